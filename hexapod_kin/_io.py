@@ -1,0 +1,59 @@
+"""Atomic file writing: an error or interrupt never leaves a half-written file in place."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from .exceptions import ParameterError
+
+__all__ = ["atomic_write"]
+
+
+def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
+    """Write ``data`` to ``path`` atomically.
+
+    The data goes to a temporary file in the same directory, is flushed and fsync'ed, then
+    renamed over ``path`` with :func:`os.replace`. If anything fails before the rename (an
+    exception, ``KeyboardInterrupt``), the temporary file is removed and the previous content
+    of ``path``, if any, is left untouched.
+
+    Args:
+        path: Destination file.
+        data: Text (written as UTF-8) or bytes.
+
+    Returns:
+        The destination as a :class:`~pathlib.Path`.
+
+    Raises:
+        ParameterError: If the destination directory does not exist or ``path`` is a directory.
+    """
+    dest = Path(path)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    if not parent.is_dir():
+        raise ParameterError(f"path={str(dest)!r}: directory {str(parent)!r} does not exist")
+    if dest.is_dir():
+        raise ParameterError(f"path={str(dest)!r} is a directory; expected a file path")
+    payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(payload)
+            fh.flush()
+            os.fsync(fh.fileno())
+        if dest.exists():
+            try:
+                os.chmod(tmp, dest.stat().st_mode & 0o777)
+            except OSError:
+                pass
+        else:
+            os.chmod(tmp, 0o644)
+        os.replace(tmp, dest)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+    return dest
