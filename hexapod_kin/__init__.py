@@ -1,0 +1,70 @@
+"""hexapod_kin: robot legs and the robots they carry.
+
+Khalil–Kleinfinger / DH tables → URDF → Pinocchio forward kinematics, frame Jacobians,
+singularities, inverse kinematics and resolved-rate motion, with a meshcat viewer.
+
+Quick start::
+
+    import hexapod_kin as hk
+    leg = hk.robots.hexabot_leg()          # seed 001 Table 1, metres
+    model = hk.load(leg)                   # Pinocchio model built from the generated URDF
+    model.fk([0.1, 0.4, -0.8])             # 4x4 foot pose in the base frame
+    model.jacobian([0.1, 0.4, -0.8])       # 6x3, LOCAL_WORLD_ALIGNED
+"""
+
+from __future__ import annotations
+
+__version__ = "0.1.0"
+
+from . import robots  # noqa: E402
+from .exceptions import (  # noqa: E402
+    ConfigurationError,
+    FrameNotFoundError,
+    HexapodKinError,
+    ParameterError,
+    SourceError,
+    UrdfError,
+)
+from .params import (  # noqa: E402
+    Chain,
+    DHRow,
+    Hexapod,
+    Inertial,
+    JointLimits,
+    KhalilRow,
+    LegMount,
+    table_fk,
+    table_transforms,
+)
+from .urdf import to_urdf, write_urdf  # noqa: E402
+
+
+def load(source, base=None, tip=None, **kwargs):  # type: ignore[no-untyped-def]
+    """Load a model; see :func:`hexapod_kin.kinematics.load` (imports Pinocchio lazily)."""
+    from .kinematics import load as _load
+
+    return _load(source, base=base, tip=tip, **kwargs)
+
+
+__all__ = [
+    "__version__",
+    "Chain",
+    "ConfigurationError",
+    "DHRow",
+    "FrameNotFoundError",
+    "Hexapod",
+    "HexapodKinError",
+    "Inertial",
+    "JointLimits",
+    "KhalilRow",
+    "LegMount",
+    "ParameterError",
+    "SourceError",
+    "UrdfError",
+    "load",
+    "robots",
+    "table_fk",
+    "table_transforms",
+    "to_urdf",
+    "write_urdf",
+]

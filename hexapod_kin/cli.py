@@ -1,0 +1,296 @@
+"""The ``hexapod-kin`` command line: ``main(argv=None) -> int``.
+
+Each subcommand has an ``_add_<name>(sub)`` that declares its arguments and a
+``_cmd_<name>(args)`` that runs it; heavy imports stay inside the ``_cmd_`` functions.
+``--json`` output is one JSON object on stdout; progress and messages go to stderr.
+Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one line
+``hexapod-kin: error: ...`` and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from .exceptions import HexapodKinError, ParameterError
+
+__all__ = ["main"]
+
+
+# ------------------------------------------------------------------------ helpers
+def _parse_value(text: str) -> Any:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def _set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for pair in pairs or ():
+        if "=" not in pair:
+            raise ParameterError(f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)")
+        key, value = pair.split("=", 1)
+        out[key.strip()] = _parse_value(value.strip())
+    return out
+
+
+def _load(args: argparse.Namespace) -> Any:
+    """Load ``args.source`` (preset, URDF path or ``erd:NAME``) with --set/--base/--tip."""
+    from .kinematics import load
+
+    params = _set_params(getattr(args, "set", None))
+    return load(
+        args.source, base=getattr(args, "base", None), tip=getattr(args, "tip", None), **params
+    )
+
+
+def _q_arg(args: argparse.Namespace, nq: int) -> Any:
+    import numpy as np
+
+    if args.q is None:
+        return np.zeros(nq)
+    q = np.array(args.q, dtype=float)
+    return np.radians(q) if getattr(args, "deg", False) else q
+
+
+def _matrix_text(m: Any, indent: str = "  ") -> str:
+    return "\n".join(indent + " ".join(f"{v: .6f}" for v in row) for row in m)
+
+
+def _emit_json(obj: dict[str, Any]) -> None:
+    sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
+
+
+def _source_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", help="preset name, URDF path, or erd:NAME (example-robot-data)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument("--base", help="base frame of the sub-chain")
+    p.add_argument("--tip", help="tip frame of the sub-chain")
+
+
+def _q_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--q", nargs="+", type=float, help="joint values (rad, m; default zeros)")
+    p.add_argument("--deg", action="store_true", help="revolute --q values are in degrees")
+
+
+# ------------------------------------------------------------------------ list
+def _add_list(sub: Any) -> None:
+    p = sub.add_parser("list", help="list the presets")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--erd", action="store_true", help="also list example-robot-data robots")
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    from . import robots
+
+    rows = []
+    for name in robots.names():
+        doc = (robots.PRESETS[name].__doc__ or "").strip().splitlines()[0]
+        rows.append({"name": name, "summary": doc})
+    out: dict[str, Any] = {"presets": rows}
+    if args.erd:
+        from .model import erd_names
+
+        out["erd"] = erd_names()
+    if args.json:
+        _emit_json(out)
+        return 0
+    for row in rows:
+        print(f"{row['name']:<16} {row['summary']}")
+    if args.erd:
+        print("\nexample-robot-data (use erd:NAME): " + ", ".join(out["erd"]))
+    return 0
+
+
+# ------------------------------------------------------------------------ urdf
+def _add_urdf(sub: Any) -> None:
+    p = sub.add_parser("urdf", help="export the URDF of a preset")
+    p.add_argument("preset", help="preset name (see `hexapod-kin list`)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument("--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
+    p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
+
+
+def _cmd_urdf(args: argparse.Namespace) -> int:
+    from . import robots
+    from .urdf import to_urdf, write_urdf
+
+    built = robots.get(args.preset, **_set_params(args.set))
+    command = "hexapod-kin urdf " + " ".join(
+        [args.preset] + [f"--set {s}" for s in args.set or ()]
+        + ([f"--leg {args.leg}"] if args.leg else [])
+    )
+    if args.output:
+        path = write_urdf(built, args.output, leg=args.leg, header=f"made by: {command}")
+        print(f"wrote {path}", file=sys.stderr)
+    else:
+        sys.stdout.write(to_urdf(built, leg=args.leg, header=f"made by: {command}"))
+    return 0
+
+
+# ------------------------------------------------------------------------ fk
+def _add_fk(sub: Any) -> None:
+    p = sub.add_parser("fk", help="tip transform and every intermediate transform")
+    _source_args(p)
+    _q_args(p)
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+
+def _cmd_fk(args: argparse.Namespace) -> int:
+    model = _load(args)
+    q = _q_arg(args, model.nq)
+    tip = model.fk(q)
+    rel = model.transforms(q)
+    cum = model.cumulative_transforms(q)
+    frames = list(model.path_frames)
+    if args.json:
+        _emit_json(
+            {
+                "source": model.name,
+                "joint_names": list(model.joint_names),
+                "q": [float(v) for v in model.check_q(q)],
+                "base": model.base,
+                "tip": model.tip,
+                "frames": frames,
+                "T_tip": tip.tolist(),
+                "position": tip[:3, 3].tolist(),
+                "transforms": [t.tolist() for t in rel],
+                "cumulative": [t.tolist() for t in cum],
+            }
+        )
+        return 0
+    print(f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
+          f"({', '.join(model.joint_names)})")
+    for j, (t, c) in enumerate(zip(rel, cum), start=1):
+        print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
+        print(_matrix_text(t))
+        print(f"^0T_{j}:")
+        print(_matrix_text(c))
+    print(f"T tip ({model.base} -> {model.tip}):")
+    print(_matrix_text(tip))
+    print("position [m]: " + " ".join(f"{v:.6f}" for v in tip[:3, 3]))
+    return 0
+
+
+# ------------------------------------------------------------------------ jacobian
+def _add_jacobian(sub: Any) -> None:
+    p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
+    _source_args(p)
+    _q_args(p)
+    p.add_argument(
+        "--reference",
+        default="local_world_aligned",
+        choices=["local", "world", "local_world_aligned"],
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+
+def _cmd_jacobian(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    model = _load(args)
+    q = _q_arg(args, model.nq)
+    jac = model.jacobian(q, args.reference)
+    jp = jac[:3]
+    det = float(np.linalg.det(jp)) if jp.shape[0] == jp.shape[1] else None
+    sv = np.linalg.svd(jp, compute_uv=False)
+    if args.json:
+        _emit_json(
+            {
+                "source": model.name,
+                "joint_names": list(model.joint_names),
+                "q": [float(v) for v in model.check_q(q)],
+                "reference": args.reference,
+                "jacobian": jac.tolist(),
+                "det_position": det,
+                "singular_values_position": sv.tolist(),
+            }
+        )
+        return 0
+    print(f"J ({args.reference}, rows vx vy vz wx wy wz; columns {', '.join(model.joint_names)}):")
+    print(_matrix_text(jac))
+    if det is not None:
+        print(f"det(J_position) = {det:.6e}")
+    print("singular values (position): " + " ".join(f"{v:.6e}" for v in sv))
+    return 0
+
+
+# ------------------------------------------------------------------------ demo
+def _add_demo(sub: Any) -> None:
+    p = sub.add_parser("demo", help="export the leg URDF, print its FK and Jacobian")
+    p.add_argument("--out", default="out", help="directory for the exported URDF")
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from . import robots
+    from .kinematics import load
+    from .urdf import write_urdf
+
+    leg = robots.hexabot_leg()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
+    print(f"wrote {path}")
+    model = load(path)
+    q = np.radians([20.0, 30.0, -60.0])
+    print(f"q = {np.degrees(q).tolist()} deg")
+    print("T foot in base:")
+    print(_matrix_text(model.fk(q)))
+    print("J (local_world_aligned):")
+    print(_matrix_text(model.jacobian(q)))
+    print(f"det(J_position) = {np.linalg.det(model.position_jacobian(q)):.6e}")
+    return 0
+
+
+# ------------------------------------------------------------------------ main
+Command = tuple[Callable[[Any], None], Callable[[argparse.Namespace], int]]
+
+#: Subcommands in help order: (declare arguments, run).
+COMMANDS: dict[str, Command] = {
+    "list": (_add_list, _cmd_list),
+    "urdf": (_add_urdf, _cmd_urdf),
+    "fk": (_add_fk, _cmd_fk),
+    "jacobian": (_add_jacobian, _cmd_jacobian),
+    "demo": (_add_demo, _cmd_demo),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Return the argument parser with every subcommand."""
+    from . import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="hexapod-kin",
+        description="Robot legs: Khalil/DH tables -> URDF -> Pinocchio kinematics.",
+    )
+    parser.add_argument("--version", action="version", version=f"hexapod-kin {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add, _ in COMMANDS.values():
+        add(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 usage or input error)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return COMMANDS[args.command][1](args)
+    except HexapodKinError as exc:
+        print(f"hexapod-kin: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("hexapod-kin: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,250 @@
+"""Forward kinematics, every intermediate transform and frame Jacobians (Pinocchio).
+
+Pose notation: Pinocchio's ``aMb`` — the pose of frame ``b`` expressed in frame ``a`` — as 4×4
+numpy arrays; ``base`` is the chain's frame 0 (Khalil numbering), ``tip`` its last frame.
+
+Reference frames of Jacobians (explicit argument, as in Pinocchio):
+
+* ``"local"`` — the tip's twist expressed in the tip frame;
+* ``"world"`` — the spatial twist expressed in the base frame (velocity of the point at the
+  base origin);
+* ``"local_world_aligned"`` — the tip's linear velocity and angular velocity expressed in
+  the base axes (the textbook ``J`` of the seeds; rows 0–2 are ``∂p/∂q``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .exceptions import ParameterError, choices
+from .model import Model, build
+
+__all__ = [
+    "REFERENCES",
+    "KinematicModel",
+    "load",
+    "direct_jacobian",
+    "indirect_jacobian",
+]
+
+REFERENCES: dict[str, pin.ReferenceFrame] = {
+    "local": pin.ReferenceFrame.LOCAL,
+    "world": pin.ReferenceFrame.WORLD,
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+}
+
+
+def _reference(reference: str) -> pin.ReferenceFrame:
+    key = reference.lower() if isinstance(reference, str) else reference
+    if key not in REFERENCES:
+        raise ParameterError(
+            f"reference={reference!r} is not allowed; use one of {choices(REFERENCES)}"
+        )
+    return REFERENCES[key]
+
+
+class KinematicModel(Model):
+    """A :class:`~hexapod_kin.model.Model` with forward kinematics and Jacobians.
+
+    Returned by :func:`load`. All outputs are fresh arrays (safe to modify).
+    """
+
+    # -------------------------------------------------------------- forward kinematics
+    def fk(self, q: Any) -> np.ndarray:
+        """Pose of the tip in the base frame, ``baseMtip`` (4×4).
+
+        Args:
+            q: Joint values (nq,) in [rad] / [m].
+
+        Raises:
+            ConfigurationError: Wrong shape or non-finite values.
+        """
+        qv = self.check_q(q)
+        pin.forwardKinematics(self.model, self.data, qv)
+        omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
+        if self._base_is_root:
+            return omf.homogeneous  # type: ignore[no-any-return]
+        return (self.baseMo * omf).homogeneous  # type: ignore[no-any-return]
+
+    def position(self, q: Any) -> np.ndarray:
+        """Tip position in the base frame in [m] (3,)."""
+        return self.fk(q)[:3, 3].copy()
+
+    def placement(self, q: Any, frame: str) -> np.ndarray:
+        """Pose of any frame in the base frame, ``baseMframe`` (4×4)."""
+        fid = self.frame_id(frame)
+        qv = self.check_q(q)
+        pin.forwardKinematics(self.model, self.data, qv)
+        omf = pin.updateFramePlacement(self.model, self.data, fid)
+        return (self.baseMo * omf).homogeneous  # type: ignore[no-any-return]
+
+    def frame_placements(self, q: Any) -> list[np.ndarray]:
+        """``^0T_j`` for every frame on the base → tip path (``path_frames``), 4×4 each."""
+        qv = self.check_q(q)
+        pin.framesForwardKinematics(self.model, self.data, qv)
+        out = []
+        for name in self.path_frames:
+            fid = self.model.getFrameId(name)
+            out.append((self.baseMo * self.data.oMf[fid]).homogeneous)
+        return out
+
+    def transforms(self, q: Any) -> list[np.ndarray]:
+        """Every intermediate transform ``^{j-1}T_j`` along the path, numbered as the table.
+
+        For a chain built from a Khalil table, entry ``j-1`` is the table's row ``j``.
+
+        Args:
+            q: Joint values (nq,).
+
+        Returns:
+            A list of 4×4 arrays; their product is :meth:`fk`.
+        """
+        world = self.frame_placements(q)
+        return [np.linalg.solve(world[j - 1], world[j]) for j in range(1, len(world))]
+
+    def cumulative_transforms(self, q: Any) -> list[np.ndarray]:
+        """``^0T_j`` for j = 1..n (the products of :meth:`transforms`)."""
+        return self.frame_placements(q)[1:]
+
+    # -------------------------------------------------------------- Jacobians
+    def jacobian(
+        self, q: Any, reference: str = "local_world_aligned", frame: str | None = None
+    ) -> np.ndarray:
+        """Frame Jacobian (6×nq), rows ``[v; ω]``, in the chosen reference frame.
+
+        Args:
+            q: Joint values (nq,).
+            reference: ``"local"``, ``"world"`` or ``"local_world_aligned"`` (see module doc;
+                world axes are the base frame's).
+            frame: Frame name (default: the tip).
+
+        Raises:
+            ParameterError: Unknown ``reference``.
+            FrameNotFoundError: Unknown ``frame``.
+            ConfigurationError: Bad ``q``.
+        """
+        ref = _reference(reference)
+        fid = self.tip_id if frame is None else self.frame_id(frame)
+        qv = self.check_q(q)
+        jac = pin.computeFrameJacobian(self.model, self.data, qv, fid, ref)
+        if self._base_is_root or ref == pin.ReferenceFrame.LOCAL:
+            return jac  # type: ignore[no-any-return]
+        if ref == pin.ReferenceFrame.WORLD:
+            return self.baseMo.action @ jac  # type: ignore[no-any-return]
+        r = self._rot_base
+        out = np.empty_like(jac)
+        out[:3] = r @ jac[:3]
+        out[3:] = r @ jac[3:]
+        return out
+
+    def position_jacobian(self, q: Any, frame: str | None = None) -> np.ndarray:
+        """3×nq Jacobian of the tip position in the base frame, ``∂p/∂q``."""
+        return self.jacobian(q, "local_world_aligned", frame)[:3].copy()
+
+    def fk_jacobian(
+        self, q: Any, reference: str = "local_world_aligned"
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Tip pose and Jacobian in one pass (cheaper than calling both)."""
+        ref = _reference(reference)
+        qv = self.check_q(q)
+        jac = pin.computeFrameJacobian(self.model, self.data, qv, self.tip_id, ref)
+        omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
+        if self._base_is_root:
+            return omf.homogeneous, jac
+        pose = (self.baseMo * omf).homogeneous
+        if ref == pin.ReferenceFrame.LOCAL:
+            return pose, jac
+        if ref == pin.ReferenceFrame.WORLD:
+            return pose, self.baseMo.action @ jac
+        r = self._rot_base
+        return pose, np.vstack([r @ jac[:3], r @ jac[3:]])
+
+
+def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
+    """The textbook *direct* method: columns ``z_j × (O_E − O_j)`` (``z_j`` if prismatic).
+
+    Computed from the joint frames' placements alone (no Jacobian routine), in the base frame.
+
+    Args:
+        model: A loaded model.
+        q: Joint values (nq,).
+
+    Returns:
+        The 3×nq position Jacobian.
+    """
+    qv = model.check_q(q)
+    m, d = model.model, model.data
+    pin.forwardKinematics(m, d, qv)
+    pose = model.baseMo * pin.updateFramePlacement(m, d, model.tip_id)
+    o_e = pose.translation
+    cols = []
+    for i in range(1, m.njoints):
+        omj = model.baseMo * d.oMi[i]
+        axis_local = _joint_axis(m, i)
+        z = omj.rotation @ axis_local
+        if model.is_prismatic[i - 1]:
+            cols.append(z)
+        else:
+            cols.append(np.cross(z, o_e - omj.translation))
+    return np.column_stack(cols)
+
+
+def indirect_jacobian(model: KinematicModel, q: Any, h: float = 1e-6) -> np.ndarray:
+    """The textbook *indirect* method ``∂p/∂q``, by central differences of :meth:`fk`.
+
+    Args:
+        model: A loaded model.
+        q: Joint values (nq,).
+        h: Step in [rad] / [m].
+
+    Returns:
+        The 3×nq position Jacobian (accurate to O(h²)).
+    """
+    qv = model.check_q(q).copy()
+    cols = []
+    for j in range(model.nq):
+        qp, qm = qv.copy(), qv.copy()
+        qp[j] += h
+        qm[j] -= h
+        cols.append((model.fk(qp)[:3, 3] - model.fk(qm)[:3, 3]) / (2 * h))
+    return np.column_stack(cols)
+
+
+def _joint_axis(model: pin.Model, i: int) -> np.ndarray:
+    joint = model.joints[i]
+    name = joint.shortname()
+    if name.endswith("X"):
+        return np.array([1.0, 0.0, 0.0])
+    if name.endswith("Y"):
+        return np.array([0.0, 1.0, 0.0])
+    if name.endswith("Z"):
+        return np.array([0.0, 0.0, 1.0])
+    return np.asarray(joint.extract().axis, dtype=float)
+
+
+def load(
+    source: Any, base: str | None = None, tip: str | None = None, **kwargs: Any
+) -> KinematicModel:
+    """Load a model from a chain/robot, preset name, URDF path or text, or ``erd:NAME``.
+
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a preset name
+            (``"hexabot_leg"``), a URDF path, URDF text, or ``"erd:solo12"``.
+        base: Base frame of the sub-chain (default: the chain's base / the root).
+        tip: Tip frame (default: the chain's tip; the first foot of a hexapod; else the last
+            body frame). Giving ``base`` or ``tip`` keeps only the joints between them, the
+            others locked at ``q_ref`` (default neutral), unless ``reduce=False``.
+        **kwargs: ``reduce``, ``q_ref``, or preset parameters (with a preset name).
+
+    Returns:
+        A :class:`KinematicModel`.
+
+    Raises:
+        SourceError: The source cannot be resolved.
+        UrdfError: The URDF fails the loader gate.
+        FrameNotFoundError: Unknown base/tip (the message lists the frames).
+    """
+    return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]

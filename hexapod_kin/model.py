@@ -1,0 +1,440 @@
+"""The only place that parses URDF: resolve a source, pass the gate, build Pinocchio.
+
+A :class:`Model` keeps the Pinocchio ``Model`` and its ``Data`` together (users never pair
+them by hand), the URDF text it was built from, and the names of the sub-chain (base → tip)
+that the user picked. Names are checked here before any id reaches Pinocchio (whose
+``getFrameId`` returns an out-of-range id for unknown names and then crashes).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import math
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from . import robots
+from ._gate import check_urdf
+from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, choices
+from .params import Chain, Hexapod
+from .urdf import to_urdf
+
+__all__ = ["Model", "build", "erd_names", "erd_path", "resolve_source", "ResolvedSource"]
+
+_SIMPLE_JOINTS = {
+    "JointModelRX",
+    "JointModelRY",
+    "JointModelRZ",
+    "JointModelRevoluteUnaligned",
+    "JointModelPX",
+    "JointModelPY",
+    "JointModelPZ",
+    "JointModelPrismaticUnaligned",
+}
+
+
+# ------------------------------------------------------------------------ example-robot-data
+def _erd_share() -> Path:
+    """Directory ``share`` of the example-robot-data 6 (cmeel) data package."""
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        raise SourceError(
+            "example-robot-data is not installed; `pip install example-robot-data==6.0.0`"
+        ) from None
+    share = Path(str(dist.locate_file("cmeel.prefix/share")))
+    if not (share / "example-robot-data" / "robots").is_dir():
+        raise SourceError(f"example-robot-data data not found under {share}")
+    return share
+
+
+@lru_cache(maxsize=1)
+def _erd_index() -> dict[str, Path]:
+    robots_dir = _erd_share() / "example-robot-data" / "robots"
+    index: dict[str, Path] = {}
+    for path in sorted(robots_dir.rglob("*.urdf")):
+        index.setdefault(path.stem, path)
+    return index
+
+
+def erd_names() -> list[str]:
+    """Names of the example-robot-data URDFs (file stems), sorted."""
+    return sorted(_erd_index())
+
+
+def erd_path(name: str) -> Path:
+    """Path of the example-robot-data URDF ``name`` (e.g. ``"solo12"``).
+
+    Raises:
+        SourceError: If there is no such robot (the message lists those that exist).
+    """
+    index = _erd_index()
+    if name not in index:
+        raise SourceError(
+            f"erd robot {name!r} does not exist; example-robot-data has {choices(erd_names())}"
+        )
+    return index[name]
+
+
+# ------------------------------------------------------------------------ sources
+@dataclass(frozen=True)
+class ResolvedSource:
+    """A source resolved to URDF text.
+
+    Attributes:
+        text: The URDF document.
+        name: A short label (preset name, file name, ``erd:NAME``).
+        package_dirs: Directories where ``package://`` meshes resolve.
+        mesh_root: Directory relative mesh paths resolve against (the URDF's directory).
+        params: The Chain or Hexapod it came from, if any.
+    """
+
+    text: str
+    name: str
+    package_dirs: tuple[str, ...] = ()
+    mesh_root: str | None = None
+    params: Chain | Hexapod | None = None
+
+
+def _read_text(path: Path) -> str:
+    from ._gate import MAX_URDF_BYTES
+    from .exceptions import UrdfError
+
+    if not path.is_file():
+        raise SourceError(f"source={str(path)!r} is not a regular file")
+    size = path.stat().st_size
+    if size > MAX_URDF_BYTES:
+        raise UrdfError(f"{path}: size {size} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise UrdfError(f"{path}: not UTF-8 text ({exc})") from None
+
+
+def resolve_source(source: Any, **params: Any) -> ResolvedSource:
+    """Turn a chain, robot, preset name, URDF path, URDF text or ``erd:NAME`` into URDF text.
+
+    Args:
+        source: What to load.
+        **params: Preset parameters (only with a preset name).
+
+    Raises:
+        SourceError: If the source cannot be resolved (the message says what is accepted).
+    """
+    if isinstance(source, (Chain, Hexapod)):
+        return ResolvedSource(to_urdf(source), source.name, params=source)
+    if isinstance(source, os.PathLike):
+        path = Path(source)
+        return ResolvedSource(
+            _read_text(path), path.name, mesh_root=str(path.parent.resolve())
+        )
+    if not isinstance(source, str):
+        raise SourceError(
+            f"source of type {type(source).__name__} is not allowed; give a Chain, a Hexapod, "
+            "a preset name, a URDF path, URDF text or 'erd:NAME'"
+        )
+    text = source.strip()
+    if text.startswith("<"):
+        return ResolvedSource(source, "urdf-text")
+    if params and text not in robots.PRESETS:
+        raise SourceError(f"preset parameters {sorted(params)} given for non-preset {text!r}")
+    if text in robots.PRESETS:
+        built = robots.get(text, **params)
+        return ResolvedSource(to_urdf(built), text, params=built)
+    if text.startswith("erd:"):
+        path = erd_path(text[4:])
+        share = _erd_share()
+        return ResolvedSource(
+            _read_text(path),
+            text,
+            package_dirs=(str(share),),
+            mesh_root=str(path.parent),
+        )
+    path = Path(text)
+    if path.suffix.lower() in (".urdf", ".xml") or path.exists():
+        if not path.exists():
+            raise SourceError(f"source={text!r}: no such file")
+        return ResolvedSource(_read_text(path), path.name, mesh_root=str(path.parent.resolve()))
+    raise SourceError(
+        f"source={text!r} is not a preset, a URDF file or 'erd:NAME'; presets are "
+        f"{choices(robots.names())}"
+    )
+
+
+# ------------------------------------------------------------------------ the model
+class Model:
+    """A Pinocchio model with its data, built from URDF text, restricted to base → tip.
+
+    Attributes:
+        model: The ``pinocchio.Model`` (reduced to the base → tip joints when asked).
+        data: Its ``pinocchio.Data`` (created here, never replaced).
+        full_model: The model before reduction.
+        urdf: The URDF text the model was built from.
+        source: The resolved source (name, mesh directories, params).
+        base: Name of the base frame.
+        tip: Name of the tip frame.
+    """
+
+    def __init__(
+        self,
+        resolved: ResolvedSource,
+        base: str | None = None,
+        tip: str | None = None,
+        *,
+        reduce: bool | None = None,
+        q_ref: Any = None,
+    ) -> None:
+        gate = check_urdf(resolved.text)
+        del gate
+        full = pin.buildModelFromXML(resolved.text)
+        self.full_model: pin.Model = full
+        self.urdf: str = resolved.text
+        self.source = resolved
+        full_frames = [f.name for f in full.frames]
+        params = resolved.params
+        default_base = (
+            params.base
+            if isinstance(params, Chain)
+            else params.body
+            if isinstance(params, Hexapod)
+            else full.frames[0].name
+        )
+        if tip is None:
+            if isinstance(params, Chain):
+                tip_name = params.tip
+            elif isinstance(params, Hexapod):
+                tip_name = params.foot_frames[0]
+            else:
+                tip_name = _last_body_frame(full)
+        else:
+            tip_name = tip
+        base_name = default_base if base is None else base
+        for label, name in (("base", base_name), ("tip", tip_name)):
+            if not isinstance(name, str) or not full.existFrame(name):
+                raise FrameNotFoundError(
+                    f"{label}={name!r} is not a frame of {resolved.name!r}; frames are "
+                    f"{choices(full_frames, limit=200)}"
+                )
+        do_reduce = (base is not None or tip is not None) if reduce is None else reduce
+        self.model, self._locked = _reduce(full, base_name, tip_name, do_reduce, q_ref)
+        self.data: pin.Data = self.model.createData()
+        self.base = base_name
+        self.tip = tip_name
+        self.base_id = int(self.model.getFrameId(base_name))
+        self.tip_id = int(self.model.getFrameId(tip_name))
+        m = self.model
+        self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
+        self.nq: int = int(m.nv)
+        self._pin_nq: int = int(m.nq)
+        self._simple = all(
+            m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints)
+        )
+        if not self._simple:
+            kinds = {m.joints[i].shortname() for i in range(1, m.njoints)} - _SIMPLE_JOINTS
+            raise SourceError(
+                f"{resolved.name!r}: joints of kind {sorted(kinds)} between {base_name!r} and "
+                f"{tip_name!r}; hexapod_kin handles 1-DOF revolute/prismatic chains (pick a "
+                "sub-chain with base=/tip=)"
+            )
+        self._shape = (self.nq,)
+        pin.framesForwardKinematics(m, self.data, pin.neutral(m))
+        self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
+            self.data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
+        )
+        # The base is fixed (no kept joint between the root and it), so its pose is constant.
+        support = set(m.supports[m.frames[self.base_id].parentJoint])
+        if support - {0}:
+            raise FrameNotFoundError(
+                f"base={base_name!r} moves with joints "
+                f"{[m.names[i] for i in sorted(support - {0})]}; the base must be fixed "
+                "relative to the root of the chain (choose a frame closer to the root)"
+            )
+        self.oMbase = pin.SE3(self.data.oMf[self.base_id])
+        self.baseMo = self.oMbase.inverse()
+        self._rot_base = np.ascontiguousarray(self.baseMo.rotation)
+        self.lower = np.array(m.lowerPositionLimit, dtype=float)
+        self.upper = np.array(m.upperPositionLimit, dtype=float)
+        self.velocity_limit = np.array(m.velocityLimit, dtype=float)
+        self.effort_limit = np.array(m.effortLimit, dtype=float)
+        self.is_prismatic = np.array(
+            [m.joints[i].shortname().startswith("JointModelP") for i in range(1, m.njoints)],
+            dtype=bool,
+        )
+        for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
+            arr.setflags(write=False)
+        self.path_frames: tuple[str, ...] = _path_frames(m, self.base_id, self.tip_id)
+
+    # -------------------------------------------------------------- names and checks
+    @property
+    def name(self) -> str:
+        """A short label of the source."""
+        return self.source.name
+
+    @property
+    def params(self) -> Chain | Hexapod | None:
+        """The parameter table the model came from, if any."""
+        return self.source.params
+
+    @property
+    def frame_names(self) -> list[str]:
+        """All frame names of the (reduced) model."""
+        return [f.name for f in self.model.frames]
+
+    def frame_id(self, name: str) -> int:
+        """Return the frame id of ``name``, checked.
+
+        Raises:
+            FrameNotFoundError: If no such frame exists (the message lists the frames).
+        """
+        if not isinstance(name, str) or not self.model.existFrame(name):
+            raise FrameNotFoundError(
+                f"frame={name!r} does not exist in {self.name!r}; frames are "
+                f"{choices(self.frame_names, limit=200)}"
+            )
+        return int(self.model.getFrameId(name))
+
+    def joint_index(self, name: str) -> int:
+        """Return the index (0-based, in ``q``) of joint ``name``, checked."""
+        if name not in self.joint_names:
+            raise FrameNotFoundError(
+                f"joint={name!r} does not exist in {self.name!r}; joints are "
+                f"{choices(self.joint_names)}"
+            )
+        return self.joint_names.index(name)
+
+    def check_q(self, q: Any, name: str = "q") -> np.ndarray:
+        """Return ``q`` as a float array of shape (nq,), checked for shape and finiteness.
+
+        Raises:
+            ConfigurationError: Wrong length, not numbers, or non-finite values.
+        """
+        if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == self._shape:
+            if math.isfinite(q @ q):
+                return q
+        try:
+            arr = np.asarray(q, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ConfigurationError(
+                f"{name}={q!r} is not a sequence of {self.nq} numbers "
+                f"(joints {list(self.joint_names)})"
+            ) from None
+        if arr.shape != self._shape:
+            raise ConfigurationError(
+                f"{name} has shape {arr.shape}; expected ({self.nq},) for joints "
+                f"{list(self.joint_names)}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError(f"{name}={arr.tolist()} contains non-finite values")
+        if not np.all(np.abs(arr) < 1e150):
+            raise ConfigurationError(f"{name}={arr.tolist()} has values too large (|x| >= 1e150)")
+        return np.ascontiguousarray(arr)
+
+    def check_q_batch(self, q: Any, name: str = "q") -> np.ndarray:
+        """Return ``q`` as an (N, nq) float array, checked (a single (nq,) becomes (1, nq))."""
+        try:
+            arr = np.asarray(q, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ConfigurationError(f"{name} is not an array of numbers") from None
+        if arr.ndim == 1:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != self.nq:
+            raise ConfigurationError(
+                f"{name} has shape {arr.shape}; expected (N, {self.nq}) for joints "
+                f"{list(self.joint_names)}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError(f"{name} contains non-finite values")
+        return arr
+
+    def neutral(self) -> np.ndarray:
+        """Neutral configuration (zeros for revolute/prismatic joints), a fresh array."""
+        return np.array(pin.neutral(self.model), dtype=float)
+
+    def random_q(self, n: int | None = None, seed: int | None = None) -> np.ndarray:
+        """Uniform random configurations within the joint limits ((nq,) or (n, nq))."""
+        rng = np.random.default_rng(seed)
+        lo, hi = self.lower, self.upper
+        size = (self.nq,) if n is None else (n, self.nq)
+        return rng.uniform(lo, hi, size=size)
+
+    def __repr__(self) -> str:
+        return (
+            f"<hexapod_kin Model {self.name!r}: nq={self.nq} joints={list(self.joint_names)} "
+            f"base={self.base!r} tip={self.tip!r}>"
+        )
+
+
+def _last_body_frame(model: pin.Model) -> str:
+    for frame in reversed(model.frames):
+        if frame.type == pin.FrameType.BODY:
+            return str(frame.name)
+    return str(model.frames[-1].name)
+
+
+def _reduce(
+    full: pin.Model, base: str, tip: str, do_reduce: bool, q_ref: Any
+) -> tuple[pin.Model, tuple[str, ...]]:
+    if not do_reduce:
+        return full, ()
+    base_joint = full.frames[full.getFrameId(base)].parentJoint
+    tip_joint = full.frames[full.getFrameId(tip)].parentJoint
+    tip_support = list(full.supports[tip_joint])
+    base_support = set(full.supports[base_joint])
+    if not base_support <= set(tip_support):
+        raise FrameNotFoundError(
+            f"base={base!r} is not on the path from the root to tip={tip!r}; pick a base that "
+            f"is an ancestor of the tip (path joints: {[full.names[i] for i in tip_support]})"
+        )
+    keep = set(tip_support) - base_support
+    lock = [i for i in range(1, full.njoints) if i not in keep]
+    if not lock:
+        return full, ()
+    ref = pin.neutral(full) if q_ref is None else np.asarray(q_ref, dtype=float)
+    if ref.shape != (full.nq,) or not np.all(np.isfinite(ref)):
+        raise ConfigurationError(
+            f"q_ref has shape {np.shape(q_ref)}; expected ({full.nq},) finite values"
+        )
+    reduced = pin.buildReducedModel(full, lock, ref)
+    return reduced, tuple(full.names[i] for i in lock)
+
+
+def _path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
+    """Body frames from base to tip (one per link on the path), by walking parents."""
+    names: list[str] = []
+    fid = tip_id
+    seen = 0
+    while True:
+        frame = model.frames[fid]
+        if frame.type == pin.FrameType.BODY or fid in (base_id, tip_id):
+            names.append(frame.name)
+        if fid == base_id or seen > len(model.frames):
+            break
+        parent = frame.parentFrame
+        if parent == fid:
+            break
+        fid = parent
+        seen += 1
+    if names[-1] != model.frames[base_id].name:
+        return (model.frames[base_id].name, model.frames[tip_id].name)
+    names.reverse()
+    return tuple(names)
+
+
+def build(
+    source: Any,
+    base: str | None = None,
+    tip: str | None = None,
+    *,
+    cls: type[Model] = Model,
+    reduce: bool | None = None,
+    q_ref: Any = None,
+    **params: Any,
+) -> Model:
+    """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``)."""
+    return cls(resolve_source(source, **params), base, tip, reduce=reduce, q_ref=q_ref)

@@ -1,0 +1,710 @@
+"""Parameter tables: Khalil–Kleinfinger (modified DH) and standard DH rows, chains, robots.
+
+Conventions, defined once here and used everywhere:
+
+* **Khalil–Kleinfinger (modified DH)**, the convention of the lab reports: row ``j`` gives
+
+  ``^{j-1}T_j = Rx(alpha_j) · Tx(d_j) · Rz(theta_j) · Tz(r_j)``
+
+  and the joint variable ``q_j`` adds to ``theta_j`` (revolute, ``sigma = 0``) or to ``r_j``
+  (prismatic, ``sigma = 1``). A fixed row (``sigma = 2``) has no variable; it is how the foot or
+  tool frame is attached.
+* **Standard (Denavit–Hartenberg 1955) DH**, columns ``(theta, d, a, alpha)``:
+
+  ``^{i-1}T_i = Rz(theta_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i)``
+
+  the joint variable adds to ``theta_i`` (revolute) or ``d_i`` (prismatic).
+
+Side by side, for the same link: Khalil's ``d`` is standard DH's ``a`` of the *previous* row and
+Khalil's ``alpha`` is standard DH's ``alpha`` of the *previous* row; Khalil's ``r`` is standard
+DH's ``d``. :meth:`Chain.from_dh` does this conversion exactly (adding a fixed last row).
+
+All lengths are in metres, angles in radians, masses in kg, inertias in kg·m².
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from .exceptions import ParameterError
+
+__all__ = [
+    "SIGMA",
+    "KhalilRow",
+    "DHRow",
+    "JointLimits",
+    "Inertial",
+    "Chain",
+    "LegMount",
+    "Hexapod",
+    "khalil_transform",
+    "dh_transform",
+    "table_fk",
+    "table_transforms",
+    "rod_inertial",
+]
+
+SigmaName = Literal["revolute", "prismatic", "fixed"]
+SIGMA: dict[Any, SigmaName] = {
+    0: "revolute",
+    1: "prismatic",
+    2: "fixed",
+    "revolute": "revolute",
+    "prismatic": "prismatic",
+    "fixed": "fixed",
+    "r": "revolute",
+    "p": "prismatic",
+    "f": "fixed",
+}
+
+NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
+
+
+def _sigma(value: Any, where: str) -> SigmaName:
+    key = value.lower() if isinstance(value, str) else value
+    if isinstance(key, bool) or key not in SIGMA:
+        raise ParameterError(
+            f"{where}.sigma={value!r} is not allowed; use 'revolute' (0), 'prismatic' (1) or "
+            "'fixed' (2)"
+        )
+    return SIGMA[key]
+
+
+def _finite(value: Any, where: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{where}={value!r} is not a number; a finite float is required")
+    if not math.isfinite(x):
+        raise ParameterError(f"{where}={value!r} is not finite; a finite float is required")
+    return x
+
+
+def _name(value: Any, where: str) -> str:
+    if not isinstance(value, str) or not value or not set(value) <= NAME_OK:
+        raise ParameterError(
+            f"{where}={value!r} is not a valid name; use a non-empty string of letters, digits, "
+            "'_', '-' or '.'"
+        )
+    return value
+
+
+def _rx(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+
+def _rz(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+
+def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
+    """Return ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` as a 4×4 array (closed form).
+
+    Args:
+        alpha: Twist about ``x_{j-1}`` in [rad].
+        d: Distance along ``x_{j-1}`` in [m].
+        theta: Angle about ``z_j`` in [rad].
+        r: Distance along ``z_j`` in [m].
+
+    Returns:
+        The homogeneous transform ``^{j-1}T_j``.
+    """
+    ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
+    return np.array(
+        [
+            [ct, -st, 0.0, d],
+            [ca * st, ca * ct, -sa, -r * sa],
+            [sa * st, sa * ct, ca, r * ca],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
+    """Return the standard-DH transform ``Rz(theta)·Tz(d)·Tx(a)·Rx(alpha)`` (4×4).
+
+    Args:
+        theta: Angle about ``z_{i-1}`` in [rad].
+        d: Offset along ``z_{i-1}`` in [m].
+        a: Length along ``x_i`` in [m].
+        alpha: Twist about ``x_i`` in [rad].
+
+    Returns:
+        The homogeneous transform ``^{i-1}T_i``.
+    """
+    ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
+    return np.array(
+        [
+            [ct, -st * ca, st * sa, a * ct],
+            [st, ct * ca, -ct * sa, a * st],
+            [0.0, sa, ca, d],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+@dataclass(frozen=True)
+class KhalilRow:
+    """One row of a Khalil–Kleinfinger (modified DH) table.
+
+    ``^{j-1}T_j = Rx(alpha)·Tx(d)·Rz(theta + q)·Tz(r)`` for a revolute joint,
+    ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r + q)`` for a prismatic one, and with no ``q`` when fixed.
+
+    Attributes:
+        sigma: ``"revolute"`` (0), ``"prismatic"`` (1) or ``"fixed"`` (2).
+        alpha: Twist about ``x_{j-1}`` in [rad].
+        d: Distance along ``x_{j-1}`` in [m].
+        theta: Angle about ``z_j`` in [rad] (offset added to ``q`` for a revolute joint).
+        r: Distance along ``z_j`` in [m] (offset added to ``q`` for a prismatic joint).
+    """
+
+    sigma: SigmaName | int | str
+    alpha: float = 0.0
+    d: float = 0.0
+    theta: float = 0.0
+    r: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "sigma", _sigma(self.sigma, "KhalilRow"))
+        for f in ("alpha", "d", "theta", "r"):
+            object.__setattr__(self, f, _finite(getattr(self, f), f"KhalilRow.{f}"))
+
+    @property
+    def is_joint(self) -> bool:
+        """True when the row carries a joint variable (revolute or prismatic)."""
+        return self.sigma != "fixed"
+
+    def transform(self, q: float = 0.0) -> np.ndarray:
+        """Return ``^{j-1}T_j`` at joint value ``q`` ([rad] or [m]; ignored when fixed)."""
+        if self.sigma == "revolute":
+            return khalil_transform(self.alpha, self.d, self.theta + q, self.r)
+        if self.sigma == "prismatic":
+            return khalil_transform(self.alpha, self.d, self.theta, self.r + q)
+        return khalil_transform(self.alpha, self.d, self.theta, self.r)
+
+
+@dataclass(frozen=True)
+class DHRow:
+    """One row of a standard DH table: ``Rz(theta)·Tz(d)·Tx(a)·Rx(alpha)``.
+
+    Attributes:
+        theta: Angle about ``z_{i-1}`` in [rad] (offset added to ``q`` when revolute).
+        d: Offset along ``z_{i-1}`` in [m] (offset added to ``q`` when prismatic).
+        a: Link length along ``x_i`` in [m].
+        alpha: Link twist about ``x_i`` in [rad].
+        sigma: ``"revolute"`` (0), ``"prismatic"`` (1) or ``"fixed"`` (2).
+    """
+
+    theta: float = 0.0
+    d: float = 0.0
+    a: float = 0.0
+    alpha: float = 0.0
+    sigma: SigmaName | int | str = "revolute"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "sigma", _sigma(self.sigma, "DHRow"))
+        for f in ("theta", "d", "a", "alpha"):
+            object.__setattr__(self, f, _finite(getattr(self, f), f"DHRow.{f}"))
+
+    def transform(self, q: float = 0.0) -> np.ndarray:
+        """Return ``^{i-1}T_i`` at joint value ``q``."""
+        if self.sigma == "revolute":
+            return dh_transform(self.theta + q, self.d, self.a, self.alpha)
+        if self.sigma == "prismatic":
+            return dh_transform(self.theta, self.d + q, self.a, self.alpha)
+        return dh_transform(self.theta, self.d, self.a, self.alpha)
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """Limits of one joint, in the units of its variable.
+
+    Attributes:
+        lower: Lower position bound in [rad] or [m].
+        upper: Upper position bound in [rad] or [m] (``lower <= upper``).
+        velocity: Maximum speed in [rad/s] or [m/s] (``>= 0``).
+        effort: Maximum torque [N·m] or force [N] (``>= 0``).
+    """
+
+    lower: float = -math.pi
+    upper: float = math.pi
+    velocity: float = 10.0
+    effort: float = 10.0
+
+    def __post_init__(self) -> None:
+        for f in ("lower", "upper", "velocity", "effort"):
+            object.__setattr__(self, f, _finite(getattr(self, f), f"JointLimits.{f}"))
+        if self.lower > self.upper:
+            raise ParameterError(
+                f"JointLimits: lower={self.lower} > upper={self.upper}; lower <= upper required"
+            )
+        if self.velocity < 0 or self.effort < 0:
+            raise ParameterError(
+                f"JointLimits: velocity={self.velocity}, effort={self.effort}; both must be >= 0"
+            )
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Mass properties of a link, expressed in the link's (Khalil) frame.
+
+    Attributes:
+        mass: Mass in [kg] (> 0).
+        com: Centre of mass ``(x, y, z)`` in [m], in the link frame.
+        inertia: ``(ixx, iyy, izz, ixy, ixz, iyz)`` about the centre of mass in [kg·m²];
+            must be positive definite and satisfy the triangle inequality.
+    """
+
+    mass: float
+    com: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    inertia: tuple[float, float, float, float, float, float] = (1e-6, 1e-6, 1e-6, 0, 0, 0)
+
+    def __post_init__(self) -> None:
+        m = _finite(self.mass, "Inertial.mass")
+        if m <= 0:
+            raise ParameterError(f"Inertial.mass={m} is not allowed; mass must be > 0 kg")
+        object.__setattr__(self, "mass", m)
+        if len(tuple(self.com)) != 3:
+            raise ParameterError(f"Inertial.com={self.com!r}: three numbers (x, y, z) required")
+        object.__setattr__(
+            self, "com", tuple(_finite(v, f"Inertial.com[{i}]") for i, v in enumerate(self.com))
+        )
+        if len(tuple(self.inertia)) != 6:
+            raise ParameterError(
+                f"Inertial.inertia={self.inertia!r}: six numbers (ixx, iyy, izz, ixy, ixz, iyz)"
+            )
+        ii = tuple(_finite(v, f"Inertial.inertia[{i}]") for i, v in enumerate(self.inertia))
+        object.__setattr__(self, "inertia", ii)
+        mat = self.matrix()
+        eig = np.linalg.eigvalsh(mat)
+        if eig[0] <= 0:
+            raise ParameterError(
+                f"Inertial.inertia={ii}: not positive definite (eigenvalues {eig.tolist()})"
+            )
+        a, b, c = eig
+        tol = 1e-12 * max(1.0, c)
+        if a + b < c - tol:
+            raise ParameterError(
+                f"Inertial.inertia={ii}: principal moments {eig.tolist()} violate the triangle "
+                "inequality (I1 + I2 >= I3)"
+            )
+
+    def matrix(self) -> np.ndarray:
+        """Return the 3×3 inertia matrix about the centre of mass in [kg·m²]."""
+        ixx, iyy, izz, ixy, ixz, iyz = self.inertia
+        return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+
+
+def rod_inertial(
+    start: np.ndarray, end: np.ndarray, mass: float, radius: float
+) -> Inertial:
+    """Inertial of a solid cylinder (rod) from ``start`` to ``end`` (link frame, [m]).
+
+    A point-like segment (zero length) gets the inertia of a solid sphere of ``radius``.
+
+    Args:
+        start: Rod start in [m].
+        end: Rod end in [m].
+        mass: Mass in [kg].
+        radius: Rod radius in [m].
+
+    Returns:
+        The :class:`Inertial` with the centre of mass at the rod midpoint.
+    """
+    start = np.asarray(start, float)
+    end = np.asarray(end, float)
+    vec = end - start
+    length = float(np.linalg.norm(vec))
+    com = 0.5 * (start + end)
+    if length < 1e-9:
+        i = 0.4 * mass * radius**2
+        mat = np.eye(3) * i
+    else:
+        u = vec / length
+        axial = 0.5 * mass * radius**2
+        transverse = mass * (3 * radius**2 + length**2) / 12.0
+        mat = transverse * (np.eye(3) - np.outer(u, u)) + axial * np.outer(u, u)
+    return Inertial(
+        mass=mass,
+        com=(float(com[0]), float(com[1]), float(com[2])),
+        inertia=(mat[0, 0], mat[1, 1], mat[2, 2], mat[0, 1], mat[0, 2], mat[1, 2]),
+    )
+
+
+def _default_limits(sigma: str) -> JointLimits:
+    if sigma == "prismatic":
+        return JointLimits(lower=-0.1, upper=0.1, velocity=0.5, effort=100.0)
+    return JointLimits()
+
+
+@dataclass(frozen=True)
+class Chain:
+    """A serial chain described by a Khalil–Kleinfinger table.
+
+    Frames are numbered as in the table: frame 0 is the base, frame ``j`` is the frame of row
+    ``j`` (1-based). The last frame is the named tip (e.g. ``"foot"``).
+
+    Attributes:
+        rows: The Khalil rows, in order from the base.
+        joint_names: One name per *joint* row (revolute/prismatic); default ``q1, q2, ...``.
+        limits: One :class:`JointLimits` per joint row; default ±π rad (revolute),
+            ±0.1 m (prismatic).
+        inertials: One :class:`Inertial` per row (the link carried by that row's frame) or
+            ``None`` for a default: a rod of ``link_mass`` from the frame origin to the next
+            frame's origin (the tip link gets a small sphere).
+        name: Robot name in the URDF.
+        base: Name of the base link (frame 0).
+        tip: Name of the tip frame (the last row's link).
+        link_names: Names of the links of frames 1..n; default ``link1, ...`` with the last
+            one named ``tip``.
+        link_mass: Default link mass in [kg] when ``inertials`` is ``None``.
+        link_radius: Radius in [m] of the visual cylinders and default rod inertia.
+        damping: Joint viscous damping, one value or one per joint ([N·m·s/rad] or [N·s/m]).
+        friction: Joint dry friction, one value or one per joint.
+        description: Free text (source of the preset), written into the URDF header.
+    """
+
+    rows: tuple[KhalilRow, ...]
+    joint_names: tuple[str, ...] | None = None
+    limits: tuple[JointLimits, ...] | None = None
+    inertials: tuple[Inertial | None, ...] | None = None
+    name: str = "chain"
+    base: str = "base"
+    tip: str = "foot"
+    link_names: tuple[str, ...] | None = None
+    link_mass: float = 0.1
+    link_radius: float = 0.01
+    damping: float | tuple[float, ...] = 0.0
+    friction: float | tuple[float, ...] = 0.0
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        rows = tuple(self.rows)
+        if not rows:
+            raise ParameterError("Chain.rows=() is empty; at least one KhalilRow is required")
+        for i, row in enumerate(rows, start=1):
+            if not isinstance(row, KhalilRow):
+                raise ParameterError(
+                    f"Chain.rows[{i}]={row!r} is not a KhalilRow (convert DH tables with "
+                    "Chain.from_dh)"
+                )
+        object.__setattr__(self, "rows", rows)
+        joint_rows = [r for r in rows if r.is_joint]
+        nj = len(joint_rows)
+        if nj == 0:
+            raise ParameterError("Chain.rows has no revolute or prismatic row; nothing moves")
+        names = (
+            tuple(f"q{i}" for i in range(1, nj + 1))
+            if self.joint_names is None
+            else tuple(self.joint_names)
+        )
+        if len(names) != nj:
+            raise ParameterError(
+                f"Chain.joint_names has {len(names)} names; the table has {nj} joint rows"
+            )
+        for i, n in enumerate(names):
+            _name(n, f"Chain.joint_names[{i}]")
+        object.__setattr__(self, "joint_names", names)
+        limits = (
+            tuple(_default_limits(r.sigma) for r in joint_rows)
+            if self.limits is None
+            else tuple(self.limits)
+        )
+        if len(limits) != nj or not all(isinstance(x, JointLimits) for x in limits):
+            raise ParameterError(
+                f"Chain.limits: {nj} JointLimits required (one per joint row), got {len(limits)}"
+            )
+        object.__setattr__(self, "limits", limits)
+        for f in ("name", "base", "tip"):
+            _name(getattr(self, f), f"Chain.{f}")
+        links = (
+            tuple(f"link{j}" for j in range(1, len(rows))) + (self.tip,)
+            if self.link_names is None
+            else tuple(self.link_names)
+        )
+        if len(links) != len(rows):
+            raise ParameterError(
+                f"Chain.link_names has {len(links)} names; the table has {len(rows)} rows"
+            )
+        for i, n in enumerate(links):
+            _name(n, f"Chain.link_names[{i}]")
+        object.__setattr__(self, "link_names", links)
+        all_names = (self.base, *links)
+        if len(set(all_names)) != len(all_names):
+            raise ParameterError(f"Chain link names must be unique, got {all_names}")
+        if len(set(names)) != len(names):
+            raise ParameterError(f"Chain.joint_names must be unique, got {names}")
+        lm = _finite(self.link_mass, "Chain.link_mass")
+        if lm <= 0:
+            raise ParameterError(f"Chain.link_mass={lm} is not allowed; must be > 0 kg")
+        lr = _finite(self.link_radius, "Chain.link_radius")
+        if lr <= 0:
+            raise ParameterError(f"Chain.link_radius={lr} is not allowed; must be > 0 m")
+        if self.inertials is not None:
+            inn = tuple(self.inertials)
+            if len(inn) != len(rows) or not all(x is None or isinstance(x, Inertial) for x in inn):
+                raise ParameterError(
+                    f"Chain.inertials: {len(rows)} entries (Inertial or None) required, one per row"
+                )
+            object.__setattr__(self, "inertials", inn)
+        for f in ("damping", "friction"):
+            v = getattr(self, f)
+            vals = (v,) * nj if isinstance(v, (int, float)) else tuple(v)
+            if len(vals) != nj:
+                raise ParameterError(f"Chain.{f}: one value or {nj} values required, got {v!r}")
+            vals = tuple(_finite(x, f"Chain.{f}") for x in vals)
+            if any(x < 0 for x in vals):
+                raise ParameterError(f"Chain.{f}={v!r}: values must be >= 0")
+            object.__setattr__(self, f, vals if not isinstance(v, (int, float)) else float(v))
+
+    # ----------------------------------------------------------------- derived facts
+    @property
+    def nq(self) -> int:
+        """Number of joint variables."""
+        return len(self.joint_names or ())
+
+    @property
+    def joint_rows(self) -> tuple[int, ...]:
+        """Indices (0-based) of the rows carrying a joint variable."""
+        return tuple(i for i, r in enumerate(self.rows) if r.is_joint)
+
+    @property
+    def sigmas(self) -> tuple[str, ...]:
+        """Joint types of the joint rows, in order."""
+        return tuple(self.rows[i].sigma for i in self.joint_rows)
+
+    def joint_damping(self) -> tuple[float, ...]:
+        """Damping per joint."""
+        d = self.damping
+        return (float(d),) * self.nq if isinstance(d, (int, float)) else tuple(d)
+
+    def joint_friction(self) -> tuple[float, ...]:
+        """Dry friction per joint."""
+        f = self.friction
+        return (float(f),) * self.nq if isinstance(f, (int, float)) else tuple(f)
+
+    def lower(self) -> np.ndarray:
+        """Lower joint bounds (n,)."""
+        return np.array([lim.lower for lim in self.limits or ()])
+
+    def upper(self) -> np.ndarray:
+        """Upper joint bounds (n,)."""
+        return np.array([lim.upper for lim in self.limits or ()])
+
+    def link_inertial(self, j: int) -> Inertial:
+        """Inertial of the link of row ``j`` (0-based), the given one or the default rod."""
+        if self.inertials is not None and self.inertials[j] is not None:
+            inertial = self.inertials[j]
+            assert inertial is not None
+            return inertial
+        if j + 1 < len(self.rows):
+            nxt = self.rows[j + 1].transform(0.0)[:3, 3]
+        else:
+            nxt = np.zeros(3)
+        mass = self.link_mass if j + 1 < len(self.rows) else 0.2 * self.link_mass
+        return rod_inertial(np.zeros(3), nxt, mass, self.link_radius)
+
+    def replace(self, **changes: Any) -> Chain:
+        """Return a copy with fields replaced (validated again)."""
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+    # ----------------------------------------------------------------- constructors
+    @classmethod
+    def from_dh(cls, dh_rows: Sequence[DHRow], **kwargs: Any) -> Chain:
+        """Build a chain from a standard-DH table, exactly.
+
+        The product ``Π Rz(θi)Tz(di)Tx(ai)Rx(αi)`` is regrouped, using that ``Tx`` and ``Rx``
+        commute, into Khalil rows ``(α_{i-1}, a_{i-1}, θ_i, d_i)`` plus a fixed last row
+        ``(α_n, a_n, 0, 0)`` that carries the tool/foot frame. Forward kinematics are
+        identical (to rounding).
+
+        Args:
+            dh_rows: Standard-DH rows from the base.
+            **kwargs: Other :class:`Chain` fields (names, limits, tip, ...). ``link_names``
+                and ``inertials``, if given, must have ``len(dh_rows) + 1`` entries.
+
+        Returns:
+            The equivalent Khalil :class:`Chain`.
+        """
+        dh = list(dh_rows)
+        if not dh or not all(isinstance(r, DHRow) for r in dh):
+            raise ParameterError("Chain.from_dh: a non-empty sequence of DHRow is required")
+        rows = []
+        prev_alpha, prev_a = 0.0, 0.0
+        for row in dh:
+            rows.append(KhalilRow(row.sigma, prev_alpha, prev_a, row.theta, row.d))
+            prev_alpha, prev_a = row.alpha, row.a
+        rows.append(KhalilRow("fixed", prev_alpha, prev_a, 0.0, 0.0))
+        return cls(rows=tuple(rows), **kwargs)
+
+
+def _as_q(chain: Chain, q: Any) -> np.ndarray:
+    from .exceptions import ConfigurationError
+
+    try:
+        arr = np.asarray(q, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ConfigurationError(f"q={q!r} is not a sequence of numbers")
+    if arr.shape != (chain.nq,):
+        raise ConfigurationError(
+            f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints "
+            f"{list(chain.joint_names or ())}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ConfigurationError(f"q={arr.tolist()} contains non-finite values")
+    return arr
+
+
+def table_transforms(chain: Chain, q: Any) -> list[np.ndarray]:
+    """Multiply nothing: return every ``^{j-1}T_j`` of the table at ``q`` (pure numpy).
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,) in [rad] / [m].
+
+    Returns:
+        One 4×4 array per row, in table order.
+    """
+    qv = _as_q(chain, q)
+    out = []
+    k = 0
+    for row in chain.rows:
+        if row.is_joint:
+            out.append(row.transform(float(qv[k])))
+            k += 1
+        else:
+            out.append(row.transform())
+    return out
+
+
+def table_fk(chain: Chain, q: Any) -> np.ndarray:
+    """Forward kinematics by multiplying the Khalil transforms directly (pure numpy).
+
+    This is the independent reference every Pinocchio result is checked against.
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,) in [rad] / [m].
+
+    Returns:
+        ``^0T_tip`` (4×4).
+
+    Raises:
+        ConfigurationError: If ``q`` has the wrong length or non-finite values.
+    """
+    t = np.eye(4)
+    for tj in table_transforms(chain, q):
+        t = t @ tj
+    return t
+
+
+@dataclass(frozen=True)
+class LegMount:
+    """A leg fixed to the body: a chain and its mount pose on the body.
+
+    Attributes:
+        name: Leg name, used as prefix of its joints and links (e.g. ``"leg1"``).
+        chain: The leg's Khalil chain (its frame 0 is the mount frame).
+        xyz: Mount position in the body frame in [m].
+        yaw: Mount rotation about the body z axis in [rad].
+    """
+
+    name: str
+    chain: Chain
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        _name(self.name, "LegMount.name")
+        if not isinstance(self.chain, Chain):
+            raise ParameterError(f"LegMount.chain={self.chain!r} is not a Chain")
+        if len(tuple(self.xyz)) != 3:
+            raise ParameterError(f"LegMount.xyz={self.xyz!r}: three numbers required")
+        object.__setattr__(
+            self, "xyz", tuple(_finite(v, f"LegMount.xyz[{i}]") for i, v in enumerate(self.xyz))
+        )
+        object.__setattr__(self, "yaw", _finite(self.yaw, "LegMount.yaw"))
+
+    def transform(self) -> np.ndarray:
+        """Return ``^{body}T_{mount}`` (4×4)."""
+        t = _rz(self.yaw)
+        t[:3, 3] = self.xyz
+        return t
+
+
+@dataclass(frozen=True)
+class Hexapod:
+    """A body carrying legs (six for a hexapod), each on a fixed mount.
+
+    Attributes:
+        legs: The leg mounts.
+        name: Robot name.
+        body: Body link name.
+        body_size: Body box ``(length x, width y, height z)`` in [m] (visual and inertia).
+        body_mass: Body mass in [kg].
+        description: Free text written into the URDF header.
+    """
+
+    legs: tuple[LegMount, ...]
+    name: str = "hexapod"
+    body: str = "body"
+    body_size: tuple[float, float, float] = (0.30, 0.20, 0.05)
+    body_mass: float = 1.0
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        legs = tuple(self.legs)
+        if not legs or not all(isinstance(x, LegMount) for x in legs):
+            raise ParameterError("Hexapod.legs: a non-empty sequence of LegMount is required")
+        object.__setattr__(self, "legs", legs)
+        _name(self.name, "Hexapod.name")
+        _name(self.body, "Hexapod.body")
+        names = [x.name for x in legs]
+        if len(set(names)) != len(names):
+            raise ParameterError(f"Hexapod.legs names must be unique, got {names}")
+        size = tuple(_finite(v, "Hexapod.body_size") for v in self.body_size)
+        if len(size) != 3 or min(size) <= 0:
+            raise ParameterError(f"Hexapod.body_size={self.body_size!r}: three lengths > 0 m")
+        object.__setattr__(self, "body_size", size)
+        m = _finite(self.body_mass, "Hexapod.body_mass")
+        if m <= 0:
+            raise ParameterError(f"Hexapod.body_mass={m}: must be > 0 kg")
+        object.__setattr__(self, "body_mass", m)
+
+    @property
+    def nq(self) -> int:
+        """Total number of joint variables."""
+        return sum(leg.chain.nq for leg in self.legs)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Joint names ``<leg>_<joint>`` in leg order."""
+        return tuple(
+            f"{leg.name}_{j}" for leg in self.legs for j in (leg.chain.joint_names or ())
+        )
+
+    @property
+    def foot_frames(self) -> tuple[str, ...]:
+        """Tip frame names ``<leg>_<tip>`` in leg order."""
+        return tuple(f"{leg.name}_{leg.chain.tip}" for leg in self.legs)
+
+    def leg(self, name: str) -> LegMount:
+        """Return the leg mount called ``name``."""
+        for leg in self.legs:
+            if leg.name == name:
+                return leg
+        from .exceptions import choices
+
+        raise ParameterError(
+            f"leg={name!r} does not exist; legs are {choices(x.name for x in self.legs)}"
+        )
+

@@ -1,0 +1,316 @@
+"""Parameter tables → deterministic URDF text (the "xacro-like" generators).
+
+No Pinocchio here: this module only turns :class:`~hexapod_kin.params.Chain` and
+:class:`~hexapod_kin.params.Hexapod` objects into URDF strings and writes them atomically.
+
+Mapping, row by row: Khalil row ``j`` becomes a URDF joint whose ``<origin>`` is
+``^{j-1}T_j`` at ``q = 0`` (``Rx(α)·Tx(d)·Rz(θ)·Tz(r)``) and whose axis is ``0 0 1``
+(``z_j``), so the URDF link of row ``j`` *is* Khalil frame ``j``. A fixed row becomes a fixed
+joint. Visuals: a sphere at every joint and a cylinder from each frame's origin to the next
+one's; the tip gets a sphere (the foot). Inertials come from the chain (default: rods).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from ._io import atomic_write
+from .exceptions import ParameterError
+from .params import Chain, Hexapod, LegMount
+
+__all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
+
+_COLORS = {
+    "body": "0.25 0.30 0.35 1",
+    "link": "0.85 0.55 0.15 1",
+    "joint": "0.20 0.45 0.80 1",
+    "foot": "0.80 0.15 0.15 1",
+    "base": "0.50 0.50 0.50 1",
+}
+
+
+def _num(x: float) -> str:
+    x = float(x)
+    if abs(x) < 1e-300 or x == 0.0:
+        return "0"
+    text = repr(x)
+    return text[:-2] if text.endswith(".0") else text
+
+
+def _vec(v: np.ndarray | tuple[float, ...]) -> str:
+    return " ".join(_num(c) for c in v)
+
+
+def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll-pitch-yaw of a rotation matrix, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+
+    Args:
+        rot: 3×3 rotation matrix.
+
+    Returns:
+        ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
+    """
+    r = np.asarray(rot, float)
+    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
+    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:
+        return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
+    return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+
+
+def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation matrix ``Rz(yaw)·Ry(pitch)·Rx(roll)`` (the URDF convention)."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _origin(t: np.ndarray) -> str:
+    rpy = matrix_to_rpy(t[:3, :3])
+    return f'<origin xyz="{_vec(t[:3, 3])}" rpy="{_vec(rpy)}"/>'
+
+
+def _z_to(v: np.ndarray) -> tuple[float, float, float]:
+    """rpy of a rotation taking +z onto the unit vector ``v``."""
+    z = v / np.linalg.norm(v)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return matrix_to_rpy(np.column_stack([x, y, z]))
+
+
+def _comment(text: str) -> str:
+    clean = text.replace("--", "- -").replace("\n", " ").strip()
+    return f"<!-- {clean} -->"
+
+
+def _material(name: str) -> str:
+    return f'<material name="{name}"><color rgba="{_COLORS[name]}"/></material>'
+
+
+def _inertial_xml(chain: Chain, j: int, indent: str) -> list[str]:
+    inn = chain.link_inertial(j)
+    ixx, iyy, izz, ixy, ixz, iyz = inn.inertia
+    return [
+        f"{indent}<inertial>",
+        f'{indent}  <origin xyz="{_vec(inn.com)}" rpy="0 0 0"/>',
+        f'{indent}  <mass value="{_num(inn.mass)}"/>',
+        f'{indent}  <inertia ixx="{_num(ixx)}" ixy="{_num(ixy)}" ixz="{_num(ixz)}" '
+        f'iyy="{_num(iyy)}" iyz="{_num(iyz)}" izz="{_num(izz)}"/>',
+        f"{indent}</inertial>",
+    ]
+
+
+def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
+    out: list[str] = []
+    row = chain.rows[j]
+    rad = chain.link_radius
+    is_tip = j + 1 == len(chain.rows)
+    if is_tip:
+        out += [
+            f"{indent}<visual>",
+            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
+            f'{indent}  <geometry><sphere radius="{_num(1.5 * rad)}"/></geometry>',
+            f'{indent}  <material name="foot"/>',
+            f"{indent}</visual>",
+        ]
+        return out
+    if row.is_joint:
+        out += [
+            f"{indent}<visual>",
+            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
+            f'{indent}  <geometry><cylinder radius="{_num(1.6 * rad)}" '
+            f'length="{_num(4.0 * rad)}"/></geometry>',
+            f'{indent}  <material name="joint"/>',
+            f"{indent}</visual>",
+        ]
+    nxt = chain.rows[j + 1].transform(0.0)[:3, 3]
+    length = float(np.linalg.norm(nxt))
+    if length > 1e-9:
+        mid = 0.5 * nxt
+        out += [
+            f"{indent}<visual>",
+            f'{indent}  <origin xyz="{_vec(mid)}" rpy="{_vec(_z_to(nxt))}"/>',
+            f'{indent}  <geometry><cylinder radius="{_num(rad)}" length="{_num(length)}"/>'
+            "</geometry>",
+            f'{indent}  <material name="link"/>',
+            f"{indent}</visual>",
+        ]
+    return out
+
+
+def _chain_body(
+    chain: Chain, prefix: str, parent: str, indent: str = "  "
+) -> list[str]:
+    """Joints and links of ``chain`` hanging from link ``parent`` (frame 0 = parent)."""
+    lines: list[str] = []
+    link_names = chain.link_names or ()
+    joint_names = chain.joint_names or ()
+    limits = chain.limits or ()
+    damping, friction = chain.joint_damping(), chain.joint_friction()
+    k = 0
+    prev = parent
+    for j, row in enumerate(chain.rows):
+        child = prefix + link_names[j]
+        t0 = row.transform(0.0)
+        lines.append(indent + _comment(
+            f"row {j + 1}: sigma={row.sigma} alpha={_num(row.alpha)} d={_num(row.d)} "
+            f"theta={_num(row.theta)} r={_num(row.r)}"
+        ))
+        if row.is_joint:
+            jname = prefix + joint_names[k]
+            lim = limits[k]
+            lines += [
+                f'{indent}<joint name="{jname}" type="{row.sigma}">',
+                f'{indent}  <parent link="{prev}"/>',
+                f'{indent}  <child link="{child}"/>',
+                f"{indent}  {_origin(t0)}",
+                f'{indent}  <axis xyz="0 0 1"/>',
+                f'{indent}  <limit lower="{_num(lim.lower)}" upper="{_num(lim.upper)}" '
+                f'effort="{_num(lim.effort)}" velocity="{_num(lim.velocity)}"/>',
+                f'{indent}  <dynamics damping="{_num(damping[k])}" '
+                f'friction="{_num(friction[k])}"/>',
+                f"{indent}</joint>",
+            ]
+            k += 1
+        else:
+            lines += [
+                f'{indent}<joint name="{child}_fixed" type="fixed">',
+                f'{indent}  <parent link="{prev}"/>',
+                f'{indent}  <child link="{child}"/>',
+                f"{indent}  {_origin(t0)}",
+                f"{indent}</joint>",
+            ]
+        lines.append(f'{indent}<link name="{child}">')
+        lines += _inertial_xml(chain, j, indent + "  ")
+        lines += _visuals(chain, j, indent + "  ")
+        lines.append(f"{indent}</link>")
+        prev = child
+    return lines
+
+
+def _header(name: str, description: str, header: str | None) -> list[str]:
+    lines = ['<?xml version="1.0" encoding="utf-8"?>']
+    lines.append(_comment(f"Generated by hexapod_kin {__version__}: {description or name}"))
+    if header:
+        lines.append(_comment(header))
+    lines.append(_comment("Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j."))
+    lines.append(f'<robot name="{name}">')
+    lines += ["  " + _material(m) for m in ("base", "body", "link", "joint", "foot")]
+    return lines
+
+
+def _chain_urdf(chain: Chain, header: str | None) -> str:
+    lines = _header(chain.name, chain.description, header)
+    rad = chain.link_radius
+    lines += [
+        f'  <link name="{chain.base}">',
+        "    <visual>",
+        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
+        f'      <geometry><box size="{_vec((6 * rad, 6 * rad, 2 * rad))}"/></geometry>',
+        '      <material name="base"/>',
+        "    </visual>",
+        "  </link>",
+    ]
+    lines += _chain_body(chain, "", chain.base)
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def _body_link(robot: Hexapod) -> list[str]:
+    lx, ly, lz = robot.body_size
+    m = robot.body_mass
+    ixx, iyy, izz = (
+        m * (ly**2 + lz**2) / 12.0,
+        m * (lx**2 + lz**2) / 12.0,
+        m * (lx**2 + ly**2) / 12.0,
+    )
+    return [
+        f'  <link name="{robot.body}">',
+        "    <inertial>",
+        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
+        f'      <mass value="{_num(m)}"/>',
+        f'      <inertia ixx="{_num(ixx)}" ixy="0" ixz="0" iyy="{_num(iyy)}" iyz="0" '
+        f'izz="{_num(izz)}"/>',
+        "    </inertial>",
+        "    <visual>",
+        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
+        f'      <geometry><box size="{_vec(robot.body_size)}"/></geometry>',
+        '      <material name="body"/>',
+        "    </visual>",
+        "  </link>",
+    ]
+
+
+def _mount(robot: Hexapod, leg: LegMount) -> list[str]:
+    base = f"{leg.name}_{leg.chain.base}"
+    return [
+        "  " + _comment(f"{leg.name}: mount xyz={_vec(leg.xyz)} yaw={_num(leg.yaw)} rad"),
+        f'  <joint name="{leg.name}_mount" type="fixed">',
+        f'    <parent link="{robot.body}"/>',
+        f'    <child link="{base}"/>',
+        f"    {_origin(leg.transform())}",
+        "  </joint>",
+        f'  <link name="{base}"/>',
+    ] + _chain_body(leg.chain, f"{leg.name}_", base)
+
+
+def _robot_urdf(robot: Hexapod, leg: str | None, header: str | None) -> str:
+    legs = robot.legs if leg is None else (robot.leg(leg),)
+    name = robot.name if leg is None else f"{robot.name}_{leg}"
+    lines = _header(name, robot.description, header)
+    lines += _body_link(robot)
+    for mount in legs:
+        lines += _mount(robot, mount)
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def to_urdf(
+    source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None
+) -> str:
+    """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
+
+    Args:
+        source: A :class:`Chain` or a :class:`Hexapod`.
+        leg: For a :class:`Hexapod`, emit only this leg with its mount on the body.
+        header: Extra line for the header comment (e.g. which command made the file).
+
+    Returns:
+        The URDF document as a string.
+
+    Raises:
+        ParameterError: If ``source`` is of another type, or ``leg`` is given for a chain.
+    """
+    if isinstance(source, Chain):
+        if leg is not None:
+            raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
+        return _chain_urdf(source, header)
+    if isinstance(source, Hexapod):
+        return _robot_urdf(source, leg, header)
+    raise ParameterError(
+        f"source={type(source).__name__} is not allowed; to_urdf takes a Chain or a Hexapod"
+    )
+
+
+def write_urdf(
+    source: Chain | Hexapod,
+    path: str | os.PathLike[str],
+    *,
+    leg: str | None = None,
+    header: str | None = None,
+) -> Path:
+    """Write :func:`to_urdf` of ``source`` to ``path`` atomically and return the path."""
+    return atomic_write(path, to_urdf(source, leg=leg, header=header))
