@@ -130,6 +130,8 @@ class KinematicModel(Model):
         fid = self.tip_id if frame is None else self.frame_id(frame)
         qv = self.check_q(q)
         jac = pin.computeFrameJacobian(self.model, self.data, qv, fid, ref)
+        if self.nq == 1:  # Eigen 6x1 comes back as a 1-D array
+            jac = jac.reshape(6, 1)
         if self._base_is_root or ref == pin.ReferenceFrame.LOCAL:
             return jac  # type: ignore[no-any-return]
         if ref == pin.ReferenceFrame.WORLD:
@@ -151,6 +153,8 @@ class KinematicModel(Model):
         ref = _reference(reference)
         qv = self.check_q(q)
         jac = pin.computeFrameJacobian(self.model, self.data, qv, self.tip_id, ref)
+        if self.nq == 1:
+            jac = jac.reshape(6, 1)
         omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
         if self._base_is_root:
             return omf.homogeneous, jac
