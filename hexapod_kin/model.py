@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from . import robots
 from ._gate import check_urdf
-from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, choices
+from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, UrdfError, choices
 from .params import Chain, Hexapod
 from .urdf import to_urdf
 
@@ -190,9 +190,15 @@ class Model:
         reduce: bool | None = None,
         q_ref: Any = None,
     ) -> None:
-        gate = check_urdf(resolved.text)
-        del gate
-        full = pin.buildModelFromXML(resolved.text)
+        check_urdf(
+            resolved.text, package_dirs=resolved.package_dirs, mesh_root=resolved.mesh_root
+        )
+        try:
+            full = pin.buildModelFromXML(resolved.text)
+        except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
+            raise UrdfError(
+                f"{resolved.name!r}: passed the loader gate but Pinocchio refused it: {exc}"
+            ) from None
         self.full_model: pin.Model = full
         self.urdf: str = resolved.text
         self.source = resolved
@@ -222,7 +228,9 @@ class Model:
                     f"{choices(full_frames, limit=200)}"
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
-        self.model, self._locked = _reduce(full, base_name, tip_name, do_reduce, q_ref)
+        self.model, self._locked, self._q_ref = _reduce(
+            full, base_name, tip_name, do_reduce, q_ref
+        )
         self.data: pin.Data = self.model.createData()
         self.base = base_name
         self.tip = tip_name
@@ -363,6 +371,49 @@ class Model:
         size = (self.nq,) if n is None else (n, self.nq)
         return rng.uniform(lo, hi, size=size)
 
+    @property
+    def locked_joints(self) -> tuple[str, ...]:
+        """Names of the joints of the full model locked by the base/tip reduction."""
+        return tuple(self.full_model.names[i] for i in self._locked)
+
+    def geometry_model(self, kind: str = "visual") -> Any:
+        """Pinocchio ``GeometryModel`` of the (reduced) model, built from the same URDF text.
+
+        Args:
+            kind: ``"visual"`` or ``"collision"``.
+
+        Returns:
+            A ``pinocchio.GeometryModel`` matching :attr:`model` (meshes are resolved with the
+            source's package directories).
+        """
+        from .exceptions import ParameterError
+
+        kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
+        if kind not in kinds:
+            raise ParameterError(f"kind={kind!r} is not allowed; use {choices(kinds)}")
+        dirs = list(self.source.package_dirs)
+        if self.source.mesh_root:
+            dirs.append(self.source.mesh_root)
+        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf, kinds[kind], None, dirs)
+        if self._locked:
+            _, geoms = pin.buildReducedModel(self.full_model, [geom], list(self._locked), self._q_ref)
+            geom = geoms[0]
+        return geom
+
+    def yourdfpy(self) -> Any:
+        """The same URDF text loaded by yourdfpy (a second engine; meshes not loaded)."""
+        import io
+
+        import yourdfpy
+
+        return yourdfpy.URDF.load(
+            io.BytesIO(self.urdf.encode("utf-8")),
+            build_scene_graph=True,
+            build_collision_scene_graph=False,
+            load_meshes=False,
+            load_collision_meshes=False,
+        )
+
     def __repr__(self) -> str:
         return (
             f"<hexapod_kin Model {self.name!r}: nq={self.nq} joints={list(self.joint_names)} "
@@ -379,9 +430,9 @@ def _last_body_frame(model: pin.Model) -> str:
 
 def _reduce(
     full: pin.Model, base: str, tip: str, do_reduce: bool, q_ref: Any
-) -> tuple[pin.Model, tuple[str, ...]]:
+) -> tuple[pin.Model, tuple[int, ...], np.ndarray]:
     if not do_reduce:
-        return full, ()
+        return full, (), pin.neutral(full)
     base_joint = full.frames[full.getFrameId(base)].parentJoint
     tip_joint = full.frames[full.getFrameId(tip)].parentJoint
     tip_support = list(full.supports[tip_joint])
@@ -393,15 +444,15 @@ def _reduce(
         )
     keep = set(tip_support) - base_support
     lock = [i for i in range(1, full.njoints) if i not in keep]
-    if not lock:
-        return full, ()
     ref = pin.neutral(full) if q_ref is None else np.asarray(q_ref, dtype=float)
     if ref.shape != (full.nq,) or not np.all(np.isfinite(ref)):
         raise ConfigurationError(
             f"q_ref has shape {np.shape(q_ref)}; expected ({full.nq},) finite values"
         )
+    if not lock:
+        return full, (), ref
     reduced = pin.buildReducedModel(full, lock, ref)
-    return reduced, tuple(full.names[i] for i in lock)
+    return reduced, tuple(lock), ref
 
 
 def _path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
