@@ -110,8 +110,8 @@ def _cmd_list(args: argparse.Namespace) -> int:
 def _add_urdf(sub: Any) -> None:
     p = sub.add_parser("urdf", help="export the URDF of a preset")
     p.add_argument("preset", help="preset name (see `hexapod-kin list`)")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
-    p.add_argument("--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
+    p.add_argument("-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
 
 
@@ -120,9 +120,10 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     from .urdf import to_urdf, write_urdf
 
     built = robots.get(args.preset, **_set_params(args.set))
+    # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
-        [args.preset] + [f"--set {s}" for s in args.set or ()]
-        + ([f"--leg {args.leg}"] if args.leg else [])
+        [args.preset] + [f"-s {s}" for s in args.set or ()]
+        + ([f"-l {args.leg}"] if args.leg else [])
     )
     if args.output:
         path = write_urdf(built, args.output, leg=args.leg, header=f"made by: {command}")

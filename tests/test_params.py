@@ -1,0 +1,151 @@
+"""Parameter tables: transforms, validation, standard DH -> Khalil conversion."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hexapod_kin import Chain, DHRow, HexapodKinError, Inertial, JointLimits, KhalilRow, table_fk
+from hexapod_kin.exceptions import ConfigurationError, ParameterError
+from hexapod_kin.params import dh_transform, khalil_transform, rod_inertial, table_transforms
+
+
+def rx(a):
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+
+def rz(a):
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+
+def tx(d):
+    t = np.eye(4)
+    t[0, 3] = d
+    return t
+
+
+def tz(d):
+    t = np.eye(4)
+    t[2, 3] = d
+    return t
+
+
+def test_khalil_transform_is_product_of_elementary_transforms():
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        a, d, th, r = rng.uniform(-3, 3, 4)
+        ref = rx(a) @ tx(d) @ rz(th) @ tz(r)
+        np.testing.assert_allclose(khalil_transform(a, d, th, r), ref, atol=1e-15)
+
+
+def test_dh_transform_is_product_of_elementary_transforms():
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        th, d, a, al = rng.uniform(-3, 3, 4)
+        ref = rz(th) @ tz(d) @ tx(a) @ rx(al)
+        np.testing.assert_allclose(dh_transform(th, d, a, al), ref, atol=1e-15)
+
+
+def test_seed_001_equation_3_row_2():
+    # Seed 001 eq. (3): T12 with alpha = -pi/2, d = L1.
+    q2, l1 = 0.3, 0.05
+    t = KhalilRow("revolute", -math.pi / 2, l1, 0.0, 0.0).transform(q2)
+    c, s = math.cos(q2), math.sin(q2)
+    ref = np.array([[c, -s, 0, l1], [0, 0, 1, 0], [-s, -c, 0, 0], [0, 0, 0, 1]])
+    np.testing.assert_allclose(t, ref, atol=1e-15)
+
+
+@pytest.mark.parametrize("sigma,expected", [(0, "revolute"), (1, "prismatic"), (2, "fixed"),
+                                            ("Revolute", "revolute"), ("p", "prismatic")])
+def test_sigma_accepts_codes_and_names(sigma, expected):
+    assert KhalilRow(sigma).sigma == expected
+
+
+def test_prismatic_variable_adds_to_r():
+    row = KhalilRow("prismatic", 0.2, 0.1, 0.3, 0.05)
+    np.testing.assert_allclose(row.transform(0.2), khalil_transform(0.2, 0.1, 0.3, 0.25))
+
+
+@pytest.mark.parametrize(
+    "make,fragment",
+    [
+        (lambda: KhalilRow(3), "sigma=3"),
+        (lambda: KhalilRow("revolute", float("nan")), "KhalilRow.alpha=nan"),
+        (lambda: KhalilRow("revolute", 0, float("inf")), "KhalilRow.d=inf"),
+        (lambda: KhalilRow("revolute", 0, "x"), "not a number"),
+        (lambda: JointLimits(1.0, -1.0), "lower=1.0 > upper=-1.0"),
+        (lambda: JointLimits(velocity=-1), "must be >= 0"),
+        (lambda: Inertial(mass=-1.0), "mass=-1.0"),
+        (lambda: Inertial(mass=1.0, inertia=(1, 1, -1, 0, 0, 0)), "not positive definite"),
+        (lambda: Inertial(mass=1.0, inertia=(1, 1, 3, 0, 0, 0)), "triangle"),
+        (lambda: Chain(rows=()), "empty"),
+        (lambda: Chain(rows=(KhalilRow("fixed"),)), "nothing moves"),
+        (lambda: Chain(rows=(KhalilRow(0),), joint_names=("a", "b")), "2 names"),
+        (lambda: Chain(rows=(KhalilRow(0),), joint_names=("bad name",)), "not a valid name"),
+        (lambda: Chain(rows=(KhalilRow(0),), link_mass=0), "link_mass=0"),
+        (lambda: Chain(rows=(KhalilRow(0), KhalilRow(0)), joint_names=("a", "a")), "unique"),
+        (lambda: Chain(rows=(DHRow(),)), "not a KhalilRow"),
+    ],
+)
+def test_validation_errors_name_field_and_value(make, fragment):
+    with pytest.raises(ParameterError) as info:
+        make()
+    assert fragment in str(info.value)
+    assert isinstance(info.value, HexapodKinError)
+
+
+def test_table_fk_checks_q():
+    chain = Chain(rows=(KhalilRow(0), KhalilRow(0, 0, 1.0)))
+    with pytest.raises(ConfigurationError, match="2 joints"):
+        table_fk(chain, [0.0])
+    with pytest.raises(ConfigurationError, match="non-finite"):
+        table_fk(chain, [0.0, float("nan")])
+
+
+def _random_dh(rng, n):
+    rows = []
+    for _ in range(n):
+        sigma = rng.choice(["revolute", "prismatic"])
+        rows.append(DHRow(*rng.uniform(-2, 2, 4), sigma=sigma))
+    return rows
+
+
+def test_standard_dh_to_khalil_gives_identical_fk():
+    rng = np.random.default_rng(7)
+    for trial in range(50):
+        n = int(rng.integers(1, 7))
+        dh = _random_dh(rng, n)
+        chain = Chain.from_dh(dh)
+        assert chain.nq == n and len(chain.rows) == n + 1
+        for _ in range(4):
+            q = rng.uniform(-3, 3, n)
+            ref = np.eye(4)
+            for row, qi in zip(dh, q):
+                ref = ref @ row.transform(qi)
+            np.testing.assert_allclose(table_fk(chain, q), ref, atol=1e-12)
+
+
+def test_table_transforms_product_equals_table_fk():
+    chain = Chain.from_dh(_random_dh(np.random.default_rng(3), 4))
+    q = np.linspace(-1, 1, 4)
+    prod = np.eye(4)
+    for t in table_transforms(chain, q):
+        prod = prod @ t
+    np.testing.assert_allclose(prod, table_fk(chain, q), atol=1e-15)
+
+
+def test_rod_inertial_matches_closed_form():
+    inn = rod_inertial(np.zeros(3), np.array([0.0, 0.0, 2.0]), 3.0, 0.1)
+    assert inn.com == (0.0, 0.0, 1.0)
+    ixx = 3.0 * (3 * 0.01 + 4.0) / 12
+    np.testing.assert_allclose(inn.matrix(), np.diag([ixx, ixx, 0.5 * 3.0 * 0.01]), atol=1e-15)
+
+
+def test_chain_is_frozen():
+    chain = Chain(rows=(KhalilRow(0),))
+    with pytest.raises(AttributeError):
+        chain.name = "x"  # type: ignore[misc]
