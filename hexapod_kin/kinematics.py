@@ -16,11 +16,16 @@ from __future__ import annotations
 
 from typing import Any
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import ParameterError, choices
-from .model import Model, build
+from .model import _F64, Model, build
+
+_ND = np.ndarray
+_isfinite = math.isfinite
 
 __all__ = [
     "REFERENCES",
@@ -62,8 +67,15 @@ class KinematicModel(Model):
         Raises:
             ConfigurationError: Wrong shape or non-finite values.
         """
-        qv = self.check_q(q)
-        pin.forwardKinematics(self.model, self.data, qv)
+        # Fast path inlined (this is the hot call): float64 array of the right shape, finite.
+        if not (
+            q.__class__ is _ND
+            and q.dtype is _F64
+            and q.shape == self._shape
+            and _isfinite(sum(q.tolist()))
+        ):
+            q = self.check_q(q)
+        pin.forwardKinematics(self.model, self.data, q)
         omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
         if self._base_is_root:
             return omf.homogeneous  # type: ignore[no-any-return]
@@ -126,11 +138,19 @@ class KinematicModel(Model):
             FrameNotFoundError: Unknown ``frame``.
             ConfigurationError: Bad ``q``.
         """
-        ref = _reference(reference)
+        ref = REFERENCES.get(reference) if reference.__class__ is str else None
+        if ref is None:
+            ref = _reference(reference)
         fid = self.tip_id if frame is None else self.frame_id(frame)
-        qv = self.check_q(q)
-        jac = pin.computeFrameJacobian(self.model, self.data, qv, fid, ref)
-        if self.nq == 1:  # Eigen 6x1 comes back as a 1-D array
+        if not (
+            q.__class__ is _ND
+            and q.dtype is _F64
+            and q.shape == self._shape
+            and _isfinite(sum(q.tolist()))
+        ):
+            q = self.check_q(q)
+        jac = pin.computeFrameJacobian(self.model, self.data, q, fid, ref)
+        if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array
             jac = jac.reshape(6, 1)
         if self._base_is_root or ref == pin.ReferenceFrame.LOCAL:
             return jac  # type: ignore[no-any-return]

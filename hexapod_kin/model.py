@@ -27,6 +27,8 @@ from .urdf import to_urdf
 
 __all__ = ["Model", "build", "erd_names", "erd_path", "resolve_source", "ResolvedSource"]
 
+_F64 = np.dtype(np.float64)
+
 _SIMPLE_JOINTS = {
     "JointModelRX",
     "JointModelRY",
@@ -322,9 +324,13 @@ class Model:
         Raises:
             ConfigurationError: Wrong length, not numbers, or non-finite values.
         """
-        if type(q) is np.ndarray and q.dtype == np.float64 and q.shape == self._shape:
-            if math.isfinite(q @ q):
-                return q
+        if (
+            q.__class__ is np.ndarray
+            and q.dtype is _F64
+            and q.shape == self._shape
+            and math.isfinite(sum(q.tolist()))
+        ):
+            return q
         try:
             arr = np.asarray(q, dtype=np.float64)
         except (TypeError, ValueError):
