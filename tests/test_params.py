@@ -149,3 +149,13 @@ def test_chain_is_frozen():
     chain = Chain(rows=(KhalilRow(0),))
     with pytest.raises(AttributeError):
         chain.name = "x"  # type: ignore[misc]
+
+
+def test_readme_example_khalil_equals_dh():
+    from math import pi
+
+    khalil = Chain(rows=(KhalilRow(0, 0, 0, 0, 0), KhalilRow(0, -pi / 2, 0.05, 0, 0),
+                         KhalilRow(0, 0, 0.10, 0, 0), KhalilRow("fixed", 0, 0.10, 0, 0)))
+    dh = Chain.from_dh([DHRow(0, 0, 0.05, -pi / 2), DHRow(0, 0, 0.10, 0), DHRow(0, 0, 0.10, 0)])
+    for q in np.random.default_rng(9).uniform(-3, 3, (20, 3)):
+        np.testing.assert_allclose(table_fk(khalil, q), table_fk(dh, q), atol=1e-15)
