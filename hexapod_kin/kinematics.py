@@ -43,7 +43,7 @@ REFERENCES: dict[str, pin.ReferenceFrame] = {
 
 
 def _reference(reference: str) -> pin.ReferenceFrame:
-    key = reference.lower() if isinstance(reference, str) else reference
+    key = reference.lower() if isinstance(reference, str) else None
     if key not in REFERENCES:
         raise ParameterError(
             f"reference={reference!r} is not allowed; use one of {choices(REFERENCES)}"
@@ -228,6 +228,8 @@ def indirect_jacobian(model: KinematicModel, q: Any, h: float = 1e-6) -> np.ndar
         The 3×nq position Jacobian (accurate to O(h²)).
     """
     qv = model.check_q(q).copy()
+    if not (isinstance(h, (int, float)) and math.isfinite(h) and h > 0):
+        raise ParameterError(f"h={h!r} is not allowed; a finite step > 0 is required")
     cols = []
     for j in range(model.nq):
         qp, qm = qv.copy(), qv.copy()

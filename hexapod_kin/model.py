@@ -328,12 +328,16 @@ class Model:
             q.__class__ is np.ndarray
             and q.dtype is _F64
             and q.shape == self._shape
-            and math.isfinite(sum(q.tolist()))
+            and math.isfinite(sum(t := q.tolist()))
+            and -1e150 < min(t, default=0.0)
+            and max(t, default=0.0) < 1e150
         ):
             return q
         try:
+            if np.asarray(q).dtype.kind in "USb":  # strings and booleans are not joint values
+                raise TypeError
             arr = np.asarray(q, dtype=np.float64)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ConfigurationError(
                 f"{name}={q!r} is not a sequence of {self.nq} numbers "
                 f"(joints {list(self.joint_names)})"
@@ -352,8 +356,10 @@ class Model:
     def check_q_batch(self, q: Any, name: str = "q") -> np.ndarray:
         """Return ``q`` as an (N, nq) float array, checked (a single (nq,) becomes (1, nq))."""
         try:
+            if np.asarray(q).dtype.kind in "USb":
+                raise TypeError
             arr = np.asarray(q, dtype=np.float64)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise ConfigurationError(f"{name} is not an array of numbers") from None
         if arr.ndim == 1:
             arr = arr[None, :]
@@ -364,6 +370,8 @@ class Model:
             )
         if not np.all(np.isfinite(arr)):
             raise ConfigurationError(f"{name} contains non-finite values")
+        if not np.all(np.abs(arr) < 1e150):
+            raise ConfigurationError(f"{name} has values too large (|x| >= 1e150)")
         return arr
 
     def neutral(self) -> np.ndarray:
@@ -372,6 +380,8 @@ class Model:
 
     def random_q(self, n: int | None = None, seed: int | None = None) -> np.ndarray:
         """Uniform random configurations within the joint limits ((nq,) or (n, nq))."""
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 0):
+            raise ConfigurationError(f"n={n!r} is not allowed; a count >= 0 (or None) required")
         rng = np.random.default_rng(seed)
         lo, hi = self.lower, self.upper
         size = (self.nq,) if n is None else (n, self.nq)
@@ -450,7 +460,10 @@ def _reduce(
         )
     keep = set(tip_support) - base_support
     lock = [i for i in range(1, full.njoints) if i not in keep]
-    ref = pin.neutral(full) if q_ref is None else np.asarray(q_ref, dtype=float)
+    try:
+        ref = pin.neutral(full) if q_ref is None else np.asarray(q_ref, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigurationError(f"q_ref={q_ref!r} is not a sequence of numbers") from None
     if ref.shape != (full.nq,) or not np.all(np.isfinite(ref)):
         raise ConfigurationError(
             f"q_ref has shape {np.shape(q_ref)}; expected ({full.nq},) finite values"
