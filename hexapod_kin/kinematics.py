@@ -216,27 +216,61 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     return np.column_stack(cols)
 
 
-def indirect_jacobian(model: KinematicModel, q: Any, h: float = 1e-6) -> np.ndarray:
-    """The textbook *indirect* method ``∂p/∂q``, by central differences of :meth:`fk`.
+def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
+    """The textbook *indirect* method ``∂p/∂q``, exact (no finite differences).
+
+    The foot position is a product of transforms; its derivative with respect to ``q_j`` is
+    the same product with joint ``j``'s transform replaced by its derivative (``E_j·G_j``,
+    ``G_j`` the joint's generator). For a model built from a Khalil table the table itself is
+    differentiated (:func:`~hexapod_kin.params.table_position_jacobian`); otherwise the
+    Pinocchio joint placements and axes are. No Jacobian routine of Pinocchio is used.
 
     Args:
         model: A loaded model.
         q: Joint values (nq,).
-        h: Step in [rad] / [m].
 
     Returns:
-        The 3×nq position Jacobian (accurate to O(h²)).
+        The 3×nq position Jacobian in the base frame.
     """
-    qv = model.check_q(q).copy()
-    if not (isinstance(h, (int, float)) and math.isfinite(h) and h > 0):
-        raise ParameterError(f"h={h!r} is not allowed; a finite step > 0 is required")
-    cols = []
-    for j in range(model.nq):
-        qp, qm = qv.copy(), qv.copy()
-        qp[j] += h
-        qm[j] -= h
-        cols.append((model.fk(qp)[:3, 3] - model.fk(qm)[:3, 3]) / (2 * h))
-    return np.column_stack(cols)
+    from .params import Chain, table_position_jacobian
+
+    qv = model.check_q(q)
+    chain = model.params
+    if isinstance(chain, Chain) and model.base == chain.base and model.tip == chain.tip:
+        return table_position_jacobian(chain, qv)
+    from ._kernels import ChainArrays
+
+    arrays = ChainArrays.from_model(model)
+    mats = []
+    gens = []
+    for k in range(arrays.rot.shape[0]):
+        place = np.eye(4)
+        place[:3, :3] = arrays.rot[k]
+        place[:3, 3] = arrays.trans[k]
+        axis = arrays.axis[k]
+        val = qv[arrays.col[k]]
+        motion = np.eye(4)
+        gen = np.zeros((4, 4))
+        if arrays.kind[k] == 1:
+            motion[:3, 3] = axis * val
+            gen[:3, 3] = axis
+        else:
+            motion[:3, :3] = pin.exp3(axis * val)
+            gen[:3, :3] = pin.skew(axis)
+        mats.append(place @ motion)
+        gens.append(gen)
+    tip = np.eye(4)
+    tip[:3, 3] = arrays.trans[-1]
+    mats.append(tip)
+    jac = np.zeros((3, model.nq))
+    prefix = np.eye(4)
+    for k in range(len(gens)):
+        prefix = prefix @ mats[k]
+        suffix = np.eye(4)
+        for m in mats[k + 1 :]:
+            suffix = suffix @ m
+        jac[:, arrays.col[k]] += (prefix @ gens[k] @ suffix)[:3, 3]
+    return jac
 
 
 def _joint_axis(model: pin.Model, i: int) -> np.ndarray:

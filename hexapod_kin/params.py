@@ -47,6 +47,8 @@ __all__ = [
     "table_fk",
     "table_transforms",
     "rod_inertial",
+    "table_position_jacobian",
+    "chain_from_rows",
 ]
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
@@ -605,6 +607,63 @@ def table_fk(chain: Chain, q: Any) -> np.ndarray:
     for tj in table_transforms(chain, q):
         t = t @ tj
     return t
+
+
+_GZ = np.array([[0.0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]])
+_GT = np.array([[0.0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]])
+
+
+def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
+    """The *indirect* method, exactly: ``∂p/∂q`` by differentiating the table's product.
+
+    ``∂(T_1···T_n)/∂q_j = (T_1···T_j)·G_j·(T_{j+1}···T_n)`` with ``G_j`` the generator of
+    ``Rz`` (revolute) or ``Tz`` (prismatic) — no finite differences, exact to rounding.
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,).
+
+    Returns:
+        The 3×n position Jacobian of the tip in the base frame.
+    """
+    ts = table_transforms(chain, q)
+    n_rows = len(ts)
+    prefix = [np.eye(4)]
+    for t in ts:
+        prefix.append(prefix[-1] @ t)
+    suffix = [np.eye(4)] * (n_rows + 1)
+    for j in range(n_rows - 1, -1, -1):
+        suffix[j] = ts[j] @ suffix[j + 1]
+    cols = []
+    for j in chain.joint_rows:
+        gen = _GZ if chain.rows[j].sigma == "revolute" else _GT
+        d = prefix[j + 1] @ gen @ suffix[j + 1]
+        cols.append(d[:3, 3])
+    return np.column_stack(cols)
+
+
+def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
+    """Build a :class:`Chain` from plain tuples ``(sigma, alpha, d, theta, r)``, one per row.
+
+    Errors name the row number (1-based, as in the table) and the field.
+
+    Raises:
+        ParameterError: For a malformed row or value.
+    """
+    built = []
+    for j, row in enumerate(rows, start=1):
+        try:
+            values = tuple(row)
+            if len(values) != 5:
+                raise ParameterError(
+                    f"{len(values)} values; (sigma, alpha, d, theta, r) required"
+                )
+            built.append(KhalilRow(*values))
+        except ParameterError as exc:
+            raise ParameterError(f"row {j}: {exc}") from None
+        except TypeError:
+            raise ParameterError(f"row {j}: {row!r} is not a sequence of 5 values") from None
+    return Chain(rows=tuple(built), **kwargs)
 
 
 @dataclass(frozen=True)

@@ -128,10 +128,16 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
         ]
         return out
     if row.is_joint:
+        # A sphere at the joint and a short cylinder along its axis (z_j).
         out += [
             f"{indent}<visual>",
             f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><cylinder radius="{_num(1.6 * rad)}" '
+            f'{indent}  <geometry><sphere radius="{_num(1.4 * rad)}"/></geometry>',
+            f'{indent}  <material name="joint"/>',
+            f"{indent}</visual>",
+            f"{indent}<visual>",
+            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
+            f'{indent}  <geometry><cylinder radius="{_num(0.8 * rad)}" '
             f'length="{_num(4.0 * rad)}"/></geometry>',
             f'{indent}  <material name="joint"/>',
             f"{indent}</visual>",

@@ -99,7 +99,7 @@ def test_direct_and_indirect_methods_equal_pinocchio(name, preset_models):
     for q in np.random.default_rng(5).uniform(model.lower, model.upper, (30, model.nq)):
         jp = model.position_jacobian(q)
         np.testing.assert_allclose(direct_jacobian(model, q), jp, atol=1e-12)
-        np.testing.assert_allclose(indirect_jacobian(model, q), jp, atol=1e-8)
+        np.testing.assert_allclose(indirect_jacobian(model, q), jp, atol=1e-12)
 
 
 def test_seed001_eq15_jacobian(preset_models):
@@ -189,3 +189,25 @@ def test_text_and_file_load_to_the_same_model(tmp_path):
         assert m.joint_names == a.joint_names
         np.testing.assert_array_equal(m.fk(q), a.fk(q))
         np.testing.assert_array_equal(m.jacobian(q), a.jacobian(q))
+
+
+@pytest.mark.parametrize("source,kw", [("hexapod", {"tip": "leg4_foot"}),
+                                       ("erd:solo12", {"tip": "FL_FOOT"})])
+def test_indirect_method_on_urdf_chains(source, kw):
+    model = hk.load(source, **kw)
+    for q in model.random_q(20, seed=8):
+        np.testing.assert_allclose(indirect_jacobian(model, q), model.position_jacobian(q),
+                                   atol=1e-12)
+        np.testing.assert_allclose(direct_jacobian(model, q), model.position_jacobian(q),
+                                   atol=1e-12)
+
+
+def test_chain_from_rows_names_the_row():
+    from hexapod_kin.params import chain_from_rows
+
+    chain = chain_from_rows([(0, 0, 0, 0, 0), (0, -math.pi / 2, 0.05, 0, 0), (2, 0, 0.1, 0, 0)])
+    assert chain.nq == 2
+    with pytest.raises(ParameterError, match=r"row 2: KhalilRow.d=nan"):
+        chain_from_rows([(0, 0, 0, 0, 0), (0, 0, float("nan"), 0, 0)])
+    with pytest.raises(ParameterError, match=r"row 1: 4 values"):
+        chain_from_rows([(0, 0, 0, 0)])
