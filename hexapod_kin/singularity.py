@@ -1,0 +1,1180 @@
+"""Singularity measures, fast scans of joint space, singular families, workspace.
+
+Measures of a Jacobian ``J`` (k selected rows of the ``local_world_aligned`` tip Jacobian
+``[v; ω]`` in the base frame, n joints; ``m = min(k, n)`` singular values ``σ1 ≥ … ≥ σm``):
+
+* ``det`` — ``det J`` when ``k == n``, else NaN;
+* ``manipulability`` — Yoshikawa's ``sqrt(det(J Jᵀ))`` (``sqrt(det(Jᵀ J))`` when ``k > n``),
+  the product of the singular values (``|det J|`` when square);
+* ``condition`` — ``σ1 / σm`` (``inf`` at a singularity);
+* ``sigma_min`` — ``σm``, in [m] for position rows of revolute joints.
+
+A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default
+``rtol × reach``, with ``reach`` the sum of the chain's link offsets).
+
+Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the position rows, plus
+the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
+gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
+
+The batched kernel is generic over any loaded 1-DOF serial chain (catalogue or URDF): it calls
+the shared :mod:`hexapod_kin._kernels` chain kernel for ``J`` and reduces each ``J`` to the
+measures in the same compiled loop (numba ``prange``), without storing the Jacobians:
+``G = J Jᵀ`` (m×m), its eigenvalues in closed form (m ≤ 3) or by cyclic Jacobi (m > 3), and
+``σm = sqrt(det G / Π_{i<m} λi)`` so that ``σm`` keeps full accuracy near a singularity
+(``det G = det(J)²`` in the square case).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from . import _kernels
+from ._kernels import fk_jac_trig_into
+from .exceptions import ConfigurationError, ParameterError, choices
+from .symbolic import ROW_NAMES, SingularFamily, row_indices
+
+__all__ = [
+    "Measures",
+    "ScanResult",
+    "WorkspaceResult",
+    "default_rows",
+    "measures",
+    "measures_batch",
+    "scan",
+    "plot_joints",
+    "workspace",
+    "cross_section",
+]
+
+njit = _kernels.njit
+prange = _kernels.prange
+
+
+# ------------------------------------------------------------------------ compiled reductions
+@njit(cache=True, nogil=True)
+def _eig2(a: float, b: float, d: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """Eigenvalues (descending) of the symmetric [[a, b], [b, d]]."""
+    half = 0.5 * (a + d)
+    diff = 0.5 * (a - d)
+    rad = math.sqrt(diff * diff + b * b)
+    lmax = half + rad
+    det = a * d - b * b
+    lmin = det / lmax if lmax > 0.0 else 0.0
+    return lmax, lmin
+
+
+@njit(cache=True, nogil=True)
+def _eig3_top2(g: np.ndarray) -> tuple[float, float]:  # pragma: no cover - compiled
+    """The two largest eigenvalues of a symmetric PSD 3×3 ``g`` (closed form, descending)."""
+    a00, a11, a22 = g[0, 0], g[1, 1], g[2, 2]
+    a01, a02, a12 = g[0, 1], g[0, 2], g[1, 2]
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    qm = (a00 + a11 + a22) / 3.0
+    b00, b11, b22 = a00 - qm, a11 - qm, a22 - qm
+    p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1
+    if p2 <= 0.0:
+        return qm, qm
+    p = math.sqrt(p2 / 6.0)
+    inv = 1.0 / p
+    c00, c11, c22 = b00 * inv, b11 * inv, b22 * inv
+    c01, c02, c12 = a01 * inv, a02 * inv, a12 * inv
+    r = 0.5 * (
+        c00 * (c11 * c22 - c12 * c12) - c01 * (c01 * c22 - c12 * c02) + c02 * (c01 * c12 - c11 * c02)
+    )
+    if r <= -1.0:
+        phi = math.pi / 3.0
+    elif r >= 1.0:
+        phi = 0.0
+    else:
+        phi = math.acos(r) / 3.0
+    l1 = qm + 2.0 * p * math.cos(phi)
+    l3 = qm + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
+    l2 = 3.0 * qm - l1 - l3
+    return l1, l2
+
+
+@njit(cache=True, nogil=True)
+def _jacobi_eig(g: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Eigenvalues of the symmetric ``g`` (destroyed) by cyclic Jacobi, into ``out`` (desc)."""
+    m = g.shape[0]
+    for _sweep in range(60):
+        off = 0.0
+        diag = 0.0
+        for i in range(m):
+            diag += g[i, i] * g[i, i]
+            for j in range(i + 1, m):
+                off += g[i, j] * g[i, j]
+        if off <= 1e-34 * diag or off == 0.0:
+            break
+        for p in range(m - 1):
+            for q in range(p + 1, m):
+                apq = g[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (g[q, q] - g[p, p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(m):
+                    gkp, gkq = g[k, p], g[k, q]
+                    g[k, p] = c * gkp - s * gkq
+                    g[k, q] = s * gkp + c * gkq
+                for k in range(m):
+                    gpk, gqk = g[p, k], g[q, k]
+                    g[p, k] = c * gpk - s * gqk
+                    g[q, k] = s * gpk + c * gqk
+    for i in range(m):
+        out[i] = g[i, i]
+    # insertion sort, descending
+    for i in range(1, m):
+        v = out[i]
+        j = i - 1
+        while j >= 0 and out[j] < v:
+            out[j + 1] = out[j]
+            j -= 1
+        out[j + 1] = v
+
+
+@njit(cache=True, nogil=True)
+def _det_lu(a: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Determinant of the square ``a`` (destroyed) by LU with partial pivoting."""
+    n = a.shape[0]
+    det = 1.0
+    for k in range(n):
+        piv = k
+        best = abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > best:
+                best = abs(a[i, k])
+                piv = i
+        if best == 0.0:
+            return 0.0
+        if piv != k:
+            for j in range(n):
+                a[k, j], a[piv, j] = a[piv, j], a[k, j]
+            det = -det
+        det *= a[k, k]
+        for i in range(k + 1, n):
+            f = a[i, k] / a[k, k]
+            for j in range(k + 1, n):
+                a[i, j] -= f * a[k, j]
+    return det
+
+
+@njit(cache=True, nogil=True)
+def _reduce_one(
+    js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """Measures ``(det, manipulability, condition, sigma_min)`` of one k×n Jacobian ``js``."""
+    k, n = js.shape
+    square = k == n
+    m = k if k <= n else n
+    # Gram matrix
+    if k <= n:
+        for a in range(m):
+            for b in range(a, m):
+                s = 0.0
+                for c in range(n):
+                    s += js[a, c] * js[b, c]
+                g[a, b] = s
+                g[b, a] = s
+    else:
+        for a in range(m):
+            for b in range(a, m):
+                s = 0.0
+                for c in range(k):
+                    s += js[c, a] * js[c, b]
+                g[a, b] = s
+                g[b, a] = s
+    # determinant (square) and det G
+    det = np.nan
+    if square:
+        if n == 1:
+            det = js[0, 0]
+        elif n == 2:
+            det = js[0, 0] * js[1, 1] - js[0, 1] * js[1, 0]
+        elif n == 3:
+            det = (
+                js[0, 0] * (js[1, 1] * js[2, 2] - js[1, 2] * js[2, 1])
+                - js[0, 1] * (js[1, 0] * js[2, 2] - js[1, 2] * js[2, 0])
+                + js[0, 2] * (js[1, 0] * js[2, 1] - js[1, 1] * js[2, 0])
+            )
+        else:
+            for a in range(n):
+                for b in range(n):
+                    work[a, b] = js[a, b]
+            det = _det_lu(work[:n, :n])
+        det_g = det * det
+    elif m == 1:
+        det_g = g[0, 0]
+    elif m == 2:
+        det_g = g[0, 0] * g[1, 1] - g[0, 1] * g[0, 1]
+    elif m == 3:
+        det_g = (
+            g[0, 0] * (g[1, 1] * g[2, 2] - g[1, 2] * g[2, 1])
+            - g[0, 1] * (g[1, 0] * g[2, 2] - g[1, 2] * g[2, 0])
+            + g[0, 2] * (g[1, 0] * g[2, 1] - g[1, 1] * g[2, 0])
+        )
+    else:
+        for a in range(m):
+            for b in range(m):
+                work[a, b] = g[a, b]
+        det_g = _det_lu(work[:m, :m])
+    if det_g < 0.0:
+        det_g = 0.0
+    # the m-1 largest eigenvalues of G
+    if m == 1:
+        lmax = g[0, 0]
+        prod_top = 1.0
+    elif m == 2:
+        lmax, _ = _eig2(g[0, 0], g[0, 1], g[1, 1])
+        prod_top = lmax
+    elif m == 3:
+        lmax, l2 = _eig3_top2(g)
+        prod_top = lmax * l2
+    else:
+        for a in range(m):
+            for b in range(m):
+                work[a, b] = g[a, b]
+        _jacobi_eig(work[:m, :m], lam)
+        lmax = lam[0]
+        prod_top = 1.0
+        for a in range(m - 1):
+            prod_top *= lam[a]
+    if m == 1:
+        lmin = g[0, 0]
+    elif prod_top > 0.0:
+        lmin = det_g / prod_top
+    else:
+        lmin = 0.0
+    if lmin < 0.0:
+        lmin = 0.0
+    smin = math.sqrt(lmin)
+    smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
+    if square:
+        manip = abs(det)
+    else:
+        manip = math.sqrt(det_g)
+    cond = smax / smin if smin > 0.0 else np.inf
+    return det, manip, cond, smin
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _top_eigs3(
+    g00: float, g01: float, g02: float, g11: float, g12: float, g22: float, det_g: float
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``(λmax, λmin)`` of a symmetric PSD 3×3 matrix ``G`` with known ``det_g`` (closed form).
+
+    ``λ1`` from the trigonometric formula (accurate: ``φ → 0`` when the two smallest
+    coincide); then ``G`` is deflated onto the plane orthogonal to ``λ1``'s eigenvector, whose
+    2×2 eigenvalues follow without cancellation (``rad = sqrt(((a−d)/2)² + b²)``), and
+    ``λ3 = det_g / (λ1 λ2)`` keeps full relative accuracy when ``λ3 → 0``.
+    """
+    p1 = g01 * g01 + g02 * g02 + g12 * g12
+    c2 = g00 + g11 + g22
+    qm = c2 / 3.0
+    b00, b11, b22 = g00 - qm, g11 - qm, g22 - qm
+    p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1
+    if p2 <= 0.0:
+        return qm, qm
+    p = math.sqrt(p2 / 6.0)
+    detb = (
+        b00 * (b11 * b22 - g12 * g12) - g01 * (g01 * b22 - g12 * g02) + g02 * (g01 * g12 - b11 * g02)
+    )
+    r = 0.5 * detb / (p * p * p)
+    if r <= -1.0:
+        cphi = 0.5
+    elif r >= 1.0:
+        cphi = 1.0
+    else:
+        cphi = math.cos(math.acos(r) / 3.0)
+    l1 = qm + 2.0 * p * cphi
+    # eigenvector of l1: the largest cross product of two rows of G - l1 I
+    h00, h11, h22 = g00 - l1, g11 - l1, g22 - l1
+    ax, ay, az = g01 * g12 - g02 * h11, g02 * g01 - h00 * g12, h00 * h11 - g01 * g01
+    bx, by, bz = g01 * h22 - g02 * g12, g02 * g02 - h00 * h22, h00 * g12 - g01 * g02
+    cx, cy, cz = h11 * h22 - g12 * g12, g12 * g02 - g01 * h22, g01 * g12 - h11 * g02
+    na = ax * ax + ay * ay + az * az
+    nb = bx * bx + by * by + bz * bz
+    nc = cx * cx + cy * cy + cz * cz
+    if na >= nb and na >= nc:
+        vx, vy, vz, nv = ax, ay, az, na
+    elif nb >= nc:
+        vx, vy, vz, nv = bx, by, bz, nb
+    else:
+        vx, vy, vz, nv = cx, cy, cz, nc
+    if nv <= 0.0:
+        return l1, (det_g / (l1 * l1) if l1 > 0.0 else 0.0)
+    inv = 1.0 / math.sqrt(nv)
+    vx, vy, vz = vx * inv, vy * inv, vz * inv
+    # orthonormal u, w spanning the complement of v
+    if abs(vx) <= abs(vy) and abs(vx) <= abs(vz):
+        ux, uy, uz = 0.0, vz, -vy
+    elif abs(vy) <= abs(vz):
+        ux, uy, uz = -vz, 0.0, vx
+    else:
+        ux, uy, uz = vy, -vx, 0.0
+    inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux, uy, uz = ux * inv, uy * inv, uz * inv
+    wx, wy, wz = vy * uz - vz * uy, vz * ux - vx * uz, vx * uy - vy * ux
+    gux = g00 * ux + g01 * uy + g02 * uz
+    guy = g01 * ux + g11 * uy + g12 * uz
+    guz = g02 * ux + g12 * uy + g22 * uz
+    gwx = g00 * wx + g01 * wy + g02 * wz
+    gwy = g01 * wx + g11 * wy + g12 * wz
+    gwz = g02 * wx + g12 * wy + g22 * wz
+    a = ux * gux + uy * guy + uz * guz
+    b = wx * gux + wy * guy + wz * guz
+    d = wx * gwx + wy * gwy + wz * gwz
+    half = 0.5 * (a - d)
+    l2 = 0.5 * (a + d) + math.sqrt(half * half + b * b)
+    if l1 <= 0.0 or l2 <= 0.0:
+        return l1, 0.0
+    return l1, det_g / (l1 * l2)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _measures_kernel(
+    prot: np.ndarray,
+    ptr: np.ndarray,
+    pident: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    qs: np.ndarray,
+    sel: np.ndarray,
+    out_det: np.ndarray,
+    out_manip: np.ndarray,
+    out_cond: np.ndarray,
+    out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Fused FK + selected-row Jacobian + measures for every row of ``qs``.
+
+    The chain is given with every joint axis aligned to its frame's z (see
+    :func:`_aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or ``Tz(q)``;
+    ``ptr[m]`` is the tip offset. No array views are created in the loop (their reference
+    counts would make the threads contend).
+    """
+    nconf = qs.shape[0]
+    nq = qs.shape[1]
+    m = kind.shape[0]
+    k = sel.shape[0]
+    mm = k if k <= nq else nq
+    big = k if k > nq else nq
+    fast3 = k == 3 and nq == 3
+    chunk = 2048
+    nchunks = (nconf + chunk - 1) // chunk
+    for c in prange(nchunks):
+        buf = np.empty((6, max(m, 1)))
+        js = np.empty((k, nq))
+        g = np.empty((mm, mm))
+        work = np.empty((big, big))
+        lam = np.empty(mm)
+        cv = np.empty(6)
+        start = c * chunk
+        stop = min(nconf, start + chunk)
+        for i in range(start, stop):
+            r00, r01, r02 = 1.0, 0.0, 0.0
+            r10, r11, r12 = 0.0, 1.0, 0.0
+            r20, r21, r22 = 0.0, 0.0, 1.0
+            px, py, pz = 0.0, 0.0, 0.0
+            for j in range(m):
+                tx, ty, tz = ptr[j, 0], ptr[j, 1], ptr[j, 2]
+                px += r00 * tx + r01 * ty + r02 * tz
+                py += r10 * tx + r11 * ty + r12 * tz
+                pz += r20 * tx + r21 * ty + r22 * tz
+                if pident[j] == 0:
+                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
+                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
+                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
+                    n00 = r00 * a00 + r01 * a10 + r02 * a20
+                    n01 = r00 * a01 + r01 * a11 + r02 * a21
+                    n02 = r00 * a02 + r01 * a12 + r02 * a22
+                    n10 = r10 * a00 + r11 * a10 + r12 * a20
+                    n11 = r10 * a01 + r11 * a11 + r12 * a21
+                    n12 = r10 * a02 + r11 * a12 + r12 * a22
+                    n20 = r20 * a00 + r21 * a10 + r22 * a20
+                    n21 = r20 * a01 + r21 * a11 + r22 * a21
+                    n22 = r20 * a02 + r21 * a12 + r22 * a22
+                    r00, r01, r02 = n00, n01, n02
+                    r10, r11, r12 = n10, n11, n12
+                    r20, r21, r22 = n20, n21, n22
+                buf[0, j] = px
+                buf[1, j] = py
+                buf[2, j] = pz
+                buf[3, j] = r02
+                buf[4, j] = r12
+                buf[5, j] = r22
+                qv = qs[i, col[j]]
+                if kind[j] == 1:
+                    px += r02 * qv
+                    py += r12 * qv
+                    pz += r22 * qv
+                else:
+                    cq = math.cos(qv)
+                    sq = math.sin(qv)
+                    r00, r01 = cq * r00 + sq * r01, cq * r01 - sq * r00
+                    r10, r11 = cq * r10 + sq * r11, cq * r11 - sq * r10
+                    r20, r21 = cq * r20 + sq * r21, cq * r21 - sq * r20
+            tx, ty, tz = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+            px += r00 * tx + r01 * ty + r02 * tz
+            py += r10 * tx + r11 * ty + r12 * tz
+            pz += r20 * tx + r21 * ty + r22 * tz
+            for a in range(k):
+                for b in range(nq):
+                    js[a, b] = 0.0
+            for j in range(m):
+                zx, zy, zz = buf[3, j], buf[4, j], buf[5, j]
+                if kind[j] == 1:
+                    cv[0], cv[1], cv[2] = zx, zy, zz
+                    cv[3], cv[4], cv[5] = 0.0, 0.0, 0.0
+                else:
+                    dx, dy, dz = px - buf[0, j], py - buf[1, j], pz - buf[2, j]
+                    cv[0] = zy * dz - zz * dy
+                    cv[1] = zz * dx - zx * dz
+                    cv[2] = zx * dy - zy * dx
+                    cv[3], cv[4], cv[5] = zx, zy, zz
+                cj = col[j]
+                for a in range(k):
+                    js[a, cj] += cv[sel[a]]
+            if fast3:
+                j00, j01, j02 = js[0, 0], js[0, 1], js[0, 2]
+                j10, j11, j12 = js[1, 0], js[1, 1], js[1, 2]
+                j20, j21, j22 = js[2, 0], js[2, 1], js[2, 2]
+                det = (
+                    j00 * (j11 * j22 - j12 * j21)
+                    - j01 * (j10 * j22 - j12 * j20)
+                    + j02 * (j10 * j21 - j11 * j20)
+                )
+                g00 = j00 * j00 + j01 * j01 + j02 * j02
+                g01 = j00 * j10 + j01 * j11 + j02 * j12
+                g02 = j00 * j20 + j01 * j21 + j02 * j22
+                g11 = j10 * j10 + j11 * j11 + j12 * j12
+                g12 = j10 * j20 + j11 * j21 + j12 * j22
+                g22 = j20 * j20 + j21 * j21 + j22 * j22
+                lmax, lmin = _top_eigs3(g00, g01, g02, g11, g12, g22, det * det)
+                smin = math.sqrt(lmin) if lmin > 0.0 else 0.0
+                smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
+                out_det[i] = det
+                out_manip[i] = abs(det)
+                out_cond[i] = smax / smin if smin > 0.0 else np.inf
+                out_smin[i] = smin
+            else:
+                d, mp, cn, sm = _reduce_one(js, g, work, lam)
+                out_det[i] = d
+                out_manip[i] = mp
+                out_cond[i] = cn
+                out_smin[i] = sm
+
+
+def _rotation_z_to(u: np.ndarray) -> np.ndarray:
+    """A rotation ``A`` with ``A @ ez = u`` (identity when ``u`` is ``ez``)."""
+    u = np.asarray(u, float) / np.linalg.norm(u)
+    ez = np.array([0.0, 0.0, 1.0])
+    if np.allclose(u, ez, rtol=0, atol=1e-15):
+        return np.eye(3)
+    if np.allclose(u, -ez, rtol=0, atol=1e-15):
+        return np.diag([1.0, -1.0, -1.0])
+    v = np.cross(ez, u)
+    s = np.linalg.norm(v)
+    c = float(u @ ez)
+    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + vx + vx @ vx * ((1 - c) / s**2)
+
+
+@dataclass(frozen=True)
+class _AlignedChain:
+    prot: np.ndarray
+    ptr: np.ndarray
+    pident: np.ndarray
+    kind: np.ndarray
+    col: np.ndarray
+    nq: int
+
+
+def _aligned_chain(arrays: _kernels.ChainArrays) -> _AlignedChain:
+    """Re-express the shared :class:`~hexapod_kin._kernels.ChainArrays` with z joint axes.
+
+    Joint ``j`` rotates about its local axis ``u_j``; with ``A_j ez = u_j`` the rotation is
+    ``A_j Rz(q) A_jᵀ``, so ``A_j`` is folded into placement ``j`` and ``A_jᵀ`` into placement
+    ``j + 1`` (or the tip offset). The kernel then only applies ``Rz(q)`` / ``Tz(q)``.
+    """
+    m = arrays.rot.shape[0]
+    prot = np.empty((m, 9))
+    ptr = np.empty((m + 1, 3))
+    pident = np.zeros(m, dtype=np.int64)
+    prev_t = np.eye(3)  # A_{j-1}^T
+    for j in range(m):
+        a = _rotation_z_to(arrays.axis[j])
+        rot = prev_t @ arrays.rot[j] @ a
+        rot[np.abs(rot) < 1e-15] = 0.0
+        prot[j] = rot.reshape(-1)
+        ptr[j] = prev_t @ arrays.trans[j]
+        pident[j] = int(np.array_equal(rot, np.eye(3)))
+        prev_t = a.T
+    ptr[m] = prev_t @ arrays.trans[m]
+    return _AlignedChain(prot, ptr, pident, arrays.kind.copy(), arrays.col.copy(), arrays.nq)
+
+
+def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Reference / fallback: measures of a stack of Jacobians (N, k, n) with numpy SVD."""
+    n_conf, k, n = jac.shape
+    sv = np.linalg.svd(jac, compute_uv=False)
+    smax = sv[:, 0]
+    smin = sv[:, -1]
+    det = np.linalg.det(jac) if k == n else np.full(n_conf, np.nan)
+    manip = np.abs(det) if k == n else np.prod(sv, axis=1)
+    with np.errstate(divide="ignore"):
+        cond = np.where(smin > 0, smax / np.where(smin > 0, smin, 1.0), np.inf)
+    return det, manip, cond, smin
+
+
+# ------------------------------------------------------------------------ single configuration
+@dataclass(frozen=True)
+class Measures:
+    """Singularity measures of one configuration.
+
+    Attributes:
+        det: ``det J`` (NaN when J is not square).
+        manipulability: ``sqrt(det(J Jᵀ))`` (product of the singular values).
+        condition: ``σmax / σmin`` (``inf`` when singular).
+        sigma_min: Smallest singular value.
+        singular_values: All ``min(k, n)`` singular values, descending (read-only).
+        rows: Row names of ``J`` used.
+    """
+
+    det: float
+    manipulability: float
+    condition: float
+    sigma_min: float
+    singular_values: np.ndarray
+    rows: tuple[str, ...]
+
+
+def _model(model: Any) -> Any:
+    from .kinematics import KinematicModel, load
+
+    if isinstance(model, KinematicModel):
+        return model
+    return load(model)
+
+
+def default_rows(model: Any) -> tuple[str, ...]:
+    """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
+
+    Angular rows are tested at a few random configurations (a row is "zero" when it is below
+    1e-12 everywhere). SCARA → ``("x", "y", "z", "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+
+    Args:
+        model: A loaded :class:`~hexapod_kin.kinematics.KinematicModel` (or a source).
+    """
+    from .symbolic import default_rows as _dr
+
+    mdl = _model(model)
+    arrays = _arrays(mdl)
+    qs = mdl.random_q(8, seed=12345)
+    jac = _kernels.jacobian_batch(arrays, qs, rows=6)
+    flags = np.abs(jac).max(axis=(0, 2)) > 1e-12
+    return _dr(flags, mdl.nq)
+
+
+def _arrays(model: Any) -> _kernels.ChainArrays:
+    cached = getattr(model, "_hk_chain_arrays", None)
+    if cached is None:
+        cached = _kernels.ChainArrays.from_model(model)
+        try:
+            model._hk_chain_arrays = cached
+        except AttributeError:  # pragma: no cover
+            pass
+    return cached  # type: ignore[no-any-return]
+
+
+def _aligned(model: Any) -> _AlignedChain:
+    cached = getattr(model, "_hk_aligned_chain", None)
+    if cached is None:
+        cached = _aligned_chain(_arrays(model))
+        try:
+            model._hk_aligned_chain = cached
+        except AttributeError:  # pragma: no cover
+            pass
+    return cached  # type: ignore[no-any-return]
+
+
+def _rows(model: Any, rows: Any) -> tuple[str, ...]:
+    if rows is None:
+        return default_rows(model)
+    return tuple(ROW_NAMES[i] for i in row_indices(rows))
+
+
+def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Measures:
+    """Singularity measures of one configuration (Pinocchio Jacobian, numpy SVD).
+
+    Args:
+        model: A loaded model (or a source for :func:`~hexapod_kin.kinematics.load`).
+        q: Joint values (nq,) in [rad] / [m].
+        rows: Row selection (see module doc); default :func:`default_rows`.
+
+    Returns:
+        The :class:`Measures`.
+
+    Raises:
+        ConfigurationError: Bad ``q``.
+        ParameterError: Bad ``rows``.
+    """
+    mdl = _model(model)
+    names = _rows(mdl, rows)
+    idx = [ROW_NAMES.index(r) for r in names]
+    jac = mdl.jacobian(q, "local_world_aligned")[idx]
+    det, manip, cond, smin = _measures_numpy(jac[None])
+    sv = np.linalg.svd(jac, compute_uv=False)
+    sv.setflags(write=False)
+    return Measures(float(det[0]), float(manip[0]), float(cond[0]), float(smin[0]), sv, names)
+
+
+def measures_batch(
+    model: Any,
+    qs: Any,
+    rows: str | Sequence[str] | None = None,
+    *,
+    engine: str = "kernel",
+    out: tuple[np.ndarray, ...] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Measures of many configurations: ``(det, manipulability, condition, sigma_min)``.
+
+    Args:
+        model: A loaded model (or a source).
+        qs: Configurations (N, nq).
+        rows: Row selection; default :func:`default_rows`.
+        engine: ``"kernel"`` (compiled, fused; numpy fallback without numba) or ``"numpy"``
+            (batched Jacobians from the kernel, numpy SVD per configuration).
+        out: Optional four preallocated float64 arrays of shape (N,) to fill.
+
+    Returns:
+        Four (N,) arrays.
+
+    Raises:
+        ConfigurationError: ``qs`` has the wrong shape or non-finite values.
+        ParameterError: Bad ``rows`` or ``engine``.
+    """
+    mdl = _model(model)
+    names = _rows(mdl, rows)
+    arrays = _arrays(mdl)
+    q = _kernels._check_batch(arrays, qs)
+    sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
+    full = 6 if sel.max() >= 3 else 3
+    if engine not in ("kernel", "numpy"):
+        raise ParameterError(f"engine={engine!r} is not allowed; use 'kernel' or 'numpy'")
+    if engine == "numpy" or not _kernels.HAVE_NUMBA:
+        jac = _kernels.jacobian_batch(arrays, q, rows=full)[:, sel, :]
+        res = _measures_numpy(jac)
+        if out is not None:
+            for o, r in zip(out, res):
+                o[...] = r
+            return out  # type: ignore[return-value]
+        return res  # type: ignore[return-value]
+    n = q.shape[0]
+    if out is None:
+        out = tuple(np.empty(n) for _ in range(4))
+    elif len(out) != 4 or any(o.shape != (n,) or o.dtype != np.float64 for o in out):
+        raise ConfigurationError(f"out: four float64 arrays of shape ({n},) are required")
+    al = _aligned(mdl)
+    _measures_kernel(al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, *out)
+    return out  # type: ignore[return-value]
+
+
+# ------------------------------------------------------------------------ families
+@lru_cache(maxsize=16)
+def _derivation(chain: Any, rows: tuple[str, ...]) -> Any:
+    from .symbolic import derive
+
+    return derive(chain, rows=rows)
+
+
+def _derivation_for(model: Any, rows: tuple[str, ...]) -> Any:
+    from .params import Chain
+
+    params = model.params
+    if isinstance(params, Chain) and model.nq == params.nq:
+        try:
+            return _derivation(params, rows)
+        except Exception:  # noqa: BLE001 - sympy failures only cost the family equations
+            return None
+    return None
+
+
+@dataclass(frozen=True)
+class _FamilyFunctions:
+    """Numeric residuals of the singular families: value ~ 0 on the family."""
+
+    families: tuple[SingularFamily, ...]
+    funcs: tuple[Any, ...]
+    grads: tuple[Any, ...]
+
+    def distance(self, q: np.ndarray) -> np.ndarray:
+        """First-order joint-space distance (N, F) of configurations to each family."""
+        q = np.atleast_2d(q)
+        out = np.empty((q.shape[0], len(self.families)))
+        for f, fam in enumerate(self.families):
+            if fam.joint is not None and fam.value is not None:
+                d = q[:, fam.joint] - fam.value
+                if fam.periodic:
+                    d = (d + np.pi) % (2 * np.pi) - np.pi
+                out[:, f] = np.abs(d)
+            else:
+                val = self.funcs[f](q)
+                grad = self.grads[f](q)
+                norm = np.sqrt(np.sum(grad**2, axis=-1).reshape(q.shape[0]))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    out[:, f] = np.where(norm > 0, np.abs(val) / norm, np.inf)
+        return out
+
+    def residual(self, q: np.ndarray, f: int) -> np.ndarray:
+        """Signed residual of family ``f`` (its factor; wrapped joint offset for joint ones)."""
+        fam = self.families[f]
+        if fam.joint is not None and fam.value is not None:
+            d = q[..., fam.joint] - fam.value
+            return (d + np.pi) % (2 * np.pi) - np.pi if fam.periodic else d
+        return self.funcs[f](q)  # type: ignore[no-any-return]
+
+
+def _family_functions(deriv: Any) -> _FamilyFunctions:
+    import sympy as sp
+
+    funcs, grads = [], []
+    for fam in deriv.families:
+        funcs.append(deriv.function(fam.factor))
+        grads.append(deriv.function(sp.Matrix([[sp.diff(fam.factor, s) for s in deriv.q]])))
+    return _FamilyFunctions(tuple(deriv.families), tuple(funcs), tuple(grads))
+
+
+# ------------------------------------------------------------------------ scans
+def _ro(arr: np.ndarray) -> np.ndarray:
+    arr = np.ascontiguousarray(arr)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class ScanResult:
+    """Result of :func:`scan` (arrays are read-only).
+
+    Attributes:
+        q: Configurations (N, n) in [rad] / [m].
+        det: ``det J`` (N,) (NaN where J is not square).
+        manipulability: (N,) ``sqrt(det(J Jᵀ))``.
+        condition: (N,) ``σmax/σmin`` (``inf`` where singular).
+        sigma_min: (N,) smallest singular value.
+        singular: (N,) boolean mask ``sigma_min < threshold``.
+        family: (N,) index into :attr:`families` of the family each flagged configuration lies
+            on (nearest, within ``family_tol``), −1 where not flagged or unexplained.
+        families: The singular families (from :mod:`hexapod_kin.symbolic`; empty when the
+            model has no Khalil table).
+        joint_names: Names of the n joints.
+        joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
+        rows: Row names of ``J``.
+        threshold: The ``sigma_min`` threshold used.
+        grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
+        q_fixed: Values of the joints that were not scanned (n,).
+        source: The model's name.
+    """
+
+    q: np.ndarray
+    det: np.ndarray
+    manipulability: np.ndarray
+    condition: np.ndarray
+    sigma_min: np.ndarray
+    singular: np.ndarray
+    family: np.ndarray
+    families: tuple[SingularFamily, ...]
+    joint_names: tuple[str, ...]
+    joints: tuple[int, ...]
+    rows: tuple[str, ...]
+    threshold: float
+    grid_shape: tuple[int, ...] | None
+    q_fixed: np.ndarray
+    source: str
+    _family_funcs: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def unexplained(self) -> np.ndarray:
+        """Flagged configurations on no known family (N,) — expected empty for catalogue chains."""
+        return self.singular & (self.family < 0)
+
+    def family_counts(self) -> dict[str, int]:
+        """Number of flagged configurations on each family, by family name."""
+        return {
+            fam.name: int(np.count_nonzero(self.family == f))
+            for f, fam in enumerate(self.families)
+        }
+
+    def family_residual(self, q: np.ndarray, f: int) -> np.ndarray:
+        """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family)."""
+        if self._family_funcs is None:
+            raise ParameterError("family_residual: this scan has no family equations")
+        return self._family_funcs.residual(np.asarray(q, float), f)  # type: ignore[no-any-return]
+
+    def grid(self, name: str) -> np.ndarray:
+        """A measure reshaped to :attr:`grid_shape` (grid scans only)."""
+        if self.grid_shape is None:
+            raise ParameterError("grid(): this scan used random samples, not a grid")
+        allowed = ("det", "manipulability", "condition", "sigma_min", "singular", "family")
+        if name not in allowed:
+            raise ParameterError(f"grid(name={name!r}): use one of {choices(allowed)}")
+        return np.asarray(getattr(self, name)).reshape(self.grid_shape)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-ready dict with the same names (NaN / inf become ``null``)."""
+
+        def clean(a: np.ndarray) -> list[Any]:
+            flat = a.astype(float).tolist()
+            return [v if math.isfinite(v) else None for v in flat]
+
+        return {
+            "source": self.source,
+            "joint_names": list(self.joint_names),
+            "joints": [self.joint_names[j] for j in self.joints],
+            "rows": list(self.rows),
+            "threshold": self.threshold,
+            "grid_shape": list(self.grid_shape) if self.grid_shape else None,
+            "q_fixed": self.q_fixed.tolist(),
+            "q": self.q.tolist(),
+            "det": clean(self.det),
+            "manipulability": clean(self.manipulability),
+            "condition": clean(self.condition),
+            "sigma_min": clean(self.sigma_min),
+            "singular": self.singular.tolist(),
+            "family": self.family.tolist(),
+            "families": [
+                {
+                    "name": fam.name,
+                    "equation": str(fam.equation),
+                    "joint": None if fam.joint is None else self.joint_names[fam.joint],
+                    "value": fam.value,
+                    "count": int(np.count_nonzero(self.family == f)),
+                }
+                for f, fam in enumerate(self.families)
+            ],
+            "n_singular": int(np.count_nonzero(self.singular)),
+            "n_unexplained": int(np.count_nonzero(self.unexplained)),
+        }
+
+
+def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
+    if joints is None:
+        return tuple(range(model.nq))
+    if isinstance(joints, (str, int)):
+        joints = [joints]
+    out = []
+    for j in joints:
+        if isinstance(j, (int, np.integer)) and not isinstance(j, bool):
+            if not 0 <= int(j) < model.nq:
+                raise ParameterError(
+                    f"joints: index {j} is out of range 0..{model.nq - 1} "
+                    f"(joints {choices(model.joint_names)})"
+                )
+            out.append(int(j))
+        else:
+            out.append(model.joint_index(str(j)))
+    if len(set(out)) != len(out) or not out:
+        raise ParameterError(f"joints={joints!r}: give distinct joint names or indices")
+    return tuple(out)
+
+
+def reach(model: Any) -> float:
+    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance)."""
+    arrays = _arrays(model)
+    return float(np.sum(np.linalg.norm(arrays.trans, axis=1)))
+
+
+def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
+    """The two joints a 2-D heat map should show by default.
+
+    Joints that appear in the singular families' equations first (most equations first),
+    then the last joints of the chain (the first revolute joint of a leg only rotates ``J``).
+    """
+    mdl = _model(model)
+    if mdl.nq < 2:
+        raise ParameterError(f"plot_joints: {mdl.name!r} has {mdl.nq} joint; two are needed")
+    deriv = _derivation_for(mdl, _rows(mdl, rows))
+    score = np.zeros(mdl.nq)
+    if deriv is not None:
+        for fam in deriv.families:
+            for v in fam.variables:
+                score[v] += 1
+    order = sorted(range(mdl.nq), key=lambda j: (-score[j], -j))
+    first = order[0]
+    if score[first] > 0 and np.count_nonzero(score) == 1:
+        rest = [j for j in range(mdl.nq) if j != first and not mdl.is_prismatic[j]]
+        second = rest[0] if rest else order[1]
+    else:
+        second = order[1]
+    a, b = sorted((first, second))
+    return a, b
+
+
+def _grid_points(
+    model: Any, joints: tuple[int, ...], grid: Any, q_fixed: np.ndarray
+) -> tuple[np.ndarray, tuple[int, ...]]:
+    counts = [grid] * len(joints) if np.isscalar(grid) else list(grid)
+    if len(counts) != len(joints):
+        raise ParameterError(
+            f"grid={grid!r}: one count or one per scanned joint ({len(joints)}) is required"
+        )
+    shape = []
+    for c in counts:
+        if isinstance(c, bool) or int(c) != c or int(c) < 2:
+            raise ParameterError(f"grid={grid!r}: counts must be integers >= 2")
+        shape.append(int(c))
+    total = int(np.prod(shape))
+    if total > 50_000_000:
+        raise ParameterError(f"grid={grid!r} makes {total} configurations; at most 50,000,000")
+    axes = [np.linspace(model.lower[j], model.upper[j], c) for j, c in zip(joints, shape)]
+    q = np.empty((total, model.nq))
+    q[:] = q_fixed
+    mesh = np.meshgrid(*axes, indexing="ij")
+    for j, mesh_j in zip(joints, mesh):
+        q[:, j] = mesh_j.reshape(-1)
+    return q, tuple(shape)
+
+
+def scan(
+    model: Any,
+    grid: int | Sequence[int] | None = None,
+    samples: int | None = None,
+    joints: Sequence[str | int] | str | None = None,
+    *,
+    rows: str | Sequence[str] | None = None,
+    q_fixed: Any = None,
+    threshold: float | None = None,
+    rtol: float = 1e-2,
+    family_tol: float = 0.05,
+    families: bool = True,
+    seed: int | None = 0,
+    progress: bool | None = None,
+    chunk: int = 1_000_000,
+) -> ScanResult:
+    """Scan joint space (grid or random samples) for singularity measures and singular families.
+
+    Args:
+        model: A loaded model or any source for :func:`~hexapod_kin.kinematics.load` (a
+            preset name, a Chain, a URDF path, ``erd:NAME`` ...).
+        grid: Points per scanned joint (one count, or one per joint), spanning the joint
+            limits (ends included). Default 41 when ``samples`` is not given either.
+        samples: Number of uniform random configurations within the limits (instead of a grid).
+        joints: Joints to scan (names or indices); default all. The others stay at ``q_fixed``.
+        rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
+            default :func:`default_rows`.
+        q_fixed: Values of the joints not scanned (default neutral, i.e. zeros).
+        threshold: ``sigma_min`` below which a configuration is flagged singular; default
+            ``rtol × reach(model)``.
+        rtol: Relative threshold (see ``threshold``).
+        family_tol: Largest joint-space distance in [rad] from a flagged configuration to a
+            family for it to count as lying on it.
+        families: Derive the families (sympy, cached per chain) and assign flagged points.
+        seed: Random seed for ``samples``.
+        progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
+        chunk: Configurations per kernel call (progress granularity).
+
+    Returns:
+        The :class:`ScanResult`.
+
+    Raises:
+        ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows.
+        ConfigurationError: Bad ``q_fixed``.
+    """
+    mdl = _model(model)
+    names = _rows(mdl, rows)
+    jidx = _joint_indices(mdl, joints)
+    qf = mdl.neutral() if q_fixed is None else mdl.check_q(q_fixed, "q_fixed").copy()
+    if grid is not None and samples is not None:
+        raise ParameterError("scan: give grid= or samples=, not both")
+    if samples is not None:
+        if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
+            raise ParameterError(f"samples={samples!r}: an integer in 1..50,000,000 is required")
+        rng = np.random.default_rng(seed)
+        q = np.empty((int(samples), mdl.nq))
+        q[:] = qf
+        for j in jidx:
+            q[:, j] = rng.uniform(mdl.lower[j], mdl.upper[j], int(samples))
+        shape = None
+    else:
+        q, shape = _grid_points(mdl, jidx, 41 if grid is None else grid, qf)
+    n = q.shape[0]
+    out = tuple(np.empty(n) for _ in range(4))
+    show = (n > 2_000_000 and sys.stderr.isatty()) if progress is None else bool(progress)
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, file=sys.stderr, unit="cfg", desc="scan", leave=False)
+    try:
+        for start in range(0, n, max(int(chunk), 1)):
+            stop = min(n, start + max(int(chunk), 1))
+            measures_batch(
+                mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out)  # type: ignore[arg-type]
+            )
+            if bar is not None:
+                bar.update(stop - start)
+    finally:
+        if bar is not None:
+            bar.close()
+    det, manip, cond, smin = out
+    thr = float(rtol * reach(mdl)) if threshold is None else float(threshold)
+    if not math.isfinite(thr) or thr < 0:
+        raise ParameterError(f"threshold={threshold!r}: a finite value >= 0 is required")
+    singular = smin < thr
+    family = np.full(n, -1, dtype=np.int64)
+    fams: tuple[SingularFamily, ...] = ()
+    funcs = None
+    if families:
+        deriv = _derivation_for(mdl, names)
+        if deriv is not None and deriv.families:
+            funcs = _family_functions(deriv)
+            fams = funcs.families
+            idx = np.flatnonzero(singular)
+            if idx.size:
+                dist = funcs.distance(q[idx])
+                best = np.argmin(dist, axis=1)
+                ok = dist[np.arange(idx.size), best] <= family_tol
+                family[idx[ok]] = best[ok]
+    return ScanResult(
+        q=_ro(q),
+        det=_ro(det),
+        manipulability=_ro(manip),
+        condition=_ro(cond),
+        sigma_min=_ro(smin),
+        singular=_ro(singular),
+        family=_ro(family),
+        families=fams,
+        joint_names=tuple(mdl.joint_names),
+        joints=jidx,
+        rows=names,
+        threshold=thr,
+        grid_shape=shape,
+        q_fixed=_ro(qf),
+        source=mdl.name,
+        _family_funcs=funcs,
+    )
+
+
+# ------------------------------------------------------------------------ workspace
+@dataclass(frozen=True)
+class WorkspaceResult:
+    """Reachable tip points and a reachable-volume estimate (arrays read-only).
+
+    The volume is a Monte Carlo voxel count: the tip positions of ``samples`` uniform random
+    configurations are binned into cubic voxels of edge ``voxel`` and ``voxel / 2``; the
+    occupied volumes ``V(h)`` and ``V(h/2)`` over-estimate the true volume by a boundary layer
+    proportional to ``h``, which Richardson extrapolation ``2·V(h/2) − V(h)`` removes to first
+    order. Only meaningful for chains whose workspace is a solid (≥ 3 joints acting on
+    the position).
+
+    Attributes:
+        q: The sampled configurations (N, n).
+        points: Tip positions (N, 3) in [m], base frame.
+        voxel: Coarse voxel edge ``h`` in [m].
+        volume_coarse: ``V(h)`` in [m³].
+        volume_fine: ``V(h/2)`` in [m³].
+        volume: The extrapolated estimate in [m³].
+        lower: Bounding-box corner (3,) in [m].
+        upper: Bounding-box corner (3,) in [m].
+        source: The model's name.
+    """
+
+    q: np.ndarray
+    points: np.ndarray
+    voxel: float
+    volume_coarse: float
+    volume_fine: float
+    volume: float
+    lower: np.ndarray
+    upper: np.ndarray
+    source: str
+
+
+def _occupied(points: np.ndarray, lower: np.ndarray, h: float) -> int:
+    idx = np.floor((points - lower) / h).astype(np.int64)
+    dims = idx.max(axis=0) + 1
+    flat = (idx[:, 0] * dims[1] + idx[:, 1]) * dims[2] + idx[:, 2]
+    return int(np.unique(flat).size)
+
+
+def workspace(
+    model: Any,
+    samples: int = 1_000_000,
+    voxel: float | None = None,
+    seed: int | None = 0,
+) -> WorkspaceResult:
+    """Reachable tip points of random configurations and a reachable-volume estimate.
+
+    Args:
+        model: A loaded model or a source.
+        samples: Number of uniform random configurations within the joint limits.
+        voxel: Coarse voxel edge in [m]; default ``reach / 25``.
+        seed: Random seed.
+
+    Returns:
+        The :class:`WorkspaceResult` (see its docstring for how the volume is estimated).
+
+    Raises:
+        ParameterError: ``samples`` < 1 or ``voxel`` not > 0.
+    """
+    mdl = _model(model)
+    if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
+        raise ParameterError(f"samples={samples!r}: an integer in 1..50,000,000 is required")
+    h = reach(mdl) / 25.0 if voxel is None else float(voxel)
+    if not math.isfinite(h) or h <= 0:
+        raise ParameterError(f"voxel={voxel!r}: a finite edge > 0 m is required")
+    q = mdl.random_q(int(samples), seed=seed)
+    pts = _kernels.fk_batch(_arrays(mdl), q)
+    lower = pts.min(axis=0) - 1e-9
+    upper = pts.max(axis=0)
+    v1 = _occupied(pts, lower, h) * h**3
+    v2 = _occupied(pts, lower, h / 2) * (h / 2) ** 3
+    return WorkspaceResult(
+        q=_ro(q),
+        points=_ro(pts),
+        voxel=h,
+        volume_coarse=v1,
+        volume_fine=v2,
+        volume=2 * v2 - v1,
+        lower=_ro(lower),
+        upper=_ro(upper),
+        source=mdl.name,
+    )
+
+
+def cross_section(
+    points: np.ndarray, plane: str = "xz", offset: float = 0.0, thickness: float | None = None
+) -> np.ndarray:
+    """Points of a workspace in a slab around a coordinate plane, as 2-D coordinates.
+
+    Args:
+        points: Tip positions (N, 3) in [m].
+        plane: ``"xz"``, ``"yz"`` or ``"xy"`` (the two kept coordinates, in that order).
+        offset: Position of the plane along the dropped axis in [m].
+        thickness: Slab thickness in [m]; default 1 % of the points' extent.
+
+    Returns:
+        (M, 2) coordinates of the points with ``|coordinate − offset| ≤ thickness / 2``.
+
+    Raises:
+        ParameterError: Unknown plane or bad thickness.
+    """
+    planes = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}
+    if plane not in planes:
+        raise ParameterError(f"plane={plane!r} is not allowed; use one of {choices(planes)}")
+    a, b, c = planes[plane]
+    pts = np.asarray(points, float)
+    if thickness is None:
+        thickness = 0.01 * float(np.ptp(pts, axis=0).max() or 1.0)
+    if not math.isfinite(thickness) or thickness <= 0:
+        raise ParameterError(f"thickness={thickness!r}: a finite value > 0 m is required")
+    keep = np.abs(pts[:, c] - offset) <= thickness / 2
+    return pts[keep][:, [a, b]].copy()
