@@ -53,6 +53,7 @@ import numpy as np
 from ._io import atomic_write
 from .exceptions import (
     ConfigurationError,
+    HexapodKinError,
     OptionalDependencyError,
     ParameterError,
     ViewerError,
@@ -1176,17 +1177,17 @@ def _hexapod_sway(
     for leg_index, mount in enumerate(params.legs):
         cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names]
         mount_T = mount.transform()
+        foot_h = np.append(feet_world[leg_index], 1.0)
+        targets = np.array([np.linalg.solve(b @ mount_T, foot_h)[:3] for b in base])
+        try:
+            solutions = ik.analytic(mount.chain, targets)
+        except HexapodKinError:  # no closed form for this leg: held still
+            continue
         prev = q0[cols]
-        for i in range(len(times)):
-            target_h = np.linalg.solve(base[i] @ mount_T, np.append(feet_world[leg_index], 1.0))
-            try:
-                sols = ik.analytic(mount.chain, target_h[:3])
-            except Exception:  # noqa: BLE001 - any IK failure keeps the previous pose
-                sols = np.empty((0, len(cols)))
-            if len(sols):
-                diff = np.angle(np.exp(1j * (sols - prev[None, :])))
-                best = sols[int(np.argmin(np.abs(diff).sum(axis=1)))]
-                prev = prev + np.angle(np.exp(1j * (best - prev)))
+        for i, sols in enumerate(solutions):
+            if len(sols):  # the branch nearest to the previous sample (angles wrapped)
+                step = np.angle(np.exp(1j * (np.asarray(sols) - prev[None, :])))
+                prev = prev + step[int(np.argmin(np.abs(step).sum(axis=1)))]
             qs[i, cols] = prev
     return times, np.clip(qs, model.lower, model.upper), base
 
