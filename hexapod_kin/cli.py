@@ -251,6 +251,130 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+# ------------------------------------------------------------------------ ik
+def _add_ik(sub: Any) -> None:
+    p = sub.add_parser("ik", help="inverse kinematics of the tip position (closed form + DLS)")
+    _source_args(p)
+    p.add_argument("--target", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"),
+                   help="tip position in the base frame [m]")
+    p.add_argument("--yaw", type=float, help="SCARA closed form only: tool yaw [rad]")
+    p.add_argument("--q0", nargs="+", type=float, help="start of the numerical solver")
+    p.add_argument("--tol", type=float, default=1e-10, help="position tolerance [m]")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+
+def _cmd_ik(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from . import ik
+    from .exceptions import IKError
+
+    model = _load(args)
+    target = np.array(args.target, dtype=float)
+    closed: list[list[float]] | None = None
+    family = None
+    try:
+        family = ik.detect_family(model).family
+    except IKError:
+        family = None
+    if family is not None:
+        tgt = target if args.yaw is None else np.append(target, args.yaw)
+        closed = ik.analytic(model, tgt).tolist()
+    res = ik.solve(model, target, args.q0, tol=args.tol)
+    if args.json:
+        _emit_json(
+            {
+                "source": model.name,
+                "joint_names": list(model.joint_names),
+                "target": target.tolist(),
+                "family": family,
+                "analytic": closed,
+                "numerical": res.as_dict(),
+            }
+        )
+        return 0 if res.status in ("converged", "unreachable") else 1
+    print(f"{model.name}: target {target.tolist()} m, joints {', '.join(model.joint_names)}")
+    if closed is not None:
+        print(f"closed form ({family}): {len(closed)} solution(s)")
+        for sol in closed:
+            print("  " + " ".join(f"{v: .9f}" for v in sol))
+    else:
+        print("closed form: none for this chain")
+    print(f"numerical: {res.status} ({res.reason})")
+    print("  q = " + " ".join(f"{v: .9f}" for v in res.q))
+    print(f"  error = {res.error:.3e} m after {res.iterations} steps, {res.attempts} start(s)")
+    if res.status in ("unreachable", "joint_limits"):
+        print(f"  nearest reachable point {np.round(res.nearest, 9).tolist()} m, "
+              f"distance {res.distance:.6g} m")
+    return 0 if res.status in ("converged", "unreachable") else 1
+
+
+# ------------------------------------------------------------------------ step
+def _add_step(sub: Any) -> None:
+    p = sub.add_parser(
+        "step", help="the seeds' resolved-rate experiment: foot velocity [A sin(2πt/T), 0, 0]"
+    )
+    _source_args(p)
+    _q_args(p)
+    p.add_argument("--amplitude", type=float, default=0.05, help="A [m/s] (default 0.05)")
+    p.add_argument("--period", type=float, default=2.0, help="T [s] (default 2)")
+    p.add_argument("--duration", type=float, default=10.0, help="[s] (default 10)")
+    p.add_argument("--dt", type=float, default=1e-3, help="step [s] (default 1e-3)")
+    p.add_argument("--method", choices=["rk4", "euler"], default="rk4")
+    p.add_argument("--gain", type=float, default=10.0, help="closed-loop gain [1/s] (0: open)")
+    p.add_argument("--no-baseline", action="store_true",
+                   help="skip the plain Euler + np.linalg.solve comparison")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.add_argument("--plot", metavar="FILE.png", help="write the seeds' figures (PNG)")
+    p.add_argument("--html", metavar="FILE.html", help="write an animated 3-D page (HTML)")
+
+
+def _cmd_step(args: argparse.Namespace) -> int:
+    from . import motion
+
+    model = _load(args)
+    q0 = None if args.q is None else _q_arg(args, model.nq)
+    run = motion.seed_experiment(
+        model, amplitude=args.amplitude, period=args.period, duration=args.duration,
+        dt=args.dt, q0=q0, method=args.method, gain=args.gain, baseline=not args.no_baseline,
+    )
+    tr = run.trajectory
+    written = []
+    if args.plot:
+        from .plots import plot_motion
+
+        written.append(str(plot_motion(run, args.plot)))
+    if args.html:
+        try:
+            from .viewer import export_html
+        except ImportError as exc:
+            raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
+        stride = max(1, int(round(0.02 / tr.dt)))
+        written.append(str(export_html(
+            model, tr.t[::stride], tr.q[::stride], args.html,
+            title=f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
+        )))
+    if args.json:
+        out = {"source": model.name, **run.as_dict(), "written": written}
+        _emit_json(out)
+        return 0
+    ca = tr.closest_approach
+    print(f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
+          f"{tr.t[-1]:g} s, dt = {tr.dt:g} s, {tr.method}, gain {tr.gain:g} 1/s")
+    print("q0 = " + " ".join(f"{v:.6f}" for v in tr.q[0]))
+    print(f"drift_y = {run.drift_y:.3e} m   drift_z = {run.drift_z:.3e} m   "
+          f"error_x = {run.error_x:.3e} m")
+    if run.baseline:
+        b = run.baseline
+        print(f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
+              f"drift_z = {b['drift_z']:.3e} m   error_x = {b['error_x']:.3e} m")
+    print(f"closest approach to a singularity: σ_min = {ca['sigma_min']:.4g} at t = "
+          f"{ca['t']:.3f} s (condition {ca['condition']:.4g})")
+    for path in written:
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
 # ------------------------------------------------------------------------ view
 def _wait_args(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
@@ -365,6 +489,8 @@ COMMANDS: dict[str, Command] = {
     "demo": (_add_demo, _cmd_demo),
     "view": (_add_view, _cmd_view),
     "animate": (_add_animate, _cmd_animate),
+    "ik": (_add_ik, _cmd_ik),
+    "step": (_add_step, _cmd_step),
 }
 
 
