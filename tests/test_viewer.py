@@ -1,0 +1,519 @@
+"""Viewer: the exported HTML and the live meshcat server, checked in a real headless Chromium.
+
+Independent references: foot positions from the numpy table (``table_fk``), geometry counts
+from Pinocchio's parser, socket states from the kernel (/proc/net/tcp), pixels from the
+browser.
+"""
+
+from __future__ import annotations
+
+import base64
+import http.client
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hexapod_kin import load, robots, viewer
+from hexapod_kin.exceptions import (
+    ConfigurationError,
+    FrameNotFoundError,
+    ParameterError,
+    ViewerError,
+)
+from hexapod_kin.params import table_fk
+
+umsgpack = pytest.importorskip("umsgpack")
+
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--enable-unsafe-swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--disable-quic",
+]
+
+
+# ====================================================================== helpers
+def _alive(pid: int) -> bool:
+    """True if ``pid`` exists and is not a zombie (a zombie has exited)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def _wait_gone(pid: int, timeout: float = 15.0) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if not _alive(pid):
+            return True
+        time.sleep(0.05)
+    return not _alive(pid)
+
+
+def _html_data(path: Path) -> dict:
+    text = path.read_text(encoding="utf-8")
+    m = re.search(r"var DATA = (\{.*?\});\n", text)
+    assert m, "no DATA block in the page"
+    return json.loads(m.group(1))
+
+
+def _decode(b64: str) -> dict:
+    return umsgpack.unpackb(base64.b64decode(b64))
+
+
+def _f32(ext) -> np.ndarray:
+    assert ext.type == 0x17
+    return np.frombuffer(ext.data, dtype=np.float32)
+
+
+def _step_trajectory(model, n: int = 61):
+    """A foot step of a 3-DOF leg as a joint path: hip swings, knee lifts mid-way."""
+    s = np.linspace(0.0, 1.0, n)
+    q_a = np.array([-0.35, 0.35, 1.2])
+    q_b = np.array([0.35, 0.35, 1.2])
+    qs = q_a + (q_b - q_a) * s[:, None]
+    qs[:, 1] -= 0.5 * np.sin(np.pi * s)
+    return s * 1.5, qs
+
+
+def _local_ipv4() -> list[str]:
+    """This machine's non-loopback IPv4 addresses (its own interfaces only)."""
+    found: set[str] = set()
+    ip = shutil.which("ip")
+    if ip:
+        out = subprocess.run([ip, "-4", "-o", "addr", "show"], capture_output=True, text=True)
+        found.update(re.findall(r"inet (\d+\.\d+\.\d+\.\d+)/", out.stdout))
+    try:
+        for info in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET):
+            found.add(info[4][0])
+    except socket.gaierror:
+        pass
+    return sorted(a for a in found if not a.startswith("127."))
+
+
+def _listeners(port: int) -> list[tuple[str, str]]:
+    """(file, local address hex) of LISTEN sockets on ``port`` from /proc/net/tcp{,6}."""
+    out = []
+    for name in ("tcp", "tcp6"):
+        path = Path(f"/proc/net/{name}")
+        if not path.exists():
+            continue
+        for line in path.read_text().splitlines()[1:]:
+            fields = line.split()
+            addr, hexport = fields[1].rsplit(":", 1)
+            if fields[3] == "0A" and int(hexport, 16) == port:
+                out.append((name, addr))
+    return out
+
+
+def _port(url: str) -> int:
+    return int(re.search(r":(\d+)", url.split("//", 1)[1]).group(1))
+
+
+# ====================================================================== browser fixtures
+@pytest.fixture(scope="module")
+def chromium() -> str:
+    path = shutil.which("chromium")
+    if path is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI is set but `chromium` is not on PATH (.ci/run installs Debian's)")
+        pytest.skip("Chromium is not installed (apt-get install chromium); browser tests skipped")
+    return path
+
+
+@pytest.fixture(scope="module")
+def browser(chromium):
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        if os.environ.get("CI"):
+            pytest.fail("CI is set but playwright (python) is not installed")
+        pytest.skip("playwright (python) is not installed; browser tests skipped")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+class _Page:
+    """A page whose every request outside ``allow`` is blocked and recorded."""
+
+    def __init__(self, browser, allow: tuple[str, ...]):
+        self.page = browser.new_page(viewport={"width": 800, "height": 600})
+        self.blocked: list[str] = []
+        self.errors: list[str] = []
+        self.page.on("pageerror", lambda e: self.errors.append(str(e)))
+        self.page.on(
+            "console", lambda m: self.errors.append(m.text) if m.type == "error" else None
+        )
+
+        def route(r):
+            if r.request.url.startswith(allow):
+                r.continue_()
+            else:
+                self.blocked.append(r.request.url)
+                r.abort()
+
+        self.page.route("**/*", route)
+
+    def pixels(self) -> np.ndarray:
+        from io import BytesIO
+
+        import matplotlib.image as mpimg
+
+        png = self.page.locator("canvas").first.screenshot()
+        return mpimg.imread(BytesIO(png), format="png")[..., :3]
+
+    def close(self):
+        self.page.close()
+
+
+def _changed(a: np.ndarray, b: np.ndarray) -> float:
+    """Fraction of pixels whose colour differs by more than 0.1 in some channel."""
+    return float(np.mean(np.abs(a - b).max(axis=-1) > 0.1))
+
+
+# ====================================================================== scene and HTML (no browser)
+@pytest.fixture(scope="module")
+def leg():
+    return load("hexabot_leg")
+
+
+@pytest.fixture(scope="module")
+def step_html(leg, tmp_path_factory):
+    times, qs = _step_trajectory(leg)
+    sing = np.zeros(len(times), bool)
+    sing[[0, 30]] = True
+    path = tmp_path_factory.mktemp("html") / "step.html"
+    viewer.export_html(leg, times, qs, path, frame_triads=True, singular_mask=sing, play=False)
+    return path, times, qs
+
+
+def test_export_is_self_contained(step_html):
+    path, times, _ = step_html
+    text = path.read_text(encoding="utf-8")
+    assert "default-src 'none'" in text  # CSP: the page may fetch nothing
+    assert "<script src" not in text and "<link" not in text
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", text)
+    data = _html_data(path)
+    assert data["duration"] == pytest.approx(times[-1] - times[0])
+    assert data["animation"] is not None
+
+
+def test_robot_objects_match_pinocchio_geometry(leg, step_html):
+    path, _, _ = step_html
+    cmds = [_decode(c) for c in _html_data(path)["commands"]]
+    robot = [c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")]
+    expected = leg.geometry_model("visual").ngeoms
+    assert len(robot) == expected > 0
+    kinds = {c["object"]["geometries"][0]["type"] for c in robot}
+    assert kinds <= {"BoxGeometry", "CylinderGeometry", "SphereGeometry"}
+
+
+def test_keyframes_follow_the_table_fk(leg, step_html):
+    """The foot sphere's animated position equals the numpy table FK at every sample."""
+    path, times, qs = step_html
+    anim = _decode(_html_data(path)["animation"])
+    foot = [a for a in anim["animations"] if a["path"].startswith("/meshcat/robot/foot")]
+    assert len(foot) == 1
+    tracks = {t["name"]: t for t in foot[0]["clip"]["tracks"]}
+    key_t = _f32(tracks[".position"]["times"])
+    pos = _f32(tracks[".position"]["values"]).reshape(-1, 3)
+    np.testing.assert_allclose(key_t, times - times[0], atol=1e-6)
+    chain = robots.hexabot_leg()
+    ref = np.array([table_fk(chain, q)[:3, 3] for q in qs])
+    np.testing.assert_allclose(pos, ref, atol=1e-6)
+    quat = _f32(tracks[".quaternion"]["values"]).reshape(-1, 4)
+    np.testing.assert_allclose(np.linalg.norm(quat, axis=1), 1.0, atol=1e-6)
+    assert np.all(np.einsum("ij,ij->i", quat[1:], quat[:-1]) > 0)  # sign-continuous
+
+
+def test_trace_tube_and_markers_follow_the_foot(leg, step_html):
+    path, times, qs = step_html
+    cmds = {c["path"]: c for c in (_decode(x) for x in _html_data(path)["commands"])}
+    chain = robots.hexabot_leg()
+    ref = np.array([table_fk(chain, q)[:3, 3] for q in qs])
+    tube = cmds["/meshcat/trace"]["object"]["geometries"][0]["data"]["attributes"]["position"]
+    verts = _f32(tube["array"]).reshape(-1, 3)
+    dist = np.min(np.linalg.norm(verts[:, None, :] - ref[None, :, :], axis=2), axis=1)
+    radius = dist.max()
+    assert 0 < radius < 0.005  # every vertex of the tube sits close to the foot path
+    spheres = cmds["/meshcat/singular"]["object"]["object"]["children"]
+    centres = np.array([np.array(s["matrix"]).reshape(4, 4).T[:3, 3] for s in spheres])
+    np.testing.assert_allclose(centres, ref[[0, 30]], atol=1e-9)
+
+
+def test_triads_are_the_khalil_frames(leg, step_html):
+    assert viewer.khalil_frames(leg) == ("base", "coxa", "femur", "tibia", "foot")
+    hexa = load("hexapod")
+    assert viewer.khalil_frames(hexa) == tuple(
+        f"leg1_{n}" for n in ("base", "coxa", "femur", "tibia", "foot")
+    )
+    path, _, qs = step_html
+    cmds = [_decode(c) for c in _html_data(path)["commands"]]
+    triads = [c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/frames/")]
+    assert [c["path"] for c in triads] == [f"/meshcat/frames/{k}" for k in range(5)]
+    labels = [
+        [t["text"] for t in c["object"]["textures"] if t["type"] == "_text"] for c in triads
+    ]
+    assert labels == [["0"], ["1"], ["2"], ["3"], ["4"]]
+    moves = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/frames/4"]
+    T = np.array(moves[0]["matrix"]).reshape(4, 4).T
+    np.testing.assert_allclose(T[:3, 3], table_fk(robots.hexabot_leg(), qs[0])[:3, 3], atol=1e-12)
+
+
+def test_base_poses_move_the_whole_robot(leg, tmp_path):
+    times, qs = _step_trajectory(leg, 5)
+    shift = np.eye(4)
+    shift[:3, 3] = [0.3, -0.2, 0.1]
+    plain = viewer.scene_commands(leg, times, qs, trace_frame=False)
+    moved = viewer.scene_commands(leg, times, qs, base_poses=shift, trace_frame=False)
+    a = {c["path"]: c for c in plain if c["type"] == "set_transform"}
+    b = {c["path"]: c for c in moved if c["type"] == "set_transform"}
+    for p in a:
+        if p.startswith("/meshcat/robot/"):
+            Ta = np.array(a[p]["matrix"]).reshape(4, 4).T
+            Tb = np.array(b[p]["matrix"]).reshape(4, 4).T
+            np.testing.assert_allclose(Tb, shift @ Ta, atol=1e-12)
+
+
+def test_resampling_and_long_trajectories(leg):
+    times, qs = _step_trajectory(leg, 31)  # 1.5 s
+    cmds = viewer.scene_commands(leg, times, qs, fps=10)
+    anim = cmds[-1]
+    key_t = _f32(anim["animations"][0]["clip"]["tracks"][0]["times"])
+    np.testing.assert_allclose(key_t, np.arange(16) / 10, atol=1e-6)
+
+
+def test_bad_inputs_are_named(leg, tmp_path):
+    times, qs = _step_trajectory(leg, 5)
+    out = tmp_path / "x.html"
+    with pytest.raises(ConfigurationError, match="increase"):
+        viewer.export_html(leg, times[::-1], qs, out)
+    with pytest.raises(ConfigurationError, match="times has shape"):
+        viewer.export_html(leg, times[:3], qs, out)
+    with pytest.raises(ConfigurationError, match="qs has shape"):
+        viewer.export_html(leg, times, qs[:, :2], out)
+    with pytest.raises(ConfigurationError, match="base_poses"):
+        viewer.export_html(leg, times, qs, out, base_poses=np.ones((5, 4, 4)))
+    with pytest.raises(ConfigurationError, match="singular_mask"):
+        viewer.export_html(leg, times, qs, out, singular_mask=[True])
+    with pytest.raises(FrameNotFoundError, match="nope"):
+        viewer.export_html(leg, times, qs, out, trace_frame="nope")
+    with pytest.raises(ParameterError, match="fps"):
+        viewer.export_html(leg, times, qs, out, fps=-1)
+    with pytest.raises(ParameterError, match="speed"):
+        viewer.export_html(leg, times, qs, out, speed=0)
+    assert not out.exists()
+
+
+def test_demo_trajectories_respect_limits_and_keep_hexapod_feet_down():
+    for name in ("hexabot_leg", "scara", "pendulum", "coxa_tibia_leg"):
+        m = load(name)
+        times, qs, base = viewer.demo_trajectory(m, 2.0, 21)
+        assert base is None and qs.shape == (21, m.nq)
+        assert np.all(qs >= m.lower - 1e-12) and np.all(qs <= m.upper + 1e-12)
+        assert np.ptp(qs, axis=0).min() > 0  # every joint moves
+    hexa = load("hexapod")
+    times, qs, base = viewer.demo_trajectory(hexa, 2.0, 21)
+    assert base.shape == (21, 4, 4) and np.ptp(base[:, 2, 3]) > 0  # the body moves
+    feet = viewer._Scene(hexa).frame_poses(qs, base, hexa.params.foot_frames)[:, :, :3, 3]
+    np.testing.assert_allclose(feet, np.broadcast_to(feet[0], feet.shape), atol=1e-9)
+    assert feet[0, :, 2].min() > -1e-9  # standing on z = 0
+
+
+def test_erd_meshes_are_embedded(tmp_path):
+    solo = load("erd:solo12", tip="FL_FOOT")
+    cmds = viewer.scene_commands(solo, [0.0], solo.neutral()[None, :])
+    meshes = [
+        c for c in cmds
+        if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+    ]
+    assert len(meshes) == solo.geometry_model("visual").ngeoms
+    g = meshes[0]["object"]["geometries"][0]
+    assert g["type"] == "_meshfile_geometry" and g["format"] == "stl" and len(g["data"].data) > 84
+
+
+# ====================================================================== browser: exported HTML
+def test_exported_step_renders_and_moves_offline(browser, step_html):
+    path, times, _ = step_html
+    page = _Page(browser, allow=("file://",))
+    try:
+        page.page.goto(path.as_uri())
+        page.page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.page.evaluate(f"hexapodKin.seek({times[0]})")
+        page.page.wait_for_timeout(300)
+        start = page.pixels()
+        page.page.evaluate(f"hexapodKin.seek({times[len(times) // 2]})")
+        page.page.wait_for_timeout(300)
+        middle = page.pixels()
+        for part in ("robot", "trace", "frames", "singular"):
+            page.page.evaluate(f"hexapodKin.setVisible('{part}', false)")
+        page.page.wait_for_timeout(300)
+        empty = page.pixels()
+        page.page.evaluate("hexapodKin.setVisible('robot', true)")
+        page.page.wait_for_timeout(300)
+        robot_only = page.pixels()
+    finally:
+        page.close()
+    assert page.blocked == []  # nothing but the file itself was requested
+    assert page.errors == []
+    assert _changed(robot_only, empty) > 0.01  # the robot is drawn
+    assert _changed(start, middle) > 0.005  # the animation moves
+
+
+# ====================================================================== live server
+def test_server_listens_on_loopback_only():
+    with viewer.MeshcatServer() as server:
+        ports = [_port(server.web_url), _port(server.zmq_url)]
+        for port in ports:
+            listening = _listeners(port)
+            assert listening == [("tcp", "0100007F")], listening  # 127.0.0.1, no IPv6
+            with socket.create_connection(("127.0.0.1", port), timeout=5):
+                pass
+            for addr in _local_ipv4():  # this machine's own other addresses only
+                with pytest.raises(ConnectionRefusedError):
+                    socket.create_connection((addr, port), timeout=5).close()
+        conn = http.client.HTTPConnection("127.0.0.1", ports[0], timeout=10)
+        conn.request("GET", "/static/")
+        resp = conn.getresponse()
+        assert resp.status == 200 and b"MeshCat" in resp.read()
+        conn.close()
+
+
+def test_live_page_shows_the_hexapod(browser):
+    hexa = load("hexapod")
+    with viewer.Viewer(hexa) as v:
+        page = _Page(browser, allow=(v.url.split("/static/")[0],))
+        try:
+            page.page.goto(v.url)
+            n = len(viewer._Scene(hexa).visuals)
+            page.page.wait_for_function(
+                "() => window.viewer && Object.keys(viewer.scene_tree.find(['meshcat','robot'])"
+                f".children).length >= {n}",
+                timeout=60000,
+            )
+            page.page.wait_for_timeout(500)
+            shown = page.pixels()
+            v.set_visible("robot", False)
+            page.page.wait_for_timeout(500)
+            hidden = page.pixels()
+        finally:
+            page.close()
+    assert page.blocked == []
+    assert _changed(shown, hidden) > 0.01
+
+
+def test_no_orphan_after_exit_and_after_an_error():
+    leg = load("hexabot_leg")
+    with viewer.Viewer(leg) as v:
+        pid = v.pid
+        assert _alive(pid)
+    assert _wait_gone(pid, 1.0)
+    with pytest.raises(RuntimeError, match="boom"):
+        with viewer.Viewer(leg) as v:
+            pid = v.pid
+            raise RuntimeError("boom")
+    assert _wait_gone(pid, 1.0)
+
+
+def test_no_orphan_when_the_parent_dies():
+    code = (
+        "import os, sys; from hexapod_kin.viewer import MeshcatServer; "
+        "s = MeshcatServer(); print(s.pid, flush=True); os._exit(3)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 3
+    pid = int(out.stdout.split()[0])
+    assert _wait_gone(pid, 15.0), f"server {pid} survived its parent"
+
+
+def _call_in_thread(fn, limit: float = 60.0):
+    box: dict = {}
+
+    def run():
+        try:
+            fn()
+        except BaseException as exc:  # noqa: BLE001
+            box["exc"] = exc
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(limit)
+    assert not t.is_alive(), "the call hung"
+    return box.get("exc")
+
+
+def test_no_hang_when_the_server_stops_answering():
+    leg = load("hexabot_leg")
+    q = np.zeros(3)
+    with viewer.Viewer(leg, timeout=1.0) as v:
+        pid = v.pid
+        os.kill(pid, signal.SIGSTOP)  # alive but silent: the zmq timeout must fire
+        exc = _call_in_thread(lambda: v.display(q))
+        assert isinstance(exc, ViewerError) and "did not answer" in str(exc)
+    assert _wait_gone(pid, 1.0)  # close() also ends a stopped server
+
+
+def test_no_hang_when_the_server_is_killed():
+    leg = load("hexabot_leg")
+    with viewer.Viewer(leg, timeout=1.0) as v:
+        os.kill(v.pid, signal.SIGKILL)
+        assert _wait_gone(v.pid, 5.0)
+        exc = _call_in_thread(lambda: v.display(np.zeros(3)))
+        assert isinstance(exc, ViewerError)
+        exc = _call_in_thread(lambda: v.set_visible("robot", True))
+        assert isinstance(exc, ViewerError)
+
+
+def test_viewer_rejects_bad_arguments():
+    leg = load("hexabot_leg")
+    with pytest.raises(ParameterError, match="timeout"):
+        viewer.Viewer(leg, timeout=0)
+    with viewer.Viewer(leg) as v:
+        with pytest.raises(ParameterError, match="part"):
+            v.set_visible("wheels", False)
+        with pytest.raises(ConfigurationError):
+            v.display([0.0, 0.0])
+        v.animate(*_step_trajectory(leg, 11), frame_triads=True)  # accepted by the server
+
+
+# ====================================================================== command line
+def test_cli_view_prints_a_loopback_url_and_stops(capsys):
+    from hexapod_kin.cli import main
+
+    assert main(["view", "hexabot_leg", "--no-wait"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"http://127\.0\.0\.1:\d+/static/", out)
+    port = _port(re.search(r"http://\S+", out).group(0))
+    with pytest.raises(OSError):
+        socket.create_connection(("127.0.0.1", port), timeout=2).close()  # stopped
+
+
+def test_cli_animate_writes_html(tmp_path, capsys):
+    from hexapod_kin.cli import main
+
+    out = tmp_path / "anim.html"
+    rc = main(["animate", "hexabot_leg", "--html", str(out), "--samples", "11", "--triads",
+               "--sigma-min", "10", "--json"])
+    assert rc == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["samples"] == 11 and info["singular_samples"] == 11
+    data = _html_data(out)
+    assert data["animation"] and data["duration"] == pytest.approx(4.0)
