@@ -953,7 +953,7 @@ def scan(
     q_fixed: Any = None,
     threshold: float | None = None,
     rtol: float = 1e-2,
-    family_tol: float = 0.05,
+    family_tol: float | None = None,
     families: bool = True,
     seed: int | None = 0,
     progress: bool | None = None,
@@ -975,7 +975,9 @@ def scan(
             ``rtol × reach(model)``.
         rtol: Relative threshold (see ``threshold``).
         family_tol: Largest joint-space distance in [rad] from a flagged configuration to a
-            family for it to count as lying on it.
+            family for it to count as lying on it; default ``15 × rtol``. (Near a family
+            ``σmin ≈ s·d`` with ``s`` a lever arm in [m/rad]; with ``threshold = rtol·reach``
+            flagged points lie within ``rtol·reach/s``, so the default allows ``s ≥ reach/15``.)
         families: Derive the families (sympy, cached per chain) and assign flagged points.
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
@@ -1041,7 +1043,8 @@ def scan(
             if idx.size:
                 dist = funcs.distance(q[idx])
                 best = np.argmin(dist, axis=1)
-                ok = dist[np.arange(idx.size), best] <= family_tol
+                tol = 15.0 * rtol if family_tol is None else float(family_tol)
+                ok = dist[np.arange(idx.size), best] <= tol
                 family[idx[ok]] = best[ok]
     return ScanResult(
         q=_ro(q),

@@ -182,22 +182,19 @@ class Derivation:
             (scalar expressions give shape () or (N,); matrices (…, rows, cols)).
         """
         num = self.numeric(expr)
-        raw = sp.lambdify(self.q, num, modules="numpy")
         is_matrix = isinstance(num, sp.MatrixBase)
         shape = num.shape if is_matrix else ()
+        entries = list(num) if is_matrix else [num]
+        raws = [sp.lambdify(self.q, e, modules="numpy") for e in entries]
 
         def f(q: np.ndarray) -> np.ndarray:
             arr = np.asarray(q, dtype=float)
+            lead = arr.shape[:-1]
             cols = [arr[..., k] for k in range(len(self.q))]
-            out = raw(*cols)
-            if is_matrix:
-                lead = arr.shape[:-1]
-                res = np.empty(lead + shape)
-                for i in range(shape[0]):
-                    for j in range(shape[1]):
-                        res[..., i, j] = np.broadcast_to(np.asarray(out[i][j], float), lead)
-                return res
-            return np.broadcast_to(np.asarray(out, dtype=float), arr.shape[:-1]).copy()
+            res = np.empty(lead + (len(raws),))
+            for i, raw in enumerate(raws):
+                res[..., i] = np.broadcast_to(np.asarray(raw(*cols), dtype=float), lead)
+            return res.reshape(lead + shape)
 
         return f
 
