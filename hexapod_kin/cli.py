@@ -477,6 +477,108 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         return _serve_until(viewer, args)
 
 
+# ------------------------------------------------------------------------ derive
+def _add_derive(sub: Any) -> None:
+    p = sub.add_parser("derive", help="symbolic T, p, J (direct/indirect), det J factored")
+    p.add_argument("source", help="preset name (or a model made from a Khalil table)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument("--tip", help="hexapod only: the foot frame of the leg (e.g. leg2_foot)")
+    p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz)")
+    p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
+
+
+def _cmd_derive(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .symbolic import ROW_NAMES, derive
+
+    model = _load(args)
+    deriv = derive(model, rows=args.rows)
+    if args.latex:
+        print(deriv.latex())
+        return 0
+    print(deriv.text())
+    qs = model.random_q(100, seed=0)
+    idx = [ROW_NAMES.index(r) for r in deriv.rows]
+    jac_sym = deriv.function(deriv.J_rows)(qs)
+    jac_pin = np.array([model.jacobian(q)[idx] for q in qs])
+    print(f"check vs Pinocchio at 100 random q: max |J_sym - J_pin| = "
+          f"{np.abs(jac_sym - jac_pin).max():.2e}", end="")
+    if deriv.det is not None:
+        det_sym = deriv.function(deriv.det)(qs)
+        det_pin = np.linalg.det(jac_pin)
+        print(f", max |det_sym - det_pin| = {np.abs(det_sym - det_pin).max():.2e}")
+    else:
+        print()
+    return 0
+
+
+# ------------------------------------------------------------------------ scan
+def _add_scan(sub: Any) -> None:
+    p = sub.add_parser("scan", help="singularity measures over a joint grid; singular families")
+    _source_args(p)
+    p.add_argument("--grid", type=int, help="points per scanned joint (default 61)")
+    p.add_argument("--samples", type=int, help="random configurations instead of a grid")
+    p.add_argument(
+        "--joints", nargs="+", help="joints to scan (default: the two the families involve)"
+    )
+    p.add_argument("--rows", nargs="+", help="rows of J (x y z wx wy wz; default auto)")
+    p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
+    p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
+    p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.add_argument("--plot", metavar="FILE.png", help="heat map (2 scanned joints, grid)")
+
+
+def _cmd_scan(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .singularity import plot_joints, scan
+
+    model = _load(args)
+    joints: Any = args.joints
+    if joints is None and model.nq > 2:
+        joints = [model.joint_names[j] for j in plot_joints(model, args.rows)]
+    joints = [int(j) if str(j).isdigit() else j for j in joints] if joints else None
+    q_fixed = _q_arg(args, model.nq) if args.q is not None else None
+    grid = args.grid if args.grid is not None or args.samples is not None else 61
+    result = scan(
+        model,
+        grid=grid,
+        samples=args.samples,
+        joints=joints,
+        rows=args.rows,
+        q_fixed=q_fixed,
+        threshold=args.threshold,
+        seed=args.seed,
+        progress=False if args.json else None,
+    )
+    if args.plot:
+        from .plots import plot_singularity_map
+
+        path = plot_singularity_map(result, args.plot)
+        print(f"wrote {path}", file=sys.stderr)
+    if args.json:
+        _emit_json(result.to_json())
+        return 0
+    n = result.q.shape[0]
+    print(f"{result.source}: {n} configurations over "
+          f"{', '.join(result.joint_names[j] for j in result.joints)}"
+          f" (grid {result.grid_shape})" if result.grid_shape else f" ({n} random samples)")
+    print(f"rows of J: {', '.join(result.rows)}; singular when sigma_min < "
+          f"{result.threshold:.3g}")
+    print(f"singular: {int(result.singular.sum())}  unexplained: "
+          f"{int(result.unexplained.sum())}")
+    for name, count in result.family_counts().items():
+        print(f"  family {name}: {count}")
+    finite = np.isfinite(result.condition)
+    print(f"manipulability: min {result.manipulability.min():.4g}  max "
+          f"{result.manipulability.max():.4g}; condition (finite) max "
+          f"{result.condition[finite].max() if finite.any() else float('nan'):.4g}")
+    return 0
+
+
 # ------------------------------------------------------------------------ main
 Command = tuple[Callable[[Any], None], Callable[[argparse.Namespace], int]]
 
@@ -491,6 +593,8 @@ COMMANDS: dict[str, Command] = {
     "animate": (_add_animate, _cmd_animate),
     "ik": (_add_ik, _cmd_ik),
     "step": (_add_step, _cmd_step),
+    "derive": (_add_derive, _cmd_derive),
+    "scan": (_add_scan, _cmd_scan),
 }
 
 
