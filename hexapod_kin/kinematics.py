@@ -22,10 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import ParameterError, choices
-from .model import _F64, Model, build
-
-_ND = np.ndarray
-_isfinite = math.isfinite
+from .model import Model, build, fast_q_ok
 
 __all__ = [
     "REFERENCES",
@@ -68,12 +65,7 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape or non-finite values.
         """
         # Fast path inlined (this is the hot call): float64 array of the right shape, finite.
-        if not (
-            q.__class__ is _ND
-            and q.dtype is _F64
-            and q.shape == self._shape
-            and _isfinite(sum(q.tolist()))
-        ):
+        if not fast_q_ok(q, self._shape):
             q = self.check_q(q)
         pin.forwardKinematics(self.model, self.data, q)
         omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
@@ -142,12 +134,7 @@ class KinematicModel(Model):
         if ref is None:
             ref = _reference(reference)
         fid = self.tip_id if frame is None else self.frame_id(frame)
-        if not (
-            q.__class__ is _ND
-            and q.dtype is _F64
-            and q.shape == self._shape
-            and _isfinite(sum(q.tolist()))
-        ):
+        if not fast_q_ok(q, self._shape):
             q = self.check_q(q)
         jac = pin.computeFrameJacobian(self.model, self.data, q, fid, ref)
         if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array

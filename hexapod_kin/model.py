@@ -28,6 +28,23 @@ from .urdf import to_urdf
 __all__ = ["Model", "build", "erd_names", "erd_path", "resolve_source", "ResolvedSource"]
 
 _F64 = np.dtype(np.float64)
+_ND = np.ndarray
+_isfinite = math.isfinite
+
+
+def fast_q_ok(q: Any, shape: tuple[int, ...]) -> bool:
+    """True when ``q`` is already a float64 array of ``shape`` with finite, |x| < 1e150 values.
+
+    The cheap test of the hot path (~0.4 µs); anything else goes through ``Model.check_q``.
+    """
+    return (
+        q.__class__ is _ND
+        and q.dtype is _F64
+        and q.shape == shape
+        and _isfinite(sum(t := q.tolist()))
+        and -1e150 < min(t, default=0.0)
+        and max(t, default=0.0) < 1e150
+    )
 
 _SIMPLE_JOINTS = {
     "JointModelRX",
@@ -324,14 +341,7 @@ class Model:
         Raises:
             ConfigurationError: Wrong length, not numbers, or non-finite values.
         """
-        if (
-            q.__class__ is np.ndarray
-            and q.dtype is _F64
-            and q.shape == self._shape
-            and math.isfinite(sum(t := q.tolist()))
-            and -1e150 < min(t, default=0.0)
-            and max(t, default=0.0) < 1e150
-        ):
+        if fast_q_ok(q, self._shape):
             return q
         try:
             if np.asarray(q).dtype.kind in "USb":  # strings and booleans are not joint values
