@@ -1,0 +1,190 @@
+"""Resolved-rate motion, the seed experiment, schedules (seed 002 Table I) and foot steps."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import motion, robots
+from hexapod_kin.cli import main
+from hexapod_kin.exceptions import ConfigurationError, ParameterError
+from hexapod_kin.params import JointLimits
+
+
+@pytest.fixture(scope="module")
+def leg():
+    return hk.load("hexabot_leg")
+
+
+@pytest.fixture(scope="module")
+def seed_run(leg):
+    return motion.seed_experiment(leg)
+
+
+# ------------------------------------------------------------------ the seeds' experiment
+def test_seed_experiment_drift(seed_run):
+    assert seed_run.drift_y <= 1e-9
+    assert seed_run.drift_z <= 1e-9
+    assert seed_run.error_x <= 1e-9
+    tr = seed_run.trajectory
+    assert tr.t.size == 10_001 and tr.t[-1] == pytest.approx(10.0)
+    # the seeds' plain Euler + np.linalg.solve drifts by orders of magnitude more
+    assert seed_run.baseline["drift_z"] > 1e-6
+    assert seed_run.baseline["drift_z"] > 1e4 * max(seed_run.drift_z, 1e-15)
+
+
+def test_trajectory_is_consistent_with_pinocchio(seed_run, leg):
+    tr = seed_run.trajectory
+    idx = np.arange(0, tr.t.size, 997)
+    for i in idx:
+        np.testing.assert_allclose(tr.foot[i], leg.position(tr.q[i]), atol=1e-15)
+        jac = leg.position_jacobian(tr.q[i])
+        np.testing.assert_allclose(tr.foot_velocity[i], jac @ tr.qdot[i], atol=1e-15)
+        sv = np.linalg.svd(jac, compute_uv=False)
+        assert tr.sigma_min[i] == pytest.approx(sv[-1], rel=1e-9)
+        assert tr.condition[i] == pytest.approx(sv[0] / sv[-1], rel=1e-8)
+    # commanded vs actual foot velocity
+    np.testing.assert_allclose(tr.foot_velocity, tr.command, atol=1e-9)
+    # qdot is the time derivative of q (central differences)
+    fd = (tr.q[2:] - tr.q[:-2]) / (2 * tr.dt)
+    np.testing.assert_allclose(fd, tr.qdot[1:-1], atol=1e-5)
+    assert not tr.q.flags.writeable
+
+
+def test_rk4_is_fourth_order_and_euler_first_order(leg):
+    def v(t):
+        t = np.asarray(t, float)
+        out = np.zeros(t.shape + (3,))
+        out[..., 0] = 0.05 * np.sin(np.pi * t)
+        out[..., 2] = 0.02 * np.cos(np.pi * t)
+        return out
+
+    errs = {}
+    for method in ("euler", "rk4"):
+        for dt in (0.02, 0.01):
+            tr = motion.resolved_rate(leg, v, motion.SEED_Q0, dt, 2.0, method=method)
+            errs[method, dt] = np.max(tr.tracking_error)
+    assert 1.7 < errs["euler", 0.02] / errs["euler", 0.01] < 2.3
+    assert errs["rk4", 0.02] / errs["rk4", 0.01] > 12  # ~16 for fourth order
+
+
+def test_closed_loop_recovers_from_an_offset_start(leg):
+    # reference starts 1 mm away from the foot: the closed loop pulls it in (e ~ exp(-K t))
+    p0 = leg.position(motion.SEED_Q0) + np.array([0.0, 0.0, 1e-3])
+    tr = motion.resolved_rate(leg, np.zeros(3), motion.SEED_Q0, 1e-3, 1.0, gain=20.0,
+                              reference=lambda t: np.broadcast_to(p0, np.shape(t) + (3,)))
+    assert tr.tracking_error[0] == pytest.approx(1e-3, rel=1e-9)
+    assert tr.tracking_error[-1] < 1e-3 * np.exp(-20.0 * 1.0) * 1.5
+
+
+# ------------------------------------------------------------------ into a singularity
+def test_stretching_outward_no_nan_within_speed_limits():
+    lim = tuple(JointLimits(-np.pi, np.pi, velocity=2.0) for _ in range(3))
+    model = hk.load(robots.hexabot_leg(limits=lim))
+    tr = motion.resolved_rate(model, [0.05, 0.0, 0.0], motion.SEED_Q0, 1e-3, 3.0)
+    assert np.all(np.isfinite(tr.q)) and np.all(np.isfinite(tr.qdot))
+    assert np.all(np.abs(tr.qdot) <= 2.0 + 1e-12)
+    reach = np.linalg.norm(tr.foot - [0, 0, 0], axis=1)
+    assert np.all(reach <= 0.25 + 1e-12)
+    ca = tr.closest_approach
+    assert ca["sigma_min"] < 1e-3  # it got (close to) the stretched singularity
+    assert ca["sigma_min"] == pytest.approx(float(tr.sigma_min.min()))
+    assert tr.damping.max() > 0  # the damping switched on
+
+
+def test_joint_position_limits_hold(leg):
+    lim = (JointLimits(-1, 1), JointLimits(0.2, 0.5), JointLimits(0.5, 1.5))
+    model = hk.load(robots.hexabot_leg(limits=lim))
+    tr = motion.resolved_rate(model, [0.0, 0.0, 0.05], motion.SEED_Q0, 1e-3, 2.0)
+    assert np.all(tr.q >= model.lower) and np.all(tr.q <= model.upper)
+    assert tr.limited.any()
+
+
+def test_argument_errors(leg):
+    with pytest.raises(ParameterError):
+        motion.resolved_rate(leg, [0, 0, 0], motion.SEED_Q0, 0.0, 1.0)
+    with pytest.raises(ParameterError):
+        motion.resolved_rate(leg, [0, 0, 0], motion.SEED_Q0, 1e-3, 1.0, method="midpoint")
+    with pytest.raises(ConfigurationError):
+        motion.resolved_rate(leg, [0, 0], motion.SEED_Q0, 1e-3, 1.0)
+    with pytest.raises(ConfigurationError):
+        motion.resolved_rate(leg, [np.nan, 0, 0], motion.SEED_Q0, 1e-3, 1.0)
+
+
+# ------------------------------------------------------------------ seed 002 Table I
+def test_table_i_replayed_through_fk_and_ik():
+    sched = motion.seed002_schedule()
+    model = hk.load("coxa_tibia_leg")
+    t = np.arange(0.0, 22.0 + 1e-9, 0.01)
+    q_plan = sched.sample(t)
+    np.testing.assert_allclose(np.degrees(sched.sample([0, 4.5, 9, 13, 17.5, 25])),
+                               [[0, -90], [0, -70], [10, -50], [20, -50], [10, -70], [0, -90]],
+                               atol=1e-12)
+    feet = np.array([model.position(q) for q in q_plan])
+    q_back, ok = motion.track(model, feet, q_plan[0])
+    assert ok.all()
+    np.testing.assert_allclose(q_back, q_plan, atol=1e-9)
+
+
+# ------------------------------------------------------------------ foot steps
+def test_foot_path_shape():
+    c = np.array([0.15, 0.0, -0.12])
+    kw = dict(center=c, length=0.04, height=0.03, duty_factor=0.6)
+    np.testing.assert_allclose(motion.foot_path(0.0, **kw), c + [0.02, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(motion.foot_path(0.6, **kw), c - [0.02, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(motion.foot_path(0.8, **kw), c + [0, 0, 0.03], atol=1e-15)
+    ph = np.linspace(0, 1, 2001)
+    for shape in ("ellipse", "cycloid"):
+        p = motion.foot_path(ph, shape=shape, **kw)
+        assert np.max(np.abs(np.diff(p, axis=0))) < 1e-3  # continuous
+        stance = ph < 0.6
+        np.testing.assert_allclose(p[stance, 2], c[2])
+        assert np.all(np.diff(p[stance, 0]) < 0)  # straight line, front to back
+        assert np.all(p[~stance, 2] >= c[2] - 1e-15)
+    with pytest.raises(ParameterError):
+        motion.foot_path(0.1, center=c, length=0.04, height=0.03, duty_factor=1.0)
+
+
+@pytest.mark.parametrize("preset", ["hexabot_leg", "erd:solo12"])
+def test_foot_step_joint_trajectory(preset):
+    model = hk.load(preset, tip="FL_FOOT") if preset.startswith("erd") else hk.load(preset)
+    step = motion.foot_step(model, length=0.04, height=0.02, duration=1.0, duty_factor=0.5,
+                            dt=0.005, cycles=2)
+    assert step.reached.all()
+    assert step.max_error < 1e-9
+    assert step.within_limits
+    assert step.max_joint_step < 0.05  # continuous joint trajectories
+    assert np.all(np.isfinite(step.qdot))
+
+
+# ------------------------------------------------------------------ command line and pictures
+def test_cli_step_json(capsys):
+    assert main(["step", "hexabot_leg", "--json", "--duration", "2", "--no-baseline"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["drift_y"] <= 1e-9 and out["drift_z"] <= 1e-9 and out["error_x"] <= 1e-9
+
+
+def test_cli_ik(capsys):
+    assert main(["ik", "hexabot_leg", "--target", "0.15", "0.02", "-0.1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["family"] == "leg3" and out["numerical"]["status"] == "converged"
+    assert len(out["analytic"]) == 2
+    assert main(["ik", "hexabot_leg", "--target", "1", "0", "0"]) == 0
+    assert "unreachable" in capsys.readouterr().out
+
+
+def test_plots_and_html(tmp_path, leg):
+    from hexapod_kin.plots import plot_motion, plot_step
+
+    run = motion.seed_experiment(leg, duration=1.0)
+    png = plot_motion(run, tmp_path / "run.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    step = motion.foot_step(leg, dt=0.01)
+    assert plot_step(step, tmp_path / "step.png").stat().st_size > 1000
+    html = tmp_path / "step.html"
+    assert main(["step", "hexabot_leg", "--duration", "1", "--no-baseline", "--html",
+                 str(html), "--plot", str(tmp_path / "cli.png")]) == 0
+    assert html.stat().st_size > 1000 and (tmp_path / "cli.png").exists()
