@@ -28,6 +28,7 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
 
     Raises:
         ParameterError: If the destination directory does not exist or ``path`` is a directory.
+
     """
     dest = Path(path)
     parent = dest.parent if str(dest.parent) else Path(".")

@@ -63,6 +63,7 @@ class ChainArrays:
         kind: (m,) 0 revolute, 1 prismatic.
         col: (m,) index of each joint's variable in ``q``.
         nq: Length of ``q``.
+
     """
 
     rot: np.ndarray
@@ -83,6 +84,7 @@ class ChainArrays:
 
         Raises:
             SourceError: If a joint on the path is not a 1-DOF revolute/prismatic joint.
+
         """
         import pinocchio as pin
 

@@ -563,9 +563,9 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         _emit_json(result.to_json())
         return 0
     n = result.q.shape[0]
-    print(f"{result.source}: {n} configurations over "
-          f"{', '.join(result.joint_names[j] for j in result.joints)}"
-          f" (grid {result.grid_shape})" if result.grid_shape else f" ({n} random samples)")
+    how = f"grid {result.grid_shape}" if result.grid_shape else "random samples"
+    over = ", ".join(result.joint_names[j] for j in result.joints)
+    print(f"{result.source}: {n} configurations over {over} ({how})")
     print(f"rows of J: {', '.join(result.rows)}; singular when sigma_min < "
           f"{result.threshold:.3g}")
     print(f"singular: {int(result.singular.sum())}  unexplained: "

@@ -68,6 +68,7 @@ def choices(names: Iterable[str], limit: int = 40) -> str:
 
     Returns:
         A string such as ``"'a', 'b', 'c'"`` (with ``... (N more)`` past ``limit``).
+
     """
     items = [repr(n) for n in names]
     if len(items) > limit:

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import math
-
 import numpy as np
 import pinocchio as pin
 
@@ -63,6 +61,7 @@ class KinematicModel(Model):
 
         Raises:
             ConfigurationError: Wrong shape or non-finite values.
+
         """
         # Fast path inlined (this is the hot call): float64 array of the right shape, finite.
         if not fast_q_ok(q, self._shape):
@@ -105,6 +104,7 @@ class KinematicModel(Model):
 
         Returns:
             A list of 4×4 arrays; their product is :meth:`fk`.
+
         """
         world = self.frame_placements(q)
         return [np.linalg.solve(world[j - 1], world[j]) for j in range(1, len(world))]
@@ -129,6 +129,7 @@ class KinematicModel(Model):
             ParameterError: Unknown ``reference``.
             FrameNotFoundError: Unknown ``frame``.
             ConfigurationError: Bad ``q``.
+
         """
         ref = REFERENCES.get(reference) if reference.__class__ is str else None
         if ref is None:
@@ -185,6 +186,7 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
 
     Returns:
         The 3×nq position Jacobian.
+
     """
     qv = model.check_q(q)
     m, d = model.model, model.data
@@ -218,6 +220,7 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
 
     Returns:
         The 3×nq position Jacobian in the base frame.
+
     """
     from .params import Chain, table_position_jacobian
 
@@ -293,5 +296,6 @@ def load(
         SourceError: The source cannot be resolved.
         UrdfError: The URDF fails the loader gate.
         FrameNotFoundError: Unknown base/tip (the message lists the frames).
+
     """
     return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]

@@ -92,6 +92,7 @@ def erd_path(name: str) -> Path:
 
     Raises:
         SourceError: If there is no such robot (the message lists those that exist).
+
     """
     index = _erd_index()
     if name not in index:
@@ -112,6 +113,7 @@ class ResolvedSource:
         package_dirs: Directories where ``package://`` meshes resolve.
         mesh_root: Directory relative mesh paths resolve against (the URDF's directory).
         params: The Chain or Hexapod it came from, if any.
+
     """
 
     text: str
@@ -145,6 +147,7 @@ def resolve_source(source: Any, **params: Any) -> ResolvedSource:
 
     Raises:
         SourceError: If the source cannot be resolved (the message says what is accepted).
+
     """
     if isinstance(source, (Chain, Hexapod)):
         return ResolvedSource(to_urdf(source), source.name, params=source)
@@ -198,6 +201,7 @@ class Model:
         source: The resolved source (name, mesh directories, params).
         base: Name of the base frame.
         tip: Name of the tip frame.
+
     """
 
     def __init__(
@@ -318,6 +322,7 @@ class Model:
 
         Raises:
             FrameNotFoundError: If no such frame exists (the message lists the frames).
+
         """
         if not isinstance(name, str) or not self.model.existFrame(name):
             raise FrameNotFoundError(
@@ -340,6 +345,7 @@ class Model:
 
         Raises:
             ConfigurationError: Wrong length, not numbers, or non-finite values.
+
         """
         if fast_q_ok(q, self._shape):
             return q
@@ -411,6 +417,7 @@ class Model:
         Returns:
             A ``pinocchio.GeometryModel`` matching :attr:`model` (meshes are resolved with the
             source's package directories).
+
         """
         from .exceptions import ParameterError
 
@@ -422,7 +429,9 @@ class Model:
             dirs.append(self.source.mesh_root)
         geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf, kinds[kind], None, dirs)
         if self._locked:
-            _, geoms = pin.buildReducedModel(self.full_model, [geom], list(self._locked), self._q_ref)
+            _, geoms = pin.buildReducedModel(
+                self.full_model, [geom], list(self._locked), self._q_ref
+            )
             geom = geoms[0]
         return geom
 

@@ -81,7 +81,9 @@ def _finite(value: Any, where: str) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(f"{where}={value!r} is not a number; a finite float is required")
+        raise ParameterError(
+            f"{where}={value!r} is not a number; a finite float is required"
+        ) from None
     if not math.isfinite(x):
         raise ParameterError(f"{where}={value!r} is not finite; a finite float is required")
     return x
@@ -117,6 +119,7 @@ def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarr
 
     Returns:
         The homogeneous transform ``^{j-1}T_j``.
+
     """
     ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
     return np.array(
@@ -140,6 +143,7 @@ def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
 
     Returns:
         The homogeneous transform ``^{i-1}T_i``.
+
     """
     ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
     return np.array(
@@ -165,6 +169,7 @@ class KhalilRow:
         d: Distance along ``x_{j-1}`` in [m].
         theta: Angle about ``z_j`` in [rad] (offset added to ``q`` for a revolute joint).
         r: Distance along ``z_j`` in [m] (offset added to ``q`` for a prismatic joint).
+
     """
 
     sigma: SigmaName | int | str
@@ -202,6 +207,7 @@ class DHRow:
         a: Link length along ``x_i`` in [m].
         alpha: Link twist about ``x_i`` in [rad].
         sigma: ``"revolute"`` (0), ``"prismatic"`` (1) or ``"fixed"`` (2).
+
     """
 
     theta: float = 0.0
@@ -233,6 +239,7 @@ class JointLimits:
         upper: Upper position bound in [rad] or [m] (``lower <= upper``).
         velocity: Maximum speed in [rad/s] or [m/s] (``>= 0``).
         effort: Maximum torque [N·m] or force [N] (``>= 0``).
+
     """
 
     lower: float = -math.pi
@@ -262,6 +269,7 @@ class Inertial:
         com: Centre of mass ``(x, y, z)`` in [m], in the link frame.
         inertia: ``(ixx, iyy, izz, ixy, ixz, iyz)`` about the centre of mass in [kg·m²];
             must be positive definite and satisfy the triangle inequality.
+
     """
 
     mass: float
@@ -319,6 +327,7 @@ def rod_inertial(
 
     Returns:
         The :class:`Inertial` with the centre of mass at the rod midpoint.
+
     """
     start = np.asarray(start, float)
     end = np.asarray(end, float)
@@ -371,6 +380,7 @@ class Chain:
         damping: Joint viscous damping, one value or one per joint ([N·m·s/rad] or [N·s/m]).
         friction: Joint dry friction, one value or one per joint.
         description: Free text (source of the preset), written into the URDF header.
+
     """
 
     rows: tuple[KhalilRow, ...]
@@ -536,6 +546,7 @@ class Chain:
 
         Returns:
             The equivalent Khalil :class:`Chain`.
+
         """
         dh = list(dh_rows)
         if not dh or not all(isinstance(r, DHRow) for r in dh):
@@ -555,7 +566,7 @@ def _as_q(chain: Chain, q: Any) -> np.ndarray:
     try:
         arr = np.asarray(q, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise ConfigurationError(f"q={q!r} is not a sequence of numbers")
+        raise ConfigurationError(f"q={q!r} is not a sequence of numbers") from None
     if arr.shape != (chain.nq,):
         raise ConfigurationError(
             f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints "
@@ -575,6 +586,7 @@ def table_transforms(chain: Chain, q: Any) -> list[np.ndarray]:
 
     Returns:
         One 4×4 array per row, in table order.
+
     """
     qv = _as_q(chain, q)
     out = []
@@ -602,6 +614,7 @@ def table_fk(chain: Chain, q: Any) -> np.ndarray:
 
     Raises:
         ConfigurationError: If ``q`` has the wrong length or non-finite values.
+
     """
     t = np.eye(4)
     for tj in table_transforms(chain, q):
@@ -625,6 +638,7 @@ def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
 
     Returns:
         The 3×n position Jacobian of the tip in the base frame.
+
     """
     ts = table_transforms(chain, q)
     n_rows = len(ts)
@@ -649,6 +663,7 @@ def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
 
     Raises:
         ParameterError: For a malformed row or value.
+
     """
     built = []
     for j, row in enumerate(rows, start=1):
@@ -675,6 +690,7 @@ class LegMount:
         chain: The leg's Khalil chain (its frame 0 is the mount frame).
         xyz: Mount position in the body frame in [m].
         yaw: Mount rotation about the body z axis in [rad].
+
     """
 
     name: str
@@ -711,6 +727,7 @@ class Hexapod:
         body_size: Body box ``(length x, width y, height z)`` in [m] (visual and inertia).
         body_mass: Body mass in [kg].
         description: Free text written into the URDF header.
+
     """
 
     legs: tuple[LegMount, ...]

@@ -82,6 +82,7 @@ def hexabot_leg(
 
     Returns:
         The chain, tip frame ``foot``, joints ``hip, knee, ankle``.
+
     """
     l1, l2, l3 = _positive("l1", l1), _positive("l2", l2), _positive("l3", l3)
     return Chain(
@@ -130,6 +131,7 @@ def coxa_tibia_leg(
 
     Returns:
         The chain, joints ``coxa, tibia``, tip ``foot``.
+
     """
     l1, l2 = _positive("l1", l1), _positive("l2", l2)
     scale = max(l1, l2)
@@ -182,6 +184,7 @@ def scara(
 
     Returns:
         The chain, joints ``theta1, theta2, theta3, q4``, tip ``tool``.
+
     """
     r1 = _positive("r1", r1)
     d2, d3, stroke = _positive("d2", d2), _positive("d3", d3), _positive("stroke", stroke)
@@ -231,6 +234,7 @@ def pendulum(
 
     Returns:
         The chain, joint ``swing``, tip ``bob``.
+
     """
     length, mass = _positive("length", length), _positive("mass", mass)
     damping = float(damping)
@@ -294,6 +298,7 @@ def hexapod(
 
     Returns:
         The :class:`Hexapod` (joints ``leg<i>_hip/knee/ankle``, feet ``leg<i>_foot``).
+
     """
     body_radius = _positive("body_radius", body_radius)
     body_height = _positive("body_height", body_height)
@@ -346,6 +351,7 @@ def get(name: str, **params: Any) -> Chain | Hexapod:
 
     Raises:
         ParameterError: If the name or a parameter is unknown (the message lists valid ones).
+
     """
     if name not in PRESETS:
         raise ParameterError(f"preset={name!r} does not exist; presets are {choices(names())}")

@@ -54,6 +54,7 @@ def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
 
     Returns:
         ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
+
     """
     r = np.asarray(rot, float)
     pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
@@ -82,7 +83,7 @@ def _origin(t: np.ndarray) -> str:
 
 
 def _z_to(v: np.ndarray) -> tuple[float, float, float]:
-    """rpy of a rotation taking +z onto the unit vector ``v``."""
+    """Rpy of a rotation taking +z onto the unit vector ``v``."""
     z = v / np.linalg.norm(v)
     helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = np.cross(helper, z)
@@ -299,6 +300,7 @@ def to_urdf(
 
     Raises:
         ParameterError: If ``source`` is of another type, or ``leg`` is given for a chain.
+
     """
     if isinstance(source, Chain):
         if leg is not None:

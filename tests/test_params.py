@@ -116,7 +116,7 @@ def _random_dh(rng, n):
 
 def test_standard_dh_to_khalil_gives_identical_fk():
     rng = np.random.default_rng(7)
-    for trial in range(50):
+    for _ in range(50):
         n = int(rng.integers(1, 7))
         dh = _random_dh(rng, n)
         chain = Chain.from_dh(dh)

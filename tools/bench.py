@@ -34,7 +34,8 @@ def main(argv: list[str] | None = None) -> int:
             row = {"section": name, **row}
             results.append(row)
             if not args.json:
-                print(f"[{name}] " + "  ".join(f"{k}={v}" for k, v in row.items() if k != "section"))
+                fields = (f"{k}={v}" for k, v in row.items() if k != "section")
+                print(f"[{name}] " + "  ".join(fields))
     if args.json:
         print(json.dumps(results))
     return 0

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
 import pinocchio as pin
 
 import hexapod_kin as hk
@@ -33,7 +32,7 @@ def run(quick: bool = False) -> list[dict]:
         lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         qs = list(model.random_q(n, seed=0))
 
-        def raw(q, m=m, d=d, fid=fid):
+        def raw(q, m=m, d=d, fid=fid, lwa=lwa):
             pin.forwardKinematics(m, d, q)
             pose = pin.updateFramePlacement(m, d, fid).homogeneous
             jac = pin.computeFrameJacobian(m, d, q, fid, lwa)

@@ -15,8 +15,8 @@ import sys
 from pathlib import Path
 
 from hexapod_kin import robots
-from hexapod_kin.params import Hexapod
 from hexapod_kin._io import atomic_write
+from hexapod_kin.params import Hexapod
 from hexapod_kin.urdf import to_urdf
 
 ROOT = Path(__file__).resolve().parent.parent
