@@ -15,7 +15,14 @@ from typing import Any
 from ._io import atomic_write
 from .exceptions import OptionalDependencyError
 
-__all__ = ["plot_motion", "plot_step", "pyplot", "save_figure"]
+__all__ = [
+    "plot_motion",
+    "plot_singularity_map",
+    "plot_step",
+    "plot_workspace",
+    "pyplot",
+    "save_figure",
+]
 
 
 def pyplot() -> Any:
@@ -23,6 +30,7 @@ def pyplot() -> Any:
 
     Raises:
         OptionalDependencyError: If matplotlib is missing (says what to install).
+
     """
     try:
         import matplotlib
@@ -48,6 +56,182 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 120) -> Path:
 
 
 # ---------------------------------------------------------------- singularity pictures
+_MEASURE_LABELS = {
+    "det": "det J",
+    "manipulability": "manipulability sqrt(det(J J^T))",
+    "sigma_min": "smallest singular value sigma_min",
+    "condition": "log10 condition number",
+}
+
+
+def plot_singularity_map(
+    result: Any,
+    path: str | os.PathLike[str],
+    measure: str | None = None,
+    title: str | None = None,
+) -> Path:
+    """Heat map of a measure over two scanned joints, with the singular families drawn.
+
+    Args:
+        result: A :class:`~hexapod_kin.singularity.ScanResult` of a *grid* scan over exactly
+            two joints.
+        path: Output PNG path (written atomically).
+        measure: ``"det"`` (default when J is square), ``"manipulability"`` (default
+            otherwise), ``"sigma_min"`` or ``"condition"``.
+        title: Figure title (default: source, measure and the fixed joints).
+
+    Returns:
+        The written path.
+
+    Raises:
+        ParameterError: Not a 2-joint grid scan, or an unknown measure.
+
+    """
+    import numpy as np
+
+    from .exceptions import ParameterError, choices
+
+    if result.grid_shape is None or len(result.joints) != 2:
+        raise ParameterError(
+            "plot_singularity_map: a grid scan over exactly two joints is required "
+            f"(got joints {[result.joint_names[j] for j in result.joints]}, "
+            f"grid {result.grid_shape})"
+        )
+    square = bool(np.isfinite(result.det).any())
+    measure = measure or ("det" if square else "manipulability")
+    if measure not in _MEASURE_LABELS or (measure == "det" and not square):
+        raise ParameterError(
+            f"measure={measure!r} is not allowed here; use one of "
+            f"{choices(k for k in _MEASURE_LABELS if square or k != 'det')}"
+        )
+    plt = pyplot()
+    from matplotlib.colors import TwoSlopeNorm
+    from matplotlib.lines import Line2D
+
+    ja, jb = result.joints
+    qa = result.q[:, ja].reshape(result.grid_shape)
+    qb = result.q[:, jb].reshape(result.grid_shape)
+    val = np.asarray(getattr(result, measure), float).reshape(result.grid_shape)
+    deg_a = np.degrees(qa[:, 0])
+    deg_b = np.degrees(qb[0, :])
+    fig, ax = plt.subplots(figsize=(8.0, 6.4))
+    unit = " [m]" if measure == "sigma_min" and set(result.rows) <= {"x", "y", "z"} else ""
+    if measure == "det":
+        lim = float(np.nanmax(np.abs(val))) or 1.0
+        mesh = ax.pcolormesh(
+            deg_a, deg_b, val.T, cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim),
+            shading="nearest",
+        )
+    elif measure == "condition":
+        with np.errstate(divide="ignore"):
+            shown = np.log10(np.where(np.isfinite(val), val, np.nan))
+        cap = np.nanpercentile(shown, 99) if np.isfinite(shown).any() else 1.0
+        mesh = ax.pcolormesh(
+            deg_a, deg_b, np.minimum(shown, cap).T, cmap="magma_r", shading="nearest"
+        )
+    else:
+        mesh = ax.pcolormesh(deg_a, deg_b, val.T, cmap="viridis", shading="nearest")
+    cbar = fig.colorbar(mesh, ax=ax)
+    cbar.set_label(_MEASURE_LABELS[measure] + unit)
+    handles = []
+    styles = ["-", "--", ":", "-."]
+    colours = ["black", "magenta", "darkorange", "cyan", "lime"]
+    fine_a = np.linspace(qa.min(), qa.max(), 721)
+    fine_b = np.linspace(qb.min(), qb.max(), 721)
+    ga, gb = np.meshgrid(fine_a, fine_b, indexing="ij")
+    for f, fam in enumerate(result.families):
+        colour = colours[f % len(colours)]
+        style = styles[f % len(styles)]
+        if fam.joint is not None and fam.joint in (ja, jb) and fam.value is not None:
+            lo, hi = (qa.min(), qa.max()) if fam.joint == ja else (qb.min(), qb.max())
+            vals = [fam.value + k * 2 * np.pi for k in (-1, 0, 1)] if fam.periodic else [fam.value]
+            for v in vals:
+                if lo - 1e-9 <= v <= hi + 1e-9:
+                    if fam.joint == ja:
+                        ax.axvline(np.degrees(v), color=colour, ls=style, lw=2.2)
+                    else:
+                        ax.axhline(np.degrees(v), color=colour, ls=style, lw=2.2)
+        elif fam.joint is None:
+            qq = np.empty(ga.shape + (len(result.joint_names),))
+            qq[:] = result.q_fixed
+            qq[..., ja] = ga
+            qq[..., jb] = gb
+            res = result.family_residual(qq, f)
+            if np.nanmin(res) > 0 or np.nanmax(res) < 0:
+                continue
+            ax.contour(
+                np.degrees(fine_a), np.degrees(fine_b), res.T, levels=[0.0],
+                colors=[colour], linestyles=[style], linewidths=2.2,
+            )
+        else:
+            continue
+        handles.append(Line2D([], [], color=colour, ls=style, lw=2.2, label=fam.name))
+    flagged = result.singular.reshape(result.grid_shape)
+    if flagged.any() and not result.families:
+        ax.contourf(deg_a, deg_b, flagged.T.astype(float), levels=[0.5, 1.5], colors="none",
+                    hatches=["////"])
+        handles.append(Line2D([], [], color="black", lw=0, marker="s", mfc="none",
+                              label=f"sigma_min < {result.threshold:.3g}"))
+    if handles:
+        ax.legend(handles=handles, title="singular families", loc="upper right",
+                  fontsize=8, title_fontsize=9, framealpha=0.85)
+    name_a, name_b = result.joint_names[ja], result.joint_names[jb]
+    ax.set_xlabel(f"{name_a} (q{ja + 1}) [deg]")
+    ax.set_ylabel(f"{name_b} (q{jb + 1}) [deg]")
+    others = [
+        f"{result.joint_names[j]} = {np.degrees(result.q_fixed[j]):.0f} deg"
+        for j in range(len(result.joint_names)) if j not in (ja, jb)
+    ]
+    ax.set_title(
+        title
+        or f"{result.source}: {_MEASURE_LABELS[measure]} (rows {', '.join(result.rows)})"
+        + (f"\n{'; '.join(others)}" if others else "")
+    )
+    return save_figure(fig, path)
+
+
+def plot_workspace(
+    ws: Any,
+    path: str | os.PathLike[str],
+    plane: str = "xz",
+    singular_points: Any = None,
+    title: str | None = None,
+) -> Path:
+    """Workspace cross-section: reachable tip points in a slab around a coordinate plane.
+
+    Args:
+        ws: A :class:`~hexapod_kin.singularity.WorkspaceResult`.
+        path: Output PNG path.
+        plane: ``"xz"``, ``"yz"`` or ``"xy"``.
+        singular_points: Optional (M, 3) tip positions of singular configurations to overlay.
+        title: Figure title.
+
+    Returns:
+        The written path.
+
+    """
+    import numpy as np
+
+    from .singularity import cross_section
+
+    plt = pyplot()
+    sec = cross_section(ws.points, plane)
+    fig, ax = plt.subplots(figsize=(7.0, 6.4))
+    ax.scatter(sec[:, 0], sec[:, 1], s=1, c="tab:blue", alpha=0.4, label="reachable tip points")
+    if singular_points is not None and len(singular_points):
+        sp_sec = cross_section(np.asarray(singular_points, float), plane)
+        ax.scatter(sp_sec[:, 0], sp_sec[:, 1], s=2, c="tab:red", label="singular configurations")
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"{plane[0]} [m]")
+    ax.set_ylabel(f"{plane[1]} [m]")
+    ax.legend(loc="upper right", markerscale=6)
+    ax.set_title(
+        title or f"{ws.source}: workspace section ({plane} plane); "
+        f"volume ~ {ws.volume * 1e6:.0f} cm^3"
+    )
+    return save_figure(fig, path)
+
+
 
 
 # ---------------------------------------------------------------- motion pictures
@@ -68,6 +252,7 @@ def plot_motion(
 
     Returns:
         The path written.
+
     """
     import numpy as np
 
@@ -135,6 +320,7 @@ def plot_step(step: Any, path: str | os.PathLike[str], title: str | None = None)
 
     Returns:
         The path written.
+
     """
     import numpy as np
 
