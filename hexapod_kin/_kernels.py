@@ -40,13 +40,13 @@ try:  # pragma: no cover - exercised in both configurations by CI extras
 except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
 
-    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
+    def njit(*args: Any, **kwargs: Any) -> Any:
         """Identity decorator when numba is missing."""
         if args and callable(args[0]):
             return args[0]
         return lambda f: f
 
-    prange = range  # type: ignore[assignment]
+    prange = range
 
 
 @dataclass(frozen=True)

@@ -69,8 +69,8 @@ class KinematicModel(Model):
         pin.forwardKinematics(self.model, self.data, q)
         omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
         if self._base_is_root:
-            return omf.homogeneous  # type: ignore[no-any-return]
-        return (self.baseMo * omf).homogeneous  # type: ignore[no-any-return]
+            return omf.homogeneous
+        return (self.baseMo * omf).homogeneous
 
     def position(self, q: Any) -> np.ndarray:
         """Tip position in the base frame in [m] (3,)."""
@@ -82,7 +82,7 @@ class KinematicModel(Model):
         qv = self.check_q(q)
         pin.forwardKinematics(self.model, self.data, qv)
         omf = pin.updateFramePlacement(self.model, self.data, fid)
-        return (self.baseMo * omf).homogeneous  # type: ignore[no-any-return]
+        return (self.baseMo * omf).homogeneous
 
     def frame_placements(self, q: Any) -> list[np.ndarray]:
         """``^0T_j`` for every frame on the base → tip path (``path_frames``), 4×4 each."""
@@ -141,9 +141,9 @@ class KinematicModel(Model):
         if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array
             jac = jac.reshape(6, 1)
         if self._base_is_root or ref == pin.ReferenceFrame.LOCAL:
-            return jac  # type: ignore[no-any-return]
+            return jac
         if ref == pin.ReferenceFrame.WORLD:
-            return self.baseMo.action @ jac  # type: ignore[no-any-return]
+            return self.baseMo.action @ jac
         r = self._rot_base
         out = np.empty_like(jac)
         out[:3] = r @ jac[:3]

@@ -425,7 +425,7 @@ class Chain:
             _name(n, f"Chain.joint_names[{i}]")
         object.__setattr__(self, "joint_names", names)
         limits = (
-            tuple(_default_limits(r.sigma) for r in joint_rows)
+            tuple(_default_limits(str(r.sigma)) for r in joint_rows)
             if self.limits is None
             else tuple(self.limits)
         )
@@ -490,7 +490,7 @@ class Chain:
     @property
     def sigmas(self) -> tuple[str, ...]:
         """Joint types of the joint rows, in order."""
-        return tuple(self.rows[i].sigma for i in self.joint_rows)
+        return tuple(str(self.rows[i].sigma) for i in self.joint_rows)
 
     def joint_damping(self) -> tuple[float, ...]:
         """Damping per joint."""

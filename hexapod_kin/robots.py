@@ -366,6 +366,6 @@ def get(name: str, **params: Any) -> Chain | Hexapod:
                 f"{choices(sig.parameters)}"
             )
     try:
-        return func(**params)  # type: ignore[no-any-return]
+        return func(**params)  # type: ignore[no-any-return,unused-ignore]
     except TypeError as exc:
         raise ParameterError(f"{name}: {exc}") from None
