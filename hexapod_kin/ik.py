@@ -288,6 +288,18 @@ def analytic_batch(
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
     tol_abs = float(tol) * fam.scale
+    if _HAVE_NUMBA and not within_limits and fam.family in ("coxa_tibia", "leg3"):
+        leg3 = fam.family == "leg3"
+        qk = np.empty((x.shape[0], fam.max_solutions, fam.nq))
+        vk = np.empty((x.shape[0], fam.max_solutions), dtype=np.bool_)
+        ls = fam.lengths + (1.0,) * (3 - len(fam.lengths))
+        _legs_kernel(
+            x, leg3, ls[0], ls[1], ls[2], fam.height, fam.sign, tol_abs,
+            np.asarray(fam.offsets, dtype=float), qk, vk,
+        )
+        qk.setflags(write=False)
+        vk.setflags(write=False)
+        return AnalyticBatch(q=qk, valid=vk, family=fam.family)
     with np.errstate(invalid="ignore", divide="ignore"):
         if fam.family == "coxa_tibia":
             q, valid = _ik_coxa_tibia(fam, x, tol_abs)
@@ -386,6 +398,71 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q[:, b, 3] = prism
         valid[:, b] = ok
     return q, valid
+
+
+
+# -------------------------------------------------------------------- compiled closed forms
+from ._kernels import HAVE_NUMBA as _HAVE_NUMBA  # noqa: E402
+from ._kernels import njit as _njit  # noqa: E402
+from ._kernels import prange as _prange  # noqa: E402
+
+
+@_njit(cache=True, nogil=True, inline="always")
+def _wrap1(a: float) -> float:  # pragma: no cover - compiled
+    """Wrap to (−π, π] by adding/subtracting 2π (inputs are within a few turns)."""
+    while a > math.pi:
+        a -= 2.0 * math.pi
+    while a <= -math.pi:
+        a += 2.0 * math.pi
+    return a
+
+
+@_njit(cache=True, parallel=True, nogil=True)
+def _legs_kernel(
+    x: np.ndarray, fam3: bool, l1: float, l2: float, l3: float, height: float, sign: float,
+    tol: float, off: np.ndarray, q: np.ndarray, valid: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """coxa_tibia (fam3 False) and leg3 (fam3 True) closed forms, offsets removed, wrapped."""
+    n = x.shape[0]
+    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3) if fam3 else 0.0
+    nan = np.nan
+    for i in _prange(n):
+        h = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1])
+        phi = math.atan2(x[i, 1], x[i, 0])
+        w = (x[i, 2] - height) * sign
+        for k in range(2):
+            u = (h if k == 0 else -h) - l1
+            p1 = _wrap1((phi if k == 0 else phi + math.pi) - off[0])
+            if not fam3:
+                ok = abs(math.sqrt(u * u + w * w) - abs(l2)) <= tol
+                valid[i, k] = ok
+                if ok:
+                    q[i, k, 0] = p1
+                    q[i, k, 1] = _wrap1(math.atan2(w / l2, u / l2) - off[1])
+                else:
+                    q[i, k, 0] = nan
+                    q[i, k, 1] = nan
+                continue
+            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+            ok = abs(c3) <= 1.0 + eps
+            valid[i, 2 * k] = ok
+            valid[i, 2 * k + 1] = ok
+            if not ok:
+                for b in range(2):
+                    for j in range(3):
+                        q[i, 2 * k + b, j] = nan
+                continue
+            c3 = min(max(c3, -1.0), 1.0)
+            s3 = math.sqrt(1.0 - c3 * c3)
+            base = math.atan2(w, u)
+            a3 = math.atan2(s3, c3)
+            a2 = math.atan2(l3 * s3, l2 + l3 * c3)
+            q[i, 2 * k, 0] = p1
+            q[i, 2 * k, 1] = _wrap1(base - a2 - off[1])
+            q[i, 2 * k, 2] = _wrap1(a3 - off[2])
+            q[i, 2 * k + 1, 0] = p1
+            q[i, 2 * k + 1, 1] = _wrap1(base + a2 - off[1])
+            q[i, 2 * k + 1, 2] = _wrap1(-a3 - off[2])
 
 
 def analytic(
