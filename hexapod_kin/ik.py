@@ -62,7 +62,9 @@ __all__ = [
 ]
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
-STATUSES: tuple[str, ...] = ("converged", "unreachable", "joint_limits", "singular", "not_converged")
+STATUSES: tuple[str, ...] = (
+    "converged", "unreachable", "joint_limits", "singular", "not_converged"
+)
 FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 
 _HALF_PI = 0.5 * math.pi
@@ -91,6 +93,7 @@ class LegFamily:
         offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
         yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
         yaw_sign: SCARA only: ±1 factor of those constant rows' contribution.
+
     """
 
     family: str
@@ -154,10 +157,11 @@ def detect_family(chain: Any) -> LegFamily:
     Raises:
         IKError: If the table matches no family (the message shows the pattern and the
             families), or the model has no table.
+
     """
     ch = _chain_of(chain)
     rows = ch.rows
-    sig = tuple(r.sigma[0].upper() for r in rows)
+    sig = tuple(str(r.sigma)[0].upper() for r in rows)
     offsets = tuple(
         rows[i].theta if rows[i].sigma == "revolute" else rows[i].r for i in ch.joint_rows
     )
@@ -223,6 +227,7 @@ class AnalyticBatch:
             keep a fixed branch meaning (see :func:`analytic_batch`).
         valid: (N, K) True where the slot holds a solution.
         family: The detected family name.
+
     """
 
     q: np.ndarray
@@ -284,6 +289,7 @@ def analytic_batch(
 
     Raises:
         IKError: No closed form for this chain; bad or non-finite targets.
+
     """
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
@@ -493,6 +499,7 @@ def analytic(
         >>> ik.analytic(robots.coxa_tibia_leg(), p).round(4)
         array([[ 0.    , -0.5236],
                [ 3.1416, -2.618 ]])
+
     """
     batch = analytic_batch(chain, target, tol=tol, within_limits=within_limits)
     single = np.asarray(target).ndim == 1
@@ -533,6 +540,7 @@ class IKResult:
             the nearest reachable point found (= ``error``); else 0.
         nearest: For ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
         sigma_min: Smallest singular value of the position Jacobian at ``q`` [m/rad].
+
     """
 
     q: np.ndarray
@@ -581,6 +589,7 @@ def dls_step(jac: Any, error: Any, damping: float) -> np.ndarray:
 
     Returns:
         Δq (n,) in [rad]/[m].
+
     """
     j = np.asarray(jac, dtype=float)
     e = np.asarray(error, dtype=float)
@@ -935,6 +944,7 @@ def solve(
         IKError: Non-finite or wrongly shaped target.
         ConfigurationError: Bad ``q0``.
         ParameterError: Bad ``tol``, ``max_iter`` or ``restarts``.
+
     """
     t = _check_target(target)
     if not (type(tol) is float and 0 < tol < math.inf):

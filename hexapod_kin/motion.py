@@ -87,6 +87,7 @@ class Trajectory:
         method: ``"euler"`` or ``"rk4"``.
         dt: Step in [s].
         gain: Closed-loop gain K in [1/s] (0: open loop).
+
     """
 
     t: np.ndarray
@@ -272,7 +273,9 @@ def _sample_velocity(velocity: Any, times: np.ndarray) -> np.ndarray:
         try:
             v = np.asarray(velocity, dtype=float)
         except (TypeError, ValueError):
-            raise ConfigurationError(f"velocity={velocity!r} is not numbers or a callable") from None
+            raise ConfigurationError(
+                f"velocity={velocity!r} is not numbers or a callable"
+            ) from None
         if v.shape != (3,):
             raise ConfigurationError(
                 f"velocity has shape {v.shape}; a constant (3,) in [m/s] or a callable v(t)"
@@ -337,6 +340,7 @@ def resolved_rate(
     Raises:
         ParameterError: Bad ``dt``, ``duration``, ``method``, ``gain`` or thresholds.
         ConfigurationError: Bad ``q0`` or velocity.
+
     """
     dt = _pos("dt", dt)
     duration = _pos("duration", duration)
@@ -425,6 +429,8 @@ class SeedRun:
         error_x: max |x(t) − x(0) − ∫v_x| in [m] against the exact integral
             ``A T/(2π) (1 − cos 2πt/T)``.
         baseline: Same three figures for the plain Euler + ``np.linalg.solve`` open loop.
+        baseline_deviation: (N, 3) |foot − reference| of that baseline in [m], or None.
+
     """
 
     trajectory: Trajectory
@@ -434,6 +440,7 @@ class SeedRun:
     drift_z: float
     error_x: float
     baseline: dict[str, float]
+    baseline_deviation: np.ndarray | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -455,14 +462,20 @@ class SeedRun:
         }
 
 
-def _drift(model: Any, q: np.ndarray, t: np.ndarray, amplitude: float, period: float) -> dict:
+def _drift(
+    model: Any, q: np.ndarray, t: np.ndarray, amplitude: float, period: float
+) -> tuple[dict[str, float], np.ndarray]:
+    """Drift figures from Pinocchio FK of ``q`` and the (N, 3) |foot − exact reference|."""
     foot = np.array([model.position(qi) for qi in q])
-    x_ref = foot[0, 0] + amplitude * period / (2 * np.pi) * (1 - np.cos(2 * np.pi * t / period))
-    return {
-        "drift_y": float(np.max(np.abs(foot[:, 1] - foot[0, 1]))),
-        "drift_z": float(np.max(np.abs(foot[:, 2] - foot[0, 2]))),
-        "error_x": float(np.max(np.abs(foot[:, 0] - x_ref))),
+    ref = np.broadcast_to(foot[0], foot.shape).copy()
+    ref[:, 0] += amplitude * period / (2 * np.pi) * (1 - np.cos(2 * np.pi * t / period))
+    dev = np.abs(foot - ref)
+    figs = {
+        "drift_y": float(np.max(dev[:, 1])),
+        "drift_z": float(np.max(dev[:, 2])),
+        "error_x": float(np.max(dev[:, 0])),
     }
+    return figs, dev
 
 
 def euler_baseline(
@@ -472,6 +485,7 @@ def euler_baseline(
 
     Returns:
         (N, n) joint trajectory.
+
     """
     q = model.check_q(q0, "q0").copy()
     steps = int(round(duration / dt))
@@ -514,6 +528,7 @@ def seed_experiment(
 
     Returns:
         A :class:`SeedRun`.
+
     """
     from .kinematics import load
 
@@ -540,12 +555,16 @@ def seed_experiment(
         return out
 
     traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, reference=ref)
-    figs = _drift(mdl, traj.q, traj.t, a, per)
+    figs, _ = _drift(mdl, traj.q, traj.t, a, per)
     base: dict[str, float] = {}
+    base_dev = None
     if baseline and mdl.nq == 3:
         qb = euler_baseline(mdl, vel, q_start, dt, duration)
-        base = _drift(mdl, qb, traj.t, a, per)
-    return SeedRun(traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base)
+        base, base_dev = _drift(mdl, qb, traj.t, a, per)
+        base_dev.setflags(write=False)
+    return SeedRun(
+        traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev
+    )
 
 
 # ============================================================================ schedules and IK
@@ -557,6 +576,7 @@ class JointSchedule:
         times: (K,) knot times in [s], non-decreasing.
         values: (K, n) joint values at the knots in [rad]/[m].
         description: Free text (source).
+
     """
 
     times: np.ndarray
@@ -624,6 +644,7 @@ def track(
 
     Raises:
         IKError: Bad positions.
+
     """
     pts = np.asarray(positions, dtype=float)
     if pts.ndim != 2 or pts.shape[1] != 3 or not np.all(np.isfinite(pts)):
@@ -691,6 +712,7 @@ def foot_path(
 
     Raises:
         ParameterError: Bad lengths, duty factor, direction or shape.
+
     """
     c = np.asarray(center, dtype=float)
     if c.shape != (3,) or not np.all(np.isfinite(c)):
@@ -740,6 +762,7 @@ class FootStep:
         foot_actual: (M, 3) FK(q) (Pinocchio) in [m].
         within_limits: True if every sample is inside the joint position limits.
         max_joint_step: Largest |Δq| between consecutive samples [rad]/[m] (continuity).
+
     """
 
     t: np.ndarray
@@ -755,7 +778,7 @@ class FootStep:
 
     @property
     def max_error(self) -> float:
-        """max ‖FK(q) − planned‖ in [m]."""
+        """Max ‖FK(q) − planned‖ in [m]."""
         return float(np.max(np.linalg.norm(self.foot_actual - self.foot, axis=1)))
 
 
@@ -796,6 +819,7 @@ def foot_step(
 
     Raises:
         ParameterError: Bad step parameters.
+
     """
     duration = _pos("duration", duration)
     dt = _pos("dt", dt)
