@@ -91,7 +91,9 @@ def _umsgpack() -> Any:
     try:
         import umsgpack
     except ImportError:
-        raise OptionalDependencyError(f"the viewer needs u-msgpack-python; {_INSTALL_HINT}") from None
+        raise OptionalDependencyError(
+            f"the viewer needs u-msgpack-python; {_INSTALL_HINT}"
+        ) from None
     return umsgpack
 
 
@@ -104,7 +106,7 @@ def _meshcat_dir() -> Path:
 
 
 def _bundle() -> str:
-    """meshcat's JavaScript bundle (three.js, msgpack, dat.GUI and the viewer), as text."""
+    """Meshcat's JavaScript bundle (three.js, msgpack, dat.GUI and the viewer), as text."""
     path = _meshcat_dir() / "viewer" / "dist" / "main.min.js"
     if not path.is_file():
         raise OptionalDependencyError(f"meshcat's viewer bundle {path} is missing; {_INSTALL_HINT}")
@@ -153,7 +155,7 @@ def _rot(axis: str, angle: float) -> np.ndarray:
     return T
 
 
-def _translate(xyz: Sequence[float]) -> np.ndarray:
+def _translate(xyz: Any) -> np.ndarray:
     T = np.eye(4)
     T[:3, 3] = np.asarray(xyz, dtype=float)
     return T
@@ -201,7 +203,8 @@ class _ObjectJSON:
         tid = self._id("texture")
         # meshcat's "_text" texture: the text drawn on a 256×256 canvas by the page itself.
         self.textures.append(
-            {"uuid": tid, "type": "_text", "text": text, "font_size": 110, "font_face": "sans-serif"}
+            {"uuid": tid, "type": "_text", "text": text, "font_size": 110,
+             "font_face": "sans-serif"}
         )
         return tid
 
@@ -281,7 +284,7 @@ def _tube(points: np.ndarray, radius: float, sides: int = 10) -> dict[str, Any] 
     )  # (M, sides, 3)
     verts = pts[:, None, :] + radius * radial
     m = len(pts)
-    idx = []
+    idx: list[int] = []
     for i in range(m - 1):
         for k in range(sides):
             a, b = i * sides + k, i * sides + (k + 1) % sides
@@ -608,12 +611,6 @@ def _quaternions(T: np.ndarray) -> np.ndarray:
 
 
 # ====================================================================== scene + animation
-@dataclass(frozen=True)
-class _Options:
-    trace_frames: tuple[str, ...]
-    triad_frames: tuple[str, ...]
-
-
 def _trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
     from .params import Hexapod
 
@@ -694,12 +691,12 @@ def _build(
     cmds.append(_set_property("/Background", "bottom_color", [0.72, 0.76, 0.82]))
     cmds.append(_set_property("/Grid", "visible", False))
     cmds.append(_set_property("/Axes", "visible", False))
-    cmds.append(_set_transform("/meshcat", _translate(-center)))
+    cmds.append(_set_transform("/meshcat", _translate(list(-center))))
     # Camera: three.js y-up inside /Cameras/default/rotated; world offset (dx, dy, dz) is the
     # local position (dx, dz, -dy).
     direction = np.array([1.0, -1.25, 0.75])
     direction /= np.linalg.norm(direction)
-    d = 2.1 * radius * direction
+    d = 1.95 * radius * direction
     cam = "/Cameras/default/rotated/<object>"
     cmds.append(_set_property(cam, "position", [float(d[0]), float(d[2]), float(-d[1])]))
     cmds.append(_set_property(cam, "fov", 40.0))
@@ -753,10 +750,14 @@ def _build(
         cmds.append(_set_object("/meshcat/singular", s.lower(s.node("Group", children=kids))))
     # -- triads with labels
     triad_len = max(size * 0.16, 1e-3)
+    origins: list[np.ndarray] = []
     for k, name in enumerate(triad_frames):
         path = f"/meshcat/frames/{k}"
-        cmds.append(_set_object(path, _triad(path, triad_len, str(k))))
         assert fposes is not None
+        origin = fposes[0, tracked.index(name), :3, 3]
+        stack = sum(1 for o in origins if np.linalg.norm(o - origin) < 1e-3 * triad_len)
+        origins.append(origin)  # coincident frames (e.g. 0 and 1): labels stacked upwards
+        cmds.append(_set_object(path, _triad(path, triad_len, str(k), stack)))
         cmds.append(_set_transform(path, fposes[0, tracked.index(name)]))
     # -- animation
     animation = None
@@ -778,7 +779,7 @@ def _build(
     return _Built(cmds, animation, center, radius, duration, float(motion.times[0]))
 
 
-def _triad(key: str, length: float, label: str) -> dict[str, Any]:
+def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any]:
     o = _ObjectJSON(key)
     r = length * 0.05
     cyl = o.geometry(_cylinder(r, length, 12))
@@ -797,7 +798,8 @@ def _triad(key: str, length: float, label: str) -> dict[str, Any]:
     mat = o.material([1, 1, 1, 1], "SpriteMaterial", map=tex, depthTest=False, transparent=True)
     scale = np.diag([length * 0.75, length * 0.75, length * 0.75, 1.0])
     kids.append(o.node("Sprite", material=mat,
-                       matrix=_translate([length * 0.25, length * 0.25, length * 0.55]) @ scale))
+                       matrix=_translate([length * 0.25, length * 0.25,
+                                          length * (0.55 + 0.5 * stack)]) @ scale))
     return o.lower(o.node("Group", children=kids))
 
 
@@ -841,6 +843,7 @@ def scene_commands(
             ``singular_mask``.
         FrameNotFoundError: A traced or triad frame does not exist.
         ViewerError: The visual geometry cannot be built.
+
     """
     built = _build_for(model, times, qs, base_poses, trace_frame, frame_triads, singular_mask,
                        fps, play, loop)
@@ -878,11 +881,16 @@ def _build_for(
 
 
 # ====================================================================== self-contained HTML
+#: The page may run its own inline code and decode data: URIs, and fetch nothing else.
+_CSP = (
+    "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; "
+    "img-src data: blob:; worker-src blob:"
+)
 _PAGE = """<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
-<meta http-equiv="Content-Security-Policy" content="default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data: blob:; worker-src blob:">
+<meta http-equiv="Content-Security-Policy" content="__CSP__">
 <meta name="generator" content="hexapod_kin __VERSION__ (meshcat 0.3.2 bundle)">
 <title>__TITLE__</title>
 <style>
@@ -1042,6 +1050,7 @@ def export_html(
         ParameterError: Bad ``fps``, ``speed`` or destination.
         OptionalDependencyError: meshcat is not installed.
         ViewerError: The visual geometry cannot be built.
+
     """
     if not (isinstance(speed, (int, float)) and math.isfinite(speed) and 0 < speed <= 100):
         raise ParameterError(f"speed={speed!r} is not allowed; give a factor in (0, 100]")
@@ -1071,6 +1080,7 @@ def export_html(
         help_text += " · red spheres: near-singular samples"
     page = (
         _PAGE.replace("__VERSION__", __version__)
+        .replace("__CSP__", _CSP)
         .replace("__TITLE__", _html_text(label))
         .replace("__HELP__", _html_text(help_text))
         .replace("__DATA__", _html_data(data))
@@ -1128,6 +1138,7 @@ def demo_trajectory(
 
     Raises:
         ParameterError: Bad ``duration`` or ``samples``.
+
     """
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration={duration!r} is not allowed; give a positive time in s")
@@ -1173,9 +1184,10 @@ def _hexapod_sway(
         return times, qs, base
     # feet fixed in the world where the standing pose puts them
     data = model.model.createData()
-    feet_world = _frame_poses(model, data, q0[None, :], stand[None], params.foot_frames)[0, :, :3, 3]
+    feet = params.foot_frames
+    feet_world = _frame_poses(model, data, q0[None, :], stand[None], feet)[0, :, :3, 3]
     for leg_index, mount in enumerate(params.legs):
-        cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names]
+        cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names or ()]
         mount_T = mount.transform()
         foot_h = np.append(feet_world[leg_index], 1.0)
         targets = np.array([np.linalg.solve(b @ mount_T, foot_h)[:3] for b in base])
@@ -1209,10 +1221,10 @@ def _serve() -> None:  # pragma: no cover - runs in the server subprocess
     from meshcat.servers.tree import SceneTree
     from meshcat.servers.zmqserver import ZMQWebSocketBridge
 
-    class LoopbackBridge(ZMQWebSocketBridge):  # type: ignore[misc]
+    class LoopbackBridge(ZMQWebSocketBridge):
         def __init__(self) -> None:  # noqa: D401 - not super().__init__: it binds 0.0.0.0
             self.host = LOOPBACK
-            self.websocket_pool = set()
+            self.websocket_pool: set[Any] = set()
             self.app = self.make_app()
             self.ioloop = tornado.ioloop.IOLoop.current()
             self.zmq_socket, self.zmq_stream, _ = self.setup_zmq(f"tcp://{LOOPBACK}:*")
@@ -1264,6 +1276,7 @@ class MeshcatServer:
     Raises:
         ViewerError: The server did not start within ``start_timeout`` seconds.
         OptionalDependencyError: meshcat (or pyzmq, tornado) is not installed.
+
     """
 
     def __init__(self, start_timeout: float = 30.0) -> None:
@@ -1453,6 +1466,7 @@ class Viewer:
     Raises:
         ViewerError: The server did not start or does not answer.
         OptionalDependencyError: meshcat is not installed.
+
     """
 
     def __init__(
@@ -1506,6 +1520,7 @@ class Viewer:
 
         Raises:
             ViewerError: The server is gone or did not answer within the timeout.
+
         """
         if self._client is None:
             raise ViewerError("the viewer is closed; open a new Viewer")
@@ -1532,6 +1547,7 @@ class Viewer:
         Raises:
             ConfigurationError: Bad ``q`` or ``base_pose``.
             ViewerError: The server is gone or did not answer within the timeout.
+
         """
         qv = self.model.check_q(q)
         base = _check_base_poses(base_pose, 1)
@@ -1559,6 +1575,7 @@ class Viewer:
         Raises:
             ConfigurationError: Bad shapes or values.
             ViewerError: The server is gone or did not answer within the timeout.
+
         """
         self._show(np.asarray(qs), base_poses, animate=True, times=times,
                    trace_frame=trace_frame, frame_triads=frame_triads,
@@ -1570,6 +1587,7 @@ class Viewer:
         Raises:
             ParameterError: Unknown part.
             ViewerError: The server is gone or did not answer within the timeout.
+
         """
         if part not in PARTS:
             raise ParameterError(f"part={part!r} is not allowed; use one of {choices(PARTS)}")
@@ -1592,7 +1610,8 @@ class Viewer:
 
     def __repr__(self) -> str:
         state = "running" if self._server.running else "closed"
-        return f"<hexapod_kin Viewer of {self.model.name!r} at {self._server.__dict__.get('web_url')} ({state})>"
+        url = self._server.__dict__.get("web_url")
+        return f"<hexapod_kin Viewer of {self.model.name!r} at {url} ({state})>"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -82,6 +82,21 @@ def _f32(ext) -> np.ndarray:
     return np.frombuffer(ext.data, dtype=np.float32)
 
 
+def _resolved_rate_step(model):
+    """The seeds' step: foot velocity [A sin(2πt/T), 0, 0] by resolved rate (hexapod_kin.motion)."""
+    try:
+        from hexapod_kin import motion
+    except ImportError:  # motion not available: a joint path of the same kind
+        return _step_trajectory(model)
+
+    def velocity(t):
+        t = np.asarray(t, dtype=float)
+        return np.stack([0.05 * np.sin(np.pi * t), 0 * t, 0 * t], axis=-1)
+
+    tr = motion.resolved_rate(model, velocity, motion.SEED_Q0, 0.025, 1.5)
+    return np.asarray(tr.t), np.asarray(tr.q)
+
+
 def _step_trajectory(model, n: int = 61):
     """A foot step of a 3-DOF leg as a joint path: hip swings, knee lifts mid-way."""
     s = np.linspace(0.0, 1.0, n)
@@ -197,7 +212,8 @@ def leg():
 
 @pytest.fixture(scope="module")
 def step_html(leg, tmp_path_factory):
-    times, qs = _step_trajectory(leg)
+    times, qs = _resolved_rate_step(leg)
+    assert len(times) == 61
     sing = np.zeros(len(times), bool)
     sing[[0, 30]] = True
     path = tmp_path_factory.mktemp("html") / "step.html"
@@ -219,7 +235,10 @@ def test_export_is_self_contained(step_html):
 def test_robot_objects_match_pinocchio_geometry(leg, step_html):
     path, _, _ = step_html
     cmds = [_decode(c) for c in _html_data(path)["commands"]]
-    robot = [c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")]
+    robot = [
+        c for c in cmds
+        if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+    ]
     expected = leg.geometry_model("visual").ngeoms
     assert len(robot) == expected > 0
     kinds = {c["object"]["geometries"][0]["type"] for c in robot}
@@ -267,7 +286,10 @@ def test_triads_are_the_khalil_frames(leg, step_html):
     )
     path, _, qs = step_html
     cmds = [_decode(c) for c in _html_data(path)["commands"]]
-    triads = [c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/frames/")]
+    triads = [
+        c for c in cmds
+        if c["type"] == "set_object" and c["path"].startswith("/meshcat/frames/")
+    ]
     assert [c["path"] for c in triads] == [f"/meshcat/frames/{k}" for k in range(5)]
     labels = [
         [t["text"] for t in c["object"]["textures"] if t["type"] == "_text"] for c in triads
@@ -517,3 +539,21 @@ def test_cli_animate_writes_html(tmp_path, capsys):
     assert info["samples"] == 11 and info["singular_samples"] == 11
     data = _html_data(out)
     assert data["animation"] and data["duration"] == pytest.approx(4.0)
+
+
+def test_screenshot_tool_runs(browser, tmp_path):
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
+    try:
+        import screenshots
+    finally:
+        sys.path.pop(0)
+    assert screenshots.main(["--out", str(tmp_path)], browser=browser) == 0
+    import matplotlib.image as mpimg
+
+    for name in ("hexapod.png", "leg_step.png"):
+        img = mpimg.imread(tmp_path / name)[..., :3]
+        assert img.shape[:2] == (700, 1000)
+        # robot colours present: orange links and red feet, absent from the grey background
+        r, g, b = img[..., 0], img[..., 1], img[..., 2]
+        orange = (r > 0.75) & (g > 0.4) & (g < 0.7) & (b < 0.35)
+        assert orange.mean() > 0.005, name
