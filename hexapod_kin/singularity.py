@@ -41,6 +41,7 @@ from .exceptions import ConfigurationError, ParameterError, choices
 from .symbolic import ROW_NAMES, SingularFamily, row_indices
 
 __all__ = [
+    "ROW_NAMES",
     "Measures",
     "ScanResult",
     "WorkspaceResult",
@@ -49,6 +50,7 @@ __all__ = [
     "measures_batch",
     "scan",
     "plot_joints",
+    "reach",
     "workspace",
     "cross_section",
 ]
