@@ -71,6 +71,8 @@ __all__ = [
     "default_configuration",
     "demo_trajectory",
     "export_html",
+    "iframe",
+    "khalil_frames",
     "scene_commands",
 ]
 
@@ -1087,6 +1089,36 @@ def export_html(
     )
     page = page.replace("__BUNDLE__", bundle)  # last: the bundle is never scanned for markers
     return atomic_write(path, page)
+
+
+def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
+    """An ``<iframe srcdoc=...>`` embedding an exported page (Jupyter, Colab, Binder).
+
+    ``IPython.display.HTML(viewer.iframe("step.html"))`` shows the animation inline; the page
+    stays isolated in its frame (ids, scripts, its Content-Security-Policy), so several can be
+    shown in one notebook.
+
+    Args:
+        html: Path of a file written by :func:`export_html`.
+        height: Frame height in [px] (100..4000).
+
+    Returns:
+        The HTML snippet.
+
+    Raises:
+        ParameterError: Bad ``height`` or not a file.
+
+    """
+    if not (isinstance(height, int) and 100 <= height <= 4000):
+        raise ParameterError(f"height={height!r} is not allowed; give pixels in [100, 4000]")
+    path = Path(html)
+    if not path.is_file():
+        raise ParameterError(f"html={str(path)!r} is not a file written by export_html")
+    doc = path.read_text(encoding="utf-8")
+    return (
+        f'<iframe srcdoc="{_html_text(doc)}" style="width: 100%; height: {height}px; '
+        'border: 0;" sandbox="allow-scripts"></iframe>'
+    )
 
 
 # ====================================================================== demo poses and motions

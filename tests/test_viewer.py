@@ -400,6 +400,27 @@ def test_exported_step_renders_and_moves_offline(browser, step_html):
     assert _changed(start, middle) > 0.005  # the animation moves
 
 
+def test_notebook_iframe_renders(browser, step_html, tmp_path):
+    """The srcdoc iframe (Jupyter/Colab) runs the page; two on one page do not clash."""
+    path, _, _ = step_html
+    snippet = viewer.iframe(path, height=300)
+    host = tmp_path / "notebook.html"
+    host.write_text(f"<!DOCTYPE html><html><body>{snippet}{snippet}</body></html>")
+    page = _Page(browser, allow=("file://",))
+    try:
+        page.page.goto(host.as_uri())
+        frames = [f for f in page.page.frames if f != page.page.main_frame]
+        assert len(frames) == 2
+        for frame in frames:
+            frame.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+            assert frame.evaluate("hexapodKin.duration") == pytest.approx(1.5)
+    finally:
+        page.close()
+    assert page.blocked == [] and page.errors == []
+    with pytest.raises(ParameterError, match="height"):
+        viewer.iframe(path, height=5)
+
+
 # ====================================================================== live server
 def test_server_listens_on_loopback_only():
     with viewer.MeshcatServer() as server:
