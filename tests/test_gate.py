@@ -1,0 +1,468 @@
+"""The loader gate: a corpus of malformed and hostile URDFs, each loaded in a child process.
+
+Every corpus file in ``tests/urdf_corpus`` is listed in :data:`CASES` with the exact error
+class, a fragment of the message and (where the error is about one element) a marker whose
+line the message must name. All files are loaded by one child process (``_urdf_runner.py``)
+that prints one JSON line per case, so a Pinocchio segfault fails the test of the case that
+crashed instead of killing the run. The crash-prone generated cases (10,000-link chain, the
+1,000-link cap itself, deep nesting, oversize) run in their own child processes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hexapod_kin import _gate, model, robots, urdf
+from hexapod_kin._gate import MAX_DOF, MAX_LINKS, MAX_URDF_BYTES, check_urdf, resolve_mesh
+from hexapod_kin.exceptions import HexapodKinError, UrdfError
+
+HERE = Path(__file__).parent
+CORPUS = HERE / "urdf_corpus"
+RUNNER = HERE / "_urdf_runner.py"
+
+# case -> (error class or None for a valid control, message fragment, line marker or None)
+CASES: dict[str, tuple[str | None, str, str | None]] = {
+    # XML
+    "xml_truncated_element": ("UrdfError", "not well-formed XML", None),
+    "xml_truncated_attribute": ("UrdfError", "not well-formed XML", None),
+    "xml_empty": ("UrdfError", "Document is empty", None),
+    "xml_billion_laughs": ("UrdfError", "DOCTYPE or ENTITY declaration", None),
+    "xml_xxe_file": ("UrdfError", "DOCTYPE or ENTITY declaration", None),
+    "xml_xxe_parameter_entity": ("UrdfError", "DOCTYPE or ENTITY declaration", None),
+    "xml_doctype_harmless": ("UrdfError", "DOCTYPE", None),
+    "xml_undefined_entity": ("UrdfError", "Entity 'corpus' not defined", None),
+    "xml_root_not_robot": ("UrdfError", "root element <sdf>; <robot> required", "<sdf name"),
+    "xml_junk_after_root": ("UrdfError", "Extra content at the end", None),
+    "xml_latin1_encoding": ("UrdfError", "encoding='ISO-8859-1' is not allowed", None),
+    "xml_mismatched_tag": ("UrdfError", "tag mismatch", None),
+    # structure
+    "robot_no_links": ("UrdfError", "at least one link is required", None),
+    "robot_no_name": ("UrdfError", "<robot> needs a non-empty name", "<robot>"),
+    "link_duplicate_name": ("UrdfError", "duplicate link name", '<link name="arm">'),
+    "link_empty_name": ("UrdfError", "needs a non-empty name", '<link name=" "/>'),
+    "link_named_universe": ("UrdfError", "reserved by Pinocchio", '<link name="universe"/>'),
+    "joint_duplicate_name": ("UrdfError", "duplicate joint name (first at line 6)",
+                             '<joint name="j1" type="fixed">'),
+    "joint_parent_missing": ("UrdfError", "link='bsae': parent link does not exist", "bsae"),
+    "joint_child_missing": ("UrdfError", "link='amr': child link does not exist", "amr"),
+    "joint_no_parent_element": ("UrdfError", "<parent> is required", '<joint name="j1"'),
+    "joint_parent_equals_child": ("UrdfError", "parent and child are the same link 'arm'",
+                                  '<joint name="j1"'),
+    "joint_unknown_type": ("UrdfError", "type='ball': joint type must be one of", 'type="ball"'),
+    "joint_type_missing": ("UrdfError", "type=None: joint type must be one of", '<joint name'),
+    "tree_two_parents": ("UrdfError", "at most one parent joint", '<joint name="j2"'),
+    "tree_cycle_with_root": ("UrdfError", "no root link", None),
+    "tree_detached_cycle": ("UrdfError", "not reachable from the root 'base'", '<link name="p">'),
+    "tree_two_roots": ("UrdfError", "2 root links ['base', 'floating_part']", None),
+    "joint_mimic_missing": ("UrdfError", "joint='j0': mimic must name another existing joint",
+                            "<mimic"),
+    "joint_duplicate_axis": ("UrdfError", "<axis> given more than once", '<axis xyz="1 0 0"'),
+    # numbers
+    "number_nan_origin": ("UrdfError", "xyz='0 nan 0.1': 'nan' is not a decimal number", "nan"),
+    "number_inf_axis": ("UrdfError", "xyz='0 0 inf': 'inf' is not a decimal number",
+                        'xyz="0 0 inf"'),
+    "number_overflow_limit": ("UrdfError", "upper='1e999': numbers must be finite", "1e999"),
+    "number_short_vector": ("UrdfError", "3 number(s) required, found 2", 'xyz="0 0.1"'),
+    "number_long_vector": ("UrdfError", "rpy='0 0 0 0': 3 number(s) required, found 4",
+                           "0 0 0 0"),
+    "number_hex_mass": ("UrdfError", "'0x1' is not a decimal number", "0x1"),
+    "number_padded_mass": ("UrdfError", "without surrounding spaces", '" 0.5 "'),
+    "number_comma_decimal": ("UrdfError", "'0,5' is not a decimal number", "0,5"),
+    "number_underscore": ("UrdfError", "'1_0' is not a decimal number", 'effort="1_0"'),
+    "number_negative_box": ("UrdfError", "size='0.1 -0.02 0.02': must be >= 0", "-0.02"),
+    "number_nan_rgba": ("UrdfError", "<material name=\"grey\"> <color> rgba='0.5 NaN 0.5 1'",
+                        'rgba="0.5 NaN'),
+    "number_empty_value": ("UrdfError", "value='': '' is not a decimal number", 'value=""'),
+    # joints
+    "joint_zero_axis": ("UrdfError", "xyz='0 0 0': joint axis has zero length",
+                        '<axis xyz="0 0 0"'),
+    "joint_lower_gt_upper": ("UrdfError", "lower='1': lower > upper='-1'", "<limit"),
+    "joint_negative_velocity": ("UrdfError", "velocity='-2': must be >= 0", "<limit"),
+    "joint_negative_effort": ("UrdfError", "effort='-10': must be >= 0", "<limit"),
+    "joint_revolute_no_limit": ("UrdfError", "needs <limit>", '<joint name="j1"'),
+    "joint_limit_no_effort": ("UrdfError", "<limit effort> is required", "<limit lower"),
+    "joint_negative_damping": ("UrdfError", "damping='-0.1': must be >= 0", "<dynamics"),
+    # mass and inertia
+    "mass_negative": ("UrdfError", "value='-0.5': must be >= 0", "<mass"),
+    "mass_moving_massless": ("UrdfError", "moved by joint 'j1' has no mass", '<link name="arm">'),
+    "mass_zero_moving": ("UrdfError", "moved by joint 'j1' has no mass", '<link name="arm">'),
+    "inertia_indefinite": ("UrdfError", "inertia is indefinite", "<inertia "),
+    "inertia_triangle": ("UrdfError", "violate the triangle inequality", "<inertia "),
+    "inertia_zero_moving": ("UrdfError", "not positive definite", "<inertia "),
+    "inertia_singular_offdiag": ("UrdfError", "not positive definite", "<inertia "),
+    "inertia_missing_entry": ("UrdfError", "izz=None: attribute is required", "<inertia "),
+    "inertial_no_mass": ("UrdfError", "<mass> is required", "<inertial>"),
+    # files
+    "mesh_file_uri": ("UrdfError", "URI scheme 'file' is refused", "<mesh"),
+    "mesh_absolute_path": ("UrdfError", "absolute paths are refused", "<mesh"),
+    "mesh_dotdot_escape": ("UrdfError", "outside the allowed root", "<mesh"),
+    "mesh_package_without_dirs": ("UrdfError", "no package directories", "<mesh"),
+    "mesh_http_uri": ("UrdfError", "URI scheme 'http' is refused", "<mesh"),
+    "mesh_missing_file": ("UrdfError", "missing.stl' does not exist", "<mesh"),
+    "mesh_directory": ("UrdfError", "is not a regular file", "<mesh"),
+    "mesh_empty_filename": ("UrdfError", "empty file name", "<mesh"),
+    "mesh_home_tilde": ("UrdfError", "absolute paths are refused", "<mesh"),
+    "texture_escape": ("UrdfError", "<texture> filename='../../../../../etc/hostname'",
+                       "<texture"),
+    # valid controls
+    "ok_minimal": (None, "", None),
+    "ok_mesh_relative": (None, "", None),
+    "ok_merged_point_mass": (None, "", None),
+    "ok_massless_link_with_massive_fixed_child": (None, "", None),
+}
+
+
+def _run(paths: list[Path], timeout: float = 120.0) -> tuple[dict[str, dict], subprocess.CompletedProcess]:
+    """Load ``paths`` in one child process; map case stem -> result line."""
+    proc = subprocess.run(
+        [sys.executable, str(RUNNER), *map(str, paths)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=HERE,
+    )
+    results: dict[str, dict] = {}
+    for line in proc.stdout.splitlines():
+        rec = json.loads(line)
+        if not rec.get("started"):
+            results[Path(rec["case"]).stem] = rec
+    return results, proc
+
+
+def _lost(proc: subprocess.CompletedProcess) -> str:
+    return f"child exited with {proc.returncode}; stderr tail: {proc.stderr[-600:]}"
+
+
+@pytest.fixture(scope="module")
+def corpus_results() -> tuple[dict[str, dict], subprocess.CompletedProcess]:
+    return _run(sorted(CORPUS.glob("*.urdf")))
+
+
+def test_corpus_lists_every_file() -> None:
+    files = {p.stem for p in CORPUS.glob("*.urdf")}
+    assert files == set(CASES)
+    assert sum(1 for v in CASES.values() if v[0] is not None) >= 30
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_corpus_case(case: str, corpus_results: tuple[dict[str, dict], subprocess.CompletedProcess]) -> None:
+    results, proc = corpus_results
+    assert case in results, f"case {case} lost (crash?): {_lost(proc)}"
+    rec = results[case]
+    error, fragment, marker = CASES[case]
+    assert rec["error"] == error, rec
+    if error is None:
+        assert rec["fk_finite"] is True
+        return
+    assert fragment in rec["message"], rec["message"]
+    if marker is not None:
+        lines = (CORPUS / f"{case}.urdf").read_text(encoding="utf-8").splitlines()
+        line = next(i for i, text in enumerate(lines, start=1) if marker in text)
+        assert f"line {line}:" in rec["message"], (line, rec["message"])
+
+
+def test_corpus_child_exits_cleanly(corpus_results: tuple[dict[str, dict], subprocess.CompletedProcess]) -> None:
+    results, proc = corpus_results
+    assert proc.returncode == 0, _lost(proc)
+    assert len(results) == len(CASES)
+
+
+# ------------------------------------------------------------------------ generated cases
+def _chain_urdf(n_links: int, moving: int | None = None) -> str:
+    """A serial chain of ``n_links`` links; the first ``moving`` joints revolute, then fixed."""
+    moving = n_links - 1 if moving is None else moving
+    parts = ['<?xml version="1.0"?>', f'<robot name="chain{n_links}">', '<link name="l0"/>']
+    inertial = ('<inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" '
+                'iyz="0" izz="1e-4"/></inertial>')
+    for i in range(1, n_links):
+        kind = "revolute" if i <= moving else "fixed"
+        parts.append(
+            f'<joint name="j{i}" type="{kind}"><parent link="l{i - 1}"/><child link="l{i}"/>'
+            f'<origin xyz="0.01 0 0" rpy="0 0 0.1"/><axis xyz="0 0 1"/>'
+            f'<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+            f'<link name="l{i}">{inertial}</link>'
+        )
+    parts.append("</robot>")
+    return "\n".join(parts) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("name", "n_links", "moving", "error", "fragment"),
+    [
+        ("chain_10000", 10_000, None, "UrdfError", "10000 links; the cap is 1000"),
+        ("chain_1001", MAX_LINKS + 1, 1, "UrdfError", f"{MAX_LINKS + 1} links; the cap is"),
+        ("dof_129", MAX_DOF + 2, None, "UrdfError", f"{MAX_DOF + 1} degrees of freedom; the cap"),
+        ("chain_1000_fixed", MAX_LINKS, 3, None, ""),
+        ("dof_128", MAX_DOF + 1, None, None, ""),
+    ],
+)
+def test_long_chains_in_child(
+    tmp_path: Path, name: str, n_links: int, moving: int | None, error: str | None,
+    fragment: str,
+) -> None:
+    """Chains at and past the caps, in a child: past them refused, at them loaded, no crash."""
+    path = tmp_path / f"{name}.urdf"
+    path.write_text(_chain_urdf(n_links, moving))
+    results, proc = _run([path], timeout=300)
+    assert name in results, _lost(proc)
+    rec = results[name]
+    assert rec["error"] == error, rec
+    assert fragment in rec["message"]
+    if error is None:
+        assert rec["fk_finite"] is True
+        assert rec["nq"] == (n_links - 1 if moving is None else moving)
+
+
+def test_deep_nesting_in_child(tmp_path: Path) -> None:
+    depth = 10_000
+    text = '<robot name="deep"><link name="a">' + "<visual>" * depth + "</visual>" * depth
+    path = tmp_path / "deep.urdf"
+    path.write_text(text + "</link></robot>")
+    results, proc = _run([path])
+    assert results["deep"]["error"] == "UrdfError", _lost(proc)
+    assert "not well-formed XML" in results["deep"]["message"]
+    assert "depth" in results["deep"]["message"].lower()
+
+
+def test_oversize_file_and_text(tmp_path: Path) -> None:
+    text = _chain_urdf(3).replace("<robot", "<!--" + "x" * (MAX_URDF_BYTES + 10) + "-->\n<robot")
+    path = tmp_path / "big.urdf"
+    path.write_text(text)
+    results, proc = _run([path])
+    assert results["big"]["error"] == "UrdfError", _lost(proc)
+    assert f"exceeds the cap of {MAX_URDF_BYTES} bytes" in results["big"]["message"]
+    with pytest.raises(UrdfError, match="exceeds the cap"):
+        check_urdf(text)
+
+
+# ------------------------------------------------------------------------ what must pass
+PRESET_TEXTS = [(n, urdf.to_urdf(robots.get(n))) for n in robots.names()] + [
+    ("hexapod:leg1", urdf.to_urdf(robots.hexapod(), leg="leg1")),
+    ("hexapod:leg4", urdf.to_urdf(robots.hexapod(), leg="leg4")),
+]
+
+
+@pytest.mark.parametrize(("name", "text"), PRESET_TEXTS, ids=[n for n, _ in PRESET_TEXTS])
+def test_gate_accepts_generated(name: str, text: str) -> None:
+    result = check_urdf(text)
+    assert result.root.tag == "robot"
+    assert result.meshes == ()
+    assert len(result.links) == len(result.joints) + 1
+
+
+#: example-robot-data robots the gate accepts (56 of 66 in ERD 6.0.0; solo12 is required).
+ERD_PASS = [
+    "solo12", "solo", "ur5_robot", "ur10_robot", "panda", "go2", "a1", "kinova", "bolt",
+    "double_pendulum", "z1", "xarm7", "talos_full_v2", "talos_reduced", "baxter", "anymal",
+    "finger_edu", "quadruped", "so101", "allegro_left_hand", "pr2", "hyq_no_sensors",
+]
+#: ... and those it refuses, each for a real defect of the file.
+ERD_REFUSED = {
+    "ur3": "<robot> needs a non-empty name",  # Pinocchio refuses it too
+    "alex_psyonic_hands": "joint='index_q1': mimic must name another existing joint",
+    "human": "moved by joint 'left_hip_Z' has no mass",  # massless virtual links
+    "romeo": "moved by joint 'LHand' has no mass",
+    "icub": "moved by joint 'neck_yaw' has an inertia that is not positive definite",
+    "romeo_small": "violate the triangle inequality",
+    "romeo_laas_small": "inertia is indefinite",
+    "tiago": "inertia is indefinite",
+}
+
+
+def _erd_check(name: str) -> _gate.GateResult:
+    path = model.erd_path(name)
+    return check_urdf(
+        path.read_text(encoding="utf-8"),
+        package_dirs=(str(model._erd_share()),),
+        mesh_root=str(path.parent),
+    )
+
+
+@pytest.mark.parametrize("name", ERD_PASS)
+def test_gate_accepts_erd(name: str) -> None:
+    result = _erd_check(name)
+    for _uri, path in result.meshes:
+        assert path.is_file()
+        assert str(path).startswith(os.path.realpath(model._erd_share()))
+
+
+@pytest.mark.parametrize("name", sorted(ERD_REFUSED))
+def test_gate_refuses_defective_erd(name: str) -> None:
+    with pytest.raises(UrdfError, match="line [0-9]+|URDF") as info:
+        _erd_check(name)
+    assert ERD_REFUSED[name] in str(info.value)
+
+
+def test_solo12_loads_with_meshes_checked() -> None:
+    from hexapod_kin.kinematics import load
+
+    leg = load("erd:solo12", tip="FL_FOOT")
+    assert leg.nq == 3
+    assert len(_erd_check("solo12").meshes) > 0
+
+
+# ------------------------------------------------------------------------ mesh roots
+def _with_mesh(filename: str) -> str:
+    text = (CORPUS / "ok_minimal.urdf").read_text(encoding="utf-8")
+    return text.replace(
+        '<geometry><box size="0.1 0.02 0.02"/></geometry>',
+        f'<geometry><mesh filename="{filename}"/></geometry>',
+    )
+
+
+def test_package_uri_resolution_and_escapes(tmp_path: Path) -> None:
+    pkg = tmp_path / "share" / "mypkg" / "meshes"
+    pkg.mkdir(parents=True)
+    (pkg / "a.stl").write_text("solid a\nendsolid a\n")
+    (tmp_path / "secret.txt").write_text("secret")
+    share = str(tmp_path / "share")
+    ok = check_urdf(_with_mesh("package://mypkg/meshes/a.stl"), package_dirs=(share,))
+    assert ok.meshes == (("package://mypkg/meshes/a.stl", pkg.resolve() / "a.stl"),)
+    # Pinocchio's "package:///pkg/path" form resolves the same way.
+    ok3 = check_urdf(_with_mesh("package:///mypkg/meshes/a.stl"), package_dirs=(share,))
+    assert ok3.meshes[0][1] == pkg.resolve() / "a.stl"
+    for bad, fragment in [
+        ("package://mypkg/../../secret.txt", "outside the allowed root"),
+        ("package://mypkg/meshes/../../../secret.txt", "outside the allowed root"),
+        ("package://../secret.txt", "must be package://<package>/<path>"),
+        ("package://mypkg", "must be package://<package>/<path>"),
+        ("package://mypkg/meshes/none.stl", "does not exist"),
+    ]:
+        with pytest.raises(UrdfError, match="line 21: .*<mesh>") as info:
+            check_urdf(_with_mesh(bad), package_dirs=(share,))
+        assert fragment in str(info.value), (bad, str(info.value))
+
+
+def test_symlink_and_special_files_refused(tmp_path: Path) -> None:
+    (tmp_path / "meshes").mkdir()
+    outside = tmp_path.parent / f"{tmp_path.name}_outside.stl"
+    outside.write_text("solid o\nendsolid o\n")
+    os.symlink(outside, tmp_path / "meshes" / "link.stl")
+    with pytest.raises(UrdfError, match="outside the allowed root"):
+        check_urdf(_with_mesh("meshes/link.stl"), mesh_root=tmp_path)
+    os.mkfifo(tmp_path / "meshes" / "fifo.stl")
+    with pytest.raises(UrdfError, match="is not a regular file"):
+        check_urdf(_with_mesh("meshes/fifo.stl"), mesh_root=tmp_path)
+    # a symlink that stays inside the root is fine
+    (tmp_path / "meshes" / "real.stl").write_text("solid r\nendsolid r\n")
+    os.symlink(tmp_path / "meshes" / "real.stl", tmp_path / "meshes" / "alias.stl")
+    ok = check_urdf(_with_mesh("meshes/alias.stl"), mesh_root=tmp_path)
+    assert ok.meshes[0][1] == (tmp_path / "meshes" / "real.stl").resolve()
+
+
+def test_relative_mesh_in_text_source_refused() -> None:
+    with pytest.raises(UrdfError, match="no mesh root"):
+        check_urdf(_with_mesh("meshes/ok.stl"))
+    result = check_urdf(_with_mesh("meshes/ok.stl"), mesh_root=CORPUS)
+    assert result.meshes[0][1] == (CORPUS / "meshes" / "ok.stl").resolve()
+
+
+def test_resolve_mesh_messages() -> None:
+    with pytest.raises(UrdfError, match="scheme 'FILE'"):
+        resolve_mesh("FILE:///etc/passwd", mesh_root=CORPUS)
+    with pytest.raises(UrdfError, match="scheme 'c'"):
+        resolve_mesh("c:/windows/system.ini", mesh_root=CORPUS)
+
+
+# ------------------------------------------------------------------------ inertia
+def test_sym_eigvals_matches_numpy() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        a = rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-8, 3)
+        m = a + a.T
+        ours = _gate._sym_eigvals(m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
+        ref = np.linalg.eigvalsh(m)
+        scale = np.abs(ref).max()
+        assert np.allclose(ours, ref, rtol=0, atol=1e-12 * scale)
+
+
+def _merged_body(points: list[tuple[float, float, float]], own_mass: float = 0.0) -> str:
+    """A revolute link (mass ``own_mass``, no inertia) with point masses fixed to it."""
+    own = (f'<inertial><mass value="{own_mass}"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" '
+           'iyz="0" izz="0"/></inertial>' if own_mass else "")
+    parts = ['<robot name="m">', '<link name="base"/>',
+             '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/>'
+             '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>',
+             f'<link name="arm">{own}</link>']
+    for i, p in enumerate(points):
+        parts.append(
+            f'<link name="p{i}"><inertial><mass value="0.5"/><inertia ixx="0" ixy="0" ixz="0" '
+            f'iyy="0" iyz="0" izz="0"/></inertial></link>'
+            f'<joint name="f{i}" type="fixed"><parent link="arm"/><child link="p{i}"/>'
+            f'<origin xyz="{p[0]} {p[1]} {p[2]}" rpy="0.3 0.2 0.1"/></joint>'
+        )
+    return "\n".join(parts + ["</robot>"])
+
+
+def test_merged_body_inertia_matches_pinocchio() -> None:
+    import pinocchio as pin
+
+    # Three non-collinear point masses fixed to a massless moving link: a valid body.
+    pts = [(0.1, 0.0, 0.0), (0.0, 0.2, 0.0), (0.0, 0.0, 0.3)]
+    text = _merged_body(pts)
+    check_urdf(text)
+    body = pin.buildModelFromXML(text).inertias[1]
+    assert math.isclose(body.mass, 1.5, rel_tol=1e-14)
+    # Independent: the inertia of point masses about their centre of mass.
+    p = np.array(pts)
+    c = p.mean(axis=0)
+    ref = sum(0.5 * ((x - c) @ (x - c) * np.eye(3) - np.outer(x - c, x - c)) for x in p)
+    assert np.allclose(body.inertia, ref, atol=1e-15)
+    # Two point masses on a line: singular about that line, refused.
+    with pytest.raises(UrdfError, match="merged with the links fixed to it: 2 inertials"):
+        check_urdf(_merged_body(pts[:2]))
+    # A single point mass: not positive definite.
+    with pytest.raises(UrdfError, match="not positive definite"):
+        check_urdf(_merged_body(pts[:1]))
+
+
+# ------------------------------------------------------------------------ misc behaviour
+def test_errors_are_one_family() -> None:
+    assert issubclass(UrdfError, HexapodKinError)
+    with pytest.raises(HexapodKinError):
+        check_urdf("<robot")
+
+
+def test_bytes_input_and_non_utf8_declared() -> None:
+    text = (CORPUS / "ok_minimal.urdf").read_text(encoding="utf-8")
+    assert check_urdf(text.encode("utf-8")).links == ("base", "arm")
+    utf16 = text.replace('encoding="utf-8"', 'encoding="utf-16"').encode("utf-16")
+    with pytest.raises(UrdfError):
+        check_urdf(utf16)
+
+
+def test_cache_only_for_documents_without_files() -> None:
+    text = urdf.to_urdf(robots.get("pendulum"))
+    assert check_urdf(text) is check_urdf(text)
+    with_mesh = _with_mesh("meshes/ok.stl")
+    assert check_urdf(with_mesh, mesh_root=CORPUS) is not check_urdf(with_mesh, mesh_root=CORPUS)
+    with pytest.raises(UrdfError, match="no mesh root"):
+        check_urdf(with_mesh)  # not served from a cache filled with mesh_root given
+
+
+def test_pinocchio_refusal_is_wrapped(monkeypatch: pytest.MonkeyPatch) -> None:
+    from hexapod_kin.kinematics import load
+
+    monkeypatch.setattr(model, "check_urdf", lambda *a, **k: None)
+    bad = _with_mesh("x").replace('<robot name="corpus">', "<robot>")
+    with pytest.raises(UrdfError, match="passed the loader gate but Pinocchio refused it"):
+        load(bad)
+
+
+def test_non_fixed_joint_without_limit_continuous_ok() -> None:
+    text = (CORPUS / "ok_minimal.urdf").read_text(encoding="utf-8")
+    cont = text.replace('type="revolute"', 'type="continuous"').replace(
+        '<limit lower="-1" upper="1" effort="10" velocity="2"/>', ""
+    )
+    check_urdf(cont)
+    # Limits default to 0 as in the URDF spec: lower = upper = 0 is allowed.
+    zero = text.replace('lower="-1" upper="1" ', "")
+    check_urdf(zero)
