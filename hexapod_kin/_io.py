@@ -57,4 +57,19 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
         except FileNotFoundError:
             pass
         raise
+    _fsync_dir(parent)
     return dest
+
+
+def _fsync_dir(directory: Path) -> None:
+    """Make the rename durable (best effort: some file systems refuse directory fsync)."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
