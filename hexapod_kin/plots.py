@@ -227,7 +227,7 @@ def plot_workspace(
     ax.legend(loc="upper right", markerscale=6)
     ax.set_title(
         title or f"{ws.source}: workspace section ({plane} plane); "
-        f"volume ~ {ws.volume * 1e6:.0f} cm^3"
+        f"volume ~ {ws.volume:.3g} m^3"
     )
     return save_figure(fig, path)
 

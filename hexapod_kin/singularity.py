@@ -36,7 +36,6 @@ from typing import Any
 import numpy as np
 
 from . import _kernels
-from ._kernels import fk_jac_trig_into
 from .exceptions import ConfigurationError, ParameterError, choices
 from .symbolic import ROW_NAMES, SingularFamily, row_indices
 
@@ -88,7 +87,9 @@ def _eig3_top2(g: np.ndarray) -> tuple[float, float]:  # pragma: no cover - comp
     c00, c11, c22 = b00 * inv, b11 * inv, b22 * inv
     c01, c02, c12 = a01 * inv, a02 * inv, a12 * inv
     r = 0.5 * (
-        c00 * (c11 * c22 - c12 * c12) - c01 * (c01 * c22 - c12 * c02) + c02 * (c01 * c12 - c11 * c02)
+        c00 * (c11 * c22 - c12 * c12)
+        - c01 * (c01 * c22 - c12 * c02)
+        + c02 * (c01 * c12 - c11 * c02)
     )
     if r <= -1.0:
         phi = math.pi / 3.0
@@ -288,7 +289,9 @@ def _top_eigs3(
         return qm, qm
     p = math.sqrt(p2 / 6.0)
     detb = (
-        b00 * (b11 * b22 - g12 * g12) - g01 * (g01 * b22 - g12 * g02) + g02 * (g01 * g12 - b11 * g02)
+        b00 * (b11 * b22 - g12 * g12)
+        - g01 * (g01 * b22 - g12 * g02)
+        + g02 * (g01 * g12 - b11 * g02)
     )
     r = 0.5 * detb / (p * p * p)
     if r <= -1.0:
@@ -549,6 +552,7 @@ class Measures:
         sigma_min: Smallest singular value.
         singular_values: All ``min(k, n)`` singular values, descending (read-only).
         rows: Row names of ``J`` used.
+
     """
 
     det: float
@@ -575,6 +579,7 @@ def default_rows(model: Any) -> tuple[str, ...]:
 
     Args:
         model: A loaded :class:`~hexapod_kin.kinematics.KinematicModel` (or a source).
+
     """
     from .symbolic import default_rows as _dr
 
@@ -594,7 +599,7 @@ def _arrays(model: Any) -> _kernels.ChainArrays:
             model._hk_chain_arrays = cached
         except AttributeError:  # pragma: no cover
             pass
-    return cached  # type: ignore[no-any-return]
+    return cached
 
 
 def _aligned(model: Any) -> _AlignedChain:
@@ -605,7 +610,7 @@ def _aligned(model: Any) -> _AlignedChain:
             model._hk_aligned_chain = cached
         except AttributeError:  # pragma: no cover
             pass
-    return cached  # type: ignore[no-any-return]
+    return cached
 
 
 def _rows(model: Any, rows: Any) -> tuple[str, ...]:
@@ -628,6 +633,7 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
     Raises:
         ConfigurationError: Bad ``q``.
         ParameterError: Bad ``rows``.
+
     """
     mdl = _model(model)
     names = _rows(mdl, rows)
@@ -663,6 +669,7 @@ def measures_batch(
     Raises:
         ConfigurationError: ``qs`` has the wrong shape or non-finite values.
         ParameterError: Bad ``rows`` or ``engine``.
+
     """
     mdl = _model(model)
     names = _rows(mdl, rows)
@@ -742,7 +749,7 @@ class _FamilyFunctions:
         if fam.joint is not None and fam.value is not None:
             d = q[..., fam.joint] - fam.value
             return (d + np.pi) % (2 * np.pi) - np.pi if fam.periodic else d
-        return self.funcs[f](q)  # type: ignore[no-any-return]
+        return self.funcs[f](q)
 
 
 def _family_functions(deriv: Any) -> _FamilyFunctions:
@@ -784,6 +791,7 @@ class ScanResult:
         grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
         q_fixed: Values of the joints that were not scanned (n,).
         source: The model's name.
+
     """
 
     q: np.ndarray
@@ -819,7 +827,7 @@ class ScanResult:
         """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family)."""
         if self._family_funcs is None:
             raise ParameterError("family_residual: this scan has no family equations")
-        return self._family_funcs.residual(np.asarray(q, float), f)  # type: ignore[no-any-return]
+        return self._family_funcs.residual(np.asarray(q, float), f)
 
     def grid(self, name: str) -> np.ndarray:
         """A measure reshaped to :attr:`grid_shape` (grid scans only)."""
@@ -923,7 +931,7 @@ def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
 def _grid_points(
     model: Any, joints: tuple[int, ...], grid: Any, q_fixed: np.ndarray
 ) -> tuple[np.ndarray, tuple[int, ...]]:
-    counts = [grid] * len(joints) if np.isscalar(grid) else list(grid)
+    counts: list[Any] = [grid] * len(joints) if np.isscalar(grid) else list(grid)
     if len(counts) != len(joints):
         raise ParameterError(
             f"grid={grid!r}: one count or one per scanned joint ({len(joints)}) is required"
@@ -991,6 +999,7 @@ def scan(
     Raises:
         ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows.
         ConfigurationError: Bad ``q_fixed``.
+
     """
     mdl = _model(model)
     names = _rows(mdl, rows)
@@ -1021,7 +1030,7 @@ def scan(
         for start in range(0, n, max(int(chunk), 1)):
             stop = min(n, start + max(int(chunk), 1))
             measures_batch(
-                mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out)  # type: ignore[arg-type]
+                mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out)
             )
             if bar is not None:
                 bar.update(stop - start)
@@ -1093,6 +1102,7 @@ class WorkspaceResult:
         lower: Bounding-box corner (3,) in [m].
         upper: Bounding-box corner (3,) in [m].
         source: The model's name.
+
     """
 
     q: np.ndarray
@@ -1142,6 +1152,7 @@ def workspace(
 
     Raises:
         ParameterError: ``samples`` out of range or ``voxel`` not > 0.
+
     """
     mdl = _model(model)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
@@ -1185,6 +1196,7 @@ def cross_section(
 
     Raises:
         ParameterError: Unknown plane or bad thickness.
+
     """
     planes = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}
     if plane not in planes:

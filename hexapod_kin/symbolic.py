@@ -61,6 +61,7 @@ def row_indices(rows: str | Sequence[str] | None, nq: int | None = None) -> tupl
 
     Raises:
         ParameterError: Unknown or repeated row names, or an empty selection.
+
     """
     del nq
     if rows is None or rows == "position":
@@ -114,6 +115,7 @@ class SingularFamily:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
+
     """
 
     name: str
@@ -147,6 +149,7 @@ class Derivation:
         gram: ``det(J_rows J_rowsᵀ)`` (k ≤ n) or ``det(J_rowsᵀ J_rows)`` (k > n), factored —
             the squared Yoshikawa manipulability; equal to ``det²`` when square.
         families: The singular families read off :attr:`det` (or :attr:`gram`).
+
     """
 
     chain: Chain
@@ -180,6 +183,7 @@ class Derivation:
         Returns:
             ``f(Q)`` with ``Q`` of shape (n,) or (N, n); returns the expression's value(s)
             (scalar expressions give shape () or (N,); matrices (…, rows, cols)).
+
         """
         num = self.numeric(expr)
         is_matrix = isinstance(num, sp.MatrixBase)
@@ -347,6 +351,7 @@ def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[st
 
     Returns:
         Row names.
+
     """
     if isinstance(derivation_or_jacobian, Derivation):
         jd = derivation_or_jacobian.J_direct
@@ -361,7 +366,9 @@ def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[st
     return ("x", "y", "z")
 
 
-def _families(expr: sp.Expr, q: tuple[sp.Symbol, ...], sigmas: Sequence[str]) -> list[SingularFamily]:
+def _families(
+    expr: sp.Expr, q: tuple[sp.Symbol, ...], sigmas: Sequence[str]
+) -> list[SingularFamily]:
     _, factors = sp.factor_list(expr)
     fams: list[SingularFamily] = []
     seen: set[Any] = set()
@@ -424,6 +431,7 @@ def derive(
 
     Raises:
         ParameterError: The source has no table, or ``rows`` / ``lengths`` are invalid.
+
     """
     chain = _chain_of(source)
     n = chain.nq
@@ -448,7 +456,7 @@ def derive(
     p = acc[:3, 3]
     # direct method: joint frame j is the frame of its row
     cols = []
-    for k, j in enumerate(chain.joint_rows):
+    for j in chain.joint_rows:
         z = cumulative[j][:3, 2]
         o = cumulative[j][:3, 3]
         if chain.rows[j].sigma == "revolute":

@@ -56,7 +56,7 @@ def scara():
 )
 def test_kernel_equals_pinocchio(source, tip, rows):
     model = load(source, tip=tip)
-    names = tuple(ROW_NAMES[i] for i in range(6)) if rows == "all" else (rows or default_rows(model))
+    names = ROW_NAMES if rows == "all" else (rows or default_rows(model))
     qs = model.random_q(500, seed=7)
     det, manip, cond, smin = measures_batch(model, qs, rows)
     pdet, pmanip, smax, psmin = pin_measures(model, qs, names)
