@@ -696,9 +696,7 @@ def _build(
     cmds.append(_set_transform("/meshcat", _translate(list(-center))))
     # Camera: three.js y-up inside /Cameras/default/rotated; world offset (dx, dy, dz) is the
     # local position (dx, dz, -dy).
-    direction = np.array([1.0, -1.25, 0.75])
-    direction /= np.linalg.norm(direction)
-    d = 1.95 * radius * direction
+    d = _camera_offset(pts - center, rad, fov_deg=40.0, min_aspect=4 / 3)
     cam = "/Cameras/default/rotated/<object>"
     cmds.append(_set_property(cam, "position", [float(d[0]), float(d[2]), float(-d[1])]))
     cmds.append(_set_property(cam, "fov", 40.0))
@@ -779,6 +777,32 @@ def _build(
             "options": {"play": bool(play), "repetitions": math.inf if loop else 1},
         }
     return _Built(cmds, animation, center, radius, duration, float(motion.times[0]))
+
+
+def _camera_offset(
+    points: np.ndarray, radii: np.ndarray, *, fov_deg: float, min_aspect: float,
+    margin: float = 0.92,
+) -> np.ndarray:
+    """Camera position (relative to the scene centre) that fits every ball in the view.
+
+    The camera looks at the centre from the direction (1, −1.25, 0.75) (front-right, above);
+    its distance is the smallest one for which every ball (``points`` (M, 3) relative to the
+    centre, ``radii`` (M,)) projects inside ``margin`` of the vertical field of view
+    ``fov_deg`` and of the horizontal one for an aspect ratio of at least ``min_aspect``.
+    """
+    direction = np.array([1.0, -1.25, 0.75])
+    direction /= np.linalg.norm(direction)
+    right = np.cross(-direction, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -direction)
+    tan_v = math.tan(math.radians(fov_deg) / 2) * margin
+    tan_h = tan_v * min_aspect
+    depth = points @ direction + radii
+    need = np.maximum((np.abs(points @ up) + radii) / tan_v,
+                      (np.abs(points @ right) + radii) / tan_h) + depth
+    extent = float(np.max(np.linalg.norm(points, axis=1) + radii))
+    dist = max(float(need.max()), 1.2 * extent, 1e-3)
+    return dist * direction
 
 
 def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any]:
