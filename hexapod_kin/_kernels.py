@@ -181,20 +181,13 @@ def fk_jac_trig_into(
 ) -> None:  # pragma: no cover - compiled
     """As :func:`fk_jac_into`, with ``cq = cos(q)``, ``sq = sin(q)`` precomputed if ``use_trig``.
 
-    Precomputing the trigonometry with numpy's SIMD ``np.cos``/``np.sin`` over a whole batch
-    is several times faster than scalar libm calls inside the loop.
+    Lets a caller reuse trigonometry it already has (e.g. a grid scan with repeated angles).
     """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
     r10, r11, r12 = 0.0, 1.0, 0.0
     r20, r21, r22 = 0.0, 0.0, 1.0
     px, py, pz = 0.0, 0.0, 0.0
-    ox = scratch[0]
-    oy = scratch[1]
-    oz = scratch[2]
-    zx = scratch[3]
-    zy = scratch[4]
-    zz = scratch[5]
     for k in range(m):
         tx, ty, tz = trans[k, 0], trans[k, 1], trans[k, 2]
         px, py, pz = (
@@ -202,29 +195,32 @@ def fk_jac_trig_into(
             py + r10 * tx + r11 * ty + r12 * tz,
             pz + r20 * tx + r21 * ty + r22 * tz,
         )
-        a = rot[k]
         if not (
-            a[0, 0] == 1.0 and a[1, 1] == 1.0 and a[2, 2] == 1.0
-            and a[0, 1] == 0.0 and a[0, 2] == 0.0 and a[1, 0] == 0.0
-            and a[1, 2] == 0.0 and a[2, 0] == 0.0 and a[2, 1] == 0.0
+            rot[k, 0, 0] == 1.0 and rot[k, 1, 1] == 1.0 and rot[k, 2, 2] == 1.0
+            and rot[k, 0, 1] == 0.0 and rot[k, 0, 2] == 0.0 and rot[k, 1, 0] == 0.0
+            and rot[k, 1, 2] == 0.0 and rot[k, 2, 0] == 0.0 and rot[k, 2, 1] == 0.0
         ):
-            n00 = r00 * a[0, 0] + r01 * a[1, 0] + r02 * a[2, 0]
-            n01 = r00 * a[0, 1] + r01 * a[1, 1] + r02 * a[2, 1]
-            n02 = r00 * a[0, 2] + r01 * a[1, 2] + r02 * a[2, 2]
-            n10 = r10 * a[0, 0] + r11 * a[1, 0] + r12 * a[2, 0]
-            n11 = r10 * a[0, 1] + r11 * a[1, 1] + r12 * a[2, 1]
-            n12 = r10 * a[0, 2] + r11 * a[1, 2] + r12 * a[2, 2]
-            n20 = r20 * a[0, 0] + r21 * a[1, 0] + r22 * a[2, 0]
-            n21 = r20 * a[0, 1] + r21 * a[1, 1] + r22 * a[2, 1]
-            n22 = r20 * a[0, 2] + r21 * a[1, 2] + r22 * a[2, 2]
+            n00 = r00 * rot[k, 0, 0] + r01 * rot[k, 1, 0] + r02 * rot[k, 2, 0]
+            n01 = r00 * rot[k, 0, 1] + r01 * rot[k, 1, 1] + r02 * rot[k, 2, 1]
+            n02 = r00 * rot[k, 0, 2] + r01 * rot[k, 1, 2] + r02 * rot[k, 2, 2]
+            n10 = r10 * rot[k, 0, 0] + r11 * rot[k, 1, 0] + r12 * rot[k, 2, 0]
+            n11 = r10 * rot[k, 0, 1] + r11 * rot[k, 1, 1] + r12 * rot[k, 2, 1]
+            n12 = r10 * rot[k, 0, 2] + r11 * rot[k, 1, 2] + r12 * rot[k, 2, 2]
+            n20 = r20 * rot[k, 0, 0] + r21 * rot[k, 1, 0] + r22 * rot[k, 2, 0]
+            n21 = r20 * rot[k, 0, 1] + r21 * rot[k, 1, 1] + r22 * rot[k, 2, 1]
+            n22 = r20 * rot[k, 0, 2] + r21 * rot[k, 1, 2] + r22 * rot[k, 2, 2]
             r00, r01, r02, r10, r11, r12 = n00, n01, n02, n10, n11, n12
             r20, r21, r22 = n20, n21, n22
         ux, uy, uz = axis[k, 0], axis[k, 1], axis[k, 2]
         wx = r00 * ux + r01 * uy + r02 * uz
         wy = r10 * ux + r11 * uy + r12 * uz
         wz = r20 * ux + r21 * uy + r22 * uz
-        ox[k], oy[k], oz[k] = px, py, pz
-        zx[k], zy[k], zz[k] = wx, wy, wz
+        scratch[0, k] = px
+        scratch[1, k] = py
+        scratch[2, k] = pz
+        scratch[3, k] = wx
+        scratch[4, k] = wy
+        scratch[5, k] = wz
         qk = q[col[k]]
         if kind[k] == 1:
             px, py, pz = px + wx * qk, py + wy * qk, pz + wz * qk
@@ -281,18 +277,18 @@ def fk_jac_trig_into(
     for k in range(m):
         j = col[k]
         if kind[k] == 1:
-            out_j[0, j] += zx[k]
-            out_j[1, j] += zy[k]
-            out_j[2, j] += zz[k]
+            out_j[0, j] += scratch[3, k]
+            out_j[1, j] += scratch[4, k]
+            out_j[2, j] += scratch[5, k]
         else:
-            dx, dy, dz = px - ox[k], py - oy[k], pz - oz[k]
-            out_j[0, j] += zy[k] * dz - zz[k] * dy
-            out_j[1, j] += zz[k] * dx - zx[k] * dz
-            out_j[2, j] += zx[k] * dy - zy[k] * dx
+            dx, dy, dz = px - scratch[0, k], py - scratch[1, k], pz - scratch[2, k]
+            out_j[0, j] += scratch[4, k] * dz - scratch[5, k] * dy
+            out_j[1, j] += scratch[5, k] * dx - scratch[3, k] * dz
+            out_j[2, j] += scratch[3, k] * dy - scratch[4, k] * dx
             if ang:
-                out_j[3, j] += zx[k]
-                out_j[4, j] += zy[k]
-                out_j[5, j] += zz[k]
+                out_j[3, j] += scratch[3, k]
+                out_j[4, j] += scratch[4, k]
+                out_j[5, j] += scratch[5, k]
 
 
 @njit(cache=True, parallel=True, nogil=True)
