@@ -1539,6 +1539,8 @@ class Viewer:
         self.model = model
         self._server = MeshcatServer(start_timeout)
         self._client: _Client | None = None
+        self._animated = False
+        self._triads: tuple[str, ...] = ()
         try:
             self._client = _Client(self._server, timeout)
             self._scene = _Scene(model)
@@ -1586,19 +1588,23 @@ class Viewer:
               **kwargs: Any) -> None:
         if times is None:
             times = np.arange(len(qs), dtype=float)
-        for part in ("trace", "frames", "singular"):
-            self.send(_delete(f"/meshcat/{part}"))
+        triads = kwargs.get("frame_triads", False)
         built = _build_for(self.model, times, qs, base, kwargs.get("trace_frame", False),
-                           kwargs.get("frame_triads", False), kwargs.get("singular_mask"),
-                           kwargs.get("fps"), kwargs.get("play", True), kwargs.get("loop", True),
-                           scene=self._scene)
+                           triads, kwargs.get("singular_mask"), kwargs.get("fps"),
+                           kwargs.get("play", True), kwargs.get("loop", True), scene=self._scene)
+        for part in ("trace", "frames", "singular"):  # after the checks: a bad call keeps them
+            self.send(_delete(f"/meshcat/{part}"))
         for cmd in built.static:
             self.send(cmd)
+        self._triads = _triad_frames(self.model, triads)
         if animate and built.animation is not None:
             self.send(built.animation)
+            self._animated = True
 
     def display(self, q: Any, base_pose: Any = None) -> None:
         """Show the model at configuration ``q`` (nq,) (and root pose ``base_pose`` (4, 4)).
+
+        A running animation is stopped; the frame triads, if shown, follow the pose.
 
         Raises:
             ConfigurationError: Bad ``q`` or ``base_pose``.
@@ -1608,8 +1614,16 @@ class Viewer:
         qv = self.model.check_q(q)
         base = _check_base_poses(base_pose, 1)
         poses = self._scene.placements(qv[None, :], base)
+        if self._animated:  # an empty animation clears meshcat's player
+            self.send({"type": "set_animation", "path": "", "animations": [],
+                       "options": {"play": False}})
+            self._animated = False
         for j, vis in enumerate(self._scene.visuals):
             self.send(_set_transform(vis.path, poses[0, j]))
+        if self._triads:
+            frames = self._scene.frame_poses(qv[None, :], base, self._triads)
+            for k in range(len(self._triads)):
+                self.send(_set_transform(f"/meshcat/frames/{k}", frames[0, k]))
 
     def animate(
         self,

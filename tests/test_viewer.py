@@ -535,6 +535,32 @@ def test_viewer_rejects_bad_arguments():
         with pytest.raises(ConfigurationError):
             v.display([0.0, 0.0])
         v.animate(*_step_trajectory(leg, 11), frame_triads=True)  # accepted by the server
+        with pytest.raises(ConfigurationError, match="increase"):
+            v.animate([1.0, 0.0], np.zeros((2, 3)))
+
+
+def test_live_display_reaches_the_server_tree():
+    """The server's scene tree (meshcat's get_scene) holds the pose of the table FK."""
+    leg = load("hexabot_leg")
+    q = np.array([0.4, 0.2, 1.1])
+    with viewer.Viewer(leg) as v:
+        v.animate(*_step_trajectory(leg, 11), frame_triads=True)
+        v.display(q)
+        page = v._client.request([b"get_scene"]).decode("utf-8")
+    blobs = re.findall(r"octet-binary;base64,([A-Za-z0-9+/=]+)", page)
+    cmds = [umsgpack.unpackb(base64.b64decode(b)) for b in blobs]
+    last = {}
+    for c in cmds:
+        if c["type"] in ("set_transform", "set_animation"):
+            last[(c["type"], c["path"])] = c
+    ref = table_fk(robots.hexabot_leg(), q)
+    foot = [k for k in last if k[0] == "set_transform" and k[1].startswith("/meshcat/robot/foot")]
+    assert len(foot) == 1
+    T = np.array(last[foot[0]]["matrix"]).reshape(4, 4).T
+    np.testing.assert_allclose(T[:3, 3], ref[:3, 3], atol=1e-12)
+    T4 = np.array(last[("set_transform", "/meshcat/frames/4")]["matrix"]).reshape(4, 4).T
+    np.testing.assert_allclose(T4, ref, atol=1e-12)  # the foot triad follows display()
+    assert last[("set_animation", "")]["animations"] == []  # display() stopped the animation
 
 
 # ====================================================================== command line
