@@ -12,19 +12,27 @@ Checks, in order (the first failure is raised):
 2. **Strict XML**: parsed by lxml with no recovery, no DTD loading, no entity expansion, no
    network; any ``DOCTYPE`` or ``ENTITY`` declaration is refused (billion laughs, XXE); the
    document must be UTF-8 (or ASCII); nesting deeper than libxml2's default limit (256) fails.
-3. **Structure**: root ``<robot name=...>``; at least one ``<link>``; at most
-   :data:`MAX_LINKS` links (Pinocchio segfaults at about 4,000; the cap also bounds the tree
-   depth) and at most :data:`MAX_DOF` degrees of freedom (Pinocchio's ``Data`` needs about
-   64·nv³ bytes; 1,000 DoF exhaust memory); non-empty, unique link and joint names (``universe`` is reserved by Pinocchio);
-   each joint has a known ``type``, one ``<parent link>`` and one ``<child link>`` naming
-   existing, distinct links; each link is the child of at most one joint; exactly one root
-   link; every link reachable from the root (so no cycles); ``<mimic joint>`` names an
-   existing other joint.
+3. **Structure**: root ``<robot name=...>`` (``version``, when given, 1.0 to 1.2); at least
+   one ``<link>``; at most :data:`MAX_LINKS` links (Pinocchio segfaults at about 4,000; the
+   cap also bounds the tree depth) and at most :data:`MAX_DOF` degrees of freedom
+   (Pinocchio's ``Data`` needs about 64·nv³ bytes; 1,000 DoF exhaust memory); non-empty,
+   unique link and joint names (``universe`` is reserved by Pinocchio); each joint has a
+   known ``type``, one ``<parent link>`` and one ``<child link>`` naming existing, distinct
+   links; each link is the child of at most one joint; exactly one root link; every link
+   reachable from the root (so no cycles); ``<mimic joint>`` names an existing other joint.
 4. **Numbers**: every numeric attribute the URDF spec defines (``origin`` xyz/rpy, ``axis``,
    ``limit``, ``dynamics``, ``safety_controller``, ``calibration``, ``mimic``, ``mass``,
    ``inertia``, ``box``/``cylinder``/``sphere`` sizes, mesh ``scale``, colour ``rgba``) has
-   the right count of plain decimal numbers (no ``nan``, ``inf``, hex or ``1_0``) that are
-   finite; geometry sizes are >= 0.
+   the right count of plain decimal numbers (no ``nan``, ``inf``, hex or ``1_0``; a scalar
+   without surrounding spaces, which urdfdom silently reads as 0) that are finite and at
+   most :data:`MAX_ABS` (:data:`MAX_ABS_LIMIT` for limits) in magnitude (huge values
+   overflow inside Pinocchio); geometry sizes, masses, ``effort``, ``velocity``,
+   ``damping`` and ``friction`` are >= 0. Materials and geometry: top-level materials named
+   and unique (Pinocchio refuses duplicates); every ``<color rgba>`` four numbers in
+   [0, 1]; a visual's ``<material>`` has a ``name`` attribute (undefined or empty names are
+   cosmetic and accepted); each ``<visual>``/``<collision>`` has one ``<geometry>`` with
+   exactly one URDF shape (box, cylinder, sphere, mesh) and its required attributes
+   (urdfdom only prints an error for these and silently drops the element).
 5. **Joints**: the axis has a non-zero length (Pinocchio normalises it); ``revolute`` and
    ``prismatic`` joints need ``<limit>`` with ``effort`` and ``velocity`` (the URDF spec makes
    them required; ``lower``/``upper`` default to 0 as in the spec); ``lower <= upper``;
@@ -65,6 +73,8 @@ __all__ = [
     "MAX_URDF_BYTES",
     "MAX_LINKS",
     "MAX_DOF",
+    "MAX_ABS",
+    "MAX_ABS_LIMIT",
     "MAX_MESH_BYTES",
     "TRIANGLE_RTOL",
     "JOINT_TYPES",
@@ -79,6 +89,14 @@ MAX_URDF_BYTES = 20 * 1024 * 1024
 #: 1,000 leaves a wide margin and still covers every robot of example-robot-data. Since a tree
 #: of N links has depth at most N, this is also the depth cap.
 MAX_LINKS = 1000
+#: Largest magnitude of any number (SI units). Finite but huge values overflow inside
+#: Pinocchio (an inertial origin of 1e308 m makes the merged inertia infinite), so the gate
+#: caps them; 1e9 (m, kg, N, rad/s ...) is far beyond any robot.
+MAX_ABS = 1e9
+#: The same for ``<limit>``, ``<safety_controller>``, ``<dynamics>``, ``<calibration>`` and
+#: ``<mimic>``, where values such as ±1e16 are a common way to write "unbounded".
+MAX_ABS_LIMIT = 1e20
+_LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
 #: Most degrees of freedom accepted. Pinocchio's ``Data`` grows as about 64·nv³ bytes
 #: (measured with pin 4.1: 0.2 GB at nv = 129, 4 GB at nv = 400; a 1,000-DoF chain exhausts
 #: memory and gets killed), so 128 DoF keeps a model under about 0.2 GB. The largest robot of
@@ -107,7 +125,11 @@ _WS = r"[ \t\r\n]"
 _PATTERNS = {n: re.compile(f"{_WS}*" + f"{_WS}+".join([_NUM] * n) + f"{_WS}*$") for n in (3, 4)}
 _PATTERNS[1] = re.compile(f"{_NUM}$")
 _CHECKED_TOP = ("link", "joint", "material")
-_BIG_EXP = re.compile(r"[eE]\+?0*[1-9]\d{2}")  # |exponent| >= 100: may overflow to inf
+_VERSION = re.compile(r"^1\.[0-2]$")
+#: URDF shapes and their required attributes.
+_SHAPES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",),
+           "mesh": ("filename",)}
+_BIG = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
 _NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
 _SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
 _RESERVED = {"universe"}
@@ -135,7 +157,6 @@ _NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "box": {"size": (3, 0.0)},
     "cylinder": {"radius": (1, 0.0), "length": (1, 0.0)},
     "sphere": {"radius": (1, 0.0)},
-    "capsule": {"radius": (1, 0.0), "length": (1, 0.0)},
     "mesh": {"scale": (3, None)},
     "color": {"rgba": (4, None)},
 }
@@ -153,6 +174,7 @@ class GateResult:
         joints: Joint names, in document order.
         root_link: Name of the root link.
         meshes: The resolved mesh and texture files, as ``(uri, path)`` pairs in document order.
+
     """
 
     root: etree._Element
@@ -199,6 +221,10 @@ def _numbers(el: etree._Element, attr: str, count: int, minimum: float | None) -
         x = float(p)
         if not math.isfinite(x):
             raise _error(el, attr, raw, "numbers must be finite")
+        cap = MAX_ABS_LIMIT if el.tag in _LIMIT_TAGS else MAX_ABS
+        if abs(x) > cap:
+            raise _error(el, attr, raw, f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); "
+                         "numbers are SI values of a robot")
         if minimum is not None and x < minimum:
             raise _error(el, attr, raw, f"must be >= {minimum:g}")
         out.append(x)
@@ -216,14 +242,14 @@ def _check_numbers(root: etree._Element) -> None:
         if top.tag not in _CHECKED_TOP:
             continue
         for node in top.iter(*numeric):
-            spec = numeric[node.tag]  # type: ignore[index]
+            spec = numeric[node.tag]
             for attr, raw in node.items():
                 kind = spec.get(attr)
                 if kind is None:
                     continue
                 if (
                     not patterns[kind[0]].match(raw)
-                    or (("e" in raw or "E" in raw) and _BIG_EXP.search(raw))
+                    or _BIG.search(raw)
                     or (kind[1] is not None and _NEGATIVE.search(raw))
                 ):
                     _numbers(node, attr, kind[0], kind[1])
@@ -346,7 +372,7 @@ class _Inertial:
         return com, rot @ mat @ rot.T
 
 
-_NO_INERTIAL = _Inertial(0.0, (0.0,) * 6, (0.0, 0.0, 0.0), None)  # type: ignore[arg-type]
+_NO_INERTIAL = _Inertial(0.0, (0.0,) * 6, (0.0, 0.0, 0.0), None)
 
 
 def _definite(eig: Sequence[float]) -> bool:
@@ -423,7 +449,7 @@ def _check_moving_body(
         pose: dict[str, tuple[np.ndarray, np.ndarray]] = {child: (np.eye(3), np.zeros(3))}
         for name, joint in members[1:]:
             assert joint is not None
-            rot_p, pos_p = pose[joint.find("parent").get("link")]  # type: ignore[union-attr,index]
+            rot_p, pos_p = pose[joint.find("parent").get("link")]
             r_j, p_j = _origin(joint)
             pose[name] = (rot_p @ r_j, rot_p @ p_j + pos_p)
         coms, mats, masses = [], [], []
@@ -507,6 +533,7 @@ def resolve_mesh(
     Raises:
         UrdfError: Refused scheme or absolute path, an escape out of the root, a missing,
             non-regular or too large file. (The caller adds the element and line.)
+
     """
     if not uri or not uri.strip():
         raise UrdfError("empty file name")
@@ -587,6 +614,7 @@ def check_urdf(
 
     Raises:
         UrdfError: Naming the element, attribute, value and line of the problem.
+
     """
     if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS:
         cached = _CACHE.get(text)
@@ -623,7 +651,11 @@ def _check(
             f"URDF <robot> has {len(links)} links; the cap is {MAX_LINKS} (Pinocchio crashes on "
             "very long chains)"
         )
+    version = root.get("version")
+    if version is not None and not _VERSION.match(version):
+        raise _error(root, "version", version, "URDF version must be 1.0, 1.1 or 1.2")
     _check_numbers(root)
+    _check_materials_and_geometry(root)
 
     link_el: dict[str, etree._Element] = {}
     for link in links:
@@ -663,7 +695,7 @@ def _check(
         children[parent].append(child)
         _check_joint(joint, jtype)
 
-    dof = sum(_JOINT_DOF[j.get("type")] for j in joint_el.values())  # type: ignore[index]
+    dof = sum(_JOINT_DOF[j.get("type")] for j in joint_el.values())
     if dof > MAX_DOF:
         raise UrdfError(
             f"URDF has {dof} degrees of freedom; the cap is {MAX_DOF} (Pinocchio's Data grows as "
@@ -703,7 +735,7 @@ def _check(
     for child, jname in parent_of.items():
         joint = joint_el[jname]
         if joint.get("type") == "fixed":
-            fixed_children[joint.find("parent").get("link")].append(  # type: ignore[union-attr]
+            fixed_children[joint.find("parent").get("link")].append(
                 (child, joint)
             )
     for child, jname in parent_of.items():
@@ -731,13 +763,62 @@ def _check(
     )
 
 
+def _check_rgba(color: etree._Element) -> None:
+    rgba = _numbers(color, "rgba", 4, None)
+    if not rgba:
+        raise _error(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
+    if not all(0.0 <= c <= 1.0 for c in rgba):
+        raise _error(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
+
+
+def _check_materials_and_geometry(root: etree._Element) -> None:
+    """Materials (named, unique, colours in [0, 1]) and visual/collision geometry."""
+    defined: dict[str, etree._Element] = {}
+    for mat in root.findall("material"):
+        name = mat.get("name")
+        if name is None or not name.strip():
+            raise _error(mat, "name", name, "every <material> needs a non-empty name")
+        if name in defined:
+            raise _error(mat, "name", name, f"duplicate material name (first at line "
+                         f"{defined[name].sourceline}); material names must be unique")
+        defined[name] = mat
+        color = _single(mat, "color", required=False)
+        if color is not None:
+            _check_rgba(color)
+    for link in root.findall("link"):
+        for part in ("visual", "collision"):
+            for el in link.findall(part):
+                _single(el, "origin", required=False)
+                geometry = _single(el, "geometry", required=True)
+                assert geometry is not None
+                shapes = [c for c in geometry if isinstance(c.tag, str)]
+                if len(shapes) != 1:
+                    raise _error(geometry, None, None, f"<geometry> must hold exactly one shape "
+                                 f"({', '.join(_SHAPES)}), found {len(shapes)}")
+                shape = shapes[0]
+                if shape.tag not in _SHAPES:
+                    raise _error(shape, None, None, f"unknown shape <{shape.tag}>; URDF shapes "
+                                 f"are {', '.join(_SHAPES)}")
+                for attr in _SHAPES[shape.tag]:
+                    if shape.get(attr) is None:
+                        raise _error(shape, attr, None, f"<{shape.tag} {attr}> is required")
+                mat = _single(el, "material", required=False) if part == "visual" else None
+                if mat is None:
+                    continue
+                if mat.get("name") is None:  # urdfdom drops the visual; "" is accepted
+                    raise _error(mat, "name", None, "a visual <material> needs a name attribute")
+                color = _single(mat, "color", required=False)
+                if color is not None:
+                    _check_rgba(color)
+
+
 def _check_joint(joint: etree._Element, jtype: str) -> None:
     seen: set[str] = set()
     for sub in joint:
         tag = sub.tag
         if tag in seen and tag in _JOINT_CHILDREN:
             raise _error(sub, None, None, f"<{tag}> given more than once; at most once")
-        seen.add(tag)  # type: ignore[arg-type]
+        seen.add(tag)
     axis = joint.find("axis")
     if axis is not None and jtype not in ("fixed", "floating"):
         xyz = _numbers(axis, "xyz", 3, None)

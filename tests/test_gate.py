@@ -81,6 +81,15 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "number_nan_rgba": ("UrdfError", "<material name=\"grey\"> <color> rgba='0.5 NaN 0.5 1'",
                         'rgba="0.5 NaN'),
     "number_empty_value": ("UrdfError", "value='': '' is not a decimal number", 'value=""'),
+    "number_huge_inertial_origin": ("UrdfError", "|-1e308| exceeds 1e+09", "-1e308"),
+    # materials and geometry
+    "material_duplicate": ("UrdfError", "duplicate material name (first at line 4)",
+                           '<material name="grey"><color rgba="1 1 1 1"/>'),
+    "material_rgba_out_of_range": ("UrdfError", "colour components must be in [0, 1]",
+                                   'rgba="1.5'),
+    "geometry_cylinder_no_length": ("UrdfError", "<cylinder length> is required", "<cylinder"),
+    "geometry_two_shapes": ("UrdfError", "exactly one shape", "<geometry>"),
+    "robot_bad_version": ("UrdfError", "version must be 1.0, 1.1 or 1.2", "<robot name"),
     # joints
     "joint_zero_axis": ("UrdfError", "xyz='0 0 0': joint axis has zero length",
                         '<axis xyz="0 0 0"'),
@@ -120,7 +129,10 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
 }
 
 
-def _run(paths: list[Path], timeout: float = 120.0) -> tuple[dict[str, dict], subprocess.CompletedProcess]:
+_Results = tuple[dict[str, dict], subprocess.CompletedProcess]
+
+
+def _run(paths: list[Path], timeout: float = 120.0) -> _Results:
     """Load ``paths`` in one child process; map case stem -> result line."""
     proc = subprocess.run(
         [sys.executable, str(RUNNER), *map(str, paths)],
@@ -142,7 +154,7 @@ def _lost(proc: subprocess.CompletedProcess) -> str:
 
 
 @pytest.fixture(scope="module")
-def corpus_results() -> tuple[dict[str, dict], subprocess.CompletedProcess]:
+def corpus_results() -> _Results:
     return _run(sorted(CORPUS.glob("*.urdf")))
 
 
@@ -153,7 +165,7 @@ def test_corpus_lists_every_file() -> None:
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-def test_corpus_case(case: str, corpus_results: tuple[dict[str, dict], subprocess.CompletedProcess]) -> None:
+def test_corpus_case(case: str, corpus_results: _Results) -> None:
     results, proc = corpus_results
     assert case in results, f"case {case} lost (crash?): {_lost(proc)}"
     rec = results[case]
@@ -169,7 +181,7 @@ def test_corpus_case(case: str, corpus_results: tuple[dict[str, dict], subproces
         assert f"line {line}:" in rec["message"], (line, rec["message"])
 
 
-def test_corpus_child_exits_cleanly(corpus_results: tuple[dict[str, dict], subprocess.CompletedProcess]) -> None:
+def test_corpus_child_exits_cleanly(corpus_results: _Results) -> None:
     results, proc = corpus_results
     assert proc.returncode == 0, _lost(proc)
     assert len(results) == len(CASES)
