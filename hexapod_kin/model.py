@@ -302,6 +302,20 @@ class Model:
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = _path_frames(m, self.base_id, self.tip_id)
 
+    _FROZEN = frozenset({"model", "data", "full_model", "urdf", "source", "base", "tip"})
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        # Model and Data are created together here and never re-paired: once set, these
+        # attributes are read-only (reads stay plain attribute lookups on the hot path).
+        if key in self._FROZEN and key in self.__dict__:
+            from .exceptions import ParameterError
+
+            raise ParameterError(
+                f"{key!r} of a hexapod_kin Model is read-only (the Pinocchio Model and Data are "
+                "kept together); load a new model instead"
+            )
+        object.__setattr__(self, key, value)
+
     # -------------------------------------------------------------- names and checks
     @property
     def name(self) -> str:

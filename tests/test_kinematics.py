@@ -211,3 +211,15 @@ def test_chain_from_rows_names_the_row():
         chain_from_rows([(0, 0, 0, 0, 0), (0, 0, float("nan"), 0, 0)])
     with pytest.raises(ParameterError, match=r"row 1: 4 values"):
         chain_from_rows([(0, 0, 0, 0)])
+
+
+def test_model_and_data_cannot_be_repaired(preset_models):
+    import pinocchio as pin
+
+    model = preset_models["hexabot_leg"]
+    other = hk.load("scara")
+    with pytest.raises(ParameterError, match="read-only"):
+        model.data = other.data
+    with pytest.raises(ParameterError, match="read-only"):
+        model.model = other.model
+    assert isinstance(model.data, pin.Data) and model.data.oMi.__len__() == model.model.njoints
