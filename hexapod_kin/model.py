@@ -163,6 +163,11 @@ def resolve_source(source: Any, **params: Any) -> ResolvedSource:
             "a preset name, a URDF path, URDF text or 'erd:NAME'"
         )
     text = source.strip()
+    if not text:
+        raise SourceError(
+            f"source={source!r} is empty; give a preset name ({choices(robots.names())}), a URDF "
+            "path, URDF text or 'erd:NAME'"
+        )
     if text.startswith("<"):
         return ResolvedSource(source, "urdf-text")
     if params and text not in robots.PRESETS:

@@ -77,6 +77,7 @@ def test_urdf_export_atomic(tmp_path, capsys):
         (["urdf", "hexabot_leg", "--set", "l1"], "NAME=VALUE"),
         (["urdf", "hexabot_leg", "--set", "l1=-2"], "l1=-2"),
         (["fk", "erd:nope"], "example-robot-data has"),
+        (["fk", ""], "is empty"),
     ],
 )
 def test_errors_are_one_line_and_exit_2(capsys, argv, fragment):
