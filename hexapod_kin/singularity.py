@@ -269,83 +269,85 @@ def _reduce_one(
     return det, manip, cond, smin
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _top_eigs3(
-    g00: float, g01: float, g02: float, g11: float, g12: float, g22: float, det_g: float
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``(λmax, λmin)`` of a symmetric PSD 3×3 matrix ``G`` with known ``det_g`` (closed form).
+# Cody–Waite split of π/2 (two 33-bit pieces and a tail) and the fdlibm minimax kernels of
+# sin / cos on [−π/4, π/4]: |error| ≤ 1 ulp for |x| ≤ _POLY_TRIG_MAX, no calls, so the
+# per-joint loops below vectorise (SIMD); larger angles use libm.
+_PIO2_1 = 1.57079632673412561417e00
+_PIO2_2 = 6.07710050630396597660e-11
+_PIO2_2T = 2.02226624879595063154e-21
+_INVPIO2 = 6.36619772367581382433e-01
+_POLY_TRIG_MAX = 1.0e5
+_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
+_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
+_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
+_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
+#: Jacobi sweeps stop when every off-diagonal sum of a block is below this × its trace.
+_JACOBI_TOL = 1e-15
+_JACOBI_MAX_SWEEPS = 12
 
-    ``λ1`` from the trigonometric formula (accurate: ``φ → 0`` when the two smallest
-    coincide); then ``G`` is deflated onto the plane orthogonal to ``λ1``'s eigenvector, whose
-    2×2 eigenvalues follow without cancellation (``rad = sqrt(((a−d)/2)² + b²)``), and
-    ``λ3 = det_g / (λ1 λ2)`` keeps full relative accuracy when ``λ3 → 0``.
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``(sin x, cos x)`` without libm calls (branch-free quadrant selection)."""
+    n = math.floor(x * _INVPIO2 + 0.5)
+    r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_2T
+    z = r * r
+    s = r + (z * r) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
+    cr = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+    hz = 0.5 * z
+    w = 1.0 - hz
+    c = w + (((1.0 - w) - hz) + z * cr)
+    quad = int(n) & 3
+    swap = quad & 1
+    sgn_s = 1.0 - 2.0 * ((quad >> 1) & 1)
+    sgn_c = 1.0 - 2.0 * (((quad + 1) >> 1) & 1)
+    ss = c if swap else s
+    cc = s if swap else c
+    return ss * sgn_s, cc * sgn_c
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_rot(
+    app: float, aqq: float, apq: float, arp: float, arq: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``."""
+    tau = 0.5 * (aqq - app)
+    rad = math.sqrt(tau * tau + apq * apq)
+    den = tau + rad if tau >= 0.0 else tau - rad
+    den = den if den != 0.0 else 1.0
+    t = apq / den
+    c = 1.0 / math.sqrt(1.0 + t * t)
+    s = t * c
+    return app - t * apq, aqq + t * apq, c * arp - s * arq, s * arp + c * arq
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _eig3_block(gb: np.ndarray, nb: int) -> None:  # pragma: no cover - compiled
+    """Diagonalise ``nb`` symmetric 3×3 matrices in place by cyclic Jacobi (SIMD over the block).
+
+    ``gb`` is (6, B): rows ``g00, g01, g02, g11, g12, g22``. Sweeps (three rotations each)
+    are repeated over the whole block until every matrix has
+    ``|g01| + |g02| + |g12| ≤ _JACOBI_TOL · trace`` (Weyl: the diagonal then holds the
+    eigenvalues to that absolute accuracy). Jacobi is backward stable for any eigenvalue
+    clustering, unlike the characteristic-polynomial / trigonometric closed forms.
     """
-    p1 = g01 * g01 + g02 * g02 + g12 * g12
-    c2 = g00 + g11 + g22
-    qm = c2 / 3.0
-    b00, b11, b22 = g00 - qm, g11 - qm, g22 - qm
-    p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1
-    if p2 <= 0.0:
-        return qm, qm
-    p = math.sqrt(p2 / 6.0)
-    detb = (
-        b00 * (b11 * b22 - g12 * g12)
-        - g01 * (g01 * b22 - g12 * g02)
-        + g02 * (g01 * g12 - b11 * g02)
-    )
-    r = 0.5 * detb / (p * p * p)
-    if r <= -1.0:
-        cphi = 0.5
-    elif r >= 1.0:
-        cphi = 1.0
-    else:
-        cphi = math.cos(math.acos(r) / 3.0)
-    l1 = qm + 2.0 * p * cphi
-    # eigenvector of l1: the largest cross product of two rows of G - l1 I
-    h00, h11, h22 = g00 - l1, g11 - l1, g22 - l1
-    ax, ay, az = g01 * g12 - g02 * h11, g02 * g01 - h00 * g12, h00 * h11 - g01 * g01
-    bx, by, bz = g01 * h22 - g02 * g12, g02 * g02 - h00 * h22, h00 * g12 - g01 * g02
-    cx, cy, cz = h11 * h22 - g12 * g12, g12 * g02 - g01 * h22, g01 * g12 - h11 * g02
-    na = ax * ax + ay * ay + az * az
-    nb = bx * bx + by * by + bz * bz
-    nc = cx * cx + cy * cy + cz * cz
-    if na >= nb and na >= nc:
-        vx, vy, vz, nv = ax, ay, az, na
-    elif nb >= nc:
-        vx, vy, vz, nv = bx, by, bz, nb
-    else:
-        vx, vy, vz, nv = cx, cy, cz, nc
-    if nv <= 0.0:
-        return l1, (det_g / (l1 * l1) if l1 > 0.0 else 0.0)
-    inv = 1.0 / math.sqrt(nv)
-    vx, vy, vz = vx * inv, vy * inv, vz * inv
-    # orthonormal u, w spanning the complement of v
-    if abs(vx) <= abs(vy) and abs(vx) <= abs(vz):
-        ux, uy, uz = 0.0, vz, -vy
-    elif abs(vy) <= abs(vz):
-        ux, uy, uz = -vz, 0.0, vx
-    else:
-        ux, uy, uz = vy, -vx, 0.0
-    inv = 1.0 / math.sqrt(ux * ux + uy * uy + uz * uz)
-    ux, uy, uz = ux * inv, uy * inv, uz * inv
-    wx, wy, wz = vy * uz - vz * uy, vz * ux - vx * uz, vx * uy - vy * ux
-    gux = g00 * ux + g01 * uy + g02 * uz
-    guy = g01 * ux + g11 * uy + g12 * uz
-    guz = g02 * ux + g12 * uy + g22 * uz
-    gwx = g00 * wx + g01 * wy + g02 * wz
-    gwy = g01 * wx + g11 * wy + g12 * wz
-    gwz = g02 * wx + g12 * wy + g22 * wz
-    a = ux * gux + uy * guy + uz * guz
-    b = wx * gux + wy * guy + wz * guz
-    d = wx * gwx + wy * gwy + wz * gwz
-    half = 0.5 * (a - d)
-    l2 = 0.5 * (a + d) + math.sqrt(half * half + b * b)
-    if l1 <= 0.0 or l2 <= 0.0:
-        return l1, 0.0
-    return l1, det_g / (l1 * l2)
+    for _sweep in range(_JACOBI_MAX_SWEEPS):
+        worst = 0.0
+        for i in range(nb):
+            a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
+            a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
+            a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
+            a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
+            a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
+            gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
+            gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
+            excess = abs(a01) + abs(a02) - _JACOBI_TOL * (a00 + a11 + a22)
+            worst = max(worst, excess)
+        if worst <= 0.0:
+            return
 
 
-@njit(cache=True, parallel=True, nogil=True)
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def _measures_kernel(
     prot: np.ndarray,
     ptr: np.ndarray,
@@ -354,6 +356,10 @@ def _measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
+    skip0: bool,
+    poly: bool,
+    nwork: int,
+    block: int,
     out_det: np.ndarray,
     out_manip: np.ndarray,
     out_cond: np.ndarray,
@@ -363,8 +369,14 @@ def _measures_kernel(
 
     The chain is given with every joint axis aligned to its frame's z (see
     :func:`_aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or ``Tz(q)``;
-    ``ptr[m]`` is the tip offset. No array views are created in the loop (their reference
-    counts would make the threads contend).
+    ``ptr[m]`` is the tip offset. Work is split into ``nwork`` contiguous ranges (one per
+    thread, scratch allocated once each), processed in blocks of ``block`` configurations
+    stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
+    and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
+    see :func:`_first_joint_invariant`). ``poly``: sin / cos by :func:`_sincos` (all
+    ``|q| ≤ _POLY_TRIG_MAX``) rather than libm. Square 3×3 ``J``: ``G = J Jᵀ`` is diagonalised
+    by :func:`_eig3_block`, ``λmin = det(J)² / (λ1 λ2)`` keeps relative accuracy near a
+    singularity; other shapes go through :func:`_reduce_one` per configuration.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -373,109 +385,147 @@ def _measures_kernel(
     mm = k if k <= nq else nq
     big = k if k > nq else nq
     fast3 = k == 3 and nq == 3
-    chunk = 2048
-    nchunks = (nconf + chunk - 1) // chunk
-    for c in prange(nchunks):
-        buf = np.empty((6, max(m, 1)))
+    bsz = block
+    nblocks = (nconf + bsz - 1) // bsz
+    per = (nblocks + nwork - 1) // nwork
+    for w in prange(nwork):
+        rr = np.empty((9, bsz))
+        pp = np.empty((3, bsz))
+        frames = np.empty((max(m, 1), 6, bsz))
+        trig = np.empty((2, bsz))
+        jb = np.empty((k, nq, bsz))
+        gb = np.empty((6, bsz))
         js = np.empty((k, nq))
         g = np.empty((mm, mm))
         work = np.empty((big, big))
         lam = np.empty(mm)
-        cv = np.empty(6)
-        start = c * chunk
-        stop = min(nconf, start + chunk)
-        for i in range(start, stop):
-            r00, r01, r02 = 1.0, 0.0, 0.0
-            r10, r11, r12 = 0.0, 1.0, 0.0
-            r20, r21, r22 = 0.0, 0.0, 1.0
-            px, py, pz = 0.0, 0.0, 0.0
+        for blk in range(w * per, min(nblocks, (w + 1) * per)):
+            start = blk * bsz
+            nb = min(nconf, start + bsz) - start
             for j in range(m):
-                tx, ty, tz = ptr[j, 0], ptr[j, 1], ptr[j, 2]
-                px += r00 * tx + r01 * ty + r02 * tz
-                py += r10 * tx + r11 * ty + r12 * tz
-                pz += r20 * tx + r21 * ty + r22 * tz
-                if pident[j] == 0:
-                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
-                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
-                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
-                    n00 = r00 * a00 + r01 * a10 + r02 * a20
-                    n01 = r00 * a01 + r01 * a11 + r02 * a21
-                    n02 = r00 * a02 + r01 * a12 + r02 * a22
-                    n10 = r10 * a00 + r11 * a10 + r12 * a20
-                    n11 = r10 * a01 + r11 * a11 + r12 * a21
-                    n12 = r10 * a02 + r11 * a12 + r12 * a22
-                    n20 = r20 * a00 + r21 * a10 + r22 * a20
-                    n21 = r20 * a01 + r21 * a11 + r22 * a21
-                    n22 = r20 * a02 + r21 * a12 + r22 * a22
-                    r00, r01, r02 = n00, n01, n02
-                    r10, r11, r12 = n10, n11, n12
-                    r20, r21, r22 = n20, n21, n22
-                buf[0, j] = px
-                buf[1, j] = py
-                buf[2, j] = pz
-                buf[3, j] = r02
-                buf[4, j] = r12
-                buf[5, j] = r22
-                qv = qs[i, col[j]]
-                if kind[j] == 1:
-                    px += r02 * qv
-                    py += r12 * qv
-                    pz += r22 * qv
+                t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
+                if j == 0:
+                    for i in range(nb):
+                        pp[0, i] = t0
+                        pp[1, i] = t1
+                        pp[2, i] = t2
+                    for a in range(9):
+                        v = prot[0, a]
+                        for i in range(nb):
+                            rr[a, i] = v
                 else:
-                    cq = math.cos(qv)
-                    sq = math.sin(qv)
-                    r00, r01 = cq * r00 + sq * r01, cq * r01 - sq * r00
-                    r10, r11 = cq * r10 + sq * r11, cq * r11 - sq * r10
-                    r20, r21 = cq * r20 + sq * r21, cq * r21 - sq * r20
-            tx, ty, tz = ptr[m, 0], ptr[m, 1], ptr[m, 2]
-            px += r00 * tx + r01 * ty + r02 * tz
-            py += r10 * tx + r11 * ty + r12 * tz
-            pz += r20 * tx + r21 * ty + r22 * tz
+                    for i in range(nb):
+                        pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                        pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                        pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+                    if pident[j] == 0:
+                        a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
+                        a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
+                        a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
+                        for row in range(3):
+                            b = 3 * row
+                            for i in range(nb):
+                                x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                                rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                                rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                                rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+                for i in range(nb):
+                    frames[j, 0, i] = pp[0, i]
+                    frames[j, 1, i] = pp[1, i]
+                    frames[j, 2, i] = pp[2, i]
+                    frames[j, 3, i] = rr[2, i]
+                    frames[j, 4, i] = rr[5, i]
+                    frames[j, 5, i] = rr[8, i]
+                cj = col[j]
+                if kind[j] == 1:
+                    for i in range(nb):
+                        qv = qs[start + i, cj]
+                        pp[0, i] += rr[2, i] * qv
+                        pp[1, i] += rr[5, i] * qv
+                        pp[2, i] += rr[8, i] * qv
+                elif not (j == 0 and skip0):
+                    if poly:
+                        for i in range(nb):
+                            trig[0, i], trig[1, i] = _sincos(qs[start + i, cj])
+                    else:
+                        for i in range(nb):
+                            qv = qs[start + i, cj]
+                            trig[0, i] = math.sin(qv)
+                            trig[1, i] = math.cos(qv)
+                    for row in range(3):
+                        b = 3 * row
+                        for i in range(nb):
+                            sq, cq = trig[0, i], trig[1, i]
+                            x0, x1 = rr[b, i], rr[b + 1, i]
+                            rr[b, i] = cq * x0 + sq * x1
+                            rr[b + 1, i] = cq * x1 - sq * x0
+            t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+            for i in range(nb):
+                pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+            # selected rows of J, column by column: [z × (p − o); z] or [z; 0]
             for a in range(k):
                 for b in range(nq):
-                    js[a, b] = 0.0
+                    for i in range(nb):
+                        jb[a, b, i] = 0.0
             for j in range(m):
-                zx, zy, zz = buf[3, j], buf[4, j], buf[5, j]
-                if kind[j] == 1:
-                    cv[0], cv[1], cv[2] = zx, zy, zz
-                    cv[3], cv[4], cv[5] = 0.0, 0.0, 0.0
-                else:
-                    dx, dy, dz = px - buf[0, j], py - buf[1, j], pz - buf[2, j]
-                    cv[0] = zy * dz - zz * dy
-                    cv[1] = zz * dx - zx * dz
-                    cv[2] = zx * dy - zy * dx
-                    cv[3], cv[4], cv[5] = zx, zy, zz
                 cj = col[j]
                 for a in range(k):
-                    js[a, cj] += cv[sel[a]]
+                    r = sel[a]
+                    if kind[j] == 1:
+                        if r < 3:
+                            for i in range(nb):
+                                jb[a, cj, i] += frames[j, 3 + r, i]
+                    elif r >= 3:
+                        for i in range(nb):
+                            jb[a, cj, i] += frames[j, r, i]
+                    else:
+                        u = (r + 1) % 3
+                        v = (r + 2) % 3
+                        for i in range(nb):
+                            jb[a, cj, i] += frames[j, 3 + u, i] * (
+                                pp[v, i] - frames[j, v, i]
+                            ) - frames[j, 3 + v, i] * (pp[u, i] - frames[j, u, i])
             if fast3:
-                j00, j01, j02 = js[0, 0], js[0, 1], js[0, 2]
-                j10, j11, j12 = js[1, 0], js[1, 1], js[1, 2]
-                j20, j21, j22 = js[2, 0], js[2, 1], js[2, 2]
-                det = (
-                    j00 * (j11 * j22 - j12 * j21)
-                    - j01 * (j10 * j22 - j12 * j20)
-                    + j02 * (j10 * j21 - j11 * j20)
-                )
-                g00 = j00 * j00 + j01 * j01 + j02 * j02
-                g01 = j00 * j10 + j01 * j11 + j02 * j12
-                g02 = j00 * j20 + j01 * j21 + j02 * j22
-                g11 = j10 * j10 + j11 * j11 + j12 * j12
-                g12 = j10 * j20 + j11 * j21 + j12 * j22
-                g22 = j20 * j20 + j21 * j21 + j22 * j22
-                lmax, lmin = _top_eigs3(g00, g01, g02, g11, g12, g22, det * det)
-                smin = math.sqrt(lmin) if lmin > 0.0 else 0.0
-                smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
-                out_det[i] = det
-                out_manip[i] = abs(det)
-                out_cond[i] = smax / smin if smin > 0.0 else np.inf
-                out_smin[i] = smin
+                for i in range(nb):
+                    j00, j01, j02 = jb[0, 0, i], jb[0, 1, i], jb[0, 2, i]
+                    j10, j11, j12 = jb[1, 0, i], jb[1, 1, i], jb[1, 2, i]
+                    j20, j21, j22 = jb[2, 0, i], jb[2, 1, i], jb[2, 2, i]
+                    out_det[start + i] = (
+                        j00 * (j11 * j22 - j12 * j21)
+                        - j01 * (j10 * j22 - j12 * j20)
+                        + j02 * (j10 * j21 - j11 * j20)
+                    )
+                    gb[0, i] = j00 * j00 + j01 * j01 + j02 * j02
+                    gb[1, i] = j00 * j10 + j01 * j11 + j02 * j12
+                    gb[2, i] = j00 * j20 + j01 * j21 + j02 * j22
+                    gb[3, i] = j10 * j10 + j11 * j11 + j12 * j12
+                    gb[4, i] = j10 * j20 + j11 * j21 + j12 * j22
+                    gb[5, i] = j20 * j20 + j21 * j21 + j22 * j22
+                _eig3_block(gb, nb)
+                for i in range(nb):
+                    e0, e1, e2 = gb[0, i], gb[3, i], gb[5, i]
+                    lmax = max(e0, max(e1, e2))
+                    lmid = max(min(e0, e1), min(max(e0, e1), e2))
+                    det = out_det[start + i]
+                    prod = lmax * lmid
+                    lmin = det * det / prod if prod > 0.0 else 0.0
+                    smin = math.sqrt(lmin)
+                    smax = math.sqrt(max(lmax, 0.0))
+                    out_manip[start + i] = abs(det)
+                    out_cond[start + i] = smax / smin if smin > 0.0 else np.inf
+                    out_smin[start + i] = smin
             else:
-                d, mp, cn, sm = _reduce_one(js, g, work, lam)
-                out_det[i] = d
-                out_manip[i] = mp
-                out_cond[i] = cn
-                out_smin[i] = sm
+                for i in range(nb):
+                    for a in range(k):
+                        for b in range(nq):
+                            js[a, b] = jb[a, b, i]
+                    d, mp, cn, sm = _reduce_one(js, g, work, lam)
+                    out_det[start + i] = d
+                    out_manip[start + i] = mp
+                    out_cond[start + i] = cn
+                    out_smin[start + i] = sm
 
 
 def _rotation_z_to(u: np.ndarray) -> np.ndarray:
@@ -525,6 +575,46 @@ def _aligned_chain(arrays: _kernels.ChainArrays) -> _AlignedChain:
         prev_t = a.T
     ptr[m] = prev_t @ arrays.trans[m]
     return _AlignedChain(prot, ptr, pident, arrays.kind.copy(), arrays.col.copy(), arrays.nq)
+
+
+#: Configurations per structure-of-arrays block of :func:`_measures_kernel`.
+_BLOCK = 512
+
+
+def _axis_rotation(u: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` [rad] about the unit axis ``u`` (Rodrigues)."""
+    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * ux + (1.0 - math.cos(angle)) * (ux @ ux)
+
+
+def _first_joint_invariant(al: _AlignedChain, sel: tuple[int, ...]) -> bool:
+    """Whether the measures of the ``sel`` rows of ``J`` do not depend on the first joint.
+
+    Turning revolute joint 0 (axis ``u`` in the base frame) by ``θ`` rotates everything after it
+    rigidly, so ``J(q) = B J(q with q0 = 0)`` with ``B = blockdiag(R, R)``, ``R = Rot(u, θ)``
+    (linear velocities and axes both rotate; the origin of the rotation does not matter for
+    differences of points). With ``S`` the k×6 row selection, ``S J(q) = Q S J(q0 = 0)`` and
+    ``Q = S B Sᵀ`` holds exactly when ``Q`` is orthogonal (the selected rows span a subspace
+    invariant under ``B``); then the singular values are the same, and ``det Q = +1``
+    (``Q(θ)`` is continuous with ``Q(0) = I``) keeps ``det J``. Checked at two generic angles.
+    Also requires ``q0`` to drive joint 0 only.
+    """
+    if al.kind.shape[0] == 0 or al.kind[0] != 0 or np.count_nonzero(al.col == al.col[0]) != 1:
+        return False
+    u = al.prot[0].reshape(3, 3)[:, 2]
+    u = u / np.linalg.norm(u)
+    rows = np.eye(6)[list(sel)]
+    for angle in (0.7, 2.3):
+        rot = _axis_rotation(u, angle)
+        b = np.zeros((6, 6))
+        b[:3, :3] = rot
+        b[3:, 3:] = rot
+        qmat = rows @ b @ rows.T
+        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12:
+            return False
+        if np.linalg.det(qmat) <= 0:
+            return False
+    return True
 
 
 def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -693,7 +783,12 @@ def measures_batch(
     elif len(out) != 4 or any(o.shape != (n,) or o.dtype != np.float64 for o in out):
         raise ConfigurationError(f"out: four float64 arrays of shape ({n},) are required")
     al = _aligned(mdl)
-    _measures_kernel(al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, *out)
+    skip0 = _first_joint_invariant(al, tuple(int(r) for r in sel))
+    poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= _POLY_TRIG_MAX)
+    nwork = max(1, min(_kernels.numba.get_num_threads(), -(-n // _BLOCK)))
+    _measures_kernel(
+        al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, skip0, poly, nwork, _BLOCK, *out
+    )
     return out  # type: ignore[return-value]
 
 

@@ -52,12 +52,19 @@ def scara():
         ("coxa_tibia_leg", None, None),
         ("erd:solo12", "FL_FOOT", None),
         ("hexabot_leg", None, "all"),
+        ("hexabot_leg", None, ("x", "z")),
+        ("erd:solo12", "FL_FOOT", ("x", "y", "z", "wz")),
+        ("erd:solo12", "FL_FOOT", ("y", "z", "wx")),
     ],
 )
 def test_kernel_equals_pinocchio(source, tip, rows):
     model = load(source, tip=tip)
     names = ROW_NAMES if rows == "all" else (rows or default_rows(model))
     qs = model.random_q(500, seed=7)
+    if source == "hexabot_leg":  # both vectorised blocks and a partial one; angles beyond 2*pi
+        qs = np.concatenate([qs, model.random_q(700, seed=8) * 3.0])
+    if source == "coxa_tibia_leg":  # |q| > _POLY_TRIG_MAX: the libm sin / cos path
+        qs = qs + 2 * np.pi * 40_000
     det, manip, cond, smin = measures_batch(model, qs, rows)
     pdet, pmanip, smax, psmin = pin_measures(model, qs, names)
     if np.isnan(pdet).all():
@@ -70,6 +77,94 @@ def test_kernel_equals_pinocchio(source, tip, rows):
     # the numpy engine agrees too
     ndet, nmanip, ncond, nsmin = measures_batch(model, qs, rows, engine="numpy")
     assert np.abs(nsmin - psmin).max() < 1e-12
+
+
+def test_first_joint_invariance_rule():
+    # S·blockdiag(R, R)·Sᵀ orthogonal <=> the measures do not depend on joint 0
+    from hexapod_kin.singularity import _aligned, _first_joint_invariant
+
+    leg = _aligned(load("hexabot_leg"))  # hip axis z
+    assert _first_joint_invariant(leg, (0, 1, 2))
+    assert _first_joint_invariant(leg, (0, 1, 2, 5))
+    assert _first_joint_invariant(leg, (0, 1, 2, 3, 4, 5))
+    assert _first_joint_invariant(leg, (0, 1))
+    assert not _first_joint_invariant(leg, (0, 2))
+    assert not _first_joint_invariant(leg, (0, 1, 2, 3))
+    solo = _aligned(load("erd:solo12", tip="FL_FOOT"))  # HAA axis x
+    assert _first_joint_invariant(solo, (0, 1, 2))
+    assert _first_joint_invariant(solo, (1, 2, 3))
+    assert not _first_joint_invariant(solo, (0, 1, 2, 5))
+    # and the measures really are independent of q0 where the rule says so (Pinocchio)
+    model = load("erd:solo12", tip="FL_FOOT")
+    q = model.random_q(50, seed=3)
+    q2 = q.copy()
+    q2[:, 0] += 1.234
+    for rows, same in (
+        ("position", True),
+        (("y", "z", "wx"), True),
+        (("x", "y", "z", "wz"), False),
+    ):
+        names = ROW_NAMES[:3] if rows == "position" else rows
+        a = pin_measures(model, q, names)[3]
+        b = pin_measures(model, q2, names)[3]
+        assert (np.abs(a - b).max() < 1e-12) == same
+
+
+def test_polynomial_sincos_matches_libm():
+    from hexapod_kin.singularity import _POLY_TRIG_MAX, _sincos, njit
+
+    @njit
+    def both(x, s, c):
+        for i in range(x.shape[0]):
+            s[i], c[i] = _sincos(x[i])
+
+    rng = np.random.default_rng(5)
+    k = np.arange(-400, 401)
+    x = np.concatenate(
+        [
+            rng.uniform(-7, 7, 200_000),
+            rng.uniform(-_POLY_TRIG_MAX, _POLY_TRIG_MAX, 200_000),
+            k * (np.pi / 4),
+            np.nextafter(k * (np.pi / 4), np.inf),
+            [0.0, -0.0, 1e-300, -1e-300, _POLY_TRIG_MAX, -_POLY_TRIG_MAX],
+        ]
+    )
+    s, c = np.empty_like(x), np.empty_like(x)
+    both(x, s, c)
+    assert np.abs(s - np.sin(x)).max() <= 2.3e-16
+    assert np.abs(c - np.cos(x)).max() <= 2.3e-16
+
+
+def test_eig3_block_clustered_and_rank_deficient():
+    # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
+    from hexapod_kin.singularity import _eig3_block
+
+    rng = np.random.default_rng(9)
+    spectra = [
+        (1.0, 1.0 - 1e-9, 0.5),
+        (1.0, 0.3, 0.3 - 1e-10),
+        (1.0, 1.0, 1.0),
+        (1.0, 1e-20, 0.0),
+        (2.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0),
+    ]
+    mats = []
+    for lam in spectra:
+        rot, _ = np.linalg.qr(rng.normal(size=(200, 3, 3)))
+        mats.append(rot @ (np.asarray(lam)[:, None] * np.swapaxes(rot, 1, 2)))
+    a = rng.normal(size=(2000, 3, 3))
+    mats.append(a @ np.swapaxes(a, 1, 2))
+    g = np.concatenate(mats)
+    g[-1] = np.diag([3.0, 1.0, 2.0])
+    gb = np.ascontiguousarray(
+        np.stack([g[:, 0, 0], g[:, 0, 1], g[:, 0, 2], g[:, 1, 1], g[:, 1, 2], g[:, 2, 2]])
+    )
+    _eig3_block(gb, g.shape[0])
+    got = np.sort(gb[[0, 3, 5]].T, axis=1)
+    ref = np.linalg.eigvalsh(g)
+    scale = np.maximum(ref[:, -1], 1e-300)
+    assert (np.abs(got - ref).max(axis=1) / scale).max() < 1e-14
+    assert np.abs(gb[[1, 2, 4]]).max() <= 1e-15 * np.abs(ref).max()
 
 
 def test_kernel_accurate_near_singularities(leg):
