@@ -310,41 +310,69 @@ def _sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
 def _jacobi_rot(
     app: float, aqq: float, apq: float, arp: float, arq: float
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``."""
+    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``.
+
+    Golub & Van Loan's ``t = sign(τ) a_pq / (|τ| + ρ)``, ``ρ = hypot(τ, a_pq)``, written with
+    ``D = τ + sign(τ) ρ``: ``c = |D| / Q``, ``s = sign(D) a_pq / Q``, ``Q = sqrt(2 ρ |D|)``
+    (the half-angle form ``c² = (1 + |τ|/ρ) / 2``, no cancellation), so one division
+    ``W = 1 / (D Q)`` gives ``1/Q = D W`` and ``t = a_pq Q W``: two square roots, one division.
+    """
     tau = 0.5 * (aqq - app)
     rad = math.sqrt(tau * tau + apq * apq)
     den = tau + rad if tau >= 0.0 else tau - rad
-    den = den if den != 0.0 else 1.0
-    t = apq / den
-    c = 1.0 / math.sqrt(1.0 + t * t)
-    s = t * c
+    zero = den == 0.0  # a_pq = 0 and equal diagonal: the identity rotation
+    den = 1.0 if zero else den
+    rad = 0.5 if zero else rad
+    qq = math.sqrt(2.0 * rad * abs(den))
+    wi = 1.0 / (den * qq)
+    inv_q = den * wi
+    c = abs(den) * inv_q
+    s = apq * inv_q if den > 0.0 else -apq * inv_q
+    t = apq * qq * wi
     return app - t * apq, aqq + t * apq, c * arp - s * arq, s * arp + c * arq
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _eig3_block(gb: np.ndarray, nb: int) -> None:  # pragma: no cover - compiled
-    """Diagonalise ``nb`` symmetric 3×3 matrices in place by cyclic Jacobi (SIMD over the block).
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_sweep(gb: np.ndarray, i: int) -> float:  # pragma: no cover - compiled
+    """One cyclic sweep on matrix ``i`` of ``gb``; returns its off-diagonal excess (≤ 0: done)."""
+    a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
+    a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
+    a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
+    a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
+    a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
+    gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
+    gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
+    return abs(a01) + abs(a02) - _JACOBI_TOL * (a00 + a11 + a22)
 
-    ``gb`` is (6, B): rows ``g00, g01, g02, g11, g12, g22``. Sweeps (three rotations each)
-    are repeated over the whole block until every matrix has
-    ``|g01| + |g02| + |g12| ≤ _JACOBI_TOL · trace`` (Weyl: the diagonal then holds the
-    eigenvalues to that absolute accuracy). Jacobi is backward stable for any eigenvalue
-    clustering, unlike the characteristic-polynomial / trigonometric closed forms.
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _eig3_block(gb: np.ndarray, nb: int, idx: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Diagonalise ``nb`` symmetric 3×3 matrices in place by cyclic Jacobi.
+
+    ``gb`` is (6, B): rows ``g00, g01, g02, g11, g12, g22``; ``idx`` is (B,) int scratch. The
+    first sweep (three rotations) runs over the whole block (SIMD); the matrices that still
+    have ``|g01| + |g02| + |g12| > _JACOBI_TOL · trace`` are gathered into ``idx`` and swept
+    again until none is left (Weyl: the diagonal then holds the eigenvalues to that absolute
+    accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
+    characteristic-polynomial / trigonometric closed forms.
     """
-    for _sweep in range(_JACOBI_MAX_SWEEPS):
-        worst = 0.0
-        for i in range(nb):
-            a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
-            a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
-            a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
-            a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
-            a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
-            gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
-            gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
-            excess = abs(a01) + abs(a02) - _JACOBI_TOL * (a00 + a11 + a22)
-            worst = max(worst, excess)
-        if worst <= 0.0:
+    for i in range(nb):
+        _jacobi_sweep(gb, i)
+    n_open = 0
+    for i in range(nb):
+        if abs(gb[1, i]) + abs(gb[2, i]) > _JACOBI_TOL * (gb[0, i] + gb[3, i] + gb[5, i]):
+            idx[n_open] = i
+            n_open += 1
+    for _sweep in range(1, _JACOBI_MAX_SWEEPS):
+        if n_open == 0:
             return
+        kept = 0
+        for jj in range(n_open):
+            i = idx[jj]
+            if _jacobi_sweep(gb, i) > 0.0:
+                idx[kept] = i
+                kept += 1
+        n_open = kept
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
@@ -395,6 +423,7 @@ def _measures_kernel(
         trig = np.empty((2, bsz))
         jb = np.empty((k, nq, bsz))
         gb = np.empty((6, bsz))
+        open_idx = np.empty(bsz, dtype=np.int64)
         js = np.empty((k, nq))
         g = np.empty((mm, mm))
         work = np.empty((big, big))
@@ -503,7 +532,7 @@ def _measures_kernel(
                     gb[3, i] = j10 * j10 + j11 * j11 + j12 * j12
                     gb[4, i] = j10 * j20 + j11 * j21 + j12 * j22
                     gb[5, i] = j20 * j20 + j21 * j21 + j22 * j22
-                _eig3_block(gb, nb)
+                _eig3_block(gb, nb, open_idx)
                 for i in range(nb):
                     e0, e1, e2 = gb[0, i], gb[3, i], gb[5, i]
                     lmax = max(e0, max(e1, e2))

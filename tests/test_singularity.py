@@ -159,7 +159,7 @@ def test_eig3_block_clustered_and_rank_deficient():
     gb = np.ascontiguousarray(
         np.stack([g[:, 0, 0], g[:, 0, 1], g[:, 0, 2], g[:, 1, 1], g[:, 1, 2], g[:, 2, 2]])
     )
-    _eig3_block(gb, g.shape[0])
+    _eig3_block(gb, g.shape[0], np.empty(g.shape[0], dtype=np.int64))
     got = np.sort(gb[[0, 3, 5]].T, axis=1)
     ref = np.linalg.eigvalsh(g)
     scale = np.maximum(ref[:, -1], 1e-300)

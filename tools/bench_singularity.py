@@ -4,16 +4,22 @@ Compares, in one run:
 
 * ``kernel`` — :func:`hexapod_kin.singularity.measures_batch` (fused numba kernel, generic over
   any loaded chain: FK + Jacobian + det + manipulability + condition number + sigma_min);
-  compile time excluded (warm-up call first; ``cache=True``); median of repeats;
+  compile time excluded (warm-up call first; ``cache=True``); median of repeats. Measured on
+  1e6 uniform random samples of the joint ranges AND on a 100×100×100 grid (the inputs of
+  ``scan(grid=100)``), the whole ``scan(grid=100)`` call (grid building, flagging, family
+  assignment) for reference, and the kernel with the first-joint invariance skip disabled
+  (its effect);
 * ``numpy`` — the same chain kernel for the Jacobians, numpy batched SVD for the measures;
 * ``pinocchio loop`` — a Python loop of ``pin.computeFrameJacobian`` + ``np.linalg.svd`` /
   ``det``, timed on a subset and extrapolated linearly to 1,000,000 (said in the output).
 
+The 1-minute load average before and after is printed (other processes skew the figures).
 Accuracy: the kernel's measures are compared with Pinocchio's at sampled configurations.
 """
 
 from __future__ import annotations
 
+import os
 import statistics
 import time
 
@@ -28,11 +34,12 @@ def _pin_loop(model, qs):
     m, d, fid = model.model, model.data, model.tip_id
     ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     out = np.empty((len(qs), 4))
-    for i, q in enumerate(qs):
-        jac = pin.computeFrameJacobian(m, d, q, fid, ref)[:3]
-        sv = np.linalg.svd(jac, compute_uv=False)
-        det = np.linalg.det(jac)
-        out[i] = det, abs(det), sv[0] / sv[-1], sv[-1]
+    with np.errstate(divide="ignore"):
+        for i, q in enumerate(qs):
+            jac = pin.computeFrameJacobian(m, d, q, fid, ref)[:3]
+            sv = np.linalg.svd(jac, compute_uv=False)
+            det = np.linalg.det(jac)
+            out[i] = det, abs(det), sv[0] / sv[-1], sv[-1]
     return out
 
 
@@ -45,9 +52,16 @@ def _median_time(fn, repeats):
     return statistics.median(times), min(times)
 
 
+def _load() -> str:
+    try:
+        return f"{os.getloadavg()[0]:.2f}"
+    except OSError:  # pragma: no cover
+        return "n/a"
+
+
 def run(quick: bool) -> list[dict]:
-    from hexapod_kin import _kernels, load
-    from hexapod_kin.singularity import measures_batch
+    from hexapod_kin import load
+    from hexapod_kin import singularity as sing
 
     try:
         import numba
@@ -55,15 +69,48 @@ def run(quick: bool) -> list[dict]:
         threads = numba.get_num_threads()
     except ImportError:  # pragma: no cover
         threads = 1
+    load_before = _load()
     model = load("hexabot_leg")
     qs = model.random_q(N, seed=0)
+    grid_q = sing._grid_points(model, (0, 1, 2), 100, model.neutral())[0]
     out = tuple(np.empty(N) for _ in range(4))
-    measures_batch(model, qs[:1000], out=tuple(o[:1000] for o in out))  # warm-up / compile
+    sing.measures_batch(model, qs[:1000], out=tuple(o[:1000] for o in out))  # warm-up / compile
     repeats = 5 if quick else 15
-    t_kernel, t_kernel_min = _median_time(lambda: measures_batch(model, qs, out=out), repeats)
+    t_grid, t_grid_min = _median_time(lambda: sing.measures_batch(model, grid_q, out=out), repeats)
+    grid_out = tuple(o.copy() for o in out)
+    t_kernel, t_kernel_min = _median_time(lambda: sing.measures_batch(model, qs, out=out), repeats)
+
+    # the same kernel with the first-joint invariance skip off (hip sin/cos + rotation kept)
+    al = sing._aligned(model)
+    sel = np.arange(3)
+    assert sing._first_joint_invariant(al, (0, 1, 2))
+    out_ns = tuple(np.empty(N) for _ in range(4))
+
+    def raw(skip0: bool) -> None:
+        sing._measures_kernel(
+            al.prot,
+            al.ptr,
+            al.pident,
+            al.kind,
+            al.col,
+            qs,
+            sel,
+            skip0,
+            True,
+            threads,
+            sing._BLOCK,
+            *out_ns,
+        )
+
+    t_noskip, _ = _median_time(lambda: raw(False), repeats)
+    t_skip, _ = _median_time(lambda: raw(True), repeats)
+    t_noskip2, _ = _median_time(lambda: raw(False), repeats)
+    t_noskip = min(t_noskip, t_noskip2)  # interleaved, to not favour the skip
+    sing.scan(model, grid=20, families=True)  # warm-up (sympy derivation cached)
+    t_scan, _ = _median_time(lambda: sing.scan(model, grid=100), 3 if quick else 5)
 
     n_np = 100_000 if quick else 200_000
-    t_np, _ = _median_time(lambda: measures_batch(model, qs[:n_np], engine="numpy"), 3)
+    t_np, _ = _median_time(lambda: sing.measures_batch(model, qs[:n_np], engine="numpy"), 3)
     t_np *= N / n_np
 
     n_pin = 5_000 if quick else 20_000
@@ -71,20 +118,31 @@ def run(quick: bool) -> list[dict]:
     t0 = time.perf_counter()
     ref = _pin_loop(model, qs[:n_pin])
     t_pin = (time.perf_counter() - t0) * N / n_pin
+    pick = np.random.default_rng(1).choice(N, n_pin, replace=False)
+    ref_grid = _pin_loop(model, grid_q[pick])
+    load_after = _load()
 
-    # accuracy at the Pinocchio-evaluated configurations
-    det, manip, cond, smin = out
-    err = max(
-        np.abs(det[:n_pin] - ref[:, 0]).max(),
-        np.abs(manip[:n_pin] - ref[:, 1]).max(),
-        np.abs(smin[:n_pin] - ref[:, 3]).max(),
-        np.abs(1 / cond[:n_pin] - 1 / ref[:, 2]).max(),
-    )
-    del _kernels
+    def max_err(res: tuple[np.ndarray, ...], idx: np.ndarray, ref: np.ndarray) -> float:
+        det, manip, cond, smin = (r[idx] for r in res)
+        with np.errstate(divide="ignore"):
+            return float(
+                max(
+                    np.abs(det - ref[:, 0]).max(),
+                    np.abs(manip - ref[:, 1]).max(),
+                    np.abs(smin - ref[:, 3]).max(),
+                    np.abs(1 / cond - 1 / ref[:, 2]).max(),
+                )
+            )
+
+    err = max_err(out, np.arange(n_pin), ref)
+    err_grid = max_err(grid_out, pick, ref_grid)
+    err_ns = max(float(np.abs(a - b)[np.isfinite(b)].max()) for a, b in zip(out_ns[:2], out[:2]))
+    loads = f"{load_before} -> {load_after}"
+    case = "hexabot_leg 1e6 configs: J + det + manipulability + condition + sigma_min"
     rows = [
         {
-            "case": "hexabot_leg 1e6 configs: J + det + manipulability + condition + sigma_min",
-            "engine": "kernel (numba, fused, generic chain)",
+            "case": case + " (uniform random samples)",
+            "engine": "kernel (numba, fused, generic chain; measures_batch)",
             "threads": threads,
             "median_s": round(t_kernel, 4),
             "min_s": round(t_kernel_min, 4),
@@ -92,6 +150,33 @@ def run(quick: bool) -> list[dict]:
             "meets_target": t_kernel <= 0.1,
             "speedup_vs_pinocchio_loop": round(t_pin / t_kernel, 1),
             "max_abs_err_vs_pinocchio": f"{err:.1e} (at {n_pin} configs; 1/condition compared)",
+            "load_avg_1min": loads,
+        },
+        {
+            "case": case + " (100x100x100 grid, the input of scan(grid=100))",
+            "engine": "kernel (same call, grid configurations)",
+            "threads": threads,
+            "median_s": round(t_grid, 4),
+            "min_s": round(t_grid_min, 4),
+            "target_s": 0.1,
+            "meets_target": t_grid <= 0.1,
+            "speedup_vs_pinocchio_loop": round(t_pin / t_grid, 1),
+            "max_abs_err_vs_pinocchio": f"{err_grid:.1e} (at {n_pin} grid configs)",
+        },
+        {
+            "case": case + " (random samples)",
+            "engine": "raw kernel call (no input checks): invariance skip off vs on",
+            "median_s_skip_off": round(t_noskip, 4),
+            "median_s_skip_on": round(t_skip, 4),
+            "skip_saves_s": round(t_noskip - t_skip, 4),
+            "max_abs_diff_det_manip_vs_skip": f"{err_ns:.1e}",
+            "speedup_vs_pinocchio_loop": round(t_pin / t_noskip, 1),
+        },
+        {
+            "case": "hexabot_leg scan(grid=100): 1e6 configs incl. grid, mask, family assignment",
+            "engine": "singularity.scan (whole call)",
+            "median_s": round(t_scan, 3),
+            "note": "not the kernel target; includes building q (24 MB) and read-only copies",
         },
         {
             "case": "hexabot_leg 1e6 configs",
