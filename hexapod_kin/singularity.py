@@ -16,10 +16,14 @@ Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the positio
 the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
 gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
 
-The batched kernel is generic over any loaded 1-DOF serial chain (catalogue or URDF): it calls
-the shared :mod:`hexapod_kin._kernels` chain kernel for ``J`` and reduces each ``J`` to the
-measures in the same compiled loop (numba ``prange``), without storing the Jacobians:
-``G = J Jᵀ`` (m×m), its eigenvalues in closed form (m ≤ 3) or by cyclic Jacobi (m > 3), and
+The batched kernel is generic over any loaded 1-DOF serial chain (catalogue or URDF): FK,
+the selected rows of ``J`` and the measures in one compiled pass (numba ``prange``), without
+storing the Jacobians. Configurations are processed in structure-of-arrays blocks, joint by
+joint, so the inner loops vectorise (SIMD): sin / cos by a polynomial (fdlibm kernels, no libm
+calls), and, when the selected rows are invariant under the first revolute joint (see
+:func:`_first_joint_invariant`), that joint is not evaluated at all. Square 3×3 ``J``:
+``G = J Jᵀ`` is diagonalised by cyclic Jacobi over the block (backward stable for clustered
+eigenvalues), other shapes by closed forms (m ≤ 3) or Jacobi per configuration; always
 ``σm = sqrt(det G / Π_{i<m} λi)`` so that ``σm`` keeps full accuracy near a singularity
 (``det G = det(J)²`` in the square case).
 """
