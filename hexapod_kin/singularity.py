@@ -880,14 +880,25 @@ class _FamilyFunctions:
         return self.funcs[f](q)
 
 
+_FAMILY_CACHE: dict[int, tuple[Any, _FamilyFunctions]] = {}
+
+
 def _family_functions(deriv: Any) -> _FamilyFunctions:
+    """Lambdified residuals of ``deriv``'s families (cached: derivations are cached too)."""
+    hit = _FAMILY_CACHE.get(id(deriv))
+    if hit is not None and hit[0] is deriv:
+        return hit[1]
     import sympy as sp
 
     funcs, grads = [], []
     for fam in deriv.families:
         funcs.append(deriv.function(fam.factor))
         grads.append(deriv.function(sp.Matrix([[sp.diff(fam.factor, s) for s in deriv.q]])))
-    return _FamilyFunctions(tuple(deriv.families), tuple(funcs), tuple(grads))
+    result = _FamilyFunctions(tuple(deriv.families), tuple(funcs), tuple(grads))
+    if len(_FAMILY_CACHE) > 32:
+        _FAMILY_CACHE.clear()
+    _FAMILY_CACHE[id(deriv)] = (deriv, result)
+    return result
 
 
 # ------------------------------------------------------------------------ scans
@@ -1073,12 +1084,13 @@ def _grid_points(
     if total > 50_000_000:
         raise ParameterError(f"grid={grid!r} makes {total} configurations; at most 50,000,000")
     axes = [np.linspace(model.lower[j], model.upper[j], c) for j, c in zip(joints, shape)]
-    q = np.empty((total, model.nq))
-    q[:] = q_fixed
-    mesh = np.meshgrid(*axes, indexing="ij")
-    for j, mesh_j in zip(joints, mesh):
-        q[:, j] = mesh_j.reshape(-1)
-    return q, tuple(shape)
+    q = np.empty((*shape, model.nq))
+    q[...] = q_fixed
+    for k, (j, ax) in enumerate(zip(joints, axes)):
+        index = [None] * len(shape)
+        index[k] = slice(None)
+        q[..., j] = ax[tuple(index)]  # broadcast along the other grid axes, no meshgrid copies
+    return q.reshape(total, model.nq), tuple(shape)
 
 
 def scan(
