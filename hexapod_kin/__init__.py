@@ -14,6 +14,8 @@ Quick start::
 
 from __future__ import annotations
 
+from typing import Any
+
 __version__ = "0.1.0"
 
 from . import robots  # noqa: E402
@@ -39,8 +41,13 @@ from .params import (  # noqa: E402
 from .urdf import to_urdf, write_urdf  # noqa: E402
 
 
-def load(source, base=None, tip=None, **kwargs):  # type: ignore[no-untyped-def]
-    """Load a model; see :func:`hexapod_kin.kinematics.load` (imports Pinocchio lazily)."""
+def load(source: Any, base: str | None = None, tip: str | None = None, **kwargs: Any) -> Any:
+    """Load a model; see :func:`hexapod_kin.kinematics.load` (imports Pinocchio lazily).
+
+    Returns:
+        A :class:`hexapod_kin.kinematics.KinematicModel`.
+
+    """
     from .kinematics import load as _load
 
     return _load(source, base=base, tip=tip, **kwargs)

@@ -1087,7 +1087,7 @@ def _grid_points(
     q = np.empty((*shape, model.nq))
     q[...] = q_fixed
     for k, (j, ax) in enumerate(zip(joints, axes)):
-        index = [None] * len(shape)
+        index: list[slice | None] = [None] * len(shape)
         index[k] = slice(None)
         q[..., j] = ax[tuple(index)]  # broadcast along the other grid axes, no meshgrid copies
     return q.reshape(total, model.nq), tuple(shape)
