@@ -1,0 +1,87 @@
+"""Loading: sources, example-robot-data lookup, sub-chain reduction, geometry, exceptions."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import exceptions
+from hexapod_kin.exceptions import FrameNotFoundError, SourceError
+from hexapod_kin.model import erd_names, erd_path, resolve_source
+
+
+def test_every_exception_is_in_the_family():
+    classes = [c for _, c in inspect.getmembers(exceptions, inspect.isclass)
+               if issubclass(c, Exception) and c.__module__ == exceptions.__name__]
+    assert len(classes) >= 8
+    for cls in classes:
+        assert issubclass(cls, hk.HexapodKinError), cls
+    assert issubclass(exceptions.OptionalDependencyError, ImportError)
+
+
+def test_erd_data_package_found_without_python_module():
+    names = erd_names()
+    assert "solo12" in names and "ur5_robot" in names and names == sorted(names)
+    path = erd_path("solo12")
+    assert path.is_file() and path.name == "solo12.urdf"
+    assert "cmeel.prefix" in str(path)
+    with pytest.raises(SourceError, match="example-robot-data has"):
+        erd_path("solo13")
+
+
+@pytest.mark.parametrize("source", ["hexabot_leg", "erd:solo12", "<robot", "urdf/scara.urdf"])
+def test_resolve_source_kinds(source):
+    if source == "<robot":
+        source = hk.to_urdf(hk.robots.pendulum())
+    res = resolve_source(source)
+    assert res.text.lstrip().startswith("<?xml") or res.text.lstrip().startswith("<robot")
+    if source == "erd:solo12":
+        assert res.package_dirs and res.mesh_root
+
+
+def test_preset_parameters_reach_the_model():
+    model = hk.load("hexabot_leg", l1=0.07)
+    np.testing.assert_allclose(model.fk([0, 0, 0])[:3, 3], [0.27, 0, 0], atol=1e-15)
+    with pytest.raises(SourceError, match="non-preset"):
+        hk.load("erd:solo12", l1=0.07)
+
+
+def test_subchain_reduction_locks_the_other_joints():
+    full = hk.load("hexapod")
+    leg3 = hk.load("hexapod", tip="leg3_foot")
+    assert full.nq == 18 and leg3.nq == 3
+    assert leg3.joint_names == ("leg3_hip", "leg3_knee", "leg3_ankle")
+    assert len(leg3.locked_joints) == 15
+    q = np.array([0.2, -0.4, 0.9])
+    q18 = np.zeros(18)
+    q18[6:9] = q
+    np.testing.assert_allclose(leg3.fk(q), full.placement(q18, "leg3_foot"), atol=1e-15)
+    unreduced = hk.load("hexapod", tip="leg3_foot", reduce=False)
+    assert unreduced.nq == 18
+
+
+def test_base_must_be_an_ancestor_of_the_tip():
+    with pytest.raises(FrameNotFoundError, match="ancestor"):
+        hk.load("hexapod", base="leg1_coxa", tip="leg2_foot")
+    with pytest.raises(FrameNotFoundError, match="must be fixed"):
+        hk.load("hexapod", base="leg1_femur", tip="leg1_foot", reduce=False)
+
+
+@pytest.mark.parametrize("source,kw,count", [("hexabot_leg", {}, None),
+                                             ("erd:solo12", {"tip": "FL_FOOT"}, None)])
+def test_geometry_model_matches_the_reduced_model(source, kw, count):
+    model = hk.load(source, **kw)
+    geom = model.geometry_model("visual")
+    assert geom.ngeoms > 0
+    for obj in geom.geometryObjects:
+        assert obj.parentJoint < model.model.njoints
+    data = geom.createData()
+    q = model.random_q(seed=0)
+    pin.updateGeometryPlacements(model.model, model.data, geom, data, q)
+    assert all(np.all(np.isfinite(p.homogeneous)) for p in data.oMg)
+    with pytest.raises(hk.ParameterError, match="kind='mesh'"):
+        model.geometry_model("mesh")
