@@ -349,34 +349,274 @@ def _jacobi_sweep(gb: np.ndarray, i: int) -> float:  # pragma: no cover - compil
     return abs(a01) + abs(a02) - _JACOBI_TOL * (a00 + a11 + a22)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def _eig3_block(gb: np.ndarray, nb: int, idx: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Diagonalise ``nb`` symmetric 3×3 matrices in place by cyclic Jacobi.
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _rot_cs(
+    app: float, aqq: float, apq: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq)``, ``(c, s)`` (as :func:`_jacobi_rot`).
 
-    ``gb`` is (6, B): rows ``g00, g01, g02, g11, g12, g22``; ``idx`` is (B,) int scratch. The
-    first sweep (three rotations) runs over the whole block (SIMD); the matrices that still
-    have ``|g01| + |g02| + |g12| > _JACOBI_TOL · trace`` are gathered into ``idx`` and swept
-    again until none is left (Weyl: the diagonal then holds the eigenvalues to that absolute
-    accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
+    The other entries transform as ``a_rp ← c a_rp − s a_rq``, ``a_rq ← s a_rp + c a_rq``.
+    """
+    tau = 0.5 * (aqq - app)
+    rad = math.sqrt(tau * tau + apq * apq)
+    den = tau + rad if tau >= 0.0 else tau - rad
+    zero = den == 0.0
+    den = 1.0 if zero else den
+    rad = 0.5 if zero else rad
+    qq = math.sqrt(2.0 * rad * abs(den))
+    wi = 1.0 / (den * qq)
+    inv_q = den * wi
+    c = abs(den) * inv_q
+    s = apq * inv_q if den > 0.0 else -apq * inv_q
+    t = apq * qq * wi
+    return app - t * apq, aqq + t * apq, c, s
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_sweep4(gb: np.ndarray, i: int) -> None:  # pragma: no cover - compiled
+    """One cyclic sweep (six rotations) on the packed symmetric 4×4 matrix ``i`` of ``gb``.
+
+    ``gb`` rows: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``.
+    """
+    a00, a01, a02, a03 = gb[0, i], gb[1, i], gb[2, i], gb[3, i]
+    a11, a12, a13 = gb[4, i], gb[5, i], gb[6, i]
+    a22, a23, a33 = gb[7, i], gb[8, i], gb[9, i]
+    a00, a11, c, s = _rot_cs(a00, a11, a01)  # (0, 1); r = 2, 3
+    a02, a12 = c * a02 - s * a12, s * a02 + c * a12
+    a03, a13 = c * a03 - s * a13, s * a03 + c * a13
+    a00, a22, c, s = _rot_cs(a00, a22, a02)  # (0, 2); r = 1, 3
+    a01, a12 = -s * a12, c * a12  # a01 = 0 here
+    a03, a23 = c * a03 - s * a23, s * a03 + c * a23
+    a00, a33, c, s = _rot_cs(a00, a33, a03)  # (0, 3); r = 1, 2
+    a01, a13 = c * a01 - s * a13, s * a01 + c * a13
+    a02, a23 = -s * a23, c * a23  # a02 = 0 here
+    a11, a22, c, s = _rot_cs(a11, a22, a12)  # (1, 2); r = 0, 3
+    a01, a02 = c * a01 - s * a02, s * a01 + c * a02
+    a13, a23 = c * a13 - s * a23, s * a13 + c * a23
+    a11, a33, c, s = _rot_cs(a11, a33, a13)  # (1, 3); r = 0, 2
+    a01, a03 = c * a01, s * a01  # a03 = 0 here
+    a12, a23 = -s * a23, c * a23  # a12 = 0 here
+    a22, a33, c, s = _rot_cs(a22, a33, a23)  # (2, 3); r = 0, 1
+    a02, a03 = c * a02 - s * a03, s * a02 + c * a03
+    a12, a13 = c * a12, s * a12  # a13 = 0 here
+    gb[0, i], gb[1, i], gb[2, i], gb[3, i] = a00, a01, a02, a03
+    gb[4, i], gb[5, i], gb[6, i] = a11, a12, a13
+    gb[7, i], gb[8, i], gb[9, i] = a22, 0.0, a33
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - compiled
+    """Whether matrix ``i`` (packed, 3×3 or 4×4) still has off-diagonal mass > tol × trace."""
+    if m == 3:
+        off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[4, i])
+        tr = gb[0, i] + gb[3, i] + gb[5, i]
+    else:
+        off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[3, i])
+        off += abs(gb[5, i]) + abs(gb[6, i]) + abs(gb[8, i])
+        tr = gb[0, i] + gb[4, i] + gb[7, i] + gb[9, i]
+    return off > _JACOBI_TOL * tr
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _eig_block(
+    gb: np.ndarray, nb: int, m: int, wb: np.ndarray, idx: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """Diagonalise ``nb`` packed symmetric m×m matrices (m = 3 or 4) in place by cyclic Jacobi.
+
+    ``gb`` is (m(m+1)/2, B), rows the packed upper triangle (m = 3: ``g00 g01 g02 g11 g12
+    g22``; m = 4: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``); ``wb`` the same shape and
+    ``idx`` (B,) int are scratch. The first sweep runs over the whole block (SIMD); the
+    matrices whose off-diagonal sum still exceeds ``_JACOBI_TOL · trace`` are gathered
+    (compacted) into ``wb`` and swept there, contiguously (SIMD again), the converged ones
+    scattered back, until none is left (Weyl: the diagonal then holds the eigenvalues to that
+    absolute accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
     characteristic-polynomial / trigonometric closed forms.
     """
-    for i in range(nb):
-        _jacobi_sweep(gb, i)
+    npk = gb.shape[0]
+    if m == 3:
+        for i in range(nb):
+            _jacobi_sweep(gb, i)
+    else:
+        for i in range(nb):
+            _jacobi_sweep4(gb, i)
     n_open = 0
     for i in range(nb):
-        if abs(gb[1, i]) + abs(gb[2, i]) > _JACOBI_TOL * (gb[0, i] + gb[3, i] + gb[5, i]):
+        if _jacobi_open(gb, i, m):
             idx[n_open] = i
             n_open += 1
+    for jj in range(n_open):
+        i = idx[jj]
+        for p in range(npk):
+            wb[p, jj] = gb[p, i]
     for _sweep in range(1, _JACOBI_MAX_SWEEPS):
         if n_open == 0:
             return
+        if m == 3:
+            for jj in range(n_open):
+                _jacobi_sweep(wb, jj)
+        else:
+            for jj in range(n_open):
+                _jacobi_sweep4(wb, jj)
         kept = 0
         for jj in range(n_open):
             i = idx[jj]
-            if _jacobi_sweep(gb, i) > 0.0:
-                idx[kept] = i
+            if _jacobi_open(wb, jj, m):
+                if kept != jj:
+                    for p in range(npk):
+                        wb[p, kept] = wb[p, jj]
+                    idx[kept] = i
                 kept += 1
+            else:
+                for p in range(npk):
+                    gb[p, i] = wb[p, jj]
         n_open = kept
+    for jj in range(n_open):  # not converged within the sweep limit: keep the last iterate
+        i = idx[jj]
+        for p in range(npk):
+            gb[p, i] = wb[p, jj]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _eig3_block(gb: np.ndarray, nb: int, idx: np.ndarray) -> None:  # pragma: no cover - compiled
+    """:func:`_eig_block` for packed 3×3 matrices (``gb`` (6, B): ``g00 g01 g02 g11 g12 g22``)."""
+    _eig_block(gb, nb, 3, np.empty_like(gb), idx)
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _minor_block(
+    jb: np.ndarray, r: np.ndarray, c: np.ndarray, m: int, nb: int, dst: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """``dst[i] = det(jb[r][:, c][:, :, i])`` for the m×m (m ≤ 4) minor on rows ``r``, cols ``c``.
+
+    Explicit formulas (cofactors; for m = 4 the Laplace expansion by the 2×2 minors of the
+    first two and the last two rows), vectorised over the block.
+    """
+    if m == 1:
+        r0, c0 = r[0], c[0]
+        for i in range(nb):
+            dst[i] = jb[r0, c0, i]
+    elif m == 2:
+        r0, r1, c0, c1 = r[0], r[1], c[0], c[1]
+        for i in range(nb):
+            dst[i] = jb[r0, c0, i] * jb[r1, c1, i] - jb[r0, c1, i] * jb[r1, c0, i]
+    elif m == 3:
+        r0, r1, r2, c0, c1, c2 = r[0], r[1], r[2], c[0], c[1], c[2]
+        for i in range(nb):
+            a00, a01, a02 = jb[r0, c0, i], jb[r0, c1, i], jb[r0, c2, i]
+            a10, a11, a12 = jb[r1, c0, i], jb[r1, c1, i], jb[r1, c2, i]
+            a20, a21, a22 = jb[r2, c0, i], jb[r2, c1, i], jb[r2, c2, i]
+            dst[i] = (
+                a00 * (a11 * a22 - a12 * a21)
+                - a01 * (a10 * a22 - a12 * a20)
+                + a02 * (a10 * a21 - a11 * a20)
+            )
+    else:
+        r0, r1, r2, r3 = r[0], r[1], r[2], r[3]
+        c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
+        for i in range(nb):
+            a0, a1, a2, a3 = jb[r0, c0, i], jb[r0, c1, i], jb[r0, c2, i], jb[r0, c3, i]
+            b0, b1, b2, b3 = jb[r1, c0, i], jb[r1, c1, i], jb[r1, c2, i], jb[r1, c3, i]
+            e0, e1, e2, e3 = jb[r2, c0, i], jb[r2, c1, i], jb[r2, c2, i], jb[r2, c3, i]
+            f0, f1, f2, f3 = jb[r3, c0, i], jb[r3, c1, i], jb[r3, c2, i], jb[r3, c3, i]
+            s01, s02, s03 = a0 * b1 - a1 * b0, a0 * b2 - a2 * b0, a0 * b3 - a3 * b0
+            s12, s13, s23 = a1 * b2 - a2 * b1, a1 * b3 - a3 * b1, a2 * b3 - a3 * b2
+            t01, t02, t03 = e0 * f1 - e1 * f0, e0 * f2 - e2 * f0, e0 * f3 - e3 * f0
+            t12, t13, t23 = e1 * f2 - e2 * f1, e1 * f3 - e3 * f1, e2 * f3 - e3 * f2
+            dst[i] = s01 * t23 - s02 * t13 + s03 * t12 + s12 * t03 - s13 * t02 + s23 * t01
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _reduce_block(
+    jb: np.ndarray,
+    nb: int,
+    pack: np.ndarray,
+    rsub: np.ndarray,
+    csub: np.ndarray,
+    gb: np.ndarray,
+    wb: np.ndarray,
+    idx: np.ndarray,
+    dg: np.ndarray,
+    mnr: np.ndarray,
+    start: int,
+    out_det: np.ndarray,
+    out_manip: np.ndarray,
+    out_cond: np.ndarray,
+    out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 4``.
+
+    ``G`` (``J Jᵀ`` if k ≤ n, else ``Jᵀ J``; packed by ``pack``) gives the largest
+    eigenvalues: closed form for m ≤ 2, :func:`_eig_block` for m = 3, 4. ``det G`` comes from
+    the Jacobian itself — ``det(J)²`` when square, else Cauchy–Binet, the sum of the squared
+    maximal minors of ``J`` (rows ``rsub[s]``, columns ``csub[s]``) — so that
+    ``λmin = det G / Π_{i<m} λi`` keeps relative accuracy near a singularity (forming ``det G``
+    from ``G`` would lose it: its error is ``ε λmax^m``).
+    """
+    k, n = jb.shape[0], jb.shape[1]
+    mm = k if k <= n else n
+    square = k == n
+    for a in range(mm):
+        for b in range(a, mm):
+            p = pack[a, b]
+            for i in range(nb):
+                gb[p, i] = 0.0
+            if k <= n:
+                for c in range(n):
+                    for i in range(nb):
+                        gb[p, i] += jb[a, c, i] * jb[b, c, i]
+            else:
+                for c in range(k):
+                    for i in range(nb):
+                        gb[p, i] += jb[c, a, i] * jb[c, b, i]
+    if square:
+        _minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
+        for i in range(nb):
+            out_det[start + i] = mnr[i]
+            dg[i] = mnr[i] * mnr[i]
+    else:
+        for i in range(nb):
+            dg[i] = 0.0
+            out_det[start + i] = np.nan
+        for s in range(rsub.shape[0]):
+            _minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
+            for i in range(nb):
+                dg[i] += mnr[i] * mnr[i]
+    if mm == 1:
+        for i in range(nb):
+            mnr[i] = gb[0, i]  # lmax
+            gb[0, i] = 1.0  # product of the other eigenvalues (none)
+    elif mm == 2:
+        for i in range(nb):
+            a, b, d = gb[0, i], gb[1, i], gb[2, i]
+            half = 0.5 * (a - d)
+            lmax = 0.5 * (a + d) + math.sqrt(half * half + b * b)
+            mnr[i] = lmax
+            gb[0, i] = lmax
+    elif mm == 3:
+        _eig_block(gb, nb, 3, wb, idx)
+        for i in range(nb):
+            e0, e1, e2 = gb[0, i], gb[3, i], gb[5, i]
+            lmax = max(e0, max(e1, e2))
+            lmid = max(min(e0, e1), min(max(e0, e1), e2))
+            mnr[i] = lmax
+            gb[0, i] = lmax * lmid
+    else:
+        _eig_block(gb, nb, 4, wb, idx)
+        for i in range(nb):
+            e0, e1, e2, e3 = gb[0, i], gb[4, i], gb[7, i], gb[9, i]
+            lo1, hi1 = min(e0, e1), max(e0, e1)
+            lo2, hi2 = min(e2, e3), max(e2, e3)
+            mnr[i] = max(hi1, hi2)
+            gb[0, i] = hi1 * hi2 * max(lo1, lo2)  # the three largest
+    for i in range(nb):
+        lmax = mnr[i]
+        prod = gb[0, i]
+        d = dg[i]
+        lmin = d / prod if prod > 0.0 else 0.0
+        smin = math.sqrt(max(lmin, 0.0))
+        out_smin[start + i] = smin
+        out_cond[start + i] = math.sqrt(max(lmax, 0.0)) / smin if smin > 0.0 else np.inf
+        out_manip[start + i] = abs(out_det[start + i]) if square else math.sqrt(d)
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
@@ -388,6 +628,10 @@ def _measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
+    pack: np.ndarray,
+    rsub: np.ndarray,
+    csub: np.ndarray,
+    use_block: bool,
     skip0: bool,
     poly: bool,
     nwork: int,
@@ -406,9 +650,9 @@ def _measures_kernel(
     stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
     and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
     see :func:`_first_joint_invariant`). ``poly``: sin / cos by :func:`_sincos` (all
-    ``|q| ≤ _POLY_TRIG_MAX``) rather than libm. Square 3×3 ``J``: ``G = J Jᵀ`` is diagonalised
-    by :func:`_eig3_block`, ``λmin = det(J)² / (λ1 λ2)`` keeps relative accuracy near a
-    singularity; other shapes go through :func:`_reduce_one` per configuration.
+    ``|q| ≤ _POLY_TRIG_MAX``) rather than libm. ``use_block`` (``min(k, n) ≤ 4``, see
+    :func:`_block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole block by
+    :func:`_reduce_block`; otherwise :func:`_reduce_one` per configuration.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -416,7 +660,7 @@ def _measures_kernel(
     k = sel.shape[0]
     mm = k if k <= nq else nq
     big = k if k > nq else nq
-    fast3 = k == 3 and nq == 3
+    npk = mm * (mm + 1) // 2 if use_block else 1
     bsz = block
     nblocks = (nconf + bsz - 1) // bsz
     per = (nblocks + nwork - 1) // nwork
@@ -426,8 +670,11 @@ def _measures_kernel(
         frames = np.empty((max(m, 1), 6, bsz))
         trig = np.empty((2, bsz))
         jb = np.empty((k, nq, bsz))
-        gb = np.empty((6, bsz))
+        gb = np.empty((npk, bsz))
+        wb = np.empty((npk, bsz))
         open_idx = np.empty(bsz, dtype=np.int64)
+        dg = np.empty(bsz)
+        mnr = np.empty(bsz)
         js = np.empty((k, nq))
         g = np.empty((mm, mm))
         work = np.empty((big, big))
@@ -520,35 +767,11 @@ def _measures_kernel(
                             jb[a, cj, i] += frames[j, 3 + u, i] * (
                                 pp[v, i] - frames[j, v, i]
                             ) - frames[j, 3 + v, i] * (pp[u, i] - frames[j, u, i])
-            if fast3:
-                for i in range(nb):
-                    j00, j01, j02 = jb[0, 0, i], jb[0, 1, i], jb[0, 2, i]
-                    j10, j11, j12 = jb[1, 0, i], jb[1, 1, i], jb[1, 2, i]
-                    j20, j21, j22 = jb[2, 0, i], jb[2, 1, i], jb[2, 2, i]
-                    out_det[start + i] = (
-                        j00 * (j11 * j22 - j12 * j21)
-                        - j01 * (j10 * j22 - j12 * j20)
-                        + j02 * (j10 * j21 - j11 * j20)
-                    )
-                    gb[0, i] = j00 * j00 + j01 * j01 + j02 * j02
-                    gb[1, i] = j00 * j10 + j01 * j11 + j02 * j12
-                    gb[2, i] = j00 * j20 + j01 * j21 + j02 * j22
-                    gb[3, i] = j10 * j10 + j11 * j11 + j12 * j12
-                    gb[4, i] = j10 * j20 + j11 * j21 + j12 * j22
-                    gb[5, i] = j20 * j20 + j21 * j21 + j22 * j22
-                _eig3_block(gb, nb, open_idx)
-                for i in range(nb):
-                    e0, e1, e2 = gb[0, i], gb[3, i], gb[5, i]
-                    lmax = max(e0, max(e1, e2))
-                    lmid = max(min(e0, e1), min(max(e0, e1), e2))
-                    det = out_det[start + i]
-                    prod = lmax * lmid
-                    lmin = det * det / prod if prod > 0.0 else 0.0
-                    smin = math.sqrt(lmin)
-                    smax = math.sqrt(max(lmax, 0.0))
-                    out_manip[start + i] = abs(det)
-                    out_cond[start + i] = smax / smin if smin > 0.0 else np.inf
-                    out_smin[start + i] = smin
+            if use_block:
+                _reduce_block(
+                    jb, nb, pack, rsub, csub, gb, wb, open_idx, dg, mnr, start,
+                    out_det, out_manip, out_cond, out_smin,
+                )
             else:
                 for i in range(nb):
                     for a in range(k):
@@ -612,6 +835,40 @@ def _aligned_chain(arrays: _kernels.ChainArrays) -> _AlignedChain:
 
 #: Configurations per structure-of-arrays block of :func:`_measures_kernel`.
 _BLOCK = 512
+#: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
+_MAX_MINORS = 70
+
+
+@lru_cache(maxsize=64)
+def _block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray]:
+    """Block-path tables for k×n Jacobians: ``(use_block, pack, rsub, csub)``.
+
+    ``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (m×m, ``m = min(k, n)``);
+    ``rsub[s]`` / ``csub[s]``: rows / columns of the s-th maximal minor of ``J`` (the one
+    square minor when ``k == n``; all ``C(max(k, n), m)`` of them otherwise, for Cauchy–Binet
+    ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 4`` or there are more than
+    ``_MAX_MINORS`` minors (the per-configuration path then serves).
+    """
+    from itertools import combinations
+
+    m = min(k, n)
+    pack = np.zeros((max(m, 1), max(m, 1)), dtype=np.int64)
+    p = 0
+    for a in range(m):
+        for b in range(a, m):
+            pack[a, b] = pack[b, a] = p
+            p += 1
+    full = tuple(range(m))
+    subs = list(combinations(range(max(k, n)), m)) if m else []
+    use = 1 <= m <= 4 and len(subs) <= _MAX_MINORS
+    if not use:
+        subs = subs[:1] or [full]
+    if k <= n:
+        rsub, csub = [full] * len(subs), subs
+    else:
+        rsub, csub = subs, [full] * len(subs)
+    as_arr = lambda x: np.array(x, dtype=np.int64).reshape(len(subs), max(m, 1))  # noqa: E731
+    return use, pack, as_arr(rsub), as_arr(csub)
 
 
 def _axis_rotation(u: np.ndarray, angle: float) -> np.ndarray:
@@ -819,8 +1076,10 @@ def measures_batch(
     skip0 = _first_joint_invariant(al, tuple(int(r) for r in sel))
     poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= _POLY_TRIG_MAX)
     nwork = max(1, min(_kernels.numba.get_num_threads(), -(-n // _BLOCK)))
+    use_block, pack, rsub, csub = _block_plan(int(sel.shape[0]), int(q.shape[1]))
     _measures_kernel(
-        al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, skip0, poly, nwork, _BLOCK, *out
+        al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, pack, rsub, csub, use_block,
+        skip0, poly, nwork, _BLOCK, *out,
     )
     return out  # type: ignore[return-value]
 

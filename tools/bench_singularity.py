@@ -86,6 +86,8 @@ def run(quick: bool) -> list[dict]:
     assert sing._first_joint_invariant(al, (0, 1, 2))
     out_ns = tuple(np.empty(N) for _ in range(4))
 
+    use_block, pack, rsub, csub = sing._block_plan(3, 3)
+
     def raw(skip0: bool) -> None:
         sing._measures_kernel(
             al.prot,
@@ -95,6 +97,10 @@ def run(quick: bool) -> list[dict]:
             al.col,
             qs,
             sel,
+            pack,
+            rsub,
+            csub,
+            use_block,
             skip0,
             True,
             threads,
