@@ -288,6 +288,8 @@ _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.1359
 #: Jacobi sweeps stop when every off-diagonal sum of a block is below this × its trace.
 _JACOBI_TOL = 1e-15
 _JACOBI_MAX_SWEEPS = 12
+#: Sweeps run over the whole block (SIMD, no gather) until at most 1/this of it is unconverged.
+_JACOBI_GATHER = 8
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -406,15 +408,32 @@ def _jacobi_sweep4(gb: np.ndarray, i: int) -> None:  # pragma: no cover - compil
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - compiled
-    """Whether matrix ``i`` (packed, 3×3 or 4×4) still has off-diagonal mass > tol × trace."""
+    """Whether matrix ``i`` (packed 3×3 or 4×4, diagonal ``d``, off-diagonal ``E``) needs sweeps.
+
+    With ``o = Σ_{a<b} |e_ab|`` (≥ every off-diagonal row sum, ≥ ``‖E‖₂``) and ``g`` the
+    smallest gap ``|d_a − d_b|``, the diagonal holds the eigenvalues to ``tol = _JACOBI_TOL ·
+    trace`` when ``o ≤ tol`` (Weyl), or when ``g > 3 o`` and ``2 o² / (g − o) ≤ tol`` (the
+    quadratic bound for isolated eigenvalues: scale row / column ``a`` of ``D + E`` by
+    ``1/α`` / ``α``; Gershgorin disc ``a``, radius ``≤ o/α``, is disjoint from the others,
+    radius ``≤ o + α o``, for ``α = (g − o) / (2 o)`` when ``(g − o)² > 4 o²``, and holds
+    exactly one eigenvalue, within ``2 o² / (g − o)`` of ``d_a``).
+    """
     if m == 3:
+        d0, d1, d2 = gb[0, i], gb[3, i], gb[5, i]
         off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[4, i])
-        tr = gb[0, i] + gb[3, i] + gb[5, i]
+        tr = d0 + d1 + d2
+        gap = min(abs(d0 - d1), min(abs(d0 - d2), abs(d1 - d2)))
     else:
+        d0, d1, d2, d3 = gb[0, i], gb[4, i], gb[7, i], gb[9, i]
         off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[3, i])
         off += abs(gb[5, i]) + abs(gb[6, i]) + abs(gb[8, i])
-        tr = gb[0, i] + gb[4, i] + gb[7, i] + gb[9, i]
-    return off > _JACOBI_TOL * tr
+        tr = d0 + d1 + d2 + d3
+        gap = min(min(abs(d0 - d1), abs(d0 - d2)), min(abs(d0 - d3), abs(d1 - d2)))
+        gap = min(gap, min(abs(d1 - d3), abs(d2 - d3)))
+    tol = _JACOBI_TOL * tr
+    weyl = off <= tol
+    quad = (gap > 3.0 * off) & (2.0 * off * off <= tol * (gap - off))
+    return not (weyl | quad)  # branch-free: the block loops that count these vectorise
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -433,12 +452,22 @@ def _eig_block(
     characteristic-polynomial / trigonometric closed forms.
     """
     npk = gb.shape[0]
-    if m == 3:
+    sweeps = 0
+    while sweeps < _JACOBI_MAX_SWEEPS:
+        if m == 3:
+            for i in range(nb):
+                _jacobi_sweep(gb, i)
+        else:
+            for i in range(nb):
+                _jacobi_sweep4(gb, i)
+        sweeps += 1
+        n_open = 0
         for i in range(nb):
-            _jacobi_sweep(gb, i)
-    else:
-        for i in range(nb):
-            _jacobi_sweep4(gb, i)
+            n_open += _jacobi_open(gb, i, m)
+        if n_open == 0:
+            return
+        if n_open * _JACOBI_GATHER <= nb:
+            break
     n_open = 0
     for i in range(nb):
         if _jacobi_open(gb, i, m):
@@ -448,7 +477,8 @@ def _eig_block(
         i = idx[jj]
         for p in range(npk):
             wb[p, jj] = gb[p, i]
-    for _sweep in range(1, _JACOBI_MAX_SWEEPS):
+    while sweeps < _JACOBI_MAX_SWEEPS:
+        sweeps += 1
         if n_open == 0:
             return
         if m == 3:
@@ -529,11 +559,11 @@ def _minor_block(
 def _reduce_block(
     jb: np.ndarray,
     nb: int,
-    pack: np.ndarray,
-    rsub: np.ndarray,
-    csub: np.ndarray,
+    plan: tuple[Any, ...],
     gb: np.ndarray,
+    hb: np.ndarray,
     wb: np.ndarray,
+    ev: np.ndarray,
     idx: np.ndarray,
     dg: np.ndarray,
     mnr: np.ndarray,
@@ -545,13 +575,18 @@ def _reduce_block(
 ) -> None:  # pragma: no cover - compiled
     """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 4``.
 
-    ``G`` (``J Jᵀ`` if k ≤ n, else ``Jᵀ J``; packed by ``pack``) gives the largest
-    eigenvalues: closed form for m ≤ 2, :func:`_eig_block` for m = 3, 4. ``det G`` comes from
-    the Jacobian itself — ``det(J)²`` when square, else Cauchy–Binet, the sum of the squared
-    maximal minors of ``J`` (rows ``rsub[s]``, columns ``csub[s]``) — so that
-    ``λmin = det G / Π_{i<m} λi`` keeps relative accuracy near a singularity (forming ``det G``
-    from ``G`` would lose it: its error is ``ε λmax^m``).
+    ``plan`` is :attr:`_GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
+    triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
+    ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
+    ``_JACOBI_TOL · trace`` over the whole block (checked; Weyl bounds the effect), each
+    diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`_eig_block` for 3
+    and 4; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
+    when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
+    ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
+    accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
+    ``ε λmax^m``).
     """
+    pack, rsub, csub, gram_t, perm, csize, drop = plan
     k, n = jb.shape[0], jb.shape[1]
     mm = k if k <= n else n
     square = k == n
@@ -560,14 +595,14 @@ def _reduce_block(
             p = pack[a, b]
             for i in range(nb):
                 gb[p, i] = 0.0
-            if k <= n:
-                for c in range(n):
-                    for i in range(nb):
-                        gb[p, i] += jb[a, c, i] * jb[b, c, i]
-            else:
+            if gram_t:
                 for c in range(k):
                     for i in range(nb):
                         gb[p, i] += jb[c, a, i] * jb[c, b, i]
+            else:
+                for c in range(n):
+                    for i in range(nb):
+                        gb[p, i] += jb[a, c, i] * jb[b, c, i]
     if square:
         _minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
         for i in range(nb):
@@ -581,42 +616,93 @@ def _reduce_block(
             _minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
             for i in range(nb):
                 dg[i] += mnr[i] * mnr[i]
+    # the structural zeros really are negligible over this block?
+    split = drop.shape[0] > 0
+    if split:
+        for i in range(nb):
+            mnr[i] = 0.0
+        for a in range(mm):
+            p = pack[a, a]
+            for i in range(nb):
+                mnr[i] += gb[p, i]
+        for d in range(drop.shape[0]):
+            p = drop[d]
+            for i in range(nb):
+                mnr[i] -= abs(gb[p, i]) / _JACOBI_TOL
+        bad = 0
+        for i in range(nb):
+            bad += mnr[i] < 0.0
+        split = bad == 0
+    # eigenvalues of each diagonal block into ev[0:mm]
+    ncomp = csize.shape[0] if split else 1
+    off = 0
+    for comp in range(ncomp):
+        s = csize[comp] if split else mm
+        if s == 1:
+            p = pack[perm[off], perm[off]] if split else 0
+            for i in range(nb):
+                ev[off, i] = gb[p, i]
+        elif s == 2:
+            a, b = (perm[off], perm[off + 1]) if split else (0, 1)
+            paa, pab, pbb = pack[a, a], pack[a, b], pack[b, b]
+            for i in range(nb):
+                ga, gab, gbb = gb[paa, i], gb[pab, i], gb[pbb, i]
+                half = 0.5 * (ga - gbb)
+                lmax = 0.5 * (ga + gbb) + math.sqrt(half * half + gab * gab)
+                ev[off, i] = lmax
+                lo = (ga * gbb - gab * gab) / lmax if lmax > 0.0 else 0.0
+                ev[off + 1, i] = max(lo, 0.0)
+        else:
+            for u in range(s):
+                for v in range(u, s):
+                    a = perm[off + u] if split else u
+                    b = perm[off + v] if split else v
+                    p = pack[a, b]
+                    q = u * s - (u * (u - 1)) // 2 + (v - u)
+                    for i in range(nb):
+                        hb[q, i] = gb[p, i]
+            _eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
+            for u in range(s):
+                q = u * s - (u * (u - 1)) // 2
+                for i in range(nb):
+                    ev[off + u, i] = hb[q, i]
+        off += s
+    # λmax into mnr, the product of the m − 1 largest into hb[0] (one loop per m: SIMD)
     if mm == 1:
         for i in range(nb):
-            mnr[i] = gb[0, i]  # lmax
-            gb[0, i] = 1.0  # product of the other eigenvalues (none)
+            mnr[i] = ev[0, i]
+            hb[0, i] = 1.0
     elif mm == 2:
         for i in range(nb):
-            a, b, d = gb[0, i], gb[1, i], gb[2, i]
-            half = 0.5 * (a - d)
-            lmax = 0.5 * (a + d) + math.sqrt(half * half + b * b)
+            lmax = max(ev[0, i], ev[1, i])
             mnr[i] = lmax
-            gb[0, i] = lmax
+            hb[0, i] = lmax
     elif mm == 3:
-        _eig_block(gb, nb, 3, wb, idx)
         for i in range(nb):
-            e0, e1, e2 = gb[0, i], gb[3, i], gb[5, i]
+            e0, e1, e2 = ev[0, i], ev[1, i], ev[2, i]
             lmax = max(e0, max(e1, e2))
-            lmid = max(min(e0, e1), min(max(e0, e1), e2))
             mnr[i] = lmax
-            gb[0, i] = lmax * lmid
+            hb[0, i] = lmax * max(min(e0, e1), min(max(e0, e1), e2))
     else:
-        _eig_block(gb, nb, 4, wb, idx)
         for i in range(nb):
-            e0, e1, e2, e3 = gb[0, i], gb[4, i], gb[7, i], gb[9, i]
+            e0, e1, e2, e3 = ev[0, i], ev[1, i], ev[2, i], ev[3, i]
             lo1, hi1 = min(e0, e1), max(e0, e1)
             lo2, hi2 = min(e2, e3), max(e2, e3)
             mnr[i] = max(hi1, hi2)
-            gb[0, i] = hi1 * hi2 * max(lo1, lo2)  # the three largest
+            hb[0, i] = hi1 * hi2 * max(lo1, lo2)  # the three largest
     for i in range(nb):
-        lmax = mnr[i]
-        prod = gb[0, i]
+        prod = hb[0, i]
         d = dg[i]
         lmin = d / prod if prod > 0.0 else 0.0
         smin = math.sqrt(max(lmin, 0.0))
         out_smin[start + i] = smin
-        out_cond[start + i] = math.sqrt(max(lmax, 0.0)) / smin if smin > 0.0 else np.inf
-        out_manip[start + i] = abs(out_det[start + i]) if square else math.sqrt(d)
+        out_cond[start + i] = math.sqrt(max(mnr[i], 0.0)) / smin if smin > 0.0 else np.inf
+    if square:
+        for i in range(nb):
+            out_manip[start + i] = abs(out_det[start + i])
+    else:
+        for i in range(nb):
+            out_manip[start + i] = math.sqrt(dg[i])
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
@@ -628,10 +714,8 @@ def _measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
-    pack: np.ndarray,
-    rsub: np.ndarray,
-    csub: np.ndarray,
     use_block: bool,
+    plan: tuple[Any, ...],
     skip0: bool,
     poly: bool,
     nwork: int,
@@ -661,6 +745,7 @@ def _measures_kernel(
     mm = k if k <= nq else nq
     big = k if k > nq else nq
     npk = mm * (mm + 1) // 2 if use_block else 1
+    nev = mm if use_block else 1
     bsz = block
     nblocks = (nconf + bsz - 1) // bsz
     per = (nblocks + nwork - 1) // nwork
@@ -669,9 +754,12 @@ def _measures_kernel(
         pp = np.empty((3, bsz))
         frames = np.empty((max(m, 1), 6, bsz))
         trig = np.empty((2, bsz))
+        qb = np.empty((nq, bsz))
         jb = np.empty((k, nq, bsz))
         gb = np.empty((npk, bsz))
+        hb = np.empty((npk, bsz))
         wb = np.empty((npk, bsz))
+        ev = np.empty((nev, bsz))
         open_idx = np.empty(bsz, dtype=np.int64)
         dg = np.empty(bsz)
         mnr = np.empty(bsz)
@@ -682,6 +770,9 @@ def _measures_kernel(
         for blk in range(w * per, min(nblocks, (w + 1) * per)):
             start = blk * bsz
             nb = min(nconf, start + bsz) - start
+            for i in range(nb):  # the block's q, transposed: the per-joint loops read rows
+                for c in range(nq):
+                    qb[c, i] = qs[start + i, c]
             for j in range(m):
                 t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
                 if j == 0:
@@ -719,17 +810,17 @@ def _measures_kernel(
                 cj = col[j]
                 if kind[j] == 1:
                     for i in range(nb):
-                        qv = qs[start + i, cj]
+                        qv = qb[cj, i]
                         pp[0, i] += rr[2, i] * qv
                         pp[1, i] += rr[5, i] * qv
                         pp[2, i] += rr[8, i] * qv
                 elif not (j == 0 and skip0):
                     if poly:
                         for i in range(nb):
-                            trig[0, i], trig[1, i] = _sincos(qs[start + i, cj])
+                            trig[0, i], trig[1, i] = _sincos(qb[cj, i])
                     else:
                         for i in range(nb):
-                            qv = qs[start + i, cj]
+                            qv = qb[cj, i]
                             trig[0, i] = math.sin(qv)
                             trig[1, i] = math.cos(qv)
                     for row in range(3):
@@ -769,8 +860,21 @@ def _measures_kernel(
                             ) - frames[j, 3 + v, i] * (pp[u, i] - frames[j, u, i])
             if use_block:
                 _reduce_block(
-                    jb, nb, pack, rsub, csub, gb, wb, open_idx, dg, mnr, start,
-                    out_det, out_manip, out_cond, out_smin,
+                    jb,
+                    nb,
+                    plan,
+                    gb,
+                    hb,
+                    wb,
+                    ev,
+                    open_idx,
+                    dg,
+                    mnr,
+                    start,
+                    out_det,
+                    out_manip,
+                    out_cond,
+                    out_smin,
                 )
             else:
                 for i in range(nb):
@@ -869,6 +973,109 @@ def _block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarra
         rsub, csub = subs, [full] * len(subs)
     as_arr = lambda x: np.array(x, dtype=np.int64).reshape(len(subs), max(m, 1))  # noqa: E731
     return use, pack, as_arr(rsub), as_arr(csub)
+
+
+@dataclass(frozen=True)
+class _GramPlan:
+    """How :func:`_reduce_block` treats one chain and row selection (see :func:`_gram_plan`).
+
+    Attributes:
+        use_block: Whether the block path applies (``m = min(k, n) ≤ 4``, few minors).
+        gram_t: ``G = Jᵀ J`` (else ``J Jᵀ``).
+        perm: (m,) indices of ``G`` ordered by diagonal block.
+        csize: (c,) sizes of the diagonal blocks (one block of size m: no split).
+        drop: Packed positions of the entries between blocks (zero at random samples).
+        arrays: The tuple the kernel takes: ``(pack, rsub, csub, gram_t, perm, csize, drop)``.
+
+    """
+
+    use_block: bool
+    gram_t: bool
+    perm: np.ndarray
+    csize: np.ndarray
+    drop: np.ndarray
+    arrays: tuple[Any, ...]
+
+
+def _components(zero: np.ndarray) -> list[list[int]]:
+    """Connected components of the graph with an edge where ``zero[a, b]`` is false."""
+    m = zero.shape[0]
+    seen = [False] * m
+    comps = []
+    for a in range(m):
+        if seen[a]:
+            continue
+        stack, comp = [a], []
+        seen[a] = True
+        while stack:
+            u = stack.pop()
+            comp.append(u)
+            for v in range(m):
+                if not seen[v] and not zero[u, v]:
+                    seen[v] = True
+                    stack.append(v)
+        comps.append(sorted(comp))
+    return comps
+
+
+def _gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> _GramPlan:
+    """Plan the block reduction for ``model``'s rows ``sel`` (cached on the model).
+
+    ``G`` is ``J Jᵀ`` when k < n, ``Jᵀ J`` when k > n, and, when square, whichever splits
+    into smaller diagonal blocks: the entries of both are evaluated at 16 random
+    configurations (the first joint at 0 when ``skip0``, as in the kernel) and those below
+    ``1e-14 · max |G|`` at all of them are taken as structural zeros. The kernel re-checks them
+    on every block (a block where one is not negligible is solved whole), so a wrong guess
+    only costs time. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}`` (the hip column is
+    orthogonal to the leg plane), the SCARA's (x, y, z, wz) ``{θ1, θ2, θ3} ⊕ {d4}``.
+    """
+    cache = getattr(model, "_hk_gram_plans", None)
+    if cache is None:
+        cache = {}
+        try:
+            model._hk_gram_plans = cache
+        except AttributeError:  # pragma: no cover
+            pass
+    key = (sel, skip0)
+    if key in cache:
+        return cache[key]
+    arrays = _arrays(model)
+    k, n = len(sel), arrays.nq
+    use_block, pack, rsub, csub = _block_plan(k, n)
+    m = min(k, n)
+    best: tuple[int, int, bool, list[list[int]], np.ndarray] | None = None
+    if use_block and m >= 2:
+        q = model.random_q(16, seed=2024)
+        if skip0:
+            q[:, arrays.col[0]] = 0.0
+        jac = _kernels.jacobian_batch(arrays, q, rows=6)[:, list(sel), :]
+        for gram_t in (False, True) if k == n else (k > n,):
+            g = np.swapaxes(jac, 1, 2) @ jac if gram_t else jac @ np.swapaxes(jac, 1, 2)
+            zero = (np.abs(g) <= 1e-14 * max(float(np.abs(g).max()), 1e-300)).all(axis=0)
+            comps = _components(zero)
+            score = (max(len(c) for c in comps), -len(comps))
+            if best is None or score < best[:2]:
+                best = (*score, gram_t, comps, zero)
+    if best is None:
+        gram_t, comps = k > n, [list(range(m))]
+    else:
+        gram_t, comps = best[2], best[3]
+    perm = np.array([a for c in comps for a in c] or [0], dtype=np.int64)
+    csize = np.array([len(c) for c in comps] or [1], dtype=np.int64)
+    where = {a: ci for ci, c in enumerate(comps) for a in c}
+    drop = np.array(
+        sorted(
+            int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]
+        ),
+        dtype=np.int64,
+    )
+    if len(comps) == 1:
+        perm = np.arange(max(m, 1), dtype=np.int64)
+    plan = _GramPlan(
+        use_block, gram_t, perm, csize, drop, (pack, rsub, csub, gram_t, perm, csize, drop)
+    )
+    cache[key] = plan
+    return plan
 
 
 def _axis_rotation(u: np.ndarray, angle: float) -> np.ndarray:
@@ -1076,9 +1283,9 @@ def measures_batch(
     skip0 = _first_joint_invariant(al, tuple(int(r) for r in sel))
     poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= _POLY_TRIG_MAX)
     nwork = max(1, min(_kernels.numba.get_num_threads(), -(-n // _BLOCK)))
-    use_block, pack, rsub, csub = _block_plan(int(sel.shape[0]), int(q.shape[1]))
+    plan = _gram_plan(mdl, tuple(int(r) for r in sel), skip0)
     _measures_kernel(
-        al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, pack, rsub, csub, use_block,
+        al.prot, al.ptr, al.pident, al.kind, al.col, q, sel, plan.use_block, plan.arrays,
         skip0, poly, nwork, _BLOCK, *out,
     )
     return out  # type: ignore[return-value]

@@ -79,6 +79,121 @@ def test_kernel_equals_pinocchio(source, tip, rows):
     assert np.abs(nsmin - psmin).max() < 1e-12
 
 
+#: Every catalogue chain (default rows), a hexapod leg tip, a Solo12 leg, and shapes beyond it.
+CHAINS = [
+    ("hexabot_leg", None, None),  # 3×3, G = Jᵀ J split {q1} ⊕ {q2, q3}
+    ("coxa_tibia_leg", None, None),  # 3×2
+    ("scara", None, None),  # 4×4 (x, y, z, wz), split {x, y, wz} ⊕ {z}
+    ("pendulum", None, None),  # 3×1
+    ("hexapod", "leg1_foot", None),  # 3×3, mount rotated in the base
+    ("erd:solo12", "FL_FOOT", None),  # 3×3, lateral offsets: no split, joint range ±10 rad
+    ("scara", None, ("x", "y", "wz")),  # 3×4: Cauchy–Binet over 4 minors
+    ("scara", None, "all"),  # 6×4: 15 minors, 4×4 Jacobi
+    ("five_dof", None, "all"),  # 6×5: m = 5, the per-configuration path
+]
+
+
+def _five_dof():
+    rows = [KhalilRow("revolute", a, d, 0.0, r) for a, d, r in (
+        (0.0, 0.0, 0.1), (math.pi / 2, 0.05, 0.0), (0.0, 0.2, 0.02), (-math.pi / 2, 0.01, 0.15),
+        (math.pi / 2, 0.0, 0.0),
+    )]
+    return Chain(rows=(*rows, KhalilRow("fixed", 0.0, 0.0, 0.0, 0.08)), name="five_dof")
+
+
+def _load_chain(source, tip):
+    return load(_five_dof()) if source == "five_dof" else load(source, tip=tip)
+
+
+@pytest.mark.parametrize(("source", "tip", "rows"), CHAINS)
+def test_every_chain_equals_pinocchio(source, tip, rows):
+    from hexapod_kin.singularity import _aligned, _first_joint_invariant, _gram_plan
+
+    model = _load_chain(source, tip)
+    names = ROW_NAMES if rows == "all" else (rows or default_rows(model))
+    qs = model.random_q(1500, seed=21)  # two full blocks and a partial one
+    det, manip, cond, smin = measures_batch(model, qs, rows)
+    pdet, pmanip, smax, psmin = pin_measures(model, qs, names)
+    if len(names) == model.nq:
+        assert np.abs(det - pdet).max() < 1e-12
+    else:
+        assert np.isnan(det).all()
+    assert np.abs(manip - pmanip).max() < 1e-12
+    assert np.abs(smin - psmin).max() < 1e-12
+    assert np.abs(1 / cond - psmin / smax).max() < 1e-12
+    sel = tuple(ROW_NAMES.index(r) for r in names)
+    plan = _gram_plan(model, sel, _first_joint_invariant(_aligned(model), sel))
+    assert plan.use_block == (min(len(names), model.nq) <= 4)
+
+
+def test_gram_plans_split_where_structure_allows():
+    from hexapod_kin.singularity import _gram_plan
+
+    def sizes(source, tip=None):
+        model = load(source, tip=tip)
+        return sorted(_gram_plan(model, (0, 1, 2, 5)[: 4 if source == "scara" else 3], True).csize)
+
+    assert sizes("hexabot_leg") == [1, 2]
+    assert sizes("hexapod", "leg1_foot") == [1, 2]
+    assert sizes("scara") == [1, 3]
+    assert sizes("erd:solo12", "FL_FOOT") == [3]
+    assert sizes("coxa_tibia_leg") == [1, 1]
+
+
+def test_wrong_split_guess_is_caught_per_block():
+    # a plan claiming G = {0} ⊕ {1, 2} for the Solo12 leg (false: G[0, 2] != 0) must not
+    # change the results: the kernel checks the dropped entries on every block
+    from dataclasses import replace
+
+    from hexapod_kin.singularity import _BLOCK, _aligned, _gram_plan, _measures_kernel
+
+    model = load("erd:solo12", tip="FL_FOOT")
+    al = _aligned(model)
+    plan = _gram_plan(model, (0, 1, 2), True)
+    perm = np.array([0, 1, 2])
+    csize = np.array([1, 2])
+    drop = np.array([1, 2])  # packed (0, 1), (0, 2)
+    pack, rsub, csub, gram_t = plan.arrays[:4]
+    bad = replace(plan, arrays=(pack, rsub, csub, False, perm, csize, drop))
+    qs = model.random_q(1200, seed=5)
+    out = tuple(np.empty(len(qs)) for _ in range(4))
+    _measures_kernel(
+        al.prot, al.ptr, al.pident, al.kind, al.col, qs, np.arange(3), True, bad.arrays, True,
+        True, 2, _BLOCK, *out,
+    )
+    _, _, smax, psmin = pin_measures(model, qs, ("x", "y", "z"))
+    assert np.abs(out[3] - psmin).max() < 1e-12
+    assert np.abs(1 / out[2] - psmin / smax).max() < 1e-12
+
+
+def test_new_shapes_accurate_near_singularities():
+    # coxa-tibia 3×2 with l1 < l2: sigma = {|l1 + l2 cos q2|, l2} (orthogonal columns), so
+    # sigma_min -> 0 at cos q2 = -l1/l2; Cauchy–Binet keeps its relative accuracy
+    from hexapod_kin import robots
+
+    coxa = load(robots.coxa_tibia_leg(l1=5.0, l2=10.0))
+    q2 = 2 * math.pi / 3 + np.array([1e-10, -1e-8, 1e-6, 0.5])
+    qs = np.column_stack([np.full(4, 0.3), q2])
+    _, manip, cond, smin = measures_batch(coxa, qs)
+    rho = np.abs(5.0 + 10.0 * np.cos(q2))
+    # absolute error ~ eps * sigma_max (q2 itself is rounded: rho is only known to ~4e-15)
+    assert np.all(np.abs(smin - np.minimum(rho, 10.0)) <= 1e-14 + 1e-9 * rho)
+    assert np.all(np.abs(manip - rho * 10.0) <= 1e-13 + 1e-9 * rho)
+    assert np.all(np.abs(1 / cond - rho / 10.0) <= 1e-15 + 1e-9 * rho)
+    # SCARA (4×4) arm stretched / folded, hexapod leg and Solo12 leg near q3 = 0: Pinocchio
+    for source, tip, q in (
+        ("scara", None, [[0.2, 1e-7, 0.3, 0.05], [0.2, math.pi - 1e-7, -1.0, 0.1]]),
+        ("hexapod", "leg1_foot", [[0.3, 0.4, 1e-7], [0.1, -0.2, math.pi - 1e-8]]),
+        ("erd:solo12", "FL_FOOT", [[0.1, 0.3, 1e-7], [-0.4, 1.0, 2e-8]]),
+    ):
+        model = load(source, tip=tip)
+        qs = np.asarray(q)
+        _, _, _, smin = measures_batch(model, qs)
+        _, _, _, psmin = pin_measures(model, qs, default_rows(model))
+        assert psmin.max() < 1e-6
+        assert np.allclose(smin, psmin, rtol=1e-6, atol=0)
+
+
 def test_first_joint_invariance_rule():
     # S·blockdiag(R, R)·Sᵀ orthogonal <=> the measures do not depend on joint 0
     from hexapod_kin.singularity import _aligned, _first_joint_invariant
@@ -135,36 +250,77 @@ def test_polynomial_sincos_matches_libm():
     assert np.abs(c - np.cos(x)).max() <= 2.3e-16
 
 
-def test_eig3_block_clustered_and_rank_deficient():
-    # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
-    from hexapod_kin.singularity import _eig3_block
-
-    rng = np.random.default_rng(9)
+def _spectra_matrices(m, rng):
+    """Symmetric PSD m×m matrices with clustered, repeated and zero eigenvalues, and random."""
     spectra = [
-        (1.0, 1.0 - 1e-9, 0.5),
-        (1.0, 0.3, 0.3 - 1e-10),
-        (1.0, 1.0, 1.0),
-        (1.0, 1e-20, 0.0),
-        (2.0, 0.0, 0.0),
-        (0.0, 0.0, 0.0),
+        (1.0, 1.0 - 1e-9, 0.5, 0.25),
+        (1.0, 0.3, 0.3 - 1e-10, 0.1),
+        (1.0, 1.0, 1.0, 1.0),
+        (1.0, 1e-20, 0.0, 0.0),
+        (2.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0, 0.0),
+        (1.0, 1.0 - 1e-6, 1.0 - 2e-6, 1e-8),
     ]
     mats = []
     for lam in spectra:
-        rot, _ = np.linalg.qr(rng.normal(size=(200, 3, 3)))
-        mats.append(rot @ (np.asarray(lam)[:, None] * np.swapaxes(rot, 1, 2)))
-    a = rng.normal(size=(2000, 3, 3))
+        rot, _ = np.linalg.qr(rng.normal(size=(200, m, m)))
+        mats.append(rot @ (np.asarray(lam[:m])[:, None] * np.swapaxes(rot, 1, 2)))
+    a = rng.normal(size=(2000, m, m))
     mats.append(a @ np.swapaxes(a, 1, 2))
     g = np.concatenate(mats)
-    g[-1] = np.diag([3.0, 1.0, 2.0])
-    gb = np.ascontiguousarray(
-        np.stack([g[:, 0, 0], g[:, 0, 1], g[:, 0, 2], g[:, 1, 1], g[:, 1, 2], g[:, 2, 2]])
-    )
-    _eig3_block(gb, g.shape[0], np.empty(g.shape[0], dtype=np.int64))
-    got = np.sort(gb[[0, 3, 5]].T, axis=1)
+    g[-1] = np.diag(np.arange(m, 0, -1.0)[[1, 0, *range(2, m)]])
+    return g
+
+
+@pytest.mark.parametrize("m", [3, 4])
+def test_eig_block_clustered_and_rank_deficient(m):
+    # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
+    from hexapod_kin.singularity import _JACOBI_TOL, _eig3_block, _eig_block
+
+    g = _spectra_matrices(m, np.random.default_rng(9))
+    iu = np.triu_indices(m)
+    gb = np.ascontiguousarray(g[:, iu[0], iu[1]].T)
+    if m == 3:
+        _eig3_block(gb, g.shape[0], np.empty(g.shape[0], dtype=np.int64))
+    else:
+        _eig_block(gb, g.shape[0], m, np.empty_like(gb), np.empty(g.shape[0], dtype=np.int64))
+    diag = iu[0] == iu[1]
+    got = np.sort(gb[diag].T, axis=1)
     ref = np.linalg.eigvalsh(g)
     scale = np.maximum(ref[:, -1], 1e-300)
     assert (np.abs(got - ref).max(axis=1) / scale).max() < 1e-14
-    assert np.abs(gb[[1, 2, 4]]).max() <= 1e-15 * np.abs(ref).max()
+    # the documented stopping rule holds: Weyl, or the quadratic bound for isolated eigenvalues
+    off = np.abs(gb[~diag]).sum(axis=0)
+    tol = _JACOBI_TOL * gb[diag].sum(axis=0)
+    d = gb[diag]
+    gap = np.min([np.abs(d[a] - d[b]) for a in range(m) for b in range(a + 1, m)], axis=0)
+    quad = (gap > 3 * off) & (2 * off**2 <= tol * (gap - off))
+    assert np.all((off <= tol) | quad)
+
+
+def test_minor_block_and_cauchy_binet():
+    # explicit minors (m <= 4) against numpy det; det(J Jᵀ) = sum of squared maximal minors
+    from itertools import combinations
+
+    from hexapod_kin.singularity import _minor_block, njit
+
+    @njit
+    def minors(jb, r, c, m, out):
+        _minor_block(jb, r, c, m, jb.shape[2], out)
+
+    rng = np.random.default_rng(4)
+    for m in (1, 2, 3, 4):
+        jb = rng.normal(size=(m, 6, 64))
+        total = np.zeros(64)
+        for cols in combinations(range(6), m):
+            out = np.empty(64)
+            minors(jb, np.arange(m), np.array(cols), m, out)
+            ref = np.linalg.det(np.moveaxis(jb[:, list(cols)], 2, 0))
+            assert np.abs(out - ref).max() < 1e-12 * max(1.0, np.abs(ref).max())
+            total += out**2
+        jac = np.moveaxis(jb, 2, 0)
+        gram = np.linalg.det(jac @ np.swapaxes(jac, 1, 2))
+        assert np.allclose(total, gram, rtol=1e-10)
 
 
 def test_kernel_accurate_near_singularities(leg):

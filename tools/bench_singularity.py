@@ -86,7 +86,7 @@ def run(quick: bool) -> list[dict]:
     assert sing._first_joint_invariant(al, (0, 1, 2))
     out_ns = tuple(np.empty(N) for _ in range(4))
 
-    use_block, pack, rsub, csub = sing._block_plan(3, 3)
+    plans = {skip: sing._gram_plan(model, (0, 1, 2), skip) for skip in (False, True)}
 
     def raw(skip0: bool) -> None:
         sing._measures_kernel(
@@ -97,10 +97,8 @@ def run(quick: bool) -> list[dict]:
             al.col,
             qs,
             sel,
-            pack,
-            rsub,
-            csub,
-            use_block,
+            plans[skip0].use_block,
+            plans[skip0].arrays,
             skip0,
             True,
             threads,
