@@ -21,17 +21,22 @@ the selected rows of ``J`` and the measures in one compiled pass (numba ``prange
 storing the Jacobians. Configurations are processed in structure-of-arrays blocks, joint by
 joint, so the inner loops vectorise (SIMD): sin / cos by a polynomial (fdlibm kernels, no libm
 calls), and, when the selected rows are invariant under the first revolute joint (see
-:func:`_first_joint_invariant`), that joint is not evaluated at all. Square 3×3 ``J``:
-``G = J Jᵀ`` is diagonalised by cyclic Jacobi over the block (backward stable for clustered
-eigenvalues), other shapes by closed forms (m ≤ 3) or Jacobi per configuration; always
-``σm = sqrt(det G / Π_{i<m} λi)`` so that ``σm`` keeps full accuracy near a singularity
-(``det G = det(J)²`` in the square case).
+:func:`_first_joint_invariant`), that joint is not evaluated at all. Every shape with
+``m = min(k, n) ≤ 4`` is reduced over the whole block (:func:`_reduce_block`): the Gram
+matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal blocks where the chain's structure
+makes it block diagonal, see :func:`_gram_plan`; the split is re-checked on every block)
+gives the largest eigenvalues — closed forms for blocks of size ≤ 2, cyclic Jacobi over the
+block for 3 and 4 (backward stable for clustered eigenvalues) — and ``det G`` comes from
+``J``'s own minors (``det(J)²`` when square, Cauchy–Binet otherwise), so that
+``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity. Larger ``m`` goes
+through a per-configuration reduction.
 """
 
 from __future__ import annotations
 
 import math
 import sys
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -1114,6 +1119,34 @@ def _first_joint_invariant(al: _AlignedChain, sel: tuple[int, ...]) -> bool:
     return True
 
 
+#: The last output buffer of :func:`measures_batch`, kept for reuse (see :func:`_output_arrays`).
+_OUT_POOL: list[np.ndarray] = []
+_OUT_LOCK = threading.Lock()
+_OUT_POOL_MAX_BYTES = 128 * 2**20
+
+
+def _output_arrays(n: int) -> tuple[np.ndarray, ...]:
+    """Four (n,) float64 arrays for :func:`measures_batch`: the rows of one (4, n) buffer.
+
+    Touching fresh memory is slow on the 2-core VM (first-touch page faults, ~1.3 ms per MB:
+    ~40 ms for the 32 MB of 1e6 configurations, as long as the kernel itself), so the last
+    buffer (up to ``_OUT_POOL_MAX_BYTES``) is kept and handed out again — only when nothing
+    references it any more: the rows returned hold it through ``.base``, so while any result
+    array (or a view of one) is alive its reference count stays above the pool's own.
+    """
+    with _OUT_LOCK:
+        if _OUT_POOL:
+            buf = _OUT_POOL[0]
+            # references: the pool list, ``buf`` and getrefcount's argument
+            if buf.shape[1] == n and sys.getrefcount(buf) == 3:
+                return tuple(buf[i] for i in range(4))
+            del buf
+        buf = np.empty((4, n))
+        if buf.nbytes <= _OUT_POOL_MAX_BYTES:
+            _OUT_POOL[:] = [buf]
+        return tuple(buf[i] for i in range(4))
+
+
 def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
     """Reference / fallback: measures of a stack of Jacobians (N, k, n) with numpy SVD."""
     n_conf, k, n = jac.shape
@@ -1276,7 +1309,7 @@ def measures_batch(
         return res  # type: ignore[return-value]
     n = q.shape[0]
     if out is None:
-        out = tuple(np.empty(n) for _ in range(4))
+        out = _output_arrays(n)
     elif len(out) != 4 or any(o.shape != (n,) or o.dtype != np.float64 for o in out):
         raise ConfigurationError(f"out: four float64 arrays of shape ({n},) are required")
     al = _aligned(mdl)

@@ -194,6 +194,28 @@ def test_new_shapes_accurate_near_singularities():
         assert np.allclose(smin, psmin, rtol=1e-6, atol=0)
 
 
+def test_output_buffers_reused_only_when_unreferenced(leg):
+    qs1, qs2 = leg.random_q(3000, seed=1), leg.random_q(3000, seed=2)
+    ref1 = [r.copy() for r in measures_batch(leg, qs1)]
+    ref2 = [r.copy() for r in measures_batch(leg, qs2)]
+    first = measures_batch(leg, qs1)
+    second = measures_batch(leg, qs2)  # `first` is alive: a different buffer
+    assert not any(np.shares_memory(a, b) for a in first for b in second)
+    view = second[3][::2]
+    del second
+    third = measures_batch(leg, qs1)  # a view of `second` is alive: not reused either
+    assert not np.shares_memory(view, third[3])
+    base = id(third[3].base)  # the pooled buffer now
+    assert all(np.array_equal(g, r, equal_nan=True) for g, r in zip(first, ref1))
+    assert all(np.array_equal(g, r, equal_nan=True) for g, r in zip(third, ref1))
+    assert np.array_equal(view, ref2[3][::2])
+    del view, third
+    again = measures_batch(leg, qs2)  # nothing references the pooled buffer: reused
+    assert id(again[3].base) == base
+    assert all(a.base is again[0].base for a in again)
+    assert all(np.array_equal(g, r, equal_nan=True) for g, r in zip(again, ref2))
+
+
 def test_first_joint_invariance_rule():
     # S·blockdiag(R, R)·Sᵀ orthogonal <=> the measures do not depend on joint 0
     from hexapod_kin.singularity import _aligned, _first_joint_invariant

@@ -15,6 +15,13 @@ Compares, in one run:
 
 The 1-minute load average before and after is printed (other processes skew the figures).
 Accuracy: the kernel's measures are compared with Pinocchio's at sampled configurations.
+
+Then one line per chain (:data:`CHAINS`: every catalogue chain, a hexapod leg tip, the Solo12
+front-left leg), default rows, 1e6 random configurations: the median of
+``measures_batch(model, Q, out=...)`` (preallocated outputs) and of ``measures_batch(model, Q)``
+(fresh output arrays: on this VM first-touch page faults of 32 MB can cost up to ~40 ms when
+the allocator hands back unmapped memory), the target, and the largest difference from
+Pinocchio (det, manipulability, sigma_min, 1/condition) at sampled configurations.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ from __future__ import annotations
 import os
 import statistics
 import time
+from functools import partial
 
 import numpy as np
 
@@ -57,6 +65,83 @@ def _load() -> str:
         return f"{os.getloadavg()[0]:.2f}"
     except OSError:  # pragma: no cover
         return "n/a"
+
+
+#: Every catalogue chain (default rows), a hexapod leg tip and a Solo12 leg.
+CHAINS = (
+    ("hexabot_leg", None),
+    ("coxa_tibia_leg", None),
+    ("scara", None),
+    ("pendulum", None),
+    ("hexapod", "leg1_foot"),
+    ("erd:solo12", "FL_FOOT"),
+)
+
+
+def _pin_measures(model, qs, rows):
+    """Pinocchio Jacobians (selected rows) + numpy SVD: (det, manipulability, 1/cond, smin)."""
+    import pinocchio as pin
+
+    from hexapod_kin.singularity import ROW_NAMES
+
+    idx = [ROW_NAMES.index(r) for r in rows]
+    m, d, fid = model.model, model.data, model.tip_id
+    ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    # (6, nv) reshaped: eigenpy returns a 1-D array when nv = 1
+    jac = np.array([pin.computeFrameJacobian(m, d, q, fid, ref).reshape(6, -1)[idx] for q in qs])
+    sv = np.linalg.svd(jac, compute_uv=False)
+    k, n = jac.shape[1:]
+    det = np.linalg.det(jac) if k == n else np.full(len(qs), np.nan)
+    return det, np.prod(sv, axis=1), sv[:, -1] / sv[:, 0], sv[:, -1]
+
+
+def run_chains(quick: bool) -> list[dict]:
+    """One line per chain: ``measures_batch(model, Q)`` on 1e6 random configurations."""
+    from hexapod_kin import load
+    from hexapod_kin import singularity as sing
+
+    repeats = 5 if quick else 11
+    n_err = 2_000 if quick else 5_000
+    rows_out = []
+    for source, tip in CHAINS:
+        load_before = _load()
+        model = load(source, tip=tip)
+        rows = sing.default_rows(model)
+        qs = model.random_q(N, seed=0)
+        out = tuple(np.empty(N) for _ in range(4))
+        sing.measures_batch(model, qs[:1000])  # warm-up / compile
+        with_out = partial(sing.measures_batch, model, qs, out=out)
+        t_out, t_out_min = _median_time(with_out, repeats)
+        t_new, _ = _median_time(partial(sing.measures_batch, model, qs), repeats)
+        pick = np.random.default_rng(3).choice(N, n_err, replace=False)
+        pdet, pmanip, pinv, psmin = _pin_measures(model, qs[pick], rows)
+        det, manip, cond, smin = (o[pick] for o in out)
+        errs = [np.abs(manip - pmanip).max(), np.abs(smin - psmin).max()]
+        errs.append(np.abs(1 / cond - pinv).max())
+        if not np.isnan(pdet).all():
+            errs.append(np.abs(det - pdet).max())
+        sel = tuple(sing.ROW_NAMES.index(r) for r in rows)
+        skip0 = sing._first_joint_invariant(sing._aligned(model), sel)
+        plan = sing._gram_plan(model, sel, skip0)
+        gram = "Jt J" if plan.gram_t else "J Jt"
+        blocks = "+".join(str(int(c)) for c in plan.csize)
+        name = source + (f" tip={tip}" if tip else "")
+        rows_out.append(
+            {
+                "case": f"{name} 1e6 random configs, rows {','.join(rows)} "
+                f"({len(rows)}x{model.nq} J, G = {gram} blocks {blocks}, skip0={skip0})",
+                "engine": "measures_batch (kernel)",
+                "median_s": round(t_out, 4),
+                "min_s": round(t_out_min, 4),
+                "median_s_fresh_outputs": round(t_new, 4),
+                "target_s": 0.1,
+                "meets_target": t_out <= 0.1 and t_new <= 0.1,
+                "max_abs_err_vs_pinocchio": f"{max(errs):.1e} (det, manip, sigma_min, 1/cond at "
+                f"{n_err} configs)",
+                "load_avg_1min": f"{load_before} -> {_load()}",
+            }
+        )
+    return rows_out
 
 
 def run(quick: bool) -> list[dict]:
@@ -197,7 +282,7 @@ def run(quick: bool) -> list[dict]:
             "ratio_to_kernel": round(t_pin / t_kernel, 1),
         },
     ]
-    return rows
+    return rows + run_chains(quick)
 
 
 if __name__ == "__main__":
