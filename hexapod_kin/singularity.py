@@ -294,7 +294,7 @@ _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.1359
 _JACOBI_TOL = 1e-15
 _JACOBI_MAX_SWEEPS = 12
 #: Sweeps run over the whole block (SIMD, no gather) until at most 1/this of it is unconverged.
-_JACOBI_GATHER = 8
+_JACOBI_GATHER = 4
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
