@@ -943,7 +943,7 @@ def _aligned_chain(arrays: _kernels.ChainArrays) -> _AlignedChain:
 
 
 #: Configurations per structure-of-arrays block of :func:`_measures_kernel`.
-_BLOCK = 512
+_BLOCK = 256
 #: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
 _MAX_MINORS = 70
 
