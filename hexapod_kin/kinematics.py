@@ -20,7 +20,12 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import ParameterError, choices
-from .model import Model, build, fast_q_ok
+from .model import _F64, _ND, Model, _hypot, build, fast_q_ok
+
+# Bound once: module attribute lookups cost on the per-call hot path.
+_forward_kinematics = pin.forwardKinematics
+_update_frame_placement = pin.updateFramePlacement
+_compute_frame_jacobian = pin.computeFrameJacobian
 
 __all__ = [
     "REFERENCES",
@@ -35,6 +40,8 @@ REFERENCES: dict[str, pin.ReferenceFrame] = {
     "world": pin.ReferenceFrame.WORLD,
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
 }
+_LOCAL = pin.ReferenceFrame.LOCAL
+_WORLD = pin.ReferenceFrame.WORLD
 
 
 def _reference(reference: str) -> pin.ReferenceFrame:
@@ -63,12 +70,19 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape or non-finite values.
 
         """
-        # Fast path inlined (this is the hot call): float64 array of the right shape, finite.
-        if not fast_q_ok(q, self._shape):
+        # The hot call: one attribute lookup for what it needs, the check of
+        # model.fast_q_ok inlined (no extra function call).
+        m, d, fid, shape, root = self._hot
+        if not (
+            q.__class__ is _ND
+            and q.dtype is _F64
+            and q.shape == shape
+            and _hypot(*q.tolist()) < 1e150
+        ):
             q = self.check_q(q)
-        pin.forwardKinematics(self.model, self.data, q)
-        omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
-        if self._base_is_root:
+        _forward_kinematics(m, d, q)
+        omf = _update_frame_placement(m, d, fid)
+        if root:
             return omf.homogeneous
         return (self.baseMo * omf).homogeneous
 
@@ -131,18 +145,25 @@ class KinematicModel(Model):
             ConfigurationError: Bad ``q``.
 
         """
+        m, d, fid, shape, root = self._hot
         ref = REFERENCES.get(reference) if reference.__class__ is str else None
         if ref is None:
             ref = _reference(reference)
-        fid = self.tip_id if frame is None else self.frame_id(frame)
-        if not fast_q_ok(q, self._shape):
+        if frame is not None:
+            fid = self.frame_id(frame)
+        if not (
+            q.__class__ is _ND
+            and q.dtype is _F64
+            and q.shape == shape
+            and _hypot(*q.tolist()) < 1e150
+        ):
             q = self.check_q(q)
-        jac = pin.computeFrameJacobian(self.model, self.data, q, fid, ref)
+        jac = _compute_frame_jacobian(m, d, q, fid, ref)
         if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array
             jac = jac.reshape(6, 1)
-        if self._base_is_root or ref == pin.ReferenceFrame.LOCAL:
+        if root or ref == _LOCAL:
             return jac
-        if ref == pin.ReferenceFrame.WORLD:
+        if ref == _WORLD:
             return self.baseMo.action @ jac
         r = self._rot_base
         out = np.empty_like(jac)
@@ -159,9 +180,10 @@ class KinematicModel(Model):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Tip pose and Jacobian in one pass (cheaper than calling both)."""
         ref = _reference(reference)
-        qv = self.check_q(q)
-        jac = pin.computeFrameJacobian(self.model, self.data, qv, self.tip_id, ref)
-        if self.nq == 1:
+        if not fast_q_ok(q, self._shape):
+            q = self.check_q(q)
+        jac = _compute_frame_jacobian(self.model, self.data, q, self.tip_id, ref)
+        if jac.ndim == 1:
             jac = jac.reshape(6, 1)
         omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
         if self._base_is_root:

@@ -306,8 +306,12 @@ class Model:
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = _path_frames(m, self.base_id, self.tip_id)
+        # What the per-call hot paths need, in one attribute (see kinematics.fk).
+        self._hot = (self.model, self.data, self.tip_id, self._shape, self._base_is_root)
 
-    _FROZEN = frozenset({"model", "data", "full_model", "urdf", "source", "base", "tip"})
+    _FROZEN = frozenset(
+        {"model", "data", "full_model", "urdf", "source", "base", "tip", "tip_id", "_hot"}
+    )
 
     def __setattr__(self, key: str, value: Any) -> None:
         # Model and Data are created together here and never re-paired: once set, these
