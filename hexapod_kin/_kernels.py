@@ -29,7 +29,6 @@ __all__ = [
     "fk_position",
     "position_jacobian",
     "fk_jac_into",
-    "fk_jac_trig_into",
 ]
 
 try:  # pragma: no cover - exercised in both configurations by CI extras
@@ -160,29 +159,6 @@ def fk_jac_into(
 
     ``scratch`` is a (6, m) work array (joint origins and axes); nothing is allocated.
     """
-    fk_jac_trig_into(rot, trans, axis, kind, col, q, q, q, False, out_p, out_j, scratch, want_jac)
-
-
-@njit(cache=True, fastmath=False, nogil=True)
-def fk_jac_trig_into(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    q: np.ndarray,
-    cq: np.ndarray,
-    sq: np.ndarray,
-    use_trig: bool,
-    out_p: np.ndarray,
-    out_j: np.ndarray,
-    scratch: np.ndarray,
-    want_jac: bool,
-) -> None:  # pragma: no cover - compiled
-    """As :func:`fk_jac_into`, with ``cq = cos(q)``, ``sq = sin(q)`` precomputed if ``use_trig``.
-
-    Lets a caller reuse trigonometry it already has (e.g. a grid scan with repeated angles).
-    """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
     r10, r11, r12 = 0.0, 1.0, 0.0
@@ -225,22 +201,14 @@ def fk_jac_trig_into(
         if kind[k] == 1:
             px, py, pz = px + wx * qk, py + wy * qk, pz + wz * qk
         elif ux == 0.0 and uy == 0.0 and uz == 1.0:
-            if use_trig:
-                c = cq[col[k]]
-                s = sq[col[k]]
-            else:
-                c = np.cos(qk)
-                s = np.sin(qk)
+            c = np.cos(qk)
+            s = np.sin(qk)
             r00, r01 = c * r00 + s * r01, c * r01 - s * r00
             r10, r11 = c * r10 + s * r11, c * r11 - s * r10
             r20, r21 = c * r20 + s * r21, c * r21 - s * r20
         else:
-            if use_trig:
-                c = cq[col[k]]
-                s = sq[col[k]]
-            else:
-                c = np.cos(qk)
-                s = np.sin(qk)
+            c = np.cos(qk)
+            s = np.sin(qk)
             v = 1.0 - c
             # Rodrigues rotation about the local axis u by qk: E = c I + s [u]x + v u u^T
             e00 = c + v * ux * ux
@@ -310,15 +278,10 @@ def _batch(
         scratch = np.empty((6, max(rot.shape[0], 1)))
         dummy = np.empty((3, qs.shape[1]))
         for i in range(c * chunk, min(n, (c + 1) * chunk)):
-            q = qs[i]
             if want_jac:
-                fk_jac_trig_into(
-                    rot, trans, axis, kind, col, q, q, q, False, out_p[i], out_j[i], scratch, True
-                )
+                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], out_j[i], scratch, True)
             else:
-                fk_jac_trig_into(
-                    rot, trans, axis, kind, col, q, q, q, False, out_p[i], dummy, scratch, False
-                )
+                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], dummy, scratch, False)
 
 
 def _check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
