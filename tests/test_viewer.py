@@ -35,18 +35,6 @@ from hexapod_kin.params import table_fk
 
 umsgpack = pytest.importorskip("umsgpack")
 
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--enable-unsafe-swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--disable-quic",
-]
-
-
 # ====================================================================== helpers
 def _alive(pid: int) -> bool:
     """True if ``pid`` exists and is not a zombie (a zombie has exited)."""
@@ -161,7 +149,7 @@ def browser(chromium):
             pytest.fail("CI is set but playwright (python) is not installed")
         pytest.skip("playwright (python) is not installed; browser tests skipped")
     with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        b = viewer.launch_chromium(p, chromium)
         yield b
         b.close()
 

@@ -23,16 +23,6 @@ from hexapod_kin import load, motion, viewer
 from hexapod_kin._io import atomic_write
 
 ROOT = Path(__file__).resolve().parent.parent
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--enable-unsafe-swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--disable-quic",
-]
 
 
 def hexapod_scene(out: Path) -> tuple[Path, float]:
@@ -70,7 +60,7 @@ def shoot(
         if chromium is None:
             raise SystemExit("screenshots: `chromium` is not on PATH (apt-get install chromium)")
         with sync_playwright() as p:
-            own = p.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+            own = viewer.launch_chromium(p, chromium)
             try:
                 return shoot(html, png, t, size, own)
             finally:
