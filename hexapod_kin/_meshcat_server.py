@@ -204,7 +204,7 @@ class MeshcatServer:
         else:  # the leader is gone; make sure nothing of its group is left
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(proc.pid, signal.SIGKILL)
-        for stream in (proc.stdin, proc.stdout):
+        for stream in (proc.stdin, proc.stdout, self._stderr):
             with contextlib.suppress(OSError):
                 if stream is not None:
                     stream.close()
