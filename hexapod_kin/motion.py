@@ -409,11 +409,28 @@ SEED_Q0 = (0.0, 0.3, 1.2)
 
 
 def default_stance(model: Any) -> np.ndarray:
-    """A non-singular start: ``SEED_Q0`` for 3-joint chains if inside the limits, else IK home."""
-    q = np.array(SEED_Q0) if model.nq == 3 else np.array(_ik._prepared(model)[7])
-    if np.any(q < model.lower) or np.any(q > model.upper):
-        q = np.array(_ik._prepared(model)[7])
-    return q
+    """A well-conditioned start configuration.
+
+    ``SEED_Q0`` for 3-joint chains when it is inside the limits (the seeds' leg); otherwise the
+    most dexterous of the IK home and 256 seeded samples within the limits (each range clipped
+    to ±π): the one with the largest smallest singular value of the position Jacobian, so that
+    a run starts far from the singular manifolds.
+    """
+    if model.nq == 3:
+        q = np.array(SEED_Q0)
+        if np.all(q >= model.lower) and np.all(q <= model.upper):
+            return q
+    lo = np.maximum(model.lower, -np.pi)
+    hi = np.minimum(model.upper, np.pi)
+    rng = np.random.default_rng(0)
+    candidates = [np.array(_ik._prepared(model)[7], dtype=float)]
+    candidates += list(rng.uniform(lo, hi, size=(256, model.nq)))
+    best, best_sigma = candidates[0], -1.0
+    for q in candidates:
+        sigma = float(np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1])
+        if sigma > best_sigma:
+            best, best_sigma = q, sigma
+    return np.array(best)
 
 
 @dataclass(frozen=True)

@@ -1555,10 +1555,13 @@ def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
         for fam in deriv.families:
             for v in fam.variables:
                 score[v] += 1
-    order = sorted(range(mdl.nq), key=lambda j: (-score[j], -j))
+    # Only joints that move the tip (a whole hexapod has 15 that do not move one foot).
+    moving = sorted(set(int(c) for c in _arrays(mdl).col))
+    candidates = moving if len(moving) >= 2 else list(range(mdl.nq))
+    order = sorted(candidates, key=lambda j: (-score[j], -j))
     first = order[0]
     if score[first] > 0 and np.count_nonzero(score) == 1:
-        rest = [j for j in range(mdl.nq) if j != first and not mdl.is_prismatic[j]]
+        rest = [j for j in candidates if j != first and not mdl.is_prismatic[j]]
         second = rest[0] if rest else order[1]
     else:
         second = order[1]

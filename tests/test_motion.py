@@ -188,3 +188,16 @@ def test_plots_and_html(tmp_path, leg):
     assert main(["step", "hexabot_leg", "--duration", "1", "--no-baseline", "--html",
                  str(html), "--plot", str(tmp_path / "cli.png")]) == 0
     assert html.stat().st_size > 1000 and (tmp_path / "cli.png").exists()
+
+
+def test_default_stance_is_far_from_singularities_for_any_chain():
+    # The SCARA's default start must let the seed experiment run cleanly (its IK home is
+    # 5 mm from the workspace boundary, where the arm stretches and x motion is impossible).
+    scara = hk.load("scara")
+    q0 = motion.default_stance(scara)
+    assert np.all(q0 >= scara.lower) and np.all(q0 <= scara.upper)
+    # closed form: the planar block's determinant is d2*d3*sin(theta2)
+    assert abs(0.22 * 0.24 * np.sin(q0[1])) > 0.5 * 0.22 * 0.24
+    run = motion.seed_experiment(scara, duration=4.0, baseline=False)
+    assert run.drift_y <= 1e-9 and run.drift_z <= 1e-9 and run.error_x <= 1e-9
+    np.testing.assert_array_equal(motion.default_stance(hk.load("hexabot_leg")), motion.SEED_Q0)

@@ -496,3 +496,15 @@ def test_workspace_plot(tmp_path, leg):
     sing = _kernels.fk_batch(_kernels.ChainArrays.from_model(leg), res.q[res.singular])
     path = plot_workspace(ws, tmp_path / "ws.png", singular_points=sing)
     assert path.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_default_heat_map_joints_move_the_tip():
+    from hexapod_kin import load
+    from hexapod_kin.singularity import plot_joints
+
+    model = load("hexapod")  # 18 joints, tip leg1_foot: 15 joints do not move it
+    a, b = plot_joints(model)
+    q = model.random_q(seed=3)
+    jac = model.position_jacobian(q)
+    assert np.linalg.norm(jac[:, a]) > 1e-6 and np.linalg.norm(jac[:, b]) > 1e-6
+    assert {model.joint_names[a], model.joint_names[b]} <= {"leg1_hip", "leg1_knee", "leg1_ankle"}
