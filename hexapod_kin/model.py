@@ -238,7 +238,7 @@ class Model:
             if isinstance(params, Chain)
             else params.body
             if isinstance(params, Hexapod)
-            else full.frames[0].name
+            else _root_link_frame(full)
         )
         if tip is None:
             if isinstance(params, Chain):
@@ -478,6 +478,18 @@ class Model:
             f"<hexapod_kin Model {self.name!r}: nq={self.nq} joints={list(self.joint_names)} "
             f"base={self.base!r} tip={self.tip!r}>"
         )
+
+
+def _root_link_frame(model: pin.Model) -> str:
+    """The URDF root link's frame (fixed at the origin of ``universe``), else ``universe``."""
+    for frame in model.frames:
+        if (
+            frame.type == pin.FrameType.BODY
+            and frame.parentJoint == 0
+            and np.allclose(frame.placement.homogeneous, np.eye(4), atol=0.0)
+        ):
+            return str(frame.name)
+    return str(model.frames[0].name)
 
 
 def _last_body_frame(model: pin.Model) -> str:
