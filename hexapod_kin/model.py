@@ -47,6 +47,24 @@ def fast_q_ok(q: Any, shape: tuple[int, ...]) -> bool:
     )
 
 
+def _float_array(q: Any, message: str) -> np.ndarray:
+    """``q`` as a float64 array; strings, booleans and non-numbers raise ``message``."""
+    try:
+        if np.asarray(q).dtype.kind in "USb":  # strings and booleans are not joint values
+            raise TypeError
+        return np.asarray(q, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigurationError(message) from None
+
+
+def _check_values(arr: np.ndarray, label: str) -> None:
+    """Refuse non-finite values and values with ``|x| >= 1e150`` (``label`` starts the message)."""
+    if not np.all(np.isfinite(arr)):
+        raise ConfigurationError(f"{label} contains non-finite values")
+    if not np.all(np.abs(arr) < 1e150):
+        raise ConfigurationError(f"{label} has values too large (|x| >= 1e150)")
+
+
 _SIMPLE_JOINTS = {
     "JointModelRX",
     "JointModelRY",
@@ -373,34 +391,21 @@ class Model:
         """
         if fast_q_ok(q, self._shape):
             return q
-        try:
-            if np.asarray(q).dtype.kind in "USb":  # strings and booleans are not joint values
-                raise TypeError
-            arr = np.asarray(q, dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
-            raise ConfigurationError(
-                f"{name}={q!r} is not a sequence of {self.nq} numbers "
-                f"(joints {list(self.joint_names)})"
-            ) from None
+        arr = _float_array(
+            q, f"{name}={q!r} is not a sequence of {self.nq} numbers "
+            f"(joints {list(self.joint_names)})"
+        )
         if arr.shape != self._shape:
             raise ConfigurationError(
                 f"{name} has shape {arr.shape}; expected ({self.nq},) for joints "
                 f"{list(self.joint_names)}"
             )
-        if not np.all(np.isfinite(arr)):
-            raise ConfigurationError(f"{name}={arr.tolist()} contains non-finite values")
-        if not np.all(np.abs(arr) < 1e150):
-            raise ConfigurationError(f"{name}={arr.tolist()} has values too large (|x| >= 1e150)")
+        _check_values(arr, f"{name}={arr.tolist()}")
         return np.ascontiguousarray(arr)
 
     def check_q_batch(self, q: Any, name: str = "q") -> np.ndarray:
         """Return ``q`` as an (N, nq) float array, checked (a single (nq,) becomes (1, nq))."""
-        try:
-            if np.asarray(q).dtype.kind in "USb":
-                raise TypeError
-            arr = np.asarray(q, dtype=np.float64)
-        except (TypeError, ValueError, OverflowError):
-            raise ConfigurationError(f"{name} is not an array of numbers") from None
+        arr = _float_array(q, f"{name} is not an array of numbers")
         if arr.ndim == 1:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != self.nq:
@@ -408,10 +413,7 @@ class Model:
                 f"{name} has shape {arr.shape}; expected (N, {self.nq}) for joints "
                 f"{list(self.joint_names)}"
             )
-        if not np.all(np.isfinite(arr)):
-            raise ConfigurationError(f"{name} contains non-finite values")
-        if not np.all(np.abs(arr) < 1e150):
-            raise ConfigurationError(f"{name} has values too large (|x| >= 1e150)")
+        _check_values(arr, name)
         return arr
 
     def neutral(self) -> np.ndarray:

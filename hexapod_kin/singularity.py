@@ -180,6 +180,16 @@ def _det_lu(a: np.ndarray) -> float:  # pragma: no cover - compiled
     return det
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _det3(a: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Determinant of the leading 3×3 block of ``a`` (cofactor expansion)."""
+    return (
+        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
+    )
+
+
 @njit(cache=True, nogil=True)
 def _reduce_one(
     js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
@@ -213,11 +223,7 @@ def _reduce_one(
         elif n == 2:
             det = js[0, 0] * js[1, 1] - js[0, 1] * js[1, 0]
         elif n == 3:
-            det = (
-                js[0, 0] * (js[1, 1] * js[2, 2] - js[1, 2] * js[2, 1])
-                - js[0, 1] * (js[1, 0] * js[2, 2] - js[1, 2] * js[2, 0])
-                + js[0, 2] * (js[1, 0] * js[2, 1] - js[1, 1] * js[2, 0])
-            )
+            det = _det3(js)
         else:
             for a in range(n):
                 for b in range(n):
@@ -229,11 +235,7 @@ def _reduce_one(
     elif m == 2:
         det_g = g[0, 0] * g[1, 1] - g[0, 1] * g[0, 1]
     elif m == 3:
-        det_g = (
-            g[0, 0] * (g[1, 1] * g[2, 2] - g[1, 2] * g[2, 1])
-            - g[0, 1] * (g[1, 0] * g[2, 2] - g[1, 2] * g[2, 0])
-            + g[0, 2] * (g[1, 0] * g[2, 1] - g[1, 1] * g[2, 0])
-        )
+        det_g = _det3(g)
     else:
         for a in range(m):
             for b in range(m):
