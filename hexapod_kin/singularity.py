@@ -191,6 +191,21 @@ def _det3(a: np.ndarray) -> float:  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Determinant of the leading n×n block of ``a``: closed forms up to 3, else LU on a copy."""
+    if n == 1:
+        return a[0, 0]
+    if n == 2:
+        return a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    if n == 3:
+        return _det3(a)
+    for i in range(n):
+        for j in range(n):
+            work[i, j] = a[i, j]
+    return _det_lu(work[:n, :n])
+
+
+@njit(cache=True, nogil=True)
 def _reduce_one(
     js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
@@ -218,29 +233,10 @@ def _reduce_one(
     # determinant (square) and det G
     det = np.nan
     if square:
-        if n == 1:
-            det = js[0, 0]
-        elif n == 2:
-            det = js[0, 0] * js[1, 1] - js[0, 1] * js[1, 0]
-        elif n == 3:
-            det = _det3(js)
-        else:
-            for a in range(n):
-                for b in range(n):
-                    work[a, b] = js[a, b]
-            det = _det_lu(work[:n, :n])
+        det = _det_small(js, n, work)
         det_g = det * det
-    elif m == 1:
-        det_g = g[0, 0]
-    elif m == 2:
-        det_g = g[0, 0] * g[1, 1] - g[0, 1] * g[0, 1]
-    elif m == 3:
-        det_g = _det3(g)
     else:
-        for a in range(m):
-            for b in range(m):
-                work[a, b] = g[a, b]
-        det_g = _det_lu(work[:m, :m])
+        det_g = _det_small(g, m, work)
     if det_g < 0.0:
         det_g = 0.0
     # the m-1 largest eigenvalues of G
