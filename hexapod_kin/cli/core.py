@@ -1,4 +1,4 @@
-"""The ``hexapod-kin`` command line: ``main(argv=None) -> int``.
+"""The core subcommands: list, urdf, fk, jacobian, demo, view, animate, ik, step, derive, scan.
 
 Each subcommand has an ``_add_<name>(sub)`` that declares its arguments and a
 ``_cmd_<name>(args)`` that runs it; heavy imports stay inside the ``_cmd_`` functions.
@@ -15,9 +15,9 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from .exceptions import HexapodKinError, ParameterError
+from ..exceptions import HexapodKinError, ParameterError
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "register"]
 
 
 # ------------------------------------------------------------------------ helpers
@@ -40,7 +40,7 @@ def _set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
 
 def _load(args: argparse.Namespace) -> Any:
     """Load ``args.source`` (preset, URDF path or ``erd:NAME``) with --set/--base/--tip."""
-    from .kinematics import load
+    from ..kinematics import load
 
     params = _set_params(getattr(args, "set", None))
     return load(
@@ -85,7 +85,7 @@ def _add_list(sub: Any) -> None:
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from . import robots
+    from .. import robots
 
     rows = []
     for name in robots.names():
@@ -93,7 +93,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
         rows.append({"name": name, "summary": doc})
     out: dict[str, Any] = {"presets": rows}
     if args.erd:
-        from .model import erd_names
+        from ..model import erd_names
 
         out["erd"] = erd_names()
     if args.json:
@@ -116,8 +116,8 @@ def _add_urdf(sub: Any) -> None:
 
 
 def _cmd_urdf(args: argparse.Namespace) -> int:
-    from . import robots
-    from .urdf import to_urdf, write_urdf
+    from .. import robots
+    from ..urdf import to_urdf, write_urdf
 
     built = robots.get(args.preset, **_set_params(args.set))
     # Short options only: an XML comment cannot contain "--".
@@ -231,9 +231,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from . import robots
-    from .kinematics import load
-    from .urdf import write_urdf
+    from .. import robots
+    from ..kinematics import load
+    from ..urdf import write_urdf
 
     leg = robots.hexabot_leg()
     out = Path(args.out)
@@ -267,8 +267,8 @@ def _add_ik(sub: Any) -> None:
 def _cmd_ik(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from . import ik
-    from .exceptions import IKError
+    from .. import ik
+    from ..exceptions import IKError
 
     model = _load(args)
     target = np.array(args.target, dtype=float)
@@ -331,7 +331,7 @@ def _add_step(sub: Any) -> None:
 
 
 def _cmd_step(args: argparse.Namespace) -> int:
-    from . import motion
+    from .. import motion
 
     model = _load(args)
     q0 = None if args.q is None else _q_arg(args, model.nq)
@@ -342,12 +342,12 @@ def _cmd_step(args: argparse.Namespace) -> int:
     tr = run.trajectory
     written = []
     if args.plot:
-        from .plots import plot_motion
+        from ..plots import plot_motion
 
         written.append(str(plot_motion(run, args.plot)))
     if args.html:
         try:
-            from .viewer import export_html
+            from ..viewer import export_html
         except ImportError as exc:
             raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
         stride = max(1, int(round(0.02 / tr.dt)))
@@ -388,7 +388,7 @@ def _wait_args(p: argparse.ArgumentParser) -> None:
 def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
     import time
 
-    from .exceptions import ViewerError
+    from ..exceptions import ViewerError
 
     print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
     if args.no_wait:
@@ -416,7 +416,7 @@ def _add_view(sub: Any) -> None:
 def _cmd_view(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .viewer import Viewer, default_configuration
+    from ..viewer import Viewer, default_configuration
 
     model = _load(args)
     q = default_configuration(model) if args.q is None else _q_arg(args, model.nq)
@@ -452,7 +452,7 @@ def _add_animate(sub: Any) -> None:
 def _cmd_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .viewer import Viewer, demo_trajectory, export_html
+    from ..viewer import Viewer, demo_trajectory, export_html
 
     model = _load(args)
     times, qs, base = demo_trajectory(model, args.length, args.samples)
@@ -491,7 +491,7 @@ def _add_derive(sub: Any) -> None:
 def _cmd_derive(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .symbolic import ROW_NAMES, derive
+    from ..symbolic import ROW_NAMES, derive
 
     model = _load(args)
     deriv = derive(model, rows=args.rows)
@@ -535,7 +535,7 @@ def _add_scan(sub: Any) -> None:
 def _cmd_scan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .singularity import plot_joints, scan
+    from ..singularity import plot_joints, scan
 
     model = _load(args)
     joints: Any = args.joints
@@ -556,7 +556,7 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         progress=False if args.json else None,
     )
     if args.plot:
-        from .plots import plot_singularity_map
+        from ..plots import plot_singularity_map
 
         path = plot_singularity_map(result, args.plot)
         print(f"wrote {path}", file=sys.stderr)
@@ -599,34 +599,8 @@ COMMANDS: dict[str, Command] = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Return the argument parser with every subcommand."""
-    from . import __version__
-
-    parser = argparse.ArgumentParser(
-        prog="hexapod-kin",
-        description="Robot legs: Khalil/DH tables -> URDF -> Pinocchio kinematics.",
-    )
-    parser.add_argument("--version", action="version", version=f"hexapod-kin {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add, _ in COMMANDS.values():
+def register(sub: Any) -> None:
+    """Add the core subcommands to ``sub`` (an argparse subparsers object)."""
+    for name, (add, run) in COMMANDS.items():
         add(sub)
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 usage or input error)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return COMMANDS[args.command][1](args)
-    except HexapodKinError as exc:
-        print(f"hexapod-kin: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("hexapod-kin: interrupted", file=sys.stderr)
-        return 130
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+        sub.choices[name].set_defaults(func=run)
