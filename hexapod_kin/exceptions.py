@@ -7,7 +7,9 @@ is a list), so that a user can fix the call without reading the source.
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Iterable
+from typing import Any
 
 __all__ = [
     "HexapodKinError",
@@ -20,11 +22,57 @@ __all__ = [
     "ViewerError",
     "OptionalDependencyError",
     "choices",
+    "did_you_mean",
 ]
 
 
 class HexapodKinError(ValueError):
-    """Base of every error raised by hexapod_kin (a ``ValueError``)."""
+    """Base of every error raised by hexapod_kin (a ``ValueError``).
+
+    Args:
+        message: The whole message (``str(err)`` returns it unchanged).
+        parameter: Name of the offending parameter (e.g. ``"q"``, ``"source"``), if known.
+        value: The value that was given, if known.
+        allowed: What is allowed (a list of names, a range, a description), if known.
+
+    Attributes:
+        parameter: As given (``None`` when the raise site did not say).
+        value: As given.
+        allowed: As given.
+
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        parameter: str | None = None,
+        value: Any = None,
+        allowed: Any = None,
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.parameter = parameter
+        self.value = value
+        self.allowed = allowed
+
+    def to_dict(self) -> dict[str, Any]:
+        """The error as JSON-ready data: type, message, parameter, value, allowed."""
+
+        def plain(x: Any) -> Any:
+            if x is None or isinstance(x, (str, int, float, bool)):
+                return x
+            if isinstance(x, (list, tuple, set, frozenset)):
+                return [plain(v) for v in x]
+            return repr(x)
+
+        return {
+            "type": type(self).__name__,
+            "message": self.message,
+            "parameter": self.parameter,
+            "value": plain(self.value),
+            "allowed": plain(self.allowed),
+        }
 
 
 class ParameterError(HexapodKinError):
@@ -74,3 +122,29 @@ def choices(names: Iterable[str], limit: int = 40) -> str:
     if len(items) > limit:
         return ", ".join(items[:limit]) + f", ... ({len(items) - limit} more)"
     return ", ".join(items)
+
+
+def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.6) -> str:
+    """A "did you mean" hint for an unknown ``name`` among ``names`` (difflib).
+
+    Args:
+        name: What the user typed.
+        names: The valid names.
+        n: At most this many suggestions.
+        cutoff: Similarity threshold in [0, 1] (``difflib.get_close_matches``).
+
+    Returns:
+        ``" (did you mean 'a' or 'b'?)"``, or ``""`` when nothing is close. Names that start
+        with ``name`` (e.g. ``ur5`` → ``ur5_robot``) count as close.
+
+    """
+    pool = [str(x) for x in names]
+    if not isinstance(name, str) or not pool:
+        return ""
+    close = difflib.get_close_matches(name, pool, n=n, cutoff=cutoff)
+    low = name.lower()
+    prefixed = [x for x in pool if low and x.lower().startswith(low) and x not in close]
+    found = (close + sorted(prefixed, key=len))[:n]
+    if not found:
+        return ""
+    return " (did you mean " + " or ".join(repr(x) for x in found) + "?)"

@@ -250,9 +250,7 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     chain = model.params
     if isinstance(chain, Chain) and model.base == chain.base and model.tip == chain.tip:
         return table_position_jacobian(chain, qv)
-    from ._kernels import ChainArrays
-
-    arrays = ChainArrays.from_model(model)
+    arrays = model.arrays
     mats = []
     gens = []
     for k in range(arrays.rot.shape[0]):

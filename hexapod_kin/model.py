@@ -11,10 +11,12 @@ from __future__ import annotations
 import importlib.metadata
 import math
 import os
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import pinocchio as pin
@@ -24,6 +26,8 @@ from ._gate import check_urdf
 from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, UrdfError, choices
 from .params import Chain, Hexapod
 from .urdf import to_urdf
+
+_T = TypeVar("_T")
 
 __all__ = ["Model", "build", "erd_names", "erd_path", "resolve_source", "ResolvedSource"]
 
@@ -40,10 +44,7 @@ def fast_q_ok(q: Any, shape: tuple[int, ...]) -> bool:
     through the full :meth:`Model.check_q`.
     """
     return (
-        q.__class__ is _ND
-        and q.dtype is _F64
-        and q.shape == shape
-        and _hypot(*q.tolist()) < 1e150
+        q.__class__ is _ND and q.dtype is _F64 and q.shape == shape and _hypot(*q.tolist()) < 1e150
     )
 
 
@@ -172,9 +173,7 @@ def resolve_source(source: Any, **params: Any) -> ResolvedSource:
         return ResolvedSource(to_urdf(source), source.name, params=source)
     if isinstance(source, os.PathLike):
         path = Path(source)
-        return ResolvedSource(
-            _read_text(path), path.name, mesh_root=str(path.parent.resolve())
-        )
+        return ResolvedSource(_read_text(path), path.name, mesh_root=str(path.parent.resolve()))
     if not isinstance(source, str):
         raise SourceError(
             f"source of type {type(source).__name__} is not allowed; give a Chain, a Hexapod, "
@@ -237,9 +236,9 @@ class Model:
         reduce: bool | None = None,
         q_ref: Any = None,
     ) -> None:
-        check_urdf(
-            resolved.text, package_dirs=resolved.package_dirs, mesh_root=resolved.mesh_root
-        )
+        self._cache: dict[str, Any] = {}
+        self._cache_lock = threading.RLock()
+        check_urdf(resolved.text, package_dirs=resolved.package_dirs, mesh_root=resolved.mesh_root)
         try:
             full = pin.buildModelFromXML(resolved.text)
         except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
@@ -275,9 +274,7 @@ class Model:
                     f"{choices(full_frames, limit=200)}"
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
-        self.model, self._locked, self._q_ref = _reduce(
-            full, base_name, tip_name, do_reduce, q_ref
-        )
+        self.model, self._locked, self._q_ref = _reduce(full, base_name, tip_name, do_reduce, q_ref)
         self.data: pin.Data = self.model.createData()
         self.base = base_name
         self.tip = tip_name
@@ -287,9 +284,7 @@ class Model:
         self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
-        self._simple = all(
-            m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints)
-        )
+        self._simple = all(m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints))
         if not self._simple:
             kinds = {m.joints[i].shortname() for i in range(1, m.njoints)} - _SIMPLE_JOINTS
             raise SourceError(
@@ -343,6 +338,46 @@ class Model:
             )
         object.__setattr__(self, key, value)
 
+    # -------------------------------------------------------------- the per-model cache
+    def cached(self, key: str, factory: Callable[[], _T]) -> _T:
+        """The value stored under ``key`` for this model, built once by ``factory()``.
+
+        The one cache of derived per-model data (chain arrays, scan plans, IK preparations):
+        thread-safe (the first caller builds, concurrent callers wait for it; a factory may
+        itself call :meth:`cached` for another key), lives and dies with the model. Keys are
+        namespaced by the caller, e.g. ``"singularity.gram_plans"``.
+
+        Args:
+            key: A name for the value.
+            factory: Builds the value (called at most once per key and model, unless it raises;
+                an exception propagates and nothing is stored).
+
+        Returns:
+            The cached value (shared: treat it as read-only).
+
+        """
+        cache = self._cache
+        try:
+            return cache[key]
+        except KeyError:
+            pass
+        with self._cache_lock:
+            if key not in cache:
+                cache[key] = factory()
+            return cache[key]
+
+    def cache_clear(self) -> None:
+        """Forget every cached value (they are rebuilt on next use)."""
+        with self._cache_lock:
+            self._cache.clear()
+
+    @property
+    def arrays(self) -> Any:
+        """The chain base → tip as :class:`hexapod_kin._kernels.ChainArrays` (extracted once)."""
+        from ._kernels import ChainArrays
+
+        return self.cached("model.arrays", lambda: ChainArrays.from_model(self))
+
     # -------------------------------------------------------------- names and checks
     @property
     def name(self) -> str:
@@ -392,8 +427,9 @@ class Model:
         if fast_q_ok(q, self._shape):
             return q
         arr = _float_array(
-            q, f"{name}={q!r} is not a sequence of {self.nq} numbers "
-            f"(joints {list(self.joint_names)})"
+            q,
+            f"{name}={q!r} is not a sequence of {self.nq} numbers "
+            f"(joints {list(self.joint_names)})",
         )
         if arr.shape != self._shape:
             raise ConfigurationError(

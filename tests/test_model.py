@@ -85,3 +85,79 @@ def test_geometry_model_matches_the_reduced_model(source, kw, count):
     assert all(np.all(np.isfinite(p.homogeneous)) for p in data.oMg)
     with pytest.raises(hk.ParameterError, match="kind='mesh'"):
         model.geometry_model("mesh")
+
+
+# ------------------------------------------------------------------ exceptions with fields
+def test_exceptions_keep_message_and_carry_fields():
+    err = exceptions.ParameterError("l1='abc' is not a number", parameter="l1", value="abc",
+                                    allowed="a length > 0 in [m]")
+    assert str(err) == "l1='abc' is not a number"
+    assert (err.parameter, err.value, err.allowed) == ("l1", "abc", "a length > 0 in [m]")
+    assert err.to_dict() == {"type": "ParameterError", "message": "l1='abc' is not a number",
+                             "parameter": "l1", "value": "abc",
+                             "allowed": "a length > 0 in [m]"}
+    plain = exceptions.SourceError("just a message")
+    assert str(plain) == "just a message" and plain.parameter is None
+    assert plain.value is None and plain.allowed is None
+    opt = exceptions.OptionalDependencyError("pip install x", parameter="viewer")
+    assert isinstance(opt, ImportError) and opt.parameter == "viewer"
+    with pytest.raises(TypeError):  # extras are keyword-only
+        exceptions.HexapodKinError("m", "p")  # type: ignore[misc]
+
+
+def test_did_you_mean():
+    names = ["hexabot_leg", "scara", "ur5_robot", "ur10_robot"]
+    assert "'hexabot_leg'" in exceptions.did_you_mean("hexabot_lge", names)
+    assert "'ur5_robot'" in exceptions.did_you_mean("ur5", names)
+    assert exceptions.did_you_mean("zzzzzz", names) == ""
+
+
+# ------------------------------------------------------------------ the per-model cache
+def test_cached_builds_once_per_model_and_key():
+    m1, m2 = hk.load("hexabot_leg"), hk.load("hexabot_leg")
+    calls = []
+
+    def factory():
+        calls.append(1)
+        return object()
+
+    a = m1.cached("test.k", factory)
+    assert m1.cached("test.k", factory) is a and len(calls) == 1
+    assert m2.cached("test.k", factory) is not a and len(calls) == 2
+    with pytest.raises(ZeroDivisionError):
+        m1.cached("test.bad", lambda: 1 / 0)
+    assert m1.cached("test.bad", lambda: 7) == 7  # a failed factory stores nothing
+    # reentrant: a factory may use another cached key
+    assert m1.cached("test.outer", lambda: m1.cached("test.inner", lambda: 3) + 1) == 4
+
+
+def test_cached_is_thread_safe_single_build():
+    import threading
+    import time
+
+    model = hk.load("hexabot_leg")
+    calls = []
+
+    def slow():
+        calls.append(1)
+        time.sleep(0.05)
+        return len(calls)
+
+    out = []
+    threads = [threading.Thread(target=lambda: out.append(model.cached("test.slow", slow)))
+               for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert calls == [1] and out == [1] * 8
+
+
+def test_arrays_extracted_once_and_match_pinocchio():
+    from hexapod_kin import _kernels
+
+    model = hk.load("hexabot_leg")
+    assert model.arrays is model.arrays
+    q = np.array([0.3, -0.4, 0.9])
+    pos = _kernels.fk_position(model.arrays, q)
+    np.testing.assert_allclose(pos, model.fk(q)[:3, 3], atol=1e-14)
