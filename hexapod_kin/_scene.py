@@ -33,6 +33,7 @@ from .exceptions import (
     ParameterError,
     ViewerError,
 )
+from .gait.stand import frame_poses
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import Model
@@ -442,24 +443,7 @@ class _Scene:
         self, qs: np.ndarray, base_poses: np.ndarray | None, frames: Sequence[str]
     ) -> np.ndarray:
         """World poses (N, F, 4, 4) of named frames."""
-        return _frame_poses(self.model, self.data, qs, base_poses, frames)
-
-
-def _frame_poses(
-    model: Model, data: Any, qs: np.ndarray, base_poses: np.ndarray | None, frames: Sequence[str]
-) -> np.ndarray:
-    import pinocchio as pin
-
-    ids = [model.frame_id(f) for f in frames]
-    m = model.model
-    out = np.empty((len(qs), len(ids), 4, 4))
-    for i, q in enumerate(qs):
-        pin.forwardKinematics(m, data, q)
-        for j, fid in enumerate(ids):
-            out[i, j] = pin.updateFramePlacement(m, data, fid).homogeneous
-    if base_poses is not None:
-        out = np.einsum("nab,nfbc->nfac", base_poses, out)
-    return out
+        return frame_poses(self.model, self.data, qs, base_poses, frames)
 
 
 def khalil_frames(model: Model) -> tuple[str, ...]:

@@ -245,7 +245,7 @@ def plot_motion(
     with the plain Euler baseline when the run has one.
 
     Args:
-        run: A :class:`~hexapod_kin.motion.SeedRun` or a
+        run: A :class:`~hexapod_kin.seeds.SeedRun` or a
             :class:`~hexapod_kin.motion.Trajectory`.
         path: Destination PNG (written atomically).
         title: Figure title.
@@ -314,7 +314,7 @@ def plot_step(step: Any, path: str | os.PathLike[str], title: str | None = None)
     """A foot step: the path seen from the side (along travel vs height) and the joints vs time.
 
     Args:
-        step: A :class:`~hexapod_kin.motion.FootStep`.
+        step: A :class:`~hexapod_kin.gait.FootStep`.
         path: Destination PNG.
         title: Figure title.
 

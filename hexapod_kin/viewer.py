@@ -36,8 +36,6 @@ re-exports the public names of the other two.
 from __future__ import annotations
 
 import contextlib
-import math
-import shutil
 import sys
 from typing import TYPE_CHECKING, Any
 
@@ -52,11 +50,9 @@ from ._scene import (
     _check_base_poses,
     _clip,  # noqa: F401 - re-exported for tools/bench_viewer.py
     _delete,
-    _frame_poses,
     _Scene,
     _set_property,
     _set_transform,
-    _translate,
     _triad_frames,
     export_html,
     iframe,
@@ -64,183 +60,26 @@ from ._scene import (
     scene_commands,
 )
 from .exceptions import (
-    HexapodKinError,
-    OptionalDependencyError,
     ParameterError,
     ViewerError,
     choices,
 )
+from .gait.stand import default_configuration, standing_base
 
 if TYPE_CHECKING:  # pragma: no cover
     from .model import Model
 
 __all__ = [
-    "CHROMIUM_ARGS",
     "LOOPBACK",
     "MAX_SAMPLES",
     "PARTS",
     "MeshcatServer",
     "Viewer",
-    "default_configuration",
-    "demo_trajectory",
     "export_html",
     "iframe",
     "khalil_frames",
-    "launch_chromium",
     "scene_commands",
 ]
-
-#: Command-line flags of the headless Chromium that opens exported pages (tests, screenshots):
-#: software WebGL, and no background traffic of the browser itself.
-CHROMIUM_ARGS: tuple[str, ...] = (
-    "--headless",
-    "--no-sandbox",
-    "--enable-unsafe-swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--disable-quic",
-)
-
-
-def launch_chromium(playwright: Any, executable: str | None = None) -> Any:
-    """Launch headless Chromium through Playwright with :data:`CHROMIUM_ARGS`.
-
-    Args:
-        playwright: A started Playwright (the object of ``with sync_playwright() as p``).
-        executable: Path of the Chromium binary (default: ``chromium`` on PATH, Debian's).
-
-    Returns:
-        The Playwright ``Browser``; close it when done.
-
-    Raises:
-        OptionalDependencyError: No ``executable`` given and ``chromium`` is not on PATH.
-
-    """
-    path = executable if executable is not None else shutil.which("chromium")
-    if path is None:
-        raise OptionalDependencyError(
-            "executable=None and `chromium` is not on PATH; install it (apt-get install chromium)"
-        )
-    return playwright.chromium.launch(executable_path=path, args=list(CHROMIUM_ARGS))
-
-
-# ====================================================================== demo poses and motions
-def default_configuration(model: Model) -> np.ndarray:
-    """A pose that reads well on screen: hexapod/3-DOF legs standing, others at mid-range.
-
-    Legs of the ``hexabot_leg`` family (hip, knee, ankle) stand with the femur raised
-    0.3 rad and the tibia pointing down; other joints sit at the middle of finite limits, or 0.
-    """
-    q = np.zeros(model.nq)
-    lo, hi = np.asarray(model.lower), np.asarray(model.upper)
-    finite = np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 1e3)
-    mid = np.where(finite, (lo + hi) / 2, 0.0)
-    q[:] = np.where(np.abs(mid) < 1e-12, 0.0, mid)
-    for i, name in enumerate(model.joint_names):
-        if name.endswith("knee"):
-            q[i] = -0.3
-        elif name.endswith("ankle"):
-            q[i] = 1.7
-    return np.clip(q, lo, hi)
-
-
-def _standing_base(model: Model, q: np.ndarray) -> np.ndarray:
-    """Body pose lifting a hexapod so that its lowest foot touches z = 0."""
-    from .params import Hexapod
-
-    params = model.params
-    if not isinstance(params, Hexapod):
-        return np.eye(4)
-    data = model.model.createData()
-    feet = _frame_poses(model, data, q[None, :], None, params.foot_frames)[0, :, :3, 3]
-    return _translate([0.0, 0.0, -float(feet[:, 2].min()) + 0.01])
-
-
-def demo_trajectory(
-    model: Model, duration: float = 4.0, samples: int = 121
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """A demo motion of any model: ``(times, qs, base_poses)``.
-
-    A hexapod stands and sways its body (heave, roll, pitch) with its feet kept on the ground
-    (closed-form leg IK when :mod:`hexapod_kin.ik` is available, else legs held still); any
-    other model sweeps each joint sinusoidally within its limits (amplitude ≤ 0.6 rad or a
-    quarter of the range, phases staggered).
-
-    Args:
-        model: A loaded model.
-        duration: Length in [s] (> 0).
-        samples: Number of samples (≥ 2).
-
-    Raises:
-        ParameterError: Bad ``duration`` or ``samples``.
-
-    """
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ParameterError(f"duration={duration!r} is not allowed; give a positive time in s")
-    if not isinstance(samples, int) or samples < 2:
-        raise ParameterError(f"samples={samples!r} is not allowed; give an integer >= 2")
-    from .params import Hexapod
-
-    times = np.linspace(0.0, float(duration), samples)
-    phase = 2 * np.pi * times / duration
-    q0 = default_configuration(model)
-    if isinstance(model.params, Hexapod):
-        return _hexapod_sway(model, times, phase, q0)
-    lo, hi = np.asarray(model.lower), np.asarray(model.upper)
-    span = np.where(np.isfinite(hi - lo), hi - lo, 2 * np.pi)
-    amp = np.minimum(0.6, span / 4)
-    amp = np.where(model.is_prismatic, np.minimum(span / 4, 0.05 + 0 * span), amp)
-    offsets = np.arange(model.nq) * np.pi / max(model.nq, 1)
-    qs = q0[None, :] + amp[None, :] * np.sin(phase[:, None] + offsets[None, :])
-    return times, np.clip(qs, lo, hi), None
-
-
-def _hexapod_sway(
-    model: Model, times: np.ndarray, phase: np.ndarray, q0: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    import pinocchio as pin
-
-    from .params import Hexapod
-
-    params = model.params
-    assert isinstance(params, Hexapod)
-    stand = _standing_base(model, q0)
-    h = float(stand[2, 3])
-    base = np.empty((len(times), 4, 4))
-    for i, ph in enumerate(phase):
-        T = _translate([0.012 * math.sin(ph), 0.012 * math.cos(ph), h + 0.012 * math.sin(2 * ph)])
-        R = pin.rpy.rpyToMatrix(0.08 * math.sin(ph), 0.08 * math.cos(ph), 0.1 * math.sin(ph))
-        T[:3, :3] = R
-        base[i] = T
-    qs = np.tile(q0, (len(times), 1))
-    try:
-        from . import ik
-    except ImportError:  # pragma: no cover - ik not available: legs held still
-        return times, qs, base
-    # feet fixed in the world where the standing pose puts them
-    data = model.model.createData()
-    feet = params.foot_frames
-    feet_world = _frame_poses(model, data, q0[None, :], stand[None], feet)[0, :, :3, 3]
-    for leg_index, mount in enumerate(params.legs):
-        cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names or ()]
-        mount_T = mount.transform()
-        foot_h = np.append(feet_world[leg_index], 1.0)
-        targets = np.array([np.linalg.solve(b @ mount_T, foot_h)[:3] for b in base])
-        try:
-            solutions = ik.analytic(mount.chain, targets)
-        except HexapodKinError:  # no closed form for this leg: held still
-            continue
-        prev = q0[cols]
-        for i, sols in enumerate(solutions):
-            if len(sols):  # the branch nearest to the previous sample (angles wrapped)
-                step = np.angle(np.exp(1j * (np.asarray(sols) - prev[None, :])))
-                prev = prev + step[int(np.argmin(np.abs(step).sum(axis=1)))]
-            qs[i, cols] = prev
-    return times, np.clip(qs, model.lower, model.upper), base
-
-
 
 class Viewer:
     """Live meshcat viewer of a model, served on 127.0.0.1 (context manager).
@@ -249,7 +88,7 @@ class Viewer:
         >>> with Viewer(load("hexapod")) as v:          # doctest: +SKIP
         ...     print(v.url)                            # open it in a browser
         ...     v.display(default_configuration(v.model))
-        ...     v.animate(*demo_trajectory(v.model))
+        ...     v.animate(*gait.demo_trajectory(v.model))
 
     Args:
         model: A loaded model.
@@ -284,7 +123,7 @@ class Viewer:
             self._client = _Client(self._server, timeout)
             self._scene = _Scene(model)
             q0 = default_configuration(model) if q is None else model.check_q(q)
-            pose = _standing_base(model, q0) if base_pose is None else base_pose
+            pose = standing_base(model, q0) if base_pose is None else base_pose
             self._show(np.asarray(q0)[None, :], pose, animate=False)
         except BaseException:
             self.close()

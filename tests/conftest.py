@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import pytest
+
+# test tooling shared with tools/ (headless Chromium launcher)
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
 
 from hexapod_kin import robots
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import hexapod_kin as hk
-from hexapod_kin import motion, robots
+from hexapod_kin import gait, motion, robots, seeds
 from hexapod_kin.cli import main
 from hexapod_kin.exceptions import ConfigurationError, ParameterError
 from hexapod_kin.params import JointLimits
@@ -21,7 +21,7 @@ def leg():
 
 @pytest.fixture(scope="module")
 def seed_run(leg):
-    return motion.seed_experiment(leg)
+    return seeds.seed_experiment(leg)
 
 
 # ------------------------------------------------------------------ the seeds' experiment
@@ -116,7 +116,7 @@ def test_argument_errors(leg):
 
 # ------------------------------------------------------------------ seed 002 Table I
 def test_table_i_replayed_through_fk_and_ik():
-    sched = motion.seed002_schedule()
+    sched = seeds.seed002_schedule()
     model = hk.load("coxa_tibia_leg")
     t = np.arange(0.0, 22.0 + 1e-9, 0.01)
     q_plan = sched.sample(t)
@@ -133,25 +133,25 @@ def test_table_i_replayed_through_fk_and_ik():
 def test_foot_path_shape():
     c = np.array([0.15, 0.0, -0.12])
     kw = dict(center=c, length=0.04, height=0.03, duty_factor=0.6)
-    np.testing.assert_allclose(motion.foot_path(0.0, **kw), c + [0.02, 0, 0], atol=1e-15)
-    np.testing.assert_allclose(motion.foot_path(0.6, **kw), c - [0.02, 0, 0], atol=1e-15)
-    np.testing.assert_allclose(motion.foot_path(0.8, **kw), c + [0, 0, 0.03], atol=1e-15)
+    np.testing.assert_allclose(gait.foot_path(0.0, **kw), c + [0.02, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(gait.foot_path(0.6, **kw), c - [0.02, 0, 0], atol=1e-15)
+    np.testing.assert_allclose(gait.foot_path(0.8, **kw), c + [0, 0, 0.03], atol=1e-15)
     ph = np.linspace(0, 1, 2001)
     for shape in ("ellipse", "cycloid"):
-        p = motion.foot_path(ph, shape=shape, **kw)
+        p = gait.foot_path(ph, shape=shape, **kw)
         assert np.max(np.abs(np.diff(p, axis=0))) < 1e-3  # continuous
         stance = ph < 0.6
         np.testing.assert_allclose(p[stance, 2], c[2])
         assert np.all(np.diff(p[stance, 0]) < 0)  # straight line, front to back
         assert np.all(p[~stance, 2] >= c[2] - 1e-15)
     with pytest.raises(ParameterError):
-        motion.foot_path(0.1, center=c, length=0.04, height=0.03, duty_factor=1.0)
+        gait.foot_path(0.1, center=c, length=0.04, height=0.03, duty_factor=1.0)
 
 
 @pytest.mark.parametrize("preset", ["hexabot_leg", "erd:solo12"])
 def test_foot_step_joint_trajectory(preset):
     model = hk.load(preset, tip="FL_FOOT") if preset.startswith("erd") else hk.load(preset)
-    step = motion.foot_step(model, length=0.04, height=0.02, duration=1.0, duty_factor=0.5,
+    step = gait.foot_step(model, length=0.04, height=0.02, duration=1.0, duty_factor=0.5,
                             dt=0.005, cycles=2)
     assert step.reached.all()
     assert step.max_error < 1e-9
@@ -179,10 +179,10 @@ def test_cli_ik(capsys):
 def test_plots_and_html(tmp_path, leg):
     from hexapod_kin.plots import plot_motion, plot_step
 
-    run = motion.seed_experiment(leg, duration=1.0)
+    run = seeds.seed_experiment(leg, duration=1.0)
     png = plot_motion(run, tmp_path / "run.png")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    step = motion.foot_step(leg, dt=0.01)
+    step = gait.foot_step(leg, dt=0.01)
     assert plot_step(step, tmp_path / "step.png").stat().st_size > 1000
     html = tmp_path / "step.html"
     assert main(["step", "hexabot_leg", "--duration", "1", "--no-baseline", "--html",
@@ -198,6 +198,6 @@ def test_default_stance_is_far_from_singularities_for_any_chain():
     assert np.all(q0 >= scara.lower) and np.all(q0 <= scara.upper)
     # closed form: the planar block's determinant is d2*d3*sin(theta2)
     assert abs(0.22 * 0.24 * np.sin(q0[1])) > 0.5 * 0.22 * 0.24
-    run = motion.seed_experiment(scara, duration=4.0, baseline=False)
+    run = seeds.seed_experiment(scara, duration=4.0, baseline=False)
     assert run.drift_y <= 1e-9 and run.drift_z <= 1e-9 and run.error_x <= 1e-9
     np.testing.assert_array_equal(motion.default_stance(hk.load("hexabot_leg")), motion.SEED_Q0)

@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from headless import launch_chromium
 
-from hexapod_kin import load, robots, viewer
+from hexapod_kin import gait, load, robots, viewer
 from hexapod_kin.exceptions import (
     ConfigurationError,
     FrameNotFoundError,
@@ -149,7 +150,7 @@ def browser(chromium):
             pytest.fail("CI is set but playwright (python) is not installed")
         pytest.skip("playwright (python) is not installed; browser tests skipped")
     with sync_playwright() as p:
-        b = viewer.launch_chromium(p, chromium)
+        b = launch_chromium(p, chromium)
         yield b
         b.close()
 
@@ -336,12 +337,12 @@ def test_bad_inputs_are_named(leg, tmp_path):
 def test_demo_trajectories_respect_limits_and_keep_hexapod_feet_down():
     for name in ("hexabot_leg", "scara", "pendulum", "coxa_tibia_leg"):
         m = load(name)
-        times, qs, base = viewer.demo_trajectory(m, 2.0, 21)
+        times, qs, base = gait.demo_trajectory(m, 2.0, 21)
         assert base is None and qs.shape == (21, m.nq)
         assert np.all(qs >= m.lower - 1e-12) and np.all(qs <= m.upper + 1e-12)
         assert np.ptp(qs, axis=0).min() > 0  # every joint moves
     hexa = load("hexapod")
-    times, qs, base = viewer.demo_trajectory(hexa, 2.0, 21)
+    times, qs, base = gait.demo_trajectory(hexa, 2.0, 21)
     assert base.shape == (21, 4, 4) and np.ptp(base[:, 2, 3]) > 0  # the body moves
     feet = viewer._Scene(hexa).frame_poses(qs, base, hexa.params.foot_frames)[:, :, :3, 3]
     np.testing.assert_allclose(feet, np.broadcast_to(feet[0], feet.shape), atol=1e-9)

@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 import hexapod_kin as hk
-from hexapod_kin import ik, motion
+from hexapod_kin import ik, motion, seeds
 
 
 def _python_closed_form(l1: float, l2: float, l3: float, p: np.ndarray) -> tuple[float, ...]:
@@ -123,7 +123,7 @@ def run(quick: bool) -> list[dict]:
             best = min(best, time.perf_counter() - t0)
         res[method] = best / steps * 1e6
     t0 = time.perf_counter()
-    qb = motion.euler_baseline(model, lambda t: vel(t), motion.SEED_Q0, 1e-3, dur / 4)
+    qb = seeds.euler_baseline(model, lambda t: vel(t), motion.SEED_Q0, 1e-3, dur / 4)
     base = (time.perf_counter() - t0) / (len(qb) - 1) * 1e6
     rows.append({
         "case": f"resolved-rate, {steps} steps of the seed run",

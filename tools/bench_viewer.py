@@ -33,10 +33,10 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
     from meshcat.animation import Animation
     from meshcat.path import Path as MPath
 
-    from hexapod_kin import load, viewer
+    from hexapod_kin import gait, load, viewer
 
     model = load(name)
-    times, qs, base = viewer.demo_trajectory(model, 4.0, samples)
+    times, qs, base = gait.demo_trajectory(model, 4.0, samples)
     scene = viewer._Scene(model)
     poses = scene.placements(qs, base)
     paths = [v.path for v in scene.visuals]

@@ -19,7 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from hexapod_kin import load, motion, viewer
+from hexapod_kin import gait, load, viewer
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from headless import launch_chromium  # noqa: E402
+
 from hexapod_kin._io import atomic_write
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -28,7 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 def hexapod_scene(out: Path) -> tuple[Path, float]:
     """The hexapod standing on its six feet, body swaying (feet fixed by the leg IK)."""
     model = load("hexapod")
-    times, qs, base = viewer.demo_trajectory(model, duration=4.0, samples=81)
+    times, qs, base = gait.demo_trajectory(model, duration=4.0, samples=81)
     path = viewer.export_html(model, times, qs, out / "hexapod.html", base_poses=base,
                               trace_frame=False, title="hexapod_kin: hexapod (body sway)")
     return path, 0.6
@@ -37,7 +41,7 @@ def hexapod_scene(out: Path) -> tuple[Path, float]:
 def leg_step_scene(out: Path) -> tuple[Path, float]:
     """The 3-DOF leg in mid-swing of a foot step (stance line + half-ellipse swing)."""
     model = load("hexabot_leg")
-    step = motion.foot_step(model, length=0.06, height=0.04, duration=1.0, dt=0.01)
+    step = gait.foot_step(model, length=0.06, height=0.04, duration=1.0, dt=0.01)
     sigma = np.array([np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1]
                       for q in step.q])
     path = viewer.export_html(model, step.t, step.q, out / "leg_step.html", frame_triads=True,
@@ -60,7 +64,7 @@ def shoot(
         if chromium is None:
             raise SystemExit("screenshots: `chromium` is not on PATH (apt-get install chromium)")
         with sync_playwright() as p:
-            own = viewer.launch_chromium(p, chromium)
+            own = launch_chromium(p, chromium)
             try:
                 return shoot(html, png, t, size, own)
             finally:

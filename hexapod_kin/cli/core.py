@@ -15,7 +15,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..exceptions import HexapodKinError, ParameterError
+from ..exceptions import ParameterError
 
 __all__ = ["COMMANDS", "register"]
 
@@ -331,11 +331,11 @@ def _add_step(sub: Any) -> None:
 
 
 def _cmd_step(args: argparse.Namespace) -> int:
-    from .. import motion
+    from .. import seeds
 
     model = _load(args)
     q0 = None if args.q is None else _q_arg(args, model.nq)
-    run = motion.seed_experiment(
+    run = seeds.seed_experiment(
         model, amplitude=args.amplitude, period=args.period, duration=args.duration,
         dt=args.dt, q0=q0, method=args.method, gain=args.gain, baseline=not args.no_baseline,
     )
@@ -416,7 +416,8 @@ def _add_view(sub: Any) -> None:
 def _cmd_view(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..viewer import Viewer, default_configuration
+    from ..gait import default_configuration
+    from ..viewer import Viewer
 
     model = _load(args)
     q = default_configuration(model) if args.q is None else _q_arg(args, model.nq)
@@ -452,7 +453,8 @@ def _add_animate(sub: Any) -> None:
 def _cmd_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..viewer import Viewer, demo_trajectory, export_html
+    from ..gait import demo_trajectory
+    from ..viewer import Viewer, export_html
 
     model = _load(args)
     times, qs, base = demo_trajectory(model, args.length, args.samples)

@@ -1,0 +1,188 @@
+"""One leg's step cycle: stance on the ground, swing through the air.
+
+:func:`foot_path` is a pure function of the gait phase (stance: a straight line on the ground,
+front to back; swing: a lifted half ellipse or cycloid, back to front) with step length,
+height and duty factor, so that gait tables call it per leg with their phase offsets;
+:func:`foot_step` turns one cycle into joint angles by IK.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from ..exceptions import ParameterError
+from ..motion import default_stance, positive, read_only, track
+
+__all__ = ["FootStep", "foot_path", "foot_step"]
+
+
+def foot_path(
+    phase: Any,
+    *,
+    center: Any,
+    length: float,
+    height: float,
+    duty_factor: float = 0.5,
+    direction: Any = (1.0, 0.0),
+    shape: Literal["ellipse", "cycloid"] = "ellipse",
+) -> np.ndarray:
+    """Foot position over one step cycle, as a pure function of the phase.
+
+    Phase 0 is touchdown at the front: during stance (``phase < duty_factor``) the foot
+    moves on the ground in a straight line from ``center + L/2·u`` to ``center − L/2·u`` at
+    constant speed (``u`` the horizontal unit ``direction`` of travel of the body); during
+    swing it returns through the air: a half ellipse (``shape="ellipse"``, semi-axes L/2 and
+    ``height``) or a cycloid (``shape="cycloid"``, zero velocity at lift-off and touchdown).
+
+    Args:
+        phase: Phase(s) in cycles (any real; taken modulo 1).
+        center: Middle of the stance line (3,) in [m] (its z is the ground).
+        length: Step length L in [m] (>= 0).
+        height: Swing height in [m] (>= 0).
+        duty_factor: Fraction of the cycle in stance, in (0, 1).
+        direction: Horizontal direction of travel (2,), normalised here.
+        shape: ``"ellipse"`` or ``"cycloid"``.
+
+    Returns:
+        (..., 3) positions in [m], the shape of ``phase`` plus 3.
+
+    Raises:
+        ParameterError: Bad lengths, duty factor, direction or shape.
+
+    """
+    c = np.asarray(center, dtype=float)
+    if c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise ParameterError(f"center={center!r}: a finite (3,) position in [m] is needed")
+    length = positive("length", length, allow_zero=True)
+    height = positive("height", height, allow_zero=True)
+    beta = float(duty_factor)
+    if not (0.0 < beta < 1.0):
+        raise ParameterError(f"duty_factor={duty_factor!r} is not allowed; 0 < duty_factor < 1")
+    u = np.asarray(direction, dtype=float).reshape(-1)
+    if u.shape != (2,) or not np.all(np.isfinite(u)) or np.hypot(*u) == 0:
+        raise ParameterError(f"direction={direction!r}: a non-zero horizontal (2,) vector")
+    u = u / np.hypot(*u)
+    if shape not in ("ellipse", "cycloid"):
+        raise ParameterError(f"shape={shape!r} is not allowed; use 'ellipse' or 'cycloid'")
+    ph = np.remainder(np.asarray(phase, dtype=float), 1.0)
+    stance = ph < beta
+    s = np.where(stance, ph / beta, (ph - beta) / (1.0 - beta))
+    along = np.where(stance, 0.5 - s, 0.0)
+    up = np.zeros_like(s)
+    sw = ~stance
+    if shape == "ellipse":
+        along = np.where(sw, -0.5 * np.cos(np.pi * s), along)
+        up = np.where(sw, np.sin(np.pi * s), up)
+    else:
+        along = np.where(sw, s - np.sin(2 * np.pi * s) / (2 * np.pi) - 0.5, along)
+        up = np.where(sw, 0.5 * (1.0 - np.cos(2 * np.pi * s)), up)
+    out = np.empty(ph.shape + (3,))
+    out[..., 0] = c[0] + length * along * u[0]
+    out[..., 1] = c[1] + length * along * u[1]
+    out[..., 2] = c[2] + height * up
+    return out
+
+
+@dataclass(frozen=True)
+class FootStep:
+    """One or more step cycles of a leg (arrays read-only, SI units).
+
+    Attributes:
+        t: (M,) times in [s].
+        phase: (M,) phase in cycles (0 = touchdown).
+        stance: (M,) True during stance.
+        foot: (M, 3) planned foot positions in [m].
+        q: (M, n) joint trajectory by IK.
+        qdot: (M, n) joint rates by finite differences [rad/s].
+        reached: (M,) True where IK reached the planned position.
+        foot_actual: (M, 3) FK(q) (Pinocchio) in [m].
+        within_limits: True if every sample is inside the joint position limits.
+        max_joint_step: Largest |Δq| between consecutive samples [rad]/[m] (continuity).
+
+    """
+
+    t: np.ndarray
+    phase: np.ndarray
+    stance: np.ndarray
+    foot: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    reached: np.ndarray
+    foot_actual: np.ndarray
+    within_limits: bool
+    max_joint_step: float
+
+    @property
+    def max_error(self) -> float:
+        """Max ‖FK(q) − planned‖ in [m]."""
+        return float(np.max(np.linalg.norm(self.foot_actual - self.foot, axis=1)))
+
+
+def foot_step(
+    model: Any,
+    *,
+    center: Any = None,
+    length: float = 0.04,
+    height: float = 0.03,
+    duration: float = 1.0,
+    duty_factor: float = 0.5,
+    dt: float = 0.005,
+    direction: Any = (1.0, 0.0),
+    shape: Literal["ellipse", "cycloid"] = "ellipse",
+    cycles: int = 1,
+    phase_offset: float = 0.0,
+    q_start: Any = None,
+) -> FootStep:
+    """Plan a foot step (stance + swing) and its joint trajectory by IK.
+
+    Args:
+        model: A loaded leg model.
+        center: Middle of the stance line (3,) in [m]; default the foot at
+            :func:`default_stance`.
+        length: Step length [m].
+        height: Swing height [m].
+        duration: Cycle time [s].
+        duty_factor: Stance fraction in (0, 1).
+        dt: Sample time [s].
+        direction: Horizontal travel direction (2,).
+        shape: Swing shape ``"ellipse"`` or ``"cycloid"``.
+        cycles: Number of cycles (>= 1).
+        phase_offset: Phase at t = 0 in cycles (gait tables set one per leg).
+        q_start: Joints near the first sample (IK branch / warm start).
+
+    Returns:
+        A :class:`FootStep`.
+
+    Raises:
+        ParameterError: Bad step parameters.
+
+    """
+    duration = positive("duration", duration)
+    dt = positive("dt", dt)
+    if not (isinstance(cycles, int) and cycles >= 1):
+        raise ParameterError(f"cycles={cycles!r} is not allowed; an int >= 1 is needed")
+    q_home = default_stance(model) if q_start is None else model.check_q(q_start, "q_start")
+    c = model.position(q_home) if center is None else np.asarray(center, dtype=float)
+    m = int(round(cycles * duration / dt))
+    t = np.arange(m + 1) * (cycles * duration / m)
+    phase = t / duration + float(phase_offset)
+    foot = foot_path(
+        phase,
+        center=c,
+        length=length,
+        height=height,
+        duty_factor=duty_factor,
+        direction=direction,
+        shape=shape,
+    )
+    q, reached = track(model, foot, q_home)
+    qdot = np.gradient(q, t, axis=0)
+    actual = np.array([model.position(qi) for qi in q])
+    within = bool(np.all(q >= model.lower - 1e-12) and np.all(q <= model.upper + 1e-12))
+    step = float(np.max(np.abs(np.diff(q, axis=0)))) if len(q) > 1 else 0.0
+    stance = np.remainder(phase, 1.0) < duty_factor
+    read_only(t, phase, stance, foot, qdot, actual)
+    return FootStep(t, phase, stance, foot, q, qdot, reached, actual, within, step)

@@ -1,0 +1,173 @@
+"""Standing poses and the hexapod's body sway (feet kept on the ground).
+
+:func:`default_configuration` is a pose that reads well (legs standing, other joints at
+mid-range); :func:`standing_base` lifts a hexapod so that its lowest foot touches the ground;
+:func:`demo_trajectory` is the demo motion of any model (the hexapod sways its body with its
+feet fixed in the world, by closed-form leg IK).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import HexapodKinError, ParameterError
+from ..params import Hexapod
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model
+
+__all__ = [
+    "default_configuration",
+    "demo_trajectory",
+    "frame_poses",
+    "hexapod_sway",
+    "standing_base",
+    "translation",
+]
+
+
+def translation(xyz: Any) -> np.ndarray:
+    """The 4×4 homogeneous translation by ``xyz`` [m]."""
+    T = np.eye(4)
+    T[:3, 3] = np.asarray(xyz, dtype=float)
+    return T
+
+
+def frame_poses(
+    model: Model, data: Any, qs: np.ndarray, base_poses: np.ndarray | None, frames: Sequence[str]
+) -> np.ndarray:
+    """World poses (K, F, 4, 4) of ``frames`` at configurations ``qs`` (K, nq).
+
+    ``base_poses`` (K, 4, 4), when given, places the model's base in the world at each sample.
+    ``data`` is a Pinocchio Data of ``model.model`` owned by the caller.
+    """
+    import pinocchio as pin
+
+    ids = [model.frame_id(f) for f in frames]
+    m = model.model
+    out = np.empty((len(qs), len(ids), 4, 4))
+    for i, q in enumerate(qs):
+        pin.forwardKinematics(m, data, q)
+        for j, fid in enumerate(ids):
+            out[i, j] = pin.updateFramePlacement(m, data, fid).homogeneous
+    if base_poses is not None:
+        out = np.einsum("kab,kfbc->kfac", base_poses, out)
+    return out
+
+
+def default_configuration(model: Model) -> np.ndarray:
+    """A pose that reads well on screen: hexapod/3-DOF legs standing, others at mid-range.
+
+    Legs of the ``hexabot_leg`` family (hip, knee, ankle) stand with the femur raised
+    0.3 rad and the tibia pointing down; other joints sit at the middle of finite limits, or 0.
+    """
+    q = np.zeros(model.nq)
+    lo, hi = np.asarray(model.lower), np.asarray(model.upper)
+    finite = np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 1e3)
+    mid = np.where(finite, (lo + hi) / 2, 0.0)
+    q[:] = np.where(np.abs(mid) < 1e-12, 0.0, mid)
+    for i, name in enumerate(model.joint_names):
+        if name.endswith("knee"):
+            q[i] = -0.3
+        elif name.endswith("ankle"):
+            q[i] = 1.7
+    return np.clip(q, lo, hi)
+
+
+def standing_base(model: Model, q: np.ndarray) -> np.ndarray:
+    """Body pose lifting a hexapod so that its lowest foot touches z = 0."""
+    params = model.params
+    if not isinstance(params, Hexapod):
+        return np.eye(4)
+    data = model.model.createData()
+    feet = frame_poses(model, data, q[None, :], None, params.foot_frames)[0, :, :3, 3]
+    return translation([0.0, 0.0, -float(feet[:, 2].min()) + 0.01])
+
+
+def demo_trajectory(
+    model: Model, duration: float = 4.0, samples: int = 121
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """A demo motion of any model: ``(times, qs, base_poses)``.
+
+    A hexapod stands and sways its body (heave, roll, pitch) with its feet kept on the ground
+    (closed-form leg IK when :mod:`hexapod_kin.ik` is available, else legs held still); any
+    other model sweeps each joint sinusoidally within its limits (amplitude ≤ 0.6 rad or a
+    quarter of the range, phases staggered).
+
+    Args:
+        model: A loaded model.
+        duration: Length in [s] (> 0).
+        samples: Number of samples (≥ 2).
+
+    Raises:
+        ParameterError: Bad ``duration`` or ``samples``.
+
+    """
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"duration={duration!r} is not allowed; give a positive time in s")
+    if not isinstance(samples, int) or samples < 2:
+        raise ParameterError(f"samples={samples!r} is not allowed; give an integer >= 2")
+
+    times = np.linspace(0.0, float(duration), samples)
+    phase = 2 * np.pi * times / duration
+    q0 = default_configuration(model)
+    if isinstance(model.params, Hexapod):
+        return hexapod_sway(model, times, phase, q0)
+    lo, hi = np.asarray(model.lower), np.asarray(model.upper)
+    span = np.where(np.isfinite(hi - lo), hi - lo, 2 * np.pi)
+    amp = np.minimum(0.6, span / 4)
+    amp = np.where(model.is_prismatic, np.minimum(span / 4, 0.05 + 0 * span), amp)
+    offsets = np.arange(model.nq) * np.pi / max(model.nq, 1)
+    qs = q0[None, :] + amp[None, :] * np.sin(phase[:, None] + offsets[None, :])
+    return times, np.clip(qs, lo, hi), None
+
+
+def hexapod_sway(
+    model: Model, times: np.ndarray, phase: np.ndarray, q0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hexapod sways its body (heave, roll, pitch, yaw) with its feet fixed in the world.
+
+    Returns ``(times, qs, base_poses)``; each leg follows by its closed-form IK, the branch
+    nearest to the previous sample.
+    """
+    import pinocchio as pin
+
+    params = model.params
+    assert isinstance(params, Hexapod)
+    stand = standing_base(model, q0)
+    h = float(stand[2, 3])
+    base = np.empty((len(times), 4, 4))
+    for i, ph in enumerate(phase):
+        T = translation([0.012 * math.sin(ph), 0.012 * math.cos(ph), h + 0.012 * math.sin(2 * ph)])
+        R = pin.rpy.rpyToMatrix(0.08 * math.sin(ph), 0.08 * math.cos(ph), 0.1 * math.sin(ph))
+        T[:3, :3] = R
+        base[i] = T
+    qs = np.tile(q0, (len(times), 1))
+    try:
+        from .. import ik
+    except ImportError:  # pragma: no cover - ik not available: legs held still
+        return times, qs, base
+    # feet fixed in the world where the standing pose puts them
+    data = model.model.createData()
+    feet = params.foot_frames
+    feet_world = frame_poses(model, data, q0[None, :], stand[None], feet)[0, :, :3, 3]
+    for leg_index, mount in enumerate(params.legs):
+        cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names or ()]
+        mount_T = mount.transform()
+        foot_h = np.append(feet_world[leg_index], 1.0)
+        targets = np.array([np.linalg.solve(b @ mount_T, foot_h)[:3] for b in base])
+        try:
+            solutions = ik.analytic(mount.chain, targets)
+        except HexapodKinError:  # no closed form for this leg: held still
+            continue
+        prev = q0[cols]
+        for i, sols in enumerate(solutions):
+            if len(sols):  # the branch nearest to the previous sample (angles wrapped)
+                step = np.angle(np.exp(1j * (np.asarray(sols) - prev[None, :])))
+                prev = prev + step[int(np.argmin(np.abs(step).sum(axis=1)))]
+            qs[i, cols] = prev
+    return times, np.clip(qs, model.lower, model.upper), base

@@ -1,0 +1,194 @@
+"""The lab reports' experiments, as functions (seeds in ``shared/seeds``).
+
+* :func:`seed_experiment` is the seeds' run: the 3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``, with
+  the drift figures, and :func:`euler_baseline`, the plain Euler + ``np.linalg.solve`` loop the
+  seeds used.
+* :func:`seed002_schedule` is seed 002's Table I (movement planning of the 2-DOF leg) as a
+  :class:`~hexapod_kin.motion.JointSchedule`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .exceptions import ParameterError
+from .motion import (
+    SEED_Q0,
+    JointSchedule,
+    Method,
+    Trajectory,
+    default_stance,
+    positive,
+    resolved_rate,
+)
+
+__all__ = ["SEED_Q0", "SeedRun", "euler_baseline", "seed002_schedule", "seed_experiment"]
+
+
+@dataclass(frozen=True)
+class SeedRun:
+    """The seeds' experiment and its drift figures (metres).
+
+    Attributes:
+        trajectory: The resolved-rate run.
+        amplitude: A in [m/s].
+        period: T in [s].
+        drift_y: max |y(t) − y(0)| in [m] (tip from Pinocchio FK of the joint trajectory).
+        drift_z: max |z(t) − z(0)| in [m].
+        error_x: max |x(t) − x(0) − ∫v_x| in [m] against the exact integral
+            ``A T/(2π) (1 − cos 2πt/T)``.
+        baseline: Same three figures for the plain Euler + ``np.linalg.solve`` open loop.
+        baseline_deviation: (N, 3) |foot − reference| of that baseline in [m], or None.
+
+    """
+
+    trajectory: Trajectory
+    amplitude: float
+    period: float
+    drift_y: float
+    drift_z: float
+    error_x: float
+    baseline: dict[str, float]
+    baseline_deviation: np.ndarray | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready summary."""
+        tr = self.trajectory
+        return {
+            "method": tr.method,
+            "gain": tr.gain,
+            "dt": tr.dt,
+            "duration": float(tr.t[-1]),
+            "amplitude": self.amplitude,
+            "period": self.period,
+            "q0": [float(v) for v in tr.q[0]],
+            "drift_y": self.drift_y,
+            "drift_z": self.drift_z,
+            "error_x": self.error_x,
+            "baseline_euler_solve": self.baseline,
+            "closest_approach": tr.closest_approach,
+            "max_joint_speed": float(np.max(np.abs(tr.qdot))),
+        }
+
+
+def _drift(
+    model: Any, q: np.ndarray, t: np.ndarray, amplitude: float, period: float
+) -> tuple[dict[str, float], np.ndarray]:
+    """Drift figures from Pinocchio FK of ``q`` and the (N, 3) |foot − exact reference|."""
+    foot = np.array([model.position(qi) for qi in q])
+    ref = np.broadcast_to(foot[0], foot.shape).copy()
+    ref[:, 0] += amplitude * period / (2 * np.pi) * (1 - np.cos(2 * np.pi * t / period))
+    dev = np.abs(foot - ref)
+    figs = {
+        "drift_y": float(np.max(dev[:, 1])),
+        "drift_z": float(np.max(dev[:, 2])),
+        "error_x": float(np.max(dev[:, 0])),
+    }
+    return figs, dev
+
+
+def euler_baseline(
+    model: Any, velocity: Callable[[float], Any], q0: Any, dt: float, duration: float
+) -> np.ndarray:
+    """The seeds' integration: ``q += dt · np.linalg.solve(J(q), v(t))`` (open loop, Pinocchio).
+
+    Returns:
+        (N, n) joint trajectory.
+
+    """
+    q = model.check_q(q0, "q0").copy()
+    steps = int(round(duration / dt))
+    out = np.empty((steps + 1, model.nq))
+    out[0] = q
+    for k in range(steps):
+        jac = model.position_jacobian(q)
+        q = q + dt * np.linalg.solve(jac, np.asarray(velocity(k * dt), dtype=float))
+        out[k + 1] = q
+    return out
+
+
+def seed_experiment(
+    model: Any = None,
+    *,
+    amplitude: float = 0.05,
+    period: float = 2.0,
+    duration: float = 10.0,
+    dt: float = 1e-3,
+    q0: Any = None,
+    method: Method = "rk4",
+    gain: float = 10.0,
+    baseline: bool = True,
+) -> SeedRun:
+    """The seeds' experiment: foot velocity ``[A sin(2πt/T), 0, 0]`` on the 3-DOF leg.
+
+    The seeds give no amplitude or period; the defaults (A = 0.05 m/s, T = 2 s) move the foot
+    0 → 3.2 cm → 0 along x every period from ``SEED_Q0``.
+
+    Args:
+        model: A loaded 3-joint model (default: ``hexabot_leg``).
+        amplitude: A in [m/s].
+        period: T in [s].
+        duration: In [s].
+        dt: Step in [s].
+        q0: Start (default :func:`default_stance`).
+        method: Integration method.
+        gain: Closed-loop gain [1/s] toward the exact reference ``x0 + A T/(2π)(1 − cos 2πt/T)``.
+        baseline: Also run the plain Euler + ``np.linalg.solve`` loop (needs a square J).
+
+    Returns:
+        A :class:`SeedRun`.
+
+    """
+    from .kinematics import load
+
+    mdl = load("hexabot_leg") if model is None else model
+    a = float(amplitude)
+    per = positive("period", period)
+    if not math.isfinite(a):
+        raise ParameterError(f"amplitude={amplitude!r} is not finite")
+    q_start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0")
+    w = 2 * np.pi / per
+
+    def vel(t: Any) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        out = np.zeros(t.shape + (3,))
+        out[..., 0] = a * np.sin(w * t)
+        return out
+
+    p0 = mdl.position(q_start)
+
+    def ref(t: Any) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        out = np.broadcast_to(p0, t.shape + (3,)).copy()
+        out[..., 0] += a / w * (1.0 - np.cos(w * t))
+        return out
+
+    traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, reference=ref)
+    figs, _ = _drift(mdl, traj.q, traj.t, a, per)
+    base: dict[str, float] = {}
+    base_dev = None
+    if baseline and mdl.nq == 3:
+        qb = euler_baseline(mdl, vel, q_start, dt, duration)
+        base, base_dev = _drift(mdl, qb, traj.t, a, per)
+        base_dev.setflags(write=False)
+    return SeedRun(traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev)
+
+
+def seed002_schedule() -> JointSchedule:
+    """Seed 002 Table I (movement planning of the 2-DOF leg), in radians.
+
+    Knots (t [s]: θ1, θ2 [deg]): 0: (0, −90); 2: (0, −90) — no movement; 7: (0, −50) — tibia
+    +40°; 11: (20, −50) — coxa +20°; 15: (20, −50) — no movement; 20: (0, −90) — both back;
+    idle afterwards. Linear ramps (the paper's Signal Builder).
+    """
+    deg = np.array([(0, -90), (0, -90), (0, -50), (20, -50), (20, -50), (0, -90)], float)
+    return JointSchedule(
+        times=np.array([0, 2, 7, 11, 15, 20], float),
+        values=np.radians(deg),
+        description="seed 002 Table I (movement planning)",
+    )
