@@ -1,0 +1,138 @@
+"""The shared compiled numerics, against numpy/LAPACK and closed forms."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hexapod_kin import _numerics as N
+from hexapod_kin.exceptions import ConfigurationError
+
+RNG = np.random.default_rng(7)
+
+
+def _sym(n: int) -> np.ndarray:
+    a = RNG.normal(size=(n, n))
+    return a @ a.T
+
+
+def test_eig3_sym_equals_lapack_including_diagonal_and_degenerate() -> None:
+    mats = [_sym(3) for _ in range(200)]
+    mats += [np.diag([3.0, -1.0, 2.0]), np.eye(3) * 2.5, np.diag([1.0, 1.0, 0.0])]
+    for g in mats:
+        got = N.eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
+        ref = np.sort(np.linalg.eigvalsh(g))[::-1]
+        assert np.allclose(got, ref, atol=1e-12 * max(1.0, abs(ref).max()))
+
+
+def test_eig2_and_jacobi_equal_lapack() -> None:
+    for n in (2, 4, 6):
+        for _ in range(50):
+            g = _sym(n)
+            ref = np.sort(np.linalg.eigvalsh(g))[::-1]
+            if n == 2:
+                got = np.array(N.eig2_sym(g[0, 0], g[0, 1], g[1, 1]))
+            else:
+                got = np.empty(n)
+                N.jacobi_eig(g.copy(), got)
+            assert np.allclose(got, ref, rtol=1e-10, atol=1e-12)
+
+
+def test_determinants_equal_numpy() -> None:
+    for n in range(1, 7):
+        work = np.empty((6, 6))
+        for _ in range(30):
+            a = RNG.normal(size=(n, n))
+            assert N.det_small(np.ascontiguousarray(a), n, work) == pytest.approx(
+                np.linalg.det(a), rel=1e-10, abs=1e-12
+            )
+    assert N.det_lu(np.zeros((4, 4))) == 0.0
+
+
+def test_solve_spd_and_non_spd() -> None:
+    a = _sym(5) + 0.1 * np.eye(5)
+    b = RNG.normal(size=5)
+    out = np.empty(5)
+    assert N.solve_spd(a.copy(), b, out)
+    assert np.allclose(a @ out, b, atol=1e-10)
+    assert not N.solve_spd(-np.eye(2), np.ones(2), np.empty(2))
+
+
+@pytest.mark.parametrize("shape", [(3, 2), (3, 3), (3, 7), (6, 6), (6, 7), (2, 5)])
+def test_dls_step_is_the_damped_least_squares_solution(shape: tuple[int, int]) -> None:
+    m, n = shape
+    j = RNG.normal(size=shape)
+    e = RNG.normal(size=m)
+    lam2 = 0.03
+    # the minimiser of ‖J dq − e‖² + λ²‖dq‖², from the stacked least-squares problem
+    stacked = np.vstack([j, math.sqrt(lam2) * np.eye(n)])
+    ref = np.linalg.lstsq(stacked, np.concatenate([e, np.zeros(n)]), rcond=None)[0]
+    assert np.allclose(N.dls_step(j, e, lam2), ref, atol=1e-10)
+
+
+def test_dls_step_frozen_joints_and_errors() -> None:
+    j = RNG.normal(size=(3, 4))
+    e = RNG.normal(size=3)
+    free = np.array([True, False, True, True])
+    dq = N.dls_step(j, e, 0.01, free=free)
+    assert dq[1] == 0.0
+    ref = N.dls_step(j[:, free], e, 0.01)
+    assert np.allclose(dq[free], ref, atol=1e-12)
+    with pytest.raises(ConfigurationError) as err:
+        N.dls_step(np.zeros((3, 3)), e, 0.0)
+    assert err.value.parameter == "damping"
+    with pytest.raises(ConfigurationError):
+        N.dls_step(j, np.ones(4), 0.1)
+    with pytest.raises(ConfigurationError):
+        N.dls_step(j, e, -1.0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
+def test_sigma_bounds_equal_svd(n: int) -> None:
+    for _ in range(50):
+        j = RNG.normal(size=(3, n))
+        s = np.linalg.svd(j, compute_uv=False)
+        lo, hi = N.sigma_bounds(np.ascontiguousarray(j))
+        assert hi == pytest.approx(s[0], rel=1e-10)
+        assert lo == pytest.approx(s[min(n, 3) - 1], rel=1e-8, abs=1e-12)
+
+
+def test_sigma_bounds_exact_singularity() -> None:
+    j = np.array([[1.0, 2.0, 3.0], [0.0, 1.0, 1.0], [1.0, 3.0, 4.0]])  # row 3 = row 1 + row 2
+    lo, _ = N.sigma_bounds(j)
+    assert lo < 1e-12
+
+
+def test_wrapping() -> None:
+    a = np.array([-7.0, -math.pi, 0.0, math.pi, 3.5, 100.0, 1e4])
+    w = N.wrap_angles(a)
+    assert np.all(w > -math.pi) and np.all(w <= math.pi)
+    assert np.allclose(np.sin(w), np.sin(a)) and np.allclose(np.cos(w), np.cos(a))
+    assert w[1] == math.pi
+    for x in a:
+        assert N.wrap_angle(float(x)) == pytest.approx(w[list(a).index(x)], abs=1e-9)
+    assert N.wrap_diff(np.array([3.0]), np.array([-3.0]))[0] == pytest.approx(6.0 - 2 * math.pi)
+
+
+def test_chain_scale_one_formula() -> None:
+    t = np.array([[0.1, 0.0, 0.0], [0.0, 0.3, 0.4], [0.0, 0.0, 0.0]])
+    assert N.chain_length(t) == pytest.approx(0.6)
+    assert N.chain_scale(t) == pytest.approx(0.6)
+    assert N.chain_scale(np.zeros((2, 3))) == 1.0
+
+
+def test_rpy_to_matrix_is_rz_ry_rx() -> None:
+    def rot(axis: int, a: float) -> np.ndarray:
+        c, s = math.cos(a), math.sin(a)
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        r = np.eye(3)
+        r[i, i] = r[j, j] = c
+        r[i, j], r[j, i] = -s, s
+        return r
+
+    for _ in range(20):
+        r, p, y = RNG.uniform(-3, 3, size=3)
+        ref = rot(2, y) @ rot(1, p) @ rot(0, r)
+        assert np.allclose(N.rpy_to_matrix(r, p, y), ref, atol=1e-15)
