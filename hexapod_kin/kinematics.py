@@ -14,13 +14,19 @@ Reference frames of Jacobians (explicit argument, as in Pinocchio):
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import ParameterError, choices
-from .model import _F64, _ND, Model, _hypot, build, fast_q_ok
+from .model import Model, build, fast_q_ok
+
+# The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
+_F64 = np.dtype(np.float64)
+_ND = np.ndarray
+_hypot = math.hypot
 
 # Bound once: module attribute lookups cost on the per-call hot path.
 _forward_kinematics = pin.forwardKinematics

@@ -8,24 +8,18 @@ that the user picked. Names are checked here before any id reaches Pinocchio (wh
 
 from __future__ import annotations
 
-import importlib.metadata
 import math
-import os
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 import pinocchio as pin
 
-from . import robots
 from ._gate import check_urdf
 from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, UrdfError, choices
 from .params import Chain, Hexapod
-from .urdf import to_urdf
+from .sources import ResolvedSource, erd_names, erd_path, resolve_source, yourdfpy_load
 
 _T = TypeVar("_T")
 
@@ -76,140 +70,6 @@ _SIMPLE_JOINTS = {
     "JointModelPZ",
     "JointModelPrismaticUnaligned",
 }
-
-
-# ------------------------------------------------------------------------ example-robot-data
-def _erd_share() -> Path:
-    """Directory ``share`` of the example-robot-data 6 (cmeel) data package."""
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        raise SourceError(
-            "example-robot-data is not installed; `pip install example-robot-data==6.0.0`"
-        ) from None
-    share = Path(str(dist.locate_file("cmeel.prefix/share")))
-    if not (share / "example-robot-data" / "robots").is_dir():
-        raise SourceError(f"example-robot-data data not found under {share}")
-    return share
-
-
-@lru_cache(maxsize=1)
-def _erd_index() -> dict[str, Path]:
-    robots_dir = _erd_share() / "example-robot-data" / "robots"
-    index: dict[str, Path] = {}
-    for path in sorted(robots_dir.rglob("*.urdf")):
-        index.setdefault(path.stem, path)
-    return index
-
-
-def erd_names() -> list[str]:
-    """Names of the example-robot-data URDFs (file stems), sorted."""
-    return sorted(_erd_index())
-
-
-def erd_path(name: str) -> Path:
-    """Path of the example-robot-data URDF ``name`` (e.g. ``"solo12"``).
-
-    Raises:
-        SourceError: If there is no such robot (the message lists those that exist).
-
-    """
-    index = _erd_index()
-    if name not in index:
-        raise SourceError(
-            f"erd robot {name!r} does not exist; example-robot-data has {choices(erd_names())}"
-        )
-    return index[name]
-
-
-# ------------------------------------------------------------------------ sources
-@dataclass(frozen=True)
-class ResolvedSource:
-    """A source resolved to URDF text.
-
-    Attributes:
-        text: The URDF document.
-        name: A short label (preset name, file name, ``erd:NAME``).
-        package_dirs: Directories where ``package://`` meshes resolve.
-        mesh_root: Directory relative mesh paths resolve against (the URDF's directory).
-        params: The Chain or Hexapod it came from, if any.
-
-    """
-
-    text: str
-    name: str
-    package_dirs: tuple[str, ...] = ()
-    mesh_root: str | None = None
-    params: Chain | Hexapod | None = None
-
-
-def _read_text(path: Path) -> str:
-    from ._gate import MAX_URDF_BYTES
-    from .exceptions import UrdfError
-
-    if not path.is_file():
-        raise SourceError(f"source={str(path)!r} is not a regular file")
-    size = path.stat().st_size
-    if size > MAX_URDF_BYTES:
-        raise UrdfError(f"{path}: size {size} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise UrdfError(f"{path}: not UTF-8 text ({exc})") from None
-
-
-def resolve_source(source: Any, **params: Any) -> ResolvedSource:
-    """Turn a chain, robot, preset name, URDF path, URDF text or ``erd:NAME`` into URDF text.
-
-    Args:
-        source: What to load.
-        **params: Preset parameters (only with a preset name).
-
-    Raises:
-        SourceError: If the source cannot be resolved (the message says what is accepted).
-
-    """
-    if isinstance(source, (Chain, Hexapod)):
-        return ResolvedSource(to_urdf(source), source.name, params=source)
-    if isinstance(source, os.PathLike):
-        path = Path(source)
-        return ResolvedSource(_read_text(path), path.name, mesh_root=str(path.parent.resolve()))
-    if not isinstance(source, str):
-        raise SourceError(
-            f"source of type {type(source).__name__} is not allowed; give a Chain, a Hexapod, "
-            "a preset name, a URDF path, URDF text or 'erd:NAME'"
-        )
-    text = source.strip()
-    if not text:
-        raise SourceError(
-            f"source={source!r} is empty; give a preset name ({choices(robots.names())}), a URDF "
-            "path, URDF text or 'erd:NAME'"
-        )
-    if text.startswith("<"):
-        return ResolvedSource(source, "urdf-text")
-    if params and text not in robots.PRESETS:
-        raise SourceError(f"preset parameters {sorted(params)} given for non-preset {text!r}")
-    if text in robots.PRESETS:
-        built = robots.get(text, **params)
-        return ResolvedSource(to_urdf(built), text, params=built)
-    if text.startswith("erd:"):
-        path = erd_path(text[4:])
-        share = _erd_share()
-        return ResolvedSource(
-            _read_text(path),
-            text,
-            package_dirs=(str(share),),
-            mesh_root=str(path.parent),
-        )
-    path = Path(text)
-    if path.suffix.lower() in (".urdf", ".xml") or path.exists():
-        if not path.exists():
-            raise SourceError(f"source={text!r}: no such file")
-        return ResolvedSource(_read_text(path), path.name, mesh_root=str(path.parent.resolve()))
-    raise SourceError(
-        f"source={text!r} is not a preset, a URDF file or 'erd:NAME'; presets are "
-        f"{choices(robots.names())}"
-    )
 
 
 # ------------------------------------------------------------------------ the model
@@ -499,17 +359,7 @@ class Model:
 
     def yourdfpy(self) -> Any:
         """The same URDF text loaded by yourdfpy (a second engine; meshes not loaded)."""
-        import io
-
-        import yourdfpy
-
-        return yourdfpy.URDF.load(
-            io.BytesIO(self.urdf.encode("utf-8")),
-            build_scene_graph=True,
-            build_collision_scene_graph=False,
-            load_meshes=False,
-            load_collision_meshes=False,
-        )
+        return yourdfpy_load(self.urdf)
 
     def __repr__(self) -> str:
         return (
@@ -597,7 +447,9 @@ def build(
     cls: type[Model] = Model,
     reduce: bool | None = None,
     q_ref: Any = None,
+    package_dirs: Any = (),
     **params: Any,
 ) -> Model:
     """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``)."""
-    return cls(resolve_source(source, **params), base, tip, reduce=reduce, q_ref=q_ref)
+    resolved = resolve_source(source, package_dirs=package_dirs, **params)
+    return cls(resolved, base, tip, reduce=reduce, q_ref=q_ref)

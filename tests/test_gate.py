@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexapod_kin import _gate, model, robots, urdf
+from hexapod_kin import _gate, model, robots, sources, urdf
 from hexapod_kin._gate import MAX_DOF, MAX_LINKS, MAX_URDF_BYTES, check_urdf, resolve_mesh
 from hexapod_kin.exceptions import HexapodKinError, UrdfError
 
@@ -290,10 +290,10 @@ ERD_REFUSED = {
 
 
 def _erd_check(name: str) -> _gate.GateResult:
-    path = model.erd_path(name)
+    path = sources.erd_path(name)
     return check_urdf(
         path.read_text(encoding="utf-8"),
-        package_dirs=(str(model._erd_share()),),
+        package_dirs=(str(sources.erd_share()),),
         mesh_root=str(path.parent),
     )
 
@@ -303,7 +303,7 @@ def test_gate_accepts_erd(name: str) -> None:
     result = _erd_check(name)
     for _uri, path in result.meshes:
         assert path.is_file()
-        assert str(path).startswith(os.path.realpath(model._erd_share()))
+        assert str(path).startswith(os.path.realpath(sources.erd_share()))
 
 
 @pytest.mark.parametrize("name", sorted(ERD_REFUSED))

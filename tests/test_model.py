@@ -161,3 +161,52 @@ def test_arrays_extracted_once_and_match_pinocchio():
     q = np.array([0.3, -0.4, 0.9])
     pos = _kernels.fk_position(model.arrays, q)
     np.testing.assert_allclose(pos, model.fk(q)[:3, 3], atol=1e-14)
+
+
+# ------------------------------------------------------------------ sources
+def test_sources_module_owns_resolution_and_model_reexports():
+    from hexapod_kin import model as model_mod
+    from hexapod_kin import sources
+
+    assert model_mod.resolve_source is sources.resolve_source
+    assert model_mod.erd_path is sources.erd_path and model_mod.erd_names is sources.erd_names
+    import ast
+    from pathlib import Path
+
+    tree = ast.parse(Path(sources.__file__).read_text())
+    imported = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    imported |= {n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert "pinocchio" not in imported  # what a source means needs no Pinocchio
+
+
+def test_kinematics_imports_no_private_name_of_model():
+    import ast
+    from pathlib import Path
+
+    from hexapod_kin import kinematics
+
+    tree = ast.parse(Path(kinematics.__file__).read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module == "model":
+            assert all(not a.name.startswith("_") for a in node.names), ast.dump(node)
+
+
+def test_erd_alias_and_did_you_mean():
+    assert erd_path("ur5") == erd_path("ur5_robot")
+    assert hk.load("erd:ur5").nq == hk.load("erd:ur5_robot").nq == 6
+    with pytest.raises(SourceError, match="did you mean") as info:
+        erd_path("ur")  # ambiguous prefix: ur3, ur5, ur10 ...
+    assert info.value.parameter == "source" and "ur5_robot" in info.value.allowed
+    with pytest.raises(SourceError, match=r"did you mean 'hexabot_leg'") as info2:
+        hk.load("hexabot_lge")
+    assert info2.value.value == "hexabot_lge"
+    with pytest.raises(SourceError, match=r"did you mean 'erd:panda'"):
+        hk.load("pandaa")
+
+
+def test_erd_names_lists_every_urdf_file():
+    from hexapod_kin.sources import erd_share
+
+    robots_dir = erd_share() / "example-robot-data" / "robots"
+    stems = {p.stem for p in robots_dir.rglob("*.urdf")}
+    assert set(erd_names()) == stems and len(stems) > 50

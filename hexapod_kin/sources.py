@@ -1,0 +1,383 @@
+"""What a model source means: a chain, a preset, a URDF path or text, ``erd:NAME``, a table file.
+
+:func:`resolve_source` turns any of them into a :class:`ResolvedSource` (URDF text, a label,
+where its meshes resolve, and the parameter table when there is one). This module also holds
+the example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second engine
+(:func:`yourdfpy_load`). It never imports Pinocchio: building the model is
+:mod:`hexapod_kin.model`'s job.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import io
+import os
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from . import robots
+from .exceptions import SourceError, UrdfError, choices, did_you_mean
+from .params import Chain, Hexapod
+from .urdf import to_urdf
+
+__all__ = [
+    "ResolvedSource",
+    "TABLE_SUFFIXES",
+    "erd_names",
+    "erd_path",
+    "erd_share",
+    "package_dirs_for",
+    "resolve_source",
+    "yourdfpy_load",
+]
+
+#: File suffixes read as parameter-table files (see :mod:`hexapod_kin.tables`).
+TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
+
+
+# ------------------------------------------------------------------------ example-robot-data
+def erd_share() -> Path:
+    """Directory ``share`` of the example-robot-data 6 (cmeel) data package.
+
+    Raises:
+        SourceError: If example-robot-data is not installed.
+
+    """
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        raise SourceError(
+            "example-robot-data is not installed; `pip install example-robot-data==6.0.0`",
+            parameter="source",
+        ) from None
+    share = Path(str(dist.locate_file("cmeel.prefix/share")))
+    if not (share / "example-robot-data" / "robots").is_dir():
+        raise SourceError(f"example-robot-data data not found under {share}")
+    return share
+
+
+@lru_cache(maxsize=1)
+def _erd_index() -> dict[str, Path]:
+    robots_dir = erd_share() / "example-robot-data" / "robots"
+    index: dict[str, Path] = {}
+    for path in sorted(robots_dir.rglob("*.urdf")):
+        index.setdefault(path.stem, path)
+    return index
+
+
+def erd_names() -> list[str]:
+    """Names of every example-robot-data URDF (file stems), sorted."""
+    return sorted(_erd_index())
+
+
+def erd_path(name: str) -> Path:
+    """Path of the example-robot-data URDF ``name`` (e.g. ``"solo12"``).
+
+    A name that is a unique prefix of one robot's name (``"ur5"`` → ``"ur5_robot"``) or that
+    is that robot's name without ``_robot``/``_description`` resolves to it.
+
+    Raises:
+        SourceError: If there is no such robot (the message suggests close names and lists
+            those that exist).
+
+    """
+    index = _erd_index()
+    if name in index:
+        return index[name]
+    names = sorted(index)
+    aliases = [n for n in names if isinstance(name, str) and name and n.startswith(name)]
+    exact = [n for n in aliases if n in (f"{name}_robot", f"{name}_description")]
+    if len(exact) == 1:
+        return index[exact[0]]
+    if len(aliases) == 1:
+        return index[aliases[0]]
+    raise SourceError(
+        f"erd robot {name!r} does not exist{did_you_mean(str(name), names)}; "
+        f"example-robot-data has {choices(names, limit=200)}",
+        parameter="source",
+        value=f"erd:{name}",
+        allowed=names,
+    )
+
+
+# ------------------------------------------------------------------------ package://
+def _ros_package_path() -> list[str]:
+    value = os.environ.get("ROS_PACKAGE_PATH", "")
+    return [p for p in value.split(os.pathsep) if p]
+
+
+_PACKAGE_URI = re.compile(r"package:///?([^/\s\"'<>]+)/")
+
+
+def _package_name(folder: Path) -> str | None:
+    """The ``<name>`` of ``folder/package.xml`` (None without one, or unreadable)."""
+    manifest = folder / "package.xml"
+    try:
+        if not manifest.is_file() or manifest.stat().st_size > 1_000_000:
+            return None
+        found = re.search(r"<name>\s*([^<\s]+)\s*</name>", manifest.read_text("utf-8", "replace"))
+    except OSError:
+        return None
+    return found.group(1) if found else None
+
+
+def package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """Directories where the ``package://PKG/...`` URIs of a URDF resolve (``<dir>/PKG/...``).
+
+    As ROS tools do, for each package named in ``text``, in this order: ``extra`` (the
+    user's ``package_dirs=``, used as given), the entries of ``ROS_PACKAGE_PATH`` (an entry
+    holding ``PKG``, an entry that is ``PKG`` itself, or a ``PKG`` folder with a
+    ``package.xml`` at most three levels below an entry), then the folders above the URDF
+    file: one named ``PKG``, or one whose ``package.xml`` names ``PKG`` and whose folder name
+    is ``PKG``. The gate still checks each mesh stays inside the directory it resolved in.
+
+    Args:
+        path: The URDF file (``None`` for URDF text: no folders above).
+        text: The URDF document (scanned for ``package://`` names).
+        extra: Directories given by the user, tried first.
+
+    Returns:
+        Directory paths, de-duplicated, in priority order.
+
+    """
+    out: list[str] = []
+
+    def add(p: str | os.PathLike[str]) -> None:
+        full = os.path.abspath(os.fspath(p))
+        if os.path.isdir(full) and full not in out:
+            out.append(full)
+
+    for d in extra:
+        add(d)
+    packages = sorted(set(_PACKAGE_URI.findall(text)))
+    if not packages:
+        return tuple(out)
+    for entry in _ros_package_path():
+        root = Path(entry)
+        for pkg in packages:
+            if (root / pkg).is_dir():
+                add(root)
+            elif root.name == pkg or _package_name(root) == pkg:
+                add(root.parent)
+            else:
+                for depth in ("*", "*/*", "*/*/*"):
+                    for hit in root.glob(f"{depth}/{pkg}/package.xml"):
+                        add(hit.parent.parent)
+    if path is not None:
+        here = path.resolve().parent
+        for folder in (here, *here.parents):
+            if folder.name in packages:
+                add(folder.parent)
+    return tuple(out)
+
+
+# ------------------------------------------------------------------------ sources
+@dataclass(frozen=True)
+class ResolvedSource:
+    """A source resolved to URDF text.
+
+    Attributes:
+        text: The URDF document.
+        name: A short label (preset name, file name, ``erd:NAME``).
+        package_dirs: Directories where ``package://`` meshes resolve.
+        mesh_root: Directory relative mesh paths resolve against (the URDF's directory).
+        params: The Chain or Hexapod it came from, if any.
+        path: The file it was read from, if any.
+
+    """
+
+    text: str
+    name: str
+    package_dirs: tuple[str, ...] = ()
+    mesh_root: str | None = None
+    params: Chain | Hexapod | None = None
+    path: str | None = None
+
+
+def _read_text(path: Path) -> str:
+    from ._gate import MAX_URDF_BYTES
+
+    if not path.is_file():
+        raise SourceError(
+            f"source={str(path)!r} is not a regular file", parameter="source", value=str(path)
+        )
+    size = path.stat().st_size
+    if size > MAX_URDF_BYTES:
+        raise UrdfError(f"{path}: size {size} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise UrdfError(f"{path}: not UTF-8 text ({exc})") from None
+
+
+def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> ResolvedSource:
+    if not path.exists():
+        raise SourceError(
+            f"source={str(path)!r}: no such file", parameter="source", value=str(path)
+        )
+    if path.suffix.lower() in TABLE_SUFFIXES:
+        from .tables import read_table
+
+        chain = read_table(path, **params)
+        return ResolvedSource(to_urdf(chain), path.name, params=chain, path=str(path))
+    if params:
+        raise SourceError(
+            f"preset parameters {sorted(params)} given for non-preset file {str(path)!r}",
+            parameter="params",
+            value=sorted(params),
+        )
+    text = _read_text(path)
+    return ResolvedSource(
+        text,
+        path.name,
+        package_dirs=package_dirs_for(path, text, package_dirs),
+        mesh_root=str(path.parent.resolve()),
+        path=str(path),
+    )
+
+
+_ACCEPTED = (
+    "a Chain, a Hexapod, a preset name, a URDF path, URDF text, a table file "
+    "(.toml/.yaml) or 'erd:NAME'"
+)
+
+
+def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> ResolvedSource:
+    """Turn a chain, robot, preset name, file, URDF text or ``erd:NAME`` into URDF text.
+
+    Args:
+        source: What to load: a :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a preset
+            name (``"hexabot_leg"``), a URDF file path, URDF text, a table file (``.toml``,
+            ``.yaml``; see :mod:`hexapod_kin.tables`) or ``"erd:NAME"``.
+        package_dirs: Extra directories where ``package://PKG/...`` resolves (``<dir>/PKG``),
+            tried before ``ROS_PACKAGE_PATH`` and the folders above a URDF file.
+        **params: Preset parameters (only with a preset name).
+
+    Raises:
+        SourceError: If the source cannot be resolved (the message says what is accepted and
+            suggests close names).
+
+    """
+    if isinstance(package_dirs, (str, os.PathLike)):
+        package_dirs = (package_dirs,)
+    try:
+        extra = tuple(os.fspath(d) for d in package_dirs)
+    except TypeError:
+        raise SourceError(
+            f"package_dirs={package_dirs!r} is not allowed; give a list of directories",
+            parameter="package_dirs",
+            value=package_dirs,
+        ) from None
+    if isinstance(source, (Chain, Hexapod)):
+        if params:
+            raise SourceError(
+                f"preset parameters {sorted(params)} given for non-preset {type(source).__name__}",
+                parameter="params",
+                value=sorted(params),
+            )
+        return ResolvedSource(to_urdf(source), source.name, params=source)
+    if isinstance(source, os.PathLike):
+        return _from_file(Path(source), extra, **params)
+    if not isinstance(source, str):
+        raise SourceError(
+            f"source of type {type(source).__name__} is not allowed; give {_ACCEPTED}",
+            parameter="source",
+            value=source,
+            allowed=_ACCEPTED,
+        )
+    text = source.strip()
+    if not text:
+        raise SourceError(
+            f"source={source!r} is empty; give a preset name ({choices(robots.names())}), a URDF "
+            "path, URDF text, a table file or 'erd:NAME'",
+            parameter="source",
+            value=source,
+            allowed=robots.names(),
+        )
+    if text.startswith("<"):
+        if params:
+            raise SourceError(
+                f"preset parameters {sorted(params)} given for non-preset URDF text",
+                parameter="params",
+                value=sorted(params),
+            )
+        return ResolvedSource(
+            source, "urdf-text", package_dirs=package_dirs_for(None, source, extra)
+        )
+    if text in robots.PRESETS:
+        built = robots.get(text, **params)
+        return ResolvedSource(to_urdf(built), text, params=built)
+    if text.startswith("erd:"):
+        if params:
+            raise SourceError(
+                f"preset parameters {sorted(params)} given for non-preset {text!r}",
+                parameter="params",
+                value=sorted(params),
+            )
+        path = erd_path(text[4:])
+        share = erd_share()
+        return ResolvedSource(
+            _read_text(path),
+            f"erd:{path.stem}",
+            package_dirs=(*extra, str(share)),
+            mesh_root=str(path.parent),
+            path=str(path),
+        )
+    path = Path(text).expanduser()
+    if path.suffix.lower() in (".urdf", ".xml", *TABLE_SUFFIXES) or path.exists():
+        return _from_file(path, extra, **params)
+    hint = _hint(text)
+    raise SourceError(
+        f"source={text!r} is not a preset, a file or 'erd:NAME'{hint}; presets are "
+        f"{choices(robots.names())}",
+        parameter="source",
+        value=text,
+        allowed=robots.names(),
+    )
+
+
+def _hint(text: str) -> str:
+    """Suggest close presets, then example-robot-data names (given as ``erd:NAME``)."""
+    hint = did_you_mean(text, robots.names())
+    if hint:
+        return hint
+    try:
+        names = erd_names()
+    except SourceError:
+        return ""
+    bare = text[3:].lstrip(":") if text.startswith("erd") else text
+    close = did_you_mean(bare, names)
+    if not close:
+        return ""
+    found = close[len(" (did you mean ") : -len("?)")].split(" or ")
+    return " (did you mean " + " or ".join(f"'erd:{n.strip(chr(39))}'" for n in found) + "?)"
+
+
+# ------------------------------------------------------------------------ second engine
+def yourdfpy_load(text: str) -> Any:
+    """The URDF text loaded by yourdfpy (a second engine; meshes not loaded).
+
+    Only call it on text that passed the loader gate (yourdfpy repairs malformed XML).
+
+    Raises:
+        OptionalDependencyError: If yourdfpy is not installed.
+
+    """
+    try:
+        import yourdfpy
+    except ImportError:  # pragma: no cover - yourdfpy is a test dependency
+        from .exceptions import OptionalDependencyError
+
+        raise OptionalDependencyError(
+            "yourdfpy is not installed; `pip install yourdfpy`", parameter="engine"
+        ) from None
+    return yourdfpy.URDF.load(
+        io.BytesIO(text.encode("utf-8")),
+        build_scene_graph=True,
+        build_collision_scene_graph=False,
+        load_meshes=False,
+        load_collision_meshes=False,
+    )
