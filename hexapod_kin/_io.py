@@ -37,7 +37,10 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
     if dest.is_dir():
         raise ParameterError(f"path={str(dest)!r} is a directory; expected a file path")
     payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise _cannot_write(dest, exc) from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
@@ -51,14 +54,27 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
         else:
             os.chmod(tmp, 0o644)
         os.replace(tmp, dest)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        if isinstance(exc, OSError):
+            raise _cannot_write(dest, exc) from None
         raise
     _fsync_dir(parent)
     return dest
+
+
+def _cannot_write(dest: Path, exc: OSError) -> ParameterError:
+    """The error of a failed write, naming the destination (never the hidden temporary file)."""
+    return ParameterError(
+        f"path={str(dest)!r}: cannot write it ({exc.strerror or exc}); the previous content, "
+        "if any, is unchanged",
+        parameter="path",
+        value=str(dest),
+        allowed="a file in a writable directory",
+    )
 
 
 def _fsync_dir(directory: Path) -> None:

@@ -26,7 +26,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from .exceptions import ParameterError, choices
+from .exceptions import HexapodKinError, ParameterError, choices
 from .params import Chain, Hexapod, Inertial, JointLimits, KhalilRow, LegMount
 
 __all__ = [
@@ -367,5 +367,13 @@ def get(name: str, **params: Any) -> Chain | Hexapod:
             )
     try:
         return func(**params)  # type: ignore[no-any-return,unused-ignore]
-    except TypeError as exc:
-        raise ParameterError(f"{name}: {exc}") from None
+    except HexapodKinError:
+        raise
+    except (TypeError, ValueError) as exc:
+        bad = {k: v for k, v in params.items() if not isinstance(v, (int, float, list, tuple))}
+        raise ParameterError(
+            f"{name}: {exc}" + (f" (non-numeric: {bad}; dimensions are numbers in SI units)"
+                                if bad else ""),
+            parameter=next(iter(bad), None), value=next(iter(bad.values()), None),
+            allowed="a number (SI units)",
+        ) from None

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import ParameterError
+from .exceptions import ConfigurationError, ParameterError
 from .motion import (
     SEED_Q0,
     JointSchedule,
@@ -44,6 +44,7 @@ class SeedRun:
             ``A T/(2π) (1 − cos 2πt/T)``.
         baseline: Same three figures for the plain Euler + ``np.linalg.solve`` open loop.
         baseline_deviation: (N, 3) |foot − reference| of that baseline in [m], or None.
+        baseline_failure: Why the baseline could not run (singular J on its way), or None.
 
     """
 
@@ -55,6 +56,7 @@ class SeedRun:
     error_x: float
     baseline: dict[str, float]
     baseline_deviation: np.ndarray | None = None
+    baseline_failure: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -71,6 +73,7 @@ class SeedRun:
             "drift_z": self.drift_z,
             "error_x": self.error_x,
             "baseline_euler_solve": self.baseline,
+            "baseline_failure": self.baseline_failure,
             "closest_approach": tr.closest_approach,
             "max_joint_speed": float(np.max(np.abs(tr.qdot))),
         }
@@ -107,7 +110,18 @@ def euler_baseline(
     out[0] = q
     for k in range(steps):
         jac = model.position_jacobian(q)
-        q = q + dt * np.linalg.solve(jac, np.asarray(velocity(k * dt), dtype=float))
+        try:
+            qdot = np.linalg.solve(jac, np.asarray(velocity(k * dt), dtype=float))
+        except np.linalg.LinAlgError:
+            qdot = np.full(model.nq, np.nan)
+        if not np.all(np.isfinite(qdot)):
+            raise ConfigurationError(
+                f"the plain Euler + np.linalg.solve loop stops at t = {k * dt:g} s: J(q) is "
+                f"singular at q = {np.round(q, 6).tolist()} (the seeds' method needs det J != 0)",
+                parameter="q0", value=np.asarray(q0, dtype=float).tolist(),
+                allowed="a start where det J != 0",
+            )
+        q = q + dt * qdot
         out[k + 1] = q
     return out
 
@@ -172,11 +186,18 @@ def seed_experiment(
     figs, _ = _drift(mdl, traj.q, traj.t, a, per)
     base: dict[str, float] = {}
     base_dev = None
+    failure = None
     if baseline and mdl.nq == 3:
-        qb = euler_baseline(mdl, vel, q_start, dt, duration)
-        base, base_dev = _drift(mdl, qb, traj.t, a, per)
-        base_dev.setflags(write=False)
-    return SeedRun(traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev)
+        try:
+            qb = euler_baseline(mdl, vel, q_start, dt, duration)
+        except ConfigurationError as exc:
+            failure = str(exc)
+        else:
+            base, base_dev = _drift(mdl, qb, traj.t, a, per)
+            base_dev.setflags(write=False)
+    return SeedRun(
+        traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev, failure
+    )
 
 
 def seed002_schedule() -> JointSchedule:

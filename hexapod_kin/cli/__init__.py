@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
 from ..exceptions import HexapodKinError
+from .common import OneLineParser
 
 __all__ = ["build_parser", "main"]
 
@@ -27,26 +29,62 @@ def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser with every subcommand."""
     from .. import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="hexapod-kin",
         description="Robot legs: Khalil/DH tables -> URDF -> Pinocchio kinematics.",
     )
     parser.add_argument("--version", action="version", version=f"hexapod-kin {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=OneLineParser
+    )
     for name in MODULES:
         importlib.import_module(f"{__name__}.{name}").register(sub)
     return parser
 
 
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 usage or input error)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run the command line; return the exit status.
+
+    0: done; 2: a usage or input error, or any failure (one line on stderr, never a
+    traceback; set ``HEXAPOD_KIN_DEBUG=1`` to see the traceback of an unexpected error);
+    130: interrupted. A closed stdout (``hexapod-kin fk ... | head``) ends quietly.
+    """
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
         return int(args.func(args))
+    except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
+        return int(exc.code) if isinstance(exc.code, int) else 2
     except HexapodKinError as exc:
-        print(f"hexapod-kin: error: {exc}", file=sys.stderr)
+        print(f"hexapod-kin: error: {_one_line(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("hexapod-kin: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # stdout closed early (| head): silence the flush at exit and stop quietly
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except OSError:
+            pass
+        return 0
+    except OSError as exc:
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"hexapod-kin: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print("hexapod-kin: error: not enough memory for this request; ask for fewer samples",
+              file=sys.stderr)
+        return 2
+    except Exception as exc:  # the last line of defence: one line, never a traceback
+        if os.environ.get("HEXAPOD_KIN_DEBUG"):
+            raise
+        print(f"hexapod-kin: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
+              "(a bug: please report it; HEXAPOD_KIN_DEBUG=1 shows the traceback)",
+              file=sys.stderr)
+        return 2

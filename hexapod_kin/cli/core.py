@@ -10,71 +10,24 @@ Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 from ..exceptions import ParameterError
+from .common import (
+    PLOT_SUFFIXES,
+    emit_json,
+    load_source,
+    matrix_text,
+    output_path,
+    q_args,
+    q_from_args,
+    set_params,
+    source_args,
+)
 
 __all__ = ["COMMANDS", "register"]
-
-
-# ------------------------------------------------------------------------ helpers
-def _parse_value(text: str) -> Any:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
-
-
-def _set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for pair in pairs or ():
-        if "=" not in pair:
-            raise ParameterError(f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)")
-        key, value = pair.split("=", 1)
-        out[key.strip()] = _parse_value(value.strip())
-    return out
-
-
-def _load(args: argparse.Namespace) -> Any:
-    """Load ``args.source`` (preset, URDF path or ``erd:NAME``) with --set/--base/--tip."""
-    from ..kinematics import load
-
-    params = _set_params(getattr(args, "set", None))
-    return load(
-        args.source, base=getattr(args, "base", None), tip=getattr(args, "tip", None), **params
-    )
-
-
-def _q_arg(args: argparse.Namespace, nq: int) -> Any:
-    import numpy as np
-
-    if args.q is None:
-        return np.zeros(nq)
-    q = np.array(args.q, dtype=float)
-    return np.radians(q) if getattr(args, "deg", False) else q
-
-
-def _matrix_text(m: Any, indent: str = "  ") -> str:
-    return "\n".join(indent + " ".join(f"{v: .6f}" for v in row) for row in m)
-
-
-def _emit_json(obj: dict[str, Any]) -> None:
-    sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
-
-
-def _source_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", help="preset name, URDF path, or erd:NAME (example-robot-data)")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
-    p.add_argument("--base", help="base frame of the sub-chain")
-    p.add_argument("--tip", help="tip frame of the sub-chain")
-
-
-def _q_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--q", nargs="+", type=float, help="joint values (rad, m; default zeros)")
-    p.add_argument("--deg", action="store_true", help="revolute --q values are in degrees")
 
 
 # ------------------------------------------------------------------------ list
@@ -90,14 +43,14 @@ def _cmd_list(args: argparse.Namespace) -> int:
     rows = []
     for name in robots.names():
         doc = (robots.PRESETS[name].__doc__ or "").strip().splitlines()[0]
-        rows.append({"name": name, "summary": doc})
+        rows.append({"name": name, "summary": doc.replace("``", "")})
     out: dict[str, Any] = {"presets": rows}
     if args.erd:
         from ..model import erd_names
 
         out["erd"] = erd_names()
     if args.json:
-        _emit_json(out)
+        emit_json(out)
         return 0
     for row in rows:
         print(f"{row['name']:<16} {row['summary']}")
@@ -108,18 +61,23 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------ urdf
 def _add_urdf(sub: Any) -> None:
-    p = sub.add_parser("urdf", help="export the URDF of a preset")
-    p.add_argument("preset", help="preset name (see `hexapod-kin list`)")
+    p = sub.add_parser(
+        "urdf",
+        help="export the URDF of a preset or a table file",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("preset", help="preset name (see `hexapod-kin list`) or a table file")
     p.add_argument("-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter")
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
 
 
 def _cmd_urdf(args: argparse.Namespace) -> int:
-    from .. import robots
     from ..urdf import to_urdf, write_urdf
 
-    built = robots.get(args.preset, **_set_params(args.set))
+    if args.output:
+        output_path(args.output, "-o/--output", (".urdf", ".xml"))
+    built = _params_of(args.preset, set_params(args.set))
     # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
         [args.preset] + [f"-s {s}" for s in args.set or ()]
@@ -133,23 +91,42 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
+def _params_of(source: str, params: dict[str, Any]) -> Any:
+    """The parameter object (Chain or Hexapod) of a preset name or a table file."""
+    from .. import robots
+
+    if source in robots.names():
+        return robots.get(source, **params)
+    from .. import sources
+
+    return sources.table_params(source, **params)
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse bad ``--plot``/``--html`` paths before any computation."""
+    if getattr(args, "plot", None):
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if getattr(args, "html", None):
+        output_path(args.html, "--html", (".html", ".htm"))
+
+
 # ------------------------------------------------------------------------ fk
 def _add_fk(sub: Any) -> None:
     p = sub.add_parser("fk", help="tip transform and every intermediate transform")
-    _source_args(p)
-    _q_args(p)
+    source_args(p)
+    q_args(p)
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
 
 def _cmd_fk(args: argparse.Namespace) -> int:
-    model = _load(args)
-    q = _q_arg(args, model.nq)
+    model = load_source(args)
+    q = q_from_args(args, model)
     tip = model.fk(q)
     rel = model.transforms(q)
     cum = model.cumulative_transforms(q)
     frames = list(model.path_frames)
     if args.json:
-        _emit_json(
+        emit_json(
             {
                 "source": model.name,
                 "joint_names": list(model.joint_names),
@@ -166,13 +143,15 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     print(f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
           f"({', '.join(model.joint_names)})")
+    n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
         print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
-        print(_matrix_text(t))
-        print(f"^0T_{j}:")
-        print(_matrix_text(c))
-    print(f"T tip ({model.base} -> {model.tip}):")
-    print(_matrix_text(tip))
+        print(matrix_text(t))
+        if 1 < j < n:  # ^0T_1 = ^0T_1 above; ^0T_n is the tip, printed last
+            print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):")
+            print(matrix_text(c))
+    print(f"^0T_{n} = T tip  ({model.base} -> {model.tip}):")
+    print(matrix_text(tip))
     print("position [m]: " + " ".join(f"{v:.6f}" for v in tip[:3, 3]))
     return 0
 
@@ -180,8 +159,8 @@ def _cmd_fk(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ jacobian
 def _add_jacobian(sub: Any) -> None:
     p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
-    _source_args(p)
-    _q_args(p)
+    source_args(p)
+    q_args(p)
     p.add_argument(
         "--reference",
         default="local_world_aligned",
@@ -193,14 +172,14 @@ def _add_jacobian(sub: Any) -> None:
 def _cmd_jacobian(args: argparse.Namespace) -> int:
     import numpy as np
 
-    model = _load(args)
-    q = _q_arg(args, model.nq)
+    model = load_source(args)
+    q = q_from_args(args, model)
     jac = model.jacobian(q, args.reference)
     jp = jac[:3]
     det = float(np.linalg.det(jp)) if jp.shape[0] == jp.shape[1] else None
     sv = np.linalg.svd(jp, compute_uv=False)
     if args.json:
-        _emit_json(
+        emit_json(
             {
                 "source": model.name,
                 "joint_names": list(model.joint_names),
@@ -213,7 +192,7 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
         )
         return 0
     print(f"J ({args.reference}, rows vx vy vz wx wy wz; columns {', '.join(model.joint_names)}):")
-    print(_matrix_text(jac))
+    print(matrix_text(jac))
     if det is not None:
         print(f"det(J_position) = {det:.6e}")
     print("singular values (position): " + " ".join(f"{v:.6e}" for v in sv))
@@ -237,7 +216,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     leg = robots.hexabot_leg()
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(
+            f"--out {args.out!r}: cannot create the directory ({exc.strerror})",
+            parameter="--out", value=args.out, allowed="a writable directory",
+        ) from None
+    output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
     print(f"wrote {path}")
     model = load(path)
@@ -245,9 +231,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     q = np.radians(q_deg)
     print(f"q = ({', '.join(f'{v:g}' for v in q_deg)}) deg  (hip, knee, ankle)")
     print("T foot in base:")
-    print(_matrix_text(model.fk(q)))
+    print(matrix_text(model.fk(q)))
     print("J (local_world_aligned):")
-    print(_matrix_text(model.jacobian(q)))
+    print(matrix_text(model.jacobian(q)))
     print(f"det(J_position) = {np.linalg.det(model.position_jacobian(q)):.6e}")
     return 0
 
@@ -255,7 +241,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ ik
 def _add_ik(sub: Any) -> None:
     p = sub.add_parser("ik", help="inverse kinematics of the tip position (closed form + DLS)")
-    _source_args(p)
+    source_args(p)
     p.add_argument("--target", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"),
                    help="tip position in the base frame [m]")
     p.add_argument("--yaw", type=float, help="SCARA closed form only: tool yaw [rad]")
@@ -270,7 +256,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     from .. import ik
     from ..exceptions import IKError
 
-    model = _load(args)
+    model = load_source(args)
     target = np.array(args.target, dtype=float)
     closed: list[list[float]] | None = None
     family = None
@@ -283,7 +269,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
         closed = ik.analytic(model, tgt).tolist()
     res = ik.solve(model, target, args.q0, tol=args.tol)
     if args.json:
-        _emit_json(
+        emit_json(
             {
                 "source": model.name,
                 "joint_names": list(model.joint_names),
@@ -315,8 +301,8 @@ def _add_step(sub: Any) -> None:
     p = sub.add_parser(
         "step", help="the seeds' resolved-rate experiment: foot velocity [A sin(2πt/T), 0, 0]"
     )
-    _source_args(p)
-    _q_args(p)
+    source_args(p)
+    q_args(p)
     p.add_argument("--amplitude", type=float, default=0.05, help="A [m/s] (default 0.05)")
     p.add_argument("--period", type=float, default=2.0, help="T [s] (default 2)")
     p.add_argument("--duration", type=float, default=10.0, help="[s] (default 10)")
@@ -331,10 +317,11 @@ def _add_step(sub: Any) -> None:
 
 
 def _cmd_step(args: argparse.Namespace) -> int:
+    _check_outputs(args)
     from .. import seeds
 
-    model = _load(args)
-    q0 = None if args.q is None else _q_arg(args, model.nq)
+    model = load_source(args)
+    q0 = None if args.q is None else q_from_args(args, model)
     run = seeds.seed_experiment(
         model, amplitude=args.amplitude, period=args.period, duration=args.duration,
         dt=args.dt, q0=q0, method=args.method, gain=args.gain, baseline=not args.no_baseline,
@@ -357,7 +344,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
         )))
     if args.json:
         out = {"source": model.name, **run.as_dict(), "written": written}
-        _emit_json(out)
+        emit_json(out)
         return 0
     ca = tr.closest_approach
     print(f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
@@ -365,6 +352,8 @@ def _cmd_step(args: argparse.Namespace) -> int:
     print("q0 = " + " ".join(f"{v:.6f}" for v in tr.q[0]))
     print(f"drift_y = {run.drift_y:.3e} m   drift_z = {run.drift_z:.3e} m   "
           f"error_x = {run.error_x:.3e} m")
+    if run.baseline_failure:
+        print(f"plain Euler + np.linalg.solve: {run.baseline_failure}")
     if run.baseline:
         b = run.baseline
         print(f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
@@ -407,8 +396,8 @@ def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
 
 def _add_view(sub: Any) -> None:
     p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
-    _source_args(p)
-    _q_args(p)
+    source_args(p)
+    q_args(p)
     _wait_args(p)
     p.add_argument("--triads", action="store_true", help="draw the Khalil frames (labelled j)")
 
@@ -419,8 +408,8 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from ..gait import default_configuration
     from ..viewer import Viewer
 
-    model = _load(args)
-    q = default_configuration(model) if args.q is None else _q_arg(args, model.nq)
+    model = load_source(args)
+    q = default_configuration(model) if args.q is None else q_from_args(args, model)
     with Viewer(model, q=q) as viewer:
         if args.triads:
             viewer.animate([0.0], np.asarray(q)[None, :], trace_frame=False, frame_triads=True)
@@ -433,7 +422,7 @@ def _add_animate(sub: Any) -> None:
         "animate",
         help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
     )
-    _source_args(p)
+    source_args(p)
     p.add_argument("--html", metavar="FILE",
                    help="write a self-contained HTML file (no server); else serve it live")
     p.add_argument("--length", type=float, default=4.0, metavar="S", help="motion length in s")
@@ -451,12 +440,13 @@ def _add_animate(sub: Any) -> None:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
+    _check_outputs(args)
     import numpy as np
 
     from ..gait import demo_trajectory
     from ..viewer import Viewer, export_html
 
-    model = _load(args)
+    model = load_source(args)
     times, qs, base = demo_trajectory(model, args.length, args.samples)
     mask = None
     if args.sigma_min is not None:
@@ -469,7 +459,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         path = export_html(model, times, qs, args.html, title=args.title, speed=args.speed,
                            **common)
         if args.json:
-            _emit_json({"source": model.name, "html": str(path), "samples": int(len(times)),
+            emit_json({"source": model.name, "html": str(path), "samples": int(len(times)),
                         "duration": float(times[-1] - times[0]),
                         "singular_samples": int(mask.sum()) if mask is not None else 0})
         else:
@@ -495,7 +485,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
 
     from ..symbolic import ROW_NAMES, derive
 
-    model = _load(args)
+    model = load_source(args)
     deriv = derive(model, rows=args.rows)
     if args.latex:
         print(deriv.latex())
@@ -519,7 +509,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ scan
 def _add_scan(sub: Any) -> None:
     p = sub.add_parser("scan", help="singularity measures over a joint grid; singular families")
-    _source_args(p)
+    source_args(p)
     p.add_argument("--grid", type=int, help="points per scanned joint (default 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(
@@ -535,16 +525,17 @@ def _add_scan(sub: Any) -> None:
 
 
 def _cmd_scan(args: argparse.Namespace) -> int:
+    _check_outputs(args)
     import numpy as np
 
     from ..singularity import plot_joints, scan
 
-    model = _load(args)
+    model = load_source(args)
     joints: Any = args.joints
     if joints is None and model.nq > 2:
         joints = [model.joint_names[j] for j in plot_joints(model, args.rows)]
     joints = [int(j) if str(j).isdigit() else j for j in joints] if joints else None
-    q_fixed = _q_arg(args, model.nq) if args.q is not None else None
+    q_fixed = q_from_args(args, model) if args.q is not None else None
     grid = args.grid if args.grid is not None or args.samples is not None else 61
     result = scan(
         model,
@@ -563,7 +554,7 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         path = plot_singularity_map(result, args.plot)
         print(f"wrote {path}", file=sys.stderr)
     if args.json:
-        _emit_json(result.to_json())
+        emit_json(result.to_json())
         return 0
     n = result.q.shape[0]
     how = f"grid {result.grid_shape}" if result.grid_shape else "random samples"

@@ -1,0 +1,171 @@
+"""Helpers shared by the subcommand modules: sources, joint values, output, argument groups.
+
+Every subcommand module imports from here; nothing here imports the heavy parts of the
+package at module level.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+from ..exceptions import ParameterError
+
+__all__ = [
+    "OneLineParser",
+    "emit_json",
+    "load_source",
+    "matrix_text",
+    "output_path",
+    "q_args",
+    "q_from_args",
+    "set_params",
+    "source_args",
+]
+
+#: Image formats that ``--plot`` accepts (matplotlib writes each natively).
+PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose usage errors are one line on stderr and exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``hexapod-kin: error: <message>`` (with the subcommand) and exit 2."""
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
+    """``-s NAME=VALUE`` pairs as a dict; values parsed as JSON numbers/lists when they are.
+
+    Raises:
+        ParameterError: A pair without ``=``.
+
+    """
+    out: dict[str, Any] = {}
+    for pair in pairs or ():
+        if "=" not in pair:
+            raise ParameterError(
+                f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)",
+                parameter="--set", value=pair, allowed="NAME=VALUE",
+            )
+        key, value = pair.split("=", 1)
+        try:
+            parsed: Any = json.loads(value.strip())
+        except json.JSONDecodeError:
+            parsed = value.strip()
+        out[key.strip()] = parsed
+    return out
+
+
+def load_source(args: argparse.Namespace) -> Any:
+    """Load ``args.source`` (preset, table file, URDF path or ``erd:NAME``) with -s/--base/--tip."""
+    from ..kinematics import load
+
+    params = set_params(getattr(args, "set", None))
+    kwargs: dict[str, Any] = {}
+    tool = getattr(args, "tool", None)
+    if tool is not None:
+        kwargs["tool"] = tool
+    return load(
+        args.source,
+        base=getattr(args, "base", None),
+        tip=getattr(args, "tip", None),
+        **kwargs,
+        **params,
+    )
+
+
+def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
+    """Joint values of ``--q`` as an array for ``model``; zeros when absent.
+
+    With ``--deg`` only the revolute joints are converted from degrees; prismatic values stay
+    in metres.
+
+    Raises:
+        ParameterError: Wrong number of values.
+
+    """
+    import numpy as np
+
+    values = getattr(args, attr, None)
+    if values is None:
+        return np.zeros(model.nq)
+    q = np.array(values, dtype=float)
+    if q.shape != (model.nq,):
+        raise ParameterError(
+            f"--{attr} has {q.size} values; {model.name} has {model.nq} joints "
+            f"({', '.join(model.joint_names)})",
+            parameter=f"--{attr}", value=list(values), allowed=f"{model.nq} values",
+        )
+    if getattr(args, "deg", False):
+        prismatic = np.asarray(model.is_prismatic, dtype=bool)
+        q = np.where(prismatic, q, np.radians(q))
+    return q
+
+
+def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[str]) -> Path:
+    """Check an output file before any work: known suffix and a writable existing directory.
+
+    Raises:
+        ParameterError: Unknown suffix, missing directory, or a directory we cannot write.
+
+    """
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise ParameterError(
+            f"{option} {str(path)!r}: unknown file type {p.suffix or '(none)'!r}; "
+            f"use one of {', '.join(suffixes)}",
+            parameter=option, value=str(path), allowed=list(suffixes),
+        )
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise ParameterError(
+            f"{option} {str(path)!r}: directory {str(parent)!r} does not exist",
+            parameter=option, value=str(path), allowed="a path in an existing directory",
+        )
+    if not os.access(parent, os.W_OK) or p.is_dir():
+        raise ParameterError(
+            f"{option} {str(path)!r}: cannot write there (permission denied or a directory)",
+            parameter=option, value=str(path), allowed="a writable file path",
+        )
+    return p
+
+
+def matrix_text(m: Any, indent: str = "  ") -> str:
+    """Rows of a matrix, 6 decimals, one line each."""
+    return "\n".join(indent + " ".join(f"{v: .6f}" for v in row) for row in m)
+
+
+def emit_json(obj: dict[str, Any]) -> None:
+    """Write one JSON object (no NaN) and a newline on stdout."""
+    sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
+
+
+def source_args(p: argparse.ArgumentParser, frames: bool = True) -> None:
+    """The SOURCE positional, ``-s/--set`` and (with ``frames``) ``--base``/``--tip``."""
+    p.add_argument(
+        "source",
+        help="preset name, table file (.toml/.yaml), URDF path, or erd:NAME (example-robot-data)",
+    )
+    p.add_argument(
+        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
+    )
+    if frames:
+        p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")
+        p.add_argument("--tip", help="tip frame of the sub-chain (default: the last link)")
+
+
+def q_args(p: argparse.ArgumentParser) -> None:
+    """``--q`` (rad for revolute, m for prismatic joints) and ``--deg``."""
+    p.add_argument(
+        "--q", nargs="+", type=float, help="joint values (rad for revolute, m for prismatic)"
+    )
+    p.add_argument(
+        "--deg", action="store_true", help="revolute --q values in degrees (prismatic stay in m)"
+    )
