@@ -35,6 +35,7 @@ from .params import (  # noqa: E402
     JointLimits,
     KhalilRow,
     LegMount,
+    Pose,
     table_fk,
     table_transforms,
 )
@@ -66,6 +67,7 @@ __all__ = [
     "KhalilRow",
     "LegMount",
     "ParameterError",
+    "Pose",
     "SourceError",
     "UrdfError",
     "load",

@@ -19,6 +19,16 @@ Side by side, for the same link: Khalil's ``d`` is standard DH's ``a`` of the *p
 Khalil's ``alpha`` is standard DH's ``alpha`` of the *previous* row; Khalil's ``r`` is standard
 DH's ``d``. :meth:`Chain.from_dh` does this conversion exactly (adding a fixed last row).
 
+* **Poses** (one notation everywhere): a rigid transform ``T_a_b`` maps coordinates in frame
+  ``b`` to frame ``a`` (``p_a = T_a_b · p_b``); it is given either as a 4×4 homogeneous matrix
+  or as ``(xyz, rpy)``: ``xyz`` the origin of ``b`` in ``a`` in [m], ``rpy`` = (roll, pitch,
+  yaw) in [rad], *fixed-axis* X-Y-Z as in URDF ``<origin>``, i.e. ``R = Rz(yaw)·Ry(pitch)·
+  Rx(roll)``. :class:`Pose` holds one; :func:`rpy_to_matrix` / :func:`matrix_to_rpy` are the
+  package's only RPY conversions.
+* **Base and tool frames** of a :class:`Chain`: ``base`` (``T_world_0``, the chain's base link
+  to Khalil frame 0) and ``tool`` (``T_n_tool``, the last row's frame to the tool/tip frame).
+  :func:`table_fk` returns ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool``.
+
 All lengths are in metres, angles in radians, masses in kg, inertias in kg·m².
 """
 
@@ -49,6 +59,9 @@ __all__ = [
     "rod_inertial",
     "table_position_jacobian",
     "chain_from_rows",
+    "Pose",
+    "rpy_to_matrix",
+    "matrix_to_rpy",
 ]
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
@@ -154,6 +167,144 @@ def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
             [0.0, 0.0, 0.0, 1.0],
         ]
     )
+
+
+def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation matrix ``Rz(yaw)·Ry(pitch)·Rx(roll)`` (URDF fixed-axis X-Y-Z), angles in [rad]."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll-pitch-yaw of a rotation matrix, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+
+    Args:
+        rot: 3×3 rotation matrix.
+
+    Returns:
+        ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
+
+    """
+    r = np.asarray(rot, float)
+    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
+    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:
+        return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
+    return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A rigid transform ``T_a_b`` (see the module docstring for the notation).
+
+    Build one with :meth:`of` from a 4×4 matrix, ``(xyz, rpy)`` or another pose.
+
+    Attributes:
+        xyz: Origin of frame ``b`` in frame ``a`` in [m].
+        rotation: The 3×3 rotation ``R_a_b``, row-major, as nested tuples.
+
+    """
+
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotation: tuple[tuple[float, ...], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+    def __post_init__(self) -> None:
+        try:
+            xyz = tuple(_finite(v, f"Pose.xyz[{i}]") for i, v in enumerate(self.xyz))
+            rot = np.array(self.rotation, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"Pose: xyz={self.xyz!r}, rotation={self.rotation!r}; three numbers and a 3x3 "
+                "rotation are required"
+            ) from None
+        if len(xyz) != 3 or rot.shape != (3, 3) or not np.all(np.isfinite(rot)):
+            raise ParameterError(
+                f"Pose: xyz={self.xyz!r}, rotation={self.rotation!r}; three numbers and a finite "
+                "3x3 rotation are required"
+            )
+        err = float(np.abs(rot @ rot.T - np.eye(3)).max())
+        if err > 1e-9 or np.linalg.det(rot) < 0:
+            raise ParameterError(
+                f"Pose.rotation={rot.tolist()} is not a rotation (|R Rt - I| = {err:.1e}, "
+                f"det = {np.linalg.det(rot):.3f}); an orthonormal matrix with det +1 is required"
+            )
+        object.__setattr__(self, "xyz", xyz)
+        object.__setattr__(self, "rotation", tuple(tuple(float(x) for x in r) for r in rot))
+
+    @classmethod
+    def of(cls, value: Any, where: str = "pose") -> Pose:
+        """Return ``value`` as a :class:`Pose`.
+
+        Args:
+            value: A :class:`Pose`, a 4×4 homogeneous matrix (last row ``0 0 0 1``), or
+                ``(xyz, rpy)`` with ``xyz`` in [m] and ``rpy`` in [rad] (URDF convention).
+            where: Parameter name used in error messages.
+
+        Returns:
+            The pose.
+
+        Raises:
+            ParameterError: For anything else, naming ``where``.
+
+        """
+        if isinstance(value, Pose):
+            return value
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            arr = None
+        if arr is not None and arr.shape == (4, 4):
+            if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), rtol=0, atol=1e-12):
+                raise ParameterError(
+                    f"{where}: last row {arr[3].tolist()} of the 4x4 matrix must be 0 0 0 1"
+                )
+            try:
+                return cls(xyz=tuple(arr[:3, 3]), rotation=tuple(map(tuple, arr[:3, :3])))
+            except ParameterError as exc:
+                raise ParameterError(f"{where}: {exc}") from None
+        if arr is not None and arr.shape == (2, 3):
+            if not np.all(np.isfinite(arr)):
+                raise ParameterError(f"{where}={value!r}: (xyz, rpy) must be finite")
+            rot = rpy_to_matrix(*arr[1])
+            return cls(xyz=tuple(arr[0]), rotation=tuple(map(tuple, rot)))
+        raise ParameterError(
+            f"{where}={value!r} is not a pose; give a 4x4 homogeneous matrix or (xyz [m], "
+            "rpy [rad]) as two triples"
+        )
+
+    @classmethod
+    def identity(cls) -> Pose:
+        """The identity transform."""
+        return cls()
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 4×4 homogeneous matrix (a fresh array)."""
+        t = np.eye(4)
+        t[:3, :3] = self.rotation
+        t[:3, 3] = self.xyz
+        return t
+
+    @property
+    def rpy(self) -> tuple[float, float, float]:
+        """``(roll, pitch, yaw)`` in [rad], URDF convention."""
+        return matrix_to_rpy(np.array(self.rotation))
+
+    @property
+    def is_identity(self) -> bool:
+        """True when the pose is exactly the identity."""
+        return self == Pose()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready ``{"xyz": [m], "rpy": [rad], "matrix": 4x4}``."""
+        return {"xyz": list(self.xyz), "rpy": list(self.rpy), "matrix": self.matrix.tolist()}
 
 
 @dataclass(frozen=True)
@@ -312,9 +463,7 @@ class Inertial:
         return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
 
 
-def rod_inertial(
-    start: np.ndarray, end: np.ndarray, mass: float, radius: float
-) -> Inertial:
+def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float) -> Inertial:
     """Inertial of a solid cylinder (rod) from ``start`` to ``end`` (link frame, [m]).
 
     A point-like segment (zero length) gets the inertia of a solid sphere of ``radius``.
@@ -371,15 +520,22 @@ class Chain:
             ``None`` for a default: a rod of ``link_mass`` from the frame origin to the next
             frame's origin (the tip link gets a small sphere).
         name: Robot name in the URDF.
-        base: Name of the base link (frame 0).
-        tip: Name of the tip frame (the last row's link).
+        base: Name of the base link. A pose (4×4 or ``(xyz, rpy)``) may be given here
+            instead: it becomes :attr:`base_pose` and the link keeps the name ``"base"``.
+        tip: Name of the tip frame: the last row's link, or the tool link when :attr:`tool`
+            is set.
         link_names: Names of the links of frames 1..n; default ``link1, ...`` with the last
-            one named ``tip``.
+            one named ``tip`` (with a tool: ``link1 .. link<n>``, the tool link is ``tip``).
         link_mass: Default link mass in [kg] when ``inertials`` is ``None``.
         link_radius: Radius in [m] of the visual cylinders and default rod inertia.
         damping: Joint viscous damping, one value or one per joint ([N·m·s/rad] or [N·s/m]).
         friction: Joint dry friction, one value or one per joint.
         description: Free text (source of the preset), written into the URDF header.
+        base_pose: ``T_base_0``: Khalil frame 0 in the base link, a :class:`Pose` (or
+            anything :meth:`Pose.of` takes); ``None`` = identity. Exported as the fixed joint
+            ``<name>_base_offset`` from the base link to the link ``<base>_frame0``.
+        tool: ``T_n_tool``: the tool frame in the last row's frame; ``None`` = no tool
+            link. Exported as the fixed joint ``<tip>_tool`` to the link ``tip``.
 
     """
 
@@ -396,8 +552,22 @@ class Chain:
     damping: float | tuple[float, ...] = 0.0
     friction: float | tuple[float, ...] = 0.0
     description: str = ""
+    base_pose: Pose | None = None
+    tool: Pose | None = None
 
     def __post_init__(self) -> None:
+        if not isinstance(self.base, str):
+            if self.base_pose is not None:
+                raise ParameterError(
+                    "Chain: base= is a pose and base_pose= is given too; give the pose once"
+                )
+            object.__setattr__(self, "base_pose", Pose.of(self.base, "Chain.base"))
+            object.__setattr__(self, "base", "base")
+        for f in ("base_pose", "tool"):
+            v = getattr(self, f)
+            if v is not None:
+                pose = Pose.of(v, f"Chain.{f}")
+                object.__setattr__(self, f, None if pose.is_identity and f == "base_pose" else pose)
         rows = tuple(self.rows)
         if not rows:
             raise ParameterError("Chain.rows=() is empty; at least one KhalilRow is required")
@@ -436,11 +606,12 @@ class Chain:
         object.__setattr__(self, "limits", limits)
         for f in ("name", "base", "tip"):
             _name(getattr(self, f), f"Chain.{f}")
-        links = (
-            tuple(f"link{j}" for j in range(1, len(rows))) + (self.tip,)
-            if self.link_names is None
-            else tuple(self.link_names)
-        )
+        if self.link_names is not None:
+            links = tuple(self.link_names)
+        elif self.tool is not None:
+            links = tuple(f"link{j}" for j in range(1, len(rows) + 1))
+        else:
+            links = tuple(f"link{j}" for j in range(1, len(rows))) + (self.tip,)
         if len(links) != len(rows):
             raise ParameterError(
                 f"Chain.link_names has {len(links)} names; the table has {len(rows)} rows"
@@ -448,7 +619,11 @@ class Chain:
         for i, n in enumerate(links):
             _name(n, f"Chain.link_names[{i}]")
         object.__setattr__(self, "link_names", links)
-        all_names = (self.base, *links)
+        all_names: tuple[str, ...] = (self.base, *links)
+        if self.base_pose is not None:
+            all_names += (self.frame0_link,)
+        if self.tool is not None:
+            all_names += (self.tip,)
         if len(set(all_names)) != len(all_names):
             raise ParameterError(f"Chain link names must be unique, got {all_names}")
         if len(set(names)) != len(names):
@@ -477,6 +652,21 @@ class Chain:
             object.__setattr__(self, f, vals if not isinstance(v, (int, float)) else float(v))
 
     # ----------------------------------------------------------------- derived facts
+    @property
+    def frame0_link(self) -> str:
+        """Name of the link of Khalil frame 0: the base link, or ``<base>_frame0`` when offset."""
+        return self.base if self.base_pose is None else f"{self.base}_frame0"
+
+    @property
+    def base_matrix(self) -> np.ndarray:
+        """``T_base_0`` as a 4×4 array (identity when no base pose)."""
+        return np.eye(4) if self.base_pose is None else self.base_pose.matrix
+
+    @property
+    def tool_matrix(self) -> np.ndarray:
+        """``T_n_tool`` as a 4×4 array (identity when no tool)."""
+        return np.eye(4) if self.tool is None else self.tool.matrix
+
     @property
     def nq(self) -> int:
         """Number of joint variables."""
@@ -531,7 +721,14 @@ class Chain:
 
     # ----------------------------------------------------------------- constructors
     @classmethod
-    def from_dh(cls, dh_rows: Sequence[DHRow], **kwargs: Any) -> Chain:
+    def from_dh(
+        cls,
+        dh_rows: Sequence[DHRow],
+        *,
+        base: Any = None,
+        tool: Any = None,
+        **kwargs: Any,
+    ) -> Chain:
         """Build a chain from a standard-DH table, exactly.
 
         The product ``Π Rz(θi)Tz(di)Tx(ai)Rx(αi)`` is regrouped, using that ``Tx`` and ``Rx``
@@ -541,13 +738,23 @@ class Chain:
 
         Args:
             dh_rows: Standard-DH rows from the base.
+            base: ``T_base_0`` (pose: 4×4 or ``(xyz, rpy)``) or a base link name; ``None``
+                keeps the defaults.
+            tool: ``T_n_tool`` in the last DH frame (pose), ``None`` for none.
             **kwargs: Other :class:`Chain` fields (names, limits, tip, ...). ``link_names``
                 and ``inertials``, if given, must have ``len(dh_rows) + 1`` entries.
 
         Returns:
             The equivalent Khalil :class:`Chain`.
 
+        Raises:
+            ParameterError: Empty table, a non-DHRow entry, or invalid chain fields.
+
         """
+        if base is not None:
+            kwargs["base"] = base
+        if tool is not None:
+            kwargs["tool"] = tool
         dh = list(dh_rows)
         if not dh or not all(isinstance(r, DHRow) for r in dh):
             raise ParameterError("Chain.from_dh: a non-empty sequence of DHRow is required")
@@ -558,6 +765,35 @@ class Chain:
             prev_alpha, prev_a = row.alpha, row.a
         rows.append(KhalilRow("fixed", prev_alpha, prev_a, 0.0, 0.0))
         return cls(rows=tuple(rows), **kwargs)
+
+    @classmethod
+    def from_urdf(
+        cls, source: Any, base: str | None = None, tip: str | None = None, **load_kwargs: Any
+    ) -> Chain:
+        """Recover the Khalil table (plus base/tool poses) of a serial URDF chain.
+
+        See :mod:`hexapod_kin._fromurdf` for how the frames are placed (common normals,
+        parallel and intersecting axes). ``table_fk`` of the result equals the URDF's
+        forward kinematics (checked on return).
+
+        Args:
+            source: A URDF path or text, ``erd:NAME``, a preset name or a loaded model.
+            base: Base frame name (default: the source's default base).
+            tip: Tip frame name (default: the source's default tip).
+            **load_kwargs: Passed on to :func:`hexapod_kin.load`.
+
+        Returns:
+            The recovered :class:`Chain` (joint names and limits from the URDF).
+
+        Raises:
+            ConfigurationError: A joint the table cannot express (named) or a non-serial
+                chain between ``base`` and ``tip``.
+            HexapodKinError: Whatever loading the source raises.
+
+        """
+        from ._fromurdf import chain_from_urdf
+
+        return chain_from_urdf(source, base=base, tip=tip, **load_kwargs)
 
 
 def _as_q(chain: Chain, q: Any) -> np.ndarray:
@@ -610,16 +846,17 @@ def table_fk(chain: Chain, q: Any) -> np.ndarray:
         q: Joint values (n,) in [rad] / [m].
 
     Returns:
-        ``^0T_tip`` (4×4).
+        ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool`` (4×4): the chain's base and
+        tool poses are included.
 
     Raises:
         ConfigurationError: If ``q`` has the wrong length or non-finite values.
 
     """
-    t = np.eye(4)
+    t = chain.base_matrix
     for tj in table_transforms(chain, q):
         t = t @ tj
-    return t
+    return t @ chain.tool_matrix
 
 
 _GZ = np.array([[0.0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]])
@@ -637,10 +874,13 @@ def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
         q: Joint values (n,).
 
     Returns:
-        The 3×n position Jacobian of the tip in the base frame.
+        The 3×n position Jacobian of the tip (tool included) in the base frame (base
+        pose included).
 
     """
     ts = table_transforms(chain, q)
+    ts[0] = chain.base_matrix @ ts[0]
+    ts.append(chain.tool_matrix)  # after the last row: the generators act before it
     n_rows = len(ts)
     prefix = [np.eye(4)]
     for t in ts:
@@ -670,9 +910,7 @@ def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
         try:
             values = tuple(row)
             if len(values) != 5:
-                raise ParameterError(
-                    f"{len(values)} values; (sigma, alpha, d, theta, r) required"
-                )
+                raise ParameterError(f"{len(values)} values; (sigma, alpha, d, theta, r) required")
             built.append(KhalilRow(*values))
         except ParameterError as exc:
             raise ParameterError(f"row {j}: {exc}") from None
@@ -764,9 +1002,7 @@ class Hexapod:
     @property
     def joint_names(self) -> tuple[str, ...]:
         """Joint names ``<leg>_<joint>`` in leg order."""
-        return tuple(
-            f"{leg.name}_{j}" for leg in self.legs for j in (leg.chain.joint_names or ())
-        )
+        return tuple(f"{leg.name}_{j}" for leg in self.legs for j in (leg.chain.joint_names or ()))
 
     @property
     def foot_frames(self) -> tuple[str, ...]:
@@ -783,4 +1019,3 @@ class Hexapod:
         raise ParameterError(
             f"leg={name!r} does not exist; legs are {choices(x.name for x in self.legs)}"
         )
-

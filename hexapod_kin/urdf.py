@@ -8,11 +8,16 @@ Mapping, row by row: Khalil row ``j`` becomes a URDF joint whose ``<origin>`` is
 (``z_j``), so the URDF link of row ``j`` *is* Khalil frame ``j``. A fixed row becomes a fixed
 joint. Visuals: a sphere at every joint and a cylinder from each frame's origin to the next
 one's; the tip gets a sphere (the foot). Inertials come from the chain (default: rods).
+
+A chain's base pose (``Chain.base_pose``, ``T_base_0``) becomes the fixed joint
+``<robot>_base_offset`` from the base link to the link ``<base>_frame0`` (Khalil frame 0); its
+tool pose (``Chain.tool``, ``T_n_tool``) becomes the fixed joint ``<tip>_fixed`` from the last
+row's link to the tool link named ``tip``. ``matrix_to_rpy`` / ``rpy_to_matrix`` are re-exported
+from :mod:`hexapod_kin.params` (the package's one RPY convention).
 """
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 
@@ -21,7 +26,7 @@ import numpy as np
 from . import __version__
 from ._io import atomic_write
 from .exceptions import ParameterError
-from .params import Chain, Hexapod, LegMount
+from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
 
 __all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
@@ -44,37 +49,6 @@ def _num(x: float) -> str:
 
 def _vec(v: np.ndarray | tuple[float, ...]) -> str:
     return " ".join(_num(c) for c in v)
-
-
-def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll-pitch-yaw of a rotation matrix, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
-
-    Args:
-        rot: 3×3 rotation matrix.
-
-    Returns:
-        ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
-
-    """
-    r = np.asarray(rot, float)
-    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
-    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:
-        return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
-    return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
-
-
-def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """Rotation matrix ``Rz(yaw)·Ry(pitch)·Rx(roll)`` (the URDF convention)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def _origin(t: np.ndarray) -> str:
@@ -158,9 +132,7 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
     return out
 
 
-def _chain_body(
-    chain: Chain, prefix: str, parent: str, indent: str = "  "
-) -> list[str]:
+def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> list[str]:
     """Joints and links of ``chain`` hanging from link ``parent`` (frame 0 = parent)."""
     lines: list[str] = []
     link_names = chain.link_names or ()
@@ -169,13 +141,28 @@ def _chain_body(
     damping, friction = chain.joint_damping(), chain.joint_friction()
     k = 0
     prev = parent
+    if chain.base_pose is not None:
+        frame0 = prefix + chain.frame0_link
+        lines += [
+            indent + _comment(f"base offset T_{chain.base}_0 (Khalil frame 0 in the base link)"),
+            f'{indent}<joint name="{prefix}{chain.name}_base_offset" type="fixed">',
+            f'{indent}  <parent link="{prev}"/>',
+            f'{indent}  <child link="{frame0}"/>',
+            f"{indent}  {_origin(chain.base_pose.matrix)}",
+            f"{indent}</joint>",
+            f'{indent}<link name="{frame0}"/>',
+        ]
+        prev = frame0
     for j, row in enumerate(chain.rows):
         child = prefix + link_names[j]
         t0 = row.transform(0.0)
-        lines.append(indent + _comment(
-            f"row {j + 1}: sigma={row.sigma} alpha={_num(row.alpha)} d={_num(row.d)} "
-            f"theta={_num(row.theta)} r={_num(row.r)}"
-        ))
+        lines.append(
+            indent
+            + _comment(
+                f"row {j + 1}: sigma={row.sigma} alpha={_num(row.alpha)} d={_num(row.d)} "
+                f"theta={_num(row.theta)} r={_num(row.r)}"
+            )
+        )
         if row.is_joint:
             jname = prefix + joint_names[k]
             lim = limits[k]
@@ -205,6 +192,35 @@ def _chain_body(
         lines += _visuals(chain, j, indent + "  ")
         lines.append(f"{indent}</link>")
         prev = child
+    if chain.tool is not None:
+        tool = prefix + chain.tip
+        t_tool = chain.tool.matrix
+        lines += [
+            indent + _comment(f"tool frame T_{len(chain.rows)}_tool"),
+            f'{indent}<joint name="{tool}_fixed" type="fixed">',
+            f'{indent}  <parent link="{prev}"/>',
+            f'{indent}  <child link="{tool}"/>',
+            f"{indent}  {_origin(t_tool)}",
+            f"{indent}</joint>",
+            f'{indent}<link name="{tool}">',
+            f"{indent}  <visual>",
+            f'{indent}    <origin xyz="0 0 0" rpy="0 0 0"/>',
+            f'{indent}    <geometry><sphere radius="{_num(1.2 * chain.link_radius)}"/></geometry>',
+            f'{indent}    <material name="foot"/>',
+            f"{indent}  </visual>",
+        ]
+        back = -t_tool[:3, :3].T @ t_tool[:3, 3]
+        length = float(np.linalg.norm(back))
+        if length > 1e-9:
+            lines += [
+                f"{indent}  <visual>",
+                f'{indent}    <origin xyz="{_vec(0.5 * back)}" rpy="{_vec(_z_to(back))}"/>',
+                f'{indent}    <geometry><cylinder radius="{_num(0.6 * chain.link_radius)}" '
+                f'length="{_num(length)}"/></geometry>',
+                f'{indent}    <material name="link"/>',
+                f"{indent}  </visual>",
+            ]
+        lines.append(f"{indent}</link>")
     return lines
 
 
@@ -285,9 +301,7 @@ def _robot_urdf(robot: Hexapod, leg: str | None, header: str | None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def to_urdf(
-    source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None
-) -> str:
+def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
     """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
 
     Args:

@@ -59,8 +59,10 @@ def test_seed_001_equation_3_row_2():
     np.testing.assert_allclose(t, ref, atol=1e-15)
 
 
-@pytest.mark.parametrize("sigma,expected", [(0, "revolute"), (1, "prismatic"), (2, "fixed"),
-                                            ("Revolute", "revolute"), ("p", "prismatic")])
+@pytest.mark.parametrize(
+    "sigma,expected",
+    [(0, "revolute"), (1, "prismatic"), (2, "fixed"), ("Revolute", "revolute"), ("p", "prismatic")],
+)
 def test_sigma_accepts_codes_and_names(sigma, expected):
     assert KhalilRow(sigma).sigma == expected
 
@@ -154,8 +156,123 @@ def test_chain_is_frozen():
 def test_readme_example_khalil_equals_dh():
     from math import pi
 
-    khalil = Chain(rows=(KhalilRow(0, 0, 0, 0, 0), KhalilRow(0, -pi / 2, 0.05, 0, 0),
-                         KhalilRow(0, 0, 0.10, 0, 0), KhalilRow("fixed", 0, 0.10, 0, 0)))
+    khalil = Chain(
+        rows=(
+            KhalilRow(0, 0, 0, 0, 0),
+            KhalilRow(0, -pi / 2, 0.05, 0, 0),
+            KhalilRow(0, 0, 0.10, 0, 0),
+            KhalilRow("fixed", 0, 0.10, 0, 0),
+        )
+    )
     dh = Chain.from_dh([DHRow(0, 0, 0.05, -pi / 2), DHRow(0, 0, 0.10, 0), DHRow(0, 0, 0.10, 0)])
     for q in np.random.default_rng(9).uniform(-3, 3, (20, 3)):
         np.testing.assert_allclose(table_fk(khalil, q), table_fk(dh, q), atol=1e-15)
+
+
+# ------------------------------------------------------------------ poses, base and tool
+def _rot_x(a):
+    return rx(a)[:3, :3]
+
+
+def _rot_y(a):
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def _rot_z(a):
+    return rz(a)[:3, :3]
+
+
+def test_rpy_is_fixed_axis_xyz_as_urdf():
+    from hexapod_kin.params import matrix_to_rpy, rpy_to_matrix
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        r, p, y = rng.uniform(-3, 3, 3)
+        ref = _rot_z(y) @ _rot_y(p) @ _rot_x(r)  # fixed axes: x first, then y, then z
+        np.testing.assert_allclose(rpy_to_matrix(r, p, y), ref, atol=1e-15)
+        np.testing.assert_allclose(rpy_to_matrix(*matrix_to_rpy(ref)), ref, atol=1e-14)
+
+
+def test_pose_from_matrix_and_xyz_rpy_agree():
+    from hexapod_kin.params import Pose
+
+    xyz, rpy = (0.1, -0.2, 0.3), (0.4, -0.5, 0.6)
+    t = np.eye(4)
+    t[:3, :3] = _rot_z(0.6) @ _rot_y(-0.5) @ _rot_x(0.4)
+    t[:3, 3] = xyz
+    a, b = Pose.of(t), Pose.of((xyz, rpy))
+    np.testing.assert_allclose(a.matrix, t, atol=0)
+    np.testing.assert_allclose(b.matrix, t, atol=1e-15)
+    np.testing.assert_allclose(a.rpy, rpy, atol=1e-14)
+    assert Pose.of(a) is a and Pose().is_identity
+    d = a.to_dict()
+    assert d["xyz"] == list(xyz) and len(d["matrix"]) == 4
+
+
+@pytest.mark.parametrize(
+    "value,fragment",
+    [
+        (np.eye(3), "not a pose"),
+        ("abc", "not a pose"),
+        (np.diag([1.0, 1.0, 2.0, 1.0]), "not a rotation"),
+        (np.diag([1.0, 1.0, -1.0, 1.0]), "not a rotation"),
+        (np.vstack([np.eye(4)[:3], [0, 0, 1, 1]]), "0 0 0 1"),
+        (((0, 0, float("nan")), (0, 0, 0)), "finite"),
+    ],
+)
+def test_pose_refuses_non_poses(value, fragment):
+    with pytest.raises(ParameterError, match=fragment):
+        Chain(rows=(KhalilRow(0),), tool=value)
+
+
+def _pose(xyz, rpy):
+    t = np.eye(4)
+    t[:3, :3] = _rot_z(rpy[2]) @ _rot_y(rpy[1]) @ _rot_x(rpy[0])
+    t[:3, 3] = xyz
+    return t
+
+
+def test_base_and_tool_wrap_the_table_product():
+    rng = np.random.default_rng(5)
+    base, tool = _pose((0.1, 0.2, 0.3), (0.3, -0.2, 1.0)), _pose((0, 0.05, 0.1), (0, 0.7, 0))
+    for _ in range(10):
+        dh = _random_dh(rng, 4)
+        plain = Chain.from_dh(dh)
+        framed = Chain.from_dh(dh, base=base, tool=(tool[:3, 3], (0, 0.7, 0)), tip="tcp")
+        assert framed.base == "base" and framed.tip == "tcp" and framed.base_pose is not None
+        assert framed.link_names[-1] == "link5" and framed.frame0_link == "base_frame0"
+        q = rng.uniform(-2, 2, 4)
+        ref = np.eye(4)
+        for row, qi in zip(dh, q):
+            ref = ref @ row.transform(qi)
+        np.testing.assert_allclose(table_fk(framed, q), base @ ref @ tool, atol=1e-12)
+        np.testing.assert_allclose(table_fk(plain, q), ref, atol=1e-12)
+
+
+def test_position_jacobian_with_base_and_tool_matches_finite_differences():
+    from hexapod_kin.params import table_position_jacobian
+
+    rng = np.random.default_rng(6)
+    rows = tuple(KhalilRow(s, *rng.uniform(-2, 2, 4)) for s in (0, 1, 0, 0, 0))  # ends on a joint
+    chain = Chain(
+        rows=rows, base=((0.1, 0, 0.2), (0.5, 0.1, -0.3)), tool=((0.1, 0.2, 0.3), (1, 2, 3))
+    )
+    q = rng.uniform(-2, 2, 5)
+    h = 1e-6
+    fd = np.column_stack(
+        [
+            (table_fk(chain, q + h * e)[:3, 3] - table_fk(chain, q - h * e)[:3, 3]) / (2 * h)
+            for e in np.eye(5)
+        ]
+    )
+    np.testing.assert_allclose(table_position_jacobian(chain, q), fd, atol=1e-8)
+
+
+def test_identity_base_is_no_base_and_base_given_twice_is_refused():
+    chain = Chain(rows=(KhalilRow(0),), base=np.eye(4))
+    assert chain.base_pose is None and chain.base == "base"
+    with pytest.raises(ParameterError, match="once"):
+        Chain(rows=(KhalilRow(0),), base=np.eye(4), base_pose=((1, 0, 0), (0, 0, 0)))
+    with pytest.raises(ParameterError, match="unique"):
+        Chain(rows=(KhalilRow(0),), tool=np.eye(4), tip="link1")

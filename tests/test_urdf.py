@@ -69,8 +69,11 @@ def test_write_urdf_atomic_and_loadable(tmp_path):
 
 
 def test_generator_check_passes_on_committed_files():
-    res = subprocess.run([sys.executable, str(ROOT / "tools" / "generate_urdf.py"), "--check"],
-                         capture_output=True, text=True)
+    res = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "generate_urdf.py"), "--check"],
+        capture_output=True,
+        text=True,
+    )
     assert res.returncode == 0, res.stdout + res.stderr
 
 
@@ -87,3 +90,32 @@ def test_committed_files_have_headers():
     for path in sorted((ROOT / "urdf").glob("*.urdf")):
         head = path.read_text().splitlines()[1:3]
         assert any("made by: python tools/generate_urdf.py" in h for h in head), path
+
+
+def test_base_offset_and_tool_exported_as_fixed_joints_and_loaded_equal():
+    from hexapod_kin import Chain, DHRow, load, table_fk
+
+    chain = Chain.from_dh(
+        [DHRow(0.1, 0.2, 0.3, math.pi / 2), DHRow(0, 0, 0.4, 0), DHRow(0, 0.1, 0, -math.pi / 2)],
+        base=((0.1, -0.2, 0.3), (0.2, 0.3, -0.4)),
+        tool=((0.0, 0.02, 0.12), (0.0, math.pi / 2, 0.0)),
+        tip="tcp",
+        name="arm",
+    )
+    root = etree.fromstring(to_urdf(chain).encode())
+    joints = {j.get("name"): j for j in root.findall("joint")}
+    off = joints["arm_base_offset"]
+    assert off.get("type") == "fixed" and off.find("parent").get("link") == "base"
+    assert off.find("child").get("link") == "base_frame0"
+    # the origin written is the pose given (xyz, rpy): an independent read of the text
+    xyz = [float(v) for v in off.find("origin").get("xyz").split()]
+    rpy = [float(v) for v in off.find("origin").get("rpy").split()]
+    np.testing.assert_allclose(xyz, (0.1, -0.2, 0.3), atol=1e-15)
+    np.testing.assert_allclose(rpy, (0.2, 0.3, -0.4), atol=1e-14)
+    tool = joints["tcp_fixed"]
+    assert tool.get("type") == "fixed" and tool.find("child").get("link") == "tcp"
+    model = load(chain)
+    assert model.base == "base" and model.tip == "tcp"
+    rng = np.random.default_rng(4)
+    for q in rng.uniform(-2, 2, (20, 3)):
+        np.testing.assert_allclose(model.fk(q), table_fk(chain, q), atol=1e-13)

@@ -1,0 +1,163 @@
+"""Chain.from_urdf: Khalil tables recovered from URDFs, FK checked against Pinocchio."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import Chain, DHRow, KhalilRow, robots, table_fk, to_urdf
+from hexapod_kin.exceptions import ConfigurationError, HexapodKinError
+from hexapod_kin.params import Hexapod, table_position_jacobian
+
+
+def _fk_error(chain, model, n=50, seed=0):
+    qs = model.random_q(n, seed=seed)
+    return max(float(np.abs(table_fk(chain, q) - model.fk(q)).max()) for q in qs)
+
+
+def _jac_error(chain, model, n=20, seed=1):
+    qs = model.random_q(n, seed=seed)
+    return max(
+        float(
+            np.abs(
+                table_position_jacobian(chain, q) - model.jacobian(q, "local_world_aligned")[:3]
+            ).max()
+        )
+        for q in qs
+    )
+
+
+def _catalogue():
+    out = []
+    for name in robots.names():
+        built = robots.get(name)
+        if isinstance(built, Hexapod):
+            out += [
+                (to_urdf(built, leg=leg.name), None, f"{name}_{leg.chain.tip}")
+                for leg in built.legs[:2]
+            ]
+            out[-2:] = [
+                (t, None, f"{leg.name}_{leg.chain.tip}")
+                for (t, _, _), leg in zip(out[-2:], built.legs[:2])
+            ]
+        else:
+            out.append((to_urdf(built), None, None))
+    return out
+
+
+@pytest.mark.parametrize("text,base,tip", _catalogue())
+def test_catalogue_urdfs_round_trip(text, base, tip):
+    chain = Chain.from_urdf(text, base=base, tip=tip)
+    model = hk.load(text, base=base, tip=tip)
+    assert chain.nq == model.nq
+    assert _fk_error(chain, model) < 1e-12
+    assert _jac_error(chain, model) < 1e-12
+
+
+@pytest.mark.parametrize(
+    "name", [n for n in robots.names() if not isinstance(robots.get(n), Hexapod)]
+)
+def test_own_exports_give_back_the_joint_rows(name):
+    original = robots.get(name)
+    chain = Chain.from_urdf(to_urdf(original))
+    joint_rows = [r for r in original.rows if r.is_joint]
+    for got, want in zip(chain.rows, joint_rows):
+        assert got.sigma == want.sigma
+        # the same geometry: |d| and alpha up to the sign conventions of a free x axis
+        assert abs(abs(got.d) - abs(want.d)) < 1e-12
+
+
+@pytest.mark.parametrize(
+    "source,tip",
+    [
+        ("erd:solo12", "FL_FOOT"),
+        ("erd:solo12", "HR_FOOT"),
+        ("erd:ur5_robot", None),
+        ("erd:panda", "panda_link8"),
+        ("erd:panda", "panda_hand"),
+    ],
+)
+def test_example_robot_data_round_trip(source, tip):
+    chain = Chain.from_urdf(source, tip=tip)
+    model = hk.load(source, tip=tip)
+    assert chain.nq == model.nq and chain.joint_names == model.joint_names
+    assert _fk_error(chain, model, n=100) < 1e-12
+    assert _jac_error(chain, model) < 1e-12
+
+
+def _urdf(joints):
+    """A serial URDF from (type, xyz, rpy, axis) tuples; links with a unit mass."""
+    inertial = (
+        '<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" '
+        'ixz="0" iyz="0"/></inertial>'
+    )
+    lines = ['<robot name="t">', f'<link name="l0">{inertial}</link>']
+    for k, (jtype, xyz, rpy, axis) in enumerate(joints, start=1):
+        lim = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if jtype != "fixed" else ""
+        ax = f'<axis xyz="{axis}"/>' if jtype != "fixed" else ""
+        lines.append(
+            f'<joint name="j{k}" type="{jtype}"><parent link="l{k - 1}"/><child link="l{k}"/>'
+            f'<origin xyz="{xyz}" rpy="{rpy}"/>{ax}{lim}</joint>'
+        )
+        lines.append(f'<link name="l{k}">{inertial}</link>')
+    lines.append("</robot>")
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize(
+    "joints",
+    [
+        # skew axes in arbitrary directions, a fixed joint between
+        [
+            ("revolute", "0.1 0.2 0.3", "0.3 0.2 0.1", "0.3 -0.5 0.8"),
+            ("revolute", "0.2 0 0.1", "0 0.4 0", "1 0 0"),
+            ("fixed", "0 0.1 0.05", "0.5 0 0", ""),
+            ("prismatic", "0.1 0 0", "0 0 0.3", "0 1 1"),
+            ("revolute", "0 0 0.2", "0.1 0.1 0.1", "-1 2 0.5"),
+        ],
+        # parallel, coincident and intersecting axes
+        [
+            ("revolute", "0 0 0", "0 0 0", "0 0 1"),
+            ("revolute", "0.3 0.1 0", "0 0 0", "0 0 1"),
+            ("revolute", "0 0 0.2", "0 0 0", "0 0 1"),
+            ("revolute", "0 0 0", "0 0 0", "1 0 0"),
+            ("prismatic", "0 0 0.1", "0 0 0", "1 0 0"),
+        ],
+        # a single joint off the base frame
+        [("revolute", "0.4 -0.3 0.2", "1 2 3", "0 1 0")],
+    ],
+    ids=["skew-fixed-prismatic", "parallel-coincident-intersecting", "single-offset"],
+)
+def test_synthetic_chains_any_axes(joints):
+    text = _urdf(joints)
+    chain = Chain.from_urdf(text, tip=f"l{len(joints)}")
+    model = hk.load(text, tip=f"l{len(joints)}")
+    assert _fk_error(chain, model, n=100) < 1e-12
+    assert _jac_error(chain, model) < 1e-12
+    assert not any(r.sigma == "fixed" for r in chain.rows)
+
+
+def test_recovered_chain_exports_and_reloads_equal():
+    chain = Chain.from_urdf("erd:ur5_robot")
+    again = hk.load(chain)
+    model = hk.load("erd:ur5_robot")
+    for q in model.random_q(20, seed=3):
+        np.testing.assert_allclose(again.fk(q), model.fk(q), atol=1e-12)
+
+
+def test_dh_chain_through_urdf_keeps_a_dh_like_table():
+    dh = Chain.from_dh([DHRow(0, 0.3, 0, math.pi / 2), DHRow(0, 0, 0.4, 0), DHRow(0, 0, 0.3, 0)])
+    back = Chain.from_urdf(to_urdf(dh))
+    assert [r.sigma for r in back.rows] == ["revolute"] * 3
+    assert back.rows[0] == KhalilRow("revolute", 0, 0, 0, 0.3)
+
+
+def test_not_serial_or_unsupported_says_why():
+    with pytest.raises(ConfigurationError, match="not a serial chain"):
+        Chain.from_urdf("hexapod")  # the whole robot: six branches
+    planar = _urdf([("planar", "0 0 0", "0 0 0", "0 0 1")])
+    with pytest.raises(HexapodKinError, match="JointModelPlanar|planar"):
+        Chain.from_urdf(planar, tip="l1")
