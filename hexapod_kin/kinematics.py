@@ -78,13 +78,17 @@ class KinematicModel(Model):
         """
         # The hot call: one attribute lookup for what it needs, the check of
         # model.fast_q_ok inlined (no extra function call).
-        m, d, fid, shape, root = self._hot
-        if not (
-            q.__class__ is _ND
-            and q.dtype is _F64
-            and q.shape == shape
-            and _hypot(*q.tolist()) < 1e150
-        ):
+        m, d, fid, nq, root = self._local.hot
+        try:  # len + hypot of the flat list: a 0-d or 2-D array raises TypeError here
+            ok = (
+                q.__class__ is _ND
+                and q.dtype is _F64
+                and len(q) == nq
+                and _hypot(*q.tolist()) < 1e150
+            )
+        except TypeError:
+            ok = False
+        if not ok:
             q = self.check_q(q)
         _forward_kinematics(m, d, q)
         omf = _update_frame_placement(m, d, fid)
@@ -100,18 +104,20 @@ class KinematicModel(Model):
         """Pose of any frame in the base frame, ``baseMframe`` (4×4)."""
         fid = self.frame_id(frame)
         qv = self.check_q(q)
-        pin.forwardKinematics(self.model, self.data, qv)
-        omf = pin.updateFramePlacement(self.model, self.data, fid)
+        d = self.data
+        pin.forwardKinematics(self.model, d, qv)
+        omf = pin.updateFramePlacement(self.model, d, fid)
         return (self.baseMo * omf).homogeneous
 
     def frame_placements(self, q: Any) -> list[np.ndarray]:
         """``^0T_j`` for every frame on the base → tip path (``path_frames``), 4×4 each."""
         qv = self.check_q(q)
-        pin.framesForwardKinematics(self.model, self.data, qv)
+        d = self.data
+        pin.framesForwardKinematics(self.model, d, qv)
         out = []
         for name in self.path_frames:
             fid = self.model.getFrameId(name)
-            out.append((self.baseMo * self.data.oMf[fid]).homogeneous)
+            out.append((self.baseMo * d.oMf[fid]).homogeneous)
         return out
 
     def transforms(self, q: Any) -> list[np.ndarray]:
@@ -151,18 +157,22 @@ class KinematicModel(Model):
             ConfigurationError: Bad ``q``.
 
         """
-        m, d, fid, shape, root = self._hot
+        m, d, fid, nq, root = self._local.hot
         ref = REFERENCES.get(reference) if reference.__class__ is str else None
         if ref is None:
             ref = _reference(reference)
         if frame is not None:
             fid = self.frame_id(frame)
-        if not (
-            q.__class__ is _ND
-            and q.dtype is _F64
-            and q.shape == shape
-            and _hypot(*q.tolist()) < 1e150
-        ):
+        try:  # len + hypot of the flat list: a 0-d or 2-D array raises TypeError here
+            ok = (
+                q.__class__ is _ND
+                and q.dtype is _F64
+                and len(q) == nq
+                and _hypot(*q.tolist()) < 1e150
+            )
+        except TypeError:
+            ok = False
+        if not ok:
             q = self.check_q(q)
         jac = _compute_frame_jacobian(m, d, q, fid, ref)
         if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array
@@ -188,10 +198,11 @@ class KinematicModel(Model):
         ref = _reference(reference)
         if not fast_q_ok(q, self._shape):
             q = self.check_q(q)
-        jac = _compute_frame_jacobian(self.model, self.data, q, self.tip_id, ref)
+        d = self.data
+        jac = _compute_frame_jacobian(self.model, d, q, self.tip_id, ref)
         if jac.ndim == 1:
             jac = jac.reshape(6, 1)
-        omf = pin.updateFramePlacement(self.model, self.data, self.tip_id)
+        omf = pin.updateFramePlacement(self.model, d, self.tip_id)
         if self._base_is_root:
             return omf.homogeneous, jac
         pose = (self.baseMo * omf).homogeneous

@@ -135,7 +135,7 @@ class Model:
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
         self.model, self._locked, self._q_ref = _reduce(full, base_name, tip_name, do_reduce, q_ref)
-        self.data: pin.Data = self.model.createData()
+        data = self.model.createData()
         self.base = base_name
         self.tip = tip_name
         self.base_id = int(self.model.getFrameId(base_name))
@@ -153,9 +153,9 @@ class Model:
                 "sub-chain with base=/tip=)"
             )
         self._shape = (self.nq,)
-        pin.framesForwardKinematics(m, self.data, pin.neutral(m))
+        pin.framesForwardKinematics(m, data, pin.neutral(m))
         self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
-            self.data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
+            data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
         )
         # The base is fixed (no kept joint between the root and it), so its pose is constant.
         support = set(m.supports[m.frames[self.base_id].parentJoint])
@@ -165,7 +165,7 @@ class Model:
                 f"{[m.names[i] for i in sorted(support - {0})]}; the base must be fixed "
                 "relative to the root of the chain (choose a frame closer to the root)"
             )
-        self.oMbase = pin.SE3(self.data.oMf[self.base_id])
+        self.oMbase = pin.SE3(data.oMf[self.base_id])
         self.baseMo = self.oMbase.inverse()
         self._rot_base = np.ascontiguousarray(self.baseMo.rotation)
         self.lower = np.array(m.lowerPositionLimit, dtype=float)
@@ -179,17 +179,32 @@ class Model:
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = _path_frames(m, self.base_id, self.tip_id)
-        # What the per-call hot paths need, in one attribute (see kinematics.fk).
-        self._hot = (self.model, self.data, self.tip_id, self._shape, self._base_is_root)
+        # What the per-call hot paths need, one tuple per thread (see kinematics.fk): each
+        # thread gets its own pinocchio.Data, so concurrent calls never share scratch space.
+        self._local = _PerThread(self, data)
 
     _FROZEN = frozenset(
-        {"model", "data", "full_model", "urdf", "source", "base", "tip", "tip_id", "_hot"}
+        {"model", "data", "full_model", "urdf", "source", "base", "tip", "tip_id", "_local"}
     )
+
+    @property
+    def data(self) -> pin.Data:
+        """The calling thread's ``pinocchio.Data`` of :attr:`model` (one per thread).
+
+        Pinocchio writes every result into its ``Data``; one ``Data`` shared by threads gives
+        wrong numbers. Each thread that uses the model gets its own, created on first use.
+        """
+        return self._local.hot[1]
+
+    @property
+    def _hot(self) -> tuple[Any, ...]:
+        """``(model, data, tip_id, nq, base is root)`` of the calling thread."""
+        return self._local.hot
 
     def __setattr__(self, key: str, value: Any) -> None:
         # Model and Data are created together here and never re-paired: once set, these
         # attributes are read-only (reads stay plain attribute lookups on the hot path).
-        if key in self._FROZEN and key in self.__dict__:
+        if key in self._FROZEN and (key in self.__dict__ or key == "data"):
             from .exceptions import ParameterError
 
             raise ParameterError(
@@ -366,6 +381,24 @@ class Model:
             f"<hexapod_kin Model {self.name!r}: nq={self.nq} joints={list(self.joint_names)} "
             f"base={self.base!r} tip={self.tip!r}>"
         )
+
+
+class _PerThread(threading.local):
+    """Per-thread hot tuple ``(model, data, tip_id, nq, base_is_root)`` of one Model.
+
+    ``threading.local`` calls ``__init__`` again (with the same arguments) in every new thread
+    that touches the object; ``data`` (the one made at load) is kept for the loading thread
+    only, other threads create their own.
+    """
+
+    def __init__(self, owner: Model, data: Any = None) -> None:
+        first = getattr(owner, "_owner_thread", None)
+        mine = threading.get_ident()
+        if first is None:
+            object.__setattr__(owner, "_owner_thread", mine)
+        if data is None or (first is not None and first != mine):
+            data = owner.model.createData()
+        self.hot = (owner.model, data, owner.tip_id, owner.nq, owner._base_is_root)
 
 
 def _root_link_frame(model: pin.Model) -> str:
