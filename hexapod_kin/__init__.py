@@ -54,6 +54,55 @@ def load(source: Any, base: str | None = None, tip: str | None = None, **kwargs:
     return _load(source, base=base, tip=tip, **kwargs)
 
 
+#: Submodules reachable as attributes (``hk.singularity``) without importing them up front
+#: (PEP 562): ``import hexapod_kin`` stays light (no Pinocchio, sympy or numba).
+_LAZY_SUBMODULES = (
+    "dynamics",
+    "export",
+    "gait",
+    "ik",
+    "kinematics",
+    "model",
+    "motion",
+    "params",
+    "plots",
+    "report",
+    "seeds",
+    "singularity",
+    "sources",
+    "sweep",
+    "symbolic",
+    "tables",
+    "urdf",
+    "viewer",
+    "workspace",
+)
+
+
+def __getattr__(name: str) -> Any:
+    """Import the submodule ``name`` on first access (PEP 562).
+
+    Raises:
+        AttributeError: If ``name`` is neither a submodule of the list above that exists in
+            this installation nor another attribute of the package.
+
+    """
+    if name in _LAZY_SUBMODULES:
+        import importlib
+        import importlib.util
+
+        full = f"{__name__}.{name}"
+        if importlib.util.find_spec(full) is not None:
+            module = importlib.import_module(full)
+            globals()[name] = module
+            return module
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY_SUBMODULES))
+
+
 __all__ = [
     "__version__",
     "Chain",

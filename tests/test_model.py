@@ -15,8 +15,11 @@ from hexapod_kin.model import erd_names, erd_path, resolve_source
 
 
 def test_every_exception_is_in_the_family():
-    classes = [c for _, c in inspect.getmembers(exceptions, inspect.isclass)
-               if issubclass(c, Exception) and c.__module__ == exceptions.__name__]
+    classes = [
+        c
+        for _, c in inspect.getmembers(exceptions, inspect.isclass)
+        if issubclass(c, Exception) and c.__module__ == exceptions.__name__
+    ]
     assert len(classes) >= 8
     for cls in classes:
         assert issubclass(cls, hk.HexapodKinError), cls
@@ -71,8 +74,9 @@ def test_base_must_be_an_ancestor_of_the_tip():
         hk.load("hexapod", base="leg1_femur", tip="leg1_foot", reduce=False)
 
 
-@pytest.mark.parametrize("source,kw,count", [("hexabot_leg", {}, None),
-                                             ("erd:solo12", {"tip": "FL_FOOT"}, None)])
+@pytest.mark.parametrize(
+    "source,kw,count", [("hexabot_leg", {}, None), ("erd:solo12", {"tip": "FL_FOOT"}, None)]
+)
 def test_geometry_model_matches_the_reduced_model(source, kw, count):
     model = hk.load(source, **kw)
     geom = model.geometry_model("visual")
@@ -89,13 +93,18 @@ def test_geometry_model_matches_the_reduced_model(source, kw, count):
 
 # ------------------------------------------------------------------ exceptions with fields
 def test_exceptions_keep_message_and_carry_fields():
-    err = exceptions.ParameterError("l1='abc' is not a number", parameter="l1", value="abc",
-                                    allowed="a length > 0 in [m]")
+    err = exceptions.ParameterError(
+        "l1='abc' is not a number", parameter="l1", value="abc", allowed="a length > 0 in [m]"
+    )
     assert str(err) == "l1='abc' is not a number"
     assert (err.parameter, err.value, err.allowed) == ("l1", "abc", "a length > 0 in [m]")
-    assert err.to_dict() == {"type": "ParameterError", "message": "l1='abc' is not a number",
-                             "parameter": "l1", "value": "abc",
-                             "allowed": "a length > 0 in [m]"}
+    assert err.to_dict() == {
+        "type": "ParameterError",
+        "message": "l1='abc' is not a number",
+        "parameter": "l1",
+        "value": "abc",
+        "allowed": "a length > 0 in [m]",
+    }
     plain = exceptions.SourceError("just a message")
     assert str(plain) == "just a message" and plain.parameter is None
     assert plain.value is None and plain.allowed is None
@@ -144,8 +153,10 @@ def test_cached_is_thread_safe_single_build():
         return len(calls)
 
     out = []
-    threads = [threading.Thread(target=lambda: out.append(model.cached("test.slow", slow)))
-               for _ in range(8)]
+    threads = [
+        threading.Thread(target=lambda: out.append(model.cached("test.slow", slow)))
+        for _ in range(8)
+    ]
     for t in threads:
         t.start()
     for t in threads:
@@ -210,3 +221,44 @@ def test_erd_names_lists_every_urdf_file():
     robots_dir = erd_share() / "example-robot-data" / "robots"
     stems = {p.stem for p in robots_dir.rglob("*.urdf")}
     assert set(erd_names()) == stems and len(stems) > 50
+
+
+# ------------------------------------------------------------------ import cost (modules, not time)
+def _modules_after(code: str) -> set[str]:
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", code + "\nimport sys, json; print(json.dumps(sorted(sys.modules)))"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    )
+    return set(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def test_import_pulls_no_heavy_module():
+    mods = _modules_after("import hexapod_kin")
+    heavy = {"pinocchio", "sympy", "numba", "scipy", "matplotlib", "yourdfpy", "meshcat", "lxml"}
+    assert not heavy & {m.split(".")[0] for m in mods}
+    loaded = {m for m in mods if m.startswith("hexapod_kin.")}
+    assert "hexapod_kin.singularity" not in loaded and "hexapod_kin.ik" not in loaded
+
+
+def test_submodules_are_lazy_attributes():
+    mods = _modules_after(
+        "import hexapod_kin as hk\n"
+        "assert hk.kinematics.load is not None and hk.sources.erd_names\n"
+        "assert 'kinematics' in dir(hk)\n"
+        "try:\n    hk.no_such_module\nexcept AttributeError:\n    pass\nelse:\n    raise SystemExit(3)"
+    )
+    assert "hexapod_kin.kinematics" in mods and "pinocchio" in mods
+    import hexapod_kin as hkm
+
+    for name in hkm._LAZY_SUBMODULES:
+        import importlib.util
+
+        exists = importlib.util.find_spec(f"hexapod_kin.{name}") is not None
+        assert hasattr(hkm, name) == exists, name
