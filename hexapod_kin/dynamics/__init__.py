@@ -1,0 +1,68 @@
+"""Dynamics: forward dynamics (ABA) and integrators, the seed pendulum, leg torques, standing.
+
+* :mod:`.forward` — :func:`simulate`: Pinocchio ABA with the URDF's joint damping and (smoothed)
+  Coulomb friction, optional springs; RK4 (default) or semi-implicit Euler; energies.
+* :mod:`.pendulum` — seed 001 §1: :func:`pendulum_experiment` (undamped, damped, small-amplitude
+  decay) measured against the exact period ``4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` and ``b/(2I)``.
+* :mod:`.statics` — :func:`leg_torques` (``g(q) + Jᵀ F``, cross-checked by RNEA with the foot
+  force as external force), :func:`step_torques` along the seeds' resolved-rate step.
+* :mod:`.stand` — :func:`stand`: the hexapod standing, the stance feet's contact forces
+  (minimum-norm or friction-cone) and every joint's torque.
+
+Every entry point refuses a model whose moving bodies have implausible inertials
+(:func:`check_inertials`, naming the link).
+"""
+
+from __future__ import annotations
+
+from ._common import check_inertials
+from .forward import METHODS, PassiveJoints, Simulation, passive_joints, simulate
+from .pendulum import (
+    PendulumExperiment,
+    PendulumRun,
+    PhysicalPendulum,
+    exact_period,
+    hermite_crossings,
+    pendulum_experiment,
+    pendulum_run,
+    physical_pendulum,
+)
+from .stand import (
+    CONTACT_METHODS,
+    Stance,
+    contact_forces,
+    robot_mass_com,
+    stance_at,
+    stand,
+    standing_configuration,
+)
+from .statics import LegTorques, StepTorques, leg_torques, step_torques, torques_along
+
+__all__ = [
+    "CONTACT_METHODS",
+    "LegTorques",
+    "METHODS",
+    "PassiveJoints",
+    "PendulumExperiment",
+    "PendulumRun",
+    "PhysicalPendulum",
+    "Simulation",
+    "Stance",
+    "StepTorques",
+    "check_inertials",
+    "contact_forces",
+    "exact_period",
+    "hermite_crossings",
+    "leg_torques",
+    "passive_joints",
+    "pendulum_experiment",
+    "pendulum_run",
+    "physical_pendulum",
+    "robot_mass_com",
+    "simulate",
+    "stance_at",
+    "stand",
+    "standing_configuration",
+    "step_torques",
+    "torques_along",
+]

@@ -1,0 +1,180 @@
+"""Shared checks of the dynamics package: models, numbers, vectors, inertials."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ParameterError
+
+__all__ = [
+    "as_model",
+    "check_inertials",
+    "check_state",
+    "finite_vector",
+    "positive",
+    "zero_gravity_model",
+]
+
+#: Relative tolerance on the principal moments of inertia (a moment <= tol * largest is zero).
+INERTIA_RTOL = 1e-12
+
+
+def as_model(model: Any, **params: Any) -> Any:
+    """A loaded model: ``model`` itself, or ``hexapod_kin.load(model, **params)`` for a source."""
+    if hasattr(model, "model") and hasattr(model, "data") and hasattr(model, "nq"):
+        return model
+    from ..kinematics import load
+
+    return load(model, **params)
+
+
+def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """``value`` as a finite float > 0 (>= 0 with ``allow_zero``).
+
+    Raises:
+        ParameterError: Not a number, not finite or out of range (names ``name``).
+
+    """
+    need = ">= 0" if allow_zero else "> 0"
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name}={value!r} is not a number; a finite value {need} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"finite {need}",
+        ) from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; a finite value {need} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"finite {need}",
+        )
+    return v
+
+
+def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -> np.ndarray:
+    """``value`` as a float array of shape (n,); a scalar is broadcast.
+
+    Raises:
+        ParameterError: Wrong shape, non-numbers, non-finite or (``nonnegative``) negative.
+
+    """
+    try:
+        if np.asarray(value).dtype.kind in "USbO":
+            raise TypeError
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name}={value!r} is not a number or a sequence of {n} numbers",
+            parameter=name,
+            value=value,
+            allowed=f"{n} finite numbers",
+        ) from None
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,):
+        raise ParameterError(
+            f"{name} has shape {arr.shape}; expected ({n},) or a scalar",
+            parameter=name,
+            value=value,
+            allowed=f"{n} finite numbers",
+        )
+    if not np.all(np.isfinite(arr)) or (nonnegative and np.any(arr < 0)):
+        need = "finite values >= 0" if nonnegative else "finite values"
+        raise ParameterError(
+            f"{name}={arr.tolist()} is not allowed; {need} are needed",
+            parameter=name,
+            value=arr.tolist(),
+            allowed=need,
+        )
+    return arr
+
+
+def _body_name(model: pin.Model, joint: int) -> str:
+    """The link moved by ``joint`` (its first body frame), else the joint's name."""
+    for frame in model.frames:
+        if frame.parentJoint == joint and frame.type == pin.FrameType.BODY:
+            return str(frame.name)
+    return str(model.names[joint])
+
+
+def _inertial_problem(inertia: pin.Inertia) -> str | None:
+    """Why a body inertia is implausible for dynamics, or None when it is fine."""
+    mass = float(inertia.mass)
+    lever = np.asarray(inertia.lever, dtype=float)
+    tensor = np.asarray(inertia.inertia, dtype=float)
+    if not (math.isfinite(mass) and np.all(np.isfinite(lever)) and np.all(np.isfinite(tensor))):
+        return "non-finite mass, centre of mass or inertia"
+    if mass <= 0:
+        return f"mass {mass!r} kg (a moving body needs mass > 0)"
+    moments = np.linalg.eigvalsh(0.5 * (tensor + tensor.T))
+    if moments[0] <= INERTIA_RTOL * max(moments[-1], 0.0) or moments[0] <= 0:
+        return (
+            f"inertia about the centre of mass not positive definite (principal moments "
+            f"{[float(m) for m in moments]} kg m^2)"
+        )
+    return None
+
+
+def check_inertials(model: Any) -> None:
+    """Refuse a model whose moving bodies have implausible inertials (before any dynamics).
+
+    Every body moved by a joint (Pinocchio's ``model.inertias[i]``, i >= 1, the links rigidly
+    attached to joint i merged) must have a finite mass > 0 and a positive-definite inertia
+    about its centre of mass: otherwise the joint-space inertia matrix can be singular and
+    ABA divides by zero. (The loader gate already refuses negative masses and indefinite
+    tensors link by link; massless moving bodies pass it and are caught here.) The result is
+    cached per model.
+
+    Args:
+        model: A loaded model.
+
+    Raises:
+        ParameterError: Naming the link (and its joint) and what is wrong with its inertial.
+
+    """
+
+    def scan() -> tuple[str, str, str] | None:
+        m = model.model
+        for j in range(1, m.njoints):
+            problem = _inertial_problem(m.inertias[j])
+            if problem is not None:
+                return _body_name(m, j), str(m.names[j]), problem
+        return None
+
+    found = model.cached("dynamics.inertials", scan) if hasattr(model, "cached") else scan()
+    if found is not None:
+        link, joint, problem = found
+        raise ParameterError(
+            f"link {link!r} (moved by joint {joint!r}) of {model.name!r} has a physically "
+            f"implausible inertial for dynamics: {problem}; fix its <inertial> in the URDF",
+            parameter="inertial",
+            value=link,
+            allowed="mass > 0, positive-definite inertia",
+        )
+
+
+def check_state(model: Any, value: Any, name: str) -> np.ndarray:
+    """A (nq,) joint vector checked by the model (``ConfigurationError`` otherwise)."""
+    arr = model.check_q(value, name)
+    return np.array(arr, dtype=float)
+
+
+def zero_gravity_model(model: Any) -> pin.Model:
+    """A copy of the Pinocchio model with gravity switched off (cached per model)."""
+
+    def build() -> pin.Model:
+        copy = pin.Model(model.model)
+        copy.gravity = pin.Motion.Zero()
+        return copy
+
+    return model.cached("dynamics.zero_gravity", build) if hasattr(model, "cached") else build()

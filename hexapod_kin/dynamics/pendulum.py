@@ -1,0 +1,448 @@
+"""The seed pendulum (seed 001 §1), simulated with ABA and measured against exact physics.
+
+Geometry: the ``pendulum`` preset swings about a horizontal axis; the angle ``θ`` is measured
+from the hanging (stable) equilibrium ``q_hang`` (found from the potential energy, −π/2 for the
+preset): ``θ = q − q_hang``. The seed's "state target" of 30° is the initial angle ``θ0``, released
+from rest.
+
+The exact physics it is checked against, for a rigid body of mass ``m`` swinging about a fixed
+horizontal axis, ``I`` its moment of inertia about that axis, ``l_c`` the distance from the axis
+to the centre of mass, ``b`` the joint's viscous damping::
+
+    I θ̈ + b θ̇ + m g l_c sin θ = 0
+    undamped period   T = 4 sqrt(I / (m g l_c)) K(k),  k = sin(θ0/2)
+    small amplitude   θ ≈ A e^{−γt} cos(ω_d t + φ),     γ = b / (2 I)
+
+``K`` is the complete elliptic integral of the first kind (``scipy.special.ellipk(k**2)``: scipy
+takes the parameter ``m = k²``).
+
+Measurements: turning points are the zero crossings of ``θ̇``, located inside each step by the
+cubic Hermite interpolant of ``θ̇`` (its slope is ``θ̈``, known at every sample) — local error
+O(dt⁴); the period is the mean spacing of same-direction crossings; the envelope decay rate is
+minus the least-squares slope of ``ln θ_peak`` against the peak times (for the linear damped
+oscillator the peaks lie exactly on ``A' e^{−γt}``, so the slope is ``−γ``; at large amplitude
+the nonlinearity changes it by O(θ0²), which is why the decay check runs at a small amplitude).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from scipy.special import ellipk
+
+from ..exceptions import ParameterError
+from ._common import as_model, check_inertials, positive
+from .forward import Method, Simulation, simulate
+
+__all__ = [
+    "PendulumExperiment",
+    "PendulumRun",
+    "PhysicalPendulum",
+    "decay_rate",
+    "exact_period",
+    "hermite_crossings",
+    "pendulum_experiment",
+    "pendulum_run",
+    "physical_pendulum",
+]
+
+
+@dataclass(frozen=True)
+class PhysicalPendulum:
+    """A 1-joint model seen as a physical pendulum (SI units).
+
+    Attributes:
+        inertia: ``I`` about the joint axis in [kg·m²] (``pin.crba``, constant).
+        mass: Moving mass ``m`` in [kg] (``pin.computeTotalMass``).
+        com_distance: ``l_c``, axis to centre of mass, in [m].
+        gravity: ``g`` in [m/s²] (norm of the model's gravity).
+        q_hanging: Joint value of the hanging (stable) equilibrium in [rad].
+        potential_min: Pinocchio's potential energy at ``q_hanging`` in [J].
+
+    """
+
+    inertia: float
+    mass: float
+    com_distance: float
+    gravity: float
+    q_hanging: float
+    potential_min: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {
+            "inertia": self.inertia,
+            "mass": self.mass,
+            "com_distance": self.com_distance,
+            "gravity": self.gravity,
+            "q_hanging": self.q_hanging,
+        }
+
+
+def physical_pendulum(model: Any) -> PhysicalPendulum:
+    """``I``, ``m``, ``l_c`` and the hanging equilibrium of a one-revolute-joint model.
+
+    The potential of a body turning about a fixed axis is ``V(q) = c + A cos q + B sin q``;
+    three evaluations (q = 0, π/2, π) give ``A``, ``B``; the minimum is at
+    ``atan2(−B, −A)`` and ``m g l_c = sqrt(A² + B²)``.
+
+    Raises:
+        ParameterError: Not one revolute joint, implausible inertials, or an axis along
+            gravity (no restoring torque: not a pendulum).
+
+    """
+    mdl = as_model(model)
+    if mdl.nq != 1 or bool(mdl.is_prismatic[0]):
+        raise ParameterError(
+            f"model {mdl.name!r} has joints {list(mdl.joint_names)}; a pendulum needs exactly "
+            "one revolute joint",
+            parameter="model",
+            value=mdl.name,
+            allowed="one revolute joint",
+        )
+    check_inertials(mdl)
+    pm = mdl.model
+    data = pm.createData()
+    v = [
+        float(pin.computePotentialEnergy(pm, data, np.array([x])))
+        for x in (0, math.pi / 2, math.pi)
+    ]
+    a = 0.5 * (v[0] - v[2])
+    b = v[1] - 0.5 * (v[0] + v[2])
+    mass = float(pin.computeTotalMass(pm))
+    g = float(np.linalg.norm(pm.gravity.linear))
+    mgl = math.hypot(a, b)
+    if g <= 0 or mgl <= 1e-12 * mass * max(g, 1.0):
+        raise ParameterError(
+            f"model {mdl.name!r}: gravity exerts no torque about its joint (axis along gravity "
+            "or centre of mass on the axis); not a pendulum",
+            parameter="model",
+            value=mdl.name,
+            allowed="a horizontal axis, offset mass",
+        )
+    q_hang = math.atan2(-b, -a)
+    inertia = float(pin.crba(pm, data, np.array([q_hang]))[0, 0])
+    vmin = float(pin.computePotentialEnergy(pm, data, np.array([q_hang])))
+    return PhysicalPendulum(inertia, mass, mgl / (mass * g), g, q_hang, vmin)
+
+
+def exact_period(pendulum: PhysicalPendulum, theta0: float) -> float:
+    """``T = 4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` in [s], the exact undamped period."""
+    p = pendulum
+    k = math.sin(0.5 * theta0)
+    return float(4.0 * math.sqrt(p.inertia / (p.mass * p.gravity * p.com_distance)) * ellipk(k * k))
+
+
+def hermite_crossings(
+    t: np.ndarray, y: np.ndarray, dy: np.ndarray, direction: int = 0
+) -> np.ndarray:
+    """Times where ``y`` crosses zero, located by the cubic Hermite interpolant (``dy`` = y').
+
+    Args:
+        t: (N,) sample times in [s].
+        y: (N,) samples.
+        dy: (N,) derivatives of ``y`` at the samples.
+        direction: +1 upward crossings only, −1 downward only, 0 both.
+
+    Returns:
+        The crossing times, increasing.
+
+    """
+    sign = np.sign(y)
+    idx = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    idx = np.union1d(idx, np.nonzero((sign[:-1] == 0) & (sign[1:] != 0))[0])
+    out = []
+    for i in idx:
+        y0, y1 = float(y[i]), float(y[i + 1])
+        if direction and (y1 - y0) * direction <= 0:
+            continue
+        if y0 == 0.0:
+            out.append(float(t[i]))
+            continue
+        h = float(t[i + 1] - t[i])
+        d0, d1 = h * float(dy[i]), h * float(dy[i + 1])
+        coeffs = [2 * y0 + d0 - 2 * y1 + d1, -3 * y0 - 2 * d0 + 3 * y1 - d1, d0, y0]
+        s_lin = y0 / (y0 - y1)
+        roots = np.roots(coeffs) if abs(coeffs[0]) + abs(coeffs[1]) > 0 else np.array([s_lin])
+        real = [r.real for r in roots if abs(r.imag) < 1e-9 and -1e-9 <= r.real <= 1 + 1e-9]
+        s = min(real, key=lambda r: abs(r - s_lin)) if real else s_lin
+        out.append(float(t[i]) + h * min(max(s, 0.0), 1.0))
+    return np.array(out)
+
+
+def _hermite_value(t: np.ndarray, y: np.ndarray, dy: np.ndarray, at: float) -> float:
+    i = int(np.clip(np.searchsorted(t, at) - 1, 0, len(t) - 2))
+    h = float(t[i + 1] - t[i])
+    s = (at - float(t[i])) / h
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    return float(h00 * y[i] + h10 * h * dy[i] + h01 * y[i + 1] + h11 * h * dy[i + 1])
+
+
+def peaks(
+    t: np.ndarray, theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Maxima of ``θ`` (downward crossings of ``θ̇``): times [s] and values [rad]."""
+    times = hermite_crossings(t, omega, alpha, direction=-1)
+    values = np.array([_hermite_value(t, theta, omega, float(x)) for x in times])
+    return times, values
+
+
+def decay_rate(
+    t: np.ndarray, theta: np.ndarray, omega: np.ndarray, alpha: np.ndarray
+) -> float | None:
+    """Envelope decay rate ``γ`` in [1/s]: −slope of ``ln θ_peak`` vs time (None if < 3 peaks)."""
+    times, values = peaks(t, theta, omega, alpha)
+    keep = values > 0
+    times, values = times[keep], values[keep]
+    if len(times) < 3:
+        return None
+    slope = np.polyfit(times, np.log(values), 1)[0]
+    return float(-slope)
+
+
+@dataclass(frozen=True)
+class PendulumRun:
+    """One pendulum run, angle measured from the hanging equilibrium (SI units).
+
+    Attributes:
+        theta0: Initial angle in [rad] (released from rest).
+        damping: Joint damping ``b`` in [N·m·s/rad].
+        pendulum: ``I``, ``m``, ``l_c``, ``g``.
+        simulation: The forward-dynamics run (joint coordinates).
+        theta: (N,) angle from the hanging equilibrium in [rad].
+        omega: (N,) angular velocity in [rad/s].
+        energy: (N,) total energy in [J], zero at rest in the hanging equilibrium.
+        period: Measured period in [s] (mean spacing of same-direction turning points; the
+            damped period when damped), or None with fewer than two.
+        period_exact: The exact undamped period for ``theta0`` in [s].
+        energy_drift: ``max |E(t) − E(0)| / E(0)`` (relative to the initial oscillation energy
+            ``m g l_c (1 − cos θ0)``).
+        energy_max_increase: Largest step-to-step increase of E, relative to ``E(0)`` (≤ 0
+            when E never increases).
+        decay_rate: Measured envelope decay rate in [1/s] (None with fewer than 3 maxima).
+        decay_rate_exact: ``b / (2 I)`` in [1/s] (the small-amplitude value).
+
+    """
+
+    theta0: float
+    damping: float
+    pendulum: PhysicalPendulum
+    simulation: Simulation
+    theta: np.ndarray
+    omega: np.ndarray
+    energy: np.ndarray
+    period: float | None
+    period_exact: float
+    energy_drift: float
+    energy_max_increase: float
+    decay_rate: float | None
+    decay_rate_exact: float
+
+    @property
+    def energy_monotone(self) -> bool:
+        """True when the total energy never increases from one sample to the next."""
+        return self.energy_max_increase <= 0.0
+
+    def to_dict(self, samples: bool = False) -> dict[str, Any]:
+        """JSON-ready figures (and the time series with ``samples=True``)."""
+
+        def rel(meas: float | None, exact: float) -> float | None:
+            return None if meas is None or exact == 0 else abs(meas - exact) / exact
+
+        out: dict[str, Any] = {
+            "theta0": self.theta0,
+            "damping": self.damping,
+            "method": self.simulation.method,
+            "dt": self.simulation.dt,
+            "duration": float(self.simulation.t[-1]),
+            "period": self.period,
+            "period_exact": self.period_exact,
+            "period_error": rel(self.period, self.period_exact),
+            "energy_drift": self.energy_drift,
+            "energy_max_increase": self.energy_max_increase,
+            "energy_monotone": self.energy_monotone,
+            "decay_rate": self.decay_rate,
+            "decay_rate_exact": self.decay_rate_exact,
+            "decay_rate_error": rel(self.decay_rate, self.decay_rate_exact),
+        }
+        if samples:
+            out.update(
+                t=self.simulation.t.tolist(),
+                theta=self.theta.tolist(),
+                omega=self.omega.tolist(),
+                energy=self.energy.tolist(),
+            )
+        return out
+
+
+def _theta0(theta0: Any) -> float:
+    th = positive("theta0", theta0)
+    if not th < math.pi:
+        raise ParameterError(
+            f"theta0={theta0!r} rad is not allowed; the initial angle from the hanging "
+            "equilibrium must lie in (0, pi) (pi is the unstable upright equilibrium)",
+            parameter="theta0",
+            value=theta0,
+            allowed="0 < theta0 < pi",
+        )
+    return th
+
+
+def pendulum_run(
+    model: Any = None,
+    theta0: float = math.pi / 6,
+    *,
+    damping: float | None = None,
+    duration: float = 20.0,
+    dt: float = 1e-3,
+    method: Method = "rk4",
+) -> PendulumRun:
+    """Release a one-joint pendulum from ``theta0`` (rest) and measure period, energy, decay.
+
+    Args:
+        model: A loaded one-revolute-joint model or source; default the ``pendulum`` preset
+            with ``damping`` written into its URDF.
+        theta0: Initial angle from the hanging equilibrium in [rad], in (0, π).
+        damping: Joint damping in [N·m·s/rad]; default: the model's URDF damping (for the
+            default preset: 0.01, the seed's value).
+        duration: In [s].
+        dt: Step in [s].
+        method: Integrator (``"rk4"`` default).
+
+    Raises:
+        ParameterError: Bad angle, damping, step, duration or model.
+
+    """
+    th0 = _theta0(theta0)
+    if model is None:
+        b_urdf = 0.01 if damping is None else positive("damping", damping, allow_zero=True)
+        mdl = as_model("pendulum", damping=b_urdf)
+    else:
+        mdl = as_model(model)
+    pend = physical_pendulum(mdl)
+    b = (
+        float(mdl.model.damping[0])
+        if damping is None
+        else positive("damping", damping, allow_zero=True)
+    )
+    sim = simulate(mdl, [pend.q_hanging + th0], duration=duration, dt=dt, method=method, damping=b)
+    theta = np.asarray(sim.q[:, 0] - pend.q_hanging)
+    omega = np.asarray(sim.v[:, 0])
+    alpha = np.asarray(sim.a[:, 0])
+    energy = np.asarray(sim.total - pend.potential_min)
+    e0 = float(energy[0])
+    drift = float(np.max(np.abs(energy - e0)) / e0)
+    max_inc = float(np.max(np.diff(energy)) / e0) if len(energy) > 1 else 0.0
+    crossings = hermite_crossings(sim.t, omega, alpha, direction=-1)
+    period = (
+        float((crossings[-1] - crossings[0]) / (len(crossings) - 1))
+        if len(crossings) >= 2
+        else None
+    )
+    rate = decay_rate(sim.t, theta, omega, alpha)
+    for arr in (theta, omega, energy):
+        arr.setflags(write=False)
+    return PendulumRun(
+        th0,
+        b,
+        pend,
+        sim,
+        theta,
+        omega,
+        energy,
+        period,
+        exact_period(pend, th0),
+        drift,
+        max_inc,
+        rate,
+        b / (2.0 * pend.inertia),
+    )
+
+
+@dataclass(frozen=True)
+class PendulumExperiment:
+    """Seed 001 §1: the undamped and the damped pendulum, and the small-amplitude decay check.
+
+    Attributes:
+        undamped: Run with damping 0 from ``theta0``.
+        damped: Run with the given damping from ``theta0``.
+        small: Damped run from the small angle ``decay_theta0`` (the decay-rate check).
+
+    """
+
+    undamped: PendulumRun
+    damped: PendulumRun
+    small: PendulumRun
+
+    def to_dict(self) -> dict[str, Any]:
+        """The figures of ``hexapod-kin pendulum --json`` (SI units, angles in rad)."""
+        u, d, s = self.undamped, self.damped, self.small
+        return {
+            "theta0": u.theta0,
+            "theta0_deg": math.degrees(u.theta0),
+            "duration": float(u.simulation.t[-1]),
+            "dt": u.simulation.dt,
+            "method": u.simulation.method,
+            "pendulum": u.pendulum.to_dict(),
+            "period": u.period,
+            "period_exact": u.period_exact,
+            "period_error": u.to_dict()["period_error"],
+            "energy_drift": u.energy_drift,
+            "damping": d.damping,
+            "damped_energy_monotone": d.energy_monotone,
+            "damped_energy_max_increase": d.energy_max_increase,
+            "damped_energy_loss": float(1.0 - d.energy[-1] / d.energy[0]),
+            "damped_period": d.period,
+            "decay_rate": s.decay_rate,
+            "decay_rate_exact": s.decay_rate_exact,
+            "decay_rate_error": s.to_dict()["decay_rate_error"],
+            "decay_theta0": s.theta0,
+            "decay_rate_at_theta0": d.decay_rate,
+            "undamped": u.to_dict(),
+            "damped": d.to_dict(),
+            "small_amplitude": s.to_dict(),
+        }
+
+
+def pendulum_experiment(
+    theta0: float = math.pi / 6,
+    damping: float = 0.01,
+    *,
+    duration: float = 20.0,
+    dt: float = 1e-3,
+    method: Method = "rk4",
+    decay_theta0: float = math.radians(1.0),
+    length: float = 0.5,
+    mass: float = 1.0,
+) -> PendulumExperiment:
+    """Run the seed's pendulum undamped and damped (and at small amplitude for the decay).
+
+    Args:
+        theta0: Initial angle from the hanging equilibrium in [rad] (seed: 30°).
+        damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01), written into
+            the preset's URDF.
+        duration: In [s].
+        dt: Step in [s].
+        method: Integrator.
+        decay_theta0: Initial angle of the small-amplitude decay run in [rad].
+        length: Pendulum length in [m] (preset parameter).
+        mass: Bob mass in [kg] (preset parameter).
+
+    Raises:
+        ParameterError: Any bad value (named).
+
+    """
+    b = positive("damping", damping, allow_zero=True)
+    free = as_model("pendulum", damping=0.0, length=length, mass=mass)
+    damped_model = as_model("pendulum", damping=b, length=length, mass=mass)
+    kw: dict[str, Any] = {"duration": duration, "dt": dt, "method": method}
+    return PendulumExperiment(
+        pendulum_run(free, theta0, **kw),
+        pendulum_run(damped_model, theta0, **kw),
+        pendulum_run(damped_model, decay_theta0, **kw),
+    )

@@ -1,0 +1,496 @@
+"""The standing hexapod: a standing pose, the contact forces that hold its weight, joint torques.
+
+Frames: the body is level, its origin at height ``h`` above flat ground (world z up, gravity
+−z); every foot touches the ground (z = 0). Pinocchio's fixed-base model has the body at its
+origin, so world = body frame shifted by (0, 0, h); forces and moments do not care.
+
+Mass and centre of mass of the whole robot: Pinocchio's ``computeTotalMass`` and
+``centerOfMass`` sum the bodies moved by joints only; the body link itself is fixed to the
+universe in the fixed-base model and its inertial sits in ``model.inertias[0]``, so it is added
+here: ``m = m_0 + Σ m_i``, ``c = (m_0 c_0 + Σ m_i c_i) / m``.
+
+Contact forces ``f_i`` (ground on foot i, world axes, point contacts, no contact torques) of the
+stance feet balance gravity — 6 equations, 3k unknowns::
+
+    Σ f_i = m g ẑ                 (forces)
+    Σ (p_i − c) × f_i = 0         (moments about the centre of mass)
+
+* ``method="min_norm"``: the minimum-norm solution ``f = A⁺ b`` (least Σ‖f_i‖²; with feet
+  symmetric about the CoM it is the equal vertical share ``m g / k``). It may ask a foot to pull
+  (``f_z < 0``) or to slide (``‖f_t‖ > μ f_z``); ``feasible`` says whether it does.
+* ``method="friction"``: the least Σ‖f_i‖² subject to the same equations, ``f_z ≥ 0`` and the
+  Coulomb cone ``‖f_t‖ ≤ μ f_z`` (scipy SLSQP from the minimum-norm point, then projected back
+  onto the equations so that they hold to rounding). Equal to min-norm when that is feasible.
+
+Joint torques (static, q̇ = q̈ = 0): ``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED
+linear Jacobian of foot i (only that leg's columns are non-zero).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ConfigurationError, ParameterError, choices
+from ..params import Hexapod
+from ._common import as_model, check_inertials, finite_vector, positive
+
+__all__ = [
+    "CONTACT_METHODS",
+    "Stance",
+    "contact_forces",
+    "robot_mass_com",
+    "stand",
+    "standing_configuration",
+]
+
+ContactMethod = Literal["min_norm", "friction"]
+CONTACT_METHODS: tuple[str, ...] = ("min_norm", "friction")
+
+
+def _ro(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        a.setflags(write=False)
+
+
+def _hexapod(model: Any) -> Hexapod:
+    params = getattr(model, "params", None)
+    if not isinstance(params, Hexapod):
+        raise ParameterError(
+            f"model {getattr(model, 'name', model)!r} is not a legged robot built from a "
+            "Hexapod (e.g. the 'hexapod' preset); standing needs its legs and feet",
+            parameter="model",
+            value=getattr(model, "name", model),
+            allowed="a Hexapod preset",
+        )
+    if model.nq != len(params.joint_names):
+        raise ParameterError(
+            f"model {model.name!r} is a sub-chain ({model.nq} joints); load the whole robot "
+            "(no base=/tip=)",
+            parameter="model",
+            value=model.name,
+            allowed="the whole robot",
+        )
+    return params
+
+
+def robot_mass_com(model: Any, q: Any) -> tuple[float, np.ndarray]:
+    """Total mass [kg] and centre of mass [m] (model's world frame) of the whole robot at ``q``.
+
+    Includes the bodies fixed to the world (``model.inertias[0]``, the body link of a
+    fixed-base robot), which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out.
+    """
+    pm = model.model
+    data = pm.createData()
+    qv = np.array(model.check_q(q), dtype=float)
+    m_joints = float(pin.computeTotalMass(pm))
+    c_joints = np.array(pin.centerOfMass(pm, data, qv)) if m_joints > 0 else np.zeros(3)
+    root = pm.inertias[0]
+    m0 = float(root.mass)
+    mass = m0 + m_joints
+    com = (m0 * np.asarray(root.lever) + m_joints * c_joints) / mass
+    return mass, com
+
+
+def _knee_up(solutions: np.ndarray) -> np.ndarray:
+    """The closed-form solution with the hip nearest 0, then the highest knee (min sin q2)."""
+    hip = np.abs(np.remainder(solutions[:, 0] + np.pi, 2 * np.pi) - np.pi)
+    best = solutions[hip <= hip.min() + 1e-9]
+    return np.array(best[int(np.argmin(np.sin(best[:, 1])))])
+
+
+def standing_configuration(
+    model: Any, height: float = 0.10, reach: float | None = None, shift: Any = (0.0, 0.0)
+) -> np.ndarray:
+    """Joint values standing the robot's body level at ``height`` above the ground.
+
+    Foot i is placed at horizontal distance ``reach`` from its hip axis along the leg's mount
+    direction, ``height`` below the body origin, then every foot is moved by ``−shift`` (the
+    body shifted by ``shift`` over fixed feet). Each leg is solved by the closed-form IK
+    (``hexapod_kin.ik.analytic``), hip nearest 0, knee up.
+
+    Args:
+        model: The whole robot (from a Hexapod, e.g. ``load("hexapod")``).
+        height: Body origin above the ground in [m] (> 0).
+        reach: Hip axis to foot, horizontal, in [m]; default ``l1 + l2`` of the leg (the
+            femur horizontal and, when ``height = l3``, the tibia vertical).
+        shift: Body shift (dx, dy) over the feet in [m].
+
+    Raises:
+        ParameterError: Not a Hexapod, bad numbers.
+        ConfigurationError: A foot cannot reach its ground point (names the leg).
+
+    """
+    from .. import ik
+
+    params = _hexapod(model)
+    h = positive("height", height)
+    sh = finite_vector("shift", shift, 2)
+    q = np.zeros(model.nq)
+    for leg in params.legs:
+        chain = leg.chain
+        r = _default_reach(chain) if reach is None else positive("reach", reach)
+        c, s = math.cos(leg.yaw), math.sin(leg.yaw)
+        mount = np.asarray(leg.xyz, dtype=float)
+        foot_body = mount + np.array([r * c - sh[0], r * s - sh[1], -h - mount[2]])
+        d = foot_body - mount
+        target = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
+        sols = ik.analytic(chain, target)
+        if len(sols) == 0:
+            raise ConfigurationError(
+                f"leg {leg.name!r} cannot reach its foot point {target.round(6).tolist()} m "
+                f"(mount frame) for height={h}, reach={r}, shift={sh.tolist()}",
+                parameter="height",
+                value=h,
+                allowed="a reachable height and reach",
+            )
+        sol = _knee_up(np.asarray(sols))
+        for name, value in zip(chain.joint_names or (), sol):
+            q[model.joint_index(f"{leg.name}_{name}")] = value
+    return q
+
+
+def _default_reach(chain: Any) -> float:
+    """``l1 + l2`` of a hexabot_leg-like chain (the d of its 2nd and 3rd rows), else 0.15 m."""
+    try:
+        return float(chain.rows[1].d + chain.rows[2].d)
+    except (AttributeError, IndexError):
+        return 0.15
+
+
+@dataclass(frozen=True)
+class ContactSolution:
+    """Contact forces and their balance residuals (SI units)."""
+
+    forces: np.ndarray
+    force_residual: float
+    moment_residual: float
+
+
+def contact_forces(
+    feet: Any,
+    com: Any,
+    weight: float,
+    *,
+    method: ContactMethod = "min_norm",
+    mu: float | None = None,
+) -> ContactSolution:
+    """Point-contact forces that hold a weight ``weight`` [N] at ``com`` on ``feet`` (k, 3).
+
+    Args:
+        feet: (k, 3) foot positions in [m] (world axes).
+        com: (3,) centre of mass in [m].
+        weight: ``m g`` in [N] (> 0), acting along −z.
+        method: ``"min_norm"`` or ``"friction"`` (see the module doc).
+        mu: Friction coefficient (> 0); needed by ``"friction"``.
+
+    Returns:
+        (k, 3) ground-on-foot forces [N] with the residuals ``‖Σf − W ẑ‖`` [N] and
+        ``‖Σ(p − c) × f‖`` [N·m].
+
+    Raises:
+        ParameterError: Bad method or ``mu``.
+        ConfigurationError: The feet cannot balance the weight (collinear/too few feet, or no
+            friction-cone solution: the CoM outside the support polygon or ``mu`` too small).
+
+    """
+    if method not in CONTACT_METHODS:
+        raise ParameterError(
+            f"method={method!r} is not allowed; use one of {choices(CONTACT_METHODS)}",
+            parameter="method",
+            value=method,
+            allowed=list(CONTACT_METHODS),
+        )
+    p = np.asarray(feet, dtype=float)
+    c = np.asarray(com, dtype=float)
+    w = positive("weight", weight)
+    k = len(p)
+    r = p - c
+    a = np.zeros((6, 3 * k))
+    for i in range(k):
+        a[0:3, 3 * i : 3 * i + 3] = np.eye(3)
+        x, y, z = r[i]
+        a[3:6, 3 * i : 3 * i + 3] = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+    b = np.array([0.0, 0.0, w, 0.0, 0.0, 0.0])
+    pinv = np.linalg.pinv(a, rcond=1e-12)
+    f = pinv @ b
+
+    def residuals(vec: np.ndarray) -> tuple[float, float]:
+        res = a @ vec - b
+        return float(np.linalg.norm(res[:3])), float(np.linalg.norm(res[3:]))
+
+    if max(residuals(f)) > 1e-9 * max(w, 1.0):
+        raise ConfigurationError(
+            f"{k} feet at {p.round(6).tolist()} cannot balance the weight (too few or "
+            "collinear contacts)",
+            parameter="feet",
+            value=k,
+            allowed="at least 3 non-collinear feet",
+        )
+    if method == "friction":
+        if mu is None:
+            raise ParameterError(
+                "method='friction' needs a friction coefficient mu > 0",
+                parameter="mu",
+                value=mu,
+                allowed="> 0",
+            )
+        f = _friction_qp(a, b, f, pinv, positive("mu", mu), w)
+    fr, mr = residuals(f)
+    forces = f.reshape(k, 3)
+    _ro(forces)
+    return ContactSolution(forces, fr, mr)
+
+
+def _friction_qp(
+    a: np.ndarray, b: np.ndarray, f0: np.ndarray, pinv: np.ndarray, mu: float, w: float
+) -> np.ndarray:
+    """Least ‖f‖² with ``A f = b``, ``f_z ≥ 0`` and ``‖f_t‖ ≤ μ f_z`` (SLSQP, then projected)."""
+    k = len(f0) // 3
+    tol = 1e-9 * w
+
+    def cone(f: np.ndarray) -> np.ndarray:
+        ff = f.reshape(k, 3)
+        return np.concatenate([ff[:, 2], (mu * ff[:, 2]) ** 2 - ff[:, 0] ** 2 - ff[:, 1] ** 2])
+
+    def ok(f: np.ndarray) -> bool:
+        ff = f.reshape(k, 3)
+        return bool(
+            np.all(ff[:, 2] >= -tol) and np.all(np.hypot(ff[:, 0], ff[:, 1]) <= mu * ff[:, 2] + tol)
+        )
+
+    if ok(f0):
+        return f0
+    from scipy.optimize import minimize
+
+    res = minimize(
+        lambda f: 0.5 * float(f @ f),
+        f0,
+        jac=lambda f: f,
+        method="SLSQP",
+        constraints=[
+            {"type": "eq", "fun": lambda f: a @ f - b, "jac": lambda f: a},
+            {"type": "ineq", "fun": cone},
+        ],
+        options={"ftol": 1e-15, "maxiter": 500},
+    )
+    f = res.x - pinv @ (a @ res.x - b)
+    if not ok(f):
+        raise ConfigurationError(
+            f"no contact forces within the friction cone mu={mu} hold the robot (its centre "
+            "of mass is outside the support polygon, or mu is too small)",
+            parameter="mu",
+            value=mu,
+            allowed="a larger mu or a stance around the CoM",
+        )
+    return f
+
+
+@dataclass(frozen=True)
+class Stance:
+    """The standing robot (SI units, world: ground z = 0, z up; arrays read-only).
+
+    Attributes:
+        height: Body origin above the ground in [m].
+        q: (nq,) joint values in [rad].
+        joint_names: Joint names (columns of q and the torques).
+        stance_legs: Names of the legs on the ground.
+        feet: (k, 3) stance foot positions in [m].
+        mass: Robot mass in [kg] (body included).
+        com: (3,) centre of mass in [m].
+        weight: ``m g`` in [N].
+        forces: (k, 3) contact forces, ground on foot, in [N].
+        method: ``"min_norm"`` or ``"friction"``.
+        mu: Friction coefficient used (None for min-norm).
+        force_residual: ``‖Σ f − m g ẑ‖`` in [N].
+        moment_residual: ``‖Σ (p − c) × f‖`` in [N·m].
+        gravity_torque: (nq,) ``g(q)`` in [N·m] (legs in the air).
+        torque: (nq,) ``g(q) − Σ J_iᵀ f_i`` in [N·m] (standing).
+
+    """
+
+    height: float
+    q: np.ndarray
+    joint_names: tuple[str, ...]
+    stance_legs: tuple[str, ...]
+    feet: np.ndarray
+    mass: float
+    com: np.ndarray
+    weight: float
+    forces: np.ndarray
+    method: str
+    mu: float | None
+    force_residual: float
+    moment_residual: float
+    gravity_torque: np.ndarray
+    torque: np.ndarray
+
+    @property
+    def friction_ratio(self) -> float:
+        """Largest ``‖f_t‖ / f_z`` over the stance feet (the least μ that holds; inf if f_z ≤ 0)."""
+        ft = np.hypot(self.forces[:, 0], self.forces[:, 1])
+        fz = self.forces[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = np.where(fz > 0, ft / np.where(fz > 0, fz, 1.0), np.inf)
+        return float(np.max(ratio))
+
+    @property
+    def feasible(self) -> bool:
+        """No foot pulls (f_z ≥ 0) and, with ``mu``, every force is inside its cone."""
+        tol = 1e-9 * self.weight
+        if np.any(self.forces[:, 2] < -tol):
+            return False
+        return self.mu is None or self.friction_ratio <= self.mu * (1 + 1e-9)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (lists of floats, SI units)."""
+        return {
+            "height": self.height,
+            "method": self.method,
+            "mu": self.mu,
+            "mass": self.mass,
+            "weight": self.weight,
+            "com": self.com.tolist(),
+            "joint_names": list(self.joint_names),
+            "q": self.q.tolist(),
+            "stance_legs": list(self.stance_legs),
+            "feet": self.feet.tolist(),
+            "forces": self.forces.tolist(),
+            "force_sum": self.forces.sum(axis=0).tolist(),
+            "force_residual": self.force_residual,
+            "moment_residual": self.moment_residual,
+            "friction_ratio": self.friction_ratio,
+            "feasible": self.feasible,
+            "gravity_torque": self.gravity_torque.tolist(),
+            "torque": self.torque.tolist(),
+            "peak_torque": float(np.max(np.abs(self.torque))),
+        }
+
+
+def _stance_legs(params: Hexapod, legs: Any) -> tuple[int, ...]:
+    names = [leg.name for leg in params.legs]
+    if legs is None:
+        return tuple(range(len(names)))
+    out = []
+    for item in legs:
+        if isinstance(item, str) and item in names:
+            out.append(names.index(item))
+        elif (
+            isinstance(item, (int, np.integer))
+            and not isinstance(item, bool)
+            and (1 <= int(item) <= len(names))
+        ):
+            out.append(int(item) - 1)
+        else:
+            raise ParameterError(
+                f"stance leg {item!r} does not exist; use leg names {choices(names)} or "
+                f"numbers 1..{len(names)}",
+                parameter="legs",
+                value=item,
+                allowed=names,
+            )
+    return tuple(sorted(set(out)))
+
+
+def stance_at(
+    model: Any,
+    q: Any,
+    height: float,
+    *,
+    legs: Any = None,
+    method: ContactMethod = "min_norm",
+    mu: float | None = None,
+) -> Stance:
+    """Contact forces and joint torques of the robot standing at ``q`` with its body ``height``.
+
+    Args:
+        model: The whole robot (from a Hexapod).
+        q: (nq,) joint values; the stance feet should be at ``−height`` in the body frame
+            (the forces hold the weight wherever the feet are; ``feet`` reports them).
+        height: Body origin above the ground in [m].
+        legs: Stance legs (names or 1-based numbers); default all.
+        method: ``"min_norm"`` or ``"friction"``.
+        mu: Friction coefficient (needed by ``"friction"``; with ``"min_norm"`` it only sets
+            what ``feasible`` checks).
+
+    Raises:
+        ParameterError, ConfigurationError: As :func:`contact_forces`; bad legs or q.
+
+    """
+    mdl = as_model(model)
+    params = _hexapod(mdl)
+    check_inertials(mdl)
+    h = positive("height", height)
+    qv = np.array(mdl.check_q(q), dtype=float)
+    idx = _stance_legs(params, legs)
+    pm = mdl.model
+    data = pm.createData()
+    mass, com = robot_mass_com(mdl, qv)
+    g = float(np.linalg.norm(pm.gravity.linear))
+    weight = mass * g
+    lift = np.array([0.0, 0.0, h])
+    pin.computeJointJacobians(pm, data, qv)
+    pin.updateFramePlacements(pm, data)
+    fids = [mdl.frame_id(params.foot_frames[i]) for i in idx]
+    feet = np.array([data.oMf[f].translation for f in fids]) + lift
+    mu_v = None if mu is None else positive("mu", mu)
+    sol = contact_forces(feet, com + lift, weight, method=method, mu=mu_v)
+    grav = np.array(pin.computeGeneralizedGravity(pm, data, qv))
+    tau = grav.copy()
+    pin.computeJointJacobians(pm, data, qv)
+    for fid, f in zip(fids, sol.forces):
+        jac = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[:3]
+        tau -= jac.T @ f
+    com_w = com + lift
+    _ro(qv, feet, com_w, grav, tau)
+    return Stance(
+        h,
+        qv,
+        tuple(mdl.joint_names),
+        tuple(params.legs[i].name for i in idx),
+        feet,
+        mass,
+        com_w,
+        weight,
+        sol.forces,
+        str(method),
+        mu_v,
+        sol.force_residual,
+        sol.moment_residual,
+        grav,
+        tau,
+    )
+
+
+def stand(
+    model: Any = None,
+    *,
+    height: float = 0.10,
+    reach: float | None = None,
+    shift: Any = (0.0, 0.0),
+    legs: Any = None,
+    method: ContactMethod = "min_norm",
+    mu: float | None = None,
+) -> Stance:
+    """The hexapod standing level at ``height``: pose, contact forces and joint torques.
+
+    Args:
+        model: The whole robot (default ``load("hexapod")``).
+        height: Body origin above the ground in [m].
+        reach: Hip axis to foot, horizontal, in [m] (default ``l1 + l2``).
+        shift: Body shift (dx, dy) over the feet in [m].
+        legs: Stance legs (names or 1-based numbers); default all six.
+        method: ``"min_norm"`` or ``"friction"`` (see the module doc).
+        mu: Friction coefficient.
+
+    Raises:
+        ParameterError, ConfigurationError: Bad values; unreachable pose; no balance.
+
+    """
+    mdl = as_model("hexapod" if model is None else model)
+    q = standing_configuration(mdl, height, reach, shift)
+    return stance_at(mdl, q, height, legs=legs, method=method, mu=mu)

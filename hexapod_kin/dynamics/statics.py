@@ -1,0 +1,328 @@
+"""Joint torques of a leg: gravity (RNEA), a foot force (Jᵀ F), along the seeds' resolved-rate step.
+
+Sign convention: ``force`` is the force the foot exerts **on its environment** (pushing on the
+ground, pulling a load), in [N], in the model's base axes. The joint torques that hold it are
+``τ_F = Jᵀ F`` (``J`` the foot's LOCAL_WORLD_ALIGNED linear Jacobian, 3×nq), and with gravity
+``τ = g(q) + Jᵀ F`` (``g = ∂V/∂q``, ``pin.computeGeneralizedGravity``). The environment pushes
+back on the foot with ``−F``; the cross-check computes ``τ_F`` a second way, by RNEA with that
+reaction applied as an external force (``pin.rnea(q, 0, 0, fext)`` on a copy of the model with
+gravity off; ``fext[i]`` is the spatial force on joint i's body **in joint i's frame**: the
+world force moved to the joint with the frame placement ``oMi``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ParameterError
+from ._common import as_model, check_inertials, finite_vector, zero_gravity_model
+
+__all__ = ["LegTorques", "StepTorques", "external_force", "leg_torques", "step_torques"]
+
+
+def _ro(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        a.setflags(write=False)
+
+
+def external_force(
+    model: pin.Model, data: pin.Data, frame_id: int, force_world: np.ndarray
+) -> list[pin.Force]:
+    """``fext`` for ``pin.rnea``/``pin.aba``: ``force_world`` [N] applied at frame ``frame_id``.
+
+    The force acts at the frame's origin (world axes) on the body of the frame's parent joint;
+    it is returned in that joint's local frame (linear part ``Rᵀ f``, moment about the joint
+    origin ``Rᵀ ((p − o) × f)``); every other joint gets zero. Needs ``data`` after forward
+    kinematics with frames (``pin.framesForwardKinematics``).
+    """
+    joint = model.frames[frame_id].parentJoint
+    omi = data.oMi[joint]
+    p = data.oMf[frame_id].translation
+    rot_t = omi.rotation.T
+    moment = np.cross(p - omi.translation, force_world)
+    fext = [pin.Force.Zero() for _ in range(model.njoints)]
+    fext[joint] = pin.Force(rot_t @ force_world, rot_t @ moment)
+    return fext
+
+
+@dataclass(frozen=True)
+class LegTorques:
+    """Static joint torques of a leg at ``q`` (SI units; arrays read-only).
+
+    Attributes:
+        q: (nq,) joint values in [rad]/[m].
+        force: (3,) force of the foot on its environment in [N], base axes.
+        frame: The frame the force acts at (the tip by default).
+        gravity: (nq,) ``g(q)``, the torques that hold the leg against gravity, in [N·m].
+        force_torque: (nq,) ``Jᵀ F`` in [N·m].
+        total: (nq,) ``g(q) + Jᵀ F`` in [N·m].
+        force_torque_rnea: (nq,) the same as ``force_torque`` by RNEA with the reaction ``−F``
+            as external force (gravity off).
+        crosscheck_error: ``max |Jᵀ F − RNEA|`` in [N·m].
+        gravity_crosscheck_error: ``max |computeGeneralizedGravity − rnea(q, 0, 0)|`` in [N·m].
+        joint_names: Joint names.
+        effort_limit: (nq,) URDF effort limits in [N·m].
+
+    """
+
+    q: np.ndarray
+    force: np.ndarray
+    frame: str
+    gravity: np.ndarray
+    force_torque: np.ndarray
+    total: np.ndarray
+    force_torque_rnea: np.ndarray
+    crosscheck_error: float
+    gravity_crosscheck_error: float
+    joint_names: tuple[str, ...]
+    effort_limit: np.ndarray
+
+    @property
+    def within_effort_limits(self) -> bool:
+        """True when every ``|total|`` is within the URDF effort limit."""
+        return bool(np.all(np.abs(self.total) <= self.effort_limit))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (lists of floats, SI units)."""
+        return {
+            "q": self.q.tolist(),
+            "force": self.force.tolist(),
+            "frame": self.frame,
+            "joint_names": list(self.joint_names),
+            "gravity": self.gravity.tolist(),
+            "force_torque": self.force_torque.tolist(),
+            "total": self.total.tolist(),
+            "force_torque_rnea": self.force_torque_rnea.tolist(),
+            "crosscheck_error": self.crosscheck_error,
+            "gravity_crosscheck_error": self.gravity_crosscheck_error,
+            "effort_limit": self.effort_limit.tolist(),
+            "within_effort_limits": self.within_effort_limits,
+        }
+
+
+class _LegStatics:
+    """Per-model state of the torque computations (own Data, zero-gravity copy, frame)."""
+
+    def __init__(self, model: Any, frame: str | None) -> None:
+        check_inertials(model)
+        self.mdl = model
+        self.frame = model.tip if frame is None else frame
+        self.fid = model.frame_id(self.frame)
+        self.pm = model.model
+        self.data = self.pm.createData()
+        self.zm = zero_gravity_model(model)
+        self.zd = self.zm.createData()
+        self.rot_base = np.asarray(model.oMbase.rotation)
+
+    def at(self, q: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, ...]:
+        pm, d, zm, zd, fid = self.pm, self.data, self.zm, self.zd, self.fid
+        jac = self.mdl.jacobian(q, "local_world_aligned", self.frame)[:3]
+        tau_f = jac.T @ force
+        grav = np.array(pin.computeGeneralizedGravity(pm, d, q))
+        grav_rnea = np.array(pin.rnea(pm, d, q, np.zeros(pm.nv), np.zeros(pm.nv)))
+        pin.framesForwardKinematics(zm, zd, q)
+        fext = external_force(zm, zd, fid, -(self.rot_base @ force))
+        tau_rnea = np.array(pin.rnea(zm, zd, q, np.zeros(zm.nv), np.zeros(zm.nv), fext))
+        return grav, tau_f, tau_rnea, grav_rnea
+
+
+def _force(force: Any) -> np.ndarray:
+    return finite_vector("force", (0.0, 0.0, 0.0) if force is None else force, 3)
+
+
+def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = None) -> LegTorques:
+    """Joint torques holding the leg at ``q`` against gravity and a foot force.
+
+    Args:
+        model: A loaded model (a leg, or any chain) or a source.
+        q: Joint values (nq,) in [rad]/[m].
+        force: Force of the foot on its environment (3,) in [N], base axes; default zero.
+        frame: Frame where the force acts (default: the tip).
+
+    Returns:
+        A :class:`LegTorques` (with both cross-check errors).
+
+    Raises:
+        ConfigurationError: Bad ``q``.
+        ParameterError: Bad ``force``; implausible inertials (names the link).
+        FrameNotFoundError: Unknown ``frame``.
+
+    """
+    mdl = as_model(model)
+    st = _LegStatics(mdl, frame)
+    qv = np.array(mdl.check_q(q), dtype=float)
+    f = _force(force)
+    grav, tau_f, tau_rnea, grav_rnea = st.at(qv, f)
+    total = grav + tau_f
+    limit = np.array(mdl.effort_limit, dtype=float)
+    _ro(qv, f, grav, tau_f, tau_rnea, total, limit)
+    return LegTorques(
+        qv,
+        f,
+        st.frame,
+        grav,
+        tau_f,
+        total,
+        tau_rnea,
+        float(np.max(np.abs(tau_f - tau_rnea), initial=0.0)),
+        float(np.max(np.abs(grav - grav_rnea), initial=0.0)),
+        tuple(mdl.joint_names),
+        limit,
+    )
+
+
+@dataclass(frozen=True)
+class StepTorques:
+    """Joint torques along a trajectory (the seeds' resolved-rate step), SI units.
+
+    Attributes:
+        t: (N,) times in [s].
+        q: (N, nq) joint values.
+        force: (3,) constant foot force on the environment in [N], base axes.
+        gravity: (N, nq) ``g(q)`` in [N·m].
+        force_torque: (N, nq) ``Jᵀ F`` in [N·m].
+        inertial: (N, nq) ``M q̈ + C q̇`` (``rnea(q, q̇, q̈) − g``; q̈ by central differences of
+            the trajectory's q̇) in [N·m].
+        total: (N, nq) ``gravity + force_torque + inertial`` in [N·m].
+        peak: (nq,) ``max_t |total|`` per joint in [N·m].
+        peak_gravity: (nq,) ``max_t |gravity|`` in [N·m].
+        crosscheck_error: ``max_t max |Jᵀ F − RNEA with fext|`` in [N·m].
+        joint_names: Joint names.
+
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    force: np.ndarray
+    gravity: np.ndarray
+    force_torque: np.ndarray
+    inertial: np.ndarray
+    total: np.ndarray
+    peak: np.ndarray
+    peak_gravity: np.ndarray
+    crosscheck_error: float
+    joint_names: tuple[str, ...]
+
+    def to_dict(self, samples: bool = False) -> dict[str, Any]:
+        """JSON-ready peaks and cross-check (the time series too with ``samples=True``)."""
+        out: dict[str, Any] = {
+            "joint_names": list(self.joint_names),
+            "force": self.force.tolist(),
+            "duration": float(self.t[-1]),
+            "samples": int(len(self.t)),
+            "peak": self.peak.tolist(),
+            "peak_gravity": self.peak_gravity.tolist(),
+            "peak_inertial": np.max(np.abs(self.inertial), axis=0).tolist(),
+            "crosscheck_error": self.crosscheck_error,
+        }
+        if samples:
+            out.update(
+                t=self.t.tolist(),
+                q=self.q.tolist(),
+                total=self.total.tolist(),
+                gravity=self.gravity.tolist(),
+                force_torque=self.force_torque.tolist(),
+            )
+        return out
+
+
+def torques_along(
+    model: Any,
+    t: Any,
+    q: Any,
+    qdot: Any = None,
+    force: Any = None,
+    *,
+    frame: str | None = None,
+) -> StepTorques:
+    """Joint torques along a sampled trajectory ``q(t)`` (see :class:`StepTorques`).
+
+    Args:
+        model: A loaded model.
+        t: (N,) increasing times in [s] (N >= 2).
+        q: (N, nq) joint values.
+        qdot: (N, nq) joint rates; default central differences of ``q``.
+        force: Constant foot force on the environment (3,) in [N], base axes.
+        frame: Force frame (default the tip).
+
+    Raises:
+        ConfigurationError: Bad ``q``/``qdot`` shapes or values.
+        ParameterError: Bad ``t`` or ``force``.
+
+    """
+    mdl = as_model(model)
+    st = _LegStatics(mdl, frame)
+    qs = mdl.check_q_batch(q, "q")
+    ts = np.asarray(t, dtype=float)
+    if ts.shape != (len(qs),) or len(ts) < 2 or not np.all(np.diff(ts) > 0):
+        raise ParameterError(
+            f"t has shape {ts.shape}; {len(qs)} strictly increasing times are needed",
+            parameter="t",
+            value=ts.shape,
+            allowed=f"({len(qs)},) increasing",
+        )
+    qd = np.gradient(qs, ts, axis=0) if qdot is None else mdl.check_q_batch(qdot, "qdot")
+    if qd.shape != qs.shape:
+        raise ParameterError(
+            f"qdot has shape {qd.shape}; expected {qs.shape}",
+            parameter="qdot",
+            value=qd.shape,
+            allowed=qs.shape,
+        )
+    qdd = np.gradient(qd, ts, axis=0)
+    f = _force(force)
+    n = len(ts)
+    grav, tau_f, inert = (np.empty_like(qs) for _ in range(3))
+    err = 0.0
+    pm, d = st.pm, st.data
+    for i in range(n):
+        g, tf, tr, _ = st.at(qs[i], f)
+        grav[i], tau_f[i] = g, tf
+        err = max(err, float(np.max(np.abs(tf - tr))))
+        inert[i] = np.asarray(pin.rnea(pm, d, qs[i], qd[i], qdd[i])) - g
+    total = grav + tau_f + inert
+    peak = np.max(np.abs(total), axis=0)
+    peak_g = np.max(np.abs(grav), axis=0)
+    _ro(ts, qs, f, grav, tau_f, inert, total, peak, peak_g)
+    return StepTorques(
+        ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, tuple(mdl.joint_names)
+    )
+
+
+def _seed_experiment() -> Any:
+    """``seed_experiment`` from its current home (``hexapod_kin.seeds`` or ``.motion``)."""
+    import importlib
+
+    for name in ("hexapod_kin.seeds", "hexapod_kin.motion"):
+        try:
+            return importlib.import_module(name).seed_experiment
+        except (ImportError, AttributeError):  # pragma: no cover - refactoring in progress
+            continue
+    raise ImportError("seed_experiment is in neither hexapod_kin.seeds nor hexapod_kin.motion")
+
+
+def step_torques(
+    model: Any = None, force: Any = None, *, frame: str | None = None, **seed_kwargs: Any
+) -> StepTorques:
+    """Joint torques along the seeds' resolved-rate step (``seed_experiment``) of a 3-joint leg.
+
+    Args:
+        model: A loaded 3-joint leg (default ``hexabot_leg``).
+        force: Constant foot force on the environment (3,) in [N], base axes.
+        frame: Force frame (default the tip).
+        **seed_kwargs: Passed to ``seed_experiment`` (``amplitude``, ``period``, ``duration``,
+            ``dt``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
+
+    Raises:
+        ParameterError: As :func:`torques_along` and ``seed_experiment``.
+
+    """
+    mdl = as_model("hexabot_leg" if model is None else model)
+    seed_kwargs.setdefault("baseline", False)
+    run = _seed_experiment()(mdl, **seed_kwargs)
+    tr = run.trajectory
+    return torques_along(mdl, tr.t, tr.q, tr.qdot, force, frame=frame)
