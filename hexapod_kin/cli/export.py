@@ -1,0 +1,184 @@
+"""Export subcommands: ``xacro``, ``export-package``, ``mjcf``.
+
+SOURCE is a preset name (with ``-s NAME=VALUE`` parameters) or a table file; ``mjcf`` also
+takes a URDF path. Each file written records the command that made it in its header (short
+options only: an XML comment cannot contain ``--``; output paths are left out so that the same
+input gives the same bytes wherever it is written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from ..exceptions import ParameterError
+from .common import emit_json, output_path, set_params, source_args
+
+__all__ = ["register"]
+
+
+def _resolve(args: argparse.Namespace, allow_urdf: bool = False) -> Any:
+    """The Chain/Hexapod of SOURCE (or, with ``allow_urdf``, the URDF text)."""
+    from ..sources import resolve_source
+
+    resolved = resolve_source(args.source, **set_params(args.set))
+    if resolved.params is not None:
+        return resolved.params
+    if allow_urdf:
+        return resolved.text
+    raise ParameterError(
+        f"source={args.source!r} is a URDF without a parameter table; {args.command} needs a "
+        "preset name or a table file",
+        parameter="source",
+        value=args.source,
+    )
+
+
+def _command(args: argparse.Namespace, extra: list[str]) -> str:
+    words = [args.command, args.source] + [f"-s {s}" for s in args.set or ()] + extra
+    return "made by: hexapod-kin " + " ".join(words)
+
+
+# ------------------------------------------------------------------------ xacro
+def _add_xacro(sub: Any) -> None:
+    p = sub.add_parser(
+        "xacro",
+        help="parametric xacro (a macro per leg family, a property per dimension)",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p, frames=False)
+    p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
+    p.add_argument(
+        "-o", "--output", default=None, help="file to write (atomically); stdout if unset"
+    )
+    p.add_argument(
+        "-x", "--expand", action="store_true", help="print/write the expanded URDF instead"
+    )
+    p.set_defaults(func=_cmd_xacro)
+
+
+def _cmd_xacro(args: argparse.Namespace) -> int:
+    from .._io import atomic_write
+    from ..export.xacro import expand_xacro, to_xacro
+
+    if args.output:
+        output_path(args.output, "--output", (".xacro", ".urdf"))
+    src = _resolve(args)
+    extra = ([f"-l {args.leg}"] if args.leg else []) + (["-x"] if args.expand else [])
+    text = to_xacro(src, leg=args.leg, header=_command(args, extra))
+    if args.expand:
+        text = expand_xacro(text)
+    if args.output:
+        path = atomic_write(args.output, text)
+        print(f"wrote {path}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+# ------------------------------------------------------------------------ export-package
+def _add_package(sub: Any) -> None:
+    p = sub.add_parser(
+        "export-package",
+        help="ROS 2 description package (package.xml, CMakeLists, urdf/, launch/, rviz/, meshes/)",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p, frames=False)
+    p.add_argument("-o", "--out", required=True, help="package folder to create")
+    p.add_argument(
+        "-n", "--name", default=None, help="ROS package name (default <robot>_description)"
+    )
+    p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in meshes/ (trimesh)")
+    p.add_argument("-f", "--force", action="store_true", help="replace a non-empty --out folder")
+    p.add_argument("--maintainer", default="hexapod_kin user", help="package.xml maintainer")
+    p.add_argument("--email", default="user@example.com", help="maintainer e-mail")
+    p.add_argument("--license", default="BSD-3-Clause", help="package.xml license")
+    p.add_argument("--json", action="store_true", help="print what was written as JSON")
+    p.set_defaults(func=_cmd_package)
+
+
+def _cmd_package(args: argparse.Namespace) -> int:
+    from ..export.ros2 import export_package
+
+    src = _resolve(args)
+    extra = ([f"-n {args.name}"] if args.name else []) + (["-m"] if args.meshes else [])
+    result = export_package(
+        src,
+        args.out,
+        name=args.name,
+        meshes=args.meshes,
+        header=_command(args, extra),
+        force=args.force,
+        maintainer=args.maintainer,
+        email=args.email,
+        license=args.license,
+    )
+    if args.json:
+        emit_json(result.to_dict())
+    else:
+        print(
+            f"wrote package {result.name} in {result.path} ({len(result.files)} files)",
+            file=sys.stderr,
+        )
+    return 0
+
+
+# ------------------------------------------------------------------------ mjcf
+def _add_mjcf(sub: Any) -> None:
+    p = sub.add_parser(
+        "mjcf",
+        help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p, frames=False)
+    p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")
+    p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in <stem>_meshes/")
+    p.add_argument("--no-floor", action="store_true", help="no floor plane and light")
+    p.add_argument(
+        "--floor-z", type=float, default=None, help="floor height [m] (default: below reach)"
+    )
+    p.add_argument("--timestep", type=float, default=None, help="option timestep [s]")
+    p.add_argument("--integrator", default=None, help="Euler, RK4, implicit or implicitfast")
+    p.set_defaults(func=_cmd_mjcf)
+
+
+def _cmd_mjcf(args: argparse.Namespace) -> int:
+    from ..export.mjcf import to_mjcf, write_mjcf
+
+    if args.output:
+        output_path(args.output, "--output", (".xml", ".mjcf"))
+    src = _resolve(args, allow_urdf=True)
+    extra = (["-m"] if args.meshes else []) + (["(no floor)"] if args.no_floor else [])
+    for label, value in (
+        ("floor-z", args.floor_z),
+        ("timestep", args.timestep),
+        ("integrator", args.integrator),
+    ):
+        if value is not None:
+            extra.append(f"({label} {value})")
+    kwargs: dict[str, Any] = {
+        "meshes": args.meshes,
+        "header": _command(args, extra),
+        "floor": not args.no_floor,
+        "floor_z": args.floor_z,
+        "timestep": args.timestep,
+        "integrator": args.integrator,
+    }
+    if args.output:
+        write_mjcf(src, args.output, **kwargs)
+        print(f"wrote {args.output}", file=sys.stderr)
+        return 0
+    if args.meshes:
+        raise ParameterError(
+            "--meshes writes mesh files beside the MJCF; give -o FILE", parameter="meshes"
+        )
+    sys.stdout.write(to_mjcf(src, **kwargs).xml)
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add the export subcommands to the ``hexapod-kin`` parser."""
+    _add_xacro(sub)
+    _add_package(sub)
+    _add_mjcf(sub)

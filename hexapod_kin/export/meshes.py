@@ -1,0 +1,201 @@
+"""Collision primitives and generated STL visuals for exported URDFs (trimesh).
+
+Both functions work on URDF *text* as :func:`hexapod_kin.urdf.to_urdf` writes it, so the
+meshes are built from exactly the primitives the URDF already draws:
+
+* :func:`add_collisions` gives every link a ``<collision>`` twin of each of its primitive
+  visuals (link cylinders, feet, base and body boxes; not the joint markers). Collision
+  geometry stays primitive.
+* :func:`mesh_visuals` replaces each link's visuals by one STL mesh per material (capsules
+  along the link segments, spheres at joints and feet, boxes for base and body), returning the
+  new URDF text and the mesh files (binary STL, deterministic bytes).
+
+Kinematics and inertials are untouched: the loader sees the same model.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import UrdfError
+from ..params import rpy_to_matrix
+from ._common import need
+
+__all__ = ["add_collisions", "mesh_visuals", "MeshedUrdf", "COLLIDING_MATERIALS"]
+
+#: Visual materials whose primitives get a collision twin (joint markers stay visual only).
+COLLIDING_MATERIALS = ("link", "foot", "body", "base")
+
+
+def _parse(text: str) -> Any:
+    from lxml import etree
+
+    parser = etree.XMLParser(remove_blank_text=False)
+    try:
+        return etree.fromstring(text.encode("utf-8"), parser).getroottree()
+    except etree.XMLSyntaxError as exc:
+        raise UrdfError(f"URDF text is not well-formed XML: {exc}") from None
+
+
+def _serialize(tree: Any) -> str:
+    from lxml import etree
+
+    root = tree.getroot()
+    prolog = [
+        etree.tostring(c, encoding="unicode").strip() for c in root.itersiblings(preceding=True)
+    ]
+    root_text = etree.tostring(root, encoding="unicode", with_tail=False)
+    lines = ['<?xml version="1.0" encoding="utf-8"?>', *reversed(prolog), root_text]
+    return "\n".join(lines) + "\n"
+
+
+def _material(visual: Any) -> str:
+    mat = visual.find("material")
+    return "" if mat is None else str(mat.get("name", ""))
+
+
+def add_collisions(urdf_text: str) -> str:
+    """Return ``urdf_text`` with a primitive ``<collision>`` for each colliding visual.
+
+    Links that already have collision elements are left as they are.
+
+    Args:
+        urdf_text: URDF document (as written by :func:`hexapod_kin.urdf.to_urdf`).
+
+    Returns:
+        The URDF text with collision elements (deterministic).
+
+    Raises:
+        UrdfError: If the text is not XML.
+
+    """
+    from lxml import etree
+
+    tree = _parse(urdf_text)
+    for link in tree.getroot().iter("link"):
+        if link.find("collision") is not None:
+            continue
+        for visual in link.findall("visual"):
+            geom = visual.find("geometry")
+            if geom is None or _material(visual) not in COLLIDING_MATERIALS:
+                continue
+            if geom.find("mesh") is not None:
+                continue
+            coll = etree.Element("collision")
+            origin = visual.find("origin")
+            if origin is not None:
+                coll.append(copy.deepcopy(origin))
+            coll.append(copy.deepcopy(geom))
+            coll.tail = visual.tail
+            link.append(coll)
+    return _serialize(tree)
+
+
+def _floats(text: str | None, n: int, default: float = 0.0) -> np.ndarray:
+    if text is None:
+        return np.full(n, default)
+    vals = np.array([float(v) for v in text.split()], dtype=float)
+    if vals.shape != (n,):
+        raise UrdfError(f"expected {n} numbers, got {text!r}")
+    return vals
+
+
+def _origin_matrix(elem: Any) -> np.ndarray:
+    t = np.eye(4)
+    origin = elem.find("origin")
+    if origin is not None:
+        t[:3, :3] = rpy_to_matrix(*_floats(origin.get("rpy"), 3))
+        t[:3, 3] = _floats(origin.get("xyz"), 3)
+    return t
+
+
+def _primitive(geom: Any, material: str) -> Any:
+    """A trimesh of one URDF primitive (about its own origin), or ``None`` for a mesh."""
+    trimesh = need("trimesh")
+    sphere, cyl, box = geom.find("sphere"), geom.find("cylinder"), geom.find("box")
+    if sphere is not None:
+        return trimesh.creation.icosphere(subdivisions=2, radius=float(sphere.get("radius")))
+    if cyl is not None:
+        radius, length = float(cyl.get("radius")), float(cyl.get("length"))
+        if material == "link":
+            # A capsule: the segment with rounded ends (height = distance between the caps).
+            return trimesh.creation.capsule(height=length, radius=radius, count=[24, 12])
+        return trimesh.creation.cylinder(radius=radius, height=length, sections=24)
+    if box is not None:
+        return trimesh.creation.box(extents=_floats(box.get("size"), 3))
+    return None
+
+
+@dataclass(frozen=True)
+class MeshedUrdf:
+    """A URDF whose visuals are STL meshes, and those meshes.
+
+    Attributes:
+        urdf: The URDF text (visual ``<mesh filename="PREFIX<file>"/>``).
+        files: Mesh file name (without the prefix) → binary STL bytes, sorted by name.
+
+    """
+
+    urdf: str
+    files: dict[str, bytes]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: the mesh file names and sizes in [bytes]."""
+        return {"files": {k: len(v) for k, v in self.files.items()}}
+
+
+def mesh_visuals(urdf_text: str, uri_prefix: str) -> MeshedUrdf:
+    """Replace the primitive visuals of every link by STL meshes (one per link and material).
+
+    Collision primitives are added first (:func:`add_collisions`), so collisions stay simple.
+
+    Args:
+        urdf_text: URDF document with primitive visuals.
+        uri_prefix: What goes before each file name in ``<mesh filename=...>``, e.g.
+            ``"package://my_robot_description/meshes/"`` or ``"meshes/"``.
+
+    Returns:
+        A :class:`MeshedUrdf` (the text and the STL files).
+
+    Raises:
+        OptionalDependencyError: If trimesh is not installed.
+        UrdfError: If the text is not a URDF.
+
+    """
+    from lxml import etree
+
+    trimesh = need("trimesh")
+    tree = _parse(add_collisions(urdf_text))
+    files: dict[str, bytes] = {}
+    for link in tree.getroot().iter("link"):
+        visuals = link.findall("visual")
+        groups: dict[str, list[Any]] = {}
+        for visual in visuals:
+            geom = visual.find("geometry")
+            mesh = None if geom is None else _primitive(geom, _material(visual))
+            if mesh is None:
+                continue
+            mesh.apply_transform(_origin_matrix(visual))
+            groups.setdefault(_material(visual), []).append(mesh)
+            link.remove(visual)
+        anchor = link.find("collision")
+        for material in sorted(groups):
+            combined = trimesh.util.concatenate(groups[material])
+            fname = f"{link.get('name')}_{material or 'visual'}.stl"
+            files[fname] = bytes(trimesh.exchange.stl.export_stl(combined))
+            visual = etree.Element("visual")
+            etree.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
+            geometry = etree.SubElement(visual, "geometry")
+            etree.SubElement(geometry, "mesh", filename=f"{uri_prefix}{fname}")
+            if material:
+                etree.SubElement(visual, "material", name=material)
+            visual.tail = "\n    "
+            if anchor is not None:
+                anchor.addprevious(visual)
+            else:
+                link.append(visual)
+    return MeshedUrdf(urdf=_serialize(tree), files=dict(sorted(files.items())))

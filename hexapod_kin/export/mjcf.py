@@ -1,0 +1,320 @@
+"""URDF → MJCF through MuJoCo's own URDF compiler, with a floor and full-precision numbers.
+
+Steps: :func:`hexapod_kin.urdf.to_urdf` (plus primitive collisions, or STL visuals with
+``meshes=True``) gets a ``<mujoco><compiler .../></mujoco>`` extension (``fusestatic="false"``
+so every URDF link stays a body with its name, ``discardvisual`` unless meshes are asked,
+``inertiafromgeom="false"`` so only the URDF inertials count, ``balanceinertia="false"``);
+``mujoco.MjModel.from_xml_string`` compiles it and ``mujoco.mj_saveLastXML`` writes the MJCF.
+MuJoCo writes 6 significant digits, so every number that matters (body poses, inertials,
+joint ranges, damping, friction loss, effort ranges, primitive geoms) is written back from the
+compiled model with full precision (``repr``); then a floor plane, a light and the optional
+``<option>`` (timestep, integrator) are added with lxml.
+
+What carries over: joint damping (``damping``), dry friction (``frictionloss``), position
+limits (``range``), effort limits (``actuatorfrcrange``), masses and inertias; URDF velocity
+limits have no MJCF counterpart. The base is fixed to the world, as in the URDF.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import atomic_write
+from ..exceptions import ParameterError, UrdfError
+from ..params import Chain, Hexapod
+from ..urdf import to_urdf
+from ._common import check_source, comment, need, num, vec
+from .meshes import add_collisions, mesh_visuals
+
+__all__ = ["to_mjcf", "write_mjcf", "MjcfExport", "INTEGRATORS", "reach"]
+
+#: MuJoCo integrators accepted by ``integrator=``.
+INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
+
+
+@dataclass(frozen=True)
+class MjcfExport:
+    """An MJCF document and the mesh files it references.
+
+    Attributes:
+        xml: The MJCF text.
+        assets: Mesh file path (as written in the MJCF, relative to it) → STL bytes.
+
+    """
+
+    xml: str
+    assets: dict[str, bytes]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the MJCF size and the mesh files with their sizes in [bytes]."""
+        return {"xml_chars": len(self.xml), "assets": {k: len(v) for k, v in self.assets.items()}}
+
+
+def _chain_reach(chain: Chain) -> float:
+    total = 0.0
+    k = 0
+    for row in chain.rows:
+        total += abs(row.d) + abs(row.r)
+        if row.sigma == "prismatic":
+            lim = (chain.limits or ())[k]
+            total += max(abs(lim.lower), abs(lim.upper))
+        k += int(row.is_joint)
+    for pose in (getattr(chain, "base_pose", None), getattr(chain, "tool", None)):
+        if pose is not None:
+            total += float(np.linalg.norm(pose.xyz))
+    return total + 3.0 * chain.link_radius
+
+
+def reach(source: Chain | Hexapod) -> float:
+    """An upper bound in [m] of how far any point of the robot gets from its root frame."""
+    if isinstance(source, Chain):
+        return _chain_reach(source)
+    body = 0.5 * float(np.linalg.norm(source.body_size))
+    legs = max(float(np.linalg.norm(m.xyz)) + _chain_reach(m.chain) for m in source.legs)
+    return max(body, legs)
+
+
+def _with_compiler(urdf_text: str, discard_visual: bool) -> str:
+    from lxml import etree
+
+    root = etree.fromstring(urdf_text.encode("utf-8"))
+    ext = etree.Element("mujoco")
+    etree.SubElement(
+        ext,
+        "compiler",
+        discardvisual="true" if discard_visual else "false",
+        fusestatic="false",
+        balanceinertia="false",
+        inertiafromgeom="false",
+        strippath="false",
+        angle="radian",
+    )
+    root.insert(0, ext)
+    return str(etree.tostring(root, encoding="unicode"))
+
+
+def _set(elem: Any, key: str, values: Any) -> None:
+    arr = np.atleast_1d(np.asarray(values, dtype=float))
+    elem.set(key, vec(arr))
+
+
+def _patch(root: Any, model: Any, mujoco: Any) -> None:
+    """Write the compiled model's numbers back into the saved MJCF with full precision."""
+    body_type, joint_type = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_JOINT
+    for body in root.iter("body"):
+        b = mujoco.mj_name2id(model, body_type, body.get("name"))
+        if b < 0:
+            raise UrdfError(f"MJCF body {body.get('name')!r} is not in the compiled model")
+        _set(body, "pos", model.body_pos[b])
+        _set(body, "quat", model.body_quat[b])
+        inertial = body.find("inertial")
+        if inertial is not None:
+            _set(inertial, "pos", model.body_ipos[b])
+            _set(inertial, "quat", model.body_iquat[b])
+            inertial.set("mass", num(model.body_mass[b]))
+            _set(inertial, "diaginertia", model.body_inertia[b])
+        for joint in body.findall("joint"):
+            jid = mujoco.mj_name2id(model, joint_type, joint.get("name"))
+            dof = model.jnt_dofadr[jid]
+            _set(joint, "pos", model.jnt_pos[jid])
+            _set(joint, "axis", model.jnt_axis[jid])
+            if model.jnt_limited[jid]:
+                _set(joint, "range", model.jnt_range[jid])
+            if model.jnt_actfrclimited[jid]:
+                _set(joint, "actuatorfrcrange", model.jnt_actfrcrange[jid])
+            for key, arr in (
+                ("damping", model.dof_damping),
+                ("frictionloss", model.dof_frictionloss),
+            ):
+                if float(arr[dof]) != 0.0 or joint.get(key) is not None:
+                    joint.set(key, num(arr[dof]))
+        geoms = body.findall("geom")
+        adr, n = int(model.body_geomadr[b]), int(model.body_geomnum[b])
+        if len(geoms) != n:
+            raise UrdfError(f"MJCF body {body.get('name')!r}: {len(geoms)} geoms, model has {n}")
+        for g, geom in zip(range(adr, adr + n), geoms):
+            if geom.get("type") == "mesh":
+                continue  # MuJoCo re-centres meshes; their placement is kept as saved
+            gtype = int(model.geom_type[g])
+            size = model.geom_size[g]
+            count = {
+                int(mujoco.mjtGeom.mjGEOM_SPHERE): 1,
+                int(mujoco.mjtGeom.mjGEOM_CAPSULE): 2,
+                int(mujoco.mjtGeom.mjGEOM_CYLINDER): 2,
+                int(mujoco.mjtGeom.mjGEOM_BOX): 3,
+            }.get(gtype, 3)
+            _set(geom, "size", size[:count])
+            _set(geom, "pos", model.geom_pos[g])
+            _set(geom, "quat", model.geom_quat[g])
+
+
+def _compile(urdf_text: str, assets: dict[str, bytes]) -> tuple[str, Any, Any]:
+    mujoco = need("mujoco")
+    try:
+        model = mujoco.MjModel.from_xml_string(urdf_text, assets)
+    except ValueError as exc:
+        raise UrdfError(f"MuJoCo's URDF compiler refused the model: {exc}") from None
+    with tempfile.TemporaryDirectory(prefix="hexapod_kin_mjcf_") as tmp:
+        path = os.path.join(tmp, "model.xml")
+        mujoco.mj_saveLastXML(path, model)
+        text = Path(path).read_text(encoding="utf-8")
+    return text, model, mujoco
+
+
+def to_mjcf(
+    source: Chain | Hexapod | str,
+    *,
+    meshes: bool = False,
+    mesh_prefix: str = "meshes/",
+    header: str | None = None,
+    floor: bool = True,
+    floor_z: float | None = None,
+    timestep: float | None = None,
+    integrator: str | None = None,
+) -> MjcfExport:
+    """Return the MJCF of a chain, robot or URDF text, compiled by MuJoCo (deterministic).
+
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`
+            or URDF text (used as it is, without meshes or reach-based floor).
+        meshes: STL visuals (trimesh) as non-colliding mesh geoms (group 1); the primitive
+            collision geoms move to group 3.
+        mesh_prefix: Folder of the mesh files relative to the MJCF file.
+        header: Header comment line (the command that made it).
+        floor: Add a floor plane and a light.
+        floor_z: Floor height in [m]; default just below everything the robot can reach.
+        timestep: ``<option timestep>`` in [s] (> 0); default MuJoCo's (0.002 s).
+        integrator: ``<option integrator>``: one of :data:`INTEGRATORS`; default MuJoCo's.
+
+    Returns:
+        An :class:`MjcfExport`.
+
+    Raises:
+        ParameterError: Invalid timestep, integrator, floor height or source.
+        OptionalDependencyError: mujoco (or trimesh with meshes) not installed.
+        UrdfError: MuJoCo refused the URDF.
+
+    """
+    from lxml import etree
+
+    if timestep is not None and not (np.isfinite(timestep) and timestep > 0):
+        raise ParameterError(
+            f"timestep={timestep!r} is not allowed; a finite step > 0 s is required",
+            parameter="timestep",
+            value=timestep,
+        )
+    if integrator is not None and integrator not in INTEGRATORS:
+        raise ParameterError(
+            f"integrator={integrator!r} is not allowed; use one of {list(INTEGRATORS)}",
+            parameter="integrator",
+            value=integrator,
+            allowed=list(INTEGRATORS),
+        )
+    if floor_z is not None and not np.isfinite(floor_z):
+        raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
+    if isinstance(source, str):
+        urdf, default_floor, desc = source, -1.0, "URDF text"
+        if meshes:
+            raise ParameterError(
+                "meshes=True needs a Chain or Hexapod source, not URDF text", parameter="meshes"
+            )
+    else:
+        src = check_source(source)
+        urdf = to_urdf(src, header=header)
+        default_floor = -math.ceil(110.0 * reach(src)) / 100.0
+        desc = src.description or src.name
+    assets: dict[str, bytes] = {}
+    if meshes:
+        meshed = mesh_visuals(urdf, mesh_prefix)
+        urdf = meshed.urdf
+        assets = {f"{mesh_prefix}{k}": v for k, v in meshed.files.items()}
+    else:
+        urdf = add_collisions(urdf)
+    saved, model, mujoco = _compile(_with_compiler(urdf, discard_visual=not meshes), assets)
+    root = etree.fromstring(saved.encode("utf-8"))
+    _patch(root, model, mujoco)
+    if meshes:
+        for geom in root.iter("geom"):
+            if geom.get("type") != "mesh":
+                geom.set("group", "3")
+    if timestep is not None or integrator is not None:
+        option = etree.Element("option")
+        if timestep is not None:
+            option.set("timestep", num(timestep))
+        if integrator is not None:
+            option.set("integrator", integrator)
+        root.find("compiler").addnext(option)
+    if floor:
+        world = root.find("worldbody")
+        z = default_floor if floor_z is None else float(floor_z)
+        light = etree.Element(
+            "light", name="hk_light", pos=f"0 0 {num(z + 3.0)}", dir="0 0 -1", directional="true"
+        )
+        plane = etree.Element(
+            "geom",
+            name="floor",
+            type="plane",
+            size="0 0 0.05",
+            pos=f"0 0 {num(z)}",
+            rgba="0.8 0.8 0.8 1",
+        )
+        world.insert(0, plane)
+        world.insert(0, light)
+    root.insert(0, etree.Comment(" " + comment(f"MJCF of {desc}")[5:-4] + " "))
+    if header:
+        root.insert(1, etree.Comment(" " + comment(header)[5:-4] + " "))
+    etree.indent(root, space="  ")
+    text = etree.tostring(root, encoding="unicode")
+    return MjcfExport(xml=text + "\n", assets=dict(sorted(assets.items())))
+
+
+def write_mjcf(
+    source: Chain | Hexapod | str,
+    path: str | os.PathLike[str],
+    *,
+    meshes: bool = False,
+    header: str | None = None,
+    floor: bool = True,
+    floor_z: float | None = None,
+    timestep: float | None = None,
+    integrator: str | None = None,
+) -> MjcfExport:
+    """Write :func:`to_mjcf` to ``path`` (meshes into ``<stem>_meshes/`` beside it), atomically.
+
+    Every file is written with :func:`hexapod_kin._io.atomic_write`; the meshes first, the
+    MJCF last, so a complete MJCF never references a missing mesh.
+
+    Raises:
+        ParameterError: As :func:`to_mjcf`, or when the directory does not exist.
+
+    """
+    dest = Path(path)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    if not parent.is_dir():
+        raise ParameterError(
+            f"path={str(dest)!r}: directory {str(parent)!r} does not exist", parameter="path"
+        )
+    stem = dest.name.split(".")[0] or "model"
+    out = to_mjcf(
+        source,
+        meshes=meshes,
+        mesh_prefix=f"{stem}_meshes/",
+        header=header,
+        floor=floor,
+        floor_z=floor_z,
+        timestep=timestep,
+        integrator=integrator,
+    )
+    for rel, data in out.assets.items():
+        target = parent / rel
+        target.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(target, data)
+    atomic_write(dest, out.xml)
+    return out

@@ -1,0 +1,449 @@
+"""A ROS 2 description package (ament_cmake) for a chain or robot, written atomically.
+
+Layout of ``<out>`` (the package folder; its name need not be the package name)::
+
+    package.xml                 format 3: name, version, description, maintainer, license,
+                                buildtool_depend ament_cmake, exec_depend launch, launch_ros,
+                                robot_state_publisher, joint_state_publisher_gui, rviz2, xacro
+    CMakeLists.txt              ament_cmake; installs urdf/ launch/ rviz/ meshes/ to share/
+    urdf/<robot>.urdf           the URDF (to_urdf + primitive collisions; STL visuals with meshes)
+    urdf/<robot>.urdf.xacro     the parametric xacro (hexapod_kin.export.xacro)
+    launch/display.launch.py    robot_state_publisher + joint_state_publisher_gui + rviz2
+    rviz/display.rviz           RobotModel, TF and grid, fixed frame = the root link
+    meshes/                     <link>_<material>.stl with meshes=True (else a README)
+    README.md                   how to build and launch it
+
+No ROS installation is needed to write it. The whole tree is built in a temporary folder next
+to ``out`` and renamed into place, so a failed export never leaves a half-written package.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from .._io import atomic_write
+from ..exceptions import ParameterError
+from ..params import Chain, Hexapod
+from ..urdf import to_urdf
+from ._common import check_source, comment
+from .meshes import add_collisions, mesh_visuals
+from .xacro import to_xacro
+
+__all__ = ["export_package", "package_name_for", "PackageExport", "PACKAGE_NAME_RE"]
+
+#: REP 144 package names: lower case letters, digits and underscores, starting with a letter.
+PACKAGE_NAME_RE = re.compile(r"^[a-z][a-z0-9_]*$")
+_EMAIL_RE = re.compile(r"^[^@\s<>\"]+@[^@\s<>\"]+\.[A-Za-z]{2,}$")
+
+#: What the launch file runs (package, executable), in order; exec_depend lists them all.
+LAUNCH_NODES = (
+    ("robot_state_publisher", "robot_state_publisher"),
+    ("joint_state_publisher_gui", "joint_state_publisher_gui"),
+    ("rviz2", "rviz2"),
+)
+EXEC_DEPENDS = (
+    "launch",
+    "launch_ros",
+    "robot_state_publisher",
+    "joint_state_publisher_gui",
+    "rviz2",
+    "xacro",
+)
+
+
+@dataclass(frozen=True)
+class PackageExport:
+    """What :func:`export_package` wrote.
+
+    Attributes:
+        path: The package folder.
+        name: The ROS package name.
+        files: Paths of the files written, relative to ``path``, sorted.
+
+    """
+
+    path: Path
+    name: str
+    files: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: path, name, files."""
+        return {"path": str(self.path), "name": self.name, "files": list(self.files)}
+
+
+def package_name_for(robot_name: str) -> str:
+    """Default package name: ``<robot>_description`` made a valid REP 144 name."""
+    base = re.sub(r"[^a-z0-9_]", "_", robot_name.lower())
+    if not base or not base[0].isalpha():
+        base = "robot_" + base
+    return f"{base}_description"
+
+
+def _xml_text(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def _package_xml(
+    name: str, description: str, maintainer: str, email: str, license_: str, header: str
+) -> str:
+    deps = "\n".join(f"  <exec_depend>{d}</exec_depend>" for d in EXEC_DEPENDS)
+    return (
+        '<?xml version="1.0"?>\n'
+        '<?xml-model href="http://download.ros.org/schema/package_format3.xsd" '
+        'schematypens="http://www.w3.org/2001/XMLSchema"?>\n'
+        f"{comment(header)}\n"
+        '<package format="3">\n'
+        f"  <name>{name}</name>\n"
+        "  <version>0.1.0</version>\n"
+        f"  <description>{_xml_text(description)}</description>\n"
+        f'  <maintainer email="{_xml_text(email)}">{_xml_text(maintainer)}</maintainer>\n'
+        f"  <license>{_xml_text(license_)}</license>\n"
+        "\n"
+        "  <buildtool_depend>ament_cmake</buildtool_depend>\n"
+        "\n"
+        f"{deps}\n"
+        "\n"
+        "  <export>\n"
+        "    <build_type>ament_cmake</build_type>\n"
+        "  </export>\n"
+        "</package>\n"
+    )
+
+
+def _cmakelists(name: str, header: str) -> str:
+    return (
+        f"# {header}\n"
+        "cmake_minimum_required(VERSION 3.8)\n"
+        f"project({name})\n"
+        "\n"
+        "find_package(ament_cmake REQUIRED)\n"
+        "\n"
+        "install(\n"
+        "  DIRECTORY urdf launch rviz meshes\n"
+        "  DESTINATION share/${PROJECT_NAME}\n"
+        ")\n"
+        "\n"
+        "ament_package()\n"
+    )
+
+
+def _launch(name: str, robot: str, header: str) -> str:
+    nodes = ", ".join(repr(n) for n in LAUNCH_NODES)
+    return f'''"""Display {robot} in RViz: robot_state_publisher, joint_state_publisher_gui, rviz2.
+
+{header}
+Run: ros2 launch {name} display.launch.py [model:=/path/to/robot.urdf.xacro] [gui:=false]
+"""
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.conditions import IfCondition, UnlessCondition
+from launch.substitutions import Command, LaunchConfiguration, PathJoinSubstitution
+from launch_ros.actions import Node
+from launch_ros.parameter_descriptions import ParameterValue
+from launch_ros.substitutions import FindPackageShare
+
+PACKAGE = {name!r}
+MODEL_FILE = ("urdf", {robot + ".urdf.xacro"!r})
+RVIZ_FILE = ("rviz", "display.rviz")
+NODES = ({nodes})
+
+
+def generate_launch_description():
+    """The launch description (the model is expanded by xacro; plain URDF works too)."""
+    share = FindPackageShare(PACKAGE)
+    model = LaunchConfiguration("model")
+    gui = LaunchConfiguration("gui")
+    robot_description = ParameterValue(Command(["xacro ", model]), value_type=str)
+    return LaunchDescription(
+        [
+            DeclareLaunchArgument(
+                "model",
+                default_value=PathJoinSubstitution([share, *MODEL_FILE]),
+                description="URDF or xacro file of the robot",
+            ),
+            DeclareLaunchArgument(
+                "gui", default_value="true", description="joint_state_publisher_gui sliders"
+            ),
+            Node(
+                package="robot_state_publisher",
+                executable="robot_state_publisher",
+                parameters=[{{"robot_description": robot_description}}],
+                output="screen",
+            ),
+            Node(
+                package="joint_state_publisher_gui",
+                executable="joint_state_publisher_gui",
+                condition=IfCondition(gui),
+            ),
+            Node(
+                package="joint_state_publisher",
+                executable="joint_state_publisher",
+                condition=UnlessCondition(gui),
+            ),
+            Node(
+                package="rviz2",
+                executable="rviz2",
+                arguments=["-d", PathJoinSubstitution([share, *RVIZ_FILE])],
+                output="screen",
+            ),
+        ]
+    )
+'''
+
+
+def _rviz(fixed_frame: str, header: str) -> str:
+    return f"""# {header}
+Panels:
+  - Class: rviz_common/Displays
+    Name: Displays
+Visualization Manager:
+  Class: ""
+  Displays:
+    - Class: rviz_default_plugins/Grid
+      Enabled: true
+      Name: Grid
+      Cell Size: 0.1
+      Plane Cell Count: 20
+      Reference Frame: <Fixed Frame>
+    - Class: rviz_default_plugins/RobotModel
+      Enabled: true
+      Name: RobotModel
+      Description Source: Topic
+      Description Topic:
+        Value: /robot_description
+      Visual Enabled: true
+      Collision Enabled: false
+    - Class: rviz_default_plugins/TF
+      Enabled: true
+      Name: TF
+      Show Names: false
+      Marker Scale: 0.2
+  Enabled: true
+  Global Options:
+    Fixed Frame: {fixed_frame}
+    Background Color: 48; 48; 48
+    Frame Rate: 30
+  Name: root
+  Tools:
+    - Class: rviz_default_plugins/MoveCamera
+    - Class: rviz_default_plugins/Select
+  Value: true
+  Views:
+    Current:
+      Class: rviz_default_plugins/Orbit
+      Distance: 1.0
+      Focal Point:
+        X: 0
+        Y: 0
+        Z: 0
+      Name: Current View
+      Pitch: 0.6
+      Yaw: 0.8
+Window Geometry:
+  Height: 800
+  Width: 1200
+"""
+
+
+def _readme(name: str, robot: str, description: str, header: str, meshes: bool) -> str:
+    vis = (
+        "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
+        if meshes
+        else "primitives (cylinders, spheres, boxes)"
+    )
+    return f"""# {name}
+
+ROS 2 description package of **{robot}**: {description}
+
+{header}. Generated by hexapod_kin {__version__}: do not edit by hand, regenerate it.
+
+| file | what |
+|---|---|
+| `urdf/{robot}.urdf` | the URDF (Khalil-Kleinfinger frames, SI units); visuals: {vis}; \
+collisions: primitives |
+| `urdf/{robot}.urdf.xacro` | the same robot as xacro macros with one property per dimension |
+| `launch/display.launch.py` | robot_state_publisher, joint_state_publisher_gui, rviz2 |
+| `rviz/display.rviz` | RViz config: RobotModel, TF, grid |
+
+```bash
+cd ~/ros2_ws/src && cp -r /path/to/this/folder {name}
+cd ~/ros2_ws && colcon build --packages-select {name} && source install/setup.bash
+ros2 launch {name} display.launch.py                          # the xacro, with sliders
+ros2 launch {name} display.launch.py model:=$(ros2 pkg prefix {name})/share/{name}/urdf/{robot}.urdf
+```
+"""
+
+
+def _check_out(out: Path, force: bool) -> None:
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise ParameterError(
+            f"out={str(out)!r}: directory {str(parent)!r} does not exist",
+            parameter="out",
+            value=str(out),
+        )
+    if out.exists() and not out.is_dir():
+        raise ParameterError(
+            f"out={str(out)!r} is a file; expected a directory for the package",
+            parameter="out",
+            value=str(out),
+        )
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise ParameterError(
+            f"out={str(out)!r} exists and is not empty; choose a new folder or pass force=True "
+            "(--force) to replace it",
+            parameter="out",
+            value=str(out),
+        )
+
+
+def package_files(
+    source: Chain | Hexapod,
+    *,
+    name: str | None = None,
+    meshes: bool = False,
+    header: str | None = None,
+    maintainer: str = "hexapod_kin user",
+    email: str = "user@example.com",
+    license: str = "BSD-3-Clause",  # noqa: A002
+) -> tuple[str, dict[str, bytes]]:
+    """The files of the description package (path relative to the package → bytes).
+
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        name: ROS package name (REP 144); default ``<robot>_description``.
+        meshes: Write STL visuals into ``meshes/`` (referenced as ``package://<name>/...``).
+        header: Header line for every file (e.g. the command that made it).
+        maintainer: Maintainer name for ``package.xml``.
+        email: Maintainer e-mail (required by package format 3).
+        license: License identifier for ``package.xml``.
+
+    Returns:
+        ``(package name, files)``, files sorted by path.
+
+    Raises:
+        ParameterError: For an invalid name, e-mail or source.
+
+    """
+    src = check_source(source)
+    pkg = package_name_for(src.name) if name is None else name
+    if not isinstance(pkg, str) or not PACKAGE_NAME_RE.match(pkg):
+        raise ParameterError(
+            f"name={pkg!r} is not a valid ROS package name; use lower case letters, digits and "
+            "underscores, starting with a letter (REP 144)",
+            parameter="name",
+            value=pkg,
+        )
+    if not _EMAIL_RE.match(email):
+        raise ParameterError(
+            f"email={email!r} is not an e-mail address (package.xml requires one)",
+            parameter="email",
+            value=email,
+        )
+    for label, value in (("maintainer", maintainer), ("license", license)):
+        if not value.strip():
+            raise ParameterError(f"{label}={value!r} is empty", parameter=label, value=value)
+    made = header or f"made by hexapod_kin {__version__}"
+    description = src.description or src.name
+    urdf = to_urdf(src, header=made)
+    files: dict[str, str | bytes] = {}
+    if meshes:
+        meshed = mesh_visuals(urdf, f"package://{pkg}/meshes/")
+        files[f"urdf/{src.name}.urdf"] = meshed.urdf
+        for fname, data in meshed.files.items():
+            files[f"meshes/{fname}"] = data
+    else:
+        files[f"urdf/{src.name}.urdf"] = add_collisions(urdf)
+        files["meshes/README.md"] = (
+            "No meshes: this package was exported without `--meshes`; visuals are primitives.\n"
+        )
+    files[f"urdf/{src.name}.urdf.xacro"] = to_xacro(src, header=made)
+    files["package.xml"] = _package_xml(
+        pkg, f"Robot description of {src.name}: {description}", maintainer, email, license, made
+    )
+    files["CMakeLists.txt"] = _cmakelists(pkg, made)
+    files["launch/display.launch.py"] = _launch(pkg, src.name, made)
+    root = src.base if isinstance(src, Chain) else src.body
+    files["rviz/display.rviz"] = _rviz(root, made)
+    files["README.md"] = _readme(pkg, src.name, description, made, meshes)
+    out = {k: (v.encode("utf-8") if isinstance(v, str) else v) for k, v in files.items()}
+    return pkg, dict(sorted(out.items()))
+
+
+def export_package(
+    source: Chain | Hexapod,
+    out: str | os.PathLike[str],
+    *,
+    name: str | None = None,
+    meshes: bool = False,
+    header: str | None = None,
+    force: bool = False,
+    maintainer: str = "hexapod_kin user",
+    email: str = "user@example.com",
+    license: str = "BSD-3-Clause",  # noqa: A002
+) -> PackageExport:
+    """Write the ROS 2 description package of ``source`` into the folder ``out``, atomically.
+
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        out: The package folder to create (its parent must exist).
+        name: ROS package name; default ``<robot>_description``.
+        meshes: Generate STL visuals (trimesh) into ``meshes/``.
+        header: Header line recorded in every file (the command that made it).
+        force: Replace ``out`` if it exists and is not empty.
+        maintainer: Maintainer name.
+        email: Maintainer e-mail.
+        license: License identifier.
+
+    Returns:
+        A :class:`PackageExport`.
+
+    Raises:
+        ParameterError: Invalid name/e-mail/source, missing parent folder, or ``out`` exists
+            and is not empty without ``force``.
+        OptionalDependencyError: ``meshes=True`` without trimesh.
+
+    """
+    dest = Path(out)
+    _check_out(dest, force)
+    pkg, files = package_files(
+        source,
+        name=name,
+        meshes=meshes,
+        header=header,
+        maintainer=maintainer,
+        email=email,
+        license=license,
+    )
+    parent = dest.parent if str(dest.parent) else Path(".")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent))
+    old: Path | None = None
+    try:
+        for rel, data in files.items():
+            path = tmp / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(path, data)
+        for d in [tmp, *(p for p in tmp.rglob("*") if p.is_dir())]:
+            os.chmod(d, 0o755)
+        if dest.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".old", dir=parent))
+            os.rename(dest, old / "pkg")
+        os.rename(tmp, dest)
+    except BaseException:
+        if old is not None and not dest.exists():
+            os.rename(old / "pkg", dest)
+        shutil.rmtree(tmp, ignore_errors=True)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return PackageExport(path=dest, name=pkg, files=tuple(files))

@@ -1,0 +1,532 @@
+"""Parameter tables → a parametric xacro document (``<xacro:macro>`` per leg family).
+
+The document defines a ``<xacro:property>`` for every dimension (Khalil table entries, joint
+limits, damping, masses, link radius, body size, mount placement), a macro per *leg family*
+(one distinct :class:`~hexapod_kin.params.Chain`; the six legs of the hexapod share one), and
+instantiates it: once for a single chain, once per leg for a robot. Expanded by the ``xacro``
+package it gives a URDF with the same frames, joints, limits, damping and inertials as
+:func:`hexapod_kin.urdf.to_urdf` (the tests compare both through the loader).
+
+Names inside a family macro: ``alpha<j> d<j> theta<j> r<j>`` for row ``j`` (1-based, as in
+the table), ``<joint>_lower/_upper/_velocity/_effort/_damping/_friction``, ``<link>_mass``
+(and ``<link>_cx .. _izz`` for links with a given inertial; default links are rods whose
+inertia follows their length), ``link_radius``, ``base_x .. base_yaw`` / ``tool_x .. tool_yaw``
+for a base or tool pose. Every parameter defaults to the global property of the same name
+(``name:=^``), so a call only passes ``prefix``, ``parent``, ``xyz`` and ``rpy``, and any
+dimension can be overridden for one instance. When a robot has legs of several families, the
+global properties are prefixed by the family name and every call passes them.
+
+The macro is generic (one joint per table row), so it also serves chains that are not legs
+(SCARA, the pendulum, any Chain): the "family" is then the chain itself.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import atomic_write
+from ..exceptions import UrdfError
+from ..params import Chain, Hexapod, matrix_to_rpy
+from ._common import COLORS, check_source, comment, header_lines, ident, need, num
+
+__all__ = ["to_xacro", "write_xacro", "expand_xacro"]
+
+_NS = "http://www.ros.org/wiki/xacro"
+
+_HELPERS = """\
+  <!-- helper macros (hk_ = hexapod_kin) -->
+  <xacro:macro name="hk_khalil_origin" params="alpha d theta r">
+    <!-- Khalil row at q = 0: Rx(alpha) Tx(d) Rz(theta) Tz(r) as a URDF origin -->
+    <xacro:property name="hk_g" value="${hypot(cos(theta), cos(alpha)*sin(theta))}"/>
+    <xacro:if value="${hk_g >= 1e-12}">
+      <origin xyz="${d} ${-r*sin(alpha)} ${r*cos(alpha)}"
+              rpy="${atan2(sin(alpha)*cos(theta), cos(alpha))}
+                   ${atan2(-(sin(alpha)*sin(theta)), hk_g)}
+                   ${atan2(cos(alpha)*sin(theta), cos(theta))}"/>
+    </xacro:if>
+    <xacro:unless value="${hk_g >= 1e-12}">
+      <origin xyz="${d} ${-r*sin(alpha)} ${r*cos(alpha)}"
+              rpy="${atan2(sin(alpha), cos(alpha)*cos(theta))}
+                   ${atan2(-(sin(alpha)*sin(theta)), hk_g)} 0"/>
+    </xacro:unless>
+  </xacro:macro>
+  <xacro:macro name="hk_rod_inertial" params="mass radius vx vy vz">
+    <!-- solid rod from the frame origin to (vx, vy, vz); a sphere when that is a point -->
+    <xacro:property name="hk_l" value="${sqrt(vx**2 + vy**2 + vz**2)}"/>
+    <inertial>
+      <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}" rpy="0 0 0"/>
+      <mass value="${mass}"/>
+      <xacro:if value="${1e-9 > hk_l}">
+        <inertia ixx="${0.4*mass*radius**2}" ixy="0" ixz="0" iyy="${0.4*mass*radius**2}"
+                 iyz="0" izz="${0.4*mass*radius**2}"/>
+      </xacro:if>
+      <xacro:unless value="${1e-9 > hk_l}">
+        <xacro:property name="hk_a" value="${0.5*mass*radius**2}"/>
+        <xacro:property name="hk_t" value="${mass*(3*radius**2 + hk_l**2)/12.0}"/>
+        <xacro:property name="hk_ux" value="${vx/hk_l}"/>
+        <xacro:property name="hk_uy" value="${vy/hk_l}"/>
+        <xacro:property name="hk_uz" value="${vz/hk_l}"/>
+        <inertia ixx="${hk_t*(1.0 - hk_ux*hk_ux) + hk_a*(hk_ux*hk_ux)}"
+                 ixy="${hk_t*(0.0 - hk_ux*hk_uy) + hk_a*(hk_ux*hk_uy)}"
+                 ixz="${hk_t*(0.0 - hk_ux*hk_uz) + hk_a*(hk_ux*hk_uz)}"
+                 iyy="${hk_t*(1.0 - hk_uy*hk_uy) + hk_a*(hk_uy*hk_uy)}"
+                 iyz="${hk_t*(0.0 - hk_uy*hk_uz) + hk_a*(hk_uy*hk_uz)}"
+                 izz="${hk_t*(1.0 - hk_uz*hk_uz) + hk_a*(hk_uz*hk_uz)}"/>
+      </xacro:unless>
+    </inertial>
+  </xacro:macro>
+  <xacro:macro name="hk_segment" params="vx vy vz radius material">
+    <!-- cylinder from the frame origin to (vx, vy, vz): visual and (primitive) collision -->
+    <xacro:property name="hk_l" value="${sqrt(vx**2 + vy**2 + vz**2)}"/>
+    <xacro:if value="${hk_l > 1e-9}">
+      <visual>
+        <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}"
+                rpy="${atan2(-vy, hypot(vx, vz))} ${atan2(vx, vz)} 0"/>
+        <geometry><cylinder radius="${radius}" length="${hk_l}"/></geometry>
+        <material name="${material}"/>
+      </visual>
+      <collision>
+        <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}"
+                rpy="${atan2(-vy, hypot(vx, vz))} ${atan2(vx, vz)} 0"/>
+        <geometry><cylinder radius="${radius}" length="${hk_l}"/></geometry>
+      </collision>
+    </xacro:if>
+  </xacro:macro>
+  <xacro:macro name="hk_joint_marker" params="radius">
+    <visual>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><sphere radius="${1.4*radius}"/></geometry>
+      <material name="joint"/>
+    </visual>
+    <visual>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><cylinder radius="${0.8*radius}" length="${4.0*radius}"/></geometry>
+      <material name="joint"/>
+    </visual>
+  </xacro:macro>
+  <xacro:macro name="hk_ball" params="radius material">
+    <visual>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><sphere radius="${radius}"/></geometry>
+      <material name="${material}"/>
+    </visual>
+    <collision>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><sphere radius="${radius}"/></geometry>
+    </collision>
+  </xacro:macro>
+  <xacro:macro name="hk_box" params="x y z material">
+    <visual>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><box size="${x} ${y} ${z}"/></geometry>
+      <material name="${material}"/>
+    </visual>
+    <collision>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <geometry><box size="${x} ${y} ${z}"/></geometry>
+    </collision>
+  </xacro:macro>"""
+
+
+@dataclass
+class _Family:
+    """One leg family: a chain, its macro name and its parameters (name → value text)."""
+
+    chain: Chain
+    macro: str
+    params: dict[str, str] = field(default_factory=dict)
+    joint_ids: list[str] = field(default_factory=list)
+    link_ids: list[str] = field(default_factory=list)
+
+
+def _unique_ids(names: tuple[str, ...], fallback: str, reserved: set[str]) -> list[str]:
+    ids = [ident(n) for n in names]
+    if len(set(ids)) != len(ids) or set(ids) & reserved:
+        ids = [f"{fallback}{i + 1}" for i in range(len(names))]
+    return ids
+
+
+def _pose_params(prefix: str, t: np.ndarray) -> dict[str, str]:
+    rpy = matrix_to_rpy(t[:3, :3])
+    keys = ("x", "y", "z", "roll", "pitch", "yaw")
+    return {f"{prefix}_{k}": num(v) for k, v in zip(keys, (*t[:3, 3], *rpy))}
+
+
+def _family(chain: Chain, macro: str) -> _Family:
+    fam = _Family(chain=chain, macro=macro)
+    rows = chain.rows
+    reserved = {f"{c}{j}" for c in ("alpha", "d", "theta", "r") for j in range(1, len(rows) + 1)}
+    fam.joint_ids = _unique_ids(tuple(chain.joint_names or ()), "joint", reserved)
+    fam.link_ids = _unique_ids(tuple(chain.link_names or ()), "link", reserved)
+    p = fam.params
+    for j, row in enumerate(rows, start=1):
+        p[f"alpha{j}"] = num(row.alpha)
+        p[f"d{j}"] = num(row.d)
+        p[f"theta{j}"] = num(row.theta)
+        p[f"r{j}"] = num(row.r)
+    damping, friction = chain.joint_damping(), chain.joint_friction()
+    for k, (jid, lim) in enumerate(zip(fam.joint_ids, chain.limits or ())):
+        p[f"{jid}_lower"] = num(lim.lower)
+        p[f"{jid}_upper"] = num(lim.upper)
+        p[f"{jid}_velocity"] = num(lim.velocity)
+        p[f"{jid}_effort"] = num(lim.effort)
+        p[f"{jid}_damping"] = num(damping[k])
+        p[f"{jid}_friction"] = num(friction[k])
+    for j, lid in enumerate(fam.link_ids):
+        inn = chain.link_inertial(j)
+        p[f"{lid}_mass"] = num(inn.mass)
+        if not _default_inertial(chain, j):
+            for key, value in zip(("cx", "cy", "cz"), inn.com):
+                p[f"{lid}_{key}"] = num(value)
+            for key, value in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), inn.inertia):
+                p[f"{lid}_{key}"] = num(value)
+    p["link_radius"] = num(chain.link_radius)
+    base_pose = getattr(chain, "base_pose", None)
+    if base_pose is not None:
+        p.update(_pose_params("base", base_pose.matrix))
+    tool = getattr(chain, "tool", None)
+    if tool is not None:
+        p.update(_pose_params("tool", tool.matrix))
+    return fam
+
+
+def _default_inertial(chain: Chain, j: int) -> bool:
+    return chain.inertials is None or chain.inertials[j] is None
+
+
+def _next_origin(j: int, n_rows: int) -> tuple[str, str, str]:
+    """Expressions of the origin of frame ``j + 1`` in frame ``j`` (1-based ``j``), at q = 0."""
+    if j >= n_rows:
+        return ("0", "0", "0")
+    k = j + 1
+    return (f"${{d{k}}}", f"${{-r{k}*sin(alpha{k})}}", f"${{r{k}*cos(alpha{k})}}")
+
+
+def _macro_lines(fam: _Family, forward: bool) -> list[str]:
+    chain = fam.chain
+    rows = chain.rows
+    pad = "    "
+    fixed_params = "prefix:='' parent:='' xyz:='0 0 0' rpy:='0 0 0'"
+    dims = " ".join(f"{k}:=^" if forward else k for k in fam.params)
+    out = [
+        "  " + comment(f"leg family {fam.macro}: {chain.description or chain.name}"),
+        f'  <xacro:macro name="{fam.macro}" params="{fixed_params} {dims}">',
+    ]
+    base = f"${{prefix}}{chain.base}"
+    out += [
+        f"{pad}<xacro:if value=\"${{parent == ''}}\">",
+        f'{pad}  <link name="{base}">',
+        f"{pad}    <visual>",
+        f'{pad}      <origin xyz="0 0 0" rpy="0 0 0"/>',
+        f'{pad}      <geometry><box size="${{6*link_radius}} ${{6*link_radius}} '
+        f'${{2*link_radius}}"/></geometry>',
+        f'{pad}      <material name="base"/>',
+        f"{pad}    </visual>",
+        f"{pad}  </link>",
+        f"{pad}</xacro:if>",
+        f"{pad}<xacro:unless value=\"${{parent == ''}}\">",
+        f'{pad}  <joint name="${{prefix}}mount" type="fixed">',
+        f'{pad}    <parent link="${{parent}}"/>',
+        f'{pad}    <child link="{base}"/>',
+        f'{pad}    <origin xyz="${{xyz}}" rpy="${{rpy}}"/>',
+        f"{pad}  </joint>",
+        f'{pad}  <link name="{base}"/>',
+        f"{pad}</xacro:unless>",
+    ]
+    prev = base
+    base_pose = getattr(chain, "base_pose", None)
+    if base_pose is not None:
+        frame0 = f"${{prefix}}{chain.base}_frame0"
+        out += [
+            f'{pad}<joint name="${{prefix}}{chain.name}_base_offset" type="fixed">',
+            f'{pad}  <parent link="{prev}"/>',
+            f'{pad}  <child link="{frame0}"/>',
+            f'{pad}  <origin xyz="${{base_x}} ${{base_y}} ${{base_z}}" '
+            f'rpy="${{base_roll}} ${{base_pitch}} ${{base_yaw}}"/>',
+            f"{pad}</joint>",
+            f'{pad}<link name="{frame0}"/>',
+        ]
+        prev = frame0
+    link_names = chain.link_names or ()
+    joint_names = chain.joint_names or ()
+    k = 0
+    for j0, row in enumerate(rows):
+        j = j0 + 1
+        child = f"${{prefix}}{link_names[j0]}"
+        lid = fam.link_ids[j0]
+        out.append(pad + comment(f"row {j}: sigma={row.sigma}"))
+        origin = (
+            f'<xacro:hk_khalil_origin alpha="${{alpha{j}}}" d="${{d{j}}}" '
+            f'theta="${{theta{j}}}" r="${{r{j}}}"/>'
+        )
+        if row.is_joint:
+            jid = fam.joint_ids[k]
+            out += [
+                f'{pad}<joint name="${{prefix}}{joint_names[k]}" type="{row.sigma}">',
+                f'{pad}  <parent link="{prev}"/>',
+                f'{pad}  <child link="{child}"/>',
+                f"{pad}  {origin}",
+                f'{pad}  <axis xyz="0 0 1"/>',
+                f'{pad}  <limit lower="${{{jid}_lower}}" upper="${{{jid}_upper}}" '
+                f'effort="${{{jid}_effort}}" velocity="${{{jid}_velocity}}"/>',
+                f'{pad}  <dynamics damping="${{{jid}_damping}}" friction="${{{jid}_friction}}"/>',
+                f"{pad}</joint>",
+            ]
+            k += 1
+        else:
+            out += [
+                f'{pad}<joint name="${{prefix}}{link_names[j0]}_fixed" type="fixed">',
+                f'{pad}  <parent link="{prev}"/>',
+                f'{pad}  <child link="{child}"/>',
+                f"{pad}  {origin}",
+                f"{pad}</joint>",
+            ]
+        out.append(f'{pad}<link name="{child}">')
+        vx, vy, vz = _next_origin(j, len(rows))
+        if _default_inertial(chain, j0):
+            out.append(
+                f'{pad}  <xacro:hk_rod_inertial mass="${{{lid}_mass}}" radius="${{link_radius}}" '
+                f'vx="{vx}" vy="{vy}" vz="{vz}"/>'
+            )
+        else:
+            out += [
+                f"{pad}  <inertial>",
+                f'{pad}    <origin xyz="${{{lid}_cx}} ${{{lid}_cy}} ${{{lid}_cz}}" rpy="0 0 0"/>',
+                f'{pad}    <mass value="${{{lid}_mass}}"/>',
+                f'{pad}    <inertia ixx="${{{lid}_ixx}}" ixy="${{{lid}_ixy}}" '
+                f'ixz="${{{lid}_ixz}}" iyy="${{{lid}_iyy}}" iyz="${{{lid}_iyz}}" '
+                f'izz="${{{lid}_izz}}"/>',
+                f"{pad}  </inertial>",
+            ]
+        if j == len(rows):
+            out.append(f'{pad}  <xacro:hk_ball radius="${{1.5*link_radius}}" material="foot"/>')
+        else:
+            if row.is_joint:
+                out.append(f'{pad}  <xacro:hk_joint_marker radius="${{link_radius}}"/>')
+            out.append(
+                f'{pad}  <xacro:hk_segment vx="{vx}" vy="{vy}" vz="{vz}" '
+                f'radius="${{link_radius}}" material="link"/>'
+            )
+        out.append(f"{pad}</link>")
+        prev = child
+    tool = getattr(chain, "tool", None)
+    if tool is not None:
+        t_tool = tool.matrix
+        back = -t_tool[:3, :3].T @ t_tool[:3, 3]
+        tip = f"${{prefix}}{chain.tip}"
+        out += [
+            pad + comment("tool frame (its back-pointing visual is drawn for the exported pose)"),
+            f'{pad}<joint name="{tip}_fixed" type="fixed">',
+            f'{pad}  <parent link="{prev}"/>',
+            f'{pad}  <child link="{tip}"/>',
+            f'{pad}  <origin xyz="${{tool_x}} ${{tool_y}} ${{tool_z}}" '
+            f'rpy="${{tool_roll}} ${{tool_pitch}} ${{tool_yaw}}"/>',
+            f"{pad}</joint>",
+            f'{pad}<link name="{tip}">',
+            f'{pad}  <xacro:hk_ball radius="${{1.2*link_radius}}" material="foot"/>',
+            f'{pad}  <xacro:hk_segment vx="{num(back[0])}" vy="{num(back[1])}" '
+            f'vz="{num(back[2])}" radius="${{0.6*link_radius}}" material="link"/>',
+            f"{pad}</link>",
+        ]
+    out.append("  </xacro:macro>")
+    return out
+
+
+def _properties(params: dict[str, str], prefix: str = "") -> list[str]:
+    return [f'  <xacro:property name="{prefix}{k}" value="{v}"/>' for k, v in params.items()]
+
+
+def _families(chains: list[Chain]) -> list[_Family]:
+    fams: list[_Family] = []
+    used: set[str] = set()
+    for chain in chains:
+        if any(f.chain == chain for f in fams):
+            continue
+        name = ident(chain.name)
+        n = 2
+        while name in used or name.startswith("hk_"):
+            name = f"{ident(chain.name)}_{n}"
+            n += 1
+        used.add(name)
+        fams.append(_family(chain, name))
+    return fams
+
+
+def _materials() -> list[str]:
+    return [
+        f'  <material name="{m}"><color rgba="{COLORS[m]}"/></material>'
+        for m in ("base", "body", "link", "joint", "foot")
+    ]
+
+
+def _chain_doc(chain: Chain, header: str | None) -> str:
+    fam = _families([chain])[0]
+    lines = header_lines("xacro", chain.description or chain.name, header)
+    lines += _intro()
+    lines.append(f'<robot name="{chain.name}" xmlns:xacro="{_NS}">')
+    lines += _materials()
+    lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
+    lines += _properties(fam.params)
+    lines += _HELPERS.splitlines()
+    lines += _macro_lines(fam, forward=True)
+    lines.append(f'  <xacro:{fam.macro} prefix="" parent=""/>')
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def _mount_props(robot: Hexapod, legs: tuple[Any, ...]) -> tuple[list[str], dict[str, str]]:
+    """Mount properties and the xyz expression per leg (circle form when the legs are on one)."""
+    zs = {leg.xyz[2] for leg in legs}
+    radius = math.hypot(legs[0].xyz[0], legs[0].xyz[1])
+    tol = 1e-12 * max(1.0, radius)
+    on_circle = len(zs) == 1 and all(
+        abs(radius * math.cos(leg.yaw) - leg.xyz[0]) <= tol
+        and abs(radius * math.sin(leg.yaw) - leg.xyz[1]) <= tol
+        for leg in legs
+    )
+    props: list[str] = []
+    xyz: dict[str, str] = {}
+    if on_circle:
+        props.append(f'  <xacro:property name="mount_radius" value="{num(radius)}"/>')
+        props.append(f'  <xacro:property name="mount_z" value="{num(legs[0].xyz[2])}"/>')
+    for leg in legs:
+        lid = ident(leg.name)
+        props.append(f'  <xacro:property name="{lid}_yaw" value="{num(leg.yaw)}"/>')
+        if on_circle:
+            xyz[leg.name] = (
+                f"${{mount_radius*cos({lid}_yaw)}} ${{mount_radius*sin({lid}_yaw)}} ${{mount_z}}"
+            )
+        else:
+            for axis, value in zip("xyz", leg.xyz):
+                props.append(f'  <xacro:property name="{lid}_{axis}" value="{num(value)}"/>')
+            xyz[leg.name] = f"${{{lid}_x}} ${{{lid}_y}} ${{{lid}_z}}"
+    return props, xyz
+
+
+def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
+    legs = robot.legs if leg is None else (robot.leg(leg),)
+    name = robot.name if leg is None else f"{robot.name}_{leg}"
+    fams = _families([m.chain for m in legs])
+    forward = len(fams) == 1
+    lines = header_lines("xacro", robot.description or robot.name, header)
+    lines += _intro()
+    lines.append(f'<robot name="{name}" xmlns:xacro="{_NS}">')
+    lines += _materials()
+    lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
+    lx, ly, lz = robot.body_size
+    lines += _properties(
+        {
+            "body_length": num(lx),
+            "body_width": num(ly),
+            "body_height": num(lz),
+            "body_mass": num(robot.body_mass),
+        }
+    )
+    mount_props, mount_xyz = _mount_props(robot, legs)
+    lines += mount_props
+    for fam in fams:
+        if not forward:
+            lines.append("  " + comment(f"leg family {fam.macro}"))
+        lines += _properties(fam.params, "" if forward else f"{fam.macro}_")
+    lines += _HELPERS.splitlines()
+    for fam in fams:
+        lines += _macro_lines(fam, forward=forward)
+    lines += [
+        f'  <link name="{robot.body}">',
+        "    <inertial>",
+        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
+        '      <mass value="${body_mass}"/>',
+        '      <inertia ixx="${body_mass*(body_width**2 + body_height**2)/12.0}" ixy="0" '
+        'ixz="0" iyy="${body_mass*(body_length**2 + body_height**2)/12.0}" iyz="0" '
+        'izz="${body_mass*(body_length**2 + body_width**2)/12.0}"/>',
+        "    </inertial>",
+        '    <xacro:hk_box x="${body_length}" y="${body_width}" z="${body_height}" '
+        'material="body"/>',
+        "  </link>",
+    ]
+    for mount in legs:
+        fam = next(f for f in fams if f.chain == mount.chain)
+        lid = ident(mount.name)
+        extra = "" if forward else " " + " ".join(f'{k}="${{{fam.macro}_{k}}}"' for k in fam.params)
+        lines.append(
+            f'  <xacro:{fam.macro} prefix="{mount.name}_" parent="{robot.body}" '
+            f'xyz="{mount_xyz[mount.name]}" rpy="0 0 ${{{lid}_yaw}}"{extra}/>'
+        )
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def _intro() -> list[str]:
+    return [
+        comment(
+            "Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j. Expand with "
+            "`xacro FILE > robot.urdf`: same kinematics and inertials as hexapod-kin urdf."
+        )
+    ]
+
+
+def to_xacro(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
+    """Return the xacro document of a chain or robot (deterministic: same input, same bytes).
+
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        leg: For a robot, emit only this leg with its mount on the body.
+        header: Extra header comment line (e.g. the command that made the file).
+
+    Returns:
+        The ``.urdf.xacro`` text.
+
+    Raises:
+        ParameterError: If ``source`` is of another type or ``leg`` does not fit.
+
+    """
+    src = check_source(source, leg)
+    if isinstance(src, Chain):
+        return _chain_doc(src, header)
+    return _robot_doc(src, leg, header)
+
+
+def write_xacro(
+    source: Chain | Hexapod,
+    path: str | os.PathLike[str],
+    *,
+    leg: str | None = None,
+    header: str | None = None,
+) -> Path:
+    """Write :func:`to_xacro` of ``source`` to ``path`` atomically; return the path.
+
+    Raises:
+        ParameterError: As :func:`to_xacro`, or when the directory does not exist.
+
+    """
+    return atomic_write(path, to_xacro(source, leg=leg, header=header))
+
+
+def expand_xacro(text: str, mappings: dict[str, str] | None = None) -> str:
+    """Expand a xacro document with the ``xacro`` package (optional extra ``export``).
+
+    Args:
+        text: The xacro document.
+        mappings: ``xacro:arg`` values (``name → value``).
+
+    Returns:
+        The URDF text.
+
+    Raises:
+        OptionalDependencyError: If ``xacro`` is not installed.
+        UrdfError: If xacro refuses the document.
+
+    """
+    xacro = need("xacro")
+    try:
+        doc = xacro.parse(text)
+        xacro.process_doc(doc, mappings=mappings)
+    except Exception as exc:  # xacro raises XacroException, expat errors, NameError, ...
+        raise UrdfError(f"xacro could not expand the document: {exc}") from None
+    return str(doc.toxml())
