@@ -1,0 +1,301 @@
+"""Design spaces of the 3-DOF hexabot leg on a body mount: grids, random and LHS samples.
+
+A design is one row of :data:`PARAMETERS` (SI units). Each parameter of a
+:class:`DesignSpace` is either fixed (a number) or a :class:`Range` ``lo:hi:n``; a grid takes
+the cartesian product of the ranges (``n`` points each), ``random`` draws uniform samples,
+``lhs`` a Latin hypercube (:class:`scipy.stats.qmc.LatinHypercube`), both seeded.
+
+With ``total`` set, ``l3 = total − l1 − l2`` (the seed leg's total length is 0.25 m); designs
+with ``l3 <= 0`` are dropped before the designs are numbered, so indices are stable.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ParameterError
+
+__all__ = ["ANGLES", "DEFAULTS", "METHODS", "PARAMETERS", "DesignSpace", "Range", "parse_range"]
+
+#: Design parameters, in table column order. Lengths in [m], angles in [rad].
+PARAMETERS: tuple[str, ...] = (
+    "l1",  # coxa (hip → knee) [m]
+    "l2",  # femur [m]
+    "l3",  # tibia [m]
+    "height",  # body height: the ground is the plane z = −height in the hip frame [m]
+    "mount_radius",  # distance of the hip axis from the body centre [m]
+    "mount_yaw",  # yaw of the hip frame on the body [rad]; walking direction is body x
+    "q1_lower",
+    "q1_upper",
+    "q2_lower",
+    "q2_upper",
+    "q3_lower",
+    "q3_upper",  # joint limits [rad]
+    "neutral",  # neutral foot: fraction of the ground's radial reach interval (0 inner, 1 outer)
+)
+
+#: Defaults: the seed leg (seed 001, Table 1) as the middle leg of ``robots.hexapod``.
+DEFAULTS: dict[str, float] = {
+    "l1": 0.05,
+    "l2": 0.10,
+    "l3": 0.10,
+    "height": 0.10,
+    "mount_radius": 0.12,
+    "mount_yaw": math.pi / 2,
+    "q1_lower": -math.pi,
+    "q1_upper": math.pi,
+    "q2_lower": -math.pi,
+    "q2_upper": math.pi,
+    "q3_lower": -math.pi,
+    "q3_upper": math.pi,
+    "neutral": 0.5,
+}
+
+#: Parameters that are angles (the CLI's ``--deg`` converts them).
+ANGLES: frozenset[str] = frozenset(p for p in PARAMETERS if p.startswith("q") or "yaw" in p)
+
+#: Sampling methods of :meth:`DesignSpace.designs`.
+METHODS: tuple[str, ...] = ("grid", "random", "lhs")
+
+
+@dataclass(frozen=True)
+class Range:
+    """A swept parameter: ``n`` grid points from ``lo`` to ``hi`` (inclusive).
+
+    Attributes:
+        lo: Lower bound (units of the parameter).
+        hi: Upper bound (``>= lo``).
+        n: Grid points (``>= 1``; ``random``/``lhs`` sampling ignores it).
+
+    """
+
+    lo: float
+    hi: float
+    n: int = 2
+
+    def __post_init__(self) -> None:
+        lo, hi = float(self.lo), float(self.hi)
+        if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+            raise ParameterError(
+                f"range {self.lo}:{self.hi}: bounds must be finite with lo <= hi",
+                parameter="range",
+                value=(self.lo, self.hi),
+                allowed="lo <= hi, finite",
+            )
+        if int(self.n) != self.n or self.n < 1:
+            raise ParameterError(
+                f"range n={self.n!r}: expected an integer >= 1", parameter="n", value=self.n
+            )
+        object.__setattr__(self, "lo", lo)
+        object.__setattr__(self, "hi", hi)
+        object.__setattr__(self, "n", int(self.n))
+
+    def grid(self) -> np.ndarray:
+        """The ``n`` grid values (``lo`` alone when ``n == 1``)."""
+        return np.linspace(self.lo, self.hi, self.n) if self.n > 1 else np.array([self.lo])
+
+
+def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
+    """Parse ``VALUE``, ``A:B`` or ``A:B:N`` (CLI syntax) into a number or a :class:`Range`.
+
+    Args:
+        name: Parameter name (for the error message).
+        text: The text.
+        scale: Factor applied to the values (e.g. π/180 for degrees).
+
+    Returns:
+        A float (fixed parameter) or a :class:`Range`.
+
+    Raises:
+        ParameterError: Malformed text, with the expected syntax.
+
+    """
+    parts = str(text).split(":")
+    try:
+        if len(parts) == 1:
+            return float(parts[0]) * scale
+        if len(parts) in (2, 3):
+            n = int(parts[2]) if len(parts) == 3 else 2
+            return Range(float(parts[0]) * scale, float(parts[1]) * scale, n)
+    except ValueError:
+        pass
+    raise ParameterError(
+        f"{name}={text!r}: expected VALUE, A:B or A:B:N (e.g. 0.04:0.08:5)",
+        parameter=name,
+        value=text,
+        allowed="VALUE | A:B | A:B:N",
+    )
+
+
+@dataclass(frozen=True)
+class DesignSpace:
+    """Fixed and swept design parameters.
+
+    Attributes:
+        values: Parameter name → fixed value or :class:`Range` (missing names take
+            :data:`DEFAULTS`).
+        total: If set, ``l3 = total − l1 − l2`` in [m] (``l3`` must then not be given).
+
+    """
+
+    values: Mapping[str, float | Range] = field(default_factory=dict)
+    total: float | None = None
+
+    def __post_init__(self) -> None:
+        vals: dict[str, float | Range] = {}
+        for k, v in dict(self.values).items():
+            if k not in PARAMETERS:
+                raise ParameterError(
+                    f"design parameter {k!r} unknown; valid: {', '.join(PARAMETERS)}",
+                    parameter=k,
+                    allowed=list(PARAMETERS),
+                )
+            if isinstance(v, Range):
+                vals[k] = v
+            else:
+                try:
+                    fv = float(v)
+                except (TypeError, ValueError):
+                    fv = math.nan
+                if not math.isfinite(fv):
+                    raise ParameterError(
+                        f"design parameter {k}={v!r}: expected a finite number or a Range",
+                        parameter=k,
+                        value=v,
+                    )
+                vals[k] = fv
+        if self.total is not None:
+            if "l3" in vals:
+                raise ParameterError(
+                    "total and l3 both given; with total set, l3 = total − l1 − l2",
+                    parameter="l3",
+                    value=vals["l3"],
+                )
+            if not (math.isfinite(float(self.total)) and float(self.total) > 0):
+                raise ParameterError(
+                    f"total={self.total!r}: expected a length > 0 in [m]",
+                    parameter="total",
+                    value=self.total,
+                )
+            object.__setattr__(self, "total", float(self.total))
+        object.__setattr__(self, "values", vals)
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """Names of the swept parameters (those given as a :class:`Range`)."""
+        return tuple(p for p in PARAMETERS if isinstance(self.values.get(p), Range))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready description (ranges as ``[lo, hi, n]``)."""
+        out: dict[str, Any] = {}
+        for p in PARAMETERS:
+            v = self.values.get(p)
+            if isinstance(v, Range):
+                out[p] = [v.lo, v.hi, v.n]
+            elif v is not None:
+                out[p] = v
+        return {"values": out, "total": self.total}
+
+    def designs(self, method: str = "grid", samples: int = 100, seed: int = 0) -> np.ndarray:
+        """The designs as a (N, len(PARAMETERS)) array, one row per design, columns PARAMETERS.
+
+        Args:
+            method: ``"grid"`` (cartesian product of the ranges), ``"random"`` (uniform) or
+                ``"lhs"`` (Latin hypercube).
+            samples: Number of designs drawn by ``random``/``lhs``.
+            seed: Seed of ``random``/``lhs``.
+
+        Returns:
+            A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
+
+        Raises:
+            ParameterError: Unknown method, ``samples < 1``, invalid designs (non-positive
+                lengths, lower > upper limits, ``neutral`` outside [0, 1], negative height).
+
+        """
+        if method not in METHODS:
+            raise ParameterError(
+                f"method={method!r} unknown; valid: {', '.join(METHODS)}",
+                parameter="method",
+                value=method,
+                allowed=list(METHODS),
+            )
+        swept = self.swept
+        if method == "grid" or not swept:
+            axes = [
+                v.grid() if isinstance(v, Range) else np.array([v])
+                for v in (self._value(p) for p in PARAMETERS)
+            ]
+            mesh = np.meshgrid(*axes, indexing="ij")
+            table = np.stack([m.ravel() for m in mesh], axis=1)
+        else:
+            if int(samples) != samples or samples < 1:
+                raise ParameterError(
+                    f"samples={samples!r}: expected an integer >= 1", parameter="samples"
+                )
+            if method == "lhs":
+                from scipy.stats import qmc
+
+                unit = qmc.LatinHypercube(d=len(swept), seed=np.random.default_rng(seed)).random(
+                    int(samples)
+                )
+            else:
+                unit = np.random.default_rng(seed).random((int(samples), len(swept)))
+            table = np.empty((int(samples), len(PARAMETERS)))
+            for j, p in enumerate(PARAMETERS):
+                v = self._value(p)
+                if isinstance(v, Range):
+                    k = swept.index(p)
+                    table[:, j] = v.lo + (v.hi - v.lo) * unit[:, k]
+                else:
+                    table[:, j] = v
+        if self.total is not None:
+            l3 = self.total - table[:, 0] - table[:, 1]
+            table[:, 2] = l3
+            table = table[l3 > 1e-12 * self.total]
+        self._validate(table)
+        table = np.ascontiguousarray(table)
+        table.setflags(write=False)
+        return table
+
+    def _value(self, p: str) -> float | Range:
+        if p == "l3" and self.total is not None:
+            return 0.0  # filled from total
+        return self.values.get(p, DEFAULTS[p])
+
+    @staticmethod
+    def _validate(table: np.ndarray) -> None:
+        col = {p: table[:, j] for j, p in enumerate(PARAMETERS)}
+        checks = [
+            (col["l1"] > 0, "l1", "> 0 [m]"),
+            (col["l2"] > 0, "l2", "> 0 [m]"),
+            (col["l3"] > 0, "l3", "> 0 [m]"),
+            (col["height"] >= 0, "height", ">= 0 [m]"),
+            (col["mount_radius"] >= 0, "mount_radius", ">= 0 [m]"),
+            ((col["neutral"] >= 0) & (col["neutral"] <= 1), "neutral", "in [0, 1]"),
+        ]
+        for j in (1, 2, 3):
+            checks.append(
+                (col[f"q{j}_lower"] <= col[f"q{j}_upper"], f"q{j}_lower", f"<= q{j}_upper")
+            )
+        for ok, name, allowed in checks:
+            bad = np.flatnonzero(~ok)
+            if bad.size:
+                row = table[bad[0]]
+                raise ParameterError(
+                    f"design parameter {name}={float(row[PARAMETERS.index(name)])!r} (design "
+                    f"{int(bad[0])}): must be {allowed}",
+                    parameter=name,
+                    value=float(row[PARAMETERS.index(name)]),
+                    allowed=allowed,
+                )
+        if table.shape[0] == 0:
+            raise ParameterError(
+                "the design space is empty (with total, every design had l3 <= 0)",
+                parameter="total",
+            )

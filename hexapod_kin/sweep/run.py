@@ -1,0 +1,447 @@
+"""Run a sweep: chunks scored on all local cores or on a Dask cluster, resumable output.
+
+The designs are split into chunks of ``chunk_size`` consecutive indices. Each chunk's scores
+depend only on its designs and the sweep options (the Monte-Carlo samples come from the sweep
+seed), so the table is identical whatever executes it: numba threads on this machine
+(default, all cores), or Dask distributed workers (``client=`` or ``scheduler=``; imported
+lazily, ``pip install 'hexapod-kin[sweep]'``).
+
+With ``out="results.csv"`` every finished chunk is written atomically to
+``results.parts/chunk_NNNNN.npz`` next to a ``manifest.json`` (the sweep's options and a key
+hashing them with the designs). Re-running the same sweep after an interruption (Ctrl-C,
+SIGKILL, a lost worker) loads the chunks present and scores only the missing ones; the merged
+table is the same. The merge writes ``results.csv``, ``results.parquet`` (when pyarrow is
+installed) and the JSON summary ``results.json``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import atomic_write
+from ..exceptions import ConfigurationError, OptionalDependencyError, ParameterError
+from .designs import PARAMETERS, DesignSpace
+from .pareto import OBJECTIVES, best_index, pareto_front
+from .scores import SCORES, score_designs
+
+__all__ = ["SweepResult", "read_table", "sweep", "table_paths"]
+
+_FORMAT = 1
+_UNCERTAIN = {"volume": "volume_se", "volume_mc": "volume_mc_se"}
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """A finished sweep.
+
+    Attributes:
+        table: Column name → read-only (N,) array: ``index``, the design parameters
+            (:data:`~hexapod_kin.sweep.designs.PARAMETERS`, SI units), the scores
+            (:data:`~hexapod_kin.sweep.scores.SCORES`, units there) and ``pareto`` (1 on the
+            front of stride, volume, σ_min).
+        summary: JSON-ready summary (counts, best design with uncertainties, front, options).
+        files: Written files by kind (``csv``, ``parquet``, ``json``, ``parts``), [] without out.
+        scored: Number of designs scored by this call (the others were loaded from chunks).
+        elapsed: Wall time of this call in [s].
+
+    """
+
+    table: dict[str, np.ndarray]
+    summary: dict[str, Any]
+    files: dict[str, str] = field(default_factory=dict)
+    scored: int = 0
+    elapsed: float = 0.0
+
+    @property
+    def n(self) -> int:
+        """Number of designs."""
+        return int(self.table["index"].shape[0])
+
+    def row(self, i: int) -> dict[str, float]:
+        """Design ``i`` as a dict of plain floats (all columns)."""
+        return {k: float(v[i]) for k, v in self.table.items()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the summary plus files, scored count and elapsed time [s]."""
+        return {
+            **self.summary,
+            "files": dict(self.files),
+            "scored": self.scored,
+            "elapsed_s": self.elapsed,
+        }
+
+
+def table_paths(out: str | Path) -> dict[str, Path]:
+    """Paths of a sweep's outputs for ``out`` (``x.csv`` → x.csv, x.parquet, x.json, x.parts)."""
+    p = Path(out)
+    base = p.with_suffix("") if p.suffix in (".csv", ".parquet", ".json") else p
+    return {
+        "csv": base.with_name(base.name + ".csv"),
+        "parquet": base.with_name(base.name + ".parquet"),
+        "json": base.with_name(base.name + ".json"),
+        "parts": base.with_name(base.name + ".parts"),
+    }
+
+
+def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
+    """Score one chunk (runs on a Dask worker or locally): (n, len(SCORES)) array."""
+    cols = score_designs(designs, **options)
+    return np.stack([cols[k] for k in SCORES], axis=1)
+
+
+def _npz_bytes(**arrays: Any) -> bytes:
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
+def _load_chunk(path: Path, key: str, n: int) -> np.ndarray | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["key"]) != key or z["scores"].shape != (n, len(SCORES)):
+                return None
+            return np.array(z["scores"])
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _set_threads(workers: int | None) -> Callable[[], None]:
+    import numba
+
+    if workers is None:
+        return lambda: None
+    top = int(numba.config.NUMBA_NUM_THREADS)
+    if int(workers) != workers or not 1 <= workers <= top:
+        raise ParameterError(
+            f"workers={workers!r}: expected an integer in [1, {top}] (this machine's threads)",
+            parameter="workers",
+            value=workers,
+            allowed=f"1..{top}",
+        )
+    old = numba.get_num_threads()
+    numba.set_num_threads(int(workers))
+    return lambda: numba.set_num_threads(old)
+
+
+def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
+    if client is not None:
+        return client, False
+    try:
+        from distributed import Client
+    except ImportError:
+        raise OptionalDependencyError(
+            "a Dask scheduler needs dask[distributed]: pip install 'hexapod-kin[sweep]'"
+        ) from None
+    try:
+        return Client(scheduler, timeout=30), True
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigurationError(
+            f"scheduler={scheduler!r}: cannot connect ({exc}); expected a running Dask "
+            "scheduler address such as tcp://HOST:8786",
+            parameter="scheduler",
+            value=scheduler,
+        ) from None
+
+
+def sweep(
+    space: DesignSpace,
+    *,
+    method: str = "grid",
+    samples: int = 100,
+    seed: int = 0,
+    mc_samples: int = 10_000,
+    line_points: int = 256,
+    stride_points: int = 64,
+    stride_use: float = 0.9,
+    out: str | Path | None = None,
+    chunk_size: int | None = None,
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool | None = None,
+    on_chunk: Callable[[int], None] | None = None,
+) -> SweepResult:
+    """Score every design of a design space; resumable, local or on Dask.
+
+    Args:
+        space: The design space.
+        method: ``"grid"``, ``"random"`` or ``"lhs"``.
+        samples: Designs drawn by ``random``/``lhs``.
+        seed: Seed of the design sampling and of the Monte-Carlo volume samples.
+        mc_samples: Monte-Carlo points per design (volume).
+        line_points: Grid steps per side of the stride search.
+        stride_points: Points along the stride for the σ/singularity/limit minima.
+        stride_use: Central fraction of the stride for those minima.
+        out: Table path (``x.csv``); chunks go to ``x.parts/``. None: nothing written.
+        chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
+        workers: Local numba threads (default: all cores). Ignored on Dask.
+        client: A ``distributed.Client`` to run the chunks on.
+        scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
+        progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
+        on_chunk: Called with the chunk number after each chunk is scored (and written).
+
+    Returns:
+        A :class:`SweepResult`.
+
+    Raises:
+        ParameterError: Bad options or design space.
+        ConfigurationError: ``out`` holds chunks of a different sweep; no scheduler there.
+        OptionalDependencyError: Dask requested but not installed.
+
+    """
+    t0 = time.perf_counter()
+    designs = space.designs(method, samples, seed)
+    n = designs.shape[0]
+    options = {
+        "mc_samples": int(mc_samples),
+        "seed": int(seed),
+        "line_points": int(line_points),
+        "stride_points": int(stride_points),
+        "stride_use": float(stride_use),
+    }
+    if chunk_size is None:
+        chunk_size = min(250, max(10, math.ceil(n / 20)))
+    if int(chunk_size) != chunk_size or chunk_size < 1:
+        raise ParameterError(
+            f"chunk_size={chunk_size!r}: expected an integer >= 1",
+            parameter="chunk_size",
+            value=chunk_size,
+        )
+    chunk_size = int(chunk_size)
+    spec = {
+        "format": _FORMAT,
+        "space": space.to_dict(),
+        "method": method,
+        "samples": int(samples),
+        "n_designs": n,
+        "chunk_size": chunk_size,
+        **options,
+    }
+    h = hashlib.sha256(json.dumps(spec, sort_keys=True).encode())
+    h.update(designs.tobytes())
+    key = h.hexdigest()
+    bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
+    results: dict[int, np.ndarray] = {}
+    paths = table_paths(out) if out is not None else None
+    if paths is not None:
+        parts = paths["parts"]
+        if not parts.parent.is_dir():
+            raise ParameterError(
+                f"out={str(out)!r}: directory {str(parts.parent)!r} does not exist",
+                parameter="out",
+                value=str(out),
+            )
+        parts.mkdir(exist_ok=True)
+        manifest = parts / "manifest.json"
+        if manifest.exists():
+            try:
+                old = json.loads(manifest.read_text())
+            except (OSError, ValueError):
+                old = {}
+            if old.get("key") != key:
+                raise ConfigurationError(
+                    f"out={str(out)!r}: {str(parts)!r} holds chunks of a different sweep "
+                    f"(key {str(old.get('key'))[:12]} != {key[:12]}); use another --out or "
+                    "remove that directory",
+                    parameter="out",
+                    value=str(out),
+                )
+        else:
+            atomic_write(
+                manifest,
+                json.dumps({"key": key, "spec": spec, "chunks": len(bounds)}, indent=1) + "\n",
+            )
+        for k, (a, b) in enumerate(bounds):
+            f = parts / f"chunk_{k:05d}.npz"
+            if f.exists():
+                got = _load_chunk(f, key, b - a)
+                if got is not None:
+                    results[k] = got
+    missing = [k for k in range(len(bounds)) if k not in results]
+    scored = sum(bounds[k][1] - bounds[k][0] for k in missing)
+
+    from tqdm import tqdm
+
+    bar = tqdm(
+        total=n,
+        initial=n - scored,
+        unit="design",
+        desc="sweep",
+        file=sys.stderr,
+        disable=(not sys.stderr.isatty()) if progress is None else not progress,
+        dynamic_ncols=True,
+    )
+
+    def done(k: int, scores: np.ndarray) -> None:
+        results[k] = scores
+        if paths is not None:
+            atomic_write(
+                paths["parts"] / f"chunk_{k:05d}.npz", _npz_bytes(key=np.array(key), scores=scores)
+            )
+        bar.update(bounds[k][1] - bounds[k][0])
+        if on_chunk is not None:
+            on_chunk(k)
+
+    try:
+        if missing and (client is not None or scheduler is not None):
+            cl, own = _dask_client(client, scheduler)
+            from distributed import as_completed
+
+            futures = {
+                cl.submit(
+                    _score_chunk,
+                    np.array(designs[bounds[k][0] : bounds[k][1]]),
+                    options,
+                    key=f"hexapod-sweep-{key[:16]}-{k}",
+                    pure=False,
+                ): k
+                for k in missing
+            }
+            try:
+                for fut, res in as_completed(list(futures), with_results=True):
+                    done(futures[fut], np.asarray(res))
+            finally:
+                for fut in futures:
+                    fut.cancel()
+                if own:
+                    cl.close()
+        elif missing:
+            restore = _set_threads(workers)
+            try:
+                for k in missing:
+                    a, b = bounds[k]
+                    done(k, _score_chunk(designs[a:b], options))
+            finally:
+                restore()
+    finally:
+        bar.close()
+
+    scores = np.concatenate([results[k] for k in range(len(bounds))], axis=0)
+    table: dict[str, np.ndarray] = {"index": np.arange(n, dtype=float)}
+    for j, p in enumerate(PARAMETERS):
+        table[p] = np.array(designs[:, j])
+    for j, s in enumerate(SCORES):
+        table[s] = scores[:, j]
+    table["pareto"] = pareto_front(table).astype(float)
+    for v in table.values():
+        v.setflags(write=False)
+    summary = _summary(table, spec, key)
+    files: dict[str, str] = {}
+    if paths is not None:
+        files = _write_tables(table, summary, paths)
+    return SweepResult(
+        table=table, summary=summary, files=files, scored=scored, elapsed=time.perf_counter() - t0
+    )
+
+
+def _design_dict(table: Mapping[str, np.ndarray], i: int) -> dict[str, Any]:
+    d: dict[str, Any] = {"index": i}
+    d.update({p: float(table[p][i]) for p in PARAMETERS})
+    for s in SCORES:
+        if s.endswith("_se"):
+            continue
+        d[s] = float(table[s][i])
+        if s in _UNCERTAIN:
+            d[s + "_se"] = float(table[_UNCERTAIN[s]][i])
+    return d
+
+
+def _summary(table: Mapping[str, np.ndarray], spec: dict[str, Any], key: str) -> dict[str, Any]:
+    n = int(table["index"].shape[0])
+    feas = np.asarray(table["feasible"]) > 0
+    best = best_index(table)
+    best_by = {
+        s: best_index(table, (s,) + tuple(o for o in OBJECTIVES if o != s)) for s in OBJECTIVES
+    }
+    front = np.flatnonzero(np.asarray(table["pareto"]) > 0)
+    return {
+        "n_designs": n,
+        "n_feasible": int(feas.sum()),
+        "best": _design_dict(table, best) if best >= 0 else None,
+        "best_by": {s: (_design_dict(table, i) if i >= 0 else None) for s, i in best_by.items()},
+        "pareto_objectives": list(OBJECTIVES),
+        "pareto_indices": [int(i) for i in front],
+        "units": {"parameters": "lengths [m], angles [rad]", **SCORES},
+        "spec": spec,
+        "key": key,
+    }
+
+
+def _csv_text(table: Mapping[str, np.ndarray]) -> str:
+    names = list(table)
+    cols = [np.asarray(table[c]) for c in names]
+    ints = {"index", "feasible", "volume_exact", "pareto"}
+    lines = [",".join(names)]
+    for i in range(cols[0].shape[0]):
+        lines.append(
+            ",".join(
+                str(int(c[i])) if nm in ints else repr(float(c[i])) for nm, c in zip(names, cols)
+            )
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _write_tables(
+    table: Mapping[str, np.ndarray], summary: dict[str, Any], paths: dict[str, Path]
+) -> dict[str, str]:
+    files = {"csv": str(atomic_write(paths["csv"], _csv_text(table))), "parts": str(paths["parts"])}
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        pass
+    else:
+        buf = io.BytesIO()
+        pq.write_table(pa.table({k: np.asarray(v) for k, v in table.items()}), buf)
+        files["parquet"] = str(atomic_write(paths["parquet"], buf.getvalue()))
+    files["json"] = str(paths["json"])
+    atomic_write(
+        paths["json"], json.dumps({**summary, "files": files}, indent=1, allow_nan=False) + "\n"
+    )
+    return files
+
+
+def read_table(path: str | Path) -> dict[str, np.ndarray]:
+    """Read a sweep table written by :func:`sweep` (CSV or Parquet) as column → array.
+
+    Args:
+        path: The ``.csv`` or ``.parquet`` file.
+
+    Returns:
+        Column name → (N,) float array.
+
+    Raises:
+        ParameterError: Missing file or unknown suffix.
+
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ParameterError(f"path={str(p)!r}: no such file", parameter="path", value=str(p))
+    if p.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        t = pq.read_table(p)
+        return {c: np.asarray(t.column(c).to_numpy(), dtype=float) for c in t.column_names}
+    if p.suffix != ".csv":
+        raise ParameterError(
+            f"path={str(p)!r}: expected a .csv or .parquet file",
+            parameter="path",
+            value=str(p),
+            allowed=[".csv", ".parquet"],
+        )
+    lines = p.read_text().splitlines()
+    names = lines[0].split(",")
+    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]], dtype=float)
+    data = data.reshape(-1, len(names))
+    return {c: data[:, j] for j, c in enumerate(names)}
