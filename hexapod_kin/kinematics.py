@@ -187,6 +187,62 @@ class KinematicModel(Model):
         out[3:] = r @ jac[3:]
         return out
 
+    # -------------------------------------------------------------- batch calls
+    def _batch_q(self, qs: Any) -> np.ndarray:
+        return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
+
+    def fk_batch(self, qs: Any) -> np.ndarray:
+        """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), compiled.
+
+        Equal to :meth:`fk` of each row to rounding (≈1e-15), without a Python loop.
+
+        Args:
+            qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
+
+        Raises:
+            ConfigurationError: Wrong shape or non-finite values.
+
+        """
+        from ._batch import pose_jacobian_batch
+
+        poses, _ = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=True, jacobian=None)
+        assert poses is not None
+        return poses
+
+    def jacobian_batch(self, qs: Any, reference: str = "local_world_aligned") -> np.ndarray:
+        """Tip Jacobians of many configurations, (N, 6, nq), rows ``[v; ω]``, compiled.
+
+        Equal to :meth:`jacobian` of each row (same ``reference``) to rounding.
+
+        Args:
+            qs: Configurations (N, nq).
+            reference: ``"local"``, ``"world"`` or ``"local_world_aligned"``.
+
+        Raises:
+            ParameterError: Unknown ``reference``.
+            ConfigurationError: Wrong shape or non-finite values.
+
+        """
+        from ._batch import pose_jacobian_batch
+
+        key = reference.lower() if isinstance(reference, str) else None
+        _reference(reference)
+        _, jac = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=False, jacobian=key)
+        assert jac is not None
+        return jac
+
+    def fk_jacobian_batch(
+        self, qs: Any, reference: str = "local_world_aligned"
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Poses (N, 4, 4) and Jacobians (N, 6, nq) in one compiled pass."""
+        from ._batch import pose_jacobian_batch
+
+        key = reference.lower() if isinstance(reference, str) else None
+        _reference(reference)
+        poses, jac = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=True, jacobian=key)
+        assert poses is not None and jac is not None
+        return poses, jac
+
     def position_jacobian(self, q: Any, frame: str | None = None) -> np.ndarray:
         """3×nq Jacobian of the tip position in the base frame, ``∂p/∂q``."""
         return self.jacobian(q, "local_world_aligned", frame)[:3].copy()
@@ -324,7 +380,10 @@ def load(
         tip: Tip frame (default: the chain's tip; the first foot of a hexapod; else the last
             body frame). Giving ``base`` or ``tip`` keeps only the joints between them, the
             others locked at ``q_ref`` (default neutral), unless ``reduce=False``.
-        **kwargs: ``reduce``, ``q_ref``, or preset parameters (with a preset name).
+        **kwargs: ``reduce``, ``q_ref``; ``tool`` (a rigid offset of the tip: 4×4, ``(xyz,
+            rpy)`` or a 6-vector, in [m]/[rad]; adds the frame ``<tip>_tool``, which becomes
+            the tip of fk/jacobian/batch calls); ``package_dirs`` (where ``package://``
+            meshes resolve); or preset parameters (with a preset name).
 
     Returns:
         A :class:`KinematicModel`.

@@ -78,12 +78,14 @@ class Model:
 
     Attributes:
         model: The ``pinocchio.Model`` (reduced to the base → tip joints when asked).
-        data: Its ``pinocchio.Data`` (created here, never replaced).
+        data: The calling thread's ``pinocchio.Data`` (one per thread, never re-paired).
         full_model: The model before reduction.
         urdf: The URDF text the model was built from.
         source: The resolved source (name, mesh directories, params).
         base: Name of the base frame.
-        tip: Name of the tip frame.
+        tip: Name of the tip frame (``<flange>_tool`` when a ``tool`` offset was given).
+        flange: The frame the tool is mounted on (the tip of the chain without the tool).
+        tool: The tool offset ``flangeMtip`` (4×4, read-only), or ``None``.
 
     """
 
@@ -95,6 +97,7 @@ class Model:
         *,
         reduce: bool | None = None,
         q_ref: Any = None,
+        tool: Any = None,
     ) -> None:
         self._cache: dict[str, Any] = {}
         self._cache_lock = threading.RLock()
@@ -134,7 +137,15 @@ class Model:
                     f"{choices(full_frames, limit=200)}"
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
-        self.model, self._locked, self._q_ref = _reduce(full, base_name, tip_name, do_reduce, q_ref)
+        reduced, self._locked, self._q_ref = _reduce(full, base_name, tip_name, do_reduce, q_ref)
+        self.flange = tip_name
+        self.tool: np.ndarray | None = None
+        if tool is not None:
+            tool_m = pose_matrix(tool, "tool")
+            reduced, tip_name = _add_tool_frame(reduced, tip_name, tool_m)
+            tool_m.setflags(write=False)
+            self.tool = tool_m
+        self.model = reduced
         data = self.model.createData()
         self.base = base_name
         self.tip = tip_name
@@ -401,6 +412,86 @@ class _PerThread(threading.local):
         self.hot = (owner.model, data, owner.tip_id, owner.nq, owner._base_is_root)
 
 
+def pose_matrix(value: Any, name: str = "pose") -> np.ndarray:
+    """A rigid transform as a fresh 4×4 array, from a 4×4 matrix or ``(xyz, rpy)``.
+
+    Accepted: a 4×4 homogeneous matrix (rotation orthonormal with det +1 to 1e-9, last row
+    ``0 0 0 1``); a pair ``(xyz, rpy)``; a flat 6-vector ``xyz + rpy``; a mapping with keys
+    ``xyz`` and/or ``rpy``. ``xyz`` in [m]; ``rpy`` in [rad], the URDF convention
+    (``Rz(yaw)·Ry(pitch)·Rx(roll)``).
+
+    Args:
+        value: The transform.
+        name: The parameter name for messages.
+
+    Raises:
+        ParameterError: Anything else, non-finite numbers or a matrix that is not rigid.
+
+    """
+    from .exceptions import ParameterError
+
+    allowed = "a 4x4 homogeneous matrix, (xyz, rpy), a 6-vector xyz+rpy or {'xyz':…, 'rpy':…}"
+
+    def bad(why: str) -> ParameterError:
+        return ParameterError(
+            f"{name}={value!r}: {why}; give {allowed}", parameter=name, value=value, allowed=allowed
+        )
+
+    if isinstance(value, dict):
+        unknown = set(value) - {"xyz", "rpy"}
+        if unknown:
+            raise bad(f"unknown keys {sorted(unknown)}")
+        value_xyz, value_rpy = value.get("xyz", (0.0, 0.0, 0.0)), value.get("rpy", (0.0, 0.0, 0.0))
+        return pose_matrix((value_xyz, value_rpy), name)
+    if isinstance(value, pin.SE3):
+        value = value.homogeneous
+    try:
+        if isinstance(value, (tuple, list)) and len(value) == 2:
+            xyz = np.asarray(value[0], dtype=float)
+            rpy = np.asarray(value[1], dtype=float)
+            if xyz.shape != (3,) or rpy.shape != (3,):
+                raise bad("xyz and rpy need 3 numbers each")
+            arr = np.concatenate([xyz, rpy])
+        else:
+            if np.asarray(value).dtype.kind in "USb":
+                raise bad("not numbers")
+            arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise bad("not numbers") from None
+    if not np.all(np.isfinite(arr)):
+        raise bad("non-finite values")
+    if arr.shape == (6,):
+        out = np.eye(4)
+        out[:3, :3] = pin.rpy.rpyToMatrix(*(float(x) for x in arr[3:]))
+        out[:3, 3] = arr[:3]
+        return out
+    if arr.shape != (4, 4):
+        raise bad(f"shape {arr.shape}")
+    rot = arr[:3, :3]
+    if not (
+        np.allclose(arr[3], [0.0, 0.0, 0.0, 1.0], atol=1e-12, rtol=0.0)
+        and np.allclose(rot.T @ rot, np.eye(3), atol=1e-9, rtol=0.0)
+        and np.linalg.det(rot) > 0.0
+    ):
+        raise bad("not a rigid transform (rotation orthonormal with det +1, last row 0 0 0 1)")
+    return arr.copy()
+
+
+def _add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:
+    """A copy of ``model`` with a frame ``<tip>_tool`` at ``tip · tool``; returns its name."""
+    out = pin.Model(model)
+    tip_id = out.getFrameId(tip)
+    tip_frame = out.frames[tip_id]
+    name = f"{tip}_tool"
+    k = 1
+    while out.existFrame(name):
+        k += 1
+        name = f"{tip}_tool{k}"
+    placement = tip_frame.placement * pin.SE3(tool[:3, :3].copy(), tool[:3, 3].copy())
+    out.addFrame(pin.Frame(name, tip_frame.parentJoint, tip_id, placement, pin.FrameType.OP_FRAME))
+    return out, name
+
+
 def _root_link_frame(model: pin.Model) -> str:
     """The URDF root link's frame (fixed at the origin of ``universe``), else ``universe``."""
     for frame in model.frames:
@@ -481,8 +572,9 @@ def build(
     reduce: bool | None = None,
     q_ref: Any = None,
     package_dirs: Any = (),
+    tool: Any = None,
     **params: Any,
 ) -> Model:
     """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``)."""
     resolved = resolve_source(source, package_dirs=package_dirs, **params)
-    return cls(resolved, base, tip, reduce=reduce, q_ref=q_ref)
+    return cls(resolved, base, tip, reduce=reduce, q_ref=q_ref, tool=tool)

@@ -223,3 +223,96 @@ def test_model_and_data_cannot_be_repaired(preset_models):
     with pytest.raises(ParameterError, match="read-only"):
         model.model = other.model
     assert isinstance(model.data, pin.Data) and model.data.oMi.__len__() == model.model.njoints
+
+
+# ------------------------------------------------------------------ batch calls (issue 11)
+@pytest.mark.parametrize(
+    ("source", "kw"),
+    [
+        ("hexabot_leg", {}),
+        ("scara", {}),
+        ("hexapod", {"tip": "leg4_foot"}),
+        ("erd:ur5_robot", {}),
+        ("erd:panda", {}),
+        ("erd:solo12", {"tip": "HR_FOOT"}),
+    ],
+)
+def test_batch_calls_equal_a_pinocchio_loop(source, kw):
+    model = hk.load(source, **kw)
+    qs = model.random_q(150, seed=3)
+    m, d = model.model, model.model.createData()  # raw Pinocchio, its own Data
+    base_inv = model.baseMo
+    poses = model.fk_batch(qs)
+    assert poses.shape == (150, 4, 4)
+    refs = {"local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+            "world": pin.ReferenceFrame.WORLD, "local": pin.ReferenceFrame.LOCAL}
+    jacs = {ref: model.jacobian_batch(qs, ref) for ref in refs}
+    both = model.fk_jacobian_batch(qs, "world")
+    for i, q in enumerate(qs):
+        pin.forwardKinematics(m, d, q)
+        omf = pin.updateFramePlacement(m, d, model.tip_id)
+        np.testing.assert_allclose(poses[i], (base_inv * omf).homogeneous, rtol=0, atol=1e-12)
+        for ref, pref in refs.items():
+            jac = pin.computeFrameJacobian(m, d, q, model.tip_id, pref)
+            if ref == "world":
+                jac = base_inv.action @ jac
+            elif ref == "local_world_aligned":
+                rot = base_inv.rotation
+                jac = np.vstack([rot @ jac[:3], rot @ jac[3:]])
+            np.testing.assert_allclose(jacs[ref][i], jac, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(both[0], poses)
+    np.testing.assert_array_equal(both[1], jacs["world"])
+
+
+def test_batch_calls_check_their_input():
+    from hexapod_kin.exceptions import ConfigurationError, ParameterError
+
+    model = hk.load("hexabot_leg")
+    assert model.fk_batch([0.1, 0.2, 0.3]).shape == (1, 4, 4)
+    with pytest.raises(ConfigurationError, match="shape"):
+        model.fk_batch(np.zeros((5, 4)))
+    with pytest.raises(ConfigurationError, match="non-finite"):
+        model.jacobian_batch([[0.0, np.nan, 0.0]])
+    with pytest.raises(ParameterError, match="reference"):
+        model.jacobian_batch(np.zeros((2, 3)), "body")
+    assert model.fk_batch(np.zeros((0, 3))).shape == (0, 4, 4)
+
+
+# ------------------------------------------------------------------ tool offsets
+@pytest.mark.parametrize("source", ["hexabot_leg", "erd:ur5_robot"])
+def test_tool_offset_composes_with_the_flange(source):
+    xyz, rpy = np.array([0.01, -0.02, 0.15]), np.array([0.3, -0.2, 1.1])
+    plain = hk.load(source)
+    tooled = hk.load(source, tool=(xyz, rpy))
+    tool = np.eye(4)
+    tool[:3, :3] = pin.rpy.rpyToMatrix(*rpy)
+    tool[:3, 3] = xyz
+    np.testing.assert_allclose(tooled.tool, tool, atol=1e-15)
+    assert tooled.flange == plain.tip and tooled.tip == f"{plain.tip}_tool"
+    for q in plain.random_q(20, seed=4):
+        np.testing.assert_allclose(tooled.fk(q), plain.fk(q) @ tool, atol=1e-12)
+        # Jacobian of the tool point by finite differences of fk (independent of Pinocchio's J)
+        jac = tooled.jacobian(q)
+        eps = 1e-6
+        for k in range(plain.nq):
+            dq = np.zeros(plain.nq)
+            dq[k] = eps
+            dp = (tooled.fk(q + dq)[:3, 3] - tooled.fk(q - dq)[:3, 3]) / (2 * eps)
+            np.testing.assert_allclose(jac[:3, k], dp, atol=1e-7)
+    qs = plain.random_q(30, seed=5)
+    np.testing.assert_allclose(tooled.fk_batch(qs), plain.fk_batch(qs) @ tool, atol=1e-12)
+    same = hk.load(source, tool=tool)  # 4x4 form
+    np.testing.assert_allclose(same.fk(qs[0]), tooled.fk(qs[0]), atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [np.eye(3), np.diag([1.0, 1.0, -1.0, 1.0]), [1, 2], "abc", [0, 0, 0, np.nan, 0, 0],
+     {"xyz": [0, 0, 0], "rot": [0, 0, 0]}],
+)
+def test_tool_offset_refuses_non_rigid(bad):
+    from hexapod_kin.exceptions import ParameterError
+
+    with pytest.raises(ParameterError) as info:
+        hk.load("hexabot_leg", tool=bad)
+    assert info.value.parameter == "tool"
