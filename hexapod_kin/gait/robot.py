@@ -1,0 +1,505 @@
+"""The whole hexapod: floating base (Pinocchio free-flyer) + 18 leg joints, and body-pose IK.
+
+:class:`WholeBody` builds the Pinocchio model of the ``hexapod`` preset with a free-flyer root
+from its generated URDF (checked by the loader gate first), and keeps the tree's constants
+(joint placements, link inertials, foot frames) as arrays so that forward kinematics, the
+centre of mass and the leg segments are computed for many samples at once (vectorised over
+time; Pinocchio's own ``centerOfMass``/``framesForwardKinematics`` are the reference in the
+tests). :meth:`WholeBody.body_ik` solves the 18 joint angles of a body pose with the feet
+fixed in the world, leg by leg, with the closed form of the leg (:func:`hexapod_kin.ik.
+analytic_batch`) in its mount frame.
+
+Poses are 4×4 ``worldMbody`` arrays (the body frame: x forward, z up, origin on the mounts'
+plane at the body centre).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from .._kernels import njit
+from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
+from ..params import Hexapod
+
+__all__ = ["BodyIK", "GaitError", "WholeBody", "pose_matrix", "whole_body"]
+
+
+class GaitError(ConfigurationError):
+    """A gait or body pose that the robot cannot perform (a check failed).
+
+    Attributes:
+        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
+            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
+        leg: The leg's name (``None`` when the check is about the whole robot).
+        time: Time of the first failing sample in [s] (``None`` for a single pose).
+        amount: By how much the check fails, in [m] or [rad] (≥ 0).
+
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        check: str,
+        leg: str | None = None,
+        time: float | None = None,
+        amount: float | None = None,
+        parameter: str | None = None,
+        value: Any = None,
+        allowed: Any = None,
+    ) -> None:
+        super().__init__(message, parameter=parameter, value=value, allowed=allowed)
+        self.check = check
+        self.leg = leg
+        self.time = time
+        self.amount = amount
+
+
+def pose_matrix(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """The 4×4 pose of position ``xyz`` [m] and roll/pitch/yaw ``rpy`` [rad] (R = Rz·Ry·Rx).
+
+    Raises:
+        ParameterError: ``xyz`` or ``rpy`` is not three finite numbers.
+
+    """
+    p = np.asarray(xyz, dtype=float).reshape(-1)
+    a = np.asarray(rpy, dtype=float).reshape(-1)
+    if p.shape != (3,) or a.shape != (3,) or not np.all(np.isfinite(np.r_[p, a])):
+        raise ParameterError(f"pose xyz={xyz!r}, rpy={rpy!r}: three finite numbers each")
+    cr, sr = math.cos(a[0]), math.sin(a[0])
+    cp, sp = math.cos(a[1]), math.sin(a[1])
+    cy, sy = math.cos(a[2]), math.sin(a[2])
+    T = np.eye(4)
+    T[:3, :3] = [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ]
+    T[:3, 3] = p
+    return T
+
+
+def _inv(T: np.ndarray) -> np.ndarray:
+    """Inverse of rigid transforms (..., 4, 4)."""
+    out = np.zeros_like(T)
+    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
+    out[..., :3, :3] = Rt
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, T[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+@dataclass(frozen=True)
+class BodyIK:
+    """Joint angles of body poses with the feet fixed in the world (arrays read-only).
+
+    Attributes:
+        q: (N, 18) joint angles in [rad], legs in order, hip/knee/ankle each.
+        reached: (N, L) True where the leg's closed form has a solution.
+        excess: (N, L) distance by which each foot is out of the leg's reach in [m]
+            (0 when reachable).
+        limit_margin: (N, 18) distance of each joint to its nearest limit in [rad]
+            (negative beyond a limit).
+        leg_names: The legs' names.
+
+    """
+
+    q: np.ndarray
+    reached: np.ndarray
+    excess: np.ndarray
+    limit_margin: np.ndarray
+    leg_names: tuple[str, ...]
+
+    @property
+    def ok(self) -> np.ndarray:
+        """(N, L) True where the leg is reached and inside its joint limits."""
+        n_leg = len(self.leg_names)
+        lim = self.limit_margin.reshape(len(self.q), n_leg, -1).min(axis=2)
+        return np.asarray(self.reached & (lim >= 0))
+
+
+@njit(cache=True)
+def _pick_branch(
+    qk: np.ndarray, valid: np.ndarray, q0: np.ndarray, out: np.ndarray, ok: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """At each sample the valid slot nearest to the previous sample (angles unwrapped)."""
+    prev = q0.copy()
+    n, k, m = qk.shape
+    for i in range(n):
+        best = -1
+        best_d = np.inf
+        for s in range(k):
+            if not valid[i, s]:
+                continue
+            d = 0.0
+            for j in range(m):
+                a = qk[i, s, j] - prev[j]
+                a = (a + math.pi) % (2.0 * math.pi) - math.pi
+                d += abs(a)
+            if d < best_d:
+                best_d = d
+                best = s
+        ok[i] = best >= 0
+        if best >= 0:
+            for j in range(m):
+                a = qk[i, best, j] - prev[j]
+                prev[j] = prev[j] + (a + math.pi) % (2.0 * math.pi) - math.pi
+        for j in range(m):
+            out[i, j] = prev[j]
+
+
+@dataclass(frozen=True, eq=False)
+class WholeBody:
+    """The hexapod with a floating base: Pinocchio model and vectorised kinematics.
+
+    Build it with :func:`whole_body` (cached per robot). Joint order: the legs in
+    ``params.legs`` order, hip/knee/ankle each (the order of Pinocchio's ``q[7:]``).
+
+    Attributes:
+        params: The robot's parameters.
+        model: Pinocchio model with a free-flyer root (nq = 7 + 18).
+        leg_names: The legs' names.
+        joint_names: The 18 joint names.
+        mass: Total mass in [kg] (from the URDF's inertials).
+        lower: (18,) lower joint limits in [rad].
+        upper: (18,) upper joint limits in [rad].
+        mounts: (L, 4, 4) ``bodyMmount`` of each leg.
+        link_radius: Radius of the leg links in [m] (for the leg clearance).
+
+    """
+
+    params: Hexapod
+    model: Any
+    leg_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    mass: float
+    lower: np.ndarray
+    upper: np.ndarray
+    mounts: np.ndarray
+    link_radius: float
+    _parents: np.ndarray = field(repr=False)
+    _placements: np.ndarray = field(repr=False)
+    _masses: np.ndarray = field(repr=False)
+    _levers: np.ndarray = field(repr=False)
+    _foot: np.ndarray = field(repr=False)
+    _foot_joint: np.ndarray = field(repr=False)
+    _leg_joints: np.ndarray = field(repr=False)
+
+    @property
+    def n_legs(self) -> int:
+        """Number of legs."""
+        return len(self.leg_names)
+
+    @property
+    def nq(self) -> int:
+        """Number of leg joints (18)."""
+        return len(self.joint_names)
+
+    # ------------------------------------------------------------------ kinematics
+    def joint_poses(self, q: Any, base: Any) -> np.ndarray:
+        """World poses of the leg joints' frames, (N, 18, 4, 4).
+
+        Args:
+            q: (N, 18) joint angles in [rad].
+            base: (N, 4, 4) body poses ``worldMbody``.
+
+        """
+        q = np.asarray(q, dtype=float)
+        base = np.asarray(base, dtype=float)
+        n = q.shape[0]
+        out = np.empty((n, self.nq, 4, 4))
+        c, s = np.cos(q), np.sin(q)
+        for j in range(self.nq):
+            P = self._placements[j]
+            local = np.empty((n, 4, 4))
+            local[:, :, 0] = c[:, j, None] * P[:, 0] + s[:, j, None] * P[:, 1]
+            local[:, :, 1] = -s[:, j, None] * P[:, 0] + c[:, j, None] * P[:, 1]
+            local[:, :, 2] = P[:, 2]
+            local[:, :, 3] = P[:, 3]
+            parent = base if self._parents[j] < 0 else out[:, self._parents[j]]
+            out[:, j] = parent @ local
+        return out
+
+    def leg_points(self, q: Any, base: Any) -> np.ndarray:
+        """World positions (N, L, 4, 3) of each leg's hip, knee, ankle and foot, in [m]."""
+        return self.points_of(self.joint_poses(q, base))
+
+    def points_of(self, T: np.ndarray) -> np.ndarray:
+        """:meth:`leg_points` from joint poses ``T`` (N, 18, 4, 4) of :meth:`joint_poses`."""
+        pts = T[:, self._leg_joints][..., :3, 3]  # (N, L, 3, 3)
+        Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
+        foot = np.einsum("nlij,lj->nli", Ta[..., :3, :], self._foot)
+        return np.concatenate([pts, foot[:, :, None, :]], axis=2)
+
+    def feet(self, q: Any, base: Any) -> np.ndarray:
+        """World foot positions (N, L, 3) in [m]."""
+        return self.leg_points(q, base)[:, :, 3]
+
+    def com(self, q: Any, base: Any) -> np.ndarray:
+        """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
+        return self.com_of(self.joint_poses(q, base), base)
+
+    def com_of(self, T: np.ndarray, base: Any) -> np.ndarray:
+        """:meth:`com` from joint poses ``T`` (N, 18, 4, 4) and body poses (N, 4, 4)."""
+        base = np.asarray(base, dtype=float)
+        acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
+        pts = np.einsum("njab,jb->nja", T[:, :, :3, :3], self._levers[1:]) + T[:, :, :3, 3]
+        acc = acc + np.einsum("j,nja->na", self._masses[1:], pts)
+        return np.asarray(acc / self.mass)
+
+    def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
+        """Pinocchio configurations (N, 25): base xyz, base quaternion (x, y, z, w), joints."""
+        import pinocchio as pin
+
+        q = np.asarray(q, dtype=float)
+        base = np.asarray(base, dtype=float)
+        out = np.empty((len(q), 7 + self.nq))
+        for i in range(len(q)):
+            out[i, :3] = base[i, :3, 3]
+            out[i, 3:7] = pin.Quaternion(base[i, :3, :3]).coeffs()
+        out[:, 7:] = q
+        return out
+
+    # ------------------------------------------------------------------ body-pose IK
+    def neutral_q(self) -> np.ndarray:
+        """A standing configuration (18,): knee −0.3 rad, ankle 1.7 rad (legs bent down)."""
+        q = np.zeros(self.nq)
+        for i, name in enumerate(self.joint_names):
+            if name.endswith("knee"):
+                q[i] = -0.3
+            elif name.endswith("ankle"):
+                q[i] = 1.7
+        return np.clip(q, self.lower, self.upper)
+
+    def reach_excess(self, targets: np.ndarray, leg: int) -> np.ndarray:
+        """Distance (N,) by which mount-frame foot targets lie outside the leg's reach [m]."""
+        from ..ik import detect_family
+
+        fam = detect_family(self.params.legs[leg].chain)
+        x = np.asarray(targets, dtype=float)
+        h = np.hypot(x[:, 0], x[:, 1])
+        w = (x[:, 2] - fam.height) * fam.sign
+        if fam.family == "leg3":
+            l1, l2, l3 = fam.lengths
+            rmin, rmax = abs(l2 - l3), l2 + l3
+        else:
+            l1, l2 = fam.lengths[:2]
+            rmin = rmax = abs(l2)
+        best = np.full(len(x), np.inf)
+        for hs in (1.0, -1.0):
+            r = np.hypot(hs * h - l1, w)
+            best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
+        return best
+
+    def body_ik(
+        self,
+        base: Any,
+        feet: Any,
+        *,
+        q_prev: Any = None,
+        times: Any = None,
+        strict: bool = True,
+    ) -> BodyIK:
+        """The 18 joint angles that put the feet at world points under body poses.
+
+        Each leg is solved in its mount frame by its closed form; at each sample the branch
+        nearest to the previous sample's (the first to ``q_prev``) is kept.
+
+        Args:
+            base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`pose_matrix`).
+            feet: Foot positions in the world (L, 3) or (N, L, 3) in [m].
+            q_prev: (18,) joints the first sample's branch is nearest to (default
+                :meth:`neutral_q`).
+            times: (N,) sample times in [s], used in error messages (default: sample index).
+            strict: Raise on the first unreachable foot or joint beyond its limits.
+
+        Returns:
+            A :class:`BodyIK` (per-leg status and out-of-reach distances).
+
+        Raises:
+            GaitError: ``strict`` and a foot is out of reach (check ``"reach"``: names the
+                leg, the time and by how much) or a joint is beyond its limit
+                (``"joint limit"``).
+            ParameterError: Bad shapes.
+
+        """
+        from ..ik import analytic_batch
+
+        B = np.asarray(base, dtype=float)
+        P = np.asarray(feet, dtype=float)
+        if B.shape == (4, 4):
+            B = B[None]
+        if P.ndim == 2:
+            P = np.broadcast_to(P, (len(B),) + P.shape)
+        nl = self.n_legs
+        if B.ndim != 3 or B.shape[1:] != (4, 4) or P.shape != (len(B), nl, 3):
+            raise ParameterError(
+                f"base has shape {np.shape(base)} and feet {np.shape(feet)}; expected (N, 4, 4) "
+                f"and (N, {nl}, 3) (or (4, 4) and ({nl}, 3))",
+                parameter="feet", value=np.shape(feet), allowed=f"(N, {nl}, 3)",
+            )
+        if not (np.all(np.isfinite(B)) and np.all(np.isfinite(P))):
+            raise ParameterError("base and feet must be finite", parameter="feet")
+        n = len(B)
+        t = np.arange(n, dtype=float) if times is None else np.asarray(times, dtype=float)
+        q0 = self.neutral_q() if q_prev is None else np.asarray(q_prev, dtype=float)
+        # feet in each mount frame: (worldMbody · bodyMmount)^-1 · p
+        inv_b = _inv(B)
+        p_body = np.einsum("nij,nlj->nli", inv_b[:, :3, :3], P) + inv_b[:, None, :3, 3]
+        inv_m = _inv(self.mounts)
+        p_mount = np.einsum("lij,nlj->nli", inv_m[:, :3, :3], p_body) + inv_m[None, :, :3, 3]
+        q = np.empty((n, self.nq))
+        reached = np.empty((n, nl), dtype=bool)
+        excess = np.zeros((n, nl))
+        for leg in range(nl):
+            cols = self._leg_joints[leg]
+            chain = self.params.legs[leg].chain
+            targets = np.ascontiguousarray(p_mount[:, leg])
+            try:
+                batch = analytic_batch(chain, targets)
+            except HexapodKinError as exc:
+                raise ConfigurationError(
+                    f"leg {self.leg_names[leg]}: {exc}", parameter="params"
+                ) from None
+            out = np.empty((n, len(cols)))
+            ok = np.empty(n, dtype=np.bool_)
+            _pick_branch(
+                np.ascontiguousarray(batch.q), np.ascontiguousarray(batch.valid),
+                np.ascontiguousarray(q0[cols]), out, ok,
+            )
+            q[:, cols] = out
+            reached[:, leg] = ok
+            if not ok.all():
+                excess[:, leg] = np.where(ok, 0.0, self.reach_excess(targets, leg))
+        margin = np.minimum(q - self.lower, self.upper - q)
+        if strict:
+            self._raise_first(reached, excess, margin, t)
+        for a in (q, reached, excess, margin):
+            a.setflags(write=False)
+        return BodyIK(q, reached, excess, margin, self.leg_names)
+
+    def _raise_first(
+        self, reached: np.ndarray, excess: np.ndarray, margin: np.ndarray, t: np.ndarray
+    ) -> None:
+        if not reached.all():
+            i, leg = np.argwhere(~reached)[0]
+            d = float(excess[i, leg])
+            name = self.leg_names[leg]
+            raise GaitError(
+                f"leg {name}: foot out of reach by {d:.4g} m at t={t[i]:.4g} s (check 'reach'; "
+                "shorten the stride, lower the step or the body, or slow down)",
+                check="reach", leg=name, time=float(t[i]), amount=d,
+                parameter="feet", value=d, allowed="a foot within the leg's reach",
+            )
+        if np.any(margin < 0):
+            i, j = np.argwhere(margin < 0)[0]
+            leg = name = self.joint_names[j].rsplit("_", 1)[0]
+            d = float(-margin[i, j])
+            raise GaitError(
+                f"leg {leg}: joint {self.joint_names[j]} beyond its limit by {d:.4g} rad at "
+                f"t={t[i]:.4g} s (check 'joint limit'; allowed [{self.lower[j]:.4g}, "
+                f"{self.upper[j]:.4g}] rad)",
+                check="joint limit", leg=name, time=float(t[i]), amount=d,
+                parameter=self.joint_names[j], value=d,
+                allowed=[float(self.lower[j]), float(self.upper[j])],
+            )
+
+
+def _build(params: Hexapod) -> WholeBody:
+    import pinocchio as pin
+
+    from .._gate import check_urdf
+    from ..urdf import to_urdf
+
+    text = to_urdf(params)
+    check_urdf(text)
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    names = list(model.names)
+    joint_names = tuple(params.joint_names)
+    idx = []
+    for jn in joint_names:
+        if jn not in names:
+            raise ConfigurationError(f"joint {jn!r} missing from the hexapod's URDF model")
+        j = names.index(jn)
+        if model.joints[j].shortname() != "JointModelRZ":
+            raise ConfigurationError(
+                f"joint {jn!r} is {model.joints[j].shortname()}; the vectorised kinematics "
+                "handle revolute-z joints (Khalil tables)"
+            )
+        idx.append(j)
+    if idx != sorted(idx) or idx != list(range(2, 2 + len(idx))):
+        raise ConfigurationError("the URDF's joint order differs from params.joint_names")
+    local = {j: k for k, j in enumerate(idx)}
+    parents = np.array([local.get(model.parents[j], -1) for j in idx])
+    placements = np.array([model.jointPlacements[j].homogeneous for j in idx])
+    masses = np.array([model.inertias[1].mass] + [model.inertias[j].mass for j in idx])
+    levers = np.array([model.inertias[1].lever] + [model.inertias[j].lever for j in idx])
+    leg_joints, foot, foot_joint = [], [], []
+    for leg in params.legs:
+        cols = [joint_names.index(f"{leg.name}_{j}") for j in (leg.chain.joint_names or ())]
+        if len(cols) != 3:
+            raise ConfigurationError(f"leg {leg.name}: three joints expected, got {len(cols)}")
+        leg_joints.append(cols)
+        fid = model.getFrameId(f"{leg.name}_{leg.chain.tip}")
+        fr = model.frames[fid]
+        foot.append(np.append(fr.placement.translation, 1.0))  # in its joint's frame
+        foot_joint.append(local[fr.parentJoint])
+    foot_arr = np.array(foot)
+    lower = np.asarray(model.lowerPositionLimit[7:], dtype=float).copy()
+    upper = np.asarray(model.upperPositionLimit[7:], dtype=float).copy()
+    mounts = np.array([leg.transform() for leg in params.legs])
+    wb = WholeBody(
+        params=params,
+        model=model,
+        leg_names=tuple(leg.name for leg in params.legs),
+        joint_names=joint_names,
+        mass=float(pin.computeTotalMass(model)),
+        lower=lower,
+        upper=upper,
+        mounts=mounts,
+        link_radius=float(params.legs[0].chain.link_radius),
+        _parents=parents,
+        _placements=placements,
+        _masses=masses,
+        _levers=levers,
+        _foot=foot_arr,
+        _foot_joint=np.array(foot_joint),
+        _leg_joints=np.array(leg_joints),
+    )
+    for a in (lower, upper, mounts, placements, masses, levers, foot_arr):
+        a.setflags(write=False)
+    return wb
+
+
+@lru_cache(maxsize=8)
+def _cached(params: Hexapod) -> WholeBody:
+    return _build(params)
+
+
+def whole_body(params: Hexapod | None = None) -> WholeBody:
+    """The whole-robot model of a hexapod (default ``robots.hexapod()``), cached.
+
+    Raises:
+        ParameterError: ``params`` is not a :class:`~hexapod_kin.params.Hexapod`.
+        UrdfError: The generated URDF fails the loader gate.
+        ConfigurationError: The legs are not 3-joint revolute-z chains.
+
+    """
+    if params is None:
+        from ..robots import hexapod
+
+        params = hexapod()
+    if not isinstance(params, Hexapod):
+        raise ParameterError(
+            f"params={params!r} is not a Hexapod", parameter="params", value=repr(params),
+            allowed="hexapod_kin.params.Hexapod (e.g. robots.hexapod())",
+        )
+    try:
+        return _cached(params)
+    except TypeError:  # unhashable parameters
+        return _build(params)

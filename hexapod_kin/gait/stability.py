@@ -1,0 +1,220 @@
+"""Static stability and leg clearance, vectorised over time (compiled loops).
+
+* :func:`support_margin`: the support polygon is the convex hull of the stance feet projected
+  on the ground plane (xy); the margin is the signed distance from the projected centre of
+  mass to its edge — positive inside (the distance to the nearest edge), negative outside
+  (minus the distance to the polygon); with two stance feet the polygon is a segment and with
+  one a point (margin ≤ 0), with none −∞.
+* :func:`segment_clearance`: the smallest distance between the segments of neighbouring legs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .._kernels import njit
+from ..exceptions import ParameterError
+
+__all__ = ["segment_clearance", "support_margin"]
+
+
+@njit(cache=True, inline="always")
+def _cross(ox: float, oy: float, ax: float, ay: float, bx: float, by: float) -> float:
+    return (ax - ox) * (by - oy) - (ay - oy) * (bx - ox)  # pragma: no cover - compiled
+
+
+@njit(cache=True, inline="always")
+def _seg_point(ax: float, ay: float, bx: float, by: float, px: float, py: float) -> float:
+    """Distance from p to the segment ab (2-D)."""
+    dx, dy = bx - ax, by - ay  # pragma: no cover - compiled
+    ll = dx * dx + dy * dy
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - ax) * dx + (py - ay) * dy) / ll
+        t = min(max(t, 0.0), 1.0)
+    ex, ey = ax + t * dx - px, ay + t * dy - py
+    return math.sqrt(ex * ex + ey * ey)
+
+
+@njit(cache=True)
+def _margin_kernel(
+    pts: np.ndarray, mask: np.ndarray, com: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    n, m = mask.shape
+    xs = np.empty(m)
+    ys = np.empty(m)
+    hx = np.empty(2 * m + 1)
+    hy = np.empty(2 * m + 1)
+    for i in range(n):
+        k = 0
+        for j in range(m):  # gather, insertion-sorted by (x, y)
+            if mask[i, j]:
+                x, y = pts[i, j, 0], pts[i, j, 1]
+                p = k
+                while p > 0 and (xs[p - 1] > x or (xs[p - 1] == x and ys[p - 1] > y)):
+                    xs[p] = xs[p - 1]
+                    ys[p] = ys[p - 1]
+                    p -= 1
+                xs[p] = x
+                ys[p] = y
+                k += 1
+        px, py = com[i, 0], com[i, 1]
+        if k == 0:
+            out[i] = -np.inf
+            continue
+        # Andrew's monotone chain, counter-clockwise, collinear points dropped
+        h = 0
+        for j in range(k):
+            while h >= 2 and _cross(hx[h - 2], hy[h - 2], hx[h - 1], hy[h - 1], xs[j], ys[j]) <= 0:
+                h -= 1
+            hx[h] = xs[j]
+            hy[h] = ys[j]
+            h += 1
+        lo = h + 1
+        for j in range(k - 2, -1, -1):
+            while h >= lo and _cross(hx[h - 2], hy[h - 2], hx[h - 1], hy[h - 1], xs[j], ys[j]) <= 0:
+                h -= 1
+            hx[h] = xs[j]
+            hy[h] = ys[j]
+            h += 1
+        h -= 1  # the last point repeats the first
+        if h <= 0:
+            h = 1
+        if h == 1:
+            out[i] = -math.sqrt((hx[0] - px) ** 2 + (hy[0] - py) ** 2)
+            continue
+        if h == 2:
+            out[i] = -_seg_point(hx[0], hy[0], hx[1], hy[1], px, py)
+            continue
+        inside = True
+        dmin = np.inf
+        for j in range(h):
+            ax, ay = hx[j], hy[j]
+            bx, by = hx[(j + 1) % h], hy[(j + 1) % h]
+            ll = math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
+            c = _cross(ax, ay, bx, by, px, py) / ll  # signed distance to the edge's line
+            if c < 0:
+                inside = False
+            dmin = min(dmin, _seg_point(ax, ay, bx, by, px, py))
+        out[i] = dmin if inside else -dmin
+
+
+def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
+    """Static stability margin at each sample, in [m].
+
+    Args:
+        feet: (N, L, 2 or 3) foot positions (only x, y are used) in [m], or (L, 2|3).
+        stance: (N, L) booleans (or (L,)): the feet in the support set.
+        com: (N, 2 or 3) centre of mass (projected: x, y) in [m], or (2|3,).
+
+    Returns:
+        (N,) signed distances (or a float for a single sample): positive inside the support
+        polygon (distance to its nearest edge), negative outside (minus the distance to it).
+
+    Raises:
+        ParameterError: Shapes that do not match.
+
+    """
+    p = np.asarray(feet, dtype=float)
+    s = np.asarray(stance, dtype=bool)
+    c = np.asarray(com, dtype=float)
+    single = p.ndim == 2
+    if single:
+        p, s, c = p[None], s[None], c[None]
+    if p.ndim != 3 or p.shape[2] not in (2, 3) or s.shape != p.shape[:2] or c.shape != (
+        len(p), c.shape[-1]
+    ) or c.shape[-1] not in (2, 3):
+        raise ParameterError(
+            f"feet {np.shape(feet)}, stance {np.shape(stance)}, com {np.shape(com)}: expected "
+            "(N, L, 2|3), (N, L), (N, 2|3)",
+            parameter="feet", value=list(np.shape(feet)), allowed="(N, L, 2|3)",
+        )
+    out = np.empty(len(p))
+    _margin_kernel(
+        np.ascontiguousarray(p[..., :2]), np.ascontiguousarray(s), np.ascontiguousarray(c[:, :2]),
+        out,
+    )
+    return np.asarray(out[0]) if single else out
+
+
+@njit(cache=True, inline="always")
+def _seg_seg(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
+    """Distance between segments p1q1 and p2q2 in 3-D (Ericson, Real-Time Collision Det.)."""
+    d1 = q1 - p1  # pragma: no cover - compiled
+    d2 = q2 - p2
+    r = p1 - p2
+    a = d1 @ d1
+    e = d2 @ d2
+    f = d2 @ r
+    eps = 1e-18
+    if a <= eps and e <= eps:
+        s = t = 0.0
+    elif a <= eps:
+        s = 0.0
+        t = min(max(f / e, 0.0), 1.0)
+    else:
+        c = d1 @ r
+        if e <= eps:
+            t = 0.0
+            s = min(max(-c / a, 0.0), 1.0)
+        else:
+            b = d1 @ d2
+            den = a * e - b * b
+            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > eps * a * e else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = min(max(-c / a, 0.0), 1.0)
+            elif t > 1.0:
+                t = 1.0
+                s = min(max((b - c) / a, 0.0), 1.0)
+    dv = p1 + d1 * s - (p2 + d2 * t)
+    return math.sqrt(dv @ dv)
+
+
+@njit(cache=True)
+def _clearance_kernel(
+    pts: np.ndarray, pairs: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    n, _, k, _ = pts.shape
+    for i in range(n):
+        for q in range(pairs.shape[0]):
+            a, b = pairs[q, 0], pairs[q, 1]
+            best = np.inf
+            for u in range(k - 1):
+                for v in range(k - 1):
+                    d = _seg_seg(pts[i, a, u], pts[i, a, u + 1], pts[i, b, v], pts[i, b, v + 1])
+                    if d < best:
+                        best = d
+            out[i, q] = best
+
+
+def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
+    """Smallest distance between the segments of leg pairs at each sample, in [m].
+
+    Args:
+        points: (N, L, K, 3) each leg's polyline (e.g. hip, knee, ankle, foot) in [m].
+        pairs: (P, 2) leg index pairs (e.g. neighbours).
+
+    Returns:
+        (N, P) minimum distances between the K − 1 segments of each leg of a pair.
+
+    Raises:
+        ParameterError: Bad shapes.
+
+    """
+    p = np.ascontiguousarray(points, dtype=float)
+    pr = np.ascontiguousarray(pairs, dtype=np.int64)
+    if p.ndim != 4 or p.shape[3] != 3 or p.shape[2] < 2 or pr.ndim != 2 or pr.shape[1] != 2:
+        raise ParameterError(
+            f"points {p.shape}, pairs {pr.shape}: expected (N, L, K>=2, 3) and (P, 2)",
+            parameter="points", value=list(p.shape), allowed="(N, L, K, 3)",
+        )
+    if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
+        raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
+    out = np.empty((p.shape[0], pr.shape[0]))
+    _clearance_kernel(p, pr, out)
+    return out
