@@ -622,6 +622,7 @@ def _build(
     singular_mask: np.ndarray | None,
     play: bool,
     loop: bool,
+    overlays: dict[str, np.ndarray] | None = None,
 ) -> _Built:
     """All commands for one model and trajectory: static scene, first pose, animation."""
     poses = scene.placements(motion.qs, motion.base_poses)  # (N, G, 4, 4)
@@ -700,6 +701,9 @@ def _build(
         sm = s.material([0.9, 0.05, 0.35, 1.0])
         kids = [s.node("Mesh", geometry=sg, material=sm, matrix=_translate(p)) for p in where]
         cmds.append(_set_object("/meshcat/singular", s.lower(s.node("Group", children=kids))))
+    # -- per-frame overlays (polylines and points given by the caller)
+    o_cmds, o_clips = _overlay_parts(overlays or {}, motion.times - motion.times[0], size)
+    cmds += o_cmds
     # -- triads with labels
     triad_len = max(size * 0.16, 1e-3)
     origins: list[np.ndarray] = []
@@ -722,6 +726,7 @@ def _build(
         for k, name in enumerate(triad_frames):
             assert fposes is not None
             clips.append(_clip(f"/meshcat/frames/{k}", times, fposes[:, tracked.index(name)]))
+        clips += o_clips
         animation = {
             "type": "set_animation",
             "path": "",
@@ -797,6 +802,83 @@ def _clip(path: str, times: np.ndarray, T: np.ndarray) -> dict[str, Any]:
     }
 
 
+
+# ====================================================================== per-frame overlays
+def _check_overlays(overlays: Any, n: int) -> dict[str, np.ndarray]:
+    """Validate ``overlays``: name -> (N, M, 3) polylines, one per sample (M = 1: a point)."""
+    if overlays is None:
+        return {}
+    if not hasattr(overlays, "items"):
+        raise ConfigurationError(
+            f"overlays={type(overlays).__name__}: expected a mapping name -> (N, M, 3) array"
+        )
+    out: dict[str, np.ndarray] = {}
+    for name, value in overlays.items():
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise ConfigurationError(f"overlays[{name!r}] is not an array of numbers") from None
+        if arr.ndim != 3 or arr.shape[0] != n or arr.shape[2] != 3 or arr.shape[1] < 1:
+            raise ConfigurationError(
+                f"overlays[{name!r}] has shape {arr.shape}; expected ({n}, M, 3): one polyline "
+                "of M points per sample (M = 1: a moving point)"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError(f"overlays[{name!r}] contains non-finite values")
+        out[str(name)] = arr
+    return out
+
+
+def _y_to(d: np.ndarray) -> np.ndarray:
+    """(K, 4) quaternions x, y, z, w turning +y onto the unit directions ``d`` (K, 3)."""
+    q = np.empty((len(d), 4))
+    q[:, 0], q[:, 1], q[:, 2] = d[:, 2], np.zeros(len(d)), -d[:, 0]  # y × d
+    q[:, 3] = 1.0 + d[:, 1]
+    flip = q[:, 3] < 1e-9  # d = -y: half turn about x
+    q[flip] = [1.0, 0.0, 0.0, 0.0]
+    return np.asarray(q / np.linalg.norm(q, axis=1, keepdims=True))
+
+
+def _overlay_parts(
+    overlays: dict[str, np.ndarray], times: np.ndarray, size: float
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Objects and animation clips of the overlays (segments: unit cylinders scaled along y)."""
+    cmds: list[dict[str, Any]] = []
+    clips: list[dict[str, Any]] = []
+    r = max(size * 0.005, 1e-4)
+    for k, (name, arr) in enumerate(overlays.items()):
+        col = _TRACE_COLORS[(k + 3) % len(_TRACE_COLORS)]
+        rgb = [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
+        pieces = [(0, 0)] if arr.shape[1] == 1 else [(j, j + 1) for j in range(arr.shape[1] - 1)]
+        for j, (a, b) in enumerate(pieces):
+            path = f"/meshcat/overlays/{name}/{j}"
+            o = _ObjectJSON(path)
+            geom = _sphere(3 * r) if a == b else _cylinder(r, 1.0, 8)
+            cmds.append(_set_object(path, o.lower(o.node(
+                "Mesh", geometry=o.geometry(geom), material=o.material(rgb)))))
+            pa, pb = arr[:, a], arr[:, b]
+            d = pb - pa
+            length = np.linalg.norm(d, axis=1)
+            unit = np.where(length[:, None] > 1e-12, d / np.maximum(length, 1e-12)[:, None],
+                            [0.0, 1.0, 0.0])
+            scale = np.ones((len(arr), 3))
+            if a != b:
+                scale[:, 1] = np.maximum(length, 1e-9)
+                scale[length <= 1e-12] = 1e-9  # a repeated point: hidden
+            T = np.tile(np.eye(4), (len(arr), 1, 1))
+            T[:, :3, 3] = (pa + pb) / 2
+            cmds.append(_set_transform(path, T[0]))
+            cmds.append(_set_property(path, "scale", [float(v) for v in scale[0]]))
+            if len(times) > 1:
+                clip = _clip(path, times, T)
+                clip["clip"]["tracks"][1]["values"] = _f32(_y_to(unit))
+                clip["clip"]["tracks"].append(
+                    {"name": ".scale", "type": "vector3", "times": _f32(times),
+                     "values": _f32(scale)})
+                clips.append(clip)
+    return cmds, clips
+
+
 def scene_commands(
     model: Model,
     times: Any,
@@ -809,6 +891,7 @@ def scene_commands(
     fps: float | None = None,
     play: bool = True,
     loop: bool = True,
+    overlays: Any = None,
 ) -> list[dict[str, Any]]:
     """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
 
@@ -824,7 +907,7 @@ def scene_commands(
 
     """
     built = _build_for(model, times, qs, base_poses, trace_frame, frame_triads, singular_mask,
-                       fps, play, loop)
+                       fps, play, loop, overlays=overlays)
     return built.static + ([built.animation] if built.animation else [])
 
 
@@ -840,13 +923,20 @@ def _build_for(
     play: bool,
     loop: bool,
     scene: _Scene | None = None,
+    overlays: Any = None,
 ) -> _Built:
     motion = _check_motion(model, times, qs, base_poses)
     mask = _check_mask(singular_mask, len(motion.times))
+    extra = _check_overlays(overlays, len(motion.times))
     if mask is not None and fps is not None:
         raise ParameterError("singular_mask cannot be combined with fps resampling; give fps=None")
     if mask is None:
+        given = motion.times
         motion = _resample(motion, fps)
+        if extra and len(motion.times) != len(given):  # hold each sample's overlay
+            idx = np.clip(np.searchsorted(given, motion.times + 1e-12, side="right") - 1, 0,
+                          len(given) - 1)
+            extra = {k: v[idx] for k, v in extra.items()}
     return _build(
         scene or _Scene(model),
         motion,
@@ -855,6 +945,7 @@ def _build_for(
         singular_mask=mask,
         play=play,
         loop=loop,
+        overlays=extra,
     )
 
 
@@ -988,6 +1079,7 @@ def export_html(
     loop: bool = True,
     speed: float = 1.0,
     play: bool = True,
+    overlays: Any = None,
 ) -> Path:
     """Write a self-contained animated HTML file of a trajectory (opens from disk, no network).
 
@@ -1018,12 +1110,17 @@ def export_html(
         loop: Repeat the animation forever (else play once).
         speed: Playback speed factor (> 0).
         play: Start playing when the page opens.
+        overlays: Optional mapping ``name -> (N, M, 3)`` array: a polyline of M world points
+            [m] per sample, drawn as thin tubes and moved with the animation (close a polygon
+            by repeating its first point; repeated points make hidden segments; M = 1 draws
+            a moving sphere), under ``/meshcat/overlays/<name>`` (e.g. a walk's support
+            polygon and projected centre of mass).
 
     Returns:
         The path written.
 
     Raises:
-        ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``.
+        ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``/``overlays``.
         FrameNotFoundError: A frame name does not exist.
         ParameterError: Bad ``fps``, ``speed`` or destination.
         OptionalDependencyError: meshcat is not installed.
@@ -1034,7 +1131,7 @@ def export_html(
         raise ParameterError(f"speed={speed!r} is not allowed; give a factor in (0, 100]")
     bundle = _bundle()
     built = _build_for(model, times, qs, base_poses, trace_frame, frame_triads, singular_mask,
-                       fps, play, loop)
+                       fps, play, loop, overlays=overlays)
     label = title if title is not None else f"hexapod_kin: {model.name}"
     data = {
         "title": label,

@@ -1,20 +1,51 @@
-"""Legged locomotion: foot paths, standing poses, and (soon) gaits of the whole robot.
+"""Legged locomotion: foot paths, standing poses, and the whole hexapod walking.
 
 * :mod:`.paths` — one leg's step cycle (:func:`foot_path`, :func:`foot_step`).
 * :mod:`.stand` — standing poses and the hexapod's body sway (:func:`demo_trajectory`).
+* :mod:`.robot` — the whole robot with a floating base (:func:`whole_body`), body-pose IK.
+* :mod:`.tables` — phase tables (tripod, wave, ripple, custom).
+* :mod:`.terrain` — the ground as a height function (flat, slope, step, user callables).
+* :mod:`.stability` — support-polygon margin and leg clearance.
+* :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`).
+* :mod:`.plots` — gait diagram, margin over time, foot paths from above (matplotlib).
 """
 
 from __future__ import annotations
 
 from .paths import FootStep, foot_path, foot_step
+from .robot import BodyIK, GaitError, WholeBody, pose_matrix, whole_body
+from .stability import segment_clearance, support_margin
 from .stand import default_configuration, demo_trajectory, frame_poses, standing_base
+from .tables import PATTERNS, PhaseTable, phase_table
+from .terrain import TERRAINS, Terrain, flat, slope, step, terrain
+from .walk import GaitRun, se2_pose, swing_profile, walk
 
 __all__ = [
+    "PATTERNS",
+    "TERRAINS",
+    "BodyIK",
     "FootStep",
+    "GaitError",
+    "GaitRun",
+    "PhaseTable",
+    "Terrain",
+    "WholeBody",
     "default_configuration",
     "demo_trajectory",
+    "flat",
     "foot_path",
     "foot_step",
     "frame_poses",
+    "phase_table",
+    "pose_matrix",
+    "se2_pose",
+    "segment_clearance",
+    "slope",
     "standing_base",
+    "step",
+    "support_margin",
+    "swing_profile",
+    "terrain",
+    "walk",
+    "whole_body",
 ]

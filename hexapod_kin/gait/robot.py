@@ -356,26 +356,34 @@ class WholeBody:
         q = np.empty((n, self.nq))
         reached = np.empty((n, nl), dtype=bool)
         excess = np.zeros((n, nl))
-        for leg in range(nl):
-            cols = self._leg_joints[leg]
-            chain = self.params.legs[leg].chain
-            targets = np.ascontiguousarray(p_mount[:, leg])
+        groups: dict[int, list[int]] = {}
+        for leg in range(nl):  # legs with the same table share one closed-form call
+            groups.setdefault(id(self.params.legs[leg].chain), []).append(leg)
+        for legs in groups.values():
+            chain = self.params.legs[legs[0]].chain
+            targets = np.ascontiguousarray(p_mount[:, legs].transpose(1, 0, 2).reshape(-1, 3))
             try:
                 batch = analytic_batch(chain, targets)
             except HexapodKinError as exc:
                 raise ConfigurationError(
-                    f"leg {self.leg_names[leg]}: {exc}", parameter="params"
+                    f"legs {[self.leg_names[k] for k in legs]}: {exc}", parameter="params"
                 ) from None
-            out = np.empty((n, len(cols)))
-            ok = np.empty(n, dtype=np.bool_)
-            _pick_branch(
-                np.ascontiguousarray(batch.q), np.ascontiguousarray(batch.valid),
-                np.ascontiguousarray(q0[cols]), out, ok,
-            )
-            q[:, cols] = out
-            reached[:, leg] = ok
-            if not ok.all():
-                excess[:, leg] = np.where(ok, 0.0, self.reach_excess(targets, leg))
+            qk = batch.q.reshape(len(legs), n, *batch.q.shape[1:])
+            vk = batch.valid.reshape(len(legs), n, -1)
+            for g, leg in enumerate(legs):
+                cols = self._leg_joints[leg]
+                out = np.empty((n, len(cols)))
+                ok = np.empty(n, dtype=np.bool_)
+                _pick_branch(
+                    np.ascontiguousarray(qk[g]), np.ascontiguousarray(vk[g]),
+                    np.ascontiguousarray(q0[cols]), out, ok,
+                )
+                q[:, cols] = out
+                reached[:, leg] = ok
+                if not ok.all():
+                    excess[:, leg] = np.where(
+                        ok, 0.0, self.reach_excess(targets[g * n:(g + 1) * n], leg)
+                    )
         margin = np.minimum(q - self.lower, self.upper - q)
         if strict:
             self._raise_first(reached, excess, margin, t)

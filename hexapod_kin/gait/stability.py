@@ -141,29 +141,32 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def _seg_seg(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
-    """Distance between segments p1q1 and p2q2 in 3-D (Ericson, Real-Time Collision Det.)."""
-    d1 = q1 - p1  # pragma: no cover - compiled
-    d2 = q2 - p2
-    r = p1 - p2
-    a = d1 @ d1
-    e = d2 @ d2
-    f = d2 @ r
+def _seg_seg(
+    px: float, py: float, pz: float, ux: float, uy: float, uz: float,
+    qx: float, qy: float, qz: float, vx: float, vy: float, vz: float,
+) -> float:  # pragma: no cover - compiled
+    """Distance between segments p→p+u and q→q+v in 3-D (Ericson, Real-Time Collision
+    Detection, 5.1.9)."""
+    rx, ry, rz = px - qx, py - qy, pz - qz
+    a = ux * ux + uy * uy + uz * uz
+    e = vx * vx + vy * vy + vz * vz
+    f = vx * rx + vy * ry + vz * rz
     eps = 1e-18
     if a <= eps and e <= eps:
-        s = t = 0.0
+        s = 0.0
+        t = 0.0
     elif a <= eps:
         s = 0.0
         t = min(max(f / e, 0.0), 1.0)
     else:
-        c = d1 @ r
+        c = ux * rx + uy * ry + uz * rz
         if e <= eps:
             t = 0.0
             s = min(max(-c / a, 0.0), 1.0)
         else:
-            b = d1 @ d2
+            b = ux * vx + uy * vy + uz * vz
             den = a * e - b * b
-            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > eps * a * e else 0.0
+            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-12 * a * e else 0.0
             t = (b * s + f) / e
             if t < 0.0:
                 t = 0.0
@@ -171,8 +174,10 @@ def _seg_seg(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> 
             elif t > 1.0:
                 t = 1.0
                 s = min(max((b - c) / a, 0.0), 1.0)
-    dv = p1 + d1 * s - (p2 + d2 * t)
-    return math.sqrt(dv @ dv)
+    dx = rx + ux * s - vx * t
+    dy = ry + uy * s - vy * t
+    dz = rz + uz * s - vz * t
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
 @njit(cache=True)
@@ -185,8 +190,16 @@ def _clearance_kernel(
             a, b = pairs[q, 0], pairs[q, 1]
             best = np.inf
             for u in range(k - 1):
+                px, py, pz = pts[i, a, u, 0], pts[i, a, u, 1], pts[i, a, u, 2]
+                ux, uy, uz = pts[i, a, u + 1, 0] - px, pts[i, a, u + 1, 1] - py, pts[
+                    i, a, u + 1, 2] - pz
                 for v in range(k - 1):
-                    d = _seg_seg(pts[i, a, u], pts[i, a, u + 1], pts[i, b, v], pts[i, b, v + 1])
+                    qx, qy, qz = pts[i, b, v, 0], pts[i, b, v, 1], pts[i, b, v, 2]
+                    d = _seg_seg(
+                        px, py, pz, ux, uy, uz, qx, qy, qz,
+                        pts[i, b, v + 1, 0] - qx, pts[i, b, v + 1, 1] - qy,
+                        pts[i, b, v + 1, 2] - qz,
+                    )
                     if d < best:
                         best = d
             out[i, q] = best
