@@ -3,7 +3,7 @@
 A :class:`ChainArrays` is extracted from a loaded model's *Pinocchio* model (joint placements,
 axes, tip offset), so the kernels serve any 1-DOF serial chain — catalogue presets and URDFs
 alike — and agree with Pinocchio to rounding. They are numba-compiled (``prange`` over
-configurations) when numba is installed, with a vectorised numpy fallback.
+configurations; numba is a core dependency, ``njit`` comes from :mod:`hexapod_kin._numerics`).
 
 Inner ``@njit`` functions (``fk_jac_into``) can be called from other numba code (IK loops,
 scans) without Python overhead.
@@ -16,8 +16,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 
+from ._numerics import njit, prange
 from .exceptions import ConfigurationError, SourceError
 
 __all__ = [
@@ -29,23 +31,12 @@ __all__ = [
     "fk_position",
     "position_jacobian",
     "fk_jac_into",
+    "check_batch",
+    "set_threads",
 ]
 
-try:  # pragma: no cover - exercised in both configurations by CI extras
-    import numba
-    from numba import njit, prange
-
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    HAVE_NUMBA = False
-
-    def njit(*args: Any, **kwargs: Any) -> Any:
-        """Identity decorator when numba is missing."""
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
-    prange = range
+#: numba is a core dependency (kept for callers that still test it).
+HAVE_NUMBA = True
 
 
 @dataclass(frozen=True)
@@ -172,9 +163,15 @@ def fk_jac_into(
             pz + r20 * tx + r21 * ty + r22 * tz,
         )
         if not (
-            rot[k, 0, 0] == 1.0 and rot[k, 1, 1] == 1.0 and rot[k, 2, 2] == 1.0
-            and rot[k, 0, 1] == 0.0 and rot[k, 0, 2] == 0.0 and rot[k, 1, 0] == 0.0
-            and rot[k, 1, 2] == 0.0 and rot[k, 2, 0] == 0.0 and rot[k, 2, 1] == 0.0
+            rot[k, 0, 0] == 1.0
+            and rot[k, 1, 1] == 1.0
+            and rot[k, 2, 2] == 1.0
+            and rot[k, 0, 1] == 0.0
+            and rot[k, 0, 2] == 0.0
+            and rot[k, 1, 0] == 0.0
+            and rot[k, 1, 2] == 0.0
+            and rot[k, 2, 0] == 0.0
+            and rot[k, 2, 1] == 0.0
         ):
             n00 = r00 * rot[k, 0, 0] + r01 * rot[k, 1, 0] + r02 * rot[k, 2, 0]
             n01 = r00 * rot[k, 0, 1] + r01 * rot[k, 1, 1] + r02 * rot[k, 2, 1]
@@ -284,20 +281,36 @@ def _batch(
                 fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], dummy, scratch, False)
 
 
-def _check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
+def check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
+    """``qs`` as an (N, nq) float64 C-contiguous array (a single (nq,) becomes (1, nq)).
+
+    Raises:
+        ConfigurationError: Wrong shape or non-finite values.
+
+    """
     q = np.ascontiguousarray(np.asarray(qs, dtype=np.float64))
     if q.ndim == 1:
         q = q[None, :]
     if q.ndim != 2 or q.shape[1] != arrays.nq:
-        raise ConfigurationError(f"Q has shape {np.shape(qs)}; expected (N, {arrays.nq})")
+        raise ConfigurationError(
+            f"Q has shape {np.shape(qs)}; expected (N, {arrays.nq})",
+            parameter="Q",
+            value=np.shape(qs),
+            allowed=f"shape (N, {arrays.nq})",
+        )
     if not np.all(np.isfinite(q)):
-        raise ConfigurationError("Q contains non-finite values")
+        raise ConfigurationError(
+            "Q contains non-finite values",
+            parameter="Q",
+            value="non-finite",
+            allowed="finite numbers",
+        )
     return q
 
 
 def fk_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
     """Tip positions (N, 3) in [m] for configurations ``qs`` (N, nq)."""
-    q = _check_batch(arrays, qs)
+    q = check_batch(arrays, qs)
     out_p = np.empty((q.shape[0], 3))
     dummy = np.empty((1, 3, arrays.nq))
     _batch(*arrays.packed, q, out_p, dummy, False)
@@ -306,7 +319,7 @@ def fk_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
 
 def jacobian_batch(arrays: ChainArrays, qs: Any, rows: int = 6) -> np.ndarray:
     """LWA Jacobians (N, rows, nq) for ``qs`` (N, nq); ``rows=3`` keeps the position part."""
-    q = _check_batch(arrays, qs)
+    q = check_batch(arrays, qs)
     if rows not in (3, 6):
         raise ConfigurationError(f"rows={rows!r}; use 3 (position) or 6 (position + rotation)")
     out_p = np.empty((q.shape[0], 3))
@@ -337,6 +350,9 @@ def position_jacobian(arrays: ChainArrays, q: Any) -> np.ndarray:
 
 
 def set_threads(n: int | None) -> None:
-    """Set numba's thread count (no-op without numba)."""
-    if HAVE_NUMBA and n:
+    """Set numba's thread count (``None``/0: unchanged)."""
+    if n:
         numba.set_num_threads(int(n))
+
+
+_check_batch = check_batch  # the old private name, for callers not yet switched

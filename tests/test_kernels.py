@@ -1,16 +1,39 @@
-"""Compiled batch kernels against Pinocchio, for every catalogue chain and a URDF leg."""
+"""The kernel layer: batch FK/Jacobian kernels and the singularity kernel (its public functions).
+
+Against Pinocchio (every catalogue chain, URDF legs, arms), numpy LAPACK and closed forms.
+"""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pytest
 
 import hexapod_kin as hk
+from hexapod_kin import Chain, KhalilRow, load
 from hexapod_kin import _kernels as K
+from hexapod_kin._numerics import njit
 from hexapod_kin.exceptions import ConfigurationError
+from hexapod_kin.singularity import ROW_NAMES, default_rows, measures_batch
+from hexapod_kin.singularity._kernel import (
+    JACOBI_TOL,
+    POLY_TRIG_MAX,
+    eig_block,
+    measures_kernel,
+    minor_block,
+    sincos,
+)
+from hexapod_kin.singularity._plan import BLOCK, aligned, first_joint_invariant, gram_plan
 
-SOURCES = [("hexabot_leg", {}), ("coxa_tibia_leg", {}), ("scara", {}), ("pendulum", {}),
-           ("hexapod", {"tip": "leg5_foot"}), ("erd:solo12", {"tip": "HR_FOOT"})]
+SOURCES = [
+    ("hexabot_leg", {}),
+    ("coxa_tibia_leg", {}),
+    ("scara", {}),
+    ("pendulum", {}),
+    ("hexapod", {"tip": "leg5_foot"}),
+    ("erd:solo12", {"tip": "HR_FOOT"}),
+]
 
 
 @pytest.mark.parametrize("source,kw", SOURCES)
@@ -23,8 +46,9 @@ def test_batch_kernels_equal_pinocchio(source, kw):
     for i, q in enumerate(qs):
         np.testing.assert_allclose(pos[i], model.fk(q)[:3, 3], atol=1e-12)
         np.testing.assert_allclose(jac[i], model.jacobian(q), atol=1e-12)
-    np.testing.assert_allclose(K.position_jacobian(arrays, qs[0]), model.position_jacobian(qs[0]),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        K.position_jacobian(arrays, qs[0]), model.position_jacobian(qs[0]), atol=1e-12
+    )
     np.testing.assert_allclose(K.fk_position(arrays, qs[0]), model.position(qs[0]), atol=1e-12)
     np.testing.assert_allclose(K.position_jacobian_batch(arrays, qs[:5]), jac[:5, :3])
 
@@ -45,3 +69,229 @@ def test_kernel_input_checks():
     with pytest.raises(ConfigurationError, match="non-finite"):
         K.jacobian_batch(arrays, np.full((2, 3), np.nan))
     assert not arrays.rot.flags.writeable
+
+
+def pin_measures(model, qs, rows):
+    idx = [ROW_NAMES.index(r) for r in rows]
+    jac = np.array([model.jacobian(q)[idx] for q in qs])
+    sv = np.linalg.svd(jac, compute_uv=False)
+    k, n = jac.shape[1:]
+    det = np.linalg.det(jac) if k == n else np.full(len(qs), np.nan)
+    return det, np.prod(sv, axis=1), sv[:, 0], sv[:, -1]
+
+
+#: Every catalogue chain (default rows), a hexapod leg tip, a Solo12 leg, and shapes beyond it.
+CHAINS = [
+    ("hexabot_leg", None, None),  # 3×3, G = Jᵀ J split {q1} ⊕ {q2, q3}
+    ("coxa_tibia_leg", None, None),  # 3×2
+    ("scara", None, None),  # 4×4 (x, y, z, wz), split {x, y, wz} ⊕ {z}
+    ("pendulum", None, None),  # 3×1
+    ("hexapod", "leg1_foot", None),  # 3×3, mount rotated in the base
+    ("erd:solo12", "FL_FOOT", None),  # 3×3, lateral offsets: no split, joint range ±10 rad
+    ("scara", None, ("x", "y", "wz")),  # 3×4: Cauchy–Binet over 4 minors
+    ("scara", None, "all"),  # 6×4: 15 minors, 4×4 Jacobi
+    ("five_dof", None, "all"),  # 6×5: m = 5, the per-configuration path
+]
+
+
+def _five_dof():
+    rows = [
+        KhalilRow("revolute", a, d, 0.0, r)
+        for a, d, r in (
+            (0.0, 0.0, 0.1),
+            (math.pi / 2, 0.05, 0.0),
+            (0.0, 0.2, 0.02),
+            (-math.pi / 2, 0.01, 0.15),
+            (math.pi / 2, 0.0, 0.0),
+        )
+    ]
+    return Chain(rows=(*rows, KhalilRow("fixed", 0.0, 0.0, 0.0, 0.08)), name="five_dof")
+
+
+def _load_chain(source, tip):
+    return load(_five_dof()) if source == "five_dof" else load(source, tip=tip)
+
+
+@pytest.mark.parametrize(("source", "tip", "rows"), CHAINS)
+def test_every_chain_equals_pinocchio(source, tip, rows):
+    model = _load_chain(source, tip)
+    names = ROW_NAMES if rows == "all" else (rows or default_rows(model))
+    qs = model.random_q(1500, seed=21)  # two full blocks and a partial one
+    det, manip, cond, smin = measures_batch(model, qs, rows)
+    pdet, pmanip, smax, psmin = pin_measures(model, qs, names)
+    if len(names) == model.nq:
+        assert np.abs(det - pdet).max() < 1e-12
+    else:
+        assert np.isnan(det).all()
+    assert np.abs(manip - pmanip).max() < 1e-12
+    assert np.abs(smin - psmin).max() < 1e-12
+    assert np.abs(1 / cond - psmin / smax).max() < 1e-12
+    sel = tuple(ROW_NAMES.index(r) for r in names)
+    plan = gram_plan(model, sel, first_joint_invariant(aligned(model), sel))
+    assert plan.use_block == (min(len(names), model.nq) <= 4)
+
+
+def testgram_plans_split_where_structure_allows():
+    def sizes(source, tip=None):
+        model = load(source, tip=tip)
+        return sorted(gram_plan(model, (0, 1, 2, 5)[: 4 if source == "scara" else 3], True).csize)
+
+    assert sizes("hexabot_leg") == [1, 2]
+    assert sizes("hexapod", "leg1_foot") == [1, 2]
+    assert sizes("scara") == [1, 3]
+    assert sizes("erd:solo12", "FL_FOOT") == [3]
+    assert sizes("coxa_tibia_leg") == [1, 1]
+
+
+def test_wrong_split_guess_is_caught_per_block():
+    # a plan claiming G = {0} ⊕ {1, 2} for the Solo12 leg (false: G[0, 2] != 0) must not
+    # change the results: the kernel checks the dropped entries on every block
+    from dataclasses import replace
+
+    model = load("erd:solo12", tip="FL_FOOT")
+    al = aligned(model)
+    plan = gram_plan(model, (0, 1, 2), True)
+    perm = np.array([0, 1, 2])
+    csize = np.array([1, 2])
+    drop = np.array([1, 2])  # packed (0, 1), (0, 2)
+    pack, rsub, csub, gram_t = plan.arrays[:4]
+    bad = replace(plan, arrays=(pack, rsub, csub, False, perm, csize, drop))
+    qs = model.random_q(1200, seed=5)
+    out = tuple(np.empty(len(qs)) for _ in range(4))
+    measures_kernel(
+        al.prot,
+        al.ptr,
+        al.pident,
+        al.kind,
+        al.col,
+        qs,
+        np.arange(3),
+        True,
+        bad.arrays,
+        True,
+        True,
+        2,
+        BLOCK,
+        *out,
+    )
+    _, _, smax, psmin = pin_measures(model, qs, ("x", "y", "z"))
+    assert np.abs(out[3] - psmin).max() < 1e-12
+    assert np.abs(1 / out[2] - psmin / smax).max() < 1e-12
+
+
+def test_first_joint_invariance_rule():
+    # S·blockdiag(R, R)·Sᵀ orthogonal <=> the measures do not depend on joint 0
+    leg = aligned(load("hexabot_leg"))  # hip axis z
+    assert first_joint_invariant(leg, (0, 1, 2))
+    assert first_joint_invariant(leg, (0, 1, 2, 5))
+    assert first_joint_invariant(leg, (0, 1, 2, 3, 4, 5))
+    assert first_joint_invariant(leg, (0, 1))
+    assert not first_joint_invariant(leg, (0, 2))
+    assert not first_joint_invariant(leg, (0, 1, 2, 3))
+    solo = aligned(load("erd:solo12", tip="FL_FOOT"))  # HAA axis x
+    assert first_joint_invariant(solo, (0, 1, 2))
+    assert first_joint_invariant(solo, (1, 2, 3))
+    assert not first_joint_invariant(solo, (0, 1, 2, 5))
+    # and the measures really are independent of q0 where the rule says so (Pinocchio)
+    model = load("erd:solo12", tip="FL_FOOT")
+    q = model.random_q(50, seed=3)
+    q2 = q.copy()
+    q2[:, 0] += 1.234
+    for rows, same in (
+        ("position", True),
+        (("y", "z", "wx"), True),
+        (("x", "y", "z", "wz"), False),
+    ):
+        names = ROW_NAMES[:3] if rows == "position" else rows
+        a = pin_measures(model, q, names)[3]
+        b = pin_measures(model, q2, names)[3]
+        assert (np.abs(a - b).max() < 1e-12) == same
+
+
+def test_polynomialsincos_matches_libm():
+    @njit
+    def both(x, s, c):
+        for i in range(x.shape[0]):
+            s[i], c[i] = sincos(x[i])
+
+    rng = np.random.default_rng(5)
+    k = np.arange(-400, 401)
+    x = np.concatenate(
+        [
+            rng.uniform(-7, 7, 200_000),
+            rng.uniform(-POLY_TRIG_MAX, POLY_TRIG_MAX, 200_000),
+            k * (np.pi / 4),
+            np.nextafter(k * (np.pi / 4), np.inf),
+            [0.0, -0.0, 1e-300, -1e-300, POLY_TRIG_MAX, -POLY_TRIG_MAX],
+        ]
+    )
+    s, c = np.empty_like(x), np.empty_like(x)
+    both(x, s, c)
+    assert np.abs(s - np.sin(x)).max() <= 2.3e-16
+    assert np.abs(c - np.cos(x)).max() <= 2.3e-16
+
+
+def _spectra_matrices(m, rng):
+    """Symmetric PSD m×m matrices with clustered, repeated and zero eigenvalues, and random."""
+    spectra = [
+        (1.0, 1.0 - 1e-9, 0.5, 0.25),
+        (1.0, 0.3, 0.3 - 1e-10, 0.1),
+        (1.0, 1.0, 1.0, 1.0),
+        (1.0, 1e-20, 0.0, 0.0),
+        (2.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0, 0.0),
+        (1.0, 1.0 - 1e-6, 1.0 - 2e-6, 1e-8),
+    ]
+    mats = []
+    for lam in spectra:
+        rot, _ = np.linalg.qr(rng.normal(size=(200, m, m)))
+        mats.append(rot @ (np.asarray(lam[:m])[:, None] * np.swapaxes(rot, 1, 2)))
+    a = rng.normal(size=(2000, m, m))
+    mats.append(a @ np.swapaxes(a, 1, 2))
+    g = np.concatenate(mats)
+    g[-1] = np.diag(np.arange(m, 0, -1.0)[[1, 0, *range(2, m)]])
+    return g
+
+
+@pytest.mark.parametrize("m", [3, 4])
+def test_eig_block_clustered_and_rank_deficient(m):
+    # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
+    g = _spectra_matrices(m, np.random.default_rng(9))
+    iu = np.triu_indices(m)
+    gb = np.ascontiguousarray(g[:, iu[0], iu[1]].T)
+    eig_block(gb, g.shape[0], m, np.empty_like(gb), np.empty(g.shape[0], dtype=np.int64))
+    diag = iu[0] == iu[1]
+    got = np.sort(gb[diag].T, axis=1)
+    ref = np.linalg.eigvalsh(g)
+    scale = np.maximum(ref[:, -1], 1e-300)
+    assert (np.abs(got - ref).max(axis=1) / scale).max() < 1e-14
+    # the documented stopping rule holds: Weyl, or the quadratic bound for isolated eigenvalues
+    off = np.abs(gb[~diag]).sum(axis=0)
+    tol = JACOBI_TOL * gb[diag].sum(axis=0)
+    d = gb[diag]
+    gap = np.min([np.abs(d[a] - d[b]) for a in range(m) for b in range(a + 1, m)], axis=0)
+    quad = (gap > 3 * off) & (2 * off**2 <= tol * (gap - off))
+    assert np.all((off <= tol) | quad)
+
+
+def testminor_block_and_cauchy_binet():
+    # explicit minors (m <= 4) against numpy det; det(J Jᵀ) = sum of squared maximal minors
+    from itertools import combinations
+
+    @njit
+    def minors(jb, r, c, m, out):
+        minor_block(jb, r, c, m, jb.shape[2], out)
+
+    rng = np.random.default_rng(4)
+    for m in (1, 2, 3, 4):
+        jb = rng.normal(size=(m, 6, 64))
+        total = np.zeros(64)
+        for cols in combinations(range(6), m):
+            out = np.empty(64)
+            minors(jb, np.arange(m), np.array(cols), m, out)
+            ref = np.linalg.det(np.moveaxis(jb[:, list(cols)], 2, 0))
+            assert np.abs(out - ref).max() < 1e-12 * max(1.0, np.abs(ref).max())
+            total += out**2
+        jac = np.moveaxis(jb, 2, 0)
+        gram = np.linalg.det(jac @ np.swapaxes(jac, 1, 2))
+        assert np.allclose(total, gram, rtol=1e-10)

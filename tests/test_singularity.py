@@ -1,4 +1,4 @@
-"""Singularity measures, scans, families and workspace, against Pinocchio and closed forms."""
+"""Singularity measures, scans and families (public API), against Pinocchio and closed forms."""
 
 from __future__ import annotations
 
@@ -8,19 +8,16 @@ import math
 import numpy as np
 import pytest
 
-from hexapod_kin import Chain, KhalilRow, load
+from hexapod_kin import load
 from hexapod_kin.cli import main
 from hexapod_kin.exceptions import ConfigurationError, FrameNotFoundError, ParameterError
 from hexapod_kin.singularity import (
     ROW_NAMES,
-    cross_section,
     default_rows,
     measures,
     measures_batch,
     plot_joints,
-    reach,
     scan,
-    workspace,
 )
 
 
@@ -79,93 +76,6 @@ def test_kernel_equals_pinocchio(source, tip, rows):
     assert np.abs(nsmin - psmin).max() < 1e-12
 
 
-#: Every catalogue chain (default rows), a hexapod leg tip, a Solo12 leg, and shapes beyond it.
-CHAINS = [
-    ("hexabot_leg", None, None),  # 3×3, G = Jᵀ J split {q1} ⊕ {q2, q3}
-    ("coxa_tibia_leg", None, None),  # 3×2
-    ("scara", None, None),  # 4×4 (x, y, z, wz), split {x, y, wz} ⊕ {z}
-    ("pendulum", None, None),  # 3×1
-    ("hexapod", "leg1_foot", None),  # 3×3, mount rotated in the base
-    ("erd:solo12", "FL_FOOT", None),  # 3×3, lateral offsets: no split, joint range ±10 rad
-    ("scara", None, ("x", "y", "wz")),  # 3×4: Cauchy–Binet over 4 minors
-    ("scara", None, "all"),  # 6×4: 15 minors, 4×4 Jacobi
-    ("five_dof", None, "all"),  # 6×5: m = 5, the per-configuration path
-]
-
-
-def _five_dof():
-    rows = [KhalilRow("revolute", a, d, 0.0, r) for a, d, r in (
-        (0.0, 0.0, 0.1), (math.pi / 2, 0.05, 0.0), (0.0, 0.2, 0.02), (-math.pi / 2, 0.01, 0.15),
-        (math.pi / 2, 0.0, 0.0),
-    )]
-    return Chain(rows=(*rows, KhalilRow("fixed", 0.0, 0.0, 0.0, 0.08)), name="five_dof")
-
-
-def _load_chain(source, tip):
-    return load(_five_dof()) if source == "five_dof" else load(source, tip=tip)
-
-
-@pytest.mark.parametrize(("source", "tip", "rows"), CHAINS)
-def test_every_chain_equals_pinocchio(source, tip, rows):
-    from hexapod_kin.singularity import _aligned, _first_joint_invariant, _gram_plan
-
-    model = _load_chain(source, tip)
-    names = ROW_NAMES if rows == "all" else (rows or default_rows(model))
-    qs = model.random_q(1500, seed=21)  # two full blocks and a partial one
-    det, manip, cond, smin = measures_batch(model, qs, rows)
-    pdet, pmanip, smax, psmin = pin_measures(model, qs, names)
-    if len(names) == model.nq:
-        assert np.abs(det - pdet).max() < 1e-12
-    else:
-        assert np.isnan(det).all()
-    assert np.abs(manip - pmanip).max() < 1e-12
-    assert np.abs(smin - psmin).max() < 1e-12
-    assert np.abs(1 / cond - psmin / smax).max() < 1e-12
-    sel = tuple(ROW_NAMES.index(r) for r in names)
-    plan = _gram_plan(model, sel, _first_joint_invariant(_aligned(model), sel))
-    assert plan.use_block == (min(len(names), model.nq) <= 4)
-
-
-def test_gram_plans_split_where_structure_allows():
-    from hexapod_kin.singularity import _gram_plan
-
-    def sizes(source, tip=None):
-        model = load(source, tip=tip)
-        return sorted(_gram_plan(model, (0, 1, 2, 5)[: 4 if source == "scara" else 3], True).csize)
-
-    assert sizes("hexabot_leg") == [1, 2]
-    assert sizes("hexapod", "leg1_foot") == [1, 2]
-    assert sizes("scara") == [1, 3]
-    assert sizes("erd:solo12", "FL_FOOT") == [3]
-    assert sizes("coxa_tibia_leg") == [1, 1]
-
-
-def test_wrong_split_guess_is_caught_per_block():
-    # a plan claiming G = {0} ⊕ {1, 2} for the Solo12 leg (false: G[0, 2] != 0) must not
-    # change the results: the kernel checks the dropped entries on every block
-    from dataclasses import replace
-
-    from hexapod_kin.singularity import _BLOCK, _aligned, _gram_plan, _measures_kernel
-
-    model = load("erd:solo12", tip="FL_FOOT")
-    al = _aligned(model)
-    plan = _gram_plan(model, (0, 1, 2), True)
-    perm = np.array([0, 1, 2])
-    csize = np.array([1, 2])
-    drop = np.array([1, 2])  # packed (0, 1), (0, 2)
-    pack, rsub, csub, gram_t = plan.arrays[:4]
-    bad = replace(plan, arrays=(pack, rsub, csub, False, perm, csize, drop))
-    qs = model.random_q(1200, seed=5)
-    out = tuple(np.empty(len(qs)) for _ in range(4))
-    _measures_kernel(
-        al.prot, al.ptr, al.pident, al.kind, al.col, qs, np.arange(3), True, bad.arrays, True,
-        True, 2, _BLOCK, *out,
-    )
-    _, _, smax, psmin = pin_measures(model, qs, ("x", "y", "z"))
-    assert np.abs(out[3] - psmin).max() < 1e-12
-    assert np.abs(1 / out[2] - psmin / smax).max() < 1e-12
-
-
 def test_new_shapes_accurate_near_singularities():
     # coxa-tibia 3×2 with l1 < l2: sigma = {|l1 + l2 cos q2|, l2} (orthogonal columns), so
     # sigma_min -> 0 at cos q2 = -l1/l2; Cauchy–Binet keeps its relative accuracy
@@ -216,135 +126,6 @@ def test_output_buffers_reused_only_when_unreferenced(leg):
     assert all(np.array_equal(g, r, equal_nan=True) for g, r in zip(again, ref2))
 
 
-def test_first_joint_invariance_rule():
-    # S·blockdiag(R, R)·Sᵀ orthogonal <=> the measures do not depend on joint 0
-    from hexapod_kin.singularity import _aligned, _first_joint_invariant
-
-    leg = _aligned(load("hexabot_leg"))  # hip axis z
-    assert _first_joint_invariant(leg, (0, 1, 2))
-    assert _first_joint_invariant(leg, (0, 1, 2, 5))
-    assert _first_joint_invariant(leg, (0, 1, 2, 3, 4, 5))
-    assert _first_joint_invariant(leg, (0, 1))
-    assert not _first_joint_invariant(leg, (0, 2))
-    assert not _first_joint_invariant(leg, (0, 1, 2, 3))
-    solo = _aligned(load("erd:solo12", tip="FL_FOOT"))  # HAA axis x
-    assert _first_joint_invariant(solo, (0, 1, 2))
-    assert _first_joint_invariant(solo, (1, 2, 3))
-    assert not _first_joint_invariant(solo, (0, 1, 2, 5))
-    # and the measures really are independent of q0 where the rule says so (Pinocchio)
-    model = load("erd:solo12", tip="FL_FOOT")
-    q = model.random_q(50, seed=3)
-    q2 = q.copy()
-    q2[:, 0] += 1.234
-    for rows, same in (
-        ("position", True),
-        (("y", "z", "wx"), True),
-        (("x", "y", "z", "wz"), False),
-    ):
-        names = ROW_NAMES[:3] if rows == "position" else rows
-        a = pin_measures(model, q, names)[3]
-        b = pin_measures(model, q2, names)[3]
-        assert (np.abs(a - b).max() < 1e-12) == same
-
-
-def test_polynomial_sincos_matches_libm():
-    from hexapod_kin.singularity import _POLY_TRIG_MAX, _sincos, njit
-
-    @njit
-    def both(x, s, c):
-        for i in range(x.shape[0]):
-            s[i], c[i] = _sincos(x[i])
-
-    rng = np.random.default_rng(5)
-    k = np.arange(-400, 401)
-    x = np.concatenate(
-        [
-            rng.uniform(-7, 7, 200_000),
-            rng.uniform(-_POLY_TRIG_MAX, _POLY_TRIG_MAX, 200_000),
-            k * (np.pi / 4),
-            np.nextafter(k * (np.pi / 4), np.inf),
-            [0.0, -0.0, 1e-300, -1e-300, _POLY_TRIG_MAX, -_POLY_TRIG_MAX],
-        ]
-    )
-    s, c = np.empty_like(x), np.empty_like(x)
-    both(x, s, c)
-    assert np.abs(s - np.sin(x)).max() <= 2.3e-16
-    assert np.abs(c - np.cos(x)).max() <= 2.3e-16
-
-
-def _spectra_matrices(m, rng):
-    """Symmetric PSD m×m matrices with clustered, repeated and zero eigenvalues, and random."""
-    spectra = [
-        (1.0, 1.0 - 1e-9, 0.5, 0.25),
-        (1.0, 0.3, 0.3 - 1e-10, 0.1),
-        (1.0, 1.0, 1.0, 1.0),
-        (1.0, 1e-20, 0.0, 0.0),
-        (2.0, 0.0, 0.0, 0.0),
-        (0.0, 0.0, 0.0, 0.0),
-        (1.0, 1.0 - 1e-6, 1.0 - 2e-6, 1e-8),
-    ]
-    mats = []
-    for lam in spectra:
-        rot, _ = np.linalg.qr(rng.normal(size=(200, m, m)))
-        mats.append(rot @ (np.asarray(lam[:m])[:, None] * np.swapaxes(rot, 1, 2)))
-    a = rng.normal(size=(2000, m, m))
-    mats.append(a @ np.swapaxes(a, 1, 2))
-    g = np.concatenate(mats)
-    g[-1] = np.diag(np.arange(m, 0, -1.0)[[1, 0, *range(2, m)]])
-    return g
-
-
-@pytest.mark.parametrize("m", [3, 4])
-def test_eig_block_clustered_and_rank_deficient(m):
-    # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
-    from hexapod_kin.singularity import _JACOBI_TOL, _eig3_block, _eig_block
-
-    g = _spectra_matrices(m, np.random.default_rng(9))
-    iu = np.triu_indices(m)
-    gb = np.ascontiguousarray(g[:, iu[0], iu[1]].T)
-    if m == 3:
-        _eig3_block(gb, g.shape[0], np.empty(g.shape[0], dtype=np.int64))
-    else:
-        _eig_block(gb, g.shape[0], m, np.empty_like(gb), np.empty(g.shape[0], dtype=np.int64))
-    diag = iu[0] == iu[1]
-    got = np.sort(gb[diag].T, axis=1)
-    ref = np.linalg.eigvalsh(g)
-    scale = np.maximum(ref[:, -1], 1e-300)
-    assert (np.abs(got - ref).max(axis=1) / scale).max() < 1e-14
-    # the documented stopping rule holds: Weyl, or the quadratic bound for isolated eigenvalues
-    off = np.abs(gb[~diag]).sum(axis=0)
-    tol = _JACOBI_TOL * gb[diag].sum(axis=0)
-    d = gb[diag]
-    gap = np.min([np.abs(d[a] - d[b]) for a in range(m) for b in range(a + 1, m)], axis=0)
-    quad = (gap > 3 * off) & (2 * off**2 <= tol * (gap - off))
-    assert np.all((off <= tol) | quad)
-
-
-def test_minor_block_and_cauchy_binet():
-    # explicit minors (m <= 4) against numpy det; det(J Jᵀ) = sum of squared maximal minors
-    from itertools import combinations
-
-    from hexapod_kin.singularity import _minor_block, njit
-
-    @njit
-    def minors(jb, r, c, m, out):
-        _minor_block(jb, r, c, m, jb.shape[2], out)
-
-    rng = np.random.default_rng(4)
-    for m in (1, 2, 3, 4):
-        jb = rng.normal(size=(m, 6, 64))
-        total = np.zeros(64)
-        for cols in combinations(range(6), m):
-            out = np.empty(64)
-            minors(jb, np.arange(m), np.array(cols), m, out)
-            ref = np.linalg.det(np.moveaxis(jb[:, list(cols)], 2, 0))
-            assert np.abs(out - ref).max() < 1e-12 * max(1.0, np.abs(ref).max())
-            total += out**2
-        jac = np.moveaxis(jb, 2, 0)
-        gram = np.linalg.det(jac @ np.swapaxes(jac, 1, 2))
-        assert np.allclose(total, gram, rtol=1e-10)
-
-
 def test_kernel_accurate_near_singularities(leg):
     # q3 -> 0 and the foot near the hip axis: sigma_min keeps its relative accuracy
     qs = np.array(
@@ -362,12 +143,12 @@ def test_default_rows(leg, scara):
     assert default_rows(leg) == ("x", "y", "z")
     assert default_rows(scara) == ("x", "y", "z", "wz")
     assert plot_joints(leg) == (1, 2)
-    assert plot_joints(scara) == (0, 1)
+    assert 1 in plot_joints(scara)  # theta2: the only joint in the families (det = l1 l2 sin q2)
 
 
 def test_leg_scan_finds_both_families_and_nothing_spurious(leg):
-    res = scan(leg, grid=73, joints=["knee", "ankle"], q_fixed=[0.4, 0, 0])
-    counts = res.family_counts()
+    res = scan(leg, grid=73, joints=["knee", "ankle"], q_fixed=[0.4, 0, 0], families=True)
+    counts = res.family_counts
     assert counts["q3 = 0 (mod 2*pi)"] > 0
     assert counts["q3 = pi (mod 2*pi)"] > 0
     assert counts["l1 + l2*cos(q2) + l3*cos(q2 + q3) = 0"] > 0
@@ -388,15 +169,15 @@ def test_leg_scan_finds_both_families_and_nothing_spurious(leg):
 
 
 def test_leg_random_scan_3d(leg):
-    res = scan(leg, samples=100_000, seed=1)
+    res = scan(leg, samples=100_000, seed=1, families=True)
     assert res.grid_shape is None and res.q.shape == (100_000, 3)
     assert not res.unexplained.any()
-    assert all(v > 0 for v in res.family_counts().values())
+    assert all(v > 0 for v in res.family_counts.values())
 
 
 def test_scara_scan_finds_stretched_and_folded(scara):
-    res = scan(scara, grid=(9, 73, 5, 3))
-    counts = res.family_counts()
+    res = scan(scara, grid=(9, 73, 5, 3), families=True)
+    counts = res.family_counts
     assert counts == {
         "q2 = 0 (mod 2*pi)": counts["q2 = 0 (mod 2*pi)"],
         "q2 = pi (mod 2*pi)": counts["q2 = pi (mod 2*pi)"],
@@ -414,7 +195,7 @@ def test_scan_result_is_read_only_and_json(leg):
     with pytest.raises(ValueError):
         res.det[0] = 1.0
     assert res.grid("det").shape == (7, 7)
-    out = json.loads(json.dumps(res.to_json(), allow_nan=False))
+    out = json.loads(json.dumps(res.to_dict(), allow_nan=False))
     for name in ("q", "det", "manipulability", "condition", "sigma_min", "singular"):
         assert len(out[name]) == 49
     assert out["joints"] == ["knee", "ankle"]
@@ -431,39 +212,6 @@ def test_scan_errors(leg):
         scan(leg, grid=1)
     with pytest.raises(ConfigurationError):
         measures_batch(leg, np.zeros((4, 2)))
-    with pytest.raises(ParameterError, match="plane"):
-        cross_section(np.zeros((3, 3)), "ab")
-
-
-def test_workspace_volume_against_closed_forms():
-    # l1 = 0: the reachable set is a spherical shell |l2 - l3| <= r <= l2 + l3
-    shell = Chain(
-        rows=(
-            KhalilRow("revolute", 0, 0, 0, 0),
-            KhalilRow("revolute", -math.pi / 2, 0, 0, 0),
-            KhalilRow("revolute", 0, 0.1, 0, 0),
-            KhalilRow("fixed", 0, 0.06, 0, 0),
-        ),
-        name="shell",
-    )
-    exact = 4 / 3 * math.pi * (0.16**3 - 0.04**3)
-    ws = workspace(shell, samples=1_500_000, seed=2)
-    assert ws.volume == pytest.approx(exact, rel=0.06)
-    assert ws.volume_occupied > ws.volume
-    r = np.linalg.norm(ws.points, axis=1)
-    assert r.min() >= 0.04 - 1e-12 and r.max() <= 0.16 + 1e-12
-    # hexabot leg: the disc of radius l2 + l3 centred l1 from the hip axis, revolved
-    from scipy.integrate import quad
-
-    c, rad = 0.05, 0.2
-    exact_leg = quad(
-        lambda x: 2 * math.pi * x * 2 * math.sqrt(max(rad**2 - (x - c) ** 2, 0.0)), 0, c + rad
-    )[0]
-    ws = workspace("hexabot_leg", samples=1_500_000, seed=3)
-    assert ws.volume == pytest.approx(exact_leg, rel=0.06)
-    assert reach(load("hexabot_leg")) == pytest.approx(0.25)
-    sec = cross_section(ws.points, "xz")
-    assert sec.shape[1] == 2 and len(sec) > 1000
 
 
 def test_cli_scan_json_and_plot(tmp_path, capsys):
@@ -484,18 +232,6 @@ def test_cli_derive(capsys):
     assert "max |det_sym - det_pin|" in text
     assert main(["derive", "scara", "--latex"]) == 0
     assert "\\det J" in capsys.readouterr().out
-
-
-def test_workspace_plot(tmp_path, leg):
-    from hexapod_kin.plots import plot_workspace
-
-    ws = workspace(leg, samples=50_000)
-    res = scan(leg, samples=20_000)
-    from hexapod_kin import _kernels
-
-    sing = _kernels.fk_batch(_kernels.ChainArrays.from_model(leg), res.q[res.singular])
-    path = plot_workspace(ws, tmp_path / "ws.png", singular_points=sing)
-    assert path.read_bytes()[:4] == b"\x89PNG"
 
 
 def test_default_heat_map_joints_move_the_tip():

@@ -1,0 +1,89 @@
+"""Singularity measures, fast scans of joint space, singular families.
+
+The package, from the kernel up:
+
+* :mod:`._kernel` — the compiled kernel: fused FK + Jacobian rows + measures over blocks of
+  configurations (SIMD), on :mod:`hexapod_kin._numerics`;
+* :mod:`._plan` — its Python side: the chain with z joint axes, Gram/minor plans, output buffers
+  (all kept in :meth:`hexapod_kin.model.Model.cached`);
+* :mod:`.rows` — row names and selections (no sympy: ``ROW_NAMES`` lives here);
+* :mod:`.measure` — :func:`measures`, :func:`measures_batch` (a :class:`MeasuresBatch`),
+  :func:`default_rows`, :func:`reach`;
+* :mod:`.families` — singular families as numbers, derived only when asked, cached on disk;
+* :mod:`.scans` — :func:`scan` / :class:`ScanResult`, dexterous defaults, family labels.
+
+(``measure`` and ``scans`` are named apart from the functions ``measures`` and ``scan``: a
+submodule of the same name would replace the function as the package's attribute.)
+
+The reachable workspace is :mod:`hexapod_kin.workspace` (re-exported here). Names load on first
+use (PEP 562), so ``import hexapod_kin.singularity`` imports neither numba nor sympy.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from .rows import ROW_NAMES, row_indices, row_names
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..workspace import WorkspaceResult, cross_section, workspace
+    from .families import Families, Family, families_for
+    from .measure import Measures, MeasuresBatch, default_rows, measures, measures_batch, reach
+    from .scans import ScanResult, default_joints, default_q_fixed, plot_joints, scan
+
+__all__ = [
+    "ROW_NAMES",
+    "Families",
+    "Family",
+    "Measures",
+    "MeasuresBatch",
+    "ScanResult",
+    "WorkspaceResult",
+    "cross_section",
+    "default_joints",
+    "default_q_fixed",
+    "default_rows",
+    "families_for",
+    "measures",
+    "measures_batch",
+    "plot_joints",
+    "reach",
+    "row_indices",
+    "row_names",
+    "scan",
+    "workspace",
+]
+
+_WHERE = {
+    "Families": ".families",
+    "Family": ".families",
+    "families_for": ".families",
+    "Measures": ".measure",
+    "MeasuresBatch": ".measure",
+    "default_rows": ".measure",
+    "measures": ".measure",
+    "measures_batch": ".measure",
+    "reach": ".measure",
+    "ScanResult": ".scans",
+    "default_joints": ".scans",
+    "default_q_fixed": ".scans",
+    "plot_joints": ".scans",
+    "scan": ".scans",
+    "WorkspaceResult": "..workspace",
+    "cross_section": "..workspace",
+    "workspace": "..workspace",
+}
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(where, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,723 @@
+"""The compiled layer of the singularity scans: fused FK + Jacobian rows + measures, in blocks.
+
+One job: given a chain re-expressed with z joint axes (:mod:`._plan`), a row selection and a
+batch of configurations, write ``det``, ``manipulability``, ``condition`` and ``sigma_min`` of
+every configuration, without storing the Jacobians. Configurations are processed in
+structure-of-arrays blocks, joint by joint, so the inner loops vectorise (SIMD): sin / cos by a
+polynomial (fdlibm kernels, no libm calls), and, when the selected rows are invariant under the
+first revolute joint, that joint is not evaluated at all. Every shape with ``m = min(k, n) ≤ 6``
+is reduced over the whole block (:func:`_reduce_block`): the Gram matrix ``G`` (``J Jᵀ`` or
+``Jᵀ J``, split into diagonal blocks where the chain's structure makes it block diagonal) gives
+the largest eigenvalues — closed forms for blocks of size ≤ 2, cyclic Jacobi over the block for
+3 to 6 (backward stable for clustered eigenvalues) — and ``det G`` comes from ``J``'s own
+minors (``det(J)²`` when square, Cauchy–Binet otherwise), so that
+``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity. Larger ``m`` goes
+through a per-configuration reduction (:func:`_reduce_one`, on :mod:`hexapod_kin._numerics`).
+
+This module is the kernel's one job and stays whole: its functions inline into one compiled
+loop (splitting it would only scatter that loop's parts).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .._numerics import det_small, eig2_sym, eig3_sym, jacobi_eig, njit, prange
+
+__all__ = [
+    "JACOBI_TOL",
+    "POLY_TRIG_MAX",
+    "eig_block",
+    "measures_kernel",
+    "minor_block",
+    "sincos",
+]
+
+# Cody–Waite split of π/2 (two 33-bit pieces and a tail) and the fdlibm minimax kernels of
+# sin / cos on [−π/4, π/4]: |error| ≤ 1 ulp for |x| ≤ POLY_TRIG_MAX, no calls, so the
+# per-joint loops below vectorise (SIMD); larger angles use libm.
+_PIO2_1 = 1.57079632673412561417e00
+_PIO2_2 = 6.07710050630396597660e-11
+_PIO2_2T = 2.02226624879595063154e-21
+_INVPIO2 = 6.36619772367581382433e-01
+POLY_TRIG_MAX = 1.0e5
+_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
+_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
+_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
+_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
+#: Jacobi sweeps stop when every off-diagonal sum of a block is below this × its trace.
+JACOBI_TOL = 1e-15
+JACOBI_MAX_SWEEPS = 12
+#: Sweeps run over the whole block (SIMD, no gather) until at most 1/this of it is unconverged.
+JACOBI_GATHER = 4
+
+
+@njit(cache=True, nogil=True)
+def _reduce_one(
+    js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """Measures ``(det, manipulability, condition, sigma_min)`` of one k×n Jacobian ``js``."""
+    k, n = js.shape
+    square = k == n
+    m = k if k <= n else n
+    # Gram matrix
+    if k <= n:
+        for a in range(m):
+            for b in range(a, m):
+                s = 0.0
+                for c in range(n):
+                    s += js[a, c] * js[b, c]
+                g[a, b] = s
+                g[b, a] = s
+    else:
+        for a in range(m):
+            for b in range(a, m):
+                s = 0.0
+                for c in range(k):
+                    s += js[c, a] * js[c, b]
+                g[a, b] = s
+                g[b, a] = s
+    # determinant (square) and det G
+    det = np.nan
+    if square:
+        det = det_small(js, n, work)
+        det_g = det * det
+    else:
+        det_g = det_small(g, m, work)
+    if det_g < 0.0:
+        det_g = 0.0
+    # the m-1 largest eigenvalues of G
+    if m == 1:
+        lmax = g[0, 0]
+        prod_top = 1.0
+    elif m == 2:
+        lmax, _ = eig2_sym(g[0, 0], g[0, 1], g[1, 1])
+        prod_top = lmax
+    elif m == 3:
+        lmax, l2, _ = eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
+        prod_top = lmax * l2
+    else:
+        for a in range(m):
+            for b in range(m):
+                work[a, b] = g[a, b]
+        jacobi_eig(work[:m, :m], lam)
+        lmax = lam[0]
+        prod_top = 1.0
+        for a in range(m - 1):
+            prod_top *= lam[a]
+    if m == 1:
+        lmin = g[0, 0]
+    elif prod_top > 0.0:
+        lmin = det_g / prod_top
+    else:
+        lmin = 0.0
+    if lmin < 0.0:
+        lmin = 0.0
+    smin = math.sqrt(lmin)
+    smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
+    if square:
+        manip = abs(det)
+    else:
+        manip = math.sqrt(det_g)
+    cond = smax / smin if smin > 0.0 else np.inf
+    return det, manip, cond, smin
+
+
+# Cody–Waite split of π/2 (two 33-bit pieces and a tail) and the fdlibm minimax kernels of
+# sin / cos on [−π/4, π/4]: |error| ≤ 1 ulp for |x| ≤ _POLY_TRIG_MAX, no calls, so the
+# per-joint loops below vectorise (SIMD); larger angles use libm.
+_PIO2_1 = 1.57079632673412561417e00
+_PIO2_2 = 6.07710050630396597660e-11
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    """``(sin x, cos x)`` without libm calls (branch-free quadrant selection)."""
+    n = math.floor(x * _INVPIO2 + 0.5)
+    r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_2T
+    z = r * r
+    s = r + (z * r) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
+    cr = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+    hz = 0.5 * z
+    w = 1.0 - hz
+    c = w + (((1.0 - w) - hz) + z * cr)
+    quad = int(n) & 3
+    swap = quad & 1
+    sgn_s = 1.0 - 2.0 * ((quad >> 1) & 1)
+    sgn_c = 1.0 - 2.0 * (((quad + 1) >> 1) & 1)
+    ss = c if swap else s
+    cc = s if swap else c
+    return ss * sgn_s, cc * sgn_c
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_rot(
+    app: float, aqq: float, apq: float, arp: float, arq: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``.
+
+    Golub & Van Loan's ``t = sign(τ) a_pq / (|τ| + ρ)``, ``ρ = hypot(τ, a_pq)``, written with
+    ``D = τ + sign(τ) ρ``: ``c = |D| / Q``, ``s = sign(D) a_pq / Q``, ``Q = sqrt(2 ρ |D|)``
+    (the half-angle form ``c² = (1 + |τ|/ρ) / 2``, no cancellation), so one division
+    ``W = 1 / (D Q)`` gives ``1/Q = D W`` and ``t = a_pq Q W``: two square roots, one division.
+    """
+    tau = 0.5 * (aqq - app)
+    rad = math.sqrt(tau * tau + apq * apq)
+    den = tau + rad if tau >= 0.0 else tau - rad
+    zero = den == 0.0  # a_pq = 0 and equal diagonal: the identity rotation
+    den = 1.0 if zero else den
+    rad = 0.5 if zero else rad
+    qq = math.sqrt(2.0 * rad * abs(den))
+    wi = 1.0 / (den * qq)
+    inv_q = den * wi
+    c = abs(den) * inv_q
+    s = apq * inv_q if den > 0.0 else -apq * inv_q
+    t = apq * qq * wi
+    return app - t * apq, aqq + t * apq, c * arp - s * arq, s * arp + c * arq
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_sweep(gb: np.ndarray, i: int) -> float:  # pragma: no cover - compiled
+    """One cyclic sweep on matrix ``i`` of ``gb``; returns its off-diagonal excess (≤ 0: done)."""
+    a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
+    a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
+    a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
+    a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
+    a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
+    gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
+    gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
+    return abs(a01) + abs(a02) - JACOBI_TOL * (a00 + a11 + a22)
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _rot_cs(
+    app: float, aqq: float, apq: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq)``, ``(c, s)`` (as :func:`_jacobi_rot`).
+
+    The other entries transform as ``a_rp ← c a_rp − s a_rq``, ``a_rq ← s a_rp + c a_rq``.
+    """
+    tau = 0.5 * (aqq - app)
+    rad = math.sqrt(tau * tau + apq * apq)
+    den = tau + rad if tau >= 0.0 else tau - rad
+    zero = den == 0.0
+    den = 1.0 if zero else den
+    rad = 0.5 if zero else rad
+    qq = math.sqrt(2.0 * rad * abs(den))
+    wi = 1.0 / (den * qq)
+    inv_q = den * wi
+    c = abs(den) * inv_q
+    s = apq * inv_q if den > 0.0 else -apq * inv_q
+    t = apq * qq * wi
+    return app - t * apq, aqq + t * apq, c, s
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_sweep4(gb: np.ndarray, i: int) -> None:  # pragma: no cover - compiled
+    """One cyclic sweep (six rotations) on the packed symmetric 4×4 matrix ``i`` of ``gb``.
+
+    ``gb`` rows: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``.
+    """
+    a00, a01, a02, a03 = gb[0, i], gb[1, i], gb[2, i], gb[3, i]
+    a11, a12, a13 = gb[4, i], gb[5, i], gb[6, i]
+    a22, a23, a33 = gb[7, i], gb[8, i], gb[9, i]
+    a00, a11, c, s = _rot_cs(a00, a11, a01)  # (0, 1); r = 2, 3
+    a02, a12 = c * a02 - s * a12, s * a02 + c * a12
+    a03, a13 = c * a03 - s * a13, s * a03 + c * a13
+    a00, a22, c, s = _rot_cs(a00, a22, a02)  # (0, 2); r = 1, 3
+    a01, a12 = -s * a12, c * a12  # a01 = 0 here
+    a03, a23 = c * a03 - s * a23, s * a03 + c * a23
+    a00, a33, c, s = _rot_cs(a00, a33, a03)  # (0, 3); r = 1, 2
+    a01, a13 = c * a01 - s * a13, s * a01 + c * a13
+    a02, a23 = -s * a23, c * a23  # a02 = 0 here
+    a11, a22, c, s = _rot_cs(a11, a22, a12)  # (1, 2); r = 0, 3
+    a01, a02 = c * a01 - s * a02, s * a01 + c * a02
+    a13, a23 = c * a13 - s * a23, s * a13 + c * a23
+    a11, a33, c, s = _rot_cs(a11, a33, a13)  # (1, 3); r = 0, 2
+    a01, a03 = c * a01, s * a01  # a03 = 0 here
+    a12, a23 = -s * a23, c * a23  # a12 = 0 here
+    a22, a33, c, s = _rot_cs(a22, a33, a23)  # (2, 3); r = 0, 1
+    a02, a03 = c * a02 - s * a03, s * a02 + c * a03
+    a12, a13 = c * a12, s * a12  # a13 = 0 here
+    gb[0, i], gb[1, i], gb[2, i], gb[3, i] = a00, a01, a02, a03
+    gb[4, i], gb[5, i], gb[6, i] = a11, a12, a13
+    gb[7, i], gb[8, i], gb[9, i] = a22, 0.0, a33
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - compiled
+    """Whether matrix ``i`` (packed 3×3 or 4×4, diagonal ``d``, off-diagonal ``E``) needs sweeps.
+
+    With ``o = Σ_{a<b} |e_ab|`` (≥ every off-diagonal row sum, ≥ ``‖E‖₂``) and ``g`` the
+    smallest gap ``|d_a − d_b|``, the diagonal holds the eigenvalues to ``tol = JACOBI_TOL ·
+    trace`` when ``o ≤ tol`` (Weyl), or when ``g > 3 o`` and ``2 o² / (g − o) ≤ tol`` (the
+    quadratic bound for isolated eigenvalues: scale row / column ``a`` of ``D + E`` by
+    ``1/α`` / ``α``; Gershgorin disc ``a``, radius ``≤ o/α``, is disjoint from the others,
+    radius ``≤ o + α o``, for ``α = (g − o) / (2 o)`` when ``(g − o)² > 4 o²``, and holds
+    exactly one eigenvalue, within ``2 o² / (g − o)`` of ``d_a``).
+    """
+    if m == 3:
+        d0, d1, d2 = gb[0, i], gb[3, i], gb[5, i]
+        off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[4, i])
+        tr = d0 + d1 + d2
+        gap = min(abs(d0 - d1), min(abs(d0 - d2), abs(d1 - d2)))
+    else:
+        d0, d1, d2, d3 = gb[0, i], gb[4, i], gb[7, i], gb[9, i]
+        off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[3, i])
+        off += abs(gb[5, i]) + abs(gb[6, i]) + abs(gb[8, i])
+        tr = d0 + d1 + d2 + d3
+        gap = min(min(abs(d0 - d1), abs(d0 - d2)), min(abs(d0 - d3), abs(d1 - d2)))
+        gap = min(gap, min(abs(d1 - d3), abs(d2 - d3)))
+    tol = JACOBI_TOL * tr
+    weyl = off <= tol
+    quad = (gap > 3.0 * off) & (2.0 * off * off <= tol * (gap - off))
+    return not (weyl | quad)  # branch-free: the block loops that count these vectorise
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def eig_block(
+    gb: np.ndarray, nb: int, m: int, wb: np.ndarray, idx: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """Diagonalise ``nb`` packed symmetric m×m matrices (m = 3 or 4) in place by cyclic Jacobi.
+
+    ``gb`` is (m(m+1)/2, B), rows the packed upper triangle (m = 3: ``g00 g01 g02 g11 g12
+    g22``; m = 4: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``); ``wb`` the same shape and
+    ``idx`` (B,) int are scratch. The first sweep runs over the whole block (SIMD); the
+    matrices whose off-diagonal sum still exceeds ``JACOBI_TOL · trace`` are gathered
+    (compacted) into ``wb`` and swept there, contiguously (SIMD again), the converged ones
+    scattered back, until none is left (Weyl: the diagonal then holds the eigenvalues to that
+    absolute accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
+    characteristic-polynomial / trigonometric closed forms.
+    """
+    npk = gb.shape[0]
+    sweeps = 0
+    while sweeps < JACOBI_MAX_SWEEPS:
+        if m == 3:
+            for i in range(nb):
+                _jacobi_sweep(gb, i)
+        else:
+            for i in range(nb):
+                _jacobi_sweep4(gb, i)
+        sweeps += 1
+        n_open = 0
+        for i in range(nb):
+            n_open += _jacobi_open(gb, i, m)
+        if n_open == 0:
+            return
+        if n_open * JACOBI_GATHER <= nb:
+            break
+    n_open = 0
+    for i in range(nb):
+        if _jacobi_open(gb, i, m):
+            idx[n_open] = i
+            n_open += 1
+    for jj in range(n_open):
+        i = idx[jj]
+        for p in range(npk):
+            wb[p, jj] = gb[p, i]
+    while sweeps < JACOBI_MAX_SWEEPS:
+        sweeps += 1
+        if n_open == 0:
+            return
+        if m == 3:
+            for jj in range(n_open):
+                _jacobi_sweep(wb, jj)
+        else:
+            for jj in range(n_open):
+                _jacobi_sweep4(wb, jj)
+        kept = 0
+        for jj in range(n_open):
+            i = idx[jj]
+            if _jacobi_open(wb, jj, m):
+                if kept != jj:
+                    for p in range(npk):
+                        wb[p, kept] = wb[p, jj]
+                    idx[kept] = i
+                kept += 1
+            else:
+                for p in range(npk):
+                    gb[p, i] = wb[p, jj]
+        n_open = kept
+    for jj in range(n_open):  # not converged within the sweep limit: keep the last iterate
+        i = idx[jj]
+        for p in range(npk):
+            gb[p, i] = wb[p, jj]
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def minor_block(
+    jb: np.ndarray, r: np.ndarray, c: np.ndarray, m: int, nb: int, dst: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """``dst[i] = det(jb[r][:, c][:, :, i])`` for the m×m (m ≤ 4) minor on rows ``r``, cols ``c``.
+
+    Explicit formulas (cofactors; for m = 4 the Laplace expansion by the 2×2 minors of the
+    first two and the last two rows), vectorised over the block.
+    """
+    if m == 1:
+        r0, c0 = r[0], c[0]
+        for i in range(nb):
+            dst[i] = jb[r0, c0, i]
+    elif m == 2:
+        r0, r1, c0, c1 = r[0], r[1], c[0], c[1]
+        for i in range(nb):
+            dst[i] = jb[r0, c0, i] * jb[r1, c1, i] - jb[r0, c1, i] * jb[r1, c0, i]
+    elif m == 3:
+        r0, r1, r2, c0, c1, c2 = r[0], r[1], r[2], c[0], c[1], c[2]
+        for i in range(nb):
+            a00, a01, a02 = jb[r0, c0, i], jb[r0, c1, i], jb[r0, c2, i]
+            a10, a11, a12 = jb[r1, c0, i], jb[r1, c1, i], jb[r1, c2, i]
+            a20, a21, a22 = jb[r2, c0, i], jb[r2, c1, i], jb[r2, c2, i]
+            dst[i] = (
+                a00 * (a11 * a22 - a12 * a21)
+                - a01 * (a10 * a22 - a12 * a20)
+                + a02 * (a10 * a21 - a11 * a20)
+            )
+    else:
+        r0, r1, r2, r3 = r[0], r[1], r[2], r[3]
+        c0, c1, c2, c3 = c[0], c[1], c[2], c[3]
+        for i in range(nb):
+            a0, a1, a2, a3 = jb[r0, c0, i], jb[r0, c1, i], jb[r0, c2, i], jb[r0, c3, i]
+            b0, b1, b2, b3 = jb[r1, c0, i], jb[r1, c1, i], jb[r1, c2, i], jb[r1, c3, i]
+            e0, e1, e2, e3 = jb[r2, c0, i], jb[r2, c1, i], jb[r2, c2, i], jb[r2, c3, i]
+            f0, f1, f2, f3 = jb[r3, c0, i], jb[r3, c1, i], jb[r3, c2, i], jb[r3, c3, i]
+            s01, s02, s03 = a0 * b1 - a1 * b0, a0 * b2 - a2 * b0, a0 * b3 - a3 * b0
+            s12, s13, s23 = a1 * b2 - a2 * b1, a1 * b3 - a3 * b1, a2 * b3 - a3 * b2
+            t01, t02, t03 = e0 * f1 - e1 * f0, e0 * f2 - e2 * f0, e0 * f3 - e3 * f0
+            t12, t13, t23 = e1 * f2 - e2 * f1, e1 * f3 - e3 * f1, e2 * f3 - e3 * f2
+            dst[i] = s01 * t23 - s02 * t13 + s03 * t12 + s12 * t03 - s13 * t02 + s23 * t01
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _reduce_block(
+    jb: np.ndarray,
+    nb: int,
+    plan: tuple[Any, ...],
+    gb: np.ndarray,
+    hb: np.ndarray,
+    wb: np.ndarray,
+    ev: np.ndarray,
+    idx: np.ndarray,
+    dg: np.ndarray,
+    mnr: np.ndarray,
+    start: int,
+    out_det: np.ndarray,
+    out_manip: np.ndarray,
+    out_cond: np.ndarray,
+    out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 4``.
+
+    ``plan`` is :attr:`._plan.GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
+    triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
+    ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
+    ``JACOBI_TOL · trace`` over the whole block (checked; Weyl bounds the effect), each
+    diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`eig_block` for 3
+    and 4; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
+    when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
+    ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
+    accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
+    ``ε λmax^m``).
+    """
+    pack, rsub, csub, gram_t, perm, csize, drop = plan
+    k, n = jb.shape[0], jb.shape[1]
+    mm = k if k <= n else n
+    square = k == n
+    for a in range(mm):
+        for b in range(a, mm):
+            p = pack[a, b]
+            for i in range(nb):
+                gb[p, i] = 0.0
+            if gram_t:
+                for c in range(k):
+                    for i in range(nb):
+                        gb[p, i] += jb[c, a, i] * jb[c, b, i]
+            else:
+                for c in range(n):
+                    for i in range(nb):
+                        gb[p, i] += jb[a, c, i] * jb[b, c, i]
+    if square:
+        minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
+        for i in range(nb):
+            out_det[start + i] = mnr[i]
+            dg[i] = mnr[i] * mnr[i]
+    else:
+        for i in range(nb):
+            dg[i] = 0.0
+            out_det[start + i] = np.nan
+        for s in range(rsub.shape[0]):
+            minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
+            for i in range(nb):
+                dg[i] += mnr[i] * mnr[i]
+    # the structural zeros really are negligible over this block?
+    split = drop.shape[0] > 0
+    if split:
+        for i in range(nb):
+            mnr[i] = 0.0
+        for a in range(mm):
+            p = pack[a, a]
+            for i in range(nb):
+                mnr[i] += gb[p, i]
+        for d in range(drop.shape[0]):
+            p = drop[d]
+            for i in range(nb):
+                mnr[i] -= abs(gb[p, i]) / JACOBI_TOL
+        bad = 0
+        for i in range(nb):
+            bad += mnr[i] < 0.0
+        split = bad == 0
+    # eigenvalues of each diagonal block into ev[0:mm]
+    ncomp = csize.shape[0] if split else 1
+    off = 0
+    for comp in range(ncomp):
+        s = csize[comp] if split else mm
+        if s == 1:
+            p = pack[perm[off], perm[off]] if split else 0
+            for i in range(nb):
+                ev[off, i] = gb[p, i]
+        elif s == 2:
+            a, b = (perm[off], perm[off + 1]) if split else (0, 1)
+            paa, pab, pbb = pack[a, a], pack[a, b], pack[b, b]
+            for i in range(nb):
+                ga, gab, gbb = gb[paa, i], gb[pab, i], gb[pbb, i]
+                half = 0.5 * (ga - gbb)
+                lmax = 0.5 * (ga + gbb) + math.sqrt(half * half + gab * gab)
+                ev[off, i] = lmax
+                lo = (ga * gbb - gab * gab) / lmax if lmax > 0.0 else 0.0
+                ev[off + 1, i] = max(lo, 0.0)
+        else:
+            for u in range(s):
+                for v in range(u, s):
+                    a = perm[off + u] if split else u
+                    b = perm[off + v] if split else v
+                    p = pack[a, b]
+                    q = u * s - (u * (u - 1)) // 2 + (v - u)
+                    for i in range(nb):
+                        hb[q, i] = gb[p, i]
+            eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
+            for u in range(s):
+                q = u * s - (u * (u - 1)) // 2
+                for i in range(nb):
+                    ev[off + u, i] = hb[q, i]
+        off += s
+    # λmax into mnr, the product of the m − 1 largest into hb[0] (one loop per m: SIMD)
+    if mm == 1:
+        for i in range(nb):
+            mnr[i] = ev[0, i]
+            hb[0, i] = 1.0
+    elif mm == 2:
+        for i in range(nb):
+            lmax = max(ev[0, i], ev[1, i])
+            mnr[i] = lmax
+            hb[0, i] = lmax
+    elif mm == 3:
+        for i in range(nb):
+            e0, e1, e2 = ev[0, i], ev[1, i], ev[2, i]
+            lmax = max(e0, max(e1, e2))
+            mnr[i] = lmax
+            hb[0, i] = lmax * max(min(e0, e1), min(max(e0, e1), e2))
+    else:
+        for i in range(nb):
+            e0, e1, e2, e3 = ev[0, i], ev[1, i], ev[2, i], ev[3, i]
+            lo1, hi1 = min(e0, e1), max(e0, e1)
+            lo2, hi2 = min(e2, e3), max(e2, e3)
+            mnr[i] = max(hi1, hi2)
+            hb[0, i] = hi1 * hi2 * max(lo1, lo2)  # the three largest
+    for i in range(nb):
+        prod = hb[0, i]
+        d = dg[i]
+        lmin = d / prod if prod > 0.0 else 0.0
+        smin = math.sqrt(max(lmin, 0.0))
+        out_smin[start + i] = smin
+        out_cond[start + i] = math.sqrt(max(mnr[i], 0.0)) / smin if smin > 0.0 else np.inf
+    if square:
+        for i in range(nb):
+            out_manip[start + i] = abs(out_det[start + i])
+    else:
+        for i in range(nb):
+            out_manip[start + i] = math.sqrt(dg[i])
+
+
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def measures_kernel(
+    prot: np.ndarray,
+    ptr: np.ndarray,
+    pident: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    qs: np.ndarray,
+    sel: np.ndarray,
+    use_block: bool,
+    plan: tuple[Any, ...],
+    skip0: bool,
+    poly: bool,
+    nwork: int,
+    block: int,
+    out_det: np.ndarray,
+    out_manip: np.ndarray,
+    out_cond: np.ndarray,
+    out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Fused FK + selected-row Jacobian + measures for every row of ``qs``.
+
+    The chain is given with every joint axis aligned to its frame's z (see
+    :func:`._plan.aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or ``Tz(q)``;
+    ``ptr[m]`` is the tip offset. Work is split into ``nwork`` contiguous ranges (one per
+    thread, scratch allocated once each), processed in blocks of ``block`` configurations
+    stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
+    and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
+    see :func:`._plan.first_joint_invariant`). ``poly``: sin / cos by :func:`sincos` (all
+    ``|q| ≤ POLY_TRIG_MAX``) rather than libm. ``use_block`` (``min(k, n) ≤ 4``, see
+    :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole block by
+    :func:`_reduce_block`; otherwise :func:`_reduce_one` per configuration.
+    """
+    nconf = qs.shape[0]
+    nq = qs.shape[1]
+    m = kind.shape[0]
+    k = sel.shape[0]
+    mm = k if k <= nq else nq
+    big = k if k > nq else nq
+    npk = mm * (mm + 1) // 2 if use_block else 1
+    nev = mm if use_block else 1
+    bsz = block
+    nblocks = (nconf + bsz - 1) // bsz
+    per = (nblocks + nwork - 1) // nwork
+    for w in prange(nwork):
+        rr = np.empty((9, bsz))
+        pp = np.empty((3, bsz))
+        frames = np.empty((max(m, 1), 6, bsz))
+        trig = np.empty((2, bsz))
+        qb = np.empty((nq, bsz))
+        jb = np.empty((k, nq, bsz))
+        gb = np.empty((npk, bsz))
+        hb = np.empty((npk, bsz))
+        wb = np.empty((npk, bsz))
+        ev = np.empty((nev, bsz))
+        open_idx = np.empty(bsz, dtype=np.int64)
+        dg = np.empty(bsz)
+        mnr = np.empty(bsz)
+        js = np.empty((k, nq))
+        g = np.empty((mm, mm))
+        work = np.empty((big, big))
+        lam = np.empty(mm)
+        for blk in range(w * per, min(nblocks, (w + 1) * per)):
+            start = blk * bsz
+            nb = min(nconf, start + bsz) - start
+            for i in range(nb):  # the block's q, transposed: the per-joint loops read rows
+                for c in range(nq):
+                    qb[c, i] = qs[start + i, c]
+            for j in range(m):
+                t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
+                if j == 0:
+                    for i in range(nb):
+                        pp[0, i] = t0
+                        pp[1, i] = t1
+                        pp[2, i] = t2
+                    for a in range(9):
+                        v = prot[0, a]
+                        for i in range(nb):
+                            rr[a, i] = v
+                else:
+                    for i in range(nb):
+                        pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                        pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                        pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+                    if pident[j] == 0:
+                        a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
+                        a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
+                        a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
+                        for row in range(3):
+                            b = 3 * row
+                            for i in range(nb):
+                                x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                                rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                                rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                                rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+                for i in range(nb):
+                    frames[j, 0, i] = pp[0, i]
+                    frames[j, 1, i] = pp[1, i]
+                    frames[j, 2, i] = pp[2, i]
+                    frames[j, 3, i] = rr[2, i]
+                    frames[j, 4, i] = rr[5, i]
+                    frames[j, 5, i] = rr[8, i]
+                cj = col[j]
+                if kind[j] == 1:
+                    for i in range(nb):
+                        qv = qb[cj, i]
+                        pp[0, i] += rr[2, i] * qv
+                        pp[1, i] += rr[5, i] * qv
+                        pp[2, i] += rr[8, i] * qv
+                elif not (j == 0 and skip0):
+                    if poly:
+                        for i in range(nb):
+                            trig[0, i], trig[1, i] = sincos(qb[cj, i])
+                    else:
+                        for i in range(nb):
+                            qv = qb[cj, i]
+                            trig[0, i] = math.sin(qv)
+                            trig[1, i] = math.cos(qv)
+                    for row in range(3):
+                        b = 3 * row
+                        for i in range(nb):
+                            sq, cq = trig[0, i], trig[1, i]
+                            x0, x1 = rr[b, i], rr[b + 1, i]
+                            rr[b, i] = cq * x0 + sq * x1
+                            rr[b + 1, i] = cq * x1 - sq * x0
+            t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+            for i in range(nb):
+                pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+            # selected rows of J, column by column: [z × (p − o); z] or [z; 0]
+            for a in range(k):
+                for b in range(nq):
+                    for i in range(nb):
+                        jb[a, b, i] = 0.0
+            for j in range(m):
+                cj = col[j]
+                for a in range(k):
+                    r = sel[a]
+                    if kind[j] == 1:
+                        if r < 3:
+                            for i in range(nb):
+                                jb[a, cj, i] += frames[j, 3 + r, i]
+                    elif r >= 3:
+                        for i in range(nb):
+                            jb[a, cj, i] += frames[j, r, i]
+                    else:
+                        u = (r + 1) % 3
+                        v = (r + 2) % 3
+                        for i in range(nb):
+                            jb[a, cj, i] += frames[j, 3 + u, i] * (
+                                pp[v, i] - frames[j, v, i]
+                            ) - frames[j, 3 + v, i] * (pp[u, i] - frames[j, u, i])
+            if use_block:
+                _reduce_block(
+                    jb,
+                    nb,
+                    plan,
+                    gb,
+                    hb,
+                    wb,
+                    ev,
+                    open_idx,
+                    dg,
+                    mnr,
+                    start,
+                    out_det,
+                    out_manip,
+                    out_cond,
+                    out_smin,
+                )
+            else:
+                for i in range(nb):
+                    for a in range(k):
+                        for b in range(nq):
+                            js[a, b] = jb[a, b, i]
+                    d, mp, cn, sm = _reduce_one(js, g, work, lam)
+                    out_det[start + i] = d
+                    out_manip[start + i] = mp
+                    out_cond[start + i] = cn
+                    out_smin[start + i] = sm

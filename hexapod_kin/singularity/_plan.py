@@ -1,0 +1,326 @@
+"""The Python side of the singularity kernel: chain re-expression, block plans, output buffers.
+
+:func:`compute` runs :func:`~._kernel.measures_kernel` for a loaded model, a row selection and a
+batch of configurations; everything it derives from the model (z-aligned chain, Gram plans) is
+kept in the model's one cache (:meth:`hexapod_kin.model.Model.cached`).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numba
+import numpy as np
+
+from .._kernels import ChainArrays, jacobian_batch
+from ._kernel import POLY_TRIG_MAX, measures_kernel
+
+__all__ = [
+    "AlignedChain",
+    "GramPlan",
+    "BLOCK",
+    "aligned",
+    "block_plan",
+    "gram_plan",
+    "first_joint_invariant",
+    "output_arrays",
+    "compute",
+]
+
+
+def _rotation_z_to(u: np.ndarray) -> np.ndarray:
+    """A rotation ``A`` with ``A @ ez = u`` (identity when ``u`` is ``ez``)."""
+    u = np.asarray(u, float) / np.linalg.norm(u)
+    ez = np.array([0.0, 0.0, 1.0])
+    if np.allclose(u, ez, rtol=0, atol=1e-15):
+        return np.eye(3)
+    if np.allclose(u, -ez, rtol=0, atol=1e-15):
+        return np.diag([1.0, -1.0, -1.0])
+    v = np.cross(ez, u)
+    s = np.linalg.norm(v)
+    c = float(u @ ez)
+    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + vx + vx @ vx * ((1 - c) / s**2)
+
+
+@dataclass(frozen=True)
+class AlignedChain:
+    prot: np.ndarray
+    ptr: np.ndarray
+    pident: np.ndarray
+    kind: np.ndarray
+    col: np.ndarray
+    nq: int
+
+
+def aligned_chain(arrays: ChainArrays) -> AlignedChain:
+    """Re-express the shared :class:`~hexapod_kin._kernels.ChainArrays` with z joint axes.
+
+    Joint ``j`` rotates about its local axis ``u_j``; with ``A_j ez = u_j`` the rotation is
+    ``A_j Rz(q) A_jᵀ``, so ``A_j`` is folded into placement ``j`` and ``A_jᵀ`` into placement
+    ``j + 1`` (or the tip offset). The kernel then only applies ``Rz(q)`` / ``Tz(q)``.
+    """
+    m = arrays.rot.shape[0]
+    prot = np.empty((m, 9))
+    ptr = np.empty((m + 1, 3))
+    pident = np.zeros(m, dtype=np.int64)
+    prev_t = np.eye(3)  # A_{j-1}^T
+    for j in range(m):
+        a = _rotation_z_to(arrays.axis[j])
+        rot = prev_t @ arrays.rot[j] @ a
+        rot[np.abs(rot) < 1e-15] = 0.0
+        prot[j] = rot.reshape(-1)
+        ptr[j] = prev_t @ arrays.trans[j]
+        pident[j] = int(np.array_equal(rot, np.eye(3)))
+        prev_t = a.T
+    ptr[m] = prev_t @ arrays.trans[m]
+    return AlignedChain(prot, ptr, pident, arrays.kind.copy(), arrays.col.copy(), arrays.nq)
+
+
+#: Configurations per structure-of-arrays block of :func:`measures_kernel`.
+BLOCK = 256
+#: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
+_MAX_MINORS = 70
+
+
+@lru_cache(maxsize=64)
+def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray]:
+    """Block-path tables for k×n Jacobians: ``(use_block, pack, rsub, csub)``.
+
+    ``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (m×m, ``m = min(k, n)``);
+    ``rsub[s]`` / ``csub[s]``: rows / columns of the s-th maximal minor of ``J`` (the one
+    square minor when ``k == n``; all ``C(max(k, n), m)`` of them otherwise, for Cauchy–Binet
+    ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 4`` or there are more than
+    ``_MAX_MINORS`` minors (the per-configuration path then serves).
+    """
+    from itertools import combinations
+
+    m = min(k, n)
+    pack = np.zeros((max(m, 1), max(m, 1)), dtype=np.int64)
+    p = 0
+    for a in range(m):
+        for b in range(a, m):
+            pack[a, b] = pack[b, a] = p
+            p += 1
+    full = tuple(range(m))
+    subs = list(combinations(range(max(k, n)), m)) if m else []
+    use = 1 <= m <= 4 and len(subs) <= _MAX_MINORS
+    if not use:
+        subs = subs[:1] or [full]
+    if k <= n:
+        rsub, csub = [full] * len(subs), subs
+    else:
+        rsub, csub = subs, [full] * len(subs)
+    as_arr = lambda x: np.array(x, dtype=np.int64).reshape(len(subs), max(m, 1))  # noqa: E731
+    return use, pack, as_arr(rsub), as_arr(csub)
+
+
+@dataclass(frozen=True)
+class GramPlan:
+    """How :func:`_reduce_block` treats one chain and row selection (see :func:`_gram_plan`).
+
+    Attributes:
+        use_block: Whether the block path applies (``m = min(k, n) ≤ 4``, few minors).
+        gram_t: ``G = Jᵀ J`` (else ``J Jᵀ``).
+        perm: (m,) indices of ``G`` ordered by diagonal block.
+        csize: (c,) sizes of the diagonal blocks (one block of size m: no split).
+        drop: Packed positions of the entries between blocks (zero at random samples).
+        arrays: The tuple the kernel takes: ``(pack, rsub, csub, gram_t, perm, csize, drop)``.
+
+    """
+
+    use_block: bool
+    gram_t: bool
+    perm: np.ndarray
+    csize: np.ndarray
+    drop: np.ndarray
+    arrays: tuple[Any, ...]
+
+
+def _components(zero: np.ndarray) -> list[list[int]]:
+    """Connected components of the graph with an edge where ``zero[a, b]`` is false."""
+    m = zero.shape[0]
+    seen = [False] * m
+    comps = []
+    for a in range(m):
+        if seen[a]:
+            continue
+        stack, comp = [a], []
+        seen[a] = True
+        while stack:
+            u = stack.pop()
+            comp.append(u)
+            for v in range(m):
+                if not seen[v] and not zero[u, v]:
+                    seen[v] = True
+                    stack.append(v)
+        comps.append(sorted(comp))
+    return comps
+
+
+def gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
+    """Plan the block reduction for ``model``'s rows ``sel`` (kept in ``model.cached``).
+
+    ``G`` is ``J Jᵀ`` when k < n, ``Jᵀ J`` when k > n, and, when square, whichever splits
+    into smaller diagonal blocks: the entries of both are evaluated at 16 random
+    configurations (the first joint at 0 when ``skip0``, as in the kernel) and those below
+    ``1e-14 · max |G|`` at all of them are taken as structural zeros. The kernel re-checks them
+    on every block (a block where one is not negligible is solved whole), so a wrong guess
+    only costs time. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}`` (the hip column is
+    orthogonal to the leg plane), the SCARA's (x, y, z, wz) ``{θ1, θ2, θ3} ⊕ {d4}``.
+    """
+    return model.cached(  # type: ignore[no-any-return]
+        f"singularity.gram_plan.{sel}.{skip0}", lambda: _build_gram_plan(model, sel, skip0)
+    )
+
+
+def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
+    arrays = model.arrays
+    k, n = len(sel), arrays.nq
+    use_block, pack, rsub, csub = block_plan(k, n)
+    m = min(k, n)
+    best: tuple[int, int, bool, list[list[int]], np.ndarray] | None = None
+    if use_block and m >= 2:
+        q = model.random_q(16, seed=2024)
+        if skip0:
+            q[:, arrays.col[0]] = 0.0
+        jac = jacobian_batch(arrays, q, rows=6)[:, list(sel), :]
+        for gram_t in (False, True) if k == n else (k > n,):
+            g = np.swapaxes(jac, 1, 2) @ jac if gram_t else jac @ np.swapaxes(jac, 1, 2)
+            zero = (np.abs(g) <= 1e-14 * max(float(np.abs(g).max()), 1e-300)).all(axis=0)
+            comps = _components(zero)
+            score = (max(len(c) for c in comps), -len(comps))
+            if best is None or score < best[:2]:
+                best = (*score, gram_t, comps, zero)
+    if best is None:
+        gram_t, comps = k > n, [list(range(m))]
+    else:
+        gram_t, comps = best[2], best[3]
+    perm = np.array([a for c in comps for a in c] or [0], dtype=np.int64)
+    csize = np.array([len(c) for c in comps] or [1], dtype=np.int64)
+    where = {a: ci for ci, c in enumerate(comps) for a in c}
+    drop = np.array(
+        sorted(int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]),
+        dtype=np.int64,
+    )
+    if len(comps) == 1:
+        perm = np.arange(max(m, 1), dtype=np.int64)
+    return GramPlan(
+        use_block, gram_t, perm, csize, drop, (pack, rsub, csub, gram_t, perm, csize, drop)
+    )
+
+
+def _axis_rotation(u: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation by ``angle`` [rad] about the unit axis ``u`` (Rodrigues)."""
+    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * ux + (1.0 - math.cos(angle)) * (ux @ ux)
+
+
+def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
+    """Whether the measures of the ``sel`` rows of ``J`` do not depend on the first joint.
+
+    Turning revolute joint 0 (axis ``u`` in the base frame) by ``θ`` rotates everything after it
+    rigidly, so ``J(q) = B J(q with q0 = 0)`` with ``B = blockdiag(R, R)``, ``R = Rot(u, θ)``
+    (linear velocities and axes both rotate; the origin of the rotation does not matter for
+    differences of points). With ``S`` the k×6 row selection, ``S J(q) = Q S J(q0 = 0)`` and
+    ``Q = S B Sᵀ`` holds exactly when ``Q`` is orthogonal (the selected rows span a subspace
+    invariant under ``B``); then the singular values are the same, and ``det Q = +1``
+    (``Q(θ)`` is continuous with ``Q(0) = I``) keeps ``det J``. Checked at two generic angles.
+    Also requires ``q0`` to drive joint 0 only.
+    """
+    if al.kind.shape[0] == 0 or al.kind[0] != 0 or np.count_nonzero(al.col == al.col[0]) != 1:
+        return False
+    u = al.prot[0].reshape(3, 3)[:, 2]
+    u = u / np.linalg.norm(u)
+    rows = np.eye(6)[list(sel)]
+    for angle in (0.7, 2.3):
+        rot = _axis_rotation(u, angle)
+        b = np.zeros((6, 6))
+        b[:3, :3] = rot
+        b[3:, 3:] = rot
+        qmat = rows @ b @ rows.T
+        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12:
+            return False
+        if np.linalg.det(qmat) <= 0:
+            return False
+    return True
+
+
+_OUT_POOL: list[np.ndarray] = []
+_OUT_LOCK = threading.Lock()
+_OUT_POOL_MAX_BYTES = 128 * 2**20
+
+
+def output_arrays(n: int) -> tuple[np.ndarray, ...]:
+    """Four (n,) float64 arrays for :func:`measures_batch`: the rows of one (4, n) buffer.
+
+    Touching fresh memory is slow on the 2-core VM (first-touch page faults, ~1.3 ms per MB:
+    ~40 ms for the 32 MB of 1e6 configurations, as long as the kernel itself), so the last
+    buffer (up to ``_OUT_POOL_MAX_BYTES``) is kept and handed out again — only when nothing
+    references it any more: the rows returned hold it through ``.base``, so while any result
+    array (or a view of one) is alive its reference count stays above the pool's own.
+    """
+    with _OUT_LOCK:
+        if _OUT_POOL:
+            buf = _OUT_POOL[0]
+            # references: the pool list, ``buf`` and getrefcount's argument
+            if buf.shape[1] == n and sys.getrefcount(buf) == 3:
+                return tuple(buf[i] for i in range(4))
+            del buf
+        buf = np.empty((4, n))
+        if buf.nbytes <= _OUT_POOL_MAX_BYTES:
+            _OUT_POOL[:] = [buf]
+        return tuple(buf[i] for i in range(4))
+
+
+def aligned(model: Any) -> AlignedChain:
+    """The model's chain with z joint axes (:func:`aligned_chain`), kept in ``model.cached``."""
+    return model.cached(  # type: ignore[no-any-return]
+        "singularity.aligned", lambda: aligned_chain(model.arrays)
+    )
+
+
+def compute(
+    model: Any, q: np.ndarray, sel: np.ndarray, out: tuple[np.ndarray, ...]
+) -> tuple[np.ndarray, ...]:
+    """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
+
+    Args:
+        model: A loaded model.
+        q: (N, nq) float64 C-contiguous configurations, checked by the caller.
+        sel: (k,) int64 row indices of ``[vx vy vz wx wy wz]``.
+        out: Four (N,) float64 arrays.
+
+    Returns:
+        ``out``.
+
+    """
+    n = q.shape[0]
+    al = aligned(model)
+    key = tuple(int(r) for r in sel)
+    skip0 = first_joint_invariant(al, key)
+    poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= POLY_TRIG_MAX)
+    nwork = max(1, min(numba.get_num_threads(), -(-n // BLOCK)))
+    plan = gram_plan(model, key, skip0)
+    measures_kernel(
+        al.prot,
+        al.ptr,
+        al.pident,
+        al.kind,
+        al.col,
+        q,
+        sel,
+        plan.use_block,
+        plan.arrays,
+        skip0,
+        poly,
+        nwork,
+        BLOCK,
+        *out,
+    )
+    return out

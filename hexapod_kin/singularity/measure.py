@@ -1,0 +1,269 @@
+"""Singularity measures of one configuration or of many.
+
+Measures of a Jacobian ``J`` (k selected rows of the ``local_world_aligned`` tip Jacobian
+``[v; ω]``, i.e. the tip's own velocity in the base frame's axes, n joints;
+``m = min(k, n)`` singular values ``σ1 ≥ … ≥ σm``):
+
+* ``det`` — ``det J`` when ``k == n``, else NaN;
+* ``manipulability`` — Yoshikawa's ``sqrt(det(J Jᵀ))`` (``sqrt(det(Jᵀ J))`` when ``k > n``),
+  the product of the singular values (``|det J|`` when square);
+* ``condition`` — ``σ1 / σm`` (``inf`` at a singularity);
+* ``sigma_min`` — ``σm``, in [m] for position rows of revolute joints.
+
+Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the position rows, plus
+the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
+gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
+:func:`measures_batch` runs the fused compiled kernel (:mod:`._kernel`), generic over any
+loaded 1-DOF serial chain, catalogue or URDF.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import _kernels
+from .._numerics import chain_length
+from ..exceptions import ConfigurationError, ParameterError, choices
+from ._plan import compute, output_arrays
+from .rows import ROW_NAMES, choose_rows, row_names
+
+__all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _clean(a: np.ndarray) -> list[Any]:
+    return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
+
+
+@dataclass(frozen=True)
+class Measures:
+    """Singularity measures of one configuration.
+
+    Attributes:
+        det: ``det J`` (NaN when J is not square), units of the product of the rows'.
+        manipulability: ``sqrt(det(J Jᵀ))`` (product of the singular values).
+        condition: ``σmax / σmin`` (``inf`` when singular), dimensionless for uniform rows.
+        sigma_min: Smallest singular value, in [m] for position rows of revolute joints.
+        singular_values: All ``min(k, n)`` singular values, descending (read-only).
+        rows: Row names of ``J`` used.
+
+    """
+
+    det: float
+    manipulability: float
+    condition: float
+    sigma_min: float
+    singular_values: np.ndarray
+    rows: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict with the same names (NaN / inf become ``None``)."""
+        return {
+            "det": _finite_or_none(self.det),
+            "manipulability": _finite_or_none(self.manipulability),
+            "condition": _finite_or_none(self.condition),
+            "sigma_min": _finite_or_none(self.sigma_min),
+            "singular_values": _clean(self.singular_values),
+            "rows": list(self.rows),
+        }
+
+
+@dataclass(frozen=True)
+class MeasuresBatch:
+    """Singularity measures of N configurations (see :func:`measures_batch`).
+
+    Iterating (or indexing 0..3) gives ``det, manipulability, condition, sigma_min`` in that
+    order, so ``det, manip, cond, smin = measures_batch(model, qs)`` works.
+
+    Attributes:
+        det: (N,) ``det J`` (NaN where J is not square).
+        manipulability: (N,) ``sqrt(det(J Jᵀ))``.
+        condition: (N,) ``σmax/σmin`` (``inf`` where singular).
+        sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
+        rows: Row names of ``J``.
+
+    """
+
+    det: np.ndarray
+    manipulability: np.ndarray
+    condition: np.ndarray
+    sigma_min: np.ndarray
+    rows: tuple[str, ...]
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return iter((self.det, self.manipulability, self.condition, self.sigma_min))
+
+    def __len__(self) -> int:
+        return 4
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return (self.det, self.manipulability, self.condition, self.sigma_min)[i]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict with the same names (NaN / inf become ``None``)."""
+        return {
+            "rows": list(self.rows),
+            "det": _clean(self.det),
+            "manipulability": _clean(self.manipulability),
+            "condition": _clean(self.condition),
+            "sigma_min": _clean(self.sigma_min),
+        }
+
+
+def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Reference engine: measures of a stack of Jacobians (N, k, n) with numpy SVD."""
+    n_conf, k, n = jac.shape
+    sv = np.linalg.svd(jac, compute_uv=False)
+    smax = sv[:, 0]
+    smin = sv[:, -1]
+    det = np.linalg.det(jac) if k == n else np.full(n_conf, np.nan)
+    manip = np.abs(det) if k == n else np.prod(sv, axis=1)
+    with np.errstate(divide="ignore"):
+        cond = np.where(smin > 0, smax / np.where(smin > 0, smin, 1.0), np.inf)
+    return det, manip, cond, smin
+
+
+def as_model(model: Any) -> Any:
+    """``model`` if it is a loaded model, else ``hexapod_kin.load(model)`` (any source)."""
+    from ..kinematics import KinematicModel, load
+
+    if isinstance(model, KinematicModel):
+        return model
+    return load(model)
+
+
+def default_rows(model: Any) -> tuple[str, ...]:
+    """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
+
+    Angular rows are tested at a few random configurations (a row is "zero" when it is below
+    1e-12 everywhere). SCARA → ``("x", "y", "z", "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+
+    Args:
+        model: A loaded model (or a source for :func:`hexapod_kin.load`).
+
+    Returns:
+        Row names from :data:`~.rows.ROW_NAMES`.
+
+    """
+    mdl = as_model(model)
+
+    def build() -> tuple[str, ...]:
+        qs = mdl.random_q(8, seed=12345)
+        jac = _kernels.jacobian_batch(mdl.arrays, qs, rows=6)
+        flags = np.abs(jac).max(axis=(0, 2)) > 1e-12
+        return choose_rows([bool(f) for f in flags], mdl.nq)
+
+    return mdl.cached("singularity.default_rows", build)  # type: ignore[no-any-return]
+
+
+def selected_rows(model: Any, rows: Any) -> tuple[str, ...]:
+    """The row names of ``rows`` for ``model`` (``None``: :func:`default_rows`)."""
+    return default_rows(model) if rows is None else row_names(rows)
+
+
+def reach(model: Any) -> float:
+    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance).
+
+    The chain's one length scale (:func:`hexapod_kin._numerics.chain_length`).
+    """
+    return float(chain_length(as_model(model).arrays.trans))
+
+
+def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Measures:
+    """Singularity measures of one configuration (Pinocchio Jacobian, numpy SVD).
+
+    Args:
+        model: A loaded model (or a source for :func:`hexapod_kin.load`).
+        q: Joint values (nq,) in [rad] / [m].
+        rows: Row selection (see module doc); default :func:`default_rows`.
+
+    Returns:
+        The :class:`Measures`.
+
+    Raises:
+        ConfigurationError: Bad ``q``.
+        ParameterError: Bad ``rows``.
+
+    """
+    mdl = as_model(model)
+    names = selected_rows(mdl, rows)
+    idx = [ROW_NAMES.index(r) for r in names]
+    jac = np.asarray(mdl.jacobian(q, "local_world_aligned"))[idx]
+    det, manip, cond, smin = _measures_numpy(jac[None])
+    sv = np.linalg.svd(jac, compute_uv=False)
+    sv.setflags(write=False)
+    return Measures(float(det[0]), float(manip[0]), float(cond[0]), float(smin[0]), sv, names)
+
+
+def measures_batch(
+    model: Any,
+    qs: Any,
+    rows: str | Sequence[str] | None = None,
+    *,
+    engine: str = "kernel",
+    out: tuple[np.ndarray, ...] | None = None,
+) -> MeasuresBatch:
+    """Measures of many configurations, as a :class:`MeasuresBatch`.
+
+    Args:
+        model: A loaded model (or a source).
+        qs: Configurations (N, nq) in [rad] / [m].
+        rows: Row selection; default :func:`default_rows`.
+        engine: ``"kernel"`` (compiled, fused) or ``"numpy"`` (batched Jacobians from the
+            kernel, numpy SVD per configuration: the reference).
+        out: Optional four preallocated float64 arrays of shape (N,) to fill (det,
+            manipulability, condition, sigma_min); the result's arrays are then these.
+
+    Returns:
+        The :class:`MeasuresBatch` (iterable as the four arrays).
+
+    Raises:
+        ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.
+        ParameterError: Bad ``rows`` or ``engine``.
+
+    """
+    mdl = as_model(model)
+    names = selected_rows(mdl, rows)
+    arrays = mdl.arrays
+    q = _kernels._check_batch(arrays, qs)
+    sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
+    if engine not in ("kernel", "numpy"):
+        raise ParameterError(
+            f"engine={engine!r} is not allowed; use one of {choices(('kernel', 'numpy'))}",
+            parameter="engine",
+            value=engine,
+            allowed=["kernel", "numpy"],
+        )
+    n = q.shape[0]
+    if out is not None and (
+        len(out) != 4
+        or any(
+            not isinstance(o, np.ndarray) or o.shape != (n,) or o.dtype != np.float64 for o in out
+        )
+    ):
+        raise ConfigurationError(
+            f"out: four float64 arrays of shape ({n},) are required",
+            parameter="out",
+            value=type(out).__name__,
+            allowed=f"four float64 arrays of shape ({n},)",
+        )
+    if engine == "numpy":
+        full = 6 if int(sel.max()) >= 3 else 3
+        res = _measures_numpy(_kernels.jacobian_batch(arrays, q, rows=full)[:, sel, :])
+        if out is not None:
+            for o, r in zip(out, res):
+                o[...] = r
+            res = (out[0], out[1], out[2], out[3])
+        return MeasuresBatch(*res, rows=names)
+    if out is None:
+        out = output_arrays(n)
+    compute(mdl, q, sel, out)
+    return MeasuresBatch(out[0], out[1], out[2], out[3], rows=names)

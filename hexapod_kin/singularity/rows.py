@@ -1,0 +1,75 @@
+"""Names of the Jacobian rows and the row selections of the singularity measures (no sympy).
+
+``J`` here is the tip Jacobian ``[v; ω]`` with rows ``x, y, z, wx, wy, wz`` (linear velocity
+of the tip in [m/s per joint unit], angular velocity in [rad/s per joint unit]), expressed
+``local_world_aligned`` (the tip's velocity, in the base frame's axes).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..exceptions import ParameterError, choices
+
+__all__ = ["ROW_NAMES", "row_indices", "row_names", "choose_rows"]
+
+#: The six rows of the tip Jacobian: linear then angular velocity.
+ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
+
+
+def row_indices(rows: str | Sequence[str] | None) -> tuple[int, ...]:
+    """Turn a row selection into indices of ``[vx vy vz wx wy wz]``.
+
+    Args:
+        rows: ``None`` or ``"position"`` (x, y, z), ``"all"`` (the six rows), a comma-separated
+            string or a sequence of names from :data:`ROW_NAMES` (e.g. ``("x", "y", "z", "wz")``).
+
+    Returns:
+        The row indices (0..5), in the given order.
+
+    Raises:
+        ParameterError: Unknown or repeated row names, or an empty selection.
+
+    """
+    if rows is None or rows == "position":
+        return (0, 1, 2)
+    if rows == "all":
+        return tuple(range(6))
+    if isinstance(rows, str):
+        rows = [r.strip() for r in rows.split(",")]
+    names = [str(r).lower() for r in rows]
+    bad = [r for r in names if r not in ROW_NAMES]
+    if bad or not names or len(set(names)) != len(names):
+        raise ParameterError(
+            f"rows={tuple(rows)!r} is not allowed; give distinct names from "
+            f"{choices(ROW_NAMES)}, or 'position' / 'all'",
+            parameter="rows",
+            value=tuple(rows),
+            allowed=[*ROW_NAMES, "position", "all"],
+        )
+    return tuple(ROW_NAMES.index(r) for r in names)
+
+
+def row_names(rows: str | Sequence[str] | None) -> tuple[str, ...]:
+    """The row names of a selection (see :func:`row_indices`)."""
+    return tuple(ROW_NAMES[i] for i in row_indices(rows))
+
+
+def choose_rows(nonzero: Sequence[bool], nq: int) -> tuple[str, ...]:
+    """The default selection: position rows, plus the angular rows that are not zero if square.
+
+    When ``x, y, z`` plus the angular rows that are not identically zero make exactly ``nq``
+    rows (and ``nq > 3``), those are used (SCARA: ``x, y, z, wz``); otherwise ``x, y, z``.
+
+    Args:
+        nonzero: Six flags, "row i of J is not identically zero".
+        nq: Number of joints.
+
+    Returns:
+        Row names.
+
+    """
+    chosen = [0, 1, 2] + [i for i in (3, 4, 5) if nonzero[i]]
+    if len(chosen) == nq and nq > 3:
+        return tuple(ROW_NAMES[i] for i in chosen)
+    return ("x", "y", "z")

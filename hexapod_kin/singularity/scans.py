@@ -1,0 +1,549 @@
+"""Scans of joint space: measures on a grid or random samples, flags, family labels.
+
+A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default
+``rtol × reach``, with ``reach`` the sum of the chain's link offsets). Every flagged sample is
+labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
+it; flagged samples farther than ``family_tol`` from every family are "unexplained".
+
+Defaults fit the robot: the joints that are not scanned sit at a *dexterous* configuration
+(:func:`default_q_fixed`: away from singular values, e.g. not PUMA's q5 = 0), and the joints a
+heat map shows are those that change ``sigma_min`` most (:func:`default_joints`).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ConfigurationError, ParameterError, choices
+from .families import Families, Family, families_for
+from .measure import as_model, measures_batch, reach, selected_rows
+
+__all__ = ["ScanResult", "scan", "default_joints", "default_q_fixed", "plot_joints"]
+
+#: Largest number of configurations of one scan (memory: ~80 bytes each plus q).
+MAX_CONFIGURATIONS = 50_000_000
+
+
+def _ro(arr: np.ndarray) -> np.ndarray:
+    arr = np.ascontiguousarray(arr)
+    arr.setflags(write=False)
+    return arr
+
+
+def _clean(a: np.ndarray) -> list[Any]:
+    return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
+
+
+class FamilyCounts(dict[str, int]):
+    """Flagged samples per family name (a dict; calling it returns itself, as the old method)."""
+
+    def __call__(self) -> FamilyCounts:
+        return self
+
+
+@dataclass(frozen=True)
+class ScanResult:
+    """Result of :func:`scan` (arrays are read-only).
+
+    Attributes:
+        q: Configurations (N, n) in [rad] / [m].
+        det: ``det J`` (N,) (NaN where J is not square).
+        manipulability: (N,) ``sqrt(det(J Jᵀ))``.
+        condition: (N,) ``σmax/σmin`` (``inf`` where singular).
+        sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
+        singular: (N,) boolean mask ``sigma_min < threshold``.
+        family: (N,) index into :attr:`families` of the nearest family of each flagged
+            configuration, −1 where not flagged or when no family is known.
+        family_distance: (N,) joint-space distance in [rad]/[m] from each flagged
+            configuration to that family (NaN where not flagged or no family).
+        families: The singular families (:class:`~.families.Family`; empty when not derived,
+            see :attr:`family_reason`).
+        family_reason: Why :attr:`families` is empty ("" when it is not).
+        family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
+        joint_names: Names of the n joints.
+        prismatic: (n,) True for prismatic joints (values in [m]), False for revolute ([rad]).
+        joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
+        rows: Row names of ``J``.
+        threshold: The ``sigma_min`` threshold used.
+        grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
+        q_fixed: Values of the joints that were not scanned (n,).
+        source: The model's name.
+
+    """
+
+    q: np.ndarray
+    det: np.ndarray
+    manipulability: np.ndarray
+    condition: np.ndarray
+    sigma_min: np.ndarray
+    singular: np.ndarray
+    family: np.ndarray
+    family_distance: np.ndarray
+    families: tuple[Family, ...]
+    family_reason: str
+    family_tol: float
+    joint_names: tuple[str, ...]
+    prismatic: tuple[bool, ...]
+    joints: tuple[int, ...]
+    rows: tuple[str, ...]
+    threshold: float
+    grid_shape: tuple[int, ...] | None
+    q_fixed: np.ndarray
+    source: str
+
+    @property
+    def unexplained(self) -> np.ndarray:
+        """(N,) flagged configurations farther than :attr:`family_tol` from every family."""
+        with np.errstate(invalid="ignore"):
+            far = ~(self.family_distance <= self.family_tol)
+        return np.asarray(self.singular & far)
+
+    @property
+    def family_counts(self) -> FamilyCounts:
+        """Flagged configurations explained by each family (within tol), by family name."""
+        with np.errstate(invalid="ignore"):
+            near = self.family_distance <= self.family_tol
+        return FamilyCounts(
+            {
+                fam.name: int(np.count_nonzero(near & (self.family == f)))
+                for f, fam in enumerate(self.families)
+            }
+        )
+
+    def family_residual(self, q: Any, f: int) -> np.ndarray:
+        """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family).
+
+        Raises:
+            ParameterError: ``f`` is not the index of a family.
+
+        """
+        if not 0 <= int(f) < len(self.families):
+            raise ParameterError(
+                f"family_residual: f={f!r}; this scan has {len(self.families)} families"
+                + (f" ({self.family_reason})" if self.family_reason else ""),
+                parameter="f",
+                value=f,
+                allowed=f"0..{len(self.families) - 1}" if self.families else "none",
+            )
+        return self.families[int(f)].residual(q)
+
+    def grid(self, name: str) -> np.ndarray:
+        """A measure reshaped to :attr:`grid_shape` (grid scans only).
+
+        Raises:
+            ParameterError: Not a grid scan, or an unknown measure name.
+
+        """
+        if self.grid_shape is None:
+            raise ParameterError("grid(): this scan used random samples, not a grid")
+        allowed = (
+            "det",
+            "manipulability",
+            "condition",
+            "sigma_min",
+            "singular",
+            "family",
+            "family_distance",
+        )
+        if name not in allowed:
+            raise ParameterError(
+                f"grid(name={name!r}): use one of {choices(allowed)}",
+                parameter="name",
+                value=name,
+                allowed=list(allowed),
+            )
+        return np.asarray(getattr(self, name)).reshape(self.grid_shape)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict with the same names (NaN / inf become ``None``)."""
+        counts = self.family_counts
+        return {
+            "source": self.source,
+            "joint_names": list(self.joint_names),
+            "prismatic": list(self.prismatic),
+            "joints": [self.joint_names[j] for j in self.joints],
+            "rows": list(self.rows),
+            "threshold": self.threshold,
+            "grid_shape": list(self.grid_shape) if self.grid_shape else None,
+            "q_fixed": self.q_fixed.tolist(),
+            "q": self.q.tolist(),
+            "det": _clean(self.det),
+            "manipulability": _clean(self.manipulability),
+            "condition": _clean(self.condition),
+            "sigma_min": _clean(self.sigma_min),
+            "singular": self.singular.tolist(),
+            "family": self.family.tolist(),
+            "family_distance": _clean(self.family_distance),
+            "family_tol": self.family_tol,
+            "family_reason": self.family_reason,
+            "families": [
+                {**fam.to_dict(self.joint_names), "count": counts[fam.name]}
+                for fam in self.families
+            ],
+            "n_singular": int(np.count_nonzero(self.singular)),
+            "n_unexplained": int(np.count_nonzero(self.unexplained)),
+        }
+
+    def to_json(self) -> dict[str, Any]:
+        """The same as :meth:`to_dict` (the old name)."""
+        return self.to_dict()
+
+
+# ------------------------------------------------------------------------ defaults
+def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
+    if joints is None:
+        return tuple(range(model.nq))
+    if isinstance(joints, (str, int)):
+        joints = [joints]
+    out = []
+    for j in joints:
+        if isinstance(j, (int, np.integer)) and not isinstance(j, bool):
+            if not 0 <= int(j) < model.nq:
+                raise ParameterError(
+                    f"joints: index {j} is out of range 0..{model.nq - 1} "
+                    f"(joints {choices(model.joint_names)})",
+                    parameter="joints",
+                    value=j,
+                    allowed=f"0..{model.nq - 1} or {list(model.joint_names)}",
+                )
+            out.append(int(j))
+        else:
+            out.append(model.joint_index(str(j)))
+    if len(set(out)) != len(out) or not out:
+        raise ParameterError(
+            f"joints={joints!r}: give distinct joint names or indices",
+            parameter="joints",
+            value=joints,
+            allowed=list(model.joint_names),
+        )
+    return tuple(out)
+
+
+def _moving(model: Any) -> list[int]:
+    """Joints that move the tip (a whole hexapod has 15 that do not move one foot)."""
+    moving = sorted({int(c) for c in model.arrays.col})
+    return moving if moving else list(range(model.nq))
+
+
+def default_q_fixed(
+    model: Any, rows: Any = None, joints: Sequence[int] | None = None, seed: int = 7
+) -> np.ndarray:
+    """A dexterous configuration for the joints that a scan does not move, in [rad]/[m].
+
+    Among 256 seeded random configurations, the one whose worst ``σmin/σmax`` over a coarse
+    grid (5 points per joint) of the scanned ``joints`` is largest — every fixed joint away
+    from its singular values (PUMA's q5 = 0 would flag the whole map).
+
+    Args:
+        model: A loaded model (or a source).
+        rows: Row selection (default :func:`~.measure.default_rows`).
+        joints: Indices of the scanned joints (their values in the result do not matter).
+        seed: Seed of the candidates.
+
+    Returns:
+        (nq,) configuration.
+
+    """
+    mdl = as_model(model)
+    names = selected_rows(mdl, rows)
+    scanned = tuple(sorted(joints)) if joints is not None else ()
+
+    def build() -> np.ndarray:
+        cand = mdl.random_q(256, seed=seed)
+        cand[0] = mdl.neutral()
+        sub = [j for j in scanned][:3]
+        if sub:
+            axes = [np.linspace(mdl.lower[j], mdl.upper[j], 5) for j in sub]
+            mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(sub))
+        else:
+            mesh = np.zeros((1, 0))
+        qs = np.repeat(cand, mesh.shape[0], axis=0)
+        qs[:, sub] = np.tile(mesh, (cand.shape[0], 1))
+        res = measures_batch(mdl, qs, names, out=None)
+        with np.errstate(divide="ignore"):
+            inv = np.where(np.isfinite(res.condition), 1.0 / res.condition, 0.0)
+        score = inv.reshape(cand.shape[0], mesh.shape[0])
+        # the worst grid point, then the mean (ties: all-singular fixed joints lose)
+        key = score.min(axis=1) + 1e-3 * score.mean(axis=1)
+        best = cand[int(np.argmax(key))].copy()
+        best.setflags(write=False)
+        return best
+
+    return np.array(mdl.cached(f"singularity.q_fixed.{names}.{scanned}.{seed}", build))
+
+
+def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, ...]:
+    """The ``count`` joints that change ``sigma_min`` most: the ones a heat map should show.
+
+    Each joint that moves the tip is swept over its range (17 points) at 32 seeded random
+    configurations of the others; its score is the mean spread of ``log σmin`` (a joint that
+    only rotates ``J``, like a leg's hip yaw, scores 0). Ties go to revolute joints, then to
+    later joints.
+
+    Args:
+        model: A loaded model (or a source).
+        rows: Row selection (default :func:`~.measure.default_rows`).
+        count: How many joints.
+
+    Returns:
+        Joint indices, ascending.
+
+    Raises:
+        ParameterError: The model has fewer than ``count`` joints.
+
+    """
+    mdl = as_model(model)
+    if mdl.nq < count:
+        raise ParameterError(
+            f"default_joints: {mdl.name!r} has {mdl.nq} joint(s); {count} are needed",
+            parameter="count",
+            value=count,
+            allowed=f"<= {mdl.nq}",
+        )
+    names = selected_rows(mdl, rows)
+
+    def build() -> tuple[int, ...]:
+        cands = _moving(mdl) if len(_moving(mdl)) >= count else list(range(mdl.nq))
+        base = mdl.random_q(32, seed=11)
+        score = np.zeros(mdl.nq)
+        floor = 1e-12 * max(reach(mdl), 1e-12)
+        for j in cands:
+            sweep = np.linspace(mdl.lower[j], mdl.upper[j], 17)
+            qs = np.repeat(base, sweep.size, axis=0)
+            qs[:, j] = np.tile(sweep, base.shape[0])
+            smin = measures_batch(mdl, qs, names).sigma_min.reshape(base.shape[0], sweep.size)
+            logs = np.log(np.maximum(smin, floor))
+            score[j] = float(np.mean(logs.max(axis=1) - logs.min(axis=1)))
+        prism = np.asarray(mdl.is_prismatic, dtype=bool)
+        order = sorted(cands, key=lambda j: (-round(score[j], 9), bool(prism[j]), -j))
+        return tuple(sorted(order[:count]))
+
+    return mdl.cached(f"singularity.default_joints.{names}.{count}", build)  # type: ignore[no-any-return]
+
+
+def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
+    """The two joints a 2-D heat map should show by default (:func:`default_joints`)."""
+    a, b = default_joints(model, rows, 2)
+    return a, b
+
+
+def _grid_points(
+    model: Any, joints: tuple[int, ...], grid: Any, q_fixed: np.ndarray
+) -> tuple[np.ndarray, tuple[int, ...]]:
+    counts: list[Any] = [grid] * len(joints) if np.isscalar(grid) else list(grid)
+    if len(counts) != len(joints):
+        raise ParameterError(
+            f"grid={grid!r}: one count or one per scanned joint ({len(joints)}) is required",
+            parameter="grid",
+            value=grid,
+            allowed=f"an integer >= 2 or {len(joints)} of them",
+        )
+    shape = []
+    for c in counts:
+        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or int(c) < 2:
+            raise ParameterError(
+                f"grid={grid!r}: counts must be integers >= 2",
+                parameter="grid",
+                value=grid,
+                allowed="integers >= 2",
+            )
+        shape.append(int(c))
+    total = math.prod(shape)
+    if total > MAX_CONFIGURATIONS:
+        raise ParameterError(
+            f"grid={grid!r} makes {total} configurations; at most {MAX_CONFIGURATIONS:,}",
+            parameter="grid",
+            value=grid,
+            allowed=f"at most {MAX_CONFIGURATIONS:,} configurations in all",
+        )
+    axes = [np.linspace(model.lower[j], model.upper[j], c) for j, c in zip(joints, shape)]
+    q = np.empty((*shape, model.nq))
+    q[...] = q_fixed
+    for k, (j, ax) in enumerate(zip(joints, axes)):
+        index: list[slice | None] = [None] * len(shape)
+        index[k] = slice(None)
+        q[..., j] = ax[tuple(index)]  # broadcast along the other grid axes, no meshgrid copies
+    return q.reshape(total, model.nq), tuple(shape)
+
+
+def _sample_points(
+    model: Any, joints: tuple[int, ...], samples: Any, q_fixed: np.ndarray, seed: int | None
+) -> np.ndarray:
+    if (
+        isinstance(samples, bool)
+        or not isinstance(samples, (int, np.integer))
+        or not 1 <= int(samples) <= MAX_CONFIGURATIONS
+    ):
+        raise ParameterError(
+            f"samples={samples!r}: an integer in 1..{MAX_CONFIGURATIONS:,} is required",
+            parameter="samples",
+            value=samples,
+            allowed=f"1..{MAX_CONFIGURATIONS:,}",
+        )
+    rng = np.random.default_rng(seed)
+    q = np.empty((int(samples), model.nq))
+    q[:] = q_fixed
+    for j in joints:
+        q[:, j] = rng.uniform(model.lower[j], model.upper[j], int(samples))
+    return q
+
+
+def scan(
+    model: Any,
+    grid: int | Sequence[int] | None = None,
+    samples: int | None = None,
+    joints: Sequence[str | int] | str | None = None,
+    *,
+    rows: str | Sequence[str] | None = None,
+    q_fixed: Any = None,
+    threshold: float | None = None,
+    rtol: float = 1e-2,
+    family_tol: float | None = None,
+    families: bool | str = "cached",
+    family_budget: float = 10.0,
+    seed: int | None = 0,
+    progress: bool | None = None,
+    chunk: int = 1_000_000,
+) -> ScanResult:
+    """Scan joint space (grid or random samples) for singularity measures and singular families.
+
+    Args:
+        model: A loaded model or any source for :func:`hexapod_kin.load`.
+        grid: Points per scanned joint (one count, or one per joint), spanning the joint
+            limits (ends included). Default 41 when ``samples`` is not given either.
+        samples: Number of uniform random configurations within the limits (instead of a grid).
+        joints: Joints to scan (names or indices); default all. The others stay at ``q_fixed``.
+        rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
+            default :func:`~.measure.default_rows`.
+        q_fixed: Values of the joints not scanned, in [rad]/[m]; default
+            :func:`default_q_fixed` (a dexterous configuration).
+        threshold: ``sigma_min`` below which a configuration is flagged singular; default
+            ``rtol × reach(model)``.
+        rtol: Relative threshold (see ``threshold``).
+        family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
+            counts as lying on its nearest family; default ``15 × rtol``. (Near a family
+            ``σmin ≈ s·d`` with ``s`` a lever arm in [m/rad]; with ``threshold = rtol·reach``
+            flagged points lie within ``rtol·reach/s``: the default allows ``s ≥ reach/15``.)
+        families: ``"cached"`` (default): families already derived (this process or the disk
+            cache), never waiting on sympy; ``True``: derive them when needed, within
+            ``family_budget``; ``False``: none.
+        family_budget: Time budget in [s] of a derivation (``families=True``).
+        seed: Random seed for ``samples``.
+        progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
+        chunk: Configurations per kernel call (progress granularity).
+
+    Returns:
+        The :class:`ScanResult`.
+
+    Raises:
+        ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows, bad
+            ``threshold``, ``families`` or ``chunk``.
+        ConfigurationError: Bad ``q_fixed``.
+
+    """
+    mdl = as_model(model)
+    names = selected_rows(mdl, rows)
+    jidx = _joint_indices(mdl, joints)
+    if families not in (True, False, "cached"):
+        raise ParameterError(
+            f"families={families!r} is not allowed; use True, False or 'cached'",
+            parameter="families",
+            value=families,
+            allowed=[True, False, "cached"],
+        )
+    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+        raise ParameterError(
+            f"chunk={chunk!r}: an integer >= 1 is required",
+            parameter="chunk",
+            value=chunk,
+            allowed=">= 1",
+        )
+    if grid is not None and samples is not None:
+        raise ParameterError(
+            "scan: give grid= or samples=, not both",
+            parameter="samples",
+            value=samples,
+            allowed="grid= or samples=",
+        )
+    if q_fixed is None:
+        qf = default_q_fixed(mdl, names, jidx) if len(jidx) < mdl.nq else mdl.neutral()
+    else:
+        qf = mdl.check_q(q_fixed, "q_fixed").copy()
+    thr = float(rtol * reach(mdl)) if threshold is None else float(threshold)
+    if not math.isfinite(thr) or thr < 0:
+        raise ParameterError(
+            f"threshold={threshold!r}: a finite value >= 0 is required",
+            parameter="threshold",
+            value=threshold,
+            allowed=">= 0",
+        )
+    if samples is not None:
+        q = _sample_points(mdl, jidx, samples, qf, seed)
+        shape = None
+    else:
+        q, shape = _grid_points(mdl, jidx, 41 if grid is None else grid, qf)
+    n = q.shape[0]
+    out = tuple(np.empty(n) for _ in range(4))
+    show = (n > 2_000_000 and sys.stderr.isatty()) if progress is None else bool(progress)
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, file=sys.stderr, unit="cfg", desc="scan", leave=False)
+    try:
+        for start in range(0, n, int(chunk)):
+            stop = min(n, start + int(chunk))
+            measures_batch(mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out))
+            if bar is not None:
+                bar.update(stop - start)
+    finally:
+        if bar is not None:
+            bar.close()
+    det, manip, cond, smin = out
+    singular = smin < thr
+    family = np.full(n, -1, dtype=np.int64)
+    distance = np.full(n, np.nan)
+    if families is False:
+        fams = Families((), "none", "families=False")
+    else:
+        fams = families_for(mdl, names, derive=families is True, budget=family_budget)
+    idx = np.flatnonzero(singular)
+    if fams.families and idx.size:
+        best, dist = fams.nearest(q[idx])
+        family[idx] = best
+        distance[idx] = dist
+    tol = 15.0 * rtol if family_tol is None else float(family_tol)
+    if not tol >= 0:
+        raise ConfigurationError(
+            f"family_tol={family_tol!r}: a value >= 0 is required",
+            parameter="family_tol",
+            value=family_tol,
+            allowed=">= 0",
+        )
+    return ScanResult(
+        q=_ro(q),
+        det=_ro(det),
+        manipulability=_ro(manip),
+        condition=_ro(cond),
+        sigma_min=_ro(smin),
+        singular=_ro(singular),
+        family=_ro(family),
+        family_distance=_ro(distance),
+        families=fams.families,
+        family_reason=fams.reason,
+        family_tol=tol,
+        joint_names=tuple(mdl.joint_names),
+        prismatic=tuple(bool(p) for p in mdl.is_prismatic),
+        joints=jidx,
+        rows=names,
+        threshold=thr,
+        grid_shape=shape,
+        q_fixed=_ro(qf),
+        source=mdl.name,
+    )
