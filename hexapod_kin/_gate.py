@@ -80,6 +80,7 @@ __all__ = [
     "JOINT_TYPES",
     "GateResult",
     "check_urdf",
+    "parse_urdf",
     "resolve_mesh",
 ]
 
@@ -103,8 +104,14 @@ _LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
 #: example-robot-data (tiago_dual) has 101; a hexapod has 18.
 MAX_DOF = 128
 #: DoFs (nv) of each URDF joint type.
-_JOINT_DOF = {"revolute": 1, "continuous": 1, "prismatic": 1, "fixed": 0, "floating": 6,
-              "planar": 3}
+_JOINT_DOF = {
+    "revolute": 1,
+    "continuous": 1,
+    "prismatic": 1,
+    "fixed": 0,
+    "floating": 6,
+    "planar": 3,
+}
 #: Largest mesh or texture file accepted, in bytes (200 MiB).
 MAX_MESH_BYTES = 200 * 1024 * 1024
 #: Relative tolerance of the triangle inequality ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)``
@@ -112,7 +119,7 @@ MAX_MESH_BYTES = 200 * 1024 * 1024
 TRIANGLE_RTOL = 1e-6
 #: Documents that passed and reference no files, by text (small LRU: generated URDFs are
 #: loaded again and again).
-_CACHE: dict[str, GateResult] = {}
+_CACHE: dict[tuple[bool, str | bytes], GateResult] = {}
 _CACHE_SIZE = 32
 _CACHE_MAX_CHARS = 1_000_000
 #: Joint types of the URDF spec.
@@ -127,8 +134,12 @@ _PATTERNS[1] = re.compile(f"{_NUM}$")
 _CHECKED_TOP = ("link", "joint", "material")
 _VERSION = re.compile(r"^1\.[0-2]$")
 #: URDF shapes and their required attributes.
-_SHAPES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",),
-           "mesh": ("filename",)}
+_SHAPES = {
+    "box": ("size",),
+    "cylinder": ("radius", "length"),
+    "sphere": ("radius",),
+    "mesh": ("filename",),
+}
 _BIG = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
 _NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
 _SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
@@ -160,8 +171,15 @@ _NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "mesh": {"scale": (3, None)},
     "color": {"rgba": (4, None)},
 }
-_JOINT_CHILDREN = ("origin", "axis", "limit", "dynamics", "safety_controller", "calibration",
-                   "mimic")
+_JOINT_CHILDREN = (
+    "origin",
+    "axis",
+    "limit",
+    "dynamics",
+    "safety_controller",
+    "calibration",
+    "mimic",
+)
 
 
 @dataclass(frozen=True)
@@ -174,6 +192,10 @@ class GateResult:
         joints: Joint names, in document order.
         root_link: Name of the root link.
         meshes: The resolved mesh and texture files, as ``(uri, path)`` pairs in document order.
+        missing_meshes: Mesh/texture URIs that could not be found (lenient mode only), as
+            ``(uri, reason)`` pairs; their visual/collision elements must be dropped.
+        inertia_defects: Physically implausible inertials (lenient mode only), as
+            ``(link, defect)`` pairs; harmless to kinematics, refused by dynamics.
 
     """
 
@@ -182,6 +204,12 @@ class GateResult:
     joints: tuple[str, ...] = ()
     root_link: str = ""
     meshes: tuple[tuple[str, Path], ...] = ()
+    missing_meshes: tuple[tuple[str, str], ...] = ()
+    inertia_defects: tuple[tuple[str, str], ...] = ()
+
+
+class _MeshMissing(UrdfError):
+    """A mesh file that cannot be found (as opposed to one that is refused)."""
 
 
 # ------------------------------------------------------------------------ messages
@@ -192,8 +220,11 @@ def _where(el: etree._Element) -> str:
     while node is not None and node.tag != "robot":
         name = node.get("name")
         tag = node.tag if isinstance(node.tag, str) else "?"
-        parts.append(f'<{tag} name="{name}">' if name is not None and tag in
-                     ("link", "joint", "material", "visual", "collision") else f"<{tag}>")
+        parts.append(
+            f'<{tag} name="{name}">'
+            if name is not None and tag in ("link", "joint", "material", "visual", "collision")
+            else f"<{tag}>"
+        )
         node = node.getparent()
     parts.reverse()
     return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
@@ -223,8 +254,12 @@ def _numbers(el: etree._Element, attr: str, count: int, minimum: float | None) -
             raise _error(el, attr, raw, "numbers must be finite")
         cap = MAX_ABS_LIMIT if el.tag in _LIMIT_TAGS else MAX_ABS
         if abs(x) > cap:
-            raise _error(el, attr, raw, f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); "
-                         "numbers are SI values of a robot")
+            raise _error(
+                el,
+                attr,
+                raw,
+                f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); numbers are SI values of a robot",
+            )
         if minimum is not None and x < minimum:
             raise _error(el, attr, raw, f"must be >= {minimum:g}")
         out.append(x)
@@ -266,6 +301,16 @@ def _number(el: etree._Element, attr: str, default: float | None = None) -> floa
 
 
 # ------------------------------------------------------------------------ parsing
+def parse_urdf(text: str | bytes) -> etree._Element:
+    """Parse URDF text with the gate's strict, hostile-safe parser (no other check).
+
+    Raises:
+        UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
+
+    """
+    return _parse(text)
+
+
 def _parse(text: str | bytes) -> etree._Element:
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if len(data) > MAX_URDF_BYTES:
@@ -323,13 +368,21 @@ def _single(el: etree._Element, tag: str, required: bool) -> etree._Element | No
 def _rpy_matrix(rpy: Sequence[float]) -> np.ndarray:
     """URDF ``Rz(yaw)·Ry(pitch)·Rx(roll)``."""
     r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), \
-        math.sin(y)
-    return np.array([
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr],
-    ])
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(r),
+        math.sin(r),
+        math.cos(p),
+        math.sin(p),
+        math.cos(y),
+        math.sin(y),
+    )
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def _origin(el: etree._Element | None) -> tuple[np.ndarray, np.ndarray]:
@@ -387,8 +440,11 @@ def _eig_text(eig: Sequence[float]) -> str:
     return "[" + ", ".join(f"{e:.6g}" for e in eig) + "]"
 
 
-def _link_inertial(link: etree._Element) -> _Inertial:
-    """Check a link's ``<inertial>``: mass >= 0, six finite entries, not indefinite."""
+def _link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = None) -> _Inertial:
+    """Check a link's ``<inertial>``: mass >= 0, six finite entries, not indefinite.
+
+    With ``defects`` (lenient mode) an indefinite inertia is recorded there instead of raised.
+    """
     inertial = _single(link, "inertial", required=False)
     if inertial is None:
         return _NO_INERTIAL
@@ -403,11 +459,16 @@ def _link_inertial(link: etree._Element) -> _Inertial:
     scale = max(abs(ixx), abs(iyy), abs(izz), abs(ixy), abs(ixz), abs(iyz))
     if eig[0] < -(1e-9 * scale + _INERTIA_FLOOR):
         values = " ".join(f"{k}={inertia_el.get(k)}" for k in keys)
-        raise _error(
-            inertia_el, None, None,
+        err = _error(
+            inertia_el,
+            None,
+            None,
             f"{values}: inertia is indefinite (principal moments {_eig_text(eig)}); an inertia "
             "tensor must be positive semi-definite",
         )
+        if defects is None:
+            raise err
+        defects.append((str(link.get("name")), str(err)))
     return _Inertial(mass, (ixx, iyy, izz, ixy, ixz, iyz), eig, inertial)
 
 
@@ -417,12 +478,29 @@ def _check_moving_body(
     link_el: dict[str, etree._Element],
     inertials: dict[str, _Inertial],
     fixed_children: dict[str, list[tuple[str, etree._Element]]],
+    defects: list[tuple[str, str]] | None = None,
 ) -> None:
     """The body Pinocchio builds for joint ``jname``: ``child`` plus its fixed-joint subtree.
 
     It must have mass > 0 and a positive-definite inertia (about its centre of mass) whose
-    principal moments satisfy the triangle inequality.
+    principal moments satisfy the triangle inequality. With ``defects`` (lenient mode) a
+    failure is recorded there as ``(child, message)`` instead of raised.
     """
+    try:
+        _check_body(jname, child, link_el, inertials, fixed_children)
+    except UrdfError as err:
+        if defects is None:
+            raise
+        defects.append((child, str(err)))
+
+
+def _check_body(
+    jname: str,
+    child: str,
+    link_el: dict[str, etree._Element],
+    inertials: dict[str, _Inertial],
+    fixed_children: dict[str, list[tuple[str, etree._Element]]],
+) -> None:
     # Members with their pose in the child frame (poses computed only if >1 carries mass).
     members: list[tuple[str, etree._Element | None]] = [(child, None)]
     stack = [child]
@@ -434,7 +512,9 @@ def _check_moving_body(
     total = math.fsum(inertials[n].mass for n in parts)
     if total <= 0.0:
         raise _error(
-            link_el[child], "name", child,
+            link_el[child],
+            "name",
+            child,
             f"the link moved by joint {jname!r} has no mass (nor do links fixed to it); a "
             "moving link needs <inertial> with mass > 0",
         )
@@ -467,18 +547,23 @@ def _check_moving_body(
         eig = _sym_eigvals(mat[0, 0], mat[1, 1], mat[2, 2], mat[0, 1], mat[0, 2], mat[1, 2])
     own = inertials[child].element
     where = own.find("inertia") if own is not None and len(parts) == 1 else link_el[child]
-    merged = "" if len(parts) == 1 else f" (merged with the links fixed to it: {len(parts)} " \
-        "inertials)"
+    merged = (
+        "" if len(parts) == 1 else f" (merged with the links fixed to it: {len(parts)} inertials)"
+    )
     if not _definite(eig):
         raise _error(
-            where, None, None,
+            where,
+            None,
+            None,
             f"the body moved by joint {jname!r}{merged} has an inertia that is not positive "
             f"definite (principal moments {_eig_text(eig)} kg m^2, mass {total:g} kg); a moving "
             "link needs a positive-definite inertia",
         )
     if not _triangle(eig):
         raise _error(
-            where, None, None,
+            where,
+            None,
+            None,
             f"the body moved by joint {jname!r}{merged} has principal moments {_eig_text(eig)} "
             "kg m^2 that violate the triangle inequality I1 + I2 >= I3 (no real body has them)",
         )
@@ -546,12 +631,13 @@ def resolve_mesh(
         if not pkg or "/" not in rest or pkg in (".", ".."):
             raise UrdfError(f"package URI {uri!r} must be package://<package>/<path>")
         if not package_dirs:
-            raise UrdfError(
+            raise _MeshMissing(
                 f"{uri!r}: no package directories are known for this source (URDF text or "
                 "file without package_dirs); package:// meshes cannot be resolved"
             )
-        candidates = [(os.path.realpath(os.fspath(d)), os.path.join(os.fspath(d), rest))
-                      for d in package_dirs]
+        candidates = [
+            (os.path.realpath(os.fspath(d)), os.path.join(os.fspath(d), rest)) for d in package_dirs
+        ]
     elif scheme:
         raise UrdfError(
             f"{uri!r}: URI scheme {scheme.group(1)!r} is refused; use package://<package>/"
@@ -561,7 +647,7 @@ def resolve_mesh(
         raise UrdfError(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
     else:
         if mesh_root is None:
-            raise UrdfError(
+            raise _MeshMissing(
                 f"{uri!r}: relative mesh path but no mesh root (URDF given as text); load the "
                 "URDF from its file so relative paths resolve next to it"
             )
@@ -575,7 +661,7 @@ def resolve_mesh(
         try:
             st = os.stat(real)
         except OSError:
-            last = UrdfError(f"{uri!r}: file {real!r} does not exist")
+            last = _MeshMissing(f"{uri!r}: file {real!r} does not exist")
             continue
         if not stat.S_ISREG(st.st_mode):
             raise UrdfError(f"{uri!r}: {real!r} is not a regular file")
@@ -595,6 +681,7 @@ def check_urdf(
     package_dirs: Iterable[str | os.PathLike[str]] = (),
     mesh_root: str | os.PathLike[str] | None = None,
     check_meshes: bool = True,
+    lenient: bool = False,
 ) -> GateResult:
     """Check a URDF document; raise :class:`UrdfError` on the first problem.
 
@@ -607,6 +694,12 @@ def check_urdf(
             relative mesh paths are then refused).
         check_meshes: Whether to resolve and check mesh/texture files (keep ``True``; only
             tools that never touch geometry may turn it off).
+        lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
+            and a physically implausible inertial (indefinite, massless moving link, zero
+            inertia, triangle inequality) are recorded in ``missing_meshes`` /
+            ``inertia_defects`` instead of raised. Refused meshes (schemes, absolute paths,
+            escapes, non-regular or huge files) and nonsense (negative mass, NaN, missing
+            entries, malformed XML ...) are refused in both modes.
 
     Returns:
         A :class:`GateResult` (shared between calls with the same text when the document
@@ -616,18 +709,23 @@ def check_urdf(
         UrdfError: Naming the element, attribute, value and line of the problem.
 
     """
+    key = (lenient, text)
     if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS:
-        cached = _CACHE.get(text)
+        cached = _CACHE.get(key)
         if cached is not None:
             return cached
-    result = _check(text, tuple(package_dirs), mesh_root, check_meshes)
-    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS and not result.meshes and (
-        check_meshes or not any(True for _ in result.root.iter("mesh", "texture"))
+    result = _check(text, tuple(package_dirs), mesh_root, check_meshes, lenient)
+    if (
+        isinstance(text, str)
+        and len(text) <= _CACHE_MAX_CHARS
+        and not result.meshes
+        and (not result.missing_meshes)
+        and (check_meshes or not any(True for _ in result.root.iter("mesh", "texture")))
     ):
         # Without file references the verdict depends on the text alone: remember it.
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[text] = result
+        _CACHE[key] = result
     return result
 
 
@@ -636,7 +734,9 @@ def _check(
     package_dirs: tuple[str | os.PathLike[str], ...],
     mesh_root: str | os.PathLike[str] | None,
     check_meshes: bool,
+    lenient: bool = False,
 ) -> GateResult:
+    defects: list[tuple[str, str]] | None = [] if lenient else None
     root = _parse(text)
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
@@ -661,8 +761,13 @@ def _check(
     for link in links:
         name = _name(link, "link")
         if name in link_el:
-            raise _error(link, "name", name, f"duplicate link name (first at line "
-                         f"{link_el[name].sourceline}); link names must be unique")
+            raise _error(
+                link,
+                "name",
+                name,
+                f"duplicate link name (first at line "
+                f"{link_el[name].sourceline}); link names must be unique",
+            )
         link_el[name] = link
 
     joint_el: dict[str, etree._Element] = {}
@@ -671,8 +776,13 @@ def _check(
     for joint in root.findall("joint"):
         name = _name(joint, "joint")
         if name in joint_el:
-            raise _error(joint, "name", name, f"duplicate joint name (first at line "
-                         f"{joint_el[name].sourceline}); joint names must be unique")
+            raise _error(
+                joint,
+                "name",
+                name,
+                f"duplicate joint name (first at line "
+                f"{joint_el[name].sourceline}); joint names must be unique",
+            )
         joint_el[name] = joint
         jtype = joint.get("type")
         if jtype not in JOINT_TYPES:
@@ -689,8 +799,13 @@ def _check(
         if parent == child:
             raise _error(joint, "name", name, f"parent and child are the same link {child!r}")
         if child in parent_of:
-            raise _error(joint, "name", name, f"link {child!r} is already the child of joint "
-                         f"{parent_of[child]!r}; a link has at most one parent joint (tree)")
+            raise _error(
+                joint,
+                "name",
+                name,
+                f"link {child!r} is already the child of joint "
+                f"{parent_of[child]!r}; a link has at most one parent joint (tree)",
+            )
         parent_of[child] = name
         children[parent].append(child)
         _check_joint(joint, jtype)
@@ -711,10 +826,13 @@ def _check(
     roots = [n for n in link_el if n not in parent_of]
     if len(roots) != 1:
         if not roots:
-            raise UrdfError("URDF has no root link (every link is a child): the joints form a "
-                            "cycle")
-        raise UrdfError(f"URDF has {len(roots)} root links {roots[:10]}; exactly one is required "
-                        "(connect them with joints)")
+            raise UrdfError(
+                "URDF has no root link (every link is a child): the joints form a cycle"
+            )
+        raise UrdfError(
+            f"URDF has {len(roots)} root links {roots[:10]}; exactly one is required "
+            "(connect them with joints)"
+        )
     # Reachability from the root (iterative; rejects cycles not containing the root).
     seen = {roots[0]}
     stack = [roots[0]]
@@ -725,24 +843,27 @@ def _check(
                 stack.append(c)
     if len(seen) != len(link_el):
         lost = [n for n in link_el if n not in seen]
-        raise _error(link_el[lost[0]], "name", lost[0],
-                     f"link not reachable from the root {roots[0]!r}: joints form a cycle")
+        raise _error(
+            link_el[lost[0]],
+            "name",
+            lost[0],
+            f"link not reachable from the root {roots[0]!r}: joints form a cycle",
+        )
 
     # Masses: each link's inertial, then each moving body (child of a non-fixed joint plus
     # its fixed-joint descendants, as Pinocchio merges them) must carry mass and inertia.
-    inertials = {n: _link_inertial(el) for n, el in link_el.items()}
+    inertials = {n: _link_inertial(el, defects) for n, el in link_el.items()}
     fixed_children: dict[str, list[tuple[str, etree._Element]]] = {n: [] for n in link_el}
     for child, jname in parent_of.items():
         joint = joint_el[jname]
         if joint.get("type") == "fixed":
-            fixed_children[joint.find("parent").get("link")].append(
-                (child, joint)
-            )
+            fixed_children[joint.find("parent").get("link")].append((child, joint))
     for child, jname in parent_of.items():
         if joint_el[jname].get("type") != "fixed":
-            _check_moving_body(jname, child, link_el, inertials, fixed_children)
+            _check_moving_body(jname, child, link_el, inertials, fixed_children, defects)
 
     meshes: list[tuple[str, Path]] = []
+    missing: list[tuple[str, str]] = []
     if check_meshes:
         dirs = package_dirs
         for node in root.iter("mesh", "texture"):
@@ -751,6 +872,11 @@ def _check(
                 continue
             try:
                 path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
+            except _MeshMissing as exc:
+                if not lenient:
+                    raise _error(node, "filename", uri, str(exc)) from None
+                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
+                continue
             except UrdfError as exc:
                 raise _error(node, "filename", uri, str(exc)) from None
             meshes.append((uri or "", path))
@@ -760,6 +886,8 @@ def _check(
         joints=tuple(joint_el),
         root_link=roots[0],
         meshes=tuple(meshes),
+        missing_meshes=tuple(missing),
+        inertia_defects=tuple(defects or ()),
     )
 
 
@@ -779,8 +907,13 @@ def _check_materials_and_geometry(root: etree._Element) -> None:
         if name is None or not name.strip():
             raise _error(mat, "name", name, "every <material> needs a non-empty name")
         if name in defined:
-            raise _error(mat, "name", name, f"duplicate material name (first at line "
-                         f"{defined[name].sourceline}); material names must be unique")
+            raise _error(
+                mat,
+                "name",
+                name,
+                f"duplicate material name (first at line "
+                f"{defined[name].sourceline}); material names must be unique",
+            )
         defined[name] = mat
         color = _single(mat, "color", required=False)
         if color is not None:
@@ -793,12 +926,21 @@ def _check_materials_and_geometry(root: etree._Element) -> None:
                 assert geometry is not None
                 shapes = [c for c in geometry if isinstance(c.tag, str)]
                 if len(shapes) != 1:
-                    raise _error(geometry, None, None, f"<geometry> must hold exactly one shape "
-                                 f"({', '.join(_SHAPES)}), found {len(shapes)}")
+                    raise _error(
+                        geometry,
+                        None,
+                        None,
+                        f"<geometry> must hold exactly one shape "
+                        f"({', '.join(_SHAPES)}), found {len(shapes)}",
+                    )
                 shape = shapes[0]
                 if shape.tag not in _SHAPES:
-                    raise _error(shape, None, None, f"unknown shape <{shape.tag}>; URDF shapes "
-                                 f"are {', '.join(_SHAPES)}")
+                    raise _error(
+                        shape,
+                        None,
+                        None,
+                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(_SHAPES)}",
+                    )
                 for attr in _SHAPES[shape.tag]:
                     if shape.get(attr) is None:
                         raise _error(shape, attr, None, f"<{shape.tag} {attr}> is required")
@@ -823,13 +965,18 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
     if axis is not None and jtype not in ("fixed", "floating"):
         xyz = _numbers(axis, "xyz", 3, None)
         if xyz and math.fsum(v * v for v in xyz) <= 1e-24:
-            raise _error(axis, "xyz", axis.get("xyz"), "joint axis has zero length; a non-zero "
-                         "vector is required")
+            raise _error(
+                axis,
+                "xyz",
+                axis.get("xyz"),
+                "joint axis has zero length; a non-zero vector is required",
+            )
     limit = joint.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
-            raise _error(joint, "type", jtype, "a revolute or prismatic joint needs <limit> "
-                         "(URDF spec)")
+            raise _error(
+                joint, "type", jtype, "a revolute or prismatic joint needs <limit> (URDF spec)"
+            )
         for attr in ("effort", "velocity"):
             if limit.get(attr) is None:
                 raise _error(limit, attr, None, f"<limit {attr}> is required for {jtype} joints")
@@ -837,8 +984,12 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
         lower = _number(limit, "lower", 0.0)
         upper = _number(limit, "upper", 0.0)
         if jtype in ("revolute", "prismatic") and lower > upper:
-            raise _error(limit, "lower", limit.get("lower"),
-                         f"lower > upper={limit.get('upper')!r}; lower <= upper required")
+            raise _error(
+                limit,
+                "lower",
+                limit.get("lower"),
+                f"lower > upper={limit.get('upper')!r}; lower <= upper required",
+            )
     safety = joint.find("safety_controller")
     if safety is not None and safety.get("k_velocity") is None:
         raise _error(safety, "k_velocity", None, "<safety_controller k_velocity> is required")

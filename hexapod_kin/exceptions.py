@@ -21,6 +21,7 @@ __all__ = [
     "IKError",
     "ViewerError",
     "OptionalDependencyError",
+    "UrdfWarning",
     "choices",
     "did_you_mean",
 ]
@@ -105,6 +106,14 @@ class ViewerError(HexapodKinError):
 
 class OptionalDependencyError(HexapodKinError, ImportError):
     """An optional dependency (viewer, plots, browser) is missing; says what to install."""
+
+
+class UrdfWarning(UserWarning):
+    """A URDF loaded for kinematics despite a defect that only geometry or dynamics would use.
+
+    Raised through :func:`warnings.warn` for a mesh that cannot be found (its visual is
+    dropped) and for physically implausible inertials (dynamics refuses them).
+    """
 
 
 def choices(names: Iterable[str], limit: int = 40) -> str:

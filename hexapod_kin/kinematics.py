@@ -383,7 +383,9 @@ def load(
         **kwargs: ``reduce``, ``q_ref``; ``tool`` (a rigid offset of the tip: 4×4, ``(xyz,
             rpy)`` or a 6-vector, in [m]/[rad]; adds the frame ``<tip>_tool``, which becomes
             the tip of fk/jacobian/batch calls); ``package_dirs`` (where ``package://``
-            meshes resolve); or preset parameters (with a preset name).
+            meshes resolve, before ``ROS_PACKAGE_PATH`` and the folders above the file);
+            ``strict_inertia`` (refuse physically implausible inertials instead of warning);
+            or preset parameters (with a preset name).
 
     Returns:
         A :class:`KinematicModel`.
@@ -392,6 +394,10 @@ def load(
         SourceError: The source cannot be resolved.
         UrdfError: The URDF fails the loader gate.
         FrameNotFoundError: Unknown base/tip (the message lists the frames).
+
+    Warns:
+        UrdfWarning: Mesh files that cannot be found (their visuals are dropped) and
+            physically implausible inertials (kinematics does not use them).
 
     """
     return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+import warnings
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -17,13 +18,29 @@ import numpy as np
 import pinocchio as pin
 
 from ._gate import check_urdf
-from .exceptions import ConfigurationError, FrameNotFoundError, SourceError, UrdfError, choices
+from .exceptions import (
+    ConfigurationError,
+    FrameNotFoundError,
+    SourceError,
+    UrdfError,
+    UrdfWarning,
+    choices,
+)
 from .params import Chain, Hexapod
 from .sources import ResolvedSource, erd_names, erd_path, resolve_source, yourdfpy_load
 
 _T = TypeVar("_T")
 
-__all__ = ["Model", "build", "erd_names", "erd_path", "resolve_source", "ResolvedSource"]
+__all__ = [
+    "check_inertials",
+    "pose_matrix",
+    "Model",
+    "build",
+    "erd_names",
+    "erd_path",
+    "resolve_source",
+    "ResolvedSource",
+]
 
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
@@ -98,10 +115,23 @@ class Model:
         reduce: bool | None = None,
         q_ref: Any = None,
         tool: Any = None,
+        strict_inertia: bool = False,
     ) -> None:
         self._cache: dict[str, Any] = {}
         self._cache_lock = threading.RLock()
-        check_urdf(resolved.text, package_dirs=resolved.package_dirs, mesh_root=resolved.mesh_root)
+        gate = check_urdf(
+            resolved.text,
+            package_dirs=resolved.package_dirs,
+            mesh_root=resolved.mesh_root,
+            lenient=True,
+        )
+        #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
+        self.missing_meshes: tuple[tuple[str, str], ...] = gate.missing_meshes
+        #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
+        self.inertia_defects: tuple[tuple[str, str], ...] = gate.inertia_defects
+        if strict_inertia:
+            _raise_inertia_defects(resolved.name, gate.inertia_defects)
+        _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
         try:
             full = pin.buildModelFromXML(resolved.text)
         except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
@@ -375,7 +405,8 @@ class Model:
         dirs = list(self.source.package_dirs)
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
-        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf, kinds[kind], None, dirs)
+        text = _without_missing_meshes(self.urdf, self.missing_meshes)
+        geom = pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
         if self._locked:
             _, geoms = pin.buildReducedModel(
                 self.full_model, [geom], list(self._locked), self._q_ref
@@ -410,6 +441,78 @@ class _PerThread(threading.local):
         if data is None or (first is not None and first != mine):
             data = owner.model.createData()
         self.hot = (owner.model, data, owner.tip_id, owner.nq, owner._base_is_root)
+
+
+def _warn_defects(
+    name: str, missing: tuple[tuple[str, str], ...], defects: tuple[tuple[str, str], ...]
+) -> None:
+    """One :class:`UrdfWarning` for the missing meshes and one for the implausible inertials."""
+    if missing:
+        seen: dict[str, str] = {}
+        for uri, why in missing:
+            seen.setdefault(uri, why)
+        shown = "; ".join(seen[u] for u in list(seen)[:20])
+        more = f"; ... ({len(seen) - 20} more)" if len(seen) > 20 else ""
+        warnings.warn(
+            f"{name!r}: {len(seen)} mesh file(s) not found, their visual/collision elements are "
+            f"dropped (kinematics unaffected; give package_dirs= or set ROS_PACKAGE_PATH): "
+            f"{shown}{more}",
+            UrdfWarning,
+            stacklevel=4,
+        )
+    if defects:
+        listed = "; ".join(f"link {link!r}: {why}" for link, why in defects)
+        warnings.warn(
+            f"{name!r}: physically implausible inertials, ignored by kinematics and refused by "
+            f"dynamics: {listed}",
+            UrdfWarning,
+            stacklevel=4,
+        )
+
+
+def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> None:
+    if defects:
+        link, why = defects[0]
+        more = f" (and {len(defects) - 1} more link(s))" if len(defects) > 1 else ""
+        raise UrdfError(
+            f"{name!r}: link {link!r} has a physically implausible inertial{more}: {why}",
+            parameter="inertial",
+            value=link,
+            allowed="mass > 0 and a positive-definite inertia obeying the triangle inequality",
+        )
+
+
+def check_inertials(model: Model) -> None:
+    """Refuse a model whose inertials are physically implausible (what dynamics needs).
+
+    Kinematics loads such models with a warning; dynamics (ABA/RNEA, torques) must call this
+    first, as MuJoCo's compiler refuses them.
+
+    Args:
+        model: A loaded model.
+
+    Raises:
+        UrdfError: Naming the first link with a defect (and how many more there are).
+
+    """
+    _raise_inertia_defects(model.name, model.inertia_defects)
+
+
+def _without_missing_meshes(text: str, missing: tuple[tuple[str, str], ...]) -> str:
+    """``text`` without the visual/collision elements whose mesh file was not found."""
+    if not missing:
+        return text
+    from ._gate import parse_urdf
+
+    uris = {uri for uri, _ in missing}
+    root = parse_urdf(text)
+    for link in root.findall("link"):
+        for part in [*link.findall("visual"), *link.findall("collision")]:
+            if any(m.get("filename") in uris for m in part.iter("mesh", "texture")):
+                link.remove(part)
+    from lxml import etree
+
+    return str(etree.tostring(root, encoding="unicode"))
 
 
 def pose_matrix(value: Any, name: str = "pose") -> np.ndarray:
@@ -573,8 +676,11 @@ def build(
     q_ref: Any = None,
     package_dirs: Any = (),
     tool: Any = None,
+    strict_inertia: bool = False,
     **params: Any,
 ) -> Model:
     """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``)."""
     resolved = resolve_source(source, package_dirs=package_dirs, **params)
-    return cls(resolved, base, tip, reduce=reduce, q_ref=q_ref, tool=tool)
+    return cls(
+        resolved, base, tip, reduce=reduce, q_ref=q_ref, tool=tool, strict_inertia=strict_inertia
+    )

@@ -18,7 +18,9 @@ def test_every_exception_is_in_the_family():
     classes = [
         c
         for _, c in inspect.getmembers(exceptions, inspect.isclass)
-        if issubclass(c, Exception) and c.__module__ == exceptions.__name__
+        if issubclass(c, Exception)
+        and not issubclass(c, Warning)
+        and c.__module__ == exceptions.__name__
     ]
     assert len(classes) >= 8
     for cls in classes:
@@ -262,3 +264,113 @@ def test_submodules_are_lazy_attributes():
 
         exists = importlib.util.find_spec(f"hexapod_kin.{name}") is not None
         assert hasattr(hkm, name) == exists, name
+
+
+# ------------------------------------------------------------------ real URDFs as they are
+def _load_warned(source, **kw):
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = hk.load(source, **kw)
+    return model, [w for w in caught if issubclass(w.category, exceptions.UrdfWarning)]
+
+
+@pytest.mark.parametrize(
+    ("name", "link", "defect"),
+    [
+        ("human", "left_upperleg_virtual", "has no mass"),
+        ("romeo", "LFinger11Link", "has no mass"),
+        ("icub", "head", "not positive definite"),
+        ("romeo_small", "RShoulderYawLink", "triangle inequality"),
+    ],
+)
+def test_implausible_inertials_warn_for_kinematics_and_refuse_for_dynamics(name, link, defect):
+    from hexapod_kin.model import check_inertials
+
+    path = erd_path(name)
+    model, warned = _load_warned(path)
+    assert len(warned) == 1
+    text = str(warned[0].message)
+    assert f"link {link!r}" in text and defect in text
+    assert any(lk == link and defect in why for lk, why in model.inertia_defects)
+    raw = pin.buildModelFromUrdf(str(path))
+    q = model.random_q(seed=1)
+    d = raw.createData()
+    pin.framesForwardKinematics(raw, d, q)
+    np.testing.assert_allclose(model.fk(q), d.oMf[raw.getFrameId(model.tip)].homogeneous,
+                               atol=1e-12)
+    with pytest.raises(exceptions.UrdfError, match=f"link {link!r}") as info:
+        check_inertials(model)
+    assert info.value.parameter == "inertial"
+    with pytest.raises(exceptions.UrdfError, match="physically implausible"):
+        hk.load(path, strict_inertia=True)
+
+
+def test_plausible_robot_passes_check_inertials():
+    from hexapod_kin.model import check_inertials
+
+    model, warned = _load_warned("erd:solo12")
+    assert warned == [] and model.inertia_defects == ()
+    check_inertials(model)
+
+
+def _ros_tree(tmp_path, mesh_name="a.stl", with_manifest=True):
+    """A ROS-like workspace: ws/src/my_robot_description/{package.xml, urdf/r.urdf, meshes}."""
+    pkg = tmp_path / "ws" / "src" / "my_robot_description"
+    (pkg / "urdf").mkdir(parents=True)
+    (pkg / "meshes").mkdir()
+    (pkg / "meshes" / "a.stl").write_text("solid a\nendsolid a\n")
+    if with_manifest:
+        (pkg / "package.xml").write_text("<package><name>my_robot_description</name></package>")
+    text = hk.to_urdf(hk.robots.pendulum()).replace(
+        "<visual>",
+        f'<visual><geometry><mesh filename="package://my_robot_description/meshes/{mesh_name}"/>'
+        "</geometry></visual><visual>",
+        1,
+    )
+    path = pkg / "urdf" / "r.urdf"
+    path.write_text(text)
+    return pkg, path
+
+
+def test_package_uri_resolves_from_the_folders_above(tmp_path):
+    pkg, path = _ros_tree(tmp_path)
+    model, warned = _load_warned(path)
+    assert warned == []
+    assert str(pkg.parent.resolve()) in model.source.package_dirs
+
+
+def test_package_uri_resolves_through_ros_package_path_and_package_dirs(tmp_path, monkeypatch):
+    pkg, path = _ros_tree(tmp_path)
+    elsewhere = tmp_path / "elsewhere.urdf"  # no package folder above this file
+    elsewhere.write_text(path.read_text())
+    _, warned = _load_warned(elsewhere)
+    assert len(warned) == 1 and "package://my_robot_description/meshes/a.stl" in str(
+        warned[0].message)
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "ws"))  # found 2 levels below
+    model, warned = _load_warned(elsewhere)
+    assert warned == [] and str(pkg.parent) in model.source.package_dirs
+    monkeypatch.delenv("ROS_PACKAGE_PATH")
+    model, warned = _load_warned(elsewhere, package_dirs=[pkg.parent])
+    assert warned == [] and model.source.package_dirs[0] == str(pkg.parent)
+
+
+def test_missing_mesh_costs_its_visual_not_the_kinematics(tmp_path):
+    _, path = _ros_tree(tmp_path, mesh_name="gone.stl")
+    model, warned = _load_warned(path)
+    assert len(warned) == 1
+    assert "package://my_robot_description/meshes/gone.stl" in str(warned[0].message)
+    assert "does not exist" in str(warned[0].message)
+    reference = hk.load(hk.robots.pendulum())
+    q = reference.random_q(seed=2)
+    np.testing.assert_allclose(model.fk(q), reference.fk(q), atol=0)
+    geom = model.geometry_model("visual")
+    full = reference.geometry_model("visual")
+    assert geom.ngeoms == full.ngeoms  # the dropped visual only; the other one remains
+
+
+def test_hostile_mesh_uris_stay_refused(tmp_path):
+    _, path = _ros_tree(tmp_path, mesh_name="../../../../../etc/passwd")
+    with pytest.raises(exceptions.UrdfError, match="outside the allowed root"):
+        hk.load(path)
