@@ -12,7 +12,9 @@ compiled model with full precision (``repr``); then a floor plane, a light and t
 
 What carries over: joint damping (``damping``), dry friction (``frictionloss``), position
 limits (``range``), effort limits (``actuatorfrcrange``), masses and inertias; URDF velocity
-limits have no MJCF counterpart. The base is fixed to the world, as in the URDF.
+limits have no MJCF counterpart. The base is fixed to the world, as in the URDF. Contacts
+between a body and its parent are excluded (``<contact><exclude>``): adjacent links meet at
+their joint.
 """
 
 from __future__ import annotations
@@ -155,6 +157,27 @@ def _patch(root: Any, model: Any, mujoco: Any) -> None:
             _set(geom, "quat", model.geom_quat[g])
 
 
+def _exclude_adjacent(root: Any) -> None:
+    """No contacts between a body and its parent (MuJoCo only filters moving parents).
+
+    A link whose parent is welded to the world (the base, a leg mount) would otherwise touch
+    it at the joint all the time.
+    """
+    from lxml import etree
+
+    pairs = [
+        (parent.get("name"), child.get("name"))
+        for parent in root.iter("body")
+        for child in parent.findall("body")
+    ]
+    if not pairs:
+        return
+    contact = etree.Element("contact")
+    for a, b in pairs:
+        etree.SubElement(contact, "exclude", body1=a, body2=b)
+    root.find("worldbody").addnext(contact)
+
+
 def _compile(urdf_text: str, assets: dict[str, bytes]) -> tuple[str, Any, Any]:
     mujoco = need("mujoco")
     try:
@@ -240,6 +263,7 @@ def to_mjcf(
     saved, model, mujoco = _compile(_with_compiler(urdf, discard_visual=not meshes), assets)
     root = etree.fromstring(saved.encode("utf-8"))
     _patch(root, model, mujoco)
+    _exclude_adjacent(root)
     if meshes:
         for geom in root.iter("geom"):
             if geom.get("type") != "mesh":
