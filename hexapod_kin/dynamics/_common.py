@@ -128,20 +128,27 @@ def _inertial_problem(inertia: pin.Inertia) -> str | None:
 def check_inertials(model: Any) -> None:
     """Refuse a model whose moving bodies have implausible inertials (before any dynamics).
 
-    Every body moved by a joint (Pinocchio's ``model.inertias[i]``, i >= 1, the links rigidly
-    attached to joint i merged) must have a finite mass > 0 and a positive-definite inertia
-    about its centre of mass: otherwise the joint-space inertia matrix can be singular and
-    ABA divides by zero. (The loader gate already refuses negative masses and indefinite
-    tensors link by link; massless moving bodies pass it and are caught here.) The result is
-    cached per model.
+    First the loader's verdict (``hexapod_kin.model.check_inertials``: the defects the URDF
+    gate found link by link, raised as ``UrdfError``); then every body moved by a joint
+    (Pinocchio's ``model.inertias[i]``, i >= 1, the links rigidly attached to joint i merged)
+    must have a finite mass > 0 and a positive-definite inertia about its centre of mass:
+    otherwise the joint-space inertia matrix can be singular and ABA divides by zero. The
+    second check also covers models edited or built without the loader. Its result is cached
+    per model.
 
     Args:
         model: A loaded model.
 
     Raises:
+        UrdfError: The loader found an implausible inertial (names the link).
         ParameterError: Naming the link (and its joint) and what is wrong with its inertial.
 
     """
+    import importlib
+
+    loader_check = getattr(importlib.import_module("hexapod_kin.model"), "check_inertials", None)
+    if loader_check is not None and hasattr(model, "inertia_defects"):
+        loader_check(model)  # the loader's own verdict, link by link
 
     def scan() -> tuple[str, str, str] | None:
         m = model.model

@@ -139,7 +139,7 @@ def standing_configuration(
         foot_body = mount + np.array([r * c - sh[0], r * s - sh[1], -h - mount[2]])
         d = foot_body - mount
         target = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
-        sols = ik.analytic(chain, target)
+        sols = np.asarray(ik.analytic(chain, target[None, :])[0])  # (k, n): one target
         if len(sols) == 0:
             raise ConfigurationError(
                 f"leg {leg.name!r} cannot reach its foot point {target.round(6).tolist()} m "

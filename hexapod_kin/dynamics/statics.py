@@ -318,10 +318,19 @@ def step_torques(
             ``dt``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
 
     Raises:
-        ParameterError: As :func:`torques_along` and ``seed_experiment``.
+        ParameterError: Not a 3-joint model; as :func:`torques_along` and
+            ``seed_experiment``.
 
     """
     mdl = as_model("hexabot_leg" if model is None else model)
+    if mdl.nq != 3:
+        raise ParameterError(
+            f"model {mdl.name!r} has {mdl.nq} joints {list(mdl.joint_names)}; the seeds' "
+            "resolved-rate step drives a 3-joint leg's foot (pick one leg with base=/tip=)",
+            parameter="model",
+            value=mdl.name,
+            allowed="a 3-joint leg",
+        )
     seed_kwargs.setdefault("baseline", False)
     run = _seed_experiment()(mdl, **seed_kwargs)
     tr = run.trajectory

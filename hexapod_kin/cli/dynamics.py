@@ -1,0 +1,327 @@
+"""Dynamics subcommands: ``pendulum`` (seed 001 §1), ``torques`` (a leg), ``stand`` (the hexapod).
+
+Heavy imports stay inside the runners. ``--json`` prints one JSON object on stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from ..exceptions import ParameterError
+from .common import (
+    PLOT_SUFFIXES,
+    emit_json,
+    load_source,
+    output_path,
+    q_args,
+    q_from_args,
+    set_params,
+    source_args,
+)
+
+__all__ = ["plot_pendulum", "register"]
+
+_FMT = argparse.ArgumentDefaultsHelpFormatter
+
+
+# ------------------------------------------------------------------------ pendulum
+def _add_pendulum(sub: Any) -> None:
+    p = sub.add_parser(
+        "pendulum",
+        help="the seed pendulum (ABA), undamped and damped, against the exact period and decay",
+        formatter_class=_FMT,
+    )
+    p.add_argument(
+        "--theta0-deg",
+        type=float,
+        default=30.0,
+        help="initial angle from the hanging equilibrium [deg], released at rest",
+    )
+    p.add_argument(
+        "--damping",
+        type=float,
+        default=0.01,
+        help="joint damping of the damped run [N m s/rad] (written into the URDF)",
+    )
+    p.add_argument("--duration", type=float, default=20.0, help="simulated time [s]")
+    p.add_argument("--dt", type=float, default=1e-3, help="integration step [s]")
+    p.add_argument(
+        "--method", choices=("rk4", "symplectic_euler"), default="rk4", help="integrator"
+    )
+    p.add_argument(
+        "--decay-theta0-deg",
+        type=float,
+        default=1.0,
+        help="initial angle of the small-amplitude decay-rate run [deg]",
+    )
+    p.add_argument("--length", type=float, default=0.5, help="pendulum length [m]")
+    p.add_argument("--mass", type=float, default=1.0, help="bob mass [kg]")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.add_argument("--plot", metavar="F", help="angle and angular velocity vs time (PNG)")
+    p.add_argument("--html", metavar="F", help="the damped pendulum animated (offline HTML)")
+    p.set_defaults(func=_cmd_pendulum)
+
+
+def plot_pendulum(experiment: Any, path: Any) -> Any:
+    """Seed 001's figures: angle [rad] and angular velocity [rad/s] vs time, both runs."""
+    from ..plots import pyplot, save_figure
+
+    plt = pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+    runs = ((experiment.undamped, "undamped"), (experiment.damped, "damped"))
+    for col, (run, label) in enumerate(runs):
+        t = run.simulation.t
+        title = f"{label} (b = {run.damping:g} N·m·s/rad), θ0 = {math.degrees(run.theta0):g}°"
+        axes[0, col].plot(t, run.theta, color="tab:blue")
+        axes[0, col].set_title(title)
+        axes[0, col].set_ylabel("angle θ [rad]")
+        axes[1, col].plot(t, run.omega, color="tab:orange")
+        axes[1, col].set_ylabel("angular velocity θ̇ [rad/s]")
+        axes[1, col].set_xlabel("time t [s]")
+        for ax in axes[:, col]:
+            ax.grid(True, alpha=0.3)
+    fig.suptitle(
+        "Seed 001 §1: simple pendulum (Pinocchio ABA, "
+        f"{experiment.undamped.simulation.method}, dt = "
+        f"{experiment.undamped.simulation.dt:g} s)"
+    )
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def _cmd_pendulum(args: argparse.Namespace) -> int:
+    if args.plot:
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if args.html:
+        output_path(args.html, "--html", (".html", ".htm"))
+    for name in ("theta0_deg", "decay_theta0_deg"):
+        value = getattr(args, name)
+        if not (math.isfinite(value) and 0 < value < 180):
+            opt = "--" + name.replace("_", "-")
+            raise ParameterError(
+                f"{opt}={value!r} is not allowed; an angle in (0, 180) degrees from the hanging "
+                "equilibrium is needed",
+                parameter=opt,
+                value=value,
+                allowed="(0, 180) deg",
+            )
+    from ..dynamics import pendulum_experiment
+
+    exp = pendulum_experiment(
+        math.radians(args.theta0_deg),
+        args.damping,
+        duration=args.duration,
+        dt=args.dt,
+        method=args.method,
+        decay_theta0=math.radians(args.decay_theta0_deg),
+        length=args.length,
+        mass=args.mass,
+    )
+    written = []
+    if args.plot:
+        written.append(str(plot_pendulum(exp, args.plot)))
+    if args.html:
+        written.append(_pendulum_html(exp, args))
+    out = exp.to_dict()
+    if args.json:
+        emit_json({**out, "written": written})
+        return 0
+    p = out["pendulum"]
+    print(
+        f"pendulum: I = {p['inertia']:.9g} kg m^2 about the pivot, m = {p['mass']:g} kg, "
+        f"l_c = {p['com_distance']:.9g} m; theta0 = {args.theta0_deg:g} deg; "
+        f"{out['method']}, dt = {out['dt']:g} s, {out['duration']:g} s"
+    )
+    per = out["period"]
+    print(
+        f"undamped: period = {per if per is None else f'{per:.12g}'} s, exact "
+        f"4 sqrt(I/(m g l_c)) K(sin(theta0/2)) = {out['period_exact']:.12g} s, "
+        f"relative error {out['period_error']}"
+    )
+    print(f"undamped: energy drift max|E - E0|/E0 = {out['energy_drift']:.3e}")
+    print(
+        f"damped (b = {out['damping']:g}): energy monotone {out['damped_energy_monotone']} "
+        f"(largest step increase {out['damped_energy_max_increase']:.3e} E0), lost "
+        f"{100 * out['damped_energy_loss']:.2f}% in {out['duration']:g} s"
+    )
+    rate, exact = out["decay_rate"], out["decay_rate_exact"]
+    print(
+        f"decay rate at {args.decay_theta0_deg:g} deg: {rate} 1/s, b/(2I) = {exact:.9g} 1/s, "
+        f"relative error {out['decay_rate_error']}"
+    )
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _pendulum_html(exp: Any, args: argparse.Namespace) -> str:
+    try:
+        from ..viewer import export_html
+    except ImportError as exc:
+        raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
+    from ..kinematics import load
+
+    run = exp.damped
+    model = load("pendulum", damping=run.damping, length=args.length, mass=args.mass)
+    sim = run.simulation
+    stride = max(1, int(round((1 / 30) / sim.dt)))
+    title = (
+        f"pendulum: theta0 = {math.degrees(run.theta0):g} deg, damping {run.damping:g} "
+        "N m s/rad (Pinocchio ABA)"
+    )
+    return str(export_html(model, sim.t[::stride], sim.q[::stride], args.html, title=title))
+
+
+# ------------------------------------------------------------------------ torques
+def _add_torques(sub: Any) -> None:
+    p = sub.add_parser(
+        "torques",
+        help="joint torques of a leg under gravity and a foot force (J^T F, RNEA cross-check)",
+        formatter_class=_FMT,
+    )
+    source_args(p)
+    q_args(p)
+    p.add_argument(
+        "--force",
+        nargs=3,
+        type=float,
+        metavar=("FX", "FY", "FZ"),
+        default=[0.0, 0.0, 0.0],
+        help="force of the foot on its environment [N], base axes",
+    )
+    p.add_argument("--frame", help="frame where the force acts (default: the tip)")
+    p.add_argument(
+        "--step",
+        action="store_true",
+        help="along the seeds' resolved-rate step from --q (3-joint legs): peaks",
+    )
+    p.add_argument("--duration", type=float, default=10.0, help="--step: duration [s]")
+    p.add_argument("--dt", type=float, default=1e-3, help="--step: step [s]")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.set_defaults(func=_cmd_torques)
+
+
+def _cmd_torques(args: argparse.Namespace) -> int:
+    from ..dynamics import leg_torques, step_torques
+
+    model = load_source(args)
+    if args.step:
+        q0 = None if args.q is None else q_from_args(args, model)
+        res = step_torques(
+            model, args.force, frame=args.frame, q0=q0, duration=args.duration, dt=args.dt
+        )
+        out = {"source": model.name, **res.to_dict()}
+        if args.json:
+            emit_json(out)
+            return 0
+        print(
+            f"{model.name}: resolved-rate step, {out['duration']:g} s, {out['samples']} "
+            f"samples, foot force {res.force.tolist()} N"
+        )
+        for i, name in enumerate(res.joint_names):
+            print(
+                f"  {name:<12} peak {res.peak[i]: .6f} N m   gravity peak "
+                f"{res.peak_gravity[i]: .6f} N m"
+            )
+        print(f"J^T F vs RNEA with fext: max error {res.crosscheck_error:.3e} N m")
+        return 0
+    q = q_from_args(args, model)
+    r = leg_torques(model, q, args.force, frame=args.frame)
+    if args.json:
+        emit_json({"source": model.name, **r.to_dict()})
+        return 0
+    print(f"{model.name}: force {r.force.tolist()} N at {r.frame!r} (base axes)")
+    print(f"  {'joint':<12} {'gravity':>12} {'J^T F':>12} {'total':>12}   [N m]")
+    for i, name in enumerate(r.joint_names):
+        print(f"  {name:<12} {r.gravity[i]:12.6f} {r.force_torque[i]:12.6f} {r.total[i]:12.6f}")
+    print(
+        f"J^T F vs RNEA with fext: {r.crosscheck_error:.3e} N m; g(q) vs rnea(q,0,0): "
+        f"{r.gravity_crosscheck_error:.3e} N m"
+    )
+    return 0
+
+
+# ------------------------------------------------------------------------ stand
+def _add_stand(sub: Any) -> None:
+    p = sub.add_parser(
+        "stand",
+        help="the hexapod standing: contact forces holding its weight, joint torques",
+        formatter_class=_FMT,
+    )
+    p.add_argument("--source", default="hexapod", help="a Hexapod preset")
+    p.add_argument(
+        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
+    )
+    p.add_argument("--height", type=float, default=0.10, help="body above the ground [m]")
+    p.add_argument("--reach", type=float, help="hip axis to foot, horizontal [m] (l1 + l2)")
+    p.add_argument(
+        "--shift",
+        nargs=2,
+        type=float,
+        metavar=("DX", "DY"),
+        default=[0.0, 0.0],
+        help="body shifted over the feet [m]",
+    )
+    p.add_argument("--legs", nargs="+", help="stance legs (names or 1-based numbers); all")
+    p.add_argument(
+        "--method",
+        choices=("min_norm", "friction"),
+        default="min_norm",
+        help="contact-force distribution",
+    )
+    p.add_argument("--mu", type=float, help="friction coefficient (needed by --method friction)")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.set_defaults(func=_cmd_stand)
+
+
+def _legs_arg(values: Any) -> Any:
+    if values is None:
+        return None
+    return [int(v) if v.isdigit() else v for v in values]
+
+
+def _cmd_stand(args: argparse.Namespace) -> int:
+    from ..dynamics import stand
+    from ..kinematics import load
+
+    model = load(args.source, **set_params(args.set))
+    st = stand(
+        model,
+        height=args.height,
+        reach=args.reach,
+        shift=args.shift,
+        legs=_legs_arg(args.legs),
+        method=args.method,
+        mu=args.mu,
+    )
+    out = {"source": model.name, **st.to_dict()}
+    if args.json:
+        emit_json(out)
+        return 0
+    print(
+        f"{model.name}: mass {st.mass:.6g} kg, weight {st.weight:.6g} N, CoM "
+        f"{[round(v, 6) for v in st.com.tolist()]} m, body at {st.height:g} m"
+    )
+    print(
+        f"contact forces ({st.method}{'' if st.mu is None else f', mu = {st.mu:g}'}), "
+        "ground on foot [N]:"
+    )
+    for name, p_i, f in zip(st.stance_legs, st.feet, st.forces):
+        print(f"  {name:<6} foot {p_i.round(4).tolist()}  f = {f.round(6).tolist()}")
+    print(
+        f"sum of forces - weight: {st.force_residual:.3e} N; moment about the CoM: "
+        f"{st.moment_residual:.3e} N m; feasible {st.feasible}"
+    )
+    print("joint torques g(q) - sum J^T f [N m]:")
+    for i, name in enumerate(st.joint_names):
+        print(f"  {name:<12} {st.torque[i]: .6f}   (legs in the air: {st.gravity_torque[i]: .6f})")
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``pendulum``, ``torques`` and ``stand`` to the subcommands ``sub``."""
+    _add_pendulum(sub)
+    _add_torques(sub)
+    _add_stand(sub)
