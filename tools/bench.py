@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-SECTIONS = ["spine", "singularity", "ik", "viewer"]
+SECTIONS = ["spine", "singularity", "ik", "viewer", "sweep"]
 
 
 def main(argv: list[str] | None = None) -> int:
