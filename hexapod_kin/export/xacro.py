@@ -141,6 +141,7 @@ class _Family:
     chain: Chain
     macro: str
     params: dict[str, str] = field(default_factory=dict)
+    notes: dict[str, str] = field(default_factory=dict)
     joint_ids: list[str] = field(default_factory=list)
     link_ids: list[str] = field(default_factory=list)
 
@@ -165,13 +166,23 @@ def _family(chain: Chain, macro: str) -> _Family:
     fam.joint_ids = _unique_ids(tuple(chain.joint_names or ()), "joint", reserved)
     fam.link_ids = _unique_ids(tuple(chain.link_names or ()), "link", reserved)
     p = fam.params
+    links = chain.link_names or ()
     for j, row in enumerate(rows, start=1):
+        prev = chain.base if j == 1 else links[j - 2]
+        fam.notes[f"alpha{j}"] = (
+            f"row {j} ({row.sigma}): frame {j} = link {links[j - 1]}; alpha about x{j - 1}, "
+            f"d along x{j - 1} (length of {prev}), theta about z{j}, r along z{j}"
+        )
         p[f"alpha{j}"] = num(row.alpha)
         p[f"d{j}"] = num(row.d)
         p[f"theta{j}"] = num(row.theta)
         p[f"r{j}"] = num(row.r)
     damping, friction = chain.joint_damping(), chain.joint_friction()
     for k, (jid, lim) in enumerate(zip(fam.joint_ids, chain.limits or ())):
+        fam.notes[f"{jid}_lower"] = (
+            f"joint {(chain.joint_names or ())[k]}: limits [rad or m], velocity, effort, "
+            "damping, friction"
+        )
         p[f"{jid}_lower"] = num(lim.lower)
         p[f"{jid}_upper"] = num(lim.upper)
         p[f"{jid}_velocity"] = num(lim.velocity)
@@ -179,6 +190,8 @@ def _family(chain: Chain, macro: str) -> _Family:
         p[f"{jid}_damping"] = num(damping[k])
         p[f"{jid}_friction"] = num(friction[k])
     for j, lid in enumerate(fam.link_ids):
+        if j == 0:
+            fam.notes[f"{lid}_mass"] = "link masses [kg] (default links: rods of link_radius)"
         inn = chain.link_inertial(j)
         p[f"{lid}_mass"] = num(inn.mass)
         if not _default_inertial(chain, j):
@@ -338,8 +351,15 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
     return out
 
 
-def _properties(params: dict[str, str], prefix: str = "") -> list[str]:
-    return [f'  <xacro:property name="{prefix}{k}" value="{v}"/>' for k, v in params.items()]
+def _properties(
+    params: dict[str, str], prefix: str = "", notes: dict[str, str] | None = None
+) -> list[str]:
+    out: list[str] = []
+    for k, v in params.items():
+        if notes and k in notes:
+            out.append("  " + comment(notes[k]))
+        out.append(f'  <xacro:property name="{prefix}{k}" value="{v}"/>')
+    return out
 
 
 def _families(chains: list[Chain]) -> list[_Family]:
@@ -372,7 +392,7 @@ def _chain_doc(chain: Chain, header: str | None) -> str:
     lines.append(f'<robot name="{chain.name}" xmlns:xacro="{_NS}">')
     lines += _materials()
     lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
-    lines += _properties(fam.params)
+    lines += _properties(fam.params, notes=fam.notes)
     lines += _HELPERS.splitlines()
     lines += _macro_lines(fam, forward=True)
     lines.append(f'  <xacro:{fam.macro} prefix="" parent=""/>')
@@ -433,7 +453,7 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
     for fam in fams:
         if not forward:
             lines.append("  " + comment(f"leg family {fam.macro}"))
-        lines += _properties(fam.params, "" if forward else f"{fam.macro}_")
+        lines += _properties(fam.params, "" if forward else f"{fam.macro}_", fam.notes)
     lines += _HELPERS.splitlines()
     for fam in fams:
         lines += _macro_lines(fam, forward=forward)
