@@ -350,6 +350,17 @@ def test_dask_table_equals_local(local_run, dask_client, tmp_path):
     res = sweep(SPACE, client=dask_client, out=tmp_path / "d.csv", **OPTS)
     assert res.scored == res.n == 32
     assert Path(res.files["csv"]).read_bytes() == Path(local_run.files["csv"]).read_bytes()
+    # through the scheduler address (what --scheduler ADDR does), other chunking
+    addr = dask_client.scheduler.address
+    res2 = sweep(SPACE, scheduler=addr, **{**OPTS, "chunk_size": 5})
+    for k, v in local_run.table.items():
+        assert np.array_equal(res2.table[k], v)
+
+
+def test_same_table_whatever_threads_and_chunks(local_run):
+    res = sweep(SPACE, workers=1, **{**OPTS, "chunk_size": 7})
+    for k, v in local_run.table.items():
+        assert np.array_equal(res.table[k], v)
 
 
 def test_dask_worker_killed_mid_sweep(local_run, dask_client, tmp_path):
@@ -363,6 +374,7 @@ def test_dask_worker_killed_mid_sweep(local_run, dask_client, tmp_path):
 
     res = sweep(SPACE, client=dask_client, out=tmp_path / "k.csv", on_chunk=kill, **OPTS)
     assert killed
+    assert killed[0] not in dask_client.run(os.getpid).values()  # the nanny replaced it
     assert Path(res.files["csv"]).read_bytes() == Path(local_run.files["csv"]).read_bytes()
 
 

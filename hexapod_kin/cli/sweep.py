@@ -59,10 +59,17 @@ def register(sub: Any) -> None:
     p.set_defaults(func=_cmd_sweep)
 
 
-def _fmt(d: dict[str, Any], name: str, unit: str) -> str:
-    se = d.get(name + "_se")
+def _fmt(d: dict[str, Any], name: str, unit: str, mc: int) -> str:
     v = d[name]
-    return f"{name} = {v:.6g}" + (f" ± {se:.2g}" if se else "") + f" {unit}"
+    if name == "volume" and d.get("volume_exact"):
+        how = "± 0 (closed form)"
+    elif name in ("volume", "volume_mc"):
+        how = f"± {d[name + '_se']:.2g} (binomial SE, {mc} Monte-Carlo points)"
+    elif name == "stride":
+        how = "± 1e-12 (exact membership, bisection to rounding)"
+    else:
+        how = "(minimum over 64 points of the central 90 % of the stride)"
+    return f"{name} = {v:.6g} {unit} {how}"
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
@@ -116,7 +123,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             ("q3_singular_margin", "rad"),
             ("limit_margin", "rad"),
         ):
-            print("  " + _fmt(b, name, unit))
+            print("  " + _fmt(b, name, unit, args.mc_samples))
     for kind, path in res.files.items():
         print(f"{kind}: {path}")
     return 0
