@@ -555,3 +555,36 @@ def test_cli_errors_are_one_line(argv: list[str], capsys: pytest.CaptureFixture[
 def test_errors_are_of_the_family() -> None:
     with pytest.raises(HexapodKinError):
         contact_forces([[0, 0, 0]] * 3, [0, 0, 1], -1.0)
+
+
+# ============================================================================ along a gait
+def test_gait_loads_balance_and_match_a_floating_base_model() -> None:
+    gait = pytest.importorskip("hexapod_kin.gait")
+    from hexapod_kin.dynamics import gait_torques
+
+    model = hk.load("hexapod")
+    run = gait.walk(pattern="tripod", duration=1.0, rate=50.0, velocity=(0.04, 0.0, 0.2))
+    loads = gait_torques(run, model)
+    assert loads.force_residual < 1e-9 and loads.moment_residual < 1e-9
+    assert loads.peak == pytest.approx(np.max(np.abs(loads.torque), axis=0))
+    ff = free_flyer(model)
+    data = ff.createData()
+    names = [ff.names[i] for i in range(2, ff.njoints)]
+    assert names == list(loads.joint_names) == list(run.joint_names)
+    qff = run.pinocchio_q()
+    weight = loads.mass * G
+    for i in range(0, len(run.t), 7):
+        f = loads.forces[i]
+        assert f.sum(axis=0) == pytest.approx([0, 0, weight], abs=1e-9)
+        assert np.all(f[~run.support[i]] == 0)
+        pin.framesForwardKinematics(ff, data, qff[i])
+        fext = [pin.Force.Zero() for _ in range(ff.njoints)]
+        for name, fk in zip(model.params.foot_frames, f):
+            fid = ff.getFrameId(name)
+            wrench = pin.SE3(np.eye(3), data.oMf[fid].translation).act(pin.Force(fk, np.zeros(3)))
+            j = ff.frames[fid].parentJoint
+            fext[j] = fext[j] + data.oMi[j].actInv(wrench)
+        tau = pin.rnea(ff, data, qff[i], np.zeros(ff.nv), np.zeros(ff.nv), fext)
+        # the base wrench is expressed in the base frame: zero means the forces hold the robot
+        assert np.abs(tau[:6]).max() < 1e-9
+        assert np.abs(tau[6:] - loads.torque[i]).max() < 1e-9

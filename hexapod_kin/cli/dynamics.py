@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
+from typing import Any, cast
 
 from ..exceptions import ParameterError
 from .common import (
@@ -272,6 +272,12 @@ def _add_stand(sub: Any) -> None:
         help="contact-force distribution",
     )
     p.add_argument("--mu", type=float, help="friction coefficient (needed by --method friction)")
+    p.add_argument(
+        "--gait",
+        metavar="PATTERN",
+        help="also walk with this gait (tripod, wave, ripple): peak torque per joint",
+    )
+    p.add_argument("--gait-duration", type=float, default=4.0, help="--gait: walk length [s]")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.set_defaults(func=_cmd_stand)
 
@@ -297,6 +303,22 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         mu=args.mu,
     )
     out = {"source": model.name, **st.to_dict()}
+    gt = None
+    if args.gait:
+        from ..dynamics import gait_torques
+        from ..gait import walk, whole_body
+
+        kw: dict[str, Any] = {"body_height": args.height}
+        if args.reach is not None:
+            kw["foot_reach"] = args.reach
+        run = walk(
+            whole_body(cast(Any, model.params)),
+            pattern=args.gait,
+            duration=args.gait_duration,
+            **kw,
+        )
+        gt = gait_torques(run, model, method=args.method, mu=args.mu)
+        out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}
     if args.json:
         emit_json(out)
         return 0
@@ -317,6 +339,15 @@ def _cmd_stand(args: argparse.Namespace) -> int:
     print("joint torques g(q) - sum J^T f [N m]:")
     for i, name in enumerate(st.joint_names):
         print(f"  {name:<12} {st.torque[i]: .6f}   (legs in the air: {st.gravity_torque[i]: .6f})")
+    if gt is not None:
+        print(
+            f"walking ({args.gait}, {gt.t[-1] - gt.t[0]:g} s, {len(gt.t)} samples, quasi-static):"
+            f" sum of forces - weight <= {gt.force_residual:.3e} N, moments <= "
+            f"{gt.moment_residual:.3e} N m, feasible {gt.feasible}"
+        )
+        print("peak torque per joint [N m] (at t [s]):")
+        for i, name in enumerate(gt.joint_names):
+            print(f"  {name:<12} {gt.peak[i]: .6f}  ({gt.peak_time[i]:g})")
     return 0
 
 

@@ -8,6 +8,8 @@
   force as external force), :func:`step_torques` along the seeds' resolved-rate step.
 * :mod:`.stand` — :func:`stand`: the hexapod standing, the stance feet's contact forces
   (minimum-norm or friction-cone) and every joint's torque.
+* :mod:`.gait_loads` — :func:`gait_torques`: the same along a gait run (a
+  ``hexapod_kin.gait.walk``), sample by sample; peak torque per joint.
 
 Every entry point refuses a model whose moving bodies have implausible inertials
 (:func:`check_inertials`, naming the link).
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 from ._common import check_inertials
 from .forward import METHODS, PassiveJoints, Simulation, passive_joints, simulate
+from .gait_loads import GaitTorques, gait_torques
 from .pendulum import (
     PendulumExperiment,
     PendulumRun,
@@ -40,6 +43,7 @@ from .statics import LegTorques, StepTorques, leg_torques, step_torques, torques
 
 __all__ = [
     "CONTACT_METHODS",
+    "GaitTorques",
     "LegTorques",
     "METHODS",
     "PassiveJoints",
@@ -52,6 +56,7 @@ __all__ = [
     "check_inertials",
     "contact_forces",
     "exact_period",
+    "gait_torques",
     "hermite_crossings",
     "leg_torques",
     "passive_joints",
