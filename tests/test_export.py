@@ -665,3 +665,36 @@ def test_cli_writes_every_format(tmp_path, capsys):
     assert err.startswith("hexapod-kin: error:") and "not empty" in err and "\n" not in err
     assert main(["mjcf", "pendulum", "--integrator", "leapfrog"]) == 2
     assert "RK4" in capsys.readouterr().err
+
+
+def test_mjcf_floating_robot_fk_and_it_lands_on_the_floor():
+    src = robots.hexapod()
+    out = to_mjcf(src, floating=True, timestep=1e-3)
+    mj = _mj_model(out)
+    assert mj.nq == 7 + 18 and mj.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
+    pm = pin.buildModelFromXML(hk.to_urdf(src), pin.JointModelFreeFlyer())
+    pd, md = pm.createData(), mujoco.MjData(mj)
+    np.random.seed(11)  # pin.randomConfiguration draws from numpy's global generator
+    for _ in range(10):
+        q = pin.randomConfiguration(pm, -np.ones(pm.nq), np.ones(pm.nq))
+        md.qpos[:3] = q[:3]
+        md.qpos[3:7] = [q[6], q[3], q[4], q[5]]  # MuJoCo w x y z, Pinocchio x y z w
+        for i in range(2, pm.njoints):
+            j = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_JOINT, pm.names[i])
+            md.qpos[mj.jnt_qposadr[j]] = q[pm.joints[i].idx_q]
+        mujoco.mj_kinematics(mj, md)
+        pin.framesForwardKinematics(pm, pd, q)
+        for b in range(1, mj.nbody):
+            f = pm.getFrameId(mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_BODY, b), pin.BODY)
+            np.testing.assert_allclose(md.xpos[b], pd.oMf[f].translation, atol=1e-12)
+            np.testing.assert_allclose(md.xmat[b].reshape(3, 3), pd.oMf[f].rotation, atol=1e-12)
+    # dropped from q = 0, the robot falls and comes to rest on the floor (contacts work)
+    mujoco.mj_resetData(mj, md)
+    floor_z = float(mj.geom("floor").pos[2])
+    for _ in range(3000):
+        mujoco.mj_step(mj, md)
+    assert np.all(np.isfinite(md.qpos))
+    assert md.ncon > 0 and abs(md.qvel[2]) < 0.05
+    assert floor_z < md.qpos[2] < 0.0  # fell from 0, stopped above the floor
+    with pytest.raises(ParameterError, match="floating"):
+        to_mjcf(robots.hexabot_leg(), floating=True)

@@ -140,6 +140,9 @@ def _add_mjcf(sub: Any) -> None:
     )
     p.add_argument("--timestep", type=float, default=None, help="option timestep [s]")
     p.add_argument("--integrator", default=None, help="Euler, RK4, implicit or implicitfast")
+    p.add_argument(
+        "--floating", action="store_true", help="robots: a free joint on the body (it can fall)"
+    )
     p.set_defaults(func=_cmd_mjcf)
 
 
@@ -149,7 +152,11 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
     if args.output:
         output_path(args.output, "--output", (".xml", ".mjcf"))
     src = _resolve(args, allow_urdf=True)
-    extra = (["-m"] if args.meshes else []) + (["(no floor)"] if args.no_floor else [])
+    extra = (
+        (["-m"] if args.meshes else [])
+        + (["(no floor)"] if args.no_floor else [])
+        + (["(floating)"] if args.floating else [])
+    )
     for label, value in (
         ("floor-z", args.floor_z),
         ("timestep", args.timestep),
@@ -164,6 +171,7 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
         "floor_z": args.floor_z,
         "timestep": args.timestep,
         "integrator": args.integrator,
+        "floating": args.floating,
     }
     if args.output:
         write_mjcf(src, args.output, **kwargs)

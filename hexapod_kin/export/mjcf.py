@@ -12,7 +12,8 @@ compiled model with full precision (``repr``); then a floor plane, a light and t
 
 What carries over: joint damping (``damping``), dry friction (``frictionloss``), position
 limits (``range``), effort limits (``actuatorfrcrange``), masses and inertias; URDF velocity
-limits have no MJCF counterpart. The base is fixed to the world, as in the URDF. Contacts
+limits have no MJCF counterpart. The base is fixed to the world, as in the URDF, unless
+``floating=True`` gives a robot's body a free joint. Contacts
 between a body and its parent are excluded (``<contact><exclude>``): adjacent links meet at
 their joint.
 """
@@ -201,6 +202,7 @@ def to_mjcf(
     floor_z: float | None = None,
     timestep: float | None = None,
     integrator: str | None = None,
+    floating: bool = False,
 ) -> MjcfExport:
     """Return the MJCF of a chain, robot or URDF text, compiled by MuJoCo (deterministic).
 
@@ -215,12 +217,15 @@ def to_mjcf(
         floor_z: Floor height in [m]; default just below everything the robot can reach.
         timestep: ``<option timestep>`` in [s] (> 0); default MuJoCo's (0.002 s).
         integrator: ``<option integrator>``: one of :data:`INTEGRATORS`; default MuJoCo's.
+        floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
+            ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor.
 
     Returns:
         An :class:`MjcfExport`.
 
     Raises:
-        ParameterError: Invalid timestep, integrator, floor height or source.
+        ParameterError: Invalid timestep, integrator, floor height or source; ``floating``
+            for a chain (its base link has no mass).
         OptionalDependencyError: mujoco (or trimesh with meshes) not installed.
         UrdfError: MuJoCo refused the URDF.
 
@@ -242,6 +247,13 @@ def to_mjcf(
         )
     if floor_z is not None and not np.isfinite(floor_z):
         raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
+    if floating and not isinstance(source, Hexapod):
+        raise ParameterError(
+            "floating=True needs a robot (Hexapod) whose root body has a mass; a chain's base "
+            "link has none",
+            parameter="floating",
+            value=floating,
+        )
     if isinstance(source, str):
         urdf, default_floor, desc = source, -1.0, "URDF text"
         if meshes:
@@ -264,6 +276,14 @@ def to_mjcf(
     root = etree.fromstring(saved.encode("utf-8"))
     _patch(root, model, mujoco)
     _exclude_adjacent(root)
+    if floating:
+        top = root.find("worldbody/body")
+        free = etree.Element("freejoint", name="floating_base")
+        inertial = top.find("inertial")
+        if inertial is not None:
+            inertial.addnext(free)
+        else:
+            top.insert(0, free)
     if meshes:
         for geom in root.iter("geom"):
             if geom.get("type") != "mesh":
@@ -309,6 +329,7 @@ def write_mjcf(
     floor_z: float | None = None,
     timestep: float | None = None,
     integrator: str | None = None,
+    floating: bool = False,
 ) -> MjcfExport:
     """Write :func:`to_mjcf` to ``path`` (meshes into ``<stem>_meshes/`` beside it), atomically.
 
@@ -335,6 +356,7 @@ def write_mjcf(
         floor_z=floor_z,
         timestep=timestep,
         integrator=integrator,
+        floating=floating,
     )
     for rel, data in out.assets.items():
         target = parent / rel
