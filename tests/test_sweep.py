@@ -23,6 +23,7 @@ from hexapod_kin.sweep import (
     PARAMETERS,
     DesignSpace,
     Range,
+    design_chain,
     jacobian_position,
     pareto_front,
     reachable,
@@ -205,6 +206,7 @@ def test_membership_against_analytic_batch_with_limits():
     pts = rng.uniform(-0.25, 0.25, (30000, 3))
     ref = analytic_batch(chain, pts, within_limits=True).reachable
     assert 0.05 < ref.mean() < 0.5
+    assert design_chain(r) == chain
     assert np.array_equal(reachable(r, pts), ref)
 
 

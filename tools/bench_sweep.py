@@ -21,8 +21,14 @@ import numpy as np
 
 import hexapod_kin as hk
 from hexapod_kin.ik import analytic_batch
-from hexapod_kin.params import JointLimits
-from hexapod_kin.sweep import DesignSpace, Range, score_designs, sweep, volume_closed_form
+from hexapod_kin.sweep import (
+    DesignSpace,
+    Range,
+    design_chain,
+    score_designs,
+    sweep,
+    volume_closed_form,
+)
 from hexapod_kin.sweep.scores import unit_samples
 
 SPACE = DesignSpace(
@@ -41,8 +47,7 @@ SPACE = DesignSpace(
 def _peer_design(r: np.ndarray, unit: np.ndarray) -> dict[str, float]:
     """One design's scores, plain numpy + Pinocchio (same conventions as the kernel)."""
     l1, l2, l3, h, _, yaw = r[:6]
-    lim = tuple(JointLimits(r[6 + 2 * j], r[7 + 2 * j]) for j in range(3))
-    chain = hk.robots.hexabot_leg(l1, l2, l3, limits=lim)
+    chain = design_chain(r)
     model = hk.load(chain)
     big, reach = l1 + l2 + l3, l2 + l3
 

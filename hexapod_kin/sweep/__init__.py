@@ -16,7 +16,7 @@ Example:
 
 from __future__ import annotations
 
-from .designs import DEFAULTS, METHODS, PARAMETERS, DesignSpace, Range, parse_range
+from .designs import DEFAULTS, METHODS, PARAMETERS, DesignSpace, Range, design_chain, parse_range
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .plot import plot_sweep
 from .run import SweepResult, read_table, sweep, table_paths
@@ -32,6 +32,7 @@ __all__ = [
     "Range",
     "SweepResult",
     "best_index",
+    "design_chain",
     "jacobian_position",
     "pareto_front",
     "parse_range",

@@ -20,7 +20,16 @@ import numpy as np
 
 from ..exceptions import ParameterError
 
-__all__ = ["ANGLES", "DEFAULTS", "METHODS", "PARAMETERS", "DesignSpace", "Range", "parse_range"]
+__all__ = [
+    "ANGLES",
+    "DEFAULTS",
+    "METHODS",
+    "PARAMETERS",
+    "DesignSpace",
+    "Range",
+    "design_chain",
+    "parse_range",
+]
 
 #: Design parameters, in table column order. Lengths in [m], angles in [rad].
 PARAMETERS: tuple[str, ...] = (
@@ -299,3 +308,33 @@ class DesignSpace:
                 "the design space is empty (with total, every design had l3 <= 0)",
                 parameter="total",
             )
+
+
+def design_chain(design: Any) -> Any:
+    """The :func:`~hexapod_kin.robots.hexabot_leg` chain of one design (with its limits).
+
+    Args:
+        design: One design: 13 values in the order of :data:`PARAMETERS`, or a mapping
+            name → value (missing names take :data:`DEFAULTS`).
+
+    Returns:
+        A :class:`~hexapod_kin.params.Chain` (hip frame; the mount is not part of it).
+
+    Raises:
+        ParameterError: Bad lengths or limits.
+
+    """
+    from ..params import JointLimits
+    from ..robots import hexabot_leg
+
+    if isinstance(design, Mapping):
+        vals = [float(design.get(p, DEFAULTS[p])) for p in PARAMETERS]
+    else:
+        vals = [float(v) for v in np.asarray(design, dtype=float).ravel()]
+    if len(vals) != len(PARAMETERS):
+        raise ParameterError(
+            f"design has {len(vals)} values; expected {len(PARAMETERS)}: {', '.join(PARAMETERS)}",
+            parameter="design",
+        )
+    limits = tuple(JointLimits(vals[6 + 2 * j], vals[7 + 2 * j]) for j in range(3))
+    return hexabot_leg(vals[0], vals[1], vals[2], limits=limits)
