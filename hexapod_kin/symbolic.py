@@ -2,50 +2,72 @@
 
 :func:`derive` builds, from a chain's table and with *symbolic* lengths,
 
-* every ``^{j-1}T_j`` and ``^0T_j`` (4×4 sympy matrices),
-* the tip position ``p(q)`` in the base frame,
+* every ``^{j-1}T_j`` and ``^0T_j`` (4×4 sympy matrices), with the chain's base and tool poses,
+* the tip position ``p(q)`` in the base frame (:attr:`Derivation.frame` names it),
 * the Jacobian by the **direct** method (columns ``z_j × (p − o_j)`` and ``z_j``; 6×n, rows
-  ``vx vy vz wx wy wz``) and by the **indirect** method (``∂p/∂q``, 3×n), checked equal,
+  ``vx vy vz wx wy wz``, axes of the base frame) and by the **indirect** method (``∂p/∂q``),
 * ``det J`` of a square row selection (the position rows for a 3-DOF leg; ``x, y, z, wz`` for
-  the SCARA), factored, or the Gram determinant ``det(J Jᵀ)`` (manipulability²) otherwise,
-* the singular *families*: one per factor of the determinant that depends on ``q``, solved
-  for the joint value when the factor involves a single joint (``sin q3 = 0`` gives the two
-  families ``q3 = 0`` and ``q3 = π``), else kept as the equation ``factor = 0``.
+  the SCARA; all six for a 6-DOF arm), factored into irreducible factors, or the Gram
+  determinant ``det(J Jᵀ)`` (manipulability²) otherwise,
+* the singular *families*: one per factor that depends on ``q``, solved for the joint value
+  when the factor involves a single joint (``sin q3 = 0`` gives ``q3 = 0`` and ``q3 = π``;
+  PUMA's elbow ``r4 cos q3 + d4 sin q3 = 0`` gives two numeric values), else kept as the
+  equation ``factor = 0``; each family is checked against the numeric Jacobian's σ_min
+  (:attr:`SingularFamily.verified`).
 
 For the 3-DOF leg (``hexabot_leg``) the factored determinant is
 ``l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
 
+**Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds and returns what it
+has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: finished derivations
+are stored on disk keyed by a hash of the table (see :mod:`hexapod_kin._symbolic_cache`), so a
+second process gets them in milliseconds. How the determinant is kept fast (per-joint
+simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin._symbolic_core`.
+
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
-else Khalil's own names ``d2, r1, ...``); :meth:`Derivation.numeric` substitutes the chain's
-numbers, :meth:`Derivation.function` returns a vectorised numpy function of ``q``.
+else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
+:meth:`Derivation.numeric` substitutes the chain's numbers, :meth:`Derivation.function`
+returns a vectorised numpy function of ``q``. :func:`family_residuals` gives the families as
+numpy callables for scans.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Mapping, Sequence
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import Any
 
 import numpy as np
 import sympy as sp
 
+from . import _symbolic_cache as _cache
+from . import _symbolic_core as _core
+from ._symbolic_core import ROW_NAMES, khalil_matrix
+from ._symbolic_families import (
+    FamilyResiduals,
+    SingularFamily,
+    build_residuals,
+    check_families,
+    families_of,
+)
 from .exceptions import ParameterError, choices
 from .params import Chain, Hexapod
 
 __all__ = [
     "ROW_NAMES",
     "Derivation",
+    "FamilyResiduals",
     "SingularFamily",
     "derive",
+    "family_residuals",
     "khalil_matrix",
     "default_rows",
     "row_indices",
 ]
 
-#: Names of the six rows of a ``local_world_aligned`` Jacobian ``[v; ω]``.
-ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
+#: Default time budget of :func:`derive` in [s].
+DEFAULT_BUDGET = 5.0
 
 
 def row_indices(rows: str | Sequence[str] | None, nq: int | None = None) -> tuple[int, ...]:
@@ -80,75 +102,36 @@ def row_indices(rows: str | Sequence[str] | None, nq: int | None = None) -> tupl
     return tuple(ROW_NAMES.index(r) for r in names)
 
 
-def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
-    """Symbolic ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` (4×4 sympy matrix)."""
-    ca, sa, ct, st = sp.cos(alpha), sp.sin(alpha), sp.cos(theta), sp.sin(theta)
-    return sp.Matrix(
-        [
-            [ct, -st, 0, d],
-            [ca * st, ca * ct, -sa, -r * sa],
-            [sa * st, sa * ct, ca, r * ca],
-            [0, 0, 0, 1],
-        ]
-    )
-
-
-def _exact_angle(value: float) -> sp.Expr:
-    """An angle as an exact multiple of π when it is one (denominator ≤ 24), else a Float."""
-    if value == 0.0:
-        return sp.Integer(0)
-    frac = Fraction(value / math.pi).limit_denominator(24)
-    if abs(float(frac) * math.pi - value) <= 1e-12 * max(1.0, abs(value)):
-        return sp.Rational(frac.numerator, frac.denominator) * sp.pi
-    return sp.Float(value)
-
-
-@dataclass(frozen=True)
-class SingularFamily:
-    """One family of singular configurations (the zero set of one factor of det J).
-
-    Attributes:
-        name: A readable label, e.g. ``"q3 = 0"`` or ``"l1 + l2*cos(q2) + ... = 0"``.
-        factor: The factor of the determinant (sympy, symbolic lengths) that vanishes.
-        equation: ``Eq(q_k, value)`` when solved for one joint, else ``Eq(factor, 0)``.
-        variables: Indices (0-based) of the joints the factor depends on.
-        joint: Index of the joint when the family is ``q_k = value``, else ``None``.
-        value: That value in [rad] or [m] (``None`` for implicit families).
-        periodic: True when ``value`` repeats every 2π (revolute joint).
-
-    """
-
-    name: str
-    factor: sp.Expr
-    equation: sp.Eq
-    variables: tuple[int, ...]
-    joint: int | None = None
-    value: float | None = None
-    periodic: bool = False
-
-
 @dataclass(frozen=True)
 class Derivation:
     """Symbolic kinematics of one chain (all sympy objects; lengths symbolic).
 
     Attributes:
-        chain: The chain it was derived from.
+        chain: The chain it was derived from (base and tool poses included).
         q: The joint symbols ``q1..qn``.
         joint_names: The chain's joint names, in the same order.
         lengths: Length symbol → value in [m] (what :meth:`numeric` substitutes).
         length_sources: Length symbol → the table entry it stands for (e.g. ``"d2"``).
         transforms: ``^{j-1}T_j`` for every table row (4×4 each).
-        cumulative: ``^0T_j`` for every table row (4×4 each, simplified).
-        p: Tip position in the base frame (3×1).
-        J_direct: 6×n Jacobian by the direct method, rows ``vx vy vz wx wy wz``.
+        cumulative: ``T_base_j`` for every table row (4×4 each; base pose included).
+        p: Tip position (tool included) in the base frame (3×1).
+        J_direct: 6×n Jacobian by the direct method, rows ``vx vy vz wx wy wz`` (base axes).
         J_indirect: 3×n Jacobian ``∂p/∂q`` by the indirect method.
-        J: The 3×n position Jacobian (equal to both methods; they are checked).
+        J: The 3×n position Jacobian (equal to both methods).
         rows: The row names of :attr:`J_rows` (the selection used for :attr:`det`).
         J_rows: The selected rows of ``J_direct`` (k×n).
-        det: ``det J_rows`` factored (``None`` when k ≠ n).
+        det: ``det J_rows`` factored (``None`` when k ≠ n or not finished).
         gram: ``det(J_rows J_rowsᵀ)`` (k ≤ n) or ``det(J_rowsᵀ J_rows)`` (k > n), factored —
-            the squared Yoshikawa manipulability; equal to ``det²`` when square.
+            the squared Yoshikawa manipulability (``None`` when not finished).
         families: The singular families read off :attr:`det` (or :attr:`gram`).
+        frame: Name of the frame ``p`` and ``J`` are expressed in (the base link).
+        tip: Name of the tip frame.
+        base_transform: ``T_base_0`` (4×4 sympy; identity without a base pose).
+        tool_transform: ``T_n_tip`` (4×4 sympy; identity without a tool).
+        method: How the determinant was computed (frame, wrist-centre split, Gram).
+        incomplete: What could not be done, and why (empty when complete).
+        seconds: Wall time of the derivation in [s] (0 when read from the cache).
+        cached: True when read from the disk cache.
 
     """
 
@@ -166,8 +149,16 @@ class Derivation:
     rows: tuple[str, ...]
     J_rows: sp.Matrix
     det: sp.Expr | None
-    gram: sp.Expr
+    gram: sp.Expr | None
     families: tuple[SingularFamily, ...] = field(default=())
+    frame: str = "base"
+    tip: str = "foot"
+    base_transform: sp.Matrix = field(default_factory=lambda: sp.eye(4))
+    tool_transform: sp.Matrix = field(default_factory=lambda: sp.eye(4))
+    method: str = ""
+    incomplete: tuple[str, ...] = ()
+    seconds: float = 0.0
+    cached: bool = False
 
     # ------------------------------------------------------------------ numbers
     def numeric(self, expr: Any) -> Any:
@@ -204,18 +195,36 @@ class Derivation:
 
     @property
     def methods_agree(self) -> bool:
-        """True when the direct and indirect position Jacobians simplify to the same matrix."""
-        diff = (self.J_direct[:3, :] - self.J_indirect).applyfunc(
-            lambda e: sp.simplify(sp.expand_trig(e))
-        )
-        return bool(diff.is_zero_matrix)
+        """True when the direct and indirect position Jacobians are the same trig polynomial.
+
+        Both are reduced to polynomials in ``sin q_i``, ``cos q_i`` modulo ``sin² + cos² = 1``
+        and compared exactly.
+        """
+        sig = self.chain.sigmas
+        for a, b in zip(self.J_direct[:3, :], self.J_indirect):
+            diff = _core._to_poly(a - b, self.q, sig)
+            if _core._reduce(diff, self.q) != 0:
+                return False
+        return True
+
+    @property
+    def complete(self) -> bool:
+        """True when every stage finished (nothing in :attr:`incomplete`)."""
+        return not self.incomplete
 
     # ------------------------------------------------------------------ printing
     def _items(self) -> list[tuple[str, str, Any]]:
         n = len(self.transforms)
         items: list[tuple[str, str, Any]] = []
+        if self.base_transform != sp.eye(4):
+            items.append((f"T_{self.frame}_0", f"T_{{\\mathrm{{{self.frame}}},0}}",
+                          self.base_transform))  # fmt: skip
         for j in range(n):
             items.append((f"^{j}T_{j + 1}", f"{{}}^{{{j}}}T_{{{j + 1}}}", self.transforms[j]))
+        if self.tool_transform != sp.eye(4):
+            items.append(
+                (f"^{n}T_tool", f"{{}}^{{{n}}}T_{{\\mathrm{{tool}}}}", self.tool_transform)
+            )
         for j in range(1, n):
             items.append((f"^0T_{j + 1}", f"{{}}^{{0}}T_{{{j + 1}}}", self.cumulative[j]))
         items.append(("p(q)", "p(q)", self.p))
@@ -223,7 +232,7 @@ class Derivation:
         items.append(("J (direct, [v; w])", "J_{\\mathrm{direct}}", self.J_direct))
         if self.det is not None:
             items.append((f"det J[{','.join(self.rows)}]", "\\det J", self.det))
-        else:
+        elif self.gram is not None:
             items.append((f"det(J Jt) [{','.join(self.rows)}]", "\\det(J J^T)", self.gram))
         return items
 
@@ -236,6 +245,7 @@ class Derivation:
             f"{self.chain.name}: Khalil-Kleinfinger table, T = Rx(alpha) Tx(d) Rz(theta) Tz(r)",
             f"joints: {joints}",
             f"lengths: {lens or '(none)'}",
+            f"frame: p and J in the axes of {self.frame!r}, tip {self.tip!r}",
         ]
 
     def text(self) -> str:
@@ -247,16 +257,22 @@ class Derivation:
             lines.append(sp.pretty(expr, use_unicode=True, wrap_line=False))
         lines.append("")
         lines.append(f"direct and indirect Jacobians agree: {self.methods_agree}")
+        if self.method:
+            lines.append(f"determinant: {self.method}")
         lines.append("singular families:")
         for fam in self.families or ():
-            lines.append(f"  {fam.name}")
-        if not self.families:
+            mark = {True: "checked", False: "CHECK FAILED", None: "not checked"}[fam.verified]
+            lines.append(f"  {fam.name}   [{mark}: {fam.check}]" if fam.check else f"  {fam.name}")
+        if not self.families and not self.incomplete:
             lines.append("  (none: the determinant has no factor depending on q)")
+        for what in self.incomplete:
+            lines.append(f"NOT DONE: {what}")
         return "\n".join(lines)
 
     def latex(self) -> str:
         """The derivation as LaTeX (one ``align*`` environment)."""
         out = ["% " + h for h in self._header()]
+        out += ["% NOT DONE: " + w for w in self.incomplete]
         out.append("\\begin{align*}")
         body = [f"{tex} &= {sp.latex(expr)}" for _, tex, expr in self._items()]
         for fam in self.families:
@@ -265,88 +281,143 @@ class Derivation:
         out.append("\\end{align*}")
         return "\n".join(out)
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: det, families (with checks), frame, incomplete, seconds."""
+        return {
+            "chain": self.chain.name,
+            "frame": self.frame,
+            "tip": self.tip,
+            "joints": list(self.joint_names),
+            "lengths_m": {str(k): v for k, v in self.lengths.items()},
+            "rows": list(self.rows),
+            "det": None if self.det is None else str(self.det),
+            "gram": None if self.gram is None else str(self.gram),
+            "method": self.method,
+            "families": [
+                {
+                    "name": f.name,
+                    "equation": str(f.equation),
+                    "joint": None if f.joint is None else self.joint_names[f.joint],
+                    "value": f.value,
+                    "verified": f.verified,
+                    "check": f.check,
+                }
+                for f in self.families
+            ],
+            "incomplete": list(self.incomplete),
+            "seconds": self.seconds,
+            "cached": self.cached,
+        }
+
     def __str__(self) -> str:
         return self.text()
 
 
-# ---------------------------------------------------------------------- building
-def _chain_of(source: Any) -> Chain:
+# ---------------------------------------------------------------------- sources
+def _mounted(robot: Hexapod, tip: str, base: str) -> tuple[Chain, str] | None:
+    for leg in robot.legs:
+        if tip == f"{leg.name}_{leg.chain.tip}":
+            chain = leg.chain
+            if base == f"{leg.name}_{chain.base}":
+                return chain, base
+            if base == robot.body:
+                pose = leg.transform() @ chain.base_matrix
+                moved = chain.replace(
+                    base=robot.body, base_pose=pose, name=f"{robot.name}_{leg.name}"
+                )
+                return moved, base
+    return None
+
+
+def _chain_of(
+    source: Any, base: str | None = None, tip: str | None = None
+) -> tuple[Chain, str, str]:
+    """``(chain, frame name, tip name)`` for a source (see :func:`derive`)."""
     if isinstance(source, Chain):
-        return source
+        if base is None and tip is None:
+            return source, source.base, source.tip
+        return _from_urdf(source, base, tip)
     if isinstance(source, Hexapod):
+        if tip is not None:
+            found = _mounted(source, tip, base or source.body)
+            if found is not None:
+                return found[0], found[1], tip
+            return _from_urdf(source, base, tip)
         raise ParameterError(
-            f"derive: source is the robot {source.name!r} (a Hexapod); derive one leg's chain, "
-            f"e.g. robot.legs[0].chain (legs {choices(leg.name for leg in source.legs)})"
+            f"derive: source is the robot {source.name!r} (a Hexapod); pick one leg with "
+            f"tip= (feet {choices(source.foot_frames)}) or derive robot.legs[0].chain"
         )
     if isinstance(source, str):
         from . import robots
 
-        return _chain_of(robots.get(source))
+        if source in robots.names():
+            return _chain_of(robots.get(source), base, tip)
+        return _from_urdf(source, base, tip)
     params = getattr(source, "params", None)
-    if isinstance(params, (Chain, Hexapod)):
+    m_base, m_tip = getattr(source, "base", None), getattr(source, "tip", None)
+    if isinstance(m_base, str) and isinstance(m_tip, str) and base is None and tip is None:
+        if isinstance(params, Chain) and params.base == m_base and params.tip == m_tip:
+            return params, m_base, m_tip
         if isinstance(params, Hexapod):
-            name = str(getattr(source, "tip", ""))
-            for leg in params.legs:
-                if name.startswith(leg.name + "_"):
-                    return leg.chain
-        return _chain_of(params)
+            found = _mounted(params, m_tip, m_base)
+            if found is not None:
+                return found[0], found[1], m_tip
+        return _from_urdf(source, None, None)
+    if hasattr(source, "model") and hasattr(source, "fk"):
+        return _from_urdf(source, base, tip)
     raise ParameterError(
-        f"derive: source={source!r} has no Khalil table; give a Chain, a preset name or a "
-        "model loaded from one (URDF files carry no table)"
+        f"derive: source={source!r} has no Khalil table; give a Chain, a preset name, a URDF "
+        "(path, text or erd:NAME) or a loaded model"
     )
 
 
-def _length_symbols(
-    chain: Chain, names: Mapping[str, str] | None
-) -> tuple[list[tuple[Any, Any]], dict[sp.Symbol, float], dict[sp.Symbol, str]]:
-    """One symbol per non-zero ``d``/``r`` entry; returns per-row (d, r) and the value maps."""
-    entries = []
-    for j, row in enumerate(chain.rows, start=1):
-        for kind in ("d", "r"):
-            value = getattr(row, kind)
-            if value != 0.0 and not (kind == "r" and row.sigma == "prismatic" and False):
-                entries.append((f"{kind}{j}", value))
-    all_d = all(key.startswith("d") for key, _ in entries)
-    given = dict(names or {})
-    unknown = [k for k in given if k not in {key for key, _ in entries}]
-    if unknown:
-        raise ParameterError(
-            f"lengths={given!r}: entries {unknown} are not non-zero lengths of the table; "
-            f"allowed keys are {choices(key for key, _ in entries)}"
-        )
-    symbols: dict[str, sp.Symbol] = {}
-    values: dict[sp.Symbol, float] = {}
-    sources: dict[sp.Symbol, str] = {}
-    for k, (key, value) in enumerate(entries, start=1):
-        label = given.get(key, f"l{k}" if all_d else key)
-        sym = sp.Symbol(label, positive=True) if value > 0 else sp.Symbol(label, real=True)
-        if sym in values:
-            raise ParameterError(f"lengths: symbol name {label!r} is used twice")
-        symbols[key] = sym
-        values[sym] = float(value)
-        sources[sym] = key
-    per_row = [
-        (symbols.get(f"d{j}", sp.Integer(0)), symbols.get(f"r{j}", sp.Integer(0)))
-        for j in range(1, len(chain.rows) + 1)
-    ]
-    return per_row, values, sources
+def _from_urdf(source: Any, base: str | None, tip: str | None) -> tuple[Chain, str, str]:
+    from .exceptions import HexapodKinError
+
+    try:
+        chain = Chain.from_urdf(source, base=base, tip=tip)
+    except HexapodKinError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - say what the source was
+        raise ParameterError(f"derive: source={source!r} could not be read: {exc}") from None
+    return chain, chain.base, chain.tip
 
 
-def _simplify(expr: Any) -> Any:
-    if isinstance(expr, sp.MatrixBase):
-        return expr.applyfunc(_simplify)
-    return sp.trigsimp(sp.simplify(expr))
+# ---------------------------------------------------------------------- stages
+def _stages(chain: Chain, rows: Any, lengths: Any, budget_end: float) -> Iterator[tuple[str, Any]]:
+    n = chain.nq
+    q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
+    syms = _core.length_symbols(chain, lengths)
+    t0 = time.perf_counter()
+    kin = _core.kinematics(chain, q, syms)
+    yield "kinematics", kin
+    if rows is None:
+        jd = kin["J_direct"]
+        flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
+        row_names = default_rows(flags, n)
+    else:
+        row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
+    yield "rows", row_names
+    det = _core.factored_determinant(chain, kin, q, row_names, budget_end)
+    yield "determinant", det
+    fams = families_of(det["factors"], q, chain, syms["values"])
+    yield "families", fams
+    checked = check_families(fams, q, chain, syms["values"], row_names)
+    yield "checks", checked
+    yield "seconds", time.perf_counter() - t0
 
 
+# ---------------------------------------------------------------------- derive
 def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[str, ...]:
     """The default row selection: position rows, plus the angular rows that are not zero.
 
     When ``x, y, z`` plus the angular rows that are not identically zero make exactly ``n``
-    rows, those are used (SCARA: ``x, y, z, wz``); otherwise the position rows.
+    rows, those are used (SCARA: ``x, y, z, wz``; a 6-DOF arm: all six); otherwise the
+    position rows.
 
     Args:
-        derivation_or_jacobian: A :class:`Derivation`, or a boolean array of 6 flags "row is
-            not identically zero" (numeric callers).
+        derivation_or_jacobian: A :class:`Derivation`, or 6 flags "row is not identically
+            zero" (numeric callers).
         nq: Number of joints (needed with the flags).
 
     Returns:
@@ -366,154 +437,173 @@ def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[st
     return ("x", "y", "z")
 
 
-def _families(
-    expr: sp.Expr, q: tuple[sp.Symbol, ...], sigmas: Sequence[str]
-) -> list[SingularFamily]:
-    _, factors = sp.factor_list(expr)
-    fams: list[SingularFamily] = []
-    seen: set[Any] = set()
-    for fac, _mult in factors:
-        vars_ = tuple(k for k, s in enumerate(q) if fac.has(s))
-        if not vars_:
-            continue
-        key = sp.simplify(fac)
-        if key in seen or sp.simplify(-fac) in seen:
-            continue
-        seen.add(key)
-        if len(vars_) == 1:
-            k = vars_[0]
-            revolute = sigmas[k] == "revolute"
-            domain = sp.Interval.Lopen(-sp.pi, sp.pi) if revolute else sp.S.Reals
-            try:
-                sols = sp.solveset(fac, q[k], domain)
-            except Exception:  # noqa: BLE001 - sympy may raise anything on hard equations
-                sols = None
-            if isinstance(sols, sp.FiniteSet) and all(s.is_number for s in sols):
-                for sol in sorted(sols, key=lambda s: float(s)):
-                    fams.append(
-                        SingularFamily(
-                            name=f"{q[k]} = {sp.sstr(sol)}" + (" (mod 2*pi)" if revolute else ""),
-                            factor=fac,
-                            equation=sp.Eq(q[k], sol),
-                            variables=vars_,
-                            joint=k,
-                            value=float(sol),
-                            periodic=revolute,
-                        )
-                    )
-                continue
-        fams.append(
-            SingularFamily(
-                name=f"{sp.sstr(fac)} = 0", factor=fac, equation=sp.Eq(fac, 0), variables=vars_
-            )
-        )
-    return fams
+def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
+    return _cache.key(
+        {
+            "rows": [
+                [r.sigma, repr(r.alpha), repr(r.d), repr(r.theta), repr(r.r)] for r in chain.rows
+            ],
+            "sigmas": list(chain.sigmas),
+            "base": None if chain.base_pose is None else chain.base_pose.matrix.tolist(),
+            "tool": None if chain.tool is None else chain.tool.matrix.tolist(),
+            "select": None if rows is None else [ROW_NAMES[i] for i in row_indices(rows)],
+            "lengths": sorted((lengths or {}).items()),
+            "limits": [[lim.lower, lim.upper] for lim in chain.limits or ()],
+        }
+    )
 
 
 def derive(
     source: Any,
     rows: str | Sequence[str] | None = None,
     lengths: Mapping[str, str] | None = None,
+    *,
+    base: str | None = None,
+    tip: str | None = None,
+    budget: float | None = DEFAULT_BUDGET,
+    cache: bool = True,
 ) -> Derivation:
-    """Derive transforms, ``p``, Jacobians (direct and indirect), ``det J`` and singular families.
+    """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a preset name (``"hexabot_leg"``) or a
-            model loaded from a chain (its ``params``).
+        source: A :class:`~hexapod_kin.params.Chain`, a preset name (``"hexabot_leg"``), a
+            URDF (path, text, ``erd:NAME``; read back with
+            :meth:`~hexapod_kin.params.Chain.from_urdf`), a :class:`Hexapod` with ``tip=``,
+            or a loaded model (its own base and tip frames are used: ``load("hexapod",
+            tip="leg2_foot")`` derives leg 2 in the body frame).
         rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default
-            (:func:`default_rows`: ``x, y, z`` for a 3-DOF leg, ``x, y, z, wz`` for the SCARA),
-            ``"position"``, ``"all"`` or names such as ``("x", "y", "z", "wz")``.
-        lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``);
-            default ``l1, l2, ...`` when every length is a ``d``, else ``d2``, ``r1``, ...
+            (:func:`default_rows`), ``"position"``, ``"all"`` or names such as
+            ``("x", "y", "z", "wz")``.
+        lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
+        base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
+        tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
+        budget: Time budget in [s] (``None``: no limit). At the budget the work stops and
+            the result says in :attr:`Derivation.incomplete` what is missing.
+        cache: Read and write the on-disk cache (complete derivations only).
 
     Returns:
         The :class:`Derivation`.
 
     Raises:
-        ParameterError: The source has no table, or ``rows`` / ``lengths`` are invalid.
+        ParameterError: The source has no table, or ``rows`` / ``lengths`` / ``budget`` are
+            invalid.
+        ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
-    chain = _chain_of(source)
+    if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
+        raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
+    chain, frame, tip_name = _chain_of(source, base, tip)
+    if rows is not None:
+        row_indices(rows)
+    syms = _core.length_symbols(chain, lengths)  # validates names early
+    digest = _cache_key(chain, rows, lengths)
+    stages = _cache.load(digest) if cache else None
+    from_cache = stages is not None
+    reason: str | None = None
+    if stages is None:
+        start = time.perf_counter()
+        end = start + (budget if budget is not None else 1e9) * 0.15
+
+        def gen() -> Iterator[tuple[str, Any]]:
+            return _stages(chain, rows, lengths, end)
+
+        stages, reason = _cache.run(gen, budget)
+        stages.setdefault("seconds", time.perf_counter() - start)
+        if reason is None and cache:
+            _cache.store(digest, stages)
+    return _assemble(chain, frame, tip_name, syms, stages, reason, from_cache, rows)
+
+
+def _assemble(
+    chain: Chain, frame: str, tip: str, syms: Mapping[str, Any], stages: Mapping[str, Any],
+    reason: str | None, from_cache: bool, rows: Any,
+) -> Derivation:  # fmt: skip
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
-    per_row, values, sources = _length_symbols(chain, lengths)
-    transforms = []
-    k = 0
-    for row, (d, r) in zip(chain.rows, per_row):
-        alpha, theta = _exact_angle(row.alpha), _exact_angle(row.theta)
-        if row.sigma == "revolute":
-            theta = theta + q[k]
-            k += 1
-        elif row.sigma == "prismatic":
-            r = r + q[k]
-            k += 1
-        transforms.append(khalil_matrix(alpha, d, theta, r))
-    cumulative = []
-    acc = sp.eye(4)
-    for t in transforms:
-        acc = _simplify(acc * t)
-        cumulative.append(acc)
-    p = acc[:3, 3]
-    # direct method: joint frame j is the frame of its row
-    cols = []
-    for j in chain.joint_rows:
-        z = cumulative[j][:3, 2]
-        o = cumulative[j][:3, 3]
-        if chain.rows[j].sigma == "revolute":
-            lin = z.cross(p - o)
-            ang = z
-        else:
-            lin = z
-            ang = sp.zeros(3, 1)
-        cols.append(sp.Matrix.vstack(lin, ang))
-    j_direct = _simplify(sp.Matrix.hstack(*cols))
-    j_indirect = _simplify(p.jacobian(sp.Matrix(q)))
-    deriv = Derivation(
-        chain=chain,
-        q=q,
-        joint_names=tuple(chain.joint_names or ()),
-        lengths=values,
-        length_sources=sources,
-        transforms=tuple(transforms),
-        cumulative=tuple(cumulative),
-        p=p,
-        J_direct=j_direct,
-        J_indirect=j_indirect,
-        J=j_indirect,
-        rows=(),
-        J_rows=sp.zeros(0, n),
-        det=None,
-        gram=sp.Integer(0),
-    )
-    row_names = default_rows(deriv) if rows is None else tuple(
-        ROW_NAMES[i] for i in row_indices(rows)
-    )
-    sel = j_direct.extract(list(row_indices(row_names)), list(range(n)))
-    det = None
-    if sel.shape[0] == n:
-        det = sp.factor(_simplify(sel.det(method="berkowitz")))
-        gram = sp.factor(det**2)
-        fam_expr = det
+    incomplete: list[str] = []
+    kin = stages.get("kinematics")
+    if kin is None:  # not even stage 1 in time: plain products, no simplification
+        kin = _core.kinematics(chain, q, syms, simplify=False)
+        incomplete.append(f"simplified transforms and Jacobians ({reason}); shown unsimplified")
+    row_names = stages.get("rows")
+    if row_names is None:
+        jd = kin["J_direct"]
+        flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
+        row_names = (
+            default_rows(flags, n)
+            if rows is None
+            else tuple(ROW_NAMES[i] for i in row_indices(rows))
+        )
+    sel = [ROW_NAMES.index(r) for r in row_names]
+    det_stage = stages.get("determinant")
+    det = gram = None
+    method = ""
+    if det_stage is None:
+        incomplete.append(f"det J factored and singular families ({reason})")
     else:
-        g = sel * sel.T if sel.shape[0] <= n else sel.T * sel
-        gram = sp.factor(_simplify(g.det(method="berkowitz")))
-        fam_expr = gram
-    fams = _families(fam_expr, q, chain.sigmas) if fam_expr != 0 else []
+        det, gram, method = det_stage["det"], det_stage["gram"], det_stage["how"]
+    fams = stages.get("checks")
+    if fams is None:
+        fams = stages.get("families")
+        if fams is not None:
+            incomplete.append(f"numeric check of the families against sigma_min ({reason})")
+        elif det_stage is not None:
+            incomplete.append(f"singular families ({reason})")
     return Derivation(
         chain=chain,
         q=q,
-        joint_names=deriv.joint_names,
-        lengths=values,
-        length_sources=sources,
-        transforms=deriv.transforms,
-        cumulative=deriv.cumulative,
-        p=p,
-        J_direct=j_direct,
-        J_indirect=j_indirect,
-        J=j_indirect,
-        rows=row_names,
-        J_rows=sel,
+        joint_names=tuple(chain.joint_names or ()),
+        lengths=dict(syms["values"]),
+        length_sources=dict(syms["sources"]),
+        transforms=tuple(kin["transforms"]),
+        cumulative=tuple(kin["cumulative"]),
+        p=kin["p"],
+        J_direct=kin["J_direct"],
+        J_indirect=kin["J_indirect"],
+        J=kin["J_indirect"],
+        rows=tuple(row_names),
+        J_rows=kin["J_direct"].extract(sel, list(range(n))),
         det=det,
         gram=gram,
-        families=tuple(fams),
+        families=tuple(fams or ()),
+        frame=frame,
+        tip=tip,
+        base_transform=kin["base"],
+        tool_transform=kin["tool"],
+        method=method,
+        incomplete=tuple(incomplete),
+        seconds=0.0 if from_cache else float(stages.get("seconds", 0.0)),
+        cached=from_cache,
     )
+
+
+# ---------------------------------------------------------------------- for scans
+def family_residuals(
+    source: Any, rows: str | Sequence[str] | None = None, *, budget: float | None = DEFAULT_BUDGET
+) -> FamilyResiduals:
+    """Families of ``source`` as numpy residuals and gradients (cheap when cached).
+
+    Args:
+        source: As for :func:`derive`.
+        rows: As for :func:`derive`.
+        budget: As for :func:`derive`; families missing at the budget are simply absent.
+
+    Returns:
+        A :class:`FamilyResiduals`.
+
+    """
+    deriv = derive(source, rows=rows, budget=budget)
+    return _residuals(deriv)
+
+
+_RESIDUALS: dict[tuple[Any, ...], FamilyResiduals] = {}
+
+
+def _residuals(deriv: Derivation) -> FamilyResiduals:
+    key = (deriv.chain, deriv.rows, tuple(f.name for f in deriv.families))
+    hit = _RESIDUALS.get(key)
+    if hit is None:
+        if len(_RESIDUALS) > 32:
+            _RESIDUALS.clear()
+        hit = _RESIDUALS[key] = build_residuals(deriv)
+    return hit

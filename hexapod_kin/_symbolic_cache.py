@@ -1,0 +1,175 @@
+"""Disk cache and time budget for :func:`hexapod_kin.symbolic.derive`.
+
+* **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
+  tool poses, the row selection, the length names and a format version), under
+  ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
+  ``~/.cache/hexapod_kin`` (``HEXAPOD_KIN_CACHE_DIR`` overrides both). Sympy objects are
+  stored as ``srepr`` text and rebuilt with ``sympify`` (so treat the folder as code, like any
+  cache of your own). Files are written atomically; a corrupt or foreign file is ignored (and
+  rewritten).
+* **Budget**: the stages run in a forked child process that sends each finished stage back;
+  at the deadline the child is killed and the caller gets the stages that finished. Where
+  ``fork`` does not exist the stages run inline, checking the clock between stages.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import sympy as sp
+
+from ._io import atomic_write
+
+FORMAT = 3
+Stages = Callable[[], Iterator[tuple[str, Any]]]
+
+
+def cache_dir() -> Path:
+    """The cache folder (not created here)."""
+    env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
+    if env:
+        return Path(env)
+    try:
+        import platformdirs
+
+        return Path(platformdirs.user_cache_dir("hexapod_kin")) / "symbolic"
+    except ImportError:
+        return Path.home() / ".cache" / "hexapod_kin" / "symbolic"
+
+
+def key(parts: Any) -> str:
+    """SHA-256 of the JSON of ``parts`` (plus the format version)."""
+    text = json.dumps({"format": FORMAT, "parts": parts}, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _encode(obj: Any) -> Any:
+    if isinstance(obj, sp.MatrixBase):
+        return {"__matrix__": sp.srepr(sp.ImmutableMatrix(obj))}
+    if isinstance(obj, sp.Basic):
+        return {"__sympy__": sp.srepr(obj)}
+    if isinstance(obj, dict):
+        return {"__dict__": [[_encode(k), _encode(v)] for k, v in obj.items()]}
+    if isinstance(obj, (list, tuple)):
+        return {"__tuple__": [_encode(x) for x in obj]}
+    if obj is None or isinstance(obj, (bool, int, float, str)):
+        return obj
+    raise TypeError(f"cannot cache {type(obj).__name__}")
+
+
+def _decode(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        if "__matrix__" in obj:
+            return sp.Matrix(sp.sympify(obj["__matrix__"]))
+        if "__sympy__" in obj:
+            return sp.sympify(obj["__sympy__"])
+        if "__dict__" in obj:
+            return {_decode(k): _decode(v) for k, v in obj["__dict__"]}
+        if "__tuple__" in obj:
+            return tuple(_decode(x) for x in obj["__tuple__"])
+        raise ValueError("unknown cache entry")
+    return obj
+
+
+def load(digest: str) -> dict[str, Any] | None:
+    """Stages stored under ``digest``, or ``None`` (missing, unreadable or corrupt)."""
+    path = cache_dir() / f"{digest}.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("format") != FORMAT or data.get("key") != digest:
+            return None
+        stages = _decode(data["stages"])
+        return stages if isinstance(stages, dict) else None
+    except Exception:  # noqa: BLE001 - any damage to the file means "not cached"
+        return None
+
+
+def store(digest: str, stages: dict[str, Any]) -> Path | None:
+    """Write ``stages`` atomically; returns the path, or ``None`` when it cannot be written."""
+    try:
+        text = json.dumps({"format": FORMAT, "key": digest, "stages": _encode(stages)})
+        folder = cache_dir()
+        folder.mkdir(parents=True, exist_ok=True)
+        return atomic_write(folder / f"{digest}.json", text)
+    except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+        return None
+
+
+def _child(conn: Any, stages: Stages) -> None:  # pragma: no cover - runs in the child
+    try:
+        for name, value in stages():
+            conn.send((name, value))
+        conn.send(("__done__", None))
+    except BaseException as exc:  # noqa: BLE001 - report, never hang the parent
+        try:
+            conn.send(("__error__", f"{type(exc).__name__}: {exc}"))
+        except Exception:  # noqa: BLE001
+            pass
+    finally:
+        conn.close()
+
+
+def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | None]:
+    """Run the stage generator within ``budget`` seconds.
+
+    Returns:
+        ``(finished stages by name, None)`` when all finished, else the finished ones and a
+        reason (``"budget of 5 s reached"`` or the error text).
+
+    """
+    done: dict[str, Any] = {}
+    if budget is None:
+        for name, value in stages():
+            done[name] = value
+        return done, None
+    import multiprocessing as mp
+
+    try:
+        ctx = mp.get_context("fork")
+    except ValueError:
+        return _inline(stages, budget)
+    start = time.perf_counter()
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(send, stages), daemon=True)
+    proc.start()
+    send.close()
+    reason: str | None = f"budget of {budget:g} s reached"
+    try:
+        while True:
+            left = budget - (time.perf_counter() - start)
+            if left <= 0 or not recv.poll(left):
+                break
+            try:
+                name, value = recv.recv()
+            except (EOFError, OSError):
+                reason = "the derivation process ended unexpectedly"
+                break
+            if name == "__done__":
+                reason = None
+                break
+            if name == "__error__":
+                reason = str(value)
+                break
+            done[name] = value
+    finally:
+        if proc.is_alive():
+            proc.kill()
+        proc.join(5)
+        recv.close()
+    return done, reason
+
+
+def _inline(stages: Stages, budget: float) -> tuple[dict[str, Any], str | None]:
+    done: dict[str, Any] = {}
+    start = time.perf_counter()
+    for name, value in stages():
+        done[name] = value
+        if time.perf_counter() - start > budget:
+            return done, f"budget of {budget:g} s reached"
+    return done, None

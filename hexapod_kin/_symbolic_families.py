@@ -1,0 +1,250 @@
+"""Singular families: read off the factored determinant, checked numerically, as numpy callables.
+
+Part of :mod:`hexapod_kin.symbolic` (which re-exports :class:`SingularFamily` and
+:class:`FamilyResiduals`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import sympy as sp
+
+from . import _symbolic_core as _core
+from ._symbolic_core import ROW_NAMES
+from .params import Chain
+
+if TYPE_CHECKING:
+    from .symbolic import Derivation
+
+
+@dataclass(frozen=True)
+class SingularFamily:
+    """One family of singular configurations (the zero set of one factor of det J).
+
+    Attributes:
+        name: A readable label, e.g. ``"q3 = 0 (mod 2*pi)"`` or ``"l1 + ... = 0"``.
+        factor: The factor of the determinant (sympy, symbolic lengths) that vanishes.
+        equation: ``Eq(q_k, value)`` when solved for one joint, else ``Eq(factor, 0)``.
+        variables: Indices (0-based) of the joints the factor depends on.
+        joint: Index of the joint when the family is ``q_k = value``, else ``None``.
+        value: That value in [rad] or [m] (``None`` for implicit families).
+        periodic: True when ``value`` repeats every 2π (revolute joint).
+        verified: ``True`` when the numeric Jacobian is singular on the family (σ_min ≤ 1e-9
+            relative, ``σ_min / max(1, σ_max)``, at up to 3 points found on it) and not
+            singular 1e-3 off it (ratio > 1e-9; near a meeting of two families σ_min grows
+            only quadratically, hence this bound); ``False``
+            when that failed; ``None`` when not checked (budget) or no real point was found.
+        check: What the check measured, in words.
+
+    """
+
+    name: str
+    factor: sp.Expr
+    equation: sp.Eq
+    variables: tuple[int, ...]
+    joint: int | None = None
+    value: float | None = None
+    periodic: bool = False
+    verified: bool | None = None
+    check: str = ""
+
+
+def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
+    def f(x: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
+
+    return f
+
+
+def _rows_of(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+    def f(qs: np.ndarray) -> np.ndarray:
+        return func(np.atleast_2d(qs))
+
+    return f
+
+
+def _grad_rows_of(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+    def f(qs: np.ndarray) -> np.ndarray:
+        return func(np.atleast_2d(qs))[:, 0, :]
+
+    return f
+
+
+def families_of(
+    factors: Sequence[tuple[Any, int]], q: tuple[sp.Symbol, ...], chain: Chain,
+    values: Mapping[sp.Symbol, float],
+) -> tuple[SingularFamily, ...]:  # fmt: skip
+    sigmas = chain.sigmas
+    fams: list[SingularFamily] = []
+    for fac, _mult in factors:
+        vars_ = tuple(k for k, s in enumerate(q) if fac.has(s))
+        if not vars_:
+            continue
+        if len(vars_) == 1:
+            k = vars_[0]
+            revolute = sigmas[k] == "revolute"
+            sols: list[tuple[Any, float]] = []
+            if not (fac.free_symbols - {q[k]}):
+                domain = sp.Interval.Lopen(-sp.pi, sp.pi) if revolute else sp.S.Reals
+                try:
+                    found = sp.solveset(fac, q[k], domain)
+                except Exception:  # noqa: BLE001 - sympy may raise anything on hard equations
+                    found = None
+                if isinstance(found, sp.FiniteSet) and all(s.is_number for s in found):
+                    sols = [(s, float(s)) for s in sorted(found, key=lambda s: float(s))]
+            if not sols:
+                lo, hi = (-math.pi, math.pi) if revolute else _prismatic_range(chain, k)
+                func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
+                roots = _core.single_joint_roots(_vectorised(func), lo, hi)
+                if revolute:
+                    roots = sorted(
+                        {round(((r + math.pi) % (2 * math.pi)) - math.pi, 15) for r in roots}
+                    )
+                sols = [(sp.Float(r, 12), r) for r in roots]
+                if sols:
+                    text = ", ".join(f"{r:.6g}" for _, r in sols)
+                    for sol, r in sols:
+                        fams.append(SingularFamily(
+                            name=f"{q[k]} = {r:.6g}" + (" (mod 2*pi)" if revolute else "")
+                            + f", from {sp.sstr(fac)} = 0 (roots {text})",
+                            factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
+                            value=r, periodic=revolute,
+                        ))  # fmt: skip
+                    continue
+            else:
+                for sol, r in sols:
+                    fams.append(SingularFamily(
+                        name=f"{q[k]} = {sp.sstr(sol)}" + (" (mod 2*pi)" if revolute else ""),
+                        factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
+                        value=r, periodic=revolute,
+                    ))  # fmt: skip
+                continue
+        fams.append(
+            SingularFamily(
+                name=f"{sp.sstr(fac)} = 0", factor=fac, equation=sp.Eq(fac, 0), variables=vars_
+            )
+        )
+    return tuple(fams)
+
+
+def _prismatic_range(chain: Chain, k: int) -> tuple[float, float]:
+    lim = (chain.limits or ())[k]
+    return (lim.lower, lim.upper) if lim.upper > lim.lower else (-1.0, 1.0)
+
+
+def check_families(
+    fams: Sequence[SingularFamily], q: tuple[sp.Symbol, ...], chain: Chain,
+    values: Mapping[sp.Symbol, float], row_names: Sequence[str],
+) -> tuple[SingularFamily, ...]:  # fmt: skip
+    """Each family against the numeric Jacobian: singular on it, regular 1e-3 off it."""
+    sel = [ROW_NAMES.index(r) for r in row_names]
+    rng = np.random.default_rng(20260101)
+    lo, hi = chain.lower(), chain.upper()
+    lo = np.where(np.isfinite(lo), lo, -math.pi)
+    hi = np.where(np.isfinite(hi), hi, math.pi)
+    out = []
+    for fam in fams:
+        func = sp.lambdify(q, fam.factor.subs(dict(values)), "numpy")
+        on, off, points = [], [], 0
+        for _ in range(12):
+            if points == 3:
+                break
+            q0 = rng.uniform(lo, hi)
+            if fam.joint is not None and fam.value is not None:
+                q0[fam.joint] = fam.value
+                var = fam.joint
+            else:
+                var = None
+                for v in rng.permutation(list(fam.variables)):
+
+                    def along(
+                        x: np.ndarray, v: int = int(v), q0: np.ndarray = q0, func: Any = func
+                    ) -> np.ndarray:
+                        qs = np.repeat(q0[None, :], np.size(x), axis=0)
+                        qs[:, v] = x
+                        return np.broadcast_to(np.asarray(func(*qs.T), float), np.shape(x))
+
+                    a, b = (-math.pi, math.pi) if chain.sigmas[v] == "revolute" else (lo[v], hi[v])
+                    roots = _core.single_joint_roots(along, a, b)
+                    if roots:
+                        q0[v] = roots[int(rng.integers(len(roots)))]
+                        var = int(v)
+                        break
+                if var is None:
+                    continue
+            points += 1
+            on.append(_core.sigma_ratio(_core.numeric_jacobian(chain, q0, sel)))
+            q1 = q0.copy()
+            q1[var] += 1e-3
+            off.append(_core.sigma_ratio(_core.numeric_jacobian(chain, q1, sel)))
+        if not on:
+            out.append(replace(fam, verified=None, check="no real point found on the family"))
+            continue
+        ok = max(on) <= 1e-9 and min(off) > 1e-9
+        out.append(replace(fam, verified=ok, check=(
+            f"sigma_min/sigma_max <= {max(on):.1e} at {len(on)} points on it, "
+            f">= {min(off):.1e} at 1e-3 off"
+        )))  # fmt: skip
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class FamilyResiduals:
+    """The singular families of a chain as numpy callables (lengths substituted).
+
+    Attributes:
+        families: The families (same order as the callables).
+        residuals: One ``f(Q) -> (N,)`` per family: the factor's value, 0 on the family
+            (joint families: the wrapped offset ``q_k − value`` in [rad] or [m]).
+        gradients: One ``g(Q) -> (N, n)`` per family: ``∂f/∂q``.
+        derivation: The :class:`Derivation` they come from.
+
+    """
+
+    families: tuple[SingularFamily, ...]
+    residuals: tuple[Callable[[np.ndarray], np.ndarray], ...]
+    gradients: tuple[Callable[[np.ndarray], np.ndarray], ...]
+    derivation: Derivation
+
+    def distance(self, q: Any) -> np.ndarray:
+        """First-order joint-space distance ``|f| / |∇f|`` (N, F) to each family."""
+        qs = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.empty((qs.shape[0], len(self.families)))
+        for k, (res, grad) in enumerate(zip(self.residuals, self.gradients)):
+            val = res(qs)
+            norm = np.sqrt(np.sum(grad(qs) ** 2, axis=-1))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out[:, k] = np.where(norm > 0, np.abs(val) / norm, np.inf)
+        return out
+
+
+def build_residuals(deriv: Derivation) -> FamilyResiduals:
+    res: list[Callable[[np.ndarray], np.ndarray]] = []
+    grads: list[Callable[[np.ndarray], np.ndarray]] = []
+    for fam in deriv.families:
+        if fam.joint is not None and fam.value is not None:
+            k, v, per = fam.joint, fam.value, fam.periodic
+            n = len(deriv.q)
+
+            def r(qs: np.ndarray, k: int = k, v: float = v, per: bool = per) -> np.ndarray:
+                d = np.atleast_2d(qs)[:, k] - v
+                return (d + np.pi) % (2 * np.pi) - np.pi if per else d
+
+            def g(qs: np.ndarray, k: int = k, n: int = n) -> np.ndarray:
+                out = np.zeros((np.atleast_2d(qs).shape[0], n))
+                out[:, k] = 1.0
+                return out
+
+            res.append(r)
+            grads.append(g)
+        else:
+            f = deriv.function(fam.factor)
+            gm = deriv.function(sp.Matrix([[sp.diff(fam.factor, s) for s in deriv.q]]))
+            res.append(_rows_of(f))
+            grads.append(_grad_rows_of(gm))
+    return FamilyResiduals(deriv.families, tuple(res), tuple(grads), deriv)
