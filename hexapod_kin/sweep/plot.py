@@ -82,7 +82,8 @@ def plot_sweep(
         fig.colorbar(m, ax=ax, label=label)
         ax.set_xlabel(px)
         ax.set_ylabel(py)
-        ax.set_title(f"best {name} over the other parameters", fontsize=9)
+        title = f"best {name} over the other parameters" if gridded else f"{name} per design"
+        ax.set_title(title, fontsize=9)
     ax = axes[3]
     front = np.asarray(table["pareto"]) > 0
     s = ax.scatter(
