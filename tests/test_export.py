@@ -371,6 +371,17 @@ def _check_launch(pkg_dir: Path, pkg: str, robot: str, monkeypatch) -> None:
         ("rviz2", "rviz2"),
     ):
         assert needed in executables
+    from catkin_pkg.package import parse_package_string
+
+    parsed = parse_package_string((pkg_dir / "package.xml").read_text())
+    exec_deps = {d.name for d in parsed.exec_depends}
+    assert {n.kwargs["package"] for n in nodes} <= exec_deps  # every node's package declared
+    imported = {
+        node.module.split(".")[0]
+        for node in ast.walk(ast.parse(source))
+        if isinstance(node, ast.ImportFrom) and node.module
+    }
+    assert imported <= exec_deps  # launch, launch_ros
     rviz = next(n for n in nodes if n.kwargs["executable"] == "rviz2")
     rviz_path = rviz.kwargs["arguments"][1].args[0]
     assert rviz_path[0].args == (pkg,) and tuple(rviz_path[1:]) == ("rviz", "display.rviz")

@@ -4,7 +4,7 @@ Layout of ``<out>`` (the package folder; its name need not be the package name):
 
     package.xml                 format 3: name, version, description, maintainer, license,
                                 buildtool_depend ament_cmake, exec_depend launch, launch_ros,
-                                robot_state_publisher, joint_state_publisher_gui, rviz2, xacro
+                                robot_state_publisher, joint_state_publisher(_gui), rviz2, xacro
     CMakeLists.txt              ament_cmake; installs urdf/ launch/ rviz/ meshes/ to share/
     urdf/<robot>.urdf           the URDF (to_urdf + primitive collisions; STL visuals with meshes)
     urdf/<robot>.urdf.xacro     the parametric xacro (hexapod_kin.export.xacro)
@@ -42,16 +42,12 @@ __all__ = ["export_package", "package_name_for", "PackageExport", "PACKAGE_NAME_
 PACKAGE_NAME_RE = re.compile(r"^[a-z][a-z0-9_]*$")
 _EMAIL_RE = re.compile(r"^[^@\s<>\"]+@[^@\s<>\"]+\.[A-Za-z]{2,}$")
 
-#: What the launch file runs (package, executable), in order; exec_depend lists them all.
-LAUNCH_NODES = (
-    ("robot_state_publisher", "robot_state_publisher"),
-    ("joint_state_publisher_gui", "joint_state_publisher_gui"),
-    ("rviz2", "rviz2"),
-)
+#: exec_depend of package.xml: everything the launch file imports or runs.
 EXEC_DEPENDS = (
     "launch",
     "launch_ros",
     "robot_state_publisher",
+    "joint_state_publisher",
     "joint_state_publisher_gui",
     "rviz2",
     "xacro",
@@ -135,7 +131,6 @@ def _cmakelists(name: str, header: str) -> str:
 
 
 def _launch(name: str, robot: str, header: str) -> str:
-    nodes = ", ".join(repr(n) for n in LAUNCH_NODES)
     return f'''"""Display {robot} in RViz: robot_state_publisher, joint_state_publisher_gui, rviz2.
 
 {header}
@@ -150,10 +145,9 @@ from launch_ros.actions import Node
 from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackageShare
 
-PACKAGE = {name!r}
-MODEL_FILE = ("urdf", {robot + ".urdf.xacro"!r})
+PACKAGE = "{name}"
+MODEL_FILE = ("urdf", "{robot}.urdf.xacro")
 RVIZ_FILE = ("rviz", "display.rviz")
-NODES = ({nodes})
 
 
 def generate_launch_description():
