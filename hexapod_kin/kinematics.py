@@ -89,7 +89,7 @@ class KinematicModel(Model):
         except TypeError:
             ok = False
         if not ok:
-            q = self.check_q(q)
+            q = self.pinocchio_q(q)
         _forward_kinematics(m, d, q)
         omf = _update_frame_placement(m, d, fid)
         if root:
@@ -103,7 +103,7 @@ class KinematicModel(Model):
     def placement(self, q: Any, frame: str) -> np.ndarray:
         """Pose of any frame in the base frame, ``baseMframe`` (4×4)."""
         fid = self.frame_id(frame)
-        qv = self.check_q(q)
+        qv = self.pinocchio_q(q)
         d = self.data
         pin.forwardKinematics(self.model, d, qv)
         omf = pin.updateFramePlacement(self.model, d, fid)
@@ -111,12 +111,12 @@ class KinematicModel(Model):
 
     def frame_placements(self, q: Any) -> list[np.ndarray]:
         """``^0T_j`` for every frame on the base → tip path (``path_frames``), 4×4 each."""
-        qv = self.check_q(q)
+        qv = self.pinocchio_q(q)
         d = self.data
         pin.framesForwardKinematics(self.model, d, qv)
         out = []
         for name in self.path_frames:
-            fid = self.model.getFrameId(name)
+            fid = self.frame_id(name)
             out.append((self.baseMo * d.oMf[fid]).homogeneous)
         return out
 
@@ -173,7 +173,7 @@ class KinematicModel(Model):
         except TypeError:
             ok = False
         if not ok:
-            q = self.check_q(q)
+            q = self.pinocchio_q(q)
         jac = _compute_frame_jacobian(m, d, q, fid, ref)
         if jac.ndim == 1:  # Eigen 6x1 comes back as a 1-D array
             jac = jac.reshape(6, 1)
@@ -253,7 +253,7 @@ class KinematicModel(Model):
         """Tip pose and Jacobian in one pass (cheaper than calling both)."""
         ref = _reference(reference)
         if not fast_q_ok(q, self._shape):
-            q = self.check_q(q)
+            q = self.pinocchio_q(q)
         d = self.data
         jac = _compute_frame_jacobian(self.model, d, q, self.tip_id, ref)
         if jac.ndim == 1:
@@ -283,7 +283,7 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
         The 3×nq position Jacobian.
 
     """
-    qv = model.check_q(q)
+    qv = model.pinocchio_q(q)
     m, d = model.model, model.data
     pin.forwardKinematics(m, d, qv)
     pose = model.baseMo * pin.updateFramePlacement(m, d, model.tip_id)

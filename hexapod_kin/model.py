@@ -77,7 +77,15 @@ def _check_values(arr: np.ndarray, label: str) -> None:
         raise ConfigurationError(f"{label} has values too large (|x| >= 1e150)")
 
 
+_UNBOUNDED_JOINTS = {
+    "JointModelRUBX",
+    "JointModelRUBY",
+    "JointModelRUBZ",
+    "JointModelRevoluteUnboundedUnaligned",
+}
+
 _SIMPLE_JOINTS = {
+    *_UNBOUNDED_JOINTS,
     "JointModelRX",
     "JointModelRY",
     "JointModelRZ",
@@ -179,8 +187,8 @@ class Model:
         data = self.model.createData()
         self.base = base_name
         self.tip = tip_name
-        self.base_id = int(self.model.getFrameId(base_name))
-        self.tip_id = int(self.model.getFrameId(tip_name))
+        self.base_id = frame_index(self.model, base_name)
+        self.tip_id = frame_index(self.model, tip_name)
         m = self.model
         self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
         self.nq: int = int(m.nv)
@@ -194,6 +202,21 @@ class Model:
                 "sub-chain with base=/tip=)"
             )
         self._shape = (self.nq,)
+        # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
+        # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
+        self._unbounded = tuple(
+            (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
+            for i in range(1, m.njoints)
+            if m.joints[i].shortname() in _UNBOUNDED_JOINTS
+        )
+        self._plain_idx = np.array(
+            [
+                (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
+                for i in range(1, m.njoints)
+                if m.joints[i].shortname() not in _UNBOUNDED_JOINTS
+            ],
+            dtype=np.int64,
+        ).reshape(-1, 2)
         pin.framesForwardKinematics(m, data, pin.neutral(m))
         self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
             data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
@@ -209,8 +232,7 @@ class Model:
         self.oMbase = pin.SE3(data.oMf[self.base_id])
         self.baseMo = self.oMbase.inverse()
         self._rot_base = np.ascontiguousarray(self.baseMo.rotation)
-        self.lower = np.array(m.lowerPositionLimit, dtype=float)
-        self.upper = np.array(m.upperPositionLimit, dtype=float)
+        self.lower, self.upper = self._limits_v(m)
         self.velocity_limit = np.array(m.velocityLimit, dtype=float)
         self.effort_limit = np.array(m.effortLimit, dtype=float)
         self.is_prismatic = np.array(
@@ -223,6 +245,37 @@ class Model:
         # What the per-call hot paths need, one tuple per thread (see kinematics.fk): each
         # thread gets its own pinocchio.Data, so concurrent calls never share scratch space.
         self._local = _PerThread(self, data)
+
+    def _limits_v(self, m: pin.Model) -> tuple[np.ndarray, np.ndarray]:
+        """Position limits per velocity index ((nv,) each); continuous joints get [-π, π]."""
+        lo = np.empty(self.nq)
+        hi = np.empty(self.nq)
+        lower, upper = np.asarray(m.lowerPositionLimit), np.asarray(m.upperPositionLimit)
+        for iq, iv in self._plain_idx:
+            lo[iv], hi[iv] = lower[iq], upper[iq]
+        for _, iv in self._unbounded:
+            lo[iv], hi[iv] = -math.pi, math.pi
+        return lo, hi
+
+    def pinocchio_q(self, q: Any) -> np.ndarray:
+        """``q`` checked (:meth:`check_q`) in Pinocchio's layout, for ``pinocchio`` calls.
+
+        The same array for chains of revolute/prismatic joints; a continuous joint's angle
+        becomes its ``(cos, sin)`` pair (Pinocchio's unbounded revolute joint).
+
+        Raises:
+            ConfigurationError: Wrong shape or non-finite values.
+
+        """
+        qv = self.check_q(q)
+        if not self._unbounded:
+            return qv
+        out = np.empty(self._pin_nq)
+        out[self._plain_idx[:, 0]] = qv[self._plain_idx[:, 1]]
+        for iq, iv in self._unbounded:
+            out[iq] = math.cos(qv[iv])
+            out[iq + 1] = math.sin(qv[iv])
+        return out
 
     _FROZEN = frozenset(
         {"model", "data", "full_model", "urdf", "source", "base", "tip", "tip_id", "_local"}
@@ -322,7 +375,7 @@ class Model:
                 f"frame={name!r} does not exist in {self.name!r}; frames are "
                 f"{choices(self.frame_names, limit=200)}"
             )
-        return int(self.model.getFrameId(name))
+        return frame_index(self.model, name)
 
     def joint_index(self, name: str) -> int:
         """Return the index (0-based, in ``q``) of joint ``name``, checked."""
@@ -370,7 +423,7 @@ class Model:
 
     def neutral(self) -> np.ndarray:
         """Neutral configuration (zeros for revolute/prismatic joints), a fresh array."""
-        return np.array(pin.neutral(self.model), dtype=float)
+        return np.zeros(self.nq)
 
     def random_q(self, n: int | None = None, seed: int | None = None) -> np.ndarray:
         """Uniform random configurations within the joint limits ((nq,) or (n, nq))."""
@@ -440,7 +493,35 @@ class _PerThread(threading.local):
             object.__setattr__(owner, "_owner_thread", mine)
         if data is None or (first is not None and first != mine):
             data = owner.model.createData()
-        self.hot = (owner.model, data, owner.tip_id, owner.nq, owner._base_is_root)
+        # nq = -1 for models with continuous joints: their q always takes the slow path
+        # (Model.pinocchio_q), which converts it to Pinocchio's (cos, sin) layout.
+        nq = -1 if owner._unbounded else owner.nq
+        self.hot = (owner.model, data, owner.tip_id, nq, owner._base_is_root)
+
+
+_FRAME_PREFERENCE = (
+    pin.FrameType.BODY,
+    pin.FrameType.OP_FRAME,
+    pin.FrameType.JOINT,
+    pin.FrameType.FIXED_JOINT,
+    pin.FrameType.SENSOR,
+)
+
+
+def frame_index(model: pin.Model, name: str) -> int:
+    """Index of the frame ``name`` in a Pinocchio model (which must have it).
+
+    URDFs may name a link and a joint alike (anymal: ``RH_HAA``); Pinocchio's ``getFrameId``
+    then raises. The link's (BODY) frame wins, then operational, joint, fixed-joint frames.
+    """
+    hits = [i for i, f in enumerate(model.frames) if f.name == name]
+    if len(hits) == 1:
+        return hits[0]
+    for kind in _FRAME_PREFERENCE:
+        for i in hits:
+            if model.frames[i].type == kind:
+                return i
+    return hits[0]
 
 
 def _warn_defects(
@@ -583,7 +664,7 @@ def pose_matrix(value: Any, name: str = "pose") -> np.ndarray:
 def _add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:
     """A copy of ``model`` with a frame ``<tip>_tool`` at ``tip · tool``; returns its name."""
     out = pin.Model(model)
-    tip_id = out.getFrameId(tip)
+    tip_id = frame_index(out, tip)
     tip_frame = out.frames[tip_id]
     name = f"{tip}_tool"
     k = 1
@@ -619,8 +700,8 @@ def _reduce(
 ) -> tuple[pin.Model, tuple[int, ...], np.ndarray]:
     if not do_reduce:
         return full, (), pin.neutral(full)
-    base_joint = full.frames[full.getFrameId(base)].parentJoint
-    tip_joint = full.frames[full.getFrameId(tip)].parentJoint
+    base_joint = full.frames[frame_index(full, base)].parentJoint
+    tip_joint = full.frames[frame_index(full, tip)].parentJoint
     tip_support = list(full.supports[tip_joint])
     base_support = set(full.supports[base_joint])
     if not base_support <= set(tip_support):

@@ -374,3 +374,37 @@ def test_hostile_mesh_uris_stay_refused(tmp_path):
     _, path = _ros_tree(tmp_path, mesh_name="../../../../../etc/passwd")
     with pytest.raises(exceptions.UrdfError, match="outside the allowed root"):
         hk.load(path)
+
+
+def test_continuous_joints_take_one_angle():
+    path = erd_path("double_pendulum_continuous")
+    model = hk.load(path)
+    assert model.nq == 2 and model.model.nq == 4  # Pinocchio: (cos, sin) per joint
+    np.testing.assert_array_equal(model.lower, [-np.pi, -np.pi])
+    np.testing.assert_array_equal(model.upper, [np.pi, np.pi])
+    np.testing.assert_array_equal(model.neutral(), [0.0, 0.0])
+    q = np.array([0.4, -1.1])
+    np.testing.assert_allclose(model.pinocchio_q(q), [np.cos(0.4), np.sin(0.4),
+                                                      np.cos(-1.1), np.sin(-1.1)])
+    # a full turn is the same pose; FK by finite differences agrees with the Jacobian
+    np.testing.assert_allclose(model.fk(q + 2 * np.pi), model.fk(q), atol=1e-12)
+    jac = model.jacobian(q)
+    for k in range(2):
+        dq = np.zeros(2)
+        dq[k] = 1e-6
+        num = (model.fk(q + dq)[:3, 3] - model.fk(q - dq)[:3, 3]) / 2e-6
+        np.testing.assert_allclose(jac[:3, k], num, atol=1e-8)
+
+
+def test_duplicate_frame_names_prefer_the_link():
+    # a link named like its joint (as anymal's URDF does): Pinocchio's getFrameId raises
+    text = hk.to_urdf(hk.robots.pendulum())
+    text = text.replace('name="rod"', 'name="swing"').replace('link="rod"', 'link="swing"')
+    model = hk.load(text, tip="swing")
+    fid = model.frame_id("swing")
+    assert model.model.frames[fid].type == pin.FrameType.BODY
+    assert model.tip_id == fid
+    q = np.array([0.7])
+    d = model.model.createData()
+    pin.framesForwardKinematics(model.model, d, model.pinocchio_q(q))
+    np.testing.assert_allclose(model.fk(q), (model.baseMo * d.oMf[fid]).homogeneous, atol=0)
