@@ -12,6 +12,7 @@ world force moved to the joint with the frame placement ``oMi``).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,7 +44,11 @@ def external_force(
     omi = data.oMi[joint]
     p = data.oMf[frame_id].translation
     rot_t = omi.rotation.T
-    moment = np.cross(p - omi.translation, force_world)
+    r = p - omi.translation
+    f = force_world
+    moment = np.array(
+        [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]]
+    )  # r × f (np.cross costs ~30 µs of axis bookkeeping on 3-vectors)
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     fext[joint] = pin.Force(rot_t @ force_world, rot_t @ moment)
     return fext
@@ -130,6 +135,20 @@ class _LegStatics:
         return grav, tau_f, tau_rnea, grav_rnea
 
 
+def _statics(model: Any, frame: str | None) -> _LegStatics:
+    """The model's :class:`_LegStatics` for ``frame``, one per thread (its Data are private)."""
+    check_inertials(model)
+    if not hasattr(model, "cached"):
+        return _LegStatics(model, frame)
+    local = model.cached("dynamics.statics", threading.local)
+    table = getattr(local, "by_frame", None)
+    if table is None:
+        table = local.by_frame = {}
+    if frame not in table:
+        table[frame] = _LegStatics(model, frame)
+    return table[frame]
+
+
 def _force(force: Any) -> np.ndarray:
     return finite_vector("force", (0.0, 0.0, 0.0) if force is None else force, 3)
 
@@ -153,7 +172,7 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
 
     """
     mdl = as_model(model)
-    st = _LegStatics(mdl, frame)
+    st = _statics(mdl, frame)
     qv = np.array(mdl.check_q(q), dtype=float)
     f = _force(force)
     grav, tau_f, tau_rnea, grav_rnea = st.at(qv, f)
@@ -255,7 +274,7 @@ def torques_along(
 
     """
     mdl = as_model(model)
-    st = _LegStatics(mdl, frame)
+    st = _statics(mdl, frame)
     qs = mdl.check_q_batch(q, "q")
     ts = np.asarray(t, dtype=float)
     if ts.shape != (len(qs),) or len(ts) < 2 or not np.all(np.diff(ts) > 0):
