@@ -400,7 +400,7 @@ def _chain_doc(chain: Chain, header: str | None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _mount_props(robot: Hexapod, legs: tuple[Any, ...]) -> tuple[list[str], dict[str, str]]:
+def _mount_props(legs: tuple[Any, ...]) -> tuple[list[str], dict[str, str]]:
     """Mount properties and the xyz expression per leg (circle form when the legs are on one)."""
     zs = {leg.xyz[2] for leg in legs}
     radius = math.hypot(legs[0].xyz[0], legs[0].xyz[1])
@@ -448,7 +448,7 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
             "body_mass": num(robot.body_mass),
         }
     )
-    mount_props, mount_xyz = _mount_props(robot, legs)
+    mount_props, mount_xyz = _mount_props(legs)
     lines += mount_props
     for fam in fams:
         if not forward:
