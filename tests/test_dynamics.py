@@ -588,3 +588,21 @@ def test_gait_loads_balance_and_match_a_floating_base_model() -> None:
         # the base wrench is expressed in the base frame: zero means the forces hold the robot
         assert np.abs(tau[:6]).max() < 1e-9
         assert np.abs(tau[6:] - loads.torque[i]).max() < 1e-9
+
+
+def test_cli_pendulum_html_and_short_runs(
+    capsys: pytest.CaptureFixture[str], tmp_path: object
+) -> None:
+    pytest.importorskip("meshcat")
+    page = f"{tmp_path}/p.html"
+    code, out, _ = run_cli(
+        ["pendulum", "--json", "--duration", "0.5", "--damping", "0", "--html", page], capsys
+    )
+    assert code == 0
+    d = json.loads(out)
+    # half a second is less than one period: no period measured, said as null (never NaN)
+    assert d["period"] is None and d["period_error"] is None
+    assert d["decay_rate_exact"] == 0.0
+    with open(page, encoding="utf-8") as fh:
+        text = fh.read()
+    assert "<html" in text.lower() and "pendulum" in text

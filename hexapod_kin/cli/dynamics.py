@@ -134,11 +134,15 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
         f"l_c = {p['com_distance']:.9g} m; theta0 = {args.theta0_deg:g} deg; "
         f"{out['method']}, dt = {out['dt']:g} s, {out['duration']:g} s"
     )
-    per = out["period"]
+
+    def num(x: Any, fmt: str, missing: str, unit: str = "") -> str:
+        return missing if x is None else format(x, fmt) + unit
+
+    short = "not measured (fewer than 2 periods)"
     print(
-        f"undamped: period = {per if per is None else f'{per:.12g}'} s, exact "
-        f"4 sqrt(I/(m g l_c)) K(sin(theta0/2)) = {out['period_exact']:.12g} s, "
-        f"relative error {out['period_error']}"
+        f"undamped: period = {num(out['period'], '.12g', short, ' s')}; exact "
+        f"4 sqrt(I/(m g l_c)) K(sin(theta0/2)) = {out['period_exact']:.12g} s; relative "
+        f"error {num(out['period_error'], '.3e', '-')}"
     )
     print(f"undamped: energy drift max|E - E0|/E0 = {out['energy_drift']:.3e}")
     print(
@@ -146,10 +150,12 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
         f"(largest step increase {out['damped_energy_max_increase']:.3e} E0), lost "
         f"{100 * out['damped_energy_loss']:.2f}% in {out['duration']:g} s"
     )
-    rate, exact = out["decay_rate"], out["decay_rate_exact"]
     print(
-        f"decay rate at {args.decay_theta0_deg:g} deg: {rate} 1/s, b/(2I) = {exact:.9g} 1/s, "
-        f"relative error {out['decay_rate_error']}"
+        f"decay rate at {args.decay_theta0_deg:g} deg: "
+        f"{num(out['decay_rate'], '.9g', 'not measured (fewer than 3 maxima)', ' 1/s')}; "
+        f"b/(2I) = "
+        f"{out['decay_rate_exact']:.9g} 1/s; relative error "
+        f"{num(out['decay_rate_error'], '.3e', '-')}"
     )
     for path in written:
         print(f"wrote {path}")
