@@ -178,7 +178,8 @@ def foot_step(
         direction=direction,
         shape=shape,
     )
-    q, reached = track(model, foot, q_home)
+    tracked = track(model, foot, q_home)
+    q, reached = tracked.q, tracked.reached
     qdot = np.gradient(q, t, axis=0)
     actual = np.array([model.position(qi) for qi in q])
     within = bool(np.all(q >= model.lower - 1e-12) and np.all(q <= model.upper + 1e-12))

@@ -27,7 +27,7 @@ def draw_gait_diagram(ax: Any, run: Any) -> None:
     """Stance (dark bars) and swing (gaps) of each leg over time on ``ax``."""
     t = run.t
     dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
-    for k, name in enumerate(run.leg_names):
+    for k in range(len(run.leg_names)):
         bars = [(t[a], t[b - 1] - t[a] + dt) for a, b in _runs(run.support[:, k])]
         ax.broken_barh(bars, (k - 0.4, 0.8), facecolors="0.25")
     ax.set_yticks(range(len(run.leg_names)), list(run.leg_names))

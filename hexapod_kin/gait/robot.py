@@ -16,6 +16,8 @@ plane at the body centre).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -153,6 +155,77 @@ def _pick_branch(
             out[i, j] = prev[j]
 
 
+@njit(cache=True)
+def _tree_kernel(
+    q: np.ndarray,
+    base: np.ndarray,
+    parents: np.ndarray,
+    placements: np.ndarray,
+    masses: np.ndarray,
+    levers: np.ndarray,
+    leg_joints: np.ndarray,
+    foot: np.ndarray,
+    foot_joint: np.ndarray,
+    pts: np.ndarray,
+    com: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Per sample: joint frames down the tree (revolute z), leg points and the CoM."""
+    n, nj = q.shape
+    nl = leg_joints.shape[0]
+    T = np.empty((nj, 3, 4))
+    loc = np.empty((3, 4))
+    mtot = masses.sum()
+    for i in range(n):
+        B = base[i]
+        for j in range(nj):
+            c, s = math.cos(q[i, j]), math.sin(q[i, j])
+            P = placements[j]
+            for r in range(3):
+                loc[r, 0] = c * P[r, 0] + s * P[r, 1]
+                loc[r, 1] = -s * P[r, 0] + c * P[r, 1]
+                loc[r, 2] = P[r, 2]
+                loc[r, 3] = P[r, 3]
+            par = parents[j]
+            for r in range(3):
+                for k in range(4):
+                    if par < 0:
+                        v = B[r, 0] * loc[0, k] + B[r, 1] * loc[1, k] + B[r, 2] * loc[2, k]
+                    else:
+                        v = (
+                            T[par, r, 0] * loc[0, k]
+                            + T[par, r, 1] * loc[1, k]
+                            + T[par, r, 2] * loc[2, k]
+                        )
+                    if k == 3:
+                        v += B[r, 3] if par < 0 else T[par, r, 3]
+                    T[j, r, k] = v
+        for r in range(3):
+            acc = masses[0] * (
+                B[r, 0] * levers[0, 0] + B[r, 1] * levers[0, 1] + B[r, 2] * levers[0, 2] + B[r, 3]
+            )
+            for j in range(nj):
+                acc += masses[j + 1] * (
+                    T[j, r, 0] * levers[j + 1, 0]
+                    + T[j, r, 1] * levers[j + 1, 1]
+                    + T[j, r, 2] * levers[j + 1, 2]
+                    + T[j, r, 3]
+                )
+            com[i, r] = acc / mtot
+        for leg in range(nl):
+            for u in range(3):
+                j = leg_joints[leg, u]
+                for r in range(3):
+                    pts[i, leg, u, r] = T[j, r, 3]
+            j = foot_joint[leg]
+            for r in range(3):
+                pts[i, leg, 3, r] = (
+                    T[j, r, 0] * foot[leg, 0]
+                    + T[j, r, 1] * foot[leg, 1]
+                    + T[j, r, 2] * foot[leg, 2]
+                    + T[j, r, 3]
+                )
+
+
 @dataclass(frozen=True, eq=False)
 class WholeBody:
     """The hexapod with a floating base: Pinocchio model and vectorised kinematics.
@@ -252,6 +325,27 @@ class WholeBody:
         acc = acc + np.einsum("j,nja->na", self._masses[1:], pts)
         return np.asarray(acc / self.mass)
 
+    def points_and_com(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`leg_points` (N, L, 4, 3) and :meth:`com` (N, 3) in one compiled pass."""
+        q = np.ascontiguousarray(q, dtype=float)
+        base = np.ascontiguousarray(base, dtype=float)
+        pts = np.empty((len(q), self.n_legs, 4, 3))
+        com = np.empty((len(q), 3))
+        _tree_kernel(
+            q,
+            base,
+            self._parents,
+            np.ascontiguousarray(self._placements[:, :3, :]),
+            self._masses,
+            self._levers,
+            self._leg_joints,
+            self._foot,
+            self._foot_joint,
+            pts,
+            com,
+        )
+        return pts, com
+
     def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
         """Pinocchio configurations (N, 25): base xyz, base quaternion (x, y, z, w), joints."""
         import pinocchio as pin
@@ -341,18 +435,19 @@ class WholeBody:
             raise ParameterError(
                 f"base has shape {np.shape(base)} and feet {np.shape(feet)}; expected (N, 4, 4) "
                 f"and (N, {nl}, 3) (or (4, 4) and ({nl}, 3))",
-                parameter="feet", value=np.shape(feet), allowed=f"(N, {nl}, 3)",
+                parameter="feet",
+                value=np.shape(feet),
+                allowed=f"(N, {nl}, 3)",
             )
         if not (np.all(np.isfinite(B)) and np.all(np.isfinite(P))):
             raise ParameterError("base and feet must be finite", parameter="feet")
         n = len(B)
         t = np.arange(n, dtype=float) if times is None else np.asarray(times, dtype=float)
         q0 = self.neutral_q() if q_prev is None else np.asarray(q_prev, dtype=float)
-        # feet in each mount frame: (worldMbody · bodyMmount)^-1 · p
-        inv_b = _inv(B)
-        p_body = np.einsum("nij,nlj->nli", inv_b[:, :3, :3], P) + inv_b[:, None, :3, 3]
-        inv_m = _inv(self.mounts)
-        p_mount = np.einsum("lij,nlj->nli", inv_m[:, :3, :3], p_body) + inv_m[None, :, :3, 3]
+        # feet in each mount frame: (worldMbody · bodyMmount)^-1 · p; rows: Rᵀv = (vᵀR)ᵀ
+        p_body = np.matmul(P - B[:, None, :3, 3], B[:, :3, :3])
+        rel = (p_body - self.mounts[None, :, :3, 3])[:, :, None, :]
+        p_mount = np.matmul(rel, self.mounts[None, :, :3, :3])[:, :, 0, :]
         q = np.empty((n, self.nq))
         reached = np.empty((n, nl), dtype=bool)
         excess = np.zeros((n, nl))
@@ -363,7 +458,8 @@ class WholeBody:
             chain = self.params.legs[legs[0]].chain
             targets = np.ascontiguousarray(p_mount[:, legs].transpose(1, 0, 2).reshape(-1, 3))
             try:
-                batch = analytic_batch(chain, targets)
+                with _one_thread(len(targets) < 200_000):
+                    batch = analytic_batch(chain, targets)
             except HexapodKinError as exc:
                 raise ConfigurationError(
                     f"legs {[self.leg_names[k] for k in legs]}: {exc}", parameter="params"
@@ -375,14 +471,17 @@ class WholeBody:
                 out = np.empty((n, len(cols)))
                 ok = np.empty(n, dtype=np.bool_)
                 _pick_branch(
-                    np.ascontiguousarray(qk[g]), np.ascontiguousarray(vk[g]),
-                    np.ascontiguousarray(q0[cols]), out, ok,
+                    np.ascontiguousarray(qk[g]),
+                    np.ascontiguousarray(vk[g]),
+                    np.ascontiguousarray(q0[cols]),
+                    out,
+                    ok,
                 )
                 q[:, cols] = out
                 reached[:, leg] = ok
                 if not ok.all():
                     excess[:, leg] = np.where(
-                        ok, 0.0, self.reach_excess(targets[g * n:(g + 1) * n], leg)
+                        ok, 0.0, self.reach_excess(targets[g * n : (g + 1) * n], leg)
                     )
         margin = np.minimum(q - self.lower, self.upper - q)
         if strict:
@@ -401,8 +500,13 @@ class WholeBody:
             raise GaitError(
                 f"leg {name}: foot out of reach by {d:.4g} m at t={t[i]:.4g} s (check 'reach'; "
                 "shorten the stride, lower the step or the body, or slow down)",
-                check="reach", leg=name, time=float(t[i]), amount=d,
-                parameter="feet", value=d, allowed="a foot within the leg's reach",
+                check="reach",
+                leg=name,
+                time=float(t[i]),
+                amount=d,
+                parameter="feet",
+                value=d,
+                allowed="a foot within the leg's reach",
             )
         if np.any(margin < 0):
             i, j = np.argwhere(margin < 0)[0]
@@ -412,10 +516,36 @@ class WholeBody:
                 f"leg {leg}: joint {self.joint_names[j]} beyond its limit by {d:.4g} rad at "
                 f"t={t[i]:.4g} s (check 'joint limit'; allowed [{self.lower[j]:.4g}, "
                 f"{self.upper[j]:.4g}] rad)",
-                check="joint limit", leg=name, time=float(t[i]), amount=d,
-                parameter=self.joint_names[j], value=d,
+                check="joint limit",
+                leg=name,
+                time=float(t[i]),
+                amount=d,
+                parameter=self.joint_names[j],
+                value=d,
                 allowed=[float(self.lower[j]), float(self.upper[j])],
             )
+
+
+@contextmanager
+def _one_thread(on: bool) -> Iterator[None]:
+    """Run compiled parallel kernels on this thread only (for small batches).
+
+    Fanning a small batch out to threads costs more than it saves on a shared machine.
+    """
+    if not on:
+        yield
+        return
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a core dependency
+        yield
+        return
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
 
 
 def _build(params: Hexapod) -> WholeBody:
@@ -489,6 +619,13 @@ def _cached(params: Hexapod) -> WholeBody:
     return _build(params)
 
 
+@lru_cache(maxsize=1)
+def _default() -> WholeBody:
+    from ..robots import hexapod
+
+    return _cached(hexapod())
+
+
 def whole_body(params: Hexapod | None = None) -> WholeBody:
     """The whole-robot model of a hexapod (default ``robots.hexapod()``), cached.
 
@@ -499,12 +636,12 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
 
     """
     if params is None:
-        from ..robots import hexapod
-
-        params = hexapod()
+        return _default()
     if not isinstance(params, Hexapod):
         raise ParameterError(
-            f"params={params!r} is not a Hexapod", parameter="params", value=repr(params),
+            f"params={params!r} is not a Hexapod",
+            parameter="params",
+            value=repr(params),
             allowed="hexapod_kin.params.Hexapod (e.g. robots.hexapod())",
         )
     try:

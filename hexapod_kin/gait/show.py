@@ -26,10 +26,14 @@ def _hull(points: np.ndarray) -> np.ndarray:
     def half(seq: list[tuple[float, ...]]) -> list[tuple[float, ...]]:
         out: list[tuple[float, ...]] = []
         for p in seq:
-            while len(out) >= 2 and (
-                (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
-            ) <= 0:
+            while (
+                len(out) >= 2
+                and (
+                    (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                    - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
+                )
+                <= 0
+            ):
                 out.pop()
             out.append(p)
         return out
@@ -107,6 +111,12 @@ def walk_html(
         f"(min margin {1e3 * run.min_margin:.1f} mm)"
     )
     return export_html(
-        mdl, run.t, run.q[:, cols], path, base_poses=run.base_poses, title=label,
-        overlays={"support_polygon": poly, "com": com}, **options,
+        mdl,
+        run.t,
+        run.q[:, cols],
+        path,
+        base_poses=run.base_poses,
+        title=label,
+        overlays={"support_polygon": poly, "com": com},
+        **options,
     )

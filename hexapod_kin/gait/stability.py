@@ -124,17 +124,25 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
     single = p.ndim == 2
     if single:
         p, s, c = p[None], s[None], c[None]
-    if p.ndim != 3 or p.shape[2] not in (2, 3) or s.shape != p.shape[:2] or c.shape != (
-        len(p), c.shape[-1]
-    ) or c.shape[-1] not in (2, 3):
+    if (
+        p.ndim != 3
+        or p.shape[2] not in (2, 3)
+        or s.shape != p.shape[:2]
+        or c.shape != (len(p), c.shape[-1])
+        or c.shape[-1] not in (2, 3)
+    ):
         raise ParameterError(
             f"feet {np.shape(feet)}, stance {np.shape(stance)}, com {np.shape(com)}: expected "
             "(N, L, 2|3), (N, L), (N, 2|3)",
-            parameter="feet", value=list(np.shape(feet)), allowed="(N, L, 2|3)",
+            parameter="feet",
+            value=list(np.shape(feet)),
+            allowed="(N, L, 2|3)",
         )
     out = np.empty(len(p))
     _margin_kernel(
-        np.ascontiguousarray(p[..., :2]), np.ascontiguousarray(s), np.ascontiguousarray(c[:, :2]),
+        np.ascontiguousarray(p[..., :2]),
+        np.ascontiguousarray(s),
+        np.ascontiguousarray(c[:, :2]),
         out,
     )
     return np.asarray(out[0]) if single else out
@@ -142,11 +150,23 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
 
 @njit(cache=True, inline="always")
 def _seg_seg(
-    px: float, py: float, pz: float, ux: float, uy: float, uz: float,
-    qx: float, qy: float, qz: float, vx: float, vy: float, vz: float,
+    px: float,
+    py: float,
+    pz: float,
+    ux: float,
+    uy: float,
+    uz: float,
+    qx: float,
+    qy: float,
+    qz: float,
+    vx: float,
+    vy: float,
+    vz: float,
 ) -> float:  # pragma: no cover - compiled
-    """Distance between segments p→p+u and q→q+v in 3-D (Ericson, Real-Time Collision
-    Detection, 5.1.9)."""
+    """Distance between segments p→p+u and q→q+v in 3-D.
+
+    Ericson, Real-Time Collision Detection, 5.1.9 (closest points of two segments).
+    """
     rx, ry, rz = px - qx, py - qy, pz - qz
     a = ux * ux + uy * uy + uz * uz
     e = vx * vx + vy * vy + vz * vz
@@ -191,13 +211,25 @@ def _clearance_kernel(
             best = np.inf
             for u in range(k - 1):
                 px, py, pz = pts[i, a, u, 0], pts[i, a, u, 1], pts[i, a, u, 2]
-                ux, uy, uz = pts[i, a, u + 1, 0] - px, pts[i, a, u + 1, 1] - py, pts[
-                    i, a, u + 1, 2] - pz
+                ux, uy, uz = (
+                    pts[i, a, u + 1, 0] - px,
+                    pts[i, a, u + 1, 1] - py,
+                    pts[i, a, u + 1, 2] - pz,
+                )
                 for v in range(k - 1):
                     qx, qy, qz = pts[i, b, v, 0], pts[i, b, v, 1], pts[i, b, v, 2]
                     d = _seg_seg(
-                        px, py, pz, ux, uy, uz, qx, qy, qz,
-                        pts[i, b, v + 1, 0] - qx, pts[i, b, v + 1, 1] - qy,
+                        px,
+                        py,
+                        pz,
+                        ux,
+                        uy,
+                        uz,
+                        qx,
+                        qy,
+                        qz,
+                        pts[i, b, v + 1, 0] - qx,
+                        pts[i, b, v + 1, 1] - qy,
                         pts[i, b, v + 1, 2] - qz,
                     )
                     if d < best:
@@ -224,7 +256,9 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
     if p.ndim != 4 or p.shape[3] != 3 or p.shape[2] < 2 or pr.ndim != 2 or pr.shape[1] != 2:
         raise ParameterError(
             f"points {p.shape}, pairs {pr.shape}: expected (N, L, K>=2, 3) and (P, 2)",
-            parameter="points", value=list(p.shape), allowed="(N, L, K, 3)",
+            parameter="points",
+            value=list(p.shape),
+            allowed="(N, L, K, 3)",
         )
     if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")

@@ -41,14 +41,18 @@ class PhaseTable:
         if not offs or not all(math.isfinite(o) and 0.0 <= o < 1.0 for o in offs):
             raise ParameterError(
                 f"offsets={self.offsets!r}: one phase offset per leg in [0, 1) cycles",
-                parameter="offsets", value=list(self.offsets), allowed="values in [0, 1)",
+                parameter="offsets",
+                value=list(self.offsets),
+                allowed="values in [0, 1)",
             )
         object.__setattr__(self, "offsets", offs)
         beta = float(self.duty_factor)
         if not (math.isfinite(beta) and 0.0 < beta < 1.0):
             raise ParameterError(
                 f"duty_factor={self.duty_factor!r} is not allowed; 0 < duty_factor < 1",
-                parameter="duty_factor", value=self.duty_factor, allowed="(0, 1)",
+                parameter="duty_factor",
+                value=self.duty_factor,
+                allowed="(0, 1)",
             )
         object.__setattr__(self, "duty_factor", beta)
 
@@ -77,11 +81,17 @@ class PhaseTable:
         return {"name": self.name, "offsets": list(self.offsets), "duty_factor": self.duty_factor}
 
 
+def _snap(x: float) -> float:
+    """``x`` modulo 1, with round-off next to a whole cycle snapped to 0."""
+    v = float(np.remainder(x, 1.0))
+    return 0.0 if v < 1e-12 or v > 1.0 - 1e-12 else v
+
+
 def _lift_order(order: Sequence[int], beta: float, spacing: float) -> tuple[float, ...]:
     """Offsets so that leg ``order[k]`` lifts off at ``k·spacing`` cycles."""
     offs = [0.0] * len(order)
     for k, leg in enumerate(order):
-        offs[leg] = float(np.remainder(beta - k * spacing, 1.0))
+        offs[leg] = _snap(beta - k * spacing)
     return tuple(offs)
 
 
@@ -101,7 +111,7 @@ def _ripple() -> PhaseTable:
     beta = 2.0 / 3.0
     offs = [0.0] * 6
     for leg, when in ((2, 0.0), (1, 1 / 3), (0, 2 / 3), (3, 0.5), (4, 5 / 6), (5, 1 / 6)):
-        offs[leg] = float(np.remainder(beta - when, 1.0))
+        offs[leg] = _snap(beta - when)
     return PhaseTable("ripple", tuple(offs), beta)
 
 
@@ -124,11 +134,15 @@ def phase_table(pattern: str | PhaseTable, n_legs: int = 6) -> PhaseTable:
     else:
         raise ParameterError(
             f"pattern={pattern!r} is not allowed; use one of {choices(PATTERNS)} or a PhaseTable",
-            parameter="pattern", value=repr(pattern), allowed=sorted(PATTERNS),
+            parameter="pattern",
+            value=repr(pattern),
+            allowed=sorted(PATTERNS),
         )
     if table.n_legs != n_legs:
         raise ParameterError(
             f"pattern {table.name!r} has {table.n_legs} offsets; the robot has {n_legs} legs",
-            parameter="pattern", value=table.n_legs, allowed=n_legs,
+            parameter="pattern",
+            value=table.n_legs,
+            allowed=n_legs,
         )
     return table

@@ -40,7 +40,9 @@ class Terrain:
         if not callable(self.height):
             raise ParameterError(
                 f"terrain height={self.height!r} is not callable; give h(x, y) -> z",
-                parameter="terrain", value=repr(self.height), allowed="a callable h(x, y)",
+                parameter="terrain",
+                value=repr(self.height),
+                allowed="a callable h(x, y)",
             )
 
     def __call__(self, x: Any, y: Any) -> np.ndarray:
@@ -76,7 +78,9 @@ def slope(angle: float = math.radians(8.0), heading: float = 0.0, z0: float = 0.
     if not (math.isfinite(a) and abs(a) < math.pi / 2):
         raise ParameterError(
             f"angle={angle!r} is not allowed; |angle| < pi/2 rad",
-            parameter="angle", value=angle, allowed="(-pi/2, pi/2) rad",
+            parameter="angle",
+            value=angle,
+            allowed="(-pi/2, pi/2) rad",
         )
     g, c, s = math.tan(a), math.cos(heading), math.sin(heading)
     return Terrain("slope", lambda x, y: z0 + g * (c * np.asarray(x) + s * np.asarray(y)))
@@ -112,7 +116,9 @@ def terrain(spec: str | Terrain | Callable[..., Any] | None = None) -> Terrain:
         if spec not in TERRAINS:
             raise ParameterError(
                 f"terrain={spec!r} is not allowed; use one of {choices(TERRAINS)} or h(x, y)",
-                parameter="terrain", value=spec, allowed=sorted(TERRAINS),
+                parameter="terrain",
+                value=spec,
+                allowed=sorted(TERRAINS),
             )
         return TERRAINS[spec]()
     return Terrain(getattr(spec, "__name__", "custom"), spec)

@@ -34,7 +34,8 @@ from ..exceptions import ParameterError
 from .robot import GaitError, WholeBody, whole_body
 from .stability import segment_clearance, support_margin
 from .tables import PhaseTable, phase_table
-from .terrain import Terrain, terrain as make_terrain
+from .terrain import Terrain
+from .terrain import terrain as make_terrain
 
 __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 
@@ -42,8 +43,9 @@ __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 DEFAULT_STRIDE = 0.05
 
 
-def _num(name: str, value: Any, *, lo: float = 0.0, zero: bool = False, hi: float = math.inf
-         ) -> float:
+def _num(
+    name: str, value: Any, *, lo: float = 0.0, zero: bool = False, hi: float = math.inf
+) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -53,7 +55,9 @@ def _num(name: str, value: Any, *, lo: float = 0.0, zero: bool = False, hi: floa
         rng = f"{'>=' if zero else '>'} {lo:g}" + (f" and <= {hi:g}" if math.isfinite(hi) else "")
         raise ParameterError(
             f"{name}={value!r} is not allowed; give a finite number {rng} (SI units)",
-            parameter=name, value=value, allowed=rng,
+            parameter=name,
+            value=value,
+            allowed=rng,
         )
     return v
 
@@ -183,8 +187,11 @@ class GaitRun:
     def ok(self) -> bool:
         """True when every check passes at every sample."""
         return bool(
-            self.ik_ok.all() and self.min_margin > 0 and self.min_limit_margin >= 0
-            and self.min_clearance > 0 and self.max_slip <= 1e-9
+            self.ik_ok.all()
+            and self.min_margin > 0
+            and self.min_limit_margin >= 0
+            and self.min_clearance > 0
+            and self.max_slip <= 1e-9
         )
 
     def pinocchio_q(self) -> np.ndarray:
@@ -199,8 +206,11 @@ class GaitRun:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: min_margin [m], max_slip [m], min_limit_margin [rad],
-        min_clearance [m], max_foot_error [m], samples, ok, pattern, and the settings."""
+        """JSON-ready summary of the checks and the settings.
+
+        Keys: min_margin [m], max_slip [m], min_limit_margin [rad], min_clearance [m],
+        max_foot_error [m], samples, ok, pattern (the table), mass [kg], and the settings.
+        """
         return {
             "min_margin": self.min_margin,
             "max_slip": self.max_slip,
@@ -289,13 +299,17 @@ def walk(
     if n > 2_000_000:
         raise ParameterError(
             f"duration*rate = {dur * hz:.4g} samples is too many; at most 2e6",
-            parameter="rate", value=rate, allowed="duration*rate <= 2e6",
+            parameter="rate",
+            value=rate,
+            allowed="duration*rate <= 2e6",
         )
     if stride is not None and velocity is not None:
         raise ParameterError(
             f"stride={stride!r} and velocity={velocity!r}: give one (stride sets a straight "
             "walk; velocity any twist)",
-            parameter="stride", value=stride, allowed="stride or velocity",
+            parameter="stride",
+            value=stride,
+            allowed="stride or velocity",
         )
     if velocity is None:
         L = _num("stride", DEFAULT_STRIDE if stride is None else stride, zero=True, hi=10.0)
@@ -305,7 +319,9 @@ def walk(
         if v.shape != (3,) or not np.all(np.isfinite(v)):
             raise ParameterError(
                 f"velocity={velocity!r}: three finite numbers vx [m/s], vy [m/s], wz [rad/s]",
-                parameter="velocity", value=velocity, allowed="(vx, vy, wz)",
+                parameter="velocity",
+                value=velocity,
+                allowed="(vx, vy, wz)",
             )
         vel = (float(v[0]), float(v[1]), float(v[2]))
     ground: Terrain = make_terrain(terrain)
@@ -344,8 +360,11 @@ def walk(
                 f"leg {names[leg]}: touch-down point ({p[0]:.4g}, {p[1]:.4g}) m at "
                 f"t={max(when[i, leg], 0.0):.4g} s is off the terrain {ground.name!r} "
                 "(check 'terrain')",
-                check="terrain", leg=names[leg], time=float(max(when[i, leg], 0.0)),
-                parameter="terrain", value=[float(p[0]), float(p[1])],
+                check="terrain",
+                leg=names[leg],
+                time=float(max(when[i, leg], 0.0)),
+                parameter="terrain",
+                value=[float(p[0]), float(p[1])],
                 allowed="feet where h(x, y) is defined",
             )
     sc = np.clip(s, 0.0, 1.0)
@@ -365,8 +384,13 @@ def walk(
             raise GaitError(
                 f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
                 f"clearance'; step_height={H:g} m is too low for this terrain)",
-                check="terrain clearance", leg=names[leg], time=float(t[i]), amount=d,
-                parameter="step_height", value=H, allowed="a swing above the terrain",
+                check="terrain clearance",
+                leg=names[leg],
+                time=float(t[i]),
+                amount=d,
+                parameter="step_height",
+                value=H,
+                allowed="a swing above the terrain",
             )
     # --- body
     pose = se2_pose(t, vel)
@@ -379,10 +403,8 @@ def walk(
     # --- joints and checks
     ik = wb.body_ik(base, feet, q_prev=q_start, times=t, strict=strict)
     q = np.array(ik.q)
-    poses = wb.joint_poses(q, base)
-    pts = wb.points_of(poses)
+    pts, com = wb.points_and_com(q, base)
     actual = np.ascontiguousarray(pts[:, :, 3])
-    com = wb.com_of(poses, base)
     start = support.copy()
     start[1:] &= ~support[:-1]
     idx = np.where(start, np.arange(n)[:, None], 0)
@@ -401,8 +423,12 @@ def walk(
             raise GaitError(
                 f"legs {names[a]} and {names[b]} collide (links {-clear[i, k]:.4g} m into "
                 f"each other) at t={t[i]:.4g} s (check 'leg clearance')",
-                check="leg clearance", leg=names[a], time=float(t[i]),
-                amount=float(-clear[i, k]), parameter="stride", value=strokes.max(),
+                check="leg clearance",
+                leg=names[a],
+                time=float(t[i]),
+                amount=float(-clear[i, k]),
+                parameter="stride",
+                value=strokes.max(),
             )
         if margin.min() <= 0:
             i = int(np.argmin(margin))
@@ -410,8 +436,12 @@ def walk(
                 f"the centre of mass leaves the support polygon by {-margin[i]:.4g} m at "
                 f"t={t[i]:.4g} s (check 'stability margin'; stance legs "
                 f"{[names[k] for k in np.flatnonzero(support[i])]})",
-                check="stability margin", time=float(t[i]), amount=float(-margin[i]),
-                parameter="pattern", value=table.name, allowed="margin > 0",
+                check="stability margin",
+                time=float(t[i]),
+                amount=float(-margin[i]),
+                parameter="pattern",
+                value=table.name,
+                allowed="margin > 0",
             )
     phase = table.phase(t, T)
     _arr(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
@@ -430,9 +460,25 @@ def walk(
     ik_ok = np.asarray(ik.ok)
     _arr(ik_ok)
     return GaitRun(
-        t=t, base_poses=base, feet=actual, feet_planned=feet, q=q, qdot=qdot, support=support,
-        phase=phase, com=com, slip=slip, margin=margin, limit_margin=ik.limit_margin,
-        ik_ok=ik_ok, reach_excess=ik.excess, clearance=clear, pairs=pairs,
-        leg_names=names, joint_names=wb.joint_names, table=table, settings=settings,
+        t=t,
+        base_poses=base,
+        feet=actual,
+        feet_planned=feet,
+        q=q,
+        qdot=qdot,
+        support=support,
+        phase=phase,
+        com=com,
+        slip=slip,
+        margin=margin,
+        limit_margin=ik.limit_margin,
+        ik_ok=ik_ok,
+        reach_excess=ik.excess,
+        clearance=clear,
+        pairs=pairs,
+        leg_names=names,
+        joint_names=wb.joint_names,
+        table=table,
+        settings=settings,
         mass=wb.mass,
     )

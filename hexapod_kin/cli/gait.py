@@ -1,0 +1,121 @@
+"""The ``gait`` subcommand: the six-legged robot walks; stability, slip and limits checked."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add the ``gait`` subcommand to ``sub`` (an argparse subparsers object)."""
+    p = sub.add_parser(
+        "gait",
+        help="walk the hexapod (tripod, wave, ripple) and check every sample",
+        description=(
+            "Walk the hexapod preset with a phase table and report, over every sample: the "
+            "minimum static stability margin (signed distance of the projected centre of mass "
+            "to the support polygon's edge), the worst stance-foot slip and the smallest "
+            "joint-limit margin (SI units). An infeasible walk (a foot out of reach, off the "
+            "terrain, a joint beyond its limit, legs colliding, the CoM outside the support "
+            "polygon) stops with an error naming the leg, the time and the check."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument("--pattern", choices=("tripod", "wave", "ripple"), default="tripod")
+    p.add_argument(
+        "--stride",
+        type=float,
+        default=None,
+        help="foot stroke in stance [m] for a straight walk (default 0.05; not with --velocity)",
+    )
+    p.add_argument("--height", type=float, default=0.03, help="step height [m]")
+    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    p.add_argument(
+        "--duty-factor",
+        type=float,
+        default=None,
+        help="stance fraction in (0, 1) (default: the pattern's)",
+    )
+    p.add_argument(
+        "--velocity",
+        type=float,
+        nargs=3,
+        metavar=("VX", "VY", "WZ"),
+        default=None,
+        help="body twist: forward, sideways [m/s], yaw rate [rad/s] (not with --stride)",
+    )
+    p.add_argument(
+        "--body-height",
+        type=float,
+        default=0.08,
+        help="body above the mean ground height of the feet [m]",
+    )
+    p.add_argument(
+        "--terrain",
+        choices=("flat", "slope", "step"),
+        default="flat",
+        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
+    )
+    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    p.add_argument("--rate", type=float, default=100.0, help="sample rate [Hz]")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--plot",
+        metavar="FILE.png",
+        help="gait diagram, margin over time and foot paths from above",
+    )
+    p.add_argument(
+        "--html",
+        metavar="FILE.html",
+        help="self-contained animation (support polygon and projected CoM per frame)",
+    )
+    p.set_defaults(func=_cmd_gait)
+
+
+def _cmd_gait(args: argparse.Namespace) -> int:
+    from ..gait.walk import walk
+    from .common import emit_json, output_path
+
+    plot = output_path(args.plot, "--plot", (".png",)) if args.plot else None
+    html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
+    run = walk(
+        pattern=args.pattern,
+        stride=args.stride,
+        step_height=args.height,
+        period=args.period,
+        duty_factor=args.duty_factor,
+        velocity=args.velocity,
+        body_height=args.body_height,
+        terrain=args.terrain,
+        duration=args.duration,
+        rate=args.rate,
+    )
+    out = run.to_dict()
+    if plot is not None:
+        from ..gait.plots import plot_gait
+
+        out["plot"] = str(plot_gait(run, plot))
+    if html is not None:
+        from ..gait.show import walk_html
+
+        out["html"] = str(walk_html(run, html))
+    if args.json:
+        emit_json(out)
+        return 0
+    vx, vy, wz = out["velocity"]
+    print(
+        f"{out['pattern']['name']} gait on {out['terrain']} terrain, {out['samples']} samples "
+        f"over {out['duration']:g} s (v = {vx:.4g}, {vy:.4g} m/s, wz = {wz:.4g} rad/s, "
+        f"stride {out['stride']:.4g} m)"
+    )
+    print(f"min stability margin   {out['min_margin']:.6g} m")
+    print(f"max stance slip        {out['max_slip']:.3g} m")
+    print(f"min joint-limit margin {out['min_limit_margin']:.6g} rad")
+    print(f"min leg clearance      {out['min_clearance']:.6g} m")
+    for key in ("plot", "html"):
+        if key in out:
+            print(f"wrote {out[key]}", file=sys.stderr)
+    return 0
