@@ -1,23 +1,361 @@
-"""Parameter-table files (TOML/YAML) → :class:`~hexapod_kin.params.Chain` (being built)."""
+"""Parameter-table files: your own robot as a TOML or YAML file → a :class:`~.params.Chain`.
+
+A table file is a source like any other (``hexapod_kin.load("leg4.toml")``, ``hexapod-kin urdf
+leg4.toml``). The format (examples in ``examples/``)::
+
+    name = "leg4"                  # robot name (default: the file stem)
+    convention = "khalil"          # "khalil" (modified DH, Khalil–Kleinfinger) or "dh" (standard)
+    angles = "rad"                 # "rad" or "deg": alpha, theta, rpy, revolute limits/velocity
+    description = "free text"      # optional
+    base = "base"                  # base link name (optional)
+    tip = "foot"                   # tip frame name (optional)
+    link_mass = 0.1                # default link mass [kg] (optional)
+    link_radius = 0.01             # visual/default-inertia radius [m] (optional)
+    base_pose = { xyz = [0, 0, 0.1], rpy = [0, 0, 0] }   # T_base_0 (optional)
+    tool = { xyz = [0, 0, 0.05], rpy = [0, 0, 0] }       # T_n_tool (optional)
+
+    [[row]]                        # one per table row, from the base
+    type = "revolute"              # "revolute", "prismatic" or "fixed" (alias: sigma = 0/1/2)
+    alpha = 0.0                    # khalil: alpha, d, theta, r   dh: theta, d, a, alpha
+    d = 0.0
+    theta = 0.0
+    r = 0.0
+    name = "coxa"                  # joint name (joint rows; optional)
+    link = "coxa_link"             # link name (optional; all rows or none)
+    lower = -1.5                   # limits (joint rows; optional): lower, upper [rad]/[m],
+    upper = 1.5                    #   velocity [rad/s]/[m/s], effort [N m]/[N]
+    mass = 0.2                     # link mass [kg] (optional): a rod to the next frame, or
+    com = [0.05, 0, 0]             #   with com [m] and inertia [ixx, iyy, izz, ixy, ixz, iyz]
+    inertia = [1e-4, 1e-4, 1e-4, 0, 0, 0]   # [kg m^2] about the com, in the row's link frame
+
+Standard DH rows become Khalil rows through :meth:`Chain.from_dh` (one fixed row more, which
+carries the tip): ``link`` names, ``mass`` and inertials then refer to the joint's frame, and
+the extra tip link takes ``tip``. Unknown keys are refused (a typo never passes silently).
+TOML is read with the standard library (``tomllib``, Python ≥ 3.11; ``tomli`` before);
+YAML with PyYAML (``pip install hexapod-kin[tables]``).
+"""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
-from .exceptions import SourceError
-from .params import Chain
+import numpy as np
 
-__all__ = ["read_table"]
+from .exceptions import OptionalDependencyError, ParameterError, SourceError, did_you_mean
+from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
+
+__all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
+
+#: Keys allowed at the top of a table file.
+TOP_KEYS = (
+    "name", "convention", "angles", "description", "base", "tip", "link_mass", "link_radius",
+    "base_pose", "tool", "row", "damping", "friction",
+)  # fmt: skip
+#: Keys allowed in a row (beside the geometry keys of the convention).
+ROW_KEYS = (
+    "type", "sigma", "name", "link", "lower", "upper", "velocity", "effort", "mass", "com",
+    "inertia",
+)  # fmt: skip
+_GEOMETRY = {"khalil": ("alpha", "d", "theta", "r"), "dh": ("theta", "d", "a", "alpha")}
+_ANGLE_KEYS = {"alpha", "theta"}
+_MAX_BYTES = 1_000_000
 
 
-def read_table(path: Path, **params: Any) -> Chain:
-    """Read a table file (not available yet).
+def _load_mapping(path: Path) -> dict[str, Any]:
+    suffix = path.suffix.lower()
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise SourceError(f"source={str(path)!r}: {exc.strerror}", parameter="source") from None
+    if size > _MAX_BYTES:
+        raise SourceError(
+            f"source={str(path)!r}: {size} bytes; a table file is at most {_MAX_BYTES} bytes",
+            parameter="source",
+        )
+    text = path.read_text(encoding="utf-8", errors="strict")
+    if suffix == ".toml":
+        try:
+            import tomllib as toml_reader  # type: ignore[import-not-found,unused-ignore]
+        except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+            try:
+                import tomli as toml_reader  # type: ignore[no-redef,import-not-found,unused-ignore]
+            except ModuleNotFoundError:
+                raise OptionalDependencyError(
+                    "reading TOML on Python 3.10 needs tomli; `pip install hexapod-kin[tables]`",
+                    parameter="source",
+                ) from None
+        try:
+            data = toml_reader.loads(text)
+        except toml_reader.TOMLDecodeError as exc:
+            raise SourceError(f"{path.name}: not valid TOML ({exc})", parameter="source") from None
+    else:
+        try:
+            import yaml
+        except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the test extra
+            raise OptionalDependencyError(
+                "reading YAML table files needs PyYAML; `pip install hexapod-kin[tables]`",
+                parameter="source",
+            ) from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise SourceError(f"{path.name}: not valid YAML ({exc})", parameter="source") from None
+    if not isinstance(data, dict):
+        raise SourceError(
+            f"{path.name}: the file must hold a mapping (name, convention, row, ...), got "
+            f"{type(data).__name__}",
+            parameter="source",
+        )
+    return data
+
+
+def read_table(path: Path | str, **overrides: Any) -> Chain:
+    """Read a TOML/YAML table file into a :class:`Chain` (see the module docstring).
+
+    Args:
+        path: The file (``.toml``, ``.yaml`` or ``.yml``).
+        **overrides: Top-level keys replacing the file's (e.g. ``name="leg4b"``).
+
+    Returns:
+        The chain.
 
     Raises:
-        SourceError: Always, for now.
+        SourceError: Unreadable file or invalid TOML/YAML.
+        ParameterError: A bad key or value; the message names the row (1-based) and key.
 
     """
-    raise SourceError(
-        f"source={str(path)!r}: table files are not supported yet", parameter="source"
-    )
+    path = Path(path)
+    data = _load_mapping(path)
+    unknown = sorted(set(overrides) - set(TOP_KEYS))
+    if unknown:
+        raise ParameterError(
+            f"{path.name}: parameters {unknown} are not table keys; allowed: {list(TOP_KEYS)}",
+            parameter=unknown[0],
+            allowed=list(TOP_KEYS),
+        )
+    data = {**data, **overrides}
+    data.setdefault("name", path.stem)
+    try:
+        return chain_from_table(data)
+    except ParameterError as exc:
+        raise ParameterError(
+            f"{path.name}: {exc}", parameter=exc.parameter, value=exc.value, allowed=exc.allowed
+        ) from None
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{where}={value!r} is not a number", parameter=where, value=value)
+    out = float(value)
+    if not math.isfinite(out):
+        raise ParameterError(f"{where}={value!r} is not finite", parameter=where, value=value)
+    return out
+
+
+def _numbers(value: Any, n: int, where: str) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        raise ParameterError(
+            f"{where}={value!r}: a list of {n} numbers is required", parameter=where, value=value
+        )
+    return tuple(_number(v, f"{where}[{i}]") for i, v in enumerate(value))
+
+
+def _check_keys(got: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
+    for key in got:
+        if key not in allowed:
+            raise ParameterError(
+                f"{where}: unknown key {key!r}{did_you_mean(str(key), allowed)}; allowed: "
+                f"{list(allowed)}",
+                parameter=str(key),
+                allowed=list(allowed),
+            )
+
+
+def _pose(value: Any, scale: float, where: str) -> Pose:
+    if not isinstance(value, dict):
+        raise ParameterError(
+            f"{where}={value!r}: a table {{xyz = [...], rpy = [...]}} is required",
+            parameter=where,
+            value=value,
+        )
+    _check_keys(value, ("xyz", "rpy"), where)
+    xyz = _numbers(value.get("xyz", [0, 0, 0]), 3, f"{where}.xyz")
+    rpy = _numbers(value.get("rpy", [0, 0, 0]), 3, f"{where}.rpy")
+    return Pose.of((xyz, tuple(a * scale for a in rpy)), where)
+
+
+def chain_from_table(data: dict[str, Any]) -> Chain:
+    """Build a :class:`Chain` from the mapping of a table file (see the module docstring).
+
+    Raises:
+        ParameterError: A bad key or value (the message names the row and the key).
+
+    """
+    _check_keys(data, TOP_KEYS, "table")
+    convention = str(data.get("convention", "khalil")).lower()
+    if convention not in _GEOMETRY:
+        raise ParameterError(
+            f"convention={data.get('convention')!r} is not allowed; use 'khalil' or 'dh'",
+            parameter="convention",
+            value=data.get("convention"),
+            allowed=["khalil", "dh"],
+        )
+    angles = str(data.get("angles", "rad")).lower()
+    if angles not in ("rad", "deg"):
+        raise ParameterError(
+            f"angles={data.get('angles')!r} is not allowed; use 'rad' or 'deg'",
+            parameter="angles",
+            value=data.get("angles"),
+            allowed=["rad", "deg"],
+        )
+    scale = math.pi / 180.0 if angles == "deg" else 1.0
+    rows_in = data.get("row")
+    if not isinstance(rows_in, list) or not rows_in:
+        raise ParameterError(
+            "table: at least one [[row]] is required (one per row of the table)",
+            parameter="row",
+        )
+    geometry = _GEOMETRY[convention]
+    allowed = (*geometry, *ROW_KEYS)
+    rows: list[KhalilRow | DHRow] = []
+    joint_names: list[str] = []
+    limits: list[JointLimits] = []
+    links: list[str] = []
+    masses: list[tuple[float, tuple[float, ...] | None, tuple[float, ...] | None] | None] = []
+    for j, row in enumerate(rows_in, start=1):
+        where = f"row {j}"
+        if not isinstance(row, dict):
+            raise ParameterError(f"{where}={row!r}: a table of keys is required", parameter="row")
+        _check_keys(row, allowed, where)
+        if "type" in row and "sigma" in row:
+            raise ParameterError(f"{where}: give type or sigma, not both", parameter="type")
+        sigma: Any = row["type"] if "type" in row else row.get("sigma", "revolute")
+        geo = {
+            k: _number(row.get(k, 0.0), f"{where}.{k}") * (scale if k in _ANGLE_KEYS else 1.0)
+            for k in geometry
+        }
+        try:
+            built: KhalilRow | DHRow = (
+                KhalilRow(sigma, **geo) if convention == "khalil" else DHRow(sigma=sigma, **geo)
+            )
+        except ParameterError as exc:
+            raise ParameterError(f"{where}: {exc}", parameter="type", value=sigma) from None
+        rows.append(built)
+        if built.sigma != "fixed":
+            name = row.get("name", f"q{len(joint_names) + 1}")
+            joint_names.append(str(name))
+            lim_scale = scale if built.sigma == "revolute" else 1.0
+            default = (
+                JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
+            )
+            try:
+                limits.append(
+                    JointLimits(
+                        lower=_number(row["lower"], f"{where}.lower") * lim_scale
+                        if "lower" in row
+                        else default.lower,
+                        upper=_number(row["upper"], f"{where}.upper") * lim_scale
+                        if "upper" in row
+                        else default.upper,
+                        velocity=_number(row["velocity"], f"{where}.velocity") * lim_scale
+                        if "velocity" in row
+                        else default.velocity,
+                        effort=_number(row.get("effort", default.effort), f"{where}.effort"),
+                    )
+                )
+            except ParameterError as exc:
+                raise ParameterError(f"{where}: {exc}", parameter="lower") from None
+        else:
+            for key in ("name", "lower", "upper", "velocity", "effort"):
+                if key in row:
+                    raise ParameterError(
+                        f"{where}: {key!r} is for joint rows; this row is fixed", parameter=key
+                    )
+        if "link" in row:
+            links.append(str(row["link"]))
+        if "mass" in row:
+            mass = _number(row["mass"], f"{where}.mass")
+            com = _numbers(row["com"], 3, f"{where}.com") if "com" in row else None
+            inertia = _numbers(row["inertia"], 6, f"{where}.inertia") if "inertia" in row else None
+            if (com is None) != (inertia is None):
+                raise ParameterError(
+                    f"{where}: give com and inertia together (or only mass: a rod)",
+                    parameter="inertia",
+                )
+            masses.append((mass, com, inertia))
+        else:
+            if "com" in row or "inertia" in row:
+                raise ParameterError(f"{where}: com/inertia need a mass", parameter="mass")
+            masses.append(None)
+    if links and len(links) != len(rows):
+        raise ParameterError(
+            f"table: 'link' given on {len(links)} of {len(rows)} rows; name all links or none",
+            parameter="link",
+        )
+    kwargs: dict[str, Any] = {"joint_names": tuple(joint_names), "limits": tuple(limits)}
+    for key in ("name", "description", "base", "tip"):
+        if key in data:
+            if not isinstance(data[key], str):
+                raise ParameterError(
+                    f"{key}={data[key]!r} must be a string", parameter=key, value=data[key]
+                )
+            kwargs[key] = data[key]
+    for key in ("link_mass", "link_radius"):
+        if key in data:
+            kwargs[key] = _number(data[key], key)
+    for key in ("damping", "friction"):
+        if key in data:
+            value = data[key]
+            kwargs[key] = (
+                tuple(_number(v, f"{key}[{i}]") for i, v in enumerate(value))
+                if isinstance(value, list)
+                else _number(value, key)
+            )
+    poses = {k: _pose(data[k], scale, k) for k in ("base_pose", "tool") if k in data}
+    if convention == "dh":
+        if links:
+            kwargs["link_names"] = (*links, str(data.get("tip", "tip")))
+        dh_rows = [r for r in rows if isinstance(r, DHRow)]
+        chain = Chain.from_dh(
+            dh_rows, tool=poses.get("tool"), base_pose=poses.get("base_pose"), **kwargs
+        )
+        masses.append(None)
+    else:
+        if links:
+            kwargs["link_names"] = tuple(links)
+        khalil = tuple(r for r in rows if isinstance(r, KhalilRow))
+        chain = Chain(
+            rows=khalil, base_pose=poses.get("base_pose"), tool=poses.get("tool"), **kwargs
+        )
+    if any(m is not None for m in masses):
+        chain = chain.replace(inertials=_inertials(chain, masses))
+    return chain
+
+
+def _inertials(
+    chain: Chain,
+    masses: list[tuple[float, tuple[float, ...] | None, tuple[float, ...] | None] | None],
+) -> tuple[Inertial | None, ...]:
+    """Given masses: a rod to the next frame (like the default), or the given com/inertia."""
+    out: list[Inertial | None] = []
+    for j, spec in enumerate(masses):
+        if spec is None:
+            out.append(None)
+            continue
+        mass, com, inertia = spec
+        where = f"row {j + 1}"
+        try:
+            if com is None or inertia is None:
+                nxt = (
+                    chain.rows[j + 1].transform(0.0)[:3, 3]
+                    if j + 1 < len(chain.rows)
+                    else np.zeros(3)
+                )
+                out.append(rod_inertial(np.zeros(3), nxt, mass, chain.link_radius))
+            else:
+                out.append(Inertial(mass=mass, com=com, inertia=inertia))  # type: ignore[arg-type]
+        except ParameterError as exc:
+            raise ParameterError(f"{where}: {exc}", parameter="mass", value=mass) from None
+    return tuple(out)
