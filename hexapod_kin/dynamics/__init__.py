@@ -6,7 +6,7 @@
   decay) measured against the exact period ``4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` and ``b/(2I)``.
 * :mod:`.statics` — :func:`leg_torques` (``g(q) + Jᵀ F``, cross-checked by RNEA with the foot
   force as external force), :func:`step_torques` along the seeds' resolved-rate step.
-* :mod:`.stand` — :func:`stand`: the hexapod standing, the stance feet's contact forces
+* :mod:`.standing` — :func:`stand`: the hexapod standing, the stance feet's contact forces
   (minimum-norm or friction-cone) and every joint's torque.
 * :mod:`.gait_loads` — :func:`gait_torques`: the same along a gait run (a
   ``hexapod_kin.gait.walk``), sample by sample; peak torque per joint.
@@ -30,8 +30,9 @@ from .pendulum import (
     pendulum_run,
     physical_pendulum,
 )
-from .stand import (
+from .standing import (
     CONTACT_METHODS,
+    ContactSolution,
     Stance,
     contact_forces,
     robot_mass_com,
@@ -43,6 +44,7 @@ from .statics import LegTorques, StepTorques, leg_torques, step_torques, torques
 
 __all__ = [
     "CONTACT_METHODS",
+    "ContactSolution",
     "GaitTorques",
     "LegTorques",
     "METHODS",

@@ -3,7 +3,7 @@
 Takes a walk's samples as data — ``t``, ``base_poses`` (``worldMbody``), ``q`` (leg joints,
 named by ``joint_names``) and ``support`` (stance feet), as in ``hexapod_kin.gait.GaitRun`` —
 and at every sample distributes the robot's weight over the stance feet exactly as
-:func:`~hexapod_kin.dynamics.stand.contact_forces` does (minimum norm, or inside friction cones),
+:func:`~hexapod_kin.dynamics.standing.contact_forces` does (minimum norm, or inside friction cones),
 then ``τ = g(q) − Σ J_iᵀ f_i`` with gravity expressed in the body's axes (the body may yaw or
 tilt). Quasi-static: the body's and the legs' accelerations are left out (a walk at constant
 body velocity has none for the body; the legs' inertial torques are small at walking speeds —
@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
 from ._common import as_model, check_inertials
-from .stand import ContactMethod, _hexapod, contact_forces
+from .standing import ContactMethod, _hexapod, contact_forces
 
 __all__ = ["GaitTorques", "gait_torques"]
 

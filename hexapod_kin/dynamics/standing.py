@@ -41,6 +41,7 @@ from ._common import as_model, check_inertials, finite_vector, positive
 
 __all__ = [
     "CONTACT_METHODS",
+    "ContactSolution",
     "Stance",
     "contact_forces",
     "robot_mass_com",
@@ -164,11 +165,26 @@ def _default_reach(chain: Any) -> float:
 
 @dataclass(frozen=True)
 class ContactSolution:
-    """Contact forces and their balance residuals (SI units)."""
+    """Contact forces and their balance residuals (SI units).
+
+    Attributes:
+        forces: (k, 3) ground-on-foot forces in [N] (read-only).
+        force_residual: ``‖Σ f − W ẑ‖`` in [N].
+        moment_residual: ``‖Σ (p − c) × f‖`` in [N·m].
+
+    """
 
     forces: np.ndarray
     force_residual: float
     moment_residual: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {
+            "forces": self.forces.tolist(),
+            "force_residual": self.force_residual,
+            "moment_residual": self.moment_residual,
+        }
 
 
 def contact_forces(
