@@ -3,7 +3,8 @@
 * **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
   tool poses, the row selection, the length names and a format version), under
   ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
-  ``~/.cache/hexapod_kin`` (``HEXAPOD_KIN_CACHE_DIR`` overrides both). Sympy objects are
+  ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
+  subfolder. Sympy objects are
   stored as ``srepr`` text and rebuilt with ``sympify`` (so treat the folder as code, like any
   cache of your own). Files are written atomically; a corrupt or foreign file is ignored (and
   rewritten).
@@ -19,6 +20,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +36,7 @@ def cache_dir() -> Path:
     """The cache folder (not created here)."""
     env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
     if env:
-        return Path(env)
+        return Path(env) / "symbolic"
     try:
         import platformdirs
 
@@ -50,6 +52,10 @@ def key(parts: Any) -> str:
 
 
 def _encode(obj: Any) -> Any:
+    from ._symbolic_families import SingularFamily
+
+    if isinstance(obj, SingularFamily):
+        return {"__family__": {f.name: _encode(getattr(obj, f.name)) for f in fields(obj)}}
     if isinstance(obj, sp.MatrixBase):
         return {"__matrix__": sp.srepr(sp.ImmutableMatrix(obj))}
     if isinstance(obj, sp.Basic):
@@ -65,6 +71,10 @@ def _encode(obj: Any) -> Any:
 
 def _decode(obj: Any) -> Any:
     if isinstance(obj, dict):
+        if "__family__" in obj:
+            from ._symbolic_families import SingularFamily
+
+            return SingularFamily(**{k: _decode(v) for k, v in obj["__family__"].items()})
         if "__matrix__" in obj:
             return sp.Matrix(sp.sympify(obj["__matrix__"]))
         if "__sympy__" in obj:

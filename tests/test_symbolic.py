@@ -13,6 +13,15 @@ from hexapod_kin.exceptions import ParameterError
 from hexapod_kin.symbolic import derive
 
 
+@pytest.fixture(autouse=True, scope="module")
+def _own_cache(tmp_path_factory):
+    """A fresh derivation cache for this module (derivations are computed, not read)."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
+    yield
+    mp.undo()
+
+
 @pytest.fixture(scope="module")
 def leg():
     return derive("hexabot_leg")
@@ -116,3 +125,192 @@ def test_bad_inputs():
         derive("pendulum", lengths={"d9": "a"})
     with pytest.raises(ParameterError, match="no Khalil table"):
         derive(object())
+
+
+# ------------------------------------------------------------------ 6-DOF arms, frames, budget
+PI = math.pi
+PUMA_DH = [(0, 0, 0, PI / 2), (0, 0, 0.4318, 0), (0, 0.15005, 0.0203, -PI / 2),
+           (0, 0.4318, 0, PI / 2), (0, 0, 0, -PI / 2), (0, 0, 0, 0)]  # fmt: skip
+UR5_DH = [(0, 0.089159, 0, PI / 2), (0, 0, -0.425, 0), (0, 0, -0.39225, 0),
+          (0, 0.10915, 0, PI / 2), (0, 0.09465, 0, -PI / 2), (0, 0.0823, 0, 0)]  # fmt: skip
+
+
+def _chain(table, name):
+    from hexapod_kin import Chain, DHRow
+
+    return Chain.from_dh([DHRow(*row) for row in table], name=name)
+
+
+@pytest.fixture(scope="module")
+def puma():
+    chain = _chain(PUMA_DH, "puma560")
+    return chain, derive(chain)
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    chain = _chain(UR5_DH, "ur5")
+    return chain, derive(chain)
+
+
+def _sigma_min(jac):
+    return np.linalg.svd(jac, compute_uv=False)[-1]
+
+
+def test_puma_det_equals_pinocchio_and_splits_elbow_shoulder_wrist(puma):
+    chain, d = puma
+    assert d.complete and d.rows == ROWS6 and "wrist centre" in d.method
+    model = load(chain)
+    qs = model.random_q(50, seed=5)
+    det_sym = d.function(d.det)(qs)
+    det_num = np.array([np.linalg.det(model.jacobian(q)) for q in qs])
+    np.testing.assert_allclose(det_sym, det_num, atol=1e-12)
+    # three separate families: wrist q5 in {0, pi}, the elbow in q3 alone, the shoulder
+    q3 = [f for f in d.families if f.joint == 2]
+    q5 = [f for f in d.families if f.joint == 4]
+    implicit = [f for f in d.families if f.joint is None]
+    assert sorted(f.value for f in q5) == pytest.approx([0.0, PI])
+    assert len(implicit) == 1 and set(implicit[0].variables) == {1, 2}
+    # the elbow: the wrist centre on the line of links 2-3; Corke's a3 = 0.0203, d4 = 0.4318:
+    # the issue's d4 cos q3 + a3 sin q3 = 0, solved by hand: tan q3 = -d4 / a3
+    expect = sorted((math.atan2(-0.4318, 0.0203) + k * PI + PI) % (2 * PI) - PI for k in (0, 1))
+    assert sorted(f.value for f in q3) == pytest.approx(expect, abs=1e-12)
+    rng = np.random.default_rng(6)
+    for fam in q3:
+        q = rng.uniform(-PI, PI, 6)
+        q[2] = fam.value
+        assert _sigma_min(model.jacobian(q)) < 1e-9
+        q[2] += 1e-3
+        assert _sigma_min(model.jacobian(q)) > 1e-6
+    assert all(f.verified for f in d.families)
+
+
+ROWS6 = ("x", "y", "z", "wx", "wy", "wz")
+
+
+def test_ur5_det_and_families(ur5):
+    chain, d = ur5
+    assert d.complete and d.rows == ROWS6
+    model = load(chain)
+    qs = model.random_q(50, seed=7)
+    det_sym = d.function(d.det)(qs)
+    det_num = np.array([np.linalg.det(model.jacobian(q)) for q in qs])
+    np.testing.assert_allclose(det_sym, det_num, atol=1e-12)
+    joints = sorted({f.joint for f in d.families if f.joint is not None})
+    assert joints == [2, 4]  # elbow q3 in {0, pi}, wrist q5 in {0, pi}
+    assert sum(f.joint is None for f in d.families) == 1  # the shoulder
+    assert all(f.verified for f in d.families)
+
+
+def test_ur5_from_example_robot_data_urdf():
+    model = load("erd:ur5_robot")
+    d = derive("erd:ur5_robot")
+    assert d.frame == model.base and d.tip == model.tip
+    qs = model.random_q(30, seed=8)
+    det_sym = d.function(d.det)(qs)
+    det_num = np.array([np.linalg.det(model.jacobian(q)) for q in qs])
+    np.testing.assert_allclose(det_sym, det_num, atol=1e-9)
+    jac_sym = d.function(d.J_direct)(qs)
+    for i, q in enumerate(qs):
+        np.testing.assert_allclose(jac_sym[i], model.jacobian(q), atol=1e-9)
+
+
+def test_hexapod_leg_is_derived_in_the_frame_asked_for():
+    model = load("hexapod", tip="leg2_foot")
+    d = derive(model)
+    assert d.frame == "body" and d.tip == "leg2_foot"
+    qs = model.random_q(30, seed=9)
+    jac = d.function(d.J_rows)(qs)
+    p = d.function(d.p)(qs)[..., 0]
+    for i, q in enumerate(qs):
+        np.testing.assert_allclose(jac[i], model.jacobian(q)[:3], atol=1e-12)
+        np.testing.assert_allclose(p[i], model.fk(q)[:3, 3], atol=1e-12)
+    same = derive(robots.hexapod(), tip="leg2_foot")
+    assert same.frame == "body" and sp.simplify(same.det - d.det) == 0
+
+
+def test_urdf_sources_are_read_back():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "urdf" / "hexabot_leg.urdf"
+    d = derive(str(path))
+    model = load(str(path))
+    qs = model.random_q(30, seed=10)
+    det_sym = d.function(d.det)(qs)
+    for i, q in enumerate(qs):
+        assert abs(det_sym[i] - np.linalg.det(model.jacobian(q)[:3])) < 1e-12
+    solo = derive("erd:solo12", tip="FL_FOOT")
+    assert solo.complete and len(solo.families) >= 2
+
+
+def test_four_dof_leg_gram_families():
+    from hexapod_kin import Chain, KhalilRow
+
+    leg4 = Chain(
+        rows=(
+            KhalilRow(0),
+            KhalilRow(0, -PI / 2, 0.05),
+            KhalilRow(0, 0, 0.1),
+            KhalilRow(0, 0, 0.1),
+            KhalilRow("fixed", 0, 0.05),
+        ),  # fmt: skip
+        name="leg4",
+    )
+    d = derive(leg4)
+    assert d.complete and d.det is None and d.rows == ("x", "y", "z")
+    model = load(leg4)
+    qs = model.random_q(40, seed=11)
+    gram = d.function(d.gram)(qs)
+    for i, q in enumerate(qs):
+        jac = model.jacobian(q)[:3]
+        assert abs(gram[i] - np.linalg.det(jac @ jac.T)) < 1e-12
+    # the foot on the hip axis: l1 + l2 c2 + l3 c23 + l4 c234 = 0
+    assert len(d.families) == 1 and d.families[0].variables == (1, 2, 3)
+    assert d.families[0].verified
+
+
+def test_budget_stops_and_says_what_is_missing():
+    chain = _chain(UR5_DH, "ur5_budget")
+    d = derive(chain, budget=0.05, cache=False)
+    assert d.incomplete and any("budget of 0.05 s" in x for x in d.incomplete)
+    assert d.det is None and not d.families and not d.complete
+    model = load(chain)
+    q = model.random_q(1, seed=12)[0]
+    np.testing.assert_allclose(d.function(d.J_direct)(q), model.jacobian(q), atol=1e-12)
+    assert "NOT DONE" in d.text()
+    with pytest.raises(ParameterError, match="budget"):
+        derive("scara", budget=0)
+
+
+def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
+    from hexapod_kin import _symbolic_cache
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    first = derive("scara")
+    files = list((tmp_path / "symbolic").glob("*.json"))
+    assert not first.cached and len(files) == 1
+    second = derive("scara")
+    assert second.cached and sp.simplify(second.det - first.det) == 0
+    assert [f.name for f in second.families] == [f.name for f in first.families]
+    assert second.families[0].verified == first.families[0].verified
+    files[0].write_text("{ not json", encoding="utf-8")
+    third = derive("scara")
+    assert not third.cached and sp.simplify(third.det - first.det) == 0
+    assert _symbolic_cache.load(files[0].stem) is not None  # rewritten
+
+
+def test_family_residuals_vanish_on_families(leg):
+    from hexapod_kin.symbolic import family_residuals
+
+    fr = family_residuals("hexabot_leg")
+    assert [f.name for f in fr.families] == [f.name for f in leg.families]
+    q = np.array([[0.3, -0.4, 0.0], [0.3, -0.4, PI], [0.2, 0.1, 0.7]])
+    dist = fr.distance(q)
+    assert dist[0, 0] == pytest.approx(0.0, abs=1e-15)
+    assert dist[1, 1] == pytest.approx(0.0, abs=1e-12)
+    # implicit family: the residual is the factor, its gradient matches finite differences
+    res, grad = fr.residuals[2], fr.gradients[2]
+    h = 1e-6
+    fd = [(res(q[2] + h * e) - res(q[2] - h * e))[0] / (2 * h) for e in np.eye(3)]
+    np.testing.assert_allclose(grad(q[2])[0], fd, atol=1e-8)
+    assert family_residuals("hexabot_leg") is fr  # cheap when asked again
