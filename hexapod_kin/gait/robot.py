@@ -361,13 +361,13 @@ class WholeBody:
 
     # ------------------------------------------------------------------ body-pose IK
     def neutral_q(self) -> np.ndarray:
-        """A standing configuration (18,): knee −0.3 rad, ankle 1.7 rad (legs bent down)."""
+        """A standing configuration (18,): every leg at :data:`hexapod_kin.ik.LEG_HOME`."""
+        from ..ik import LEG_HOME
+
         q = np.zeros(self.nq)
+        home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
         for i, name in enumerate(self.joint_names):
-            if name.endswith("knee"):
-                q[i] = -0.3
-            elif name.endswith("ankle"):
-                q[i] = 1.7
+            q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
         return np.clip(q, self.lower, self.upper)
 
     def reach_excess(self, targets: np.ndarray, leg: int) -> np.ndarray:

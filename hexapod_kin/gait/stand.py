@@ -60,22 +60,20 @@ def frame_poses(
 
 
 def default_configuration(model: Model) -> np.ndarray:
-    """A pose that reads well on screen: hexapod/3-DOF legs standing, others at mid-range.
+    """The package's home pose (:func:`hexapod_kin.ik.home`), for display and demos.
 
-    Legs of the ``hexabot_leg`` family (hip, knee, ankle) stand with the femur raised
-    0.3 rad and the tibia pointing down; other joints sit at the middle of finite limits, or 0.
+    A hexapod stands with every leg at the legs' home :data:`hexapod_kin.ik.LEG_HOME`
+    (hip, knee, ankle; clipped to the limits); any other model is at ``ik.home(model)``.
     """
+    from .. import ik
+
+    if not isinstance(model.params, Hexapod):
+        return np.asarray(ik.home(model), dtype=float)
     q = np.zeros(model.nq)
-    lo, hi = np.asarray(model.lower), np.asarray(model.upper)
-    finite = np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 1e3)
-    mid = np.where(finite, (lo + hi) / 2, 0.0)
-    q[:] = np.where(np.abs(mid) < 1e-12, 0.0, mid)
+    home = dict(zip(("hip", "knee", "ankle"), ik.LEG_HOME))
     for i, name in enumerate(model.joint_names):
-        if name.endswith("knee"):
-            q[i] = -0.3
-        elif name.endswith("ankle"):
-            q[i] = 1.7
-    return np.clip(q, lo, hi)
+        q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
+    return np.clip(q, np.asarray(model.lower), np.asarray(model.upper))
 
 
 def standing_base(model: Model, q: np.ndarray) -> np.ndarray:
