@@ -74,7 +74,7 @@ class SeedRun:
             "error_x": self.error_x,
             "baseline_euler_solve": self.baseline,
             "baseline_failure": self.baseline_failure,
-            "closest_approach": tr.closest_approach,
+            "closest_approach": tr.closest_approach.to_dict(),
             "max_joint_speed": float(np.max(np.abs(tr.qdot))),
         }
 
@@ -182,7 +182,7 @@ def seed_experiment(
         out[..., 0] += a / w * (1.0 - np.cos(w * t))
         return out
 
-    traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, reference=ref)
+    traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, path=ref)
     figs, _ = _drift(mdl, traj.q, traj.t, a, per)
     base: dict[str, float] = {}
     base_dev = None

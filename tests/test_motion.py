@@ -75,7 +75,7 @@ def test_closed_loop_recovers_from_an_offset_start(leg):
     # reference starts 1 mm away from the foot: the closed loop pulls it in (e ~ exp(-K t))
     p0 = leg.position(motion.SEED_Q0) + np.array([0.0, 0.0, 1e-3])
     tr = motion.resolved_rate(leg, np.zeros(3), motion.SEED_Q0, 1e-3, 1.0, gain=20.0,
-                              reference=lambda t: np.broadcast_to(p0, np.shape(t) + (3,)))
+                              path=lambda t: np.broadcast_to(p0, np.shape(t) + (3,)))
     assert tr.tracking_error[0] == pytest.approx(1e-3, rel=1e-9)
     assert tr.tracking_error[-1] < 1e-3 * np.exp(-20.0 * 1.0) * 1.5
 
@@ -90,8 +90,9 @@ def test_stretching_outward_no_nan_within_speed_limits():
     reach = np.linalg.norm(tr.foot - [0, 0, 0], axis=1)
     assert np.all(reach <= 0.25 + 1e-12)
     ca = tr.closest_approach
-    assert ca["sigma_min"] < 1e-3  # it got (close to) the stretched singularity
-    assert ca["sigma_min"] == pytest.approx(float(tr.sigma_min.min()))
+    assert ca.sigma_min < 1e-3  # it got (close to) the stretched singularity
+    assert ca.sigma_min == pytest.approx(float(tr.sigma_min.min()))
+    assert ca.to_dict()["t"] == tr.t[ca.index]
     assert tr.damping.max() > 0  # the damping switched on
 
 
@@ -114,6 +115,84 @@ def test_argument_errors(leg):
         motion.resolved_rate(leg, [np.nan, 0, 0], motion.SEED_Q0, 1e-3, 1.0)
 
 
+# ------------------------------------------------------------------ 6-D twists (UR5)
+@pytest.fixture(scope="module")
+def ur5():
+    return hk.load("erd:ur5_robot", tip="tool0")
+
+
+def _exact(pose0, twist, t, frame):
+    """Independent of motion: Pinocchio's exp maps of the constant twist."""
+    import pinocchio as pin
+
+    T0 = pin.SE3(pose0)
+    out = []
+    for tk in t:
+        if frame == "tip":
+            out.append((T0 * pin.exp6(pin.Motion(np.asarray(twist) * tk))).homogeneous)
+        else:
+            m = np.eye(4)
+            m[:3, :3] = pin.exp3(np.asarray(twist[3:]) * tk) @ T0.rotation
+            m[:3, 3] = T0.translation + np.asarray(twist[:3]) * tk
+            out.append(m)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("frame", ["base", "tip"])
+@pytest.mark.parametrize("gain", [0.0, 10.0])
+def test_constant_twist_for_one_second_on_ur5(ur5, frame, gain):
+    import pinocchio as pin
+
+    twist = np.array([0.05, -0.03, 0.02, 0.2, -0.1, 0.3])
+    q0 = np.array([0.8, -1.2, 1.5, -0.3, 1.1, -1.5])
+    tr = motion.resolved_rate(ur5, twist, q0, 1e-3, 1.0, frame=frame, gain=gain)
+    assert not tr.limited.any()
+    exact = _exact(ur5.fk(q0), twist, tr.t, frame)
+    reached = np.array([ur5.fk(q) for q in tr.q])  # Pinocchio FK of the joint trajectory
+    drift_p = np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1))
+    drift_r = max(np.linalg.norm(pin.log3(e[:3, :3] @ r[:3, :3].T)) for e, r in
+                  zip(exact, reached))
+    assert drift_p <= 1e-9 and drift_r <= 1e-9
+    # the reported tip pose and velocity agree with Pinocchio
+    i = 500
+    np.testing.assert_allclose(tr.poses[i], reached[i], atol=1e-13)
+    jac = ur5.jacobian(tr.q[i], "local" if frame == "tip" else "local_world_aligned")
+    np.testing.assert_allclose(jac @ tr.qdot[i], twist, atol=1e-9 if gain == 0 else 1e-6)
+    sv = np.linalg.svd(ur5.jacobian(tr.q[i]), compute_uv=False)
+    assert tr.sigma_min[i] == pytest.approx(sv[-1], rel=1e-6)
+    assert tr.rotation_error.max() <= 1e-9
+
+
+def test_pose_path_is_the_se3_geodesic_and_is_followed(ur5):
+    import pinocchio as pin
+
+    qa, qb = np.array([0.2, -1.0, 1.2, -0.4, 1.0, 0.1]), np.array([0.7, -1.3, 1.6, -0.2, 1.3, 0.9])
+    A, B = ur5.fk(qa), ur5.fk(qb)
+    path = motion.PosePath([0.0, 0.5], [A, B])
+    np.testing.assert_allclose(path.sample(0.0), A, atol=1e-15)
+    np.testing.assert_allclose(path.sample(0.5), B, atol=1e-12)
+    mid = path.sample(0.25)
+    half = np.linalg.solve(A, mid)  # A⁻¹ M: its square is A⁻¹ B (geodesic midpoint)
+    np.testing.assert_allclose(half @ half, np.linalg.solve(A, B), atol=1e-12)
+    # the twist is the derivative of the path (central differences)
+    h = 1e-6
+    d = pin.log6(pin.SE3(path.sample(0.2 - h)).actInv(pin.SE3(path.sample(0.2 + h)))).vector
+    np.testing.assert_allclose(d / (2 * h), path.twist(0.2), atol=1e-6)
+    tr = motion.follow_pose_path(ur5, path, qa, dt=1e-3, gain=20.0)
+    assert tr.frame == "tip"
+    assert np.max(tr.tracking_error) <= 1e-9 and np.max(tr.rotation_error) <= 1e-9
+    np.testing.assert_allclose(ur5.fk(tr.q[-1]), B, atol=1e-9)
+    with pytest.raises(ParameterError):
+        motion.PosePath([0.0, 0.0], [A, B])
+
+
+def test_twist_argument_errors(ur5):
+    with pytest.raises(ParameterError, match="frame"):
+        motion.resolved_rate(ur5, np.zeros(6), None, 1e-3, 0.01, frame="world")
+    with pytest.raises(ConfigurationError, match="5 values"):
+        motion.resolved_rate(ur5, np.zeros(5), None, 1e-3, 0.01)
+
+
 # ------------------------------------------------------------------ seed 002 Table I
 def test_table_i_replayed_through_fk_and_ik():
     sched = seeds.seed002_schedule()
@@ -124,9 +203,9 @@ def test_table_i_replayed_through_fk_and_ik():
                                [[0, -90], [0, -70], [10, -50], [20, -50], [10, -70], [0, -90]],
                                atol=1e-12)
     feet = np.array([model.position(q) for q in q_plan])
-    q_back, ok = motion.track(model, feet, q_plan[0])
-    assert ok.all()
-    np.testing.assert_allclose(q_back, q_plan, atol=1e-9)
+    back = motion.track(model, feet, q_plan[0])
+    assert back.reached.all()
+    np.testing.assert_allclose(back.q, q_plan, atol=1e-9)
 
 
 # ------------------------------------------------------------------ foot steps
@@ -165,6 +244,39 @@ def test_cli_step_json(capsys):
     assert main(["step", "hexabot_leg", "--json", "--duration", "2", "--no-baseline"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["drift_y"] <= 1e-9 and out["drift_z"] <= 1e-9 and out["error_x"] <= 1e-9
+
+
+def test_cli_ik_pose_mask_tool_and_step_twist(capsys):
+    import pinocchio as pin
+
+    ur5 = hk.load("erd:ur5_robot", tip="tool0")
+    pose = ur5.fk(np.array([0.3, -1.1, 1.3, -0.5, 1.2, 0.4]))
+    rpy = pin.rpy.matrixToRpy(pose[:3, :3])
+    args = ["ik", "erd:ur5_robot", "--tip", "tool0", "--pose", *map(str, pose[:3, 3]),
+            *map(str, np.degrees(rpy)), "--deg", "--json"]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["numerical"]["status"] == "converged"
+    q = np.array(out["numerical"]["q"])
+    assert np.max(np.abs(ur5.fk(q) - pose)) <= 1e-9
+    # a tool 0.1 m along z: the tool frame reaches the pose
+    assert main(args + ["--tool", "0", "0", "0.1", "0", "0", "0"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    tooled = hk.load("erd:ur5_robot", tip="tool0", tool=((0, 0, 0.1), (0, 0, 0)))
+    np.testing.assert_allclose(tooled.fk(np.array(out["numerical"]["q"])), pose, atol=1e-9)
+    assert main(args + ["--mask", "1", "1", "1", "0", "0", "0"]) == 0
+    assert json.loads(capsys.readouterr().out)["numerical"]["error"] <= 1e-9
+    # step: a constant twist, checked against the exact motion
+    assert main(["step", "erd:ur5_robot", "--tip", "tool0", "--twist", "0.02", "0", "0", "0",
+                 "0", "30", "--deg", "--frame", "tip", "--duration", "0.5", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["position_drift"] <= 1e-9 and out["rotation_drift"] <= 1e-9
+    assert out["velocity"][5] == pytest.approx(np.radians(30.0))
+    # --deg converts revolute joints only: the SCARA's prismatic joint stays in metres
+    assert main(["step", "scara", "--velocity", "0", "0", "0", "--q", "10", "20", "30", "0.1",
+                 "--deg", "--duration", "0.01", "--json"]) == 0
+    q0 = json.loads(capsys.readouterr().out)["q0"]
+    np.testing.assert_allclose(q0, [*np.radians([10, 20, 30]), 0.1], atol=1e-15)
 
 
 def test_cli_ik(capsys):

@@ -1,0 +1,417 @@
+"""Subcommands ``ik`` (position, position + yaw, or 6-D pose targets) and ``step`` (resolved rate).
+
+``ik``: ``--target X Y Z`` (position), plus ``--yaw PSI`` (position + yaw), or ``--pose X Y Z
+ROLL PITCH YAW`` (a full pose, URDF rpy ``Rz·Ry·Rx``), ``--mask``/``--weights`` for the rows
+x y z wx wy wz, ``--tool X Y Z ROLL PITCH YAW`` (a rigid tool offset on the tip).
+``step``: the seeds' experiment (foot velocity ``[A sin(2πt/T), 0, 0]``), or a constant
+``--velocity VX VY VZ`` / ``--twist VX VY VZ WX WY WZ`` in ``--frame base|tip``.
+``--deg`` converts angles (revolute joints, rpy, yaw, angular velocities) from degrees; prismatic
+joints stay in metres.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any, Literal
+
+from ..exceptions import ParameterError
+from .common import (
+    PLOT_SUFFIXES,
+    emit_json,
+    load_source,
+    output_path,
+    q_args,
+    q_from_args,
+    source_args,
+)
+
+__all__ = ["register"]
+
+
+def _tool_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        help="rigid tool offset on the tip: xyz [m] and URDF rpy [rad] (deg with --deg)",
+    )
+
+
+def _load(args: argparse.Namespace) -> Any:
+    """Load the source; ``--tool`` (xyz + rpy, rpy in degrees with ``--deg``) as ``tool=``."""
+    tool = getattr(args, "tool", None)
+    if tool is not None:
+        rpy = [math.radians(v) if args.deg else v for v in tool[3:]]
+        args.tool = (tuple(tool[:3]), tuple(rpy))
+    return load_source(args)
+
+
+def _angle(args: argparse.Namespace, v: float) -> float:
+    return math.radians(v) if args.deg else v
+
+
+# ------------------------------------------------------------------------ ik
+def _add_ik(sub: Any) -> None:
+    p = sub.add_parser(
+        "ik",
+        help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p)
+    g = p.add_mutually_exclusive_group(required=True)
+    g.add_argument(
+        "--target",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "Z"),
+        help="tip position in the base frame [m]",
+    )
+    g.add_argument(
+        "--pose",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        help="tip pose: xyz [m] and URDF rpy [rad] (deg with --deg)",
+    )
+    p.add_argument(
+        "--yaw",
+        type=float,
+        help="with --target: yaw of the tool's x axis in the base xy-plane [rad]",
+    )
+    w = p.add_mutually_exclusive_group()
+    w.add_argument(
+        "--mask",
+        nargs=6,
+        type=int,
+        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
+        help="rows of the task to keep (1) or drop (0)",
+    )
+    w.add_argument(
+        "--weights",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
+        help="weight of each task row",
+    )
+    _tool_args(p)
+    p.add_argument(
+        "--q0",
+        nargs="+",
+        type=float,
+        help="start of the numerical solver (rad, m; revolute in deg with --deg)",
+    )
+    p.add_argument(
+        "--deg",
+        action="store_true",
+        help="angles in degrees (rpy, yaw, revolute --q0); prismatic stay in m",
+    )
+    p.add_argument("--tol", type=float, default=1e-10, help="position tolerance [m]")
+    p.add_argument("--rot-tol", type=float, default=1e-10, help="orientation tolerance [rad]")
+    p.add_argument("--restarts", type=int, default=16, help="extra seeded starts")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.set_defaults(func=_cmd_ik)
+
+
+def _target(args: argparse.Namespace) -> Any:
+    import numpy as np
+
+    if args.pose is not None:
+        if args.yaw is not None:
+            raise ParameterError(
+                "--yaw goes with --target, not --pose (the pose has its own rpy)",
+                parameter="--yaw",
+                value=args.yaw,
+                allowed="only with --target",
+            )
+        from .._numerics import rpy_to_matrix
+
+        pose = np.eye(4)
+        roll, pitch, yaw = (_angle(args, v) for v in args.pose[3:])
+        pose[:3, :3] = rpy_to_matrix(roll, pitch, yaw)
+        pose[:3, 3] = args.pose[:3]
+        return pose
+    t = np.array(args.target, dtype=float)
+    return t if args.yaw is None else np.append(t, _angle(args, args.yaw))
+
+
+def _cmd_ik(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .. import ik
+    from ..exceptions import IKError
+
+    model = _load(args)
+    target = _target(args)
+    closed: list[list[float]] | None = None
+    family = None
+    if target.shape != (4, 4) and args.tool is None:
+        try:
+            family = ik.detect_family(model).family
+        except IKError:
+            family = None
+    if family is not None and (target.size == 3 or family == "scara"):
+        closed = ik.analytic(model, target)[0].tolist()
+    q0 = None if args.q0 is None else q_from_args(args, model, "q0")
+    res = ik.solve(
+        model,
+        target,
+        q0,
+        mask=args.mask,
+        weights=args.weights,
+        tol=args.tol,
+        rot_tol=args.rot_tol,
+        restarts=args.restarts,
+    )
+    status = 0 if res.status in ("converged", "unreachable") else 1
+    if args.json:
+        emit_json(
+            {
+                "source": model.name,
+                "tip": model.tip,
+                "joint_names": list(model.joint_names),
+                "target": target.tolist(),
+                "family": family,
+                "analytic": closed,
+                "numerical": res.to_dict(),
+            }
+        )
+        return status
+    what = "pose" if target.shape == (4, 4) else "target"
+    print(
+        f"{model.name} (tip {model.tip}): {what} {np.round(target, 9).tolist()}, joints "
+        f"{', '.join(model.joint_names)}"
+    )
+    if closed is not None:
+        print(f"closed form ({family}): {len(closed)} solution(s)")
+        for sol in closed:
+            print("  " + " ".join(f"{v: .9f}" for v in sol))
+    elif target.shape != (4, 4):
+        print("closed form: none for this chain")
+    print(f"numerical: {res.status} ({res.reason})")
+    print("  q = " + " ".join(f"{v: .9f}" for v in res.q))
+    print(
+        f"  error = {res.error:.3e} m, {res.rotation_error:.3e} rad after {res.iterations} "
+        f"steps, {res.attempts} start(s)"
+    )
+    if res.status in ("unreachable", "joint_limits"):
+        print(
+            f"  nearest reachable point {np.round(res.nearest, 9).tolist()} m, "
+            f"distance {res.distance:.6g} m"
+        )
+    return status
+
+
+# ------------------------------------------------------------------------ step
+def _add_step(sub: Any) -> None:
+    p = sub.add_parser(
+        "step",
+        help="resolved rate: the seeds' experiment (v = [A sin(2πt/T), 0, 0]) or a constant "
+        "velocity / 6-D twist",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p)
+    q_args(p)
+    _tool_args(p)
+    g = p.add_mutually_exclusive_group()
+    g.add_argument(
+        "--velocity",
+        nargs=3,
+        type=float,
+        metavar=("VX", "VY", "VZ"),
+        help="constant linear tip velocity [m/s] (base axes)",
+    )
+    g.add_argument(
+        "--twist",
+        nargs=6,
+        type=float,
+        metavar=("VX", "VY", "VZ", "WX", "WY", "WZ"),
+        help="constant twist [m/s, rad/s] (deg/s with --deg) in --frame",
+    )
+    p.add_argument(
+        "--frame",
+        choices=["base", "tip"],
+        default="base",
+        help="axes of --twist: base, or tip (body twist)",
+    )
+    p.add_argument("--amplitude", type=float, default=0.05, help="A [m/s] (seed experiment)")
+    p.add_argument("--period", type=float, default=2.0, help="T [s] (seed experiment)")
+    p.add_argument("--duration", type=float, default=10.0, help="[s]")
+    p.add_argument("--dt", type=float, default=1e-3, help="step [s]")
+    p.add_argument("--method", choices=["rk4", "euler"], default="rk4")
+    p.add_argument("--gain", type=float, default=10.0, help="closed-loop gain [1/s] (0: open)")
+    p.add_argument(
+        "--no-baseline",
+        action="store_true",
+        help="skip the plain Euler + np.linalg.solve comparison",
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.add_argument("--plot", metavar="FILE.png", help="write the seeds' figures (PNG)")
+    p.add_argument("--html", metavar="FILE.html", help="write an animated 3-D page (HTML)")
+    p.set_defaults(func=_cmd_step)
+
+
+def _write_html(model: Any, tr: Any, path: str, title: str) -> str:
+    try:
+        from ..viewer import export_html
+    except ImportError as exc:
+        raise ParameterError(
+            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
+            parameter="--html",
+            value=path,
+            allowed="install hexapod-kin[viewer]",
+        ) from None
+    stride = max(1, int(round(0.02 / tr.dt)))
+    return str(export_html(model, tr.t[::stride], tr.q[::stride], path, title=title))
+
+
+def _cmd_step(args: argparse.Namespace) -> int:
+    if args.plot:
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if args.html:
+        output_path(args.html, "--html", (".html", ".htm"))
+    model = _load(args)
+    q0 = None if args.q is None else q_from_args(args, model)
+    if args.velocity is not None or args.twist is not None:
+        return _constant(args, model, q0)
+    from .. import seeds
+
+    run = seeds.seed_experiment(
+        model,
+        amplitude=args.amplitude,
+        period=args.period,
+        duration=args.duration,
+        dt=args.dt,
+        q0=q0,
+        method=args.method,
+        gain=args.gain,
+        baseline=not args.no_baseline,
+    )
+    tr = run.trajectory
+    written = []
+    if args.plot:
+        from ..plots import plot_motion
+
+        written.append(str(plot_motion(run, args.plot)))
+    if args.html:
+        written.append(
+            _write_html(
+                model,
+                tr,
+                args.html,
+                f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
+            )
+        )
+    if args.json:
+        emit_json({"source": model.name, **run.as_dict(), "written": written})
+        return 0
+    ca = tr.closest_approach
+    print(
+        f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
+        f"{tr.t[-1]:g} s, dt = {tr.dt:g} s, {tr.method}, gain {tr.gain:g} 1/s"
+    )
+    print("q0 = " + " ".join(f"{v:.6f}" for v in tr.q[0]))
+    print(
+        f"drift_y = {run.drift_y:.3e} m   drift_z = {run.drift_z:.3e} m   "
+        f"error_x = {run.error_x:.3e} m"
+    )
+    if run.baseline_failure:
+        print(f"plain Euler + np.linalg.solve: {run.baseline_failure}")
+    if run.baseline:
+        b = run.baseline
+        print(
+            f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
+            f"drift_z = {b['drift_z']:.3e} m   error_x = {b['error_x']:.3e} m"
+        )
+    print(
+        f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
+        f"{ca.t:.3f} s (condition {ca.condition:.4g})"
+    )
+    for path in written:
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
+    """A constant linear velocity or twist: run it and compare with the exact motion."""
+    import numpy as np
+    import pinocchio as pin
+
+    from .. import motion
+
+    if args.twist is not None:
+        vel = np.array(args.twist, dtype=float)
+        if args.deg:
+            vel[3:] = np.radians(vel[3:])
+        label = f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
+    else:
+        vel = np.array(args.velocity, dtype=float)
+        label = f"velocity {vel.tolist()} m/s (base axes)"
+    tr = motion.resolved_rate(
+        model,
+        vel,
+        q0,
+        args.dt,
+        args.duration,
+        frame=args.frame,
+        method=args.method,
+        gain=args.gain,
+    )
+    twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
+    frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
+    exact = motion.constant_twist_pose(model.fk(tr.q[0]), twist, tr.t, frame)
+    reached = np.array([model.fk(q) for q in tr.q])  # Pinocchio FK of the joint trajectory
+    drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
+    rot = 0.0
+    if vel.size == 6:
+        rot = max(
+            float(np.linalg.norm(pin.log3(e[:3, :3] @ r[:3, :3].T))) for e, r in zip(exact, reached)
+        )
+    written = []
+    if args.html:
+        written.append(_write_html(model, tr, args.html, f"{model.name}: {label}"))
+    ca = tr.closest_approach
+    if args.json:
+        emit_json(
+            {
+                "source": model.name,
+                "velocity": vel.tolist(),
+                "frame": frame,
+                "duration": float(tr.t[-1]),
+                "dt": tr.dt,
+                "method": tr.method,
+                "gain": tr.gain,
+                "q0": tr.q[0].tolist(),
+                "q_end": tr.q[-1].tolist(),
+                "position_drift": drift,
+                "rotation_drift": rot,
+                "limited": bool(tr.limited.any()),
+                "closest_approach": ca.to_dict(),
+                "written": written,
+            }
+        )
+        return 0
+    print(
+        f"{model.name} (tip {model.tip}): {label} for {tr.t[-1]:g} s, dt = {tr.dt:g} s, "
+        f"{tr.method}, gain {tr.gain:g} 1/s"
+    )
+    print("q0 = " + " ".join(f"{v:.6f}" for v in tr.q[0]))
+    print(
+        f"drift from the exact motion: position {drift:.3e} m, orientation {rot:.3e} rad"
+        + ("  (joint limits or speed limits were hit)" if tr.limited.any() else "")
+    )
+    print(
+        f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
+        f"{ca.t:.3f} s (condition {ca.condition:.4g})"
+    )
+    for path in written:
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``ik`` and ``step`` to ``sub`` (an argparse subparsers object)."""
+    _add_ik(sub)
+    _add_step(sub)

@@ -1,0 +1,497 @@
+"""Closed-form inverse kinematics of the leg families, recognised from the Khalil table.
+
+Closed forms (:func:`analytic`, :func:`analytic_batch`) are chosen from the *structure* of the
+Khalil table (the pattern of σ, α, d, r), never from a preset name:
+``"coxa_tibia"`` (2 DOF, seed 002)
+    ``R(α=0, d=0, r=r1) · R(α=±π/2, d=l1, r=0) · F(d=l2, r=0)``; foot
+    ``Rz(φ1)·[l1 + l2 cos φ2, 0, ±l2 sin φ2] + [0, 0, r1]``. A 2-DOF leg reaches a *surface*:
+    a target off it (farther than ``tol`` from it) has no solution. The tibia angle comes from
+    ``atan2`` of both coordinates, so its sign is right (the seed's ``θ2 = 180° − β`` loses it:
+    ``(0°, −30°)`` and ``(0°, +30°)`` give the same ``β``). Up to 2 solutions (hip ± π).
+``"leg3"`` (3 DOF hip/knee/ankle, seeds 000/001/003)
+    ``R(0, 0, r1) · R(±π/2, l1, 0) · R(0, l2, 0) · F(d=l3, r=0)``. Up to 4 solutions: hip
+    ``atan2(y, x)`` or that ``+ π`` (the leg reaching back over the hip axis), each with both
+    knee branches (ankle ``±acos``).
+``"scara"`` (seed 003)
+    ``R(0, 0, r1) · R(0, d2, r2) · R(0, d3, r3) · P(α ∈ {0, π}, d=0) · F(d=0, r=0)``. Target
+    ``(x, y, z)`` or ``(x, y, z, yaw)``: ``yaw`` [rad] is the angle of the tool frame's x axis
+    in the base xy-plane. A position alone leaves θ3 free (it only turns the tool); then the
+    solutions use ``θ3 = 0`` (joint value). Up to 2 solutions (both elbow branches); the
+    prismatic value follows from z.
+
+Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
+results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
+limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
+
+The numerical solver :func:`solve` works on any loaded model (Pinocchio). It is a
+
+:func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
+gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
+:class:`AnalyticBatch`. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._numerics import njit, prange, wrap_angle, wrap_angles, wrap_diff
+from ..exceptions import IKError
+from ..model import Model
+from ..params import Chain
+
+__all__ = ["FAMILIES", "AnalyticBatch", "LegFamily", "analytic", "analytic_batch", "detect_family"]
+
+FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
+
+_HALF_PI = 0.5 * math.pi
+_ANG_TOL = 1e-12
+
+
+def _is(value: float, target: float, tol: float = _ANG_TOL) -> bool:
+    return abs(value - target) <= tol
+
+
+def _angle_is(value: float, target: float) -> bool:
+    return abs(math.remainder(value - target, 2 * math.pi)) <= _ANG_TOL
+
+
+# ============================================================================ family detection
+@dataclass(frozen=True)
+class LegFamily:
+    """A chain recognised as one of the closed-form families (see the module docstring).
+
+    Attributes:
+        family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"``.
+        chain: The chain.
+        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``.
+        height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
+        sign: ``sin α2`` (±1) of the legs; ``cos α4`` (±1) of the SCARA's prismatic row.
+        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
+        yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
+        yaw_sign: SCARA only: ±1 factor of those constant rows' contribution.
+
+    """
+
+    family: str
+    chain: Chain
+    lengths: tuple[float, ...]
+    height: float
+    sign: float
+    offsets: tuple[float, ...]
+    yaw_offset: float = 0.0
+
+    @property
+    def nq(self) -> int:
+        """Number of joints."""
+        return self.chain.nq
+
+    @property
+    def max_solutions(self) -> int:
+        """Number of solution slots of :func:`analytic_batch` (2, 4 or 2)."""
+        return {"coxa_tibia": 2, "leg3": 4, "scara": 2}[self.family]
+
+    @property
+    def target_size(self) -> tuple[int, ...]:
+        """Accepted target lengths: (3,) for legs, (3, 4) for the SCARA (with yaw)."""
+        return (3, 4) if self.family == "scara" else (3,)
+
+    @property
+    def scale(self) -> float:
+        """A length scale of the chain in [m] (sum of |d| and |r|), for tolerances."""
+        s = sum(abs(r.d) + abs(r.r) for r in self.chain.rows)
+        return s if s > 0 else 1.0
+
+
+def _chain_of(chain: Chain | Model) -> Chain:
+    if isinstance(chain, Chain):
+        return chain
+    params = getattr(chain, "params", None)
+    if isinstance(params, Chain):
+        base, tip = getattr(chain, "base", params.base), getattr(chain, "tip", params.tip)
+        if base != params.base or tip != params.tip:
+            raise IKError(
+                f"chain: the model's sub-chain {base!r} -> {tip!r} is not the table's "
+                f"{params.base!r} -> {params.tip!r}; closed forms need the whole table "
+                "(use ik.solve for sub-chains)"
+            )
+        return params
+    raise IKError(
+        f"chain={chain!r}: closed-form IK needs a Khalil table (a Chain, or a model loaded from "
+        "one); this source has none (URDF) — use hexapod_kin.ik.solve(model, target)"
+    )
+
+
+def detect_family(chain: Chain | Model) -> LegFamily:
+    """Recognise the closed-form family of a chain from its table pattern.
+
+    Args:
+        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one.
+
+    Returns:
+        The :class:`LegFamily`.
+
+    Raises:
+        IKError: If the table matches no family (the message shows the pattern and the
+            families), or the model has no table.
+
+    """
+    ch = _chain_of(chain)
+    rows = ch.rows
+    sig = tuple(str(r.sigma)[0].upper() for r in rows)
+    offsets = tuple(
+        rows[i].theta if rows[i].sigma == "revolute" else rows[i].r for i in ch.joint_rows
+    )
+    r1 = rows[0]
+    base_ok = _is(r1.alpha, 0.0) and _is(r1.d, 0.0)
+    if sig == ("R", "R", "F") and base_ok:
+        a, f = rows[1], rows[2]
+        if _is(abs(a.alpha), _HALF_PI) and _is(a.r, 0.0) and _is(f.r, 0.0) and abs(f.d) > 0:
+            return LegFamily(
+                "coxa_tibia", ch, (a.d, f.d), r1.r, math.copysign(1.0, a.alpha), offsets
+            )
+    if sig == ("R", "R", "R", "F") and base_ok:
+        a, b, f = rows[1], rows[2], rows[3]
+        if (
+            _is(abs(a.alpha), _HALF_PI)
+            and _is(a.r, 0.0)
+            and _is(b.alpha, 0.0)
+            and _is(b.r, 0.0)
+            and _is(f.r, 0.0)
+            and abs(b.d) > 0
+            and abs(f.d) > 0
+        ):
+            return LegFamily(
+                "leg3", ch, (a.d, b.d, f.d), r1.r, math.copysign(1.0, a.alpha), offsets
+            )
+    if sig == ("R", "R", "R", "P", "F") and base_ok:
+        b, c, p, f = rows[1], rows[2], rows[3], rows[4]
+        flip = _angle_is(p.alpha, math.pi)
+        f_flip = _angle_is(f.alpha, math.pi)
+        if (
+            _is(b.alpha, 0.0)
+            and _is(c.alpha, 0.0)
+            and (flip or _angle_is(p.alpha, 0.0))
+            and _is(p.d, 0.0)
+            and _is(f.d, 0.0)
+            and _is(f.r, 0.0)
+            and (f_flip or _angle_is(f.alpha, 0.0))
+            and abs(b.d) > 0
+            and abs(c.d) > 0
+        ):
+            c4 = -1.0 if flip else 1.0
+            c5 = -1.0 if f_flip else 1.0
+            return LegFamily(
+                "scara",
+                ch,
+                (b.d, c.d),
+                r1.r + b.r + c.r,
+                c4,
+                offsets,
+                yaw_offset=c4 * (p.theta + c5 * f.theta),
+            )
+    pattern = " ".join(f"{s}(α={r.alpha:.4g}, d={r.d:.4g}, r={r.r:.4g})" for s, r in zip(sig, rows))
+    raise IKError(
+        f"chain {ch.name!r} has no closed-form IK: its table {pattern} matches none of the "
+        f"families {list(FAMILIES)} (coxa_tibia: R(0,0,r1) R(±π/2,l1,0) F(l2,r=0); leg3: "
+        "R(0,0,r1) R(±π/2,l1,0) R(0,l2,0) F(l3,r=0); scara: R(0,0,r1) R(0,d2) R(0,d3) "
+        "P(α∈{0,π},d=0) F(d=0,r=0)); use hexapod_kin.ik.solve(model, target)"
+    )
+
+
+# ============================================================================ closed forms
+@dataclass(frozen=True)
+class AnalyticBatch:
+    """Closed-form solutions of many targets, in fixed-shape arrays (read-only).
+
+    Attributes:
+        q: (N, K, n) joint values; slot ``k`` of target ``i`` is meaningful where
+            ``valid[i, k]`` (elsewhere NaN). K is 2 (coxa_tibia, scara) or 4 (leg3); slots
+            keep a fixed branch meaning (see :func:`analytic_batch`).
+        valid: (N, K) True where the slot holds a solution.
+        family: The detected family name.
+
+    """
+
+    q: np.ndarray
+    valid: np.ndarray
+    family: str
+
+    @property
+    def reachable(self) -> np.ndarray:
+        """(N,) True where a target has at least one solution."""
+        return np.asarray(self.valid.any(axis=1))
+
+
+def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
+    try:
+        arr = np.asarray(target, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise IKError(f"target={target!r} is not an array of numbers") from None
+    single = arr.ndim == 1
+    if single:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] not in fam.target_size:
+        allowed = " or ".join(f"({k},)/(N, {k})" for k in fam.target_size)
+        raise IKError(
+            f"target has shape {np.shape(target)}; family {fam.family!r} takes {allowed}"
+            + (" — (x, y, z[, yaw]) in [m], [rad]" if fam.family == "scara" else " in [m]")
+        )
+    if not np.all(np.isfinite(arr)):
+        raise IKError(f"target={np.asarray(target).tolist()!r} contains non-finite values")
+    return np.ascontiguousarray(arr), single
+
+
+def analytic_batch(
+    chain: Chain | Model, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
+) -> AnalyticBatch:
+    """All closed-form solutions of N targets as fixed-shape arrays plus a validity mask.
+
+    Slot meanings: coxa_tibia ``[hip toward the target, hip reversed (φ1 + π)]``; leg3
+    ``[toward/ankle +, toward/ankle −, reversed/ankle +, reversed/ankle −]``; scara
+    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid.
+
+    Args:
+        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one.
+        targets: (N, 3) foot positions in [m] in the base frame (SCARA: (N, 3) or (N, 4) with
+            yaw [rad]); a single (3,) target is accepted as N = 1.
+        tol: Relative tolerance (× the chain's length scale) of the reachability tests; a
+            target this close outside the workspace is solved on its boundary.
+        within_limits: If True, invalidate solutions outside the joint limits (revolute
+            values are first shifted by ±2π when that brings them inside).
+
+    Returns:
+        An :class:`AnalyticBatch`.
+
+    Raises:
+        IKError: No closed form for this chain; bad or non-finite targets.
+
+    """
+    fam = detect_family(chain)
+    x, _ = _targets(fam, targets)
+    tol_abs = float(tol) * fam.scale
+    if not within_limits and fam.family in ("coxa_tibia", "leg3"):
+        leg3 = fam.family == "leg3"
+        qk = np.empty((x.shape[0], fam.max_solutions, fam.nq))
+        vk = np.empty((x.shape[0], fam.max_solutions), dtype=np.bool_)
+        ls = fam.lengths + (1.0,) * (3 - len(fam.lengths))
+        _legs_kernel(
+            x,
+            leg3,
+            ls[0],
+            ls[1],
+            ls[2],
+            fam.height,
+            fam.sign,
+            tol_abs,
+            np.asarray(fam.offsets, dtype=float),
+            qk,
+            vk,
+        )
+        qk.setflags(write=False)
+        vk.setflags(write=False)
+        return AnalyticBatch(q=qk, valid=vk, family=fam.family)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if fam.family == "coxa_tibia":
+            q, valid = _ik_coxa_tibia(fam, x, tol_abs)
+        elif fam.family == "leg3":
+            q, valid = _ik_leg3(fam, x, tol_abs)
+        else:
+            q, valid = _ik_scara(fam, x)
+    off = np.asarray(fam.offsets)
+    revolute = np.array([s == "revolute" for s in fam.chain.sigmas])
+    q = q - off
+    q[..., revolute] = wrap_angles(q[..., revolute])
+    if within_limits:
+        lo, hi = fam.chain.lower(), fam.chain.upper()
+        for j in np.flatnonzero(revolute):
+            for shift in (2 * np.pi, -2 * np.pi):
+                moved = q[..., j] + shift
+                fix = (
+                    ((q[..., j] < lo[j]) | (q[..., j] > hi[j]))
+                    & (moved >= lo[j])
+                    & (moved <= hi[j])
+                )
+                q[..., j] = np.where(fix, moved, q[..., j])
+        valid &= np.all((q >= lo - 1e-12) & (q <= hi + 1e-12), axis=-1)
+    q[~valid] = np.nan
+    q.setflags(write=False)
+    valid.setflags(write=False)
+    return AnalyticBatch(q=q, valid=valid, family=fam.family)
+
+
+def _ik_coxa_tibia(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    l1, l2 = fam.lengths
+    n = x.shape[0]
+    h = np.hypot(x[:, 0], x[:, 1])
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    w = (x[:, 2] - fam.height) * fam.sign  # = l2 sin φ2
+    q = np.empty((n, 2, 2))
+    valid = np.empty((n, 2), dtype=bool)
+    for k, hs in enumerate((1.0, -1.0)):
+        u = hs * h - l1  # = l2 cos φ2
+        dist = np.hypot(u, w)
+        valid[:, k] = np.abs(dist - abs(l2)) <= tol
+        q[:, k, 0] = phi if hs > 0 else phi + np.pi
+        q[:, k, 1] = np.arctan2(w / l2, u / l2)
+    return q, valid
+
+
+def _ik_leg3(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    l1, l2, l3 = fam.lengths
+    n = x.shape[0]
+    h = np.hypot(x[:, 0], x[:, 1])
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    w = (x[:, 2] - fam.height) * fam.sign  # = l2 s2 + l3 s23
+    q = np.empty((n, 4, 3))
+    valid = np.empty((n, 4), dtype=bool)
+    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3)
+    for k, hs in enumerate((1.0, -1.0)):
+        u = hs * h - l1  # = l2 c2 + l3 c23
+        c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+        ok = np.abs(c3) <= 1.0 + eps
+        c3 = np.clip(c3, -1.0, 1.0)
+        s3 = np.sqrt(1.0 - c3 * c3)
+        base = np.arctan2(w, u)
+        for b, sgn in enumerate((1.0, -1.0)):
+            slot = 2 * k + b
+            s = sgn * s3
+            q[:, slot, 0] = phi if hs > 0 else phi + np.pi
+            q[:, slot, 2] = np.arctan2(s, c3)
+            q[:, slot, 1] = base - np.arctan2(l3 * s, l2 + l3 * c3)
+            valid[:, slot] = ok
+    return q, valid
+
+
+def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d2, d3 = fam.lengths
+    n = x.shape[0]
+    rr = x[:, 0] ** 2 + x[:, 1] ** 2
+    c2 = (rr - d2 * d2 - d3 * d3) / (2.0 * d2 * d3)
+    eps = 1e-9 * (abs(d2) + abs(d3)) ** 2 / abs(d2 * d3)
+    ok = np.abs(c2) <= 1.0 + eps
+    c2 = np.clip(c2, -1.0, 1.0)
+    s2 = np.sqrt(1.0 - c2 * c2)
+    base = np.arctan2(x[:, 1], x[:, 0])
+    q = np.empty((n, 2, 4))
+    valid = np.empty((n, 2), dtype=bool)
+    c4 = fam.sign
+    prism = (x[:, 2] - fam.height) * c4  # = r4 + q4 along ±z
+    for b, sgn in enumerate((1.0, -1.0)):
+        s = sgn * s2
+        t2 = np.arctan2(s, c2)
+        t1 = base - np.arctan2(d3 * s, d2 + d3 * c2)
+        q[:, b, 0] = t1
+        q[:, b, 1] = t2
+        if x.shape[1] == 4:
+            # yaw = φ1 + φ2 + φ3 + yaw_offset → φ3 (offset θ3 is removed later with the others)
+            q[:, b, 2] = x[:, 3] - fam.yaw_offset - t1 - t2
+        else:
+            q[:, b, 2] = fam.offsets[2]  # joint value θ3 = 0 after the offset is removed
+        q[:, b, 3] = prism
+        valid[:, b] = ok
+    return q, valid
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _legs_kernel(
+    x: np.ndarray,
+    fam3: bool,
+    l1: float,
+    l2: float,
+    l3: float,
+    height: float,
+    sign: float,
+    tol: float,
+    off: np.ndarray,
+    q: np.ndarray,
+    valid: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """coxa_tibia (fam3 False) and leg3 (fam3 True) closed forms, offsets removed, wrapped."""
+    n = x.shape[0]
+    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3) if fam3 else 0.0
+    nan = np.nan
+    for i in prange(n):
+        h = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1])
+        phi = math.atan2(x[i, 1], x[i, 0])
+        w = (x[i, 2] - height) * sign
+        for k in range(2):
+            u = (h if k == 0 else -h) - l1
+            p1 = wrap_angle((phi if k == 0 else phi + math.pi) - off[0])
+            if not fam3:
+                ok = abs(math.sqrt(u * u + w * w) - abs(l2)) <= tol
+                valid[i, k] = ok
+                if ok:
+                    q[i, k, 0] = p1
+                    q[i, k, 1] = wrap_angle(math.atan2(w / l2, u / l2) - off[1])
+                else:
+                    q[i, k, 0] = nan
+                    q[i, k, 1] = nan
+                continue
+            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+            ok = abs(c3) <= 1.0 + eps
+            valid[i, 2 * k] = ok
+            valid[i, 2 * k + 1] = ok
+            if not ok:
+                for b in range(2):
+                    for j in range(3):
+                        q[i, 2 * k + b, j] = nan
+                continue
+            c3 = min(max(c3, -1.0), 1.0)
+            s3 = math.sqrt(1.0 - c3 * c3)
+            base = math.atan2(w, u)
+            a3 = math.atan2(s3, c3)
+            a2 = math.atan2(l3 * s3, l2 + l3 * c3)
+            q[i, 2 * k, 0] = p1
+            q[i, 2 * k, 1] = wrap_angle(base - a2 - off[1])
+            q[i, 2 * k, 2] = wrap_angle(a3 - off[2])
+            q[i, 2 * k + 1, 0] = p1
+            q[i, 2 * k + 1, 1] = wrap_angle(base + a2 - off[1])
+            q[i, 2 * k + 1, 2] = wrap_angle(-a3 - off[2])
+
+
+def analytic(
+    chain: Chain | Model, target: Any, *, tol: float = 1e-9, within_limits: bool = False
+) -> list[np.ndarray]:
+    """All closed-form solutions, as a list with one (k, n) array per target (k ≥ 0).
+
+    The return type does not depend on the input: a single target (3,) gives a list of one
+    array, N targets (N, 3) a list of N. Coincident solutions (e.g. the two knee branches of a
+    stretched leg) are returned once; an unreachable target gives a (0, n) array.
+
+    Args:
+        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one (the family is
+            recognised from the table; see the module docstring).
+        target: Foot position (3,) in [m] in the base frame, or (N, 3); SCARA: (3,) or
+            (4,) = (x, y, z, yaw [rad]), or (N, 3) / (N, 4).
+        tol: Relative reachability tolerance (see :func:`analytic_batch`).
+        within_limits: Keep only solutions inside the joint limits.
+
+    Returns:
+        A list of (k, n) arrays in [rad]/[m], one per target.
+
+    Raises:
+        IKError: No closed form for this chain; bad or non-finite target.
+
+    Example:
+        >>> from hexapod_kin import robots, ik
+        >>> import math
+        >>> p = [10 + 5 * math.cos(math.radians(30)), 0.0, -2.5]  # seed 002, P1
+        >>> ik.analytic(robots.coxa_tibia_leg(), p)[0].round(4)
+        array([[ 0.    , -0.5236],
+               [ 3.1416, -2.618 ]])
+
+    """
+    batch = analytic_batch(chain, target, tol=tol, within_limits=within_limits)
+    out: list[np.ndarray] = []
+    for qi, vi in zip(batch.q, batch.valid):
+        sols = qi[vi]
+        keep: list[np.ndarray] = []
+        for s in sols:
+            if not any(np.max(np.abs(wrap_diff(s, k))) <= 1e-12 for k in keep):
+                keep.append(s)
+        out.append(np.array(keep, dtype=float).reshape(len(keep), qi.shape[-1]))
+    return out

@@ -1,0 +1,579 @@
+"""Numerical IK for any loaded chain: position, position + yaw, or a full 6-D pose.
+
+:func:`solve` builds the task (:func:`~hexapod_kin.ik.task.build_task`), runs the compiled
+Levenberg–Marquardt loop (:func:`~hexapod_kin.ik.step.lm_loop`: damping ``λ² = μ(‖We‖² + w̄)``
+adapted step by step, a step kept only if it lowers the error — the residual history decreases
+strictly —, a step cap, joint limits: continuous joints (range ≥ 2π) wrap, the others are
+clamped and a joint blocked at a limit is frozen; stall detection; seeded restarts) and reports
+the result with Pinocchio's FK. Orientation errors are ``log(R* Rᵀ)`` on SO(3), never Euler
+angles. On a redundant chain (more joints than task rows, e.g. Panda 7-DOF with a 6-D pose)
+a secondary task moves toward a preferred posture (default: the middle of the joint ranges)
+in the null space of the task, while it does not slow the task down.
+
+Per-model data (packed chain arrays, limits, home, restart starts) is built once and kept in
+the model's cache (:meth:`~hexapod_kin.model.Model.cached`); every call allocates its own
+buffers, so one model can be solved from many threads.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal, Union
+
+import numpy as np
+
+from .._kernels import fk_jac_into
+from .._numerics import sigma_bounds
+from ..exceptions import ConfigurationError, IKError, ParameterError
+from ..kinematics import KinematicModel
+from ..params import Chain, Hexapod
+from .step import (
+    I_LIMITS,
+    I_MAX_ITER,
+    P_ROT_TOL,
+    P_TOL,
+    lm_loop,
+    pose_errors,
+    task_cost,
+    task_into,
+    tip_rotation_into,
+)
+from .task import Task, build_task
+
+__all__ = ["LEG_HOME", "STATUSES", "IKResult", "home", "prepared", "solve", "solve_many"]
+
+Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
+STATUSES: tuple[str, ...] = (
+    "converged",
+    "unreachable",
+    "joint_limits",
+    "singular",
+    "not_converged",
+)
+
+#: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
+ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
+
+#: Standing pose of the 3-DOF legs [rad] (the seeds' start): foot at (0.1526, 0, −0.1293) m on
+#: the hexabot leg, well away from the singularities (q3 = 0, π; foot over the hip axis).
+LEG_HOME = (0.0, 0.3, 1.2)
+
+_MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
+_N_STARTS = 32  # seeded restart configurations kept per model
+
+
+def as_model(model: ModelLike) -> KinematicModel:
+    """``model`` itself if loaded, else :func:`hexapod_kin.load` of it."""
+    if isinstance(model, KinematicModel):
+        return model
+    from ..kinematics import load
+
+    return load(model)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """What the solver needs of one model, built once (arrays read-only).
+
+    Attributes:
+        packed: The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col).
+        tip_rot: (3, 3) rotation of the tip in its joint frame.
+        lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
+        cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
+        scale: The chain's length scale in [m] (sum of the link offsets).
+        home: The default start (see :func:`home`).
+        starts: (32, n) seeded random restart configurations within the limits.
+        middle: (n,) middle of each joint's range (continuous joints: 0).
+
+    """
+
+    packed: tuple[np.ndarray, ...]
+    tip_rot: np.ndarray
+    lim: np.ndarray
+    cont: np.ndarray
+    scale: float
+    home: np.ndarray
+    starts: np.ndarray
+    middle: np.ndarray
+
+
+def _build_prepared(model: KinematicModel) -> Prepared:
+    from .._numerics import chain_scale
+
+    arrays = model.arrays
+    lower = np.asarray(model.lower, dtype=float)
+    upper = np.asarray(model.upper, dtype=float)
+    prism = np.asarray(model.is_prismatic, dtype=bool)
+    cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
+    scale = chain_scale(arrays.trans)
+    cap = np.where(prism, 0.25 * scale, 0.5)
+    lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
+    lo = np.where(cont, -np.pi, lower)
+    hi = np.where(cont, np.pi, upper)
+    starts = np.random.default_rng(12345).uniform(lo, hi, size=(_N_STARTS, model.nq))
+    middle = np.where(cont, 0.0, 0.5 * (lower + upper))
+    q_home = _dexterous_home(model, lower, upper, cont)
+    for a in (lim, cont, starts, middle, q_home):
+        a.setflags(write=False)
+    return Prepared(arrays.packed, arrays.tip_rot, lim, cont, scale, q_home, starts, middle)
+
+
+def _dexterous_home(
+    model: KinematicModel, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray
+) -> np.ndarray:
+    if model.nq == 3:
+        q = np.array(LEG_HOME)
+        if np.all(q >= lower) and np.all(q <= upper):
+            return q
+    from .._kernels import position_jacobian_batch
+
+    lo = np.maximum(lower, -np.pi)
+    hi = np.minimum(upper, np.pi)
+    mid = 0.5 * (lo + hi)
+    half = 0.25 * (hi - lo)
+    rng = np.random.default_rng(0)
+    cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
+    sv = np.linalg.svd(position_jacobian_batch(model.arrays, cands), compute_uv=False)
+    return np.array(cands[int(np.argmax(sv[:, min(model.nq, 3) - 1]))])
+
+
+def prepared(model: ModelLike) -> Prepared:
+    """The solver's per-model data (cached in the model; see :class:`Prepared`)."""
+    mdl = as_model(model)
+    return mdl.cached("ik.prepared", lambda: _build_prepared(mdl))
+
+
+def home(model: ModelLike) -> np.ndarray:
+    """The package's one home pose: the default IK start and resolved-rate start (a copy).
+
+    ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
+    otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
+    the middle half of each range (ranges clipped to ±π): the one with the largest smallest
+    (3rd) singular value of the position Jacobian — far from the singular manifolds and from
+    the limits. Computed once per model.
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
+
+    Returns:
+        (nq,) joint values in [rad]/[m].
+
+    """
+    return np.array(prepared(model).home)
+
+
+# ============================================================================ result
+@dataclass(frozen=True)
+class IKResult:
+    """Result of :func:`solve` (arrays are read-only; SI units).
+
+    Attributes:
+        q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
+        status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
+            ``"not_converged"``.
+        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
+            with Pinocchio.
+        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
+            position + yaw: |ψ* − ψ|; position: 0), recomputed with Pinocchio.
+        iterations: Accepted steps of the returned attempt.
+        history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
+            (starts with the initial residual; strictly decreasing).
+        position: p(q) in [m] (Pinocchio).
+        rotation: R(q) (3, 3), the tip's rotation in the base frame (Pinocchio).
+        target: The target position in [m].
+        task: The task solved (mode, target pose, yaw, weights).
+        attempts: How many starts were tried (1 + restarts used).
+        reason: One sentence explaining the status.
+        distance: For ``"unreachable"`` / ``"joint_limits"``: the position error in [m] of the
+            best configuration found; else 0.
+        nearest: For ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
+        sigma_min: Smallest singular value of the position Jacobian at ``q`` [m/rad].
+
+    """
+
+    q: np.ndarray
+    status: Status
+    error: float
+    rotation_error: float
+    iterations: int
+    history: np.ndarray
+    position: np.ndarray
+    rotation: np.ndarray
+    target: np.ndarray
+    task: Task
+    attempts: int
+    reason: str
+    distance: float
+    nearest: np.ndarray
+    sigma_min: float
+
+    @property
+    def converged(self) -> bool:
+        """True when ``status == "converged"``."""
+        return self.status == "converged"
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The reached pose ``baseMtip`` (4, 4)."""
+        out = np.eye(4)
+        out[:3, :3] = self.rotation
+        out[:3, 3] = self.position
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary ([rad]/[m])."""
+        return {
+            "status": self.status,
+            "q": [float(v) for v in self.q],
+            "error": float(self.error),
+            "rotation_error": float(self.rotation_error),
+            "iterations": int(self.iterations),
+            "attempts": int(self.attempts),
+            "position": [float(v) for v in self.position],
+            "rotation": self.rotation.tolist(),
+            "target": [float(v) for v in self.target],
+            "task": self.task.to_dict(),
+            "distance": float(self.distance),
+            "nearest": [float(v) for v in self.nearest],
+            "sigma_min": float(self.sigma_min),
+            "reason": self.reason,
+            "history": [float(v) for v in self.history],
+        }
+
+
+# ============================================================================ solve
+def _positive(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; a finite number > 0 is needed",
+            parameter=name,
+            value=value,
+            allowed="finite > 0",
+        )
+    if not (math.isfinite(value) and value > 0):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; a finite number > 0 is needed",
+            parameter=name,
+            value=value,
+            allowed="finite > 0",
+        )
+    return float(value)
+
+
+def _count(name: str, value: Any, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; an int >= {least} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"int >= {least}",
+        )
+    return int(value)
+
+
+def _posture(model: KinematicModel, prep: Prepared, posture: Any) -> tuple[np.ndarray, bool]:
+    if posture is None or posture is False:
+        return prep.middle, False
+    if isinstance(posture, str):
+        if posture != "middle":
+            raise ParameterError(
+                f"posture={posture!r} is not allowed; use 'middle', None or a (nq,) array",
+                parameter="posture",
+                value=posture,
+                allowed="'middle', None, (nq,) array",
+            )
+        return prep.middle, True
+    return np.ascontiguousarray(model.check_q(posture, "posture"), dtype=float), True
+
+
+def solve(
+    model: ModelLike,
+    target: Any,
+    q0: Any = None,
+    *,
+    mask: Any = None,
+    weights: Any = None,
+    tol: float = 1e-10,
+    rot_tol: float = 1e-10,
+    max_iter: int = 100,
+    restarts: int = 16,
+    within_limits: bool = True,
+    posture: Any = "middle",
+    posture_gain: float = 0.1,
+) -> IKResult:
+    """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
+
+    Args:
+        model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
+        target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
+            axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
+        q0: Start configuration (nq,); default :func:`home`.
+        mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
+        weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
+        tol: Convergence threshold on the position error in [m].
+        rot_tol: Convergence threshold on the orientation error in [rad].
+        max_iter: Accepted steps per attempt.
+        restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
+        within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
+        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
+            ranges), a preferred configuration (nq,), or None (off).
+        posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
+
+    Returns:
+        An :class:`IKResult`. ``"unreachable"``: every attempt ended at a local minimum of the
+        task error (no direction lowers it), also without limits; ``nearest`` / ``distance``
+        give the best point found. ``"joint_limits"``: reachable only outside the limits.
+        ``"singular"``: stuck at a singular configuration that is not a minimum.
+        ``"not_converged"``: iteration cap.
+
+    Raises:
+        IKError: Non-finite or wrongly shaped target, or bad mask/weights.
+        ConfigurationError: Bad ``q0`` or ``posture``.
+        ParameterError: Bad ``tol``, ``rot_tol``, ``max_iter``, ``restarts`` or posture.
+
+    """
+    mdl = model if model.__class__ is KinematicModel else as_model(model)
+    task = build_task(target, mask=mask, weights=weights)
+    tol = tol if tol.__class__ is float and 0.0 < tol < math.inf else _positive("tol", tol)
+    rot_tol = _positive("rot_tol", rot_tol) if rot_tol != 1e-10 else rot_tol
+    max_iter = _count("max_iter", max_iter, 1)
+    restarts = _count("restarts", restarts, 0)
+    if restarts > _N_STARTS:
+        raise ParameterError(
+            f"restarts={restarts} is not allowed; at most {_N_STARTS}",
+            parameter="restarts",
+            value=restarts,
+            allowed=f"0..{_N_STARTS}",
+        )
+    gain = _positive("posture_gain", posture_gain)
+    prep = prepared(mdl)
+    target_posture, use_posture = _posture(mdl, prep, posture)
+    qs = prep.home if q0 is None else mdl.check_q(q0, "q0")
+    starts = np.empty((1 + restarts, mdl.nq))
+    starts[0] = qs
+    starts[1:] = prep.starts[:restarts]
+    # the loop's parameters, in the order of step.P_* and step.I_*
+    par = np.array([tol, rot_tol, 1e-8 * prep.scale**2, _MU0, gain, task.yaw, 1e-6 * prep.scale])
+    ipar = np.array(
+        [task.code, max_iter, int(bool(within_limits)), int(use_posture)], dtype=np.int64
+    )
+    q = np.empty(mdl.nq)
+    hist = np.empty(max_iter + 1)
+    jac = np.empty((6, mdl.nq))
+    attempts, it, code = lm_loop(
+        *prep.packed,
+        prep.tip_rot,
+        task.pose,
+        task.weights,
+        par,
+        ipar,
+        starts,
+        prep.lim,
+        prep.cont,
+        target_posture,
+        q,
+        hist,
+        jac,
+    )
+    return _report(mdl, prep, task, q, hist[: it + 1], jac, attempts, it, code, par, ipar)
+
+
+def _report(
+    mdl: KinematicModel,
+    prep: Prepared,
+    task: Task,
+    q: np.ndarray,
+    hist: np.ndarray,
+    jac: np.ndarray,
+    attempts: int,
+    it: int,
+    code: int,
+    par: np.ndarray,
+    ipar: np.ndarray,
+) -> IKResult:
+    pose = np.ascontiguousarray(mdl.fk(q))  # the reported residual: Pinocchio's FK
+    err, rot = pose_errors(task.code, task.pose, task.weights, task.yaw, pose)
+    smin = float(sigma_bounds(jac[:3])[0])
+    tgt = task.pose[:3, 3].copy()
+    pos = pose[:3, 3].copy()
+    rmat = pose[:3, :3].copy()
+    for a in (q, hist, pos, tgt, rmat):
+        a.setflags(write=False)
+    tol, rot_tol = float(par[P_TOL]), float(par[P_ROT_TOL])
+
+    def result(status: Status, reason: str, far: bool = False) -> IKResult:
+        return IKResult(
+            q=q,
+            status=status,
+            error=err,
+            rotation_error=rot,
+            iterations=it,
+            history=hist,
+            position=pos,
+            rotation=rmat,
+            target=tgt,
+            task=task,
+            attempts=attempts,
+            reason=reason,
+            distance=err if far else 0.0,
+            nearest=pos if far else tgt,
+            sigma_min=smin,
+        )
+
+    if code == 0 or (err <= tol and rot <= rot_tol):
+        return result("converged", f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {tol:g}, {rot_tol:g}")
+    if code == 2:
+        return result(
+            "not_converged",
+            f"{int(ipar[I_MAX_ITER])} steps taken, ‖e‖ = {err:.3g} m, "
+            f"{rot:.3g} rad, still decreasing",
+        )
+    use_limits = bool(ipar[I_LIMITS])
+    if use_limits and _blocked(q, jac, task, prep).size:
+        free = ipar.copy()
+        free[I_LIMITS] = 0
+        free[I_MAX_ITER] = 200
+        qq, hh, jj = np.empty(mdl.nq), np.empty(201), np.empty((6, mdl.nq))
+        starts = np.vstack([q, prep.starts[:8]])
+        _, _, c2 = lm_loop(
+            *prep.packed,
+            prep.tip_rot,
+            task.pose,
+            task.weights,
+            par,
+            free,
+            starts,
+            prep.lim,
+            prep.cont,
+            prep.middle,
+            qq,
+            hh,
+            jj,
+        )
+        if c2 == 0:
+            names = [mdl.joint_names[i] for i in _blocked(q, jac, task, prep)]
+            return result(
+                "joint_limits",
+                f"reachable only beyond the limits of {names}; the nearest point within the "
+                f"limits is {err:.3g} m, {rot:.3g} rad away",
+                far=True,
+            )
+    if _is_local_min(mdl, prep, task, q, hist[-1], par, ipar):
+        return result(
+            "unreachable",
+            f"outside the workspace: every start ends at a local minimum of the error, "
+            f"{err:.6g} m, {rot:.6g} rad from the target",
+            far=True,
+        )
+    if smin <= 1e-6 * prep.scale:
+        return result(
+            "singular",
+            f"stalled at a singular configuration (σ_min = {smin:.3g}) that is not a minimum "
+            "of the error; try another q0 or more restarts",
+        )
+    return result("not_converged", f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)")
+
+
+def _blocked(q: np.ndarray, jac: np.ndarray, task: Task, prep: Prepared) -> np.ndarray:
+    """Joints at a limit whose task-error gradient points outward."""
+    rot, trans, axis, kind, col = prep.packed
+    p = np.empty(3)
+    fk_jac_into(rot, trans, axis, kind, col, q, p, np.empty((3, q.size)), _scratch(prep), False)
+    r = np.empty((3, 3))
+    tip_rotation_into(rot, axis, kind, col, prep.tip_rot, q, r)
+    et, jt = np.empty(6), np.empty((6, q.size))
+    m, _, _ = task_into(
+        task.code, task.pose, task.weights, task.yaw, p, r, jac, np.empty((3, 3)), et, jt
+    )
+    g = jt[:m].T @ et[:m]
+    lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
+    at_lo = (~cont) & (q <= lower + 1e-12) & (g < 0)
+    at_hi = (~cont) & (q >= upper - 1e-12) & (g > 0)
+    return np.flatnonzero(at_lo | at_hi)
+
+
+def _scratch(prep: Prepared) -> np.ndarray:
+    return np.empty((6, max(prep.packed[0].shape[0], 1)))
+
+
+def _is_local_min(
+    mdl: KinematicModel,
+    prep: Prepared,
+    task: Task,
+    q: np.ndarray,
+    cost_root: float,
+    par: np.ndarray,
+    ipar: np.ndarray,
+) -> bool:
+    """True if no small perturbation of q (±1e-3, ±3e-2 rad) lowers the task error."""
+    rng = np.random.default_rng(7)
+    jac = mdl.jacobian(q)
+    rows = task.weights != 0
+    jt = jac[rows] * task.weights[rows, None]
+    _, sv, vt = np.linalg.svd(jt)
+    sv_full = np.zeros(mdl.nq)
+    sv_full[: sv.size] = sv
+    null = vt[sv_full <= 1e-6 * max(prep.scale, float(sv_full.max()))]
+    base = np.vstack([np.eye(mdl.nq), rng.normal(size=(16, mdl.nq)), null])
+    dirs = np.vstack([base, -base])
+    trial = np.vstack([q[None, :] + h * dirs for h in (1e-3, 3e-2)])
+    if ipar[I_LIMITS]:
+        trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
+    cost = np.empty(trial.shape[0])
+    task_cost(
+        *prep.packed,
+        prep.tip_rot,
+        task.pose,
+        task.weights,
+        par,
+        ipar,
+        np.ascontiguousarray(trial),
+        cost,
+    )
+    return bool(np.all(np.sqrt(cost) >= cost_root - 1e-9 * prep.scale))
+
+
+def solve_many(model: ModelLike, targets: Any, q0: Any = None, **kwargs: Any) -> list[IKResult]:
+    """:func:`solve` for each target: (N, 3), (N, 4) or (N, 4, 4).
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
+        targets: N targets of one kind (see :func:`solve`).
+        q0: None, one start (nq,) for all, or (N, nq) starts.
+        **kwargs: Options of :func:`solve`.
+
+    Returns:
+        One :class:`IKResult` per target.
+
+    Raises:
+        IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
+
+    """
+    mdl = as_model(model)
+    t = np.asarray(targets, dtype=float)
+    if (
+        t.ndim not in (2, 3)
+        or (t.ndim == 2 and t.shape[1] not in (3, 4))
+        or (t.ndim == 3 and t.shape[1:] != (4, 4))
+    ):
+        raise IKError(
+            f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed",
+            parameter="targets",
+            value=t.shape,
+            allowed="(N, 3), (N, 4), (N, 4, 4)",
+        )
+    if q0 is None or np.ndim(q0) == 1:
+        starts: Sequence[Any] = [q0] * len(t)
+    else:
+        starts = list(mdl.check_q_batch(q0, "q0"))
+        if len(starts) != len(t):
+            raise ConfigurationError(
+                f"q0 has {len(starts)} rows; targets has {len(t)}",
+                parameter="q0",
+                value=len(starts),
+                allowed=f"{len(t)} rows",
+            )
+    return [solve(mdl, ti, si, **kwargs) for ti, si in zip(t, starts)]

@@ -1,0 +1,517 @@
+"""The compiled numerical IK: the task error, the damped least-squares step, the loop.
+
+Split as mink's ``build_ik`` / ``solve_ik``: :func:`task_into` turns a configuration into the
+weighted task rows (error and Jacobian) — the problem; :func:`step_into` computes one step
+from those rows — a pure function of its inputs; :func:`lm_loop` is the small loop around them
+(Levenberg–Marquardt damping, step cap, limits, restarts).
+
+Task modes (``ipar[0]``):
+
+* ``0`` position: rows ``[x, y, z]`` of ``e = p* − p`` (base frame, [m]);
+* ``1`` position + yaw: plus ``wrap(ψ* − ψ)``, ψ = ``atan2(x_y, x_x)`` the angle of the tool's
+  x axis in the base xy-plane, with its exact row ``∂ψ/∂q = [−x_z x_x/h², −x_z x_y/h², 1]·J_ω``;
+* ``2`` pose: plus the orientation error on SO(3), ``e_ω = log(R* Rᵀ)`` (base axes, [rad]) —
+  never Euler angles — with the rotation rows of the LOCAL_WORLD_ALIGNED Jacobian.
+
+Each row is multiplied by its weight (0 drops the row). Every buffer is allocated per call
+(thread-safe; ``nogil``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._kernels import fk_jac_into
+from .._numerics import dls_into, njit, wrap_angle
+
+__all__ = ["log3_into", "lm_loop", "step_into", "task_cost", "task_into", "tip_rotation_into"]
+
+# indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
+P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
+I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
+
+
+@njit(cache=True, nogil=True)
+def tip_rotation_into(
+    rot: np.ndarray,
+    axis: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    tip_rot: np.ndarray,
+    q: np.ndarray,
+    out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Rotation of the tip frame in the base frame (3, 3) — the companion of ``fk_jac_into``."""
+    r00, r01, r02 = 1.0, 0.0, 0.0
+    r10, r11, r12 = 0.0, 1.0, 0.0
+    r20, r21, r22 = 0.0, 0.0, 1.0
+    for k in range(rot.shape[0]):
+        a = rot[k]
+        n00 = r00 * a[0, 0] + r01 * a[1, 0] + r02 * a[2, 0]
+        n01 = r00 * a[0, 1] + r01 * a[1, 1] + r02 * a[2, 1]
+        n02 = r00 * a[0, 2] + r01 * a[1, 2] + r02 * a[2, 2]
+        n10 = r10 * a[0, 0] + r11 * a[1, 0] + r12 * a[2, 0]
+        n11 = r10 * a[0, 1] + r11 * a[1, 1] + r12 * a[2, 1]
+        n12 = r10 * a[0, 2] + r11 * a[1, 2] + r12 * a[2, 2]
+        n20 = r20 * a[0, 0] + r21 * a[1, 0] + r22 * a[2, 0]
+        n21 = r20 * a[0, 1] + r21 * a[1, 1] + r22 * a[2, 1]
+        n22 = r20 * a[0, 2] + r21 * a[1, 2] + r22 * a[2, 2]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = n00, n01, n02, n10, n11, n12, n20, n21, n22
+        if kind[k] == 1:
+            continue
+        ux, uy, uz = axis[k, 0], axis[k, 1], axis[k, 2]
+        qk = q[col[k]]
+        c = math.cos(qk)
+        s = math.sin(qk)
+        v = 1.0 - c
+        e00 = c + v * ux * ux
+        e01 = v * ux * uy - s * uz
+        e02 = v * ux * uz + s * uy
+        e10 = v * uy * ux + s * uz
+        e11 = c + v * uy * uy
+        e12 = v * uy * uz - s * ux
+        e20 = v * uz * ux - s * uy
+        e21 = v * uz * uy + s * ux
+        e22 = c + v * uz * uz
+        n00 = r00 * e00 + r01 * e10 + r02 * e20
+        n01 = r00 * e01 + r01 * e11 + r02 * e21
+        n02 = r00 * e02 + r01 * e12 + r02 * e22
+        n10 = r10 * e00 + r11 * e10 + r12 * e20
+        n11 = r10 * e01 + r11 * e11 + r12 * e21
+        n12 = r10 * e02 + r11 * e12 + r12 * e22
+        n20 = r20 * e00 + r21 * e10 + r22 * e20
+        n21 = r20 * e01 + r21 * e11 + r22 * e21
+        n22 = r20 * e02 + r21 * e12 + r22 * e22
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = n00, n01, n02, n10, n11, n12, n20, n21, n22
+    t = tip_rot
+    for j in range(3):
+        out[0, j] = r00 * t[0, j] + r01 * t[1, j] + r02 * t[2, j]
+        out[1, j] = r10 * t[0, j] + r11 * t[1, j] + r12 * t[2, j]
+        out[2, j] = r20 * t[0, j] + r21 * t[1, j] + r22 * t[2, j]
+
+
+@njit(cache=True, nogil=True)
+def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - compiled
+    """``out = log(M)`` (rotation vector, [rad]) of a rotation matrix; returns the angle.
+
+    ``θ = atan2(‖v‖, (tr M − 1)/2)`` with ``v = vee(M − Mᵀ)/2 = sin θ·a`` (accurate at small
+    angles); near π the axis comes from the symmetric part ``(M + Mᵀ)/2 = cos θ I + (1 − cos θ)
+    a aᵀ`` with the sign of ``v``.
+    """
+    vx = 0.5 * (m[2, 1] - m[1, 2])
+    vy = 0.5 * (m[0, 2] - m[2, 0])
+    vz = 0.5 * (m[1, 0] - m[0, 1])
+    s = math.sqrt(vx * vx + vy * vy + vz * vz)
+    c = 0.5 * (m[0, 0] + m[1, 1] + m[2, 2] - 1.0)
+    theta = math.atan2(s, c)
+    if c > -0.5 or s > 0.5:
+        f = theta / s if s > 1e-300 else 1.0
+        out[0], out[1], out[2] = f * vx, f * vy, f * vz
+        return theta
+    d = 1.0 - c
+    a0 = max((m[0, 0] - c) / d, 0.0)
+    a1 = max((m[1, 1] - c) / d, 0.0)
+    a2 = max((m[2, 2] - c) / d, 0.0)
+    if a0 >= a1 and a0 >= a2:
+        x = math.sqrt(a0)
+        y = 0.5 * (m[0, 1] + m[1, 0]) / (d * x)
+        z = 0.5 * (m[0, 2] + m[2, 0]) / (d * x)
+    elif a1 >= a2:
+        y = math.sqrt(a1)
+        x = 0.5 * (m[0, 1] + m[1, 0]) / (d * y)
+        z = 0.5 * (m[1, 2] + m[2, 1]) / (d * y)
+    else:
+        z = math.sqrt(a2)
+        x = 0.5 * (m[0, 2] + m[2, 0]) / (d * z)
+        y = 0.5 * (m[1, 2] + m[2, 1]) / (d * z)
+    norm = math.sqrt(x * x + y * y + z * z)
+    sign = -1.0 if x * vx + y * vy + z * vz < 0.0 else 1.0
+    f = sign * theta / norm
+    out[0], out[1], out[2] = f * x, f * y, f * z
+    return theta
+
+
+@njit(cache=True, nogil=True)
+def task_into(
+    mode: int,
+    tgt: np.ndarray,
+    w6: np.ndarray,
+    yaw: float,
+    p: np.ndarray,
+    r: np.ndarray,
+    jac: np.ndarray,
+    work3: np.ndarray,
+    e_out: np.ndarray,
+    j_out: np.ndarray,
+) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    """Weighted task rows at one configuration (the problem, built from FK and J).
+
+    Args:
+        mode: 0 position, 1 position + yaw, 2 pose.
+        tgt: Target pose (4, 4) (rotation used in mode 2).
+        w6: Weights of the rows x y z wx wy wz (mode 1: ``w6[5]`` weights the yaw row).
+        yaw: Target yaw [rad] (mode 1).
+        p: Tip position (3,) in [m].
+        r: Tip rotation (3, 3) (unused in mode 0).
+        jac: LOCAL_WORLD_ALIGNED Jacobian (6, n).
+        work3: (3, 3) scratch.
+        e_out: (6,) output, the weighted errors (the first ``m`` rows are written).
+        j_out: (6, n) output, the weighted Jacobian rows.
+
+    Returns:
+        ``(m, ‖e_position‖², ‖e_rotation‖²)`` (unweighted squared errors of the kept rows).
+
+    """
+    n = jac.shape[1]
+    m = 0
+    pos2 = 0.0
+    rot2 = 0.0
+    for k in range(3):
+        if w6[k] != 0.0:
+            e = tgt[k, 3] - p[k]
+            pos2 += e * e
+            e_out[m] = w6[k] * e
+            for i in range(n):
+                j_out[m, i] = w6[k] * jac[k, i]
+            m += 1
+    if mode == 1 and w6[5] != 0.0:
+        x0, x1, x2 = r[0, 0], r[1, 0], r[2, 0]
+        h2 = x0 * x0 + x1 * x1
+        e = wrap_angle(yaw - math.atan2(x1, x0))
+        rot2 += e * e
+        a = -x2 * x0 / h2 if h2 > 1e-24 else 0.0
+        b = -x2 * x1 / h2 if h2 > 1e-24 else 0.0
+        e_out[m] = w6[5] * e
+        for i in range(n):
+            j_out[m, i] = w6[5] * (a * jac[3, i] + b * jac[4, i] + jac[5, i])
+        m += 1
+    elif mode == 2:
+        # R* Rᵀ: the rotation still to apply, in base axes
+        for a in range(3):
+            for b in range(3):
+                work3[a, b] = tgt[a, 0] * r[b, 0] + tgt[a, 1] * r[b, 1] + tgt[a, 2] * r[b, 2]
+        ew = np.empty(3)
+        log3_into(work3, ew)
+        for k in range(3):
+            if w6[3 + k] != 0.0:
+                rot2 += ew[k] * ew[k]
+                e_out[m] = w6[3 + k] * ew[k]
+                for i in range(n):
+                    j_out[m, i] = w6[3 + k] * jac[3 + k, i]
+                m += 1
+    return m, pos2, rot2
+
+
+@njit(cache=True, nogil=True)
+def step_into(
+    jt: np.ndarray,
+    et: np.ndarray,
+    m: int,
+    lam2: float,
+    free: np.ndarray,
+    z: np.ndarray,
+    use_z: bool,
+    dq: np.ndarray,
+    e2: np.ndarray,
+    work: np.ndarray,
+    rhs: np.ndarray,
+    sol: np.ndarray,
+) -> bool:  # pragma: no cover - compiled
+    """One damped step (pure: writes only ``dq`` and the scratch arrays).
+
+    ``Δq = z + J⁺_λ (e − J z)`` with ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints: the DLS step
+    of the task plus ``z`` (a secondary motion, e.g. toward a preferred posture) projected on
+    the task's (damped) null space. Without ``use_z`` it is the plain DLS step.
+    Returns False if the damped system is not positive definite.
+    """
+    n = jt.shape[1]
+    for r in range(m):
+        s = et[r]
+        if use_z:
+            for i in range(n):
+                if free[i]:
+                    s -= jt[r, i] * z[i]
+        e2[r] = s
+    ok = dls_into(jt[:m], e2[:m], lam2, free, dq, work, rhs, sol)
+    if use_z:
+        for i in range(n):
+            if free[i]:
+                dq[i] += z[i]
+    return ok
+
+
+@njit(cache=True, nogil=True)
+def _limit_into(
+    q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
+) -> None:  # pragma: no cover - compiled
+    """Wrap continuous joints into their range; clamp the others (when ``use_limits``)."""
+    for i in range(q.shape[0]):
+        if cont[i]:
+            span = upper[i] - lower[i]
+            if q[i] < lower[i] or q[i] > upper[i]:
+                q[i] = lower[i] + ((q[i] - lower[i]) % span)
+        elif use_limits:
+            if q[i] < lower[i]:
+                q[i] = lower[i]
+            elif q[i] > upper[i]:
+                q[i] = upper[i]
+
+
+@njit(cache=True, nogil=True)
+def task_cost(
+    rot: np.ndarray,
+    trans: np.ndarray,
+    axis: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    tip_rot: np.ndarray,
+    tgt: np.ndarray,
+    w6: np.ndarray,
+    par: np.ndarray,
+    ipar: np.ndarray,
+    qs: np.ndarray,
+    out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """Weighted squared task error ``‖W e(q)‖²`` of each row of ``qs`` into ``out``."""
+    n = qs.shape[1]
+    scratch = np.empty((6, max(rot.shape[0], 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    jac = np.empty((6, n))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
+    for k in range(qs.shape[0]):
+        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, True)
+        if ipar[I_MODE] != 0:
+            tip_rotation_into(rot, axis, kind, col, tip_rot, qs[k], r)
+        m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
+        s = 0.0
+        for i in range(m):
+            s += et[i] * et[i]
+        out[k] = s
+
+
+@njit(cache=True, nogil=True)
+def lm_loop(
+    rot: np.ndarray,
+    trans: np.ndarray,
+    axis: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    tip_rot: np.ndarray,
+    tgt: np.ndarray,
+    w6: np.ndarray,
+    par: np.ndarray,
+    ipar: np.ndarray,
+    starts: np.ndarray,
+    lim: np.ndarray,
+    cont: np.ndarray,
+    posture: np.ndarray,
+    q_out: np.ndarray,
+    hist_out: np.ndarray,
+    jac_out: np.ndarray,
+) -> tuple[int, int, int]:  # pragma: no cover - compiled
+    """Levenberg–Marquardt loop from each start in turn until one converges.
+
+    ``lim`` rows: lower, upper, step cap. A step is kept only if it lowers ``‖W e‖`` (so the
+    history decreases strictly); λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a
+    refused one. Joints at a limit with the gradient pointing outward are frozen. With
+    ``ipar[I_POSTURE]`` and more joints than task rows, each step first tries the null-space
+    motion toward ``posture`` (gain ``par[P_POST_GAIN]``), kept only if the task error at
+    least quarters the squared error (the first refusal ends it for that attempt), while the
+    error is above ``par[P_POST_FLOOR]``.
+
+    Returns:
+        ``(attempts, accepted steps of the best attempt, code)``: code 0 converged, 1 stalled,
+        2 iteration cap. The best attempt's q, residual history (``hist_out[:steps + 1]``) and
+        its (6, n) LWA Jacobian are written to the outputs.
+
+    """
+    n = starts.shape[1]
+    mode = ipar[I_MODE]
+    max_iter = ipar[I_MAX_ITER]
+    use_limits = ipar[I_LIMITS] != 0
+    tol2 = par[P_TOL] * par[P_TOL]
+    rtol2 = par[P_ROT_TOL] * par[P_ROT_TOL]
+    yaw = par[P_YAW]
+    wbar = par[P_WBAR]
+    floor2 = par[P_POST_FLOOR] * par[P_POST_FLOOR]
+    lower = lim[0]
+    upper = lim[1]
+    cap = lim[2]
+    scratch = np.empty((6, max(rot.shape[0], 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    jac = np.empty((6, n))
+    jac_n = np.empty((6, n))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
+    et_n = np.empty(6)
+    jt_n = np.empty((6, n))
+    e2 = np.empty(6)
+    q = np.empty(n)
+    qn = np.empty(n)
+    dq = np.empty(n)
+    z = np.empty(n)
+    free = np.empty(n, dtype=np.bool_)
+    k = max(n, 6)
+    work = np.empty((k, k))
+    rhs = np.empty(k)
+    sol = np.empty(k)
+    hist = np.empty(hist_out.shape[0])
+    best_cost = np.inf
+    best_steps = 0
+    best_code = 1
+    attempts = 0
+    for s in range(starts.shape[0]):
+        attempts += 1
+        for i in range(n):
+            q[i] = starts[s, i]
+        _limit_into(q, lower, upper, cont, use_limits)
+        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, True)
+        if mode != 0:
+            tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
+        m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
+        cost = 0.0
+        for i in range(m):
+            cost += et[i] * et[i]
+        hist[0] = math.sqrt(cost)
+        use_post = ipar[I_POSTURE] != 0 and n > m
+        mu = par[P_MU0]
+        accepted = 0
+        tries = 0
+        slow = 0
+        code = 1
+        while True:
+            if pos2 <= tol2 and rot2 <= rtol2:
+                code = 0
+                break
+            if accepted >= max_iter:
+                code = 2
+                break
+            for i in range(n):
+                free[i] = True
+                if use_limits and not cont[i]:
+                    g = 0.0
+                    for row in range(m):
+                        g += jt[row, i] * et[row]
+                    if (q[i] <= lower[i] and g < 0.0) or (q[i] >= upper[i] and g > 0.0):
+                        free[i] = False
+            lam2 = mu * (cost + wbar)
+            with_z = use_post and cost > floor2
+            if with_z:
+                for i in range(n):
+                    d = posture[i] - q[i]
+                    if cont[i]:
+                        d = wrap_angle(d)
+                    z[i] = par[P_POST_GAIN] * d if free[i] else 0.0
+            kept = False
+            stalled = False
+            for _attempt in range(2):
+                ok = step_into(jt, et, m, lam2, free, z, with_z, dq, e2, work, rhs, sol)
+                if not ok:
+                    break
+                scale = 1.0
+                for i in range(n):
+                    a = abs(dq[i])
+                    if a * scale > cap[i]:
+                        scale = cap[i] / a
+                for i in range(n):
+                    qn[i] = q[i] + scale * dq[i]
+                _limit_into(qn, lower, upper, cont, use_limits)
+                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, True)
+                if mode != 0:
+                    tip_rotation_into(rot, axis, kind, col, tip_rot, qn, r)
+                m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
+                cost_n = 0.0
+                for i in range(m_n):
+                    cost_n += et_n[i] * et_n[i]
+                good = cost_n < (0.25 * cost if with_z else cost)
+                if good:
+                    if cost_n > cost * (1.0 - 1e-10):
+                        slow += 1
+                    else:
+                        slow = 0
+                    for i in range(n):
+                        q[i] = qn[i]
+                        for row in range(6):
+                            jac[row, i] = jac_n[row, i]
+                        for row in range(m_n):
+                            jt[row, i] = jt_n[row, i]
+                    for row in range(m_n):
+                        et[row] = et_n[row]
+                    m, pos2, rot2, cost = m_n, pos2_n, rot2_n, cost_n
+                    accepted += 1
+                    hist[accepted] = math.sqrt(cost)
+                    mu = max(mu * 0.25, 1e-12)
+                    tries = 0
+                    kept = True
+                    if slow >= 8:
+                        stalled = True
+                    break
+                if not with_z:
+                    break
+                with_z = False  # retry the plain step; no more posture in this attempt
+                use_post = False
+            if stalled:
+                code = 1
+                break
+            if not kept:
+                mu *= 8.0
+                tries += 1
+                if tries > 40:
+                    code = 1
+                    break
+        if cost < best_cost or s == 0:
+            best_cost = cost
+            best_steps = accepted
+            best_code = code
+            for i in range(n):
+                q_out[i] = q[i]
+                for row in range(6):
+                    jac_out[row, i] = jac[row, i]
+            for i in range(accepted + 1):
+                hist_out[i] = hist[i]
+        if code == 0:
+            best_cost = cost
+            best_steps = accepted
+            best_code = code
+            for i in range(n):
+                q_out[i] = q[i]
+                for row in range(6):
+                    jac_out[row, i] = jac[row, i]
+            for i in range(accepted + 1):
+                hist_out[i] = hist[i]
+            break
+    return attempts, best_steps, best_code
+
+
+@njit(cache=True, nogil=True)
+def pose_errors(
+    mode: int, tgt: np.ndarray, w6: np.ndarray, yaw: float, pose: np.ndarray
+) -> tuple[float, float]:  # pragma: no cover - compiled
+    """(position error [m], orientation error [rad]) of a reached pose, over the kept rows."""
+    pos2 = 0.0
+    for k in range(3):
+        if w6[k] != 0.0:
+            d = tgt[k, 3] - pose[k, 3]
+            pos2 += d * d
+    rot2 = 0.0
+    if mode == 1 and w6[5] != 0.0:
+        e = wrap_angle(yaw - math.atan2(pose[1, 0], pose[0, 0]))
+        rot2 = e * e
+    elif mode == 2:
+        w3 = np.empty((3, 3))
+        for a in range(3):
+            for b in range(3):
+                w3[a, b] = tgt[a, 0] * pose[b, 0] + tgt[a, 1] * pose[b, 1] + tgt[a, 2] * pose[b, 2]
+        ew = np.empty(3)
+        log3_into(w3, ew)
+        for k in range(3):
+            if w6[3 + k] != 0.0:
+                rot2 += ew[k] * ew[k]
+    return math.sqrt(pos2), math.sqrt(rot2)

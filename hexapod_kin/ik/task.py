@@ -1,0 +1,216 @@
+"""Build an IK task from a target: position, position + yaw, or a full pose with weights.
+
+The task is the *problem* (mink's ``build_ik``): what the rows of the error are and how much
+each counts. :mod:`hexapod_kin.ik.step` solves it. Rows are ``x y z wx wy wz``: position error
+``p* − p`` in [m] and orientation error ``log(R* Rᵀ)`` in [rad], both in the base axes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from ..exceptions import IKError
+
+__all__ = ["AXES", "Task", "build_task"]
+
+#: Names of the six task rows (position [m], orientation [rad]; base axes).
+AXES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
+
+Mode = Literal["position", "position_yaw", "pose"]
+MODES: tuple[str, ...] = ("position", "position_yaw", "pose")
+
+
+@dataclass(frozen=True)
+class Task:
+    """A target and the weight of each task row (arrays read-only).
+
+    Attributes:
+        mode: ``"position"`` (3 rows), ``"position_yaw"`` (x y z and the yaw ψ of the tool's
+            x axis in the base xy-plane) or ``"pose"`` (6 rows).
+        pose: Target pose ``baseMtarget`` (4, 4); rotation = identity unless ``mode="pose"``.
+        yaw: Target yaw [rad] (``"position_yaw"``), else 0.
+        weights: (6,) weights of rows x y z wx wy wz (0 drops a row; ``"position_yaw"`` keeps
+            the yaw row's weight in ``wz``).
+
+    """
+
+    mode: Mode
+    pose: np.ndarray
+    yaw: float
+    weights: np.ndarray
+
+    @property
+    def position(self) -> np.ndarray:
+        """Target position (3,) in [m]."""
+        return np.array(self.pose[:3, 3])
+
+    @property
+    def code(self) -> int:
+        """The compiled loop's mode number (0, 1, 2)."""
+        return MODES.index(self.mode)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (pose as nested lists, [m] and [rad])."""
+        return {
+            "mode": self.mode,
+            "pose": self.pose.tolist(),
+            "yaw": float(self.yaw),
+            "weights": self.weights.tolist(),
+        }
+
+
+def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
+    """(6,) row weights from ``mask`` or ``weights``; rows not in ``allowed`` must be 0."""
+    if mask is not None and weights is not None:
+        raise IKError(
+            "give either mask= or weights=, not both",
+            parameter="mask",
+            value=mask,
+            allowed="mask (6 booleans) or weights (6 numbers >= 0)",
+        )
+    w = np.zeros(6)
+    w[list(allowed)] = 1.0
+    given = mask if mask is not None else weights
+    if given is None:
+        return w
+    name = "mask" if mask is not None else "weights"
+    try:
+        arr = np.asarray(given, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise IKError(
+            f"{name}={given!r} is not 6 numbers",
+            parameter=name,
+            value=given,
+            allowed="6 values for rows x y z wx wy wz",
+        ) from None
+    if arr.shape != (6,) or not np.all(np.isfinite(arr)) or np.any(arr < 0) or not arr.any():
+        raise IKError(
+            f"{name}={np.asarray(given).tolist()!r} is not allowed; 6 finite values >= 0 (rows "
+            "x y z wx wy wz [m], [rad]), at least one > 0",
+            parameter=name,
+            value=given,
+            allowed="6 finite values >= 0, not all 0",
+        )
+    if mask is not None:
+        arr = (arr != 0).astype(np.float64)
+    unused = [AXES[k] for k in range(6) if k not in allowed and arr[k] != 0]
+    if unused:
+        raise IKError(
+            f"{name} weights rows {unused} that this target does not define (a position "
+            "target has rows x y z; position + yaw adds wz; give a 4×4 pose for the others)",
+            parameter=name,
+            value=given,
+            allowed=f"non-zero only on {[AXES[k] for k in allowed]}",
+        )
+    return arr
+
+
+_POSE_WEIGHTS = np.ones(6)
+_POSE_WEIGHTS.setflags(write=False)
+
+
+def _fast_pose(t: np.ndarray) -> Task | None:
+    """The common case (a float64 4×4 pose, no mask) checked in plain floats; None if not."""
+    (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
+    if last != [0.0, 0.0, 0.0, 1.0] or not math.isfinite(x + y + z):
+        return None
+    # columns orthonormal and det +1 (third column = first × second), to 1e-9
+    checks = (
+        a * a + d * d + g * g - 1.0,
+        b * b + e * e + h * h - 1.0,
+        a * b + d * e + g * h,
+        d * h - g * e - c,
+        g * b - a * h - f,
+        a * e - d * b - i,
+    )
+    if not all(abs(v) <= 1e-9 for v in checks):  # also False for NaN
+        return None
+    pose = t.copy()
+    pose.setflags(write=False)
+    return Task(mode="pose", pose=pose, yaw=0.0, weights=_POSE_WEIGHTS)
+
+
+def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
+    """Parse a target into a :class:`Task` (pure function).
+
+    Args:
+        target: A position (3,) [m]; position + yaw (4,) = (x, y, z, ψ [rad]); or a pose
+            ``baseMtarget`` (4, 4) — a homogeneous transform with a proper rotation.
+        mask: Optional 6 booleans selecting rows x y z wx wy wz.
+        weights: Optional 6 weights >= 0 (instead of ``mask``).
+
+    Returns:
+        The task (read-only arrays).
+
+    Raises:
+        IKError: Wrong shape, non-finite values, a matrix that is not a rigid transform, or
+            weights on rows the target does not define.
+
+    """
+    if (
+        target.__class__ is np.ndarray
+        and target.dtype == np.float64
+        and target.shape == (4, 4)
+        and mask is None
+        and weights is None
+    ):
+        fast = _fast_pose(target)
+        if fast is not None:
+            return fast
+    try:
+        t = np.array(target, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise IKError(
+            f"target={target!r} is not numbers",
+            parameter="target",
+            value=target,
+            allowed="(3,) position [m], (4,) position + yaw [rad], or a (4, 4) pose",
+        ) from None
+    if not np.all(np.isfinite(t)):
+        raise IKError(
+            f"target={t.tolist()} contains non-finite values; finite [m]/[rad] required",
+            parameter="target",
+            value=t.tolist(),
+            allowed="finite numbers",
+        )
+    pose = np.eye(4)
+    yaw = 0.0
+    mode: Mode
+    if t.shape == (3,):
+        mode, pose[:3, 3] = "position", t
+        w = _weights(mask, weights, (0, 1, 2))
+    elif t.shape == (4,):
+        mode, pose[:3, 3], yaw = "position_yaw", t[:3], float(t[3])
+        w = _weights(mask, weights, (0, 1, 2, 5))
+    elif t.shape == (4, 4):
+        rot = t[:3, :3]
+        if (
+            np.max(np.abs(t[3] - [0.0, 0.0, 0.0, 1.0])) > 1e-12
+            or np.max(np.abs(rot.T @ rot - np.eye(3))) > 1e-9
+            or np.linalg.det(rot) < 0
+        ):
+            raise IKError(
+                "target (4, 4) is not a rigid transform (rotation orthonormal to 1e-9 with "
+                "det +1, last row [0, 0, 0, 1])",
+                parameter="target",
+                value=t.tolist(),
+                allowed="a homogeneous transform baseMtarget",
+            )
+        mode, pose = "pose", t
+        w = _weights(mask, weights, (0, 1, 2, 3, 4, 5))
+    else:
+        raise IKError(
+            f"target has shape {t.shape}; a position (3,) [m], position + yaw (4,) or a pose "
+            "(4, 4) is needed",
+            parameter="target",
+            value=t.shape,
+            allowed="(3,), (4,) or (4, 4)",
+        )
+    pose = np.ascontiguousarray(pose)
+    pose.setflags(write=False)
+    w.setflags(write=False)
+    return Task(mode=mode, pose=pose, yaw=yaw, weights=w)

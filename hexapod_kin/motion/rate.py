@@ -1,0 +1,538 @@
+"""Resolved-rate motion: drive the tip with a linear velocity or a 6-D twist.
+
+:func:`resolved_rate` integrates ``q̇ = J⁺_λ (ξ(t) + K e(t))`` — the seeds' main experiment
+(drive the foot with ``q̇ = J⁻¹v``) done properly: damped least squares whose damping grows as
+``σ_min`` falls below a threshold (Nakamura/Chiaverini: ``λ² = λ²_max (1 − (σ_min/ε)²)`` for
+``σ_min < ε``, else 0), explicit Euler or classic RK4, an optional closed-loop term toward the
+reference path (gain ``K`` in [1/s]; the pose error is ``[p_ref − p; log(R_ref Rᵀ)]``), joint
+position limits (a joint at a limit moving outward is frozen) and joint velocity limits (q̇
+scaled uniformly, its direction kept). The loop is compiled (numba,
+:mod:`hexapod_kin.motion._kernel`); velocity and reference are sampled beforehand at the RK4
+half steps.
+
+Velocities: a linear velocity (3,) [m/s] of the tip in the base axes (3 task rows), or a twist
+(6,) ``[v; ω]`` ([m/s], [rad/s]) in a named frame: ``frame="base"`` — the tip's linear and
+angular velocity in the base axes (so a constant twist moves ``p = p0 + v t``,
+``R = exp(ω t) R0``), or ``frame="tip"`` — the body twist in the tip frame (a constant twist
+moves ``T = T0 exp(t ξ)``, a screw motion).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ConfigurationError, ParameterError
+from ..ik.solver import ModelLike, as_model, home, prepared
+from ._kernel import rr_kernel
+
+__all__ = [
+    "FRAMES",
+    "ClosestApproach",
+    "Trajectory",
+    "constant_twist_pose",
+    "positive",
+    "read_only",
+    "resolved_rate",
+]
+
+Method = Literal["euler", "rk4"]
+Frame = Literal["base", "tip"]
+FRAMES: tuple[str, ...] = ("base", "tip")
+
+
+def positive(name: str, value: Any, allow_zero: bool = False) -> float:
+    """``value`` as a finite float > 0 (≥ 0 with ``allow_zero``).
+
+    Raises:
+        ParameterError: Not a number, not finite, or out of range; the message names ``name``.
+
+    """
+    need = ">= 0" if allow_zero else "> 0"
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name}={value!r} is not a number", parameter=name, value=value, allowed=need
+        ) from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; a finite value {need} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"finite {need}",
+        )
+    return v
+
+
+def read_only(*arrays: np.ndarray) -> None:
+    """Mark arrays read-only (results handed to users are protected)."""
+    for a in arrays:
+        a.setflags(write=False)
+
+
+# ============================================================================ results
+@dataclass(frozen=True)
+class ClosestApproach:
+    """The sample of a run nearest to a singularity (smallest σ_min).
+
+    Attributes:
+        index: Sample index.
+        t: Time in [s].
+        sigma_min: Smallest singular value of the task Jacobian there.
+        condition: σ_max/σ_min there (inf at a singularity).
+        q: Joint values there in [rad]/[m].
+
+    """
+
+    index: int
+    t: float
+    sigma_min: float
+    condition: float
+    q: tuple[float, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (a non-finite condition becomes None)."""
+        return {
+            "index": self.index,
+            "t": self.t,
+            "sigma_min": self.sigma_min,
+            "condition": self.condition if math.isfinite(self.condition) else None,
+            "q": list(self.q),
+        }
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A resolved-rate run, sampled at ``t`` (all arrays read-only, SI units, base axes).
+
+    Attributes:
+        t: (N,) times in [s].
+        q: (N, n) joint values in [rad]/[m].
+        qdot: (N, n) joint rates in [rad/s]/[m/s] (the control law at each sample).
+        foot: (N, 3) tip position in [m].
+        foot_velocity: (N, 3) actual tip velocity ``J q̇`` in [m/s].
+        rotation: (N, 3, 3) tip rotation.
+        angular_velocity: (N, 3) actual tip angular velocity in [rad/s] (base axes).
+        command: (N, 3) commanded linear velocity [m/s], or (N, 6) commanded twist
+            ([m/s], [rad/s]) in ``frame``.
+        reference: (N, 3) reference position in [m].
+        reference_rotation: (N, 3, 3) reference rotation (6-D runs), else None.
+        sigma_min: (N,) smallest singular value of the task Jacobian (3×n position, or 6×n).
+        sigma_max: (N,) largest singular value.
+        damping: (N,) DLS damping λ² used at each sample.
+        limited: (N,) True where a joint limit froze a joint or q̇ was scaled to the speed limits.
+        method: ``"euler"`` or ``"rk4"``.
+        dt: Step in [s].
+        gain: Closed-loop gain K in [1/s] (0: open loop).
+        frame: ``"base"`` or ``"tip"``: the axes of ``command``.
+
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qdot: np.ndarray
+    foot: np.ndarray
+    foot_velocity: np.ndarray
+    rotation: np.ndarray
+    angular_velocity: np.ndarray
+    command: np.ndarray
+    reference: np.ndarray
+    reference_rotation: np.ndarray | None
+    sigma_min: np.ndarray
+    sigma_max: np.ndarray
+    damping: np.ndarray
+    limited: np.ndarray
+    method: str
+    dt: float
+    gain: float
+    frame: str = "base"
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(N, 4, 4) tip poses ``baseMtip``."""
+        out = np.zeros((self.t.size, 4, 4))
+        out[:, :3, :3] = self.rotation
+        out[:, :3, 3] = self.foot
+        out[:, 3, 3] = 1.0
+        return out
+
+    @property
+    def condition(self) -> np.ndarray:
+        """(N,) condition number σ_max/σ_min (inf at a singularity)."""
+        with np.errstate(divide="ignore"):
+            return np.where(self.sigma_min > 0, self.sigma_max / self.sigma_min, np.inf)
+
+    @property
+    def closest_approach(self) -> ClosestApproach:
+        """The sample with the smallest σ_min."""
+        i = int(np.argmin(self.sigma_min))
+        return ClosestApproach(
+            index=i,
+            t=float(self.t[i]),
+            sigma_min=float(self.sigma_min[i]),
+            condition=float(self.condition[i]),
+            q=tuple(float(v) for v in self.q[i]),
+        )
+
+    @property
+    def tracking_error(self) -> np.ndarray:
+        """(N,) ‖foot − reference‖ in [m]."""
+        return np.asarray(np.linalg.norm(self.foot - self.reference, axis=1))
+
+    @property
+    def rotation_error(self) -> np.ndarray:
+        """(N,) ‖log(R_ref Rᵀ)‖ in [rad] (zeros for a linear-velocity run)."""
+        if self.reference_rotation is None:
+            return np.zeros(self.t.size)
+        rel = self.reference_rotation @ np.transpose(self.rotation, (0, 2, 1))
+        return np.array([float(np.linalg.norm(pin.log3(m))) for m in rel])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of every field (arrays as nested lists)."""
+        out: dict[str, Any] = {}
+        for name in self.__dataclass_fields__:
+            v = getattr(self, name)
+            out[name] = v.tolist() if isinstance(v, np.ndarray) else v
+        out["closest_approach"] = self.closest_approach.to_dict()
+        return out
+
+
+# ============================================================================ sampling
+def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.ndarray:
+    """Evaluate a constant or callable ``fn(t)`` at ``times`` → (M, width) finite values."""
+    if callable(fn):
+        try:
+            out = np.asarray(fn(times), dtype=float)
+            if out.shape == (width, times.size):
+                out = out.T
+            if out.shape != (times.size, width):
+                raise ValueError
+        except (ValueError, TypeError, IndexError):
+            out = np.array([np.asarray(fn(float(t)), dtype=float) for t in times])
+            if out.shape != (times.size, width):
+                raise ConfigurationError(
+                    f"{name}(t) returned shape {out.shape[1:]}; {what} (or (M, {width}) for an "
+                    "array of times) is needed",
+                    parameter=name,
+                    value=out.shape[1:],
+                    allowed=f"({width},)",
+                ) from None
+    else:
+        try:
+            v = np.asarray(fn, dtype=float)
+        except (TypeError, ValueError):
+            raise ConfigurationError(
+                f"{name}={fn!r} is not numbers or a callable",
+                parameter=name,
+                value=fn,
+                allowed=what,
+            ) from None
+        if v.shape != (width,):
+            raise ConfigurationError(
+                f"{name} has shape {v.shape}; {what} or a callable",
+                parameter=name,
+                value=v.shape,
+                allowed=what,
+            )
+        out = np.broadcast_to(v, (times.size, width)).copy()
+    if not np.all(np.isfinite(out)):
+        raise ConfigurationError(
+            f"{name} contains non-finite values",
+            parameter=name,
+            value="non-finite",
+            allowed="finite numbers",
+        )
+    return np.ascontiguousarray(out)
+
+
+def _width(velocity: Any) -> int:
+    """3 (linear velocity) or 6 (twist), from a constant or from ``velocity(0.0)``."""
+    probe = velocity(0.0) if callable(velocity) else velocity
+    try:
+        size = np.asarray(probe, dtype=float).size
+    except (TypeError, ValueError):
+        size = -1
+    if size not in (3, 6):
+        raise ConfigurationError(
+            f"velocity has {size} values; a linear velocity (3,) [m/s] or a twist (6,) "
+            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed",
+            parameter="velocity",
+            value=size,
+            allowed="3 or 6 values",
+        )
+    return size
+
+
+def _simpson(vel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Increments over full and half steps by Simpson's rule on (v_k, v_k+½, v_k+1)."""
+    v0, vh, v1 = vel[0:-1:2], vel[1::2], vel[2::2]
+    return dt / 6.0 * (v0 + 4.0 * vh + v1), dt / 24.0 * (5.0 * v0 + 8.0 * vh - v1)
+
+
+def _integrate_position(p0: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarray:
+    """p_ref at half steps by Simpson's rule (exact for quadratics)."""
+    full, half = _simpson(vel, dt)
+    ref = np.empty_like(vel)
+    ref[0] = p0
+    ref[2::2] = p0 + np.cumsum(full, axis=0)
+    ref[1::2] = ref[0:-1:2] + half
+    return ref
+
+
+def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -> np.ndarray:
+    """Exact poses reached by following a constant twist from ``pose0`` for times ``t``.
+
+    ``frame="tip"``: ``T(t) = T0 exp(t ξ)`` (body twist, a screw motion); ``frame="base"``:
+    ``p = p0 + v t``, ``R = exp(ω t) R0`` (linear and angular velocity in base axes).
+
+    Args:
+        pose0: Start pose (4, 4).
+        twist: ``[v; ω]`` (6,) in [m/s], [rad/s].
+        t: Times (M,) in [s].
+        frame: ``"base"`` or ``"tip"``.
+
+    Returns:
+        (M, 4, 4) poses.
+
+    """
+    T0 = pin.SE3(np.asarray(pose0, dtype=float))
+    xi = np.asarray(twist, dtype=float)
+    times = np.atleast_1d(np.asarray(t, dtype=float))
+    out = np.empty((times.size, 4, 4))
+    for k, tk in enumerate(times):
+        if frame == "tip":
+            out[k] = (T0 * pin.exp6(pin.Motion(xi * tk))).homogeneous
+        else:
+            out[k] = np.eye(4)
+            out[k, :3, :3] = pin.exp3(xi[3:] * tk) @ T0.rotation
+            out[k, :3, 3] = T0.translation + xi[:3] * tk
+    return out
+
+
+def _integrate_pose(pose0: np.ndarray, vel: np.ndarray, dt: float, frame: str) -> np.ndarray:
+    """Reference poses at half steps from a sampled twist (exact for a constant twist)."""
+    full, half = _simpson(vel, dt)
+    ref = np.empty((vel.shape[0], 4, 4))
+    cur = pose0.copy()
+    ref[0] = cur
+    for k in range(full.shape[0]):
+        ref[2 * k + 1] = _advance(cur, half[k], frame)
+        cur = _advance(cur, full[k], frame)
+        ref[2 * k + 2] = cur
+    return ref
+
+
+def _advance(pose: np.ndarray, inc: np.ndarray, frame: str) -> np.ndarray:
+    if frame == "tip":
+        return (pin.SE3(pose) * pin.exp6(pin.Motion(inc))).homogeneous
+    out = np.eye(4)
+    out[:3, :3] = pin.exp3(inc[3:]) @ pose[:3, :3]
+    out[:3, 3] = pose[:3, 3] + inc[:3]
+    return out
+
+
+# ============================================================================ resolved rate
+def resolved_rate(
+    model: ModelLike,
+    velocity: Any,
+    q0: Any,
+    dt: float,
+    duration: float,
+    *,
+    frame: Frame = "base",
+    method: Method = "rk4",
+    gain: float = 0.0,
+    path: Callable[[np.ndarray], Any] | None = None,
+    sigma_threshold: float | None = None,
+    max_damping: float | None = None,
+    within_limits: bool = True,
+    velocity_limits: bool = True,
+) -> Trajectory:
+    """Drive the tip with a linear velocity or a 6-D twist by resolved-rate control.
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
+        velocity: A linear velocity (3,) [m/s] in base axes, or a twist (6,) ``[v; ω]``
+            ([m/s], [rad/s]) in ``frame``: constant, or a callable ``v(t)`` (t in [s]; called
+            with an array of times if it accepts one, returning (M, 3)/(M, 6), else per time).
+        q0: Start configuration (nq,); None: :func:`hexapod_kin.ik.home`.
+        dt: Step in [s] (> 0).
+        duration: Length of the run in [s] (> 0); ``round(duration/dt)`` steps.
+        frame: Axes of a twist: ``"base"`` (the tip's velocities in base axes) or ``"tip"``
+            (body twist). A linear velocity is always in base axes.
+        method: ``"rk4"`` (classic Runge–Kutta) or ``"euler"``.
+        gain: Closed-loop gain K in [1/s] pulling the tip toward the reference path
+            (0 = open loop). Keep ``K·dt`` well below 1.
+        path: Optional reference path, a callable of time: positions (M, 3)/(3,) in [m] for
+            a linear velocity, poses (M, 4, 4)/(4, 4) for a twist (see :class:`PosePath`).
+            Default: the integral of the velocity from FK(q0) (Simpson's rule on the same
+            samples; exact for a constant twist).
+        sigma_threshold: ε: damping starts when σ_min < ε. Default 1 % of the largest σ at q0.
+        max_damping: λ²_max reached at σ_min = 0. Default ε².
+        within_limits: Freeze joints at their position limits (and clamp).
+        velocity_limits: Scale q̇ to the joint velocity limits of the model.
+
+    Returns:
+        A :class:`Trajectory` with ``round(duration/dt) + 1`` samples.
+
+    Raises:
+        ParameterError: Bad ``dt``, ``duration``, ``method``, ``frame``, ``gain`` or thresholds.
+        ConfigurationError: Bad ``q0``, velocity or path.
+
+    """
+    mdl = as_model(model)
+    dt = positive("dt", dt)
+    duration = positive("duration", duration)
+    gain = positive("gain", gain, allow_zero=True)
+    if method not in ("rk4", "euler"):
+        raise ParameterError(
+            f"method={method!r} is not allowed; use 'rk4' or 'euler'",
+            parameter="method",
+            value=method,
+            allowed="'rk4', 'euler'",
+        )
+    if frame not in FRAMES:
+        raise ParameterError(
+            f"frame={frame!r} is not allowed; use 'base' or 'tip'",
+            parameter="frame",
+            value=frame,
+            allowed="'base', 'tip'",
+        )
+    steps = int(round(duration / dt))
+    if steps < 1 or steps > 50_000_000:
+        raise ParameterError(
+            f"duration/dt = {duration / dt:g} steps; between 1 and 5e7 steps are allowed",
+            parameter="duration",
+            value=duration,
+            allowed="1..5e7 steps of dt",
+        )
+    start = home(mdl) if q0 is None else mdl.check_q(q0, "q0").copy()
+    prep = prepared(mdl)
+    lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
+    width = _width(velocity)
+    rows6 = width == 6
+    times_half = np.arange(2 * steps + 1) * (0.5 * dt)
+    what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
+    vel = _sample(velocity, times_half, width, "velocity", what)
+    pose0 = np.array(mdl.fk(start))
+    ref = np.zeros((times_half.size, 4, 4))
+    if rows6:
+        if path is not None:
+            ref[:] = _sample_poses(path, times_half)
+        elif not callable(velocity):
+            ref[:] = constant_twist_pose(pose0, vel[0], times_half, frame)
+        else:
+            ref[:] = _integrate_pose(pose0, vel, dt, frame)
+    else:
+        ref[:, :3, :3] = np.eye(3)
+        ref[:, 3, 3] = 1.0
+        if path is None:
+            ref[:, :3, 3] = _integrate_position(pose0[:3, 3], vel, dt)
+        else:
+            ref[:, :3, 3] = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
+    vel6 = vel if rows6 else np.hstack([vel, np.zeros((vel.shape[0], 3))])
+    jac0 = mdl.jacobian(start)
+    sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
+    eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)
+    lam2max = eps * eps if max_damping is None else positive("max_damping", max_damping, True)
+    vlim = np.asarray(mdl.velocity_limit, dtype=float)
+    vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
+    lo = np.where(cont, -np.inf, lower) if within_limits else lower
+    hi = np.where(cont, np.inf, upper) if within_limits else upper
+    if within_limits and (np.any(start < lo) or np.any(start > hi)):
+        raise ConfigurationError(
+            f"q0={start.tolist()} is outside the joint limits {lower.tolist()} .. {upper.tolist()}",
+            parameter="q0",
+            value=start.tolist(),
+            allowed="within the joint limits (or within_limits=False)",
+        )
+    n = mdl.nq
+    out_q = np.empty((steps + 1, n))
+    out_qd = np.empty((steps + 1, n))
+    out_pose = np.empty((steps + 1, 4, 4))
+    out_tw = np.empty((steps + 1, 6))
+    out_s = np.empty((steps + 1, 2))
+    out_lam = np.empty(steps + 1)
+    out_lim = np.empty(steps + 1, dtype=np.bool_)
+    rr_kernel(
+        *prep.packed,
+        prep.tip_rot,
+        start,
+        vel6,
+        ref,
+        dt,
+        method == "rk4",
+        rows6,
+        frame == "tip",
+        gain,
+        eps,
+        lam2max,
+        np.ascontiguousarray(lo, dtype=float),
+        np.ascontiguousarray(hi, dtype=float),
+        within_limits,
+        vmax,
+        out_q,
+        out_qd,
+        out_pose,
+        out_tw,
+        out_s,
+        out_lam,
+        out_lim,
+    )
+    t = np.arange(steps + 1) * dt
+    arrays = {
+        "t": t,
+        "q": out_q,
+        "qdot": out_qd,
+        "foot": np.ascontiguousarray(out_pose[:, :3, 3]),
+        "foot_velocity": np.ascontiguousarray(out_tw[:, :3]),
+        "rotation": np.ascontiguousarray(out_pose[:, :3, :3]),
+        "angular_velocity": np.ascontiguousarray(out_tw[:, 3:]),
+        "command": np.ascontiguousarray(vel[::2]),
+        "reference": np.ascontiguousarray(ref[::2, :3, 3]),
+        "sigma_min": np.ascontiguousarray(out_s[:, 0]),
+        "sigma_max": np.ascontiguousarray(out_s[:, 1]),
+        "damping": out_lam,
+        "limited": out_lim,
+    }
+    ref_rot = np.ascontiguousarray(ref[::2, :3, :3]) if rows6 else None
+    read_only(*arrays.values(), *(() if ref_rot is None else (ref_rot,)))
+    return Trajectory(
+        **arrays,
+        reference_rotation=ref_rot,
+        method=method,
+        dt=dt,
+        gain=gain,
+        frame=frame if rows6 else "base",
+    )
+
+
+def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:
+    """Evaluate a pose path at ``times`` → (M, 4, 4) rigid transforms."""
+    if not callable(path):
+        raise ConfigurationError(
+            "path must be a callable of time returning poses (M, 4, 4)",
+            parameter="path",
+            value=type(path).__name__,
+            allowed="callable t -> (M, 4, 4)",
+        )
+    try:
+        out = np.asarray(path(times), dtype=float)
+        if out.shape != (times.size, 4, 4):
+            raise ValueError
+    except (ValueError, TypeError, IndexError):
+        out = np.array([np.asarray(path(float(t)), dtype=float) for t in times])
+    if out.shape != (times.size, 4, 4) or not np.all(np.isfinite(out)):
+        raise ConfigurationError(
+            f"path(t) returned shape {out.shape[1:]}; finite poses (4, 4) are needed",
+            parameter="path",
+            value=out.shape[1:],
+            allowed="(4, 4) per time",
+        )
+    return out

@@ -1,0 +1,314 @@
+"""Joint schedules, pose paths in SE(3), and tracking of tip paths by IK.
+
+* :class:`JointSchedule` replays piecewise-linear joint tables.
+* :class:`PosePath` interpolates poses on SE(3) (``T_i exp(s log(T_i⁻¹ T_{i+1}))``: a constant
+  body twist per segment) and :func:`follow_pose_path` tracks it by resolved rate, closed loop
+  on the pose error (log map).
+* :func:`track` turns tip positions (or poses) back into joint trajectories by IK (closed form
+  with branch continuity when the chain has one, else damped least squares warm-started from
+  the previous sample).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .. import ik
+from ..exceptions import IKError, ParameterError
+from ..ik.solver import ModelLike, as_model
+from .rate import Method, Trajectory, positive, read_only, resolved_rate
+
+__all__ = ["JointSchedule", "PosePath", "Tracked", "follow_pose_path", "track"]
+
+
+# ============================================================================ joint schedule
+@dataclass(frozen=True)
+class JointSchedule:
+    """Piecewise-linear joint trajectory through knots (held constant after the last one).
+
+    Attributes:
+        times: (K,) knot times in [s], non-decreasing.
+        values: (K, n) joint values at the knots in [rad]/[m].
+        description: Free text (source).
+
+    """
+
+    times: np.ndarray
+    values: np.ndarray
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times, dtype=float).reshape(-1)
+        v = np.asarray(self.values, dtype=float)
+        if v.ndim == 1:
+            v = v[:, None]
+        if t.size < 1 or v.shape[0] != t.size:
+            raise ParameterError(
+                f"JointSchedule: {t.size} times and {v.shape[0]} value rows; one row per knot",
+                parameter="values",
+                value=v.shape,
+                allowed=f"({t.size}, n)",
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
+            raise ParameterError("JointSchedule: times and values must be finite")
+        if np.any(np.diff(t) < 0):
+            raise ParameterError(f"JointSchedule.times={t.tolist()} must be non-decreasing")
+        read_only(t, v)
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "values", v)
+
+    def sample(self, t: Any) -> np.ndarray:
+        """Joint values at times ``t`` ((M,) → (M, n); a scalar → (n,))."""
+        tt = np.asarray(t, dtype=float)
+        cols = [np.interp(tt, self.times, self.values[:, j]) for j in range(self.values.shape[1])]
+        return np.stack(cols, axis=-1)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary ([s], [rad]/[m])."""
+        return {
+            "times": self.times.tolist(),
+            "values": self.values.tolist(),
+            "description": self.description,
+        }
+
+
+# ============================================================================ pose path
+@dataclass(frozen=True)
+class PosePath:
+    """Poses at knot times, interpolated on SE(3) (arrays read-only).
+
+    Between knots ``i`` and ``i+1`` the pose is ``T_i exp(s ξ_i)`` with
+    ``ξ_i = log(T_i⁻¹ T_{i+1})`` and ``s ∈ [0, 1]`` linear in time: a constant body twist
+    ``ξ_i / Δt_i`` (a screw motion, the geodesic of SE(3)); held at the last pose afterwards.
+
+    Attributes:
+        times: (K,) knot times in [s], strictly increasing, starting at 0.
+        poses: (K, 4, 4) poses ``baseMtarget``.
+
+    """
+
+    times: np.ndarray
+    poses: np.ndarray
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times, dtype=float).reshape(-1)
+        p = np.asarray(self.poses, dtype=float)
+        if p.shape != (t.size, 4, 4) or t.size < 2:
+            raise ParameterError(
+                f"PosePath: {t.size} times and poses of shape {p.shape}; K >= 2 times and "
+                "(K, 4, 4) poses are needed",
+                parameter="poses",
+                value=p.shape,
+                allowed=f"({t.size}, 4, 4)",
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
+            raise ParameterError("PosePath: times and poses must be finite")
+        if t[0] != 0.0 or np.any(np.diff(t) <= 0):
+            raise ParameterError(
+                f"PosePath.times={t.tolist()} must start at 0 and increase strictly",
+                parameter="times",
+                value=t.tolist(),
+                allowed="0 = t0 < t1 < ...",
+            )
+        for k, m in enumerate(p):
+            r = m[:3, :3]
+            if np.max(np.abs(r.T @ r - np.eye(3))) > 1e-9 or np.linalg.det(r) < 0:
+                raise ParameterError(
+                    f"PosePath.poses[{k}] is not a rigid transform",
+                    parameter="poses",
+                    value=k,
+                    allowed="rotation orthonormal with det +1",
+                )
+        xi = np.array(
+            [pin.log6(pin.SE3(p[k]).actInv(pin.SE3(p[k + 1]))).vector for k in range(t.size - 1)]
+        )
+        read_only(t, p, xi)
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "poses", p)
+        object.__setattr__(self, "_xi", xi)
+
+    @property
+    def duration(self) -> float:
+        """Time of the last knot in [s]."""
+        return float(self.times[-1])
+
+    def _segment(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+        dt = self.times[k + 1] - self.times[k]
+        s = np.clip((t - self.times[k]) / dt, 0.0, 1.0)
+        return k, s
+
+    def sample(self, t: Any) -> np.ndarray:
+        """Poses at times ``t``: (M, 4, 4) for (M,) times, (4, 4) for a scalar."""
+        tt = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(tt)
+        k, s = self._segment(flat)
+        xi: np.ndarray = self._xi  # type: ignore[attr-defined]
+        out = np.array(
+            [
+                (pin.SE3(self.poses[ki]) * pin.exp6(pin.Motion(si * xi[ki]))).homogeneous
+                for ki, si in zip(k, s)
+            ]
+        )
+        return out[0] if tt.ndim == 0 else out
+
+    def twist(self, t: Any) -> np.ndarray:
+        """Body twist ``[v; ω]`` of the path (tip frame) at times ``t``: (M, 6) or (6,).
+
+        Segment i's twist on ``[t_i, t_{i+1}]`` (the last segment's at the end), 0 after.
+        """
+        tt = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(tt)
+        k, _ = self._segment(flat)
+        xi: np.ndarray = self._xi  # type: ignore[attr-defined]
+        out = xi[k] / (self.times[k + 1] - self.times[k])[:, None]
+        out[flat > self.times[-1]] = 0.0
+        return out[0] if tt.ndim == 0 else out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary ([s], poses as nested lists)."""
+        return {"times": self.times.tolist(), "poses": self.poses.tolist()}
+
+
+def follow_pose_path(
+    model: ModelLike,
+    path: PosePath,
+    q0: Any = None,
+    *,
+    dt: float = 1e-3,
+    gain: float = 20.0,
+    method: Method = "rk4",
+    within_limits: bool = True,
+) -> Trajectory:
+    """Track a :class:`PosePath` by resolved rate: feed-forward body twist + pose feedback.
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes (6-D tip motion needs
+            at least 6 joints for exact tracking; fewer give the damped best fit).
+        path: The pose path.
+        q0: Start (nq,); default: 6-D IK of the first pose from :func:`hexapod_kin.ik.home`.
+        dt: Step in [s].
+        gain: Closed-loop gain on the pose error ``[p_ref − p; log(R_ref Rᵀ)]`` in [1/s].
+        method: ``"rk4"`` or ``"euler"``.
+        within_limits: Respect the joint position limits.
+
+    Returns:
+        The :class:`Trajectory` (``frame="tip"``; ``reference``/``reference_rotation`` are
+        the path).
+
+    Raises:
+        IKError: The first pose cannot be reached (when ``q0`` is None).
+
+    """
+    mdl = as_model(model)
+    if q0 is None:
+        res = ik.solve(mdl, path.poses[0], within_limits=within_limits)
+        if not res.converged:
+            raise IKError(
+                f"follow_pose_path: the first pose is not reachable ({res.reason})",
+                parameter="path",
+                value="poses[0]",
+                allowed="a reachable pose (or give q0)",
+            )
+        q0 = res.q
+    return resolved_rate(
+        mdl,
+        path.twist,
+        q0,
+        dt,
+        path.duration,
+        frame="tip",
+        method=method,
+        gain=gain,
+        path=path.sample,
+        within_limits=within_limits,
+    )
+
+
+# ============================================================================ tracking by IK
+@dataclass(frozen=True)
+class Tracked:
+    """Joint trajectory reaching a sequence of tip targets (arrays read-only).
+
+    Attributes:
+        q: (M, n) joint values in [rad]/[m].
+        reached: (M,) True where the target was reached.
+
+    """
+
+    q: np.ndarray
+    reached: np.ndarray
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {"q": self.q.tolist(), "reached": self.reached.tolist()}
+
+
+def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-10) -> Tracked:
+    """Joint trajectory reaching a sequence of tip positions (or poses), continuously.
+
+    Uses the closed form when the model comes from a chain with one (each sample takes the
+    solution nearest to the previous sample's joints, so no branch jumps), else
+    :func:`hexapod_kin.ik.solve` warm-started from the previous sample.
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
+        positions: (M, 3) tip positions in [m], or (M, 4, 4) poses.
+        q0: Joints near the first sample (branch choice / warm start); default
+            :func:`hexapod_kin.ik.home`.
+        tol: Position tolerance [m] of the numerical fallback.
+
+    Returns:
+        A :class:`Tracked`.
+
+    Raises:
+        IKError: Bad positions.
+
+    """
+    mdl = as_model(model)
+    pts = np.asarray(positions, dtype=float)
+    poses = pts.ndim == 3
+    if not ((pts.ndim == 2 and pts.shape[1] == 3) or (poses and pts.shape[1:] == (4, 4))):
+        raise IKError(
+            f"positions has shape {pts.shape}; (M, 3) in [m] or (M, 4, 4) poses are needed",
+            parameter="positions",
+            value=pts.shape,
+            allowed="(M, 3) or (M, 4, 4)",
+        )
+    if not np.all(np.isfinite(pts)):
+        raise IKError("positions contains non-finite values", parameter="positions")
+    tol = positive("tol", tol)
+    prev = ik.home(mdl) if q0 is None else mdl.check_q(q0, "q0")
+    out = np.empty((pts.shape[0], mdl.nq))
+    ok = np.zeros(pts.shape[0], dtype=bool)
+    batch = None
+    if not poses:
+        try:
+            batch = ik.analytic_batch(mdl, pts, within_limits=True)
+        except IKError:
+            batch = None
+    rev = ~np.asarray(mdl.is_prismatic)
+    for i, p in enumerate(pts):
+        if batch is not None and batch.valid[i].any():
+            cands = batch.q[i][batch.valid[i]]
+            d = cands - prev
+            d[:, rev] = np.remainder(d[:, rev] + np.pi, 2 * np.pi) - np.pi
+            idx = int(np.argmin(np.sum(d * d, axis=1)))
+            best = cands[idx]
+            # keep revolute joints continuous (no 2π jumps) when that stays inside the limits
+            unwrapped = prev + d[idx]
+            if np.all(unwrapped >= mdl.lower) and np.all(unwrapped <= mdl.upper):
+                best = unwrapped
+            out[i] = best
+            ok[i] = True
+        else:
+            res = ik.solve(mdl, p, prev, tol=tol, restarts=2)
+            out[i] = res.q
+            ok[i] = res.converged
+        prev = out[i]
+    read_only(out, ok)
+    return Tracked(q=out, reached=ok)

@@ -1,0 +1,157 @@
+"""Closed-form IK of the leg families, checked by Pinocchio FK (``ik.closed``)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import ik, robots
+from hexapod_kin.exceptions import ConfigurationError, IKError, ParameterError
+from hexapod_kin.params import JointLimits
+
+
+def _fk_many(model, qs):
+    return np.array([model.position(q) for q in qs])
+
+
+def _wrapdiff(a, b):
+    return np.remainder(a - b + np.pi, 2 * np.pi) - np.pi
+
+
+# ------------------------------------------------------------------ family detection
+@pytest.mark.parametrize(
+    ("preset", "family"),
+    [("coxa_tibia_leg", "coxa_tibia"), ("hexabot_leg", "leg3"), ("scara", "scara")],
+)
+def test_family_from_table(preset, family):
+    chain = robots.get(preset)
+    assert ik.detect_family(chain).family == family
+    # same table, another name and other lengths: still recognised (pattern, not name)
+    renamed = chain.replace(name="renamed_robot")
+    assert ik.detect_family(renamed).family == family
+    assert ik.detect_family(hk.load(chain)).family == family
+
+
+def test_no_closed_form_is_a_clear_error():
+    with pytest.raises(IKError, match="no closed-form IK"):
+        ik.detect_family(robots.pendulum())
+    leg = robots.hexabot_leg(alpha2=0.3)  # not a ±π/2 twist: no closed form
+    with pytest.raises(IKError, match="leg3"):
+        ik.analytic(leg, [0.1, 0.0, 0.0])
+    from_urdf = hk.load(hk.to_urdf(robots.hexabot_leg()))  # URDF text: no table
+    with pytest.raises(IKError, match="ik.solve"):
+        ik.analytic(from_urdf, [0.1, 0.0, 0.0])
+
+
+# ------------------------------------------------------------------ seed 002 (2-DOF)
+def test_seed002_points_and_tibia_sign():
+    chain = robots.coxa_tibia_leg()
+    c30 = 10 + 5 * math.cos(math.radians(30))
+    # the seed's P1 (0°, −30°) and P2 (20°, −30°)
+    p1 = [c30, 0.0, -2.5]
+    p2 = [c30 * math.cos(math.radians(20)), c30 * math.sin(math.radians(20)), -2.5]
+    np.testing.assert_allclose(p2, [13.4659, 4.9012, -2.5], atol=1e-4)
+    s1 = ik.analytic(chain, p1)[0]
+    s2 = ik.analytic(chain, p2)[0]
+    np.testing.assert_allclose(s1, np.radians([[0.0, -30.0]]), atol=1e-12)
+    np.testing.assert_allclose(s2, np.radians([[20.0, -30.0]]), atol=1e-12)
+    # +30° lifts the foot: the seed's θ2 = 180° − β gives the same value for both; we do not
+    s_up = ik.analytic(chain, [c30, 0.0, +2.5])[0]
+    np.testing.assert_allclose(s_up, np.radians([[0.0, 30.0]]), atol=1e-12)
+    beta = lambda p: math.degrees(  # noqa: E731 - the seed's formula (11)
+        math.acos((10**2 + 5**2 - sum(v * v for v in p)) / (2 * 10 * 5))
+    )
+    assert beta(p1) == pytest.approx(beta([c30, 0.0, 2.5]))
+
+
+def test_coxa_tibia_off_surface_has_no_solution():
+    chain = robots.coxa_tibia_leg()
+    assert ik.analytic(chain, [14.0, 0.0, -2.5])[0].shape == (0, 2)  # not on the reachable surface
+
+
+# ------------------------------------------------------------------ FK(IK(x)) = x, 10,000 targets
+@pytest.mark.parametrize("preset", ["coxa_tibia_leg", "hexabot_leg", "scara"])
+def test_closed_form_roundtrip_10000(preset):
+    chain = robots.get(preset)
+    model = hk.load(chain)
+    qs = model.random_q(10_000, seed=11)
+    targets = _fk_many(model, qs)
+    batch = ik.analytic_batch(chain, targets)
+    assert batch.reachable.all()
+    scale = ik.detect_family(chain).scale
+    worst = 0.0
+    found = np.zeros(len(qs), dtype=bool)
+    for i in range(len(qs)):
+        sols = batch.q[i][batch.valid[i]]
+        back = _fk_many(model, sols)
+        worst = max(worst, float(np.max(np.abs(back - targets[i]))))
+        d = _wrapdiff(sols, qs[i])
+        if preset == "scara":
+            d = d[:, [0, 1, 3]]  # θ3 is free for a position target (we return θ3 = 0)
+            d[:, 2] = sols[:, 3] - qs[i, 3]
+        found[i] = np.any(np.max(np.abs(d), axis=1) < 1e-7)
+    assert worst <= 1e-9 * max(scale, 1.0)
+    # the configuration the target came from is among the solutions (all branches are there)
+    assert found.all()
+
+
+def test_leg3_all_four_solutions_distinct_and_correct():
+    chain = robots.hexabot_leg()
+    model = hk.load(chain)
+    target = model.position([0.4, 1.0, 1.5])  # foot close to the hip axis: reachable reversed
+    sols = ik.analytic(chain, target)[0]
+    assert sols.shape == (4, 3)  # hip toward/reversed × both knee branches
+    np.testing.assert_allclose(_fk_many(model, sols), np.tile(target, (4, 1)), atol=1e-15)
+    assert len({tuple(np.round(s, 9)) for s in sols}) == 4
+
+
+def test_scara_yaw_target_sets_tool_yaw():
+    chain = robots.scara()
+    model = hk.load(chain)
+    target = [0.3, 0.2, 0.4, 0.7]
+    sols = ik.analytic(chain, target)[0]
+    assert sols.shape == (2, 4)
+    for s in sols:
+        pose = model.fk(s)
+        np.testing.assert_allclose(pose[:3, 3], target[:3], atol=1e-14)
+        assert math.atan2(pose[1, 0], pose[0, 0]) == pytest.approx(0.7, abs=1e-12)
+    # position only: θ3 = 0
+    assert np.all(ik.analytic(chain, target[:3])[0][:, 2] == 0.0)
+
+
+def test_unreachable_closed_form_and_limits_filter():
+    chain = robots.hexabot_leg()
+    assert ik.analytic(chain, [1.0, 0.0, 0.0])[0].shape == (0, 3)
+    assert ik.analytic(robots.scara(), [1.0, 0.0, 0.4])[0].shape == (0, 4)
+    lim = tuple(JointLimits(-0.5, 1.6) for _ in range(3))
+    limited = robots.hexabot_leg(limits=lim)
+    target = hk.load(chain).position([0.4, 0.3, 1.2])
+    sols = ik.analytic(limited, target, within_limits=True)[0]
+    assert sols.shape == (1, 3)
+    np.testing.assert_allclose(sols[0], [0.4, 0.3, 1.2], atol=1e-12)
+
+
+def test_vectorised_list_and_batch_shapes():
+    chain = robots.hexabot_leg()
+    model = hk.load(chain)
+    targets = _fk_many(model, model.random_q(5, seed=2))
+    out = ik.analytic(chain, targets)
+    assert isinstance(out, list) and len(out) == 5
+    single = ik.analytic(chain, targets[0])  # one type whatever the input: a list
+    assert isinstance(single, list) and len(single) == 1
+    np.testing.assert_array_equal(single[0], out[0])
+    b = ik.analytic_batch(chain, targets)
+    assert b.q.shape == (5, 4, 3) and b.valid.shape == (5, 4)
+    assert not b.q.flags.writeable
+    assert np.all(np.isnan(b.q[~b.valid]))
+
+
+@pytest.mark.parametrize("bad", [[np.nan, 0, 0], [0, np.inf, 0], [1, 2], "abc"])
+def test_bad_targets_refused(bad):
+    with pytest.raises(IKError):
+        ik.analytic(robots.hexabot_leg(), bad)
+    with pytest.raises(IKError):
+        ik.solve(hk.load("hexabot_leg"), bad)

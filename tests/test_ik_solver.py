@@ -1,0 +1,310 @@
+"""Numerical IK (``ik.solve``): positions on the legs, 6-D poses on UR5 and Panda, statuses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import ik, robots
+from hexapod_kin.exceptions import ConfigurationError, IKError, ParameterError
+from hexapod_kin.params import JointLimits
+
+
+def _fk_many(model, qs):
+    return np.array([model.position(q) for q in qs])
+
+
+# ------------------------------------------------------------------ numerical solver
+def _models():
+    return {
+        "hexabot_leg": hk.load("hexabot_leg"),
+        "scara": hk.load("scara"),
+        "solo12_FL": hk.load("erd:solo12", tip="FL_FOOT"),
+    }
+
+
+@pytest.fixture(scope="module")
+def models():
+    return _models()
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "scara", "solo12_FL"])
+def test_numerical_roundtrip_10000(models, name):
+    model = models[name]
+    qs = model.random_q(10_000, seed=5)
+    if name == "solo12_FL":  # ±10 rad limits in the URDF; sample one turn
+        qs = np.random.default_rng(5).uniform(-np.pi, np.pi, size=(10_000, 3))
+    targets = _fk_many(model, qs)
+    bad = []
+    for i, t in enumerate(targets):
+        r = ik.solve(model, t)
+        if r.status != "converged":
+            bad.append((i, r.status))
+            continue
+        # equal to Pinocchio: the reported position is Pinocchio's FK of q
+        np.testing.assert_array_equal(r.position, model.position(r.q))
+        assert np.max(np.abs(r.position - t)) <= 1e-9
+        assert np.all(r.q >= model.lower) and np.all(r.q <= model.upper)
+        assert np.all(np.diff(r.history) < 0)  # strictly decreasing, step by step
+    assert bad == []
+
+
+def test_convergence_is_monotonic_step_by_step(models):
+    model = models["hexabot_leg"]
+    r = ik.solve(model, model.position([1.0, -0.7, 2.0]), q0=[0.0, 0.3, 0.3])
+    assert r.converged
+    h = r.history
+    assert len(h) == r.iterations + 1 >= 4
+    assert h[0] == pytest.approx(
+        np.linalg.norm(model.position([1.0, -0.7, 2.0]) - model.position([0.0, 0.3, 0.3]))
+    )
+    assert np.all(np.diff(h) < 0)
+    # quadratic convergence at the end: each late error well below the previous one
+    assert h[-1] < 1e-10 and h[-2] < 1e-3
+
+
+def test_dls_step_matches_formula_and_lstsq():
+    rng = np.random.default_rng(0)
+    for n in (2, 3, 4, 6):
+        jac = rng.normal(size=(3, n))
+        e = rng.normal(size=3)
+        lam2 = 0.3
+        expected = jac.T @ np.linalg.solve(jac @ jac.T + lam2 * np.eye(3), e)
+        np.testing.assert_allclose(ik.dls_step(jac, e, lam2), expected, atol=1e-12)
+        np.testing.assert_allclose(
+            ik.dls_step(jac, e, 1e-14), np.linalg.lstsq(jac, e, rcond=None)[0], atol=1e-6
+        )
+
+
+def test_sigma_bounds_match_svd():
+    rng = np.random.default_rng(1)
+    for n in (1, 2, 3, 4, 7):
+        for _ in range(50):
+            jac = np.ascontiguousarray(rng.normal(size=(3, n)))
+            sv = np.linalg.svd(jac, compute_uv=False)
+            smin, smax = ik.sigma_bounds(jac)
+            assert smax == pytest.approx(sv[0], rel=1e-9)
+            assert smin == pytest.approx(sv[min(n, 3) - 1], rel=1e-6, abs=1e-9)
+    singular = np.array([[1.0, 2.0, 3.0], [0.0, 0.0, 0.0], [2.0, 4.0, 6.0]])
+    assert ik.sigma_bounds(singular)[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_unreachable_reports_nearest_point_and_never_winds(models):
+    model = models["hexabot_leg"]
+    for target, nearest in (([1.0, 0.0, 0.0], [0.25, 0, 0]), ([0.0, 0.6, 0.0], [0, 0.25, 0])):
+        r = ik.solve(model, target)
+        assert r.status == "unreachable"
+        assert r.distance == pytest.approx(np.linalg.norm(np.subtract(target, nearest)), abs=1e-6)
+        np.testing.assert_allclose(r.nearest, nearest, atol=1e-6)
+        assert np.all(np.abs(r.q) <= np.pi)  # no winding to ±1000 rad
+        assert np.all(np.diff(r.history) < 0)
+    scara = models["scara"]
+    r = ik.solve(scara, [1.0, 0.0, 0.3])
+    assert r.status == "unreachable"
+    assert r.distance == pytest.approx(1.0 - 0.46, abs=1e-6)
+    solo = models["solo12_FL"]
+    r = ik.solve(solo, [2.0, 1.0, -2.0])
+    assert r.status == "unreachable"
+    assert np.all(np.abs(r.q) <= 10.0)
+
+
+def test_joint_limits_status():
+    lim = tuple(JointLimits(-0.5, 0.5) for _ in range(3))
+    model = hk.load(robots.hexabot_leg(limits=lim))
+    reachable_without_limits = hk.load("hexabot_leg").position([0.0, 1.2, 1.0])
+    r = ik.solve(model, reachable_without_limits)
+    assert r.status == "joint_limits"
+    assert np.all(r.q >= -0.5) and np.all(r.q <= 0.5)
+    assert r.distance > 0.05
+    np.testing.assert_allclose(r.nearest, model.position(r.q), atol=1e-15)
+
+
+def test_singular_status_without_restarts(models):
+    model = models["hexabot_leg"]
+    # stretched leg (q3 = 0), target inward along the leg: e is outside the range of J
+    r = ik.solve(model, [0.2, 0.0, 0.0], q0=[0.0, 0.0, 0.0], restarts=0)
+    assert r.status == "singular"
+    assert r.sigma_min < 1e-12
+    r2 = ik.solve(model, [0.2, 0.0, 0.0], q0=[0.0, 0.0, 0.0])
+    assert r2.converged
+
+
+def test_not_converged_with_tiny_budget(models):
+    model = models["hexabot_leg"]
+    r = ik.solve(
+        model, model.position([2.0, -1.0, 2.0]), q0=[0.0, 0.3, 0.3], max_iter=2, restarts=0
+    )
+    assert r.status == "not_converged"
+    assert r.iterations == 2
+
+
+def test_solver_argument_errors(models):
+    model = models["hexabot_leg"]
+    with pytest.raises(ParameterError):
+        ik.solve(model, [0.1, 0, 0], tol=-1.0)
+    with pytest.raises(ParameterError):
+        ik.solve(model, [0.1, 0, 0], max_iter=0)
+    with pytest.raises(ConfigurationError):
+        ik.solve(model, [0.1, 0, 0], q0=[0.0, 0.0])
+    r = ik.solve(model, [0.15, 0.0, -0.1])
+    assert not r.q.flags.writeable and not r.history.flags.writeable
+    assert set(r.to_dict()) >= {"status", "q", "error", "iterations", "history"}
+    assert r.status in ik.STATUSES
+
+
+def test_solve_many(models):
+    model = models["scara"]
+    targets = _fk_many(model, model.random_q(20, seed=9))
+    res = ik.solve_many(model, targets)
+    assert all(r.converged for r in res)
+
+
+# ------------------------------------------------------------------ 6-D poses (UR5, Panda)
+@pytest.fixture(scope="module")
+def arms():
+    return {
+        "ur5": hk.load("erd:ur5_robot", tip="tool0"),
+        "panda": hk.load("erd:panda", tip="panda_hand"),
+    }
+
+
+def _pose_errors(model, q, target):
+    """Position [m] and orientation [rad] errors from Pinocchio's own FK and log map."""
+    pose = model.fk(q)
+    return (
+        float(np.linalg.norm(target[:3, 3] - pose[:3, 3])),
+        float(np.linalg.norm(pin.log3(target[:3, :3] @ pose[:3, :3].T))),
+    )
+
+
+@pytest.mark.parametrize("arm", ["ur5", "panda"])
+def test_pose_ik_random_reachable_poses(arms, arm):
+    model = arms[arm]
+    qs = model.random_q(300, seed=21)
+    targets = np.array([model.fk(q) for q in qs])  # reachable: FK of q within the limits
+    failed = []
+    for i, target in enumerate(targets):
+        r = ik.solve(model, target)
+        pos_err, rot_err = _pose_errors(model, r.q, target)
+        if not (r.converged and pos_err <= 1e-9 and rot_err <= 1e-9):
+            failed.append((i, r.status))
+            continue
+        assert np.all(r.q >= model.lower) and np.all(r.q <= model.upper)
+        assert r.error == pytest.approx(pos_err, abs=1e-15)
+        assert r.rotation_error == pytest.approx(rot_err, abs=1e-12)
+        assert np.all(np.diff(r.history) < 0)
+    assert len(failed) <= 1, failed  # >= 99.6 % (tools/bench_ik.py: 2,000 poses)
+
+
+def test_pose_ik_large_rotation_and_near_pi(arms):
+    # the start is ~π away in orientation: the log map's branch near π is used
+    model = arms["ur5"]
+    q_target = np.array([0.3, -1.2, 1.4, 0.2, 1.1, 2.9])
+    target = model.fk(q_target)
+    r = ik.solve(model, target, q0=q_target + [0.0, 0.0, 0.0, 0.0, 0.0, -np.pi + 1e-6])
+    assert r.converged
+    assert max(_pose_errors(model, r.q, target)) <= 1e-9
+
+
+def test_mask_and_weights(arms):
+    model = arms["ur5"]
+    target = model.fk(np.array([0.5, -1.0, 1.2, -0.4, 1.3, 0.2]))
+    # position + rotation about z only: the tool's z axis stays free
+    r = ik.solve(model, target, mask=[1, 1, 1, 0, 0, 1])
+    assert r.converged and r.error <= 1e-9
+    ew = pin.log3(target[:3, :3] @ model.fk(r.q)[:3, :3].T)
+    assert abs(ew[2]) <= 1e-9 and r.rotation_error == pytest.approx(abs(ew[2]), abs=1e-12)
+    # weights change the path, not the answer of a reachable pose
+    r2 = ik.solve(model, target, weights=[1, 1, 1, 0.1, 0.1, 0.1])
+    assert r2.converged and max(_pose_errors(model, r2.q, target)) <= 1e-9
+    with pytest.raises(IKError, match="not both"):
+        ik.solve(model, target, mask=[1] * 6, weights=[1] * 6)
+    with pytest.raises(IKError, match="wx"):
+        ik.solve(model, target[:3, 3], mask=[1, 1, 1, 1, 0, 0])
+    with pytest.raises(IKError):
+        ik.solve(model, target, weights=[0] * 6)
+
+
+def test_bad_pose_targets(arms):
+    model = arms["ur5"]
+    bad = np.eye(4)
+    bad[0, 0] = 1.1
+    with pytest.raises(IKError, match="rigid"):
+        ik.solve(model, bad)
+    mirror = np.diag([1.0, 1.0, -1.0, 1.0])
+    with pytest.raises(IKError, match="rigid"):
+        ik.solve(model, mirror)
+    with pytest.raises(IKError):
+        ik.solve(model, np.zeros((3, 3)))
+
+
+def test_position_plus_yaw_on_the_scara(models):
+    scara = models["scara"]
+    q = np.array([0.4, -0.9, 0.6, 0.12])
+    pose = scara.fk(q)
+    yaw = math.atan2(pose[1, 0], pose[0, 0])
+    r = ik.solve(scara, np.append(pose[:3, 3], yaw))
+    assert r.converged
+    reached = scara.fk(r.q)
+    assert np.max(np.abs(reached[:3, 3] - pose[:3, 3])) <= 1e-9
+    assert abs(math.remainder(math.atan2(reached[1, 0], reached[0, 0]) - yaw, 2 * math.pi)) <= 1e-9
+
+
+def test_redundant_chain_posture_in_the_null_space(arms):
+    # Panda (7 joints) on 6-D poses: the secondary task pulls toward the middle of the ranges
+    model = arms["panda"]
+    middle = 0.5 * (model.lower + model.upper)
+    qs = model.random_q(40, seed=4)
+    with_posture, without = [], []
+    for q in qs:
+        target = model.fk(q)
+        a = ik.solve(model, target, posture="middle")
+        b = ik.solve(model, target, posture=None)
+        if a.converged and b.converged and a.attempts == b.attempts == 1:
+            assert max(_pose_errors(model, a.q, target)) <= 1e-9
+            with_posture.append(np.linalg.norm(a.q - middle))
+            without.append(np.linalg.norm(b.q - middle))
+    assert len(with_posture) >= 20
+    assert np.mean(with_posture) < np.mean(without)
+    # a preferred posture of the user's
+    pref = model.random_q(seed=8)
+    r = ik.solve(model, model.fk(qs[0]), posture=pref)
+    assert r.converged
+    with pytest.raises(ParameterError):
+        ik.solve(model, model.fk(qs[0]), posture="upright")
+
+
+def test_solve_many_poses_and_home(arms):
+    model = arms["ur5"]
+    qs = model.random_q(5, seed=2)
+    res = ik.solve_many(model, np.array([model.fk(q) for q in qs]))
+    assert all(r.converged for r in res)
+    home = ik.home(model)
+    assert np.all(home >= model.lower) and np.all(home <= model.upper)
+    # the home pose is the most dexterous candidate: far from the position singularities
+    sv = np.linalg.svd(model.jacobian(home)[:3], compute_uv=False)
+    assert sv[-1] > 0.05 * sv[0]
+    np.testing.assert_array_equal(ik.home(hk.load("hexabot_leg")), ik.LEG_HOME)
+    assert ik.solve("hexabot_leg", [0.15, 0.0, -0.1]).converged  # any source
+
+
+def test_threads_give_the_single_thread_answers(arms):
+    import sys
+    from concurrent.futures import ThreadPoolExecutor
+
+    model = arms["ur5"]
+    targets = [model.fk(q) for q in model.random_q(64, seed=6)]
+    single = [ik.solve(model, t).q for t in targets]
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        with ThreadPoolExecutor(8) as pool:
+            multi = list(pool.map(lambda t: ik.solve(model, t).q, targets * 2))
+    finally:
+        sys.setswitchinterval(old)
+    for a, b in zip(single * 2, multi):
+        np.testing.assert_array_equal(a, b)
