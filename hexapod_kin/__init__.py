@@ -26,6 +26,7 @@ from .exceptions import (  # noqa: E402
     ParameterError,
     SourceError,
     UrdfError,
+    UrdfWarning,
 )
 from .params import (  # noqa: E402
     Chain,
@@ -59,6 +60,7 @@ def load(source: Any, base: str | None = None, tip: str | None = None, **kwargs:
 _LAZY_SUBMODULES = (
     "dynamics",
     "export",
+    "frames",
     "gait",
     "ik",
     "kinematics",
@@ -119,6 +121,7 @@ __all__ = [
     "Pose",
     "SourceError",
     "UrdfError",
+    "UrdfWarning",
     "load",
     "robots",
     "table_fk",

@@ -1,9 +1,13 @@
-"""The only place that parses URDF: resolve a source, pass the gate, build Pinocchio.
+"""The loader: a resolved source (:mod:`hexapod_kin.sources`) passes the gate, then Pinocchio.
 
-A :class:`Model` keeps the Pinocchio ``Model`` and its ``Data`` together (users never pair
-them by hand), the URDF text it was built from, and the names of the sub-chain (base → tip)
-that the user picked. Names are checked here before any id reaches Pinocchio (whose
-``getFrameId`` returns an out-of-range id for unknown names and then crashes).
+A :class:`Model` keeps the Pinocchio ``Model`` with one ``Data`` per thread (users never pair
+them by hand), the URDF text it was built from, the names of the sub-chain (base → tip) that
+the user picked, an optional tool frame, and one per-model cache (:meth:`Model.cached`) for
+what other modules derive from it. Names are checked here before any id reaches Pinocchio
+(whose ``getFrameId`` returns an out-of-range id for unknown names and then crashes). What a
+URDF may contain that kinematics does not need (missing meshes, implausible inertials) loads
+with a :class:`~hexapod_kin.exceptions.UrdfWarning`; :func:`check_inertials` is the strict
+check dynamics calls.
 """
 
 from __future__ import annotations
@@ -25,6 +29,16 @@ from .exceptions import (
     UrdfError,
     UrdfWarning,
     choices,
+)
+from .frames import (
+    add_tool_frame,
+    drop_missing_meshes,
+    frame_index,
+    last_body_frame,
+    path_frames,
+    pose_matrix,
+    reduce_model,
+    root_link_frame,
 )
 from .params import Chain, Hexapod
 from .sources import ResolvedSource, erd_names, erd_path, resolve_source, yourdfpy_load
@@ -156,7 +170,7 @@ class Model:
             if isinstance(params, Chain)
             else params.body
             if isinstance(params, Hexapod)
-            else _root_link_frame(full)
+            else root_link_frame(full)
         )
         if tip is None:
             if isinstance(params, Chain):
@@ -164,7 +178,7 @@ class Model:
             elif isinstance(params, Hexapod):
                 tip_name = params.foot_frames[0]
             else:
-                tip_name = _last_body_frame(full)
+                tip_name = last_body_frame(full)
         else:
             tip_name = tip
         base_name = default_base if base is None else base
@@ -175,12 +189,14 @@ class Model:
                     f"{choices(full_frames, limit=200)}"
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
-        reduced, self._locked, self._q_ref = _reduce(full, base_name, tip_name, do_reduce, q_ref)
+        reduced, self._locked, self._q_ref = reduce_model(
+            full, base_name, tip_name, do_reduce, q_ref
+        )
         self.flange = tip_name
         self.tool: np.ndarray | None = None
         if tool is not None:
             tool_m = pose_matrix(tool, "tool")
-            reduced, tip_name = _add_tool_frame(reduced, tip_name, tool_m)
+            reduced, tip_name = add_tool_frame(reduced, tip_name, tool_m)
             tool_m.setflags(write=False)
             self.tool = tool_m
         self.model = reduced
@@ -241,7 +257,7 @@ class Model:
         )
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
-        self.path_frames: tuple[str, ...] = _path_frames(m, self.base_id, self.tip_id)
+        self.path_frames: tuple[str, ...] = path_frames(m, self.base_id, self.tip_id)
         # What the per-call hot paths need, one tuple per thread (see kinematics.fk): each
         # thread gets its own pinocchio.Data, so concurrent calls never share scratch space.
         self._local = _PerThread(self, data)
@@ -458,7 +474,7 @@ class Model:
         dirs = list(self.source.package_dirs)
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
-        text = _without_missing_meshes(self.urdf, self.missing_meshes)
+        text = drop_missing_meshes(self.urdf, self.missing_meshes)
         geom = pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
         if self._locked:
             _, geoms = pin.buildReducedModel(
@@ -497,31 +513,6 @@ class _PerThread(threading.local):
         # (Model.pinocchio_q), which converts it to Pinocchio's (cos, sin) layout.
         nq = -1 if owner._unbounded else owner.nq
         self.hot = (owner.model, data, owner.tip_id, nq, owner._base_is_root)
-
-
-_FRAME_PREFERENCE = (
-    pin.FrameType.BODY,
-    pin.FrameType.OP_FRAME,
-    pin.FrameType.JOINT,
-    pin.FrameType.FIXED_JOINT,
-    pin.FrameType.SENSOR,
-)
-
-
-def frame_index(model: pin.Model, name: str) -> int:
-    """Index of the frame ``name`` in a Pinocchio model (which must have it).
-
-    URDFs may name a link and a joint alike (anymal: ``RH_HAA``); Pinocchio's ``getFrameId``
-    then raises. The link's (BODY) frame wins, then operational, joint, fixed-joint frames.
-    """
-    hits = [i for i, f in enumerate(model.frames) if f.name == name]
-    if len(hits) == 1:
-        return hits[0]
-    for kind in _FRAME_PREFERENCE:
-        for i in hits:
-            if model.frames[i].type == kind:
-                return i
-    return hits[0]
 
 
 def _warn_defects(
@@ -577,174 +568,6 @@ def check_inertials(model: Model) -> None:
 
     """
     _raise_inertia_defects(model.name, model.inertia_defects)
-
-
-def _without_missing_meshes(text: str, missing: tuple[tuple[str, str], ...]) -> str:
-    """``text`` without the visual/collision elements whose mesh file was not found."""
-    if not missing:
-        return text
-    from ._gate import parse_urdf
-
-    uris = {uri for uri, _ in missing}
-    root = parse_urdf(text)
-    for link in root.findall("link"):
-        for part in [*link.findall("visual"), *link.findall("collision")]:
-            if any(m.get("filename") in uris for m in part.iter("mesh", "texture")):
-                link.remove(part)
-    from lxml import etree
-
-    return str(etree.tostring(root, encoding="unicode"))
-
-
-def pose_matrix(value: Any, name: str = "pose") -> np.ndarray:
-    """A rigid transform as a fresh 4×4 array, from a 4×4 matrix or ``(xyz, rpy)``.
-
-    Accepted: a 4×4 homogeneous matrix (rotation orthonormal with det +1 to 1e-9, last row
-    ``0 0 0 1``); a pair ``(xyz, rpy)``; a flat 6-vector ``xyz + rpy``; a mapping with keys
-    ``xyz`` and/or ``rpy``. ``xyz`` in [m]; ``rpy`` in [rad], the URDF convention
-    (``Rz(yaw)·Ry(pitch)·Rx(roll)``).
-
-    Args:
-        value: The transform.
-        name: The parameter name for messages.
-
-    Raises:
-        ParameterError: Anything else, non-finite numbers or a matrix that is not rigid.
-
-    """
-    from .exceptions import ParameterError
-
-    allowed = "a 4x4 homogeneous matrix, (xyz, rpy), a 6-vector xyz+rpy or {'xyz':…, 'rpy':…}"
-
-    def bad(why: str) -> ParameterError:
-        return ParameterError(
-            f"{name}={value!r}: {why}; give {allowed}", parameter=name, value=value, allowed=allowed
-        )
-
-    if isinstance(value, dict):
-        unknown = set(value) - {"xyz", "rpy"}
-        if unknown:
-            raise bad(f"unknown keys {sorted(unknown)}")
-        value_xyz, value_rpy = value.get("xyz", (0.0, 0.0, 0.0)), value.get("rpy", (0.0, 0.0, 0.0))
-        return pose_matrix((value_xyz, value_rpy), name)
-    if isinstance(value, pin.SE3):
-        value = value.homogeneous
-    try:
-        if isinstance(value, (tuple, list)) and len(value) == 2:
-            xyz = np.asarray(value[0], dtype=float)
-            rpy = np.asarray(value[1], dtype=float)
-            if xyz.shape != (3,) or rpy.shape != (3,):
-                raise bad("xyz and rpy need 3 numbers each")
-            arr = np.concatenate([xyz, rpy])
-        else:
-            if np.asarray(value).dtype.kind in "USb":
-                raise bad("not numbers")
-            arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise bad("not numbers") from None
-    if not np.all(np.isfinite(arr)):
-        raise bad("non-finite values")
-    if arr.shape == (6,):
-        out = np.eye(4)
-        out[:3, :3] = pin.rpy.rpyToMatrix(*(float(x) for x in arr[3:]))
-        out[:3, 3] = arr[:3]
-        return out
-    if arr.shape != (4, 4):
-        raise bad(f"shape {arr.shape}")
-    rot = arr[:3, :3]
-    if not (
-        np.allclose(arr[3], [0.0, 0.0, 0.0, 1.0], atol=1e-12, rtol=0.0)
-        and np.allclose(rot.T @ rot, np.eye(3), atol=1e-9, rtol=0.0)
-        and np.linalg.det(rot) > 0.0
-    ):
-        raise bad("not a rigid transform (rotation orthonormal with det +1, last row 0 0 0 1)")
-    return arr.copy()
-
-
-def _add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:
-    """A copy of ``model`` with a frame ``<tip>_tool`` at ``tip · tool``; returns its name."""
-    out = pin.Model(model)
-    tip_id = frame_index(out, tip)
-    tip_frame = out.frames[tip_id]
-    name = f"{tip}_tool"
-    k = 1
-    while out.existFrame(name):
-        k += 1
-        name = f"{tip}_tool{k}"
-    placement = tip_frame.placement * pin.SE3(tool[:3, :3].copy(), tool[:3, 3].copy())
-    out.addFrame(pin.Frame(name, tip_frame.parentJoint, tip_id, placement, pin.FrameType.OP_FRAME))
-    return out, name
-
-
-def _root_link_frame(model: pin.Model) -> str:
-    """The URDF root link's frame (fixed at the origin of ``universe``), else ``universe``."""
-    for frame in model.frames:
-        if (
-            frame.type == pin.FrameType.BODY
-            and frame.parentJoint == 0
-            and np.allclose(frame.placement.homogeneous, np.eye(4), atol=0.0)
-        ):
-            return str(frame.name)
-    return str(model.frames[0].name)
-
-
-def _last_body_frame(model: pin.Model) -> str:
-    for frame in reversed(model.frames):
-        if frame.type == pin.FrameType.BODY:
-            return str(frame.name)
-    return str(model.frames[-1].name)
-
-
-def _reduce(
-    full: pin.Model, base: str, tip: str, do_reduce: bool, q_ref: Any
-) -> tuple[pin.Model, tuple[int, ...], np.ndarray]:
-    if not do_reduce:
-        return full, (), pin.neutral(full)
-    base_joint = full.frames[frame_index(full, base)].parentJoint
-    tip_joint = full.frames[frame_index(full, tip)].parentJoint
-    tip_support = list(full.supports[tip_joint])
-    base_support = set(full.supports[base_joint])
-    if not base_support <= set(tip_support):
-        raise FrameNotFoundError(
-            f"base={base!r} is not on the path from the root to tip={tip!r}; pick a base that "
-            f"is an ancestor of the tip (path joints: {[full.names[i] for i in tip_support]})"
-        )
-    keep = set(tip_support) - base_support
-    lock = [i for i in range(1, full.njoints) if i not in keep]
-    try:
-        ref = pin.neutral(full) if q_ref is None else np.asarray(q_ref, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise ConfigurationError(f"q_ref={q_ref!r} is not a sequence of numbers") from None
-    if ref.shape != (full.nq,) or not np.all(np.isfinite(ref)):
-        raise ConfigurationError(
-            f"q_ref has shape {np.shape(q_ref)}; expected ({full.nq},) finite values"
-        )
-    if not lock:
-        return full, (), ref
-    reduced = pin.buildReducedModel(full, lock, ref)
-    return reduced, tuple(lock), ref
-
-
-def _path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
-    """Body frames from base to tip (one per link on the path), by walking parents."""
-    names: list[str] = []
-    fid = tip_id
-    seen = 0
-    while True:
-        frame = model.frames[fid]
-        if frame.type == pin.FrameType.BODY or fid in (base_id, tip_id):
-            names.append(frame.name)
-        if fid == base_id or seen > len(model.frames):
-            break
-        parent = frame.parentFrame
-        if parent == fid:
-            break
-        fid = parent
-        seen += 1
-    if names[-1] != model.frames[base_id].name:
-        return (model.frames[base_id].name, model.frames[tip_id].name)
-    names.reverse()
-    return tuple(names)
 
 
 def build(
