@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-SECTIONS = ["spine", "singularity", "ik", "viewer", "sweep", "gait"]
+SECTIONS = ["spine", "singularity", "ik", "viewer", "sweep", "gait", "symbolic"]
 
 
 def main(argv: list[str] | None = None) -> int:
