@@ -589,3 +589,42 @@ def test_tools_bench_gait_runs():
         check=True,
     ).stdout
     assert "tripod" in out and "ratio" in out
+
+
+def test_walk_live_sends_the_overlays_in_the_animation():
+    pytest.importorskip("umsgpack")
+    from hexapod_kin import load
+    from hexapod_kin.gait.show import walk_live
+
+    class FakeViewer:  # the two Viewer methods walk_live uses, recorded
+        def __init__(self) -> None:
+            self.model = load("hexapod")
+            self.sent: list[dict] = []
+            self.animated: tuple | None = None
+
+        def animate(self, times, qs, **kw):
+            self.animated = (np.asarray(times), np.asarray(qs), kw)
+
+        def send(self, cmd):
+            self.sent.append(cmd)
+
+    run = walk(duration=1.0)
+    v = FakeViewer()
+    walk_live(run, v)
+    assert v.animated is not None and np.array_equal(v.animated[1], run.q)
+    assert v.sent[0] == {"type": "delete", "path": "/meshcat/overlays"}
+    anim = v.sent[-1]
+    assert anim["type"] == "set_animation"
+    paths = {c["path"] for c in anim["animations"]}
+    assert "/meshcat/overlays/com/0" in paths and any(p.startswith("/meshcat/robot") for p in paths)
+
+
+def test_walk_live_in_a_real_viewer():
+    pytest.importorskip("meshcat")
+    from hexapod_kin import load
+    from hexapod_kin.gait.show import walk_live
+    from hexapod_kin.viewer import Viewer
+
+    with Viewer(load("hexapod")) as v:
+        walk_live(walk(duration=1.0), v)
+        assert v.server.running

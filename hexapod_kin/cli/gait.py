@@ -72,6 +72,11 @@ def register(sub: Any) -> None:
         metavar="FILE.html",
         help="self-contained animation (support polygon and projected CoM per frame)",
     )
+    p.add_argument(
+        "--view",
+        action="store_true",
+        help="play the walk in the live viewer (127.0.0.1) until Ctrl-C",
+    )
     p.set_defaults(func=_cmd_gait)
 
 
@@ -104,7 +109,34 @@ def _cmd_gait(args: argparse.Namespace) -> int:
         out["html"] = str(walk_html(run, html))
     if args.json:
         emit_json(out)
-        return 0
+    else:
+        _print(out)
+    if args.view:
+        _view(run)
+    return 0
+
+
+def _view(run: Any) -> None:
+    import time
+
+    from .. import load
+    from ..exceptions import ViewerError
+    from ..gait.show import walk_live
+    from ..viewer import Viewer
+
+    with Viewer(load("hexapod")) as viewer:
+        walk_live(run, viewer)
+        print(f"meshcat viewer of the walk: {viewer.url}", file=sys.stderr, flush=True)
+        print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
+        try:
+            while viewer.server.running:
+                time.sleep(0.2)
+            raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
+        except KeyboardInterrupt:
+            print("stopped", file=sys.stderr)
+
+
+def _print(out: dict[str, Any]) -> None:
     vx, vy, wz = out["velocity"]
     print(
         f"{out['pattern']['name']} gait on {out['terrain']} terrain, {out['samples']} samples "
@@ -118,4 +150,3 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     for key in ("plot", "html"):
         if key in out:
             print(f"wrote {out[key]}", file=sys.stderr)
-    return 0

@@ -3,7 +3,8 @@
 :func:`walk_html` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with
 :func:`hexapod_kin.viewer.export_html`: the body and legs, the foot traces, and at every frame
 the support polygon (the convex hull of the stance feet, drawn on the ground under them) and
-the centre of mass projected on it (the ``overlays`` of the page).
+the centre of mass projected on it (the ``overlays`` of the page); :func:`walk_live` plays
+the same in the live viewer.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["support_polygons", "walk_html"]
+__all__ = ["support_polygons", "walk_html", "walk_live"]
 
 
 def _hull(points: np.ndarray) -> np.ndarray:
@@ -67,6 +68,55 @@ def support_polygons(run: Any, lift: float = 0.002) -> tuple[np.ndarray, np.ndar
     return poly, com
 
 
+def _joint_columns(run: Any, mdl: Any) -> list[int]:
+    from ..exceptions import ConfigurationError
+
+    try:
+        return [run.joint_names.index(name) for name in mdl.joint_names]
+    except ValueError:
+        raise ConfigurationError(
+            f"model joints {list(mdl.joint_names)} are not the run's {list(run.joint_names)}",
+            parameter="model",
+        ) from None
+
+
+def walk_live(run: Any, viewer: Any, **options: Any) -> None:
+    """Play a walk in a live :class:`hexapod_kin.viewer.Viewer` of the hexapod (with overlays).
+
+    The viewer animates the robot and the foot traces (``Viewer.animate``); the support
+    polygon and the projected centre of mass are then added to the same animation.
+
+    Args:
+        run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
+        viewer: A live viewer of the hexapod model.
+        **options: Passed to ``Viewer.animate`` (``fps``, ``loop``, ``play``).
+
+    Raises:
+        ViewerError: The server is gone.
+        ConfigurationError: The viewer's model joints are not the run's.
+
+    """
+    from ..viewer import scene_commands
+
+    q = run.q[:, _joint_columns(run, viewer.model)]
+    viewer.animate(run.t, q, base_poses=run.base_poses, **options)
+    poly, com = support_polygons(run)
+    cmds = scene_commands(
+        viewer.model,
+        run.t,
+        q,
+        base_poses=run.base_poses,
+        overlays={"support_polygon": poly, "com": com},
+        **options,
+    )
+    viewer.send({"type": "delete", "path": "/meshcat/overlays"})
+    for cmd in cmds:
+        if cmd["type"] == "set_animation" or str(cmd.get("path", "")).startswith(
+            "/meshcat/overlays/"
+        ):
+            viewer.send(cmd)
+
+
 def walk_html(
     run: Any,
     path: str | os.PathLike[str],
@@ -94,17 +144,10 @@ def walk_html(
 
     """
     from .. import load
-    from ..exceptions import ConfigurationError
     from ..viewer import export_html
 
     mdl = load("hexapod") if model is None else model
-    try:
-        cols = [run.joint_names.index(name) for name in mdl.joint_names]
-    except ValueError:
-        raise ConfigurationError(
-            f"model joints {list(mdl.joint_names)} are not the run's {list(run.joint_names)}",
-            parameter="model",
-        ) from None
+    cols = _joint_columns(run, mdl)
     poly, com = support_polygons(run)
     label = title or (
         f"hexapod_kin: {run.table.name} gait on {run.settings.get('terrain', '?')} terrain "

@@ -68,7 +68,8 @@ def default_configuration(model: Model) -> np.ndarray:
     from .. import ik
 
     if not isinstance(model.params, Hexapod):
-        return np.asarray(ik.home(model), dtype=float)
+        home_of: Any = ik.home  # takes any loaded model
+        return np.asarray(home_of(model), dtype=float)
     q = np.zeros(model.nq)
     home = dict(zip(("hip", "knee", "ankle"), ik.LEG_HOME))
     for i, name in enumerate(model.joint_names):
