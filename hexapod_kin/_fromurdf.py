@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import ConfigurationError
+from .exceptions import ConfigurationError, SourceError
 from .params import Chain, JointLimits, KhalilRow, Pose, table_fk
 
 __all__ = ["chain_from_urdf"]
@@ -145,7 +145,15 @@ def chain_from_urdf(
     if isinstance(source, KinematicModel) and base is None and tip is None and not load_kwargs:
         km = source
     else:
-        km = load(source, base=base, tip=tip, **load_kwargs)
+        try:
+            km = load(source, base=base, tip=tip, **load_kwargs)
+        except SourceError as exc:
+            if "joints of kind" not in str(exc):
+                raise
+            raise ConfigurationError(
+                f"from_urdf: {_unsupported(source, load_kwargs) or exc}; a Khalil table "
+                "expresses revolute, continuous, prismatic and fixed joints only"
+            ) from None
     m = km.model
     names = [str(m.names[i]) for i in range(m.njoints)]
     for i in range(1, m.njoints):
@@ -286,6 +294,25 @@ def chain_from_urdf(
     )
     _check(chain, km)
     return chain
+
+
+def _unsupported(source: Any, load_kwargs: dict[str, Any]) -> str:
+    """Names and kinds of the joints a table cannot express ('' when unknown)."""
+    try:
+        import pinocchio as pin
+
+        from .sources import resolve_source
+
+        resolved = resolve_source(source, **load_kwargs)
+        full = pin.buildModelFromXML(resolved.text)
+    except Exception:  # noqa: BLE001 - the caller falls back to the loader's message
+        return ""
+    bad = [
+        f"joint {full.names[i]!r} is a {full.joints[i].shortname()}"
+        for i in range(1, full.njoints)
+        if full.joints[i].shortname() not in _REVOLUTE + _PRISMATIC
+    ]
+    return "; ".join(bad)
 
 
 def _check(chain: Chain, km: Any) -> None:

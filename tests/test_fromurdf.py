@@ -96,8 +96,8 @@ def _urdf(joints):
     )
     lines = ['<robot name="t">', f'<link name="l0">{inertial}</link>']
     for k, (jtype, xyz, rpy, axis) in enumerate(joints, start=1):
-        lim = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if jtype != "fixed" else ""
-        ax = f'<axis xyz="{axis}"/>' if jtype != "fixed" else ""
+        lim = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if axis else ""
+        ax = f'<axis xyz="{axis}"/>' if axis else ""
         lines.append(
             f'<joint name="j{k}" type="{jtype}"><parent link="l{k - 1}"/><child link="l{k}"/>'
             f'<origin xyz="{xyz}" rpy="{rpy}"/>{ax}{lim}</joint>'
@@ -159,5 +159,18 @@ def test_not_serial_or_unsupported_says_why():
     with pytest.raises(ConfigurationError, match="not a serial chain"):
         Chain.from_urdf("hexapod")  # the whole robot: six branches
     planar = _urdf([("planar", "0 0 0", "0 0 0", "0 0 1")])
-    with pytest.raises(HexapodKinError, match="JointModelPlanar|planar"):
+    with pytest.raises(ConfigurationError, match="joint 'j1' is a JointModelPlanar"):
         Chain.from_urdf(planar, tip="l1")
+    floating = _urdf([("revolute", "0 0 0", "0 0 0", "0 0 1"), ("floating", "0 0 1", "0 0 0", "")])
+    with pytest.raises(HexapodKinError, match="joint 'j2' is a JointModelFreeFlyer"):
+        Chain.from_urdf(floating, tip="l2")
+
+
+def test_continuous_joint_is_a_revolute_row():
+    text = _urdf(
+        [("continuous", "0 0 0.1", "0 0 0", "0 1 0"), ("revolute", "0.2 0 0", "0 0 0", "0 1 0")]
+    )
+    chain = Chain.from_urdf(text, tip="l2")
+    model = hk.load(text, tip="l2")
+    assert chain.sigmas == ("revolute", "revolute")
+    assert _fk_error(chain, model, n=50) < 1e-12
