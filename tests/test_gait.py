@@ -78,10 +78,11 @@ def test_mass_and_com_against_the_urdf_hand_sum_and_pinocchio(wb):
         u = np.array([math.cos(yaw), math.sin(yaw), 0.0])
         for part, start in lengths.items():
             name = f"leg{k + 1}_{part}"
-            # q = 0: the link's frame is translated along u; its inertial x offset adds along u
-            # (the Khalil frames of this leg have x along u; the twist only turns y/z)
+            # q = 0: every Khalil frame of the leg has its x axis along u (the knee's twist
+            # only turns y and z), so the link's inertial x offset adds along u
             c = np.array(com_x[name])
-            total += masses[name] * ((R_HIP + start + c[0]) * u + np.array([0, 0, 0.0]))
+            assert c[1] == c[2] == 0.0
+            total += masses[name] * (R_HIP + start + c[0]) * u
     hand = total / sum(masses.values())
     got = wb.com(np.zeros((1, 18)), np.eye(4)[None])[0]
     assert np.allclose(got, hand, atol=1e-12)
@@ -628,3 +629,40 @@ def test_walk_live_in_a_real_viewer():
     with Viewer(load("hexapod")) as v:
         walk_live(walk(duration=1.0), v)
         assert v.server.running
+
+
+def test_joint_rates_keep_stance_feet_still_pinocchio(wb):
+    """Free-flyer velocity (body twist, qdot) through Pinocchio: stance feet have ~0 speed."""
+    run = walk(
+        pattern="ripple", velocity=(0.06, 0.01, 0.15), terrain="slope", duration=3.0, rate=400.0
+    )
+    Q, V = run.pinocchio_q(), run.pinocchio_v()
+    data = wb.model.createData()
+    fids = [wb.model.getFrameId(f"{leg}_foot") for leg in wb.leg_names]
+    swing_speed = np.linalg.norm(np.gradient(run.feet, run.t, axis=0), axis=-1)
+    worst_stance, checked = 0.0, 0
+    for i in range(5, len(run.t) - 5, 7):
+        pin.forwardKinematics(wb.model, data, Q[i], V[i])
+        pin.updateFramePlacements(wb.model, data)
+        for k, f in enumerate(fids):
+            v = pin.getFrameVelocity(wb.model, data, f, pin.LOCAL_WORLD_ALIGNED).linear
+            if run.support[i - 2 : i + 3, k].all():
+                worst_stance = max(worst_stance, float(np.linalg.norm(v)))
+                checked += 1
+            elif not run.support[i - 2 : i + 3, k].any():
+                assert np.linalg.norm(v) == pytest.approx(swing_speed[i, k], abs=2e-3)
+    assert checked > 100
+    assert worst_stance < 1e-5  # [m/s] (finite-difference error O(dt²); swing ~0.3 m/s)
+
+
+def test_body_ik_takes_xyz_rpy(wb):
+    feet = _hexagon_feet()
+    a = wb.body_ik([0.01, 0.0, 0.08, 0.05, -0.04, 0.1], feet)
+    b = wb.body_ik(pose_matrix([0.01, 0.0, 0.08], [0.05, -0.04, 0.1]), feet)
+    assert np.array_equal(a.q, b.q)
+    # roll about x: R = Rx for rpy (r, 0, 0)
+    r = 0.2
+    T = pose_matrix([0, 0, 0], [r, 0, 0])
+    assert np.allclose(
+        T[:3, :3], [[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]]
+    )

@@ -405,7 +405,8 @@ class WholeBody:
         nearest to the previous sample's (the first to ``q_prev``) is kept.
 
         Args:
-            base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`pose_matrix`).
+            base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`pose_matrix`), or
+                (6,) / (N, 6) ``x, y, z`` [m], ``roll, pitch, yaw`` [rad].
             feet: Foot positions in the world (L, 3) or (N, L, 3) in [m].
             q_prev: (18,) joints the first sample's branch is nearest to (default
                 :meth:`neutral_q`).
@@ -424,8 +425,15 @@ class WholeBody:
         """
         from ..ik import analytic_batch
 
-        B = np.asarray(base, dtype=float)
-        P = np.asarray(feet, dtype=float)
+        try:
+            B = np.asarray(base, dtype=float)
+            P = np.asarray(feet, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                "base and feet must be arrays of numbers", parameter="base"
+            ) from None
+        if B.shape[-1:] == (6,) and B.ndim in (1, 2):  # x, y, z, roll, pitch, yaw
+            B = np.array([pose_matrix(b[:3], b[3:]) for b in B.reshape(-1, 6)])
         if B.shape == (4, 4):
             B = B[None]
         if P.ndim == 2:

@@ -205,6 +205,26 @@ class GaitRun:
         out[:, 7:] = self.q
         return out
 
+    def base_velocity(self) -> np.ndarray:
+        """Body twist (N, 6) in the body frame: linear [m/s], angular [rad/s].
+
+        The free-flyer's velocity in Pinocchio's convention (``v[:6]``); by second-order
+        finite differences of :attr:`base_poses` (the body stays level: ω = (0, 0, ψ̇)).
+        """
+        n = len(self.t)
+        if n < 3:
+            return np.zeros((n, 6))
+        p_dot = np.gradient(self.base_poses[:, :3, 3], self.t, axis=0, edge_order=2)
+        yaw = np.unwrap(np.arctan2(self.base_poses[:, 1, 0], self.base_poses[:, 0, 0]))
+        out = np.zeros((n, 6))
+        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], p_dot)
+        out[:, 5] = np.gradient(yaw, self.t, edge_order=2)
+        return out
+
+    def pinocchio_v(self) -> np.ndarray:
+        """Pinocchio free-flyer velocities (N, 24): :meth:`base_velocity` then ``qdot``."""
+        return np.concatenate([self.base_velocity(), self.qdot], axis=1)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary of the checks and the settings.
 
@@ -315,7 +335,10 @@ def walk(
         L = _num("stride", DEFAULT_STRIDE if stride is None else stride, zero=True, hi=10.0)
         vel = (L / (beta * T), 0.0, 0.0)
     else:
-        v = np.asarray(velocity, dtype=float).reshape(-1)
+        try:
+            v = np.asarray(velocity, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            v = np.full(1, np.nan)
         if v.shape != (3,) or not np.all(np.isfinite(v)):
             raise ParameterError(
                 f"velocity={velocity!r}: three finite numbers vx [m/s], vy [m/s], wz [rad/s]",
