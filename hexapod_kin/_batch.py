@@ -216,8 +216,37 @@ def plain_flags(arrays: ChainArrays) -> np.ndarray:
     return (ident.astype(np.int64) * (1 + zaxis.astype(np.int64))).astype(np.int64)
 
 
+def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """``out`` checked (float64, C-contiguous, writeable, ``shape``), or a new array."""
+    if out is None:
+        return np.empty(shape)
+    if not (
+        isinstance(out, np.ndarray)
+        and out.dtype == np.float64
+        and out.shape == shape
+        and out.flags.c_contiguous
+        and out.flags.writeable
+    ):
+        from .exceptions import ParameterError
+
+        raise ParameterError(
+            f"{name}: an array of shape {np.shape(out)} and dtype "
+            f"{getattr(out, 'dtype', type(out).__name__)} is not allowed; a writeable "
+            f"C-contiguous float64 array of shape {shape} is required",
+            parameter=name,
+            allowed=f"float64 {shape}",
+        )
+    return out
+
+
 def pose_jacobian_batch(
-    arrays: ChainArrays, qs: np.ndarray, *, pose: bool, jacobian: str | None
+    arrays: ChainArrays,
+    qs: np.ndarray,
+    *,
+    pose: bool,
+    jacobian: str | None,
+    out_pose: np.ndarray | None = None,
+    out_jacobian: np.ndarray | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of checked configurations ``qs`` (N, nq).
 
@@ -226,15 +255,23 @@ def pose_jacobian_batch(
         qs: C-contiguous float64 (N, nq), already checked by the caller.
         pose: Whether to compute the poses.
         jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
+        out_pose: Optional (N, 4, 4) float64 array to write the poses into (reused buffers
+            skip the page faults of a fresh array: about 40 ms per 1e6 poses here).
+        out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
 
     Returns:
         ``(poses or None, jacobians or None)``.
 
+    Raises:
+        ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.
+
     """
     n = qs.shape[0]
-    out_t = np.empty((n, 4, 4)) if pose else np.empty((1, 4, 4))
+    out_t = _out(out_pose, (n, 4, 4), "out") if pose else np.empty((1, 4, 4))
     want_jac = jacobian is not None
-    out_j = np.empty((n, 6, arrays.nq)) if want_jac else np.empty((1, 6, arrays.nq))
+    out_j = (
+        _out(out_jacobian, (n, 6, arrays.nq), "out") if want_jac else np.empty((1, 6, arrays.nq))
+    )
     ref = REF_CODES[jacobian] if jacobian is not None else 0
     _run(
         arrays.rot, arrays.trans, arrays.axis, arrays.kind, arrays.col, plain_flags(arrays),

@@ -191,25 +191,32 @@ class KinematicModel(Model):
     def _batch_q(self, qs: Any) -> np.ndarray:
         return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
 
-    def fk_batch(self, qs: Any) -> np.ndarray:
+    def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), compiled.
 
         Equal to :meth:`fk` of each row to rounding (≈1e-15), without a Python loop.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
+            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return (reuse it
+                across calls to skip allocating).
 
         Raises:
             ConfigurationError: Wrong shape or non-finite values.
+            ParameterError: ``out`` of the wrong shape, dtype or layout.
 
         """
         from ._batch import pose_jacobian_batch
 
-        poses, _ = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=True, jacobian=None)
+        poses, _ = pose_jacobian_batch(
+            self.arrays, self._batch_q(qs), pose=True, jacobian=None, out_pose=out
+        )
         assert poses is not None
         return poses
 
-    def jacobian_batch(self, qs: Any, reference: str = "local_world_aligned") -> np.ndarray:
+    def jacobian_batch(
+        self, qs: Any, reference: str = "local_world_aligned", *, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """Tip Jacobians of many configurations, (N, 6, nq), rows ``[v; ω]``, compiled.
 
         Equal to :meth:`jacobian` of each row (same ``reference``) to rounding.
@@ -217,9 +224,10 @@ class KinematicModel(Model):
         Args:
             qs: Configurations (N, nq).
             reference: ``"local"``, ``"world"`` or ``"local_world_aligned"``.
+            out: Optional (N, 6, nq) float64 C-contiguous array to fill and return.
 
         Raises:
-            ParameterError: Unknown ``reference``.
+            ParameterError: Unknown ``reference``; ``out`` of the wrong shape/dtype/layout.
             ConfigurationError: Wrong shape or non-finite values.
 
         """
@@ -227,7 +235,9 @@ class KinematicModel(Model):
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
-        _, jac = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=False, jacobian=key)
+        _, jac = pose_jacobian_batch(
+            self.arrays, self._batch_q(qs), pose=False, jacobian=key, out_jacobian=out
+        )
         assert jac is not None
         return jac
 

@@ -316,3 +316,20 @@ def test_tool_offset_refuses_non_rigid(bad):
     with pytest.raises(ParameterError) as info:
         hk.load("hexabot_leg", tool=bad)
     assert info.value.parameter == "tool"
+
+
+def test_batch_out_buffers_are_filled_and_checked():
+    from hexapod_kin.exceptions import ParameterError
+
+    model = hk.load("scara")
+    qs = model.random_q(40, seed=9)
+    buf = np.full((40, 4, 4), np.nan)
+    assert model.fk_batch(qs, out=buf) is buf
+    np.testing.assert_array_equal(buf, model.fk_batch(qs))
+    jbuf = np.empty((40, 6, model.nq))
+    assert model.jacobian_batch(qs, "local", out=jbuf) is jbuf
+    np.testing.assert_array_equal(jbuf, model.jacobian_batch(qs, "local"))
+    for bad in (np.empty((39, 4, 4)), np.empty((40, 4, 4), dtype=np.float32),
+                np.empty((40, 4, 4), order="F")[:, :, :], np.empty((4, 4, 40)).T):
+        with pytest.raises(ParameterError, match="out"):
+            model.fk_batch(qs, out=bad)

@@ -116,6 +116,8 @@ def run_batch(quick: bool = False) -> list[dict]:
         t_raw_fk = _best(raw_fk, repeat) * scale
         t_raw_jac = _best(raw_jac, repeat) * scale
         t_fk = _best(lambda model=model, qs=qs: model.fk_batch(qs), repeat)
+        buf = np.empty((n, 4, 4))
+        t_fk_out = _best(lambda model=model, qs=qs, buf=buf: model.fk_batch(qs, out=buf), repeat)
         t_jac = _best(lambda model=model, qs=qs: model.jacobian_batch(qs), repeat)
         t_both = _best(lambda model=model, qs=qs: model.fk_jacobian_batch(qs), repeat)
         check = slice(0, 200)
@@ -132,6 +134,7 @@ def run_batch(quick: bool = False) -> list[dict]:
                 "batch": source,
                 "n": n,
                 "fk_batch_s": round(t_fk, 4),
+                "fk_batch_reused_out_s": round(t_fk_out, 4),
                 "jacobian_batch_s": round(t_jac, 4),
                 "fk_jacobian_batch_s": round(t_both, 4),
                 "raw_pin_loop_fk_s": round(t_raw_fk, 3),
