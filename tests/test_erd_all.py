@@ -96,3 +96,18 @@ def test_erd_file_loads_and_matches_raw_pinocchio(path: Path) -> None:
                 model.placement(q, frames[k]), (base_inv * omf[k]).homogeneous, atol=1e-12
             )
     np.testing.assert_allclose(model.fk_batch(qs), [model.fk(q) for q in qs], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["ur5_robot", "solo12", "panda", "talos_reduced"])
+def test_meshes_of_a_file_path_resolve_like_ros(name: str) -> None:
+    """package:// found from the folders above the file: every visual mesh is a real file."""
+    path = next(p for p in FILES if p.stem == name)
+    model = hk.load(path)
+    assert model.missing_meshes == ()
+    geom = model.geometry_model("visual")
+    primitives = {"BOX", "CYLINDER", "SPHERE", "CAPSULE", "CONE"}
+    meshes = [
+        g.meshPath for g in geom.geometryObjects if g.meshPath and g.meshPath not in primitives
+    ]
+    assert meshes and all(Path(m).is_file() for m in meshes)
+    assert all(str(Path(m).resolve()).startswith(str(erd_share().resolve())) for m in meshes)

@@ -254,7 +254,8 @@ def test_submodules_are_lazy_attributes():
         "import hexapod_kin as hk\n"
         "assert hk.kinematics.load is not None and hk.sources.erd_names\n"
         "assert 'kinematics' in dir(hk)\n"
-        "try:\n    hk.no_such_module\nexcept AttributeError:\n    pass\nelse:\n    raise SystemExit(3)"
+        "try:\n    hk.no_such_module\nexcept AttributeError:\n    pass\n"
+        "else:\n    raise SystemExit(3)"
     )
     assert "hexapod_kin.kinematics" in mods and "pinocchio" in mods
     import hexapod_kin as hkm
