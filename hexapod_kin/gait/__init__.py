@@ -8,6 +8,7 @@
 * :mod:`.stability` — support-polygon margin and leg clearance.
 * :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`).
 * :mod:`.plots` — gait diagram, margin over time, foot paths from above (matplotlib).
+* :mod:`.show` — the walk in the viewer (HTML file or live), with the support polygon and CoM.
 """
 
 from __future__ import annotations

@@ -229,7 +229,8 @@ class GaitRun:
         """JSON-ready summary of the checks and the settings.
 
         Keys: min_margin [m], max_slip [m], min_limit_margin [rad], min_clearance [m],
-        max_foot_error [m], samples, ok, pattern (the table), mass [kg], and the settings.
+        max_foot_error [m], max_joint_rate [rad/s] (informative: joint velocity limits are
+        not a check), samples, ok, pattern (the table), mass [kg], and the settings.
         """
         return {
             "min_margin": self.min_margin,
@@ -237,6 +238,7 @@ class GaitRun:
             "min_limit_margin": self.min_limit_margin,
             "min_clearance": self.min_clearance,
             "max_foot_error": self.max_foot_error,
+            "max_joint_rate": float(np.abs(self.qdot).max()) if self.qdot.size else 0.0,
             "samples": int(len(self.t)),
             "ok": self.ok,
             "pattern": self.table.to_dict(),
