@@ -9,7 +9,7 @@ import pytest
 
 import hexapod_kin as hk
 from hexapod_kin import ik, robots
-from hexapod_kin.exceptions import ConfigurationError, IKError, ParameterError
+from hexapod_kin.exceptions import IKError
 from hexapod_kin.params import JointLimits
 
 

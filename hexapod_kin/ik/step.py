@@ -192,16 +192,49 @@ def task_into(
         for a in range(3):
             for b in range(3):
                 work3[a, b] = tgt[a, 0] * r[b, 0] + tgt[a, 1] * r[b, 1] + tgt[a, 2] * r[b, 2]
-        ew = np.empty(3)
-        log3_into(work3, ew)
+        e0, e1, e2 = _log3(work3)
+        # e(q + dq) = log(E exp(−J_ω dq)) ≈ e − Jr⁻¹(e) J_ω dq: the rows are Jr⁻¹(e) J_ω, exact
+        # also when masked rows leave a large rotation error (Jr: right Jacobian of SO(3))
+        th2 = e0 * e0 + e1 * e1 + e2 * e2
+        th = math.sqrt(th2)
+        if th < 1e-4:
+            c = 1.0 / 12.0 + th2 / 720.0
+        else:
+            c = 1.0 / th2 - 0.5 / (th * math.tan(0.5 * th))
+        # M = I + [e]/2 + c [e]²  ([e]² = e eᵀ − θ² I)
+        ev = (e0, e1, e2)
         for k in range(3):
-            if w6[3 + k] != 0.0:
-                rot2 += ew[k] * ew[k]
-                e_out[m] = w6[3 + k] * ew[k]
-                for i in range(n):
-                    j_out[m, i] = w6[3 + k] * jac[3 + k, i]
-                m += 1
+            if w6[3 + k] == 0.0:
+                continue
+            rot2 += ev[k] * ev[k]
+            m0 = c * ev[k] * e0
+            m1 = c * ev[k] * e1
+            m2 = c * ev[k] * e2
+            if k == 0:
+                m0 += 1.0 - c * th2
+                m1 -= 0.5 * e2
+                m2 += 0.5 * e1
+            elif k == 1:
+                m0 += 0.5 * e2
+                m1 += 1.0 - c * th2
+                m2 -= 0.5 * e0
+            else:
+                m0 -= 0.5 * e1
+                m1 += 0.5 * e0
+                m2 += 1.0 - c * th2
+            wk = w6[3 + k]
+            e_out[m] = wk * ev[k]
+            for i in range(n):
+                j_out[m, i] = wk * (m0 * jac[3, i] + m1 * jac[4, i] + m2 * jac[5, i])
+            m += 1
     return m, pos2, rot2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _log3(w3: np.ndarray) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    ew = np.empty(3)
+    log3_into(w3, ew)
+    return ew[0], ew[1], ew[2]
 
 
 @njit(cache=True, nogil=True)

@@ -113,8 +113,25 @@ _POSE_WEIGHTS = np.ones(6)
 _POSE_WEIGHTS.setflags(write=False)
 
 
-def _fast_pose(t: np.ndarray) -> Task | None:
-    """The common case (a float64 4×4 pose, no mask) checked in plain floats; None if not."""
+_POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+_POSITION_WEIGHTS.setflags(write=False)
+_EYE4 = np.eye(4)
+
+
+def _fast(t: np.ndarray) -> Task | None:
+    """The common cases (float64 position or pose, no mask) checked in plain floats."""
+    if t.dtype != np.float64:
+        return None
+    if t.shape == (3,):
+        x, y, z = t.tolist()
+        if not math.isfinite(x + y + z):
+            return None
+        pose = _EYE4.copy()
+        pose[0, 3], pose[1, 3], pose[2, 3] = x, y, z
+        pose.setflags(write=False)
+        return Task(mode="position", pose=pose, yaw=0.0, weights=_POSITION_WEIGHTS)
+    if t.shape != (4, 4):
+        return None
     (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
     if last != [0.0, 0.0, 0.0, 1.0] or not math.isfinite(x + y + z):
         return None
@@ -151,14 +168,8 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
             weights on rows the target does not define.
 
     """
-    if (
-        target.__class__ is np.ndarray
-        and target.dtype == np.float64
-        and target.shape == (4, 4)
-        and mask is None
-        and weights is None
-    ):
-        fast = _fast_pose(target)
+    if target.__class__ is np.ndarray and mask is None and weights is None:
+        fast = _fast(target)
         if fast is not None:
             return fast
     try:
