@@ -54,7 +54,7 @@ def _pin_dls(model, target, q0, tol=1e-10, max_iter=200, lam2=1e-6):
 def _pin_pose_dls(m, d, fid, o_m_des, q0, lower, upper, tol=1e-10, max_iter=200, damp=1e-12):
     """Pinocchio's IK example loop (log6 error, Jlog6, damped pseudo-inverse), full steps."""
     q = q0.copy()
-    for it in range(max_iter):
+    for _ in range(max_iter):
         pin.forwardKinematics(m, d, q)
         i_m_d = pin.updateFramePlacement(m, d, fid).actInv(o_m_des)
         err = pin.log(i_m_d).vector
