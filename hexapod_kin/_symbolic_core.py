@@ -60,14 +60,42 @@ def exact_angle(value: float) -> sp.Expr:
     return sp.Float(value)
 
 
+#: Sums with more terms than this are not folded (see :func:`cheap`).
+_FOLD_TERMS = 32
+
+
 def cheap(expr: Any) -> Any:
     """Expand, then fold sums of angle products (Fu's TR10i). Fast on kinematic entries."""
     if isinstance(expr, sp.MatrixBase):
         return expr.applyfunc(cheap)
     e = sp.expand(expr)
-    if not e.has(sp.sin, sp.cos):
-        return e
+    if not e.has(sp.sin, sp.cos) or len(sp.Add.make_args(e)) > _FOLD_TERMS:
+        return e  # TR10i is quadratic in the number of terms: long sums stay expanded
     return TR10i(e)
+
+
+#: Above this many terms in a cumulative product, later products are left unexpanded.
+_MAX_TERMS = 600
+
+
+def _terms(mat: sp.Matrix) -> int:
+    return sum(len(sp.Add.make_args(e)) for e in mat)
+
+
+def has_parallel_axes(chain: Chain) -> bool:
+    """True when two consecutive joint axes are parallel (only then do angle sums fold)."""
+    joints = chain.joint_rows
+    for a, b in zip(joints, joints[1:]):
+        twist = sum(chain.rows[k].alpha for k in range(a + 1, b + 1))
+        if abs(math.sin(twist)) < 1e-9:
+            return True
+    return False
+
+
+def _expand(expr: Any) -> Any:
+    if isinstance(expr, sp.MatrixBase):
+        return expr.applyfunc(sp.expand)
+    return sp.expand(expr)
 
 
 def _same(expr: Any) -> Any:
@@ -162,7 +190,7 @@ def kinematics(
 
     With ``simplify=False`` the products are left as they come (fast fallback).
     """
-    cheap_ = cheap if simplify else _same
+    cheap_ = (cheap if has_parallel_axes(chain) else _expand) if simplify else _same
     transforms = []
     k = 0
     for row, (d, r) in zip(chain.rows, syms["per_row"]):
@@ -188,6 +216,8 @@ def kinematics(
     for t in transforms:
         acc = cheap_(acc * t)
         cumulative.append(acc)
+        if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
+            cheap_ = _same  # long chains without parallel axes: expanding only grows them
     tip = cheap_(acc * tool_t)
     p = tip[:3, 3]
     cols = []
