@@ -506,8 +506,7 @@ def _changed(a: np.ndarray, b: np.ndarray) -> float:
 def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
     path = tmp_path / "walk.html"
     assert main(["gait", "--duration", "3", "--html", str(path)]) == 0
-    html = path.read_text(encoding="utf-8")
-    assert "http://" not in html.split("<script>")[0] and "overlays" not in html[:2000]
+    assert "default-src 'none'" in path.read_text(encoding="utf-8")  # the page's CSP
     page = browser.new_page(viewport={"width": 800, "height": 600})
     blocked: list[str] = []
     errors: list[str] = []
@@ -541,7 +540,7 @@ def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
         page.close()
     assert blocked == [] and errors == []
     assert _changed(shots[0.2], shots[0.7]) > 0.005  # the walk moves
-    assert _changed(overlays_only, empty) > 0.0005  # support polygon and CoM are drawn
+    assert _changed(overlays_only, empty) > 0.003  # support polygon and CoM (~0.8 %) drawn
 
 
 def test_walk_html_scene_has_the_overlays():
