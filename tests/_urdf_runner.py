@@ -30,13 +30,22 @@ def _load_one(path: Path) -> dict[str, object]:
         try:
             model = load(path)
         except Exception as exc:  # report every class, the parent asserts which one
-            return {"error": type(exc).__name__, "message": str(exc), "fk_finite": None,
-                    "warnings": [str(w.message) for w in caught]}
+            return {
+                "error": type(exc).__name__,
+                "message": str(exc),
+                "fk_finite": None,
+                "warnings": [str(w.message) for w in caught],
+            }
     finite = True
     for q in (model.neutral(), *model.random_q(5, seed=0)):
         finite &= bool(np.all(np.isfinite(model.fk(q))))
-    return {"error": None, "message": "", "fk_finite": finite, "nq": model.nq,
-            "warnings": [str(w.message) for w in caught]}
+    return {
+        "error": None,
+        "message": "",
+        "fk_finite": finite,
+        "nq": model.nq,
+        "warnings": [str(w.message) for w in caught],
+    }
 
 
 def main(argv: list[str]) -> int:

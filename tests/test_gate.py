@@ -50,50 +50,69 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "link_duplicate_name": ("UrdfError", "duplicate link name", '<link name="arm">'),
     "link_empty_name": ("UrdfError", "needs a non-empty name", '<link name=" "/>'),
     "link_named_universe": ("UrdfError", "reserved by Pinocchio", '<link name="universe"/>'),
-    "joint_duplicate_name": ("UrdfError", "duplicate joint name (first at line 6)",
-                             '<joint name="j1" type="fixed">'),
+    "joint_duplicate_name": (
+        "UrdfError",
+        "duplicate joint name (first at line 6)",
+        '<joint name="j1" type="fixed">',
+    ),
     "joint_parent_missing": ("UrdfError", "link='bsae': parent link does not exist", "bsae"),
     "joint_child_missing": ("UrdfError", "link='amr': child link does not exist", "amr"),
     "joint_no_parent_element": ("UrdfError", "<parent> is required", '<joint name="j1"'),
-    "joint_parent_equals_child": ("UrdfError", "parent and child are the same link 'arm'",
-                                  '<joint name="j1"'),
+    "joint_parent_equals_child": (
+        "UrdfError",
+        "parent and child are the same link 'arm'",
+        '<joint name="j1"',
+    ),
     "joint_unknown_type": ("UrdfError", "type='ball': joint type must be one of", 'type="ball"'),
-    "joint_type_missing": ("UrdfError", "type=None: joint type must be one of", '<joint name'),
+    "joint_type_missing": ("UrdfError", "type=None: joint type must be one of", "<joint name"),
     "tree_two_parents": ("UrdfError", "at most one parent joint", '<joint name="j2"'),
     "tree_cycle_with_root": ("UrdfError", "no root link", None),
     "tree_detached_cycle": ("UrdfError", "not reachable from the root 'base'", '<link name="p">'),
     "tree_two_roots": ("UrdfError", "2 root links ['base', 'floating_part']", None),
-    "joint_mimic_missing": ("UrdfError", "joint='j0': mimic must name another existing joint",
-                            "<mimic"),
+    "joint_mimic_missing": (
+        "UrdfError",
+        "joint='j0': mimic must name another existing joint",
+        "<mimic",
+    ),
     "joint_duplicate_axis": ("UrdfError", "<axis> given more than once", '<axis xyz="1 0 0"'),
     # numbers
     "number_nan_origin": ("UrdfError", "xyz='0 nan 0.1': 'nan' is not a decimal number", "nan"),
-    "number_inf_axis": ("UrdfError", "xyz='0 0 inf': 'inf' is not a decimal number",
-                        'xyz="0 0 inf"'),
+    "number_inf_axis": (
+        "UrdfError",
+        "xyz='0 0 inf': 'inf' is not a decimal number",
+        'xyz="0 0 inf"',
+    ),
     "number_overflow_limit": ("UrdfError", "upper='1e999': numbers must be finite", "1e999"),
     "number_short_vector": ("UrdfError", "3 number(s) required, found 2", 'xyz="0 0.1"'),
-    "number_long_vector": ("UrdfError", "rpy='0 0 0 0': 3 number(s) required, found 4",
-                           "0 0 0 0"),
+    "number_long_vector": ("UrdfError", "rpy='0 0 0 0': 3 number(s) required, found 4", "0 0 0 0"),
     "number_hex_mass": ("UrdfError", "'0x1' is not a decimal number", "0x1"),
     "number_padded_mass": ("UrdfError", "without surrounding spaces", '" 0.5 "'),
     "number_comma_decimal": ("UrdfError", "'0,5' is not a decimal number", "0,5"),
     "number_underscore": ("UrdfError", "'1_0' is not a decimal number", 'effort="1_0"'),
     "number_negative_box": ("UrdfError", "size='0.1 -0.02 0.02': must be >= 0", "-0.02"),
-    "number_nan_rgba": ("UrdfError", "<material name=\"grey\"> <color> rgba='0.5 NaN 0.5 1'",
-                        'rgba="0.5 NaN'),
+    "number_nan_rgba": (
+        "UrdfError",
+        "<material name=\"grey\"> <color> rgba='0.5 NaN 0.5 1'",
+        'rgba="0.5 NaN',
+    ),
     "number_empty_value": ("UrdfError", "value='': '' is not a decimal number", 'value=""'),
     "number_huge_inertial_origin": ("UrdfError", "|-1e308| exceeds 1e+09", "-1e308"),
     # materials and geometry
-    "material_duplicate": ("UrdfError", "duplicate material name (first at line 4)",
-                           '<material name="grey"><color rgba="1 1 1 1"/>'),
-    "material_rgba_out_of_range": ("UrdfError", "colour components must be in [0, 1]",
-                                   'rgba="1.5'),
+    "material_duplicate": (
+        "UrdfError",
+        "duplicate material name (first at line 4)",
+        '<material name="grey"><color rgba="1 1 1 1"/>',
+    ),
+    "material_rgba_out_of_range": ("UrdfError", "colour components must be in [0, 1]", 'rgba="1.5'),
     "geometry_cylinder_no_length": ("UrdfError", "<cylinder length> is required", "<cylinder"),
     "geometry_two_shapes": ("UrdfError", "exactly one shape", "<geometry>"),
     "robot_bad_version": ("UrdfError", "version must be 1.0, 1.1 or 1.2", "<robot name"),
     # joints
-    "joint_zero_axis": ("UrdfError", "xyz='0 0 0': joint axis has zero length",
-                        '<axis xyz="0 0 0"'),
+    "joint_zero_axis": (
+        "UrdfError",
+        "xyz='0 0 0': joint axis has zero length",
+        '<axis xyz="0 0 0"',
+    ),
     "joint_lower_gt_upper": ("UrdfError", "lower='1': lower > upper='-1'", "<limit"),
     "joint_negative_velocity": ("UrdfError", "velocity='-2': must be >= 0", "<limit"),
     "joint_negative_effort": ("UrdfError", "effort='-10': must be >= 0", "<limit"),
@@ -120,8 +139,7 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "mesh_directory": ("UrdfError", "is not a regular file", "<mesh"),
     "mesh_empty_filename": ("UrdfError", "empty file name", "<mesh"),
     "mesh_home_tilde": ("UrdfError", "absolute paths are refused", "<mesh"),
-    "texture_escape": ("UrdfError", "<texture> filename='../../../../../etc/hostname'",
-                       "<texture"),
+    "texture_escape": ("UrdfError", "<texture> filename='../../../../../etc/hostname'", "<texture"),
     # valid controls
     "ok_minimal": (None, "", None),
     "ok_mesh_relative": (None, "", None),
@@ -204,8 +222,10 @@ def _chain_urdf(n_links: int, moving: int | None = None) -> str:
     """A serial chain of ``n_links`` links; the first ``moving`` joints revolute, then fixed."""
     moving = n_links - 1 if moving is None else moving
     parts = ['<?xml version="1.0"?>', f'<robot name="chain{n_links}">', '<link name="l0"/>']
-    inertial = ('<inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" '
-                'iyz="0" izz="1e-4"/></inertial>')
+    inertial = (
+        '<inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" '
+        'iyz="0" izz="1e-4"/></inertial>'
+    )
     for i in range(1, n_links):
         kind = "revolute" if i <= moving else "fixed"
         parts.append(
@@ -229,7 +249,11 @@ def _chain_urdf(n_links: int, moving: int | None = None) -> str:
     ],
 )
 def test_long_chains_in_child(
-    tmp_path: Path, name: str, n_links: int, moving: int | None, error: str | None,
+    tmp_path: Path,
+    name: str,
+    n_links: int,
+    moving: int | None,
+    error: str | None,
     fragment: str,
 ) -> None:
     """Chains at and past the caps, in a child: past them refused, at them loaded, no crash."""
@@ -284,9 +308,28 @@ def test_gate_accepts_generated(name: str, text: str) -> None:
 
 #: example-robot-data robots the gate accepts (56 of 66 in ERD 6.0.0; solo12 is required).
 ERD_PASS = [
-    "solo12", "solo", "ur5_robot", "ur10_robot", "panda", "go2", "a1", "kinova", "bolt",
-    "double_pendulum", "z1", "xarm7", "talos_full_v2", "talos_reduced", "baxter", "anymal",
-    "finger_edu", "quadruped", "so101", "allegro_left_hand", "pr2", "hyq_no_sensors",
+    "solo12",
+    "solo",
+    "ur5_robot",
+    "ur10_robot",
+    "panda",
+    "go2",
+    "a1",
+    "kinova",
+    "bolt",
+    "double_pendulum",
+    "z1",
+    "xarm7",
+    "talos_full_v2",
+    "talos_reduced",
+    "baxter",
+    "anymal",
+    "finger_edu",
+    "quadruped",
+    "so101",
+    "allegro_left_hand",
+    "pr2",
+    "hyq_no_sensors",
 ]
 #: ... and those it refuses, each for a real defect of the file.
 ERD_REFUSED = {
@@ -410,12 +453,19 @@ def test_sym_eigvals_matches_numpy() -> None:
 
 def _merged_body(points: list[tuple[float, float, float]], own_mass: float = 0.0) -> str:
     """A revolute link (mass ``own_mass``, no inertia) with point masses fixed to it."""
-    own = (f'<inertial><mass value="{own_mass}"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" '
-           'iyz="0" izz="0"/></inertial>' if own_mass else "")
-    parts = ['<robot name="m">', '<link name="base"/>',
-             '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/>'
-             '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>',
-             f'<link name="arm">{own}</link>']
+    own = (
+        f'<inertial><mass value="{own_mass}"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" '
+        'iyz="0" izz="0"/></inertial>'
+        if own_mass
+        else ""
+    )
+    parts = [
+        '<robot name="m">',
+        '<link name="base"/>',
+        '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/>'
+        '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>',
+        f'<link name="arm">{own}</link>',
+    ]
     for i, p in enumerate(points):
         parts.append(
             f'<link name="p{i}"><inertial><mass value="0.5"/><inertia ixx="0" ixy="0" ixz="0" '

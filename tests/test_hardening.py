@@ -77,14 +77,34 @@ def test_random_tables_load_and_match_table_fk(rows: list[KhalilRow], data: st.D
 # ------------------------------------------------------------------------ mutations
 _ATTR = re.compile(r'\s(\w+)="([^"]*)"')
 _NUM = re.compile(r"-?\d+(?:\.\d*)?(?:e-?\d+)?")
-_BAD = ["nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e999", "1e-320", "-0", "0", "-1",
-        "", " ", "1 2", "0x10", "1_0", "+.5", "1e", "--1"]
+_BAD = [
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e308",
+    "-1e308",
+    "1e999",
+    "1e-320",
+    "-0",
+    "0",
+    "-1",
+    "",
+    " ",
+    "1 2",
+    "0x10",
+    "1_0",
+    "+.5",
+    "1e",
+    "--1",
+]
 _TYPES = ["revolute", "prismatic", "fixed", "continuous", "floating", "planar", "ball"]
 
 
 def _base_texts() -> list[str]:
-    texts = [urdf.to_urdf(robots.get(n)) for n in ("pendulum", "hexabot_leg", "scara",
-                                                   "coxa_tibia_leg")]
+    texts = [
+        urdf.to_urdf(robots.get(n)) for n in ("pendulum", "hexabot_leg", "scara", "coxa_tibia_leg")
+    ]
     texts.append(urdf.to_urdf(robots.hexapod(), leg="leg2"))
     texts.append((HERE / "urdf_corpus" / "ok_merged_point_mass.urdf").read_text())
     return texts
@@ -97,13 +117,13 @@ def _mutate(text: str, ops: list[tuple[str, int, int, int]]) -> str:
             found = list(_ATTR.finditer(text))
             if found:
                 m = found[i % len(found)]
-                text = text[: m.start()] + text[m.end():]
+                text = text[: m.start()] + text[m.end() :]
         elif kind in ("swap_num", "bad_num"):
             nums = list(_NUM.finditer(text))
             if nums:
                 m = nums[i % len(nums)]
                 new = nums[j % len(nums)].group() if kind == "swap_num" else _BAD[k % len(_BAD)]
-                text = text[: m.start()] + new + text[m.end():]
+                text = text[: m.start()] + new + text[m.end() :]
         elif kind == "cut":
             text = text[: 1 + i % max(1, len(text) - 1)]
         elif kind in ("del_line", "dup_line"):
@@ -115,7 +135,7 @@ def _mutate(text: str, ops: list[tuple[str, int, int, int]]) -> str:
             found = list(re.finditer(r'type="(\w+)"', text))
             if found:
                 m = found[i % len(found)]
-                text = text[: m.start()] + f'type="{_TYPES[j % len(_TYPES)]}"' + text[m.end():]
+                text = text[: m.start()] + f'type="{_TYPES[j % len(_TYPES)]}"' + text[m.end() :]
     return text if text.strip() else "<"
 
 
@@ -150,16 +170,31 @@ def run_mutations(max_examples: int, crash_file: str) -> None:
     """
     texts = _base_texts()
     op = st.tuples(
-        st.sampled_from(["del_attr", "swap_num", "bad_num", "bad_num", "cut", "del_line",
-                         "dup_line", "joint_type"]),
+        st.sampled_from(
+            [
+                "del_attr",
+                "swap_num",
+                "bad_num",
+                "bad_num",
+                "cut",
+                "del_line",
+                "dup_line",
+                "joint_type",
+            ]
+        ),
         st.integers(0, 10_000),
         st.integers(0, 10_000),
         st.integers(0, 10_000),
     )
     outcomes = {"loaded": 0, "refused": 0}
 
-    @settings(max_examples=max_examples, deadline=None, database=None, derandomize=True,
-              suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=max_examples,
+        deadline=None,
+        database=None,
+        derandomize=True,
+        suppress_health_check=list(HealthCheck),
+    )
     @given(base=st.sampled_from(range(len(texts))), ops=st.lists(op, min_size=1, max_size=3))
     def prop(base: int, ops: list[tuple[str, int, int, int]]) -> None:
         text = _mutate(texts[base], ops)
@@ -261,8 +296,10 @@ def test_lists_tuples_and_ints_accepted(leg) -> None:  # type: ignore[no-untyped
     assert np.array_equal(leg.fk([0.1, 0.2, 0.3]), ref)
     assert np.array_equal(leg.fk((0.1, 0.2, 0.3)), ref)
     assert np.array_equal(leg.fk([0, 0, 0]), leg.fk(np.zeros(3)))
-    assert np.array_equal(leg.fk(np.array([0.1, 0.2, 0.3], dtype=np.float32)),
-                          leg.fk(np.array([0.1, 0.2, 0.3], dtype=np.float32).astype(float)))
+    assert np.array_equal(
+        leg.fk(np.array([0.1, 0.2, 0.3], dtype=np.float32)),
+        leg.fk(np.array([0.1, 0.2, 0.3], dtype=np.float32).astype(float)),
+    )
 
 
 def test_batches_checked(leg) -> None:  # type: ignore[no-untyped-def]

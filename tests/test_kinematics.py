@@ -53,8 +53,9 @@ def test_hexapod_every_foot_equals_mount_times_table(preset_models):
     rng = np.random.default_rng(2)
     for q in rng.uniform(model.lower, model.upper, (200, 18)):
         for i, foot in enumerate(hexa.foot_frames):
-            np.testing.assert_allclose(model.placement(q, foot), _hexapod_fk(hexa, i, q),
-                                       atol=1e-12)
+            np.testing.assert_allclose(
+                model.placement(q, foot), _hexapod_fk(hexa, i, q), atol=1e-12
+            )
 
 
 @pytest.mark.parametrize("leg", ["leg1", "leg4"])
@@ -82,9 +83,9 @@ def test_jacobian_equals_central_differences(name, reference, preset_models):
             dq[j] = h
             mp, mm = pin.SE3(model.fk(q + dq)), pin.SE3(model.fk(q - dq))
             if reference == "local":
-                tw = (pin.log6(m0.inverse() * mp).vector - pin.log6(m0.inverse() * mm).vector)
+                tw = pin.log6(m0.inverse() * mp).vector - pin.log6(m0.inverse() * mm).vector
             elif reference == "world":
-                tw = (pin.log6(mp * m0.inverse()).vector - pin.log6(mm * m0.inverse()).vector)
+                tw = pin.log6(mp * m0.inverse()).vector - pin.log6(mm * m0.inverse()).vector
             else:
                 v = mp.translation - mm.translation
                 w = pin.log3(mp.rotation @ m0.rotation.T) - pin.log3(mm.rotation @ m0.rotation.T)
@@ -109,11 +110,13 @@ def test_seed001_eq15_jacobian(preset_models):
         c1, s1, c2, s2 = math.cos(q1), math.sin(q1), math.cos(q2), math.sin(q2)
         c23, s23 = math.cos(q2 + q3), math.sin(q2 + q3)
         rho = l1 + c2 * l2 + c23 * l3
-        ref = np.array([
-            [-s1 * rho, -c1 * (s2 * l2 + s23 * l3), -c1 * s23 * l3],
-            [c1 * rho, -s1 * (s2 * l2 + s23 * l3), -s1 * s23 * l3],
-            [0.0, -c2 * l2 - c23 * l3, -c23 * l3],
-        ])
+        ref = np.array(
+            [
+                [-s1 * rho, -c1 * (s2 * l2 + s23 * l3), -c1 * s23 * l3],
+                [c1 * rho, -s1 * (s2 * l2 + s23 * l3), -s1 * s23 * l3],
+                [0.0, -c2 * l2 - c23 * l3, -c23 * l3],
+            ]
+        )
         np.testing.assert_allclose(model.position_jacobian([q1, q2, q3]), ref, atol=1e-15)
 
 
@@ -147,8 +150,9 @@ def test_solo12_subchain_with_base_expresses_in_base():
     j_full = full.jacobian(q, "local_world_aligned")[:, 1:]
     rot = o_m_s[:3, :3].T
     np.testing.assert_allclose(sub.jacobian(q[1:])[:3], rot @ j_full[:3], atol=1e-12)
-    np.testing.assert_allclose(sub.jacobian(q[1:], "local"), full.jacobian(q, "local")[:, 1:],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        sub.jacobian(q[1:], "local"), full.jacobian(q, "local")[:, 1:], atol=1e-12
+    )
 
 
 def test_bad_inputs_raise_clear_errors(preset_models):
@@ -191,15 +195,18 @@ def test_text_and_file_load_to_the_same_model(tmp_path):
         np.testing.assert_array_equal(m.jacobian(q), a.jacobian(q))
 
 
-@pytest.mark.parametrize("source,kw", [("hexapod", {"tip": "leg4_foot"}),
-                                       ("erd:solo12", {"tip": "FL_FOOT"})])
+@pytest.mark.parametrize(
+    "source,kw", [("hexapod", {"tip": "leg4_foot"}), ("erd:solo12", {"tip": "FL_FOOT"})]
+)
 def test_indirect_method_on_urdf_chains(source, kw):
     model = hk.load(source, **kw)
     for q in model.random_q(20, seed=8):
-        np.testing.assert_allclose(indirect_jacobian(model, q), model.position_jacobian(q),
-                                   atol=1e-12)
-        np.testing.assert_allclose(direct_jacobian(model, q), model.position_jacobian(q),
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            indirect_jacobian(model, q), model.position_jacobian(q), atol=1e-12
+        )
+        np.testing.assert_allclose(
+            direct_jacobian(model, q), model.position_jacobian(q), atol=1e-12
+        )
 
 
 def test_chain_from_rows_names_the_row():
@@ -244,8 +251,11 @@ def test_batch_calls_equal_a_pinocchio_loop(source, kw):
     base_inv = model.baseMo
     poses = model.fk_batch(qs)
     assert poses.shape == (150, 4, 4)
-    refs = {"local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
-            "world": pin.ReferenceFrame.WORLD, "local": pin.ReferenceFrame.LOCAL}
+    refs = {
+        "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+        "world": pin.ReferenceFrame.WORLD,
+        "local": pin.ReferenceFrame.LOCAL,
+    }
     jacs = {ref: model.jacobian_batch(qs, ref) for ref in refs}
     both = model.fk_jacobian_batch(qs, "world")
     for i, q in enumerate(qs):
@@ -307,8 +317,14 @@ def test_tool_offset_composes_with_the_flange(source):
 
 @pytest.mark.parametrize(
     "bad",
-    [np.eye(3), np.diag([1.0, 1.0, -1.0, 1.0]), [1, 2], "abc", [0, 0, 0, np.nan, 0, 0],
-     {"xyz": [0, 0, 0], "rot": [0, 0, 0]}],
+    [
+        np.eye(3),
+        np.diag([1.0, 1.0, -1.0, 1.0]),
+        [1, 2],
+        "abc",
+        [0, 0, 0, np.nan, 0, 0],
+        {"xyz": [0, 0, 0], "rot": [0, 0, 0]},
+    ],
 )
 def test_tool_offset_refuses_non_rigid(bad):
     from hexapod_kin.exceptions import ParameterError
@@ -329,7 +345,11 @@ def test_batch_out_buffers_are_filled_and_checked():
     jbuf = np.empty((40, 6, model.nq))
     assert model.jacobian_batch(qs, "local", out=jbuf) is jbuf
     np.testing.assert_array_equal(jbuf, model.jacobian_batch(qs, "local"))
-    for bad in (np.empty((39, 4, 4)), np.empty((40, 4, 4), dtype=np.float32),
-                np.empty((40, 4, 4), order="F")[:, :, :], np.empty((4, 4, 40)).T):
+    for bad in (
+        np.empty((39, 4, 4)),
+        np.empty((40, 4, 4), dtype=np.float32),
+        np.empty((40, 4, 4), order="F")[:, :, :],
+        np.empty((4, 4, 40)).T,
+    ):
         with pytest.raises(ParameterError, match="out"):
             model.fk_batch(qs, out=bad)

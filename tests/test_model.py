@@ -299,8 +299,9 @@ def test_implausible_inertials_warn_for_kinematics_and_refuse_for_dynamics(name,
     q = model.random_q(seed=1)
     d = raw.createData()
     pin.framesForwardKinematics(raw, d, q)
-    np.testing.assert_allclose(model.fk(q), d.oMf[raw.getFrameId(model.tip)].homogeneous,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        model.fk(q), d.oMf[raw.getFrameId(model.tip)].homogeneous, atol=1e-12
+    )
     with pytest.raises(exceptions.UrdfError, match=f"link {link!r}") as info:
         check_inertials(model)
     assert info.value.parameter == "inertial"
@@ -348,7 +349,8 @@ def test_package_uri_resolves_through_ros_package_path_and_package_dirs(tmp_path
     elsewhere.write_text(path.read_text())
     _, warned = _load_warned(elsewhere)
     assert len(warned) == 1 and "package://my_robot_description/meshes/a.stl" in str(
-        warned[0].message)
+        warned[0].message
+    )
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "ws"))  # found 2 levels below
     model, warned = _load_warned(elsewhere)
     assert warned == [] and str(pkg.parent) in model.source.package_dirs
@@ -385,8 +387,9 @@ def test_continuous_joints_take_one_angle():
     np.testing.assert_array_equal(model.upper, [np.pi, np.pi])
     np.testing.assert_array_equal(model.neutral(), [0.0, 0.0])
     q = np.array([0.4, -1.1])
-    np.testing.assert_allclose(model.pinocchio_q(q), [np.cos(0.4), np.sin(0.4),
-                                                      np.cos(-1.1), np.sin(-1.1)])
+    np.testing.assert_allclose(
+        model.pinocchio_q(q), [np.cos(0.4), np.sin(0.4), np.cos(-1.1), np.sin(-1.1)]
+    )
     # a full turn is the same pose; FK by finite differences agrees with the Jacobian
     np.testing.assert_allclose(model.fk(q + 2 * np.pi), model.fk(q), atol=1e-12)
     jac = model.jacobian(q)
