@@ -106,9 +106,13 @@ class LegFamily:
         return s if s > 0 else 1.0
 
 
-def _chain_of(chain: Chain | Model) -> Chain:
+def _chain_of(chain: Chain | Model | str) -> Chain:
     if isinstance(chain, Chain):
         return chain
+    if not isinstance(chain, Model):  # any other source: what hexapod_kin.load takes
+        from ..kinematics import load
+
+        chain = load(chain)
     params = getattr(chain, "params", None)
     if isinstance(params, Chain):
         base, tip = getattr(chain, "base", params.base), getattr(chain, "tip", params.tip)
@@ -121,15 +125,19 @@ def _chain_of(chain: Chain | Model) -> Chain:
         return params
     raise IKError(
         f"chain={chain!r}: closed-form IK needs a Khalil table (a Chain, or a model loaded from "
-        "one); this source has none (URDF) — use hexapod_kin.ik.solve(model, target)"
+        "one); this source has none (URDF) — use hexapod_kin.ik.solve(model, target)",
+        parameter="chain",
+        value=getattr(chain, "name", repr(chain)),
+        allowed="a Chain, a preset, a table file, or a model loaded from one",
     )
 
 
-def detect_family(chain: Chain | Model) -> LegFamily:
+def detect_family(chain: Chain | Model | str) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
 
     Args:
-        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one.
+        chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
+            :func:`hexapod_kin.load` takes (a preset name, a table file).
 
     Returns:
         The :class:`LegFamily`.
@@ -246,7 +254,7 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
 
 
 def analytic_batch(
-    chain: Chain | Model, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
+    chain: Chain | Model | str, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
 ) -> AnalyticBatch:
     """All closed-form solutions of N targets as fixed-shape arrays plus a validity mask.
 
@@ -255,7 +263,8 @@ def analytic_batch(
     ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid.
 
     Args:
-        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one.
+        chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
+            :func:`hexapod_kin.load` takes (a preset name, a table file).
         targets: (N, 3) foot positions in [m] in the base frame (SCARA: (N, 3) or (N, 4) with
             yaw [rad]); a single (3,) target is accepted as N = 1.
         tol: Relative tolerance (× the chain's length scale) of the reachability tests; a
@@ -454,7 +463,7 @@ def _legs_kernel(
 
 
 def analytic(
-    chain: Chain | Model, target: Any, *, tol: float = 1e-9, within_limits: bool = False
+    chain: Chain | Model | str, target: Any, *, tol: float = 1e-9, within_limits: bool = False
 ) -> list[np.ndarray]:
     """All closed-form solutions, as a list with one (k, n) array per target (k ≥ 0).
 
