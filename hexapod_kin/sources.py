@@ -63,13 +63,23 @@ def erd_share() -> Path:
 def _erd_index() -> dict[str, Path]:
     robots_dir = erd_share() / "example-robot-data" / "robots"
     index: dict[str, Path] = {}
-    for path in sorted(robots_dir.rglob("*.urdf")):
+    files = sorted(robots_dir.rglob("*.urdf"))
+    stems: dict[str, int] = {}
+    for path in files:
+        stems[path.stem] = stems.get(path.stem, 0) + 1
+    for path in files:
         index.setdefault(path.stem, path)
+        if stems[path.stem] > 1:  # e.g. anymal: also "<description folder>/<stem>"
+            index[f"{path.relative_to(robots_dir).parts[0]}/{path.stem}"] = path
     return index
 
 
 def erd_names() -> list[str]:
-    """Names of every example-robot-data URDF (file stems), sorted."""
+    """Names of every example-robot-data URDF, sorted.
+
+    File stems, and for a stem that two files share (``anymal``) also
+    ``<description folder>/<stem>`` for each of them, so that every file has a name.
+    """
     return sorted(_erd_index())
 
 

@@ -221,8 +221,14 @@ def test_erd_names_lists_every_urdf_file():
     from hexapod_kin.sources import erd_share
 
     robots_dir = erd_share() / "example-robot-data" / "robots"
-    stems = {p.stem for p in robots_dir.rglob("*.urdf")}
-    assert set(erd_names()) == stems and len(stems) > 50
+    files = set(robots_dir.rglob("*.urdf"))
+    assert {erd_path(n) for n in erd_names()} == files and len(files) > 60
+    assert {p.stem for p in files} <= set(erd_names())
+    b, c = (
+        erd_path("anymal_b_simple_description/anymal"),
+        erd_path("anymal_c_simple_description/anymal"),
+    )
+    assert b != c and hk.load(f"erd:{c.parent.parent.name}/anymal").nq == 12
 
 
 # ------------------------------------------------------------------ import cost (modules, not time)
