@@ -453,6 +453,10 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
     )
 
 
+#: Complete derivations of this process, by cache key (in front of the disk cache).
+_MEMO: dict[str, Mapping[str, Any]] = {}
+
+
 def derive(
     source: Any,
     rows: str | Sequence[str] | None = None,
@@ -497,7 +501,7 @@ def derive(
         row_indices(rows)
     syms = _core.length_symbols(chain, lengths)  # validates names early
     digest = _cache_key(chain, rows, lengths)
-    stages = _cache.load(digest) if cache else None
+    stages = (_MEMO.get(digest) or _cache.load(digest)) if cache else None
     from_cache = stages is not None
     reason: str | None = None
     if stages is None:
@@ -511,6 +515,10 @@ def derive(
         stages.setdefault("seconds", time.perf_counter() - start)
         if reason is None and cache:
             _cache.store(digest, stages)
+    if cache and reason is None:
+        if len(_MEMO) > 64:
+            _MEMO.clear()
+        _MEMO[digest] = stages
     return _assemble(chain, frame, tip_name, syms, stages, reason, from_cache, rows)
 
 

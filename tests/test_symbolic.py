@@ -283,17 +283,22 @@ def test_budget_stops_and_says_what_is_missing():
 
 
 def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
-    from hexapod_kin import _symbolic_cache
+    from hexapod_kin import _symbolic_cache, symbolic
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    symbolic._MEMO.clear()
     first = derive("scara")
     files = list((tmp_path / "symbolic").glob("*.json"))
     assert not first.cached and len(files) == 1
+    memo = derive("scara")  # this process: from memory
+    assert memo.cached and memo.det == first.det
+    symbolic._MEMO.clear()  # a new process: from the disk
     second = derive("scara")
     assert second.cached and sp.simplify(second.det - first.det) == 0
     assert [f.name for f in second.families] == [f.name for f in first.families]
     assert second.families[0].verified == first.families[0].verified
     files[0].write_text("{ not json", encoding="utf-8")
+    symbolic._MEMO.clear()
     third = derive("scara")
     assert not third.cached and sp.simplify(third.det - first.det) == 0
     assert _symbolic_cache.load(files[0].stem) is not None  # rewritten

@@ -119,3 +119,10 @@ def test_base_offset_and_tool_exported_as_fixed_joints_and_loaded_equal():
     rng = np.random.default_rng(4)
     for q in rng.uniform(-2, 2, (20, 3)):
         np.testing.assert_allclose(model.fk(q), table_fk(chain, q), atol=1e-13)
+
+
+def test_one_rpy_convention_for_the_package():
+    from hexapod_kin import params, urdf
+
+    assert urdf.rpy_to_matrix is params.rpy_to_matrix
+    assert urdf.matrix_to_rpy is params.matrix_to_rpy
