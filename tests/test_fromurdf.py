@@ -31,18 +31,13 @@ def _jac_error(chain, model, n=20, seed=1):
 
 
 def _catalogue():
+    """(URDF text, base, tip) of every catalogue chain; each hexapod leg from the body."""
     out = []
     for name in robots.names():
         built = robots.get(name)
         if isinstance(built, Hexapod):
-            out += [
-                (to_urdf(built, leg=leg.name), None, f"{name}_{leg.chain.tip}")
-                for leg in built.legs[:2]
-            ]
-            out[-2:] = [
-                (t, None, f"{leg.name}_{leg.chain.tip}")
-                for (t, _, _), leg in zip(out[-2:], built.legs[:2])
-            ]
+            out += [(to_urdf(built, leg=leg.name), None, f"{leg.name}_{leg.chain.tip}")
+                    for leg in built.legs]  # fmt: skip
         else:
             out.append((to_urdf(built), None, None))
     return out
