@@ -329,6 +329,13 @@ def _mounted(robot: Hexapod, tip: str, base: str) -> tuple[Chain, str] | None:
     return None
 
 
+def _leg_nq(robot: Hexapod, tip: str) -> int:
+    for leg in robot.legs:
+        if tip == f"{leg.name}_{leg.chain.tip}":
+            return leg.chain.nq
+    return -1
+
+
 def _chain_of(
     source: Any, base: str | None = None, tip: str | None = None
 ) -> tuple[Chain, str, str]:
@@ -356,8 +363,15 @@ def _chain_of(
     params = getattr(source, "params", None)
     m_base, m_tip = getattr(source, "base", None), getattr(source, "tip", None)
     if isinstance(m_base, str) and isinstance(m_tip, str) and base is None and tip is None:
+        nq = getattr(source, "nq", None)
+        if isinstance(params, Hexapod) and nq != _leg_nq(params, m_tip):
+            raise ParameterError(
+                f"derive: the model {getattr(source, 'name', '?')!r} moves {nq} joints (the whole "
+                f"robot); pick one leg with tip= (feet {choices(params.foot_frames)})"
+            )
         if isinstance(params, Chain) and params.base == m_base and params.tip == m_tip:
-            return params, m_base, m_tip
+            if nq == params.nq:
+                return params, m_base, m_tip
         if isinstance(params, Hexapod):
             found = _mounted(params, m_tip, m_base)
             if found is not None:

@@ -319,3 +319,9 @@ def test_family_residuals_vanish_on_families(leg):
     fd = [(res(q[2] + h * e) - res(q[2] - h * e))[0] / (2 * h) for e in np.eye(3)]
     np.testing.assert_allclose(grad(q[2])[0], fd, atol=1e-8)
     assert family_residuals("hexabot_leg") is fr  # cheap when asked again
+
+
+def test_whole_hexapod_model_is_refused_with_the_feet_listed():
+    model = load("hexapod")  # 18 joints, default tip leg1_foot
+    with pytest.raises(ParameterError, match="moves 18 joints.*leg2_foot"):
+        derive(model)
