@@ -21,7 +21,7 @@ from hexapod_kin.singularity._kernel import (
     POLY_TRIG_MAX,
     eig_block,
     measures_kernel,
-    minor_block,
+    minor_big,
     sincos,
 )
 from hexapod_kin.singularity._plan import BLOCK, aligned, first_joint_invariant, gram_plan
@@ -90,7 +90,10 @@ CHAINS = [
     ("erd:solo12", "FL_FOOT", None),  # 3×3, lateral offsets: no split, joint range ±10 rad
     ("scara", None, ("x", "y", "wz")),  # 3×4: Cauchy–Binet over 4 minors
     ("scara", None, "all"),  # 6×4: 15 minors, 4×4 Jacobi
-    ("five_dof", None, "all"),  # 6×5: m = 5, the per-configuration path
+    ("five_dof", None, "all"),  # 6×5: m = 5, 6 minors of 5×5 (Laplace 2 + 3)
+    ("erd:ur5_robot", None, "all"),  # 6×6: generic block Jacobi, Laplace 3 + 3
+    ("erd:panda", None, "all"),  # 6×9 (fingers: zero columns): 84 minors, per configuration
+    ("erd:panda", None, ("x", "y", "z", "wx")),  # 4×9: 126 minors, per configuration
 ]
 
 
@@ -128,7 +131,8 @@ def test_every_chain_equals_pinocchio(source, tip, rows):
     assert np.abs(1 / cond - psmin / smax).max() < 1e-12
     sel = tuple(ROW_NAMES.index(r) for r in names)
     plan = gram_plan(model, sel, first_joint_invariant(aligned(model), sel))
-    assert plan.use_block == (min(len(names), model.nq) <= 4)
+    k, n = len(names), model.nq
+    assert plan.use_block == (min(k, n) <= 6 and math.comb(max(k, n), min(k, n)) <= 70)
 
 
 def testgram_plans_split_where_structure_allows():
@@ -234,13 +238,13 @@ def test_polynomialsincos_matches_libm():
 def _spectra_matrices(m, rng):
     """Symmetric PSD m×m matrices with clustered, repeated and zero eigenvalues, and random."""
     spectra = [
-        (1.0, 1.0 - 1e-9, 0.5, 0.25),
-        (1.0, 0.3, 0.3 - 1e-10, 0.1),
-        (1.0, 1.0, 1.0, 1.0),
-        (1.0, 1e-20, 0.0, 0.0),
-        (2.0, 0.0, 0.0, 0.0),
-        (0.0, 0.0, 0.0, 0.0),
-        (1.0, 1.0 - 1e-6, 1.0 - 2e-6, 1e-8),
+        (1.0, 1.0 - 1e-9, 0.5, 0.25, 0.1, 0.05),
+        (1.0, 0.3, 0.3 - 1e-10, 0.1, 0.1, 1e-12),
+        (1.0, 1.0, 1.0, 1.0, 1.0, 1.0),
+        (1.0, 1e-20, 0.0, 0.0, 0.0, 0.0),
+        (2.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        (1.0, 1.0 - 1e-6, 1.0 - 2e-6, 1e-8, 1e-8, 0.5),
     ]
     mats = []
     for lam in spectra:
@@ -253,7 +257,7 @@ def _spectra_matrices(m, rng):
     return g
 
 
-@pytest.mark.parametrize("m", [3, 4])
+@pytest.mark.parametrize("m", [3, 4, 5, 6])
 def test_eig_block_clustered_and_rank_deficient(m):
     # Jacobi is backward stable for any eigenvalue clustering (the closed forms are not)
     g = _spectra_matrices(m, np.random.default_rng(9))
@@ -274,19 +278,19 @@ def test_eig_block_clustered_and_rank_deficient(m):
     assert np.all((off <= tol) | quad)
 
 
-def testminor_block_and_cauchy_binet():
+def test_minor_block_and_cauchy_binet():
     # explicit minors (m <= 4) against numpy det; det(J Jᵀ) = sum of squared maximal minors
     from itertools import combinations
 
     @njit
     def minors(jb, r, c, m, out):
-        minor_block(jb, r, c, m, jb.shape[2], out)
+        minor_big(jb, r, c, m, jb.shape[2], out, np.empty((2, jb.shape[2])))
 
     rng = np.random.default_rng(4)
-    for m in (1, 2, 3, 4):
-        jb = rng.normal(size=(m, 6, 64))
+    for m in (1, 2, 3, 4, 5, 6):
+        jb = rng.normal(size=(m, 7, 64))
         total = np.zeros(64)
-        for cols in combinations(range(6), m):
+        for cols in combinations(range(7), m):
             out = np.empty(64)
             minors(jb, np.arange(m), np.array(cols), m, out)
             ref = np.linalg.det(np.moveaxis(jb[:, list(cols)], 2, 0))

@@ -32,6 +32,7 @@ __all__ = [
     "POLY_TRIG_MAX",
     "eig_block",
     "measures_kernel",
+    "minor_big",
     "minor_block",
     "sincos",
 ]
@@ -51,6 +52,8 @@ _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.1359
 #: Jacobi sweeps stop when every off-diagonal sum of a block is below this × its trace.
 JACOBI_TOL = 1e-15
 JACOBI_MAX_SWEEPS = 12
+#: Sweeps of m ≥ 5 matrices before the first convergence test (UR5: 64 % done after 4, all 5).
+JACOBI_MIN_SWEEPS_BIG = 4
 #: Sweeps run over the whole block (SIMD, no gather) until at most 1/this of it is unconverged.
 JACOBI_GATHER = 4
 
@@ -249,7 +252,7 @@ def _jacobi_sweep4(gb: np.ndarray, i: int) -> None:  # pragma: no cover - compil
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - compiled
-    """Whether matrix ``i`` (packed 3×3 or 4×4, diagonal ``d``, off-diagonal ``E``) needs sweeps.
+    """Whether matrix ``i`` (packed m×m, diagonal ``d``, off-diagonal ``E``) needs sweeps.
 
     With ``o = Σ_{a<b} |e_ab|`` (≥ every off-diagonal row sum, ≥ ``‖E‖₂``) and ``g`` the
     smallest gap ``|d_a − d_b|``, the diagonal holds the eigenvalues to ``tol = JACOBI_TOL ·
@@ -264,6 +267,16 @@ def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - 
         off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[4, i])
         tr = d0 + d1 + d2
         gap = min(abs(d0 - d1), min(abs(d0 - d2), abs(d1 - d2)))
+    elif m > 4:
+        off = 0.0
+        tr = 0.0
+        gap = np.inf
+        for a in range(m):
+            da = gb[a * m - (a * (a - 1)) // 2, i]
+            tr += da
+            for b in range(a + 1, m):
+                off += abs(gb[a * m - (a * (a - 1)) // 2 + (b - a), i])
+                gap = min(gap, abs(da - gb[b * m - (b * (b - 1)) // 2, i]))
     else:
         d0, d1, d2, d3 = gb[0, i], gb[4, i], gb[7, i], gb[9, i]
         off = abs(gb[1, i]) + abs(gb[2, i]) + abs(gb[3, i])
@@ -278,10 +291,58 @@ def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _pack_table(m: int) -> np.ndarray:  # pragma: no cover - compiled
+    """``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (row-major) of m×m."""
+    pack = np.empty((m, m), dtype=np.int64)
+    p = 0
+    for a in range(m):
+        for b in range(a, m):
+            pack[a, b] = p
+            pack[b, a] = p
+            p += 1
+    return pack
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _sweep_gen(
+    gb: np.ndarray, nb: int, m: int, pack: np.ndarray, cs: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """One cyclic Jacobi sweep over every matrix of the block, any m (structure of arrays).
+
+    Pair by pair: the rotation ``(c, s)`` of every matrix in one loop over the block, then each
+    other row ``r`` updated in its own loop over the block — contiguous, so it vectorises.
+    """
+    for p in range(m - 1):
+        for q in range(p + 1, m):
+            ppp, pqq, ppq = pack[p, p], pack[q, q], pack[p, q]
+            for i in range(nb):
+                app, aqq, c, sn = _rot_cs(gb[ppp, i], gb[pqq, i], gb[ppq, i])
+                gb[ppp, i] = app
+                gb[pqq, i] = aqq
+                gb[ppq, i] = 0.0
+                cs[0, i] = c
+                cs[1, i] = sn
+            for r in range(m):
+                if r == p or r == q:
+                    continue
+                prp, prq = pack[r, p], pack[r, q]
+                for i in range(nb):
+                    arp, arq = gb[prp, i], gb[prq, i]
+                    c, sn = cs[0, i], cs[1, i]
+                    gb[prp, i] = c * arp - sn * arq
+                    gb[prq, i] = sn * arp + c * arq
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def eig_block(
     gb: np.ndarray, nb: int, m: int, wb: np.ndarray, idx: np.ndarray
 ) -> None:  # pragma: no cover - compiled
-    """Diagonalise ``nb`` packed symmetric m×m matrices (m = 3 or 4) in place by cyclic Jacobi.
+    """Diagonalise ``nb`` packed symmetric m×m matrices in place by cyclic Jacobi.
+
+    m = 3 and 4 have unrolled sweeps; larger m (5, 6: arms) sweep pair by pair over the block
+    (:func:`_sweep_gen`, structure of arrays: an unrolled 6×6 sweep spills its 21 entries and
+    measured 2.7× slower), ``JACOBI_MIN_SWEEPS_BIG`` times before the first test (a 6×6 needs
+    5, rarely 6).
 
     ``gb`` is (m(m+1)/2, B), rows the packed upper triangle (m = 3: ``g00 g01 g02 g11 g12
     g22``; m = 4: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``); ``wb`` the same shape and
@@ -294,7 +355,14 @@ def eig_block(
     """
     npk = gb.shape[0]
     sweeps = 0
-    while sweeps < JACOBI_MAX_SWEEPS:
+    big = m > 4
+    pack = _pack_table(m if big else 1)
+    cs = np.empty((2, nb if big else 1))
+    if big:  # arms: ~4 of the ~5 sweeps a 6×6 needs, before any test
+        for _ in range(JACOBI_MIN_SWEEPS_BIG):
+            _sweep_gen(gb, nb, m, pack, cs)
+        sweeps = JACOBI_MIN_SWEEPS_BIG
+    while sweeps < JACOBI_MAX_SWEEPS and not big:
         if m == 3:
             for i in range(nb):
                 _jacobi_sweep(gb, i)
@@ -325,9 +393,11 @@ def eig_block(
         if m == 3:
             for jj in range(n_open):
                 _jacobi_sweep(wb, jj)
-        else:
+        elif m == 4:
             for jj in range(n_open):
                 _jacobi_sweep4(wb, jj)
+        else:
+            _sweep_gen(wb, n_open, m, pack, cs)
         kept = 0
         for jj in range(n_open):
             i = idx[jj]
@@ -391,6 +461,58 @@ def minor_block(
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def minor_big(
+    jb: np.ndarray,
+    r: np.ndarray,
+    c: np.ndarray,
+    m: int,
+    nb: int,
+    dst: np.ndarray,
+    tmp: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`minor_block` for any m ≤ 8: Laplace expansion along the first ``h = m // 2`` rows.
+
+    ``det = Σ_S ε(S) det(J[top, S]) det(J[bottom, S̄])`` over the h-subsets ``S`` of the
+    columns (20 pairs of 3×3 minors for m = 6), each from :func:`minor_block`; ``tmp`` is
+    (2, B) scratch.
+    """
+    if m <= 4:
+        minor_block(jb, r, c, m, nb, dst)
+        return
+    h = m // 2
+    rt = r[:h].copy()
+    rb = r[h:m].copy()
+    cs = np.empty(h, dtype=np.int64)
+    cc = np.empty(m - h, dtype=np.int64)
+    for i in range(nb):
+        dst[i] = 0.0
+    base = h * (h - 1) // 2
+    for mask in range(1 << m):
+        cnt = 0
+        tot = 0
+        for b in range(m):
+            if (mask >> b) & 1:
+                cnt += 1
+        if cnt != h:
+            continue
+        a1 = 0
+        a2 = 0
+        for b in range(m):
+            if (mask >> b) & 1:
+                cs[a1] = c[b]
+                tot += b
+                a1 += 1
+            else:
+                cc[a2] = c[b]
+                a2 += 1
+        sign = 1.0 if (tot + base) % 2 == 0 else -1.0
+        minor_block(jb, rt, cs, h, nb, tmp[0])
+        minor_block(jb, rb, cc, m - h, nb, tmp[1])
+        for i in range(nb):
+            dst[i] += sign * tmp[0, i] * tmp[1, i]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _reduce_block(
     jb: np.ndarray,
     nb: int,
@@ -402,20 +524,21 @@ def _reduce_block(
     idx: np.ndarray,
     dg: np.ndarray,
     mnr: np.ndarray,
+    tmp: np.ndarray,
     start: int,
     out_det: np.ndarray,
     out_manip: np.ndarray,
     out_cond: np.ndarray,
     out_smin: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 4``.
+    """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 6``.
 
     ``plan`` is :attr:`._plan.GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
     triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
     ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
     ``JACOBI_TOL · trace`` over the whole block (checked; Weyl bounds the effect), each
     diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`eig_block` for 3
-    and 4; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
+    to 6; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
     when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
     ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
     accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
@@ -439,7 +562,7 @@ def _reduce_block(
                     for i in range(nb):
                         gb[p, i] += jb[a, c, i] * jb[b, c, i]
     if square:
-        minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
+        minor_big(jb, rsub[0], csub[0], mm, nb, mnr, tmp)
         for i in range(nb):
             out_det[start + i] = mnr[i]
             dg[i] = mnr[i] * mnr[i]
@@ -448,7 +571,7 @@ def _reduce_block(
             dg[i] = 0.0
             out_det[start + i] = np.nan
         for s in range(rsub.shape[0]):
-            minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
+            minor_big(jb, rsub[s], csub[s], mm, nb, mnr, tmp)
             for i in range(nb):
                 dg[i] += mnr[i] * mnr[i]
     # the structural zeros really are negligible over this block?
@@ -518,6 +641,21 @@ def _reduce_block(
             lmax = max(e0, max(e1, e2))
             mnr[i] = lmax
             hb[0, i] = lmax * max(min(e0, e1), min(max(e0, e1), e2))
+    elif mm > 4:
+        for i in range(nb):
+            lo = 0
+            hi = 0
+            for a in range(1, mm):
+                if ev[a, i] < ev[lo, i]:
+                    lo = a
+                if ev[a, i] > ev[hi, i]:
+                    hi = a
+            prod = 1.0
+            for a in range(mm):
+                if a != lo:
+                    prod *= ev[a, i]
+            mnr[i] = ev[hi, i]
+            hb[0, i] = prod  # the m − 1 largest
     else:
         for i in range(nb):
             e0, e1, e2, e3 = ev[0, i], ev[1, i], ev[2, i], ev[3, i]
@@ -563,14 +701,16 @@ def measures_kernel(
     """Fused FK + selected-row Jacobian + measures for every row of ``qs``.
 
     The chain is given with every joint axis aligned to its frame's z (see
-    :func:`._plan.aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or ``Tz(q)``;
+    :func:`._plan.aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or
+    ``Tz(q)``;
     ``ptr[m]`` is the tip offset. Work is split into ``nwork`` contiguous ranges (one per
     thread, scratch allocated once each), processed in blocks of ``block`` configurations
     stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
     and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
     see :func:`._plan.first_joint_invariant`). ``poly``: sin / cos by :func:`sincos` (all
-    ``|q| ≤ POLY_TRIG_MAX``) rather than libm. ``use_block`` (``min(k, n) ≤ 4``, see
-    :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole block by
+    ``|q| ≤ POLY_TRIG_MAX``) rather than libm. ``use_block`` (``min(k, n) ≤ 6``, see
+    :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole
+    block by
     :func:`_reduce_block`; otherwise :func:`_reduce_one` per configuration.
     """
     nconf = qs.shape[0]
@@ -598,6 +738,7 @@ def measures_kernel(
         open_idx = np.empty(bsz, dtype=np.int64)
         dg = np.empty(bsz)
         mnr = np.empty(bsz)
+        tmp = np.empty((2, bsz))
         js = np.empty((k, nq))
         g = np.empty((mm, mm))
         work = np.empty((big, big))
@@ -705,6 +846,7 @@ def measures_kernel(
                     open_idx,
                     dg,
                     mnr,
+                    tmp,
                     start,
                     out_det,
                     out_manip,

@@ -95,7 +95,7 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
     ``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (m×m, ``m = min(k, n)``);
     ``rsub[s]`` / ``csub[s]``: rows / columns of the s-th maximal minor of ``J`` (the one
     square minor when ``k == n``; all ``C(max(k, n), m)`` of them otherwise, for Cauchy–Binet
-    ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 4`` or there are more than
+    ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 6`` or there are more than
     ``_MAX_MINORS`` minors (the per-configuration path then serves).
     """
     from itertools import combinations
@@ -109,7 +109,7 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
             p += 1
     full = tuple(range(m))
     subs = list(combinations(range(max(k, n)), m)) if m else []
-    use = 1 <= m <= 4 and len(subs) <= _MAX_MINORS
+    use = 1 <= m <= 6 and len(subs) <= _MAX_MINORS
     if not use:
         subs = subs[:1] or [full]
     if k <= n:
@@ -174,7 +174,7 @@ def gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
     only costs time. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}`` (the hip column is
     orthogonal to the leg plane), the SCARA's (x, y, z, wz) ``{θ1, θ2, θ3} ⊕ {d4}``.
     """
-    return model.cached(  # type: ignore[no-any-return]
+    return model.cached(
         f"singularity.gram_plan.{sel}.{skip0}", lambda: _build_gram_plan(model, sel, skip0)
     )
 
@@ -280,9 +280,7 @@ def output_arrays(n: int) -> tuple[np.ndarray, ...]:
 
 def aligned(model: Any) -> AlignedChain:
     """The model's chain with z joint axes (:func:`aligned_chain`), kept in ``model.cached``."""
-    return model.cached(  # type: ignore[no-any-return]
-        "singularity.aligned", lambda: aligned_chain(model.arrays)
-    )
+    return model.cached("singularity.aligned", lambda: aligned_chain(model.arrays))
 
 
 def compute(

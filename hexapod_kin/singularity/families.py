@@ -91,7 +91,7 @@ def _compile(text: str, nq: int) -> ast.Expression:
 def _evaluate(node: ast.AST, q: np.ndarray) -> Any:
     if isinstance(node, ast.Expression):
         return _evaluate(node.body, q)
-    if isinstance(node, ast.Constant):
+    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
         return float(node.value)
     if isinstance(node, ast.Name):
         return math.pi if node.id == "pi" else q[..., int(node.id[1:]) - 1]
@@ -140,7 +140,7 @@ class Family:
                 tuple(_compile(g, self.nq) for g in self.gradient),
             )
             object.__setattr__(self, "_code", code)
-        return self._code  # type: ignore[no-any-return]
+        return self._code
 
     def residual(self, q: Any) -> np.ndarray:
         """Signed residual at ``q`` (…, nq): the factor; the wrapped offset for ``q_k = v``."""
@@ -265,7 +265,7 @@ def _table(model: Any) -> tuple[Any, str]:
             return None, f"the recovered table has {chain.nq} joints, the model {model.nq}"
         return chain, ""
 
-    return model.cached("singularity.table", build)  # type: ignore[no-any-return]
+    return model.cached("singularity.table", build)
 
 
 def _key(chain: Any, rows: tuple[str, ...]) -> str:
@@ -360,9 +360,11 @@ def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Fa
     if deriv.det is not None:
         sym = np.abs(deriv.function(deriv.det)(qs))
         num = np.abs(res.det)
-    else:
+    elif getattr(deriv, "gram", None) is not None:
         sym = np.abs(deriv.function(deriv.gram)(qs))
         num = res.manipulability**2
+    else:
+        raise ParameterError("the derivation has no determinant to check the families against")
     scale = max(float(np.max(num)), 1e-300)
     err = float(np.max(np.abs(sym - num))) / scale
     if not err <= _MATCH_RTOL:
@@ -477,9 +479,14 @@ def families_for(
         )
     try:
         deriv = _derive(chain, rows, float(budget))
+        incomplete = str(getattr(deriv, "incomplete", "") or "")
+        if incomplete and not deriv.families:
+            return Families((), "none", f"derivation incomplete: {incomplete}", key)
         fams = _numeric_families(deriv, model, rows)
     except _derive_errors() as err:
         return Families((), "none", f"derivation failed: {type(err).__name__}: {err}", key)
+    if incomplete:  # partial families: used, but not kept (a later call may finish)
+        return Families(fams, "derived", f"derivation incomplete: {incomplete}", key)
     _write_cache(key, model.nq, fams)
     model.cached(mem, lambda: fams)
     return Families(fams, "derived", "" if fams else _NO_FACTOR, key)

@@ -161,7 +161,7 @@ def default_rows(model: Any) -> tuple[str, ...]:
         flags = np.abs(jac).max(axis=(0, 2)) > 1e-12
         return choose_rows([bool(f) for f in flags], mdl.nq)
 
-    return mdl.cached("singularity.default_rows", build)  # type: ignore[no-any-return]
+    return mdl.cached("singularity.default_rows", build)
 
 
 def selected_rows(model: Any, rows: Any) -> tuple[str, ...]:

@@ -321,10 +321,10 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
             logs = np.log(np.maximum(smin, floor))
             score[j] = float(np.mean(logs.max(axis=1) - logs.min(axis=1)))
         prism = np.asarray(mdl.is_prismatic, dtype=bool)
-        order = sorted(cands, key=lambda j: (-round(score[j], 9), bool(prism[j]), -j))
+        order = sorted(cands, key=lambda j: (-round(float(score[j]), 9), bool(prism[j]), -j))
         return tuple(sorted(order[:count]))
 
-    return mdl.cached(f"singularity.default_joints.{names}.{count}", build)  # type: ignore[no-any-return]
+    return mdl.cached(f"singularity.default_joints.{names}.{count}", build)
 
 
 def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
