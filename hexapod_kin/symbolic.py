@@ -61,6 +61,7 @@ __all__ = [
     "SingularFamily",
     "derive",
     "family_residuals",
+    "cached",
     "khalil_matrix",
     "default_rows",
     "row_indices",
@@ -601,21 +602,57 @@ def _assemble(
 
 # ---------------------------------------------------------------------- for scans
 def family_residuals(
-    source: Any, rows: str | Sequence[str] | None = None, *, budget: float | None = DEFAULT_BUDGET
-) -> FamilyResiduals:
+    source: Any,
+    rows: str | Sequence[str] | None = None,
+    *,
+    budget: float | None = DEFAULT_BUDGET,
+    derive_missing: bool = True,
+) -> FamilyResiduals | None:
     """Families of ``source`` as numpy residuals and gradients (cheap when cached).
 
     Args:
         source: As for :func:`derive`.
         rows: As for :func:`derive`.
         budget: As for :func:`derive`; families missing at the budget are simply absent.
+        derive_missing: When ``False``, never run sympy: return ``None`` unless the
+            derivation is already in this process or the disk cache (milliseconds).
 
     Returns:
-        A :class:`FamilyResiduals`.
+        A :class:`FamilyResiduals`, or ``None`` (only with ``derive_missing=False``).
 
     """
-    deriv = derive(source, rows=rows, budget=budget)
-    return _residuals(deriv)
+    if not derive_missing:
+        deriv = cached(source, rows)
+        return None if deriv is None else _residuals(deriv)
+    return _residuals(derive(source, rows=rows, budget=budget))
+
+
+def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation | None:
+    """The derivation of ``source`` if this process or the disk cache has it, else ``None``.
+
+    Never runs sympy's derivation (reading a cached one takes milliseconds).
+
+    Args:
+        source: As for :func:`derive`.
+        rows: As for :func:`derive`.
+
+    Returns:
+        The cached :class:`Derivation` or ``None``.
+
+    Raises:
+        ParameterError: As for :func:`derive`.
+
+    """
+    chain, frame, tip_name = _chain_of(source, None, None)
+    if rows is not None:
+        row_indices(rows)
+    digest = _cache_key(chain, rows, None)
+    stages = _MEMO.get(digest) or _cache.load(digest)
+    if stages is None:
+        return None
+    _MEMO[digest] = stages
+    syms = _core.length_symbols(chain, None)
+    return _assemble(chain, frame, tip_name, syms, stages, None, True, rows)
 
 
 _RESIDUALS: dict[tuple[Any, ...], FamilyResiduals] = {}

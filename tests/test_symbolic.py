@@ -325,3 +325,18 @@ def test_whole_hexapod_model_is_refused_with_the_feet_listed():
     model = load("hexapod")  # 18 joints, default tip leg1_foot
     with pytest.raises(ParameterError, match="moves 18 joints.*leg2_foot"):
         derive(model)
+
+
+def test_cached_never_derives(tmp_path, monkeypatch):
+    from hexapod_kin import symbolic
+    from hexapod_kin.symbolic import cached, family_residuals
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    symbolic._MEMO.clear()
+    assert cached("coxa_tibia_leg") is None
+    assert family_residuals("coxa_tibia_leg", derive_missing=False) is None
+    d = derive("coxa_tibia_leg")
+    symbolic._MEMO.clear()
+    again = cached("coxa_tibia_leg")
+    assert again is not None and again.cached and sp.simplify(again.gram - d.gram) == 0
+    assert family_residuals("coxa_tibia_leg", derive_missing=False) is not None
