@@ -1,0 +1,156 @@
+"""Poses: the package's one rigid-transform notation and its one RPY convention.
+
+Re-exported by :mod:`hexapod_kin.params` (see its module docstring for the notation):
+``T_a_b`` as a 4×4 homogeneous matrix or ``(xyz [m], rpy [rad])`` with URDF's fixed-axis
+X-Y-Z roll-pitch-yaw, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .exceptions import ParameterError
+
+__all__ = ["Pose", "matrix_to_rpy", "rpy_to_matrix"]
+
+
+def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation matrix ``Rz(yaw)·Ry(pitch)·Rx(roll)`` (URDF fixed-axis X-Y-Z), angles in [rad]."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll-pitch-yaw of a rotation matrix, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+
+    Args:
+        rot: 3×3 rotation matrix.
+
+    Returns:
+        ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
+
+    """
+    r = np.asarray(rot, float)
+    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
+    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:
+        return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
+    return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A rigid transform ``T_a_b`` (see the module docstring for the notation).
+
+    Build one with :meth:`of` from a 4×4 matrix, ``(xyz, rpy)`` or another pose.
+
+    Attributes:
+        xyz: Origin of frame ``b`` in frame ``a`` in [m].
+        rotation: The 3×3 rotation ``R_a_b``, row-major, as nested tuples.
+
+    """
+
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotation: tuple[tuple[float, ...], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+    def __post_init__(self) -> None:
+        try:
+            xyz = tuple(float(v) for v in self.xyz)
+            rot = np.array(self.rotation, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"Pose: xyz={self.xyz!r}, rotation={self.rotation!r}; three numbers and a 3x3 "
+                "rotation are required"
+            ) from None
+        if len(xyz) != 3 or rot.shape != (3, 3) or not np.all(np.isfinite(rot + sum(xyz))):
+            raise ParameterError(
+                f"Pose: xyz={self.xyz!r}, rotation={self.rotation!r}; three numbers and a finite "
+                "3x3 rotation are required"
+            )
+        err = float(np.abs(rot @ rot.T - np.eye(3)).max())
+        if err > 1e-9 or np.linalg.det(rot) < 0:
+            raise ParameterError(
+                f"Pose.rotation={rot.tolist()} is not a rotation (|R Rt - I| = {err:.1e}, "
+                f"det = {np.linalg.det(rot):.3f}); an orthonormal matrix with det +1 is required"
+            )
+        object.__setattr__(self, "xyz", xyz)
+        object.__setattr__(self, "rotation", tuple(tuple(float(x) for x in r) for r in rot))
+
+    @classmethod
+    def of(cls, value: Any, where: str = "pose") -> Pose:
+        """Return ``value`` as a :class:`Pose`.
+
+        Args:
+            value: A :class:`Pose`, a 4×4 homogeneous matrix (last row ``0 0 0 1``), or
+                ``(xyz, rpy)`` with ``xyz`` in [m] and ``rpy`` in [rad] (URDF convention).
+            where: Parameter name used in error messages.
+
+        Returns:
+            The pose.
+
+        Raises:
+            ParameterError: For anything else, naming ``where``.
+
+        """
+        if isinstance(value, Pose):
+            return value
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            arr = None
+        if arr is not None and arr.shape == (4, 4):
+            if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), rtol=0, atol=1e-12):
+                raise ParameterError(
+                    f"{where}: last row {arr[3].tolist()} of the 4x4 matrix must be 0 0 0 1"
+                )
+            try:
+                return cls(xyz=tuple(arr[:3, 3]), rotation=tuple(map(tuple, arr[:3, :3])))
+            except ParameterError as exc:
+                raise ParameterError(f"{where}: {exc}") from None
+        if arr is not None and arr.shape == (2, 3):
+            if not np.all(np.isfinite(arr)):
+                raise ParameterError(f"{where}={value!r}: (xyz, rpy) must be finite")
+            rot = rpy_to_matrix(*arr[1])
+            return cls(xyz=tuple(arr[0]), rotation=tuple(map(tuple, rot)))
+        raise ParameterError(
+            f"{where}={value!r} is not a pose; give a 4x4 homogeneous matrix or (xyz [m], "
+            "rpy [rad]) as two triples"
+        )
+
+    @classmethod
+    def identity(cls) -> Pose:
+        """The identity transform."""
+        return cls()
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 4×4 homogeneous matrix (a fresh array)."""
+        t = np.eye(4)
+        t[:3, :3] = self.rotation
+        t[:3, 3] = self.xyz
+        return t
+
+    @property
+    def rpy(self) -> tuple[float, float, float]:
+        """``(roll, pitch, yaw)`` in [rad], URDF convention."""
+        return matrix_to_rpy(np.array(self.rotation))
+
+    @property
+    def is_identity(self) -> bool:
+        """True when the pose is exactly the identity."""
+        return self == Pose()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready ``{"xyz": [m], "rpy": [rad], "matrix": 4x4}``."""
+        return {"xyz": list(self.xyz), "rpy": list(self.rpy), "matrix": self.matrix.tolist()}

@@ -1,0 +1,115 @@
+"""Forward kinematics of a Khalil table in plain numpy (the independent reference).
+
+Re-exported by :mod:`hexapod_kin.params`; a chain's base and tool poses are included.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .params import Chain
+
+__all__ = ["table_fk", "table_position_jacobian", "table_transforms"]
+
+
+def _as_q(chain: Chain, q: Any) -> np.ndarray:
+    from .exceptions import ConfigurationError
+
+    try:
+        arr = np.asarray(q, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ConfigurationError(f"q={q!r} is not a sequence of numbers") from None
+    if arr.shape != (chain.nq,):
+        raise ConfigurationError(
+            f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints "
+            f"{list(chain.joint_names or ())}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ConfigurationError(f"q={arr.tolist()} contains non-finite values")
+    return arr
+
+
+def table_transforms(chain: Chain, q: Any) -> list[np.ndarray]:
+    """Multiply nothing: return every ``^{j-1}T_j`` of the table at ``q`` (pure numpy).
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,) in [rad] / [m].
+
+    Returns:
+        One 4×4 array per row, in table order.
+
+    """
+    qv = _as_q(chain, q)
+    out = []
+    k = 0
+    for row in chain.rows:
+        if row.is_joint:
+            out.append(row.transform(float(qv[k])))
+            k += 1
+        else:
+            out.append(row.transform())
+    return out
+
+
+def table_fk(chain: Chain, q: Any) -> np.ndarray:
+    """Forward kinematics by multiplying the Khalil transforms directly (pure numpy).
+
+    This is the independent reference every Pinocchio result is checked against.
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,) in [rad] / [m].
+
+    Returns:
+        ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool`` (4×4): the chain's base and
+        tool poses are included.
+
+    Raises:
+        ConfigurationError: If ``q`` has the wrong length or non-finite values.
+
+    """
+    t = chain.base_matrix
+    for tj in table_transforms(chain, q):
+        t = t @ tj
+    return t @ chain.tool_matrix
+
+
+_GZ = np.array([[0.0, -1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]])
+_GT = np.array([[0.0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]])
+
+
+def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
+    """The *indirect* method, exactly: ``∂p/∂q`` by differentiating the table's product.
+
+    ``∂(T_1···T_n)/∂q_j = (T_1···T_j)·G_j·(T_{j+1}···T_n)`` with ``G_j`` the generator of
+    ``Rz`` (revolute) or ``Tz`` (prismatic) — no finite differences, exact to rounding.
+
+    Args:
+        chain: The chain.
+        q: Joint values (n,).
+
+    Returns:
+        The 3×n position Jacobian of the tip (tool included) in the base frame (base
+        pose included).
+
+    """
+    ts = table_transforms(chain, q)
+    ts[0] = chain.base_matrix @ ts[0]
+    ts.append(chain.tool_matrix)  # after the last row: the generators act before it
+    n_rows = len(ts)
+    prefix = [np.eye(4)]
+    for t in ts:
+        prefix.append(prefix[-1] @ t)
+    suffix = [np.eye(4)] * (n_rows + 1)
+    for j in range(n_rows - 1, -1, -1):
+        suffix[j] = ts[j] @ suffix[j + 1]
+    cols = []
+    for j in chain.joint_rows:
+        gen = _GZ if chain.rows[j].sigma == "revolute" else _GT
+        d = prefix[j + 1] @ gen @ suffix[j + 1]
+        cols.append(d[:3, 3])
+    return np.column_stack(cols)
