@@ -166,3 +166,13 @@ def test_data_stays_paired_with_model() -> None:
         model.data = model.model.createData()
     with pytest.raises(ParameterError, match="read-only"):
         model.model = model.full_model
+
+
+def test_batch_calls_from_threads() -> None:
+    model = hk.load("erd:ur5_robot")
+    qs = [model.random_q(3000, seed=70 + i) for i in range(N_THREADS)]
+    expect = [(model.fk_batch(q), model.jacobian_batch(q, "world")) for q in qs]
+    got = _run_threads(lambda i: (model.fk_batch(qs[i]), model.jacobian_batch(qs[i], "world")))
+    for g, e in zip(got, expect):
+        np.testing.assert_array_equal(g[0], e[0])
+        np.testing.assert_array_equal(g[1], e[1])
