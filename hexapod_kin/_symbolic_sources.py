@@ -1,0 +1,99 @@
+"""What :func:`hexapod_kin.symbolic.derive` derives: a source turned into a chain and a frame.
+
+A :class:`~hexapod_kin.params.Chain` as it is; a preset by name; a hexapod leg with its mount
+as the chain's base pose (so ``p`` and ``J`` are in the body frame, like the loaded model);
+any URDF (path, text, ``erd:NAME``, a loaded model of one) read back with
+:meth:`~hexapod_kin.params.Chain.from_urdf`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .exceptions import ParameterError, choices
+from .params import Chain, Hexapod
+
+__all__ = ["chain_of"]
+
+
+def _mounted(robot: Hexapod, tip: str, base: str) -> tuple[Chain, str] | None:
+    for leg in robot.legs:
+        if tip == f"{leg.name}_{leg.chain.tip}":
+            chain = leg.chain
+            if base == f"{leg.name}_{chain.base}":
+                return chain, base
+            if base == robot.body:
+                pose = leg.transform() @ chain.base_matrix
+                moved = chain.replace(
+                    base=robot.body, base_pose=pose, name=f"{robot.name}_{leg.name}"
+                )
+                return moved, base
+    return None
+
+
+def _leg_nq(robot: Hexapod, tip: str) -> int:
+    for leg in robot.legs:
+        if tip == f"{leg.name}_{leg.chain.tip}":
+            return leg.chain.nq
+    return -1
+
+
+def chain_of(
+    source: Any, base: str | None = None, tip: str | None = None
+) -> tuple[Chain, str, str]:
+    """``(chain, frame name, tip name)`` for a source (see :func:`derive`)."""
+    if isinstance(source, Chain):
+        if base is None and tip is None:
+            return source, source.base, source.tip
+        return _from_urdf(source, base, tip)
+    if isinstance(source, Hexapod):
+        if tip is not None:
+            found = _mounted(source, tip, base or source.body)
+            if found is not None:
+                return found[0], found[1], tip
+            return _from_urdf(source, base, tip)
+        raise ParameterError(
+            f"derive: source is the robot {source.name!r} (a Hexapod); pick one leg with "
+            f"tip= (feet {choices(source.foot_frames)}) or derive robot.legs[0].chain"
+        )
+    if isinstance(source, str):
+        from . import robots
+
+        if source in robots.names():
+            return chain_of(robots.get(source), base, tip)
+        return _from_urdf(source, base, tip)
+    params = getattr(source, "params", None)
+    m_base, m_tip = getattr(source, "base", None), getattr(source, "tip", None)
+    if isinstance(m_base, str) and isinstance(m_tip, str) and base is None and tip is None:
+        nq = getattr(source, "nq", None)
+        if isinstance(params, Hexapod) and nq != _leg_nq(params, m_tip):
+            raise ParameterError(
+                f"derive: the model {getattr(source, 'name', '?')!r} moves {nq} joints (the whole "
+                f"robot); pick one leg with tip= (feet {choices(params.foot_frames)})"
+            )
+        if isinstance(params, Chain) and params.base == m_base and params.tip == m_tip:
+            if nq == params.nq:
+                return params, m_base, m_tip
+        if isinstance(params, Hexapod):
+            found = _mounted(params, m_tip, m_base)
+            if found is not None:
+                return found[0], found[1], m_tip
+        return _from_urdf(source, None, None)
+    if hasattr(source, "model") and hasattr(source, "fk"):
+        return _from_urdf(source, base, tip)
+    raise ParameterError(
+        f"derive: source={source!r} has no Khalil table; give a Chain, a preset name, a URDF "
+        "(path, text or erd:NAME) or a loaded model"
+    )
+
+
+def _from_urdf(source: Any, base: str | None, tip: str | None) -> tuple[Chain, str, str]:
+    from .exceptions import HexapodKinError
+
+    try:
+        chain = Chain.from_urdf(source, base=base, tip=tip)
+    except HexapodKinError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - say what the source was
+        raise ParameterError(f"derive: source={source!r} could not be read: {exc}") from None
+    return chain, chain.base, chain.tip
