@@ -16,12 +16,16 @@ from ._io import atomic_write
 from .exceptions import OptionalDependencyError
 
 __all__ = [
+    "FORMATS",
+    "figure_format",
+    "joint_axis",
     "plot_motion",
     "plot_singularity_map",
     "plot_step",
     "plot_workspace",
     "pyplot",
     "save_figure",
+    "singularity_map_figure",
 ]
 
 
@@ -44,12 +48,43 @@ def pyplot() -> Any:
     return plt
 
 
+#: Output formats by file suffix (matplotlib writes each without extra dependencies).
+FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".svg": "svg", ".pdf": "pdf"}
+
+
+def figure_format(path: str | os.PathLike[str]) -> str:
+    """The image format of ``path`` from its suffix.
+
+    Raises:
+        ParameterError: An unknown suffix (the message lists the allowed ones).
+
+    """
+    from .exceptions import ParameterError, choices
+
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        raise ParameterError(
+            f"plot path {str(path)!r}: suffix {suffix or '(none)'!r} is not allowed; use one of "
+            f"{choices(FORMATS)}",
+            parameter="path",
+            value=str(path),
+            allowed=list(FORMATS),
+        )
+    return FORMATS[suffix]
+
+
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 120) -> Path:
-    """Render ``fig`` to PNG in memory, write it atomically, close it; return the path."""
+    """Render ``fig`` in memory in the format of ``path``'s suffix, write it atomically, close it.
+
+    Raises:
+        ParameterError: An unknown suffix (see :data:`FORMATS`).
+
+    """
     plt = pyplot()
     buf = io.BytesIO()
     try:
-        fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+        fmt = figure_format(path)
+        fig.savefig(buf, format=fmt, dpi=dpi, bbox_inches="tight")
     finally:
         plt.close(fig)
     return atomic_write(path, buf.getvalue())
@@ -64,24 +99,37 @@ _MEASURE_LABELS = {
 }
 
 
-def plot_singularity_map(
-    result: Any,
-    path: str | os.PathLike[str],
-    measure: str | None = None,
-    title: str | None = None,
-) -> Path:
-    """Heat map of a measure over two scanned joints, with the singular families drawn.
+def joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
+    """Values of ``joint`` for an axis, and the axis label with its unit.
+
+    Revolute joints in degrees; prismatic joints in metres, or millimetres when their range is
+    under 0.1 m.
 
     Args:
-        result: A :class:`~hexapod_kin.singularity.ScanResult` of a *grid* scan over exactly
-            two joints.
-        path: Output PNG path (written atomically).
-        measure: ``"det"`` (default when J is square), ``"manipulability"`` (default
-            otherwise), ``"sigma_min"`` or ``"condition"``.
-        title: Figure title (default: source, measure and the fixed joints).
+        result: A :class:`~hexapod_kin.singularity.ScanResult`.
+        joint: Joint index.
+        values: Joint values in [rad] or [m].
 
     Returns:
-        The written path.
+        ``(converted values, "name (qk) [unit]")``.
+
+    """
+    import numpy as np
+
+    vals = np.asarray(values, dtype=float)
+    name = f"{result.joint_names[joint]} (q{joint + 1})"
+    if not result.prismatic[joint]:
+        return np.degrees(vals), f"{name} [deg]"
+    span = float(np.ptp(result.q[:, joint])) if result.q.size else 0.0
+    if span < 0.1:
+        return vals * 1000.0, f"{name} [mm]"
+    return vals, f"{name} [m]"
+
+
+def singularity_map_figure(
+    result: Any, measure: str | None = None, title: str | None = None
+) -> Any:
+    """The figure of :func:`plot_singularity_map` (not written; close it when done).
 
     Raises:
         ParameterError: Not a 2-joint grid scan, or an unknown measure.
@@ -95,14 +143,20 @@ def plot_singularity_map(
         raise ParameterError(
             "plot_singularity_map: a grid scan over exactly two joints is required "
             f"(got joints {[result.joint_names[j] for j in result.joints]}, "
-            f"grid {result.grid_shape})"
+            f"grid {result.grid_shape})",
+            parameter="result",
+            value=result.grid_shape,
+            allowed="a grid scan over two joints",
         )
     square = bool(np.isfinite(result.det).any())
     measure = measure or ("det" if square else "manipulability")
     if measure not in _MEASURE_LABELS or (measure == "det" and not square):
+        allowed = [k for k in _MEASURE_LABELS if square or k != "det"]
         raise ParameterError(
-            f"measure={measure!r} is not allowed here; use one of "
-            f"{choices(k for k in _MEASURE_LABELS if square or k != 'det')}"
+            f"measure={measure!r} is not allowed here; use one of {choices(allowed)}",
+            parameter="measure",
+            value=measure,
+            allowed=allowed,
         )
     plt = pyplot()
     from matplotlib.colors import TwoSlopeNorm
@@ -112,25 +166,22 @@ def plot_singularity_map(
     qa = result.q[:, ja].reshape(result.grid_shape)
     qb = result.q[:, jb].reshape(result.grid_shape)
     val = np.asarray(getattr(result, measure), float).reshape(result.grid_shape)
-    deg_a = np.degrees(qa[:, 0])
-    deg_b = np.degrees(qb[0, :])
+    xa, label_a = joint_axis(result, ja, qa[:, 0])
+    xb, label_b = joint_axis(result, jb, qb[0, :])
     fig, ax = plt.subplots(figsize=(8.0, 6.4))
     unit = " [m]" if measure == "sigma_min" and set(result.rows) <= {"x", "y", "z"} else ""
     if measure == "det":
         lim = float(np.nanmax(np.abs(val))) or 1.0
         mesh = ax.pcolormesh(
-            deg_a, deg_b, val.T, cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim),
-            shading="nearest",
+            xa, xb, val.T, cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim), shading="nearest"
         )
     elif measure == "condition":
         with np.errstate(divide="ignore"):
             shown = np.log10(np.where(np.isfinite(val), val, np.nan))
         cap = np.nanpercentile(shown, 99) if np.isfinite(shown).any() else 1.0
-        mesh = ax.pcolormesh(
-            deg_a, deg_b, np.minimum(shown, cap).T, cmap="magma_r", shading="nearest"
-        )
+        mesh = ax.pcolormesh(xa, xb, np.minimum(shown, cap).T, cmap="magma_r", shading="nearest")
     else:
-        mesh = ax.pcolormesh(deg_a, deg_b, val.T, cmap="viridis", shading="nearest")
+        mesh = ax.pcolormesh(xa, xb, val.T, cmap="viridis", shading="nearest")
     cbar = fig.colorbar(mesh, ax=ax)
     cbar.set_label(_MEASURE_LABELS[measure] + unit)
     handles = []
@@ -145,49 +196,114 @@ def plot_singularity_map(
         if fam.joint is not None and fam.joint in (ja, jb) and fam.value is not None:
             lo, hi = (qa.min(), qa.max()) if fam.joint == ja else (qb.min(), qb.max())
             vals = [fam.value + k * 2 * np.pi for k in (-1, 0, 1)] if fam.periodic else [fam.value]
+            drawn = False
             for v in vals:
                 if lo - 1e-9 <= v <= hi + 1e-9:
+                    drawn = True
                     if fam.joint == ja:
-                        ax.axvline(np.degrees(v), color=colour, ls=style, lw=2.2)
+                        ax.axvline(
+                            float(joint_axis(result, ja, v)[0]), color=colour, ls=style, lw=2.2
+                        )
                     else:
-                        ax.axhline(np.degrees(v), color=colour, ls=style, lw=2.2)
+                        ax.axhline(
+                            float(joint_axis(result, jb, v)[0]), color=colour, ls=style, lw=2.2
+                        )
+            if not drawn:
+                continue
         elif fam.joint is None:
             qq = np.empty(ga.shape + (len(result.joint_names),))
             qq[:] = result.q_fixed
             qq[..., ja] = ga
             qq[..., jb] = gb
             res = result.family_residual(qq, f)
-            if np.nanmin(res) > 0 or np.nanmax(res) < 0:
+            if not (np.nanmin(res) <= 0 <= np.nanmax(res)):
                 continue
             ax.contour(
-                np.degrees(fine_a), np.degrees(fine_b), res.T, levels=[0.0],
-                colors=[colour], linestyles=[style], linewidths=2.2,
+                joint_axis(result, ja, fine_a)[0],
+                joint_axis(result, jb, fine_b)[0],
+                res.T,
+                levels=[0.0],
+                colors=[colour],
+                linestyles=[style],
+                linewidths=2.2,
             )
         else:
             continue
         handles.append(Line2D([], [], color=colour, ls=style, lw=2.2, label=fam.name))
     flagged = result.singular.reshape(result.grid_shape)
     if flagged.any() and not result.families:
-        ax.contourf(deg_a, deg_b, flagged.T.astype(float), levels=[0.5, 1.5], colors="none",
-                    hatches=["////"])
-        handles.append(Line2D([], [], color="black", lw=0, marker="s", mfc="none",
-                              label=f"sigma_min < {result.threshold:.3g}"))
-    if handles:
-        ax.legend(handles=handles, title="singular families", loc="upper right",
-                  fontsize=8, title_fontsize=9, framealpha=0.85)
-    name_a, name_b = result.joint_names[ja], result.joint_names[jb]
-    ax.set_xlabel(f"{name_a} (q{ja + 1}) [deg]")
-    ax.set_ylabel(f"{name_b} (q{jb + 1}) [deg]")
-    others = [
-        f"{result.joint_names[j]} = {np.degrees(result.q_fixed[j]):.0f} deg"
-        for j in range(len(result.joint_names)) if j not in (ja, jb)
-    ]
+        ax.contourf(
+            xa, xb, flagged.T.astype(float), levels=[0.5, 1.5], colors="none", hatches=["////"]
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="black",
+                lw=0,
+                marker="s",
+                mfc="none",
+                label=f"sigma_min < {result.threshold:.3g}",
+            )
+        )
+    if handles:  # below the axes: never over the data
+        ax.legend(
+            handles=handles,
+            title="singular families",
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.12),
+            ncol=min(len(handles), 2),
+            fontsize=8,
+            title_fontsize=9,
+            frameon=False,
+        )
+    ax.set_xlabel(label_a)
+    ax.set_ylabel(label_b)
+    others = []
+    for j in range(len(result.joint_names)):
+        if j in (ja, jb):
+            continue
+        if result.prismatic[j]:
+            others.append(f"{result.joint_names[j]} = {result.q_fixed[j]:.3g} m")
+        else:
+            others.append(f"{result.joint_names[j]} = {np.degrees(result.q_fixed[j]):.0f} deg")
     ax.set_title(
         title
         or f"{result.source}: {_MEASURE_LABELS[measure]} (rows {', '.join(result.rows)})"
         + (f"\n{'; '.join(others)}" if others else "")
     )
-    return save_figure(fig, path)
+    return fig
+
+
+def plot_singularity_map(
+    result: Any,
+    path: str | os.PathLike[str],
+    measure: str | None = None,
+    title: str | None = None,
+) -> Path:
+    """Heat map of a measure over two scanned joints, with the singular families drawn.
+
+    Revolute axes in degrees, prismatic axes in metres (millimetres under 0.1 m); the legend
+    sits below the axes (never over the data); flagged points are hatched when no family is
+    known.
+
+    Args:
+        result: A :class:`~hexapod_kin.singularity.ScanResult` of a *grid* scan over exactly
+            two joints.
+        path: Output path (``.png``, ``.jpg``, ``.svg`` or ``.pdf``; written atomically).
+        measure: ``"det"`` (default when J is square), ``"manipulability"`` (default
+            otherwise), ``"sigma_min"`` or ``"condition"``.
+        title: Figure title (default: source, measure and the fixed joints).
+
+    Returns:
+        The written path.
+
+    Raises:
+        ParameterError: Not a 2-joint grid scan, an unknown measure or file suffix.
+
+    """
+    figure_format(path)
+    return save_figure(singularity_map_figure(result, measure, title), path)
 
 
 def plot_workspace(
@@ -200,7 +316,7 @@ def plot_workspace(
     """Workspace cross-section: reachable tip points in a slab around a coordinate plane.
 
     Args:
-        ws: A :class:`~hexapod_kin.singularity.WorkspaceResult`.
+        ws: A :class:`~hexapod_kin.workspace.WorkspaceResult`.
         path: Output PNG path.
         plane: ``"xz"``, ``"yz"`` or ``"xy"``.
         singular_points: Optional (M, 3) tip positions of singular configurations to overlay.
@@ -212,7 +328,7 @@ def plot_workspace(
     """
     import numpy as np
 
-    from .singularity import cross_section
+    from .workspace import cross_section
 
     plt = pyplot()
     sec = cross_section(ws.points, plane)
@@ -226,18 +342,13 @@ def plot_workspace(
     ax.set_ylabel(f"{plane[1]} [m]")
     ax.legend(loc="upper right", markerscale=6)
     ax.set_title(
-        title or f"{ws.source}: workspace section ({plane} plane); "
-        f"volume ~ {ws.volume:.3g} m^3"
+        title or f"{ws.source}: workspace section ({plane} plane); volume ~ {ws.volume:.3g} m^3"
     )
     return save_figure(fig, path)
 
 
-
-
 # ---------------------------------------------------------------- motion pictures
-def plot_motion(
-    run: Any, path: str | os.PathLike[str], title: str | None = None
-) -> Path:
+def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None) -> Path:
     """The seeds' figures of a resolved-rate run, in one PNG (2×2 panels).
 
     Panels: foot position vs time (x, y, z); commanded vs actual foot velocity; joint angles
@@ -270,8 +381,9 @@ def plot_motion(
     ax = axes[0, 1]
     for k, name in enumerate("xyz"):
         (line,) = ax.plot(t, tr.foot_velocity[:, k], label=f"actual v{name}")
-        ax.plot(t, tr.command[:, k], "--", color=line.get_color(), alpha=0.8,
-                label=f"commanded v{name}")
+        ax.plot(
+            t, tr.command[:, k], "--", color=line.get_color(), alpha=0.8, label=f"commanded v{name}"
+        )
     ax.set_ylabel("foot velocity [m/s]")
     ax.set_title("commanded vs actual foot velocity")
     ax.legend(loc="best", fontsize=8, ncol=2)
@@ -292,8 +404,9 @@ def plot_motion(
     base_dev = getattr(run, "baseline_deviation", None)
     if base_dev is not None:
         ax.semilogy(t, np.maximum(base_dev[:, 2], floor), "k:", label="|z − z0| Euler + solve")
-        ax.semilogy(t, np.maximum(base_dev[:, 0], floor), "k--", lw=0.8,
-                    label="|x − x_ref| Euler + solve")
+        ax.semilogy(
+            t, np.maximum(base_dev[:, 0], floor), "k--", lw=0.8, label="|x − x_ref| Euler + solve"
+        )
     ax.set_ylabel("deviation from the reference path [m]")
     ax.set_xlabel("t [s]")
     ax.set_title("drift")
@@ -303,8 +416,10 @@ def plot_motion(
         title = f"resolved-rate run: {tr.method}, dt = {tr.dt:g} s, gain {tr.gain:g} 1/s"
         drift = getattr(run, "drift_z", None)
         if drift is not None:
-            title += (f" — drift y {run.drift_y:.1e} m, z {run.drift_z:.1e} m, "
-                      f"x error {run.error_x:.1e} m")
+            title += (
+                f" — drift y {run.drift_y:.1e} m, z {run.drift_z:.1e} m, "
+                f"x error {run.error_x:.1e} m"
+            )
     fig.suptitle(title)
     fig.tight_layout()
     return save_figure(fig, path)

@@ -214,7 +214,10 @@ def test_scan_errors(leg):
         measures_batch(leg, np.zeros((4, 2)))
 
 
-def test_cli_scan_json_and_plot(tmp_path, capsys):
+def test_cli_scan_json_and_plot(tmp_path, capsys, fresh_cache):
+    # families derived once through the API (kept on disk), then shown by the CLI
+    scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
+    scan(load("scara"), samples=10, families=True)
     png = tmp_path / "map.png"
     assert main(["scan", "hexabot_leg", "--grid", "25", "--json", "--plot", str(png)]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -244,3 +247,212 @@ def test_default_heat_map_joints_move_the_tip():
     jac = model.position_jacobian(q)
     assert np.linalg.norm(jac[:, a]) > 1e-6 and np.linalg.norm(jac[:, b]) > 1e-6
     assert {model.joint_names[a], model.joint_names[b]} <= {"leg1_hip", "leg1_knee", "leg1_ankle"}
+
+
+# ------------------------------------------------------------------ families, defaults, plots
+def test_import_singularity_loads_neither_sympy_nor_numba():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, hexapod_kin.singularity as s; s.ROW_NAMES; "
+        "print('sympy' in sys.modules, 'numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "False"]
+
+
+@pytest.fixture
+def fresh_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    return tmp_path
+
+
+def test_families_only_when_asked_then_from_disk_without_sympy(fresh_cache):
+    import subprocess
+    import sys
+
+    from hexapod_kin.singularity import families_for
+
+    res = scan(load("hexabot_leg"), grid=9, joints=("knee", "ankle"))
+    assert res.families == () and "not derived" in res.family_reason
+    assert (res.family == -1).all() and res.unexplained.sum() == res.singular.sum()
+    res = scan(load("hexabot_leg"), grid=9, joints=("knee", "ankle"), families=True)
+    assert len(res.families) == 3 and res.family_reason == ""
+    fams = families_for(load("hexabot_leg"), res.rows)  # a fresh model: from the disk
+    assert fams.origin == "cache" and [f.name for f in fams.families] == [
+        f.name for f in res.families
+    ]
+    code = (
+        "import sys; from hexapod_kin import load; from hexapod_kin.singularity import scan; "
+        "r = scan(load('hexabot_leg'), grid=9, joints=('knee', 'ankle')); "
+        "print(len(r.families), 'sympy' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["3", "False"]
+
+
+def test_derivation_failures_are_recorded_and_bugs_propagate(fresh_cache, monkeypatch):
+    from hexapod_kin import symbolic
+
+    def refuse(chain, rows=None, budget=None):
+        raise ParameterError("no table for you")
+
+    monkeypatch.setattr(symbolic, "derive", refuse)
+    res = scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
+    assert res.families == () and "no table for you" in res.family_reason
+
+    def bug(chain, rows=None, budget=None):
+        raise KeyError("a bug")
+
+    monkeypatch.setattr(symbolic, "derive", bug)
+    with pytest.raises(KeyError):
+        scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
+
+
+def test_derivation_without_budget_support_stops_waiting(fresh_cache, monkeypatch):
+    import threading
+
+    from hexapod_kin import symbolic
+
+    release = threading.Event()
+
+    def slow(chain, rows=None):  # no budget parameter: scan waits at most family_budget
+        release.wait(30)
+        raise ParameterError("released")
+
+    monkeypatch.setattr(symbolic, "derive", slow)
+    try:
+        res = scan(
+            load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True, family_budget=0.2
+        )
+    finally:
+        release.set()
+    assert res.families == () and "budget" in res.family_reason
+
+
+def test_family_text_is_evaluated_by_a_whitelist():
+    from hexapod_kin.singularity import Family
+
+    evil = Family("x", "x", (0,), None, None, False, "__import__('os').getcwd()", ("1",), nq=3)
+    with pytest.raises(ParameterError, match="not allowed"):
+        evil.residual(np.zeros(3))
+    ok = Family("f", "f", (1,), None, None, False, "0.05 + 0.1*cos(q2)", ("-0.1*sin(q2)",), nq=3)
+    assert ok.residual(np.array([0.0, math.pi, 0.0])) == pytest.approx(-0.05)
+
+
+def test_family_distance_against_brute_force(fresh_cache):
+    # hexabot leg (l1 = 0.05, l2 = l3 = 0.1): the hip-axis family l1 + l2 c2 + l3 c23 = 0;
+    # the curve sampled densely from its closed form, the distance taken by brute force
+    res = scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
+    fam = next(f for f in res.families if f.joint is None)
+    q2 = np.linspace(-math.pi, math.pi, 400_001)
+    c = -(0.05 + 0.1 * np.cos(q2)) / 0.1
+    ok = np.abs(c) <= 1
+    curve = []
+    for sgn in (1, -1):
+        q3 = sgn * np.arccos(c[ok]) - q2[ok]
+        for k in (-1, 0, 1):
+            curve.append(np.column_stack([q2[ok], q3 + 2 * math.pi * k]))
+    curve = np.concatenate(curve)
+    rng = np.random.default_rng(3)
+    on = curve[rng.choice(len(curve), 20)]
+    pts = on + rng.normal(scale=0.05, size=on.shape)
+    q = np.column_stack([np.zeros(len(pts)), pts])
+    got = fam.distance(q)
+    ref = np.array([np.min(np.linalg.norm(curve - p, axis=1)) for p in pts])
+    assert np.allclose(got, ref, rtol=2e-2, atol=1e-4)
+    assert np.abs(fam.residual(np.column_stack([np.zeros(20), on]))).max() < 1e-6
+
+
+def test_every_flagged_sample_labelled_with_a_distance(fresh_cache, leg):
+    res = scan(leg, samples=20_000, seed=4, families=True)
+    flagged = res.singular
+    assert flagged.any() and (res.family[flagged] >= 0).all()
+    assert np.isfinite(res.family_distance[flagged]).all()
+    assert np.isnan(res.family_distance[~flagged]).all()
+    # labels agree with the family equations: the residual of the labelled family is smallest
+    dists = np.stack([f.distance(res.q[flagged]) for f in res.families], axis=1)
+    assert np.array_equal(np.argmin(dists, axis=1), res.family[flagged])
+    assert sum(res.family_counts.values()) + res.unexplained.sum() == flagged.sum()
+
+
+def _puma():
+    from hexapod_kin.params import Chain, DHRow
+
+    pi = math.pi
+    dh = [(0, 0, 0, pi / 2), (0, 0, 0.4318, 0), (0, 0.15005, 0.0203, -pi / 2),
+          (0, 0.4318, 0, pi / 2), (0, 0, 0, -pi / 2), (0, 0, 0, 0)]  # fmt: skip
+    return load(Chain.from_dh([DHRow(*row) for row in dh], name="puma560"))
+
+
+def test_default_fixed_joints_avoid_singular_values():
+    # PUMA 560, all six rows: q5 = 0 (wrist) is singular for every q2, q3 — the old default
+    puma = _puma()
+    zero = scan(puma, grid=15, joints=(1, 2), rows="all", q_fixed=np.zeros(6))
+    assert zero.singular.all()
+    res = scan(puma, grid=15, joints=(1, 2), rows="all")
+    assert res.singular.mean() < 0.3
+    q5 = res.q_fixed[4]
+    assert min(abs(math.sin(q5)), abs(q5)) > 0.1  # away from the wrist family sin q5 = 0
+    assert not np.allclose(res.q_fixed, 0.0)
+
+
+def test_default_joints_are_those_that_change_sigma_min():
+    from hexapod_kin.singularity import default_joints
+
+    assert default_joints(load("hexabot_leg")) == (1, 2)  # the hip yaw only rotates J
+    panda = load("erd:panda")
+    chosen = default_joints(panda)
+    # joint 7 turns the flange about the TCP's own axis and the fingers do not move it:
+    # neither changes the position Jacobian's sigma_min
+    jac = panda.position_jacobian(panda.random_q(seed=2))
+    assert np.abs(jac[:, 6]).max() < 1e-12
+    assert not set(chosen) & {6, 7, 8}
+
+
+def test_scan_refuses_huge_grids_and_bad_options(leg):
+    with pytest.raises(ParameterError, match="at most"):
+        scan(leg, grid=10**9)
+    with pytest.raises(ParameterError, match="families"):
+        scan(leg, grid=5, families="sometimes")
+    with pytest.raises(ParameterError, match="samples"):
+        scan(leg, samples=0)
+
+
+def test_measures_batch_is_a_frozen_dataclass(leg):
+    from dataclasses import FrozenInstanceError
+
+    res = measures_batch(leg, leg.random_q(4, seed=1))
+    with pytest.raises(FrozenInstanceError):
+        res.det = None
+    d = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert d["rows"] == ["x", "y", "z"] and len(d["sigma_min"]) == 4
+    m = measures(leg, np.zeros(3))  # stretched leg: singular, condition inf -> null
+    assert json.loads(json.dumps(m.to_dict(), allow_nan=False))["condition"] is None
+
+
+def test_heat_map_units_and_legend_outside(tmp_path, scara, fresh_cache):
+    from hexapod_kin.plots import singularity_map_figure
+
+    res = scan(scara, grid=(31, 11), joints=("theta2", "q4"), families=True)
+    fig = singularity_map_figure(res)
+    ax = fig.axes[0]
+    assert ax.get_xlabel().endswith("[deg]") and ax.get_ylabel().endswith("[m]")
+    x0, x1 = ax.get_xlim()
+    assert x1 - x0 == pytest.approx(360, rel=0.1)  # degrees
+    y0, y1 = ax.get_ylim()
+    assert y1 - y0 == pytest.approx(0.2, rel=0.2)  # 0..0.2 m, in metres (not as radians)
+    fig.canvas.draw()
+    legend = ax.get_legend()
+    assert legend is not None
+    box, axes_box = legend.get_window_extent(), ax.get_window_extent()
+    assert box.y1 <= axes_box.y0 + 1e-6  # below the axes, over no data
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    from hexapod_kin.plots import plot_singularity_map
+
+    assert plot_singularity_map(res, tmp_path / "m.svg").read_text().lstrip().startswith("<?xml")
+    with pytest.raises(ParameterError, match="suffix"):
+        plot_singularity_map(res, tmp_path / "m.bmp")
