@@ -46,12 +46,24 @@ Checks, in order (the first failure is raised):
    from it through fixed joints, and at least one of them must carry mass (a massless body
    makes the joint-space inertia matrix singular).
 7. **Files** (``<mesh filename>``, ``<texture filename>``): always checked when present (the
-   kinematics never read meshes, but geometry and the viewer do, so the rule is the same
-   everywhere): ``package://pkg/path`` resolves against ``package_dirs`` (as Pinocchio does:
-   ``<dir>/pkg/path``), a relative path against ``mesh_root`` (the URDF's directory);
-   ``file://``, other URI schemes and absolute paths are refused; the resolved real path
-   (symlinks followed) must stay inside the root it was resolved against; it must be an
-   existing regular file of at most :data:`MAX_MESH_BYTES` bytes.
+   kinematics never read meshes, but geometry and the viewer do): ``package://pkg/path``
+   resolves against ``package_dirs`` (as Pinocchio does: ``<dir>/pkg/path``), a relative
+   path against ``mesh_root`` (the URDF's directory); ``file://``, other URI schemes and
+   absolute paths are refused; the resolved real path (symlinks followed) must stay inside
+   the root it was resolved against; it must be an existing regular file of at most
+   :data:`MAX_MESH_BYTES` bytes.
+
+**Lenient mode** (``check_urdf(..., lenient=True)``, what :class:`~hexapod_kin.model.Model`
+uses for kinematics): a mesh that cannot be *found* (missing file, unknown package, relative
+path of URDF text) and the physical plausibility of inertials (rule 6 beyond ``mass >= 0`` and
+the six finite entries) are recorded in the result (``missing_meshes``, ``inertia_defects``)
+instead of raised; the loader warns and drops those visuals, dynamics refuses the inertials.
+Refused mesh URIs (schemes, absolute paths, escapes, non-regular or huge files) and every
+other rule stay errors in both modes.
+
+This module is longer than the package's ~600-line habit on purpose: it is one job (decide
+whether a URDF may reach Pinocchio) whose rules refer to each other (numbers before masses,
+structure before both), and splitting it would scatter that single decision.
 """
 
 from __future__ import annotations
