@@ -61,6 +61,12 @@ def chain_of(
 
         if source in robots.names():
             return chain_of(robots.get(source), base, tip)
+        if source.lower().endswith((".toml", ".yaml", ".yml")):  # a table file: its own table
+            from .sources import resolve_source
+
+            params = resolve_source(source).params
+            if isinstance(params, (Chain, Hexapod)):
+                return chain_of(params, base, tip)
         return _from_urdf(source, base, tip)
     params = getattr(source, "params", None)
     m_base, m_tip = getattr(source, "base", None), getattr(source, "tip", None)

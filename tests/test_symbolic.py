@@ -340,3 +340,19 @@ def test_cached_never_derives(tmp_path, monkeypatch):
     again = cached("coxa_tibia_leg")
     assert again is not None and again.cached and sp.simplify(again.gram - d.gram) == 0
     assert family_residuals("coxa_tibia_leg", derive_missing=False) is not None
+
+
+def test_table_file_keeps_its_own_table():
+    from pathlib import Path
+
+    from hexapod_kin.sources import resolve_source
+
+    path = str(Path(__file__).resolve().parent.parent / "examples" / "leg4.toml")
+    d = derive(path)
+    assert d.chain == resolve_source(path).params
+    model = load(path)
+    qs = model.random_q(20, seed=13)
+    gram = d.function(d.gram)(qs)
+    for i, q in enumerate(qs):
+        jac = model.jacobian(q)[:3]
+        assert abs(gram[i] - np.linalg.det(jac @ jac.T)) < 1e-12
