@@ -56,7 +56,8 @@ def _rate(
     tip_rot: np.ndarray,
     q: np.ndarray,
     v: np.ndarray,
-    ref: np.ndarray,
+    ref_p: np.ndarray,
+    ref_r: np.ndarray,
     rows6: bool,
     tip_frame: bool,
     gain: float,
@@ -83,9 +84,7 @@ def _rate(
     """The control law q̇(q, t) into ``out_qd``; returns (σ_min, σ_max, λ², limited)."""
     n = q.shape[0]
     fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, True)
-    m = 3
     if rows6:
-        m = 6
         tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
         if tip_frame:
             for a in range(3):
@@ -97,7 +96,7 @@ def _rate(
         if gain != 0.0:
             for a in range(3):
                 for b in range(3):
-                    w3[a, b] = ref[a, 0] * r[b, 0] + ref[a, 1] * r[b, 1] + ref[a, 2] * r[b, 2]
+                    w3[a, b] = ref_r[a, 0] * r[b, 0] + ref_r[a, 1] * r[b, 1] + ref_r[a, 2] * r[b, 2]
             log3_into(w3, ew)
             for a in range(3):
                 xd[3 + a] += gain * ew[a]
@@ -105,9 +104,9 @@ def _rate(
     else:
         for a in range(3):
             xd[a] = v[a]
-        smin, smax = sigma_bounds(jac[:3])
+        smin, smax = sigma_bounds(jac)
     for a in range(3):
-        xd[a] += gain * (ref[a, 3] - p[a])
+        xd[a] += gain * (ref_p[a] - p[a])
     lam2 = 0.0
     if smin < eps:
         ratio = smin / eps
@@ -117,7 +116,7 @@ def _rate(
     for i in range(n):
         free[i] = True
     for _pass in range(2):
-        ok = dls_into(jac[:m], xd[:m], max(lam2, floor), free, out_qd, work, rhs, sol)
+        ok = dls_into(jac, xd, max(lam2, floor), free, out_qd, work, rhs, sol)
         if not ok:
             for i in range(n):
                 out_qd[i] = 0.0
@@ -154,7 +153,8 @@ def rr_kernel(
     tip_rot: np.ndarray,
     q0: np.ndarray,
     vel: np.ndarray,
-    ref: np.ndarray,
+    ref_p: np.ndarray,
+    ref_r: np.ndarray,
     dt: float,
     rk4: bool,
     rows6: bool,
@@ -176,9 +176,10 @@ def rr_kernel(
 ) -> None:  # pragma: no cover - compiled
     """Integrate the control law from ``q0`` (Euler or RK4).
 
-    ``vel`` (2K+1, 6) / ``ref`` (2K+1, 4, 4) are sampled at half steps (index 2k = t_k,
-    2k+1 = t_k + dt/2). Outputs per sample: q, q̇, tip pose (4, 4), tip velocity ``J q̇``
-    (6, LWA), (σ_min, σ_max), λ², limited.
+    ``vel`` (2K+1, 3 or 6), ``ref_p`` (2K+1, 3) and ``ref_r`` (2K+1, 3, 3) — (1, 3, 3), unused,
+    for a 3-row task — are sampled at half steps (index 2k = t_k, 2k+1 = t_k + dt/2).
+    Outputs per sample: q, q̇, tip pose (4, 4), tip velocity ``J q̇`` (6, LWA),
+    (σ_min, σ_max), λ², limited.
     """
     n = q0.shape[0]
     steps = out_q.shape[0] - 1
@@ -186,12 +187,14 @@ def rr_kernel(
     p = np.empty(3)
     r = np.empty((3, 3))
     jac = np.empty((6, n))
+    jac3 = np.empty((3, n))  # a 3-row task needs no angular rows
+    jst = jac if rows6 else jac3
     free = np.empty(n, dtype=np.bool_)
     mm = max(n, 6)
     work = np.empty((mm, mm))
     rhs = np.empty(mm)
     sol = np.empty(mm)
-    xd = np.empty(6)
+    xd = np.empty(6 if rows6 else 3)  # one row per task row; jac (jst) has as many
     w3 = np.empty((3, 3))
     ew = np.empty(3)
     ev = np.empty(mm)
@@ -203,6 +206,9 @@ def rr_kernel(
     qs = np.empty(n)
     for k in range(steps + 1):
         h = 2 * k
+        hr0 = h if rows6 else 0  # a 3-row task passes one unused rotation
+        hr1 = h + 1 if rows6 else 0
+        hr2 = h + 2 if rows6 else 0
         smin, smax, lam2, lim = _rate(
             rot,
             trans,
@@ -212,7 +218,8 @@ def rr_kernel(
             tip_rot,
             q,
             vel[h],
-            ref[h],
+            ref_p[h],
+            ref_r[hr0],
             rows6,
             tip_frame,
             gain,
@@ -225,7 +232,7 @@ def rr_kernel(
             k1,
             p,
             r,
-            jac,
+            jst,
             scratch,
             free,
             work,
@@ -247,11 +254,24 @@ def rr_kernel(
             out_pose[k, a, 3] = p[a]
             out_pose[k, 3, a] = 0.0
         out_pose[k, 3, 3] = 1.0
-        for a in range(6):
+        for a in range(3):
             s = 0.0
             for i in range(n):
-                s += jac[a, i] * k1[i]
+                s += jst[a, i] * k1[i]
             out_twist[k, a] = s
+        if rows6:
+            for a in range(3, 6):
+                s = 0.0
+                for i in range(n):
+                    s += jac[a, i] * k1[i]
+                out_twist[k, a] = s
+        else:  # ω = Σ axis_j q̇_j over the revolute joints (the axes fk_jac_into left in scratch)
+            for a in range(3):
+                s = 0.0
+                for j in range(kind.shape[0]):
+                    if kind[j] == 0:
+                        s += scratch[3 + a, j] * k1[col[j]]
+                out_twist[k, 3 + a] = s
         out_s[k, 0] = smin
         out_s[k, 1] = smax
         out_lam[k] = lam2
@@ -270,7 +290,8 @@ def rr_kernel(
                 tip_rot,
                 qs,
                 vel[h + 1],
-                ref[h + 1],
+                ref_p[h + 1],
+                ref_r[hr1],
                 rows6,
                 tip_frame,
                 gain,
@@ -283,7 +304,7 @@ def rr_kernel(
                 k2,
                 p,
                 r,
-                jac,
+                jst,
                 scratch,
                 free,
                 work,
@@ -305,7 +326,8 @@ def rr_kernel(
                 tip_rot,
                 qs,
                 vel[h + 1],
-                ref[h + 1],
+                ref_p[h + 1],
+                ref_r[hr1],
                 rows6,
                 tip_frame,
                 gain,
@@ -318,7 +340,7 @@ def rr_kernel(
                 k3,
                 p,
                 r,
-                jac,
+                jst,
                 scratch,
                 free,
                 work,
@@ -340,7 +362,8 @@ def rr_kernel(
                 tip_rot,
                 qs,
                 vel[h + 2],
-                ref[h + 2],
+                ref_p[h + 2],
+                ref_r[hr2],
                 rows6,
                 tip_frame,
                 gain,
@@ -353,7 +376,7 @@ def rr_kernel(
                 k4,
                 p,
                 r,
-                jac,
+                jst,
                 scratch,
                 free,
                 work,

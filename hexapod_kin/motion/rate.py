@@ -421,22 +421,20 @@ def resolved_rate(
     what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
     vel = _sample(velocity, times_half, width, "velocity", what)
     pose0 = np.array(mdl.fk(start))
-    ref = np.zeros((times_half.size, 4, 4))
+    ref_r = np.empty((1, 3, 3))
     if rows6:
         if path is not None:
-            ref[:] = _sample_poses(path, times_half)
+            ref = _sample_poses(path, times_half)
         elif not callable(velocity):
-            ref[:] = constant_twist_pose(pose0, vel[0], times_half, frame)
+            ref = constant_twist_pose(pose0, vel[0], times_half, frame)
         else:
-            ref[:] = _integrate_pose(pose0, vel, dt, frame)
+            ref = _integrate_pose(pose0, vel, dt, frame)
+        ref_p = np.ascontiguousarray(ref[:, :3, 3])
+        ref_r = np.ascontiguousarray(ref[:, :3, :3])
+    elif path is None:
+        ref_p = _integrate_position(pose0[:3, 3], vel, dt)
     else:
-        ref[:, :3, :3] = np.eye(3)
-        ref[:, 3, 3] = 1.0
-        if path is None:
-            ref[:, :3, 3] = _integrate_position(pose0[:3, 3], vel, dt)
-        else:
-            ref[:, :3, 3] = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
-    vel6 = vel if rows6 else np.hstack([vel, np.zeros((vel.shape[0], 3))])
+        ref_p = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
     jac0 = mdl.jacobian(start)
     sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
     eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)
@@ -464,8 +462,9 @@ def resolved_rate(
         *prep.packed,
         prep.tip_rot,
         start,
-        vel6,
-        ref,
+        vel,
+        ref_p,
+        ref_r,
         dt,
         method == "rk4",
         rows6,
@@ -495,13 +494,13 @@ def resolved_rate(
         "rotation": np.ascontiguousarray(out_pose[:, :3, :3]),
         "angular_velocity": np.ascontiguousarray(out_tw[:, 3:]),
         "command": np.ascontiguousarray(vel[::2]),
-        "reference": np.ascontiguousarray(ref[::2, :3, 3]),
+        "reference": np.ascontiguousarray(ref_p[::2]),
         "sigma_min": np.ascontiguousarray(out_s[:, 0]),
         "sigma_max": np.ascontiguousarray(out_s[:, 1]),
         "damping": out_lam,
         "limited": out_lim,
     }
-    ref_rot = np.ascontiguousarray(ref[::2, :3, :3]) if rows6 else None
+    ref_rot = np.ascontiguousarray(ref_r[::2]) if rows6 else None
     read_only(*arrays.values(), *(() if ref_rot is None else (ref_rot,)))
     return Trajectory(
         **arrays,
