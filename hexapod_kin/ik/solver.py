@@ -337,10 +337,14 @@ def solve(
     """
     mdl = model if model.__class__ is KinematicModel else as_model(model)
     task = build_task(target, mask=mask, weights=weights)
-    tol = tol if tol.__class__ is float and 0.0 < tol < math.inf else _positive("tol", tol)
-    rot_tol = _positive("rot_tol", rot_tol) if rot_tol != 1e-10 else rot_tol
-    max_iter = _count("max_iter", max_iter, 1)
-    restarts = _count("restarts", restarts, 0)
+    if not (tol.__class__ is float and 0.0 < tol < math.inf):
+        tol = _positive("tol", tol)
+    if not (rot_tol.__class__ is float and 0.0 < rot_tol < math.inf):
+        rot_tol = _positive("rot_tol", rot_tol)
+    if not (max_iter.__class__ is int and max_iter >= 1):
+        max_iter = _count("max_iter", max_iter, 1)
+    if not (restarts.__class__ is int and restarts >= 0):
+        restarts = _count("restarts", restarts, 0)
     if restarts > _N_STARTS:
         raise ParameterError(
             f"restarts={restarts} is not allowed; at most {_N_STARTS}",
@@ -348,7 +352,16 @@ def solve(
             value=restarts,
             allowed=f"0..{_N_STARTS}",
         )
-    gain = _positive("posture_gain", posture_gain)
+    gain = posture_gain
+    if not (gain.__class__ is float and 0.0 < gain <= 1.0):
+        gain = _positive("posture_gain", posture_gain)
+        if gain > 1.0:
+            raise ParameterError(
+                f"posture_gain={posture_gain!r} is not allowed; 0 < gain <= 1",
+                parameter="posture_gain",
+                value=posture_gain,
+                allowed="(0, 1]",
+            )
     prep = prepared(mdl)
     target_posture, use_posture = _posture(mdl, prep, posture)
     qs = prep.home if q0 is None else mdl.check_q(q0, "q0")
