@@ -456,3 +456,19 @@ def test_heat_map_units_and_legend_outside(tmp_path, scara, fresh_cache):
     assert plot_singularity_map(res, tmp_path / "m.svg").read_text().lstrip().startswith("<?xml")
     with pytest.raises(ParameterError, match="suffix"):
         plot_singularity_map(res, tmp_path / "m.bmp")
+
+
+@pytest.mark.parametrize(("source", "tip"), [("hexapod", "leg3_foot"), ("erd:solo12", "FL_FOOT")])
+def test_urdf_and_mounted_legs_get_families_from_their_recovered_table(source, tip, fresh_cache):
+    # no Khalil table of their own: Chain.from_urdf recovers one (the mount as base pose)
+    model = load(source, tip=tip)
+    res = scan(model, samples=30_000, seed=2, families=True)
+    assert len(res.families) >= 3, res.family_reason
+    assert res.singular.any() and not res.unexplained.any()
+    # an independent check of the labels: the q3 families are where the knee is stretched or
+    # folded, i.e. the foot-to-hip-pitch distance is extremal
+    q3 = [f for f, fam in enumerate(res.families) if fam.joint == 2]
+    on = np.isin(res.family, q3) & res.explained
+    assert on.any()
+    wrapped = np.abs(np.angle(np.exp(1j * res.q[on, 2])))
+    assert np.all(np.minimum(wrapped, np.pi - wrapped) < 0.7)

@@ -219,14 +219,27 @@ class Families:
     reason: str
     key: str = ""
 
-    def nearest(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Index of the nearest family (M,) and the distance to it (M,) for ``q`` (M, nq)."""
-        if not self.families or q.shape[0] == 0:
-            return np.full(q.shape[0], -1, dtype=np.int64), np.full(q.shape[0], np.inf)
+    def nearest(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The nearest and second-nearest families of ``q`` (M, nq) and the distances to them.
+
+        Returns:
+            ``(index, distance, second_index, second_distance)``, each (M,); −1 / inf where
+            there is no (second) family.
+
+        """
+        m = q.shape[0]
+        none = np.full(m, -1, dtype=np.int64), np.full(m, np.inf)
+        if not self.families or m == 0:
+            return none[0], none[1], none[0].copy(), none[1].copy()
         dist = np.stack([fam.distance(q) for fam in self.families], axis=1)
         dist = np.where(np.isnan(dist), np.inf, dist)
-        best = np.argmin(dist, axis=1).astype(np.int64)
-        return best, dist[np.arange(q.shape[0]), best]
+        order = np.argsort(dist, axis=1, kind="stable")
+        rows = np.arange(m)
+        best = order[:, 0].astype(np.int64)
+        if dist.shape[1] < 2:
+            return best, dist[rows, best], none[0].copy(), none[1].copy()
+        second = order[:, 1].astype(np.int64)
+        return best, dist[rows, best], second, dist[rows, second]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""

@@ -62,10 +62,17 @@ class ScanResult:
             configuration, −1 where not flagged or when no family is known.
         family_distance: (N,) joint-space distance in [rad]/[m] from each flagged
             configuration to that family (NaN where not flagged or no family).
+        second_family: (N,) the second-nearest family of each flagged configuration (−1 where
+            none): near the meeting of two families both are named.
+        second_distance: (N,) the distance to it in [rad]/[m] (NaN where none).
         families: The singular families (:class:`~.families.Family`; empty when not derived,
             see :attr:`family_reason`).
         family_reason: Why :attr:`families` is empty ("" when it is not).
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
+        family_tols: Per family, the tolerance actually used: ``family_tol``, widened to
+            ``1.5 × threshold / s`` where the family's measured lever arm ``s`` (first quartile of
+            ``σmin / distance`` over its flagged samples within ``family_tol``) is small —
+            flagged points then lie farther from it (at most ``4 × family_tol``).
         joint_names: Names of the n joints.
         prismatic: (n,) True for prismatic joints (values in [m]), False for revolute ([rad]).
         joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
@@ -85,9 +92,12 @@ class ScanResult:
     singular: np.ndarray
     family: np.ndarray
     family_distance: np.ndarray
+    second_family: np.ndarray
+    second_distance: np.ndarray
     families: tuple[Family, ...]
     family_reason: str
     family_tol: float
+    family_tols: tuple[float, ...]
     joint_names: tuple[str, ...]
     prismatic: tuple[bool, ...]
     joints: tuple[int, ...]
@@ -98,17 +108,29 @@ class ScanResult:
     source: str
 
     @property
-    def unexplained(self) -> np.ndarray:
-        """(N,) flagged configurations farther than :attr:`family_tol` from every family."""
+    def explained(self) -> np.ndarray:
+        """(N,) flagged configurations on a known family.
+
+        Within :attr:`family_tols` of the nearest family, or within twice that of two families (near their meeting ``σmin`` falls faster than along either alone, so flagged
+        points reach farther out).
+        """
+        tols = np.asarray((*self.family_tols, np.nan))[self.family]  # -1: NaN (no family)
+        tols2 = np.asarray((*self.family_tols, np.nan))[self.second_family]
         with np.errstate(invalid="ignore"):
-            far = ~(self.family_distance <= self.family_tol)
-        return np.asarray(self.singular & far)
+            near = self.family_distance <= tols
+            meet = (self.family_distance <= 2.0 * tols) & (self.second_distance <= 2.0 * tols2)
+        return np.asarray(self.singular & (near | meet))
+
+    @property
+    def unexplained(self) -> np.ndarray:
+        """(N,) flagged configurations on no known family (see :attr:`explained`)."""
+        return np.asarray(self.singular & ~self.explained)
 
     @property
     def family_counts(self) -> FamilyCounts:
-        """Flagged configurations explained by each family (within tol), by family name."""
+        """Explained flagged configurations per nearest family, by family name."""
         with np.errstate(invalid="ignore"):
-            near = self.family_distance <= self.family_tol
+            near = self.explained
         return FamilyCounts(
             {
                 fam.name: int(np.count_nonzero(near & (self.family == f)))
@@ -180,7 +202,10 @@ class ScanResult:
             "singular": self.singular.tolist(),
             "family": self.family.tolist(),
             "family_distance": _clean(self.family_distance),
+            "second_family": self.second_family.tolist(),
+            "second_distance": _clean(self.second_distance),
             "family_tol": self.family_tol,
+            "family_tols": list(self.family_tols),
             "family_reason": self.family_reason,
             "families": [
                 {**fam.to_dict(self.joint_names), "count": counts[fam.name]}
@@ -509,15 +534,19 @@ def scan(
     singular = smin < thr
     family = np.full(n, -1, dtype=np.int64)
     distance = np.full(n, np.nan)
+    second = np.full(n, -1, dtype=np.int64)
+    distance2 = np.full(n, np.nan)
     if families is False:
         fams = Families((), "none", "families=False")
     else:
         fams = families_for(mdl, names, derive=families is True, budget=family_budget)
     idx = np.flatnonzero(singular)
     if fams.families and idx.size:
-        best, dist = fams.nearest(q[idx])
+        best, dist, nxt, dist2 = fams.nearest(q[idx])
         family[idx] = best
         distance[idx] = dist
+        second[idx] = nxt
+        distance2[idx] = np.where(nxt >= 0, dist2, np.nan)
     tol = 15.0 * rtol if family_tol is None else float(family_tol)
     if not tol >= 0:
         raise ConfigurationError(
@@ -526,6 +555,11 @@ def scan(
             value=family_tol,
             allowed=">= 0",
         )
+    tols = []
+    for f in range(len(fams.families)):
+        mine = (family == f) & (distance > 0) & (distance <= tol)
+        lever = float(np.quantile(smin[mine] / distance[mine], 0.25)) if mine.sum() >= 8 else np.inf
+        tols.append(min(max(tol, 1.5 * thr / lever), 4.0 * tol) if lever > 0 else 4.0 * tol)
     return ScanResult(
         q=_ro(q),
         det=_ro(det),
@@ -535,9 +569,12 @@ def scan(
         singular=_ro(singular),
         family=_ro(family),
         family_distance=_ro(distance),
+        second_family=_ro(second),
+        second_distance=_ro(distance2),
         families=fams.families,
         family_reason=fams.reason,
         family_tol=tol,
+        family_tols=tuple(tols),
         joint_names=tuple(mdl.joint_names),
         prismatic=tuple(bool(p) for p in mdl.is_prismatic),
         joints=jidx,
