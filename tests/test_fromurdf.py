@@ -135,6 +135,22 @@ def test_synthetic_chains_any_axes(joints):
     assert not any(r.sigma == "fixed" for r in chain.rows)
 
 
+@pytest.mark.parametrize(
+    "source,base,tip",
+    [
+        ("erd:solo12", "FL_SHOULDER", "FL_FOOT"),
+        ("erd:ur5_robot", "shoulder_link", "wrist_2_link"),
+        ("erd:ur5_robot", "upper_arm_link", "tool0"),
+    ],
+)
+def test_sub_chains_between_named_frames(source, base, tip):
+    chain = Chain.from_urdf(source, base=base, tip=tip)
+    model = hk.load(source, base=base, tip=tip)
+    assert chain.base == base and chain.tip == tip and chain.nq == model.nq
+    assert _fk_error(chain, model) < 1e-12
+    assert _jac_error(chain, model) < 1e-12
+
+
 def test_recovered_chain_exports_and_reloads_equal():
     chain = Chain.from_urdf("erd:ur5_robot")
     again = hk.load(chain)
