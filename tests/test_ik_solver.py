@@ -281,8 +281,14 @@ def test_redundant_chain_posture_in_the_null_space(arms):
 def test_solve_many_poses_and_home(arms):
     model = arms["ur5"]
     qs = model.random_q(5, seed=2)
-    res = ik.solve_many(model, np.array([model.fk(q) for q in qs]))
-    assert all(r.converged for r in res)
+    poses = np.array([model.fk(q) for q in qs])
+    res = ik.solve_many(model, poses, mask=[1, 1, 1, 1, 1, 0])
+    for r, pose in zip(res, poses):  # the same answers as one by one
+        one = ik.solve(model, pose, mask=[1, 1, 1, 1, 1, 0])
+        np.testing.assert_array_equal(r.q, one.q)
+        assert r.status == one.status == "converged"
+    with pytest.raises(ConfigurationError):
+        ik.solve_many(model, poses, q0=np.zeros((4, 6)))
     home = ik.home(model)
     assert np.all(home >= model.lower) and np.all(home <= model.upper)
     # the home pose is the most dexterous candidate: far from the position singularities

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, Union
 
@@ -35,6 +34,7 @@ from .step import (
     I_MAX_ITER,
     P_ROT_TOL,
     P_TOL,
+    P_YAW,
     lm_loop,
     pose_errors,
     task_cost,
@@ -337,6 +337,48 @@ def solve(
     """
     mdl = model if model.__class__ is KinematicModel else as_model(model)
     task = build_task(target, mask=mask, weights=weights)
+    opts = _options(
+        mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code
+    )
+    prep, par, ipar, target_posture, restarts = opts
+    par[P_YAW] = task.yaw
+    qs = prep.home if q0 is None else mdl.check_q(q0, "q0")
+    starts = np.empty((1 + restarts, mdl.nq))
+    starts[0] = qs
+    starts[1:] = prep.starts[:restarts]
+    q = np.empty(mdl.nq)
+    hist = np.empty(int(ipar[I_MAX_ITER]) + 1)
+    jac = np.empty((6, mdl.nq))
+    attempts, it, code = lm_loop(
+        *prep.packed,
+        prep.tip_rot,
+        task.pose,
+        task.weights,
+        par,
+        ipar,
+        starts,
+        prep.lim,
+        prep.cont,
+        target_posture,
+        q,
+        hist,
+        jac,
+    )
+    return _report(mdl, prep, task, q, hist[: it + 1], jac, attempts, it, code, par, ipar)
+
+
+def _options(
+    mdl: KinematicModel,
+    tol: Any,
+    rot_tol: Any,
+    max_iter: Any,
+    restarts: Any,
+    within_limits: bool,
+    posture: Any,
+    posture_gain: Any,
+    mode: int,
+) -> tuple[Prepared, np.ndarray, np.ndarray, np.ndarray, int]:
+    """Checked options as the loop's parameters: (prepared, par, ipar, posture, restarts)."""
     if not (tol.__class__ is float and 0.0 < tol < math.inf):
         tol = _positive("tol", tol)
     if not (rot_tol.__class__ is float and 0.0 < rot_tol < math.inf):
@@ -364,34 +406,10 @@ def solve(
             )
     prep = prepared(mdl)
     target_posture, use_posture = _posture(mdl, prep, posture)
-    qs = prep.home if q0 is None else mdl.check_q(q0, "q0")
-    starts = np.empty((1 + restarts, mdl.nq))
-    starts[0] = qs
-    starts[1:] = prep.starts[:restarts]
-    # the loop's parameters, in the order of step.P_* and step.I_*
-    par = np.array([tol, rot_tol, 1e-8 * prep.scale**2, _MU0, gain, task.yaw, 1e-6 * prep.scale])
-    ipar = np.array(
-        [task.code, max_iter, int(bool(within_limits)), int(use_posture)], dtype=np.int64
-    )
-    q = np.empty(mdl.nq)
-    hist = np.empty(max_iter + 1)
-    jac = np.empty((6, mdl.nq))
-    attempts, it, code = lm_loop(
-        *prep.packed,
-        prep.tip_rot,
-        task.pose,
-        task.weights,
-        par,
-        ipar,
-        starts,
-        prep.lim,
-        prep.cont,
-        target_posture,
-        q,
-        hist,
-        jac,
-    )
-    return _report(mdl, prep, task, q, hist[: it + 1], jac, attempts, it, code, par, ipar)
+    # the loop's parameters, in the order of step.P_* and step.I_* (P_YAW set per target)
+    par = np.array([tol, rot_tol, 1e-8 * prep.scale**2, _MU0, gain, 0.0, 1e-6 * prep.scale])
+    ipar = np.array([mode, max_iter, int(bool(within_limits)), int(use_posture)], dtype=np.int64)
+    return prep, par, ipar, target_posture, int(restarts)
 
 
 def _report(
@@ -549,22 +567,47 @@ def _is_local_min(
     return bool(np.all(np.sqrt(cost) >= cost_root - 1e-9 * prep.scale))
 
 
-def solve_many(model: ModelLike, targets: Any, q0: Any = None, **kwargs: Any) -> list[IKResult]:
-    """:func:`solve` for each target: (N, 3), (N, 4) or (N, 4, 4).
+def solve_many(
+    model: ModelLike,
+    targets: Any,
+    q0: Any = None,
+    *,
+    mask: Any = None,
+    weights: Any = None,
+    tol: float = 1e-10,
+    rot_tol: float = 1e-10,
+    max_iter: int = 100,
+    restarts: int = 16,
+    within_limits: bool = True,
+    posture: Any = "middle",
+    posture_gain: float = 0.1,
+) -> list[IKResult]:
+    """:func:`solve` for N targets of one kind, the loops in one compiled call.
 
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
-        targets: N targets of one kind (see :func:`solve`).
-        q0: None, one start (nq,) for all, or (N, nq) starts.
-        **kwargs: Options of :func:`solve`.
+        targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
+        q0: None (:func:`home` for all), one start (nq,) for all, or (N, nq) starts.
+        mask: As in :func:`solve` (one for all targets).
+        weights: As in :func:`solve`.
+        tol: As in :func:`solve`.
+        rot_tol: As in :func:`solve`.
+        max_iter: As in :func:`solve`.
+        restarts: As in :func:`solve`.
+        within_limits: As in :func:`solve`.
+        posture: As in :func:`solve`.
+        posture_gain: As in :func:`solve`.
 
     Returns:
-        One :class:`IKResult` per target.
+        One :class:`IKResult` per target, equal to :func:`solve`'s.
 
     Raises:
         IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
+        ParameterError: Bad options.
 
     """
+    from .step import lm_batch
+
     mdl = as_model(model)
     t = np.asarray(targets, dtype=float)
     if (
@@ -578,15 +621,70 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **kwargs: Any) ->
             value=t.shape,
             allowed="(N, 3), (N, 4), (N, 4, 4)",
         )
-    if q0 is None or np.ndim(q0) == 1:
-        starts: Sequence[Any] = [q0] * len(t)
+    tasks = [build_task(ti, mask=mask, weights=weights) for ti in t]
+    n_t = len(tasks)
+    code = tasks[0].code if tasks else 0
+    prep, par, ipar, target_posture, restarts = _options(
+        mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, code
+    )
+    starts = np.empty((n_t, 1 + restarts, mdl.nq))
+    if q0 is None:
+        starts[:, 0] = prep.home
+    elif np.ndim(q0) == 1:
+        starts[:, 0] = mdl.check_q(q0, "q0")
     else:
-        starts = list(mdl.check_q_batch(q0, "q0"))
-        if len(starts) != len(t):
+        rows = mdl.check_q_batch(q0, "q0")
+        if len(rows) != n_t:
             raise ConfigurationError(
-                f"q0 has {len(starts)} rows; targets has {len(t)}",
+                f"q0 has {len(rows)} rows; targets has {n_t}",
                 parameter="q0",
-                value=len(starts),
-                allowed=f"{len(t)} rows",
+                value=len(rows),
+                allowed=f"{n_t} rows",
             )
-    return [solve(mdl, ti, si, **kwargs) for ti, si in zip(t, starts)]
+        starts[:, 0] = rows
+    starts[:, 1:] = prep.starts[:restarts]
+    pars = np.tile(par, (n_t, 1))
+    pars[:, P_YAW] = [task.yaw for task in tasks]
+    tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
+    m = int(ipar[I_MAX_ITER])
+    q = np.empty((n_t, mdl.nq))
+    hist = np.empty((n_t, m + 1))
+    jac = np.empty((n_t, 6, mdl.nq))
+    res = np.empty((n_t, 3), dtype=np.int64)
+    if n_t:
+        weights6 = np.ascontiguousarray(tasks[0].weights)
+        lm_batch(
+            *prep.packed,
+            prep.tip_rot,
+            tgts,
+            weights6,
+            pars,
+            ipar,
+            starts,
+            prep.lim,
+            prep.cont,
+            target_posture,
+            q,
+            hist,
+            jac,
+            res,
+        )
+    out = []
+    for i, task in enumerate(tasks):
+        a, it, c = (int(v) for v in res[i])
+        out.append(
+            _report(
+                mdl,
+                prep,
+                task,
+                q[i].copy(),
+                hist[i, : it + 1].copy(),
+                jac[i].copy(),
+                a,
+                it,
+                c,
+                pars[i],
+                ipar,
+            )
+        )
+    return out

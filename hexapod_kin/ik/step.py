@@ -26,7 +26,16 @@ import numpy as np
 from .._kernels import fk_jac_into
 from .._numerics import dls_into, njit, wrap_angle
 
-__all__ = ["log3_into", "lm_loop", "step_into", "task_cost", "task_into", "tip_rotation_into"]
+__all__ = [
+    "lm_batch",
+    "lm_loop",
+    "log3_into",
+    "pose_errors",
+    "step_into",
+    "task_cost",
+    "task_into",
+    "tip_rotation_into",
+]
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
@@ -548,3 +557,57 @@ def pose_errors(
             if w6[3 + k] != 0.0:
                 rot2 += ew[k] * ew[k]
     return math.sqrt(pos2), math.sqrt(rot2)
+
+
+@njit(cache=True, nogil=True)
+def lm_batch(
+    rot: np.ndarray,
+    trans: np.ndarray,
+    axis: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    tip_rot: np.ndarray,
+    tgts: np.ndarray,
+    w6: np.ndarray,
+    pars: np.ndarray,
+    ipar: np.ndarray,
+    starts: np.ndarray,
+    lim: np.ndarray,
+    cont: np.ndarray,
+    posture: np.ndarray,
+    q_out: np.ndarray,
+    hist_out: np.ndarray,
+    jac_out: np.ndarray,
+    res_out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """:func:`lm_loop` for N targets in one compiled call.
+
+    Serial: measured, a ``prange`` gained nothing on 2 cores and its spinning threads slowed
+    the code that followed.
+
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
+    steps, code).
+    """
+    for i in range(tgts.shape[0]):
+        a, it, c = lm_loop(
+            rot,
+            trans,
+            axis,
+            kind,
+            col,
+            tip_rot,
+            tgts[i],
+            w6,
+            pars[i],
+            ipar,
+            starts[i],
+            lim,
+            cont,
+            posture,
+            q_out[i],
+            hist_out[i],
+            jac_out[i],
+        )
+        res_out[i, 0] = a
+        res_out[i, 1] = it
+        res_out[i, 2] = c
