@@ -288,8 +288,10 @@ def _candidates(
 ) -> list[tuple[int, str, sp.Matrix, bool]]:
     """Jacobians in a few joint frames and reference points, simplest first.
 
-    Position rows: the reference point is the tip. All six rows: any point gives the same
-    determinant, so origins of the last joints' frames are tried (the wrist centre when
+    Position rows, or all six rows of a non-square J: the reference point is the tip (a
+    rotation of both row blocks keeps det(J Jᵀ); moving the point does not). All six rows
+    of a 6×6 J: any point gives the same determinant, so origins of the last joints' frames
+    are tried (the wrist centre when
     there is one, which makes J block-triangular).
     """
     joints = chain.joint_rows
@@ -302,7 +304,7 @@ def _candidates(
         if out and time.perf_counter() > deadline:
             break
         frames = _frames_in(stage1["transforms"], m)
-        if len(sel) == 3:
+        if len(sel) == 3 or n != 6:  # det(J Jt) of a non-square J depends on the point
             points = [("tip", cheap(frames[-1] * stage1["tool"])[:3, 3])]
         else:
             points = [

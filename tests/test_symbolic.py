@@ -356,3 +356,14 @@ def test_table_file_keeps_its_own_table():
     for i, q in enumerate(qs):
         jac = model.jacobian(q)[:3]
         assert abs(gram[i] - np.linalg.det(jac @ jac.T)) < 1e-12
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "scara"])
+def test_all_six_rows_gram_equals_numeric(name):
+    d = derive(name, rows="all")
+    model = load(name)
+    qs = model.random_q(20, seed=14)
+    gram = d.function(d.gram)(qs)
+    for i, q in enumerate(qs):
+        jac = model.jacobian(q)
+        assert abs(gram[i] - np.linalg.det(jac.T @ jac)) < 1e-12
