@@ -17,7 +17,8 @@ from __future__ import annotations
 
 from .._numerics import dls_step, sigma_bounds
 from .closed import FAMILIES, AnalyticBatch, LegFamily, analytic, analytic_batch, detect_family
-from .solver import LEG_HOME, STATUSES, IKResult, Prepared, home, prepared, solve, solve_many
+from .prepare import LEG_HOME, Prepared, home, prepared
+from .solver import STATUSES, IKResult, solve, solve_many
 from .task import AXES, Task, build_task
 
 __all__ = [

@@ -10,17 +10,15 @@ angles. On a redundant chain (more joints than task rows, e.g. Panda 7-DOF with 
 a secondary task moves toward a preferred posture (default: the middle of the joint ranges)
 in the null space of the task, while it does not slow the task down.
 
-Per-model data (packed chain arrays, limits, home, restart starts) is built once and kept in
-the model's cache (:meth:`~hexapod_kin.model.Model.cached`); every call allocates its own
-buffers, so one model can be solved from many threads.
+Per-model data (:mod:`hexapod_kin.ik.prepare`) is built once and kept in the model's cache;
+every call allocates its own buffers, so one model can be solved from many threads.
 """
 
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
-from typing import Any, Literal, Union
+from typing import Any, Literal
 
 import numpy as np
 
@@ -28,7 +26,7 @@ from .._kernels import fk_jac_into
 from .._numerics import sigma_bounds
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
-from ..params import Chain, Hexapod
+from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .step import (
     I_LIMITS,
     I_MAX_ITER,
@@ -43,7 +41,7 @@ from .step import (
 )
 from .task import Task, build_task
 
-__all__ = ["LEG_HOME", "STATUSES", "IKResult", "home", "prepared", "solve", "solve_many"]
+__all__ = ["STATUSES", "IKResult", "solve", "solve_many"]
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
 STATUSES: tuple[str, ...] = (
@@ -54,115 +52,7 @@ STATUSES: tuple[str, ...] = (
     "not_converged",
 )
 
-#: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
-ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
-
-#: Standing pose of the 3-DOF legs [rad] (the seeds' start): foot at (0.1526, 0, −0.1293) m on
-#: the hexabot leg, well away from the singularities (q3 = 0, π; foot over the hip axis).
-LEG_HOME = (0.0, 0.3, 1.2)
-
 _MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
-_N_STARTS = 32  # seeded restart configurations kept per model
-
-
-def as_model(model: ModelLike) -> KinematicModel:
-    """``model`` itself if loaded, else :func:`hexapod_kin.load` of it."""
-    if isinstance(model, KinematicModel):
-        return model
-    from ..kinematics import load
-
-    return load(model)
-
-
-@dataclass(frozen=True)
-class Prepared:
-    """What the solver needs of one model, built once (arrays read-only).
-
-    Attributes:
-        packed: The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col).
-        tip_rot: (3, 3) rotation of the tip in its joint frame.
-        lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
-        cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
-        scale: The chain's length scale in [m] (sum of the link offsets).
-        home: The default start (see :func:`home`).
-        starts: (32, n) seeded random restart configurations within the limits.
-        middle: (n,) middle of each joint's range (continuous joints: 0).
-
-    """
-
-    packed: tuple[np.ndarray, ...]
-    tip_rot: np.ndarray
-    lim: np.ndarray
-    cont: np.ndarray
-    scale: float
-    home: np.ndarray
-    starts: np.ndarray
-    middle: np.ndarray
-
-
-def _build_prepared(model: KinematicModel) -> Prepared:
-    from .._numerics import chain_scale
-
-    arrays = model.arrays
-    lower = np.asarray(model.lower, dtype=float)
-    upper = np.asarray(model.upper, dtype=float)
-    prism = np.asarray(model.is_prismatic, dtype=bool)
-    cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
-    scale = chain_scale(arrays.trans)
-    cap = np.where(prism, 0.25 * scale, 0.5)
-    lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
-    lo = np.where(cont, -np.pi, lower)
-    hi = np.where(cont, np.pi, upper)
-    starts = np.random.default_rng(12345).uniform(lo, hi, size=(_N_STARTS, model.nq))
-    middle = np.where(cont, 0.0, 0.5 * (lower + upper))
-    q_home = _dexterous_home(model, lower, upper, cont)
-    for a in (lim, cont, starts, middle, q_home):
-        a.setflags(write=False)
-    return Prepared(arrays.packed, arrays.tip_rot, lim, cont, scale, q_home, starts, middle)
-
-
-def _dexterous_home(
-    model: KinematicModel, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray
-) -> np.ndarray:
-    if model.nq == 3:
-        q = np.array(LEG_HOME)
-        if np.all(q >= lower) and np.all(q <= upper):
-            return q
-    from .._kernels import position_jacobian_batch
-
-    lo = np.maximum(lower, -np.pi)
-    hi = np.minimum(upper, np.pi)
-    mid = 0.5 * (lo + hi)
-    half = 0.25 * (hi - lo)
-    rng = np.random.default_rng(0)
-    cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
-    sv = np.linalg.svd(position_jacobian_batch(model.arrays, cands), compute_uv=False)
-    return np.array(cands[int(np.argmax(sv[:, min(model.nq, 3) - 1]))])
-
-
-def prepared(model: ModelLike) -> Prepared:
-    """The solver's per-model data (cached in the model; see :class:`Prepared`)."""
-    mdl = as_model(model)
-    return mdl.cached("ik.prepared", lambda: _build_prepared(mdl))
-
-
-def home(model: ModelLike) -> np.ndarray:
-    """The package's one home pose: the default IK start and resolved-rate start (a copy).
-
-    ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
-    otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
-    the middle half of each range (ranges clipped to ±π): the one with the largest smallest
-    (3rd) singular value of the position Jacobian — far from the singular manifolds and from
-    the limits. Computed once per model.
-
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-
-    Returns:
-        (nq,) joint values in [rad]/[m].
-
-    """
-    return np.array(prepared(model).home)
 
 
 # ============================================================================ result
@@ -310,7 +200,7 @@ def solve(
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
         target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
             axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
-        q0: Start configuration (nq,); default :func:`home`.
+        q0: Start configuration (nq,); default :func:`~hexapod_kin.ik.home`.
         mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
         weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
         tol: Convergence threshold on the position error in [m].
@@ -387,12 +277,12 @@ def _options(
         max_iter = _count("max_iter", max_iter, 1)
     if not (restarts.__class__ is int and restarts >= 0):
         restarts = _count("restarts", restarts, 0)
-    if restarts > _N_STARTS:
+    if restarts > N_STARTS:
         raise ParameterError(
-            f"restarts={restarts} is not allowed; at most {_N_STARTS}",
+            f"restarts={restarts} is not allowed; at most {N_STARTS}",
             parameter="restarts",
             value=restarts,
-            allowed=f"0..{_N_STARTS}",
+            allowed=f"0..{N_STARTS}",
         )
     gain = posture_gain
     if not (gain.__class__ is float and 0.0 < gain <= 1.0):
@@ -587,7 +477,8 @@ def solve_many(
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
         targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
-        q0: None (:func:`home` for all), one start (nq,) for all, or (N, nq) starts.
+        q0: None (:func:`~hexapod_kin.ik.home` for all), one start (nq,) for all, or (N, nq)
+            starts.
         mask: As in :func:`solve` (one for all targets).
         weights: As in :func:`solve`.
         tol: As in :func:`solve`.

@@ -13,7 +13,7 @@ The start pose is the package's one home pose, :func:`hexapod_kin.ik.home`
 
 from __future__ import annotations
 
-from ..ik.solver import LEG_HOME, home
+from ..ik.prepare import LEG_HOME, home
 from .rate import (
     FRAMES,
     ClosestApproach,

@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
-from ..ik.solver import ModelLike, as_model, home, prepared
+from ..ik.prepare import ModelLike, as_model, home, prepared
 from ._kernel import rr_kernel
 
 __all__ = [

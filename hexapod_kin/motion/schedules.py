@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from .. import ik
 from ..exceptions import IKError, ParameterError
-from ..ik.solver import ModelLike, as_model
+from ..ik.prepare import ModelLike, as_model
 from .rate import Method, Trajectory, positive, read_only, resolved_rate
 
 __all__ = ["JointSchedule", "PosePath", "Tracked", "follow_pose_path", "track"]

@@ -1,0 +1,129 @@
+"""What the solver keeps per model: packed chain arrays, limits, restart starts, and the home pose.
+
+Built once per model and kept in its cache (:meth:`~hexapod_kin.model.Model.cached`); read-only,
+so one model can be solved from many threads. :func:`home` is the package's one home pose (the
+default IK start and the default start of resolved-rate runs).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Union
+
+import numpy as np
+
+from ..kinematics import KinematicModel
+from ..params import Chain, Hexapod
+
+__all__ = ["LEG_HOME", "N_STARTS", "ModelLike", "Prepared", "as_model", "home", "prepared"]
+
+#: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
+ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
+
+#: Standing pose of the 3-DOF legs [rad] (the seeds' start): foot at (0.1526, 0, −0.1293) m on
+#: the hexabot leg, well away from the singularities (q3 = 0, π; foot over the hip axis).
+LEG_HOME = (0.0, 0.3, 1.2)
+
+#: Seeded restart configurations kept per model (the most :func:`~hexapod_kin.ik.solve` tries).
+N_STARTS = 32
+
+
+def as_model(model: ModelLike) -> KinematicModel:
+    """``model`` itself if loaded, else :func:`hexapod_kin.load` of it."""
+    if isinstance(model, KinematicModel):
+        return model
+    from ..kinematics import load
+
+    return load(model)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """What the solver needs of one model, built once (arrays read-only).
+
+    Attributes:
+        packed: The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col).
+        tip_rot: (3, 3) rotation of the tip in its joint frame.
+        lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
+        cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
+        scale: The chain's length scale in [m] (sum of the link offsets).
+        home: The default start (see :func:`home`).
+        starts: (32, n) seeded random restart configurations within the limits.
+        middle: (n,) middle of each joint's range (continuous joints: 0).
+
+    """
+
+    packed: tuple[np.ndarray, ...]
+    tip_rot: np.ndarray
+    lim: np.ndarray
+    cont: np.ndarray
+    scale: float
+    home: np.ndarray
+    starts: np.ndarray
+    middle: np.ndarray
+
+
+def _build_prepared(model: KinematicModel) -> Prepared:
+    from .._numerics import chain_scale
+
+    arrays = model.arrays
+    lower = np.asarray(model.lower, dtype=float)
+    upper = np.asarray(model.upper, dtype=float)
+    prism = np.asarray(model.is_prismatic, dtype=bool)
+    cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
+    scale = chain_scale(arrays.trans)
+    cap = np.where(prism, 0.25 * scale, 0.5)
+    lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
+    lo = np.where(cont, -np.pi, lower)
+    hi = np.where(cont, np.pi, upper)
+    starts = np.random.default_rng(12345).uniform(lo, hi, size=(N_STARTS, model.nq))
+    middle = np.where(cont, 0.0, 0.5 * (lower + upper))
+    q_home = _dexterous_home(model, lower, upper, cont)
+    for a in (lim, cont, starts, middle, q_home):
+        a.setflags(write=False)
+    return Prepared(arrays.packed, arrays.tip_rot, lim, cont, scale, q_home, starts, middle)
+
+
+def _dexterous_home(
+    model: KinematicModel, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray
+) -> np.ndarray:
+    if model.nq == 3:
+        q = np.array(LEG_HOME)
+        if np.all(q >= lower) and np.all(q <= upper):
+            return q
+    from .._kernels import position_jacobian_batch
+
+    lo = np.maximum(lower, -np.pi)
+    hi = np.minimum(upper, np.pi)
+    mid = 0.5 * (lo + hi)
+    half = 0.25 * (hi - lo)
+    rng = np.random.default_rng(0)
+    cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
+    sv = np.linalg.svd(position_jacobian_batch(model.arrays, cands), compute_uv=False)
+    return np.array(cands[int(np.argmax(sv[:, min(model.nq, 3) - 1]))])
+
+
+def prepared(model: ModelLike) -> Prepared:
+    """The solver's per-model data (cached in the model; see :class:`Prepared`)."""
+    mdl = as_model(model)
+    return mdl.cached("ik.prepared", lambda: _build_prepared(mdl))
+
+
+def home(model: ModelLike) -> np.ndarray:
+    """The package's one home pose: the default IK start and resolved-rate start (a copy).
+
+    ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
+    otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
+    the middle half of each range (ranges clipped to ±π): the one with the largest smallest
+    (3rd) singular value of the position Jacobian — far from the singular manifolds and from
+    the limits. Computed once per model.
+
+    Args:
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
+
+    Returns:
+        (nq,) joint values in [rad]/[m].
+
+    """
+    return np.array(prepared(model).home)
