@@ -74,8 +74,15 @@ def test_rk4_is_fourth_order_and_euler_first_order(leg):
 def test_closed_loop_recovers_from_an_offset_start(leg):
     # reference starts 1 mm away from the foot: the closed loop pulls it in (e ~ exp(-K t))
     p0 = leg.position(motion.SEED_Q0) + np.array([0.0, 0.0, 1e-3])
-    tr = motion.resolved_rate(leg, np.zeros(3), motion.SEED_Q0, 1e-3, 1.0, gain=20.0,
-                              path=lambda t: np.broadcast_to(p0, np.shape(t) + (3,)))
+    tr = motion.resolved_rate(
+        leg,
+        np.zeros(3),
+        motion.SEED_Q0,
+        1e-3,
+        1.0,
+        gain=20.0,
+        path=lambda t: np.broadcast_to(p0, np.shape(t) + (3,)),
+    )
     assert tr.tracking_error[0] == pytest.approx(1e-3, rel=1e-9)
     assert tr.tracking_error[-1] < 1e-3 * np.exp(-20.0 * 1.0) * 1.5
 
@@ -150,8 +157,7 @@ def test_constant_twist_for_one_second_on_ur5(ur5, frame, gain):
     exact = _exact(ur5.fk(q0), twist, tr.t, frame)
     reached = np.array([ur5.fk(q) for q in tr.q])  # Pinocchio FK of the joint trajectory
     drift_p = np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1))
-    drift_r = max(np.linalg.norm(pin.log3(e[:3, :3] @ r[:3, :3].T)) for e, r in
-                  zip(exact, reached))
+    drift_r = max(np.linalg.norm(pin.log3(e[:3, :3] @ r[:3, :3].T)) for e, r in zip(exact, reached))
     assert drift_p <= 1e-9 and drift_r <= 1e-9
     # the reported tip pose and velocity agree with Pinocchio
     i = 500
@@ -199,9 +205,11 @@ def test_table_i_replayed_through_fk_and_ik():
     model = hk.load("coxa_tibia_leg")
     t = np.arange(0.0, 22.0 + 1e-9, 0.01)
     q_plan = sched.sample(t)
-    np.testing.assert_allclose(np.degrees(sched.sample([0, 4.5, 9, 13, 17.5, 25])),
-                               [[0, -90], [0, -70], [10, -50], [20, -50], [10, -70], [0, -90]],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        np.degrees(sched.sample([0, 4.5, 9, 13, 17.5, 25])),
+        [[0, -90], [0, -70], [10, -50], [20, -50], [10, -70], [0, -90]],
+        atol=1e-12,
+    )
     feet = np.array([model.position(q) for q in q_plan])
     back = motion.track(model, feet, q_plan[0])
     assert back.reached.all()
@@ -230,8 +238,9 @@ def test_foot_path_shape():
 @pytest.mark.parametrize("preset", ["hexabot_leg", "erd:solo12"])
 def test_foot_step_joint_trajectory(preset):
     model = hk.load(preset, tip="FL_FOOT") if preset.startswith("erd") else hk.load(preset)
-    step = gait.foot_step(model, length=0.04, height=0.02, duration=1.0, duty_factor=0.5,
-                            dt=0.005, cycles=2)
+    step = gait.foot_step(
+        model, length=0.04, height=0.02, duration=1.0, duty_factor=0.5, dt=0.005, cycles=2
+    )
     assert step.reached.all()
     assert step.max_error < 1e-9
     assert step.within_limits
@@ -252,8 +261,8 @@ def test_cli_ik_pose_mask_tool_and_step_twist(capsys):
     ur5 = hk.load("erd:ur5_robot", tip="tool0")
     pose = ur5.fk(np.array([0.3, -1.1, 1.3, -0.5, 1.2, 0.4]))
     rpy = pin.rpy.matrixToRpy(pose[:3, :3])
-    args = ["ik", "erd:ur5_robot", "--tip", "tool0", "--pose", *map(str, pose[:3, 3]),
-            *map(str, np.degrees(rpy)), "--deg", "--json"]
+    xyz_rpy = [*map(str, pose[:3, 3]), *map(str, np.degrees(rpy))]
+    args = ["ik", "erd:ur5_robot", "--tip", "tool0", "--pose", *xyz_rpy, "--deg", "--json"]
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["numerical"]["status"] == "converged"
@@ -267,14 +276,14 @@ def test_cli_ik_pose_mask_tool_and_step_twist(capsys):
     assert main(args + ["--mask", "1", "1", "1", "0", "0", "0"]) == 0
     assert json.loads(capsys.readouterr().out)["numerical"]["error"] <= 1e-9
     # step: a constant twist, checked against the exact motion
-    assert main(["step", "erd:ur5_robot", "--tip", "tool0", "--twist", "0.02", "0", "0", "0",
-                 "0", "30", "--deg", "--frame", "tip", "--duration", "0.5", "--json"]) == 0
+    argv = "step erd:ur5_robot --tip tool0 --twist 0.02 0 0 0 0 30 --deg --frame tip"
+    assert main([*argv.split(), "--duration", "0.5", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["position_drift"] <= 1e-9 and out["rotation_drift"] <= 1e-9
     assert out["velocity"][5] == pytest.approx(np.radians(30.0))
     # --deg converts revolute joints only: the SCARA's prismatic joint stays in metres
-    assert main(["step", "scara", "--velocity", "0", "0", "0", "--q", "10", "20", "30", "0.1",
-                 "--deg", "--duration", "0.01", "--json"]) == 0
+    argv = "step scara --velocity 0 0 0 --q 10 20 30 0.1 --deg --duration 0.01 --json"
+    assert main(argv.split()) == 0
     q0 = json.loads(capsys.readouterr().out)["q0"]
     np.testing.assert_allclose(q0, [*np.radians([10, 20, 30]), 0.1], atol=1e-15)
 
@@ -297,8 +306,8 @@ def test_plots_and_html(tmp_path, leg):
     step = gait.foot_step(leg, dt=0.01)
     assert plot_step(step, tmp_path / "step.png").stat().st_size > 1000
     html = tmp_path / "step.html"
-    assert main(["step", "hexabot_leg", "--duration", "1", "--no-baseline", "--html",
-                 str(html), "--plot", str(tmp_path / "cli.png")]) == 0
+    argv = ["step", "hexabot_leg", "--duration", "1", "--no-baseline"]
+    assert main([*argv, "--html", str(html), "--plot", str(tmp_path / "cli.png")]) == 0
     assert html.stat().st_size > 1000 and (tmp_path / "cli.png").exists()
 
 
