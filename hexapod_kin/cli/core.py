@@ -585,8 +585,6 @@ COMMANDS: dict[str, Command] = {
     "demo": (_add_demo, _cmd_demo),
     "view": (_add_view, _cmd_view),
     "animate": (_add_animate, _cmd_animate),
-    "ik": (_add_ik, _cmd_ik),
-    "step": (_add_step, _cmd_step),
     "derive": (_add_derive, _cmd_derive),
     "scan": (_add_scan, _cmd_scan),
 }
