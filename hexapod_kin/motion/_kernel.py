@@ -63,13 +63,10 @@ def _rate(
     gain: float,
     eps: float,
     lam2max: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
+    lim: np.ndarray,
     use_limits: bool,
-    vmax: np.ndarray,
     out_qd: np.ndarray,
     p: np.ndarray,
-    r: np.ndarray,
     jac: np.ndarray,
     scratch: np.ndarray,
     free: np.ndarray,
@@ -77,14 +74,18 @@ def _rate(
     rhs: np.ndarray,
     sol: np.ndarray,
     xd: np.ndarray,
-    w3: np.ndarray,
-    ew: np.ndarray,
-    ev: np.ndarray,
 ) -> tuple[float, float, float, bool]:  # pragma: no cover - compiled
     """The control law q̇(q, t) into ``out_qd``; returns (σ_min, σ_max, λ², limited)."""
     n = q.shape[0]
+    lower = lim[0]
+    upper = lim[1]
+    vmax = lim[2]
     fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, True)
     if rows6:
+        r = np.empty((3, 3))
+        w3 = np.empty((3, 3))
+        ew = np.empty(3)
+        ev = np.empty(max(n, 6))
         tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
         if tip_frame:
             for a in range(3):
@@ -195,9 +196,11 @@ def rr_kernel(
     rhs = np.empty(mm)
     sol = np.empty(mm)
     xd = np.empty(6 if rows6 else 3)  # one row per task row; jac (jst) has as many
-    w3 = np.empty((3, 3))
-    ew = np.empty(3)
-    ev = np.empty(mm)
+    lims = np.empty((3, n))  # lower, upper, speed limits: one argument of the control law
+    for i in range(n):
+        lims[0, i] = lower[i]
+        lims[1, i] = upper[i]
+        lims[2, i] = vmax[i]
     q = q0.copy()
     k1 = np.empty(n)
     k2 = np.empty(n)
@@ -225,13 +228,10 @@ def rr_kernel(
             gain,
             eps,
             lam2max,
-            lower,
-            upper,
+            lims,
             use_limits,
-            vmax,
             k1,
             p,
-            r,
             jst,
             scratch,
             free,
@@ -239,12 +239,8 @@ def rr_kernel(
             rhs,
             sol,
             xd,
-            w3,
-            ew,
-            ev,
         )
-        if not rows6:
-            tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
+        tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
         for i in range(n):
             out_q[k, i] = q[i]
             out_qd[k, i] = k1[i]
@@ -297,13 +293,10 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
-                lower,
-                upper,
+                lims,
                 use_limits,
-                vmax,
                 k2,
                 p,
-                r,
                 jst,
                 scratch,
                 free,
@@ -311,9 +304,6 @@ def rr_kernel(
                 rhs,
                 sol,
                 xd,
-                w3,
-                ew,
-                ev,
             )
             for i in range(n):
                 qs[i] = q[i] + 0.5 * dt * k2[i]
@@ -333,13 +323,10 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
-                lower,
-                upper,
+                lims,
                 use_limits,
-                vmax,
                 k3,
                 p,
-                r,
                 jst,
                 scratch,
                 free,
@@ -347,9 +334,6 @@ def rr_kernel(
                 rhs,
                 sol,
                 xd,
-                w3,
-                ew,
-                ev,
             )
             for i in range(n):
                 qs[i] = q[i] + dt * k3[i]
@@ -369,13 +353,10 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
-                lower,
-                upper,
+                lims,
                 use_limits,
-                vmax,
                 k4,
                 p,
-                r,
                 jst,
                 scratch,
                 free,
@@ -383,9 +364,6 @@ def rr_kernel(
                 rhs,
                 sol,
                 xd,
-                w3,
-                ew,
-                ev,
             )
             for i in range(n):
                 q[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
