@@ -227,15 +227,30 @@ def solve(
     """
     mdl = model if model.__class__ is KinematicModel else as_model(model)
     task = build_task(target, mask=mask, weights=weights)
-    opts = _options(
-        mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code
-    )
-    prep, par, ipar, target_posture, restarts = opts
-    par[P_YAW] = task.yaw
-    qs = prep.home if q0 is None else mdl.check_q(q0, "q0")
-    starts = np.empty((1 + restarts, mdl.nq))
-    starts[0] = qs
-    starts[1:] = prep.starts[:restarts]
+    # options and default starts, checked once per model and set of options (never written)
+    key = None
+    if posture is None or posture.__class__ is str:
+        key = (tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code)
+    known: dict[Any, Any] = mdl.cached("ik.options", dict)
+    hit = known.get(key) if key is not None else None
+    if hit is None:
+        opts = _options(
+            mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code
+        )
+        prep, par, ipar, target_posture, n_restarts = opts
+        home_starts = np.empty((1 + n_restarts, mdl.nq))
+        home_starts[0] = prep.home
+        home_starts[1:] = prep.starts[:n_restarts]
+        hit = (prep, par, ipar, target_posture, home_starts)
+        if key is not None and len(known) < 64:
+            known[key] = hit
+    prep, par, ipar, target_posture, starts = hit
+    if task.yaw != 0.0:
+        par = par.copy()
+        par[P_YAW] = task.yaw
+    if q0 is not None:
+        starts = starts.copy()
+        starts[0] = mdl.check_q(q0, "q0")
     q = np.empty(mdl.nq)
     hist = np.empty(int(ipar[I_MAX_ITER]) + 1)
     jac = np.empty((6, mdl.nq))
@@ -315,7 +330,7 @@ def _report(
     par: np.ndarray,
     ipar: np.ndarray,
 ) -> IKResult:
-    pose = np.ascontiguousarray(mdl.fk(q))  # the reported residual: Pinocchio's FK
+    pose = mdl.fk(q)  # the reported residual: Pinocchio's FK (a fresh C-ordered array)
     err, rot = pose_errors(task.code, task.pose, task.weights, task.yaw, pose)
     smin = float(sigma_bounds(jac[:3])[0])
     tgt = task.pose[:3, 3].copy()
