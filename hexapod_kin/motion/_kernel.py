@@ -7,7 +7,9 @@ the body twist, LOCAL), rotated here into base axes — damped least squares is 
 that rotation, so both use the one LWA Jacobian. The feedback term is ``K [p_ref − p;
 log(R_ref Rᵀ)]`` (the pose error on SO(3), never Euler angles).
 
-All buffers are allocated per call (thread-safe, ``nogil``).
+Damping: ``σ_min`` of a 3-row task comes from closed forms at every evaluation; for a twist it
+takes a small Jacobi eigen-solve, done at the start of each step and held (zero-order) over
+that step's RK4 stages. All buffers are allocated per call (thread-safe, ``nogil``).
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ def _rate(
     gain: float,
     eps: float,
     lam2max: float,
+    hold: float,
     lim: np.ndarray,
     use_limits: bool,
     out_qd: np.ndarray,
@@ -101,7 +104,10 @@ def _rate(
             log3_into(w3, ew)
             for a in range(3):
                 xd[3 + a] += gain * ew[a]
-        smin, smax = _sigma6(jac, work, ev)
+        if hold < 0.0:
+            smin, smax = _sigma6(jac, work, ev)
+        else:  # an RK4 stage of a twist: the damping of the step's start is held
+            smin, smax = math.nan, math.nan
     else:
         for a in range(3):
             xd[a] = v[a]
@@ -109,15 +115,19 @@ def _rate(
     for a in range(3):
         xd[a] += gain * (ref_p[a] - p[a])
     lam2 = 0.0
-    if smin < eps:
-        ratio = smin / eps
-        lam2 = lam2max * (1.0 - ratio * ratio)
-    floor = 1e-14 * (smax * smax + 1e-300)
+    if hold >= 0.0 and rows6:
+        lam2 = hold
+        lam_use = hold
+    else:
+        if smin < eps:
+            ratio = smin / eps
+            lam2 = lam2max * (1.0 - ratio * ratio)
+        lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
     limited = False
     for i in range(n):
         free[i] = True
     for _pass in range(2):
-        ok = dls_into(jac, xd, max(lam2, floor), free, out_qd, work, rhs, sol)
+        ok = dls_into(jac, xd, lam_use, free, out_qd, work, rhs, sol)
         if not ok:
             for i in range(n):
                 out_qd[i] = 0.0
@@ -228,6 +238,7 @@ def rr_kernel(
             gain,
             eps,
             lam2max,
+            -1.0,
             lims,
             use_limits,
             k1,
@@ -240,6 +251,7 @@ def rr_kernel(
             sol,
             xd,
         )
+        hold = max(lam2, 1e-14 * (smax * smax + 1e-300)) if rows6 else -1.0
         tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
         for i in range(n):
             out_q[k, i] = q[i]
@@ -293,6 +305,7 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
+                hold,
                 lims,
                 use_limits,
                 k2,
@@ -323,6 +336,7 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
+                hold,
                 lims,
                 use_limits,
                 k3,
@@ -353,6 +367,7 @@ def rr_kernel(
                 gain,
                 eps,
                 lam2max,
+                hold,
                 lims,
                 use_limits,
                 k4,
