@@ -322,3 +322,17 @@ def test_default_stance_is_far_from_singularities_for_any_chain():
     run = seeds.seed_experiment(scara, duration=4.0, baseline=False)
     assert run.drift_y <= 1e-9 and run.drift_z <= 1e-9 and run.error_x <= 1e-9
     np.testing.assert_array_equal(motion.default_stance(hk.load("hexabot_leg")), motion.SEED_Q0)
+
+
+def test_twist_through_a_wrist_singularity_stays_finite(ur5):
+    # UR5's wrist is singular at wrist_2 = 0: drive wrist_2 through it with an angular twist
+    q0 = np.array([0.3, -1.2, 1.4, -0.5, 0.15, 0.2])
+    axis = ur5.jacobian(q0)[3:, 4]  # the wrist_2 axis (base frame)
+    twist = np.concatenate([np.zeros(3), -0.3 * axis / np.linalg.norm(axis)])
+    tr = motion.resolved_rate(ur5, twist, q0, 1e-3, 1.0)
+    assert np.all(np.isfinite(tr.q)) and np.all(np.isfinite(tr.qdot))
+    assert tr.damping.max() > 0  # the damping switched on near the singularity
+    i = int(np.argmin(tr.sigma_min))
+    sv = np.linalg.svd(ur5.jacobian(tr.q[i]), compute_uv=False)
+    assert tr.sigma_min[i] == pytest.approx(sv[-1], rel=1e-6, abs=1e-9)
+    assert tr.sigma_min[i] < 0.02 * sv[0]
