@@ -174,7 +174,8 @@ def test_wrong_split_guess_is_caught_per_block():
         bad.arrays,
         True,
         True,
-        2,
+        0,
+        -(-len(qs) // BLOCK),
         BLOCK,
         *out,
     )

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import det_small, eig2_sym, eig3_sym, jacobi_eig, njit, prange
+from .._numerics import det_small, eig2_sym, eig3_sym, jacobi_eig, njit
 
 __all__ = [
     "JACOBI_TOL",
@@ -136,7 +136,7 @@ _PIO2_1 = 1.57079632673412561417e00
 _PIO2_2 = 6.07710050630396597660e-11
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """``(sin x, cos x)`` without libm calls (branch-free quadrant selection)."""
     n = math.floor(x * _INVPIO2 + 0.5)
@@ -291,6 +291,29 @@ def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _sweep_many(g: np.ndarray, count: int, m: int) -> None:  # pragma: no cover - compiled
+    """One sweep on matrices ``0 .. count - 1`` of ``g`` (m = 3 or 4; SIMD over the matrices).
+
+    The one place the unrolled sweeps are inlined (compile time grows with every copy).
+    """
+    if m == 3:
+        for i in range(count):
+            _jacobi_sweep(g, i)
+    else:
+        for i in range(count):
+            _jacobi_sweep4(g, i)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _count_open(g: np.ndarray, count: int, m: int) -> int:  # pragma: no cover - compiled
+    """How many of matrices ``0 .. count - 1`` :func:`_jacobi_open` leaves open."""
+    n_open = 0
+    for i in range(count):
+        n_open += _jacobi_open(g, i, m)
+    return n_open
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _pack_table(m: int) -> np.ndarray:  # pragma: no cover - compiled
     """``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (row-major) of m×m."""
     pack = np.empty((m, m), dtype=np.int64)
@@ -363,16 +386,9 @@ def eig_block(
             _sweep_gen(gb, nb, m, pack, cs)
         sweeps = JACOBI_MIN_SWEEPS_BIG
     while sweeps < JACOBI_MAX_SWEEPS and not big:
-        if m == 3:
-            for i in range(nb):
-                _jacobi_sweep(gb, i)
-        else:
-            for i in range(nb):
-                _jacobi_sweep4(gb, i)
+        _sweep_many(gb, nb, m)
         sweeps += 1
-        n_open = 0
-        for i in range(nb):
-            n_open += _jacobi_open(gb, i, m)
+        n_open = _count_open(gb, nb, m)
         if n_open == 0:
             return
         if n_open * JACOBI_GATHER <= nb:
@@ -390,14 +406,10 @@ def eig_block(
         sweeps += 1
         if n_open == 0:
             return
-        if m == 3:
-            for jj in range(n_open):
-                _jacobi_sweep(wb, jj)
-        elif m == 4:
-            for jj in range(n_open):
-                _jacobi_sweep4(wb, jj)
-        else:
+        if big:
             _sweep_gen(wb, n_open, m, pack, cs)
+        else:
+            _sweep_many(wb, n_open, m)
         kept = 0
         for jj in range(n_open):
             i = idx[jj]
@@ -417,7 +429,7 @@ def eig_block(
             gb[p, i] = wb[p, jj]
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def minor_block(
     jb: np.ndarray, r: np.ndarray, c: np.ndarray, m: int, nb: int, dst: np.ndarray
 ) -> None:  # pragma: no cover - compiled
@@ -678,7 +690,7 @@ def _reduce_block(
             out_manip[start + i] = math.sqrt(dg[i])
 
 
-@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def measures_kernel(
     prot: np.ndarray,
     ptr: np.ndarray,
@@ -691,7 +703,8 @@ def measures_kernel(
     plan: tuple[Any, ...],
     skip0: bool,
     poly: bool,
-    nwork: int,
+    first_block: int,
+    last_block: int,
     block: int,
     out_det: np.ndarray,
     out_manip: np.ndarray,
@@ -703,8 +716,8 @@ def measures_kernel(
     The chain is given with every joint axis aligned to its frame's z (see
     :func:`._plan.aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or
     ``Tz(q)``;
-    ``ptr[m]`` is the tip offset. Work is split into ``nwork`` contiguous ranges (one per
-    thread, scratch allocated once each), processed in blocks of ``block`` configurations
+    ``ptr[m]`` is the tip offset. This call handles blocks ``first_block`` to ``last_block - 1``
+    (the caller runs one call per thread; the GIL is released), each of ``block`` configurations
     stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
     and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
     see :func:`._plan.first_joint_invariant`). ``poly``: sin / cos by :func:`sincos` (all
@@ -722,144 +735,141 @@ def measures_kernel(
     npk = mm * (mm + 1) // 2 if use_block else 1
     nev = mm if use_block else 1
     bsz = block
-    nblocks = (nconf + bsz - 1) // bsz
-    per = (nblocks + nwork - 1) // nwork
-    for w in prange(nwork):
-        rr = np.empty((9, bsz))
-        pp = np.empty((3, bsz))
-        frames = np.empty((max(m, 1), 6, bsz))
-        trig = np.empty((2, bsz))
-        qb = np.empty((nq, bsz))
-        jb = np.empty((k, nq, bsz))
-        gb = np.empty((npk, bsz))
-        hb = np.empty((npk, bsz))
-        wb = np.empty((npk, bsz))
-        ev = np.empty((nev, bsz))
-        open_idx = np.empty(bsz, dtype=np.int64)
-        dg = np.empty(bsz)
-        mnr = np.empty(bsz)
-        tmp = np.empty((2, bsz))
-        js = np.empty((k, nq))
-        g = np.empty((mm, mm))
-        work = np.empty((big, big))
-        lam = np.empty(mm)
-        for blk in range(w * per, min(nblocks, (w + 1) * per)):
-            start = blk * bsz
-            nb = min(nconf, start + bsz) - start
-            for i in range(nb):  # the block's q, transposed: the per-joint loops read rows
-                for c in range(nq):
-                    qb[c, i] = qs[start + i, c]
-            for j in range(m):
-                t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
-                if j == 0:
-                    for i in range(nb):
-                        pp[0, i] = t0
-                        pp[1, i] = t1
-                        pp[2, i] = t2
-                    for a in range(9):
-                        v = prot[0, a]
-                        for i in range(nb):
-                            rr[a, i] = v
-                else:
-                    for i in range(nb):
-                        pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-                        pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-                        pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-                    if pident[j] == 0:
-                        a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
-                        a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
-                        a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
-                        for row in range(3):
-                            b = 3 * row
-                            for i in range(nb):
-                                x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
-                                rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
-                                rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
-                                rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+    rr = np.empty((9, bsz))
+    pp = np.empty((3, bsz))
+    frames = np.empty((max(m, 1), 6, bsz))
+    trig = np.empty((2, bsz))
+    qb = np.empty((nq, bsz))
+    jb = np.empty((k, nq, bsz))
+    gb = np.empty((npk, bsz))
+    hb = np.empty((npk, bsz))
+    wb = np.empty((npk, bsz))
+    ev = np.empty((nev, bsz))
+    open_idx = np.empty(bsz, dtype=np.int64)
+    dg = np.empty(bsz)
+    mnr = np.empty(bsz)
+    tmp = np.empty((2, bsz))
+    js = np.empty((k, nq))
+    g = np.empty((mm, mm))
+    work = np.empty((big, big))
+    lam = np.empty(mm)
+    for blk in range(first_block, last_block):
+        start = blk * bsz
+        nb = min(nconf, start + bsz) - start
+        for i in range(nb):  # the block's q, transposed: the per-joint loops read rows
+            for c in range(nq):
+                qb[c, i] = qs[start + i, c]
+        for j in range(m):
+            t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
+            if j == 0:
                 for i in range(nb):
-                    frames[j, 0, i] = pp[0, i]
-                    frames[j, 1, i] = pp[1, i]
-                    frames[j, 2, i] = pp[2, i]
-                    frames[j, 3, i] = rr[2, i]
-                    frames[j, 4, i] = rr[5, i]
-                    frames[j, 5, i] = rr[8, i]
-                cj = col[j]
-                if kind[j] == 1:
+                    pp[0, i] = t0
+                    pp[1, i] = t1
+                    pp[2, i] = t2
+                for a in range(9):
+                    v = prot[0, a]
                     for i in range(nb):
-                        qv = qb[cj, i]
-                        pp[0, i] += rr[2, i] * qv
-                        pp[1, i] += rr[5, i] * qv
-                        pp[2, i] += rr[8, i] * qv
-                elif not (j == 0 and skip0):
-                    if poly:
-                        for i in range(nb):
-                            trig[0, i], trig[1, i] = sincos(qb[cj, i])
-                    else:
-                        for i in range(nb):
-                            qv = qb[cj, i]
-                            trig[0, i] = math.sin(qv)
-                            trig[1, i] = math.cos(qv)
+                        rr[a, i] = v
+            else:
+                for i in range(nb):
+                    pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                    pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                    pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+                if pident[j] == 0:
+                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
+                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
+                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
                     for row in range(3):
                         b = 3 * row
                         for i in range(nb):
-                            sq, cq = trig[0, i], trig[1, i]
-                            x0, x1 = rr[b, i], rr[b + 1, i]
-                            rr[b, i] = cq * x0 + sq * x1
-                            rr[b + 1, i] = cq * x1 - sq * x0
-            t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+                            x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                            rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                            rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                            rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
             for i in range(nb):
-                pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-                pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-                pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-            # selected rows of J, column by column: [z × (p − o); z] or [z; 0]
-            for a in range(k):
-                for b in range(nq):
-                    for i in range(nb):
-                        jb[a, b, i] = 0.0
-            for j in range(m):
-                cj = col[j]
-                for a in range(k):
-                    r = sel[a]
-                    if kind[j] == 1:
-                        if r < 3:
-                            for i in range(nb):
-                                jb[a, cj, i] += frames[j, 3 + r, i]
-                    elif r >= 3:
-                        for i in range(nb):
-                            jb[a, cj, i] += frames[j, r, i]
-                    else:
-                        u = (r + 1) % 3
-                        v = (r + 2) % 3
-                        for i in range(nb):
-                            jb[a, cj, i] += frames[j, 3 + u, i] * (
-                                pp[v, i] - frames[j, v, i]
-                            ) - frames[j, 3 + v, i] * (pp[u, i] - frames[j, u, i])
-            if use_block:
-                _reduce_block(
-                    jb,
-                    nb,
-                    plan,
-                    gb,
-                    hb,
-                    wb,
-                    ev,
-                    open_idx,
-                    dg,
-                    mnr,
-                    tmp,
-                    start,
-                    out_det,
-                    out_manip,
-                    out_cond,
-                    out_smin,
-                )
-            else:
+                frames[j, 0, i] = pp[0, i]
+                frames[j, 1, i] = pp[1, i]
+                frames[j, 2, i] = pp[2, i]
+                frames[j, 3, i] = rr[2, i]
+                frames[j, 4, i] = rr[5, i]
+                frames[j, 5, i] = rr[8, i]
+            cj = col[j]
+            if kind[j] == 1:
                 for i in range(nb):
-                    for a in range(k):
-                        for b in range(nq):
-                            js[a, b] = jb[a, b, i]
-                    d, mp, cn, sm = _reduce_one(js, g, work, lam)
-                    out_det[start + i] = d
-                    out_manip[start + i] = mp
-                    out_cond[start + i] = cn
-                    out_smin[start + i] = sm
+                    qv = qb[cj, i]
+                    pp[0, i] += rr[2, i] * qv
+                    pp[1, i] += rr[5, i] * qv
+                    pp[2, i] += rr[8, i] * qv
+            elif not (j == 0 and skip0):
+                if poly:
+                    for i in range(nb):
+                        trig[0, i], trig[1, i] = sincos(qb[cj, i])
+                else:
+                    for i in range(nb):
+                        qv = qb[cj, i]
+                        trig[0, i] = math.sin(qv)
+                        trig[1, i] = math.cos(qv)
+                for row in range(3):
+                    b = 3 * row
+                    for i in range(nb):
+                        sq, cq = trig[0, i], trig[1, i]
+                        x0, x1 = rr[b, i], rr[b + 1, i]
+                        rr[b, i] = cq * x0 + sq * x1
+                        rr[b + 1, i] = cq * x1 - sq * x0
+        t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+        for i in range(nb):
+            pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+            pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+            pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+        # selected rows of J, column by column: [z × (p − o); z] or [z; 0]
+        for a in range(k):
+            for b in range(nq):
+                for i in range(nb):
+                    jb[a, b, i] = 0.0
+        for j in range(m):
+            cj = col[j]
+            for a in range(k):
+                r = sel[a]
+                if kind[j] == 1:
+                    if r < 3:
+                        for i in range(nb):
+                            jb[a, cj, i] += frames[j, 3 + r, i]
+                elif r >= 3:
+                    for i in range(nb):
+                        jb[a, cj, i] += frames[j, r, i]
+                else:
+                    u = (r + 1) % 3
+                    v = (r + 2) % 3
+                    for i in range(nb):
+                        jb[a, cj, i] += frames[j, 3 + u, i] * (pp[v, i] - frames[j, v, i]) - frames[
+                            j, 3 + v, i
+                        ] * (pp[u, i] - frames[j, u, i])
+        if use_block:
+            _reduce_block(
+                jb,
+                nb,
+                plan,
+                gb,
+                hb,
+                wb,
+                ev,
+                open_idx,
+                dg,
+                mnr,
+                tmp,
+                start,
+                out_det,
+                out_manip,
+                out_cond,
+                out_smin,
+            )
+        else:
+            for i in range(nb):
+                for a in range(k):
+                    for b in range(nq):
+                        js[a, b] = jb[a, b, i]
+                d, mp, cn, sm = _reduce_one(js, g, work, lam)
+                out_det[start + i] = d
+                out_manip[start + i] = mp
+                out_cond[start + i] = cn
+                out_smin[start + i] = sm

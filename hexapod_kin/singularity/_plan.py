@@ -17,7 +17,7 @@ from typing import Any
 import numba
 import numpy as np
 
-from .._kernels import ChainArrays, jacobian_batch
+from .._kernels import ChainArrays
 from ._kernel import POLY_TRIG_MAX, measures_kernel
 
 __all__ = [
@@ -84,6 +84,8 @@ def aligned_chain(arrays: ChainArrays) -> AlignedChain:
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
 BLOCK = 256
+#: Fewest configurations per thread (below this, one thread: starting threads costs more).
+MIN_PER_THREAD = 20_000
 #: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
 _MAX_MINORS = 70
 
@@ -189,7 +191,8 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
         q = model.random_q(16, seed=2024)
         if skip0:
             q[:, arrays.col[0]] = 0.0
-        jac = jacobian_batch(arrays, q, rows=6)[:, list(sel), :]
+        # 16 Pinocchio calls: no batch kernel to compile for a plan (cold start)
+        jac = np.array([model.jacobian(qi, "local_world_aligned") for qi in q])[:, list(sel), :]
         for gram_t in (False, True) if k == n else (k > n,):
             g = np.swapaxes(jac, 1, 2) @ jac if gram_t else jac @ np.swapaxes(jac, 1, 2)
             zero = (np.abs(g) <= 1e-14 * max(float(np.abs(g).max()), 1e-300)).all(axis=0)
@@ -288,6 +291,11 @@ def compute(
 ) -> tuple[np.ndarray, ...]:
     """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
 
+    One kernel call per thread (``numba.get_num_threads()`` of them, each on a contiguous range
+    of blocks; the kernel releases the GIL), not numba's ``parallel=True``: the parallel
+    lowering of this kernel doubled its compile time (cold start). The threads only run the
+    compiled kernel, which raises nothing (inputs are checked before).
+
     Args:
         model: A loaded model.
         q: (N, nq) float64 C-contiguous configurations, checked by the caller.
@@ -303,22 +311,39 @@ def compute(
     key = tuple(int(r) for r in sel)
     skip0 = first_joint_invariant(al, key)
     poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= POLY_TRIG_MAX)
-    nwork = max(1, min(numba.get_num_threads(), -(-n // BLOCK)))
     plan = gram_plan(model, key, skip0)
-    measures_kernel(
-        al.prot,
-        al.ptr,
-        al.pident,
-        al.kind,
-        al.col,
-        q,
-        sel,
-        plan.use_block,
-        plan.arrays,
-        skip0,
-        poly,
-        nwork,
-        BLOCK,
-        *out,
-    )
+    nblocks = -(-n // BLOCK)
+    nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
+    per = -(-nblocks // nwork)
+
+    def run(w: int) -> None:
+        measures_kernel(
+            al.prot,
+            al.ptr,
+            al.pident,
+            al.kind,
+            al.col,
+            q,
+            sel,
+            plan.use_block,
+            plan.arrays,
+            skip0,
+            poly,
+            w * per,
+            min(nblocks, (w + 1) * per),
+            BLOCK,
+            *out,
+        )
+
+    if nwork == 1:
+        run(0)
+    else:  # the kernel releases the GIL: plain threads run it in parallel
+        workers = [threading.Thread(target=run, args=(w,)) for w in range(1, nwork)]
+        for t in workers:
+            t.start()
+        try:
+            run(0)
+        finally:
+            for t in workers:
+                t.join()
     return out

@@ -111,7 +111,8 @@ class ScanResult:
     def explained(self) -> np.ndarray:
         """(N,) flagged configurations on a known family.
 
-        Within :attr:`family_tols` of the nearest family, or within twice that of two families (near their meeting ``σmin`` falls faster than along either alone, so flagged
+        Within :attr:`family_tols` of the nearest family, or within twice that of two families
+        (near their meeting ``σmin`` falls faster than along either alone, so flagged
         points reach farther out).
         """
         tols = np.asarray((*self.family_tols, np.nan))[self.family]  # -1: NaN (no family)
