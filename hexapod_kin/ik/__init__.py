@@ -6,8 +6,9 @@
   weights (:func:`build_task`).
 * :mod:`.step` — compiled: the task rows, the damped least-squares step (a pure function),
   and the small Levenberg–Marquardt loop around it.
-* :mod:`.solver` — :func:`solve`, :func:`solve_many`, :class:`IKResult`, and the package's one
-  home pose :func:`home`.
+* :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
+  and the package's one home pose :func:`home` (IK start, resolved-rate start);
+* :mod:`.solver` — :func:`solve`, :func:`solve_many`, :class:`IKResult` and the statuses.
 
 :func:`dls_step` and :func:`sigma_bounds` are the shared numerics of
 :mod:`hexapod_kin._numerics`, re-exported here.
