@@ -386,7 +386,8 @@ def resolved_rate(
         gain: Closed-loop gain K in [1/s] pulling the tip toward the reference path
             (0 = open loop). Keep ``K·dt`` well below 1.
         path: Optional reference path, a callable of time: positions (M, 3)/(3,) in [m] for
-            a linear velocity, poses (M, 4, 4)/(4, 4) for a twist (see :class:`PosePath`).
+            a linear velocity, poses (M, 4, 4)/(4, 4) for a twist (e.g.
+            :meth:`hexapod_kin.motion.PosePath.sample`).
             Default: the integral of the velocity from FK(q0) (Simpson's rule on the same
             samples; exact for a constant twist).
         sigma_threshold: ε: damping starts when σ_min < ε. Default 1 % of the largest σ at q0.
