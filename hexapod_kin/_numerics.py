@@ -438,17 +438,15 @@ def wrap_diff(a: Any, b: Any) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------ chain length scale
-@njit(cache=True, nogil=True)
-def chain_length(trans: np.ndarray) -> float:  # pragma: no cover - compiled
+def chain_length(trans: Any) -> float:
     """Sum of the link offsets' lengths ``Σ‖tᵢ‖`` in [m] of an (m, 3) translation array.
 
     An upper bound of the base-to-tip distance (rows are the joint placements and the tip
-    offset, e.g. ``Model.arrays.trans``; a Khalil row contributes ``‖(d, 0, r)‖``).
+    offset, e.g. ``Model.arrays.trans``; a Khalil row contributes ``‖(d, 0, r)‖``). Plain
+    numpy (called once per model, nothing to compile).
     """
-    s = 0.0
-    for i in range(trans.shape[0]):
-        s += math.sqrt(trans[i, 0] ** 2 + trans[i, 1] ** 2 + trans[i, 2] ** 2)
-    return s
+    t = np.asarray(trans, dtype=np.float64).reshape(-1, 3)
+    return float(np.sum(np.sqrt(np.sum(t * t, axis=1))))
 
 
 def chain_scale(trans: Any) -> float:
@@ -461,8 +459,7 @@ def chain_scale(trans: Any) -> float:
         ``Σ‖tᵢ‖`` if positive, else 1.0.
 
     """
-    t = np.ascontiguousarray(np.asarray(trans, dtype=np.float64).reshape(-1, 3))
-    s = float(chain_length(t))
+    s = chain_length(trans)
     return s if s > 0.0 else 1.0
 
 

@@ -147,7 +147,8 @@ def testgram_plans_split_where_structure_allows():
     assert sizes("coxa_tibia_leg") == [1, 1]
 
 
-def test_wrong_split_guess_is_caught_per_block():
+@pytest.mark.parametrize("jacobi", [np.empty(0), None])
+def test_wrong_split_guess_is_caught_per_block(jacobi):
     # a plan claiming G = {0} ⊕ {1, 2} for the Solo12 leg (false: G[0, 2] != 0) must not
     # change the results: the kernel checks the dropped entries on every block
     from dataclasses import replace
@@ -170,10 +171,12 @@ def test_wrong_split_guess_is_caught_per_block():
         al.col,
         qs,
         np.arange(3),
-        True,
+        None,
         bad.arrays,
+        jacobi,  # None: the kernel without Jacobi (3×3 closed form where a split fails)
+        None,
         True,
-        True,
+        None,  # polynomial sin / cos
         0,
         -(-len(qs) // BLOCK),
         BLOCK,

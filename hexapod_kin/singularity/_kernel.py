@@ -536,7 +536,8 @@ def _reduce_block(
     idx: np.ndarray,
     dg: np.ndarray,
     mnr: np.ndarray,
-    tmp: np.ndarray,
+    tmp: Any,
+    jacobi: Any,
     start: int,
     out_det: np.ndarray,
     out_manip: np.ndarray,
@@ -574,7 +575,10 @@ def _reduce_block(
                     for i in range(nb):
                         gb[p, i] += jb[a, c, i] * jb[b, c, i]
     if square:
-        minor_big(jb, rsub[0], csub[0], mm, nb, mnr, tmp)
+        if tmp is None:  # compile-time (m <= 4): no Laplace expansion compiled
+            minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
+        else:
+            minor_big(jb, rsub[0], csub[0], mm, nb, mnr, tmp)
         for i in range(nb):
             out_det[start + i] = mnr[i]
             dg[i] = mnr[i] * mnr[i]
@@ -583,7 +587,10 @@ def _reduce_block(
             dg[i] = 0.0
             out_det[start + i] = np.nan
         for s in range(rsub.shape[0]):
-            minor_big(jb, rsub[s], csub[s], mm, nb, mnr, tmp)
+            if tmp is None:
+                minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
+            else:
+                minor_big(jb, rsub[s], csub[s], mm, nb, mnr, tmp)
             for i in range(nb):
                 dg[i] += mnr[i] * mnr[i]
     # the structural zeros really are negligible over this block?
@@ -631,7 +638,14 @@ def _reduce_block(
                     q = u * s - (u * (u - 1)) // 2 + (v - u)
                     for i in range(nb):
                         hb[q, i] = gb[p, i]
-            eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
+            if jacobi is None:  # compile-time: plans whose blocks are all <= 2 (legs)
+                for i in range(nb):  # only if a block's split fails: the 3×3 closed form
+                    l1, l2, l3 = eig3_sym(
+                        hb[0, i], hb[3, i], hb[5, i], hb[1, i], hb[2, i], hb[4, i]
+                    )
+                    hb[0, i], hb[3, i], hb[5, i] = l1, l2, l3
+            else:
+                eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
             for u in range(s):
                 q = u * s - (u * (u - 1)) // 2
                 for i in range(nb):
@@ -699,10 +713,12 @@ def measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
-    use_block: bool,
+    perconf: Any,
     plan: tuple[Any, ...],
+    jacobi: Any,
+    tmp: Any,
     skip0: bool,
-    poly: bool,
+    libm: Any,
     first_block: int,
     last_block: int,
     block: int,
@@ -720,11 +736,16 @@ def measures_kernel(
     (the caller runs one call per thread; the GIL is released), each of ``block`` configurations
     stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
     and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
-    see :func:`._plan.first_joint_invariant`). ``poly``: sin / cos by :func:`sincos` (all
-    ``|q| ≤ POLY_TRIG_MAX``) rather than libm. ``use_block`` (``min(k, n) ≤ 6``, see
+    see :func:`._plan.first_joint_invariant`). ``libm``: ``None`` for sin / cos by :func:`sincos`
+    (all ``|q| ≤ POLY_TRIG_MAX``), an array for libm's. ``perconf`` ``None`` (``min(k, n) ≤ 6``, see
     :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole
-    block by
-    :func:`_reduce_block`; otherwise :func:`_reduce_one` per configuration.
+    block by :func:`_reduce_block`; an array: :func:`_reduce_one` per configuration.
+    ``tmp``: ``None`` when m ≤ 4 (no Laplace expansion compiled), else this thread's (2, B)
+    scratch of :func:`minor_big`. ``jacobi`` ``None``: the plan's diagonal blocks are all of
+    size ≤ 2 and m ≤ 3 (legs), so
+    no Jacobi is compiled (a block whose split fails gets the 3×3 closed form). Both are
+    ``None``-or-array on purpose: numba prunes a branch on ``x is None`` before typing, so a
+    command compiles only the reduction its chain needs (cold start).
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -732,6 +753,7 @@ def measures_kernel(
     k = sel.shape[0]
     mm = k if k <= nq else nq
     big = k if k > nq else nq
+    use_block = perconf is None
     npk = mm * (mm + 1) // 2 if use_block else 1
     nev = mm if use_block else 1
     bsz = block
@@ -748,7 +770,6 @@ def measures_kernel(
     open_idx = np.empty(bsz, dtype=np.int64)
     dg = np.empty(bsz)
     mnr = np.empty(bsz)
-    tmp = np.empty((2, bsz))
     js = np.empty((k, nq))
     g = np.empty((mm, mm))
     work = np.empty((big, big))
@@ -801,7 +822,7 @@ def measures_kernel(
                     pp[1, i] += rr[5, i] * qv
                     pp[2, i] += rr[8, i] * qv
             elif not (j == 0 and skip0):
-                if poly:
+                if libm is None:
                     for i in range(nb):
                         trig[0, i], trig[1, i] = sincos(qb[cj, i])
                 else:
@@ -844,7 +865,7 @@ def measures_kernel(
                         jb[a, cj, i] += frames[j, 3 + u, i] * (pp[v, i] - frames[j, v, i]) - frames[
                             j, 3 + v, i
                         ] * (pp[u, i] - frames[j, u, i])
-        if use_block:
+        if perconf is None:  # a compile-time branch (None is a type): only one is compiled
             _reduce_block(
                 jb,
                 nb,
@@ -857,6 +878,7 @@ def measures_kernel(
                 dg,
                 mnr,
                 tmp,
+                jacobi,
                 start,
                 out_det,
                 out_manip,

@@ -84,6 +84,8 @@ def aligned_chain(arrays: ChainArrays) -> AlignedChain:
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
 BLOCK = 256
+#: Passed for "yes" where the kernel takes ``None`` or an array (see ``measures_kernel``).
+_DUMMY = np.empty(0)
 #: Fewest configurations per thread (below this, one thread: starting threads costs more).
 MIN_PER_THREAD = 20_000
 #: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
@@ -316,7 +318,12 @@ def compute(
     nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
     per = -(-nblocks // nwork)
 
+    m = min(len(key), q.shape[1])
+    perconf = None if plan.use_block else _DUMMY
+    jacobi = None if (m <= 3 and int(plan.csize.max()) <= 2) else _DUMMY
+
     def run(w: int) -> None:
+        tmp = None if m <= 4 else np.empty((2, BLOCK))  # this thread's scratch
         measures_kernel(
             al.prot,
             al.ptr,
@@ -325,10 +332,12 @@ def compute(
             al.col,
             q,
             sel,
-            plan.use_block,
+            perconf,
             plan.arrays,
+            jacobi,
+            tmp,
             skip0,
-            poly,
+            None if poly else _DUMMY,
             w * per,
             min(nblocks, (w + 1) * per),
             BLOCK,
