@@ -169,6 +169,8 @@ class Family:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             for _ in range(max(steps, 1)):
                 f = np.broadcast_to(np.asarray(_evaluate(fcode, cur), float), lead)
+                if f0 is not None and np.all(np.abs(f) <= 1e-6 * np.maximum(f0, 1e-300)):
+                    break  # every point converged: no more steps
                 g = np.stack(
                     [np.broadcast_to(np.asarray(_evaluate(c, cur), float), lead) for c in gcode],
                     axis=-1,

@@ -234,7 +234,7 @@ def measures_batch(
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
     arrays = mdl.arrays
-    q = _kernels._check_batch(arrays, qs)
+    q = _kernels.check_batch(arrays, qs)
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
     if engine not in ("kernel", "numpy"):
         raise ParameterError(
