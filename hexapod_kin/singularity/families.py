@@ -7,7 +7,7 @@ on its mount, Solo12, UR5, ...). Deriving is sympy work, so it happens only when
 (:func:`families_for` with ``derive=True``, within a time budget); the result is validated
 against the model's own Jacobian (the symbolic ``det`` must equal the numeric one at random
 configurations), turned into plain text expressions (lengths substituted) and kept on disk
-(``$HEXAPOD_KIN_CACHE_DIR`` or ``~/.cache/hexapod_kin``, keyed by the table and the rows), so
+(:func:`cache_dir`, keyed by the table and the rows), so
 later scans — in any process — read them back without importing sympy. The text is
 evaluated by a small whitelisting evaluator (numbers, ``q1..qn``, ``+ - * / **``, ``sin``,
 ``cos``, ``tan``, ``sqrt``, ``pi``), never by ``eval``.
@@ -255,12 +255,20 @@ class Families:
 
 # ------------------------------------------------------------------------ tables and keys
 def cache_dir() -> Path:
-    """Where derived families are kept: ``$HEXAPOD_KIN_CACHE_DIR`` or the user cache dir."""
+    """Where derived families are kept: ``families/`` beside :mod:`hexapod_kin.symbolic`'s cache.
+
+    ``$HEXAPOD_KIN_CACHE_DIR``, else ``platformdirs.user_cache_dir("hexapod_kin")`` when
+    platformdirs is installed, else ``~/.cache/hexapod_kin``.
+    """
     env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
     if env:
         return Path(env) / "families"
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "hexapod_kin" / "families"
+    try:
+        import platformdirs
+
+        return Path(platformdirs.user_cache_dir("hexapod_kin")) / "families"
+    except ImportError:
+        return Path.home() / ".cache" / "hexapod_kin" / "families"
 
 
 def _table(model: Any) -> tuple[Any, str]:
