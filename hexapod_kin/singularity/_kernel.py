@@ -667,7 +667,7 @@ def _reduce_block(
             lmax = max(e0, max(e1, e2))
             mnr[i] = lmax
             hb[0, i] = lmax * max(min(e0, e1), min(max(e0, e1), e2))
-    elif mm > 4:
+    elif tmp is not None:  # m = 5, 6 (compile-time: tmp is None for m <= 4)
         for i in range(nb):
             lo = 0
             hi = 0
