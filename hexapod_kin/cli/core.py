@@ -99,7 +99,14 @@ def _params_of(source: str, params: dict[str, Any]) -> Any:
         return robots.get(source, **params)
     from .. import sources
 
-    return sources.table_params(source, **params)
+    resolved = sources.resolve_source(source, **params)
+    if resolved.params is None:
+        raise ParameterError(
+            f"urdf {source!r}: not a preset or a table file; `urdf` exports what hexapod_kin "
+            "builds (a URDF source is already a URDF)",
+            parameter="SOURCE", value=source, allowed="a preset name or a .toml/.yaml table",
+        )
+    return resolved.params
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
@@ -175,7 +182,9 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     model = load_source(args)
     q = q_from_args(args, model)
     jac = model.jacobian(q, args.reference)
-    jp = jac[:3]
+    # position measures from the tip's linear velocity (LOCAL_WORLD_ALIGNED rows), whatever
+    # frame is printed: WORLD's linear rows are the velocity of the point at the world origin
+    jp = model.jacobian(q, "local_world_aligned")[:3]
     det = float(np.linalg.det(jp)) if jp.shape[0] == jp.shape[1] else None
     sv = np.linalg.svd(jp, compute_uv=False)
     if args.json:
@@ -194,7 +203,7 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     print(f"J ({args.reference}, rows vx vy vz wx wy wz; columns {', '.join(model.joint_names)}):")
     print(matrix_text(jac))
     if det is not None:
-        print(f"det(J_position) = {det:.6e}")
+        print(f"det(J_position) = {det:.6e}  (tip linear velocity, base-aligned)")
     print("singular values (position): " + " ".join(f"{v:.6e}" for v in sv))
     return 0
 
