@@ -22,7 +22,7 @@ from .common import OneLineParser
 __all__ = ["build_parser", "main"]
 
 #: Modules of this package whose ``register(sub)`` adds subcommands, in help order.
-MODULES: tuple[str, ...] = ("core", "motion", "dynamics", "export", "sweep", "gait")
+MODULES: tuple[str, ...] = ("core", "view", "motion", "dynamics", "export", "sweep", "gait")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -374,111 +374,6 @@ def _cmd_step(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ view
-def _wait_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--duration", type=float, metavar="S",
-                   help="serve for S seconds, then stop (default: until Ctrl-C)")
-    g.add_argument("--no-wait", action="store_true",
-                   help="stop the server right after showing (scripts, tests)")
-
-
-def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
-    import time
-
-    from ..exceptions import ViewerError
-
-    print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
-    if args.no_wait:
-        return 0
-    print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
-    end = None if args.duration is None else time.monotonic() + max(args.duration, 0.0)
-    try:
-        while end is None or time.monotonic() < end:
-            if not viewer.server.running:
-                raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
-            time.sleep(0.2 if end is None else max(0.0, min(0.2, end - time.monotonic())))
-    except KeyboardInterrupt:
-        print("stopped", file=sys.stderr)
-    return 0
-
-
-def _add_view(sub: Any) -> None:
-    p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
-    source_args(p)
-    q_args(p)
-    _wait_args(p)
-    p.add_argument("--triads", action="store_true", help="draw the Khalil frames (labelled j)")
-
-
-def _cmd_view(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from ..gait import default_configuration
-    from ..viewer import Viewer
-
-    model = load_source(args)
-    q = default_configuration(model) if args.q is None else q_from_args(args, model)
-    with Viewer(model, q=q) as viewer:
-        if args.triads:
-            viewer.animate([0.0], np.asarray(q)[None, :], trace_frame=False, frame_triads=True)
-        return _serve_until(viewer, args)
-
-
-# ------------------------------------------------------------------------ animate
-def _add_animate(sub: Any) -> None:
-    p = sub.add_parser(
-        "animate",
-        help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
-    )
-    source_args(p)
-    p.add_argument("--html", metavar="FILE",
-                   help="write a self-contained HTML file (no server); else serve it live")
-    p.add_argument("--length", type=float, default=4.0, metavar="S", help="motion length in s")
-    p.add_argument("--samples", type=int, default=121, help="number of samples")
-    p.add_argument("--fps", type=float, help="resample the animation at this frame rate")
-    p.add_argument("--speed", type=float, default=1.0, help="playback speed factor")
-    p.add_argument("--no-loop", action="store_true", help="play once")
-    p.add_argument("--triads", action="store_true", help="draw the Khalil frames (labelled j)")
-    p.add_argument("--sigma-min", type=float, metavar="S",
-                   help="mark samples whose smallest singular value of the tip's position "
-                   "Jacobian is below S (m/rad)")
-    p.add_argument("--title", help="page title")
-    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    _wait_args(p)
-
-
-def _cmd_animate(args: argparse.Namespace) -> int:
-    _check_outputs(args)
-    import numpy as np
-
-    from ..gait import demo_trajectory
-    from ..viewer import Viewer, export_html
-
-    model = load_source(args)
-    times, qs, base = demo_trajectory(model, args.length, args.samples)
-    mask = None
-    if args.sigma_min is not None:
-        sv = np.array([np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1]
-                       for q in qs])
-        mask = sv < args.sigma_min
-    common = dict(base_poses=base, frame_triads=args.triads, singular_mask=mask, fps=args.fps,
-                  loop=not args.no_loop)
-    if args.html:
-        path = export_html(model, times, qs, args.html, title=args.title, speed=args.speed,
-                           **common)
-        if args.json:
-            emit_json({"source": model.name, "html": str(path), "samples": int(len(times)),
-                        "duration": float(times[-1] - times[0]),
-                        "singular_samples": int(mask.sum()) if mask is not None else 0})
-        else:
-            print(f"wrote {path} ({len(times)} samples, {times[-1] - times[0]:.3g} s)")
-        return 0
-    with Viewer(model, q=qs[0]) as viewer:
-        viewer.animate(times, qs, **common)
-        return _serve_until(viewer, args)
-
-
 # ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser("derive", help="symbolic T, p, J (direct/indirect), det J factored")
@@ -592,8 +487,6 @@ COMMANDS: dict[str, Command] = {
     "fk": (_add_fk, _cmd_fk),
     "jacobian": (_add_jacobian, _cmd_jacobian),
     "demo": (_add_demo, _cmd_demo),
-    "view": (_add_view, _cmd_view),
-    "animate": (_add_animate, _cmd_animate),
     "derive": (_add_derive, _cmd_derive),
     "scan": (_add_scan, _cmd_scan),
 }
