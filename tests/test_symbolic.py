@@ -283,7 +283,8 @@ def test_budget_stops_and_says_what_is_missing():
 
 
 def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
-    from hexapod_kin import _symbolic_cache, symbolic
+    from hexapod_kin import symbolic
+    from hexapod_kin.symbolic import cache as symbolic_cache
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
     symbolic._MEMO.clear()
@@ -301,7 +302,7 @@ def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
     symbolic._MEMO.clear()
     third = derive("scara")
     assert not third.cached and sp.simplify(third.det - first.det) == 0
-    assert _symbolic_cache.load(files[0].stem) is not None  # rewritten
+    assert symbolic_cache.load(files[0].stem) is not None  # rewritten
 
 
 def test_family_residuals_vanish_on_families(leg):

@@ -23,8 +23,7 @@ from typing import Any
 import sympy as sp
 
 from hexapod_kin import Chain, DHRow, KhalilRow, robots, symbolic
-from hexapod_kin import _symbolic_cache as cache
-from hexapod_kin import _symbolic_core as core
+from hexapod_kin.symbolic import cache, core
 
 PI = math.pi
 TARGET_S = 5.0

@@ -14,12 +14,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import sympy as sp
 
-from . import _symbolic_core as _core
-from ._symbolic_core import ROW_NAMES
-from .params import Chain
+from ..params import Chain
+from . import core as _core
+from .core import ROW_NAMES
 
 if TYPE_CHECKING:
-    from .symbolic import Derivation
+    from .derivation import Derivation
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,7 @@ def families_of(
     factors: Sequence[tuple[Any, int]], q: tuple[sp.Symbol, ...], chain: Chain,
     values: Mapping[sp.Symbol, float],
 ) -> tuple[SingularFamily, ...]:  # fmt: skip
+    """One family per factor of ``det J`` that depends on ``q`` (solved for one joint if it can)."""
     sigmas = chain.sigmas
     fams: list[SingularFamily] = []
     for fac, _mult in factors:
@@ -224,6 +225,7 @@ class FamilyResiduals:
 
 
 def build_residuals(deriv: Derivation) -> FamilyResiduals:
+    """The derivation's families as numpy residuals and gradients of ``q`` (for scans)."""
     res: list[Callable[[np.ndarray], np.ndarray]] = []
     grads: list[Callable[[np.ndarray], np.ndarray]] = []
     for fam in deriv.families:

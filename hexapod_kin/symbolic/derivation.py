@@ -20,9 +20,9 @@ For the 3-DOF leg (``hexabot_leg``) the factored determinant is
 
 **Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds and returns what it
 has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: finished derivations
-are stored on disk keyed by a hash of the table (see :mod:`hexapod_kin._symbolic_cache`), so a
+are stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
 second process gets them in milliseconds. How the determinant is kept fast (per-joint
-simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin._symbolic_core`.
+simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
 
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
 else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
@@ -41,19 +41,19 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from . import _symbolic_cache as _cache
-from . import _symbolic_core as _core
-from ._symbolic_core import ROW_NAMES, khalil_matrix
-from ._symbolic_families import (
+from ..exceptions import ParameterError, choices
+from ..params import Chain
+from . import cache as _cache
+from . import core as _core
+from .core import ROW_NAMES, khalil_matrix
+from .families import (
     FamilyResiduals,
     SingularFamily,
     build_residuals,
     check_families,
     families_of,
 )
-from ._symbolic_sources import chain_of as _chain_of
-from .exceptions import ParameterError, choices
-from .params import Chain
+from .sources import chain_of as _chain_of
 
 __all__ = [
     "ROW_NAMES",

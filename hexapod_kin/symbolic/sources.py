@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .exceptions import ParameterError, choices
-from .params import Chain, Hexapod
+from ..exceptions import ParameterError, choices
+from ..params import Chain, Hexapod
 
 __all__ = ["chain_of"]
 
@@ -57,12 +57,12 @@ def chain_of(
             f"tip= (feet {choices(source.foot_frames)}) or derive robot.legs[0].chain"
         )
     if isinstance(source, str):
-        from . import robots
+        from .. import robots
 
         if source in robots.names():
             return chain_of(robots.get(source), base, tip)
         if source.lower().endswith((".toml", ".yaml", ".yml")):  # a table file: its own table
-            from .sources import resolve_source
+            from ..sources import resolve_source
 
             params = resolve_source(source).params
             if isinstance(params, (Chain, Hexapod)):
@@ -94,7 +94,7 @@ def chain_of(
 
 
 def _from_urdf(source: Any, base: str | None, tip: str | None) -> tuple[Chain, str, str]:
-    from .exceptions import HexapodKinError
+    from ..exceptions import HexapodKinError
 
     try:
         chain = Chain.from_urdf(source, base=base, tip=tip)

@@ -26,7 +26,7 @@ from typing import Any
 
 import sympy as sp
 
-from ._io import atomic_write
+from .._io import atomic_write
 
 FORMAT = 3
 Stages = Callable[[], Iterator[tuple[str, Any]]]
@@ -52,7 +52,7 @@ def key(parts: Any) -> str:
 
 
 def _encode(obj: Any) -> Any:
-    from ._symbolic_families import SingularFamily
+    from .families import SingularFamily
 
     if isinstance(obj, SingularFamily):
         return {"__family__": {f.name: _encode(getattr(obj, f.name)) for f in fields(obj)}}
@@ -72,7 +72,7 @@ def _encode(obj: Any) -> Any:
 def _decode(obj: Any) -> Any:
     if isinstance(obj, dict):
         if "__family__" in obj:
-            from ._symbolic_families import SingularFamily
+            from .families import SingularFamily
 
             return SingularFamily(**{k: _decode(v) for k, v in obj["__family__"].items()})
         if "__matrix__" in obj:

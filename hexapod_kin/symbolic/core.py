@@ -27,8 +27,8 @@ import numpy as np
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-from .exceptions import ParameterError, choices
-from .params import Chain, table_transforms
+from ..exceptions import ParameterError, choices
+from ..params import Chain, table_transforms
 
 ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
 
@@ -104,7 +104,7 @@ def _same(expr: Any) -> Any:
 
 def _rotation(rot: np.ndarray) -> sp.Matrix:
     """A numeric rotation as sympy, exact when its roll-pitch-yaw are nice angles."""
-    from .params import matrix_to_rpy
+    from ..params import matrix_to_rpy
 
     roll, pitch, yaw = (exact_angle(a) for a in matrix_to_rpy(rot))
     rx = sp.Matrix([[1, 0, 0], [0, sp.cos(roll), -sp.sin(roll)], [0, sp.sin(roll), sp.cos(roll)]])
