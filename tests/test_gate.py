@@ -440,15 +440,17 @@ def test_resolve_mesh_messages() -> None:
 
 
 # ------------------------------------------------------------------------ inertia
-def test_sym_eigvals_matches_numpy() -> None:
+def test_principal_moments_of_rotated_diagonal_tensors() -> None:
+    # R diag(a, b, c) Rᵀ has principal moments a, b, c (ascending), whatever the rotation R.
+    from hexapod_kin.params import rpy_to_matrix
+
     rng = np.random.default_rng(1)
     for _ in range(200):
-        a = rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-8, 3)
-        m = a + a.T
-        ours = _gate._sym_eigvals(m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
-        ref = np.linalg.eigvalsh(m)
-        scale = np.abs(ref).max()
-        assert np.allclose(ours, ref, rtol=0, atol=1e-12 * scale)
+        moments = np.sort(rng.uniform(-1.0, 1.0, 3)) * 10.0 ** rng.integers(-8, 3)
+        rot = rpy_to_matrix(*rng.uniform(-np.pi, np.pi, 3))
+        m = rot @ np.diag(moments) @ rot.T
+        ours = _gate.principal_moments(m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
+        assert np.allclose(ours, moments, rtol=0, atol=1e-12 * np.abs(moments).max())
 
 
 def _merged_body(points: list[tuple[float, float, float]], own_mass: float = 0.0) -> str:

@@ -1,0 +1,214 @@
+"""Masses and inertias: each link's ``<inertial>``, and each moving body Pinocchio builds.
+
+Part of :mod:`hexapod_kin._gate`. Principal moments come from LAPACK
+(:func:`numpy.linalg.eigvalsh`): the gate stays pure numpy so that loading a model never
+imports numba (the compiled ``_numerics.eig3_sym`` serves the kernels).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from lxml import etree
+
+from ..exceptions import UrdfError
+from .limits import _INERTIA_FLOOR, TRIANGLE_RTOL
+from .parse import _error, _number, _origin, _single
+
+
+def principal_moments(
+    ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float
+) -> tuple[float, float, float]:
+    """Eigenvalues of the symmetric inertia ``[[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]``.
+
+    Args:
+        ixx: Diagonal entry [kg m^2] (likewise ``iyy``, ``izz``).
+        iyy: Diagonal entry [kg m^2].
+        izz: Diagonal entry [kg m^2].
+        ixy: Off-diagonal entry [kg m^2] (likewise ``ixz``, ``iyz``).
+        ixz: Off-diagonal entry [kg m^2].
+        iyz: Off-diagonal entry [kg m^2].
+
+    Returns:
+        The three principal moments [kg m^2], ascending.
+
+    """
+    mat = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+    e = np.linalg.eigvalsh(mat)
+    return (float(e[0]), float(e[1]), float(e[2]))
+
+
+@dataclass
+class _Inertial:
+    """A link's checked ``<inertial>`` (raw numbers; matrices only built when needed)."""
+
+    mass: float
+    values: tuple[float, float, float, float, float, float]  # ixx iyy izz ixy ixz iyz
+    eig: tuple[float, float, float]  # principal moments [kg m^2], sorted
+    element: etree._Element | None  # the <inertial>
+
+    @property
+    def present(self) -> bool:
+        return self.mass > 0.0 or any(self.values)
+
+    @property
+    def definite(self) -> bool:
+        return _definite(self.eig)
+
+    @property
+    def triangle(self) -> bool:
+        return _triangle(self.eig)
+
+    def in_link(self) -> tuple[np.ndarray, np.ndarray]:
+        """Centre of mass [m] and inertia about it [kg m^2], in link axes."""
+        rot, com = _origin(self.element)
+        ixx, iyy, izz, ixy, ixz, iyz = self.values
+        mat = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+        return com, rot @ mat @ rot.T
+
+
+_NO_INERTIAL = _Inertial(0.0, (0.0,) * 6, (0.0, 0.0, 0.0), None)
+
+
+def _definite(eig: Sequence[float]) -> bool:
+    return eig[0] > 1e-12 * eig[2] + _INERTIA_FLOOR
+
+
+def _triangle(eig: Sequence[float]) -> bool:
+    return eig[0] + eig[1] >= eig[2] * (1.0 - TRIANGLE_RTOL)
+
+
+def _eig_text(eig: Sequence[float]) -> str:
+    return "[" + ", ".join(f"{e:.6g}" for e in eig) + "]"
+
+
+def _link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = None) -> _Inertial:
+    """Check a link's ``<inertial>``: mass >= 0, six finite entries, not indefinite.
+
+    With ``defects`` (lenient mode) an indefinite inertia is recorded there instead of raised.
+    """
+    inertial = _single(link, "inertial", required=False)
+    if inertial is None:
+        return _NO_INERTIAL
+    _single(inertial, "origin", required=False)
+    mass_el = _single(inertial, "mass", required=True)
+    inertia_el = _single(inertial, "inertia", required=True)
+    assert mass_el is not None and inertia_el is not None
+    mass = _number(mass_el, "value")
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    ixx, ixy, ixz, iyy, iyz, izz = (_number(inertia_el, k) for k in keys)
+    eig = principal_moments(ixx, iyy, izz, ixy, ixz, iyz)
+    scale = max(abs(ixx), abs(iyy), abs(izz), abs(ixy), abs(ixz), abs(iyz))
+    if eig[0] < -(1e-9 * scale + _INERTIA_FLOOR):
+        values = " ".join(f"{k}={inertia_el.get(k)}" for k in keys)
+        err = _error(
+            inertia_el,
+            None,
+            None,
+            f"{values}: inertia is indefinite (principal moments {_eig_text(eig)}); an inertia "
+            "tensor must be positive semi-definite",
+        )
+        if defects is None:
+            raise err
+        defects.append((str(link.get("name")), str(err)))
+    return _Inertial(mass, (ixx, iyy, izz, ixy, ixz, iyz), eig, inertial)
+
+
+def _check_moving_body(
+    jname: str,
+    child: str,
+    link_el: dict[str, etree._Element],
+    inertials: dict[str, _Inertial],
+    fixed_children: dict[str, list[tuple[str, etree._Element]]],
+    defects: list[tuple[str, str]] | None = None,
+) -> None:
+    """The body Pinocchio builds for joint ``jname``: ``child`` plus its fixed-joint subtree.
+
+    It must have mass > 0 and a positive-definite inertia (about its centre of mass) whose
+    principal moments satisfy the triangle inequality. With ``defects`` (lenient mode) a
+    failure is recorded there as ``(child, message)`` instead of raised.
+    """
+    try:
+        _check_body(jname, child, link_el, inertials, fixed_children)
+    except UrdfError as err:
+        if defects is None:
+            raise
+        defects.append((child, str(err)))
+
+
+def _check_body(
+    jname: str,
+    child: str,
+    link_el: dict[str, etree._Element],
+    inertials: dict[str, _Inertial],
+    fixed_children: dict[str, list[tuple[str, etree._Element]]],
+) -> None:
+    # Members with their pose in the child frame (poses computed only if >1 carries mass).
+    members: list[tuple[str, etree._Element | None]] = [(child, None)]
+    stack = [child]
+    while stack:
+        for grandchild, joint in fixed_children[stack.pop()]:
+            members.append((grandchild, joint))
+            stack.append(grandchild)
+    parts = [n for n, _ in members if inertials[n].present]
+    total = math.fsum(inertials[n].mass for n in parts)
+    if total <= 0.0:
+        raise _error(
+            link_el[child],
+            "name",
+            child,
+            f"the link moved by joint {jname!r} has no mass (nor do links fixed to it); a "
+            "moving link needs <inertial> with mass > 0",
+        )
+    if len(parts) == 1:
+        eig = inertials[parts[0]].eig  # rotation-invariant
+    elif any(inertials[n].definite for n in parts) and all(inertials[n].triangle for n in parts):
+        # Sums of physical inertias (tr(S)·E − S with S >= 0, moved by the parallel-axis
+        # theorem, also of that form) stay physical, and adding a definite one makes the
+        # sum definite: nothing to compute.
+        return
+    else:
+        pose: dict[str, tuple[np.ndarray, np.ndarray]] = {child: (np.eye(3), np.zeros(3))}
+        for name, joint in members[1:]:
+            assert joint is not None
+            rot_p, pos_p = pose[joint.find("parent").get("link")]
+            r_j, p_j = _origin(joint)
+            pose[name] = (rot_p @ r_j, rot_p @ p_j + pos_p)
+        coms, mats, masses = [], [], []
+        for name in parts:
+            rot, pos = pose[name]
+            com_l, mat_l = inertials[name].in_link()
+            coms.append(rot @ com_l + pos)
+            mats.append(rot @ mat_l @ rot.T)
+            masses.append(inertials[name].mass)
+        com = sum(m * c for m, c in zip(masses, coms)) / total
+        mat = np.zeros((3, 3))
+        for m, c, inertia in zip(masses, coms, mats):
+            dc = c - com
+            mat += inertia + m * (float(dc @ dc) * np.eye(3) - np.outer(dc, dc))
+        eig = principal_moments(mat[0, 0], mat[1, 1], mat[2, 2], mat[0, 1], mat[0, 2], mat[1, 2])
+    own = inertials[child].element
+    where = own.find("inertia") if own is not None and len(parts) == 1 else link_el[child]
+    merged = (
+        "" if len(parts) == 1 else f" (merged with the links fixed to it: {len(parts)} inertials)"
+    )
+    if not _definite(eig):
+        raise _error(
+            where,
+            None,
+            None,
+            f"the body moved by joint {jname!r}{merged} has an inertia that is not positive "
+            f"definite (principal moments {_eig_text(eig)} kg m^2, mass {total:g} kg); a moving "
+            "link needs a positive-definite inertia",
+        )
+    if not _triangle(eig):
+        raise _error(
+            where,
+            None,
+            None,
+            f"the body moved by joint {jname!r}{merged} has principal moments {_eig_text(eig)} "
+            "kg m^2 that violate the triangle inequality I1 + I2 >= I3 (no real body has them)",
+        )

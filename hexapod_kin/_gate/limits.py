@@ -1,0 +1,100 @@
+"""The gate's caps and tables: sizes, magnitudes, DoF, joint types, numeric attributes.
+
+Part of :mod:`hexapod_kin._gate` (see its docstring for the rules these serve).
+"""
+
+from __future__ import annotations
+
+import re
+
+#: Largest URDF text accepted, in bytes (20 MiB; the largest example-robot-data file is < 1 MiB).
+MAX_URDF_BYTES = 20 * 1024 * 1024
+#: Most links accepted. Pinocchio 4.1 segfaults (recursion) on chains of about 4,000 links;
+#: 1,000 leaves a wide margin and still covers every robot of example-robot-data. Since a tree
+#: of N links has depth at most N, this is also the depth cap.
+MAX_LINKS = 1000
+#: Largest magnitude of any number (SI units). Finite but huge values overflow inside
+#: Pinocchio (an inertial origin of 1e308 m makes the merged inertia infinite), so the gate
+#: caps them; 1e9 (m, kg, N, rad/s ...) is far beyond any robot.
+MAX_ABS = 1e9
+#: The same for ``<limit>``, ``<safety_controller>``, ``<dynamics>``, ``<calibration>`` and
+#: ``<mimic>``, where values such as ±1e16 are a common way to write "unbounded".
+MAX_ABS_LIMIT = 1e20
+_LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
+#: Most degrees of freedom accepted. Pinocchio's ``Data`` grows as about 64·nv³ bytes
+#: (measured with pin 4.1: 0.2 GB at nv = 129, 4 GB at nv = 400; a 1,000-DoF chain exhausts
+#: memory and gets killed), so 128 DoF keeps a model under about 0.2 GB. The largest robot of
+#: example-robot-data (tiago_dual) has 101; a hexapod has 18.
+MAX_DOF = 128
+#: DoFs (nv) of each URDF joint type.
+_JOINT_DOF = {
+    "revolute": 1,
+    "continuous": 1,
+    "prismatic": 1,
+    "fixed": 0,
+    "floating": 6,
+    "planar": 3,
+}
+#: Largest mesh or texture file accepted, in bytes (200 MiB).
+MAX_MESH_BYTES = 200 * 1024 * 1024
+#: Relative tolerance of the triangle inequality ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)``
+#: (CAD exports round their inertias; 1e-6 accepts that rounding, not a wrong tensor).
+TRIANGLE_RTOL = 1e-6
+#: Joint types of the URDF spec.
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+
+_NUM = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+_NUMBER = re.compile(f"^{_NUM}$")
+_WS = r"[ \t\r\n]"
+# Vectors may be padded with whitespace; a scalar may not (urdfdom then silently reads 0).
+_PATTERNS = {n: re.compile(f"{_WS}*" + f"{_WS}+".join([_NUM] * n) + f"{_WS}*$") for n in (3, 4)}
+_PATTERNS[1] = re.compile(f"{_NUM}$")
+_CHECKED_TOP = ("link", "joint", "material")
+_VERSION = re.compile(r"^1\.[0-2]$")
+#: URDF shapes and their required attributes.
+_SHAPES = {
+    "box": ("size",),
+    "cylinder": ("radius", "length"),
+    "sphere": ("radius",),
+    "mesh": ("filename",),
+}
+_BIG = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
+_NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
+_SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
+_RESERVED = {"universe"}
+#: Absolute tolerance on principal moments in [kg m^2] (rounding noise in exported files; a
+#: 1 mg, 0.1 mm part has 1e-14).
+_INERTIA_FLOOR = 1e-18
+
+# (element tag, attribute) → (count of numbers, minimum or None). Attributes not listed are
+# not numeric. The tag is the element's own tag; context-dependent ones are handled in code.
+_NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
+    "origin": {"xyz": (3, None), "rpy": (3, None)},
+    "axis": {"xyz": (3, None)},
+    "limit": {"lower": (1, None), "upper": (1, None), "effort": (1, 0.0), "velocity": (1, 0.0)},
+    "dynamics": {"damping": (1, 0.0), "friction": (1, 0.0)},
+    "safety_controller": {
+        "soft_lower_limit": (1, None),
+        "soft_upper_limit": (1, None),
+        "k_position": (1, None),
+        "k_velocity": (1, None),
+    },
+    "calibration": {"rising": (1, None), "falling": (1, None)},
+    "mimic": {"multiplier": (1, None), "offset": (1, None)},
+    "mass": {"value": (1, 0.0)},
+    "inertia": {a: (1, None) for a in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+    "box": {"size": (3, 0.0)},
+    "cylinder": {"radius": (1, 0.0), "length": (1, 0.0)},
+    "sphere": {"radius": (1, 0.0)},
+    "mesh": {"scale": (3, None)},
+    "color": {"rgba": (4, None)},
+}
+_JOINT_CHILDREN = (
+    "origin",
+    "axis",
+    "limit",
+    "dynamics",
+    "safety_controller",
+    "calibration",
+    "mimic",
+)

@@ -1,0 +1,163 @@
+"""Materials, visual/collision geometry, and the mesh/texture files they name.
+
+Part of :mod:`hexapod_kin._gate`.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from collections.abc import Sequence
+from pathlib import Path
+
+from lxml import etree
+
+from ..exceptions import UrdfError
+from .limits import _SCHEME, _SHAPES, MAX_MESH_BYTES
+from .parse import _error, _numbers, _single
+
+
+class _MeshMissing(UrdfError):
+    """A mesh file that cannot be found (as opposed to one that is refused)."""
+
+
+def _inside(path: str, root: str) -> bool:
+    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
+
+
+def resolve_mesh(
+    uri: str,
+    *,
+    package_dirs: Sequence[str | os.PathLike[str]] = (),
+    mesh_root: str | os.PathLike[str] | None = None,
+) -> Path:
+    """Resolve a mesh/texture ``filename`` to a regular file inside an allowed root.
+
+    Args:
+        uri: The ``filename`` attribute (``package://pkg/path`` or a relative path).
+        package_dirs: Directories ``package://`` URIs resolve in (``<dir>/pkg/path``).
+        mesh_root: Directory relative paths resolve against (the URDF's directory).
+
+    Returns:
+        The real path of the file.
+
+    Raises:
+        UrdfError: Refused scheme or absolute path, an escape out of the root, a missing,
+            non-regular or too large file. (The caller adds the element and line.)
+
+    """
+    if not uri or not uri.strip():
+        raise UrdfError("empty file name")
+    scheme = _SCHEME.match(uri)
+    candidates: list[tuple[str, str]] = []  # (root, joined path)
+    if scheme and scheme.group(1).lower() == "package" and uri[8:10] == "//":
+        # Pinocchio also accepts package:///pkg/path (it joins "<dir>/" + "/pkg/path").
+        rest = uri[10:].lstrip("/")
+        pkg = rest.split("/", 1)[0]
+        if not pkg or "/" not in rest or pkg in (".", ".."):
+            raise UrdfError(f"package URI {uri!r} must be package://<package>/<path>")
+        if not package_dirs:
+            raise _MeshMissing(
+                f"{uri!r}: no package directories are known for this source (URDF text or "
+                "file without package_dirs); package:// meshes cannot be resolved"
+            )
+        candidates = [
+            (os.path.realpath(os.fspath(d)), os.path.join(os.fspath(d), rest)) for d in package_dirs
+        ]
+    elif scheme:
+        raise UrdfError(
+            f"{uri!r}: URI scheme {scheme.group(1)!r} is refused; use package://<package>/"
+            "<path> or a path relative to the URDF file"
+        )
+    elif os.path.isabs(uri) or uri.startswith("~"):
+        raise UrdfError(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
+    else:
+        if mesh_root is None:
+            raise _MeshMissing(
+                f"{uri!r}: relative mesh path but no mesh root (URDF given as text); load the "
+                "URDF from its file so relative paths resolve next to it"
+            )
+        root = os.fspath(mesh_root)
+        candidates = [(os.path.realpath(root), os.path.join(root, uri))]
+    last: UrdfError | None = None
+    for root_real, joined in candidates:
+        real = os.path.realpath(joined)
+        if not _inside(real, root_real):
+            raise UrdfError(f"{uri!r} resolves to {real!r}, outside the allowed root {root_real!r}")
+        try:
+            st = os.stat(real)
+        except OSError:
+            last = _MeshMissing(f"{uri!r}: file {real!r} does not exist")
+            continue
+        if not stat.S_ISREG(st.st_mode):
+            raise UrdfError(f"{uri!r}: {real!r} is not a regular file")
+        if st.st_size > MAX_MESH_BYTES:
+            raise UrdfError(
+                f"{uri!r}: {real!r} has {st.st_size} bytes; the cap is {MAX_MESH_BYTES}"
+            )
+        return Path(real)
+    assert last is not None
+    raise last
+
+
+def _check_rgba(color: etree._Element) -> None:
+    rgba = _numbers(color, "rgba", 4, None)
+    if not rgba:
+        raise _error(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
+    if not all(0.0 <= c <= 1.0 for c in rgba):
+        raise _error(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
+
+
+def _check_materials_and_geometry(root: etree._Element) -> None:
+    """Materials (named, unique, colours in [0, 1]) and visual/collision geometry."""
+    defined: dict[str, etree._Element] = {}
+    for mat in root.findall("material"):
+        name = mat.get("name")
+        if name is None or not name.strip():
+            raise _error(mat, "name", name, "every <material> needs a non-empty name")
+        if name in defined:
+            raise _error(
+                mat,
+                "name",
+                name,
+                f"duplicate material name (first at line "
+                f"{defined[name].sourceline}); material names must be unique",
+            )
+        defined[name] = mat
+        color = _single(mat, "color", required=False)
+        if color is not None:
+            _check_rgba(color)
+    for link in root.findall("link"):
+        for part in ("visual", "collision"):
+            for el in link.findall(part):
+                _single(el, "origin", required=False)
+                geometry = _single(el, "geometry", required=True)
+                assert geometry is not None
+                shapes = [c for c in geometry if isinstance(c.tag, str)]
+                if len(shapes) != 1:
+                    raise _error(
+                        geometry,
+                        None,
+                        None,
+                        f"<geometry> must hold exactly one shape "
+                        f"({', '.join(_SHAPES)}), found {len(shapes)}",
+                    )
+                shape = shapes[0]
+                if shape.tag not in _SHAPES:
+                    raise _error(
+                        shape,
+                        None,
+                        None,
+                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(_SHAPES)}",
+                    )
+                for attr in _SHAPES[shape.tag]:
+                    if shape.get(attr) is None:
+                        raise _error(shape, attr, None, f"<{shape.tag} {attr}> is required")
+                mat = _single(el, "material", required=False) if part == "visual" else None
+                if mat is None:
+                    continue
+                if mat.get("name") is None:  # urdfdom drops the visual; "" is accepted
+                    raise _error(mat, "name", None, "a visual <material> needs a name attribute")
+                color = _single(mat, "color", required=False)
+                if color is not None:
+                    _check_rgba(color)

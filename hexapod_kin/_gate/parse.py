@@ -1,0 +1,191 @@
+"""Strict, hostile-safe XML parsing; element paths in messages; plain decimal numbers.
+
+Part of :mod:`hexapod_kin._gate`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+from lxml import etree
+
+from .._pose import rpy_to_matrix
+from ..exceptions import UrdfError
+from .limits import (
+    _BIG,
+    _CHECKED_TOP,
+    _LIMIT_TAGS,
+    _NEGATIVE,
+    _NUMBER,
+    _NUMERIC,
+    _PATTERNS,
+    _RESERVED,
+    MAX_ABS,
+    MAX_ABS_LIMIT,
+    MAX_URDF_BYTES,
+)
+
+
+# ------------------------------------------------------------------------ messages
+def _where(el: etree._Element) -> str:
+    """``<joint name="j1"> <axis>`` style path of an element, with its line."""
+    parts: list[str] = []
+    node: etree._Element | None = el
+    while node is not None and node.tag != "robot":
+        name = node.get("name")
+        tag = node.tag if isinstance(node.tag, str) else "?"
+        parts.append(
+            f'<{tag} name="{name}">'
+            if name is not None and tag in ("link", "joint", "material", "visual", "collision")
+            else f"<{tag}>"
+        )
+        node = node.getparent()
+    parts.reverse()
+    return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
+
+
+def _error(el: etree._Element, attr: str | None, value: object, problem: str) -> UrdfError:
+    attr_part = f" {attr}={value!r}" if attr is not None else ""
+    return UrdfError(f"URDF {_where(el)}{attr_part}: {problem}")
+
+
+# ------------------------------------------------------------------------ numbers
+def _numbers(el: etree._Element, attr: str, count: int, minimum: float | None) -> tuple[float, ...]:
+    raw = el.get(attr)
+    if raw is None:
+        return ()
+    if count == 1 and raw != raw.strip():
+        raise _error(el, attr, raw, "a single number without surrounding spaces is required")
+    parts = re.split(r"[ \t\r\n]+", raw.strip(" \t\r\n"))
+    if len(parts) != count:
+        raise _error(el, attr, raw, f"{count} number(s) required, found {len(parts)}")
+    out = []
+    for p in parts:
+        if not _NUMBER.match(p):
+            raise _error(el, attr, raw, f"{p!r} is not a decimal number")
+        x = float(p)
+        if not math.isfinite(x):
+            raise _error(el, attr, raw, "numbers must be finite")
+        cap = MAX_ABS_LIMIT if el.tag in _LIMIT_TAGS else MAX_ABS
+        if abs(x) > cap:
+            raise _error(
+                el,
+                attr,
+                raw,
+                f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); numbers are SI values of a robot",
+            )
+        if minimum is not None and x < minimum:
+            raise _error(el, attr, raw, f"must be >= {minimum:g}")
+        out.append(x)
+    return tuple(out)
+
+
+def _check_numbers(root: etree._Element) -> None:
+    """Check every numeric attribute under the ``<link>``, ``<joint>`` and ``<material>``s.
+
+    Fast path: one regular expression per attribute (the exact count of plain decimal
+    numbers); :func:`_numbers` runs only to explain a failure or to look for overflow.
+    """
+    patterns, numeric = _PATTERNS, _NUMERIC
+    for top in root:
+        if top.tag not in _CHECKED_TOP:
+            continue
+        for node in top.iter(*numeric):
+            spec = numeric[node.tag]
+            for attr, raw in node.items():
+                kind = spec.get(attr)
+                if kind is None:
+                    continue
+                if (
+                    not patterns[kind[0]].match(raw)
+                    or _BIG.search(raw)
+                    or (kind[1] is not None and _NEGATIVE.search(raw))
+                ):
+                    _numbers(node, attr, kind[0], kind[1])
+
+
+def _number(el: etree._Element, attr: str, default: float | None = None) -> float:
+    """A single number already validated by :func:`_check_numbers` (or ``default``)."""
+    raw = el.get(attr)
+    if raw is None:
+        if default is None:
+            raise _error(el, attr, None, "attribute is required")
+        return default
+    return float(raw)
+
+
+# ------------------------------------------------------------------------ parsing
+def parse_urdf(text: str | bytes) -> etree._Element:
+    """Parse URDF text with the gate's strict, hostile-safe parser (no other check).
+
+    Raises:
+        UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
+
+    """
+    return _parse(text)
+
+
+def _parse(text: str | bytes) -> etree._Element:
+    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+    if len(data) > MAX_URDF_BYTES:
+        raise UrdfError(f"URDF size {len(data)} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
+    if b"<!DOCTYPE" in data or b"<!ENTITY" in data:
+        raise UrdfError(
+            "URDF contains a DOCTYPE or ENTITY declaration; these are refused (entity "
+            "expansion and external entities are not allowed)"
+        )
+    parser = etree.XMLParser(
+        resolve_entities=False,
+        no_network=True,
+        recover=False,
+        huge_tree=False,
+        load_dtd=False,
+        dtd_validation=False,
+        remove_comments=True,
+        remove_pis=True,
+    )
+    try:
+        tree = etree.fromstring(data, parser).getroottree()
+    except etree.XMLSyntaxError as exc:
+        raise UrdfError(f"URDF is not well-formed XML: {exc}") from None
+    info = tree.docinfo
+    if info.doctype or info.internalDTD is not None or info.externalDTD is not None:
+        raise UrdfError("URDF contains a DOCTYPE declaration; DOCTYPE is refused")
+    enc = (info.encoding or "UTF-8").upper().replace("_", "-")
+    if enc not in ("UTF-8", "UTF8", "US-ASCII", "ASCII"):
+        raise UrdfError(f"URDF encoding={info.encoding!r} is not allowed; use UTF-8")
+    root = tree.getroot()
+    for node in root.iter(etree.Entity):  # entity references left unexpanded
+        raise UrdfError(f"URDF line {node.sourceline}: entity reference {node!s}; refused")
+    return root
+
+
+def _name(el: etree._Element, what: str) -> str:
+    name = el.get("name")
+    if name is None or not name.strip():
+        raise _error(el, "name", name, f"every <{what}> needs a non-empty name")
+    if name in _RESERVED:
+        raise _error(el, "name", name, "the name 'universe' is reserved by Pinocchio")
+    return name
+
+
+def _single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:
+    found = el.findall(tag)
+    if len(found) > 1:
+        raise _error(found[1], None, None, f"<{tag}> given {len(found)} times; at most once")
+    if required and not found:
+        raise _error(el, None, None, f"<{tag}> is required")
+    return found[0] if found else None
+
+
+def _origin(el: etree._Element | None) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation and translation of an element's ``<origin>`` (identity when absent)."""
+    origin = None if el is None else el.find("origin")
+    if origin is None:
+        return np.eye(3), np.zeros(3)
+    xyz = _numbers(origin, "xyz", 3, None) or (0.0, 0.0, 0.0)
+    rpy = _numbers(origin, "rpy", 3, None) or (0.0, 0.0, 0.0)
+    rot = np.eye(3) if not any(rpy) else rpy_to_matrix(*rpy)
+    return rot, np.array(xyz, dtype=float)

@@ -1,0 +1,311 @@
+"""The verdict: structure (names, parents, one root, reachability), joints, then the other checks.
+
+Part of :mod:`hexapod_kin._gate`; :func:`check_urdf` is the one entry point.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from lxml import etree
+
+from ..exceptions import UrdfError
+from .inertials import _check_moving_body, _link_inertial
+from .limits import _JOINT_CHILDREN, _JOINT_DOF, _VERSION, JOINT_TYPES, MAX_DOF, MAX_LINKS
+from .meshes import _check_materials_and_geometry, _MeshMissing, resolve_mesh
+from .parse import _check_numbers, _error, _name, _number, _numbers, _parse, _single
+
+
+@dataclass(frozen=True)
+class GateResult:
+    """What the gate learned about a URDF that passed.
+
+    Attributes:
+        root: The parsed ``<robot>`` element (lxml).
+        links: Link names, in document order.
+        joints: Joint names, in document order.
+        root_link: Name of the root link.
+        meshes: The resolved mesh and texture files, as ``(uri, path)`` pairs in document order.
+        missing_meshes: Mesh/texture URIs that could not be found (lenient mode only), as
+            ``(uri, reason)`` pairs; their visual/collision elements must be dropped.
+        inertia_defects: Physically implausible inertials (lenient mode only), as
+            ``(link, defect)`` pairs; harmless to kinematics, refused by dynamics.
+
+    """
+
+    root: etree._Element
+    links: tuple[str, ...] = ()
+    joints: tuple[str, ...] = ()
+    root_link: str = ""
+    meshes: tuple[tuple[str, Path], ...] = ()
+    missing_meshes: tuple[tuple[str, str], ...] = ()
+    inertia_defects: tuple[tuple[str, str], ...] = ()
+
+
+#: Documents that passed and reference no files, by text (small LRU: generated URDFs are
+#: loaded again and again).
+_CACHE: dict[tuple[bool, str | bytes], GateResult] = {}
+_CACHE_SIZE = 32
+_CACHE_MAX_CHARS = 1_000_000
+
+
+# ------------------------------------------------------------------------ the gate
+def check_urdf(
+    text: str | bytes,
+    *,
+    package_dirs: Iterable[str | os.PathLike[str]] = (),
+    mesh_root: str | os.PathLike[str] | None = None,
+    check_meshes: bool = True,
+    lenient: bool = False,
+) -> GateResult:
+    """Check a URDF document; raise :class:`UrdfError` on the first problem.
+
+    See the module docstring for the full list of checks.
+
+    Args:
+        text: The URDF document (str, or bytes in UTF-8).
+        package_dirs: Directories ``package://pkg/...`` meshes may resolve into.
+        mesh_root: Directory relative mesh paths resolve against (``None`` for URDF text:
+            relative mesh paths are then refused).
+        check_meshes: Whether to resolve and check mesh/texture files (keep ``True``; only
+            tools that never touch geometry may turn it off).
+        lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
+            and a physically implausible inertial (indefinite, massless moving link, zero
+            inertia, triangle inequality) are recorded in ``missing_meshes`` /
+            ``inertia_defects`` instead of raised. Refused meshes (schemes, absolute paths,
+            escapes, non-regular or huge files) and nonsense (negative mass, NaN, missing
+            entries, malformed XML ...) are refused in both modes.
+
+    Returns:
+        A :class:`GateResult` (shared between calls with the same text when the document
+        references no files: the generated URDFs are loaded often; do not modify ``root``).
+
+    Raises:
+        UrdfError: Naming the element, attribute, value and line of the problem.
+
+    """
+    key = (lenient, text)
+    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS:
+        cached = _CACHE.get(key)
+        if cached is not None:
+            return cached
+    result = _check(text, tuple(package_dirs), mesh_root, check_meshes, lenient)
+    if (
+        isinstance(text, str)
+        and len(text) <= _CACHE_MAX_CHARS
+        and not result.meshes
+        and (not result.missing_meshes)
+        and (check_meshes or not any(True for _ in result.root.iter("mesh", "texture")))
+    ):
+        # Without file references the verdict depends on the text alone: remember it.
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = result
+    return result
+
+
+def _check(
+    text: str | bytes,
+    package_dirs: tuple[str | os.PathLike[str], ...],
+    mesh_root: str | os.PathLike[str] | None,
+    check_meshes: bool,
+    lenient: bool = False,
+) -> GateResult:
+    defects: list[tuple[str, str]] | None = [] if lenient else None
+    root = _parse(text)
+    if root.tag != "robot":
+        raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
+    robot_name = root.get("name")
+    if robot_name is None or not robot_name.strip():
+        raise _error(root, "name", robot_name, "<robot> needs a non-empty name")
+    links = root.findall("link")
+    if not links:
+        raise UrdfError("URDF <robot> has no <link>; at least one link is required")
+    if len(links) > MAX_LINKS:
+        raise UrdfError(
+            f"URDF <robot> has {len(links)} links; the cap is {MAX_LINKS} (Pinocchio crashes on "
+            "very long chains)"
+        )
+    version = root.get("version")
+    if version is not None and not _VERSION.match(version):
+        raise _error(root, "version", version, "URDF version must be 1.0, 1.1 or 1.2")
+    _check_numbers(root)
+    _check_materials_and_geometry(root)
+
+    link_el: dict[str, etree._Element] = {}
+    for link in links:
+        name = _name(link, "link")
+        if name in link_el:
+            raise _error(
+                link,
+                "name",
+                name,
+                f"duplicate link name (first at line "
+                f"{link_el[name].sourceline}); link names must be unique",
+            )
+        link_el[name] = link
+
+    joint_el: dict[str, etree._Element] = {}
+    parent_of: dict[str, str] = {}  # child link -> joint name
+    children: dict[str, list[str]] = {n: [] for n in link_el}
+    for joint in root.findall("joint"):
+        name = _name(joint, "joint")
+        if name in joint_el:
+            raise _error(
+                joint,
+                "name",
+                name,
+                f"duplicate joint name (first at line "
+                f"{joint_el[name].sourceline}); joint names must be unique",
+            )
+        joint_el[name] = joint
+        jtype = joint.get("type")
+        if jtype not in JOINT_TYPES:
+            raise _error(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
+        ends = []
+        for tag in ("parent", "child"):
+            el = _single(joint, tag, required=True)
+            assert el is not None
+            lname = el.get("link")
+            if lname not in link_el:
+                raise _error(el, "link", lname, f"{tag} link does not exist")
+            ends.append(lname)
+        parent, child = ends
+        if parent == child:
+            raise _error(joint, "name", name, f"parent and child are the same link {child!r}")
+        if child in parent_of:
+            raise _error(
+                joint,
+                "name",
+                name,
+                f"link {child!r} is already the child of joint "
+                f"{parent_of[child]!r}; a link has at most one parent joint (tree)",
+            )
+        parent_of[child] = name
+        children[parent].append(child)
+        _check_joint(joint, jtype)
+
+    dof = sum(_JOINT_DOF[j.get("type")] for j in joint_el.values())
+    if dof > MAX_DOF:
+        raise UrdfError(
+            f"URDF has {dof} degrees of freedom; the cap is {MAX_DOF} (Pinocchio's Data grows as "
+            "nv^3: 4 GB at 400)"
+        )
+    for joint in joint_el.values():
+        mimic = joint.find("mimic")
+        if mimic is not None:
+            target = mimic.get("joint")
+            if target not in joint_el or target == joint.get("name"):
+                raise _error(mimic, "joint", target, "mimic must name another existing joint")
+
+    roots = [n for n in link_el if n not in parent_of]
+    if len(roots) != 1:
+        if not roots:
+            raise UrdfError(
+                "URDF has no root link (every link is a child): the joints form a cycle"
+            )
+        raise UrdfError(
+            f"URDF has {len(roots)} root links {roots[:10]}; exactly one is required "
+            "(connect them with joints)"
+        )
+    # Reachability from the root (iterative; rejects cycles not containing the root).
+    seen = {roots[0]}
+    stack = [roots[0]]
+    while stack:
+        for c in children[stack.pop()]:
+            if c not in seen:
+                seen.add(c)
+                stack.append(c)
+    if len(seen) != len(link_el):
+        lost = [n for n in link_el if n not in seen]
+        raise _error(
+            link_el[lost[0]],
+            "name",
+            lost[0],
+            f"link not reachable from the root {roots[0]!r}: joints form a cycle",
+        )
+
+    # Masses: each link's inertial, then each moving body (child of a non-fixed joint plus
+    # its fixed-joint descendants, as Pinocchio merges them) must carry mass and inertia.
+    inertials = {n: _link_inertial(el, defects) for n, el in link_el.items()}
+    fixed_children: dict[str, list[tuple[str, etree._Element]]] = {n: [] for n in link_el}
+    for child, jname in parent_of.items():
+        joint = joint_el[jname]
+        if joint.get("type") == "fixed":
+            fixed_children[joint.find("parent").get("link")].append((child, joint))
+    for child, jname in parent_of.items():
+        if joint_el[jname].get("type") != "fixed":
+            _check_moving_body(jname, child, link_el, inertials, fixed_children, defects)
+
+    meshes: list[tuple[str, Path]] = []
+    missing: list[tuple[str, str]] = []
+    if check_meshes:
+        dirs = package_dirs
+        for node in root.iter("mesh", "texture"):
+            uri = node.get("filename")
+            if node.tag == "texture" and uri is None:
+                continue
+            try:
+                path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
+            except _MeshMissing as exc:
+                if not lenient:
+                    raise _error(node, "filename", uri, str(exc)) from None
+                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
+                continue
+            except UrdfError as exc:
+                raise _error(node, "filename", uri, str(exc)) from None
+            meshes.append((uri or "", path))
+    return GateResult(
+        root=root,
+        links=tuple(link_el),
+        joints=tuple(joint_el),
+        root_link=roots[0],
+        meshes=tuple(meshes),
+        missing_meshes=tuple(missing),
+        inertia_defects=tuple(defects or ()),
+    )
+
+
+def _check_joint(joint: etree._Element, jtype: str) -> None:
+    seen: set[str] = set()
+    for sub in joint:
+        tag = sub.tag
+        if tag in seen and tag in _JOINT_CHILDREN:
+            raise _error(sub, None, None, f"<{tag}> given more than once; at most once")
+        seen.add(tag)
+    axis = joint.find("axis")
+    if axis is not None and jtype not in ("fixed", "floating"):
+        xyz = _numbers(axis, "xyz", 3, None)
+        if xyz and math.fsum(v * v for v in xyz) <= 1e-24:
+            raise _error(
+                axis,
+                "xyz",
+                axis.get("xyz"),
+                "joint axis has zero length; a non-zero vector is required",
+            )
+    limit = joint.find("limit")
+    if jtype in ("revolute", "prismatic"):
+        if limit is None:
+            raise _error(
+                joint, "type", jtype, "a revolute or prismatic joint needs <limit> (URDF spec)"
+            )
+        for attr in ("effort", "velocity"):
+            if limit.get(attr) is None:
+                raise _error(limit, attr, None, f"<limit {attr}> is required for {jtype} joints")
+    if limit is not None:
+        lower = _number(limit, "lower", 0.0)
+        upper = _number(limit, "upper", 0.0)
+        if jtype in ("revolute", "prismatic") and lower > upper:
+            raise _error(
+                limit,
+                "lower",
+                limit.get("lower"),
+                f"lower > upper={limit.get('upper')!r}; lower <= upper required",
+            )
+    safety = joint.find("safety_controller")
+    if safety is not None and safety.get("k_velocity") is None:
+        raise _error(safety, "k_velocity", None, "<safety_controller k_velocity> is required")
