@@ -15,8 +15,10 @@ Contents:
     - :func:`sigma_bounds` of a position Jacobian;
     - angle wrapping: :func:`wrap_angle` (scalar, compiled), :func:`wrap_angles` and
       :func:`wrap_diff` (arrays);
-    - the chain's length scale: :func:`chain_length` / :func:`chain_scale` (ONE formula);
-    - :func:`rpy_to_matrix` (URDF ``Rz(yaw)·Ry(pitch)·Rx(roll)``).
+    - the chain's length scale: :func:`chain_length` / :func:`chain_scale` (ONE formula).
+
+RPY → matrix is not here: no kernel needs it compiled, and its one home is
+:func:`hexapod_kin.params.rpy_to_matrix` (pure numpy, no numba import).
 
 Angles in [rad], lengths in [m].
 """
@@ -49,7 +51,6 @@ __all__ = [
     "wrap_diff",
     "chain_length",
     "chain_scale",
-    "rpy_to_matrix",
 ]
 
 _TWO_PI = 2.0 * math.pi
@@ -461,23 +462,3 @@ def chain_scale(trans: Any) -> float:
     """
     s = chain_length(trans)
     return s if s > 0.0 else 1.0
-
-
-# ------------------------------------------------------------------------ rotations
-@njit(cache=True, nogil=True)
-def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:  # pragma: no cover
-    """Rotation matrix ``Rz(yaw)·Ry(pitch)·Rx(roll)`` (the URDF convention), angles in [rad]."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    out = np.empty((3, 3))
-    out[0, 0] = cy * cp
-    out[0, 1] = cy * sp * sr - sy * cr
-    out[0, 2] = cy * sp * cr + sy * sr
-    out[1, 0] = sy * cp
-    out[1, 1] = sy * sp * sr + cy * cr
-    out[1, 2] = sy * sp * cr - cy * sr
-    out[2, 0] = -sp
-    out[2, 1] = cp * sr
-    out[2, 2] = cp * cr
-    return out

@@ -124,6 +124,8 @@ def test_chain_scale_one_formula() -> None:
 
 
 def test_rpy_to_matrix_is_rz_ry_rx() -> None:
+    from hexapod_kin.params import rpy_to_matrix  # the one home (pure numpy)
+
     def rot(axis: int, a: float) -> np.ndarray:
         c, s = math.cos(a), math.sin(a)
         i, j = [(1, 2), (2, 0), (0, 1)][axis]
@@ -135,4 +137,4 @@ def test_rpy_to_matrix_is_rz_ry_rx() -> None:
     for _ in range(20):
         r, p, y = RNG.uniform(-3, 3, size=3)
         ref = rot(2, y) @ rot(1, p) @ rot(0, r)
-        assert np.allclose(N.rpy_to_matrix(r, p, y), ref, atol=1e-15)
+        assert np.allclose(rpy_to_matrix(r, p, y), ref, atol=1e-15)

@@ -126,7 +126,7 @@ def _target(args: argparse.Namespace) -> Any:
                 value=args.yaw,
                 allowed="only with --target",
             )
-        from .._numerics import rpy_to_matrix
+        from ..params import rpy_to_matrix
 
         pose = np.eye(4)
         roll, pitch, yaw = (_angle(args, v) for v in args.pose[3:])
