@@ -26,6 +26,7 @@ import pytest
 from headless import launch_chromium
 
 from hexapod_kin import gait, load, robots, viewer
+from hexapod_kin.viewer.scene import Scene
 from hexapod_kin.exceptions import (
     ConfigurationError,
     FrameNotFoundError,
@@ -344,7 +345,7 @@ def test_demo_trajectories_respect_limits_and_keep_hexapod_feet_down():
     hexa = load("hexapod")
     times, qs, base = gait.demo_trajectory(hexa, 2.0, 21)
     assert base.shape == (21, 4, 4) and np.ptp(base[:, 2, 3]) > 0  # the body moves
-    feet = viewer._Scene(hexa).frame_poses(qs, base, hexa.params.foot_frames)[:, :, :3, 3]
+    feet = Scene(hexa).frame_poses(qs, base, hexa.params.foot_frames)[:, :, :3, 3]
     np.testing.assert_allclose(feet, np.broadcast_to(feet[0], feet.shape), atol=1e-9)
     assert feet[0, :, 2].min() > -1e-9  # standing on z = 0
 
@@ -435,7 +436,7 @@ def test_live_page_shows_the_hexapod(browser):
         page = _Page(browser, allow=(v.url.split("/static/")[0],))
         try:
             page.page.goto(v.url)
-            n = len(viewer._Scene(hexa).visuals)
+            n = len(Scene(hexa).visuals)
             page.page.wait_for_function(
                 "() => window.viewer && Object.keys(viewer.scene_tree.find(['meshcat','robot'])"
                 f".children).length >= {n}",

@@ -34,16 +34,19 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
     from meshcat.path import Path as MPath
 
     from hexapod_kin import gait, load, viewer
+    from hexapod_kin.viewer.objects import bundle
+    from hexapod_kin.viewer.scene import Scene
+    from hexapod_kin.viewer.trajectory import clip
 
     model = load(name)
     times, qs, base = gait.demo_trajectory(model, 4.0, samples)
-    scene = viewer._Scene(model)
+    scene = Scene(model)
     poses = scene.placements(qs, base)
     paths = [v.path for v in scene.visuals]
     fps = (len(times) - 1) / (times[-1] - times[0])
 
     def ours() -> bytes:
-        clips = [viewer._clip(p, times, poses[:, j]) for j, p in enumerate(paths)]
+        clips = [clip(p, times, poses[:, j]) for j, p in enumerate(paths)]
         msg = {"type": "set_animation", "path": "", "animations": clips,
                "options": {"play": True, "repetitions": 1}}
         return bytes(umsgpack.packb(msg))
@@ -79,7 +82,7 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
         rows.append({
             "case": f"{name} export_html ({len(times)} samples)",
             "ms": round(1e3 * t_html, 1), "html_bytes": out.stat().st_size,
-            "bundle_bytes": len(viewer._bundle()),
+            "bundle_bytes": len(bundle()),
         })
     return rows
 

@@ -1,12 +1,12 @@
 """The live meshcat server of the viewer: a loopback-only subprocess and its client.
 
-:class:`MeshcatServer` starts ``python -m hexapod_kin._meshcat_server --serve``, a meshcat
+:class:`MeshcatServer` starts ``python -m hexapod_kin.viewer.bridge --serve``, a meshcat
 websocket bridge whose web server and ZeroMQ socket listen on 127.0.0.1 only (meshcat 0.3.2's
 own server binds the web server to all interfaces; ours binds explicitly), with free ports,
-stopped with its process group on exit, on error and at interpreter exit. :class:`_Client`
+stopped with its process group on exit, on error and at interpreter exit. :class:`Client`
 is a ZeroMQ client with timeouts so that no call hangs when the server is gone
 (:class:`~hexapod_kin.exceptions.ViewerError`). The public names are re-exported by
-:mod:`hexapod_kin.viewer`; import them from there.
+:mod:`hexapod_kin.viewer`.
 """
 
 from __future__ import annotations
@@ -25,68 +25,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ._scene import _INSTALL_HINT, _meshcat_dir, _pack
-from .exceptions import OptionalDependencyError, ViewerError
+from ..exceptions import OptionalDependencyError, ViewerError
+from .objects import INSTALL_HINT, meshcat_dir, pack
 
 __all__ = ["LOOPBACK", "MeshcatServer"]
 
 #: The only address the live server listens on.
 LOOPBACK = "127.0.0.1"
-
-
-def _serve() -> None:  # pragma: no cover - runs in the server subprocess
-    """Run meshcat's websocket bridge bound to 127.0.0.1 (the child of :class:`MeshcatServer`).
-
-    Prints one JSON line ``{"zmq_url", "web_url", "pid"}`` and serves until stdin closes (the
-    parent went away), SIGTERM or SIGINT.
-    """
-    import socket
-    import threading
-
-    import tornado.httpserver
-    import tornado.ioloop
-    import tornado.netutil
-    import zmq
-    from meshcat.servers.tree import SceneTree
-    from meshcat.servers.zmqserver import ZMQWebSocketBridge
-
-    class LoopbackBridge(ZMQWebSocketBridge):
-        def __init__(self) -> None:  # noqa: D401 - not super().__init__: it binds 0.0.0.0
-            self.host = LOOPBACK
-            self.websocket_pool: set[Any] = set()
-            self.app = self.make_app()
-            self.ioloop = tornado.ioloop.IOLoop.current()
-            self.zmq_socket, self.zmq_stream, _ = self.setup_zmq(f"tcp://{LOOPBACK}:*")
-            self.zmq_url = self.zmq_socket.getsockopt_string(zmq.LAST_ENDPOINT)
-            socks = tornado.netutil.bind_sockets(0, address=LOOPBACK, family=socket.AF_INET)
-            self.http_server = tornado.httpserver.HTTPServer(self.app)
-            self.http_server.add_sockets(socks)
-            self.fileserver_port = socks[0].getsockname()[1]
-            self.web_url = f"http://{LOOPBACK}:{self.fileserver_port}/static/"
-            self.tree = SceneTree()
-
-    bridge = LoopbackBridge()
-    loop = bridge.ioloop
-
-    def stop(*_: Any) -> None:
-        loop.add_callback_from_signal(loop.stop)
-
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
-
-    def watch_parent() -> None:
-        try:
-            while sys.stdin.buffer.read(4096):
-                pass
-        except (OSError, ValueError):
-            pass
-        loop.add_callback(loop.stop)
-
-    threading.Thread(target=watch_parent, daemon=True).start()
-    print(json.dumps({"zmq_url": bridge.zmq_url, "web_url": bridge.web_url, "pid": os.getpid()}),
-          flush=True)
-    loop.start()
-    os._exit(0)
 
 
 class MeshcatServer:
@@ -111,16 +56,14 @@ class MeshcatServer:
     def __init__(self, start_timeout: float = 30.0) -> None:
         for mod in ("zmq", "tornado"):
             if importlib.util.find_spec(mod) is None:
-                raise OptionalDependencyError(f"the live viewer needs {mod}; {_INSTALL_HINT}")
-        _meshcat_dir()
+                raise OptionalDependencyError(f"the live viewer needs {mod}; {INSTALL_HINT}")
+        meshcat_dir()
         self._stderr = tempfile.TemporaryFile()
         env = dict(os.environ)
-        pkg_root = str(Path(__file__).resolve().parent.parent)
-        env["PYTHONPATH"] = os.pathsep.join(
-            p for p in (pkg_root, env.get("PYTHONPATH", "")) if p
-        )
+        pkg_root = str(Path(__file__).resolve().parents[2])
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (pkg_root, env.get("PYTHONPATH", "")) if p)
         self._proc: subprocess.Popen[bytes] | None = subprocess.Popen(
-            [sys.executable, "-u", "-m", "hexapod_kin._meshcat_server", "--serve"],
+            [sys.executable, "-u", "-m", "hexapod_kin.viewer.bridge", "--serve"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=self._stderr,
@@ -136,8 +79,10 @@ class MeshcatServer:
             raise
         self.web_url: str = info["web_url"]
         self.zmq_url: str = info["zmq_url"]
-        if not (self.web_url.startswith(f"http://{LOOPBACK}:")
-                and self.zmq_url.startswith(f"tcp://{LOOPBACK}:")):
+        if not (
+            self.web_url.startswith(f"http://{LOOPBACK}:")
+            and self.zmq_url.startswith(f"tcp://{LOOPBACK}:")
+        ):
             self.close()
             raise ViewerError(f"meshcat server reported non-loopback URLs {info}")
 
@@ -220,7 +165,7 @@ class MeshcatServer:
             self.close()
 
 
-class _Client:
+class Client:
     """A ZeroMQ REQ client of the meshcat server whose calls time out (never hang)."""
 
     def __init__(self, server: MeshcatServer, timeout: float) -> None:
@@ -264,7 +209,7 @@ class _Client:
 
     def send(self, cmd: dict[str, Any]) -> None:
         reply = self.request(
-            [cmd["type"].encode("utf-8"), cmd.get("path", "").encode("utf-8"), _pack(cmd)]
+            [cmd["type"].encode("utf-8"), cmd.get("path", "").encode("utf-8"), pack(cmd)]
         )
         if reply != b"ok":
             raise ViewerError(f"the meshcat server refused {cmd['type']!r}: {reply[:200]!r}")
@@ -274,11 +219,3 @@ class _Client:
             self._sock.close(0)
             self._sock = None
         self._ctx.term()
-
-
-
-if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] == ["--serve"]:
-        _serve()
-    else:
-        sys.exit("usage: python -m hexapod_kin._meshcat_server --serve  (internal)")

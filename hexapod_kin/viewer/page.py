@@ -1,0 +1,281 @@
+"""The self-contained offline page: :func:`export_html` and :func:`iframe`.
+
+The page inlines meshcat's JavaScript bundle and the scene as meshcat commands (msgpack,
+base64) decoded by the page itself, so it opens from disk (``file://``) with no server and no
+network: its Content-Security-Policy forbids every fetch.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._io import atomic_write
+from ..exceptions import ParameterError
+from .objects import bundle, pack
+from .scene import PARTS, build_for, resolve_triad_frames
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model
+
+
+# ====================================================================== self-contained HTML
+#: The page may run its own inline code and decode data: URIs, and fetch nothing else.
+_CSP = (
+    "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; "
+    "img-src data: blob:; worker-src blob:"
+)
+_PAGE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta http-equiv="Content-Security-Policy" content="__CSP__">
+<meta name="generator" content="hexapod_kin __VERSION__ (meshcat 0.3.2 bundle)">
+<title>__TITLE__</title>
+<style>
+body { margin: 0; overflow: hidden; font-family: sans-serif; }
+#meshcat-pane { width: 100vw; height: 100vh; overflow: hidden; }
+#hk-panel { position: absolute; left: 8px; top: 8px; padding: 6px 10px; border-radius: 6px;
+  background: rgba(255,255,255,0.82); color: #222; font-size: 13px; line-height: 1.5; }
+#hk-panel b { font-size: 14px; }
+#hk-panel button, #hk-panel select { font-size: 12px; }
+#hk-help { color: #555; font-size: 11px; }
+</style>
+</head>
+<body>
+<div id="meshcat-pane"></div>
+<div id="hk-panel"><b id="hk-title"></b><br>
+<span id="hk-controls"><button id="hk-play">pause</button>
+<label><input type="checkbox" id="hk-loop"> loop</label>
+speed <select id="hk-speed"><option>0.25</option><option>0.5</option><option>1</option>
+<option>2</option><option>4</option></select>
+t = <span id="hk-time">0.000</span> s</span><br>
+<span id="hk-help">__HELP__</span></div>
+<script>
+__BUNDLE__
+</script>
+<script>
+(function () {
+  "use strict";
+  var DATA = __DATA__;
+  function bytes(b64) {
+    var s = atob(b64), out = new Uint8Array(s.length);
+    for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
+    return out;
+  }
+  var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
+  DATA.commands.forEach(function (c) { viewer.handle_command_bytearray(bytes(c)); });
+  var animator = viewer.animator;
+  if (DATA.animation) {
+    viewer.handle_command_bytearray(bytes(DATA.animation));
+    animator.mixer.timeScale = DATA.speed;
+  }
+  document.getElementById("hk-title").textContent = DATA.title;
+  var playBtn = document.getElementById("hk-play"), loopBox = document.getElementById("hk-loop");
+  var speedSel = document.getElementById("hk-speed"), timeEl = document.getElementById("hk-time");
+  if (!DATA.animation) { document.getElementById("hk-controls").style.display = "none"; }
+  loopBox.checked = DATA.loop;
+  speedSel.value = String(DATA.speed);
+  function setLoop(on) {
+    animator.actions.forEach(function (a) { a.repetitions = on ? Infinity : 1; });
+  }
+  function play() {
+    if (animator.actions.length && animator.actions.every(function (a) { return a.paused; })) {
+      animator.reset();
+    }
+    animator.play(); playBtn.textContent = "pause";
+  }
+  function pause() { animator.pause(); playBtn.textContent = "play"; }
+  function seek(t) {
+    animator.actions.forEach(function (a) { a.enabled = true; a.paused = false; a.play(); });
+    animator.pause(); playBtn.textContent = "play";
+    animator.seek(t - DATA.t0); animator.display_progress(t - DATA.t0);
+    viewer.render();
+  }
+  playBtn.onclick = function () { if (animator.playing) { pause(); } else { play(); } };
+  loopBox.onchange = function () { setLoop(loopBox.checked); };
+  speedSel.onchange = function () { animator.mixer.timeScale = parseFloat(speedSel.value); };
+  if (!DATA.play) { playBtn.textContent = "play"; }
+  (function tick() {
+    timeEl.textContent = (DATA.t0 + (animator.time || 0)).toFixed(3);
+    if (DATA.animation && !animator.playing) { playBtn.textContent = "play"; }
+    requestAnimationFrame(tick);
+  })();
+  window.hexapodKin = {
+    viewer: viewer, duration: DATA.duration, t0: DATA.t0, parts: DATA.parts,
+    play: play, pause: pause, seek: seek, setLoop: setLoop,
+    setSpeed: function (s) { animator.mixer.timeScale = s; speedSel.value = String(s); },
+    setVisible: function (part, on) {
+      viewer.set_property(["meshcat", part], "visible", !!on); viewer.render();
+    },
+    render: function () { viewer.render(); },
+    ready: true
+  };
+})();
+</script>
+</body>
+</html>
+"""
+
+
+def _html_data(obj: Any) -> str:
+    """JSON for an inline <script> (no ``</`` or ``<!--`` can close it)."""
+    return (
+        json.dumps(obj, allow_nan=False)
+        .replace("<", "\\u003c")
+        .replace(">", "\\u003e")
+        .replace("&", "\\u0026")
+    )
+
+
+def _html_text(text: str) -> str:
+    return (
+        text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+    )
+
+
+def export_html(
+    model: Model,
+    times: Any,
+    qs: Any,
+    path: str | os.PathLike[str],
+    *,
+    base_poses: Any = None,
+    trace_frame: Any = None,
+    frame_triads: Any = False,
+    singular_mask: Any = None,
+    title: str | None = None,
+    fps: float | None = None,
+    loop: bool = True,
+    speed: float = 1.0,
+    play: bool = True,
+    overlays: Any = None,
+) -> Path:
+    """Write a self-contained animated HTML file of a trajectory (opens from disk, no network).
+
+    The page inlines meshcat's JavaScript bundle and the scene as meshcat commands; it works
+    from ``file://``, in an iframe (Colab, Binder, Jupyter) and offline. Controls: drag to
+    orbit, right-drag to pan, wheel to zoom; a panel with play/pause, loop, speed and the time;
+    meshcat's "Open Controls" menu (scene tree visibility, animation scrubber). For scripts and
+    tests the page exposes ``window.hexapodKin`` (``seek(t)``, ``play()``, ``pause()``,
+    ``setVisible(part, on)``, ``setLoop(on)``, ``setSpeed(s)``).
+
+    Args:
+        model: A loaded model (``hexapod_kin.load(...)``).
+        times: Sample times (N,) in [s], strictly increasing.
+        qs: Joint configurations (N, nq) in [rad] / [m]. A single (nq,) shows a still pose.
+        path: Destination ``.html`` file (written atomically).
+        base_poses: Optional world pose of the model's root per sample, (N, 4, 4) or one (4, 4)
+            (a floating body, e.g. a walking hexapod).
+        trace_frame: Frame(s) whose path is drawn: a name, a sequence of names, ``False`` for
+            none; default the tip (every foot for a hexapod).
+        frame_triads: ``True`` draws the Khalil frames 0..n of the chain (x red, y green,
+            z blue, labelled with the index j); or a sequence of frame names (labelled with
+            their position in the sequence).
+        singular_mask: Optional (N,) booleans; a red sphere marks the traced point at each
+            flagged (near-singular) sample.
+        title: Page title (default: the model's name).
+        fps: Resample the animation at this rate in [frames/s] (default: the given samples,
+            or 60 frames/s above :data:`MAX_SAMPLES` samples).
+        loop: Repeat the animation forever (else play once).
+        speed: Playback speed factor (> 0).
+        play: Start playing when the page opens.
+        overlays: Optional mapping ``name -> (N, M, 3)`` array: a polyline of M world points
+            [m] per sample, drawn as thin tubes and moved with the animation (close a polygon
+            by repeating its first point; repeated points make hidden segments; M = 1 draws
+            a moving sphere), under ``/meshcat/overlays/<name>`` (e.g. a walk's support
+            polygon and projected centre of mass).
+
+    Returns:
+        The path written.
+
+    Raises:
+        ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``/``overlays``.
+        FrameNotFoundError: A frame name does not exist.
+        ParameterError: Bad ``fps``, ``speed`` or destination.
+        OptionalDependencyError: meshcat is not installed.
+        ViewerError: The visual geometry cannot be built.
+
+    """
+    if not (isinstance(speed, (int, float)) and math.isfinite(speed) and 0 < speed <= 100):
+        raise ParameterError(f"speed={speed!r} is not allowed; give a factor in (0, 100]")
+    script = bundle()
+    built = build_for(
+        model,
+        times,
+        qs,
+        base_poses,
+        trace_frame,
+        frame_triads,
+        singular_mask,
+        fps,
+        play,
+        loop,
+        overlays=overlays,
+    )
+    label = title if title is not None else f"hexapod_kin: {model.name}"
+    data = {
+        "title": label,
+        "commands": [base64.b64encode(pack(c)).decode("ascii") for c in built.static],
+        "animation": (
+            base64.b64encode(pack(built.animation)).decode("ascii") if built.animation else None
+        ),
+        "duration": built.duration,
+        "t0": built.t0,
+        "loop": bool(loop),
+        "speed": float(speed),
+        "play": bool(play),
+        "parts": list(PARTS),
+    }
+    from .. import __version__
+
+    help_text = "drag: orbit · right-drag: pan · wheel: zoom"
+    if resolve_triad_frames(model, frame_triads):
+        help_text += " · triads x/y/z = red/green/blue, label = Khalil frame index"
+    if data["commands"] and singular_mask is not None and np.any(singular_mask):
+        help_text += " · red spheres: near-singular samples"
+    page = (
+        _PAGE.replace("__VERSION__", __version__)
+        .replace("__CSP__", _CSP)
+        .replace("__TITLE__", _html_text(label))
+        .replace("__HELP__", _html_text(help_text))
+        .replace("__DATA__", _html_data(data))
+    )
+    page = page.replace("__BUNDLE__", script)  # last: the bundle is never scanned for markers
+    return atomic_write(path, page)
+
+
+def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
+    """An ``<iframe srcdoc=...>`` embedding an exported page (Jupyter, Colab, Binder).
+
+    ``IPython.display.HTML(viewer.iframe("step.html"))`` shows the animation inline; the page
+    stays isolated in its frame (ids, scripts, its Content-Security-Policy), so several can be
+    shown in one notebook.
+
+    Args:
+        html: Path of a file written by :func:`export_html`.
+        height: Frame height in [px] (100..4000).
+
+    Returns:
+        The HTML snippet.
+
+    Raises:
+        ParameterError: Bad ``height`` or not a file.
+
+    """
+    if not (isinstance(height, int) and 100 <= height <= 4000):
+        raise ParameterError(f"height={height!r} is not allowed; give pixels in [100, 4000]")
+    path = Path(html)
+    if not path.is_file():
+        raise ParameterError(f"html={str(path)!r} is not a file written by export_html")
+    doc = path.read_text(encoding="utf-8")
+    return (
+        f'<iframe srcdoc="{_html_text(doc)}" style="width: 100%; height: {height}px; '
+        'border: 0;" sandbox="allow-scripts"></iframe>'
+    )

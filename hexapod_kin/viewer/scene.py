@@ -1,0 +1,529 @@
+"""The model's scene: its visual geometry as meshcat objects, and every command of a trajectory.
+
+:class:`Scene` turns a model's visual geometry into meshcat objects and places them along
+q; :func:`build` makes all commands of one model and trajectory (view, ground, robot, foot
+traces, near-singular markers, overlays, labelled Khalil triads, the animation);
+:func:`scene_commands` is its public face, shared by the offline page and the live viewer.
+
+Scene layout (meshcat paths, all under ``/meshcat``, which is shifted so that the centre of
+the scene sits at the origin, the orbit camera's target)::
+
+    /meshcat/robot/<geometry>   visual geometry of the URDF (boxes, cylinders, spheres, meshes)
+    /meshcat/trace              the path of the traced frame(s) (feet), drawn as thin tubes
+    /meshcat/frames/<k>         triads of the Khalil frames (x red, y green, z blue), each
+                                labelled with its index j (frame 0 = base of the chain)
+    /meshcat/singular           red spheres where the trajectory is near-singular
+    /meshcat/overlays/<name>    per-frame polylines given by the caller
+    /meshcat/ground             a grid at the lowest point of the scene
+
+Poses are Pinocchio's ``oMx`` (pose of x in the world frame of the model), 4×4 arrays; with
+``base_poses`` the whole model is moved by ``worldMroot`` (a floating body).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import ParameterError, ViewerError
+from ..gait.stand import frame_poses
+from .objects import (
+    TRACE_COLORS,
+    ObjectJSON,
+    cylinder,
+    grid,
+    msgpack_lib,
+    nice_step,
+    rotation,
+    set_object,
+    set_property,
+    set_transform,
+    sphere,
+    translation,
+    tube,
+)
+from .overlays import check_overlays, overlay_parts
+from .trajectory import Motion, check_mask, check_motion, clip, resample
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..model import Model
+
+
+#: Parts of the scene that can be shown or hidden (``Viewer.set_visible``).
+PARTS = ("robot", "trace", "frames", "singular", "ground")
+
+
+# ====================================================================== the model's scene
+@dataclass(frozen=True)
+class Visual:
+    """One drawn geometry: its meshcat path, three.js object and bounding radius [m]."""
+
+    path: str
+    obj: dict[str, Any]
+    radius: float
+
+
+class Scene:
+    """The visual geometry of a model as meshcat objects, and their placements along q."""
+
+    def __init__(self, model: Model) -> None:
+        import pinocchio as pin
+
+        self.model = model
+        try:
+            self.geom = model.geometry_model("visual")
+        except (ValueError, RuntimeError, OSError) as exc:
+            raise ViewerError(
+                f"could not build the visual geometry of {model.name!r}: {exc} (meshes resolve "
+                f"against package_dirs={list(model.source.package_dirs)} and "
+                f"mesh_root={model.source.mesh_root!r})"
+            ) from exc
+        self.gdata = pin.GeometryData(self.geom)
+        self.data = model.model.createData()
+        self.visuals: list[Visual] = []
+        self.kept: list[int] = []
+        used: set[str] = set()
+        for k, go in enumerate(self.geom.geometryObjects):
+            item = self._visual(go, used)
+            if item is not None:
+                self.visuals.append(item)
+                self.kept.append(k)
+
+    def _visual(self, go: Any, used: set[str]) -> Visual | None:
+        name = "".join(c if c.isalnum() or c in "_-." else "_" for c in str(go.name)) or "geom"
+        while name in used:
+            name += "_"
+        used.add(name)
+        path = f"/meshcat/robot/{name}"
+        rgba = [float(c) for c in np.asarray(go.meshColor).ravel()[:4]]
+        if len(rgba) < 4 or not all(math.isfinite(c) for c in rgba):
+            rgba = [0.7, 0.7, 0.7, 1.0]
+        obj = ObjectJSON(path)
+        mat = obj.material(rgba)
+        g = go.geometry
+        kind = type(g).__name__
+        scale = np.diag(np.append(np.asarray(go.meshScale, dtype=float).ravel()[:3], 1.0))
+        mesh_path = str(getattr(go, "meshPath", "") or "")
+        if kind == "Box":
+            size = 2.0 * np.asarray(g.halfSide, dtype=float)
+            gid = obj.geometry(
+                {"type": "BoxGeometry", "width": size[0], "height": size[1], "depth": size[2]}
+            )
+            radius = float(np.linalg.norm(size) / 2)
+            intrinsic = np.eye(4)
+        elif kind == "Cylinder":
+            gid = obj.geometry(cylinder(g.radius, 2.0 * g.halfLength))
+            radius = float(math.hypot(g.radius, g.halfLength))
+            intrinsic = rotation("x", math.pi / 2)
+        elif kind == "Capsule":
+            gid = obj.geometry(cylinder(g.radius, 2.0 * g.halfLength + 2.0 * g.radius))
+            radius = float(g.halfLength + g.radius)
+            intrinsic = rotation("x", math.pi / 2)
+        elif kind == "Sphere":
+            gid = obj.geometry(sphere(g.radius))
+            radius = float(g.radius)
+            intrinsic = np.eye(4)
+        elif kind == "Ellipsoid":
+            gid = obj.geometry(sphere(1.0))
+            radii = np.asarray(g.radii, dtype=float)
+            radius = float(radii.max())
+            intrinsic = np.diag(np.append(radii, 1.0))
+        elif mesh_path and Path(mesh_path).is_file():
+            data = self._mesh_file(Path(mesh_path))
+            if data is None:
+                warnings.warn(
+                    f"viewer: mesh {mesh_path} has an unsupported format; skipped", stacklevel=3
+                )
+                return None
+            gid = obj.geometry(data)
+            radius = self._mesh_radius(g) * float(np.max(np.abs(np.diag(scale)[:3])))
+            intrinsic = scale
+        else:
+            warnings.warn(f"viewer: geometry {go.name!r} of type {kind} is not drawn", stacklevel=3)
+            return None
+        root = obj.node("Mesh", geometry=gid, material=mat, matrix=intrinsic, name=name)
+        return Visual(path, obj.lower(root), radius)
+
+    @staticmethod
+    def _mesh_file(path: Path) -> dict[str, Any] | None:
+        suffix = path.suffix.lower()
+        if suffix == ".stl":
+            return {
+                "type": "_meshfile_geometry",
+                "format": "stl",
+                "data": msgpack_lib().Ext(0x12, path.read_bytes()),
+            }
+        if suffix in (".dae", ".obj"):
+            return {
+                "type": "_meshfile_geometry",
+                "format": suffix[1:],
+                "data": path.read_text(encoding="utf-8", errors="replace"),
+            }
+        return None
+
+    @staticmethod
+    def _mesh_radius(g: Any) -> float:
+        try:
+            g.computeLocalAABB()
+            return float(g.aabb_radius + np.linalg.norm(np.asarray(g.aabb_center)))
+        except (AttributeError, RuntimeError):
+            return 0.05
+
+    # -------------------------------------------------------------- placements
+    def placements(self, qs: np.ndarray, base_poses: np.ndarray | None) -> np.ndarray:
+        """World poses (N, G, 4, 4) of the drawn geometries."""
+        import pinocchio as pin
+
+        m, d = self.model.model, self.data
+        out = np.empty((len(qs), len(self.kept), 4, 4))
+        for i, q in enumerate(qs):
+            pin.forwardKinematics(m, d, q)
+            pin.updateGeometryPlacements(m, d, self.geom, self.gdata)
+            for j, k in enumerate(self.kept):
+                out[i, j] = self.gdata.oMg[k].homogeneous
+        if base_poses is not None:
+            out = np.einsum("nab,ngbc->ngac", base_poses, out)
+        return out
+
+    def frame_poses(
+        self, qs: np.ndarray, base_poses: np.ndarray | None, frames: Sequence[str]
+    ) -> np.ndarray:
+        """World poses (N, F, 4, 4) of named frames."""
+        return frame_poses(self.model, self.data, qs, base_poses, frames)
+
+
+def khalil_frames(model: Model) -> tuple[str, ...]:
+    """The Khalil frames 0..n of the model's chain (base → tip), by name.
+
+    Frame 0 is the last frame of ``model.path_frames`` that is fixed to the base (the parent
+    link of the first joint), so for a hexapod leg ``leg1_base`` is 0 and the foot is 4.
+    """
+    m = model.model
+    names = list(model.path_frames)
+    start = 0
+    base_joint = m.frames[m.getFrameId(names[0])].parentJoint
+    for i, name in enumerate(names):
+        if m.frames[m.getFrameId(name)].parentJoint == base_joint:
+            start = i
+        else:
+            break
+    return tuple(names[start:])
+
+
+# ====================================================================== scene + animation
+def resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
+    """The frames whose path is drawn (``None``/``True``: the tip, or every foot)."""
+    from ..params import Hexapod
+
+    if trace_frame is False or trace_frame == ():
+        return ()
+    if trace_frame is None or trace_frame is True:
+        params = model.params
+        if isinstance(params, Hexapod):
+            return tuple(params.foot_frames)
+        return (model.tip,)
+    names = (trace_frame,) if isinstance(trace_frame, str) else tuple(trace_frame)
+    for name in names:
+        model.frame_id(name)
+    return names
+
+
+def resolve_triad_frames(model: Model, frame_triads: Any) -> tuple[str, ...]:
+    """The frames drawn as triads (``True``: the Khalil frames 0..n)."""
+    if frame_triads is False or frame_triads is None:
+        return ()
+    if frame_triads is True:
+        return khalil_frames(model)
+    names = (frame_triads,) if isinstance(frame_triads, str) else tuple(frame_triads)
+    for name in names:
+        model.frame_id(name)
+    return names
+
+
+@dataclass(frozen=True)
+class Built:
+    """Every command of one trajectory: static scene, animation, extent and timing [s]."""
+
+    static: list[dict[str, Any]]
+    animation: dict[str, Any] | None
+    center: np.ndarray
+    radius: float
+    duration: float
+    t0: float
+
+
+def build(
+    scene: Scene,
+    motion: Motion,
+    *,
+    trace_frames: tuple[str, ...],
+    triad_frames: tuple[str, ...],
+    singular_mask: np.ndarray | None,
+    play: bool,
+    loop: bool,
+    overlays: dict[str, np.ndarray] | None = None,
+) -> Built:
+    """All commands for one model and trajectory: static scene, first pose, animation."""
+    poses = scene.placements(motion.qs, motion.base_poses)  # (N, G, 4, 4)
+    radii = np.array([v.radius for v in scene.visuals])
+    tracked = tuple(dict.fromkeys(trace_frames + triad_frames))
+    fposes = scene.frame_poses(motion.qs, motion.base_poses, tracked) if tracked else None
+    # -- extent of the scene over the whole motion
+    pts = poses[:, :, :3, 3].reshape(-1, 3) if len(radii) else np.zeros((1, 3))
+    rad = np.tile(radii, len(poses)) if len(radii) else np.zeros(1)
+    if fposes is not None:
+        pts = np.vstack([pts, fposes[:, :, :3, 3].reshape(-1, 3)])
+        rad = np.concatenate([rad, np.zeros(fposes.shape[0] * fposes.shape[1])])
+    lo = (pts - rad[:, None]).min(axis=0)
+    hi = (pts + rad[:, None]).max(axis=0)
+    center = (lo + hi) / 2
+    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
+    size = radius
+    cmds: list[dict[str, Any]] = []
+    # -- view: light background, no default grid/axes (metres-scale), camera framing the scene
+    cmds.append(set_property("/Background", "top_color", [0.97, 0.97, 0.99]))
+    cmds.append(set_property("/Background", "bottom_color", [0.72, 0.76, 0.82]))
+    cmds.append(set_property("/Grid", "visible", False))
+    cmds.append(set_property("/Axes", "visible", False))
+    cmds.append(set_transform("/meshcat", translation(list(-center))))
+    # Camera: three.js y-up inside /Cameras/default/rotated; world offset (dx, dy, dz) is the
+    # local position (dx, dz, -dy).
+    d = _camera_offset(pts - center, rad, fov_deg=40.0, min_aspect=4 / 3)
+    cam = "/Cameras/default/rotated/<object>"
+    cmds.append(set_property(cam, "position", [float(d[0]), float(d[2]), float(-d[1])]))
+    cmds.append(set_property(cam, "fov", 40.0))
+    cmds.append(set_property(cam, "near", max(radius * 0.01, 1e-4)))
+    cmds.append(set_property(cam, "far", radius * 100.0))
+    # -- ground grid at the lowest point of the scene
+    cell = nice_step(radius / 4)
+    half = cell * max(2, math.ceil(1.6 * radius / cell))
+    ground_z = float(lo[2])
+    g = ObjectJSON("/meshcat/ground")
+    root = g.node(
+        "LineSegments",
+        geometry=g.geometry(grid(half, cell)),
+        material=g.material([0.45, 0.47, 0.52, 0.6], "LineBasicMaterial"),
+        matrix=translation([center[0], center[1], ground_z]),
+    )
+    cmds.append(set_object("/meshcat/ground", g.lower(root)))
+    # -- robot
+    for j, vis in enumerate(scene.visuals):
+        cmds.append(set_object(vis.path, vis.obj))
+        cmds.append(set_transform(vis.path, poses[0, j]))
+    # -- traces
+    tube_r = max(size * 0.006, 1e-4)
+    if trace_frames and fposes is not None:
+        t = ObjectJSON("/meshcat/trace")
+        kids = []
+        for k, name in enumerate(trace_frames):
+            geom = tube(fposes[:, tracked.index(name), :3, 3], tube_r)
+            if geom is None:
+                continue
+            col = TRACE_COLORS[k % len(TRACE_COLORS)]
+            rgb = [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
+            kids.append(
+                t.node("Mesh", geometry=t.geometry(geom), material=t.material(rgb), name=name)
+            )
+        if kids:
+            cmds.append(set_object("/meshcat/trace", t.lower(t.node("Group", children=kids))))
+    # -- singular markers (on the first traced frame, or the tip)
+    if singular_mask is not None and singular_mask.any():
+        if trace_frames and fposes is not None:
+            where = fposes[singular_mask, tracked.index(trace_frames[0]), :3, 3]
+        else:
+            where = scene.frame_poses(
+                motion.qs[singular_mask],
+                None if motion.base_poses is None else motion.base_poses[singular_mask],
+                (scene.model.tip,),
+            )[:, 0, :3, 3]
+        s = ObjectJSON("/meshcat/singular")
+        sg = s.geometry(sphere(max(size * 0.02, 1e-4)))
+        sm = s.material([0.9, 0.05, 0.35, 1.0])
+        kids = [s.node("Mesh", geometry=sg, material=sm, matrix=translation(p)) for p in where]
+        cmds.append(set_object("/meshcat/singular", s.lower(s.node("Group", children=kids))))
+    # -- per-frame overlays (polylines and points given by the caller)
+    o_cmds, o_clips = overlay_parts(overlays or {}, motion.times - motion.times[0], size)
+    cmds += o_cmds
+    # -- triads with labels
+    triad_len = max(size * 0.16, 1e-3)
+    origins: list[np.ndarray] = []
+    for k, name in enumerate(triad_frames):
+        path = f"/meshcat/frames/{k}"
+        assert fposes is not None
+        origin = fposes[0, tracked.index(name), :3, 3]
+        stack = sum(1 for o in origins if np.linalg.norm(o - origin) < 1e-3 * triad_len)
+        origins.append(origin)  # coincident frames (e.g. 0 and 1): labels stacked upwards
+        cmds.append(set_object(path, _triad(path, triad_len, str(k), stack)))
+        cmds.append(set_transform(path, fposes[0, tracked.index(name)]))
+    # -- animation
+    animation = None
+    duration = float(motion.times[-1] - motion.times[0])
+    if len(motion.times) > 1:
+        times = motion.times - motion.times[0]
+        clips = []
+        for j, vis in enumerate(scene.visuals):
+            clips.append(clip(vis.path, times, poses[:, j]))
+        for k, name in enumerate(triad_frames):
+            assert fposes is not None
+            clips.append(clip(f"/meshcat/frames/{k}", times, fposes[:, tracked.index(name)]))
+        clips += o_clips
+        animation = {
+            "type": "set_animation",
+            "path": "",
+            "animations": clips,
+            "options": {"play": bool(play), "repetitions": math.inf if loop else 1},
+        }
+    return Built(cmds, animation, center, radius, duration, float(motion.times[0]))
+
+
+def _camera_offset(
+    points: np.ndarray,
+    radii: np.ndarray,
+    *,
+    fov_deg: float,
+    min_aspect: float,
+    margin: float = 0.92,
+) -> np.ndarray:
+    """Camera position (relative to the scene centre) that fits every ball in the view.
+
+    The camera looks at the centre from the direction (1, −1.25, 0.75) (front-right, above);
+    its distance is the smallest one for which every ball (``points`` (M, 3) relative to the
+    centre, ``radii`` (M,)) projects inside ``margin`` of the vertical field of view
+    ``fov_deg`` and of the horizontal one for an aspect ratio of at least ``min_aspect``.
+    """
+    direction = np.array([1.0, -1.25, 0.75])
+    direction /= np.linalg.norm(direction)
+    right = np.cross(-direction, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -direction)
+    tan_v = math.tan(math.radians(fov_deg) / 2) * margin
+    tan_h = tan_v * min_aspect
+    depth = points @ direction + radii
+    need = (
+        np.maximum((np.abs(points @ up) + radii) / tan_v, (np.abs(points @ right) + radii) / tan_h)
+        + depth
+    )
+    extent = float(np.max(np.linalg.norm(points, axis=1) + radii))
+    dist = max(float(need.max()), 1.2 * extent, 1e-3)
+    return dist * direction
+
+
+def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any]:
+    o = ObjectJSON(key)
+    r = length * 0.05
+    cyl = o.geometry(cylinder(r, length, 12))
+    kids = []
+    axes = (
+        ("x", [0.85, 0.1, 0.1, 1.0], rotation("z", -math.pi / 2)),
+        ("y", [0.1, 0.7, 0.1, 1.0], np.eye(4)),
+        ("z", [0.1, 0.25, 0.9, 1.0], rotation("x", math.pi / 2)),
+    )
+    for i, (_axis, rgba, rot) in enumerate(axes):
+        offset = np.zeros(3)
+        offset[i] = length / 2
+        kids.append(
+            o.node(
+                "Mesh", geometry=cyl, material=o.material(rgba), matrix=translation(offset) @ rot
+            )
+        )
+    tex = o.text_texture(label)
+    mat = o.material([1, 1, 1, 1], "SpriteMaterial", map=tex, depthTest=False, transparent=True)
+    scale = np.diag([length * 0.75, length * 0.75, length * 0.75, 1.0])
+    kids.append(
+        o.node(
+            "Sprite",
+            material=mat,
+            matrix=translation([length * 0.25, length * 0.25, length * (0.55 + 0.5 * stack)])
+            @ scale,
+        )
+    )
+    return o.lower(o.node("Group", children=kids))
+
+
+def scene_commands(
+    model: Model,
+    times: Any,
+    qs: Any,
+    *,
+    base_poses: Any = None,
+    trace_frame: Any = None,
+    frame_triads: Any = False,
+    singular_mask: Any = None,
+    fps: float | None = None,
+    play: bool = True,
+    loop: bool = True,
+    overlays: Any = None,
+) -> list[dict[str, Any]]:
+    """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
+
+    The same commands feed :func:`export_html` and :meth:`Viewer.animate`; the last one is the
+    ``set_animation`` when there is more than one sample. See :func:`export_html` for the
+    arguments.
+
+    Raises:
+        ConfigurationError: Bad shapes or values of ``times``, ``qs``, ``base_poses``,
+            ``singular_mask``.
+        FrameNotFoundError: A traced or triad frame does not exist.
+        ViewerError: The visual geometry cannot be built.
+
+    """
+    built = build_for(
+        model,
+        times,
+        qs,
+        base_poses,
+        trace_frame,
+        frame_triads,
+        singular_mask,
+        fps,
+        play,
+        loop,
+        overlays=overlays,
+    )
+    return built.static + ([built.animation] if built.animation else [])
+
+
+def build_for(
+    model: Model,
+    times: Any,
+    qs: Any,
+    base_poses: Any,
+    trace_frame: Any,
+    frame_triads: Any,
+    singular_mask: Any,
+    fps: float | None,
+    play: bool,
+    loop: bool,
+    scene: Scene | None = None,
+    overlays: Any = None,
+) -> Built:
+    """Check the inputs, resample, and :func:`build` (``scene`` reused if given)."""
+    motion = check_motion(model, times, qs, base_poses)
+    mask = check_mask(singular_mask, len(motion.times))
+    extra = check_overlays(overlays, len(motion.times))
+    if mask is not None and fps is not None:
+        raise ParameterError("singular_mask cannot be combined with fps resampling; give fps=None")
+    if mask is None:
+        given = motion.times
+        motion = resample(motion, fps)
+        if extra and len(motion.times) != len(given):  # hold each sample's overlay
+            idx = np.clip(
+                np.searchsorted(given, motion.times + 1e-12, side="right") - 1, 0, len(given) - 1
+            )
+            extra = {k: v[idx] for k, v in extra.items()}
+    return build(
+        scene or Scene(model),
+        motion,
+        trace_frames=resolve_trace_frames(model, trace_frame),
+        triad_frames=resolve_triad_frames(model, frame_triads),
+        singular_mask=mask,
+        play=play,
+        loop=loop,
+        overlays=extra,
+    )
