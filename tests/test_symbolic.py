@@ -287,19 +287,19 @@ def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
     from hexapod_kin.symbolic import cache as symbolic_cache
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
-    symbolic._MEMO.clear()
+    symbolic.clear_memory()
     first = derive("scara")
     files = list((tmp_path / "symbolic").glob("*.json"))
     assert not first.cached and len(files) == 1
     memo = derive("scara")  # this process: from memory
     assert memo.cached and memo.det == first.det
-    symbolic._MEMO.clear()  # a new process: from the disk
+    symbolic.clear_memory()  # a new process: from the disk
     second = derive("scara")
     assert second.cached and sp.simplify(second.det - first.det) == 0
     assert [f.name for f in second.families] == [f.name for f in first.families]
     assert second.families[0].verified == first.families[0].verified
     files[0].write_text("{ not json", encoding="utf-8")
-    symbolic._MEMO.clear()
+    symbolic.clear_memory()
     third = derive("scara")
     assert not third.cached and sp.simplify(third.det - first.det) == 0
     assert symbolic_cache.load(files[0].stem) is not None  # rewritten
@@ -333,11 +333,11 @@ def test_cached_never_derives(tmp_path, monkeypatch):
     from hexapod_kin.symbolic import cached, family_residuals
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
-    symbolic._MEMO.clear()
+    symbolic.clear_memory()
     assert cached("coxa_tibia_leg") is None
     assert family_residuals("coxa_tibia_leg", derive_missing=False) is None
     d = derive("coxa_tibia_leg")
-    symbolic._MEMO.clear()
+    symbolic.clear_memory()
     again = cached("coxa_tibia_leg")
     assert again is not None and again.cached and sp.simplify(again.gram - d.gram) == 0
     assert family_residuals("coxa_tibia_leg", derive_missing=False) is not None

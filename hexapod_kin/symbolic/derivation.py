@@ -389,6 +389,11 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
+def clear_memory() -> None:
+    """Forget the derivations memoised in this process (the disk cache stays)."""
+    _MEMO.clear()
+
+
 def derive(
     source: Any,
     rows: str | Sequence[str] | None = None,

@@ -103,9 +103,9 @@ def families_of(
                 func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
                 roots = _core.single_joint_roots(_vectorised(func), lo, hi)
                 if revolute:
-                    roots = sorted(
-                        {round(((r + math.pi) % (2 * math.pi)) - math.pi, 15) for r in roots}
-                    )
+                    from .._numerics import wrap_angles  # the one angle wrapping
+
+                    roots = sorted({round(float(r), 15) for r in wrap_angles(roots)})
                 sols = [(sp.Float(r, 12), r) for r in roots]
                 if sols:
                     text = ", ".join(f"{r:.6g}" for _, r in sols)
@@ -226,6 +226,8 @@ class FamilyResiduals:
 
 def build_residuals(deriv: Derivation) -> FamilyResiduals:
     """The derivation's families as numpy residuals and gradients of ``q`` (for scans)."""
+    from .._numerics import wrap_diff  # the one angle wrapping
+
     res: list[Callable[[np.ndarray], np.ndarray]] = []
     grads: list[Callable[[np.ndarray], np.ndarray]] = []
     for fam in deriv.families:
@@ -234,8 +236,8 @@ def build_residuals(deriv: Derivation) -> FamilyResiduals:
             n = len(deriv.q)
 
             def r(qs: np.ndarray, k: int = k, v: float = v, per: bool = per) -> np.ndarray:
-                d = np.atleast_2d(qs)[:, k] - v
-                return (d + np.pi) % (2 * np.pi) - np.pi if per else d
+                qk = np.atleast_2d(qs)[:, k]
+                return wrap_diff(qk, v) if per else qk - v
 
             def g(qs: np.ndarray, k: int = k, n: int = n) -> np.ndarray:
                 out = np.zeros((np.atleast_2d(qs).shape[0], n))

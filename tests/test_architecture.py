@@ -1,0 +1,209 @@
+"""The layout rules of docs/ARCHITECTURE.md, checked by parsing every module of the package.
+
+* no module over :data:`MAX_LINES` lines, except the documented :data:`LONG_MODULES`;
+* no ``from X import _private`` across modules, except from the numerics/kernel layer
+  (:data:`KERNEL_LAYER`) and between modules of the same subpackage;
+* the core (everything left of viewer/plots/cli in the data flow) never imports the
+  application layer (:data:`APP_LAYER`) at module level;
+* every subpackage and lazy submodule named by ``hexapod_kin`` exists.
+
+These read the source only (nothing is imported), so they are fast and cannot be fooled by
+import side effects.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "hexapod_kin"
+MAX_LINES = 800
+#: Modules allowed over MAX_LINES, each with its reason (keep this list short and true).
+LONG_MODULES: dict[str, str] = {
+    "singularity/_kernel.py": (
+        "one numba compilation unit: the per-configuration and the block reductions share "
+        "inline='always' Jacobi rotations and sweeps whose pruning by None-or-array "
+        "arguments keeps cold compiles to what a chain needs; split only with a cold-start "
+        "re-measure (tools/bench_singularity.py, tools/bench_startup.py)"
+    ),
+}
+#: Modules whose private names other modules may import (the compiled layer).
+KERNEL_LAYER = ("_numerics", "_kernels", "_batch", "singularity._kernel")
+#: The application layer: the core never imports these at module level.
+APP_LAYER = ("viewer", "plots", "cli", "report", "sweep")
+
+
+def _modules() -> list[Path]:
+    return sorted(p for p in ROOT.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _dotted(path: Path) -> str:
+    rel = path.relative_to(ROOT.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _package_of(path: Path) -> str:
+    dotted = _dotted(path)
+    return dotted if path.name == "__init__.py" else dotted.rpartition(".")[0]
+
+
+def _resolve(path: Path, node: ast.ImportFrom) -> str:
+    """Absolute module name of an ``ImportFrom`` (relative levels resolved)."""
+    if node.level == 0:
+        return node.module or ""
+    base = _package_of(path).split(".")
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _is_module(dotted: str) -> bool:
+    rel = Path(*dotted.split("."))
+    return (ROOT.parent / rel).with_suffix(".py").exists() or (ROOT.parent / rel).is_dir()
+
+
+def _top_level_imports(tree: ast.Module) -> list[ast.Import | ast.ImportFrom]:
+    """Imports run when the module is imported (not inside functions or TYPE_CHECKING)."""
+    found: list[ast.Import | ast.ImportFrom] = []
+
+    def visit(body: list[ast.stmt]) -> None:
+        for node in body:
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                found.append(node)
+            elif isinstance(node, ast.If):
+                if "TYPE_CHECKING" in ast.unparse(node.test):
+                    visit(node.orelse)
+                else:
+                    visit(node.body)
+                    visit(node.orelse)
+            elif isinstance(node, ast.Try):
+                for part in (node.body, node.orelse, node.finalbody):
+                    visit(part)
+                for handler in node.handlers:
+                    visit(handler.body)
+            elif isinstance(node, (ast.With,)):
+                visit(node.body)
+
+    visit(tree.body)
+    return found
+
+
+def _all_imports(tree: ast.Module) -> list[ast.ImportFrom]:
+    return [n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+
+
+def _rel(path: Path) -> str:
+    return path.relative_to(ROOT).as_posix()
+
+
+def test_the_walk_finds_the_package() -> None:
+    mods = {_rel(p) for p in _modules()}
+    assert {"__init__.py", "params.py", "model.py", "_numerics.py"} <= mods
+    assert len(mods) > 50
+
+
+def test_no_module_over_the_line_cap_except_documented() -> None:
+    sizes = {_rel(p): len(p.read_text(encoding="utf-8").splitlines()) for p in _modules()}
+    over = {name: n for name, n in sizes.items() if n > MAX_LINES and name not in LONG_MODULES}
+    assert not over, f"modules over {MAX_LINES} lines (split them or document why): {over}"
+    stale = [name for name in LONG_MODULES if sizes.get(name, 0) <= MAX_LINES]
+    assert not stale, f"allow-list entries no longer needed: {stale}"
+
+
+def _private_in(path: Path, tree: ast.Module) -> list[str]:
+    """``from X import _name`` lines of one module that break the rule."""
+    bad = []
+    here_pkg = _package_of(path).split(".")
+    for node in _all_imports(tree):
+        target = _resolve(path, node)
+        for alias in node.names:
+            name = alias.name
+            if not name.startswith("_") or name.startswith("__"):
+                continue
+            if _is_module(f"{target}.{name}"):
+                continue  # a private module of a package, imported as a module
+            if target.removeprefix("hexapod_kin.") in KERNEL_LAYER:
+                continue
+            # Same subpackage (not the root package): hexapod_kin.<sub>... -> hexapod_kin.<sub>...
+            target_parts = target.split(".")
+            if len(here_pkg) > 1 and len(target_parts) > 1 and here_pkg[1] == target_parts[1]:
+                continue
+            bad.append(f"{_rel(path)}:{node.lineno}: from {target} import {name}")
+    return bad
+
+
+def _private_imports() -> list[str]:
+    bad = []
+    for path in _modules():
+        bad += _private_in(path, ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
+    return bad
+
+
+def test_no_private_name_imported_across_modules() -> None:
+    bad = _private_imports()
+    assert not bad, "private names imported across modules:\n" + "\n".join(bad)
+
+
+def _layer(dotted: str) -> str:
+    parts = dotted.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def test_core_never_imports_the_application_layer_at_module_level() -> None:
+    bad = []
+    for path in _modules():
+        here = _dotted(path)
+        if _layer(here) in APP_LAYER or here == "hexapod_kin.__main__":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for node in _top_level_imports(tree):
+            if isinstance(node, ast.ImportFrom):
+                target = _resolve(path, node)
+                names = [f"{target}.{a.name}" for a in node.names]
+                targets = [target] + [n for n in names if _is_module(n)]
+            else:
+                targets = [a.name for a in node.names]
+            for t in targets:
+                if t.startswith("hexapod_kin.") and _layer(t) in APP_LAYER:
+                    bad.append(f"{_rel(path)}:{node.lineno}: imports {t}")
+    assert not bad, "core modules importing the application layer:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize("name", ["symbolic", "_gate", "singularity", "ik", "motion", "viewer"])
+def test_packages_named_in_the_architecture_exist(name: str) -> None:
+    assert (ROOT / name / "__init__.py").exists()
+
+
+def test_lazy_submodules_exist() -> None:
+    tree = ast.parse((ROOT / "__init__.py").read_text(encoding="utf-8"))
+    lazy: list[str] = []
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == "_LAZY_SUBMODULES" for t in node.targets
+        ):
+            lazy = [ast.literal_eval(e) for e in node.value.elts]  # type: ignore[attr-defined]
+    assert lazy, "hexapod_kin.__init__ has no _LAZY_SUBMODULES tuple"
+    missing = [n for n in lazy if not _is_module(f"hexapod_kin.{n}")]
+    assert not missing, f"lazy submodules that do not exist: {missing}"
+
+
+def test_the_checkers_see_planted_violations() -> None:
+    # Root-package modules are not a subpackage: a private name between them is refused ...
+    kin = ROOT / "kinematics.py"
+    assert _private_in(kin, ast.parse("from .model import _hidden\n"))
+    assert _private_in(kin, ast.parse("def f():\n    from .ik.solver import _x\n"))
+    # ... from the kernel layer or a private module it is allowed, as inside one subpackage.
+    assert not _private_in(kin, ast.parse("from ._numerics import _helper\n"))
+    assert not _private_in(kin, ast.parse("from . import _gate\n"))
+    assert not _private_in(ROOT / "ik" / "solver.py", ast.parse("from .step import _x\n"))
+    assert _private_in(ROOT / "ik" / "solver.py", ast.parse("from ..motion.rate import _x\n"))
+    # Module-level imports of the application layer are seen; those inside functions are not.
+    src = "import os\ntry:\n    from . import plots\nexcept ImportError:\n    pass\n"
+    top = _top_level_imports(ast.parse(src))
+    assert [type(n).__name__ for n in top] == ["Import", "ImportFrom"]
+    inner = _top_level_imports(ast.parse("def f():\n    from . import plots\n"))
+    assert inner == []

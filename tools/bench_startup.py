@@ -1,0 +1,189 @@
+"""Start times of every ``hexapod-kin`` subcommand, as whole processes: cold and warm.
+
+* **cold**: a fresh ``NUMBA_CACHE_DIR`` and ``HEXAPOD_KIN_CACHE_DIR`` (empty temp folders), so
+  neither the compiled kernels nor the symbolic derivations can be reused: what a new user's
+  first command pays. Python bytecode stays as it is (``pip install`` compiles it; a cold
+  bytecode cache adds about 0.3 s, measured with ``PYTHONPYCACHEPREFIX`` in a new folder).
+* **warm**: the same command again with caches that the first run filled.
+
+Each command runs ``runs`` times per mode (a new cold folder each cold run); the report has
+min / median / max wall seconds and marks a median over its target (cold ≤ 5 s: the first
+command on a fresh install; warm ≤ 1 s). The peer is ``python -c "import hexapod_kin"`` in
+the same run (``ratio`` = median / that), so a slow machine shows as such.
+
+Usage: ``python tools/bench_startup.py [--quick] [--runs N] [--only CMD ...] [--mode cold|warm]``
+or ``python tools/bench.py --only startup``. No timing assertion anywhere: this only prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+COLD_TARGET_S = 5.0
+WARM_TARGET_S = 1.0
+
+#: Every subcommand with typical arguments; ``{out}`` is a scratch folder.
+COMMANDS: dict[str, list[str]] = {
+    "list": ["list"],
+    "urdf": ["urdf", "hexabot_leg", "-o", "{out}/leg.urdf"],
+    "fk": ["fk", "hexabot_leg", "--q", "0", "0.5", "-1"],
+    "jacobian": ["jacobian", "hexabot_leg", "--q", "0", "0.5", "-1"],
+    "ik": ["ik", "hexabot_leg", "--target", "0.25", "0.05", "-0.1"],
+    "step": ["step", "hexabot_leg", "--duration", "1", "--no-baseline"],
+    "scan": ["scan", "hexabot_leg"],
+    "derive": ["derive", "hexabot_leg"],
+    "demo": ["demo", "--out", "{out}/demo"],
+    "animate": ["animate", "hexabot_leg", "--html", "{out}/anim.html"],
+    "gait": ["gait", "--duration", "2"],
+    "pendulum": ["pendulum", "--duration", "2"],
+    "torques": ["torques", "hexabot_leg", "--q", "0", "0.5", "-1"],
+    "stand": ["stand"],
+    "xacro": ["xacro", "hexapod", "-o", "{out}/hexapod.xacro"],
+    "mjcf": ["mjcf", "hexabot_leg", "-o", "{out}/leg.xml"],
+    "export-package": ["export-package", "hexabot_leg", "-o", "{out}/pkg", "-f"],
+    "sweep": ["sweep", "--height", "0.1", "--l2", "0.08:0.12:2", "--mc-samples", "2000"],
+}
+#: The commands of ``--quick`` (a smoke test of the section: one of each kind of cost).
+QUICK = ("list", "fk", "scan")
+
+
+def _cli() -> list[str]:
+    return [sys.executable, "-m", "hexapod_kin"]
+
+
+def _env(cache: Path | None) -> dict[str, str]:
+    env = dict(os.environ)
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(cache / "numba")
+        env["HEXAPOD_KIN_CACHE_DIR"] = str(cache / "hexapod_kin")
+    env.pop("HEXAPOD_KIN_DEBUG", None)
+    return env
+
+
+def _time(argv: list[str], env: dict[str, str], timeout: float) -> tuple[float, int, str]:
+    """Wall seconds, exit status and the last stderr line of one whole process."""
+    t0 = time.perf_counter()
+    try:
+        res = subprocess.run(
+            argv, env=env, capture_output=True, text=True, timeout=timeout, check=False
+        )
+    except subprocess.TimeoutExpired:
+        return time.perf_counter() - t0, -1, f"timed out after {timeout:g} s"
+    last = (res.stderr.strip().splitlines() or [""])[-1]
+    return time.perf_counter() - t0, res.returncode, last
+
+
+def _stats(times: list[float]) -> dict[str, float]:
+    return {
+        "min_s": round(min(times), 3),
+        "median_s": round(statistics.median(times), 3),
+        "max_s": round(max(times), 3),
+    }
+
+
+def measure(
+    names: list[str], runs: int, modes: tuple[str, ...], timeout: float = 300.0
+) -> list[dict[str, Any]]:
+    """Rows of the report: one per command and mode.
+
+    Args:
+        names: Keys of :data:`COMMANDS`.
+        runs: Processes per command and mode (≥ 1).
+        modes: ``"cold"`` and/or ``"warm"``.
+        timeout: Bound of one process in [s].
+
+    Returns:
+        Dicts with the command, mode, min/median/max [s], the peer ratio, the target and
+        ``over`` (True when the median exceeds the target) and the exit status.
+
+    """
+    out_dir = Path(tempfile.mkdtemp(prefix="hk_startup_"))
+    peer_argv = [sys.executable, "-c", "import hexapod_kin"]
+    rows: list[dict[str, Any]] = []
+    try:
+        warm_cache = out_dir / "warm_cache"
+        peer = statistics.median(
+            _time(peer_argv, _env(warm_cache), timeout)[0] for _ in range(max(runs, 3))
+        )
+        for name in names:
+            argv = _cli() + [a.format(out=out_dir) for a in COMMANDS[name]]
+            for mode in modes:
+                times: list[float] = []
+                status, last = 0, ""
+                for i in range(runs):
+                    if mode == "cold":
+                        cache = out_dir / f"cold_{name}_{i}"
+                        dt, status, last = _time(argv, _env(cache), timeout)
+                        shutil.rmtree(cache, ignore_errors=True)
+                    else:
+                        if i == 0:  # fill the caches first (not counted)
+                            _time(argv, _env(warm_cache), timeout)
+                        dt, status, last = _time(argv, _env(warm_cache), timeout)
+                    times.append(dt)
+                target = COLD_TARGET_S if mode == "cold" else WARM_TARGET_S
+                stats = _stats(times)
+                rows.append(
+                    {
+                        "command": name,
+                        "mode": mode,
+                        **stats,
+                        "ratio": round(stats["median_s"] / peer, 1),
+                        "peer_import_s": round(peer, 3),
+                        "target_s": target,
+                        "over": stats["median_s"] > target,
+                        "exit": status,
+                        **({"stderr": last[:120]} if status != 0 else {}),
+                    }
+                )
+    finally:
+        shutil.rmtree(out_dir, ignore_errors=True)
+    return rows
+
+
+def run(quick: bool = False) -> list[dict[str, Any]]:
+    """tools/bench.py's ``startup`` section (``quick``: three commands, one run each)."""
+    if quick:
+        return measure(list(QUICK), 1, ("warm",)) + measure(["fk"], 1, ("cold",))
+    return measure(list(COMMANDS), 3, ("cold", "warm"))
+
+
+def _table(rows: list[dict[str, Any]]) -> str:
+    lines = [f"{'command':16} {'mode':5} {'min':>7} {'median':>7} {'max':>7}  target"]
+    for r in rows:
+        flag = "  OVER" if r["over"] else ""
+        bad = f"  exit {r['exit']}: {r.get('stderr', '')}" if r["exit"] != 0 else ""
+        lines.append(
+            f"{r['command']:16} {r['mode']:5} {r['min_s']:7.2f} {r['median_s']:7.2f} "
+            f"{r['max_s']:7.2f}  <= {r['target_s']:g} s{flag}{bad}"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print the start-time table (seconds, wall clock, whole processes)."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="the bench.py smoke test")
+    parser.add_argument("--runs", type=int, default=3, help="processes per command and mode")
+    parser.add_argument("--only", nargs="+", choices=sorted(COMMANDS), help="these commands")
+    parser.add_argument("--mode", choices=("cold", "warm", "both"), default="both")
+    args = parser.parse_args(argv)
+    if args.quick:
+        rows = run(quick=True)
+    else:
+        modes = ("cold", "warm") if args.mode == "both" else (args.mode,)
+        rows = measure(args.only or list(COMMANDS), max(1, args.runs), modes)
+    print(_table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
