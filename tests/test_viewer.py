@@ -8,6 +8,7 @@ browser.
 from __future__ import annotations
 
 import base64
+import gzip
 import http.client
 import json
 import os
@@ -57,14 +58,24 @@ def _wait_gone(pid: int, timeout: float = 15.0) -> bool:
 
 
 def _html_data(path: Path) -> dict:
+    """The page's DATA, its gzipped scene unpacked: ``commands`` and ``animation`` (bytes)."""
     text = path.read_text(encoding="utf-8")
     m = re.search(r"var DATA = (\{.*?\});\n", text)
     assert m, "no DATA block in the page"
-    return json.loads(m.group(1))
+    data = json.loads(m.group(1))
+    blob = gzip.decompress(base64.b64decode(data["scene"]))
+    cmds, at = [], 0
+    while at < len(blob):
+        n = int.from_bytes(blob[at : at + 4], "little")
+        cmds.append(blob[at + 4 : at + 4 + n])
+        at += 4 + n
+    data["animation"] = cmds.pop() if data["animation"] else None
+    data["commands"] = cmds
+    return data
 
 
-def _decode(b64: str) -> dict:
-    return umsgpack.unpackb(base64.b64decode(b64))
+def _decode(packed: bytes) -> dict:
+    return umsgpack.unpackb(packed)
 
 
 def _f32(ext) -> np.ndarray:
@@ -350,16 +361,105 @@ def test_demo_trajectories_respect_limits_and_keep_hexapod_feet_down():
     assert feet[0, :, 2].min() > -1e-9  # standing on z = 0
 
 
-def test_erd_meshes_are_embedded(tmp_path):
+def _stl_triangles(path: str) -> np.ndarray:
+    """Triangles (T, 3, 3) of a binary STL file, read with numpy alone."""
+    raw = Path(path).read_bytes()
+    n = int.from_bytes(raw[80:84], "little")
+    assert len(raw) == 84 + 50 * n, "not a binary STL"
+    rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    return np.frombuffer(raw[84:], dtype=rec)["v"].astype(float)
+
+
+def _area(tris: np.ndarray) -> float:
+    return float(np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1).sum() / 2)
+
+
+def _mesh_triangles(obj: dict) -> tuple[np.ndarray, np.ndarray | None]:
+    """World-free triangles (T, 3, 3) [m] of a drawn mesh object, and its normals if sent."""
+    geom = obj["geometries"][0]
+    assert geom["type"] == "BufferGeometry"
+    attrs = geom["data"]["attributes"]
+    assert attrs["position"]["array"].type == 0x13  # int16
+    pos = np.frombuffer(attrs["position"]["array"].data, dtype=np.int16).reshape(-1, 3)
+    index = geom["data"]["index"]
+    dtype = {0x14: np.uint16, 0x16: np.uint32}[index["array"].type]
+    idx = np.frombuffer(index["array"].data, dtype=dtype).reshape(-1, 3)
+    M = np.array(obj["object"]["matrix"]).reshape(4, 4).T
+    verts = pos @ M[:3, :3].T + M[:3, 3]
+    normals = None
+    if "normal" in attrs:
+        normals = np.frombuffer(attrs["normal"]["array"].data, dtype=np.float32).reshape(-1, 3)
+    return verts[idx], normals
+
+
+def test_erd_meshes_are_embedded_compactly():
+    """Mesh objects hold the STL's own triangles (int16 positions within one step)."""
     solo = load("erd:solo12", tip="FL_FOOT")
     cmds = viewer.scene_commands(solo, [0.0], solo.neutral()[None, :])
     meshes = [
         c for c in cmds
         if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
     ]
-    assert len(meshes) == solo.geometry_model("visual").ngeoms
-    g = meshes[0]["object"]["geometries"][0]
-    assert g["type"] == "_meshfile_geometry" and g["format"] == "stl" and len(g["data"].data) > 84
+    gm = solo.geometry_model("visual")
+    assert len(meshes) == gm.ngeoms
+    for cmd, go in zip(meshes, gm.geometryObjects):
+        tris, normals = _mesh_triangles(cmd["object"])
+        stl = _stl_triangles(go.meshPath) * np.asarray(go.meshScale)
+        step = np.ptp(stl.reshape(-1, 3), axis=0).max() / 65534
+        np.testing.assert_allclose(tris.reshape(-1, 3).min(0), stl.reshape(-1, 3).min(0), atol=step)
+        np.testing.assert_allclose(tris.reshape(-1, 3).max(0), stl.reshape(-1, 3).max(0), atol=step)
+        assert _area(tris) == pytest.approx(_area(stl), rel=1e-3)
+        assert normals is not None  # the live viewer gets normals (the page computes them)
+        np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
+
+
+def test_mesh_page_is_much_smaller_than_the_mesh_files(tmp_path):
+    """Panda: the page is under 40 % of its bundle plus mesh files (what it embedded before)."""
+    from hexapod_kin.viewer.objects import bundle
+
+    panda = load("erd:panda")
+    q = panda.neutral()
+    path = viewer.export_html(panda, [0.0], q[None, :], tmp_path / "panda.html")
+    gm = panda.geometry_model("visual")
+    files = sum(Path(go.meshPath).stat().st_size for go in gm.geometryObjects)
+    before = len(bundle().encode("utf-8")) + files
+    assert files > 5e6  # the bound is about the meshes
+    assert path.stat().st_size < 0.4 * before
+    data = _html_data(path)
+    robot = [
+        _decode(c) for c in data["commands"]
+        if _decode(c)["path"].startswith("/meshcat/robot/")
+        and _decode(c)["type"] == "set_object"
+    ]
+    assert len(robot) == gm.ngeoms
+    for c in robot:  # the page computes the normals itself
+        assert "normal" not in c["object"]["geometries"][0]["data"]["attributes"]
+
+
+def _rod_radii(model) -> list[float]:
+    cmds = viewer.scene_commands(model, [0.0], model.neutral()[None, :])
+    return [
+        g["radiusTop"]
+        for c in cmds
+        if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+        for g in c["object"]["geometries"]
+        if g["type"] == "CylinderGeometry"
+    ]
+
+
+def test_link_radius_scales_with_the_robot():
+    """PUMA 560's rods are at least 2.5 % of its reach; a small leg keeps its URDF radius."""
+    puma = load(str(Path(__file__).resolve().parent.parent / "examples" / "puma560.toml"))
+    q = np.zeros(puma.nq)
+    tip = np.asarray(puma.fk(q))[:3, 3]
+    reach = float(np.linalg.norm(tip))  # base at the origin: straight-line distance to the flange
+    assert reach > 0.5
+    radii = _rod_radii(puma)
+    assert max(radii) >= 0.025 * reach > puma.params.link_radius  # the URDF's rods: too thin
+    leg = load("hexabot_leg")
+    geoms = [go.geometry for go in leg.geometry_model("visual").geometryObjects]
+    urdf = sorted(g.radius for g in geoms if type(g).__name__ == "Cylinder")
+    assert sorted(_rod_radii(leg)) == pytest.approx(urdf)  # already visible: drawn as it is
 
 
 # ====================================================================== browser: exported HTML

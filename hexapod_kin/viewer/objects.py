@@ -65,16 +65,26 @@ def f32(array: Any) -> Any:
     return msgpack_lib().Ext(0x17, arr.tobytes())
 
 
-def u32(array: Any) -> Any:
-    """A uint32 typed array for meshcat's msgpack decoder (extension 0x16)."""
-    arr = np.ascontiguousarray(np.asarray(array, dtype=np.uint32).ravel())
-    return msgpack_lib().Ext(0x16, arr.tobytes())
+#: msgpack extension codes of meshcat's decoder and three.js type names, by numpy dtype.
+TYPED_ARRAYS = {
+    "int16": (0x13, "Int16Array"),
+    "uint16": (0x14, "Uint16Array"),
+    "uint32": (0x16, "Uint32Array"),
+    "float32": (0x17, "Float32Array"),
+}
 
 
 def attribute(array: np.ndarray, item_size: int) -> dict[str, Any]:
-    """A three.js BufferGeometry attribute of ``array`` (uint32 or float32)."""
-    typename = "Uint32Array" if array.dtype.kind == "u" else "Float32Array"
-    packed = u32(array) if array.dtype.kind == "u" else f32(array)
+    """A three.js BufferGeometry attribute of ``array`` (int16, uint16, uint32 or float32).
+
+    Other integer arrays are sent as uint32, other floats as float32.
+    """
+    kind = array.dtype.name
+    if kind not in TYPED_ARRAYS:
+        kind = "uint32" if array.dtype.kind == "u" else "float32"
+    code, typename = TYPED_ARRAYS[kind]
+    arr = np.ascontiguousarray(np.asarray(array, dtype=kind).ravel())
+    packed = msgpack_lib().Ext(code, arr.tobytes())
     return {"itemSize": item_size, "type": typename, "array": packed, "normalized": False}
 
 

@@ -1,13 +1,15 @@
 """The self-contained offline page: :func:`export_html` and :func:`iframe`.
 
 The page inlines meshcat's JavaScript bundle and the scene as meshcat commands (msgpack,
-base64) decoded by the page itself, so it opens from disk (``file://``) with no server and no
-network: its Content-Security-Policy forbids every fetch.
+gzipped, base64; meshes as int16 vertices without normals) unpacked by the page itself
+(``DecompressionStream``, no fetch; normals computed in the browser), so it opens from disk
+(``file://``) with no server and no network: its Content-Security-Policy forbids every fetch.
 """
 
 from __future__ import annotations
 
 import base64
+import gzip
 import json
 import math
 import os
@@ -19,7 +21,7 @@ import numpy as np
 from .._io import atomic_write
 from ..exceptions import ParameterError
 from .objects import bundle, pack
-from .scene import PARTS, build_for, resolve_triad_frames
+from .scene import PARTS, Scene, build_for, resolve_triad_frames
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
@@ -64,16 +66,47 @@ __BUNDLE__
 (function () {
   "use strict";
   var DATA = __DATA__;
+  var help = document.getElementById("hk-help");
   function bytes(b64) {
     var s = atob(b64), out = new Uint8Array(s.length);
     for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
     return out;
   }
+  // The scene: meshcat commands (msgpack), each after its uint32 length, gzipped together.
+  function inflate(b64) {
+    var stream = new Blob([bytes(b64)]).stream().pipeThrough(new DecompressionStream("gzip"));
+    return new Response(stream).arrayBuffer();
+  }
+  function split(buf) {
+    var view = new DataView(buf), out = [], at = 0;
+    while (at + 4 <= buf.byteLength) {
+      var n = view.getUint32(at, true);
+      out.push(new Uint8Array(buf.slice(at + 4, at + 4 + n)));
+      at += 4 + n;
+    }
+    return out;
+  }
+  if (typeof DecompressionStream === "undefined") {
+    help.textContent = "this browser cannot unpack the scene (no DecompressionStream): " +
+      "open the page in Chrome 80+, Firefox 113+ or Safari 16.4+";
+    return;
+  }
+  inflate(DATA.scene).then(function (buf) { start(split(buf)); }).catch(function (err) {
+    help.textContent = "could not unpack the scene: " + err;
+  });
+  function start(cmds) {
   var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-  DATA.commands.forEach(function (c) { viewer.handle_command_bytearray(bytes(c)); });
+  var anim = DATA.animation ? cmds.pop() : null;
+  cmds.forEach(function (c) { viewer.handle_command_bytearray(c); });
+  viewer.scene.traverse(function (o) {  // meshes come without normals: computed here
+    var g = o.geometry;
+    if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
+      g.computeVertexNormals();
+    }
+  });
   var animator = viewer.animator;
-  if (DATA.animation) {
-    viewer.handle_command_bytearray(bytes(DATA.animation));
+  if (anim) {
+    viewer.handle_command_bytearray(anim);
     animator.mixer.timeScale = DATA.speed;
   }
   document.getElementById("hk-title").textContent = DATA.title;
@@ -117,11 +150,27 @@ __BUNDLE__
     render: function () { viewer.render(); },
     ready: true
   };
+  viewer.render();
+  }
 })();
 </script>
 </body>
 </html>
 """
+
+
+def scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) -> bytes:
+    """The page's scene: every command (msgpack) after its uint32 LE length, gzipped.
+
+    The animation, if any, is the last command. Deterministic (no time stamp in the gzip
+    header), so the same inputs give the same page.
+    """
+    cmds = static + ([animation] if animation is not None else [])
+    parts = []
+    for cmd in cmds:
+        packed = pack(cmd)
+        parts += [len(packed).to_bytes(4, "little"), packed]
+    return gzip.compress(b"".join(parts), compresslevel=9, mtime=0)
 
 
 def _html_data(obj: Any) -> str:
@@ -217,15 +266,14 @@ def export_html(
         fps,
         play,
         loop,
+        scene=Scene(model, normals=False),  # the page computes the normals
         overlays=overlays,
     )
     label = title if title is not None else f"hexapod_kin: {model.name}"
     data = {
         "title": label,
-        "commands": [base64.b64encode(pack(c)).decode("ascii") for c in built.static],
-        "animation": (
-            base64.b64encode(pack(built.animation)).decode("ascii") if built.animation else None
-        ),
+        "scene": base64.b64encode(scene_blob(built.static, built.animation)).decode("ascii"),
+        "animation": built.animation is not None,
         "duration": built.duration,
         "t0": built.t0,
         "loop": bool(loop),
@@ -238,7 +286,7 @@ def export_html(
     help_text = "drag: orbit · right-drag: pan · wheel: zoom"
     if resolve_triad_frames(model, frame_triads):
         help_text += " · triads x/y/z = red/green/blue, label = Khalil frame index"
-    if data["commands"] and singular_mask is not None and np.any(singular_mask):
+    if built.static and singular_mask is not None and np.any(singular_mask):
         help_text += " · red spheres: near-singular samples"
     page = (
         _PAGE.replace("__VERSION__", __version__)

@@ -26,19 +26,18 @@ import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..exceptions import ParameterError, ViewerError
 from ..gait.stand import frame_poses
+from .meshes import mesh_geometry
 from .objects import (
     TRACE_COLORS,
     ObjectJSON,
     cylinder,
     grid,
-    msgpack_lib,
     nice_step,
     rotation,
     set_object,
@@ -69,13 +68,51 @@ class Visual:
     radius: float
 
 
+#: Drawn link radius as a fraction of the chain's length scale (PUMA 560: about 2.4 cm).
+LINK_RADIUS_FRACTION = 0.02
+
+
+def thickening(model: Model, objects: Sequence[Any]) -> tuple[float, float]:
+    """Factor for thin primitives so that links stay visible at the robot's scale.
+
+    The rods of a generated URDF have the chain's ``link_radius`` (0.01 m by default),
+    invisible on a 1 m arm. The rod radius is the largest cylinder radius of the model's
+    primitives; the drawn radius is at least :data:`LINK_RADIUS_FRACTION` of the chain's length
+    scale (``Σ‖tᵢ‖`` of its link offsets, :func:`hexapod_kin._numerics.chain_length`). Cylinders
+    and capsules of the rod radius or thinner, spheres up to 3 rod radii (joints, feet) and
+    boxes up to 6 rod radii wide (the base plate) grow by the same factor (1 to 20); meshes and
+    larger primitives (a hexapod's body) are drawn as they are.
+
+    Returns:
+        ``(factor, rod radius [m])``; ``(1.0, 0.0)`` when the model has no cylinder.
+
+    """
+    from .._numerics import chain_length
+
+    rods = [
+        float(go.geometry.radius)
+        for go in objects
+        if type(go.geometry).__name__ in ("Cylinder", "Capsule")
+    ]
+    if not rods or max(rods) <= 0:
+        return 1.0, 0.0
+    rod = max(rods)
+    try:
+        length = chain_length(model.arrays.trans)
+    except (AttributeError, TypeError, ValueError):
+        return 1.0, rod
+    target = LINK_RADIUS_FRACTION * length
+    return float(min(max(target / rod, 1.0), 20.0)), rod
+
+
 class Scene:
     """The visual geometry of a model as meshcat objects, and their placements along q."""
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: Model, *, normals: bool = True) -> None:
         import pinocchio as pin
 
         self.model = model
+        self.normals = bool(normals)
         try:
             self.geom = model.geometry_model("visual")
         except (ValueError, RuntimeError, OSError) as exc:
@@ -89,6 +126,7 @@ class Scene:
         self.visuals: list[Visual] = []
         self.kept: list[int] = []
         used: set[str] = set()
+        self.thickening = thickening(model, self.geom.geometryObjects)
         for k, go in enumerate(self.geom.geometryObjects):
             item = self._visual(go, used)
             if item is not None:
@@ -108,64 +146,46 @@ class Scene:
         mat = obj.material(rgba)
         g = go.geometry
         kind = type(g).__name__
-        scale = np.diag(np.append(np.asarray(go.meshScale, dtype=float).ravel()[:3], 1.0))
         mesh_path = str(getattr(go, "meshPath", "") or "")
+        grow, rod = self.thickening
         if kind == "Box":
             size = 2.0 * np.asarray(g.halfSide, dtype=float)
+            if np.max(size) <= 6.0 * rod:
+                size = size * grow
             gid = obj.geometry(
                 {"type": "BoxGeometry", "width": size[0], "height": size[1], "depth": size[2]}
             )
             radius = float(np.linalg.norm(size) / 2)
             intrinsic = np.eye(4)
         elif kind == "Cylinder":
-            gid = obj.geometry(cylinder(g.radius, 2.0 * g.halfLength))
-            radius = float(math.hypot(g.radius, g.halfLength))
+            r = g.radius * (grow if g.radius <= rod else 1.0)
+            gid = obj.geometry(cylinder(r, 2.0 * g.halfLength))
+            radius = float(math.hypot(r, g.halfLength))
             intrinsic = rotation("x", math.pi / 2)
         elif kind == "Capsule":
-            gid = obj.geometry(cylinder(g.radius, 2.0 * g.halfLength + 2.0 * g.radius))
-            radius = float(g.halfLength + g.radius)
+            r = g.radius * (grow if g.radius <= rod else 1.0)
+            gid = obj.geometry(cylinder(r, 2.0 * g.halfLength + 2.0 * r))
+            radius = float(g.halfLength + r)
             intrinsic = rotation("x", math.pi / 2)
         elif kind == "Sphere":
-            gid = obj.geometry(sphere(g.radius))
-            radius = float(g.radius)
+            r = g.radius * (grow if g.radius <= 3.0 * rod else 1.0)
+            gid = obj.geometry(sphere(r))
+            radius = float(r)
             intrinsic = np.eye(4)
         elif kind == "Ellipsoid":
             gid = obj.geometry(sphere(1.0))
             radii = np.asarray(g.radii, dtype=float)
             radius = float(radii.max())
             intrinsic = np.diag(np.append(radii, 1.0))
-        elif mesh_path and Path(mesh_path).is_file():
-            data = self._mesh_file(Path(mesh_path))
-            if data is None:
-                warnings.warn(
-                    f"viewer: mesh {mesh_path} has an unsupported format; skipped", stacklevel=3
-                )
-                return None
-            gid = obj.geometry(data)
-            radius = self._mesh_radius(g) * float(np.max(np.abs(np.diag(scale)[:3])))
-            intrinsic = scale
+        elif mesh_path and (mesh := mesh_geometry(g, normals=self.normals)) is not None:
+            gid = obj.geometry(mesh.data)
+            radius = self._mesh_radius(g)  # the BVH has the mesh scale applied
+            intrinsic = mesh.matrix
         else:
             warnings.warn(f"viewer: geometry {go.name!r} of type {kind} is not drawn", stacklevel=3)
             return None
         root = obj.node("Mesh", geometry=gid, material=mat, matrix=intrinsic, name=name)
         return Visual(path, obj.lower(root), radius)
-
-    @staticmethod
-    def _mesh_file(path: Path) -> dict[str, Any] | None:
-        suffix = path.suffix.lower()
-        if suffix == ".stl":
-            return {
-                "type": "_meshfile_geometry",
-                "format": "stl",
-                "data": msgpack_lib().Ext(0x12, path.read_bytes()),
-            }
-        if suffix in (".dae", ".obj"):
-            return {
-                "type": "_meshfile_geometry",
-                "format": suffix[1:],
-                "data": path.read_text(encoding="utf-8", errors="replace"),
-            }
-        return None
 
     @staticmethod
     def _mesh_radius(g: Any) -> float:
