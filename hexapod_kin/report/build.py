@@ -1,0 +1,283 @@
+"""Build the report: run every comparison and experiment, write Markdown and standalone HTML.
+
+``reproduce(out)`` writes into ``out``:
+
+* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``;
+* ``report.html`` — the same, standalone: figures as base64 PNG data URIs, the animations
+  embedded as ``<iframe srcdoc>`` (they also sit beside it as ``step.html`` and ``walk.html``),
+  so it opens offline from ``file://``;
+* ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .._io import atomic_write
+from .compare import Verdict, evaluate, load_claims
+
+__all__ = ["SECTIONS", "Report", "reproduce"]
+
+#: Report sections: (key, title, introduction).
+SECTIONS: tuple[tuple[str, str, str], ...] = (
+    ("tables", "1. The Khalil tables (3-DOF leg, SCARA)",
+     "Seeds 000 and 001 use α2 = −90° with symbolic lengths, seed 003 uses α2 = +90° with "
+     "50/100/100 mm. hexapod_kin's `hexabot_leg` is the −90° table; the `differs` verdict "
+     "says, computed, what the +90° choice does to the FK."),
+    ("transforms", "2. Every ^{j-1}T_j and ^0T_j, symbolically",
+     "Each seed matrix is compared entry by entry with `hexapod_kin.symbolic.derive` of the "
+     "seed's own table (α2 sign and lengths as the seed chose). The full derivations are at "
+     "the end of the section."),
+    ("jacobian", "3. Jacobian (direct, indirect), det J factored, singular families",
+     "The families are read off the factors of det J; the heat maps scan σ_min over two "
+     "joints and label every flagged sample with its family."),
+    ("step", "4. The x-only step (foot velocity [A sin 2πt/T, 0, 0])",
+     "`hexapod_kin.seeds.seed_experiment`: resolved rate, RK4, closed loop on the exact "
+     "reference; the plain Euler + solve loop the seeds used is the baseline in the drift panel."),
+    ("leg2", "5. The 2-DOF leg of seed 002 (FK, IK, Table I replayed)",
+     "FK numbers by Pinocchio (and the table product), the seed's IK Eqs. 9-12 evaluated as "
+     "written, and `ik.analytic`; Table I is `seeds.seed002_schedule`."),
+    ("pendulum", "6. The pendulum of seed 001 (undamped, damped)",
+     "`dynamics.pendulum_experiment` (0.5 m, 1 kg, θ0 = 30°; the seed gives no length or "
+     "mass): the period against the exact elliptic-integral period."),
+    ("beyond", "7. Beyond the seeds: the hexapod standing and walking", ""),
+)
+
+
+def _section(v: Verdict) -> str:
+    if v.kind == "table":
+        return "tables"
+    if v.kind in ("generic",) or (v.kind == "matrix" and "T" in v.claim.split("-")[-1]):
+        return "transforms"
+    if v.seed == "002":
+        return "leg2"
+    if v.claim.endswith(("step", "phase")):
+        return "step"
+    if "pend" in v.claim:
+        return "pendulum"
+    return "jacobian"
+
+
+@dataclass(frozen=True)
+class Report:
+    """A built report.
+
+    Attributes:
+        out: The report folder.
+        markdown: Path of ``report.md``.
+        html: Path of ``report.html``.
+        verdicts: Every verdict, in claims-file order.
+        facts: Other computed figures (scan family counts, standing, walking).
+        seconds: Wall time of the build in [s].
+
+    """
+
+    out: Path
+    markdown: Path
+    html: Path
+    verdicts: tuple[Verdict, ...]
+    facts: dict[str, Any]
+    seconds: float
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Number of verdicts per status."""
+        out = {"agrees": 0, "wrong": 0, "differs": 0, "error": 0}
+        for v in self.verdicts:
+            out[v.status] = out.get(v.status, 0) + 1
+        return out
+
+    def summary(self) -> str:
+        """One line: how many claims, how many agree, are wrong, differ, failed."""
+        c = self.counts
+        text = (f"{len(self.verdicts)} claims checked: {c['agrees']} agree, {c['wrong']} "
+                f"seed is wrong, {c['differs']} differ (convention)")  # fmt: skip
+        return text + (f", {c['error']} NOT COMPUTED" if c["error"] else "")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: paths, counts, verdicts, facts, seconds."""
+        return {
+            "out": str(self.out),
+            "markdown": str(self.markdown),
+            "html": str(self.html),
+            "summary": self.summary(),
+            "counts": self.counts,
+            "seconds": self.seconds,
+            "verdicts": [v.to_dict() for v in self.verdicts],
+            "facts": self.facts,
+        }
+
+
+def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) -> Report:
+    """Redo every result of the four seeds, compare, and write the report into ``out``.
+
+    Args:
+        out: Report folder (created).
+        quick: Reduced sizes (shorter runs, coarser scans) for tests.
+        animations: Write the step and walk animations (needs the ``viewer`` extra).
+
+    Returns:
+        The :class:`Report`.
+
+    """
+    from . import figures
+    from .checks import Context
+
+    start = time.perf_counter()
+    out = Path(out)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    claims, seeds = load_claims()
+    ctx = Context(quick=quick, claims=claims)
+    verdicts = evaluate(claims, ctx)
+    figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
+    anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
+    facts: dict[str, Any] = {}
+    fdir = out / "figures"
+    maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+    figs["jacobian"] += maps
+    figs["step"].append(figures.step_figure(ctx, fdir))
+    facts["step"] = ctx.step.as_dict()
+    figs["leg2"].append(figures.leg2_figure(ctx, fdir))
+    figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
+    facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
+    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0)
+    figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
+    if animations:
+        try:
+            anims["step"].append(figures.step_animation(ctx, out))
+        except Exception as exc:
+            facts["step_animation"] = f"not written: {exc}"
+        for p in walk_paths:
+            if p.suffix == ".html":
+                target = out / "walk.html"
+                p.replace(target)
+                anims["beyond"].append(target)
+    else:
+        for p in walk_paths:
+            if p.suffix == ".html":
+                p.unlink()
+    derivations = {k: ctx.derivation(k).text() for k in ("leg", "leg+", "scara")}
+    md_path, html_path = out / "report.md", out / "report.html"
+    rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
+    parts = (rep, seeds, figs, anims, derivations)
+    atomic_write(md_path, _markdown(*parts))
+    atomic_write(html_path, _html(*parts))
+    seconds = time.perf_counter() - start
+    rep = Report(out, md_path, html_path, tuple(verdicts), facts, seconds)
+    atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
+    return rep
+
+
+_LABEL = {"agrees": "agrees", "wrong": "seed is wrong", "differs": "differs", "error": "NOT COMPUTED"}
+_DERIV = {"leg": "hexabot_leg (α2 = −90°, seeds 000/001)", "leg+": "hexabot_leg(alpha2=+π/2) "
+          "(seed 003)", "scara": "scara (seed 003)"}  # fmt: skip
+
+
+def _facts_lines(key: str, rep: Report) -> list[str]:
+    f = rep.facts
+    if key == "jacobian":
+        return [f"Scan family counts (flagged samples labelled by family): `{f['scan_family_counts']}`"]
+    if key == "step":
+        s = f["step"]
+        return [f"Drift of the closed-loop run: y {s['drift_y']:.2e} m, z {s['drift_z']:.2e} m, "
+                f"x error {s['error_x']:.2e} m; the seeds' plain Euler + solve loop: "
+                f"{ {k: float(f'{v:.2e}') for k, v in s['baseline_euler_solve'].items()} } m."]  # fmt: skip
+    if key == "pendulum":
+        p = f["pendulum"]
+        return [f"Undamped period {p['period']:.9f} s vs exact {p['period_exact']:.9f} s; "
+                f"damped period {p['damped_period']:.6f} s; decay rate {p['decay_rate']:.5f} 1/s "
+                f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s."]  # fmt: skip
+    if key == "beyond":
+        return [f"`{k}` = {v}" for k, v in f["hexapod"].items()]
+    return []
+
+
+def _markdown(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
+              anims: dict[str, list[Path]], derivations: dict[str, str]) -> str:  # fmt: skip
+    lines = ["# hexapod_kin reproduces the four lab reports", "",
+             f"**{rep.summary()}.** Every verdict is computed (see `hexapod_kin/report/`): the "
+             "seeds' claims are data in `claims.toml`, each with its place in the seed.", "",
+             "Seeds:", ""]  # fmt: skip
+    lines += [f"- **{k}**: {v}" for k, v in seeds.items()]
+    lines += ["", "| claim | seed | where | verdict |", "|---|---|---|---|"]
+    for v in rep.verdicts:
+        short = v.text if len(v.text) < 160 else v.text[:157] + "..."
+        lines.append(f"| {v.claim} | {v.seed} | {v.where} | {short.replace('|', '/')} |")
+    for key, title, intro in SECTIONS:
+        lines += ["", f"## {title}", ""]
+        if intro:
+            lines += [intro, ""]
+        for v in rep.verdicts:
+            if _section(v) != key:
+                continue
+            lines += [f"### {v.claim} — seed {v.seed}, {v.where}", "",
+                      f"- seed: `{v.claimed}`", f"- hexapod_kin: `{v.computed}`",
+                      f"- **verdict: {v.text}**", f"- compared: {v.method}", ""]  # fmt: skip
+        lines += _facts_lines(key, rep)
+        for p in figs[key]:
+            lines += ["", f"![{p.stem}](figures/{p.name})"]
+        for p in anims[key]:
+            lines += ["", f"Animation: [{p.name}]({p.name}) (self-contained, opens offline)"]
+        if key == "transforms":
+            for k, text in derivations.items():
+                lines += ["", f"#### Derivation of {_DERIV[k]}", "", "```", text, "```"]
+    return "\n".join(lines) + "\n"
+
+
+def _img(path: Path) -> str:
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return f'<img alt="{path.stem}" src="data:image/png;base64,{data}">'
+
+
+_CSS = """body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em;line-height:1.4}
+code,pre{font-size:12px}pre{overflow-x:auto;background:#f6f6f6;padding:.5em}
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}
+.agrees{color:#17692b}.wrong{color:#b00020}.differs{color:#8a5a00}.error{color:#fff;background:#b00020}
+.item{border-left:4px solid #ddd;padding-left:.7em;margin:1em 0}img{max-width:100%}
+iframe{width:100%;height:520px;border:1px solid #ccc}"""
+
+
+def _html(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
+          anims: dict[str, list[Path]], derivations: dict[str, str]) -> str:  # fmt: skip
+    e = html.escape
+    h = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
+         "<title>hexapod_kin reproduces the seeds</title>", f"<style>{_CSS}</style></head><body>",
+         "<h1>hexapod_kin reproduces the four lab reports</h1>",
+         f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
+         "(<code>hexapod_kin/report/claims.toml</code>), each with its place in the seed.</p><ul>"]  # fmt: skip
+    h += [f"<li><b>{e(k)}</b>: {e(v)}</li>" for k, v in seeds.items()]
+    h.append("</ul><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
+    for v in rep.verdicts:
+        h.append(f"<tr><td><a href='#{e(v.claim)}'>{e(v.claim)}</a></td><td>{e(v.seed)}</td>"
+                 f"<td>{e(v.where)}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>")  # fmt: skip
+    h.append("</table>")
+    for key, title, intro in SECTIONS:
+        h.append(f"<h2>{e(title)}</h2>")
+        if intro:
+            h.append(f"<p>{e(intro)}</p>")
+        for v in rep.verdicts:
+            if _section(v) != key:
+                continue
+            h.append(f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
+                     f"{e(v.where)}</h3><p>seed: <code>{e(v.claimed)}</code></p>"
+                     f"<p>hexapod_kin: <code>{e(v.computed)}</code></p>"
+                     f"<p class='{v.status}'><b>verdict: {e(v.text)}</b></p>"
+                     f"<p><small>compared: {e(v.method)}</small></p></div>")  # fmt: skip
+        h += [f"<p>{e(line)}</p>" for line in _facts_lines(key, rep)]
+        h += [f"<p>{_img(p)}</p>" for p in figs[key]]
+        for p in anims[key]:
+            doc = e(p.read_text(encoding="utf-8"), quote=True)
+            h.append(f"<p>Animation (also <a href='{p.name}'>{p.name}</a>):</p>"
+                     f"<iframe srcdoc=\"{doc}\"></iframe>")  # fmt: skip
+        if key == "transforms":
+            for k, text in derivations.items():
+                h.append(f"<details><summary>Derivation of {e(_DERIV[k])}</summary>"
+                         f"<pre>{e(text)}</pre></details>")  # fmt: skip
+    h.append("</body></html>")
+    return "\n".join(h)

@@ -1,0 +1,483 @@
+"""One check per claim kind, and the :class:`Context` holding hexapod_kin's values (lazily).
+
+Every check returns a :class:`~.compare.Verdict` computed from the claim's data and the
+context; see :mod:`hexapod_kin.report.compare` for the comparison rules and tolerances.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from .compare import (
+    RTOL,
+    Claim,
+    Verdict,
+    _fmt,
+    _fmt_matrix,
+    _num,
+    _Q,
+    _SYMS,
+    equal,
+    matrix_diff,
+    parse,
+    parse_matrix,
+    plain,
+    points_on,
+    vanishes,
+)
+
+__all__ = ["CHECKS", "MODELS", "Context"]
+
+#: Claim ``model`` → the hexapod_kin preset and its parameters.
+MODELS: dict[str, tuple[str, dict[str, float]]] = {
+    "leg": ("hexabot_leg", {"alpha2": -math.pi / 2}),
+    "leg+": ("hexabot_leg", {"alpha2": math.pi / 2}),
+    "scara": ("scara", {}),
+    "coxa": ("coxa_tibia_leg", {}),
+}
+_OTHER = {"leg": ("leg+", "+90°"), "leg+": ("leg", "−90°")}
+_SIGMA = {"0": "revolute", "1": "prismatic", "fixed": "fixed"}
+
+
+class Context:
+    """hexapod_kin's side of every comparison, computed on first use and kept.
+
+    Args:
+        quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
+        claims: All claims (a matrix check looks up the seed's own factors).
+
+    """
+
+    def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
+        self.quick = quick
+        self.claims = {c.id: c for c in claims or []}
+        self._derived: dict[str, Any] = {}
+
+    # ------------------------------------------------------------------ models
+    def chain(self, key: str) -> Any:
+        """The preset chain of a claim's ``model``."""
+        from .. import robots
+
+        name, params = MODELS[key]
+        return robots.get(name, **params)
+
+    def derivation(self, key: str) -> Any:
+        """:func:`hexapod_kin.symbolic.derive` of the model (cached)."""
+        from ..symbolic import derive
+
+        if key not in self._derived:
+            self._derived[key] = derive(self.chain(key), budget=60.0)
+        return self._derived[key]
+
+    def model(self, key: str) -> Any:
+        """The loaded (Pinocchio) model of a claim's ``model``."""
+        from .. import load
+
+        return load(self.chain(key))
+
+    def lengths(self, key: str) -> dict[sp.Symbol, float]:
+        """The preset's length values by plain symbol."""
+        return {plain(k): sp.Float(v) for k, v in self.derivation(key).lengths.items()}
+
+    def item(self, key: str, item: str) -> sp.Matrix:
+        """A named symbolic item of the derivation (``"T 2"``, ``"0T 4"``, ``"p"``, ``"J"``…)."""
+        d = self.derivation(key)
+        if item.startswith("T "):
+            out = d.transforms[int(item[2:]) - 1]
+        elif item.startswith("0T "):
+            out = d.cumulative[int(item[3:]) - 1]
+        elif item == "p":
+            out = d.p
+        elif item == "p - o2":
+            out = d.p - d.cumulative[1][:3, 3]
+        elif item == "J":
+            out = d.J
+        elif item == "J_indirect":
+            out = d.J_indirect
+        elif item == "J x,y,wz":
+            out = d.J_direct.extract([0, 1, 5], [0, 1, 2])
+        else:
+            raise KeyError(f"unknown item {item!r}")
+        return sp.Matrix(plain(sp.Matrix(out)))
+
+    # ------------------------------------------------------------------ experiments
+    @cached_property
+    def step(self) -> Any:
+        """The seeds' x-only step (:func:`hexapod_kin.seeds.seed_experiment`)."""
+        from ..seeds import seed_experiment
+
+        return seed_experiment(duration=4.0 if self.quick else 10.0)
+
+    @cached_property
+    def pendulum(self) -> Any:
+        """Seed 001's pendulum, undamped and damped (:func:`pendulum_experiment`)."""
+        from ..dynamics import pendulum_experiment
+
+        return pendulum_experiment(duration=12.0 if self.quick else 20.0)
+
+    @cached_property
+    def schedule(self) -> dict[str, np.ndarray]:
+        """Seed 002 Table I replayed: q(t), FK, the seed's IK and :func:`ik.analytic`."""
+        from .. import ik
+        from ..seeds import seed002_schedule
+
+        sched = seed002_schedule()
+        t = np.arange(0.0, 22.0 + 1e-9, 0.25 if self.quick else 0.05)
+        q = np.asarray(sched.sample(t), dtype=float)
+        mdl = self.model("coxa")
+        feet = np.array([mdl.position(qi) for qi in q])
+        sols = ik.analytic(self.chain("coxa"), feet)
+        ours = np.array([s[np.argmin(np.abs(s - qi).sum(axis=1))] for s, qi in zip(sols, q)])
+        back = np.array([mdl.position(qi) for qi in ours])
+        claim = self.claims.get("002-table1")
+        seed = (
+            np.array([_seed_ik(claim.data["value"], f, self.lengths("coxa")) for f in feet])
+            if claim is not None
+            else np.full_like(q, np.nan)
+        )
+        return {"t": t, "q": q, "feet": feet, "ours": ours, "back": back, "seed": seed,
+                "knots_t": sched.times, "knots_q": sched.values}  # fmt: skip
+
+    def quantity(self, name: str) -> float:
+        """A measured figure named in a ``bound`` claim."""
+        if name == "step.drift_yz":
+            return max(self.step.drift_y, self.step.drift_z)
+        if name == "step.phase_deg":
+            tr = self.step.trajectory
+            w = 2 * math.pi / self.step.period
+            n = int(math.floor(tr.t[-1] / self.step.period) * self.step.period / tr.dt) + 1
+            t, x, v = tr.t[:n], tr.foot[:n, 0], tr.foot_velocity[:n, 0]
+            ph = np.angle(np.sum((x - x.mean()) * np.exp(-1j * w * t)))
+            pv = np.angle(np.sum(v * np.exp(-1j * w * t)))
+            return float(abs(math.degrees((pv - ph + math.pi) % (2 * math.pi) - math.pi)))
+        p = self.pendulum
+        if name == "pendulum.energy_drift":
+            return float(p.undamped.energy_drift)
+        if name == "pendulum.period_error":
+            return float(abs(p.undamped.period - p.undamped.period_exact) / p.undamped.period_exact)
+        if name == "pendulum.speed_at_zero":
+            th, om = p.undamped.theta, p.undamped.omega
+            k = np.flatnonzero(np.sign(th[:-1]) * np.sign(th[1:]) < 0)
+            s = th[k] / (th[k] - th[k + 1])
+            at_zero = np.abs(om[k] + s * (om[k + 1] - om[k]))
+            return float(at_zero.min() / np.abs(om).max())
+        if name == "pendulum.amplitude_ratio_10s":
+            d = p.damped
+            t = d.simulation.t
+            win = (t >= 9.0) & (t <= 11.0)
+            return float(np.abs(d.theta[win]).max() / d.theta0)
+        raise KeyError(f"unknown quantity {name!r}")
+
+
+def _seed_ik(formulas: dict[str, str], foot: np.ndarray, lengths: dict[sp.Symbol, float]) -> list:
+    env: dict[sp.Symbol, float] = dict(lengths)
+    env.update({_SYMS["x"]: foot[0], _SYMS["y"]: foot[1], _SYMS["z"]: foot[2]})
+    for name, text in formulas.items():
+        env[sp.Symbol(name, real=True)] = _num(parse(text).xreplace(
+            {sp.Symbol(k.name): v for k, v in env.items()}).xreplace(env), {})  # fmt: skip
+    return [env[sp.Symbol("theta1", real=True)], env[sp.Symbol("theta2", real=True)]]
+
+
+def _verdict(c: Claim, claimed: str, computed: str, status: str, reason: str, method: str
+             ) -> Verdict:  # fmt: skip
+    return Verdict(c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method)
+
+
+def _subs(c: Claim) -> dict[sp.Symbol, float]:
+    return {_SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
+
+
+_SYMBOLIC = f"symbolic: every entry at random points (rel. tol {RTOL:g}) then simplify(a - b) == 0"
+
+
+# ---------------------------------------------------------------------- checks
+def check_matrix(c: Claim, ctx: Context) -> Verdict:
+    """``matrix`` claims (transforms, p, J)."""
+    key, item, subs = c.data["model"], c.data["item"], _subs(c)
+    seed = parse_matrix(c.data["value"]).xreplace(subs)
+    truth = ctx.item(key, item).xreplace(subs)
+    claimed, computed = _fmt_matrix(seed), _fmt_matrix(truth.applyfunc(sp.simplify))
+    if seed.shape != truth.shape:
+        return _verdict(c, claimed, computed, "wrong",
+                        f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC)  # fmt: skip
+    diffs = matrix_diff(seed, truth, c.id)
+    if not diffs:
+        return _verdict(c, claimed, computed, "agrees", "", _SYMBOLIC)
+    notes = [f"{len(diffs)} of {truth.rows * truth.cols} entries differ: " + "; ".join(diffs)]
+    if key in _OTHER:
+        other, label = _OTHER[key]
+        if not matrix_diff(seed, ctx.item(other, item).xreplace(subs), c.id):
+            notes.append(f"it is the α2 = {label} matrix (the other sign of row 2)")
+    if item.startswith("0T "):
+        notes.append(_own_product(c, ctx, seed, subs))
+    if "derivative_of" in c.data:
+        p = parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]).xreplace(subs)
+        dp = p.jacobian(_Q[: seed.cols])
+        own = matrix_diff(seed, dp, c.id + "d")
+        notes.append(
+            "it is the derivative of the seed's own p"
+            if not own
+            else "nor is it the derivative of the seed's own p: " + "; ".join(own)
+        )
+    return _verdict(c, claimed, computed, "wrong", " — ".join(n for n in notes if n), _SYMBOLIC)
+
+
+def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
+    j = int(c.data["item"][3:])
+    factors = []
+    for k in range(1, j + 1):
+        f = [x for x in ctx.claims.values() if x.seed == c.seed and x.kind == "matrix"
+             and x.data.get("model") == c.data["model"] and x.data.get("item") == f"T {k}"]  # fmt: skip
+        if not f:
+            return ""
+        factors.append(parse_matrix(f[0].data["value"]).xreplace(subs))
+    prod = sp.eye(4)
+    for f in factors:
+        prod = prod * f
+    own = matrix_diff(seed, prod, c.id + "p")
+    ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, j + 1))
+    if not own:
+        return f"it is the product {ids} of the seed's own factors"
+    return f"it is not the product {ids} of the seed's own factors either ({len(own)} entries)"
+
+
+def check_table(c: Claim, ctx: Context) -> Verdict:
+    """``table`` claims: the seed's rows vs the preset's rows."""
+    key, unit = c.data["model"], float(c.data.get("unit", 1.0))
+    chain = ctx.chain(key)
+    lengths = ctx.lengths(key)
+    subs = _subs(c)
+    problems, alpha_rows = [], []
+    rows = c.data["rows"]
+    for i, (row, (sig, d, alpha, r, theta)) in enumerate(zip(chain.rows, rows), start=1):
+        if _SIGMA.get(sig) != row.sigma:
+            problems.append(f"row {i}: σ {sig} vs {row.sigma}")
+        for name, text, mine, var in (("d", d, row.d, False), ("r", r, row.r, row.sigma ==
+                                      "prismatic"), ("θ", theta, row.theta, row.sigma == "revolute")):  # fmt: skip
+            e = parse(text).xreplace(subs)
+            if any(s in _Q for s in e.free_symbols):
+                if not var:
+                    problems.append(f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin")
+                continue
+            val = _num(e.xreplace(lengths), {}) * (unit if not (e.free_symbols & set(lengths)) else 1.0)
+            if abs(val - mine) > 1e-9:
+                problems.append(f"row {i}: {name} = {text} ({val:g} m) vs {mine:g} m")
+        if abs(math.radians(float(alpha)) - row.alpha) > 1e-12:
+            alpha_rows.append((i, float(alpha), math.degrees(row.alpha)))
+    extra = chain.rows[len(rows):]
+    if len(rows) > len(chain.rows) or any(
+        r.sigma != "fixed" or (r.alpha, r.d, r.theta, r.r) != (0, 0, 0, 0) for r in extra
+    ):
+        problems.append(f"{len(rows)} rows vs {len(chain.rows)}")
+    computed = "; ".join(
+        f"{r.sigma} α={math.degrees(r.alpha):g}° d={r.d:g} θ={r.theta:g} r={r.r:g}" for r in chain.rows
+    )
+    claimed = "; ".join("(" + ", ".join(str(v) for v in row) + ")" for row in rows)
+    method = "numeric, per entry (|Δ| ≤ 1e-9 m or rad), lengths × unit"
+    if problems:
+        return _verdict(c, claimed, computed, "wrong", "; ".join(problems), method)
+    if not alpha_rows:
+        return _verdict(c, claimed, computed, "agrees", "", method)
+    (i, seed_a, ours_a), *_ = alpha_rows
+    p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
+    mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
+    fk = (f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
+          f"(checked symbolically: {mirror}): p_z = {_fmt(p_plus[2])}, a positive knee "
+          f"angle lifts the foot; the lengths agree") if mirror else (
+          f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {_fmt_matrix(p_plus.T)}")  # fmt: skip
+    return _verdict(c, claimed, computed, "differs", f"row {i}: α = {seed_a:+g}° vs "
+                    f"hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}", method)  # fmt: skip
+
+
+def check_generic(c: Claim, ctx: Context) -> Verdict:
+    """``generic``: the seed's generic transform vs :func:`khalil_matrix`."""
+    from ..symbolic import khalil_matrix
+
+    s = _SYMS
+    truth = sp.Matrix(khalil_matrix(s["alpha"], s["d"], s["theta"], s["r"]))
+    seed = parse_matrix(c.data["value"])
+    diffs = matrix_diff(seed, truth, c.id)
+    return _verdict(c, _fmt_matrix(seed), _fmt_matrix(truth), "wrong" if diffs else "agrees",
+                    "; ".join(diffs), _SYMBOLIC)  # fmt: skip
+
+
+def check_methods(c: Claim, ctx: Context) -> Verdict:
+    """``methods_equal``: direct and indirect Jacobians equal."""
+    agree = bool(ctx.derivation(c.data["model"]).methods_agree)
+    ok = agree == bool(c.data["value"])
+    return _verdict(c, f"J_indirect − J_direct = 0: {c.data['value']}",
+                    f"Derivation.methods_agree = {agree}", "agrees" if ok else "wrong",
+                    "" if ok else f"hexapod_kin finds methods_agree = {agree}",
+                    "exact: trig polynomials reduced modulo sin² + cos² = 1")  # fmt: skip
+
+
+def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
+    key = c.data["model"]
+    if c.data.get("item"):
+        return plain(ctx.item(key, c.data["item"]).det())
+    return plain(ctx.derivation(key).det)
+
+
+def check_det(c: Claim, ctx: Context) -> Verdict:
+    """``det``: the seed's det J vs hexapod_kin's factored det J."""
+    subs = _subs(c)
+    seed = parse(c.data["value"]).xreplace(subs)
+    truth = sp.factor(sp.simplify(_det_truth(c, ctx).xreplace(subs)))
+    claimed, computed = _fmt(seed), _fmt(truth)
+    method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
+    if equal(seed, truth, c.id):
+        return _verdict(c, claimed, computed, "agrees", "", method)
+    why = "opposite sign" if equal(seed, -truth, c.id) else f"differs from {computed}"
+    return _verdict(c, claimed, computed, "wrong", why, method)
+
+
+def check_families(c: Claim, ctx: Context) -> Verdict:
+    """``families``: the seed's singular sets vs the factors of det J."""
+    key = c.data["model"]
+    d = ctx.derivation(key)
+    nq = d.chain.nq
+    lengths = ctx.lengths(key)
+    det = plain(d.numeric(d.det))
+    rng = np.random.default_rng(7)
+    det_scale = float(np.median([abs(_num(det, {q: v for q, v in zip(_Q, rng.uniform(-3, 3, nq))}))
+                                 for _ in range(20)]))  # fmt: skip
+    seeds = [parse(v).xreplace(lengths) for v in c.data["value"]]
+    missing, spurious = [], []
+    for fam in d.families:
+        if fam.joint is not None:
+            pts = points_on(sp.Integer(0), nq, c.id + fam.name, fixed={fam.joint: fam.value})
+        else:
+            pts = points_on(plain(d.numeric(fam.factor)), nq, c.id + fam.name)
+        if not any(vanishes(s, pts) for s in seeds):
+            missing.append(fam.name)
+    for s, text in zip(seeds, c.data["value"]):
+        pts = points_on(s, nq, c.id + text)
+        if len(pts) and not vanishes(det, pts, det_scale, 1e-9):
+            q = np.round(pts[0], 3).tolist()
+            val = _num(det, {qq: v for qq, v in zip(_Q, pts[0])})
+            spurious.append(f"{text} = 0 is not singular (det J = {val:.3g} at q = {q})")
+    claimed = ", ".join(f"{v} = 0" for v in c.data["value"]) or "no singularity"
+    computed = f"det J = {_fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
+    method = ("numeric on sampled points: a seed set covers a family when its residual is "
+              "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
+              "(relative) on 5 of its points")
+    if not missing and not spurious:
+        return _verdict(c, claimed, computed, "agrees", "", method)
+    parts = [f"misses the family {m}" for m in missing] + spurious
+    return _verdict(c, claimed, computed, "wrong", "; ".join(parts), method)
+
+
+def check_fk(c: Claim, ctx: Context) -> Verdict:
+    """``fk``: the seed's foot position vs Pinocchio (and the table product)."""
+    from ..params import table_fk
+
+    q = np.radians(c.data["q_deg"])
+    ours = ctx.model(c.data["model"]).position(q)
+    table = table_fk(ctx.chain(c.data["model"]), q)[:3, 3]
+    seed = np.asarray(c.data["value"], float)
+    tol = float(c.data["tol"])
+    err = float(np.max(np.abs(seed - ours)))
+    computed = f"{np.round(ours, 6).tolist()} (table product: |Δ| = {np.max(np.abs(table - ours)):.1e})"
+    method = f"numeric, max |Δ| ≤ {tol:g} (the seed's 4 decimals)"
+    if err <= tol:
+        return _verdict(c, str(seed.tolist()), computed, "agrees", "", method)
+    return _verdict(c, str(seed.tolist()), computed, "wrong", f"max |Δ| = {err:.3g} > {tol:g}", method)
+
+
+def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) -> list[str]:
+    bad = []
+    for k, (s, t, o) in enumerate(zip(np.degrees(seed), np.degrees(q), np.degrees(ours)), 1):
+        if abs(s - t) > tol:
+            sign = " — the sign is lost (acos gives |θ|)" if abs(s + t) <= tol else ""
+            bad.append(f"θ{k}: the seed's formulas give {s:+.4f}°, the leg is at {t:+.4f}° "
+                       f"(ik.analytic: {o:+.4f}°){sign}")  # fmt: skip
+    return bad
+
+
+def check_ik(c: Claim, ctx: Context) -> Verdict:
+    """``ik``: the seed's IK formulas, evaluated as written, at FK(q)."""
+    from .. import ik
+
+    key = c.data["model"]
+    q = np.radians(c.data["q_deg"])
+    mdl = ctx.model(key)
+    foot = mdl.position(q)
+    seed = np.array(_seed_ik(c.data["value"], foot, ctx.lengths(key)))
+    sols = ik.analytic(ctx.chain(key), foot)[0]
+    ours = sols[np.argmin(np.abs(sols - q).sum(axis=1))]
+    back = float(np.max(np.abs(mdl.position(ours) - foot)))
+    tol = float(c.data["tol_deg"])
+    claimed = "; ".join(f"{k} = {v}" for k, v in c.data["value"].items())
+    computed = (f"P = {np.round(foot, 4).tolist()}; seed formulas → {np.round(np.degrees(seed), 4).tolist()}°; "
+                f"ik.analytic → {np.round(np.degrees(ours), 4).tolist()}° (FK back: |Δ| = {back:.1e})")  # fmt: skip
+    method = f"numeric, |Δθ| ≤ {tol:g}° against the angles P was made from"
+    bad = _ik_reason(seed, q, ours, tol)
+    return _verdict(c, claimed, computed, "wrong" if bad else "agrees", "; ".join(bad), method)
+
+
+def check_schedule(c: Claim, ctx: Context) -> Verdict:
+    """``schedule``: seed 002 Table I replayed, FK then IK (seed's formulas and ours)."""
+    s = ctx.schedule
+    knots = np.asarray(c.data["knots"], float)
+    same = np.allclose(knots[:, 0], s["knots_t"]) and np.allclose(np.radians(knots[:, 1:]), s["knots_q"])
+    tol = float(c.data["tol_deg"])
+    ours_err = float(np.degrees(np.max(np.abs(s["ours"] - s["q"]))))
+    seed_err = np.degrees(np.abs(s["seed"] - s["q"]))
+    worst = np.unravel_index(np.argmax(seed_err), seed_err.shape)
+    n_bad = int(np.count_nonzero(seed_err.max(axis=1) > tol))
+    computed = (f"{len(s['t'])} samples; ik.analytic max |Δθ| = {ours_err:.2e}°, FK back "
+                f"max |Δ| = {np.max(np.abs(s['back'] - s['feet'])):.1e}; the seed's formulas: "
+                f"max |Δθ| = {seed_err.max():.4f}°; Table I = seed002_schedule: {same}")  # fmt: skip
+    claimed = "IK output = input pattern (θ1 0..20°, θ2 −90..−50°)"
+    method = f"numeric, every sample, |Δθ| ≤ {tol:g}°"
+    if ours_err > tol or not same:
+        return _verdict(c, claimed, computed, "error", "hexapod_kin's own replay failed", method)
+    if n_bad == 0:
+        return _verdict(c, claimed, computed, "agrees", "", method)
+    t, j = float(s["t"][worst[0]]), int(worst[1])
+    return _verdict(c, claimed, computed, "wrong", (
+        f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of {len(s['t'])} samples: "
+        f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
+        f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"), method)
+
+
+def check_bound(c: Claim, ctx: Context) -> Verdict:
+    """``bound``: a measured quantity within ``tol`` of the claimed value."""
+    val = ctx.quantity(c.data["quantity"])
+    target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
+    claimed = f"{c.data['quantity']} = {target:g} {unit}"
+    computed = f"{val:.4g} {unit}"
+    method = f"numeric, |measured − claimed| ≤ {tol:g} {unit}"
+    if abs(val - target) <= tol:
+        return _verdict(c, claimed, computed, "agrees", "", method)
+    extra = ""
+    if c.data["quantity"] == "pendulum.amplitude_ratio_10s":
+        d = ctx.pendulum.damped
+        i_max = d.damping * 10.0 / (2 * math.log(1 / tol))
+        extra = (f" (decay rate b/(2I) = {d.decay_rate_exact:.4f} 1/s for I = "
+                 f"{d.pendulum.inertia:.3g} kg·m²; coming to rest within 10 s with b = "
+                 f"{d.damping:g} N·m·s/rad needs I < {i_max:.2g} kg·m²; the seed gives no "
+                 "length or mass; its damping unit 'Nm/s^2' should be N·m·s/rad)")
+    return _verdict(c, claimed, computed, "wrong",
+                    f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}{extra}",
+                    method)  # fmt: skip
+
+
+CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
+    "bound": check_bound,
+    "det": check_det,
+    "families": check_families,
+    "fk": check_fk,
+    "generic": check_generic,
+    "ik": check_ik,
+    "matrix": check_matrix,
+    "methods_equal": check_methods,
+    "schedule": check_schedule,
+    "table": check_table,
+}

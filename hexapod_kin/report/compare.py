@@ -1,0 +1,319 @@
+"""Computed verdicts for the seeds' claims (``claims.toml``): nothing here is written by hand.
+
+Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_kin's own value:
+
+* ``table`` — the seed's Khalil rows against the preset's rows (lengths scaled by the claim's
+  ``unit``); a different α is reported with what it does to the FK (checked symbolically);
+* ``matrix`` — a symbolic matrix (``^{j-1}T_j``, ``^0T_j``, ``p``, ``J``) against
+  :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points (relative
+  tolerance :data:`RTOL`), then ``sympy.simplify(a - b) == 0`` for the entries that agree;
+  a wrong matrix is also tested against the other α2 sign, the product of the seed's own
+  factors and the derivative of the seed's own ``p`` to say where the slip comes from;
+* ``det`` — ``simplify(seed − det J) == 0`` (and ``±`` / scale when not);
+* ``families`` — the seed's singular sets (residual expressions) against the factors of
+  ``det J``: points sampled on every true family must zero a seed residual (else *missing*),
+  points on every seed set must zero ``det J`` (else *not singular*);
+* ``generic`` — the seed's generic transform against :func:`hexapod_kin.symbolic.khalil_matrix`;
+* ``methods_equal`` — :attr:`Derivation.methods_agree`;
+* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
+  :func:`hexapod_kin.ik.analytic`; the seed's IK formulas are evaluated as written;
+* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``
+  of the claimed value.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import sympy as sp
+from sympy.parsing.sympy_parser import parse_expr
+
+from ..exceptions import ConfigurationError
+
+__all__ = [
+    "CLAIMS_FILE",
+    "POINTS",
+    "RTOL",
+    "Claim",
+    "Verdict",
+    "evaluate",
+    "load_claims",
+    "parse",
+]
+
+#: The claims shipped with the package.
+CLAIMS_FILE = Path(__file__).with_name("claims.toml")
+#: Random points per symbolic comparison.
+POINTS = 8
+#: Relative tolerance of a numeric entry comparison (scaled by 1 + |value|).
+RTOL = 1e-9
+
+_Q = [sp.Symbol(f"q{i}", real=True) for i in range(1, 5)]
+_NAMES = ["l1", "l2", "l3", "r1", "d2", "d3", "x", "y", "z", "theta", "alpha", "d", "r", "beta"]
+_SYMS: dict[str, sp.Symbol] = {s.name: s for s in _Q}
+_SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
+
+
+def _locals() -> dict[str, Any]:
+    loc: dict[str, Any] = dict(_SYMS)
+    q = _Q
+    for combo in ("1", "2", "3", "12", "23", "123"):
+        angle = sum(q[int(k) - 1] for k in combo)
+        loc[f"c{combo}"] = sp.cos(angle)
+        loc[f"s{combo}"] = sp.sin(angle)
+    loc["pi"] = sp.pi
+    return loc
+
+
+_LOCALS = _locals()
+
+
+def parse(text: Any) -> sp.Expr:
+    """Parse one seed expression (sympy syntax, ``c23``-style abbreviations expanded)."""
+    return sp.sympify(parse_expr(str(text), local_dict=dict(_LOCALS)))
+
+
+def plain(expr: Any) -> Any:
+    """``expr`` with every symbol renamed onto this module's real symbols (by name)."""
+    expr = sp.sympify(expr)
+    return expr.xreplace({s: _SYMS.get(s.name, s) for s in expr.free_symbols})
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One claim of a seed (the raw TOML table plus its identity)."""
+
+    id: str
+    seed: str
+    where: str
+    kind: str
+    data: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A computed verdict.
+
+    Attributes:
+        claim: The claim's id.
+        seed: The seed (``"000"`` … ``"003"``).
+        where: Location in the seed (section / equation / table / figure).
+        kind: The claim's kind.
+        claimed: The seed's value, as text.
+        computed: hexapod_kin's value, as text.
+        status: ``"agrees"``, ``"wrong"`` (the seed is wrong), ``"differs"`` (a different but
+            consistent convention) or ``"error"`` (the comparison could not run: a bug).
+        reason: The computed reason (empty when it agrees).
+        method: How it was compared, with the tolerance.
+
+    """
+
+    claim: str
+    seed: str
+    where: str
+    kind: str
+    claimed: str
+    computed: str
+    status: str
+    reason: str
+    method: str
+
+    @property
+    def text(self) -> str:
+        """``agrees`` / ``seed is wrong: …`` / ``differs: …``."""
+        if self.status == "agrees":
+            return "agrees"
+        if self.status == "wrong":
+            return f"seed is wrong: {self.reason}"
+        if self.status == "differs":
+            return f"differs: {self.reason}"
+        return f"not computed: {self.reason}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {
+            "claim": self.claim,
+            "seed": self.seed,
+            "where": self.where,
+            "kind": self.kind,
+            "claimed": self.claimed,
+            "computed": self.computed,
+            "status": self.status,
+            "verdict": self.text,
+            "method": self.method,
+        }
+
+
+def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, str]]:
+    """Read the claims file; return the claims and the seed titles.
+
+    Raises:
+        ConfigurationError: A claim without ``id``, ``seed``, ``where`` or ``kind``, or a
+            duplicated id.
+
+    """
+    raw = tomllib.loads(Path(path or CLAIMS_FILE).read_text(encoding="utf-8"))
+    out: list[Claim] = []
+    seen: set[str] = set()
+    for item in raw.get("claim", []):
+        missing = [k for k in ("id", "seed", "where", "kind") if k not in item]
+        if missing or item.get("id") in seen:
+            raise ConfigurationError(
+                f"claims file {path or CLAIMS_FILE}: claim {item.get('id')!r} "
+                f"{'lacks ' + ', '.join(missing) if missing else 'is duplicated'}"
+            )
+        seen.add(item["id"])
+        out.append(Claim(item["id"], item["seed"], item["where"], item["kind"], item))
+    return out, dict(raw.get("seeds", {}))
+
+
+# ---------------------------------------------------------------------- comparison helpers
+def _rng(key: str) -> np.random.Generator:
+    return np.random.default_rng(abs(hash(key)) % (2**32))
+
+
+def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
+    out = {}
+    for s in symbols:
+        if s.name.startswith("q") or s.name in ("theta", "alpha"):
+            out[s] = float(rng.uniform(-math.pi, math.pi))
+        else:
+            out[s] = float(rng.uniform(0.5, 2.0))
+    return out
+
+
+def _num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+    return float(sp.N(sp.sympify(expr).xreplace(point)))
+
+
+def equal(a: Any, b: Any, key: str = "") -> bool:
+    """True when ``a == b`` at :data:`POINTS` random points and ``simplify(a − b) == 0``."""
+    a, b = plain(a), plain(b)
+    syms = sorted((a - b).free_symbols | a.free_symbols | b.free_symbols, key=str)
+    rng = _rng(key + str(a) + str(b))
+    for _ in range(POINTS):
+        pt = _point(syms, rng)
+        va, vb = _num(a, pt), _num(b, pt)
+        if abs(va - vb) > RTOL * (1.0 + abs(va) + abs(vb)):
+            return False
+    diff = sp.expand(sp.expand_trig(a - b))
+    return bool(diff == 0 or sp.simplify(diff) == 0)
+
+
+def _fmt(expr: Any) -> str:
+    return sp.sstr(sp.sympify(expr))
+
+
+def _fmt_matrix(m: sp.Matrix) -> str:
+    return "[" + "; ".join(", ".join(_fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
+
+
+def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str) -> list[str]:
+    """Differing entries of two same-shape matrices, 1-based, with a sign-slip note."""
+    out = []
+    for i in range(truth.rows):
+        for j in range(truth.cols):
+            a, b = seed[i, j], truth[i, j]
+            if equal(a, b, key):
+                continue
+            note = " (sign slip)" if equal(a, -b, key) else ""
+            out.append(f"({i + 1},{j + 1}): seed {_fmt(a)} vs {_fmt(sp.simplify(b))}{note}")
+    return out
+
+
+def parse_matrix(rows: Any) -> sp.Matrix:
+    """A sympy matrix from the claim's nested list of strings."""
+    return sp.Matrix([[parse(v) for v in row] for row in rows])
+
+
+# ---------------------------------------------------------------------- family sampling
+def _roots(f: Callable[[np.ndarray], np.ndarray], grid: np.ndarray) -> list[float]:
+    vals = f(grid)
+    out: list[float] = []
+    for k in np.flatnonzero(vals == 0.0):
+        out.append(float(grid[k]))
+    for k in np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0):
+        lo, hi = float(grid[k]), float(grid[k + 1])
+        flo = float(f(np.array([lo]))[0])
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            fm = float(f(np.array([mid]))[0])
+            if np.sign(fm) == np.sign(flo):
+                lo, flo = mid, fm
+            else:
+                hi = mid
+        out.append(0.5 * (lo + hi))
+    return out
+
+
+def points_on(
+    expr: Any, nq: int, key: str, count: int = 5, fixed: Mapping[int, float] | None = None
+) -> np.ndarray:
+    """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (numbers for lengths).
+
+    Random values for every joint but the last one ``expr`` depends on, which is found by
+    bracketing on ``[−π, π]`` and bisection; ``fixed`` pins joints (0-based) to values.
+    """
+    expr = plain(expr)
+    rng = _rng(key)
+    deps = [k for k in range(nq) if _Q[k] in expr.free_symbols]
+    pts: list[np.ndarray] = []
+    for _ in range(40 * count):
+        q = rng.uniform(-math.pi, math.pi, nq)
+        for k, v in (fixed or {}).items():
+            q[k] = v
+        if deps:
+            var = deps[-1]
+            sub = {_Q[k]: float(q[k]) for k in range(nq) if k != var}
+            g = sp.lambdify(_Q[var], expr.xreplace(sub), "numpy")
+
+            def f(x: np.ndarray, g: Any = g) -> np.ndarray:
+                return np.broadcast_to(np.asarray(g(x), dtype=float), x.shape)
+
+            roots = _roots(f, np.linspace(-math.pi, math.pi, 721))
+            if not roots:
+                continue
+            q[var] = roots[int(rng.integers(len(roots)))]
+        elif abs(_num(expr, {})) > 1e-12:
+            break
+        pts.append(q)
+        if len(pts) >= count:
+            break
+    return np.array(pts).reshape(-1, nq)
+
+
+def vanishes(expr: Any, pts: np.ndarray, scale: float = 1.0, tol: float = 1e-7) -> bool:
+    """True when ``expr`` is ~0 at every point (relative to ``scale``)."""
+    expr = plain(expr)
+    for q in pts:
+        val = _num(expr, {_Q[k]: float(v) for k, v in enumerate(q)})
+        if abs(val) > tol * max(scale, 1e-300):
+            return False
+    return len(pts) > 0
+
+
+# ---------------------------------------------------------------------- entry point
+def evaluate(claims: list[Claim], ctx: Any) -> list[Verdict]:
+    """Compute every claim's verdict against ``ctx`` (a :class:`~.checks.Context`).
+
+    A comparison that raises gives status ``"error"`` with the exception (never skipped).
+    """
+    from .checks import CHECKS
+
+    out = []
+    for claim in claims:
+        try:
+            check = CHECKS[claim.kind]
+            out.append(check(claim, ctx))
+        except Exception as exc:  # recorded, reported, and failed by the CLI and the test
+            out.append(
+                Verdict(claim.id, claim.seed, claim.where, claim.kind, str(claim.data.get(
+                    "value")), "", "error", f"{type(exc).__name__}: {exc}", "")
+            )
+    return out
