@@ -22,7 +22,7 @@ from .common import OneLineParser
 __all__ = ["build_parser", "main"]
 
 #: Modules of this package whose ``register(sub)`` adds subcommands, in help order.
-MODULES: tuple[str, ...] = ("core", "view", "motion", "dynamics", "export", "sweep", "gait")
+MODULES: tuple[str, ...] = ("core", "view", "motion", "dynamics", "export", "sweep", "gait", "report")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -78,13 +78,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"hexapod-kin: error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
     except MemoryError:
-        print("hexapod-kin: error: not enough memory for this request; ask for fewer samples",
-              file=sys.stderr)
+        print(
+            "hexapod-kin: error: not enough memory for this request; ask for fewer samples",
+            file=sys.stderr,
+        )
         return 2
     except Exception as exc:  # the last line of defence: one line, never a traceback
         if os.environ.get("HEXAPOD_KIN_DEBUG"):
             raise
-        print(f"hexapod-kin: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
-              "(a bug: please report it; HEXAPOD_KIN_DEBUG=1 shows the traceback)",
-              file=sys.stderr)
+        print(
+            f"hexapod-kin: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
+            "(a bug: please report it; HEXAPOD_KIN_DEBUG=1 shows the traceback)",
+            file=sys.stderr,
+        )
         return 2
