@@ -27,7 +27,6 @@ import pytest
 from headless import launch_chromium
 
 from hexapod_kin import gait, load, robots, viewer
-from hexapod_kin.viewer.scene import Scene
 from hexapod_kin.exceptions import (
     ConfigurationError,
     FrameNotFoundError,
@@ -35,6 +34,7 @@ from hexapod_kin.exceptions import (
     ViewerError,
 )
 from hexapod_kin.params import table_fk
+from hexapod_kin.viewer.scene import Scene
 
 umsgpack = pytest.importorskip("umsgpack")
 
@@ -371,7 +371,8 @@ def _stl_triangles(path: str) -> np.ndarray:
 
 
 def _area(tris: np.ndarray) -> float:
-    return float(np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1).sum() / 2)
+    cross = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    return float(np.linalg.norm(cross, axis=1).sum() / 2)
 
 
 def _mesh_triangles(obj: dict) -> tuple[np.ndarray, np.ndarray | None]:
@@ -488,6 +489,34 @@ def test_exported_step_renders_and_moves_offline(browser, step_html):
     assert page.errors == []
     assert _changed(robot_only, empty) > 0.01  # the robot is drawn
     assert _changed(start, middle) > 0.005  # the animation moves
+
+
+def test_mesh_page_unpacks_and_computes_normals(browser, tmp_path):
+    """A mesh robot's page unpacks its gzipped scene offline and shades every mesh."""
+    solo = load("erd:solo12", tip="FL_FOOT")
+    path = viewer.export_html(solo, [0.0], solo.neutral()[None, :], tmp_path / "solo.html")
+    page = _Page(browser, allow=("file://",))
+    try:
+        page.page.goto(path.as_uri())
+        page.page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        counts = page.page.evaluate(
+            """() => { var n = 0, shaded = 0;
+              hexapodKin.viewer.scene.traverse(function (o) {
+                if (o.isMesh && o.geometry.index && o.geometry.getAttribute("position").array
+                    instanceof Int16Array) {
+                  n += 1; if (o.geometry.getAttribute("normal")) { shaded += 1; } } });
+              return [n, shaded]; }"""
+        )
+        page.page.wait_for_timeout(300)
+        with_robot = page.pixels()
+        page.page.evaluate("hexapodKin.setVisible('robot', false)")
+        page.page.wait_for_timeout(300)
+        without = page.pixels()
+    finally:
+        page.close()
+    assert page.blocked == [] and page.errors == []
+    assert counts == [solo.geometry_model("visual").ngeoms] * 2
+    assert _changed(with_robot, without) > 0.01
 
 
 def test_notebook_iframe_renders(browser, step_html, tmp_path):
