@@ -33,7 +33,9 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--out", default="report", help="report folder (created)")
-    p.add_argument("--quick", action="store_true", help="reduced sizes (shorter runs, coarser scans)")
+    p.add_argument(
+        "--quick", action="store_true", help="reduced sizes (shorter runs, coarser scans)"
+    )
     p.add_argument("--no-animations", action="store_true",
                    help="skip the step and walk animations (no viewer extra needed)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON object")

@@ -26,26 +26,45 @@ __all__ = ["SECTIONS", "Report", "reproduce"]
 
 #: Report sections: (key, title, introduction).
 SECTIONS: tuple[tuple[str, str, str], ...] = (
-    ("tables", "1. The Khalil tables (3-DOF leg, SCARA)",
-     "Seeds 000 and 001 use α2 = −90° with symbolic lengths, seed 003 uses α2 = +90° with "
-     "50/100/100 mm. hexapod_kin's `hexabot_leg` is the −90° table; the `differs` verdict "
-     "says, computed, what the +90° choice does to the FK."),
-    ("transforms", "2. Every ^{j-1}T_j and ^0T_j, symbolically",
-     "Each seed matrix is compared entry by entry with `hexapod_kin.symbolic.derive` of the "
-     "seed's own table (α2 sign and lengths as the seed chose). The full derivations are at "
-     "the end of the section."),
-    ("jacobian", "3. Jacobian (direct, indirect), det J factored, singular families",
-     "The families are read off the factors of det J; the heat maps scan σ_min over two "
-     "joints and label every flagged sample with its family."),
-    ("step", "4. The x-only step (foot velocity [A sin 2πt/T, 0, 0])",
-     "`hexapod_kin.seeds.seed_experiment`: resolved rate, RK4, closed loop on the exact "
-     "reference; the plain Euler + solve loop the seeds used is the baseline in the drift panel."),
-    ("leg2", "5. The 2-DOF leg of seed 002 (FK, IK, Table I replayed)",
-     "FK numbers by Pinocchio (and the table product), the seed's IK Eqs. 9-12 evaluated as "
-     "written, and `ik.analytic`; Table I is `seeds.seed002_schedule`."),
-    ("pendulum", "6. The pendulum of seed 001 (undamped, damped)",
-     "`dynamics.pendulum_experiment` (0.5 m, 1 kg, θ0 = 30°; the seed gives no length or "
-     "mass): the period against the exact elliptic-integral period."),
+    (
+        "tables",
+        "1. The Khalil tables (3-DOF leg, SCARA)",
+        "Seeds 000 and 001 use α2 = −90° with symbolic lengths, seed 003 uses α2 = +90° with "
+        "50/100/100 mm. hexapod_kin's `hexabot_leg` is the −90° table; the `differs` verdict "
+        "says, computed, what the +90° choice does to the FK.",
+    ),
+    (
+        "transforms",
+        "2. Every ^{j-1}T_j and ^0T_j, symbolically",
+        "Each seed matrix is compared entry by entry with `hexapod_kin.symbolic.derive` of the "
+        "seed's own table (α2 sign and lengths as the seed chose). The full derivations are at "
+        "the end of the section.",
+    ),
+    (
+        "jacobian",
+        "3. Jacobian (direct, indirect), det J factored, singular families",
+        "The families are read off the factors of det J; the heat maps scan σ_min over two "
+        "joints and label every flagged sample with its family.",
+    ),
+    (
+        "step",
+        "4. The x-only step (foot velocity [A sin 2πt/T, 0, 0])",
+        "`hexapod_kin.seeds.seed_experiment`: resolved rate, RK4, closed loop on the exact "
+        "reference; the plain Euler + solve loop the seeds used is the baseline in the drift "
+        "panel.",
+    ),
+    (
+        "leg2",
+        "5. The 2-DOF leg of seed 002 (FK, IK, Table I replayed)",
+        "FK numbers by Pinocchio (and the table product), the seed's IK Eqs. 9-12 evaluated as "
+        "written, and `ik.analytic`; Table I is `seeds.seed002_schedule`.",
+    ),
+    (
+        "pendulum",
+        "6. The pendulum of seed 001 (undamped, damped)",
+        "`dynamics.pendulum_experiment` (0.5 m, 1 kg, θ0 = 30°; the seed gives no length or "
+        "mass): the period against the exact elliptic-integral period.",
+    ),
     ("beyond", "7. Beyond the seeds: the hexapod standing and walking", ""),
 )
 
@@ -96,8 +115,10 @@ class Report:
     def summary(self) -> str:
         """One line: how many claims, how many agree, are wrong, differ, failed."""
         c = self.counts
-        text = (f"{len(self.verdicts)} claims checked: {c['agrees']} agree, {c['wrong']} "
-                f"seed is wrong, {c['differs']} differ (convention)")  # fmt: skip
+        text = (
+            f"{len(self.verdicts)} claims checked: {c['agrees']} agree, {c['wrong']} "
+            f"seed is wrong, {c['differs']} differ (convention)"
+        )
         return text + (f", {c['error']} NOT COMPUTED" if c["error"] else "")
 
     def to_dict(self) -> dict[str, Any]:
@@ -174,36 +195,60 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     return rep
 
 
-_LABEL = {"agrees": "agrees", "wrong": "seed is wrong", "differs": "differs", "error": "NOT COMPUTED"}
-_DERIV = {"leg": "hexabot_leg (α2 = −90°, seeds 000/001)", "leg+": "hexabot_leg(alpha2=+π/2) "
-          "(seed 003)", "scara": "scara (seed 003)"}  # fmt: skip
+_LABEL = {
+    "agrees": "agrees",
+    "wrong": "seed is wrong",
+    "differs": "differs",
+    "error": "NOT COMPUTED",
+}
+_DERIV = {
+    "leg": "hexabot_leg (α2 = −90°, seeds 000/001)",
+    "leg+": "hexabot_leg(alpha2=+π/2) (seed 003)",
+    "scara": "scara (seed 003)",
+}
 
 
 def _facts_lines(key: str, rep: Report) -> list[str]:
     f = rep.facts
     if key == "jacobian":
-        return [f"Scan family counts (flagged samples labelled by family): `{f['scan_family_counts']}`"]
+        return [
+            f"Scan family counts (flagged samples labelled by family): `{f['scan_family_counts']}`"
+        ]
     if key == "step":
         s = f["step"]
-        return [f"Drift of the closed-loop run: y {s['drift_y']:.2e} m, z {s['drift_z']:.2e} m, "
-                f"x error {s['error_x']:.2e} m; the seeds' plain Euler + solve loop: "
-                f"{ {k: float(f'{v:.2e}') for k, v in s['baseline_euler_solve'].items()} } m."]  # fmt: skip
+        return [
+            f"Drift of the closed-loop run: y {s['drift_y']:.2e} m, z {s['drift_z']:.2e} m, "
+            f"x error {s['error_x']:.2e} m; the seeds' plain Euler + solve loop: "
+            f"{ {k: float(f'{v:.2e}') for k, v in s['baseline_euler_solve'].items()} } m."
+        ]
     if key == "pendulum":
         p = f["pendulum"]
-        return [f"Undamped period {p['period']:.9f} s vs exact {p['period_exact']:.9f} s; "
-                f"damped period {p['damped_period']:.6f} s; decay rate {p['decay_rate']:.5f} 1/s "
-                f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s."]  # fmt: skip
+        return [
+            f"Undamped period {p['period']:.9f} s vs exact {p['period_exact']:.9f} s; "
+            f"damped period {p['damped_period']:.6f} s; decay rate {p['decay_rate']:.5f} 1/s "
+            f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s."
+        ]
     if key == "beyond":
         return [f"`{k}` = {v}" for k, v in f["hexapod"].items()]
     return []
 
 
-def _markdown(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
-              anims: dict[str, list[Path]], derivations: dict[str, str]) -> str:  # fmt: skip
-    lines = ["# hexapod_kin reproduces the four lab reports", "",
-             f"**{rep.summary()}.** Every verdict is computed (see `hexapod_kin/report/`): the "
-             "seeds' claims are data in `claims.toml`, each with its place in the seed.", "",
-             "Seeds:", ""]  # fmt: skip
+def _markdown(
+    rep: Report,
+    seeds: dict[str, str],
+    figs: dict[str, list[Path]],
+    anims: dict[str, list[Path]],
+    derivations: dict[str, str],
+) -> str:
+    lines = [
+        "# hexapod_kin reproduces the four lab reports",
+        "",
+        f"**{rep.summary()}.** Every verdict is computed (see `hexapod_kin/report/`): the "
+        "seeds' claims are data in `claims.toml`, each with its place in the seed.",
+        "",
+        "Seeds:",
+        "",
+    ]
     lines += [f"- **{k}**: {v}" for k, v in seeds.items()]
     lines += ["", "| claim | seed | where | verdict |", "|---|---|---|---|"]
     for v in rep.verdicts:
@@ -216,9 +261,15 @@ def _markdown(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
         for v in rep.verdicts:
             if _section(v) != key:
                 continue
-            lines += [f"### {v.claim} — seed {v.seed}, {v.where}", "",
-                      f"- seed: `{v.claimed}`", f"- hexapod_kin: `{v.computed}`",
-                      f"- **verdict: {v.text}**", f"- compared: {v.method}", ""]  # fmt: skip
+            lines += [
+                f"### {v.claim} — seed {v.seed}, {v.where}",
+                "",
+                f"- seed: `{v.claimed}`",
+                f"- hexapod_kin: `{v.computed}`",
+                f"- **verdict: {v.text}**",
+                f"- compared: {v.method}",
+                "",
+            ]
         lines += _facts_lines(key, rep)
         for p in figs[key]:
             lines += ["", f"![{p.stem}](figures/{p.name})"]
@@ -243,19 +294,29 @@ table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;paddin
 iframe{width:100%;height:520px;border:1px solid #ccc}"""
 
 
-def _html(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
-          anims: dict[str, list[Path]], derivations: dict[str, str]) -> str:  # fmt: skip
+def _html(
+    rep: Report,
+    seeds: dict[str, str],
+    figs: dict[str, list[Path]],
+    anims: dict[str, list[Path]],
+    derivations: dict[str, str],
+) -> str:
     e = html.escape
-    h = ["<!DOCTYPE html><html><head><meta charset='utf-8'>",
-         "<title>hexapod_kin reproduces the seeds</title>", f"<style>{_CSS}</style></head><body>",
-         "<h1>hexapod_kin reproduces the four lab reports</h1>",
-         f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
-         "(<code>hexapod_kin/report/claims.toml</code>), each with its place in the seed.</p><ul>"]  # fmt: skip
+    h = [
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>",
+        "<title>hexapod_kin reproduces the seeds</title>",
+        f"<style>{_CSS}</style></head><body>",
+        "<h1>hexapod_kin reproduces the four lab reports</h1>",
+        f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
+        "(<code>hexapod_kin/report/claims.toml</code>), each with its place in the seed.</p><ul>",
+    ]
     h += [f"<li><b>{e(k)}</b>: {e(v)}</li>" for k, v in seeds.items()]
     h.append("</ul><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
     for v in rep.verdicts:
-        h.append(f"<tr><td><a href='#{e(v.claim)}'>{e(v.claim)}</a></td><td>{e(v.seed)}</td>"
-                 f"<td>{e(v.where)}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>")  # fmt: skip
+        h.append(
+            f"<tr><td><a href='#{e(v.claim)}'>{e(v.claim)}</a></td><td>{e(v.seed)}</td>"
+            f"<td>{e(v.where)}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>"
+        )
     h.append("</table>")
     for key, title, intro in SECTIONS:
         h.append(f"<h2>{e(title)}</h2>")
@@ -264,20 +325,26 @@ def _html(rep: Report, seeds: dict[str, str], figs: dict[str, list[Path]],
         for v in rep.verdicts:
             if _section(v) != key:
                 continue
-            h.append(f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
-                     f"{e(v.where)}</h3><p>seed: <code>{e(v.claimed)}</code></p>"
-                     f"<p>hexapod_kin: <code>{e(v.computed)}</code></p>"
-                     f"<p class='{v.status}'><b>verdict: {e(v.text)}</b></p>"
-                     f"<p><small>compared: {e(v.method)}</small></p></div>")  # fmt: skip
+            h.append(
+                f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
+                f"{e(v.where)}</h3><p>seed: <code>{e(v.claimed)}</code></p>"
+                f"<p>hexapod_kin: <code>{e(v.computed)}</code></p>"
+                f"<p class='{v.status}'><b>verdict: {e(v.text)}</b></p>"
+                f"<p><small>compared: {e(v.method)}</small></p></div>"
+            )
         h += [f"<p>{e(line)}</p>" for line in _facts_lines(key, rep)]
         h += [f"<p>{_img(p)}</p>" for p in figs[key]]
         for p in anims[key]:
             doc = e(p.read_text(encoding="utf-8"), quote=True)
-            h.append(f"<p>Animation (also <a href='{p.name}'>{p.name}</a>):</p>"
-                     f"<iframe srcdoc=\"{doc}\"></iframe>")  # fmt: skip
+            h.append(
+                f"<p>Animation (also <a href='{p.name}'>{p.name}</a>):</p>"
+                f'<iframe srcdoc="{doc}"></iframe>'
+            )
         if key == "transforms":
             for k, text in derivations.items():
-                h.append(f"<details><summary>Derivation of {e(_DERIV[k])}</summary>"
-                         f"<pre>{e(text)}</pre></details>")  # fmt: skip
+                h.append(
+                    f"<details><summary>Derivation of {e(_DERIV[k])}</summary>"
+                    f"<pre>{e(text)}</pre></details>"
+                )
     h.append("</body></html>")
     return "\n".join(h)

@@ -15,14 +15,14 @@ import numpy as np
 import sympy as sp
 
 from .compare import (
+    _Q,
+    _SYMS,
     RTOL,
     Claim,
     Verdict,
     _fmt,
     _fmt_matrix,
     _num,
-    _Q,
-    _SYMS,
     equal,
     matrix_diff,
     parse,
@@ -141,8 +141,16 @@ class Context:
             if claim is not None
             else np.full_like(q, np.nan)
         )
-        return {"t": t, "q": q, "feet": feet, "ours": ours, "back": back, "seed": seed,
-                "knots_t": sched.times, "knots_q": sched.values}  # fmt: skip
+        return {
+            "t": t,
+            "q": q,
+            "feet": feet,
+            "ours": ours,
+            "back": back,
+            "seed": seed,
+            "knots_t": sched.times,
+            "knots_q": sched.values,
+        }
 
     def quantity(self, name: str) -> float:
         """A measured figure named in a ``bound`` claim."""
@@ -179,13 +187,15 @@ def _seed_ik(formulas: dict[str, str], foot: np.ndarray, lengths: dict[sp.Symbol
     env: dict[sp.Symbol, float] = dict(lengths)
     env.update({_SYMS["x"]: foot[0], _SYMS["y"]: foot[1], _SYMS["z"]: foot[2]})
     for name, text in formulas.items():
-        env[sp.Symbol(name, real=True)] = _num(parse(text).xreplace(
-            {sp.Symbol(k.name): v for k, v in env.items()}).xreplace(env), {})  # fmt: skip
+        env[sp.Symbol(name, real=True)] = _num(
+            parse(text).xreplace({sp.Symbol(k.name): v for k, v in env.items()}).xreplace(env), {}
+        )
     return [env[sp.Symbol("theta1", real=True)], env[sp.Symbol("theta2", real=True)]]
 
 
-def _verdict(c: Claim, claimed: str, computed: str, status: str, reason: str, method: str
-             ) -> Verdict:  # fmt: skip
+def _verdict(
+    c: Claim, claimed: str, computed: str, status: str, reason: str, method: str
+) -> Verdict:
     return Verdict(c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method)
 
 
@@ -204,8 +214,9 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     truth = ctx.item(key, item).xreplace(subs)
     claimed, computed = _fmt_matrix(seed), _fmt_matrix(truth.applyfunc(sp.simplify))
     if seed.shape != truth.shape:
-        return _verdict(c, claimed, computed, "wrong",
-                        f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC)  # fmt: skip
+        return _verdict(
+            c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
+        )
     diffs = matrix_diff(seed, truth, c.id)
     if not diffs:
         return _verdict(c, claimed, computed, "agrees", "", _SYMBOLIC)
@@ -232,8 +243,14 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
     j = int(c.data["item"][3:])
     factors = []
     for k in range(1, j + 1):
-        f = [x for x in ctx.claims.values() if x.seed == c.seed and x.kind == "matrix"
-             and x.data.get("model") == c.data["model"] and x.data.get("item") == f"T {k}"]  # fmt: skip
+        f = [
+            x
+            for x in ctx.claims.values()
+            if x.seed == c.seed
+            and x.kind == "matrix"
+            and x.data.get("model") == c.data["model"]
+            and x.data.get("item") == f"T {k}"
+        ]
         if not f:
             return ""
         factors.append(parse_matrix(f[0].data["value"]).xreplace(subs))
@@ -258,25 +275,33 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     for i, (row, (sig, d, alpha, r, theta)) in enumerate(zip(chain.rows, rows), start=1):
         if _SIGMA.get(sig) != row.sigma:
             problems.append(f"row {i}: σ {sig} vs {row.sigma}")
-        for name, text, mine, var in (("d", d, row.d, False), ("r", r, row.r, row.sigma ==
-                                      "prismatic"), ("θ", theta, row.theta, row.sigma == "revolute")):  # fmt: skip
+        for name, text, mine, var in (
+            ("d", d, row.d, False),
+            ("r", r, row.r, row.sigma == "prismatic"),
+            ("θ", theta, row.theta, row.sigma == "revolute"),
+        ):
             e = parse(text).xreplace(subs)
             if any(s in _Q for s in e.free_symbols):
                 if not var:
-                    problems.append(f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin")
+                    problems.append(
+                        f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin"
+                    )
                 continue
-            val = _num(e.xreplace(lengths), {}) * (unit if not (e.free_symbols & set(lengths)) else 1.0)
+            val = _num(e.xreplace(lengths), {}) * (
+                unit if not (e.free_symbols & set(lengths)) else 1.0
+            )
             if abs(val - mine) > 1e-9:
                 problems.append(f"row {i}: {name} = {text} ({val:g} m) vs {mine:g} m")
         if abs(math.radians(float(alpha)) - row.alpha) > 1e-12:
             alpha_rows.append((i, float(alpha), math.degrees(row.alpha)))
-    extra = chain.rows[len(rows):]
+    extra = chain.rows[len(rows) :]
     if len(rows) > len(chain.rows) or any(
         r.sigma != "fixed" or (r.alpha, r.d, r.theta, r.r) != (0, 0, 0, 0) for r in extra
     ):
         problems.append(f"{len(rows)} rows vs {len(chain.rows)}")
     computed = "; ".join(
-        f"{r.sigma} α={math.degrees(r.alpha):g}° d={r.d:g} θ={r.theta:g} r={r.r:g}" for r in chain.rows
+        f"{r.sigma} α={math.degrees(r.alpha):g}° d={r.d:g} θ={r.theta:g} r={r.r:g}"
+        for r in chain.rows
     )
     claimed = "; ".join("(" + ", ".join(str(v) for v in row) + ")" for row in rows)
     method = "numeric, per entry (|Δ| ≤ 1e-9 m or rad), lengths × unit"
@@ -287,12 +312,23 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     (i, seed_a, ours_a), *_ = alpha_rows
     p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
     mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
-    fk = (f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
-          f"(checked symbolically: {mirror}): p_z = {_fmt(p_plus[2])}, a positive knee "
-          f"angle lifts the foot; the lengths agree") if mirror else (
-          f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {_fmt_matrix(p_plus.T)}")  # fmt: skip
-    return _verdict(c, claimed, computed, "differs", f"row {i}: α = {seed_a:+g}° vs "
-                    f"hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}", method)  # fmt: skip
+    fk = (
+        (
+            f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
+            f"(checked symbolically: {mirror}): p_z = {_fmt(p_plus[2])}, a positive knee "
+            f"angle lifts the foot; the lengths agree"
+        )
+        if mirror
+        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {_fmt_matrix(p_plus.T)}")
+    )
+    return _verdict(
+        c,
+        claimed,
+        computed,
+        "differs",
+        f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}",
+        method,
+    )
 
 
 def check_generic(c: Claim, ctx: Context) -> Verdict:
@@ -303,18 +339,28 @@ def check_generic(c: Claim, ctx: Context) -> Verdict:
     truth = sp.Matrix(khalil_matrix(s["alpha"], s["d"], s["theta"], s["r"]))
     seed = parse_matrix(c.data["value"])
     diffs = matrix_diff(seed, truth, c.id)
-    return _verdict(c, _fmt_matrix(seed), _fmt_matrix(truth), "wrong" if diffs else "agrees",
-                    "; ".join(diffs), _SYMBOLIC)  # fmt: skip
+    return _verdict(
+        c,
+        _fmt_matrix(seed),
+        _fmt_matrix(truth),
+        "wrong" if diffs else "agrees",
+        "; ".join(diffs),
+        _SYMBOLIC,
+    )
 
 
 def check_methods(c: Claim, ctx: Context) -> Verdict:
     """``methods_equal``: direct and indirect Jacobians equal."""
     agree = bool(ctx.derivation(c.data["model"]).methods_agree)
     ok = agree == bool(c.data["value"])
-    return _verdict(c, f"J_indirect − J_direct = 0: {c.data['value']}",
-                    f"Derivation.methods_agree = {agree}", "agrees" if ok else "wrong",
-                    "" if ok else f"hexapod_kin finds methods_agree = {agree}",
-                    "exact: trig polynomials reduced modulo sin² + cos² = 1")  # fmt: skip
+    return _verdict(
+        c,
+        f"J_indirect − J_direct = 0: {c.data['value']}",
+        f"Derivation.methods_agree = {agree}",
+        "agrees" if ok else "wrong",
+        "" if ok else f"hexapod_kin finds methods_agree = {agree}",
+        "exact: trig polynomials reduced modulo sin² + cos² = 1",
+    )
 
 
 def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
@@ -345,8 +391,11 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
     lengths = ctx.lengths(key)
     det = plain(d.numeric(d.det))
     rng = np.random.default_rng(7)
-    det_scale = float(np.median([abs(_num(det, {q: v for q, v in zip(_Q, rng.uniform(-3, 3, nq))}))
-                                 for _ in range(20)]))  # fmt: skip
+    det_scale = float(
+        np.median(
+            [abs(_num(det, {q: v for q, v in zip(_Q, rng.uniform(-3, 3, nq))})) for _ in range(20)]
+        )
+    )
     seeds = [parse(v).xreplace(lengths) for v in c.data["value"]]
     missing, spurious = [], []
     for fam in d.families:
@@ -364,9 +413,11 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
             spurious.append(f"{text} = 0 is not singular (det J = {val:.3g} at q = {q})")
     claimed = ", ".join(f"{v} = 0" for v in c.data["value"]) or "no singularity"
     computed = f"det J = {_fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
-    method = ("numeric on sampled points: a seed set covers a family when its residual is "
-              "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
-              "(relative) on 5 of its points")
+    method = (
+        "numeric on sampled points: a seed set covers a family when its residual is "
+        "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
+        "(relative) on 5 of its points"
+    )
     if not missing and not spurious:
         return _verdict(c, claimed, computed, "agrees", "", method)
     parts = [f"misses the family {m}" for m in missing] + spurious
@@ -383,11 +434,15 @@ def check_fk(c: Claim, ctx: Context) -> Verdict:
     seed = np.asarray(c.data["value"], float)
     tol = float(c.data["tol"])
     err = float(np.max(np.abs(seed - ours)))
-    computed = f"{np.round(ours, 6).tolist()} (table product: |Δ| = {np.max(np.abs(table - ours)):.1e})"
+    computed = (
+        f"{np.round(ours, 6).tolist()} (table product: |Δ| = {np.max(np.abs(table - ours)):.1e})"
+    )
     method = f"numeric, max |Δ| ≤ {tol:g} (the seed's 4 decimals)"
     if err <= tol:
         return _verdict(c, str(seed.tolist()), computed, "agrees", "", method)
-    return _verdict(c, str(seed.tolist()), computed, "wrong", f"max |Δ| = {err:.3g} > {tol:g}", method)
+    return _verdict(
+        c, str(seed.tolist()), computed, "wrong", f"max |Δ| = {err:.3g} > {tol:g}", method
+    )
 
 
 def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) -> list[str]:
@@ -395,8 +450,10 @@ def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) ->
     for k, (s, t, o) in enumerate(zip(np.degrees(seed), np.degrees(q), np.degrees(ours)), 1):
         if abs(s - t) > tol:
             sign = " — the sign is lost (acos gives |θ|)" if abs(s + t) <= tol else ""
-            bad.append(f"θ{k}: the seed's formulas give {s:+.4f}°, the leg is at {t:+.4f}° "
-                       f"(ik.analytic: {o:+.4f}°){sign}")  # fmt: skip
+            bad.append(
+                f"θ{k}: the seed's formulas give {s:+.4f}°, the leg is at {t:+.4f}° "
+                f"(ik.analytic: {o:+.4f}°){sign}"
+            )
     return bad
 
 
@@ -414,8 +471,11 @@ def check_ik(c: Claim, ctx: Context) -> Verdict:
     back = float(np.max(np.abs(mdl.position(ours) - foot)))
     tol = float(c.data["tol_deg"])
     claimed = "; ".join(f"{k} = {v}" for k, v in c.data["value"].items())
-    computed = (f"P = {np.round(foot, 4).tolist()}; seed formulas → {np.round(np.degrees(seed), 4).tolist()}°; "
-                f"ik.analytic → {np.round(np.degrees(ours), 4).tolist()}° (FK back: |Δ| = {back:.1e})")  # fmt: skip
+    computed = (
+        f"P = {np.round(foot, 4).tolist()}; "
+        f"seed formulas → {np.round(np.degrees(seed), 4).tolist()}°; "
+        f"ik.analytic → {np.round(np.degrees(ours), 4).tolist()}° (FK back: |Δ| = {back:.1e})"
+    )
     method = f"numeric, |Δθ| ≤ {tol:g}° against the angles P was made from"
     bad = _ik_reason(seed, q, ours, tol)
     return _verdict(c, claimed, computed, "wrong" if bad else "agrees", "; ".join(bad), method)
@@ -425,15 +485,19 @@ def check_schedule(c: Claim, ctx: Context) -> Verdict:
     """``schedule``: seed 002 Table I replayed, FK then IK (seed's formulas and ours)."""
     s = ctx.schedule
     knots = np.asarray(c.data["knots"], float)
-    same = np.allclose(knots[:, 0], s["knots_t"]) and np.allclose(np.radians(knots[:, 1:]), s["knots_q"])
+    same = np.allclose(knots[:, 0], s["knots_t"]) and np.allclose(
+        np.radians(knots[:, 1:]), s["knots_q"]
+    )
     tol = float(c.data["tol_deg"])
     ours_err = float(np.degrees(np.max(np.abs(s["ours"] - s["q"]))))
     seed_err = np.degrees(np.abs(s["seed"] - s["q"]))
     worst = np.unravel_index(np.argmax(seed_err), seed_err.shape)
     n_bad = int(np.count_nonzero(seed_err.max(axis=1) > tol))
-    computed = (f"{len(s['t'])} samples; ik.analytic max |Δθ| = {ours_err:.2e}°, FK back "
-                f"max |Δ| = {np.max(np.abs(s['back'] - s['feet'])):.1e}; the seed's formulas: "
-                f"max |Δθ| = {seed_err.max():.4f}°; Table I = seed002_schedule: {same}")  # fmt: skip
+    computed = (
+        f"{len(s['t'])} samples; ik.analytic max |Δθ| = {ours_err:.2e}°, FK back "
+        f"max |Δ| = {np.max(np.abs(s['back'] - s['feet'])):.1e}; the seed's formulas: "
+        f"max |Δθ| = {seed_err.max():.4f}°; Table I = seed002_schedule: {same}"
+    )
     claimed = "IK output = input pattern (θ1 0..20°, θ2 −90..−50°)"
     method = f"numeric, every sample, |Δθ| ≤ {tol:g}°"
     if ours_err > tol or not same:
@@ -441,10 +505,19 @@ def check_schedule(c: Claim, ctx: Context) -> Verdict:
     if n_bad == 0:
         return _verdict(c, claimed, computed, "agrees", "", method)
     t, j = float(s["t"][worst[0]]), int(worst[1])
-    return _verdict(c, claimed, computed, "wrong", (
-        f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of {len(s['t'])} samples: "
-        f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
-        f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"), method)
+    return _verdict(
+        c,
+        claimed,
+        computed,
+        "wrong",
+        (
+            f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of "
+            f"{len(s['t'])} samples: "
+            f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
+            f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"
+        ),
+        method,
+    )
 
 
 def check_bound(c: Claim, ctx: Context) -> Verdict:
@@ -460,13 +533,20 @@ def check_bound(c: Claim, ctx: Context) -> Verdict:
     if c.data["quantity"] == "pendulum.amplitude_ratio_10s":
         d = ctx.pendulum.damped
         i_max = d.damping * 10.0 / (2 * math.log(1 / tol))
-        extra = (f" (decay rate b/(2I) = {d.decay_rate_exact:.4f} 1/s for I = "
-                 f"{d.pendulum.inertia:.3g} kg·m²; coming to rest within 10 s with b = "
-                 f"{d.damping:g} N·m·s/rad needs I < {i_max:.2g} kg·m²; the seed gives no "
-                 "length or mass; its damping unit 'Nm/s^2' should be N·m·s/rad)")
-    return _verdict(c, claimed, computed, "wrong",
-                    f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}{extra}",
-                    method)  # fmt: skip
+        extra = (
+            f" (decay rate b/(2I) = {d.decay_rate_exact:.4f} 1/s for I = "
+            f"{d.pendulum.inertia:.3g} kg·m²; coming to rest within 10 s with b = "
+            f"{d.damping:g} N·m·s/rad needs I < {i_max:.2g} kg·m²; the seed gives no "
+            "length or mass; its damping unit 'Nm/s^2' should be N·m·s/rad)"
+        )
+    return _verdict(
+        c,
+        claimed,
+        computed,
+        "wrong",
+        f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}{extra}",
+        method,
+    )
 
 
 CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {

@@ -24,7 +24,6 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from typing import Any
 
 import numpy as np
 import sympy as sp
+import tomllib
 from sympy.parsing.sympy_parser import parse_expr
 
 from ..exceptions import ConfigurationError
@@ -313,7 +313,16 @@ def evaluate(claims: list[Claim], ctx: Any) -> list[Verdict]:
             out.append(check(claim, ctx))
         except Exception as exc:  # recorded, reported, and failed by the CLI and the test
             out.append(
-                Verdict(claim.id, claim.seed, claim.where, claim.kind, str(claim.data.get(
-                    "value")), "", "error", f"{type(exc).__name__}: {exc}", "")
+                Verdict(
+                    claim.id,
+                    claim.seed,
+                    claim.where,
+                    claim.kind,
+                    str(claim.data.get("value")),
+                    "",
+                    "error",
+                    f"{type(exc).__name__}: {exc}",
+                    "",
+                )
             )
     return out

@@ -11,20 +11,28 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["heat_maps", "leg2_figure", "pendulum_figure", "step_animation", "step_figure",
-           "walk_figures"]  # fmt: skip
+__all__ = [
+    "heat_maps",
+    "leg2_figure",
+    "pendulum_figure",
+    "step_animation",
+    "step_figure",
+    "walk_figures",
+]
 
 
 def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any]]:
-    """det J / σ_min over (knee, ankle) for the leg and (θ1, θ2) for the SCARA, with families."""
+    """Det J / σ_min over (knee, ankle) for the leg and (θ1, θ2) for the SCARA, with families."""
     from .. import load
     from ..plots import pyplot, save_figure, singularity_map_figure
     from ..singularity import scan
 
     plt = pyplot()
     paths, counts = [], {}
-    for key, name, joints in (("leg", "hexabot_leg", ["knee", "ankle"]),
-                              ("scara", "scara", ["theta1", "theta2"])):  # fmt: skip
+    for key, name, joints in (
+        ("leg", "hexabot_leg", ["knee", "ankle"]),
+        ("scara", "scara", ["theta1", "theta2"]),
+    ):
         res = scan(load(ctx.chain(key)), grid=grid, joints=joints, families=True)
         counts[name] = dict(res.family_counts)
         fig = singularity_map_figure(res, title=f"{name}: singularity map, families of det J")
@@ -38,8 +46,11 @@ def step_figure(ctx: Any, out: Path) -> Path:
     """Seeds 000/001/003 Figs.: foot position, velocity, joint angles vs time, drift."""
     from ..plots import plot_motion
 
-    return plot_motion(ctx.step, out / "step.png",
-                       title="x-only step: v = [A sin(2πt/T), 0, 0] (seeds 000, 001, 003)")  # fmt: skip
+    return plot_motion(
+        ctx.step,
+        out / "step.png",
+        title="x-only step: v = [A sin(2πt/T), 0, 0] (seeds 000, 001, 003)",
+    )
 
 
 def step_animation(ctx: Any, out: Path) -> Path:
@@ -48,8 +59,14 @@ def step_animation(ctx: Any, out: Path) -> Path:
     from ..viewer import export_html
 
     tr = ctx.step.trajectory
-    return export_html(load("hexabot_leg"), tr.t, tr.q, out / "step.html", fps=30,
-                       title="hexabot_leg: the seeds' x-only step")  # fmt: skip
+    return export_html(
+        load("hexabot_leg"),
+        tr.t,
+        tr.q,
+        out / "step.html",
+        fps=30,
+        title="hexabot_leg: the seeds' x-only step",
+    )
 
 
 def leg2_figure(ctx: Any, out: Path) -> Path:
@@ -90,8 +107,9 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
     plt = pyplot()
     p = ctx.pendulum
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
-    for col, (run, name) in enumerate(((p.undamped, "without damping"),
-                                       (p.damped, f"damping {p.damped.damping:g} N·m·s/rad"))):  # fmt: skip
+    for col, (run, name) in enumerate(
+        ((p.undamped, "without damping"), (p.damped, f"damping {p.damped.damping:g} N·m·s/rad"))
+    ):
         t = run.simulation.t
         axes[0, col].plot(t, run.theta)
         axes[0, col].set_title(f"rotation of the link {name}")
@@ -105,8 +123,10 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
         for ax in axes[:, col]:
             ax.grid(True, alpha=0.3)
     u = p.undamped
-    fig.suptitle(f"pendulum from {math.degrees(u.theta0):.0f}°: period {u.period:.6f} s, "
-                 f"exact {u.period_exact:.6f} s")  # fmt: skip
+    fig.suptitle(
+        f"pendulum from {math.degrees(u.theta0):.0f}°: period {u.period:.6f} s, "
+        f"exact {u.period_exact:.6f} s"
+    )
     fig.tight_layout()
     path = save_figure(fig, out / "pendulum.png")
     plt.close(fig)
