@@ -31,10 +31,9 @@ from typing import Any
 
 import numpy as np
 import sympy as sp
-import tomllib
 from sympy.parsing.sympy_parser import parse_expr
 
-from ..exceptions import ConfigurationError
+from ..exceptions import ConfigurationError, OptionalDependencyError
 
 __all__ = [
     "CLAIMS_FILE",
@@ -154,11 +153,23 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
     """Read the claims file; return the claims and the seed titles.
 
     Raises:
+        OptionalDependencyError: Python 3.10 without ``tomli``.
         ConfigurationError: A claim without ``id``, ``seed``, ``where`` or ``kind``, or a
             duplicated id.
 
     """
-    raw = tomllib.loads(Path(path or CLAIMS_FILE).read_text(encoding="utf-8"))
+    try:
+        import tomllib as toml_reader  # type: ignore[import-not-found,unused-ignore]
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        try:
+            import tomli as toml_reader  # type: ignore[no-redef,import-not-found,unused-ignore]
+        except ModuleNotFoundError:
+            raise OptionalDependencyError(
+                "reading the claims file on Python 3.10 needs tomli; "
+                "`pip install hexapod-kin[tables]`",
+                parameter="claims",
+            ) from None
+    raw = toml_reader.loads(Path(path or CLAIMS_FILE).read_text(encoding="utf-8"))
     out: list[Claim] = []
     seen: set[str] = set()
     for item in raw.get("claim", []):
