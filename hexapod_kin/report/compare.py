@@ -218,7 +218,7 @@ def equal(a: Any, b: Any, key: str = "") -> bool:
 
 
 def _fmt(expr: Any) -> str:
-    return sp.sstr(sp.sympify(expr))
+    return sp.sstr(sp.sympify(expr), full_prec=False)
 
 
 def _fmt_matrix(m: sp.Matrix) -> str:
