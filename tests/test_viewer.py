@@ -469,7 +469,9 @@ def test_exported_step_renders_and_moves_offline(browser, step_html):
     page = _Page(browser, allow=("file://",))
     try:
         page.page.goto(path.as_uri())
-        page.page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.page.wait_for_function(
+            "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+        )
         page.page.evaluate(f"hexapodKin.seek({times[0]})")
         page.page.wait_for_timeout(300)
         start = page.pixels()
@@ -498,7 +500,9 @@ def test_mesh_page_unpacks_and_computes_normals(browser, tmp_path):
     page = _Page(browser, allow=("file://",))
     try:
         page.page.goto(path.as_uri())
-        page.page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.page.wait_for_function(
+            "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+        )
         counts = page.page.evaluate(
             """() => { var n = 0, shaded = 0;
               hexapodKin.viewer.scene.traverse(function (o) {
@@ -531,7 +535,9 @@ def test_notebook_iframe_renders(browser, step_html, tmp_path):
         frames = [f for f in page.page.frames if f != page.page.main_frame]
         assert len(frames) == 2
         for frame in frames:
-            frame.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+            frame.wait_for_function(
+                "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+            )
             assert frame.evaluate("hexapodKin.duration") == pytest.approx(1.5)
     finally:
         page.close()

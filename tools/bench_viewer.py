@@ -87,11 +87,35 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
     return rows
 
 
+def _mesh_page(name: str) -> dict[str, Any]:
+    """Size of a mesh robot's page against its peer: the bundle plus the mesh files it used
+    to embed as they are (meshcat's ``_meshfile_geometry``, before the compact geometry)."""
+    from hexapod_kin import load, viewer
+    from hexapod_kin.viewer.objects import bundle
+
+    model = load(name)
+    files = sum(
+        Path(go.meshPath).stat().st_size for go in model.geometry_model("visual").geometryObjects
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "x.html"
+        t0 = time.perf_counter()
+        viewer.export_html(model, [0.0], model.neutral()[None, :], out)
+        ms = 1e3 * (time.perf_counter() - t0)
+        size = out.stat().st_size
+    peer = len(bundle().encode("utf-8")) + files
+    return {
+        "case": f"{name} page (still pose)", "ms": round(ms, 1), "html_bytes": size,
+        "bundle_plus_mesh_files_bytes": peer, "size_ratio": round(peer / size, 2),
+    }
+
+
 def run(quick: bool) -> list[dict[str, Any]]:
     repeat = 1 if quick else 5
     rows: list[dict[str, Any]] = []
     for name, samples in (("hexabot_leg", 121), ("hexapod", 121 if quick else 481)):
         rows += _case(name, samples, repeat)
+    rows.append(_mesh_page("erd:panda"))
     return rows
 
 

@@ -82,7 +82,9 @@ def shoot(
 
         page.route("**/*", route)
         page.goto(html.resolve().as_uri())
-        page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.wait_for_function(
+            "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+        )
         page.evaluate("document.querySelector('.dg.main') && "
                       "(document.querySelector('.dg.main').style.display = 'none')")
         page.evaluate(f"hexapodKin.seek({t})")
