@@ -523,7 +523,7 @@ def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
     page.route("**/*", route)
     try:
         page.goto(path.as_uri())
-        page.wait_for_function("window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.wait_for_function("() => window.hexapodKin && window.hexapodKin.ready", timeout=60000)
         shots = {}
         for t in (0.2, 0.7):
             page.evaluate(f"hexapodKin.seek({t})")
