@@ -38,6 +38,7 @@ from hexapod_kin.viewer.scene import Scene
 
 umsgpack = pytest.importorskip("umsgpack")
 
+
 # ====================================================================== helpers
 def _alive(pid: int) -> bool:
     """True if ``pid`` exists and is not a zombie (a zombie has exited)."""
@@ -175,9 +176,7 @@ class _Page:
         self.blocked: list[str] = []
         self.errors: list[str] = []
         self.page.on("pageerror", lambda e: self.errors.append(str(e)))
-        self.page.on(
-            "console", lambda m: self.errors.append(m.text) if m.type == "error" else None
-        )
+        self.page.on("console", lambda m: self.errors.append(m.text) if m.type == "error" else None)
 
         def route(r):
             if r.request.url.startswith(allow):
@@ -237,8 +236,7 @@ def test_robot_objects_match_pinocchio_geometry(leg, step_html):
     path, _, _ = step_html
     cmds = [_decode(c) for c in _html_data(path)["commands"]]
     robot = [
-        c for c in cmds
-        if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+        c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
     ]
     expected = leg.geometry_model("visual").ngeoms
     assert len(robot) == expected > 0
@@ -288,13 +286,10 @@ def test_triads_are_the_khalil_frames(leg, step_html):
     path, _, qs = step_html
     cmds = [_decode(c) for c in _html_data(path)["commands"]]
     triads = [
-        c for c in cmds
-        if c["type"] == "set_object" and c["path"].startswith("/meshcat/frames/")
+        c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/frames/")
     ]
     assert [c["path"] for c in triads] == [f"/meshcat/frames/{k}" for k in range(5)]
-    labels = [
-        [t["text"] for t in c["object"]["textures"] if t["type"] == "_text"] for c in triads
-    ]
+    labels = [[t["text"] for t in c["object"]["textures"] if t["type"] == "_text"] for c in triads]
     assert labels == [["0"], ["1"], ["2"], ["3"], ["4"]]
     moves = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/frames/4"]
     T = np.array(moves[0]["matrix"]).reshape(4, 4).T
@@ -398,8 +393,7 @@ def test_erd_meshes_are_embedded_compactly():
     solo = load("erd:solo12", tip="FL_FOOT")
     cmds = viewer.scene_commands(solo, [0.0], solo.neutral()[None, :])
     meshes = [
-        c for c in cmds
-        if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+        c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
     ]
     gm = solo.geometry_model("visual")
     assert len(meshes) == gm.ngeoms
@@ -428,9 +422,9 @@ def test_mesh_page_is_much_smaller_than_the_mesh_files(tmp_path):
     assert path.stat().st_size < 0.4 * before
     data = _html_data(path)
     robot = [
-        _decode(c) for c in data["commands"]
-        if _decode(c)["path"].startswith("/meshcat/robot/")
-        and _decode(c)["type"] == "set_object"
+        _decode(c)
+        for c in data["commands"]
+        if _decode(c)["path"].startswith("/meshcat/robot/") and _decode(c)["type"] == "set_object"
     ]
     assert len(robot) == gm.ngeoms
     for c in robot:  # the page computes the normals itself
@@ -704,8 +698,20 @@ def test_cli_animate_writes_html(tmp_path, capsys):
     from hexapod_kin.cli import main
 
     out = tmp_path / "anim.html"
-    rc = main(["animate", "hexabot_leg", "--html", str(out), "--samples", "11", "--triads",
-               "--sigma-min", "10", "--json"])
+    rc = main(
+        [
+            "animate",
+            "hexabot_leg",
+            "--html",
+            str(out),
+            "--samples",
+            "11",
+            "--triads",
+            "--sigma-min",
+            "10",
+            "--json",
+        ]
+    )
     assert rc == 0
     info = json.loads(capsys.readouterr().out)
     assert info["samples"] == 11 and info["singular_samples"] == 11

@@ -47,8 +47,12 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
 
     def ours() -> bytes:
         clips = [clip(p, times, poses[:, j]) for j, p in enumerate(paths)]
-        msg = {"type": "set_animation", "path": "", "animations": clips,
-               "options": {"play": True, "repetitions": 1}}
+        msg = {
+            "type": "set_animation",
+            "path": "",
+            "animations": clips,
+            "options": {"play": True, "repetitions": 1},
+        }
         return bytes(umsgpack.packb(msg))
 
     def peer() -> bytes:
@@ -58,20 +62,28 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
             frame = anim.at_frame(root, i)
             for j, p in enumerate(paths):
                 frame[p.lstrip("/")].set_transform(poses[i, j])
-        msg = {"type": "set_animation", "path": "", "animations": anim.lower(),
-               "options": {"play": True, "repetitions": 1}}
+        msg = {
+            "type": "set_animation",
+            "path": "",
+            "animations": anim.lower(),
+            "options": {"play": True, "repetitions": 1},
+        }
         return bytes(umsgpack.packb(msg))
 
     t_ours, t_peer = _best(ours, repeat), _best(peer, repeat)
     b_ours, b_peer = len(ours()), len(peer())
-    rows: list[dict[str, Any]] = [{
-        "case": f"{name} {len(paths)} geoms x {len(times)} samples "
-                f"({len(times) * len(paths)} keys)",
-        "ours_ms": round(1e3 * t_ours, 2), "meshcat_ms": round(1e3 * t_peer, 2),
-        "time_ratio": round(t_peer / t_ours, 2),
-        "ours_bytes": b_ours, "meshcat_bytes": b_peer,
-        "size_ratio": round(b_peer / b_ours, 2),
-    }]
+    rows: list[dict[str, Any]] = [
+        {
+            "case": f"{name} {len(paths)} geoms x {len(times)} samples "
+            f"({len(times) * len(paths)} keys)",
+            "ours_ms": round(1e3 * t_ours, 2),
+            "meshcat_ms": round(1e3 * t_peer, 2),
+            "time_ratio": round(t_peer / t_ours, 2),
+            "ours_bytes": b_ours,
+            "meshcat_bytes": b_peer,
+            "size_ratio": round(b_peer / b_ours, 2),
+        }
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "x.html"
 
@@ -79,11 +91,14 @@ def _case(name: str, samples: int, repeat: int) -> list[dict[str, Any]]:
             viewer.export_html(model, times, qs, out, base_poses=base)
 
         t_html = _best(export, max(1, repeat // 2))
-        rows.append({
-            "case": f"{name} export_html ({len(times)} samples)",
-            "ms": round(1e3 * t_html, 1), "html_bytes": out.stat().st_size,
-            "bundle_bytes": len(bundle()),
-        })
+        rows.append(
+            {
+                "case": f"{name} export_html ({len(times)} samples)",
+                "ms": round(1e3 * t_html, 1),
+                "html_bytes": out.stat().st_size,
+                "bundle_bytes": len(bundle()),
+            }
+        )
     return rows
 
 
@@ -105,8 +120,11 @@ def _mesh_page(name: str) -> dict[str, Any]:
         size = out.stat().st_size
     peer = len(bundle().encode("utf-8")) + files
     return {
-        "case": f"{name} page (still pose)", "ms": round(ms, 1), "html_bytes": size,
-        "bundle_plus_mesh_files_bytes": peer, "size_ratio": round(peer / size, 2),
+        "case": f"{name} page (still pose)",
+        "ms": round(ms, 1),
+        "html_bytes": size,
+        "bundle_plus_mesh_files_bytes": peer,
+        "size_ratio": round(peer / size, 2),
     }
 
 

@@ -33,8 +33,15 @@ def hexapod_scene(out: Path) -> tuple[Path, float]:
     """The hexapod standing on its six feet, body swaying (feet fixed by the leg IK)."""
     model = load("hexapod")
     times, qs, base = gait.demo_trajectory(model, duration=4.0, samples=81)
-    path = viewer.export_html(model, times, qs, out / "hexapod.html", base_poses=base,
-                              trace_frame=False, title="hexapod_kin: hexapod (body sway)")
+    path = viewer.export_html(
+        model,
+        times,
+        qs,
+        out / "hexapod.html",
+        base_poses=base,
+        trace_frame=False,
+        title="hexapod_kin: hexapod (body sway)",
+    )
     return path, 0.6
 
 
@@ -42,11 +49,18 @@ def leg_step_scene(out: Path) -> tuple[Path, float]:
     """The 3-DOF leg in mid-swing of a foot step (stance line + half-ellipse swing)."""
     model = load("hexabot_leg")
     step = gait.foot_step(model, length=0.06, height=0.04, duration=1.0, dt=0.01)
-    sigma = np.array([np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1]
-                      for q in step.q])
-    path = viewer.export_html(model, step.t, step.q, out / "leg_step.html", frame_triads=True,
-                              singular_mask=sigma < 1e-3,
-                              title="hexapod_kin: hexabot_leg, foot step (mid-swing)")
+    sigma = np.array(
+        [np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1] for q in step.q]
+    )
+    path = viewer.export_html(
+        model,
+        step.t,
+        step.q,
+        out / "leg_step.html",
+        frame_triads=True,
+        singular_mask=sigma < 1e-3,
+        title="hexapod_kin: hexabot_leg, foot step (mid-swing)",
+    )
     return path, 0.75  # duty factor 0.5: swing from t = 0.5 s to 1 s, top at 0.75 s
 
 
@@ -82,11 +96,11 @@ def shoot(
 
         page.route("**/*", route)
         page.goto(html.resolve().as_uri())
-        page.wait_for_function(
-            "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+        page.wait_for_function("() => window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        page.evaluate(
+            "document.querySelector('.dg.main') && "
+            "(document.querySelector('.dg.main').style.display = 'none')"
         )
-        page.evaluate("document.querySelector('.dg.main') && "
-                      "(document.querySelector('.dg.main').style.display = 'none')")
         page.evaluate(f"hexapodKin.seek({t})")
         page.wait_for_timeout(400)
         data = page.screenshot()
