@@ -29,8 +29,7 @@ from sympy.simplify.fu import TR10i
 
 from ..exceptions import ParameterError, choices
 from ..params import Chain, table_transforms
-
-ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
+from ..singularity.rows import ROW_NAMES
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:

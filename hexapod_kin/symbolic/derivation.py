@@ -41,8 +41,9 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..exceptions import ParameterError, choices
+from ..exceptions import ParameterError
 from ..params import Chain
+from ..singularity.rows import choose_rows, row_indices
 from . import cache as _cache
 from . import core as _core
 from .core import ROW_NAMES, khalil_matrix
@@ -70,38 +71,6 @@ __all__ = [
 
 #: Default time budget of :func:`derive` in [s].
 DEFAULT_BUDGET = 5.0
-
-
-def row_indices(rows: str | Sequence[str] | None, nq: int | None = None) -> tuple[int, ...]:
-    """Turn a row selection into indices of ``[vx vy vz wx wy wz]``.
-
-    Args:
-        rows: ``None`` or ``"position"`` (x, y, z), ``"all"`` (the six rows), or a sequence of
-            names from :data:`ROW_NAMES` (e.g. ``("x", "y", "z", "wz")``).
-        nq: Unused here; kept for symmetry with callers that check squareness.
-
-    Returns:
-        The row indices (0..5), in the given order.
-
-    Raises:
-        ParameterError: Unknown or repeated row names, or an empty selection.
-
-    """
-    del nq
-    if rows is None or rows == "position":
-        return (0, 1, 2)
-    if rows == "all":
-        return tuple(range(6))
-    if isinstance(rows, str):
-        rows = [r.strip() for r in rows.split(",")]
-    names = [str(r).lower() for r in rows]
-    bad = [r for r in names if r not in ROW_NAMES]
-    if bad or not names or len(set(names)) != len(names):
-        raise ParameterError(
-            f"rows={tuple(rows)!r} is not allowed; give distinct names from "
-            f"{choices(ROW_NAMES)}, or 'position' / 'all'"
-        )
-    return tuple(ROW_NAMES.index(r) for r in names)
 
 
 @dataclass(frozen=True)
@@ -363,10 +332,7 @@ def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[st
     else:
         flags = [bool(x) for x in derivation_or_jacobian]
         n = int(nq if nq is not None else 0)
-    chosen = [0, 1, 2] + [i for i in (3, 4, 5) if flags[i]]
-    if len(chosen) == n and n > 3:
-        return tuple(ROW_NAMES[i] for i in chosen)
-    return ("x", "y", "z")
+    return choose_rows(flags, n)
 
 
 def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
