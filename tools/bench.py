@@ -1,8 +1,11 @@
 """Benchmarks: hexapod_kin against its peers, in one run, printing ratios.
 
-Usage: ``python tools/bench.py [--only SECTION ...] [--quick]``.
+Usage: ``python tools/bench.py [--only SECTION ...] [--quick] [--json]``.
 Sections live in ``tools/bench_<section>.py`` (one per concern) and expose
-``run(quick: bool) -> list[dict]``; each dict is one line of the report.
+``run(quick: bool) -> list[dict]``; each dict is one line of the report and carries its
+comparison: a ``ratio``/``speedup`` against a peer measured in the same run, or a measured
+figure beside its ``target``. ``startup`` times every subcommand as a whole process, cold
+(fresh numba and derivation caches) and warm.
 """
 
 from __future__ import annotations
@@ -13,7 +16,17 @@ import json
 import sys
 from pathlib import Path
 
-SECTIONS = ["spine", "singularity", "ik", "viewer", "sweep", "gait", "symbolic"]
+SECTIONS = [
+    "spine",
+    "singularity",
+    "ik",
+    "viewer",
+    "sweep",
+    "gait",
+    "symbolic",
+    "dynamics",
+    "startup",
+]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -51,7 +51,10 @@ COMMANDS: dict[str, list[str]] = {
     "mjcf": ["mjcf", "hexabot_leg", "-o", "{out}/leg.xml"],
     "export-package": ["export-package", "hexabot_leg", "-o", "{out}/pkg", "-f"],
     "sweep": ["sweep", "--height", "0.1", "--l2", "0.08:0.12:2", "--mc-samples", "2000"],
+    "reproduce": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
 }
+#: Not timed: ``view`` serves a page until interrupted (no start-to-exit time).
+UNTIMED = ("view",)
 #: The commands of ``--quick`` (a smoke test of the section: one of each kind of cost).
 QUICK = ("list", "fk", "scan")
 
