@@ -51,7 +51,8 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
         "4. The x-only step (foot velocity [A sin 2πt/T, 0, 0])",
         "`hexapod_kin.seeds.seed_experiment`: resolved rate, RK4, closed loop on the exact "
         "reference; the plain Euler + solve loop the seeds used is the baseline in the drift "
-        "panel.",
+        "panel. Not checkable: seed 003's 'velocity = 10 × the input' (the input amplitude is "
+        "not given).",
     ),
     (
         "leg2",

@@ -206,13 +206,24 @@ def _subs(c: Claim) -> dict[sp.Symbol, float]:
 _SYMBOLIC = f"symbolic: every entry at random points (rel. tol {RTOL:g}) then simplify(a - b) == 0"
 
 
+def _raw(rows: Any) -> str:
+    """The seed's matrix as written in the claims file."""
+    return "[" + "; ".join(", ".join(str(v) for v in row) for row in rows) + "]"
+
+
+def _with(c: Claim) -> str:
+    subs = c.data.get("subs")
+    return " with " + ", ".join(f"{k} = {v:g}" for k, v in subs.items()) if subs else ""
+
+
 # ---------------------------------------------------------------------- checks
 def check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)
     seed = parse_matrix(c.data["value"]).xreplace(subs)
     truth = ctx.item(key, item).xreplace(subs)
-    claimed, computed = _fmt_matrix(seed), _fmt_matrix(truth.applyfunc(sp.simplify))
+    claimed = _raw(c.data["value"]) + _with(c)
+    computed = _fmt_matrix(truth.applyfunc(sp.simplify))
     if seed.shape != truth.shape:
         return _verdict(
             c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
@@ -375,7 +386,7 @@ def check_det(c: Claim, ctx: Context) -> Verdict:
     subs = _subs(c)
     seed = parse(c.data["value"]).xreplace(subs)
     truth = sp.factor(sp.simplify(_det_truth(c, ctx).xreplace(subs)))
-    claimed, computed = _fmt(seed), _fmt(truth)
+    claimed, computed = str(c.data["value"]) + _with(c), _fmt(truth)
     method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
     if equal(seed, truth, c.id):
         return _verdict(c, claimed, computed, "agrees", "", method)
