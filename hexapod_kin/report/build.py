@@ -230,7 +230,10 @@ def _facts_lines(key: str, rep: Report) -> list[str]:
             f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s."
         ]
     if key == "beyond":
-        return [f"`{k}` = {v}" for k, v in f["hexapod"].items()]
+        return [
+            f"- `{k}` = {v:.6g}" if isinstance(v, float) else f"- `{k}` = {v}"
+            for k, v in f["hexapod"].items()
+        ]
     return []
 
 
