@@ -1,4 +1,4 @@
-"""Atomic file writing: an error or interrupt never leaves a half-written file in place."""
+"""Files: atomic writing (never a half-written file) and the package's cache root."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .exceptions import ParameterError
 
-__all__ = ["atomic_write"]
+__all__ = ["atomic_write", "cache_root"]
 
 
 def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
@@ -89,3 +89,20 @@ def _fsync_dir(directory: Path) -> None:
         pass
     finally:
         os.close(fd)
+
+
+def cache_root(kind: str) -> Path:
+    """The package's cache folder for ``kind`` (``"symbolic"``, ``"families"``; not created here).
+
+    ``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else ``platformdirs.user_cache_dir("hexapod_kin")/<kind>``
+    when platformdirs is installed, else ``~/.cache/hexapod_kin/<kind>``.
+    """
+    env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
+    if env:
+        return Path(env) / kind
+    try:
+        import platformdirs
+
+        return Path(platformdirs.user_cache_dir("hexapod_kin")) / kind
+    except ImportError:
+        return Path.home() / ".cache" / "hexapod_kin" / kind

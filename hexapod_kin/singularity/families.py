@@ -22,7 +22,6 @@ import hashlib
 import inspect
 import json
 import math
-import os
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -260,15 +259,9 @@ def cache_dir() -> Path:
     ``$HEXAPOD_KIN_CACHE_DIR``, else ``platformdirs.user_cache_dir("hexapod_kin")`` when
     platformdirs is installed, else ``~/.cache/hexapod_kin``.
     """
-    env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
-    if env:
-        return Path(env) / "families"
-    try:
-        import platformdirs
+    from .._io import cache_root
 
-        return Path(platformdirs.user_cache_dir("hexapod_kin")) / "families"
-    except ImportError:
-        return Path.home() / ".cache" / "hexapod_kin" / "families"
+    return cache_root("families")
 
 
 def _table(model: Any) -> tuple[Any, str]:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import fields
@@ -26,23 +25,15 @@ from typing import Any
 
 import sympy as sp
 
-from .._io import atomic_write
+from .._io import atomic_write, cache_root
 
 FORMAT = 3
 Stages = Callable[[], Iterator[tuple[str, Any]]]
 
 
 def cache_dir() -> Path:
-    """The cache folder (not created here)."""
-    env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
-    if env:
-        return Path(env) / "symbolic"
-    try:
-        import platformdirs
-
-        return Path(platformdirs.user_cache_dir("hexapod_kin")) / "symbolic"
-    except ImportError:
-        return Path.home() / ".cache" / "hexapod_kin" / "symbolic"
+    """The cache folder (not created here): :func:`hexapod_kin._io.cache_root` ``("symbolic")``."""
+    return cache_root("symbolic")
 
 
 def key(parts: Any) -> str:
