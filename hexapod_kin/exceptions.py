@@ -8,6 +8,7 @@ is a list), so that a user can fix the call without reading the source.
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Iterable
 from typing import Any
 
@@ -24,6 +25,7 @@ __all__ = [
     "UrdfWarning",
     "choices",
     "did_you_mean",
+    "positive",
 ]
 
 
@@ -157,3 +159,33 @@ def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.
     if not found:
         return ""
     return " (did you mean " + " or ".join(repr(x) for x in found) + "?)"
+
+
+def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """``value`` as a finite float > 0 (>= 0 with ``allow_zero``): the package's one such check.
+
+    Raises:
+        ParameterError: Not a number (a bool is not one), not finite or out of range; the
+            error names ``name`` and carries the value and what is allowed.
+
+    """
+    need = ">= 0" if allow_zero else "> 0"
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name}={value!r} is not a number; a finite value {need} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"finite {need}",
+        ) from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; a finite value {need} is needed",
+            parameter=name,
+            value=value,
+            allowed=f"finite {need}",
+        )
+    return v

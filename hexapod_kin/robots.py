@@ -26,7 +26,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from .exceptions import HexapodKinError, ParameterError, choices
+from .exceptions import HexapodKinError, ParameterError, choices, positive
 from .params import Chain, Hexapod, Inertial, JointLimits, KhalilRow, LegMount
 
 __all__ = [
@@ -42,10 +42,7 @@ __all__ = [
 
 
 def _positive(name: str, value: float) -> float:
-    v = float(value)
-    if not math.isfinite(v) or v <= 0:
-        raise ParameterError(f"{name}={value!r} is not allowed; a finite length > 0 is required")
-    return v
+    return positive(name, value)
 
 
 def hexabot_leg(
@@ -372,8 +369,9 @@ def get(name: str, **params: Any) -> Chain | Hexapod:
     except (TypeError, ValueError) as exc:
         bad = {k: v for k, v in params.items() if not isinstance(v, (int, float, list, tuple))}
         raise ParameterError(
-            f"{name}: {exc}" + (f" (non-numeric: {bad}; dimensions are numbers in SI units)"
-                                if bad else ""),
-            parameter=next(iter(bad), None), value=next(iter(bad.values()), None),
+            f"{name}: {exc}"
+            + (f" (non-numeric: {bad}; dimensions are numbers in SI units)" if bad else ""),
+            parameter=next(iter(bad), None),
+            value=next(iter(bad.values()), None),
             allowed="a number (SI units)",
         ) from None

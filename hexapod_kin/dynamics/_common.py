@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ParameterError
+from ..exceptions import ParameterError, positive
 
 __all__ = [
     "as_model",
@@ -30,35 +30,6 @@ def as_model(model: Any, **params: Any) -> Any:
     from ..kinematics import load
 
     return load(model, **params)
-
-
-def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
-    """``value`` as a finite float > 0 (>= 0 with ``allow_zero``).
-
-    Raises:
-        ParameterError: Not a number, not finite or out of range (names ``name``).
-
-    """
-    need = ">= 0" if allow_zero else "> 0"
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"{name}={value!r} is not a number; a finite value {need} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"finite {need}",
-        ) from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; a finite value {need} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"finite {need}",
-        )
-    return v
 
 
 def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -> np.ndarray:

@@ -27,7 +27,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError
+from ..exceptions import ConfigurationError, ParameterError, positive
 from ..ik.prepare import ModelLike, as_model, home, prepared
 from ._kernel import rr_kernel
 
@@ -44,30 +44,6 @@ __all__ = [
 Method = Literal["euler", "rk4"]
 Frame = Literal["base", "tip"]
 FRAMES: tuple[str, ...] = ("base", "tip")
-
-
-def positive(name: str, value: Any, allow_zero: bool = False) -> float:
-    """``value`` as a finite float > 0 (≥ 0 with ``allow_zero``).
-
-    Raises:
-        ParameterError: Not a number, not finite, or out of range; the message names ``name``.
-
-    """
-    need = ">= 0" if allow_zero else "> 0"
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"{name}={value!r} is not a number", parameter=name, value=value, allowed=need
-        ) from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; a finite value {need} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"finite {need}",
-        )
-    return v
 
 
 def read_only(*arrays: np.ndarray) -> None:
@@ -455,7 +431,9 @@ def resolved_rate(
     jac0 = mdl.jacobian(start)
     sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
     eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)
-    lam2max = eps * eps if max_damping is None else positive("max_damping", max_damping, True)
+    lam2max = (
+        eps * eps if max_damping is None else positive("max_damping", max_damping, allow_zero=True)
+    )
     vlim = np.asarray(mdl.velocity_limit, dtype=float)
     vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
     lo = np.where(cont, -np.inf, lower) if within_limits else lower
