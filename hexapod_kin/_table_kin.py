@@ -16,19 +16,31 @@ __all__ = ["table_fk", "table_position_jacobian", "table_transforms"]
 
 
 def _as_q(chain: Chain, q: Any) -> np.ndarray:
+    """``q`` as a finite (nq,) float array for ``chain`` (the table layer: no model needed)."""
     from .exceptions import ConfigurationError
 
+    allowed = f"{chain.nq} finite numbers (joints {list(chain.joint_names or ())})"
     try:
         arr = np.asarray(q, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise ConfigurationError(f"q={q!r} is not a sequence of numbers") from None
+        raise ConfigurationError(
+            f"q={q!r} is not a sequence of numbers", parameter="q", value=q, allowed=allowed
+        ) from None
     if arr.shape != (chain.nq,):
         raise ConfigurationError(
             f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints "
-            f"{list(chain.joint_names or ())}"
+            f"{list(chain.joint_names or ())}",
+            parameter="q",
+            value=arr.tolist(),
+            allowed=allowed,
         )
     if not np.all(np.isfinite(arr)):
-        raise ConfigurationError(f"q={arr.tolist()} contains non-finite values")
+        raise ConfigurationError(
+            f"q={arr.tolist()} contains non-finite values",
+            parameter="q",
+            value=arr.tolist(),
+            allowed=allowed,
+        )
     return arr
 
 
