@@ -15,8 +15,8 @@ import numpy as np
 from lxml import etree
 
 from ..exceptions import UrdfError
-from .limits import _INERTIA_FLOOR, TRIANGLE_RTOL
-from .parse import _error, _number, _origin, _single
+from .limits import INERTIA_FLOOR, TRIANGLE_RTOL
+from .parse import error_at, number_of, origin_of, single
 
 
 def principal_moments(
@@ -64,7 +64,7 @@ class _Inertial:
 
     def in_link(self) -> tuple[np.ndarray, np.ndarray]:
         """Centre of mass [m] and inertia about it [kg m^2], in link axes."""
-        rot, com = _origin(self.element)
+        rot, com = origin_of(self.element)
         ixx, iyy, izz, ixy, ixz, iyz = self.values
         mat = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
         return com, rot @ mat @ rot.T
@@ -74,7 +74,7 @@ _NO_INERTIAL = _Inertial(0.0, (0.0,) * 6, (0.0, 0.0, 0.0), None)
 
 
 def _definite(eig: Sequence[float]) -> bool:
-    return eig[0] > 1e-12 * eig[2] + _INERTIA_FLOOR
+    return eig[0] > 1e-12 * eig[2] + INERTIA_FLOOR
 
 
 def _triangle(eig: Sequence[float]) -> bool:
@@ -85,26 +85,26 @@ def _eig_text(eig: Sequence[float]) -> str:
     return "[" + ", ".join(f"{e:.6g}" for e in eig) + "]"
 
 
-def _link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = None) -> _Inertial:
+def link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = None) -> _Inertial:
     """Check a link's ``<inertial>``: mass >= 0, six finite entries, not indefinite.
 
     With ``defects`` (lenient mode) an indefinite inertia is recorded there instead of raised.
     """
-    inertial = _single(link, "inertial", required=False)
+    inertial = single(link, "inertial", required=False)
     if inertial is None:
         return _NO_INERTIAL
-    _single(inertial, "origin", required=False)
-    mass_el = _single(inertial, "mass", required=True)
-    inertia_el = _single(inertial, "inertia", required=True)
+    single(inertial, "origin", required=False)
+    mass_el = single(inertial, "mass", required=True)
+    inertia_el = single(inertial, "inertia", required=True)
     assert mass_el is not None and inertia_el is not None
-    mass = _number(mass_el, "value")
+    mass = number_of(mass_el, "value")
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    ixx, ixy, ixz, iyy, iyz, izz = (_number(inertia_el, k) for k in keys)
+    ixx, ixy, ixz, iyy, iyz, izz = (number_of(inertia_el, k) for k in keys)
     eig = principal_moments(ixx, iyy, izz, ixy, ixz, iyz)
     scale = max(abs(ixx), abs(iyy), abs(izz), abs(ixy), abs(ixz), abs(iyz))
-    if eig[0] < -(1e-9 * scale + _INERTIA_FLOOR):
+    if eig[0] < -(1e-9 * scale + INERTIA_FLOOR):
         values = " ".join(f"{k}={inertia_el.get(k)}" for k in keys)
-        err = _error(
+        err = error_at(
             inertia_el,
             None,
             None,
@@ -117,7 +117,7 @@ def _link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None =
     return _Inertial(mass, (ixx, iyy, izz, ixy, ixz, iyz), eig, inertial)
 
 
-def _check_moving_body(
+def check_moving_body(
     jname: str,
     child: str,
     link_el: dict[str, etree._Element],
@@ -156,7 +156,7 @@ def _check_body(
     parts = [n for n, _ in members if inertials[n].present]
     total = math.fsum(inertials[n].mass for n in parts)
     if total <= 0.0:
-        raise _error(
+        raise error_at(
             link_el[child],
             "name",
             child,
@@ -175,7 +175,7 @@ def _check_body(
         for name, joint in members[1:]:
             assert joint is not None
             rot_p, pos_p = pose[joint.find("parent").get("link")]
-            r_j, p_j = _origin(joint)
+            r_j, p_j = origin_of(joint)
             pose[name] = (rot_p @ r_j, rot_p @ p_j + pos_p)
         coms, mats, masses = [], [], []
         for name in parts:
@@ -196,7 +196,7 @@ def _check_body(
         "" if len(parts) == 1 else f" (merged with the links fixed to it: {len(parts)} inertials)"
     )
     if not _definite(eig):
-        raise _error(
+        raise error_at(
             where,
             None,
             None,
@@ -205,7 +205,7 @@ def _check_body(
             "link needs a positive-definite inertia",
         )
     if not _triangle(eig):
-        raise _error(
+        raise error_at(
             where,
             None,
             None,

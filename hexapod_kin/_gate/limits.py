@@ -20,14 +20,14 @@ MAX_ABS = 1e9
 #: The same for ``<limit>``, ``<safety_controller>``, ``<dynamics>``, ``<calibration>`` and
 #: ``<mimic>``, where values such as ±1e16 are a common way to write "unbounded".
 MAX_ABS_LIMIT = 1e20
-_LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
+LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
 #: Most degrees of freedom accepted. Pinocchio's ``Data`` grows as about 64·nv³ bytes
 #: (measured with pin 4.1: 0.2 GB at nv = 129, 4 GB at nv = 400; a 1,000-DoF chain exhausts
 #: memory and gets killed), so 128 DoF keeps a model under about 0.2 GB. The largest robot of
 #: example-robot-data (tiago_dual) has 101; a hexapod has 18.
 MAX_DOF = 128
 #: DoFs (nv) of each URDF joint type.
-_JOINT_DOF = {
+JOINT_DOF = {
     "revolute": 1,
     "continuous": 1,
     "prismatic": 1,
@@ -44,31 +44,31 @@ TRIANGLE_RTOL = 1e-6
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
 _NUM = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
-_NUMBER = re.compile(f"^{_NUM}$")
+NUMBER = re.compile(f"^{_NUM}$")
 _WS = r"[ \t\r\n]"
 # Vectors may be padded with whitespace; a scalar may not (urdfdom then silently reads 0).
-_PATTERNS = {n: re.compile(f"{_WS}*" + f"{_WS}+".join([_NUM] * n) + f"{_WS}*$") for n in (3, 4)}
-_PATTERNS[1] = re.compile(f"{_NUM}$")
-_CHECKED_TOP = ("link", "joint", "material")
-_VERSION = re.compile(r"^1\.[0-2]$")
+PATTERNS = {n: re.compile(f"{_WS}*" + f"{_WS}+".join([_NUM] * n) + f"{_WS}*$") for n in (3, 4)}
+PATTERNS[1] = re.compile(f"{_NUM}$")
+CHECKED_TOP = ("link", "joint", "material")
+URDF_VERSION = re.compile(r"^1\.[0-2]$")
 #: URDF shapes and their required attributes.
-_SHAPES = {
+SHAPES = {
     "box": ("size",),
     "cylinder": ("radius", "length"),
     "sphere": ("radius",),
     "mesh": ("filename",),
 }
-_BIG = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
-_NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
-_SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
-_RESERVED = {"universe"}
+BIG_NUMBER = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
+NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
+SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
+RESERVED = {"universe"}
 #: Absolute tolerance on principal moments in [kg m^2] (rounding noise in exported files; a
 #: 1 mg, 0.1 mm part has 1e-14).
-_INERTIA_FLOOR = 1e-18
+INERTIA_FLOOR = 1e-18
 
 # (element tag, attribute) → (count of numbers, minimum or None). Attributes not listed are
 # not numeric. The tag is the element's own tag; context-dependent ones are handled in code.
-_NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
+NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "origin": {"xyz": (3, None), "rpy": (3, None)},
     "axis": {"xyz": (3, None)},
     "limit": {"lower": (1, None), "upper": (1, None), "effort": (1, 0.0), "velocity": (1, 0.0)},
@@ -89,7 +89,7 @@ _NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "mesh": {"scale": (3, None)},
     "color": {"rgba": (4, None)},
 }
-_JOINT_CHILDREN = (
+JOINT_CHILDREN = (
     "origin",
     "axis",
     "limit",

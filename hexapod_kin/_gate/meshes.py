@@ -13,11 +13,11 @@ from pathlib import Path
 from lxml import etree
 
 from ..exceptions import UrdfError
-from .limits import _SCHEME, _SHAPES, MAX_MESH_BYTES
-from .parse import _error, _numbers, _single
+from .limits import MAX_MESH_BYTES, SCHEME, SHAPES
+from .parse import error_at, numbers_of, single
 
 
-class _MeshMissing(UrdfError):
+class MeshMissing(UrdfError):
     """A mesh file that cannot be found (as opposed to one that is refused)."""
 
 
@@ -48,7 +48,7 @@ def resolve_mesh(
     """
     if not uri or not uri.strip():
         raise UrdfError("empty file name")
-    scheme = _SCHEME.match(uri)
+    scheme = SCHEME.match(uri)
     candidates: list[tuple[str, str]] = []  # (root, joined path)
     if scheme and scheme.group(1).lower() == "package" and uri[8:10] == "//":
         # Pinocchio also accepts package:///pkg/path (it joins "<dir>/" + "/pkg/path").
@@ -57,7 +57,7 @@ def resolve_mesh(
         if not pkg or "/" not in rest or pkg in (".", ".."):
             raise UrdfError(f"package URI {uri!r} must be package://<package>/<path>")
         if not package_dirs:
-            raise _MeshMissing(
+            raise MeshMissing(
                 f"{uri!r}: no package directories are known for this source (URDF text or "
                 "file without package_dirs); package:// meshes cannot be resolved"
             )
@@ -73,7 +73,7 @@ def resolve_mesh(
         raise UrdfError(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
     else:
         if mesh_root is None:
-            raise _MeshMissing(
+            raise MeshMissing(
                 f"{uri!r}: relative mesh path but no mesh root (URDF given as text); load the "
                 "URDF from its file so relative paths resolve next to it"
             )
@@ -87,7 +87,7 @@ def resolve_mesh(
         try:
             st = os.stat(real)
         except OSError:
-            last = _MeshMissing(f"{uri!r}: file {real!r} does not exist")
+            last = MeshMissing(f"{uri!r}: file {real!r} does not exist")
             continue
         if not stat.S_ISREG(st.st_mode):
             raise UrdfError(f"{uri!r}: {real!r} is not a regular file")
@@ -101,22 +101,22 @@ def resolve_mesh(
 
 
 def _check_rgba(color: etree._Element) -> None:
-    rgba = _numbers(color, "rgba", 4, None)
+    rgba = numbers_of(color, "rgba", 4, None)
     if not rgba:
-        raise _error(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
+        raise error_at(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
     if not all(0.0 <= c <= 1.0 for c in rgba):
-        raise _error(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
+        raise error_at(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
 
 
-def _check_materials_and_geometry(root: etree._Element) -> None:
+def check_materials_and_geometry(root: etree._Element) -> None:
     """Materials (named, unique, colours in [0, 1]) and visual/collision geometry."""
     defined: dict[str, etree._Element] = {}
     for mat in root.findall("material"):
         name = mat.get("name")
         if name is None or not name.strip():
-            raise _error(mat, "name", name, "every <material> needs a non-empty name")
+            raise error_at(mat, "name", name, "every <material> needs a non-empty name")
         if name in defined:
-            raise _error(
+            raise error_at(
                 mat,
                 "name",
                 name,
@@ -124,40 +124,40 @@ def _check_materials_and_geometry(root: etree._Element) -> None:
                 f"{defined[name].sourceline}); material names must be unique",
             )
         defined[name] = mat
-        color = _single(mat, "color", required=False)
+        color = single(mat, "color", required=False)
         if color is not None:
             _check_rgba(color)
     for link in root.findall("link"):
         for part in ("visual", "collision"):
             for el in link.findall(part):
-                _single(el, "origin", required=False)
-                geometry = _single(el, "geometry", required=True)
+                single(el, "origin", required=False)
+                geometry = single(el, "geometry", required=True)
                 assert geometry is not None
                 shapes = [c for c in geometry if isinstance(c.tag, str)]
                 if len(shapes) != 1:
-                    raise _error(
+                    raise error_at(
                         geometry,
                         None,
                         None,
                         f"<geometry> must hold exactly one shape "
-                        f"({', '.join(_SHAPES)}), found {len(shapes)}",
+                        f"({', '.join(SHAPES)}), found {len(shapes)}",
                     )
                 shape = shapes[0]
-                if shape.tag not in _SHAPES:
-                    raise _error(
+                if shape.tag not in SHAPES:
+                    raise error_at(
                         shape,
                         None,
                         None,
-                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(_SHAPES)}",
+                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(SHAPES)}",
                     )
-                for attr in _SHAPES[shape.tag]:
+                for attr in SHAPES[shape.tag]:
                     if shape.get(attr) is None:
-                        raise _error(shape, attr, None, f"<{shape.tag} {attr}> is required")
-                mat = _single(el, "material", required=False) if part == "visual" else None
+                        raise error_at(shape, attr, None, f"<{shape.tag} {attr}> is required")
+                mat = single(el, "material", required=False) if part == "visual" else None
                 if mat is None:
                     continue
                 if mat.get("name") is None:  # urdfdom drops the visual; "" is accepted
-                    raise _error(mat, "name", None, "a visual <material> needs a name attribute")
-                color = _single(mat, "color", required=False)
+                    raise error_at(mat, "name", None, "a visual <material> needs a name attribute")
+                color = single(mat, "color", required=False)
                 if color is not None:
                     _check_rgba(color)

@@ -14,17 +14,17 @@ from lxml import etree
 from .._pose import rpy_to_matrix
 from ..exceptions import UrdfError
 from .limits import (
-    _BIG,
-    _CHECKED_TOP,
-    _LIMIT_TAGS,
-    _NEGATIVE,
-    _NUMBER,
-    _NUMERIC,
-    _PATTERNS,
-    _RESERVED,
+    BIG_NUMBER,
+    CHECKED_TOP,
+    LIMIT_TAGS,
     MAX_ABS,
     MAX_ABS_LIMIT,
     MAX_URDF_BYTES,
+    NEGATIVE,
+    NUMBER,
+    NUMERIC,
+    PATTERNS,
+    RESERVED,
 )
 
 
@@ -46,51 +46,54 @@ def _where(el: etree._Element) -> str:
     return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
 
 
-def _error(el: etree._Element, attr: str | None, value: object, problem: str) -> UrdfError:
+def error_at(el: etree._Element, attr: str | None, value: object, problem: str) -> UrdfError:
     attr_part = f" {attr}={value!r}" if attr is not None else ""
     return UrdfError(f"URDF {_where(el)}{attr_part}: {problem}")
 
 
 # ------------------------------------------------------------------------ numbers
-def _numbers(el: etree._Element, attr: str, count: int, minimum: float | None) -> tuple[float, ...]:
+def numbers_of(
+    el: etree._Element, attr: str, count: int, minimum: float | None
+) -> tuple[float, ...]:
+    """The ``count`` plain decimal numbers of ``el.attr`` (``()`` when absent), checked."""
     raw = el.get(attr)
     if raw is None:
         return ()
     if count == 1 and raw != raw.strip():
-        raise _error(el, attr, raw, "a single number without surrounding spaces is required")
+        raise error_at(el, attr, raw, "a single number without surrounding spaces is required")
     parts = re.split(r"[ \t\r\n]+", raw.strip(" \t\r\n"))
     if len(parts) != count:
-        raise _error(el, attr, raw, f"{count} number(s) required, found {len(parts)}")
+        raise error_at(el, attr, raw, f"{count} number(s) required, found {len(parts)}")
     out = []
     for p in parts:
-        if not _NUMBER.match(p):
-            raise _error(el, attr, raw, f"{p!r} is not a decimal number")
+        if not NUMBER.match(p):
+            raise error_at(el, attr, raw, f"{p!r} is not a decimal number")
         x = float(p)
         if not math.isfinite(x):
-            raise _error(el, attr, raw, "numbers must be finite")
-        cap = MAX_ABS_LIMIT if el.tag in _LIMIT_TAGS else MAX_ABS
+            raise error_at(el, attr, raw, "numbers must be finite")
+        cap = MAX_ABS_LIMIT if el.tag in LIMIT_TAGS else MAX_ABS
         if abs(x) > cap:
-            raise _error(
+            raise error_at(
                 el,
                 attr,
                 raw,
                 f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); numbers are SI values of a robot",
             )
         if minimum is not None and x < minimum:
-            raise _error(el, attr, raw, f"must be >= {minimum:g}")
+            raise error_at(el, attr, raw, f"must be >= {minimum:g}")
         out.append(x)
     return tuple(out)
 
 
-def _check_numbers(root: etree._Element) -> None:
+def check_numbers(root: etree._Element) -> None:
     """Check every numeric attribute under the ``<link>``, ``<joint>`` and ``<material>``s.
 
     Fast path: one regular expression per attribute (the exact count of plain decimal
-    numbers); :func:`_numbers` runs only to explain a failure or to look for overflow.
+    numbers); :func:`numbers_of` runs only to explain a failure or to look for overflow.
     """
-    patterns, numeric = _PATTERNS, _NUMERIC
+    patterns, numeric = PATTERNS, NUMERIC
     for top in root:
-        if top.tag not in _CHECKED_TOP:
+        if top.tag not in CHECKED_TOP:
             continue
         for node in top.iter(*numeric):
             spec = numeric[node.tag]
@@ -100,18 +103,18 @@ def _check_numbers(root: etree._Element) -> None:
                     continue
                 if (
                     not patterns[kind[0]].match(raw)
-                    or _BIG.search(raw)
-                    or (kind[1] is not None and _NEGATIVE.search(raw))
+                    or BIG_NUMBER.search(raw)
+                    or (kind[1] is not None and NEGATIVE.search(raw))
                 ):
-                    _numbers(node, attr, kind[0], kind[1])
+                    numbers_of(node, attr, kind[0], kind[1])
 
 
-def _number(el: etree._Element, attr: str, default: float | None = None) -> float:
-    """A single number already validated by :func:`_check_numbers` (or ``default``)."""
+def number_of(el: etree._Element, attr: str, default: float | None = None) -> float:
+    """A single number already validated by :func:`check_numbers` (or ``default``)."""
     raw = el.get(attr)
     if raw is None:
         if default is None:
-            raise _error(el, attr, None, "attribute is required")
+            raise error_at(el, attr, None, "attribute is required")
         return default
     return float(raw)
 
@@ -124,10 +127,10 @@ def parse_urdf(text: str | bytes) -> etree._Element:
         UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
 
     """
-    return _parse(text)
+    return parse_strict(text)
 
 
-def _parse(text: str | bytes) -> etree._Element:
+def parse_strict(text: str | bytes) -> etree._Element:
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if len(data) > MAX_URDF_BYTES:
         raise UrdfError(f"URDF size {len(data)} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
@@ -162,30 +165,30 @@ def _parse(text: str | bytes) -> etree._Element:
     return root
 
 
-def _name(el: etree._Element, what: str) -> str:
+def element_name(el: etree._Element, what: str) -> str:
     name = el.get("name")
     if name is None or not name.strip():
-        raise _error(el, "name", name, f"every <{what}> needs a non-empty name")
-    if name in _RESERVED:
-        raise _error(el, "name", name, "the name 'universe' is reserved by Pinocchio")
+        raise error_at(el, "name", name, f"every <{what}> needs a non-empty name")
+    if name in RESERVED:
+        raise error_at(el, "name", name, "the name 'universe' is reserved by Pinocchio")
     return name
 
 
-def _single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:
+def single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:
     found = el.findall(tag)
     if len(found) > 1:
-        raise _error(found[1], None, None, f"<{tag}> given {len(found)} times; at most once")
+        raise error_at(found[1], None, None, f"<{tag}> given {len(found)} times; at most once")
     if required and not found:
-        raise _error(el, None, None, f"<{tag}> is required")
+        raise error_at(el, None, None, f"<{tag}> is required")
     return found[0] if found else None
 
 
-def _origin(el: etree._Element | None) -> tuple[np.ndarray, np.ndarray]:
+def origin_of(el: etree._Element | None) -> tuple[np.ndarray, np.ndarray]:
     """Rotation and translation of an element's ``<origin>`` (identity when absent)."""
     origin = None if el is None else el.find("origin")
     if origin is None:
         return np.eye(3), np.zeros(3)
-    xyz = _numbers(origin, "xyz", 3, None) or (0.0, 0.0, 0.0)
-    rpy = _numbers(origin, "rpy", 3, None) or (0.0, 0.0, 0.0)
+    xyz = numbers_of(origin, "xyz", 3, None) or (0.0, 0.0, 0.0)
+    rpy = numbers_of(origin, "rpy", 3, None) or (0.0, 0.0, 0.0)
     rot = np.eye(3) if not any(rpy) else rpy_to_matrix(*rpy)
     return rot, np.array(xyz, dtype=float)

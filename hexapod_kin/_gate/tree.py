@@ -14,10 +14,18 @@ from pathlib import Path
 from lxml import etree
 
 from ..exceptions import UrdfError
-from .inertials import _check_moving_body, _link_inertial
-from .limits import _JOINT_CHILDREN, _JOINT_DOF, _VERSION, JOINT_TYPES, MAX_DOF, MAX_LINKS
-from .meshes import _check_materials_and_geometry, _MeshMissing, resolve_mesh
-from .parse import _check_numbers, _error, _name, _number, _numbers, _parse, _single
+from .inertials import check_moving_body, link_inertial
+from .limits import JOINT_CHILDREN, JOINT_DOF, JOINT_TYPES, MAX_DOF, MAX_LINKS, URDF_VERSION
+from .meshes import MeshMissing, check_materials_and_geometry, resolve_mesh
+from .parse import (
+    check_numbers,
+    element_name,
+    error_at,
+    number_of,
+    numbers_of,
+    parse_strict,
+    single,
+)
 
 
 @dataclass(frozen=True)
@@ -116,12 +124,12 @@ def _check(
     lenient: bool = False,
 ) -> GateResult:
     defects: list[tuple[str, str]] | None = [] if lenient else None
-    root = _parse(text)
+    root = parse_strict(text)
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
     robot_name = root.get("name")
     if robot_name is None or not robot_name.strip():
-        raise _error(root, "name", robot_name, "<robot> needs a non-empty name")
+        raise error_at(root, "name", robot_name, "<robot> needs a non-empty name")
     links = root.findall("link")
     if not links:
         raise UrdfError("URDF <robot> has no <link>; at least one link is required")
@@ -131,16 +139,16 @@ def _check(
             "very long chains)"
         )
     version = root.get("version")
-    if version is not None and not _VERSION.match(version):
-        raise _error(root, "version", version, "URDF version must be 1.0, 1.1 or 1.2")
-    _check_numbers(root)
-    _check_materials_and_geometry(root)
+    if version is not None and not URDF_VERSION.match(version):
+        raise error_at(root, "version", version, "URDF version must be 1.0, 1.1 or 1.2")
+    check_numbers(root)
+    check_materials_and_geometry(root)
 
     link_el: dict[str, etree._Element] = {}
     for link in links:
-        name = _name(link, "link")
+        name = element_name(link, "link")
         if name in link_el:
-            raise _error(
+            raise error_at(
                 link,
                 "name",
                 name,
@@ -153,9 +161,9 @@ def _check(
     parent_of: dict[str, str] = {}  # child link -> joint name
     children: dict[str, list[str]] = {n: [] for n in link_el}
     for joint in root.findall("joint"):
-        name = _name(joint, "joint")
+        name = element_name(joint, "joint")
         if name in joint_el:
-            raise _error(
+            raise error_at(
                 joint,
                 "name",
                 name,
@@ -165,20 +173,20 @@ def _check(
         joint_el[name] = joint
         jtype = joint.get("type")
         if jtype not in JOINT_TYPES:
-            raise _error(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
+            raise error_at(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
         ends = []
         for tag in ("parent", "child"):
-            el = _single(joint, tag, required=True)
+            el = single(joint, tag, required=True)
             assert el is not None
             lname = el.get("link")
             if lname not in link_el:
-                raise _error(el, "link", lname, f"{tag} link does not exist")
+                raise error_at(el, "link", lname, f"{tag} link does not exist")
             ends.append(lname)
         parent, child = ends
         if parent == child:
-            raise _error(joint, "name", name, f"parent and child are the same link {child!r}")
+            raise error_at(joint, "name", name, f"parent and child are the same link {child!r}")
         if child in parent_of:
-            raise _error(
+            raise error_at(
                 joint,
                 "name",
                 name,
@@ -189,7 +197,7 @@ def _check(
         children[parent].append(child)
         _check_joint(joint, jtype)
 
-    dof = sum(_JOINT_DOF[j.get("type")] for j in joint_el.values())
+    dof = sum(JOINT_DOF[j.get("type")] for j in joint_el.values())
     if dof > MAX_DOF:
         raise UrdfError(
             f"URDF has {dof} degrees of freedom; the cap is {MAX_DOF} (Pinocchio's Data grows as "
@@ -200,7 +208,7 @@ def _check(
         if mimic is not None:
             target = mimic.get("joint")
             if target not in joint_el or target == joint.get("name"):
-                raise _error(mimic, "joint", target, "mimic must name another existing joint")
+                raise error_at(mimic, "joint", target, "mimic must name another existing joint")
 
     roots = [n for n in link_el if n not in parent_of]
     if len(roots) != 1:
@@ -222,7 +230,7 @@ def _check(
                 stack.append(c)
     if len(seen) != len(link_el):
         lost = [n for n in link_el if n not in seen]
-        raise _error(
+        raise error_at(
             link_el[lost[0]],
             "name",
             lost[0],
@@ -231,7 +239,7 @@ def _check(
 
     # Masses: each link's inertial, then each moving body (child of a non-fixed joint plus
     # its fixed-joint descendants, as Pinocchio merges them) must carry mass and inertia.
-    inertials = {n: _link_inertial(el, defects) for n, el in link_el.items()}
+    inertials = {n: link_inertial(el, defects) for n, el in link_el.items()}
     fixed_children: dict[str, list[tuple[str, etree._Element]]] = {n: [] for n in link_el}
     for child, jname in parent_of.items():
         joint = joint_el[jname]
@@ -239,7 +247,7 @@ def _check(
             fixed_children[joint.find("parent").get("link")].append((child, joint))
     for child, jname in parent_of.items():
         if joint_el[jname].get("type") != "fixed":
-            _check_moving_body(jname, child, link_el, inertials, fixed_children, defects)
+            check_moving_body(jname, child, link_el, inertials, fixed_children, defects)
 
     meshes: list[tuple[str, Path]] = []
     missing: list[tuple[str, str]] = []
@@ -251,13 +259,13 @@ def _check(
                 continue
             try:
                 path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
-            except _MeshMissing as exc:
+            except MeshMissing as exc:
                 if not lenient:
-                    raise _error(node, "filename", uri, str(exc)) from None
+                    raise error_at(node, "filename", uri, str(exc)) from None
                 missing.append((uri or "", f"line {node.sourceline}: {exc}"))
                 continue
             except UrdfError as exc:
-                raise _error(node, "filename", uri, str(exc)) from None
+                raise error_at(node, "filename", uri, str(exc)) from None
             meshes.append((uri or "", path))
     return GateResult(
         root=root,
@@ -274,14 +282,14 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
     seen: set[str] = set()
     for sub in joint:
         tag = sub.tag
-        if tag in seen and tag in _JOINT_CHILDREN:
-            raise _error(sub, None, None, f"<{tag}> given more than once; at most once")
+        if tag in seen and tag in JOINT_CHILDREN:
+            raise error_at(sub, None, None, f"<{tag}> given more than once; at most once")
         seen.add(tag)
     axis = joint.find("axis")
     if axis is not None and jtype not in ("fixed", "floating"):
-        xyz = _numbers(axis, "xyz", 3, None)
+        xyz = numbers_of(axis, "xyz", 3, None)
         if xyz and math.fsum(v * v for v in xyz) <= 1e-24:
-            raise _error(
+            raise error_at(
                 axis,
                 "xyz",
                 axis.get("xyz"),
@@ -290,17 +298,17 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
     limit = joint.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
-            raise _error(
+            raise error_at(
                 joint, "type", jtype, "a revolute or prismatic joint needs <limit> (URDF spec)"
             )
         for attr in ("effort", "velocity"):
             if limit.get(attr) is None:
-                raise _error(limit, attr, None, f"<limit {attr}> is required for {jtype} joints")
+                raise error_at(limit, attr, None, f"<limit {attr}> is required for {jtype} joints")
     if limit is not None:
-        lower = _number(limit, "lower", 0.0)
-        upper = _number(limit, "upper", 0.0)
+        lower = number_of(limit, "lower", 0.0)
+        upper = number_of(limit, "upper", 0.0)
         if jtype in ("revolute", "prismatic") and lower > upper:
-            raise _error(
+            raise error_at(
                 limit,
                 "lower",
                 limit.get("lower"),
@@ -308,4 +316,4 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
             )
     safety = joint.find("safety_controller")
     if safety is not None and safety.get("k_velocity") is None:
-        raise _error(safety, "k_velocity", None, "<safety_controller k_velocity> is required")
+        raise error_at(safety, "k_velocity", None, "<safety_controller k_velocity> is required")
