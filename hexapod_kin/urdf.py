@@ -30,7 +30,9 @@ from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
 
 __all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
-_COLORS = {
+#: Material colours (RGBA) of the generated robots (the exporters in :mod:`hexapod_kin.export`
+#: use the same). ``num``, ``vec`` and ``comment`` are the number and comment text they share.
+COLORS = {
     "body": "0.25 0.30 0.35 1",
     "link": "0.85 0.55 0.15 1",
     "joint": "0.20 0.45 0.80 1",
@@ -39,7 +41,8 @@ _COLORS = {
 }
 
 
-def _num(x: float) -> str:
+def num(x: float) -> str:
+    """Shortest text that reads back as the same float (``repr``), ``0`` for zero."""
     x = float(x)
     if abs(x) < 1e-300 or x == 0.0:
         return "0"
@@ -47,13 +50,14 @@ def _num(x: float) -> str:
     return text[:-2] if text.endswith(".0") else text
 
 
-def _vec(v: np.ndarray | tuple[float, ...]) -> str:
-    return " ".join(_num(c) for c in v)
+def vec(v: np.ndarray | tuple[float, ...]) -> str:
+    """Space-separated :func:`num` of each value."""
+    return " ".join(num(c) for c in v)
 
 
 def _origin(t: np.ndarray) -> str:
     rpy = matrix_to_rpy(t[:3, :3])
-    return f'<origin xyz="{_vec(t[:3, 3])}" rpy="{_vec(rpy)}"/>'
+    return f'<origin xyz="{vec(t[:3, 3])}" rpy="{vec(rpy)}"/>'
 
 
 def _z_to(v: np.ndarray) -> tuple[float, float, float]:
@@ -66,13 +70,16 @@ def _z_to(v: np.ndarray) -> tuple[float, float, float]:
     return matrix_to_rpy(np.column_stack([x, y, z]))
 
 
-def _comment(text: str) -> str:
-    clean = text.replace("--", "- -").replace("\n", " ").strip()
+def comment(text: str) -> str:
+    """An XML comment of ``text`` (one line; ``--`` is not allowed inside a comment)."""
+    clean = text.replace("\n", " ").strip()
+    while "--" in clean:
+        clean = clean.replace("--", "- -")
     return f"<!-- {clean} -->"
 
 
 def _material(name: str) -> str:
-    return f'<material name="{name}"><color rgba="{_COLORS[name]}"/></material>'
+    return f'<material name="{name}"><color rgba="{COLORS[name]}"/></material>'
 
 
 def _inertial_xml(chain: Chain, j: int, indent: str) -> list[str]:
@@ -80,10 +87,10 @@ def _inertial_xml(chain: Chain, j: int, indent: str) -> list[str]:
     ixx, iyy, izz, ixy, ixz, iyz = inn.inertia
     return [
         f"{indent}<inertial>",
-        f'{indent}  <origin xyz="{_vec(inn.com)}" rpy="0 0 0"/>',
-        f'{indent}  <mass value="{_num(inn.mass)}"/>',
-        f'{indent}  <inertia ixx="{_num(ixx)}" ixy="{_num(ixy)}" ixz="{_num(ixz)}" '
-        f'iyy="{_num(iyy)}" iyz="{_num(iyz)}" izz="{_num(izz)}"/>',
+        f'{indent}  <origin xyz="{vec(inn.com)}" rpy="0 0 0"/>',
+        f'{indent}  <mass value="{num(inn.mass)}"/>',
+        f'{indent}  <inertia ixx="{num(ixx)}" ixy="{num(ixy)}" ixz="{num(ixz)}" '
+        f'iyy="{num(iyy)}" iyz="{num(iyz)}" izz="{num(izz)}"/>',
         f"{indent}</inertial>",
     ]
 
@@ -97,7 +104,7 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
         out += [
             f"{indent}<visual>",
             f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><sphere radius="{_num(1.5 * rad)}"/></geometry>',
+            f'{indent}  <geometry><sphere radius="{num(1.5 * rad)}"/></geometry>',
             f'{indent}  <material name="foot"/>',
             f"{indent}</visual>",
         ]
@@ -107,13 +114,13 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
         out += [
             f"{indent}<visual>",
             f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><sphere radius="{_num(1.4 * rad)}"/></geometry>',
+            f'{indent}  <geometry><sphere radius="{num(1.4 * rad)}"/></geometry>',
             f'{indent}  <material name="joint"/>',
             f"{indent}</visual>",
             f"{indent}<visual>",
             f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><cylinder radius="{_num(0.8 * rad)}" '
-            f'length="{_num(4.0 * rad)}"/></geometry>',
+            f'{indent}  <geometry><cylinder radius="{num(0.8 * rad)}" '
+            f'length="{num(4.0 * rad)}"/></geometry>',
             f'{indent}  <material name="joint"/>',
             f"{indent}</visual>",
         ]
@@ -123,8 +130,8 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
         mid = 0.5 * nxt
         out += [
             f"{indent}<visual>",
-            f'{indent}  <origin xyz="{_vec(mid)}" rpy="{_vec(_z_to(nxt))}"/>',
-            f'{indent}  <geometry><cylinder radius="{_num(rad)}" length="{_num(length)}"/>'
+            f'{indent}  <origin xyz="{vec(mid)}" rpy="{vec(_z_to(nxt))}"/>',
+            f'{indent}  <geometry><cylinder radius="{num(rad)}" length="{num(length)}"/>'
             "</geometry>",
             f'{indent}  <material name="link"/>',
             f"{indent}</visual>",
@@ -144,7 +151,7 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
     if chain.base_pose is not None:
         frame0 = prefix + chain.frame0_link
         lines += [
-            indent + _comment(f"base offset T_{chain.base}_0 (Khalil frame 0 in the base link)"),
+            indent + comment(f"base offset T_{chain.base}_0 (Khalil frame 0 in the base link)"),
             f'{indent}<joint name="{prefix}{chain.name}_base_offset" type="fixed">',
             f'{indent}  <parent link="{prev}"/>',
             f'{indent}  <child link="{frame0}"/>',
@@ -158,9 +165,9 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         t0 = row.transform(0.0)
         lines.append(
             indent
-            + _comment(
-                f"row {j + 1}: sigma={row.sigma} alpha={_num(row.alpha)} d={_num(row.d)} "
-                f"theta={_num(row.theta)} r={_num(row.r)}"
+            + comment(
+                f"row {j + 1}: sigma={row.sigma} alpha={num(row.alpha)} d={num(row.d)} "
+                f"theta={num(row.theta)} r={num(row.r)}"
             )
         )
         if row.is_joint:
@@ -172,10 +179,9 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
                 f'{indent}  <child link="{child}"/>',
                 f"{indent}  {_origin(t0)}",
                 f'{indent}  <axis xyz="0 0 1"/>',
-                f'{indent}  <limit lower="{_num(lim.lower)}" upper="{_num(lim.upper)}" '
-                f'effort="{_num(lim.effort)}" velocity="{_num(lim.velocity)}"/>',
-                f'{indent}  <dynamics damping="{_num(damping[k])}" '
-                f'friction="{_num(friction[k])}"/>',
+                f'{indent}  <limit lower="{num(lim.lower)}" upper="{num(lim.upper)}" '
+                f'effort="{num(lim.effort)}" velocity="{num(lim.velocity)}"/>',
+                f'{indent}  <dynamics damping="{num(damping[k])}" friction="{num(friction[k])}"/>',
                 f"{indent}</joint>",
             ]
             k += 1
@@ -196,7 +202,7 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         tool = prefix + chain.tip
         t_tool = chain.tool.matrix
         lines += [
-            indent + _comment(f"tool frame T_{len(chain.rows)}_tool"),
+            indent + comment(f"tool frame T_{len(chain.rows)}_tool"),
             f'{indent}<joint name="{tool}_fixed" type="fixed">',
             f'{indent}  <parent link="{prev}"/>',
             f'{indent}  <child link="{tool}"/>',
@@ -205,7 +211,7 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
             f'{indent}<link name="{tool}">',
             f"{indent}  <visual>",
             f'{indent}    <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}    <geometry><sphere radius="{_num(1.2 * chain.link_radius)}"/></geometry>',
+            f'{indent}    <geometry><sphere radius="{num(1.2 * chain.link_radius)}"/></geometry>',
             f'{indent}    <material name="foot"/>',
             f"{indent}  </visual>",
         ]
@@ -214,9 +220,9 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         if length > 1e-9:
             lines += [
                 f"{indent}  <visual>",
-                f'{indent}    <origin xyz="{_vec(0.5 * back)}" rpy="{_vec(_z_to(back))}"/>',
-                f'{indent}    <geometry><cylinder radius="{_num(0.6 * chain.link_radius)}" '
-                f'length="{_num(length)}"/></geometry>',
+                f'{indent}    <origin xyz="{vec(0.5 * back)}" rpy="{vec(_z_to(back))}"/>',
+                f'{indent}    <geometry><cylinder radius="{num(0.6 * chain.link_radius)}" '
+                f'length="{num(length)}"/></geometry>',
                 f'{indent}    <material name="link"/>',
                 f"{indent}  </visual>",
             ]
@@ -226,10 +232,10 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
 
 def _header(name: str, description: str, header: str | None) -> list[str]:
     lines = ['<?xml version="1.0" encoding="utf-8"?>']
-    lines.append(_comment(f"Generated by hexapod_kin {__version__}: {description or name}"))
+    lines.append(comment(f"Generated by hexapod_kin {__version__}: {description or name}"))
     if header:
-        lines.append(_comment(header))
-    lines.append(_comment("Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j."))
+        lines.append(comment(header))
+    lines.append(comment("Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j."))
     lines.append(f'<robot name="{name}">')
     lines += ["  " + _material(m) for m in ("base", "body", "link", "joint", "foot")]
     return lines
@@ -242,7 +248,7 @@ def _chain_urdf(chain: Chain, header: str | None) -> str:
         f'  <link name="{chain.base}">',
         "    <visual>",
         '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <geometry><box size="{_vec((6 * rad, 6 * rad, 2 * rad))}"/></geometry>',
+        f'      <geometry><box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/></geometry>',
         '      <material name="base"/>',
         "    </visual>",
         "  </link>",
@@ -264,13 +270,13 @@ def _body_link(robot: Hexapod) -> list[str]:
         f'  <link name="{robot.body}">',
         "    <inertial>",
         '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <mass value="{_num(m)}"/>',
-        f'      <inertia ixx="{_num(ixx)}" ixy="0" ixz="0" iyy="{_num(iyy)}" iyz="0" '
-        f'izz="{_num(izz)}"/>',
+        f'      <mass value="{num(m)}"/>',
+        f'      <inertia ixx="{num(ixx)}" ixy="0" ixz="0" iyy="{num(iyy)}" iyz="0" '
+        f'izz="{num(izz)}"/>',
         "    </inertial>",
         "    <visual>",
         '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <geometry><box size="{_vec(robot.body_size)}"/></geometry>',
+        f'      <geometry><box size="{vec(robot.body_size)}"/></geometry>',
         '      <material name="body"/>',
         "    </visual>",
         "  </link>",
@@ -280,7 +286,7 @@ def _body_link(robot: Hexapod) -> list[str]:
 def _mount(robot: Hexapod, leg: LegMount) -> list[str]:
     base = f"{leg.name}_{leg.chain.base}"
     return [
-        "  " + _comment(f"{leg.name}: mount xyz={_vec(leg.xyz)} yaw={_num(leg.yaw)} rad"),
+        "  " + comment(f"{leg.name}: mount xyz={vec(leg.xyz)} yaw={num(leg.yaw)} rad"),
         f'  <joint name="{leg.name}_mount" type="fixed">',
         f'    <parent link="{robot.body}"/>',
         f'    <child link="{base}"/>',

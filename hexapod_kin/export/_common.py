@@ -9,6 +9,7 @@ from typing import Any
 from .. import __version__
 from ..exceptions import OptionalDependencyError, ParameterError
 from ..params import Chain, Hexapod
+from ..urdf import COLORS, comment, num, vec  # one home: the URDF text
 
 __all__ = [
     "COLORS",
@@ -20,37 +21,6 @@ __all__ = [
     "header_lines",
     "ident",
 ]
-
-#: Material colours (RGBA), the same as :mod:`hexapod_kin.urdf` uses.
-COLORS = {
-    "body": "0.25 0.30 0.35 1",
-    "link": "0.85 0.55 0.15 1",
-    "joint": "0.20 0.45 0.80 1",
-    "foot": "0.80 0.15 0.15 1",
-    "base": "0.50 0.50 0.50 1",
-}
-
-
-def num(x: float) -> str:
-    """Shortest text that reads back as the same float (``repr``), ``0`` for zero."""
-    x = float(x)
-    if abs(x) < 1e-300 or x == 0.0:
-        return "0"
-    text = repr(x)
-    return text[:-2] if text.endswith(".0") else text
-
-
-def vec(values: Any) -> str:
-    """Space-separated :func:`num` of each value."""
-    return " ".join(num(c) for c in values)
-
-
-def comment(text: str) -> str:
-    """An XML comment of ``text`` (one line; ``--`` is not allowed inside a comment)."""
-    clean = text.replace("\n", " ").strip()
-    while "--" in clean:
-        clean = clean.replace("--", "- -")
-    return f"<!-- {clean} -->"
 
 
 def ident(name: str) -> str:
