@@ -4,19 +4,15 @@ The same chain arrays as :mod:`hexapod_kin._kernels` (:class:`~hexapod_kin._kern
 extracted once per model through ``Model.arrays``), but carrying the full tip rotation and the
 three Pinocchio reference frames, so that each result equals Pinocchio's ``fk``/
 ``computeFrameJacobian`` of the same model to rounding. Compiled with numba (``prange`` over
-configurations, chunks of 4,096); a plain loop when numba is missing.
+configurations, chunks of 4,096).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import HAVE_NUMBA, ChainArrays
-
-if HAVE_NUMBA:
-    from numba import njit, prange
-else:  # pragma: no cover - CI runs with numba
-    from ._kernels import njit, prange
+from ._kernels import ChainArrays
+from ._numerics import njit, prange
 
 __all__ = ["REF_CODES", "pose_jacobian_batch"]
 

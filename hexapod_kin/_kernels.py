@@ -23,7 +23,6 @@ from ._numerics import njit, prange
 from .exceptions import ConfigurationError, SourceError
 
 __all__ = [
-    "HAVE_NUMBA",
     "ChainArrays",
     "fk_batch",
     "jacobian_batch",
@@ -34,9 +33,6 @@ __all__ = [
     "check_batch",
     "set_threads",
 ]
-
-#: numba is a core dependency (kept for callers that still test it).
-HAVE_NUMBA = True
 
 
 @dataclass(frozen=True)
