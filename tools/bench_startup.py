@@ -50,7 +50,17 @@ COMMANDS: dict[str, list[str]] = {
     "xacro": ["xacro", "hexapod", "-o", "{out}/hexapod.xacro"],
     "mjcf": ["mjcf", "hexabot_leg", "-o", "{out}/leg.xml"],
     "export-package": ["export-package", "hexabot_leg", "-o", "{out}/pkg", "-f"],
-    "sweep": ["sweep", "--height", "0.1", "--l2", "0.08:0.12:2", "--mc-samples", "2000"],
+    "sweep": [
+        "sweep",
+        "--height",
+        "0.1",
+        "--l2",
+        "0.08:0.12:2",
+        "--mc-samples",
+        "2000",
+        "--out",
+        "{out}/sweep.csv",
+    ],
     "reproduce": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
 }
 #: Not timed: ``view`` serves a page until interrupted (no start-to-exit time).
@@ -72,12 +82,14 @@ def _env(cache: Path | None) -> dict[str, str]:
     return env
 
 
-def _time(argv: list[str], env: dict[str, str], timeout: float) -> tuple[float, int, str]:
-    """Wall seconds, exit status and the last stderr line of one whole process."""
+def _time(
+    argv: list[str], env: dict[str, str], timeout: float, cwd: Path | None = None
+) -> tuple[float, int, str]:
+    """Wall seconds, exit status and the last stderr line of one whole process (run in ``cwd``)."""
     t0 = time.perf_counter()
     try:
         res = subprocess.run(
-            argv, env=env, capture_output=True, text=True, timeout=timeout, check=False
+            argv, env=env, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False
         )
     except subprocess.TimeoutExpired:
         return time.perf_counter() - t0, -1, f"timed out after {timeout:g} s"
@@ -125,12 +137,12 @@ def measure(
                 for i in range(runs):
                     if mode == "cold":
                         cache = out_dir / f"cold_{name}_{i}"
-                        dt, status, last = _time(argv, _env(cache), timeout)
+                        dt, status, last = _time(argv, _env(cache), timeout, out_dir)
                         shutil.rmtree(cache, ignore_errors=True)
                     else:
                         if i == 0:  # fill the caches first (not counted)
-                            _time(argv, _env(warm_cache), timeout)
-                        dt, status, last = _time(argv, _env(warm_cache), timeout)
+                            _time(argv, _env(warm_cache), timeout, out_dir)
+                        dt, status, last = _time(argv, _env(warm_cache), timeout, out_dir)
                     times.append(dt)
                 target = COLD_TARGET_S if mode == "cold" else WARM_TARGET_S
                 stats = _stats(times)
