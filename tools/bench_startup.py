@@ -12,7 +12,8 @@ command on a fresh install; warm ≤ 1 s). The peer is ``python -c "import hexap
 the same run (``ratio`` = median / that), so a slow machine shows as such.
 
 Usage: ``python tools/bench_startup.py [--quick] [--runs N] [--only CMD ...] [--mode cold|warm]``
-or ``python tools/bench.py --only startup``. No timing assertion anywhere: this only prints.
+or ``python tools/bench.py --only startup``; ``--profile CMD`` prints the numba compile seconds
+of each kernel a cold ``CMD`` compiles (where a cold start goes). No timing assertion anywhere.
 """
 
 from __future__ import annotations
@@ -164,6 +165,51 @@ def measure(
     return rows
 
 
+_PROFILE = """
+import sys, time
+from numba.core import event
+recorder_cm = event.install_recorder("numba:compile")
+recorder = recorder_cm.__enter__()
+from hexapod_kin.cli import main
+main(sys.argv[1:])
+starts, rows = {}, []
+for ts, ev in recorder.buffer:
+    disp = ev.data["dispatcher"]
+    key = (id(disp), str(ev.data["args"]))
+    if ev.is_start:
+        starts[key] = ts
+    else:
+        name = disp.py_func.__module__ + "." + disp.py_func.__qualname__
+        rows.append((ts - starts.pop(key, ts), name))
+for dt, name in sorted(rows, reverse=True):
+    print(f"@@{dt:8.2f} s  {name}", file=sys.stderr)
+"""
+
+
+def compile_profile(name: str, timeout: float = 300.0) -> str:
+    """Seconds of numba compilation per kernel of one cold command (nested times included).
+
+    Runs the command in a child with fresh caches and numba's ``numba:compile`` events; a
+    kernel's time includes the kernels it calls that compile with it.
+    """
+    cache = Path(tempfile.mkdtemp(prefix="hk_profile_"))
+    try:
+        argv = [sys.executable, "-c", _PROFILE] + [a.format(out=cache) for a in COMMANDS[name]]
+        res = subprocess.run(
+            argv,
+            env=_env(cache),
+            cwd=cache,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
+        )
+        rows = [ln[2:] for ln in res.stderr.splitlines() if ln.startswith("@@")]
+        return "\n".join(rows) or f"no compile events (exit {res.returncode})"
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+
+
 def run(quick: bool = False) -> list[dict[str, Any]]:
     """tools/bench.py's ``startup`` section (``quick``: three commands, one run each)."""
     if quick:
@@ -190,7 +236,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=3, help="processes per command and mode")
     parser.add_argument("--only", nargs="+", choices=sorted(COMMANDS), help="these commands")
     parser.add_argument("--mode", choices=("cold", "warm", "both"), default="both")
+    parser.add_argument(
+        "--profile", choices=sorted(COMMANDS), help="compile seconds per kernel of one cold command"
+    )
     args = parser.parse_args(argv)
+    if args.profile:
+        print(compile_profile(args.profile))
+        return 0
     if args.quick:
         rows = run(quick=True)
     else:
