@@ -72,7 +72,7 @@ def test_urdf_export_atomic(tmp_path, capsys):
     "argv,fragment",
     [
         (["fk", "nope"], "presets are"),
-        (["fk", "hexabot_leg", "--q", "1", "2"], "expected (3,)"),
+        (["fk", "hexabot_leg", "--q", "1", "2"], "has 3 joints"),
         (["fk", "hexabot_leg", "--tip", "toe"], "frames are"),
         (["urdf", "hexabot_leg", "--set", "l1"], "NAME=VALUE"),
         (["urdf", "hexabot_leg", "--set", "l1=-2"], "l1=-2"),

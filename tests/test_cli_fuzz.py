@@ -19,6 +19,8 @@ from hexapod_kin.cli import build_parser, main
 # Minimal valid arguments of commands that need more than a SOURCE (others: SOURCE = a preset).
 BASE_ARGS: dict[str, list[str]] = {
     "ik": ["ik", "hexabot_leg", "--target", "0.15", "0.05", "-0.1"],
+    # without --html, animate serves a live viewer until Ctrl-C
+    "animate": ["animate", "hexabot_leg", "--html", "/tmp/hk-fuzz-animate.html"],
     "export-package": ["export-package", "hexabot_leg", "--out", "/tmp/hk-fuzz-pkg"],
     "mjcf": ["mjcf", "hexabot_leg", "-o", "/tmp/hk-fuzz.xml"],
     "sweep": ["sweep", "--l1", "0.04:0.06:2", "--l2", "0.1:0.1:1", "--l3", "0.1:0.1:1",

@@ -16,7 +16,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from ..exceptions import HexapodKinError
+from ..exceptions import HexapodKinError, ParameterError
 from .common import OneLineParser
 
 __all__ = ["build_parser", "main"]
@@ -42,6 +42,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _refuse_non_finite(args: argparse.Namespace) -> None:
+    """No option value may be NaN or infinite (``--q nan``, ``--dt inf``): one clear error."""
+    import math
+
+    for dest, value in vars(args).items():
+        values = value if isinstance(value, (list, tuple)) else [value]
+        for v in values:
+            if isinstance(v, float) and not math.isfinite(v):
+                option = "--" + dest.replace("_", "-")
+                raise ParameterError(
+                    f"{option} {v}: not a finite number; give a finite value",
+                    parameter=option, value=v, allowed="a finite number",
+                )
+
+
 def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
@@ -56,6 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
+        _refuse_non_finite(args)
         return int(args.func(args))
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return int(exc.code) if isinstance(exc.code, int) else 2

@@ -52,7 +52,9 @@ def set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
         if "=" not in pair:
             raise ParameterError(
                 f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)",
-                parameter="--set", value=pair, allowed="NAME=VALUE",
+                parameter="--set",
+                value=pair,
+                allowed="NAME=VALUE",
             )
         key, value = pair.split("=", 1)
         try:
@@ -101,7 +103,9 @@ def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
         raise ParameterError(
             f"--{attr} has {q.size} values; {model.name} has {model.nq} joints "
             f"({', '.join(model.joint_names)})",
-            parameter=f"--{attr}", value=list(values), allowed=f"{model.nq} values",
+            parameter=f"--{attr}",
+            value=list(values),
+            allowed=f"{model.nq} values",
         )
     if getattr(args, "deg", False):
         prismatic = np.asarray(model.is_prismatic, dtype=bool)
@@ -121,18 +125,24 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
         raise ParameterError(
             f"{option} {str(path)!r}: unknown file type {p.suffix or '(none)'!r}; "
             f"use one of {', '.join(suffixes)}",
-            parameter=option, value=str(path), allowed=list(suffixes),
+            parameter=option,
+            value=str(path),
+            allowed=list(suffixes),
         )
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise ParameterError(
             f"{option} {str(path)!r}: directory {str(parent)!r} does not exist",
-            parameter=option, value=str(path), allowed="a path in an existing directory",
+            parameter=option,
+            value=str(path),
+            allowed="a path in an existing directory",
         )
     if not os.access(parent, os.W_OK) or p.is_dir():
         raise ParameterError(
             f"{option} {str(path)!r}: cannot write there (permission denied or a directory)",
-            parameter=option, value=str(path), allowed="a writable file path",
+            parameter=option,
+            value=str(path),
+            allowed="a writable file path",
         )
     return p
 

@@ -80,7 +80,8 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     built = _params_of(args.preset, set_params(args.set))
     # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
-        [args.preset] + [f"-s {s}" for s in args.set or ()]
+        [args.preset]
+        + [f"-s {s}" for s in args.set or ()]
         + ([f"-l {args.leg}"] if args.leg else [])
     )
     if args.output:
@@ -104,7 +105,9 @@ def _params_of(source: str, params: dict[str, Any]) -> Any:
         raise ParameterError(
             f"urdf {source!r}: not a preset or a table file; `urdf` exports what hexapod_kin "
             "builds (a URDF source is already a URDF)",
-            parameter="SOURCE", value=source, allowed="a preset name or a .toml/.yaml table",
+            parameter="SOURCE",
+            value=source,
+            allowed="a preset name or a .toml/.yaml table",
         )
     return resolved.params
 
@@ -148,8 +151,10 @@ def _cmd_fk(args: argparse.Namespace) -> int:
             }
         )
         return 0
-    print(f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
-          f"({', '.join(model.joint_names)})")
+    print(
+        f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
+        f"({', '.join(model.joint_names)})"
+    )
     n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
         print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
@@ -230,7 +235,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise ParameterError(
             f"--out {args.out!r}: cannot create the directory ({exc.strerror})",
-            parameter="--out", value=args.out, allowed="a writable directory",
+            parameter="--out",
+            value=args.out,
+            allowed="a writable directory",
         ) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
@@ -247,172 +254,81 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ ik
-def _add_ik(sub: Any) -> None:
-    p = sub.add_parser("ik", help="inverse kinematics of the tip position (closed form + DLS)")
-    source_args(p)
-    p.add_argument("--target", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"),
-                   help="tip position in the base frame [m]")
-    p.add_argument("--yaw", type=float, help="SCARA closed form only: tool yaw [rad]")
-    p.add_argument("--q0", nargs="+", type=float, help="start of the numerical solver")
-    p.add_argument("--tol", type=float, default=1e-10, help="position tolerance [m]")
-    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-
-
-def _cmd_ik(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from .. import ik
-    from ..exceptions import IKError
-
-    model = load_source(args)
-    target = np.array(args.target, dtype=float)
-    closed: list[list[float]] | None = None
-    family = None
-    try:
-        family = ik.detect_family(model).family
-    except IKError:
-        family = None
-    if family is not None:
-        tgt = target if args.yaw is None else np.append(target, args.yaw)
-        closed = ik.analytic(model, tgt).tolist()
-    res = ik.solve(model, target, args.q0, tol=args.tol)
-    if args.json:
-        emit_json(
-            {
-                "source": model.name,
-                "joint_names": list(model.joint_names),
-                "target": target.tolist(),
-                "family": family,
-                "analytic": closed,
-                "numerical": res.as_dict(),
-            }
-        )
-        return 0 if res.status in ("converged", "unreachable") else 1
-    print(f"{model.name}: target {target.tolist()} m, joints {', '.join(model.joint_names)}")
-    if closed is not None:
-        print(f"closed form ({family}): {len(closed)} solution(s)")
-        for sol in closed:
-            print("  " + " ".join(f"{v: .9f}" for v in sol))
-    else:
-        print("closed form: none for this chain")
-    print(f"numerical: {res.status} ({res.reason})")
-    print("  q = " + " ".join(f"{v: .9f}" for v in res.q))
-    print(f"  error = {res.error:.3e} m after {res.iterations} steps, {res.attempts} start(s)")
-    if res.status in ("unreachable", "joint_limits"):
-        print(f"  nearest reachable point {np.round(res.nearest, 9).tolist()} m, "
-              f"distance {res.distance:.6g} m")
-    return 0 if res.status in ("converged", "unreachable") else 1
-
-
-# ------------------------------------------------------------------------ step
-def _add_step(sub: Any) -> None:
-    p = sub.add_parser(
-        "step", help="the seeds' resolved-rate experiment: foot velocity [A sin(2πt/T), 0, 0]"
-    )
-    source_args(p)
-    q_args(p)
-    p.add_argument("--amplitude", type=float, default=0.05, help="A [m/s] (default 0.05)")
-    p.add_argument("--period", type=float, default=2.0, help="T [s] (default 2)")
-    p.add_argument("--duration", type=float, default=10.0, help="[s] (default 10)")
-    p.add_argument("--dt", type=float, default=1e-3, help="step [s] (default 1e-3)")
-    p.add_argument("--method", choices=["rk4", "euler"], default="rk4")
-    p.add_argument("--gain", type=float, default=10.0, help="closed-loop gain [1/s] (0: open)")
-    p.add_argument("--no-baseline", action="store_true",
-                   help="skip the plain Euler + np.linalg.solve comparison")
-    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    p.add_argument("--plot", metavar="FILE.png", help="write the seeds' figures (PNG)")
-    p.add_argument("--html", metavar="FILE.html", help="write an animated 3-D page (HTML)")
-
-
-def _cmd_step(args: argparse.Namespace) -> int:
-    _check_outputs(args)
-    from .. import seeds
-
-    model = load_source(args)
-    q0 = None if args.q is None else q_from_args(args, model)
-    run = seeds.seed_experiment(
-        model, amplitude=args.amplitude, period=args.period, duration=args.duration,
-        dt=args.dt, q0=q0, method=args.method, gain=args.gain, baseline=not args.no_baseline,
-    )
-    tr = run.trajectory
-    written = []
-    if args.plot:
-        from ..plots import plot_motion
-
-        written.append(str(plot_motion(run, args.plot)))
-    if args.html:
-        try:
-            from ..viewer import export_html
-        except ImportError as exc:
-            raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
-        stride = max(1, int(round(0.02 / tr.dt)))
-        written.append(str(export_html(
-            model, tr.t[::stride], tr.q[::stride], args.html,
-            title=f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
-        )))
-    if args.json:
-        out = {"source": model.name, **run.as_dict(), "written": written}
-        emit_json(out)
-        return 0
-    ca = tr.closest_approach
-    print(f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
-          f"{tr.t[-1]:g} s, dt = {tr.dt:g} s, {tr.method}, gain {tr.gain:g} 1/s")
-    print("q0 = " + " ".join(f"{v:.6f}" for v in tr.q[0]))
-    print(f"drift_y = {run.drift_y:.3e} m   drift_z = {run.drift_z:.3e} m   "
-          f"error_x = {run.error_x:.3e} m")
-    if run.baseline_failure:
-        print(f"plain Euler + np.linalg.solve: {run.baseline_failure}")
-    if run.baseline:
-        b = run.baseline
-        print(f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
-              f"drift_z = {b['drift_z']:.3e} m   error_x = {b['error_x']:.3e} m")
-    print(f"closest approach to a singularity: σ_min = {ca['sigma_min']:.4g} at t = "
-          f"{ca['t']:.3f} s (condition {ca['condition']:.4g})")
-    for path in written:
-        print(f"wrote {path}", file=sys.stderr)
-    return 0
-
-
 # ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
-    p = sub.add_parser("derive", help="symbolic T, p, J (direct/indirect), det J factored")
-    p.add_argument("source", help="preset name (or a model made from a Khalil table)")
-    p.add_argument("--set", action="append", metavar="NAME=VALUE", help="preset parameter")
-    p.add_argument("--tip", help="hexapod only: the foot frame of the leg (e.g. leg2_foot)")
-    p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz)")
+    p = sub.add_parser(
+        "derive",
+        help="symbolic T, p, J (direct/indirect), det J factored, singular families",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    source_args(p)
+    p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
+    p.add_argument(
+        "--budget",
+        type=float,
+        default=5.0,
+        help="time budget [s]: what is not done by then is reported, never waited on",
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
 
 def _cmd_derive(args: argparse.Namespace) -> int:
+    import math
+
     import numpy as np
 
-    from ..symbolic import ROW_NAMES, derive
+    from ..singularity.rows import ROW_NAMES
+    from ..symbolic import derive
 
+    if not (math.isfinite(args.budget) and args.budget > 0):
+        raise ParameterError(
+            f"--budget {args.budget!r} is not allowed; a time in seconds > 0",
+            parameter="--budget",
+            value=args.budget,
+            allowed="> 0 s",
+        )
     model = load_source(args)
-    deriv = derive(model, rows=args.rows)
+    deriv = derive(model, rows=args.rows, budget=args.budget)
+    # compare like with like: the derivation is in the model's own base frame, as Pinocchio's
+    check: dict[str, Any] = {}
+    if deriv.J_rows is not None:
+        qs = model.random_q(100, seed=0)
+        idx = [ROW_NAMES.index(r) for r in deriv.rows]
+        jac_sym = deriv.function(deriv.J_rows)(qs)
+        jac_pin = np.array([model.jacobian(q)[idx] for q in qs])
+        check["max_abs_J_sym_minus_J_pinocchio"] = float(np.abs(jac_sym - jac_pin).max())
+        if deriv.det is not None and jac_pin.shape[1] == jac_pin.shape[2]:
+            det_sym = deriv.function(deriv.det)(qs)
+            check["max_abs_det_sym_minus_det_pinocchio"] = float(
+                np.abs(det_sym - np.linalg.det(jac_pin)).max()
+            )
+    if args.json:
+        emit_json({**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check})
+        return 0
     if args.latex:
         print(deriv.latex())
         return 0
     print(deriv.text())
-    qs = model.random_q(100, seed=0)
-    idx = [ROW_NAMES.index(r) for r in deriv.rows]
-    jac_sym = deriv.function(deriv.J_rows)(qs)
-    jac_pin = np.array([model.jacobian(q)[idx] for q in qs])
-    print(f"check vs Pinocchio at 100 random q: max |J_sym - J_pin| = "
-          f"{np.abs(jac_sym - jac_pin).max():.2e}", end="")
-    if deriv.det is not None:
-        det_sym = deriv.function(deriv.det)(qs)
-        det_pin = np.linalg.det(jac_pin)
-        print(f", max |det_sym - det_pin| = {np.abs(det_sym - det_pin).max():.2e}")
-    else:
-        print()
+    if check:
+        labels = {
+            "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
+            "max_abs_det_sym_minus_det_pinocchio": "max |det_sym - det_pin|",
+        }
+        print(
+            f"check vs Pinocchio at 100 random q (frame {deriv.frame}): "
+            + ", ".join(f"{labels[k]} = {v:.2e}" for k, v in check.items())
+        )
     return 0
 
 
 # ------------------------------------------------------------------------ scan
 def _add_scan(sub: Any) -> None:
-    p = sub.add_parser("scan", help="singularity measures over a joint grid; singular families")
+    p = sub.add_parser(
+        "scan",
+        help="singularity measures over a joint grid; singular families",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
     source_args(p)
     p.add_argument("--grid", type=int, help="points per scanned joint (default 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
@@ -424,20 +340,39 @@ def _add_scan(sub: Any) -> None:
     p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--families",
+        choices=["derive", "cached", "off"],
+        default="derive",
+        help="singular families: derive them within --family-budget (cached on disk after the "
+        "first time), only use cached ones, or none",
+    )
+    p.add_argument(
+        "--family-budget",
+        type=float,
+        default=10.0,
+        help="time budget [s] for deriving the families",
+    )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    p.add_argument("--plot", metavar="FILE.png", help="heat map (2 scanned joints, grid)")
+    p.add_argument(
+        "--plot", metavar="FILE.png", help="heat map (2 scanned joints, grid): .png .jpg .svg .pdf"
+    )
+
+
+#: ``--families`` choice -> ``scan(families=...)``.
+_FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
 
 
 def _cmd_scan(args: argparse.Namespace) -> int:
     _check_outputs(args)
     import numpy as np
 
-    from ..singularity import plot_joints, scan
+    from ..singularity import default_joints, scan
 
     model = load_source(args)
     joints: Any = args.joints
     if joints is None and model.nq > 2:
-        joints = [model.joint_names[j] for j in plot_joints(model, args.rows)]
+        joints = [model.joint_names[j] for j in default_joints(model, args.rows)]
     joints = [int(j) if str(j).isdigit() else j for j in joints] if joints else None
     q_fixed = q_from_args(args, model) if args.q is not None else None
     grid = args.grid if args.grid is not None or args.samples is not None else 61
@@ -451,6 +386,8 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         threshold=args.threshold,
         seed=args.seed,
         progress=False if args.json else None,
+        families=_FAMILIES[args.families],
+        family_budget=args.family_budget,
     )
     if args.plot:
         from ..plots import plot_singularity_map
@@ -458,22 +395,24 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         path = plot_singularity_map(result, args.plot)
         print(f"wrote {path}", file=sys.stderr)
     if args.json:
-        emit_json(result.to_json())
+        emit_json(result.to_dict())
         return 0
     n = result.q.shape[0]
     how = f"grid {result.grid_shape}" if result.grid_shape else "random samples"
     over = ", ".join(result.joint_names[j] for j in result.joints)
     print(f"{result.source}: {n} configurations over {over} ({how})")
-    print(f"rows of J: {', '.join(result.rows)}; singular when sigma_min < "
-          f"{result.threshold:.3g}")
-    print(f"singular: {int(result.singular.sum())}  unexplained: "
-          f"{int(result.unexplained.sum())}")
-    for name, count in result.family_counts().items():
+    print(f"rows of J: {', '.join(result.rows)}; singular when sigma_min < {result.threshold:.3g}")
+    print(f"singular: {int(result.singular.sum())}  unexplained: {int(result.unexplained.sum())}")
+    for name, count in result.family_counts.items():
         print(f"  family {name}: {count}")
+    if result.family_reason:
+        print(f"  no families: {result.family_reason}")
     finite = np.isfinite(result.condition)
-    print(f"manipulability: min {result.manipulability.min():.4g}  max "
-          f"{result.manipulability.max():.4g}; condition (finite) max "
-          f"{result.condition[finite].max() if finite.any() else float('nan'):.4g}")
+    print(
+        f"manipulability: min {result.manipulability.min():.4g}  max "
+        f"{result.manipulability.max():.4g}; condition (finite) max "
+        f"{result.condition[finite].max() if finite.any() else float('nan'):.4g}"
+    )
     return 0
 
 
