@@ -23,8 +23,17 @@ BASE_ARGS: dict[str, list[str]] = {
     "animate": ["animate", "hexabot_leg", "--html", "/tmp/hk-fuzz-animate.html"],
     "export-package": ["export-package", "hexabot_leg", "--out", "/tmp/hk-fuzz-pkg"],
     "mjcf": ["mjcf", "hexabot_leg", "-o", "/tmp/hk-fuzz.xml"],
-    "sweep": ["sweep", "--l1", "0.04:0.06:2", "--l2", "0.1:0.1:1", "--l3", "0.1:0.1:1",
-              "--height", "0.1"],
+    "sweep": [
+        "sweep",
+        "--l1",
+        "0.04:0.06:2",
+        "--l2",
+        "0.1:0.1:1",
+        "--l3",
+        "0.1:0.1:1",
+        "--height",
+        "0.1",
+    ],
 }
 # commands that serve or run long: only the parser-level checks
 PARSER_ONLY = {"view", "reproduce", "sweep"}
@@ -189,19 +198,24 @@ def test_help_exits_zero(capsys):
         assert "usage" in capsys.readouterr().out
 
 
-@pytest.mark.skipif(shutil.which("hexapod-kin") is None and not sys.executable,
-                    reason="console script not installed")
+@pytest.mark.skipif(
+    shutil.which("hexapod-kin") is None and not sys.executable,
+    reason="console script not installed",
+)
 def test_closed_pipe_is_quiet():
     exe = [sys.executable, "-m", "hexapod_kin"]
     proc = subprocess.run(
         exe + ["fk", "hexabot_leg", "--q", "0.1", "0.2", "0.3"] + [],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=120,
-        input=None,
+        capture_output=True,
+        timeout=120,
     )
     assert proc.returncode == 0
     # close stdout after the first line: `| head -1`
     shell = subprocess.run(
         " ".join(exe) + " fk hexapod --q " + " ".join(["0.1"] * 18) + " | head -1",
-        shell=True, capture_output=True, text=True, timeout=120,
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert "Traceback" not in shell.stderr and "BrokenPipe" not in shell.stderr, shell.stderr

@@ -22,7 +22,16 @@ from .common import OneLineParser
 __all__ = ["build_parser", "main"]
 
 #: Modules of this package whose ``register(sub)`` adds subcommands, in help order.
-MODULES: tuple[str, ...] = ("core", "view", "motion", "dynamics", "export", "sweep", "gait", "report")
+MODULES: tuple[str, ...] = (
+    "core",
+    "view",
+    "motion",
+    "dynamics",
+    "export",
+    "sweep",
+    "gait",
+    "report",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,7 +62,9 @@ def _refuse_non_finite(args: argparse.Namespace) -> None:
                 option = "--" + dest.replace("_", "-")
                 raise ParameterError(
                     f"{option} {v}: not a finite number; give a finite value",
-                    parameter=option, value=v, allowed="a finite number",
+                    parameter=option,
+                    value=v,
+                    allowed="a finite number",
                 )
 
 
