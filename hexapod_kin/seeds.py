@@ -118,7 +118,8 @@ def euler_baseline(
             raise ConfigurationError(
                 f"the plain Euler + np.linalg.solve loop stops at t = {k * dt:g} s: J(q) is "
                 f"singular at q = {np.round(q, 6).tolist()} (the seeds' method needs det J != 0)",
-                parameter="q0", value=np.asarray(q0, dtype=float).tolist(),
+                parameter="q0",
+                value=np.asarray(q0, dtype=float).tolist(),
                 allowed="a start where det J != 0",
             )
         q = q + dt * qdot

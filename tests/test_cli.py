@@ -37,15 +37,37 @@ def test_fk_json_matches_api(capsys):
 
 
 def test_fk_text_prints_every_transform(capsys):
-    code, out, _ = run(capsys, "fk", "coxa_tibia_leg", "--set", "l1=10", "--set", "l2=5",
-                       "--q", "0", "-30", "--deg")
+    code, out, _ = run(
+        capsys,
+        "fk",
+        "coxa_tibia_leg",
+        "--set",
+        "l1=10",
+        "--set",
+        "l2=5",
+        "--q",
+        "0",
+        "-30",
+        "--deg",
+    )
     assert code == 0
     assert "^0T_1" in out and "^2T_3" in out and "14.330127" in out and "-2.500000" in out
 
 
 def test_jacobian_json(capsys):
-    code, out, _ = run(capsys, "jacobian", "scara", "--q", "0.1", "0.2", "0.3", "0.05",
-                       "--reference", "world", "--json")
+    code, out, _ = run(
+        capsys,
+        "jacobian",
+        "scara",
+        "--q",
+        "0.1",
+        "0.2",
+        "0.3",
+        "0.05",
+        "--reference",
+        "world",
+        "--json",
+    )
     assert code == 0
     obj = json.loads(out)
     model = hk.load("scara")
@@ -53,8 +75,9 @@ def test_jacobian_json(capsys):
 
 
 def test_jacobian_erd_leg(capsys):
-    code, out, _ = run(capsys, "jacobian", "erd:solo12", "--tip", "FL_FOOT", "--q", "0", "0.5",
-                       "-1", "--json")
+    code, out, _ = run(
+        capsys, "jacobian", "erd:solo12", "--tip", "FL_FOOT", "--q", "0", "0.5", "-1", "--json"
+    )
     assert code == 0 and len(json.loads(out)["jacobian"][0]) == 3
 
 
@@ -88,7 +111,8 @@ def test_errors_are_one_line_and_exit_2(capsys, argv, fragment):
 
 def test_console_script_demo(tmp_path):
     exe = shutil.which("hexapod-kin") or str(
-        __import__("pathlib").Path(sys.executable).with_name("hexapod-kin"))
+        __import__("pathlib").Path(sys.executable).with_name("hexapod-kin")
+    )
     res = subprocess.run([exe, "demo", "--out", str(tmp_path)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "hexabot_leg.urdf").exists() and "det(J_position)" in res.stdout

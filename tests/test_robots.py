@@ -41,8 +41,9 @@ def test_hexabot_leg_seed001_eq8_rotation():
     q1, q2, q3 = 0.2, 0.4, -0.9
     c1, s1, c23, s23 = math.cos(q1), math.sin(q1), math.cos(q2 + q3), math.sin(q2 + q3)
     ref = np.array([[c1 * c23, -c1 * s23, -s1], [s1 * c23, -s1 * s23, c1], [-s23, -c23, 0]])
-    np.testing.assert_allclose(table_fk(robots.hexabot_leg(), [q1, q2, q3])[:3, :3], ref,
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        table_fk(robots.hexabot_leg(), [q1, q2, q3])[:3, :3], ref, atol=1e-15
+    )
 
 
 @pytest.mark.parametrize(
@@ -58,8 +59,11 @@ def test_coxa_tibia_seed002_numbers(t1, t2, expected):
 def test_coxa_tibia_closed_form():
     leg = robots.coxa_tibia_leg(10, 5)
     for t1, t2 in np.random.default_rng(1).uniform(-3, 3, (100, 2)):
-        ref = [math.cos(t1) * (10 + 5 * math.cos(t2)), math.sin(t1) * (10 + 5 * math.cos(t2)),
-               5 * math.sin(t2)]
+        ref = [
+            math.cos(t1) * (10 + 5 * math.cos(t2)),
+            math.sin(t1) * (10 + 5 * math.cos(t2)),
+            5 * math.sin(t2),
+        ]
         np.testing.assert_allclose(table_fk(leg, [t1, t2])[:3, 3], ref, atol=1e-13)
 
 
@@ -67,8 +71,11 @@ def test_scara_closed_form():
     arm = robots.scara(stroke=0.3)
     for t1, t2, t3, d in np.random.default_rng(2).uniform(0, 1, (100, 4)) * [6, 6, 6, 0.3]:
         t = table_fk(arm, [t1, t2, t3, d])
-        ref = [0.22 * math.cos(t1) + 0.24 * math.cos(t1 + t2),
-               0.22 * math.sin(t1) + 0.24 * math.sin(t1 + t2), 0.4524 - d]
+        ref = [
+            0.22 * math.cos(t1) + 0.24 * math.cos(t1 + t2),
+            0.22 * math.sin(t1) + 0.24 * math.sin(t1 + t2),
+            0.4524 - d,
+        ]
         np.testing.assert_allclose(t[:3, 3], ref, atol=1e-15)
         # alpha = pi: the tool z axis points down; yaw = -(t1 + t2 + t3) about the tool axis.
         np.testing.assert_allclose(t[:3, 2], [0, 0, -1], atol=1e-15)
