@@ -145,6 +145,8 @@ def fk_jac_into(
     """Tip position into ``out_p`` (3,) and LWA Jacobian into ``out_j`` (3 or 6, nq).
 
     ``scratch`` is a (6, m) work array (joint origins and axes); nothing is allocated.
+    Callers in compiled code pass ``want_jac`` as a runtime value (``n >= 0``, an argument),
+    never a literal ``True``/``False``: numba would compile one copy per literal.
     """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
@@ -272,9 +274,11 @@ def _batch(
         dummy = np.empty((3, qs.shape[1]))
         for i in range(c * chunk, min(n, (c + 1) * chunk)):
             if want_jac:
-                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], out_j[i], scratch, True)
+                fk_jac_into(
+                    rot, trans, axis, kind, col, qs[i], out_p[i], out_j[i], scratch, want_jac
+                )
             else:
-                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], dummy, scratch, False)
+                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], dummy, scratch, want_jac)
 
 
 def check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
@@ -331,7 +335,7 @@ def position_jacobian_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
 
 def fk_position(arrays: ChainArrays, q: Any) -> np.ndarray:
     """Tip position (3,) for one configuration."""
-    qv = np.ascontiguousarray(np.asarray(q, dtype=np.float64))
+    qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
     out_p = np.empty(3)
     fk_jac_into(*arrays.packed, qv, out_p, np.empty((3, arrays.nq)), arrays.scratch(), False)
     return out_p
@@ -339,7 +343,7 @@ def fk_position(arrays: ChainArrays, q: Any) -> np.ndarray:
 
 def position_jacobian(arrays: ChainArrays, q: Any) -> np.ndarray:
     """Position Jacobian (3, nq) for one configuration."""
-    qv = np.ascontiguousarray(np.asarray(q, dtype=np.float64))
+    qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
     out_j = np.empty((3, arrays.nq))
     fk_jac_into(*arrays.packed, qv, np.empty(3), out_j, arrays.scratch(), True)
     return out_j

@@ -416,6 +416,7 @@ def _report(
 def _blocked(q: np.ndarray, jac: np.ndarray, task: Task, prep: Prepared) -> np.ndarray:
     """Joints at a limit whose task-error gradient points outward."""
     rot, trans, axis, kind, col = prep.packed
+    q = np.array(q, dtype=float)  # writable, like the kernels' q: one compiled fk_jac_into
     p = np.empty(3)
     fk_jac_into(rot, trans, axis, kind, col, q, p, np.empty((3, q.size)), _scratch(prep), False)
     r = np.empty((3, 3))

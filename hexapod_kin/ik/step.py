@@ -326,7 +326,7 @@ def task_cost(
     et = np.empty(6)
     jt = np.empty((6, n))
     for k in range(qs.shape[0]):
-        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, True)
+        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0)
         if ipar[I_MODE] != 0:
             tip_rotation_into(rot, axis, kind, col, tip_rot, qs[k], r)
         m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
@@ -414,7 +414,7 @@ def lm_loop(
         for i in range(n):
             q[i] = starts[s, i]
         _limit_into(q, lower, upper, cont, use_limits)
-        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, True)
+        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0)
         if mode != 0:
             tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
         m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
@@ -465,7 +465,7 @@ def lm_loop(
                 for i in range(n):
                     qn[i] = q[i] + scale * dq[i]
                 _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, True)
+                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0)
                 if mode != 0:
                     tip_rotation_into(rot, axis, kind, col, tip_rot, qn, r)
                 m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)

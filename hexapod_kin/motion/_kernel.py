@@ -83,7 +83,7 @@ def _rate(
     lower = lim[0]
     upper = lim[1]
     vmax = lim[2]
-    fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, True)
+    fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0)
     if rows6:
         r = np.empty((3, 3))
         w3 = np.empty((3, 3))
