@@ -589,11 +589,7 @@ def _rr6(
 
 
 def rr_kernel(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
+    packed: tuple[np.ndarray, ...],
     tip_rot: np.ndarray,
     q0: np.ndarray,
     vel: np.ndarray,
@@ -624,8 +620,10 @@ def rr_kernel(
     for a 3-row task — are sampled at half steps (index 2k = t_k, 2k+1 = t_k + dt/2).
     Outputs per sample: q, q̇, tip pose (4, 4), tip velocity ``J q̇`` (6, LWA),
     (σ_min, σ_max), λ², limited. Chosen here, in Python: a 3-row task runs (and compiles) only
-    the position kernel, a twist only the 6-D one.
+    the position kernel, a twist only the 6-D one. ``packed``: the chain's
+    ``(rot, trans, axis, kind, col)`` arrays.
     """
+    rot, trans, axis, kind, col = packed
     lims = np.empty((3, q0.shape[0]))  # lower, upper, speed limits: one argument of the law
     lims[0], lims[1], lims[2] = lower, upper, vmax
     outs = (out_q, out_qd, out_pose, out_twist, out_s, out_lam, out_lim)

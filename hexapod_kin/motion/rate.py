@@ -454,7 +454,7 @@ def resolved_rate(
     out_lam = np.empty(steps + 1)
     out_lim = np.empty(steps + 1, dtype=np.bool_)
     rr_kernel(
-        *prep.packed,
+        prep.packed,
         prep.tip_rot,
         start,
         vel,
