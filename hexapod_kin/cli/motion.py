@@ -111,6 +111,12 @@ def _add_ik(sub: Any) -> None:
     p.add_argument("--tol", type=float, default=1e-10, help="position tolerance [m]")
     p.add_argument("--rot-tol", type=float, default=1e-10, help="orientation tolerance [rad]")
     p.add_argument("--restarts", type=int, default=16, help="extra seeded starts")
+    p.add_argument(
+        "--numerical",
+        action="store_true",
+        help="run the numerical (DLS) solver too when the closed form answers (it always runs "
+        "without a closed form, for an unreachable target, with --q0/--mask/--weights or --json)",
+    )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.set_defaults(func=_cmd_ik)
 
@@ -155,17 +161,29 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     if family is not None and (target.size == 3 or family == "scara"):
         closed = ik.analytic(model, target)[0].tolist()
     q0 = None if args.q0 is None else q_from_args(args, model, "q0")
-    res = ik.solve(
-        model,
-        target,
-        q0,
-        mask=args.mask,
-        weights=args.weights,
-        tol=args.tol,
-        rot_tol=args.rot_tol,
-        restarts=args.restarts,
+    # The closed form answers first; the numerical solver (and its compile, seconds on a fresh
+    # install) runs only when it is needed or asked for.
+    numerical = (
+        not closed
+        or args.numerical
+        or args.json
+        or q0 is not None
+        or args.mask is not None
+        or args.weights is not None
     )
-    status = 0 if res.status in ("converged", "unreachable") else 1
+    res = None
+    if numerical:
+        res = ik.solve(
+            model,
+            target,
+            q0,
+            mask=args.mask,
+            weights=args.weights,
+            tol=args.tol,
+            rot_tol=args.rot_tol,
+            restarts=args.restarts,
+        )
+    status = 0 if res is None or res.status in ("converged", "unreachable") else 1
     if args.json:
         emit_json(
             {
@@ -175,7 +193,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
                 "target": target.tolist(),
                 "family": family,
                 "analytic": closed,
-                "numerical": res.to_dict(),
+                "numerical": None if res is None else res.to_dict(),
             }
         )
         return status
@@ -190,6 +208,9 @@ def _cmd_ik(args: argparse.Namespace) -> int:
             print("  " + " ".join(f"{v: .9f}" for v in sol))
     elif target.shape != (4, 4):
         print("closed form: none for this chain")
+    if res is None:
+        print("numerical: not run (the closed form answered; --numerical runs it too)")
+        return status
     print(f"numerical: {res.status} ({res.reason})")
     print("  q = " + " ".join(f"{v: .9f}" for v in res.q))
     print(
