@@ -253,6 +253,10 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
     return np.ascontiguousarray(arr), single
 
 
+#: Up to this many targets, :func:`analytic_batch` solves in numpy (no kernel to compile).
+_FEW = 256
+
+
 def analytic_batch(
     chain: Chain | Model | str, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
 ) -> AnalyticBatch:
@@ -282,7 +286,9 @@ def analytic_batch(
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
     tol_abs = float(tol) * fam.scale
-    if not within_limits and fam.family in ("coxa_tibia", "leg3"):
+    # A few targets take the numpy path below: the compiled kernel (parallel) costs seconds to
+    # compile on a fresh install, more than numpy spends on a few hundred targets.
+    if not within_limits and fam.family in ("coxa_tibia", "leg3") and x.shape[0] > _FEW:
         leg3 = fam.family == "leg3"
         qk = np.empty((x.shape[0], fam.max_solutions, fam.nq))
         vk = np.empty((x.shape[0], fam.max_solutions), dtype=np.bool_)
