@@ -154,14 +154,17 @@ class Model:
         if strict_inertia:
             _raise_inertia_defects(resolved.name, gate.inertia_defects)
         _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
+        for repair in gate.repairs:
+            warnings.warn(f"{resolved.name!r}: {repair}", UrdfWarning, stacklevel=3)
+        text = resolved.text if gate.text is None else gate.text
         try:
-            full = pin.buildModelFromXML(resolved.text)
+            full = pin.buildModelFromXML(text)
         except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
             raise UrdfError(
                 f"{resolved.name!r}: passed the loader gate but Pinocchio refused it: {exc}"
             ) from None
         self.full_model: pin.Model = full
-        self.urdf: str = resolved.text
+        self.urdf: str = text
         self.source = resolved
         full_frames = [f.name for f in full.frames]
         params = resolved.params

@@ -22,11 +22,13 @@ FILES = sorted(ROBOTS.rglob("*.urdf"))
 
 #: Files refused, each for a defect the gate keeps refusing (see the report / docs).
 REFUSED = {
-    "ur3": "<robot> needs a non-empty name",  # raw Pinocchio refuses it too
-    "alex_psyonic_hands": "mimic must name another existing joint",
+    "ur3": "no <link>",  # an empty <robot> (the xacro expansion lost everything)
     "romeo_laas_small": "URI scheme 'file' is refused",  # absolute file:// mesh URIs
 }
 #: Files that load with an implausible-inertial warning (link named in it).
+#: Files with harmless defects the loader mends, one warning per repair (raw Pinocchio loads
+#: them as they are: it ignores a mimic naming a missing joint).
+MENDED = {"alex_psyonic_hands": "<mimic> dropped"}
 IMPLAUSIBLE = {
     "human",
     "icub",
@@ -67,6 +69,8 @@ def test_erd_file_loads_and_matches_raw_pinocchio(path: Path) -> None:
         assert model.inertia_defects and all(
             f"link {link!r}" in str(ours[0].message) for link, _ in model.inertia_defects
         )
+    elif path.stem in MENDED:
+        assert ours and all(MENDED[path.stem] in str(w.message) for w in ours)
     else:
         assert ours == [], [str(w.message)[:300] for w in ours]
     raw = pin.buildModelFromUrdf(str(path))

@@ -42,6 +42,11 @@ class GateResult:
             ``(uri, reason)`` pairs; their visual/collision elements must be dropped.
         inertia_defects: Physically implausible inertials (lenient mode only), as
             ``(link, defect)`` pairs; harmless to kinematics, refused by dynamics.
+        repairs: Harmless defects of real robot files mended in lenient mode (a ``<robot>``
+            without a name gets ``name="robot"``; a ``<mimic>`` naming a joint that does not
+            exist is dropped, the joint then moves on its own), one message each.
+        text: The mended document when :attr:`repairs` is not empty (give it to Pinocchio),
+            else ``None``.
 
     """
 
@@ -52,6 +57,8 @@ class GateResult:
     meshes: tuple[tuple[str, Path], ...] = ()
     missing_meshes: tuple[tuple[str, str], ...] = ()
     inertia_defects: tuple[tuple[str, str], ...] = ()
+    repairs: tuple[str, ...] = ()
+    text: str | None = None
 
 
 #: Documents that passed and reference no files, by text (small LRU: generated URDFs are
@@ -127,9 +134,14 @@ def _check(
     root = parse_strict(text)
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
+    repairs: list[str] = []
     robot_name = root.get("name")
     if robot_name is None or not robot_name.strip():
-        raise error_at(root, "name", robot_name, "<robot> needs a non-empty name")
+        problem = "<robot> needs a non-empty name"
+        if not lenient:
+            raise error_at(root, "name", robot_name, problem)
+        root.set("name", "robot")
+        repairs.append(str(error_at(root, "name", robot_name, problem + ": named 'robot'")))
     links = root.findall("link")
     if not links:
         raise UrdfError("URDF <robot> has no <link>; at least one link is required")
@@ -208,7 +220,21 @@ def _check(
         if mimic is not None:
             target = mimic.get("joint")
             if target not in joint_el or target == joint.get("name"):
-                raise error_at(mimic, "joint", target, "mimic must name another existing joint")
+                problem = "mimic must name another existing joint"
+                if not lenient:
+                    raise error_at(mimic, "joint", target, problem)
+                repairs.append(
+                    str(
+                        error_at(
+                            mimic,
+                            "joint",
+                            target,
+                            problem + ": <mimic> dropped, the "
+                            f"joint {joint.get('name')!r} moves on its own",
+                        )
+                    )
+                )
+                joint.remove(mimic)
 
     roots = [n for n in link_el if n not in parent_of]
     if len(roots) != 1:
@@ -275,6 +301,8 @@ def _check(
         meshes=tuple(meshes),
         missing_meshes=tuple(missing),
         inertia_defects=tuple(defects or ()),
+        repairs=tuple(repairs),
+        text=etree.tostring(root, encoding="unicode") if repairs else None,
     )
 
 
