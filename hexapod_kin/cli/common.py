@@ -33,7 +33,15 @@ PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An ``ArgumentParser`` whose usage errors are one line on stderr and exit status 2."""
+    """An ``ArgumentParser`` whose usage errors are one line on stderr and exit status 2.
+
+    Help shows every option's default (``ArgumentDefaultsHelpFormatter``) unless a subcommand
+    picks another formatter.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", argparse.ArgumentDefaultsHelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         """Print ``hexapod-kin: error: <message>`` (with the subcommand) and exit 2."""

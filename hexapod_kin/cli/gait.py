@@ -24,6 +24,13 @@ def register(sub: Any) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
+    p.add_argument(
+        "-s",
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="hexapod preset parameter (SI units), e.g. -s body_radius=0.14",
+    )
     p.add_argument("--pattern", choices=("tripod", "wave", "ripple"), default="tripod")
     p.add_argument(
         "--stride",
@@ -81,12 +88,21 @@ def register(sub: Any) -> None:
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
+    from .. import robots
+    from ..gait.robot import whole_body
     from ..gait.walk import walk
-    from .common import emit_json, output_path
+    from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
 
-    plot = output_path(args.plot, "--plot", (".png",)) if args.plot else None
+    plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
+    params = set_params(args.set)
+    robot = None
+    if params:  # robots.get checks the names and values (one error naming the parameter)
+        built = robots.get("hexapod", **params)
+        assert isinstance(built, robots.Hexapod)
+        robot = whole_body(built)
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     run = walk(
+        robot,
         pattern=args.pattern,
         stride=args.stride,
         step_height=args.height,

@@ -1,6 +1,6 @@
 """The viewer subcommands: ``view`` (a model in the browser) and ``animate`` (a demo motion).
 
-Both serve a live meshcat viewer on 127.0.0.1 until Ctrl-C, ``--duration`` seconds or at
+Both serve a live meshcat viewer on 127.0.0.1 until Ctrl-C, ``--serve-for`` seconds or at
 once with ``--no-wait``; ``animate --html FILE`` writes a self-contained page instead. Heavy
 imports (numpy, Pinocchio, the viewer) stay inside the runners.
 """
@@ -19,7 +19,7 @@ __all__ = ["register"]
 def _wait_args(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument(
-        "--duration",
+        "--serve-for",
         type=float,
         metavar="S",
         help="serve for S seconds, then stop (default: until Ctrl-C)",
@@ -36,18 +36,18 @@ def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
 
     from ..exceptions import ParameterError, ViewerError
 
-    if args.duration is not None and not (0.0 <= args.duration <= 1e7):
+    if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
         raise ParameterError(
-            f"--duration {args.duration!r} is not allowed; give seconds in [0, 1e7]",
-            parameter="--duration",
-            value=args.duration,
+            f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]",
+            parameter="--serve-for",
+            value=args.serve_for,
             allowed="seconds in [0, 1e7]",
         )
     print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
     if args.no_wait:
         return 0
     print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
-    end = None if args.duration is None else time.monotonic() + args.duration
+    end = None if args.serve_for is None else time.monotonic() + args.serve_for
     try:
         while end is None or time.monotonic() < end:
             if not viewer.server.running:

@@ -134,7 +134,7 @@ def foot_step(
     shape: Literal["ellipse", "cycloid"] = "ellipse",
     cycles: int = 1,
     phase_offset: float = 0.0,
-    q_start: Any = None,
+    q0: Any = None,
 ) -> FootStep:
     """Plan a foot step (stance + swing) and its joint trajectory by IK.
 
@@ -151,7 +151,7 @@ def foot_step(
         shape: Swing shape ``"ellipse"`` or ``"cycloid"``.
         cycles: Number of cycles (>= 1).
         phase_offset: Phase at t = 0 in cycles (gait tables set one per leg).
-        q_start: Joints near the first sample (IK branch / warm start).
+        q0: Joints near the first sample (IK branch / warm start).
 
     Returns:
         A :class:`FootStep`.
@@ -164,7 +164,7 @@ def foot_step(
     dt = positive("dt", dt)
     if not (isinstance(cycles, int) and cycles >= 1):
         raise ParameterError(f"cycles={cycles!r} is not allowed; an int >= 1 is needed")
-    q_home = default_stance(model) if q_start is None else model.check_q(q_start, "q_start")
+    q_home = default_stance(model) if q0 is None else model.check_q(q0, "q0")
     c = model.position(q_home) if center is None else np.asarray(center, dtype=float)
     m = int(round(cycles * duration / dt))
     t = np.arange(m + 1) * (cycles * duration / m)

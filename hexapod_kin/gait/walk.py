@@ -271,7 +271,7 @@ def walk(
     terrain: Any = None,
     duration: float = 10.0,
     rate: float = 100.0,
-    q_start: Any = None,
+    q0: Any = None,
     strict: bool = True,
 ) -> GaitRun:
     """Walk the hexapod and check every sample.
@@ -293,7 +293,7 @@ def walk(
             :class:`~.terrain.Terrain` or ``h(x, y)``.
         duration: Length of the run [s].
         rate: Sample rate [Hz].
-        q_start: (18,) joints the first sample's IK branches are nearest to.
+        q0: (18,) joints the first sample's IK branches are nearest to.
         strict: Raise on the first failed check (else return the run with its checks).
 
     Returns:
@@ -426,7 +426,7 @@ def walk(
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
     base[:, 2, 3] = gz.mean(axis=1) + bh
     # --- joints and checks
-    ik = wb.body_ik(base, feet, q_prev=q_start, times=t, strict=strict)
+    ik = wb.body_ik(base, feet, q_prev=q0, times=t, strict=strict)
     q = np.array(ik.q)
     pts, com = wb.points_and_com(q, base)
     actual = np.ascontiguousarray(pts[:, :, 3])
