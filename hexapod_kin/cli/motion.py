@@ -152,6 +152,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     model = _load(args)
     target = _target(args)
     closed: list[list[float]] | None = None
+    inside = 0  # closed-form solutions within the joint limits
     family = None
     if target.shape != (4, 4) and args.tool is None:
         try:
@@ -160,11 +161,12 @@ def _cmd_ik(args: argparse.Namespace) -> int:
             family = None
     if family is not None and (target.size == 3 or family == "scara"):
         closed = ik.analytic(model, target)[0].tolist()
+        inside = len(ik.analytic(model, target, within_limits=True)[0]) if closed else 0
     q0 = None if args.q0 is None else q_from_args(args, model, "q0")
     # The closed form answers first; the numerical solver (and its compile, seconds on a fresh
     # install) runs only when it is needed or asked for.
     numerical = (
-        not closed
+        not inside
         or args.numerical
         or args.json
         or q0 is not None
@@ -203,7 +205,9 @@ def _cmd_ik(args: argparse.Namespace) -> int:
         f"{', '.join(model.joint_names)}"
     )
     if closed is not None:
-        print(f"closed form ({family}): {len(closed)} solution(s)")
+        print(
+            f"closed form ({family}): {len(closed)} solution(s), {inside} within the joint limits"
+        )
         for sol in closed:
             print("  " + " ".join(f"{v: .9f}" for v in sol))
     elif target.shape != (4, 4):
