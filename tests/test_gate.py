@@ -130,16 +130,32 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "inertia_singular_offdiag": ("warn", "not positive definite", "<inertia "),
     "inertia_missing_entry": ("UrdfError", "izz=None: attribute is required", "<inertia "),
     "inertial_no_mass": ("UrdfError", "<mass> is required", "<inertial>"),
-    # files
-    "mesh_file_uri": ("UrdfError", "URI scheme 'file' is refused", "<mesh"),
-    "mesh_absolute_path": ("UrdfError", "absolute paths are refused", "<mesh"),
+    # files (other schemes and absolute paths: never read nor fetched, the visual is dropped)
+    "mesh_file_uri": (
+        "warn",
+        "URI scheme 'file' is refused",
+        "<mesh",
+    ),
+    "mesh_absolute_path": (
+        "warn",
+        "absolute paths are refused",
+        "<mesh",
+    ),
     "mesh_dotdot_escape": ("UrdfError", "outside the allowed root", "<mesh"),
     "mesh_package_without_dirs": ("warn", "no package directories", "<mesh"),
-    "mesh_http_uri": ("UrdfError", "URI scheme 'http' is refused", "<mesh"),
+    "mesh_http_uri": (
+        "warn",
+        "URI scheme 'http' is refused",
+        "<mesh",
+    ),
     "mesh_missing_file": ("warn", "missing.stl' does not exist", "<mesh"),
     "mesh_directory": ("UrdfError", "is not a regular file", "<mesh"),
     "mesh_empty_filename": ("UrdfError", "empty file name", "<mesh"),
-    "mesh_home_tilde": ("UrdfError", "absolute paths are refused", "<mesh"),
+    "mesh_home_tilde": (
+        "warn",
+        "absolute paths are refused",
+        "<mesh",
+    ),
     "texture_escape": ("UrdfError", "<texture> filename='../../../../../etc/hostname'", "<texture"),
     # valid controls
     "ok_minimal": (None, "", None),

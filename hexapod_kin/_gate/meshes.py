@@ -21,6 +21,15 @@ class MeshMissing(UrdfError):
     """A mesh file that cannot be found (as opposed to one that is refused)."""
 
 
+class MeshOutside(UrdfError):
+    """A mesh named by another URI scheme (``file://``, ``http://``) or an absolute path.
+
+    It is never read (nor fetched). Strict checking refuses the document; lenient loading drops
+    the element's visual/collision with a warning, as for a missing file. An escape out of the
+    root through ``..`` or a symbolic link is hostile and always refused.
+    """
+
+
 def _inside(path: str, root: str) -> bool:
     return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
 
@@ -65,12 +74,12 @@ def resolve_mesh(
             (os.path.realpath(os.fspath(d)), os.path.join(os.fspath(d), rest)) for d in package_dirs
         ]
     elif scheme:
-        raise UrdfError(
+        raise MeshOutside(
             f"{uri!r}: URI scheme {scheme.group(1)!r} is refused; use package://<package>/"
             "<path> or a path relative to the URDF file"
         )
     elif os.path.isabs(uri) or uri.startswith("~"):
-        raise UrdfError(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
+        raise MeshOutside(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
     else:
         if mesh_root is None:
             raise MeshMissing(
@@ -83,6 +92,7 @@ def resolve_mesh(
     for root_real, joined in candidates:
         real = os.path.realpath(joined)
         if not _inside(real, root_real):
+            # an escape out of the root through ".." or a link is hostile: always refused
             raise UrdfError(f"{uri!r} resolves to {real!r}, outside the allowed root {root_real!r}")
         try:
             st = os.stat(real)
