@@ -155,3 +155,36 @@ def test_bad_targets_refused(bad):
         ik.analytic(robots.hexabot_leg(), bad)
     with pytest.raises(IKError):
         ik.solve(hk.load("hexabot_leg"), bad)
+
+
+# ------------------------------------------------------------------ legs on mounts, base poses
+@pytest.mark.parametrize("leg", range(6))
+def test_hexapod_leg_closed_form_through_its_mount(leg):
+    from hexapod_kin import ik, load, robots
+
+    foot = robots.hexapod().foot_frames[leg]
+    model = load("hexapod", tip=foot)
+    assert ik.detect_family(model).family == "leg3"
+    for q in model.random_q(50, seed=leg):
+        p = model.fk(q)[:3, 3]  # the foot in the BODY frame (Pinocchio)
+        sols = ik.analytic(model, p)[0]
+        assert len(sols) >= 1
+        assert any(np.allclose(s, q, atol=1e-9) for s in sols)  # the original branch is found
+        for s in sols:
+            np.testing.assert_allclose(model.fk(s)[:3, 3], p, atol=1e-9)
+
+
+def test_base_pose_maps_targets_and_tool_offset_is_refused():
+    from hexapod_kin import Chain, ik, robots
+    from hexapod_kin.params import table_fk
+
+    leg = robots.hexabot_leg()
+    moved = Chain(rows=leg.rows, base_pose=([0.1, -0.2, 0.05], [0.3, -0.2, 1.0]))
+    rng = np.random.default_rng(3)
+    for q in rng.uniform(-1.0, 1.0, size=(50, 3)):
+        p = table_fk(moved, q)[:3, 3]
+        sols = ik.analytic(moved, p)[0]
+        assert any(np.allclose(s, q, atol=1e-9) for s in sols)
+    with_tool = Chain(rows=leg.rows, tool=([0.0, 0.0, 0.02], [0.0, 0.0, 0.0]))
+    with pytest.raises(hk.exceptions.IKError, match="tool offset"):
+        ik.detect_family(with_tool)

@@ -33,7 +33,7 @@ gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -41,7 +41,7 @@ import numpy as np
 from .._numerics import njit, prange, wrap_angle, wrap_angles, wrap_diff
 from ..exceptions import IKError
 from ..model import Model
-from ..params import Chain
+from ..params import Chain, Hexapod, Pose
 
 __all__ = ["FAMILIES", "AnalyticBatch", "LegFamily", "analytic", "analytic_batch", "detect_family"]
 
@@ -123,6 +123,18 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
                 "(use ik.solve for sub-chains)"
             )
         return params
+    if isinstance(params, Hexapod):  # one leg of the robot: its table on its mount
+        base, tip = chain.base, chain.tip
+        for mount, foot in zip(params.legs, params.foot_frames):
+            if tip == foot and base == params.body:
+                return replace(mount.chain, base_pose=Pose.of(mount.transform()))
+        raise IKError(
+            f"chain: the hexapod's sub-chain {base!r} -> {tip!r} is not one leg from the body "
+            f"{params.body!r}; closed forms take base={params.body!r} and a foot as tip",
+            parameter="tip",
+            value=tip,
+            allowed=list(params.foot_frames),
+        )
     raise IKError(
         f"chain={chain!r}: closed-form IK needs a Khalil table (a Chain, or a model loaded from "
         "one); this source has none (URDF) — use hexapod_kin.ik.solve(model, target)",
@@ -148,6 +160,14 @@ def detect_family(chain: Chain | Model | str) -> LegFamily:
 
     """
     ch = _chain_of(chain)
+    if ch.tool is not None and not np.allclose(ch.tool.matrix[:3, 3], 0.0, atol=1e-15):
+        raise IKError(
+            f"chain {ch.name!r} has a tool offset {ch.tool.matrix[:3, 3].tolist()} m: the closed "
+            "forms place the table's last frame; use hexapod_kin.ik.solve(model, target)",
+            parameter="tool",
+            value=ch.tool.matrix[:3, 3].tolist(),
+            allowed="no tool translation",
+        )
     rows = ch.rows
     sig = tuple(str(r.sigma)[0].upper() for r in rows)
     offsets = tuple(
@@ -250,6 +270,20 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
         )
     if not np.all(np.isfinite(arr)):
         raise IKError(f"target={np.asarray(target).tolist()!r} contains non-finite values")
+    if fam.chain.base_pose is not None:  # targets in the base link -> Khalil frame 0
+        T = fam.chain.base_pose.matrix
+        R, t = T[:3, :3], T[:3, 3]
+        arr = arr.copy()
+        arr[:, :3] = (arr[:, :3] - t) @ R
+        if arr.shape[1] == 4:
+            if not math.isclose(R[2, 2], 1.0, abs_tol=1e-12):
+                raise IKError(
+                    "a yaw target needs a base pose that only turns about z; this chain's "
+                    "base_pose tilts it: use hexapod_kin.ik.solve(model, target)"
+                )
+            arr[:, 3] -= math.atan2(R[1, 0], R[0, 0])
+        if fam.family == "scara" and fam.chain.tool is not None:
+            raise IKError("SCARA closed form: a tool pose turns the yaw; use ik.solve")
     return np.ascontiguousarray(arr), single
 
 
