@@ -29,8 +29,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ._tier import njit
 from .exceptions import ConfigurationError
 
 __all__ = [

@@ -34,8 +34,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from .._numerics import njit
 from ..exceptions import ParameterError
 from .designs import PARAMETERS
 
