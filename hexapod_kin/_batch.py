@@ -1,215 +1,300 @@
 """Compiled batch FK and Jacobians of whole poses: ``Model.fk_batch`` / ``jacobian_batch``.
 
-The same chain arrays as :mod:`hexapod_kin._kernels` (:class:`~hexapod_kin._kernels.ChainArrays`,
-extracted once per model through ``Model.arrays``), but carrying the full tip rotation and the
-three Pinocchio reference frames, so that each result equals Pinocchio's ``fk``/
-``computeFrameJacobian`` of the same model to rounding. Compiled with numba (``prange`` over
-configurations, chunks of 4,096).
+The same chain as :mod:`hexapod_kin._kernels` (:class:`~hexapod_kin._kernels.ChainArrays`,
+extracted once per model through ``Model.arrays``), re-expressed with every joint axis along its
+frame's z (:func:`aligned`: a constant rotation ``A_j`` with ``A_j ez = u_j`` folded into the
+placements; exact signed permutations for coordinate axes), carrying the full tip rotation and
+the three Pinocchio reference frames, so that each result equals Pinocchio's ``fk`` /
+``computeFrameJacobian`` of the same model to rounding.
+
+One kernel, :func:`pose_jacobian_kernel`, one compiled signature for every chain and every
+request (pose, Jacobian in any frame, or both). Configurations are processed in
+structure-of-arrays blocks of :data:`BLOCK`, joint by joint, so the inner loops run over the
+block and vectorise (SIMD): sin / cos by the libm-free polynomial
+:func:`hexapod_kin.singularity._kernel.sincos` (libm for a block holding an ``|q|`` above
+:data:`~hexapod_kin.singularity._kernel.POLY_TRIG_MAX`), the 3×3 products, the Jacobian
+columns; each block is then written row by row into the (N, 4, 4) / (N, 6, nq) outputs. Big
+batches run one kernel call per thread on contiguous ranges of blocks (the kernel releases the
+GIL; no ``parallel=True``, whose lowering doubles compile time), so each thread also takes the
+page faults of its own part of a fresh output.
+
+Small batches run the kernel's source interpreted (:mod:`hexapod_kin._tier`) until compiling
+pays: ``work=`` estimates the interpreted seconds of a call from its configuration count.
 """
 
 from __future__ import annotations
 
+import threading
+
+import numba
 import numpy as np
 
 from ._kernels import ChainArrays
-from ._numerics import njit, prange
+from ._numerics import njit
+from .singularity._kernel import POLY_TRIG_MAX, sincos
 
-__all__ = ["REF_CODES", "pose_jacobian_batch"]
+__all__ = ["BLOCK", "REF_CODES", "AlignedPose", "aligned", "pose_jacobian_batch"]
 
 #: Reference frame name → kernel code.
 REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
 
-_CHUNK = 4096
+#: Configurations per structure-of-arrays block (temporaries stay in L1/L2).
+BLOCK = 256
+#: Fewest configurations per thread (below this, one thread: starting threads costs more).
+MIN_PER_THREAD = 16_384
+#: Interpreted seconds per configuration and joint (measured, CPython 3.11; ``work=``).
+_INTERP_S = 6e-6
 
 
-@njit(cache=True, nogil=True)
-def _one(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    plain: np.ndarray,
-    tip_rot: np.ndarray,
-    q: np.ndarray,
-    out_t: np.ndarray,
-    out_j: np.ndarray,
-    want_pose: bool,
-    ref: int,
-    want_jac: bool,
-    org: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """Pose (4×4) into ``out_t`` and Jacobian (6×nq, ``ref``) into ``out_j`` for one ``q``.
+class AlignedPose:
+    """A chain re-expressed with z joint axes, plus its tip rotation (kernel arguments).
 
-    ``plain[k]`` is 1 when joint k's placement rotation is the identity (skipped) and 2 when
-    moreover its axis is +z (the rotation by q is then a plane rotation). ``org`` is a (m, 6)
-    work array: joint origins and world axes.
+    Attributes:
+        prot: (m, 9) placement rotations, row-major (``A_{j-1}ᵀ R_j A_j``).
+        ptr: (m + 1, 3) placement translations (``A_{j-1}ᵀ t_j``); the last is the tip offset.
+        flags: (m + 1,) int64: ``flags[j]`` 1 when placement ``j``'s rotation is the identity;
+            ``flags[m]`` 1 when the tip rotation is.
+        tip: (9,) tip rotation in the last aligned joint frame (``A_{m-1}ᵀ R_tip``).
+        kind: (m,) 0 revolute, 1 prismatic.
+        col: (m,) index of each joint's variable in ``q``.
+        nq: Length of ``q``.
+
     """
-    m = rot.shape[0]
-    r00, r01, r02 = 1.0, 0.0, 0.0
-    r10, r11, r12 = 0.0, 1.0, 0.0
-    r20, r21, r22 = 0.0, 0.0, 1.0
-    px, py, pz = 0.0, 0.0, 0.0
-    for k in range(m):
-        tx, ty, tz = trans[k, 0], trans[k, 1], trans[k, 2]
-        px += r00 * tx + r01 * ty + r02 * tz
-        py += r10 * tx + r11 * ty + r12 * tz
-        pz += r20 * tx + r21 * ty + r22 * tz
-        if plain[k] == 0:
-            a00, a01, a02 = rot[k, 0, 0], rot[k, 0, 1], rot[k, 0, 2]
-            a10, a11, a12 = rot[k, 1, 0], rot[k, 1, 1], rot[k, 1, 2]
-            a20, a21, a22 = rot[k, 2, 0], rot[k, 2, 1], rot[k, 2, 2]
-            r00, r01, r02 = (
-                r00 * a00 + r01 * a10 + r02 * a20,
-                r00 * a01 + r01 * a11 + r02 * a21,
-                r00 * a02 + r01 * a12 + r02 * a22,
-            )
-            r10, r11, r12 = (
-                r10 * a00 + r11 * a10 + r12 * a20,
-                r10 * a01 + r11 * a11 + r12 * a21,
-                r10 * a02 + r11 * a12 + r12 * a22,
-            )
-            r20, r21, r22 = (
-                r20 * a00 + r21 * a10 + r22 * a20,
-                r20 * a01 + r21 * a11 + r22 * a21,
-                r20 * a02 + r21 * a12 + r22 * a22,
-            )
-        ux, uy, uz = axis[k, 0], axis[k, 1], axis[k, 2]
-        wx = r00 * ux + r01 * uy + r02 * uz
-        wy = r10 * ux + r11 * uy + r12 * uz
-        wz = r20 * ux + r21 * uy + r22 * uz
-        org[k, 0], org[k, 1], org[k, 2] = px, py, pz
-        org[k, 3], org[k, 4], org[k, 5] = wx, wy, wz
-        qk = q[col[k]]
-        if kind[k] == 1:
-            px += wx * qk
-            py += wy * qk
-            pz += wz * qk
-            continue
-        c = np.cos(qk)
-        s = np.sin(qk)
-        if plain[k] == 2 or (ux == 0.0 and uy == 0.0 and uz == 1.0):
-            r00, r01 = c * r00 + s * r01, c * r01 - s * r00
-            r10, r11 = c * r10 + s * r11, c * r11 - s * r10
-            r20, r21 = c * r20 + s * r21, c * r21 - s * r20
-            continue
-        v = 1.0 - c
-        e00 = c + v * ux * ux
-        e01 = v * ux * uy - s * uz
-        e02 = v * ux * uz + s * uy
-        e10 = v * uy * ux + s * uz
-        e11 = c + v * uy * uy
-        e12 = v * uy * uz - s * ux
-        e20 = v * uz * ux - s * uy
-        e21 = v * uz * uy + s * ux
-        e22 = c + v * uz * uz
-        r00, r01, r02 = (
-            r00 * e00 + r01 * e10 + r02 * e20,
-            r00 * e01 + r01 * e11 + r02 * e21,
-            r00 * e02 + r01 * e12 + r02 * e22,
-        )
-        r10, r11, r12 = (
-            r10 * e00 + r11 * e10 + r12 * e20,
-            r10 * e01 + r11 * e11 + r12 * e21,
-            r10 * e02 + r11 * e12 + r12 * e22,
-        )
-        r20, r21, r22 = (
-            r20 * e00 + r21 * e10 + r22 * e20,
-            r20 * e01 + r21 * e11 + r22 * e21,
-            r20 * e02 + r21 * e12 + r22 * e22,
-        )
-    tx, ty, tz = trans[m, 0], trans[m, 1], trans[m, 2]
-    px += r00 * tx + r01 * ty + r02 * tz
-    py += r10 * tx + r11 * ty + r12 * tz
-    pz += r20 * tx + r21 * ty + r22 * tz
-    a00, a01, a02 = tip_rot[0, 0], tip_rot[0, 1], tip_rot[0, 2]
-    a10, a11, a12 = tip_rot[1, 0], tip_rot[1, 1], tip_rot[1, 2]
-    a20, a21, a22 = tip_rot[2, 0], tip_rot[2, 1], tip_rot[2, 2]
-    t00 = r00 * a00 + r01 * a10 + r02 * a20
-    t01 = r00 * a01 + r01 * a11 + r02 * a21
-    t02 = r00 * a02 + r01 * a12 + r02 * a22
-    t10 = r10 * a00 + r11 * a10 + r12 * a20
-    t11 = r10 * a01 + r11 * a11 + r12 * a21
-    t12 = r10 * a02 + r11 * a12 + r12 * a22
-    t20 = r20 * a00 + r21 * a10 + r22 * a20
-    t21 = r20 * a01 + r21 * a11 + r22 * a21
-    t22 = r20 * a02 + r21 * a12 + r22 * a22
-    if want_pose:
-        out_t[0, 0], out_t[0, 1], out_t[0, 2], out_t[0, 3] = t00, t01, t02, px
-        out_t[1, 0], out_t[1, 1], out_t[1, 2], out_t[1, 3] = t10, t11, t12, py
-        out_t[2, 0], out_t[2, 1], out_t[2, 2], out_t[2, 3] = t20, t21, t22, pz
-        out_t[3, 0], out_t[3, 1], out_t[3, 2], out_t[3, 3] = 0.0, 0.0, 0.0, 1.0
-    if not want_jac:
-        return
-    out_j[:, :] = 0.0
-    for k in range(m):
-        j = col[k]
-        wx, wy, wz = org[k, 3], org[k, 4], org[k, 5]
-        if kind[k] == 1:
-            vx, vy, vz = wx, wy, wz
-            ox = oy = oz = 0.0
-        else:
-            if ref == 1:  # WORLD: velocity of the point at the base origin, o × w
-                qx, qy, qz = org[k, 0], org[k, 1], org[k, 2]
-                vx = qy * wz - qz * wy
-                vy = qz * wx - qx * wz
-                vz = qx * wy - qy * wx
-            else:
-                dx, dy, dz = px - org[k, 0], py - org[k, 1], pz - org[k, 2]
-                vx = wy * dz - wz * dy
-                vy = wz * dx - wx * dz
-                vz = wx * dy - wy * dx
-            ox, oy, oz = wx, wy, wz
-        if ref == 2:  # LOCAL: both parts in the tip axes (R^T)
-            out_j[0, j] += t00 * vx + t10 * vy + t20 * vz
-            out_j[1, j] += t01 * vx + t11 * vy + t21 * vz
-            out_j[2, j] += t02 * vx + t12 * vy + t22 * vz
-            out_j[3, j] += t00 * ox + t10 * oy + t20 * oz
-            out_j[4, j] += t01 * ox + t11 * oy + t21 * oz
-            out_j[5, j] += t02 * ox + t12 * oy + t22 * oz
-        else:
-            out_j[0, j] += vx
-            out_j[1, j] += vy
-            out_j[2, j] += vz
-            out_j[3, j] += ox
-            out_j[4, j] += oy
-            out_j[5, j] += oz
+
+    def __init__(self, arrays: ChainArrays) -> None:
+        m = arrays.rot.shape[0]
+        prot = np.empty((m, 9))
+        ptr = np.empty((m + 1, 3))
+        flags = np.zeros(m + 1, dtype=np.int64)
+        prev_t = np.eye(3)  # A_{j-1}^T
+        for j in range(m):
+            a = _z_to(arrays.axis[j])
+            rot = prev_t @ arrays.rot[j] @ a
+            prot[j] = rot.reshape(-1)
+            ptr[j] = prev_t @ arrays.trans[j]
+            flags[j] = int(np.array_equal(rot, np.eye(3)))
+            prev_t = a.T
+        ptr[m] = prev_t @ arrays.trans[m]
+        tip = prev_t @ arrays.tip_rot
+        flags[m] = int(np.array_equal(tip, np.eye(3)))
+        self.prot = np.ascontiguousarray(prot)
+        self.ptr = np.ascontiguousarray(ptr)
+        self.flags = flags
+        self.tip = np.ascontiguousarray(tip.reshape(-1))
+        self.kind = np.ascontiguousarray(arrays.kind, dtype=np.int64)
+        self.col = np.ascontiguousarray(arrays.col, dtype=np.int64)
+        self.nq = int(arrays.nq)
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _run(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
+def _z_to(u: np.ndarray) -> np.ndarray:
+    """A rotation ``A`` with ``A ez = u`` (unit ``u``); a signed permutation for ±x, ±y, ±z.
+
+    Exact for coordinate axes (no rounding enters the placements); otherwise the columns
+    ``(e1, e2, u)`` of an orthonormal frame completed by Gram–Schmidt.
+    """
+    u = np.asarray(u, dtype=float)
+    for k in range(3):
+        if abs(u[k]) == 1.0 and np.count_nonzero(u) == 1:
+            s = float(u[k])
+            ex, ey = np.zeros(3), np.zeros(3)
+            ex[(k + 1) % 3] = 1.0
+            ey[(k + 2) % 3] = s  # (ex, ey, u) right-handed: ex × ey = s·e_k = u
+            return np.column_stack([ex, ey, u])
+    u = u / np.linalg.norm(u)
+    ref = np.eye(3)[int(np.argmin(np.abs(u)))]
+    e1 = ref - (ref @ u) * u
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    return np.column_stack([e1, e2, u])
+
+
+def aligned(arrays: ChainArrays) -> AlignedPose:
+    """The chain of ``arrays`` with z joint axes (:class:`AlignedPose`)."""
+    return AlignedPose(arrays)
+
+
+def _work(*args: object) -> float:
+    """Interpreted seconds of one :func:`pose_jacobian_kernel` call (its ``work=``)."""
+    prot, qs, first, last, block = args[0], args[6], args[12], args[13], args[14]
+    n = min(int(qs.shape[0]), int(last) * int(block)) - int(first) * int(block)  # type: ignore[attr-defined]
+    return _INTERP_S * max(n, 0) * (1 + int(prot.shape[0]))  # type: ignore[attr-defined]
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, work=_work)
+def pose_jacobian_kernel(
+    prot: np.ndarray,
+    ptr: np.ndarray,
+    flags: np.ndarray,
+    tip: np.ndarray,
     kind: np.ndarray,
     col: np.ndarray,
-    plain: np.ndarray,
-    tip_rot: np.ndarray,
     qs: np.ndarray,
     out_t: np.ndarray,
     out_j: np.ndarray,
     want_pose: bool,
     ref: int,
     want_jac: bool,
+    first_block: int,
+    last_block: int,
+    block: int,
 ) -> None:  # pragma: no cover - compiled
-    n = qs.shape[0]
-    m = max(rot.shape[0], 1)
-    nchunks = (n + _CHUNK - 1) // _CHUNK
-    for c in prange(nchunks):
-        org = np.empty((m, 6))
-        for i in range(c * _CHUNK, min(n, (c + 1) * _CHUNK)):
-            _one(
-                rot, trans, axis, kind, col, plain, tip_rot, qs[i],
-                out_t[i if want_pose else 0], out_j[i if want_jac else 0],
-                want_pose, ref, want_jac, org,
-            )  # fmt: skip
+    """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) for blocks
+    ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq).
 
-
-def plain_flags(arrays: ChainArrays) -> np.ndarray:
-    """Per joint: 1 if its placement rotation is exactly the identity, 2 if its axis is also +z."""
-    ident = np.all(arrays.rot == np.eye(3), axis=(1, 2))
-    zaxis = np.all(arrays.axis == np.array([0.0, 0.0, 1.0]), axis=1)
-    return (ident.astype(np.int64) * (1 + zaxis.astype(np.int64))).astype(np.int64)
+    The chain is an :class:`AlignedPose`: placement ``j`` (``prot[j]``, ``ptr[j]``) then
+    ``Rz(q)`` or ``Tz(q)``; ``ptr[m]`` and ``tip`` place the tip. ``ref``: 0 local world
+    aligned, 1 world (velocity of the point at the base origin), 2 local (tip axes). Only
+    multiply-add contraction (FMA) is allowed to the compiler: no NaN / Inf assumptions.
+    """
+    nconf = qs.shape[0]
+    nq = qs.shape[1]
+    m = kind.shape[0]
+    bsz = block
+    need_rot = want_pose or (want_jac and ref == 2)
+    tip_ident = flags[m] == 1
+    rr = np.empty((9, bsz))
+    pp = np.empty((3, bsz))
+    tt = np.empty((9, bsz)) if need_rot and not tip_ident else rr
+    trig = np.empty((2, bsz))
+    qb = np.empty((max(nq, 1), bsz))
+    jb = np.empty((6, max(nq, 1), bsz))
+    if want_jac and nq > m:  # variables of joints off the path: zero columns
+        jb[:, :, :] = 0.0
+    for blk in range(first_block, last_block):
+        start = blk * bsz
+        nb = min(nconf, start + bsz) - start
+        for c in range(nq):  # the block's q, transposed: the per-joint loops read rows
+            for i in range(nb):
+                qb[c, i] = qs[start + i, c]
+        # rr, pp: the frame of joint j (z = its axis) in the base frame, block-wide
+        if m == 0:
+            for a in range(9):
+                v = 1.0 if a == 0 or a == 4 or a == 8 else 0.0
+                for i in range(nb):
+                    rr[a, i] = v
+            for a in range(3):
+                for i in range(nb):
+                    pp[a, i] = 0.0
+        for j in range(m):
+            t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
+            if j == 0:
+                for a in range(3):
+                    v = ptr[0, a]
+                    for i in range(nb):
+                        pp[a, i] = v
+                for a in range(9):
+                    v = prot[0, a]
+                    for i in range(nb):
+                        rr[a, i] = v
+            else:
+                if t0 != 0.0 or t1 != 0.0 or t2 != 0.0:
+                    for i in range(nb):
+                        pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                        pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                        pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+                if flags[j] == 0:
+                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
+                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
+                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
+                    for i in range(nb):
+                        for b in range(0, 9, 3):
+                            x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                            rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                            rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                            rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+            cj = col[j]
+            if want_jac:  # joint axis w (rr's z column); linear part: o x w (world), else o
+                if kind[j] == 1:
+                    for i in range(nb):
+                        jb[0, cj, i], jb[1, cj, i], jb[2, cj, i] = rr[2, i], rr[5, i], rr[8, i]
+                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = 0.0, 0.0, 0.0
+                elif ref == 1:
+                    for i in range(nb):
+                        wx, wy, wz = rr[2, i], rr[5, i], rr[8, i]
+                        ox, oy, oz = pp[0, i], pp[1, i], pp[2, i]
+                        jb[0, cj, i] = oy * wz - oz * wy
+                        jb[1, cj, i] = oz * wx - ox * wz
+                        jb[2, cj, i] = ox * wy - oy * wx
+                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = wx, wy, wz
+                else:
+                    for i in range(nb):
+                        jb[0, cj, i], jb[1, cj, i], jb[2, cj, i] = pp[0, i], pp[1, i], pp[2, i]
+                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = rr[2, i], rr[5, i], rr[8, i]
+            if kind[j] == 1:
+                for i in range(nb):
+                    qv = qb[cj, i]
+                    pp[0, i] += rr[2, i] * qv
+                    pp[1, i] += rr[5, i] * qv
+                    pp[2, i] += rr[8, i] * qv
+                continue
+            big = False
+            for i in range(nb):
+                qv = qb[cj, i]
+                big |= abs(qv) > POLY_TRIG_MAX
+                trig[0, i], trig[1, i] = sincos(qv)
+            if big:  # an angle beyond the polynomial's range: libm for this joint and block
+                for i in range(nb):
+                    qv = qb[cj, i]
+                    trig[0, i] = np.sin(qv)
+                    trig[1, i] = np.cos(qv)
+            for i in range(nb):
+                sq, cq = trig[0, i], trig[1, i]
+                for b in range(0, 9, 3):
+                    x0, x1 = rr[b, i], rr[b + 1, i]
+                    rr[b, i] = cq * x0 + sq * x1
+                    rr[b + 1, i] = cq * x1 - sq * x0
+        t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
+        for i in range(nb):
+            pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+            pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+            pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+        if need_rot and not tip_ident:  # tt: the tip rotation (rr itself when the identity)
+            a00, a01, a02, a10, a11, a12 = tip[0], tip[1], tip[2], tip[3], tip[4], tip[5]
+            a20, a21, a22 = tip[6], tip[7], tip[8]
+            for i in range(nb):
+                for b in range(0, 9, 3):
+                    x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                    tt[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                    tt[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                    tt[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+        if want_pose:
+            for i in range(nb):
+                r = start + i
+                out_t[r, 0], out_t[r, 1], out_t[r, 2] = tt[0, i], tt[1, i], tt[2, i]
+                out_t[r, 3] = pp[0, i]
+                out_t[r, 4], out_t[r, 5], out_t[r, 6] = tt[3, i], tt[4, i], tt[5, i]
+                out_t[r, 7] = pp[1, i]
+                out_t[r, 8], out_t[r, 9], out_t[r, 10] = tt[6, i], tt[7, i], tt[8, i]
+                out_t[r, 11] = pp[2, i]
+                out_t[r, 12], out_t[r, 13], out_t[r, 14], out_t[r, 15] = 0.0, 0.0, 0.0, 1.0
+        if not want_jac:
+            continue
+        if ref != 1:  # linear parts w x (p - o) of the revolute columns (o stored there)
+            for j in range(m):
+                if kind[j] == 1:
+                    continue
+                cj = col[j]
+                for i in range(nb):
+                    dx = pp[0, i] - jb[0, cj, i]
+                    dy = pp[1, i] - jb[1, cj, i]
+                    dz = pp[2, i] - jb[2, cj, i]
+                    wx, wy, wz = jb[3, cj, i], jb[4, cj, i], jb[5, cj, i]
+                    jb[0, cj, i] = wy * dz - wz * dy
+                    jb[1, cj, i] = wz * dx - wx * dz
+                    jb[2, cj, i] = wx * dy - wy * dx
+        if ref == 2:  # LOCAL: both parts in the tip axes (Tᵀ)
+            for c in range(nq):
+                for i in range(nb):
+                    for h in range(0, 6, 3):
+                        vx, vy, vz = jb[h, c, i], jb[h + 1, c, i], jb[h + 2, c, i]
+                        jb[h, c, i] = tt[0, i] * vx + tt[3, i] * vy + tt[6, i] * vz
+                        jb[h + 1, c, i] = tt[1, i] * vx + tt[4, i] * vy + tt[7, i] * vz
+                        jb[h + 2, c, i] = tt[2, i] * vx + tt[5, i] * vy + tt[8, i] * vz
+        for i in range(nb):
+            r = start + i
+            for a in range(6):
+                for c in range(nq):
+                    out_j[r, a * nq + c] = jb[a, c, i]
 
 
 def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarray:
@@ -243,6 +328,7 @@ def pose_jacobian_batch(
     jacobian: str | None,
     out_pose: np.ndarray | None = None,
     out_jacobian: np.ndarray | None = None,
+    chain: AlignedPose | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of checked configurations ``qs`` (N, nq).
 
@@ -251,9 +337,10 @@ def pose_jacobian_batch(
         qs: C-contiguous float64 (N, nq), already checked by the caller.
         pose: Whether to compute the poses.
         jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
-        out_pose: Optional (N, 4, 4) float64 array to write the poses into (reused buffers
-            skip the page faults of a fresh array: about 40 ms per 1e6 poses here).
+        out_pose: Optional (N, 4, 4) float64 array to write the poses into (a reused buffer
+            skips the page faults of a fresh array).
         out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
+        chain: ``aligned(arrays)`` if the caller keeps it (else derived here, ~30 µs).
 
     Returns:
         ``(poses or None, jacobians or None)``.
@@ -263,14 +350,33 @@ def pose_jacobian_batch(
 
     """
     n = qs.shape[0]
+    nq = arrays.nq
     out_t = _out(out_pose, (n, 4, 4), "out") if pose else np.empty((1, 4, 4))
     want_jac = jacobian is not None
-    out_j = (
-        _out(out_jacobian, (n, 6, arrays.nq), "out") if want_jac else np.empty((1, 6, arrays.nq))
-    )
+    out_j = _out(out_jacobian, (n, 6, nq), "out") if want_jac else np.empty((1, 6, nq))
     ref = REF_CODES[jacobian] if jacobian is not None else 0
-    _run(
-        arrays.rot, arrays.trans, arrays.axis, arrays.kind, arrays.col, plain_flags(arrays),
-        arrays.tip_rot, qs, out_t, out_j, pose, ref, want_jac,
-    )  # fmt: skip
+    al = aligned(arrays) if chain is None else chain
+    flat_t = out_t.reshape(out_t.shape[0], 16)
+    flat_j = out_j.reshape(out_j.shape[0], 6 * nq)
+    nblocks = -(-n // BLOCK)
+    nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
+    per = -(-nblocks // nwork)
+
+    def run(w: int) -> None:
+        pose_jacobian_kernel(
+            al.prot, al.ptr, al.flags, al.tip, al.kind, al.col, qs, flat_t, flat_j,
+            pose, ref, want_jac, w * per, min(nblocks, (w + 1) * per), BLOCK,
+        )  # fmt: skip
+
+    if nwork == 1:
+        run(0)
+    else:  # the kernel releases the GIL: plain threads run it in parallel
+        workers = [threading.Thread(target=run, args=(w,)) for w in range(1, nwork)]
+        for t in workers:
+            t.start()
+        try:
+            run(0)
+        finally:
+            for t in workers:
+                t.join()
     return (out_t if pose else None), (out_j if want_jac else None)

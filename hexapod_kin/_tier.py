@@ -14,7 +14,7 @@ of two tiers per call, like a JIT virtual machine:
 
 The choice is the ski-rental rule: a kernel runs interpreted while the interpreted seconds it
 has cost in this process plus the predicted cost of this call stay within its compile budget
-(:data:`BUDGET_S`, about what compiling one of the bigger kernels costs), then it compiles once.
+(``compile_s``, about what compiling it costs; :data:`COMPILE_S` by default), then it compiles once.
 The prediction is ``work(*args)``, a kernel's own estimate of its interpreted seconds (given
 where the cost scales with the input: samples, steps, iterations), else the measured cost of
 its previous interpreted calls, else the element count of its array arguments at 1 µs each.
@@ -39,12 +39,22 @@ from numba.core import types as nbtypes
 from numba.core.dispatcher import Dispatcher
 from numba.extending import typeof_impl
 
-__all__ = ["BUDGET_S", "Kernel", "compiled", "interpreted", "mode", "njit", "pending", "set_mode"]
+__all__ = [
+    "COMPILE_S",
+    "PER_UNIT_S",
+    "Kernel",
+    "compiled",
+    "interpreted",
+    "mode",
+    "njit",
+    "pending",
+    "set_mode",
+]
 
-#: Interpreted seconds a kernel may spend in one process before it is compiled.
-BUDGET_S = 1.0
-#: Interpreted seconds per array element for kernels without a ``work`` estimate.
-_PER_ELEMENT_S = 1e-6
+#: Default interpreted seconds a kernel may spend in one process before it is compiled.
+COMPILE_S = 1.0
+#: Default first guess of interpreted seconds per unit of work (per array element).
+PER_UNIT_S = 1e-5
 _MODES = ("auto", "always", "never")
 _lock = threading.Lock()
 _all: list[Kernel] = []
@@ -92,10 +102,17 @@ class Kernel:
     Attributes:
         dispatcher: The numba dispatcher (what other kernels call).
         py_func: The Python source function.
+        compile_s: This kernel's interpreted budget in [s] (about its compile time).
 
     """
 
-    def __init__(self, dispatcher: Dispatcher, work: Callable[..., float] | None) -> None:
+    def __init__(
+        self,
+        dispatcher: Dispatcher,
+        work: Callable[..., float] | None,
+        per_unit_s: float,
+        compile_s: float,
+    ) -> None:
         self.dispatcher = dispatcher
         self.py_func = dispatcher.py_func
         self.__name__ = self.py_func.__name__
@@ -103,18 +120,18 @@ class Kernel:
         self.__module__ = self.py_func.__module__
         self.__doc__ = self.py_func.__doc__
         self.__wrapped__ = self.py_func
+        self.compile_s = compile_s
         self._work = work
+        self._rate = per_unit_s
         self._ready = False
         self._fast = False
         self._disk_checked = False
         self._spent = 0.0
-        self._per_call = -1.0
         self._twin: Callable[..., Any] | None = None
 
     def __repr__(self) -> str:
         return f"<kernel {self.__module__}.{self.__qualname__}>"
 
-    # -- tiers ---------------------------------------------------------------------------
     def ready(self) -> bool:
         """True when calling compiled costs no compilation (in memory, or in numba's cache)."""
         if self._ready:
@@ -126,6 +143,31 @@ class Kernel:
             self._ready = _on_disk(self.dispatcher)
         return self._ready
 
+    def prefer_interpreted(self, predicted_s: float) -> bool:
+        """The rule for a caller with an interpreted path of its own (then :meth:`charge` it).
+
+        Args:
+            predicted_s: Predicted seconds of that path for this call.
+
+        Returns:
+            True to run the interpreted path: mode ``never``, or mode ``auto`` while the
+            kernel is neither compiled nor cached and its interpreted seconds (spent and
+            predicted) stay within :attr:`compile_s`.
+
+        """
+        if _mode == "never":
+            return True
+        if _mode == "always" or self.ready():
+            return False
+        if self._spent + predicted_s > self.compile_s:
+            self._ready = True  # compile now: later calls go straight to machine code
+            return False
+        return True
+
+    def charge(self, seconds: float) -> None:
+        """Count ``seconds`` spent on an interpreted path toward this kernel's budget."""
+        self._spent += seconds
+
     def interpreted(self) -> Callable[..., Any]:
         """The same source as a plain Python function whose callees are interpreted too."""
         if self._twin is None:
@@ -134,12 +176,10 @@ class Kernel:
                     self._twin = _twin(self.dispatcher, {})
         return self._twin
 
-    def _predict(self, args: tuple[Any, ...]) -> float:
+    def _units(self, args: tuple[Any, ...]) -> float:
         if self._work is not None:
-            return float(self._work(*args))
-        if self._per_call >= 0.0:
-            return self._per_call
-        return _PER_ELEMENT_S * sum(a.size for a in args if isinstance(a, np.ndarray))
+            return max(float(self._work(*args)), 1.0)
+        return float(max(sum(a.size for a in args if isinstance(a, np.ndarray)), 1))
 
     def __call__(self, *args: Any) -> Any:
         if self._fast:
@@ -147,17 +187,16 @@ class Kernel:
         return self._tiered(args)
 
     def _tiered(self, args: tuple[Any, ...]) -> Any:
-        if _mode == "always" or (_mode == "auto" and self.ready()):
-            self._fast = True
-            return self.dispatcher(*args)
-        if _mode == "auto" and self._spent + self._predict(args) > BUDGET_S:
-            self._ready = self._fast = True
+        units = self._units(args) if _mode == "auto" else 1.0
+        if not self.prefer_interpreted(self._rate * units):
+            self._fast = _mode != "never"
             return self.dispatcher(*args)
         t0 = time.perf_counter()
         out = self.interpreted()(*args)
         dt = time.perf_counter() - t0
         self._spent += dt
-        self._per_call = dt if self._per_call < 0.0 else 0.5 * (self._per_call + dt)
+        if _mode == "auto":  # learn the interpreted seconds per unit (the first call included)
+            self._rate = 0.5 * (self._rate + dt / units)
         return out
 
 
@@ -170,7 +209,7 @@ def _typeof_kernel(val: Kernel, c: Any) -> Any:
 def _on_disk(disp: Dispatcher) -> bool:
     """Whether numba's on-disk cache holds fresh machine code of ``disp`` for this CPU."""
     try:
-        cache = disp._cache
+        cache = disp._cache  # type: ignore[attr-defined]
         index = cache._cache_file._load_index()
         magic = disp.targetctx.codegen().magic_tuple()
         return any(isinstance(k, tuple) and len(k) > 1 and k[1] == magic for k in index)
@@ -181,7 +220,7 @@ def _on_disk(disp: Dispatcher) -> bool:
 def _twin(disp: Dispatcher, seen: dict[Any, Any]) -> Callable[..., Any]:
     """A plain function running ``disp``'s source; every kernel it names is a twin too."""
     if disp in seen:
-        return seen[disp]  # type: ignore[no-any-return]
+        return seen[disp]
     f = disp.py_func
     glb: dict[str, Any] = dict(f.__globals__)
     cells = None
@@ -210,18 +249,28 @@ def _dispatcher_of(value: Any) -> Dispatcher | None:
     return None
 
 
-def njit(*args: Any, work: Callable[..., float] | None = None, **options: Any) -> Any:
-    """``numba.njit`` returning a :class:`Kernel` (same options, plus ``work``).
+def njit(
+    *args: Any,
+    work: Callable[..., float] | None = None,
+    per_unit_s: float = PER_UNIT_S,
+    compile_s: float = COMPILE_S,
+    **options: Any,
+) -> Any:
+    """``numba.njit`` returning a :class:`Kernel` (same options, plus the tier hints).
 
     Args:
         *args: The function (bare decorator use) or nothing.
-        work: Optional estimate of one call's interpreted seconds from its arguments.
+        work: Units of work of one call from its arguments (steps, samples, iterations...);
+            default: the element count of its array arguments.
+        per_unit_s: First guess of the interpreted seconds per unit (then learned).
+        compile_s: Interpreted seconds allowed in one process before compiling (about the
+            kernel's compile time, measured with ``tools/bench_startup.py --profile``).
         **options: numba options (``cache``, ``nogil``, ``parallel``, ``inline``...).
 
     """
 
     def wrap(func: Callable[..., Any]) -> Kernel:
-        kernel = Kernel(numba.njit(**options)(func), work)
+        kernel = Kernel(numba.njit(**options)(func), work, per_unit_s, compile_s)
         _all.append(kernel)
         return kernel
 

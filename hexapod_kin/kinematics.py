@@ -191,6 +191,11 @@ class KinematicModel(Model):
     def _batch_q(self, qs: Any) -> np.ndarray:
         return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
 
+    def _batch_chain(self) -> Any:
+        from ._batch import aligned
+
+        return self.cached("batch.aligned", lambda: aligned(self.arrays))
+
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), compiled.
 
@@ -209,8 +214,9 @@ class KinematicModel(Model):
         from ._batch import pose_jacobian_batch
 
         poses, _ = pose_jacobian_batch(
-            self.arrays, self._batch_q(qs), pose=True, jacobian=None, out_pose=out
-        )
+            self.arrays, self._batch_q(qs), pose=True, jacobian=None, out_pose=out,
+            chain=self._batch_chain(),
+        )  # fmt: skip
         assert poses is not None
         return poses
 
@@ -236,8 +242,9 @@ class KinematicModel(Model):
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
         _, jac = pose_jacobian_batch(
-            self.arrays, self._batch_q(qs), pose=False, jacobian=key, out_jacobian=out
-        )
+            self.arrays, self._batch_q(qs), pose=False, jacobian=key, out_jacobian=out,
+            chain=self._batch_chain(),
+        )  # fmt: skip
         assert jac is not None
         return jac
 
@@ -249,7 +256,9 @@ class KinematicModel(Model):
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
-        poses, jac = pose_jacobian_batch(self.arrays, self._batch_q(qs), pose=True, jacobian=key)
+        poses, jac = pose_jacobian_batch(
+            self.arrays, self._batch_q(qs), pose=True, jacobian=key, chain=self._batch_chain()
+        )
         assert poses is not None and jac is not None
         return poses, jac
 

@@ -19,3 +19,27 @@ def preset_models():
     from hexapod_kin import load
 
     return {name: load(name) for name in robots.names()}
+
+
+@pytest.fixture
+def jit_always():
+    """Compiled tier for every kernel call of the test (tests of the compiled code itself)."""
+    from hexapod_kin import _tier
+
+    before = _tier.set_mode("always")
+    try:
+        yield
+    finally:
+        _tier.set_mode(before)
+
+
+@pytest.fixture
+def jit_never():
+    """Interpreted tier for every kernel call of the test (the same source run by Python)."""
+    from hexapod_kin import _tier
+
+    before = _tier.set_mode("never")
+    try:
+        yield
+    finally:
+        _tier.set_mode(before)

@@ -270,7 +270,14 @@ def _advance(
                 q[i] = upper[i]
 
 
-@njit(cache=True, nogil=True)
+@njit(
+    cache=True,
+    nogil=True,
+    # interpreted: about 7 µs per RK4 stage and squared joint count; compiles in about 5 s
+    work=lambda *a: a[16].shape[0] * (4 if a[10] else 1) * a[6].shape[0] ** 2,
+    per_unit_s=7e-6,
+    compile_s=5.0,
+)
 def _rr3(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -423,7 +430,13 @@ def _rr3(
         _advance(q, k1, k2, k3, k4, dt, rk4, lims[0], lims[1], use_limits)
 
 
-@njit(cache=True, nogil=True)
+@njit(
+    cache=True,
+    nogil=True,
+    work=lambda *a: a[18].shape[0] * (4 if a[11] else 1) * a[6].shape[0] ** 2,
+    per_unit_s=1e-5,
+    compile_s=5.0,
+)
 def _rr6(
     rot: np.ndarray,
     trans: np.ndarray,

@@ -20,6 +20,7 @@ loaded 1-DOF serial chain, catalogue or URDF.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +30,7 @@ import numpy as np
 from .. import _kernels
 from .._numerics import chain_length
 from ..exceptions import ConfigurationError, ParameterError, choices
+from ._kernel import measures_kernel
 from ._plan import compute, output_arrays
 from .rows import ROW_NAMES, choose_rows, row_names
 
@@ -264,7 +266,31 @@ def measures_batch(
                 o[...] = r
             res = (out[0], out[1], out[2], out[3])
         return MeasuresBatch(*res, rows=names)
+    if measures_kernel.prefer_interpreted(n * _REFERENCE_S):
+        # cold kernel, small batch: Pinocchio's Jacobians and numpy's SVD answer in
+        # milliseconds where compiling the fused kernel takes seconds (see hexapod_kin._tier)
+        t0 = time.perf_counter()
+        res = _measures_numpy(_pinocchio_jacobians(mdl, q)[:, sel, :])
+        measures_kernel.charge(time.perf_counter() - t0)
+        if out is not None:
+            for o, r in zip(out, res):
+                o[...] = r
+            res = (out[0], out[1], out[2], out[3])
+        return MeasuresBatch(*res, rows=names)
     if out is None:
         out = output_arrays(n)
     compute(mdl, q, sel, out)
     return MeasuresBatch(out[0], out[1], out[2], out[3], rows=names)
+
+
+#: Seconds per configuration of the Pinocchio + numpy path (Jacobian call and SVD).
+_REFERENCE_S = 6e-6
+
+
+def _pinocchio_jacobians(mdl: Any, q: np.ndarray) -> np.ndarray:
+    """(N, 6, nq) LOCAL_WORLD_ALIGNED Jacobians of the tip, one Pinocchio call each."""
+    jac = np.empty((q.shape[0], 6, q.shape[1]))
+    one = mdl.jacobian
+    for i in range(q.shape[0]):
+        jac[i] = one(q[i], "local_world_aligned")
+    return jac
