@@ -25,6 +25,8 @@ pays: ``work=`` estimates the interpreted seconds of a call from its configurati
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
@@ -42,8 +44,12 @@ REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
 BLOCK = 256
 #: Fewest configurations per thread (below this, one thread: starting threads costs more).
 MIN_PER_THREAD = 16_384
-#: Interpreted seconds per configuration and joint (measured, CPython 3.11; ``work=``).
+#: Interpreted seconds per unit of :func:`_work` (measured: 5–10 µs, CPython 3.11).
 _INTERP_S = 6e-6
+#: Cold compile time of :func:`pose_jacobian_kernel` in [s] (its interpreted budget).
+_COMPILE_S = 3.0
+#: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
+Q_MAX = 1e150
 
 
 class AlignedPose:
@@ -113,14 +119,27 @@ def aligned(arrays: ChainArrays) -> AlignedPose:
     return AlignedPose(arrays)
 
 
-def _work(*args: object) -> float:
-    """Interpreted seconds of one :func:`pose_jacobian_kernel` call (its ``work=``)."""
-    prot, qs, first, last, block = args[0], args[6], args[12], args[13], args[14]
-    n = min(int(qs.shape[0]), int(last) * int(block)) - int(first) * int(block)  # type: ignore[attr-defined]
-    return _INTERP_S * max(n, 0) * (1 + int(prot.shape[0]))  # type: ignore[attr-defined]
+def _work(*args: Any) -> float:
+    """Units of work of one :func:`pose_jacobian_kernel` call (its ``work=``).
+
+    Configurations × (m + 1) × requested outputs; about :data:`_INTERP_S` interpreted seconds
+    each.
+    """
+    prot, qs, want_pose, want_jac = args[0], args[6], args[9], args[11]
+    first, last, block = int(args[12]), int(args[13]), int(args[14])
+    n = max(min(int(qs.shape[0]), last * block) - first * block, 0)
+    return float(n * (1 + int(prot.shape[0])) * (int(want_pose) + int(want_jac)))
 
 
-@njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, work=_work)
+@njit(
+    cache=True,
+    nogil=True,
+    error_model="numpy",
+    fastmath={"contract"},
+    work=_work,
+    per_unit_s=_INTERP_S,
+    compile_s=_COMPILE_S,
+)
 def pose_jacobian_kernel(
     prot: np.ndarray,
     ptr: np.ndarray,
@@ -137,14 +156,20 @@ def pose_jacobian_kernel(
     first_block: int,
     last_block: int,
     block: int,
-) -> None:  # pragma: no cover - compiled
-    """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) for blocks
-    ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq).
+) -> bool:  # pragma: no cover - compiled
+    """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
 
-    The chain is an :class:`AlignedPose`: placement ``j`` (``prot[j]``, ``ptr[j]``) then
-    ``Rz(q)`` or ``Tz(q)``; ``ptr[m]`` and ``tip`` place the tip. ``ref``: 0 local world
-    aligned, 1 world (velocity of the point at the base origin), 2 local (tip axes). Only
-    multiply-add contraction (FMA) is allowed to the compiler: no NaN / Inf assumptions.
+    Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq). The
+    chain is an :class:`AlignedPose`: placement ``j`` (``prot[j]``, ``ptr[j]``) then ``Rz(q)``
+    or ``Tz(q)``; ``ptr[m]`` and ``tip`` place the tip. ``ref``: 0 local world aligned, 1
+    world (velocity of the point at the base origin), 2 local (tip axes). Only multiply-add
+    contraction (FMA) is allowed to the compiler: no NaN / Inf assumptions.
+
+    Returns:
+        Whether a value of ``q`` in these blocks is non-finite or ``|q| >= 1e150`` (the
+        caller raises; the outputs of such rows are meaningless but no memory outside them is
+        written).
+
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -160,12 +185,15 @@ def pose_jacobian_kernel(
     jb = np.empty((6, max(nq, 1), bsz))
     if want_jac and nq > m:  # variables of joints off the path: zero columns
         jb[:, :, :] = 0.0
+    ok = True
     for blk in range(first_block, last_block):
         start = blk * bsz
         nb = min(nconf, start + bsz) - start
         for c in range(nq):  # the block's q, transposed: the per-joint loops read rows
             for i in range(nb):
-                qb[c, i] = qs[start + i, c]
+                qv = qs[start + i, c]
+                qb[c, i] = qv
+                ok &= abs(qv) < Q_MAX  # False for NaN too
         # rr, pp: the frame of joint j (z = its axis) in the base frame, block-wide
         if m == 0:
             for a in range(9):
@@ -295,6 +323,7 @@ def pose_jacobian_kernel(
             for a in range(6):
                 for c in range(nq):
                     out_j[r, a * nq + c] = jb[a, c, i]
+    return not ok
 
 
 def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarray:
@@ -329,24 +358,31 @@ def pose_jacobian_batch(
     out_pose: np.ndarray | None = None,
     out_jacobian: np.ndarray | None = None,
     chain: AlignedPose | None = None,
+    check: Callable[[], object] | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of checked configurations ``qs`` (N, nq).
+    """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of configurations ``qs`` (N, nq).
 
     Args:
         arrays: The chain (``Model.arrays``).
-        qs: C-contiguous float64 (N, nq), already checked by the caller.
+        qs: C-contiguous float64 (N, nq). Its values are checked by the kernel on the way
+            (finite, ``|q| < 1e150``); when one is not, ``check()`` is called to raise.
         pose: Whether to compute the poses.
         jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
         out_pose: Optional (N, 4, 4) float64 array to write the poses into (a reused buffer
             skips the page faults of a fresh array).
         out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
         chain: ``aligned(arrays)`` if the caller keeps it (else derived here, ~30 µs).
+        check: Raises the caller's error for ``qs`` (e.g. ``Model.check_q_batch``); called
+            only when a value is out of range.
 
     Returns:
         ``(poses or None, jacobians or None)``.
 
     Raises:
         ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.
+        ConfigurationError: A non-finite or too large value in ``qs`` (from ``check``, or
+            this module's message when ``check`` is ``None`` or returns); the ``out_*``
+            contents are then unspecified.
 
     """
     n = qs.shape[0]
@@ -361,9 +397,10 @@ def pose_jacobian_batch(
     nblocks = -(-n // BLOCK)
     nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
     per = -(-nblocks // nwork)
+    bad = [False] * nwork
 
     def run(w: int) -> None:
-        pose_jacobian_kernel(
+        bad[w] = pose_jacobian_kernel(
             al.prot, al.ptr, al.flags, al.tip, al.kind, al.col, qs, flat_t, flat_j,
             pose, ref, want_jac, w * per, min(nblocks, (w + 1) * per), BLOCK,
         )  # fmt: skip
@@ -379,4 +416,10 @@ def pose_jacobian_batch(
         finally:
             for t in workers:
                 t.join()
+    if any(bad):
+        if check is not None:
+            check()
+        from .exceptions import ConfigurationError
+
+        raise ConfigurationError(f"Q contains non-finite values or values with |x| >= {Q_MAX:g}")
     return (out_t if pose else None), (out_j if want_jac else None)

@@ -189,7 +189,23 @@ class KinematicModel(Model):
 
     # -------------------------------------------------------------- batch calls
     def _batch_q(self, qs: Any) -> np.ndarray:
+        """``qs`` as C-contiguous float64 (N, nq), shape checked.
+
+        A C-contiguous float64 (N, nq) array passes as it is: the batch kernel checks its
+        values on the way and :meth:`_batch_check` raises the message of ``check_q_batch``.
+        """
+        if (
+            isinstance(qs, np.ndarray)
+            and qs.dtype == np.float64
+            and qs.ndim == 2
+            and qs.shape[1] == self.nq
+            and qs.flags.c_contiguous
+        ):
+            return qs
         return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
+
+    def _batch_check(self, qs: np.ndarray) -> Any:
+        return lambda: self.check_q_batch(qs, "Q")
 
     def _batch_chain(self) -> Any:
         from ._batch import aligned
@@ -213,9 +229,10 @@ class KinematicModel(Model):
         """
         from ._batch import pose_jacobian_batch
 
+        q = self._batch_q(qs)
         poses, _ = pose_jacobian_batch(
-            self.arrays, self._batch_q(qs), pose=True, jacobian=None, out_pose=out,
-            chain=self._batch_chain(),
+            self.arrays, q, pose=True, jacobian=None, out_pose=out,
+            chain=self._batch_chain(), check=self._batch_check(q),
         )  # fmt: skip
         assert poses is not None
         return poses
@@ -241,9 +258,10 @@ class KinematicModel(Model):
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
+        q = self._batch_q(qs)
         _, jac = pose_jacobian_batch(
-            self.arrays, self._batch_q(qs), pose=False, jacobian=key, out_jacobian=out,
-            chain=self._batch_chain(),
+            self.arrays, q, pose=False, jacobian=key, out_jacobian=out,
+            chain=self._batch_chain(), check=self._batch_check(q),
         )  # fmt: skip
         assert jac is not None
         return jac
@@ -256,9 +274,11 @@ class KinematicModel(Model):
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
+        q = self._batch_q(qs)
         poses, jac = pose_jacobian_batch(
-            self.arrays, self._batch_q(qs), pose=True, jacobian=key, chain=self._batch_chain()
-        )
+            self.arrays, q, pose=True, jacobian=key, chain=self._batch_chain(),
+            check=self._batch_check(q),
+        )  # fmt: skip
         assert poses is not None and jac is not None
         return poses, jac
 

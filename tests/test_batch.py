@@ -1,0 +1,134 @@
+"""Batch FK / Jacobians (``fk_batch``, ``jacobian_batch``, ``fk_jacobian_batch``) vs Pinocchio.
+
+Every result is compared with raw Pinocchio calls on the same model (its own ``Data``), in the
+three reference frames, on random configurations spread over the kernel's blocks and threads,
+with angles beyond the polynomial sin / cos range (the libm path), and with the kernel run
+interpreted (the tier a small cold call takes) as well as compiled.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import _batch, _tier
+from hexapod_kin.exceptions import ConfigurationError
+
+SOURCES = [
+    ("hexabot_leg", {}),
+    ("scara", {}),
+    ("examples/leg4.toml", {}),
+    ("erd:ur5_robot", {}),
+    ("erd:solo12", {"tip": "FL_FOOT"}),
+    ("erd:panda", {}),  # nq = 9 > 7 joints on the path: zero columns
+]
+REFS = {
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+    "world": pin.ReferenceFrame.WORLD,
+    "local": pin.ReferenceFrame.LOCAL,
+}
+
+
+def _pinocchio(model, q):
+    """Pose and the three Jacobians of ``q`` by raw Pinocchio, in the model's base frame."""
+    m, d = model.model, model.model.createData()
+    base = model.baseMo
+    pin.forwardKinematics(m, d, q)
+    pose = (base * pin.updateFramePlacement(m, d, model.tip_id)).homogeneous
+    jacs = {}
+    for ref, pref in REFS.items():
+        jac = pin.computeFrameJacobian(m, d, q, model.tip_id, pref)
+        if ref == "world":
+            jac = base.action @ jac
+        elif ref == "local_world_aligned":
+            jac = np.vstack([base.rotation @ jac[:3], base.rotation @ jac[3:]])
+        jacs[ref] = jac
+    return pose, jacs
+
+
+def _configs(model, n, seed):
+    qs = model.random_q(n, seed=seed)
+    revolute = model.arrays.kind == 0
+    if revolute.any():  # beyond the polynomial sin / cos range: libm for that block
+        qs[n // 3, model.arrays.col[revolute]] = [2.5e5 * (-1) ** k for k in range(revolute.sum())]
+    return qs
+
+
+def _rows(n):
+    """Rows to check: both ends of every thread's range and of some blocks, and random ones."""
+    block = _batch.BLOCK
+    rows = {0, 1, n - 1, n // 2 - 1, n // 2, n // 3, block - 1, block, 2 * block + 7}
+    rows |= set(np.random.default_rng(0).integers(0, n, 40).tolist())
+    return sorted(r for r in rows if 0 <= r < n)
+
+
+@pytest.mark.parametrize(("source", "kw"), SOURCES)
+def test_batch_equals_pinocchio_in_every_frame(source, kw, jit_always):
+    model = hk.load(source, **kw)
+    n = 2 * _batch.MIN_PER_THREAD + 3 * _batch.BLOCK + 5  # two threads, a partial last block
+    qs = _configs(model, n, seed=11)
+    poses = model.fk_batch(qs)
+    jacs = {ref: model.jacobian_batch(qs, ref) for ref in REFS}
+    both = model.fk_jacobian_batch(qs, "local")
+    assert poses.shape == (n, 4, 4) and jacs["local"].shape == (n, 6, model.nq)
+    np.testing.assert_array_equal(both[0], poses)
+    np.testing.assert_array_equal(both[1], jacs["local"])
+    for i in _rows(n):
+        pose, ref_jacs = _pinocchio(model, qs[i])
+        np.testing.assert_allclose(poses[i], pose, rtol=0, atol=1e-12, err_msg=f"row {i}")
+        for ref, jac in ref_jacs.items():
+            np.testing.assert_allclose(jacs[ref][i], jac, rtol=0, atol=1e-12, err_msg=ref)
+
+
+@pytest.mark.parametrize(("source", "kw"), SOURCES)
+def test_interpreted_kernel_gives_the_same_numbers(source, kw):
+    model = hk.load(source, **kw)
+    qs = _configs(model, 7, seed=5)
+    before = _tier.set_mode("never")
+    try:
+        slow = {ref: model.fk_jacobian_batch(qs, ref) for ref in REFS}
+        slow_fk = model.fk_batch(qs)
+    finally:
+        _tier.set_mode(before)
+    before = _tier.set_mode("always")
+    try:
+        fast = {ref: model.fk_jacobian_batch(qs, ref) for ref in REFS}
+    finally:
+        _tier.set_mode(before)
+    np.testing.assert_array_equal(slow_fk, slow["local"][0])
+    for ref in REFS:
+        np.testing.assert_allclose(slow[ref][0], fast[ref][0], rtol=0, atol=1e-14)
+        np.testing.assert_allclose(slow[ref][1], fast[ref][1], rtol=0, atol=1e-14)
+    for i, q in enumerate(qs):
+        pose, ref_jacs = _pinocchio(model, q)
+        np.testing.assert_allclose(slow_fk[i], pose, rtol=0, atol=1e-12)
+        for ref, jac in ref_jacs.items():
+            np.testing.assert_allclose(slow[ref][1][i], jac, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"), [(np.nan, "non-finite"), (-np.inf, "non-finite"), (1e151, "too large")]
+)
+def test_values_checked_inside_the_kernel_raise_the_model_message(bad, message, jit_always):
+    model = hk.load("hexabot_leg")
+    qs = model.random_q(3 * _batch.MIN_PER_THREAD, seed=2)
+    qs[-5, 1] = bad  # in the second thread's range
+    for call in (model.fk_batch, model.jacobian_batch, model.fk_jacobian_batch):
+        with pytest.raises(ConfigurationError, match=message):
+            call(qs)
+    out = np.empty((len(qs), 4, 4))
+    with pytest.raises(ConfigurationError, match=message):
+        model.fk_batch(qs, out=out)
+
+
+def test_aligned_chain_rotations_map_z_to_the_axis():
+    rng = np.random.default_rng(3)
+    axes = [np.eye(3)[k] * s for k in range(3) for s in (1.0, -1.0)]
+    axes += [v / np.linalg.norm(v) for v in rng.normal(size=(20, 3))]
+    for u in axes:
+        a = _batch._z_to(u)
+        np.testing.assert_allclose(a @ [0.0, 0.0, 1.0], u, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(a.T @ a, np.eye(3), rtol=0, atol=1e-15)
+        assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-15)
