@@ -38,9 +38,14 @@ COMMANDS: dict[str, list[str]] = {
     "urdf": ["urdf", "hexabot_leg", "-o", "{out}/leg.urdf"],
     "fk": ["fk", "hexabot_leg", "--q", "0", "0.5", "-1"],
     "jacobian": ["jacobian", "hexabot_leg", "--q", "0", "0.5", "-1"],
-    "ik": ["ik", "hexabot_leg", "--target", "0.25", "0.05", "-0.1"],
+    "ik": ["ik", "hexabot_leg", "--target", "0.25", "0.05", "-0.1"],  # out of reach: numerical
+    "ik-reach": ["ik", "hexabot_leg", "--target", "0.15", "0.05", "-0.1"],
+    "ik-pose": ["ik", "erd:ur5_robot", "--pose", "0.4", "0.2", "0.3", "3.1", "0.1", "0"],
     "step": ["step", "hexabot_leg", "--duration", "1", "--no-baseline"],
+    "step-default": ["step", "hexabot_leg"],
+    "step-twist": ["step", "erd:ur5_robot", "--twist", "0", "0", "0.01", "0", "0", "0.1"],
     "scan": ["scan", "hexabot_leg"],
+    "scan-ur5": ["scan", "erd:ur5_robot"],
     "derive": ["derive", "hexabot_leg"],
     "demo": ["demo", "--out", "{out}/demo"],
     "animate": ["animate", "hexabot_leg", "--html", "{out}/anim.html"],
@@ -74,8 +79,14 @@ def _cli() -> list[str]:
     return [sys.executable, "-m", "hexapod_kin"]
 
 
+#: The tier rule of the timed processes (``--jit``): ``auto`` is what users get; ``always``
+#: compiles every kernel on its first call (the cost the interpreted tier avoids).
+_JIT = {"mode": "auto"}
+
+
 def _env(cache: Path | None) -> dict[str, str]:
     env = dict(os.environ)
+    env["HEXAPOD_KIN_JIT"] = _JIT["mode"]
     if cache is not None:
         env["NUMBA_CACHE_DIR"] = str(cache / "numba")
         env["HEXAPOD_KIN_CACHE_DIR"] = str(cache / "hexapod_kin")
@@ -239,7 +250,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--profile", choices=sorted(COMMANDS), help="compile seconds per kernel of one cold command"
     )
+    parser.add_argument(
+        "--jit",
+        choices=("auto", "always"),
+        default="auto",
+        help="tier rule of the timed processes (always: compile every kernel, as before tiers)",
+    )
     args = parser.parse_args(argv)
+    _JIT["mode"] = args.jit
     if args.profile:
         print(compile_profile(args.profile))
         return 0

@@ -1,0 +1,216 @@
+"""Tiered kernels (hexapod_kin._tier): both tiers give the same numbers; the rule picks right."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import _tier
+from hexapod_kin.exceptions import ParameterError
+
+
+@_tier.njit(cache=False, compile_s=0.5)
+def _inner(x: np.ndarray, i: int) -> float:  # pragma: no cover - also compiled
+    return x[i] * 2.0
+
+
+@_tier.njit(cache=False, work=lambda x, reps: x.size * reps, per_unit_s=1e-6, compile_s=0.5)
+def _outer(x: np.ndarray, reps: int) -> float:  # pragma: no cover - also compiled
+    s = 0.0
+    for _ in range(reps):
+        for i in range(x.shape[0]):
+            s += _inner(x, i)
+    return s
+
+
+@_tier.njit(cache=False, compile_s=0.5)
+def _lone(x: np.ndarray, i: int) -> float:  # pragma: no cover - also compiled
+    return x[i] * 2.0 + 0.0
+
+
+def _fresh(kernel: _tier.Kernel) -> None:
+    """Forget what the rule learned (the dispatchers of these test kernels are never cached)."""
+    kernel._ready = kernel._fast = False
+    kernel._spent = 0.0
+
+
+@pytest.fixture
+def auto():
+    before = _tier.set_mode("auto")
+    try:
+        yield
+    finally:
+        _tier.set_mode(before)
+
+
+def test_small_call_interpreted_big_call_compiled(auto):
+    x = np.arange(10.0)
+    for k in (_outer, _inner):
+        _fresh(k)
+    if _outer.dispatcher.signatures:
+        pytest.skip("compiled by an earlier test in this process")
+    assert _outer(x, 3) == pytest.approx(3 * 2 * x.sum(), rel=0, abs=0)
+    # interpreted: the caller and its callee ran as Python, nothing compiled
+    assert not _outer.dispatcher.signatures and not _inner.dispatcher.signatures
+    assert 0.0 < _outer._spent < 0.5
+    # predicted 1e6 units x ~1e-6 s > 0.5 s budget: compiles (callee compiled with it)
+    assert _outer(x, 100_000) == pytest.approx(100_000 * 2 * x.sum(), rel=1e-12)
+    assert _outer.dispatcher.signatures and _outer.ready()
+    # from now on compiled: the fast path, even for a small call
+    assert _outer(x, 1) == 2 * x.sum() and _outer._fast
+
+
+def test_budget_spent_then_compiled(auto):
+    """Ski rental: interpreted calls until their seconds reach the budget, then compiled."""
+    x = np.arange(50.0)
+    _fresh(_lone)
+    if _lone.dispatcher.signatures:
+        pytest.skip("compiled by an earlier test in this process")
+    _lone.compile_s = 0.02
+    try:
+        calls = 0
+        while not _lone.dispatcher.signatures and calls < 100_000:
+            assert _lone(x, calls % 50) == 2.0 * (calls % 50)
+            calls += 1
+        assert _lone.dispatcher.signatures, "never compiled"
+        assert calls > 1 and _lone._spent <= 0.02 + 0.01
+    finally:
+        _lone.compile_s = 0.5
+
+
+def test_modes_and_bad_mode():
+    before = _tier.set_mode("never")
+    try:
+        assert _tier.mode() == "never"
+        x = np.arange(4.0)
+        assert _outer(x, 2) == 2 * 2 * x.sum()
+        with pytest.raises(ParameterError, match="jit mode 'fast' is not allowed"):
+            _tier.set_mode("fast")
+        assert _tier.mode() == "never"
+    finally:
+        _tier.set_mode(before)
+    assert _tier.interpreted(_outer) is _outer.interpreted()
+    assert _tier.compiled(_outer) is _outer.dispatcher
+
+
+# -- the same numbers from both tiers -----------------------------------------------------------
+
+
+def _both(fn):
+    out = []
+    for mode in ("always", "never"):
+        before = _tier.set_mode(mode)
+        try:
+            out.append(fn())
+        finally:
+            _tier.set_mode(before)
+    return out
+
+
+@pytest.mark.parametrize(
+    ("source", "target"),
+    [
+        ("hexabot_leg", [0.12, 0.06, -0.12]),
+        ("hexabot_leg", [0.5, 0.1, 0.0]),  # unreachable: nearest point, local-minimum check
+        ("erd:ur5_robot", None),
+    ],
+)
+def test_ik_same_in_both_tiers(source, target):
+    model = hk.load(source)
+    if target is None:
+        target = model.fk(np.array([0.3, -0.8, 1.1, -0.4, 0.6, 0.2]))
+    a, b = _both(lambda: hk.ik.solve(model, target))
+    assert a.status == b.status and a.iterations == b.iterations and a.attempts == b.attempts
+    assert np.abs(a.q - b.q).max() <= 1e-12
+    assert abs(a.error - b.error) <= 1e-12
+
+
+def test_resolved_rate_same_in_both_tiers():
+    leg = hk.load("hexabot_leg")
+    a, b = _both(lambda: hk.motion.resolved_rate(leg, [0.02, 0.0, 0.0], [0, 0.3, 1.2], 2e-3, 0.4))
+    assert np.abs(a.q - b.q).max() <= 1e-12
+    ur5 = hk.load("erd:ur5_robot")
+    twist = [0.0, 0.01, 0.02, 0.1, 0.0, 0.05]
+    q0 = np.array([0.3, -0.8, 1.1, -0.4, 0.6, 0.2])
+    a, b = _both(lambda: hk.motion.resolved_rate(ur5, twist, q0, 5e-3, 0.2, frame="tip"))
+    assert np.abs(a.q - b.q).max() <= 1e-12
+
+
+def test_measures_same_in_both_tiers():
+    """The compiled fused kernel against the cold path (Pinocchio Jacobians + numpy SVD)."""
+    for source in ("hexabot_leg", "scara", "erd:ur5_robot"):
+        model = hk.load(source)
+        qs = model.random_q(300, seed=7)
+        a, b = _both(lambda model=model, qs=qs: hk.singularity.measures_batch(model, qs))
+        scale = float(np.abs(a.manipulability).max())
+        assert np.allclose(a.sigma_min, b.sigma_min, rtol=1e-9, atol=1e-12)
+        assert np.allclose(a.manipulability, b.manipulability, rtol=1e-9, atol=1e-12 * scale)
+        assert np.allclose(a.det, b.det, rtol=1e-9, atol=1e-12 * scale, equal_nan=True)
+
+
+def test_closed_form_batch_same_in_both_tiers():
+    leg = hk.load("hexabot_leg")
+    qs = leg.random_q(200, seed=3)
+    targets = np.array([leg.fk(q)[:3, 3] for q in qs])
+    a, b = _both(lambda: hk.ik.analytic_batch(leg, targets))
+    assert np.array_equal(a.valid, b.valid) and a.valid.any()
+    assert np.abs(a.q[a.valid] - b.q[b.valid]).max() <= 1e-12
+
+
+# -- a fresh install: nothing compiled, small calls answer interpreted ---------------------------
+
+_PROBE = r"""
+import json, sys, numpy as np
+import hexapod_kin as hk
+from hexapod_kin import _numerics
+from hexapod_kin.ik import step
+from hexapod_kin.singularity import _kernel
+what = sys.argv[1]
+if what == "compile":
+    _numerics.wrap_angle(7.0)
+    print(json.dumps({"compiled": bool(_numerics.wrap_angle.dispatcher.signatures)}))
+elif what == "ready":
+    print(json.dumps({"ready": _numerics.wrap_angle.ready()}))
+else:
+    leg = hk.load("hexabot_leg")
+    r = hk.ik.solve(leg, [0.5, 0.1, 0.0])
+    m = hk.singularity.measures_batch(leg, leg.random_q(2000, seed=1))
+    print(json.dumps({
+        "status": r.status,
+        "lm_compiled": bool(step.lm_loop.dispatcher.signatures),
+        "scan_compiled": bool(_kernel.measures_kernel.dispatcher.signatures),
+        "finite": bool(np.isfinite(m.sigma_min).all()),
+    }))
+"""
+
+
+def _probe(tmp_path, what, mode):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HEXAPOD_KIN_JIT=mode)
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / "hk")
+    res = subprocess.run(
+        [sys.executable, "-c", _PROBE, what], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def test_fresh_install_small_calls_compile_nothing(tmp_path):
+    got = _probe(tmp_path, "work", "auto")
+    assert got == {
+        "status": "unreachable",
+        "lm_compiled": False,
+        "scan_compiled": False,
+        "finite": True,
+    }
+
+
+def test_cached_machine_code_is_used(tmp_path):
+    assert _probe(tmp_path, "ready", "auto") == {"ready": False}
+    assert _probe(tmp_path, "compile", "always") == {"compiled": True}
+    assert _probe(tmp_path, "ready", "auto") == {"ready": True}
