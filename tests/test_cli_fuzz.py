@@ -8,6 +8,7 @@ installed console script (closed pipe, unwritable paths).
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import subprocess
 import sys
@@ -195,7 +196,13 @@ def test_set_bad_value(capsys):
 def test_help_exits_zero(capsys):
     for name in COMMANDS:
         assert main([name, "--help"]) == 0
-        assert "usage" in capsys.readouterr().out
+        out = capsys.readouterr().out
+        assert "usage" in out
+        # each default said once, and never an empty "(default: None)"
+        flat = " ".join(out.split())
+        assert "(default: None)" not in flat, name
+        assert not re.search(r"\(default: [^)]*\) \(default:", flat), name
+        assert "--dt" not in flat or "(default: 0.001)" in flat, name
 
 
 @pytest.mark.skipif(

@@ -32,15 +32,27 @@ __all__ = [
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
 
 
+class DefaultsFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Every option's default in its help, once: not when the help already says it, not None."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        if action.default is None or "default" in text.lower():
+            return text
+        return super()._get_help_string(action)
+
+
 class OneLineParser(argparse.ArgumentParser):
     """An ``ArgumentParser`` whose usage errors are one line on stderr and exit status 2.
 
-    Help shows every option's default (``ArgumentDefaultsHelpFormatter``) unless a subcommand
+    Help shows every option's default (:class:`DefaultsFormatter`) unless a subcommand
     picks another formatter.
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs.setdefault("formatter_class", argparse.ArgumentDefaultsHelpFormatter)
+        fmt = kwargs.get("formatter_class")
+        if fmt is None or fmt is argparse.ArgumentDefaultsHelpFormatter:
+            kwargs["formatter_class"] = DefaultsFormatter
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
