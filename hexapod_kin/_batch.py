@@ -53,43 +53,41 @@ Q_MAX = 1e150
 
 
 class AlignedPose:
-    """A chain re-expressed with z joint axes, plus its tip rotation (kernel arguments).
+    """A chain re-expressed with z joint axes (the kernel's arguments).
+
+    Placement ``j`` (rotation ``prot[j]``, translation ``ptr[j]``) comes before joint ``j``'s
+    motion ``Rz(q)`` / ``Tz(q)``; placement ``m`` is the tip's. With ``A_j ez = u_j`` (see
+    :func:`_z_to`), placement ``j`` is ``A_{j-1}ᵀ (R_j, t_j) A_j`` (``A_{-1} = A_m = I``).
 
     Attributes:
-        prot: (m, 9) placement rotations, row-major (``A_{j-1}ᵀ R_j A_j``).
-        ptr: (m + 1, 3) placement translations (``A_{j-1}ᵀ t_j``); the last is the tip offset.
-        flags: (m + 1,) int64: ``flags[j]`` 1 when placement ``j``'s rotation is the identity;
-            ``flags[m]`` 1 when the tip rotation is.
-        tip: (9,) tip rotation in the last aligned joint frame (``A_{m-1}ᵀ R_tip``).
+        prot: (m + 1, 9) placement rotations, row-major; the last is the tip rotation.
+        ptr: (m + 1, 3) placement translations; the last is the tip offset.
+        flags: (m + 1,) int64, 1 where the placement rotation is exactly the identity.
         kind: (m,) 0 revolute, 1 prismatic.
-        col: (m,) index of each joint's variable in ``q``.
+        col: (m,) index of each joint's variable in ``q`` (distinct).
         nq: Length of ``q``.
 
     """
 
     def __init__(self, arrays: ChainArrays) -> None:
         m = arrays.rot.shape[0]
-        prot = np.empty((m, 9))
+        prot = np.empty((m + 1, 9))
         ptr = np.empty((m + 1, 3))
-        flags = np.zeros(m + 1, dtype=np.int64)
         prev_t = np.eye(3)  # A_{j-1}^T
-        for j in range(m):
-            a = _z_to(arrays.axis[j])
-            rot = prev_t @ arrays.rot[j] @ a
+        for j in range(m + 1):
+            a = _z_to(arrays.axis[j]) if j < m else np.eye(3)
+            rot = prev_t @ (arrays.rot[j] if j < m else arrays.tip_rot) @ a
             prot[j] = rot.reshape(-1)
             ptr[j] = prev_t @ arrays.trans[j]
-            flags[j] = int(np.array_equal(rot, np.eye(3)))
             prev_t = a.T
-        ptr[m] = prev_t @ arrays.trans[m]
-        tip = prev_t @ arrays.tip_rot
-        flags[m] = int(np.array_equal(tip, np.eye(3)))
-        self.prot = np.ascontiguousarray(prot)
-        self.ptr = np.ascontiguousarray(ptr)
-        self.flags = flags
-        self.tip = np.ascontiguousarray(tip.reshape(-1))
+        self.prot = prot
+        self.ptr = ptr
+        self.flags = np.array([np.array_equal(r, np.eye(3).reshape(-1)) for r in prot], np.int64)
         self.kind = np.ascontiguousarray(arrays.kind, dtype=np.int64)
         self.col = np.ascontiguousarray(arrays.col, dtype=np.int64)
         self.nq = int(arrays.nq)
+        if len(set(self.col.tolist())) != m:  # pragma: no cover - one variable per joint
+            raise ValueError("a joint variable drives two joints of the chain")
 
 
 def _z_to(u: np.ndarray) -> np.ndarray:
@@ -125,10 +123,10 @@ def _work(*args: Any) -> float:
     Configurations × (m + 1) × requested outputs; about :data:`_INTERP_S` interpreted seconds
     each.
     """
-    prot, qs, want_pose, want_jac = args[0], args[6], args[9], args[11]
-    first, last, block = int(args[12]), int(args[13]), int(args[14])
+    kind, qs, want_pose, want_jac = args[3], args[5], args[8], args[10]
+    first, last, block = int(args[11]), int(args[12]), int(args[13])
     n = max(min(int(qs.shape[0]), last * block) - first * block, 0)
-    return float(n * (1 + int(prot.shape[0])) * (int(want_pose) + int(want_jac)))
+    return float(n * (1 + int(kind.shape[0])) * (int(want_pose) + int(want_jac)))
 
 
 @njit(
@@ -144,7 +142,6 @@ def pose_jacobian_kernel(
     prot: np.ndarray,
     ptr: np.ndarray,
     flags: np.ndarray,
-    tip: np.ndarray,
     kind: np.ndarray,
     col: np.ndarray,
     qs: np.ndarray,
@@ -160,10 +157,10 @@ def pose_jacobian_kernel(
     """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
 
     Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq). The
-    chain is an :class:`AlignedPose`: placement ``j`` (``prot[j]``, ``ptr[j]``) then ``Rz(q)``
-    or ``Tz(q)``; ``ptr[m]`` and ``tip`` place the tip. ``ref``: 0 local world aligned, 1
-    world (velocity of the point at the base origin), 2 local (tip axes). Only multiply-add
-    contraction (FMA) is allowed to the compiler: no NaN / Inf assumptions.
+    chain is an :class:`AlignedPose` (``prot``, ``ptr``, ``flags``, ``kind``, ``col``).
+    ``ref``: 0 local world aligned, 1 world (velocity of the point at the base origin), 2
+    local (tip axes). Only multiply-add contraction (FMA) is allowed to the compiler: no NaN /
+    Inf assumptions.
 
     Returns:
         Whether a value of ``q`` in these blocks is non-finite or ``|q| >= 1e150`` (the
@@ -175,16 +172,16 @@ def pose_jacobian_kernel(
     nq = qs.shape[1]
     m = kind.shape[0]
     bsz = block
-    need_rot = want_pose or (want_jac and ref == 2)
-    tip_ident = flags[m] == 1
-    rr = np.empty((9, bsz))
-    pp = np.empty((3, bsz))
-    tt = np.empty((9, bsz)) if need_rot and not tip_ident else rr
+    need_tip_rot = want_pose or (want_jac and ref == 2)
+    keep = 0.0 if ref == 1 else 1.0  # world: velocity of the point at the base origin
+    rr = np.empty((9, bsz))  # rotation of the current frame (z = joint axis), row-major
+    pp = np.empty((3, bsz))  # its origin
     trig = np.empty((2, bsz))
     qb = np.empty((max(nq, 1), bsz))
-    jb = np.empty((6, max(nq, 1), bsz))
+    jb = np.empty((6 * max(nq, 1), bsz))  # row a * nq + c: J[a, c]
+    npj = 6 * nq
     if want_jac and nq > m:  # variables of joints off the path: zero columns
-        jb[:, :, :] = 0.0
+        jb[:, :] = 0.0
     ok = True
     for blk in range(first_block, last_block):
         start = blk * bsz
@@ -194,135 +191,107 @@ def pose_jacobian_kernel(
                 qv = qs[start + i, c]
                 qb[c, i] = qv
                 ok &= abs(qv) < Q_MAX  # False for NaN too
-        # rr, pp: the frame of joint j (z = its axis) in the base frame, block-wide
-        if m == 0:
-            for a in range(9):
-                v = 1.0 if a == 0 or a == 4 or a == 8 else 0.0
-                for i in range(nb):
-                    rr[a, i] = v
-            for a in range(3):
-                for i in range(nb):
-                    pp[a, i] = 0.0
+        for a in range(3):
+            v = ptr[0, a]
+            for i in range(nb):
+                pp[a, i] = v
+        for a in range(9):
+            v = prot[0, a]
+            for i in range(nb):
+                rr[a, i] = v
         for j in range(m):
-            t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
-            if j == 0:
-                for a in range(3):
-                    v = ptr[0, a]
-                    for i in range(nb):
-                        pp[a, i] = v
-                for a in range(9):
-                    v = prot[0, a]
-                    for i in range(nb):
-                        rr[a, i] = v
-            else:
-                if t0 != 0.0 or t1 != 0.0 or t2 != 0.0:
-                    for i in range(nb):
-                        pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-                        pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-                        pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-                if flags[j] == 0:
-                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
-                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
-                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
-                    for i in range(nb):
-                        for b in range(0, 9, 3):
-                            x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
-                            rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
-                            rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
-                            rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
             cj = col[j]
-            if want_jac:  # joint axis w (rr's z column); linear part: o x w (world), else o
-                if kind[j] == 1:
-                    for i in range(nb):
-                        jb[0, cj, i], jb[1, cj, i], jb[2, cj, i] = rr[2, i], rr[5, i], rr[8, i]
-                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = 0.0, 0.0, 0.0
-                elif ref == 1:
-                    for i in range(nb):
-                        wx, wy, wz = rr[2, i], rr[5, i], rr[8, i]
-                        ox, oy, oz = pp[0, i], pp[1, i], pp[2, i]
-                        jb[0, cj, i] = oy * wz - oz * wy
-                        jb[1, cj, i] = oz * wx - ox * wz
-                        jb[2, cj, i] = ox * wy - oy * wx
-                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = wx, wy, wz
-                else:
-                    for i in range(nb):
-                        jb[0, cj, i], jb[1, cj, i], jb[2, cj, i] = pp[0, i], pp[1, i], pp[2, i]
-                        jb[3, cj, i], jb[4, cj, i], jb[5, cj, i] = rr[2, i], rr[5, i], rr[8, i]
+            if want_jac:  # prismatic [w; 0]; revolute [o; w], its linear part finished below
+                for a in range(3):
+                    lin = a * nq + cj
+                    ang = lin + 3 * nq
+                    w = 3 * a + 2
+                    if kind[j] == 1:
+                        for i in range(nb):
+                            jb[lin, i] = rr[w, i]
+                            jb[ang, i] = 0.0
+                    else:
+                        for i in range(nb):
+                            jb[lin, i] = pp[a, i]
+                            jb[ang, i] = rr[w, i]
             if kind[j] == 1:
                 for i in range(nb):
                     qv = qb[cj, i]
                     pp[0, i] += rr[2, i] * qv
                     pp[1, i] += rr[5, i] * qv
                     pp[2, i] += rr[8, i] * qv
-                continue
-            big = False
-            for i in range(nb):
-                qv = qb[cj, i]
-                big |= abs(qv) > POLY_TRIG_MAX
-                trig[0, i], trig[1, i] = sincos(qv)
-            if big:  # an angle beyond the polynomial's range: libm for this joint and block
+            else:
+                big = False
                 for i in range(nb):
                     qv = qb[cj, i]
-                    trig[0, i] = np.sin(qv)
-                    trig[1, i] = np.cos(qv)
-            for i in range(nb):
-                sq, cq = trig[0, i], trig[1, i]
-                for b in range(0, 9, 3):
-                    x0, x1 = rr[b, i], rr[b + 1, i]
-                    rr[b, i] = cq * x0 + sq * x1
-                    rr[b + 1, i] = cq * x1 - sq * x0
-        t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
-        for i in range(nb):
-            pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-            pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-            pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-        if need_rot and not tip_ident:  # tt: the tip rotation (rr itself when the identity)
-            a00, a01, a02, a10, a11, a12 = tip[0], tip[1], tip[2], tip[3], tip[4], tip[5]
-            a20, a21, a22 = tip[6], tip[7], tip[8]
-            for i in range(nb):
-                for b in range(0, 9, 3):
-                    x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
-                    tt[b, i] = x0 * a00 + x1 * a10 + x2 * a20
-                    tt[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
-                    tt[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+                    big |= abs(qv) > POLY_TRIG_MAX
+                    trig[0, i], trig[1, i] = sincos(qv)
+                if big:  # an angle beyond the polynomial's range: libm for this joint and block
+                    for i in range(nb):
+                        qv = qb[cj, i]
+                        trig[0, i] = np.sin(qv)
+                        trig[1, i] = np.cos(qv)
+                for i in range(nb):
+                    sq, cq = trig[0, i], trig[1, i]
+                    for b in range(0, 9, 3):
+                        x0, x1 = rr[b, i], rr[b + 1, i]
+                        rr[b, i] = cq * x0 + sq * x1
+                        rr[b + 1, i] = cq * x1 - sq * x0
+            # placement j + 1 (the tip's after the last joint)
+            t0, t1, t2 = ptr[j + 1, 0], ptr[j + 1, 1], ptr[j + 1, 2]
+            if t0 != 0.0 or t1 != 0.0 or t2 != 0.0:
+                for i in range(nb):
+                    pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                    pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                    pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+            if flags[j + 1] == 0 and (j + 1 < m or need_tip_rot):
+                a00, a01, a02 = prot[j + 1, 0], prot[j + 1, 1], prot[j + 1, 2]
+                a10, a11, a12 = prot[j + 1, 3], prot[j + 1, 4], prot[j + 1, 5]
+                a20, a21, a22 = prot[j + 1, 6], prot[j + 1, 7], prot[j + 1, 8]
+                for i in range(nb):
+                    for b in range(0, 9, 3):
+                        x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                        rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                        rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                        rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
         if want_pose:
             for i in range(nb):
                 r = start + i
-                out_t[r, 0], out_t[r, 1], out_t[r, 2] = tt[0, i], tt[1, i], tt[2, i]
+                out_t[r, 0], out_t[r, 1], out_t[r, 2] = rr[0, i], rr[1, i], rr[2, i]
                 out_t[r, 3] = pp[0, i]
-                out_t[r, 4], out_t[r, 5], out_t[r, 6] = tt[3, i], tt[4, i], tt[5, i]
+                out_t[r, 4], out_t[r, 5], out_t[r, 6] = rr[3, i], rr[4, i], rr[5, i]
                 out_t[r, 7] = pp[1, i]
-                out_t[r, 8], out_t[r, 9], out_t[r, 10] = tt[6, i], tt[7, i], tt[8, i]
+                out_t[r, 8], out_t[r, 9], out_t[r, 10] = rr[6, i], rr[7, i], rr[8, i]
                 out_t[r, 11] = pp[2, i]
                 out_t[r, 12], out_t[r, 13], out_t[r, 14], out_t[r, 15] = 0.0, 0.0, 0.0, 1.0
         if not want_jac:
             continue
-        if ref != 1:  # linear parts w x (p - o) of the revolute columns (o stored there)
-            for j in range(m):
-                if kind[j] == 1:
-                    continue
-                cj = col[j]
+        for j in range(m):  # revolute: w × (p − o), or w × (0 − o) = o × w for world
+            if kind[j] == 1:
+                continue
+            r0 = col[j]
+            r1, r2, r3, r4, r5 = r0 + nq, r0 + 2 * nq, r0 + 3 * nq, r0 + 4 * nq, r0 + 5 * nq
+            for i in range(nb):
+                dx = keep * pp[0, i] - jb[r0, i]
+                dy = keep * pp[1, i] - jb[r1, i]
+                dz = keep * pp[2, i] - jb[r2, i]
+                wx, wy, wz = jb[r3, i], jb[r4, i], jb[r5, i]
+                jb[r0, i] = wy * dz - wz * dy
+                jb[r1, i] = wz * dx - wx * dz
+                jb[r2, i] = wx * dy - wy * dx
+        if ref == 2:  # local: both parts in the tip axes (Rᵀ)
+            for c in range(2 * nq):
+                r0 = (c // nq) * 3 * nq + c % nq
+                r1, r2 = r0 + nq, r0 + 2 * nq
                 for i in range(nb):
-                    dx = pp[0, i] - jb[0, cj, i]
-                    dy = pp[1, i] - jb[1, cj, i]
-                    dz = pp[2, i] - jb[2, cj, i]
-                    wx, wy, wz = jb[3, cj, i], jb[4, cj, i], jb[5, cj, i]
-                    jb[0, cj, i] = wy * dz - wz * dy
-                    jb[1, cj, i] = wz * dx - wx * dz
-                    jb[2, cj, i] = wx * dy - wy * dx
-        if ref == 2:  # LOCAL: both parts in the tip axes (Tᵀ)
-            for c in range(nq):
-                for i in range(nb):
-                    for h in range(0, 6, 3):
-                        vx, vy, vz = jb[h, c, i], jb[h + 1, c, i], jb[h + 2, c, i]
-                        jb[h, c, i] = tt[0, i] * vx + tt[3, i] * vy + tt[6, i] * vz
-                        jb[h + 1, c, i] = tt[1, i] * vx + tt[4, i] * vy + tt[7, i] * vz
-                        jb[h + 2, c, i] = tt[2, i] * vx + tt[5, i] * vy + tt[8, i] * vz
-        for i in range(nb):
+                    vx, vy, vz = jb[r0, i], jb[r1, i], jb[r2, i]
+                    jb[r0, i] = rr[0, i] * vx + rr[3, i] * vy + rr[6, i] * vz
+                    jb[r1, i] = rr[1, i] * vx + rr[4, i] * vy + rr[7, i] * vz
+                    jb[r2, i] = rr[2, i] * vx + rr[5, i] * vy + rr[8, i] * vz
+        for i in range(nb):  # rows of 6·nq, one flat loop
             r = start + i
-            for a in range(6):
-                for c in range(nq):
-                    out_j[r, a * nq + c] = jb[a, c, i]
+            for p in range(npj):
+                out_j[r, p] = jb[p, i]
     return not ok
 
 
@@ -401,7 +370,7 @@ def pose_jacobian_batch(
 
     def run(w: int) -> None:
         bad[w] = pose_jacobian_kernel(
-            al.prot, al.ptr, al.flags, al.tip, al.kind, al.col, qs, flat_t, flat_j,
+            al.prot, al.ptr, al.flags, al.kind, al.col, qs, flat_t, flat_j,
             pose, ref, want_jac, w * per, min(nblocks, (w + 1) * per), BLOCK,
         )  # fmt: skip
 

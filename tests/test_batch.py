@@ -23,6 +23,8 @@ SOURCES = [
     ("erd:ur5_robot", {}),
     ("erd:solo12", {"tip": "FL_FOOT"}),
     ("erd:panda", {}),  # nq = 9 > 7 joints on the path: zero columns
+    ("hexapod", {"tip": "leg2_femur"}),  # a frame inside the chain, mounted on a body
+    ("hexabot_leg", {"tip": "base"}),  # no joint at all: nq = 0
 ]
 REFS = {
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
