@@ -24,7 +24,9 @@ pays: ``work=`` estimates the interpreted seconds of a call from its configurati
 
 from __future__ import annotations
 
+import itertools
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -33,6 +35,7 @@ import numpy as np
 
 from ._kernels import ChainArrays
 from ._numerics import njit
+from ._tier import compiled, interpreted
 from .singularity._kernel import POLY_TRIG_MAX, sincos
 
 __all__ = ["BLOCK", "REF_CODES", "AlignedPose", "aligned", "pose_jacobian_batch"]
@@ -44,10 +47,14 @@ REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
 BLOCK = 256
 #: Fewest configurations per thread (below this, one thread: starting threads costs more).
 MIN_PER_THREAD = 16_384
+#: Chunks of blocks handed out per thread (dynamic: a thread sharing its core takes fewer).
+CHUNKS_PER_THREAD = 8
+#: Fewest blocks per chunk (each chunk is one kernel call, ~10 µs of dispatch).
+MIN_CHUNK_BLOCKS = 16
 #: Interpreted seconds per unit of :func:`_work` (measured: 5–10 µs, CPython 3.11).
 _INTERP_S = 6e-6
 #: Cold compile time of :func:`pose_jacobian_kernel` in [s] (its interpreted budget).
-_COMPILE_S = 3.0
+_COMPILE_S = 2.0
 #: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
 Q_MAX = 1e150
 
@@ -295,6 +302,39 @@ def pose_jacobian_kernel(
     return not ok
 
 
+def _run_threads(
+    fast: Callable[..., bool], args: tuple[Any, ...], nblocks: int, bad: list[bool]
+) -> None:
+    """Run the compiled kernel ``fast`` over ``nblocks`` blocks; its flags go to ``bad``.
+
+    Up to ``numba.get_num_threads()`` threads (the kernel releases the GIL), each taking the
+    next chunk of blocks when done with one, so that a thread sharing its core with another
+    process does less of the work.
+    """
+    nwork = max(1, min(numba.get_num_threads(), nblocks * BLOCK // MIN_PER_THREAD))
+    if nwork == 1:
+        bad.append(fast(*args, 0, nblocks, BLOCK))
+        return
+    per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))
+    chunks = itertools.count()  # next() is atomic under the GIL
+
+    def run() -> None:
+        while True:
+            first = next(chunks) * per
+            if first >= nblocks:
+                return
+            bad.append(fast(*args, first, min(nblocks, first + per), BLOCK))
+
+    workers = [threading.Thread(target=run) for _ in range(nwork - 1)]
+    for t in workers:
+        t.start()
+    try:
+        run()
+    finally:
+        for t in workers:
+            t.join()
+
+
 def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarray:
     """``out`` checked (float64, C-contiguous, writeable, ``shape``), or a new array."""
     if out is None:
@@ -364,27 +404,15 @@ def pose_jacobian_batch(
     flat_t = out_t.reshape(out_t.shape[0], 16)
     flat_j = out_j.reshape(out_j.shape[0], 6 * nq)
     nblocks = -(-n // BLOCK)
-    nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
-    per = -(-nblocks // nwork)
-    bad = [False] * nwork
-
-    def run(w: int) -> None:
-        bad[w] = pose_jacobian_kernel(
-            al.prot, al.ptr, al.flags, al.kind, al.col, qs, flat_t, flat_j,
-            pose, ref, want_jac, w * per, min(nblocks, (w + 1) * per), BLOCK,
-        )  # fmt: skip
-
-    if nwork == 1:
-        run(0)
-    else:  # the kernel releases the GIL: plain threads run it in parallel
-        workers = [threading.Thread(target=run, args=(w,)) for w in range(1, nwork)]
-        for t in workers:
-            t.start()
-        try:
-            run(0)
-        finally:
-            for t in workers:
-                t.join()
+    args = (al.prot, al.ptr, al.flags, al.kind, al.col, qs, flat_t, flat_j, pose, ref, want_jac)
+    kernel = pose_jacobian_kernel
+    bad: list[bool] = []
+    if kernel.prefer_interpreted(_INTERP_S * _work(*args, 0, nblocks, BLOCK)):
+        t0 = time.perf_counter()  # small and cold: the source run by Python, one thread
+        bad.append(interpreted(kernel)(*args, 0, nblocks, BLOCK))
+        kernel.charge(time.perf_counter() - t0)
+    else:
+        _run_threads(compiled(kernel), args, nblocks, bad)
     if any(bad):
         if check is not None:
             check()

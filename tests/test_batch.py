@@ -59,9 +59,10 @@ def _configs(model, n, seed):
 
 
 def _rows(n):
-    """Rows to check: both ends of every thread's range and of some blocks, and random ones."""
-    block = _batch.BLOCK
+    """Rows to check: both ends of the threads' chunks and of some blocks, and random ones."""
+    block, chunk = _batch.BLOCK, _batch.BLOCK * _batch.MIN_CHUNK_BLOCKS
     rows = {0, 1, n - 1, n // 2 - 1, n // 2, n // 3, block - 1, block, 2 * block + 7}
+    rows |= {k * chunk + d for k in range(1, n // chunk + 1) for d in (-1, 0)}
     rows |= set(np.random.default_rng(0).integers(0, n, 40).tolist())
     return sorted(r for r in rows if 0 <= r < n)
 
@@ -69,7 +70,7 @@ def _rows(n):
 @pytest.mark.parametrize(("source", "kw"), SOURCES)
 def test_batch_equals_pinocchio_in_every_frame(source, kw, jit_always):
     model = hk.load(source, **kw)
-    n = 2 * _batch.MIN_PER_THREAD + 3 * _batch.BLOCK + 5  # two threads, a partial last block
+    n = 2 * _batch.MIN_PER_THREAD + 3 * _batch.BLOCK + 5  # two threads, chunks, a partial block
     qs = _configs(model, n, seed=11)
     poses = model.fk_batch(qs)
     jacs = {ref: model.jacobian_batch(qs, ref) for ref in REFS}
