@@ -150,12 +150,17 @@ class Family:
         val = _evaluate(self._compiled()[0], qa)
         return np.asarray(np.broadcast_to(val, qa.shape[:-1]), dtype=float)
 
-    def distance(self, q: Any, steps: int = 4) -> np.ndarray:
+    def distance(self, q: Any, steps: int = 30) -> np.ndarray:
         """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m].
 
-        Exact for ``q_k = value`` families; for implicit ones, a few Gauss–Newton projection
-        steps ``q ← q − f ∇f / ‖∇f‖²`` (so curved families and points far from the first-order
-        regime are measured well), falling back to ``|f| / ‖∇f‖`` where they do not converge.
+        Exact for ``q_k = value`` families. For implicit ones, the foot point of ``p = q``: the
+        iteration ``x ← p − ∇f(x) [f(x) + ∇f(x)·(p − x)] / ‖∇f(x)‖²`` (project ``p`` on the
+        tangent plane of ``f = 0`` at ``x``; a fixed point is on the family with ``p − x``
+        along the normal, the closest-point condition), run from ``x = p`` and from the end
+        of three gradient projections ``x ← x − f ∇f / ‖∇f‖²``; the nearer converged foot
+        point counts. Where neither converges within ``steps``, the first-order
+        ``|f| / ‖∇f‖``. Checked against a brute-force distance to the densely sampled
+        hexabot-leg family (tests): equal to the sampling resolution up to 0.2 rad away.
         """
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -163,28 +168,42 @@ class Family:
         fcode, gcode = self._compiled()
         var = list(self.variables)
         lead = qa.shape[:-1]
-        cur = np.array(qa, dtype=float)
-        f0 = first = None
+        p = np.array(qa[..., var], dtype=float)
+        full = np.array(qa, dtype=float)
+
+        def fg(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            full[..., var] = x
+            f = np.broadcast_to(np.asarray(_evaluate(fcode, full), float), lead)
+            g = np.stack(
+                [np.broadcast_to(np.asarray(_evaluate(c, full), float), lead) for c in gcode],
+                axis=-1,
+            )
+            return f, g
+
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            for _ in range(max(steps, 1)):
-                f = np.broadcast_to(np.asarray(_evaluate(fcode, cur), float), lead)
-                if f0 is not None and np.all(np.abs(f) <= 1e-6 * np.maximum(f0, 1e-300)):
-                    break  # every point converged: no more steps
-                g = np.stack(
-                    [np.broadcast_to(np.asarray(_evaluate(c, cur), float), lead) for c in gcode],
-                    axis=-1,
-                )
+            f0, g0 = fg(p)
+            g20 = np.sum(g0 * g0, axis=-1)
+            first = np.where(g20 > 0, np.abs(f0) / np.sqrt(g20), np.inf)
+            tol_f = 1e-9 * np.abs(f0) + 1e-14
+            best = np.full(lead, np.inf)
+            starts = [p.copy(), p.copy()]
+            for _ in range(3):  # the second start: gradient projections onto f = 0
+                f, g = fg(starts[1])
                 g2 = np.sum(g * g, axis=-1)
-                if f0 is None:
-                    f0 = np.abs(f)
-                    first = np.where(g2 > 0, f0 / np.sqrt(g2), np.inf)
                 step = np.where(g2 > 0, f / g2, 0.0)[..., None] * g
-                cur[..., var] -= np.nan_to_num(step, nan=0.0, posinf=0.0, neginf=0.0)
-            f_end = np.abs(np.broadcast_to(np.asarray(_evaluate(fcode, cur), float), lead))
-            moved = np.linalg.norm(cur[..., var] - qa[..., var], axis=-1)
-        assert f0 is not None and first is not None
-        converged = f_end <= 1e-6 * np.maximum(f0, 1e-300)
-        return np.asarray(np.where(converged, np.minimum(moved, first), first))
+                starts[1] = starts[1] - np.nan_to_num(step, nan=0.0, posinf=0.0, neginf=0.0)
+            for x, alpha, count in ((starts[0], 1.0, steps), (starts[1], 1.0, steps),
+                                    (starts[1], 0.5, 2 * steps)):  # fmt: skip
+                for _ in range(max(count, 1)):
+                    f, g = fg(x)
+                    g2 = np.sum(g * g, axis=-1)
+                    lam = np.where(g2 > 0, (f + np.sum(g * (p - x), axis=-1)) / g2, 0.0)
+                    new = x + alpha * (p - lam[..., None] * g - x)
+                    x = np.where(np.isfinite(new), new, x)
+                f_end = np.abs(fg(x)[0])
+                dist = np.linalg.norm(x - p, axis=-1)
+                best = np.where((f_end <= tol_f) & (dist < best), dist, best)
+        return np.asarray(np.where(np.isfinite(best), best, first))
 
     def to_dict(self, joint_names: tuple[str, ...] | None = None) -> dict[str, Any]:
         """JSON-ready dict (joint by name when ``joint_names`` is given)."""
