@@ -29,6 +29,7 @@ from .compare import (
     parse_matrix,
     plain,
     points_on,
+    simplified,
     vanishes,
 )
 
@@ -223,7 +224,7 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     seed = parse_matrix(c.data["value"]).xreplace(subs)
     truth = ctx.item(key, item).xreplace(subs)
     claimed = _raw(c.data["value"]) + _with(c)
-    computed = _fmt_matrix(truth.applyfunc(sp.simplify))
+    computed = _fmt_matrix(truth.applyfunc(simplified))
     if seed.shape != truth.shape:
         return _verdict(
             c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
@@ -234,7 +235,7 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     notes = [f"{len(diffs)} of {truth.rows * truth.cols} entries differ: " + "; ".join(diffs)]
     if key in _OTHER:
         other, label = _OTHER[key]
-        if not matrix_diff(seed, ctx.item(other, item).xreplace(subs), c.id):
+        if not matrix_diff(seed, ctx.item(other, item).xreplace(subs), c.id, explain=False):
             notes.append(f"it is the α2 = {label} matrix (the other sign of row 2)")
     if item.startswith("0T "):
         notes.append(_own_product(c, ctx, seed, subs))
@@ -268,7 +269,7 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
     prod = sp.eye(4)
     for f in factors:
         prod = prod * f
-    own = matrix_diff(seed, prod, c.id + "p")
+    own = matrix_diff(seed, prod, c.id + "p", explain=False)
     ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, j + 1))
     if not own:
         return f"it is the product {ids} of the seed's own factors"

@@ -23,9 +23,11 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
 
 from __future__ import annotations
 
+import hashlib
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -186,7 +188,8 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
 
 # ---------------------------------------------------------------------- comparison helpers
 def _rng(key: str) -> np.random.Generator:
-    return np.random.default_rng(abs(hash(key)) % (2**32))
+    """A generator seeded by ``key`` (SHA-256: the same points in every process)."""
+    return np.random.default_rng(int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "big"))
 
 
 def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
@@ -203,18 +206,63 @@ def _num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
+def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarray, np.ndarray]:
+    """Numeric screening of entry pairs: ``(a == b, a == −b)`` at :data:`POINTS` random points.
+
+    Every expression is evaluated (``sympy.lambdify`` to numpy, float64) at the same
+    :data:`POINTS` points, seeded by ``key``: joint angles, ``theta`` and ``alpha`` uniform in
+    [−π, π] rad, every other symbol (a length) uniform in [0.5, 2]. A pair agrees when
+    ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (a NaN or complex value never agrees).
+
+    Args:
+        a: Expressions (a flat sequence, e.g. a matrix in row-major order).
+        b: Expressions, as many as ``a``.
+        key: Seed text of the points.
+
+    Returns:
+        Two boolean arrays of ``len(a)``: equal, and equal with the opposite sign.
+
+    """
+    ea, eb = [plain(x) for x in a], [plain(x) for x in b]
+    syms: set[sp.Symbol] = set()
+    for e in ea + eb:
+        syms |= e.free_symbols
+    ordered = sorted(syms, key=str)
+    rng = _rng(key)
+    pts = [_point(ordered, rng) for _ in range(POINTS)]
+    args = [np.array([p[s] for p in pts]) for s in ordered]
+    with np.errstate(all="ignore"):
+        raw = sp.lambdify(ordered, ea + eb, modules="numpy")(*args)
+        vals = np.array([np.broadcast_to(np.asarray(v, dtype=complex), (POINTS,)) for v in raw])
+    vals = vals.reshape(2, len(ea), POINTS)
+    real = np.all(np.isfinite(vals) & (vals.imag == 0), axis=(0, 2))
+    va, vb = vals.real
+    tol = RTOL * (1.0 + np.abs(va) + np.abs(vb))
+    same = real & np.all(np.abs(va - vb) <= tol, axis=1)
+    opposite = real & np.all(np.abs(va + vb) <= tol, axis=1)
+    return same, opposite
+
+
+@lru_cache(maxsize=4096)
+def simplified(expr: Any) -> Any:
+    """``sympy.simplify(expr)``, remembered for the process (the same truths recur)."""
+    return sp.simplify(expr)
+
+
+@lru_cache(maxsize=4096)
+def _zero(diff: Any) -> bool:
+    """``expand(expand_trig(diff)) == 0`` or ``simplify(...) == 0``."""
+    d = sp.expand(sp.expand_trig(diff))
+    return bool(d == 0 or simplified(d) == 0)
+
+
 def equal(a: Any, b: Any, key: str = "") -> bool:
-    """True when ``a == b`` at :data:`POINTS` random points and ``simplify(a − b) == 0``."""
+    """True when ``a == b`` at :data:`POINTS` random points and ``simplify(a − b) == 0``.
+
+    The symbolic proof runs only when the numeric screening (:func:`screen`) passes.
+    """
     a, b = plain(a), plain(b)
-    syms = sorted((a - b).free_symbols | a.free_symbols | b.free_symbols, key=str)
-    rng = _rng(key + str(a) + str(b))
-    for _ in range(POINTS):
-        pt = _point(syms, rng)
-        va, vb = _num(a, pt), _num(b, pt)
-        if abs(va - vb) > RTOL * (1.0 + abs(va) + abs(vb)):
-            return False
-    diff = sp.expand(sp.expand_trig(a - b))
-    return bool(diff == 0 or sp.simplify(diff) == 0)
+    return bool(screen([a], [b], key)[0][0]) and _zero(a - b)
 
 
 def _fmt(expr: Any) -> str:
@@ -225,16 +273,25 @@ def _fmt_matrix(m: sp.Matrix) -> str:
     return "[" + "; ".join(", ".join(_fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
 
 
-def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str) -> list[str]:
-    """Differing entries of two same-shape matrices, 1-based, with a sign-slip note."""
+def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = True) -> list[str]:
+    """Differing entries of two same-shape matrices, 1-based, with a sign-slip note.
+
+    An entry agrees when it passes the numeric screening and ``simplify(a − b) == 0``; sympy
+    simplifies only the entries that differ (their explanation). With ``explain=False`` the
+    list holds one empty string per differing entry (only the count is wanted).
+    """
+    a, b = [plain(x) for x in seed], [plain(x) for x in truth]
+    same, opposite = screen(a, b, key)
     out = []
-    for i in range(truth.rows):
-        for j in range(truth.cols):
-            a, b = seed[i, j], truth[i, j]
-            if equal(a, b, key):
-                continue
-            note = " (sign slip)" if equal(a, -b, key) else ""
-            out.append(f"({i + 1},{j + 1}): seed {_fmt(a)} vs {_fmt(sp.simplify(b))}{note}")
+    for k, (x, y) in enumerate(zip(a, b)):
+        if same[k] and _zero(x - y):
+            continue
+        if not explain:
+            out.append("")
+            continue
+        i, j = divmod(k, truth.cols)
+        note = " (sign slip)" if opposite[k] and _zero(x + y) else ""
+        out.append(f"({i + 1},{j + 1}): seed {_fmt(x)} vs {_fmt(simplified(y))}{note}")
     return out
 
 
@@ -310,18 +367,32 @@ def vanishes(expr: Any, pts: np.ndarray, scale: float = 1.0, tol: float = 1e-7) 
 
 
 # ---------------------------------------------------------------------- entry point
-def evaluate(claims: list[Claim], ctx: Any) -> list[Verdict]:
+def evaluate(claims: list[Claim], ctx: Any, cache: bool = True) -> list[Verdict]:
     """Compute every claim's verdict against ``ctx`` (a :class:`~.checks.Context`).
 
     A comparison that raises gives status ``"error"`` with the exception (never skipped).
+    With ``cache`` the symbolic verdicts are read from (and written to) the disk cache of
+    :mod:`.cache`, keyed by the claim's data and hexapod_kin's expressions.
     """
+    from . import cache as _cache
     from .checks import CHECKS
 
     out = []
     for claim in claims:
         try:
             check = CHECKS[claim.kind]
-            out.append(check(claim, ctx))
+            digest = None
+            if cache:
+                try:
+                    digest = _cache.key(claim, ctx)
+                except Exception:  # noqa: BLE001 - no key: the check runs (and reports)
+                    digest = None
+            verdict = _cache.load(digest, claim) if digest else None
+            if verdict is None:
+                verdict = check(claim, ctx)
+                if digest:
+                    _cache.store(digest, verdict)
+            out.append(verdict)
         except Exception as exc:  # recorded, reported, and failed by the CLI and the test
             out.append(
                 Verdict(
