@@ -21,25 +21,29 @@ def preset_models():
     return {name: load(name) for name in robots.names()}
 
 
-@pytest.fixture
-def jit_always():
-    """Compiled tier for every kernel call of the test (tests of the compiled code itself)."""
+def _jit(mode):
     from hexapod_kin import _tier
 
-    before = _tier.set_mode("always")
+    before = _tier.set_mode(mode)
     try:
         yield
     finally:
         _tier.set_mode(before)
+
+
+@pytest.fixture
+def jit_always():
+    """Compiled tier for every kernel call of the test (tests of the compiled code itself)."""
+    yield from _jit("always")
 
 
 @pytest.fixture
 def jit_never():
     """Interpreted tier for every kernel call of the test (the same source run by Python)."""
-    from hexapod_kin import _tier
+    yield from _jit("never")
 
-    before = _tier.set_mode("never")
-    try:
-        yield
-    finally:
-        _tier.set_mode(before)
+
+@pytest.fixture
+def jit_auto():
+    """The default tier rule, whatever the environment sets (``HEXAPOD_KIN_JIT``)."""
+    yield from _jit("auto")

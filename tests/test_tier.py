@@ -40,16 +40,7 @@ def _fresh(kernel: _tier.Kernel) -> None:
     kernel._spent = 0.0
 
 
-@pytest.fixture
-def auto():
-    before = _tier.set_mode("auto")
-    try:
-        yield
-    finally:
-        _tier.set_mode(before)
-
-
-def test_small_call_interpreted_big_call_compiled(auto):
+def test_small_call_interpreted_big_call_compiled(jit_auto):
     x = np.arange(10.0)
     for k in (_outer, _inner):
         _fresh(k)
@@ -66,7 +57,7 @@ def test_small_call_interpreted_big_call_compiled(auto):
     assert _outer(x, 1) == 2 * x.sum() and _outer._fast
 
 
-def test_budget_spent_then_compiled(auto):
+def test_budget_spent_then_compiled(jit_auto):
     """Ski rental: interpreted calls until their seconds reach the budget, then compiled."""
     x = np.arange(50.0)
     _fresh(_lone)
