@@ -144,7 +144,10 @@ def _check(
         repairs.append(str(error_at(root, "name", robot_name, problem + ": named 'robot'")))
     links = root.findall("link")
     if not links:
-        raise UrdfError("URDF <robot> has no <link>; at least one link is required")
+        hint = ""
+        if any("xacro" in (uri or "") for uri in root.nsmap.values()):
+            hint = " (it declares the xacro namespace: a macro file rendered without a call?)"
+        raise UrdfError(f"URDF <robot> has no <link>; at least one link is required{hint}")
     if len(links) > MAX_LINKS:
         raise UrdfError(
             f"URDF <robot> has {len(links)} links; the cap is {MAX_LINKS} (Pinocchio crashes on "
