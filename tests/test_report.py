@@ -8,15 +8,21 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
+import os
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 import sympy as sp
 
 from hexapod_kin.cli import main
-from hexapod_kin.report import load_claims
+from hexapod_kin.report import cache as report_cache
+from hexapod_kin.report import checks, load_claims
 from hexapod_kin.report.checks import Context
-from hexapod_kin.report.compare import equal, evaluate, parse, parse_matrix
+from hexapod_kin.report.compare import equal, evaluate, matrix_diff, parse, parse_matrix, screen
 
 #: Claims the seeds get right (read by hand: seed 001's matrices follow its own Table 1 and
 #: Eq. 1; seed 000's p and J are the derivative of the right p; seed 003's SCARA J and det).
@@ -172,3 +178,114 @@ def test_comparison_rules_against_hand_algebra() -> None:
         parse("l2*l3*(l3*s2*c3**2 + l3*c2*s3*c3 + l1*s3 - l3*s2 + l2*c2*s3)"),
         parse("l2*l3*s3*(l1 + l2*c2 + l3*c23)"),
     )
+
+
+# ---------------------------------------------------------------------- numeric screening
+def test_screening_against_hand_computed_entries() -> None:
+    """^0T_4 (1,1) of the leg by hand is cos q1·cos(q2 + q3); seed 000 wrote c1·c2·c3."""
+    q1, q2, q3 = (sp.Symbol(f"q{i}", real=True) for i in (1, 2, 3))
+    hand = sp.cos(q1) * sp.cos(q2 + q3)
+    same, opposite = screen(
+        [parse("c1*c23"), parse("c1*c2*c3"), parse("-c1*c23")], [hand, hand, hand], "t"
+    )
+    assert same.tolist() == [True, False, False]
+    assert opposite.tolist() == [False, False, True]
+    # the derivation's entry is the hand one; the seed's entry is flagged, with its text
+    claims, _ = load_claims()
+    ctx = Context(quick=True, claims=claims)
+    truth = ctx.item("leg", "0T 4")
+    assert screen([truth[0, 0]], [hand], "t")[0].all()
+    seed = parse_matrix(next(c for c in claims if c.id == "000-T04").data["value"])
+    diffs = matrix_diff(seed, truth, "t")
+    assert diffs[0].startswith("(1,1): seed cos(q1)*cos(q2)*cos(q3) vs cos(q1)*cos(q2 + q3)")
+    # the numbers behind it, by hand at one point: the seed's entry is not the leg's
+    q = (0.3, 0.7, -1.1)
+    assert (
+        abs(math.cos(q[0]) * math.cos(q[1] + q[2]) - float(hand.subs(zip((q1, q2, q3), q)))) < 1e-15
+    )
+    assert (
+        abs(
+            math.cos(q[0]) * math.cos(q[1]) * math.cos(q[2])
+            - math.cos(q[0]) * math.cos(q[1] + q[2])
+        )
+        > 0.1
+    )
+
+
+def test_screening_is_scale_aware_and_not_the_last_word() -> None:
+    """A mm-sized entry with float round-off passes the screen; the proof still decides."""
+    l1, q1 = sp.Symbol("l1", real=True), sp.Symbol("q1", real=True)
+    exact = 452.4 * l1 * sp.cos(q1)
+    close = (452.4 + 1e-10) * l1 * sp.cos(q1)
+    assert screen([close], [exact], "s")[0].all()
+    assert not screen([exact + 1e-3], [exact], "s")[0].any()
+    assert equal(exact, exact * 2 / 2, "s") and not equal(close, exact, "s")
+
+
+def test_sample_points_are_the_same_in_every_process() -> None:
+    code = (
+        "from hexapod_kin.report.compare import parse, points_on;"
+        "print(points_on(parse('sin(q2)'), 3, 'k').round(12).tolist())"
+    )
+    outs = {
+        subprocess.run(
+            [sys.executable, "-c", code],
+            env={**os.environ, "PYTHONHASHSEED": seed},
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+        for seed in ("1", "2")
+    }
+    assert len(outs) == 1
+
+
+# ---------------------------------------------------------------------- disk cache
+@pytest.fixture()
+def symbolic_claims() -> list:
+    claims, _ = load_claims()
+    return claims
+
+
+def _symbolic(claims: list) -> list:
+    return [c for c in claims if c.kind in report_cache.KINDS]
+
+
+def test_cache_hit_gives_the_cold_verdicts(
+    symbolic_claims: list, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path / "report")
+    claims = symbolic_claims
+    todo = _symbolic(claims)
+    cold = evaluate(todo, Context(quick=True, claims=claims), cache=False)
+    filled = evaluate(todo, Context(quick=True, claims=claims))
+    assert filled == cold
+    assert len(list((tmp_path / "report").glob("*.json"))) == len(todo)
+
+    def boom(*_: object) -> None:
+        raise AssertionError("recomputed although cached")
+
+    monkeypatch.setattr(checks, "CHECKS", {k: boom for k in checks.CHECKS})
+    hit = evaluate(todo, Context(quick=True, claims=claims))
+    assert hit == cold
+    assert {v.status for v in hit} <= {"agrees", "wrong", "differs"}
+
+
+def test_corrupt_or_foreign_cache_files_are_ignored(
+    symbolic_claims: list, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "report"
+    monkeypatch.setattr(report_cache, "cache_dir", lambda: folder)
+    claims = symbolic_claims
+    todo = [c for c in _symbolic(claims) if c.id in ("000-T12", "001-T12", "001-det")]
+    cold = evaluate(todo, Context(quick=True, claims=claims), cache=False)
+    evaluate(todo, Context(quick=True, claims=claims))
+    files = sorted(folder.glob("*.json"))
+    assert len(files) == 3
+    texts = [f.read_text() for f in files]
+    files[0].write_text("{not json")  # corrupt
+    files[1].write_text(texts[2])  # foreign: another claim's verdict under this key
+    files[2].write_text(json.dumps({"format": -1}))  # unknown layout
+    again = evaluate(todo, Context(quick=True, claims=claims))
+    assert again == cold
+    assert [json.loads(f.read_text())["key"] for f in files] == [f.stem for f in files]
