@@ -315,6 +315,8 @@ def _run_threads(
     if nwork == 1:
         bad.append(fast(*args, 0, nblocks, BLOCK))
         return
+    if not getattr(fast, "signatures", True):  # compile (or load) once, before the threads
+        fast(*args, 0, 0, BLOCK)
     per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))
     chunks = itertools.count()  # next() is atomic under the GIL
 
