@@ -205,3 +205,28 @@ def test_cached_machine_code_is_used(tmp_path):
     assert _probe(tmp_path, "ready", "auto") == {"ready": False}
     assert _probe(tmp_path, "compile", "always") == {"compiled": True}
     assert _probe(tmp_path, "ready", "auto") == {"ready": True}
+
+
+def test_precompile_fills_the_disk_cache(tmp_path):
+    from hexapod_kin.precompile import precompile
+
+    with pytest.raises(ParameterError, match="area 'scans' does not exist"):
+        precompile(["scans"])
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HEXAPOD_KIN_JIT="auto")
+    probe = (
+        "import json; from hexapod_kin.motion import _kernel as k; "
+        "print(json.dumps([k._rr3.ready(), k._rr6.ready()]))"
+    )
+
+    def ready():
+        res = subprocess.run(
+            [sys.executable, "-c", probe], env=env, capture_output=True, text=True, timeout=120
+        )
+        return json.loads(res.stdout)
+
+    assert ready() == [False, False]
+    cli = [sys.executable, "-m", "hexapod_kin", "precompile", "--only", "motion", "--json"]
+    res = subprocess.run(cli, env=env, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert set(json.loads(res.stdout)["seconds"]) == {"motion"}
+    assert ready() == [True, True]

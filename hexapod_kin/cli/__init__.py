@@ -31,6 +31,7 @@ MODULES: tuple[str, ...] = (
     "sweep",
     "gait",
     "report",
+    "precompile",
 )
 
 
