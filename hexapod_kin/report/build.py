@@ -168,7 +168,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))
     figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
-    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0)
+    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
     if animations:
         try:
@@ -180,10 +180,6 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
                 target = out / "walk.html"
                 p.replace(target)
                 anims["beyond"].append(target)
-    else:
-        for p in walk_paths:
-            if p.suffix == ".html":
-                p.unlink()
     derivations = {k: ctx.derivation(k).text() for k in ("leg", "leg+", "scara")}
     md_path, html_path = out / "report.md", out / "report.html"
     rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
