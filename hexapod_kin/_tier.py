@@ -26,6 +26,7 @@ check both tiers give the same numbers).
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 import time
@@ -192,7 +193,8 @@ class Kernel:
             self._fast = _mode != "never"
             return self.dispatcher(*args)
         t0 = time.perf_counter()
-        out = self.interpreted()(*args)
+        with np.errstate(all="ignore"):  # compiled code never warns (inf, NaN as computed)
+            out = self.interpreted()(*args)
         dt = time.perf_counter() - t0
         self._spent += dt
         if _mode == "auto":  # learn the interpreted seconds per unit (the first call included)
@@ -217,6 +219,29 @@ def _on_disk(disp: Dispatcher) -> bool:
         return False
 
 
+def _c_semantics(fn: Callable[..., float]) -> Callable[..., float]:
+    """``fn`` as compiled code computes it: NaN outside the domain, inf on overflow."""
+
+    def wrapped(*args: float) -> float:
+        try:
+            return fn(*args)
+        except ValueError:  # sqrt(-1e-18), acos(1 + 1e-16): numba gives NaN, not an error
+            return math.nan
+        except OverflowError:
+            return math.inf
+
+    wrapped.__name__ = fn.__name__
+    return wrapped
+
+
+#: ``math`` as numba compiles it, for the interpreted twins.
+_MATH = pytypes.SimpleNamespace(**{k: getattr(math, k) for k in dir(math) if not k.startswith("_")})
+for _name in ("sqrt", "acos", "asin", "acosh", "atanh", "log", "log10", "log2", "log1p", "exp",
+              "expm1", "cosh", "sinh", "pow", "fmod"):  # fmt: skip
+    setattr(_MATH, _name, _c_semantics(getattr(math, _name)))
+_MATH_BY_ID = {id(getattr(math, k)): getattr(_MATH, k) for k in vars(_MATH)}
+
+
 def _twin(disp: Dispatcher, seen: dict[Any, Any]) -> Callable[..., Any]:
     """A plain function running ``disp``'s source; every kernel it names is a twin too."""
     if disp in seen:
@@ -233,6 +258,14 @@ def _twin(disp: Dispatcher, seen: dict[Any, Any]) -> Callable[..., Any]:
         inner = _dispatcher_of(value)
         if inner is not None:
             glb[name] = _twin(inner, seen)
+        elif value is math:
+            glb[name] = _MATH
+        elif (
+            callable(value)
+            and id(value) in _MATH_BY_ID
+            and value is getattr(math, value.__name__, None)
+        ):
+            glb[name] = _MATH_BY_ID[id(value)]
     if cells is not None:
         for cell in cells:
             inner = _dispatcher_of(cell.cell_contents)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -230,3 +231,18 @@ def test_precompile_fills_the_disk_cache(tmp_path):
     assert res.returncode == 0, res.stderr[-2000:]
     assert set(json.loads(res.stdout)["seconds"]) == {"motion"}
     assert ready() == [True, True]
+
+
+@_tier.njit(cache=False)
+def _domain(x: float) -> float:  # pragma: no cover - also compiled
+    return math.sqrt(x) + math.acos(1.0 + x * x)
+
+
+def test_interpreted_math_has_compiled_semantics():
+    """Out of domain: NaN as compiled code gives (Python's math would raise)."""
+    for mode in ("never", "always"):
+        before = _tier.set_mode(mode)
+        try:
+            assert math.isnan(_domain(-1e-18)), mode
+        finally:
+            _tier.set_mode(before)
