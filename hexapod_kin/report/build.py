@@ -149,6 +149,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
 
     """
     from . import figures
+    from .cache import derivation_text
     from .checks import Context
 
     start = time.perf_counter()
@@ -180,7 +181,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
                 target = out / "walk.html"
                 p.replace(target)
                 anims["beyond"].append(target)
-    derivations = {k: ctx.derivation(k).text() for k in ("leg", "leg+", "scara")}
+    derivations = {k: derivation_text(ctx.derivation(k)) for k in ("leg", "leg+", "scara")}
     md_path, html_path = out / "report.md", out / "report.html"
     rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
     parts = (rep, seeds, figs, anims, derivations)

@@ -9,14 +9,15 @@ depends on:
   derivative of);
 * hexapod_kin's expressions the check compares against (``srepr`` of the derived matrices,
   det J, the families, the lengths, the preset's table rows);
-* the package version, the sympy version, this cache's :data:`FORMAT` and the source text of
-  the comparison code (``compare.py``, ``checks.py``), so an edited rule never reads an old
-  verdict.
+* the package version, the sympy version, this cache's :data:`FORMAT` and the package's source
+  (:func:`package_digest`), so an edited rule never reads an old verdict.
 
 Only the symbolic kinds are cached (:data:`KINDS`); the numeric checks (FK, IK, schedule,
-measured bounds) always run. A verdict with status ``"error"`` is never stored. Files are written
-atomically (:func:`hexapod_kin._io.atomic_write`); a missing, corrupt or foreign file is
-ignored (the verdict is recomputed and the file rewritten).
+measured bounds) always run. A verdict with status ``"error"`` is never stored. The plain-text
+derivations printed in the report (:func:`derivation_text`) are kept the same way, keyed by
+every field of the derivation but its timing. Files are written atomically
+(:func:`hexapod_kin._io.atomic_write`); a missing, corrupt or foreign file is ignored (the
+verdict is recomputed and the file rewritten).
 """
 
 from __future__ import annotations
@@ -33,7 +34,16 @@ import sympy as sp
 from .._io import atomic_write, cache_root
 from .compare import Claim, Verdict
 
-__all__ = ["FORMAT", "KINDS", "cache_dir", "key", "load", "store"]
+__all__ = [
+    "FORMAT",
+    "KINDS",
+    "cache_dir",
+    "derivation_text",
+    "key",
+    "load",
+    "package_digest",
+    "store",
+]
 
 #: Version of the file layout and of the key's parts.
 FORMAT = 1
@@ -49,12 +59,17 @@ def cache_dir() -> Path:
 
 
 @lru_cache(maxsize=1)
-def _code_digest() -> str:
-    """SHA-256 of the comparison code (the rules a cached verdict was made with)."""
+def package_digest() -> str:
+    """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``).
+
+    Part of every key here: any change of the code that computes, compares or draws makes
+    the cached results unreachable (they are recomputed).
+    """
+    root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
-    here = Path(__file__).parent
-    for name in ("compare.py", "checks.py", "cache.py"):
-        h.update((here / name).read_bytes())
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode())
+        h.update(f.read_bytes())
     return h.hexdigest()
 
 
@@ -127,7 +142,7 @@ def key(c: Claim, ctx: Any) -> str | None:
         "format": FORMAT,
         "version": __version__,
         "sympy": sp.__version__,
-        "code": _code_digest(),
+        "code": package_digest(),
         "claim": c.data,
         "ours": _ours(c, ctx),
     }
@@ -166,3 +181,49 @@ def store(digest: str, verdict: Verdict) -> Path | None:
         return atomic_write(folder / f"{digest}.json", text)
     except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
         return None
+
+
+def _text_key(d: Any) -> str:
+    parts: dict[str, Any] = {
+        "format": FORMAT,
+        "sympy": sp.__version__,
+        "code": package_digest(),
+    }
+    for f in fields(d):
+        if f.name in ("seconds", "cached"):
+            continue
+        value = getattr(d, f.name)
+        if isinstance(value, (list, tuple)):
+            parts[f.name] = [_sre(v) if isinstance(v, sp.Basic) else repr(v) for v in value]
+        else:
+            parts[f.name] = _sre(value) if isinstance(value, sp.Basic) else repr(value)
+    text = json.dumps(parts, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def derivation_text(d: Any) -> str:
+    """``d.text()`` (a :class:`~hexapod_kin.symbolic.Derivation`), read from the cache when kept.
+
+    The key is every field of ``d`` but ``seconds`` and ``cached`` (``srepr`` of the sympy
+    ones), the sympy version and the package source.
+    """
+    try:
+        digest = _text_key(d)
+    except Exception:  # noqa: BLE001 - no key: print it
+        return str(d.text())
+    path = cache_dir() / f"text-{digest}.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("format") == FORMAT and data.get("key") == digest:
+            if isinstance(data.get("text"), str):
+                return str(data["text"])
+    except Exception:  # noqa: BLE001 - missing or damaged: print it again
+        pass
+    text = str(d.text())
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        payload = {"format": FORMAT, "key": digest, "text": text}
+        atomic_write(path, json.dumps(payload, ensure_ascii=False))
+    except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+        pass
+    return text

@@ -59,6 +59,7 @@ class Context:
         self.quick = quick
         self.claims = {c.id: c for c in claims or []}
         self._derived: dict[str, Any] = {}
+        self._items: dict[tuple[str, str], sp.Matrix] = {}
 
     # ------------------------------------------------------------------ models
     def chain(self, key: str) -> Any:
@@ -88,6 +89,11 @@ class Context:
 
     def item(self, key: str, item: str) -> sp.Matrix:
         """A named symbolic item of the derivation (``"T 2"``, ``"0T 4"``, ``"p"``, ``"J"``…)."""
+        if (key, item) not in self._items:
+            self._items[key, item] = self._item(key, item)
+        return self._items[key, item].copy()
+
+    def _item(self, key: str, item: str) -> sp.Matrix:
         d = self.derivation(key)
         if item.startswith("T "):
             out = d.transforms[int(item[2:]) - 1]

@@ -77,7 +77,12 @@ _LOCALS = _locals()
 
 def parse(text: Any) -> sp.Expr:
     """Parse one seed expression (sympy syntax, ``c23``-style abbreviations expanded)."""
-    return sp.sympify(parse_expr(str(text), local_dict=dict(_LOCALS)))
+    return _parse(str(text))
+
+
+@lru_cache(maxsize=4096)
+def _parse(text: str) -> sp.Expr:
+    return sp.sympify(parse_expr(text, local_dict=dict(_LOCALS)))
 
 
 def plain(expr: Any) -> Any:

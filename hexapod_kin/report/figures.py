@@ -18,7 +18,6 @@ import dataclasses
 import hashlib
 import math
 from collections.abc import Callable
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -36,17 +35,6 @@ __all__ = [
 ]
 
 _PNG_HEAD, _PNG_TAIL = b"\x89PNG\r\n\x1a\n", b"IEND\xaeB`\x82"
-
-
-@lru_cache(maxsize=1)
-def _code_digest() -> str:
-    """SHA-256 of the package's Python source (any change redraws every figure)."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
 
 
 def _feed(h: Any, obj: Any, depth: int = 0) -> bool:
@@ -87,9 +75,10 @@ def _digest(name: str, inputs: Any) -> str | None:
         import matplotlib
 
         from .. import __version__
+        from .cache import package_digest
 
         h = hashlib.sha256()
-        head = (name, __version__, matplotlib.__version__, _code_digest())
+        head = (name, __version__, matplotlib.__version__, package_digest())
         return h.hexdigest() if _feed(h, head) and _feed(h, inputs) else None
     except Exception:  # noqa: BLE001 - no key: the figure is drawn
         return None
