@@ -157,7 +157,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     (out / "figures").mkdir(parents=True, exist_ok=True)
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims)
-    verdicts = evaluate(claims, ctx)
+    ahead = _derive_ahead(ctx)  # sympy in another process while the experiments run here
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
@@ -166,11 +166,13 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     figs["jacobian"] += maps
     figs["step"].append(figures.step_figure(ctx, fdir))
     facts["step"] = ctx.step.as_dict()
-    figs["leg2"].append(figures.leg2_figure(ctx, fdir))
     figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
     walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
+    _join(ahead)
+    figs["leg2"].append(figures.leg2_figure(ctx, fdir))  # the schedule needs coxa's lengths
+    verdicts = evaluate(claims, ctx)
     if animations:
         try:
             anims["step"].append(figures.step_animation(ctx, out))
@@ -191,6 +193,50 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     rep = Report(out, md_path, html_path, tuple(verdicts), facts, seconds)
     atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
     return rep
+
+
+#: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
+DERIVED = ("coxa", "leg", "leg+", "scara")
+_AHEAD_BUDGET = 60.0
+
+
+def _derive_ahead(ctx: Any) -> Any:
+    """Start the derivations missing from the disk cache in a forked process; return it or None.
+
+    The child fills the symbolic disk cache (:func:`hexapod_kin.symbolic.derive`, budget 60 s
+    each) while this process runs the numeric experiments; :func:`_join` waits for it before
+    the checks read the derivations (a derivation it could not finish is derived here).
+    """
+    import multiprocessing as mp
+
+    from ..symbolic import cached
+
+    try:
+        todo = [ctx.chain(k) for k in DERIVED if cached(ctx.chain(k)) is None]
+        if not todo:
+            return None
+        proc = mp.get_context("fork").Process(target=_derive_all, args=(todo,))
+        proc.start()
+        return proc
+    except Exception:  # noqa: BLE001 - no fork (or no process): the checks derive in turn
+        return None
+
+
+def _derive_all(chains: list[Any]) -> None:  # pragma: no cover - runs in the child
+    from ..symbolic import derive
+
+    for chain in chains:
+        derive(chain, budget=_AHEAD_BUDGET)
+
+
+def _join(proc: Any) -> None:
+    """Wait for :func:`_derive_ahead`'s process (bounded by the budgets), then end it."""
+    if proc is None:
+        return
+    proc.join(_AHEAD_BUDGET * len(DERIVED) + 5.0)
+    if proc.is_alive():
+        proc.kill()
+        proc.join(5.0)
 
 
 _LABEL = {
