@@ -157,19 +157,26 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     (out / "figures").mkdir(parents=True, exist_ok=True)
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims)
-    ahead = _derive_ahead(ctx)  # sympy in another process while the experiments run here
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
     fdir = out / "figures"
-    maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
-    figs["jacobian"] += maps
-    figs["step"].append(figures.step_figure(ctx, fdir))
-    facts["step"] = ctx.step.as_dict()
-    figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
-    facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
-    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
-    figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
+    ahead = _derive_ahead(ctx)  # sympy in another process while the experiments run here
+    try:
+        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        figs["jacobian"] += maps
+        figs["step"].append(figures.step_figure(ctx, fdir))
+        facts["step"] = ctx.step.as_dict()
+        figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
+        facts["pendulum"] = {
+            k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)
+        }
+        duration = 1.5 if quick else 3.0
+        walk_paths, facts["hexapod"] = figures.walk_figures(fdir, duration, animations)
+        figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
+    except BaseException:
+        _join(ahead, wait=False)
+        raise
     _join(ahead)
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))  # the schedule needs coxa's lengths
     verdicts = evaluate(claims, ctx)
@@ -229,11 +236,11 @@ def _derive_all(chains: list[Any]) -> None:  # pragma: no cover - runs in the ch
         derive(chain, budget=_AHEAD_BUDGET)
 
 
-def _join(proc: Any) -> None:
-    """Wait for :func:`_derive_ahead`'s process (bounded by the budgets), then end it."""
+def _join(proc: Any, wait: bool = True) -> None:
+    """Wait for :func:`_derive_ahead`'s process, then end it (``wait=False``: end it now)."""
     if proc is None:
         return
-    proc.join(_AHEAD_BUDGET * len(DERIVED) + 5.0)
+    proc.join(_AHEAD_BUDGET * len(DERIVED) + 5.0 if wait else 0.0)
     if proc.is_alive():
         proc.kill()
         proc.join(5.0)
