@@ -98,7 +98,9 @@ class AlignedPose:
         self.col = np.ascontiguousarray(arrays.col, dtype=np.int64)
         self.nq = int(arrays.nq)
         if len(set(self.col.tolist())) != m:  # pragma: no cover - one variable per joint
-            raise ValueError("a joint variable drives two joints of the chain")
+            from .exceptions import SourceError
+
+            raise SourceError(f"joint variables {self.col.tolist()} drive two joints of a chain")
 
 
 def _z_to(u: np.ndarray) -> np.ndarray:
