@@ -15,6 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sympy as sp
 
@@ -289,3 +290,43 @@ def test_corrupt_or_foreign_cache_files_are_ignored(
     again = evaluate(todo, Context(quick=True, claims=claims))
     assert again == cold
     assert [json.loads(f.read_text())["key"] for f in files] == [f.stem for f in files]
+
+
+def test_figure_render_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Same data: the PNG is not drawn again; other data or a damaged PNG: drawn."""
+    from hexapod_kin.report import figures
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "cache"))
+    drawn: list[bytes] = []
+
+    def draw(path: Path) -> Path:
+        data = b"\x89PNG\r\n\x1a\n" + bytes([len(drawn)]) + b"IEND\xaeB`\x82"
+        drawn.append(data)
+        path.write_bytes(data)
+        return path
+
+    inputs = {"t": np.linspace(0.0, 1.0, 5), "title": "x"}
+    first = figures._rendered("f", inputs, tmp_path / "a.png", draw).read_bytes()
+    again = figures._rendered("f", dict(inputs), tmp_path / "b.png", draw).read_bytes()
+    assert len(drawn) == 1 and again == first
+    other = {"t": np.linspace(0.0, 1.0, 5) + 1e-15, "title": "x"}  # 1e-15 apart: drawn again
+    figures._rendered("f", other, tmp_path / "c.png", draw)
+    assert len(drawn) == 2
+    for png in (tmp_path / "cache" / "report" / "figures").glob("*.png"):
+        png.write_bytes(png.read_bytes()[:-3])  # truncated
+    figures._rendered("f", inputs, tmp_path / "d.png", draw)
+    assert len(drawn) == 3
+    figures._rendered("f", object(), tmp_path / "e.png", draw)  # not hashable: drawn
+    figures._rendered("f", object(), tmp_path / "e.png", draw)
+    assert len(drawn) == 5
+
+
+def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path)
+    d = Context(quick=True).derivation("scara")
+    text = d.text()
+    assert report_cache.derivation_text(d) == text
+    (path,) = tmp_path.glob("text-*.json")
+    assert json.loads(path.read_text())["text"] == text
+    path.write_text("[]")  # foreign content
+    assert report_cache.derivation_text(d) == text
