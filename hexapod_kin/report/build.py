@@ -208,39 +208,37 @@ _AHEAD_BUDGET = 60.0
 
 
 def _derive_ahead(ctx: Any) -> Any:
-    """Start the derivations missing from the disk cache in a forked process; return it or None.
+    """Start the symbolic side in a forked process; return it (or None: no fork here).
 
-    The child fills the symbolic disk cache (:func:`hexapod_kin.symbolic.derive`, budget 60 s
-    each) while this process runs the numeric experiments; :func:`_join` waits for it before
-    the checks read the derivations (a derivation it could not finish is derived here).
+    The child derives :data:`DERIVED` (:func:`hexapod_kin.symbolic.derive`, budget 60 s each)
+    and computes the symbolic verdicts (:data:`.cache.KINDS`): both land in the disk caches
+    while this process runs the numeric experiments and draws. :func:`_join` waits for it
+    before the checks run here, which then read what it stored (anything it could not finish
+    is computed here, the same way).
     """
     import multiprocessing as mp
 
-    from ..symbolic import cached
-
     try:
-        todo = [ctx.chain(k) for k in DERIVED if cached(ctx.chain(k)) is None]
-        if not todo:
-            return None
-        proc = mp.get_context("fork").Process(target=_derive_all, args=(todo,))
+        proc = mp.get_context("fork").Process(target=_symbolic_side, args=(ctx,))
         proc.start()
         return proc
     except Exception:  # noqa: BLE001 - no fork (or no process): the checks derive in turn
         return None
 
 
-def _derive_all(chains: list[Any]) -> None:  # pragma: no cover - runs in the child
-    from ..symbolic import derive
+def _symbolic_side(ctx: Any) -> None:  # pragma: no cover - runs in the child
+    from .cache import KINDS
 
-    for chain in chains:
-        derive(chain, budget=_AHEAD_BUDGET)
+    for key in DERIVED:
+        ctx.derivation(key)
+    evaluate([c for c in ctx.claims.values() if c.kind in KINDS], ctx)
 
 
 def _join(proc: Any, wait: bool = True) -> None:
     """Wait for :func:`_derive_ahead`'s process, then end it (``wait=False``: end it now)."""
     if proc is None:
         return
-    proc.join(_AHEAD_BUDGET * len(DERIVED) + 5.0 if wait else 0.0)
+    proc.join(_AHEAD_BUDGET * (len(DERIVED) + 1) if wait else 0.0)
     if proc.is_alive():
         proc.kill()
         proc.join(5.0)
