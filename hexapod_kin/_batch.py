@@ -38,9 +38,8 @@ import numba
 import numpy as np
 
 from ._kernels import ChainArrays
-from ._numerics import njit
+from ._numerics import POLY_TRIG_MAX, njit, sincos
 from ._tier import compiled, interpreted
-from .singularity._kernel import POLY_TRIG_MAX, sincos
 
 __all__ = ["BLOCK", "REF_CODES", "AlignedPose", "aligned", "pose_jacobian_batch"]
 

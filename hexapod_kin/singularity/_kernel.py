@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import det_small, eig2_sym, eig3_sym, jacobi_eig, njit
+from .._numerics import POLY_TRIG_MAX, det_small, eig2_sym, eig3_sym, jacobi_eig, njit, sincos
 from ._blocks import JACOBI_TOL, eig_block, minor_big, minor_block
 
 __all__ = [
@@ -37,19 +37,6 @@ __all__ = [
     "minor_block",
     "sincos",
 ]
-
-# Cody–Waite split of π/2 (two 33-bit pieces and a tail) and the fdlibm minimax kernels of
-# sin / cos on [−π/4, π/4]: |error| ≤ 1 ulp for |x| ≤ POLY_TRIG_MAX, no calls, so the
-# per-joint loops below vectorise (SIMD); larger angles use libm.
-_PIO2_1 = 1.57079632673412561417e00
-_PIO2_2 = 6.07710050630396597660e-11
-_PIO2_2T = 2.02226624879595063154e-21
-_INVPIO2 = 6.36619772367581382433e-01
-POLY_TRIG_MAX = 1.0e5
-_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
-_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
-_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
-_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
 
 
 @njit(cache=True, nogil=True)
@@ -121,26 +108,6 @@ def _reduce_one(
         manip = math.sqrt(det_g)
     cond = smax / smin if smin > 0.0 else np.inf
     return det, manip, cond, smin
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``(sin x, cos x)`` without libm calls (branch-free quadrant selection)."""
-    n = math.floor(x * _INVPIO2 + 0.5)
-    r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_2T
-    z = r * r
-    s = r + (z * r) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
-    cr = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    hz = 0.5 * z
-    w = 1.0 - hz
-    c = w + (((1.0 - w) - hz) + z * cr)
-    quad = int(n) & 3
-    swap = quad & 1
-    sgn_s = 1.0 - 2.0 * ((quad >> 1) & 1)
-    sgn_c = 1.0 - 2.0 * (((quad + 1) >> 1) & 1)
-    ss = c if swap else s
-    cc = s if swap else c
-    return ss * sgn_s, cc * sgn_c
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
