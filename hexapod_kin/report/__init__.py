@@ -3,8 +3,11 @@
 * ``claims.toml`` — the seeds' claims as data, each with its place in the seed;
 * :mod:`.compare` — parsing the claims and the comparison rules (:class:`Verdict`);
 * :mod:`.checks` — one check per claim kind against hexapod_kin's values (:class:`Context`);
-* :mod:`.figures` — the seed-like figures and the animations;
-* :mod:`.build` — :func:`reproduce`: Markdown + standalone HTML + ``verdicts.json``.
+* :mod:`.cache` — the disk cache of the symbolic verdicts and derivation texts;
+* :mod:`.figures` — the seed-like figures (a render cache: the same data is not drawn twice)
+  and the animations;
+* :mod:`.build` — :func:`reproduce`: Markdown + standalone HTML + ``verdicts.json`` (the
+  symbolic side runs in a forked process while the experiments run).
 
 ``hexapod-kin reproduce --out DIR`` is the command line.
 """

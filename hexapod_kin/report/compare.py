@@ -5,8 +5,10 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
 * ``table`` — the seed's Khalil rows against the preset's rows (lengths scaled by the claim's
   ``unit``); a different α is reported with what it does to the FK (checked symbolically);
 * ``matrix`` — a symbolic matrix (``^{j-1}T_j``, ``^0T_j``, ``p``, ``J``) against
-  :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points (relative
-  tolerance :data:`RTOL`), then ``sympy.simplify(a - b) == 0`` for the entries that agree;
+  :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points seeded by
+  the claim (:func:`screen`: numpy, relative tolerance :data:`RTOL`), then
+  ``sympy.simplify(a - b) == 0`` for the entries that agree; sympy simplifies a differing
+  entry only to explain it;
   a wrong matrix is also tested against the other α2 sign, the product of the seed's own
   factors and the derivative of the seed's own ``p`` to say where the slip comes from;
 * ``det`` — ``simplify(seed − det J) == 0`` (and ``±`` / scale when not);
@@ -19,6 +21,9 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
   :func:`hexapod_kin.ik.analytic`; the seed's IK formulas are evaluated as written;
 * ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``
   of the claimed value.
+
+The symbolic verdicts are kept on disk (:mod:`.cache`), keyed by the claim, hexapod_kin's
+expressions and the package source.
 """
 
 from __future__ import annotations
