@@ -259,6 +259,7 @@ def test_cache_hit_gives_the_cold_verdicts(
     claims = symbolic_claims
     todo = _symbolic(claims)
     cold = evaluate(todo, Context(quick=True, claims=claims), cache=False)
+    assert not (tmp_path / "report").exists()  # cache=False neither reads nor writes
     filled = evaluate(todo, Context(quick=True, claims=claims))
     assert filled == cold
     assert len(list((tmp_path / "report").glob("*.json"))) == len(todo)
@@ -325,6 +326,8 @@ def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path)
     d = Context(quick=True).derivation("scara")
     text = d.text()
+    assert report_cache.derivation_text(d, cache=False) == text
+    assert not list(tmp_path.iterdir())
     assert report_cache.derivation_text(d) == text
     (path,) = tmp_path.glob("text-*.json")
     assert json.loads(path.read_text())["text"] == text

@@ -12,7 +12,9 @@ __all__ = ["register"]
 def _reproduce(args: argparse.Namespace) -> int:
     from ..report import reproduce
 
-    rep = reproduce(args.out, quick=args.quick, animations=not args.no_animations)
+    rep = reproduce(
+        args.out, quick=args.quick, animations=not args.no_animations, cache=not args.no_cache
+    )
     if args.json:
         print(json.dumps(rep.to_dict(), default=str))
     else:
@@ -38,5 +40,10 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--no-animations", action="store_true",
                    help="skip the step and walk animations (no viewer extra needed)")  # fmt: skip
+    p.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="recompute every symbolic verdict and redraw every figure (ignore the disk cache)",
+    )
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON object")
     p.set_defaults(func=_reproduce)

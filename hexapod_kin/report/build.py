@@ -136,13 +136,17 @@ class Report:
         }
 
 
-def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) -> Report:
+def reproduce(
+    out: str | Path, *, quick: bool = False, animations: bool = True, cache: bool = True
+) -> Report:
     """Redo every result of the four seeds, compare, and write the report into ``out``.
 
     Args:
         out: Report folder (created).
         quick: Reduced sizes (shorter runs, coarser scans) for tests.
         animations: Write the step and walk animations (needs the ``viewer`` extra).
+        cache: Use the report's disk caches (symbolic verdicts, derivation texts, rendered
+            figures; see :mod:`.cache`); ``False`` computes and draws everything again.
 
     Returns:
         The :class:`Report`.
@@ -156,7 +160,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     claims, seeds = load_claims()
-    ctx = Context(quick=quick, claims=claims)
+    ctx = Context(quick=quick, claims=claims, cache=cache)
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
@@ -172,14 +176,14 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
             k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)
         }
         duration = 1.5 if quick else 3.0
-        walk_paths, facts["hexapod"] = figures.walk_figures(fdir, duration, animations)
+        walk_paths, facts["hexapod"] = figures.walk_figures(fdir, duration, animations, cache)
         figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
     except BaseException:
         _join(ahead, wait=False)
         raise
     _join(ahead)
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))  # the schedule needs coxa's lengths
-    verdicts = evaluate(claims, ctx)
+    verdicts = evaluate(claims, ctx, cache=cache)
     if animations:
         try:
             anims["step"].append(figures.step_animation(ctx, out))
@@ -190,7 +194,7 @@ def reproduce(out: str | Path, *, quick: bool = False, animations: bool = True) 
                 target = out / "walk.html"
                 p.replace(target)
                 anims["beyond"].append(target)
-    derivations = {k: derivation_text(ctx.derivation(k)) for k in ("leg", "leg+", "scara")}
+    derivations = {k: derivation_text(ctx.derivation(k), cache) for k in ("leg", "leg+", "scara")}
     md_path, html_path = out / "report.md", out / "report.html"
     rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
     parts = (rep, seeds, figs, anims, derivations)
@@ -231,7 +235,8 @@ def _symbolic_side(ctx: Any) -> None:  # pragma: no cover - runs in the child
 
     for key in DERIVED:
         ctx.derivation(key)
-    evaluate([c for c in ctx.claims.values() if c.kind in KINDS], ctx)
+    if ctx.cache:  # the verdicts reach the parent through the disk cache only
+        evaluate([c for c in ctx.claims.values() if c.kind in KINDS], ctx)
 
 
 def _join(proc: Any, wait: bool = True) -> None:

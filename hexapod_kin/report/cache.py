@@ -201,12 +201,14 @@ def _text_key(d: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def derivation_text(d: Any) -> str:
+def derivation_text(d: Any, cache: bool = True) -> str:
     """``d.text()`` (a :class:`~hexapod_kin.symbolic.Derivation`), read from the cache when kept.
 
     The key is every field of ``d`` but ``seconds`` and ``cached`` (``srepr`` of the sympy
-    ones), the sympy version and the package source.
+    ones), the sympy version and the package source. ``cache=False``: printed, not kept.
     """
+    if not cache:
+        return str(d.text())
     try:
         digest = _text_key(d)
     except Exception:  # noqa: BLE001 - no key: print it

@@ -52,11 +52,15 @@ class Context:
     Args:
         quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
         claims: All claims (a matrix check looks up the seed's own factors).
+        cache: Read and write the report's disk caches (verdicts, texts, figures).
 
     """
 
-    def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
+    def __init__(
+        self, quick: bool = False, claims: list[Claim] | None = None, cache: bool = True
+    ) -> None:
         self.quick = quick
+        self.cache = cache
         self.claims = {c.id: c for c in claims or []}
         self._derived: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}

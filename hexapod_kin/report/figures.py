@@ -84,9 +84,11 @@ def _digest(name: str, inputs: Any) -> str | None:
         return None
 
 
-def _rendered(name: str, inputs: Any, path: Path, draw: Callable[[Path], Path]) -> Path:
+def _rendered(
+    name: str, inputs: Any, path: Path, draw: Callable[[Path], Path], cache: bool = True
+) -> Path:
     """Write figure ``name`` to ``path``: the cached PNG of the same inputs, else ``draw(path)``."""
-    digest = _digest(name, inputs)
+    digest = _digest(name, inputs) if cache else None
     cached = cache_root("report") / "figures" / f"{digest}.png" if digest else None
     if cached is not None:
         try:
@@ -128,7 +130,8 @@ def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any
             plt.close(fig)
             return written
 
-        paths.append(_rendered("heat_map", (res, title), out / f"singularity_{name}.png", draw))
+        png = out / f"singularity_{name}.png"
+        paths.append(_rendered("heat_map", (res, title), png, draw, ctx.cache))
     return paths, counts
 
 
@@ -141,7 +144,7 @@ def step_figure(ctx: Any, out: Path) -> Path:
 
         return plot_motion(ctx.step, path, title=title)
 
-    return _rendered("step", (ctx.step, title), out / "step.png", draw)
+    return _rendered("step", (ctx.step, title), out / "step.png", draw, ctx.cache)
 
 
 def step_animation(ctx: Any, out: Path) -> Path:
@@ -162,7 +165,9 @@ def step_animation(ctx: Any, out: Path) -> Path:
 
 def leg2_figure(ctx: Any, out: Path) -> Path:
     """Seed 002 Figs. 11-13: planned joint input, foot position, IK output (ours, the seed's)."""
-    return _rendered("leg2", ctx.schedule, out / "leg2.png", lambda path: _leg2(ctx.schedule, path))
+    return _rendered(
+        "leg2", ctx.schedule, out / "leg2.png", lambda path: _leg2(ctx.schedule, path), ctx.cache
+    )
 
 
 def _leg2(s: dict[str, np.ndarray], path: Path) -> Path:
@@ -197,7 +202,11 @@ def _leg2(s: dict[str, np.ndarray], path: Path) -> Path:
 def pendulum_figure(ctx: Any, out: Path) -> Path:
     """Seed 001 Figs. 5-8: rotation (and angular velocity) of the link, undamped and damped."""
     return _rendered(
-        "pendulum", ctx.pendulum, out / "pendulum.png", lambda path: _pendulum(ctx.pendulum, path)
+        "pendulum",
+        ctx.pendulum,
+        out / "pendulum.png",
+        lambda path: _pendulum(ctx.pendulum, path),
+        ctx.cache,
     )
 
 
@@ -233,7 +242,7 @@ def _pendulum(p: Any, path: Path) -> Path:
 
 
 def walk_figures(
-    out: Path, duration: float, animation: bool = True
+    out: Path, duration: float, animation: bool = True, cache: bool = True
 ) -> tuple[list[Path], dict[str, Any]]:
     """The hexapod standing and walking: gait figure, walk animation, the figures of both."""
     from ..dynamics import stand
@@ -248,7 +257,7 @@ def walk_figures(
 
         return plot_gait(run, path, title=title)
 
-    paths = [_rendered("walk", (run, title), out / "walk.png", draw)]
+    paths = [_rendered("walk", (run, title), out / "walk.png", draw, cache)]
     facts: dict[str, Any] = {
         "stand_height_m": st.height,
         "stand_mass_kg": st.mass,
