@@ -15,7 +15,10 @@ of two tiers per call, like a JIT virtual machine:
 The choice is the ski-rental rule: a kernel runs interpreted while the interpreted seconds it
 has cost in this process plus the predicted cost of this call stay within its compile budget
 (``compile_s``, about what compiling it costs; :data:`COMPILE_S` by default), then it compiles once.
-The prediction is ``work(*args)``, a kernel's own estimate of its interpreted seconds (given
+A kernel with a disk cache also counts the
+interpreted seconds of earlier processes (a small ledger in the package's cache folder, keyed
+by the source file's stamp), so a command run again and again compiles once too. The
+prediction is ``work(*args)``, a kernel's own estimate of its interpreted seconds (given
 where the cost scales with the input: samples, steps, iterations), else the measured cost of
 its previous interpreted calls, else the element count of its array arguments at 1 µs each.
 
@@ -26,6 +29,7 @@ check both tiers give the same numbers).
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
 import threading
@@ -128,6 +132,8 @@ class Kernel:
         self._fast = False
         self._disk_checked = False
         self._spent = 0.0
+        self._spent_here = 0.0
+        self._ledger_read = False
         self._twin: Callable[..., Any] | None = None
 
     def __repr__(self) -> str:
@@ -160,6 +166,9 @@ class Kernel:
             return True
         if _mode == "always" or self.ready():
             return False
+        if not self._ledger_read:
+            self._ledger_read = True
+            self._spent += _ledger().get(_ledger_key(self), 0.0)
         if self._spent + predicted_s > self.compile_s:
             self._ready = True  # compile now: later calls go straight to machine code
             return False
@@ -168,6 +177,7 @@ class Kernel:
     def charge(self, seconds: float) -> None:
         """Count ``seconds`` spent on an interpreted path toward this kernel's budget."""
         self._spent += seconds
+        self._spent_here += seconds
 
     def interpreted(self) -> Callable[..., Any]:
         """The same source as a plain Python function whose callees are interpreted too."""
@@ -196,7 +206,7 @@ class Kernel:
         with np.errstate(all="ignore"):  # compiled code never warns (inf, NaN as computed)
             out = self.interpreted()(*args)
         dt = time.perf_counter() - t0
-        self._spent += dt
+        self.charge(dt)
         if _mode == "auto":  # learn the interpreted seconds per unit (the first call included)
             self._rate = 0.5 * (self._rate + dt / units)
         return out
@@ -206,6 +216,78 @@ class Kernel:
 def _typeof_kernel(val: Kernel, c: Any) -> Any:
     """To numba a kernel is its dispatcher: compiled callers call it compiled."""
     return nbtypes.Dispatcher(val.dispatcher)
+
+
+# -- the ledger: interpreted seconds across processes -------------------------------------
+# A command run again and again (``hexapod-kin step`` in a shell loop) would run its kernels
+# interpreted every time; the ledger carries each disk-cached kernel's interpreted seconds from
+# one process to the next (keyed by the source file's stamp, like numba's cache), so the rule
+# compiles once their sum reaches the budget, as it does within one process.
+_LEDGER: dict[str, float] | None = None
+
+
+def _ledger_file() -> Any:
+    from ._io import cache_root
+
+    return cache_root("tier") / f"interpreted-seconds-numba{numba.__version__}.json"
+
+
+def _ledger() -> dict[str, float]:
+    global _LEDGER
+    if _LEDGER is None:
+        try:
+            import json
+
+            data = json.loads(_ledger_file().read_text())
+            _LEDGER = {str(k): float(v) for k, v in data.items() if isinstance(v, (int, float))}
+        except Exception:  # noqa: BLE001 - none yet, unreadable or foreign: start afresh
+            _LEDGER = {}
+    return _LEDGER
+
+
+def _ledger_key(kernel: Kernel) -> str:
+    try:
+        st = os.stat(kernel.py_func.__code__.co_filename)
+        stamp = f"{st.st_mtime_ns}:{st.st_size}"
+    except OSError:
+        stamp = "?"
+    return f"{kernel.__module__}.{kernel.__qualname__}@{stamp}"
+
+
+def _save_ledger() -> None:
+    """At exit: add this process's interpreted seconds of disk-cached kernels to the ledger."""
+    spent = {
+        _ledger_key(k): k._spent_here
+        for k in _all
+        if k._spent_here > 0.0 and _disk_cached(k.dispatcher) and not k.dispatcher.signatures
+    }
+    spent = {k: v for k, v in spent.items() if v > 0.0}
+    if not spent:
+        return
+    try:
+        import json
+
+        from ._io import atomic_write
+
+        global _LEDGER
+        _LEDGER = None  # another process may have written meanwhile
+        merged = dict(_ledger())
+        for key, value in spent.items():
+            merged[key] = merged.get(key, 0.0) + value
+        path = _ledger_file()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(path, json.dumps(merged, indent=0, sort_keys=True))
+    except Exception:  # noqa: BLE001 - a ledger is an optimisation: never fail at exit
+        pass
+
+
+atexit.register(_save_ledger)
+
+
+def _disk_cached(disp: Dispatcher) -> bool:
+    from numba.core.caching import NullCache
+
+    return not isinstance(getattr(disp, "_cache", None), (NullCache, type(None)))
 
 
 def _on_disk(disp: Dispatcher) -> bool:

@@ -246,3 +246,43 @@ def test_interpreted_math_has_compiled_semantics():
             assert math.isnan(_domain(-1e-18)), mode
         finally:
             _tier.set_mode(before)
+
+
+_LEDGER_PROBE = r"""
+import json, sys
+import hexapod_kin as hk
+from hexapod_kin import _tier
+from hexapod_kin.motion import _kernel as k
+if sys.argv[1] == "spend":
+    hk.motion.resolved_rate(hk.load("hexabot_leg"), [0.01, 0, 0], [0, 0.3, 1.2], 1e-3, 0.2)
+    print(json.dumps({"compiled": bool(k._rr3.dispatcher.signatures)}))
+else:
+    before = _tier._ledger().get(_tier._ledger_key(k._rr3), 0.0)
+    ask = k._rr3.compile_s - 0.5 * float(sys.argv[2])
+    print(json.dumps({"before": before, "interpret": k._rr3.prefer_interpreted(ask)}))
+"""
+
+
+def test_interpreted_seconds_carry_over_between_processes(tmp_path):
+    """A command run again and again compiles once its interpreted seconds reach the budget."""
+
+    def run(cache, *args):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HEXAPOD_KIN_JIT="auto")
+        env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / cache)
+        res = subprocess.run(
+            [sys.executable, "-c", _LEDGER_PROBE, *args],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert res.returncode == 0, res.stderr[-2000:]
+        return json.loads(res.stdout.strip().splitlines()[-1])
+
+    assert run("a", "spend") == {"compiled": False}
+    got = run("a", "decide", "0")
+    spent = got["before"]
+    assert spent > 0.0
+    # what fits the budget in a fresh cache folder does not once this folder's seconds count
+    assert run("a", "decide", str(spent))["interpret"] is False
+    assert run("fresh", "decide", str(spent)) == {"before": 0.0, "interpret": True}
