@@ -13,14 +13,14 @@ of two tiers per call, like a JIT virtual machine:
   instead of waiting 4–5 s for LLVM.
 
 The choice is the ski-rental rule: a kernel runs interpreted while the interpreted seconds it
-has cost in this process plus the predicted cost of this call stay within its compile budget
-(``compile_s``, about what compiling it costs; :data:`COMPILE_S` by default), then it compiles once.
-A kernel with a disk cache also counts the
+has cost plus the predicted cost of this call stay within its compile budget (``compile_s``,
+about what compiling it costs; :data:`COMPILE_S` by default), then it compiles once: at worst
+twice what the better choice would have cost. The prediction is ``work(*args)`` units (steps,
+samples, iterations, declared where the cost scales with the input; else the element count of
+the array arguments) times the interpreted seconds per unit, learned from the kernel's earlier
+interpreted calls (first guess ``per_unit_s``). A kernel with a disk cache also counts the
 interpreted seconds of earlier processes (a small ledger in the package's cache folder, keyed
-by the source file's stamp), so a command run again and again compiles once too. The
-prediction is ``work(*args)``, a kernel's own estimate of its interpreted seconds (given
-where the cost scales with the input: samples, steps, iterations), else the measured cost of
-its previous interpreted calls, else the element count of its array arguments at 1 µs each.
+by the source file's stamp), so a command run again and again compiles once too.
 
 ``HEXAPOD_KIN_JIT`` overrides the rule: ``auto`` (default), ``always`` (compile on the first
 call, numba's own behaviour) or ``never`` (interpret every call: debugging, and the tests that
