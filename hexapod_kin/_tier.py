@@ -46,6 +46,7 @@ from numba.extending import typeof_impl
 
 __all__ = [
     "COMPILE_S",
+    "CONTEXT_S",
     "PER_UNIT_S",
     "Kernel",
     "compiled",
@@ -60,6 +61,10 @@ __all__ = [
 COMPILE_S = 1.0
 #: Default first guess of interpreted seconds per unit of work (per array element).
 PER_UNIT_S = 1e-5
+#: What numba's first use in a process costs, even for cached machine code (its typing and
+#: lowering registries load): about 0.25-0.45 s here.
+CONTEXT_S = 0.3
+_CONTEXT = {"warm": False}
 _MODES = ("auto", "always", "never")
 _lock = threading.Lock()
 _all: list[Kernel] = []
@@ -157,15 +162,19 @@ class Kernel:
             predicted_s: Predicted seconds of that path for this call.
 
         Returns:
-            True to run the interpreted path: mode ``never``, or mode ``auto`` while the
+            True to run the interpreted path: mode ``never``; or mode ``auto`` while the
             kernel is neither compiled nor cached and its interpreted seconds (spent and
-            predicted) stay within :attr:`compile_s`.
+            predicted) stay within :attr:`compile_s`; or while its machine code is cached
+            but no compiled code has run in this process yet (numba's first load costs
+            :data:`CONTEXT_S`) and this process's interpreted seconds stay within that.
 
         """
         if _mode == "never":
             return True
-        if _mode == "always" or self.ready():
+        if _mode == "always":
             return False
+        if self.ready():  # cached machine code: loading it first costs numba's start-up
+            return not _CONTEXT["warm"] and self._spent_here + predicted_s <= CONTEXT_S
         if not self._ledger_read:
             self._ledger_read = True
             self._spent += _ledger().get(_ledger_key(self), 0.0)
@@ -201,6 +210,7 @@ class Kernel:
         units = self._units(args) if _mode == "auto" else 1.0
         if not self.prefer_interpreted(self._rate * units):
             self._fast = _mode != "never"
+            _CONTEXT["warm"] = True
             return self.dispatcher(*args)
         t0 = time.perf_counter()
         with np.errstate(all="ignore"):  # compiled code never warns (inf, NaN as computed)

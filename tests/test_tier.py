@@ -160,7 +160,7 @@ def test_closed_form_batch_same_in_both_tiers():
 _PROBE = r"""
 import json, sys, numpy as np
 import hexapod_kin as hk
-from hexapod_kin import _numerics
+from hexapod_kin import _numerics, _tier
 from hexapod_kin.ik import step
 from hexapod_kin.singularity import _kernel
 what = sys.argv[1]
@@ -168,7 +168,14 @@ if what == "compile":
     _numerics.wrap_angle(7.0)
     print(json.dumps({"compiled": bool(_numerics.wrap_angle.dispatcher.signatures)}))
 elif what == "ready":
-    print(json.dumps({"ready": _numerics.wrap_angle.ready()}))
+    k = _numerics.wrap_angle
+    ready = k.ready()
+    k(7.0)  # tiny: interpreted while numba has not started in this process, even if cached
+    first = bool(k.dispatcher.signatures)
+    k._spent_here = _tier.CONTEXT_S  # this process has spent numba's start-up interpreting
+    k(7.0)
+    hits = sum(k.dispatcher.stats.cache_hits.values())
+    print(json.dumps({"ready": ready, "first_compiled": first, "cache_hits": hits}))
 else:
     leg = hk.load("hexabot_leg")
     r = hk.ik.solve(leg, [0.5, 0.1, 0.0])
@@ -203,9 +210,11 @@ def test_fresh_install_small_calls_compile_nothing(tmp_path):
 
 
 def test_cached_machine_code_is_used(tmp_path):
-    assert _probe(tmp_path, "ready", "auto") == {"ready": False}
+    before = _probe(tmp_path, "ready", "auto")
+    assert before["ready"] is False and before["cache_hits"] == 0
     assert _probe(tmp_path, "compile", "always") == {"compiled": True}
-    assert _probe(tmp_path, "ready", "auto") == {"ready": True}
+    after = _probe(tmp_path, "ready", "auto")
+    assert after == {"ready": True, "first_compiled": False, "cache_hits": 1}
 
 
 def test_precompile_fills_the_disk_cache(tmp_path):
