@@ -24,6 +24,7 @@ __all__ = [
     "OptionalDependencyError",
     "UrdfWarning",
     "choices",
+    "one_of",
     "did_you_mean",
     "positive",
 ]
@@ -133,6 +134,30 @@ def choices(names: Iterable[str], limit: int = 40) -> str:
     if len(items) > limit:
         return ", ".join(items[:limit]) + f", ... ({len(items) - limit} more)"
     return ", ".join(items)
+
+
+def one_of(parameter: str, value: Any, allowed: Iterable[Any], also: str = "") -> Any:
+    """``value`` when it is one of ``allowed``, else a :class:`ParameterError` naming them.
+
+    Args:
+        parameter: The argument's name (in the message and the error's fields).
+        value: What was given.
+        allowed: The valid values.
+        also: Text appended to the list of valid values (e.g. ``" or h(x, y)"``).
+
+    Raises:
+        ParameterError: ``value`` is not in ``allowed``.
+
+    """
+    valid = list(allowed)
+    if value in valid:
+        return value
+    raise ParameterError(
+        f"{parameter}={value!r} is not allowed; use one of {choices(valid)}{also}",
+        parameter=parameter,
+        value=value,
+        allowed=valid,
+    )
 
 
 def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.6) -> str:

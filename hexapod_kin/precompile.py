@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from .exceptions import ParameterError, choices
+from .exceptions import one_of
 
 __all__ = ["AREAS", "precompile"]
 
@@ -104,13 +104,7 @@ def precompile(areas: Sequence[str] | None = None) -> dict[str, float]:
 
     names = list(AREAS) if areas is None else list(areas)
     for name in names:
-        if name not in AREAS:
-            raise ParameterError(
-                f"area {name!r} does not exist; choose from {choices(AREAS)}",
-                parameter="areas",
-                value=name,
-                allowed=list(AREAS),
-            )
+        one_of("areas", name, AREAS)
     before = _tier.set_mode("always")
     seconds: dict[str, float] = {}
     try:

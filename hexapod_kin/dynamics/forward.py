@@ -40,7 +40,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError, choices
+from ..exceptions import ConfigurationError, ParameterError, one_of
 from ._common import as_model, check_inertials, check_state, finite_vector, positive
 
 __all__ = ["METHODS", "PassiveJoints", "Simulation", "passive_joints", "simulate"]
@@ -255,13 +255,7 @@ def simulate(
     """
     mdl = as_model(model)
     check_inertials(mdl)
-    if method not in METHODS:
-        raise ParameterError(
-            f"method={method!r} is not allowed; use one of {choices(METHODS)}",
-            parameter="method",
-            value=method,
-            allowed=list(METHODS),
-        )
+    one_of("method", method, METHODS)
     n, h = _steps(duration, dt)
     passive = passive_joints(
         mdl,

@@ -35,7 +35,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError, choices
+from ..exceptions import ConfigurationError, ParameterError, choices, one_of
 from ..params import Hexapod
 from ._common import as_model, check_inertials, finite_vector, positive
 
@@ -214,13 +214,7 @@ def contact_forces(
             friction-cone solution: the CoM outside the support polygon or ``mu`` too small).
 
     """
-    if method not in CONTACT_METHODS:
-        raise ParameterError(
-            f"method={method!r} is not allowed; use one of {choices(CONTACT_METHODS)}",
-            parameter="method",
-            value=method,
-            allowed=list(CONTACT_METHODS),
-        )
+    one_of("method", method, CONTACT_METHODS)
     p = np.asarray(feet, dtype=float)
     c = np.asarray(com, dtype=float)
     w = positive("weight", weight)

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError, choices
+from ..exceptions import ParameterError, one_of
 
 __all__ = ["TERRAINS", "Terrain", "flat", "slope", "step", "terrain"]
 
@@ -113,12 +113,6 @@ def terrain(spec: str | Terrain | Callable[..., Any] | None = None) -> Terrain:
     if isinstance(spec, Terrain):
         return spec
     if isinstance(spec, str):
-        if spec not in TERRAINS:
-            raise ParameterError(
-                f"terrain={spec!r} is not allowed; use one of {choices(TERRAINS)} or h(x, y)",
-                parameter="terrain",
-                value=spec,
-                allowed=sorted(TERRAINS),
-            )
+        one_of("terrain", spec, sorted(TERRAINS), also=" or h(x, y)")
         return TERRAINS[spec]()
     return Terrain(getattr(spec, "__name__", "custom"), spec)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError, choices
+from ..exceptions import ConfigurationError, ParameterError, choices, one_of
 from .families import Families, Family, families_for
 from .measure import as_model, measures_batch, reach, selected_rows
 
@@ -174,13 +174,7 @@ class ScanResult:
             "family",
             "family_distance",
         )
-        if name not in allowed:
-            raise ParameterError(
-                f"grid(name={name!r}): use one of {choices(allowed)}",
-                parameter="name",
-                value=name,
-                allowed=list(allowed),
-            )
+        one_of("name", name, allowed)
         return np.asarray(getattr(self, name)).reshape(self.grid_shape)
 
     def to_dict(self) -> dict[str, Any]:

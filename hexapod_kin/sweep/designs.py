@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from ..exceptions import ParameterError, one_of
 
 __all__ = [
     "ANGLES",
@@ -227,13 +227,7 @@ class DesignSpace:
                 lengths, lower > upper limits, ``neutral`` outside [0, 1], negative height).
 
         """
-        if method not in METHODS:
-            raise ParameterError(
-                f"method={method!r} unknown; valid: {', '.join(METHODS)}",
-                parameter="method",
-                value=method,
-                allowed=list(METHODS),
-            )
+        one_of("method", method, METHODS)
         swept = self.swept
         if method == "grid" or not swept:
             axes = [
