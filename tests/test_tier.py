@@ -71,7 +71,7 @@ def test_budget_spent_then_compiled(jit_auto):
             assert _lone(x, calls % 50) == 2.0 * (calls % 50)
             calls += 1
         assert _lone.dispatcher.signatures, "never compiled"
-        assert calls > 1 and _lone._spent <= 0.02 + 0.01
+        assert calls > 1 and _lone._spent <= 0.02 + 0.05  # at most one call past the budget
     finally:
         _lone.compile_s = 0.5
 
