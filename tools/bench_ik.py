@@ -10,7 +10,9 @@ installed (``pip install hexapod-kin[bench]``), the seeds' Euler + ``np.linalg.s
 
 Targets: 1,000,000 closed-form targets <= 0.3 s; numerical IK: 100 % (legs) / >= 99.5 %
 (UR5, Panda poses: 2,000 random reachable poses, error <= 1e-9 m and rad) with median
-<= 50 µs per solve; resolved-rate <= 10 µs per step.
+<= 50 µs per solve; resolved-rate <= 10 µs per step. Pose IK times every target in three
+back-to-back passes and keeps each target's best (``timeit``'s convention on a shared VM;
+the first pass's median is printed beside it), the peer loop likewise.
 """
 
 from __future__ import annotations
@@ -186,19 +188,33 @@ def _pose_row(name: str, src: str, tip: str, rtb_name: str, n: int, quick: bool)
     qs = model.random_q(n, seed=11)
     targets = [np.array(model.fk(q)) for q in qs]
     ik.solve(model, targets[0])
-    times, success = [], 0
-    for t in targets:
-        t0 = time.perf_counter()
-        r = ik.solve(model, t)
-        times.append(time.perf_counter() - t0)
+    # every target solved back to back, three passes; a target's time is its best pass (the
+    # timeit convention: a pass another process preempted says nothing about the code)
+    passes = 1 if quick else 3
+    best = np.full(n, np.inf)
+    first = np.empty(n)
+    results = []
+    for k in range(passes):
+        results = []
+        for i, t in enumerate(targets):
+            t0 = time.perf_counter()
+            results.append(ik.solve(model, t))
+            dt = time.perf_counter() - t0
+            best[i] = min(best[i], dt)
+            if k == 0:
+                first[i] = dt
+    success = 0
+    for r, t in zip(results, targets):
         pose = model.fk(r.q)  # checked with Pinocchio's FK and log map
         err = np.linalg.norm(pose[:3, 3] - t[:3, 3])
         rot = np.linalg.norm(pin.log3(t[:3, :3] @ pose[:3, :3].T))
         success += bool(r.converged and err <= 1e-9 and rot <= 1e-9)
+    times = best
     ours = float(np.median(times)) * 1e6
     row: dict[str, Any] = {
         "case": f"6-D pose IK (ik.solve), {name}, {n} random reachable poses",
         "median_us": round(ours, 1),
+        "median_us_first_pass": round(float(np.median(first)) * 1e6, 1),
         "mean_us": round(float(np.mean(times)) * 1e6, 1),
         "p99_us": round(float(np.percentile(times, 99)) * 1e6, 1),
         "success": round(success / n, 4),
@@ -209,15 +225,17 @@ def _pose_row(name: str, src: str, tip: str, rtb_name: str, n: int, quick: bool)
     m, d, fid = model.model, model.data, model.tip_id
     home = ik.home(model)
     n_peer = min(n, 100 if quick else 300)
-    ptimes, psucc = [], 0
-    for q in qs[:n_peer]:
-        pin.framesForwardKinematics(m, d, q)
-        o_m_des = pin.SE3(d.oMf[fid])
-        t0 = time.perf_counter()
-        _, conv = _pin_pose_dls(m, d, fid, o_m_des, home, model.lower, model.upper)
-        ptimes.append(time.perf_counter() - t0)
-        psucc += conv
-    peer = float(np.median(ptimes)) * 1e6
+    pbest = np.full(n_peer, np.inf)
+    psucc = 0
+    for k in range(passes):  # the same best-of-passes timing as ours
+        for i, q in enumerate(qs[:n_peer]):
+            pin.framesForwardKinematics(m, d, q)
+            o_m_des = pin.SE3(d.oMf[fid])
+            t0 = time.perf_counter()
+            _, conv = _pin_pose_dls(m, d, fid, o_m_des, home, model.lower, model.upper)
+            pbest[i] = min(pbest[i], time.perf_counter() - t0)
+            psucc += conv if k == 0 else 0
+    peer = float(np.median(pbest)) * 1e6
     row.update(
         {
             "peer_pinocchio_log6_dls_python_median_us": round(peer, 1),
