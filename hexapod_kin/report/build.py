@@ -208,6 +208,8 @@ def reproduce(
 
 #: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
 DERIVED = ("coxa", "leg", "leg+", "scara")
+#: The models of :func:`.figures.heat_maps` (their families are derived ahead too).
+HEAT_MAP_MODELS = ("leg", "scara")
 _AHEAD_BUDGET = 60.0
 
 
@@ -231,8 +233,16 @@ def _derive_ahead(ctx: Any) -> Any:
 
 
 def _symbolic_side(ctx: Any) -> None:  # pragma: no cover - runs in the child
+    from .. import load
+    from ..singularity.families import families_for
+    from ..singularity.measure import selected_rows
     from .cache import KINDS
 
+    # first the families the heat maps label (the parent scans them soon): on disk in time,
+    # the parent's scan reads them instead of deriving them itself
+    for key in HEAT_MAP_MODELS:
+        model = load(ctx.chain(key))
+        families_for(model, tuple(selected_rows(model, None)), derive=True)
     for key in DERIVED:
         ctx.derivation(key)
     if ctx.cache:  # the verdicts reach the parent through the disk cache only
