@@ -15,7 +15,26 @@ import numpy as np
 
 from .exceptions import ParameterError
 
-__all__ = ["Pose", "matrix_to_rpy", "rpy_to_matrix"]
+__all__ = ["Pose", "matrix_to_rpy", "rotation_angle", "rpy_to_matrix"]
+
+
+def rotation_angle(r_a: Any, r_b: Any) -> np.ndarray:
+    """Angles ‖log(R_a R_bᵀ)‖ in [rad] of stacks of rotations (…, 3, 3), in [0, π].
+
+    ``atan2(‖vee(M − Mᵀ)‖ / 2, (tr M − 1) / 2)`` with ``M = R_a R_bᵀ``: the sine part keeps
+    full relative precision for tiny angles (where ``arccos`` of the trace loses half the
+    digits), the cosine part for angles near π.
+    """
+    a = np.asarray(r_a, dtype=float)
+    b = np.asarray(r_b, dtype=float)
+    m = a @ np.swapaxes(b, -1, -2)
+    skew = np.stack(
+        [m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]],
+        axis=-1,
+    )
+    sin_t = 0.5 * np.linalg.norm(skew, axis=-1)
+    cos_t = 0.5 * (np.trace(m, axis1=-2, axis2=-1) - 1.0)
+    return np.arctan2(sin_t, cos_t)
 
 
 def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:

@@ -96,7 +96,7 @@ def _drift(
 
 
 def euler_baseline(
-    model: Any, velocity: Callable[[float], Any], q0: Any, dt: float, duration: float
+    model: Any, velocity: Callable[[Any], Any], q0: Any, dt: float, duration: float
 ) -> np.ndarray:
     """The seeds' integration: ``q += dt · np.linalg.solve(J(q), v(t))`` (open loop, Pinocchio).
 
@@ -108,10 +108,18 @@ def euler_baseline(
     steps = int(round(duration / dt))
     out = np.empty((steps + 1, model.nq))
     out[0] = q
+    vs = None
+    try:  # one call with every time, as resolved_rate does, when v(t) takes an array
+        vs = np.asarray(velocity(np.arange(steps) * dt), dtype=float)
+    except Exception:  # noqa: BLE001 - a scalar-only v(t): called per step below
+        vs = None
+    if vs is not None and vs.shape != (steps, 3):
+        vs = None
     for k in range(steps):
         jac = model.position_jacobian(q)
+        v = vs[k] if vs is not None else np.asarray(velocity(k * dt), dtype=float)
         try:
-            qdot = np.linalg.solve(jac, np.asarray(velocity(k * dt), dtype=float))
+            qdot = np.linalg.solve(jac, v)
         except np.linalg.LinAlgError:
             qdot = np.full(model.nq, np.nan)
         if not np.all(np.isfinite(qdot)):

@@ -138,3 +138,23 @@ def test_rpy_to_matrix_is_rz_ry_rx() -> None:
         r, p, y = RNG.uniform(-3, 3, size=3)
         ref = rot(2, y) @ rot(1, p) @ rot(0, r)
         assert np.allclose(rpy_to_matrix(r, p, y), ref, atol=1e-15)
+
+
+def test_rotation_angle_equals_pinocchio_log3():
+    """‖log(R_a R_bᵀ)‖ at random, tiny and near-π angles, against Pinocchio's log3."""
+    import pinocchio as pin
+
+    from hexapod_kin._pose import rotation_angle
+
+    rng = np.random.default_rng(5)
+    ra, rb = [], []
+    for angle in np.concatenate([rng.uniform(0, np.pi, 40), [1e-15, 3e-9, 1e-5, np.pi - 1e-7]]):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        base = pin.exp3(rng.normal(size=3))
+        rb.append(base)
+        ra.append(pin.exp3(angle * axis) @ base)
+    got = rotation_angle(np.array(ra), np.array(rb))
+    ref = np.array([np.linalg.norm(pin.log3(a @ b.T)) for a, b in zip(ra, rb)])
+    assert np.allclose(got, ref, rtol=1e-9, atol=1e-15)
+    assert got[-4] < 1e-14 and abs(got[-3] - 3e-9) < 1e-16  # tiny angles keep their digits
