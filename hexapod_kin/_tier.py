@@ -53,7 +53,6 @@ __all__ = [
     "interpreted",
     "mode",
     "njit",
-    "pending",
     "set_mode",
 ]
 
@@ -412,8 +411,3 @@ def compiled(kernel: Any) -> Any:
 def interpreted(kernel: Any) -> Any:
     """The interpreted twin of a kernel (its source run by Python)."""
     return kernel.interpreted() if isinstance(kernel, Kernel) else kernel
-
-
-def pending() -> list[str]:
-    """Kernels of the imported modules that are neither compiled nor cached on disk (names)."""
-    return [f"{k.__module__}.{k.__qualname__}" for k in _all if not k.ready()]
