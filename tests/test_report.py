@@ -333,3 +333,25 @@ def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     assert json.loads(path.read_text())["text"] == text
     path.write_text("[]")  # foreign content
     assert report_cache.derivation_text(d) == text
+
+
+def test_seed_ik_vectorised_equals_sympy_per_foot():
+    """Seed 002's IK formulas at every schedule foot: numpy at once = sympy one foot at a time."""
+    import sympy as sp
+
+    from hexapod_kin.report.checks import Context, _seed_ik
+    from hexapod_kin.report.compare import _SYMS, load_claims, parse
+
+    ctx = Context(quick=True, claims=load_claims()[0])
+    claim = ctx.claims["002-table1"]
+    feet = ctx.schedule["feet"]
+    lengths = ctx.lengths("coxa")
+    got = _seed_ik(claim.data["value"], feet, lengths)
+    for foot, row in zip(feet[::4], got[::4]):
+        env = dict(lengths)
+        env.update({_SYMS["x"]: foot[0], _SYMS["y"]: foot[1], _SYMS["z"]: foot[2]})
+        for name, text in claim.data["value"].items():
+            expr = parse(text).xreplace({sp.Symbol(k.name): v for k, v in env.items()})
+            env[sp.Symbol(name, real=True)] = float(sp.N(expr.xreplace(env)))
+        ref = [env[sp.Symbol("theta1", real=True)], env[sp.Symbol("theta2", real=True)]]
+        assert np.allclose(row, ref, rtol=0, atol=1e-12)

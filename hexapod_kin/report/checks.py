@@ -148,7 +148,7 @@ class Context:
         back = np.array([mdl.position(qi) for qi in ours])
         claim = self.claims.get("002-table1")
         seed = (
-            np.array([_seed_ik(claim.data["value"], f, self.lengths("coxa")) for f in feet])
+            _seed_ik(claim.data["value"], feet, self.lengths("coxa"))
             if claim is not None
             else np.full_like(q, np.nan)
         )
@@ -194,14 +194,24 @@ class Context:
         raise KeyError(f"unknown quantity {name!r}")
 
 
-def _seed_ik(formulas: dict[str, str], foot: np.ndarray, lengths: dict[sp.Symbol, float]) -> list:
-    env: dict[sp.Symbol, float] = dict(lengths)
-    env.update({_SYMS["x"]: foot[0], _SYMS["y"]: foot[1], _SYMS["z"]: foot[2]})
+def _seed_ik(
+    formulas: dict[str, str], feet: np.ndarray, lengths: dict[sp.Symbol, float]
+) -> np.ndarray:
+    """The seed's IK formulas (assignments in order) evaluated at every foot: (N, 2) θ1, θ2.
+
+    Each formula is parsed once and evaluated with numpy over all feet at once (symbols
+    matched by name: the lengths, ``x, y, z`` and the names assigned before it).
+    """
+    env: dict[str, Any] = {k.name: float(v) for k, v in lengths.items()}
+    env.update(x=feet[:, 0], y=feet[:, 1], z=feet[:, 2])
     for name, text in formulas.items():
-        env[sp.Symbol(name, real=True)] = _num(
-            parse(text).xreplace({sp.Symbol(k.name): v for k, v in env.items()}).xreplace(env), {}
-        )
-    return [env[sp.Symbol("theta1", real=True)], env[sp.Symbol("theta2", real=True)]]
+        expr = parse(text)
+        syms = sorted(expr.free_symbols, key=lambda s: s.name)
+        fn = sp.lambdify(syms, expr, "numpy")
+        with np.errstate(all="ignore"):
+            value = np.asarray(fn(*[env[s.name] for s in syms]), dtype=float)
+        env[name] = np.broadcast_to(value, (feet.shape[0],))
+    return np.column_stack([env["theta1"], env["theta2"]])
 
 
 def _verdict(
@@ -487,7 +497,7 @@ def check_ik(c: Claim, ctx: Context) -> Verdict:
     q = np.radians(c.data["q_deg"])
     mdl = ctx.model(key)
     foot = mdl.position(q)
-    seed = np.array(_seed_ik(c.data["value"], foot, ctx.lengths(key)))
+    seed = _seed_ik(c.data["value"], np.asarray(foot)[None, :], ctx.lengths(key))[0]
     sols = ik.analytic(ctx.chain(key), foot)[0]
     ours = sols[np.argmin(np.abs(sols - q).sum(axis=1))]
     back = float(np.max(np.abs(mdl.position(ours) - foot)))
