@@ -21,7 +21,7 @@ import sympy as sp
 
 from hexapod_kin.cli import main
 from hexapod_kin.report import cache as report_cache
-from hexapod_kin.report import checks, load_claims
+from hexapod_kin.report import checks, load_claims, replay
 from hexapod_kin.report.checks import Context
 from hexapod_kin.report.compare import equal, evaluate, matrix_diff, parse, parse_matrix, screen
 
@@ -107,7 +107,9 @@ DIFFERS = {"003-leg-table": r"α = \+90° vs hexabot_leg's -90°.*\(x, y, −z\)
 @pytest.fixture(scope="module")
 def built(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, object]:
     out = tmp_path_factory.mktemp("report")
-    code = main(["reproduce", "--out", str(out), "--quick", "--json"])
+    with pytest.MonkeyPatch.context() as mp:  # computed here, never replayed from a run entry
+        mp.setattr(replay, "lookup", lambda key: None)
+        code = main(["reproduce", "--out", str(out), "--quick", "--json"])
     assert code == 0
     data = json.loads((out / "verdicts.json").read_text())
     return data, out

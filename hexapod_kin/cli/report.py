@@ -19,7 +19,14 @@ def _reproduce(args: argparse.Namespace) -> int:
         print(json.dumps(rep.to_dict(), default=str))
     else:
         print(f"report: {rep.html} (also {rep.markdown}, verdicts.json)")
-        print(f"verdicts: {rep.summary()} [{rep.seconds:.1f} s]")
+        when = f"{rep.seconds:.1f} s"
+        if rep.replayed_from:
+            when = f"{rep.seconds:.2f} s" + (
+                ", replayed: same code, data and libraries as the build of "
+                f"{rep.replayed_from[:16]}Z ({rep.build_seconds or 0.0:.1f} s); "
+                "--no-cache recomputes"
+            )
+        print(f"verdicts: {rep.summary()} [{when}]")
         for v in rep.verdicts:
             if v.status != "agrees":
                 text = v.text if len(v.text) <= 150 else v.text[:147] + "..."
@@ -43,7 +50,9 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--no-cache",
         action="store_true",
-        help="recompute every symbolic verdict and redraw every figure (ignore the disk cache)",
+        help="recompute everything instead of replaying an earlier build with the same code, "
+        "data and libraries (every experiment, symbolic verdict and figure; the cache is only "
+        "written)",
     )
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON object")
     p.set_defaults(func=_reproduce)

@@ -7,11 +7,17 @@
   embedded as ``<iframe srcdoc>`` (they also sit beside it as ``step.html`` and ``walk.html``),
   so it opens offline from ``file://``;
 * ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
+
+With ``cache=True`` a run whose inputs (source, claims, options, library versions) are those
+of an earlier successful build replays it: its files are copied from the run cache
+(:mod:`.replay`) and only ``verdicts.json`` is written anew (:attr:`Report.replayed_from`).
+This module imports nothing heavy at module level: a replay stays light.
 """
 
 from __future__ import annotations
 
 import base64
+import dataclasses
 import html
 import json
 import time
@@ -20,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write
-from .compare import Verdict, evaluate, load_claims
+from .data import Verdict
 
 __all__ = ["SECTIONS", "Report", "reproduce"]
 
@@ -94,7 +100,12 @@ class Report:
         html: Path of ``report.html``.
         verdicts: Every verdict, in claims-file order.
         facts: Other computed figures (scan family counts, standing, walking).
-        seconds: Wall time of the build in [s].
+        seconds: Wall time of this run in [s] (of the replay when replayed).
+        replayed_from: UTC time (``YYYY-MM-DDTHH:MM:SSZ``) of the build whose files this run
+            copied (same source, claims, options and libraries; see :mod:`.replay`), or
+            ``None``: computed by this run.
+        build_seconds: Wall time in [s] of the build that computed the report (this run's
+            ``seconds`` unless replayed).
 
     """
 
@@ -104,6 +115,8 @@ class Report:
     verdicts: tuple[Verdict, ...]
     facts: dict[str, Any]
     seconds: float
+    replayed_from: str | None = None
+    build_seconds: float | None = None
 
     @property
     def counts(self) -> dict[str, int]:
@@ -123,7 +136,7 @@ class Report:
         return text + (f", {c['error']} NOT COMPUTED" if c["error"] else "")
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: paths, counts, verdicts, facts, seconds."""
+        """JSON-ready: paths, counts, verdicts, facts, seconds, replayed_from, build_seconds."""
         return {
             "out": str(self.out),
             "markdown": str(self.markdown),
@@ -131,6 +144,8 @@ class Report:
             "summary": self.summary(),
             "counts": self.counts,
             "seconds": self.seconds,
+            "replayed_from": self.replayed_from,
+            "build_seconds": self.build_seconds,
             "verdicts": [v.to_dict() for v in self.verdicts],
             "facts": self.facts,
         }
@@ -145,19 +160,99 @@ def reproduce(
         out: Report folder (created).
         quick: Reduced sizes (shorter runs, coarser scans) for tests.
         animations: Write the step and walk animations (needs the ``viewer`` extra).
-        cache: Use the report's disk caches (symbolic verdicts, derivation texts, rendered
-            figures; see :mod:`.cache`); ``False`` computes and draws everything again.
+        cache: Use the report's disk caches: replay an earlier build with the same inputs
+            (:mod:`.replay`), else reuse the symbolic verdicts, derivation texts and rendered
+            figures (:mod:`.cache`, :mod:`.figures`); ``False`` computes and draws everything
+            again (and stores the result for the next run).
 
     Returns:
-        The :class:`Report`.
+        The :class:`Report` (``replayed_from`` tells whether it was replayed).
+
+    Raises:
+        ParameterError: A file of ``out`` cannot be written.
+
+    """
+    from . import replay
+
+    start = time.perf_counter()
+    out = Path(out)
+    try:
+        parts: dict[str, Any] | None = replay.key_parts(
+            quick=quick, animations=animations, digest=replay.source_digest()
+        )
+    except Exception:  # noqa: BLE001 - unreadable source: build, do not keep
+        parts = None
+    key = replay.run_key(parts) if parts is not None else None
+    if cache and key is not None:
+        entry = replay.lookup(key)
+        if entry is not None:
+            rep = _replayed(entry, out, start)
+            if rep is not None:
+                return rep
+    rep, written = _build(out, quick=quick, animations=animations, cache=cache, start=start)
+    if parts is not None and key is not None and _storable(rep, parts):
+        record = {
+            "summary": rep.summary(),
+            "counts": rep.counts,
+            "seconds": rep.seconds,
+            "verdicts": [dataclasses.asdict(v) for v in rep.verdicts],
+            "facts": rep.facts,
+        }
+        replay.store(key, parts, out, written, record)
+    return rep
+
+
+def _storable(rep: Report, parts: dict[str, Any]) -> bool:
+    """A complete build whose inputs did not change while it ran (the source is re-read)."""
+    from . import replay
+
+    if rep.counts["error"] or "step_animation" in rep.facts:
+        return False
+    try:
+        return replay.key_parts(
+            quick=parts["options"]["quick"],
+            animations=parts["options"]["animations"],
+            digest=replay.source_digest(),
+        ) == json.loads(json.dumps(parts))
+    except Exception:  # noqa: BLE001 - cannot tell: do not keep
+        return False
+
+
+def _replayed(entry: Any, out: Path, start: float) -> Report | None:
+    """The report of a replayed entry (its files copied into ``out``), or None (unusable)."""
+    rec = entry.record
+    try:
+        names = [f.name for f in dataclasses.fields(Verdict)]
+        verdicts = tuple(Verdict(**{n: str(v[n]) for n in names}) for v in rec["verdicts"])
+        facts, built, build_seconds = dict(rec["facts"]), str(rec["built"]), float(rec["seconds"])
+    except Exception:  # noqa: BLE001 - a manifest we cannot read back: build
+        return None
+    if any(v.status == "error" for v in verdicts):
+        return None
+    from . import replay
+
+    replay.restore(entry, out)
+    md_path, html_path = out / "report.md", out / "report.html"
+    seconds = time.perf_counter() - start
+    rep = Report(out, md_path, html_path, verdicts, facts, seconds, built, build_seconds)
+    atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
+    return rep
+
+
+def _build(
+    out: Path, *, quick: bool, animations: bool, cache: bool, start: float
+) -> tuple[Report, list[Path]]:
+    """Compute everything and write the report.
+
+    Returns:
+        The :class:`Report` and the files written into ``out`` but ``verdicts.json``.
 
     """
     from . import figures
     from .cache import derivation_text
     from .checks import Context
+    from .compare import evaluate, load_claims
 
-    start = time.perf_counter()
-    out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims, cache=cache)
@@ -201,9 +296,10 @@ def reproduce(
     atomic_write(md_path, _markdown(*parts))
     atomic_write(html_path, _html(*parts))
     seconds = time.perf_counter() - start
-    rep = Report(out, md_path, html_path, tuple(verdicts), facts, seconds)
+    rep = Report(out, md_path, html_path, tuple(verdicts), facts, seconds, None, seconds)
     atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
-    return rep
+    written = [md_path, html_path] + [p for k in figs for p in figs[k] + anims[k]]
+    return rep, written
 
 
 #: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
@@ -246,6 +342,8 @@ def _symbolic_side(ctx: Any) -> None:  # pragma: no cover - runs in the child
     for key in DERIVED:
         ctx.derivation(key)
     if ctx.cache:  # the verdicts reach the parent through the disk cache only
+        from .compare import evaluate
+
         evaluate([c for c in ctx.claims.values() if c.kind in KINDS], ctx)
 
 

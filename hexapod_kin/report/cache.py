@@ -10,7 +10,7 @@ depends on:
 * hexapod_kin's expressions the check compares against (``srepr`` of the derived matrices,
   det J, the families, the lengths, the preset's table rows);
 * the package version, the sympy version, this cache's :data:`FORMAT` and the package's source
-  (:func:`package_digest`), so an edited rule never reads an old verdict.
+  (:func:`package_digest`, kept in :mod:`.replay`), so an edited rule never reads an old verdict.
 
 Only the symbolic kinds are cached (:data:`KINDS`); the numeric checks (FK, IK, schedule,
 measured bounds) always run. A verdict with status ``"error"`` is never stored. The plain-text
@@ -25,7 +25,6 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import fields
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +32,7 @@ import sympy as sp
 
 from .._io import atomic_write, cache_root
 from .compare import Claim, Verdict
+from .replay import package_digest
 
 __all__ = [
     "FORMAT",
@@ -56,21 +56,6 @@ _FIELDS = tuple(f.name for f in fields(Verdict))
 def cache_dir() -> Path:
     """The cache folder (not created here): :func:`hexapod_kin._io.cache_root` ``("report")``."""
     return cache_root("report")
-
-
-@lru_cache(maxsize=1)
-def package_digest() -> str:
-    """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``).
-
-    Part of every key here: any change of the code that computes, compares or draws makes
-    the cached results unreachable (they are recomputed).
-    """
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
 
 
 def _sre(obj: Any) -> str:

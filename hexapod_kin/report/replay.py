@@ -1,0 +1,314 @@
+"""Replay of whole reports: a second ``reproduce`` with the same inputs copies the first's files.
+
+The report is a deterministic function of its inputs, so, like a build system, a run whose
+inputs are those of an earlier successful build copies that build's files instead of redoing
+its experiments. The inputs (:func:`key_parts`), hashed into the run's key (:func:`run_key`):
+
+* the package's Python source (:func:`package_digest`: every ``.py`` file of ``hexapod_kin``)
+  and the bytes of ``claims.toml`` (the only data file the build reads: the claims and the
+  seeds' titles);
+* the options (``quick``, ``animations``) and ``HEXAPOD_KIN_JIT`` (the kernel tier);
+* the versions of Python, hexapod_kin, numpy, scipy, pinocchio (``pin``), sympy, matplotlib,
+  numba and meshcat (read with :func:`importlib.metadata.version`, never by importing them;
+  ``"absent"`` when not installed), the platform and this layout's :data:`FORMAT`.
+
+An entry is the folder ``cache_root("report")/runs/<key>/``: ``files/`` holds every file the
+build wrote into the report folder (relative paths) but ``verdicts.json``, which a replay
+writes again (it names the report folder and this run's time), and ``manifest.json`` holds
+each file's SHA-256 and size, the build's verdicts, facts, summary, counts and wall time, the
+UTC time of the build and the key's parts. Every file is written atomically
+(:func:`hexapod_kin._io.atomic_write`), the manifest last (and removed first when an entry is
+rewritten): an entry without a manifest is never replayed. A replay checks every file against
+the manifest before copying any; a missing, damaged or foreign file, or a manifest of another
+layout or key, makes the run build normally (and rewrite the entry). Only builds without an
+``"error"`` verdict (and whose animations were all written) are stored; the newest
+:data:`KEEP` entries (by last use) are kept, older ones are removed after each store.
+
+This module is light on purpose: a replay imports neither sympy, matplotlib, Pinocchio,
+numba, scipy nor meshcat.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+import shutil
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from functools import lru_cache
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+from .._io import atomic_write, cache_root
+from .data import CLAIMS_FILE
+
+__all__ = [
+    "DISTRIBUTIONS",
+    "FORMAT",
+    "KEEP",
+    "Entry",
+    "key_parts",
+    "lookup",
+    "package_digest",
+    "prune",
+    "restore",
+    "run_key",
+    "runs_dir",
+    "store",
+]
+
+#: Version of the entry layout (part of the key).
+FORMAT = 1
+#: Number of run entries kept (the most recently built or replayed).
+KEEP = 4
+#: Distributions whose installed versions are part of the key.
+DISTRIBUTIONS = ("numpy", "scipy", "pin", "sympy", "matplotlib", "numba", "meshcat")
+MANIFEST = "manifest.json"
+_PACKAGE = Path(__file__).resolve().parents[1]
+#: An entry without a manifest older than this [s] is a crashed store (removed by prune).
+_STALE = 3600.0
+
+
+def runs_dir() -> Path:
+    """The entries' folder (not created here): ``cache_root("report") / "runs"``."""
+    return cache_root("report") / "runs"
+
+
+def source_digest() -> str:
+    """SHA-256 of the package's Python source, read now (see :func:`package_digest`)."""
+    h = hashlib.sha256()
+    for f in sorted(_PACKAGE.rglob("*.py")):
+        h.update(str(f.relative_to(_PACKAGE)).encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=1)
+def package_digest() -> str:
+    """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``).
+
+    Part of every report cache key (symbolic verdicts, derivation texts, figures, runs): any
+    change of the code that computes, compares or draws makes the cached results unreachable
+    (they are recomputed). Read once per process.
+    """
+    return source_digest()
+
+
+def versions() -> dict[str, str]:
+    """Installed versions of Python, hexapod_kin and :data:`DISTRIBUTIONS` (none imported)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .. import __version__
+
+    out = {
+        "python": f"{platform.python_implementation()} {platform.python_version()}",
+        "hexapod_kin": __version__,
+    }
+    for name in DISTRIBUTIONS:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = "absent"
+    return out
+
+
+def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> dict[str, Any]:
+    """Everything a report depends on, as JSON-ready data (see the module's docstring).
+
+    Args:
+        quick: The ``quick`` option of :func:`~hexapod_kin.report.reproduce`.
+        animations: Its ``animations`` option.
+        digest: The source digest (default :func:`package_digest`).
+
+    Raises:
+        OSError: The package's source or ``claims.toml`` cannot be read.
+
+    """
+    return {
+        "format": FORMAT,
+        "code": digest if digest is not None else package_digest(),
+        "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
+        "options": {"quick": bool(quick), "animations": bool(animations)},
+        "jit": os.environ.get("HEXAPOD_KIN_JIT", "auto").strip().lower() or "auto",
+        "versions": versions(),
+        "platform": f"{sys.platform}-{platform.machine()}",
+    }
+
+
+def run_key(parts: Mapping[str, Any]) -> str:
+    """SHA-256 (hex) of ``parts`` (:func:`key_parts`)."""
+    text = json.dumps(parts, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A complete, verified run entry.
+
+    Attributes:
+        key: The run's key.
+        folder: The entry's folder.
+        record: The manifest (``built``: UTC time of the build, ``seconds``: its wall time in
+            [s], ``verdicts``, ``facts``, ``files``, ``parts``, ...).
+        files: Relative path (POSIX) → content, every one checked against the manifest.
+
+    """
+
+    key: str
+    folder: Path
+    record: dict[str, Any]
+    files: dict[str, bytes]
+
+
+def _safe(rel: Any) -> bool:
+    """A relative path inside the report folder (no absolute path, no ``..``)."""
+    if not isinstance(rel, str) or not rel or "\\" in rel or "\0" in rel:
+        return False
+    p = PurePosixPath(rel)
+    return not p.is_absolute() and all(part not in ("", ".", "..") for part in p.parts)
+
+
+def lookup(key: str) -> Entry | None:
+    """The complete entry of ``key`` with every file matching its manifest, else ``None``.
+
+    Nothing is raised: a missing, incomplete, damaged or foreign entry is simply no entry.
+    """
+    folder = runs_dir() / key
+    try:
+        record = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        listed = record["files"]
+        if not (
+            record.get("format") == FORMAT
+            and record.get("key") == key
+            and isinstance(record.get("built"), str)
+            and isinstance(record.get("seconds"), (int, float))
+            and isinstance(record.get("verdicts"), list)
+            and isinstance(record.get("facts"), dict)
+            and isinstance(listed, dict)
+            and listed
+        ):
+            return None
+        files: dict[str, bytes] = {}
+        for rel, meta in listed.items():
+            if not _safe(rel) or rel == "verdicts.json":
+                return None
+            data = (folder / "files" / rel).read_bytes()
+            if len(data) != meta["size"] or hashlib.sha256(data).hexdigest() != meta["sha256"]:
+                return None
+            files[rel] = data
+    except Exception:  # noqa: BLE001 - any damage means "no entry"
+        return None
+    return Entry(key, folder, record, files)
+
+
+def restore(entry: Entry, out: Path) -> list[Path]:
+    """Write the entry's files into ``out`` (atomically, folders created); mark it used.
+
+    Raises:
+        ParameterError: A file of ``out`` cannot be written.
+
+    """
+    written = []
+    for rel, data in entry.files.items():
+        dest = out.joinpath(*PurePosixPath(rel).parts)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        written.append(atomic_write(dest, data))
+    try:
+        os.utime(entry.folder / MANIFEST)  # last use: what prune keeps
+    except OSError:
+        pass
+    return written
+
+
+def utc_now() -> str:
+    """The current UTC time, ``YYYY-MM-DDTHH:MM:SSZ``."""
+    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def store(
+    key: str,
+    parts: Mapping[str, Any],
+    out: Path,
+    files: Sequence[Path],
+    record: Mapping[str, Any],
+    keep: int = KEEP,
+) -> Path | None:
+    """Keep a successful build's files under ``runs/<key>/``; the entry, or ``None``.
+
+    Never raises: a cache that cannot be written is only slower (``None``); a record with an
+    ``"error"`` verdict is not kept.
+
+    Args:
+        key: :func:`run_key` of ``parts``.
+        parts: :func:`key_parts` of the build.
+        out: The report folder the build wrote.
+        files: The files it wrote there (but ``verdicts.json``).
+        record: The build's ``verdicts`` (each a dict of :class:`~.data.Verdict`'s fields),
+            ``facts``, ``summary``, ``counts`` and ``seconds``.
+        keep: Entries kept after this one is stored (:func:`prune`).
+
+    """
+    folder = runs_dir() / key
+    try:
+        if any(v.get("status") == "error" for v in record["verdicts"]):
+            return None
+        rels = [p.resolve().relative_to(out.resolve()).as_posix() for p in files]
+        if not rels or len(set(rels)) != len(rels) or not all(map(_safe, rels)):
+            return None
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / MANIFEST).unlink(missing_ok=True)  # incomplete until the manifest is back
+        listed: dict[str, dict[str, Any]] = {}
+        for rel in sorted(rels):
+            data = out.joinpath(*PurePosixPath(rel).parts).read_bytes()
+            dest = folder.joinpath("files", *PurePosixPath(rel).parts)
+            dest.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(dest, data)
+            listed[rel] = {"sha256": hashlib.sha256(data).hexdigest(), "size": len(data)}
+        manifest = {
+            **record,
+            "format": FORMAT,
+            "key": key,
+            "parts": dict(parts),
+            "built": utc_now(),
+            "files": listed,
+        }
+        atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, default=str))
+    except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+        return None
+    prune(keep)
+    return folder
+
+
+def prune(keep: int = KEEP) -> list[Path]:
+    """Remove all but the ``keep`` most recently used complete entries; the removed folders.
+
+    Entries without a manifest are left alone for an hour (another process may be storing
+    them), then removed. Never raises.
+    """
+    removed: list[Path] = []
+    try:
+        folders = [d for d in runs_dir().iterdir() if d.is_dir()]
+    except OSError:
+        return removed
+    complete: list[tuple[float, Path]] = []
+    now = time.time()
+    for d in folders:
+        try:
+            complete.append(((d / MANIFEST).stat().st_mtime, d))
+        except OSError:
+            try:
+                if now - d.stat().st_mtime > _STALE:
+                    shutil.rmtree(d, ignore_errors=True)
+                    removed.append(d)
+            except OSError:
+                pass
+    complete.sort(key=lambda t: (t[0], t[1].name), reverse=True)
+    for _, d in complete[max(keep, 0) :]:
+        shutil.rmtree(d, ignore_errors=True)
+        removed.append(d)
+    return removed
