@@ -115,14 +115,15 @@ def euler_baseline(
         vs = None
     if vs is not None and vs.shape != (steps, 3):
         vs = None
+    jacobian, solve, isfinite = model.jacobian, np.linalg.solve, math.isfinite
     for k in range(steps):
-        jac = model.position_jacobian(q)
+        jac = jacobian(q)[:3]  # the tip's linear velocity rows (local-world-aligned)
         v = vs[k] if vs is not None else np.asarray(velocity(k * dt), dtype=float)
         try:
-            qdot = np.linalg.solve(jac, v)
+            qdot = solve(jac, v)
         except np.linalg.LinAlgError:
             qdot = np.full(model.nq, np.nan)
-        if not np.all(np.isfinite(qdot)):
+        if not isfinite(qdot.sum()):  # a NaN or inf anywhere makes the sum non-finite
             raise ConfigurationError(
                 f"the plain Euler + np.linalg.solve loop stops at t = {k * dt:g} s: J(q) is "
                 f"singular at q = {np.round(q, 6).tolist()} (the seeds' method needs det J != 0)",

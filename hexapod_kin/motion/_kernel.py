@@ -15,12 +15,15 @@ that step's RK4 stages. All buffers are allocated per call (thread-safe, ``nogil
 from __future__ import annotations
 
 import math
+import time
+from typing import Any
 
 import numpy as np
 
 from .._kernels import fk_jac_into
 from .._numerics import dls_into, jacobi_eig, njit, sigma_bounds
 from ..ik.step import log3_into, tip_rotation_into
+from ._cold import rr_cold
 
 __all__ = ["rr_kernel"]
 
@@ -601,6 +604,11 @@ def _rr6(
         _advance(q, k1, k2, k3, k4, dt, rk4, lims[0], lims[1], use_limits)
 
 
+#: Predicted seconds per unit of :func:`._cold.rr_cold` (a unit: one RK4 stage × (4 + n)
+#: joints); refined by every run in this process.
+_COLD = {"per_unit_s": 4.5e-6}
+
+
 def rr_kernel(
     packed: tuple[np.ndarray, ...],
     tip_rot: np.ndarray,
@@ -626,6 +634,7 @@ def rr_kernel(
     out_s: np.ndarray,
     out_lam: np.ndarray,
     out_lim: np.ndarray,
+    model: Any = None,
 ) -> None:
     """Integrate the control law from ``q0`` (Euler or RK4) into the ``out_*`` arrays.
 
@@ -634,12 +643,27 @@ def rr_kernel(
     Outputs per sample: q, q̇, tip pose (4, 4), tip velocity ``J q̇`` (6, LWA),
     (σ_min, σ_max), λ², limited. Chosen here, in Python: a 3-row task runs (and compiles) only
     the position kernel, a twist only the 6-D one. ``packed``: the chain's
-    ``(rot, trans, axis, kind, col)`` arrays.
+    ``(rot, trans, axis, kind, col)`` arrays. With ``model`` (the loaded model of that chain)
+    the loop runs as :func:`._cold.rr_cold` (Pinocchio + Python) while the tier rule prefers
+    it to compiling the kernel (``Kernel.prefer_interpreted``, charged with its seconds).
     """
+    outs = (out_q, out_qd, out_pose, out_twist, out_s, out_lam, out_lim)
+    kernel = _rr6 if rows6 else _rr3
+    if model is not None:  # the cold path while the kernel is not compiled (see ._cold)
+        units = (out_q.shape[0] - 1) * (4 if rk4 else 1) * (4 + q0.shape[0])
+        if kernel.prefer_interpreted(_COLD["per_unit_s"] * units):
+            t0 = time.perf_counter()
+            rr_cold(
+                model, q0, vel, ref_p, ref_r, dt, rk4, rows6, tip_frame, gain, eps, lam2max,
+                lower, upper, use_limits, vmax, *outs,
+            )  # fmt: skip
+            spent = time.perf_counter() - t0
+            kernel.charge(spent)
+            _COLD["per_unit_s"] = 0.5 * (_COLD["per_unit_s"] + spent / max(units, 1))
+            return
     rot, trans, axis, kind, col = packed
     lims = np.empty((3, q0.shape[0]))  # lower, upper, speed limits: one argument of the law
     lims[0], lims[1], lims[2] = lower, upper, vmax
-    outs = (out_q, out_qd, out_pose, out_twist, out_s, out_lam, out_lim)
     if rows6:
         _rr6(
             rot,

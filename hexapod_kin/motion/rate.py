@@ -478,6 +478,7 @@ def resolved_rate(
         out_s,
         out_lam,
         out_lim,
+        model=mdl,
     )
     t = np.arange(steps + 1) * dt
     arrays = {
