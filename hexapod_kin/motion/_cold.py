@@ -89,13 +89,21 @@ def _dls(jac: np.ndarray, e: list[float], lam2: float, free: list[bool]) -> list
         jac = jac * np.array(free, dtype=float)
     if n <= m:
         cols = jac.T.tolist()
-        rhs = [_dot(c, e) for c in cols]
+        rhs = []
         work = [[0.0] * n for _ in range(n)]
         for i in range(n):
             ci = cols[i]
+            g = 0.0
+            for x, y in zip(ci, e):
+                g += x * y
+            rhs.append(g)
+            wi = work[i]
             for k in range(i, n):
-                work[i][k] = work[k][i] = _dot(ci, cols[k])
-            work[i][i] += lam2
+                s = 0.0
+                for x, y in zip(ci, cols[k]):
+                    s += x * y
+                wi[k] = work[k][i] = s
+            wi[i] += lam2
         sol = _chol_solve(work, rhs)
         if sol is None:
             return None
@@ -223,7 +231,8 @@ def rr_cold(
                 smin = smax = math.nan
         else:
             rows = jac[:3]
-            smin, smax = sig3(rows)
+            # an object array: the same source, indexing gives Python floats (faster math)
+            smin, smax = sig3(rows.astype(object))
             xd = list(v)
         rp = refp_l[h]
         pl = pose[:3, 3].tolist()
