@@ -88,7 +88,7 @@ def plot_pendulum(experiment: Any, path: Any) -> Any:
         f"{experiment.undamped.simulation.dt:g} s)"
     )
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, crop=False)
 
 
 def _cmd_pendulum(args: argparse.Namespace) -> int:

@@ -262,14 +262,16 @@ def _build(
     fdir = out / "figures"
     ahead = _derive_ahead(ctx)  # sympy in another process while the experiments run here
     try:
-        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
-        figs["jacobian"] += maps
+        # the heat maps come after the step and the pendulum: by then the child has stored
+        # the families they label (it derives those first), so this process does not
         figs["step"].append(figures.step_figure(ctx, fdir))
         facts["step"] = ctx.step.as_dict()
         figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
         facts["pendulum"] = {
             k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)
         }
+        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        figs["jacobian"] += maps
         duration = 1.5 if quick else 3.0
         walk_paths, facts["hexapod"] = figures.walk_figures(fdir, duration, animations, cache)
         figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]

@@ -171,22 +171,22 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
 
 
 def _leg2(s: dict[str, np.ndarray], path: Path) -> Path:
-    from ..plots import pyplot, save_figure
+    from ..plots import decimate, pyplot, save_figure
 
     plt = pyplot()
     t = s["t"]
     fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
     for k, lab in enumerate(("θ1 (coxa)", "θ2 (tibia)")):
-        axes[0].plot(t, np.degrees(s["q"][:, k]), label=lab)
+        axes[0].plot(*decimate(t, np.degrees(s["q"][:, k])), label=lab)
     axes[0].set_ylabel("input angle [deg]")
     axes[0].set_title("Fig. 11: planned input (Table I)")
     for k, lab in enumerate("xyz"):
-        axes[1].plot(t, s["feet"][:, k], label=lab)
+        axes[1].plot(*decimate(t, s["feet"][:, k]), label=lab)
     axes[1].set_ylabel("foot position [m] (l1 = 10, l2 = 5)")
     axes[1].set_title("Fig. 12: foot position by FK")
     for k, lab in enumerate(("θ1", "θ2")):
-        axes[2].plot(t, np.degrees(s["ours"][:, k]), label=f"{lab} ik.analytic")
-        axes[2].plot(t, np.degrees(s["seed"][:, k]), "--", label=f"{lab} seed Eqs. 9-12")
+        axes[2].plot(*decimate(t, np.degrees(s["ours"][:, k])), label=f"{lab} ik.analytic")
+        axes[2].plot(*decimate(t, np.degrees(s["seed"][:, k])), "--", label=f"{lab} seed Eqs. 9-12")
     axes[2].set_ylabel("IK output [deg]")
     axes[2].set_xlabel("time [s]")
     axes[2].set_title("Fig. 13: inverse kinematics of the foot positions")
@@ -194,7 +194,7 @@ def _leg2(s: dict[str, np.ndarray], path: Path) -> Path:
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    written = save_figure(fig, path)
+    written = save_figure(fig, path, crop=False)
     plt.close(fig)
     return written
 
@@ -211,7 +211,7 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
 
 
 def _pendulum(p: Any, path: Path) -> Path:
-    from ..plots import pyplot, save_figure
+    from ..plots import decimate, pyplot, save_figure
 
     plt = pyplot()
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
@@ -219,11 +219,11 @@ def _pendulum(p: Any, path: Path) -> Path:
         ((p.undamped, "without damping"), (p.damped, f"damping {p.damped.damping:g} N·m·s/rad"))
     ):
         t = run.simulation.t
-        axes[0, col].plot(t, run.theta)
+        axes[0, col].plot(*decimate(t, run.theta))
         axes[0, col].set_title(f"rotation of the link {name}")
         axes[0, col].set_ylabel("θ [rad] (from hanging)")
-        axes[1, col].plot(t, run.theta, label="θ [rad]")
-        axes[1, col].plot(t, run.omega, label="ω [rad/s]")
+        axes[1, col].plot(*decimate(t, run.theta), label="θ [rad]")
+        axes[1, col].plot(*decimate(t, run.omega), label="ω [rad/s]")
         axes[1, col].set_title(f"rotation and angular velocity {name}")
         axes[1, col].set_xlabel("time [s]")
         axes[1, col].set_ylabel("θ [rad], ω [rad/s]")
@@ -236,7 +236,7 @@ def _pendulum(p: Any, path: Path) -> Path:
         f"exact {u.period_exact:.6f} s"
     )
     fig.tight_layout()
-    written = save_figure(fig, path)
+    written = save_figure(fig, path, crop=False)
     plt.close(fig)
     return written
 

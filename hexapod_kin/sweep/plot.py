@@ -107,4 +107,4 @@ def plot_sweep(
     ax.legend(loc="best", fontsize=8)
     ax.set_title("front: max stride, volume, σ_min", fontsize=9)
     fig.tight_layout()
-    return save_figure(fig, path)
+    return save_figure(fig, path, crop=False)
