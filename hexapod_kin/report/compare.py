@@ -36,7 +36,9 @@ from typing import Any
 
 import numpy as np
 import sympy as sp
+from sympy.core.rules import Transform
 from sympy.parsing.sympy_parser import parse_expr
+from sympy.simplify.radsimp import collect_abs
 
 from .data import CLAIMS_FILE, Claim, Verdict, load_claims
 
@@ -112,10 +114,83 @@ def _num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
+class _Unsupported(Exception):
+    """An expression :func:`_evaluate` has no numpy rule for."""
+
+
+_NUMPY: dict[Any, Callable[..., Any]] = {
+    sp.sin: np.sin,
+    sp.cos: np.cos,
+    sp.tan: np.tan,
+    sp.exp: np.exp,
+    sp.log: np.log,
+    sp.Abs: np.abs,
+    sp.asin: np.arcsin,
+    sp.acos: np.arccos,
+    sp.atan: np.arctan,
+    sp.atan2: np.arctan2,
+}
+
+
+def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:
+    """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
+
+    Each distinct sub-expression is evaluated once (the entries of a kinematic matrix share
+    most of theirs), which is what ``sympy.lambdify`` would compute, without generating and
+    compiling code for every comparison. Numbers, π and ``E``, symbols, sums, products,
+    powers and ``sin cos tan exp log Abs asin acos atan atan2`` only; anything else (an
+    imaginary unit, another function) raises :class:`_Unsupported`.
+    """
+    memo: dict[Any, Any] = {}
+    points = len(next(iter(env.values()))) if env else POINTS
+
+    def ev(e: Any) -> Any:
+        hit = memo.get(e)
+        if hit is not None:
+            return hit
+        v: Any
+        if e.is_Symbol:
+            if e not in env:
+                raise _Unsupported(e)
+            v = env[e]
+        elif (e.is_Number or e.is_NumberSymbol) and e.is_extended_real:
+            v = float(e)
+        elif e.is_Add:
+            args = [ev(x) for x in e.args]
+            v = args[0]
+            for x in args[1:]:
+                v = v + x
+        elif e.is_Mul:
+            args = [ev(x) for x in e.args]
+            v = args[0]
+            for x in args[1:]:
+                v = v * x
+        elif e.is_Pow:
+            base, exp = ev(e.base), e.exp
+            if exp.is_Integer:
+                v = np.power(np.asarray(base, dtype=float), int(exp))
+            elif exp == sp.S.Half:
+                v = np.sqrt(base)
+            else:
+                v = np.power(np.asarray(base, dtype=float), ev(exp))
+        elif e.func in _NUMPY:
+            v = _NUMPY[e.func](*[ev(x) for x in e.args])
+        else:
+            raise _Unsupported(e)
+        memo[e] = v
+        return v
+
+    out = np.empty((len(exprs), points), dtype=complex)
+    for k, e in enumerate(exprs):
+        out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
+    return out
+
+
 def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarray, np.ndarray]:
     """Numeric screening of entry pairs: ``(a == b, a == −b)`` at :data:`POINTS` random points.
 
-    Every expression is evaluated (``sympy.lambdify`` to numpy, float64) at the same
+    Every expression is evaluated (numpy, float64: :func:`_evaluate`, or ``sympy.lambdify``
+    for what it does not know) at the same
     :data:`POINTS` points, seeded by ``key``: joint angles, ``theta`` and ``alpha`` uniform in
     [−π, π] rad, every other symbol (a length) uniform in [0.5, 2]. A pair agrees when
     ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (a NaN or complex value never agrees).
@@ -138,8 +213,11 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     pts = [_point(ordered, rng) for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
     with np.errstate(all="ignore"):
-        raw = sp.lambdify(ordered, ea + eb, modules="numpy")(*args)
-        vals = np.array([np.broadcast_to(np.asarray(v, dtype=complex), (POINTS,)) for v in raw])
+        try:
+            vals = _evaluate(ea + eb, dict(zip(ordered, args)))
+        except _Unsupported:
+            raw = sp.lambdify(ordered, ea + eb, modules="numpy")(*args)
+            vals = np.array([np.broadcast_to(np.asarray(v, dtype=complex), (POINTS,)) for v in raw])
     vals = vals.reshape(2, len(ea), POINTS)
     real = np.all(np.isfinite(vals) & (vals.imag == 0), axis=(0, 2))
     va, vb = vals.real
@@ -155,11 +233,83 @@ def simplified(expr: Any) -> Any:
     return sp.simplify(expr)
 
 
+def _hollow(x: Any) -> bool:
+    return bool(
+        x.is_Mul
+        and len(x.args) == 2
+        and x.args[0].is_Number
+        and x.args[1].is_Add
+        and x.is_commutative
+    )
+
+
+_HOLLOW = Transform(lambda x: sp.Mul(*x.args), _hollow)
+
+
+@lru_cache(maxsize=4096)
+def tidy(expr: Any) -> Any:
+    """``expr`` as printed in a verdict: common factors out, the sign in front (exactly equal).
+
+    The non-trigonometric steps of ``sympy.simplify`` in its order — ``signsimp``,
+    ``factor_terms(sign=False)``, a lone number no longer held in front of a sum, the minus
+    sign taken out of a quotient, the original kept when the result is 1.7 times as long
+    (``count_ops``) — without its trigonometric search (``trigsimp``/``futrig``, most of its
+    time): hexapod_kin's entries are already folded by :func:`hexapod_kin.symbolic.derive`
+    (``cos(q2 + q3)``, not ``c2 c3 − s2 s3``), so on them it prints what ``simplify`` prints;
+    on other input it may print a longer, equal form. Every step is an identity. Used only to
+    print; no verdict depends on it.
+    """
+    expr = sp.sympify(expr)
+    if not expr.args:
+        return expr
+    original = e = collect_abs(sp.signsimp(expr))
+    e = sp.factor_terms(e, sign=False).xreplace(_HOLLOW)
+    if e.could_extract_minus_sign():
+        n, d = sp.fraction(e)
+        if d != 0:
+            e = sp.signsimp(-n / (-d))
+    return original if sp.count_ops(e) > 1.7 * sp.count_ops(original) else e
+
+
+def _reduces_to_zero(poly: Any) -> bool:
+    """True when ``poly`` is 0 modulo ``sin(x)² + cos(x)² = 1`` for every angle ``x`` in it.
+
+    ``poly`` is an expanded expression whose ``sin``/``cos`` have plain symbols as
+    arguments (``expand_trig`` done). With ``s = sin x``, ``c = cos x`` it is a polynomial;
+    its remainder by ``s² + c² − 1`` in ``s``, taken for each angle in turn, is 0 only if
+    ``poly`` is a combination of those relations: then it vanishes for every real value of
+    the symbols (a proof; a non-zero remainder proves nothing here). Anything else
+    (``sin(q/2)``, ``tan``, a non-polynomial term) gives False.
+    """
+    trig = poly.atoms(sp.sin, sp.cos)
+    if not trig or any(not f.args[0].is_Symbol for f in trig):
+        return False
+    angles = sorted({f.args[0] for f in trig}, key=str)
+    s = [sp.Dummy(f"s_{x}") for x in angles]
+    c = [sp.Dummy(f"c_{x}") for x in angles]
+    rep = {sp.sin(x): sk for x, sk in zip(angles, s)}
+    rep.update({sp.cos(x): ck for x, ck in zip(angles, c)})
+    e = sp.expand(poly.xreplace(rep))
+    if e.has(sp.sin, sp.cos):
+        return False
+    try:
+        for sk, ck in zip(s, c):
+            if e.has(sk):
+                e = sp.expand(sp.rem(sp.Poly(e, sk), sp.Poly(sk**2 + ck**2 - 1, sk)).as_expr())
+    except sp.PolynomialError:
+        return False
+    return bool(e == 0 or (e.is_Number and e.is_zero))
+
+
 @lru_cache(maxsize=4096)
 def _zero(diff: Any) -> bool:
-    """``expand(expand_trig(diff)) == 0`` or ``simplify(...) == 0``."""
+    """True when ``diff`` is exactly 0.
+
+    ``expand(expand_trig(diff)) == 0``, else that reduced modulo ``sin² + cos² = 1`` is 0
+    (:func:`_reduces_to_zero`), else ``simplify(...) == 0``.
+    """
     d = sp.expand(sp.expand_trig(diff))
-    return bool(d == 0 or simplified(d) == 0)
+    return bool(d == 0 or _reduces_to_zero(d) or simplified(d) == 0)
 
 
 def equal(a: Any, b: Any, key: str = "") -> bool:
@@ -197,7 +347,7 @@ def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = Tru
             continue
         i, j = divmod(k, truth.cols)
         note = " (sign slip)" if opposite[k] and _zero(x + y) else ""
-        out.append(f"({i + 1},{j + 1}): seed {_fmt(x)} vs {_fmt(simplified(y))}{note}")
+        out.append(f"({i + 1},{j + 1}): seed {_fmt(x)} vs {_fmt(tidy(y))}{note}")
     return out
 
 

@@ -10,7 +10,10 @@
   rewritten).
 * **Budget**: the stages run in a forked child process that sends each finished stage back;
   at the deadline the child is killed and the caller gets the stages that finished. Where
-  ``fork`` does not exist the stages run inline, checking the clock between stages.
+  ``fork`` does not exist the stages run inline, checking the clock between stages; so they do
+  after :func:`run_in_process` (for a process that is itself bounded, e.g. a forked worker its
+  parent kills at a deadline: forking again per derivation would only redo sympy's warm-up and
+  pickle the results back).
 """
 
 from __future__ import annotations
@@ -29,6 +32,25 @@ from .._io import atomic_write, cache_root
 
 FORMAT = 3
 Stages = Callable[[], Iterator[tuple[str, Any]]]
+
+#: Run budgeted stages in this process (see :func:`run_in_process`).
+_IN_PROCESS = False
+
+
+def run_in_process(on: bool = True) -> None:
+    """From now on run budgeted derivations in this process, the clock checked between stages.
+
+    Meant for a process that is itself bounded (a forked worker whose parent ends it at a
+    deadline, like ``reproduce``'s symbolic side): the stages then share this process's
+    sympy caches and imports instead of forking a cold child per derivation. A stage that
+    hangs is not interrupted here; the bound of the calling process is what stops it.
+
+    Args:
+        on: ``False`` restores the default (a forked child per budgeted derivation).
+
+    """
+    global _IN_PROCESS
+    _IN_PROCESS = bool(on)
 
 
 def cache_dir() -> Path:
@@ -129,6 +151,8 @@ def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | Non
         for name, value in stages():
             done[name] = value
         return done, None
+    if _IN_PROCESS:
+        return _inline(stages, budget)
     import multiprocessing as mp
 
     try:

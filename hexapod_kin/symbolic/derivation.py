@@ -351,6 +351,27 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
     )
 
 
+def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> str | None:
+    """The other key of the same derivation: the default rows spelled out, or ``None``.
+
+    The stages depend on ``rows`` only through the row names they resolve to, so the
+    derivation with ``rows=None`` is the one with its default rows named (and back): in one
+    process, a scan that names the rows and the report that does not share one derivation
+    (:data:`_MEMO`; the disk keeps one file, under the key asked for).
+    """
+    names = stages.get("rows")
+    kin = stages.get("kinematics")
+    if names is None or kin is None:
+        return None
+    if rows is None:
+        return _cache_key(chain, tuple(names), lengths)
+    jd = kin["J_direct"]
+    flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
+    if tuple(default_rows(flags, chain.nq)) != tuple(names):
+        return None
+    return _cache_key(chain, None, lengths)
+
+
 #: Complete derivations of this process, by cache key (in front of the disk cache).
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
@@ -414,6 +435,8 @@ def derive(
         def gen() -> Iterator[tuple[str, Any]]:
             return _stages(chain, rows, lengths, end)
 
+        if budget is not None:
+            _core.import_ahead()  # here once, not in every forked child
         stages, reason = _cache.run(gen, budget)
         stages.setdefault("seconds", time.perf_counter() - start)
         if reason is None and cache:
@@ -422,6 +445,9 @@ def derive(
         if len(_MEMO) > 64:
             _MEMO.clear()
         _MEMO[digest] = stages
+        alias = _alias(chain, rows, lengths, stages)
+        if alias is not None:
+            _MEMO.setdefault(alias, stages)
     return _assemble(chain, frame, tip_name, syms, stages, reason, from_cache, rows)
 
 
