@@ -21,6 +21,7 @@ import dataclasses
 import html
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -260,27 +261,56 @@ def _build(
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
     fdir = out / "figures"
-    ahead = _derive_ahead(ctx)  # sympy in another process while the experiments run here
+    duration = 1.5 if quick else 3.0
+
+    texts = ("leg", "leg+", "scara")
+
+    def symbolic_side() -> tuple[list[Verdict], dict[str, Any], Path, dict[str, str]]:
+        # the sympy work: families, derivations, symbolic verdicts; then what reads them
+        sym = _symbolic_side(ctx, claims)
+        leg2 = figures.leg2_figure(ctx, fdir)  # the schedule needs coxa's lengths
+        return (
+            sym,
+            ctx.schedule,
+            leg2,
+            {k: derivation_text(ctx.derivation(k), cache) for k in texts},
+        )
+
+    def dynamics_side() -> tuple[Any, Path, tuple[list[Path], dict[str, Any]]]:
+        pend = figures.pendulum_figure(ctx, fdir)
+        return ctx.pendulum, pend, figures.walk_figures(fdir, duration, animations, cache)
+
+    _preload(animations)
+    # Three processes where the platform forks (the results come back pickled; a child
+    # that cannot fork, fails or dies is redone here, the same way): sympy in one, the
+    # pendulum and the walk in another, the step and the heat maps here.
+    ahead = _Forked(symbolic_side, budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
+    side = _Forked(dynamics_side)
     try:
-        # the heat maps come after the step and the pendulum: by then the child has stored
-        # the families they label (it derives those first), so this process does not
+        # the heat maps come after the step: by then the child has stored the families they
+        # label (it derives those first), so this process does not
         figs["step"].append(figures.step_figure(ctx, fdir))
         facts["step"] = ctx.step.as_dict()
-        figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
+        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        figs["jacobian"] += maps
+        pendulum, pend_png, (walk_paths, facts["hexapod"]) = side.result() or dynamics_side()
+        ctx.__dict__["pendulum"] = pendulum  # the Context's cached_property, as if run here
+        figs["pendulum"].append(pend_png)
         facts["pendulum"] = {
             k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)
         }
-        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
-        figs["jacobian"] += maps
-        duration = 1.5 if quick else 3.0
-        walk_paths, facts["hexapod"] = figures.walk_figures(fdir, duration, animations, cache)
         figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
-    except BaseException:
-        _join(ahead, wait=False)
-        raise
-    _join(ahead)
-    figs["leg2"].append(figures.leg2_figure(ctx, fdir))  # the schedule needs coxa's lengths
-    verdicts = evaluate(claims, ctx, cache=cache)
+        sym, schedule, leg2_png, derivations = ahead.result() or symbolic_side()
+    finally:
+        side.stop()
+        ahead.stop()
+    ctx.__dict__["schedule"] = schedule
+    figs["leg2"].append(leg2_png)
+    from .cache import KINDS
+
+    rest = iter(evaluate([c for c in claims if c.kind not in KINDS], ctx, cache=cache))
+    done = iter(sym)
+    verdicts = [next(done) if c.kind in KINDS else next(rest) for c in claims]
     if animations:
         try:
             anims["step"].append(figures.step_animation(ctx, out))
@@ -291,7 +321,6 @@ def _build(
                 target = out / "walk.html"
                 p.replace(target)
                 anims["beyond"].append(target)
-    derivations = {k: derivation_text(ctx.derivation(k), cache) for k in ("leg", "leg+", "scara")}
     md_path, html_path = out / "report.md", out / "report.html"
     rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
     parts = (rep, seeds, figs, anims, derivations)
@@ -304,6 +333,94 @@ def _build(
     return rep, written
 
 
+def _preload(animations: bool) -> None:
+    """Import what all three processes of a build use, once, before they fork.
+
+    A forked child shares the parent's imported modules; imported after the fork, Pinocchio,
+    numba, scipy, lxml, matplotlib (and meshcat for the animations) would each be imported
+    three times: about 1.5 CPU-seconds of a cold build on two cores.
+    """
+    import importlib
+
+    names = ["kinematics", "seeds", "motion._kernel", "dynamics", "gait", "singularity.scans",
+             "singularity.families", "symbolic", "plots"]  # fmt: skip
+    if animations:
+        names += ["viewer", "viewer.page"]
+    for name in names:
+        try:
+            importlib.import_module(f"hexapod_kin.{name}")
+        except Exception:  # noqa: BLE001 - a missing extra: the part that needs it says so
+            pass
+    try:
+        from .. import load
+        from ..plots import pyplot
+
+        load("hexabot_leg")  # the URDF reader (lxml, the gate) on first use
+        pyplot()
+    except Exception:  # noqa: BLE001 - no matplotlib: the figures say so when drawn
+        pass
+
+
+class _Forked:
+    """``fn()`` in a forked process; :meth:`result` is its return value (pickled back) or None.
+
+    None when this platform cannot fork, the child raised or died, or it outlived ``budget``
+    seconds (then it is killed): the caller computes the same thing itself. The child's
+    output is read before it is joined (a large result would otherwise block its pipe).
+    """
+
+    def __init__(self, fn: Callable[[], Any], budget: float = 300.0) -> None:
+        import multiprocessing as mp
+
+        self.budget = budget
+        self.proc: Any = None
+        self.recv: Any = None
+        try:
+            ctx = mp.get_context("fork")
+            self.recv, send = ctx.Pipe(duplex=False)
+            self.proc = ctx.Process(target=self._run, args=(fn, send))
+            self.proc.start()
+            send.close()
+        except Exception:  # noqa: BLE001 - no fork here: result() is None
+            self.proc = None
+
+    @staticmethod
+    def _run(fn: Callable[[], Any], send: Any) -> None:  # pragma: no cover - in the child
+        try:
+            out = ("ok", fn())
+        except BaseException as exc:  # noqa: BLE001 - reported as a failure, recomputed
+            out = ("error", repr(exc))
+        try:
+            send.send(out)
+        finally:
+            send.close()
+
+    def result(self) -> Any:
+        """The child's return value, or None (see the class docstring)."""
+        if self.proc is None:
+            return None
+        value = None
+        try:
+            if self.recv.poll(self.budget):
+                status, payload = self.recv.recv()
+                value = payload if status == "ok" else None
+        except (EOFError, OSError):  # the child died before sending
+            value = None
+        self.stop(wait=value is not None)
+        return value
+
+    def stop(self, wait: bool = False) -> None:
+        """End the child (kill it unless ``wait`` and it is about to exit)."""
+        if self.proc is None:
+            return
+        self.proc.join(5.0 if wait else 0.0)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join(5.0)
+        self.recv.close()
+        self.proc = None
+
+
 #: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
 DERIVED = ("coxa", "leg", "leg+", "scara")
 #: The models of :func:`.figures.heat_maps` (their families are derived ahead too).
@@ -311,52 +428,27 @@ HEAT_MAP_MODELS = ("leg", "scara")
 _AHEAD_BUDGET = 60.0
 
 
-def _derive_ahead(ctx: Any) -> Any:
-    """Start the symbolic side in a forked process; return it (or None: no fork here).
+def _symbolic_side(ctx: Any, claims: list[Any]) -> list[Verdict]:
+    """The sympy work of a build, in the order the other processes need it.
 
-    The child derives :data:`DERIVED` (:func:`hexapod_kin.symbolic.derive`, budget 60 s each)
-    and computes the symbolic verdicts (:data:`.cache.KINDS`): both land in the disk caches
-    while this process runs the numeric experiments and draws. :func:`_join` waits for it
-    before the checks run here, which then read what it stored (anything it could not finish
-    is computed here, the same way).
+    First the families the heat maps label (on disk before the parent scans), then the
+    derivations of :data:`DERIVED` (:func:`hexapod_kin.symbolic.derive`, budget 60 s each),
+    then the verdicts of every claim of ``claims`` whose kind is symbolic
+    (:data:`.cache.KINDS`), in their order (read from and stored in the disk cache with
+    ``ctx.cache``).
     """
-    import multiprocessing as mp
-
-    try:
-        proc = mp.get_context("fork").Process(target=_symbolic_side, args=(ctx,))
-        proc.start()
-        return proc
-    except Exception:  # noqa: BLE001 - no fork (or no process): the checks derive in turn
-        return None
-
-
-def _symbolic_side(ctx: Any) -> None:  # pragma: no cover - runs in the child
     from .. import load
     from ..singularity.families import families_for
     from ..singularity.measure import selected_rows
     from .cache import KINDS
+    from .compare import evaluate
 
-    # first the families the heat maps label (the parent scans them soon): on disk in time,
-    # the parent's scan reads them instead of deriving them itself
     for key in HEAT_MAP_MODELS:
         model = load(ctx.chain(key))
         families_for(model, tuple(selected_rows(model, None)), derive=True)
     for key in DERIVED:
         ctx.derivation(key)
-    if ctx.cache:  # the verdicts reach the parent through the disk cache only
-        from .compare import evaluate
-
-        evaluate([c for c in ctx.claims.values() if c.kind in KINDS], ctx)
-
-
-def _join(proc: Any, wait: bool = True) -> None:
-    """Wait for :func:`_derive_ahead`'s process, then end it (``wait=False``: end it now)."""
-    if proc is None:
-        return
-    proc.join(_AHEAD_BUDGET * (len(DERIVED) + 1) if wait else 0.0)
-    if proc.is_alive():
-        proc.kill()
-        proc.join(5.0)
+    return evaluate([c for c in claims if c.kind in KINDS], ctx, cache=ctx.cache)
 
 
 _LABEL = {
