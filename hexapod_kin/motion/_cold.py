@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .. import _tier
-from .._numerics import sigma_bounds
+from .._numerics import eig3_sym, sigma_bounds
 from ..ik.step import log3_into
 
 __all__ = ["rr_cold"]
@@ -162,6 +162,33 @@ def _solve_law(
     return qd, limited
 
 
+def _at_limit(q: list[float], qd: list[float], lower: list[float], upper: list[float]) -> bool:
+    """True when a joint sits at a limit and ``qd`` pushes it further (the law then freezes it)."""
+    for i in range(len(q)):
+        if (q[i] <= lower[i] and qd[i] < 0.0) or (q[i] >= upper[i] and qd[i] > 0.0):
+            return True
+    return False
+
+
+def _scale(qd: list[float], vmax: list[float]) -> float:
+    """The speed-limit factor of the law (1 when no joint is too fast)."""
+    scale = 1.0
+    for i in range(len(qd)):
+        a = abs(qd[i])
+        if a * scale > vmax[i]:
+            scale = vmax[i] / a
+    return scale
+
+
+def _scaled(qd: list[float], vmax: list[float]) -> np.ndarray:
+    scale = _scale(qd, vmax)
+    return np.array(qd if scale >= 1.0 else [x * scale for x in qd])
+
+
+def _limited(qd: list[float], vmax: list[float]) -> bool:
+    return _scale(qd, vmax) < 1.0
+
+
 def _damping(smin: float, smax: float, eps: float, lam2max: float) -> tuple[float, float]:
     """(λ², λ² used): the kernels' damping rule."""
     lam2 = 0.0
@@ -169,6 +196,57 @@ def _damping(smin: float, smax: float, eps: float, lam2max: float) -> tuple[floa
         ratio = smin / eps
         lam2 = lam2max * (1.0 - ratio * ratio)
     return lam2, max(lam2, 1e-14 * (smax * smax + 1e-300))
+
+
+def _sigma3x3(j: list[list[float]], eig3: Any) -> tuple[float, float]:
+    """``_numerics.sigma_bounds`` of a 3×3 Jacobian on Python floats (the same operations)."""
+    (a, b, c), (d, e, f), (g, h, i) = j
+    m00 = a * a + b * b + c * c
+    m01 = a * d + b * e + c * f
+    m02 = a * g + b * h + c * i
+    m11 = d * d + e * e + f * f
+    m12 = d * g + e * h + f * i
+    m22 = g * g + h * h + i * i
+    e1, e2, _ = eig3(m00, m11, m22, m01, m02, m12)
+    smax = math.sqrt(max(e1, 0.0))
+    s12 = smax * math.sqrt(max(e2, 0.0))
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return (abs(det) / s12 if s12 > 0.0 else 0.0), smax
+
+
+def _dls3x3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:
+    """``_numerics.dls_into`` (every joint free) for a 3×3 Jacobian, unrolled, same order."""
+    (a, b, c), (d, e, f), (g, h, i) = j
+    x0, x1, x2 = x
+    r0 = a * x0 + d * x1 + g * x2
+    r1 = b * x0 + e * x1 + h * x2
+    r2 = c * x0 + f * x1 + i * x2
+    w00 = a * a + d * d + g * g + lam2
+    w10 = b * a + e * d + h * g
+    w20 = c * a + f * d + i * g
+    w11 = b * b + e * e + h * h + lam2
+    w21 = c * b + f * e + i * h
+    w22 = c * c + f * f + i * i + lam2
+    if not w00 > 0.0:
+        return None
+    l00 = math.sqrt(w00)
+    l10 = w10 / l00
+    l20 = w20 / l00
+    s = w11 - l10 * l10
+    if not s > 0.0:
+        return None
+    l11 = math.sqrt(s)
+    l21 = (w21 - l20 * l10) / l11
+    s = w22 - l20 * l20 - l21 * l21
+    if not s > 0.0:
+        return None
+    l22 = math.sqrt(s)
+    y0 = r0 / l00
+    y1 = (r1 - l10 * y0) / l11
+    y2 = (r2 - l20 * y0 - l21 * y1) / l22
+    z2 = y2 / l22
+    z1 = (y1 - l21 * z2) / l11
+    return [(y0 - l10 * z1 - l20 * z2) / l00, z1, z2]
 
 
 def rr_cold(
@@ -202,6 +280,8 @@ def rr_cold(
     """
     fkj = model.fk_jacobian
     sig3 = _tier.interpreted(sigma_bounds)
+    eig3 = _tier.interpreted(eig3_sym)
+    square3 = not rows6 and q0.shape[0] == 3
     log3 = _tier.interpreted(log3_into)
     lo, hi, vm = lower.tolist(), upper.tolist(), vmax.tolist()
     w3 = np.empty((3, 3))
@@ -229,6 +309,11 @@ def rr_cold(
                 smin, smax = float(sv[-1]), float(sv[0])
             else:  # an RK4 stage of a twist: the damping of the step's start is held
                 smin = smax = math.nan
+        elif square3:
+            rows = jac[:3]
+            j3 = rows.tolist()
+            smin, smax = _sigma3x3(j3, eig3)
+            xd = list(v)
         else:
             rows = jac[:3]
             # an object array: the same source, indexing gives Python floats (faster math)
@@ -242,7 +327,12 @@ def rr_cold(
             lam2 = lam_use = hold
         else:
             lam2, lam_use = _damping(smin, smax, eps, lam2max)
-        qd, limited = _solve_law(rows, xd, lam_use, q.tolist(), lo, hi, vm, use_limits)
+        ql = q.tolist()
+        if square3:  # the kernel's first pass; its limit and speed rules when they apply
+            qd = _dls3x3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
+            if not (use_limits and _at_limit(ql, qd, lo, hi)):
+                return _scaled(qd, vm), pose, jac, smin, smax, lam2, _limited(qd, vm)
+        qd, limited = _solve_law(rows, xd, lam_use, ql, lo, hi, vm, use_limits)
         return np.array(qd), pose, jac, smin, smax, lam2, limited
 
     q = np.array(q0, dtype=float)

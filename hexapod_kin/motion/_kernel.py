@@ -604,9 +604,9 @@ def _rr6(
         _advance(q, k1, k2, k3, k4, dt, rk4, lims[0], lims[1], use_limits)
 
 
-#: Predicted seconds per unit of :func:`._cold.rr_cold` (a unit: one RK4 stage × (4 + n)
-#: joints); refined by every run in this process.
-_COLD = {"per_unit_s": 4.5e-6}
+#: Predicted seconds of :func:`._cold.rr_cold` per unit: one stage of the unrolled 3×3
+#: position task ("square3"), one stage × (4 + n) otherwise; refined by every run here.
+_COLD = {"square3": 1.6e-5, "general": 5e-6}
 
 
 def rr_kernel(
@@ -650,8 +650,10 @@ def rr_kernel(
     outs = (out_q, out_qd, out_pose, out_twist, out_s, out_lam, out_lim)
     kernel = _rr6 if rows6 else _rr3
     if model is not None:  # the cold path while the kernel is not compiled (see ._cold)
-        units = (out_q.shape[0] - 1) * (4 if rk4 else 1) * (4 + q0.shape[0])
-        if kernel.prefer_interpreted(_COLD["per_unit_s"] * units):
+        path = "square3" if not rows6 and q0.shape[0] == 3 else "general"
+        per_stage = 1 if path == "square3" else 4 + q0.shape[0]
+        units = (out_q.shape[0] - 1) * (4 if rk4 else 1) * per_stage
+        if kernel.prefer_interpreted(_COLD[path] * units):
             t0 = time.perf_counter()
             rr_cold(
                 model, q0, vel, ref_p, ref_r, dt, rk4, rows6, tip_frame, gain, eps, lam2max,
@@ -659,7 +661,7 @@ def rr_kernel(
             )  # fmt: skip
             spent = time.perf_counter() - t0
             kernel.charge(spent)
-            _COLD["per_unit_s"] = 0.5 * (_COLD["per_unit_s"] + spent / max(units, 1))
+            _COLD[path] = 0.5 * (_COLD[path] + spent / max(units, 1))
             return
     rot, trans, axis, kind, col = packed
     lims = np.empty((3, q0.shape[0]))  # lower, upper, speed limits: one argument of the law
