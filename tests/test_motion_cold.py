@@ -10,6 +10,7 @@ hexapod's body (a sub-chain whose base is not Pinocchio's root).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -20,7 +21,7 @@ import numpy as np
 import pytest
 
 import hexapod_kin as hk
-from hexapod_kin import _tier
+from hexapod_kin import _tier, robots
 from hexapod_kin.motion import _kernel
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -60,12 +61,19 @@ def _same(a, b, tol: float) -> None:
 
 
 UR5_Q0 = [0.3, -0.8, 1.1, -0.4, 0.6, 0.2]
+_LEG = robots.get("hexabot_leg")
+#: the leg with narrow joint limits: the run ends up pressing a joint against its limit
+NARROW = dataclasses.replace(
+    _LEG, limits=tuple(dataclasses.replace(lim, lower=-0.2, upper=1.3) for lim in _LEG.limits)
+)
 CASES = [
     # (source, load kwargs, velocity, q0, dt, duration, resolved_rate kwargs)
     ("hexabot_leg", {}, [0.02, 0.0, 0.0], [0, 0.3, 1.2], 2e-3, 0.6, {}),
     ("hexabot_leg", {}, [0.02, -0.01, 0.01], [0, 0.3, 1.2], 2e-3, 0.4, {"method": "euler"}),
     # pushed out of reach: damping near the boundary, then the joint limits
     ("hexabot_leg", {}, [0.3, 0.0, 0.0], [0, 0.3, 1.2], 2e-3, 1.0, {}),
+    (NARROW, {}, [-0.05, 0.0, 0.0], [0, 0.3, 1.2], 2e-3, 1.0, {}),  # joint limits hit
+    (NARROW, {}, [0.0, 0.0, 0.05], [0, 0.3, 1.2], 2e-3, 1.0, {"method": "euler"}),
     # a singular start (straight leg): damped, never a division by zero
     ("hexabot_leg", {}, [0.0, 0.0, 0.02], [0, 0, 0], 2e-3, 0.3, {}),
     ("scara", {}, [0.01, 0.02, -0.02], None, 2e-3, 0.5, {}),  # prismatic joint
@@ -77,7 +85,12 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("case", CASES, ids=lambda c: Path(c[0]).stem + str(c[6] or ""))
+def _id(case: tuple) -> str:
+    name = case[0] if isinstance(case[0], str) else "narrow_leg"
+    return Path(name).stem + str(case[2]) + str(case[6] or "")
+
+
+@pytest.mark.parametrize("case", CASES, ids=_id)
 def test_cold_path_equals_the_kernel(case, monkeypatch):
     source, load_kw, vel, q0, dt, duration, kw = case
     model = hk.load(source, **load_kw)
@@ -91,6 +104,8 @@ def test_cold_path_equals_the_kernel(case, monkeypatch):
     cold = _run("never", run)
     assert calls == [1]  # the cold path ran
     _same(cold, compiled, 1e-11)
+    if source is NARROW:
+        assert cold.limited.any()  # the limit rule ran
 
 
 def test_cold_path_is_the_law_not_a_copy_of_the_kernel_output():
