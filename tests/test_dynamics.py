@@ -606,3 +606,21 @@ def test_cli_pendulum_html_and_short_runs(
     with open(page, encoding="utf-8") as fh:
         text = fh.read()
     assert "<html" in text.lower() and "pendulum" in text
+
+
+@pytest.mark.parametrize("method", ["rk4", "symplectic_euler"])
+def test_one_joint_float_loop_equals_the_array_loop(method, monkeypatch):
+    """The pendulum's loop on Python floats gives the array loop's numbers bit for bit."""
+    from hexapod_kin.dynamics import forward
+
+    model = hk.load("pendulum", damping=0.01)
+    calls = []
+    real = forward._scalar_run
+    monkeypatch.setattr(forward, "_scalar_run", lambda *a: calls.append(1) or real(*a))
+    fast = forward.simulate(model, [0.5], [0.2], duration=3.0, dt=1e-3, method=method)
+    assert calls == [1]
+    # an explicit zero torque takes the general (array) loop: same physics, same operations
+    slow = forward.simulate(model, [0.5], [0.2], duration=3.0, dt=1e-3, method=method, tau=[0.0])
+    assert calls == [1]
+    for name in ("q", "v", "a", "kinetic", "potential", "total"):
+        assert np.array_equal(getattr(fast, name), getattr(slow, name)), name

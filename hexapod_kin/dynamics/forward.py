@@ -286,6 +286,77 @@ def simulate(
             return aba(pm, data, qk, vk, applied(tk, qk, vk) + ptorque(qk, vk)).copy()
 
     ts = np.arange(n + 1) * h
+    if (
+        tau is None
+        and not (np.any(passive.friction) or np.any(passive.stiffness))
+        and pm.nq == pm.nv == nq == 1
+    ):  # one joint, damping only (the seed's pendulum): the same loop on Python floats
+        qs, vs, accs = _scalar_run(pm, data, float(q[0]), float(v[0]), float(-b[0]), n, h, method)
+    else:
+        qs, vs, accs = _array_run(acc, q, v, ts, n, h, method)
+    kin = np.array([pin.computeKineticEnergy(pm, data, qs[i], vs[i]) for i in range(n + 1)])
+    pot = np.array([pin.computePotentialEnergy(pm, data, qs[i]) for i in range(n + 1)])
+    pot = pot + passive.spring_energy(qs)
+    total = kin + pot
+    _ro(ts, qs, vs, accs, kin, pot, total)
+    return Simulation(
+        ts, qs, vs, accs, kin, pot, total, str(method), h, passive, tuple(mdl.joint_names)
+    )
+
+
+def _scalar_run(
+    pm: Any, data: Any, q: float, v: float, nb: float, n: int, h: float, method: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_array_run` for one joint with damping only, on Python floats.
+
+    The same operations in the same order as the array loop (IEEE doubles either way, so the
+    same numbers), without numpy's per-operation cost on 1-element arrays: about 2.5× faster.
+    ``nb`` is minus the damping.
+    """
+    aba = pin.aba
+    arr = np.array
+
+    def acc(qk: float, vk: float) -> float:
+        return float(aba(pm, data, arr([qk]), arr([vk]), arr([nb * vk]))[0])
+
+    qs, vs, accs = [q], [v], []
+    a = acc(q, v)
+    accs.append(a)
+    half = 0.5 * h
+    sixth = h / 6.0
+    for k in range(n):
+        if method == "rk4":
+            v2 = v + half * a
+            k2a = acc(q + half * v, v2)
+            v3 = v + half * k2a
+            k3a = acc(q + half * v2, v3)
+            v4 = v + h * k3a
+            k4a = acc(q + h * v3, v4)
+            q = q + sixth * (v + 2.0 * v2 + 2.0 * v3 + v4)
+            v = v + sixth * (a + 2.0 * k2a + 2.0 * k3a + k4a)
+        else:
+            v = v + h * a
+            q = q + h * v
+        a = acc(q, v)
+        if k % 64 == 63 or k == n - 1:
+            _finite_or_raise(arr([q]), arr([v]), arr([a]), k * h + h, h)
+        qs.append(q)
+        vs.append(v)
+        accs.append(a)
+    return arr(qs).reshape(-1, 1), arr(vs).reshape(-1, 1), arr(accs).reshape(-1, 1)
+
+
+def _array_run(
+    acc: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+    q: np.ndarray,
+    v: np.ndarray,
+    ts: np.ndarray,
+    n: int,
+    h: float,
+    method: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """RK4 or symplectic Euler from (q, v): the (n+1, nq) positions, velocities, accelerations."""
+    nq = q.shape[0]
     qs = np.empty((n + 1, nq))
     vs = np.empty((n + 1, nq))
     accs = np.empty((n + 1, nq))
@@ -312,14 +383,7 @@ def simulate(
         if k % 64 == 63 or k == n - 1:  # a diverged state stays non-finite: check now and then
             _finite_or_raise(q, v, a, tk + h, h)
         qs[k + 1], vs[k + 1], accs[k + 1] = q, v, a
-    kin = np.array([pin.computeKineticEnergy(pm, data, qs[i], vs[i]) for i in range(n + 1)])
-    pot = np.array([pin.computePotentialEnergy(pm, data, qs[i]) for i in range(n + 1)])
-    pot = pot + passive.spring_energy(qs)
-    total = kin + pot
-    _ro(ts, qs, vs, accs, kin, pot, total)
-    return Simulation(
-        ts, qs, vs, accs, kin, pot, total, str(method), h, passive, tuple(mdl.joint_names)
-    )
+    return qs, vs, accs
 
 
 def _finite_or_raise(q: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, h: float) -> None:
