@@ -25,6 +25,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import fields
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -59,7 +60,13 @@ def cache_dir() -> Path:
 
 
 def _sre(obj: Any) -> str:
-    return sp.srepr(sp.ImmutableMatrix(obj) if isinstance(obj, sp.MatrixBase) else obj)
+    return _srepr(sp.ImmutableMatrix(obj) if isinstance(obj, sp.MatrixBase) else obj)
+
+
+@lru_cache(maxsize=1024)
+def _srepr(obj: Any) -> str:
+    """``sympy.srepr``, remembered (the claims of one model share its matrices)."""
+    return str(sp.srepr(obj))
 
 
 def _factor_claims(c: Claim, ctx: Any) -> list[Any]:

@@ -220,6 +220,11 @@ def _verdict(
     return Verdict(c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method)
 
 
+def _at(m: Any, subs: dict[sp.Symbol, float]) -> Any:
+    """``m.xreplace(subs)``; ``m`` itself when there is nothing to replace (no tree walk)."""
+    return m.xreplace(subs) if subs else m
+
+
 def _subs(c: Claim) -> dict[sp.Symbol, float]:
     return {_SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
 
@@ -241,8 +246,8 @@ def _with(c: Claim) -> str:
 def check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)
-    seed = parse_matrix(c.data["value"]).xreplace(subs)
-    truth = ctx.item(key, item).xreplace(subs)
+    seed = _at(parse_matrix(c.data["value"]), subs)
+    truth = _at(ctx.item(key, item), subs)
     claimed = _raw(c.data["value"]) + _with(c)
     computed = _fmt_matrix(truth.applyfunc(tidy))
     if seed.shape != truth.shape:
@@ -255,12 +260,12 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     notes = [f"{len(diffs)} of {truth.rows * truth.cols} entries differ: " + "; ".join(diffs)]
     if key in _OTHER:
         other, label = _OTHER[key]
-        if not matrix_diff(seed, ctx.item(other, item).xreplace(subs), c.id, explain=False):
+        if not matrix_diff(seed, _at(ctx.item(other, item), subs), c.id, explain=False):
             notes.append(f"it is the α2 = {label} matrix (the other sign of row 2)")
     if item.startswith("0T "):
         notes.append(_own_product(c, ctx, seed, subs))
     if "derivative_of" in c.data:
-        p = parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]).xreplace(subs)
+        p = _at(parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]), subs)
         dp = p.jacobian(_Q[: seed.cols])
         own = matrix_diff(seed, dp, c.id + "d")
         notes.append(
@@ -285,7 +290,7 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
         ]
         if not f:
             return ""
-        factors.append(parse_matrix(f[0].data["value"]).xreplace(subs))
+        factors.append(_at(parse_matrix(f[0].data["value"]), subs))
     prod = sp.eye(4)
     for f in factors:
         prod = prod * f

@@ -91,7 +91,8 @@ def _parse(text: str) -> sp.Expr:
 def plain(expr: Any) -> Any:
     """``expr`` with every symbol renamed onto this module's real symbols (by name)."""
     expr = sp.sympify(expr)
-    return expr.xreplace({s: _SYMS.get(s.name, s) for s in expr.free_symbols})
+    rename = {s: _SYMS[s.name] for s in expr.free_symbols if _SYMS.get(s.name, s) != s}
+    return expr.xreplace(rename) if rename else expr
 
 
 # ---------------------------------------------------------------------- comparison helpers

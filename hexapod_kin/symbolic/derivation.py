@@ -376,6 +376,10 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
+#: Budgeted derivations run by this process (from the second on, imports are made ahead).
+_BUDGETED = 0
+
+
 def clear_memory() -> None:
     """Forget the derivations memoised in this process (the disk cache stays)."""
     _MEMO.clear()
@@ -435,9 +439,11 @@ def derive(
         def gen() -> Iterator[tuple[str, Any]]:
             return _stages(chain, rows, lengths, end)
 
-        if budget is not None:
-            _core.import_ahead()  # here once, not in every forked child
+        global _BUDGETED
+        if budget is not None and _BUDGETED:  # a process that derives again and again:
+            _core.import_ahead()  # import here once, not in each forked child
         stages, reason = _cache.run(gen, budget)
+        _BUDGETED += budget is not None
         stages.setdefault("seconds", time.perf_counter() - start)
         if reason is None and cache:
             _cache.store(digest, stages)
