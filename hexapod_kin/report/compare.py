@@ -257,12 +257,15 @@ def tidy(expr: Any) -> Any:
     (``count_ops``) — without its trigonometric search (``trigsimp``/``futrig``, most of its
     time): hexapod_kin's entries are already folded by :func:`hexapod_kin.symbolic.derive`
     (``cos(q2 + q3)``, not ``c2 c3 − s2 s3``), so on them it prints what ``simplify`` prints;
-    on other input it may print a longer, equal form. Every step is an identity. Used only to
-    print; no verdict depends on it.
+    an expression with a power of ``sin`` or ``cos`` (``sin² + cos²`` may fold) is handed to
+    ``simplify`` itself; other unfolded input may print in a longer, equal form. Every step
+    is an identity. Used only to print; no verdict depends on it.
     """
     expr = sp.sympify(expr)
     if not expr.args:
         return expr
+    if any(p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer for p in expr.atoms(sp.Pow)):
+        return simplified(expr)  # sin² + cos² to fold: that is trigsimp's work
     original = e = collect_abs(sp.signsimp(expr))
     e = sp.factor_terms(e, sign=False).xreplace(_HOLLOW)
     if e.could_extract_minus_sign():
