@@ -79,7 +79,7 @@ def test_evaluate_equals_lambdify(leg):
     env = {s: rng.uniform(0.5, 2.0, 8) for s in syms}
     ours = compare._evaluate(entries, env)
     ref = sp.lambdify(syms, entries, "numpy")(*[env[s] for s in syms])
-    for k, e in enumerate(entries):
+    for k in range(len(entries)):
         expected = np.broadcast_to(np.asarray(ref[k], dtype=float), (8,))
         np.testing.assert_allclose(ours[k].real, expected, rtol=1e-13, atol=1e-15)
         assert not ours[k].imag.any()
