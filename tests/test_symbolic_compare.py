@@ -16,7 +16,7 @@ import sympy as sp
 
 from hexapod_kin import robots, symbolic
 from hexapod_kin.report import compare
-from hexapod_kin.report.checks import Context, _det_truth, _factored, _subs
+from hexapod_kin.report.checks import Context, _det_truth, _subs
 from hexapod_kin.report.data import load_claims
 from hexapod_kin.symbolic import cache as symbolic_cache
 from hexapod_kin.symbolic import derive
@@ -153,7 +153,8 @@ def test_factored_det_equals_factor_of_simplify():
     assert dets
     for c in dets:
         raw = _det_truth(c, ctx).xreplace(_subs(c))
-        ours = _factored(raw, ctx.derivation(c.data["model"]), c.id)
+        d = ctx.derivation(c.data["model"])
+        ours = compare.factored(raw, d.q, d.chain.sigmas, c.id)
         assert sp.srepr(ours) == sp.srepr(sp.factor(sp.simplify(raw)))
 
 

@@ -24,6 +24,7 @@ from .compare import (
     _fmt_matrix,
     _num,
     equal,
+    factored,
     matrix_diff,
     parse,
     parse_matrix,
@@ -407,31 +408,12 @@ def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
     return plain(ctx.derivation(key).det)
 
 
-def _factored(det: sp.Expr, d: Any, key: str) -> sp.Expr:
-    """``det`` factored the way :func:`~hexapod_kin.symbolic.derive` factors det J.
-
-    :func:`~hexapod_kin.symbolic.core.trig_factor` (exact), then ``sympy.factor``. The
-    product is checked equal to ``det`` (:func:`equal`); should it not be, the answer is
-    ``factor(simplify(det))``, as it always was before.
-    """
-    from ..symbolic.core import trig_factor
-
-    q = tuple(plain(s) for s in d.q)
-    try:
-        const, factors = trig_factor(det, q, d.chain.sigmas)
-        out = sp.factor(const * sp.Mul(*[f**m for f, m in factors]))
-        if equal(det, out, key + " factored"):
-            return out
-    except (sp.PolynomialError, ValueError, TypeError):
-        pass
-    return sp.factor(sp.simplify(det))
-
-
 def check_det(c: Claim, ctx: Context) -> Verdict:
     """``det``: the seed's det J vs hexapod_kin's factored det J."""
     subs = _subs(c)
     seed = parse(c.data["value"]).xreplace(subs)
-    truth = _factored(_det_truth(c, ctx).xreplace(subs), ctx.derivation(c.data["model"]), c.id)
+    d = ctx.derivation(c.data["model"])
+    truth = factored(_det_truth(c, ctx).xreplace(subs), d.q, d.chain.sigmas, c.id)
     claimed, computed = str(c.data["value"]) + _with(c), _fmt(truth)
     method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
     if equal(seed, truth, c.id):

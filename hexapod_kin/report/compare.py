@@ -7,8 +7,8 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
 * ``matrix`` — a symbolic matrix (``^{j-1}T_j``, ``^0T_j``, ``p``, ``J``) against
   :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points seeded by
   the claim (:func:`screen`: numpy, relative tolerance :data:`RTOL`), then
-  ``sympy.simplify(a - b) == 0`` for the entries that agree; sympy simplifies a differing
-  entry only to explain it;
+  ``simplify(a - b) == 0`` for the entries that agree (an exact proof, cheapest first: see
+  :func:`_zero`); a differing entry is printed (:func:`tidy`) only to explain it;
   a wrong matrix is also tested against the other α2 sign, the product of the seed's own
   factors and the derivative of the seed's own ``p`` to say where the slip comes from;
 * ``det`` — ``simplify(seed − det J) == 0`` (and ``±`` / scale when not);
@@ -21,6 +21,13 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
   :func:`hexapod_kin.ik.analytic`; the seed's IK formulas are evaluated as written;
 * ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``
   of the claimed value.
+
+"``simplify(a − b) == 0``" in the verdicts' method is decided exactly, cheapest first:
+``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
+``sin(x)² + cos(x)² = 1`` for every angle ``x`` is 0 (:func:`_reduces_to_zero`); else
+``sympy.simplify(...) == 0``. Each is a proof that ``a − b`` vanishes identically; a
+non-zero result of the first two only passes the question on. Hexapod_kin's expressions
+are printed by :func:`tidy` (``sympy.simplify``'s non-trigonometric steps).
 
 The symbolic verdicts are kept on disk (:mod:`.cache`), keyed by the claim, hexapod_kin's
 expressions and the package source.
@@ -323,6 +330,26 @@ def equal(a: Any, b: Any, key: str = "") -> bool:
     """
     a, b = plain(a), plain(b)
     return bool(screen([a], [b], key)[0][0]) and _zero(a - b)
+
+
+def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -> Any:
+    """``det`` factored the way :func:`~hexapod_kin.symbolic.derive` factors det J.
+
+    :func:`~hexapod_kin.symbolic.core.trig_factor` (exact, joints ``q`` of kinds ``sigmas``),
+    then ``sympy.factor``. The product is checked equal to ``det`` (:func:`equal`); should it
+    not be, the answer is ``factor(simplify(det))``, as it always was before.
+    """
+    from ..symbolic.core import trig_factor
+
+    qs = tuple(plain(s) for s in q)
+    try:
+        const, factors = trig_factor(det, qs, sigmas)
+        out = sp.factor(const * sp.Mul(*[f**m for f, m in factors]))
+        if equal(det, out, key + " factored"):
+            return out
+    except (sp.PolynomialError, ValueError, TypeError):
+        pass
+    return sp.factor(sp.simplify(det))
 
 
 def _fmt(expr: Any) -> str:
