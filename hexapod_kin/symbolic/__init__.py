@@ -9,7 +9,7 @@ The folder reads in the order the data flows:
 * :mod:`~hexapod_kin.symbolic.families` — singular families read off the factors, checked
   against the numeric σ_min, and their numpy residuals for scans;
 * :mod:`~hexapod_kin.symbolic.cache` — the disk cache keyed by the table and the time budget
-  (stages run in a forked child);
+  (stages run in a forked child; :func:`run_in_process` for a process that is itself bounded);
 * :mod:`~hexapod_kin.symbolic.derivation` — the public face: :func:`derive`,
   :class:`Derivation`, :func:`cached`, :func:`family_residuals`.
 
@@ -19,6 +19,7 @@ inside the functions that derive (``singularity`` families on request, the ``der
 
 from __future__ import annotations
 
+from .cache import run_in_process
 from .core import ROW_NAMES, khalil_matrix
 from .derivation import (
     _MEMO,  # noqa: F401 - the in-process memo (tests clear it)
@@ -46,4 +47,5 @@ __all__ = [
     "khalil_matrix",
     "default_rows",
     "row_indices",
+    "run_in_process",
 ]
