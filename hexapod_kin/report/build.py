@@ -249,6 +249,7 @@ def _build(
         The :class:`Report` and the files written into ``out`` but ``verdicts.json``.
 
     """
+    from ..symbolic import in_process
     from . import figures
     from .cache import derivation_text
     from .checks import Context
@@ -284,7 +285,8 @@ def _build(
     # Three processes where the platform forks (the results come back pickled; a child
     # that cannot fork, fails or dies is redone here, the same way): sympy in one, the
     # pendulum and the walk in another, the step and the heat maps here.
-    ahead = _Forked(symbolic_side, budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
+    # bounded by _Forked's budget, the sympy child derives in itself (not a fork per chain)
+    ahead = _Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
     side = _Forked(dynamics_side)
     try:
         # the heat maps come after the step: by then the child has stored the families they

@@ -19,7 +19,7 @@ inside the functions that derive (``singularity`` families on request, the ``der
 
 from __future__ import annotations
 
-from .cache import run_in_process
+from .cache import in_process, run_in_process
 from .core import ROW_NAMES, khalil_matrix
 from .derivation import (
     _MEMO,  # noqa: F401 - the in-process memo (tests clear it)
@@ -47,5 +47,6 @@ __all__ = [
     "khalil_matrix",
     "default_rows",
     "row_indices",
+    "in_process",
     "run_in_process",
 ]

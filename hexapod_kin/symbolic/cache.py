@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import fields
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import sympy as sp
 
@@ -32,6 +32,7 @@ from .._io import atomic_write, cache_root
 
 FORMAT = 3
 Stages = Callable[[], Iterator[tuple[str, Any]]]
+_T = TypeVar("_T")
 
 #: Run budgeted stages in this process (see :func:`run_in_process`).
 _IN_PROCESS = False
@@ -51,6 +52,24 @@ def run_in_process(on: bool = True) -> None:
     """
     global _IN_PROCESS
     _IN_PROCESS = bool(on)
+
+
+def in_process(fn: Callable[[], _T]) -> Callable[[], _T]:
+    """``fn`` that first calls :func:`run_in_process` (the target of a bounded forked child).
+
+    Args:
+        fn: What the child runs (its derivations then stay in the child).
+
+    Returns:
+        The wrapped function.
+
+    """
+
+    def run_here() -> _T:
+        run_in_process()
+        return fn()
+
+    return run_here
 
 
 def cache_dir() -> Path:
