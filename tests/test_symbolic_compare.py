@@ -191,3 +191,16 @@ def test_run_in_process_gives_the_forked_result_and_keeps_the_budget():
         symbolic_cache.run_in_process(False)
     assert inline.text() == forked.text()
     assert short.incomplete and any("budget of 0.05 s" in x for x in short.incomplete)
+
+
+def test_in_process_wraps_a_child_target():
+    def target():
+        return symbolic_cache._IN_PROCESS
+
+    wrapped = symbolic.in_process(target)
+    assert symbolic_cache._IN_PROCESS is False
+    try:
+        assert wrapped() is True  # the flag is set before the target runs
+    finally:
+        symbolic.run_in_process(False)
+    assert target() is False
