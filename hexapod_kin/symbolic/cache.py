@@ -54,6 +54,11 @@ def run_in_process(on: bool = True) -> None:
     _IN_PROCESS = bool(on)
 
 
+def in_process_mode() -> bool:
+    """True after :func:`run_in_process` (budgeted derivations do not fork)."""
+    return _IN_PROCESS
+
+
 def in_process(fn: Callable[[], _T]) -> Callable[[], _T]:
     """``fn`` that first calls :func:`run_in_process` (the target of a bounded forked child).
 

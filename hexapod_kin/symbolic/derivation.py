@@ -376,7 +376,7 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
-#: Budgeted derivations run by this process (from the second on, imports are made ahead).
+#: Derivations this process forked (from the second on, their imports are made here first).
 _BUDGETED = 0
 
 
@@ -422,6 +422,7 @@ def derive(
         ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
+    global _BUDGETED
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
     chain, frame, tip_name = _chain_of(source, base, tip)
@@ -439,11 +440,11 @@ def derive(
         def gen() -> Iterator[tuple[str, Any]]:
             return _stages(chain, rows, lengths, end)
 
-        global _BUDGETED
-        if budget is not None and _BUDGETED:  # a process that derives again and again:
+        forks = budget is not None and not _cache.in_process_mode()
+        if forks and _BUDGETED:  # a process that derives again and again:
             _core.import_ahead()  # import here once, not in each forked child
         stages, reason = _cache.run(gen, budget)
-        _BUDGETED += budget is not None
+        _BUDGETED += forks
         stages.setdefault("seconds", time.perf_counter() - start)
         if reason is None and cache:
             _cache.store(digest, stages)
