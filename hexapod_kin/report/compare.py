@@ -35,10 +35,12 @@ expressions and the package source.
 
 from __future__ import annotations
 
+import builtins
 import hashlib
 import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import lru_cache
+from types import BuiltinFunctionType
 from typing import Any
 
 import numpy as np
@@ -90,9 +92,23 @@ def parse(text: Any) -> sp.Expr:
     return _parse(str(text))
 
 
+@lru_cache(maxsize=1)
+def _globals() -> dict[str, Any]:
+    """The namespace ``parse_expr`` would build on every call, built once.
+
+    ``from sympy import *``, the builtin functions, ``max``/``min`` as ``Max``/``Min``.
+    """
+    out: dict[str, Any] = {}
+    exec("from sympy import *", out)  # noqa: S102 - sympy's own namespace, as parse_expr does
+    out.update({k: v for k, v in vars(builtins).items() if isinstance(v, BuiltinFunctionType)})
+    out["max"], out["min"] = sp.Max, sp.Min
+    return out
+
+
 @lru_cache(maxsize=4096)
 def _parse(text: str) -> sp.Expr:
-    return sp.sympify(parse_expr(text, local_dict=dict(_LOCALS)))
+    expr = parse_expr(text, local_dict=dict(_LOCALS), global_dict=dict(_globals()))
+    return sp.sympify(expr)
 
 
 def plain(expr: Any) -> Any:
