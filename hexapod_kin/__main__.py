@@ -1,7 +1,5 @@
 """``python -m hexapod_kin``: the same as the ``hexapod-kin`` command."""
 
-import sys
+from .cli import run
 
-from .cli import main
-
-sys.exit(main())
+run()

@@ -266,34 +266,39 @@ def _build(
 
     texts = ("leg", "leg+", "scara")
 
-    def symbolic_side() -> tuple[list[Verdict], dict[str, Any], Path, dict[str, str]]:
-        # the sympy work: families, derivations, symbolic verdicts; then what reads them
+    grid = 21 if quick else 61
+
+    def symbolic_side() -> tuple[Any, ...]:
+        # the sympy work (families, derivations, symbolic verdicts), then what reads it: the
+        # heat maps label their samples by family, the schedule needs coxa's lengths
         sym = _symbolic_side(ctx, claims)
-        leg2 = figures.leg2_figure(ctx, fdir)  # the schedule needs coxa's lengths
-        return (
-            sym,
-            ctx.schedule,
-            leg2,
-            {k: derivation_text(ctx.derivation(k), cache) for k in texts},
-        )
+        leg2 = figures.leg2_figure(ctx, fdir)
+        derived = {k: derivation_text(ctx.derivation(k), cache) for k in texts}
+        return sym, ctx.schedule, leg2, derived
 
     def dynamics_side() -> tuple[Any, Path, tuple[list[Path], dict[str, Any]]]:
         pend = figures.pendulum_figure(ctx, fdir)
         return ctx.pendulum, pend, figures.walk_figures(fdir, duration, animations, cache)
 
+    # Three processes where the platform forks (results come back pickled; a child that
+    # cannot fork, fails or dies is redone here, the same way), after the modules all of
+    # them use are loaded once: sympy and what reads it in one (bounded by _Forked's
+    # budget, it derives in itself, not a fork per chain), the pendulum and the walk in
+    # another, the step and the heat maps here.
     _preload(animations)
-    # Three processes where the platform forks (the results come back pickled; a child
-    # that cannot fork, fails or dies is redone here, the same way): sympy in one, the
-    # pendulum and the walk in another, the step and the heat maps here.
-    # bounded by _Forked's budget, the sympy child derives in itself (not a fork per chain)
     ahead = _Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
     side = _Forked(dynamics_side)
     try:
-        # the heat maps come after the step: by then the child has stored the families they
-        # label (it derives those first), so this process does not
         figs["step"].append(figures.step_figure(ctx, fdir))
         facts["step"] = ctx.step.as_dict()
-        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        if animations:
+            try:
+                anims["step"].append(figures.step_animation(ctx, out))
+            except Exception as exc:
+                facts["step_animation"] = f"not written: {exc}"
+        # by now the sympy child has stored the families the heat maps label (it derives
+        # them first), so this process reads them instead of deriving them too
+        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, grid)
         figs["jacobian"] += maps
         pendulum, pend_png, (walk_paths, facts["hexapod"]) = side.result() or dynamics_side()
         ctx.__dict__["pendulum"] = pendulum  # the Context's cached_property, as if run here
@@ -308,16 +313,10 @@ def _build(
         ahead.stop()
     ctx.__dict__["schedule"] = schedule
     figs["leg2"].append(leg2_png)
-    from .cache import KINDS
-
-    rest = iter(evaluate([c for c in claims if c.kind not in KINDS], ctx, cache=cache))
+    rest = iter(evaluate([c for c in claims if c.kind in HERE], ctx, cache=cache))
     done = iter(sym)
-    verdicts = [next(done) if c.kind in KINDS else next(rest) for c in claims]
+    verdicts = [next(rest) if c.kind in HERE else next(done) for c in claims]
     if animations:
-        try:
-            anims["step"].append(figures.step_animation(ctx, out))
-        except Exception as exc:
-            facts["step_animation"] = f"not written: {exc}"
         for p in walk_paths:
             if p.suffix == ".html":
                 target = out / "walk.html"
@@ -423,6 +422,10 @@ class _Forked:
         self.proc = None
 
 
+#: Claim kinds checked in the build's own process: they read its experiments (the step) and
+#: the pendulum's (sent back by the dynamics child). Every other kind is checked in the sympy
+#: child, where the derivations they read are.
+HERE = frozenset({"bound"})
 #: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
 DERIVED = ("coxa", "leg", "leg+", "scara")
 #: The models of :func:`.figures.heat_maps` (their families are derived ahead too).
@@ -435,14 +438,13 @@ def _symbolic_side(ctx: Any, claims: list[Any]) -> list[Verdict]:
 
     First the families the heat maps label (on disk before the parent scans), then the
     derivations of :data:`DERIVED` (:func:`hexapod_kin.symbolic.derive`, budget 60 s each),
-    then the verdicts of every claim of ``claims`` whose kind is symbolic
-    (:data:`.cache.KINDS`), in their order (read from and stored in the disk cache with
-    ``ctx.cache``).
+    then the verdicts of every claim of ``claims`` whose kind is not in :data:`HERE`, in
+    their order (the symbolic ones, :data:`.cache.KINDS`, read from and stored in the disk
+    cache with ``ctx.cache``).
     """
     from .. import load
     from ..singularity.families import families_for
     from ..singularity.measure import selected_rows
-    from .cache import KINDS
     from .compare import evaluate
 
     for key in HEAT_MAP_MODELS:
@@ -450,7 +452,7 @@ def _symbolic_side(ctx: Any, claims: list[Any]) -> list[Verdict]:
         families_for(model, tuple(selected_rows(model, None)), derive=True)
     for key in DERIVED:
         ctx.derivation(key)
-    return evaluate([c for c in claims if c.kind in KINDS], ctx, cache=ctx.cache)
+    return evaluate([c for c in claims if c.kind not in HERE], ctx, cache=ctx.cache)
 
 
 _LABEL = {
