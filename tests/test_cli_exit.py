@@ -33,9 +33,7 @@ def test_output_is_whole_and_the_same_as_in_process(tmp_path, capsys):
 def test_error_status_is_kept(tmp_path):
     res = _cli(["fk", "no_such_robot"], tmp_path)
     assert res.returncode == 2
-    assert (
-        res.stderr.count("\n") == 1 and "did you mean" in res.stderr or "not a preset" in res.stderr
-    )
+    assert res.stderr.count("\n") == 1 and "no_such_robot" in res.stderr
 
 
 def test_atexit_work_is_done(tmp_path):
