@@ -27,7 +27,14 @@ from .motion import (
     resolved_rate,
 )
 
-__all__ = ["SEED_Q0", "SeedRun", "euler_baseline", "seed002_schedule", "seed_experiment"]
+__all__ = [
+    "SEED_Q0",
+    "SeedRun",
+    "euler_baseline",
+    "seed002_schedule",
+    "seed_baseline",
+    "seed_experiment",
+]
 
 
 @dataclass(frozen=True)
@@ -198,16 +205,58 @@ def seed_experiment(
     base_dev = None
     failure = None
     if baseline and mdl.nq == 3:
-        try:
-            qb = euler_baseline(mdl, vel, q_start, dt, duration)
-        except ConfigurationError as exc:
-            failure = str(exc)
-        else:
-            base, base_dev = _drift(mdl, qb, traj.t, a, per)
-            base_dev.setflags(write=False)
+        base, base_dev, failure = seed_baseline(
+            mdl, amplitude=a, period=per, duration=duration, dt=dt, q0=q_start
+        )
     return SeedRun(
         traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev, failure
     )
+
+
+def seed_baseline(
+    model: Any,
+    *,
+    amplitude: float = 0.05,
+    period: float = 2.0,
+    duration: float = 10.0,
+    dt: float = 1e-3,
+    q0: Any = None,
+) -> tuple[dict[str, float], np.ndarray | None, str | None]:
+    """The baseline of :func:`seed_experiment` alone: the seeds' plain Euler + solve loop.
+
+    Args:
+        model: A loaded 3-joint model.
+        amplitude: A in [m/s].
+        period: T in [s].
+        duration: In [s].
+        dt: Step in [s].
+        q0: Start (default :func:`default_stance`).
+
+    Returns:
+        ``(figures, deviation, failure)``: the drift figures in [m] (``drift_y``,
+        ``drift_z``, ``error_x``) and the (N, 3) read-only |foot − reference| (empty dict and
+        None when the loop met a singular J), and why it stopped (or None).
+
+    """
+    a = float(amplitude)
+    per = positive("period", period)
+    q_start = default_stance(model) if q0 is None else model.check_q(q0, "q0")
+    w = 2 * np.pi / per
+
+    def vel(t: Any) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        out = np.zeros(t.shape + (3,))
+        out[..., 0] = a * np.sin(w * t)
+        return out
+
+    try:
+        qb = euler_baseline(model, vel, q_start, dt, duration)
+    except ConfigurationError as exc:
+        return {}, None, str(exc)
+    t = np.arange(qb.shape[0]) * dt
+    base, dev = _drift(model, qb, t, a, per)
+    dev.setflags(write=False)
+    return base, dev, None
 
 
 def seed002_schedule() -> JointSchedule:

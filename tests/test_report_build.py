@@ -50,25 +50,25 @@ def _close(x: object, y: object, where: str) -> None:
 def forked(tmp_path_factory: pytest.TempPathFactory) -> dict:
     with pytest.MonkeyPatch.context() as mp:
         calls: list[str] = []
-        real = build._Forked.__init__
+        real = build.Forked.__init__
 
         def spy(self, fn, budget=300.0):
             calls.append(fn.__name__)
             real(self, fn, budget)
 
-        mp.setattr(build._Forked, "__init__", spy)
+        mp.setattr(build.Forked, "__init__", spy)
         data = _build(tmp_path_factory.mktemp("forked"), mp)
     assert len(calls) == 2 and "dynamics_side" in calls  # the sympy side and the dynamics
     return data
 
 
 def test_no_fork_gives_the_same_report(forked, tmp_path, monkeypatch):
-    monkeypatch.setattr(build._Forked, "result", lambda self: None)  # as if fork failed
+    monkeypatch.setattr(build.Forked, "result", lambda self: None)  # as if fork failed
     _same(_build(tmp_path, monkeypatch), forked)
 
 
 def test_a_failing_child_is_redone_here(forked, tmp_path, monkeypatch):
-    real = build._Forked.__init__
+    real = build.Forked.__init__
 
     def boom(self, fn, budget=300.0):
         def fail():
@@ -76,10 +76,5 @@ def test_a_failing_child_is_redone_here(forked, tmp_path, monkeypatch):
 
         real(self, fail, budget)
 
-    monkeypatch.setattr(build._Forked, "__init__", boom)
+    monkeypatch.setattr(build.Forked, "__init__", boom)
     _same(_build(tmp_path, monkeypatch), forked)
-
-
-def test_forked_result_comes_back_and_errors_are_none():
-    assert build._Forked(lambda: {"a": [1, 2.5]}).result() == {"a": [1, 2.5]}
-    assert build._Forked(lambda: 1 / 0).result() is None

@@ -301,19 +301,32 @@ def _cmd_step(args: argparse.Namespace) -> int:
     q0 = None if args.q is None else q_from_args(args, model)
     if args.velocity is not None or args.twist is not None:
         return _constant(args, model, q0)
-    from .. import seeds
+    import dataclasses
 
-    run = seeds.seed_experiment(
-        model,
-        amplitude=args.amplitude,
-        period=args.period,
-        duration=args.duration,
-        dt=args.dt,
-        q0=q0,
-        method=args.method,
-        gain=args.gain,
-        baseline=not args.no_baseline,
-    )
+    from .. import seeds
+    from .._fork import Forked
+
+    timing = {"amplitude": args.amplitude, "period": args.period, "duration": args.duration}
+    timing["dt"] = args.dt
+
+    def baseline() -> Any:
+        return seeds.seed_baseline(model, q0=q0, **timing)
+
+    # the seeds' Euler loop on the other core while this one runs the resolved-rate loop
+    side = Forked(baseline) if not args.no_baseline and model.nq == 3 else None
+    try:
+        run = seeds.seed_experiment(
+            model, q0=q0, method=args.method, gain=args.gain, baseline=False, **timing
+        )
+    except BaseException:
+        if side is not None:
+            side.stop()
+        raise
+    if side is not None:
+        base, dev, failure = side.result() or baseline()
+        run = dataclasses.replace(
+            run, baseline=base, baseline_deviation=dev, baseline_failure=failure
+        )
     tr = run.trajectory
     written = []
     if args.plot:

@@ -21,11 +21,11 @@ import dataclasses
 import html
 import json
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .._fork import Forked
 from .._io import atomic_write
 from .data import Verdict
 
@@ -282,12 +282,12 @@ def _build(
 
     # Three processes where the platform forks (results come back pickled; a child that
     # cannot fork, fails or dies is redone here, the same way), after the modules all of
-    # them use are loaded once: sympy and what reads it in one (bounded by _Forked's
+    # them use are loaded once: sympy and what reads it in one (bounded by Forked's
     # budget, it derives in itself, not a fork per chain), the pendulum and the walk in
     # another, the step and the heat maps here.
     _preload(animations)
-    ahead = _Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
-    side = _Forked(dynamics_side)
+    ahead = Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
+    side = Forked(dynamics_side)
     try:
         figs["step"].append(figures.step_figure(ctx, fdir))
         facts["step"] = ctx.step.as_dict()
@@ -360,66 +360,6 @@ def _preload(animations: bool) -> None:
         pyplot()
     except Exception:  # noqa: BLE001 - no matplotlib: the figures say so when drawn
         pass
-
-
-class _Forked:
-    """``fn()`` in a forked process; :meth:`result` is its return value (pickled back) or None.
-
-    None when this platform cannot fork, the child raised or died, or it outlived ``budget``
-    seconds (then it is killed): the caller computes the same thing itself. The child's
-    output is read before it is joined (a large result would otherwise block its pipe).
-    """
-
-    def __init__(self, fn: Callable[[], Any], budget: float = 300.0) -> None:
-        import multiprocessing as mp
-
-        self.budget = budget
-        self.proc: Any = None
-        self.recv: Any = None
-        try:
-            ctx = mp.get_context("fork")
-            self.recv, send = ctx.Pipe(duplex=False)
-            self.proc = ctx.Process(target=self._run, args=(fn, send))
-            self.proc.start()
-            send.close()
-        except Exception:  # noqa: BLE001 - no fork here: result() is None
-            self.proc = None
-
-    @staticmethod
-    def _run(fn: Callable[[], Any], send: Any) -> None:  # pragma: no cover - in the child
-        try:
-            out = ("ok", fn())
-        except BaseException as exc:  # noqa: BLE001 - reported as a failure, recomputed
-            out = ("error", repr(exc))
-        try:
-            send.send(out)
-        finally:
-            send.close()
-
-    def result(self) -> Any:
-        """The child's return value, or None (see the class docstring)."""
-        if self.proc is None:
-            return None
-        value = None
-        try:
-            if self.recv.poll(self.budget):
-                status, payload = self.recv.recv()
-                value = payload if status == "ok" else None
-        except (EOFError, OSError):  # the child died before sending
-            value = None
-        self.stop(wait=value is not None)
-        return value
-
-    def stop(self, wait: bool = False) -> None:
-        """End the child (kill it unless ``wait`` and it is about to exit)."""
-        if self.proc is None:
-            return
-        self.proc.join(5.0 if wait else 0.0)
-        if self.proc.is_alive():
-            self.proc.kill()
-            self.proc.join(5.0)
-        self.recv.close()
-        self.proc = None
 
 
 #: Claim kinds checked in the build's own process: they read its experiments (the step) and
