@@ -45,10 +45,14 @@ from numba.core.dispatcher import Dispatcher
 from numba.extending import typeof_impl
 
 __all__ = [
+    "BACKGROUND_MAX_S",
     "COMPILE_S",
     "CONTEXT_S",
     "PER_UNIT_S",
     "Kernel",
+    "background",
+    "background_done",
+    "background_running",
     "compiled",
     "interpreted",
     "mode",
@@ -174,6 +178,13 @@ class Kernel:
             return False
         if self.ready():  # cached machine code: loading it first costs numba's start-up
             return not _CONTEXT["warm"] and self._spent_here + predicted_s <= CONTEXT_S
+        if _BACKGROUND["on"] and predicted_s > CONTEXT_S:
+            # machine code would pay for this call: have it compiled after this process
+            area = _area(self)
+            if area is not None:
+                _BACKGROUND["areas"].add(area)
+                if background_running():  # on its way: never compile the same code twice
+                    return True
         if not self._ledger_read:
             self._ledger_read = True
             self._spent += _ledger().get(_ledger_key(self), 0.0)
@@ -291,6 +302,115 @@ def _save_ledger() -> None:
 
 
 atexit.register(_save_ledger)
+
+
+# -- background compiles: the command line's first use leaves machine code for the next ----
+# The ski-rental rule bounds the total cost, but the command that crosses the budget pays the
+# whole compile (6 s for the twist loop) at once. A command-line process therefore hands the
+# compile to a detached, low-priority ``hexapod-kin precompile --only AREA`` started at its
+# exit, for the areas whose kernels it ran interpreted although machine code would have paid
+# (predicted interpreted seconds above :data:`CONTEXT_S`); while one runs, no process compiles
+# the same code in the foreground. On with ``HEXAPOD_KIN_BACKGROUND=1`` (``cli.run`` sets it
+# when unset) or :func:`background`; ``HEXAPOD_KIN_BACKGROUND=0`` keeps it off (the tests and
+# the benchmarks' cold runs do).
+_BACKGROUND: dict[str, Any] = {
+    "on": os.environ.get("HEXAPOD_KIN_BACKGROUND", "0") == "1",  # cli.run sets "1" if unset
+    "areas": set(),
+}
+#: Module prefix → :data:`hexapod_kin.precompile.AREAS` name.
+_AREAS = (
+    ("hexapod_kin._batch", "batch"),
+    ("hexapod_kin.ik.", "ik"),
+    ("hexapod_kin.motion.", "motion"),
+    ("hexapod_kin.singularity.", "singularity"),
+    ("hexapod_kin.gait.", "gait"),
+)
+#: A background compile older than this is taken for dead (its lock is ignored).
+BACKGROUND_MAX_S = 1800.0
+
+
+def background(on: bool = True) -> bool:
+    """Turn background compiles on or off for this process; returns whether they are on.
+
+    ``HEXAPOD_KIN_BACKGROUND=0`` keeps them off whatever is asked.
+    """
+    _BACKGROUND["on"] = bool(on) and os.environ.get("HEXAPOD_KIN_BACKGROUND", "1") != "0"
+    return bool(_BACKGROUND["on"])
+
+
+def _area(kernel: Kernel) -> str | None:
+    module = kernel.py_func.__module__
+    for prefix, area in _AREAS:
+        if module == prefix or module.startswith(prefix):
+            return area
+    return None
+
+
+def _lock_file() -> Any:
+    from ._io import cache_root
+
+    return cache_root("tier") / "background-compile.json"
+
+
+def background_running() -> bool:
+    """True while a background compile started by an earlier command is still running."""
+    try:
+        import json
+
+        info = json.loads(_lock_file().read_text())
+        if time.time() - float(info["started"]) > BACKGROUND_MAX_S:
+            return False
+        os.kill(int(info["pid"]), 0)  # raises when no such process
+        return True
+    except Exception:  # noqa: BLE001 - no lock, unreadable, or its process is gone
+        return False
+
+
+def _spawn_background() -> None:
+    """At exit: start the background compile of the areas this process asked for."""
+    if not (_BACKGROUND["on"] and _BACKGROUND["areas"]) or _mode != "auto":
+        return
+    try:
+        if background_running():
+            return
+        import json
+        import subprocess
+        import sys
+
+        from ._io import atomic_write
+
+        env = dict(os.environ, HEXAPOD_KIN_BACKGROUND="0", HEXAPOD_KIN_JIT="auto")
+        areas = sorted(_BACKGROUND["areas"])
+        argv = [sys.executable, "-m", "hexapod_kin", "precompile", "--background", "--only"]
+        proc = subprocess.Popen(
+            argv + areas,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,
+            env=env,
+        )
+        lock = _lock_file()
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        info = {"pid": proc.pid, "started": time.time(), "areas": areas}
+        atomic_write(lock, json.dumps(info))
+    except Exception:  # noqa: BLE001 - an optimisation: never fail at exit
+        pass
+
+
+def background_done(pid: int) -> None:
+    """Called by the background compile when it ends: remove its lock (if still its own)."""
+    try:
+        import json
+
+        lock = _lock_file()
+        if int(json.loads(lock.read_text())["pid"]) == pid:
+            lock.unlink()
+    except Exception:  # noqa: BLE001 - already gone, or another one's
+        pass
+
+
+atexit.register(_spawn_background)
 
 
 def _disk_cached(disp: Dispatcher) -> bool:

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import pytest
+
+# no background compiles from the command lines the tests start (hexapod_kin._tier): each
+# would compile a kernel area for tens of seconds; tests/test_tier.py checks them on purpose
+os.environ["HEXAPOD_KIN_BACKGROUND"] = "0"
 
 # test tooling shared with tools/ (headless Chromium launcher)
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))

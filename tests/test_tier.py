@@ -295,3 +295,75 @@ def test_interpreted_seconds_carry_over_between_processes(tmp_path):
     # what fits the budget in a fresh cache folder does not once this folder's seconds count
     assert run("a", "decide", str(spent))["interpret"] is False
     assert run("fresh", "decide", str(spent)) == {"before": 0.0, "interpret": True}
+
+
+_READY_PROBE = r"""
+import json
+from hexapod_kin import _tier
+from hexapod_kin.motion import _kernel as k
+print(json.dumps({"ready": [k._rr3.ready(), k._rr6.ready()], "bg": _tier.background_running()}))
+"""
+
+
+def test_a_command_leaves_a_background_compile_for_the_next(tmp_path):
+    """A 10-s step on a fresh install runs interpreted, then its kernels compile behind it."""
+    import time
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), HEXAPOD_KIN_JIT="auto")
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / "hk")
+    env.pop("HEXAPOD_KIN_BACKGROUND")  # as a user's shell: the command line turns it on
+
+    def probe() -> dict:
+        res = subprocess.run(
+            [sys.executable, "-c", _READY_PROBE], env=env, capture_output=True, text=True
+        )
+        assert res.returncode == 0, res.stderr[-2000:]
+        return json.loads(res.stdout.strip().splitlines()[-1])
+
+    assert probe()["ready"] == [False, False]
+    res = subprocess.run(
+        [sys.executable, "-m", "hexapod_kin", "step", "hexabot_leg", "--no-baseline"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert res.returncode == 0, res.stderr
+    lock = tmp_path / "hk" / "tier" / "background-compile.json"
+    assert json.loads(lock.read_text())["areas"] == ["motion"]
+    end = time.monotonic() + 280
+    while lock.exists() and time.monotonic() < end:
+        time.sleep(0.5)
+    assert not lock.exists()  # the background compile ended and removed its lock
+    assert probe() == {"ready": [True, True], "bg": False}  # machine code for both loops
+
+
+def test_no_foreground_compile_while_a_background_one_runs(tmp_path, monkeypatch, jit_auto):
+    import time
+
+    def twice(x):
+        return 2.0 * x
+
+    twice.__module__ = "hexapod_kin.motion._probe"  # an area's kernel (motion)
+    monkeypatch.setattr(_tier, "_all", list(_tier._all))  # keep the probes out of the list
+    kernel = _tier.njit(twice, compile_s=0.5)  # a fresh kernel: never compiled, not cached
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setitem(_tier._BACKGROUND, "on", True)
+    monkeypatch.setitem(_tier._BACKGROUND, "areas", set())
+    big = 2 * kernel.compile_s  # past the budget: the rule compiles now
+    assert kernel.prefer_interpreted(0.01) is True  # small: interpreted, nothing asked
+    assert _tier._BACKGROUND["areas"] == set()
+    assert kernel.prefer_interpreted(big) is False
+    assert _tier._BACKGROUND["areas"] == {"motion"}  # machine code would pay: asked for
+    kernel2 = _tier.njit(twice, compile_s=0.5)
+    lock = tmp_path / "tier" / "background-compile.json"
+    lock.parent.mkdir(parents=True)
+    lock.write_text(json.dumps({"pid": os.getpid(), "started": time.time()}))
+    assert _tier.background_running()
+    assert kernel2.prefer_interpreted(big) is True  # the background compile brings it
+    _tier.background_done(os.getpid() + 1)  # not its lock: kept
+    assert lock.exists()
+    _tier.background_done(os.getpid())
+    assert not lock.exists() and not _tier.background_running()
+    lock.write_text(json.dumps({"pid": os.getpid(), "started": time.time() - 1e4}))
+    assert not _tier.background_running()  # too old: taken for dead

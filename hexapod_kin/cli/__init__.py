@@ -78,21 +78,25 @@ def _one_line(text: object) -> str:
 def run() -> None:
     """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit.
 
-    The exit skips the interpreter's teardown (freeing every module and object), which takes
-    0.1–0.4 s once numba, Pinocchio, sympy and matplotlib are loaded — a tenth of a warm
-    command. First the output is flushed and the ``atexit`` handlers run (the tier ledger,
-    the viewer's server, multiprocessing's children); if another non-daemon thread is still
-    alive the normal exit (which waits for it) is kept.
+    A kernel the command ran interpreted although machine code would have paid is compiled
+    after it by a detached low-priority process (:mod:`hexapod_kin._tier`;
+    ``HEXAPOD_KIN_BACKGROUND=0`` turns that off). The exit skips the interpreter's teardown
+    (freeing every module and object), which takes 0.1–0.4 s once numba, Pinocchio, sympy and
+    matplotlib are loaded — a tenth of a warm command. First the output is flushed and the
+    ``atexit`` handlers run (the tier ledger, the background compile, the viewer's server,
+    multiprocessing's children); if another non-daemon thread is still alive the normal exit
+    (which waits for it) is kept.
     """
+    # a kernel this command runs interpreted although machine code would have paid is
+    # compiled after it, in the background (hexapod_kin._tier; HEXAPOD_KIN_BACKGROUND=0: not)
+    os.environ.setdefault("HEXAPOD_KIN_BACKGROUND", "1")
     code = main()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except (OSError, ValueError):  # a closed pipe: nothing more can be said on it
             pass
-    others = [
-        t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon
-    ]
+    others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
     if any(t.is_alive() for t in others):
         sys.exit(code)
     atexit._run_exitfuncs()
