@@ -84,8 +84,8 @@ def run() -> None:
     (freeing every module and object), which takes 0.1–0.4 s once numba, Pinocchio, sympy and
     matplotlib are loaded — a tenth of a warm command. First the output is flushed and the
     ``atexit`` handlers run (the tier ledger, the background compile, the viewer's server,
-    multiprocessing's children); if another non-daemon thread is still alive the normal exit
-    (which waits for it) is kept.
+    multiprocessing's children); if another non-daemon thread is still alive, or a profiler
+    or tracer runs (``python -m cProfile -m hexapod_kin ...``), the normal exit is kept.
     """
     # a kernel this command runs interpreted although machine code would have paid is
     # compiled after it, in the background (hexapod_kin._tier; HEXAPOD_KIN_BACKGROUND=0: not)
@@ -97,8 +97,8 @@ def run() -> None:
         except (OSError, ValueError):  # a closed pipe: nothing more can be said on it
             pass
     others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
-    if any(t.is_alive() for t in others):
-        sys.exit(code)
+    if any(t.is_alive() for t in others) or sys.getprofile() or sys.gettrace():
+        sys.exit(code)  # a thread to wait for, or a profiler / tracer that writes at the end
     atexit._run_exitfuncs()
     os._exit(code)
 

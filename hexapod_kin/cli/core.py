@@ -309,7 +309,9 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     if args.latex:
         print(deriv.latex())
         return 0
-    print(deriv.text())
+    from ..report.cache import derivation_text
+
+    print(derivation_text(deriv))  # the pretty-printed text is kept on disk with its key
     if check:
         labels = {
             "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
