@@ -27,7 +27,7 @@ from typing import Any
 
 from .._fork import Forked
 from .._io import atomic_write
-from .data import Verdict
+from .data import Verdict, pendulum_duration
 
 __all__ = ["SECTIONS", "Report", "reproduce"]
 
@@ -249,45 +249,50 @@ def _build(
         The :class:`Report` and the files written into ``out`` but ``verdicts.json``.
 
     """
-    from ..symbolic import in_process
     from . import figures
-    from .cache import derivation_text
-    from .checks import Context
-    from .compare import evaluate, load_claims
 
     (out / "figures").mkdir(parents=True, exist_ok=True)
-    claims, seeds = load_claims()
-    ctx = Context(quick=quick, claims=claims, cache=cache)
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
     fdir = out / "figures"
     duration = 1.5 if quick else 3.0
-
     texts = ("leg", "leg+", "scara")
-
     grid = 21 if quick else 61
 
+    def dynamics_side() -> tuple[Any, Path, tuple[list[Path], dict[str, Any]]]:
+        from ..dynamics import pendulum_experiment
+
+        pend = pendulum_experiment(duration=pendulum_duration(quick))
+        png = figures.pendulum_figure(_PendulumOnly(pend, cache), fdir)
+        return pend, png, figures.walk_figures(fdir, duration, animations, cache)
+
+    # Three processes where the platform forks (results come back pickled; a child that
+    # cannot fork, fails or dies is redone here, the same way), each forked once the modules
+    # it shares with this one are loaded: the pendulum and the walk first (they need no
+    # sympy, so they start while sympy is imported here), then sympy and what reads it
+    # (bounded by Forked's budget, it derives in itself, not a fork per chain); the step and
+    # the heat maps here.
+    _preload(animations, symbolic=False)
+    side = Forked(dynamics_side)
+    from ..symbolic import in_process
+    from .cache import derivation_text
+    from .checks import Context
+    from .compare import evaluate, load_claims
+
+    claims, seeds = load_claims()
+    ctx = Context(quick=quick, claims=claims, cache=cache)
+
     def symbolic_side() -> tuple[Any, ...]:
-        # the sympy work (families, derivations, symbolic verdicts), then what reads it: the
-        # heat maps label their samples by family, the schedule needs coxa's lengths
+        # the sympy work (families, derivations, the claims' verdicts), then what reads it:
+        # the schedule needs coxa's lengths
         sym = _symbolic_side(ctx, claims)
         leg2 = figures.leg2_figure(ctx, fdir)
         derived = {k: derivation_text(ctx.derivation(k), cache) for k in texts}
         return sym, ctx.schedule, leg2, derived
 
-    def dynamics_side() -> tuple[Any, Path, tuple[list[Path], dict[str, Any]]]:
-        pend = figures.pendulum_figure(ctx, fdir)
-        return ctx.pendulum, pend, figures.walk_figures(fdir, duration, animations, cache)
-
-    # Three processes where the platform forks (results come back pickled; a child that
-    # cannot fork, fails or dies is redone here, the same way), after the modules all of
-    # them use are loaded once: sympy and what reads it in one (bounded by Forked's
-    # budget, it derives in itself, not a fork per chain), the pendulum and the walk in
-    # another, the step and the heat maps here.
-    _preload(animations)
+    _preload(animations, symbolic=True)
     ahead = Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
-    side = Forked(dynamics_side)
     try:
         figs["step"].append(figures.step_figure(ctx, fdir))
         facts["step"] = ctx.step.as_dict()
@@ -334,7 +339,15 @@ def _build(
     return rep, written
 
 
-def _preload(animations: bool) -> None:
+@dataclass(frozen=True)
+class _PendulumOnly:
+    """What :func:`.figures.pendulum_figure` reads of a ``Context``: the run and the cache flag."""
+
+    pendulum: Any
+    cache: bool
+
+
+def _preload(animations: bool, symbolic: bool) -> None:
     """Import what all three processes of a build use, once, before they fork.
 
     A forked child shares the parent's imported modules; imported after the fork, Pinocchio,
@@ -343,15 +356,19 @@ def _preload(animations: bool) -> None:
     """
     import importlib
 
-    names = ["kinematics", "seeds", "motion._kernel", "dynamics", "gait", "singularity.scans",
-             "singularity.families", "symbolic", "plots"]  # fmt: skip
-    if animations:
-        names += ["viewer", "viewer.page"]
+    if symbolic:  # what the sympy side shares with this process
+        names = ["motion._kernel", "singularity.scans", "singularity.families", "symbolic"]
+    else:  # what the pendulum and walk side shares with this process
+        names = ["kinematics", "seeds", "dynamics", "gait", "plots"]
+        if animations:
+            names += ["viewer", "viewer.page"]
     for name in names:
         try:
             importlib.import_module(f"hexapod_kin.{name}")
         except Exception:  # noqa: BLE001 - a missing extra: the part that needs it says so
             pass
+    if symbolic:
+        return
     try:
         from .. import load
         from ..plots import pyplot

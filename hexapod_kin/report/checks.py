@@ -130,8 +130,9 @@ class Context:
     def pendulum(self) -> Any:
         """Seed 001's pendulum, undamped and damped (:func:`pendulum_experiment`)."""
         from ..dynamics import pendulum_experiment
+        from .data import pendulum_duration
 
-        return pendulum_experiment(duration=12.0 if self.quick else 20.0)
+        return pendulum_experiment(duration=pendulum_duration(self.quick))
 
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:

@@ -14,7 +14,7 @@ from typing import Any
 
 from ..exceptions import ConfigurationError, OptionalDependencyError
 
-__all__ = ["CLAIMS_FILE", "Claim", "Verdict", "load_claims"]
+__all__ = ["CLAIMS_FILE", "Claim", "Verdict", "load_claims", "pendulum_duration"]
 
 #: The claims shipped with the package.
 CLAIMS_FILE = Path(__file__).with_name("claims.toml")
@@ -118,3 +118,8 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
         seen.add(item["id"])
         out.append(Claim(item["id"], item["seed"], item["where"], item["kind"], item))
     return out, dict(raw.get("seeds", {}))
+
+
+def pendulum_duration(quick: bool) -> float:
+    """Length of the report's pendulum runs in [s] (reduced with ``quick``)."""
+    return 12.0 if quick else 20.0
