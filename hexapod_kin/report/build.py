@@ -268,13 +268,13 @@ def _build(
         return pend, png, figures.walk_figures(fdir, duration, animations, cache)
 
     # Three processes where the platform forks (results come back pickled; a child that
-    # cannot fork, fails or dies is redone here, the same way), each forked once the modules
-    # it shares with this one are loaded: the pendulum and the walk first (they need no
-    # sympy, so they start while sympy is imported here), then sympy and what reads it
-    # (bounded by Forked's budget, it derives in itself, not a fork per chain); the step and
-    # the heat maps here.
-    _preload(animations, symbolic=False)
+    # cannot fork, fails or dies is redone here, the same way): the pendulum and the walk
+    # first, at once (they import what they need on the core that would otherwise wait while
+    # this process imports), then, once the modules it shares with this process are loaded,
+    # sympy and what reads it (bounded by Forked's budget, it derives in itself, not a fork
+    # per chain); the step and the heat maps here.
     side = Forked(dynamics_side)
+    _preload(animations, symbolic=False)
     from ..symbolic import in_process
     from .cache import derivation_text
     from .checks import Context
@@ -348,17 +348,19 @@ class _PendulumOnly:
 
 
 def _preload(animations: bool, symbolic: bool) -> None:
-    """Import what all three processes of a build use, once, before they fork.
+    """Import what this process shares with the sympy child, before it forks.
 
     A forked child shares the parent's imported modules; imported after the fork, Pinocchio,
-    numba, scipy, lxml, matplotlib (and meshcat for the animations) would each be imported
-    three times: about 1.5 CPU-seconds of a cold build on two cores.
+    numba, scipy, lxml and matplotlib would be imported twice, on cores that are busy by
+    then. ``symbolic=False``: the kinematics, the step, the figures, the dynamics and gait
+    modules whose results come back pickled (and the viewer for the animations); ``True``:
+    the kernels, the singularity families and the derivations.
     """
     import importlib
 
     if symbolic:  # what the sympy side shares with this process
         names = ["motion._kernel", "singularity.scans", "singularity.families", "symbolic"]
-    else:  # what the pendulum and walk side shares with this process
+    else:
         names = ["kinematics", "seeds", "dynamics", "gait", "plots"]
         if animations:
             names += ["viewer", "viewer.page"]
