@@ -143,6 +143,19 @@ def euler_baseline(
     return out
 
 
+def _x_velocity(a: float, period: float) -> Callable[[Any], np.ndarray]:
+    """The seeds' foot velocity ``v(t) = [a sin(2πt/T), 0, 0]`` in [m/s] (t scalar or array)."""
+    w = 2 * np.pi / period
+
+    def vel(t: Any) -> np.ndarray:
+        t = np.asarray(t, dtype=float)
+        out = np.zeros(t.shape + (3,))
+        out[..., 0] = a * np.sin(w * t)
+        return out
+
+    return vel
+
+
 def seed_experiment(
     model: Any = None,
     *,
@@ -184,13 +197,7 @@ def seed_experiment(
         raise ParameterError(f"amplitude={amplitude!r} is not finite")
     q_start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0")
     w = 2 * np.pi / per
-
-    def vel(t: Any) -> np.ndarray:
-        t = np.asarray(t, dtype=float)
-        out = np.zeros(t.shape + (3,))
-        out[..., 0] = a * np.sin(w * t)
-        return out
-
+    vel = _x_velocity(a, per)
     p0 = mdl.position(q_start)
 
     def ref(t: Any) -> np.ndarray:
@@ -241,14 +248,7 @@ def seed_baseline(
     a = float(amplitude)
     per = positive("period", period)
     q_start = default_stance(model) if q0 is None else model.check_q(q0, "q0")
-    w = 2 * np.pi / per
-
-    def vel(t: Any) -> np.ndarray:
-        t = np.asarray(t, dtype=float)
-        out = np.zeros(t.shape + (3,))
-        out[..., 0] = a * np.sin(w * t)
-        return out
-
+    vel = _x_velocity(a, per)
     try:
         qb = euler_baseline(model, vel, q_start, dt, duration)
     except ConfigurationError as exc:
