@@ -151,15 +151,8 @@ def _solve_law(
         if not again:
             break
         limited = True
-    scale = 1.0
-    for i in range(n):
-        a = abs(qd[i])
-        if a * scale > vmax[i]:
-            scale = vmax[i] / a
-    if scale < 1.0:
-        limited = True
-        qd = [x * scale for x in qd]
-    return qd, limited
+    qd, slowed = _speed(qd, vmax)
+    return qd, limited or slowed
 
 
 def _at_limit(q: list[float], qd: list[float], lower: list[float], upper: list[float]) -> bool:
@@ -170,23 +163,19 @@ def _at_limit(q: list[float], qd: list[float], lower: list[float], upper: list[f
     return False
 
 
-def _scale(qd: list[float], vmax: list[float]) -> float:
-    """The speed-limit factor of the law (1 when no joint is too fast)."""
+def _speed(qd: list[float], vmax: list[float]) -> tuple[list[float], bool]:
+    """The law's speed limit: ``qd`` scaled down uniformly so no joint passes ``vmax``.
+
+    Returns the (possibly scaled) rates and whether they were scaled.
+    """
     scale = 1.0
     for i in range(len(qd)):
         a = abs(qd[i])
         if a * scale > vmax[i]:
             scale = vmax[i] / a
-    return scale
-
-
-def _scaled(qd: list[float], vmax: list[float]) -> np.ndarray:
-    scale = _scale(qd, vmax)
-    return np.array(qd if scale >= 1.0 else [x * scale for x in qd])
-
-
-def _limited(qd: list[float], vmax: list[float]) -> bool:
-    return _scale(qd, vmax) < 1.0
+    if scale < 1.0:
+        return [x * scale for x in qd], True
+    return qd, False
 
 
 def _damping(smin: float, smax: float, eps: float, lam2max: float) -> tuple[float, float]:
@@ -331,7 +320,8 @@ def rr_cold(
         if square3:  # the kernel's first pass; its limit and speed rules when they apply
             qd = _dls3x3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
             if not (use_limits and _at_limit(ql, qd, lo, hi)):
-                return _scaled(qd, vm), pose, jac, smin, smax, lam2, _limited(qd, vm)
+                qd, slowed = _speed(qd, vm)
+                return np.array(qd), pose, jac, smin, smax, lam2, slowed
         qd, limited = _solve_law(rows, xd, lam_use, ql, lo, hi, vm, use_limits)
         return np.array(qd), pose, jac, smin, smax, lam2, limited
 
