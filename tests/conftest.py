@@ -52,3 +52,13 @@ def jit_never():
 def jit_auto():
     """The default tier rule, whatever the environment sets (``HEXAPOD_KIN_JIT``)."""
     yield from _jit("auto")
+
+
+@pytest.fixture(scope="module")
+def own_cache_dir(tmp_path_factory):
+    """A fresh ``HEXAPOD_KIN_CACHE_DIR`` for a whole test module (``pytestmark`` it)."""
+    mp = pytest.MonkeyPatch()
+    path = tmp_path_factory.mktemp("cache")
+    mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(path))
+    yield path
+    mp.undo()

@@ -12,14 +12,8 @@ from hexapod_kin import load, robots, table_fk
 from hexapod_kin.exceptions import ParameterError
 from hexapod_kin.symbolic import derive
 
-
-@pytest.fixture(autouse=True, scope="module")
-def _own_cache(tmp_path_factory):
-    """A fresh derivation cache for this module (derivations are computed, not read)."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
-    yield
-    mp.undo()
+#: a fresh derivation cache for this module: derivations are computed, not read
+pytestmark = pytest.mark.usefixtures("own_cache_dir")
 
 
 @pytest.fixture(scope="module")

@@ -24,13 +24,8 @@ from hexapod_kin.symbolic import derive
 Q = [sp.Symbol(f"q{k}", real=True) for k in range(1, 5)]
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _own_cache(tmp_path_factory):
-    """A fresh derivation cache for this module (derivations are computed, not read)."""
-    mp = pytest.MonkeyPatch()
-    mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
-    yield
-    mp.undo()
+#: a fresh derivation cache for this module: derivations are computed, not read
+pytestmark = pytest.mark.usefixtures("own_cache_dir")
 
 
 @pytest.fixture(scope="module")
