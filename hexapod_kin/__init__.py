@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from typing import Any
 
-__version__ = "0.1.0"
-
-from . import robots  # noqa: E402
-from .exceptions import (  # noqa: E402
+from . import robots
+from ._fromurdf import chain_from_urdf
+from ._table_kin import table_fk, table_transforms
+from ._version import __version__
+from .exceptions import (
     ConfigurationError,
     FrameNotFoundError,
     HexapodKinError,
@@ -28,19 +29,8 @@ from .exceptions import (  # noqa: E402
     UrdfError,
     UrdfWarning,
 )
-from .params import (  # noqa: E402
-    Chain,
-    DHRow,
-    Hexapod,
-    Inertial,
-    JointLimits,
-    KhalilRow,
-    LegMount,
-    Pose,
-    table_fk,
-    table_transforms,
-)
-from .urdf import to_urdf, write_urdf  # noqa: E402
+from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
+from .urdf import to_urdf, write_urdf
 
 
 def load(source: Any, base: str | None = None, tip: str | None = None, **kwargs: Any) -> Any:
@@ -122,6 +112,7 @@ __all__ = [
     "SourceError",
     "UrdfError",
     "UrdfWarning",
+    "chain_from_urdf",
     "load",
     "robots",
     "table_fk",

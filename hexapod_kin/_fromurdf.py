@@ -1,4 +1,4 @@
-"""Recover a Khalil–Kleinfinger table from a serial URDF chain (``Chain.from_urdf``).
+"""Recover a Khalil–Kleinfinger table from a serial URDF chain (:func:`chain_from_urdf`).
 
 The model is loaded with :func:`hexapod_kin.load` (the loader gate, then Pinocchio; a sub-chain
 is picked with ``base=`` / ``tip=``); the joint placements and axes are read from the Pinocchio
@@ -29,8 +29,9 @@ from typing import Any
 
 import numpy as np
 
+from ._table_kin import table_fk
 from .exceptions import ConfigurationError, SourceError
-from .params import Chain, JointLimits, KhalilRow, Pose, table_fk
+from .params import Chain, JointLimits, KhalilRow, Pose
 
 __all__ = ["chain_from_urdf"]
 

@@ -27,7 +27,8 @@ DH's ``d``. :meth:`Chain.from_dh` does this conversion exactly (adding a fixed l
   package's only RPY conversions.
 * **Base and tool frames** of a :class:`Chain`: ``base`` (``T_world_0``, the chain's base link
   to Khalil frame 0) and ``tool`` (``T_n_tool``, the last row's frame to the tool/tip frame).
-  :func:`table_fk` returns ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool``.
+  The table's forward kinematics is ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool``
+  (:func:`hexapod_kin.table_fk`).
 
 All lengths are in metres, angles in radians, masses in kg, inertias in kg·m².
 """
@@ -42,11 +43,9 @@ from typing import Any, Literal
 import numpy as np
 
 from ._pose import Pose, matrix_to_rpy, rpy_to_matrix
-from ._table_kin import table_fk, table_position_jacobian, table_transforms
-from .exceptions import ParameterError
+from .exceptions import ParameterError, choices
 
 __all__ = [
-    "SIGMA",
     "KhalilRow",
     "DHRow",
     "JointLimits",
@@ -56,10 +55,7 @@ __all__ = [
     "Hexapod",
     "khalil_transform",
     "dh_transform",
-    "table_fk",
-    "table_transforms",
     "rod_inertial",
-    "table_position_jacobian",
     "chain_from_rows",
     "Pose",
     "rpy_to_matrix",
@@ -67,7 +63,7 @@ __all__ = [
 ]
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
-SIGMA: dict[Any, SigmaName] = {
+_SIGMA: dict[Any, SigmaName] = {
     0: "revolute",
     1: "prismatic",
     2: "fixed",
@@ -79,17 +75,17 @@ SIGMA: dict[Any, SigmaName] = {
     "f": "fixed",
 }
 
-NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
+_NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
 
 
 def _sigma(value: Any, where: str) -> SigmaName:
     key = value.lower() if isinstance(value, str) else value
-    if isinstance(key, bool) or key not in SIGMA:
+    if isinstance(key, bool) or key not in _SIGMA:
         raise ParameterError(
             f"{where}.sigma={value!r} is not allowed; use 'revolute' (0), 'prismatic' (1) or "
             "'fixed' (2)"
         )
-    return SIGMA[key]
+    return _SIGMA[key]
 
 
 def _finite(value: Any, where: str) -> float:
@@ -105,7 +101,7 @@ def _finite(value: Any, where: str) -> float:
 
 
 def _name(value: Any, where: str) -> str:
-    if not isinstance(value, str) or not value or not set(value) <= NAME_OK:
+    if not isinstance(value, str) or not value or not set(value) <= _NAME_OK:
         raise ParameterError(
             f"{where}={value!r} is not a valid name; use a non-empty string of letters, digits, "
             "'_', '-' or '.'"
@@ -630,35 +626,6 @@ class Chain:
         rows.append(KhalilRow("fixed", prev_alpha, prev_a, 0.0, 0.0))
         return cls(rows=tuple(rows), **kwargs)
 
-    @classmethod
-    def from_urdf(
-        cls, source: Any, base: str | None = None, tip: str | None = None, **load_kwargs: Any
-    ) -> Chain:
-        """Recover the Khalil table (plus base/tool poses) of a serial URDF chain.
-
-        See :mod:`hexapod_kin._fromurdf` for how the frames are placed (common normals,
-        parallel and intersecting axes). ``table_fk`` of the result equals the URDF's
-        forward kinematics (checked on return).
-
-        Args:
-            source: A URDF path or text, ``erd:NAME``, a preset name or a loaded model.
-            base: Base frame name (default: the source's default base).
-            tip: Tip frame name (default: the source's default tip).
-            **load_kwargs: Passed on to :func:`hexapod_kin.load`.
-
-        Returns:
-            The recovered :class:`Chain` (joint names and limits from the URDF).
-
-        Raises:
-            ConfigurationError: A joint the table cannot express (named) or a non-serial
-                chain between ``base`` and ``tip``.
-            HexapodKinError: Whatever loading the source raises.
-
-        """
-        from ._fromurdf import chain_from_urdf
-
-        return chain_from_urdf(source, base=base, tip=tip, **load_kwargs)
-
 
 def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
     """Build a :class:`Chain` from plain tuples ``(sigma, alpha, d, theta, r)``, one per row.
@@ -778,8 +745,6 @@ class Hexapod:
         for leg in self.legs:
             if leg.name == name:
                 return leg
-        from .exceptions import choices
-
         raise ParameterError(
             f"leg={name!r} does not exist; legs are {choices(x.name for x in self.legs)}"
         )

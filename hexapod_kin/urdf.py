@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
 from ._io import atomic_write
+from ._version import __version__
 from .exceptions import ParameterError
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
 
