@@ -108,44 +108,57 @@ class Pose:
 
     @classmethod
     def of(cls, value: Any, where: str = "pose") -> Pose:
-        """Return ``value`` as a :class:`Pose`.
+        """Return ``value`` as a :class:`Pose` (the package's one reader of poses).
 
         Args:
-            value: A :class:`Pose`, a 4×4 homogeneous matrix (last row ``0 0 0 1``), or
-                ``(xyz, rpy)`` with ``xyz`` in [m] and ``rpy`` in [rad] (URDF convention).
-            where: Parameter name used in error messages.
-
-        Returns:
-            The pose.
+            value: A :class:`Pose`; a 4×4 homogeneous matrix (rotation orthonormal with det +1
+                to 1e-9, last row ``0 0 0 1``) or an object with ``.homogeneous`` (``pin.SE3``);
+                ``(xyz, rpy)``; a 6-vector ``xyz + rpy``; or a mapping with keys ``xyz`` and/or
+                ``rpy``. ``xyz`` in [m], ``rpy`` in [rad] (URDF convention).
+            where: Parameter name used in error messages (and as ``error.parameter``).
 
         Raises:
-            ParameterError: For anything else, naming ``where``.
+            ParameterError: For anything else, non-finite numbers or a matrix that is not
+                rigid, naming ``where``.
 
         """
         if isinstance(value, Pose):
             return value
+        allowed = "a 4x4 homogeneous matrix, (xyz, rpy), a 6-vector xyz+rpy or {'xyz':…, 'rpy':…}"
+
+        def bad(why: str) -> ParameterError:
+            return ParameterError(
+                f"{where}={value!r}: {why}; give {allowed}",
+                parameter=where,
+                value=value,
+                allowed=allowed,
+            )
+
+        if isinstance(value, dict):
+            if set(value) - {"xyz", "rpy"}:
+                raise bad(f"unknown keys {sorted(set(value) - {'xyz', 'rpy'})}")
+            value = (value.get("xyz", (0.0, 0.0, 0.0)), value.get("rpy", (0.0, 0.0, 0.0)))
+        value = getattr(value, "homogeneous", value)
         try:
+            if isinstance(value, (str, bytes)):
+                raise TypeError
             arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            arr = None
-        if arr is not None and arr.shape == (4, 4):
-            if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), rtol=0, atol=1e-12):
-                raise ParameterError(
-                    f"{where}: last row {arr[3].tolist()} of the 4x4 matrix must be 0 0 0 1"
-                )
-            try:
-                return cls(xyz=tuple(arr[:3, 3]), rotation=tuple(map(tuple, arr[:3, :3])))
-            except ParameterError as exc:
-                raise ParameterError(f"{where}: {exc}") from None
-        if arr is not None and arr.shape == (2, 3):
-            if not np.all(np.isfinite(arr)):
-                raise ParameterError(f"{where}={value!r}: (xyz, rpy) must be finite")
-            rot = rpy_to_matrix(*arr[1])
-            return cls(xyz=tuple(arr[0]), rotation=tuple(map(tuple, rot)))
-        raise ParameterError(
-            f"{where}={value!r} is not a pose; give a 4x4 homogeneous matrix or (xyz [m], "
-            "rpy [rad]) as two triples"
-        )
+        except (TypeError, ValueError, OverflowError):
+            raise bad("not numbers") from None
+        if arr.shape == (2, 3):  # (xyz, rpy)
+            arr = arr.reshape(6)
+        if not np.all(np.isfinite(arr)):
+            raise bad("non-finite values")
+        if arr.shape == (6,):
+            return cls(xyz=tuple(arr[:3]), rotation=tuple(map(tuple, rpy_to_matrix(*arr[3:]))))
+        if arr.shape != (4, 4):
+            raise bad(f"shape {arr.shape}")
+        if not np.allclose(arr[3], (0.0, 0.0, 0.0, 1.0), rtol=0, atol=1e-12):
+            raise bad("not a rigid transform (last row must be 0 0 0 1)")
+        try:
+            return cls(xyz=tuple(arr[:3, 3]), rotation=tuple(map(tuple, arr[:3, :3])))
+        except ParameterError as exc:
+            raise bad(f"not a rigid transform ({exc})") from None
 
     @classmethod
     def identity(cls) -> Pose:

@@ -1,8 +1,8 @@
 """Pinocchio model surgery for :mod:`hexapod_kin.model`: frames, sub-chains, tool frames.
 
 Frame lookup that survives duplicate names, the reduction of a model to the joints between a
-base and a tip, the tool frame added at the tip, the path of body frames, rigid poses given as
-4×4 or ``(xyz, rpy)``, and the URDF text without the visuals whose meshes are missing.
+base and a tip, the tool frame added at the tip, the path of body frames, and the URDF text
+without the visuals whose meshes are missing.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ __all__ = [
     "frame_index",
     "last_body_frame",
     "path_frames",
-    "pose_matrix",
     "reduce_model",
     "root_link_frame",
 ]
@@ -66,71 +65,6 @@ def drop_missing_meshes(text: str, missing: tuple[tuple[str, str], ...]) -> str:
     from lxml import etree
 
     return str(etree.tostring(root, encoding="unicode"))
-
-
-def pose_matrix(value: Any, name: str = "pose") -> np.ndarray:
-    """A rigid transform as a fresh 4×4 array, from a 4×4 matrix or ``(xyz, rpy)``.
-
-    Accepted: a 4×4 homogeneous matrix (rotation orthonormal with det +1 to 1e-9, last row
-    ``0 0 0 1``); a pair ``(xyz, rpy)``; a flat 6-vector ``xyz + rpy``; a mapping with keys
-    ``xyz`` and/or ``rpy``. ``xyz`` in [m]; ``rpy`` in [rad], the URDF convention
-    (``Rz(yaw)·Ry(pitch)·Rx(roll)``).
-
-    Args:
-        value: The transform.
-        name: The parameter name for messages.
-
-    Raises:
-        ParameterError: Anything else, non-finite numbers or a matrix that is not rigid.
-
-    """
-    from .exceptions import ParameterError
-
-    allowed = "a 4x4 homogeneous matrix, (xyz, rpy), a 6-vector xyz+rpy or {'xyz':…, 'rpy':…}"
-
-    def bad(why: str) -> ParameterError:
-        return ParameterError(
-            f"{name}={value!r}: {why}; give {allowed}", parameter=name, value=value, allowed=allowed
-        )
-
-    if isinstance(value, dict):
-        unknown = set(value) - {"xyz", "rpy"}
-        if unknown:
-            raise bad(f"unknown keys {sorted(unknown)}")
-        value_xyz, value_rpy = value.get("xyz", (0.0, 0.0, 0.0)), value.get("rpy", (0.0, 0.0, 0.0))
-        return pose_matrix((value_xyz, value_rpy), name)
-    if isinstance(value, pin.SE3):
-        value = value.homogeneous
-    try:
-        if isinstance(value, (tuple, list)) and len(value) == 2:
-            xyz = np.asarray(value[0], dtype=float)
-            rpy = np.asarray(value[1], dtype=float)
-            if xyz.shape != (3,) or rpy.shape != (3,):
-                raise bad("xyz and rpy need 3 numbers each")
-            arr = np.concatenate([xyz, rpy])
-        else:
-            if np.asarray(value).dtype.kind in "USb":
-                raise bad("not numbers")
-            arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise bad("not numbers") from None
-    if not np.all(np.isfinite(arr)):
-        raise bad("non-finite values")
-    if arr.shape == (6,):
-        out = np.eye(4)
-        out[:3, :3] = pin.rpy.rpyToMatrix(*(float(x) for x in arr[3:]))
-        out[:3, 3] = arr[:3]
-        return out
-    if arr.shape != (4, 4):
-        raise bad(f"shape {arr.shape}")
-    rot = arr[:3, :3]
-    if not (
-        np.allclose(arr[3], [0.0, 0.0, 0.0, 1.0], atol=1e-12, rtol=0.0)
-        and np.allclose(rot.T @ rot, np.eye(3), atol=1e-9, rtol=0.0)
-        and np.linalg.det(rot) > 0.0
-    ):
-        raise bad("not a rigid transform (rotation orthonormal with det +1, last row 0 0 0 1)")
-    return arr.copy()
 
 
 def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:

@@ -36,25 +36,15 @@ from .frames import (
     frame_index,
     last_body_frame,
     path_frames,
-    pose_matrix,
     reduce_model,
     root_link_frame,
 )
-from .params import Chain, Hexapod
-from .sources import ResolvedSource, erd_names, erd_path, resolve_source, yourdfpy_load
+from .params import Chain, Hexapod, Pose
+from .sources import ResolvedSource, resolve_source, yourdfpy_load
 
 _T = TypeVar("_T")
 
-__all__ = [
-    "check_inertials",
-    "pose_matrix",
-    "Model",
-    "build",
-    "erd_names",
-    "erd_path",
-    "resolve_source",
-    "ResolvedSource",
-]
+__all__ = ["Model", "build", "check_inertials"]
 
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
@@ -198,7 +188,7 @@ class Model:
         self.flange = tip_name
         self.tool: np.ndarray | None = None
         if tool is not None:
-            tool_m = pose_matrix(tool, "tool")
+            tool_m = Pose.of(tool, "tool").matrix
             reduced, tip_name = add_tool_frame(reduced, tip_name, tool_m)
             tool_m.setflags(write=False)
             self.tool = tool_m

@@ -1,4 +1,4 @@
-"""Chain.from_urdf: Khalil tables recovered from URDFs, FK checked against Pinocchio."""
+"""chain_from_urdf: Khalil tables recovered from URDFs, FK checked against Pinocchio."""
 
 from __future__ import annotations
 
@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import hexapod_kin as hk
-from hexapod_kin import Chain, DHRow, KhalilRow, robots, table_fk, to_urdf
+from hexapod_kin import Chain, DHRow, KhalilRow, chain_from_urdf, robots, table_fk, to_urdf
+from hexapod_kin._table_kin import table_position_jacobian
 from hexapod_kin.exceptions import ConfigurationError, HexapodKinError
-from hexapod_kin.params import Hexapod, table_position_jacobian
+from hexapod_kin.params import Hexapod
 
 
 def _fk_error(chain, model, n=50, seed=0):
@@ -45,7 +46,7 @@ def _catalogue():
 
 @pytest.mark.parametrize("text,base,tip", _catalogue())
 def test_catalogue_urdfs_round_trip(text, base, tip):
-    chain = Chain.from_urdf(text, base=base, tip=tip)
+    chain = chain_from_urdf(text, base=base, tip=tip)
     model = hk.load(text, base=base, tip=tip)
     assert chain.nq == model.nq
     assert _fk_error(chain, model) < 1e-12
@@ -57,7 +58,7 @@ def test_catalogue_urdfs_round_trip(text, base, tip):
 )
 def test_own_exports_give_back_the_joint_rows(name):
     original = robots.get(name)
-    chain = Chain.from_urdf(to_urdf(original))
+    chain = chain_from_urdf(to_urdf(original))
     joint_rows = [r for r in original.rows if r.is_joint]
     for got, want in zip(chain.rows, joint_rows):
         assert got.sigma == want.sigma
@@ -76,7 +77,7 @@ def test_own_exports_give_back_the_joint_rows(name):
     ],
 )
 def test_example_robot_data_round_trip(source, tip):
-    chain = Chain.from_urdf(source, tip=tip)
+    chain = chain_from_urdf(source, tip=tip)
     model = hk.load(source, tip=tip)
     assert chain.nq == model.nq and chain.joint_names == model.joint_names
     assert _fk_error(chain, model, n=100) < 1e-12
@@ -128,7 +129,7 @@ def _urdf(joints):
 )
 def test_synthetic_chains_any_axes(joints):
     text = _urdf(joints)
-    chain = Chain.from_urdf(text, tip=f"l{len(joints)}")
+    chain = chain_from_urdf(text, tip=f"l{len(joints)}")
     model = hk.load(text, tip=f"l{len(joints)}")
     assert _fk_error(chain, model, n=100) < 1e-12
     assert _jac_error(chain, model) < 1e-12
@@ -144,7 +145,7 @@ def test_synthetic_chains_any_axes(joints):
     ],
 )
 def test_sub_chains_between_named_frames(source, base, tip):
-    chain = Chain.from_urdf(source, base=base, tip=tip)
+    chain = chain_from_urdf(source, base=base, tip=tip)
     model = hk.load(source, base=base, tip=tip)
     assert chain.base == base and chain.tip == tip and chain.nq == model.nq
     assert _fk_error(chain, model) < 1e-12
@@ -152,7 +153,7 @@ def test_sub_chains_between_named_frames(source, base, tip):
 
 
 def test_recovered_chain_exports_and_reloads_equal():
-    chain = Chain.from_urdf("erd:ur5_robot")
+    chain = chain_from_urdf("erd:ur5_robot")
     again = hk.load(chain)
     model = hk.load("erd:ur5_robot")
     for q in model.random_q(20, seed=3):
@@ -161,27 +162,27 @@ def test_recovered_chain_exports_and_reloads_equal():
 
 def test_dh_chain_through_urdf_keeps_a_dh_like_table():
     dh = Chain.from_dh([DHRow(0, 0.3, 0, math.pi / 2), DHRow(0, 0, 0.4, 0), DHRow(0, 0, 0.3, 0)])
-    back = Chain.from_urdf(to_urdf(dh))
+    back = chain_from_urdf(to_urdf(dh))
     assert [r.sigma for r in back.rows] == ["revolute"] * 3
     assert back.rows[0] == KhalilRow("revolute", 0, 0, 0, 0.3)
 
 
 def test_not_serial_or_unsupported_says_why():
     with pytest.raises(ConfigurationError, match="not a serial chain"):
-        Chain.from_urdf("hexapod")  # the whole robot: six branches
+        chain_from_urdf("hexapod")  # the whole robot: six branches
     planar = _urdf([("planar", "0 0 0", "0 0 0", "0 0 1")])
     with pytest.raises(ConfigurationError, match="joint 'j1' is a JointModelPlanar"):
-        Chain.from_urdf(planar, tip="l1")
+        chain_from_urdf(planar, tip="l1")
     floating = _urdf([("revolute", "0 0 0", "0 0 0", "0 0 1"), ("floating", "0 0 1", "0 0 0", "")])
     with pytest.raises(HexapodKinError, match="joint 'j2' is a JointModelFreeFlyer"):
-        Chain.from_urdf(floating, tip="l2")
+        chain_from_urdf(floating, tip="l2")
 
 
 def test_continuous_joint_is_a_revolute_row():
     text = _urdf(
         [("continuous", "0 0 0.1", "0 0 0", "0 1 0"), ("revolute", "0.2 0 0", "0 0 0", "0 1 0")]
     )
-    chain = Chain.from_urdf(text, tip="l2")
+    chain = chain_from_urdf(text, tip="l2")
     model = hk.load(text, tip="l2")
     assert chain.sigmas == ("revolute", "revolute")
     assert _fk_error(chain, model, n=50) < 1e-12

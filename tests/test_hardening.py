@@ -23,7 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from hexapod_kin import robots, urdf
+from hexapod_kin import robots, table_fk, urdf
 from hexapod_kin.exceptions import (
     ConfigurationError,
     FrameNotFoundError,
@@ -32,7 +32,7 @@ from hexapod_kin.exceptions import (
     UrdfError,
 )
 from hexapod_kin.kinematics import direct_jacobian, indirect_jacobian, load
-from hexapod_kin.params import Chain, KhalilRow, table_fk
+from hexapod_kin.params import Chain, KhalilRow
 
 HERE = Path(__file__).parent
 

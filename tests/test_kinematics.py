@@ -121,7 +121,7 @@ def test_seed001_eq15_jacobian(preset_models):
 
 
 def test_solo12_leg_equals_raw_pinocchio():
-    from hexapod_kin.model import erd_path
+    from hexapod_kin.sources import erd_path
 
     model = hk.load("erd:solo12", tip="FL_FOOT")
     assert model.joint_names == ("FL_HAA", "FL_HFE", "FL_KFE")

@@ -11,7 +11,7 @@ import pytest
 import hexapod_kin as hk
 from hexapod_kin import exceptions
 from hexapod_kin.exceptions import FrameNotFoundError, SourceError
-from hexapod_kin.model import erd_names, erd_path, resolve_source
+from hexapod_kin.sources import erd_names, erd_path, resolve_source
 
 
 def test_every_exception_is_in_the_family():

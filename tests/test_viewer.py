@@ -33,7 +33,7 @@ from hexapod_kin.exceptions import (
     ParameterError,
     ViewerError,
 )
-from hexapod_kin.params import table_fk
+from hexapod_kin import table_fk
 from hexapod_kin.viewer.scene import Scene
 
 umsgpack = pytest.importorskip("umsgpack")
