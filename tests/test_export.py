@@ -46,6 +46,7 @@ from hexapod_kin.export import (  # noqa: E402
     expand_xacro,
     export_package,
     mesh_visuals,
+    package_files,
     to_mjcf,
     to_xacro,
     write_mjcf,
@@ -263,8 +264,22 @@ def test_xacro_single_leg_and_errors():
     assert_same_model(hk.to_urdf(robot, leg="leg3"), expand_xacro(to_xacro(robot, leg="leg3")))
     with pytest.raises(ParameterError, match="leg='leg9'"):
         to_xacro(robot, leg="leg9")
-    with pytest.raises(ParameterError, match="Chain or a Hexapod"):
-        to_xacro("hexabot_leg")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match="without a parameter table"):
+        to_xacro(hk.to_urdf(robots.hexabot_leg()))
+
+
+def test_a_source_string_means_the_same_to_every_exporter(tmp_path):
+    """A preset name is the preset for load, to_xacro, package_files and to_mjcf alike."""
+    leg = robots.hexabot_leg()
+    assert to_xacro("hexabot_leg") == to_xacro(leg)
+    assert package_files("hexabot_leg") == package_files(leg)
+    assert to_mjcf("hexabot_leg").xml == to_mjcf(leg).xml
+    text = hk.to_urdf(leg)
+    (tmp_path / "leg.urdf").write_text(text)
+    from_text, from_file = to_mjcf(text), to_mjcf(tmp_path / "leg.urdf")
+    assert from_text.xml.split("\n", 2)[2] == from_file.xml.split("\n", 2)[2]
+    with pytest.raises(hk.SourceError, match="hexabot_le"):
+        to_mjcf("hexabot_le")
 
 
 # ------------------------------------------------------------------------ check_urdf

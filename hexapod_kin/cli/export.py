@@ -19,14 +19,14 @@ __all__ = ["register"]
 
 
 def _resolve(args: argparse.Namespace, allow_urdf: bool = False) -> Any:
-    """The Chain/Hexapod of SOURCE (or, with ``allow_urdf``, the URDF text)."""
+    """The Chain/Hexapod of SOURCE (or, with ``allow_urdf``, SOURCE itself: a URDF)."""
     from ..sources import resolve_source
 
     resolved = resolve_source(args.source, **set_params(args.set))
     if resolved.params is not None:
         return resolved.params
     if allow_urdf:
-        return resolved.text
+        return args.source
     raise ParameterError(
         f"source={args.source!r} is a URDF without a parameter table; {args.command} needs a "
         "preset name or a table file",

@@ -6,9 +6,10 @@ import importlib
 import re
 from typing import Any
 
-from .. import __version__
+from .._version import __version__
 from ..exceptions import OptionalDependencyError, ParameterError
 from ..params import Chain, Hexapod
+from ..sources import resolve_source
 from ..urdf import COLORS, comment, num, vec  # one home: the URDF text
 
 __all__ = [
@@ -17,7 +18,7 @@ __all__ = [
     "num",
     "vec",
     "need",
-    "check_source",
+    "table_of",
     "header_lines",
     "ident",
 ]
@@ -38,32 +39,31 @@ def header_lines(what: str, description: str, header: str | None) -> list[str]:
     return lines
 
 
-def check_source(source: Any, leg: str | None = None) -> Chain | Hexapod:
-    """Return ``source`` if it is a :class:`Chain` or :class:`Hexapod` (and ``leg`` fits).
+def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
+    """The parameter table of ``source``, resolved as everywhere (:func:`resolve_source`).
 
     Raises:
-        ParameterError: For another type, or ``leg`` given with a chain / unknown leg.
+        ParameterError: A source without a table (a URDF), or ``leg`` that does not fit.
+        SourceError: A source that does not resolve.
 
     """
-    if isinstance(source, Chain):
-        if leg is not None:
+    params = source if isinstance(source, (Chain, Hexapod)) else resolve_source(source).params
+    if params is None:
+        raise ParameterError(
+            f"source={source!r} is a URDF without a parameter table; this export needs a Chain, "
+            "a Hexapod, a preset name or a table file",
+            parameter="source",
+            value=source,
+        )
+    if leg is not None:
+        if isinstance(params, Chain):
             raise ParameterError(
                 f"leg={leg!r} only applies to a Hexapod, not to a Chain",
                 parameter="leg",
                 value=leg,
             )
-        return source
-    if isinstance(source, Hexapod):
-        if leg is not None:
-            source.leg(leg)  # raises with the list of legs
-        return source
-    raise ParameterError(
-        f"source={type(source).__name__} is not allowed; the exporters take a Chain or a Hexapod "
-        "(hexapod_kin.robots.get(name) builds a preset)",
-        parameter="source",
-        value=type(source).__name__,
-        allowed=["Chain", "Hexapod"],
-    )
+        params.leg(leg)  # raises with the list of legs
+    return params
 
 
 def need(module: str, extra: str = "export") -> Any:

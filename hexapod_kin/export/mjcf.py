@@ -32,8 +32,9 @@ import numpy as np
 from .._io import atomic_write
 from ..exceptions import ParameterError, UrdfError
 from ..params import Chain, Hexapod
+from ..sources import resolve_source
 from ..urdf import to_urdf
-from ._common import check_source, comment, need, num, vec
+from ._common import comment, need, num, vec
 from .meshes import add_collisions, mesh_visuals
 
 __all__ = ["to_mjcf", "write_mjcf", "MjcfExport", "INTEGRATORS", "reach"]
@@ -193,7 +194,7 @@ def _compile(urdf_text: str, assets: dict[str, bytes]) -> tuple[str, Any, Any]:
 
 
 def to_mjcf(
-    source: Chain | Hexapod | str,
+    source: Any,
     *,
     meshes: bool = False,
     mesh_prefix: str = "meshes/",
@@ -204,11 +205,13 @@ def to_mjcf(
     integrator: str | None = None,
     floating: bool = False,
 ) -> MjcfExport:
-    """Return the MJCF of a chain, robot or URDF text, compiled by MuJoCo (deterministic).
+    """Return the MJCF of a source, compiled by MuJoCo (deterministic).
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`
-            or URDF text (used as it is, without meshes or reach-based floor).
+        source: What :func:`hexapod_kin.load` takes (resolved by
+            :func:`~hexapod_kin.sources.resolve_source`): a chain, a robot, a preset name, a
+            table file, a URDF path or text, ``erd:NAME``. A URDF without a parameter table is
+            used as it is (no meshes, no reach-based floor).
         meshes: STL visuals (trimesh) as non-colliding mesh geoms (group 1); the primitive
             collision geoms move to group 3.
         mesh_prefix: Folder of the mesh files relative to the MJCF file.
@@ -247,24 +250,29 @@ def to_mjcf(
         )
     if floor_z is not None and not np.isfinite(floor_z):
         raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
-    if floating and not isinstance(source, Hexapod):
+    if isinstance(source, (Chain, Hexapod)):
+        params, resolved = source, None
+    else:
+        resolved = resolve_source(source)
+        params = resolved.params
+    if floating and not isinstance(params, Hexapod):
         raise ParameterError(
             "floating=True needs a robot (Hexapod) whose root body has a mass; a chain's base "
             "link has none",
             parameter="floating",
             value=floating,
         )
-    if isinstance(source, str):
-        urdf, default_floor, desc = source, -1.0, "URDF text"
+    if params is None:
+        assert resolved is not None
+        urdf, default_floor, desc = resolved.text, -1.0, resolved.name
         if meshes:
             raise ParameterError(
-                "meshes=True needs a Chain or Hexapod source, not URDF text", parameter="meshes"
+                "meshes=True needs a source with a parameter table, not a URDF", parameter="meshes"
             )
     else:
-        src = check_source(source)
-        urdf = to_urdf(src, header=header)
-        default_floor = -math.ceil(110.0 * reach(src)) / 100.0
-        desc = src.description or src.name
+        urdf = to_urdf(params, header=header)
+        default_floor = -math.ceil(110.0 * reach(params)) / 100.0
+        desc = params.description or params.name
     assets: dict[str, bytes] = {}
     if meshes:
         meshed = mesh_visuals(urdf, mesh_prefix)
@@ -320,7 +328,7 @@ def to_mjcf(
 
 
 def write_mjcf(
-    source: Chain | Hexapod | str,
+    source: Any,
     path: str | os.PathLike[str],
     *,
     meshes: bool = False,

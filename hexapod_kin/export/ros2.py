@@ -30,9 +30,9 @@ from typing import Any
 from .. import __version__
 from .._io import atomic_write
 from ..exceptions import ParameterError
-from ..params import Chain, Hexapod
+from ..params import Chain
 from ..urdf import to_urdf
-from ._common import check_source, comment
+from ._common import comment, table_of
 from .meshes import add_collisions, mesh_visuals
 from .xacro import to_xacro
 
@@ -300,7 +300,7 @@ def _check_out(out: Path, force: bool) -> None:
 
 
 def package_files(
-    source: Chain | Hexapod,
+    source: Any,
     *,
     name: str | None = None,
     meshes: bool = False,
@@ -312,7 +312,8 @@ def package_files(
     """The files of the description package (path relative to the package → bytes).
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
+            a preset name or a table file (any source with a parameter table).
         name: ROS package name (REP 144); default ``<robot>_description``.
         meshes: Write STL visuals into ``meshes/`` (referenced as ``package://<name>/...``).
         header: Header line for every file (e.g. the command that made it).
@@ -327,7 +328,7 @@ def package_files(
         ParameterError: For an invalid name, e-mail or source.
 
     """
-    src = check_source(source)
+    src = table_of(source)
     pkg = package_name_for(src.name) if name is None else name
     if not isinstance(pkg, str) or not PACKAGE_NAME_RE.match(pkg):
         raise ParameterError(
@@ -373,7 +374,7 @@ def package_files(
 
 
 def export_package(
-    source: Chain | Hexapod,
+    source: Any,
     out: str | os.PathLike[str],
     *,
     name: str | None = None,
@@ -387,7 +388,8 @@ def export_package(
     """Write the ROS 2 description package of ``source`` into the folder ``out``, atomically.
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
+            a preset name or a table file (any source with a parameter table).
         out: The package folder to create (its parent must exist).
         name: ROS package name; default ``<robot>_description``.
         meshes: Generate STL visuals (trimesh) into ``meshes/``.

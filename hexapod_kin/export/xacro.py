@@ -33,7 +33,7 @@ import numpy as np
 from .._io import atomic_write
 from ..exceptions import UrdfError
 from ..params import Chain, Hexapod, matrix_to_rpy
-from ._common import COLORS, check_source, comment, header_lines, ident, need, num
+from ._common import COLORS, comment, header_lines, ident, need, num, table_of
 
 __all__ = ["to_xacro", "write_xacro", "expand_xacro"]
 
@@ -491,11 +491,12 @@ def _intro() -> list[str]:
     ]
 
 
-def to_xacro(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
+def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) -> str:
     """Return the xacro document of a chain or robot (deterministic: same input, same bytes).
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain` or :class:`~hexapod_kin.params.Hexapod`.
+        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
+            a preset name or a table file (any source with a parameter table).
         leg: For a robot, emit only this leg with its mount on the body.
         header: Extra header comment line (e.g. the command that made the file).
 
@@ -506,14 +507,14 @@ def to_xacro(source: Chain | Hexapod, *, leg: str | None = None, header: str | N
         ParameterError: If ``source`` is of another type or ``leg`` does not fit.
 
     """
-    src = check_source(source, leg)
+    src = table_of(source, leg)
     if isinstance(src, Chain):
         return _chain_doc(src, header)
     return _robot_doc(src, leg, header)
 
 
 def write_xacro(
-    source: Chain | Hexapod,
+    source: Any,
     path: str | os.PathLike[str],
     *,
     leg: str | None = None,
