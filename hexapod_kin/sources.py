@@ -206,6 +206,16 @@ class ResolvedSource:
     params: Chain | Hexapod | None = None
     path: str | None = None
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (the URDF text left out; ``params`` as its name)."""
+        return {
+            "name": self.name,
+            "package_dirs": list(self.package_dirs),
+            "mesh_root": self.mesh_root,
+            "params": None if self.params is None else self.params.name,
+            "path": self.path,
+        }
+
 
 def _read_text(path: Path) -> str:
     from ._gate import MAX_URDF_BYTES

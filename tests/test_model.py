@@ -177,12 +177,11 @@ def test_arrays_extracted_once_and_match_pinocchio():
 
 
 # ------------------------------------------------------------------ sources
-def test_sources_module_owns_resolution_and_model_reexports():
+def test_sources_module_owns_resolution():
     from hexapod_kin import model as model_mod
     from hexapod_kin import sources
 
-    assert model_mod.resolve_source is sources.resolve_source
-    assert model_mod.erd_path is sources.erd_path and model_mod.erd_names is sources.erd_names
+    assert not hasattr(model_mod, "erd_path")  # one home: no second import path
     import ast
     from pathlib import Path
 
@@ -418,3 +417,15 @@ def test_duplicate_frame_names_prefer_the_link():
     d = model.model.createData()
     pin.framesForwardKinematics(model.model, d, model.pinocchio_q(q))
     np.testing.assert_allclose(model.fk(q), (model.baseMo * d.oMf[fid]).homogeneous, atol=0)
+
+
+def test_resolved_source_and_gate_result_to_dict():
+    import json
+
+    from hexapod_kin._gate import check_urdf
+
+    resolved = resolve_source("hexabot_leg")
+    d = json.loads(json.dumps(resolved.to_dict()))
+    assert d["name"] == "hexabot_leg" and d["params"] == resolved.params.name
+    gate = json.loads(json.dumps(check_urdf(resolved.text).to_dict()))
+    assert gate["root_link"] == resolved.params.base and len(gate["joints"]) >= 3

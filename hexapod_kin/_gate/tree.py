@@ -10,6 +10,7 @@ import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from lxml import etree
 
@@ -59,6 +60,18 @@ class GateResult:
     inertia_defects: tuple[tuple[str, str], ...] = ()
     repairs: tuple[str, ...] = ()
     text: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (the parsed element and the mended text left out)."""
+        return {
+            "links": list(self.links),
+            "joints": list(self.joints),
+            "root_link": self.root_link,
+            "meshes": [[uri, str(path)] for uri, path in self.meshes],
+            "missing_meshes": [list(m) for m in self.missing_meshes],
+            "inertia_defects": [list(d) for d in self.inertia_defects],
+            "repairs": list(self.repairs),
+        }
 
 
 #: Documents that passed and reference no files, by text (small LRU: generated URDFs are
