@@ -32,19 +32,6 @@ from .exceptions import (
 from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
 from .urdf import to_urdf, write_urdf
 
-
-def load(source: Any, base: str | None = None, tip: str | None = None, **kwargs: Any) -> Any:
-    """Load a model; see :func:`hexapod_kin.kinematics.load` (imports Pinocchio lazily).
-
-    Returns:
-        A :class:`hexapod_kin.kinematics.KinematicModel`.
-
-    """
-    from .kinematics import load as _load
-
-    return _load(source, base=base, tip=tip, **kwargs)
-
-
 #: Submodules reachable as attributes (``hk.singularity``) without importing them up front
 #: (PEP 562): ``import hexapod_kin`` stays light (no Pinocchio, sympy or numba).
 _LAZY_SUBMODULES = (
@@ -72,17 +59,19 @@ _LAZY_SUBMODULES = (
 
 
 def __getattr__(name: str) -> Any:
-    """Import the submodule ``name`` on first access (PEP 562).
+    """Import the submodule ``name`` on first access (PEP 562); ``load`` is ``kinematics.load``.
 
     Raises:
         AttributeError: If ``name`` is neither a submodule of the list above that exists in
             this installation nor another attribute of the package.
 
     """
-    if name in _LAZY_SUBMODULES:
-        import importlib
-        import importlib.util
+    import importlib
+    import importlib.util
 
+    if name == "load":  # the one loader, without importing Pinocchio up front
+        return importlib.import_module(f"{__name__}.kinematics").load
+    if name in _LAZY_SUBMODULES:
         full = f"{__name__}.{name}"
         if importlib.util.find_spec(full) is not None:
             module = importlib.import_module(full)

@@ -299,11 +299,6 @@ class Model:
         """
         return self._local.hot[1]
 
-    @property
-    def _hot(self) -> tuple[Any, ...]:
-        """``(model, data, tip_id, nq, base is root)`` of the calling thread."""
-        return self._local.hot
-
     def __setattr__(self, key: str, value: Any) -> None:
         # Model and Data are created together here and never re-paired: once set, these
         # attributes are read-only (reads stay plain attribute lookups on the hot path).
@@ -343,11 +338,6 @@ class Model:
             if key not in cache:
                 cache[key] = factory()
             return cache[key]
-
-    def cache_clear(self) -> None:
-        """Forget every cached value (they are rebuilt on next use)."""
-        with self._cache_lock:
-            self._cache.clear()
 
     @property
     def arrays(self) -> Any:

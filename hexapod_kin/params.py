@@ -109,16 +109,6 @@ def _name(value: Any, where: str) -> str:
     return value
 
 
-def _rx(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
-
-
-def _rz(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
-
-
 def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
     """Return ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` as a 4×4 array (closed form).
 
@@ -680,7 +670,7 @@ class LegMount:
 
     def transform(self) -> np.ndarray:
         """Return ``^{body}T_{mount}`` (4×4)."""
-        t = _rz(self.yaw)
+        t = khalil_transform(0.0, 0.0, self.yaw, 0.0)  # Rz(yaw)
         t[:3, 3] = self.xyz
         return t
 

@@ -26,14 +26,13 @@ import numpy as np
 import pytest
 from headless import launch_chromium
 
-from hexapod_kin import gait, load, robots, viewer
+from hexapod_kin import gait, load, robots, table_fk, viewer
 from hexapod_kin.exceptions import (
     ConfigurationError,
     FrameNotFoundError,
     ParameterError,
     ViewerError,
 )
-from hexapod_kin import table_fk
 from hexapod_kin.viewer.scene import Scene
 
 umsgpack = pytest.importorskip("umsgpack")

@@ -250,8 +250,10 @@ def to_mjcf(
         )
     if floor_z is not None and not np.isfinite(floor_z):
         raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
+    params: Chain | Hexapod | None = None
+    resolved = None
     if isinstance(source, (Chain, Hexapod)):
-        params, resolved = source, None
+        params = source
     else:
         resolved = resolve_source(source)
         params = resolved.params
