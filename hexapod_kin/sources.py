@@ -1,8 +1,11 @@
-"""What a model source means: a chain, a preset, a URDF path or text, ``erd:NAME``, a table file.
+"""What a model source means — one meaning everywhere (load, chain_from_urdf, the exporters).
 
-:func:`resolve_source` turns any of them into a :class:`ResolvedSource` (URDF text, a label,
-where its meshes resolve, and the parameter table when there is one). This module also holds
-the example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second engine
+:func:`resolve_source` turns a source into a :class:`ResolvedSource` (URDF text, a label, where
+its meshes resolve, and the parameter table when there is one). A source is a
+:class:`~hexapod_kin.params.Chain` or ``Hexapod``, a path, or a string read in this order:
+URDF text (it starts with ``<``), a preset name, ``erd:NAME`` (example-robot-data), a file
+path (``.urdf``/``.xml``, or a table file ``.toml``/``.yaml``). This module also holds the
+example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second engine
 (:func:`yourdfpy_load`). It never imports Pinocchio: building the model is
 :mod:`hexapod_kin.model`'s job.
 """
@@ -25,17 +28,15 @@ from .urdf import to_urdf
 
 __all__ = [
     "ResolvedSource",
-    "TABLE_SUFFIXES",
     "erd_names",
     "erd_path",
     "erd_share",
-    "package_dirs_for",
     "resolve_source",
     "yourdfpy_load",
 ]
 
 #: File suffixes read as parameter-table files (see :mod:`hexapod_kin.tables`).
-TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
+_TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
 
 
 # ------------------------------------------------------------------------ example-robot-data
@@ -134,7 +135,7 @@ def _package_name(folder: Path) -> str | None:
     return found.group(1) if found else None
 
 
-def package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
+def _package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
     """Directories where the ``package://PKG/...`` URIs of a URDF resolve (``<dir>/PKG/...``).
 
     As ROS tools do, for each package named in ``text``, in this order: ``extra`` (the
@@ -238,7 +239,7 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
         raise SourceError(
             f"source={str(path)!r}: no such file", parameter="source", value=str(path)
         )
-    if path.suffix.lower() in TABLE_SUFFIXES:
+    if path.suffix.lower() in _TABLE_SUFFIXES:
         from .tables import read_table
 
         chain = read_table(path, **params)
@@ -253,7 +254,7 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
     return ResolvedSource(
         text,
         path.name,
-        package_dirs=package_dirs_for(path, text, package_dirs),
+        package_dirs=_package_dirs_for(path, text, package_dirs),
         mesh_root=str(path.parent.resolve()),
         path=str(path),
     )
@@ -325,7 +326,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
                 value=sorted(params),
             )
         return ResolvedSource(
-            source, "urdf-text", package_dirs=package_dirs_for(None, source, extra)
+            source, "urdf-text", package_dirs=_package_dirs_for(None, source, extra)
         )
     if text in robots.PRESETS:
         built = robots.get(text, **params)
@@ -347,7 +348,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             path=str(path),
         )
     path = Path(text).expanduser()
-    if path.suffix.lower() in (".urdf", ".xml", *TABLE_SUFFIXES) or path.exists():
+    if path.suffix.lower() in (".urdf", ".xml", *_TABLE_SUFFIXES) or path.exists():
         return _from_file(path, extra, **params)
     hint = _hint(text)
     raise SourceError(

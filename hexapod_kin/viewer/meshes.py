@@ -49,7 +49,7 @@ def _corners(tri: Any) -> tuple[int, int, int]:
     return int(tri[0]), int(tri[1]), int(tri[2])  # a Coal Triangle has no len(): no tuple()
 
 
-def mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
+def _mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
     """Vertices (V, 3) [m] and triangles (T, 3) of a loaded mesh (a BVH), or None if empty."""
     try:
         verts = np.asarray(geometry.vertices(), dtype=np.float64).reshape(-1, 3)
@@ -66,7 +66,7 @@ def mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
     return verts, tris
 
 
-def quantise(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _quantise(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Int16 coordinates of ``verts`` (V, 3) and the 4×4 matrix back to [m]."""
     lo, hi = verts.min(axis=0), verts.max(axis=0)
     center = (lo + hi) / 2
@@ -75,7 +75,7 @@ def quantise(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q, translation(center) @ np.diag([step, step, step, 1.0])
 
 
-def vertex_normals(verts: np.ndarray, tris: np.ndarray) -> np.ndarray:
+def _vertex_normals(verts: np.ndarray, tris: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals (V, 3) (as three.js ``computeVertexNormals``)."""
     a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
     face = np.cross(b - a, c - a)
@@ -94,16 +94,16 @@ def mesh_geometry(geometry: Any, *, normals: bool) -> MeshGeometry | None:
         normals: Include float32 vertex normals (for pages that do not compute them).
 
     """
-    arrays = mesh_arrays(geometry)
+    arrays = _mesh_arrays(geometry)
     if arrays is None:
         return None
     verts, tris = arrays
-    q, matrix = quantise(verts)
+    q, matrix = _quantise(verts)
     index = tris.astype(np.uint16 if len(verts) <= 65536 else np.uint32)
     attributes: dict[str, Any] = {"position": attribute(q, 3)}
     if normals:  # of the quantised mesh: what the browser would compute
         attributes["normal"] = attribute(
-            vertex_normals(q.astype(np.float64), tris).astype(np.float32), 3
+            _vertex_normals(q.astype(np.float64), tris).astype(np.float32), 3
         )
     data = {
         "type": "BufferGeometry",

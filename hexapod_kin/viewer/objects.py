@@ -93,7 +93,7 @@ def column_major(T: np.ndarray) -> list[float]:
     return [float(v) for v in np.asarray(T, dtype=float).T.ravel()]
 
 
-def hex_color(rgb: Sequence[float]) -> int:
+def _hex_color(rgb: Sequence[float]) -> int:
     """The 0xRRGGBB integer of an RGB(A) colour in [0, 1]."""
     r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgb[:3])
     return (r << 16) | (g << 8) | b
@@ -142,7 +142,7 @@ class ObjectJSON:
         data: dict[str, Any] = {
             "uuid": mid,
             "type": kind,
-            "color": hex_color(rgba),
+            "color": _hex_color(rgba),
             "side": 2,
             "transparent": alpha < 1.0,
             "opacity": alpha,

@@ -173,7 +173,7 @@ def _bundle_gz() -> str:
     return base64.b64encode(gzip.compress(bundle().encode("utf-8"), 9, mtime=0)).decode("ascii")
 
 
-def scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) -> bytes:
+def _scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) -> bytes:
     """The page's scene: every command (msgpack) after its uint32 LE length, gzipped.
 
     The animation, if any, is the last command. Deterministic (no time stamp in the gzip
@@ -287,7 +287,7 @@ def export_html(
     data = {
         "title": label,
         "bundle": script,
-        "scene": base64.b64encode(scene_blob(built.static, built.animation)).decode("ascii"),
+        "scene": base64.b64encode(_scene_blob(built.static, built.animation)).decode("ascii"),
         "animation": built.animation is not None,
         "duration": built.duration,
         "t0": built.t0,

@@ -237,7 +237,7 @@ def khalil_frames(model: Model) -> tuple[str, ...]:
 
 
 # ====================================================================== scene + animation
-def resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
+def _resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
     """The frames whose path is drawn (``None``/``True``: the tip, or every foot)."""
     from ..params import Hexapod
 
@@ -540,7 +540,7 @@ def build_for(
     return build(
         scene or Scene(model),
         motion,
-        trace_frames=resolve_trace_frames(model, trace_frame),
+        trace_frames=_resolve_trace_frames(model, trace_frame),
         triad_frames=resolve_triad_frames(model, frame_triads),
         singular_mask=mask,
         play=play,
