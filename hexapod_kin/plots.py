@@ -18,8 +18,6 @@ from .exceptions import OptionalDependencyError
 __all__ = [
     "FORMATS",
     "decimate",
-    "figure_format",
-    "joint_axis",
     "plot_motion",
     "plot_singularity_map",
     "plot_step",
@@ -53,7 +51,7 @@ def pyplot() -> Any:
 FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".svg": "svg", ".pdf": "pdf"}
 
 
-def figure_format(path: str | os.PathLike[str]) -> str:
+def _figure_format(path: str | os.PathLike[str]) -> str:
     """The image format of ``path`` from its suffix.
 
     Raises:
@@ -131,7 +129,7 @@ def save_figure(
     plt = pyplot()
     buf = io.BytesIO()
     try:
-        fmt = figure_format(path)
+        fmt = _figure_format(path)
         fig.savefig(buf, format=fmt, dpi=dpi, bbox_inches="tight" if crop else None)
     finally:
         plt.close(fig)
@@ -147,7 +145,7 @@ _MEASURE_LABELS = {
 }
 
 
-def joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
+def _joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
     """Values of ``joint`` for an axis, and the axis label with its unit.
 
     Revolute joints in degrees; prismatic joints in metres, or millimetres when their range is
@@ -214,8 +212,8 @@ def singularity_map_figure(
     qa = result.q[:, ja].reshape(result.grid_shape)
     qb = result.q[:, jb].reshape(result.grid_shape)
     val = np.asarray(getattr(result, measure), float).reshape(result.grid_shape)
-    xa, label_a = joint_axis(result, ja, qa[:, 0])
-    xb, label_b = joint_axis(result, jb, qb[0, :])
+    xa, label_a = _joint_axis(result, ja, qa[:, 0])
+    xb, label_b = _joint_axis(result, jb, qb[0, :])
     fig, ax = plt.subplots(figsize=(8.0, 6.4))
     unit = " [m]" if measure == "sigma_min" and set(result.rows) <= {"x", "y", "z"} else ""
     if measure == "det":
@@ -250,11 +248,11 @@ def singularity_map_figure(
                     drawn = True
                     if fam.joint == ja:
                         ax.axvline(
-                            float(joint_axis(result, ja, v)[0]), color=colour, ls=style, lw=2.2
+                            float(_joint_axis(result, ja, v)[0]), color=colour, ls=style, lw=2.2
                         )
                     else:
                         ax.axhline(
-                            float(joint_axis(result, jb, v)[0]), color=colour, ls=style, lw=2.2
+                            float(_joint_axis(result, jb, v)[0]), color=colour, ls=style, lw=2.2
                         )
             if not drawn:
                 continue
@@ -267,8 +265,8 @@ def singularity_map_figure(
             if not (np.nanmin(res) <= 0 <= np.nanmax(res)):
                 continue
             ax.contour(
-                joint_axis(result, ja, fine_a)[0],
-                joint_axis(result, jb, fine_b)[0],
+                _joint_axis(result, ja, fine_a)[0],
+                _joint_axis(result, jb, fine_b)[0],
                 res.T,
                 levels=[0.0],
                 colors=[colour],
@@ -350,7 +348,7 @@ def plot_singularity_map(
         ParameterError: Not a 2-joint grid scan, an unknown measure or file suffix.
 
     """
-    figure_format(path)
+    _figure_format(path)
     return save_figure(singularity_map_figure(result, measure, title), path)
 
 
