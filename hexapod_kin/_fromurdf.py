@@ -131,7 +131,7 @@ def chain_from_urdf(
         **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
 
     Returns:
-        A :class:`~hexapod_kin.params.Chain` whose :func:`~hexapod_kin.params.table_fk`
+        A :class:`~hexapod_kin.params.Chain` whose :func:`~hexapod_kin.table_fk`
         equals the URDF's ``T_base_tip`` (checked to 1e-9 relative at random configurations;
         1e-12 absolute in practice).
 
@@ -152,7 +152,7 @@ def chain_from_urdf(
             if "joints of kind" not in str(exc):
                 raise
             raise ConfigurationError(
-                f"from_urdf: {_unsupported(source, load_kwargs) or exc}; a Khalil table "
+                f"chain_from_urdf: {_unsupported(source, load_kwargs) or exc}; a Khalil table "
                 "expresses revolute, continuous, prismatic and fixed joints only"
             ) from None
     m = km.model
@@ -328,6 +328,6 @@ def _check(chain: Chain, km: Any) -> None:
     scale = max(1.0, float(np.abs(km.fk(qs[0])[:3, 3]).max()))
     if worst > 1e-9 * scale:
         raise ConfigurationError(
-            f"from_urdf: the recovered table of {km.name!r} misses the URDF's forward kinematics "
+            f"chain_from_urdf: the recovered table of {km.name!r} misses the URDF's forward kinematics "
             f"by {worst:.2e} (base={km.base!r}, tip={km.tip!r}); this chain is not supported"
         )
