@@ -152,8 +152,8 @@ def chain_from_urdf(
             if "joints of kind" not in str(exc):
                 raise
             raise ConfigurationError(
-                f"chain_from_urdf: {_unsupported(source, load_kwargs) or exc}; a Khalil table "
-                "expresses revolute, continuous, prismatic and fixed joints only"
+                f"chain_from_urdf: {exc}; a Khalil table expresses revolute, continuous, "
+                "prismatic and fixed joints only"
             ) from None
     m = km.model
     names = [str(m.names[i]) for i in range(m.njoints)]
@@ -297,25 +297,6 @@ def chain_from_urdf(
     return chain
 
 
-def _unsupported(source: Any, load_kwargs: dict[str, Any]) -> str:
-    """Names and kinds of the joints a table cannot express ('' when unknown)."""
-    try:
-        import pinocchio as pin
-
-        from .sources import resolve_source
-
-        resolved = resolve_source(source, **load_kwargs)
-        full = pin.buildModelFromXML(resolved.text)
-    except Exception:  # noqa: BLE001 - the caller falls back to the loader's message
-        return ""
-    bad = [
-        f"joint {full.names[i]!r} is a {full.joints[i].shortname()}"
-        for i in range(1, full.njoints)
-        if full.joints[i].shortname() not in _REVOLUTE + _PRISMATIC
-    ]
-    return "; ".join(bad)
-
-
 def _check(chain: Chain, km: Any) -> None:
     rng = np.random.default_rng(0)
     lo = np.where(np.isfinite(km.lower), km.lower, -math.pi)
@@ -328,6 +309,6 @@ def _check(chain: Chain, km: Any) -> None:
     scale = max(1.0, float(np.abs(km.fk(qs[0])[:3, 3]).max()))
     if worst > 1e-9 * scale:
         raise ConfigurationError(
-            f"chain_from_urdf: the recovered table of {km.name!r} misses the URDF's forward kinematics "
-            f"by {worst:.2e} (base={km.base!r}, tip={km.tip!r}); this chain is not supported"
+            f"chain_from_urdf: the recovered table of {km.name!r} misses the URDF's forward "
+            f"kinematics by {worst:.2e} (base={km.base!r}, tip={km.tip!r}); not supported"
         )

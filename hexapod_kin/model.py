@@ -204,11 +204,15 @@ class Model:
         self._pin_nq: int = int(m.nq)
         self._simple = all(m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints))
         if not self._simple:
-            kinds = {m.joints[i].shortname() for i in range(1, m.njoints)} - _SIMPLE_JOINTS
+            bad = [
+                f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
+                for i in range(1, m.njoints)
+                if m.joints[i].shortname() not in _SIMPLE_JOINTS
+            ]
             raise SourceError(
-                f"{resolved.name!r}: joints of kind {sorted(kinds)} between {base_name!r} and "
-                f"{tip_name!r}; hexapod_kin handles 1-DOF revolute/prismatic chains (pick a "
-                "sub-chain with base=/tip=)"
+                f"{resolved.name!r}: joints of kind other than 1-DOF revolute/prismatic between "
+                f"{base_name!r} and {tip_name!r} ({'; '.join(bad)}); pick a sub-chain with "
+                "base=/tip="
             )
         self._shape = (self.nq,)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
