@@ -16,6 +16,7 @@ import side effects.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -32,6 +33,11 @@ APP_LAYER = ("viewer", "plots", "cli", "report", "sweep")
 
 def _modules() -> list[Path]:
     return sorted(p for p in ROOT.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    return ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
 
 
 def _dotted(path: Path) -> str:
@@ -56,6 +62,7 @@ def _resolve(path: Path, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+@functools.cache
 def _is_module(dotted: str) -> bool:
     rel = Path(*dotted.split("."))
     return (ROOT.parent / rel).with_suffix(".py").exists() or (ROOT.parent / rel).is_dir()
@@ -132,7 +139,7 @@ def _private_in(path: Path, tree: ast.Module) -> list[str]:
 def _private_imports() -> list[str]:
     bad = []
     for path in _modules():
-        bad += _private_in(path, ast.parse(path.read_text(encoding="utf-8"), filename=str(path)))
+        bad += _private_in(path, _tree(path))
     return bad
 
 
@@ -152,7 +159,7 @@ def test_core_never_imports_the_application_layer_at_module_level() -> None:
         here = _dotted(path)
         if _layer(here) in APP_LAYER or here == "hexapod_kin.__main__":
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        tree = _tree(path)
         for node in _top_level_imports(tree):
             if isinstance(node, ast.ImportFrom):
                 target = _resolve(path, node)
@@ -203,13 +210,11 @@ def _imported(path: Path, tree: ast.AST, known: set[str]) -> set[str]:
     return out & known - {_dotted(path)}
 
 
+@functools.cache
 def _import_graph() -> dict[str, set[str]]:
     mods = _module_names()
     known = set(mods)
-    return {
-        name: _imported(path, ast.parse(path.read_text(encoding="utf-8")), known)
-        for name, path in mods.items()
-    }
+    return {name: _imported(path, _tree(path), known) for name, path in mods.items()}
 
 
 def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
