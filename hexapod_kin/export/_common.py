@@ -47,14 +47,19 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
         SourceError: A source that does not resolve.
 
     """
-    params = source if isinstance(source, (Chain, Hexapod)) else resolve_source(source).params
-    if params is None:
-        raise ParameterError(
-            f"source={source!r} is a URDF without a parameter table; this export needs a Chain, "
-            "a Hexapod, a preset name or a table file",
-            parameter="source",
-            value=source,
-        )
+    if isinstance(source, (Chain, Hexapod)):
+        params: Chain | Hexapod | None = source
+    else:
+        resolved = resolve_source(source)
+        params = resolved.params
+        if params is None:
+            raise ParameterError(
+                f"source {resolved.name!r} is a URDF without a parameter table; this export needs "
+                "a Chain, a Hexapod, a preset name or a table file",
+                parameter="source",
+                value=resolved.name,
+            )
+    assert params is not None
     if leg is not None:
         if isinstance(params, Chain):
             raise ParameterError(
