@@ -118,9 +118,8 @@ def save_figure(
         fig: A matplotlib figure.
         path: Destination; its suffix picks the format.
         dpi: Resolution of raster formats.
-        crop: Crop the page to what is drawn (``bbox_inches="tight"``: one more layout pass,
-            about 0.2 s for a 4-panel figure); a figure already fitted by ``tight_layout``
-            passes False.
+        crop: Crop the page to what is drawn (``bbox_inches="tight"``: one more layout pass);
+            a figure already fitted by ``tight_layout`` passes False.
 
     Raises:
         ParameterError: An unknown suffix (see :data:`FORMATS`).
