@@ -234,6 +234,15 @@ def _read_text(path: Path) -> str:
         raise UrdfError(f"{path}: not UTF-8 text ({exc})") from None
 
 
+def _no_params(params: dict[str, Any], what: str) -> None:
+    if params:
+        raise SourceError(
+            f"preset parameters {sorted(params)} given for non-preset {what}",
+            parameter="params",
+            value=sorted(params),
+        )
+
+
 def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> ResolvedSource:
     if not path.exists():
         raise SourceError(
@@ -244,12 +253,7 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
 
         chain = read_table(path, **params)
         return ResolvedSource(to_urdf(chain), path.name, params=chain, path=str(path))
-    if params:
-        raise SourceError(
-            f"preset parameters {sorted(params)} given for non-preset file {str(path)!r}",
-            parameter="params",
-            value=sorted(params),
-        )
+    _no_params(params, f"file {str(path)!r}")
     text = _read_text(path)
     return ResolvedSource(
         text,
@@ -293,12 +297,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             value=package_dirs,
         ) from None
     if isinstance(source, (Chain, Hexapod)):
-        if params:
-            raise SourceError(
-                f"preset parameters {sorted(params)} given for non-preset {type(source).__name__}",
-                parameter="params",
-                value=sorted(params),
-            )
+        _no_params(params, type(source).__name__)
         return ResolvedSource(to_urdf(source), source.name, params=source)
     if isinstance(source, os.PathLike):
         return _from_file(Path(source), extra, **params)
@@ -319,12 +318,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             allowed=robots.names(),
         )
     if text.startswith("<"):
-        if params:
-            raise SourceError(
-                f"preset parameters {sorted(params)} given for non-preset URDF text",
-                parameter="params",
-                value=sorted(params),
-            )
+        _no_params(params, "URDF text")
         return ResolvedSource(
             source, "urdf-text", package_dirs=_package_dirs_for(None, source, extra)
         )
@@ -332,12 +326,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
         built = robots.get(text, **params)
         return ResolvedSource(to_urdf(built), text, params=built)
     if text.startswith("erd:"):
-        if params:
-            raise SourceError(
-                f"preset parameters {sorted(params)} given for non-preset {text!r}",
-                parameter="params",
-                value=sorted(params),
-            )
+        _no_params(params, repr(text))
         path = erd_path(text[4:])
         share = erd_share()
         return ResolvedSource(
