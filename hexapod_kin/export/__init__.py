@@ -1,8 +1,8 @@
 """Exports that other tools consume: xacro, a ROS 2 description package, MJCF, STL meshes.
 
-Each exporter turns a :class:`~hexapod_kin.params.Chain` or
-:class:`~hexapod_kin.params.Hexapod` into files that are deterministic (same input, same
-bytes), written atomically, with a header recording the command that made them:
+Each exporter takes a source as :func:`hexapod_kin.load` does (a chain, a robot, a preset name, a
+table file; :func:`to_mjcf` also a URDF) and writes files that are deterministic (same input,
+same bytes), atomically, with a header recording the command that made them:
 
 * :func:`to_xacro` / :func:`write_xacro` — ``<xacro:macro>`` per leg family, a property per
   dimension; :func:`expand_xacro` runs the real ``xacro`` package on it.
