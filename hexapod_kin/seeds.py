@@ -16,16 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import ConfigurationError, ParameterError
-from .motion import (
-    SEED_Q0,
-    JointSchedule,
-    Method,
-    Trajectory,
-    default_stance,
-    positive,
-    resolved_rate,
-)
+from .exceptions import ConfigurationError, ParameterError, positive
+from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, resolved_rate
 
 __all__ = [
     "SEED_Q0",
@@ -65,7 +57,7 @@ class SeedRun:
     baseline_deviation: np.ndarray | None = None
     baseline_failure: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
         tr = self.trajectory
         return {
@@ -143,6 +135,20 @@ def euler_baseline(
     return out
 
 
+def _start(model: Any, q0: Any) -> np.ndarray:
+    """``q0`` checked, else the seeds' start ``SEED_Q0`` where it fits, else the home pose.
+
+    ``SEED_Q0`` on a 3-joint chain within its limits is what :func:`default_stance` gives there,
+    without importing the IK package.
+    """
+    if q0 is not None:
+        return np.array(model.check_q(q0, "q0"))
+    seed = np.array(SEED_Q0)
+    if model.nq == 3 and np.all(seed >= model.lower) and np.all(seed <= model.upper):
+        return seed
+    return default_stance(model)
+
+
 def _x_velocity(a: float, period: float) -> Callable[[Any], np.ndarray]:
     """The seeds' foot velocity ``v(t) = [a sin(2πt/T), 0, 0]`` in [m/s] (t scalar or array)."""
     w = 2 * np.pi / period
@@ -161,8 +167,8 @@ def seed_experiment(
     *,
     amplitude: float = 0.05,
     period: float = 2.0,
-    duration: float = 10.0,
     dt: float = 1e-3,
+    duration: float = 10.0,
     q0: Any = None,
     method: Method = "rk4",
     gain: float = 10.0,
@@ -177,9 +183,10 @@ def seed_experiment(
         model: A loaded 3-joint model (default: ``hexabot_leg``).
         amplitude: A in [m/s].
         period: T in [s].
-        duration: In [s].
         dt: Step in [s].
-        q0: Start (default :func:`default_stance`).
+        duration: In [s].
+        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
+            :func:`default_stance`).
         method: Integration method.
         gain: Closed-loop gain [1/s] toward the exact reference ``x0 + A T/(2π)(1 − cos 2πt/T)``.
         baseline: Also run the plain Euler + ``np.linalg.solve`` loop (needs a square J).
@@ -195,7 +202,7 @@ def seed_experiment(
     per = positive("period", period)
     if not math.isfinite(a):
         raise ParameterError(f"amplitude={amplitude!r} is not finite")
-    q_start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0")
+    q_start = _start(mdl, q0)
     w = 2 * np.pi / per
     vel = _x_velocity(a, per)
     p0 = mdl.position(q_start)
@@ -213,7 +220,7 @@ def seed_experiment(
     failure = None
     if baseline and mdl.nq == 3:
         base, base_dev, failure = seed_baseline(
-            mdl, amplitude=a, period=per, duration=duration, dt=dt, q0=q_start
+            mdl, amplitude=a, period=per, dt=dt, duration=duration, q0=q_start
         )
     return SeedRun(
         traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev, failure
@@ -225,8 +232,8 @@ def seed_baseline(
     *,
     amplitude: float = 0.05,
     period: float = 2.0,
-    duration: float = 10.0,
     dt: float = 1e-3,
+    duration: float = 10.0,
     q0: Any = None,
 ) -> tuple[dict[str, float], np.ndarray | None, str | None]:
     """The baseline of :func:`seed_experiment` alone: the seeds' plain Euler + solve loop.
@@ -235,9 +242,10 @@ def seed_baseline(
         model: A loaded 3-joint model.
         amplitude: A in [m/s].
         period: T in [s].
-        duration: In [s].
         dt: Step in [s].
-        q0: Start (default :func:`default_stance`).
+        duration: In [s].
+        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
+            :func:`default_stance`).
 
     Returns:
         ``(figures, deviation, failure)``: the drift figures in [m] (``drift_y``,
@@ -247,7 +255,7 @@ def seed_baseline(
     """
     a = float(amplitude)
     per = positive("period", period)
-    q_start = default_stance(model) if q0 is None else model.check_q(q0, "q0")
+    q_start = _start(model, q0)
     vel = _x_velocity(a, per)
     try:
         qb = euler_baseline(model, vel, q_start, dt, duration)
