@@ -79,10 +79,9 @@ class SeedRun:
 
 
 def _drift(
-    model: Any, q: np.ndarray, t: np.ndarray, amplitude: float, period: float
+    foot: np.ndarray, t: np.ndarray, amplitude: float, period: float
 ) -> tuple[dict[str, float], np.ndarray]:
-    """Drift figures from Pinocchio FK of ``q`` and the (N, 3) |foot − exact reference|."""
-    foot = np.array([model.position(qi) for qi in q])
+    """Drift figures of tip positions ``foot`` (N, 3) and the (N, 3) |foot − exact reference|."""
     ref = np.broadcast_to(foot[0], foot.shape).copy()
     ref[:, 0] += amplitude * period / (2 * np.pi) * (1 - np.cos(2 * np.pi * t / period))
     dev = np.abs(foot - ref)
@@ -122,7 +121,7 @@ def euler_baseline(
             qdot = solve(jac, v)
         except np.linalg.LinAlgError:
             qdot = np.full(model.nq, np.nan)
-        if not isfinite(qdot.sum()):  # a NaN or inf anywhere makes the sum non-finite
+        if not isfinite(qdot @ qdot):  # a NaN or inf anywhere makes it non-finite
             raise ConfigurationError(
                 f"the plain Euler + np.linalg.solve loop stops at t = {k * dt:g} s: J(q) is "
                 f"singular at q = {np.round(q, 6).tolist()} (the seeds' method needs det J != 0)",
@@ -214,7 +213,7 @@ def seed_experiment(
         return out
 
     traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, path=ref)
-    figs, _ = _drift(mdl, traj.q, traj.t, a, per)
+    figs, _ = _drift(traj.foot, traj.t, a, per)  # traj.foot: Pinocchio FK of traj.q
     base: dict[str, float] = {}
     base_dev = None
     failure = None
@@ -262,7 +261,7 @@ def seed_baseline(
     except ConfigurationError as exc:
         return {}, None, str(exc)
     t = np.arange(qb.shape[0]) * dt
-    base, dev = _drift(model, qb, t, a, per)
+    base, dev = _drift(np.array([model.position(q) for q in qb]), t, a, per)
     dev.setflags(write=False)
     return base, dev, None
 
