@@ -3,6 +3,7 @@
 * :func:`seed_experiment` is the seeds' run: the 3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``, with
   the drift figures, and :func:`euler_baseline`, the plain Euler + ``np.linalg.solve`` loop the
   seeds used.
+* :func:`step_torques`: the joint torques along the seeds' run (gravity, a foot force, inertia).
 * :func:`seed002_schedule` is seed 002's Table I (movement planning of the 2-DOF leg) as a
   :class:`~hexapod_kin.motion.JointSchedule`.
 """
@@ -12,12 +13,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .exceptions import ConfigurationError, ParameterError, positive
 from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, resolved_rate
+
+if TYPE_CHECKING:
+    from .dynamics import StepTorques
 
 __all__ = [
     "SEED_Q0",
@@ -26,6 +30,7 @@ __all__ = [
     "seed002_schedule",
     "seed_baseline",
     "seed_experiment",
+    "step_torques",
 ]
 
 
@@ -264,6 +269,40 @@ def seed_baseline(
     base, dev = _drift(np.array([model.position(q) for q in qb]), t, a, per)
     dev.setflags(write=False)
     return base, dev, None
+
+
+def step_torques(
+    model: Any = None, force: Any = None, *, frame: str | None = None, **seed_kwargs: Any
+) -> StepTorques:
+    """Joint torques along the seeds' resolved-rate step (:func:`seed_experiment`).
+
+    Args:
+        model: A loaded 3-joint leg (default ``hexabot_leg``).
+        force: Constant foot force on the environment (3,) in [N], base axes.
+        frame: Force frame (default the tip).
+        **seed_kwargs: Passed to :func:`seed_experiment` (``amplitude``, ``period``, ``dt``,
+            ``duration``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
+
+    Raises:
+        ParameterError: Not a 3-joint model; as
+            :func:`hexapod_kin.dynamics.torques_along` and :func:`seed_experiment`.
+
+    """
+    from .dynamics import torques_along
+    from .kinematics import load
+
+    mdl = load("hexabot_leg") if model is None else model
+    if mdl.nq != 3:
+        raise ParameterError(
+            f"model {mdl.name!r} has {mdl.nq} joints {list(mdl.joint_names)}; the seeds' "
+            "resolved-rate step drives a 3-joint leg's foot (pick one leg with base=/tip=)",
+            parameter="model",
+            value=mdl.name,
+            allowed="a 3-joint leg",
+        )
+    seed_kwargs.setdefault("baseline", False)
+    tr = seed_experiment(mdl, **seed_kwargs).trajectory
+    return torques_along(mdl, tr.t, tr.q, tr.qdot, force, frame=frame)
 
 
 def seed002_schedule() -> JointSchedule:

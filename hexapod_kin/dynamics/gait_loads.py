@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
-from ._common import as_model, check_inertials
+from ._common import as_model, check_inertials, read_only
 from .standing import ContactMethod, _hexapod, contact_forces
 
 __all__ = ["GaitTorques", "gait_torques"]
@@ -168,8 +168,7 @@ def gait_torques(
     idx = np.argmax(np.abs(torque), axis=0)
     peak = np.abs(torque[idx, np.arange(mdl.nq)])
     peak_time = ts[idx]
-    for a in (ts, support, forces, torque, peak, peak_time, fmin):
-        a.setflags(write=False)
+    read_only(ts, support, forces, torque, peak, peak_time, fmin)
     return GaitTorques(
         ts,
         tuple(mdl.joint_names),

@@ -34,8 +34,8 @@ import numpy as np
 import pinocchio as pin
 from scipy.special import ellipk
 
-from ..exceptions import ParameterError
-from ._common import as_model, check_inertials, positive
+from ..exceptions import ParameterError, positive
+from ._common import as_model, check_inertials, read_only
 from .forward import Method, Simulation, simulate
 
 __all__ = [
@@ -298,8 +298,8 @@ def pendulum_run(
     theta0: float = math.pi / 6,
     *,
     damping: float | None = None,
-    duration: float = 20.0,
     dt: float = 1e-3,
+    duration: float = 20.0,
     method: Method = "rk4",
 ) -> PendulumRun:
     """Release a one-joint pendulum from ``theta0`` (rest) and measure period, energy, decay.
@@ -310,8 +310,8 @@ def pendulum_run(
         theta0: Initial angle from the hanging equilibrium in [rad], in (0, π).
         damping: Joint damping in [N·m·s/rad]; default: the model's URDF damping (for the
             default preset: 0.01, the seed's value).
-        duration: In [s].
         dt: Step in [s].
+        duration: In [s].
         method: Integrator (``"rk4"`` default).
 
     Raises:
@@ -330,7 +330,7 @@ def pendulum_run(
         if damping is None
         else positive("damping", damping, allow_zero=True)
     )
-    sim = simulate(mdl, [pend.q_hanging + th0], duration=duration, dt=dt, method=method, damping=b)
+    sim = simulate(mdl, [pend.q_hanging + th0], dt=dt, duration=duration, method=method, damping=b)
     theta = np.asarray(sim.q[:, 0] - pend.q_hanging)
     omega = np.asarray(sim.v[:, 0])
     alpha = np.asarray(sim.a[:, 0])
@@ -345,8 +345,7 @@ def pendulum_run(
         else None
     )
     rate = decay_rate(sim.t, theta, omega, alpha)
-    for arr in (theta, omega, energy):
-        arr.setflags(write=False)
+    read_only(theta, omega, energy)
     return PendulumRun(
         th0,
         b,
@@ -413,8 +412,8 @@ def pendulum_experiment(
     theta0: float = math.pi / 6,
     damping: float = 0.01,
     *,
-    duration: float = 20.0,
     dt: float = 1e-3,
+    duration: float = 20.0,
     method: Method = "rk4",
     decay_theta0: float = math.radians(1.0),
     length: float = 0.5,
@@ -426,8 +425,8 @@ def pendulum_experiment(
         theta0: Initial angle from the hanging equilibrium in [rad] (seed: 30°).
         damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01), written into
             the preset's URDF.
-        duration: In [s].
         dt: Step in [s].
+        duration: In [s].
         method: Integrator.
         decay_theta0: Initial angle of the small-amplitude decay run in [rad].
         length: Pendulum length in [m] (preset parameter).
@@ -440,7 +439,7 @@ def pendulum_experiment(
     b = positive("damping", damping, allow_zero=True)
     free = as_model("pendulum", damping=0.0, length=length, mass=mass)
     damped_model = as_model("pendulum", damping=b, length=length, mass=mass)
-    kw: dict[str, Any] = {"duration": duration, "dt": dt, "method": method}
+    kw: dict[str, Any] = {"dt": dt, "duration": duration, "method": method}
     return PendulumExperiment(
         pendulum_run(free, theta0, **kw),
         pendulum_run(damped_model, theta0, **kw),
