@@ -267,22 +267,30 @@ def simulate(
     pm = mdl.model
     data = pm.createData()
     aba, arr = pin.aba, np.array
+    acc: Callable[[float, Any, Any], Any]
+    state: tuple[Any, Any] = (q, v)
+    ts = np.arange(n + 1) * h
     if tau is None and not (np.any(passive.friction) or np.any(passive.stiffness)):
-        nb = (-passive.damping).tolist()  # the common case: damping only
+        nb = -passive.damping  # the common case: damping only
+        if pm.nq == nq == 1:  # one joint (the seed's pendulum): the state as Python floats
+            nb0 = float(nb[0])
 
-        def acc(tk: float, qk: list[float], vk: list[float]) -> list[float]:
-            tau_k = arr([b * x for b, x in zip(nb, vk)])
-            return aba(pm, data, arr(qk), arr(vk), tau_k).tolist()
+            def acc(tk: float, qk: Any, vk: Any) -> Any:
+                return float(aba(pm, data, arr([qk]), arr([vk]), arr([nb0 * vk]))[0])
+
+            state = (float(q[0]), float(v[0]))
+        else:
+
+            def acc(tk: float, qk: Any, vk: Any) -> Any:
+                return aba(pm, data, qk, vk, nb * vk).copy()  # aba returns data.ddq: copy it
 
     else:
         ptorque = passive.torque
 
-        def acc(tk: float, qk: list[float], vk: list[float]) -> list[float]:
-            qa, va = arr(qk), arr(vk)
-            return aba(pm, data, qa, va, applied(tk, qa, va) + ptorque(qa, va)).tolist()
+        def acc(tk: float, qk: Any, vk: Any) -> Any:
+            return aba(pm, data, qk, vk, applied(tk, qk, vk) + ptorque(qk, vk)).copy()
 
-    ts = np.arange(n + 1) * h
-    qs, vs, accs = _run(acc, q.tolist(), v.tolist(), ts.tolist(), h, method)
+    qs, vs, accs = (x.reshape(n + 1, nq) for x in _run(acc, *state, ts, h, method))
     kin = np.array([pin.computeKineticEnergy(pm, data, qs[i], vs[i]) for i in range(n + 1)])
     pot = np.array([pin.computePotentialEnergy(pm, data, qs[i]) for i in range(n + 1)])
     pot = pot + passive.spring_energy(qs)
@@ -294,45 +302,43 @@ def simulate(
 
 
 def _run(
-    acc: Callable[[float, list[float], list[float]], list[float]],
-    q: list[float],
-    v: list[float],
-    ts: list[float],
-    h: float,
-    method: str,
+    acc: Callable[[float, Any, Any], Any], q: Any, v: Any, ts: np.ndarray, h: float, method: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """RK4 or symplectic Euler from (q, v) on Python floats: (n+1, nq) q, q̇, q̈."""
+    """RK4 or symplectic Euler from (q, v): the positions, velocities and accelerations.
+
+    The state is (nq,) arrays, or Python floats for one joint (the same operations either way,
+    so the same numbers, without numpy's per-operation cost on 1-element arrays).
+    """
     qs, vs, accs = [q], [v], []
     a = acc(0.0, q, v)
     accs.append(a)
     half, sixth = 0.5 * h, h / 6.0
-    for k in range(len(ts) - 1):
-        tk = ts[k]
+    n = len(ts) - 1
+    for k in range(n):
+        tk = float(ts[k])
         if method == "rk4":
-            v2 = [x + half * y for x, y in zip(v, a)]
-            a2 = acc(tk + half, [x + half * y for x, y in zip(q, v)], v2)
-            v3 = [x + half * y for x, y in zip(v, a2)]
-            a3 = acc(tk + half, [x + half * y for x, y in zip(q, v2)], v3)
-            v4 = [x + h * y for x, y in zip(v, a3)]
-            a4 = acc(tk + h, [x + h * y for x, y in zip(q, v3)], v4)
-            q = [x + sixth * (b + 2.0 * c + 2.0 * d + e) for x, b, c, d, e in zip(q, v, v2, v3, v4)]
-            v = [x + sixth * (b + 2.0 * c + 2.0 * d + e) for x, b, c, d, e in zip(v, a, a2, a3, a4)]
+            v2 = v + half * a
+            a2 = acc(tk + half, q + half * v, v2)
+            v3 = v + half * a2
+            a3 = acc(tk + half, q + half * v2, v3)
+            v4 = v + h * a3
+            a4 = acc(tk + h, q + h * v3, v4)
+            q = q + sixth * (v + 2.0 * v2 + 2.0 * v3 + v4)
+            v = v + sixth * (a + 2.0 * a2 + 2.0 * a3 + a4)
         else:
-            v = [x + h * y for x, y in zip(v, a)]
-            q = [x + h * y for x, y in zip(q, v)]
-        a = acc(ts[k + 1], q, v)
-        if (
-            k % 64 == 63 or k == len(ts) - 2
-        ):  # a diverged state stays non-finite: check now and then
-            _finite_or_raise(q + v + a, ts[k + 1], h)
+            v = v + h * a
+            q = q + h * v
+        a = acc(tk + h, q, v)
+        if k % 64 == 63 or k == n - 1:  # a diverged state stays non-finite: check now and then
+            _finite_or_raise(q, v, a, tk + h, h)
         qs.append(q)
         vs.append(v)
         accs.append(a)
     return np.array(qs), np.array(vs), np.array(accs)
 
 
-def _finite_or_raise(state: list[float], t: float, h: float) -> None:
-    if not all(map(math.isfinite, state)):
+def _finite_or_raise(q: Any, v: Any, a: Any, t: float, h: float) -> None:
+    if not math.isfinite(float(np.sum(q) + np.sum(v) + np.sum(a))):
         raise ConfigurationError(
             f"the simulation diverged by t = {t:.6g} s (non-finite state); reduce dt={h!r} or "
             "check the model and torques",
