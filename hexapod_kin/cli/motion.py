@@ -386,7 +386,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
     exact = motion.constant_twist_pose(model.fk(tr.q[0]), twist, tr.t, frame)
-    reached = np.array([model.fk(q) for q in tr.q])  # Pinocchio FK of the joint trajectory
+    reached = tr.poses  # Pinocchio's FK of the joint trajectory, sample by sample
     drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
     rot = 0.0
     if vel.size == 6:  # ‖log(E Rᵀ)‖ of every sample, at once

@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.special import ellipk
 
 from ..exceptions import ParameterError, positive
 from ._common import as_model, check_inertials, read_only
@@ -132,6 +131,8 @@ def physical_pendulum(model: Any) -> PhysicalPendulum:
 
 def exact_period(pendulum: PhysicalPendulum, theta0: float) -> float:
     """``T = 4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` in [s], the exact undamped period."""
+    from scipy.special import ellipk  # scipy on use: the other dynamics commands skip it
+
     p = pendulum
     k = math.sin(0.5 * theta0)
     return float(4.0 * math.sqrt(p.inertia / (p.mass * p.gravity * p.com_distance)) * ellipk(k * k))
