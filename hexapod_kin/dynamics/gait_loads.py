@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
 from ._common import as_model, check_inertials, read_only
-from .standing import ContactMethod, _hexapod, contact_forces
+from .standing import ContactMethod, _hexapod, contact_forces, robot_mass_com
 
 __all__ = ["GaitTorques", "gait_torques"]
 
@@ -128,10 +128,7 @@ def gait_torques(
     data = pm.createData()
     fids = [mdl.frame_id(f) for f in params.foot_frames]
     g_world = np.array(mdl.model.gravity.linear, dtype=float)
-    root = pm.inertias[0]
-    m0, c0 = float(root.mass), np.asarray(root.lever, dtype=float)
-    m_legs = float(pin.computeTotalMass(pm))
-    mass = m0 + m_legs
+    mass = robot_mass_com(mdl, qs[0])[0]
     weight = mass * float(np.linalg.norm(g_world))
     n = len(ts)
     forces = np.zeros((n, n_legs, 3))
@@ -142,7 +139,7 @@ def gait_torques(
         rot, pos = poses[i, :3, :3], poses[i, :3, 3]
         q = qs[i]
         pm.gravity = pin.Motion(rot.T @ g_world, np.zeros(3))
-        com_b = (m0 * c0 + m_legs * np.asarray(pin.centerOfMass(pm, data, q))) / mass
+        com_b = robot_mass_com(mdl, q)[1]
         pin.computeJointJacobians(pm, data, q)
         pin.updateFramePlacements(pm, data)
         stance = np.nonzero(support[i])[0]
