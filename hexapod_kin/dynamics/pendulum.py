@@ -385,8 +385,8 @@ class PendulumExperiment:
         return {
             "theta0": u.theta0,
             "theta0_deg": math.degrees(u.theta0),
-            "duration": float(u.simulation.t[-1]),
             "dt": u.simulation.dt,
+            "duration": float(u.simulation.t[-1]),
             "method": u.simulation.method,
             "pendulum": u.pendulum.to_dict(),
             "period": u.period,
