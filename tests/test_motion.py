@@ -445,6 +445,21 @@ def test_a_singular_start_is_damped_never_divided_by_zero(leg):
     assert tr.damping[0] == pytest.approx((0.01 * sv[0]) ** 2, rel=1e-9)  # λ²_max = ε²
 
 
+def test_one_joint_and_more_rows_than_joints():
+    # one joint (3 rows, n = 1): the best fit moves the pendulum's tip along its circle
+    pend = hk.load("pendulum")
+    tr = motion.resolved_rate(pend, [0.0, 0.0, 0.01], [-1.5], 1e-3, 0.2)
+    jac = pend.position_jacobian(tr.q[0])[:, 0]
+    assert tr.qdot[0, 0] == pytest.approx(jac @ [0.0, 0.0, 0.01] / (jac @ jac), rel=1e-9)
+    assert tr.sigma_min[0] == pytest.approx(np.linalg.norm(jac), rel=1e-12)
+    # a 6-D twist on a 3-joint leg: the damped least-squares fit, finite, FK-consistent
+    leg = hk.load("hexabot_leg")
+    twist = [0.01, 0, 0, 0, 0, 0.1]
+    tr = motion.resolved_rate(leg, twist, motion.SEED_Q0, 1e-3, 0.2, frame="tip", gain=5.0)
+    assert np.isfinite(tr.q).all()
+    np.testing.assert_allclose(tr.poses[-1], leg.fk(tr.q[-1]), atol=1e-15)
+
+
 def test_a_continuous_joint_passes_pi_without_a_limit():
     model = hk.load("erd:double_pendulum_continuous")
     q0 = np.array([3.0, 0.8])

@@ -119,7 +119,7 @@ def _dls(jac: np.ndarray, x: Any, lam_eye: np.ndarray) -> list[float]:
         out = np.dot(ldlt.solve(np.asarray(x)), jac)
     if ldlt.info() != _SUCCESS:
         return [0.0] * n
-    return out.tolist()
+    return out.reshape(-1).tolist()
 
 
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
