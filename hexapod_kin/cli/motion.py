@@ -163,8 +163,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
         closed = ik.analytic(model, target)[0].tolist()
         inside = len(ik.analytic(model, target, within_limits=True)[0]) if closed else 0
     q0 = None if args.q0 is None else q_from_args(args, model, "q0")
-    # The closed form answers first; the numerical solver (and its compile, seconds on a fresh
-    # install) runs only when it is needed or asked for.
+    # The closed form answers first; the numerical solver runs only when needed or asked for.
     numerical = (
         not inside
         or args.numerical
