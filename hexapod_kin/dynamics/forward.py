@@ -17,13 +17,11 @@ enforced (the model is a free multibody system).
 Integrators (fixed step ``dt``):
 
 * ``"rk4"`` (default): the classic 4th-order Runge–Kutta. Global error O(dt⁴); on smooth
-  conservative motion the energy error per step is O((ω dt)⁶), so the seed pendulum keeps its
-  energy to ~1e-12 over 20 s with dt = 1 ms and its period to ~1e-10 — the figures the tests
-  demand (1e-8 and 1e-6). Not symplectic: over very long runs its energy drifts (slowly).
+  conservative motion the energy error per step is O((ω dt)⁶). Not symplectic: over very long
+  runs its energy drifts (slowly).
 * ``"symplectic_euler"``: semi-implicit Euler, ``q̇ₖ₊₁ = q̇ₖ + dt q̈(qₖ, q̇ₖ)``,
   ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``. First order, one ABA per step; symplectic, so without damping its
-  energy error stays bounded (no drift) but oscillates with amplitude O(ω dt) — about 1e-3 at
-  dt = 1 ms for the pendulum, far from 1e-8. Useful for long, cheap, qualitative runs.
+  energy error stays bounded (no drift) but oscillates with amplitude O(ω dt).
 
 Energies: kinetic ``½ q̇ᵀ M q̇`` (``pin.computeKineticEnergy``) and potential
 ``−Σ mᵢ g·cᵢ`` (``pin.computePotentialEnergy``: zero at the world origin; bodies fixed to the

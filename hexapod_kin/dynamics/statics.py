@@ -43,7 +43,7 @@ def external_force(
     f = force_world
     moment = np.array(
         [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]]
-    )  # r × f (np.cross costs ~30 µs of axis bookkeeping on 3-vectors)
+    )  # r × f
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     fext[joint] = pin.Force(rot_t @ force_world, rot_t @ moment)
     return fext
