@@ -120,7 +120,8 @@ class _LegStatics:
 
     def at(self, q: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, ...]:
         pm, d, zm, zd, fid = self.pm, self.data, self.zm, self.zd, self.fid
-        jac = self.mdl.jacobian(q, "local_world_aligned", self.frame)[:3]
+        frame = None if fid == self.mdl.tip_id else self.frame  # the tip: no name lookup
+        jac = self.mdl.jacobian(q, "local_world_aligned", frame)[:3]
         tau_f = jac.T @ force
         grav = np.array(pin.computeGeneralizedGravity(pm, d, q))
         grav_rnea = np.array(pin.rnea(pm, d, q, np.zeros(pm.nv), np.zeros(pm.nv)))
