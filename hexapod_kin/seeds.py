@@ -3,6 +3,7 @@
 * :func:`seed_experiment` is the seeds' run: the 3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``, with
   the drift figures, and :func:`euler_baseline`, the plain Euler + ``np.linalg.solve`` loop the
   seeds used.
+* :func:`step_torques`: the joint torques along the seeds' run (gravity, a foot force, inertia).
 * :func:`seed002_schedule` is seed 002's Table I (movement planning of the 2-DOF leg) as a
   :class:`~hexapod_kin.motion.JointSchedule`.
 """
@@ -12,20 +13,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .exceptions import ConfigurationError, ParameterError
-from .motion import (
-    SEED_Q0,
-    JointSchedule,
-    Method,
-    Trajectory,
-    default_stance,
-    positive,
-    resolved_rate,
-)
+from .exceptions import ConfigurationError, ParameterError, positive
+from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, resolved_rate
+
+if TYPE_CHECKING:
+    from .dynamics import StepTorques
 
 __all__ = [
     "SEED_Q0",
@@ -34,6 +30,7 @@ __all__ = [
     "seed002_schedule",
     "seed_baseline",
     "seed_experiment",
+    "step_torques",
 ]
 
 
@@ -65,7 +62,7 @@ class SeedRun:
     baseline_deviation: np.ndarray | None = None
     baseline_failure: str | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary."""
         tr = self.trajectory
         return {
@@ -85,12 +82,15 @@ class SeedRun:
             "max_joint_speed": float(np.max(np.abs(tr.qdot))),
         }
 
+    def as_dict(self) -> dict[str, Any]:
+        """Transition alias of :meth:`to_dict` (``report/build.py`` still calls it; remove then)."""
+        return self.to_dict()
+
 
 def _drift(
-    model: Any, q: np.ndarray, t: np.ndarray, amplitude: float, period: float
+    foot: np.ndarray, t: np.ndarray, amplitude: float, period: float
 ) -> tuple[dict[str, float], np.ndarray]:
-    """Drift figures from Pinocchio FK of ``q`` and the (N, 3) |foot − exact reference|."""
-    foot = np.array([model.position(qi) for qi in q])
+    """Drift figures of tip positions ``foot`` (N, 3) and the (N, 3) |foot − exact reference|."""
     ref = np.broadcast_to(foot[0], foot.shape).copy()
     ref[:, 0] += amplitude * period / (2 * np.pi) * (1 - np.cos(2 * np.pi * t / period))
     dev = np.abs(foot - ref)
@@ -130,7 +130,7 @@ def euler_baseline(
             qdot = solve(jac, v)
         except np.linalg.LinAlgError:
             qdot = np.full(model.nq, np.nan)
-        if not isfinite(qdot.sum()):  # a NaN or inf anywhere makes the sum non-finite
+        if not isfinite(qdot @ qdot):  # a NaN or inf anywhere makes it non-finite
             raise ConfigurationError(
                 f"the plain Euler + np.linalg.solve loop stops at t = {k * dt:g} s: J(q) is "
                 f"singular at q = {np.round(q, 6).tolist()} (the seeds' method needs det J != 0)",
@@ -141,6 +141,20 @@ def euler_baseline(
         q = q + dt * qdot
         out[k + 1] = q
     return out
+
+
+def _start(model: Any, q0: Any) -> np.ndarray:
+    """``q0`` checked, else the seeds' start ``SEED_Q0`` where it fits, else the home pose.
+
+    ``SEED_Q0`` on a 3-joint chain within its limits is what :func:`default_stance` gives there,
+    without importing the IK package.
+    """
+    if q0 is not None:
+        return np.array(model.check_q(q0, "q0"))
+    seed = np.array(SEED_Q0)
+    if model.nq == 3 and np.all(seed >= model.lower) and np.all(seed <= model.upper):
+        return seed
+    return default_stance(model)
 
 
 def _x_velocity(a: float, period: float) -> Callable[[Any], np.ndarray]:
@@ -161,8 +175,8 @@ def seed_experiment(
     *,
     amplitude: float = 0.05,
     period: float = 2.0,
-    duration: float = 10.0,
     dt: float = 1e-3,
+    duration: float = 10.0,
     q0: Any = None,
     method: Method = "rk4",
     gain: float = 10.0,
@@ -177,9 +191,10 @@ def seed_experiment(
         model: A loaded 3-joint model (default: ``hexabot_leg``).
         amplitude: A in [m/s].
         period: T in [s].
-        duration: In [s].
         dt: Step in [s].
-        q0: Start (default :func:`default_stance`).
+        duration: In [s].
+        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
+            :func:`default_stance`).
         method: Integration method.
         gain: Closed-loop gain [1/s] toward the exact reference ``x0 + A T/(2π)(1 − cos 2πt/T)``.
         baseline: Also run the plain Euler + ``np.linalg.solve`` loop (needs a square J).
@@ -195,7 +210,7 @@ def seed_experiment(
     per = positive("period", period)
     if not math.isfinite(a):
         raise ParameterError(f"amplitude={amplitude!r} is not finite")
-    q_start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0")
+    q_start = _start(mdl, q0)
     w = 2 * np.pi / per
     vel = _x_velocity(a, per)
     p0 = mdl.position(q_start)
@@ -207,13 +222,13 @@ def seed_experiment(
         return out
 
     traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, path=ref)
-    figs, _ = _drift(mdl, traj.q, traj.t, a, per)
+    figs, _ = _drift(traj.foot, traj.t, a, per)  # traj.foot: Pinocchio FK of traj.q
     base: dict[str, float] = {}
     base_dev = None
     failure = None
     if baseline and mdl.nq == 3:
         base, base_dev, failure = seed_baseline(
-            mdl, amplitude=a, period=per, duration=duration, dt=dt, q0=q_start
+            mdl, amplitude=a, period=per, dt=dt, duration=duration, q0=q_start
         )
     return SeedRun(
         traj, a, per, figs["drift_y"], figs["drift_z"], figs["error_x"], base, base_dev, failure
@@ -225,8 +240,8 @@ def seed_baseline(
     *,
     amplitude: float = 0.05,
     period: float = 2.0,
-    duration: float = 10.0,
     dt: float = 1e-3,
+    duration: float = 10.0,
     q0: Any = None,
 ) -> tuple[dict[str, float], np.ndarray | None, str | None]:
     """The baseline of :func:`seed_experiment` alone: the seeds' plain Euler + solve loop.
@@ -235,9 +250,10 @@ def seed_baseline(
         model: A loaded 3-joint model.
         amplitude: A in [m/s].
         period: T in [s].
-        duration: In [s].
         dt: Step in [s].
-        q0: Start (default :func:`default_stance`).
+        duration: In [s].
+        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
+            :func:`default_stance`).
 
     Returns:
         ``(figures, deviation, failure)``: the drift figures in [m] (``drift_y``,
@@ -247,16 +263,50 @@ def seed_baseline(
     """
     a = float(amplitude)
     per = positive("period", period)
-    q_start = default_stance(model) if q0 is None else model.check_q(q0, "q0")
+    q_start = _start(model, q0)
     vel = _x_velocity(a, per)
     try:
         qb = euler_baseline(model, vel, q_start, dt, duration)
     except ConfigurationError as exc:
         return {}, None, str(exc)
     t = np.arange(qb.shape[0]) * dt
-    base, dev = _drift(model, qb, t, a, per)
+    base, dev = _drift(np.array([model.position(q) for q in qb]), t, a, per)
     dev.setflags(write=False)
     return base, dev, None
+
+
+def step_torques(
+    model: Any = None, force: Any = None, *, frame: str | None = None, **seed_kwargs: Any
+) -> StepTorques:
+    """Joint torques along the seeds' resolved-rate step (:func:`seed_experiment`).
+
+    Args:
+        model: A loaded 3-joint leg (default ``hexabot_leg``).
+        force: Constant foot force on the environment (3,) in [N], base axes.
+        frame: Force frame (default the tip).
+        **seed_kwargs: Passed to :func:`seed_experiment` (``amplitude``, ``period``, ``dt``,
+            ``duration``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
+
+    Raises:
+        ParameterError: Not a 3-joint model; as
+            :func:`hexapod_kin.dynamics.torques_along` and :func:`seed_experiment`.
+
+    """
+    from .dynamics import torques_along
+    from .kinematics import load
+
+    mdl = load("hexabot_leg") if model is None else model
+    if mdl.nq != 3:
+        raise ParameterError(
+            f"model {mdl.name!r} has {mdl.nq} joints {list(mdl.joint_names)}; the seeds' "
+            "resolved-rate step drives a 3-joint leg's foot (pick one leg with base=/tip=)",
+            parameter="model",
+            value=mdl.name,
+            allowed="a 3-joint leg",
+        )
+    seed_kwargs.setdefault("baseline", False)
+    tr = seed_experiment(mdl, **seed_kwargs).trajectory
+    return torques_along(mdl, tr.t, tr.q, tr.qdot, force, frame=frame)
 
 
 def seed002_schedule() -> JointSchedule:

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import subprocess
+import sys
+import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,7 +16,10 @@ import hexapod_kin as hk
 from hexapod_kin import gait, motion, robots, seeds
 from hexapod_kin.cli import main
 from hexapod_kin.exceptions import ConfigurationError, ParameterError
+from hexapod_kin.motion._law import _dls3, _sigma3
 from hexapod_kin.params import JointLimits
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 @pytest.fixture(scope="module")
@@ -336,3 +344,151 @@ def test_twist_through_a_wrist_singularity_stays_finite(ur5):
     sv = np.linalg.svd(ur5.jacobian(tr.q[i]), compute_uv=False)
     assert tr.sigma_min[i] == pytest.approx(sv[-1], rel=1e-6, abs=1e-9)
     assert tr.sigma_min[i] < 0.02 * sv[0]
+
+
+# ------------------------------------------------------------ the law vs independent references
+def test_closed_forms_of_the_3x3_law_match_numpy():
+    rng = np.random.default_rng(7)
+    for k in range(300):
+        jac = rng.normal(size=(3, 3))
+        if k % 3 == 1:  # nearly singular: one row almost a combination of the others
+            jac[2] = jac[0] + 0.5 * jac[1] + 10.0 ** -rng.uniform(3, 12) * rng.normal(size=3)
+        sv = np.linalg.svd(jac, compute_uv=False)
+        smin, smax = _sigma3(jac.tolist())
+        assert smax == pytest.approx(sv[0], rel=1e-12)
+        assert smin == pytest.approx(sv[-1], rel=1e-6, abs=1e-15 * sv[0])
+        x, lam2 = rng.normal(size=3), 10.0 ** -rng.uniform(2, 14)
+        u, s, vt = np.linalg.svd(jac)
+        ref = vt.T @ (s / (s * s + lam2) * (u.T @ x))  # the DLS solution by the SVD
+        cond = (s[0] ** 2 + lam2) / (s[-1] ** 2 + lam2)  # of the Cholesky's matrix
+        got = np.array(_dls3(jac.tolist(), x.tolist(), lam2))
+        assert np.abs(got - ref).max() <= 1e-14 * cond * np.abs(ref).max()
+    assert _sigma3([[0.0] * 3] * 3) == (0.0, 0.0)
+
+
+def _commanded(model, tr, rows=3):
+    """Pinocchio's own Jacobian at every sample times the recorded q̇ (base axes)."""
+    return np.array([model.jacobian(q)[:rows] @ qd for q, qd in zip(tr.q, tr.qdot)])
+
+
+@pytest.mark.parametrize(
+    ("source", "kw", "velocity"),
+    [
+        ("hexabot_leg", {}, [0.02, -0.01, 0.01]),
+        ("scara", {}, [0.01, 0.02, -0.02]),  # a prismatic joint
+        (str(EXAMPLES / "leg4.toml"), {}, [0.02, 0.0, 0.01]),  # 3 rows, 4 joints
+        ("hexapod", {"tip": "leg3_foot"}, [0.01, 0.01, 0.0]),  # a leg on the body
+    ],
+)
+def test_pinocchio_jacobian_times_qdot_returns_the_command(source, kw, velocity):
+    model = hk.load(source, **kw)
+    v = np.array(velocity)
+    for method in ("rk4", "euler"):
+        tr = motion.resolved_rate(model, v, None, 2e-3, 0.4, method=method)
+        assert not tr.limited.any()
+        assert np.abs(_commanded(model, tr) - v).max() < 1e-9
+        # the foot is Pinocchio's FK of q and moved by v t
+        np.testing.assert_allclose(tr.foot[-1], model.position(tr.q[-1]), atol=1e-15)
+        drift = np.abs(tr.foot - tr.foot[0] - np.outer(tr.t, v)).max()
+        assert drift < (1e-9 if method == "rk4" else 1e-5)  # 4th / 1st order, open loop
+        sv = np.linalg.svd(model.jacobian(tr.q[50])[:3], compute_uv=False)
+        assert tr.sigma_min[50] == pytest.approx(sv[min(model.nq, 3) - 1], rel=1e-9)
+        assert tr.sigma_max[50] == pytest.approx(sv[0], rel=1e-12)
+
+
+def test_panda_twist_six_rows_seven_joints():
+    panda = hk.load("erd:panda")
+    twist = np.array([0.02, 0.0, 0.01, 0.1, 0.0, 0.1])
+    tr = motion.resolved_rate(panda, twist, None, 5e-3, 0.5)
+    exact = _exact(panda.fk(tr.q[0]), twist, tr.t, "base")
+    reached = np.array([panda.fk(q) for q in tr.q])
+    assert np.abs(reached[:, :3, 3] - exact[:, :3, 3]).max() < 1e-9
+    assert np.abs(_commanded(panda, tr, 6) - twist).max() < 1e-9
+    sv = np.linalg.svd(panda.jacobian(tr.q[40]), compute_uv=False)
+    assert tr.sigma_min[40] == pytest.approx(sv[-1], rel=1e-9)
+
+
+def test_a_leg_pushed_out_of_reach_is_damped_then_held_by_its_limits(leg):
+    # [0.3, 0, 0] m/s for 1 s leaves the workspace: damping near the boundary, never a NaN
+    tr = motion.resolved_rate(leg, [0.3, 0.0, 0.0], motion.SEED_Q0, 2e-3, 1.0)
+    assert np.all(np.isfinite(tr.q)) and np.all(np.isfinite(tr.qdot))
+    assert np.all(tr.q >= leg.lower) and np.all(tr.q <= leg.upper)
+    assert tr.damping.max() > 0 and tr.sigma_min.min() < 1e-2 * tr.sigma_max[0]
+    # the damping law, from the recorded σ_min and ε = 1 % of σ_max at q0
+    eps = 0.01 * np.linalg.svd(leg.position_jacobian(tr.q[0]), compute_uv=False)[0]
+    law = np.where(tr.sigma_min < eps, eps**2 * (1 - (tr.sigma_min / eps) ** 2), 0.0)
+    np.testing.assert_allclose(tr.damping, law, rtol=1e-9, atol=1e-18)
+
+
+def test_narrow_limits_freeze_the_joint_pushed_outward():
+    base = robots.get("hexabot_leg")
+    narrow = dataclasses.replace(
+        base, limits=tuple(dataclasses.replace(lim, lower=-0.2, upper=1.3) for lim in base.limits)
+    )
+    model = hk.load(narrow)
+    for v in ([-0.05, 0.0, 0.0], [0.0, 0.0, 0.05]):
+        tr = motion.resolved_rate(model, v, motion.SEED_Q0, 2e-3, 1.0)
+        assert tr.limited.any()
+        assert np.all(tr.q >= model.lower) and np.all(tr.q <= model.upper)
+        at_low, at_high = tr.q <= model.lower, tr.q >= model.upper
+        assert at_low.any() or at_high.any()
+        # a joint at a limit never moves outward (the freeze rule)
+        assert np.all(tr.qdot[at_low] >= 0.0) and np.all(tr.qdot[at_high] <= 0.0)
+
+
+def test_a_singular_start_is_damped_never_divided_by_zero(leg):
+    q0 = np.zeros(3)  # the straight leg: a singular position Jacobian
+    tr = motion.resolved_rate(leg, [0.0, 0.0, 0.02], q0, 2e-3, 0.3)
+    assert np.all(np.isfinite(tr.q)) and np.all(np.isfinite(tr.qdot))
+    sv = np.linalg.svd(leg.position_jacobian(q0), compute_uv=False)
+    assert tr.sigma_min[0] < 1e-12 * sv[0]
+    assert tr.damping[0] == pytest.approx((0.01 * sv[0]) ** 2, rel=1e-9)  # λ²_max = ε²
+
+
+def test_one_joint_and_more_rows_than_joints():
+    # one joint (3 rows, n = 1): the best fit moves the pendulum's tip along its circle
+    pend = hk.load("pendulum")
+    tr = motion.resolved_rate(pend, [0.0, 0.0, 0.01], [-1.5], 1e-3, 0.2)
+    jac = pend.position_jacobian(tr.q[0])[:, 0]
+    assert tr.qdot[0, 0] == pytest.approx(jac @ [0.0, 0.0, 0.01] / (jac @ jac), rel=1e-9)
+    assert tr.sigma_min[0] == pytest.approx(np.linalg.norm(jac), rel=1e-12)
+    # a 6-D twist on a 3-joint leg: the damped least-squares fit, finite, FK-consistent
+    leg = hk.load("hexabot_leg")
+    twist = [0.01, 0, 0, 0, 0, 0.1]
+    tr = motion.resolved_rate(leg, twist, motion.SEED_Q0, 1e-3, 0.2, frame="tip", gain=5.0)
+    assert np.isfinite(tr.q).all()
+    np.testing.assert_allclose(tr.poses[-1], leg.fk(tr.q[-1]), atol=1e-15)
+
+
+def test_a_continuous_joint_passes_pi_without_a_limit():
+    model = hk.load("erd:double_pendulum_continuous")
+    q0 = np.array([3.0, 0.8])
+    v = model.jacobian(q0)[:3] @ np.array([0.5, 0.0])
+    tr = motion.resolved_rate(model, v, q0, 1e-3, 0.5)
+    assert tr.q[-1, 0] > np.pi and not tr.limited.any()
+    np.testing.assert_allclose(tr.foot, [model.position(q) for q in tr.q], atol=1e-15)
+
+
+def test_the_same_bits_again_and_from_another_thread(leg):
+    def run():
+        return motion.resolved_rate(leg, [0.02, 0.0, 0.01], motion.SEED_Q0, 2e-3, 0.2, gain=5.0)
+
+    a, b = run(), run()
+    out = []
+    th = threading.Thread(target=lambda: out.append(run()))
+    th.start()
+    th.join()
+    for other in (b, out[0]):
+        for name in ("q", "qdot", "foot", "rotation", "sigma_min", "damping"):
+            assert getattr(a, name).tobytes() == getattr(other, name).tobytes(), name
+
+
+def test_the_step_command_never_imports_numba():
+    code = (
+        "import sys; from hexapod_kin.cli import main; "
+        "main(['step', 'hexabot_leg', '--duration', '0.2']); "
+        "print('numba' in sys.modules)"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.strip().splitlines()[-1] == "False"

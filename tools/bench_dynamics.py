@@ -59,7 +59,7 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                 v = v + dt / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
 
         def ours(model: Any = model, q0: np.ndarray = q0) -> None:
-            simulate(model, q0, duration=steps * dt, dt=dt)
+            simulate(model, q0, dt=dt, duration=steps * dt)
 
         t_bare = _best(bare, repeat) / steps
         t_ours = _best(ours, repeat) / steps

@@ -45,8 +45,8 @@ def _add_pendulum(sub: Any) -> None:
         default=0.01,
         help="joint damping of the damped run [N m s/rad] (written into the URDF)",
     )
-    p.add_argument("--duration", type=float, default=20.0, help="simulated time [s]")
     p.add_argument("--dt", type=float, default=1e-3, help="integration step [s]")
+    p.add_argument("--duration", type=float, default=20.0, help="simulated time [s]")
     p.add_argument(
         "--method", choices=("rk4", "symplectic_euler"), default="rk4", help="integrator"
     )
@@ -112,8 +112,8 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
     exp = pendulum_experiment(
         math.radians(args.theta0_deg),
         args.damping,
-        duration=args.duration,
         dt=args.dt,
+        duration=args.duration,
         method=args.method,
         decay_theta0=math.radians(args.decay_theta0_deg),
         length=args.length,
@@ -203,20 +203,22 @@ def _add_torques(sub: Any) -> None:
         action="store_true",
         help="along the seeds' resolved-rate step from --q (3-joint legs): peaks",
     )
-    p.add_argument("--duration", type=float, default=10.0, help="--step: duration [s]")
     p.add_argument("--dt", type=float, default=1e-3, help="--step: step [s]")
+    p.add_argument("--duration", type=float, default=10.0, help="--step: duration [s]")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.set_defaults(func=_cmd_torques)
 
 
 def _cmd_torques(args: argparse.Namespace) -> int:
-    from ..dynamics import leg_torques, step_torques
+    from ..dynamics import leg_torques
 
     model = load_source(args)
     if args.step:
+        from ..seeds import step_torques
+
         q0 = None if args.q is None else q_from_args(args, model)
         res = step_torques(
-            model, args.force, frame=args.frame, q0=q0, duration=args.duration, dt=args.dt
+            model, args.force, frame=args.frame, q0=q0, dt=args.dt, duration=args.duration
         )
         out = {"source": model.name, **res.to_dict()}
         if args.json:

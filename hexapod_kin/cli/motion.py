@@ -163,8 +163,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
         closed = ik.analytic(model, target)[0].tolist()
         inside = len(ik.analytic(model, target, within_limits=True)[0]) if closed else 0
     q0 = None if args.q0 is None else q_from_args(args, model, "q0")
-    # The closed form answers first; the numerical solver (and its compile, seconds on a fresh
-    # install) runs only when it is needed or asked for.
+    # The closed form answers first; the numerical solver runs only when needed or asked for.
     numerical = (
         not inside
         or args.numerical
@@ -263,8 +262,8 @@ def _add_step(sub: Any) -> None:
     )
     p.add_argument("--amplitude", type=float, default=0.05, help="A [m/s] (seed experiment)")
     p.add_argument("--period", type=float, default=2.0, help="T [s] (seed experiment)")
-    p.add_argument("--duration", type=float, default=10.0, help="[s]")
     p.add_argument("--dt", type=float, default=1e-3, help="step [s]")
+    p.add_argument("--duration", type=float, default=10.0, help="[s]")
     p.add_argument("--method", choices=["rk4", "euler"], default="rk4")
     p.add_argument("--gain", type=float, default=10.0, help="closed-loop gain [1/s] (0: open)")
     p.add_argument(
@@ -301,32 +300,19 @@ def _cmd_step(args: argparse.Namespace) -> int:
     q0 = None if args.q is None else q_from_args(args, model)
     if args.velocity is not None or args.twist is not None:
         return _constant(args, model, q0)
-    import dataclasses
-
     from .. import seeds
-    from .._fork import Forked
 
-    timing = {"amplitude": args.amplitude, "period": args.period, "duration": args.duration}
-    timing["dt"] = args.dt
-
-    def baseline() -> Any:
-        return seeds.seed_baseline(model, q0=q0, **timing)
-
-    # the seeds' Euler loop on the other core while this one runs the resolved-rate loop
-    side = Forked(baseline) if not args.no_baseline and model.nq == 3 else None
-    try:
-        run = seeds.seed_experiment(
-            model, q0=q0, method=args.method, gain=args.gain, baseline=False, **timing
-        )
-    except BaseException:
-        if side is not None:
-            side.stop()
-        raise
-    if side is not None:
-        base, dev, failure = side.result() or baseline()
-        run = dataclasses.replace(
-            run, baseline=base, baseline_deviation=dev, baseline_failure=failure
-        )
+    run = seeds.seed_experiment(
+        model,
+        amplitude=args.amplitude,
+        period=args.period,
+        dt=args.dt,
+        duration=args.duration,
+        q0=q0,
+        method=args.method,
+        gain=args.gain,
+        baseline=not args.no_baseline,
+    )
     tr = run.trajectory
     written = []
     if args.plot:
@@ -343,7 +329,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
             )
         )
     if args.json:
-        emit_json({"source": model.name, **run.as_dict(), "written": written})
+        emit_json({"source": model.name, **run.to_dict(), "written": written})
         return 0
     ca = tr.closest_approach
     print(
@@ -399,7 +385,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
     exact = motion.constant_twist_pose(model.fk(tr.q[0]), twist, tr.t, frame)
-    reached = np.array([model.fk(q) for q in tr.q])  # Pinocchio FK of the joint trajectory
+    reached = tr.poses  # Pinocchio's FK of the joint trajectory, sample by sample
     drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
     rot = 0.0
     if vel.size == 6:  # ‖log(E Rᵀ)‖ of every sample, at once
@@ -416,8 +402,8 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "source": model.name,
                 "velocity": vel.tolist(),
                 "frame": frame,
-                "duration": float(tr.t[-1]),
                 "dt": tr.dt,
+                "duration": float(tr.t[-1]),
                 "method": tr.method,
                 "gain": tr.gain,
                 "q0": tr.q[0].tolist(),

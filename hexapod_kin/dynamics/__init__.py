@@ -5,7 +5,8 @@
 * :mod:`.pendulum` — seed 001 §1: :func:`pendulum_experiment` (undamped, damped, small-amplitude
   decay) measured against the exact period ``4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` and ``b/(2I)``.
 * :mod:`.statics` — :func:`leg_torques` (``g(q) + Jᵀ F``, cross-checked by RNEA with the foot
-  force as external force), :func:`step_torques` along the seeds' resolved-rate step.
+  force as external force), :func:`torques_along` a joint trajectory (the seeds' step:
+  :func:`hexapod_kin.seeds.step_torques`).
 * :mod:`.standing` — :func:`stand`: the hexapod standing, the stance feet's contact forces
   (minimum-norm or friction-cone) and every joint's torque.
 * :mod:`.gait_loads` — :func:`gait_torques`: the same along a gait run (a
@@ -40,7 +41,7 @@ from .standing import (
     stand,
     standing_configuration,
 )
-from .statics import LegTorques, StepTorques, leg_torques, step_torques, torques_along
+from .statics import LegTorques, StepTorques, leg_torques, torques_along
 
 __all__ = [
     "CONTACT_METHODS",
@@ -70,6 +71,5 @@ __all__ = [
     "stance_at",
     "stand",
     "standing_configuration",
-    "step_torques",
     "torques_along",
 ]

@@ -8,14 +8,15 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ParameterError, positive
+from ..exceptions import ParameterError
+from ..model import check_inertials as loader_check_inertials
 
 __all__ = [
     "as_model",
     "check_inertials",
     "check_state",
     "finite_vector",
-    "positive",
+    "read_only",
     "zero_gravity_model",
 ]
 
@@ -30,6 +31,12 @@ def as_model(model: Any, **params: Any) -> Any:
     from ..kinematics import load
 
     return load(model, **params)
+
+
+def read_only(*arrays: np.ndarray) -> None:
+    """Mark result arrays read-only."""
+    for a in arrays:
+        a.setflags(write=False)
 
 
 def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -> np.ndarray:
@@ -115,11 +122,8 @@ def check_inertials(model: Any) -> None:
         ParameterError: Naming the link (and its joint) and what is wrong with its inertial.
 
     """
-    import importlib
-
-    loader_check = getattr(importlib.import_module("hexapod_kin.model"), "check_inertials", None)
-    if loader_check is not None and hasattr(model, "inertia_defects"):
-        loader_check(model)  # the loader's own verdict, link by link
+    if hasattr(model, "inertia_defects"):
+        loader_check_inertials(model)  # the loader's own verdict, link by link
 
     def scan() -> tuple[str, str, str] | None:
         m = model.model

@@ -17,13 +17,11 @@ enforced (the model is a free multibody system).
 Integrators (fixed step ``dt``):
 
 * ``"rk4"`` (default): the classic 4th-order Runge–Kutta. Global error O(dt⁴); on smooth
-  conservative motion the energy error per step is O((ω dt)⁶), so the seed pendulum keeps its
-  energy to ~1e-12 over 20 s with dt = 1 ms and its period to ~1e-10 — the figures the tests
-  demand (1e-8 and 1e-6). Not symplectic: over very long runs its energy drifts (slowly).
+  conservative motion the energy error per step is O((ω dt)⁶). Not symplectic: over very long
+  runs its energy drifts (slowly).
 * ``"symplectic_euler"``: semi-implicit Euler, ``q̇ₖ₊₁ = q̇ₖ + dt q̈(qₖ, q̇ₖ)``,
   ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``. First order, one ABA per step; symplectic, so without damping its
-  energy error stays bounded (no drift) but oscillates with amplitude O(ω dt) — about 1e-3 at
-  dt = 1 ms for the pendulum, far from 1e-8. Useful for long, cheap, qualitative runs.
+  energy error stays bounded (no drift) but oscillates with amplitude O(ω dt).
 
 Energies: kinetic ``½ q̇ᵀ M q̇`` (``pin.computeKineticEnergy``) and potential
 ``−Σ mᵢ g·cᵢ`` (``pin.computePotentialEnergy``: zero at the world origin; bodies fixed to the
@@ -40,8 +38,8 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError, one_of
-from ._common import as_model, check_inertials, check_state, finite_vector, positive
+from ..exceptions import ConfigurationError, ParameterError, one_of, positive
+from ._common import as_model, check_inertials, check_state, finite_vector, read_only
 
 __all__ = ["METHODS", "PassiveJoints", "Simulation", "passive_joints", "simulate"]
 
@@ -50,11 +48,6 @@ Method = Literal["rk4", "symplectic_euler"]
 METHODS: tuple[str, ...] = ("rk4", "symplectic_euler")
 #: Largest number of steps of one run (a guard against a hang from a tiny ``dt``).
 MAX_STEPS = 5_000_000
-
-
-def _ro(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -131,7 +124,7 @@ def passive_joints(
     k = finite_vector("stiffness", stiffness, n, nonnegative=True)
     rest = finite_vector("q_rest", np.zeros(n) if q_rest is None else q_rest, n)
     vf = positive("friction_velocity", friction_velocity)
-    _ro(b, f, k, rest)
+    read_only(b, f, k, rest)
     return PassiveJoints(b, f, vf, k, rest)
 
 
@@ -189,7 +182,7 @@ class Simulation:
         }
 
 
-def _steps(duration: Any, dt: Any) -> tuple[int, float]:
+def _steps(dt: Any, duration: Any) -> tuple[int, float]:
     h = positive("dt", dt)
     span = positive("duration", duration)
     n = int(round(span / h))
@@ -216,8 +209,8 @@ def simulate(
     q0: Any,
     v0: Any = None,
     *,
-    duration: float = 1.0,
     dt: float = 1e-3,
+    duration: float = 1.0,
     method: Method = "rk4",
     damping: Any = None,
     friction: Any = None,
@@ -232,8 +225,8 @@ def simulate(
         model: A loaded model (``hexapod_kin.load(...)``) or a source to load.
         q0: Initial joint positions (nq,) in [rad]/[m].
         v0: Initial joint velocities (nq,) in [rad/s]/[m/s]; default zeros.
-        duration: Length of the run in [s] (rounded to a whole number of steps).
         dt: Fixed step in [s].
+        duration: Length of the run in [s] (rounded to a whole number of steps).
         method: ``"rk4"`` (default) or ``"symplectic_euler"`` (see the module doc).
         damping: Viscous damping override (default: the URDF's), see :func:`passive_joints`.
         friction: Coulomb friction override (default: the URDF's).
@@ -256,7 +249,7 @@ def simulate(
     mdl = as_model(model)
     check_inertials(mdl)
     one_of("method", method, METHODS)
-    n, h = _steps(duration, dt)
+    n, h = _steps(dt, duration)
     passive = passive_joints(
         mdl,
         damping=damping,
@@ -271,122 +264,78 @@ def simulate(
     applied = _applied(tau, nq)
     pm = mdl.model
     data = pm.createData()
-    aba = pin.aba
-    ptorque = passive.torque
-    b = passive.damping
-
+    aba, arr = pin.aba, np.array
+    acc: Callable[[float, Any, Any], Any]
+    state: tuple[Any, Any] = (q, v)
+    ts = np.arange(n + 1) * h
     if tau is None and not (np.any(passive.friction) or np.any(passive.stiffness)):
-        # the common case (damping only), without the general bookkeeping
-        def acc(tk: float, qk: np.ndarray, vk: np.ndarray) -> np.ndarray:
-            return aba(pm, data, qk, vk, -b * vk).copy()  # aba returns data.ddq: copy it
+        nb = -passive.damping  # the common case: damping only
+        if pm.nq == nq == 1:  # one joint (the seed's pendulum): the state as Python floats
+            nb0 = float(nb[0])
+
+            def acc(tk: float, qk: Any, vk: Any) -> Any:
+                return float(aba(pm, data, arr([qk]), arr([vk]), arr([nb0 * vk]))[0])
+
+            state = (float(q[0]), float(v[0]))
+        else:
+
+            def acc(tk: float, qk: Any, vk: Any) -> Any:
+                return aba(pm, data, qk, vk, nb * vk).copy()  # aba returns data.ddq: copy it
 
     else:
+        ptorque = passive.torque
 
-        def acc(tk: float, qk: np.ndarray, vk: np.ndarray) -> np.ndarray:
+        def acc(tk: float, qk: Any, vk: Any) -> Any:
             return aba(pm, data, qk, vk, applied(tk, qk, vk) + ptorque(qk, vk)).copy()
 
-    ts = np.arange(n + 1) * h
-    if (
-        tau is None
-        and not (np.any(passive.friction) or np.any(passive.stiffness))
-        and pm.nq == pm.nv == nq == 1
-    ):  # one joint, damping only (the seed's pendulum): the same loop on Python floats
-        qs, vs, accs = _scalar_run(pm, data, float(q[0]), float(v[0]), float(-b[0]), n, h, method)
-    else:
-        qs, vs, accs = _array_run(acc, q, v, ts, n, h, method)
+    qs, vs, accs = (x.reshape(n + 1, nq) for x in _run(acc, *state, ts, h, method))
     kin = np.array([pin.computeKineticEnergy(pm, data, qs[i], vs[i]) for i in range(n + 1)])
     pot = np.array([pin.computePotentialEnergy(pm, data, qs[i]) for i in range(n + 1)])
     pot = pot + passive.spring_energy(qs)
     total = kin + pot
-    _ro(ts, qs, vs, accs, kin, pot, total)
+    read_only(ts, qs, vs, accs, kin, pot, total)
     return Simulation(
         ts, qs, vs, accs, kin, pot, total, str(method), h, passive, tuple(mdl.joint_names)
     )
 
 
-def _scalar_run(
-    pm: Any, data: Any, q: float, v: float, nb: float, n: int, h: float, method: str
+def _run(
+    acc: Callable[[float, Any, Any], Any], q: Any, v: Any, ts: np.ndarray, h: float, method: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_array_run` for one joint with damping only, on Python floats.
+    """RK4 or symplectic Euler from (q, v): the positions, velocities and accelerations.
 
-    The same operations in the same order as the array loop (IEEE doubles either way, so the
-    same numbers), without numpy's per-operation cost on 1-element arrays: about 2.5× faster.
-    ``nb`` is minus the damping.
+    The state is (nq,) arrays, or Python floats for one joint (the same operations either way,
+    so the same numbers, without numpy's per-operation cost on 1-element arrays).
     """
-    aba = pin.aba
-    arr = np.array
-
-    def acc(qk: float, vk: float) -> float:
-        return float(aba(pm, data, arr([qk]), arr([vk]), arr([nb * vk]))[0])
-
     qs, vs, accs = [q], [v], []
-    a = acc(q, v)
+    a = acc(0.0, q, v)
     accs.append(a)
-    half = 0.5 * h
-    sixth = h / 6.0
+    half, sixth = 0.5 * h, h / 6.0
+    n = len(ts) - 1
     for k in range(n):
+        tk = float(ts[k])
         if method == "rk4":
             v2 = v + half * a
-            k2a = acc(q + half * v, v2)
-            v3 = v + half * k2a
-            k3a = acc(q + half * v2, v3)
-            v4 = v + h * k3a
-            k4a = acc(q + h * v3, v4)
+            a2 = acc(tk + half, q + half * v, v2)
+            v3 = v + half * a2
+            a3 = acc(tk + half, q + half * v2, v3)
+            v4 = v + h * a3
+            a4 = acc(tk + h, q + h * v3, v4)
             q = q + sixth * (v + 2.0 * v2 + 2.0 * v3 + v4)
-            v = v + sixth * (a + 2.0 * k2a + 2.0 * k3a + k4a)
-        else:
-            v = v + h * a
-            q = q + h * v
-        a = acc(q, v)
-        if k % 64 == 63 or k == n - 1:
-            _finite_or_raise(arr([q]), arr([v]), arr([a]), k * h + h, h)
-        qs.append(q)
-        vs.append(v)
-        accs.append(a)
-    return arr(qs).reshape(-1, 1), arr(vs).reshape(-1, 1), arr(accs).reshape(-1, 1)
-
-
-def _array_run(
-    acc: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
-    q: np.ndarray,
-    v: np.ndarray,
-    ts: np.ndarray,
-    n: int,
-    h: float,
-    method: str,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """RK4 or symplectic Euler from (q, v): the (n+1, nq) positions, velocities, accelerations."""
-    nq = q.shape[0]
-    qs = np.empty((n + 1, nq))
-    vs = np.empty((n + 1, nq))
-    accs = np.empty((n + 1, nq))
-    qs[0], vs[0] = q, v
-    a = acc(0.0, q, v)
-    accs[0] = a
-    half = 0.5 * h
-    for k in range(n):
-        tk = ts[k]
-        if method == "rk4":
-            k1v, k1a = v, a
-            q2, v2 = q + half * k1v, v + half * k1a
-            k2a = acc(tk + half, q2, v2)
-            q3, v3 = q + half * v2, v + half * k2a
-            k3a = acc(tk + half, q3, v3)
-            q4, v4 = q + h * v3, v + h * k3a
-            k4a = acc(tk + h, q4, v4)
-            q = q + (h / 6.0) * (k1v + 2.0 * v2 + 2.0 * v3 + v4)
-            v = v + (h / 6.0) * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)
+            v = v + sixth * (a + 2.0 * a2 + 2.0 * a3 + a4)
         else:
             v = v + h * a
             q = q + h * v
         a = acc(tk + h, q, v)
         if k % 64 == 63 or k == n - 1:  # a diverged state stays non-finite: check now and then
             _finite_or_raise(q, v, a, tk + h, h)
-        qs[k + 1], vs[k + 1], accs[k + 1] = q, v, a
-    return qs, vs, accs
+        qs.append(q)
+        vs.append(v)
+        accs.append(a)
+    return np.array(qs), np.array(vs), np.array(accs)
 
 
-def _finite_or_raise(q: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, h: float) -> None:
+def _finite_or_raise(q: Any, v: Any, a: Any, t: float, h: float) -> None:
     if not math.isfinite(float(np.sum(q) + np.sum(v) + np.sum(a))):
         raise ConfigurationError(
             f"the simulation diverged by t = {t:.6g} s (non-finite state); reduce dt={h!r} or "

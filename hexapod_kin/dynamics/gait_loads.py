@@ -19,8 +19,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
-from ._common import as_model, check_inertials
-from .standing import ContactMethod, _hexapod, contact_forces
+from ._common import as_model, check_inertials, read_only
+from .standing import ContactMethod, _hexapod, contact_forces, robot_mass_com
 
 __all__ = ["GaitTorques", "gait_torques"]
 
@@ -128,10 +128,7 @@ def gait_torques(
     data = pm.createData()
     fids = [mdl.frame_id(f) for f in params.foot_frames]
     g_world = np.array(mdl.model.gravity.linear, dtype=float)
-    root = pm.inertias[0]
-    m0, c0 = float(root.mass), np.asarray(root.lever, dtype=float)
-    m_legs = float(pin.computeTotalMass(pm))
-    mass = m0 + m_legs
+    mass = robot_mass_com(mdl, qs[0])[0]
     weight = mass * float(np.linalg.norm(g_world))
     n = len(ts)
     forces = np.zeros((n, n_legs, 3))
@@ -142,7 +139,7 @@ def gait_torques(
         rot, pos = poses[i, :3, :3], poses[i, :3, 3]
         q = qs[i]
         pm.gravity = pin.Motion(rot.T @ g_world, np.zeros(3))
-        com_b = (m0 * c0 + m_legs * np.asarray(pin.centerOfMass(pm, data, q))) / mass
+        com_b = robot_mass_com(mdl, q)[1]
         pin.computeJointJacobians(pm, data, q)
         pin.updateFramePlacements(pm, data)
         stance = np.nonzero(support[i])[0]
@@ -168,8 +165,7 @@ def gait_torques(
     idx = np.argmax(np.abs(torque), axis=0)
     peak = np.abs(torque[idx, np.arange(mdl.nq)])
     peak_time = ts[idx]
-    for a in (ts, support, forces, torque, peak, peak_time, fmin):
-        a.setflags(write=False)
+    read_only(ts, support, forces, torque, peak, peak_time, fmin)
     return GaitTorques(
         ts,
         tuple(mdl.joint_names),

@@ -32,10 +32,9 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.special import ellipk
 
-from ..exceptions import ParameterError
-from ._common import as_model, check_inertials, positive
+from ..exceptions import ParameterError, positive
+from ._common import as_model, check_inertials, read_only
 from .forward import Method, Simulation, simulate
 
 __all__ = [
@@ -132,6 +131,8 @@ def physical_pendulum(model: Any) -> PhysicalPendulum:
 
 def exact_period(pendulum: PhysicalPendulum, theta0: float) -> float:
     """``T = 4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` in [s], the exact undamped period."""
+    from scipy.special import ellipk  # scipy on use: the other dynamics commands skip it
+
     p = pendulum
     k = math.sin(0.5 * theta0)
     return float(4.0 * math.sqrt(p.inertia / (p.mass * p.gravity * p.com_distance)) * ellipk(k * k))
@@ -298,8 +299,8 @@ def pendulum_run(
     theta0: float = math.pi / 6,
     *,
     damping: float | None = None,
-    duration: float = 20.0,
     dt: float = 1e-3,
+    duration: float = 20.0,
     method: Method = "rk4",
 ) -> PendulumRun:
     """Release a one-joint pendulum from ``theta0`` (rest) and measure period, energy, decay.
@@ -310,8 +311,8 @@ def pendulum_run(
         theta0: Initial angle from the hanging equilibrium in [rad], in (0, π).
         damping: Joint damping in [N·m·s/rad]; default: the model's URDF damping (for the
             default preset: 0.01, the seed's value).
-        duration: In [s].
         dt: Step in [s].
+        duration: In [s].
         method: Integrator (``"rk4"`` default).
 
     Raises:
@@ -330,7 +331,7 @@ def pendulum_run(
         if damping is None
         else positive("damping", damping, allow_zero=True)
     )
-    sim = simulate(mdl, [pend.q_hanging + th0], duration=duration, dt=dt, method=method, damping=b)
+    sim = simulate(mdl, [pend.q_hanging + th0], dt=dt, duration=duration, method=method, damping=b)
     theta = np.asarray(sim.q[:, 0] - pend.q_hanging)
     omega = np.asarray(sim.v[:, 0])
     alpha = np.asarray(sim.a[:, 0])
@@ -345,8 +346,7 @@ def pendulum_run(
         else None
     )
     rate = decay_rate(sim.t, theta, omega, alpha)
-    for arr in (theta, omega, energy):
-        arr.setflags(write=False)
+    read_only(theta, omega, energy)
     return PendulumRun(
         th0,
         b,
@@ -385,8 +385,8 @@ class PendulumExperiment:
         return {
             "theta0": u.theta0,
             "theta0_deg": math.degrees(u.theta0),
-            "duration": float(u.simulation.t[-1]),
             "dt": u.simulation.dt,
+            "duration": float(u.simulation.t[-1]),
             "method": u.simulation.method,
             "pendulum": u.pendulum.to_dict(),
             "period": u.period,
@@ -413,8 +413,8 @@ def pendulum_experiment(
     theta0: float = math.pi / 6,
     damping: float = 0.01,
     *,
-    duration: float = 20.0,
     dt: float = 1e-3,
+    duration: float = 20.0,
     method: Method = "rk4",
     decay_theta0: float = math.radians(1.0),
     length: float = 0.5,
@@ -426,8 +426,8 @@ def pendulum_experiment(
         theta0: Initial angle from the hanging equilibrium in [rad] (seed: 30°).
         damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01), written into
             the preset's URDF.
-        duration: In [s].
         dt: Step in [s].
+        duration: In [s].
         method: Integrator.
         decay_theta0: Initial angle of the small-amplitude decay run in [rad].
         length: Pendulum length in [m] (preset parameter).
@@ -440,7 +440,7 @@ def pendulum_experiment(
     b = positive("damping", damping, allow_zero=True)
     free = as_model("pendulum", damping=0.0, length=length, mass=mass)
     damped_model = as_model("pendulum", damping=b, length=length, mass=mass)
-    kw: dict[str, Any] = {"duration": duration, "dt": dt, "method": method}
+    kw: dict[str, Any] = {"dt": dt, "duration": duration, "method": method}
     return PendulumExperiment(
         pendulum_run(free, theta0, **kw),
         pendulum_run(damped_model, theta0, **kw),

@@ -35,9 +35,9 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError, choices, one_of
+from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
 from ..params import Hexapod
-from ._common import as_model, check_inertials, finite_vector, positive
+from ._common import as_model, check_inertials, finite_vector, read_only
 
 __all__ = [
     "CONTACT_METHODS",
@@ -51,11 +51,6 @@ __all__ = [
 
 ContactMethod = Literal["min_norm", "friction"]
 CONTACT_METHODS: tuple[str, ...] = ("min_norm", "friction")
-
-
-def _ro(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.setflags(write=False)
 
 
 def _hexapod(model: Any) -> Hexapod:
@@ -252,7 +247,7 @@ def contact_forces(
         f = _friction_qp(a, b, f, pinv, positive("mu", mu), w)
     fr, mr = residuals(f)
     forces = f.reshape(k, 3)
-    _ro(forces)
+    read_only(forces)
     return ContactSolution(forces, fr, mr)
 
 
@@ -451,12 +446,11 @@ def stance_at(
     sol = contact_forces(feet, com + lift, weight, method=method, mu=mu_v)
     grav = np.array(pin.computeGeneralizedGravity(pm, data, qv))
     tau = grav.copy()
-    pin.computeJointJacobians(pm, data, qv)
     for fid, f in zip(fids, sol.forces):
         jac = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[:3]
         tau -= jac.T @ f
     com_w = com + lift
-    _ro(qv, feet, com_w, grav, tau)
+    read_only(qv, feet, com_w, grav, tau)
     return Stance(
         h,
         qv,

@@ -1,4 +1,4 @@
-"""Joint torques of a leg: gravity (RNEA), a foot force (Jᵀ F), along the seeds' resolved-rate step.
+"""Joint torques of a leg: gravity (RNEA), a foot force (Jᵀ F), along a joint trajectory.
 
 Sign convention: ``force`` is the force the foot exerts **on its environment** (pushing on the
 ground, pulling a load), in [N], in the model's base axes. The joint torques that hold it are
@@ -20,14 +20,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ParameterError
-from ._common import as_model, check_inertials, finite_vector, zero_gravity_model
+from ._common import as_model, check_inertials, finite_vector, read_only, zero_gravity_model
 
-__all__ = ["LegTorques", "StepTorques", "external_force", "leg_torques", "step_torques"]
-
-
-def _ro(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.setflags(write=False)
+__all__ = ["LegTorques", "StepTorques", "external_force", "leg_torques", "torques_along"]
 
 
 def external_force(
@@ -48,7 +43,7 @@ def external_force(
     f = force_world
     moment = np.array(
         [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]]
-    )  # r × f (np.cross costs ~30 µs of axis bookkeeping on 3-vectors)
+    )  # r × f
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     fext[joint] = pin.Force(rot_t @ force_world, rot_t @ moment)
     return fext
@@ -125,7 +120,8 @@ class _LegStatics:
 
     def at(self, q: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, ...]:
         pm, d, zm, zd, fid = self.pm, self.data, self.zm, self.zd, self.fid
-        jac = self.mdl.jacobian(q, "local_world_aligned", self.frame)[:3]
+        frame = None if fid == self.mdl.tip_id else self.frame  # the tip: no name lookup
+        jac = self.mdl.jacobian(q, "local_world_aligned", frame)[:3]
         tau_f = jac.T @ force
         grav = np.array(pin.computeGeneralizedGravity(pm, d, q))
         grav_rnea = np.array(pin.rnea(pm, d, q, np.zeros(pm.nv), np.zeros(pm.nv)))
@@ -178,7 +174,7 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
     grav, tau_f, tau_rnea, grav_rnea = st.at(qv, f)
     total = grav + tau_f
     limit = np.array(mdl.effort_limit, dtype=float)
-    _ro(qv, f, grav, tau_f, tau_rnea, total, limit)
+    read_only(qv, f, grav, tau_f, tau_rnea, total, limit)
     return LegTorques(
         qv,
         f,
@@ -196,7 +192,7 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
 
 @dataclass(frozen=True)
 class StepTorques:
-    """Joint torques along a trajectory (the seeds' resolved-rate step), SI units.
+    """Joint torques along a trajectory (e.g. the seeds' resolved-rate step), SI units.
 
     Attributes:
         t: (N,) times in [s].
@@ -306,51 +302,7 @@ def torques_along(
     total = grav + tau_f + inert
     peak = np.max(np.abs(total), axis=0)
     peak_g = np.max(np.abs(grav), axis=0)
-    _ro(ts, qs, f, grav, tau_f, inert, total, peak, peak_g)
+    read_only(ts, qs, f, grav, tau_f, inert, total, peak, peak_g)
     return StepTorques(
         ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, tuple(mdl.joint_names)
     )
-
-
-def _seed_experiment() -> Any:
-    """``seed_experiment`` from its current home (``hexapod_kin.seeds`` or ``.motion``)."""
-    import importlib
-
-    for name in ("hexapod_kin.seeds", "hexapod_kin.motion"):
-        try:
-            return importlib.import_module(name).seed_experiment
-        except (ImportError, AttributeError):  # pragma: no cover - refactoring in progress
-            continue
-    raise ImportError("seed_experiment is in neither hexapod_kin.seeds nor hexapod_kin.motion")
-
-
-def step_torques(
-    model: Any = None, force: Any = None, *, frame: str | None = None, **seed_kwargs: Any
-) -> StepTorques:
-    """Joint torques along the seeds' resolved-rate step (``seed_experiment``) of a 3-joint leg.
-
-    Args:
-        model: A loaded 3-joint leg (default ``hexabot_leg``).
-        force: Constant foot force on the environment (3,) in [N], base axes.
-        frame: Force frame (default the tip).
-        **seed_kwargs: Passed to ``seed_experiment`` (``amplitude``, ``period``, ``duration``,
-            ``dt``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
-
-    Raises:
-        ParameterError: Not a 3-joint model; as :func:`torques_along` and
-            ``seed_experiment``.
-
-    """
-    mdl = as_model("hexabot_leg" if model is None else model)
-    if mdl.nq != 3:
-        raise ParameterError(
-            f"model {mdl.name!r} has {mdl.nq} joints {list(mdl.joint_names)}; the seeds' "
-            "resolved-rate step drives a 3-joint leg's foot (pick one leg with base=/tip=)",
-            parameter="model",
-            value=mdl.name,
-            allowed="a 3-joint leg",
-        )
-    seed_kwargs.setdefault("baseline", False)
-    run = _seed_experiment()(mdl, **seed_kwargs)
-    tr = run.trajectory
-    return torques_along(mdl, tr.t, tr.q, tr.qdot, force, frame=frame)

@@ -4,33 +4,32 @@
   :func:`constant_twist_pose` (exact poses of a constant twist);
 * :mod:`.schedules` — :class:`JointSchedule`, :class:`PosePath` + :func:`follow_pose_path`
   (SE(3) interpolation, closed loop on the pose error), :func:`track` (IK along a path);
-* :mod:`._kernel` — the compiled control law and integrator.
+* :mod:`._law` — the control law and its integration (Pinocchio + numpy).
 
-The start pose is the package's one home pose, :func:`hexapod_kin.ik.home`
-(``default_stance`` is the same function). The seeds' experiments live in
-:mod:`hexapod_kin.seeds`; foot steps and gaits in :mod:`hexapod_kin.gait`.
+The default start is the package's one home pose, :func:`hexapod_kin.ik.home`
+(:func:`default_stance` calls it). The seeds' experiments live in :mod:`hexapod_kin.seeds`;
+foot steps and gaits in :mod:`hexapod_kin.gait`.
 """
 
 from __future__ import annotations
 
-from ..ik.prepare import LEG_HOME, home
+from typing import Any
+
 from .rate import (
     FRAMES,
     ClosestApproach,
     Method,
     Trajectory,
     constant_twist_pose,
-    positive,
+    default_stance,
     read_only,
     resolved_rate,
 )
 from .schedules import JointSchedule, PosePath, Tracked, follow_pose_path, track
 
-#: The seeds' start on the 3-DOF leg [rad] (= :data:`hexapod_kin.ik.LEG_HOME`).
-SEED_Q0 = LEG_HOME
-
-#: The default start of a run: the same function as :func:`hexapod_kin.ik.home`.
-default_stance = home
+#: The seeds' start on the 3-DOF leg [rad] (the value of :data:`hexapod_kin.ik.LEG_HOME`,
+#: written here so that a run from it does not import the IK package).
+SEED_Q0 = (0.0, 0.3, 1.2)
 
 __all__ = [
     "FRAMES",
@@ -44,8 +43,17 @@ __all__ = [
     "constant_twist_pose",
     "default_stance",
     "follow_pose_path",
-    "positive",
     "read_only",
     "resolved_rate",
     "track",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    # Transition only: gait/paths.py still imports ``positive`` from here; its home is
+    # hexapod_kin.exceptions. Not API (not in __all__); delete once gait imports it from there.
+    if name == "positive":
+        from ..exceptions import positive
+
+        return positive
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,14 +1,12 @@
 """Resolved-rate motion: drive the tip with a linear velocity or a 6-D twist.
 
-:func:`resolved_rate` integrates ``q̇ = J⁺_λ (ξ(t) + K e(t))`` — the seeds' main experiment
-(drive the foot with ``q̇ = J⁻¹v``) done properly: damped least squares whose damping grows as
-``σ_min`` falls below a threshold (Nakamura/Chiaverini: ``λ² = λ²_max (1 − (σ_min/ε)²)`` for
+:func:`resolved_rate` integrates ``q̇ = J⁺_λ (ξ(t) + K e(t))``: damped least squares whose
+damping grows as ``σ_min`` falls below a threshold (``λ² = λ²_max (1 − (σ_min/ε)²)`` for
 ``σ_min < ε``, else 0), explicit Euler or classic RK4, an optional closed-loop term toward the
 reference path (gain ``K`` in [1/s]; the pose error is ``[p_ref − p; log(R_ref Rᵀ)]``), joint
 position limits (a joint at a limit moving outward is frozen) and joint velocity limits (q̇
-scaled uniformly, its direction kept). The loop is compiled (numba,
-:mod:`hexapod_kin.motion._kernel`); velocity and reference are sampled beforehand at the RK4
-half steps.
+scaled uniformly, its direction kept). The law and the loop are :mod:`._law` (Pinocchio's
+kinematics, numpy); velocity and reference are sampled beforehand at the RK4 half steps.
 
 Velocities: a linear velocity (3,) [m/s] of the tip in the base axes (3 task rows), or a twist
 (6,) ``[v; ω]`` ([m/s], [rad/s]) in a named frame: ``frame="base"`` — the tip's linear and
@@ -22,21 +20,24 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError, positive
-from ..ik.prepare import ModelLike, as_model, home, prepared
-from ._kernel import rr_kernel
+from ..kinematics import KinematicModel, load
+from ._law import integrate
+
+if TYPE_CHECKING:
+    from ..ik.prepare import ModelLike
 
 __all__ = [
     "FRAMES",
     "ClosestApproach",
     "Trajectory",
     "constant_twist_pose",
-    "positive",
+    "default_stance",
     "read_only",
     "resolved_rate",
 ]
@@ -50,6 +51,17 @@ def read_only(*arrays: np.ndarray) -> None:
     """Mark arrays read-only (results handed to users are protected)."""
     for a in arrays:
         a.setflags(write=False)
+
+
+def default_stance(model: ModelLike) -> np.ndarray:
+    """The default start of a run: :func:`hexapod_kin.ik.home` (imported on use)."""
+    from ..ik.prepare import home
+
+    return home(model)
+
+
+def _as_model(model: ModelLike) -> KinematicModel:
+    return model if isinstance(model, KinematicModel) else load(model)
 
 
 # ============================================================================ results
@@ -379,7 +391,7 @@ def resolved_rate(
         ConfigurationError: Bad ``q0``, velocity or path.
 
     """
-    mdl = as_model(model)
+    mdl = _as_model(model)
     dt = positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)
@@ -405,16 +417,14 @@ def resolved_rate(
             value=duration,
             allowed="1..5e7 steps of dt",
         )
-    start = home(mdl) if q0 is None else mdl.check_q(q0, "q0").copy()
-    prep = prepared(mdl)
-    lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
+    start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0").copy()
     width = _width(velocity)
     rows6 = width == 6
     times_half = np.arange(2 * steps + 1) * (0.5 * dt)
     what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
     vel = _sample(velocity, times_half, width, "velocity", what)
     pose0 = np.array(mdl.fk(start))
-    ref_r = np.empty((1, 3, 3))
+    ref_r = None
     if rows6:
         if path is not None:
             ref = _sample_poses(path, times_half)
@@ -434,10 +444,10 @@ def resolved_rate(
     lam2max = (
         eps * eps if max_damping is None else positive("max_damping", max_damping, allow_zero=True)
     )
-    vlim = np.asarray(mdl.velocity_limit, dtype=float)
-    vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
-    lo = np.where(cont, -np.inf, lower) if within_limits else lower
-    hi = np.where(cont, np.inf, upper) if within_limits else upper
+    lower, upper = np.asarray(mdl.lower, dtype=float), np.asarray(mdl.upper, dtype=float)
+    # continuous joints (revolute, range >= 2π) wrap: no position limit for them
+    cont = ~np.asarray(mdl.is_prismatic, dtype=bool) & (upper - lower >= 2 * np.pi - 1e-9)
+    lo, hi = np.where(cont, -np.inf, lower), np.where(cont, np.inf, upper)
     if within_limits and (np.any(start < lo) or np.any(start > hi)):
         raise ConfigurationError(
             f"q0={start.tolist()} is outside the joint limits {lower.tolist()} .. {upper.tolist()}",
@@ -445,58 +455,41 @@ def resolved_rate(
             value=start.tolist(),
             allowed="within the joint limits (or within_limits=False)",
         )
-    n = mdl.nq
-    out_q = np.empty((steps + 1, n))
-    out_qd = np.empty((steps + 1, n))
-    out_pose = np.empty((steps + 1, 4, 4))
-    out_tw = np.empty((steps + 1, 6))
-    out_s = np.empty((steps + 1, 2))
-    out_lam = np.empty(steps + 1)
-    out_lim = np.empty(steps + 1, dtype=np.bool_)
-    rr_kernel(
-        prep.packed,
-        prep.tip_rot,
+    vlim = np.asarray(mdl.velocity_limit, dtype=float)
+    out = integrate(
+        mdl,
         start,
         vel,
         ref_p,
         ref_r,
         dt,
         method == "rk4",
-        rows6,
         frame == "tip",
         gain,
         eps,
         lam2max,
-        np.ascontiguousarray(lo, dtype=float),
-        np.ascontiguousarray(hi, dtype=float),
+        lo,
+        hi,
         within_limits,
-        vmax,
-        out_q,
-        out_qd,
-        out_pose,
-        out_tw,
-        out_s,
-        out_lam,
-        out_lim,
-        model=mdl,
+        np.where(velocity_limits & (vlim > 0), vlim, np.inf),
     )
-    t = np.arange(steps + 1) * dt
+    pose = out["pose"]
     arrays = {
-        "t": t,
-        "q": out_q,
-        "qdot": out_qd,
-        "foot": np.ascontiguousarray(out_pose[:, :3, 3]),
-        "foot_velocity": np.ascontiguousarray(out_tw[:, :3]),
-        "rotation": np.ascontiguousarray(out_pose[:, :3, :3]),
-        "angular_velocity": np.ascontiguousarray(out_tw[:, 3:]),
+        "t": np.arange(steps + 1) * dt,
+        "q": out["q"],
+        "qdot": out["qdot"],
+        "foot": np.ascontiguousarray(pose[:, :3, 3]),
+        "foot_velocity": np.ascontiguousarray(out["twist"][:, :3]),
+        "rotation": np.ascontiguousarray(pose[:, :3, :3]),
+        "angular_velocity": np.ascontiguousarray(out["twist"][:, 3:]),
         "command": np.ascontiguousarray(vel[::2]),
         "reference": np.ascontiguousarray(ref_p[::2]),
-        "sigma_min": np.ascontiguousarray(out_s[:, 0]),
-        "sigma_max": np.ascontiguousarray(out_s[:, 1]),
-        "damping": out_lam,
-        "limited": out_lim,
+        "sigma_min": np.ascontiguousarray(out["sigma"][:, 0]),
+        "sigma_max": np.ascontiguousarray(out["sigma"][:, 1]),
+        "damping": out["damping"],
+        "limited": out["limited"],
     }
-    ref_rot = np.ascontiguousarray(ref_r[::2]) if rows6 else None
+    ref_rot = None if ref_r is None else np.ascontiguousarray(ref_r[::2])
     read_only(*arrays.values(), *(() if ref_rot is None else (ref_rot,)))
     return Trajectory(
         **arrays,

@@ -12,15 +12,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
-from .. import ik
-from ..exceptions import IKError, ParameterError
-from ..ik.prepare import ModelLike, as_model
-from .rate import Method, Trajectory, positive, read_only, resolved_rate
+from ..exceptions import IKError, ParameterError, positive
+from .rate import Method, Trajectory, _as_model, read_only, resolved_rate
+
+if TYPE_CHECKING:
+    from ..ik.prepare import ModelLike
 
 __all__ = ["JointSchedule", "PosePath", "Tracked", "follow_pose_path", "track"]
 
@@ -204,8 +205,10 @@ def follow_pose_path(
         IKError: The first pose cannot be reached (when ``q0`` is None).
 
     """
-    mdl = as_model(model)
+    mdl = _as_model(model)
     if q0 is None:
+        from .. import ik
+
         res = ik.solve(mdl, path.poses[0], within_limits=within_limits)
         if not res.converged:
             raise IKError(
@@ -269,7 +272,9 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         IKError: Bad positions.
 
     """
-    mdl = as_model(model)
+    from .. import ik
+
+    mdl = _as_model(model)
     pts = np.asarray(positions, dtype=float)
     poses = pts.ndim == 3
     if not ((pts.ndim == 2 and pts.shape[1] == 3) or (poses and pts.shape[1:] == (4, 4))):

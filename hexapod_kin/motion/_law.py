@@ -1,0 +1,277 @@
+"""The resolved-rate law ``q̇(q, t)`` and its Euler / RK4 integration, on Pinocchio and numpy.
+
+One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
+
+1. Pinocchio, one pass: the tip pose and its LOCAL_WORLD_ALIGNED Jacobian ``J`` (rows
+   ``[v; ω]``, base axes): ``computeFrameJacobian`` then ``updateFramePlacement``.
+2. The task velocity ``ẋ = ξ(t) + K e``: ``ξ`` the commanded linear velocity (3 rows) or twist
+   (6 rows; a twist in the tip frame is rotated into base axes — damped least squares is
+   invariant under that rotation, so one Jacobian serves both frames), ``e = [p_ref − p;
+   log(R_ref Rᵀ)]`` the pose error on SO(3).
+3. Damped least squares ``q̇ = (JᵀJ + λ² I)⁻¹ Jᵀ ẋ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ`` with the variable
+   damping ``λ² = λ²_max (1 − (σ_min/ε)²)`` for ``σ_min < ε``, else 0 (Nakamura; Chiaverini),
+   floored at ``1e-14 σ_max²`` in the solve. σ and λ² are computed at the start of each step
+   and held over its RK4 stages.
+4. Joint limits: a joint at a limit that ``q̇`` pushes outward is frozen (its column removed)
+   and the system solved again, once. Then ``q̇`` is scaled uniformly to the speed limits.
+
+A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
+3×3 Gram matrix and an unrolled Cholesky solve; larger tasks on numpy.
+"""
+
+from __future__ import annotations
+
+import math
+from operator import ge, le, truediv
+from typing import Any
+
+import eigenpy
+import numpy as np
+import pinocchio as pin
+
+__all__ = ["integrate"]
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_LDLT = eigenpy.LDLT
+_SUCCESS = eigenpy.ComputationInfo.Success
+
+
+def _sigma3(j: list[list[float]]) -> tuple[float, float]:
+    """(σ_min, σ_max) of a 3×3 matrix (rows ``j``), closed form.
+
+    σ_max² is the largest eigenvalue ``e1`` of ``G = J Jᵀ`` (trigonometric solution of the
+    characteristic cubic); ``e2 + e3 = tr G − e1`` and ``e2 e3 = det(J)²/e1`` give ``e2``;
+    ``σ_min = |det J| / sqrt(e1 e2)`` keeps its accuracy near a singularity.
+    """
+    (a, b, c), (d, e, f), (g, h, i) = j
+    m00, m11, m22 = a * a + b * b + c * c, d * d + e * e + f * f, g * g + h * h + i * i
+    m01, m02, m12 = a * d + b * e + c * f, a * g + b * h + c * i, d * g + e * h + f * i
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    tr = m00 + m11 + m22
+    mean = tr / 3.0
+    off = m01 * m01 + m02 * m02 + m12 * m12
+    b00, b11, b22 = m00 - mean, m11 - mean, m22 - mean
+    p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off
+    if p2 > 0.0:
+        p = math.sqrt(p2 / 6.0)
+        detb = (
+            b00 * (b11 * b22 - m12 * m12)
+            - m01 * (m01 * b22 - m12 * m02)
+            + m02 * (m01 * m12 - b11 * m02)
+        )
+        r = max(-1.0, min(1.0, detb / (2.0 * p * p * p)))
+        e1 = mean + 2.0 * p * math.cos(math.acos(r) / 3.0)
+    else:
+        e1 = mean
+    if not e1 > 0.0:
+        return 0.0, 0.0
+    s = tr - e1
+    e2 = 0.5 * (s + math.sqrt(max(s * s - 4.0 * det * det / e1, 0.0)))
+    s12 = math.sqrt(e1 * e2)
+    return (abs(det) / s12 if s12 > 0.0 else 0.0), math.sqrt(e1)
+
+
+def _dls3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:
+    """``(JᵀJ + λ² I)⁻¹ Jᵀ x`` for a 3×3 ``J`` (rows ``j``) by Cholesky; None if not SPD."""
+    (a, b, c), (d, e, f), (g, h, i) = j
+    x0, x1, x2 = x
+    r0, r1, r2 = a * x0 + d * x1 + g * x2, b * x0 + e * x1 + h * x2, c * x0 + f * x1 + i * x2
+    w00 = a * a + d * d + g * g + lam2
+    w10, w20 = b * a + e * d + h * g, c * a + f * d + i * g
+    w11 = b * b + e * e + h * h + lam2
+    w21 = c * b + f * e + i * h
+    w22 = c * c + f * f + i * i + lam2
+    if not w00 > 0.0:
+        return None
+    l00 = math.sqrt(w00)
+    l10, l20 = w10 / l00, w20 / l00
+    s = w11 - l10 * l10
+    if not s > 0.0:
+        return None
+    l11 = math.sqrt(s)
+    l21 = (w21 - l20 * l10) / l11
+    s = w22 - l20 * l20 - l21 * l21
+    if not s > 0.0:
+        return None
+    l22 = math.sqrt(s)
+    y0 = r0 / l00
+    y1 = (r1 - l10 * y0) / l11
+    z2 = (r2 - l20 * y0 - l21 * y1) / l22 / l22
+    z1 = (y1 - l21 * z2) / l11
+    return [(y0 - l10 * z1 - l20 * z2) / l00, z1, z2]
+
+
+def _dls(jac: np.ndarray, x: Any, lam_eye: np.ndarray) -> list[float]:
+    """``(JᵀJ + λ² I)⁻¹ Jᵀ x`` by Eigen's LDLᵀ of the smaller Gram matrix (0 if that fails).
+
+    ``lam_eye`` is ``λ² I`` of the Gram matrix's size (n×n if n <= m, else m×m).
+    """
+    m, n = jac.shape
+    if n <= m:
+        gram = np.dot(jac.T, jac)
+        gram += lam_eye
+        ldlt = _LDLT(gram)
+        out = ldlt.solve(np.dot(x, jac))
+    else:
+        gram = np.dot(jac, jac.T)
+        gram += lam_eye
+        ldlt = _LDLT(gram)
+        out = np.dot(ldlt.solve(np.asarray(x)), jac)
+    if ldlt.info() != _SUCCESS:
+        return [0.0] * n
+    return out.reshape(-1).tolist()
+
+
+def _sigma(rows: np.ndarray) -> tuple[float, float]:
+    """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value."""
+    if rows.shape[1] == 0:
+        return 0.0, 0.0
+    s = np.linalg.svd(rows, compute_uv=False)
+    return float(s[-1]), float(s[0])
+
+
+def integrate(
+    model: Any,
+    q0: np.ndarray,
+    vel: np.ndarray,
+    ref_p: np.ndarray,
+    ref_r: np.ndarray | None,
+    dt: float,
+    rk4: bool,
+    tip_frame: bool,
+    gain: float,
+    eps: float,
+    lam2max: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    use_limits: bool,
+    vmax: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """Integrate the law from ``q0`` (Euler or RK4); ``(len(vel) − 1) / 2`` steps.
+
+    ``vel`` (2K+1, 3 or 6) and ``ref_p`` (2K+1, 3), ``ref_r`` (2K+1, 3, 3) (None for a 3-row
+    task) are sampled at half steps (index 2k = t_k, 2k+1 = t_k + dt/2). ``lower``/``upper``
+    are the position limits (±inf for none), ``vmax`` the speed limits (inf for none).
+
+    Returns:
+        Per sample: ``q``, ``qdot``, ``pose`` (4×4), ``twist`` ``J q̇`` (6, base axes),
+        ``sigma`` (σ_min, σ_max), ``damping`` λ², ``limited``.
+
+    """
+    pm, data, fid = model.model, model.data, model.tip_id
+    base = model.baseMo
+    rot_base = np.asarray(base.rotation)
+    moved = not np.array_equal(base.homogeneous, np.eye(4))
+    convert = model.pinocchio_q if pm.nq != model.nq else None
+    n = int(q0.shape[0])
+    rows6 = vel.shape[1] == 6
+    fast = not rows6 and n == 3
+    vel_l, refp_l = vel.tolist(), ref_p.tolist()
+    lo, hi, vm = lower.tolist(), upper.tolist(), vmax.tolist()
+    speed = any(math.isfinite(v) for v in vm)
+    eye = np.eye(min(n, vel.shape[1]))  # the size of the smaller Gram matrix
+    held: list[Any] = [-1.0, eye]  # λ² used and λ² I, kept over a step's stages
+    frame_jacobian, frame_placement, log3 = (
+        pin.computeFrameJacobian,
+        pin.updateFramePlacement,
+        pin.log3,
+    )
+    array = np.array
+
+    def law(q: list[float], h: int, lam_use: float) -> tuple[Any, ...]:
+        """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², λ² used, limited).
+
+        ``lam_use`` < 0: σ and λ² from this evaluation (a step's start), else held.
+        """
+        jac = frame_jacobian(pm, data, array(q) if convert is None else convert(q), fid, _LWA)
+        omf = frame_placement(pm, data, fid)
+        if jac.ndim == 1:  # one joint: Eigen's 6×1 comes back 1-D
+            jac = jac.reshape(6, 1)
+        if moved:
+            omf = base * omf
+            jac = np.vstack((rot_base @ jac[:3], rot_base @ jac[3:]))
+        pose = omf.homogeneous
+        (r00, r01, r02, p0), (r10, r11, r12, p1), (r20, r21, r22, p2), _ = pose.tolist()
+        v, rp = vel_l[h], refp_l[h]
+        if rows6 and tip_frame:  # the body twist in base axes: [R v; R ω]
+            a, b, c, d, e, f = v
+            v = [r00 * a + r01 * b + r02 * c, r10 * a + r11 * b + r12 * c,
+                 r20 * a + r21 * b + r22 * c, r00 * d + r01 * e + r02 * f,
+                 r10 * d + r11 * e + r12 * f, r20 * d + r21 * e + r22 * f]  # fmt: skip
+        xd = [v[0] + gain * (rp[0] - p0), v[1] + gain * (rp[1] - p1), v[2] + gain * (rp[2] - p2)]
+        if rows6:
+            wx, wy, wz = v[3], v[4], v[5]
+            if gain != 0.0:
+                ex, ey, ez = log3(ref_r[h] @ pose[:3, :3].T).tolist()  # type: ignore[index]
+                wx, wy, wz = wx + gain * ex, wy + gain * ey, wz + gain * ez
+            xd += [wx, wy, wz]
+            rows = jac
+        else:
+            rows = jac[:3]
+        j3 = rows.tolist() if fast else None
+        smin = smax = lam2 = math.nan
+        if lam_use < 0.0:
+            smin, smax = _sigma3(j3) if j3 is not None else _sigma(rows)
+            lam2 = 0.0
+            if smin < eps:
+                ratio = smin / eps
+                lam2 = lam2max * (1.0 - ratio * ratio)
+            lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
+        if j3 is None and held[0] != lam_use:
+            held[0], held[1] = lam_use, lam_use * eye
+        if j3 is not None:
+            qd = _dls3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
+        else:
+            qd = _dls(rows, xd, held[1])
+        limited = False
+        if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
+            free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
+                    for x, v, a, b in zip(q, qd, lo, hi)]  # fmt: skip
+            if not all(free):  # freeze the joints pushed outward, solve for the others
+                qd = _dls(rows * array(free, dtype=float), xd, lam_use * eye)
+                qd = [x if ok else 0.0 for x, ok in zip(qd, free)]
+                limited = True
+        if speed:
+            ratio = max(map(truediv, map(abs, qd), vm))  # largest |q̇_i| / q̇max_i
+            if ratio > 1.0:
+                qd = [x / ratio for x in qd]
+                limited = True
+        return qd, pose, jac, smin, smax, lam2, lam_use, limited
+
+    steps = (vel.shape[0] - 1) // 2
+    qs, qds, poses, jacs, sig, lams, lims = [], [], [], [], [], [], []
+    q = q0.tolist()
+    half, sixth = 0.5 * dt, dt / 6.0
+    for k in range(steps + 1):
+        h = 2 * k
+        k1, pose, jac, smin, smax, lam2, lam_use, lim = law(q, h, -1.0)
+        qs.append(q)
+        qds.append(k1)
+        poses.append(pose)
+        jacs.append(jac)
+        sig.append((smin, smax))
+        lams.append(lam2)
+        lims.append(lim)
+        if k == steps:
+            break
+        if rk4:
+            k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, lam_use)[0]
+            k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, lam_use)[0]
+            k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, lam_use)[0]
+            q = [
+                a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in zip(q, k1, k2, k3, k4)
+            ]
+        else:
+            q = [a + dt * b for a, b in zip(q, k1)]
+        if use_limits:
+            q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
+    qdot = np.array(qds)
+    return {
+        "q": np.array(qs),
+        "qdot": qdot,
+        "pose": np.array(poses),
+        "twist": np.einsum("kij,kj->ki", np.array(jacs), qdot),
+        "sigma": np.array(sig),
+        "damping": np.array(lams),
+        "limited": np.array(lims, dtype=bool),
+    }
