@@ -1,7 +1,7 @@
-"""One check per claim kind, and the :class:`Context` holding hexapod_kin's values (lazily).
+"""One check per claim kind, the :class:`Context` holding hexapod_kin's values, :func:`evaluate`.
 
-Every check returns a :class:`~.compare.Verdict` computed from the claim's data and the
-context; see :mod:`hexapod_kin.report.compare` for the comparison rules and tolerances.
+Every check returns a :class:`~.data.Verdict` computed from the claim's data and the context;
+see :mod:`hexapod_kin.report.compare` for the comparison rules and tolerances.
 """
 
 from __future__ import annotations
@@ -15,17 +15,15 @@ import numpy as np
 import sympy as sp
 
 from .compare import (
-    _Q,
-    _SYMS,
     RTOL,
-    Claim,
-    Verdict,
-    _fmt,
-    _fmt_matrix,
-    _num,
+    SYMS,
+    Q,
     equal,
     factored,
+    fmt,
+    fmt_matrix,
     matrix_diff,
+    num,
     parse,
     parse_matrix,
     plain,
@@ -33,8 +31,9 @@ from .compare import (
     tidy,
     vanishes,
 )
+from .data import Claim, Verdict
 
-__all__ = ["CHECKS", "MODELS", "Context"]
+__all__ = ["CHECKS", "MODELS", "Context", "evaluate"]
 
 #: Claim ``model`` → the hexapod_kin preset and its parameters.
 MODELS: dict[str, tuple[str, dict[str, float]]] = {
@@ -53,7 +52,7 @@ class Context:
     Args:
         quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
         claims: All claims (a matrix check looks up the seed's own factors).
-        cache: Read and write the report's disk caches (verdicts, texts, figures).
+        cache: Read and write the disk cache of the printed derivations (:mod:`.cache`).
 
     """
 
@@ -63,6 +62,7 @@ class Context:
         self.quick = quick
         self.cache = cache
         self.claims = {c.id: c for c in claims or []}
+        self.pendulum_duration = 12.0 if quick else 20.0
         self._derived: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
@@ -75,11 +75,11 @@ class Context:
         return robots.get(name, **params)
 
     def derivation(self, key: str) -> Any:
-        """:func:`hexapod_kin.symbolic.derive` of the model (cached)."""
+        """:func:`hexapod_kin.symbolic.derive` of the model, kept (no budget: small tables)."""
         from ..symbolic import derive
 
         if key not in self._derived:
-            self._derived[key] = derive(self.chain(key), budget=60.0)
+            self._derived[key] = derive(self.chain(key), budget=None)
         return self._derived[key]
 
     def model(self, key: str) -> Any:
@@ -87,6 +87,12 @@ class Context:
         from .. import load
 
         return load(self.chain(key))
+
+    def text(self, key: str) -> str:
+        """The printed derivation of the model (:func:`.cache.derivation_text`)."""
+        from .cache import derivation_text
+
+        return derivation_text(self.derivation(key), self.cache)
 
     def lengths(self, key: str) -> dict[sp.Symbol, float]:
         """The preset's length values by plain symbol."""
@@ -130,9 +136,8 @@ class Context:
     def pendulum(self) -> Any:
         """Seed 001's pendulum, undamped and damped (:func:`pendulum_experiment`)."""
         from ..dynamics import pendulum_experiment
-        from .data import pendulum_duration
 
-        return pendulum_experiment(duration=pendulum_duration(self.quick))
+        return pendulum_experiment(duration=self.pendulum_duration)
 
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:
@@ -228,7 +233,7 @@ def _at(m: Any, subs: dict[sp.Symbol, float]) -> Any:
 
 
 def _subs(c: Claim) -> dict[sp.Symbol, float]:
-    return {_SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
+    return {SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
 
 
 _SYMBOLIC = f"symbolic: every entry at random points (rel. tol {RTOL:g}) then simplify(a - b) == 0"
@@ -251,7 +256,7 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     seed = _at(parse_matrix(c.data["value"]), subs)
     truth = _at(ctx.item(key, item), subs)
     claimed = _raw(c.data["value"]) + _with(c)
-    computed = _fmt_matrix(truth.applyfunc(tidy))
+    computed = fmt_matrix(truth.applyfunc(tidy))
     if seed.shape != truth.shape:
         return _verdict(
             c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
@@ -268,7 +273,7 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
         notes.append(_own_product(c, ctx, seed, subs))
     if "derivative_of" in c.data:
         p = _at(parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]), subs)
-        dp = p.jacobian(_Q[: seed.cols])
+        dp = p.jacobian(Q[: seed.cols])
         own = matrix_diff(seed, dp, c.id + "d")
         notes.append(
             "it is the derivative of the seed's own p"
@@ -278,9 +283,10 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", " — ".join(n for n in notes if n), _SYMBOLIC)
 
 
-def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
+def _own_factors(c: Claim, ctx: Context) -> list[Claim]:
+    """The seed's own ``^{k-1}T_k`` claims (k = 1 … j) whose product a ``^0T_j`` claim is."""
     j = int(c.data["item"][3:])
-    factors = []
+    out = []
     for k in range(1, j + 1):
         f = [
             x
@@ -291,13 +297,20 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
             and x.data.get("item") == f"T {k}"
         ]
         if not f:
-            return ""
-        factors.append(_at(parse_matrix(f[0].data["value"]), subs))
+            return []
+        out.append(f[0])
+    return out
+
+
+def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
+    factors = _own_factors(c, ctx)
+    if not factors:
+        return ""
     prod = sp.eye(4)
     for f in factors:
-        prod = prod * f
+        prod = prod * _at(parse_matrix(f.data["value"]), subs)
     own = matrix_diff(seed, prod, c.id + "p", explain=False)
-    ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, j + 1))
+    ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, len(factors) + 1))
     if not own:
         return f"it is the product {ids} of the seed's own factors"
     return f"it is not the product {ids} of the seed's own factors either ({len(own)} entries)"
@@ -320,13 +333,13 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
             ("θ", theta, row.theta, row.sigma == "revolute"),
         ):
             e = parse(text).xreplace(subs)
-            if any(s in _Q for s in e.free_symbols):
+            if any(s in Q for s in e.free_symbols):
                 if not var:
                     problems.append(
                         f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin"
                     )
                 continue
-            val = _num(e.xreplace(lengths), {}) * (
+            val = num(e.xreplace(lengths), {}) * (
                 unit if not (e.free_symbols & set(lengths)) else 1.0
             )
             if abs(val - mine) > 1e-9:
@@ -354,11 +367,11 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     fk = (
         (
             f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
-            f"(checked symbolically: {mirror}): p_z = {_fmt(p_plus[2])}, a positive knee "
+            f"(checked symbolically: {mirror}): p_z = {fmt(p_plus[2])}, a positive knee "
             f"angle lifts the foot; the lengths agree"
         )
         if mirror
-        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {_fmt_matrix(p_plus.T)}")
+        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}")
     )
     return _verdict(
         c,
@@ -374,14 +387,14 @@ def check_generic(c: Claim, ctx: Context) -> Verdict:
     """``generic``: the seed's generic transform vs :func:`khalil_matrix`."""
     from ..symbolic import khalil_matrix
 
-    s = _SYMS
+    s = SYMS
     truth = sp.Matrix(khalil_matrix(s["alpha"], s["d"], s["theta"], s["r"]))
     seed = parse_matrix(c.data["value"])
     diffs = matrix_diff(seed, truth, c.id)
     return _verdict(
         c,
-        _fmt_matrix(seed),
-        _fmt_matrix(truth),
+        fmt_matrix(seed),
+        fmt_matrix(truth),
         "wrong" if diffs else "agrees",
         "; ".join(diffs),
         _SYMBOLIC,
@@ -415,7 +428,7 @@ def check_det(c: Claim, ctx: Context) -> Verdict:
     seed = parse(c.data["value"]).xreplace(subs)
     d = ctx.derivation(c.data["model"])
     truth = factored(_det_truth(c, ctx).xreplace(subs), d.q, d.chain.sigmas, c.id)
-    claimed, computed = str(c.data["value"]) + _with(c), _fmt(truth)
+    claimed, computed = str(c.data["value"]) + _with(c), fmt(truth)
     method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
     if equal(seed, truth, c.id):
         return _verdict(c, claimed, computed, "agrees", "", method)
@@ -433,7 +446,7 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
     rng = np.random.default_rng(7)
     det_scale = float(
         np.median(
-            [abs(_num(det, {q: v for q, v in zip(_Q, rng.uniform(-3, 3, nq))})) for _ in range(20)]
+            [abs(num(det, {q: v for q, v in zip(Q, rng.uniform(-3, 3, nq))})) for _ in range(20)]
         )
     )
     seeds = [parse(v).xreplace(lengths) for v in c.data["value"]]
@@ -449,10 +462,10 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
         pts = points_on(s, nq, c.id + text)
         if len(pts) and not vanishes(det, pts, det_scale, 1e-9):
             q = np.round(pts[0], 3).tolist()
-            val = _num(det, {qq: v for qq, v in zip(_Q, pts[0])})
+            val = num(det, {qq: v for qq, v in zip(Q, pts[0])})
             spurious.append(f"{text} = 0 is not singular (det J = {val:.3g} at q = {q})")
     claimed = ", ".join(f"{v} = 0" for v in c.data["value"]) or "no singularity"
-    computed = f"det J = {_fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
+    computed = f"det J = {fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
     method = (
         "numeric on sampled points: a seed set covers a family when its residual is "
         "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
@@ -601,3 +614,18 @@ CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
     "schedule": check_schedule,
     "table": check_table,
 }
+
+
+def evaluate(claims: list[Claim], ctx: Context) -> list[Verdict]:
+    """Compute every claim's verdict against ``ctx``.
+
+    A comparison that raises gives status ``"error"`` with the exception (never skipped).
+    """
+    out = []
+    for claim in claims:
+        try:
+            out.append(CHECKS[claim.kind](claim, ctx))
+        except Exception as exc:  # recorded, reported, and failed by the CLI and the test
+            why = f"{type(exc).__name__}: {exc}"
+            out.append(_verdict(claim, str(claim.data.get("value")), "", "error", why, ""))
+    return out

@@ -28,9 +28,6 @@ Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_
 ``sympy.simplify(...) == 0``. Each is a proof that ``a − b`` vanishes identically; a
 non-zero result of the first two only passes the question on. Hexapod_kin's expressions
 are printed by :func:`tidy` (``sympy.simplify``'s non-trigonometric steps).
-
-The symbolic verdicts are kept on disk (:mod:`.cache`), keyed by the claim, hexapod_kin's
-expressions and the package source.
 """
 
 from __future__ import annotations
@@ -49,17 +46,24 @@ from sympy.core.rules import Transform
 from sympy.parsing.sympy_parser import parse_expr
 from sympy.simplify.radsimp import collect_abs
 
-from .data import CLAIMS_FILE, Claim, Verdict, load_claims
-
 __all__ = [
-    "CLAIMS_FILE",
     "POINTS",
+    "Q",
     "RTOL",
-    "Claim",
-    "Verdict",
-    "evaluate",
-    "load_claims",
+    "SYMS",
+    "equal",
+    "factored",
+    "fmt",
+    "fmt_matrix",
+    "matrix_diff",
+    "num",
     "parse",
+    "parse_matrix",
+    "plain",
+    "points_on",
+    "screen",
+    "tidy",
+    "vanishes",
 ]
 
 #: Random points per symbolic comparison.
@@ -67,17 +71,18 @@ POINTS = 8
 #: Relative tolerance of a numeric entry comparison (scaled by 1 + |value|).
 RTOL = 1e-9
 
-_Q = [sp.Symbol(f"q{i}", real=True) for i in range(1, 5)]
+#: The joint symbols ``q1`` … ``q4`` of the seeds' expressions.
+Q = [sp.Symbol(f"q{i}", real=True) for i in range(1, 5)]
 _NAMES = ["l1", "l2", "l3", "r1", "d2", "d3", "x", "y", "z", "theta", "alpha", "d", "r", "beta"]
-_SYMS: dict[str, sp.Symbol] = {s.name: s for s in _Q}
-_SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
+#: Every symbol of the seeds' expressions by name (real).
+SYMS: dict[str, sp.Symbol] = {s.name: s for s in Q}
+SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
 
 
 def _locals() -> dict[str, Any]:
-    loc: dict[str, Any] = dict(_SYMS)
-    q = _Q
+    loc: dict[str, Any] = dict(SYMS)
     for combo in ("1", "2", "3", "12", "23", "123"):
-        angle = sum(q[int(k) - 1] for k in combo)
+        angle = sum(Q[int(k) - 1] for k in combo)
         loc[f"c{combo}"] = sp.cos(angle)
         loc[f"s{combo}"] = sp.sin(angle)
     loc["pi"] = sp.pi
@@ -114,7 +119,7 @@ def _parse(text: str) -> sp.Expr:
 def plain(expr: Any) -> Any:
     """``expr`` with every symbol renamed onto this module's real symbols (by name)."""
     expr = sp.sympify(expr)
-    rename = {s: _SYMS[s.name] for s in expr.free_symbols if _SYMS.get(s.name, s) != s}
+    rename = {s: SYMS[s.name] for s in expr.free_symbols if SYMS.get(s.name, s) != s}
     return expr.xreplace(rename) if rename else expr
 
 
@@ -134,7 +139,8 @@ def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
     return out
 
 
-def _num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+def num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+    """``expr`` at ``point`` (symbols replaced by numbers), as a float."""
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
@@ -368,12 +374,14 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
     return sp.factor(sp.simplify(det))
 
 
-def _fmt(expr: Any) -> str:
+def fmt(expr: Any) -> str:
+    """``expr`` as text (``sympy.sstr``, short floats)."""
     return sp.sstr(sp.sympify(expr), full_prec=False)
 
 
-def _fmt_matrix(m: sp.Matrix) -> str:
-    return "[" + "; ".join(", ".join(_fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
+def fmt_matrix(m: sp.Matrix) -> str:
+    """A matrix as ``[a, b; c, d]`` (:func:`fmt` entries)."""
+    return "[" + "; ".join(", ".join(fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
 
 
 def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = True) -> list[str]:
@@ -394,7 +402,7 @@ def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = Tru
             continue
         i, j = divmod(k, truth.cols)
         note = " (sign slip)" if opposite[k] and _zero(x + y) else ""
-        out.append(f"({i + 1},{j + 1}): seed {_fmt(x)} vs {_fmt(tidy(y))}{note}")
+        out.append(f"({i + 1},{j + 1}): seed {fmt(x)} vs {fmt(tidy(y))}{note}")
     return out
 
 
@@ -433,7 +441,7 @@ def points_on(
     """
     expr = plain(expr)
     rng = _rng(key)
-    deps = [k for k in range(nq) if _Q[k] in expr.free_symbols]
+    deps = [k for k in range(nq) if Q[k] in expr.free_symbols]
     pts: list[np.ndarray] = []
     for _ in range(40 * count):
         q = rng.uniform(-math.pi, math.pi, nq)
@@ -441,8 +449,8 @@ def points_on(
             q[k] = v
         if deps:
             var = deps[-1]
-            sub = {_Q[k]: float(q[k]) for k in range(nq) if k != var}
-            g = sp.lambdify(_Q[var], expr.xreplace(sub), "numpy")
+            sub = {Q[k]: float(q[k]) for k in range(nq) if k != var}
+            g = sp.lambdify(Q[var], expr.xreplace(sub), "numpy")
 
             def f(x: np.ndarray, g: Any = g) -> np.ndarray:
                 return np.broadcast_to(np.asarray(g(x), dtype=float), x.shape)
@@ -451,7 +459,7 @@ def points_on(
             if not roots:
                 continue
             q[var] = roots[int(rng.integers(len(roots)))]
-        elif abs(_num(expr, {})) > 1e-12:
+        elif abs(num(expr, {})) > 1e-12:
             break
         pts.append(q)
         if len(pts) >= count:
@@ -463,51 +471,7 @@ def vanishes(expr: Any, pts: np.ndarray, scale: float = 1.0, tol: float = 1e-7) 
     """True when ``expr`` is ~0 at every point (relative to ``scale``)."""
     expr = plain(expr)
     for q in pts:
-        val = _num(expr, {_Q[k]: float(v) for k, v in enumerate(q)})
+        val = num(expr, {Q[k]: float(v) for k, v in enumerate(q)})
         if abs(val) > tol * max(scale, 1e-300):
             return False
     return len(pts) > 0
-
-
-# ---------------------------------------------------------------------- entry point
-def evaluate(claims: list[Claim], ctx: Any, cache: bool = True) -> list[Verdict]:
-    """Compute every claim's verdict against ``ctx`` (a :class:`~.checks.Context`).
-
-    A comparison that raises gives status ``"error"`` with the exception (never skipped).
-    With ``cache`` the symbolic verdicts are read from (and written to) the disk cache of
-    :mod:`.cache`, keyed by the claim's data and hexapod_kin's expressions.
-    """
-    from . import cache as _cache
-    from .checks import CHECKS
-
-    out = []
-    for claim in claims:
-        try:
-            check = CHECKS[claim.kind]
-            digest = None
-            if cache:
-                try:
-                    digest = _cache.key(claim, ctx)
-                except Exception:  # noqa: BLE001 - no key: the check runs (and reports)
-                    digest = None
-            verdict = _cache.load(digest, claim) if digest else None
-            if verdict is None:
-                verdict = check(claim, ctx)
-                if digest:
-                    _cache.store(digest, verdict)
-            out.append(verdict)
-        except Exception as exc:  # recorded, reported, and failed by the CLI and the test
-            out.append(
-                Verdict(
-                    claim.id,
-                    claim.seed,
-                    claim.where,
-                    claim.kind,
-                    str(claim.data.get("value")),
-                    "",
-                    "error",
-                    f"{type(exc).__name__}: {exc}",
-                    "",
-                )
-            )
-    return out
