@@ -29,6 +29,7 @@ from .compare import (
     plain,
     points_on,
     tidy,
+    values,
     vanishes,
 )
 from .data import Claim, Verdict
@@ -443,11 +444,8 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
     nq = d.chain.nq
     lengths = ctx.lengths(key)
     det = plain(d.numeric(d.det))
-    rng = np.random.default_rng(7)
     det_scale = float(
-        np.median(
-            [abs(num(det, {q: v for q, v in zip(Q, rng.uniform(-3, 3, nq))})) for _ in range(20)]
-        )
+        np.median(np.abs(values(det, np.random.default_rng(7).uniform(-3, 3, (20, nq)))))
     )
     seeds = [parse(v).xreplace(lengths) for v in c.data["value"]]
     missing, spurious = [], []
@@ -462,7 +460,7 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
         pts = points_on(s, nq, c.id + text)
         if len(pts) and not vanishes(det, pts, det_scale, 1e-9):
             q = np.round(pts[0], 3).tolist()
-            val = num(det, {qq: v for qq, v in zip(Q, pts[0])})
+            val = float(values(det, pts[:1])[0])
             spurious.append(f"{text} = 0 is not singular (det J = {val:.3g} at q = {q})")
     claimed = ", ".join(f"{v} = 0" for v in c.data["value"]) or "no singularity"
     computed = f"det J = {fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)

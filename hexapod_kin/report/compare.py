@@ -63,6 +63,7 @@ __all__ = [
     "points_on",
     "screen",
     "tidy",
+    "values",
     "vanishes",
 ]
 
@@ -412,23 +413,23 @@ def parse_matrix(rows: Any) -> sp.Matrix:
 
 
 # ---------------------------------------------------------------------- family sampling
-def _roots(f: Callable[[np.ndarray], np.ndarray], grid: np.ndarray) -> list[float]:
-    vals = f(grid)
-    out: list[float] = []
-    for k in np.flatnonzero(vals == 0.0):
-        out.append(float(grid[k]))
-    for k in np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0):
-        lo, hi = float(grid[k]), float(grid[k + 1])
-        flo = float(f(np.array([lo]))[0])
-        for _ in range(80):
-            mid = 0.5 * (lo + hi)
-            fm = float(f(np.array([mid]))[0])
-            if np.sign(fm) == np.sign(flo):
-                lo, flo = mid, fm
-            else:
-                hi = mid
-        out.append(0.5 * (lo + hi))
-    return out
+def values(expr: Any, qs: np.ndarray) -> np.ndarray:
+    """A real expression of the joints ``q1 … q4`` (numbers for lengths) at each row of ``qs``.
+
+    numpy float64 (:func:`_evaluate`, or ``sympy.lambdify`` for what it does not know); an
+    imaginary value becomes NaN.
+    """
+    expr = plain(expr)
+    qs = np.atleast_2d(np.asarray(qs, dtype=float))
+    env = {s: qs[:, k] for k, s in enumerate(Q[: qs.shape[1]])}
+    with np.errstate(all="ignore"):
+        try:
+            v = _evaluate([expr], env)[0]
+        except _Unsupported:
+            args = sorted(env, key=str)
+            raw = sp.lambdify(args, expr, modules="numpy")(*[env[s] for s in args])
+            v = np.broadcast_to(np.asarray(raw, dtype=complex), (qs.shape[0],))
+    return np.where(v.imag == 0, v.real, np.nan)
 
 
 def points_on(
@@ -436,9 +437,12 @@ def points_on(
 ) -> np.ndarray:
     """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (numbers for lengths).
 
-    Random values for every joint but the last one ``expr`` depends on, which is found by
-    bracketing on ``[−π, π]`` and bisection; ``fixed`` pins joints (0-based) to values.
+    Random values for every joint but the last one ``expr`` depends on, which is a root on
+    ``[−π, π]`` (:func:`hexapod_kin.symbolic.core.single_joint_roots`) picked at random;
+    ``fixed`` pins joints (0-based) to values.
     """
+    from ..symbolic.core import single_joint_roots
+
     expr = plain(expr)
     rng = _rng(key)
     deps = [k for k in range(nq) if Q[k] in expr.free_symbols]
@@ -449,13 +453,13 @@ def points_on(
             q[k] = v
         if deps:
             var = deps[-1]
-            sub = {Q[k]: float(q[k]) for k in range(nq) if k != var}
-            g = sp.lambdify(Q[var], expr.xreplace(sub), "numpy")
 
-            def f(x: np.ndarray, g: Any = g) -> np.ndarray:
-                return np.broadcast_to(np.asarray(g(x), dtype=float), x.shape)
+            def f(x: np.ndarray, q: np.ndarray = q, var: int = var) -> np.ndarray:
+                qs = np.repeat(q[None, :], len(x), axis=0)
+                qs[:, var] = x
+                return values(expr, qs)
 
-            roots = _roots(f, np.linspace(-math.pi, math.pi, 721))
+            roots = single_joint_roots(f, -math.pi, math.pi)
             if not roots:
                 continue
             q[var] = roots[int(rng.integers(len(roots)))]
@@ -469,9 +473,6 @@ def points_on(
 
 def vanishes(expr: Any, pts: np.ndarray, scale: float = 1.0, tol: float = 1e-7) -> bool:
     """True when ``expr`` is ~0 at every point (relative to ``scale``)."""
-    expr = plain(expr)
-    for q in pts:
-        val = num(expr, {Q[k]: float(v) for k, v in enumerate(q)})
-        if abs(val) > tol * max(scale, 1e-300):
-            return False
-    return len(pts) > 0
+    if not len(pts):
+        return False
+    return bool(np.all(np.abs(values(expr, pts)) <= tol * max(scale, 1e-300)))
