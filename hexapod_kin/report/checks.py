@@ -65,6 +65,7 @@ class Context:
         self.claims = {c.id: c for c in claims or []}
         self.pendulum_duration = 12.0 if quick else 20.0
         self._derived: dict[str, Any] = {}
+        self._models: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
     # ------------------------------------------------------------------ models
@@ -84,10 +85,12 @@ class Context:
         return self._derived[key]
 
     def model(self, key: str) -> Any:
-        """The loaded (Pinocchio) model of a claim's ``model``."""
+        """The loaded (Pinocchio) model of a claim's ``model`` (loaded once)."""
         from .. import load
 
-        return load(self.chain(key))
+        if key not in self._models:
+            self._models[key] = load(self.chain(key))
+        return self._models[key]
 
     def text(self, key: str) -> str:
         """The printed derivation of the model (:func:`.cache.derivation_text`)."""

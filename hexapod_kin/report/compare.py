@@ -375,8 +375,9 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
     return sp.factor(sp.simplify(det))
 
 
+@lru_cache(maxsize=4096)
 def fmt(expr: Any) -> str:
-    """``expr`` as text (``sympy.sstr``, short floats)."""
+    """``expr`` as text (``sympy.sstr``, short floats), remembered (the same entries recur)."""
     return sp.sstr(sp.sympify(expr), full_prec=False)
 
 

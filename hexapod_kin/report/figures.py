@@ -23,7 +23,6 @@ __all__ = [
 
 def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any]]:
     """Det J / σ_min over (knee, ankle) for the leg and (θ1, θ2) for the SCARA, with families."""
-    from .. import load
     from ..plots import plot_singularity_map
     from ..singularity import scan
 
@@ -32,7 +31,7 @@ def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any
         ("leg", "hexabot_leg", ["knee", "ankle"]),
         ("scara", "scara", ["theta1", "theta2"]),
     ):
-        res = scan(load(ctx.chain(key)), grid=grid, joints=joints, families=True)
+        res = scan(ctx.model(key), grid=grid, joints=joints, families=True)
         counts[name] = dict(res.family_counts)
         title = f"{name}: singularity map, families of det J"
         paths.append(plot_singularity_map(res, out / f"singularity_{name}.png", title=title))
@@ -49,12 +48,11 @@ def step_figure(ctx: Any, out: Path) -> Path:
 
 def step_animation(ctx: Any, out: Path) -> Path:
     """The step, animated (self-contained HTML)."""
-    from .. import load
     from ..viewer import export_html
 
     tr = ctx.step.trajectory
     return export_html(
-        load("hexabot_leg"),
+        ctx.model("leg"),
         tr.t,
         tr.q,
         out / "step.html",
