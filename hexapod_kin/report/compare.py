@@ -1,33 +1,11 @@
-"""Computed verdicts for the seeds' claims (``claims.toml``): nothing here is written by hand.
+"""The report's comparison rules: the seeds' expressions parsed, screened numerically, proved.
 
-Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_kin's own value:
-
-* ``table`` — the seed's Khalil rows against the preset's rows (lengths scaled by the claim's
-  ``unit``); a different α is reported with what it does to the FK (checked symbolically);
-* ``matrix`` — a symbolic matrix (``^{j-1}T_j``, ``^0T_j``, ``p``, ``J``) against
-  :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points seeded by
-  the claim (:func:`screen`: numpy, relative tolerance :data:`RTOL`), then
-  ``simplify(a - b) == 0`` for the entries that agree (an exact proof, cheapest first: see
-  :func:`_zero`); a differing entry is printed (:func:`tidy`) only to explain it;
-  a wrong matrix is also tested against the other α2 sign, the product of the seed's own
-  factors and the derivative of the seed's own ``p`` to say where the slip comes from;
-* ``det`` — ``simplify(seed − det J) == 0`` (and ``±`` / scale when not);
-* ``families`` — the seed's singular sets (residual expressions) against the factors of
-  ``det J``: points sampled on every true family must zero a seed residual (else *missing*),
-  points on every seed set must zero ``det J`` (else *not singular*);
-* ``generic`` — the seed's generic transform against :func:`hexapod_kin.symbolic.khalil_matrix`;
-* ``methods_equal`` — :attr:`Derivation.methods_agree`;
-* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
-  :func:`hexapod_kin.ik.analytic`; the seed's IK formulas are evaluated as written;
-* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``
-  of the claimed value.
-
-"``simplify(a − b) == 0``" in the verdicts' method is decided exactly, cheapest first:
-``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
+A symbolic entry agrees when it matches at :data:`POINTS` random points (:func:`screen`,
+relative tolerance :data:`RTOL`) and ``simplify(a − b) == 0``, decided exactly, cheapest first
+(:func:`_zero`): ``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
 ``sin(x)² + cos(x)² = 1`` for every angle ``x`` is 0 (:func:`_reduces_to_zero`); else
-``sympy.simplify(...) == 0``. Each is a proof that ``a − b`` vanishes identically; a
-non-zero result of the first two only passes the question on. Hexapod_kin's expressions
-are printed by :func:`tidy` (``sympy.simplify``'s non-trigonometric steps).
+``sympy.simplify(...) == 0``. A non-zero result of the first two only passes the question on.
+hexapod_kin's expressions are printed by :func:`tidy`.
 """
 
 from __future__ import annotations
@@ -167,8 +145,8 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
     """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
 
     Each distinct sub-expression is evaluated once (the entries of a kinematic matrix share
-    most of theirs), which is what ``sympy.lambdify`` would compute, without generating and
-    compiling code for every comparison. Numbers, π and ``E``, symbols, sums, products,
+    most of theirs), without generating code as ``sympy.lambdify`` does. Numbers, π and ``E``,
+    symbols, sums, products,
     powers and ``sin cos tan exp log Abs asin acos atan atan2`` only; anything else (an
     imaginary unit, another function) raises :class:`_Unsupported`.
     """
@@ -221,8 +199,8 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     """Numeric screening of entry pairs: ``(a == b, a == −b)`` at :data:`POINTS` random points.
 
     Every expression is evaluated (numpy, float64: :func:`_evaluate`, or ``sympy.lambdify``
-    for what it does not know) at the same
-    :data:`POINTS` points, seeded by ``key``: joint angles, ``theta`` and ``alpha`` uniform in
+    for what it does not know) at the same :data:`POINTS` points, seeded by ``key``: joint
+    angles, ``theta`` and ``alpha`` uniform in
     [−π, π] rad, every other symbol (a length) uniform in [0.5, 2]. A pair agrees when
     ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (a NaN or complex value never agrees).
 
@@ -359,8 +337,8 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
     """``det`` factored the way :func:`~hexapod_kin.symbolic.derive` factors det J.
 
     :func:`~hexapod_kin.symbolic.core.trig_factor` (exact, joints ``q`` of kinds ``sigmas``),
-    then ``sympy.factor``. The product is checked equal to ``det`` (:func:`equal`); should it
-    not be, the answer is ``factor(simplify(det))``, as it always was before.
+    then ``sympy.factor``, checked equal to ``det`` (:func:`equal`); else
+    ``factor(simplify(det))``.
     """
     from ..symbolic.core import trig_factor
 
@@ -370,7 +348,7 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
         out = sp.factor(const * sp.Mul(*[f**m for f, m in factors]))
         if equal(det, out, key + " factored"):
             return out
-    except Exception:  # noqa: BLE001 - cannot factor that way: the way it always was
+    except Exception:  # noqa: BLE001 - cannot factor that way: factor(simplify(det))
         pass
     return sp.factor(sp.simplify(det))
 
