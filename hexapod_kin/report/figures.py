@@ -68,7 +68,8 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
     plt = pyplot()
     s = ctx.schedule
     t = s["t"]
-    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
+    margins = {"left": 0.093, "right": 0.981, "bottom": 0.065, "top": 0.96, "hspace": 0.171}
+    fig, axes = plt.subplots(3, 1, figsize=(8, 9), sharex=True, gridspec_kw=margins)
     for k, lab in enumerate(("θ1 (coxa)", "θ2 (tibia)")):
         axes[0].plot(*decimate(t, np.degrees(s["q"][:, k])), label=lab)
     axes[0].set_ylabel("input angle [deg]")
@@ -86,7 +87,6 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
     for ax in axes:
         ax.grid(True, alpha=0.3)
         ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
     return save_figure(fig, out / "leg2.png", crop=False)
 
 
@@ -96,7 +96,8 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
 
     plt = pyplot()
     p = ctx.pendulum
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
+    margins = {"left": 0.071, "right": 0.986, "bottom": 0.084, "top": 0.902}
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, gridspec_kw=margins)
     for col, (run, name) in enumerate(
         ((p.undamped, "without damping"), (p.damped, f"damping {p.damped.damping:g} N·m·s/rad"))
     ):
@@ -117,7 +118,7 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
         f"pendulum from {math.degrees(u.theta0):.0f}°: period {u.period:.6f} s, "
         f"exact {u.period_exact:.6f} s"
     )
-    fig.tight_layout()
+    fig.subplots_adjust(wspace=0.169, hspace=0.155)
     return save_figure(fig, out / "pendulum.png", crop=False)
 
 
