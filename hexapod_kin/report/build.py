@@ -264,9 +264,9 @@ def _build(
     maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
     figs["jacobian"] += maps
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))
+    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
     figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
-    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
     for p in walk_paths:
         if p.suffix == ".html":
