@@ -495,7 +495,7 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
 
 def check_fk(c: Claim, ctx: Context) -> Verdict:
     """``fk``: the seed's foot position vs Pinocchio (and the table product)."""
-    from ..params import table_fk
+    from .. import table_fk
 
     q = np.radians(c.data["q_deg"])
     ours = ctx.model(c.data["model"]).position(q)
