@@ -245,13 +245,13 @@ def test_sample_points_are_the_same_in_every_process() -> None:
 
 # ---------------------------------------------------------------------- disk cache
 def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path)
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
     d = Context(quick=True).derivation("scara")
     text = d.text()
     assert report_cache.derivation_text(d, cache=False) == text
-    assert not list(tmp_path.iterdir())
+    assert not (tmp_path / "report").exists()
     assert report_cache.derivation_text(d) == text
-    (path,) = tmp_path.glob("text-*.json")
+    (path,) = tmp_path.glob("report/text-*.json")
     assert json.loads(path.read_text())["text"] == text
     path.write_text("[]")  # foreign content
     assert report_cache.derivation_text(d) == text

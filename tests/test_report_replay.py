@@ -273,9 +273,9 @@ def test_error_build_is_not_stored(
 ) -> None:
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "cache"))
     out, files = _fake_out(tmp_path, "x")
-    assert replay.store("a" * 64, {}, out, files, _record(env, "error")) is None
+    assert replay.save("a" * 64, {}, out, files, _record(env, "error")) is None
     assert not (replay.runs_dir() / ("a" * 64)).exists()
-    assert replay.store("b" * 64, {}, out, files, _record(env)) is not None
+    assert replay.save("b" * 64, {}, out, files, _record(env)) is not None
     # through reproduce: a build with an error verdict leaves no entry
     bad = dataclasses.replace(env.rep.verdicts[0], status="error", reason="forced")
     rep = dataclasses.replace(env.rep, out=out, verdicts=(bad, *env.rep.verdicts[1:]))
@@ -308,7 +308,7 @@ def test_prune_keeps_the_newest_four(
     now = time.time()
     for i, key in enumerate(keys[:6]):
         out, files = _fake_out(tmp_path, key[:4])
-        assert replay.store(key, {}, out, files, _record(env)) is not None
+        assert replay.save(key, {}, out, files, _record(env)) is not None
         os.utime(replay.runs_dir() / key / "manifest.json", (now - 100 + i, now - 100 + i))
     assert replay.KEEP == 4
     assert sorted(d.name for d in replay.runs_dir().iterdir()) == keys[2:6]
@@ -323,7 +323,7 @@ def test_prune_keeps_the_newest_four(
     young.mkdir()
     os.utime(stale, (now - 7200, now - 7200))
     out, files = _fake_out(tmp_path, "last")
-    replay.store(keys[6], {}, out, files, _record(env))
+    replay.save(keys[6], {}, out, files, _record(env))
     left = sorted(d.name for d in replay.runs_dir().iterdir())
     assert left == sorted([keys[2], keys[5], keys[4], keys[6], "f" * 64])
 

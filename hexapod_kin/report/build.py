@@ -194,7 +194,7 @@ def reproduce(
             "verdicts": [v.fields() for v in rep.verdicts],
             "facts": rep.facts,
         }
-        replay.store(key, parts, out, written, record)
+        replay.save(key, parts, out, written, record)
     return rep
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import fields
-from pathlib import Path
 from typing import Any
 
 import sympy as sp
@@ -20,15 +19,10 @@ import sympy as sp
 from .._io import atomic_write, cache_root
 from .replay import package_digest
 
-__all__ = ["FORMAT", "cache_dir", "derivation_text"]
+__all__ = ["FORMAT", "derivation_text"]
 
 #: Version of the file layout and of the key's parts.
 FORMAT = 2
-
-
-def cache_dir() -> Path:
-    """The cache folder (not created here): :func:`hexapod_kin._io.cache_root` ``("report")``."""
-    return cache_root("report")
 
 
 def _text(obj: Any) -> Any:
@@ -62,7 +56,7 @@ def derivation_text(d: Any, cache: bool = True) -> str:
         digest = _key(d)
     except Exception:  # noqa: BLE001 - no key: print it
         return str(d.text())
-    path = cache_dir() / f"text-{digest}.json"
+    path = cache_root("report") / f"text-{digest}.json"
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         if data["key"] == digest and isinstance(data["text"], str):

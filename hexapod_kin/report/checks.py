@@ -38,12 +38,12 @@ from .compare import (
     fmt,
     fmt_matrix,
     matrix_diff,
-    num,
     parse,
     parse_matrix,
     plain,
     points_on,
     tidy,
+    value_at,
     values,
     vanishes,
 )
@@ -269,7 +269,7 @@ def _with(c: Claim) -> str:
 
 
 # ---------------------------------------------------------------------- checks
-def check_matrix(c: Claim, ctx: Context) -> Verdict:
+def _check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)
     seed = _at(parse_matrix(c.data["value"]), subs)
@@ -335,7 +335,7 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
     return f"it is not the product {ids} of the seed's own factors either ({len(own)} entries)"
 
 
-def check_table(c: Claim, ctx: Context) -> Verdict:
+def _check_table(c: Claim, ctx: Context) -> Verdict:
     """``table`` claims: the seed's rows vs the preset's rows."""
     key, unit = c.data["model"], float(c.data.get("unit", 1.0))
     chain = ctx.chain(key)
@@ -358,7 +358,7 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
                         f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin"
                     )
                 continue
-            val = num(e.xreplace(lengths), {}) * (
+            val = value_at(e.xreplace(lengths), {}) * (
                 unit if not (e.free_symbols & set(lengths)) else 1.0
             )
             if abs(val - mine) > 1e-9:
@@ -402,7 +402,7 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     )
 
 
-def check_generic(c: Claim, ctx: Context) -> Verdict:
+def _check_generic(c: Claim, ctx: Context) -> Verdict:
     """``generic``: the seed's generic transform vs :func:`khalil_matrix`."""
     from ..symbolic import khalil_matrix
 
@@ -420,7 +420,7 @@ def check_generic(c: Claim, ctx: Context) -> Verdict:
     )
 
 
-def check_methods(c: Claim, ctx: Context) -> Verdict:
+def _check_methods(c: Claim, ctx: Context) -> Verdict:
     """``methods_equal``: direct and indirect Jacobians equal."""
     agree = bool(ctx.derivation(c.data["model"]).methods_agree)
     ok = agree == bool(c.data["value"])
@@ -441,7 +441,7 @@ def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
     return plain(ctx.derivation(key).det)
 
 
-def check_det(c: Claim, ctx: Context) -> Verdict:
+def _check_det(c: Claim, ctx: Context) -> Verdict:
     """``det``: the seed's det J vs hexapod_kin's factored det J."""
     subs = _subs(c)
     seed = parse(c.data["value"]).xreplace(subs)
@@ -455,7 +455,7 @@ def check_det(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", why, method)
 
 
-def check_families(c: Claim, ctx: Context) -> Verdict:
+def _check_families(c: Claim, ctx: Context) -> Verdict:
     """``families``: the seed's singular sets vs the factors of det J."""
     key = c.data["model"]
     d = ctx.derivation(key)
@@ -493,7 +493,7 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", "; ".join(parts), method)
 
 
-def check_fk(c: Claim, ctx: Context) -> Verdict:
+def _check_fk(c: Claim, ctx: Context) -> Verdict:
     """``fk``: the seed's foot position vs Pinocchio (and the table product)."""
     from .. import table_fk
 
@@ -526,7 +526,7 @@ def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) ->
     return bad
 
 
-def check_ik(c: Claim, ctx: Context) -> Verdict:
+def _check_ik(c: Claim, ctx: Context) -> Verdict:
     """``ik``: the seed's IK formulas, evaluated as written, at FK(q)."""
     from .. import ik
 
@@ -550,7 +550,7 @@ def check_ik(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong" if bad else "agrees", "; ".join(bad), method)
 
 
-def check_schedule(c: Claim, ctx: Context) -> Verdict:
+def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     """``schedule``: seed 002 Table I replayed, FK then IK (seed's formulas and ours)."""
     s = ctx.schedule
     knots = np.asarray(c.data["knots"], float)
@@ -589,7 +589,7 @@ def check_schedule(c: Claim, ctx: Context) -> Verdict:
     )
 
 
-def check_bound(c: Claim, ctx: Context) -> Verdict:
+def _check_bound(c: Claim, ctx: Context) -> Verdict:
     """``bound``: a measured quantity within ``tol`` of the claimed value."""
     val = ctx.quantity(c.data["quantity"])
     target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
@@ -619,16 +619,16 @@ def check_bound(c: Claim, ctx: Context) -> Verdict:
 
 
 CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
-    "bound": check_bound,
-    "det": check_det,
-    "families": check_families,
-    "fk": check_fk,
-    "generic": check_generic,
-    "ik": check_ik,
-    "matrix": check_matrix,
-    "methods_equal": check_methods,
-    "schedule": check_schedule,
-    "table": check_table,
+    "bound": _check_bound,
+    "det": _check_det,
+    "families": _check_families,
+    "fk": _check_fk,
+    "generic": _check_generic,
+    "ik": _check_ik,
+    "matrix": _check_matrix,
+    "methods_equal": _check_methods,
+    "schedule": _check_schedule,
+    "table": _check_table,
 }
 
 

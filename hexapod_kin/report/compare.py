@@ -34,13 +34,13 @@ __all__ = [
     "fmt",
     "fmt_matrix",
     "matrix_diff",
-    "num",
     "parse",
     "parse_matrix",
     "plain",
     "points_on",
     "screen",
     "tidy",
+    "value_at",
     "values",
     "vanishes",
 ]
@@ -118,7 +118,7 @@ def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
     return out
 
 
-def num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
     """``expr`` at ``point`` (symbols replaced by numbers), as a float."""
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
@@ -442,7 +442,7 @@ def points_on(
             if not roots:
                 continue
             q[var] = roots[int(rng.integers(len(roots)))]
-        elif abs(num(expr, {})) > 1e-12:
+        elif abs(value_at(expr, {})) > 1e-12:
             break
         pts.append(q)
         if len(pts) >= count:

@@ -45,8 +45,8 @@ __all__ = [
     "restore",
     "run_key",
     "runs_dir",
+    "save",
     "source_digest",
-    "store",
 ]
 
 #: Version of the entry layout (part of the key).
@@ -211,12 +211,12 @@ def restore(entry: Entry, out: Path) -> list[Path]:
     return written
 
 
-def utc_now() -> str:
+def _utc_now() -> str:
     """The current UTC time, ``YYYY-MM-DDTHH:MM:SSZ``."""
     return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def store(
+def save(
     key: str,
     parts: Mapping[str, Any],
     out: Path,
@@ -260,7 +260,7 @@ def store(
             "format": FORMAT,
             "key": key,
             "parts": dict(parts),
-            "built": utc_now(),
+            "built": _utc_now(),
             "files": listed,
         }
         atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, default=str))
