@@ -21,9 +21,9 @@ import sympy as sp
 
 from hexapod_kin.cli import main
 from hexapod_kin.report import cache as report_cache
-from hexapod_kin.report import checks, load_claims, replay
-from hexapod_kin.report.checks import Context
-from hexapod_kin.report.compare import equal, evaluate, matrix_diff, parse, parse_matrix, screen
+from hexapod_kin.report import load_claims, replay
+from hexapod_kin.report.checks import Context, evaluate
+from hexapod_kin.report.compare import equal, matrix_diff, parse, parse_matrix, screen
 
 #: Claims the seeds get right (read by hand: seed 001's matrices follow its own Table 1 and
 #: Eq. 1; seed 000's p and J are the derivative of the right p; seed 003's SCARA J and det).
@@ -153,7 +153,7 @@ def test_report_files_standalone(built: tuple[dict, object]) -> None:
 
 
 def test_verdicts_follow_the_claims_not_the_ids() -> None:
-    """Correct seed 000's ^1T_2 by hand: the same check now says it agrees (nothing cached)."""
+    """Correct seed 000's ^1T_2 by hand: the same check now says it agrees."""
     claims, _ = load_claims()
     c = next(x for x in claims if x.id == "000-T12")
     fixed = dict(c.data)
@@ -244,94 +244,14 @@ def test_sample_points_are_the_same_in_every_process() -> None:
 
 
 # ---------------------------------------------------------------------- disk cache
-@pytest.fixture()
-def symbolic_claims() -> list:
-    claims, _ = load_claims()
-    return claims
-
-
-def _symbolic(claims: list) -> list:
-    return [c for c in claims if c.kind in report_cache.KINDS]
-
-
-def test_cache_hit_gives_the_cold_verdicts(
-    symbolic_claims: list, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path / "report")
-    claims = symbolic_claims
-    todo = _symbolic(claims)
-    cold = evaluate(todo, Context(quick=True, claims=claims), cache=False)
-    assert not (tmp_path / "report").exists()  # cache=False neither reads nor writes
-    filled = evaluate(todo, Context(quick=True, claims=claims))
-    assert filled == cold
-    assert len(list((tmp_path / "report").glob("*.json"))) == len(todo)
-
-    def boom(*_: object) -> None:
-        raise AssertionError("recomputed although cached")
-
-    monkeypatch.setattr(checks, "CHECKS", {k: boom for k in checks.CHECKS})
-    hit = evaluate(todo, Context(quick=True, claims=claims))
-    assert hit == cold
-    assert {v.status for v in hit} <= {"agrees", "wrong", "differs"}
-
-
-def test_corrupt_or_foreign_cache_files_are_ignored(
-    symbolic_claims: list, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    folder = tmp_path / "report"
-    monkeypatch.setattr(report_cache, "cache_dir", lambda: folder)
-    claims = symbolic_claims
-    todo = [c for c in _symbolic(claims) if c.id in ("000-T12", "001-T12", "001-det")]
-    cold = evaluate(todo, Context(quick=True, claims=claims), cache=False)
-    evaluate(todo, Context(quick=True, claims=claims))
-    files = sorted(folder.glob("*.json"))
-    assert len(files) == 3
-    texts = [f.read_text() for f in files]
-    files[0].write_text("{not json")  # corrupt
-    files[1].write_text(texts[2])  # foreign: another claim's verdict under this key
-    files[2].write_text(json.dumps({"format": -1}))  # unknown layout
-    again = evaluate(todo, Context(quick=True, claims=claims))
-    assert again == cold
-    assert [json.loads(f.read_text())["key"] for f in files] == [f.stem for f in files]
-
-
-def test_figure_render_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Same data: the PNG is not drawn again; other data or a damaged PNG: drawn."""
-    from hexapod_kin.report import figures
-
-    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "cache"))
-    drawn: list[bytes] = []
-
-    def draw(path: Path) -> Path:
-        data = b"\x89PNG\r\n\x1a\n" + bytes([len(drawn)]) + b"IEND\xaeB`\x82"
-        drawn.append(data)
-        path.write_bytes(data)
-        return path
-
-    inputs = {"t": np.linspace(0.0, 1.0, 5), "title": "x"}
-    first = figures._rendered("f", inputs, tmp_path / "a.png", draw).read_bytes()
-    again = figures._rendered("f", dict(inputs), tmp_path / "b.png", draw).read_bytes()
-    assert len(drawn) == 1 and again == first
-    other = {"t": np.linspace(0.0, 1.0, 5) + 1e-15, "title": "x"}  # 1e-15 apart: drawn again
-    figures._rendered("f", other, tmp_path / "c.png", draw)
-    assert len(drawn) == 2
-    for png in (tmp_path / "cache" / "report" / "figures").glob("*.png"):
-        png.write_bytes(png.read_bytes()[:-3])  # truncated
-    figures._rendered("f", inputs, tmp_path / "d.png", draw)
-    assert len(drawn) == 3
-    figures._rendered("f", object(), tmp_path / "e.png", draw)  # not hashable: drawn
-    figures._rendered("f", object(), tmp_path / "e.png", draw)
-    assert len(drawn) == 5
-
-
 def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(report_cache, "cache_dir", lambda: tmp_path)
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
     d = Context(quick=True).derivation("scara")
     text = d.text()
     assert report_cache.derivation_text(d, cache=False) == text
-    assert not list(tmp_path.iterdir())
+    assert not (tmp_path / "report").exists()
     assert report_cache.derivation_text(d) == text
-    (path,) = tmp_path.glob("text-*.json")
+    (path,) = tmp_path.glob("report/text-*.json")
     assert json.loads(path.read_text())["text"] == text
     path.write_text("[]")  # foreign content
     assert report_cache.derivation_text(d) == text
@@ -341,8 +261,8 @@ def test_seed_ik_vectorised_equals_sympy_per_foot():
     """Seed 002's IK formulas at every schedule foot: numpy at once = sympy one foot at a time."""
     import sympy as sp
 
-    from hexapod_kin.report.checks import Context, _seed_ik
-    from hexapod_kin.report.compare import _SYMS, load_claims, parse
+    from hexapod_kin.report.checks import _seed_ik
+    from hexapod_kin.report.compare import SYMS
 
     ctx = Context(quick=True, claims=load_claims()[0])
     claim = ctx.claims["002-table1"]
@@ -351,7 +271,7 @@ def test_seed_ik_vectorised_equals_sympy_per_foot():
     got = _seed_ik(claim.data["value"], feet, lengths)
     for foot, row in zip(feet[::4], got[::4]):
         env = dict(lengths)
-        env.update({_SYMS["x"]: foot[0], _SYMS["y"]: foot[1], _SYMS["z"]: foot[2]})
+        env.update({SYMS["x"]: foot[0], SYMS["y"]: foot[1], SYMS["z"]: foot[2]})
         for name, text in claim.data["value"].items():
             expr = parse(text).xreplace({sp.Symbol(k.name): v for k, v in env.items()})
             env[sp.Symbol(name, real=True)] = float(sp.N(expr.xreplace(env)))

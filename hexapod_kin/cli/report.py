@@ -51,8 +51,7 @@ def register(sub: Any) -> None:
         "--no-cache",
         action="store_true",
         help="recompute everything instead of replaying an earlier build with the same code, "
-        "data and libraries (every experiment, symbolic verdict and figure; the cache is only "
-        "written)",
+        "data and libraries (the cache is only written)",
     )
     p.add_argument("--json", action="store_true", help="print the verdicts as one JSON object")
     p.set_defaults(func=_reproduce)

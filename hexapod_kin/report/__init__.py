@@ -1,20 +1,18 @@
 """Reproduce the four lab reports (``shared/seeds``): one command, one report, every result checked.
 
+In data-flow order:
+
 * ``claims.toml`` — the seeds' claims as data, each with its place in the seed;
 * :mod:`.data` — :class:`Claim`, :class:`Verdict`, :func:`load_claims` (light);
-* :mod:`.compare` — parsing the seeds' expressions and the comparison rules;
-* :mod:`.checks` — one check per claim kind against hexapod_kin's values (:class:`Context`);
-* :mod:`.cache` — the disk cache of the symbolic verdicts and derivation texts;
-* :mod:`.figures` — the seed-like figures (a render cache: the same data is not drawn twice)
-  and the animations;
-* :mod:`.build` — :func:`reproduce`: Markdown + standalone HTML + ``verdicts.json`` (the
-  symbolic side runs in a forked process while the experiments run);
+* :mod:`.compare` — parsing the seeds' expressions and the comparison rules (sympy, numpy);
 * :mod:`.replay` — the run cache: a run with the same source, claims, options and library
-  versions as an earlier successful build copies its files (no experiment is redone).
+  versions as an earlier successful build copies its files (light);
+* :mod:`.cache` — the disk cache of the printed derivations;
+* :mod:`.checks` — :class:`~.checks.Context` (hexapod_kin's values) and one check per claim kind;
+* :mod:`.figures` — the seed-like figures and the animations;
+* :mod:`.build` — :func:`reproduce`: Markdown + standalone HTML + ``verdicts.json``.
 
-Importing this package is light (no sympy, matplotlib, Pinocchio, numba, scipy or meshcat):
-they are imported when a report is built, not when one is replayed.
-
+Importing this package is light (no sympy, matplotlib, Pinocchio, numba, scipy or meshcat).
 ``hexapod-kin reproduce --out DIR`` is the command line.
 """
 

@@ -8,16 +8,14 @@
   so it opens offline from ``file://``;
 * ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
 
-With ``cache=True`` a run whose inputs (source, claims, options, library versions) are those
-of an earlier successful build replays it: its files are copied from the run cache
-(:mod:`.replay`) and only ``verdicts.json`` is written anew (:attr:`Report.replayed_from`).
-This module imports nothing heavy at module level: a replay stays light.
+With ``cache=True`` a run whose inputs are those of an earlier successful build replays it
+(:mod:`.replay`): its files are copied and only ``verdicts.json`` is written anew. Nothing
+heavy is imported at module level: a replay stays light.
 """
 
 from __future__ import annotations
 
 import base64
-import dataclasses
 import html
 import json
 import time
@@ -25,9 +23,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._fork import Forked
 from .._io import atomic_write
-from .data import Verdict, pendulum_duration
+from . import replay
+from .data import Verdict, load_claims
 
 __all__ = ["SECTIONS", "Report", "reproduce"]
 
@@ -161,10 +159,9 @@ def reproduce(
         out: Report folder (created).
         quick: Reduced sizes (shorter runs, coarser scans) for tests.
         animations: Write the step and walk animations (needs the ``viewer`` extra).
-        cache: Use the report's disk caches: replay an earlier build with the same inputs
-            (:mod:`.replay`), else reuse the symbolic verdicts, derivation texts and rendered
-            figures (:mod:`.cache`, :mod:`.figures`); ``False`` computes and draws everything
-            again (and stores the result for the next run).
+        cache: Replay an earlier build with the same inputs (:mod:`.replay`) and reuse the
+            printed derivations (:mod:`.cache`); ``False`` computes everything again (and
+            stores the result for the next run).
 
     Returns:
         The :class:`Report` (``replayed_from`` tells whether it was replayed).
@@ -173,8 +170,6 @@ def reproduce(
         ParameterError: A file of ``out`` cannot be written.
 
     """
-    from . import replay
-
     start = time.perf_counter()
     out = Path(out)
     try:
@@ -196,18 +191,17 @@ def reproduce(
             "summary": rep.summary(),
             "counts": rep.counts,
             "seconds": rep.seconds,
-            "verdicts": [dataclasses.asdict(v) for v in rep.verdicts],
+            "verdicts": [v.fields() for v in rep.verdicts],
             "facts": rep.facts,
         }
-        replay.store(key, parts, out, written, record)
+        replay.save(key, parts, out, written, record)
     return rep
 
 
 def _storable(rep: Report, parts: dict[str, Any]) -> bool:
     """A complete build whose inputs did not change while it ran (the source is re-read)."""
-    from . import replay
-
-    if rep.counts["error"] or "step_animation" in rep.facts:
+    unwritten = "step_animation" in rep.facts or "walk_animation" in rep.facts.get("hexapod", {})
+    if rep.counts["error"] or unwritten:
         return False
     try:
         return replay.key_parts(
@@ -223,15 +217,12 @@ def _replayed(entry: Any, out: Path, start: float) -> Report | None:
     """The report of a replayed entry (its files copied into ``out``), or None (unusable)."""
     rec = entry.record
     try:
-        names = [f.name for f in dataclasses.fields(Verdict)]
-        verdicts = tuple(Verdict(**{n: str(v[n]) for n in names}) for v in rec["verdicts"])
+        verdicts = tuple(Verdict.from_fields(v) for v in rec["verdicts"])
         facts, built, build_seconds = dict(rec["facts"]), str(rec["built"]), float(rec["seconds"])
     except Exception:  # noqa: BLE001 - a manifest we cannot read back: build
         return None
     if any(v.status == "error" for v in verdicts):
         return None
-    from . import replay
-
     replay.restore(entry, out)
     md_path, html_path = out / "report.md", out / "report.html"
     seconds = time.perf_counter() - start
@@ -250,168 +241,49 @@ def _build(
 
     """
     from . import figures
+    from .checks import Context, evaluate
 
-    (out / "figures").mkdir(parents=True, exist_ok=True)
+    fdir = out / "figures"
+    fdir.mkdir(parents=True, exist_ok=True)
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     facts: dict[str, Any] = {}
-    fdir = out / "figures"
-    duration = 1.5 if quick else 3.0
-    texts = ("leg", "leg+", "scara")
-    grid = 21 if quick else 61
-
-    def dynamics_side() -> tuple[Any, Path, tuple[list[Path], dict[str, Any]]]:
-        from ..dynamics import pendulum_experiment
-
-        pend = pendulum_experiment(duration=pendulum_duration(quick))
-        png = figures.pendulum_figure(_PendulumOnly(pend, cache), fdir)
-        return pend, png, figures.walk_figures(fdir, duration, animations, cache)
-
-    # Three processes where the platform forks (results come back pickled; a child that
-    # cannot fork, fails or dies is redone here, the same way): the pendulum and the walk
-    # first, at once (they import what they need on the core that would otherwise wait while
-    # this process imports), then, once the modules it shares with this process are loaded,
-    # sympy and what reads it (bounded by Forked's budget, it derives in itself, not a fork
-    # per chain); the step and the heat maps here.
-    side = Forked(dynamics_side)
-    _preload(animations, symbolic=False)
-    from ..symbolic import in_process
-    from .cache import derivation_text
-    from .checks import Context
-    from .compare import evaluate, load_claims
-
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims, cache=cache)
-
-    def symbolic_side() -> tuple[Any, ...]:
-        # the sympy work (families, derivations, the claims' verdicts), then what reads it:
-        # the schedule needs coxa's lengths
-        sym = _symbolic_side(ctx, claims)
-        leg2 = figures.leg2_figure(ctx, fdir)
-        derived = {k: derivation_text(ctx.derivation(k), cache) for k in texts}
-        return sym, ctx.schedule, leg2, derived
-
-    _preload(animations, symbolic=True)
-    ahead = Forked(in_process(symbolic_side), budget=_AHEAD_BUDGET * (len(DERIVED) + 2))
-    try:
-        figs["step"].append(figures.step_figure(ctx, fdir))
-        facts["step"] = ctx.step.as_dict()
-        if animations:
-            try:
-                anims["step"].append(figures.step_animation(ctx, out))
-            except Exception as exc:
-                facts["step_animation"] = f"not written: {exc}"
-        # by now the sympy child has stored the families the heat maps label (it derives
-        # them first), so this process reads them instead of deriving them too
-        maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, grid)
-        figs["jacobian"] += maps
-        pendulum, pend_png, (walk_paths, facts["hexapod"]) = side.result() or dynamics_side()
-        ctx.__dict__["pendulum"] = pendulum  # the Context's cached_property, as if run here
-        figs["pendulum"].append(pend_png)
-        facts["pendulum"] = {
-            k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)
-        }
-        figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
-        sym, schedule, leg2_png, derivations = ahead.result() or symbolic_side()
-    finally:
-        side.stop()
-        ahead.stop()
-    ctx.__dict__["schedule"] = schedule
-    figs["leg2"].append(leg2_png)
-    rest = iter(evaluate([c for c in claims if c.kind in HERE], ctx, cache=cache))
-    done = iter(sym)
-    verdicts = [next(rest) if c.kind in HERE else next(done) for c in claims]
+    # the derivations first: the heat maps label their samples with the families derived here
+    derivations = {k: ctx.text(k) for k in _PRINTED}
+    verdicts = tuple(evaluate(claims, ctx))
+    figs["step"].append(figures.step_figure(ctx, fdir))
+    step = ctx.step
+    facts["step"] = (getattr(step, "to_dict", None) or step.as_dict)()  # as_dict: before h2
     if animations:
-        for p in walk_paths:
-            if p.suffix == ".html":
-                target = out / "walk.html"
-                p.replace(target)
-                anims["beyond"].append(target)
+        try:
+            anims["step"].append(figures.step_animation(ctx, out))
+        except Exception as exc:
+            facts["step_animation"] = f"not written: {exc}"
+    maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+    figs["jacobian"] += maps
+    figs["leg2"].append(figures.leg2_figure(ctx, fdir))
+    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
+    figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
+    facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
+    figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
+    for p in walk_paths:
+        if p.suffix == ".html":
+            anims["beyond"].append(p.replace(out / "walk.html"))
     md_path, html_path = out / "report.md", out / "report.html"
-    rep = Report(out, md_path, html_path, tuple(verdicts), facts, 0.0)
-    parts = (rep, seeds, figs, anims, derivations)
-    atomic_write(md_path, _markdown(*parts))
-    atomic_write(html_path, _html(*parts))
+    parts = (Report(out, md_path, html_path, verdicts, facts, 0.0), seeds, figs, anims)
+    atomic_write(md_path, _markdown(*parts, derivations))
+    atomic_write(html_path, _html(*parts, derivations))
     seconds = time.perf_counter() - start
-    rep = Report(out, md_path, html_path, tuple(verdicts), facts, seconds, None, seconds)
+    rep = Report(out, md_path, html_path, verdicts, facts, seconds, None, seconds)
     atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
     written = [md_path, html_path] + [p for k in figs for p in figs[k] + anims[k]]
     return rep, written
 
 
-@dataclass(frozen=True)
-class _PendulumOnly:
-    """What :func:`.figures.pendulum_figure` reads of a ``Context``: the run and the cache flag."""
-
-    pendulum: Any
-    cache: bool
-
-
-def _preload(animations: bool, symbolic: bool) -> None:
-    """Import what this process shares with the sympy child, before it forks.
-
-    A forked child shares the parent's imported modules; imported after the fork, Pinocchio,
-    numba, scipy, lxml and matplotlib would be imported twice, on cores that are busy by
-    then. ``symbolic=False``: the kinematics, the step, the figures, the dynamics and gait
-    modules whose results come back pickled (and the viewer for the animations); ``True``:
-    the kernels, the singularity families and the derivations.
-    """
-    import importlib
-
-    if symbolic:  # what the sympy side shares with this process
-        names = ["motion._kernel", "singularity.scans", "singularity.families", "symbolic"]
-    else:
-        names = ["kinematics", "seeds", "dynamics", "gait", "plots"]
-        if animations:
-            names += ["viewer", "viewer.page"]
-    for name in names:
-        try:
-            importlib.import_module(f"hexapod_kin.{name}")
-        except Exception:  # noqa: BLE001 - a missing extra: the part that needs it says so
-            pass
-    if symbolic:
-        return
-    try:
-        from .. import load
-        from ..plots import pyplot
-
-        load("hexabot_leg")  # the URDF reader (lxml, the gate) on first use
-        pyplot()
-    except Exception:  # noqa: BLE001 - no matplotlib: the figures say so when drawn
-        pass
-
-
-#: Claim kinds checked in the build's own process: they read its experiments (the step) and
-#: the pendulum's (sent back by the dynamics child). Every other kind is checked in the sympy
-#: child, where the derivations they read are.
-HERE = frozenset({"bound"})
-#: The models whose derivations the checks read (coxa first: the schedule needs its lengths).
-DERIVED = ("coxa", "leg", "leg+", "scara")
-#: The models of :func:`.figures.heat_maps` (their families are derived ahead too).
-HEAT_MAP_MODELS = ("leg", "scara")
-_AHEAD_BUDGET = 60.0
-
-
-def _symbolic_side(ctx: Any, claims: list[Any]) -> list[Verdict]:
-    """The sympy work of a build, in the order the other processes need it.
-
-    First the families the heat maps label (on disk before the parent scans), then the
-    derivations of :data:`DERIVED` (:func:`hexapod_kin.symbolic.derive`, budget 60 s each),
-    then the verdicts of every claim of ``claims`` whose kind is not in :data:`HERE`, in
-    their order (the symbolic ones, :data:`.cache.KINDS`, read from and stored in the disk
-    cache with ``ctx.cache``).
-    """
-    from .. import load
-    from ..singularity.families import families_for
-    from ..singularity.measure import selected_rows
-    from .compare import evaluate
-
-    for key in HEAT_MAP_MODELS:
-        model = load(ctx.chain(key))
-        families_for(model, tuple(selected_rows(model, None)), derive=True)
-    for key in DERIVED:
-        ctx.derivation(key)
-    return evaluate([c for c in claims if c.kind not in HERE], ctx, cache=ctx.cache)
+#: The derivations printed in the report, in its order.
+_PRINTED = ("leg", "leg+", "scara")
 
 
 _LABEL = {

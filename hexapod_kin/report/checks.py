@@ -1,7 +1,22 @@
-"""One check per claim kind, and the :class:`Context` holding hexapod_kin's values (lazily).
+"""One check per claim kind, the :class:`Context` holding hexapod_kin's values, :func:`evaluate`.
 
-Every check returns a :class:`~.compare.Verdict` computed from the claim's data and the
-context; see :mod:`hexapod_kin.report.compare` for the comparison rules and tolerances.
+Each claim of ``claims.toml`` is compared with hexapod_kin's own value (rules and tolerances
+in :mod:`.compare`); no verdict is written by hand:
+
+* ``table`` — the seed's Khalil rows against the preset's (lengths × the claim's ``unit``); a
+  different α is reported with what it does to the FK (checked symbolically);
+* ``matrix`` — ``^{j-1}T_j``, ``^0T_j``, ``p``, ``J`` against
+  :func:`hexapod_kin.symbolic.derive`, entry by entry; a wrong matrix is also tried against
+  the other α2 sign, the product of the seed's own factors and the derivative of the seed's
+  own ``p``, to say where the slip comes from;
+* ``det`` — the seed's det J against hexapod_kin's (and its opposite);
+* ``families`` — points on every true family must zero a seed residual (else *missing*),
+  points on every seed set must zero det J (else *not singular*);
+* ``generic`` — against :func:`hexapod_kin.symbolic.khalil_matrix`; ``methods_equal`` —
+  :attr:`Derivation.methods_agree`;
+* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
+  :func:`hexapod_kin.ik.analytic`, the seed's IK formulas evaluated as written;
+* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``.
 """
 
 from __future__ import annotations
@@ -15,26 +30,26 @@ import numpy as np
 import sympy as sp
 
 from .compare import (
-    _Q,
-    _SYMS,
     RTOL,
-    Claim,
-    Verdict,
-    _fmt,
-    _fmt_matrix,
-    _num,
+    SYMS,
+    Q,
     equal,
     factored,
+    fmt,
+    fmt_matrix,
     matrix_diff,
     parse,
     parse_matrix,
     plain,
     points_on,
     tidy,
+    value_at,
+    values,
     vanishes,
 )
+from .data import Claim, Verdict
 
-__all__ = ["CHECKS", "MODELS", "Context"]
+__all__ = ["CHECKS", "MODELS", "Context", "evaluate"]
 
 #: Claim ``model`` → the hexapod_kin preset and its parameters.
 MODELS: dict[str, tuple[str, dict[str, float]]] = {
@@ -53,7 +68,7 @@ class Context:
     Args:
         quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
         claims: All claims (a matrix check looks up the seed's own factors).
-        cache: Read and write the report's disk caches (verdicts, texts, figures).
+        cache: Read and write the disk cache of the printed derivations (:mod:`.cache`).
 
     """
 
@@ -63,7 +78,9 @@ class Context:
         self.quick = quick
         self.cache = cache
         self.claims = {c.id: c for c in claims or []}
+        self.pendulum_duration = 12.0 if quick else 20.0
         self._derived: dict[str, Any] = {}
+        self._models: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
     # ------------------------------------------------------------------ models
@@ -75,18 +92,26 @@ class Context:
         return robots.get(name, **params)
 
     def derivation(self, key: str) -> Any:
-        """:func:`hexapod_kin.symbolic.derive` of the model (cached)."""
+        """:func:`hexapod_kin.symbolic.derive` of the model, kept (no budget: small tables)."""
         from ..symbolic import derive
 
         if key not in self._derived:
-            self._derived[key] = derive(self.chain(key), budget=60.0)
+            self._derived[key] = derive(self.chain(key), budget=None)
         return self._derived[key]
 
     def model(self, key: str) -> Any:
-        """The loaded (Pinocchio) model of a claim's ``model``."""
+        """The loaded (Pinocchio) model of a claim's ``model`` (loaded once)."""
         from .. import load
 
-        return load(self.chain(key))
+        if key not in self._models:
+            self._models[key] = load(self.chain(key))
+        return self._models[key]
+
+    def text(self, key: str) -> str:
+        """The printed derivation of the model (:func:`.cache.derivation_text`)."""
+        from .cache import derivation_text
+
+        return derivation_text(self.derivation(key), self.cache)
 
     def lengths(self, key: str) -> dict[sp.Symbol, float]:
         """The preset's length values by plain symbol."""
@@ -130,9 +155,8 @@ class Context:
     def pendulum(self) -> Any:
         """Seed 001's pendulum, undamped and damped (:func:`pendulum_experiment`)."""
         from ..dynamics import pendulum_experiment
-        from .data import pendulum_duration
 
-        return pendulum_experiment(duration=pendulum_duration(self.quick))
+        return pendulum_experiment(duration=self.pendulum_duration)
 
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:
@@ -228,7 +252,7 @@ def _at(m: Any, subs: dict[sp.Symbol, float]) -> Any:
 
 
 def _subs(c: Claim) -> dict[sp.Symbol, float]:
-    return {_SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
+    return {SYMS[k]: sp.Float(v) for k, v in c.data.get("subs", {}).items()}
 
 
 _SYMBOLIC = f"symbolic: every entry at random points (rel. tol {RTOL:g}) then simplify(a - b) == 0"
@@ -245,13 +269,13 @@ def _with(c: Claim) -> str:
 
 
 # ---------------------------------------------------------------------- checks
-def check_matrix(c: Claim, ctx: Context) -> Verdict:
+def _check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)
     seed = _at(parse_matrix(c.data["value"]), subs)
     truth = _at(ctx.item(key, item), subs)
     claimed = _raw(c.data["value"]) + _with(c)
-    computed = _fmt_matrix(truth.applyfunc(tidy))
+    computed = fmt_matrix(truth.applyfunc(tidy))
     if seed.shape != truth.shape:
         return _verdict(
             c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
@@ -268,7 +292,7 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
         notes.append(_own_product(c, ctx, seed, subs))
     if "derivative_of" in c.data:
         p = _at(parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]), subs)
-        dp = p.jacobian(_Q[: seed.cols])
+        dp = p.jacobian(Q[: seed.cols])
         own = matrix_diff(seed, dp, c.id + "d")
         notes.append(
             "it is the derivative of the seed's own p"
@@ -278,9 +302,10 @@ def check_matrix(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", " — ".join(n for n in notes if n), _SYMBOLIC)
 
 
-def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
+def _own_factors(c: Claim, ctx: Context) -> list[Claim]:
+    """The seed's own ``^{k-1}T_k`` claims (k = 1 … j) whose product a ``^0T_j`` claim is."""
     j = int(c.data["item"][3:])
-    factors = []
+    out = []
     for k in range(1, j + 1):
         f = [
             x
@@ -291,19 +316,26 @@ def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
             and x.data.get("item") == f"T {k}"
         ]
         if not f:
-            return ""
-        factors.append(_at(parse_matrix(f[0].data["value"]), subs))
+            return []
+        out.append(f[0])
+    return out
+
+
+def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:
+    factors = _own_factors(c, ctx)
+    if not factors:
+        return ""
     prod = sp.eye(4)
     for f in factors:
-        prod = prod * f
+        prod = prod * _at(parse_matrix(f.data["value"]), subs)
     own = matrix_diff(seed, prod, c.id + "p", explain=False)
-    ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, j + 1))
+    ids = "·".join(f"^{k - 1}T_{k}" for k in range(1, len(factors) + 1))
     if not own:
         return f"it is the product {ids} of the seed's own factors"
     return f"it is not the product {ids} of the seed's own factors either ({len(own)} entries)"
 
 
-def check_table(c: Claim, ctx: Context) -> Verdict:
+def _check_table(c: Claim, ctx: Context) -> Verdict:
     """``table`` claims: the seed's rows vs the preset's rows."""
     key, unit = c.data["model"], float(c.data.get("unit", 1.0))
     chain = ctx.chain(key)
@@ -320,13 +352,13 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
             ("θ", theta, row.theta, row.sigma == "revolute"),
         ):
             e = parse(text).xreplace(subs)
-            if any(s in _Q for s in e.free_symbols):
+            if any(s in Q for s in e.free_symbols):
                 if not var:
                     problems.append(
                         f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin"
                     )
                 continue
-            val = _num(e.xreplace(lengths), {}) * (
+            val = value_at(e.xreplace(lengths), {}) * (
                 unit if not (e.free_symbols & set(lengths)) else 1.0
             )
             if abs(val - mine) > 1e-9:
@@ -354,11 +386,11 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     fk = (
         (
             f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
-            f"(checked symbolically: {mirror}): p_z = {_fmt(p_plus[2])}, a positive knee "
+            f"(checked symbolically: {mirror}): p_z = {fmt(p_plus[2])}, a positive knee "
             f"angle lifts the foot; the lengths agree"
         )
         if mirror
-        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {_fmt_matrix(p_plus.T)}")
+        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}")
     )
     return _verdict(
         c,
@@ -370,25 +402,25 @@ def check_table(c: Claim, ctx: Context) -> Verdict:
     )
 
 
-def check_generic(c: Claim, ctx: Context) -> Verdict:
+def _check_generic(c: Claim, ctx: Context) -> Verdict:
     """``generic``: the seed's generic transform vs :func:`khalil_matrix`."""
     from ..symbolic import khalil_matrix
 
-    s = _SYMS
+    s = SYMS
     truth = sp.Matrix(khalil_matrix(s["alpha"], s["d"], s["theta"], s["r"]))
     seed = parse_matrix(c.data["value"])
     diffs = matrix_diff(seed, truth, c.id)
     return _verdict(
         c,
-        _fmt_matrix(seed),
-        _fmt_matrix(truth),
+        fmt_matrix(seed),
+        fmt_matrix(truth),
         "wrong" if diffs else "agrees",
         "; ".join(diffs),
         _SYMBOLIC,
     )
 
 
-def check_methods(c: Claim, ctx: Context) -> Verdict:
+def _check_methods(c: Claim, ctx: Context) -> Verdict:
     """``methods_equal``: direct and indirect Jacobians equal."""
     agree = bool(ctx.derivation(c.data["model"]).methods_agree)
     ok = agree == bool(c.data["value"])
@@ -409,13 +441,13 @@ def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
     return plain(ctx.derivation(key).det)
 
 
-def check_det(c: Claim, ctx: Context) -> Verdict:
+def _check_det(c: Claim, ctx: Context) -> Verdict:
     """``det``: the seed's det J vs hexapod_kin's factored det J."""
     subs = _subs(c)
     seed = parse(c.data["value"]).xreplace(subs)
     d = ctx.derivation(c.data["model"])
     truth = factored(_det_truth(c, ctx).xreplace(subs), d.q, d.chain.sigmas, c.id)
-    claimed, computed = str(c.data["value"]) + _with(c), _fmt(truth)
+    claimed, computed = str(c.data["value"]) + _with(c), fmt(truth)
     method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
     if equal(seed, truth, c.id):
         return _verdict(c, claimed, computed, "agrees", "", method)
@@ -423,18 +455,15 @@ def check_det(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", why, method)
 
 
-def check_families(c: Claim, ctx: Context) -> Verdict:
+def _check_families(c: Claim, ctx: Context) -> Verdict:
     """``families``: the seed's singular sets vs the factors of det J."""
     key = c.data["model"]
     d = ctx.derivation(key)
     nq = d.chain.nq
     lengths = ctx.lengths(key)
     det = plain(d.numeric(d.det))
-    rng = np.random.default_rng(7)
     det_scale = float(
-        np.median(
-            [abs(_num(det, {q: v for q, v in zip(_Q, rng.uniform(-3, 3, nq))})) for _ in range(20)]
-        )
+        np.median(np.abs(values(det, np.random.default_rng(7).uniform(-3, 3, (20, nq)))))
     )
     seeds = [parse(v).xreplace(lengths) for v in c.data["value"]]
     missing, spurious = [], []
@@ -449,10 +478,10 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
         pts = points_on(s, nq, c.id + text)
         if len(pts) and not vanishes(det, pts, det_scale, 1e-9):
             q = np.round(pts[0], 3).tolist()
-            val = _num(det, {qq: v for qq, v in zip(_Q, pts[0])})
+            val = float(values(det, pts[:1])[0])
             spurious.append(f"{text} = 0 is not singular (det J = {val:.3g} at q = {q})")
     claimed = ", ".join(f"{v} = 0" for v in c.data["value"]) or "no singularity"
-    computed = f"det J = {_fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
+    computed = f"det J = {fmt(d.det)}; families: " + ", ".join(f.name for f in d.families)
     method = (
         "numeric on sampled points: a seed set covers a family when its residual is "
         "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
@@ -464,9 +493,9 @@ def check_families(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong", "; ".join(parts), method)
 
 
-def check_fk(c: Claim, ctx: Context) -> Verdict:
+def _check_fk(c: Claim, ctx: Context) -> Verdict:
     """``fk``: the seed's foot position vs Pinocchio (and the table product)."""
-    from ..params import table_fk
+    from .. import table_fk
 
     q = np.radians(c.data["q_deg"])
     ours = ctx.model(c.data["model"]).position(q)
@@ -497,7 +526,7 @@ def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) ->
     return bad
 
 
-def check_ik(c: Claim, ctx: Context) -> Verdict:
+def _check_ik(c: Claim, ctx: Context) -> Verdict:
     """``ik``: the seed's IK formulas, evaluated as written, at FK(q)."""
     from .. import ik
 
@@ -521,7 +550,7 @@ def check_ik(c: Claim, ctx: Context) -> Verdict:
     return _verdict(c, claimed, computed, "wrong" if bad else "agrees", "; ".join(bad), method)
 
 
-def check_schedule(c: Claim, ctx: Context) -> Verdict:
+def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     """``schedule``: seed 002 Table I replayed, FK then IK (seed's formulas and ours)."""
     s = ctx.schedule
     knots = np.asarray(c.data["knots"], float)
@@ -560,7 +589,7 @@ def check_schedule(c: Claim, ctx: Context) -> Verdict:
     )
 
 
-def check_bound(c: Claim, ctx: Context) -> Verdict:
+def _check_bound(c: Claim, ctx: Context) -> Verdict:
     """``bound``: a measured quantity within ``tol`` of the claimed value."""
     val = ctx.quantity(c.data["quantity"])
     target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
@@ -590,14 +619,29 @@ def check_bound(c: Claim, ctx: Context) -> Verdict:
 
 
 CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
-    "bound": check_bound,
-    "det": check_det,
-    "families": check_families,
-    "fk": check_fk,
-    "generic": check_generic,
-    "ik": check_ik,
-    "matrix": check_matrix,
-    "methods_equal": check_methods,
-    "schedule": check_schedule,
-    "table": check_table,
+    "bound": _check_bound,
+    "det": _check_det,
+    "families": _check_families,
+    "fk": _check_fk,
+    "generic": _check_generic,
+    "ik": _check_ik,
+    "matrix": _check_matrix,
+    "methods_equal": _check_methods,
+    "schedule": _check_schedule,
+    "table": _check_table,
 }
+
+
+def evaluate(claims: list[Claim], ctx: Context) -> list[Verdict]:
+    """Compute every claim's verdict against ``ctx``.
+
+    A comparison that raises gives status ``"error"`` with the exception (never skipped).
+    """
+    out = []
+    for claim in claims:
+        try:
+            out.append(CHECKS[claim.kind](claim, ctx))
+        except Exception as exc:  # recorded, reported, and failed by the CLI and the test
+            why = f"{type(exc).__name__}: {exc}"
+            out.append(_verdict(claim, str(claim.data.get("value")), "", "error", why, ""))
+    return out

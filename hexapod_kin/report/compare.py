@@ -1,36 +1,11 @@
-"""Computed verdicts for the seeds' claims (``claims.toml``): nothing here is written by hand.
+"""The report's comparison rules: the seeds' expressions parsed, screened numerically, proved.
 
-Each claim of :data:`claims.toml <hexapod_kin.report>` is compared with hexapod_kin's own value:
-
-* ``table`` — the seed's Khalil rows against the preset's rows (lengths scaled by the claim's
-  ``unit``); a different α is reported with what it does to the FK (checked symbolically);
-* ``matrix`` — a symbolic matrix (``^{j-1}T_j``, ``^0T_j``, ``p``, ``J``) against
-  :func:`hexapod_kin.symbolic.derive`: every entry at :data:`POINTS` random points seeded by
-  the claim (:func:`screen`: numpy, relative tolerance :data:`RTOL`), then
-  ``simplify(a - b) == 0`` for the entries that agree (an exact proof, cheapest first: see
-  :func:`_zero`); a differing entry is printed (:func:`tidy`) only to explain it;
-  a wrong matrix is also tested against the other α2 sign, the product of the seed's own
-  factors and the derivative of the seed's own ``p`` to say where the slip comes from;
-* ``det`` — ``simplify(seed − det J) == 0`` (and ``±`` / scale when not);
-* ``families`` — the seed's singular sets (residual expressions) against the factors of
-  ``det J``: points sampled on every true family must zero a seed residual (else *missing*),
-  points on every seed set must zero ``det J`` (else *not singular*);
-* ``generic`` — the seed's generic transform against :func:`hexapod_kin.symbolic.khalil_matrix`;
-* ``methods_equal`` — :attr:`Derivation.methods_agree`;
-* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
-  :func:`hexapod_kin.ik.analytic`; the seed's IK formulas are evaluated as written;
-* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``
-  of the claimed value.
-
-"``simplify(a − b) == 0``" in the verdicts' method is decided exactly, cheapest first:
-``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
+A symbolic entry agrees when it matches at :data:`POINTS` random points (:func:`screen`,
+relative tolerance :data:`RTOL`) and ``simplify(a − b) == 0``, decided exactly, cheapest first
+(:func:`_zero`): ``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
 ``sin(x)² + cos(x)² = 1`` for every angle ``x`` is 0 (:func:`_reduces_to_zero`); else
-``sympy.simplify(...) == 0``. Each is a proof that ``a − b`` vanishes identically; a
-non-zero result of the first two only passes the question on. Hexapod_kin's expressions
-are printed by :func:`tidy` (``sympy.simplify``'s non-trigonometric steps).
-
-The symbolic verdicts are kept on disk (:mod:`.cache`), keyed by the claim, hexapod_kin's
-expressions and the package source.
+``sympy.simplify(...) == 0``. A non-zero result of the first two only passes the question on.
+hexapod_kin's expressions are printed by :func:`tidy`.
 """
 
 from __future__ import annotations
@@ -49,17 +24,25 @@ from sympy.core.rules import Transform
 from sympy.parsing.sympy_parser import parse_expr
 from sympy.simplify.radsimp import collect_abs
 
-from .data import CLAIMS_FILE, Claim, Verdict, load_claims
-
 __all__ = [
-    "CLAIMS_FILE",
     "POINTS",
+    "Q",
     "RTOL",
-    "Claim",
-    "Verdict",
-    "evaluate",
-    "load_claims",
+    "SYMS",
+    "equal",
+    "factored",
+    "fmt",
+    "fmt_matrix",
+    "matrix_diff",
     "parse",
+    "parse_matrix",
+    "plain",
+    "points_on",
+    "screen",
+    "tidy",
+    "value_at",
+    "values",
+    "vanishes",
 ]
 
 #: Random points per symbolic comparison.
@@ -67,17 +50,18 @@ POINTS = 8
 #: Relative tolerance of a numeric entry comparison (scaled by 1 + |value|).
 RTOL = 1e-9
 
-_Q = [sp.Symbol(f"q{i}", real=True) for i in range(1, 5)]
+#: The joint symbols ``q1`` … ``q4`` of the seeds' expressions.
+Q = [sp.Symbol(f"q{i}", real=True) for i in range(1, 5)]
 _NAMES = ["l1", "l2", "l3", "r1", "d2", "d3", "x", "y", "z", "theta", "alpha", "d", "r", "beta"]
-_SYMS: dict[str, sp.Symbol] = {s.name: s for s in _Q}
-_SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
+#: Every symbol of the seeds' expressions by name (real).
+SYMS: dict[str, sp.Symbol] = {s.name: s for s in Q}
+SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
 
 
 def _locals() -> dict[str, Any]:
-    loc: dict[str, Any] = dict(_SYMS)
-    q = _Q
+    loc: dict[str, Any] = dict(SYMS)
     for combo in ("1", "2", "3", "12", "23", "123"):
-        angle = sum(q[int(k) - 1] for k in combo)
+        angle = sum(Q[int(k) - 1] for k in combo)
         loc[f"c{combo}"] = sp.cos(angle)
         loc[f"s{combo}"] = sp.sin(angle)
     loc["pi"] = sp.pi
@@ -114,7 +98,7 @@ def _parse(text: str) -> sp.Expr:
 def plain(expr: Any) -> Any:
     """``expr`` with every symbol renamed onto this module's real symbols (by name)."""
     expr = sp.sympify(expr)
-    rename = {s: _SYMS[s.name] for s in expr.free_symbols if _SYMS.get(s.name, s) != s}
+    rename = {s: SYMS[s.name] for s in expr.free_symbols if SYMS.get(s.name, s) != s}
     return expr.xreplace(rename) if rename else expr
 
 
@@ -134,7 +118,8 @@ def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
     return out
 
 
-def _num(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
+    """``expr`` at ``point`` (symbols replaced by numbers), as a float."""
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
@@ -160,8 +145,8 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
     """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
 
     Each distinct sub-expression is evaluated once (the entries of a kinematic matrix share
-    most of theirs), which is what ``sympy.lambdify`` would compute, without generating and
-    compiling code for every comparison. Numbers, π and ``E``, symbols, sums, products,
+    most of theirs), without generating code as ``sympy.lambdify`` does. Numbers, π and ``E``,
+    symbols, sums, products,
     powers and ``sin cos tan exp log Abs asin acos atan atan2`` only; anything else (an
     imaginary unit, another function) raises :class:`_Unsupported`.
     """
@@ -214,8 +199,8 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     """Numeric screening of entry pairs: ``(a == b, a == −b)`` at :data:`POINTS` random points.
 
     Every expression is evaluated (numpy, float64: :func:`_evaluate`, or ``sympy.lambdify``
-    for what it does not know) at the same
-    :data:`POINTS` points, seeded by ``key``: joint angles, ``theta`` and ``alpha`` uniform in
+    for what it does not know) at the same :data:`POINTS` points, seeded by ``key``: joint
+    angles, ``theta`` and ``alpha`` uniform in
     [−π, π] rad, every other symbol (a length) uniform in [0.5, 2]. A pair agrees when
     ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (a NaN or complex value never agrees).
 
@@ -352,8 +337,8 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
     """``det`` factored the way :func:`~hexapod_kin.symbolic.derive` factors det J.
 
     :func:`~hexapod_kin.symbolic.core.trig_factor` (exact, joints ``q`` of kinds ``sigmas``),
-    then ``sympy.factor``. The product is checked equal to ``det`` (:func:`equal`); should it
-    not be, the answer is ``factor(simplify(det))``, as it always was before.
+    then ``sympy.factor``, checked equal to ``det`` (:func:`equal`); else
+    ``factor(simplify(det))``.
     """
     from ..symbolic.core import trig_factor
 
@@ -363,17 +348,20 @@ def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -
         out = sp.factor(const * sp.Mul(*[f**m for f, m in factors]))
         if equal(det, out, key + " factored"):
             return out
-    except Exception:  # noqa: BLE001 - cannot factor that way: the way it always was
+    except Exception:  # noqa: BLE001 - cannot factor that way: factor(simplify(det))
         pass
     return sp.factor(sp.simplify(det))
 
 
-def _fmt(expr: Any) -> str:
+@lru_cache(maxsize=4096)
+def fmt(expr: Any) -> str:
+    """``expr`` as text (``sympy.sstr``, short floats), remembered (the same entries recur)."""
     return sp.sstr(sp.sympify(expr), full_prec=False)
 
 
-def _fmt_matrix(m: sp.Matrix) -> str:
-    return "[" + "; ".join(", ".join(_fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
+def fmt_matrix(m: sp.Matrix) -> str:
+    """A matrix as ``[a, b; c, d]`` (:func:`fmt` entries)."""
+    return "[" + "; ".join(", ".join(fmt(v) for v in m.row(i)) for i in range(m.rows)) + "]"
 
 
 def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = True) -> list[str]:
@@ -394,7 +382,7 @@ def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = Tru
             continue
         i, j = divmod(k, truth.cols)
         note = " (sign slip)" if opposite[k] and _zero(x + y) else ""
-        out.append(f"({i + 1},{j + 1}): seed {_fmt(x)} vs {_fmt(tidy(y))}{note}")
+        out.append(f"({i + 1},{j + 1}): seed {fmt(x)} vs {fmt(tidy(y))}{note}")
     return out
 
 
@@ -404,23 +392,23 @@ def parse_matrix(rows: Any) -> sp.Matrix:
 
 
 # ---------------------------------------------------------------------- family sampling
-def _roots(f: Callable[[np.ndarray], np.ndarray], grid: np.ndarray) -> list[float]:
-    vals = f(grid)
-    out: list[float] = []
-    for k in np.flatnonzero(vals == 0.0):
-        out.append(float(grid[k]))
-    for k in np.flatnonzero(np.sign(vals[:-1]) * np.sign(vals[1:]) < 0):
-        lo, hi = float(grid[k]), float(grid[k + 1])
-        flo = float(f(np.array([lo]))[0])
-        for _ in range(80):
-            mid = 0.5 * (lo + hi)
-            fm = float(f(np.array([mid]))[0])
-            if np.sign(fm) == np.sign(flo):
-                lo, flo = mid, fm
-            else:
-                hi = mid
-        out.append(0.5 * (lo + hi))
-    return out
+def values(expr: Any, qs: np.ndarray) -> np.ndarray:
+    """A real expression of the joints ``q1 … q4`` (numbers for lengths) at each row of ``qs``.
+
+    numpy float64 (:func:`_evaluate`, or ``sympy.lambdify`` for what it does not know); an
+    imaginary value becomes NaN.
+    """
+    expr = plain(expr)
+    qs = np.atleast_2d(np.asarray(qs, dtype=float))
+    env = {s: qs[:, k] for k, s in enumerate(Q[: qs.shape[1]])}
+    with np.errstate(all="ignore"):
+        try:
+            v = _evaluate([expr], env)[0]
+        except _Unsupported:
+            args = sorted(env, key=str)
+            raw = sp.lambdify(args, expr, modules="numpy")(*[env[s] for s in args])
+            v = np.broadcast_to(np.asarray(raw, dtype=complex), (qs.shape[0],))
+    return np.where(v.imag == 0, v.real, np.nan)
 
 
 def points_on(
@@ -428,12 +416,15 @@ def points_on(
 ) -> np.ndarray:
     """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (numbers for lengths).
 
-    Random values for every joint but the last one ``expr`` depends on, which is found by
-    bracketing on ``[−π, π]`` and bisection; ``fixed`` pins joints (0-based) to values.
+    Random values for every joint but the last one ``expr`` depends on, which is a root on
+    ``[−π, π]`` (:func:`hexapod_kin.symbolic.core.single_joint_roots`) picked at random;
+    ``fixed`` pins joints (0-based) to values.
     """
+    from ..symbolic.core import single_joint_roots
+
     expr = plain(expr)
     rng = _rng(key)
-    deps = [k for k in range(nq) if _Q[k] in expr.free_symbols]
+    deps = [k for k in range(nq) if Q[k] in expr.free_symbols]
     pts: list[np.ndarray] = []
     for _ in range(40 * count):
         q = rng.uniform(-math.pi, math.pi, nq)
@@ -441,17 +432,17 @@ def points_on(
             q[k] = v
         if deps:
             var = deps[-1]
-            sub = {_Q[k]: float(q[k]) for k in range(nq) if k != var}
-            g = sp.lambdify(_Q[var], expr.xreplace(sub), "numpy")
 
-            def f(x: np.ndarray, g: Any = g) -> np.ndarray:
-                return np.broadcast_to(np.asarray(g(x), dtype=float), x.shape)
+            def f(x: np.ndarray, q: np.ndarray = q, var: int = var) -> np.ndarray:
+                qs = np.repeat(q[None, :], len(x), axis=0)
+                qs[:, var] = x
+                return values(expr, qs)
 
-            roots = _roots(f, np.linspace(-math.pi, math.pi, 721))
+            roots = single_joint_roots(f, -math.pi, math.pi)
             if not roots:
                 continue
             q[var] = roots[int(rng.integers(len(roots)))]
-        elif abs(_num(expr, {})) > 1e-12:
+        elif abs(value_at(expr, {})) > 1e-12:
             break
         pts.append(q)
         if len(pts) >= count:
@@ -461,53 +452,6 @@ def points_on(
 
 def vanishes(expr: Any, pts: np.ndarray, scale: float = 1.0, tol: float = 1e-7) -> bool:
     """True when ``expr`` is ~0 at every point (relative to ``scale``)."""
-    expr = plain(expr)
-    for q in pts:
-        val = _num(expr, {_Q[k]: float(v) for k, v in enumerate(q)})
-        if abs(val) > tol * max(scale, 1e-300):
-            return False
-    return len(pts) > 0
-
-
-# ---------------------------------------------------------------------- entry point
-def evaluate(claims: list[Claim], ctx: Any, cache: bool = True) -> list[Verdict]:
-    """Compute every claim's verdict against ``ctx`` (a :class:`~.checks.Context`).
-
-    A comparison that raises gives status ``"error"`` with the exception (never skipped).
-    With ``cache`` the symbolic verdicts are read from (and written to) the disk cache of
-    :mod:`.cache`, keyed by the claim's data and hexapod_kin's expressions.
-    """
-    from . import cache as _cache
-    from .checks import CHECKS
-
-    out = []
-    for claim in claims:
-        try:
-            check = CHECKS[claim.kind]
-            digest = None
-            if cache:
-                try:
-                    digest = _cache.key(claim, ctx)
-                except Exception:  # noqa: BLE001 - no key: the check runs (and reports)
-                    digest = None
-            verdict = _cache.load(digest, claim) if digest else None
-            if verdict is None:
-                verdict = check(claim, ctx)
-                if digest:
-                    _cache.store(digest, verdict)
-            out.append(verdict)
-        except Exception as exc:  # recorded, reported, and failed by the CLI and the test
-            out.append(
-                Verdict(
-                    claim.id,
-                    claim.seed,
-                    claim.where,
-                    claim.kind,
-                    str(claim.data.get("value")),
-                    "",
-                    "error",
-                    f"{type(exc).__name__}: {exc}",
-                    "",
-                )
-            )
-    return out
+    if not len(pts):
+        return False
+    return bool(np.all(np.abs(values(expr, pts)) <= tol * max(scale, 1e-300)))

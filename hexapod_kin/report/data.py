@@ -1,23 +1,20 @@
-"""The seeds' claims and the computed verdicts, as data (light: no sympy, numpy or Pinocchio).
-
-:class:`Claim` (one table of ``claims.toml``), :class:`Verdict` (a computed verdict) and
-:func:`load_claims`. Re-exported by :mod:`.compare` and :mod:`hexapod_kin.report`; kept apart
-so that a replayed report (:mod:`.replay`) is rebuilt without importing the comparison rules.
-"""
+"""The seeds' claims and the computed verdicts, as data (light: no sympy, numpy or Pinocchio)."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from ..exceptions import ConfigurationError, OptionalDependencyError
 
-__all__ = ["CLAIMS_FILE", "Claim", "Verdict", "load_claims", "pendulum_duration"]
+__all__ = ["CLAIMS_FILE", "STATUSES", "Claim", "Verdict", "load_claims"]
 
 #: The claims shipped with the package.
 CLAIMS_FILE = Path(__file__).with_name("claims.toml")
+#: The statuses of a computed verdict (``"error"``: the comparison could not run, a bug).
+STATUSES = ("agrees", "wrong", "differs", "error")
 
 
 @dataclass(frozen=True)
@@ -29,6 +26,10 @@ class Claim:
     where: str
     kind: str
     data: Mapping[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the claim's TOML table."""
+        return dict(self.data)
 
 
 @dataclass(frozen=True)
@@ -42,8 +43,8 @@ class Verdict:
         kind: The claim's kind.
         claimed: The seed's value, as text.
         computed: hexapod_kin's value, as text.
-        status: ``"agrees"``, ``"wrong"`` (the seed is wrong), ``"differs"`` (a different but
-            consistent convention) or ``"error"`` (the comparison could not run: a bug).
+        status: One of :data:`STATUSES` (``"wrong"``: the seed is wrong; ``"differs"``: a
+            different but consistent convention).
         reason: The computed reason (empty when it agrees).
         method: How it was compared, with the tolerance.
 
@@ -61,7 +62,7 @@ class Verdict:
 
     @property
     def text(self) -> str:
-        """``agrees`` / ``seed is wrong: …`` / ``differs: …``."""
+        """``agrees`` / ``seed is wrong: …`` / ``differs: …`` / ``not computed: …``."""
         if self.status == "agrees":
             return "agrees"
         if self.status == "wrong":
@@ -70,19 +71,30 @@ class Verdict:
             return f"differs: {self.reason}"
         return f"not computed: {self.reason}"
 
+    def fields(self) -> dict[str, str]:
+        """Every field by name (what :meth:`from_fields` reads back)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @classmethod
+    def from_fields(cls, data: Mapping[str, Any]) -> Verdict:
+        """The verdict of :meth:`fields`.
+
+        Raises:
+            ValueError: A field is missing, extra or not text, or the status is unknown.
+
+        """
+        names = [f.name for f in fields(cls)]
+        if set(data) != set(names) or not all(isinstance(data[n], str) for n in names):
+            raise ValueError(f"not a verdict: {sorted(data)}")
+        if data["status"] not in STATUSES:
+            raise ValueError(f"unknown status {data['status']!r}")
+        return cls(**{n: data[n] for n in names})
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready."""
-        return {
-            "claim": self.claim,
-            "seed": self.seed,
-            "where": self.where,
-            "kind": self.kind,
-            "claimed": self.claimed,
-            "computed": self.computed,
-            "status": self.status,
-            "verdict": self.text,
-            "method": self.method,
-        }
+        """JSON-ready (``verdict``: :attr:`text`; no ``reason``, which it holds)."""
+        out: dict[str, Any] = self.fields()
+        del out["reason"], out["method"]
+        return {**out, "verdict": self.text, "method": self.method}
 
 
 def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, str]]:
@@ -118,8 +130,3 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
         seen.add(item["id"])
         out.append(Claim(item["id"], item["seed"], item["where"], item["kind"], item))
     return out, dict(raw.get("seeds", {}))
-
-
-def pendulum_duration(quick: bool) -> float:
-    """Length of the report's pendulum runs in [s] (reduced with ``quick``)."""
-    return 12.0 if quick else 20.0

@@ -1,31 +1,17 @@
 """Replay of whole reports: a second ``reproduce`` with the same inputs copies the first's files.
 
-The report is a deterministic function of its inputs, so, like a build system, a run whose
-inputs are those of an earlier successful build copies that build's files instead of redoing
-its experiments. The inputs (:func:`key_parts`), hashed into the run's key (:func:`run_key`):
-
-* the package's Python source (:func:`package_digest`: every ``.py`` file of ``hexapod_kin``)
-  and the bytes of ``claims.toml`` (the only data file the build reads: the claims and the
-  seeds' titles);
-* the options (``quick``, ``animations``) and ``HEXAPOD_KIN_JIT`` (the kernel tier);
-* the versions of Python, hexapod_kin, numpy, scipy, pinocchio (``pin``), sympy, matplotlib,
-  numba and meshcat (read with :func:`importlib.metadata.version`, never by importing them;
-  ``"absent"`` when not installed), the platform and this layout's :data:`FORMAT`.
-
-An entry is the folder ``cache_root("report")/runs/<key>/``: ``files/`` holds every file the
-build wrote into the report folder (relative paths) but ``verdicts.json``, which a replay
-writes again (it names the report folder and this run's time), and ``manifest.json`` holds
-each file's SHA-256 and size, the build's verdicts, facts, summary, counts and wall time, the
-UTC time of the build and the key's parts. Every file is written atomically
-(:func:`hexapod_kin._io.atomic_write`), the manifest last (and removed first when an entry is
-rewritten): an entry without a manifest is never replayed. A replay checks every file against
-the manifest before copying any; a missing, damaged or foreign file, or a manifest of another
-layout or key, makes the run build normally (and rewrite the entry). Only builds without an
-``"error"`` verdict (and whose animations were all written) are stored; the newest
-:data:`KEEP` entries (by last use) are kept, older ones are removed after each store.
-
-This module is light on purpose: a replay imports neither sympy, matplotlib, Pinocchio,
-numba, scipy nor meshcat.
+The report is a deterministic function of its inputs (:func:`key_parts`, hashed by
+:func:`run_key`): the package's Python source (:func:`package_digest`), the bytes of
+``claims.toml``, the options (``quick``, ``animations``), the installed versions of Python,
+hexapod_kin and :data:`DISTRIBUTIONS` (read from their metadata, never imported) and the
+platform. An entry is the folder ``cache_root("report")/runs/<key>/``: ``files/`` holds every
+file the build wrote into the report folder but ``verdicts.json`` (rewritten by a replay: it
+names the folder and the run's time), ``manifest.json`` each file's SHA-256 and size, the
+build's verdicts, facts and wall time. The manifest is written last (removed first when an
+entry is rewritten), and a replay checks every file against it before copying any: a missing,
+damaged or foreign entry is no entry. Only builds without an ``"error"`` verdict and with
+every animation written are stored; the :data:`KEEP` most recently used entries are kept.
+Light: a replay imports neither sympy, matplotlib, Pinocchio nor numba.
 """
 
 from __future__ import annotations
@@ -59,7 +45,8 @@ __all__ = [
     "restore",
     "run_key",
     "runs_dir",
-    "store",
+    "save",
+    "source_digest",
 ]
 
 #: Version of the entry layout (part of the key).
@@ -80,7 +67,7 @@ def runs_dir() -> Path:
 
 
 def source_digest() -> str:
-    """SHA-256 of the package's Python source, read now (see :func:`package_digest`)."""
+    """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``), read now."""
     h = hashlib.sha256()
     for f in sorted(_PACKAGE.rglob("*.py")):
         h.update(str(f.relative_to(_PACKAGE)).encode())
@@ -90,12 +77,7 @@ def source_digest() -> str:
 
 @lru_cache(maxsize=1)
 def package_digest() -> str:
-    """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``).
-
-    Part of every report cache key (symbolic verdicts, derivation texts, figures, runs): any
-    change of the code that computes, compares or draws makes the cached results unreachable
-    (they are recomputed). Read once per process.
-    """
+    """:func:`source_digest`, read once per process: part of every report cache key."""
     return source_digest()
 
 
@@ -118,7 +100,7 @@ def versions() -> dict[str, str]:
 
 
 def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> dict[str, Any]:
-    """Everything a report depends on, as JSON-ready data (see the module's docstring).
+    """Everything a report depends on, as JSON-ready data.
 
     Args:
         quick: The ``quick`` option of :func:`~hexapod_kin.report.reproduce`.
@@ -134,7 +116,6 @@ def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> di
         "code": digest if digest is not None else package_digest(),
         "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
         "options": {"quick": bool(quick), "animations": bool(animations)},
-        "jit": os.environ.get("HEXAPOD_KIN_JIT", "auto").strip().lower() or "auto",
         "versions": versions(),
         "platform": f"{sys.platform}-{platform.machine()}",
     }
@@ -163,6 +144,11 @@ class Entry:
     folder: Path
     record: dict[str, Any]
     files: dict[str, bytes]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: key, folder, the manifest and the files' sizes."""
+        sizes = {rel: len(data) for rel, data in self.files.items()}
+        return {"key": self.key, "folder": str(self.folder), "record": self.record, "files": sizes}
 
 
 def _safe(rel: Any) -> bool:
@@ -225,12 +211,12 @@ def restore(entry: Entry, out: Path) -> list[Path]:
     return written
 
 
-def utc_now() -> str:
+def _utc_now() -> str:
     """The current UTC time, ``YYYY-MM-DDTHH:MM:SSZ``."""
     return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def store(
+def save(
     key: str,
     parts: Mapping[str, Any],
     out: Path,
@@ -274,7 +260,7 @@ def store(
             "format": FORMAT,
             "key": key,
             "parts": dict(parts),
-            "built": utc_now(),
+            "built": _utc_now(),
             "files": listed,
         }
         atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, default=str))
