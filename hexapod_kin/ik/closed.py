@@ -23,8 +23,6 @@ Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are all
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
 
-The numerical solver :func:`solve` works on any loaded model (Pinocchio). It is a
-
 :func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
 gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
 :class:`AnalyticBatch`. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
@@ -38,16 +36,24 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import njit, prange, wrap_angle, wrap_angles, wrap_diff
 from ..exceptions import IKError
 from ..model import Model
 from ..params import Chain, Hexapod, Pose
 
-__all__ = ["FAMILIES", "AnalyticBatch", "LegFamily", "analytic", "analytic_batch", "detect_family"]
+__all__ = [
+    "FAMILIES",
+    "AnalyticBatch",
+    "LegFamily",
+    "analytic",
+    "analytic_batch",
+    "detect_family",
+    "leg_solutions",
+]
 
 FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 
 _HALF_PI = 0.5 * math.pi
+_TWO_PI = 2.0 * math.pi
 _ANG_TOL = 1e-12
 
 
@@ -287,11 +293,6 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
     return np.ascontiguousarray(arr), single
 
 
-#: Up to this many targets, :func:`analytic_batch` solves in numpy (~0.4 µs a target, no kernel
-#: to compile on a fresh install); more go to the parallel kernel.
-_FEW = 16384
-
-
 def analytic_batch(
     chain: Chain | Model | str, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
 ) -> AnalyticBatch:
@@ -321,99 +322,28 @@ def analytic_batch(
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
     tol_abs = float(tol) * fam.scale
-    # A few targets take the numpy path below: the compiled kernel (parallel) costs seconds to
-    # compile on a fresh install, more than numpy spends on thousands of targets.
-    if not within_limits and fam.family in ("coxa_tibia", "leg3") and x.shape[0] > _FEW:
-        leg3 = fam.family == "leg3"
-        qk = np.empty((x.shape[0], fam.max_solutions, fam.nq))
-        vk = np.empty((x.shape[0], fam.max_solutions), dtype=np.bool_)
-        ls = fam.lengths + (1.0,) * (3 - len(fam.lengths))
-        _legs_kernel(
-            x,
-            leg3,
-            ls[0],
-            ls[1],
-            ls[2],
-            fam.height,
-            fam.sign,
-            tol_abs,
-            np.asarray(fam.offsets, dtype=float),
-            qk,
-            vk,
-        )
-        qk.setflags(write=False)
-        vk.setflags(write=False)
-        return AnalyticBatch(q=qk, valid=vk, family=fam.family)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        if fam.family == "coxa_tibia":
-            q, valid = _ik_coxa_tibia(fam, x, tol_abs)
-        elif fam.family == "leg3":
-            q, valid = _ik_leg3(fam, x, tol_abs)
-        else:
-            q, valid = _ik_scara(fam, x)
-    off = np.asarray(fam.offsets)
-    revolute = np.array([s == "revolute" for s in fam.chain.sigmas])
-    q = q - off
-    q[..., revolute] = wrap_angles(q[..., revolute])
+    limits = None
     if within_limits:
-        lo, hi = fam.chain.lower(), fam.chain.upper()
-        for j in np.flatnonzero(revolute):
-            for shift in (2 * np.pi, -2 * np.pi):
-                moved = q[..., j] + shift
-                fix = (
-                    ((q[..., j] < lo[j]) | (q[..., j] > hi[j]))
-                    & (moved >= lo[j])
-                    & (moved <= hi[j])
-                )
-                q[..., j] = np.where(fix, moved, q[..., j])
-        valid &= np.all((q >= lo - 1e-12) & (q <= hi + 1e-12), axis=-1)
-    q[~valid] = np.nan
+        limits = (np.asarray(fam.chain.lower(), float), np.asarray(fam.chain.upper(), float))
+    if fam.family == "scara":
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q, valid = _ik_scara(fam, x)
+        q = q - np.asarray(fam.offsets)
+        q[..., :3] = _wrap(q[..., :3])
+        q, valid = _keep(q, valid, limits, np.array([True, True, True, False]))
+    else:
+        q, valid = leg_solutions(
+            x,
+            fam.lengths,
+            height=fam.height,
+            sign=fam.sign,
+            offsets=fam.offsets,
+            tol=tol_abs,
+            limits=limits,
+        )
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
-
-
-def _ik_coxa_tibia(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    l1, l2 = fam.lengths
-    n = x.shape[0]
-    h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
-    w = (x[:, 2] - fam.height) * fam.sign  # = l2 sin φ2
-    q = np.empty((n, 2, 2))
-    valid = np.empty((n, 2), dtype=bool)
-    for k, hs in enumerate((1.0, -1.0)):
-        u = hs * h - l1  # = l2 cos φ2
-        dist = np.hypot(u, w)
-        valid[:, k] = np.abs(dist - abs(l2)) <= tol
-        q[:, k, 0] = phi if hs > 0 else phi + np.pi
-        q[:, k, 1] = np.arctan2(w / l2, u / l2)
-    return q, valid
-
-
-def _ik_leg3(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    l1, l2, l3 = fam.lengths
-    n = x.shape[0]
-    h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
-    w = (x[:, 2] - fam.height) * fam.sign  # = l2 s2 + l3 s23
-    q = np.empty((n, 4, 3))
-    valid = np.empty((n, 4), dtype=bool)
-    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3)
-    for k, hs in enumerate((1.0, -1.0)):
-        u = hs * h - l1  # = l2 c2 + l3 c23
-        c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-        ok = np.abs(c3) <= 1.0 + eps
-        c3 = np.clip(c3, -1.0, 1.0)
-        s3 = np.sqrt(1.0 - c3 * c3)
-        base = np.arctan2(w, u)
-        for b, sgn in enumerate((1.0, -1.0)):
-            slot = 2 * k + b
-            s = sgn * s3
-            q[:, slot, 0] = phi if hs > 0 else phi + np.pi
-            q[:, slot, 2] = np.arctan2(s, c3)
-            q[:, slot, 1] = base - np.arctan2(l3 * s, l2 + l3 * c3)
-            valid[:, slot] = ok
-    return q, valid
 
 
 def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -446,61 +376,102 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q, valid
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _legs_kernel(
-    x: np.ndarray,
-    fam3: bool,
-    l1: float,
-    l2: float,
-    l3: float,
-    height: float,
-    sign: float,
-    tol: float,
-    off: np.ndarray,
+def _wrap(a: np.ndarray) -> np.ndarray:
+    """Angles wrapped to (−π, π] [rad] (a new array; ``a − 2πk``, as ``wrap_angle``)."""
+    out = a - _TWO_PI * np.round(a * (1.0 / _TWO_PI))
+    out[out <= -np.pi] += _TWO_PI
+    return out
+
+
+def _keep(
     q: np.ndarray,
     valid: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """coxa_tibia (fam3 False) and leg3 (fam3 True) closed forms, offsets removed, wrapped."""
-    n = x.shape[0]
-    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3) if fam3 else 0.0
-    nan = np.nan
-    for i in prange(n):
-        h = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1])
-        phi = math.atan2(x[i, 1], x[i, 0])
-        w = (x[i, 2] - height) * sign
-        for k in range(2):
-            u = (h if k == 0 else -h) - l1
-            p1 = wrap_angle((phi if k == 0 else phi + math.pi) - off[0])
-            if not fam3:
-                ok = abs(math.sqrt(u * u + w * w) - abs(l2)) <= tol
-                valid[i, k] = ok
-                if ok:
-                    q[i, k, 0] = p1
-                    q[i, k, 1] = wrap_angle(math.atan2(w / l2, u / l2) - off[1])
-                else:
-                    q[i, k, 0] = nan
-                    q[i, k, 1] = nan
+    limits: tuple[np.ndarray, np.ndarray] | None,
+    revolute: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint limits applied (revolute values shifted by ±2π if that helps), invalid slots NaN."""
+    if limits is not None:
+        lo, hi = limits
+        for j in np.flatnonzero(revolute):
+            qj = q[..., j]
+            out = (qj < lo[j] - 1e-12) | (qj > hi[j] + 1e-12)
+            for shift in (2 * np.pi, -2 * np.pi):
+                moved = qj + shift
+                qj = np.where(out & (moved >= lo[j] - 1e-12) & (moved <= hi[j] + 1e-12), moved, qj)
+            q[..., j] = qj
+        valid &= np.all((q >= lo - 1e-12) & (q <= hi + 1e-12), axis=-1)
+    if not valid.all():
+        q[~valid] = np.nan
+    return q, valid
+
+
+def leg_solutions(
+    targets: np.ndarray,
+    lengths: tuple[float, ...],
+    *,
+    height: float = 0.0,
+    sign: float = -1.0,
+    offsets: Any = None,
+    tol: float = 0.0,
+    limits: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The one closed form of the coxa_tibia (2 lengths) and leg3 (3 lengths) legs, vectorised.
+
+    Foot ``Rz(φ1)·[l1 + ρ', 0, σ·w] + [0, 0, h]`` with ``ρ' = l2 c2`` (2 DOF) or
+    ``l2 c2 + l3 c23`` and ``w = l2 s2 (+ l3 s23)``; σ = ``sign`` (sin α2). For each hip
+    branch (``φ1 = atan2(y, x)`` or ``+ π``, ``u = ±√(x² + y²) − l1``): 2 DOF, valid when
+    ``|‖(u, w)‖ − |l2|| ≤ tol``, ``φ2 = atan2(w/l2, u/l2)``; 3 DOF,
+    ``c3 = (u² + w² − l2² − l3²)/(2 l2 l3)`` valid when ``|c3| ≤ 1 + ε`` (ε: ``tol`` as a
+    cosine), ``φ3 = ±acos c3``, ``φ2 = atan2(w, u) − atan2(l3 s3, l2 + l3 c3)``.
+
+    Args:
+        targets: (N, 3) foot positions [m] in the leg's frame 0.
+        lengths: ``(l1, l2)`` or ``(l1, l2, l3)`` [m].
+        height: ``r1`` [m].
+        sign: ``sin α2`` (±1).
+        offsets: The joints' θ offsets [rad] (removed from the result); default 0.
+        tol: Absolute reachability tolerance [m].
+        limits: Optional (lower, upper) joint limits: solutions outside are invalid (values
+            first shifted by ±2π when that brings them inside).
+
+    Returns:
+        ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
+        (N, K) validity; K = 2 (slots: hip toward, reversed) or 4 (toward/ankle +,
+        toward/ankle −, reversed/ankle +, reversed/ankle −).
+
+    """
+    x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    nq = len(lengths)
+    l1, l2 = lengths[0], lengths[1]
+    off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
+    h = np.hypot(x[:, 0], x[:, 1])
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    w = (x[:, 2] - height) * sign
+    cols: list[np.ndarray] = []  # slot by slot, joint by joint
+    oks: list[np.ndarray] = []
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for k, hs in enumerate((1.0, -1.0)):
+            u = hs * h - l1
+            hip = _wrap(phi + (k * np.pi - off[0]))
+            if nq == 2:
+                oks.append(np.abs(np.hypot(u, w) - abs(l2)) <= tol)
+                cols += [hip, _wrap(np.arctan2(w / l2, u / l2) - off[1])]
                 continue
+            l3 = lengths[2]
+            eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3)
             c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-            ok = abs(c3) <= 1.0 + eps
-            valid[i, 2 * k] = ok
-            valid[i, 2 * k + 1] = ok
-            if not ok:
-                for b in range(2):
-                    for j in range(3):
-                        q[i, 2 * k + b, j] = nan
-                continue
-            c3 = min(max(c3, -1.0), 1.0)
-            s3 = math.sqrt(1.0 - c3 * c3)
-            base = math.atan2(w, u)
-            a3 = math.atan2(s3, c3)
-            a2 = math.atan2(l3 * s3, l2 + l3 * c3)
-            q[i, 2 * k, 0] = p1
-            q[i, 2 * k, 1] = wrap_angle(base - a2 - off[1])
-            q[i, 2 * k, 2] = wrap_angle(a3 - off[2])
-            q[i, 2 * k + 1, 0] = p1
-            q[i, 2 * k + 1, 1] = wrap_angle(base + a2 - off[1])
-            q[i, 2 * k + 1, 2] = wrap_angle(-a3 - off[2])
+            ok = np.abs(c3) <= 1.0 + eps
+            np.clip(c3, -1.0, 1.0, out=c3)
+            s3 = np.sqrt(1.0 - c3 * c3)
+            base = np.arctan2(w, u)
+            a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
+            a3 = np.arctan2(s3, c3)
+            for sgn in (1.0, -1.0):
+                oks.append(ok)
+                cols += [hip, _wrap(base - sgn * a2 - off[1]), _wrap(sgn * a3 - off[2])]
+    q = np.stack(cols, axis=-1).reshape(-1, len(oks), nq)
+    valid = np.stack(oks, axis=-1)
+    return _keep(q, valid, limits, np.ones(nq, dtype=bool))
 
 
 def analytic(
@@ -541,7 +512,7 @@ def analytic(
         sols = qi[vi]
         keep: list[np.ndarray] = []
         for s in sols:
-            if not any(np.max(np.abs(wrap_diff(s, k))) <= 1e-12 for k in keep):
+            if not any(np.max(np.abs(_wrap(s - k))) <= 1e-12 for k in keep):
                 keep.append(s)
         out.append(np.array(keep, dtype=float).reshape(len(keep), qi.shape[-1]))
     return out
