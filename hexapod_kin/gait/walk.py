@@ -269,8 +269,8 @@ def walk(
     body_height: float = 0.08,
     foot_reach: float = 0.16,
     terrain: Any = None,
-    duration: float = 10.0,
     rate: float = 100.0,
+    duration: float = 10.0,
     q0: Any = None,
     strict: bool = True,
 ) -> GaitRun:
@@ -291,8 +291,8 @@ def walk(
         foot_reach: Horizontal distance from the hip axis to the neutral foot point [m].
         terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
             :class:`~.terrain.Terrain` or ``h(x, y)``.
-        duration: Length of the run [s].
         rate: Sample rate [Hz].
+        duration: Length of the run [s].
         q0: (18,) joints the first sample's IK branches are nearest to.
         strict: Raise on the first failed check (else return the run with its checks).
 

@@ -95,6 +95,18 @@ class LegFamily:
         """Number of joints."""
         return self.chain.nq
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
+        return {
+            "family": self.family,
+            "chain": self.chain.name,
+            "lengths": list(self.lengths),
+            "height": self.height,
+            "sign": self.sign,
+            "offsets": list(self.offsets),
+            "yaw_offset": self.yaw_offset,
+        }
+
     @property
     def max_solutions(self) -> int:
         """Number of solution slots of :func:`analytic_batch` (2, 4 or 2)."""
@@ -258,6 +270,15 @@ class AnalyticBatch:
     def reachable(self) -> np.ndarray:
         """(N,) True where a target has at least one solution."""
         return np.asarray(self.valid.any(axis=1))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (NaN slots as None)."""
+        q = np.where(self.valid[..., None], self.q, 0.0).tolist()
+        for qi, vi in zip(q, self.valid.tolist()):
+            for k, ok in enumerate(vi):
+                if not ok:
+                    qi[k] = None
+        return {"family": self.family, "q": q, "valid": self.valid.tolist()}
 
 
 def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
