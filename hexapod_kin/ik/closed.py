@@ -47,6 +47,7 @@ __all__ = [
     "analytic",
     "analytic_batch",
     "detect_family",
+    "leg_reachable",
     "leg_solutions",
 ]
 
@@ -407,34 +408,100 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 def _keep(
     q: np.ndarray,
     valid: np.ndarray,
-    limits: tuple[np.ndarray, np.ndarray] | None,
+    limits: tuple[Any, Any] | None,
     revolute: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Joint limits applied (revolute values shifted by ±2π if that helps), invalid slots NaN."""
+    """Joint limits applied (revolute values shifted by ±2π if that helps), invalid slots NaN.
+
+    ``limits``: (lower, upper), each (n,) or (N, n) (one row per target).
+    """
     if limits is not None:
-        lo, hi = limits
+        lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
+        if lo.ndim == 2:
+            lo, hi = lo[:, None, :], hi[:, None, :]
+        lo_t, hi_t = lo - 1e-12, hi + 1e-12
         for j in np.flatnonzero(revolute):
-            qj = q[..., j]
-            out = (qj < lo[j] - 1e-12) | (qj > hi[j] + 1e-12)
+            qj, lj, hj = q[..., j], lo_t[..., j], hi_t[..., j]
+            out = (qj < lj) | (qj > hj)
             for shift in (2 * np.pi, -2 * np.pi):
                 moved = qj + shift
-                qj = np.where(out & (moved >= lo[j] - 1e-12) & (moved <= hi[j] + 1e-12), moved, qj)
+                qj = np.where(out & (moved >= lj) & (moved <= hj), moved, qj)
             q[..., j] = qj
-        valid &= np.all((q >= lo - 1e-12) & (q <= hi + 1e-12), axis=-1)
+        valid &= np.all((q >= lo_t) & (q <= hi_t), axis=-1)
     if not valid.all():
         q[~valid] = np.nan
     return q, valid
 
 
+def _leg_slots(
+    targets: Any,
+    lengths: tuple[Any, ...],
+    height: float,
+    sign: float,
+    offsets: Any,
+    tol: float,
+    limits: tuple[Any, Any] | None,
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The leg closed form as columns: (slot-major joint values, per-slot validity)."""
+    x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    nq = len(lengths)
+    l1, l2 = lengths[0], lengths[1]
+    off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
+    if not off.any():
+        off = [0] * nq  # type: ignore[assignment]  # a - 0 is a: no work
+    lo = hi = None
+    if limits is not None:
+        lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
+        # joint j's bounds lo[j], hi[j]: scalars or contiguous (N,)
+        lo, hi = np.ascontiguousarray(lo.T - 1e-12), np.ascontiguousarray(hi.T + 1e-12)
+    h = np.hypot(x[:, 0], x[:, 1])
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    w = (x[:, 2] - height) * sign
+    cols: list[np.ndarray] = []  # slot by slot, joint by joint
+    oks: list[np.ndarray] = []
+
+    def slot(ok: np.ndarray, *angles: np.ndarray) -> None:
+        vals = [_wrap(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
+        if lo is not None and hi is not None:
+            for j, v in enumerate(vals):
+                below, above = v < lo[j], v > hi[j]
+                v = np.where(below & (v + _TWO_PI <= hi[j]), v + _TWO_PI, v)
+                v = np.where(above & (v - _TWO_PI >= lo[j]), v - _TWO_PI, v)
+                ok = ok & (v >= lo[j]) & (v <= hi[j])
+                vals[j] = v
+        oks.append(ok)
+        cols.extend(vals)
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for k, hs in enumerate((1.0, -1.0)):
+            u = hs * h - l1
+            hip = phi + k * np.pi
+            if nq == 2:
+                slot(np.abs(np.hypot(u, w) - np.abs(l2)) <= tol, hip, np.arctan2(w / l2, u / l2))
+                continue
+            l3 = lengths[2]
+            eps = tol * (np.abs(l2) + np.abs(l3)) / np.abs(l2 * l3)
+            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+            ok = np.abs(c3) <= 1.0 + eps
+            np.clip(c3, -1.0, 1.0, out=c3)
+            s3 = np.sqrt(1.0 - c3 * c3)
+            base = np.arctan2(w, u)
+            a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
+            a3 = np.arctan2(s3, c3)
+            slot(ok, hip, base - a2, a3)
+            slot(ok, hip, base + a2, -a3)
+    return cols, oks
+
+
 def leg_solutions(
     targets: np.ndarray,
-    lengths: tuple[float, ...],
+    lengths: tuple[Any, ...],
     *,
     height: float = 0.0,
     sign: float = -1.0,
     offsets: Any = None,
     tol: float = 0.0,
-    limits: tuple[np.ndarray, np.ndarray] | None = None,
+    limits: tuple[Any, Any] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The one closed form of the coxa_tibia (2 lengths) and leg3 (3 lengths) legs, vectorised.
 
@@ -447,13 +514,14 @@ def leg_solutions(
 
     Args:
         targets: (N, 3) foot positions [m] in the leg's frame 0.
-        lengths: ``(l1, l2)`` or ``(l1, l2, l3)`` [m].
+        lengths: ``(l1, l2)`` or ``(l1, l2, l3)`` [m]; each a number or (N,) (one per target).
         height: ``r1`` [m].
         sign: ``sin α2`` (±1).
         offsets: The joints' θ offsets [rad] (removed from the result); default 0.
         tol: Absolute reachability tolerance [m].
-        limits: Optional (lower, upper) joint limits: solutions outside are invalid (values
-            first shifted by ±2π when that brings them inside).
+        limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
+            (by more than 1e-12) are invalid; values are first shifted by ±2π when that brings
+            them inside.
 
     Returns:
         ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
@@ -461,38 +529,27 @@ def leg_solutions(
         toward/ankle −, reversed/ankle +, reversed/ankle −).
 
     """
-    x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    cols, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
     nq = len(lengths)
-    l1, l2 = lengths[0], lengths[1]
-    off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
-    h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
-    w = (x[:, 2] - height) * sign
-    cols: list[np.ndarray] = []  # slot by slot, joint by joint
-    oks: list[np.ndarray] = []
-    with np.errstate(invalid="ignore", divide="ignore"):
-        for k, hs in enumerate((1.0, -1.0)):
-            u = hs * h - l1
-            hip = _wrap(phi + (k * np.pi - off[0]))
-            if nq == 2:
-                oks.append(np.abs(np.hypot(u, w) - abs(l2)) <= tol)
-                cols += [hip, _wrap(np.arctan2(w / l2, u / l2) - off[1])]
-                continue
-            l3 = lengths[2]
-            eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3)
-            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-            ok = np.abs(c3) <= 1.0 + eps
-            np.clip(c3, -1.0, 1.0, out=c3)
-            s3 = np.sqrt(1.0 - c3 * c3)
-            base = np.arctan2(w, u)
-            a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
-            a3 = np.arctan2(s3, c3)
-            for sgn in (1.0, -1.0):
-                oks.append(ok)
-                cols += [hip, _wrap(base - sgn * a2 - off[1]), _wrap(sgn * a3 - off[2])]
-    q = np.stack(cols, axis=-1).reshape(-1, len(oks), nq)
-    valid = np.stack(oks, axis=-1)
-    return _keep(q, valid, limits, np.ones(nq, dtype=bool))
+    for i, ok in enumerate(oks):
+        for j in range(nq):
+            cols[i * nq + j] = np.where(ok, cols[i * nq + j], np.nan)
+    return np.stack(cols, axis=-1).reshape(-1, len(oks), nq), np.stack(oks, axis=-1)
+
+
+def leg_reachable(
+    targets: Any,
+    lengths: tuple[Any, ...],
+    *,
+    height: float = 0.0,
+    sign: float = -1.0,
+    offsets: Any = None,
+    tol: float = 0.0,
+    limits: tuple[Any, Any] | None = None,
+) -> np.ndarray:
+    """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
+    oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)[1]
+    return np.logical_or.reduce(oks)
 
 
 def analytic(
