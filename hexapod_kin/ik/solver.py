@@ -410,20 +410,31 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     attempts, it, code, q, hist, jac = _lm(
         mdl, s, task, starts, bool(opts.within_limits), int(opts.max_iter)
     )
-    return _report(mdl, s, task, q, hist, jac, attempts, it, code)
+    poses, err, rot, smin = _measures(mdl, [task], q[None], jac[None])
+    measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
+    return _report(mdl, s, task, q, hist, jac, attempts, it, code, measured)
 
 
-def _errors(task: Task, pose: np.ndarray) -> tuple[float, float]:
-    """(position error [m], orientation error [rad]) of a reached pose, over the kept rows."""
-    w = task.weights
-    d = (task.pose[:3, 3] - pose[:3, 3])[w[:3] != 0]
-    rot = 0.0
-    if task.code == 1 and w[5] != 0:
-        rot = abs(_wrap(task.yaw - math.atan2(pose[1, 0], pose[0, 0])))
-    elif task.code == 2:
-        ev = pin.log3(task.pose[:3, :3] @ pose[:3, :3].T)[w[3:] != 0]
-        rot = math.sqrt(float(ev @ ev))
-    return math.sqrt(float(d @ d)), rot
+def _measures(
+    mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched)."""
+    poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
+    w = tasks[0].weights
+    tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
+    d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
+    err = np.sqrt(np.einsum("ij,ij->i", d, d))
+    rot = np.zeros(len(tasks))
+    if tasks[0].code == 1 and w[5] != 0:
+        yaw = np.array([t.yaw for t in tasks])
+        rot = np.abs(_wrap(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
+    elif tasks[0].code == 2:
+        rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
+        ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
+        rot = np.sqrt(np.einsum("ij,ij->i", ev, ev))
+    sv = np.linalg.svd(jacs[:, :3], compute_uv=False)
+    smin = sv[:, 2] if sv.shape[1] >= 3 else np.zeros(len(tasks))
+    return poses, err, rot, smin
 
 
 def _report(
@@ -436,12 +447,10 @@ def _report(
     attempts: int,
     it: int,
     code: int,
+    measured: tuple[np.ndarray, float, float, float],
 ) -> IKResult:
     prep = s.prep
-    pose = mdl.fk(q)  # the reported residual: Pinocchio's FK
-    err, rot = _errors(task, pose)
-    sv = np.linalg.svd(jac[:3], compute_uv=False)
-    smin = float(sv[2]) if sv.size >= 3 else 0.0
+    pose, err, rot, smin = measured
     for a in (pose, q, hist):
         a.setflags(write=False)
     tgt, pos = task.pose[:3, 3], pose[:3, 3]
@@ -612,10 +621,14 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             jac,
             res,
         )
+    if not n_t:
+        return []
+    poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):
         a, it, c = (int(v) for v in res[i])
+        measured = (poses[i], float(err[i]), float(rot[i]), float(smin[i]))
         out.append(
-            _report(mdl, s, task, q[i].copy(), hist[i, : it + 1].copy(), jac[i].copy(), a, it, c)
+            _report(mdl, s, task, q[i], hist[i, : it + 1].copy(), jac[i], a, it, c, measured)
         )
     return out
