@@ -25,7 +25,9 @@ limits unless ``within_limits=True`` (then each is shifted by 2π if that helps,
 
 :func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
 gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
-:class:`AnalyticBatch`. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+:class:`AnalyticBatch`. The legs' closed form is written once, vectorised in numpy over
+arrays of targets (:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the
+gait's body IK call it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -107,11 +109,6 @@ class LegFamily:
             "offsets": list(self.offsets),
             "yaw_offset": self.yaw_offset,
         }
-
-    @property
-    def max_solutions(self) -> int:
-        """Number of solution slots of :func:`analytic_batch` (2, 4 or 2)."""
-        return {"coxa_tibia": 2, "leg3": 4, "scara": 2}[self.family]
 
     @property
     def target_size(self) -> tuple[int, ...]:
@@ -352,7 +349,13 @@ def analytic_batch(
             q, valid = _ik_scara(fam, x)
         q = q - np.asarray(fam.offsets)
         q[..., :3] = _wrap(q[..., :3])
-        q, valid = _keep(q, valid, limits, np.array([True, True, True, False]))
+        if limits is not None:
+            lo, hi = limits[0] - 1e-12, limits[1] + 1e-12
+            for j in range(4):  # θ1 θ2 θ3 revolute, then the prismatic joint
+                v, ok = _fit(q[..., j], lo[j], hi[j]) if j < 3 else (q[..., j], True)
+                q[..., j] = v
+                valid &= ok & (v >= lo[j]) & (v <= hi[j])
+        q[~valid] = np.nan
     else:
         q, valid = leg_solutions(
             x,
@@ -405,32 +408,11 @@ def _wrap(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def _keep(
-    q: np.ndarray,
-    valid: np.ndarray,
-    limits: tuple[Any, Any] | None,
-    revolute: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Joint limits applied (revolute values shifted by ±2π if that helps), invalid slots NaN.
-
-    ``limits``: (lower, upper), each (n,) or (N, n) (one row per target).
-    """
-    if limits is not None:
-        lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
-        if lo.ndim == 2:
-            lo, hi = lo[:, None, :], hi[:, None, :]
-        lo_t, hi_t = lo - 1e-12, hi + 1e-12
-        for j in np.flatnonzero(revolute):
-            qj, lj, hj = q[..., j], lo_t[..., j], hi_t[..., j]
-            out = (qj < lj) | (qj > hj)
-            for shift in (2 * np.pi, -2 * np.pi):
-                moved = qj + shift
-                qj = np.where(out & (moved >= lj) & (moved <= hj), moved, qj)
-            q[..., j] = qj
-        valid &= np.all((q >= lo_t) & (q <= hi_t), axis=-1)
-    if not valid.all():
-        q[~valid] = np.nan
-    return q, valid
+def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Angles shifted by ±2π into [lo, hi] where that helps; (angles, inside)."""
+    v = np.where((v < lo) & (v + _TWO_PI <= hi), v + _TWO_PI, v)
+    v = np.where((v > hi) & (v - _TWO_PI >= lo), v - _TWO_PI, v)
+    return v, (v >= lo) & (v <= hi)
 
 
 def _leg_slots(
@@ -464,11 +446,8 @@ def _leg_slots(
         vals = [_wrap(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
         if lo is not None and hi is not None:
             for j, v in enumerate(vals):
-                below, above = v < lo[j], v > hi[j]
-                v = np.where(below & (v + _TWO_PI <= hi[j]), v + _TWO_PI, v)
-                v = np.where(above & (v - _TWO_PI >= lo[j]), v - _TWO_PI, v)
-                ok = ok & (v >= lo[j]) & (v <= hi[j])
-                vals[j] = v
+                vals[j], inside = _fit(v, lo[j], hi[j])
+                ok = ok & inside
         oks.append(ok)
         cols.extend(vals)
 
