@@ -141,6 +141,8 @@ def test_body_ik_unreachable_foot_names_the_leg_and_the_excess(wb):
     res = wb.body_ik(B, feet, strict=False)
     assert not res.reached[0, 3] and res.reached[0, [0, 1, 2, 4, 5]].all()
     assert res.excess[0, 3] == pytest.approx(math.hypot(u, w) - 0.20, abs=1e-12)
+    d = res.to_dict()
+    assert d["reached"][0][3] is False and d["leg_names"][3] == "leg4"
 
 
 # ====================================================================== stability, known answers
@@ -665,3 +667,12 @@ def test_body_ik_takes_xyz_rpy(wb):
     assert np.allclose(
         T[:3, :3], [[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]]
     )
+
+
+def test_foot_step_to_dict_is_json_ready():
+    import hexapod_kin as hk
+    from hexapod_kin.gait import foot_step
+
+    step = foot_step(hk.load("hexabot_leg"), dt=0.01, duration=0.5)
+    d = json.loads(json.dumps(step.to_dict()))
+    assert len(d["t"]) == len(step.t) and d["within_limits"] is step.within_limits

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ParameterError
+from ..motion import read_only
 from .robot import GaitError, WholeBody, whole_body
 from .stability import segment_clearance, support_margin
 from .tables import PhaseTable, phase_table
@@ -97,11 +98,6 @@ def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.asarray(s, dtype=float)
     return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 16.0 * s * s * (1.0 - s) ** 2
-
-
-def _arr(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -469,7 +465,7 @@ def walk(
                 allowed="margin > 0",
             )
     phase = table.phase(t, T)
-    _arr(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
+    read_only(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
     settings = {
         "stride": float(strokes.max()),
         "step_height": H,
@@ -483,7 +479,7 @@ def walk(
         "rate": hz,
     }
     ik_ok = np.asarray(ik.ok)
-    _arr(ik_ok)
+    read_only(ik_ok)
     return GaitRun(
         t=t,
         base_poses=base,

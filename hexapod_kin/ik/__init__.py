@@ -1,7 +1,8 @@
 """Inverse kinematics: closed forms for the leg families, damped least squares for any chain.
 
 * :mod:`.closed` — closed forms chosen from the Khalil table's pattern (:func:`detect_family`,
-  :func:`analytic`, :func:`analytic_batch`; the legs' one closed form :func:`leg_solutions`).
+  :func:`analytic`, :func:`analytic_batch`); the legs' one closed form, vectorised
+  (:func:`leg_solutions`, :func:`leg_reachable`).
 * :mod:`.task` — the problem: a position, position + yaw, or a 6-D pose target with per-row
   weights (:func:`build_task`).
 * :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
@@ -19,6 +20,7 @@ from .closed import (
     analytic,
     analytic_batch,
     detect_family,
+    leg_reachable,
     leg_solutions,
 )
 from .prepare import LEG_HOME, Prepared, home, prepared
@@ -41,6 +43,7 @@ __all__ = [
     "build_task",
     "detect_family",
     "home",
+    "leg_reachable",
     "leg_solutions",
     "prepared",
     "solve",
