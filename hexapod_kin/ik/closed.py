@@ -415,6 +415,12 @@ def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
     return v, (v >= lo) & (v <= hi)
 
 
+def _scatter(v: np.ndarray, idx: np.ndarray, n: int, fill: Any) -> np.ndarray:
+    out = np.full(n, fill, dtype=v.dtype)
+    out[idx] = v
+    return out
+
+
 def _leg_slots(
     targets: Any,
     lengths: tuple[Any, ...],
@@ -427,7 +433,6 @@ def _leg_slots(
     """The leg closed form as columns: (slot-major joint values, per-slot validity)."""
     x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
     nq = len(lengths)
-    l1, l2 = lengths[0], lengths[1]
     off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
     if not off.any():
         off = [0] * nq  # type: ignore[assignment]  # a - 0 is a: no work
@@ -436,9 +441,37 @@ def _leg_slots(
         lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
         # joint j's bounds lo[j], hi[j]: scalars or contiguous (N,)
         lo, hi = np.ascontiguousarray(lo.T - 1e-12), np.ascontiguousarray(hi.T + 1e-12)
+    n = len(x)
     h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
     w = (x[:, 2] - height) * sign
+    l1, l2 = lengths[0], lengths[1]
+    l3 = lengths[2] if nq == 3 else 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        us = [h - l1, -h - l1]  # the hip toward the target, then reversed
+        if nq == 2:
+            reach = [np.abs(np.hypot(u, w) - np.abs(l2)) <= tol for u in us]
+        else:
+            eps = tol * (np.abs(l2) + np.abs(l3)) / np.abs(l2 * l3)
+            c3s = [(u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3) for u in us]
+            reach = [np.abs(c3) <= 1.0 + eps for c3 in c3s]
+    # the angles only where a branch reaches (the trigonometry is most of the work)
+    sub = np.flatnonzero(reach[0] | reach[1])
+    full = len(sub) == n
+
+    def take(a: Any) -> Any:
+        return a if full or np.ndim(a) == 0 else a[..., sub]
+
+    x, h, w, us, reach = (
+        x[sub] if not full else x,
+        take(h),
+        take(w),
+        [take(u) for u in us],
+        [take(r) for r in reach],
+    )
+    l1, l2, l3 = take(np.asarray(l1)), take(np.asarray(l2)), take(np.asarray(l3))
+    if lo is not None and hi is not None and lo.ndim == 2:  # per target: (nq, N)
+        lo, hi = take(lo), take(hi)
+    phi = np.arctan2(x[:, 1], x[:, 0])
     cols: list[np.ndarray] = []  # slot by slot, joint by joint
     oks: list[np.ndarray] = []
 
@@ -452,23 +485,21 @@ def _leg_slots(
         cols.extend(vals)
 
     with np.errstate(invalid="ignore", divide="ignore"):
-        for k, hs in enumerate((1.0, -1.0)):
-            u = hs * h - l1
+        for k, u in enumerate(us):
             hip = phi + k * np.pi
             if nq == 2:
-                slot(np.abs(np.hypot(u, w) - np.abs(l2)) <= tol, hip, np.arctan2(w / l2, u / l2))
+                slot(reach[k], hip, np.arctan2(w / l2, u / l2))
                 continue
-            l3 = lengths[2]
-            eps = tol * (np.abs(l2) + np.abs(l3)) / np.abs(l2 * l3)
-            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-            ok = np.abs(c3) <= 1.0 + eps
-            np.clip(c3, -1.0, 1.0, out=c3)
+            c3 = np.clip(take(c3s[k]), -1.0, 1.0)
             s3 = np.sqrt(1.0 - c3 * c3)
             base = np.arctan2(w, u)
             a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
             a3 = np.arctan2(s3, c3)
-            slot(ok, hip, base - a2, a3)
-            slot(ok, hip, base + a2, -a3)
+            slot(reach[k], hip, base - a2, a3)
+            slot(reach[k], hip, base + a2, -a3)
+    if not full:  # back to all targets: NaN / False where no branch reaches
+        cols = [_scatter(c, sub, n, np.nan) for c in cols]
+        oks = [_scatter(o, sub, n, False) for o in oks]
     return cols, oks
 
 
