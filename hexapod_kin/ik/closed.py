@@ -415,12 +415,6 @@ def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
     return v, (v >= lo) & (v <= hi)
 
 
-def _scatter(v: np.ndarray, idx: np.ndarray, n: int, fill: Any) -> np.ndarray:
-    out = np.full(n, fill, dtype=v.dtype)
-    out[idx] = v
-    return out
-
-
 def _leg_slots(
     targets: Any,
     lengths: tuple[Any, ...],
@@ -429,8 +423,12 @@ def _leg_slots(
     offsets: Any,
     tol: float,
     limits: tuple[Any, Any] | None,
-) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """The leg closed form as columns: (slot-major joint values, per-slot validity)."""
+) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:
+    """The leg closed form as columns on the targets a branch reaches.
+
+    Returns ``(sub, cols, oks)``: the indices of those targets (None: all), their joint values
+    slot by slot and joint by joint, and each slot's validity.
+    """
     x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
     nq = len(lengths)
     off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
@@ -497,10 +495,7 @@ def _leg_slots(
             a3 = np.arctan2(s3, c3)
             slot(reach[k], hip, base - a2, a3)
             slot(reach[k], hip, base + a2, -a3)
-    if not full:  # back to all targets: NaN / False where no branch reaches
-        cols = [_scatter(c, sub, n, np.nan) for c in cols]
-        oks = [_scatter(o, sub, n, False) for o in oks]
-    return cols, oks
+    return (None if full else sub), cols, oks
 
 
 def leg_solutions(
@@ -539,12 +534,17 @@ def leg_solutions(
         toward/ankle −, reversed/ankle +, reversed/ankle −).
 
     """
-    cols, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
-    nq = len(lengths)
+    n = len(np.asarray(targets).reshape(-1, 3))
+    sub, cols, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
+    q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
+    valid = np.zeros((k, n), dtype=bool)
+    at = slice(None) if sub is None else sub
     for i, ok in enumerate(oks):
+        valid[i, at] = ok
         for j in range(nq):
-            cols[i * nq + j] = np.where(ok, cols[i * nq + j], np.nan)
-    return np.stack(cols, axis=-1).reshape(-1, len(oks), nq), np.stack(oks, axis=-1)
+            q[i * nq + j, at] = np.where(ok, cols[i * nq + j], np.nan)
+    return q.T.reshape(n, k, nq), valid.T
 
 
 def leg_reachable(
@@ -558,8 +558,12 @@ def leg_reachable(
     limits: tuple[Any, Any] | None = None,
 ) -> np.ndarray:
     """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
-    oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)[1]
-    return np.logical_or.reduce(oks)
+    sub, _, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    if sub is None:
+        return np.logical_or.reduce(oks)
+    out = np.zeros(len(np.asarray(targets).reshape(-1, 3)), dtype=bool)
+    out[sub] = np.logical_or.reduce(oks)
+    return out
 
 
 def analytic(
