@@ -302,3 +302,21 @@ def test_threads_give_the_single_thread_answers(arms):
         sys.setswitchinterval(old)
     for a, b in zip(single * 2, multi):
         np.testing.assert_array_equal(a, b)
+
+
+def test_one_target_runs_without_numba():
+    """Size rule: ik.solve, ik.analytic and analytic_batch import no compiled layer."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, hexapod_kin as hk\n"
+        "r = hk.ik.solve('hexabot_leg', [0.15, 0.0, -0.1])\n"
+        "assert r.converged\n"
+        "hk.ik.solve(hk.load('erd:ur5_robot', tip='tool0'), __import__('numpy').eye(4))\n"
+        "hk.ik.analytic('hexabot_leg', [0.15, 0.0, -0.1])\n"
+        "hk.ik.analytic_batch('scara', [[0.3, 0.2, 0.1]], within_limits=True)\n"
+        "assert 'numba' not in sys.modules, 'numba imported'\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
