@@ -175,8 +175,7 @@ def test_hexapod_leg_closed_form_through_its_mount(leg):
 
 
 def test_base_pose_maps_targets_and_tool_offset_is_refused():
-    from hexapod_kin import Chain, ik, robots
-    from hexapod_kin.params import table_fk
+    from hexapod_kin import Chain, ik, robots, table_fk
 
     leg = robots.hexabot_leg()
     moved = Chain(rows=leg.rows, base_pose=([0.1, -0.2, 0.05], [0.3, -0.2, 1.0]))
