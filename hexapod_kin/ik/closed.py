@@ -401,11 +401,11 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q, valid
 
 
-def _wrap(a: np.ndarray) -> np.ndarray:
-    """Angles wrapped to (−π, π] [rad] (a new array; ``a − 2πk``, as ``wrap_angle``)."""
-    out = a - _TWO_PI * np.round(a * (1.0 / _TWO_PI))
-    out[out <= -np.pi] += _TWO_PI
-    return out
+def _wrap(a: Any) -> Any:
+    """Angle(s) wrapped to (−π, π] [rad]: ``a − 2πk`` (a float for a scalar, else an array)."""
+    out = np.asarray(a - _TWO_PI * np.round(a * (1.0 / _TWO_PI)))
+    out = np.where(out <= -np.pi, out + _TWO_PI, out)
+    return float(out) if out.ndim == 0 else out
 
 
 def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:

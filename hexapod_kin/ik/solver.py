@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
+from .closed import _wrap
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import Task, build_task
 
@@ -236,13 +237,6 @@ def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
 
 
 # ============================================================================ numpy loop
-def _wrap(a: Any) -> Any:
-    """Angle(s) wrapped to (−π, π] [rad]."""
-    out = np.asarray(a - 2.0 * math.pi * np.round(a / (2.0 * math.pi)))
-    out = np.where(out <= -math.pi, out + 2.0 * math.pi, out)
-    return float(out) if out.ndim == 0 else out
-
-
 def _skew(e: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
 
