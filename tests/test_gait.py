@@ -26,8 +26,8 @@ from hexapod_kin.gait import (
     GaitError,
     PhaseTable,
     Terrain,
+    body_pose,
     phase_table,
-    pose_matrix,
     se2_pose,
     segment_clearance,
     support_margin,
@@ -89,7 +89,7 @@ def test_mass_and_com_against_the_urdf_hand_sum_and_pinocchio(wb):
     # random configurations and body poses: the vectorised CoM and feet equal Pinocchio's
     rng = np.random.default_rng(3)
     q = rng.uniform(-2.5, 2.5, (6, 18))
-    B = np.array([pose_matrix(rng.normal(size=3), rng.normal(size=3)) for _ in range(6)])
+    B = np.array([body_pose(rng.normal(size=3), rng.normal(size=3)) for _ in range(6)])
     com, feet = wb.com(q, B), wb.feet(q, B)
     Q = wb.pinocchio_q(q, B)
     data = wb.model.createData()
@@ -113,7 +113,7 @@ def test_body_ik_solves_the_feet_and_matches_fk(wb):
     feet = _hexagon_feet()
     B = np.array(
         [
-            pose_matrix(
+            body_pose(
                 [*rng.uniform(-0.03, 0.03, 2), 0.08 + rng.uniform(-0.02, 0.02)],
                 rng.uniform(-0.12, 0.12, 3),
             )
@@ -127,7 +127,7 @@ def test_body_ik_solves_the_feet_and_matches_fk(wb):
 
 
 def test_body_ik_unreachable_foot_names_the_leg_and_the_excess(wb):
-    B = pose_matrix([0, 0, 0.08])
+    B = body_pose([0, 0, 0.08])
     feet = _hexagon_feet()
     feet[3, :2] *= 0.50 / R_FOOT  # leg4: 0.5 m from the centre, on its radial line
     with pytest.raises(GaitError) as err:
@@ -141,11 +141,13 @@ def test_body_ik_unreachable_foot_names_the_leg_and_the_excess(wb):
     res = wb.body_ik(B, feet, strict=False)
     assert not res.reached[0, 3] and res.reached[0, [0, 1, 2, 4, 5]].all()
     assert res.excess[0, 3] == pytest.approx(math.hypot(u, w) - 0.20, abs=1e-12)
+    d = res.to_dict()
+    assert d["reached"][0][3] is False and d["leg_names"][3] == "leg4"
 
 
 # ====================================================================== stability, known answers
 def test_symmetric_standing_pose_margin_is_the_hexagon_apothem(wb):
-    B = pose_matrix([0, 0, 0.08])
+    B = body_pose([0, 0, 0.08])
     feet = _hexagon_feet()
     q = wb.body_ik(B, feet).q
     com = wb.com(q, B[None])
@@ -159,7 +161,7 @@ def test_symmetric_standing_pose_margin_is_the_hexagon_apothem(wb):
 
 def test_com_outside_the_support_polygon_has_the_negative_hand_distance(wb):
     feet = _hexagon_feet()
-    B = pose_matrix([-0.03, -0.01, 0.08], [0.0, 0.0, 0.1])
+    B = body_pose([-0.03, -0.01, 0.08], [0.0, 0.0, 0.1])
     q = wb.body_ik(B, feet).q
     com = wb.com(q, B[None])[0]
     stance = np.array([1, 1, 0, 0, 0, 1], bool)  # legs 1, 2, 6: the triangle is ahead
@@ -657,11 +659,20 @@ def test_joint_rates_keep_stance_feet_still_pinocchio(wb):
 def test_body_ik_takes_xyz_rpy(wb):
     feet = _hexagon_feet()
     a = wb.body_ik([0.01, 0.0, 0.08, 0.05, -0.04, 0.1], feet)
-    b = wb.body_ik(pose_matrix([0.01, 0.0, 0.08], [0.05, -0.04, 0.1]), feet)
+    b = wb.body_ik(body_pose([0.01, 0.0, 0.08], [0.05, -0.04, 0.1]), feet)
     assert np.array_equal(a.q, b.q)
     # roll about x: R = Rx for rpy (r, 0, 0)
     r = 0.2
-    T = pose_matrix([0, 0, 0], [r, 0, 0])
+    T = body_pose([0, 0, 0], [r, 0, 0])
     assert np.allclose(
         T[:3, :3], [[1, 0, 0], [0, math.cos(r), -math.sin(r)], [0, math.sin(r), math.cos(r)]]
     )
+
+
+def test_foot_step_to_dict_is_json_ready():
+    import hexapod_kin as hk
+    from hexapod_kin.gait import foot_step
+
+    step = foot_step(hk.load("hexabot_leg"), dt=0.01, duration=0.5)
+    d = json.loads(json.dumps(step.to_dict()))
+    assert len(d["t"]) == len(step.t) and d["within_limits"] is step.within_limits

@@ -175,8 +175,7 @@ def test_hexapod_leg_closed_form_through_its_mount(leg):
 
 
 def test_base_pose_maps_targets_and_tool_offset_is_refused():
-    from hexapod_kin import Chain, ik, robots
-    from hexapod_kin.params import table_fk
+    from hexapod_kin import Chain, ik, robots, table_fk
 
     leg = robots.hexabot_leg()
     moved = Chain(rows=leg.rows, base_pose=([0.1, -0.2, 0.05], [0.3, -0.2, 1.0]))
@@ -188,3 +187,29 @@ def test_base_pose_maps_targets_and_tool_offset_is_refused():
     with_tool = Chain(rows=leg.rows, tool=([0.0, 0.0, 0.02], [0.0, 0.0, 0.0]))
     with pytest.raises(hk.exceptions.IKError, match="tool offset"):
         ik.detect_family(with_tool)
+
+
+def test_leg_solutions_is_the_one_home_per_target_lengths_and_limits():
+    """leg_solutions with one design per target equals analytic_batch design by design."""
+    rng = np.random.default_rng(4)
+    designs = [(0.05, 0.1, 0.1), (0.03, 0.12, 0.08)]
+    lim = JointLimits(-2.0, 2.0)
+    pts, rows, ref = [], [], []
+    for l1, l2, l3 in designs:
+        chain = robots.hexabot_leg(l1=l1, l2=l2, l3=l3).replace(limits=(lim, lim, lim))
+        p = rng.uniform(-0.25, 0.25, size=(500, 3))
+        b = ik.analytic_batch(chain, p, tol=0.0, within_limits=True)
+        pts.append(p)
+        rows.append(np.tile([l1, l2, l3], (500, 1)))
+        ref.append(b)
+    p, r = np.vstack(pts), np.vstack(rows)
+    lo, hi = np.full((len(p), 3), -2.0), np.full((len(p), 3), 2.0)
+    q, valid = ik.leg_solutions(p, (r[:, 0], r[:, 1], r[:, 2]), sign=-1.0, limits=(lo, hi))
+    np.testing.assert_array_equal(valid, np.vstack([b.valid for b in ref]))
+    np.testing.assert_allclose(q, np.vstack([b.q for b in ref]), rtol=0, atol=1e-12)
+    reach = ik.leg_reachable(p, (r[:, 0], r[:, 1], r[:, 2]), sign=-1.0, limits=(lo, hi))
+    np.testing.assert_array_equal(reach, valid.any(axis=1))
+    assert 0.05 < reach.mean() < 0.95
+    d = ref[0].to_dict()
+    assert d["family"] == "leg3" and len(d["q"]) == 500
+    assert ik.detect_family(robots.hexabot_leg()).to_dict()["lengths"] == [0.05, 0.1, 0.1]

@@ -27,7 +27,7 @@ from hexapod_kin.sweep import (
     jacobian_position,
     pareto_front,
     reachable,
-    read_table,
+    read_results,
     score_designs,
     sweep,
     volume_closed_form,
@@ -320,7 +320,7 @@ def test_pareto_front_against_brute_force():
 SPACE = DesignSpace(
     {"l1": Range(0.03, 0.07, 4), "l2": Range(0.08, 0.12, 4), "q2_lower": Range(-PI, -1.0, 2)}
 )
-OPTS = {"mc_samples": 400_000, "chunk_size": 2, "seed": 7}
+OPTS = {"mc_samples": 40_000, "chunk_size": 2, "seed": 7}
 
 
 @pytest.fixture(scope="module")
@@ -342,7 +342,7 @@ def dask_client():
 
 
 def test_parquet_and_csv_tables_agree(local_run):
-    csv, pq = read_table(local_run.files["csv"]), read_table(local_run.files["parquet"])
+    csv, pq = read_results(local_run.files["csv"]), read_results(local_run.files["parquet"])
     assert list(csv) == list(pq) == list(local_run.table)
     for k in csv:
         assert np.array_equal(csv[k], pq[k]) and np.array_equal(csv[k], local_run.table[k])
@@ -394,7 +394,7 @@ def _cli(out: Path) -> list[str]:
         "--height",
         "0.1",
         "--mc-samples",
-        "400000",
+        "40000",
         "--chunk-size",
         "2",
         "--seed",

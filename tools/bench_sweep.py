@@ -97,7 +97,7 @@ def _peer_design(r: np.ndarray, unit: np.ndarray) -> dict[str, float]:
 def run(quick: bool = False) -> list[dict]:
     n_designs, n_mc = 1000, 10_000
     designs = SPACE.designs("lhs", samples=n_designs, seed=0)
-    score_designs(designs[:2], mc_samples=100)  # compile / load the numba cache
+    score_designs(designs[:2], mc_samples=100)  # warm up (imports)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         times = []

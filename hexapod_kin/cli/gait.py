@@ -66,8 +66,8 @@ def register(sub: Any) -> None:
         default="flat",
         help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
     )
-    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
     p.add_argument("--rate", type=float, default=100.0, help="sample rate [Hz]")
+    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
         "--plot",
@@ -111,8 +111,8 @@ def _cmd_gait(args: argparse.Namespace) -> int:
         velocity=args.velocity,
         body_height=args.body_height,
         terrain=args.terrain,
-        duration=args.duration,
         rate=args.rate,
+        duration=args.duration,
     )
     out = run.to_dict()
     if plot is not None:

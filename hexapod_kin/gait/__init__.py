@@ -4,7 +4,7 @@
 * :mod:`.stand` — standing poses and the hexapod's body sway (:func:`demo_trajectory`).
 * :mod:`.robot` — the whole robot with a floating base (:func:`whole_body`), body-pose IK.
 * :mod:`.tables` — phase tables (tripod, wave, ripple, custom).
-* :mod:`.terrain` — the ground as a height function (flat, slope, step, user callables).
+* :mod:`.terrain` — the ground as a height function (flat, slope, a step, user callables).
 * :mod:`.stability` — support-polygon margin and leg clearance.
 * :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`).
 * :mod:`.plots` — gait diagram, margin over time, foot paths from above (matplotlib).
@@ -14,11 +14,11 @@
 from __future__ import annotations
 
 from .paths import FootStep, foot_path, foot_step
-from .robot import BodyIK, GaitError, WholeBody, pose_matrix, whole_body
+from .robot import BodyIK, GaitError, WholeBody, body_pose, whole_body
 from .stability import segment_clearance, support_margin
 from .stand import default_configuration, demo_trajectory, frame_poses, standing_base
 from .tables import PATTERNS, PhaseTable, phase_table
-from .terrain import TERRAINS, Terrain, flat, slope, step, terrain
+from .terrain import TERRAINS, Terrain, flat, slope, step_terrain, terrain
 from .walk import GaitRun, se2_pose, swing_profile, walk
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "PhaseTable",
     "Terrain",
     "WholeBody",
+    "body_pose",
     "default_configuration",
     "demo_trajectory",
     "flat",
@@ -38,12 +39,11 @@ __all__ = [
     "foot_step",
     "frame_poses",
     "phase_table",
-    "pose_matrix",
     "se2_pose",
     "segment_clearance",
     "slope",
     "standing_base",
-    "step",
+    "step_terrain",
     "support_margin",
     "swing_profile",
     "terrain",

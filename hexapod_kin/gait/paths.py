@@ -8,13 +8,13 @@ height and duty factor, so that gait tables call it per leg with their phase off
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any, Literal
 
 import numpy as np
 
-from ..exceptions import ParameterError
-from ..motion import default_stance, positive, read_only, track
+from ..exceptions import ParameterError, positive
+from ..motion import default_stance, read_only, track
 
 __all__ = ["FootStep", "foot_path", "foot_step"]
 
@@ -115,6 +115,14 @@ class FootStep:
     within_limits: bool
     max_joint_step: float
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (arrays as nested lists, SI units)."""
+        return {
+            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
+            for f in fields(self)
+            for v in (getattr(self, f.name),)
+        }
+
     @property
     def max_error(self) -> float:
         """Max ‖FK(q) − planned‖ in [m]."""
@@ -127,9 +135,9 @@ def foot_step(
     center: Any = None,
     length: float = 0.04,
     height: float = 0.03,
+    dt: float = 0.005,
     duration: float = 1.0,
     duty_factor: float = 0.5,
-    dt: float = 0.005,
     direction: Any = (1.0, 0.0),
     shape: Literal["ellipse", "cycloid"] = "ellipse",
     cycles: int = 1,
@@ -144,9 +152,9 @@ def foot_step(
             :func:`default_stance`.
         length: Step length [m].
         height: Swing height [m].
+        dt: Sample time [s].
         duration: Cycle time [s].
         duty_factor: Stance fraction in (0, 1).
-        dt: Sample time [s].
         direction: Horizontal travel direction (2,).
         shape: Swing shape ``"ellipse"`` or ``"cycloid"``.
         cycles: Number of cycles (>= 1).

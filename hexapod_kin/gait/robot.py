@@ -15,20 +15,17 @@ plane at the body centre).
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
-from ..params import Hexapod
+from ..params import Hexapod, rpy_to_matrix
 from ._compiled import _pick_branch, _tree_kernel
 
-__all__ = ["BodyIK", "GaitError", "WholeBody", "pose_matrix", "whole_body"]
+__all__ = ["BodyIK", "GaitError", "WholeBody", "body_pose", "whole_body"]
 
 
 class GaitError(ConfigurationError):
@@ -62,7 +59,7 @@ class GaitError(ConfigurationError):
         self.amount = amount
 
 
-def pose_matrix(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
+def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
     """The 4×4 pose of position ``xyz`` [m] and roll/pitch/yaw ``rpy`` [rad] (R = Rz·Ry·Rx).
 
     Raises:
@@ -73,27 +70,10 @@ def pose_matrix(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.nd
     a = np.asarray(rpy, dtype=float).reshape(-1)
     if p.shape != (3,) or a.shape != (3,) or not np.all(np.isfinite(np.r_[p, a])):
         raise ParameterError(f"pose xyz={xyz!r}, rpy={rpy!r}: three finite numbers each")
-    cr, sr = math.cos(a[0]), math.sin(a[0])
-    cp, sp = math.cos(a[1]), math.sin(a[1])
-    cy, sy = math.cos(a[2]), math.sin(a[2])
     T = np.eye(4)
-    T[:3, :3] = [
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr],
-    ]
+    T[:3, :3] = rpy_to_matrix(*(float(v) for v in a))
     T[:3, 3] = p
     return T
-
-
-def _inv(T: np.ndarray) -> np.ndarray:
-    """Inverse of rigid transforms (..., 4, 4)."""
-    out = np.zeros_like(T)
-    Rt = np.swapaxes(T[..., :3, :3], -1, -2)
-    out[..., :3, :3] = Rt
-    out[..., :3, 3] = -np.einsum("...ij,...j->...i", Rt, T[..., :3, 3])
-    out[..., 3, 3] = 1.0
-    return out
 
 
 @dataclass(frozen=True)
@@ -116,6 +96,14 @@ class BodyIK:
     excess: np.ndarray
     limit_margin: np.ndarray
     leg_names: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (arrays as nested lists, SI units)."""
+        return {
+            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
+            for f in fields(self)
+            for v in (getattr(self, f.name),)
+        }
 
     @property
     def ok(self) -> np.ndarray:
@@ -304,7 +292,7 @@ class WholeBody:
         nearest to the previous sample's (the first to ``q_prev``) is kept.
 
         Args:
-            base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`pose_matrix`), or
+            base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`body_pose`), or
                 (6,) / (N, 6) ``x, y, z`` [m], ``roll, pitch, yaw`` [rad].
             feet: Foot positions in the world (L, 3) or (N, L, 3) in [m].
             q_prev: (18,) joints the first sample's branch is nearest to (default
@@ -332,7 +320,7 @@ class WholeBody:
                 "base and feet must be arrays of numbers", parameter="base"
             ) from None
         if B.shape[-1:] == (6,) and B.ndim in (1, 2):  # x, y, z, roll, pitch, yaw
-            B = np.array([pose_matrix(b[:3], b[3:]) for b in B.reshape(-1, 6)])
+            B = np.array([body_pose(b[:3], b[3:]) for b in B.reshape(-1, 6)])
         if B.shape == (4, 4):
             B = B[None]
         if P.ndim == 2:
@@ -365,8 +353,7 @@ class WholeBody:
             chain = self.params.legs[legs[0]].chain
             targets = np.ascontiguousarray(p_mount[:, legs].transpose(1, 0, 2).reshape(-1, 3))
             try:
-                with _one_thread(len(targets) < 200_000):
-                    batch = analytic_batch(chain, targets)
+                batch = analytic_batch(chain, targets)
             except HexapodKinError as exc:
                 raise ConfigurationError(
                     f"legs {[self.leg_names[k] for k in legs]}: {exc}", parameter="params"
@@ -431,28 +418,6 @@ class WholeBody:
                 value=d,
                 allowed=[float(self.lower[j]), float(self.upper[j])],
             )
-
-
-@contextmanager
-def _one_thread(on: bool) -> Iterator[None]:
-    """Run compiled parallel kernels on this thread only (for small batches).
-
-    Fanning a small batch out to threads costs more than it saves on a shared machine.
-    """
-    if not on:
-        yield
-        return
-    try:
-        import numba
-    except ImportError:  # pragma: no cover - numba is a core dependency
-        yield
-        return
-    before = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(before)
 
 
 def _build(params: Hexapod) -> WholeBody:

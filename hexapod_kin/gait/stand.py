@@ -16,6 +16,7 @@ import numpy as np
 
 from ..exceptions import HexapodKinError, ParameterError
 from ..params import Hexapod
+from .robot import body_pose
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
@@ -26,15 +27,7 @@ __all__ = [
     "frame_poses",
     "hexapod_sway",
     "standing_base",
-    "translation",
 ]
-
-
-def translation(xyz: Any) -> np.ndarray:
-    """The 4×4 homogeneous translation by ``xyz`` [m]."""
-    T = np.eye(4)
-    T[:3, 3] = np.asarray(xyz, dtype=float)
-    return T
 
 
 def frame_poses(
@@ -84,7 +77,7 @@ def standing_base(model: Model, q: np.ndarray) -> np.ndarray:
         return np.eye(4)
     data = model.model.createData()
     feet = frame_poses(model, data, q[None, :], None, params.foot_frames)[0, :, :3, 3]
-    return translation([0.0, 0.0, -float(feet[:, 2].min()) + 0.01])
+    return body_pose([0.0, 0.0, -float(feet[:, 2].min()) + 0.01])
 
 
 def demo_trajectory(
@@ -141,7 +134,7 @@ def hexapod_sway(
     h = float(stand[2, 3])
     base = np.empty((len(times), 4, 4))
     for i, ph in enumerate(phase):
-        T = translation([0.012 * math.sin(ph), 0.012 * math.cos(ph), h + 0.012 * math.sin(2 * ph)])
+        T = body_pose([0.012 * math.sin(ph), 0.012 * math.cos(ph), h + 0.012 * math.sin(2 * ph)])
         R = pin.rpy.rpyToMatrix(0.08 * math.sin(ph), 0.08 * math.cos(ph), 0.1 * math.sin(ph))
         T[:3, :3] = R
         base[i] = T

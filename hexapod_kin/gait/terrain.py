@@ -17,7 +17,7 @@ import numpy as np
 
 from ..exceptions import ParameterError, one_of
 
-__all__ = ["TERRAINS", "Terrain", "flat", "slope", "step", "terrain"]
+__all__ = ["TERRAINS", "Terrain", "flat", "slope", "step_terrain", "terrain"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,7 +86,7 @@ def slope(angle: float = math.radians(8.0), heading: float = 0.0, z0: float = 0.
     return Terrain("slope", lambda x, y: z0 + g * (c * np.asarray(x) + s * np.asarray(y)))
 
 
-def step(rise: float = 0.02, at: float = 0.25, heading: float = 0.0) -> Terrain:
+def step_terrain(rise: float = 0.02, at: float = 0.25, heading: float = 0.0) -> Terrain:
     """A step of height ``rise`` [m] at distance ``at`` [m] along ``heading`` [rad].
 
     The ground is at 0 before the edge and at ``rise`` beyond it (the edge itself is up).
@@ -98,7 +98,7 @@ def step(rise: float = 0.02, at: float = 0.25, heading: float = 0.0) -> Terrain:
 
 
 #: The example terrains by name.
-TERRAINS: dict[str, Callable[[], Terrain]] = {"flat": flat, "slope": slope, "step": step}
+TERRAINS: dict[str, Callable[[], Terrain]] = {"flat": flat, "slope": slope, "step": step_terrain}
 
 
 def terrain(spec: str | Terrain | Callable[..., Any] | None = None) -> Terrain:

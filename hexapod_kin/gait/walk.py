@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ParameterError
+from ..motion import read_only
 from .robot import GaitError, WholeBody, whole_body
 from .stability import segment_clearance, support_margin
 from .tables import PhaseTable, phase_table
@@ -97,11 +98,6 @@ def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.asarray(s, dtype=float)
     return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 16.0 * s * s * (1.0 - s) ** 2
-
-
-def _arr(*arrays: np.ndarray) -> None:
-    for a in arrays:
-        a.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -269,8 +265,8 @@ def walk(
     body_height: float = 0.08,
     foot_reach: float = 0.16,
     terrain: Any = None,
-    duration: float = 10.0,
     rate: float = 100.0,
+    duration: float = 10.0,
     q0: Any = None,
     strict: bool = True,
 ) -> GaitRun:
@@ -291,8 +287,8 @@ def walk(
         foot_reach: Horizontal distance from the hip axis to the neutral foot point [m].
         terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
             :class:`~.terrain.Terrain` or ``h(x, y)``.
-        duration: Length of the run [s].
         rate: Sample rate [Hz].
+        duration: Length of the run [s].
         q0: (18,) joints the first sample's IK branches are nearest to.
         strict: Raise on the first failed check (else return the run with its checks).
 
@@ -469,7 +465,7 @@ def walk(
                 allowed="margin > 0",
             )
     phase = table.phase(t, T)
-    _arr(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
+    read_only(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
     settings = {
         "stride": float(strokes.max()),
         "step_height": H,
@@ -483,7 +479,7 @@ def walk(
         "rate": hz,
     }
     ik_ok = np.asarray(ik.ok)
-    _arr(ik_ok)
+    read_only(ik_ok)
     return GaitRun(
         t=t,
         base_poses=base,

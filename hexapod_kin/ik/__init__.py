@@ -1,25 +1,30 @@
 """Inverse kinematics: closed forms for the leg families, damped least squares for any chain.
 
 * :mod:`.closed` — closed forms chosen from the Khalil table's pattern (:func:`detect_family`,
-  :func:`analytic`, :func:`analytic_batch`).
+  :func:`analytic`, :func:`analytic_batch`); the legs' one closed form, vectorised
+  (:func:`leg_solutions`, :func:`leg_reachable`).
 * :mod:`.task` — the problem: a position, position + yaw, or a 6-D pose target with per-row
   weights (:func:`build_task`).
-* :mod:`.step` — compiled: the task rows, the damped least-squares step (a pure function),
-  and the small Levenberg–Marquardt loop around it.
 * :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
-  and the package's one home pose :func:`home` (IK start, resolved-rate start);
-* :mod:`.solver` — :func:`solve`, :func:`solve_many`, :class:`IKResult` and the statuses.
-
-:func:`dls_step` and :func:`sigma_bounds` are the shared numerics of
-:mod:`hexapod_kin._numerics`, re-exported here.
+  and the package's one home pose :func:`home` (IK start, resolved-rate start).
+* :mod:`.solver` — :func:`solve` (numpy over Pinocchio), :func:`solve_many` (the compiled
+  loop of :mod:`.step`, imported on first use), :class:`IKOptions`, :class:`IKResult`.
 """
 
 from __future__ import annotations
 
-from .._numerics import dls_step, sigma_bounds
-from .closed import FAMILIES, AnalyticBatch, LegFamily, analytic, analytic_batch, detect_family
+from .closed import (
+    FAMILIES,
+    AnalyticBatch,
+    LegFamily,
+    analytic,
+    analytic_batch,
+    detect_family,
+    leg_reachable,
+    leg_solutions,
+)
 from .prepare import LEG_HOME, Prepared, home, prepared
-from .solver import STATUSES, IKResult, solve, solve_many
+from .solver import STATUSES, IKOptions, IKResult, solve, solve_many
 from .task import AXES, Task, build_task
 
 __all__ = [
@@ -28,6 +33,7 @@ __all__ = [
     "LEG_HOME",
     "STATUSES",
     "AnalyticBatch",
+    "IKOptions",
     "IKResult",
     "LegFamily",
     "Prepared",
@@ -36,10 +42,10 @@ __all__ = [
     "analytic_batch",
     "build_task",
     "detect_family",
-    "dls_step",
     "home",
+    "leg_reachable",
+    "leg_solutions",
     "prepared",
-    "sigma_bounds",
     "solve",
     "solve_many",
 ]

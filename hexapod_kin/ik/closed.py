@@ -23,11 +23,11 @@ Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are all
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
 
-The numerical solver :func:`solve` works on any loaded model (Pinocchio). It is a
-
 :func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
 gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
-:class:`AnalyticBatch`. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+:class:`AnalyticBatch`. The legs' closed form is written once, vectorised in numpy over
+arrays of targets (:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the
+gait's body IK call it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -38,16 +38,25 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import njit, prange, wrap_angle, wrap_angles, wrap_diff
 from ..exceptions import IKError
 from ..model import Model
 from ..params import Chain, Hexapod, Pose
 
-__all__ = ["FAMILIES", "AnalyticBatch", "LegFamily", "analytic", "analytic_batch", "detect_family"]
+__all__ = [
+    "FAMILIES",
+    "AnalyticBatch",
+    "LegFamily",
+    "analytic",
+    "analytic_batch",
+    "detect_family",
+    "leg_reachable",
+    "leg_solutions",
+]
 
 FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 
 _HALF_PI = 0.5 * math.pi
+_TWO_PI = 2.0 * math.pi
 _ANG_TOL = 1e-12
 
 
@@ -89,10 +98,17 @@ class LegFamily:
         """Number of joints."""
         return self.chain.nq
 
-    @property
-    def max_solutions(self) -> int:
-        """Number of solution slots of :func:`analytic_batch` (2, 4 or 2)."""
-        return {"coxa_tibia": 2, "leg3": 4, "scara": 2}[self.family]
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
+        return {
+            "family": self.family,
+            "chain": self.chain.name,
+            "lengths": list(self.lengths),
+            "height": self.height,
+            "sign": self.sign,
+            "offsets": list(self.offsets),
+            "yaw_offset": self.yaw_offset,
+        }
 
     @property
     def target_size(self) -> tuple[int, ...]:
@@ -253,6 +269,15 @@ class AnalyticBatch:
         """(N,) True where a target has at least one solution."""
         return np.asarray(self.valid.any(axis=1))
 
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (NaN slots as None)."""
+        q = np.where(self.valid[..., None], self.q, 0.0).tolist()
+        for qi, vi in zip(q, self.valid.tolist()):
+            for k, ok in enumerate(vi):
+                if not ok:
+                    qi[k] = None
+        return {"family": self.family, "q": q, "valid": self.valid.tolist()}
+
 
 def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
     try:
@@ -287,11 +312,6 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
     return np.ascontiguousarray(arr), single
 
 
-#: Up to this many targets, :func:`analytic_batch` solves in numpy (~0.4 µs a target, no kernel
-#: to compile on a fresh install); more go to the parallel kernel.
-_FEW = 16384
-
-
 def analytic_batch(
     chain: Chain | Model | str, targets: Any, *, tol: float = 1e-9, within_limits: bool = False
 ) -> AnalyticBatch:
@@ -321,99 +341,34 @@ def analytic_batch(
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
     tol_abs = float(tol) * fam.scale
-    # A few targets take the numpy path below: the compiled kernel (parallel) costs seconds to
-    # compile on a fresh install, more than numpy spends on thousands of targets.
-    if not within_limits and fam.family in ("coxa_tibia", "leg3") and x.shape[0] > _FEW:
-        leg3 = fam.family == "leg3"
-        qk = np.empty((x.shape[0], fam.max_solutions, fam.nq))
-        vk = np.empty((x.shape[0], fam.max_solutions), dtype=np.bool_)
-        ls = fam.lengths + (1.0,) * (3 - len(fam.lengths))
-        _legs_kernel(
-            x,
-            leg3,
-            ls[0],
-            ls[1],
-            ls[2],
-            fam.height,
-            fam.sign,
-            tol_abs,
-            np.asarray(fam.offsets, dtype=float),
-            qk,
-            vk,
-        )
-        qk.setflags(write=False)
-        vk.setflags(write=False)
-        return AnalyticBatch(q=qk, valid=vk, family=fam.family)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        if fam.family == "coxa_tibia":
-            q, valid = _ik_coxa_tibia(fam, x, tol_abs)
-        elif fam.family == "leg3":
-            q, valid = _ik_leg3(fam, x, tol_abs)
-        else:
-            q, valid = _ik_scara(fam, x)
-    off = np.asarray(fam.offsets)
-    revolute = np.array([s == "revolute" for s in fam.chain.sigmas])
-    q = q - off
-    q[..., revolute] = wrap_angles(q[..., revolute])
+    limits = None
     if within_limits:
-        lo, hi = fam.chain.lower(), fam.chain.upper()
-        for j in np.flatnonzero(revolute):
-            for shift in (2 * np.pi, -2 * np.pi):
-                moved = q[..., j] + shift
-                fix = (
-                    ((q[..., j] < lo[j]) | (q[..., j] > hi[j]))
-                    & (moved >= lo[j])
-                    & (moved <= hi[j])
-                )
-                q[..., j] = np.where(fix, moved, q[..., j])
-        valid &= np.all((q >= lo - 1e-12) & (q <= hi + 1e-12), axis=-1)
-    q[~valid] = np.nan
+        limits = (np.asarray(fam.chain.lower(), float), np.asarray(fam.chain.upper(), float))
+    if fam.family == "scara":
+        with np.errstate(invalid="ignore", divide="ignore"):
+            q, valid = _ik_scara(fam, x)
+        q = q - np.asarray(fam.offsets)
+        q[..., :3] = _wrap(q[..., :3])
+        if limits is not None:
+            lo, hi = limits[0] - 1e-12, limits[1] + 1e-12
+            for j in range(4):  # θ1 θ2 θ3 revolute, then the prismatic joint
+                v, ok = _fit(q[..., j], lo[j], hi[j]) if j < 3 else (q[..., j], True)
+                q[..., j] = v
+                valid &= ok & (v >= lo[j]) & (v <= hi[j])
+        q[~valid] = np.nan
+    else:
+        q, valid = leg_solutions(
+            x,
+            fam.lengths,
+            height=fam.height,
+            sign=fam.sign,
+            offsets=fam.offsets,
+            tol=tol_abs,
+            limits=limits,
+        )
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
-
-
-def _ik_coxa_tibia(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    l1, l2 = fam.lengths
-    n = x.shape[0]
-    h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
-    w = (x[:, 2] - fam.height) * fam.sign  # = l2 sin φ2
-    q = np.empty((n, 2, 2))
-    valid = np.empty((n, 2), dtype=bool)
-    for k, hs in enumerate((1.0, -1.0)):
-        u = hs * h - l1  # = l2 cos φ2
-        dist = np.hypot(u, w)
-        valid[:, k] = np.abs(dist - abs(l2)) <= tol
-        q[:, k, 0] = phi if hs > 0 else phi + np.pi
-        q[:, k, 1] = np.arctan2(w / l2, u / l2)
-    return q, valid
-
-
-def _ik_leg3(fam: LegFamily, x: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    l1, l2, l3 = fam.lengths
-    n = x.shape[0]
-    h = np.hypot(x[:, 0], x[:, 1])
-    phi = np.arctan2(x[:, 1], x[:, 0])
-    w = (x[:, 2] - fam.height) * fam.sign  # = l2 s2 + l3 s23
-    q = np.empty((n, 4, 3))
-    valid = np.empty((n, 4), dtype=bool)
-    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3)
-    for k, hs in enumerate((1.0, -1.0)):
-        u = hs * h - l1  # = l2 c2 + l3 c23
-        c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-        ok = np.abs(c3) <= 1.0 + eps
-        c3 = np.clip(c3, -1.0, 1.0)
-        s3 = np.sqrt(1.0 - c3 * c3)
-        base = np.arctan2(w, u)
-        for b, sgn in enumerate((1.0, -1.0)):
-            slot = 2 * k + b
-            s = sgn * s3
-            q[:, slot, 0] = phi if hs > 0 else phi + np.pi
-            q[:, slot, 2] = np.arctan2(s, c3)
-            q[:, slot, 1] = base - np.arctan2(l3 * s, l2 + l3 * c3)
-            valid[:, slot] = ok
-    return q, valid
 
 
 def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -446,61 +401,169 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q, valid
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _legs_kernel(
-    x: np.ndarray,
-    fam3: bool,
-    l1: float,
-    l2: float,
-    l3: float,
+def _wrap(a: Any) -> Any:
+    """Angle(s) wrapped to (−π, π] [rad]: ``a − 2πk`` (a float for a scalar, else an array)."""
+    out = np.asarray(a - _TWO_PI * np.round(a * (1.0 / _TWO_PI)))
+    out = np.where(out <= -np.pi, out + _TWO_PI, out)
+    return float(out) if out.ndim == 0 else out
+
+
+def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Angles shifted by ±2π into [lo, hi] where that helps; (angles, inside)."""
+    v = np.where((v < lo) & (v + _TWO_PI <= hi), v + _TWO_PI, v)
+    v = np.where((v > hi) & (v - _TWO_PI >= lo), v - _TWO_PI, v)
+    return v, (v >= lo) & (v <= hi)
+
+
+def _leg_slots(
+    targets: Any,
+    lengths: tuple[Any, ...],
     height: float,
     sign: float,
+    offsets: Any,
     tol: float,
-    off: np.ndarray,
-    q: np.ndarray,
-    valid: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """coxa_tibia (fam3 False) and leg3 (fam3 True) closed forms, offsets removed, wrapped."""
-    n = x.shape[0]
-    eps = tol * (abs(l2) + abs(l3)) / abs(l2 * l3) if fam3 else 0.0
-    nan = np.nan
-    for i in prange(n):
-        h = math.sqrt(x[i, 0] * x[i, 0] + x[i, 1] * x[i, 1])
-        phi = math.atan2(x[i, 1], x[i, 0])
-        w = (x[i, 2] - height) * sign
-        for k in range(2):
-            u = (h if k == 0 else -h) - l1
-            p1 = wrap_angle((phi if k == 0 else phi + math.pi) - off[0])
-            if not fam3:
-                ok = abs(math.sqrt(u * u + w * w) - abs(l2)) <= tol
-                valid[i, k] = ok
-                if ok:
-                    q[i, k, 0] = p1
-                    q[i, k, 1] = wrap_angle(math.atan2(w / l2, u / l2) - off[1])
-                else:
-                    q[i, k, 0] = nan
-                    q[i, k, 1] = nan
+    limits: tuple[Any, Any] | None,
+) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:
+    """The leg closed form as columns on the targets a branch reaches.
+
+    Returns ``(sub, cols, oks)``: the indices of those targets (None: all), their joint values
+    slot by slot and joint by joint, and each slot's validity.
+    """
+    x = np.asarray(targets, dtype=np.float64).reshape(-1, 3)
+    nq = len(lengths)
+    off = np.zeros(nq) if offsets is None else np.asarray(offsets, dtype=np.float64)
+    if not off.any():
+        off = [0] * nq  # type: ignore[assignment]  # a - 0 is a: no work
+    lo = hi = None
+    if limits is not None:
+        lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
+        # joint j's bounds lo[j], hi[j]: scalars or contiguous (N,)
+        lo, hi = np.ascontiguousarray(lo.T - 1e-12), np.ascontiguousarray(hi.T + 1e-12)
+    n = len(x)
+    h = np.hypot(x[:, 0], x[:, 1])
+    w = (x[:, 2] - height) * sign
+    l1, l2 = lengths[0], lengths[1]
+    l3 = lengths[2] if nq == 3 else 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        us = [h - l1, -h - l1]  # the hip toward the target, then reversed
+        if nq == 2:
+            reach = [np.abs(np.hypot(u, w) - np.abs(l2)) <= tol for u in us]
+        else:
+            eps = tol * (np.abs(l2) + np.abs(l3)) / np.abs(l2 * l3)
+            c3s = [(u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3) for u in us]
+            reach = [np.abs(c3) <= 1.0 + eps for c3 in c3s]
+    # the angles only where a branch reaches (the trigonometry is most of the work)
+    sub = np.flatnonzero(reach[0] | reach[1])
+    full = len(sub) == n
+
+    def take(a: Any) -> Any:
+        return a if full or np.ndim(a) == 0 else a[..., sub]
+
+    x, h, w, us, reach = (
+        x[sub] if not full else x,
+        take(h),
+        take(w),
+        [take(u) for u in us],
+        [take(r) for r in reach],
+    )
+    l1, l2, l3 = take(np.asarray(l1)), take(np.asarray(l2)), take(np.asarray(l3))
+    if lo is not None and hi is not None and lo.ndim == 2:  # per target: (nq, N)
+        lo, hi = take(lo), take(hi)
+    phi = np.arctan2(x[:, 1], x[:, 0])
+    cols: list[np.ndarray] = []  # slot by slot, joint by joint
+    oks: list[np.ndarray] = []
+
+    def slot(ok: np.ndarray, *angles: np.ndarray) -> None:
+        vals = [_wrap(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
+        if lo is not None and hi is not None:
+            for j, v in enumerate(vals):
+                vals[j], inside = _fit(v, lo[j], hi[j])
+                ok = ok & inside
+        oks.append(ok)
+        cols.extend(vals)
+
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for k, u in enumerate(us):
+            hip = phi + k * np.pi
+            if nq == 2:
+                slot(reach[k], hip, np.arctan2(w / l2, u / l2))
                 continue
-            c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-            ok = abs(c3) <= 1.0 + eps
-            valid[i, 2 * k] = ok
-            valid[i, 2 * k + 1] = ok
-            if not ok:
-                for b in range(2):
-                    for j in range(3):
-                        q[i, 2 * k + b, j] = nan
-                continue
-            c3 = min(max(c3, -1.0), 1.0)
-            s3 = math.sqrt(1.0 - c3 * c3)
-            base = math.atan2(w, u)
-            a3 = math.atan2(s3, c3)
-            a2 = math.atan2(l3 * s3, l2 + l3 * c3)
-            q[i, 2 * k, 0] = p1
-            q[i, 2 * k, 1] = wrap_angle(base - a2 - off[1])
-            q[i, 2 * k, 2] = wrap_angle(a3 - off[2])
-            q[i, 2 * k + 1, 0] = p1
-            q[i, 2 * k + 1, 1] = wrap_angle(base + a2 - off[1])
-            q[i, 2 * k + 1, 2] = wrap_angle(-a3 - off[2])
+            c3 = np.clip(take(c3s[k]), -1.0, 1.0)
+            s3 = np.sqrt(1.0 - c3 * c3)
+            base = np.arctan2(w, u)
+            a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
+            a3 = np.arctan2(s3, c3)
+            slot(reach[k], hip, base - a2, a3)
+            slot(reach[k], hip, base + a2, -a3)
+    return (None if full else sub), cols, oks
+
+
+def leg_solutions(
+    targets: np.ndarray,
+    lengths: tuple[Any, ...],
+    *,
+    height: float = 0.0,
+    sign: float = -1.0,
+    offsets: Any = None,
+    tol: float = 0.0,
+    limits: tuple[Any, Any] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The one closed form of the coxa_tibia (2 lengths) and leg3 (3 lengths) legs, vectorised.
+
+    Foot ``Rz(φ1)·[l1 + ρ', 0, σ·w] + [0, 0, h]`` with ``ρ' = l2 c2`` (2 DOF) or
+    ``l2 c2 + l3 c23`` and ``w = l2 s2 (+ l3 s23)``; σ = ``sign`` (sin α2). For each hip
+    branch (``φ1 = atan2(y, x)`` or ``+ π``, ``u = ±√(x² + y²) − l1``): 2 DOF, valid when
+    ``|‖(u, w)‖ − |l2|| ≤ tol``, ``φ2 = atan2(w/l2, u/l2)``; 3 DOF,
+    ``c3 = (u² + w² − l2² − l3²)/(2 l2 l3)`` valid when ``|c3| ≤ 1 + ε`` (ε: ``tol`` as a
+    cosine), ``φ3 = ±acos c3``, ``φ2 = atan2(w, u) − atan2(l3 s3, l2 + l3 c3)``.
+
+    Args:
+        targets: (N, 3) foot positions [m] in the leg's frame 0.
+        lengths: ``(l1, l2)`` or ``(l1, l2, l3)`` [m]; each a number or (N,) (one per target).
+        height: ``r1`` [m].
+        sign: ``sin α2`` (±1).
+        offsets: The joints' θ offsets [rad] (removed from the result); default 0.
+        tol: Absolute reachability tolerance [m].
+        limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
+            (by more than 1e-12) are invalid; values are first shifted by ±2π when that brings
+            them inside.
+
+    Returns:
+        ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
+        (N, K) validity; K = 2 (slots: hip toward, reversed) or 4 (toward/ankle +,
+        toward/ankle −, reversed/ankle +, reversed/ankle −).
+
+    """
+    n = len(np.asarray(targets).reshape(-1, 3))
+    sub, cols, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
+    q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
+    valid = np.zeros((k, n), dtype=bool)
+    at = slice(None) if sub is None else sub
+    for i, ok in enumerate(oks):
+        valid[i, at] = ok
+        for j in range(nq):
+            q[i * nq + j, at] = np.where(ok, cols[i * nq + j], np.nan)
+    return q.T.reshape(n, k, nq), valid.T
+
+
+def leg_reachable(
+    targets: Any,
+    lengths: tuple[Any, ...],
+    *,
+    height: float = 0.0,
+    sign: float = -1.0,
+    offsets: Any = None,
+    tol: float = 0.0,
+    limits: tuple[Any, Any] | None = None,
+) -> np.ndarray:
+    """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
+    sub, _, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    if sub is None:
+        return np.logical_or.reduce(oks)
+    out = np.zeros(len(np.asarray(targets).reshape(-1, 3)), dtype=bool)
+    out[sub] = np.logical_or.reduce(oks)
+    return out
 
 
 def analytic(
@@ -541,7 +604,7 @@ def analytic(
         sols = qi[vi]
         keep: list[np.ndarray] = []
         for s in sols:
-            if not any(np.max(np.abs(wrap_diff(s, k))) <= 1e-12 for k in keep):
+            if not any(np.max(np.abs(_wrap(s - k))) <= 1e-12 for k in keep):
                 keep.append(s)
         out.append(np.array(keep, dtype=float).reshape(len(keep), qi.shape[-1]))
     return out

@@ -8,8 +8,8 @@ default IK start and the default start of resolved-rate runs).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
-from typing import Union
+from dataclasses import dataclass, field
+from typing import Any, Union
 
 import numpy as np
 
@@ -42,37 +42,56 @@ def as_model(model: ModelLike) -> KinematicModel:
 class Prepared:
     """What the solver needs of one model, built once (arrays read-only).
 
+    The compiled batch loops also read :attr:`packed` and :attr:`tip_rot`, the model's chain
+    arrays (:attr:`~hexapod_kin.model.Model.arrays`), fetched on first use only.
+
     Attributes:
-        packed: The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col).
-        tip_rot: (3, 3) rotation of the tip in its joint frame.
         lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
         cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
         scale: The chain's length scale in [m] (sum of the link offsets).
         home: The default start (see :func:`home`).
         starts: (32, n) seeded random restart configurations within the limits.
         middle: (n,) middle of each joint's range (continuous joints: 0).
+        model: The model (not compared).
 
     """
 
-    packed: tuple[np.ndarray, ...]
-    tip_rot: np.ndarray
     lim: np.ndarray
     cont: np.ndarray
     scale: float
     home: np.ndarray
     starts: np.ndarray
     middle: np.ndarray
+    model: Any = field(repr=False, compare=False)
+
+    @property
+    def packed(self) -> tuple[np.ndarray, ...]:
+        """The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col)."""
+        return tuple(self.model.arrays.packed)
+
+    @property
+    def tip_rot(self) -> np.ndarray:
+        """(3, 3) rotation of the tip in its joint frame (compiled kernels)."""
+        return np.asarray(self.model.arrays.tip_rot)
+
+
+def _scale(model: KinematicModel) -> float:
+    """The chain's length scale in [m]: ``Σ‖t‖`` of the link offsets base → tip, else 1.0."""
+    m = model.model
+    frame = m.frames[model.tip_id]
+    path = [int(i) for i in m.supports[frame.parentJoint]][1:]
+    offsets = [m.jointPlacements[i] for i in path] + [frame.placement]
+    offsets[0] = model.baseMo * offsets[0]
+    s = float(sum(np.linalg.norm(np.asarray(p.translation)) for p in offsets))
+    return s if s > 0.0 else 1.0
 
 
 def _build_prepared(model: KinematicModel) -> Prepared:
-    from .._numerics import chain_scale
-
-    arrays = model.arrays
     lower = np.asarray(model.lower, dtype=float)
     upper = np.asarray(model.upper, dtype=float)
     prism = np.asarray(model.is_prismatic, dtype=bool)
     cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
-    scale = chain_scale(arrays.trans)
+    scale = _scale(model)
     cap = np.where(prism, 0.25 * scale, 0.5)
     lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
     lo = np.where(cont, -np.pi, lower)
@@ -82,7 +101,7 @@ def _build_prepared(model: KinematicModel) -> Prepared:
     q_home = _dexterous_home(model, lower, upper, cont)
     for a in (lim, cont, starts, middle, q_home):
         a.setflags(write=False)
-    return Prepared(arrays.packed, arrays.tip_rot, lim, cont, scale, q_home, starts, middle)
+    return Prepared(lim, cont, scale, q_home, starts, middle, model)
 
 
 def _dexterous_home(
@@ -92,15 +111,14 @@ def _dexterous_home(
         q = np.array(LEG_HOME)
         if np.all(q >= lower) and np.all(q <= upper):
             return q
-    from .._kernels import position_jacobian_batch
-
     lo = np.maximum(lower, -np.pi)
     hi = np.minimum(upper, np.pi)
     mid = 0.5 * (lo + hi)
     half = 0.25 * (hi - lo)
     rng = np.random.default_rng(0)
     cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
-    sv = np.linalg.svd(position_jacobian_batch(model.arrays, cands), compute_uv=False)
+    jacs = np.array([model.jacobian(q)[:3] for q in cands])
+    sv = np.linalg.svd(jacs, compute_uv=False)
     return np.array(cands[int(np.argmax(sv[:, min(model.nq, 3) - 1]))])
 
 

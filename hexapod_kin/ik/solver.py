@@ -1,47 +1,37 @@
 """Numerical IK for any loaded chain: position, position + yaw, or a full 6-D pose.
 
-:func:`solve` builds the task (:func:`~hexapod_kin.ik.task.build_task`), runs the compiled
-Levenberg–Marquardt loop (:func:`~hexapod_kin.ik.step.lm_loop`: damping ``λ² = μ(‖We‖² + w̄)``
-adapted step by step, a step kept only if it lowers the error — the residual history decreases
-strictly —, a step cap, joint limits: continuous joints (range ≥ 2π) wrap, the others are
-clamped and a joint blocked at a limit is frozen; stall detection; seeded restarts) and reports
-the result with Pinocchio's FK. Orientation errors are ``log(R* Rᵀ)`` on SO(3), never Euler
-angles. On a redundant chain (more joints than task rows, e.g. Panda 7-DOF with a 6-D pose)
-a secondary task moves toward a preferred posture (default: the middle of the joint ranges)
-in the null space of the task, while it does not slow the task down.
+Levenberg–Marquardt on the weighted task rows of :mod:`hexapod_kin.ik.task`: damping
+``λ² = μ(‖We‖² + w̄)``, μ ÷4 after a kept step and ×8 after a refused one; a step is kept only if
+it lowers ``‖We‖`` (the residual history decreases strictly); each step is scaled to the
+joints' step caps; continuous joints (range ≥ 2π) wrap, the others are clamped and a joint at
+a limit whose gradient points outward is frozen; 8 nearly flat steps in a row, or 40 refusals,
+end an attempt (stall); seeded restarts follow until one converges. Orientation errors are
+``log(R* Rᵀ)`` on SO(3), never Euler angles. On a redundant chain (more joints than task rows)
+each step first tries ``z = g·(q_posture − q)`` projected on the task's null space:
+``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
+the posture task for that attempt).
 
-Per-model data (:mod:`hexapod_kin.ik.prepare`) is built once and kept in the model's cache;
-every call allocates its own buffers, so one model can be solved from many threads.
+Size rule: :func:`solve` (one target) runs that loop in numpy over Pinocchio's FK and
+Jacobian — no compiled code; :func:`solve_many` (a batch) runs the same algorithm compiled
+(:func:`~hexapod_kin.ik.step.lm_batch`). Both report with Pinocchio's FK.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any, Literal
 
 import numpy as np
+import pinocchio as pin
 
-from .._kernels import fk_jac_into
-from .._numerics import sigma_bounds
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
+from .closed import _wrap
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .step import (
-    I_LIMITS,
-    I_MAX_ITER,
-    P_ROT_TOL,
-    P_TOL,
-    P_YAW,
-    lm_loop,
-    pose_errors,
-    task_cost,
-    task_into,
-    tip_rotation_into,
-)
 from .task import Task, build_task
 
-__all__ = ["STATUSES", "IKResult", "solve", "solve_many"]
+__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_many"]
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
 STATUSES: tuple[str, ...] = (
@@ -53,6 +43,86 @@ STATUSES: tuple[str, ...] = (
 )
 
 _MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
+
+
+# ============================================================================ options
+def _bad(name: str, value: Any, allowed: str) -> ParameterError:
+    return ParameterError(
+        f"{name}={value!r} is not allowed; {allowed} is needed",
+        parameter=name,
+        value=value,
+        allowed=allowed,
+    )
+
+
+@dataclass(frozen=True)
+class IKOptions:
+    """The options of :func:`solve` and :func:`solve_many`, checked on construction.
+
+    Attributes:
+        mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
+        weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
+        tol: Convergence threshold on the position error in [m].
+        rot_tol: Convergence threshold on the orientation error in [rad].
+        max_iter: Accepted steps per attempt.
+        restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
+        within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
+        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
+            ranges), a preferred configuration (nq,), or None (off).
+        posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
+
+    Raises:
+        ParameterError: A value out of its range.
+
+    """
+
+    mask: Any = None
+    weights: Any = None
+    tol: float = 1e-10
+    rot_tol: float = 1e-10
+    max_iter: int = 100
+    restarts: int = 16
+    within_limits: bool = True
+    posture: Any = "middle"
+    posture_gain: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name in ("tol", "rot_tol", "posture_gain"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < math.inf:
+                raise _bad(name, v, "a finite number > 0")
+        if self.posture_gain > 1:
+            raise _bad("posture_gain", self.posture_gain, "0 < gain <= 1")
+        for name, least in (("max_iter", 1), ("restarts", 0)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
+                raise _bad(name, v, f"an int >= {least}")
+        if self.restarts > N_STARTS:
+            raise _bad("restarts", self.restarts, f"at most {N_STARTS}")
+        if isinstance(self.posture, str) and self.posture != "middle":
+            raise _bad("posture", self.posture, "'middle', None or a (nq,) array")
+
+    @classmethod
+    def of(cls, options: dict[str, Any]) -> IKOptions:
+        """Options from keywords (unknown names raise :class:`ParameterError`)."""
+        names = [f.name for f in fields(cls)]
+        unknown = sorted(set(options) - set(names))
+        if unknown:
+            raise ParameterError(
+                f"unknown IK option(s) {unknown}; valid: {names}",
+                parameter=unknown[0],
+                value=options[unknown[0]],
+                allowed=names,
+            )
+        return cls(**options)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        out = {f.name: getattr(self, f.name) for f in fields(self)}
+        for k in ("mask", "weights", "posture"):
+            if out[k] is not None and not isinstance(out[k], str):
+                out[k] = np.asarray(out[k], dtype=float).tolist()
+        return out
 
 
 # ============================================================================ result
@@ -134,66 +204,172 @@ class IKResult:
         }
 
 
+# ============================================================================ the loop's setup
+@dataclass(frozen=True)
+class _Setup:
+    """Checked options as the loop's parameters (the order of ``step.P_*`` / ``step.I_*``)."""
+
+    prep: Prepared
+    par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
+    ipar: np.ndarray  # mode, max_iter, limits on, posture on
+    posture: np.ndarray
+    restarts: int
+
+
+def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
+    prep = prepared(mdl)
+    posture, use = prep.middle, opts.posture is not None and opts.posture is not False
+    if use and not isinstance(opts.posture, str):
+        posture = np.ascontiguousarray(mdl.check_q(opts.posture, "posture"), dtype=float)
+    par = np.array(
+        [
+            float(opts.tol),
+            float(opts.rot_tol),
+            1e-8 * prep.scale**2,
+            _MU0,
+            float(opts.posture_gain),
+            0.0,
+            1e-6 * prep.scale,
+        ]
+    )
+    ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
+    return _Setup(prep, par, ipar, posture, int(opts.restarts))
+
+
+# ============================================================================ numpy loop
+def _skew(e: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
+
+
+def _rows(
+    mdl: KinematicModel, task: Task, q: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray]:
+    """Weighted task rows at q: ``(e, J, ‖e_p‖², ‖e_ω‖², LWA Jacobian)`` (Pinocchio FK, J)."""
+    pose, jac = mdl.fk_jacobian(q)
+    w = task.weights
+    ep = task.pose[:3, 3] - pose[:3, 3]
+    keep = w[:3] != 0
+    es, js = [w[:3][keep] * ep[keep]], [w[:3][keep, None] * jac[:3][keep]]
+    pos2 = float(ep[keep] @ ep[keep])
+    rot2 = 0.0
+    if task.code == 1 and w[5] != 0:
+        x0, x1, x2 = pose[0, 0], pose[1, 0], pose[2, 0]
+        h2 = x0 * x0 + x1 * x1
+        e = _wrap(task.yaw - math.atan2(x1, x0))
+        rot2 = e * e
+        a, b = (-x2 * x0 / h2, -x2 * x1 / h2) if h2 > 1e-24 else (0.0, 0.0)
+        es.append(np.array([w[5] * e]))
+        js.append(w[5] * (a * jac[3] + b * jac[4] + jac[5])[None, :])
+    elif task.code == 2:
+        ev = pin.log3(task.pose[:3, :3] @ pose[:3, :3].T)
+        th2 = float(ev @ ev)
+        th = math.sqrt(th2)
+        c = 1.0 / 12.0 + th2 / 720.0 if th < 1e-4 else 1.0 / th2 - 0.5 / (th * math.tan(0.5 * th))
+        # e(q + dq) ≈ e − Jr⁻¹(e) J_ω dq, Jr⁻¹ = I + [e]/2 + c [e]² (right Jacobian of SO(3))
+        jr_inv = np.eye(3) + 0.5 * _skew(ev) + c * (np.outer(ev, ev) - th2 * np.eye(3))
+        keep = w[3:] != 0
+        rot2 = float(ev[keep] @ ev[keep])
+        es.append(w[3:][keep] * ev[keep])
+        js.append(w[3:][keep, None] * (jr_inv @ jac[3:])[keep])
+    return np.concatenate(es), np.concatenate(js), pos2, rot2, jac
+
+
+def _limit(q: np.ndarray, prep: Prepared, use_limits: bool) -> np.ndarray:
+    """Continuous joints wrapped into their range; the others clamped (``use_limits``)."""
+    lower, upper = prep.lim[0], prep.lim[1]
+    out = (q < lower) | (q > upper)
+    wrapped = np.where(prep.cont & out, lower + np.remainder(q - lower, upper - lower), q)
+    if use_limits:
+        return np.where(prep.cont, wrapped, np.clip(q, lower, upper))
+    return wrapped
+
+
+def _dls(jt: np.ndarray, e: np.ndarray, lam2: float, free: np.ndarray) -> np.ndarray:
+    """``Δq = Jfᵀ(JfJfᵀ + λ²I)⁻¹ e`` on the free joints (the frozen ones get 0)."""
+    jf = jt * free
+    m, n = jf.shape
+    if n <= m:
+        return np.linalg.solve(jf.T @ jf + lam2 * np.eye(n), jf.T @ e)
+    return jf.T @ np.linalg.solve(jf @ jf.T + lam2 * np.eye(m), e)
+
+
+def _lm(
+    mdl: KinematicModel, s: _Setup, task: Task, starts: np.ndarray, use_limits: bool, max_iter: int
+) -> tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray]:
+    """The Levenberg–Marquardt loop (module docstring) from each start in turn.
+
+    Returns:
+        ``(attempts, steps, code, q, history, Jacobian)`` of the best attempt; code 0
+        converged, 1 stalled, 2 iteration cap.
+
+    """
+    prep, par = s.prep, s.par
+    tol2, rtol2 = par[0] ** 2, par[1] ** 2
+    wbar, gain, floor2 = par[2], par[4], par[6] ** 2
+    lower, upper, cap = prep.lim
+    cont = prep.cont
+    best: tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray] | None = None
+    best_cost = math.inf
+    tried = 0
+    for start in starts:
+        tried += 1
+        q = _limit(np.array(start, dtype=float), prep, use_limits)
+        e, jt, pos2, rot2, jac = _rows(mdl, task, q)
+        cost = float(e @ e)
+        hist = [math.sqrt(cost)]
+        use_post = bool(s.ipar[3]) and q.size > e.size
+        mu, tries, slow, code = par[3], 0, 0, 1
+        while True:
+            if pos2 <= tol2 and rot2 <= rtol2:
+                code = 0
+                break
+            if len(hist) > max_iter:
+                code = 2
+                break
+            g = jt.T @ e
+            free = ~(((q <= lower) & (g < 0)) | ((q >= upper) & (g > 0))) | cont | (not use_limits)
+            lam2 = mu * (cost + wbar)
+            with_z = use_post and cost > floor2
+            kept = stalled = False
+            for _ in range(2):
+                if with_z:
+                    d = s.posture - q
+                    z = np.where(free, gain * np.where(cont, _wrap(d), d), 0.0)
+                    dq = z + _dls(jt, e - (jt * free) @ z, lam2, free)
+                else:
+                    dq = _dls(jt, e, lam2, free)
+                big = np.abs(dq) > cap
+                scale = float(np.min(cap[big] / np.abs(dq[big]))) if big.any() else 1.0
+                qn = _limit(q + scale * dq, prep, use_limits)
+                en, jtn, pos2n, rot2n, jacn = _rows(mdl, task, qn)
+                cost_n = float(en @ en)
+                if cost_n < (0.25 * cost if with_z else cost):
+                    slow = slow + 1 if cost_n > cost * (1.0 - 1e-10) else 0
+                    q, e, jt, pos2, rot2, jac, cost = qn, en, jtn, pos2n, rot2n, jacn, cost_n
+                    hist.append(math.sqrt(cost))
+                    mu, tries, kept, stalled = max(mu * 0.25, 1e-12), 0, True, slow >= 8
+                    break
+                if not with_z:
+                    break
+                with_z = use_post = False  # the plain step next; no posture in this attempt
+            if stalled:
+                break
+            if not kept:
+                mu *= 8.0
+                tries += 1
+                if tries > 40:
+                    break
+        if cost < best_cost or best is None or code == 0:
+            best_cost = cost
+            best = (0, len(hist) - 1, code, q, np.array(hist), jac)
+        if code == 0:
+            break
+    assert best is not None
+    return (tried,) + best[1:]
+
+
 # ============================================================================ solve
-def _positive(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; a finite number > 0 is needed",
-            parameter=name,
-            value=value,
-            allowed="finite > 0",
-        )
-    if not (math.isfinite(value) and value > 0):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; a finite number > 0 is needed",
-            parameter=name,
-            value=value,
-            allowed="finite > 0",
-        )
-    return float(value)
-
-
-def _count(name: str, value: Any, least: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; an int >= {least} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"int >= {least}",
-        )
-    return int(value)
-
-
-def _posture(model: KinematicModel, prep: Prepared, posture: Any) -> tuple[np.ndarray, bool]:
-    if posture is None or posture is False:
-        return prep.middle, False
-    if isinstance(posture, str):
-        if posture != "middle":
-            raise ParameterError(
-                f"posture={posture!r} is not allowed; use 'middle', None or a (nq,) array",
-                parameter="posture",
-                value=posture,
-                allowed="'middle', None, (nq,) array",
-            )
-        return prep.middle, True
-    return np.ascontiguousarray(model.check_q(posture, "posture"), dtype=float), True
-
-
-def solve(
-    model: ModelLike,
-    target: Any,
-    q0: Any = None,
-    *,
-    mask: Any = None,
-    weights: Any = None,
-    tol: float = 1e-10,
-    rot_tol: float = 1e-10,
-    max_iter: int = 100,
-    restarts: int = 16,
-    within_limits: bool = True,
-    posture: Any = "middle",
-    posture_gain: float = 0.1,
-) -> IKResult:
+def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
     Args:
@@ -201,16 +377,9 @@ def solve(
         target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
             axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
         q0: Start configuration (nq,); default :func:`~hexapod_kin.ik.home`.
-        mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
-        weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
-        tol: Convergence threshold on the position error in [m].
-        rot_tol: Convergence threshold on the orientation error in [rad].
-        max_iter: Accepted steps per attempt.
-        restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
-        within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
-        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
-            ranges), a preferred configuration (nq,), or None (off).
-        posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
+        **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
+            ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
+            ``posture_gain``).
 
     Returns:
         An :class:`IKResult`. ``"unreachable"``: every attempt ended at a local minimum of the
@@ -222,104 +391,49 @@ def solve(
     Raises:
         IKError: Non-finite or wrongly shaped target, or bad mask/weights.
         ConfigurationError: Bad ``q0`` or ``posture``.
-        ParameterError: Bad ``tol``, ``rot_tol``, ``max_iter``, ``restarts`` or posture.
+        ParameterError: Unknown or bad options.
 
     """
-    mdl = model if model.__class__ is KinematicModel else as_model(model)
-    task = build_task(target, mask=mask, weights=weights)
-    # options and default starts, checked once per model and set of options (never written)
-    key = None
-    if posture is None or posture.__class__ is str:
-        key = (tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code)
-    known: dict[Any, Any] = mdl.cached("ik.options", dict)
-    hit = known.get(key) if key is not None else None
-    if hit is None:
-        opts = _options(
-            mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, task.code
-        )
-        prep, par, ipar, target_posture, n_restarts = opts
-        home_starts = np.empty((1 + n_restarts, mdl.nq))
-        home_starts[0] = prep.home
-        home_starts[1:] = prep.starts[:n_restarts]
-        hit = (prep, par, ipar, target_posture, home_starts)
-        if key is not None and len(known) < 64:
-            known[key] = hit
-    prep, par, ipar, target_posture, starts = hit
-    if task.yaw != 0.0:
-        par = par.copy()
-        par[P_YAW] = task.yaw
+    mdl = as_model(model)
+    opts = IKOptions.of(options)
+    task = build_task(target, mask=opts.mask, weights=opts.weights)
+    s = _setup(mdl, opts, task.code)
+    starts = np.vstack([s.prep.home, s.prep.starts[: s.restarts]])
     if q0 is not None:
-        starts = starts.copy()
         starts[0] = mdl.check_q(q0, "q0")
-    q = np.empty(mdl.nq)
-    hist = np.empty(int(ipar[I_MAX_ITER]) + 1)
-    jac = np.empty((6, mdl.nq))
-    attempts, it, code = lm_loop(
-        *prep.packed,
-        prep.tip_rot,
-        task.pose,
-        task.weights,
-        par,
-        ipar,
-        starts,
-        prep.lim,
-        prep.cont,
-        target_posture,
-        q,
-        hist,
-        jac,
+    attempts, it, code, q, hist, jac = _lm(
+        mdl, s, task, starts, bool(opts.within_limits), int(opts.max_iter)
     )
-    return _report(mdl, prep, task, q, hist[: it + 1], jac, attempts, it, code, par, ipar)
+    poses, err, rot, smin = _measures(mdl, [task], q[None], jac[None])
+    measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
+    return _report(mdl, s, task, q, hist, jac, attempts, it, code, measured)
 
 
-def _options(
-    mdl: KinematicModel,
-    tol: Any,
-    rot_tol: Any,
-    max_iter: Any,
-    restarts: Any,
-    within_limits: bool,
-    posture: Any,
-    posture_gain: Any,
-    mode: int,
-) -> tuple[Prepared, np.ndarray, np.ndarray, np.ndarray, int]:
-    """Checked options as the loop's parameters: (prepared, par, ipar, posture, restarts)."""
-    if not (tol.__class__ is float and 0.0 < tol < math.inf):
-        tol = _positive("tol", tol)
-    if not (rot_tol.__class__ is float and 0.0 < rot_tol < math.inf):
-        rot_tol = _positive("rot_tol", rot_tol)
-    if not (max_iter.__class__ is int and max_iter >= 1):
-        max_iter = _count("max_iter", max_iter, 1)
-    if not (restarts.__class__ is int and restarts >= 0):
-        restarts = _count("restarts", restarts, 0)
-    if restarts > N_STARTS:
-        raise ParameterError(
-            f"restarts={restarts} is not allowed; at most {N_STARTS}",
-            parameter="restarts",
-            value=restarts,
-            allowed=f"0..{N_STARTS}",
-        )
-    gain = posture_gain
-    if not (gain.__class__ is float and 0.0 < gain <= 1.0):
-        gain = _positive("posture_gain", posture_gain)
-        if gain > 1.0:
-            raise ParameterError(
-                f"posture_gain={posture_gain!r} is not allowed; 0 < gain <= 1",
-                parameter="posture_gain",
-                value=posture_gain,
-                allowed="(0, 1]",
-            )
-    prep = prepared(mdl)
-    target_posture, use_posture = _posture(mdl, prep, posture)
-    # the loop's parameters, in the order of step.P_* and step.I_* (P_YAW set per target)
-    par = np.array([tol, rot_tol, 1e-8 * prep.scale**2, _MU0, gain, 0.0, 1e-6 * prep.scale])
-    ipar = np.array([mode, max_iter, int(bool(within_limits)), int(use_posture)], dtype=np.int64)
-    return prep, par, ipar, target_posture, int(restarts)
+def _measures(
+    mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched)."""
+    poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
+    w = tasks[0].weights
+    tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
+    d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
+    err = np.sqrt(np.einsum("ij,ij->i", d, d))
+    rot = np.zeros(len(tasks))
+    if tasks[0].code == 1 and w[5] != 0:
+        yaw = np.array([t.yaw for t in tasks])
+        rot = np.abs(_wrap(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
+    elif tasks[0].code == 2:
+        rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
+        ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
+        rot = np.sqrt(np.einsum("ij,ij->i", ev, ev))
+    sv = np.linalg.svd(jacs[:, :3], compute_uv=False)
+    smin = sv[:, 2] if sv.shape[1] >= 3 else np.zeros(len(tasks))
+    return poses, err, rot, smin
 
 
 def _report(
     mdl: KinematicModel,
-    prep: Prepared,
+    s: _Setup,
     task: Task,
     q: np.ndarray,
     hist: np.ndarray,
@@ -327,27 +441,17 @@ def _report(
     attempts: int,
     it: int,
     code: int,
-    par: np.ndarray,
-    ipar: np.ndarray,
+    measured: tuple[np.ndarray, float, float, float],
 ) -> IKResult:
-    pose = mdl.fk(q)  # the reported residual: Pinocchio's FK (a fresh C-ordered array)
-    err, rot = pose_errors(task.code, task.pose, task.weights, task.yaw, pose)
-    smin = float(sigma_bounds(jac[:3])[0])
-    # read-only views, no copies: ``pose`` and ``hist``'s base are this call's own arrays and
-    # ``task.pose`` is read-only already
-    pose.setflags(write=False)
-    tgt = task.pose[:3, 3]
-    pos = pose[:3, 3]
-    rmat = pose[:3, :3]
-    q.setflags(write=False)
-    hist.setflags(write=False)
-    tol, rot_tol = float(par[P_TOL]), float(par[P_ROT_TOL])
+    prep = s.prep
+    pose, err, rot, smin = measured
+    for a in (pose, q, hist):
+        a.setflags(write=False)
+    tgt, pos = task.pose[:3, 3], pose[:3, 3]
+    tol, rot_tol = float(s.par[0]), float(s.par[1])
 
     def result(status: Status, reason: str, far: bool = False) -> IKResult:
-        # a frozen dataclass's __init__ sets each of its 15 fields through
-        # object.__setattr__; filling __dict__ at once is the same object, 2 µs sooner
-        out = object.__new__(IKResult)
-        out.__dict__.update(
+        return IKResult(
             q=q,
             status=status,
             error=err,
@@ -355,7 +459,7 @@ def _report(
             iterations=it,
             history=hist,
             position=pos,
-            rotation=rmat,
+            rotation=pose[:3, :3],
             target=tgt,
             task=task,
             attempts=attempts,
@@ -364,47 +468,25 @@ def _report(
             nearest=pos if far else tgt,
             sigma_min=smin,
         )
-        return out
 
     if code == 0 or (err <= tol and rot <= rot_tol):
         return result("converged", f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {tol:g}, {rot_tol:g}")
     if code == 2:
         return result(
             "not_converged",
-            f"{int(ipar[I_MAX_ITER])} steps taken, ‖e‖ = {err:.3g} m, "
-            f"{rot:.3g} rad, still decreasing",
+            f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing",
         )
-    use_limits = bool(ipar[I_LIMITS])
-    if use_limits and _blocked(q, jac, task, prep).size:
-        free = ipar.copy()
-        free[I_LIMITS] = 0
-        free[I_MAX_ITER] = 200
-        qq, hh, jj = np.empty(mdl.nq), np.empty(201), np.empty((6, mdl.nq))
-        starts = np.vstack([q, prep.starts[:8]])
-        _, _, c2 = lm_loop(
-            *prep.packed,
-            prep.tip_rot,
-            task.pose,
-            task.weights,
-            par,
-            free,
-            starts,
-            prep.lim,
-            prep.cont,
-            prep.middle,
-            qq,
-            hh,
-            jj,
-        )
-        if c2 == 0:
-            names = [mdl.joint_names[i] for i in _blocked(q, jac, task, prep)]
+    if s.ipar[2] and _blocked(mdl, prep, task, q).size:
+        free = _lm(mdl, s, task, np.vstack([q, prep.starts[:8]]), False, 200)
+        if free[2] == 0:
+            names = [mdl.joint_names[i] for i in _blocked(mdl, prep, task, q)]
             return result(
                 "joint_limits",
                 f"reachable only beyond the limits of {names}; the nearest point within the "
                 f"limits is {err:.3g} m, {rot:.3g} rad away",
                 far=True,
             )
-    if _is_local_min(mdl, prep, task, q, hist[-1], par, ipar):
+    if _is_local_min(mdl, s, task, q, float(hist[-1])):
         return result(
             "unreachable",
             f"outside the workspace: every start ends at a local minimum of the error, "
@@ -420,109 +502,64 @@ def _report(
     return result("not_converged", f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)")
 
 
-def _blocked(q: np.ndarray, jac: np.ndarray, task: Task, prep: Prepared) -> np.ndarray:
+def _blocked(mdl: KinematicModel, prep: Prepared, task: Task, q: np.ndarray) -> np.ndarray:
     """Joints at a limit whose task-error gradient points outward."""
-    rot, trans, axis, kind, col = prep.packed
-    q = np.array(q, dtype=float)  # writable, like the kernels' q: one compiled fk_jac_into
-    p = np.empty(3)
-    fk_jac_into(rot, trans, axis, kind, col, q, p, np.empty((3, q.size)), _scratch(prep), False)
-    r = np.empty((3, 3))
-    tip_rotation_into(rot, axis, kind, col, prep.tip_rot, q, r)
-    et, jt = np.empty(6), np.empty((6, q.size))
-    m, _, _ = task_into(
-        task.code, task.pose, task.weights, task.yaw, p, r, jac, np.empty((3, 3)), et, jt
-    )
-    g = jt[:m].T @ et[:m]
+    e, jt, _, _, _ = _rows(mdl, task, np.array(q))
+    g = jt.T @ e
     lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
     at_lo = (~cont) & (q <= lower + 1e-12) & (g < 0)
     at_hi = (~cont) & (q >= upper - 1e-12) & (g > 0)
     return np.flatnonzero(at_lo | at_hi)
 
 
-def _scratch(prep: Prepared) -> np.ndarray:
-    return np.empty((6, max(prep.packed[0].shape[0], 1)))
-
-
 def _is_local_min(
-    mdl: KinematicModel,
-    prep: Prepared,
-    task: Task,
-    q: np.ndarray,
-    cost_root: float,
-    par: np.ndarray,
-    ipar: np.ndarray,
+    mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, cost_root: float
 ) -> bool:
     """True if no small perturbation of q (±1e-3, ±3e-2 rad) lowers the task error."""
+    prep = s.prep
     rng = np.random.default_rng(7)
     jac = mdl.jacobian(q)
     rows = task.weights != 0
-    jt = jac[rows] * task.weights[rows, None]
-    _, sv, vt = np.linalg.svd(jt)
+    _, sv, vt = np.linalg.svd(jac[rows] * task.weights[rows, None])
     sv_full = np.zeros(mdl.nq)
     sv_full[: sv.size] = sv
     null = vt[sv_full <= 1e-6 * max(prep.scale, float(sv_full.max()))]
     base = np.vstack([np.eye(mdl.nq), rng.normal(size=(16, mdl.nq)), null])
     dirs = np.vstack([base, -base])
     trial = np.vstack([q[None, :] + h * dirs for h in (1e-3, 3e-2)])
-    if ipar[I_LIMITS]:
+    if s.ipar[2]:
         trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
-    cost = np.empty(trial.shape[0])
-    task_cost(
-        *prep.packed,
-        prep.tip_rot,
-        task.pose,
-        task.weights,
-        par,
-        ipar,
-        np.ascontiguousarray(trial),
-        cost,
-    )
-    return bool(np.all(np.sqrt(cost) >= cost_root - 1e-9 * prep.scale))
+    floor = cost_root - 1e-9 * prep.scale
+    for qt in trial:
+        e = _rows(mdl, task, qt)[0]
+        if math.sqrt(float(e @ e)) < floor:
+            return False
+    return True
 
 
-def solve_many(
-    model: ModelLike,
-    targets: Any,
-    q0: Any = None,
-    *,
-    mask: Any = None,
-    weights: Any = None,
-    tol: float = 1e-10,
-    rot_tol: float = 1e-10,
-    max_iter: int = 100,
-    restarts: int = 16,
-    within_limits: bool = True,
-    posture: Any = "middle",
-    posture_gain: float = 0.1,
-) -> list[IKResult]:
-    """:func:`solve` for N targets of one kind, the loops in one compiled call.
+def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
+    """:func:`solve` for N targets of one kind, the loops in one compiled call (a batch API).
 
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
         targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
         q0: None (:func:`~hexapod_kin.ik.home` for all), one start (nq,) for all, or (N, nq)
             starts.
-        mask: As in :func:`solve` (one for all targets).
-        weights: As in :func:`solve`.
-        tol: As in :func:`solve`.
-        rot_tol: As in :func:`solve`.
-        max_iter: As in :func:`solve`.
-        restarts: As in :func:`solve`.
-        within_limits: As in :func:`solve`.
-        posture: As in :func:`solve`.
-        posture_gain: As in :func:`solve`.
+        **options: As in :func:`solve` (one set for all targets).
 
     Returns:
-        One :class:`IKResult` per target, equal to :func:`solve`'s.
+        One :class:`IKResult` per target, equal to :func:`solve`'s to rounding (the compiled
+        loop runs its own FK; the report is Pinocchio's).
 
     Raises:
         IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
-        ParameterError: Bad options.
+        ParameterError: Unknown or bad options.
 
     """
     from .step import lm_batch
 
     mdl = as_model(model)
+    opts = IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
     if (
         t.ndim not in (2, 3)
@@ -535,15 +572,12 @@ def solve_many(
             value=t.shape,
             allowed="(N, 3), (N, 4), (N, 4, 4)",
         )
-    tasks = [build_task(ti, mask=mask, weights=weights) for ti in t]
+    tasks = [build_task(ti, mask=opts.mask, weights=opts.weights) for ti in t]
     n_t = len(tasks)
-    code = tasks[0].code if tasks else 0
-    prep, par, ipar, target_posture, restarts = _options(
-        mdl, tol, rot_tol, max_iter, restarts, within_limits, posture, posture_gain, code
-    )
-    starts = np.empty((n_t, 1 + restarts, mdl.nq))
+    s = _setup(mdl, opts, tasks[0].code if tasks else 0)
+    starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
     if q0 is None:
-        starts[:, 0] = prep.home
+        starts[:, 0] = s.prep.home
     elif np.ndim(q0) == 1:
         starts[:, 0] = mdl.check_q(q0, "q0")
     else:
@@ -556,49 +590,39 @@ def solve_many(
                 allowed=f"{n_t} rows",
             )
         starts[:, 0] = rows
-    starts[:, 1:] = prep.starts[:restarts]
-    pars = np.tile(par, (n_t, 1))
-    pars[:, P_YAW] = [task.yaw for task in tasks]
-    tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
-    m = int(ipar[I_MAX_ITER])
+    starts[:, 1:] = s.prep.starts[: s.restarts]
+    pars = np.tile(s.par, (n_t, 1))
+    pars[:, 5] = [task.yaw for task in tasks]
+    m = int(opts.max_iter)
     q = np.empty((n_t, mdl.nq))
     hist = np.empty((n_t, m + 1))
     jac = np.empty((n_t, 6, mdl.nq))
     res = np.empty((n_t, 3), dtype=np.int64)
     if n_t:
-        weights6 = np.ascontiguousarray(tasks[0].weights)
         lm_batch(
-            *prep.packed,
-            prep.tip_rot,
-            tgts,
-            weights6,
+            *s.prep.packed,
+            s.prep.tip_rot,
+            np.array([task.pose for task in tasks]).reshape(n_t, 4, 4),
+            np.ascontiguousarray(tasks[0].weights),
             pars,
-            ipar,
+            s.ipar,
             starts,
-            prep.lim,
-            prep.cont,
-            target_posture,
+            s.prep.lim,
+            s.prep.cont,
+            s.posture,
             q,
             hist,
             jac,
             res,
         )
+    if not n_t:
+        return []
+    poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):
         a, it, c = (int(v) for v in res[i])
+        measured = (poses[i], float(err[i]), float(rot[i]), float(smin[i]))
         out.append(
-            _report(
-                mdl,
-                prep,
-                task,
-                q[i].copy(),
-                hist[i, : it + 1].copy(),
-                jac[i].copy(),
-                a,
-                it,
-                c,
-                pars[i],
-                ipar,
-            )
+            _report(mdl, s, task, q[i], hist[i, : it + 1].copy(), jac[i], a, it, c, measured)
         )
     return out

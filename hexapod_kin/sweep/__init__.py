@@ -3,7 +3,7 @@
 ``designs`` builds the design table (grid, random, Latin hypercube), ``scores`` scores it
 (exact closed-form membership, Monte-Carlo volume with standard errors and the closed form
 where one exists, stride, σ_min, singular distances, limit margins), ``run`` executes the
-sweep in resumable chunks (numba threads or Dask) and writes CSV/Parquet/JSON, ``pareto``
+sweep in resumable chunks (threads or Dask) and writes CSV/Parquet/JSON, ``pareto``
 finds the front, ``plot`` draws maps and the front.
 
 Example:
@@ -19,7 +19,7 @@ from __future__ import annotations
 from .designs import DEFAULTS, METHODS, PARAMETERS, DesignSpace, Range, design_chain, parse_range
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .plot import plot_sweep
-from .run import SweepResult, read_table, sweep, table_paths
+from .run import SweepResult, read_results, sweep, table_paths
 from .scores import SCORES, jacobian_position, reachable, score_designs, volume_closed_form
 
 __all__ = [
@@ -37,7 +37,7 @@ __all__ = [
     "pareto_front",
     "parse_range",
     "plot_sweep",
-    "read_table",
+    "read_results",
     "reachable",
     "score_designs",
     "sweep",

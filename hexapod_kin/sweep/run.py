@@ -2,9 +2,9 @@
 
 The designs are split into chunks of ``chunk_size`` consecutive indices. Each chunk's scores
 depend only on its designs and the sweep options (the Monte-Carlo samples come from the sweep
-seed), so the table is identical whatever executes it: numba threads on this machine
-(default, all cores), or Dask distributed workers (``client=`` or ``scheduler=``; imported
-lazily, ``pip install 'hexapod-kin[sweep]'``).
+seed), so the table is identical whatever executes it: threads on this machine (default,
+one per core; numpy releases the GIL), or Dask distributed workers (``client=`` or
+``scheduler=``; imported lazily, ``pip install 'hexapod-kin[sweep]'``).
 
 With ``out="results.csv"`` every finished chunk is written atomically to
 ``results.parts/chunk_NNNNN.npz`` next to a ``manifest.json`` (the sweep's options and a key
@@ -20,6 +20,7 @@ import hashlib
 import io
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Mapping
@@ -35,7 +36,7 @@ from .designs import PARAMETERS, DesignSpace
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .scores import SCORES, score_designs
 
-__all__ = ["SweepResult", "read_table", "sweep", "table_paths"]
+__all__ = ["SweepResult", "read_results", "sweep", "table_paths"]
 
 _FORMAT = 1
 _UNCERTAIN = {"volume": "volume_se", "volume_mc": "volume_mc_se"}
@@ -116,22 +117,18 @@ def _load_chunk(path: Path, key: str, n: int) -> np.ndarray | None:
         return None
 
 
-def _set_threads(workers: int | None) -> Callable[[], None]:
-    import numba
-
+def _check_workers(workers: int | None) -> int:
+    top = os.cpu_count() or 1
     if workers is None:
-        return lambda: None
-    top = int(numba.config.NUMBA_NUM_THREADS)
-    if int(workers) != workers or not 1 <= workers <= top:
+        return top
+    if int(workers) != workers or not 1 <= workers <= 4 * top:
         raise ParameterError(
-            f"workers={workers!r}: expected an integer in [1, {top}] (this machine's threads)",
+            f"workers={workers!r}: expected an integer in [1, {4 * top}] (threads)",
             parameter="workers",
             value=workers,
-            allowed=f"1..{top}",
+            allowed=f"1..{4 * top}",
         )
-    old = numba.get_num_threads()
-    numba.set_num_threads(int(workers))
-    return lambda: numba.set_num_threads(old)
+    return int(workers)
 
 
 def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
@@ -185,7 +182,7 @@ def sweep(
         stride_use: Central fraction of the stride for those minima.
         out: Table path (``x.csv``); chunks go to ``x.parts/``. None: nothing written.
         chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
-        workers: Local numba threads (default: all cores). Ignored on Dask.
+        workers: Local threads scoring chunks (default: one per core). Ignored on Dask.
         client: A ``distributed.Client`` to run the chunks on.
         scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
         progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
@@ -317,13 +314,18 @@ def sweep(
                 if own:
                     cl.close()
         elif missing:
-            restore = _set_threads(workers)
+            from concurrent.futures import ThreadPoolExecutor
+
+            pool = ThreadPoolExecutor(min(_check_workers(workers), len(missing)))
             try:
-                for k in missing:
-                    a, b = bounds[k]
-                    done(k, _score_chunk(designs[a:b], options))
-            finally:
-                restore()
+                chunks = {
+                    k: pool.submit(_score_chunk, designs[bounds[k][0] : bounds[k][1]], options)
+                    for k in missing
+                }
+                for k, fut in chunks.items():  # written in order
+                    done(k, fut.result())
+            finally:  # on Ctrl-C: the running chunks end, the queued ones never start
+                pool.shutdown(wait=True, cancel_futures=True)
     finally:
         bar.close()
 
@@ -412,7 +414,7 @@ def _write_tables(
     return files
 
 
-def read_table(path: str | Path) -> dict[str, np.ndarray]:
+def read_results(path: str | Path) -> dict[str, np.ndarray]:
     """Read a sweep table written by :func:`sweep` (CSV or Parquet) as column → array.
 
     Args:

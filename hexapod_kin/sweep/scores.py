@@ -22,8 +22,9 @@ on a body mount (radius, yaw). Conventions (all in the hip frame unless said):
   [m] (family ``l1 + l2 c2 + l3 c23 = 0``), the angular distance of q3 to {0, π} [rad]
   (family ``sin q3 = 0``) and the joint-limit margin [rad].
 * **volume**: Monte-Carlo over ``mc_samples`` points uniform in the bounding cylinder
-  (radius ``l1+l2+l3``, ``|z| <= l2+l3``) with the exact membership test; binomial standard
-  error. The same unit samples serve every design (common random numbers, seeded by the
+  (radius ``l1+l2+l3``, ``|z| <= l2+l3``) with the exact membership test (a within-limits
+  solution of the one leg closed form, :func:`hexapod_kin.ik.leg_solutions`); binomial
+  standard error. The same unit samples serve every design (common random numbers, seeded by the
   sweep's seed), so close designs rank by their difference, not by sampling noise. The closed
   form of :func:`volume_closed_form` is used where it exists (knee unlimited).
 """
@@ -34,10 +35,9 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import prange
 
-from .._numerics import njit
 from ..exceptions import ParameterError
+from ..ik.closed import leg_reachable, leg_solutions
 from .designs import PARAMETERS
 
 __all__ = [
@@ -45,6 +45,7 @@ __all__ = [
     "jacobian_position",
     "reachable",
     "score_designs",
+    "sigmas",
     "unit_samples",
     "volume_closed_form",
 ]
@@ -67,211 +68,153 @@ SCORES: dict[str, str] = {
     "limit_margin": "minimum joint-limit margin along the stride [rad]",
     "foot_radius": "horizontal distance of the neutral foot from the body centre [m]",
 }
-_NS = len(SCORES)
+_COL = {name: j for j, name in enumerate(SCORES)}
 _TWO_PI = 2.0 * math.pi
+_BLOCK = 1 << 18  # targets per closed-form call (bounds the temporary arrays)
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _fit(q: float, lo: float, hi: float) -> float:  # pragma: no cover - compiled
-    """Angle q wrapped to (−π, π], shifted by ±2π into [lo, hi] if that helps; NaN if outside."""
-    q = q - _TWO_PI * math.floor((q + math.pi) / _TWO_PI)
-    if q <= -math.pi:
-        q += _TWO_PI
-    if q < lo - 1e-12 and q + _TWO_PI <= hi + 1e-12:
-        q += _TWO_PI
-    elif q > hi + 1e-12 and q - _TWO_PI >= lo - 1e-12:
-        q -= _TWO_PI
-    if q < lo - 1e-12 or q > hi + 1e-12:
-        return math.nan
-    return q
+def _solve(d: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Within-limits solutions (N, 4, 3) and validity (N, 4) of points (N, 3), designs (N, 13)."""
+    return leg_solutions(
+        pts, (d[:, 0], d[:, 1], d[:, 2]), sign=-1.0, limits=(d[:, 6:12:2], d[:, 7:12:2])
+    )
 
 
-@njit(cache=True, nogil=True)
-def _ik(
-    x: float,
-    y: float,
-    z: float,
-    l1: float,
-    l2: float,
-    l3: float,
-    lim: np.ndarray,
-    q: np.ndarray,
-    first_only: bool,
-) -> int:  # pragma: no cover - compiled
-    """Within-limits closed-form solutions of one target into q (4, 3); returns their number."""
-    hr = math.sqrt(x * x + y * y)
-    phi = math.atan2(y, x)
-    w = -z
-    n = 0
-    for k in range(2):
-        u = (hr if k == 0 else -hr) - l1
-        c3 = (u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-        if c3 > 1.0 or c3 < -1.0:
-            continue
-        q1 = _fit(phi if k == 0 else phi + math.pi, lim[0], lim[1])
-        if q1 != q1:
-            continue
-        s3a = math.sqrt(max(1.0 - c3 * c3, 0.0))
-        base = math.atan2(w, u)
-        for b in range(2):
-            s3 = s3a if b == 0 else -s3a
-            q3 = _fit(math.atan2(s3, c3), lim[4], lim[5])
-            if q3 != q3:
-                continue
-            q2 = _fit(base - math.atan2(l3 * s3, l2 + l3 * c3), lim[2], lim[3])
-            if q2 != q2:
-                continue
-            q[n, 0] = q1
-            q[n, 1] = q2
-            q[n, 2] = q3
-            n += 1
-            if first_only:
-                return n
-    return n
+def _member(d: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """(N,) True where point i is reachable within the limits by design row i."""
+    out = np.empty(len(pts), dtype=bool)
+    for a in range(0, len(pts), _BLOCK):
+        r = np.ascontiguousarray(d[a : a + _BLOCK].T)  # contiguous columns: faster ufuncs
+        out[a : a + _BLOCK] = leg_reachable(
+            pts[a : a + _BLOCK], (r[0], r[1], r[2]), sign=-1.0, limits=(r[6:12:2].T, r[7:12:2].T)
+        )
+    return out
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _sigmas(q2: float, q3: float, l1: float, l2: float, l3: float) -> tuple[float, float, float]:
-    """(σ_min, manipulability, ρ) of the leg's 3×3 position Jacobian (closed form)."""
-    c2, s2 = math.cos(q2), math.sin(q2)
-    c23, s23 = math.cos(q2 + q3), math.sin(q2 + q3)
+def _sigma_rows(
+    q2: np.ndarray, q3: np.ndarray, l1: Any, l2: Any, l3: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(σ_min, manipulability, ρ) of the leg's 3×3 position Jacobian (closed form).
+
+    σ values are ``|ρ|`` and those of the planar 2×2 block (``det = l2 l3 sin q3``).
+    """
+    c2, s2, c23, s23 = np.cos(q2), np.sin(q2), np.cos(q2 + q3), np.sin(q2 + q3)
     rho = l1 + l2 * c2 + l3 * c23
     u = l2 * c2 + l3 * c23
     w = l2 * s2 + l3 * s23
     fro = u * u + w * w + l3 * l3
-    det = l2 * l3 * abs(math.sin(q3))
-    smax2 = 0.5 * (fro + math.sqrt(max(fro * fro - 4.0 * det * det, 0.0)))
-    s2min = det / math.sqrt(smax2) if smax2 > 0 else 0.0
-    return min(abs(rho), s2min), abs(rho) * det, rho
+    det = l2 * l3 * np.abs(np.sin(q3))
+    smax2 = 0.5 * (fro + np.sqrt(np.maximum(fro * fro - 4.0 * det * det, 0.0)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s2min = np.where(smax2 > 0, det / np.sqrt(smax2), 0.0)
+    return np.minimum(np.abs(rho), s2min), np.abs(rho) * det, rho
 
 
-@njit(cache=True, nogil=True)
-def _member(
-    x: float,
-    y: float,
-    z: float,
-    l1: float,
-    l2: float,
-    l3: float,
-    lim: np.ndarray,
-    q: np.ndarray,
-) -> bool:  # pragma: no cover - compiled
-    return _ik(x, y, z, l1, l2, l3, lim, q, True) > 0
-
-
-@njit(cache=True, parallel=True)
-def _score_kernel(
-    d: np.ndarray,
-    unit: np.ndarray,
-    line_points: int,
-    stride_points: int,
-    stride_use: float,
-    out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    nd = d.shape[0]
-    m = unit.shape[0]
-    for i in prange(nd):
-        l1, l2, l3, h = d[i, 0], d[i, 1], d[i, 2], d[i, 3]
-        mrad, yaw, neutral = d[i, 4], d[i, 5], d[i, 12]
-        lim = np.empty(6)
-        for j in range(6):
-            lim[j] = d[i, 6 + j]
-        q = np.empty((4, 3))
-        # ---- volume: Monte-Carlo in the bounding cylinder
-        big = l1 + l2 + l3
-        reach = l2 + l3
-        vcyl = math.pi * big * big * 2.0 * reach
-        hits = 0
-        for s in range(m):
-            r = big * math.sqrt(unit[s, 0])
-            ph = _TWO_PI * unit[s, 1] - math.pi
-            zz = reach * (2.0 * unit[s, 2] - 1.0)
-            if _member(r * math.cos(ph), r * math.sin(ph), zz, l1, l2, l3, lim, q):
-                hits += 1
-        p = hits / m
-        out[i, 4] = vcyl * p
-        out[i, 5] = vcyl * math.sqrt(p * (1.0 - p) / m)
-        for j in (0, 6, 7, 8, 9, 10, 11, 12, 13, 14):
-            out[i, j] = 0.0
-        # ---- neutral foot and stride
-        if h >= reach:
-            continue
-        a = math.sqrt(reach * reach - h * h)
-        dl = l2 - l3
-        b = math.sqrt(max(dl * dl - h * h, 0.0))
-        rho0 = l1 + b + neutral * (a - b)
-        q1m = 0.5 * (lim[0] + lim[1])
-        px, py, pz = rho0 * math.cos(q1m), rho0 * math.sin(q1m), -h
-        fx = mrad * math.cos(yaw) + math.cos(yaw) * px - math.sin(yaw) * py
-        fy = mrad * math.sin(yaw) + math.sin(yaw) * px + math.cos(yaw) * py
-        out[i, 14] = math.sqrt(fx * fx + fy * fy)
-        if not _member(px, py, pz, l1, l2, l3, lim, q):
-            continue
-        out[i, 0] = 1.0
-        dx, dy = math.cos(yaw), -math.sin(yaw)
-        tmax = 2.0 * big
-        step = tmax / line_points
-        ends = np.zeros(2)
-        for side in range(2):
-            sg = 1.0 if side == 0 else -1.0
-            good, bad = 0.0, tmax
-            for k in range(1, line_points + 1):
-                t = k * step
-                if _member(px + sg * t * dx, py + sg * t * dy, pz, l1, l2, l3, lim, q):
-                    good = t
-                else:
-                    bad = t
-                    break
-            if bad < tmax or not _member(
-                px + sg * tmax * dx, py + sg * tmax * dy, pz, l1, l2, l3, lim, q
-            ):
-                for _ in range(64):
-                    mid = 0.5 * (good + bad)
-                    if mid <= good or mid >= bad:
-                        break
-                    if _member(px + sg * mid * dx, py + sg * mid * dy, pz, l1, l2, l3, lim, q):
-                        good = mid
-                    else:
-                        bad = mid
-            ends[side] = good
-        out[i, 8] = ends[0]
-        out[i, 7] = ends[1]
-        out[i, 6] = ends[0] + ends[1]
-        # ---- along the central part of the stride
-        centre = 0.5 * (ends[0] - ends[1])
-        half = 0.5 * stride_use * (ends[0] + ends[1])
-        smin, mmin, amin, q3min, lmin = np.inf, np.inf, np.inf, np.inf, np.inf
-        for k in range(stride_points):
-            t = (
-                centre
-                - half
-                + (2.0 * half * k / (stride_points - 1) if stride_points > 1 else half)
-            )
-            n = _ik(px + t * dx, py + t * dy, pz, l1, l2, l3, lim, q, False)
-            best = -1.0
-            bm, br, bq3, bl = 0.0, 0.0, 0.0, 0.0
-            for s in range(n):
-                sv, mv, rho = _sigmas(q[s, 1], q[s, 2], l1, l2, l3)
-                if sv > best:
-                    best, bm, br = sv, mv, abs(rho)
-                    aq3 = abs(q[s, 2]) % _TWO_PI
-                    aq3 = min(aq3, _TWO_PI - aq3)
-                    bq3 = min(aq3, math.pi - aq3)
-                    bl = np.inf
-                    for j in range(3):
-                        bl = min(bl, q[s, j] - lim[2 * j], lim[2 * j + 1] - q[s, j])
-            if n == 0:  # rounding at a boundary: treat as singular
-                best, bm, br, bq3, bl = 0.0, 0.0, 0.0, 0.0, 0.0
-            smin = min(smin, best)
-            mmin = min(mmin, bm)
-            amin = min(amin, br)
-            q3min = min(q3min, bq3)
-            lmin = min(lmin, bl)
-        out[i, 9] = smin
-        out[i, 10] = mmin
-        out[i, 11] = amin
-        out[i, 12] = q3min
-        out[i, 13] = max(lmin, 0.0)
+def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) -> np.ndarray:
+    """Scores of designs d (D, 13), columns of :data:`SCORES` (the volume columns MC only)."""
+    nd, m = len(d), len(unit)
+    out = np.zeros((nd, len(SCORES)))
+    l1, l2, l3, h = d[:, 0], d[:, 1], d[:, 2], d[:, 3]
+    mrad, yaw, neutral = d[:, 4], d[:, 5], d[:, 12]
+    big, reach = l1 + l2 + l3, l2 + l3
+    # ---- volume: Monte-Carlo in the bounding cylinder, the same unit samples for all
+    r_u, ph = np.sqrt(unit[:, 0]), _TWO_PI * unit[:, 1] - math.pi
+    c_u, s_u, z_u = r_u * np.cos(ph), r_u * np.sin(ph), 2.0 * unit[:, 2] - 1.0
+    hits = np.empty(nd)
+    per = max(1, _BLOCK // m)
+    for a in range(0, nd, per):
+        blk = slice(a, a + per)
+        pts = np.stack(
+            [
+                big[blk, None] * c_u,
+                big[blk, None] * s_u,
+                reach[blk, None] * z_u,
+            ],
+            axis=-1,
+        ).reshape(-1, 3)
+        ok = _member(np.repeat(d[blk], m, axis=0), pts)
+        hits[blk] = ok.reshape(-1, m).sum(axis=1)
+    p = hits / m
+    vcyl = math.pi * big * big * 2.0 * reach
+    out[:, _COL["volume_mc"]] = vcyl * p
+    out[:, _COL["volume_mc_se"]] = vcyl * np.sqrt(p * (1.0 - p) / m)
+    # ---- neutral foot
+    live = np.flatnonzero(h < reach)
+    d, l1, l2, l3, h = d[live], l1[live], l2[live], l3[live], h[live]
+    yaw, big, reach = yaw[live], big[live], reach[live]
+    a_r = np.sqrt(reach * reach - h * h)
+    b_r = np.sqrt(np.maximum((l2 - l3) ** 2 - h * h, 0.0))
+    rho0 = l1 + b_r + neutral[live] * (a_r - b_r)
+    q1m = 0.5 * (d[:, 6] + d[:, 7])
+    p0 = np.stack([rho0 * np.cos(q1m), rho0 * np.sin(q1m), -h], axis=1)
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    fx = mrad[live] * cy + cy * p0[:, 0] - sy * p0[:, 1]
+    fy = mrad[live] * sy + sy * p0[:, 0] + cy * p0[:, 1]
+    out[live, _COL["foot_radius"]] = np.hypot(fx, fy)
+    feasible = _member(d, p0)
+    live, d, p0 = live[feasible], d[feasible], p0[feasible]
+    l1, l2, l3, big = l1[feasible], l2[feasible], l3[feasible], big[feasible]
+    direction = np.stack([cy[feasible], -sy[feasible], np.zeros(len(live))], axis=1)
+    out[live, _COL["feasible"]] = 1.0
+    n = len(live)
+    # ---- stride: grid of ``line`` steps per side, then bisection to rounding
+    tmax = 2.0 * big
+    ends = np.zeros((2, n))
+    ks = np.arange(1, line + 1)
+    for side, sg in enumerate((1.0, -1.0)):
+        ts = (tmax / line)[:, None] * ks[None, :]  # (n, line)
+        pts = p0[:, None, :] + sg * ts[..., None] * direction[:, None, :]
+        ok = _member(np.repeat(d, line, axis=0), pts.reshape(-1, 3)).reshape(n, line)
+        first_bad = np.where(ok.all(axis=1), line, np.argmin(ok, axis=1))
+        rows = np.arange(n)
+        good = np.where(first_bad > 0, ts[rows, np.maximum(first_bad - 1, 0)], 0.0)
+        bad = np.where(first_bad < line, ts[rows, np.minimum(first_bad, line - 1)], tmax)
+        active = first_bad < line
+        for _ in range(64):
+            mid = 0.5 * (good + bad)
+            active &= (mid > good) & (mid < bad)
+            if not active.any():
+                break
+            idx = np.flatnonzero(active)
+            hit = _member(d[idx], p0[idx] + sg * mid[idx, None] * direction[idx])
+            good[idx] = np.where(hit, mid[idx], good[idx])
+            bad[idx] = np.where(hit, bad[idx], mid[idx])
+        ends[side] = good
+    out[live, _COL["stride_forward"]] = ends[0]
+    out[live, _COL["stride_back"]] = ends[1]
+    out[live, _COL["stride"]] = ends[0] + ends[1]
+    # ---- along the central part of the stride: the within-limits branch of largest σ_min
+    centre, half = 0.5 * (ends[0] - ends[1]), 0.5 * use * (ends[0] + ends[1])
+    k = np.arange(points)[None, :]
+    ts = (
+        centre[:, None]
+        - half[:, None]
+        + (2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None])
+    )  # (n, points)
+    pts = p0[:, None, :] + ts[..., None] * direction[:, None, :]
+    q, valid = _solve(np.repeat(d, points, axis=0), pts.reshape(-1, 3))
+    rep = (np.repeat(v, points)[:, None] for v in (l1, l2, l3))
+    sv, mv, rho = _sigma_rows(q[..., 1], q[..., 2], *rep)
+    sv = np.where(valid, sv, -1.0)
+    best = np.argmax(sv, axis=1)
+    rows = np.arange(len(best))
+    qb = q[rows, best]
+    aq3 = np.abs(qb[:, 2]) % _TWO_PI
+    aq3 = np.minimum(aq3, _TWO_PI - aq3)
+    lo = np.repeat(d[:, 6:12:2], points, axis=0)
+    hi = np.repeat(d[:, 7:12:2], points, axis=0)
+    cols = {
+        "sigma_min": sv[rows, best],
+        "manipulability": mv[rows, best],
+        "axis_distance": np.abs(rho[rows, best]),
+        "q3_singular_margin": np.minimum(aq3, math.pi - aq3),
+        "limit_margin": np.minimum(qb - lo, hi - qb).min(axis=1),
+    }
+    none = ~valid.any(axis=1)  # rounding at a boundary: treat as singular
+    for name, v in cols.items():
+        v = np.where(none, 0.0, v).reshape(n, points).min(axis=1)
+        out[live, _COL[name]] = np.maximum(v, 0.0) if name == "limit_margin" else v
+    return out
 
 
 def unit_samples(seed: int, n: int) -> np.ndarray:
@@ -297,7 +240,7 @@ def score_designs(
     stride_points: int = 64,
     stride_use: float = 0.9,
 ) -> dict[str, np.ndarray]:
-    """Score designs (rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS`), all cores.
+    """Score designs (rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS`), vectorised.
 
     Args:
         designs: (N, 13) array, columns ``PARAMETERS`` (SI units).
@@ -332,15 +275,14 @@ def score_designs(
         raise ParameterError(
             f"stride_use={stride_use}: expected a fraction in (0, 1]", parameter="stride_use"
         )
-    out = np.zeros((d.shape[0], _NS))
+    out = np.zeros((d.shape[0], len(SCORES)))
     if d.shape[0]:
-        _score_kernel(
+        out = _score(
             d,
             unit_samples(seed, mc_samples),
             int(line_points),
             int(stride_points),
             float(stride_use),
-            out,
         )
     cols = {name: out[:, j].copy() for j, name in enumerate(SCORES)}
     exact = np.array([volume_closed_form(*row[:3], *row[6:12]) for row in d])
@@ -352,7 +294,7 @@ def score_designs(
 
 
 def reachable(designs_row: Any, points: Any) -> np.ndarray:
-    """Exact membership test of the sweep's kernel for one design: (N,) bool.
+    """Exact membership test of the sweep for one design: (N,) bool.
 
     Args:
         designs_row: One design (13 values, columns ``PARAMETERS``).
@@ -364,22 +306,11 @@ def reachable(designs_row: Any, points: Any) -> np.ndarray:
     """
     row = np.asarray(designs_row, dtype=float)
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    return _reach_batch(pts, row[0], row[1], row[2], np.ascontiguousarray(row[6:12]))
-
-
-@njit(cache=True)
-def _reach_batch(
-    pts: np.ndarray, l1: float, l2: float, l3: float, lim: np.ndarray
-) -> np.ndarray:  # pragma: no cover - compiled
-    out = np.zeros(pts.shape[0], dtype=np.bool_)
-    q = np.empty((4, 3))
-    for i in range(pts.shape[0]):
-        out[i] = _member(pts[i, 0], pts[i, 1], pts[i, 2], l1, l2, l3, lim, q)
-    return out
+    return _member(np.broadcast_to(row, (len(pts), row.size)), pts)
 
 
 def jacobian_position(l1: float, l2: float, l3: float, q: Any) -> np.ndarray:
-    """Closed-form 3×3 position Jacobian of the leg (hip frame), used by the kernel's σ.
+    """Closed-form 3×3 position Jacobian of the leg (hip frame), used for the σ scores.
 
     Args:
         l1: Coxa length [m].
@@ -403,8 +334,8 @@ def jacobian_position(l1: float, l2: float, l3: float, q: Any) -> np.ndarray:
 
 
 def sigmas(l1: float, l2: float, l3: float, q: Any) -> tuple[float, float]:
-    """(σ_min [m/rad], manipulability [m³/rad³]) of the kernel's closed form at q."""
-    s, m, _ = _sigmas(float(q[1]), float(q[2]), l1, l2, l3)
+    """(σ_min [m/rad], manipulability [m³/rad³]) of the sweep's closed form at q."""
+    s, m, _ = _sigma_rows(np.array(float(q[1])), np.array(float(q[2])), l1, l2, l3)
     return float(s), float(m)
 
 
