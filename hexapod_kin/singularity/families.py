@@ -1,28 +1,24 @@
-"""Singular families as numbers: residuals, distances, labels — without waiting on sympy.
+"""Singular families as numbers: residuals, exact distances, labels — without waiting on sympy.
 
 A family is the zero set of one factor of ``det J`` (or of ``det(J Jᵀ)``), derived by
-:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table: the model's own table, or
-the one :meth:`hexapod_kin.params.Chain.from_urdf` recovers from a URDF chain (a hexapod leg
-on its mount, Solo12, UR5, ...). Deriving is sympy work, so it happens only when asked
-(:func:`families_for` with ``derive=True``, within a time budget); the result is validated
-against the model's own Jacobian (the symbolic ``det`` must equal the numeric one at random
-configurations), turned into plain text expressions (lengths substituted) and kept on disk
-(:func:`cache_dir`, keyed by the table and the rows), so
-later scans — in any process — read them back without importing sympy. The text is
-evaluated by a small whitelisting evaluator (numbers, ``q1..qn``, ``+ - * / **``, ``sin``,
-``cos``, ``tan``, ``sqrt``, ``pi``), never by ``eval``.
+:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table (the model's own, or the one
+:meth:`hexapod_kin.params.Chain.from_urdf` recovers). Deriving is sympy work, done only when
+asked (:func:`families_for` with ``derive=True``, within a time budget); the result is checked
+against the model's own Jacobian, turned into text (lengths substituted) and kept on disk
+(:func:`cache_dir`), so later scans in any process read it back without importing sympy.
 
-When no family is available the result says why (:attr:`Families.reason`).
+The text is parsed once and checked against a whitelist (numbers, ``q1..qn``, ``pi``,
+``+ - * / **`` with a numeric exponent, ``sin cos tan sqrt Abs``), then turned into a tree of
+numpy closures that evaluates the factor with its gradient and Hessian over a whole array of
+configurations (forward-mode second-order derivatives): nothing is ever ``eval``-ed.
 """
 
 from __future__ import annotations
 
 import ast
 import hashlib
-import inspect
 import json
 import math
-import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,78 +26,285 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write
-from .._numerics import wrap_angles
+from .._io import atomic_write, cache_root
 from ..exceptions import HexapodKinError, ParameterError
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
-_VERSION = 1
+_VERSION = 2
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
+_TWO_PI = 2.0 * math.pi
+
+# ------------------------------------------------------------------------ jets
+# A jet is (value (M,), gradient (M, v) or (v,) or None, Hessian (M, v, v) or None) over the
+# family's v variables; None stands for zero (constants, linear leaves).
+Jet = tuple[Any, Any, Any]
 
 
-# ------------------------------------------------------------------------ safe evaluation
-_FUNCS: dict[str, Callable[[Any], Any]] = {
-    "sin": np.sin,
-    "cos": np.cos,
-    "tan": np.tan,
-    "sqrt": np.sqrt,
-    "Abs": np.abs,
+def _col(s: Any, k: int) -> Any:
+    """``s`` with ``k`` trailing axes (to scale a gradient or Hessian per configuration)."""
+    return np.asarray(s)[(...,) + (None,) * k]
+
+
+def _add(a: Any, b: Any) -> Any:
+    return b if a is None else a if b is None else a + b
+
+
+def _outer(a: Any, b: Any) -> Any:
+    return a[..., :, None] * b[..., None, :]
+
+
+def _chain(fn: tuple[Callable[..., Any], ...], x: Jet, hess: bool) -> Jet:
+    """``φ(x)`` for a scalar function with derivatives ``fn = (φ, φ', φ'')``."""
+    f, g, h = x
+    val = fn[0](f)
+    if g is None:
+        return val, None, None
+    d1 = fn[1](f)
+    if not hess:
+        return val, _col(d1, 1) * g, None
+    hh = _outer(g, g) * _col(fn[2](f), 2)
+    if h is not None:
+        hh = hh + _col(d1, 2) * h
+    return val, _col(d1, 1) * g, hh
+
+
+def _mul(a: Jet, b: Jet, hess: bool) -> Jet:
+    fa, ga, ha = a
+    fb, gb, hb = b
+    g = _add(None if gb is None else _col(fa, 1) * gb, None if ga is None else _col(fb, 1) * ga)
+    if not hess:
+        return fa * fb, g, None
+    h = _add(None if hb is None else _col(fa, 2) * hb, None if ha is None else _col(fb, 2) * ha)
+    if ga is not None and gb is not None:
+        h = _add(h, _outer(ga, gb) + _outer(gb, ga))
+    return fa * fb, g, h
+
+
+def _neg(a: Jet) -> Jet:
+    return -a[0], None if a[1] is None else -a[1], None if a[2] is None else -a[2]
+
+
+def _sum(a: Jet, b: Jet) -> Jet:
+    return a[0] + b[0], _add(a[1], b[1]), _add(a[2], b[2])
+
+
+def _power(c: float) -> tuple[Callable[..., Any], ...]:
+    return (
+        lambda x: x**c,
+        lambda x: c * x ** (c - 1.0),
+        lambda x: c * (c - 1.0) * x ** (c - 2.0),
+    )
+
+
+_UNARY: dict[str, tuple[Callable[..., Any], ...]] = {
+    "sin": (np.sin, np.cos, lambda x: -np.sin(x)),
+    "cos": (np.cos, lambda x: -np.sin(x), lambda x: -np.cos(x)),
+    "tan": (np.tan, lambda x: np.cos(x) ** -2.0, lambda x: 2.0 * np.tan(x) * np.cos(x) ** -2.0),
+    "sqrt": (np.sqrt, lambda x: 0.5 / np.sqrt(x), lambda x: -0.25 * x**-1.5),
+    "Abs": (np.abs, np.sign, np.zeros_like),
 }
-_BINOPS: dict[type, Callable[[Any, Any], Any]] = {
-    ast.Add: np.add,
-    ast.Sub: np.subtract,
-    ast.Mult: np.multiply,
-    ast.Div: np.divide,
-    ast.Pow: np.power,
-}
+_RECIPROCAL = _power(-1.0)
+_ALLOWED = "numbers, q1..qn, pi, + - * / ** (numeric exponent), sin cos tan sqrt Abs"
+Node = Callable[[list[Any], bool], Jet]  # (variables' columns, with Hessian) -> jet
 
 
-def _compile(text: str, nq: int) -> ast.Expression:
-    """Parse ``text`` and check it uses only the whitelisted grammar (raises ParameterError)."""
+def _number(node: ast.AST) -> float | None:
+    """The value of a numeric constant (``-2``, ``pi``, ``1/2`` stay non-numeric but ``2.5``)."""
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        return float(node.value)
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        inner = _number(node.operand)
+        return None if inner is None else (-inner if isinstance(node.op, ast.USub) else inner)
+    return None
+
+
+def _refuse(text: str, what: str) -> ParameterError:
+    return ParameterError(
+        f"family expression {text!r}: {what} is not allowed",
+        parameter="expression",
+        value=text,
+        allowed=_ALLOWED,
+    )
+
+
+def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
+    """A closure ``(cols, hess) -> jet`` for the AST node, checking it against the whitelist.
+
+    ``pos`` maps a joint index to its column among the family's variables; a name outside
+    them is refused (the factor depends on its variables only).
+    """
+    num = _number(node)
+    if num is not None:
+        return lambda env, hess, c=num: (c, None, None)
+    if isinstance(node, ast.Name):
+        if node.id == "pi":
+            return lambda env, hess: (math.pi, None, None)
+        k = int(node.id[1:]) - 1 if node.id[:1] == "q" and node.id[1:].isdigit() else -1
+        if k not in pos:
+            raise _refuse(text, f"the name {node.id!r}")
+        i = pos[k]
+        unit = np.zeros(len(pos))
+        unit[i] = 1.0
+        return lambda env, hess: (env[i], unit, None)
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        inner = _build(node.operand, text, pos)
+        if isinstance(node.op, ast.UAdd):
+            return inner
+        return lambda env, hess: _neg(inner(env, hess))
+    if isinstance(node, ast.BinOp):
+        left = _build(node.left, text, pos)
+        if isinstance(node.op, ast.Pow):
+            expo = _number(node.right)
+            if expo is None:
+                raise _refuse(text, "a non-numeric exponent")
+            fn = _power(expo)
+            return lambda env, hess: _chain(fn, left(env, hess), hess)
+        right = _build(node.right, text, pos)
+        if isinstance(node.op, ast.Add):
+            return lambda env, hess: _sum(left(env, hess), right(env, hess))
+        if isinstance(node.op, ast.Sub):
+            return lambda env, hess: _sum(left(env, hess), _neg(right(env, hess)))
+        if isinstance(node.op, ast.Mult):
+            return lambda env, hess: _mul(left(env, hess), right(env, hess), hess)
+        if isinstance(node.op, ast.Div):
+            return lambda env, hess: _mul(
+                left(env, hess), _chain(_RECIPROCAL, right(env, hess), hess), hess
+            )
+        raise _refuse(text, type(node.op).__name__)
+    if (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id in _UNARY
+        and len(node.args) == 1
+        and not node.keywords
+    ):
+        arg = _build(node.args[0], text, pos)
+        fn = _UNARY[node.func.id]
+        return lambda env, hess: _chain(fn, arg(env, hess), hess)
+    raise _refuse(text, type(node).__name__)
+
+
+def _compile(text: str, variables: tuple[int, ...]) -> Node:
+    """Parse ``text`` once into a jet evaluator over ``variables`` (raises ParameterError)."""
     try:
         tree = ast.parse(text, mode="eval")
     except SyntaxError as err:
         raise ParameterError(f"family expression {text!r} does not parse: {err.msg}") from None
-    allowed_names = {f"q{k}" for k in range(1, nq + 1)} | {"pi"}
-    for node in ast.walk(tree):
-        ok = isinstance(node, (ast.Expression, ast.Load, ast.UAdd, ast.USub, *_BINOPS))
-        ok = ok or isinstance(node, (ast.BinOp, ast.UnaryOp))
-        ok = ok or (isinstance(node, ast.Constant) and isinstance(node.value, (int, float)))
-        ok = ok or (isinstance(node, ast.Name) and node.id in allowed_names | set(_FUNCS))
-        ok = ok or (
-            isinstance(node, ast.Call)
-            and isinstance(node.func, ast.Name)
-            and node.func.id in _FUNCS
-            and len(node.args) == 1
-            and not node.keywords
-        )
-        if not ok:
-            raise ParameterError(
-                f"family expression {text!r}: {type(node).__name__} is not allowed",
-                parameter="expression",
-                value=text,
-                allowed="numbers, q1..qn, pi, + - * / **, sin cos tan sqrt Abs",
-            )
-    return tree
+    return _build(tree.body, text, {k: i for i, k in enumerate(variables)})
 
 
-def _evaluate(node: ast.AST, q: np.ndarray) -> Any:
-    if isinstance(node, ast.Expression):
-        return _evaluate(node.body, q)
-    if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
-        return float(node.value)
-    if isinstance(node, ast.Name):
-        return math.pi if node.id == "pi" else q[..., int(node.id[1:]) - 1]
-    if isinstance(node, ast.UnaryOp):
-        val = _evaluate(node.operand, q)
-        return -val if isinstance(node.op, ast.USub) else val
-    if isinstance(node, ast.BinOp):
-        return _BINOPS[type(node.op)](_evaluate(node.left, q), _evaluate(node.right, q))
-    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name):
-        return _FUNCS[node.func.id](_evaluate(node.args[0], q))
-    raise ParameterError(f"family expression node {type(node).__name__} is not allowed")
+# ------------------------------------------------------------------------ closest points
+#: Stop when ``|f|/‖∇f‖`` and the tangential part of ``x − p`` are below this ([rad]/[m]).
+_TOL = 1e-12
+#: Longest step of one iteration in [rad]/[m] (no jumping across the torus).
+_STEP_MAX = 0.5
+_NEWTON = 12
+#: Extra starts: radii as fractions of the first distance found, and how many of the
+#: projected starts of a configuration go on to Newton.
+_SHELLS = np.array([0.5, 1.0])
+_KEEP = 2
+_GN = 3
+_NEAR = 1e-2
+#: Configurations solved together (the work arrays stay in cache).
+_CHUNK = 1024
+Eval = Callable[[np.ndarray, bool], Jet]
+
+
+def _directions(v: int) -> np.ndarray:
+    """Unit directions of the extra starts: ±axes, and the four diagonals when v = 2."""
+    eye = np.eye(v)
+    dirs = [eye, -eye]
+    if v == 2:
+        dirs.append(np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]) / math.sqrt(2))
+    return np.concatenate(dirs)
+
+
+def _solve(mat: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``mat⁻¹ rhs`` per row (LAPACK per matrix); a singular row gets NaN (no step)."""
+    try:
+        return np.linalg.solve(mat, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        bad = ~(np.abs(np.linalg.det(mat)) > 1e-300)
+        safe = np.where(bad[:, None, None], np.eye(mat.shape[1]), mat)
+        out = np.linalg.solve(safe, rhs[..., None])[..., 0]
+        out[bad] = np.nan
+        return out
+
+
+def _project(jet: Eval, x: np.ndarray, steps: int) -> np.ndarray:
+    """Gauss–Newton projections ``x ← x − f ∇f / ‖∇f‖²`` towards ``f = 0`` (steps capped)."""
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            f, g, _h = jet(x, False)
+            step = (f / np.sum(g * g, axis=1))[:, None] * g
+            norm = np.linalg.norm(step, axis=1)
+            step *= np.minimum(1.0, _STEP_MAX / np.where(norm > 0, norm, 1.0))[:, None]
+            x = np.where(np.isfinite(step), x - step, x)
+    return x
+
+
+def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``‖x* − p‖`` (M,) from Newton on ``x − p + λ∇f = 0, f = 0`` started at ``x`` on ``f = 0``.
+
+    Stops a row when ``|f|/‖∇f‖ ≤ _TOL`` and ``‖x − p + λ∇f‖ ≤ _TOL`` (the closest-point
+    condition); ``inf`` where it does not within ``_NEWTON`` steps. Rows are independent (the
+    same bits whatever the other rows).
+    """
+    m, v = x.shape
+    out = np.full(m, np.inf)
+    rows = np.arange(m)
+    eye = np.eye(v)
+    with np.errstate(all="ignore"):
+        f, g, h = jet(x, True)
+        lam = np.sum((p - x) * g, axis=1) / np.sum(g * g, axis=1)
+        lam = np.where(np.isfinite(lam), lam, 0.0)
+        for _ in range(_NEWTON):
+            r1 = x - p[rows] + lam[:, None] * g
+            gn = np.sqrt(np.sum(g * g, axis=1))
+            ok = (np.abs(f) <= _TOL * gn) & (np.linalg.norm(r1, axis=1) <= _TOL)
+            out[rows[ok]] = np.linalg.norm(x[ok] - p[rows[ok]], axis=1)
+            keep = ~ok
+            if not keep.any():
+                break
+            rows, x, lam, f, g, h, r1 = (a[keep] for a in (rows, x, lam, f, g, h, r1))
+            mat = np.zeros((rows.size, v + 1, v + 1))
+            mat[:, :v, :v] = eye + lam[:, None, None] * h
+            mat[:, :v, v] = g
+            mat[:, v, :v] = g
+            delta = _solve(mat, -np.concatenate([r1, f[:, None]], axis=1))
+            norm = np.linalg.norm(delta[:, :v], axis=1)
+            scale = np.minimum(1.0, _STEP_MAX / np.where(norm > 0, norm, 1.0))[:, None] * delta
+            good = np.isfinite(delta).all(axis=1)
+            rows, x, lam = rows[good], x[good] + scale[good, :v], lam[good] + scale[good, v]
+            f, g, h = jet(x, True)
+    return out
+
+
+def _distance(jet: Eval, p: np.ndarray) -> np.ndarray:
+    """Distance (M,) from each row of ``p`` (M, v) to ``f = 0``: the global closest point.
+
+    Newton from the projection of ``p`` gives a distance ``d``; then starts at
+    ``p + s·d·u`` (``s`` in ``_SHELLS``, ``u`` in :func:`_directions`) are projected onto
+    ``f = 0`` and the ``_KEEP`` nearest per row refined by :func:`_newton` (a nearer branch
+    of the family than the first one found); the nearest converged candidate counts.
+    """
+    m, v = p.shape
+    best = _newton(jet, p, _project(jet, p.copy(), 6))
+    u = _directions(v)
+    radius = np.where(np.isfinite(best), best, math.pi)
+    shell = _SHELLS[:, None, None, None] * radius[None, None, :, None]
+    starts = (p[None, None] + shell * u[None, :, None, :]).reshape(-1, m, v)
+    x = _project(jet, starts.reshape(-1, v), _GN).reshape(starts.shape)
+    with np.errstate(invalid="ignore"):
+        d = np.linalg.norm(x - p[None], axis=2)
+        f, g, _h = jet(x.reshape(-1, v), False)
+        on = (np.abs(f) < _NEAR * np.linalg.norm(g, axis=1)).reshape(d.shape)
+    pick = np.argsort(np.where(on, d, np.inf), axis=0, kind="stable")[:_KEEP]  # (keep, M)
+    cand = np.take_along_axis(x, pick[..., None], axis=0).reshape(-1, v)
+    more = _newton(jet, np.tile(p, (_KEEP, 1)), cand).reshape(_KEEP, m)
+    return np.minimum(best, more.min(axis=0))
 
 
 # ------------------------------------------------------------------------ one family
@@ -116,8 +319,8 @@ class Family:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
-        factor: The factor with the lengths substituted (text), zero on the family.
-        gradient: Its partial derivatives along :attr:`variables` (text).
+        factor: The factor with the lengths substituted (text, in ``q1..qn`` of
+            :attr:`variables` only), zero on the family.
 
     """
 
@@ -128,82 +331,51 @@ class Family:
     value: float | None
     periodic: bool
     factor: str
-    gradient: tuple[str, ...]
-    nq: int
-    _code: Any = field(default=None, repr=False, compare=False)
+    _jet: Any = field(default=None, init=False, repr=False, compare=False)
 
-    def _compiled(self) -> tuple[ast.Expression, tuple[ast.Expression, ...]]:
-        if self._code is None:
-            code = (
-                _compile(self.factor, self.nq),
-                tuple(_compile(g, self.nq) for g in self.gradient),
-            )
-            object.__setattr__(self, "_code", code)
-        return self._code
+    def __post_init__(self) -> None:
+        """Compile the factor once (refusing anything outside the grammar)."""
+        object.__setattr__(self, "_jet", _compile(self.factor, self.variables))
+
+    def _eval(self, x: np.ndarray, hess: bool) -> Jet:
+        """Value (M,), gradient (M, v), Hessian (M, v, v) or None at the variables ``x``."""
+        f, g, h = self._jet([x[:, i] for i in range(x.shape[1])], hess)
+        m, v = x.shape
+        f = np.broadcast_to(np.asarray(f, dtype=float), (m,))
+        g = np.zeros((m, v)) if g is None else np.broadcast_to(g, (m, v))
+        if hess:
+            h = np.zeros((m, v, v)) if h is None else np.broadcast_to(h, (m, v, v))
+        return f, g, h
 
     def residual(self, q: Any) -> np.ndarray:
         """Signed residual at ``q`` (…, nq): the factor; the wrapped offset for ``q_k = v``."""
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
             d = qa[..., self.joint] - self.value
-            return wrap_angles(d) if self.periodic else np.asarray(d)
-        val = _evaluate(self._compiled()[0], qa)
-        return np.asarray(np.broadcast_to(val, qa.shape[:-1]), dtype=float)
+            return np.remainder(d + math.pi, _TWO_PI) - math.pi if self.periodic else d
+        x = qa[..., list(self.variables)].reshape(-1, len(self.variables))
+        return np.asarray(self._eval(x, False)[0]).reshape(qa.shape[:-1])
 
-    def distance(self, q: Any, steps: int = 30) -> np.ndarray:
-        """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m].
+    def distance(self, q: Any) -> np.ndarray:
+        """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m]: the closest point.
 
-        Exact for ``q_k = value`` families. For implicit ones, the foot point of ``p = q``: the
-        iteration ``x ← p − ∇f(x) [f(x) + ∇f(x)·(p − x)] / ‖∇f(x)‖²`` (project ``p`` on the
-        tangent plane of ``f = 0`` at ``x``; a fixed point is on the family with ``p − x``
-        along the normal, the closest-point condition), run from ``x = p`` and from the end
-        of three gradient projections ``x ← x − f ∇f / ‖∇f‖²``; the nearer converged foot
-        point counts. Where neither converges within ``steps``, the first-order
-        ``|f| / ‖∇f‖``. Checked against a brute-force distance to the densely sampled
-        hexabot-leg family (tests): equal to the sampling resolution up to 0.2 rad away.
+        ``q_k = value``: ``|q_k − value|`` (wrapped for a revolute joint). Implicit families:
+        ``min ‖x − q‖`` over ``f(x) = 0`` in the family's variables (the other joints do not
+        change ``f``), found by :func:`_distance` to 1e-12. Revolute angles wrap by
+        themselves: ``f`` is 2π-periodic in them, so the nearest point of the unwrapped zero
+        set is the nearest of all its 2π copies.
         """
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
             return np.abs(self.residual(qa))
-        fcode, gcode = self._compiled()
-        var = list(self.variables)
-        lead = qa.shape[:-1]
-        p = np.array(qa[..., var], dtype=float)
-        full = np.array(qa, dtype=float)
-
-        def fg(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            full[..., var] = x
-            f = np.broadcast_to(np.asarray(_evaluate(fcode, full), float), lead)
-            g = np.stack(
-                [np.broadcast_to(np.asarray(_evaluate(c, full), float), lead) for c in gcode],
-                axis=-1,
-            )
-            return f, g
-
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            f0, g0 = fg(p)
-            g20 = np.sum(g0 * g0, axis=-1)
-            first = np.where(g20 > 0, np.abs(f0) / np.sqrt(g20), np.inf)
-            tol_f = 1e-9 * np.abs(f0) + 1e-14
-            best = np.full(lead, np.inf)
-            starts = [p.copy(), p.copy()]
-            for _ in range(3):  # the second start: gradient projections onto f = 0
-                f, g = fg(starts[1])
-                g2 = np.sum(g * g, axis=-1)
-                step = np.where(g2 > 0, f / g2, 0.0)[..., None] * g
-                starts[1] = starts[1] - np.nan_to_num(step, nan=0.0, posinf=0.0, neginf=0.0)
-            for x, alpha, count in ((starts[0], 1.0, steps), (starts[1], 1.0, steps),
-                                    (starts[1], 0.5, 2 * steps)):  # fmt: skip
-                for _ in range(max(count, 1)):
-                    f, g = fg(x)
-                    g2 = np.sum(g * g, axis=-1)
-                    lam = np.where(g2 > 0, (f + np.sum(g * (p - x), axis=-1)) / g2, 0.0)
-                    new = x + alpha * (p - lam[..., None] * g - x)
-                    x = np.where(np.isfinite(new), new, x)
-                f_end = np.abs(fg(x)[0])
-                dist = np.linalg.norm(x - p, axis=-1)
-                best = np.where((f_end <= tol_f) & (dist < best), dist, best)
-        return np.asarray(np.where(np.isfinite(best), best, first))
+        p = np.ascontiguousarray(qa[..., list(self.variables)].reshape(-1, len(self.variables)))
+        if p.shape[0] == 0:
+            return np.zeros(qa.shape[:-1])
+        best = np.concatenate(
+            [_distance(self._eval, p[i : i + _CHUNK]) for i in range(0, p.shape[0], _CHUNK)]
+        )
+        best[self._eval(p, False)[0] == 0.0] = 0.0
+        return best.reshape(qa.shape[:-1])
 
     def to_dict(self, joint_names: tuple[str, ...] | None = None) -> dict[str, Any]:
         """JSON-ready dict (joint by name when ``joint_names`` is given)."""
@@ -218,7 +390,6 @@ class Family:
             "value": self.value,
             "periodic": self.periodic,
             "factor": self.factor,
-            "gradient": list(self.gradient),
         }
 
 
@@ -273,13 +444,7 @@ class Families:
 
 # ------------------------------------------------------------------------ tables and keys
 def cache_dir() -> Path:
-    """Where derived families are kept: ``families/`` beside :mod:`hexapod_kin.symbolic`'s cache.
-
-    ``$HEXAPOD_KIN_CACHE_DIR``, else ``platformdirs.user_cache_dir("hexapod_kin")`` when
-    platformdirs is installed, else ``~/.cache/hexapod_kin``.
-    """
-    from .._io import cache_root
-
+    """Where derived families are kept: :func:`hexapod_kin._io.cache_root` ``("families")``."""
     return cache_root("families")
 
 
@@ -319,9 +484,8 @@ def _key(chain: Any, rows: tuple[str, ...]) -> str:
 
 
 def _from_json(data: dict[str, Any], nq: int) -> tuple[Family, ...]:
-    fams = []
-    for f in data["families"]:
-        fam = Family(
+    return tuple(
+        Family(
             name=str(f["name"]),
             equation=str(f["equation"]),
             variables=tuple(int(v) for v in f["variables"]),
@@ -329,27 +493,18 @@ def _from_json(data: dict[str, Any], nq: int) -> tuple[Family, ...]:
             value=None if f["value"] is None else float(f["value"]),
             periodic=bool(f["periodic"]),
             factor=str(f["factor"]),
-            gradient=tuple(str(g) for g in f["gradient"]),
-            nq=nq,
         )
-        fam._compiled()  # refuse anything outside the grammar now, not mid-scan
-        fams.append(fam)
-    return tuple(fams)
+        for f in data["families"]
+    )
 
 
 def _read_cache(key: str, nq: int) -> tuple[Family, ...] | None:
-    path = cache_dir() / f"{key}.json"
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        return None
-    except (OSError, ValueError):
-        return None  # unreadable or corrupt: derive again (and overwrite)
-    if data.get("v") != _VERSION or data.get("nq") != nq:
-        return None
-    try:
+        data = json.loads((cache_dir() / f"{key}.json").read_text(encoding="utf-8"))
+        if data.get("v") != _VERSION or data.get("nq") != nq:
+            return None
         return _from_json(data, nq)
-    except (KeyError, TypeError, ValueError):  # ParameterError is a ValueError
+    except (OSError, KeyError, TypeError, ValueError):  # missing or corrupt: derive again
         return None
 
 
@@ -370,8 +525,8 @@ class _Miss(Exception):
     """Not in the disk cache (nothing is stored in the model's cache then)."""
 
 
-#: Errors a derivation may end with; anything else is a bug and propagates.
 def _derive_errors() -> tuple[type[BaseException], ...]:
+    """Errors a derivation may end with; anything else is a bug and propagates."""
     import sympy
 
     return (
@@ -386,23 +541,19 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
 
 def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Family, ...]:
     """Check ``deriv`` against the model's Jacobian and turn its families into text forms."""
-    import sympy as sp
-
     from .measure import measures
 
     qs = model.random_q(16, seed=4242)
-    # Pinocchio's Jacobians and numpy (16 calls): no batch kernel compiled for this check.
     res = [measures(model, q, rows) for q in qs]
     if deriv.det is not None:
         sym = np.abs(deriv.function(deriv.det)(qs))
         num = np.abs([m.det for m in res])
-    elif getattr(deriv, "gram", None) is not None:
+    elif deriv.gram is not None:
         sym = np.abs(deriv.function(deriv.gram)(qs))
         num = np.array([m.manipulability for m in res]) ** 2
     else:
         raise ParameterError("the derivation has no determinant to check the families against")
-    scale = max(float(np.max(num)), 1e-300)
-    err = float(np.max(np.abs(sym - num))) / scale
+    err = float(np.max(np.abs(sym - num))) / max(float(np.max(num)), 1e-300)
     if not err <= _MATCH_RTOL:
         raise ParameterError(
             f"the symbolic det of the table differs from the model's (relative {err:.1e}): "
@@ -410,54 +561,18 @@ def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Fa
             parameter="rows",
             value=rows,
         )
-    q = deriv.q
-    fams = []
-    for fam in deriv.families:
-        factor = deriv.numeric(fam.factor)
-        grads = tuple(str(sp.diff(factor, q[v])) for v in fam.variables)
-        fams.append(
-            Family(
-                name=str(fam.name),
-                equation=str(fam.equation),
-                variables=tuple(int(v) for v in fam.variables),
-                joint=fam.joint,
-                value=None if fam.value is None else float(fam.value),
-                periodic=bool(fam.periodic),
-                factor=str(factor),
-                gradient=grads,
-                nq=model.nq,
-            )
+    return tuple(
+        Family(
+            name=str(fam.name),
+            equation=str(fam.equation),
+            variables=tuple(int(v) for v in fam.variables),
+            joint=fam.joint,
+            value=None if fam.value is None else float(fam.value),
+            periodic=bool(fam.periodic),
+            factor=str(deriv.numeric(fam.factor)),
         )
-    out = tuple(fams)
-    for f in out:
-        f._compiled()
-    return out
-
-
-def _derive(chain: Any, rows: tuple[str, ...], budget: float) -> Any:
-    """``symbolic.derive(chain, rows)`` within ``budget`` seconds (raises TimeoutError)."""
-    from .. import symbolic
-
-    params = inspect.signature(symbolic.derive).parameters
-    if "budget" in params:
-        return symbolic.derive(chain, rows=rows, budget=budget)
-    # No budget in symbolic.derive: run it aside and stop waiting at the budget.
-    box: dict[str, Any] = {}
-
-    def work() -> None:
-        try:
-            box["value"] = symbolic.derive(chain, rows=rows)
-        except BaseException as err:  # noqa: BLE001 - handed to the waiting thread below
-            box["error"] = err
-
-    thread = threading.Thread(target=work, name="hexapod_kin-derive", daemon=True)
-    thread.start()
-    thread.join(budget)
-    if thread.is_alive():
-        raise TimeoutError(f"symbolic.derive did not finish within the budget of {budget:g} s")
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
+        for fam in deriv.families
+    )
 
 
 def families_for(
@@ -501,10 +616,9 @@ def families_for(
 
     try:
         hit = model.cached(mem, load)
-    except _Miss:
-        hit = None
-    if hit is not None:
         return Families(hit, "cache", "" if hit else _NO_FACTOR, key)
+    except _Miss:
+        pass
     if not derive:
         return Families(
             (),
@@ -513,9 +627,11 @@ def families_for(
             "they are then kept on disk)",
             key,
         )
+    from .. import symbolic
+
     try:
-        deriv = _derive(chain, rows, float(budget))
-        incomplete = str(getattr(deriv, "incomplete", "") or "")
+        deriv = symbolic.derive(chain, rows=rows, budget=float(budget))
+        incomplete = "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             return Families((), "none", f"derivation incomplete: {incomplete}", key)
         fams = _numeric_families(deriv, model, rows)
