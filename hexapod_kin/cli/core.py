@@ -318,13 +318,17 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             "max_abs_det_sym_minus_det_pinocchio": "max |det_sym - det_pin|",
         }
         print(
-            f"check vs Pinocchio at 100 random q (frame {deriv.frame}): "
+            f"check vs Pinocchio at 100 random q (reference {deriv.reference}): "
             + ", ".join(f"{labels[k]} = {v:.2e}" for k, v in check.items())
         )
     return 0
 
 
 # ------------------------------------------------------------------------ scan
+#: ``--families`` choice -> ``scan(families=...)``.
+_FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
+
+
 def _add_scan(sub: Any) -> None:
     p = sub.add_parser(
         "scan",
@@ -332,65 +336,56 @@ def _add_scan(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
-    p.add_argument("--grid", type=int, help="points per scanned joint (default 61)")
+    p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(
-        "--joints", nargs="+", help="joints to scan (default: the two the families involve)"
+        "--joints",
+        nargs="+",
+        help="joints to scan, or 'all' (default: the two that change sigma_min most)",
     )
     p.add_argument("--rows", nargs="+", help="rows of J (x y z wx wy wz; default auto)")
     p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
     p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, help="seed of --samples (default: scan()'s, 0)")
     p.add_argument(
         "--families",
-        choices=["derive", "cached", "off"],
-        default="derive",
+        choices=list(_FAMILIES),
         help="singular families: derive them within --family-budget (cached on disk after the "
-        "first time), only use cached ones, or none",
+        "first time; scan()'s default), only use cached ones, or none",
     )
-    p.add_argument(
-        "--family-budget",
-        type=float,
-        default=10.0,
-        help="time budget [s] for deriving the families",
-    )
+    p.add_argument("--family-budget", type=float, help="time budget [s] for deriving the families")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.add_argument(
         "--plot", metavar="FILE.png", help="heat map (2 scanned joints, grid): .png .jpg .svg .pdf"
     )
 
 
-#: ``--families`` choice -> ``scan(families=...)``.
-_FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
-
-
 def _cmd_scan(args: argparse.Namespace) -> int:
     _check_outputs(args)
     import numpy as np
 
-    from ..singularity import default_joints, scan
+    from ..singularity import scan
 
     model = load_source(args)
     joints: Any = args.joints
-    if joints is None and model.nq > 2:
-        joints = [model.joint_names[j] for j in default_joints(model, args.rows)]
-    joints = [int(j) if str(j).isdigit() else j for j in joints] if joints else None
-    q_fixed = q_from_args(args, model) if args.q is not None else None
-    grid = args.grid if args.grid is not None or args.samples is not None else 61
-    result = scan(
-        model,
-        grid=grid,
-        samples=args.samples,
-        joints=joints,
-        rows=args.rows,
-        q_fixed=q_fixed,
-        threshold=args.threshold,
-        seed=args.seed,
-        progress=False if args.json else None,
-        families=_FAMILIES[args.families],
-        family_budget=args.family_budget,
-    )
+    if joints == ["all"]:
+        joints = "all"
+    elif joints:
+        joints = [int(j) if str(j).isdigit() else j for j in joints]
+    given = {  # only what was given: every default is scan()'s own
+        "grid": args.grid,
+        "samples": args.samples,
+        "joints": joints,
+        "rows": args.rows,
+        "q_fixed": q_from_args(args, model) if args.q is not None else None,
+        "threshold": args.threshold,
+        "seed": args.seed,
+        "families": None if args.families is None else _FAMILIES[args.families],
+        "family_budget": args.family_budget,
+        "progress": False if args.json else None,
+    }
+    result = scan(model, **{k: v for k, v in given.items() if v is not None})
     if args.plot:
         from ..plots import plot_singularity_map
 

@@ -204,7 +204,7 @@ _NEWTON = 12
 #: Extra starts: radii as fractions of the first distance found, and how many of the
 #: projected starts of a configuration go on to Newton.
 _SHELLS = np.array([0.5, 1.0])
-_KEEP = 2
+_KEEP = 3
 _GN = 3
 _NEAR = 1e-2
 #: Configurations solved together (the work arrays stay in cache).
@@ -213,12 +213,11 @@ Eval = Callable[[np.ndarray, bool], Jet]
 
 
 def _directions(v: int) -> np.ndarray:
-    """Unit directions of the extra starts: ±axes, and the four diagonals when v = 2."""
-    eye = np.eye(v)
-    dirs = [eye, -eye]
+    """Unit directions of the extra starts: 16 around the circle when v = 2, else ±axes."""
     if v == 2:
-        dirs.append(np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, -1.0]]) / math.sqrt(2))
-    return np.concatenate(dirs)
+        a = np.arange(16) * (math.pi / 8)
+        return np.column_stack([np.cos(a), np.sin(a)])
+    return np.concatenate([np.eye(v), -np.eye(v)])
 
 
 def _solve(mat: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -285,15 +284,17 @@ def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
 def _distance(jet: Eval, p: np.ndarray) -> np.ndarray:
     """Distance (M,) from each row of ``p`` (M, v) to ``f = 0``: the global closest point.
 
-    Newton from the projection of ``p`` gives a distance ``d``; then starts at
+    Newton from the projection of ``p`` gives a distance ``d`` (or, where it does not
+    converge, ``d`` is the distance to the projection); then starts at
     ``p + s·d·u`` (``s`` in ``_SHELLS``, ``u`` in :func:`_directions`) are projected onto
     ``f = 0`` and the ``_KEEP`` nearest per row refined by :func:`_newton` (a nearer branch
     of the family than the first one found); the nearest converged candidate counts.
     """
     m, v = p.shape
-    best = _newton(jet, p, _project(jet, p.copy(), 6))
+    x0 = _project(jet, p.copy(), 6)
+    best = _newton(jet, p, x0)
     u = _directions(v)
-    radius = np.where(np.isfinite(best), best, math.pi)
+    radius = np.where(np.isfinite(best), best, np.linalg.norm(x0 - p, axis=1))
     shell = _SHELLS[:, None, None, None] * radius[None, None, :, None]
     starts = (p[None, None] + shell * u[None, :, None, :]).reshape(-1, m, v)
     x = _project(jet, starts.reshape(-1, v), _GN).reshape(starts.shape)

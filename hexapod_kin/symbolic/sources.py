@@ -1,4 +1,4 @@
-"""What :func:`hexapod_kin.symbolic.derive` derives: a source turned into a chain and a frame.
+"""What :func:`hexapod_kin.symbolic.derive` derives: a source turned into a chain and its base.
 
 A :class:`~hexapod_kin.params.Chain` as it is; a preset by name; a hexapod leg with its mount
 as the chain's base pose (so ``p`` and ``J`` are in the body frame, like the loaded model);
@@ -41,7 +41,7 @@ def _leg_nq(robot: Hexapod, tip: str) -> int:
 def chain_of(
     source: Any, base: str | None = None, tip: str | None = None
 ) -> tuple[Chain, str, str]:
-    """``(chain, frame name, tip name)`` for a source (see :func:`derive`)."""
+    """``(chain, reference (base frame name), tip name)`` for a source (see :func:`derive`)."""
     if isinstance(source, Chain):
         if base is None and tip is None:
             return source, source.base, source.tip
