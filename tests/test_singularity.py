@@ -13,10 +13,10 @@ from hexapod_kin.cli import main
 from hexapod_kin.exceptions import ConfigurationError, FrameNotFoundError, ParameterError
 from hexapod_kin.singularity import (
     ROW_NAMES,
+    default_joints,
     default_rows,
     measures,
     measures_batch,
-    plot_joints,
     scan,
 )
 
@@ -139,8 +139,8 @@ def test_kernel_accurate_near_singularities(leg):
 def test_default_rows(leg, scara):
     assert default_rows(leg) == ("x", "y", "z")
     assert default_rows(scara) == ("x", "y", "z", "wz")
-    assert plot_joints(leg) == (1, 2)
-    assert 1 in plot_joints(scara)  # theta2: the only joint in the families (det = l1 l2 sin q2)
+    assert default_joints(leg) == (1, 2)
+    assert 1 in default_joints(scara)  # theta2: the only joint in the families (det = l1 l2 sin q2)
 
 
 def test_leg_scan_finds_both_families_and_nothing_spurious(leg):
@@ -194,7 +194,7 @@ def test_scan_defaults_are_the_commands_and_small_scans_skip_the_kernel(leg, cap
     from hexapod_kin.singularity.scans import DEFAULT_GRID, SMALL_SCAN
 
     res = scan(leg, families=False)
-    assert res.joints == plot_joints(leg) and res.grid_shape == (DEFAULT_GRID, DEFAULT_GRID)
+    assert res.joints == default_joints(leg) and res.grid_shape == (DEFAULT_GRID, DEFAULT_GRID)
     assert main(["scan", "hexabot_leg", "--families", "off", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["grid_shape"] == [DEFAULT_GRID] * 2 and out["joints"] == ["knee", "ankle"]
@@ -263,10 +263,10 @@ def test_cli_derive(capsys):
 
 def test_default_heat_map_joints_move_the_tip():
     from hexapod_kin import load
-    from hexapod_kin.singularity import plot_joints
+    from hexapod_kin.singularity import default_joints
 
     model = load("hexapod")  # 18 joints, tip leg1_foot: 15 joints do not move it
-    a, b = plot_joints(model)
+    a, b = default_joints(model)
     q = model.random_q(seed=3)
     jac = model.position_jacobian(q)
     assert np.linalg.norm(jac[:, a]) > 1e-6 and np.linalg.norm(jac[:, b]) > 1e-6

@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..workspace import WorkspaceResult, cross_section, workspace
     from .families import Families, Family, families_for
     from .measure import Measures, MeasuresBatch, default_rows, measures, measures_batch, reach
-    from .scans import ScanResult, default_joints, default_q_fixed, plot_joints, scan
+    from .scans import ScanResult, default_joints, default_q_fixed, scan
 
 __all__ = [
     "ROW_NAMES",
@@ -47,7 +47,6 @@ __all__ = [
     "families_for",
     "measures",
     "measures_batch",
-    "plot_joints",
     "reach",
     "row_indices",
     "row_names",
@@ -68,7 +67,6 @@ _WHERE = {
     "ScanResult": ".scans",
     "default_joints": ".scans",
     "default_q_fixed": ".scans",
-    "plot_joints": ".scans",
     "scan": ".scans",
     "WorkspaceResult": "..workspace",
     "cross_section": "..workspace",

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of
 from .families import Families, Family, families_for
-from .measure import _measures_small, as_model, measures_batch, reach, selected_rows
+from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
 __all__ = [
     "DEFAULT_GRID",
@@ -36,7 +36,6 @@ __all__ = [
     "scan",
     "default_joints",
     "default_q_fixed",
-    "plot_joints",
 ]
 
 #: Largest number of configurations of one scan (memory: ~80 bytes each plus q).
@@ -75,10 +74,6 @@ def _ro(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.setflags(write=False)
     return arr
-
-
-def _clean(a: np.ndarray) -> list[Any]:
-    return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
 
 
 @dataclass(frozen=True)
@@ -372,12 +367,6 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
         return tuple(sorted(order[:count]))
 
     return mdl.cached(f"singularity.default_joints.{names}.{count}", build)
-
-
-def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
-    """The two joints a 2-D heat map should show by default (:func:`default_joints`)."""
-    a, b = default_joints(model, rows, 2)
-    return a, b
 
 
 def _grid_points(
