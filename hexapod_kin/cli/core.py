@@ -188,7 +188,7 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     q = q_from_args(args, model)
     jac = model.jacobian(q, args.reference)
     # position measures from the tip's linear velocity (LOCAL_WORLD_ALIGNED rows), whatever
-    # frame is printed: WORLD's linear rows are the velocity of the point at the world origin
+    # reference is printed: WORLD's linear rows are the velocity of the point at the world origin
     jp = model.jacobian(q, "local_world_aligned")[:3]
     det = float(np.linalg.det(jp)) if jp.shape[0] == jp.shape[1] else None
     sv = np.linalg.svd(jp, compute_uv=False)

@@ -255,17 +255,7 @@ class Derivation:
             "det": None if self.det is None else str(self.det),
             "gram": None if self.gram is None else str(self.gram),
             "method": self.method,
-            "families": [
-                {
-                    "name": f.name,
-                    "equation": str(f.equation),
-                    "joint": None if f.joint is None else self.joint_names[f.joint],
-                    "value": f.value,
-                    "verified": f.verified,
-                    "check": f.check,
-                }
-                for f in self.families
-            ],
+            "families": [f.to_dict(self.joint_names) for f in self.families],
             "incomplete": list(self.incomplete),
             "seconds": self.seconds,
             "cached": self.cached,

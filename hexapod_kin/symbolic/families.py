@@ -50,6 +50,23 @@ class SingularFamily:
     verified: bool | None = None
     check: str = ""
 
+    def to_dict(self, joint_names: Sequence[str] | None = None) -> dict[str, Any]:
+        """JSON-ready dict (sympy objects as text; the joint by name with ``joint_names``)."""
+        joint: Any = self.joint
+        if joint is not None and joint_names is not None:
+            joint = joint_names[joint]
+        return {
+            "name": self.name,
+            "equation": str(self.equation),
+            "factor": str(self.factor),
+            "variables": list(self.variables),
+            "joint": joint,
+            "value": self.value,
+            "periodic": self.periodic,
+            "verified": self.verified,
+            "check": self.check,
+        }
+
 
 def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
     def f(x: np.ndarray) -> np.ndarray:
