@@ -363,41 +363,53 @@ def test_family_jets_equal_finite_differences():
     assert np.allclose(fam.residual(np.column_stack([x[:, 0], np.zeros(3), x[:, 1]])), f)
 
 
-def _closest_on_hip_axis_family(p2, p3):
-    """Brute force: the nearest point of l1 + l2 cos q2 + l3 cos(q2 + q3) = 0 (torus metric).
+_L1, _L2, _L3 = 0.05, 0.1, 0.1  # the hexabot leg's lengths in [m]
 
-    Two dense parametrisations of the curve (by q2: q3 = ±acos(-(l1 + l2 cos q2)/l3) - q2;
-    by phi = q2 + q3: q2 = ±acos(-(l1 + l3 cos phi)/l2)), the best sample of each branch
-    refined by scipy's bounded scalar search inside the branch's range.
+
+def _hip_axis_branch(x, by_q2, sign):
+    """A point (q2, q3) of l1 + l2 cos q2 + l3 cos(q2 + q3) = 0 on one branch, or None.
+
+    By q2: q3 = ±acos(-(l1 + l2 cos q2)/l3) - q2; by phi = q2 + q3: q2 = ±acos(-(l1 + l3
+    cos phi)/l2), q3 = phi - q2.
+    """
+    a, b = (_L2, _L3) if by_q2 else (_L3, _L2)
+    c = -(_L1 + a * np.cos(x)) / b
+    s = sign * np.arccos(np.clip(c, -1, 1))
+    return ((x, s - x) if by_q2 else (s, x - s)), np.abs(c) <= 1
+
+
+_BRANCHES = [(by_q2, sign) for by_q2 in (True, False) for sign in (1, -1)]
+_T = np.linspace(-math.pi, math.pi, 10_001)
+_SAMPLED = [_hip_axis_branch(_T, *br) for br in _BRANCHES]
+
+
+def _closest_on_hip_axis_family(p2, p3):
+    """Brute force: the distance (torus metric) from (p2, p3) to the hip-axis family.
+
+    Both dense parametrisations, both signs; the best sample of each branch within 1e-3 of
+    the best is refined by scipy's bounded scalar search inside the branch's range.
     """
     from scipy.optimize import minimize_scalar
 
-    l1, l2, l3 = 0.05, 0.1, 0.1
-    t = np.linspace(-math.pi, math.pi, 20_001)
-
     def wrap(a):
-        return np.remainder(a + math.pi, 2 * math.pi) - math.pi
+        return a - 2 * math.pi * np.round(a / (2 * math.pi))
 
-    best = np.inf
-    for by_q2 in (True, False):
-        a, b = (l2, l3) if by_q2 else (l3, l2)
-        inside = np.abs((l1 + a * np.cos(t)) / b) <= 1
-        for sign in (1, -1):
+    def dist(x, by_q2, sign):
+        (u, w), ok = _hip_axis_branch(x, by_q2, sign)
+        return np.where(ok, np.hypot(wrap(u - p2), wrap(w - p3)), 10.0)
 
-            def dist(x, a=a, b=b, sign=sign, by_q2=by_q2):
-                c = -(l1 + a * np.cos(x)) / b
-                if np.ndim(x) == 0 and abs(c) > 1:
-                    return 10.0
-                s = sign * np.arccos(c)
-                u, w = (x, s - x) if by_q2 else (s, x - s)
-                return np.hypot(wrap(u - p2), wrap(w - p3))
-
-            d = dist(t[inside])
-            x0 = t[inside][int(np.argmin(d))]
+    grid = [np.where(ok, np.hypot(wrap(u - p2), wrap(w - p3)), 10.0) for (u, w), ok in _SAMPLED]
+    best = min(float(d.min()) for d in grid)
+    for d, br in zip(grid, _BRANCHES):
+        if d.min() < best + 1e-3:
+            x0 = _T[int(np.argmin(d))]
             res = minimize_scalar(
-                dist, bounds=(x0 - 4e-4, x0 + 4e-4), method="bounded", options={"xatol": 1e-15}
+                lambda x, br=br: float(dist(x, *br)),
+                bounds=(x0 - 1.3e-3, x0 + 1.3e-3),
+                method="bounded",
+                options={"xatol": 1e-15},
             )
-            best = min(best, res.fun, d.min())
+            best = min(best, res.fun)
     return best
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import math
+import operator
 from collections.abc import Callable
 from typing import Any
 
@@ -95,11 +96,11 @@ Eval = Callable[[np.ndarray, bool], Jet]  # (x (M, v), with Hessian) -> jet
 
 
 _FOLD: dict[type, Callable[[float, float], float]] = {
-    ast.Add: lambda a, b: a + b,
-    ast.Sub: lambda a, b: a - b,
-    ast.Mult: lambda a, b: a * b,
-    ast.Div: lambda a, b: a / b,
-    ast.Pow: lambda a, b: a**b,
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.Pow: operator.pow,
 }
 
 
@@ -160,6 +161,8 @@ def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
             expo = _number(node.right)
             if expo is None:
                 raise _refuse(text, "a non-numeric exponent")
+            if expo == 1.0:
+                return left
             fn = _power(expo)
             return lambda env, hess: _chain(fn, left(env, hess), hess)
         right = _build(node.right, text, pos)
@@ -221,14 +224,13 @@ _TOL = 1e-12
 #: Longest step of one iteration in [rad]/[m] (no jumping across the torus).
 _STEP_MAX = 0.5
 _NEWTON = 12
-#: Extra starts: radii as fractions of the first distance found, and how many of the
-#: projected starts of a configuration go on to Newton.
+#: Extra starts: radii as fractions of the first distance found; their Gauss–Newton steps; a
+#: projected start is on the family when ``|f| < _NEAR ‖∇f‖``; the ``_KEEP`` nearest go on to
+#: Newton.
 _SHELLS = np.array([0.5, 1.0])
-_KEEP = 3
 _GN = 3
 _NEAR = 1e-2
-#: Configurations solved together (the work arrays stay in cache).
-_CHUNK = 1024
+_KEEP = 3
 #: Configurations solved together (the work arrays stay in cache).
 _CHUNK = 1024
 
@@ -303,9 +305,12 @@ def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
-    """Distance (M,) from each row of ``p`` (M, v) to ``f = 0``: the global closest point.
+    """Distance (M,) from each row of ``p`` (M, v) to the zero set ``f = 0`` of ``jet``.
 
-    Solved :data:`_CHUNK` rows at a time (:func:`_closest`); 0 where ``f(p) = 0``.
+    The nearest of several closest-point candidates, each converged to 1e-12 (:func:`_closest`;
+    ``tests/test_singularity.py`` checks it against a brute-force closest point), ``inf``
+    where none converges, 0 where ``f(p) = 0``. Solved :data:`_CHUNK` rows at a time; every
+    row on its own (the same bits whatever the other rows).
     """
     out = np.concatenate(
         [_closest(jet, p[i : i + _CHUNK]) for i in range(0, p.shape[0], _CHUNK)] or [np.zeros(0)]
@@ -317,11 +322,11 @@ def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
 def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
     """Distance (M,) from each row of ``p`` (M, v) to ``f = 0`` (see :func:`closest_distance`).
 
-    Newton from the projection of ``p`` gives a distance ``d`` (or, where it does not
-    converge, ``d`` is the distance to the projection); then starts at
-    ``p + s·d·u`` (``s`` in ``_SHELLS``, ``u`` in :func:`_directions`) are projected onto
-    ``f = 0`` and the ``_KEEP`` nearest per row refined by :func:`_newton` (a nearer branch
-    of the family than the first one found); the nearest converged candidate counts.
+    Newton from the projection of ``p`` gives a distance ``d`` (where it does not converge,
+    ``d`` is the distance to the projection); then starts at ``p + s·d·u`` (``s`` in
+    ``_SHELLS``, ``u`` in :func:`_directions`) are projected onto ``f = 0`` and the ``_KEEP``
+    nearest per row refined by :func:`_newton`: a nearer branch of the zero set than the
+    first one found.
     """
     m, v = p.shape
     x0 = _project(jet, p.copy(), 6)
