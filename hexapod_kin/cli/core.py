@@ -267,8 +267,8 @@ def _add_derive(sub: Any) -> None:
     p.add_argument(
         "--budget",
         type=float,
-        default=5.0,
-        help="time budget [s]: what is not done by then is reported, never waited on",
+        help="time budget [s] (default: derive()'s, 5 s): what is not done by then is "
+        "reported, never waited on",
     )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
@@ -281,7 +281,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..singularity.rows import ROW_NAMES
     from ..symbolic import derive
 
-    if not (math.isfinite(args.budget) and args.budget > 0):
+    if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
         raise ParameterError(
             f"--budget {args.budget!r} is not allowed; a time in seconds > 0",
             parameter="--budget",
@@ -289,7 +289,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             allowed="> 0 s",
         )
     model = load_source(args)
-    deriv = derive(model, rows=args.rows, budget=args.budget)
+    given = {} if args.budget is None else {"budget": args.budget}
+    deriv = derive(model, rows=args.rows, **given)
     # compare like with like: the derivation is in the model's own base frame, as Pinocchio's
     check: dict[str, Any] = {}
     if deriv.J_rows is not None:
