@@ -428,6 +428,25 @@ def test_family_distance_is_the_closest_point_against_brute_force(fresh_cache):
     assert np.allclose(q3.distance(q), np.abs(np.angle(np.exp(1j * q[:, 2]))), atol=1e-15)
 
 
+def test_family_distance_is_the_radius_of_the_first_circle_to_touch_the_family():
+    # Solo12's knee family l1 c2 + l2 c23 = 0 with l1 = l2: crossing lines (grad f = 0 where
+    # they cross). The distance d is exact when no zero lies inside the circle of radius
+    # d (1 - 1e-9) around q and one lies on the circle of radius d (1 + 1e-9).
+    from hexapod_kin.singularity import Family
+
+    fam = Family("knee", "knee", (1, 2), None, None, False, "0.16*cos(q2) + 0.16*cos(q2 + q3)")
+    q = np.zeros((25, 3))
+    q[:, 1:] = np.random.default_rng(5).uniform(-math.pi, math.pi, (25, 2))
+    got = fam.distance(q)
+    angle = np.linspace(0, 2 * math.pi, 250_001)
+    ring = np.column_stack([np.cos(angle), np.sin(angle)])
+    for p, d in zip(q[:, 1:], got):
+        inner = fam.residual(np.column_stack([np.zeros(len(ring)), p + d * (1 - 1e-9) * ring]))
+        outer = fam.residual(np.column_stack([np.zeros(len(ring)), p + d * (1 + 1e-9) * ring]))
+        assert np.all(np.sign(inner) == np.sign(inner[0])) and inner[0] != 0
+        assert np.any(np.sign(outer) != np.sign(outer[0]))
+
+
 def test_every_flagged_sample_labelled_with_a_distance(fresh_cache, leg):
     res = scan(leg, samples=20_000, seed=4, joints="all", families=True)
     flagged = res.singular
