@@ -35,10 +35,6 @@ from .rows import ROW_NAMES, choose_rows, row_names
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
 
 
-def _finite_or_none(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
-
-
 def _clean(a: np.ndarray) -> list[Any]:
     return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
 
@@ -66,11 +62,10 @@ class Measures:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
+        names = ("det", "manipulability", "condition", "sigma_min")
+        values = _clean(np.array([getattr(self, k) for k in names]))
         return {
-            "det": _finite_or_none(self.det),
-            "manipulability": _finite_or_none(self.manipulability),
-            "condition": _finite_or_none(self.condition),
-            "sigma_min": _finite_or_none(self.sigma_min),
+            **dict(zip(names, values)),
             "singular_values": _clean(self.singular_values),
             "rows": list(self.rows),
         }
@@ -118,17 +113,15 @@ class MeasuresBatch:
         }
 
 
-def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Reference engine: measures of a stack of Jacobians (N, k, n) with numpy SVD."""
-    n_conf, k, n = jac.shape
+def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``det, manipulability, condition, sigma_min, singular values`` of (N, k, n) Jacobians."""
     sv = np.linalg.svd(jac, compute_uv=False)
-    smax = sv[:, 0]
-    smin = sv[:, -1]
-    det = np.linalg.det(jac) if k == n else np.full(n_conf, np.nan)
-    manip = np.abs(det) if k == n else np.prod(sv, axis=1)
+    square = jac.shape[1] == jac.shape[2]
+    det = np.linalg.det(jac) if square else np.full(jac.shape[0], np.nan)
+    manip = np.abs(det) if square else np.prod(sv, axis=1)
     with np.errstate(divide="ignore"):
-        cond = np.where(smin > 0, smax / np.where(smin > 0, smin, 1.0), np.inf)
-    return det, manip, cond, smin
+        cond = np.where(sv[:, -1] > 0, sv[:, 0] / sv[:, -1], np.inf)
+    return det, manip, cond, sv[:, -1], sv
 
 
 def as_model(model: Any) -> Any:
@@ -200,8 +193,8 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
     names = selected_rows(mdl, rows)
     idx = [ROW_NAMES.index(r) for r in names]
     jac = np.asarray(mdl.jacobian(q, "local_world_aligned"))[idx]
-    det, manip, cond, smin = _measures_numpy(jac[None])
-    sv = np.linalg.svd(jac, compute_uv=False)
+    det, manip, cond, smin, sv = _measures_numpy(jac[None])
+    sv = sv[0]
     sv.setflags(write=False)
     return Measures(float(det[0]), float(manip[0]), float(cond[0]), float(smin[0]), sv, names)
 
@@ -265,5 +258,5 @@ def _measures_small(model: Any, qs: np.ndarray, rows: tuple[str, ...]) -> Measur
     jac = np.empty((qs.shape[0], 6, qs.shape[1]))
     for i, q in enumerate(qs):
         jac[i] = model.jacobian(q, "local_world_aligned")
-    det, manip, cond, smin = _measures_numpy(jac[:, [ROW_NAMES.index(r) for r in rows], :])
+    det, manip, cond, smin, _ = _measures_numpy(jac[:, [ROW_NAMES.index(r) for r in rows], :])
     return MeasuresBatch(det, manip, cond, smin, rows=rows)
