@@ -42,7 +42,9 @@ __all__ = [
 MAX_CONFIGURATIONS = 50_000_000
 #: Points per scanned joint when neither ``grid`` nor ``samples`` is given.
 DEFAULT_GRID = 61
-#: Largest scan run on Pinocchio + numpy; above it, the compiled kernel.
+#: Largest scan run on Pinocchio + numpy (about 6 µs a configuration, no numba import: the
+#: default 61 × 61 grid and command-line sizes); above it, the compiled kernel (a
+#: ``precompile``-d kernel takes well under 1 µs a configuration).
 SMALL_SCAN = 5_000
 
 
