@@ -42,9 +42,8 @@ __all__ = [
 MAX_CONFIGURATIONS = 50_000_000
 #: Points per scanned joint when neither ``grid`` nor ``samples`` is given.
 DEFAULT_GRID = 61
-#: Largest scan run on Pinocchio + numpy (about 6 µs a configuration, no numba import: the
-#: default 61 × 61 grid and command-line sizes); above it, the compiled kernel (a
-#: ``precompile``-d kernel takes well under 1 µs a configuration).
+#: Largest scan run on Pinocchio + numpy, with no numba import (the default 61 × 61 grid and
+#: other command-line sizes); above it, the compiled kernel (``tools/bench_singularity.py``).
 SMALL_SCAN = 5_000
 
 
