@@ -309,14 +309,16 @@ def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
 
     The nearest of several closest-point candidates, each converged to 1e-12 (:func:`_closest`;
     ``tests/test_singularity.py`` checks it against a brute-force closest point), ``inf``
-    where none converges, 0 where ``f(p) = 0``. Solved :data:`_CHUNK` rows at a time; every
-    row on its own (the same bits whatever the other rows).
+    where none converges, 0 where ``f(p) = 0``. Each distinct row is solved once (a grid
+    scan repeats the family's variables along the other joints), :data:`_CHUNK` rows at a
+    time, every row on its own (the same bits whatever the other rows).
     """
+    rows, back = np.unique(p, axis=0, return_inverse=True)
     out = np.concatenate(
-        [_closest(jet, p[i : i + _CHUNK]) for i in range(0, p.shape[0], _CHUNK)] or [np.zeros(0)]
+        [_closest(jet, rows[i : i + _CHUNK]) for i in range(0, len(rows), _CHUNK)] or [np.zeros(0)]
     )
-    out[jet(p, False)[0] == 0.0] = 0.0
-    return out
+    out[jet(rows, False)[0] == 0.0] = 0.0
+    return out[back.reshape(-1)]
 
 
 def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
