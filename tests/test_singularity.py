@@ -419,6 +419,7 @@ def test_family_distance_is_the_closest_point_against_brute_force(fresh_cache):
     res = scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
     fam = next(f for f in res.families if f.joint is None)
     q = np.random.default_rng(3).uniform(-math.pi, math.pi, (1000, 3))
+    q[:4, 1:] = [[0, 0], [0, math.pi], [math.pi, 0], [math.pi, math.pi]]  # grad f = 0 there
     got = fam.distance(q)
     ref = np.array([_closest_on_hip_axis_family(a, b) for a, b in q[:, 1:]])
     assert np.abs(got - ref).max() < 1e-9

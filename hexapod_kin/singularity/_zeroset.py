@@ -325,16 +325,17 @@ def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
     """Distance (M,) from each row of ``p`` (M, v) to ``f = 0`` (see :func:`closest_distance`).
 
     Newton from the projection of ``p`` gives a distance ``d`` (where it does not converge,
-    ``d`` is the distance to the projection); then starts at ``p + s·d·u`` (``s`` in
-    ``_SHELLS``, ``u`` in :func:`_directions`) are projected onto ``f = 0`` and the ``_KEEP``
-    nearest per row refined by :func:`_newton`: a nearer branch of the zero set than the
-    first one found.
+    ``d`` is the distance to the projection, or ``_STEP_MAX`` where ``∇f(p) = 0``); then
+    starts at ``p + s·d·u`` (``s`` in ``_SHELLS``, ``u`` in :func:`_directions`) are
+    projected onto ``f = 0`` and the ``_KEEP`` nearest per row refined by :func:`_newton`: a
+    nearer branch of the zero set than the first one found.
     """
     m, v = p.shape
     x0 = _project(jet, p.copy(), 6)
     best = _newton(jet, p, x0)
     u = _directions(v)
-    radius = np.where(np.isfinite(best), best, np.linalg.norm(x0 - p, axis=1))
+    moved = np.linalg.norm(x0 - p, axis=1)  # 0 where ∇f(p) = 0: no first step at all
+    radius = np.where(np.isfinite(best), best, np.where(moved > 0, moved, _STEP_MAX))
     shell = _SHELLS[:, None, None, None] * radius[None, None, :, None]
     starts = (p[None, None] + shell * u[None, :, None, :]).reshape(-1, m, v)
     x = _project(jet, starts.reshape(-1, v), _GN).reshape(starts.shape)
