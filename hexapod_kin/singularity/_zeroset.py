@@ -225,12 +225,14 @@ _TOL = 1e-12
 _STEP_MAX = 0.5
 _NEWTON = 12
 #: Extra starts: radii as fractions of the first distance found; their Gauss–Newton steps; a
-#: projected start is on the family when ``|f| < _NEAR ‖∇f‖``; the ``_KEEP`` nearest go on to
+#: projected start is on the family when ``|f| < _NEAR ‖∇f‖``; ``_KEEP`` of them go on to
 #: Newton.
 _SHELLS = np.array([0.5, 1.0])
 _GN = 3
 _NEAR = 1e-2
 _KEEP = 3
+#: Picked starts lie at least this fraction of the first distance apart.
+_APART = 0.1
 #: Configurations solved together (the work arrays stay in cache).
 _CHUNK = 1024
 
@@ -327,8 +329,9 @@ def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
     Newton from the projection of ``p`` gives a distance ``d`` (where it does not converge,
     ``d`` is the distance to the projection, or ``_STEP_MAX`` where ``∇f(p) = 0``); then
     starts at ``p + s·d·u`` (``s`` in ``_SHELLS``, ``u`` in :func:`_directions`) are
-    projected onto ``f = 0`` and the ``_KEEP`` nearest per row refined by :func:`_newton`: a
-    nearer branch of the zero set than the first one found.
+    projected onto ``f = 0``; the nearest, then the nearest ``_APART`` from those picked
+    (``_KEEP`` in all), are refined by :func:`_newton`: a nearer branch of the zero set than
+    the first one found.
     """
     m, v = p.shape
     x0 = _project(jet, p.copy(), 6)
@@ -343,7 +346,11 @@ def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
         d = np.linalg.norm(x - p[None], axis=2)
         f, g, _h = jet(x.reshape(-1, v), False)
         on = (np.abs(f) < _NEAR * np.linalg.norm(g, axis=1)).reshape(d.shape)
-    pick = np.argsort(np.where(on, d, np.inf), axis=0, kind="stable")[:_KEEP]  # (keep, M)
-    cand = np.take_along_axis(x, pick[..., None], axis=0).reshape(-1, v)
+    picks, cols = [], np.arange(m)
+    for _ in range(_KEEP):  # the nearest, then the nearest apart from those picked
+        pick = np.argmin(np.where(on, d, np.inf), axis=0)
+        picks.append(x[pick, cols])
+        on &= np.linalg.norm(x - picks[-1][None], axis=2) > _APART * radius[None]
+    cand = np.concatenate(picks)
     more = _newton(jet, np.tile(p, (_KEEP, 1)), cand).reshape(_KEEP, m)
     return np.minimum(best, more.min(axis=0))
