@@ -14,7 +14,7 @@ The folder reads in the order the data flows:
   :class:`Derivation`, :func:`cached`.
 
 The families as numbers for scans (residuals, exact distances) are
-:mod:`hexapod_kin.singularity.families`. Importing this package imports sympy (about 0.5 s):
+:mod:`hexapod_kin.singularity.families`. Importing this package imports sympy (slow to import):
 the rest of hexapod_kin imports it only inside the functions that derive.
 """
 

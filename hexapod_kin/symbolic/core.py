@@ -552,7 +552,7 @@ def sigma_ratio(jac: np.ndarray) -> float:
 
 
 def import_ahead() -> None:
-    """Import what the stages import on first use (``scipy.optimize``, ~0.35 s).
+    """Import what the stages import on first use (``scipy.optimize``).
 
     Called before a derivation runs in a forked child: the child inherits the module instead
     of importing it again, once per derivation.
