@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -342,6 +343,8 @@ def test_family_text_is_evaluated_by_a_whitelist():
             Family("x", "x", (1,), None, None, False, evil)
     ok = Family("f", "f", (1,), None, None, False, "0.05 + 0.1*cos(q2)")
     assert ok.residual(np.array([0.0, math.pi, 0.0])) == pytest.approx(-0.05)
+    again = pickle.loads(pickle.dumps(ok))  # the compiled factor is rebuilt
+    assert again == ok and again.residual(np.array([0.0, 0.0, 0.0])) == pytest.approx(0.15)
 
 
 def test_family_jets_equal_finite_differences():

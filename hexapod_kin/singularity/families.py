@@ -62,6 +62,11 @@ class Family:
         """Compile the factor once (refusing anything outside the grammar)."""
         object.__setattr__(self, "_jet", compile_factor(self.factor, self.variables))
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled as its fields (the compiled factor is rebuilt on loading)."""
+        fields = (self.name, self.equation, self.variables, self.joint, self.value)
+        return (Family, (*fields, self.periodic, self.factor))
+
     def residual(self, q: Any) -> np.ndarray:
         """Signed residual at ``q`` (…, nq): the factor; the wrapped offset for ``q_k = v``."""
         qa = np.asarray(q, dtype=float)
