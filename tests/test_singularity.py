@@ -546,7 +546,7 @@ def test_heat_map_units_and_legend_outside(tmp_path, scara, fresh_cache):
 
 @pytest.mark.parametrize(("source", "tip"), [("hexapod", "leg3_foot"), ("erd:solo12", "FL_FOOT")])
 def test_urdf_and_mounted_legs_get_families_from_their_recovered_table(source, tip, fresh_cache):
-    # no Khalil table of their own: Chain.from_urdf recovers one (the mount as base pose)
+    # no Khalil table of their own: chain_from_urdf recovers one (the mount as base pose)
     model = load(source, tip=tip)
     res = scan(model, samples=30_000, seed=2, joints="all", families=True)
     assert len(res.families) >= 3, res.family_reason

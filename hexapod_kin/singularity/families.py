@@ -2,7 +2,7 @@
 
 A family is the zero set of one factor of ``det J`` (or of ``det(J Jᵀ)``), derived by
 :func:`hexapod_kin.symbolic.derive` from the chain's Khalil table (the model's own, or the one
-:meth:`hexapod_kin.params.Chain.from_urdf` recovers). Deriving is sympy work, done only when
+:func:`hexapod_kin.chain_from_urdf` recovers). Deriving is sympy work, done only when
 asked (:func:`families_for` with ``derive=True``, within a time budget); the result is checked
 against the model's own Jacobian, turned into text (lengths substituted) and kept on disk
 (:func:`cache_dir`), so later scans in any process read it back without importing sympy.
@@ -166,15 +166,16 @@ def _table(model: Any) -> tuple[Any, str]:
     """The model's Khalil chain (its own, or recovered from the URDF) and why not, if none."""
 
     def build() -> tuple[Any, str]:
+        from .._fromurdf import chain_from_urdf
         from ..params import Chain
 
         params = model.params
         if isinstance(params, Chain) and model.nq == params.nq:
             return params, ""
         try:
-            chain = Chain.from_urdf(model)
+            chain = chain_from_urdf(model)
         except HexapodKinError as err:
-            return None, f"no Khalil table: Chain.from_urdf refused the chain ({err})"
+            return None, f"no Khalil table: chain_from_urdf refused the chain ({err})"
         if chain.nq != model.nq:
             return None, f"the recovered table has {chain.nq} joints, the model {model.nq}"
         return chain, ""

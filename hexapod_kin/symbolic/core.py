@@ -27,8 +27,9 @@ import numpy as np
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
+from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
-from ..params import Chain, table_transforms
+from ..params import Chain
 from ..singularity.rows import ROW_NAMES
 
 

@@ -357,7 +357,7 @@ def derive(
     Args:
         source: A :class:`~hexapod_kin.params.Chain`, a preset name (``"hexabot_leg"``), a
             URDF (path, text, ``erd:NAME``; read back with
-            :meth:`~hexapod_kin.params.Chain.from_urdf`), a :class:`Hexapod` with ``tip=``,
+            :func:`~hexapod_kin.chain_from_urdf`), a :class:`Hexapod` with ``tip=``,
             or a loaded model (its own base and tip frames are used: ``load("hexapod",
             tip="leg2_foot")`` derives leg 2 in the body frame).
         rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default

@@ -3,7 +3,7 @@
 A :class:`~hexapod_kin.params.Chain` as it is; a preset by name; a hexapod leg with its mount
 as the chain's base pose (so ``p`` and ``J`` are in the body frame, like the loaded model);
 any URDF (path, text, ``erd:NAME``, a loaded model of one) read back with
-:meth:`~hexapod_kin.params.Chain.from_urdf`.
+:func:`~hexapod_kin.chain_from_urdf`.
 """
 
 from __future__ import annotations
@@ -94,10 +94,11 @@ def chain_of(
 
 
 def _from_urdf(source: Any, base: str | None, tip: str | None) -> tuple[Chain, str, str]:
+    from .._fromurdf import chain_from_urdf
     from ..exceptions import HexapodKinError
 
     try:
-        chain = Chain.from_urdf(source, base=base, tip=tip)
+        chain = chain_from_urdf(source, base=base, tip=tip)
     except HexapodKinError:
         raise
     except Exception as exc:  # noqa: BLE001 - say what the source was
