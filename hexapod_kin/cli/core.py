@@ -46,7 +46,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
         rows.append({"name": name, "summary": doc.replace("``", "")})
     out: dict[str, Any] = {"presets": rows}
     if args.erd:
-        from ..model import erd_names
+        from ..sources import erd_names
 
         out["erd"] = erd_names()
     if args.json:
