@@ -36,9 +36,8 @@ class WorkspaceResult:
     six face neighbours occupied count fully; boundary voxels (an empty neighbour) count
     half, since the boundary surface cuts them on average through the middle:
     ``volume = (interior + boundary / 2) · voxel³``; ``volume_occupied`` counts every occupied
-    voxel (an over-estimate). Checked against closed forms (a spherical shell, the hexabot
-    leg's solid of revolution) to about 4 % with the defaults. Meaningful for chains whose
-    workspace is a solid (≥ 3 joints acting on the position).
+    voxel (an over-estimate). Meaningful for chains whose workspace is a solid (≥ 3 joints
+    acting on the position).
 
     Attributes:
         q: The sampled configurations (N, n).

@@ -199,7 +199,7 @@ def test_ur5_det_and_families(ur5):
 def test_ur5_from_example_robot_data_urdf():
     model = load("erd:ur5_robot")
     d = derive("erd:ur5_robot")
-    assert d.frame == model.base and d.tip == model.tip
+    assert d.reference == model.base and d.tip == model.tip
     qs = model.random_q(30, seed=8)
     det_sym = d.function(d.det)(qs)
     det_num = np.array([np.linalg.det(model.jacobian(q)) for q in qs])
@@ -212,7 +212,7 @@ def test_ur5_from_example_robot_data_urdf():
 def test_hexapod_leg_is_derived_in_the_frame_asked_for():
     model = load("hexapod", tip="leg2_foot")
     d = derive(model)
-    assert d.frame == "body" and d.tip == "leg2_foot"
+    assert d.reference == "body" and d.tip == "leg2_foot"
     qs = model.random_q(30, seed=9)
     jac = d.function(d.J_rows)(qs)
     p = d.function(d.p)(qs)[..., 0]
@@ -220,7 +220,7 @@ def test_hexapod_leg_is_derived_in_the_frame_asked_for():
         np.testing.assert_allclose(jac[i], model.jacobian(q)[:3], atol=1e-12)
         np.testing.assert_allclose(p[i], model.fk(q)[:3, 3], atol=1e-12)
     same = derive(robots.hexapod(), tip="leg2_foot")
-    assert same.frame == "body" and sp.simplify(same.det - d.det) == 0
+    assert same.reference == "body" and sp.simplify(same.det - d.det) == 0
 
 
 def test_urdf_sources_are_read_back():
@@ -299,21 +299,18 @@ def test_disk_cache_round_trip_and_corrupt_file(tmp_path, monkeypatch):
     assert symbolic_cache.load(files[0].stem) is not None  # rewritten
 
 
-def test_family_residuals_vanish_on_families(leg):
-    from hexapod_kin.symbolic import family_residuals
+def test_numeric_families_vanish_on_the_symbolic_families(leg, tmp_path, monkeypatch):
+    # the scans' numeric form of the families (singularity.families) is the derivation's
+    from hexapod_kin.singularity import families_for
 
-    fr = family_residuals("hexabot_leg")
-    assert [f.name for f in fr.families] == [f.name for f in leg.families]
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    fams = families_for(load("hexabot_leg"), leg.rows, derive=True).families
+    assert [f.name for f in fams] == [f.name for f in leg.families]
     q = np.array([[0.3, -0.4, 0.0], [0.3, -0.4, PI], [0.2, 0.1, 0.7]])
-    dist = fr.distance(q)
-    assert dist[0, 0] == pytest.approx(0.0, abs=1e-15)
-    assert dist[1, 1] == pytest.approx(0.0, abs=1e-12)
-    # implicit family: the residual is the factor, its gradient matches finite differences
-    res, grad = fr.residuals[2], fr.gradients[2]
-    h = 1e-6
-    fd = [(res(q[2] + h * e) - res(q[2] - h * e))[0] / (2 * h) for e in np.eye(3)]
-    np.testing.assert_allclose(grad(q[2])[0], fd, atol=1e-8)
-    assert family_residuals("hexabot_leg") is fr  # cheap when asked again
+    assert fams[0].distance(q)[0] == pytest.approx(0.0, abs=1e-15)
+    assert fams[1].distance(q)[1] == pytest.approx(0.0, abs=1e-12)
+    sym = leg.function(leg.families[2].factor)(q)
+    np.testing.assert_allclose(fams[2].residual(q), sym, rtol=1e-13, atol=1e-15)
 
 
 def test_whole_hexapod_model_is_refused_with_the_feet_listed():
@@ -324,17 +321,15 @@ def test_whole_hexapod_model_is_refused_with_the_feet_listed():
 
 def test_cached_never_derives(tmp_path, monkeypatch):
     from hexapod_kin import symbolic
-    from hexapod_kin.symbolic import cached, family_residuals
+    from hexapod_kin.symbolic import cached
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
     symbolic.clear_memory()
     assert cached("coxa_tibia_leg") is None
-    assert family_residuals("coxa_tibia_leg", derive_missing=False) is None
     d = derive("coxa_tibia_leg")
     symbolic.clear_memory()
     again = cached("coxa_tibia_leg")
     assert again is not None and again.cached and sp.simplify(again.gram - d.gram) == 0
-    assert family_residuals("coxa_tibia_leg", derive_missing=False) is not None
 
 
 def test_table_file_keeps_its_own_table():

@@ -18,7 +18,6 @@ from hexapod_kin import robots, symbolic
 from hexapod_kin.report import compare
 from hexapod_kin.report.checks import Context, _det_truth, _subs
 from hexapod_kin.report.data import load_claims
-from hexapod_kin.symbolic import cache as symbolic_cache
 from hexapod_kin.symbolic import derive
 
 Q = [sp.Symbol(f"q{k}", real=True) for k in range(1, 5)]
@@ -129,7 +128,7 @@ def test_zero_decides_as_simplify_on_random_trig_polynomials():
     rng = np.random.default_rng(4)
     s1, c1, s2, c2 = sp.sin(Q[0]), sp.cos(Q[0]), sp.sin(Q[1]), sp.cos(Q[1])
     monomials = [s1, c1, s2, c2, s1 * c2, c1 * s2, s1**2, c2**2, sp.Integer(1)]
-    for k in range(12):
+    for k in range(6):  # each of the three identity shapes twice
         coef = rng.integers(-3, 4, len(monomials))
         p = sum(int(a) * m for a, m in zip(coef, monomials))
         identity = p * (s1**2 + c1**2 - 1) + (k % 3) * (s2**2 + c2**2 - 1)
@@ -169,33 +168,23 @@ def test_default_rows_and_named_rows_share_one_derivation():
     assert not other.cached and other.rows == ("x", "y", "z") and other.det is None
 
 
-def test_run_in_process_gives_the_forked_result_and_keeps_the_budget():
+def test_without_fork_the_stages_run_inline_with_the_same_result(monkeypatch):
+    import multiprocessing
+
+    from hexapod_kin import Chain, DHRow
+
     chain = robots.hexabot_leg(alpha2=math.pi / 2)
     forked = derive(chain, budget=60.0, cache=False)
-    symbolic_cache.run_in_process()
-    try:
-        inline = derive(chain, budget=60.0, cache=False)
-        from hexapod_kin import Chain, DHRow
 
-        ur5_dh = [(0, 0.089159, 0, math.pi / 2), (0, 0, -0.425, 0), (0, 0, -0.39225, 0),
-                  (0, 0.10915, 0, math.pi / 2), (0, 0.09465, 0, -math.pi / 2),
-                  (0, 0.0823, 0, 0)]  # fmt: skip
-        ur5 = Chain.from_dh([DHRow(*row) for row in ur5_dh], name="ur5_inline")
-        short = derive(ur5, budget=0.05, cache=False)
-    finally:
-        symbolic_cache.run_in_process(False)
+    def no_fork(method=None):
+        raise ValueError("no fork on this platform")
+
+    monkeypatch.setattr(multiprocessing, "get_context", no_fork)
+    inline = derive(chain, budget=60.0, cache=False)
+    ur5_dh = [(0, 0.089159, 0, math.pi / 2), (0, 0, -0.425, 0), (0, 0, -0.39225, 0),
+              (0, 0.10915, 0, math.pi / 2), (0, 0.09465, 0, -math.pi / 2),
+              (0, 0.0823, 0, 0)]  # fmt: skip
+    ur5 = Chain.from_dh([DHRow(*row) for row in ur5_dh], name="ur5_inline")
+    short = derive(ur5, budget=0.05, cache=False)
     assert inline.text() == forked.text()
     assert short.incomplete and any("budget of 0.05 s" in x for x in short.incomplete)
-
-
-def test_in_process_wraps_a_child_target():
-    def target():
-        return symbolic_cache._IN_PROCESS
-
-    wrapped = symbolic.in_process(target)
-    assert symbolic_cache._IN_PROCESS is False
-    try:
-        assert wrapped() is True  # the flag is set before the target runs
-    finally:
-        symbolic.run_in_process(False)
-    assert target() is False

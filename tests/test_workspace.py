@@ -49,7 +49,7 @@ def test_workspace_plot(tmp_path):
     from hexapod_kin.plots import plot_workspace
 
     ws = workspace(leg, samples=50_000)
-    res = scan(leg, samples=20_000)
+    res = scan(leg, samples=20_000, joints="all", families=False)
     sing = np.array([leg.position(q) for q in res.q[res.singular][:500]])
     path = plot_workspace(ws, tmp_path / "ws.png", singular_points=sing)
     assert path.read_bytes()[:4] == b"\x89PNG"

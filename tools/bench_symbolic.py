@@ -23,6 +23,7 @@ from typing import Any
 import sympy as sp
 
 from hexapod_kin import Chain, DHRow, KhalilRow, robots, symbolic
+from hexapod_kin.singularity.rows import choose_rows
 from hexapod_kin.symbolic import cache, core
 
 PI = math.pi
@@ -76,7 +77,7 @@ def _naive(chain: Chain) -> Iterator[tuple[str, Any]]:
                     else sp.Matrix.vstack(z, sp.zeros(3, 1)))  # fmt: skip
     jac = simp(sp.Matrix.hstack(*cols))
     yield "J", True
-    rows = symbolic.default_rows([any(e != 0 for e in jac.row(i)) for i in range(6)], chain.nq)
+    rows = choose_rows([any(e != 0 for e in jac.row(i)) for i in range(6)], chain.nq)
     sel = jac.extract([symbolic.ROW_NAMES.index(r) for r in rows], list(range(chain.nq)))
     mat = sel if sel.shape[0] == chain.nq else sel * sel.T
     yield "det", sp.factor(simp(mat.det(method="berkowitz")))

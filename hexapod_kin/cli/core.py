@@ -46,7 +46,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
         rows.append({"name": name, "summary": doc.replace("``", "")})
     out: dict[str, Any] = {"presets": rows}
     if args.erd:
-        from ..model import erd_names
+        from ..sources import erd_names
 
         out["erd"] = erd_names()
     if args.json:
@@ -188,7 +188,7 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     q = q_from_args(args, model)
     jac = model.jacobian(q, args.reference)
     # position measures from the tip's linear velocity (LOCAL_WORLD_ALIGNED rows), whatever
-    # frame is printed: WORLD's linear rows are the velocity of the point at the world origin
+    # reference is printed: WORLD's linear rows are the velocity of the point at the world origin
     jp = model.jacobian(q, "local_world_aligned")[:3]
     det = float(np.linalg.det(jp)) if jp.shape[0] == jp.shape[1] else None
     sv = np.linalg.svd(jp, compute_uv=False)
@@ -267,8 +267,8 @@ def _add_derive(sub: Any) -> None:
     p.add_argument(
         "--budget",
         type=float,
-        default=5.0,
-        help="time budget [s]: what is not done by then is reported, never waited on",
+        help="time budget [s] (default: derive()'s, 5 s): what is not done by then is "
+        "reported, never waited on",
     )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
@@ -281,7 +281,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..singularity.rows import ROW_NAMES
     from ..symbolic import derive
 
-    if not (math.isfinite(args.budget) and args.budget > 0):
+    if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
         raise ParameterError(
             f"--budget {args.budget!r} is not allowed; a time in seconds > 0",
             parameter="--budget",
@@ -289,7 +289,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             allowed="> 0 s",
         )
     model = load_source(args)
-    deriv = derive(model, rows=args.rows, budget=args.budget)
+    given = {} if args.budget is None else {"budget": args.budget}
+    deriv = derive(model, rows=args.rows, **given)
     # compare like with like: the derivation is in the model's own base frame, as Pinocchio's
     check: dict[str, Any] = {}
     if deriv.J_rows is not None:
@@ -318,13 +319,17 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             "max_abs_det_sym_minus_det_pinocchio": "max |det_sym - det_pin|",
         }
         print(
-            f"check vs Pinocchio at 100 random q (frame {deriv.frame}): "
+            f"check vs Pinocchio at 100 random q (reference {deriv.reference}): "
             + ", ".join(f"{labels[k]} = {v:.2e}" for k, v in check.items())
         )
     return 0
 
 
 # ------------------------------------------------------------------------ scan
+#: ``--families`` choice -> ``scan(families=...)``.
+_FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
+
+
 def _add_scan(sub: Any) -> None:
     p = sub.add_parser(
         "scan",
@@ -332,65 +337,56 @@ def _add_scan(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
-    p.add_argument("--grid", type=int, help="points per scanned joint (default 61)")
+    p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(
-        "--joints", nargs="+", help="joints to scan (default: the two the families involve)"
+        "--joints",
+        nargs="+",
+        help="joints to scan, or 'all' (default: the two that change sigma_min most)",
     )
     p.add_argument("--rows", nargs="+", help="rows of J (x y z wx wy wz; default auto)")
     p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
     p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, help="seed of --samples (default: scan()'s, 0)")
     p.add_argument(
         "--families",
-        choices=["derive", "cached", "off"],
-        default="derive",
+        choices=list(_FAMILIES),
         help="singular families: derive them within --family-budget (cached on disk after the "
-        "first time), only use cached ones, or none",
+        "first time; scan()'s default), only use cached ones, or none",
     )
-    p.add_argument(
-        "--family-budget",
-        type=float,
-        default=10.0,
-        help="time budget [s] for deriving the families",
-    )
+    p.add_argument("--family-budget", type=float, help="time budget [s] for deriving the families")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.add_argument(
         "--plot", metavar="FILE.png", help="heat map (2 scanned joints, grid): .png .jpg .svg .pdf"
     )
 
 
-#: ``--families`` choice -> ``scan(families=...)``.
-_FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
-
-
 def _cmd_scan(args: argparse.Namespace) -> int:
     _check_outputs(args)
     import numpy as np
 
-    from ..singularity import default_joints, scan
+    from ..singularity import scan
 
     model = load_source(args)
     joints: Any = args.joints
-    if joints is None and model.nq > 2:
-        joints = [model.joint_names[j] for j in default_joints(model, args.rows)]
-    joints = [int(j) if str(j).isdigit() else j for j in joints] if joints else None
-    q_fixed = q_from_args(args, model) if args.q is not None else None
-    grid = args.grid if args.grid is not None or args.samples is not None else 61
-    result = scan(
-        model,
-        grid=grid,
-        samples=args.samples,
-        joints=joints,
-        rows=args.rows,
-        q_fixed=q_fixed,
-        threshold=args.threshold,
-        seed=args.seed,
-        progress=False if args.json else None,
-        families=_FAMILIES[args.families],
-        family_budget=args.family_budget,
-    )
+    if joints == ["all"]:
+        joints = "all"
+    elif joints:
+        joints = [int(j) if str(j).isdigit() else j for j in joints]
+    given = {  # only what was given: every default is scan()'s own
+        "grid": args.grid,
+        "samples": args.samples,
+        "joints": joints,
+        "rows": args.rows,
+        "q_fixed": q_from_args(args, model) if args.q is not None else None,
+        "threshold": args.threshold,
+        "seed": args.seed,
+        "families": None if args.families is None else _FAMILIES[args.families],
+        "family_budget": args.family_budget,
+        "progress": False if args.json else None,
+    }
+    result = scan(model, **{k: v for k, v in given.items() if v is not None})
     if args.plot:
         from ..plots import plot_singularity_map
 

@@ -1,16 +1,18 @@
-"""Singularity measures, fast scans of joint space, singular families.
+"""Singularity measures, scans of joint space, singular families.
 
 The package, from the kernel up:
 
 * :mod:`._kernel` — the compiled kernel: fused FK + Jacobian rows + measures over blocks of
-  configurations (SIMD), on :mod:`hexapod_kin._numerics`;
-* :mod:`._plan` — its Python side: the chain with z joint axes, Gram/minor plans, output buffers
-  (all kept in :meth:`hexapod_kin.model.Model.cached`);
+  configurations, on :mod:`hexapod_kin._numerics`; :mod:`._plan` — its Python side (chain
+  with z joint axes, Gram/minor plans, output buffers, kept in ``Model.cached``);
 * :mod:`.rows` — row names and selections (no sympy: ``ROW_NAMES`` lives here);
-* :mod:`.measure` — :func:`measures`, :func:`measures_batch` (a :class:`MeasuresBatch`),
-  :func:`default_rows`, :func:`reach`;
+* :mod:`.measure` — :func:`measures` (Pinocchio + numpy), :func:`measures_batch` (the
+  kernel), :func:`default_rows`, :func:`reach`;
+* :mod:`._zeroset` — a family's factor compiled to numpy value/gradient/Hessian evaluators,
+  and the exact distance to its zero set;
 * :mod:`.families` — singular families as numbers, derived only when asked, cached on disk;
-* :mod:`.scans` — :func:`scan` / :class:`ScanResult`, dexterous defaults, family labels.
+* :mod:`.scans` — :func:`scan` / :class:`ScanResult` (Pinocchio + numpy up to
+  ``SMALL_SCAN`` configurations, the kernel above), defaults, family labels.
 
 (``measure`` and ``scans`` are named apart from the functions ``measures`` and ``scan``: a
 submodule of the same name would replace the function as the package's attribute.)
@@ -30,7 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..workspace import WorkspaceResult, cross_section, workspace
     from .families import Families, Family, families_for
     from .measure import Measures, MeasuresBatch, default_rows, measures, measures_batch, reach
-    from .scans import ScanResult, default_joints, default_q_fixed, plot_joints, scan
+    from .scans import ScanResult, default_joints, default_q_fixed, scan
 
 __all__ = [
     "ROW_NAMES",
@@ -47,7 +49,6 @@ __all__ = [
     "families_for",
     "measures",
     "measures_batch",
-    "plot_joints",
     "reach",
     "row_indices",
     "row_names",
@@ -68,7 +69,6 @@ _WHERE = {
     "ScanResult": ".scans",
     "default_joints": ".scans",
     "default_q_fixed": ".scans",
-    "plot_joints": ".scans",
     "scan": ".scans",
     "WorkspaceResult": "..workspace",
     "cross_section": "..workspace",

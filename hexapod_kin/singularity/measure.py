@@ -13,32 +13,26 @@ Measures of a Jacobian ``J`` (k selected rows of the ``local_world_aligned`` tip
 Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the position rows, plus
 the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
 gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
-:func:`measures_batch` runs the fused compiled kernel (:mod:`._kernel`), generic over any
-loaded 1-DOF serial chain, catalogue or URDF.
+
+Engines (the size rule): :func:`measures` of one configuration is Pinocchio's Jacobian and
+numpy's SVD; :func:`measures_batch` is always the fused compiled kernel (:mod:`._kernel`),
+generic over any loaded 1-DOF serial chain; scans of at most
+:data:`~.scans.SMALL_SCAN` configurations use Pinocchio + numpy (no numba import).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .. import _kernels
-from .._numerics import chain_length
-from ..exceptions import ConfigurationError, ParameterError, choices
-from ._kernel import measures_kernel
-from ._plan import compute, output_arrays
+from ..exceptions import ConfigurationError
 from .rows import ROW_NAMES, choose_rows, row_names
 
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
-
-
-def _finite_or_none(x: float) -> float | None:
-    return float(x) if math.isfinite(x) else None
 
 
 def _clean(a: np.ndarray) -> list[Any]:
@@ -68,11 +62,10 @@ class Measures:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
+        names = ("det", "manipulability", "condition", "sigma_min")
+        values = _clean(np.array([getattr(self, k) for k in names]))
         return {
-            "det": _finite_or_none(self.det),
-            "manipulability": _finite_or_none(self.manipulability),
-            "condition": _finite_or_none(self.condition),
-            "sigma_min": _finite_or_none(self.sigma_min),
+            **dict(zip(names, values)),
             "singular_values": _clean(self.singular_values),
             "rows": list(self.rows),
         }
@@ -120,17 +113,15 @@ class MeasuresBatch:
         }
 
 
-def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Reference engine: measures of a stack of Jacobians (N, k, n) with numpy SVD."""
-    n_conf, k, n = jac.shape
+def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``det, manipulability, condition, sigma_min, singular values`` of (N, k, n) Jacobians."""
     sv = np.linalg.svd(jac, compute_uv=False)
-    smax = sv[:, 0]
-    smin = sv[:, -1]
-    det = np.linalg.det(jac) if k == n else np.full(n_conf, np.nan)
-    manip = np.abs(det) if k == n else np.prod(sv, axis=1)
+    square = jac.shape[1] == jac.shape[2]
+    det = np.linalg.det(jac) if square else np.full(jac.shape[0], np.nan)
+    manip = np.abs(det) if square else np.prod(sv, axis=1)
     with np.errstate(divide="ignore"):
-        cond = np.where(smin > 0, smax / np.where(smin > 0, smin, 1.0), np.inf)
-    return det, manip, cond, smin
+        cond = np.where(sv[:, -1] > 0, sv[:, 0] / sv[:, -1], np.inf)
+    return det, manip, cond, sv[:, -1], sv
 
 
 def as_model(model: Any) -> Any:
@@ -177,6 +168,8 @@ def reach(model: Any) -> float:
 
     The chain's one length scale (:func:`hexapod_kin._numerics.chain_length`).
     """
+    from .._numerics import chain_length
+
     return float(chain_length(as_model(model).arrays.trans))
 
 
@@ -200,8 +193,8 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
     names = selected_rows(mdl, rows)
     idx = [ROW_NAMES.index(r) for r in names]
     jac = np.asarray(mdl.jacobian(q, "local_world_aligned"))[idx]
-    det, manip, cond, smin = _measures_numpy(jac[None])
-    sv = np.linalg.svd(jac, compute_uv=False)
+    det, manip, cond, smin, sv = _measures_numpy(jac[None])
+    sv = sv[0]
     sv.setflags(write=False)
     return Measures(float(det[0]), float(manip[0]), float(cond[0]), float(smin[0]), sv, names)
 
@@ -211,17 +204,14 @@ def measures_batch(
     qs: Any,
     rows: str | Sequence[str] | None = None,
     *,
-    engine: str = "kernel",
     out: tuple[np.ndarray, ...] | None = None,
 ) -> MeasuresBatch:
-    """Measures of many configurations, as a :class:`MeasuresBatch`.
+    """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
     Args:
         model: A loaded model (or a source).
         qs: Configurations (N, nq) in [rad] / [m].
         rows: Row selection; default :func:`default_rows`.
-        engine: ``"kernel"`` (compiled, fused) or ``"numpy"`` (batched Jacobians from the
-            kernel, numpy SVD per configuration: the reference).
         out: Optional four preallocated float64 arrays of shape (N,) to fill (det,
             manipulability, condition, sigma_min); the result's arrays are then these.
 
@@ -230,21 +220,16 @@ def measures_batch(
 
     Raises:
         ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.
-        ParameterError: Bad ``rows`` or ``engine``.
+        ParameterError: Bad ``rows``.
 
     """
+    from .. import _kernels
+    from ._plan import compute, output_arrays
+
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
-    arrays = mdl.arrays
-    q = _kernels.check_batch(arrays, qs)
+    q = _kernels.check_batch(mdl.arrays, qs)
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
-    if engine not in ("kernel", "numpy"):
-        raise ParameterError(
-            f"engine={engine!r} is not allowed; use one of {choices(('kernel', 'numpy'))}",
-            parameter="engine",
-            value=engine,
-            allowed=["kernel", "numpy"],
-        )
     n = q.shape[0]
     if out is not None and (
         len(out) != 4
@@ -258,39 +243,20 @@ def measures_batch(
             value=type(out).__name__,
             allowed=f"four float64 arrays of shape ({n},)",
         )
-    if engine == "numpy":
-        full = 6 if int(sel.max()) >= 3 else 3
-        res = _measures_numpy(_kernels.jacobian_batch(arrays, q, rows=full)[:, sel, :])
-        if out is not None:
-            for o, r in zip(out, res):
-                o[...] = r
-            res = (out[0], out[1], out[2], out[3])
-        return MeasuresBatch(*res, rows=names)
-    if measures_kernel.prefer_interpreted(n * _REFERENCE_S):
-        # cold kernel, small batch: Pinocchio's Jacobians and numpy's SVD answer in
-        # milliseconds where compiling the fused kernel takes seconds (see hexapod_kin._tier)
-        t0 = time.perf_counter()
-        res = _measures_numpy(_pinocchio_jacobians(mdl, q)[:, sel, :])
-        measures_kernel.charge(time.perf_counter() - t0)
-        if out is not None:
-            for o, r in zip(out, res):
-                o[...] = r
-            res = (out[0], out[1], out[2], out[3])
-        return MeasuresBatch(*res, rows=names)
     if out is None:
         out = output_arrays(n)
     compute(mdl, q, sel, out)
     return MeasuresBatch(out[0], out[1], out[2], out[3], rows=names)
 
 
-#: Seconds per configuration of the Pinocchio + numpy path (Jacobian call and SVD).
-_REFERENCE_S = 6e-6
+def _measures_small(model: Any, qs: np.ndarray, rows: tuple[str, ...]) -> MeasuresBatch:
+    """:func:`measures_batch` of a checked (N, nq) array on Pinocchio Jacobians and numpy SVD.
 
-
-def _pinocchio_jacobians(mdl: Any, q: np.ndarray) -> np.ndarray:
-    """(N, 6, nq) LOCAL_WORLD_ALIGNED Jacobians of the tip, one Pinocchio call each."""
-    jac = np.empty((q.shape[0], 6, q.shape[1]))
-    one = mdl.jacobian
-    for i in range(q.shape[0]):
-        jac[i] = one(q[i], "local_world_aligned")
-    return jac
+    The path of command-line-sized work (no numba import): one Pinocchio call per
+    configuration, then one batched numpy SVD.
+    """
+    jac = np.empty((qs.shape[0], 6, qs.shape[1]))
+    for i, q in enumerate(qs):
+        jac[i] = model.jacobian(q, "local_world_aligned")
+    det, manip, cond, smin, _ = _measures_numpy(jac[:, [ROW_NAMES.index(r) for r in rows], :])
+    return MeasuresBatch(det, manip, cond, smin, rows=rows)

@@ -5,9 +5,14 @@ A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default
 labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
 it; flagged samples farther than ``family_tol`` from every family are "unexplained".
 
-Defaults fit the robot: the joints that are not scanned sit at a *dexterous* configuration
-(:func:`default_q_fixed`: away from singular values, e.g. not PUMA's q5 = 0), and the joints a
-heat map shows are those that change ``sigma_min`` most (:func:`default_joints`).
+Defaults fit the robot (the API and the ``scan`` command share them): the two joints that
+change ``sigma_min`` most (:func:`default_joints`; every joint of a chain of at most two) at
+:data:`DEFAULT_GRID` points each, the others at a *dexterous* configuration
+(:func:`default_q_fixed`: away from singular values, e.g. not PUMA's q5 = 0).
+
+Engines (the size rule): a scan of at most :data:`SMALL_SCAN` configurations runs on
+Pinocchio's Jacobians and numpy's SVD (no numba import: command-line sized); a larger one on
+the compiled :func:`~.measure.measures_batch` kernel.
 """
 
 from __future__ import annotations
@@ -22,29 +27,54 @@ import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of
 from .families import Families, Family, families_for
-from .measure import as_model, measures_batch, reach, selected_rows
+from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
-__all__ = ["ScanResult", "scan", "default_joints", "default_q_fixed", "plot_joints"]
+__all__ = [
+    "DEFAULT_GRID",
+    "SMALL_SCAN",
+    "ScanResult",
+    "scan",
+    "default_joints",
+    "default_q_fixed",
+]
 
 #: Largest number of configurations of one scan (memory: ~80 bytes each plus q).
 MAX_CONFIGURATIONS = 50_000_000
+#: Points per scanned joint when neither ``grid`` nor ``samples`` is given.
+DEFAULT_GRID = 61
+#: Largest scan run on Pinocchio + numpy, with no numba import (the default 61 × 61 grid and
+#: other command-line sizes); above it, the compiled kernel (``tools/bench_singularity.py``).
+SMALL_SCAN = 5_000
+
+
+def _kernel_scan(
+    mdl: Any, q: np.ndarray, names: tuple[str, ...], progress: bool | None, chunk: int
+) -> tuple[np.ndarray, ...]:
+    """The four measures of a large scan by the compiled kernel, ``chunk`` at a time."""
+    n = q.shape[0]
+    out = tuple(np.empty(n) for _ in range(4))
+    show = (n > 2_000_000 and sys.stderr.isatty()) if progress is None else bool(progress)
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, file=sys.stderr, unit="cfg", desc="scan", leave=False)
+    try:
+        for start in range(0, n, chunk):
+            stop = min(n, start + chunk)
+            measures_batch(mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out))
+            if bar is not None:
+                bar.update(stop - start)
+    finally:
+        if bar is not None:
+            bar.close()
+    return out
 
 
 def _ro(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.setflags(write=False)
     return arr
-
-
-def _clean(a: np.ndarray) -> list[Any]:
-    return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
-
-
-class FamilyCounts(dict[str, int]):
-    """Flagged samples per family name (a dict; calling it returns itself, as the old method)."""
-
-    def __call__(self) -> FamilyCounts:
-        return self
 
 
 @dataclass(frozen=True)
@@ -128,16 +158,13 @@ class ScanResult:
         return np.asarray(self.singular & ~self.explained)
 
     @property
-    def family_counts(self) -> FamilyCounts:
+    def family_counts(self) -> dict[str, int]:
         """Explained flagged configurations per nearest family, by family name."""
-        with np.errstate(invalid="ignore"):
-            near = self.explained
-        return FamilyCounts(
-            {
-                fam.name: int(np.count_nonzero(near & (self.family == f)))
-                for f, fam in enumerate(self.families)
-            }
-        )
+        near = self.explained
+        return {
+            fam.name: int(np.count_nonzero(near & (self.family == f)))
+            for f, fam in enumerate(self.families)
+        }
 
     def family_residual(self, q: Any, f: int) -> np.ndarray:
         """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family).
@@ -210,14 +237,10 @@ class ScanResult:
             "n_unexplained": int(np.count_nonzero(self.unexplained)),
         }
 
-    def to_json(self) -> dict[str, Any]:
-        """The same as :meth:`to_dict` (the old name)."""
-        return self.to_dict()
-
 
 # ------------------------------------------------------------------------ defaults
 def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
-    if joints is None:
+    if isinstance(joints, str) and joints == "all" and "all" not in model.joint_names:
         return tuple(range(model.nq))
     if isinstance(joints, (str, int)):
         joints = [joints]
@@ -285,7 +308,7 @@ def default_q_fixed(
             mesh = np.zeros((1, 0))
         qs = np.repeat(cand, mesh.shape[0], axis=0)
         qs[:, sub] = np.tile(mesh, (cand.shape[0], 1))
-        res = measures_batch(mdl, qs, names, out=None)
+        res = _measures_small(mdl, qs, names)
         with np.errstate(divide="ignore"):
             inv = np.where(np.isfinite(res.condition), 1.0 / res.condition, 0.0)
         score = inv.reshape(cand.shape[0], mesh.shape[0])
@@ -337,7 +360,7 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
             sweep = np.linspace(mdl.lower[j], mdl.upper[j], 17)
             qs = np.repeat(base, sweep.size, axis=0)
             qs[:, j] = np.tile(sweep, base.shape[0])
-            smin = measures_batch(mdl, qs, names).sigma_min.reshape(base.shape[0], sweep.size)
+            smin = _measures_small(mdl, qs, names).sigma_min.reshape(base.shape[0], sweep.size)
             logs = np.log(np.maximum(smin, floor))
             score[j] = float(np.mean(logs.max(axis=1) - logs.min(axis=1)))
         prism = np.asarray(mdl.is_prismatic, dtype=bool)
@@ -345,12 +368,6 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
         return tuple(sorted(order[:count]))
 
     return mdl.cached(f"singularity.default_joints.{names}.{count}", build)
-
-
-def plot_joints(model: Any, rows: Any = None) -> tuple[int, int]:
-    """The two joints a 2-D heat map should show by default (:func:`default_joints`)."""
-    a, b = default_joints(model, rows, 2)
-    return a, b
 
 
 def _grid_points(
@@ -425,7 +442,7 @@ def scan(
     threshold: float | None = None,
     rtol: float = 1e-2,
     family_tol: float | None = None,
-    families: bool | str = "cached",
+    families: bool | str = True,
     family_budget: float = 10.0,
     seed: int | None = 0,
     progress: bool | None = None,
@@ -436,9 +453,12 @@ def scan(
     Args:
         model: A loaded model or any source for :func:`hexapod_kin.load`.
         grid: Points per scanned joint (one count, or one per joint), spanning the joint
-            limits (ends included). Default 41 when ``samples`` is not given either.
+            limits (ends included). Default :data:`DEFAULT_GRID` when ``samples`` is not
+            given either.
         samples: Number of uniform random configurations within the limits (instead of a grid).
-        joints: Joints to scan (names or indices); default all. The others stay at ``q_fixed``.
+        joints: Joints to scan (names or indices, or ``"all"``); default
+            :func:`default_joints` (the two that change ``sigma_min`` most; all of a chain of
+            at most two joints). The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
             default :func:`~.measure.default_rows`.
         q_fixed: Values of the joints not scanned, in [rad]/[m]; default
@@ -450,13 +470,14 @@ def scan(
             counts as lying on its nearest family; default ``15 × rtol``. (Near a family
             ``σmin ≈ s·d`` with ``s`` a lever arm in [m/rad]; with ``threshold = rtol·reach``
             flagged points lie within ``rtol·reach/s``: the default allows ``s ≥ reach/15``.)
-        families: ``"cached"`` (default): families already derived (this process or the disk
-            cache), never waiting on sympy; ``True``: derive them when needed, within
-            ``family_budget``; ``False``: none.
+        families: ``True`` (default): derive them when needed (sympy, within
+            ``family_budget``; then kept on disk); ``"cached"``: only families already derived
+            (this process or the disk cache), never waiting on sympy; ``False``: none.
         family_budget: Time budget in [s] of a derivation (``families=True``).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
-        chunk: Configurations per kernel call (progress granularity).
+        chunk: Configurations per kernel call (progress granularity; scans above
+            :data:`SMALL_SCAN`).
 
     Returns:
         The :class:`ScanResult`.
@@ -469,7 +490,10 @@ def scan(
     """
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
-    jidx = _joint_indices(mdl, joints)
+    if joints is None:
+        jidx = default_joints(mdl, names, 2) if mdl.nq > 2 else tuple(range(mdl.nq))
+    else:
+        jidx = _joint_indices(mdl, joints)
     if families not in (True, False, "cached"):
         raise ParameterError(
             f"families={families!r} is not allowed; use True, False or 'cached'",
@@ -507,25 +531,12 @@ def scan(
         q = _sample_points(mdl, jidx, samples, qf, seed)
         shape = None
     else:
-        q, shape = _grid_points(mdl, jidx, 41 if grid is None else grid, qf)
+        q, shape = _grid_points(mdl, jidx, DEFAULT_GRID if grid is None else grid, qf)
     n = q.shape[0]
-    out = tuple(np.empty(n) for _ in range(4))
-    show = (n > 2_000_000 and sys.stderr.isatty()) if progress is None else bool(progress)
-    bar = None
-    if show:
-        from tqdm import tqdm
-
-        bar = tqdm(total=n, file=sys.stderr, unit="cfg", desc="scan", leave=False)
-    try:
-        for start in range(0, n, int(chunk)):
-            stop = min(n, start + int(chunk))
-            measures_batch(mdl, q[start:stop], names, out=tuple(o[start:stop] for o in out))
-            if bar is not None:
-                bar.update(stop - start)
-    finally:
-        if bar is not None:
-            bar.close()
-    det, manip, cond, smin = out
+    if n <= SMALL_SCAN:
+        det, manip, cond, smin = _measures_small(mdl, q, names)
+    else:
+        det, manip, cond, smin = _kernel_scan(mdl, q, names, progress, int(chunk))
     singular = smin < thr
     family = np.full(n, -1, dtype=np.int64)
     distance = np.full(n, np.nan)

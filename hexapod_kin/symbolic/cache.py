@@ -10,10 +10,7 @@
   rewritten).
 * **Budget**: the stages run in a forked child process that sends each finished stage back;
   at the deadline the child is killed and the caller gets the stages that finished. Where
-  ``fork`` does not exist the stages run inline, checking the clock between stages; so they do
-  after :func:`run_in_process` (for a process that is itself bounded, e.g. a forked worker its
-  parent kills at a deadline: forking again per derivation would only redo sympy's warm-up and
-  pickle the results back).
+  ``fork`` does not exist the stages run inline, checking the clock between stages.
 """
 
 from __future__ import annotations
@@ -24,57 +21,15 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import fields
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
 import sympy as sp
 
 from .._io import atomic_write, cache_root
+from .families import SingularFamily
 
 FORMAT = 3
 Stages = Callable[[], Iterator[tuple[str, Any]]]
-_T = TypeVar("_T")
-
-#: Run budgeted stages in this process (see :func:`run_in_process`).
-_IN_PROCESS = False
-
-
-def run_in_process(on: bool = True) -> None:
-    """From now on run budgeted derivations in this process, the clock checked between stages.
-
-    Meant for a process that is itself bounded (a forked worker whose parent ends it at a
-    deadline, like ``reproduce``'s symbolic side): the stages then share this process's
-    sympy caches and imports instead of forking a cold child per derivation. A stage that
-    hangs is not interrupted here; the bound of the calling process is what stops it.
-
-    Args:
-        on: ``False`` restores the default (a forked child per budgeted derivation).
-
-    """
-    global _IN_PROCESS
-    _IN_PROCESS = bool(on)
-
-
-def in_process_mode() -> bool:
-    """True after :func:`run_in_process` (budgeted derivations do not fork)."""
-    return _IN_PROCESS
-
-
-def in_process(fn: Callable[[], _T]) -> Callable[[], _T]:
-    """``fn`` that first calls :func:`run_in_process` (the target of a bounded forked child).
-
-    Args:
-        fn: What the child runs (its derivations then stay in the child).
-
-    Returns:
-        The wrapped function.
-
-    """
-
-    def run_here() -> _T:
-        run_in_process()
-        return fn()
-
-    return run_here
 
 
 def cache_dir() -> Path:
@@ -89,8 +44,6 @@ def key(parts: Any) -> str:
 
 
 def _encode(obj: Any) -> Any:
-    from .families import SingularFamily
-
     if isinstance(obj, SingularFamily):
         return {"__family__": {f.name: _encode(getattr(obj, f.name)) for f in fields(obj)}}
     if isinstance(obj, sp.MatrixBase):
@@ -109,8 +62,6 @@ def _encode(obj: Any) -> Any:
 def _decode(obj: Any) -> Any:
     if isinstance(obj, dict):
         if "__family__" in obj:
-            from .families import SingularFamily
-
             return SingularFamily(**{k: _decode(v) for k, v in obj["__family__"].items()})
         if "__matrix__" in obj:
             return sp.Matrix(sp.sympify(obj["__matrix__"]))
@@ -175,8 +126,6 @@ def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | Non
         for name, value in stages():
             done[name] = value
         return done, None
-    if _IN_PROCESS:
-        return _inline(stages, budget)
     import multiprocessing as mp
 
     try:

@@ -27,8 +27,9 @@ import numpy as np
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
+from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
-from ..params import Chain, table_transforms
+from ..params import Chain
 from ..singularity.rows import ROW_NAMES
 
 
@@ -552,7 +553,7 @@ def sigma_ratio(jac: np.ndarray) -> float:
 
 
 def import_ahead() -> None:
-    """Import what the stages import on first use (``scipy.optimize``, ~0.35 s).
+    """Import what the stages import on first use (``scipy.optimize``).
 
     Called before a derivation runs in a forked child: the child inherits the module instead
     of importing it again, once per derivation.

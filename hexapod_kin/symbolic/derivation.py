@@ -3,7 +3,7 @@
 :func:`derive` builds, from a chain's table and with *symbolic* lengths,
 
 * every ``^{j-1}T_j`` and ``^0T_j`` (4×4 sympy matrices), with the chain's base and tool poses,
-* the tip position ``p(q)`` in the base frame (:attr:`Derivation.frame` names it),
+* the tip position ``p(q)`` in the base frame (:attr:`Derivation.reference` names it),
 * the Jacobian by the **direct** method (columns ``z_j × (p − o_j)`` and ``z_j``; 6×n, rows
   ``vx vy vz wx wy wz``, axes of the base frame) and by the **indirect** method (``∂p/∂q``),
 * ``det J`` of a square row selection (the position rows for a 3-DOF leg; ``x, y, z, wz`` for
@@ -27,8 +27,8 @@ simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
 else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
 :meth:`Derivation.numeric` substitutes the chain's numbers, :meth:`Derivation.function`
-returns a vectorised numpy function of ``q``. :func:`family_residuals` gives the families as
-numpy callables for scans.
+returns a vectorised numpy function of ``q``; the families as numbers for scans are
+:mod:`hexapod_kin.singularity.families`.
 """
 
 from __future__ import annotations
@@ -47,25 +47,16 @@ from ..singularity.rows import choose_rows, row_indices
 from . import cache as _cache
 from . import core as _core
 from .core import ROW_NAMES, khalil_matrix
-from .families import (
-    FamilyResiduals,
-    SingularFamily,
-    build_residuals,
-    check_families,
-    families_of,
-)
+from .families import SingularFamily, check_families, families_of
 from .sources import chain_of as _chain_of
 
 __all__ = [
     "ROW_NAMES",
     "Derivation",
-    "FamilyResiduals",
     "SingularFamily",
     "derive",
-    "family_residuals",
     "cached",
     "khalil_matrix",
-    "default_rows",
     "row_indices",
 ]
 
@@ -95,7 +86,7 @@ class Derivation:
         gram: ``det(J_rows J_rowsᵀ)`` (k ≤ n) or ``det(J_rowsᵀ J_rows)`` (k > n), factored —
             the squared Yoshikawa manipulability (``None`` when not finished).
         families: The singular families read off :attr:`det` (or :attr:`gram`).
-        frame: Name of the frame ``p`` and ``J`` are expressed in (the base link).
+        reference: Name of the frame whose axes ``p`` and ``J`` are expressed in (the base).
         tip: Name of the tip frame.
         base_transform: ``T_base_0`` (4×4 sympy; identity without a base pose).
         tool_transform: ``T_n_tip`` (4×4 sympy; identity without a tool).
@@ -122,7 +113,7 @@ class Derivation:
     det: sp.Expr | None
     gram: sp.Expr | None
     families: tuple[SingularFamily, ...] = field(default=())
-    frame: str = "base"
+    reference: str = "base"
     tip: str = "foot"
     base_transform: sp.Matrix = field(default_factory=lambda: sp.eye(4))
     tool_transform: sp.Matrix = field(default_factory=lambda: sp.eye(4))
@@ -188,7 +179,7 @@ class Derivation:
         n = len(self.transforms)
         items: list[tuple[str, str, Any]] = []
         if self.base_transform != sp.eye(4):
-            items.append((f"T_{self.frame}_0", f"T_{{\\mathrm{{{self.frame}}},0}}",
+            items.append((f"T_{self.reference}_0", f"T_{{\\mathrm{{{self.reference}}},0}}",
                           self.base_transform))  # fmt: skip
         for j in range(n):
             items.append((f"^{j}T_{j + 1}", f"{{}}^{{{j}}}T_{{{j + 1}}}", self.transforms[j]))
@@ -216,7 +207,7 @@ class Derivation:
             f"{self.chain.name}: Khalil-Kleinfinger table, T = Rx(alpha) Tx(d) Rz(theta) Tz(r)",
             f"joints: {joints}",
             f"lengths: {lens or '(none)'}",
-            f"frame: p and J in the axes of {self.frame!r}, tip {self.tip!r}",
+            f"reference: p and J in the axes of {self.reference!r}, tip {self.tip!r}",
         ]
 
     def text(self) -> str:
@@ -253,10 +244,10 @@ class Derivation:
         return "\n".join(out)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: det, families (with checks), frame, incomplete, seconds."""
+        """JSON-ready summary: det, families (with checks), reference, incomplete, seconds."""
         return {
             "chain": self.chain.name,
-            "frame": self.frame,
+            "reference": self.reference,
             "tip": self.tip,
             "joints": list(self.joint_names),
             "lengths_m": {str(k): v for k, v in self.lengths.items()},
@@ -264,17 +255,7 @@ class Derivation:
             "det": None if self.det is None else str(self.det),
             "gram": None if self.gram is None else str(self.gram),
             "method": self.method,
-            "families": [
-                {
-                    "name": f.name,
-                    "equation": str(f.equation),
-                    "joint": None if f.joint is None else self.joint_names[f.joint],
-                    "value": f.value,
-                    "verified": f.verified,
-                    "check": f.check,
-                }
-                for f in self.families
-            ],
+            "families": [f.to_dict(self.joint_names) for f in self.families],
             "incomplete": list(self.incomplete),
             "seconds": self.seconds,
             "cached": self.cached,
@@ -293,9 +274,7 @@ def _stages(chain: Chain, rows: Any, lengths: Any, budget_end: float) -> Iterato
     kin = _core.kinematics(chain, q, syms)
     yield "kinematics", kin
     if rows is None:
-        jd = kin["J_direct"]
-        flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
-        row_names = default_rows(flags, n)
+        row_names = _default_rows(kin, n)
     else:
         row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
     yield "rows", row_names
@@ -309,30 +288,10 @@ def _stages(chain: Chain, rows: Any, lengths: Any, budget_end: float) -> Iterato
 
 
 # ---------------------------------------------------------------------- derive
-def default_rows(derivation_or_jacobian: Any, nq: int | None = None) -> tuple[str, ...]:
-    """The default row selection: position rows, plus the angular rows that are not zero.
-
-    When ``x, y, z`` plus the angular rows that are not identically zero make exactly ``n``
-    rows, those are used (SCARA: ``x, y, z, wz``; a 6-DOF arm: all six); otherwise the
-    position rows.
-
-    Args:
-        derivation_or_jacobian: A :class:`Derivation`, or 6 flags "row is not identically
-            zero" (numeric callers).
-        nq: Number of joints (needed with the flags).
-
-    Returns:
-        Row names.
-
-    """
-    if isinstance(derivation_or_jacobian, Derivation):
-        jd = derivation_or_jacobian.J_direct
-        flags = [not all(sp.simplify(e) == 0 for e in jd.row(i)) for i in range(6)]
-        n = jd.shape[1]
-    else:
-        flags = [bool(x) for x in derivation_or_jacobian]
-        n = int(nq if nq is not None else 0)
-    return choose_rows(flags, n)
+def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
+    """The default row selection (:func:`~hexapod_kin.singularity.rows.choose_rows`)."""
+    jd = kin["J_direct"]
+    return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
 
 def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
@@ -365,9 +324,7 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
         return None
     if rows is None:
         return _cache_key(chain, tuple(names), lengths)
-    jd = kin["J_direct"]
-    flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
-    if tuple(default_rows(flags, chain.nq)) != tuple(names):
+    if _default_rows(kin, chain.nq) != tuple(names):
         return None
     return _cache_key(chain, None, lengths)
 
@@ -400,12 +357,12 @@ def derive(
     Args:
         source: A :class:`~hexapod_kin.params.Chain`, a preset name (``"hexabot_leg"``), a
             URDF (path, text, ``erd:NAME``; read back with
-            :meth:`~hexapod_kin.params.Chain.from_urdf`), a :class:`Hexapod` with ``tip=``,
+            :func:`~hexapod_kin.chain_from_urdf`), a :class:`Hexapod` with ``tip=``,
             or a loaded model (its own base and tip frames are used: ``load("hexapod",
             tip="leg2_foot")`` derives leg 2 in the body frame).
         rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default
-            (:func:`default_rows`), ``"position"``, ``"all"`` or names such as
-            ``("x", "y", "z", "wz")``.
+            (:func:`~hexapod_kin.singularity.rows.choose_rows`), ``"position"``, ``"all"`` or
+            names such as ``("x", "y", "z", "wz")``.
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
@@ -425,7 +382,7 @@ def derive(
     global _BUDGETED
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
-    chain, frame, tip_name = _chain_of(source, base, tip)
+    chain, reference, tip_name = _chain_of(source, base, tip)
     if rows is not None:
         row_indices(rows)
     syms = _core.length_symbols(chain, lengths)  # validates names early
@@ -440,7 +397,7 @@ def derive(
         def gen() -> Iterator[tuple[str, Any]]:
             return _stages(chain, rows, lengths, end)
 
-        forks = budget is not None and not _cache.in_process_mode()
+        forks = budget is not None
         if forks and _BUDGETED:  # a process that derives again and again:
             _core.import_ahead()  # import here once, not in each forked child
         stages, reason = _cache.run(gen, budget)
@@ -455,11 +412,11 @@ def derive(
         alias = _alias(chain, rows, lengths, stages)
         if alias is not None:
             _MEMO.setdefault(alias, stages)
-    return _assemble(chain, frame, tip_name, syms, stages, reason, from_cache, rows)
+    return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
 
 
 def _assemble(
-    chain: Chain, frame: str, tip: str, syms: Mapping[str, Any], stages: Mapping[str, Any],
+    chain: Chain, reference: str, tip: str, syms: Mapping[str, Any], stages: Mapping[str, Any],
     reason: str | None, from_cache: bool, rows: Any,
 ) -> Derivation:  # fmt: skip
     n = chain.nq
@@ -471,10 +428,8 @@ def _assemble(
         incomplete.append(f"simplified transforms and Jacobians ({reason}); shown unsimplified")
     row_names = stages.get("rows")
     if row_names is None:
-        jd = kin["J_direct"]
-        flags = [not all(e == 0 for e in jd.row(i)) for i in range(6)]
         row_names = (
-            default_rows(flags, n)
+            _default_rows(kin, n)
             if rows is None
             else tuple(ROW_NAMES[i] for i in row_indices(rows))
         )
@@ -510,7 +465,7 @@ def _assemble(
         det=det,
         gram=gram,
         families=tuple(fams or ()),
-        frame=frame,
+        reference=reference,
         tip=tip,
         base_transform=kin["base"],
         tool_transform=kin["tool"],
@@ -519,33 +474,6 @@ def _assemble(
         seconds=0.0 if from_cache else float(stages.get("seconds", 0.0)),
         cached=from_cache,
     )
-
-
-# ---------------------------------------------------------------------- for scans
-def family_residuals(
-    source: Any,
-    rows: str | Sequence[str] | None = None,
-    *,
-    budget: float | None = DEFAULT_BUDGET,
-    derive_missing: bool = True,
-) -> FamilyResiduals | None:
-    """Families of ``source`` as numpy residuals and gradients (cheap when cached).
-
-    Args:
-        source: As for :func:`derive`.
-        rows: As for :func:`derive`.
-        budget: As for :func:`derive`; families missing at the budget are simply absent.
-        derive_missing: When ``False``, never run sympy: return ``None`` unless the
-            derivation is already in this process or the disk cache (milliseconds).
-
-    Returns:
-        A :class:`FamilyResiduals`, or ``None`` (only with ``derive_missing=False``).
-
-    """
-    if not derive_missing:
-        deriv = cached(source, rows)
-        return None if deriv is None else _residuals(deriv)
-    return _residuals(derive(source, rows=rows, budget=budget))
 
 
 def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation | None:
@@ -564,7 +492,7 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
         ParameterError: As for :func:`derive`.
 
     """
-    chain, frame, tip_name = _chain_of(source, None, None)
+    chain, reference, tip_name = _chain_of(source, None, None)
     if rows is not None:
         row_indices(rows)
     digest = _cache_key(chain, rows, None)
@@ -573,17 +501,4 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
         return None
     _MEMO[digest] = stages
     syms = _core.length_symbols(chain, None)
-    return _assemble(chain, frame, tip_name, syms, stages, None, True, rows)
-
-
-_RESIDUALS: dict[tuple[Any, ...], FamilyResiduals] = {}
-
-
-def _residuals(deriv: Derivation) -> FamilyResiduals:
-    key = (deriv.chain, deriv.rows, tuple(f.name for f in deriv.families))
-    hit = _RESIDUALS.get(key)
-    if hit is None:
-        if len(_RESIDUALS) > 32:
-            _RESIDUALS.clear()
-        hit = _RESIDUALS[key] = build_residuals(deriv)
-    return hit
+    return _assemble(chain, reference, tip_name, syms, stages, None, True, rows)

@@ -1,7 +1,7 @@
-"""Singular families: read off the factored determinant, checked numerically, as numpy callables.
+"""Singular families: read off the factored determinant, checked against the numeric Jacobian.
 
-Part of :mod:`hexapod_kin.symbolic` (which re-exports :class:`SingularFamily` and
-:class:`FamilyResiduals`).
+Part of :mod:`hexapod_kin.symbolic` (which re-exports :class:`SingularFamily`). Their numeric
+form for scans (residuals, distances) is :mod:`hexapod_kin.singularity.families`.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -17,9 +17,6 @@ import sympy as sp
 from ..params import Chain
 from . import core as _core
 from .core import ROW_NAMES
-
-if TYPE_CHECKING:
-    from .derivation import Derivation
 
 
 @dataclass(frozen=True)
@@ -53,24 +50,27 @@ class SingularFamily:
     verified: bool | None = None
     check: str = ""
 
+    def to_dict(self, joint_names: Sequence[str] | None = None) -> dict[str, Any]:
+        """JSON-ready dict (sympy objects as text; the joint by name with ``joint_names``)."""
+        joint: Any = self.joint
+        if joint is not None and joint_names is not None:
+            joint = joint_names[joint]
+        return {
+            "name": self.name,
+            "equation": str(self.equation),
+            "factor": str(self.factor),
+            "variables": list(self.variables),
+            "joint": joint,
+            "value": self.value,
+            "periodic": self.periodic,
+            "verified": self.verified,
+            "check": self.check,
+        }
+
 
 def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
     def f(x: np.ndarray) -> np.ndarray:
         return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
-
-    return f
-
-
-def _rows_of(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
-    def f(qs: np.ndarray) -> np.ndarray:
-        return func(np.atleast_2d(qs))
-
-    return f
-
-
-def _grad_rows_of(func: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
-    def f(qs: np.ndarray) -> np.ndarray:
-        return func(np.atleast_2d(qs))[:, 0, :]
 
     return f
 
@@ -192,63 +192,3 @@ def check_families(
             f">= {min(off):.1e} at 1e-3 off"
         )))  # fmt: skip
     return tuple(out)
-
-
-@dataclass(frozen=True)
-class FamilyResiduals:
-    """The singular families of a chain as numpy callables (lengths substituted).
-
-    Attributes:
-        families: The families (same order as the callables).
-        residuals: One ``f(Q) -> (N,)`` per family: the factor's value, 0 on the family
-            (joint families: the wrapped offset ``q_k − value`` in [rad] or [m]).
-        gradients: One ``g(Q) -> (N, n)`` per family: ``∂f/∂q``.
-        derivation: The :class:`Derivation` they come from.
-
-    """
-
-    families: tuple[SingularFamily, ...]
-    residuals: tuple[Callable[[np.ndarray], np.ndarray], ...]
-    gradients: tuple[Callable[[np.ndarray], np.ndarray], ...]
-    derivation: Derivation
-
-    def distance(self, q: Any) -> np.ndarray:
-        """First-order joint-space distance ``|f| / |∇f|`` (N, F) to each family."""
-        qs = np.atleast_2d(np.asarray(q, dtype=float))
-        out = np.empty((qs.shape[0], len(self.families)))
-        for k, (res, grad) in enumerate(zip(self.residuals, self.gradients)):
-            val = res(qs)
-            norm = np.sqrt(np.sum(grad(qs) ** 2, axis=-1))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                out[:, k] = np.where(norm > 0, np.abs(val) / norm, np.inf)
-        return out
-
-
-def build_residuals(deriv: Derivation) -> FamilyResiduals:
-    """The derivation's families as numpy residuals and gradients of ``q`` (for scans)."""
-    from .._numerics import wrap_diff  # the one angle wrapping
-
-    res: list[Callable[[np.ndarray], np.ndarray]] = []
-    grads: list[Callable[[np.ndarray], np.ndarray]] = []
-    for fam in deriv.families:
-        if fam.joint is not None and fam.value is not None:
-            k, v, per = fam.joint, fam.value, fam.periodic
-            n = len(deriv.q)
-
-            def r(qs: np.ndarray, k: int = k, v: float = v, per: bool = per) -> np.ndarray:
-                qk = np.atleast_2d(qs)[:, k]
-                return wrap_diff(qk, v) if per else qk - v
-
-            def g(qs: np.ndarray, k: int = k, n: int = n) -> np.ndarray:
-                out = np.zeros((np.atleast_2d(qs).shape[0], n))
-                out[:, k] = 1.0
-                return out
-
-            res.append(r)
-            grads.append(g)
-        else:
-            f = deriv.function(fam.factor)
-            gm = deriv.function(sp.Matrix([[sp.diff(fam.factor, s) for s in deriv.q]]))
-            res.append(_rows_of(f))
-            grads.append(_grad_rows_of(gm))
-    return FamilyResiduals(deriv.families, tuple(res), tuple(grads), deriv)

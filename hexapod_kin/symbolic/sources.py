@@ -1,9 +1,9 @@
-"""What :func:`hexapod_kin.symbolic.derive` derives: a source turned into a chain and a frame.
+"""What :func:`hexapod_kin.symbolic.derive` derives: a source turned into a chain and its base.
 
 A :class:`~hexapod_kin.params.Chain` as it is; a preset by name; a hexapod leg with its mount
 as the chain's base pose (so ``p`` and ``J`` are in the body frame, like the loaded model);
 any URDF (path, text, ``erd:NAME``, a loaded model of one) read back with
-:meth:`~hexapod_kin.params.Chain.from_urdf`.
+:func:`~hexapod_kin.chain_from_urdf`.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def _leg_nq(robot: Hexapod, tip: str) -> int:
 def chain_of(
     source: Any, base: str | None = None, tip: str | None = None
 ) -> tuple[Chain, str, str]:
-    """``(chain, frame name, tip name)`` for a source (see :func:`derive`)."""
+    """``(chain, reference (base frame name), tip name)`` for a source (see :func:`derive`)."""
     if isinstance(source, Chain):
         if base is None and tip is None:
             return source, source.base, source.tip
@@ -94,10 +94,11 @@ def chain_of(
 
 
 def _from_urdf(source: Any, base: str | None, tip: str | None) -> tuple[Chain, str, str]:
+    from .._fromurdf import chain_from_urdf
     from ..exceptions import HexapodKinError
 
     try:
-        chain = Chain.from_urdf(source, base=base, tip=tip)
+        chain = chain_from_urdf(source, base=base, tip=tip)
     except HexapodKinError:
         raise
     except Exception as exc:  # noqa: BLE001 - say what the source was
