@@ -82,10 +82,6 @@ class SeedRun:
             "max_joint_speed": float(np.max(np.abs(tr.qdot))),
         }
 
-    def as_dict(self) -> dict[str, Any]:
-        """Transition alias of :meth:`to_dict` (``report/build.py`` still calls it; remove then)."""
-        return self.to_dict()
-
 
 def _drift(
     foot: np.ndarray, t: np.ndarray, amplitude: float, period: float

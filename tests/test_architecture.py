@@ -259,26 +259,10 @@ def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
-#: Circles other branches of issue 21 remove (their xfail goes when they are merged).
-_PENDING = ("hexapod_kin.report", "hexapod_kin.symbolic")
-
-
-def _area(component: list[str]) -> str:
-    for prefix in _PENDING:
-        if all(m.startswith(prefix + ".") for m in component):
-            return prefix
-    return "hexapod_kin"
-
-
-@pytest.mark.parametrize(
-    "area",
-    ["hexapod_kin"]
-    + [pytest.param(p, marks=pytest.mark.xfail(strict=False, reason="issue 21")) for p in _PENDING],
-)
-def test_no_import_circle(area: str) -> None:
+def test_no_import_circle() -> None:
     graph = _import_graph()
     assert {"hexapod_kin.params", "hexapod_kin.kinematics"} <= graph.keys()
-    bad = [c for c in _circles(graph) if _area(c) == area]
+    bad = _circles(graph)
     text = "\n".join(
         " <-> ".join(c) + ": " + str({m: sorted(graph[m] & set(c)) for m in c}) for c in bad
     )

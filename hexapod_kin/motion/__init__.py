@@ -48,12 +48,3 @@ __all__ = [
     "track",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    # Transition only: gait/paths.py still imports ``positive`` from here; its home is
-    # hexapod_kin.exceptions. Not API (not in __all__); delete once gait imports it from there.
-    if name == "positive":
-        from ..exceptions import positive
-
-        return positive
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -255,7 +255,7 @@ def _build(
     verdicts = tuple(evaluate(claims, ctx))
     figs["step"].append(figures.step_figure(ctx, fdir))
     step = ctx.step
-    facts["step"] = (getattr(step, "to_dict", None) or step.as_dict)()  # as_dict: before h2
+    facts["step"] = step.to_dict()
     if animations:
         try:
             anims["step"].append(figures.step_animation(ctx, out))
