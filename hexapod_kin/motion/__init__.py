@@ -13,8 +13,6 @@ foot steps and gaits in :mod:`hexapod_kin.gait`.
 
 from __future__ import annotations
 
-from typing import Any
-
 from .rate import (
     FRAMES,
     ClosestApproach,
