@@ -598,7 +598,8 @@ def pose_jacobian_batch(
     want_jac = jacobian is not None
     out_j = _out(out_jacobian, (n, 6, nq), "out") if want_jac else np.empty((1, 6, nq))
     ref = REF_CODES[jacobian] if jacobian is not None else 0
-    args = (*chain.packed, qs, out_t.reshape(-1, 16), out_j.reshape(-1, 6 * nq), pose, ref)
+    flat_j = out_j.reshape(out_j.shape[0], 6 * nq)
+    args = (*chain.packed, qs, out_t.reshape(-1, 16), flat_j, pose, ref)
 
     def run(first: int, last: int) -> bool:
         return bool(pose_jacobian_kernel(*args, want_jac, first, last, BLOCK))

@@ -13,7 +13,7 @@ import pytest
 import hexapod_kin as hk
 from hexapod_kin import Chain, KhalilRow, load
 from hexapod_kin import _kernels as K
-from hexapod_kin._numerics import njit
+from hexapod_kin._kernels import njit
 from hexapod_kin.exceptions import ConfigurationError
 from hexapod_kin.singularity import ROW_NAMES, default_rows, measures_batch
 from hexapod_kin.singularity._kernel import (
@@ -166,7 +166,7 @@ def test_wrong_split_guess_is_caught_per_block(jacobi):
     measures_kernel(
         al.prot,
         al.ptr,
-        al.pident,
+        al.flags,
         al.kind,
         al.col,
         qs,
@@ -176,7 +176,6 @@ def test_wrong_split_guess_is_caught_per_block(jacobi):
         jacobi,  # None: the kernel without Jacobi (3×3 closed form where a split fails)
         None,
         True,
-        None,  # polynomial sin / cos
         0,
         -(-len(qs) // BLOCK),
         BLOCK,
