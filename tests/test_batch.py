@@ -13,7 +13,7 @@ import pytest
 
 import hexapod_kin as hk
 from hexapod_kin import _chain
-from hexapod_kin import _kernels as _batch
+from hexapod_kin import _kernels as K
 from hexapod_kin.exceptions import ConfigurationError
 
 SOURCES = [
@@ -60,7 +60,7 @@ def _configs(model, n, seed):
 
 def _rows(n):
     """Rows to check: both ends of the threads' chunks and of some blocks, and random ones."""
-    block, chunk = _batch.BLOCK, _batch.BLOCK * _batch.MIN_CHUNK_BLOCKS
+    block, chunk = K.BLOCK, K.BLOCK * K.MIN_CHUNK_BLOCKS
     rows = {0, 1, n - 1, n // 2 - 1, n // 2, n // 3, block - 1, block, 2 * block + 7}
     rows |= {k * chunk + d for k in range(1, n // chunk + 1) for d in (-1, 0)}
     rows |= set(np.random.default_rng(0).integers(0, n, 40).tolist())
@@ -70,7 +70,7 @@ def _rows(n):
 @pytest.mark.parametrize(("source", "kw"), SOURCES)
 def test_batch_equals_pinocchio_in_every_frame(source, kw):
     model = hk.load(source, **kw)
-    n = 2 * _batch.MIN_PER_THREAD + 3 * _batch.BLOCK + 5  # two threads, chunks, a partial block
+    n = 2 * K.MIN_PER_THREAD + 3 * K.BLOCK + 5  # two threads, chunks, a partial block
     qs = _configs(model, n, seed=11)
     poses = model.fk_batch(qs)
     jacs = {ref: model.jacobian_batch(qs, ref) for ref in REFS}
@@ -88,9 +88,9 @@ def test_batch_equals_pinocchio_in_every_frame(source, kw):
 def test_a_value_does_not_depend_on_its_neighbours():
     # the libm switch, the block and the thread of a row never change its bits
     model = hk.load("erd:ur5_robot")
-    qs = _configs(model, 3 * _batch.BLOCK + 5, seed=4)
+    qs = _configs(model, 3 * K.BLOCK + 5, seed=4)
     poses, jacs = model.fk_jacobian_batch(qs, "local")
-    for i in (0, qs.shape[0] // 3, _batch.BLOCK + 1, qs.shape[0] - 1):
+    for i in (0, qs.shape[0] // 3, K.BLOCK + 1, qs.shape[0] - 1):
         one_pose, one_jac = model.fk_jacobian_batch(qs[i : i + 1], "local")
         np.testing.assert_array_equal(one_pose[0], poses[i])
         np.testing.assert_array_equal(one_jac[0], jacs[i])
@@ -101,7 +101,7 @@ def test_a_value_does_not_depend_on_its_neighbours():
 )
 def test_values_checked_inside_the_kernel_raise_the_model_message(bad, message):
     model = hk.load("hexabot_leg")
-    qs = model.random_q(3 * _batch.MIN_PER_THREAD, seed=2)
+    qs = model.random_q(3 * K.MIN_PER_THREAD, seed=2)
     qs[-5, 1] = bad  # in the second thread's range
     for call in (model.fk_batch, model.jacobian_batch, model.fk_jacobian_batch):
         with pytest.raises(ConfigurationError, match=message):
