@@ -4,8 +4,9 @@ Each call's result is reduced to the sha256 of its arrays' bytes (dataclass fiel
 timing fields skipped). The subprocesses run with their own numba and hexapod_kin caches:
 (a) fresh, (b) the same caches again (warm), (c) the same caches after
 ``python -m hexapod_kin precompile`` (of the areas whose kernels compile once per chain kind;
-compiling every area again costs minutes and gives the same machine code); the 8 threads run
-in this process.
+compiling every area again costs minutes and gives the same machine code); (d) 8 threads of
+one process on the same caches (what the caches hold is input too: ``scan`` labels flagged
+samples with the families kept on disk).
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ import json
 import os
 import subprocess
 import sys
-import threading
 from pathlib import Path
 from typing import Any
 
@@ -93,6 +93,20 @@ def digests() -> dict[str, str]:
 #: The precompile areas run before (c).
 _AREAS = ("batch", "singularity", "gait")
 _CHILD = "import json, test_same_bits as t; print(json.dumps(t.digests()))"
+#: The same calls from 8 threads of one process, started together.
+_THREADS = """
+import json, threading, test_same_bits as t
+out, barrier = {}, threading.Barrier(8)
+def run(i):
+    barrier.wait()
+    out[str(i)] = t.digests()
+threads = [threading.Thread(target=run, args=(i,)) for i in range(8)]
+for th in threads:
+    th.start()
+for th in threads:
+    th.join()
+print(json.dumps(out))
+"""
 
 
 def _env(cache: Path) -> dict[str, str]:
@@ -103,9 +117,9 @@ def _env(cache: Path) -> dict[str, str]:
     return env
 
 
-def _child(cache: Path) -> dict[str, str]:
+def _child(cache: Path, code: str = _CHILD) -> Any:
     out = subprocess.run(
-        [sys.executable, "-c", _CHILD], env=_env(cache), capture_output=True, text=True
+        [sys.executable, "-c", code], env=_env(cache), capture_output=True, text=True
     )
     assert out.returncode == 0, out.stderr[-3000:]
     return json.loads(out.stdout.splitlines()[-1])
@@ -124,18 +138,5 @@ def test_same_bytes_fresh_warm_after_precompile_and_threads(tmp_path: Path) -> N
     after = _child(tmp_path / "a")
     assert warm == fresh
     assert after == fresh
-    results: list[dict[str, str]] = []
-    barrier = threading.Barrier(8)
-
-    def run() -> None:
-        barrier.wait()
-        results.append(digests())
-
-    threads = [threading.Thread(target=run) for _ in range(8)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert len(results) == 8
-    for got in results:
-        assert got == fresh
+    threads = _child(tmp_path / "a", _THREADS)
+    assert threads == {str(i): fresh for i in range(8)}
