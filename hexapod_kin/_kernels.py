@@ -95,6 +95,7 @@ __all__ = [
     "run_blocks",
     "set_threads",
     "sigma_bounds",
+    "silence_notice",
     "sincos",
     "solve_spd",
     "wrap_angle",
@@ -117,6 +118,12 @@ Q_MAX = 1e150
 # ------------------------------------------------------------------------ first use
 _SEEN: set[str] = set()
 _SEEN_LOCK = threading.Lock()
+_NOTICE = [True]
+
+
+def silence_notice() -> None:
+    """No first-use notice in this process (``precompile`` compiles on purpose)."""
+    _NOTICE[0] = False
 
 
 def _stamp(area: str) -> Path:
@@ -157,7 +164,7 @@ def first_use(area: str) -> Iterator[None]:
     if area in _SEEN:
         yield
         return
-    if not _stamp(area).exists():
+    if _NOTICE[0] and not _stamp(area).exists():
         print(
             f"hexapod-kin: compiling {area} kernels for this machine "
             "(once; 'hexapod-kin precompile' does it ahead)",

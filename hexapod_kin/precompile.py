@@ -109,11 +109,12 @@ def precompile(areas: Sequence[str] | None = None) -> dict[str, float]:
         ParameterError: An unknown area name.
 
     """
-    from ._kernels import mark_compiled
+    from ._kernels import mark_compiled, silence_notice
 
     names = list(AREAS) if areas is None else list(areas)
     for name in names:
         one_of("areas", name, AREAS)
+    silence_notice()
     seconds: dict[str, float] = {}
     for name in names:
         t0 = time.perf_counter()
