@@ -117,17 +117,24 @@ def _env(cache: Path) -> dict[str, str]:
     return env
 
 
+_NOTICES: list[str] = []
+
+
 def _child(cache: Path, code: str = _CHILD) -> Any:
     out = subprocess.run(
         [sys.executable, "-c", code], env=_env(cache), capture_output=True, text=True
     )
     assert out.returncode == 0, out.stderr[-3000:]
+    _NOTICES.append(out.stderr)
     return json.loads(out.stdout.splitlines()[-1])
 
 
 def test_same_bytes_fresh_warm_after_precompile_and_threads(tmp_path: Path) -> None:
     fresh = _child(tmp_path / "a")
     warm = _child(tmp_path / "a")
+    # the first-use notice: once per area on fresh caches, never again (stamp files)
+    assert _NOTICES[-2].count("hexapod-kin: compiling batch kernels") == 1
+    assert "compiling" not in _NOTICES[-1]
     pre = subprocess.run(
         [sys.executable, "-m", "hexapod_kin", "precompile", "--only", *_AREAS],
         env=_env(tmp_path / "a"),
