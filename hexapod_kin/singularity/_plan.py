@@ -1,8 +1,9 @@
-"""The Python side of the singularity kernel: chain re-expression, block plans, output buffers.
+"""The Python side of the singularity kernel: block plans, output buffers, the threads.
 
 :func:`compute` runs :func:`~._kernel.measures_kernel` for a loaded model, a row selection and a
-batch of configurations; everything it derives from the model (z-aligned chain, Gram plans) is
-kept in the model's one cache (:meth:`hexapod_kin.model.Model.cached`).
+batch of configurations; everything it derives from the model (the z-aligned chain of
+:mod:`hexapod_kin._chain`, shared with the batch FK; Gram plans) is kept in the model's one
+cache (:meth:`hexapod_kin.model.Model.cached`).
 """
 
 from __future__ import annotations
