@@ -130,7 +130,7 @@ def _stamp(area: str) -> Path:
     """The stamp file of ``area`` (see the module docstring)."""
     import llvmlite.binding
 
-    from . import __version__
+    from ._version import __version__
 
     root = Path(numba.config.CACHE_DIR or Path(__file__).resolve().parent / "__pycache__")
     py = f"{sys.version_info[0]}{sys.version_info[1]}"
