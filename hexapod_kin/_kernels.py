@@ -128,13 +128,17 @@ def silence_notice() -> None:
 
 def _stamp(area: str) -> Path:
     """The stamp file of ``area`` (see the module docstring)."""
+    import importlib.metadata
+
     import llvmlite.binding
 
-    from ._version import __version__
-
+    try:
+        version = importlib.metadata.version("hexapod-kin")
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - run from a checkout
+        version = "dev"
     root = Path(numba.config.CACHE_DIR or Path(__file__).resolve().parent / "__pycache__")
     py = f"{sys.version_info[0]}{sys.version_info[1]}"
-    key = f"{__version__}-numba{numba.__version__}-py{py}-{llvmlite.binding.get_host_cpu_name()}"
+    key = f"{version}-numba{numba.__version__}-py{py}-{llvmlite.binding.get_host_cpu_name()}"
     return root / f"hexapod_kin-{area}-{key}.stamp"
 
 
