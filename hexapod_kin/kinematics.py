@@ -376,7 +376,8 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
         The 3×nq position Jacobian in the base frame.
 
     """
-    from .params import Chain, table_position_jacobian
+    from ._table_kin import table_position_jacobian
+    from .params import Chain
 
     qv = model.check_q(q)
     chain = model.params
