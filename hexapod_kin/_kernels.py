@@ -1,135 +1,192 @@
-"""Compiled batch kernels for serial chains: foot position and Jacobian of many configurations.
+"""The one compiled layer (numba): the FK + Jacobian core and the batch kernels of chains.
 
-A :class:`ChainArrays` is extracted from a loaded model's *Pinocchio* model (joint placements,
-axes, tip offset), so the kernels serve any 1-DOF serial chain — catalogue presets and URDFs
-alike — and agree with Pinocchio to rounding. They are numba-compiled (``prange`` over
-configurations; numba is a core dependency, ``njit`` comes from :mod:`hexapod_kin._numerics`).
+Two forms of the same maths, both on :class:`~hexapod_kin._chain.ChainArrays` (extracted
+once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
 
-Inner ``@njit`` functions (``fk_jac_into``) can be called from other numba code (IK loops,
-scans) without Python overhead.
+* :func:`fk_jac_into` — one configuration (tip position, rotation, LWA Jacobian), for the
+  compiled loops that step one configuration at a time (IK, resolved rate);
+* :func:`fk_jac_block` — a structure-of-arrays block of configurations on the chain with z
+  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), ``inline="always"`` into every batch
+  kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
+  singularity measures (:mod:`hexapod_kin.singularity._kernel`). Its per-joint loops run over
+  the block and vectorise (SIMD): sin / cos by the libm-free polynomial :func:`sincos`,
+  libm for the elements beyond :data:`POLY_TRIG_MAX`, element by element.
 
-Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame: rows ``[v; ω]``.
+**The same bits every time**: no ``fastmath``; each element's arithmetic depends on its own
+input only (never on its neighbours in a block, the block size or the thread that runs it),
+so a result is the same in any process, warm or cold, and from any number of threads.
+
+**When it compiles**: only batch APIs import this module (the size rule: per-call work runs
+on Pinocchio and numpy). Kernels are ``cache=True``: compiled on first use, then loaded from
+numba's disk cache (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources).
+``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area
+in a process, :func:`first_use` prints one notice on stderr unless a stamp file says this
+machine's cache already holds that area: ``hexapod_kin-<area>-<stamp key>.stamp`` in numba's
+cache directory (else ``hexapod_kin/__pycache__``), the key made of the package version,
+numba's version, Python's and the CPU name; written after the area's first completed call
+and by ``precompile``. Deleting numba's cache deletes the stamps with it.
+
+Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: rows
+``[v; ω]``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import itertools
+import math
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numba
 import numpy as np
 
-from ._numerics import njit, prange
-from .exceptions import ConfigurationError, SourceError
+from ._chain import AlignedChain, ChainArrays, aligned_chain
+from ._kmath import (
+    POLY_TRIG_MAX,
+    det3,
+    det_lu,
+    det_small,
+    dls_into,
+    eig2_sym,
+    eig3_sym,
+    jacobi_eig,
+    njit,
+    prange,
+    sigma_bounds,
+    sincos,
+    solve_spd,
+    wrap_angle,
+)
+from .exceptions import ConfigurationError, ParameterError
 
 __all__ = [
+    "BLOCK",
+    "POLY_TRIG_MAX",
+    "Q_MAX",
+    "REF_CODES",
+    "AlignedChain",
     "ChainArrays",
-    "fk_batch",
-    "jacobian_batch",
-    "position_jacobian_batch",
-    "fk_position",
-    "position_jacobian",
-    "fk_jac_into",
+    "aligned_chain",
     "check_batch",
+    "det3",
+    "det_lu",
+    "det_small",
+    "dls_into",
+    "eig2_sym",
+    "eig3_sym",
+    "first_use",
+    "fk_batch",
+    "fk_jac_block",
+    "fk_jac_into",
+    "fk_position",
+    "jacobi_eig",
+    "jacobian_batch",
+    "mark_compiled",
+    "njit",
+    "pose_jacobian_batch",
+    "pose_jacobian_kernel",
+    "position_jacobian",
+    "position_jacobian_batch",
+    "prange",
+    "run_blocks",
     "set_threads",
+    "sigma_bounds",
+    "silence_notice",
+    "sincos",
+    "solve_spd",
+    "wrap_angle",
 ]
 
+#: Reference frame name → kernel code.
+REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
+#: Configurations per structure-of-arrays block of :func:`pose_jacobian_kernel` (L1-sized).
+BLOCK = 64
+#: Fewest configurations per thread (below this, one thread: starting threads costs more).
+MIN_PER_THREAD = 16_384
+#: Chunks of blocks handed out per thread (dynamic: a thread sharing its core takes fewer).
+CHUNKS_PER_THREAD = 8
+#: Fewest blocks per chunk (each chunk is one kernel call, ~10 µs of dispatch).
+MIN_CHUNK_BLOCKS = 64
+#: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
+Q_MAX = 1e150
 
-@dataclass(frozen=True)
-class ChainArrays:
-    """A serial chain as flat arrays (read-only), in the model's base frame.
 
-    Attributes:
-        rot: (m, 3, 3) rotation of each joint placement (parent joint → joint at q = 0); the
-            first one includes the base → root transform.
-        trans: (m + 1, 3) translations of the placements; the last row is the tip offset in
-            the frame of the tip's parent joint.
-        tip_rot: (3, 3) rotation of the tip frame in its parent joint frame.
-        axis: (m, 3) unit joint axes in their joint frames.
-        kind: (m,) 0 revolute, 1 prismatic.
-        col: (m,) index of each joint's variable in ``q``.
-        nq: Length of ``q``.
+# ------------------------------------------------------------------------ first use
+_SEEN: set[str] = set()
+_SEEN_LOCK = threading.Lock()
+_NOTICE = [True]
 
+
+def silence_notice() -> None:
+    """No first-use notice in this process (``precompile`` compiles on purpose)."""
+    _NOTICE[0] = False
+
+
+def _stamp(area: str) -> Path:
+    """The stamp file of ``area`` (see the module docstring)."""
+    import importlib.metadata
+
+    import llvmlite.binding
+
+    try:
+        version = importlib.metadata.version("hexapod-kin")
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - run from a checkout
+        version = "dev"
+    root = Path(numba.config.CACHE_DIR or Path(__file__).resolve().parent / "__pycache__")
+    py = f"{sys.version_info[0]}{sys.version_info[1]}"
+    key = f"{version}-numba{numba.__version__}-py{py}-{llvmlite.binding.get_host_cpu_name()}"
+    return root / f"hexapod_kin-{area}-{key}.stamp"
+
+
+def mark_compiled(area: str) -> None:
+    """Record that numba's cache holds ``area``'s kernels (its stamp file).
+
+    Best effort: a read-only cache directory only means the notice shows again.
     """
+    with _SEEN_LOCK:
+        _SEEN.add(area)
+    try:
+        path = _stamp(area)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.touch()
+    except OSError:
+        pass
 
-    rot: np.ndarray
-    trans: np.ndarray
-    tip_rot: np.ndarray
-    axis: np.ndarray
-    kind: np.ndarray
-    col: np.ndarray
-    nq: int
 
-    @classmethod
-    def from_model(cls, model: Any, frame: str | None = None) -> ChainArrays:
-        """Extract the chain from root to ``frame`` (default: the tip) of a loaded model.
+@contextmanager
+def first_use(area: str) -> Iterator[None]:
+    """Wrap the kernel calls of a batch API: the compile notice, then the stamp.
 
-        Args:
-            model: A :class:`~hexapod_kin.model.Model` (1-DOF revolute/prismatic joints).
-            frame: Tip frame name (checked).
-
-        Raises:
-            SourceError: If a joint on the path is not a 1-DOF revolute/prismatic joint.
-
-        """
-        import pinocchio as pin
-
-        m = model.model
-        fid = model.tip_id if frame is None else model.frame_id(frame)
-        fr = m.frames[fid]
-        path = [int(i) for i in m.supports[fr.parentJoint]][1:]
-        rots, trans, axes, kinds, cols = [], [], [], [], []
-        for k, i in enumerate(path):
-            placement = m.jointPlacements[i]
-            if k == 0:
-                placement = model.baseMo * placement
-            name = m.joints[i].shortname()
-            if name.startswith("JointModelR"):
-                kinds.append(0)
-            elif name.startswith("JointModelP"):
-                kinds.append(1)
-            else:
-                raise SourceError(f"joint {m.names[i]!r} of kind {name} is not 1-DOF rev/prism")
-            if name[-1] in "XYZ":
-                ax = np.zeros(3)
-                ax["XYZ".index(name[-1])] = 1.0
-            else:
-                ax = np.asarray(m.joints[i].extract().axis, dtype=float)
-                ax = ax / np.linalg.norm(ax)
-            rots.append(np.array(placement.rotation))
-            trans.append(np.array(placement.translation))
-            axes.append(ax)
-            cols.append(int(m.joints[i].idx_v))
-        if not path:
-            tip_pl = model.baseMo * fr.placement
-        else:
-            tip_pl = fr.placement
-        trans.append(np.array(tip_pl.translation))
-        arrays = cls(
-            rot=np.ascontiguousarray(np.array(rots, dtype=float).reshape(-1, 3, 3)),
-            trans=np.ascontiguousarray(np.array(trans, dtype=float).reshape(-1, 3)),
-            tip_rot=np.ascontiguousarray(np.array(tip_pl.rotation, dtype=float)),
-            axis=np.ascontiguousarray(np.array(axes, dtype=float).reshape(-1, 3)),
-            kind=np.array(kinds, dtype=np.int64),
-            col=np.array(cols, dtype=np.int64),
-            nq=int(m.nv),
+    The first time in a process, if no stamp says the disk cache holds ``area``, one line on
+    stderr says the kernels are being compiled; after the call completes the stamp is
+    written. Later calls cost one set lookup.
+    """
+    if area in _SEEN:
+        yield
+        return
+    if _NOTICE[0] and not _stamp(area).exists():
+        print(
+            f"hexapod-kin: compiling {area} kernels for this machine "
+            "(once; 'hexapod-kin precompile' does it ahead)",
+            file=sys.stderr,
+            flush=True,
         )
-        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-            arr.setflags(write=False)
-        del pin
-        return arrays
-
-    def scratch(self) -> np.ndarray:
-        """A fresh (6, m) work array for :func:`fk_jac_into`."""
-        return np.empty((6, max(self.rot.shape[0], 1)))
-
-    @property
-    def packed(self) -> tuple[np.ndarray, ...]:
-        """The arrays in the argument order of the compiled kernels."""
-        return (self.rot, self.trans, self.axis, self.kind, self.col)
+    yield
+    mark_compiled(area)
 
 
-@njit(cache=True, fastmath=False, nogil=True)
+def set_threads(n: int | None) -> None:
+    """Set numba's thread count (``None``/0: unchanged)."""
+    if n:
+        numba.set_num_threads(int(n))
+
+
+# ------------------------------------------------------------------------ one configuration
+@njit(cache=True, nogil=True)
 def fk_jac_into(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -141,12 +198,17 @@ def fk_jac_into(
     out_j: np.ndarray,
     scratch: np.ndarray,
     want_jac: bool,
+    tip_rot: Any = None,
+    out_r: Any = None,
 ) -> None:  # pragma: no cover - compiled
-    """Tip position into ``out_p`` (3,) and LWA Jacobian into ``out_j`` (3 or 6, nq).
+    """Tip position into ``out_p`` (3,), LWA Jacobian into ``out_j`` (3 or 6, nq), rotation.
 
-    ``scratch`` is a (6, m) work array (joint origins and axes); nothing is allocated.
-    Callers in compiled code pass ``want_jac`` as a runtime value (``n >= 0``, an argument),
-    never a literal ``True``/``False``: numba would compile one copy per literal.
+    The per-configuration FK + Jacobian core. ``scratch`` is a (6, m) work array (joint
+    origins and axes); nothing is allocated. With ``tip_rot`` (the chain's ``tip_rot``) and
+    ``out_r`` (3, 3), the tip frame's rotation in the base frame goes to ``out_r`` (both
+    ``None`` or omitted: not computed; numba prunes the branch). Callers in compiled code pass
+    ``want_jac`` as a runtime value (``n >= 0``, an argument), never a literal
+    ``True``/``False``: numba would compile one copy per literal.
     """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
@@ -196,14 +258,14 @@ def fk_jac_into(
         if kind[k] == 1:
             px, py, pz = px + wx * qk, py + wy * qk, pz + wz * qk
         elif ux == 0.0 and uy == 0.0 and uz == 1.0:
-            c = np.cos(qk)
-            s = np.sin(qk)
+            c = math.cos(qk)
+            s = math.sin(qk)
             r00, r01 = c * r00 + s * r01, c * r01 - s * r00
             r10, r11 = c * r10 + s * r11, c * r11 - s * r10
             r20, r21 = c * r20 + s * r21, c * r21 - s * r20
         else:
-            c = np.cos(qk)
-            s = np.sin(qk)
+            c = math.cos(qk)
+            s = math.sin(qk)
             v = 1.0 - c
             # Rodrigues rotation about the local axis u by qk: E = c I + s [u]x + v u u^T
             e00 = c + v * ux * ux
@@ -233,6 +295,12 @@ def fk_jac_into(
         pz + r20 * tx + r21 * ty + r22 * tz,
     )
     out_p[0], out_p[1], out_p[2] = px, py, pz
+    if out_r is not None and tip_rot is not None:
+        t = tip_rot
+        for j in range(3):
+            out_r[0, j] = r00 * t[0, j] + r01 * t[1, j] + r02 * t[2, j]
+            out_r[1, j] = r10 * t[0, j] + r11 * t[1, j] + r12 * t[2, j]
+            out_r[2, j] = r20 * t[0, j] + r21 * t[1, j] + r22 * t[2, j]
     if not want_jac:
         return
     out_j[:, :] = 0.0
@@ -254,33 +322,309 @@ def fk_jac_into(
                 out_j[5, j] += scratch[5, k]
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _batch(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
+# ------------------------------------------------------------------------ blocks of configurations
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def fk_jac_block(
+    prot: np.ndarray,
+    ptr: np.ndarray,
+    flags: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    qb: np.ndarray,
+    nb: int,
+    skip0: bool,
+    tip_rot: bool,
+    want_jac: bool,
+    keep: float,
+    rr: np.ndarray,
+    pp: np.ndarray,
+    trig: np.ndarray,
+    jb: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """The block FK + Jacobian core: ``nb`` configurations, structure of arrays.
+
+    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot``, ``ptr``, ``flags``,
+    ``kind``, ``col``); ``qb`` (nq, B) holds the block's configurations column-wise. Writes the
+    tip rotation into ``rr`` (9, B, row-major; with ``tip_rot`` False the tip placement's own
+    rotation is left out) and position into ``pp`` (3, B). With ``want_jac``, the Jacobian into
+    ``jb`` (6·nq, B), row ``a·nq + c`` holding ``J[a, c]``: revolute ``[w × (keep·p − o); w]``
+    (``keep`` 1: LOCAL_WORLD_ALIGNED; 0: WORLD, the velocity of the point at the base
+    origin), prismatic ``[w; 0]``; columns of variables off the path are not written (the
+    caller zeroes them once). ``skip0``: joint 0 stays at q = 0 (its column is still
+    computed). ``trig`` is (2, B) scratch. Each element's arithmetic depends on its own ``q``
+    only: sin / cos by :func:`sincos` over the block, then libm for the elements with
+    ``|q| > POLY_TRIG_MAX``.
+    """
+    nq = qb.shape[0]
+    m = kind.shape[0]
+    for a in range(3):
+        v = ptr[0, a]
+        for i in range(nb):
+            pp[a, i] = v
+    for a in range(9):
+        v = prot[0, a]
+        for i in range(nb):
+            rr[a, i] = v
+    for j in range(m):
+        cj = col[j]
+        if want_jac:  # prismatic [w; 0]; revolute [o; w], its linear part finished below
+            for a in range(3):
+                lin = a * nq + cj
+                ang = lin + 3 * nq
+                w = 3 * a + 2
+                if kind[j] == 1:
+                    for i in range(nb):
+                        jb[lin, i] = rr[w, i]
+                        jb[ang, i] = 0.0
+                else:
+                    for i in range(nb):
+                        jb[lin, i] = pp[a, i]
+                        jb[ang, i] = rr[w, i]
+        if kind[j] == 1:
+            for i in range(nb):
+                qv = qb[cj, i]
+                pp[0, i] += rr[2, i] * qv
+                pp[1, i] += rr[5, i] * qv
+                pp[2, i] += rr[8, i] * qv
+        elif not (j == 0 and skip0):
+            for i in range(nb):
+                trig[0, i], trig[1, i] = sincos(qb[cj, i])
+            for i in range(nb):  # beyond the polynomial's range: libm, this element only
+                qv = qb[cj, i]
+                if abs(qv) > POLY_TRIG_MAX:
+                    trig[0, i] = math.sin(qv)
+                    trig[1, i] = math.cos(qv)
+            for i in range(nb):
+                sq, cq = trig[0, i], trig[1, i]
+                for b in range(0, 9, 3):
+                    x0, x1 = rr[b, i], rr[b + 1, i]
+                    rr[b, i] = cq * x0 + sq * x1
+                    rr[b + 1, i] = cq * x1 - sq * x0
+        # placement j + 1 (the tip's after the last joint)
+        t0, t1, t2 = ptr[j + 1, 0], ptr[j + 1, 1], ptr[j + 1, 2]
+        if t0 != 0.0 or t1 != 0.0 or t2 != 0.0:
+            for i in range(nb):
+                pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
+                pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
+                pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
+        if flags[j + 1] == 0 and (j + 1 < m or tip_rot):
+            a00, a01, a02 = prot[j + 1, 0], prot[j + 1, 1], prot[j + 1, 2]
+            a10, a11, a12 = prot[j + 1, 3], prot[j + 1, 4], prot[j + 1, 5]
+            a20, a21, a22 = prot[j + 1, 6], prot[j + 1, 7], prot[j + 1, 8]
+            for i in range(nb):
+                for b in range(0, 9, 3):
+                    x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
+                    rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
+                    rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
+                    rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
+    if not want_jac:
+        return
+    for j in range(m):  # revolute: w × (keep·p − o)
+        if kind[j] == 1:
+            continue
+        r0 = col[j]
+        r1, r2, r3, r4, r5 = r0 + nq, r0 + 2 * nq, r0 + 3 * nq, r0 + 4 * nq, r0 + 5 * nq
+        for i in range(nb):
+            dx = keep * pp[0, i] - jb[r0, i]
+            dy = keep * pp[1, i] - jb[r1, i]
+            dz = keep * pp[2, i] - jb[r2, i]
+            wx, wy, wz = jb[r3, i], jb[r4, i], jb[r5, i]
+            jb[r0, i] = wy * dz - wz * dy
+            jb[r1, i] = wz * dx - wx * dz
+            jb[r2, i] = wx * dy - wy * dx
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def pose_jacobian_kernel(
+    prot: np.ndarray,
+    ptr: np.ndarray,
+    flags: np.ndarray,
     kind: np.ndarray,
     col: np.ndarray,
     qs: np.ndarray,
-    out_p: np.ndarray,
+    out_t: np.ndarray,
     out_j: np.ndarray,
+    want_pose: bool,
+    ref: int,
     want_jac: bool,
-) -> None:  # pragma: no cover - compiled
+    first_block: int,
+    last_block: int,
+    block: int,
+) -> bool:  # pragma: no cover - compiled
+    """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
+
+    Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq), through
+    :func:`fk_jac_block`. ``ref``: 0 local world aligned, 1 world (velocity of the point at
+    the base origin), 2 local (tip axes).
+
+    Returns:
+        Whether a value of ``q`` in these blocks is non-finite or ``|q| >= Q_MAX`` (the
+        caller raises; the outputs of such rows are meaningless but no memory outside them is
+        written).
+
+    """
+    nconf = qs.shape[0]
+    nq = qs.shape[1]
+    bsz = block
+    rr = np.empty((9, bsz))
+    pp = np.empty((3, bsz))
+    trig = np.empty((2, bsz))
+    qb = np.empty((max(nq, 1), bsz))
+    jb = np.empty((6 * max(nq, 1), bsz))
+    npj = 6 * nq
+    if want_jac:  # variables of joints off the path: zero columns
+        jb[:, :] = 0.0
+    tip_rot = want_pose or (want_jac and ref == 2)
+    keep = 0.0 if ref == 1 else 1.0
+    ok = True
+    for blk in range(first_block, last_block):
+        start = blk * bsz
+        nb = min(nconf, start + bsz) - start
+        for c in range(nq):  # the block's q, transposed; the value check rides along
+            for i in range(nb):
+                qv = qs[start + i, c]
+                qb[c, i] = qv
+                ok &= abs(qv) < Q_MAX  # False for NaN too
+        fk_jac_block(
+            prot, ptr, flags, kind, col, qb, nb, False, tip_rot, want_jac, keep, rr, pp, trig, jb
+        )
+        if want_pose:
+            for i in range(nb):
+                r = start + i
+                out_t[r, 0], out_t[r, 1], out_t[r, 2] = rr[0, i], rr[1, i], rr[2, i]
+                out_t[r, 3] = pp[0, i]
+                out_t[r, 4], out_t[r, 5], out_t[r, 6] = rr[3, i], rr[4, i], rr[5, i]
+                out_t[r, 7] = pp[1, i]
+                out_t[r, 8], out_t[r, 9], out_t[r, 10] = rr[6, i], rr[7, i], rr[8, i]
+                out_t[r, 11] = pp[2, i]
+                out_t[r, 12], out_t[r, 13], out_t[r, 14], out_t[r, 15] = 0.0, 0.0, 0.0, 1.0
+        if not want_jac:
+            continue
+        if ref == 2:  # local: both parts in the tip axes (Rᵀ)
+            for c in range(2 * nq):
+                r0 = (c // nq) * 3 * nq + c % nq
+                r1, r2 = r0 + nq, r0 + 2 * nq
+                for i in range(nb):
+                    vx, vy, vz = jb[r0, i], jb[r1, i], jb[r2, i]
+                    jb[r0, i] = rr[0, i] * vx + rr[3, i] * vy + rr[6, i] * vz
+                    jb[r1, i] = rr[1, i] * vx + rr[4, i] * vy + rr[7, i] * vz
+                    jb[r2, i] = rr[2, i] * vx + rr[5, i] * vy + rr[8, i] * vz
+        for i in range(nb):  # rows of 6·nq, one flat loop
+            r = start + i
+            for p in range(npj):
+                out_j[r, p] = jb[p, i]
+    return not ok
+
+
+def run_blocks(
+    run: Callable[[int, int], Any], nblocks: int, block: int, min_per_thread: int
+) -> list[Any]:
+    """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
+
+    Up to ``numba.get_num_threads()`` plain threads (the kernels release the GIL), each taking
+    the next chunk of blocks from a shared counter when done with one, so that a thread
+    sharing its core with another process does less of the work. Which thread runs a block
+    never changes its numbers (see the module docstring).
+    """
+    nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))
+    if nwork == 1:
+        return [run(0, nblocks)]
+    per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))
+    results = [run(0, 0)]  # no blocks: compiles (or loads) the kernel once, before the threads
+    chunks = itertools.count()  # next() is atomic under the GIL
+
+    def loop() -> None:
+        while True:
+            first = next(chunks) * per
+            if first >= nblocks:
+                return
+            results.append(run(first, min(nblocks, first + per)))
+
+    workers = [threading.Thread(target=loop) for _ in range(nwork - 1)]
+    for t in workers:
+        t.start()
+    try:
+        loop()
+    finally:
+        for t in workers:
+            t.join()
+    return results
+
+
+def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """``out`` checked (float64, C-contiguous, writeable, ``shape``), or a new array."""
+    if out is None:
+        return np.empty(shape)
+    if not (
+        isinstance(out, np.ndarray)
+        and out.dtype == np.float64
+        and out.shape == shape
+        and out.flags.c_contiguous
+        and out.flags.writeable
+    ):
+        raise ParameterError(
+            f"{name}: an array of shape {np.shape(out)} and dtype "
+            f"{getattr(out, 'dtype', type(out).__name__)} is not allowed; a writeable "
+            f"C-contiguous float64 array of shape {shape} is required",
+            parameter=name,
+            allowed=f"float64 {shape}",
+        )
+    return out
+
+
+def pose_jacobian_batch(
+    chain: AlignedChain,
+    qs: np.ndarray,
+    *,
+    pose: bool,
+    jacobian: str | None,
+    out_pose: np.ndarray | None = None,
+    out_jacobian: np.ndarray | None = None,
+    check: Callable[[], object] | None = None,
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of configurations ``qs`` (N, nq).
+
+    Args:
+        chain: The chain with z joint axes (:func:`~hexapod_kin._chain.aligned_chain`).
+        qs: C-contiguous float64 (N, nq). Its values are checked by the kernel on the way
+            (finite, ``|q| < Q_MAX``); when one is not, ``check()`` is called to raise.
+        pose: Whether to compute the poses.
+        jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
+        out_pose: Optional (N, 4, 4) float64 array to write the poses into.
+        out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
+        check: Raises the caller's error for ``qs`` (e.g. ``Model.check_q_batch``); called
+            only when a value is out of range.
+
+    Returns:
+        ``(poses or None, jacobians or None)``.
+
+    Raises:
+        ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.
+        ConfigurationError: A non-finite or too large value in ``qs``.
+
+    """
     n = qs.shape[0]
-    chunk = 2048
-    nchunks = (n + chunk - 1) // chunk
-    for c in prange(nchunks):
-        scratch = np.empty((6, max(rot.shape[0], 1)))
-        dummy = np.empty((3, qs.shape[1]))
-        for i in range(c * chunk, min(n, (c + 1) * chunk)):
-            if want_jac:
-                fk_jac_into(
-                    rot, trans, axis, kind, col, qs[i], out_p[i], out_j[i], scratch, want_jac
-                )
-            else:
-                fk_jac_into(rot, trans, axis, kind, col, qs[i], out_p[i], dummy, scratch, want_jac)
+    nq = chain.nq
+    out_t = _out(out_pose, (n, 4, 4), "out") if pose else np.empty((1, 4, 4))
+    want_jac = jacobian is not None
+    out_j = _out(out_jacobian, (n, 6, nq), "out") if want_jac else np.empty((1, 6, nq))
+    ref = REF_CODES[jacobian] if jacobian is not None else 0
+    flat_j = out_j.reshape(out_j.shape[0], 6 * nq)
+    args = (*chain.packed, qs, out_t.reshape(-1, 16), flat_j, pose, ref)
+
+    def run(first: int, last: int) -> bool:
+        return bool(pose_jacobian_kernel(*args, want_jac, first, last, BLOCK))
+
+    with first_use("batch"):
+        bad = run_blocks(run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
+    if any(bad):
+        if check is not None:
+            check()
+        raise ConfigurationError(f"Q contains non-finite values or values with |x| >= {Q_MAX:g}")
+    return (out_t if pose else None), (out_j if want_jac else None)
 
 
+# ------------------------------------------------------------------------ on ChainArrays
 def check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
     """``qs`` as an (N, nq) float64 C-contiguous array (a single (nq,) becomes (1, nq)).
 
@@ -309,23 +653,23 @@ def check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
 
 
 def fk_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
-    """Tip positions (N, 3) in [m] for configurations ``qs`` (N, nq)."""
-    q = check_batch(arrays, qs)
-    out_p = np.empty((q.shape[0], 3))
-    dummy = np.empty((1, 3, arrays.nq))
-    _batch(*arrays.packed, q, out_p, dummy, False)
-    return out_p
+    """Tip positions (N, 3) in [m] for configurations ``qs`` (N, nq) (the block core)."""
+    poses, _ = pose_jacobian_batch(
+        aligned_chain(arrays), check_batch(arrays, qs), pose=True, jacobian=None
+    )
+    assert poses is not None
+    return np.ascontiguousarray(poses[:, :3, 3])
 
 
 def jacobian_batch(arrays: ChainArrays, qs: Any, rows: int = 6) -> np.ndarray:
     """LWA Jacobians (N, rows, nq) for ``qs`` (N, nq); ``rows=3`` keeps the position part."""
-    q = check_batch(arrays, qs)
     if rows not in (3, 6):
         raise ConfigurationError(f"rows={rows!r}; use 3 (position) or 6 (position + rotation)")
-    out_p = np.empty((q.shape[0], 3))
-    out_j = np.empty((q.shape[0], rows, arrays.nq))
-    _batch(*arrays.packed, q, out_p, out_j, True)
-    return out_j
+    _, jac = pose_jacobian_batch(
+        aligned_chain(arrays), check_batch(arrays, qs), pose=False, jacobian="local_world_aligned"
+    )
+    assert jac is not None
+    return jac if rows == 6 else np.ascontiguousarray(jac[:, :3])
 
 
 def position_jacobian_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
@@ -334,7 +678,7 @@ def position_jacobian_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
 
 
 def fk_position(arrays: ChainArrays, q: Any) -> np.ndarray:
-    """Tip position (3,) for one configuration."""
+    """Tip position (3,) for one configuration (the per-configuration core)."""
     qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
     out_p = np.empty(3)
     fk_jac_into(*arrays.packed, qv, out_p, np.empty((3, arrays.nq)), arrays.scratch(), False)
@@ -342,17 +686,8 @@ def fk_position(arrays: ChainArrays, q: Any) -> np.ndarray:
 
 
 def position_jacobian(arrays: ChainArrays, q: Any) -> np.ndarray:
-    """Position Jacobian (3, nq) for one configuration."""
+    """Position Jacobian (3, nq) for one configuration (the per-configuration core)."""
     qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
     out_j = np.empty((3, arrays.nq))
     fk_jac_into(*arrays.packed, qv, np.empty(3), out_j, arrays.scratch(), True)
     return out_j
-
-
-def set_threads(n: int | None) -> None:
-    """Set numba's thread count (``None``/0: unchanged)."""
-    if n:
-        numba.set_num_threads(int(n))
-
-
-_check_batch = check_batch  # the old private name, for callers not yet switched

@@ -1,24 +1,10 @@
-"""Small compiled numerics shared by every module: the one home for each piece of maths.
+"""Small per-call maths in plain numpy (never imports numba).
 
-Everything here is a numba ``@njit(cache=True, nogil=True)`` function (callable from Python
-and from other compiled code without overhead) or a thin numpy wrapper of one. Callers pass
-``float64`` C-contiguous arrays so each function compiles to ONE specialisation (cold start
-cost), and the functions are compiled lazily: a command pays only for what it calls.
-
-Contents:
-    - symmetric eigenvalues: :func:`eig2_sym`, :func:`eig3_sym` (closed forms, descending),
-      :func:`jacobi_eig` (any small size);
-    - determinants: :func:`det3`, :func:`det_lu`, :func:`det_small`;
-    - linear solve: :func:`solve_spd` (Cholesky, in place);
-    - damped least squares: :func:`dls_into` (compiled, frozen joints) and :func:`dls_step`
-      (pure function, the public face);
-    - :func:`sigma_bounds` of a position Jacobian;
-    - angle wrapping: :func:`wrap_angle` (scalar, compiled), :func:`wrap_angles` and
-      :func:`wrap_diff` (arrays);
-    - the chain's length scale: :func:`chain_length` / :func:`chain_scale` (ONE formula).
-
-RPY → matrix is not here: no kernel needs it compiled, and its one home is
-:func:`hexapod_kin.params.rpy_to_matrix` (pure numpy, no numba import).
+One home each: angle wrapping (:func:`wrap_angles`, :func:`wrap_diff`), the chain's length
+scale (:func:`chain_length` / :func:`chain_scale`, ONE formula) and the damped-least-squares
+step as a pure function (:func:`dls_step`). The compiled counterparts used inside kernels
+(``wrap_angle``, ``dls_into``, ``sigma_bounds``, eigenvalues, determinants...) live in
+:mod:`hexapod_kin._kernels`, the one compiled layer.
 
 Angles in [rad], lengths in [m].
 """
@@ -29,284 +15,34 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import prange
 
-from ._tier import njit
 from .exceptions import ConfigurationError
 
-__all__ = [
-    "POLY_TRIG_MAX",
-    "njit",
-    "sincos",
-    "prange",
-    "eig2_sym",
-    "eig3_sym",
-    "jacobi_eig",
-    "det3",
-    "det_lu",
-    "det_small",
-    "solve_spd",
-    "dls_into",
-    "dls_step",
-    "sigma_bounds",
-    "wrap_angle",
-    "wrap_angles",
-    "wrap_diff",
-    "chain_length",
-    "chain_scale",
-]
+__all__ = ["chain_length", "chain_scale", "dls_step", "wrap_angles", "wrap_diff"]
 
 _TWO_PI = 2.0 * math.pi
 
-
-# ------------------------------------------------------------------------ eigenvalues
-@njit(cache=True, nogil=True)
-def eig2_sym(a: float, b: float, d: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """Eigenvalues (descending) of the symmetric PSD ``[[a, b], [b, d]]``.
-
-    The smaller one is ``det / λmax`` (no cancellation near a singularity).
-    """
-    half = 0.5 * (a + d)
-    diff = 0.5 * (a - d)
-    rad = math.sqrt(diff * diff + b * b)
-    lmax = half + rad
-    det = a * d - b * b
-    lmin = det / lmax if lmax > 0.0 else 0.0
-    return lmax, lmin
+#: Names that moved to :mod:`hexapod_kin._kernels` (forwarded on first access, PEP 562, so
+#: that importing this module never imports numba; new code imports them from ``_kernels``).
+_COMPILED = frozenset(
+    "POLY_TRIG_MAX njit prange sincos eig2_sym eig3_sym jacobi_eig det3 det_lu det_small "
+    "solve_spd dls_into sigma_bounds wrap_angle".split()
+)
 
 
-@njit(cache=True, nogil=True)
-def eig3_sym(
-    a00: float, a11: float, a22: float, a01: float, a02: float, a12: float
-) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    """Eigenvalues (descending) of the symmetric ``[[a00,a01,a02],[a01,a11,a12],[a02,a12,a22]]``.
+def __getattr__(name: str) -> Any:
+    if name in _COMPILED:
+        from . import _kernels
 
-    Trigonometric closed form (Smith 1961); a diagonal matrix returns its sorted diagonal
-    exactly.
-    """
-    p1 = a01 * a01 + a02 * a02 + a12 * a12
-    if p1 == 0.0:
-        x, y, z = a00, a11, a22
-        if x < y:
-            x, y = y, x
-        if y < z:
-            y, z = z, y
-        if x < y:
-            x, y = y, x
-        return x, y, z
-    qm = (a00 + a11 + a22) / 3.0
-    b00, b11, b22 = a00 - qm, a11 - qm, a22 - qm
-    p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1
-    p = math.sqrt(p2 / 6.0)
-    if p == 0.0:
-        return qm, qm, qm
-    inv = 1.0 / p
-    c00, c11, c22 = b00 * inv, b11 * inv, b22 * inv
-    c01, c02, c12 = a01 * inv, a02 * inv, a12 * inv
-    r = 0.5 * (
-        c00 * (c11 * c22 - c12 * c12)
-        - c01 * (c01 * c22 - c12 * c02)
-        + c02 * (c01 * c12 - c11 * c02)
-    )
-    if r <= -1.0:
-        phi = math.pi / 3.0
-    elif r >= 1.0:
-        phi = 0.0
-    else:
-        phi = math.acos(r) / 3.0
-    l1 = qm + 2.0 * p * math.cos(phi)
-    l3 = qm + 2.0 * p * math.cos(phi + _TWO_PI / 3.0)
-    l2 = 3.0 * qm - l1 - l3
-    return l1, l2, l3
-
-
-@njit(cache=True, nogil=True)
-def jacobi_eig(g: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Eigenvalues of the symmetric ``g`` (destroyed) by cyclic Jacobi, into ``out`` (desc)."""
-    m = g.shape[0]
-    for _sweep in range(60):
-        off = 0.0
-        diag = 0.0
-        for i in range(m):
-            diag += g[i, i] * g[i, i]
-            for j in range(i + 1, m):
-                off += g[i, j] * g[i, j]
-        if off <= 1e-34 * diag or off == 0.0:
-            break
-        for p in range(m - 1):
-            for q in range(p + 1, m):
-                apq = g[p, q]
-                if apq == 0.0:
-                    continue
-                theta = (g[q, q] - g[p, p]) / (2.0 * apq)
-                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for k in range(m):
-                    gkp, gkq = g[k, p], g[k, q]
-                    g[k, p] = c * gkp - s * gkq
-                    g[k, q] = s * gkp + c * gkq
-                for k in range(m):
-                    gpk, gqk = g[p, k], g[q, k]
-                    g[p, k] = c * gpk - s * gqk
-                    g[q, k] = s * gpk + c * gqk
-    for i in range(m):
-        out[i] = g[i, i]
-    for i in range(1, m):  # insertion sort, descending
-        v = out[i]
-        j = i - 1
-        while j >= 0 and out[j] < v:
-            out[j + 1] = out[j]
-            j -= 1
-        out[j + 1] = v
-
-
-# ------------------------------------------------------------------------ determinants
-@njit(cache=True, nogil=True, inline="always")
-def det3(a: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the leading 3×3 block of ``a`` (cofactor expansion)."""
-    return (
-        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
-        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
-    )
-
-
-@njit(cache=True, nogil=True)
-def det_lu(a: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the square ``a`` (destroyed) by LU with partial pivoting."""
-    n = a.shape[0]
-    det = 1.0
-    for k in range(n):
-        piv = k
-        best = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > best:
-                best = abs(a[i, k])
-                piv = i
-        if best == 0.0:
-            return 0.0
-        if piv != k:
-            for j in range(n):
-                a[k, j], a[piv, j] = a[piv, j], a[k, j]
-            det = -det
-        det *= a[k, k]
-        for i in range(k + 1, n):
-            f = a[i, k] / a[k, k]
-            for j in range(k + 1, n):
-                a[i, j] -= f * a[k, j]
-    return det
-
-
-@njit(cache=True, nogil=True)
-def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the leading n×n block of ``a``: closed forms up to 3, else LU in ``work``."""
-    if n == 0:
-        return 1.0
-    if n == 1:
-        return a[0, 0]
-    if n == 2:
-        return a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    if n == 3:
-        return det3(a)
-    for i in range(n):
-        for j in range(n):
-            work[i, j] = a[i, j]
-    return det_lu(work[:n, :n])
-
-
-# ------------------------------------------------------------------------ linear solve
-@njit(cache=True, nogil=True)
-def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
-    """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
-    n = a.shape[0]
-    for j in range(n):
-        s = a[j, j]
-        for k in range(j):
-            s -= a[j, k] * a[j, k]
-        if not s > 0.0:
-            return False
-        d = math.sqrt(s)
-        a[j, j] = d
-        for i in range(j + 1, n):
-            t = a[i, j]
-            for k in range(j):
-                t -= a[i, k] * a[j, k]
-            a[i, j] = t / d
-    for i in range(n):
-        t = b[i]
-        for k in range(i):
-            t -= a[i, k] * out[k]
-        out[i] = t / a[i, i]
-    for i in range(n - 1, -1, -1):
-        t = out[i]
-        for k in range(i + 1, n):
-            t -= a[k, i] * out[k]
-        out[i] = t / a[i, i]
-    return True
-
-
-# ------------------------------------------------------------------------ damped least squares
-@njit(cache=True, nogil=True)
-def dls_into(
-    jac: np.ndarray,
-    e: np.ndarray,
-    lam2: float,
-    free: np.ndarray,
-    dq: np.ndarray,
-    work: np.ndarray,
-    rhs: np.ndarray,
-    sol: np.ndarray,
-) -> bool:  # pragma: no cover - compiled
-    """Damped least squares for an (m, n) task Jacobian; frozen joints (``~free``) get 0.
-
-    ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
-    system). ``work`` is at least (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n).
-    Returns False if the system is not SPD (λ² = 0 at a singularity).
-    """
-    m = jac.shape[0]
-    n = jac.shape[1]
-    if n <= m:
-        for i in range(n):
-            g = 0.0
-            if free[i]:
-                for r in range(m):
-                    g += jac[r, i] * e[r]
-            rhs[i] = g
-            for k in range(n):
-                s = 0.0
-                if free[i] and free[k]:
-                    for r in range(m):
-                        s += jac[r, i] * jac[r, k]
-                work[i, k] = s
-            work[i, i] += lam2
-        ok = solve_spd(work[:n, :n], rhs[:n], sol[:n])
-        for i in range(n):
-            dq[i] = sol[i] if free[i] else 0.0
-        return ok
-    for a in range(m):
-        rhs[a] = e[a]
-        for b in range(m):
-            s = 0.0
-            for k in range(n):
-                if free[k]:
-                    s += jac[a, k] * jac[b, k]
-            work[a, b] = s
-        work[a, a] += lam2
-    ok = solve_spd(work[:m, :m], rhs[:m], sol[:m])
-    for k in range(n):
-        if free[k]:
-            s = 0.0
-            for a in range(m):
-                s += jac[a, k] * sol[a]
-            dq[k] = s
-        else:
-            dq[k] = 0.0
-    return ok
+        return getattr(_kernels, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def dls_step(jac: Any, error: Any, damping: float, free: Any = None) -> np.ndarray:
     """One damped-least-squares step ``Δq = Jᵀ(JJᵀ + λ²I)⁻¹ e`` (pure function).
+
+    The smaller system is solved: ``(JᵀJ + λ²I)⁻¹ Jᵀ e`` when n ≤ m, else
+    ``Jᵀ (JJᵀ + λ²I)⁻¹ e`` (the same Δq), by Cholesky.
 
     Args:
         jac: Task Jacobian (m, n): position rows in [m/rad] (or [m/m]), rotation rows in
@@ -323,8 +59,8 @@ def dls_step(jac: Any, error: Any, damping: float, free: Any = None) -> np.ndarr
             negative, or ``damping = 0`` at a singular Jacobian (no unique step).
 
     """
-    j = np.ascontiguousarray(np.asarray(jac, dtype=np.float64))
-    e = np.ascontiguousarray(np.asarray(error, dtype=np.float64))
+    j = np.asarray(jac, dtype=np.float64)
+    e = np.asarray(error, dtype=np.float64)
     if j.ndim != 2 or e.shape != (j.shape[0],):
         raise ConfigurationError(
             f"dls_step: jac {j.shape} and error {e.shape} disagree; (m, n) and (m,) are needed",
@@ -356,76 +92,25 @@ def dls_step(jac: Any, error: Any, damping: float, free: Any = None) -> np.ndarr
             value=fr.shape,
             allowed=f"shape ({n},)",
         )
-    k = max(m, n, 1)
-    dq = np.empty(n)
-    ok = dls_into(j, e, lam2, fr, dq, np.empty((k, k)), np.empty(k), np.empty(k))
-    if not ok:
+    jf = j * fr
+    try:
+        if n <= m:
+            low = np.linalg.cholesky(jf.T @ jf + lam2 * np.eye(n))
+            dq = np.linalg.solve(low.T, np.linalg.solve(low, jf.T @ e))
+        else:
+            low = np.linalg.cholesky(jf @ jf.T + lam2 * np.eye(m))
+            dq = jf.T @ np.linalg.solve(low.T, np.linalg.solve(low, e))
+    except np.linalg.LinAlgError:
+        dq = None
+    if dq is None or not np.all(np.isfinite(dq)):
         raise ConfigurationError(
             "dls_step: the Jacobian is singular and damping=0; use damping > 0",
             parameter="damping",
             value=damping,
             allowed="> 0 at a singular Jacobian",
         )
+    dq[~fr] = 0.0
     return dq
-
-
-# ------------------------------------------------------------------------ σ bounds
-@njit(cache=True, nogil=True)
-def sigma_bounds(jac: np.ndarray) -> tuple[float, float]:  # pragma: no cover - compiled
-    """Smallest and largest singular values of a (3, n) position Jacobian, closed form.
-
-    The smallest counts the task directions: for n >= 3 it is the 3rd singular value (0 at a
-    singularity), for n < 3 the n-th. Uses the eigenvalues of ``JJᵀ`` (3×3) or ``JᵀJ`` (2×2);
-    for n == 3 the smallest is ``|det J| / (σ1 σ2)`` (accurate near singularities).
-    """
-    n = jac.shape[1]
-    if n == 0:
-        return 0.0, 0.0
-    if n == 1:
-        v = math.sqrt(jac[0, 0] ** 2 + jac[1, 0] ** 2 + jac[2, 0] ** 2)
-        return v, v
-    if n == 2:
-        a = jac[0, 0] ** 2 + jac[1, 0] ** 2 + jac[2, 0] ** 2
-        d = jac[0, 1] ** 2 + jac[1, 1] ** 2 + jac[2, 1] ** 2
-        # |c1 x c2|^2 = ad - b^2 without cancellation
-        cx = jac[1, 0] * jac[2, 1] - jac[2, 0] * jac[1, 1]
-        cy = jac[2, 0] * jac[0, 1] - jac[0, 0] * jac[2, 1]
-        cz = jac[0, 0] * jac[1, 1] - jac[1, 0] * jac[0, 1]
-        det = cx * cx + cy * cy + cz * cz
-        b = jac[0, 0] * jac[0, 1] + jac[1, 0] * jac[1, 1] + jac[2, 0] * jac[2, 1]
-        lmax = 0.5 * (a + d + math.sqrt(max((a - d) ** 2 + 4.0 * b * b, 0.0)))
-        lmin = det / lmax if lmax > 0.0 else 0.0
-        return math.sqrt(max(lmin, 0.0)), math.sqrt(lmax)
-    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    for k in range(n):
-        x, y, z = jac[0, k], jac[1, k], jac[2, k]
-        m00 += x * x
-        m01 += x * y
-        m02 += x * z
-        m11 += y * y
-        m12 += y * z
-        m22 += z * z
-    e1, e2, e3 = eig3_sym(m00, m11, m22, m01, m02, m12)
-    smax = math.sqrt(max(e1, 0.0))
-    if n == 3:
-        s12 = smax * math.sqrt(max(e2, 0.0))
-        return (abs(det3(jac)) / s12 if s12 > 0.0 else 0.0), smax
-    return math.sqrt(max(e3, 0.0)), smax
-
-
-# ------------------------------------------------------------------------ angles
-@njit(cache=True, nogil=True, inline="always")
-def wrap_angle(a: float) -> float:  # pragma: no cover - compiled
-    """Wrap one angle to (−π, π] in [rad] (exact for inputs within a few turns)."""
-    if -math.pi < a <= math.pi:
-        return a
-    if abs(a) > 64.0 * math.pi:  # far out: one floor instead of many subtractions
-        a -= _TWO_PI * math.floor(a / _TWO_PI)
-    while a > math.pi:
-        a -= _TWO_PI
-    while a <= -math.pi:
-        a += _TWO_PI
-    return a
 
 
 def wrap_angles(a: Any) -> np.ndarray:
@@ -441,13 +126,11 @@ def wrap_diff(a: Any, b: Any) -> np.ndarray:
     return wrap_angles(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64))
 
 
-# ------------------------------------------------------------------------ chain length scale
 def chain_length(trans: Any) -> float:
     """Sum of the link offsets' lengths ``Σ‖tᵢ‖`` in [m] of an (m, 3) translation array.
 
     An upper bound of the base-to-tip distance (rows are the joint placements and the tip
-    offset, e.g. ``Model.arrays.trans``; a Khalil row contributes ``‖(d, 0, r)‖``). Plain
-    numpy (called once per model, nothing to compile).
+    offset, e.g. ``Model.arrays.trans``; a Khalil row contributes ``‖(d, 0, r)‖``).
     """
     t = np.asarray(trans, dtype=np.float64).reshape(-1, 3)
     return float(np.sum(np.sqrt(np.sum(t * t, axis=1))))
@@ -465,37 +148,3 @@ def chain_scale(trans: Any) -> float:
     """
     s = chain_length(trans)
     return s if s > 0.0 else 1.0
-
-
-# Cody–Waite split of π/2 (two 33-bit pieces and a tail) and the fdlibm minimax kernels of
-# sin / cos on [−π/4, π/4]: |error| ≤ 1 ulp for |x| ≤ POLY_TRIG_MAX, no calls, so the
-# per-joint loops below vectorise (SIMD); larger angles use libm.
-_PIO2_1 = 1.57079632673412561417e00
-_PIO2_2 = 6.07710050630396597660e-11
-_PIO2_2T = 2.02226624879595063154e-21
-_INVPIO2 = 6.36619772367581382433e-01
-POLY_TRIG_MAX = 1.0e5
-_S1, _S2, _S3 = -1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04
-_S4, _S5, _S6 = 2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10
-_C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05
-_C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """``(sin x, cos x)`` without libm calls (branch-free quadrant selection)."""
-    n = math.floor(x * _INVPIO2 + 0.5)
-    r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_2T
-    z = r * r
-    s = r + (z * r) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
-    cr = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
-    hz = 0.5 * z
-    w = 1.0 - hz
-    c = w + (((1.0 - w) - hz) + z * cr)
-    quad = int(n) & 3
-    swap = quad & 1
-    sgn_s = 1.0 - 2.0 * ((quad >> 1) & 1)
-    sgn_c = 1.0 - 2.0 * (((quad + 1) >> 1) & 1)
-    ss = c if swap else s
-    cc = s if swap else c
-    return ss * sgn_s, cc * sgn_c

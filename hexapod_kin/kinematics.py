@@ -209,18 +209,17 @@ class KinematicModel(Model):
         return lambda: self.check_q_batch(qs, "Q")
 
     def _batch_chain(self) -> Any:
-        from ._batch import aligned
+        from ._chain import aligned_chain
 
-        return self.cached("batch.aligned", lambda: aligned(self.arrays))
+        return self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
 
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
 
         Equal to :meth:`fk` of each row to rounding (≈1e-15), without a Python loop: the
-        structure-of-arrays kernel of :mod:`hexapod_kin._batch` on every core (about 25 ms
-        per 1e6 leg poses here, most of it writing the 128 MB result). A small call on a cold
-        process runs the same kernel interpreted (:mod:`hexapod_kin._tier`) rather than
-        waiting about 2 s for it to compile.
+        compiled block kernel of :mod:`hexapod_kin._kernels` on every core (compiled on first
+        use, or ahead by ``hexapod-kin precompile``); the same bits whatever the process or
+        thread count.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
@@ -233,12 +232,12 @@ class KinematicModel(Model):
             ParameterError: ``out`` of the wrong shape, dtype or layout.
 
         """
-        from ._batch import pose_jacobian_batch
+        from ._kernels import pose_jacobian_batch
 
         q = self._batch_q(qs)
         poses, _ = pose_jacobian_batch(
-            self.arrays, q, pose=True, jacobian=None, out_pose=out,
-            chain=self._batch_chain(), check=self._batch_check(q),
+            self._batch_chain(), q, pose=True, jacobian=None, out_pose=out,
+            check=self._batch_check(q),
         )  # fmt: skip
         assert poses is not None
         return poses
@@ -249,7 +248,7 @@ class KinematicModel(Model):
         """Tip Jacobians of many configurations, (N, 6, nq), rows ``[v; ω]``, in one pass.
 
         Equal to :meth:`jacobian` of each row (same ``reference``) to rounding; the same
-        kernel and tiers as :meth:`fk_batch`. Columns of variables off the base → tip path
+        kernel as :meth:`fk_batch`. Columns of variables off the base → tip path
         are zero.
 
         Args:
@@ -262,14 +261,14 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
 
         """
-        from ._batch import pose_jacobian_batch
+        from ._kernels import pose_jacobian_batch
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
         q = self._batch_q(qs)
         _, jac = pose_jacobian_batch(
-            self.arrays, q, pose=False, jacobian=key, out_jacobian=out,
-            chain=self._batch_chain(), check=self._batch_check(q),
+            self._batch_chain(), q, pose=False, jacobian=key, out_jacobian=out,
+            check=self._batch_check(q),
         )  # fmt: skip
         assert jac is not None
         return jac
@@ -292,15 +291,14 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
 
         """
-        from ._batch import pose_jacobian_batch
+        from ._kernels import pose_jacobian_batch
 
         key = reference.lower() if isinstance(reference, str) else None
         _reference(reference)
         q = self._batch_q(qs)
         poses, jac = pose_jacobian_batch(
-            self.arrays, q, pose=True, jacobian=key, chain=self._batch_chain(),
-            check=self._batch_check(q),
-        )  # fmt: skip
+            self._batch_chain(), q, pose=True, jacobian=key, check=self._batch_check(q)
+        )
         assert poses is not None and jac is not None
         return poses, jac
 
@@ -378,7 +376,8 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
         The 3×nq position Jacobian in the base frame.
 
     """
-    from .params import Chain, table_position_jacobian
+    from ._table_kin import table_position_jacobian
+    from .params import Chain
 
     qv = model.check_q(q)
     chain = model.params

@@ -1,11 +1,9 @@
-"""Compile the kernels ahead of use: ``hexapod_kin.precompile()`` / ``hexapod-kin precompile``.
+"""Compile every kernel ahead of use: ``hexapod_kin.precompile()`` / ``hexapod-kin precompile``.
 
-A new process runs small calls through the interpreted tier and compiles a kernel only once
-its work pays for the compile (:mod:`hexapod_kin._tier`). Whoever wants machine code from the
-first call on (a benchmark, a long-running controller, a container image built once) compiles
-the kernels of the areas they use here: each area makes representative calls with every
-kernel forced to compile, and numba's disk cache keeps the machine code for every later
-process (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources).
+Each area calls its batch APIs once with tiny inputs, so numba compiles every kernel of the
+package and writes the machine code to its disk cache (``cache=True``; ``NUMBA_CACHE_DIR``,
+else ``__pycache__`` beside the sources); every later process loads it. The area's stamp
+(:func:`hexapod_kin._kernels.mark_compiled`) then silences the first-use notice.
 """
 
 from __future__ import annotations
@@ -21,15 +19,18 @@ __all__ = ["AREAS", "precompile"]
 
 
 def _batch() -> None:
+    from ._kernels import fk_batch, position_jacobian_batch
     from .kinematics import load
 
     for source in ("hexabot_leg", "scara"):
         model = load(source)
-        qs = model.random_q(64, seed=0)
+        qs = model.random_q(8, seed=0)
         model.fk_batch(qs)
         for ref in ("local_world_aligned", "world", "local"):
             model.jacobian_batch(qs, ref)
         model.fk_jacobian_batch(qs)
+        fk_batch(model.arrays, qs)
+        position_jacobian_batch(model.arrays, qs)
 
 
 def _ik() -> None:
@@ -37,9 +38,8 @@ def _ik() -> None:
     from .kinematics import load
 
     leg = load("hexabot_leg")
-    targets = np.array([leg.fk(q)[:3, 3] for q in leg.random_q(8, seed=1)])
+    targets = np.array([leg.fk(q)[:3, 3] for q in leg.random_q(4, seed=1)])
     solve(leg, targets[0])
-    solve(leg, [1.0, 0.0, 0.0])  # out of reach: the local-minimum checks
     solve_many(leg, targets)
     analytic_batch(leg, targets)
     arm = load("erd:ur5_robot")
@@ -67,13 +67,21 @@ def _singularity() -> None:
 
     for source in ("hexabot_leg", "scara", "erd:ur5_robot"):
         model = load(source)
-        measures_batch(model, model.random_q(512, seed=3))
+        measures_batch(model, model.random_q(8, seed=3))
 
 
 def _gait() -> None:
     from .gait import walk
 
     walk(duration=0.2)
+
+
+def _sweep() -> None:
+    from .sweep import score_designs
+    from .sweep.designs import DEFAULTS, PARAMETERS
+
+    row = np.array([[DEFAULTS[name] for name in PARAMETERS]], dtype=float)
+    score_designs(row, mc_samples=16, line_points=4, stride_points=2)
 
 
 #: Area name → the calls that compile its kernels.
@@ -83,6 +91,7 @@ AREAS: dict[str, Callable[[], None]] = {
     "motion": _motion,
     "singularity": _singularity,
     "gait": _gait,
+    "sweep": _sweep,
 }
 
 
@@ -100,18 +109,16 @@ def precompile(areas: Sequence[str] | None = None) -> dict[str, float]:
         ParameterError: An unknown area name.
 
     """
-    from . import _tier
+    from ._kernels import mark_compiled, silence_notice
 
     names = list(AREAS) if areas is None else list(areas)
     for name in names:
         one_of("areas", name, AREAS)
-    before = _tier.set_mode("always")
+    silence_notice()
     seconds: dict[str, float] = {}
-    try:
-        for name in names:
-            t0 = time.perf_counter()
-            AREAS[name]()
-            seconds[name] = time.perf_counter() - t0
-    finally:
-        _tier.set_mode(before)
+    for name in names:
+        t0 = time.perf_counter()
+        AREAS[name]()
+        seconds[name] = time.perf_counter() - t0
+        mark_compiled(name)
     return seconds

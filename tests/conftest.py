@@ -2,15 +2,10 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
 import pytest
-
-# no background compiles from the command lines the tests start (hexapod_kin._tier): each
-# would compile a kernel area for tens of seconds; tests/test_tier.py checks them on purpose
-os.environ["HEXAPOD_KIN_BACKGROUND"] = "0"
 
 # test tooling shared with tools/ (headless Chromium launcher)
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
@@ -26,32 +21,10 @@ def preset_models():
     return {name: load(name) for name in robots.names()}
 
 
-def _jit(mode):
-    from hexapod_kin import _tier
-
-    before = _tier.set_mode(mode)
-    try:
-        yield
-    finally:
-        _tier.set_mode(before)
-
-
 @pytest.fixture
 def jit_always():
-    """Compiled tier for every kernel call of the test (tests of the compiled code itself)."""
-    yield from _jit("always")
-
-
-@pytest.fixture
-def jit_never():
-    """Interpreted tier for every kernel call of the test (the same source run by Python)."""
-    yield from _jit("never")
-
-
-@pytest.fixture
-def jit_auto():
-    """The default tier rule, whatever the environment sets (``HEXAPOD_KIN_JIT``)."""
-    yield from _jit("auto")
+    """No-op, kept while tests of other areas still name it (kernels have no tiers now)."""
+    yield
 
 
 @pytest.fixture(scope="module")

@@ -2,8 +2,7 @@
 
 Every result is compared with raw Pinocchio calls on the same model (its own ``Data``), in the
 three reference frames, on random configurations spread over the kernel's blocks and threads,
-with angles beyond the polynomial sin / cos range (the libm path), and with the kernel run
-interpreted (the tier a small cold call takes) as well as compiled.
+with angles beyond the polynomial sin / cos range (the libm path, element by element).
 """
 
 from __future__ import annotations
@@ -13,7 +12,8 @@ import pinocchio as pin
 import pytest
 
 import hexapod_kin as hk
-from hexapod_kin import _batch, _tier
+from hexapod_kin import _chain
+from hexapod_kin import _kernels as K
 from hexapod_kin.exceptions import ConfigurationError
 
 SOURCES = [
@@ -53,14 +53,14 @@ def _pinocchio(model, q):
 def _configs(model, n, seed):
     qs = model.random_q(n, seed=seed)
     revolute = model.arrays.kind == 0
-    if revolute.any():  # beyond the polynomial sin / cos range: libm for that block
+    if revolute.any():  # beyond the polynomial sin / cos range: libm for that element
         qs[n // 3, model.arrays.col[revolute]] = [2.5e5 * (-1) ** k for k in range(revolute.sum())]
     return qs
 
 
 def _rows(n):
     """Rows to check: both ends of the threads' chunks and of some blocks, and random ones."""
-    block, chunk = _batch.BLOCK, _batch.BLOCK * _batch.MIN_CHUNK_BLOCKS
+    block, chunk = K.BLOCK, K.BLOCK * K.MIN_CHUNK_BLOCKS
     rows = {0, 1, n - 1, n // 2 - 1, n // 2, n // 3, block - 1, block, 2 * block + 7}
     rows |= {k * chunk + d for k in range(1, n // chunk + 1) for d in (-1, 0)}
     rows |= set(np.random.default_rng(0).integers(0, n, 40).tolist())
@@ -68,9 +68,9 @@ def _rows(n):
 
 
 @pytest.mark.parametrize(("source", "kw"), SOURCES)
-def test_batch_equals_pinocchio_in_every_frame(source, kw, jit_always):
+def test_batch_equals_pinocchio_in_every_frame(source, kw):
     model = hk.load(source, **kw)
-    n = 2 * _batch.MIN_PER_THREAD + 3 * _batch.BLOCK + 5  # two threads, chunks, a partial block
+    n = 2 * K.MIN_PER_THREAD + 3 * K.BLOCK + 5  # two threads, chunks, a partial block
     qs = _configs(model, n, seed=11)
     poses = model.fk_batch(qs)
     jacs = {ref: model.jacobian_batch(qs, ref) for ref in REFS}
@@ -85,38 +85,23 @@ def test_batch_equals_pinocchio_in_every_frame(source, kw, jit_always):
             np.testing.assert_allclose(jacs[ref][i], jac, rtol=0, atol=1e-12, err_msg=ref)
 
 
-@pytest.mark.parametrize(("source", "kw"), SOURCES)
-def test_interpreted_kernel_gives_the_same_numbers(source, kw):
-    model = hk.load(source, **kw)
-    qs = _configs(model, 7, seed=5)
-    before = _tier.set_mode("never")
-    try:
-        slow = {ref: model.fk_jacobian_batch(qs, ref) for ref in REFS}
-        slow_fk = model.fk_batch(qs)
-    finally:
-        _tier.set_mode(before)
-    before = _tier.set_mode("always")
-    try:
-        fast = {ref: model.fk_jacobian_batch(qs, ref) for ref in REFS}
-    finally:
-        _tier.set_mode(before)
-    np.testing.assert_array_equal(slow_fk, slow["local"][0])
-    for ref in REFS:
-        np.testing.assert_allclose(slow[ref][0], fast[ref][0], rtol=0, atol=1e-14)
-        np.testing.assert_allclose(slow[ref][1], fast[ref][1], rtol=0, atol=1e-14)
-    for i, q in enumerate(qs):
-        pose, ref_jacs = _pinocchio(model, q)
-        np.testing.assert_allclose(slow_fk[i], pose, rtol=0, atol=1e-12)
-        for ref, jac in ref_jacs.items():
-            np.testing.assert_allclose(slow[ref][1][i], jac, rtol=0, atol=1e-12)
+def test_a_value_does_not_depend_on_its_neighbours():
+    # the libm switch, the block and the thread of a row never change its bits
+    model = hk.load("erd:ur5_robot")
+    qs = _configs(model, 3 * K.BLOCK + 5, seed=4)
+    poses, jacs = model.fk_jacobian_batch(qs, "local")
+    for i in (0, qs.shape[0] // 3, K.BLOCK + 1, qs.shape[0] - 1):
+        one_pose, one_jac = model.fk_jacobian_batch(qs[i : i + 1], "local")
+        np.testing.assert_array_equal(one_pose[0], poses[i])
+        np.testing.assert_array_equal(one_jac[0], jacs[i])
 
 
 @pytest.mark.parametrize(
     ("bad", "message"), [(np.nan, "non-finite"), (-np.inf, "non-finite"), (1e151, "too large")]
 )
-def test_values_checked_inside_the_kernel_raise_the_model_message(bad, message, jit_always):
+def test_values_checked_inside_the_kernel_raise_the_model_message(bad, message):
     model = hk.load("hexabot_leg")
-    qs = model.random_q(3 * _batch.MIN_PER_THREAD, seed=2)
+    qs = model.random_q(3 * K.MIN_PER_THREAD, seed=2)
     qs[-5, 1] = bad  # in the second thread's range
     for call in (model.fk_batch, model.jacobian_batch, model.fk_jacobian_batch):
         with pytest.raises(ConfigurationError, match=message):
@@ -131,7 +116,7 @@ def test_aligned_chain_rotations_map_z_to_the_axis():
     axes = [np.eye(3)[k] * s for k in range(3) for s in (1.0, -1.0)]
     axes += [v / np.linalg.norm(v) for v in rng.normal(size=(20, 3))]
     for u in axes:
-        a = _batch._z_to(u)
+        a = _chain._z_to(u)
         np.testing.assert_allclose(a @ [0.0, 0.0, 1.0], u, rtol=0, atol=1e-15)
         np.testing.assert_allclose(a.T @ a, np.eye(3), rtol=0, atol=1e-15)
         assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-15)

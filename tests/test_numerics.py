@@ -1,4 +1,4 @@
-"""The shared compiled numerics, against numpy/LAPACK and closed forms."""
+"""The small maths (numpy :mod:`_numerics`, compiled :mod:`_kernels`) vs numpy/LAPACK."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from hexapod_kin import _kernels as K
 from hexapod_kin import _numerics as N
 from hexapod_kin.exceptions import ConfigurationError
 
@@ -22,7 +23,7 @@ def test_eig3_sym_equals_lapack_including_diagonal_and_degenerate() -> None:
     mats = [_sym(3) for _ in range(200)]
     mats += [np.diag([3.0, -1.0, 2.0]), np.eye(3) * 2.5, np.diag([1.0, 1.0, 0.0])]
     for g in mats:
-        got = N.eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
+        got = K.eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
         ref = np.sort(np.linalg.eigvalsh(g))[::-1]
         assert np.allclose(got, ref, atol=1e-12 * max(1.0, abs(ref).max()))
 
@@ -33,10 +34,10 @@ def test_eig2_and_jacobi_equal_lapack() -> None:
             g = _sym(n)
             ref = np.sort(np.linalg.eigvalsh(g))[::-1]
             if n == 2:
-                got = np.array(N.eig2_sym(g[0, 0], g[0, 1], g[1, 1]))
+                got = np.array(K.eig2_sym(g[0, 0], g[0, 1], g[1, 1]))
             else:
                 got = np.empty(n)
-                N.jacobi_eig(g.copy(), got)
+                K.jacobi_eig(g.copy(), got)
             assert np.allclose(got, ref, rtol=1e-10, atol=1e-12)
 
 
@@ -45,19 +46,19 @@ def test_determinants_equal_numpy() -> None:
         work = np.empty((6, 6))
         for _ in range(30):
             a = RNG.normal(size=(n, n))
-            assert N.det_small(np.ascontiguousarray(a), n, work) == pytest.approx(
+            assert K.det_small(np.ascontiguousarray(a), n, work) == pytest.approx(
                 np.linalg.det(a), rel=1e-10, abs=1e-12
             )
-    assert N.det_lu(np.zeros((4, 4))) == 0.0
+    assert K.det_lu(np.zeros((4, 4))) == 0.0
 
 
 def test_solve_spd_and_non_spd() -> None:
     a = _sym(5) + 0.1 * np.eye(5)
     b = RNG.normal(size=5)
     out = np.empty(5)
-    assert N.solve_spd(a.copy(), b, out)
+    assert K.solve_spd(a.copy(), b, out)
     assert np.allclose(a @ out, b, atol=1e-10)
-    assert not N.solve_spd(-np.eye(2), np.ones(2), np.empty(2))
+    assert not K.solve_spd(-np.eye(2), np.ones(2), np.empty(2))
 
 
 @pytest.mark.parametrize("shape", [(3, 2), (3, 3), (3, 7), (6, 6), (6, 7), (2, 5)])
@@ -94,14 +95,14 @@ def test_sigma_bounds_equal_svd(n: int) -> None:
     for _ in range(50):
         j = RNG.normal(size=(3, n))
         s = np.linalg.svd(j, compute_uv=False)
-        lo, hi = N.sigma_bounds(np.ascontiguousarray(j))
+        lo, hi = K.sigma_bounds(np.ascontiguousarray(j))
         assert hi == pytest.approx(s[0], rel=1e-10)
         assert lo == pytest.approx(s[min(n, 3) - 1], rel=1e-8, abs=1e-12)
 
 
 def test_sigma_bounds_exact_singularity() -> None:
     j = np.array([[1.0, 2.0, 3.0], [0.0, 1.0, 1.0], [1.0, 3.0, 4.0]])  # row 3 = row 1 + row 2
-    lo, _ = N.sigma_bounds(j)
+    lo, _ = K.sigma_bounds(j)
     assert lo < 1e-12
 
 
@@ -112,7 +113,7 @@ def test_wrapping() -> None:
     assert np.allclose(np.sin(w), np.sin(a)) and np.allclose(np.cos(w), np.cos(a))
     assert w[1] == math.pi
     for x in a:
-        assert N.wrap_angle(float(x)) == pytest.approx(w[list(a).index(x)], abs=1e-9)
+        assert K.wrap_angle(float(x)) == pytest.approx(w[list(a).index(x)], abs=1e-9)
     assert N.wrap_diff(np.array([3.0]), np.array([-3.0]))[0] == pytest.approx(6.0 - 2 * math.pi)
 
 
@@ -158,3 +159,11 @@ def test_rotation_angle_equals_pinocchio_log3():
     ref = np.array([np.linalg.norm(pin.log3(a @ b.T)) for a, b in zip(ra, rb)])
     assert np.allclose(got, ref, rtol=1e-9, atol=1e-15)
     assert got[-4] < 1e-14 and abs(got[-3] - 3e-9) < 1e-16  # tiny angles keep their digits
+
+
+def test_numerics_never_imports_numba() -> None:
+    import subprocess
+    import sys
+
+    code = "import sys, hexapod_kin._numerics; assert 'numba' not in sys.modules"
+    subprocess.run([sys.executable, "-c", code], check=True)

@@ -3,9 +3,7 @@
 Pinocchio writes every result into its ``Data``; a model keeps one ``Data`` per thread. The
 thread switch interval is set to 1 µs (as on a busy server) so that threads interleave
 between the Pinocchio calls of one ``fk``; each thread's results are compared bit for bit
-with the same calls made on one thread beforehand. Compiled kernels throughout (the
-interpreted tier of a cold process rounds sin/cos differently in the last bit; both tiers are
-compared in test_tier.py).
+with the same calls made on one thread beforehand.
 """
 
 from __future__ import annotations
@@ -56,11 +54,6 @@ def _run_threads(work: Callable[[int], Any]) -> list[Any]:
     if errors:
         raise errors[0]
     return results
-
-
-@pytest.fixture(autouse=True)
-def _compiled(jit_always: None) -> None:
-    """Every kernel call of this module runs compiled."""
 
 
 @pytest.fixture(scope="module")

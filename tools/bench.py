@@ -1,11 +1,18 @@
-"""Benchmarks: hexapod_kin against its peers, in one run, printing ratios.
+"""Benchmarks: the issue's figures in one run, then the per-concern sections.
 
 Usage: ``python tools/bench.py [--only SECTION ...] [--quick] [--json]``.
-Sections live in ``tools/bench_<section>.py`` (one per concern) and expose
-``run(quick: bool) -> list[dict]``; each dict is one line of the report and carries its
-comparison: a ``ratio``/``speedup`` against a peer measured in the same run, or a measured
-figure beside its ``target``. ``startup`` times every subcommand as a whole process, cold
-(fresh numba and derivation caches) and warm.
+
+``headline`` (first, the default) prints, in one run: every command's start time cold and
+warm (:mod:`bench_startup`), ``hexapod-kin precompile`` on fresh caches, and after it, in
+child processes on those caches: the first leg ``fk_batch`` of 1e6 in a fresh process, then
+(one process) the default ``scan(grid=100)`` with family labels, ``measures_batch`` of 1e6
+(leg, SCARA, Solo12 leg, UR5), leg ``fk_batch`` of 1e6, UR5 6-D IK through ``solve_many``
+(mean µs per pose and success) and ``ik.solve`` (median µs per pose); with the ratio to a peer
+measured in the same run where one exists (a Pinocchio loop, numpy's SVD, Pinocchio's IK
+example loop). A row that fails prints its error and the run goes on.
+
+The other sections live in ``tools/bench_<section>.py`` (one per concern) and expose
+``run(quick: bool) -> list[dict]``; each dict is one line of the report.
 """
 
 from __future__ import annotations
@@ -13,10 +20,16 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import os
+import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
+from typing import Any
 
 SECTIONS = [
+    "headline",
     "spine",
     "singularity",
     "ik",
@@ -27,34 +40,198 @@ SECTIONS = [
     "dynamics",
     "startup",
 ]
+TOOLS = Path(__file__).resolve().parent
+
+#: The speed rows, run in one child process after ``precompile`` (prints one JSON per row).
+_SPEED = r"""
+import json, sys, time
+import numpy as np
+import pinocchio as pin
+import hexapod_kin as hk
+from hexapod_kin import ik
+from hexapod_kin.singularity import measures_batch, scan
+
+QUICK = sys.argv[1] == "1"
+N = 100_000 if QUICK else 1_000_000
+
+
+def best(f, r=3):
+    f()
+    out = float("inf")
+    for _ in range(r):
+        t0 = time.perf_counter(); f(); out = min(out, time.perf_counter() - t0)
+    return out
+
+
+def row(name, fn):
+    try:
+        res = fn()
+    except Exception as exc:  # noqa: BLE001 - printed on the row
+        res = {"error": f"{type(exc).__name__}: {exc}"[:200]}
+    print(json.dumps({"row": name, **res}), flush=True)
+
+
+def svd_peer(model, k=10_000):
+    qs = model.random_q(k, seed=9)
+    m, d, fid = model.model, model.model.createData(), model.tip_id
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    t0 = time.perf_counter()
+    jac = np.array([pin.computeFrameJacobian(m, d, q, fid, lwa)[:3] for q in qs])
+    np.linalg.svd(jac, compute_uv=False)
+    return (time.perf_counter() - t0) * N / k
+
+
+def scan_row():
+    leg = hk.load("hexabot_leg")
+    t0 = time.perf_counter(); res = scan(leg, grid=100); first = time.perf_counter() - t0
+    again = best(lambda: scan(leg, grid=100), 2)
+    fams = [getattr(f, "name", str(f)) for f in getattr(res, "families", ())]
+    return {"first_s": round(first, 4), "best_s": round(again, 4), "target_s": 0.1,
+            "flagged": int(np.count_nonzero(res.singular)), "families": fams}
+
+
+def measures_row(src, kw, target):
+    model = hk.load(src, **kw)
+    qs = model.random_q(N, seed=0)
+    t = best(lambda: measures_batch(model, qs))
+    peer = svd_peer(model)
+    return {"n": N, "s": round(t, 4), "target_s": target,
+            "peer_pinocchio_loop_numpy_svd_s": round(peer, 2), "speedup": round(peer / t, 1)}
+
+
+def fk_row():
+    leg = hk.load("hexabot_leg")
+    qs = leg.random_q(N, seed=0)
+    t = best(lambda: leg.fk_batch(qs))
+    m, d, fid = leg.model, leg.model.createData(), leg.tip_id
+    k = 20_000
+    t0 = time.perf_counter()
+    for q in qs[:k]:
+        pin.forwardKinematics(m, d, q); pin.updateFramePlacement(m, d, fid).homogeneous
+    peer = (time.perf_counter() - t0) * N / k
+    return {"n": N, "s": round(t, 4), "target_s": 0.05, "peer_pinocchio_loop_s": round(peer, 2),
+            "speedup": round(peer / t, 1)}
+
+
+def ik_row():
+    sys.path.insert(0, sys.argv[2])
+    from bench_ik import _pin_pose_dls
+
+    arm = hk.load("erd:ur5_robot")
+    n = 200 if QUICK else 2000
+    poses = np.array([arm.fk(q) for q in arm.random_q(n, seed=11)])
+    ik.solve_many(arm, poses[:2])
+    t0 = time.perf_counter(); many = ik.solve_many(arm, poses); t_many = time.perf_counter() - t0
+    ok = 0
+    qs = [r.q for r in many] if isinstance(many, (list, tuple)) else many.q
+    for i, t in enumerate(poses):
+        pose = arm.fk(qs[i])
+        err = np.linalg.norm(pose[:3, 3] - t[:3, 3])
+        rot = np.linalg.norm(pin.log3(t[:3, :3] @ pose[:3, :3].T))
+        ok += bool(err <= 1e-9 and rot <= 1e-9)
+    times = []
+    for t in poses[:200]:
+        t0 = time.perf_counter(); ik.solve(arm, t); times.append(time.perf_counter() - t0)
+    ours = float(np.median(times)) * 1e6
+    m, d, fid = arm.model, arm.model.createData(), arm.tip_id
+    lo, hi = m.lowerPositionLimit, m.upperPositionLimit
+    ptimes = []
+    for t in poses[:100]:
+        des = pin.SE3(t[:3, :3], t[:3, 3])
+        t0 = time.perf_counter(); _pin_pose_dls(m, d, fid, des, pin.neutral(m), lo, hi)
+        ptimes.append(time.perf_counter() - t0)
+    peer = float(np.median(ptimes)) * 1e6
+    return {"n": n, "solve_many_mean_us": round(t_many / n * 1e6, 1),
+            "success": round(ok / n, 4), "target_success": 0.995,
+            "solve_median_us": round(ours, 1), "target_median_us": 50,
+            "peer_pinocchio_ik_example_median_us": round(peer, 1),
+            "speedup": round(peer / ours, 1)}
+
+
+row("scan(grid=100) hexabot_leg", scan_row)
+for src, kw, target in [("hexabot_leg", {}, 0.05), ("scara", {}, 0.1),
+                        ("erd:solo12", {"tip": "FL_FOOT"}, 0.1), ("erd:ur5_robot", {}, 0.3)]:
+    row(f"measures_batch {src}", lambda: measures_row(src, kw, target))
+row("fk_batch hexabot_leg", fk_row)
+row("6-D IK erd:ur5_robot", ik_row)
+"""
+
+_FIRST = r"""
+import json, time
+import hexapod_kin as hk
+leg = hk.load("hexabot_leg")
+qs = leg.random_q(1_000_000, seed=0)
+t0 = time.perf_counter(); leg.fk_batch(qs); dt = time.perf_counter() - t0
+print(json.dumps({"row": "first fk_batch 1e6 in a fresh process", "s": round(dt, 4),
+                  "target_s": 0.5}))
+"""
+
+
+def _child(code: str, env: dict[str, str], *args: str) -> list[dict[str, Any]]:
+    res = subprocess.run(
+        [sys.executable, "-c", code, *args], env=env, capture_output=True, text=True, check=False
+    )
+    rows = [json.loads(ln) for ln in res.stdout.splitlines() if ln.startswith("{")]
+    if res.returncode != 0:
+        rows.append({"row": "child", "error": res.stderr.strip()[-300:]})
+    return rows
+
+
+def headline(quick: bool) -> list[dict[str, Any]]:
+    """The issue's figures (see the module docstring)."""
+    import bench_startup
+
+    rows: list[dict[str, Any]] = []
+    try:
+        if quick:
+            rows += bench_startup.measure(list(bench_startup.QUICK), 1, ("cold", "warm"))
+        else:
+            rows += bench_startup.measure(list(bench_startup.COMMANDS), 1, ("cold", "warm"))
+    except Exception as exc:  # noqa: BLE001 - printed on the row
+        rows.append({"row": "startup", "error": f"{type(exc).__name__}: {exc}"})
+    cache = Path(tempfile.mkdtemp(prefix="hk_bench_"))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache / "numba"))
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(cache / "hexapod_kin")
+    t0 = time.perf_counter()
+    pre = subprocess.run(
+        [sys.executable, "-m", "hexapod_kin", "precompile"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    rows.append(
+        {"row": "precompile (fresh caches)", "s": round(time.perf_counter() - t0, 2)}
+        | ({"error": pre.stderr.strip()[-300:]} if pre.returncode else {})
+    )
+    rows += _child(_FIRST, env)
+    rows += _child(_SPEED, env, "1" if quick else "0", str(TOOLS))
+    return rows
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--only", nargs="+", choices=SECTIONS)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--only", nargs="+", choices=SECTIONS, default=["headline"])
     parser.add_argument("--quick", action="store_true", help="fewer repetitions (smoke test)")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    # speed sections measure machine code: every kernel compiled on its first call, never the
-    # interpreted tier a cold process starts with (hexapod_kin._tier); ``startup`` times whole
-    # processes, which keep the default rule
-    from hexapod_kin import _tier
-
-    _tier.set_mode("always")
+    sys.path.insert(0, str(TOOLS))
     results = []
-    for name in args.only or SECTIONS:
+    for name in args.only:
         try:
-            mod = importlib.import_module(f"bench_{name}")
-        except ModuleNotFoundError as exc:
-            print(f"[{name}] skipped: {exc}", file=sys.stderr)
-            continue
-        for row in mod.run(args.quick):
+            rows = (
+                headline(args.quick)
+                if name == "headline"
+                else importlib.import_module(f"bench_{name}").run(args.quick)
+            )
+        except Exception as exc:  # noqa: BLE001 - one failing section does not end the run
+            rows = [{"error": f"{type(exc).__name__}: {exc}"}]
+        for row in rows:
             row = {"section": name, **row}
             results.append(row)
             if not args.json:
                 fields = (f"{k}={v}" for k, v in row.items() if k != "section")
-                print(f"[{name}] " + "  ".join(fields))
+                print(f"[{name}] " + "  ".join(fields), flush=True)
     if args.json:
         print(json.dumps(results))
     return 0

@@ -94,12 +94,9 @@ def run_batch(quick: bool = False) -> list[dict]:
 
     Fresh output arrays (``fk_batch_s``: the page faults of 128 MB are part of it) and a reused
     ``out=`` buffer; the load average is printed beside (the machine is shared). The last
-    columns compare the two tiers of the kernel on a 10-configuration call: interpreted (what a
-    cold small call runs, see :mod:`hexapod_kin._tier`) and compiled.
+    column is a 10-configuration call (the kernel's fixed cost).
     """
     import os
-
-    from hexapod_kin import _tier
 
     rows = []
     n = 100_000 if quick else 1_000_000
@@ -109,52 +106,43 @@ def run_batch(quick: bool = False) -> list[dict]:
         model = hk.load(source)
         qs = model.random_q(n, seed=0)
         small = qs[:10].copy()
-        before = _tier.set_mode("never")
-        try:
-            t_interp = _best(lambda model=model, small=small: model.fk_jacobian_batch(small), 3)
-        finally:
-            _tier.set_mode("always")
-        try:  # compile (cached on disk after the first run)
-            model.fk_jacobian_batch(small)
-            t_small = _best(lambda model=model, small=small: model.fk_jacobian_batch(small), 20)
-            m, d, fid = model.model, model.model.createData(), model.tip_id
-            lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-            loop_q = list(qs[:n_loop])
+        # compile (cached on disk after the first run)
+        model.fk_jacobian_batch(small)
+        t_small = _best(lambda model=model, small=small: model.fk_jacobian_batch(small), 20)
+        m, d, fid = model.model, model.model.createData(), model.tip_id
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        loop_q = list(qs[:n_loop])
 
-            def raw_fk(m=m, d=d, fid=fid, loop_q=loop_q):
-                for q in loop_q:
-                    pin.forwardKinematics(m, d, q)
-                    _ = pin.updateFramePlacement(m, d, fid).homogeneous
+        def raw_fk(m=m, d=d, fid=fid, loop_q=loop_q):
+            for q in loop_q:
+                pin.forwardKinematics(m, d, q)
+                _ = pin.updateFramePlacement(m, d, fid).homogeneous
 
-            def raw_jac(m=m, d=d, fid=fid, loop_q=loop_q, lwa=lwa):
-                for q in loop_q:
-                    pin.computeFrameJacobian(m, d, q, fid, lwa)
+        def raw_jac(m=m, d=d, fid=fid, loop_q=loop_q, lwa=lwa):
+            for q in loop_q:
+                pin.computeFrameJacobian(m, d, q, fid, lwa)
 
-            scale = n / n_loop
-            t_raw_fk = _best(raw_fk, repeat) * scale
-            t_raw_jac = _best(raw_jac, repeat) * scale
-            t_fk = _best(lambda model=model, qs=qs: model.fk_batch(qs), repeat)
-            buf = np.empty((n, 4, 4))
-            t_fk_out = _best(
-                lambda model=model, qs=qs, buf=buf: model.fk_batch(qs, out=buf), repeat
-            )
-            t_jac = _best(lambda model=model, qs=qs: model.jacobian_batch(qs), repeat)
-            jbuf = np.empty((n, 6, model.nq))
-            t_jac_out = _best(
-                lambda model=model, qs=qs, jbuf=jbuf: model.jacobian_batch(qs, out=jbuf), repeat
-            )
-            t_both = _best(lambda model=model, qs=qs: model.fk_jacobian_batch(qs), repeat)
-            check = slice(0, 200)
-            err = max(
-                float(np.abs(model.fk_batch(qs[check]) - [model.fk(q) for q in qs[check]]).max()),
-                float(
-                    np.abs(
-                        model.jacobian_batch(qs[check]) - [model.jacobian(q) for q in qs[check]]
-                    ).max()
-                ),
-            )
-        finally:
-            _tier.set_mode(before)
+        scale = n / n_loop
+        t_raw_fk = _best(raw_fk, repeat) * scale
+        t_raw_jac = _best(raw_jac, repeat) * scale
+        t_fk = _best(lambda model=model, qs=qs: model.fk_batch(qs), repeat)
+        buf = np.empty((n, 4, 4))
+        t_fk_out = _best(lambda model=model, qs=qs, buf=buf: model.fk_batch(qs, out=buf), repeat)
+        t_jac = _best(lambda model=model, qs=qs: model.jacobian_batch(qs), repeat)
+        jbuf = np.empty((n, 6, model.nq))
+        t_jac_out = _best(
+            lambda model=model, qs=qs, jbuf=jbuf: model.jacobian_batch(qs, out=jbuf), repeat
+        )
+        t_both = _best(lambda model=model, qs=qs: model.fk_jacobian_batch(qs), repeat)
+        check = slice(0, 200)
+        err = max(
+            float(np.abs(model.fk_batch(qs[check]) - [model.fk(q) for q in qs[check]]).max()),
+            float(
+                np.abs(
+                    model.jacobian_batch(qs[check]) - [model.jacobian(q) for q in qs[check]]
+                ).max()
+            ),
+        )
         rows.append(
             {
                 "batch": source,
@@ -170,7 +158,6 @@ def run_batch(quick: bool = False) -> list[dict]:
                 "speedup_jac": round(t_raw_jac / t_jac, 1),
                 "max_err_vs_pin": f"{err:.1e}",
                 "target_s": f"<= {target} (for n = 1e6)",
-                "fk_jac_10_interpreted_ms": round(t_interp * 1e3, 2),
                 "fk_jac_10_compiled_us": round(t_small * 1e6, 1),
                 "load_avg_1min": round(os.getloadavg()[0], 2),
             }

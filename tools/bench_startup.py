@@ -5,10 +5,7 @@
   first command pays. Python bytecode stays as it is (written by the first import of each
   module; a cold bytecode cache adds about 0.3 s, measured with ``PYTHONPYCACHEPREFIX`` in a
   new folder).
-* **warm**: the same command again with caches that the first run filled, including the
-  machine code that run's background compile left (``hexapod_kin._tier``: a command that ran
-  a kernel interpreted although machine code would have paid has it compiled after it; the
-  timed runs wait for that compile, and the cold runs turn it off).
+* **warm**: the same command again with the caches that a first (untimed) run filled.
 
 Each command runs ``runs`` times per mode (a new cold folder each cold run); the report has
 min / median / max wall seconds and marks a median over its target (cold ≤ 5 s: the first
@@ -17,7 +14,8 @@ the same run (``ratio`` = median / that), so a slow machine shows as such.
 
 Usage: ``python tools/bench_startup.py [--quick] [--runs N] [--only CMD ...] [--mode cold|warm]``
 or ``python tools/bench.py --only startup``; ``--profile CMD`` prints the numba compile seconds
-of each kernel a cold ``CMD`` compiles (where a cold start goes). No timing assertion anywhere.
+of each kernel a cold ``CMD`` compiles (command-line work should compile none: the size rule).
+No timing assertion anywhere.
 """
 
 from __future__ import annotations
@@ -86,17 +84,8 @@ def _cli() -> list[str]:
     return [sys.executable, "-m", "hexapod_kin"]
 
 
-#: The tier rule of the timed processes (``--jit``): ``auto`` is what users get; ``always``
-#: compiles every kernel on its first call (the cost the interpreted tier avoids).
-_JIT = {"mode": "auto"}
-
-
-def _env(cache: Path | None, background: bool = False) -> dict[str, str]:
+def _env(cache: Path | None) -> dict[str, str]:
     env = dict(os.environ)
-    env["HEXAPOD_KIN_JIT"] = _JIT["mode"]
-    # a command leaves a background compile behind it (hexapod_kin._tier): only the run that
-    # fills the warm caches may, and the warm runs wait for it (else it would share the cores)
-    env["HEXAPOD_KIN_BACKGROUND"] = "1" if background else "0"
     # as on a user's machine: Python writes the bytecode of the package on its first import
     # (an editable install compiles none; a sandbox may set PYTHONDONTWRITEBYTECODE, and then
     # every process would compile the recently edited modules from source again)
@@ -121,14 +110,6 @@ def _time(
         return time.perf_counter() - t0, -1, f"timed out after {timeout:g} s"
     last = (res.stderr.strip().splitlines() or [""])[-1]
     return time.perf_counter() - t0, res.returncode, last
-
-
-def _wait_background(cache: Path, timeout: float) -> None:
-    """Wait until the background compile a command started in ``cache`` has ended."""
-    lock = cache / "hexapod_kin" / "tier" / "background-compile.json"
-    end = time.monotonic() + timeout
-    while lock.exists() and time.monotonic() < end:
-        time.sleep(0.2)
 
 
 def _stats(times: list[float]) -> dict[str, float]:
@@ -174,9 +155,8 @@ def measure(
                         dt, status, last = _time(argv, _env(cache), timeout, out_dir)
                         shutil.rmtree(cache, ignore_errors=True)
                     else:
-                        if i == 0:  # fill the caches first (not counted), background included
-                            _time(argv, _env(warm_cache, background=True), timeout, out_dir)
-                            _wait_background(warm_cache, timeout)
+                        if i == 0:  # fill the caches first (not counted)
+                            _time(argv, _env(warm_cache), timeout, out_dir)
                         dt, status, last = _time(argv, _env(warm_cache), timeout, out_dir)
                     times.append(dt)
                 target = COLD_TARGET_S if mode == "cold" else WARM_TARGET_S
@@ -273,14 +253,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--profile", choices=sorted(COMMANDS), help="compile seconds per kernel of one cold command"
     )
-    parser.add_argument(
-        "--jit",
-        choices=("auto", "always"),
-        default="auto",
-        help="tier rule of the timed processes (always: compile every kernel, as before tiers)",
-    )
     args = parser.parse_args(argv)
-    _JIT["mode"] = args.jit
     if args.profile:
         print(compile_profile(args.profile))
         return 0

@@ -11,11 +11,9 @@ Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one 
 from __future__ import annotations
 
 import argparse
-import atexit
 import importlib
 import os
 import sys
-import threading
 from collections.abc import Sequence
 
 from ..exceptions import HexapodKinError, ParameterError
@@ -76,31 +74,8 @@ def _one_line(text: object) -> str:
 
 
 def run() -> None:
-    """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit.
-
-    A kernel the command ran interpreted although machine code would have paid is compiled
-    after it by a detached low-priority process (:mod:`hexapod_kin._tier`;
-    ``HEXAPOD_KIN_BACKGROUND=0`` turns that off). The exit skips the interpreter's teardown
-    (freeing every module and object), which takes 0.1–0.4 s once numba, Pinocchio, sympy and
-    matplotlib are loaded — a tenth of a warm command. First the output is flushed and the
-    ``atexit`` handlers run (the tier ledger, the background compile, the viewer's server,
-    multiprocessing's children); if another non-daemon thread is still alive, or a profiler
-    or tracer runs (``python -m cProfile -m hexapod_kin ...``), the normal exit is kept.
-    """
-    # a kernel this command runs interpreted although machine code would have paid is
-    # compiled after it, in the background (hexapod_kin._tier; HEXAPOD_KIN_BACKGROUND=0: not)
-    os.environ.setdefault("HEXAPOD_KIN_BACKGROUND", "1")
-    code = main()
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError):  # a closed pipe: nothing more can be said on it
-            pass
-    others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
-    if any(t.is_alive() for t in others) or sys.getprofile() or sys.gettrace():
-        sys.exit(code)  # a thread to wait for, or a profiler / tracer that writes at the end
-    atexit._run_exitfuncs()
-    os._exit(code)
+    """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit."""
+    sys.exit(main())
 
 
 def main(argv: Sequence[str] | None = None) -> int:

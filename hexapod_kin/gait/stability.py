@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import njit
+from .._kernels import first_use, njit
 from ..exceptions import ParameterError
 
 __all__ = ["segment_clearance", "support_margin"]
@@ -139,12 +139,13 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
             allowed="(N, L, 2|3)",
         )
     out = np.empty(len(p))
-    _margin_kernel(
-        np.ascontiguousarray(p[..., :2]),
-        np.ascontiguousarray(s),
-        np.ascontiguousarray(c[:, :2]),
-        out,
-    )
+    with first_use("gait"):
+        _margin_kernel(
+            np.ascontiguousarray(p[..., :2]),
+            np.ascontiguousarray(s),
+            np.ascontiguousarray(c[:, :2]),
+            out,
+        )
     return np.asarray(out[0]) if single else out
 
 
@@ -263,5 +264,6 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
     if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
     out = np.empty((p.shape[0], pr.shape[0]))
-    _clearance_kernel(p, pr, out)
+    with first_use("gait"):
+        _clearance_kernel(p, pr, out)
     return out

@@ -23,8 +23,7 @@ import math
 
 import numpy as np
 
-from .._kernels import fk_jac_into
-from .._numerics import dls_into, njit, wrap_angle
+from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
 __all__ = [
     "lm_batch",
@@ -34,71 +33,11 @@ __all__ = [
     "step_into",
     "task_cost",
     "task_into",
-    "tip_rotation_into",
 ]
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
-
-
-@njit(cache=True, nogil=True)
-def tip_rotation_into(
-    rot: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
-    q: np.ndarray,
-    out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """Rotation of the tip frame in the base frame (3, 3) — the companion of ``fk_jac_into``."""
-    r00, r01, r02 = 1.0, 0.0, 0.0
-    r10, r11, r12 = 0.0, 1.0, 0.0
-    r20, r21, r22 = 0.0, 0.0, 1.0
-    for k in range(rot.shape[0]):
-        a = rot[k]
-        n00 = r00 * a[0, 0] + r01 * a[1, 0] + r02 * a[2, 0]
-        n01 = r00 * a[0, 1] + r01 * a[1, 1] + r02 * a[2, 1]
-        n02 = r00 * a[0, 2] + r01 * a[1, 2] + r02 * a[2, 2]
-        n10 = r10 * a[0, 0] + r11 * a[1, 0] + r12 * a[2, 0]
-        n11 = r10 * a[0, 1] + r11 * a[1, 1] + r12 * a[2, 1]
-        n12 = r10 * a[0, 2] + r11 * a[1, 2] + r12 * a[2, 2]
-        n20 = r20 * a[0, 0] + r21 * a[1, 0] + r22 * a[2, 0]
-        n21 = r20 * a[0, 1] + r21 * a[1, 1] + r22 * a[2, 1]
-        n22 = r20 * a[0, 2] + r21 * a[1, 2] + r22 * a[2, 2]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = n00, n01, n02, n10, n11, n12, n20, n21, n22
-        if kind[k] == 1:
-            continue
-        ux, uy, uz = axis[k, 0], axis[k, 1], axis[k, 2]
-        qk = q[col[k]]
-        c = math.cos(qk)
-        s = math.sin(qk)
-        v = 1.0 - c
-        e00 = c + v * ux * ux
-        e01 = v * ux * uy - s * uz
-        e02 = v * ux * uz + s * uy
-        e10 = v * uy * ux + s * uz
-        e11 = c + v * uy * uy
-        e12 = v * uy * uz - s * ux
-        e20 = v * uz * ux - s * uy
-        e21 = v * uz * uy + s * ux
-        e22 = c + v * uz * uz
-        n00 = r00 * e00 + r01 * e10 + r02 * e20
-        n01 = r00 * e01 + r01 * e11 + r02 * e21
-        n02 = r00 * e02 + r01 * e12 + r02 * e22
-        n10 = r10 * e00 + r11 * e10 + r12 * e20
-        n11 = r10 * e01 + r11 * e11 + r12 * e21
-        n12 = r10 * e02 + r11 * e12 + r12 * e22
-        n20 = r20 * e00 + r21 * e10 + r22 * e20
-        n21 = r20 * e01 + r21 * e11 + r22 * e21
-        n22 = r20 * e02 + r21 * e12 + r22 * e22
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = n00, n01, n02, n10, n11, n12, n20, n21, n22
-    t = tip_rot
-    for j in range(3):
-        out[0, j] = r00 * t[0, j] + r01 * t[1, j] + r02 * t[2, j]
-        out[1, j] = r10 * t[0, j] + r11 * t[1, j] + r12 * t[2, j]
-        out[2, j] = r20 * t[0, j] + r21 * t[1, j] + r22 * t[2, j]
 
 
 @njit(cache=True, nogil=True)
@@ -326,9 +265,7 @@ def task_cost(
     et = np.empty(6)
     jt = np.empty((6, n))
     for k in range(qs.shape[0]):
-        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0)
-        if ipar[I_MODE] != 0:
-            tip_rotation_into(rot, axis, kind, col, tip_rot, qs[k], r)
+        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0, tip_rot, r)
         m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
         s = 0.0
         for i in range(m):
@@ -336,14 +273,7 @@ def task_cost(
         out[k] = s
 
 
-@njit(
-    cache=True,
-    nogil=True,
-    # interpreted: ~10 steps per start at ~30 µs per squared joint count; compiles in ~5 s
-    work=lambda *a: a[10].shape[0] * 10 * a[10].shape[1] ** 2,
-    per_unit_s=3e-5,
-    compile_s=5.0,
-)
+@njit(cache=True, nogil=True)
 def lm_loop(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -421,9 +351,7 @@ def lm_loop(
         for i in range(n):
             q[i] = starts[s, i]
         _limit_into(q, lower, upper, cont, use_limits)
-        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0)
-        if mode != 0:
-            tip_rotation_into(rot, axis, kind, col, tip_rot, q, r)
+        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0, tip_rot, r)
         m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
         cost = 0.0
         for i in range(m):
@@ -472,9 +400,7 @@ def lm_loop(
                 for i in range(n):
                     qn[i] = q[i] + scale * dq[i]
                 _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0)
-                if mode != 0:
-                    tip_rotation_into(rot, axis, kind, col, tip_rot, qn, r)
+                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r)
                 m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
                 cost_n = 0.0
                 for i in range(m_n):
@@ -566,13 +492,7 @@ def pose_errors(
     return math.sqrt(pos2), math.sqrt(rot2)
 
 
-@njit(
-    cache=True,
-    nogil=True,
-    work=lambda *a: a[6].shape[0] * a[10].shape[1] * 10 * a[10].shape[2] ** 2,
-    per_unit_s=3e-5,
-    compile_s=5.0,
-)
+@njit(cache=True, nogil=True)
 def lm_batch(
     rot: np.ndarray,
     trans: np.ndarray,

@@ -7,8 +7,9 @@ of size 3 to 6 by :func:`eig_block`; ``det J`` and Cauchy–Binet minors by :fun
 :func:`minor_big`). The rotations and sweeps are ``inline="always"`` at one call site each, so
 they compile into the kernel's loop only when a chain needs them (legs never do).
 
-Numba's disk cache checks only the caller's own file: after editing this module, touch
-``_kernel.py`` too (or clear ``NUMBA_CACHE_DIR``), so that ``measures_kernel`` recompiles.
+Numba's disk cache checks only the caller's own file: after editing this module (or the
+block core in :mod:`hexapod_kin._kernels`), touch ``_kernel.py`` too (or clear
+``NUMBA_CACHE_DIR``), so that ``measures_kernel`` recompiles.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import math
 
 import numpy as np
 
-from .._numerics import njit
+from .._kernels import njit
 
 __all__ = ["JACOBI_TOL", "eig_block", "minor_big", "minor_block"]
 
@@ -26,8 +27,6 @@ JACOBI_TOL = 1e-15
 JACOBI_MAX_SWEEPS = 12
 #: Sweeps of m ≥ 5 matrices before the first convergence test (UR5: 64 % done after 4, all 5).
 JACOBI_MIN_SWEEPS_BIG = 4
-#: Sweeps run over the whole block (SIMD, no gather) until at most 1/this of it is unconverged.
-JACOBI_GATHER = 4
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -179,15 +178,6 @@ def _sweep_many(g: np.ndarray, count: int, m: int) -> None:  # pragma: no cover 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _count_open(g: np.ndarray, count: int, m: int) -> int:  # pragma: no cover - compiled
-    """How many of matrices ``0 .. count - 1`` :func:`_jacobi_open` leaves open."""
-    n_open = 0
-    for i in range(count):
-        n_open += _jacobi_open(g, i, m)
-    return n_open
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _pack_table(m: int) -> np.ndarray:  # pragma: no cover - compiled
     """``pack[a, b]``: row of ``G[a, b]`` in the packed upper triangle (row-major) of m×m."""
     pack = np.empty((m, m), dtype=np.int64)
@@ -243,10 +233,11 @@ def eig_block(
 
     ``gb`` is (m(m+1)/2, B), rows the packed upper triangle (m = 3: ``g00 g01 g02 g11 g12
     g22``; m = 4: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``); ``wb`` the same shape and
-    ``idx`` (B,) int are scratch. The first sweep runs over the whole block (SIMD); the
-    matrices whose off-diagonal sum still exceeds ``JACOBI_TOL · trace`` are gathered
-    (compacted) into ``wb`` and swept there, contiguously (SIMD again), the converged ones
-    scattered back, until none is left (Weyl: the diagonal then holds the eigenvalues to that
+    ``idx`` (B,) int are scratch. The first sweep(s) run over the whole block (SIMD); the
+    matrices still open (:func:`_jacobi_open`) are gathered (compacted) into ``wb`` and swept
+    there, contiguously (SIMD again), each scattered back as soon as it converges, until
+    none is left: every matrix gets exactly the sweeps its own test asks for, whatever its
+    neighbours in the block (Weyl: the diagonal then holds the eigenvalues to that
     absolute accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
     characteristic-polynomial / trigonometric closed forms.
     """
@@ -259,14 +250,9 @@ def eig_block(
         for _ in range(JACOBI_MIN_SWEEPS_BIG):
             _sweep_gen(gb, nb, m, pack, cs)
         sweeps = JACOBI_MIN_SWEEPS_BIG
-    while sweeps < JACOBI_MAX_SWEEPS and not big:
+    else:
         _sweep_many(gb, nb, m)
-        sweeps += 1
-        n_open = _count_open(gb, nb, m)
-        if n_open == 0:
-            return
-        if n_open * JACOBI_GATHER <= nb:
-            break
+        sweeps = 1
     n_open = 0
     for i in range(nb):
         if _jacobi_open(gb, i, m):

@@ -1,21 +1,22 @@
-"""The compiled layer of the singularity scans: fused FK + Jacobian rows + measures, in blocks.
+"""The compiled layer of the singularity scans: FK + Jacobian rows + measures, in blocks.
 
-One job: given a chain re-expressed with z joint axes (:mod:`._plan`), a row selection and a
-batch of configurations, write ``det``, ``manipulability``, ``condition`` and ``sigma_min`` of
-every configuration, without storing the Jacobians. Configurations are processed in
-structure-of-arrays blocks, joint by joint, so the inner loops vectorise (SIMD): sin / cos by a
-polynomial (fdlibm kernels, no libm calls), and, when the selected rows are invariant under the
-first revolute joint, that joint is not evaluated at all. Every shape with ``m = min(k, n) ≤ 6``
-is reduced over the whole block (:func:`_reduce_block`): the Gram matrix ``G`` (``J Jᵀ`` or
-``Jᵀ J``, split into diagonal blocks where the chain's structure makes it block diagonal) gives
-the largest eigenvalues — closed forms for blocks of size ≤ 2, cyclic Jacobi over the block for
-3 to 6 (backward stable for clustered eigenvalues) — and ``det G`` comes from ``J``'s own
-minors (``det(J)²`` when square, Cauchy–Binet otherwise), so that
-``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity. Larger ``m`` goes
-through a per-configuration reduction (:func:`_reduce_one`, on :mod:`hexapod_kin._numerics`).
+One job: given a chain with z joint axes (:class:`~hexapod_kin._chain.AlignedChain`), a row
+selection and a batch of configurations, write ``det``, ``manipulability``, ``condition`` and
+``sigma_min`` of every configuration, without storing the Jacobians. Configurations are
+processed in structure-of-arrays blocks by the one block FK + Jacobian core
+(:func:`hexapod_kin._kernels.fk_jac_block`, inlined), so the inner loops vectorise (SIMD);
+when the selected rows are invariant under the first revolute joint, that joint is not
+evaluated at all. Every shape with ``m = min(k, n) ≤ 6`` is reduced over the whole block
+(:func:`_reduce_block`): the Gram matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal
+blocks where the chain's structure makes it block diagonal) gives the largest eigenvalues —
+closed forms for blocks of size ≤ 2, cyclic Jacobi over the block for 3 to 6 (backward stable
+for clustered eigenvalues) — and ``det G`` comes from ``J``'s own minors (``det(J)²`` when
+square, Cauchy–Binet otherwise), so that ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full
+accuracy near a singularity. Larger ``m`` goes through a per-configuration reduction
+(:func:`_reduce_one`). Every decision is taken per configuration (never per block), so a
+value does not depend on its neighbours in the batch.
 
-The block linear algebra (cyclic Jacobi eigenvalues, Laplace minors) is in :mod:`._blocks`;
-its rotations inline into this loop at compile time, as before the split.
+The block linear algebra (cyclic Jacobi eigenvalues, Laplace minors) is in :mod:`._blocks`.
 """
 
 from __future__ import annotations
@@ -25,7 +26,16 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import POLY_TRIG_MAX, det_small, eig2_sym, eig3_sym, jacobi_eig, njit, sincos
+from .._kernels import (
+    POLY_TRIG_MAX,
+    det_small,
+    eig2_sym,
+    eig3_sym,
+    fk_jac_block,
+    jacobi_eig,
+    njit,
+    sincos,
+)
 from ._blocks import JACOBI_TOL, eig_block, minor_big, minor_block
 
 __all__ = [
@@ -110,6 +120,67 @@ def _reduce_one(
     return det, manip, cond, smin
 
 
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _eigenvalues(
+    gb: np.ndarray,
+    hb: np.ndarray,
+    wb: np.ndarray,
+    ev: np.ndarray,
+    idx: np.ndarray,
+    nb: int,
+    mm: int,
+    pack: np.ndarray,
+    perm: np.ndarray,
+    csize: np.ndarray,
+    split: bool,
+    jacobi: Any,
+) -> None:  # pragma: no cover - compiled
+    """Eigenvalues of the packed Gram matrices ``gb`` into ``ev[0:mm]`` (any order).
+
+    ``split``: each diagonal block of the plan (``perm``, ``csize``) apart, else ``G`` whole.
+    """
+    ncomp = csize.shape[0] if split else 1
+    off = 0
+    for comp in range(ncomp):
+        s = csize[comp] if split else mm
+        if s == 1:
+            p = pack[perm[off], perm[off]] if split else 0
+            for i in range(nb):
+                ev[off, i] = gb[p, i]
+        elif s == 2:
+            a, b = (perm[off], perm[off + 1]) if split else (0, 1)
+            paa, pab, pbb = pack[a, a], pack[a, b], pack[b, b]
+            for i in range(nb):
+                ga, gab, gbb = gb[paa, i], gb[pab, i], gb[pbb, i]
+                half = 0.5 * (ga - gbb)
+                lmax = 0.5 * (ga + gbb) + math.sqrt(half * half + gab * gab)
+                ev[off, i] = lmax
+                lo = (ga * gbb - gab * gab) / lmax if lmax > 0.0 else 0.0
+                ev[off + 1, i] = max(lo, 0.0)
+        else:
+            for u in range(s):
+                for v in range(u, s):
+                    a = perm[off + u] if split else u
+                    b = perm[off + v] if split else v
+                    p = pack[a, b]
+                    q = u * s - (u * (u - 1)) // 2 + (v - u)
+                    for i in range(nb):
+                        hb[q, i] = gb[p, i]
+            if jacobi is None:  # compile-time: plans whose blocks are all <= 2 (legs)
+                for i in range(nb):  # only if a split fails: the 3×3 closed form
+                    l1, l2, l3 = eig3_sym(
+                        hb[0, i], hb[3, i], hb[5, i], hb[1, i], hb[2, i], hb[4, i]
+                    )
+                    hb[0, i], hb[3, i], hb[5, i] = l1, l2, l3
+            else:
+                eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
+            for u in range(s):
+                q = u * s - (u * (u - 1)) // 2
+                for i in range(nb):
+                    ev[off + u, i] = hb[q, i]
+        off += s
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def _reduce_block(
     jb: np.ndarray,
@@ -119,6 +190,8 @@ def _reduce_block(
     hb: np.ndarray,
     wb: np.ndarray,
     ev: np.ndarray,
+    ev2: np.ndarray,
+    flag: np.ndarray,
     idx: np.ndarray,
     dg: np.ndarray,
     mnr: np.ndarray,
@@ -135,13 +208,13 @@ def _reduce_block(
     ``plan`` is :attr:`._plan.GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
     triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
     ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
-    ``JACOBI_TOL · trace`` over the whole block (checked; Weyl bounds the effect), each
+    ``JACOBI_TOL · trace`` (checked per configuration; Weyl bounds the effect), each
     diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`eig_block` for 3
     to 6; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
     when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
     ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
     accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
-    ``ε λmax^m``).
+    ``ε λmax^m``). ``ev2`` (m, B) and ``flag`` (B,) are scratch.
     """
     pack, rsub, csub, gram_t, perm, csize, drop = plan
     k, n = jb.shape[0], jb.shape[1]
@@ -179,8 +252,9 @@ def _reduce_block(
                 minor_big(jb, rsub[s], csub[s], mm, nb, mnr, tmp)
             for i in range(nb):
                 dg[i] += mnr[i] * mnr[i]
-    # the structural zeros really are negligible over this block?
+    # the structural zeros really negligible, configuration by configuration? (flag 1: no)
     split = drop.shape[0] > 0
+    nbad = 0
     if split:
         for i in range(nb):
             mnr[i] = 0.0
@@ -192,51 +266,19 @@ def _reduce_block(
             p = drop[d]
             for i in range(nb):
                 mnr[i] -= abs(gb[p, i]) / JACOBI_TOL
-        bad = 0
         for i in range(nb):
-            bad += mnr[i] < 0.0
-        split = bad == 0
-    # eigenvalues of each diagonal block into ev[0:mm]
-    ncomp = csize.shape[0] if split else 1
-    off = 0
-    for comp in range(ncomp):
-        s = csize[comp] if split else mm
-        if s == 1:
-            p = pack[perm[off], perm[off]] if split else 0
+            flag[i] = mnr[i] < 0.0
+            nbad += flag[i]
+    if split and nbad < nb:  # each diagonal block apart
+        _eigenvalues(gb, hb, wb, ev, idx, nb, mm, pack, perm, csize, True, jacobi)
+    if not split or nbad > 0:  # G whole, for the configurations where the split fails
+        whole = ev2 if split and nbad < nb else ev
+        _eigenvalues(gb, hb, wb, whole, idx, nb, mm, pack, perm, csize, False, jacobi)
+        if split and nbad < nb:
             for i in range(nb):
-                ev[off, i] = gb[p, i]
-        elif s == 2:
-            a, b = (perm[off], perm[off + 1]) if split else (0, 1)
-            paa, pab, pbb = pack[a, a], pack[a, b], pack[b, b]
-            for i in range(nb):
-                ga, gab, gbb = gb[paa, i], gb[pab, i], gb[pbb, i]
-                half = 0.5 * (ga - gbb)
-                lmax = 0.5 * (ga + gbb) + math.sqrt(half * half + gab * gab)
-                ev[off, i] = lmax
-                lo = (ga * gbb - gab * gab) / lmax if lmax > 0.0 else 0.0
-                ev[off + 1, i] = max(lo, 0.0)
-        else:
-            for u in range(s):
-                for v in range(u, s):
-                    a = perm[off + u] if split else u
-                    b = perm[off + v] if split else v
-                    p = pack[a, b]
-                    q = u * s - (u * (u - 1)) // 2 + (v - u)
-                    for i in range(nb):
-                        hb[q, i] = gb[p, i]
-            if jacobi is None:  # compile-time: plans whose blocks are all <= 2 (legs)
-                for i in range(nb):  # only if a block's split fails: the 3×3 closed form
-                    l1, l2, l3 = eig3_sym(
-                        hb[0, i], hb[3, i], hb[5, i], hb[1, i], hb[2, i], hb[4, i]
-                    )
-                    hb[0, i], hb[3, i], hb[5, i] = l1, l2, l3
-            else:
-                eig_block(hb[: s * (s + 1) // 2], nb, s, wb, idx)
-            for u in range(s):
-                q = u * s - (u * (u - 1)) // 2
-                for i in range(nb):
-                    ev[off + u, i] = hb[q, i]
-        off += s
+                if flag[i]:
+                    for a in range(mm):
+                        ev[a, i] = ev2[a, i]
     # λmax into mnr, the product of the m − 1 largest into hb[0] (one loop per m: SIMD)
     if mm == 1:
         for i in range(nb):
@@ -290,20 +332,11 @@ def _reduce_block(
             out_manip[start + i] = math.sqrt(dg[i])
 
 
-@njit(
-    cache=True,
-    nogil=True,
-    error_model="numpy",
-    # interpreted: about 2.5 ms per configuration; compiles in about 4.5 s (measures_batch
-    # serves small cold batches with Pinocchio + numpy instead, see measure.py)
-    work=lambda *a: (a[14] - a[13]) * a[15],
-    per_unit_s=2.5e-3,
-    compile_s=4.5,
-)
+@njit(cache=True, nogil=True, error_model="numpy")
 def measures_kernel(
     prot: np.ndarray,
     ptr: np.ndarray,
-    pident: np.ndarray,
+    flags: np.ndarray,
     kind: np.ndarray,
     col: np.ndarray,
     qs: np.ndarray,
@@ -313,7 +346,6 @@ def measures_kernel(
     jacobi: Any,
     tmp: Any,
     skip0: bool,
-    libm: Any,
     first_block: int,
     last_block: int,
     block: int,
@@ -322,29 +354,23 @@ def measures_kernel(
     out_cond: np.ndarray,
     out_smin: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Fused FK + selected-row Jacobian + measures for every row of ``qs``.
+    """FK + selected-row Jacobian + measures for blocks ``first_block`` to ``last_block - 1``.
 
-    The chain is given with every joint axis aligned to its frame's z (see
-    :func:`._plan.aligned_chain`): fixed placements ``(prot[j], ptr[j])`` then ``Rz(q)`` or
-    ``Tz(q)``;
-    ``ptr[m]`` is the tip offset. This call handles blocks ``first_block`` to ``last_block - 1``
-    (the caller runs one call per thread; the GIL is released), each of ``block`` configurations
-    stored structure-of-arrays, joint by joint, so that every inner loop runs over the block
-    and vectorises. ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend on it,
-    see :func:`._plan.first_joint_invariant`). ``libm``: ``None`` for sin / cos by :func:`sincos`
-    (all ``|q| ≤ POLY_TRIG_MAX``), an array for libm's. ``perconf`` ``None`` (``min(k, n) ≤ 6``, see
-    :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the whole
-    block by :func:`_reduce_block`; an array: :func:`_reduce_one` per configuration.
+    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot``, ``ptr``, ``flags``,
+    ``kind``, ``col``); ``qs`` (N, nq) is cut into blocks of ``block`` configurations, each
+    through :func:`~hexapod_kin._kernels.fk_jac_block` (the caller runs one call per thread;
+    the GIL is released). ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend
+    on it, see :func:`._plan.first_joint_invariant`). ``perconf`` ``None`` (``min(k, n) ≤ 6``,
+    see :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the
+    whole block by :func:`_reduce_block`; an array: :func:`_reduce_one` per configuration.
     ``tmp``: ``None`` when m ≤ 4 (no Laplace expansion compiled), else this thread's (2, B)
     scratch of :func:`minor_big`. ``jacobi`` ``None``: the plan's diagonal blocks are all of
-    size ≤ 2 and m ≤ 3 (legs), so
-    no Jacobi is compiled (a block whose split fails gets the 3×3 closed form). Both are
-    ``None``-or-array on purpose: numba prunes a branch on ``x is None`` before typing, so a
-    command compiles only the reduction its chain needs (cold start).
+    size ≤ 2 and m ≤ 3 (legs), so no Jacobi is compiled (a configuration whose split fails
+    gets the 3×3 closed form). Both are ``None``-or-array on purpose: numba prunes a branch on
+    ``x is None`` before typing, so a chain compiles only the reduction it needs.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
-    m = kind.shape[0]
     k = sel.shape[0]
     mm = k if k <= nq else nq
     big = k if k > nq else nq
@@ -354,14 +380,16 @@ def measures_kernel(
     bsz = block
     rr = np.empty((9, bsz))
     pp = np.empty((3, bsz))
-    frames = np.empty((max(m, 1), 6, bsz))
     trig = np.empty((2, bsz))
-    qb = np.empty((nq, bsz))
+    qb = np.empty((max(nq, 1), bsz))
+    jfull = np.zeros((6 * max(nq, 1), bsz))  # off-path columns stay zero
     jb = np.empty((k, nq, bsz))
     gb = np.empty((npk, bsz))
     hb = np.empty((npk, bsz))
     wb = np.empty((npk, bsz))
     ev = np.empty((nev, bsz))
+    ev2 = np.empty((nev, bsz))
+    flag = np.zeros(bsz, dtype=np.int64)
     open_idx = np.empty(bsz, dtype=np.int64)
     dg = np.empty(bsz)
     mnr = np.empty(bsz)
@@ -375,91 +403,14 @@ def measures_kernel(
         for i in range(nb):  # the block's q, transposed: the per-joint loops read rows
             for c in range(nq):
                 qb[c, i] = qs[start + i, c]
-        for j in range(m):
-            t0, t1, t2 = ptr[j, 0], ptr[j, 1], ptr[j, 2]
-            if j == 0:
-                for i in range(nb):
-                    pp[0, i] = t0
-                    pp[1, i] = t1
-                    pp[2, i] = t2
-                for a in range(9):
-                    v = prot[0, a]
-                    for i in range(nb):
-                        rr[a, i] = v
-            else:
-                for i in range(nb):
-                    pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-                    pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-                    pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-                if pident[j] == 0:
-                    a00, a01, a02 = prot[j, 0], prot[j, 1], prot[j, 2]
-                    a10, a11, a12 = prot[j, 3], prot[j, 4], prot[j, 5]
-                    a20, a21, a22 = prot[j, 6], prot[j, 7], prot[j, 8]
-                    for row in range(3):
-                        b = 3 * row
-                        for i in range(nb):
-                            x0, x1, x2 = rr[b, i], rr[b + 1, i], rr[b + 2, i]
-                            rr[b, i] = x0 * a00 + x1 * a10 + x2 * a20
-                            rr[b + 1, i] = x0 * a01 + x1 * a11 + x2 * a21
-                            rr[b + 2, i] = x0 * a02 + x1 * a12 + x2 * a22
-            for i in range(nb):
-                frames[j, 0, i] = pp[0, i]
-                frames[j, 1, i] = pp[1, i]
-                frames[j, 2, i] = pp[2, i]
-                frames[j, 3, i] = rr[2, i]
-                frames[j, 4, i] = rr[5, i]
-                frames[j, 5, i] = rr[8, i]
-            cj = col[j]
-            if kind[j] == 1:
-                for i in range(nb):
-                    qv = qb[cj, i]
-                    pp[0, i] += rr[2, i] * qv
-                    pp[1, i] += rr[5, i] * qv
-                    pp[2, i] += rr[8, i] * qv
-            elif not (j == 0 and skip0):
-                if libm is None:
-                    for i in range(nb):
-                        trig[0, i], trig[1, i] = sincos(qb[cj, i])
-                else:
-                    for i in range(nb):
-                        qv = qb[cj, i]
-                        trig[0, i] = math.sin(qv)
-                        trig[1, i] = math.cos(qv)
-                for row in range(3):
-                    b = 3 * row
-                    for i in range(nb):
-                        sq, cq = trig[0, i], trig[1, i]
-                        x0, x1 = rr[b, i], rr[b + 1, i]
-                        rr[b, i] = cq * x0 + sq * x1
-                        rr[b + 1, i] = cq * x1 - sq * x0
-        t0, t1, t2 = ptr[m, 0], ptr[m, 1], ptr[m, 2]
-        for i in range(nb):
-            pp[0, i] += rr[0, i] * t0 + rr[1, i] * t1 + rr[2, i] * t2
-            pp[1, i] += rr[3, i] * t0 + rr[4, i] * t1 + rr[5, i] * t2
-            pp[2, i] += rr[6, i] * t0 + rr[7, i] * t1 + rr[8, i] * t2
-        # selected rows of J, column by column: [z × (p − o); z] or [z; 0]
-        for a in range(k):
+        fk_jac_block(
+            prot, ptr, flags, kind, col, qb, nb, skip0, False, nb > 0, 1.0, rr, pp, trig, jfull
+        )
+        for a in range(k):  # the selected rows
+            r = sel[a] * nq
             for b in range(nq):
                 for i in range(nb):
-                    jb[a, b, i] = 0.0
-        for j in range(m):
-            cj = col[j]
-            for a in range(k):
-                r = sel[a]
-                if kind[j] == 1:
-                    if r < 3:
-                        for i in range(nb):
-                            jb[a, cj, i] += frames[j, 3 + r, i]
-                elif r >= 3:
-                    for i in range(nb):
-                        jb[a, cj, i] += frames[j, r, i]
-                else:
-                    u = (r + 1) % 3
-                    v = (r + 2) % 3
-                    for i in range(nb):
-                        jb[a, cj, i] += frames[j, 3 + u, i] * (pp[v, i] - frames[j, v, i]) - frames[
-                            j, 3 + v, i
-                        ] * (pp[u, i] - frames[j, u, i])
+                    jb[a, b, i] = jfull[r + b, i]
         if perconf is None:  # a compile-time branch (None is a type): only one is compiled
             _reduce_block(
                 jb,
@@ -469,6 +420,8 @@ def measures_kernel(
                 hb,
                 wb,
                 ev,
+                ev2,
+                flag,
                 open_idx,
                 dg,
                 mnr,

@@ -1,8 +1,9 @@
-"""The Python side of the singularity kernel: chain re-expression, block plans, output buffers.
+"""The Python side of the singularity kernel: block plans, output buffers, the threads.
 
 :func:`compute` runs :func:`~._kernel.measures_kernel` for a loaded model, a row selection and a
-batch of configurations; everything it derives from the model (z-aligned chain, Gram plans) is
-kept in the model's one cache (:meth:`hexapod_kin.model.Model.cached`).
+batch of configurations; everything it derives from the model (the z-aligned chain of
+:mod:`hexapod_kin._chain`, shared with the batch FK; Gram plans) is kept in the model's one
+cache (:meth:`hexapod_kin.model.Model.cached`).
 """
 
 from __future__ import annotations
@@ -14,14 +15,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
-import numba
 import numpy as np
 
-from .._kernels import ChainArrays
-from ._kernel import POLY_TRIG_MAX, measures_kernel
+from .._kernels import AlignedChain, aligned_chain, first_use, run_blocks
+from ._kernel import measures_kernel
 
 __all__ = [
-    "AlignedChain",
     "GramPlan",
     "BLOCK",
     "aligned",
@@ -31,55 +30,6 @@ __all__ = [
     "output_arrays",
     "compute",
 ]
-
-
-def _rotation_z_to(u: np.ndarray) -> np.ndarray:
-    """A rotation ``A`` with ``A @ ez = u`` (identity when ``u`` is ``ez``)."""
-    u = np.asarray(u, float) / np.linalg.norm(u)
-    ez = np.array([0.0, 0.0, 1.0])
-    if np.allclose(u, ez, rtol=0, atol=1e-15):
-        return np.eye(3)
-    if np.allclose(u, -ez, rtol=0, atol=1e-15):
-        return np.diag([1.0, -1.0, -1.0])
-    v = np.cross(ez, u)
-    s = np.linalg.norm(v)
-    c = float(u @ ez)
-    vx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return np.eye(3) + vx + vx @ vx * ((1 - c) / s**2)
-
-
-@dataclass(frozen=True)
-class AlignedChain:
-    prot: np.ndarray
-    ptr: np.ndarray
-    pident: np.ndarray
-    kind: np.ndarray
-    col: np.ndarray
-    nq: int
-
-
-def aligned_chain(arrays: ChainArrays) -> AlignedChain:
-    """Re-express the shared :class:`~hexapod_kin._kernels.ChainArrays` with z joint axes.
-
-    Joint ``j`` rotates about its local axis ``u_j``; with ``A_j ez = u_j`` the rotation is
-    ``A_j Rz(q) A_jᵀ``, so ``A_j`` is folded into placement ``j`` and ``A_jᵀ`` into placement
-    ``j + 1`` (or the tip offset). The kernel then only applies ``Rz(q)`` / ``Tz(q)``.
-    """
-    m = arrays.rot.shape[0]
-    prot = np.empty((m, 9))
-    ptr = np.empty((m + 1, 3))
-    pident = np.zeros(m, dtype=np.int64)
-    prev_t = np.eye(3)  # A_{j-1}^T
-    for j in range(m):
-        a = _rotation_z_to(arrays.axis[j])
-        rot = prev_t @ arrays.rot[j] @ a
-        rot[np.abs(rot) < 1e-15] = 0.0
-        prot[j] = rot.reshape(-1)
-        ptr[j] = prev_t @ arrays.trans[j]
-        pident[j] = int(np.array_equal(rot, np.eye(3)))
-        prev_t = a.T
-    ptr[m] = prev_t @ arrays.trans[m]
-    return AlignedChain(prot, ptr, pident, arrays.kind.copy(), arrays.col.copy(), arrays.nq)
 
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
@@ -284,8 +234,8 @@ def output_arrays(n: int) -> tuple[np.ndarray, ...]:
 
 
 def aligned(model: Any) -> AlignedChain:
-    """The model's chain with z joint axes (:func:`aligned_chain`), kept in ``model.cached``."""
-    return model.cached("singularity.aligned", lambda: aligned_chain(model.arrays))
+    """The model's chain with z joint axes, kept in ``model.cached`` (shared with the batch)."""
+    return model.cached("batch.aligned", lambda: aligned_chain(model.arrays))
 
 
 def compute(
@@ -293,10 +243,10 @@ def compute(
 ) -> tuple[np.ndarray, ...]:
     """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
 
-    One kernel call per thread (``numba.get_num_threads()`` of them, each on a contiguous range
-    of blocks; the kernel releases the GIL), not numba's ``parallel=True``: the parallel
-    lowering of this kernel doubled its compile time (cold start). The threads only run the
-    compiled kernel, which raises nothing (inputs are checked before).
+    Chunks of blocks on up to ``numba.get_num_threads()`` plain threads
+    (:func:`hexapod_kin._kernels.run_blocks`; the kernel releases the GIL), not numba's
+    ``parallel=True``. The threads only run the compiled kernel, which raises nothing (inputs
+    are checked before).
 
     Args:
         model: A loaded model.
@@ -312,47 +262,16 @@ def compute(
     al = aligned(model)
     key = tuple(int(r) for r in sel)
     skip0 = first_joint_invariant(al, key)
-    poly = bool(n == 0 or max(float(q.max()), -float(q.min())) <= POLY_TRIG_MAX)
     plan = gram_plan(model, key, skip0)
-    nblocks = -(-n // BLOCK)
-    nwork = max(1, min(numba.get_num_threads(), nblocks, n // MIN_PER_THREAD))
-    per = -(-nblocks // nwork)
-
     m = min(len(key), q.shape[1])
     perconf = None if plan.use_block else _DUMMY
     jacobi = None if (m <= 3 and int(plan.csize.max()) <= 2) else _DUMMY
+    args = (*al.packed, q, sel, perconf, plan.arrays, jacobi)
 
-    def run(w: int) -> None:
+    def run(first: int, last: int) -> None:
         tmp = None if m <= 4 else np.empty((2, BLOCK))  # this thread's scratch
-        measures_kernel(
-            al.prot,
-            al.ptr,
-            al.pident,
-            al.kind,
-            al.col,
-            q,
-            sel,
-            perconf,
-            plan.arrays,
-            jacobi,
-            tmp,
-            skip0,
-            None if poly else _DUMMY,
-            w * per,
-            min(nblocks, (w + 1) * per),
-            BLOCK,
-            *out,
-        )
+        measures_kernel(*args, tmp, skip0, first, last, BLOCK, *out)
 
-    if nwork == 1:
-        run(0)
-    else:  # the kernel releases the GIL: plain threads run it in parallel
-        workers = [threading.Thread(target=run, args=(w,)) for w in range(1, nwork)]
-        for t in workers:
-            t.start()
-        try:
-            run(0)
-        finally:
-            for t in workers:
-                t.join()
+    with first_use("singularity"):
+        run_blocks(run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
     return out

@@ -1,0 +1,182 @@
+"""A serial chain as flat arrays, the input of the compiled layer (numpy only, no numba).
+
+:class:`ChainArrays` is extracted once per model from its *Pinocchio* model (``Model.arrays``):
+joint placements, axes and the tip offset, so the compiled kernels serve any chain of 1-DOF
+joints — presets and URDFs alike. :class:`AlignedChain` is the same chain re-expressed with
+every joint axis along its frame's z, the form of the block FK core
+(:func:`hexapod_kin._kernels.fk_block`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .exceptions import SourceError
+
+__all__ = ["AlignedChain", "ChainArrays", "aligned_chain"]
+
+
+@dataclass(frozen=True)
+class ChainArrays:
+    """A serial chain as flat arrays (read-only), in the model's base frame.
+
+    Attributes:
+        rot: (m, 3, 3) rotation of each joint placement (parent joint → joint at q = 0); the
+            first one includes the base → root transform.
+        trans: (m + 1, 3) translations of the placements in [m]; the last row is the tip
+            offset in the frame of the tip's parent joint.
+        tip_rot: (3, 3) rotation of the tip frame in its parent joint frame.
+        axis: (m, 3) unit joint axes in their joint frames.
+        kind: (m,) 0 revolute, 1 prismatic.
+        col: (m,) index of each joint's variable in ``q``.
+        nq: Length of ``q``.
+
+    """
+
+    rot: np.ndarray
+    trans: np.ndarray
+    tip_rot: np.ndarray
+    axis: np.ndarray
+    kind: np.ndarray
+    col: np.ndarray
+    nq: int
+
+    @classmethod
+    def from_model(cls, model: Any, frame: str | None = None) -> ChainArrays:
+        """Extract the chain from root to ``frame`` (default: the tip) of a loaded model.
+
+        Args:
+            model: A :class:`~hexapod_kin.model.Model` (1-DOF revolute/prismatic joints).
+            frame: Tip frame name (checked).
+
+        Raises:
+            SourceError: If a joint on the path is not a 1-DOF revolute/prismatic joint.
+
+        """
+        m = model.model
+        fid = model.tip_id if frame is None else model.frame_id(frame)
+        fr = m.frames[fid]
+        path = [int(i) for i in m.supports[fr.parentJoint]][1:]
+        rots, trans, axes, kinds, cols = [], [], [], [], []
+        for k, i in enumerate(path):
+            placement = model.baseMo * m.jointPlacements[i] if k == 0 else m.jointPlacements[i]
+            name = m.joints[i].shortname()
+            if name.startswith("JointModelR"):
+                kinds.append(0)
+            elif name.startswith("JointModelP"):
+                kinds.append(1)
+            else:
+                raise SourceError(f"joint {m.names[i]!r} of kind {name} is not 1-DOF rev/prism")
+            if name[-1] in "XYZ":
+                ax = np.zeros(3)
+                ax["XYZ".index(name[-1])] = 1.0
+            else:
+                ax = np.asarray(m.joints[i].extract().axis, dtype=float)
+                ax = ax / np.linalg.norm(ax)
+            rots.append(np.array(placement.rotation))
+            trans.append(np.array(placement.translation))
+            axes.append(ax)
+            cols.append(int(m.joints[i].idx_v))
+        tip_pl = fr.placement if path else model.baseMo * fr.placement
+        trans.append(np.array(tip_pl.translation))
+        arrays = cls(
+            rot=np.ascontiguousarray(np.array(rots, dtype=float).reshape(-1, 3, 3)),
+            trans=np.ascontiguousarray(np.array(trans, dtype=float).reshape(-1, 3)),
+            tip_rot=np.ascontiguousarray(np.array(tip_pl.rotation, dtype=float)),
+            axis=np.ascontiguousarray(np.array(axes, dtype=float).reshape(-1, 3)),
+            kind=np.array(kinds, dtype=np.int64),
+            col=np.array(cols, dtype=np.int64),
+            nq=int(m.nv),
+        )
+        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
+            arr.setflags(write=False)
+        return arrays
+
+    def scratch(self) -> np.ndarray:
+        """A fresh (6, m) work array for :func:`hexapod_kin._kernels.fk_jac_into`."""
+        return np.empty((6, max(self.rot.shape[0], 1)))
+
+    @property
+    def packed(self) -> tuple[np.ndarray, ...]:
+        """The arrays in the argument order of the compiled kernels."""
+        return (self.rot, self.trans, self.axis, self.kind, self.col)
+
+
+@dataclass(frozen=True)
+class AlignedChain:
+    """A chain re-expressed with z joint axes (the block FK core's arguments).
+
+    Placement ``j`` (rotation ``prot[j]``, translation ``ptr[j]``) comes before joint ``j``'s
+    motion ``Rz(q)`` / ``Tz(q)``; placement ``m`` is the tip's. With ``A_j ez = u_j`` (see
+    :func:`_z_to`), placement ``j`` is ``A_{j-1}ᵀ (R_j, t_j) A_j`` (``A_{-1} = A_m = I``).
+
+    Attributes:
+        prot: (m + 1, 9) placement rotations, row-major; the last is the tip rotation.
+        ptr: (m + 1, 3) placement translations in [m]; the last is the tip offset.
+        flags: (m + 1,) int64, 1 where the placement rotation is exactly the identity.
+        kind: (m,) 0 revolute, 1 prismatic.
+        col: (m,) index of each joint's variable in ``q`` (distinct).
+        nq: Length of ``q``.
+
+    """
+
+    prot: np.ndarray
+    ptr: np.ndarray
+    flags: np.ndarray
+    kind: np.ndarray
+    col: np.ndarray
+    nq: int
+
+    @property
+    def packed(self) -> tuple[np.ndarray, ...]:
+        """``(prot, ptr, flags, kind, col)``: the block core's argument order."""
+        return (self.prot, self.ptr, self.flags, self.kind, self.col)
+
+
+def _z_to(u: np.ndarray) -> np.ndarray:
+    """A rotation ``A`` with ``A ez = u`` (unit ``u``); a signed permutation for ±x, ±y, ±z.
+
+    Exact for coordinate axes (no rounding enters the placements); otherwise the columns
+    ``(e1, e2, u)`` of an orthonormal frame completed by Gram–Schmidt.
+    """
+    u = np.asarray(u, dtype=float)
+    for k in range(3):
+        if abs(u[k]) == 1.0 and np.count_nonzero(u) == 1:
+            s = float(u[k])
+            ex, ey = np.zeros(3), np.zeros(3)
+            ex[(k + 1) % 3] = 1.0
+            ey[(k + 2) % 3] = s  # (ex, ey, u) right-handed: ex × ey = s·e_k = u
+            return np.column_stack([ex, ey, u])
+    u = u / np.linalg.norm(u)
+    ref = np.eye(3)[int(np.argmin(np.abs(u)))]
+    e1 = ref - (ref @ u) * u
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    return np.column_stack([e1, e2, u])
+
+
+def aligned_chain(arrays: ChainArrays) -> AlignedChain:
+    """The chain of ``arrays`` with z joint axes (:class:`AlignedChain`).
+
+    Raises:
+        SourceError: One joint variable drives two joints of the chain.
+
+    """
+    m = arrays.rot.shape[0]
+    prot = np.empty((m + 1, 9))
+    ptr = np.empty((m + 1, 3))
+    prev_t = np.eye(3)  # A_{j-1}^T
+    for j in range(m + 1):
+        a = _z_to(arrays.axis[j]) if j < m else np.eye(3)
+        prot[j] = (prev_t @ (arrays.rot[j] if j < m else arrays.tip_rot) @ a).reshape(-1)
+        ptr[j] = prev_t @ arrays.trans[j]
+        prev_t = a.T
+    flags = np.array([np.array_equal(r, np.eye(3).reshape(-1)) for r in prot], np.int64)
+    col = np.ascontiguousarray(arrays.col, dtype=np.int64)
+    if len(set(col.tolist())) != m:
+        raise SourceError(f"joint variables {col.tolist()} drive two joints of a chain")
+    kind = np.ascontiguousarray(arrays.kind, dtype=np.int64)
+    return AlignedChain(prot, ptr, flags, kind, col, int(arrays.nq))
