@@ -22,22 +22,6 @@ __all__ = ["chain_length", "chain_scale", "dls_step", "wrap_angles", "wrap_diff"
 
 _TWO_PI = 2.0 * math.pi
 
-#: Names that moved to :mod:`hexapod_kin._kernels` (forwarded on first access, PEP 562, so
-#: that importing this module never imports numba; new code imports them from ``_kernels``).
-_COMPILED = frozenset(
-    "POLY_TRIG_MAX njit prange sincos eig2_sym eig3_sym jacobi_eig det3 det_lu det_small "
-    "solve_spd dls_into sigma_bounds wrap_angle".split()
-)
-
-
-def __getattr__(name: str) -> Any:
-    if name in _COMPILED:
-        from . import _kernels
-
-        return getattr(_kernels, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def dls_step(jac: Any, error: Any, damping: float, free: Any = None) -> np.ndarray:
     """One damped-least-squares step ``Δq = Jᵀ(JJᵀ + λ²I)⁻¹ e`` (pure function).
 

@@ -34,31 +34,14 @@ def _batch() -> None:
 
 
 def _ik() -> None:
-    from .ik import analytic_batch, solve, solve_many
+    from .ik import solve_many
     from .kinematics import load
 
     leg = load("hexabot_leg")
-    targets = np.array([leg.fk(q)[:3, 3] for q in leg.random_q(4, seed=1)])
-    solve(leg, targets[0])
-    solve_many(leg, targets)
-    analytic_batch(leg, targets)
+    solve_many(leg, np.array([leg.fk(q)[:3, 3] for q in leg.random_q(4, seed=1)]))
     arm = load("erd:ur5_robot")
     pose = arm.fk(arm.random_q(1, seed=2)[0])
-    solve(arm, pose)
     solve_many(arm, np.array([pose, pose]))
-
-
-def _motion() -> None:
-    from .kinematics import load
-    from .motion import resolved_rate
-
-    leg = load("hexabot_leg")
-    resolved_rate(leg, [0.01, 0.0, 0.0], [0.0, 0.3, 1.2], 1e-3, 0.01)
-    resolved_rate(leg, [0.01, 0.0, 0.0], [0.0, 0.3, 1.2], 1e-3, 0.01, method="euler")
-    arm = load("erd:ur5_robot")
-    q0 = np.array([0.3, -0.8, 1.1, -0.4, 0.6, 0.2])
-    for frame in ("base", "tip"):
-        resolved_rate(arm, [0.0, 0.0, 0.01, 0.0, 0.0, 0.1], q0, 1e-3, 0.01, frame=frame)
 
 
 def _singularity() -> None:
@@ -76,22 +59,12 @@ def _gait() -> None:
     walk(duration=0.2)
 
 
-def _sweep() -> None:
-    from .sweep import score_designs
-    from .sweep.designs import DEFAULTS, PARAMETERS
-
-    row = np.array([[DEFAULTS[name] for name in PARAMETERS]], dtype=float)
-    score_designs(row, mc_samples=16, line_points=4, stride_points=2)
-
-
 #: Area name → the calls that compile its kernels.
 AREAS: dict[str, Callable[[], None]] = {
     "batch": _batch,
     "ik": _ik,
-    "motion": _motion,
     "singularity": _singularity,
     "gait": _gait,
-    "sweep": _sweep,
 }
 
 

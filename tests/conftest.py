@@ -21,12 +21,6 @@ def preset_models():
     return {name: load(name) for name in robots.names()}
 
 
-@pytest.fixture
-def jit_always():
-    """No-op, kept while tests of other areas still name it (kernels have no tiers now)."""
-    yield
-
-
 @pytest.fixture(scope="module")
 def own_cache_dir(tmp_path_factory):
     """A fresh ``HEXAPOD_KIN_CACHE_DIR`` for a whole test module (``pytestmark`` it)."""

@@ -102,7 +102,7 @@ def test_new_shapes_accurate_near_singularities():
         assert np.allclose(smin, psmin, rtol=1e-6, atol=0)
 
 
-def test_output_buffers_reused_only_when_unreferenced(leg, jit_always):
+def test_output_buffers_reused_only_when_unreferenced(leg):
     qs1, qs2 = leg.random_q(3000, seed=1), leg.random_q(3000, seed=2)
     ref1 = [r.copy() for r in measures_batch(leg, qs1)]
     ref2 = [r.copy() for r in measures_batch(leg, qs2)]

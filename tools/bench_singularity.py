@@ -178,7 +178,7 @@ def run(quick: bool) -> list[dict]:
         measures_kernel(
             al.prot,
             al.ptr,
-            al.pident,
+            al.flags,
             al.kind,
             al.col,
             qs,
@@ -188,7 +188,6 @@ def run(quick: bool) -> list[dict]:
             None,
             None,
             skip0,
-            None,
             0,
             -(-N // kplan.BLOCK),
             kplan.BLOCK,

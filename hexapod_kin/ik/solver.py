@@ -556,6 +556,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         ParameterError: Unknown or bad options.
 
     """
+    from .._kernels import first_use
     from .step import lm_batch
 
     mdl = as_model(model)
@@ -599,22 +600,23 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     jac = np.empty((n_t, 6, mdl.nq))
     res = np.empty((n_t, 3), dtype=np.int64)
     if n_t:
-        lm_batch(
-            *s.prep.packed,
-            s.prep.tip_rot,
-            np.array([task.pose for task in tasks]).reshape(n_t, 4, 4),
-            np.ascontiguousarray(tasks[0].weights),
-            pars,
-            s.ipar,
-            starts,
-            s.prep.lim,
-            s.prep.cont,
-            s.posture,
-            q,
-            hist,
-            jac,
-            res,
-        )
+        with first_use("ik"):
+            lm_batch(
+                *s.prep.packed,
+                s.prep.tip_rot,
+                np.array([task.pose for task in tasks]).reshape(n_t, 4, 4),
+                np.ascontiguousarray(tasks[0].weights),
+                pars,
+                s.ipar,
+                starts,
+                s.prep.lim,
+                s.prep.cont,
+                s.posture,
+                q,
+                hist,
+                jac,
+                res,
+            )
     if not n_t:
         return []
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
