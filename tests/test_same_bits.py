@@ -2,11 +2,9 @@
 
 Each call's result is reduced to the sha256 of its arrays' bytes (dataclass fields walked;
 timing fields skipped). The subprocesses run with their own numba and hexapod_kin caches:
-(a) fresh, (b) the same caches again (warm), (c) the same caches after
-``python -m hexapod_kin precompile`` (of the areas whose kernels compile once per chain kind;
-compiling every area again costs minutes and gives the same machine code); (d) 8 threads of
-one process on the same caches (what the caches hold is input too: ``scan`` labels flagged
-samples with the families kept on disk).
+(a) fresh caches (every kernel compiled on first use), (b) the same caches again (warm),
+(c) other fresh caches filled by ``python -m hexapod_kin precompile`` before the calls (the
+machine code precompile wrote), (d) 8 threads of one process on those caches.
 """
 
 from __future__ import annotations
@@ -91,7 +89,7 @@ def digests() -> dict[str, str]:
 
 
 #: The precompile areas run before (c).
-_AREAS = ("batch", "singularity", "gait")
+_AREAS = ("batch", "singularity", "gait", "ik")
 _CHILD = "import json, test_same_bits as t; print(json.dumps(t.digests()))"
 #: The same calls from 8 threads of one process, started together.
 _THREADS = """
@@ -137,13 +135,14 @@ def test_same_bytes_fresh_warm_after_precompile_and_threads(tmp_path: Path) -> N
     assert "compiling" not in _NOTICES[-1]
     pre = subprocess.run(
         [sys.executable, "-m", "hexapod_kin", "precompile", "--only", *_AREAS],
-        env=_env(tmp_path / "a"),
+        env=_env(tmp_path / "c"),
         capture_output=True,
         text=True,
     )
     assert pre.returncode == 0, pre.stderr[-3000:]
-    after = _child(tmp_path / "a")
+    after = _child(tmp_path / "c")
+    assert "compiling" not in _NOTICES[-1]  # precompile filled every area these calls use
     assert warm == fresh
     assert after == fresh
-    threads = _child(tmp_path / "a", _THREADS)
+    threads = _child(tmp_path / "c", _THREADS)
     assert threads == {str(i): fresh for i in range(8)}

@@ -23,7 +23,6 @@ import numpy as np
 
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 from ..params import Hexapod, rpy_to_matrix
-from ._compiled import _pick_branch, _tree_kernel
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "body_pose", "whole_body"]
 
@@ -74,6 +73,35 @@ def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndar
     T[:3, :3] = rpy_to_matrix(*(float(v) for v in a))
     T[:3, 3] = p
     return T
+
+
+def _pick_branch(
+    qk: np.ndarray, valid: np.ndarray, q0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
+
+    Args:
+        qk: (G, N, K, m) candidate solutions of G legs at N samples.
+        valid: (G, N, K) which candidates exist.
+        q0: (G, m) the configuration before the first sample.
+
+    Returns:
+        ``(q, ok)``: (G, N, m) the continued joint angles (the previous value kept where no
+        slot is valid) and (G, N) whether a slot was found.
+
+    """
+    g, n, _, m = qk.shape
+    out = np.empty((g, n, m))
+    ok = valid.any(axis=2)
+    prev = np.array(q0, dtype=float)
+    rows = np.arange(g)
+    for i in range(n):
+        step = np.mod(qk[:, i] - prev[:, None, :] + np.pi, 2.0 * np.pi) - np.pi  # (G, K, m)
+        d = np.where(valid[:, i], np.abs(step).sum(axis=2), np.inf)
+        best = np.argmin(d, axis=1)
+        prev = np.where(ok[:, i, None], prev + step[rows, best], prev)
+        out[:, i] = prev
+    return out, ok
 
 
 @dataclass(frozen=True)
@@ -213,25 +241,9 @@ class WholeBody:
         return np.asarray(acc / self.mass)
 
     def points_and_com(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`leg_points` (N, L, 4, 3) and :meth:`com` (N, 3) in one compiled pass."""
-        q = np.ascontiguousarray(q, dtype=float)
-        base = np.ascontiguousarray(base, dtype=float)
-        pts = np.empty((len(q), self.n_legs, 4, 3))
-        com = np.empty((len(q), 3))
-        _tree_kernel(
-            q,
-            base,
-            self._parents,
-            np.ascontiguousarray(self._placements[:, :3, :]),
-            self._masses,
-            self._levers,
-            self._leg_joints,
-            self._foot,
-            self._foot_joint,
-            pts,
-            com,
-        )
-        return pts, com
+        """:meth:`leg_points` (N, L, 4, 3) and :meth:`com` (N, 3) from one tree pass."""
+        T = self.joint_poses(q, base)
+        return self.points_of(T), self.com_of(T, base)
 
     def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
         """Pinocchio configurations (N, 25): base xyz, base quaternion (x, y, z, w), joints."""
@@ -360,22 +372,14 @@ class WholeBody:
                 ) from None
             qk = batch.q.reshape(len(legs), n, *batch.q.shape[1:])
             vk = batch.valid.reshape(len(legs), n, -1)
+            cols = self._leg_joints[legs]  # (G, m)
+            picked, ok = _pick_branch(qk, vk, q0[cols])
             for g, leg in enumerate(legs):
-                cols = self._leg_joints[leg]
-                out = np.empty((n, len(cols)))
-                ok = np.empty(n, dtype=np.bool_)
-                _pick_branch(
-                    np.ascontiguousarray(qk[g]),
-                    np.ascontiguousarray(vk[g]),
-                    np.ascontiguousarray(q0[cols]),
-                    out,
-                    ok,
-                )
-                q[:, cols] = out
-                reached[:, leg] = ok
-                if not ok.all():
+                q[:, cols[g]] = picked[g]
+                reached[:, leg] = ok[g]
+                if not ok[g].all():
                     excess[:, leg] = np.where(
-                        ok, 0.0, self.reach_excess(targets[g * n : (g + 1) * n], leg)
+                        ok[g], 0.0, self.reach_excess(targets[g * n : (g + 1) * n], leg)
                     )
         margin = np.minimum(q - self.lower, self.upper - q)
         if strict:
