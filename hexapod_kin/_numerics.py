@@ -22,6 +22,7 @@ __all__ = ["chain_length", "chain_scale", "dls_step", "wrap_angles", "wrap_diff"
 
 _TWO_PI = 2.0 * math.pi
 
+
 def dls_step(jac: Any, error: Any, damping: float, free: Any = None) -> np.ndarray:
     """One damped-least-squares step ``Δq = Jᵀ(JJᵀ + λ²I)⁻¹ e`` (pure function).
 
