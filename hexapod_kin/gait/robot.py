@@ -92,7 +92,7 @@ def _pick_branch(
     """
     g, n, _, m = qk.shape
     out = np.empty((g, n, m))
-    ok = valid.any(axis=2)
+    ok = np.asarray(valid).any(axis=2).astype(bool)
     prev = np.array(q0, dtype=float)
     rows = np.arange(g)
     for i in range(n):
