@@ -47,7 +47,6 @@ import numpy as np
 from ._chain import AlignedChain, ChainArrays, aligned_chain
 from ._kmath import (
     POLY_TRIG_MAX,
-    det3,
     det_lu,
     det_small,
     dls_into,
@@ -71,29 +70,21 @@ __all__ = [
     "AlignedChain",
     "ChainArrays",
     "aligned_chain",
-    "check_batch",
-    "det3",
     "det_lu",
     "det_small",
     "dls_into",
     "eig2_sym",
     "eig3_sym",
     "first_use",
-    "fk_batch",
     "fk_jac_block",
     "fk_jac_into",
-    "fk_position",
     "jacobi_eig",
-    "jacobian_batch",
     "mark_compiled",
     "njit",
     "pose_jacobian_batch",
     "pose_jacobian_kernel",
-    "position_jacobian",
-    "position_jacobian_batch",
     "prange",
     "run_blocks",
-    "set_threads",
     "sigma_bounds",
     "silence_notice",
     "sincos",
@@ -177,12 +168,6 @@ def first_use(area: str) -> Iterator[None]:
         )
     yield
     mark_compiled(area)
-
-
-def set_threads(n: int | None) -> None:
-    """Set numba's thread count (``None``/0: unchanged)."""
-    if n:
-        numba.set_num_threads(int(n))
 
 
 # ------------------------------------------------------------------------ one configuration
@@ -622,72 +607,3 @@ def pose_jacobian_batch(
             check()
         raise ConfigurationError(f"Q contains non-finite values or values with |x| >= {Q_MAX:g}")
     return (out_t if pose else None), (out_j if want_jac else None)
-
-
-# ------------------------------------------------------------------------ on ChainArrays
-def check_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
-    """``qs`` as an (N, nq) float64 C-contiguous array (a single (nq,) becomes (1, nq)).
-
-    Raises:
-        ConfigurationError: Wrong shape or non-finite values.
-
-    """
-    q = np.ascontiguousarray(np.asarray(qs, dtype=np.float64))
-    if q.ndim == 1:
-        q = q[None, :]
-    if q.ndim != 2 or q.shape[1] != arrays.nq:
-        raise ConfigurationError(
-            f"Q has shape {np.shape(qs)}; expected (N, {arrays.nq})",
-            parameter="Q",
-            value=np.shape(qs),
-            allowed=f"shape (N, {arrays.nq})",
-        )
-    if not np.all(np.isfinite(q)):
-        raise ConfigurationError(
-            "Q contains non-finite values",
-            parameter="Q",
-            value="non-finite",
-            allowed="finite numbers",
-        )
-    return q
-
-
-def fk_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
-    """Tip positions (N, 3) in [m] for configurations ``qs`` (N, nq) (the block core)."""
-    poses, _ = pose_jacobian_batch(
-        aligned_chain(arrays), check_batch(arrays, qs), pose=True, jacobian=None
-    )
-    assert poses is not None
-    return np.ascontiguousarray(poses[:, :3, 3])
-
-
-def jacobian_batch(arrays: ChainArrays, qs: Any, rows: int = 6) -> np.ndarray:
-    """LWA Jacobians (N, rows, nq) for ``qs`` (N, nq); ``rows=3`` keeps the position part."""
-    if rows not in (3, 6):
-        raise ConfigurationError(f"rows={rows!r}; use 3 (position) or 6 (position + rotation)")
-    _, jac = pose_jacobian_batch(
-        aligned_chain(arrays), check_batch(arrays, qs), pose=False, jacobian="local_world_aligned"
-    )
-    assert jac is not None
-    return jac if rows == 6 else np.ascontiguousarray(jac[:, :3])
-
-
-def position_jacobian_batch(arrays: ChainArrays, qs: Any) -> np.ndarray:
-    """Position Jacobians (N, 3, nq) in the base frame."""
-    return jacobian_batch(arrays, qs, rows=3)
-
-
-def fk_position(arrays: ChainArrays, q: Any) -> np.ndarray:
-    """Tip position (3,) for one configuration (the per-configuration core)."""
-    qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
-    out_p = np.empty(3)
-    fk_jac_into(*arrays.packed, qv, out_p, np.empty((3, arrays.nq)), arrays.scratch(), False)
-    return out_p
-
-
-def position_jacobian(arrays: ChainArrays, q: Any) -> np.ndarray:
-    """Position Jacobian (3, nq) for one configuration (the per-configuration core)."""
-    qv = np.array(q, dtype=np.float64)  # writable C array: the kernels' q type (one compile)
-    out_j = np.empty((3, arrays.nq))
-    fk_jac_into(*arrays.packed, qv, np.empty(3), out_j, arrays.scratch(), True)
-    return out_j

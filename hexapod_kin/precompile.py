@@ -19,7 +19,6 @@ __all__ = ["AREAS", "precompile"]
 
 
 def _batch() -> None:
-    from ._kernels import fk_batch, position_jacobian_batch
     from .kinematics import load
 
     for source in ("hexabot_leg", "scara"):
@@ -29,8 +28,6 @@ def _batch() -> None:
         for ref in ("local_world_aligned", "world", "local"):
             model.jacobian_batch(qs, ref)
         model.fk_jacobian_batch(qs)
-        fk_batch(model.arrays, qs)
-        position_jacobian_batch(model.arrays, qs)
 
 
 def _ik() -> None:

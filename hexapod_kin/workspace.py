@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from ._kernels import fk_batch
 from ._numerics import chain_length
 from .exceptions import ParameterError, choices
 
@@ -124,7 +123,9 @@ def workspace(
     if not math.isfinite(h) or h <= 0:
         raise ParameterError(f"voxel={voxel!r}: a finite edge > 0 m is required")
     q = mdl.random_q(int(samples), seed=seed)
-    pts = fk_batch(mdl.arrays, q)
+    pts = np.empty((len(q), 3))
+    for i in range(0, len(q), 1_000_000):  # the batch kernel, in chunks: (n, 4, 4) is 128 B a row
+        pts[i : i + 1_000_000] = mdl.fk_batch(q[i : i + 1_000_000])[:, :3, 3]
     span = float(np.ptp(pts, axis=0).max())
     if span / h > 2000:
         raise ParameterError(f"voxel={h!r} m is too small for a workspace {span:.3g} m wide")

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
 from ..params import Chain, Hexapod, Pose
@@ -348,7 +349,7 @@ def analytic_batch(
         with np.errstate(invalid="ignore", divide="ignore"):
             q, valid = _ik_scara(fam, x)
         q = q - np.asarray(fam.offsets)
-        q[..., :3] = _wrap(q[..., :3])
+        q[..., :3] = wrap_angles(q[..., :3])
         if limits is not None:
             lo, hi = limits[0] - 1e-12, limits[1] + 1e-12
             for j in range(4):  # θ1 θ2 θ3 revolute, then the prismatic joint
@@ -399,13 +400,6 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q[:, b, 3] = prism
         valid[:, b] = ok
     return q, valid
-
-
-def _wrap(a: Any) -> Any:
-    """Angle(s) wrapped to (−π, π] [rad]: ``a − 2πk`` (a float for a scalar, else an array)."""
-    out = np.asarray(a - _TWO_PI * np.round(a * (1.0 / _TWO_PI)))
-    out = np.where(out <= -np.pi, out + _TWO_PI, out)
-    return float(out) if out.ndim == 0 else out
 
 
 def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -474,7 +468,7 @@ def _leg_slots(
     oks: list[np.ndarray] = []
 
     def slot(ok: np.ndarray, *angles: np.ndarray) -> None:
-        vals = [_wrap(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
+        vals = [wrap_angles(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
         if lo is not None and hi is not None:
             for j, v in enumerate(vals):
                 vals[j], inside = _fit(v, lo[j], hi[j])
@@ -604,7 +598,7 @@ def analytic(
         sols = qi[vi]
         keep: list[np.ndarray] = []
         for s in sols:
-            if not any(np.max(np.abs(_wrap(s - k))) <= 1e-12 for k in keep):
+            if not any(np.max(np.abs(wrap_angles(s - k))) <= 1e-12 for k in keep):
                 keep.append(s)
         out.append(np.array(keep, dtype=float).reshape(len(keep), qi.shape[-1]))
     return out

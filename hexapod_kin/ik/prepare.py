@@ -13,6 +13,7 @@ from typing import Any, Union
 
 import numpy as np
 
+from .._numerics import chain_scale
 from ..kinematics import KinematicModel
 from ..params import Chain, Hexapod
 
@@ -75,23 +76,12 @@ class Prepared:
         return np.asarray(self.model.arrays.tip_rot)
 
 
-def _scale(model: KinematicModel) -> float:
-    """The chain's length scale in [m]: ``Σ‖t‖`` of the link offsets base → tip, else 1.0."""
-    m = model.model
-    frame = m.frames[model.tip_id]
-    path = [int(i) for i in m.supports[frame.parentJoint]][1:]
-    offsets = [m.jointPlacements[i] for i in path] + [frame.placement]
-    offsets[0] = model.baseMo * offsets[0]
-    s = float(sum(np.linalg.norm(np.asarray(p.translation)) for p in offsets))
-    return s if s > 0.0 else 1.0
-
-
 def _build_prepared(model: KinematicModel) -> Prepared:
     lower = np.asarray(model.lower, dtype=float)
     upper = np.asarray(model.upper, dtype=float)
     prism = np.asarray(model.is_prismatic, dtype=bool)
     cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
-    scale = _scale(model)
+    scale = chain_scale(model.arrays.trans)
     cap = np.where(prism, 0.25 * scale, 0.5)
     lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
     lo = np.where(cont, -np.pi, lower)

@@ -25,9 +25,9 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from .._numerics import wrap_angles
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
-from .closed import _wrap
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import Task, build_task
 
@@ -255,7 +255,7 @@ def _rows(
     if task.code == 1 and w[5] != 0:
         x0, x1, x2 = pose[0, 0], pose[1, 0], pose[2, 0]
         h2 = x0 * x0 + x1 * x1
-        e = _wrap(task.yaw - math.atan2(x1, x0))
+        e = float(wrap_angles(task.yaw - math.atan2(x1, x0)))
         rot2 = e * e
         a, b = (-x2 * x0 / h2, -x2 * x1 / h2) if h2 > 1e-24 else (0.0, 0.0)
         es.append(np.array([w[5] * e]))
@@ -334,7 +334,7 @@ def _lm(
             for _ in range(2):
                 if with_z:
                     d = s.posture - q
-                    z = np.where(free, gain * np.where(cont, _wrap(d), d), 0.0)
+                    z = np.where(free, gain * np.where(cont, wrap_angles(d), d), 0.0)
                     dq = z + _dls(jt, e - (jt * free) @ z, lam2, free)
                 else:
                     dq = _dls(jt, e, lam2, free)
@@ -421,7 +421,7 @@ def _measures(
     rot = np.zeros(len(tasks))
     if tasks[0].code == 1 and w[5] != 0:
         yaw = np.array([t.yaw for t in tasks])
-        rot = np.abs(_wrap(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
+        rot = np.abs(wrap_angles(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
     elif tasks[0].code == 2:
         rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
         ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)

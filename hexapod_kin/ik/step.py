@@ -29,9 +29,7 @@ __all__ = [
     "lm_batch",
     "lm_loop",
     "log3_into",
-    "pose_errors",
     "step_into",
-    "task_cost",
     "task_into",
 ]
 
@@ -241,39 +239,6 @@ def _limit_into(
 
 
 @njit(cache=True, nogil=True)
-def task_cost(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
-    tgt: np.ndarray,
-    w6: np.ndarray,
-    par: np.ndarray,
-    ipar: np.ndarray,
-    qs: np.ndarray,
-    out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """Weighted squared task error ``‖W e(q)‖²`` of each row of ``qs`` into ``out``."""
-    n = qs.shape[1]
-    scratch = np.empty((6, max(rot.shape[0], 1)))
-    p = np.empty(3)
-    r = np.empty((3, 3))
-    jac = np.empty((6, n))
-    w3 = np.empty((3, 3))
-    et = np.empty(6)
-    jt = np.empty((6, n))
-    for k in range(qs.shape[0]):
-        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0, tip_rot, r)
-        m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
-        s = 0.0
-        for i in range(m):
-            s += et[i] * et[i]
-        out[k] = s
-
-
-@njit(cache=True, nogil=True)
 def lm_loop(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -466,33 +431,6 @@ def lm_loop(
 
 
 @njit(cache=True, nogil=True)
-def pose_errors(
-    mode: int, tgt: np.ndarray, w6: np.ndarray, yaw: float, pose: np.ndarray
-) -> tuple[float, float]:  # pragma: no cover - compiled
-    """(position error [m], orientation error [rad]) of a reached pose, over the kept rows."""
-    pos2 = 0.0
-    for k in range(3):
-        if w6[k] != 0.0:
-            d = tgt[k, 3] - pose[k, 3]
-            pos2 += d * d
-    rot2 = 0.0
-    if mode == 1 and w6[5] != 0.0:
-        e = wrap_angle(yaw - math.atan2(pose[1, 0], pose[0, 0]))
-        rot2 = e * e
-    elif mode == 2:
-        w3 = np.empty((3, 3))
-        for a in range(3):
-            for b in range(3):
-                w3[a, b] = tgt[a, 0] * pose[b, 0] + tgt[a, 1] * pose[b, 1] + tgt[a, 2] * pose[b, 2]
-        ew = np.empty(3)
-        log3_into(w3, ew)
-        for k in range(3):
-            if w6[3 + k] != 0.0:
-                rot2 += ew[k] * ew[k]
-    return math.sqrt(pos2), math.sqrt(rot2)
-
-
-@njit(cache=True, nogil=True)
 def lm_batch(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -514,9 +452,6 @@ def lm_batch(
     res_out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     """:func:`lm_loop` for N targets in one compiled call.
-
-    Serial: measured, a ``prange`` gained nothing on 2 cores and its spinning threads slowed
-    the code that followed.
 
     ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
     steps, code).

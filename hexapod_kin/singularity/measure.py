@@ -223,12 +223,11 @@ def measures_batch(
         ParameterError: Bad ``rows``.
 
     """
-    from .. import _kernels
     from ._plan import compute, output_arrays
 
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
-    q = _kernels.check_batch(mdl.arrays, qs)
+    q = np.ascontiguousarray(mdl.check_q_batch(qs, "qs"))
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
     n = q.shape[0]
     if out is not None and (
