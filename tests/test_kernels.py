@@ -145,8 +145,8 @@ def testgram_plans_split_where_structure_allows():
     assert sizes("coxa_tibia_leg") == [1, 1]
 
 
-@pytest.mark.parametrize("jacobi", [np.empty(0), None])
-def test_wrong_split_guess_is_caught_per_block(jacobi):
+@pytest.mark.parametrize("use_jacobi", [True, False])
+def test_wrong_split_guess_is_caught_per_block(use_jacobi):
     # a plan claiming G = {0} ⊕ {1, 2} for the Solo12 leg (false: G[0, 2] != 0) must not
     # change the results: the kernel checks the dropped entries on every block
     from dataclasses import replace
@@ -169,10 +169,10 @@ def test_wrong_split_guess_is_caught_per_block(jacobi):
         al.col,
         qs,
         np.arange(3),
-        None,
+        False,
         bad.arrays,
-        jacobi,  # None: the kernel without Jacobi (3×3 closed form where a split fails)
-        None,
+        use_jacobi,  # False: no Jacobi (the 3×3 closed form where a split fails)
+        np.empty((2, 1)),
         True,
         0,
         -(-len(qs) // BLOCK),

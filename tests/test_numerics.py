@@ -9,7 +9,6 @@ import pytest
 
 from hexapod_kin import _kernels as K
 from hexapod_kin import _numerics as N
-from hexapod_kin.exceptions import ConfigurationError
 
 RNG = np.random.default_rng(7)
 

@@ -133,7 +133,7 @@ def _eigenvalues(
     perm: np.ndarray,
     csize: np.ndarray,
     split: bool,
-    jacobi: Any,
+    use_jacobi: bool,
 ) -> None:  # pragma: no cover - compiled
     """Eigenvalues of the packed Gram matrices ``gb`` into ``ev[0:mm]`` (any order).
 
@@ -166,7 +166,7 @@ def _eigenvalues(
                     q = u * s - (u * (u - 1)) // 2 + (v - u)
                     for i in range(nb):
                         hb[q, i] = gb[p, i]
-            if jacobi is None:  # compile-time: plans whose blocks are all <= 2 (legs)
+            if not use_jacobi:  # plans whose blocks are all <= 2 (legs)
                 for i in range(nb):  # only if a split fails: the 3×3 closed form
                     l1, l2, l3 = eig3_sym(
                         hb[0, i], hb[3, i], hb[5, i], hb[1, i], hb[2, i], hb[4, i]
@@ -195,8 +195,8 @@ def _reduce_block(
     idx: np.ndarray,
     dg: np.ndarray,
     mnr: np.ndarray,
-    tmp: Any,
-    jacobi: Any,
+    tmp: np.ndarray,
+    use_jacobi: bool,
     start: int,
     out_det: np.ndarray,
     out_manip: np.ndarray,
@@ -234,7 +234,7 @@ def _reduce_block(
                     for i in range(nb):
                         gb[p, i] += jb[a, c, i] * jb[b, c, i]
     if square:
-        if tmp is None:  # compile-time (m <= 4): no Laplace expansion compiled
+        if mm <= 4:  # no Laplace expansion
             minor_block(jb, rsub[0], csub[0], mm, nb, mnr)
         else:
             minor_big(jb, rsub[0], csub[0], mm, nb, mnr, tmp)
@@ -246,7 +246,7 @@ def _reduce_block(
             dg[i] = 0.0
             out_det[start + i] = np.nan
         for s in range(rsub.shape[0]):
-            if tmp is None:
+            if mm <= 4:
                 minor_block(jb, rsub[s], csub[s], mm, nb, mnr)
             else:
                 minor_big(jb, rsub[s], csub[s], mm, nb, mnr, tmp)
@@ -270,10 +270,10 @@ def _reduce_block(
             flag[i] = mnr[i] < 0.0
             nbad += flag[i]
     if split and nbad < nb:  # each diagonal block apart
-        _eigenvalues(gb, hb, wb, ev, idx, nb, mm, pack, perm, csize, True, jacobi)
+        _eigenvalues(gb, hb, wb, ev, idx, nb, mm, pack, perm, csize, True, use_jacobi)
     if not split or nbad > 0:  # G whole, for the configurations where the split fails
         whole = ev2 if split and nbad < nb else ev
-        _eigenvalues(gb, hb, wb, whole, idx, nb, mm, pack, perm, csize, False, jacobi)
+        _eigenvalues(gb, hb, wb, whole, idx, nb, mm, pack, perm, csize, False, use_jacobi)
         if split and nbad < nb:
             for i in range(nb):
                 if flag[i]:
@@ -295,7 +295,7 @@ def _reduce_block(
             lmax = max(e0, max(e1, e2))
             mnr[i] = lmax
             hb[0, i] = lmax * max(min(e0, e1), min(max(e0, e1), e2))
-    elif tmp is not None:  # m = 5, 6 (compile-time: tmp is None for m <= 4)
+    elif mm >= 5:  # m = 5, 6
         for i in range(nb):
             lo = 0
             hi = 0
@@ -341,10 +341,10 @@ def measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
-    perconf: Any,
+    per_conf: bool,
     plan: tuple[Any, ...],
-    jacobi: Any,
-    tmp: Any,
+    use_jacobi: bool,
+    tmp: np.ndarray,
     skip0: bool,
     first_block: int,
     last_block: int,
@@ -360,21 +360,20 @@ def measures_kernel(
     ``kind``, ``col``); ``qs`` (N, nq) is cut into blocks of ``block`` configurations, each
     through :func:`~hexapod_kin._kernels.fk_jac_block` (the caller runs one call per thread;
     the GIL is released). ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend
-    on it, see :func:`._plan.first_joint_invariant`). ``perconf`` ``None`` (``min(k, n) ≤ 6``,
+    on it, see :func:`._plan.first_joint_invariant`). ``per_conf`` False (``min(k, n) ≤ 6``,
     see :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the
-    whole block by :func:`_reduce_block`; an array: :func:`_reduce_one` per configuration.
-    ``tmp``: ``None`` when m ≤ 4 (no Laplace expansion compiled), else this thread's (2, B)
-    scratch of :func:`minor_big`. ``jacobi`` ``None``: the plan's diagonal blocks are all of
-    size ≤ 2 and m ≤ 3 (legs), so no Jacobi is compiled (a configuration whose split fails
-    gets the 3×3 closed form). Both are ``None``-or-array on purpose: numba prunes a branch on
-    ``x is None`` before typing, so a chain compiles only the reduction it needs.
+    whole block by :func:`_reduce_block`; True: :func:`_reduce_one` per configuration.
+    ``use_jacobi`` False: the plan's diagonal blocks are all of size ≤ 2 and m ≤ 3 (legs), so
+    a configuration whose split fails gets the 3×3 closed form, else cyclic Jacobi. ``tmp``:
+    this thread's (2, B) scratch of :func:`minor_big` (m = 5, 6). One compiled signature
+    serves every chain: these choices are runtime flags, per chain, never per element.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
     k = sel.shape[0]
     mm = k if k <= nq else nq
     big = k if k > nq else nq
-    use_block = perconf is None
+    use_block = not per_conf
     npk = mm * (mm + 1) // 2 if use_block else 1
     nev = mm if use_block else 1
     bsz = block
@@ -411,7 +410,7 @@ def measures_kernel(
             for b in range(nq):
                 for i in range(nb):
                     jb[a, b, i] = jfull[r + b, i]
-        if perconf is None:  # a compile-time branch (None is a type): only one is compiled
+        if use_block:
             _reduce_block(
                 jb,
                 nb,
@@ -426,7 +425,7 @@ def measures_kernel(
                 dg,
                 mnr,
                 tmp,
-                jacobi,
+                use_jacobi,
                 start,
                 out_det,
                 out_manip,

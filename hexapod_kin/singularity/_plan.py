@@ -35,7 +35,6 @@ __all__ = [
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
 BLOCK = 256
 #: Passed for "yes" where the kernel takes ``None`` or an array (see ``measures_kernel``).
-_DUMMY = np.empty(0)
 #: Fewest configurations per thread (below this, one thread: starting threads costs more).
 MIN_PER_THREAD = 20_000
 #: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
@@ -264,12 +263,11 @@ def compute(
     skip0 = first_joint_invariant(al, key)
     plan = gram_plan(model, key, skip0)
     m = min(len(key), q.shape[1])
-    perconf = None if plan.use_block else _DUMMY
-    jacobi = None if (m <= 3 and int(plan.csize.max()) <= 2) else _DUMMY
-    args = (*al.packed, q, sel, perconf, plan.arrays, jacobi)
+    use_jacobi = not (m <= 3 and int(plan.csize.max()) <= 2)
+    args = (*al.packed, q, sel, not plan.use_block, plan.arrays, use_jacobi)
 
     def run(first: int, last: int) -> None:
-        tmp = None if m <= 4 else np.empty((2, BLOCK))  # this thread's scratch
+        tmp = np.empty((2, BLOCK if m > 4 else 1))  # this thread's scratch (m = 5, 6)
         measures_kernel(*args, tmp, skip0, first, last, BLOCK, *out)
 
     with first_use("singularity"):
