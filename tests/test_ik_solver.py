@@ -320,3 +320,19 @@ def test_one_target_runs_without_numba():
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
+
+
+def test_build_tasks_equals_build_task_row_by_row():
+    arm = hk.load("erd:ur5_robot")
+    poses = np.array([arm.fk(q) for q in arm.random_q(20, seed=3)])
+    for targets in (poses, poses[:, :3, 3]):
+        fast = ik.build_tasks(targets)
+        slow = [ik.build_task(t) for t in targets]
+        assert [t.mode for t in fast] == [t.mode for t in slow]
+        assert all(np.array_equal(a.pose, b.pose) for a, b in zip(fast, slow))
+        assert all(np.array_equal(a.weights, b.weights) for a, b in zip(fast, slow))
+        assert all(not t.pose.flags.writeable for t in fast)
+    bad = poses.copy()
+    bad[7, :3, :3] *= 1.01  # not a rotation: the row-by-row path names it
+    with pytest.raises(IKError, match="rigid transform"):
+        ik.build_tasks(bad)

@@ -25,7 +25,7 @@ from .closed import (
 )
 from .prepare import LEG_HOME, Prepared, home, prepared
 from .solver import STATUSES, IKOptions, IKResult, solve, solve_many
-from .task import AXES, Task, build_task
+from .task import AXES, Task, build_task, build_tasks
 
 __all__ = [
     "AXES",
@@ -41,6 +41,7 @@ __all__ = [
     "analytic",
     "analytic_batch",
     "build_task",
+    "build_tasks",
     "detect_family",
     "home",
     "leg_reachable",

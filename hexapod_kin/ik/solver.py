@@ -29,7 +29,7 @@ from .._numerics import wrap_angles
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .task import Task, build_task
+from .task import Task, build_task, build_tasks
 
 __all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_many"]
 
@@ -123,6 +123,10 @@ class IKOptions:
             if out[k] is not None and not isinstance(out[k], str):
                 out[k] = np.asarray(out[k], dtype=float).tolist()
         return out
+
+
+#: Fewest targets per thread of :func:`solve_many` (the compiled loop releases the GIL).
+_PER_THREAD = 64
 
 
 # ============================================================================ result
@@ -556,7 +560,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         ParameterError: Unknown or bad options.
 
     """
-    from .._kernels import first_use
+    from .._kernels import first_use, run_blocks
     from .step import lm_batch
 
     mdl = as_model(model)
@@ -573,7 +577,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             value=t.shape,
             allowed="(N, 3), (N, 4), (N, 4, 4)",
         )
-    tasks = [build_task(ti, mask=opts.mask, weights=opts.weights) for ti in t]
+    tasks = build_tasks(t, mask=opts.mask, weights=opts.weights)
     n_t = len(tasks)
     s = _setup(mdl, opts, tasks[0].code if tasks else 0)
     starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
@@ -599,24 +603,30 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     hist = np.empty((n_t, m + 1))
     jac = np.empty((n_t, 6, mdl.nq))
     res = np.empty((n_t, 3), dtype=np.int64)
+    tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
+    w6 = np.ascontiguousarray(tasks[0].weights) if n_t else np.ones(6)
+
+    def run(a: int, b: int) -> None:  # targets a..b-1; each target's numbers are its own
+        lm_batch(
+            *s.prep.packed,
+            s.prep.tip_rot,
+            tgts[a:b],
+            w6,
+            pars[a:b],
+            s.ipar,
+            starts[a:b],
+            s.prep.lim,
+            s.prep.cont,
+            s.posture,
+            q[a:b],
+            hist[a:b],
+            jac[a:b],
+            res[a:b],
+        )
+
     if n_t:
         with first_use("ik"):
-            lm_batch(
-                *s.prep.packed,
-                s.prep.tip_rot,
-                np.array([task.pose for task in tasks]).reshape(n_t, 4, 4),
-                np.ascontiguousarray(tasks[0].weights),
-                pars,
-                s.ipar,
-                starts,
-                s.prep.lim,
-                s.prep.cont,
-                s.posture,
-                q,
-                hist,
-                jac,
-                res,
-            )
+            run_blocks(run, n_t, 1, _PER_THREAD)
     if not n_t:
         return []
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..exceptions import IKError
 
-__all__ = ["AXES", "Task", "build_task"]
+__all__ = ["AXES", "Task", "build_task", "build_tasks"]
 
 #: Names of the six task rows (position [m], orientation [rad]; base axes).
 AXES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
@@ -225,3 +225,36 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
     pose.setflags(write=False)
     w.setflags(write=False)
     return Task(mode=mode, pose=pose, yaw=yaw, weights=w)
+
+
+def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[Task]:
+    """:func:`build_task` of each row of ``targets`` ((N, 3) positions or (N, 4, 4) poses).
+
+    Without ``mask`` or ``weights``, the rows are checked at once (finite; poses rigid to 1e-9
+    with det +1 and last row [0, 0, 0, 1]); any other case, or a row that fails, goes through
+    :func:`build_task` one by one (which names what is wrong).
+
+    Raises:
+        IKError: As :func:`build_task`.
+
+    """
+    t = np.asarray(targets)
+    if mask is None and weights is None and t.dtype == np.float64 and len(t):
+        if t.ndim == 2 and t.shape[1] == 3 and np.all(np.isfinite(t)):
+            poses = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+            poses[:, :3, 3] = t
+            poses.setflags(write=False)
+            return [Task("position", p, 0.0, _POSITION_WEIGHTS) for p in poses]
+        if t.ndim == 3 and t.shape[1:] == (4, 4) and np.all(np.isfinite(t)):
+            rot = t[:, :3, :3]
+            gram = np.einsum("nji,njk->nik", rot, rot) - np.eye(3)
+            rigid = (
+                np.all(t[:, 3] == [0.0, 0.0, 0.0, 1.0])
+                and np.max(np.abs(gram)) <= 1e-9
+                and np.all(np.linalg.det(rot) > 0)
+            )
+            if rigid:
+                poses = np.array(t)
+                poses.setflags(write=False)
+                return [Task("pose", p, 0.0, _POSE_WEIGHTS) for p in poses]
+    return [build_task(ti, mask=mask, weights=weights) for ti in t]
