@@ -51,9 +51,11 @@ def _singularity() -> None:
 
 
 def _gait() -> None:
-    from .gait import walk
+    from .gait.stability import SMALL, segment_clearance, support_margin
 
-    walk(duration=0.2)
+    n = SMALL + 1  # above the numpy side of the size rule: the compiled checks
+    support_margin(np.zeros((n, 4, 2)), np.ones((n, 4), dtype=bool), np.zeros((n, 2)))
+    segment_clearance(np.zeros((n, 2, 3, 3)), np.array([[0, 1]]))
 
 
 #: Area name → the calls that compile its kernels.

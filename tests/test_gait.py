@@ -676,3 +676,35 @@ def test_foot_step_to_dict_is_json_ready():
     step = foot_step(hk.load("hexabot_leg"), dt=0.01, duration=0.5)
     d = json.loads(json.dumps(step.to_dict()))
     assert len(d["t"]) == len(step.t) and d["within_limits"] is step.within_limits
+
+
+def test_numpy_checks_equal_the_compiled_ones_on_random_and_degenerate_supports():
+    """The two engines of the size rule (numpy up to SMALL samples, compiled above) agree."""
+    from hexapod_kin.gait import stability as S
+    from hexapod_kin.gait._stability_kernel import _clearance_kernel, _margin_kernel
+
+    rng = np.random.default_rng(0)
+    for legs in (4, 6, 8):
+        n = 3000
+        pts = rng.normal(size=(n, legs, 2))
+        stance = rng.random((n, legs)) < 0.6
+        com = 0.5 * rng.normal(size=(n, 2))
+        pts[:300, :, 1] = 2.0 * pts[:300, :, 0]  # collinear feet: a segment
+        pts[300:400, 1] = pts[300:400, 0]  # two feet at one point
+        stance[400:450] = False  # no foot down: -inf
+        stance[450:500] = False
+        stance[450:500, 0] = True  # one foot: minus the distance to it
+        ref = np.empty(n)
+        _margin_kernel(pts, stance, com, ref)
+        got = S._margin_numpy(pts, stance, com)
+        assert np.array_equal(np.isfinite(ref), np.isfinite(got))
+        assert np.all(got[~np.isfinite(got)] == -np.inf)
+        fin = np.isfinite(ref)
+        assert np.max(np.abs(got[fin] - ref[fin])) <= 1e-12
+        assert np.array_equal(np.sign(got[fin]), np.sign(ref[fin]))
+        chains = rng.normal(size=(n, legs, 4, 3))
+        chains[:50, 0, 1] = chains[:50, 0, 0]  # a zero-length segment
+        pairs = np.array([[i, (i + 1) % legs] for i in range(legs)], dtype=np.int64)
+        ref2 = np.empty((n, legs))
+        _clearance_kernel(chains, pairs, ref2)
+        assert np.max(np.abs(S._clearance_numpy(chains, pairs) - ref2)) <= 1e-12

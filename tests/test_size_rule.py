@@ -22,6 +22,9 @@ COMMANDS = [
     ["ik", "hexabot_leg", "--target", "0.15", "0.05", "-0.05"],
     ["scan", "hexabot_leg"],
     ["step", "hexabot_leg", "--duration", "1"],
+    ["gait", "--duration", "2"],
+    ["stand"],
+    ["derive", "hexabot_leg"],
 ]
 
 _CHILD = """

@@ -1,105 +1,110 @@
-"""Static stability and leg clearance, vectorised over time (compiled loops).
+"""Static stability and leg clearance, vectorised over time.
 
 * :func:`support_margin`: the support polygon is the convex hull of the stance feet projected
   on the ground plane (xy); the margin is the signed distance from the projected centre of
   mass to its edge — positive inside (the distance to the nearest edge), negative outside
   (minus the distance to the polygon); with two stance feet the polygon is a segment and with
   one a point (margin ≤ 0), with none −∞.
-* :func:`segment_clearance`: the smallest distance between the segments of neighbouring legs.
+* :func:`segment_clearance`: the smallest distance between the segments of neighbouring legs
+  (closest points of two segments: Ericson, *Real-Time Collision Detection*, 5.1.9).
+
+Size rule: up to :data:`SMALL` samples (a walk of a command's size) both run in numpy; above,
+the compiled loops of :mod:`._stability_kernel` (imported only then).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
-from .._kernels import first_use, njit
 from ..exceptions import ParameterError
 
-__all__ = ["segment_clearance", "support_margin"]
+__all__ = ["SMALL", "segment_clearance", "support_margin"]
+
+#: Most samples checked in numpy; more go through the compiled loops.
+SMALL = 20_000
 
 
-@njit(cache=True, inline="always")
-def _cross(ox: float, oy: float, ax: float, ay: float, bx: float, by: float) -> float:
-    return (ax - ox) * (by - oy) - (ay - oy) * (bx - ox)  # pragma: no cover - compiled
+def _seg_point(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Distance from points ``p`` to segments ``ab`` (2-D, broadcast over leading axes)."""
+    d = b - a
+    ll = np.einsum("...i,...i->...", d, d)
+    num = np.einsum("...i,...i->...", p - a, d)
+    t = np.clip(np.divide(num, ll, out=np.zeros_like(num), where=ll > 0.0), 0.0, 1.0)
+    e = a + t[..., None] * d - p
+    return np.sqrt(np.einsum("...i,...i->...", e, e))
 
 
-@njit(cache=True, inline="always")
-def _seg_point(ax: float, ay: float, bx: float, by: float, px: float, py: float) -> float:
-    """Distance from p to the segment ab (2-D)."""
-    dx, dy = bx - ax, by - ay  # pragma: no cover - compiled
-    ll = dx * dx + dy * dy
-    t = 0.0
-    if ll > 0.0:
-        t = ((px - ax) * dx + (py - ay) * dy) / ll
-        t = min(max(t, 0.0), 1.0)
-    ex, ey = ax + t * dx - px, ay + t * dy - py
-    return math.sqrt(ex * ex + ey * ey)
+def _margin_numpy(pts: np.ndarray, mask: np.ndarray, com: np.ndarray) -> np.ndarray:
+    """:func:`support_margin` in numpy: hull edges as the stance pairs with no foot on their right.
+
+    An ordered pair (a, b) of distinct stance feet is on the boundary of the counter-clockwise
+    hull when every stance foot c has ``(b − a) × (c − a) ≥ 0``; the margin is the smallest
+    distance to those segments, positive when the centre of mass is on the left of all of them.
+    Stance feet on one line (or one or two of them) give a point or a segment: minus the
+    distance to it (the nearest of all stance pairs' segments, whose union it is).
+    """
+    a = pts[:, :, None, :]  # (N, L, 1, 2)
+    b = pts[:, None, :, :]  # (N, 1, L, 2)
+    d = b - a  # (N, L, L, 2): a -> b
+    rel = pts[:, None, :, :] - pts[:, :, None, :]  # (N, L(a), L(c), 2): a -> c
+    cross = (
+        d[:, :, :, None, 0] * rel[:, :, None, :, 1] - d[:, :, :, None, 1] * rel[:, :, None, :, 0]
+    )
+    stance_c = mask[:, None, None, :]
+    pair = mask[:, :, None] & mask[:, None, :]
+    distinct = np.any(d != 0.0, axis=-1)
+    edge = pair & distinct & np.all((cross >= 0.0) | ~stance_c, axis=-1)
+    flat = ~np.any((cross != 0.0) & stance_c & pair[..., None], axis=(1, 2, 3))
+    dist = _seg_point(a, b, com[:, None, None, :])  # (N, L, L)
+    pc = d[..., 0] * (com[:, None, None, 1] - a[..., 1]) - d[..., 1] * (
+        com[:, None, None, 0] - a[..., 0]
+    )
+    inside = np.all(~edge | (pc >= 0.0), axis=(1, 2))
+    dmin = np.min(np.where(edge, dist, np.inf), axis=(1, 2))
+    dflat = np.min(np.where(pair, dist, np.inf), axis=(1, 2))
+    out = np.where(inside, dmin, -dmin)
+    out = np.where(flat, -dflat, out)
+    return np.where(mask.any(axis=1), out, -np.inf)
 
 
-@njit(cache=True)
-def _margin_kernel(
-    pts: np.ndarray, mask: np.ndarray, com: np.ndarray, out: np.ndarray
-) -> None:  # pragma: no cover - compiled
-    n, m = mask.shape
-    xs = np.empty(m)
-    ys = np.empty(m)
-    hx = np.empty(2 * m + 1)
-    hy = np.empty(2 * m + 1)
-    for i in range(n):
-        k = 0
-        for j in range(m):  # gather, insertion-sorted by (x, y)
-            if mask[i, j]:
-                x, y = pts[i, j, 0], pts[i, j, 1]
-                p = k
-                while p > 0 and (xs[p - 1] > x or (xs[p - 1] == x and ys[p - 1] > y)):
-                    xs[p] = xs[p - 1]
-                    ys[p] = ys[p - 1]
-                    p -= 1
-                xs[p] = x
-                ys[p] = y
-                k += 1
-        px, py = com[i, 0], com[i, 1]
-        if k == 0:
-            out[i] = -np.inf
-            continue
-        # Andrew's monotone chain, counter-clockwise, collinear points dropped
-        h = 0
-        for j in range(k):
-            while h >= 2 and _cross(hx[h - 2], hy[h - 2], hx[h - 1], hy[h - 1], xs[j], ys[j]) <= 0:
-                h -= 1
-            hx[h] = xs[j]
-            hy[h] = ys[j]
-            h += 1
-        lo = h + 1
-        for j in range(k - 2, -1, -1):
-            while h >= lo and _cross(hx[h - 2], hy[h - 2], hx[h - 1], hy[h - 1], xs[j], ys[j]) <= 0:
-                h -= 1
-            hx[h] = xs[j]
-            hy[h] = ys[j]
-            h += 1
-        h -= 1  # the last point repeats the first
-        if h <= 0:
-            h = 1
-        if h == 1:
-            out[i] = -math.sqrt((hx[0] - px) ** 2 + (hy[0] - py) ** 2)
-            continue
-        if h == 2:
-            out[i] = -_seg_point(hx[0], hy[0], hx[1], hy[1], px, py)
-            continue
-        inside = True
-        dmin = np.inf
-        for j in range(h):
-            ax, ay = hx[j], hy[j]
-            bx, by = hx[(j + 1) % h], hy[(j + 1) % h]
-            ll = math.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
-            c = _cross(ax, ay, bx, by, px, py) / ll  # signed distance to the edge's line
-            if c < 0:
-                inside = False
-            dmin = min(dmin, _seg_point(ax, ay, bx, by, px, py))
-        out[i] = dmin if inside else -dmin
+def _clearance_numpy(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """:func:`segment_clearance` in numpy (Ericson's closest points, every segment pair)."""
+    n, _, k, _ = pts.shape
+    if not len(pairs):
+        return np.empty((n, 0))
+    p0 = pts[:, pairs[:, 0], :-1][:, :, :, None, :]  # (N, P, K-1, 1, 3)
+    u = (pts[:, pairs[:, 0], 1:] - pts[:, pairs[:, 0], :-1])[:, :, :, None, :]
+    q0 = pts[:, pairs[:, 1], :-1][:, :, None, :, :]  # (N, P, 1, K-1, 3)
+    v = (pts[:, pairs[:, 1], 1:] - pts[:, pairs[:, 1], :-1])[:, :, None, :, :]
+    r = p0 - q0
+
+    def dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]
+
+    a, e, f, c, b = dot(u, u), dot(v, v), dot(v, r), dot(u, r), dot(u, v)
+    a, e, f, c, b = np.broadcast_arrays(a, e, f, c, b)
+    eps = 1e-18
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = a * e - b * b
+        s = np.where(den > 1e-12 * a * e, np.clip((b * f - c * e) / den, 0.0, 1.0), 0.0)
+        t = (b * s + f) / e
+        low, high = t < 0.0, t > 1.0
+        s = np.where(
+            low, np.clip(-c / a, 0.0, 1.0), np.where(high, np.clip((b - c) / a, 0.0, 1.0), s)
+        )
+        t = np.clip(t, 0.0, 1.0)
+        # degenerate segments (a point): one parameter fixed at 0
+        s = np.where(e <= eps, np.clip(-c / a, 0.0, 1.0), s)
+        t = np.where(e <= eps, 0.0, t)
+        t = np.where(a <= eps, np.clip(f / e, 0.0, 1.0), t)
+        s = np.where(a <= eps, 0.0, s)
+        both = (a <= eps) & (e <= eps)
+        s, t = np.where(both, 0.0, s), np.where(both, 0.0, t)
+    d = r + u * s[..., None] - v * t[..., None]
+    dist = np.sqrt(dot(d, d))
+    return np.asarray(dist.reshape(n, len(pairs), -1).min(axis=2))
 
 
 def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
@@ -138,104 +143,19 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
             value=list(np.shape(feet)),
             allowed="(N, L, 2|3)",
         )
-    out = np.empty(len(p))
-    with first_use("gait"):
-        _margin_kernel(
-            np.ascontiguousarray(p[..., :2]),
-            np.ascontiguousarray(s),
-            np.ascontiguousarray(c[:, :2]),
-            out,
-        )
-    return np.asarray(out[0]) if single else out
-
-
-@njit(cache=True, inline="always")
-def _seg_seg(
-    px: float,
-    py: float,
-    pz: float,
-    ux: float,
-    uy: float,
-    uz: float,
-    qx: float,
-    qy: float,
-    qz: float,
-    vx: float,
-    vy: float,
-    vz: float,
-) -> float:  # pragma: no cover - compiled
-    """Distance between segments p→p+u and q→q+v in 3-D.
-
-    Ericson, Real-Time Collision Detection, 5.1.9 (closest points of two segments).
-    """
-    rx, ry, rz = px - qx, py - qy, pz - qz
-    a = ux * ux + uy * uy + uz * uz
-    e = vx * vx + vy * vy + vz * vz
-    f = vx * rx + vy * ry + vz * rz
-    eps = 1e-18
-    if a <= eps and e <= eps:
-        s = 0.0
-        t = 0.0
-    elif a <= eps:
-        s = 0.0
-        t = min(max(f / e, 0.0), 1.0)
+    xy, st, cxy = p[..., :2], s, c[:, :2]
+    if len(p) <= SMALL:
+        out = _margin_numpy(xy, st, cxy)
     else:
-        c = ux * rx + uy * ry + uz * rz
-        if e <= eps:
-            t = 0.0
-            s = min(max(-c / a, 0.0), 1.0)
-        else:
-            b = ux * vx + uy * vy + uz * vz
-            den = a * e - b * b
-            s = min(max((b * f - c * e) / den, 0.0), 1.0) if den > 1e-12 * a * e else 0.0
-            t = (b * s + f) / e
-            if t < 0.0:
-                t = 0.0
-                s = min(max(-c / a, 0.0), 1.0)
-            elif t > 1.0:
-                t = 1.0
-                s = min(max((b - c) / a, 0.0), 1.0)
-    dx = rx + ux * s - vx * t
-    dy = ry + uy * s - vy * t
-    dz = rz + uz * s - vz * t
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
+        from .._kernels import first_use
+        from ._stability_kernel import _margin_kernel
 
-
-@njit(cache=True)
-def _clearance_kernel(
-    pts: np.ndarray, pairs: np.ndarray, out: np.ndarray
-) -> None:  # pragma: no cover - compiled
-    n, _, k, _ = pts.shape
-    for i in range(n):
-        for q in range(pairs.shape[0]):
-            a, b = pairs[q, 0], pairs[q, 1]
-            best = np.inf
-            for u in range(k - 1):
-                px, py, pz = pts[i, a, u, 0], pts[i, a, u, 1], pts[i, a, u, 2]
-                ux, uy, uz = (
-                    pts[i, a, u + 1, 0] - px,
-                    pts[i, a, u + 1, 1] - py,
-                    pts[i, a, u + 1, 2] - pz,
-                )
-                for v in range(k - 1):
-                    qx, qy, qz = pts[i, b, v, 0], pts[i, b, v, 1], pts[i, b, v, 2]
-                    d = _seg_seg(
-                        px,
-                        py,
-                        pz,
-                        ux,
-                        uy,
-                        uz,
-                        qx,
-                        qy,
-                        qz,
-                        pts[i, b, v + 1, 0] - qx,
-                        pts[i, b, v + 1, 1] - qy,
-                        pts[i, b, v + 1, 2] - qz,
-                    )
-                    if d < best:
-                        best = d
-            out[i, q] = best
+        out = np.empty(len(p))
+        with first_use("gait"):
+            _margin_kernel(
+                np.ascontiguousarray(xy), np.ascontiguousarray(st), np.ascontiguousarray(cxy), out
+            )
+    return np.asarray(out[0]) if single else out
 
 
 def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
@@ -263,6 +183,11 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
         )
     if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
+    if len(p) <= SMALL:
+        return _clearance_numpy(p, pr)
+    from .._kernels import first_use
+    from ._stability_kernel import _clearance_kernel
+
     out = np.empty((p.shape[0], pr.shape[0]))
     with first_use("gait"):
         _clearance_kernel(p, pr, out)
