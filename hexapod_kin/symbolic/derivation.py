@@ -142,15 +142,15 @@ class Derivation:
         is_matrix = isinstance(num, sp.MatrixBase)
         shape = num.shape if is_matrix else ()
         entries = list(num) if is_matrix else [num]
-        raws = [sp.lambdify(self.q, e, modules="numpy") for e in entries]
+        raw = sp.lambdify(self.q, entries, modules="numpy")  # one code object for all
 
         def f(q: np.ndarray) -> np.ndarray:
             arr = np.asarray(q, dtype=float)
             lead = arr.shape[:-1]
             cols = [arr[..., k] for k in range(len(self.q))]
-            res = np.empty(lead + (len(raws),))
-            for i, raw in enumerate(raws):
-                res[..., i] = np.broadcast_to(np.asarray(raw(*cols), dtype=float), lead)
+            res = np.empty(lead + (len(entries),))
+            for i, value in enumerate(raw(*cols)):
+                res[..., i] = np.broadcast_to(np.asarray(value, dtype=float), lead)
             return res.reshape(lead + shape)
 
         return f
