@@ -8,7 +8,7 @@ inputs give the same bits in every process and thread.
 Contents: symmetric eigenvalues (:func:`eig2_sym`, :func:`eig3_sym` closed forms, descending;
 :func:`jacobi_eig` any small size); determinants (:func:`det3`, :func:`det_lu`,
 :func:`det_small`); :func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least
-squares, frozen joints); :func:`sigma_bounds` of a position Jacobian; :func:`wrap_angle`
+squares, frozen joints); :func:`wrap_angle`
 (scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp for ``|x| ≤ POLY_TRIG_MAX``).
 Angles in [rad].
 """
@@ -34,7 +34,6 @@ __all__ = [
     "det_small",
     "solve_spd",
     "dls_into",
-    "sigma_bounds",
     "wrap_angle",
 ]
 
@@ -299,50 +298,6 @@ def dls_into(
         else:
             dq[k] = 0.0
     return ok
-
-
-# ------------------------------------------------------------------------ σ bounds
-@njit(cache=True, nogil=True)
-def sigma_bounds(jac: np.ndarray) -> tuple[float, float]:  # pragma: no cover - compiled
-    """Smallest and largest singular values of a (3, n) position Jacobian, closed form.
-
-    The smallest counts the task directions: for n >= 3 it is the 3rd singular value (0 at a
-    singularity), for n < 3 the n-th. Uses the eigenvalues of ``JJᵀ`` (3×3) or ``JᵀJ`` (2×2);
-    for n == 3 the smallest is ``|det J| / (σ1 σ2)`` (accurate near singularities).
-    """
-    n = jac.shape[1]
-    if n == 0:
-        return 0.0, 0.0
-    if n == 1:
-        v = math.sqrt(jac[0, 0] ** 2 + jac[1, 0] ** 2 + jac[2, 0] ** 2)
-        return v, v
-    if n == 2:
-        a = jac[0, 0] ** 2 + jac[1, 0] ** 2 + jac[2, 0] ** 2
-        d = jac[0, 1] ** 2 + jac[1, 1] ** 2 + jac[2, 1] ** 2
-        # |c1 x c2|^2 = ad - b^2 without cancellation
-        cx = jac[1, 0] * jac[2, 1] - jac[2, 0] * jac[1, 1]
-        cy = jac[2, 0] * jac[0, 1] - jac[0, 0] * jac[2, 1]
-        cz = jac[0, 0] * jac[1, 1] - jac[1, 0] * jac[0, 1]
-        det = cx * cx + cy * cy + cz * cz
-        b = jac[0, 0] * jac[0, 1] + jac[1, 0] * jac[1, 1] + jac[2, 0] * jac[2, 1]
-        lmax = 0.5 * (a + d + math.sqrt(max((a - d) ** 2 + 4.0 * b * b, 0.0)))
-        lmin = det / lmax if lmax > 0.0 else 0.0
-        return math.sqrt(max(lmin, 0.0)), math.sqrt(lmax)
-    m00 = m01 = m02 = m11 = m12 = m22 = 0.0
-    for k in range(n):
-        x, y, z = jac[0, k], jac[1, k], jac[2, k]
-        m00 += x * x
-        m01 += x * y
-        m02 += x * z
-        m11 += y * y
-        m12 += y * z
-        m22 += z * z
-    e1, e2, e3 = eig3_sym(m00, m11, m22, m01, m02, m12)
-    smax = math.sqrt(max(e1, 0.0))
-    if n == 3:
-        s12 = smax * math.sqrt(max(e2, 0.0))
-        return (abs(det3(jac)) / s12 if s12 > 0.0 else 0.0), smax
-    return math.sqrt(max(e3, 0.0)), smax
 
 
 # ------------------------------------------------------------------------ angles

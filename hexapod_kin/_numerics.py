@@ -2,7 +2,7 @@
 
 One home each: angle wrapping (:func:`wrap_angles`) and the chain's length scale
 (:func:`chain_length` / :func:`chain_scale`, ONE formula). The compiled counterparts used
-inside kernels (``wrap_angle``, ``dls_into``, ``sigma_bounds``, eigenvalues, determinants...)
+inside kernels (``wrap_angle``, ``dls_into``, eigenvalues, determinants...)
 live in :mod:`hexapod_kin._kmath`, re-exported by :mod:`hexapod_kin._kernels`.
 
 Angles in [rad], lengths in [m].

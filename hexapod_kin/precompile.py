@@ -50,20 +50,11 @@ def _singularity() -> None:
         measures_batch(model, model.random_q(8, seed=3))
 
 
-def _gait() -> None:
-    from .gait.stability import SMALL, segment_clearance, support_margin
-
-    n = SMALL + 1  # above the numpy side of the size rule: the compiled checks
-    support_margin(np.zeros((n, 4, 2)), np.ones((n, 4), dtype=bool), np.zeros((n, 2)))
-    segment_clearance(np.zeros((n, 2, 3, 3)), np.array([[0, 1]]))
-
-
 #: Area name → the calls that compile its kernels.
 AREAS: dict[str, Callable[[], None]] = {
     "batch": _batch,
     "ik": _ik,
     "singularity": _singularity,
-    "gait": _gait,
 }
 
 

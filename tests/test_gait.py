@@ -678,33 +678,47 @@ def test_foot_step_to_dict_is_json_ready():
     assert len(d["t"]) == len(step.t) and d["within_limits"] is step.within_limits
 
 
-def test_numpy_checks_equal_the_compiled_ones_on_random_and_degenerate_supports():
-    """The two engines of the size rule (numpy up to SMALL samples, compiled above) agree."""
-    from hexapod_kin.gait import stability as S
-    from hexapod_kin.gait._stability_kernel import _clearance_kernel, _margin_kernel
+def test_checks_against_shapely_and_a_minimiser_on_random_and_degenerate_supports():
+    """support_margin against shapely's polygon distance; clearance against a bounded minimiser."""
+    from scipy.optimize import minimize
+    from shapely.geometry import MultiPoint, Point
+
+    from hexapod_kin.gait import segment_clearance, support_margin
 
     rng = np.random.default_rng(0)
-    for legs in (4, 6, 8):
-        n = 3000
-        pts = rng.normal(size=(n, legs, 2))
-        stance = rng.random((n, legs)) < 0.6
-        com = 0.5 * rng.normal(size=(n, 2))
-        pts[:300, :, 1] = 2.0 * pts[:300, :, 0]  # collinear feet: a segment
-        pts[300:400, 1] = pts[300:400, 0]  # two feet at one point
-        stance[400:450] = False  # no foot down: -inf
-        stance[450:500] = False
-        stance[450:500, 0] = True  # one foot: minus the distance to it
-        ref = np.empty(n)
-        _margin_kernel(pts, stance, com, ref)
-        got = S._margin_numpy(pts, stance, com)
-        assert np.array_equal(np.isfinite(ref), np.isfinite(got))
-        assert np.all(got[~np.isfinite(got)] == -np.inf)
-        fin = np.isfinite(ref)
-        assert np.max(np.abs(got[fin] - ref[fin])) <= 1e-12
-        assert np.array_equal(np.sign(got[fin]), np.sign(ref[fin]))
-        chains = rng.normal(size=(n, legs, 4, 3))
-        chains[:50, 0, 1] = chains[:50, 0, 0]  # a zero-length segment
-        pairs = np.array([[i, (i + 1) % legs] for i in range(legs)], dtype=np.int64)
-        ref2 = np.empty((n, legs))
-        _clearance_kernel(chains, pairs, ref2)
-        assert np.max(np.abs(S._clearance_numpy(chains, pairs) - ref2)) <= 1e-12
+    n, legs = 400, 6
+    pts = rng.normal(size=(n, legs, 2))
+    stance = rng.random((n, legs)) < 0.6
+    com = 0.5 * rng.normal(size=(n, 2))
+    pts[:40, :, 1] = 2.0 * pts[:40, :, 0]  # collinear feet: a segment
+    pts[40:60, 1] = pts[40:60, 0]  # two feet at one point
+    stance[60:70] = False  # no foot down
+    stance[70:80] = False
+    stance[70:80, 0] = True  # one foot
+    got = support_margin(pts, stance, com)
+    for i in range(n):
+        if not stance[i].any():
+            assert got[i] == -np.inf
+            continue
+        hull = MultiPoint([tuple(p) for p in pts[i, stance[i]]]).convex_hull
+        p = Point(*com[i])
+        inside = hull.geom_type == "Polygon" and hull.contains(p)
+        ref = hull.exterior.distance(p) if inside else -hull.distance(p)
+        assert abs(got[i] - ref) <= 1e-12, (i, got[i], ref)
+    chains = rng.normal(size=(30, 2, 4, 3))
+    chains[:5, 0, 1] = chains[:5, 0, 0]  # a zero-length segment
+    clear = segment_clearance(chains, np.array([[0, 1]]))[:, 0]
+    for i in range(30):
+        best = np.inf
+        for u in range(3):
+            for v in range(3):
+                a0, a1 = chains[i, 0, u], chains[i, 0, u + 1]
+                b0, b1 = chains[i, 1, v], chains[i, 1, v + 1]
+
+                def dist(st, a0=a0, a1=a1, b0=b0, b1=b1):
+                    return np.linalg.norm(a0 + st[0] * (a1 - a0) - b0 - st[1] * (b1 - b0))
+
+                for start in ((0.5, 0.5), (0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)):
+                    res = minimize(dist, start, bounds=[(0, 1), (0, 1)], method="L-BFGS-B")
+                    best = min(best, res.fun)
+        assert clear[i] <= best + 1e-12 and clear[i] >= best - 1e-6

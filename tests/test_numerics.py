@@ -79,22 +79,6 @@ def test_dls_step_is_the_damped_least_squares_solution(shape: tuple[int, int]) -
     assert np.allclose(dq[free], ref, atol=1e-10)
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
-def test_sigma_bounds_equal_svd(n: int) -> None:
-    for _ in range(50):
-        j = RNG.normal(size=(3, n))
-        s = np.linalg.svd(j, compute_uv=False)
-        lo, hi = K.sigma_bounds(np.ascontiguousarray(j))
-        assert hi == pytest.approx(s[0], rel=1e-10)
-        assert lo == pytest.approx(s[min(n, 3) - 1], rel=1e-8, abs=1e-12)
-
-
-def test_sigma_bounds_exact_singularity() -> None:
-    j = np.array([[1.0, 2.0, 3.0], [0.0, 1.0, 1.0], [1.0, 3.0, 4.0]])  # row 3 = row 1 + row 2
-    lo, _ = K.sigma_bounds(j)
-    assert lo < 1e-12
-
-
 def test_wrapping() -> None:
     a = np.array([-7.0, -math.pi, 0.0, math.pi, 3.5, 100.0, 1e4])
     w = N.wrap_angles(a)

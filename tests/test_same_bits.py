@@ -89,7 +89,7 @@ def digests() -> dict[str, str]:
 
 
 #: The precompile areas run before (c).
-_AREAS = ("batch", "singularity", "gait", "ik")
+_AREAS = ("batch", "singularity", "ik")
 _CHILD = "import json, test_same_bits as t; print(json.dumps(t.digests()))"
 #: The same calls from 8 threads of one process, started together.
 _THREADS = """

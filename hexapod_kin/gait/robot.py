@@ -91,16 +91,24 @@ def _pick_branch(
 
     """
     g, n, _, m = qk.shape
-    out = np.empty((g, n, m))
+    out = np.empty((n, g, m))
     ok = np.asarray(valid).any(axis=2).astype(bool)
+    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
+    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
+    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
     prev = np.array(q0, dtype=float)
     rows = np.arange(g)
+    step = np.empty(cand.shape[1:])
+    two_pi = 2.0 * np.pi
     for i in range(n):
-        step = np.mod(qk[:, i] - prev[:, None, :] + np.pi, 2.0 * np.pi) - np.pi  # (G, K, m)
-        d = np.where(valid[:, i], np.abs(step).sum(axis=2), np.inf)
-        best = np.argmin(d, axis=1)
-        prev = np.where(ok[:, i, None], prev + step[rows, best], prev)
-        out[:, i] = prev
+        np.subtract(cand[i], prev[:, None, :], out=step)
+        step += np.pi
+        np.mod(step, two_pi, out=step)
+        step -= np.pi
+        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
+        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
+        out[i] = prev
+    out = np.moveaxis(out, 0, 1)
     return out, ok
 
 
@@ -221,7 +229,7 @@ class WholeBody:
         """:meth:`leg_points` from joint poses ``T`` (N, 18, 4, 4) of :meth:`joint_poses`."""
         pts = T[:, self._leg_joints][..., :3, 3]  # (N, L, 3, 3)
         Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
-        foot = np.einsum("nlij,lj->nli", Ta[..., :3, :], self._foot)
+        foot = np.matmul(Ta[..., :3, :], self._foot[None, :, :, None])[..., 0]
         return np.concatenate([pts, foot[:, :, None, :]], axis=2)
 
     def feet(self, q: Any, base: Any) -> np.ndarray:

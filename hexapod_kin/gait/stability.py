@@ -8,8 +8,8 @@
 * :func:`segment_clearance`: the smallest distance between the segments of neighbouring legs
   (closest points of two segments: Ericson, *Real-Time Collision Detection*, 5.1.9).
 
-Size rule: up to :data:`SMALL` samples (a walk of a command's size) both run in numpy; above,
-the compiled loops of :mod:`._stability_kernel` (imported only then).
+Both run in numpy, vectorised over samples (in chunks of :data:`CHUNK` samples, bounding the
+(N, L, L, L) work arrays).
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ import numpy as np
 
 from ..exceptions import ParameterError
 
-__all__ = ["SMALL", "segment_clearance", "support_margin"]
+__all__ = ["CHUNK", "segment_clearance", "support_margin"]
 
-#: Most samples checked in numpy; more go through the compiled loops.
-SMALL = 20_000
+#: Samples per vectorised pass.
+CHUNK = 20_000
 
 
 def _seg_point(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -144,17 +144,12 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
             allowed="(N, L, 2|3)",
         )
     xy, st, cxy = p[..., :2], s, c[:, :2]
-    if len(p) <= SMALL:
-        out = _margin_numpy(xy, st, cxy)
-    else:
-        from .._kernels import first_use
-        from ._stability_kernel import _margin_kernel
-
-        out = np.empty(len(p))
-        with first_use("gait"):
-            _margin_kernel(
-                np.ascontiguousarray(xy), np.ascontiguousarray(st), np.ascontiguousarray(cxy), out
-            )
+    out = np.concatenate(
+        [
+            _margin_numpy(xy[i : i + CHUNK], st[i : i + CHUNK], cxy[i : i + CHUNK])
+            for i in range(0, max(len(p), 1), CHUNK)
+        ]
+    )
     return np.asarray(out[0]) if single else out
 
 
@@ -183,12 +178,6 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
         )
     if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
-    if len(p) <= SMALL:
-        return _clearance_numpy(p, pr)
-    from .._kernels import first_use
-    from ._stability_kernel import _clearance_kernel
-
-    out = np.empty((p.shape[0], pr.shape[0]))
-    with first_use("gait"):
-        _clearance_kernel(p, pr, out)
-    return out
+    return np.concatenate(
+        [_clearance_numpy(p[i : i + CHUNK], pr) for i in range(0, max(len(p), 1), CHUNK)]
+    )
