@@ -62,8 +62,6 @@ def test_solve_spd_and_non_spd() -> None:
 
 @pytest.mark.parametrize("shape", [(3, 2), (3, 3), (3, 7), (6, 6), (6, 7), (2, 5)])
 def test_dls_step_is_the_damped_least_squares_solution(shape: tuple[int, int]) -> None:
-    from hexapod_kin.ik.solver import _dls  # the per-call IK's step (pure function)
-
     m, n = shape
     j = RNG.normal(size=shape)
     e = RNG.normal(size=m)
@@ -71,12 +69,12 @@ def test_dls_step_is_the_damped_least_squares_solution(shape: tuple[int, int]) -
     # the minimiser of ‖J dq − e‖² + λ²‖dq‖², from the stacked least-squares problem
     stacked = np.vstack([j, math.sqrt(lam2) * np.eye(n)])
     ref = np.linalg.lstsq(stacked, np.concatenate([e, np.zeros(n)]), rcond=None)[0]
-    assert np.allclose(_dls(j, e, lam2, np.ones(n)), ref, atol=1e-10)
+    assert np.allclose(N.dls_step(j, e, lam2), ref, atol=1e-10)
     free = np.arange(n) != 1  # a frozen joint gets no step; the others solve without it
-    dq = _dls(j, e, lam2, free.astype(float))
+    dq = N.dls_step(j, e, lam2, free)
     assert dq[1] == 0.0
     ref = np.linalg.lstsq(stacked[:, free], np.concatenate([e, np.zeros(n)]), rcond=None)[0]
-    assert np.allclose(dq[free], ref, atol=1e-10)
+    assert np.allclose(dq[free], ref, atol=1e-12)
 
 
 def test_wrapping() -> None:

@@ -128,7 +128,7 @@ def gait_torques(
     data = pm.createData()
     fids = [mdl.frame_id(f) for f in params.foot_frames]
     g_world = np.array(mdl.model.gravity.linear, dtype=float)
-    mass = robot_mass_com(mdl, qs[0])[0]
+    mass = robot_mass_com(mdl, qs[0], data)[0]
     weight = mass * float(np.linalg.norm(g_world))
     n = len(ts)
     forces = np.zeros((n, n_legs, 3))
@@ -139,7 +139,7 @@ def gait_torques(
         rot, pos = poses[i, :3, :3], poses[i, :3, 3]
         q = qs[i]
         pm.gravity = pin.Motion(rot.T @ g_world, np.zeros(3))
-        com_b = robot_mass_com(mdl, q)[1]
+        com_b = robot_mass_com(mdl, q, data)[1]
         pin.computeJointJacobians(pm, data, q)
         pin.updateFramePlacements(pm, data)
         stance = np.nonzero(support[i])[0]

@@ -74,14 +74,15 @@ def _hexapod(model: Any) -> Hexapod:
     return params
 
 
-def robot_mass_com(model: Any, q: Any) -> tuple[float, np.ndarray]:
+def robot_mass_com(model: Any, q: Any, data: Any = None) -> tuple[float, np.ndarray]:
     """Total mass [kg] and centre of mass [m] (model's world frame) of the whole robot at ``q``.
 
     Includes the bodies fixed to the world (``model.inertias[0]``, the body link of a
     fixed-base robot), which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out.
+    ``data``: a Pinocchio ``Data`` of ``model.model`` to reuse (sample loops).
     """
     pm = model.model
-    data = pm.createData()
+    data = pm.createData() if data is None else data
     qv = np.array(model.check_q(q), dtype=float)
     m_joints = float(pin.computeTotalMass(pm))
     c_joints = np.array(pin.centerOfMass(pm, data, qv)) if m_joints > 0 else np.zeros(3)

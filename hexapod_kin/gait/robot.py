@@ -92,7 +92,7 @@ def _pick_branch(
     """
     g, n, _, m = qk.shape
     out = np.empty((n, g, m))
-    ok = np.asarray(valid).any(axis=2).astype(bool)
+    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
     cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
     usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
     found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)

@@ -48,10 +48,7 @@ def _margin_numpy(pts: np.ndarray, mask: np.ndarray, com: np.ndarray) -> np.ndar
     a = pts[:, :, None, :]  # (N, L, 1, 2)
     b = pts[:, None, :, :]  # (N, 1, L, 2)
     d = b - a  # (N, L, L, 2): a -> b
-    rel = pts[:, None, :, :] - pts[:, :, None, :]  # (N, L(a), L(c), 2): a -> c
-    cross = (
-        d[:, :, :, None, 0] * rel[:, :, None, :, 1] - d[:, :, :, None, 1] * rel[:, :, None, :, 0]
-    )
+    cross = d[:, :, :, None, 0] * d[:, :, None, :, 1] - d[:, :, :, None, 1] * d[:, :, None, :, 0]
     stance_c = mask[:, None, None, :]
     pair = mask[:, :, None] & mask[:, None, :]
     distinct = np.any(d != 0.0, axis=-1)

@@ -25,7 +25,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from .._numerics import wrap_angles
+from .._numerics import dls_step, wrap_angles
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
@@ -288,15 +288,6 @@ def _limit(q: np.ndarray, prep: Prepared, use_limits: bool) -> np.ndarray:
     return wrapped
 
 
-def _dls(jt: np.ndarray, e: np.ndarray, lam2: float, free: np.ndarray) -> np.ndarray:
-    """``Δq = Jfᵀ(JfJfᵀ + λ²I)⁻¹ e`` on the free joints (the frozen ones get 0)."""
-    jf = jt * free
-    m, n = jf.shape
-    if n <= m:
-        return np.linalg.solve(jf.T @ jf + lam2 * np.eye(n), jf.T @ e)
-    return jf.T @ np.linalg.solve(jf @ jf.T + lam2 * np.eye(m), e)
-
-
 def _lm(
     mdl: KinematicModel, s: _Setup, task: Task, starts: np.ndarray, use_limits: bool, max_iter: int
 ) -> tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray]:
@@ -339,9 +330,9 @@ def _lm(
                 if with_z:
                     d = s.posture - q
                     z = np.where(free, gain * np.where(cont, wrap_angles(d), d), 0.0)
-                    dq = z + _dls(jt, e - (jt * free) @ z, lam2, free)
+                    dq = z + dls_step(jt, e - (jt * free) @ z, lam2, free)
                 else:
-                    dq = _dls(jt, e, lam2, free)
+                    dq = dls_step(jt, e, lam2, free)
                 big = np.abs(dq) > cap
                 scale = float(np.min(cap[big] / np.abs(dq[big]))) if big.any() else 1.0
                 qn = _limit(q + scale * dq, prep, use_limits)

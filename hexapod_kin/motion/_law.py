@@ -25,15 +25,14 @@ import math
 from operator import ge, le, truediv
 from typing import Any
 
-import eigenpy
 import numpy as np
 import pinocchio as pin
+
+from .._numerics import dls_step
 
 __all__ = ["integrate"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-_LDLT = eigenpy.LDLT
-_SUCCESS = eigenpy.ComputationInfo.Success
 
 
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
@@ -101,27 +100,6 @@ def _dls3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | No
     return [(y0 - l10 * z1 - l20 * z2) / l00, z1, z2]
 
 
-def _dls(jac: np.ndarray, x: Any, lam_eye: np.ndarray) -> list[float]:
-    """``(JᵀJ + λ² I)⁻¹ Jᵀ x`` by Eigen's LDLᵀ of the smaller Gram matrix (0 if that fails).
-
-    ``lam_eye`` is ``λ² I`` of the Gram matrix's size (n×n if n <= m, else m×m).
-    """
-    m, n = jac.shape
-    if n <= m:
-        gram = np.dot(jac.T, jac)
-        gram += lam_eye
-        ldlt = _LDLT(gram)
-        out = ldlt.solve(np.dot(x, jac))
-    else:
-        gram = np.dot(jac, jac.T)
-        gram += lam_eye
-        ldlt = _LDLT(gram)
-        out = np.dot(ldlt.solve(np.asarray(x)), jac)
-    if ldlt.info() != _SUCCESS:
-        return [0.0] * n
-    return out.reshape(-1).tolist()
-
-
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
     """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value."""
     if rows.shape[1] == 0:
@@ -169,8 +147,6 @@ def integrate(
     vel_l, refp_l = vel.tolist(), ref_p.tolist()
     lo, hi, vm = lower.tolist(), upper.tolist(), vmax.tolist()
     speed = any(math.isfinite(v) for v in vm)
-    eye = np.eye(min(n, vel.shape[1]))  # the size of the smaller Gram matrix
-    held: list[Any] = [-1.0, eye]  # λ² used and λ² I, kept over a step's stages
     frame_jacobian, frame_placement, log3 = (
         pin.computeFrameJacobian,
         pin.updateFramePlacement,
@@ -217,18 +193,16 @@ def integrate(
                 ratio = smin / eps
                 lam2 = lam2max * (1.0 - ratio * ratio)
             lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
-        if j3 is None and held[0] != lam_use:
-            held[0], held[1] = lam_use, lam_use * eye
         if j3 is not None:
             qd = _dls3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
         else:
-            qd = _dls(rows, xd, held[1])
+            qd = dls_step(rows, xd, lam_use).tolist()
         limited = False
         if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
             free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
                     for x, v, a, b in zip(q, qd, lo, hi)]  # fmt: skip
             if not all(free):  # freeze the joints pushed outward, solve for the others
-                qd = _dls(rows * array(free, dtype=float), xd, lam_use * eye)
+                qd = dls_step(rows, xd, lam_use, free).tolist()
                 qd = [x if ok else 0.0 for x, ok in zip(qd, free)]
                 limited = True
         if speed:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write, cache_root
+from .._numerics import wrap_angles
 from ..exceptions import HexapodKinError, ParameterError
 from ._zeroset import closest_distance, compile_factor
 
@@ -29,7 +30,6 @@ __all__ = ["Family", "Families", "families_for", "cache_dir"]
 _VERSION = 2
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
-_TWO_PI = 2.0 * math.pi
 
 
 # ------------------------------------------------------------------------ one family
@@ -72,7 +72,7 @@ class Family:
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
             d = qa[..., self.joint] - self.value
-            return np.remainder(d + math.pi, _TWO_PI) - math.pi if self.periodic else d
+            return wrap_angles(d) if self.periodic else d
         x = qa[..., list(self.variables)].reshape(-1, len(self.variables))
         return np.asarray(self._jet(x, False)[0]).reshape(qa.shape[:-1])
 
@@ -198,7 +198,7 @@ def _key(chain: Any, rows: tuple[str, ...]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
-def _from_json(data: dict[str, Any], nq: int) -> tuple[Family, ...]:
+def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
     return tuple(
         Family(
             name=str(f["name"]),
@@ -218,7 +218,7 @@ def _read_cache(key: str, nq: int) -> tuple[Family, ...] | None:
         data = json.loads((cache_dir() / f"{key}.json").read_text(encoding="utf-8"))
         if data.get("v") != _VERSION or data.get("nq") != nq:
             return None
-        return _from_json(data, nq)
+        return _from_json(data)
     except (OSError, KeyError, TypeError, ValueError):  # missing or corrupt: derive again
         return None
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .._numerics import chain_length
 from ..exceptions import ConfigurationError
 from .rows import ROW_NAMES, choose_rows, row_names
 
@@ -168,8 +169,6 @@ def reach(model: Any) -> float:
 
     The chain's one length scale (:func:`hexapod_kin._numerics.chain_length`).
     """
-    from .._numerics import chain_length
-
     return float(chain_length(as_model(model).arrays.trans))
 
 
