@@ -4,7 +4,7 @@
 joint placements, axes and the tip offset, so the compiled kernels serve any chain of 1-DOF
 joints — presets and URDFs alike. :class:`AlignedChain` is the same chain re-expressed with
 every joint axis along its frame's z, the form of the block FK core
-(:func:`hexapod_kin._kernels.fk_block`).
+(:func:`hexapod_kin._kernels.fk_jac_block`).
 """
 
 from __future__ import annotations

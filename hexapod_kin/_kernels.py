@@ -32,6 +32,7 @@ Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said oth
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import sys
@@ -54,7 +55,6 @@ from ._kmath import (
     eig3_sym,
     jacobi_eig,
     njit,
-    prange,
     sincos,
     solve_spd,
     wrap_angle,
@@ -82,7 +82,6 @@ __all__ = [
     "njit",
     "pose_jacobian_batch",
     "pose_jacobian_kernel",
-    "prange",
     "run_blocks",
     "silence_notice",
     "sincos",
@@ -115,6 +114,7 @@ def silence_notice() -> None:
     _NOTICE[0] = False
 
 
+@functools.cache
 def _stamp(area: str) -> Path:
     """The stamp file of ``area`` (see the module docstring)."""
     import importlib.metadata
@@ -181,15 +181,14 @@ def fk_jac_into(
     out_j: np.ndarray,
     scratch: np.ndarray,
     want_jac: bool,
-    tip_rot: Any = None,
-    out_r: Any = None,
+    tip_rot: np.ndarray,
+    out_r: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     """Tip position into ``out_p`` (3,), LWA Jacobian into ``out_j`` (3 or 6, nq), rotation.
 
     The per-configuration FK + Jacobian core. ``scratch`` is a (6, m) work array (joint
-    origins and axes); nothing is allocated. With ``tip_rot`` (the chain's ``tip_rot``) and
-    ``out_r`` (3, 3), the tip frame's rotation in the base frame goes to ``out_r`` (both
-    ``None`` or omitted: not computed; numba prunes the branch). Callers in compiled code pass
+    origins and axes); nothing is allocated. ``tip_rot`` is the chain's ``tip_rot``; the tip
+    frame's rotation in the base frame goes to ``out_r`` (3, 3). Callers in compiled code pass
     ``want_jac`` as a runtime value (``n >= 0``, an argument), never a literal
     ``True``/``False``: numba would compile one copy per literal.
     """
@@ -278,12 +277,11 @@ def fk_jac_into(
         pz + r20 * tx + r21 * ty + r22 * tz,
     )
     out_p[0], out_p[1], out_p[2] = px, py, pz
-    if out_r is not None and tip_rot is not None:
-        t = tip_rot
-        for j in range(3):
-            out_r[0, j] = r00 * t[0, j] + r01 * t[1, j] + r02 * t[2, j]
-            out_r[1, j] = r10 * t[0, j] + r11 * t[1, j] + r12 * t[2, j]
-            out_r[2, j] = r20 * t[0, j] + r21 * t[1, j] + r22 * t[2, j]
+    t = tip_rot  # the tip frame's rotation
+    for j in range(3):
+        out_r[0, j] = r00 * t[0, j] + r01 * t[1, j] + r02 * t[2, j]
+        out_r[1, j] = r10 * t[0, j] + r11 * t[1, j] + r12 * t[2, j]
+        out_r[2, j] = r20 * t[0, j] + r21 * t[1, j] + r22 * t[2, j]
     if not want_jac:
         return
     out_j[:, :] = 0.0

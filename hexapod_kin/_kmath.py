@@ -24,7 +24,6 @@ import numpy as np
 __all__ = [
     "POLY_TRIG_MAX",
     "njit",
-    "prange",
     "sincos",
     "eig2_sym",
     "eig3_sym",
@@ -37,7 +36,6 @@ __all__ = [
     "wrap_angle",
 ]
 
-prange = numba.prange
 _TWO_PI = 2.0 * math.pi
 
 

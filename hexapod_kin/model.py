@@ -345,7 +345,7 @@ class Model:
 
     @property
     def arrays(self) -> Any:
-        """The chain base → tip as :class:`hexapod_kin._kernels.ChainArrays` (extracted once)."""
+        """The chain base → tip as :class:`hexapod_kin._chain.ChainArrays` (extracted once)."""
         from ._chain import ChainArrays
 
         return self.cached("model.arrays", lambda: ChainArrays.from_model(self))

@@ -173,7 +173,10 @@ def test_arrays_extracted_once_and_match_pinocchio():
     assert model.arrays is model.arrays
     q = np.array([0.3, -0.4, 0.9])
     arrays, pos = model.arrays, np.empty(3)
-    _kernels.fk_jac_into(*arrays.packed, q, pos, np.empty((3, 3)), arrays.scratch(), False)
+    rot = np.empty((3, 3))
+    args = (pos, np.empty((3, 3)), arrays.scratch(), False, arrays.tip_rot, rot)
+    _kernels.fk_jac_into(*arrays.packed, q, *args)
+    np.testing.assert_allclose(rot, model.fk(q)[:3, :3], atol=1e-14)
     np.testing.assert_allclose(pos, model.fk(q)[:3, 3], atol=1e-14)
 
 

@@ -137,3 +137,19 @@ def test_numerics_never_imports_numba() -> None:
 
     code = "import sys, hexapod_kin._numerics; assert 'numba' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+@pytest.mark.parametrize("shape", [(3, 2), (3, 3), (6, 7), (2, 5)])
+def test_compiled_dls_into_is_the_damped_least_squares_solution(shape: tuple[int, int]) -> None:
+    m, n = shape
+    j = RNG.normal(size=shape)
+    e = RNG.normal(size=m)
+    lam2 = 0.03
+    free = np.arange(n) != 1
+    big = max(m, n)
+    dq = np.empty(n)
+    assert K.dls_into(j, e, lam2, free, dq, np.empty((big, big)), np.empty(big), np.empty(big))
+    stacked = np.vstack([j[:, free], math.sqrt(lam2) * np.eye(n)[:, free]])
+    ref = np.linalg.lstsq(stacked, np.concatenate([e, np.zeros(n)]), rcond=None)[0]
+    assert dq[1] == 0.0
+    assert np.allclose(dq[free], ref, atol=1e-12)

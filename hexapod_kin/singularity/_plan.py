@@ -34,7 +34,6 @@ __all__ = [
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
 BLOCK = 256
-#: Passed for "yes" where the kernel takes ``None`` or an array (see ``measures_kernel``).
 #: Fewest configurations per thread (below this, one thread: starting threads costs more).
 MIN_PER_THREAD = 20_000
 #: Largest number of maximal minors (Cauchy–Binet terms) the block path accepts.
@@ -78,7 +77,7 @@ class GramPlan:
     """How :func:`_reduce_block` treats one chain and row selection (see :func:`_gram_plan`).
 
     Attributes:
-        use_block: Whether the block path applies (``m = min(k, n) ≤ 4``, few minors).
+        use_block: Whether the block path applies (``m = min(k, n) ≤ 6``, few minors).
         gram_t: ``G = Jᵀ J`` (else ``J Jᵀ``).
         perm: (m,) indices of ``G`` ordered by diagonal block.
         csize: (c,) sizes of the diagonal blocks (one block of size m: no split).
