@@ -207,6 +207,15 @@ def test_leg_solutions_is_the_one_home_per_target_lengths_and_limits():
     q, valid = ik.leg_solutions(p, (r[:, 0], r[:, 1], r[:, 2]), sign=-1.0, limits=(lo, hi))
     np.testing.assert_array_equal(valid, np.vstack([b.valid for b in ref]))
     np.testing.assert_allclose(q, np.vstack([b.q for b in ref]), rtol=0, atol=1e-12)
+    # independent: every valid slot within the limits and its table FK on the target
+    chains = [
+        robots.hexabot_leg(l1=a, l2=b, l3=c).replace(limits=(lim, lim, lim)) for a, b, c in designs
+    ]
+    for i in np.flatnonzero(valid.any(axis=1))[::7]:
+        for qk in q[i][valid[i]]:
+            assert np.all(np.abs(qk) <= 2.0 + 1e-12)
+            foot = hk.table_fk(chains[i // 500], qk)[:3, 3]
+            np.testing.assert_allclose(foot, p[i], rtol=0, atol=1e-12)
     reach = ik.leg_reachable(p, (r[:, 0], r[:, 1], r[:, 2]), sign=-1.0, limits=(lo, hi))
     np.testing.assert_array_equal(reach, valid.any(axis=1))
     assert 0.05 < reach.mean() < 0.95

@@ -471,10 +471,11 @@ def _report(
             "not_converged",
             f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing",
         )
-    if s.ipar[2] and _blocked(mdl, prep, task, q).size:
+    blocked = _blocked(mdl, prep, task, q) if s.ipar[2] else np.empty(0, dtype=int)
+    if blocked.size:
         free = _lm(mdl, s, task, np.vstack([q, prep.starts[:8]]), False, 200)
         if free[2] == 0:
-            names = [mdl.joint_names[i] for i in _blocked(mdl, prep, task, q)]
+            names = [mdl.joint_names[i] for i in blocked]
             return result(
                 "joint_limits",
                 f"reachable only beyond the limits of {names}; the nearest point within the "
@@ -569,8 +570,10 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             allowed="(N, 3), (N, 4), (N, 4, 4)",
         )
     tasks = build_tasks(t, mask=opts.mask, weights=opts.weights)
+    if not tasks:
+        return []
     n_t = len(tasks)
-    s = _setup(mdl, opts, tasks[0].code if tasks else 0)
+    s = _setup(mdl, opts, tasks[0].code)
     starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
     if q0 is None:
         starts[:, 0] = s.prep.home
@@ -595,7 +598,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     jac = np.empty((n_t, 6, mdl.nq))
     res = np.empty((n_t, 3), dtype=np.int64)
     tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
-    w6 = np.ascontiguousarray(tasks[0].weights) if n_t else np.ones(6)
+    w6 = np.ascontiguousarray(tasks[0].weights)
 
     def run(a: int, b: int) -> None:  # targets a..b-1; each target's numbers are its own
         lm_batch(
@@ -615,11 +618,8 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             res[a:b],
         )
 
-    if n_t:
-        with first_use("ik"):
-            run_blocks(run, n_t, 1, _PER_THREAD)
-    if not n_t:
-        return []
+    with first_use("ik"):
+        run_blocks(run, n_t, 1, _PER_THREAD)
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):
