@@ -414,9 +414,12 @@ def test_a_leg_pushed_out_of_reach_is_damped_then_held_by_its_limits(leg):
     assert np.all(np.isfinite(tr.q)) and np.all(np.isfinite(tr.qdot))
     assert np.all(tr.q >= leg.lower) and np.all(tr.q <= leg.upper)
     assert tr.damping.max() > 0 and tr.sigma_min.min() < 1e-2 * tr.sigma_max[0]
-    # the damping law, from the recorded σ_min and ε = 1 % of σ_max at q0
-    eps = 0.01 * np.linalg.svd(leg.position_jacobian(tr.q[0]), compute_uv=False)[0]
-    law = np.where(tr.sigma_min < eps, eps**2 * (1 - (tr.sigma_min / eps) ** 2), 0.0)
+    # the damping law from σ_min by SVD of Pinocchio's Jacobian at each recorded q, and
+    # ε = 1 % of σ_max at q0
+    sv = np.linalg.svd(np.array([leg.position_jacobian(q) for q in tr.q]), compute_uv=False)
+    eps = 0.01 * sv[0, 0]
+    np.testing.assert_allclose(tr.sigma_min, sv[:, -1], rtol=1e-9, atol=1e-15)
+    law = np.where(sv[:, -1] < eps, eps**2 * (1 - (sv[:, -1] / eps) ** 2), 0.0)
     np.testing.assert_allclose(tr.damping, law, rtol=1e-9, atol=1e-18)
 
 
