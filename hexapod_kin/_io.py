@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 
-from .exceptions import ParameterError
+from .exceptions import ParameterError, SourceError
 
-__all__ = ["atomic_write", "cache_root"]
+__all__ = ["atomic_write", "cache_root", "decode_utf8", "read_regular"]
 
 
 def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
@@ -106,3 +107,79 @@ def cache_root(kind: str) -> Path:
         return Path(platformdirs.user_cache_dir("hexapod_kin")) / kind
     except ImportError:
         return Path.home() / ".cache" / "hexapod_kin" / kind
+
+
+def read_regular(path: str | os.PathLike[str], max_bytes: int, what: str = "source") -> bytes:
+    """The bytes of a regular file, refused beyond ``max_bytes`` while reading.
+
+    Only regular files are read: a device (``/dev/zero``), a named pipe, a socket or a folder
+    is refused without reading (the file is opened non-blocking, so a pipe with no writer does
+    not hang, and checked with ``fstat`` on the open descriptor). The cap is enforced on the
+    bytes actually read, not on the size the file system reports.
+
+    Raises:
+        SourceError: Not a regular file, unreadable, or larger than ``max_bytes`` (one line
+            naming the file and the cap; ``parameter`` is ``what``).
+
+    """
+    name = str(path)
+    try:
+        fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise SourceError(
+            f"{what}={name!r}: cannot read it ({exc.strerror or exc})",
+            parameter=what,
+            value=name,
+            allowed="a readable regular file",
+        ) from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = (
+                "a folder" if stat.S_ISDIR(mode)
+                else "a named pipe" if stat.S_ISFIFO(mode)
+                else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                else "a socket" if stat.S_ISSOCK(mode)
+                else "not a regular file"
+            )  # fmt: skip
+            raise SourceError(
+                f"{what}={name!r} is {kind}; only regular files are read",
+                parameter=what,
+                value=name,
+                allowed="a regular file",
+            )
+        chunks: list[bytes] = []
+        total = 0
+        while True:
+            block = os.read(fd, min(1 << 20, max_bytes + 1 - total))
+            if not block:
+                break
+            chunks.append(block)
+            total += len(block)
+            if total > max_bytes:
+                raise SourceError(
+                    f"{what}={name!r}: more than {max_bytes} bytes; the cap is {max_bytes} bytes",
+                    parameter=what,
+                    value=name,
+                    allowed=f"at most {max_bytes} bytes",
+                )
+        return b"".join(chunks)
+    except OSError as exc:
+        raise SourceError(
+            f"{what}={name!r}: cannot read it ({exc.strerror or exc})", parameter=what, value=name
+        ) from None
+    finally:
+        os.close(fd)
+
+
+def decode_utf8(data: bytes, name: str, what: str = "source") -> str:
+    """``data`` as UTF-8 text, or a :class:`SourceError` naming the file and the byte offset."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SourceError(
+            f"{what}={name!r} is not UTF-8 text (byte {exc.start}: {exc.reason})",
+            parameter=what,
+            value=name,
+            allowed="UTF-8 text",
+        ) from None

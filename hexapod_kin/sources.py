@@ -220,18 +220,13 @@ class ResolvedSource:
 
 def _read_text(path: Path) -> str:
     from ._gate import MAX_URDF_BYTES
+    from ._io import read_regular
 
-    if not path.is_file():
-        raise SourceError(
-            f"source={str(path)!r} is not a regular file", parameter="source", value=str(path)
-        )
-    size = path.stat().st_size
-    if size > MAX_URDF_BYTES:
-        raise UrdfError(f"{path}: size {size} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
+    data = read_regular(path, MAX_URDF_BYTES)
     try:
-        return path.read_text(encoding="utf-8")
+        return data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise UrdfError(f"{path}: not UTF-8 text ({exc})") from None
+        raise UrdfError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
 
 
 def _no_params(params: dict[str, Any], what: str) -> None:

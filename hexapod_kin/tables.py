@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from ._io import decode_utf8, read_regular
 from .exceptions import OptionalDependencyError, ParameterError, SourceError, did_you_mean
 from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
 
@@ -63,18 +64,109 @@ _ANGLE_KEYS = {"alpha", "theta"}
 _MAX_BYTES = 1_000_000
 
 
+#: Structure bounds of a table file (a real table is far inside them): nesting depth,
+#: values after YAML alias expansion, YAML aliases, characters of one string.
+MAX_DEPTH = 16
+MAX_VALUES = 100_000
+MAX_ALIASES = 64
+MAX_STRING = 10_000
+#: Largest magnitude of a length in a table [m] (and of a com or pose offset).
+MAX_LENGTH = 1e3
+#: Largest magnitude of any other number (the URDF gate's bound on any value).
+MAX_NUMBER = 1e9
+
+
+def _refuse(path: Path, what: str, allowed: str) -> SourceError:
+    return SourceError(
+        f"{path.name}: {what}; allowed: {allowed}", parameter="source", value=str(path),
+        allowed=allowed,
+    )  # fmt: skip
+
+
+def _strict_yaml(text: str, path: Path) -> Any:
+    """PyYAML's safe loader refusing duplicate keys, deep nesting and many aliases."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        depth = 0
+        aliases = 0
+
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            if self.check_event(yaml.AliasEvent):
+                self.aliases += 1
+                if self.aliases > MAX_ALIASES:
+                    raise _refuse(path, f"more than {MAX_ALIASES} YAML aliases",
+                                  f"at most {MAX_ALIASES} aliases")  # fmt: skip
+                return super().compose_node(parent, index)
+            self.depth += 1
+            if self.depth > MAX_DEPTH:
+                raise _refuse(path, f"values nested deeper than {MAX_DEPTH} levels",
+                              f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
+            try:
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+        def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    dup = key in seen
+                    seen.add(key)
+                except TypeError:  # an unhashable key: the base class refuses it
+                    continue
+                if dup:
+                    line = key_node.start_mark.line + 1
+                    raise _refuse(path, f"key {key!r} given twice (line {line})",
+                                  "each key once per table")  # fmt: skip
+            return super().construct_mapping(node, deep=deep)
+
+    loader = Loader(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
+
+
+def _check_structure(data: Any, path: Path) -> None:
+    """Refuse deep, huge (after alias expansion) or odd values; iterative, stops early."""
+    stack: list[tuple[Any, int, str]] = [(data, 0, "")]
+    count = 0
+    while stack:
+        value, depth, key = stack.pop()
+        count += 1
+        if count > MAX_VALUES:
+            raise _refuse(path, f"more than {MAX_VALUES} values (after alias expansion)",
+                          f"at most {MAX_VALUES} values")  # fmt: skip
+        if depth > MAX_DEPTH:
+            raise _refuse(path, f"values nested deeper than {MAX_DEPTH} levels",
+                          f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
+        where = f"key {key!r}" if key else "a value"
+        if isinstance(value, dict):
+            for k, v in value.items():
+                stack.append((k, depth + 1, key))
+                stack.append((v, depth + 1, str(k)[:40]))
+        elif isinstance(value, (list, tuple)):
+            stack.extend((v, depth + 1, key) for v in value)
+        elif isinstance(value, bool) or value is None:
+            continue
+        elif isinstance(value, int):
+            if abs(value) > 2**53:
+                raise _refuse(path, f"{where}: an integer of {len(str(abs(value)))} digits",
+                              "integers of at most 15 digits")  # fmt: skip
+        elif isinstance(value, str):
+            if len(value) > MAX_STRING:
+                raise _refuse(path, f"{where}: a string of {len(value)} characters",
+                              f"strings of at most {MAX_STRING} characters")  # fmt: skip
+        elif not isinstance(value, float):
+            raise _refuse(path, f"{where}: a value of type {type(value).__name__}",
+                          "numbers, strings, lists and tables")  # fmt: skip
+
+
 def _load_mapping(path: Path) -> dict[str, Any]:
     suffix = path.suffix.lower()
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise SourceError(f"source={str(path)!r}: {exc.strerror}", parameter="source") from None
-    if size > _MAX_BYTES:
-        raise SourceError(
-            f"source={str(path)!r}: {size} bytes; a table file is at most {_MAX_BYTES} bytes",
-            parameter="source",
-        )
-    text = path.read_text(encoding="utf-8", errors="strict")
+    text = decode_utf8(read_regular(path, _MAX_BYTES), str(path))
     if suffix == ".toml":
         try:
             import tomllib as toml_reader  # type: ignore[import-not-found,unused-ignore]
@@ -90,6 +182,14 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             data = toml_reader.loads(text)
         except toml_reader.TOMLDecodeError as exc:
             raise SourceError(f"{path.name}: not valid TOML ({exc})", parameter="source") from None
+        except SourceError:
+            raise
+        except RecursionError:
+            raise _refuse(path, "values nested too deeply for the TOML reader",
+                          f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
+        except ValueError as exc:  # e.g. an integer beyond Python's digit limit
+            raise _refuse(path, f"a value the TOML reader refuses ({_short(exc)})",
+                          "integers of at most 15 digits") from None  # fmt: skip
     else:
         try:
             import yaml
@@ -99,16 +199,32 @@ def _load_mapping(path: Path) -> dict[str, Any]:
                 parameter="source",
             ) from None
         try:
-            data = yaml.safe_load(text)
+            data = _strict_yaml(text, path)
         except yaml.YAMLError as exc:
-            raise SourceError(f"{path.name}: not valid YAML ({exc})", parameter="source") from None
+            raise SourceError(
+                f"{path.name}: not valid YAML ({_short(exc)})", parameter="source"
+            ) from None
+        except SourceError:
+            raise
+        except RecursionError:
+            raise _refuse(path, "values nested too deeply for the YAML reader",
+                          f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
+        except ValueError as exc:  # e.g. an integer beyond Python's digit limit
+            raise _refuse(path, f"a value the YAML reader refuses ({_short(exc)})",
+                          "integers of at most 15 digits") from None  # fmt: skip
     if not isinstance(data, dict):
         raise SourceError(
             f"{path.name}: the file must hold a mapping (name, convention, row, ...), got "
             f"{type(data).__name__}",
             parameter="source",
         )
+    _check_structure(data, path)
     return data
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 160 else text[:157] + "..."
 
 
 def read_table(path: Path | str, **overrides: Any) -> Chain:
@@ -145,21 +261,40 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
         ) from None
 
 
-def _number(value: Any, where: str) -> float:
+def _number(value: Any, where: str, limit: float = MAX_NUMBER) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{where}={value!r} is not a number", parameter=where, value=value)
-    out = float(value)
+    try:
+        out = float(value)
+    except OverflowError:
+        out = math.inf
     if not math.isfinite(out):
-        raise ParameterError(f"{where}={value!r} is not finite", parameter=where, value=value)
+        raise ParameterError(
+            f"{where}={_clip(value)} is not finite", parameter=where, value=_clip(value)
+        )
+    if abs(out) > limit:
+        raise ParameterError(
+            f"{where}={out:g} is out of range; allowed |{where.rsplit('.', 1)[-1]}| <= {limit:g}",
+            parameter=where,
+            value=out,
+            allowed=f"|value| <= {limit:g}",
+        )
     return out
 
 
-def _numbers(value: Any, n: int, where: str) -> tuple[float, ...]:
+def _clip(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
+
+
+def _numbers(value: Any, n: int, where: str, limit: float = MAX_NUMBER) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)) or len(value) != n:
         raise ParameterError(
-            f"{where}={value!r}: a list of {n} numbers is required", parameter=where, value=value
+            f"{where}={_clip(value)}: a list of {n} numbers is required",
+            parameter=where,
+            value=_clip(value),
         )
-    return tuple(_number(v, f"{where}[{i}]") for i, v in enumerate(value))
+    return tuple(_number(v, f"{where}[{i}]", limit) for i, v in enumerate(value))
 
 
 def _check_keys(got: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
@@ -181,7 +316,7 @@ def _pose(value: Any, scale: float, where: str) -> Pose:
             value=value,
         )
     _check_keys(value, ("xyz", "rpy"), where)
-    xyz = _numbers(value.get("xyz", [0, 0, 0]), 3, f"{where}.xyz")
+    xyz = _numbers(value.get("xyz", [0, 0, 0]), 3, f"{where}.xyz", MAX_LENGTH)
     rpy = _numbers(value.get("rpy", [0, 0, 0]), 3, f"{where}.rpy")
     return Pose.of((xyz, tuple(a * scale for a in rpy)), where)
 
@@ -233,7 +368,10 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             raise ParameterError(f"{where}: give type or sigma, not both", parameter="type")
         sigma: Any = row["type"] if "type" in row else row.get("sigma", "revolute")
         geo = {
-            k: _number(row.get(k, 0.0), f"{where}.{k}") * (scale if k in _ANGLE_KEYS else 1.0)
+            k: _number(
+                row.get(k, 0.0), f"{where}.{k}", MAX_NUMBER if k in _ANGLE_KEYS else MAX_LENGTH
+            )
+            * (scale if k in _ANGLE_KEYS else 1.0)
             for k in geometry
         }
         try:
@@ -277,7 +415,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             links.append(str(row["link"]))
         if "mass" in row:
             mass = _number(row["mass"], f"{where}.mass")
-            com = _numbers(row["com"], 3, f"{where}.com") if "com" in row else None
+            com = _numbers(row["com"], 3, f"{where}.com", MAX_LENGTH) if "com" in row else None
             inertia = _numbers(row["inertia"], 6, f"{where}.inertia") if "inertia" in row else None
             if (com is None) != (inertia is None):
                 raise ParameterError(
@@ -325,6 +463,8 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
     else:
         if links:
             kwargs["link_names"] = tuple(links)
+            if "tip" not in data and "tool" not in poses:  # the last link is the tip
+                kwargs["tip"] = links[-1]
         khalil = tuple(r for r in rows if isinstance(r, KhalilRow))
         chain = Chain(
             rows=khalil, base_pose=poses.get("base_pose"), tool=poses.get("tool"), **kwargs

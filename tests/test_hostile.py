@@ -1,0 +1,174 @@
+"""Hostile table files and sources: each ends in one clear line and exit status 2.
+
+The corpus of issue 25 (alias bombs, devices, pipes, huge integers, non-UTF-8, deep nesting,
+duplicate keys, absurd magnitudes) and a table that names its links but not its tip. Every case
+runs the real command line in a child process under a 1 GB address-space cap and a 10 s
+timeout, so a case that would read forever or blow up memory fails the test instead of the
+machine.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin.cli import main
+
+ROWS = "\n".join(f"[[row]]\nalpha = 0.0\nd = {0.1 if i else 0}\nr = 0\n" for i in range(3))
+
+
+def _bomb() -> str:
+    """The "billion laughs": 9 levels of 9 aliases each (9⁹ strings when expanded)."""
+    lines = ["a: &a [x, x, x, x, x, x, x, x, x]"]
+    for i in range(8):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 9) + "]")
+    return "\n".join(lines) + "\nname: *i\nrow: [{alpha: 0}]\n"
+
+
+def _few_alias_bomb() -> str:
+    """Fewer aliases (6 per level, 60 in all) that still expand to 6¹⁰ values."""
+    lines = ["a: &a [x, x, x, x, x, x]"]
+    for i in range(10):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 6) + "]")
+    return "\n".join(lines) + "\nrow: [{alpha: 0}]\n"
+
+
+CASES: dict[str, tuple[str, bytes | str, str]] = {
+    # name: (file name, content, a phrase the one-line error must contain)
+    "alias-bomb": ("bomb.yaml", _bomb(), "aliases"),
+    "alias-bomb-few": ("bomb6.yaml", _few_alias_bomb(), "after alias expansion"),
+    "int-401": ("int401.yaml", "row:\n  - d: " + "9" * 401 + "\n", "401 digits"),
+    "int-5001-yaml": ("int5001.yaml", "row:\n  - d: " + "9" * 5001 + "\n", "integers"),
+    "int-5001-toml": ("int5001.toml", "[[row]]\nd = " + "9" * 5001 + "\n", "integers"),
+    "not-utf8": ("latin1.yaml", "name: caf\xe9\nrow: [{d: 0}]\n".encode("latin-1"), "UTF-8"),
+    "deep-yaml": ("deep.yaml", "row: " + "[" * 50_000 + "]" * 50_000 + "\n", "nest"),
+    "deep-toml": ("deep.toml", "row = " + "[" * 50_000 + "]" * 50_000 + "\n", "nest"),
+    "deep-yaml-maps": ("deepm.yaml", "row: " + "{a: " * 5_000 + "1" + "}" * 5_000, "nest"),
+    "dup-row-key": ("dup.yaml", "row:\n  - {d: 0.1, d: 0.5}\n", "'d' given twice"),
+    "dup-top-key": ("dup2.yaml", "angles: deg\nangles: rad\nrow: [{d: 0.1}]\n", "'angles'"),
+    "d-1e300": ("big.toml", "[[row]]\nd = 1e300\n", "out of range"),
+    "d-1e12": ("big12.toml", "[[row]]\nd = 1e12\n", "out of range"),
+    "long-string": ("long.yaml", "name: " + "x" * 20_000 + "\nrow: [{d: 0}]\n", "characters"),
+    "not-a-mapping": ("list.yaml", "- 1\n- 2\n", "mapping"),
+    "yaml-python-tag": ("tag.yaml", "name: !!python/object/apply:os.system [echo hi]\n", "YAML"),
+}
+
+
+def _limit_memory() -> None:  # pragma: no cover - runs in the child
+    cap = 1 << 30
+    resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, HEXAPOD_KIN_DEBUG="")
+    env.pop("HEXAPOD_KIN_DEBUG")
+    return subprocess.run(
+        [sys.executable, "-m", "hexapod_kin", *args],
+        capture_output=True,
+        text=True,
+        timeout=10,
+        env=env,
+        preexec_fn=_limit_memory,
+        check=False,
+    )
+
+
+def _one_clear_line(res: subprocess.CompletedProcess[str]) -> str:
+    lines = res.stderr.strip().splitlines()
+    assert res.returncode == 2, res.stderr
+    assert len(lines) == 1, res.stderr
+    assert lines[0].startswith("hexapod-kin: error: "), lines[0]
+    assert "a bug" not in lines[0] and "Traceback" not in res.stderr
+    assert len(lines[0]) < 400, lines[0]
+    return lines[0]
+
+
+def _write(tmp_path: Path, case: str) -> tuple[Path, str]:
+    name, content, phrase = CASES[case]
+    path = tmp_path / name
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    return path, phrase
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_hostile_table_file(tmp_path: Path, case: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """In process (fast): ``main`` returns 2 with one line naming the file and the refusal."""
+    path, phrase = _write(tmp_path, case)
+    rc = main(["fk", str(path)])
+    err = capsys.readouterr().err
+    line = _one_clear_line(subprocess.CompletedProcess([], rc, "", err))
+    assert phrase in line, line
+    assert path.name in line, line  # the file is named
+
+
+@pytest.mark.parametrize("case", ["alias-bomb", "alias-bomb-few", "deep-yaml"])
+def test_hostile_table_file_bounded(tmp_path: Path, case: str) -> None:
+    """The worst cases as a real process under a 1 GB cap and a 10 s timeout."""
+    path, phrase = _write(tmp_path, case)
+    assert phrase in _one_clear_line(_run("fk", str(path)))
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom"])
+@pytest.mark.parametrize("suffix", ["", ".yaml"])
+def test_devices_are_not_read(tmp_path: Path, device: str, suffix: str) -> None:
+    if not os.path.exists(device):
+        pytest.skip(f"{device} missing")
+    src = device
+    if suffix:  # a table-looking name that points at a device
+        src = str(tmp_path / f"t{suffix}")
+        os.symlink(device, src)
+    line = _one_clear_line(_run("fk", src))
+    assert "regular file" in line, line
+
+
+@pytest.mark.parametrize("name", ["pipe.yaml", "pipe.urdf", "pipe.toml"])
+def test_named_pipe_does_not_hang(tmp_path: Path, name: str) -> None:
+    fifo = tmp_path / name
+    os.mkfifo(fifo)
+    line = _one_clear_line(_run("fk", str(fifo)))
+    assert "named pipe" in line, line
+
+
+def test_growing_file_capped_while_reading(tmp_path: Path) -> None:
+    """The cap holds on the bytes read, not the size the file system reports."""
+    from hexapod_kin._io import read_regular
+    from hexapod_kin.exceptions import SourceError
+
+    path = tmp_path / "t.yaml"
+    path.write_bytes(b"#" * 2000)
+    assert read_regular(path, 2000) == b"#" * 2000
+    with pytest.raises(SourceError, match="more than 1999 bytes"):
+        read_regular(path, 1999)
+
+
+def test_links_named_without_tip(tmp_path: Path) -> None:
+    """A table naming every link and no tip ends at its last link (FK by hand: 3 × 0.1 m)."""
+    path = tmp_path / "named.toml"
+    path.write_text(
+        "".join(f'[[row]]\nd = 0.1\nlink = "l{i}"\n' for i in range(3)), encoding="utf-8"
+    )
+    model = hk.load(str(path))
+    assert model.tip == "l2"
+    p = model.fk([0.4, -0.3, 0.2])[:3, 3]
+    # Khalil rows with d = 0.1 and alpha = 0: planar 3R, tip at the third frame's origin
+    x = 0.1 * (1 + math.cos(0.4) + math.cos(0.4 - 0.3))
+    y = 0.1 * (math.sin(0.4) + math.sin(0.4 - 0.3))
+    assert abs(p[0] - x) < 1e-12 and abs(p[1] - y) < 1e-12 and abs(p[2]) < 1e-12
+
+
+def test_good_table_still_reads(tmp_path: Path) -> None:
+    path = tmp_path / "ok.toml"
+    path.write_text('name = "ok"\n' + ROWS, encoding="utf-8")
+    assert hk.load(str(path)).nq == 3
