@@ -20,7 +20,7 @@ so a result is the same in any process, warm or cold, and from any number of thr
 on Pinocchio and numpy). Kernels are ``cache=True``: compiled on first use, then loaded from
 numba's disk cache (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources).
 ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area
-in a process, :func:`first_use` prints one notice on stderr unless a stamp file says this
+in a process, :func:`run_blocks` prints one notice on stderr unless a stamp file says this
 machine's cache already holds that area: ``hexapod_kin-<area>-<stamp key>.stamp`` in numba's
 cache directory (else ``hexapod_kin/__pycache__``), the key made of the package version,
 numba's version, Python's and the CPU name; written after the area's first completed call
@@ -37,8 +37,7 @@ import itertools
 import math
 import sys
 import threading
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -74,7 +73,6 @@ __all__ = [
     "dls_into",
     "eig2_sym",
     "eig3_sym",
-    "first_use",
     "fk_jac_block",
     "fk_jac_into",
     "jacobi_eig",
@@ -146,17 +144,8 @@ def mark_compiled(area: str) -> None:
         pass
 
 
-@contextmanager
-def first_use(area: str) -> Iterator[None]:
-    """Wrap the kernel calls of a batch API: the compile notice, then the stamp.
-
-    The first time in a process, if no stamp says the disk cache holds ``area``, one line on
-    stderr says the kernels are being compiled; after the call completes the stamp is
-    written. Later calls cost one set lookup.
-    """
-    if area in _SEEN:
-        yield
-        return
+def _notice(area: str) -> None:
+    """The first time in a process, one line if no stamp says the disk cache holds ``area``."""
     if _NOTICE[0] and not _stamp(area).exists():
         print(
             f"hexapod-kin: compiling {area} kernels for this machine "
@@ -164,8 +153,50 @@ def first_use(area: str) -> Iterator[None]:
             file=sys.stderr,
             flush=True,
         )
-    yield
+
+
+def _rebuild_unloaded() -> None:
+    """Reset the disk cache of every package kernel that holds no machine code yet.
+
+    ``Dispatcher.recompile()`` (numba's public method) with no signature loaded drops the
+    dispatcher's cache index, so the next call compiles afresh and writes a new entry.
+    Kernels already loaded in this process are left as they are.
+    """
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("hexapod_kin") or module is None:
+            continue
+        for obj in list(vars(module).values()):
+            if callable(getattr(obj, "recompile", None)) and hasattr(obj, "py_func"):
+                if not obj.overloads:
+                    obj.recompile()
+
+
+def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
+    """``run(0, 0)`` (no blocks: loads or compiles the kernel); a damaged cache is rebuilt.
+
+    A compiled-code cache that cannot be loaded (truncated, emptied, random bytes, swapped
+    files: numba raises while unpickling it) is never fatal: one line on stderr, the cache
+    entries that failed are reset, and the kernel is compiled again.
+    """
+    if area in _SEEN:
+        return run(0, 0)
+    _notice(area)
+    try:
+        out = run(0, 0)
+    except (ParameterError, ConfigurationError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - any failure to load the cache: rebuild once
+        detail = " ".join(str(exc).split())[:120]
+        print(
+            f"hexapod-kin: warning: the compiled-code cache of the {area} kernels could not be "
+            f"loaded ({type(exc).__name__}: {detail}); compiling them again",
+            file=sys.stderr,
+            flush=True,
+        )
+        _rebuild_unloaded()
+        out = run(0, 0)
     mark_compiled(area)
+    return out
 
 
 # ------------------------------------------------------------------------ one configuration
@@ -498,20 +529,23 @@ def pose_jacobian_kernel(
 
 
 def run_blocks(
-    run: Callable[[int, int], Any], nblocks: int, block: int, min_per_thread: int
+    area: str, run: Callable[[int, int], Any], nblocks: int, block: int, min_per_thread: int
 ) -> list[Any]:
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
-    Up to ``numba.get_num_threads()`` plain threads (the kernels release the GIL), each taking
-    the next chunk of blocks from a shared counter when done with one, so that a thread
-    sharing its core with another process does less of the work. Which thread runs a block
-    never changes its numbers (see the module docstring).
+    ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``): the first call in a
+    process loads them with no blocks first (:func:`_load_or_rebuild`: the compile notice, a
+    damaged cache rebuilt, the stamp written). Then up to ``numba.get_num_threads()`` plain
+    threads (the kernels release the GIL), each taking the next chunk of blocks from a shared
+    counter when done with one, so that a thread sharing its core with another process does
+    less of the work. Which thread runs a block never changes its numbers (see the module
+    docstring).
     """
+    results = [_load_or_rebuild(area, run)]
     nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))
     if nwork == 1:
-        return [run(0, nblocks)]
+        return [*results, run(0, nblocks)]
     per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))
-    results = [run(0, 0)]  # no blocks: compiles (or loads) the kernel once, before the threads
     chunks = itertools.count()  # next() is atomic under the GIL
 
     def loop() -> None:
@@ -596,8 +630,7 @@ def pose_jacobian_batch(
     def run(first: int, last: int) -> bool:
         return bool(pose_jacobian_kernel(*args, want_jac, first, last, BLOCK))
 
-    with first_use("batch"):
-        bad = run_blocks(run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
+    bad = run_blocks("batch", run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
     if any(bad):
         if check is not None:
             check()

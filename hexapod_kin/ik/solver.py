@@ -552,7 +552,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         ParameterError: Unknown or bad options.
 
     """
-    from .._kernels import first_use, run_blocks
+    from .._kernels import run_blocks
     from .step import lm_batch
 
     mdl = as_model(model)
@@ -618,8 +618,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             res[a:b],
         )
 
-    with first_use("ik"):
-        run_blocks(run, n_t, 1, _PER_THREAD)
+    run_blocks("ik", run, n_t, 1, _PER_THREAD)
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):

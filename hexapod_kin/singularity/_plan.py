@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import AlignedChain, aligned_chain, first_use, run_blocks
+from .._kernels import AlignedChain, aligned_chain, run_blocks
 from ._kernel import measures_kernel
 
 __all__ = [
@@ -269,6 +269,5 @@ def compute(
         tmp = np.empty((2, BLOCK if m > 4 else 1))  # this thread's scratch (m = 5, 6)
         measures_kernel(*args, tmp, skip0, first, last, BLOCK, *out)
 
-    with first_use("singularity"):
-        run_blocks(run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
+    run_blocks("singularity", run, -(-n // BLOCK), BLOCK, MIN_PER_THREAD)
     return out
