@@ -14,11 +14,8 @@ Quick start::
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from . import robots
-from ._fromurdf import chain_from_urdf
-from ._table_kin import table_fk, table_transforms
 from ._version import __version__
 from .exceptions import (
     ConfigurationError,
@@ -29,8 +26,39 @@ from .exceptions import (
     UrdfError,
     UrdfWarning,
 )
-from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
-from .urdf import to_urdf, write_urdf
+
+if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
+    from . import robots
+    from ._fromurdf import chain_from_urdf
+    from ._table_kin import table_fk, table_transforms
+    from .kinematics import load
+    from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
+    from .urdf import to_urdf, write_urdf
+
+#: Names of the package imported from their module on first access (PEP 562), so that
+#: ``import hexapod_kin`` imports no numpy: a Ctrl-C while a command starts is then caught
+#: by the command line's own handler (one line, status 130), not by Python's traceback.
+_LAZY_NAMES = {
+    "load": "kinematics",
+    "chain_from_urdf": "_fromurdf",
+    "table_fk": "_table_kin",
+    "table_transforms": "_table_kin",
+    "to_urdf": "urdf",
+    "write_urdf": "urdf",
+    **{
+        name: "params"
+        for name in (
+            "Chain",
+            "DHRow",
+            "Hexapod",
+            "Inertial",
+            "JointLimits",
+            "KhalilRow",
+            "LegMount",
+            "Pose",
+        )
+    },  # fmt: skip
+}
 
 #: Submodules reachable as attributes (``hk.singularity``) without importing them up front
 #: (PEP 562): ``import hexapod_kin`` stays light (no Pinocchio, sympy or numba).
@@ -46,6 +74,7 @@ _LAZY_SUBMODULES = (
     "params",
     "plots",
     "report",
+    "robots",
     "seeds",
     "singularity",
     "sources",
@@ -69,8 +98,10 @@ def __getattr__(name: str) -> Any:
     import importlib
     import importlib.util
 
-    if name == "load":  # the one loader, without importing Pinocchio up front
-        return importlib.import_module(f"{__name__}.kinematics").load
+    if name in _LAZY_NAMES:  # e.g. ``load``: the one loader, without Pinocchio up front
+        value = getattr(importlib.import_module(f"{__name__}.{_LAZY_NAMES[name]}"), name)
+        globals()[name] = value
+        return value
     if name in _LAZY_SUBMODULES:
         full = f"{__name__}.{name}"
         if importlib.util.find_spec(full) is not None:
@@ -81,7 +112,7 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY_SUBMODULES))
+    return sorted(set(globals()) | set(_LAZY_SUBMODULES) | set(_LAZY_NAMES))
 
 
 __all__ = [

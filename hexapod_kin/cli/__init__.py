@@ -13,8 +13,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from ..exceptions import HexapodKinError, ParameterError
 from .common import OneLineParser
@@ -84,7 +86,47 @@ def main(argv: Sequence[str] | None = None) -> int:
     0: done; 2: a usage or input error, or any failure (one line on stderr, never a
     traceback; set ``HEXAPOD_KIN_DEBUG=1`` to see the traceback of an unexpected error);
     130: interrupted. A closed stdout (``hexapod-kin fk ... | head``) ends quietly.
+
+    Ctrl-C (SIGINT) is recorded as well as raised, so that a library that swallows the
+    ``KeyboardInterrupt`` (e.g. inside an import, or where Python can only report it as
+    "Exception ignored") cannot turn it into a success: an interrupted command ends with one
+    line and status 130. (When the interrupt lands inside Python code that an extension
+    module runs at import, CPython ends the process by SIGINT itself after this status is
+    returned; a shell reports that as 130 too.)
     """
+    interrupted: list[int] = []
+
+    def on_sigint(signum: int, frame: object) -> None:
+        interrupted.append(signum)
+        raise KeyboardInterrupt
+
+    def unraisable(info: Any) -> None:  # an interrupt raised where Python cannot raise it
+        if isinstance(info.exc_value, KeyboardInterrupt):
+            interrupted.append(signal.SIGINT)
+        else:
+            hook(info)
+
+    try:
+        previous = signal.signal(signal.SIGINT, on_sigint)
+    except ValueError:  # not the main thread: leave signals alone
+        previous = None
+    hook, sys.unraisablehook = sys.unraisablehook, unraisable
+    try:
+        status = _main(argv)
+    except KeyboardInterrupt:  # between the handler and _main's own handler
+        status = 130
+        print("hexapod-kin: interrupted", file=sys.stderr)
+    finally:
+        sys.unraisablehook = hook
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+    if interrupted and status != 130:
+        print("hexapod-kin: interrupted", file=sys.stderr)
+        return 130
+    return status
+
+
+def _main(argv: Sequence[str] | None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
