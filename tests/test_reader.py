@@ -1,0 +1,61 @@
+"""The restricted ``srepr`` reader of the symbolic cache: round trips, and nothing runs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import sympy as sp
+
+from hexapod_kin.symbolic._reader import CacheFormatError, read_srepr
+
+q1, q2 = sp.symbols("q1 q2", real=True)
+d3 = sp.Symbol("d3", positive=True)
+
+EXPRESSIONS = [
+    -d3 * sp.sin(q1) ** 2 * sp.cos(q2) + sp.Rational(1, 3) * sp.sqrt(2) * q2,
+    sp.Float(0.25) * sp.pi + sp.atan2(q1, q2) - sp.Float("-1.5e-300"),
+    sp.ImmutableMatrix([[q1, 0], [sp.E, -1]]),
+    sp.Poly(q1**2 + q2, q1),
+    sp.Eq(q1, 2),
+    sp.Piecewise((q1, q1 > 0), (q2, True)),
+    sp.Abs(q1) + sp.Max(q1, q2) + sp.exp(-q2),
+    sp.oo,
+    sp.true,
+]
+
+
+@pytest.mark.parametrize("expr", EXPRESSIONS, ids=range(len(EXPRESSIONS)))
+def test_round_trip(expr: sp.Basic) -> None:
+    back = read_srepr(sp.srepr(expr))
+    assert back == expr and sp.srepr(back) == sp.srepr(expr)
+
+
+PLANTED = [
+    "__import__('os').system('touch /tmp/hk_planted')",
+    "Symbol('x').__class__.__mro__",
+    "Add(lambda: 1)",
+    "[x for x in ()]",
+    "open('/etc/passwd')",
+    "Symbol('x', evaluate=True)",
+    "Integer(1) + Integer(2)",
+    "Float('1', precision=__import__('os'))",
+    "Symbol(Symbol('x'))",
+    "Pow(Integer(10), Integer(100000000))",
+    "exec('1')",
+    "Integer(" + "9" * 5000 + ")",
+    "Add(" * 100_000 + ")" * 100_000,
+]
+
+
+@pytest.mark.parametrize("text", PLANTED, ids=range(len(PLANTED)))
+def test_planted_text_is_refused(text: str) -> None:
+    with pytest.raises(CacheFormatError):
+        read_srepr(text)
+
+
+def test_planted_code_never_runs(tmp_path: Path) -> None:
+    marker = tmp_path / "ran"
+    with pytest.raises(CacheFormatError):
+        read_srepr(f"__import__('pathlib').Path({str(marker)!r}).touch()")
+    assert not marker.exists()
