@@ -1,25 +1,13 @@
-"""Legs of any floating-base robot: found in the kinematic tree, their kinematics and IK.
+"""Legs of any floating-base robot: found in the kinematic tree, feet, closed forms.
 
 * **Legs from the tree**: every chain of actuated joints from the floating body (the root
   link) to a foot. A foot is either the deepest frame of a branch (a leaf link such as
   solo12's ``FL_FOOT``) or a point given by the user on a frame (``frame:x,y,z``, the offset
   in that frame, in [m]) when the URDF has no foot link (:func:`parse_feet`).
-* **Vectorised kinematics** of the tree (any revolute axis, RX/RY/RZ or unaligned, and
-  prismatic joints): joint ``j``'s frame is ``parent · P_j · M_j(q_j)`` with ``P_j`` its
-  placement at q = 0 (Pinocchio's ``jointPlacements``) and ``M_j`` the rotation
-  ``R(a, q) = cos q I + sin q [a]× + (1 − cos q) a aᵀ`` (Rodrigues) or the translation ``a q``
-  along its unit axis ``a``. Raw Pinocchio FK is the reference in the tests.
-* **Numerical leg IK** (:func:`solve_legs`), used where no closed form recognises the leg:
-  damped least squares on the leg's own joints, vectorised over samples and legs, with the
-  analytic position Jacobian ``J_k = w_k × (p − o_k)`` (revolute; ``w_k`` for prismatic)::
-
-      Δq = (JᵀJ + λ²I)⁻¹ Jᵀ e,   λ² = 10⁻² ‖e‖² + 10⁻¹⁴ s²   (s: the leg's span)
-
-  clipped to the joint limits, until ``‖e‖ ≤ 10⁻¹³ s`` or the step stalls. All samples start
-  from the seed; a sample whose solution is far from its predecessor's (a branch jump) or
-  not reached is solved again warm-started from the previous sample. A foot is *reached*
-  when the residual is at most :data:`REACH_TOL`; otherwise the residual is the distance of
-  the best reachable point found to the target (the leg's ``excess``).
+* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
+  Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
+  and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
+  solved numerically (:func:`~.tree.solve_legs`).
 """
 
 from __future__ import annotations
@@ -28,32 +16,69 @@ import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError
+from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
+from .tree import leg_fk
 
 __all__ = [
-    "REACH_TOL",
+    "BodyIK",
     "FootSpec",
     "LegTree",
-    "Tree",
-    "axis_rotation",
+    "closed_leg",
+    "finite_or_inf",
+    "joint_axis",
+    "pick_branch",
+    "sphere_radius",
     "find_legs",
-    "leg_fk",
+    "leg_layout",
+    "offset_of",
     "parse_feet",
-    "solve_legs",
-    "tree_poses",
 ]
-
-#: A foot is reached when the numerical IK residual is at most this [m].
-REACH_TOL = 1e-10
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
 _SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
+
+
+@dataclass(frozen=True)
+class BodyIK:
+    """Joint angles of body poses with the feet fixed in the world (arrays read-only).
+
+    Attributes:
+        q: (N, nq) joint angles in [rad], legs in order, each leg's joints.
+        reached: (N, L) True where the leg's closed form has a solution.
+        excess: (N, L) distance by which each foot is out of the leg's reach in [m]
+            (0 when reachable).
+        limit_margin: (N, nq) distance of each joint to its nearest limit in [rad]
+            (negative beyond a limit).
+        leg_names: The legs' names.
+
+    """
+
+    q: np.ndarray
+    reached: np.ndarray
+    excess: np.ndarray
+    limit_margin: np.ndarray
+    leg_names: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (arrays as nested lists, SI units)."""
+        return {
+            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
+            for f in fields(self)
+            for v in (getattr(self, f.name),)
+        }
+
+    @property
+    def ok(self) -> np.ndarray:
+        """(N, L) True where the leg is reached and inside its joint limits."""
+        n_leg = len(self.leg_names)
+        lim = self.limit_margin.reshape(len(self.q), n_leg, -1).min(axis=2)
+        return np.asarray(self.reached & (lim >= 0))
 
 
 # ============================================================================ foot specs
@@ -178,111 +203,6 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
             f"feet: a frame is named twice in {frames}", parameter="feet", value=frames
         )
     return tuple(out)
-
-
-# ============================================================================ the tree
-@dataclass(frozen=True)
-class Tree:
-    """The actuated joints of a floating-base tree as arrays (joint order = Pinocchio's q).
-
-    Attributes:
-        parents: (n,) index of each joint's parent joint (−1: the floating body).
-        placements: (n, 4, 4) joint placements in the parent joint's frame at q = 0.
-        axes: (n, 3) unit joint axes in the joint's own frame.
-        prismatic: (n,) True for prismatic joints.
-
-    """
-
-    parents: np.ndarray
-    placements: np.ndarray
-    axes: np.ndarray
-    prismatic: np.ndarray
-
-
-def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Rotations (..., 3, 3) about unit ``axes`` (..., 3) by ``q`` (...) [rad] (Rodrigues)."""
-    c, s = np.cos(q), np.sin(q)
-    x, y, z = axes[..., 0], axes[..., 1], axes[..., 2]
-    v = 1.0 - c
-    R = np.empty(np.shape(q) + (3, 3))
-    R[..., 0, 0] = c + v * x * x
-    R[..., 0, 1] = v * x * y - s * z
-    R[..., 0, 2] = v * x * z + s * y
-    R[..., 1, 0] = v * x * y + s * z
-    R[..., 1, 1] = c + v * y * y
-    R[..., 1, 2] = v * y * z - s * x
-    R[..., 2, 0] = v * x * z - s * y
-    R[..., 2, 1] = v * y * z + s * x
-    R[..., 2, 2] = c + v * z * z
-    return R
-
-
-def _local(P: np.ndarray, axis: np.ndarray, prismatic: Any, q: np.ndarray) -> np.ndarray:
-    """``P · M(q)`` (N, 4, 4) for one joint (placement P (..., 4, 4), axis (..., 3))."""
-    n = q.shape[0]
-    out = np.empty((n, 4, 4))
-    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
-    Pr = P[..., :3, :3]
-    if np.ndim(prismatic) == 0 and not prismatic:
-        out[:, :3, :3] = Pr @ axis_rotation(np.broadcast_to(axis, (n, 3)), q)
-        out[:, :3, 3] = P[..., :3, 3]
-        return out
-    pr = np.broadcast_to(np.asarray(prismatic, dtype=bool), (n,))
-    rot = axis_rotation(np.broadcast_to(axis, (n, 3)), np.where(pr, 0.0, q))
-    out[:, :3, :3] = Pr @ rot
-    shift = np.where(pr[:, None], np.broadcast_to(axis, (n, 3)) * q[:, None], 0.0)
-    out[:, :3, 3] = P[..., :3, 3] + (Pr @ shift[..., None])[..., 0]
-    return out
-
-
-def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
-    n, nj = q.shape
-    out = np.empty((n, nj, 4, 4))
-    for j in range(nj):
-        local = _local(tree.placements[j], tree.axes[j], bool(tree.prismatic[j]), q[:, j])
-        par = int(tree.parents[j])
-        out[:, j] = (base if par < 0 else out[:, par]) @ local
-    return out
-
-
-def leg_fk(
-    placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray, q: Any
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Body-frame kinematics of E leg instances (one serial chain each, m joints).
-
-    Args:
-        placements: (E, m, 4, 4) each joint's placement in the previous joint's frame (the
-            first in the body frame).
-        axes: (E, m, 3) unit axes; prismatic: (E, m) booleans.
-        foot: (E, 3) the foot in the last joint's frame.
-        q: (E, m) joint values.
-
-    Returns:
-        ``(origins, world_axes, feet)``: (E, m, 3) joint origins, (E, m, 3) joint axes in the
-        body frame, (E, 3) feet.
-
-    """
-    q = np.asarray(q, dtype=float)
-    e, m = q.shape
-    T = np.broadcast_to(np.eye(4), (e, 4, 4))
-    origins = np.empty((e, m, 3))
-    waxes = np.empty((e, m, 3))
-    any_p = bool(np.any(prismatic))
-    for k in range(m):
-        T = T @ placements[:, k]
-        origins[:, k] = T[:, :3, 3]
-        waxes[:, k] = (T[:, :3, :3] @ axes[:, k, :, None])[..., 0]
-        R = axis_rotation(axes[:, k], np.where(prismatic[:, k], 0.0, q[:, k]) if any_p else q[:, k])
-        Tn = np.empty((e, 4, 4))
-        Tn[:, :3, :3] = T[:, :3, :3] @ R
-        Tn[:, :3, 3] = T[:, :3, 3]
-        if any_p:
-            Tn[:, :3, 3] += np.where(prismatic[:, k, None], waxes[:, k] * q[:, k, None], 0.0)
-        Tn[:, 3] = (0.0, 0.0, 0.0, 1.0)
-        T = Tn
-    feet = (T[:, :3, :3] @ foot[..., None])[..., 0] + T[:, :3, 3]
-    return origins, waxes, feet
 
 
 # ============================================================================ legs in a tree
@@ -459,111 +379,222 @@ def find_legs(
     return legs, others
 
 
-# ============================================================================ numerical IK
-def solve_legs(
-    placements: np.ndarray,
-    axes: np.ndarray,
-    prismatic: np.ndarray,
-    foot: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    targets: np.ndarray,
-    seed: np.ndarray,
-    *,
-    span: float,
-    iterations: int = 60,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Damped least squares for G legs of m joints at N samples (see the module doc).
+# ============================================================================ build helpers
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_axis(jm: Any, name: str) -> tuple[np.ndarray, bool]:
+    """Unit axis (in the joint frame) and whether the joint is prismatic."""
+    kind = jm.shortname()
+    for prefix, prismatic in (("JointModelR", False), ("JointModelP", True)):
+        if kind in (f"{prefix}X", f"{prefix}Y", f"{prefix}Z"):
+            return np.array(_AXES[kind[-1]]), prismatic
+    if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+        a = np.asarray(jm.extract().axis, dtype=float)
+        return a / np.linalg.norm(a), kind.startswith("JointModelP")
+    raise ConfigurationError(
+        f"joint {name!r} is a {kind}; a leg joint must be revolute (limited) or prismatic "
+        "(continuous joints: give them limits in the URDF)",
+        parameter="source",
+        value=name,
+        allowed="revolute or prismatic joints",
+    )
+
+
+def sphere_radius(text: str, link: str) -> float | None:
+    """The radius of the first sphere collision of ``link`` in URDF ``text`` (if any)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:  # pragma: no cover - the gate parsed it already
+        return None
+    for el in root.iter("link"):
+        if el.get("name") != link:
+            continue
+        for col in el.iter("collision"):
+            sph = col.find("geometry/sphere")
+            if sph is not None and sph.get("radius") is not None:
+                try:
+                    return float(sph.get("radius", ""))
+                except ValueError:
+                    return None
+    return None
+
+
+def closed_leg(
+    table: Any, T0: np.ndarray, consts: tuple[np.ndarray, ...], lower: Any, upper: Any, span: float
+) -> bool:
+    """True when the closed form of ``table`` (frame 0 at ``T0`` in the body) solves the leg.
+
+    Checked at 6 seeded random configurations inside the limits: a valid slot must put the
+    foot (by the leg's own vectorised FK) on the target within 1e-9 of the span.
+    """
+    from ..ik import analytic_batch
+
+    P, A, pr, foot = consts
+    lo = np.where(np.isfinite(lower), lower, -np.pi)
+    hi = np.where(np.isfinite(upper), upper, np.pi)
+    rng = np.random.default_rng(7)
+    qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
+    e = len(qs)
+    rep = [np.broadcast_to(c, (e,) + c.shape) for c in (P, A, pr, foot)]
+    _o, _w, p = leg_fk(*rep, qs)
+    p0 = (p - T0[:3, 3]) @ T0[:3, :3]
+    try:
+        batch = analytic_batch(table, p0)
+    except HexapodKinError:
+        return False
+    k = batch.q.shape[1]
+    cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
+    if cand.shape[1] != len(lo):
+        return False
+    rep = [np.broadcast_to(c, (e * k,) + c.shape) for c in (P, A, pr, foot)]
+    _o, _w, pk = leg_fk(*rep, cand)
+    err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
+    err = np.where(np.asarray(batch.valid), err, np.inf)
+    return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
+
+
+def finite_or_inf(v: Any) -> np.ndarray:
+    """``v`` as floats with absent limits (±inf, ±1e300 and beyond) as inf."""
+    a = np.array(v, dtype=float)
+    a[~np.isfinite(a) | (np.abs(a) >= 1e300)] = np.inf
+    return a
+
+
+def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
 
     Args:
-        placements, axes, prismatic, foot: The legs' constants ((G, m, 4, 4), (G, m, 3),
-            (G, m), (G, 3); see :func:`leg_fk`).
-        lower, upper: (G, m) joint limits.
-        targets: (N, G, 3) body-frame foot targets [m].
-        seed: (G, m) the joints before the first sample.
-        span: The legs' length scale [m] (tolerances).
-        iterations: Cap on the steps per solve.
+        qk: (G, N, K, m) candidate solutions of G legs at N samples.
+        valid: (G, N, K) which candidates exist.
+        q0: (G, m) the configuration before the first sample.
 
     Returns:
-        ``(q, residual, reached)``: (N, G, m), (N, G) [m], (N, G).
+        ``(q, ok)``: (G, N, m) the continued joint angles (the previous value kept where no
+        slot is valid) and (G, N) whether a slot was found.
 
     """
-    n, g, _ = targets.shape
-    m = placements.shape[1]
-    q = np.broadcast_to(seed, (n, g, m)).reshape(n * g, m).copy()
-    gi = np.tile(np.arange(g), n)
-    tgt = targets.reshape(n * g, 3)
-    res = _dls(placements, axes, prismatic, foot, lower, upper, tgt, q, gi, span, iterations)
-    q = q.reshape(n, g, m)
-    res = res.reshape(n, g)
-    # continuity: re-solve, warm-started from the previous sample, where a branch jumped
-    prev = np.asarray(seed, dtype=float)
+    g, n, _, m = qk.shape
+    out = np.empty((n, g, m))
+    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
+    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
+    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
+    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
+    prev = np.array(q0, dtype=float)
+    rows = np.arange(g)
+    step = np.empty(cand.shape[1:])
+    two_pi = 2.0 * np.pi
     for i in range(n):
-        jump = np.abs(q[i] - prev).max(axis=1) > 0.5
-        bad = jump | (res[i] > REACH_TOL)
-        if bad.any():
-            idx = np.flatnonzero(bad)
-            qi = prev[idx].copy()
-            ri = _dls(
-                placements, axes, prismatic, foot, lower, upper,
-                targets[i, idx], qi, idx, span, iterations,
-            )  # fmt: skip
-            better = (ri <= np.maximum(res[i, idx], REACH_TOL)) | (ri <= REACH_TOL)
-            q[i, idx] = np.where(better[:, None], qi, q[i, idx])
-            res[i, idx] = np.where(better, ri, res[i, idx])
-        prev = q[i]
-    return q, res, res <= REACH_TOL
+        np.subtract(cand[i], prev[:, None, :], out=step)
+        step += np.pi
+        np.mod(step, two_pi, out=step)
+        step -= np.pi
+        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
+        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
+        out[i] = prev
+    out = np.moveaxis(out, 0, 1)
+    return out, ok
 
 
-def _dls(
-    placements: np.ndarray,
-    axes: np.ndarray,
-    prismatic: np.ndarray,
-    foot: np.ndarray,
+def leg_layout(
+    model: Any,
+    tree: Any,
+    legs: list[LegTree],
+    cols: tuple[tuple[int, ...], ...],
+    q_zero: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
-    tgt: np.ndarray,
-    q: np.ndarray,
-    gi: np.ndarray,
-    span: float,
-    iterations: int,
-) -> np.ndarray:
-    """Iterate DLS in place on ``q`` (E, m) for leg indices ``gi`` (E,); residuals (E,)."""
-    e_n, m = q.shape
-    res = np.full(e_n, np.inf)
-    active = np.arange(e_n)
-    lam_floor = 1e-14 * span * span
-    done_tol = 1e-13 * span
-    eye = np.eye(m)
-    for _ in range(iterations):
-        g = gi[active]
-        o, w, p = leg_fk(placements[g], axes[g], prismatic[g], foot[g], q[active])
-        err = tgt[active] - p
-        norm = np.linalg.norm(err, axis=1)
-        res[active] = norm
-        keep = norm > done_tol
-        if not keep.any():
-            break
-        active, g, o, w, p, err, norm = (
-            a[keep] for a in (active, g, o, w, p, err, norm)
-        )  # fmt: skip
-        J = np.where(prismatic[g][:, None, :], np.swapaxes(w, 1, 2), 0.0)
-        rev = np.cross(w, p[:, None, :] - o)  # (E, m, 3)
-        J = np.where(prismatic[g][:, None, :], J, np.swapaxes(rev, 1, 2))  # (E, 3, m)
-        Jt = np.swapaxes(J, 1, 2)
-        lam2 = 1e-2 * norm * norm + lam_floor
-        A = Jt @ J + lam2[:, None, None] * eye
-        dq = np.linalg.solve(A, (Jt @ err[..., None]))[..., 0]
-        big = np.abs(dq).max(axis=1)
-        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[:, None]
-        new = np.clip(q[active] + dq, lower[g], upper[g])
-        moved = np.abs(new - q[active]).max(axis=1) > 1e-15
-        q[active] = new
-        active = active[moved]
-        if active.size == 0:
-            break
-    if active.size:  # the last step's residual
-        g = gi[active]
-        _o, _w, p = leg_fk(placements[g], axes[g], prismatic[g], foot[g], q[active])
-        res[active] = np.linalg.norm(tgt[active] - p, axis=1)
-    return res
+    params: Any,
+    chain_source: Any,
+) -> dict[str, Any]:
+    """The legs' spans, mounts, default stance geometry and closed forms.
+
+    Returns a dict: ``consts`` (per leg: placements, axes, prismatic flags, foot), ``span``
+    (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2), ``reach`` (L,) [m],
+    ``body_height`` [m] (the rules of :meth:`~.robot.WholeBody.neutral_feet`) and ``closed``
+    (per leg ``(table, T_body_frame0)`` or ``None``).
+    """
+    import warnings
+
+    from .._fromurdf import chain_from_urdf
+    from ..params import Pose
+
+    hexa = params is not None
+    # per-leg constants and the geometry at q = 0 (clipped into the limits)
+    consts, spans, origins, feet0 = [], [], [], []
+    for c, leg in zip(cols, legs):
+        cc = list(c)
+        k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
+        consts.append(k)
+        o, _w, p = leg_fk(*(x[None] for x in k), q_zero[cc][None])
+        pts = np.vstack([o[0], p])
+        spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
+        origins.append(o[0, 0])
+        feet0.append(p[0])
+    span = np.array(spans)
+    if hexa:
+        mounts = np.array([x.transform() for x in params.legs])  # type: ignore[union-attr]
+        direction = mounts[:, :2, 0].copy()
+    else:
+        mounts = np.array([tree.placements[c[0]] for c in cols])
+        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
+        direction = np.zeros((len(cols), 2))
+        for i, d in enumerate(d0):
+            out = mounts[i, :2, 3]
+            for v in (d, out, np.array([1.0, 0.0])):
+                if np.linalg.norm(v) > 1e-6 * span[i]:
+                    direction[i] = v / np.linalg.norm(v)
+                    break
+    d_horiz = np.einsum("li,li->l", np.array(feet0)[:, :2] - mounts[:, :2, 3], direction)
+    reach = np.minimum(np.maximum(d_horiz, 0.0), 0.64 * span)
+    rho = span * math.hypot(0.64, 0.32)
+    depth = np.sqrt(np.maximum(rho**2 - reach**2, 0.0))
+    body_height = float(np.min(depth - mounts[:, 2, 3]))
+    # closed forms
+    closed: list[tuple[Any, np.ndarray] | None] = []
+    for i, leg in enumerate(legs):
+        cand: tuple[Any, np.ndarray] | None = None
+        try:
+            if hexa:
+                ch = params.legs[i].chain  # type: ignore[union-attr]
+                T0 = mounts[i] @ ch.base_matrix
+                table = ch if ch.base_pose is None else replace(ch, base_pose=None)
+            else:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    ch = chain_from_urdf(chain_source, tip=leg.foot_frame)
+                off = np.eye(4)
+                off[:3, 3] = offset_of(model, leg)
+                if np.any(off[:3, 3] != 0):
+                    ch = replace(ch, tool=Pose.of(ch.tool_matrix @ off))
+                T0 = ch.base_matrix
+                table = replace(ch, base_pose=None)
+            sel = list(cols[i])
+            if closed_leg(table, T0, consts[i], lower[sel], upper[sel], float(span[i])):
+                cand = (table, T0)
+        except HexapodKinError:
+            cand = None
+        closed.append(cand)
+    if hexa:  # legs sharing one table share one closed-form call
+        by_id: dict[int, Any] = {}
+        for i, c in enumerate(closed):
+            if c is not None:
+                closed[i] = (by_id.setdefault(id(params.legs[i].chain), c[0]), c[1])  # type: ignore[union-attr]
+    return {
+        "consts": consts,
+        "span": span,
+        "mounts": mounts,
+        "direction": direction,
+        "reach": reach,
+        "body_height": body_height,
+        "closed": closed,
+    }
+
+
+def offset_of(model: Any, leg: LegTree) -> np.ndarray:
+    """The foot in its frame (the user's offset; 0 for a leaf frame) [m]."""
+    fr = model.frames[model.getFrameId(leg.foot_frame)]
+    rel = np.linalg.solve(fr.placement.homogeneous, leg.foot_placement)
+    return np.asarray(rel[:3, 3])

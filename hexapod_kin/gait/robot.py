@@ -18,15 +18,27 @@ from __future__ import annotations
 import math
 import os
 import threading
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
-from ..params import Hexapod, Pose, rpy_to_matrix
-from .legs import FootSpec, LegTree, Tree, find_legs, leg_fk, parse_feet, solve_legs, tree_poses
+from ..params import Hexapod, rpy_to_matrix
+from .legs import (
+    BodyIK,
+    FootSpec,
+    find_legs,
+    finite_or_inf,
+    joint_axis,
+    leg_layout,
+    offset_of,
+    parse_feet,
+    pick_branch,
+    sphere_radius,
+)
+from .tree import Tree, solve_legs, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
@@ -77,80 +89,6 @@ def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndar
     T[:3, :3] = rpy_to_matrix(*(float(v) for v in a))
     T[:3, 3] = p
     return T
-
-
-def _pick_branch(
-    qk: np.ndarray, valid: np.ndarray, q0: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
-
-    Args:
-        qk: (G, N, K, m) candidate solutions of G legs at N samples.
-        valid: (G, N, K) which candidates exist.
-        q0: (G, m) the configuration before the first sample.
-
-    Returns:
-        ``(q, ok)``: (G, N, m) the continued joint angles (the previous value kept where no
-        slot is valid) and (G, N) whether a slot was found.
-
-    """
-    g, n, _, m = qk.shape
-    out = np.empty((n, g, m))
-    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
-    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
-    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
-    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
-    prev = np.array(q0, dtype=float)
-    rows = np.arange(g)
-    step = np.empty(cand.shape[1:])
-    two_pi = 2.0 * np.pi
-    for i in range(n):
-        np.subtract(cand[i], prev[:, None, :], out=step)
-        step += np.pi
-        np.mod(step, two_pi, out=step)
-        step -= np.pi
-        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
-        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
-        out[i] = prev
-    out = np.moveaxis(out, 0, 1)
-    return out, ok
-
-
-@dataclass(frozen=True)
-class BodyIK:
-    """Joint angles of body poses with the feet fixed in the world (arrays read-only).
-
-    Attributes:
-        q: (N, 18) joint angles in [rad], legs in order, hip/knee/ankle each.
-        reached: (N, L) True where the leg's closed form has a solution.
-        excess: (N, L) distance by which each foot is out of the leg's reach in [m]
-            (0 when reachable).
-        limit_margin: (N, 18) distance of each joint to its nearest limit in [rad]
-            (negative beyond a limit).
-        leg_names: The legs' names.
-
-    """
-
-    q: np.ndarray
-    reached: np.ndarray
-    excess: np.ndarray
-    limit_margin: np.ndarray
-    leg_names: tuple[str, ...]
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (arrays as nested lists, SI units)."""
-        return {
-            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
-            for f in fields(self)
-            for v in (getattr(self, f.name),)
-        }
-
-    @property
-    def ok(self) -> np.ndarray:
-        """(N, L) True where the leg is reached and inside its joint limits."""
-        n_leg = len(self.leg_names)
-        lim = self.limit_margin.reshape(len(self.q), n_leg, -1).min(axis=2)
-        return np.asarray(self.reached & (lim >= 0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -337,9 +275,11 @@ class WholeBody:
         return out
 
     def neutral_q(self) -> np.ndarray:
-        """A standing configuration (nq,): a Hexapod's legs at :data:`hexapod_kin.ik.LEG_HOME`;
-        another robot's feet at :meth:`neutral_feet` under the body at :attr:`body_height`
-        (numerical IK from q = 0 with the knees nudged off the stretched singularity).
+        """A standing configuration (nq,).
+
+        A Hexapod's legs at :data:`hexapod_kin.ik.LEG_HOME`; another robot's feet at
+        :meth:`neutral_feet` under the body at :attr:`body_height` (numerical IK from q = 0
+        with the knees nudged off the stretched singularity).
         """
         return np.array(self._seed)
 
@@ -505,7 +445,7 @@ class WholeBody:
                 ) from None
             qk = batch.q.reshape(len(legs), n, *batch.q.shape[1:])
             vk = batch.valid.reshape(len(legs), n, -1)
-            picked, ok = _pick_branch(qk, vk, q0[cols])
+            picked, ok = pick_branch(qk, vk, q0[cols])
             for g, leg in enumerate(legs):
                 q[:, cols[g]] = picked[g]
                 reached[:, leg] = ok[g]
@@ -563,88 +503,6 @@ class WholeBody:
             )
 
 
-_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
-
-
-def _joint_axis(jm: Any, name: str) -> tuple[np.ndarray, bool]:
-    """Unit axis (in the joint frame) and whether the joint is prismatic."""
-    kind = jm.shortname()
-    for prefix, prismatic in (("JointModelR", False), ("JointModelP", True)):
-        if kind in (f"{prefix}X", f"{prefix}Y", f"{prefix}Z"):
-            return np.array(_AXES[kind[-1]]), prismatic
-    if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
-        a = np.asarray(jm.extract().axis, dtype=float)
-        return a / np.linalg.norm(a), kind.startswith("JointModelP")
-    raise ConfigurationError(
-        f"joint {name!r} is a {kind}; a leg joint must be revolute (limited) or prismatic "
-        "(continuous joints: give them limits in the URDF)",
-        parameter="source",
-        value=name,
-        allowed="revolute or prismatic joints",
-    )
-
-
-def _sphere_radius(text: str, link: str) -> float | None:
-    """The radius of the first sphere collision of ``link`` in URDF ``text`` (if any)."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError:  # pragma: no cover - the gate parsed it already
-        return None
-    for el in root.iter("link"):
-        if el.get("name") != link:
-            continue
-        for col in el.iter("collision"):
-            sph = col.find("geometry/sphere")
-            if sph is not None and sph.get("radius") is not None:
-                try:
-                    return float(sph.get("radius", ""))
-                except ValueError:
-                    return None
-    return None
-
-
-def _closed_leg(
-    table: Any, T0: np.ndarray, consts: tuple[np.ndarray, ...], lower: Any, upper: Any, span: float
-) -> bool:
-    """True when the closed form of ``table`` (frame 0 at ``T0`` in the body) solves the leg.
-
-    Checked at 6 seeded random configurations inside the limits: a valid slot must put the
-    foot (by the leg's own vectorised FK) on the target within 1e-9 of the span.
-    """
-    from ..ik import analytic_batch
-
-    P, A, pr, foot = consts
-    lo = np.where(np.isfinite(lower), lower, -np.pi)
-    hi = np.where(np.isfinite(upper), upper, np.pi)
-    rng = np.random.default_rng(7)
-    qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
-    e = len(qs)
-    rep = [np.broadcast_to(c, (e,) + c.shape) for c in (P, A, pr, foot)]
-    _o, _w, p = leg_fk(*rep, qs)
-    p0 = (p - T0[:3, 3]) @ T0[:3, :3]
-    try:
-        batch = analytic_batch(table, p0)
-    except HexapodKinError:
-        return False
-    k = batch.q.shape[1]
-    cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
-    if cand.shape[1] != len(lo):
-        return False
-    rep = [np.broadcast_to(c, (e * k,) + c.shape) for c in (P, A, pr, foot)]
-    _o, _w, pk = leg_fk(*rep, cand)
-    err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
-    err = np.where(np.asarray(batch.valid), err, np.inf)
-    return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
-
-
-def _finite_or_inf(v: Any) -> np.ndarray:
-    a = np.array(v, dtype=float)
-    a[~np.isfinite(a) | (np.abs(a) >= 1e300)] = np.inf
-    return a
-
-
 def _build_model(
     text: str,
     label: str,
@@ -657,8 +515,6 @@ def _build_model(
     """The :class:`WholeBody` of a URDF ``text`` (gate-checked by the caller)."""
     import pinocchio as pin
 
-    from .._fromurdf import chain_from_urdf
-
     full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
     hexa = params is not None
     if hexa:
@@ -667,7 +523,7 @@ def _build_model(
     locked = tuple(str(full.names[j]) for j in others)
     model = full
     if others:
-        specs = tuple(FootSpec(leg.foot_frame, _offset_of(full, leg)) for leg in legs)
+        specs = tuple(FootSpec(leg.foot_frame, offset_of(full, leg)) for leg in legs)
         model = pin.buildReducedModel(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
     for j in range(2, model.njoints):
@@ -682,10 +538,12 @@ def _build_model(
     axes = np.empty((nq, 3))
     prismatic = np.zeros(nq, dtype=bool)
     for j in range(2, model.njoints):
-        axes[j - 2], prismatic[j - 2] = _joint_axis(model.joints[j], str(model.names[j]))
+        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]))
     tree = Tree(
         parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
-        placements=np.array([model.jointPlacements[j].homogeneous for j in range(2, model.njoints)]),
+        placements=np.array(
+            [model.jointPlacements[j].homogeneous for j in range(2, model.njoints)]
+        ),
         axes=axes,
         prismatic=prismatic,
     )
@@ -706,90 +564,30 @@ def _build_model(
                 )
             )
         foot_names.append(fname)
-    lower = _finite_or_inf(model.lowerPositionLimit[7:])
+    lower = finite_or_inf(model.lowerPositionLimit[7:])
     lower[np.isinf(lower)] = -np.inf
-    upper = _finite_or_inf(model.upperPositionLimit[7:])
-    vel = _finite_or_inf(model.velocityLimit[6:])
-    eff = _finite_or_inf(model.effortLimit[6:])
+    upper = finite_or_inf(model.upperPositionLimit[7:])
+    vel = finite_or_inf(model.velocityLimit[6:])
+    eff = finite_or_inf(model.effortLimit[6:])
     cols = tuple(leg.joints for leg in legs)
     width = max(len(c) for c in cols)
     padded = np.array([(c[0],) * (width - len(c)) + tuple(c) for c in cols])
     foot = np.array([leg.foot_placement for leg in legs])
     foot_joint = np.array([leg.foot_joint for leg in legs])
-    # per-leg constants and the geometry at q = 0 (clipped into the limits)
     q_zero = np.clip(np.zeros(nq), lower, upper)
-    consts, spans, origins, feet0 = [], [], [], []
-    for c, leg in zip(cols, legs):
-        cc = list(c)
-        k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
-        consts.append(k)
-        o, _w, p = leg_fk(*(x[None] for x in k), q_zero[cc][None])
-        pts = np.vstack([o[0], p])
-        spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
-        origins.append(o[0, 0])
-        feet0.append(p[0])
-    span = np.array(spans)
-    if hexa:
-        mounts = np.array([x.transform() for x in params.legs])  # type: ignore[union-attr]
-        direction = mounts[:, :2, 0].copy()
-    else:
-        mounts = np.array([tree.placements[c[0]] for c in cols])
-        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
-        direction = np.zeros((len(cols), 2))
-        for i, d in enumerate(d0):
-            out = mounts[i, :2, 3]
-            for v in (d, out, np.array([1.0, 0.0])):
-                if np.linalg.norm(v) > 1e-6 * span[i]:
-                    direction[i] = v / np.linalg.norm(v)
-                    break
-    d_horiz = np.einsum("li,li->l", np.array(feet0)[:, :2] - mounts[:, :2, 3], direction)
-    reach = np.minimum(np.maximum(d_horiz, 0.0), 0.64 * span)
-    rho = span * math.hypot(0.64, 0.32)
-    depth = np.sqrt(np.maximum(rho**2 - reach**2, 0.0))
-    body_height = float(np.min(depth - mounts[:, 2, 3]))
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, chain_source)
+    span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
         rad = _num_nonneg("foot_radius", foot_radius)
     elif hexa:
         rad = 1.5 * float(params.legs[0].chain.link_radius)  # type: ignore[union-attr]
     elif feet is None:  # leaf feet: their links' sphere collisions, if every foot has one
-        radii = [_sphere_radius(text, leg.foot_frame) for leg in legs]
+        radii = [sphere_radius(text, leg.foot_frame) for leg in legs]
         rad = min(float(r) for r in radii) if all(r is not None for r in radii) else 0.0  # type: ignore[arg-type]
     else:
         rad = 0.0
     link_r = float(params.legs[0].chain.link_radius) if hexa else 0.04 * float(span.mean())  # type: ignore[union-attr]
-    # closed forms
-    closed: list[tuple[Any, np.ndarray] | None] = []
-    import warnings
-
-    for i, leg in enumerate(legs):
-        cand: tuple[Any, np.ndarray] | None = None
-        try:
-            if hexa:
-                ch = params.legs[i].chain  # type: ignore[union-attr]
-                T0 = mounts[i] @ ch.base_matrix
-                table = ch if ch.base_pose is None else replace(ch, base_pose=None)
-            else:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    ch = chain_from_urdf(chain_source, tip=leg.foot_frame)
-                off = np.eye(4)
-                off[:3, 3] = _offset_of(model, leg)
-                if np.any(off[:3, 3] != 0):
-                    ch = replace(ch, tool=Pose.of(ch.tool_matrix @ off))
-                T0 = ch.base_matrix
-                table = replace(ch, base_pose=None)
-            sel = list(cols[i])
-            if _closed_leg(table, T0, consts[i], lower[sel], upper[sel], float(span[i])):
-                cand = (table, T0)
-        except HexapodKinError:
-            cand = None
-        closed.append(cand)
-    if hexa:  # legs sharing one table share one closed-form call
-        by_id: dict[int, Any] = {}
-        for i, c in enumerate(closed):
-            if c is not None:
-                closed[i] = (by_id.setdefault(id(params.legs[i].chain), c[0]), c[1])  # type: ignore[union-attr]
     inertias = [model.inertias[1]] + [model.inertias[j] for j in range(2, model.njoints)]
     wb = WholeBody(
         params=params,
@@ -805,11 +603,11 @@ def _build_model(
         mounts=mounts,
         link_radius=link_r,
         foot_radius=rad,
-        body_height=body_height,
+        body_height=lay["body_height"],
         foot_frames=tuple(foot_names),
-        foot_offsets=foot[:, :3, 3].copy(),
+        foot_offsets=np.array([offset_of(model, leg) for leg in legs]),
         locked_joints=locked,
-        ik_kind=tuple("closed" if c is not None else "numerical" for c in closed),
+        ik_kind=tuple("closed" if c is not None else "numerical" for c in lay["closed"]),
         _tree=tree,
         _masses=np.array([x.mass for x in inertias]),
         _levers=np.array([x.lever for x in inertias]),
@@ -817,9 +615,9 @@ def _build_model(
         _foot_joint=foot_joint,
         _leg_joints=padded,
         _leg_cols=cols,
-        _closed=tuple(closed),
-        _reach_dir=direction,
-        _reach=reach,
+        _closed=tuple(lay["closed"]),
+        _reach_dir=lay["direction"],
+        _reach=lay["reach"],
         _span=span,
         _seed=np.zeros(nq),
     )
@@ -827,13 +625,6 @@ def _build_model(
     for a in (lower, upper, vel, eff, mounts, tree.placements, tree.axes, foot, wb._seed):
         a.setflags(write=False)
     return wb
-
-
-def _offset_of(model: Any, leg: LegTree) -> np.ndarray:
-    """The foot in its frame (the user's offset; 0 for a leaf frame) [m]."""
-    fr = model.frames[model.getFrameId(leg.foot_frame)]
-    rel = np.linalg.solve(fr.placement.homogeneous, leg.foot_placement)
-    return np.asarray(rel[:3, 3])
 
 
 def _num_nonneg(name: str, value: Any) -> float:
@@ -988,8 +779,10 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
     km = robot if isinstance(robot, KinematicModel) else load(robot)
     params = km.params
     if isinstance(params, Hexapod):
-        return as_whole_body(params, foot_radius=rad) if spec is None else as_whole_body(
-            params, feet=spec
+        return (
+            as_whole_body(params, foot_radius=rad)
+            if spec is None
+            else as_whole_body(params, feet=spec)
         )
     if params is not None:
         raise ConfigurationError(
