@@ -29,6 +29,7 @@ from ..params import Hexapod, rpy_to_matrix
 from .legs import (
     BodyIK,
     FootSpec,
+    annulus_excess,
     find_legs,
     finite_or_inf,
     joint_axis,
@@ -238,6 +239,11 @@ class WholeBody:
         return out
 
     # ------------------------------------------------------------------ standing defaults
+    @property
+    def foot_reach(self) -> float:
+        """The default mount-to-foot horizontal distance [m] (legs' mean, :meth:`neutral_feet`)."""
+        return float(np.mean(self._reach))
+
     def neutral_feet(self, foot_reach: float | None = None) -> np.ndarray:
         """Neutral foot points (L, 3) in the body frame [m] (the contact spheres' centres).
 
@@ -296,21 +302,7 @@ class WholeBody:
         if closed is not None:
             fam = detect_family(closed[0])
             if fam.family in ("leg3", "coxa_tibia") and fam.chain.tool is None:
-                h = np.hypot(x[:, 0], x[:, 1])
-                w = (x[:, 2] - fam.height) * fam.sign
-                if fam.family == "leg3":
-                    l1, l2, l3 = fam.lengths
-                    rmin, rmax = abs(l2 - l3), l2 + l3
-                else:
-                    l1, l2 = fam.lengths[:2]
-                    rmin = rmax = abs(l2)
-                best = np.full(len(x), np.inf)
-                for hs in (1.0, -1.0):
-                    r = np.hypot(hs * h - l1, w)
-                    best = np.minimum(
-                        best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)])
-                    )
-                return best
+                return annulus_excess(fam, x)
             T0 = closed[1]
             x = x @ T0[:3, :3].T + T0[:3, 3]  # frame 0 → body
         _q, res, _ok = self._numeric([leg], x[:, None, :], self._seed[None, :])

@@ -288,7 +288,7 @@ def walk(
         body_height: Body above the mean ground height of the feet [m] (default the
             robot's :attr:`~.robot.WholeBody.body_height`; the built-in hexapod: 0.08 m).
         foot_reach: Horizontal distance from each leg's mount to its neutral foot point [m]
-            (default the robot's own, :meth:`~.robot.WholeBody.neutral_feet`; the built-in
+            (default the robot's own, :attr:`~.robot.WholeBody.foot_reach`; the built-in
             hexapod: 0.16 m).
         terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
             :class:`~.terrain.Terrain` or ``h(x, y)``.
@@ -315,7 +315,7 @@ def walk(
     T = _num("period", period, hi=1e3)
     H = _num("step_height", step_height, zero=True, hi=1.0)
     bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
-    reach = None if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
+    reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
     dur = _num("duration", duration, zero=True, hi=1e5)
     hz = _num("rate", rate, hi=1e5)
     n = int(round(dur * hz)) + 1
