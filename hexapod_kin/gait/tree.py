@@ -21,7 +21,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -98,6 +98,89 @@ def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
     return out
 
 
+def _mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Stacked 3×3 matrix times 3-vector (..., 3) (broadcast sums: faster than matmul here)."""
+    return np.asarray(
+        A[..., :, 0] * v[..., 0, None]
+        + A[..., :, 1] * v[..., 1, None]
+        + A[..., :, 2] * v[..., 2, None]
+    )
+
+
+@dataclass(frozen=True)
+class LegConsts:
+    """Per-leg constants of G serial legs of m joints, for :func:`leg_fk_of`.
+
+    With ``P`` the placement rotation and ``a`` the axis: ``P R(a, q) = c P + s P[a]× +
+    (1 − c) (P a) aᵀ``, so each joint costs one 3×3 product per sample.
+    """
+
+    Pr: np.ndarray  # (G, m, 3, 3)
+    Pt: np.ndarray  # (G, m, 3)
+    K1: np.ndarray  # (G, m, 3, 3) P [a]×
+    K2: np.ndarray  # (G, m, 3, 3) (P a) aᵀ
+    Pa: np.ndarray  # (G, m, 3)
+    prismatic: np.ndarray  # (G, m)
+    foot: np.ndarray  # (G, 3)
+
+    @classmethod
+    def of(
+        cls, placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray
+    ) -> LegConsts:
+        """From (G, m, 4, 4) placements, (G, m, 3) axes, (G, m) flags and (G, 3) feet."""
+        Pr = np.ascontiguousarray(placements[..., :3, :3])
+        a = np.asarray(axes, dtype=float)
+        skew = np.zeros(a.shape + (3,))
+        skew[..., 0, 1], skew[..., 0, 2] = -a[..., 2], a[..., 1]
+        skew[..., 1, 0], skew[..., 1, 2] = a[..., 2], -a[..., 0]
+        skew[..., 2, 0], skew[..., 2, 1] = -a[..., 1], a[..., 0]
+        Pa = _mv(Pr, a)
+        return cls(
+            Pr,
+            np.ascontiguousarray(placements[..., :3, 3]),
+            Pr @ skew,
+            Pa[..., :, None] * a[..., None, :],
+            Pa,
+            np.asarray(prismatic, dtype=bool),
+            np.asarray(foot, dtype=float),
+        )
+
+
+def _subset(c: LegConsts, idx: np.ndarray) -> LegConsts:
+    return LegConsts(*(getattr(c, f.name)[idx] for f in fields(LegConsts)))
+
+
+def leg_fk_of(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`leg_fk` of the G legs of ``c`` at ``q`` (..., G, m) (constants broadcast)."""
+    m = q.shape[-1]
+    shape = q.shape[:-1]
+    origins = np.empty(shape + (m, 3))
+    waxes = np.empty(shape + (m, 3))
+    any_p = bool(c.prismatic.any())
+    R: np.ndarray | None = None
+    t = np.zeros(shape + (3,))
+    for k in range(m):
+        qk = q[..., k]
+        pk = c.prismatic[:, k]
+        qr = np.where(pk, 0.0, qk) if any_p else qk
+        co, si = np.cos(qr)[..., None, None], np.sin(qr)[..., None, None]
+        M = co * c.Pr[:, k] + si * c.K1[:, k] + (1.0 - co) * c.K2[:, k]
+        if R is None:
+            o = np.broadcast_to(c.Pt[:, k], shape + (3,))
+            w = np.broadcast_to(c.Pa[:, k], shape + (3,))
+            R = M
+        else:
+            o = t + _mv(R, c.Pt[:, k])
+            w = _mv(R, c.Pa[:, k])
+            R = R @ M
+        origins[..., k, :] = o
+        waxes[..., k, :] = w
+        t = o + np.where(pk[:, None], w * qk[..., None], 0.0) if any_p else o
+    assert R is not None
+    feet = t + _mv(R, c.foot)
+    return origins, waxes, feet
+
+
 def leg_fk(
     placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray, q: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -117,25 +200,7 @@ def leg_fk(
 
     """
     q = np.asarray(q, dtype=float)
-    e, m = q.shape
-    T = np.broadcast_to(np.eye(4), (e, 4, 4))
-    origins = np.empty((e, m, 3))
-    waxes = np.empty((e, m, 3))
-    any_p = bool(np.any(prismatic))
-    for k in range(m):
-        T = T @ placements[:, k]
-        origins[:, k] = T[:, :3, 3]
-        waxes[:, k] = (T[:, :3, :3] @ axes[:, k, :, None])[..., 0]
-        R = axis_rotation(axes[:, k], np.where(prismatic[:, k], 0.0, q[:, k]) if any_p else q[:, k])
-        Tn = np.empty((e, 4, 4))
-        Tn[:, :3, :3] = T[:, :3, :3] @ R
-        Tn[:, :3, 3] = T[:, :3, 3]
-        if any_p:
-            Tn[:, :3, 3] += np.where(prismatic[:, k, None], waxes[:, k] * q[:, k, None], 0.0)
-        Tn[:, 3] = (0.0, 0.0, 0.0, 1.0)
-        T = Tn
-    feet = (T[:, :3, :3] @ foot[..., None])[..., 0] + T[:, :3, 3]
-    return origins, waxes, feet
+    return leg_fk_of(LegConsts.of(placements, axes, prismatic, foot), q)
 
 
 # ============================================================================ numerical IK
@@ -172,80 +237,102 @@ def solve_legs(
     """
     n, g, _ = targets.shape
     m = placements.shape[1]
-    q = np.broadcast_to(seed, (n, g, m)).reshape(n * g, m).copy()
-    gi = np.tile(np.arange(g), n)
-    tgt = targets.reshape(n * g, 3)
-    res = _dls(placements, axes, prismatic, foot, lower, upper, tgt, q, gi, span, iterations)
-    q = q.reshape(n, g, m)
-    res = res.reshape(n, g)
+    c = LegConsts.of(placements, axes, prismatic, foot)
+    seed_arr = np.asarray(seed, dtype=float)
+    q = np.broadcast_to(seed_arr, (n, g, m)).copy()
+    res = _dls(c, lower, upper, targets, q, span, iterations)
     # continuity: re-solve, warm-started from the previous sample, where a branch jumped
-    prev = np.asarray(seed, dtype=float)
-    for i in range(n):
+    # (or the foot was missed); only those samples are visited, in time order
+
+    def suspects(start: int) -> np.ndarray:
+        prev = np.concatenate([seed_arr[None], q[:-1]])[start:]
+        jump = np.abs(q[start:] - prev).max(axis=2) > 0.5
+        return np.flatnonzero((jump | (res[start:] > REACH_TOL)).any(axis=1)) + start
+
+    todo = suspects(0)
+    while todo.size:
+        i = int(todo[0])
+        prev = seed_arr if i == 0 else q[i - 1]
         jump = np.abs(q[i] - prev).max(axis=1) > 0.5
-        bad = jump | (res[i] > REACH_TOL)
-        if bad.any():
-            idx = np.flatnonzero(bad)
-            qi = prev[idx].copy()
-            ri = _dls(
-                placements, axes, prismatic, foot, lower, upper,
-                targets[i, idx], qi, idx, span, iterations,
-            )  # fmt: skip
+        idx = np.flatnonzero(jump | (res[i] > REACH_TOL))
+        if idx.size:
+            qi = prev[idx][None].copy()
+            sub = _subset(c, idx)
+            ri = _dls(sub, lower[idx], upper[idx], targets[i, idx][None], qi, span, iterations)[0]
             better = (ri <= np.maximum(res[i, idx], REACH_TOL)) | (ri <= REACH_TOL)
-            q[i, idx] = np.where(better[:, None], qi, q[i, idx])
+            q[i, idx] = np.where(better[:, None], qi[0], q[i, idx])
             res[i, idx] = np.where(better, ri, res[i, idx])
-        prev = q[i]
+        todo = suspects(i + 1) if i + 1 < n else todo[:0]
     return q, res, res <= REACH_TOL
 
 
 def _dls(
-    placements: np.ndarray,
-    axes: np.ndarray,
-    prismatic: np.ndarray,
-    foot: np.ndarray,
+    c: LegConsts,
     lower: np.ndarray,
     upper: np.ndarray,
     tgt: np.ndarray,
     q: np.ndarray,
-    gi: np.ndarray,
     span: float,
     iterations: int,
 ) -> np.ndarray:
-    """Iterate DLS in place on ``q`` (E, m) for leg indices ``gi`` (E,); residuals (E,)."""
-    e_n, m = q.shape
-    res = np.full(e_n, np.inf)
-    active = np.arange(e_n)
+    """Iterate DLS in place on ``q`` (N, G, m) towards ``tgt`` (N, G, 3); residuals (N, G).
+
+    Levenberg–Marquardt acceptance: a step is kept only when it lowers the residual (then
+    the damping factor μ shrinks ×0.3), else it is refused and μ grows ×10; an element stops
+    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual).
+    """
+    m = q.shape[-1]
     lam_floor = 1e-14 * span * span
     done_tol = 1e-13 * span
     eye = np.eye(m)
+    o, w, p = leg_fk_of(c, q)
+    err = tgt - p
+    norm = np.linalg.norm(err, axis=-1)
+    mu = np.full(norm.shape, 1e-2)
     for _ in range(iterations):
-        g = gi[active]
-        o, w, p = leg_fk(placements[g], axes[g], prismatic[g], foot[g], q[active])
-        err = tgt[active] - p
-        norm = np.linalg.norm(err, axis=1)
-        res[active] = norm
-        keep = norm > done_tol
-        if not keep.any():
+        live = (norm > done_tol) & (mu < 1e10)
+        if not live.any():
             break
-        active, g, o, w, p, err, norm = (
-            a[keep] for a in (active, g, o, w, p, err, norm)
-        )  # fmt: skip
-        J = np.where(prismatic[g][:, None, :], np.swapaxes(w, 1, 2), 0.0)
-        rev = np.cross(w, p[:, None, :] - o)  # (E, m, 3)
-        J = np.where(prismatic[g][:, None, :], J, np.swapaxes(rev, 1, 2))  # (E, 3, m)
-        Jt = np.swapaxes(J, 1, 2)
-        lam2 = 1e-2 * norm * norm + lam_floor
-        A = Jt @ J + lam2[:, None, None] * eye
-        dq = np.linalg.solve(A, (Jt @ err[..., None]))[..., 0]
-        big = np.abs(dq).max(axis=1)
-        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[:, None]
-        new = np.clip(q[active] + dq, lower[g], upper[g])
-        moved = np.abs(new - q[active]).max(axis=1) > 1e-15
-        q[active] = new
-        active = active[moved]
-        if active.size == 0:
-            break
-    if active.size:  # the last step's residual
-        g = gi[active]
-        _o, _w, p = leg_fk(placements[g], axes[g], prismatic[g], foot[g], q[active])
-        res[active] = np.linalg.norm(tgt[active] - p, axis=1)
-    return res
+        pr = c.prismatic[:, None, :]
+        rev = np.swapaxes(np.cross(w, p[..., None, :] - o), -1, -2)  # (N, G, 3, m)
+        J = np.where(pr, np.swapaxes(w, -1, -2), rev)
+        Jt = np.swapaxes(J, -1, -2)
+        lam2 = mu * norm * norm + lam_floor
+        dq = _solve_spd(Jt @ J + lam2[..., None, None] * eye, _mv(Jt, err))
+        big = np.abs(dq).max(axis=-1)
+        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[..., None]
+        new = np.clip(q + dq, lower, upper)
+        o2, w2, p2 = leg_fk_of(c, new)
+        err2 = tgt - p2
+        norm2 = np.linalg.norm(err2, axis=-1)
+        acc = live & (norm2 < norm)
+        q[acc] = new[acc]
+        o[acc], w[acc], p[acc], err[acc], norm[acc] = (
+            o2[acc],
+            w2[acc],
+            p2[acc],
+            err2[acc],
+            norm2[acc],
+        )
+        mu = np.where(acc, np.maximum(mu * 0.3, 1e-9), np.where(live, mu * 10.0, mu))
+    return norm
+
+
+def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve stacked symmetric positive-definite systems ``A x = b`` (E, m, m), (E, m).
+
+    m = 3: by the adjugate (element-wise, faster than a batched LAPACK call for 3×3);
+    otherwise ``numpy.linalg.solve``.
+    """
+    if A.shape[-1] != 3:
+        return np.asarray(np.linalg.solve(A, b[..., None])[..., 0])
+    a, bb, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
+    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
+    c00, c01, c02 = d * f - e * e, c * e - bb * f, bb * e - c * d
+    c11, c12, c22 = a * f - c * c, bb * c - a * e, a * d - bb * bb
+    det = a * c00 + bb * c01 + c * c02
+    x = np.empty_like(b)
+    x[..., 0] = c00 * b[..., 0] + c01 * b[..., 1] + c02 * b[..., 2]
+    x[..., 1] = c01 * b[..., 0] + c11 * b[..., 1] + c12 * b[..., 2]
+    x[..., 2] = c02 * b[..., 0] + c12 * b[..., 1] + c22 * b[..., 2]
+    return x / det[..., None]
