@@ -439,8 +439,8 @@ def closed_leg(
     rng = np.random.default_rng(7)
     qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
     e = len(qs)
-    rep = [np.broadcast_to(c, (e,) + c.shape) for c in (P, A, pr, foot)]
-    _o, _w, p = leg_fk(*rep, qs)
+    _o, _w, p = leg_fk(P[None], A[None], pr[None], foot[None], qs[:, None])
+    p = p[:, 0]
     p0 = (p - T0[:3, 3]) @ T0[:3, :3]
     try:
         batch = analytic_batch(table, p0)
@@ -450,8 +450,7 @@ def closed_leg(
     cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
     if cand.shape[1] != len(lo):
         return False
-    rep = [np.broadcast_to(c, (e * k,) + c.shape) for c in (P, A, pr, foot)]
-    _o, _w, pk = leg_fk(*rep, cand)
+    _o, _w, pk = leg_fk(P[None], A[None], pr[None], foot[None], cand[:, None])
     err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
     err = np.where(np.asarray(batch.valid), err, np.inf)
     return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
@@ -529,14 +528,14 @@ def leg_layout(
         cc = list(c)
         k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
         consts.append(k)
-        o, _w, p = leg_fk(*(x[None] for x in k), q_zero[cc][None])
+        o, _w, p = leg_fk(k[0][None], k[1][None], k[2][None], k[3][None], q_zero[cc][None])
         pts = np.vstack([o[0], p])
         spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
         origins.append(o[0, 0])
         feet0.append(p[0])
     span = np.array(spans)
     if hexa:
-        mounts = np.array([x.transform() for x in params.legs])  # type: ignore[union-attr]
+        mounts = np.array([x.transform() for x in params.legs])
         direction = mounts[:, :2, 0].copy()
     else:
         mounts = np.array([tree.placements[c[0]] for c in cols])
@@ -559,7 +558,7 @@ def leg_layout(
         cand: tuple[Any, np.ndarray] | None = None
         try:
             if hexa:
-                ch = params.legs[i].chain  # type: ignore[union-attr]
+                ch = params.legs[i].chain
                 T0 = mounts[i] @ ch.base_matrix
                 table = ch if ch.base_pose is None else replace(ch, base_pose=None)
             else:
@@ -580,9 +579,10 @@ def leg_layout(
         closed.append(cand)
     if hexa:  # legs sharing one table share one closed-form call
         by_id: dict[int, Any] = {}
-        for i, c in enumerate(closed):
-            if c is not None:
-                closed[i] = (by_id.setdefault(id(params.legs[i].chain), c[0]), c[1])  # type: ignore[union-attr]
+        for i, found in enumerate(closed):
+            if found is not None:
+                shared = by_id.setdefault(id(params.legs[i].chain), found[0])
+                closed[i] = (shared, found[1])
     return {
         "consts": consts,
         "span": span,

@@ -515,7 +515,10 @@ def _build_model(
     locked = tuple(str(full.names[j]) for j in others)
     model = full
     if others:
-        specs = tuple(FootSpec(leg.foot_frame, offset_of(full, leg)) for leg in legs)
+        specs = tuple(
+            FootSpec(leg.foot_frame, tuple(float(v) for v in offset_of(full, leg)))  # type: ignore[arg-type]
+            for leg in legs
+        )
         model = pin.buildReducedModel(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
     for j in range(2, model.njoints):
