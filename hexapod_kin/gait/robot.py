@@ -1,16 +1,12 @@
-"""The whole hexapod: floating base (Pinocchio free-flyer) + 18 leg joints, and body-pose IK.
+"""A legged robot with a floating base (Pinocchio free-flyer), from any source; body-pose IK.
 
-:class:`WholeBody` builds the Pinocchio model of the ``hexapod`` preset with a free-flyer root
-from its generated URDF (checked by the loader gate first), and keeps the tree's constants
-(joint placements, link inertials, foot frames) as arrays so that forward kinematics, the
-centre of mass and the leg segments are computed for many samples at once (vectorised over
-time; Pinocchio's own ``centerOfMass``/``framesForwardKinematics`` are the reference in the
-tests). :meth:`WholeBody.body_ik` solves the 18 joint angles of a body pose with the feet
-fixed in the world, leg by leg, with the closed form of the leg (:func:`hexapod_kin.ik.
-analytic_batch`) in its mount frame.
-
-Poses are 4×4 ``worldMbody`` arrays (the body frame: x forward, z up, origin on the mounts'
-plane at the body centre).
+:func:`as_whole_body` builds a :class:`WholeBody` from a Hexapod, a URDF, ``erd:NAME`` or a
+loaded model: legs from the kinematic tree (:mod:`.legs`), the tree's constants as arrays so
+that forward kinematics, the centre of mass and the leg segments are computed for many samples
+at once (:mod:`.tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
+solves the leg joints of body poses with the feet fixed in the world, leg by leg: closed form
+where recognised, else numerically. Poses are 4×4 ``worldMbody`` arrays (body frame: x
+forward, z up).
 """
 
 from __future__ import annotations
