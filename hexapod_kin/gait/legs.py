@@ -246,12 +246,12 @@ def _strip_common(names: list[str]) -> list[str]:
 def _frame_depth(model: Any, fid: int) -> int:
     depth = 0
     f = model.frames[fid]
-    parent = getattr(f, "parentFrame", getattr(f, "previousFrame", 0))
+    parent = f.parentFrame
     while fid != 0 and parent != fid and depth < 10_000:
         depth += 1
         fid = int(parent)
         f = model.frames[fid]
-        parent = getattr(f, "parentFrame", getattr(f, "previousFrame", 0))
+        parent = f.parentFrame
     return depth
 
 

@@ -717,11 +717,11 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
             1.5 × its link radius; a URDF's foot links' sphere collision radius, else 0).
 
     Raises:
-        ParameterError: A bad ``feet`` or ``foot_radius``, or options given with a
-            WholeBody.
+        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody.
         SourceError, UrdfError: The source cannot be loaded.
+        ParameterError: A source that is one chain (a table file, an arm preset).
         ConfigurationError: No legs found (names the frames), a non-revolute/prismatic leg
-            joint, a source that is one chain (a table file, an arm preset).
+            joint.
 
     """
     if isinstance(robot, WholeBody):
@@ -776,7 +776,7 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
             else as_whole_body(params, feet=spec)
         )
     if params is not None:
-        raise ConfigurationError(
+        raise ParameterError(
             f"{km.name!r} is one serial chain, not a legged robot (a floating body with legs); "
             "give a Hexapod, a legged robot's URDF or erd:NAME",
             parameter="robot",
