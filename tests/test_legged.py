@@ -474,3 +474,38 @@ def test_cli_stand_and_gait_take_any_source(capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len([line for line in err if line.startswith("hexapod-kin: error")]) == 1
+
+
+# ----------------------------------------------------------------------------- building
+def test_whole_body_is_cached_and_as_whole_body_takes_every_form():
+    from hexapod_kin import load
+
+    wb = whole_body()
+    assert wb is whole_body() is as_whole_body(None) is as_whole_body(wb)
+    assert as_whole_body("hexapod") is wb and as_whole_body(load("hexapod")) is wb
+    p = robots.hexapod(l2=0.11)
+    assert whole_body(p) is whole_body(p) is as_whole_body(p)
+    assert as_whole_body(str(PHX), feet=SPEC) is as_whole_body(str(PHX), feet=SPEC)
+    for bad in ((wb, {"feet": SPEC}), (robots.hexapod(), {"feet": SPEC}), ("hexabot_leg", {})):
+        with pytest.raises(ParameterError):
+            as_whole_body(bad[0], **bad[1])
+
+
+def test_the_default_stance_rule_by_hand():
+    """Built-in legs (l1, l2, l3) = (0.05, 0.1, 0.1), stretched at q = 0: span 0.25 m, so the
+    neutral reach is 0.64 · 0.25 = 0.16 m and the body height √(ρ² − r²) = 0.32 · 0.25 m."""
+    wb = whole_body()
+    assert wb.foot_reach == pytest.approx(0.16, abs=1e-15)
+    assert wb.body_height == pytest.approx(0.08, abs=1e-15)
+    yaw = np.radians([30, 90, 150, -150, -90, -30])
+    want = np.column_stack([(0.12 + 0.16) * np.cos(yaw), (0.12 + 0.16) * np.sin(yaw)])
+    assert np.allclose(wb.neutral_feet(None)[:, :2], want, atol=1e-15)
+    assert np.allclose(wb.neutral_feet(0.2)[:, :2], want / 0.28 * 0.32, atol=1e-15)
+    # solo12 hangs its legs at q = 0: the feet stay under the hips, the body at 0.7155 span
+    solo = as_whole_body("erd:solo12")
+    pose = standing_pose(solo)
+    assert pose.height == solo.body_height and np.allclose(pose.contacts[:, 2], 0.0)
+    feet_q0 = solo.feet(np.zeros((1, 12)), np.eye(4)[None])[0]
+    assert np.allclose(pose.feet[:, :2], feet_q0[:, :2], atol=1e-12)
+    reached = solo.feet(pose.q[None], pose.base[None])[0]
+    assert np.abs(reached - pose.feet).max() <= 1e-10

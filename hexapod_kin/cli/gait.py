@@ -103,7 +103,7 @@ def register(sub: Any) -> None:
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
-    from .. import robots
+    from .. import load, robots
     from ..gait.robot import as_whole_body
     from ..gait.walk import walk
     from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
@@ -150,7 +150,8 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     if html is not None:
         from ..gait.show import walk_html
 
-        out["html"] = str(walk_html(run, html))
+        shown = None if robot is None or robot.params is not None else load(source)
+        out["html"] = str(walk_html(run, html, model=shown))
     if args.json:
         emit_json(out)
     else:
