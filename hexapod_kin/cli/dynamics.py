@@ -255,15 +255,32 @@ def _cmd_torques(args: argparse.Namespace) -> int:
 def _add_stand(sub: Any) -> None:
     p = sub.add_parser(
         "stand",
-        help="the hexapod standing: contact forces holding its weight, joint torques",
+        help="a legged robot standing: contact forces holding its weight, joint torques",
+        description=(
+            "Stand a legged robot level on flat ground and print the contact forces that hold "
+            "its weight and the joint torques. SOURCE: a Hexapod preset (default 'hexapod'), a "
+            "URDF path or erd:NAME (legs found from the kinematic tree; name the feet with "
+            "--foot when the URDF has no foot links)."
+        ),
         formatter_class=_FMT,
     )
-    p.add_argument("--source", default="hexapod", help="a Hexapod preset")
+    p.add_argument("source_pos", nargs="?", metavar="SOURCE", help="the robot (default hexapod)")
+    p.add_argument("--source", help="the robot (same as SOURCE)")
     p.add_argument(
         "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
     )
-    p.add_argument("--height", type=float, default=0.10, help="body above the ground [m]")
-    p.add_argument("--reach", type=float, help="hip axis to foot, horizontal [m] (l1 + l2)")
+    add_feet_args(p)
+    p.add_argument(
+        "--height",
+        "--body-height",
+        dest="height",
+        type=float,
+        default=None,
+        help="body above the ground [m] (default: a Hexapod 0.10; other robots their own)",
+    )
+    p.add_argument(
+        "--reach", type=float, help="mount to foot, horizontal [m] (default: l1 + l2 / own)"
+    )
     p.add_argument(
         "--shift",
         nargs=2,
@@ -283,11 +300,43 @@ def _add_stand(sub: Any) -> None:
     p.add_argument(
         "--gait",
         metavar="PATTERN",
-        help="also walk with this gait (tripod, wave, ripple): peak torque per joint",
+        help="also walk with this gait (tripod, wave, ripple): peak torque per joint (Hexapod)",
     )
     p.add_argument("--gait-duration", type=float, default=4.0, help="--gait: walk length [s]")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     p.set_defaults(func=_cmd_stand)
+
+
+def add_feet_args(p: Any) -> None:
+    """``--foot FRAME:X,Y,Z`` (repeatable) and ``--foot-radius R`` on parser ``p``."""
+    p.add_argument(
+        "--foot",
+        action="append",
+        metavar="FRAME:X,Y,Z",
+        help="a foot as a frame plus an offset in it [m], once per leg (or comma-separated, or "
+        "a .yaml/.toml/.json file), for a URDF without foot links; e.g. "
+        "--foot tibia_lf:0,0.16,0.029",
+    )
+    p.add_argument(
+        "--foot-radius", type=float, help="contact radius of the feet [m] (default: the robot's)"
+    )
+
+
+def source_arg(args: argparse.Namespace) -> str | None:
+    """The robot source of a command: the positional SOURCE or ``--source`` (not both)."""
+    pos, opt = getattr(args, "source_pos", None), getattr(args, "source", None)
+    if pos is not None and opt is not None and pos != opt:
+        raise ParameterError(
+            f"two sources given: {pos!r} and --source {opt!r}; give one",
+            parameter="source",
+            value=[pos, opt],
+        )
+    return pos if pos is not None else opt
+
+
+def feet_arg(args: argparse.Namespace) -> Any:
+    """The ``--foot`` values as one spec (None when absent)."""
+    return None if not args.foot else " ".join(args.foot)
 
 
 def _legs_arg(values: Any) -> Any:
@@ -298,40 +347,65 @@ def _legs_arg(values: Any) -> Any:
 
 def _cmd_stand(args: argparse.Namespace) -> int:
     from ..dynamics import stand
+    from ..dynamics.standing import hexapod_model
     from ..kinematics import load
 
-    model = load(args.source, **set_params(args.set))
+    source = source_arg(args) or "hexapod"
+    feet, radius = feet_arg(args), args.foot_radius
+    params = set_params(args.set)
+    model = load(source, **params) if params else None
+    hexa = (
+        None
+        if model is None and (feet or radius is not None)
+        else hexapod_model(model if model is not None else source)
+    )
+    if hexa is None and params:
+        raise ParameterError(
+            f"-s/--set is for the Hexapod presets; {source!r} is not one",
+            parameter="set",
+            value=sorted(params),
+        )
     st = stand(
-        model,
+        hexa if hexa is not None else source,
         height=args.height,
         reach=args.reach,
         shift=args.shift,
         legs=_legs_arg(args.legs),
         method=args.method,
         mu=args.mu,
+        feet=feet,
+        foot_radius=radius,
     )
-    out = {"source": model.name, **st.to_dict()}
+    name = hexa.name if hexa is not None else source
+    out = {"source": name, **st.to_dict()}
     gt = None
     if args.gait:
+        if hexa is None:
+            raise ParameterError(
+                "--gait (walking loads) needs a Hexapod preset; walk other robots with "
+                f"'hexapod-kin gait {source}'",
+                parameter="gait",
+                value=args.gait,
+            )
         from ..dynamics import gait_torques
         from ..gait import walk, whole_body
 
-        kw: dict[str, Any] = {"body_height": args.height}
+        kw: dict[str, Any] = {"body_height": st.height}
         if args.reach is not None:
             kw["foot_reach"] = args.reach
         run = walk(
-            whole_body(cast(Any, model.params)),
+            whole_body(cast(Any, hexa.params)),
             pattern=args.gait,
             duration=args.gait_duration,
             **kw,
         )
-        gt = gait_torques(run, model, method=args.method, mu=args.mu)
+        gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}
     if args.json:
         emit_json(out)
         return 0
     print(
-        f"{model.name}: mass {st.mass:.6g} kg, weight {st.weight:.6g} N, CoM "
+        f"{name}: mass {st.mass:.6g} kg, weight {st.weight:.6g} N, CoM "
         f"{[round(v, 6) for v in st.com.tolist()]} m, body at {st.height:g} m"
     )
     print(

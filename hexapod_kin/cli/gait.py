@@ -1,10 +1,13 @@
-"""The ``gait`` subcommand: the six-legged robot walks; stability, slip and limits checked."""
+"""The ``gait`` subcommand: a legged robot walks; stability, slip and limits checked."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from typing import Any
+
+from ..exceptions import ParameterError
+from .dynamics import add_feet_args, feet_arg
 
 __all__ = ["register"]
 
@@ -13,9 +16,11 @@ def register(sub: Any) -> None:
     """Add the ``gait`` subcommand to ``sub`` (an argparse subparsers object)."""
     p = sub.add_parser(
         "gait",
-        help="walk the hexapod (tripod, wave, ripple) and check every sample",
+        help="walk a legged robot (tripod, wave, ripple, ...) and check every sample",
         description=(
-            "Walk the hexapod preset with a phase table and report, over every sample: the "
+            "Walk a legged robot (SOURCE: the hexapod preset by default, a URDF path or "
+            "erd:NAME; name the feet with --foot when the URDF has no foot links) with a phase "
+            "table and report, over every sample: the "
             "minimum static stability margin (signed distance of the projected centre of mass "
             "to the support polygon's edge), the worst stance-foot slip and the smallest "
             "joint-limit margin (SI units). An infeasible walk (a foot out of reach, off the "
@@ -24,6 +29,7 @@ def register(sub: Any) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
+    p.add_argument("source", nargs="?", metavar="SOURCE", help="the robot (default: hexapod)")
     p.add_argument(
         "-s",
         "--set",
@@ -31,7 +37,16 @@ def register(sub: Any) -> None:
         metavar="NAME=VALUE",
         help="hexapod preset parameter (SI units), e.g. -s body_radius=0.14",
     )
-    p.add_argument("--pattern", choices=("tripod", "wave", "ripple"), default="tripod")
+    p.add_argument(
+        "--pattern", default="tripod", help="phase table: tripod, wave, ripple (6 legs), ..."
+    )
+    add_feet_args(p)
+    p.add_argument(
+        "--foot-reach",
+        type=float,
+        default=None,
+        help="mount to neutral foot point, horizontal [m] (default: the robot's own)",
+    )
     p.add_argument(
         "--stride",
         type=float,
@@ -57,8 +72,8 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--body-height",
         type=float,
-        default=0.08,
-        help="body above the mean ground height of the feet [m]",
+        default=None,
+        help="body above the mean ground height of the feet [m] (default: the robot's own)",
     )
     p.add_argument(
         "--terrain",
@@ -88,18 +103,30 @@ def register(sub: Any) -> None:
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
-    from .. import robots
-    from ..gait.robot import whole_body
+    from .. import load, robots
+    from ..gait.robot import as_whole_body
     from ..gait.walk import walk
     from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
 
     plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
     params = set_params(args.set)
-    robot = None
+    robot: Any = None
+    source = args.source or "hexapod"
     if params:  # robots.get checks the names and values (one error naming the parameter)
-        built = robots.get("hexapod", **params)
-        assert isinstance(built, robots.Hexapod)
-        robot = whole_body(built)
+        if source not in robots.PRESETS:
+            raise ParameterError(
+                f"-s/--set is for the presets; {source!r} is not one",
+                parameter="set",
+                value=sorted(params),
+            )
+        built = robots.get(source, **params)
+        if not isinstance(built, robots.Hexapod):
+            raise ParameterError(
+                f"{source!r} is not a legged robot preset", parameter="source", value=source
+            )
+        robot = as_whole_body(built, foot_radius=args.foot_radius)
+    elif args.source is not None or args.foot or args.foot_radius is not None:
+        robot = as_whole_body(source, feet=feet_arg(args), foot_radius=args.foot_radius)
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     run = walk(
         robot,
@@ -110,6 +137,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
         duty_factor=args.duty_factor,
         velocity=args.velocity,
         body_height=args.body_height,
+        foot_reach=args.foot_reach,
         terrain=args.terrain,
         rate=args.rate,
         duration=args.duration,
@@ -122,12 +150,18 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     if html is not None:
         from ..gait.show import walk_html
 
-        out["html"] = str(walk_html(run, html))
+        shown = None if robot is None or robot.params is not None else load(source)
+        out["html"] = str(walk_html(run, html, model=shown))
     if args.json:
         emit_json(out)
     else:
         _print(out)
     if args.view:
+        if args.source not in (None, "hexapod") or params:
+            raise ParameterError(
+                "--view plays the built-in hexapod; use --html for other robots",
+                parameter="view",
+            )
         _view(run)
     return 0
 

@@ -24,6 +24,13 @@ stance feet balance gravity — 6 equations, 3k unknowns::
 
 Joint torques (static, q̇ = q̈ = 0): ``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED
 linear Jacobian of foot i (only that leg's columns are non-zero).
+
+Any other legged robot (a URDF path, ``erd:NAME``, a loaded model, a
+:class:`~hexapod_kin.gait.robot.WholeBody`; feet named with ``feet=`` when the URDF has no foot
+links) stands by :func:`hexapod_kin.gait.stand.standing_pose` on its floating-base model: the
+forces act at the contact points (the foot spheres' lowest points), ``J_i`` is the contact
+point's Jacobian ``J_v − [c_i − p_i]× J_ω`` and the torques are the joint rows of
+``g(q) − Σ J_iᵀ f_i`` (its six base rows vanish when the forces balance the weight).
 """
 
 from __future__ import annotations
@@ -44,6 +51,7 @@ __all__ = [
     "ContactSolution",
     "Stance",
     "contact_forces",
+    "hexapod_model",
     "robot_mass_com",
     "stand",
     "standing_configuration",
@@ -378,7 +386,10 @@ class Stance:
 
 
 def _stance_legs(params: Hexapod, legs: Any) -> tuple[int, ...]:
-    names = [leg.name for leg in params.legs]
+    return _stance_of([leg.name for leg in params.legs], legs)
+
+
+def _stance_of(names: list[str], legs: Any) -> tuple[int, ...]:
     if legs is None:
         return tuple(range(len(names)))
     out = []
@@ -474,28 +485,109 @@ def stance_at(
 def stand(
     model: Any = None,
     *,
-    height: float = 0.10,
+    height: float | None = None,
     reach: float | None = None,
     shift: Any = (0.0, 0.0),
     legs: Any = None,
     method: ContactMethod = "min_norm",
     mu: float | None = None,
+    feet: Any = None,
+    foot_radius: float | None = None,
 ) -> Stance:
-    """The hexapod standing level at ``height``: pose, contact forces and joint torques.
+    """A legged robot standing level at ``height``: pose, contact forces and joint torques.
 
     Args:
-        model: The whole robot (default ``load("hexapod")``).
-        height: Body origin above the ground in [m].
-        reach: Hip axis to foot, horizontal, in [m] (default ``l1 + l2``).
+        model: The robot: a Hexapod's model or preset (default ``load("hexapod")``), or any
+            legged robot :func:`hexapod_kin.gait.as_whole_body` takes (a URDF path,
+            ``erd:NAME``, a loaded model, a ``WholeBody``).
+        height: Body origin above the ground in [m] (default: a Hexapod 0.10 m; another
+            robot its ``body_height``, see :meth:`~hexapod_kin.gait.WholeBody.neutral_feet`).
+        reach: Hip axis to foot, horizontal, in [m] (default: a Hexapod ``l1 + l2``; another
+            robot its own).
         shift: Body shift (dx, dy) over the feet in [m].
-        legs: Stance legs (names or 1-based numbers); default all six.
+        legs: Stance legs (names or 1-based numbers); default all.
         method: ``"min_norm"`` or ``"friction"`` (see the module doc).
         mu: Friction coefficient.
+        feet: Feet as frame plus offset, for a URDF without foot links (``"tibia_lf:0,0.16,
+            0.029 ..."``, a mapping or a file; see :func:`hexapod_kin.gait.legs.parse_feet`).
+        foot_radius: Contact radius of the feet [m] (default: the robot's).
 
     Raises:
         ParameterError, ConfigurationError: Bad values; unreachable pose; no balance.
 
     """
-    mdl = as_model("hexapod" if model is None else model)
-    q = standing_configuration(mdl, height, reach, shift)
-    return stance_at(mdl, q, height, legs=legs, method=method, mu=mu)
+    if feet is None and foot_radius is None:
+        mdl = hexapod_model(model)
+        if mdl is not None:
+            h = 0.10 if height is None else height
+            q = standing_configuration(mdl, h, reach, shift)
+            return stance_at(mdl, q, h, legs=legs, method=method, mu=mu)
+    from ..gait.stand import standing_pose
+
+    pose = standing_pose(
+        model, height=height, reach=reach, shift=shift, feet=feet, foot_radius=foot_radius
+    )
+    return _legged_stance(pose, legs, method, mu)
+
+
+def hexapod_model(model: Any) -> Any:
+    """The loaded model when ``model`` is a Hexapod (preset, params or model), else None."""
+    if model is None:
+        return as_model("hexapod")
+    if isinstance(model, Hexapod):
+        return as_model(model)
+    if hasattr(model, "model") and hasattr(model, "nq") and hasattr(model, "data"):
+        return model if isinstance(getattr(model, "params", None), Hexapod) else None
+    if isinstance(model, str) and not model.strip().startswith("<"):
+        from .. import robots
+
+        if model.strip() in robots.PRESETS:
+            mdl = as_model(model)
+            return mdl if isinstance(mdl.params, Hexapod) else None
+    return None
+
+
+def _legged_stance(pose: Any, legs: Any, method: ContactMethod, mu: float | None) -> Stance:
+    """Contact forces and torques of a :class:`~hexapod_kin.gait.stand.StandingPose`."""
+    wb = pose.robot
+    idx = _stance_of(list(wb.leg_names), legs)
+    pm = wb.model
+    data = pm.createData()
+    qp = wb.pinocchio_q(pose.q[None], pose.base[None])[0]
+    mass = float(pin.computeTotalMass(pm))
+    com = np.array(pin.centerOfMass(pm, data, qp))
+    g = float(np.linalg.norm(pm.gravity.linear))
+    weight = mass * g
+    contacts = np.array(pose.contacts)[list(idx)]
+    mu_v = None if mu is None else positive("mu", mu)
+    sol = contact_forces(contacts, com, weight, method=method, mu=mu_v)
+    pin.computeJointJacobians(pm, data, qp)
+    pin.updateFramePlacements(pm, data)
+    grav = np.array(pin.computeGeneralizedGravity(pm, data, qp))
+    tau = grav.copy()
+    for k, f in zip(idx, sol.forces):
+        fid = pm.getFrameId(wb.foot_frames[k])
+        J = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        d = contacts[list(idx).index(k)] - np.asarray(data.oMf[fid].translation)
+        skew = np.array([[0, -d[2], d[1]], [d[2], 0, -d[0]], [-d[1], d[0], 0]])
+        tau -= (J[:3] - skew @ J[3:]).T @ f
+    qv = np.array(pose.q)
+    g_j, t_j = grav[6:].copy(), tau[6:].copy()
+    read_only(qv, contacts, com, g_j, t_j)
+    return Stance(
+        pose.height,
+        qv,
+        tuple(wb.joint_names),
+        tuple(wb.leg_names[i] for i in idx),
+        contacts,
+        mass,
+        com,
+        weight,
+        sol.forces,
+        str(method),
+        mu_v,
+        sol.force_residual,
+        sol.moment_residual,
+        g_j,
+        t_j,
+    )

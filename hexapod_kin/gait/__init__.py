@@ -14,9 +14,16 @@
 from __future__ import annotations
 
 from .paths import FootStep, foot_path, foot_step
-from .robot import BodyIK, GaitError, WholeBody, body_pose, whole_body
+from .robot import BodyIK, GaitError, WholeBody, as_whole_body, body_pose, whole_body
 from .stability import segment_clearance, support_margin
-from .stand import default_configuration, demo_trajectory, frame_poses, standing_base
+from .stand import (
+    StandingPose,
+    default_configuration,
+    demo_trajectory,
+    frame_poses,
+    standing_base,
+    standing_pose,
+)
 from .tables import PATTERNS, PhaseTable, phase_table
 from .terrain import TERRAINS, Terrain, flat, slope, step_terrain, terrain
 from .walk import GaitRun, se2_pose, swing_profile, walk
@@ -29,8 +36,10 @@ __all__ = [
     "GaitError",
     "GaitRun",
     "PhaseTable",
+    "StandingPose",
     "Terrain",
     "WholeBody",
+    "as_whole_body",
     "body_pose",
     "default_configuration",
     "demo_trajectory",
@@ -43,6 +52,7 @@ __all__ = [
     "segment_clearance",
     "slope",
     "standing_base",
+    "standing_pose",
     "step_terrain",
     "support_margin",
     "swing_profile",

@@ -1,21 +1,20 @@
-"""The whole hexapod: floating base (Pinocchio free-flyer) + 18 leg joints, and body-pose IK.
+"""A legged robot with a floating base (Pinocchio free-flyer), from any source; body-pose IK.
 
-:class:`WholeBody` builds the Pinocchio model of the ``hexapod`` preset with a free-flyer root
-from its generated URDF (checked by the loader gate first), and keeps the tree's constants
-(joint placements, link inertials, foot frames) as arrays so that forward kinematics, the
-centre of mass and the leg segments are computed for many samples at once (vectorised over
-time; Pinocchio's own ``centerOfMass``/``framesForwardKinematics`` are the reference in the
-tests). :meth:`WholeBody.body_ik` solves the 18 joint angles of a body pose with the feet
-fixed in the world, leg by leg, with the closed form of the leg (:func:`hexapod_kin.ik.
-analytic_batch`) in its mount frame.
-
-Poses are 4×4 ``worldMbody`` arrays (the body frame: x forward, z up, origin on the mounts'
-plane at the body centre).
+:func:`as_whole_body` builds a :class:`WholeBody` from a Hexapod, a URDF, ``erd:NAME`` or a
+loaded model: legs from the kinematic tree (:mod:`.legs`), the tree's constants as arrays so
+that forward kinematics, the centre of mass and the leg segments are computed for many samples
+at once (:mod:`.tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
+solves the leg joints of body poses with the feet fixed in the world, leg by leg: closed form
+where recognised, else numerically. Poses are 4×4 ``worldMbody`` arrays (body frame: x
+forward, z up).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+import math
+import os
+import threading
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
 
@@ -23,8 +22,22 @@ import numpy as np
 
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 from ..params import Hexapod, rpy_to_matrix
+from .legs import (
+    BodyIK,
+    FootSpec,
+    annulus_excess,
+    find_legs,
+    finite_or_inf,
+    joint_axis,
+    leg_layout,
+    offset_of,
+    parse_feet,
+    pick_branch,
+    sphere_radius,
+)
+from .tree import Tree, solve_legs, tree_poses
 
-__all__ = ["BodyIK", "GaitError", "WholeBody", "body_pose", "whole_body"]
+__all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
 
 class GaitError(ConfigurationError):
@@ -75,116 +88,71 @@ def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndar
     return T
 
 
-def _pick_branch(
-    qk: np.ndarray, valid: np.ndarray, q0: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
-
-    Args:
-        qk: (G, N, K, m) candidate solutions of G legs at N samples.
-        valid: (G, N, K) which candidates exist.
-        q0: (G, m) the configuration before the first sample.
-
-    Returns:
-        ``(q, ok)``: (G, N, m) the continued joint angles (the previous value kept where no
-        slot is valid) and (G, N) whether a slot was found.
-
-    """
-    g, n, _, m = qk.shape
-    out = np.empty((n, g, m))
-    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
-    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
-    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
-    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
-    prev = np.array(q0, dtype=float)
-    rows = np.arange(g)
-    step = np.empty(cand.shape[1:])
-    two_pi = 2.0 * np.pi
-    for i in range(n):
-        np.subtract(cand[i], prev[:, None, :], out=step)
-        step += np.pi
-        np.mod(step, two_pi, out=step)
-        step -= np.pi
-        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
-        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
-        out[i] = prev
-    out = np.moveaxis(out, 0, 1)
-    return out, ok
-
-
-@dataclass(frozen=True)
-class BodyIK:
-    """Joint angles of body poses with the feet fixed in the world (arrays read-only).
-
-    Attributes:
-        q: (N, 18) joint angles in [rad], legs in order, hip/knee/ankle each.
-        reached: (N, L) True where the leg's closed form has a solution.
-        excess: (N, L) distance by which each foot is out of the leg's reach in [m]
-            (0 when reachable).
-        limit_margin: (N, 18) distance of each joint to its nearest limit in [rad]
-            (negative beyond a limit).
-        leg_names: The legs' names.
-
-    """
-
-    q: np.ndarray
-    reached: np.ndarray
-    excess: np.ndarray
-    limit_margin: np.ndarray
-    leg_names: tuple[str, ...]
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (arrays as nested lists, SI units)."""
-        return {
-            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
-            for f in fields(self)
-            for v in (getattr(self, f.name),)
-        }
-
-    @property
-    def ok(self) -> np.ndarray:
-        """(N, L) True where the leg is reached and inside its joint limits."""
-        n_leg = len(self.leg_names)
-        lim = self.limit_margin.reshape(len(self.q), n_leg, -1).min(axis=2)
-        return np.asarray(self.reached & (lim >= 0))
-
-
 @dataclass(frozen=True, eq=False)
 class WholeBody:
-    """The hexapod with a floating base: Pinocchio model and vectorised kinematics.
+    """A legged robot with a floating base: Pinocchio model and vectorised kinematics.
 
-    Build it with :func:`whole_body` (cached per robot). Joint order: the legs in
-    ``params.legs`` order, hip/knee/ankle each (the order of Pinocchio's ``q[7:]``).
+    Build it with :func:`as_whole_body` (any source) or :func:`whole_body` (a Hexapod),
+    both cached. Joint order: Pinocchio's ``q[7:]`` (the URDF tree, depth first); the joints
+    that belong to no leg are locked at their neutral value (:attr:`locked_joints`).
 
     Attributes:
-        params: The robot's parameters.
-        model: Pinocchio model with a free-flyer root (nq = 7 + 18).
-        leg_names: The legs' names.
-        joint_names: The 18 joint names.
+        params: The Hexapod it was built from (``None`` for a URDF robot).
+        source: A label of the source (preset, file name, ``erd:NAME``).
+        model: Pinocchio model with a free-flyer root (nq = 7 + :attr:`nq`); one frame
+            ``<leg>_contact`` per foot (the contact sphere's centre) is added.
+        leg_names: The legs' names (the order of phase tables).
+        joint_names: The leg joints (the columns of q).
         mass: Total mass in [kg] (from the URDF's inertials).
-        lower: (18,) lower joint limits in [rad].
-        upper: (18,) upper joint limits in [rad].
-        mounts: (L, 4, 4) ``bodyMmount`` of each leg.
+        lower: (nq,) lower joint limits in [rad] or [m].
+        upper: (nq,) upper joint limits.
+        velocity_limit: (nq,) joint speed limits from the URDF [rad/s] (inf if absent).
+        effort_limit: (nq,) joint effort limits from the URDF [N·m] (inf if absent).
+        mounts: (L, 4, 4) ``bodyMmount`` of each leg (a Hexapod's mount; a URDF robot's first
+            joint frame of the leg at q = 0).
         link_radius: Radius of the leg links in [m] (for the leg clearance).
+        foot_radius: Contact radius of the feet in [m] (the foot frames are the spheres'
+            centres).
+        body_height: The robot's default body height above flat ground [m] (see
+            :meth:`neutral_feet`).
+        foot_frames: The frames the feet are given on (with :attr:`foot_offsets`).
+        foot_offsets: (L, 3) the feet in those frames [m].
+        locked_joints: Joints of no leg, locked at their neutral value.
+        ik_kind: Per leg, ``"closed"`` (closed form, :mod:`hexapod_kin.ik.closed`) or
+            ``"numerical"`` (damped least squares, :func:`~.legs.solve_legs`).
 
     """
 
-    params: Hexapod
+    params: Hexapod | None
+    source: str
     model: Any
     leg_names: tuple[str, ...]
     joint_names: tuple[str, ...]
     mass: float
     lower: np.ndarray
     upper: np.ndarray
+    velocity_limit: np.ndarray
+    effort_limit: np.ndarray
     mounts: np.ndarray
     link_radius: float
-    _parents: np.ndarray = field(repr=False)
-    _placements: np.ndarray = field(repr=False)
+    foot_radius: float
+    body_height: float
+    foot_frames: tuple[str, ...]
+    foot_offsets: np.ndarray
+    locked_joints: tuple[str, ...]
+    ik_kind: tuple[str, ...]
+    _tree: Tree = field(repr=False)
     _masses: np.ndarray = field(repr=False)
     _levers: np.ndarray = field(repr=False)
-    _foot: np.ndarray = field(repr=False)
+    _foot: np.ndarray = field(repr=False)  # (L, 4, 4) foot frame in its joint's frame
     _foot_joint: np.ndarray = field(repr=False)
-    _leg_joints: np.ndarray = field(repr=False)
+    _leg_joints: np.ndarray = field(repr=False)  # (L, M) padded at the front
+    _leg_cols: tuple[tuple[int, ...], ...] = field(repr=False)
+    _closed: tuple[tuple[Any, np.ndarray] | None, ...] = field(repr=False)
+    _reach_dir: np.ndarray = field(repr=False)  # (L, 2) horizontal foot direction
+    _reach: np.ndarray = field(repr=False)  # (L,) default horizontal mount-to-foot distance
+    _span: np.ndarray = field(repr=False)  # (L,) leg spans [m]
+    _seed: np.ndarray = field(repr=False)
 
     @property
     def n_legs(self) -> int:
@@ -193,55 +161,55 @@ class WholeBody:
 
     @property
     def nq(self) -> int:
-        """Number of leg joints (18)."""
+        """Number of leg joints."""
         return len(self.joint_names)
 
     # ------------------------------------------------------------------ kinematics
     def joint_poses(self, q: Any, base: Any) -> np.ndarray:
-        """World poses of the leg joints' frames, (N, 18, 4, 4).
+        """World poses of the leg joints' frames, (N, nq, 4, 4).
 
         Args:
-            q: (N, 18) joint angles in [rad].
+            q: (N, nq) joint values in [rad] / [m].
             base: (N, 4, 4) body poses ``worldMbody``.
 
         """
-        q = np.asarray(q, dtype=float)
-        base = np.asarray(base, dtype=float)
-        n = q.shape[0]
-        out = np.empty((n, self.nq, 4, 4))
-        c, s = np.cos(q), np.sin(q)
-        for j in range(self.nq):
-            P = self._placements[j]
-            local = np.empty((n, 4, 4))
-            local[:, :, 0] = c[:, j, None] * P[:, 0] + s[:, j, None] * P[:, 1]
-            local[:, :, 1] = -s[:, j, None] * P[:, 0] + c[:, j, None] * P[:, 1]
-            local[:, :, 2] = P[:, 2]
-            local[:, :, 3] = P[:, 3]
-            parent = base if self._parents[j] < 0 else out[:, self._parents[j]]
-            out[:, j] = parent @ local
-        return out
+        return tree_poses(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
 
     def leg_points(self, q: Any, base: Any) -> np.ndarray:
-        """World positions (N, L, 4, 3) of each leg's hip, knee, ankle and foot, in [m]."""
+        """World positions (N, L, K, 3) of each leg's joints (hip first) and foot, in [m]."""
         return self.points_of(self.joint_poses(q, base))
 
     def points_of(self, T: np.ndarray) -> np.ndarray:
-        """:meth:`leg_points` from joint poses ``T`` (N, 18, 4, 4) of :meth:`joint_poses`."""
-        pts = T[:, self._leg_joints][..., :3, 3]  # (N, L, 3, 3)
-        Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
-        foot = np.matmul(Ta[..., :3, :], self._foot[None, :, :, None])[..., 0]
+        """:meth:`leg_points` from joint poses ``T`` (N, nq, 4, 4) of :meth:`joint_poses`.
+
+        Legs with fewer joints than the longest repeat their first joint's point.
+        """
+        pts = T[:, self._leg_joints][..., :3, 3]  # (N, L, M, 3)
+        foot = self.feet_of(T)
         return np.concatenate([pts, foot[:, :, None, :]], axis=2)
 
+    def feet_of(self, T: np.ndarray) -> np.ndarray:
+        """World foot positions (N, L, 3) from joint poses ``T``."""
+        Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
+        return np.asarray(
+            np.matmul(Ta[..., :3, :3], self._foot[None, :, :3, 3, None])[..., 0] + Ta[..., :3, 3]
+        )
+
     def feet(self, q: Any, base: Any) -> np.ndarray:
-        """World foot positions (N, L, 3) in [m]."""
-        return self.leg_points(q, base)[:, :, 3]
+        """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
+        return self.feet_of(self.joint_poses(q, base))
+
+    def foot_poses(self, q: Any, base: Any) -> np.ndarray:
+        """World poses (N, L, 4, 4) of the feet (rotation: the frame the foot is on)."""
+        Ta = self.joint_poses(q, base)[:, self._foot_joint]
+        return np.asarray(np.matmul(Ta, self._foot[None]))
 
     def com(self, q: Any, base: Any) -> np.ndarray:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
         return self.com_of(self.joint_poses(q, base), base)
 
     def com_of(self, T: np.ndarray, base: Any) -> np.ndarray:
-        """:meth:`com` from joint poses ``T`` (N, 18, 4, 4) and body poses (N, 4, 4)."""
+        """:meth:`com` from joint poses ``T`` (N, nq, 4, 4) and body poses (N, 4, 4)."""
         base = np.asarray(base, dtype=float)
         acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
         pts = np.einsum("njab,jb->nja", T[:, :, :3, :3], self._levers[1:]) + T[:, :, :3, 3]
@@ -249,12 +217,12 @@ class WholeBody:
         return np.asarray(acc / self.mass)
 
     def points_and_com(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`leg_points` (N, L, 4, 3) and :meth:`com` (N, 3) from one tree pass."""
+        """:meth:`leg_points` (N, L, K, 3) and :meth:`com` (N, 3) from one tree pass."""
         T = self.joint_poses(q, base)
         return self.points_of(T), self.com_of(T, base)
 
     def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
-        """Pinocchio configurations (N, 25): base xyz, base quaternion (x, y, z, w), joints."""
+        """Pinocchio configurations (N, 7 + nq): base xyz, quaternion (x, y, z, w), joints."""
         import pinocchio as pin
 
         q = np.asarray(q, dtype=float)
@@ -266,36 +234,99 @@ class WholeBody:
         out[:, 7:] = q
         return out
 
-    # ------------------------------------------------------------------ body-pose IK
-    def neutral_q(self) -> np.ndarray:
-        """A standing configuration (18,): every leg at :data:`hexapod_kin.ik.LEG_HOME`."""
-        from ..ik import LEG_HOME
+    # ------------------------------------------------------------------ standing defaults
+    @property
+    def foot_reach(self) -> float:
+        """The default mount-to-foot horizontal distance [m] (legs' mean, :meth:`neutral_feet`)."""
+        return float(np.mean(self._reach))
 
-        q = np.zeros(self.nq)
-        home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
-        for i, name in enumerate(self.joint_names):
-            q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
-        return np.clip(q, self.lower, self.upper)
+    def neutral_feet(self, foot_reach: float | None = None) -> np.ndarray:
+        """Neutral foot points (L, 3) in the body frame [m] (the contact spheres' centres).
+
+        Horizontally, foot i is at ``mount_i + r_i ê_i``: ``ê_i`` the horizontal direction
+        from the leg's mount to its foot at q = 0 (a Hexapod: the mount's x axis; a leg
+        hanging straight down: outward from the body centre), ``r_i = foot_reach``, or by
+        default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that horizontal distance at q = 0 and
+        ``ℓ_i`` the leg's span (the lengths from mount to foot through every joint, at
+        q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
+        ``−``:attr:`body_height`): the default height puts every neutral foot at most
+        ``ℓ·√(0.64² + 0.32²)`` from its mount (the built-in hexapod: r = 0.16 m, 0.08 m).
+
+        Raises:
+            ParameterError: ``foot_reach`` not a number >= 0.
+
+        """
+        if foot_reach is None:
+            r = self._reach
+        else:
+            try:
+                v = float(foot_reach)
+            except (TypeError, ValueError):
+                v = math.nan
+            if not (math.isfinite(v) and v >= 0):
+                raise ParameterError(
+                    f"foot_reach={foot_reach!r} is not allowed; give a distance >= 0 m",
+                    parameter="foot_reach",
+                    value=foot_reach,
+                    allowed=">= 0",
+                )
+            r = np.full(self.n_legs, v)
+        out = np.empty((self.n_legs, 3))
+        out[:, :2] = self.mounts[:, :2, 3] + r[:, None] * self._reach_dir
+        out[:, 2] = -self.body_height + self.foot_radius
+        return out
+
+    def neutral_q(self) -> np.ndarray:
+        """A standing configuration (nq,).
+
+        A Hexapod's legs at :data:`hexapod_kin.ik.LEG_HOME`; another robot's feet at
+        :meth:`neutral_feet` under the body at :attr:`body_height` (numerical IK from q = 0
+        with the knees nudged off the stretched singularity).
+        """
+        return np.array(self._seed)
 
     def reach_excess(self, targets: np.ndarray, leg: int) -> np.ndarray:
-        """Distance (N,) by which mount-frame foot targets lie outside the leg's reach [m]."""
+        """Distance (N,) by which frame-0 foot targets lie outside a closed-form leg's reach [m].
+
+        Exact for the ``leg3`` and ``coxa_tibia`` families (the annulus of the last two
+        links about the hip); other legs: by the numerical IK's residual.
+        """
         from ..ik import detect_family
 
-        fam = detect_family(self.params.legs[leg].chain)
+        closed = self._closed[leg]
         x = np.asarray(targets, dtype=float)
-        h = np.hypot(x[:, 0], x[:, 1])
-        w = (x[:, 2] - fam.height) * fam.sign
-        if fam.family == "leg3":
-            l1, l2, l3 = fam.lengths
-            rmin, rmax = abs(l2 - l3), l2 + l3
-        else:
-            l1, l2 = fam.lengths[:2]
-            rmin = rmax = abs(l2)
-        best = np.full(len(x), np.inf)
-        for hs in (1.0, -1.0):
-            r = np.hypot(hs * h - l1, w)
-            best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
-        return best
+        if closed is not None:
+            fam = detect_family(closed[0])
+            if fam.family in ("leg3", "coxa_tibia") and fam.chain.tool is None:
+                return annulus_excess(fam, x)
+            T0 = closed[1]
+            x = x @ T0[:3, :3].T + T0[:3, 3]  # frame 0 → body
+        _q, res, _ok = self._numeric([leg], x[:, None, :], self._seed[None, :])
+        return np.asarray(res[:, 0])
+
+    def _numeric(
+        self, legs: list[int], p_body: np.ndarray, q0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Numerical IK of ``legs`` (same joint count) at body-frame targets (N, G, 3)."""
+        cols = np.array([self._leg_cols[k] for k in legs])  # (G, m)
+        tr = self._tree
+        P = tr.placements[cols]
+        A = tr.axes[cols]
+        pr = tr.prismatic[cols]
+        foot = np.array([self._foot[k][:3, 3] for k in legs])
+        if np.any(self._foot_joint[legs] != cols[:, -1]):  # pragma: no cover - by construction
+            raise ConfigurationError("a foot is not on its leg's last joint")
+        return solve_legs(
+            P,
+            A,
+            pr,
+            foot,
+            self.lower[cols],
+            self.upper[cols],
+            p_body,
+            q0[-1][cols] if q0.ndim == 2 else q0[cols],
+            span=float(self._span[legs].max()),
+        )
 
     def body_ik(
         self,
@@ -306,16 +337,19 @@ class WholeBody:
         times: Any = None,
         strict: bool = True,
     ) -> BodyIK:
-        """The 18 joint angles that put the feet at world points under body poses.
+        """The leg joints that put the feet at world points under body poses.
 
-        Each leg is solved in its mount frame by its closed form; at each sample the branch
-        nearest to the previous sample's (the first to ``q_prev``) is kept.
+        Each leg is solved on its own: by its closed form where :mod:`hexapod_kin.ik.closed`
+        recognises it (at each sample the branch nearest to the previous sample's, the first
+        to ``q_prev``), otherwise numerically (:func:`~.legs.solve_legs`, warm-started from
+        the previous sample; :attr:`ik_kind` says which).
 
         Args:
             base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`body_pose`), or
                 (6,) / (N, 6) ``x, y, z`` [m], ``roll, pitch, yaw`` [rad].
-            feet: Foot positions in the world (L, 3) or (N, L, 3) in [m].
-            q_prev: (18,) joints the first sample's branch is nearest to (default
+            feet: Foot positions (the contact spheres' centres) in the world (L, 3) or
+                (N, L, 3) in [m].
+            q_prev: (nq,) joints the first sample's branch is nearest to (default
                 :meth:`neutral_q`).
             times: (N,) sample times in [s], used in error messages (default: sample index).
             strict: Raise on the first unreachable foot or joint beyond its limits.
@@ -359,19 +393,38 @@ class WholeBody:
         n = len(B)
         t = np.arange(n, dtype=float) if times is None else np.asarray(times, dtype=float)
         q0 = self.neutral_q() if q_prev is None else np.asarray(q_prev, dtype=float)
-        # feet in each mount frame: (worldMbody · bodyMmount)^-1 · p; rows: Rᵀv = (vᵀR)ᵀ
+        if q0.shape != (self.nq,):
+            raise ParameterError(
+                f"q_prev has shape {q0.shape}; expected ({self.nq},)",
+                parameter="q_prev",
+                value=q0.shape,
+                allowed=(self.nq,),
+            )
+        # feet in the body frame: (worldMbody)^-1 · p; rows: Rᵀv = (vᵀR)ᵀ
         p_body = np.matmul(P - B[:, None, :3, 3], B[:, :3, :3])
-        rel = (p_body - self.mounts[None, :, :3, 3])[:, :, None, :]
-        p_mount = np.matmul(rel, self.mounts[None, :, :3, :3])[:, :, 0, :]
         q = np.empty((n, self.nq))
+        q[:] = q0  # locked columns never exist; every column belongs to a leg
         reached = np.empty((n, nl), dtype=bool)
         excess = np.zeros((n, nl))
-        groups: dict[int, list[int]] = {}
-        for leg in range(nl):  # legs with the same table share one closed-form call
-            groups.setdefault(id(self.params.legs[leg].chain), []).append(leg)
-        for legs in groups.values():
-            chain = self.params.legs[legs[0]].chain
-            targets = np.ascontiguousarray(p_mount[:, legs].transpose(1, 0, 2).reshape(-1, 3))
+        groups: dict[Any, list[int]] = {}
+        for leg in range(nl):  # legs with the same table (or joint count) share one call
+            closed = self._closed[leg]
+            key = ("c", id(closed[0])) if closed is not None else ("n", len(self._leg_cols[leg]))
+            groups.setdefault(key, []).append(leg)
+        for key, legs in groups.items():
+            cols = np.array([self._leg_cols[k] for k in legs])  # (G, m)
+            if key[0] == "n":
+                qn, res, ok = self._numeric(legs, p_body[:, legs], q0)
+                for g, leg in enumerate(legs):
+                    q[:, cols[g]] = qn[:, g]
+                    reached[:, leg] = ok[:, g]
+                    excess[:, leg] = np.where(ok[:, g], 0.0, res[:, g])
+                continue
+            chain = self._closed[legs[0]][0]  # type: ignore[index]
+            T0 = np.array([self._closed[k][1] for k in legs])  # type: ignore[index]
+            rel = p_body[:, legs] - T0[None, :, :3, 3]
+            p0 = np.matmul(rel[:, :, None, :], T0[None, :, :3, :3])[:, :, 0, :]
+            targets = np.ascontiguousarray(p0.transpose(1, 0, 2).reshape(-1, 3))
             try:
                 batch = analytic_batch(chain, targets)
             except HexapodKinError as exc:
@@ -380,8 +433,7 @@ class WholeBody:
                 ) from None
             qk = batch.q.reshape(len(legs), n, *batch.q.shape[1:])
             vk = batch.valid.reshape(len(legs), n, -1)
-            cols = self._leg_joints[legs]  # (G, m)
-            picked, ok = _pick_branch(qk, vk, q0[cols])
+            picked, ok = pick_branch(qk, vk, q0[cols])
             for g, leg in enumerate(legs):
                 q[:, cols[g]] = picked[g]
                 reached[:, leg] = ok[g]
@@ -395,6 +447,13 @@ class WholeBody:
         for a in (q, reached, excess, margin):
             a.setflags(write=False)
         return BodyIK(q, reached, excess, margin, self.leg_names)
+
+    def leg_of_joint(self, j: int) -> str:
+        """The name of the leg joint ``j`` (a column of q) belongs to."""
+        for name, cols in zip(self.leg_names, self._leg_cols):
+            if j in cols:
+                return name
+        return self.joint_names[j]  # pragma: no cover - every joint is on a leg
 
     def _raise_first(
         self, reached: np.ndarray, excess: np.ndarray, margin: np.ndarray, t: np.ndarray
@@ -416,7 +475,7 @@ class WholeBody:
             )
         if np.any(margin < 0):
             i, j = np.argwhere(margin < 0)[0]
-            leg = name = self.joint_names[j].rsplit("_", 1)[0]
+            leg = name = self.leg_of_joint(int(j))
             d = float(-margin[i, j])
             raise GaitError(
                 f"leg {leg}: joint {self.joint_names[j]} beyond its limit by {d:.4g} rad at "
@@ -432,75 +491,180 @@ class WholeBody:
             )
 
 
-def _build(params: Hexapod) -> WholeBody:
+def _build_model(
+    text: str,
+    label: str,
+    *,
+    params: Hexapod | None = None,
+    feet: tuple[FootSpec, ...] | None = None,
+    foot_radius: float | None = None,
+    chain_source: Any = None,
+) -> WholeBody:
+    """The :class:`WholeBody` of a URDF ``text`` (gate-checked by the caller)."""
     import pinocchio as pin
 
-    from .._gate import check_urdf
-    from ..urdf import to_urdf
-
-    text = to_urdf(params)
-    check_urdf(text)
-    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
-    names = list(model.names)
-    joint_names = tuple(params.joint_names)
-    idx = []
-    for jn in joint_names:
-        if jn not in names:
-            raise ConfigurationError(f"joint {jn!r} missing from the hexapod's URDF model")
-        j = names.index(jn)
-        if model.joints[j].shortname() != "JointModelRZ":
+    full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    hexa = params is not None
+    if hexa:
+        feet = tuple(FootSpec(f) for f in params.foot_frames)  # type: ignore[union-attr]
+    legs, others = find_legs(full, feet, ccw=not hexa)
+    locked = tuple(str(full.names[j]) for j in others)
+    model = full
+    if others:
+        specs = tuple(
+            FootSpec(leg.foot_frame, tuple(float(v) for v in offset_of(full, leg)))  # type: ignore[arg-type]
+            for leg in legs
+        )
+        model = pin.buildReducedModel(full, list(others), pin.neutral(full))
+        legs, _ = find_legs(model, specs, ccw=False)
+    for j in range(2, model.njoints):
+        if model.joints[j].nq != 1 or model.joints[j].idx_q != 5 + j:
             raise ConfigurationError(
-                f"joint {jn!r} is {model.joints[j].shortname()}; the vectorised kinematics "
-                "handle revolute-z joints (Khalil tables)"
+                f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; "
+                "legs need one-variable revolute or prismatic joints",
+                parameter="source",
+                value=str(model.names[j]),
             )
-        idx.append(j)
-    if idx != sorted(idx) or idx != list(range(2, 2 + len(idx))):
-        raise ConfigurationError("the URDF's joint order differs from params.joint_names")
-    local = {j: k for k, j in enumerate(idx)}
-    parents = np.array([local.get(model.parents[j], -1) for j in idx])
-    placements = np.array([model.jointPlacements[j].homogeneous for j in idx])
-    masses = np.array([model.inertias[1].mass] + [model.inertias[j].mass for j in idx])
-    levers = np.array([model.inertias[1].lever] + [model.inertias[j].lever for j in idx])
-    leg_joints, foot, foot_joint = [], [], []
-    for leg in params.legs:
-        cols = [joint_names.index(f"{leg.name}_{j}") for j in (leg.chain.joint_names or ())]
-        if len(cols) != 3:
-            raise ConfigurationError(f"leg {leg.name}: three joints expected, got {len(cols)}")
-        leg_joints.append(cols)
-        fid = model.getFrameId(f"{leg.name}_{leg.chain.tip}")
-        fr = model.frames[fid]
-        foot.append(np.append(fr.placement.translation, 1.0))  # in its joint's frame
-        foot_joint.append(local[fr.parentJoint])
-    foot_arr = np.array(foot)
-    lower = np.asarray(model.lowerPositionLimit[7:], dtype=float).copy()
-    upper = np.asarray(model.upperPositionLimit[7:], dtype=float).copy()
-    mounts = np.array([leg.transform() for leg in params.legs])
+    nq = model.njoints - 2
+    axes = np.empty((nq, 3))
+    prismatic = np.zeros(nq, dtype=bool)
+    for j in range(2, model.njoints):
+        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]))
+    tree = Tree(
+        parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
+        placements=np.array(
+            [model.jointPlacements[j].homogeneous for j in range(2, model.njoints)]
+        ),
+        axes=axes,
+        prismatic=prismatic,
+    )
+    tree.parents[tree.parents < 0] = -1
+    names = tuple(leg.name for leg in legs) if not hexa else tuple(x.name for x in params.legs)  # type: ignore[union-attr]
+    foot_names = []
+    for leg, name in zip(legs, names):
+        fname = f"{name}_contact"
+        if not model.existFrame(fname):
+            parent = model.getFrameId(leg.foot_frame)
+            model.addFrame(
+                pin.Frame(
+                    fname,
+                    leg.foot_joint + 2,
+                    parent,
+                    pin.SE3(leg.foot_placement),
+                    pin.FrameType.OP_FRAME,
+                )
+            )
+        foot_names.append(fname)
+    lower = finite_or_inf(model.lowerPositionLimit[7:])
+    lower[np.isinf(lower)] = -np.inf
+    upper = finite_or_inf(model.upperPositionLimit[7:])
+    vel = finite_or_inf(model.velocityLimit[6:])
+    eff = finite_or_inf(model.effortLimit[6:])
+    cols = tuple(leg.joints for leg in legs)
+    width = max(len(c) for c in cols)
+    padded = np.array([(c[0],) * (width - len(c)) + tuple(c) for c in cols])
+    foot = np.array([leg.foot_placement for leg in legs])
+    foot_joint = np.array([leg.foot_joint for leg in legs])
+    q_zero = np.clip(np.zeros(nq), lower, upper)
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, chain_source)
+    span, mounts = lay["span"], lay["mounts"]
+    # contact radius and link radius
+    if foot_radius is not None:
+        rad = _num_nonneg("foot_radius", foot_radius)
+    elif hexa:
+        rad = 1.5 * float(params.legs[0].chain.link_radius)  # type: ignore[union-attr]
+    elif feet is None:  # leaf feet: their links' sphere collisions, if every foot has one
+        radii = [sphere_radius(text, leg.foot_frame) for leg in legs]
+        rad = min(float(r) for r in radii) if all(r is not None for r in radii) else 0.0  # type: ignore[arg-type]
+    else:
+        rad = 0.0
+    link_r = float(params.legs[0].chain.link_radius) if hexa else 0.04 * float(span.mean())  # type: ignore[union-attr]
+    inertias = [model.inertias[1]] + [model.inertias[j] for j in range(2, model.njoints)]
     wb = WholeBody(
         params=params,
+        source=label,
         model=model,
-        leg_names=tuple(leg.name for leg in params.legs),
-        joint_names=joint_names,
+        leg_names=names,
+        joint_names=tuple(str(model.names[j]) for j in range(2, model.njoints)),
         mass=float(pin.computeTotalMass(model)),
         lower=lower,
         upper=upper,
+        velocity_limit=vel,
+        effort_limit=eff,
         mounts=mounts,
-        link_radius=float(params.legs[0].chain.link_radius),
-        _parents=parents,
-        _placements=placements,
-        _masses=masses,
-        _levers=levers,
-        _foot=foot_arr,
-        _foot_joint=np.array(foot_joint),
-        _leg_joints=np.array(leg_joints),
+        link_radius=link_r,
+        foot_radius=rad,
+        body_height=lay["body_height"],
+        foot_frames=tuple(foot_names),
+        foot_offsets=np.array([offset_of(model, leg) for leg in legs]),
+        locked_joints=locked,
+        ik_kind=tuple("closed" if c is not None else "numerical" for c in lay["closed"]),
+        _tree=tree,
+        _masses=np.array([x.mass for x in inertias]),
+        _levers=np.array([x.lever for x in inertias]),
+        _foot=foot,
+        _foot_joint=foot_joint,
+        _leg_joints=padded,
+        _leg_cols=cols,
+        _closed=tuple(lay["closed"]),
+        _reach_dir=lay["direction"],
+        _reach=lay["reach"],
+        _span=span,
+        _seed=np.zeros(nq),
     )
-    for a in (lower, upper, mounts, placements, masses, levers, foot_arr):
+    object.__setattr__(wb, "_seed", _standing_seed(wb, params))
+    for a in (lower, upper, vel, eff, mounts, tree.placements, tree.axes, foot, wb._seed):
         a.setflags(write=False)
     return wb
+
+
+def _num_nonneg(name: str, value: Any) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and v >= 0):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; give a length >= 0 m",
+            parameter=name,
+            value=value,
+            allowed=">= 0",
+        )
+    return v
+
+
+def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
+    """:meth:`WholeBody.neutral_q` (see there)."""
+    from ..ik import LEG_HOME
+
+    q = np.zeros(wb.nq)
+    if params is not None:
+        home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
+        for i, name in enumerate(wb.joint_names):
+            q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
+        return np.clip(q, wb.lower, wb.upper)
+    for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity
+        for k, j in enumerate(cols):
+            q[j] = 0.3 if k >= 1 else 0.0
+    q = np.clip(q, wb.lower, wb.upper)
+    base = body_pose([0.0, 0.0, wb.body_height])
+    feet = wb.neutral_feet(None) + base[:3, 3]
+    ik = wb.body_ik(base, feet, q_prev=q, strict=False)
+    return np.array(ik.q[0]) if bool(ik.reached.all()) else q
 
 
 @lru_cache(maxsize=8)
 def _cached(params: Hexapod) -> WholeBody:
     return _build(params)
+
+
+def _build(params: Hexapod) -> WholeBody:
+    from .._gate import check_urdf
+    from ..urdf import to_urdf
+
+    text = to_urdf(params)
+    check_urdf(text)
+    return _build_model(text, params.name, params=params)
 
 
 @lru_cache(maxsize=1)
@@ -516,7 +680,7 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
     Raises:
         ParameterError: ``params`` is not a :class:`~hexapod_kin.params.Hexapod`.
         UrdfError: The generated URDF fails the loader gate.
-        ConfigurationError: The legs are not 3-joint revolute-z chains.
+        ConfigurationError: A leg joint that is neither revolute nor prismatic.
 
     """
     if params is None:
@@ -532,3 +696,91 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
         return _cached(params)
     except TypeError:  # unhashable parameters
         return _build(params)
+
+
+_SOURCES: dict[Any, WholeBody] = {}
+_SOURCES_LOCK = threading.Lock()
+
+
+def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = None) -> WholeBody:
+    """The legged robot of any source, cached.
+
+    Args:
+        robot: ``None`` (the built-in hexapod), a :class:`WholeBody` (returned as is), a
+            :class:`~hexapod_kin.params.Hexapod`, a loaded model, or a source
+            :func:`hexapod_kin.load` takes (a URDF path or text, ``erd:NAME``, a preset).
+        feet: Feet named as a frame plus an offset in that frame [m], for a URDF without foot
+            links (see :func:`~.legs.parse_feet`: ``"tibia_lf:0,0.16,0.029 ..."``, a list of
+            such strings, ``{"tibia_lf": (x, y, z), ...}`` or a YAML/TOML/JSON file). Default:
+            the deepest frame of every branch of the joint tree.
+        foot_radius: Contact radius of the feet [m] (default: a Hexapod's foot sphere,
+            1.5 × its link radius; a URDF's foot links' sphere collision radius, else 0).
+
+    Raises:
+        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody.
+        SourceError, UrdfError: The source cannot be loaded.
+        ParameterError: A source that is one chain (a table file, an arm preset).
+        ConfigurationError: No legs found (names the frames), a non-revolute/prismatic leg
+            joint.
+
+    """
+    if isinstance(robot, WholeBody):
+        if feet is not None or foot_radius is not None:
+            raise ParameterError(
+                "feet= and foot_radius= are properties of a robot being built; this robot is "
+                "already a WholeBody",
+                parameter="feet",
+                value=repr(feet),
+            )
+        return robot
+    spec = parse_feet(feet)
+    rad = None if foot_radius is None else _num_nonneg("foot_radius", foot_radius)
+    if robot is None:
+        robot = "hexapod"
+    params = robot if isinstance(robot, Hexapod) else getattr(robot, "params", None)
+    if isinstance(robot, Hexapod) or isinstance(params, Hexapod) and hasattr(robot, "urdf"):
+        if spec is not None:
+            raise ParameterError(
+                "feet= is for URDF robots without foot links; a Hexapod has its feet",
+                parameter="feet",
+                value=repr(feet),
+            )
+        wb = whole_body(params)
+        return wb if rad is None else replace(wb, foot_radius=rad)
+    key: Any = None
+    if isinstance(robot, (str, os.PathLike)):
+        text = os.fspath(robot)
+        stamp = os.stat(text).st_mtime_ns if os.path.isfile(text) else None
+        key = (text, stamp, spec, rad)
+        with _SOURCES_LOCK:
+            if key in _SOURCES:
+                return _SOURCES[key]
+    wb = _from_source(robot, spec, rad)
+    if key is not None:
+        with _SOURCES_LOCK:
+            if len(_SOURCES) >= 16:
+                _SOURCES.pop(next(iter(_SOURCES)))
+            _SOURCES[key] = wb
+    return wb
+
+
+def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | None) -> WholeBody:
+    from ..kinematics import KinematicModel, load
+
+    km = robot if isinstance(robot, KinematicModel) else load(robot)
+    params = km.params
+    if isinstance(params, Hexapod):
+        return (
+            as_whole_body(params, foot_radius=rad)
+            if spec is None
+            else as_whole_body(params, feet=spec)
+        )
+    if params is not None:
+        raise ParameterError(
+            f"{km.name!r} is one serial chain, not a legged robot (a floating body with legs); "
+            "give a Hexapod, a legged robot's URDF or erd:NAME",
+            parameter="robot",
+            value=km.name,
+            allowed="a legged robot",
+        )
+    return _build_model(km.urdf, km.name, feet=spec, foot_radius=rad, chain_source=km.urdf)

@@ -1,5 +1,9 @@
 """Standing poses and the hexapod's body sway (feet kept on the ground).
 
+:func:`standing_pose` stands any legged robot (any source :func:`~.robot.as_whole_body`
+takes) level on flat ground: the body at ``height`` (default the robot's
+:attr:`~.robot.WholeBody.body_height`), every foot's contact sphere on the ground under its
+neutral point (:meth:`~.robot.WholeBody.neutral_feet`), legs by body-pose IK.
 :func:`default_configuration` is a pose that reads well (legs standing, other joints at
 mid-range); :func:`standing_base` lifts a hexapod so that its lowest foot touches the ground;
 :func:`demo_trajectory` is the demo motion of any model (the hexapod sways its body with its
@@ -10,24 +14,104 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..exceptions import HexapodKinError, ParameterError
 from ..params import Hexapod
-from .robot import body_pose
+from .robot import WholeBody, as_whole_body, body_pose
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
 
 __all__ = [
+    "StandingPose",
     "default_configuration",
     "demo_trajectory",
     "frame_poses",
     "hexapod_sway",
     "standing_base",
+    "standing_pose",
 ]
+
+
+@dataclass(frozen=True)
+class StandingPose:
+    """A legged robot standing level on flat ground (z = 0, z up; SI units; arrays read-only).
+
+    Attributes:
+        robot: The robot.
+        height: Body origin above the ground [m].
+        q: (nq,) joint values.
+        base: (4, 4) body pose ``worldMbody``.
+        feet: (L, 3) foot positions (the contact spheres' centres, ``foot_radius`` above the
+            ground) [m].
+        contacts: (L, 3) contact points on the ground [m].
+
+    """
+
+    robot: WholeBody
+    height: float
+    q: np.ndarray
+    base: np.ndarray
+    feet: np.ndarray
+    contacts: np.ndarray
+
+
+def standing_pose(
+    robot: Any = None,
+    *,
+    height: float | None = None,
+    reach: float | None = None,
+    shift: Any = (0.0, 0.0),
+    feet: Any = None,
+    foot_radius: Any = None,
+) -> StandingPose:
+    """Stand any legged robot level on flat ground (see the module doc for the rule).
+
+    Args:
+        robot: Any robot :func:`~.robot.as_whole_body` takes (default the built-in hexapod).
+        height: Body origin above the ground [m] (default the robot's ``body_height``).
+        reach: Mount-to-foot horizontal distance [m] (default the robot's own).
+        shift: Body shift (dx, dy) over the feet [m].
+        feet: Foot spec for a URDF without foot links (see :func:`~.legs.parse_feet`).
+        foot_radius: Contact radius of the feet [m].
+
+    Raises:
+        ParameterError: Bad numbers.
+        GaitError: A foot out of reach or a joint beyond its limit (names the leg).
+
+    """
+    wb = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
+    h = wb.body_height if height is None else float(height)
+    if not (math.isfinite(h) and h > 0):
+        raise ParameterError(
+            f"height={height!r} is not allowed; give a height > 0 m",
+            parameter="height",
+            value=height,
+            allowed="> 0",
+        )
+    try:
+        sh = np.asarray(shift, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        sh = np.full(1, np.nan)
+    if sh.shape != (2,) or not np.all(np.isfinite(sh)):
+        raise ParameterError(
+            f"shift={shift!r}: two finite numbers dx, dy [m]", parameter="shift", value=shift
+        )
+    base = body_pose([0.0, 0.0, h])
+    pts = wb.neutral_feet(reach)
+    pts[:, :2] -= sh
+    pts[:, 2] = wb.foot_radius
+    ik = wb.body_ik(base, pts, strict=True)
+    q = np.array(ik.q[0])
+    contacts = pts.copy()
+    contacts[:, 2] = 0.0
+    for a in (q, base, pts, contacts):
+        a.setflags(write=False)
+    return StandingPose(wb, h, q, base, pts, contacts)
 
 
 def frame_poses(

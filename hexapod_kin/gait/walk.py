@@ -32,7 +32,7 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from ..motion import read_only
-from .robot import GaitError, WholeBody, whole_body
+from .robot import GaitError, WholeBody, as_whole_body
 from .stability import segment_clearance, support_margin
 from .tables import PhaseTable, phase_table
 from .terrain import Terrain
@@ -254,7 +254,7 @@ def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
 
 
 def walk(
-    robot: WholeBody | None = None,
+    robot: Any = None,
     *,
     pattern: str | PhaseTable = "tripod",
     stride: float | None = None,
@@ -262,8 +262,8 @@ def walk(
     period: float = 1.0,
     duty_factor: float | None = None,
     velocity: Any = None,
-    body_height: float = 0.08,
-    foot_reach: float = 0.16,
+    body_height: float | None = None,
+    foot_reach: float | None = None,
     terrain: Any = None,
     rate: float = 100.0,
     duration: float = 10.0,
@@ -273,7 +273,9 @@ def walk(
     """Walk the hexapod and check every sample.
 
     Args:
-        robot: The whole-robot model (default :func:`~.robot.whole_body` of the preset).
+        robot: The robot: a :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
+            :func:`~.robot.as_whole_body` takes (a URDF path, ``erd:NAME``, a loaded model);
+            default the built-in hexapod.
         pattern: ``"tripod"``, ``"wave"``, ``"ripple"`` or a :class:`~.tables.PhaseTable`.
         stride: Foot stroke during stance [m] for a straight forward walk (sets
             ``vx = stride / (duty_factor · period)``); default 0.05 m when ``velocity`` is
@@ -283,8 +285,11 @@ def walk(
         duty_factor: Stance fraction β in (0, 1) (default the pattern's).
         velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame (curves with
             vx and wz, turning in place with only wz).
-        body_height: Body above the mean ground height of the feet [m].
-        foot_reach: Horizontal distance from the hip axis to the neutral foot point [m].
+        body_height: Body above the mean ground height of the feet [m] (default the
+            robot's :attr:`~.robot.WholeBody.body_height`; the built-in hexapod: 0.08 m).
+        foot_reach: Horizontal distance from each leg's mount to its neutral foot point [m]
+            (default the robot's own, :attr:`~.robot.WholeBody.foot_reach`; the built-in
+            hexapod: 0.16 m).
         terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
             :class:`~.terrain.Terrain` or ``h(x, y)``.
         rate: Sample rate [Hz].
@@ -304,13 +309,13 @@ def walk(
             and by how much.
 
     """
-    wb = whole_body() if robot is None else robot
+    wb = as_whole_body(robot)
     table = phase_table(pattern, wb.n_legs).with_duty_factor(duty_factor)
     beta = table.duty_factor
     T = _num("period", period, hi=1e3)
     H = _num("step_height", step_height, zero=True, hi=1.0)
-    bh = _num("body_height", body_height, hi=10.0)
-    reach = _num("foot_reach", foot_reach, hi=10.0)
+    bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
+    reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
     dur = _num("duration", duration, zero=True, hi=1e5)
     hz = _num("rate", rate, hi=1e5)
     n = int(round(dur * hz)) + 1
@@ -350,7 +355,7 @@ def walk(
     names = wb.leg_names
     nl = wb.n_legs
     # neutral foot points in the body frame (xy)
-    nb = wb.mounts[:, :2, :2] @ np.array([reach, 0.0]) + wb.mounts[:, :2, 3]  # (L, 2)
+    nb = wb.neutral_feet(reach)[:, :2]  # (L, 2)
     vx, vy, w = vel
     strokes = np.hypot(vx - w * nb[:, 1], vy + w * nb[:, 0]) * beta * T
     # --- contacts and swings, per sample and leg

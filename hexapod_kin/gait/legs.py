@@ -1,0 +1,626 @@
+"""Legs of any floating-base robot: found in the kinematic tree, feet, closed forms.
+
+* **Legs from the tree**: every chain of actuated joints from the floating body (the root
+  link) to a foot. A foot is either the deepest frame of a branch (a leaf link such as
+  solo12's ``FL_FOOT``) or a point given by the user on a frame (``frame:x,y,z``, the offset
+  in that frame, in [m]) when the URDF has no foot link (:func:`parse_feet`).
+* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
+  Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
+  and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
+  solved numerically (:func:`~.tree.solve_legs`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
+from .tree import leg_fk
+
+__all__ = [
+    "BodyIK",
+    "FootSpec",
+    "LegTree",
+    "annulus_excess",
+    "closed_leg",
+    "finite_or_inf",
+    "joint_axis",
+    "pick_branch",
+    "sphere_radius",
+    "find_legs",
+    "leg_layout",
+    "offset_of",
+    "parse_feet",
+]
+
+#: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
+_SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
+
+
+@dataclass(frozen=True)
+class BodyIK:
+    """Joint angles of body poses with the feet fixed in the world (arrays read-only).
+
+    Attributes:
+        q: (N, nq) joint angles in [rad], legs in order, each leg's joints.
+        reached: (N, L) True where the leg's closed form has a solution.
+        excess: (N, L) distance by which each foot is out of the leg's reach in [m]
+            (0 when reachable).
+        limit_margin: (N, nq) distance of each joint to its nearest limit in [rad]
+            (negative beyond a limit).
+        leg_names: The legs' names.
+
+    """
+
+    q: np.ndarray
+    reached: np.ndarray
+    excess: np.ndarray
+    limit_margin: np.ndarray
+    leg_names: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (arrays as nested lists, SI units)."""
+        return {
+            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
+            for f in fields(self)
+            for v in (getattr(self, f.name),)
+        }
+
+    @property
+    def ok(self) -> np.ndarray:
+        """(N, L) True where the leg is reached and inside its joint limits."""
+        n_leg = len(self.leg_names)
+        lim = self.limit_margin.reshape(len(self.q), n_leg, -1).min(axis=2)
+        return np.asarray(self.reached & (lim >= 0))
+
+
+# ============================================================================ foot specs
+@dataclass(frozen=True)
+class FootSpec:
+    """A foot: a point ``offset`` [m] in the frame ``frame`` (the contact sphere's centre)."""
+
+    frame: str
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
+    try:
+        vals = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
+    except (TypeError, ValueError):
+        vals = []
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise ParameterError(
+            f"foot {where}: offset {text!r} is not three finite numbers x,y,z [m]",
+            parameter="feet",
+            value=str(text),
+            allowed="frame:x,y,z (metres, in the frame)",
+        )
+    return (vals[0], vals[1], vals[2])
+
+
+def _split_specs(text: str) -> list[str]:
+    """``a:1,2,3,b:4,5,6`` or ``a:1,2,3 b:...`` → one item per foot."""
+    items: list[str] = []
+    for part in re.split(r"[\s;]+", text.strip()):
+        if not part:
+            continue
+        # a comma before a name with a colon starts a new foot
+        items += [p for p in re.split(r",(?=[^,:\s]+:)", part) if p]
+    return items
+
+
+def _load_file(path: Path) -> Any:
+    text = path.read_text(encoding="utf-8")
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".json":
+            return json.loads(text)
+        if suffix == ".toml":
+            import tomllib
+
+            return tomllib.loads(text)
+        import yaml
+
+        return yaml.safe_load(text)
+    except Exception as exc:  # the parsers' own error types differ
+        raise ParameterError(
+            f"feet file {str(path)!r}: cannot be read ({exc})", parameter="feet", value=str(path)
+        ) from None
+
+
+def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
+    """Foot specifications from any of the accepted forms (``None`` stays ``None``).
+
+    Accepted: ``"tibia_lf:0,0.16,0.029"`` (several separated by spaces, ``;`` or commas), a
+    list of such strings, a mapping ``{"tibia_lf": (x, y, z), ...}``, a sequence of
+    :class:`FootSpec`, or a table file (``.yaml``/``.yml``/``.toml``/``.json``) holding either
+    such a mapping or ``feet = [{frame = "...", offset = [x, y, z]}, ...]`` (optionally under
+    a ``feet`` key). Offsets in [m], in the named frame.
+
+    Raises:
+        ParameterError: A malformed spec (named).
+
+    """
+    if spec is None:
+        return None
+    if isinstance(spec, Path) or (
+        isinstance(spec, str) and Path(spec).suffix.lower() in (".yaml", ".yml", ".toml", ".json")
+    ):
+        path = Path(spec)
+        if not path.is_file():
+            raise ParameterError(
+                f"feet file {str(path)!r} does not exist", parameter="feet", value=str(path)
+            )
+        data = _load_file(path)
+        if isinstance(data, Mapping) and "feet" in data:
+            data = data["feet"]
+        return parse_feet(data)
+    out: list[FootSpec] = []
+    if isinstance(spec, str):
+        items: list[Any] = _split_specs(spec)
+    elif isinstance(spec, Mapping):
+        items = [FootSpec(str(k), _numbers3(v, str(k))) for k, v in spec.items()]
+    else:
+        try:
+            items = list(spec)
+        except TypeError:
+            raise ParameterError(
+                f"feet={spec!r} is not a foot spec", parameter="feet", value=repr(spec)
+            ) from None
+    for item in items:
+        if isinstance(item, FootSpec):
+            out.append(item)
+        elif isinstance(item, Mapping) and "frame" in item:
+            out.append(FootSpec(str(item["frame"]), _numbers3(item.get("offset", (0, 0, 0)), "")))
+        elif isinstance(item, str):
+            for piece in _split_specs(item):
+                m = _SPEC.match(piece)
+                if m is None:
+                    raise ParameterError(
+                        f"foot spec {piece!r} is not 'frame:x,y,z'",
+                        parameter="feet",
+                        value=piece,
+                        allowed="frame:x,y,z",
+                    )
+                off = (0.0, 0.0, 0.0) if m.group(2) is None else _numbers3(m.group(2), piece)
+                out.append(FootSpec(m.group(1), off))
+        else:
+            raise ParameterError(
+                f"foot spec {item!r} is not 'frame:x,y,z'", parameter="feet", value=repr(item)
+            )
+    if not out:
+        raise ParameterError("feet: no foot given", parameter="feet", value=repr(spec))
+    frames = [f.frame for f in out]
+    if len(set(frames)) != len(frames):
+        raise ParameterError(
+            f"feet: a frame is named twice in {frames}", parameter="feet", value=frames
+        )
+    return tuple(out)
+
+
+# ============================================================================ legs in a tree
+@dataclass(frozen=True)
+class LegTree:
+    """One leg found in the tree: its joints (indices into q) and its foot.
+
+    Attributes:
+        name: The leg's name.
+        joints: Indices of the leg's joints in q, from the body outward.
+        foot_frame: The frame the foot is given on (a leaf link, or the user's frame).
+        foot_joint: Index (in q) of the joint that moves the foot.
+        foot_placement: (4, 4) the foot frame in that joint's frame (offset included).
+
+    """
+
+    name: str
+    joints: tuple[int, ...]
+    foot_frame: str
+    foot_joint: int
+    foot_placement: np.ndarray
+
+
+def _strip_common(names: list[str]) -> list[str]:
+    """Names with a common prefix/suffix (ending/starting at ``_``/``-``) removed, if unique."""
+    if len(names) < 2:
+        return names
+    pre = 0
+    while all(len(n) > pre and n[pre] == names[0][pre] for n in names):
+        pre += 1
+    pre = max((i + 1 for i in range(pre) if names[0][i] in "_-"), default=0)
+    suf = 0
+    while all(len(n) > suf and n[-1 - suf] == names[0][-1 - suf] for n in names):
+        suf += 1
+    suf = max((i + 1 for i in range(suf) if names[0][-1 - i] in "_-"), default=0)
+    out = [n[pre : len(n) - suf] for n in names]
+    return out if all(out) and len(set(out)) == len(out) else names
+
+
+def _frame_depth(model: Any, fid: int) -> int:
+    depth = 0
+    f = model.frames[fid]
+    parent = f.parentFrame
+    while fid != 0 and parent != fid and depth < 10_000:
+        depth += 1
+        fid = int(parent)
+        f = model.frames[fid]
+        parent = f.parentFrame
+    return depth
+
+
+def find_legs(
+    model: Any, feet: tuple[FootSpec, ...] | None, *, ccw: bool = True
+) -> tuple[list[LegTree], list[int]]:
+    """The legs of a Pinocchio model with a free-flyer root (joint 1), and the other joints.
+
+    Legs: with ``feet``, one per foot (the joints from the root to the foot's frame); without,
+    one per leaf of the joint tree whose deepest frame is away from its joint (the foot), the
+    branches shorter than half the longest one left out (a head, a sensor). Legs are ordered
+    counter-clockwise seen from above starting at the front-left (the order of the built-in
+    hexapod: ``atan2(y, x)`` of the first joint in [0, 2π)); ``ccw=False`` keeps the order of
+    ``feet``.
+
+    Returns:
+        ``(legs, others)``: the legs (joint indices are model joint ids minus 2, i.e. indices
+        into q[7:]) and the ids of the joints that belong to no leg.
+
+    Raises:
+        ConfigurationError: A frame that does not exist, a foot on the floating body, legs
+            sharing joints, no leg found.
+
+    """
+    import pinocchio as pin
+
+    nj = model.njoints
+    children: dict[int, list[int]] = {j: [] for j in range(nj)}
+    for j in range(2, nj):
+        children[int(model.parents[j])].append(j)
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    found: list[tuple[str, int, np.ndarray]] = []  # (frame name, joint id, foot in joint)
+    if feet is not None:
+        names = [f.name for f in model.frames]
+        for spec in feet:
+            if not model.existFrame(spec.frame):
+                close = [n for n in names if spec.frame.lower() in n.lower()][:8]
+                raise ConfigurationError(
+                    f"foot frame {spec.frame!r} is not a frame of the robot"
+                    + (f"; similar: {close}" if close else f"; frames: {names[:40]}"),
+                    parameter="feet",
+                    value=spec.frame,
+                    allowed=names,
+                )
+            fr = model.frames[model.getFrameId(spec.frame)]
+            off = np.eye(4)
+            off[:3, 3] = spec.offset
+            found.append((spec.frame, int(fr.parentJoint), fr.placement.homogeneous @ off))
+    else:
+        for j in range(2, nj):
+            if children[j]:
+                continue
+            cands = [i for i, f in enumerate(model.frames) if int(f.parentJoint) == j]
+            if not cands:
+                continue
+
+            def key(i: int) -> tuple[int, float]:
+                return (
+                    _frame_depth(model, i),
+                    float(np.linalg.norm(model.frames[i].placement.translation)),
+                )
+
+            best = max(cands, key=key)
+            fr = model.frames[best]
+            if np.linalg.norm(fr.placement.translation) <= 1e-9:
+                raise ConfigurationError(
+                    f"the branch ending at joint {model.names[j]!r} has no foot link (its "
+                    f"deepest frame {fr.name!r} is on the joint axis); name the foot as a frame "
+                    f"plus an offset, e.g. --foot {fr.name}:0,0,-0.1 (feet={{'{fr.name}': "
+                    "(x, y, z)}) for every leg",
+                    parameter="feet",
+                    value=str(fr.name),
+                    allowed="frame:x,y,z",
+                )
+            found.append((str(fr.name), j, fr.placement.homogeneous.copy()))
+    legs_raw = []
+    for frame, j, place in found:
+        if j <= 1:
+            raise ConfigurationError(
+                f"foot frame {frame!r} is on the floating body, not on a leg",
+                parameter="feet",
+                value=frame,
+            )
+        path = []
+        k = j
+        while k > 1:
+            path.append(k)
+            k = int(model.parents[k])
+        path.reverse()
+        foot_w = data.oMi[j].homogeneous @ place
+        span = 0.0
+        pts = [data.oMi[p].translation for p in path] + [foot_w[:3, 3]]
+        for a, b in zip(pts[:-1], pts[1:]):
+            span += float(np.linalg.norm(np.asarray(b) - np.asarray(a)))
+        legs_raw.append((frame, path, place, span, np.asarray(data.oMi[path[0]].translation)))
+    if feet is None and legs_raw:
+        longest = max(r[3] for r in legs_raw)
+        legs_raw = [r for r in legs_raw if r[3] >= 0.5 * longest]
+    if not legs_raw:
+        raise ConfigurationError(
+            "no leg found: the robot has no branch of actuated joints from its root to a foot",
+            parameter="feet",
+        )
+    used: dict[int, str] = {}
+    for frame, path, *_ in legs_raw:
+        for p in path:
+            if p in used:
+                raise ConfigurationError(
+                    f"feet {used[p]!r} and {frame!r} share the joint {model.names[p]!r}: "
+                    "a leg is the chain from the body to one foot",
+                    parameter="feet",
+                    value=[used[p], frame],
+                )
+            used[p] = frame
+    if ccw:
+        yaw = [math.atan2(r[4][1], r[4][0]) % (2 * math.pi) for r in legs_raw]
+        order = sorted(range(len(legs_raw)), key=lambda i: (round(yaw[i], 9), legs_raw[i][0]))
+        legs_raw = [legs_raw[i] for i in order]
+    names = _strip_common([r[0] for r in legs_raw])
+    legs = [
+        LegTree(name, tuple(p - 2 for p in path), frame, path[-1] - 2, place)
+        for name, (frame, path, place, _s, _o) in zip(names, legs_raw)
+    ]
+    others = sorted(set(range(2, nj)) - set(used))
+    return legs, others
+
+
+# ============================================================================ build helpers
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_axis(jm: Any, name: str) -> tuple[np.ndarray, bool]:
+    """Unit axis (in the joint frame) and whether the joint is prismatic."""
+    kind = jm.shortname()
+    for prefix, prismatic in (("JointModelR", False), ("JointModelP", True)):
+        if kind in (f"{prefix}X", f"{prefix}Y", f"{prefix}Z"):
+            return np.array(_AXES[kind[-1]]), prismatic
+    if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+        a = np.asarray(jm.extract().axis, dtype=float)
+        return a / np.linalg.norm(a), kind.startswith("JointModelP")
+    raise ConfigurationError(
+        f"joint {name!r} is a {kind}; a leg joint must be revolute (limited) or prismatic "
+        "(continuous joints: give them limits in the URDF)",
+        parameter="source",
+        value=name,
+        allowed="revolute or prismatic joints",
+    )
+
+
+def sphere_radius(text: str, link: str) -> float | None:
+    """The radius of the first sphere collision of ``link`` in URDF ``text`` (if any)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:  # pragma: no cover - the gate parsed it already
+        return None
+    for el in root.iter("link"):
+        if el.get("name") != link:
+            continue
+        for col in el.iter("collision"):
+            sph = col.find("geometry/sphere")
+            if sph is not None and sph.get("radius") is not None:
+                try:
+                    return float(sph.get("radius", ""))
+                except ValueError:
+                    return None
+    return None
+
+
+def closed_leg(
+    table: Any, T0: np.ndarray, consts: tuple[np.ndarray, ...], lower: Any, upper: Any, span: float
+) -> bool:
+    """True when the closed form of ``table`` (frame 0 at ``T0`` in the body) solves the leg.
+
+    Checked at 6 seeded random configurations inside the limits: a valid slot must put the
+    foot (by the leg's own vectorised FK) on the target within 1e-9 of the span (max(span,
+    1 m)). A table that only approximates the leg (axes snapped by
+    :func:`hexapod_kin.chain_from_urdf`, a miss of ~1e-7 m on PhantomX) is not used: the
+    numerical solve on the leg's own kinematics is exact and, batched, faster than the closed
+    form followed by Newton steps (tools/bench_legs.py).
+    """
+    from ..ik import analytic_batch
+
+    P, A, pr, foot = consts
+    lo = np.where(np.isfinite(lower), lower, -np.pi)
+    hi = np.where(np.isfinite(upper), upper, np.pi)
+    rng = np.random.default_rng(7)
+    qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
+    e = len(qs)
+    _o, _w, p = leg_fk(P[None], A[None], pr[None], foot[None], qs[:, None])
+    p = p[:, 0]
+    p0 = (p - T0[:3, 3]) @ T0[:3, :3]
+    try:
+        batch = analytic_batch(table, p0)
+    except HexapodKinError:
+        return False
+    k = batch.q.shape[1]
+    cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
+    if cand.shape[1] != len(lo):
+        return False
+    _o, _w, pk = leg_fk(P[None], A[None], pr[None], foot[None], cand[:, None])
+    err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
+    err = np.where(np.asarray(batch.valid), err, np.inf)
+    return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
+
+
+def finite_or_inf(v: Any) -> np.ndarray:
+    """``v`` as floats with absent limits (±inf, ±1e300 and beyond) as inf."""
+    a = np.array(v, dtype=float)
+    a[~np.isfinite(a) | (np.abs(a) >= 1e300)] = np.inf
+    return a
+
+
+def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
+
+    Args:
+        qk: (G, N, K, m) candidate solutions of G legs at N samples.
+        valid: (G, N, K) which candidates exist.
+        q0: (G, m) the configuration before the first sample.
+
+    Returns:
+        ``(q, ok)``: (G, N, m) the continued joint angles (the previous value kept where no
+        slot is valid) and (G, N) whether a slot was found.
+
+    """
+    g, n, _, m = qk.shape
+    out = np.empty((n, g, m))
+    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
+    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
+    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
+    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
+    prev = np.array(q0, dtype=float)
+    rows = np.arange(g)
+    step = np.empty(cand.shape[1:])
+    two_pi = 2.0 * np.pi
+    for i in range(n):
+        np.subtract(cand[i], prev[:, None, :], out=step)
+        step += np.pi
+        np.mod(step, two_pi, out=step)
+        step -= np.pi
+        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
+        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
+        out[i] = prev
+    out = np.moveaxis(out, 0, 1)
+    return out, ok
+
+
+def leg_layout(
+    model: Any,
+    tree: Any,
+    legs: list[LegTree],
+    cols: tuple[tuple[int, ...], ...],
+    q_zero: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    params: Any,
+    chain_source: Any,
+) -> dict[str, Any]:
+    """The legs' spans, mounts, default stance geometry and closed forms.
+
+    Returns a dict: ``consts`` (per leg: placements, axes, prismatic flags, foot), ``span``
+    (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2), ``reach`` (L,) [m],
+    ``body_height`` [m] (the rules of :meth:`~.robot.WholeBody.neutral_feet`) and ``closed``
+    (per leg ``(table, T_body_frame0)`` or ``None``).
+    """
+    import warnings
+
+    from .._fromurdf import chain_from_urdf
+    from ..params import Pose
+
+    hexa = params is not None
+    # per-leg constants and the geometry at q = 0 (clipped into the limits)
+    consts, spans, origins, feet0 = [], [], [], []
+    for c, leg in zip(cols, legs):
+        cc = list(c)
+        k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
+        consts.append(k)
+        o, _w, p = leg_fk(k[0][None], k[1][None], k[2][None], k[3][None], q_zero[cc][None])
+        pts = np.vstack([o[0], p])
+        spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
+        origins.append(o[0, 0])
+        feet0.append(p[0])
+    span = np.array(spans)
+    if hexa:
+        mounts = np.array([x.transform() for x in params.legs])
+        direction = mounts[:, :2, 0].copy()
+    else:
+        mounts = np.array([tree.placements[c[0]] for c in cols])
+        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
+        direction = np.zeros((len(cols), 2))
+        for i, d in enumerate(d0):
+            out = mounts[i, :2, 3]
+            for v in (d, out, np.array([1.0, 0.0])):
+                if np.linalg.norm(v) > 1e-6 * span[i]:
+                    direction[i] = v / np.linalg.norm(v)
+                    break
+    d_horiz = np.einsum("li,li->l", np.array(feet0)[:, :2] - mounts[:, :2, 3], direction)
+    reach = np.minimum(np.maximum(d_horiz, 0.0), 0.64 * span)
+    rho = span * math.hypot(0.64, 0.32)
+    depth = np.sqrt(np.maximum(rho**2 - reach**2, 0.0))
+    body_height = float(np.min(depth - mounts[:, 2, 3]))
+    # closed forms
+    closed: list[tuple[Any, np.ndarray] | None] = []
+    for i, leg in enumerate(legs):
+        cand: tuple[Any, np.ndarray] | None = None
+        try:
+            if hexa:
+                ch = params.legs[i].chain
+                T0 = mounts[i] @ ch.base_matrix
+                table = ch if ch.base_pose is None else replace(ch, base_pose=None)
+            else:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    ch = chain_from_urdf(chain_source, tip=leg.foot_frame)
+                off = np.eye(4)
+                off[:3, 3] = offset_of(model, leg)
+                if np.any(off[:3, 3] != 0):
+                    ch = replace(ch, tool=Pose.of(ch.tool_matrix @ off))
+                T0 = ch.base_matrix
+                table = replace(ch, base_pose=None)
+            sel = list(cols[i])
+            if closed_leg(table, T0, consts[i], lower[sel], upper[sel], float(span[i])):
+                cand = (table, T0)
+        except HexapodKinError:
+            cand = None
+        closed.append(cand)
+    if hexa:  # legs sharing one table share one closed-form call
+        by_id: dict[int, Any] = {}
+        for i, found in enumerate(closed):
+            if found is not None:
+                shared = by_id.setdefault(id(params.legs[i].chain), found[0])
+                closed[i] = (shared, found[1])
+    return {
+        "consts": consts,
+        "span": span,
+        "mounts": mounts,
+        "direction": direction,
+        "reach": reach,
+        "body_height": body_height,
+        "closed": closed,
+    }
+
+
+def offset_of(model: Any, leg: LegTree) -> np.ndarray:
+    """The foot in its frame (the user's offset; 0 for a leaf frame) [m]."""
+    fr = model.frames[model.getFrameId(leg.foot_frame)]
+    rel = np.linalg.solve(fr.placement.homogeneous, leg.foot_placement)
+    return np.asarray(rel[:3, 3])
+
+
+def annulus_excess(fam: Any, x: np.ndarray) -> np.ndarray:
+    """Distance (N,) of frame-0 targets ``x`` outside a leg3/coxa_tibia leg's reach [m].
+
+    The reach is the annulus ``|l2 − l3| ≤ ‖(±ρ − l1, w)‖ ≤ l2 + l3`` (coxa_tibia: the circle
+    of radius l2) about the hip, ``ρ`` the horizontal distance and ``w`` the height.
+    """
+    h = np.hypot(x[:, 0], x[:, 1])
+    w = (x[:, 2] - fam.height) * fam.sign
+    if fam.family == "leg3":
+        l1, l2, l3 = fam.lengths
+        rmin, rmax = abs(l2 - l3), l2 + l3
+    else:
+        l1, l2 = fam.lengths[:2]
+        rmin = rmax = abs(l2)
+    best = np.full(len(x), np.inf)
+    for hs in (1.0, -1.0):
+        r = np.hypot(hs * h - l1, w)
+        best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
+    return best

@@ -1,0 +1,338 @@
+"""Vectorised kinematics of a floating-base tree and the numerical leg IK (numpy only).
+
+* **Tree kinematics** (any revolute axis, RX/RY/RZ or unaligned, and prismatic joints): joint
+  ``j``'s frame is ``parent · P_j · M_j(q_j)`` with ``P_j`` its placement at q = 0
+  (Pinocchio's ``jointPlacements``) and ``M_j`` the rotation
+  ``R(a, q) = cos q I + sin q [a]× + (1 − cos q) a aᵀ`` (Rodrigues) or the translation ``a q``
+  along its unit axis ``a``. Raw Pinocchio FK is the reference in the tests.
+* **Numerical leg IK** (:func:`solve_legs`), used where no closed form recognises the leg:
+  damped least squares on the leg's own joints, vectorised over samples and legs, with the
+  analytic position Jacobian ``J_k = w_k × (p − o_k)`` (revolute; ``w_k`` for prismatic)::
+
+      Δq = (JᵀJ + λ²I)⁻¹ Jᵀ e,   λ² = 10⁻² ‖e‖² + 10⁻¹⁴ s²   (s: the leg's span)
+
+  each step scaled to at most 0.5 rad and clipped to the joint limits, until
+  ``‖e‖ ≤ 10⁻¹³ s`` or the step stalls. All samples start from the seed; a sample whose
+  solution is far from its predecessor's (a branch jump, > 0.5 rad) or not reached is solved
+  again warm-started from the previous sample. A foot is *reached* when the residual is at
+  most :data:`REACH_TOL`; otherwise the residual is the distance of the best reachable point
+  found to the target (the leg's ``excess``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+__all__ = ["REACH_TOL", "Tree", "axis_rotation", "leg_fk", "solve_legs", "tree_poses"]
+
+#: A foot is reached when the numerical IK residual is at most this [m].
+REACH_TOL = 1e-10
+
+
+# ============================================================================ the tree
+@dataclass(frozen=True)
+class Tree:
+    """The actuated joints of a floating-base tree as arrays (joint order = Pinocchio's q).
+
+    Attributes:
+        parents: (n,) index of each joint's parent joint (−1: the floating body).
+        placements: (n, 4, 4) joint placements in the parent joint's frame at q = 0.
+        axes: (n, 3) unit joint axes in the joint's own frame.
+        prismatic: (n,) True for prismatic joints.
+
+    """
+
+    parents: np.ndarray
+    placements: np.ndarray
+    axes: np.ndarray
+    prismatic: np.ndarray
+
+
+def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Rotations (..., 3, 3) about unit ``axes`` (..., 3) by ``q`` (...) [rad] (Rodrigues)."""
+    c, s = np.cos(q), np.sin(q)
+    x, y, z = axes[..., 0], axes[..., 1], axes[..., 2]
+    v = 1.0 - c
+    R = np.empty(np.shape(q) + (3, 3))
+    R[..., 0, 0] = c + v * x * x
+    R[..., 0, 1] = v * x * y - s * z
+    R[..., 0, 2] = v * x * z + s * y
+    R[..., 1, 0] = v * x * y + s * z
+    R[..., 1, 1] = c + v * y * y
+    R[..., 1, 2] = v * y * z - s * x
+    R[..., 2, 0] = v * x * z - s * y
+    R[..., 2, 1] = v * y * z + s * x
+    R[..., 2, 2] = c + v * z * z
+    return R
+
+
+def _local(P: np.ndarray, axis: np.ndarray, prismatic: Any, q: np.ndarray) -> np.ndarray:
+    """``P · M(q)`` (N, 4, 4) for one joint (placement P (..., 4, 4), axis (..., 3))."""
+    n = q.shape[0]
+    out = np.empty((n, 4, 4))
+    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
+    Pr = P[..., :3, :3]
+    if np.ndim(prismatic) == 0 and not prismatic:
+        out[:, :3, :3] = Pr @ axis_rotation(np.broadcast_to(axis, (n, 3)), q)
+        out[:, :3, 3] = P[..., :3, 3]
+        return out
+    pr = np.broadcast_to(np.asarray(prismatic, dtype=bool), (n,))
+    rot = axis_rotation(np.broadcast_to(axis, (n, 3)), np.where(pr, 0.0, q))
+    out[:, :3, :3] = Pr @ rot
+    shift = np.where(pr[:, None], np.broadcast_to(axis, (n, 3)) * q[:, None], 0.0)
+    out[:, :3, 3] = P[..., :3, 3] + (Pr @ shift[..., None])[..., 0]
+    return out
+
+
+def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
+    n, nj = q.shape
+    out = np.empty((n, nj, 4, 4))
+    for j in range(nj):
+        local = _local(tree.placements[j], tree.axes[j], bool(tree.prismatic[j]), q[:, j])
+        par = int(tree.parents[j])
+        out[:, j] = (base if par < 0 else out[:, par]) @ local
+    return out
+
+
+def _mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Stacked 3×3 matrix times 3-vector (..., 3) (broadcast sums: faster than matmul here)."""
+    return np.asarray(
+        A[..., :, 0] * v[..., 0, None]
+        + A[..., :, 1] * v[..., 1, None]
+        + A[..., :, 2] * v[..., 2, None]
+    )
+
+
+@dataclass(frozen=True)
+class LegConsts:
+    """Per-leg constants of G serial legs of m joints, for :func:`leg_fk_of`.
+
+    With ``P`` the placement rotation and ``a`` the axis: ``P R(a, q) = c P + s P[a]× +
+    (1 − c) (P a) aᵀ``, so each joint costs one 3×3 product per sample.
+    """
+
+    Pr: np.ndarray  # (G, m, 3, 3)
+    Pt: np.ndarray  # (G, m, 3)
+    K1: np.ndarray  # (G, m, 3, 3) P [a]×
+    K2: np.ndarray  # (G, m, 3, 3) (P a) aᵀ
+    Pa: np.ndarray  # (G, m, 3)
+    prismatic: np.ndarray  # (G, m)
+    foot: np.ndarray  # (G, 3)
+
+    @classmethod
+    def of(
+        cls, placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray
+    ) -> LegConsts:
+        """From (G, m, 4, 4) placements, (G, m, 3) axes, (G, m) flags and (G, 3) feet."""
+        Pr = np.ascontiguousarray(placements[..., :3, :3])
+        a = np.asarray(axes, dtype=float)
+        skew = np.zeros(a.shape + (3,))
+        skew[..., 0, 1], skew[..., 0, 2] = -a[..., 2], a[..., 1]
+        skew[..., 1, 0], skew[..., 1, 2] = a[..., 2], -a[..., 0]
+        skew[..., 2, 0], skew[..., 2, 1] = -a[..., 1], a[..., 0]
+        Pa = _mv(Pr, a)
+        return cls(
+            Pr,
+            np.ascontiguousarray(placements[..., :3, 3]),
+            Pr @ skew,
+            Pa[..., :, None] * a[..., None, :],
+            Pa,
+            np.asarray(prismatic, dtype=bool),
+            np.asarray(foot, dtype=float),
+        )
+
+
+def _subset(c: LegConsts, idx: np.ndarray) -> LegConsts:
+    return LegConsts(*(getattr(c, f.name)[idx] for f in fields(LegConsts)))
+
+
+def leg_fk_of(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`leg_fk` of the G legs of ``c`` at ``q`` (..., G, m) (constants broadcast)."""
+    m = q.shape[-1]
+    shape = q.shape[:-1]
+    origins = np.empty(shape + (m, 3))
+    waxes = np.empty(shape + (m, 3))
+    any_p = bool(c.prismatic.any())
+    R: np.ndarray | None = None
+    t = np.zeros(shape + (3,))
+    for k in range(m):
+        qk = q[..., k]
+        pk = c.prismatic[:, k]
+        qr = np.where(pk, 0.0, qk) if any_p else qk
+        co, si = np.cos(qr)[..., None, None], np.sin(qr)[..., None, None]
+        M = co * c.Pr[:, k] + si * c.K1[:, k] + (1.0 - co) * c.K2[:, k]
+        if R is None:
+            o = np.broadcast_to(c.Pt[:, k], shape + (3,))
+            w = np.broadcast_to(c.Pa[:, k], shape + (3,))
+            R = M
+        else:
+            o = t + _mv(R, c.Pt[:, k])
+            w = _mv(R, c.Pa[:, k])
+            R = R @ M
+        origins[..., k, :] = o
+        waxes[..., k, :] = w
+        t = o + np.where(pk[:, None], w * qk[..., None], 0.0) if any_p else o
+    assert R is not None
+    feet = t + _mv(R, c.foot)
+    return origins, waxes, feet
+
+
+def leg_fk(
+    placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray, q: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body-frame kinematics of E leg instances (one serial chain each, m joints).
+
+    Args:
+        placements: (E, m, 4, 4) each joint's placement in the previous joint's frame (the
+            first in the body frame).
+        axes: (E, m, 3) unit axes.
+        prismatic: (E, m) True for prismatic joints.
+        foot: (E, 3) the foot in the last joint's frame.
+        q: (E, m) joint values.
+
+    Returns:
+        ``(origins, world_axes, feet)``: (E, m, 3) joint origins, (E, m, 3) joint axes in the
+        body frame, (E, 3) feet.
+
+    """
+    q = np.asarray(q, dtype=float)
+    return leg_fk_of(LegConsts.of(placements, axes, prismatic, foot), q)
+
+
+# ============================================================================ numerical IK
+def solve_legs(
+    placements: np.ndarray,
+    axes: np.ndarray,
+    prismatic: np.ndarray,
+    foot: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    targets: np.ndarray,
+    seed: np.ndarray,
+    *,
+    span: float,
+    iterations: int = 60,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Damped least squares for G legs of m joints at N samples (see the module doc).
+
+    Args:
+        placements: (G, m, 4, 4) the legs' joint placements (see :func:`leg_fk`).
+        axes: (G, m, 3) unit joint axes.
+        prismatic: (G, m) True for prismatic joints.
+        foot: (G, 3) the feet in their last joint's frame.
+        lower: (G, m) lower joint limits.
+        upper: (G, m) upper joint limits.
+        targets: (N, G, 3) body-frame foot targets [m].
+        seed: (G, m) the joints before the first sample.
+        span: The legs' length scale [m] (tolerances).
+        iterations: Cap on the steps per solve.
+
+    Returns:
+        ``(q, residual, reached)``: (N, G, m), (N, G) [m], (N, G).
+
+    """
+    n, g, _ = targets.shape
+    m = placements.shape[1]
+    c = LegConsts.of(placements, axes, prismatic, foot)
+    seed_arr = np.asarray(seed, dtype=float)
+    q = np.broadcast_to(seed_arr, (n, g, m)).copy()
+    res = _dls(c, lower, upper, targets, q, span, iterations)
+    # continuity: re-solve, warm-started from the previous sample, where a branch jumped
+    # (or the foot was missed); only those samples are visited, in time order
+
+    def suspects(start: int) -> np.ndarray:
+        prev = np.concatenate([seed_arr[None], q[:-1]])[start:]
+        jump = np.abs(q[start:] - prev).max(axis=2) > 0.5
+        return np.flatnonzero((jump | (res[start:] > REACH_TOL)).any(axis=1)) + start
+
+    todo = suspects(0)
+    while todo.size:
+        i = int(todo[0])
+        prev = seed_arr if i == 0 else q[i - 1]
+        jump = np.abs(q[i] - prev).max(axis=1) > 0.5
+        idx = np.flatnonzero(jump | (res[i] > REACH_TOL))
+        if idx.size:
+            qi = prev[idx][None].copy()
+            sub = _subset(c, idx)
+            ri = _dls(sub, lower[idx], upper[idx], targets[i, idx][None], qi, span, iterations)[0]
+            better = (ri <= np.maximum(res[i, idx], REACH_TOL)) | (ri <= REACH_TOL)
+            q[i, idx] = np.where(better[:, None], qi[0], q[i, idx])
+            res[i, idx] = np.where(better, ri, res[i, idx])
+        todo = suspects(i + 1) if i + 1 < n else todo[:0]
+    return q, res, res <= REACH_TOL
+
+
+def _dls(
+    c: LegConsts,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    tgt: np.ndarray,
+    q: np.ndarray,
+    span: float,
+    iterations: int,
+) -> np.ndarray:
+    """Iterate DLS in place on ``q`` (N, G, m) towards ``tgt`` (N, G, 3); residuals (N, G).
+
+    Levenberg–Marquardt acceptance: a step is kept only when it lowers the residual (then
+    the damping factor μ shrinks ×0.3), else it is refused and μ grows ×10; an element stops
+    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual).
+    """
+    m = q.shape[-1]
+    lam_floor = 1e-14 * span * span
+    done_tol = 1e-13 * span
+    eye = np.eye(m)
+    o, w, p = leg_fk_of(c, q)
+    err = tgt - p
+    norm = np.linalg.norm(err, axis=-1)
+    mu = np.full(norm.shape, 1e-2)
+    for _ in range(iterations):
+        live = (norm > done_tol) & (mu < 1e10)
+        if not live.any():
+            break
+        pr = c.prismatic[:, None, :]
+        rev = np.swapaxes(np.cross(w, p[..., None, :] - o), -1, -2)  # (N, G, 3, m)
+        J = np.where(pr, np.swapaxes(w, -1, -2), rev)
+        Jt = np.swapaxes(J, -1, -2)
+        lam2 = mu * norm * norm + lam_floor
+        dq = _solve_spd(Jt @ J + lam2[..., None, None] * eye, _mv(Jt, err))
+        big = np.abs(dq).max(axis=-1)
+        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[..., None]
+        new = np.clip(q + dq, lower, upper)
+        o2, w2, p2 = leg_fk_of(c, new)
+        err2 = tgt - p2
+        norm2 = np.linalg.norm(err2, axis=-1)
+        acc = live & (norm2 < norm)
+        q[acc] = new[acc]
+        o[acc], w[acc], p[acc], err[acc], norm[acc] = (
+            o2[acc],
+            w2[acc],
+            p2[acc],
+            err2[acc],
+            norm2[acc],
+        )
+        mu = np.where(acc, np.maximum(mu * 0.3, 1e-9), np.where(live, mu * 10.0, mu))
+    return norm
+
+
+def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve stacked symmetric positive-definite systems ``A x = b`` (E, m, m), (E, m).
+
+    m = 3: by the adjugate (element-wise, faster than a batched LAPACK call for 3×3);
+    otherwise ``numpy.linalg.solve``.
+    """
+    if A.shape[-1] != 3:
+        return np.asarray(np.linalg.solve(A, b[..., None])[..., 0])
+    a, bb, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
+    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
+    c00, c01, c02 = d * f - e * e, c * e - bb * f, bb * e - c * d
+    c11, c12, c22 = a * f - c * c, bb * c - a * e, a * d - bb * bb
+    det = a * c00 + bb * c01 + c * c02
+    x = np.empty_like(b)
+    x[..., 0] = c00 * b[..., 0] + c01 * b[..., 1] + c02 * b[..., 2]
+    x[..., 1] = c01 * b[..., 0] + c11 * b[..., 1] + c12 * b[..., 2]
+    x[..., 2] = c02 * b[..., 0] + c12 * b[..., 1] + c22 * b[..., 2]
+    return x / det[..., None]

@@ -1,0 +1,511 @@
+"""Any legged robot: legs from the kinematic tree, vectorised kinematics, per-leg IK, stand, walk.
+
+References: raw Pinocchio (FK, centre of mass) on models built here from the URDF text, the
+URDF's own numbers read with ElementTree (masses), hand lever rules for the standing forces,
+and the closed-form leg IK for the numerical one.
+
+PhantomX foot spec (the URDF has no foot links): the tibia collision mesh of
+HumaRobotics/phantomx_description (``meshes/tibia_l_coll.STL``, used by all six legs, not
+shipped here) reaches farthest along the tibia frame's +y at (0.0015, 0.1604, 0.0288) m; the
+foot point is taken there, rounded: ``tibia_XX:0,0.16,0.029`` (a point foot, radius 0).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from hexapod_kin import robots
+from hexapod_kin.dynamics import stand
+from hexapod_kin.exceptions import ConfigurationError, HexapodKinError, ParameterError
+from hexapod_kin.gait import GaitError, PhaseTable, as_whole_body, body_pose, walk, whole_body
+from hexapod_kin.gait.legs import annulus_excess, parse_feet
+from hexapod_kin.gait.stand import standing_pose
+from hexapod_kin.params import Chain, Hexapod, KhalilRow, LegMount
+
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
+
+PHX = Path(__file__).parent / "data" / "phantomx" / "phantomx.urdf"
+SIDES = ("lf", "lm", "lr", "rf", "rm", "rr")
+OFFSET = (0.0, 0.16, 0.029)
+SPEC = " ".join(f"tibia_{s}:{','.join(map(str, OFFSET))}" for s in SIDES)
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def phx():
+    return as_whole_body(str(PHX), feet=SPEC)
+
+
+def _raw_model(text: str) -> tuple[pin.Model, pin.Data]:
+    m = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    return m, m.createData()
+
+
+def _urdf_mass(text: str) -> float:
+    return sum(float(m.get("value")) for m in ET.fromstring(text).iter("mass"))
+
+
+def _random_state(wb, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    lo = np.where(np.isfinite(wb.lower), wb.lower, -np.pi)
+    hi = np.where(np.isfinite(wb.upper), wb.upper, np.pi)
+    q = lo + (hi - lo) * rng.uniform(size=(n, wb.nq))
+    base = np.array([body_pose(rng.normal(size=3), rng.uniform(-1, 1, size=3)) for _ in range(n)])
+    return q, base
+
+
+def _raw_feet(wb, m: pin.Model, d: pin.Data, q: np.ndarray, base: np.ndarray, spec):
+    """Feet by raw Pinocchio: the named frames' placements applied to the offsets."""
+    Q = wb.pinocchio_q(q, base)
+    out = np.empty((len(q), wb.n_legs, 3))
+    for i, qi in enumerate(Q):
+        pin.framesForwardKinematics(m, d, qi)
+        for k, (frame, off) in enumerate(spec):
+            out[i, k] = d.oMf[m.getFrameId(frame)].act(np.asarray(off, dtype=float))
+    return out
+
+
+# ----------------------------------------------------------------------------- PhantomX
+def test_phantomx_legs_found_from_the_tree(phx):
+    assert phx.n_legs == 6 and phx.nq == 18
+    assert set(phx.leg_names) == set(SIDES)
+    # counter-clockwise from the front-left, like the built-in hexapod's leg1..leg6
+    assert phx.leg_names == ("lf", "lm", "lr", "rr", "rm", "rf")
+    for name, cols in zip(phx.leg_names, phx._leg_cols):
+        assert [phx.joint_names[j] for j in cols] == [
+            f"j_{p}_{name}" for p in ("c1", "thigh", "tibia")
+        ]
+    assert phx.locked_joints == ()
+    assert phx.foot_radius == 0.0
+    assert np.allclose(phx.foot_offsets, OFFSET, atol=0)
+    assert phx.mass == pytest.approx(_urdf_mass(PHX.read_text()), rel=1e-12)
+    assert np.allclose(phx.velocity_limit, 5.6548668) and np.allclose(phx.effort_limit, 2.8)
+
+
+def test_phantomx_feet_and_com_match_raw_pinocchio(phx):
+    m, d = _raw_model(PHX.read_text())
+    assert tuple(m.names[2:]) == phx.joint_names
+    q, base = _random_state(phx, 40, 1)
+    spec = [(f"tibia_{name}", OFFSET) for name in phx.leg_names]
+    ref = _raw_feet(phx, m, d, q, base, spec)
+    assert np.abs(phx.feet(q, base) - ref).max() <= 1e-12
+    poses = phx.foot_poses(q, base)
+    assert np.abs(poses[..., :3, 3] - ref).max() <= 1e-12
+    T = phx.joint_poses(q, base)
+    Q = phx.pinocchio_q(q, base)
+    com = phx.com(q, base)
+    for i in (0, 17, 39):
+        pin.forwardKinematics(m, d, Q[i])
+        for j in range(phx.nq):
+            assert np.abs(T[i, j] - d.oMi[j + 2].homogeneous).max() <= 1e-12
+        assert np.abs(com[i] - pin.centerOfMass(m, d, Q[i])).max() <= 1e-12
+        pin.framesForwardKinematics(m, d, Q[i])
+        R = d.oMf[m.getFrameId(f"tibia_{phx.leg_names[0]}")].rotation
+        assert np.abs(poses[i, 0, :3, :3] - R).max() <= 1e-12
+    # the added contact frames are the feet in the robot's own Pinocchio model
+    md = phx.model.createData()
+    pin.framesForwardKinematics(phx.model, md, Q[3])
+    for k, f in enumerate(phx.foot_frames):
+        assert np.abs(md.oMf[phx.model.getFrameId(f)].translation - ref[3, k]).max() <= 1e-12
+
+
+def test_phantomx_stands_by_the_lever_rule(phx):
+    st = stand(str(PHX), feet=SPEC)
+    mass = _urdf_mass(PHX.read_text())
+    W = mass * G
+    assert st.mass == pytest.approx(mass, rel=1e-12)
+    assert st.forces[:, 2].sum() == pytest.approx(W, rel=1e-12)
+    # force and moment balance about the CoM, by hand
+    r = st.feet - st.com
+    assert np.abs(st.forces.sum(axis=0) - [0.0, 0.0, W]).max() <= 1e-9 * W
+    assert np.abs(np.cross(r, st.forces).sum(axis=0)).max() <= 1e-9 * W
+    # the stance is point-symmetric about the CoM's ground projection (to the URDF's rounded
+    # constants, 3.4e-7 m): each foot carries W/6 to that order
+    assert np.abs(r[:, :2].sum(axis=0)).max() < 1e-6
+    assert np.allclose(st.forces[:, 2], W / 6, rtol=0, atol=1e-5 * W)
+    # three feet (a tripod): the vertical forces by hand from the lever equations
+    tri = ["lf", "lr", "rm"]
+    st3 = stand(str(PHX), feet=SPEC, legs=tri, shift=(0.01, 0.005))
+    p = st3.feet
+    A = np.vstack([np.ones(3), p[:, 0] - st3.com[0], p[:, 1] - st3.com[1]])
+    fz = np.linalg.solve(A, [W, 0.0, 0.0])
+    assert np.allclose(st3.forces[:, 2], fz, rtol=0, atol=1e-9 * W)
+    # torques: g(q) − Σ Jᵀf on a raw Pinocchio model; its six base rows vanish
+    pose = standing_pose(phx, shift=(0.01, 0.005))
+    assert np.array_equal(pose.q, st3.q)
+    m, d = _raw_model(PHX.read_text())
+    qp = phx.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.computeJointJacobians(m, d, qp)
+    pin.updateFramePlacements(m, d)
+    tau = np.array(pin.computeGeneralizedGravity(m, d, qp))
+    for name, f in zip(tri, st3.forces):
+        fid = m.getFrameId(f"tibia_{name}")
+        J = pin.getFrameJacobian(m, d, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        r = d.oMf[fid].rotation @ np.array(OFFSET)  # frame origin → foot
+        Jp = J[:3] - pin.skew(r) @ J[3:]
+        tau -= Jp.T @ f
+    assert np.abs(tau[:6]).max() <= 1e-9 * W
+    assert np.abs(tau[6:] - st3.torque).max() <= 1e-12
+
+
+@pytest.mark.parametrize("pattern", ["tripod", "wave", "ripple"])
+def test_phantomx_walks(phx, pattern):
+    run = walk(phx, pattern=pattern, duration=10.0, rate=100.0, strict=True)
+    assert run.min_margin > 0 and run.max_slip <= 1e-9 and run.min_limit_margin >= 0
+    assert run.ik_ok.all() and run.ok
+    assert np.all(run.q >= phx.lower) and np.all(run.q <= phx.upper)
+    m, d = _raw_model(PHX.read_text())
+    spec = [(f"tibia_{name}", OFFSET) for name in phx.leg_names]
+    idx = np.array([0, 251, 500, 777, 1000])
+    ref = _raw_feet(phx, m, d, run.q[idx], run.base_poses[idx], spec)
+    assert np.abs(ref - run.feet_planned[idx]).max() <= 1e-9
+
+
+def test_walk_takes_a_path_and_a_loaded_model():
+    from hexapod_kin import load
+
+    a = walk(as_whole_body(str(PHX), feet=SPEC), duration=1.0)
+    b = as_whole_body(load(str(PHX)), feet=SPEC)
+    assert b.leg_names == a.leg_names
+    assert walk(b, duration=1.0).max_slip <= 1e-9
+
+
+# ----------------------------------------------------------------------------- solo12
+def test_solo12_legs_feet_and_standing():
+    wb = as_whole_body("erd:solo12")
+    assert wb.leg_names == ("FL", "HL", "HR", "FR") and wb.nq == 12
+    st = stand("erd:solo12")
+    W = st.mass * G
+    assert st.forces[:, 2].sum() == pytest.approx(W, rel=1e-12)
+    assert st.moment_residual < 1e-9 and st.feasible
+    # front/hind lever rule: the CoM's x splits the weight between the two foot pairs
+    x = st.feet[:, 0]
+    front = x > st.com[0]
+    xf, xh = x[front].mean(), x[~front].mean()
+    share = W * (st.com[0] - xh) / (xf - xh)
+    assert st.forces[front, 2].sum() == pytest.approx(share, rel=1e-9)
+    assert st.mass == pytest.approx(float(pin.computeTotalMass(wb.model)), rel=1e-12)
+
+
+def test_solo12_feet_match_raw_pinocchio():
+    from hexapod_kin.sources import resolve_source
+
+    wb = as_whole_body("erd:solo12")
+    m, d = _raw_model(resolve_source("erd:solo12").text)
+    q, base = _random_state(wb, 20, 3)
+    spec = [(f"{name}_FOOT", (0, 0, 0)) for name in wb.leg_names]
+    assert np.abs(wb.feet(q, base) - _raw_feet(wb, m, d, q, base, spec)).max() <= 1e-12
+
+
+def _crawl4() -> tuple[PhaseTable, bool]:
+    """h2's crawl (with body sway) when it exists, else a hand-made crawl (no sway)."""
+    from hexapod_kin.gait import phase_table
+
+    try:
+        return phase_table("crawl", 4), True
+    except ParameterError:
+        beta = 0.8
+        offs = [0.0] * 4
+        for k, leg in enumerate([1, 0, 2, 3]):  # HL, FL, HR, FR
+            offs[leg] = (beta - k * 0.25) % 1.0
+        return PhaseTable("crawl", tuple(offs), beta), False
+
+
+def test_solo12_crawls():
+    table, has_sway = _crawl4()
+    run = walk("erd:solo12", pattern=table, duration=10.0, strict=has_sway)
+    assert run.ik_ok.all() and run.max_slip <= 1e-9 and run.min_limit_margin >= 0
+    if has_sway:
+        assert run.min_margin > 0
+
+
+# ----------------------------------------------------------------------------- Hexapods
+def test_four_and_eight_legged_hexapods_walk():
+    four = as_whole_body(robots.hexapod(mount_yaw_deg=(45, 135, -135, -45)))
+    table, has_sway = _crawl4()
+    run = walk(four, pattern=table, duration=4.0, strict=has_sway)
+    assert run.ik_ok.all() and run.max_slip <= 1e-9 and run.min_limit_margin >= 0
+    yaws = tuple(22.5 + 45 * k for k in range(4)) + tuple(-157.5 + 45 * k for k in range(4))
+    eight = as_whole_body(robots.hexapod(body_radius=0.16, mount_yaw_deg=yaws))
+    assert eight.n_legs == 8 and eight.ik_kind == ("closed",) * 8
+    beta = 7 / 8  # wave: each side rear to front, one leg at a time
+    offs = [0.0] * 8
+    for k, leg in enumerate([3, 2, 1, 0, 4, 5, 6, 7]):
+        offs[leg] = (beta - k / 8) % 1.0
+    run8 = walk(eight, pattern=PhaseTable("wave8", tuple(offs), beta), duration=8.0)
+    assert run8.ok and run8.min_margin > 0 and run8.max_slip <= 1e-9
+
+
+def test_hexapod_with_custom_leg_order_and_names_walks():
+    base = robots.hexapod()
+    names = ("zeta", "alpha", "mike", "bravo", "yankee", "echo")
+    legs = tuple(replace(leg, name=n) for leg, n in zip(base.legs, names))
+    hexa = Hexapod(legs=legs, name="custom")
+    wb = whole_body(hexa)
+    assert wb.leg_names == names
+    assert list(wb.joint_names) != list(hexa.joint_names)  # Pinocchio orders the tree itself
+    assert sorted(wb.joint_names) == sorted(hexa.joint_names)
+    run = walk(wb, pattern="tripod", duration=3.0)
+    assert run.ok
+    # the same walk as the built-in robot's, joint by joint name (an independent pairing)
+    ref = walk(pattern="tripod", duration=3.0)
+    ref_cols = {n: i for i, n in enumerate(ref.joint_names)}
+    for j, name in enumerate(wb.joint_names):
+        leg, joint = name.rsplit("_", 1)
+        other = f"leg{names.index(leg) + 1}_{joint}"
+        assert np.allclose(run.q[:, j], ref.q[:, ref_cols[other]], atol=1e-12)
+
+
+def test_a_head_joint_is_locked_and_reported():
+    from hexapod_kin.urdf import to_urdf
+
+    text = to_urdf(robots.hexapod())
+    head = (
+        '<link name="head"><inertial><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" '
+        'iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>'
+        '<joint name="head_pan" type="revolute"><parent link="body"/><child link="head"/>'
+        '<origin xyz="0.1 0 0.03" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        '<link name="camera"/><joint name="camera_fixed" type="fixed"><parent link="head"/>'
+        '<child link="camera"/><origin xyz="0.02 0 0" rpy="0 0 0"/></joint></robot>'
+    )
+    wb = as_whole_body(text.replace("</robot>", head))
+    assert wb.locked_joints == ("head_pan",) and wb.n_legs == 6 and wb.nq == 18
+    assert wb.mass == pytest.approx(whole_body().mass + 0.05, rel=1e-12)
+    assert walk(wb, duration=2.0).ok
+
+
+# ----------------------------------------------------------------------------- any joint axis
+def _tilted_quadruped() -> str:
+    """Four 3-joint legs with unaligned revolute axes and one prismatic joint per leg."""
+    inert = (
+        '<inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" '
+        'izz="1e-4"/></inertial>'
+    )
+    parts = [f'<robot name="tilted"><link name="body">{inert}</link>']
+    for k, (x, y) in enumerate([(0.2, 0.1), (-0.2, 0.1), (-0.2, -0.1), (0.2, -0.1)]):
+        parts.append(
+            f'<link name="a{k}">{inert}</link><link name="b{k}">{inert}</link>'
+            f'<link name="c{k}">{inert}</link><link name="foot{k}"/>'
+            f'<joint name="j{k}a" type="revolute"><parent link="body"/><child link="a{k}"/>'
+            f'<origin xyz="{x} {y} 0" rpy="0.1 -0.2 0.3"/><axis xyz="0.6 0 0.8"/>'
+            '<limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+            f'<joint name="j{k}b" type="revolute"><parent link="a{k}"/><child link="b{k}"/>'
+            '<origin xyz="0.05 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/>'
+            '<limit lower="-2" upper="2" effort="1" velocity="1"/></joint>'
+            f'<joint name="j{k}c" type="prismatic"><parent link="b{k}"/><child link="c{k}"/>'
+            '<origin xyz="0 0 -0.1" rpy="0 0.2 0"/><axis xyz="0 0.28 -0.96"/>'
+            '<limit lower="-0.05" upper="0.05" effort="1" velocity="1"/></joint>'
+            f'<joint name="f{k}" type="fixed"><parent link="c{k}"/><child link="foot{k}"/>'
+            '<origin xyz="0 0 -0.1" rpy="0 0 0"/></joint>'
+        )
+    return "".join(parts) + "</robot>"
+
+
+def test_tree_kinematics_any_axis_and_prismatic_match_raw_pinocchio():
+    text = _tilted_quadruped()
+    wb = as_whole_body(text)
+    m, d = _raw_model(text)
+    kinds = {m.joints[j].shortname() for j in range(2, m.njoints)}
+    assert {"JointModelRevoluteUnaligned", "JointModelRY", "JointModelPrismaticUnaligned"} <= kinds
+    q, base = _random_state(wb, 30, 5)
+    T = wb.joint_poses(q, base)
+    Q = wb.pinocchio_q(q, base)
+    for i in range(len(q)):
+        pin.forwardKinematics(m, d, Q[i])
+        for j in range(wb.nq):
+            assert np.abs(T[i, j] - d.oMi[j + 2].homogeneous).max() <= 1e-12
+    spec = [(name, (0, 0, 0)) for name in wb.leg_names]
+    assert np.abs(wb.feet(q, base) - _raw_feet(wb, m, d, q, base, spec)).max() <= 1e-12
+    # the numerical IK puts every foot back where Pinocchio put it
+    ik = wb.body_ik(base[0], wb.feet(q[:1], base[:1])[0], q_prev=q[0] * 0.7, strict=False)
+    assert ik.reached.all()
+    assert np.abs(wb.feet(ik.q, base[:1]) - wb.feet(q[:1], base[:1])).max() <= 1e-10
+
+
+# ----------------------------------------------------------------------------- leg IK
+def test_numerical_leg_ik_equals_the_closed_form_on_the_builtin_leg():
+    wb = whole_body()
+    num = replace(wb, _closed=(None,) * 6, ik_kind=("numerical",) * 6)
+    run = walk(pattern="ripple", duration=2.0)
+    a = wb.body_ik(run.base_poses, run.feet_planned)
+    b = num.body_ik(run.base_poses, run.feet_planned)
+    assert np.abs(a.q - b.q).max() <= 1e-9
+    assert b.reached.all()
+    # out of reach: the numerical excess is the exact distance to the leg's annulus
+    from hexapod_kin.ik import detect_family
+
+    fam = detect_family(wb.params.legs[0].chain)
+    B = body_pose([0.0, 0.0, 0.08])
+    rng = np.random.default_rng(2)
+    far = wb.neutral_feet(None) + B[:3, 3]
+    far[:, :2] *= rng.uniform(1.6, 2.2, size=(6, 1))
+    e_closed = wb.body_ik(B, far, strict=False)
+    e_num = num.body_ik(B, far, strict=False)
+    assert not e_closed.reached.any() and not e_num.reached.any()
+    T0 = wb.mounts[0]
+    p0 = (far[0] - B[:3, 3] - T0[:3, 3]) @ T0[:3, :3]
+    assert e_num.excess[0, 0] == pytest.approx(float(annulus_excess(fam, p0[None])[0]), abs=1e-9)
+    assert np.allclose(e_num.excess, e_closed.excess, atol=1e-9)
+    with pytest.raises(GaitError) as err:
+        num.body_ik(B, far)
+    assert err.value.check == "reach" and err.value.amount == pytest.approx(e_num.excess[0, 0])
+
+
+def _four_joint_leg() -> Chain:
+    return Chain(
+        rows=(
+            KhalilRow("revolute", 0.0, 0.0, 0.0, 0.0),
+            KhalilRow("revolute", -math.pi / 2, 0.04, 0.0, 0.0),
+            KhalilRow("revolute", 0.0, 0.07, 0.0, 0.0),
+            KhalilRow("revolute", 0.0, 0.06, 0.0, 0.0),
+            KhalilRow("fixed", 0.0, 0.06, 0.0, 0.0),
+        ),
+        joint_names=("hip", "knee", "ankle", "toe"),
+        name="leg4",
+        tip="foot",
+        link_radius=0.006,
+    )
+
+
+def test_numerical_ik_reaches_legs_the_closed_form_refuses(phx):
+    from hexapod_kin.ik import detect_family
+
+    leg = _four_joint_leg()
+    with pytest.raises(HexapodKinError):
+        detect_family(leg)
+    hexa = Hexapod(
+        legs=tuple(
+            LegMount(f"l{k}", leg, (0.1 * math.cos(y), 0.1 * math.sin(y), 0.0), y)
+            for k, y in enumerate(np.radians([30, 90, 150, -150, -90, -30]))
+        )
+    )
+    rng = np.random.default_rng(4)
+    for wb in (as_whole_body(hexa), replace(phx, _closed=(None,) * 6)):
+        q, base = _random_state(wb, 12, 11)
+        q = 0.5 * q  # well inside the limits
+        for i in range(len(q)):  # each from a start 0.3 rad away (a warm start)
+            start = q[i] + rng.uniform(-0.3, 0.3, size=wb.nq)
+            target = wb.feet(q[i : i + 1], base[i : i + 1])
+            ik = wb.body_ik(base[i], target[0], q_prev=start, strict=False)
+            assert ik.reached.all()
+            assert np.abs(wb.feet(ik.q, base[i : i + 1]) - target).max() <= 1e-10
+    assert as_whole_body(hexa).ik_kind == ("numerical",) * 6
+    run = walk(as_whole_body(hexa), duration=2.0, stride=0.03, strict=False)
+    assert run.ik_ok.all() and run.min_margin > 0 and run.min_limit_margin >= 0
+    wb4 = as_whole_body(hexa)  # the stance feet by FK of the walk's joints: on the plan
+    assert np.abs(wb4.feet(run.q, run.base_poses) - run.feet_planned).max() <= 1e-10
+
+
+# ----------------------------------------------------------------------------- feet specs
+def test_foot_specs_in_every_form_give_the_same_robot(tmp_path):
+    forms = [
+        SPEC,
+        SPEC.replace(" ", ","),
+        SPEC.split(),
+        {f"tibia_{s}": OFFSET for s in SIDES},
+    ]
+    y = tmp_path / "feet.yaml"
+    y.write_text("".join(f"tibia_{s}: [0, 0.16, 0.029]\n" for s in SIDES))
+    t = tmp_path / "feet.toml"
+    t.write_text(
+        "".join(f'[[feet]]\nframe = "tibia_{s}"\noffset = [0, 0.16, 0.029]\n' for s in SIDES)
+    )
+    j = tmp_path / "feet.json"
+    j.write_text(json.dumps({"feet": {f"tibia_{s}": list(OFFSET) for s in SIDES}}))
+    forms += [str(y), t, str(j)]
+    want = parse_feet(SPEC)
+    for f in forms:
+        assert sorted(parse_feet(f), key=lambda s: s.frame) == sorted(want, key=lambda s: s.frame)
+    for bad in ("tibia_lf:0,0.1", "tibia_lf:a,b,c", "tibia_lf:0,0,0 tibia_lf:1,1,1"):
+        with pytest.raises(ParameterError):
+            parse_feet(bad)
+    with pytest.raises(ConfigurationError, match="no foot link"):
+        as_whole_body(str(PHX))
+    with pytest.raises(ConfigurationError, match="tibia_xx"):
+        as_whole_body(str(PHX), feet="tibia_xx:0,0,0")
+
+
+def test_foot_radius_is_a_property_of_the_robot():
+    assert whole_body().foot_radius == pytest.approx(1.5 * 0.008)
+    from hexapod_kin.sources import resolve_source
+
+    urdf = ET.fromstring(resolve_source("erd:anymal").text)
+    radii = []
+    for link in urdf.iter("link"):
+        if link.get("name", "").endswith("_FOOT"):
+            radii += [float(s.get("radius")) for s in link.iter("sphere")]
+    assert as_whole_body("erd:anymal").foot_radius == pytest.approx(min(radii))
+    r = as_whole_body(str(PHX), feet=SPEC, foot_radius=0.01)
+    pose = standing_pose(r)
+    assert np.allclose(pose.feet[:, 2], 0.01) and np.allclose(pose.contacts[:, 2], 0.0)
+    with pytest.raises(ParameterError):
+        as_whole_body(str(PHX), feet=SPEC, foot_radius=-1)
+
+
+# ----------------------------------------------------------------------------- CLI
+def test_cli_stand_and_gait_take_any_source(capsys):
+    from hexapod_kin.cli import main
+
+    feet = [a for s in SIDES for a in ("--foot", f"tibia_{s}:0,0.16,0.029")]
+    assert main(["stand", str(PHX), *feet, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    W = _urdf_mass(PHX.read_text()) * G
+    assert sum(f[2] for f in out["forces"]) == pytest.approx(W, rel=1e-12)
+    assert main(["gait", str(PHX), *feet, "--pattern", "wave", "--duration", "2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["ok"] is True and out["max_slip"] <= 1e-9
+    assert main(["gait", "--foot-reach", "0.17", "--duration", "1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["foot_reach"] == 0.17
+    for argv in (
+        ["stand", str(PHX)],
+        ["gait", str(PHX), "--foot", "tibia_lf:1,2"],
+        ["gait", "erd:solo12", "--pattern", "tripod"],
+        ["stand", "erd:solo12", "--gait", "tripod"],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len([line for line in err if line.startswith("hexapod-kin: error")]) == 1
+
+
+# ----------------------------------------------------------------------------- building
+def test_whole_body_is_cached_and_as_whole_body_takes_every_form():
+    from hexapod_kin import load
+
+    wb = whole_body()
+    assert wb is whole_body() is as_whole_body(None) is as_whole_body(wb)
+    assert as_whole_body("hexapod") is wb and as_whole_body(load("hexapod")) is wb
+    p = robots.hexapod(l2=0.11)
+    assert whole_body(p) is whole_body(p) is as_whole_body(p)
+    assert as_whole_body(str(PHX), feet=SPEC) is as_whole_body(str(PHX), feet=SPEC)
+    for bad in ((wb, {"feet": SPEC}), (robots.hexapod(), {"feet": SPEC}), ("hexabot_leg", {})):
+        with pytest.raises(ParameterError):
+            as_whole_body(bad[0], **bad[1])
+
+
+def test_the_default_stance_rule_by_hand():
+    """Built-in legs (l1, l2, l3) = (0.05, 0.1, 0.1), stretched at q = 0: span 0.25 m, so the
+    neutral reach is 0.64 · 0.25 = 0.16 m and the body height √(ρ² − r²) = 0.32 · 0.25 m."""
+    wb = whole_body()
+    assert wb.foot_reach == pytest.approx(0.16, abs=1e-15)
+    assert wb.body_height == pytest.approx(0.08, abs=1e-15)
+    yaw = np.radians([30, 90, 150, -150, -90, -30])
+    want = np.column_stack([(0.12 + 0.16) * np.cos(yaw), (0.12 + 0.16) * np.sin(yaw)])
+    assert np.allclose(wb.neutral_feet(None)[:, :2], want, atol=1e-15)
+    assert np.allclose(wb.neutral_feet(0.2)[:, :2], want / 0.28 * 0.32, atol=1e-15)
+    # solo12 hangs its legs at q = 0: the feet stay under the hips, the body at 0.7155 span
+    solo = as_whole_body("erd:solo12")
+    pose = standing_pose(solo)
+    assert pose.height == solo.body_height and np.allclose(pose.contacts[:, 2], 0.0)
+    feet_q0 = solo.feet(np.zeros((1, 12)), np.eye(4)[None])[0]
+    assert np.allclose(pose.feet[:, :2], feet_q0[:, :2], atol=1e-12)
+    reached = solo.feet(pose.q[None], pose.base[None])[0]
+    assert np.abs(reached - pose.feet).max() <= 1e-10
