@@ -53,7 +53,11 @@ COMMANDS = sorted(SUBS)
 
 
 def _positionals(name: str) -> list[str]:
-    return [a.dest for a in SUBS[name]._actions if not a.option_strings and a.dest != "help"]
+    return [
+        a.dest
+        for a in SUBS[name]._actions
+        if not a.option_strings and a.dest != "help" and a.nargs != "?"
+    ]
 
 
 def _required_options(name: str) -> list[str]:
