@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from . import robots
-from ._fromurdf import chain_from_urdf
+from ._fromurdf import TableRecovery, chain_from_urdf, recover_chain
 from ._table_kin import table_fk, table_transforms
 from ._version import __version__
 from .exceptions import (
@@ -99,10 +99,12 @@ __all__ = [
     "ParameterError",
     "Pose",
     "SourceError",
+    "TableRecovery",
     "UrdfError",
     "UrdfWarning",
     "chain_from_urdf",
     "load",
+    "recover_chain",
     "robots",
     "table_fk",
     "table_transforms",
