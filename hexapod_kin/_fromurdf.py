@@ -185,6 +185,9 @@ class TableRecovery:
             can differ from the URDF's in any configuration (0 without snaps).
         fk_error: The largest tip position difference table vs URDF (Pinocchio) measured at
             ``q = 0`` and 8 random configurations [m].
+        zeroed: Lengths (``d<j>``, ``r<j>``, ``tool_<x|y|z>``) within rounding of the URDF's
+            constants (below 1e-9 × max(1 m, size)) set to exactly 0, with their values [m];
+            each moves the tip by its size (included in ``fk_bound``). Only when snapping.
 
     """
 
@@ -194,17 +197,20 @@ class TableRecovery:
     size: float
     fk_bound: float
     fk_error: float
+    zeroed: tuple[tuple[str, float], ...] = ()
 
     def summary(self) -> str:
         """One line: the snaps with their sizes and the FK difference (or "no snaps")."""
+        zeroed = "".join(f"; zeroed {k} = {v:.2g} m" for k, v in self.zeroed)
         if not self.snaps:
             return (
-                f"no axis snapped (angle_tol {self.angle_tol:.3g} rad); FK equals the URDF's "
-                f"to {self.fk_error:.2g} m"
+                f"no axis snapped (angle_tol {self.angle_tol:.3g} rad){zeroed}; FK equals the "
+                f"URDF's to {self.fk_error:.2g} m"
             )
         return (
             f"snapped {len(self.snaps)} axis pair(s) (angle_tol {self.angle_tol:.3g} rad): "
             + ", ".join(str(s) for s in self.snaps)
+            + zeroed
             + f"; FK within {self.fk_error:.2g} m of the URDF (bound {self.fk_bound:.2g} m)"
         )
 
@@ -217,6 +223,7 @@ class TableRecovery:
             "size": self.size,
             "fk_bound": self.fk_bound,
             "fk_error": self.fk_error,
+            "zeroed": {k: v for k, v in self.zeroed},
         }
 
 
@@ -284,6 +291,7 @@ def _exact_twists(rows: list[KhalilRow], snapped: set[int]) -> list[KhalilRow]:
 
 
 _HALF_PI = 0.5 * math.pi
+_LEN_TOL = 1e-9
 
 
 def chain_from_urdf(
@@ -487,6 +495,9 @@ def recover_chain(
     tool[:3, :3] = u @ vt
     size = _size(points, t_base_tip[:3, 3])
     _check_lengths(rows, tool, size, path_names, km, axes, tol)
+    zeroed: list[tuple[str, float]] = []
+    if tol > 0:  # lengths within rounding of the URDF's constants: clean zeros
+        rows, tool, zeroed = _zero_lengths(rows, tool, _LEN_TOL * max(1.0, size))
     limits = []
     for k in range(n):
         lo, hi = float(km.lower[k]), float(km.upper[k])
@@ -506,12 +517,14 @@ def recover_chain(
         f"{base_name}_kk{j}" if f"{base_name}_kk{j}" != tip_name else f"kk{j}"
         for j in range(1, n + 1)
     )
-    fk_bound = sum(s.angle * s.reach for s in snaps)
+    fk_bound = sum(s.angle * s.reach for s in snaps) + sum(abs(v) for _, v in zeroed)
     description = f"Khalil table recovered from {km.name!r} ({km.base} -> {km.tip})"
     if snaps:
         description += (
             f"; snapped (angle_tol {tol:.3g} rad): " + ", ".join(str(s) for s in snaps)
         )
+    if zeroed:
+        description += "; zeroed " + ", ".join(f"{k} = {v:.2g} m" for k, v in zeroed)
     chain = Chain(
         rows=tuple(rows),
         joint_names=jnames,
@@ -525,7 +538,30 @@ def recover_chain(
         description=description,
     )
     fk_error = _check(chain, km, fk_bound, sum(s.angle for s in snaps))
-    return TableRecovery(chain, tuple(snaps), tol, size, fk_bound, fk_error)
+    return TableRecovery(chain, tuple(snaps), tol, size, fk_bound, fk_error, tuple(zeroed))
+
+
+def _zero_lengths(
+    rows: list[KhalilRow], tool: np.ndarray, tiny: float
+) -> tuple[list[KhalilRow], np.ndarray, list[tuple[str, float]]]:
+    """Set |d|, |r| and tool offsets below ``tiny`` to 0 (each moves the tip by its size)."""
+    zeroed: list[tuple[str, float]] = []
+    out = []
+    for k, row in enumerate(rows, start=1):
+        for f in ("d", "r"):
+            v = getattr(row, f)
+            if v != 0.0 and abs(v) < tiny:
+                zeroed.append((f"{f}{k}", v))
+                row = replace(row, **{f: 0.0})
+        out.append(row)
+    tool = tool.copy()
+    for i, axis in enumerate("xyz"):
+        v = float(tool[i, 3])
+        if v != 0.0 and abs(v) < tiny:
+            if abs(v) > 1e-14:  # beyond rounding: say so
+                zeroed.append((f"tool_{axis}", v))
+            tool[i, 3] = 0.0
+    return out, tool, zeroed
 
 
 def _size(points: list[np.ndarray], tip: np.ndarray) -> float:

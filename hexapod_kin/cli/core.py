@@ -304,8 +304,10 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             check["max_abs_det_sym_minus_det_pinocchio"] = float(
                 np.abs(det_sym - np.linalg.det(jac_pin)).max()
             )
+    recovered = deriv.chain.description.startswith("Khalil table recovered")
     if args.json:
-        emit_json({**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check})
+        extra = {"table_from_urdf": deriv.chain.description} if recovered else {}
+        emit_json({**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check, **extra})
         return 0
     if args.latex:
         print(deriv.latex())
@@ -313,6 +315,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..report.cache import derivation_text
 
     print(derivation_text(deriv))  # the pretty-printed text is kept on disk with its key
+    if recovered:  # the URDF's table: what was snapped, one line
+        print(f"table: {deriv.chain.description}")
     if check:
         labels = {
             "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
