@@ -520,9 +520,7 @@ def recover_chain(
     fk_bound = sum(s.angle * s.reach for s in snaps) + sum(abs(v) for _, v in zeroed)
     description = f"Khalil table recovered from {km.name!r} ({km.base} -> {km.tip})"
     if snaps:
-        description += (
-            f"; snapped (angle_tol {tol:.3g} rad): " + ", ".join(str(s) for s in snaps)
-        )
+        description += f"; snapped (angle_tol {tol:.3g} rad): " + ", ".join(str(s) for s in snaps)
     if zeroed:
         description += "; zeroed " + ", ".join(f"{k} = {v:.2g} m" for k, v in zeroed)
     chain = Chain(

@@ -19,6 +19,16 @@ Khalil table (the pattern of σ, α, d, r), never from a preset name:
     solutions use ``θ3 = 0`` (joint value). Up to 2 solutions (both elbow branches); the
     prismatic value follows from z.
 
+The legs are recognised through what leaves their closed form unchanged (:func:`detect_family`):
+a base pose and any ``α1``, ``d1`` (the *mount*), offsets ``r2``, ``r3`` along the knee axis,
+fixed rows after the last joint and a **tool offset** — the foot a fixed point ``p`` in the
+last joint's frame is an effective last length ``√(p_x² + p_y²)``, an angle offset
+``atan2(p_y, p_x)`` on the last joint and a lateral offset ``e`` along the knee axis (the hip
+then turns by ``atan2(−σe, ±√(x² + y² − e²))``) — an ankle axis anti-parallel to the knee's
+(``α3 = π``: that joint enters negated), and twists within ``angle_tol`` (default
+:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished by Newton
+steps on the table itself (:mod:`hexapod_kin.ik._table_finish`).
+
 Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
@@ -42,6 +52,8 @@ from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
 from ..params import Chain, Hexapod, Pose, khalil_transform
+from ._table_finish import finish_on_table
+from ._table_finish import fit_angles as _fit
 
 __all__ = [
     "FAMILIES",
@@ -139,10 +151,42 @@ class LegFamily:
         """Accepted target lengths: (3,) for legs, (3, 4) for the SCARA (with yaw)."""
         return (3, 4) if self.family == "scara" else (3,)
 
+    def reach_excess(self, targets: Any) -> np.ndarray:
+        """Distance (N,) [m] by which targets lie outside the leg's reach (0 inside).
+
+        Targets (N, 3) in the chain's base frame, as :func:`analytic_batch` takes them. The
+        distance is that of the exact pattern's workspace (joint limits ignored): the
+        planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]`` (2 DOF: ``|l2|``) over
+        both hip branches, and ``|e| − √(x² + y²)`` for a lateral offset ``e``.
+
+        Raises:
+            IKError: The family is ``scara`` (no such distance) or bad targets.
+
+        """
+        if self.family == "scara":
+            raise IKError("reach_excess: legs only (coxa_tibia, leg3)", parameter="family")
+        x, _ = _targets(self, targets)
+        h = np.hypot(x[:, 0], x[:, 1])
+        w = (x[:, 2] - self.height) * self.sign
+        side = np.maximum(abs(self.lateral) - h, 0.0)
+        m = np.sqrt(np.maximum(h * h - self.lateral**2, 0.0))
+        if self.family == "leg3":
+            l1, l2, l3 = self.lengths
+            rmin, rmax = abs(abs(l2) - abs(l3)), abs(l2) + abs(l3)
+        else:
+            l1, l2 = self.lengths
+            rmin = rmax = abs(l2)
+        best = np.full(len(x), np.inf)
+        for hs in (1.0, -1.0):
+            r = np.hypot(hs * m - l1, w)
+            best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
+        return np.asarray(np.maximum(best, side))
+
     @property
     def scale(self) -> float:
-        """A length scale of the chain in [m] (sum of |d| and |r|), for tolerances."""
+        """A length scale of the chain in [m] (sum of |d|, |r| and the tool offset)."""
         s = sum(abs(r.d) + abs(r.r) for r in self.chain.rows)
+        s += float(np.linalg.norm(self.chain.tool_matrix[:3, 3]))
         return s if s > 0 else 1.0
 
 
@@ -464,85 +508,10 @@ def analytic_batch(
             lateral=fam.lateral,
             joint_signs=fam.joint_signs,
         )
-        q, valid = _finish(fam, x, q, valid, tol_abs, limits)
+        q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
-
-
-def _khalil_many(alpha: float, d: float, theta: np.ndarray, r: float) -> np.ndarray:
-    """(M, 4, 4) ``Rx(α)·Tx(d)·Rz(θ)·Tz(r)`` for an array of θ (see ``khalil_transform``)."""
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    ct, st = np.cos(theta), np.sin(theta)
-    t = np.zeros((len(theta), 4, 4))
-    t[:, 0, 0], t[:, 0, 1], t[:, 0, 3] = ct, -st, d
-    t[:, 1, 0], t[:, 1, 1], t[:, 1, 2], t[:, 1, 3] = ca * st, ca * ct, -sa, -r * sa
-    t[:, 2, 0], t[:, 2, 1], t[:, 2, 2], t[:, 2, 3] = sa * st, sa * ct, ca, r * ca
-    t[:, 3, 3] = 1.0
-    return t
-
-
-def _leg_fk(fam: LegFamily, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Foot (M, 3) and ∂foot/∂q (M, 3, n) of the table itself, in the mount frame."""
-    ch, n = fam.chain, q.shape[1]
-    rows = ch.rows
-    t = np.eye(4)
-    for row in rows[n:]:
-        t = t @ row.transform()
-    foot = (t @ ch.tool_matrix)[:3, 3]
-    acc = np.broadcast_to(np.eye(4), (len(q), 4, 4))
-    axes, origins = [], []
-    for j in range(n):
-        row = rows[j]
-        alpha, d = (0.0, 0.0) if j == 0 else (row.alpha, row.d)  # α1, d1: in the mount
-        acc = acc @ _khalil_many(alpha, d, row.theta + q[:, j], row.r)
-        axes.append(acc[:, :3, 2])
-        origins.append(acc[:, :3, 3])
-    p = acc[:, :3, :3] @ foot + acc[:, :3, 3]
-    jac = np.stack([np.cross(z, p - o) for z, o in zip(axes, origins)], axis=2)
-    return p, jac
-
-
-def _finish(
-    fam: LegFamily,
-    x: np.ndarray,
-    q: np.ndarray,
-    valid: np.ndarray,
-    tol_abs: float,
-    limits: tuple[np.ndarray, np.ndarray] | None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Newton steps on the table's own FK from the exact-pattern solutions (twists off by
-    ``fam.deviation``); a slot stays valid when its foot ends within ``tol_abs`` of the target
-    (2 DOF: the target's distance to the table's reachable surface, by Gauss–Newton)."""
-    n_t, k, n = q.shape
-    q = q.copy()
-    idx = np.argwhere(valid)
-    if len(idx):
-        qa = q[idx[:, 0], idx[:, 1]]
-        xa = x[idx[:, 0], :3]
-        damp = 1e-24 * fam.scale**2 * np.eye(n)
-        for _ in range(12):
-            p, jac = _leg_fk(fam, qa)
-            res = xa - p
-            jt = np.swapaxes(jac, 1, 2)
-            step = np.linalg.solve(jt @ jac + damp, (jt @ res[:, :, None]))[:, :, 0]
-            qa = qa + step
-            if float(np.abs(step).max()) < 1e-15:
-                break
-        p, _ = _leg_fk(fam, qa)
-        miss = np.linalg.norm(xa - p, axis=1)
-        qa = wrap_angles(qa)
-        ok = miss <= max(tol_abs, 1e-12 * fam.scale)
-        if limits is not None:
-            lo, hi = limits[0] - 1e-12, limits[1] + 1e-12
-            for j in range(n):
-                qa[:, j], inside = _fit(qa[:, j], lo[j], hi[j])
-                ok &= inside
-        q[idx[:, 0], idx[:, 1]] = qa
-        valid = valid.copy()
-        valid[idx[:, 0], idx[:, 1]] = ok
-    q[~valid] = np.nan
-    return q, valid
 
 
 def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -573,13 +542,6 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q[:, b, 3] = prism
         valid[:, b] = ok
     return q, valid
-
-
-def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Angles shifted by ±2π into [lo, hi] where that helps; (angles, inside)."""
-    v = np.where((v < lo) & (v + _TWO_PI <= hi), v + _TWO_PI, v)
-    v = np.where((v > hi) & (v - _TWO_PI >= lo), v - _TWO_PI, v)
-    return v, (v >= lo) & (v <= hi)
 
 
 def _leg_slots(
