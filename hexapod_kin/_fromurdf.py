@@ -255,10 +255,12 @@ def _snap(
         s = float(np.linalg.norm(np.cross(z0, z1)))
         off_par = math.atan2(s, abs(c))  # angle to the nearest of ±z0
         off_perp = math.atan2(abs(c), s)  # angle to the plane ⟂ z0
-        if 0.0 < off_par <= tol:
+        if off_par <= _ROUNDING or off_perp <= _ROUNDING:
+            continue  # exact up to rounding: the frame placement handles it as it is
+        if off_par <= tol:
             target = z0 if c > 0 else -z0
             kind, angle = ("parallel" if c > 0 else "anti-parallel"), off_par
-        elif 0.0 < off_perp <= tol:
+        elif off_perp <= tol:
             w = z1 - c * z0
             target = w / np.linalg.norm(w)
             kind, angle = "perpendicular", off_perp
@@ -292,6 +294,7 @@ def _exact_twists(rows: list[KhalilRow], snapped: set[int]) -> list[KhalilRow]:
 
 _HALF_PI = 0.5 * math.pi
 _LEN_TOL = 1e-9
+_ROUNDING = 1e-13  # [rad]: axis relations this close are exact already (never snapped)
 
 
 def chain_from_urdf(
