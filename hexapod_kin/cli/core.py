@@ -67,7 +67,13 @@ def _add_urdf(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("preset", help="preset name (see `hexapod-kin list`) or a table file")
-    p.add_argument("-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument(
+        "-s",
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="preset parameter; a list as comma-separated numbers (e.g. mount_yaw_deg=45,90)",
+    )
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
 
@@ -77,7 +83,7 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
 
     if args.output:
         output_path(args.output, "-o/--output", (".urdf", ".xml"))
-    built = _params_of(args.preset, set_params(args.set))
+    built = _params_of(args.preset, set_params(args.set, source=args.preset))
     # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
         [args.preset]
