@@ -261,6 +261,18 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------ derive
+def _tool_arg(p: argparse.ArgumentParser) -> None:
+    """``--tool X Y Z ROLL PITCH YAW``: a point (frame) fixed to the tip, e.g. a foot."""
+    p.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (e.g. a foot point "
+        "on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0)",
+    )
+
+
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
         "derive",
@@ -268,6 +280,7 @@ def _add_derive(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
+    _tool_arg(p)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
     p.add_argument(
@@ -347,6 +360,7 @@ def _add_scan(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
+    _tool_arg(p)
     p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(
