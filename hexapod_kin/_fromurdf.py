@@ -549,11 +549,12 @@ def _zero_lengths(
     zeroed: list[tuple[str, float]] = []
     out = []
     for k, row in enumerate(rows, start=1):
-        for f in ("d", "r"):
-            v = getattr(row, f)
-            if v != 0.0 and abs(v) < tiny:
-                zeroed.append((f"{f}{k}", v))
-                row = replace(row, **{f: 0.0})
+        if row.d != 0.0 and abs(row.d) < tiny:
+            zeroed.append((f"d{k}", row.d))
+            row = replace(row, d=0.0)
+        if row.r != 0.0 and abs(row.r) < tiny:
+            zeroed.append((f"r{k}", row.r))
+            row = replace(row, r=0.0)
         out.append(row)
     tool = tool.copy()
     for i, axis in enumerate("xyz"):

@@ -347,6 +347,8 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
     if last == 0.0 or a.d == 0.0 or (nq == 3 and rows[2].d == 0.0):
         return None  # a foot on the last axis, or a zero link: not these closed forms
     lengths = (a.d, last) if nq == 2 else (a.d, rows[2].d, last)
+    offs: tuple[float, ...]
+    signs: tuple[float, ...]
     if nq == 2:
         lateral = a.r + pz
         offs = (r1.theta, a.theta + delta)

@@ -348,8 +348,11 @@ def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
 
 
 def _chop(expr: Any, rel: float = 1e-12) -> Any:
-    """Float coefficients below ``rel`` × the largest one set to 0 (rounding noise of tables
-    with inexact angles, e.g. 1e-17 terms of a URDF's table: they would factor as real terms)."""
+    """Float coefficients below ``rel`` × the largest one, set to 0.
+
+    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
+    that would otherwise factor as real terms.
+    """
     floats = expr.atoms(sp.Float)
     if not floats:
         return expr
