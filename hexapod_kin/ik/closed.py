@@ -359,9 +359,9 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         signs = (1.0, 1.0, kappa)
     if abs(lateral) < 1e-15 * (abs(a.d) + abs(last)):
         lateral = 0.0
-    mount = ch.base_matrix
+    mount = ch.base_pose  # α1 = d1 = 0: the base pose as it is (same bits as before)
     if not (r1.alpha == 0.0 and r1.d == 0.0):
-        mount = mount @ khalil_transform(r1.alpha, r1.d, 0.0, 0.0)
+        mount = Pose.of(ch.base_matrix @ khalil_transform(r1.alpha, r1.d, 0.0, 0.0))
     return LegFamily(
         "coxa_tibia" if nq == 2 else "leg3",
         ch,
@@ -371,7 +371,7 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         tuple(float(v) for v in offs),
         lateral=float(lateral),
         joint_signs=signs,
-        mount=None if np.array_equal(mount, np.eye(4)) else Pose.of(mount),
+        mount=mount,
         deviation=0.0 if dev <= _ANG_TOL else dev,
     )
 
@@ -450,7 +450,15 @@ def analytic_batch(
 
     Slot meanings: coxa_tibia ``[hip toward the target, hip reversed (φ1 + π)]``; leg3
     ``[toward/ankle +, toward/ankle −, reversed/ankle +, reversed/ankle −]``; scara
-    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid.
+    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid. With a
+    lateral offset ``e`` "toward" is the branch ``u + l1 = +√(x² + y² − e²)``.
+
+    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0, within
+    :data:`FAMILY_TOL`) is solved by the exact pattern's closed form, then each solution is
+    finished by Newton steps on the table itself (:mod:`hexapod_kin.ik._table_finish`); a slot
+    stays valid when its foot lands within ``tol`` × the length scale of the target (2 DOF:
+    the target that close to the table's surface) and, with ``within_limits``, inside the
+    limits. The slots keep their meaning.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
