@@ -296,3 +296,29 @@ def test_near_perpendicular_axis_is_snapped_with_its_bound():
     assert err <= rec.fk_bound * (1 + 1e-9)
     exact = hk.recover_chain(text, tip="l4", angle_tol=1e-5)  # below the tolerance: kept
     assert exact.snaps == () and _fk_error(exact.chain, model) < 1e-12
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+def test_phantomx_derive_and_scan_from_the_cli(capsys, tmp_path, monkeypatch):
+    import json
+
+    from hexapod_kin.cli import main
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    code = main(["derive", PHANTOMX, "--base", "base_link", "--tip", "tibia_lf", "--json",
+                 "--budget", "2"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert out["lengths_m"]["l1"] == pytest.approx(0.054, abs=1e-12)
+    assert out["lengths_m"]["l2"] == pytest.approx(math.hypot(0.0645, 0.0145), abs=1e-12)
+    assert "anti-parallel by 2.65e-06 rad" in out["table_from_urdf"]
+    foot = ["--tool", *map(str, PHANTOMX_FOOT[0]), "0", "0", "0"]
+    code = main(["scan", PHANTOMX, "--tip", "tibia_lf", *foot, "--grid", "9", "--json",
+                 "--family-budget", "2"])  # fmt: skip
+    scan = json.loads(capsys.readouterr().out)
+    assert code == 0 and len(scan["q"]) == 81
+    model = hk.load(PHANTOMX, tip="tibia_lf", tool=PHANTOMX_FOOT)
+    # the scan's manipulability is Pinocchio's sqrt(det(J Jᵀ)) of the position rows
+    for q, w in list(zip(scan["q"], scan["manipulability"]))[::10]:
+        jac = model.jacobian(np.array(q))[:3]
+        assert w == pytest.approx(math.sqrt(np.linalg.det(jac @ jac.T)), rel=1e-9, abs=1e-15)
