@@ -5,7 +5,8 @@ A leg whose twists are within ``angle_tol`` of the closed-form pattern (``α2 = 
 closed form (:mod:`hexapod_kin.ik.closed`); each solution is then finished by damped Newton
 steps ``Δq = (JᵀJ + λI)⁻¹ Jᵀ (x − p(q))`` on the table's own forward kinematics (numpy,
 vectorised over all solutions; ``J = [z_j × (p − o_j)]``). From a start ``O(deviation)``
-away, the steps converge quadratically (≤ 12 steps; they stop when a step is below 1e-15).
+away, the steps converge quadratically (≤ 12 steps; a solution stops moving once its step is
+below 1e-14 rad).
 """
 
 from __future__ import annotations
@@ -30,37 +31,43 @@ def fit_angles(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]
     return v, (v >= lo) & (v <= hi)
 
 
-def _khalil_many(alpha: float, d: float, theta: np.ndarray, r: float) -> np.ndarray:
-    """(M, 4, 4) ``Rx(α)·Tx(d)·Rz(θ)·Tz(r)`` for an array of θ (see ``khalil_transform``)."""
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    ct, st = np.cos(theta), np.sin(theta)
-    t = np.zeros((len(theta), 4, 4))
-    t[:, 0, 0], t[:, 0, 1], t[:, 0, 3] = ct, -st, d
-    t[:, 1, 0], t[:, 1, 1], t[:, 1, 2], t[:, 1, 3] = ca * st, ca * ct, -sa, -r * sa
-    t[:, 2, 0], t[:, 2, 1], t[:, 2, 2], t[:, 2, 3] = sa * st, sa * ct, ca, r * ca
-    t[:, 3, 3] = 1.0
-    return t
-
-
 def _leg_fk(ch: Chain, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Foot (M, 3) and ∂foot/∂q (M, 3, n) of the table itself, in the mount frame."""
-    n = q.shape[1]
+    """Foot (M, 3) and ∂foot/∂q (M, 3, n) of the table itself, in the mount frame.
+
+    The rows ``Rx(α)·Tx(d)·Rz(θ + q)·Tz(r)`` are applied to the frame's columns
+    ``(x, y, z)`` and origin ``p`` as (M, 3) arrays (row 1's α1, d1 are in the mount).
+    """
+    n, m = q.shape[1], len(q)
     rows = ch.rows
     t = np.eye(4)
     for row in rows[n:]:
         t = t @ row.transform()
     foot = (t @ ch.tool_matrix)[:3, 3]
-    acc = np.broadcast_to(np.eye(4), (len(q), 4, 4))
+    eye = np.eye(3)
+    cx, cy, cz = (np.broadcast_to(eye[k], (m, 3)) for k in range(3))
+    p = np.zeros((m, 3))
     axes, origins = [], []
     for j in range(n):
         row = rows[j]
-        alpha, d = (0.0, 0.0) if j == 0 else (row.alpha, row.d)  # α1, d1: in the mount
-        acc = acc @ _khalil_many(alpha, d, row.theta + q[:, j], row.r)
-        axes.append(acc[:, :3, 2])
-        origins.append(acc[:, :3, 3])
-    p = acc[:, :3, :3] @ foot + acc[:, :3, 3]
-    jac = np.stack([np.cross(z, p - o) for z, o in zip(axes, origins)], axis=2)
-    return p, jac
+        if j > 0:
+            ca, sa = math.cos(row.alpha), math.sin(row.alpha)
+            p = p + row.d * cx
+            cy, cz = ca * cy + sa * cz, ca * cz - sa * cy
+        phi = row.theta + q[:, j]
+        c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
+        cx, cy = c * cx + s * cy, c * cy - s * cx
+        if row.r:
+            p = p + row.r * cz
+        axes.append(cz)
+        origins.append(p)
+    tip = p + foot[0] * cx + foot[1] * cy + foot[2] * cz
+    jac = np.empty((m, 3, n))
+    for j, (z, o) in enumerate(zip(axes, origins)):
+        v = tip - o  # z × v, by components (np.cross is slow on (M, 3))
+        jac[:, 0, j] = z[:, 1] * v[:, 2] - z[:, 2] * v[:, 1]
+        jac[:, 1, j] = z[:, 2] * v[:, 0] - z[:, 0] * v[:, 2]
+        jac[:, 2, j] = z[:, 0] * v[:, 1] - z[:, 1] * v[:, 0]
+    return tip, jac
 
 
 def finish_on_table(
@@ -95,13 +102,15 @@ def finish_on_table(
         qa = q[idx[:, 0], idx[:, 1]]
         xa = x[idx[:, 0], :3]
         damp = 1e-12 * scale**2 * np.eye(n)
+        act = np.arange(len(qa))  # the slots still moving
         for _ in range(12):
-            p, jac = _leg_fk(ch, qa)
-            res = xa - p
+            p, jac = _leg_fk(ch, qa[act])
+            res = xa[act] - p
             jt = np.swapaxes(jac, 1, 2)
             step = np.linalg.solve(jt @ jac + damp, (jt @ res[:, :, None]))[:, :, 0]
-            qa = qa + step
-            if float(np.abs(step).max()) < 1e-15:
+            qa[act] += step
+            act = act[np.abs(step).max(axis=1) >= 1e-14]
+            if not len(act):
                 break
         p, _ = _leg_fk(ch, qa)
         miss = np.linalg.norm(xa - p, axis=1)
