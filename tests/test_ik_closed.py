@@ -337,3 +337,24 @@ def test_leg_solutions_is_the_one_home_per_target_lengths_and_limits():
     d = ref[0].to_dict()
     assert d["family"] == "leg3" and len(d["q"]) == 500
     assert ik.detect_family(robots.hexabot_leg()).to_dict()["lengths"] == [0.05, 0.1, 0.1]
+
+
+@pytest.mark.parametrize(
+    ("source", "base", "tip"),
+    [("erd:solo12", "base_link", "FL_FOOT"), ("erd:anymal", "base", "RH_FOOT")],
+)
+def test_quadruped_legs_closed_form(source, base, tip):
+    """solo12 / ANYmal legs: hip and thigh axes meet (l1 = 0), the foot off the leg plane."""
+    rec = hk.recover_chain(source, base=base, tip=tip)
+    fam = ik.detect_family(rec.chain)
+    assert fam.family == "leg3" and fam.lengths[0] == 0.0 and fam.lateral != 0.0
+    model = hk.load(source, base=base, tip=tip)
+    qs = model.random_q(200, seed=3)
+    targets = np.array([model.position(q) for q in qs])  # Pinocchio on the URDF itself
+    batch = ik.analytic_batch(rec.chain, targets)
+    assert batch.reachable.all()
+    for i in range(len(qs)):
+        sols = batch.q[i][batch.valid[i]]
+        assert any(np.abs(_wrapdiff(s, qs[i])).max() < 1e-7 for s in sols)
+        for s in sols:
+            np.testing.assert_allclose(model.position(s), targets[i], rtol=0, atol=1e-9)

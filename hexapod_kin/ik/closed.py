@@ -344,8 +344,8 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         last, delta = float(px), 0.0
     else:
         last, delta = math.hypot(px, py), math.atan2(py, px)
-    if last == 0.0 or a.d == 0.0 or (nq == 3 and rows[2].d == 0.0):
-        return None  # a foot on the last axis, or a zero link: not these closed forms
+    if last == 0.0 or (nq == 3 and rows[2].d == 0.0):
+        return None  # a foot on the last axis, or no thigh: not these closed forms
     lengths = (a.d, last) if nq == 2 else (a.d, rows[2].d, last)
     offs: tuple[float, ...]
     signs: tuple[float, ...]
