@@ -96,10 +96,13 @@ class LegFamily:
     Attributes:
         family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"``.
         chain: The chain.
-        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``.
+        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``;
+            a leg's last length is the one to its foot point, ``√(p_x² + p_y²)`` (``d`` of
+            the fixed row for the catalogue legs).
         height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
         sign: ``sin α2`` (±1) of the legs; ``cos α4`` (±1) of the SCARA's prismatic row.
-        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
+        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint; a leg's
+            last one includes the foot point's angle ``atan2(p_y, p_x)``.
         yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
         lateral: Legs: the foot's offset ``e`` along the knee axis [m] (``r2 + κ(r3 + p_z)``;
             0 for the catalogue legs). The hip then turns by ``atan2(−σe, ±√(h² − e²))``.
