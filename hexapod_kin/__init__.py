@@ -29,7 +29,7 @@ from .exceptions import (
 
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
     from . import robots
-    from ._fromurdf import chain_from_urdf
+    from ._fromurdf import TableRecovery, chain_from_urdf, recover_chain
     from ._table_kin import table_fk, table_transforms
     from .kinematics import load
     from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
@@ -41,6 +41,8 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
 _LAZY_NAMES = {
     "load": "kinematics",
     "chain_from_urdf": "_fromurdf",
+    "recover_chain": "_fromurdf",
+    "TableRecovery": "_fromurdf",
     "table_fk": "_table_kin",
     "table_transforms": "_table_kin",
     "to_urdf": "urdf",
@@ -130,10 +132,12 @@ __all__ = [
     "ParameterError",
     "Pose",
     "SourceError",
+    "TableRecovery",
     "UrdfError",
     "UrdfWarning",
     "chain_from_urdf",
     "load",
+    "recover_chain",
     "robots",
     "table_fk",
     "table_transforms",

@@ -17,23 +17,46 @@ base frame). Khalil frames are then placed on those lines:
 * what remains to the tip frame is ``Chain.tool``.
 
 Each row ``(α_j, d_j, θ_j, r_j)`` is read off consecutive frames; fixed URDF joints need no
-rows (Pinocchio folds them into the placements). The result is checked: the table's forward
-kinematics must equal Pinocchio's at ``q = 0`` and at random configurations, else an error.
+rows (Pinocchio folds them into the placements).
+
+**Snapping.** Real files write rotations with rounded constants (``3.14159``, ``1.5704``), so
+axes meant to be parallel miss by a few µrad and their common normal lands kilometres away.
+Before the frames are placed, each joint axis is compared with the previous one: when it is
+within ``angle_tol`` (default :data:`SNAP_TOL` = 1e-4 rad) of parallel, anti-parallel or
+perpendicular, the rest of the chain (that joint, the joints after it and the tip) is turned
+rigidly about that joint's origin by the small rotation that makes the relation exact (the
+correction of the rounded constant in the placement before the joint). Each snap is reported
+(:class:`Snap`, :attr:`TableRecovery.snaps`, and one clause of ``Chain.description``); snapped
+twists are exact multiples of π/2. A snap of ``ε`` rad moves the tip by at most
+``ε × (path length from that joint through the later joints to the tip)`` in every
+configuration: :attr:`TableRecovery.fk_bound` sums these.
+
+**Checks.** No recovered length (``|d|``, ``|r|``, the tool offset) may exceed the chain's size
+(:attr:`TableRecovery.size`: twice the path length from the base origin through the joint
+origins to the tip) — else :class:`~hexapod_kin.exceptions.ConfigurationError` naming the
+joints and the ``angle_tol`` that would snap them. The table's forward kinematics must equal
+Pinocchio's at ``q = 0`` and at random configurations: to 1e-9 relative (1e-12 m in practice)
+when nothing was snapped, else within ``fk_bound`` (plus that rounding).
 """
 
 from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from ._table_kin import table_fk
-from .exceptions import ConfigurationError, SourceError
+from .exceptions import ConfigurationError, ParameterError, SourceError
 from .params import Chain, JointLimits, KhalilRow, Pose
 
-__all__ = ["chain_from_urdf"]
+__all__ = ["SNAP_TOL", "Snap", "TableRecovery", "chain_from_urdf", "recover_chain"]
+
+#: Default angle tolerance [rad] within which consecutive joint axes are snapped to exactly
+#: parallel, anti-parallel or perpendicular (:func:`recover_chain`).
+SNAP_TOL = 1e-4
 
 _REVOLUTE = (
     "JointModelRX",
@@ -118,31 +141,238 @@ def _frame(o: np.ndarray, x: np.ndarray, z: np.ndarray) -> np.ndarray:
     return t
 
 
+@dataclass(frozen=True)
+class Snap:
+    """One snap: a joint axis turned to be exactly parallel or perpendicular to the previous one.
+
+    Attributes:
+        joints: The previous joint and the snapped joint (URDF names).
+        kind: ``"parallel"``, ``"anti-parallel"`` or ``"perpendicular"``.
+        angle: The rotation applied to the snapped joint and everything after it [rad].
+        reach: Path length from the snapped joint's origin through the later joints to the
+            tip [m]; the tip moves by at most ``angle × reach`` in every configuration.
+
+    """
+
+    joints: tuple[str, str]
+    kind: str
+    angle: float
+    reach: float
+
+    def __str__(self) -> str:
+        return f"{self.joints[0]}/{self.joints[1]} {self.kind} by {self.angle:.3g} rad"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (angle in [rad], reach in [m])."""
+        return {
+            "joints": list(self.joints),
+            "kind": self.kind,
+            "angle": self.angle,
+            "reach": self.reach,
+        }
+
+
+@dataclass(frozen=True)
+class TableRecovery:
+    """A recovered Khalil table with what was done to get it (:func:`recover_chain`).
+
+    Attributes:
+        chain: The recovered :class:`~hexapod_kin.params.Chain`.
+        snaps: The snaps applied, in chain order (empty for an exact URDF).
+        angle_tol: The snapping tolerance used [rad].
+        size: The bound on every recovered length [m] (see the module docstring).
+        fk_bound: ``Σ angle × reach`` over the snaps [m]: the most the table's tip position
+            can differ from the URDF's in any configuration (0 without snaps).
+        fk_error: The largest tip position difference table vs URDF (Pinocchio) measured at
+            ``q = 0`` and 8 random configurations [m].
+        zeroed: Lengths (``d<j>``, ``r<j>``, ``tool_<x|y|z>``) within rounding of the URDF's
+            constants (below 1e-9 × max(1 m, size)) set to exactly 0, with their values [m];
+            each moves the tip by its size (included in ``fk_bound``). Only when snapping.
+
+    """
+
+    chain: Chain
+    snaps: tuple[Snap, ...]
+    angle_tol: float
+    size: float
+    fk_bound: float
+    fk_error: float
+    zeroed: tuple[tuple[str, float], ...] = ()
+
+    def summary(self) -> str:
+        """One line: the snaps with their sizes and the FK difference (or "no snaps")."""
+        zeroed = "".join(f"; zeroed {k} = {v:.2g} m" for k, v in self.zeroed)
+        if not self.snaps:
+            return (
+                f"no axis snapped (angle_tol {self.angle_tol:.3g} rad){zeroed}; FK equals the "
+                f"URDF's to {self.fk_error:.2g} m"
+            )
+        return (
+            f"snapped {len(self.snaps)} axis pair(s) (angle_tol {self.angle_tol:.3g} rad): "
+            + ", ".join(str(s) for s in self.snaps)
+            + zeroed
+            + f"; FK within {self.fk_error:.2g} m of the URDF (bound {self.fk_bound:.2g} m)"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
+        return {
+            "chain": self.chain.name,
+            "snaps": [s.to_dict() for s in self.snaps],
+            "angle_tol": self.angle_tol,
+            "size": self.size,
+            "fk_bound": self.fk_bound,
+            "fk_error": self.fk_error,
+            "zeroed": {k: v for k, v in self.zeroed},
+        }
+
+
+def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking unit ``a`` to unit ``b`` (Rodrigues)."""
+    axis = np.cross(a, b)
+    s = float(np.linalg.norm(axis))
+    c = float(np.dot(a, b))
+    if s == 0.0:
+        return np.eye(3)
+    k = axis / s
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + s * kx + (1.0 - c) * (kx @ kx)
+
+
+def _snap(
+    points: list[np.ndarray],
+    axes: list[np.ndarray],
+    tip: np.ndarray,
+    names: list[str],
+    tol: float,
+) -> list[Snap]:
+    """Turn near-parallel / near-perpendicular axes exact, in place (``tip``: 4×4 pose)."""
+    snaps: list[Snap] = []
+    n = len(axes)
+    for k in range(n - 1):
+        z0, z1 = axes[k], axes[k + 1]
+        c = float(np.dot(z0, z1))
+        s = float(np.linalg.norm(np.cross(z0, z1)))
+        off_par = math.atan2(s, abs(c))  # angle to the nearest of ±z0
+        off_perp = math.atan2(abs(c), s)  # angle to the plane ⟂ z0
+        if off_par <= _ROUNDING or off_perp <= _ROUNDING:
+            continue  # exact up to rounding: the frame placement handles it as it is
+        if off_par <= tol:
+            target = z0 if c > 0 else -z0
+            kind, angle = ("parallel" if c > 0 else "anti-parallel"), off_par
+        elif off_perp <= tol:
+            w = z1 - c * z0
+            target = w / np.linalg.norm(w)
+            kind, angle = "perpendicular", off_perp
+        else:
+            continue
+        rot = _rotation(z1, target)
+        pivot = points[k + 1].copy()
+        for j in range(k + 1, n):
+            points[j] = pivot + rot @ (points[j] - pivot)
+            axes[j] = rot @ axes[j]
+        axes[k + 1] = target.copy()
+        tip[:3, 3] = pivot + rot @ (tip[:3, 3] - pivot)
+        tip[:3, :3] = rot @ tip[:3, :3]
+        path = [points[j] for j in range(k + 1, n)] + [tip[:3, 3]]
+        reach = sum(float(np.linalg.norm(b - a)) for a, b in zip(path[:-1], path[1:]))
+        snaps.append(Snap((names[k], names[k + 1]), kind, angle, reach))
+    return snaps
+
+
+def _exact_twists(rows: list[KhalilRow], snapped: set[int]) -> list[KhalilRow]:
+    """Snapped rows' α as exact multiples of π/2 (they are within rounding of one)."""
+    out = []
+    for k, row in enumerate(rows):
+        if k in snapped:
+            m = round(row.alpha / _HALF_PI)
+            if abs(row.alpha - m * _HALF_PI) < 1e-9:
+                row = replace(row, alpha=0.0 if m == 0 else m * _HALF_PI)
+        out.append(row)
+    return out
+
+
+_HALF_PI = 0.5 * math.pi
+_LEN_TOL = 1e-9
+_ROUNDING = 1e-13  # [rad]: axis relations this close are exact already (never snapped)
+
+
 def chain_from_urdf(
-    source: Any, base: str | None = None, tip: str | None = None, **load_kwargs: Any
+    source: Any,
+    base: str | None = None,
+    tip: str | None = None,
+    *,
+    angle_tol: float = SNAP_TOL,
+    **load_kwargs: Any,
 ) -> Chain:
     """Recover the Khalil table (and base/tool poses) of a serial URDF chain.
+
+    The chain of :func:`recover_chain` (which also reports the snaps); see the module
+    docstring for the construction, the snapping and the checks.
 
     Args:
         source: Anything :func:`hexapod_kin.load` takes (URDF path or text, ``erd:NAME``,
             preset, or an already loaded model).
         base: Base frame name (default: the source's default base).
         tip: Tip frame name (default: the source's default tip).
+        angle_tol: Axes within this angle [rad] of parallel or perpendicular to the previous
+            joint's axis are snapped (0 turns snapping off).
         **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
 
     Returns:
         A :class:`~hexapod_kin.params.Chain` whose :func:`~hexapod_kin.table_fk`
-        equals the URDF's ``T_base_tip`` (checked to 1e-9 relative at random configurations;
-        1e-12 absolute in practice).
+        equals the URDF's ``T_base_tip`` (1e-9 relative; 1e-12 m in practice) when nothing
+        was snapped, else within the snaps' bound (``Chain.description`` lists the snaps).
 
     Raises:
         ConfigurationError: A joint the table cannot express (named), a branch between
-            ``base`` and ``tip`` (not serial), or a failed check.
+            ``base`` and ``tip`` (not serial), a recovered length larger than the chain
+            (near-parallel axes beyond ``angle_tol``), or a failed check.
+        ParameterError: ``angle_tol`` not a finite angle in [0, 0.1] rad.
         HexapodKinError: Whatever :func:`hexapod_kin.load` raises for the source.
+
+    """
+    return recover_chain(source, base, tip, angle_tol=angle_tol, **load_kwargs).chain
+
+
+def recover_chain(
+    source: Any,
+    base: str | None = None,
+    tip: str | None = None,
+    *,
+    angle_tol: float = SNAP_TOL,
+    **load_kwargs: Any,
+) -> TableRecovery:
+    """Recover the Khalil table of a serial URDF chain, with the snaps and the FK difference.
+
+    Args:
+        source: Anything :func:`hexapod_kin.load` takes.
+        base: Base frame name (default: the source's default base).
+        tip: Tip frame name (default: the source's default tip).
+        angle_tol: Snapping tolerance [rad] (default :data:`SNAP_TOL`; 0 = never snap).
+        **load_kwargs: Passed to :func:`hexapod_kin.load`.
+
+    Returns:
+        A :class:`TableRecovery`.
+
+    Raises:
+        ConfigurationError: As :func:`chain_from_urdf`.
+        ParameterError: ``angle_tol`` not a finite angle in [0, 0.1] rad.
 
     """
     from .kinematics import KinematicModel, load
 
+    try:
+        tol = float(angle_tol)
+    except (TypeError, ValueError):
+        tol = float("nan")
+    if not (0.0 <= tol <= 0.1):
+        raise ParameterError(
+            f"angle_tol={angle_tol!r} is not allowed; a snapping tolerance in [0, 0.1] rad",
+            parameter="angle_tol",
+            value=angle_tol,
+            allowed="[0, 0.1] rad",
+        )
     if isinstance(source, KinematicModel) and base is None and tip is None and not load_kwargs:
         km = source
     else:
@@ -194,6 +424,9 @@ def chain_from_urdf(
         points.append(t[:3, 3])
         axes.append(t[:3, :3] @ _axis(m.joints[i]))
         sigmas.append("prismatic" if m.joints[i].shortname() in _PRISMATIC else "revolute")
+    path_names = [names[i] for i in path]
+    snaps = _snap(points, axes, t_base_tip, path_names, tol)
+    snapped_rows = {path_names.index(s.joints[1]) for s in snaps}
     scale = max(1.0, float(np.abs(points).max()), float(np.abs(t_base_tip[:3, 3]).max()))
     n = len(path)
     # frame 0: the base frame when row 1 can start from it
@@ -254,6 +487,7 @@ def chain_from_urdf(
     for k, fr in enumerate(frames):
         rows.append(_row(prev_f, fr, sigmas[k], f"joint {names[path[k]]!r}", scale))
         prev_f = fr
+    rows = _exact_twists(rows, snapped_rows)
     last = _frame(*frames[-1])
     if base_pose is not None:
         tool = np.linalg.inv(last) @ np.linalg.inv(base_pose) @ t_base_tip
@@ -262,6 +496,11 @@ def chain_from_urdf(
     tool[3] = (0.0, 0.0, 0.0, 1.0)
     u, _, vt = np.linalg.svd(tool[:3, :3])
     tool[:3, :3] = u @ vt
+    size = _size(points, t_base_tip[:3, 3])
+    _check_lengths(rows, tool, size, path_names, km, axes, tol)
+    zeroed: list[tuple[str, float]] = []
+    if tol > 0:  # lengths within rounding of the URDF's constants: clean zeros
+        rows, tool, zeroed = _zero_lengths(rows, tool, _LEN_TOL * max(1.0, size))
     limits = []
     for k in range(n):
         lo, hi = float(km.lower[k]), float(km.upper[k])
@@ -281,6 +520,12 @@ def chain_from_urdf(
         f"{base_name}_kk{j}" if f"{base_name}_kk{j}" != tip_name else f"kk{j}"
         for j in range(1, n + 1)
     )
+    fk_bound = sum(s.angle * s.reach for s in snaps) + sum(abs(v) for _, v in zeroed)
+    description = f"Khalil table recovered from {km.name!r} ({km.base} -> {km.tip})"
+    if snaps:
+        description += f"; snapped (angle_tol {tol:.3g} rad): " + ", ".join(str(s) for s in snaps)
+    if zeroed:
+        description += "; zeroed " + ", ".join(f"{k} = {v:.2g} m" for k, v in zeroed)
     chain = Chain(
         rows=tuple(rows),
         joint_names=jnames,
@@ -291,24 +536,103 @@ def chain_from_urdf(
         link_names=links,
         base_pose=None if base_pose is None else Pose.of(base_pose),
         tool=Pose.of(tool),
-        description=f"Khalil table recovered from {km.name!r} ({km.base} -> {km.tip})",
+        description=description,
     )
-    _check(chain, km)
-    return chain
+    fk_error = _check(chain, km, fk_bound, sum(s.angle for s in snaps))
+    return TableRecovery(chain, tuple(snaps), tol, size, fk_bound, fk_error, tuple(zeroed))
 
 
-def _check(chain: Chain, km: Any) -> None:
+def _zero_lengths(
+    rows: list[KhalilRow], tool: np.ndarray, tiny: float
+) -> tuple[list[KhalilRow], np.ndarray, list[tuple[str, float]]]:
+    """Set |d|, |r| and tool offsets below ``tiny`` to 0 (each moves the tip by its size)."""
+    zeroed: list[tuple[str, float]] = []
+    out = []
+    for k, row in enumerate(rows, start=1):
+        if row.d != 0.0 and abs(row.d) < tiny:
+            zeroed.append((f"d{k}", row.d))
+            row = replace(row, d=0.0)
+        if row.r != 0.0 and abs(row.r) < tiny:
+            zeroed.append((f"r{k}", row.r))
+            row = replace(row, r=0.0)
+        out.append(row)
+    tool = tool.copy()
+    for i, axis in enumerate("xyz"):
+        v = float(tool[i, 3])
+        if v != 0.0 and abs(v) < tiny:
+            if abs(v) > 1e-14:  # beyond rounding: say so
+                zeroed.append((f"tool_{axis}", v))
+            tool[i, 3] = 0.0
+    return out, tool, zeroed
+
+
+def _size(points: list[np.ndarray], tip: np.ndarray) -> float:
+    """Twice the path length base origin → joint origins → tip [m]."""
+    path = [np.zeros(3), *points, tip]
+    length = sum(float(np.linalg.norm(b - a)) for a, b in zip(path[:-1], path[1:]))
+    return 2.0 * length + 1e-9
+
+
+def _check_lengths(
+    rows: list[KhalilRow],
+    tool: np.ndarray,
+    size: float,
+    names: list[str],
+    km: Any,
+    axes: list[np.ndarray],
+    tol: float,
+) -> None:
+    values = [(f"d{k + 1}", r.d, k) for k, r in enumerate(rows)]
+    values += [(f"r{k + 1}", r.r, k) for k, r in enumerate(rows)]
+    values += [("the tool offset", float(np.linalg.norm(tool[:3, 3])), len(rows) - 1)]
+    for label, value, k in values:
+        if abs(value) <= size:
+            continue
+        # the usual cause: axes k-1, k or k, k+1 nearly (not quite) parallel
+        worst = ""
+        for a in range(max(0, k - 1), min(len(axes) - 1, k + 1)):
+            s = float(np.linalg.norm(np.cross(axes[a], axes[a + 1])))
+            off = math.atan2(s, abs(float(np.dot(axes[a], axes[a + 1]))))
+            if 0.0 < off < 0.1:
+                worst = (
+                    f"; the axes of {names[a]!r} and {names[a + 1]!r} are {off:.3g} rad from "
+                    f"parallel (angle_tol={tol:.3g} rad): snap them with angle_tol >= "
+                    f"{off * 1.01:.3g} or correct the URDF"
+                )
+                break
+        raise ConfigurationError(
+            f"chain_from_urdf: {km.name!r} ({km.base} -> {km.tip}): recovered {label} = "
+            f"{value:.6g} m is larger than the chain itself (size bound {size:.4g} m){worst}",
+            parameter="angle_tol",
+            value=tol,
+            allowed=f"recovered lengths <= {size:.4g} m",
+        )
+
+
+def _check(chain: Chain, km: Any, bound: float = 0.0, turn: float = 0.0) -> float:
+    """Table FK vs Pinocchio's; returns the largest position difference [m]."""
     rng = np.random.default_rng(0)
     lo = np.where(np.isfinite(km.lower), km.lower, -math.pi)
     hi = np.where(np.isfinite(km.upper), km.upper, math.pi)
     qs = [np.zeros(km.nq)] + [rng.uniform(lo, hi) for _ in range(8)]
-    worst = 0.0
+    worst = worst_pos = 0.0
+    worst_rot = 0.0
     for q in qs:
-        err = float(np.abs(table_fk(chain, q) - km.fk(q)).max())
-        worst = max(worst, err)
+        a, b = table_fk(chain, q), km.fk(q)
+        worst = max(worst, float(np.abs(a - b).max()))
+        worst_pos = max(worst_pos, float(np.linalg.norm(a[:3, 3] - b[:3, 3])))
+        worst_rot = max(worst_rot, float(np.abs(a[:3, :3] - b[:3, :3]).max()))
     scale = max(1.0, float(np.abs(km.fk(qs[0])[:3, 3]).max()))
-    if worst > 1e-9 * scale:
+    slack = 1e-9 * scale
+    if bound == 0.0 and turn == 0.0:
+        ok = worst <= slack
+    else:
+        ok = worst_pos <= bound * (1 + 1e-6) + slack and worst_rot <= 2.0 * turn + slack
+    if not ok:
         raise ConfigurationError(
             f"chain_from_urdf: the recovered table of {km.name!r} misses the URDF's forward "
-            f"kinematics by {worst:.2e} (base={km.base!r}, tip={km.tip!r}); not supported"
+            f"kinematics by {worst:.2e} (base={km.base!r}, tip={km.tip!r}"
+            + (f"; snap bound {bound:.2e} m" if bound else "")
+            + "); not supported"
         )
+    return worst_pos

@@ -136,6 +136,9 @@ def save_figure(
 
 
 # ---------------------------------------------------------------- singularity pictures
+#: Longest family name in a legend (longer ones are cut): the figure keeps its size.
+_LEGEND_CHARS = 80
+
 _MEASURE_LABELS = {
     "det": "det J",
     "manipulability": "manipulability sqrt(det(J J^T))",
@@ -274,7 +277,8 @@ def singularity_map_figure(
             )
         else:
             continue
-        handles.append(Line2D([], [], color=colour, ls=style, lw=2.2, label=fam.name))
+        name = fam.name if len(fam.name) <= _LEGEND_CHARS else fam.name[: _LEGEND_CHARS - 1] + "…"
+        handles.append(Line2D([], [], color=colour, ls=style, lw=2.2, label=name))
     flagged = result.singular.reshape(result.grid_shape)
     if flagged.any() and not result.families:
         ax.contourf(

@@ -186,3 +186,139 @@ def test_continuous_joint_is_a_revolute_row():
     model = hk.load(text, tip="l2")
     assert chain.sigmas == ("revolute", "revolute")
     assert _fk_error(chain, model, n=50) < 1e-12
+
+
+# ------------------------------------------------------------------ real files: snapping
+PHANTOMX = "tests/data/phantomx/phantomx.urdf"
+#: The centre of the tibia mesh's spherical tip (tibia_l.STL, fitted), in the tibia frame.
+PHANTOMX_FOOT = ((0.00155, 0.1535, 0.0288), (0.0, 0.0, 0.0))
+LEGS = ["lf", "lm", "lr", "rf", "rm", "rr"]
+
+
+def _span(model):
+    """Path length base origin -> joint origins -> tip at q = 0, from Pinocchio's placements."""
+    import pinocchio as pin
+
+    m, d = model.model, pin.Data(model.model)
+    pin.forwardKinematics(m, d, np.zeros(m.nq))
+    pin.updateFramePlacements(m, d)
+    base = d.oMf[model.base_id].inverse()
+    pts = [np.zeros(3)] + [(base * d.oMi[i]).translation for i in range(1, m.njoints)]
+    pts.append((base * d.oMf[model.tip_id]).translation)
+    return sum(float(np.linalg.norm(b - a)) for a, b in zip(pts[:-1], pts[1:]))
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+@pytest.mark.parametrize("leg", LEGS)
+def test_phantomx_legs_are_clean_tables(leg):
+    tip = f"tibia_{leg}"
+    rec = hk.recover_chain(PHANTOMX, base="base_link", tip=tip, tool=PHANTOMX_FOOT)
+    chain = rec.chain
+    model = hk.load(PHANTOMX, base="base_link", tip=tip, tool=PHANTOMX_FOOT)
+    # one snap: thigh/tibia anti-parallel, off by the rounding of π to 3.14159 in the tibia yaw
+    assert [(s.joints, s.kind) for s in rec.snaps] == [
+        ((f"j_thigh_{leg}", f"j_tibia_{leg}"), "anti-parallel")
+    ]
+    assert rec.snaps[0].angle == pytest.approx(math.pi - 3.14159, rel=1e-6)
+    alpha3 = chain.rows[2].alpha
+    assert alpha3 == round(alpha3 / (math.pi / 2)) * (math.pi / 2) and abs(alpha3) == math.pi
+    # the lengths are the URDF's: coxa 0.054 m, femur |(0.0645, 0.0145)|; none over the chain
+    assert chain.rows[1].d == pytest.approx(0.054, abs=1e-12)
+    assert chain.rows[2].d == pytest.approx(math.hypot(0.0645, 0.0145), abs=1e-12)
+    span = _span(model)
+    lengths = [abs(v) for r in chain.rows for v in (r.d, r.r)]
+    assert max(lengths + [float(np.linalg.norm(chain.tool.xyz))]) <= span
+    # FK vs Pinocchio, 100 random q: the snap moves the foot by angle × |foot − tibia axis|
+    bound = rec.snaps[0].angle * float(np.linalg.norm(PHANTOMX_FOOT[0]))
+    assert rec.fk_bound == pytest.approx(bound, rel=1e-9)
+    err = max(
+        float(np.linalg.norm(table_fk(chain, q)[:3, 3] - model.fk(q)[:3, 3]))
+        for q in model.random_q(100, seed=2)
+    )
+    assert 0.5 * bound <= err <= bound * (1 + 1e-9) + 1e-12  # ≈ 4.1e-7 m: the snap, no more
+    assert "anti-parallel by 2.65e-06 rad" in rec.summary() and "snapped" in chain.description
+    assert rec.to_dict()["snaps"][0]["kind"] == "anti-parallel"
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+def test_phantomx_without_snapping_is_a_clear_error_and_a_wider_tolerance_snaps_more():
+    with pytest.raises(ConfigurationError, match=r"larger than the chain itself.*j_thigh_lf"):
+        chain_from_urdf(PHANTOMX, base="base_link", tip="tibia_lf", angle_tol=0.0)
+    with pytest.raises(hk.ParameterError, match="angle_tol"):
+        chain_from_urdf(PHANTOMX, base="base_link", tip="tibia_lf", angle_tol=-1.0)
+    # 1e-3 rad also snaps 1.5704 (for π/2): the coxa/thigh twist becomes exactly -π/2
+    rec = hk.recover_chain(
+        PHANTOMX, base="base_link", tip="tibia_lf", tool=PHANTOMX_FOOT, angle_tol=1e-3
+    )
+    assert [s.kind for s in rec.snaps] == ["perpendicular", "anti-parallel"]
+    assert rec.snaps[0].angle == pytest.approx(math.pi / 2 - 1.5704, rel=1e-6)
+    assert rec.chain.rows[1].alpha == -math.pi / 2
+    model = hk.load(PHANTOMX, base="base_link", tip="tibia_lf", tool=PHANTOMX_FOOT)
+    err = max(
+        float(np.linalg.norm(table_fk(rec.chain, q)[:3, 3] - model.fk(q)[:3, 3]))
+        for q in model.random_q(100, seed=3)
+    )
+    assert err <= rec.fk_bound * (1 + 1e-9)
+
+
+def test_exact_urdf_has_no_snaps_and_fk_to_1e12():
+    built = robots.hexapod()
+    for leg in built.legs[:2]:
+        text = to_urdf(built, leg=leg.name)
+        rec = hk.recover_chain(text, tip=f"{leg.name}_{leg.chain.tip}")
+        assert rec.snaps == () and rec.zeroed == () and rec.fk_bound == 0.0
+        assert rec.fk_error <= 1e-12
+        assert _fk_error(rec.chain, hk.load(text, tip=f"{leg.name}_{leg.chain.tip}")) <= 1e-12
+        assert "no axis snapped" in rec.summary()
+
+
+def test_near_perpendicular_axis_is_snapped_with_its_bound():
+    eps = 5e-5  # a rounded constant: the second axis 5e-5 rad off perpendicular
+    text = _urdf(
+        [
+            ("revolute", "0 0 0.1", "0 0 0", "0 0 1"),
+            ("revolute", "0.05 0 0", f"{math.pi / 2 + eps} 0 0", "0 0 1"),
+            ("revolute", "0.1 0 0", "0 0 0", "0 0 1"),
+            ("fixed", "0.12 0.01 0", "0 0 0", ""),
+        ]
+    )
+    rec = hk.recover_chain(text, tip="l4")
+    assert [s.kind for s in rec.snaps] == ["perpendicular"]
+    assert rec.snaps[0].angle == pytest.approx(eps, rel=1e-9)
+    assert rec.chain.rows[1].alpha in (math.pi / 2, -math.pi / 2)
+    reach = 0.1 + math.hypot(0.12, 0.01)  # joint 2 -> joint 3 -> tip
+    assert rec.fk_bound == pytest.approx(eps * reach, rel=1e-9)
+    model = hk.load(text, tip="l4")
+    err = max(
+        float(np.linalg.norm(table_fk(rec.chain, q)[:3, 3] - model.fk(q)[:3, 3]))
+        for q in model.random_q(100, seed=4)
+    )
+    assert err <= rec.fk_bound * (1 + 1e-9)
+    exact = hk.recover_chain(text, tip="l4", angle_tol=1e-5)  # below the tolerance: kept
+    assert exact.snaps == () and _fk_error(exact.chain, model) < 1e-12
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+def test_phantomx_derive_and_scan_from_the_cli(capsys, tmp_path, monkeypatch):
+    import json
+
+    from hexapod_kin.cli import main
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    code = main(["derive", PHANTOMX, "--base", "base_link", "--tip", "tibia_lf", "--json",
+                 "--budget", "2"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert out["lengths_m"]["l1"] == pytest.approx(0.054, abs=1e-12)
+    assert out["lengths_m"]["l2"] == pytest.approx(math.hypot(0.0645, 0.0145), abs=1e-12)
+    assert "anti-parallel by 2.65e-06 rad" in out["table_from_urdf"]
+    foot = ["--tool", *map(str, PHANTOMX_FOOT[0]), "0", "0", "0"]
+    code = main(["scan", PHANTOMX, "--tip", "tibia_lf", *foot, "--grid", "9", "--json",
+                 "--family-budget", "2"])  # fmt: skip
+    scan = json.loads(capsys.readouterr().out)
+    assert code == 0 and len(scan["q"]) == 81
+    model = hk.load(PHANTOMX, tip="tibia_lf", tool=PHANTOMX_FOOT)
+    # the scan's manipulability is Pinocchio's sqrt(det(J Jᵀ)) of the position rows
+    for q, w in list(zip(scan["q"], scan["manipulability"]))[::10]:
+        jac = model.jacobian(np.array(q))[:3]
+        assert w == pytest.approx(math.sqrt(np.linalg.det(jac @ jac.T)), rel=1e-9, abs=1e-15)

@@ -10,7 +10,7 @@ import pytest
 import hexapod_kin as hk
 from hexapod_kin import ik, robots
 from hexapod_kin.exceptions import IKError
-from hexapod_kin.params import JointLimits
+from hexapod_kin.params import Chain, JointLimits, KhalilRow
 
 
 def _fk_many(model, qs):
@@ -174,7 +174,7 @@ def test_hexapod_leg_closed_form_through_its_mount(leg):
             np.testing.assert_allclose(model.fk(s)[:3, 3], p, atol=1e-9)
 
 
-def test_base_pose_maps_targets_and_tool_offset_is_refused():
+def test_base_pose_maps_targets():
     from hexapod_kin import Chain, ik, robots, table_fk
 
     leg = robots.hexabot_leg()
@@ -184,9 +184,124 @@ def test_base_pose_maps_targets_and_tool_offset_is_refused():
         p = table_fk(moved, q)[:3, 3]
         sols = ik.analytic(moved, p)[0]
         assert any(np.allclose(s, q, atol=1e-9) for s in sols)
-    with_tool = Chain(rows=leg.rows, tool=([0.0, 0.0, 0.02], [0.0, 0.0, 0.0]))
-    with pytest.raises(hk.exceptions.IKError, match="tool offset"):
-        ik.detect_family(with_tool)
+    scara = Chain(rows=robots.scara().rows, tool=([0.0, 0.02, 0.0], [0.0, 0.0, 0.0]))
+    with pytest.raises(hk.exceptions.IKError, match="tool offset"):  # SCARA: still refused
+        ik.detect_family(scara)
+
+
+# ------------------------------------------------------------------ tool offsets, near twists
+def _random_leg(rng, nq, *, ankle_flip=False, dev=0.0):
+    """A leg table with a mount, θ/r offsets, a tool offset and twists ``dev`` off the pattern."""
+    sigma = float(rng.choice([-1.0, 1.0]))
+    rows = [
+        KhalilRow("revolute", rng.uniform(-1, 1), rng.uniform(-0.05, 0.05), rng.uniform(-1, 1),
+                  rng.uniform(-0.05, 0.05)),
+        KhalilRow("revolute", sigma * math.pi / 2 + dev, rng.uniform(0.03, 0.08),
+                  rng.uniform(-1, 1), rng.uniform(-0.02, 0.02)),
+    ]  # fmt: skip
+    if nq == 3:
+        a3 = (math.pi if ankle_flip else 0.0) - dev
+        rows.append(
+            KhalilRow("revolute", a3, rng.uniform(0.06, 0.12), rng.uniform(-1, 1),
+                      rng.uniform(-0.02, 0.02))
+        )  # fmt: skip
+    tool_xyz = [rng.uniform(0.05, 0.15), rng.uniform(-0.08, 0.08), rng.uniform(-0.03, 0.03)]
+    return Chain(
+        rows=tuple(rows),
+        base_pose=(rng.uniform(-0.1, 0.1, 3), rng.uniform(-1, 1, 3)),
+        tool=(tool_xyz, rng.uniform(-1, 1, 3)),
+    )
+
+
+def _check_solutions(chain, qs, *, model=None, pin_every=7):
+    """Every closed-form solution's foot on its target (table FK; Pinocchio on a subset)."""
+    targets = np.array([hk.table_fk(chain, q)[:3, 3] for q in qs])
+    batch = ik.analytic_batch(chain, targets)
+    assert batch.reachable.all()
+    worst = 0.0
+    for i, q in enumerate(qs):
+        sols = batch.q[i][batch.valid[i]]
+        assert any(np.abs(_wrapdiff(s, q)).max() < 1e-7 for s in sols)  # its own branch
+        for s in sols:
+            worst = max(worst, float(np.linalg.norm(hk.table_fk(chain, s)[:3, 3] - targets[i])))
+            if model is not None and i % pin_every == 0:
+                np.testing.assert_allclose(model.position(s), targets[i], rtol=0, atol=1e-9)
+    assert worst <= 1e-9
+    return batch
+
+
+@pytest.mark.parametrize(
+    ("nq", "ankle_flip", "dev"),
+    [(2, False, 0.0), (3, False, 0.0), (3, True, 0.0), (2, False, 6e-4), (3, True, -8e-4)],
+    ids=["2dof-tool", "3dof-tool", "3dof-antiparallel-ankle", "2dof-near-twist",
+         "3dof-near-twists"],
+)  # fmt: skip
+def test_legs_with_tool_offsets_and_near_twists(nq, ankle_flip, dev):
+    rng = np.random.default_rng(20 + nq + int(ankle_flip))
+    for k in range(3):
+        chain = _random_leg(rng, nq, ankle_flip=ankle_flip, dev=dev)
+        fam = ik.detect_family(chain)
+        assert fam.family == ("leg3" if nq == 3 else "coxa_tibia")
+        assert fam.lateral != 0.0
+        assert fam.deviation == pytest.approx(abs(dev), abs=1e-15)
+        qs = rng.uniform(-math.pi, math.pi, size=(120, nq))
+        _check_solutions(chain, qs, model=hk.load(chain) if k == 0 else None)
+
+
+def test_near_twists_beyond_the_tolerance_are_refused():
+    chain = _random_leg(np.random.default_rng(1), 3, dev=2e-3)
+    with pytest.raises(IKError, match="angle_tol"):
+        ik.detect_family(chain)
+    assert ik.detect_family(chain, angle_tol=3e-3).deviation == pytest.approx(2e-3)
+
+
+def test_lateral_offset_reach_and_excess():
+    """Off the leg plane by e: nothing within |e| of the hip axis; reach_excess is 0 iff reached."""
+    leg = robots.hexabot_leg()
+    e = 0.04
+    chain = leg.replace(rows=(*leg.rows[:3], KhalilRow("fixed", 0.0, 0.1, 0.0, e)))
+    fam = ik.detect_family(chain)
+    assert fam.lateral == pytest.approx(e)
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-0.3, 0.3, size=(3000, 3))
+    pts[:200, :2] *= 0.1  # some inside the |e| cylinder
+    batch = ik.analytic_batch(chain, pts)
+    excess = fam.reach_excess(pts)
+    np.testing.assert_array_equal(excess <= 1e-12, batch.reachable)
+    inner = np.hypot(pts[:, 0], pts[:, 1]) < e - 1e-9
+    assert inner.any() and not batch.reachable[inner].any()
+    assert np.all(excess[inner] >= e - np.hypot(pts[inner, 0], pts[inner, 1]) - 1e-12)
+    for i in np.flatnonzero(batch.reachable)[::10]:
+        for s in batch.q[i][batch.valid[i]]:
+            np.testing.assert_allclose(hk.table_fk(chain, s)[:3, 3], pts[i], rtol=0, atol=1e-12)
+
+
+#: The PhantomX foot: the centre of the tibia mesh's spherical tip (tibia_l.STL of
+#: HumaRobotics/phantomx_description, fitted: radius 7.1 mm), in each tibia link's frame.
+PHANTOMX_FOOT = ((0.00155, 0.1535, 0.0288), (0.0, 0.0, 0.0))
+PHANTOMX = "tests/data/phantomx/phantomx.urdf"
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+@pytest.mark.parametrize("leg", ["lf", "lm", "lr", "rf", "rm", "rr"])
+def test_phantomx_legs_closed_form(leg):
+    """Recovered PhantomX legs (foot on the tibia) are leg3; solutions hit ≤ 1e-9 m."""
+    tip = f"tibia_{leg}"
+    rec = hk.recover_chain(PHANTOMX, base="base_link", tip=tip, tool=PHANTOMX_FOOT)
+    fam = ik.detect_family(rec.chain)
+    assert fam.family == "leg3"
+    assert fam.joint_signs == (1.0, 1.0, -1.0)  # tibia axis anti-parallel to the thigh's
+    # 1.5704 in the URDF for π/2: the coxa/thigh twist is 3.96e-4 rad off (not snapped)
+    assert fam.deviation == pytest.approx(math.pi / 2 - 1.5704, rel=1e-6)
+    assert fam.lateral == pytest.approx(-PHANTOMX_FOOT[0][0], abs=1e-9)
+    urdf = hk.load(PHANTOMX, base="base_link", tip=tip, tool=PHANTOMX_FOOT)
+    qs = urdf.random_q(150, seed=7)
+    batch = _check_solutions(rec.chain, qs, model=hk.load(rec.chain))
+    # the URDF itself (Pinocchio) puts every solution within the snap's bound of the target
+    targets = np.array([hk.table_fk(rec.chain, q)[:3, 3] for q in qs])
+    for i in range(0, len(qs), 5):
+        for s in batch.q[i][batch.valid[i]]:
+            assert np.linalg.norm(urdf.position(s) - targets[i]) <= rec.fk_bound + 1e-12
 
 
 def test_leg_solutions_is_the_one_home_per_target_lengths_and_limits():
@@ -222,3 +337,24 @@ def test_leg_solutions_is_the_one_home_per_target_lengths_and_limits():
     d = ref[0].to_dict()
     assert d["family"] == "leg3" and len(d["q"]) == 500
     assert ik.detect_family(robots.hexabot_leg()).to_dict()["lengths"] == [0.05, 0.1, 0.1]
+
+
+@pytest.mark.parametrize(
+    ("source", "base", "tip"),
+    [("erd:solo12", "base_link", "FL_FOOT"), ("erd:anymal", "base", "RH_FOOT")],
+)
+def test_quadruped_legs_closed_form(source, base, tip):
+    """solo12 / ANYmal legs: hip and thigh axes meet (l1 = 0), the foot off the leg plane."""
+    rec = hk.recover_chain(source, base=base, tip=tip)
+    fam = ik.detect_family(rec.chain)
+    assert fam.family == "leg3" and fam.lengths[0] == 0.0 and fam.lateral != 0.0
+    model = hk.load(source, base=base, tip=tip)
+    qs = model.random_q(200, seed=3)
+    targets = np.array([model.position(q) for q in qs])  # Pinocchio on the URDF itself
+    batch = ik.analytic_batch(rec.chain, targets)
+    assert batch.reachable.all()
+    for i in range(len(qs)):
+        sols = batch.q[i][batch.valid[i]]
+        assert any(np.abs(_wrapdiff(s, qs[i])).max() < 1e-7 for s in sols)
+        for s in sols:
+            np.testing.assert_allclose(model.position(s), targets[i], rtol=0, atol=1e-9)

@@ -60,11 +60,18 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
-    """``-s NAME=VALUE`` pairs as a dict; values parsed as JSON numbers/lists when they are.
+def set_params(pairs: Sequence[str] | None, source: Any = None) -> dict[str, Any]:
+    """``-s NAME=VALUE`` pairs as a dict.
+
+    A value is read as JSON when it is JSON (``0.06``, ``[30, 90]``, ``true``), else as a list
+    of numbers when it holds commas (``30,90,150`` → ``(30.0, 90.0, 150.0)``; ``45,`` is a
+    one-item list), else kept as text. Lists come back as tuples. With ``source`` a preset
+    name, each value is fitted to the preset's parameter: one number for a list parameter
+    becomes a one-item tuple; a list for a one-number parameter is refused.
 
     Raises:
-        ParameterError: A pair without ``=``.
+        ParameterError: A pair without ``=``; a list item that is not a finite number; a
+            list for a parameter that takes one number (each names the parameter).
 
     """
     out: dict[str, Any] = {}
@@ -77,11 +84,73 @@ def set_params(pairs: Sequence[str] | None) -> dict[str, Any]:
                 allowed="NAME=VALUE",
             )
         key, value = pair.split("=", 1)
+        key = key.strip()
+        out[key] = _set_value(key, value.strip())
+    if isinstance(source, str):
+        out = _fit_to_preset(source, out)
+    return out
+
+
+def _set_value(key: str, text: str) -> Any:
+    """One ``-s`` value: JSON, else comma-separated numbers, else the text itself."""
+    import math
+
+    try:
+        parsed: Any = json.loads(text)
+    except json.JSONDecodeError:
+        parsed = None
+        if "," not in text:
+            return text
+    else:
+        return tuple(parsed) if isinstance(parsed, list) else parsed
+    items = [t.strip() for t in text.split(",")]
+    if len(items) > 1 and items[-1] == "":  # "45," : a one-item list
+        items.pop()
+    values = []
+    for i, item in enumerate(items, start=1):
         try:
-            parsed: Any = json.loads(value.strip())
-        except json.JSONDecodeError:
-            parsed = value.strip()
-        out[key.strip()] = parsed
+            v = float(item)
+        except ValueError:
+            v = math.nan
+        if not math.isfinite(v):
+            raise ParameterError(
+                f"-s {key}={text}: item {i} ({item!r}) is not a finite number; a list value "
+                f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)",
+                parameter=key,
+                value=text,
+                allowed="comma-separated finite numbers",
+            )
+        values.append(v)
+    return tuple(values)
+
+
+def _fit_to_preset(source: str, params: dict[str, Any]) -> dict[str, Any]:
+    """Values shaped as the preset's parameters take them (see :func:`set_params`)."""
+    import inspect
+
+    from .. import robots
+
+    if source not in robots.PRESETS:
+        return params
+    sig = inspect.signature(robots.PRESETS[source])
+    out = dict(params)
+    for key, value in params.items():
+        if key not in sig.parameters:
+            continue  # robots.get names the valid parameters
+        default = sig.parameters[key].default
+        takes_list = isinstance(default, (tuple, list))
+        takes_number = isinstance(default, (int, float)) and not isinstance(default, bool)
+        is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if takes_list and is_number:
+            out[key] = (value,)
+        elif takes_number and isinstance(value, tuple):
+            raise ParameterError(
+                f"-s {key}={','.join(f'{v:g}' for v in value)}: {source} parameter {key!r} "
+                f"takes one number (SI units), not a list of {len(value)}",
+                parameter=key,
+                value=list(value),
+                allowed="one number",
+            )
     return out
 
 
@@ -89,7 +158,7 @@ def load_source(args: argparse.Namespace) -> Any:
     """Load ``args.source`` (preset, table file, URDF path or ``erd:NAME``) with -s/--base/--tip."""
     from ..kinematics import load
 
-    params = set_params(getattr(args, "set", None))
+    params = set_params(getattr(args, "set", None), source=args.source)
     kwargs: dict[str, Any] = {}
     tool = getattr(args, "tool", None)
     if tool is not None:
@@ -184,7 +253,12 @@ def source_args(p: argparse.ArgumentParser, frames: bool = True) -> None:
         help="preset name, table file (.toml/.yaml), URDF path, or erd:NAME (example-robot-data)",
     )
     p.add_argument(
-        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
+        "-s",
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="preset parameter (SI units); a list as comma-separated numbers, e.g. "
+        "-s mount_yaw_deg=45,90,135,-135,-90,-45",
     )
     if frames:
         p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")

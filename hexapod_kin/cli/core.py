@@ -67,7 +67,13 @@ def _add_urdf(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("preset", help="preset name (see `hexapod-kin list`) or a table file")
-    p.add_argument("-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter")
+    p.add_argument(
+        "-s",
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="preset parameter; a list as comma-separated numbers (e.g. mount_yaw_deg=45,90)",
+    )
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
 
@@ -77,7 +83,7 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
 
     if args.output:
         output_path(args.output, "-o/--output", (".urdf", ".xml"))
-    built = _params_of(args.preset, set_params(args.set))
+    built = _params_of(args.preset, set_params(args.set, source=args.preset))
     # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
         [args.preset]
@@ -255,6 +261,18 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------ derive
+def _tool_arg(p: argparse.ArgumentParser) -> None:
+    """``--tool X Y Z ROLL PITCH YAW``: a point (frame) fixed to the tip, e.g. a foot."""
+    p.add_argument(
+        "--tool",
+        nargs=6,
+        type=float,
+        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (e.g. a foot point "
+        "on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0)",
+    )
+
+
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
         "derive",
@@ -262,6 +280,7 @@ def _add_derive(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
+    _tool_arg(p)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
     p.add_argument(
@@ -304,8 +323,10 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             check["max_abs_det_sym_minus_det_pinocchio"] = float(
                 np.abs(det_sym - np.linalg.det(jac_pin)).max()
             )
+    recovered = deriv.chain.description.startswith("Khalil table recovered")
     if args.json:
-        emit_json({**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check})
+        extra = {"table_from_urdf": deriv.chain.description} if recovered else {}
+        emit_json({**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check, **extra})
         return 0
     if args.latex:
         print(deriv.latex())
@@ -313,6 +334,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..report.cache import derivation_text
 
     print(derivation_text(deriv))  # the pretty-printed text is kept on disk with its key
+    if recovered:  # the URDF's table: what was snapped, one line
+        print(f"table: {deriv.chain.description}")
     if check:
         labels = {
             "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
@@ -337,6 +360,7 @@ def _add_scan(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     source_args(p)
+    _tool_arg(p)
     p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(

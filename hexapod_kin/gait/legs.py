@@ -29,7 +29,6 @@ __all__ = [
     "BodyIK",
     "FootSpec",
     "LegTree",
-    "annulus_excess",
     "closed_leg",
     "finite_or_inf",
     "joint_axis",
@@ -603,24 +602,3 @@ def offset_of(model: Any, leg: LegTree) -> np.ndarray:
     fr = model.frames[model.getFrameId(leg.foot_frame)]
     rel = np.linalg.solve(fr.placement.homogeneous, leg.foot_placement)
     return np.asarray(rel[:3, 3])
-
-
-def annulus_excess(fam: Any, x: np.ndarray) -> np.ndarray:
-    """Distance (N,) of frame-0 targets ``x`` outside a leg3/coxa_tibia leg's reach [m].
-
-    The reach is the annulus ``|l2 − l3| ≤ ‖(±ρ − l1, w)‖ ≤ l2 + l3`` (coxa_tibia: the circle
-    of radius l2) about the hip, ``ρ`` the horizontal distance and ``w`` the height.
-    """
-    h = np.hypot(x[:, 0], x[:, 1])
-    w = (x[:, 2] - fam.height) * fam.sign
-    if fam.family == "leg3":
-        l1, l2, l3 = fam.lengths
-        rmin, rmax = abs(l2 - l3), l2 + l3
-    else:
-        l1, l2 = fam.lengths[:2]
-        rmin = rmax = abs(l2)
-    best = np.full(len(x), np.inf)
-    for hs in (1.0, -1.0):
-        r = np.hypot(hs * h - l1, w)
-        best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
-    return best

@@ -25,7 +25,6 @@ from ..params import Hexapod, rpy_to_matrix
 from .legs import (
     BodyIK,
     FootSpec,
-    annulus_excess,
     find_legs,
     finite_or_inf,
     joint_axis,
@@ -297,8 +296,8 @@ class WholeBody:
         x = np.asarray(targets, dtype=float)
         if closed is not None:
             fam = detect_family(closed[0])
-            if fam.family in ("leg3", "coxa_tibia") and fam.chain.tool is None:
-                return annulus_excess(fam, x)
+            if fam.family in ("leg3", "coxa_tibia"):  # tool, mount and lateral offset included
+                return np.asarray(fam.reach_excess(x))
             T0 = closed[1]
             x = x @ T0[:3, :3].T + T0[:3, 3]  # frame 0 → body
         _q, res, _ok = self._numeric([leg], x[:, None, :], self._seed[None, :])

@@ -2,7 +2,8 @@
 
 * :mod:`.closed` — closed forms chosen from the Khalil table's pattern (:func:`detect_family`,
   :func:`analytic`, :func:`analytic_batch`); the legs' one closed form, vectorised
-  (:func:`leg_solutions`, :func:`leg_reachable`).
+  (:func:`leg_solutions`, :func:`leg_reachable`); legs with a tool offset or twists within
+  :data:`FAMILY_TOL` of the pattern (finished on the table by :mod:`._table_finish`).
 * :mod:`.task` — the problem: a position, position + yaw, or a 6-D pose target with per-row
   weights (:func:`build_task`).
 * :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 from .closed import (
     FAMILIES,
+    FAMILY_TOL,
     AnalyticBatch,
     LegFamily,
     analytic,
@@ -30,6 +32,7 @@ from .task import AXES, Task, build_task, build_tasks
 __all__ = [
     "AXES",
     "FAMILIES",
+    "FAMILY_TOL",
     "LEG_HOME",
     "STATUSES",
     "AnalyticBatch",

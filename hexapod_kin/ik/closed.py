@@ -19,6 +19,16 @@ Khalil table (the pattern of σ, α, d, r), never from a preset name:
     solutions use ``θ3 = 0`` (joint value). Up to 2 solutions (both elbow branches); the
     prismatic value follows from z.
 
+The legs are recognised through what leaves their closed form unchanged (:func:`detect_family`):
+a base pose and any ``α1``, ``d1`` (the *mount*), offsets ``r2``, ``r3`` along the knee axis,
+fixed rows after the last joint and a **tool offset** — the foot a fixed point ``p`` in the
+last joint's frame is an effective last length ``√(p_x² + p_y²)``, an angle offset
+``atan2(p_y, p_x)`` on the last joint and a lateral offset ``e`` along the knee axis (the hip
+then turns by ``atan2(−σe, ±√(x² + y² − e²))``) — an ankle axis anti-parallel to the knee's
+(``α3 = π``: that joint enters negated), and twists within ``angle_tol`` (default
+:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished by Newton
+steps on the table itself (:mod:`hexapod_kin.ik._table_finish`).
+
 Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
@@ -41,10 +51,13 @@ import numpy as np
 from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
-from ..params import Chain, Hexapod, Pose
+from ..params import Chain, Hexapod, Pose, khalil_transform
+from ._table_finish import finish_on_table
+from ._table_finish import fit_angles as _fit
 
 __all__ = [
     "FAMILIES",
+    "FAMILY_TOL",
     "AnalyticBatch",
     "LegFamily",
     "analytic",
@@ -59,6 +72,12 @@ FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
 _ANG_TOL = 1e-12
+
+#: Default tolerance [rad] of :func:`detect_family` on a leg's twists (α2 = ±π/2,
+#: α3 ∈ {0, π}): wider than the URDF snapping tolerance (``hexapod_kin.SNAP_TOL``), so legs
+#: whose rounded constants were not snapped (e.g. ``1.5704`` for π/2: 4e-4 rad) are still
+#: recognised; their solutions are finished on the exact table.
+FAMILY_TOL = 1e-3
 
 
 def _is(value: float, target: float, tol: float = _ANG_TOL) -> bool:
@@ -77,12 +96,24 @@ class LegFamily:
     Attributes:
         family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"``.
         chain: The chain.
-        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``.
+        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``;
+            a leg's last length is the one to its foot point, ``√(p_x² + p_y²)`` (``d`` of
+            the fixed row for the catalogue legs).
         height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
         sign: ``sin α2`` (±1) of the legs; ``cos α4`` (±1) of the SCARA's prismatic row.
-        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
+        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint; a leg's
+            last one includes the foot point's angle ``atan2(p_y, p_x)``.
         yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
-        yaw_sign: SCARA only: ±1 factor of those constant rows' contribution.
+        lateral: Legs: the foot's offset ``e`` along the knee axis [m] (``r2 + κ(r3 + p_z)``;
+            0 for the catalogue legs). The hip then turns by ``atan2(−σe, ±√(h² − e²))``.
+        joint_signs: Legs: ``+1`` per joint, ``−1`` for an ankle whose axis is anti-parallel
+            to the knee's (``α3 = π``): that joint's angle enters the planar leg negated.
+        mount: Legs: ``T_base_frame0'`` = ``base_pose · Rx(α1) · Tx(d1)`` when not identity
+            (targets are mapped through it), else None.
+        deviation: Legs: how far [rad] the table's twists are from the exact pattern
+            (``|α2 ∓ π/2|``, ``α3`` from 0 or π); 0 for an exact table. Above 1e-12 the
+            closed form solves the exact pattern and Newton steps on the table itself
+            finish each solution (see :func:`analytic_batch`).
 
     """
 
@@ -93,6 +124,10 @@ class LegFamily:
     sign: float
     offsets: tuple[float, ...]
     yaw_offset: float = 0.0
+    lateral: float = 0.0
+    joint_signs: tuple[float, ...] = ()
+    mount: Pose | None = None
+    deviation: float = 0.0
 
     @property
     def nq(self) -> int:
@@ -109,6 +144,9 @@ class LegFamily:
             "sign": self.sign,
             "offsets": list(self.offsets),
             "yaw_offset": self.yaw_offset,
+            "lateral": self.lateral,
+            "joint_signs": list(self.joint_signs),
+            "deviation": self.deviation,
         }
 
     @property
@@ -116,10 +154,42 @@ class LegFamily:
         """Accepted target lengths: (3,) for legs, (3, 4) for the SCARA (with yaw)."""
         return (3, 4) if self.family == "scara" else (3,)
 
+    def reach_excess(self, targets: Any) -> np.ndarray:
+        """Distance (N,) [m] by which targets lie outside the leg's reach (0 inside).
+
+        Targets (N, 3) in the chain's base frame, as :func:`analytic_batch` takes them. The
+        distance is that of the exact pattern's workspace (joint limits ignored): the
+        planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]`` (2 DOF: ``|l2|``) over
+        both hip branches, and ``|e| − √(x² + y²)`` for a lateral offset ``e``.
+
+        Raises:
+            IKError: The family is ``scara`` (no such distance) or bad targets.
+
+        """
+        if self.family == "scara":
+            raise IKError("reach_excess: legs only (coxa_tibia, leg3)", parameter="family")
+        x, _ = _targets(self, targets)
+        h = np.hypot(x[:, 0], x[:, 1])
+        w = (x[:, 2] - self.height) * self.sign
+        side = np.maximum(abs(self.lateral) - h, 0.0)
+        m = np.sqrt(np.maximum(h * h - self.lateral**2, 0.0))
+        if self.family == "leg3":
+            l1, l2, l3 = self.lengths
+            rmin, rmax = abs(abs(l2) - abs(l3)), abs(l2) + abs(l3)
+        else:
+            l1, l2 = self.lengths
+            rmin = rmax = abs(l2)
+        best = np.full(len(x), np.inf)
+        for hs in (1.0, -1.0):
+            r = np.hypot(hs * m - l1, w)
+            best = np.minimum(best, np.maximum.reduce([r - rmax, rmin - r, np.zeros_like(r)]))
+        return np.asarray(np.maximum(best, side))
+
     @property
     def scale(self) -> float:
-        """A length scale of the chain in [m] (sum of |d| and |r|), for tolerances."""
+        """A length scale of the chain in [m] (sum of |d|, |r| and the tool offset)."""
         s = sum(abs(r.d) + abs(r.r) for r in self.chain.rows)
+        s += float(np.linalg.norm(self.chain.tool_matrix[:3, 3]))
         return s if s > 0 else 1.0
 
 
@@ -161,12 +231,24 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
     )
 
 
-def detect_family(chain: Chain | Model | str) -> LegFamily:
+def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
+
+    Legs (``coxa_tibia``, ``leg3``) are recognised through what does not change the closed
+    form: a base pose and a first row with any ``α1``, ``d1`` (folded into
+    :attr:`LegFamily.mount`), joint offsets ``θ``, offsets ``r2``, ``r3`` along the knee axis,
+    fixed rows after the last joint and a **tool offset** (the foot a fixed point ``p`` in the
+    last joint's frame: it becomes the effective last length ``√(p_x² + p_y²)``, an angle
+    offset ``atan2(p_y, p_x)`` on the last joint and a lateral offset along the knee axis),
+    an ankle axis anti-parallel to the knee's (``α3 = π``), and twists within ``angle_tol`` of
+    the pattern (``α2 = ±π/2``, ``α3 ∈ {0, π}``; then the solutions are finished by Newton
+    steps on the exact table: :func:`analytic_batch`).
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
             :func:`hexapod_kin.load` takes (a preset name, a table file).
+        angle_tol: How far [rad] a leg's twists may be from the exact pattern (default
+            :data:`FAMILY_TOL` = 1e-3 rad: covers URDF constants such as ``1.5704`` for π/2).
 
     Returns:
         The :class:`LegFamily`.
@@ -177,14 +259,6 @@ def detect_family(chain: Chain | Model | str) -> LegFamily:
 
     """
     ch = _chain_of(chain)
-    if ch.tool is not None and not np.allclose(ch.tool.matrix[:3, 3], 0.0, atol=1e-15):
-        raise IKError(
-            f"chain {ch.name!r} has a tool offset {ch.tool.matrix[:3, 3].tolist()} m: the closed "
-            "forms place the table's last frame; use hexapod_kin.ik.solve(model, target)",
-            parameter="tool",
-            value=ch.tool.matrix[:3, 3].tolist(),
-            allowed="no tool translation",
-        )
     rows = ch.rows
     sig = tuple(str(r.sigma)[0].upper() for r in rows)
     offsets = tuple(
@@ -192,26 +266,22 @@ def detect_family(chain: Chain | Model | str) -> LegFamily:
     )
     r1 = rows[0]
     base_ok = _is(r1.alpha, 0.0) and _is(r1.d, 0.0)
-    if sig == ("R", "R", "F") and base_ok:
-        a, f = rows[1], rows[2]
-        if _is(abs(a.alpha), _HALF_PI) and _is(a.r, 0.0) and _is(f.r, 0.0) and abs(f.d) > 0:
-            return LegFamily(
-                "coxa_tibia", ch, (a.d, f.d), r1.r, math.copysign(1.0, a.alpha), offsets
-            )
-    if sig == ("R", "R", "R", "F") and base_ok:
-        a, b, f = rows[1], rows[2], rows[3]
-        if (
-            _is(abs(a.alpha), _HALF_PI)
-            and _is(a.r, 0.0)
-            and _is(b.alpha, 0.0)
-            and _is(b.r, 0.0)
-            and _is(f.r, 0.0)
-            and abs(b.d) > 0
-            and abs(f.d) > 0
-        ):
-            return LegFamily(
-                "leg3", ch, (a.d, b.d, f.d), r1.r, math.copysign(1.0, a.alpha), offsets
-            )
+    joints = "".join(s for s in sig if s != "F")
+    n_joint_rows = len(ch.joint_rows)
+    legs_ok = joints in ("RR", "RRR") and sig[:n_joint_rows] == tuple(joints)
+    if legs_ok:
+        leg = _leg_family(ch, float(angle_tol))
+        if leg is not None:
+            return leg
+    tool_xyz = ch.tool_matrix[:3, 3]
+    if not np.allclose(tool_xyz, 0.0, atol=1e-15) and not legs_ok:
+        raise IKError(
+            f"chain {ch.name!r} has a tool offset {tool_xyz.tolist()} m: the SCARA closed form "
+            "places the table's last frame; use hexapod_kin.ik.solve(model, target)",
+            parameter="tool",
+            value=tool_xyz.tolist(),
+            allowed="no tool translation",
+        )
     if sig == ("R", "R", "R", "P", "F") and base_ok:
         b, c, p, f = rows[1], rows[2], rows[3], rows[4]
         flip = _angle_is(p.alpha, math.pi)
@@ -241,9 +311,71 @@ def detect_family(chain: Chain | Model | str) -> LegFamily:
     pattern = " ".join(f"{s}(α={r.alpha:.4g}, d={r.d:.4g}, r={r.r:.4g})" for s, r in zip(sig, rows))
     raise IKError(
         f"chain {ch.name!r} has no closed-form IK: its table {pattern} matches none of the "
-        f"families {list(FAMILIES)} (coxa_tibia: R(0,0,r1) R(±π/2,l1,0) F(l2,r=0); leg3: "
-        "R(0,0,r1) R(±π/2,l1,0) R(0,l2,0) F(l3,r=0); scara: R(0,0,r1) R(0,d2) R(0,d3) "
+        f"families {list(FAMILIES)} (coxa_tibia: R R(±π/2, l1) + a foot off the last axis; "
+        "leg3: R R(±π/2, l1) R(0 or π, l2) + a foot off the last axis, twists within "
+        f"angle_tol={float(angle_tol):.3g} rad; scara: R(0,0,r1) R(0,d2) R(0,d3) "
         "P(α∈{0,π},d=0) F(d=0,r=0)); use hexapod_kin.ik.solve(model, target)"
+    )
+
+
+def _twist_off(alpha: float, target: float) -> float:
+    """|alpha − target| modulo 2π [rad]."""
+    return abs(math.remainder(alpha - target, _TWO_PI))
+
+
+def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
+    """The leg families through mounts, tool offsets and near-exact twists (None: no leg)."""
+    rows, jr = ch.rows, ch.joint_rows
+    nq = len(jr)
+    r1, a = rows[0], rows[1]
+    # α2 = σ·π/2
+    sigma = 1.0 if math.sin(a.alpha) > 0 else -1.0
+    dev = _twist_off(a.alpha, sigma * _HALF_PI)
+    kappa = 1.0
+    if nq == 3:
+        b = rows[2]
+        kappa = 1.0 if math.cos(b.alpha) > 0 else -1.0
+        dev = max(dev, _twist_off(b.alpha, 0.0 if kappa > 0 else math.pi))
+    if dev > angle_tol:
+        return None
+    # the foot: a fixed point in the last joint's frame (fixed rows, then the tool)
+    t = np.eye(4)
+    for row in rows[nq:]:
+        t = t @ row.transform()
+    px, py, pz = (t @ ch.tool_matrix)[:3, 3]
+    if py == 0.0:  # the catalogue's legs: the length as the table writes it (sign kept)
+        last, delta = float(px), 0.0
+    else:
+        last, delta = math.hypot(px, py), math.atan2(py, px)
+    if last == 0.0 or (nq == 3 and rows[2].d == 0.0):
+        return None  # a foot on the last axis, or no thigh: not these closed forms
+    lengths = (a.d, last) if nq == 2 else (a.d, rows[2].d, last)
+    offs: tuple[float, ...]
+    signs: tuple[float, ...]
+    if nq == 2:
+        lateral = a.r + pz
+        offs = (r1.theta, a.theta + delta)
+        signs = (1.0, 1.0)
+    else:
+        lateral = a.r + kappa * (rows[2].r + pz)
+        offs = (r1.theta, a.theta, rows[2].theta + delta)
+        signs = (1.0, 1.0, kappa)
+    if abs(lateral) < 1e-15 * (abs(a.d) + abs(last)):
+        lateral = 0.0
+    mount = ch.base_pose  # α1 = d1 = 0: the base pose as it is (same bits as before)
+    if not (r1.alpha == 0.0 and r1.d == 0.0):
+        mount = Pose.of(ch.base_matrix @ khalil_transform(r1.alpha, r1.d, 0.0, 0.0))
+    return LegFamily(
+        "coxa_tibia" if nq == 2 else "leg3",
+        ch,
+        lengths,
+        r1.r,
+        sigma,
+        tuple(float(v) for v in offs),
+        lateral=float(lateral),
+        joint_signs=signs,
+        mount=mount,
+        deviation=0.0 if dev <= _ANG_TOL else dev,
     )
 
 
@@ -296,8 +428,9 @@ def _targets(fam: LegFamily, target: Any) -> tuple[np.ndarray, bool]:
         )
     if not np.all(np.isfinite(arr)):
         raise IKError(f"target={np.asarray(target).tolist()!r} contains non-finite values")
-    if fam.chain.base_pose is not None:  # targets in the base link -> Khalil frame 0
-        T = fam.chain.base_pose.matrix
+    pose = fam.chain.base_pose if fam.family == "scara" else fam.mount
+    if pose is not None:  # targets in the base link -> Khalil frame 0 (legs: after α1, d1)
+        T = pose.matrix
         R, t = T[:3, :3], T[:3, 3]
         arr = arr.copy()
         arr[:, :3] = (arr[:, :3] - t) @ R
@@ -320,7 +453,15 @@ def analytic_batch(
 
     Slot meanings: coxa_tibia ``[hip toward the target, hip reversed (φ1 + π)]``; leg3
     ``[toward/ankle +, toward/ankle −, reversed/ankle +, reversed/ankle −]``; scara
-    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid.
+    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid. With a
+    lateral offset ``e`` "toward" is the branch ``u + l1 = +√(x² + y² − e²)``.
+
+    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0, within
+    :data:`FAMILY_TOL`) is solved by the exact pattern's closed form, then each solution is
+    finished by Newton steps on the table itself (:mod:`hexapod_kin.ik._table_finish`); a slot
+    stays valid when its foot lands within ``tol`` × the length scale of the target (2 DOF:
+    the target that close to the table's surface) and, with ``within_limits``, inside the
+    limits. The slots keep their meaning.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -357,7 +498,7 @@ def analytic_batch(
                 q[..., j] = v
                 valid &= ok & (v >= lo[j]) & (v <= hi[j])
         q[~valid] = np.nan
-    else:
+    elif fam.deviation == 0.0:
         q, valid = leg_solutions(
             x,
             fam.lengths,
@@ -366,7 +507,21 @@ def analytic_batch(
             offsets=fam.offsets,
             tol=tol_abs,
             limits=limits,
+            lateral=fam.lateral,
+            joint_signs=fam.joint_signs,
         )
+    else:  # twists near the pattern: solve the exact pattern, finish on the table itself
+        q, valid = leg_solutions(
+            x,
+            fam.lengths,
+            height=fam.height,
+            sign=fam.sign,
+            offsets=fam.offsets,
+            tol=tol_abs + 4.0 * fam.deviation * fam.scale,
+            lateral=fam.lateral,
+            joint_signs=fam.joint_signs,
+        )
+        q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
@@ -402,13 +557,6 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q, valid
 
 
-def _fit(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Angles shifted by ±2π into [lo, hi] where that helps; (angles, inside)."""
-    v = np.where((v < lo) & (v + _TWO_PI <= hi), v + _TWO_PI, v)
-    v = np.where((v > hi) & (v - _TWO_PI >= lo), v - _TWO_PI, v)
-    return v, (v >= lo) & (v <= hi)
-
-
 def _leg_slots(
     targets: Any,
     lengths: tuple[Any, ...],
@@ -417,6 +565,8 @@ def _leg_slots(
     offsets: Any,
     tol: float,
     limits: tuple[Any, Any] | None,
+    lateral: Any = 0.0,
+    joint_signs: Any = None,
 ) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:
     """The leg closed form as columns on the targets a branch reaches.
 
@@ -433,11 +583,18 @@ def _leg_slots(
         lo, hi = (np.asarray(v, dtype=np.float64) for v in limits)
         # joint j's bounds lo[j], hi[j]: scalars or contiguous (N,)
         lo, hi = np.ascontiguousarray(lo.T - 1e-12), np.ascontiguousarray(hi.T + 1e-12)
+    flip = [] if joint_signs is None else [j for j, s in enumerate(joint_signs) if s < 0]
     n = len(x)
     h = np.hypot(x[:, 0], x[:, 1])
     w = (x[:, 2] - height) * sign
     l1, l2 = lengths[0], lengths[1]
     l3 = lengths[2] if nq == 3 else 0.0
+    e = lateral
+    side = np.ndim(e) > 0 or e != 0.0  # a foot off the leg plane: h² = (l1 + ρ)² + e²
+    if side:
+        m2 = h * h - np.square(e)
+        lat_ok = m2 >= -(2.0 * np.abs(e) * tol + tol * tol)
+        h = np.sqrt(np.maximum(m2, 0.0))
     with np.errstate(invalid="ignore", divide="ignore"):
         us = [h - l1, -h - l1]  # the hip toward the target, then reversed
         if nq == 2:
@@ -446,6 +603,8 @@ def _leg_slots(
             eps = tol * (np.abs(l2) + np.abs(l3)) / np.abs(l2 * l3)
             c3s = [(u * u + w * w - l2 * l2 - l3 * l3) / (2.0 * l2 * l3) for u in us]
             reach = [np.abs(c3) <= 1.0 + eps for c3 in c3s]
+        if side:
+            reach = [r & lat_ok for r in reach]
     # the angles only where a branch reaches (the trigonometry is most of the work)
     sub = np.flatnonzero(reach[0] | reach[1])
     full = len(sub) == n
@@ -461,6 +620,8 @@ def _leg_slots(
         [take(r) for r in reach],
     )
     l1, l2, l3 = take(np.asarray(l1)), take(np.asarray(l2)), take(np.asarray(l3))
+    if side:
+        e = take(np.asarray(e, dtype=np.float64))
     if lo is not None and hi is not None and lo.ndim == 2:  # per target: (nq, N)
         lo, hi = take(lo), take(hi)
     phi = np.arctan2(x[:, 1], x[:, 0])
@@ -468,6 +629,7 @@ def _leg_slots(
     oks: list[np.ndarray] = []
 
     def slot(ok: np.ndarray, *angles: np.ndarray) -> None:
+        angles = tuple(-a if j in flip else a for j, a in enumerate(angles))
         vals = [wrap_angles(a - off[j] if off[j] else a) for j, a in enumerate(angles)]
         if lo is not None and hi is not None:
             for j, v in enumerate(vals):
@@ -478,7 +640,8 @@ def _leg_slots(
 
     with np.errstate(invalid="ignore", divide="ignore"):
         for k, u in enumerate(us):
-            hip = phi + k * np.pi
+            # e = 0: the foot's plane holds the hip axis, φ1 = atan2(y, x) (+ π reversed)
+            hip = phi - np.arctan2(-sign * e, u + l1) if side else phi + k * np.pi
             if nq == 2:
                 slot(reach[k], hip, np.arctan2(w / l2, u / l2))
                 continue
@@ -501,6 +664,8 @@ def leg_solutions(
     offsets: Any = None,
     tol: float = 0.0,
     limits: tuple[Any, Any] | None = None,
+    lateral: Any = 0.0,
+    joint_signs: Any = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The one closed form of the coxa_tibia (2 lengths) and leg3 (3 lengths) legs, vectorised.
 
@@ -521,6 +686,12 @@ def leg_solutions(
         limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
             (by more than 1e-12) are invalid; values are first shifted by ±2π when that brings
             them inside.
+        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): the foot
+            is ``Rz(φ1)·[l1 + ρ', −σe, σw] + [0, 0, h]``, so ``u = ±√(x² + y² − e²) − l1``
+            and ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``; no solution where
+            ``√(x² + y²) < |e|``. Default 0 (the formulas above).
+        joint_signs: ±1 per joint: a joint with −1 enters the planar leg negated (an ankle
+            axis anti-parallel to the knee's, ``α3 = π``). Default all +1.
 
     Returns:
         ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
@@ -529,7 +700,9 @@ def leg_solutions(
 
     """
     n = len(np.asarray(targets).reshape(-1, 3))
-    sub, cols, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    sub, cols, oks = _leg_slots(
+        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
+    )
     nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
     q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
     valid = np.zeros((k, n), dtype=bool)
@@ -550,9 +723,13 @@ def leg_reachable(
     offsets: Any = None,
     tol: float = 0.0,
     limits: tuple[Any, Any] | None = None,
+    lateral: Any = 0.0,
+    joint_signs: Any = None,
 ) -> np.ndarray:
     """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
-    sub, _, oks = _leg_slots(targets, lengths, height, sign, offsets, tol, limits)
+    sub, _, oks = _leg_slots(
+        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
+    )
     if sub is None:
         return np.logical_or.reduce(oks)
     out = np.zeros(len(np.asarray(targets).reshape(-1, 3)), dtype=bool)

@@ -347,6 +347,20 @@ def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     return sp.expand(e)
 
 
+def _chop(expr: Any, rel: float = 1e-12) -> Any:
+    """Float coefficients below ``rel`` × the largest one, set to 0.
+
+    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
+    that would otherwise factor as real terms.
+    """
+    floats = expr.atoms(sp.Float)
+    if not floats:
+        return expr
+    tiny = rel * max(abs(float(f)) for f in floats)
+    zero = {f: sp.Integer(0) for f in floats if abs(float(f)) < tiny}
+    return sp.expand(expr.xreplace(zero)) if zero else expr
+
+
 def _to_trig(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     s, c = _trig_symbols(q)
     sub = {}
@@ -371,7 +385,7 @@ def trig_factor(
         form; the product ``constant · Π factor**mult`` equals ``expr``.
 
     """
-    poly = _to_poly(expr, q, sigmas)
+    poly = _chop(_to_poly(expr, q, sigmas))
     const, raw = sp.factor_list(poly)
     found: list[tuple[Any, int]] = []
 
@@ -388,7 +402,7 @@ def trig_factor(
         found.append((f, mult))
 
     for fac, mult in raw:
-        red = _reduce(fac, q)
+        red = _chop(_reduce(fac, q))
         if not _depends(red, q):
             const = const * red**mult
             continue
