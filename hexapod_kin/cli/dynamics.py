@@ -352,7 +352,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
 
     source = source_arg(args) or "hexapod"
     feet, radius = feet_arg(args), args.foot_radius
-    params = set_params(args.set)
+    params = set_params(args.set, source=source)
     model = load(source, **params) if params else None
     hexa = (
         None

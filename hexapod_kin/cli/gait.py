@@ -109,9 +109,9 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
 
     plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
-    params = set_params(args.set)
-    robot: Any = None
     source = args.source or "hexapod"
+    params = set_params(args.set, source=source)
+    robot: Any = None
     if params:  # robots.get checks the names and values (one error naming the parameter)
         if source not in robots.PRESETS:
             raise ParameterError(
