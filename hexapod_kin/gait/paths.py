@@ -16,7 +16,16 @@ import numpy as np
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 
-__all__ = ["FootStep", "foot_path", "foot_step"]
+__all__ = [
+    "FootStep",
+    "foot_path",
+    "foot_step",
+    "last_stance_value",
+    "rolling_offsets",
+    "rotation_increments",
+    "stance_start_index",
+    "terrain_normals",
+]
 
 
 def foot_path(
@@ -195,3 +204,95 @@ def foot_step(
     stance = np.remainder(phase, 1.0) < duty_factor
     read_only(t, phase, stance, foot, qdot, actual)
     return FootStep(t, phase, stance, foot, q, qdot, reached, actual, within, step)
+
+
+# ---------------------------------------------------------------------- round feet
+def terrain_normals(ground: Any, x: Any, y: Any, step: float = 1e-6) -> np.ndarray:
+    """Unit normals (..., 3) of the ground ``z = h(x, y)`` at ``x``, ``y`` [m].
+
+    ``n ∝ (−∂h/∂x, −∂h/∂y, 1)`` with each slope the smaller (in size) of the forward and the
+    backward difference over ``step`` [m] (min-mod: exact on a plane up to rounding, and the
+    flat side at a step's edge); ``ẑ`` where the ground is undefined.
+    """
+    xa, ya = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    h0 = ground(xa, ya)
+
+    def slope(dx: float, dy: float) -> np.ndarray:
+        fwd = (ground(xa + dx, ya + dy) - h0) / step
+        bwd = (h0 - ground(xa - dx, ya - dy)) / step
+        g = np.where(np.abs(fwd) <= np.abs(bwd), fwd, bwd)
+        return np.where(np.isfinite(g), g, 0.0)
+
+    out = np.empty(xa.shape + (3,))
+    out[..., 0] = -slope(step, 0.0)
+    out[..., 1] = -slope(0.0, step)
+    out[..., 2] = 1.0
+    out /= np.linalg.norm(out, axis=-1, keepdims=True)
+    return out
+
+
+def rotation_increments(rot: np.ndarray) -> np.ndarray:
+    """Rotation vectors (N − 1, ...) ``θ_k = log(R_{k+1} R_kᵀ)`` of world rotations (N, ..., 3, 3).
+
+    ``θ_k`` is the world-frame rotation from sample k to k + 1 (``ω dt`` for a constant angular
+    velocity ω): axis-angle from the trace and the skew part (angles below π).
+    """
+    dR = np.matmul(rot[1:], np.swapaxes(rot[:-1], -1, -2))
+    cos = np.clip((np.trace(dR, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    ang = np.arccos(cos)
+    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+    small = ang < 1e-6
+    scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
+    vee = np.stack(
+        [dR[..., 2, 1] - dR[..., 1, 2], dR[..., 0, 2] - dR[..., 2, 0], dR[..., 1, 0] - dR[..., 0, 1]],
+        axis=-1,
+    )
+    return np.asarray(vee * scale[..., None])
+
+
+def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.ndarray:
+    """How far each stance foot's centre has rolled since its first stance sample, (N, L, 3) [m].
+
+    A sphere of radius r rolling without slip on a plane of unit normal n has centre velocity
+    ``v = ω × (r n)`` (the material point in contact, ``c − r n``, is at rest). Discretely,
+    ``D_i = Σ_{k = s}^{i − 1} θ_k × (r n)`` from the stance's first sample s, ``θ_k`` the foot
+    frame's rotation increment (:func:`rotation_increments`) and n the stance's contact
+    normal; 0 in swing. The contact point then slips by ``c_i − c_s − D_i`` (zero when rolling).
+
+    Args:
+        rot: (N, L, 3, 3) world rotations of the foot frames.
+        support: (N, L) True in stance.
+        normals: (N, L, 3) the ground's unit normal at each stance contact.
+        radius: Foot radius r [m].
+
+    """
+    R = np.asarray(rot, dtype=float)
+    sup = np.asarray(support, dtype=bool)
+    n = np.asarray(normals, dtype=float)
+    out = np.zeros(sup.shape + (3,))
+    if radius == 0.0 or len(sup) < 2:
+        return out
+    inc = np.cross(rotation_increments(R), radius * n[:-1])  # (N-1, L, 3)
+    inc *= (sup[:-1] & sup[1:])[..., None]
+    cum = np.zeros_like(out)
+    np.cumsum(inc, axis=0, out=cum[1:])
+    ref = cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
+    return np.asarray(np.where(sup[..., None], cum - ref, 0.0))
+
+
+def stance_start_index(support: np.ndarray) -> np.ndarray:
+    """(N, L) index of the first sample of the current stance (or of the last one, in swing)."""
+    n = len(support)
+    start = support.copy()
+    start[1:] &= ~support[:-1]
+    idx = np.where(start, np.arange(n)[:, None], 0)
+    return np.asarray(np.maximum.accumulate(idx, axis=0))
+
+
+def last_stance_value(values: np.ndarray, support: np.ndarray) -> np.ndarray:
+    """(N, L, ...) ``values`` at each leg's latest stance sample (0 before the first one)."""
+    n = len(support)
+    idx = np.where(support, np.arange(n)[:, None], -1)
+    idx = np.maximum.accumulate(idx, axis=0)
+    out = values[np.maximum(idx, 0), np.arange(support.shape[1])[None, :]]
+    return np.asarray(np.where((idx >= 0)[..., None], out, 0.0))

@@ -431,6 +431,40 @@ class WholeBody:
                 allowed=[float(self.lower[j]), float(self.upper[j])],
             )
 
+    # ------------------------------------------------ minimal versions (h2; h1 builds them)
+    @property
+    def foot_radius(self) -> float:
+        """Contact radius of the feet [m]: the foot spheres of the exported model (1.5 × link)."""
+        return 1.5 * float(self.params.legs[0].chain.link_radius)
+
+    @property
+    def velocity_limit(self) -> np.ndarray:
+        """(nq,) joint velocity limits from the URDF [rad/s] (inf if absent)."""
+        v = np.asarray(self.model.velocityLimit[6:], dtype=float).copy()
+        v[v > 1e300] = np.inf
+        return v
+
+    @property
+    def effort_limit(self) -> np.ndarray:
+        """(nq,) joint effort limits from the URDF [N·m] (inf if absent)."""
+        v = np.asarray(self.model.effortLimit[6:], dtype=float).copy()
+        v[v > 1e300] = np.inf
+        return v
+
+    def foot_poses(self, q: Any, base: Any) -> np.ndarray:
+        """World poses (N, L, 4, 4) of the foot frames (the contact spheres' centres)."""
+        T = self.joint_poses(q, base)
+        Ta = T[:, self._foot_joint]  # (N, L, 4, 4): the foot's joint frame
+        local = np.array(
+            [
+                self.model.frames[
+                    self.model.getFrameId(f"{leg.name}_{leg.chain.tip}")
+                ].placement.homogeneous
+                for leg in self.params.legs
+            ]
+        )
+        return np.asarray(np.matmul(Ta, local[None]))
+
 
 def _build(params: Hexapod) -> WholeBody:
     import pinocchio as pin

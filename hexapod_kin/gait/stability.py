@@ -20,7 +20,7 @@ import numpy as np
 
 from ..exceptions import ParameterError
 
-__all__ = ["CHUNK", "segment_clearance", "support_margin"]
+__all__ = ["CHUNK", "periodic_spline", "segment_clearance", "support_margin"]
 
 #: Samples per vectorised pass.
 CHUNK = 20_000
@@ -177,4 +177,52 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
     return np.concatenate(
         [_clearance_numpy(p[i : i + CHUNK], pr) for i in range(0, max(len(p), 1), CHUNK)]
+    )
+
+
+def periodic_spline(knots: Any, values: Any, period: float, t: Any) -> np.ndarray:
+    """The periodic cubic spline through ``(knots, values)`` evaluated at ``t``, C² everywhere.
+
+    Args:
+        knots: (M,) distinct times in [0, period) [s] (any order).
+        values: (M, D) values at the knots.
+        period: The period T [s]; the spline repeats with it.
+        t: (N,) times [s] (any real).
+
+    Returns:
+        (N, D): value, with the second derivatives ``M_j`` at the knots solving the cyclic
+        system ``h_{j−1} M_{j−1} + 2 (h_{j−1} + h_j) M_j + h_j M_{j+1} = 6 (δ_j − δ_{j−1})``
+        (δ_j the slope of chord j), so value, slope and curvature are continuous, across the
+        period too. One knot gives a constant.
+
+    """
+    x = np.asarray(knots, dtype=float)
+    y = np.asarray(values, dtype=float)
+    order = np.argsort(x, kind="stable")
+    x, y = x[order], y[order]
+    tt = np.asarray(t, dtype=float)
+    m = len(x)
+    if m == 1:
+        return np.broadcast_to(y[0], (len(tt), y.shape[1])).copy()
+    h = np.diff(np.append(x, x[0] + period))  # (M,)
+    y_next = np.roll(y, -1, axis=0)
+    delta = (y_next - y) / h[:, None]
+    A = np.zeros((m, m))
+    rhs = 6.0 * (delta - np.roll(delta, 1, axis=0))
+    for j in range(m):
+        hp = h[j - 1]
+        A[j, (j - 1) % m] += hp
+        A[j, j] += 2.0 * (hp + h[j])
+        A[j, (j + 1) % m] += h[j]
+    M = np.linalg.solve(A, rhs)
+    u = np.remainder(tt - x[0], period) + x[0]
+    j = np.clip(np.searchsorted(x, u, side="right") - 1, 0, m - 1)
+    hj = h[j][:, None]
+    a = (x[j] + h[j])[:, None] - u[:, None]
+    b = u[:, None] - x[j][:, None]
+    M0, M1 = M[j], np.roll(M, -1, axis=0)[j]
+    y0, y1 = y[j], y_next[j]
+    return np.asarray(
+        (M0 * a**3 + M1 * b**3) / (6.0 * hj) + (y0 / hj - M0 * hj / 6.0) * a
+        + (y1 / hj - M1 * hj / 6.0) * b
     )
