@@ -542,7 +542,6 @@ def walk(
     plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * blend[..., None], c_nxt)
     plan[..., 2] += np.where(swing, H * lift, 0.0)
     gz = np.where(swing, prev[..., 2] + (nxt[..., 2] - prev[..., 2]) * blend, nxt[..., 2])
-    _check_swing_clearance(ground, plan, swing, rad, t, names, H)
     # --- body
     pose = se2_pose(t, vel)
     base = np.zeros((n, 4, 4))
@@ -556,6 +555,7 @@ def walk(
         base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
     feet, q, ik, passes, residual = _rolling_ik(wb, base, plan, support, swing, blend,
                                                 n_nxt, rad, t, q0, size)
+    _check_swing_clearance(ground, feet, swing, rad, t, names, H)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     pts, com = wb.points_and_com(q, base)
