@@ -125,7 +125,7 @@ def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     The first blends the horizontal position (and the ground height) from lift-off to
     touch-down, the second scales the step height (1 at s = ½); both have zero first **and
     second** derivatives at s = 0 and 1 (``30s²(1 − s)²`` and ``60s(1 − s)(1 − 2s)``;
-    ``192 s²(1 − s)²(1 − 2s)`` and ``192 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
+    ``192 s²(1 − s)²(1 − 2s)`` and ``384 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
     with zero velocity and zero acceleration.
     """
     s = np.asarray(s, dtype=float)
@@ -505,7 +505,7 @@ def walk(
     m = np.floor(t[:, None] / T + offs[None, :] - beta)  # latest lift-off index
     t_lo = (m + beta - offs[None, :]) * T
     s = (t[:, None] - t_lo) / tsw
-    swing = s < 1.0
+    swing = s < 1.0 - 1e-9  # a touch-down instant is stance, whatever the rounding of t
     support = ~swing
     t_td = t_lo + tsw
 
