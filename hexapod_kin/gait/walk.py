@@ -688,6 +688,8 @@ def _rolling_ik(
     """
     D = np.zeros(plan.shape)
     passes, residual = 0, 0.0
+    hist_g: list[np.ndarray] = []
+    hist_f: list[np.ndarray] = []
     while True:
         if passes:
             lo = last_stance_value(D, support)
@@ -700,11 +702,24 @@ def _rolling_ik(
         if rad == 0.0:
             return feet, q, ik, passes, 0.0
         rot = wb.foot_poses(q, base)[..., :3, :3]
-        D_new = rolling_offsets(rot, support, normals, rad)
-        residual = float(np.abs(D_new - D).max())
-        D = D_new
+        G = rolling_offsets(rot, support, normals, rad)
+        f = G - D
+        residual = float(np.abs(f).max())
         if residual <= ROLLING_TOL * size or passes >= ROLLING_PASSES:
             return feet, q, ik, passes, residual
+        # Anderson acceleration (depth 2) of the fixed point D = G(D)
+        hist_g.append(G.ravel())
+        hist_f.append(f.ravel())
+        if len(hist_g) > 3:
+            hist_g.pop(0)
+            hist_f.pop(0)
+        if len(hist_f) > 1:
+            dF = np.diff(np.array(hist_f), axis=0).T
+            dG = np.diff(np.array(hist_g), axis=0).T
+            gamma = np.linalg.lstsq(dF, hist_f[-1], rcond=None)[0]
+            D = (hist_g[-1] - dG @ gamma).reshape(G.shape)
+        else:
+            D = G
 
 
 def _sway(
