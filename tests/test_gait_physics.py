@@ -64,12 +64,15 @@ def test_planned_feet_start_and_end_swings_with_zero_acceleration(pattern):
 
     def edge_accel(rate: float) -> tuple[float, float]:
         run = walk(pattern=pattern, duration=1.2, rate=rate, foot_radius=0.0)
-        acc = np.linalg.norm(
-            run.feet_planned[2:] - 2 * run.feet_planned[1:-1] + run.feet_planned[:-2], axis=-1
-        ) * rate**2  # (N-2, L) at samples 1..N-2
+        acc = (
+            np.linalg.norm(
+                run.feet_planned[2:] - 2 * run.feet_planned[1:-1] + run.feet_planned[:-2], axis=-1
+            )
+            * rate**2
+        )  # (N-2, L) at samples 1..N-2
         st = run.support[1:-1]
-        lift = (st[:-1] & ~st[1:])  # last stance sample before a swing
-        touch = (~st[:-1] & st[1:])  # last swing sample
+        lift = st[:-1] & ~st[1:]  # last stance sample before a swing
+        touch = ~st[:-1] & st[1:]  # last swing sample
         peak = float(acc.max())
         return float(acc[1:][lift].max()) / peak, float(acc[:-1][touch].max()) / peak
 

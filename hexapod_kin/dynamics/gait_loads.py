@@ -268,9 +268,11 @@ def full_dynamics(
     n, nl = support.shape
     rad = float(getattr(run, "settings", {}).get("foot_radius", 0.0))
     normals = getattr(run, "normals", None)
-    nrm = np.broadcast_to([0.0, 0.0, 1.0], feet.shape) if normals is None or not np.size(
-        normals
-    ) else np.asarray(normals, dtype=float)
+    nrm = (
+        np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
+        if normals is None or not np.size(normals)
+        else np.asarray(normals, dtype=float)
+    )
     fids = _contact_frames(model, data, Q[0], feet[0])
     weight = float(run.mass) * 9.81
     tau = np.zeros((n, model.nv - 6))
@@ -286,7 +288,9 @@ def full_dynamics(
         for m, k in enumerate(stance):
             J = pin.getFrameJacobian(model, data, fids[k], lwa)
             arm = feet[i, k] - rad * nrm[i, k] - data.oMf[fids[k]].translation
-            skew = np.array([[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]])
+            skew = np.array(
+                [[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]]
+            )
             jac[m] = J[:3] - skew @ J[3:]  # the contact point, fixed on the foot
         a_base = jac[:, :, :6].transpose(2, 0, 1).reshape(6, -1)  # (6, 3k): Σ J_baseᵀ f
         if len(stance):

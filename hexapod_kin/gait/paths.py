@@ -21,6 +21,7 @@ __all__ = [
     "foot_path",
     "foot_step",
     "last_stance_value",
+    "rolling_ik",
     "rolling_offsets",
     "rotation_increments",
     "stance_start_index",
@@ -244,7 +245,11 @@ def rotation_increments(rot: np.ndarray) -> np.ndarray:
     small = ang < 1e-6
     scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
     vee = np.stack(
-        [dR[..., 2, 1] - dR[..., 1, 2], dR[..., 0, 2] - dR[..., 2, 0], dR[..., 1, 0] - dR[..., 0, 1]],
+        [
+            dR[..., 2, 1] - dR[..., 1, 2],
+            dR[..., 0, 2] - dR[..., 2, 0],
+            dR[..., 1, 0] - dR[..., 0, 1],
+        ],
         axis=-1,
     )
     return np.asarray(vee * scale[..., None])
@@ -296,3 +301,63 @@ def last_stance_value(values: np.ndarray, support: np.ndarray) -> np.ndarray:
     idx = np.maximum.accumulate(idx, axis=0)
     out = values[np.maximum(idx, 0), np.arange(support.shape[1])[None, :]]
     return np.asarray(np.where((idx >= 0)[..., None], out, 0.0))
+
+
+def rolling_ik(
+    wb: Any,
+    base: np.ndarray,
+    plan: np.ndarray,
+    support: np.ndarray,
+    swing: np.ndarray,
+    blend: np.ndarray,
+    normals: np.ndarray,
+    rad: float,
+    t: np.ndarray,
+    q0: Any,
+    tol: float,
+    max_passes: int,
+) -> tuple[np.ndarray, np.ndarray, Any, int, float]:
+    """IK of the planned feet with the stance feet rolling, iterated to a fixed point.
+
+    Pass k: feet = plan + rolling ``D_k`` (stance: ``D``; swing: the lift-off value of the
+    previous stance fading with ``1 − blend``); IK (``wb.body_ik``) → q_k;
+    ``G(D_k)`` = :func:`rolling_offsets` of the foot rotations of q_k (``wb.foot_poses``).
+    The next ``D`` is Anderson's (depth 2) extrapolation of the fixed point ``D = G(D)`` (the
+    plain iteration contracts by about r / leg length per pass). Stops when
+    ``max‖G(D_k) − D_k‖ ≤ tol`` [m] (or after ``max_passes``); returns (feet, q, ik, passes,
+    residual [m]): the slip of the planned contact points is the residual up to rounding.
+    """
+    D = np.zeros(plan.shape)
+    passes, residual = 0, 0.0
+    hist_g: list[np.ndarray] = []
+    hist_f: list[np.ndarray] = []
+    while True:
+        if passes:
+            lo = last_stance_value(D, support)
+            feet = plan + np.where(swing[..., None], lo * (1.0 - blend[..., None]), D)
+        else:
+            feet = plan
+        ik = wb.body_ik(base, feet, q_prev=q0, times=t, strict=False)
+        q = np.array(ik.q)
+        passes += 1
+        if rad == 0.0:
+            return feet, q, ik, passes, 0.0
+        rot = wb.foot_poses(q, base)[..., :3, :3]
+        G = rolling_offsets(rot, support, normals, rad)
+        f = G - D
+        residual = float(np.abs(f).max())
+        if residual <= tol or passes >= max_passes:
+            return feet, q, ik, passes, residual
+        # Anderson acceleration (depth 2) of the fixed point D = G(D)
+        hist_g.append(G.ravel())
+        hist_f.append(f.ravel())
+        if len(hist_g) > 3:
+            hist_g.pop(0)
+            hist_f.pop(0)
+        if len(hist_f) > 1:
+            dF = np.diff(np.array(hist_f), axis=0).T
+            dG = np.diff(np.array(hist_g), axis=0).T
+            gamma = np.linalg.lstsq(dF, hist_f[-1], rcond=None)[0]
+            D = (hist_g[-1] - dG @ gamma).reshape(G.shape)
+        else:
+            D = G

@@ -27,7 +27,6 @@ the body frame, x forward, y left; the walk passes the leg mounts), for any orde
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 

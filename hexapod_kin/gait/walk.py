@@ -48,13 +48,20 @@ import numpy as np
 from ..exceptions import ParameterError
 from ..motion import read_only
 from .paths import (
-    last_stance_value,
+    rolling_ik,
     rolling_offsets,
     stance_start_index,
     terrain_normals,
 )
 from .robot import GaitError, WholeBody, whole_body
-from .stability import periodic_spline, segment_clearance, support_margin
+from .stability import (
+    accel_limit_of,
+    check_swing_clearance,
+    periodic_spline,
+    raise_checks,
+    segment_clearance,
+    support_margin,
+)
 from .tables import PhaseTable, phase_table
 from .terrain import Terrain
 from .terrain import terrain as make_terrain
@@ -360,8 +367,11 @@ class GaitRun:
 
 
 def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """d²x/dt² (N, ...) on uniform samples: ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the
-    second-order one-sided ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends (N ≥ 4)."""
+    """d²x/dt² (N, ...) on uniform samples (N ≥ 4).
+
+    ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the second-order one-sided
+    ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends.
+    """
     dt = float(t[1] - t[0])
     out = np.empty_like(x)
     out[1:-1] = x[2:] - 2.0 * x[1:-1] + x[:-2]
@@ -464,7 +474,7 @@ def walk(
             value=rate,
             allowed="duration*rate <= 2e6",
         )
-    acc_lim = _accel_limit(accel_limit, wb.nq)
+    acc_lim = accel_limit_of(accel_limit, wb.nq)
     if stride is not None and velocity is not None:
         raise ParameterError(
             f"stride={stride!r} and velocity={velocity!r}: give one (stride sets a straight "
@@ -553,9 +563,10 @@ def walk(
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
     if gain > 0.0:
         base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
-    feet, q, ik, passes, residual = _rolling_ik(wb, base, plan, support, swing, blend,
-                                                n_nxt, rad, t, q0, size)
-    _check_swing_clearance(ground, feet, swing, rad, t, names, H)
+    feet, q, ik, passes, residual = rolling_ik(
+        wb, base, plan, support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES
+    )
+    check_swing_clearance(ground, feet, swing, rad, t, names, H)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     pts, com = wb.points_and_com(q, base)
@@ -578,8 +589,22 @@ def walk(
         qdot, qddot = np.zeros_like(q), np.zeros_like(q)
     vlim = np.asarray(wb.velocity_limit, dtype=float).reshape(-1)
     if strict:
-        _raise_checks(wb, table, names, pairs, t, clear, margin, tol, strokes, qdot, qddot,
-                      vlim, acc_lim, support)
+        raise_checks(
+            wb.joint_names,
+            table,
+            names,
+            pairs,
+            t,
+            clear,
+            margin,
+            tol,
+            strokes,
+            qdot,
+            qddot,
+            vlim,
+            acc_lim,
+            support,
+        )
     phase = table.phase(t, T)
     read_only(t, base, actual, feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
     settings = {
@@ -631,101 +656,20 @@ def walk(
     )
 
 
-def _accel_limit(value: Any, nq: int) -> np.ndarray:
-    if value is None:
-        return np.full(nq, np.inf)
-    try:
-        a = np.broadcast_to(np.asarray(value, dtype=float), (nq,)).copy()
-    except (TypeError, ValueError):
-        a = np.full(nq, np.nan)
-    if not np.all(a > 0):
-        raise ParameterError(
-            f"accel_limit={value!r}: one number > 0 [rad/s²] or one per joint ({nq})",
-            parameter="accel_limit",
-            value=repr(value),
-            allowed=f"> 0, scalar or ({nq},)",
-        )
-    return a
-
-
-def _check_swing_clearance(
-    ground: Terrain, plan: np.ndarray, swing: np.ndarray, rad: float, t: np.ndarray,
-    names: tuple[str, ...], H: float,
-) -> None:
-    """Swing foot spheres above the ground: centre height over h(x, y) at least r."""
-    if not swing.any():
-        return
-    under = ground(plan[..., 0], plan[..., 1])
-    gap = np.where(swing, plan[..., 2] - under - rad, np.inf)
-    gap = np.where(np.isnan(gap), -np.inf, gap)
-    if gap.min() < -1e-9:
-        i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
-        d = float(-gap[i, leg])
-        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m below the ground"
-        raise GaitError(
-            f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
-            f"clearance'; step_height={H:g} m is too low for this terrain)",
-            check="terrain clearance",
-            leg=names[leg],
-            time=float(t[i]),
-            amount=d,
-            parameter="step_height",
-            value=H,
-            allowed="a swing above the terrain",
-        )
-
-
-def _rolling_ik(
-    wb: WholeBody, base: np.ndarray, plan: np.ndarray, support: np.ndarray, swing: np.ndarray,
-    blend: np.ndarray, normals: np.ndarray, rad: float, t: np.ndarray, q0: Any, size: float,
-) -> tuple[np.ndarray, np.ndarray, Any, int, float]:
-    """IK of the planned feet with the stance feet rolling, iterated to a fixed point.
-
-    Pass k: feet = plan + rolling ``D_k`` (stance: ``D``; swing: the lift-off value of the
-    previous stance fading with ``1 − blend``); IK → q_k; ``D_{k+1}`` = rolling of the foot
-    rotations of q_k. Stops when ``max‖D_{k+1} − D_k‖ ≤ ROLLING_TOL·size`` (or after
-    ``ROLLING_PASSES``); returns (feet, q, ik, passes, residual [m]).
-    """
-    D = np.zeros(plan.shape)
-    passes, residual = 0, 0.0
-    hist_g: list[np.ndarray] = []
-    hist_f: list[np.ndarray] = []
-    while True:
-        if passes:
-            lo = last_stance_value(D, support)
-            feet = plan + np.where(swing[..., None], lo * (1.0 - blend[..., None]), D)
-        else:
-            feet = plan
-        ik = wb.body_ik(base, feet, q_prev=q0, times=t, strict=False)
-        q = np.array(ik.q)
-        passes += 1
-        if rad == 0.0:
-            return feet, q, ik, passes, 0.0
-        rot = wb.foot_poses(q, base)[..., :3, :3]
-        G = rolling_offsets(rot, support, normals, rad)
-        f = G - D
-        residual = float(np.abs(f).max())
-        if residual <= ROLLING_TOL * size or passes >= ROLLING_PASSES:
-            return feet, q, ik, passes, residual
-        # Anderson acceleration (depth 2) of the fixed point D = G(D)
-        hist_g.append(G.ravel())
-        hist_f.append(f.ravel())
-        if len(hist_g) > 3:
-            hist_g.pop(0)
-            hist_f.pop(0)
-        if len(hist_f) > 1:
-            dF = np.diff(np.array(hist_f), axis=0).T
-            dG = np.diff(np.array(hist_g), axis=0).T
-            gamma = np.linalg.lstsq(dF, hist_f[-1], rcond=None)[0]
-            D = (hist_g[-1] - dG @ gamma).reshape(G.shape)
-        else:
-            D = G
-
-
 def _sway(
-    wb: WholeBody, table: PhaseTable, T: float, vel: tuple[float, float, float],
-    nb: np.ndarray, gain: float, base: np.ndarray, plan: np.ndarray, t: np.ndarray, q0: Any,
-    support: np.ndarray, rad: float, normals: np.ndarray,
+    wb: WholeBody,
+    table: PhaseTable,
+    T: float,
+    vel: tuple[float, float, float],
+    nb: np.ndarray,
+    gain: float,
+    base: np.ndarray,
+    plan: np.ndarray,
+    t: np.ndarray,
+    q0: Any,
+    support: np.ndarray,
+    rad: float,
+    normals: np.ndarray,
 ) -> np.ndarray:
     """The body poses with the periodic sway added (see the module docstring)."""
     offs = np.asarray(table.offsets)
@@ -747,8 +691,10 @@ def _sway(
     rot2 = nominal[:, :2, :2]
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
-    near = [np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
-            for tau in knots]
+    near = [
+        np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
+        for tau in knots
+    ]
     out = nominal
     for it in range(3):
         off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
@@ -763,58 +709,3 @@ def _sway(
             if m.any():
                 values[k] += targets[k] - com_b[m].mean(axis=0)
     return out
-
-
-def _raise_checks(
-    wb: WholeBody, table: PhaseTable, names: tuple[str, ...], pairs: tuple[tuple[int, int], ...],
-    t: np.ndarray, clear: np.ndarray, margin: np.ndarray, tol: float, strokes: np.ndarray,
-    qdot: np.ndarray, qddot: np.ndarray, vlim: np.ndarray, acc_lim: np.ndarray,
-    support: np.ndarray,
-) -> None:
-    if clear.size and clear.min() <= 0:
-        i, k = np.unravel_index(int(np.argmin(clear)), clear.shape)
-        a, b = pairs[k]
-        raise GaitError(
-            f"legs {names[a]} and {names[b]} collide (links {-clear[i, k]:.4g} m into "
-            f"each other) at t={t[i]:.4g} s (check 'leg clearance')",
-            check="leg clearance",
-            leg=names[a],
-            time=float(t[i]),
-            amount=float(-clear[i, k]),
-            parameter="stride",
-            value=strokes.max(),
-        )
-    if table.statically_stable and margin.min() <= -tol:
-        i = int(np.argmin(margin))
-        raise GaitError(
-            f"the centre of mass leaves the support polygon by {-margin[i]:.4g} m at "
-            f"t={t[i]:.4g} s (check 'stability margin'; stance legs "
-            f"{[names[k] for k in np.flatnonzero(support[i])]})",
-            check="stability margin",
-            time=float(t[i]),
-            amount=float(-margin[i]),
-            parameter="pattern",
-            value=table.name,
-            allowed="margin > 0",
-        )
-    for rates, lim, check, unit in (
-        (qdot, vlim, "joint speed", "rad/s"),
-        (qddot, acc_lim, "joint acceleration", "rad/s²"),
-    ):
-        over = np.abs(rates) - lim * (1.0 + 1e-9)
-        if over.size and over.max() > 0:
-            i, j = np.unravel_index(int(np.argmax(over)), over.shape)
-            joint = wb.joint_names[j]
-            d = float(np.abs(rates[i, j]) - lim[j])
-            raise GaitError(
-                f"joint {joint}: |rate| {abs(rates[i, j]):.4g} {unit} exceeds its limit "
-                f"{lim[j]:.4g} {unit} by {d:.4g} at t={t[i]:.4g} s (check '{check}'; slow "
-                "down or lengthen the period)",
-                check=check,
-                leg=None,
-                time=float(t[i]),
-                amount=d,
-                parameter=joint,
-                value=float(abs(rates[i, j])),
-                allowed=float(lim[j]),
-            )
