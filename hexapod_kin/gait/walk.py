@@ -49,7 +49,6 @@ from ..exceptions import ParameterError
 from ..motion import read_only
 from .paths import (
     rolling_ik,
-    rolling_offsets,
     stance_start_index,
     terrain_normals,
 )
@@ -77,7 +76,7 @@ MARGIN_TOL = 1e-9
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
-ROLLING_TOL = 1e-11
+ROLLING_TOL = 1e-12
 
 
 def _num(
@@ -563,21 +562,20 @@ def walk(
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
     if gain > 0.0:
         base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
-    feet, q, ik, passes, residual = rolling_ik(
+    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(
         wb, base, plan, support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES
     )
     check_swing_clearance(ground, feet, swing, rad, t, names, H)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
-    pts, com = wb.points_and_com(q, base)
+    if T_last is None:
+        pts, com = wb.points_and_com(q, base)
+    else:
+        pts, com = wb.points_of(T_last), wb.com_of(T_last, base)
     actual = np.ascontiguousarray(pts[:, :, -1])
     ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
-    if rad:
-        rot = wb.foot_poses(q, base)[..., :3, :3]
-        rolled = rolling_offsets(rot, support, n_nxt, rad)
-        slip = np.where(support, np.linalg.norm(actual - ref - rolled, axis=-1), 0.0)
-    else:
-        slip = np.where(support, np.linalg.norm(actual - ref, axis=-1), 0.0)
+    # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
+    slip = np.where(support, np.linalg.norm(actual - ref - rolled, axis=-1), 0.0)
     margin = support_margin(actual - rad * n_nxt, support, com)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
