@@ -571,7 +571,8 @@ def walk(
     if T_last is None:
         pts, com = wb.points_and_com(q, base)
     else:
-        pts, com = wb.points_of(T_last), wb.com_of(T_last, base)
+        pts = wb.points_of(T_last)
+        com = wb.com_of(T_last, base) if hasattr(wb, "com_of") else wb.com(q, base)
     actual = np.ascontiguousarray(pts[:, :, -1])
     ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
