@@ -63,7 +63,7 @@ def test_planned_feet_start_and_end_swings_with_zero_acceleration(pattern):
     """Second differences of the planned feet at lift-off / touch-down samples → 0 with dt."""
 
     def edge_accel(rate: float) -> tuple[float, float]:
-        run = walk(pattern=pattern, duration=1.2, rate=rate, foot_radius=0.0)
+        run = walk(pattern=pattern, duration=0.6, rate=rate, foot_radius=0.0)
         acc = (
             np.linalg.norm(
                 run.feet_planned[2:] - 2 * run.feet_planned[1:-1] + run.feet_planned[:-2], axis=-1
@@ -77,8 +77,8 @@ def test_planned_feet_start_and_end_swings_with_zero_acceleration(pattern):
         return float(acc[1:][lift].max()) / peak, float(acc[:-1][touch].max()) / peak
 
     # the jerk is not zero at the ends, so one sample in the acceleration is O(dt)
-    coarse, fine = edge_accel(2000.0), edge_accel(20000.0)
-    assert max(fine) < 1e-2  # relative to the peak swing acceleration
+    coarse, fine = edge_accel(2000.0), edge_accel(10000.0)
+    assert max(fine) < 2e-2  # relative to the peak swing acceleration
     assert fine[0] < 0.3 * coarse[0] + 1e-12 and fine[1] < 0.3 * coarse[1] + 1e-12
 
 
