@@ -1,18 +1,27 @@
-"""Contact forces and joint torques along a gait run (quasi-static), peak torque per joint.
+"""Contact forces and joint torques along a gait run: quasi-static and full inverse dynamics.
 
 Takes a walk's samples as data — ``t``, ``base_poses`` (``worldMbody``), ``q`` (leg joints,
-named by ``joint_names``) and ``support`` (stance feet), as in ``hexapod_kin.gait.GaitRun`` —
-and at every sample distributes the robot's weight over the stance feet exactly as
-:func:`~hexapod_kin.dynamics.standing.contact_forces` does (minimum norm, or inside friction cones),
-then ``τ = g(q) − Σ J_iᵀ f_i`` with gravity expressed in the body's axes (the body may yaw or
-tilt). Quasi-static: the body's and the legs' accelerations are left out (a walk at constant
-body velocity has none for the body; the legs' inertial torques are small at walking speeds —
-see :func:`~hexapod_kin.dynamics.statics.torques_along` for a leg's).
+named by ``joint_names``) and ``support`` (stance feet), as in ``hexapod_kin.gait.GaitRun``.
+
+* **Quasi-static** (``torque``): at every sample the robot's weight is distributed over the
+  stance feet exactly as :func:`~hexapod_kin.dynamics.standing.contact_forces` does (minimum
+  norm, or inside friction cones), then ``τ = g(q) − Σ J_iᵀ f_i`` with gravity expressed in the
+  body's axes. The body's and the legs' accelerations are left out.
+* **Full inverse dynamics** (``torque_full``, when the run carries its floating-base robot,
+  ``run.robot``): the recursive Newton–Euler algorithm (Pinocchio ``rnea``) with the base and
+  legs' velocities and accelerations of the plan (``run.pinocchio_v()``, ``pinocchio_a()``:
+  consistent second-order finite differences), ``b = M(q) a + h(q, v)``. The stance feet's
+  contact forces (applied at the contact points, ``centre − r n``) are solved so that the
+  floating base's six rows hold, ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or least
+  ‖f‖² inside the friction cones), then ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``.
+  ``base_residual`` is the largest ``‖b_base − Σ J_{i,base}ᵀ f_i‖`` (zero up to rounding when
+  the stance feet can produce any wrench: three or more not on one line).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -20,9 +29,9 @@ import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
 from ._common import as_model, check_inertials, read_only
-from .standing import ContactMethod, _hexapod, contact_forces, robot_mass_com
+from .standing import ContactMethod, _friction_qp, _hexapod, contact_forces, robot_mass_com
 
-__all__ = ["GaitTorques", "gait_torques"]
+__all__ = ["GaitTorques", "full_dynamics", "gait_torques"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +53,12 @@ class GaitTorques:
         mass: Robot mass in [kg].
         method: Contact-force distribution.
         mu: Friction coefficient (None for min-norm).
+        torque_full: (N, nq) full inverse-dynamics torques [N·m] (empty without ``run.robot``).
+        forces_full: (N, L, 3) their contact forces [N] (world axes).
+        peak_full: (nq,) ``max_t |torque_full|`` [N·m].
+        peak_full_time: (nq,) time of each [s].
+        peak_difference: (nq,) ``max_t |torque_full − torque|`` [N·m].
+        base_residual: Largest residual of the base rows [N, N·m] (see the module doc).
 
     """
 
@@ -61,6 +76,12 @@ class GaitTorques:
     mass: float
     method: str
     mu: float | None
+    torque_full: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    forces_full: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    peak_full: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    peak_full_time: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    peak_difference: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    base_residual: float = math.nan
 
     @property
     def feasible(self) -> bool:
@@ -68,8 +89,19 @@ class GaitTorques:
         return bool(np.all(self.min_normal_force >= -1e-9 * self.mass * 9.81))
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready peaks per joint, residuals and feasibility."""
+        """JSON-ready peaks per joint (quasi-static, full, their difference), residuals."""
+        full = {}
+        if self.peak_full.size:
+            full = {
+                "peak_torque_full": self.peak_full.tolist(),
+                "peak_torque_full_time": self.peak_full_time.tolist(),
+                "peak_torque_full_max": float(self.peak_full.max()),
+                "peak_difference": self.peak_difference.tolist(),
+                "peak_difference_max": float(self.peak_difference.max()),
+                "base_residual": self.base_residual,
+            }
         return {
+            **full,
             "samples": int(len(self.t)),
             "duration": float(self.t[-1] - self.t[0]),
             "method": self.method,
@@ -97,7 +129,9 @@ def gait_torques(
 
     Args:
         run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
-            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L).
+            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L);
+            with ``robot`` (its floating-base WholeBody), ``pinocchio_q/v/a()`` and ``feet``
+            the full inverse dynamics too.
         model: The fixed-base whole robot the run walks (default ``load("hexapod")``).
         method: ``"min_norm"`` or ``"friction"``.
         mu: Friction coefficient.
@@ -166,6 +200,21 @@ def gait_torques(
     peak = np.abs(torque[idx, np.arange(mdl.nq)])
     peak_time = ts[idx]
     read_only(ts, support, forces, torque, peak, peak_time, fmin)
+    extra: dict[str, Any] = {}
+    if getattr(run, "robot", None) is not None and hasattr(run, "pinocchio_a"):
+        tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
+        wb_names = tuple(run.robot.joint_names)
+        tau_f = tau_f[:, [wb_names.index(nm) for nm in mdl.joint_names]]
+        jf = np.argmax(np.abs(tau_f), axis=0)
+        extra = {
+            "torque_full": tau_f,
+            "forces_full": f_full,
+            "peak_full": np.abs(tau_f[jf, np.arange(mdl.nq)]),
+            "peak_full_time": ts[jf],
+            "peak_difference": np.abs(tau_f - torque).max(axis=0),
+            "base_residual": base_res,
+        }
+        read_only(*(v for v in extra.values() if isinstance(v, np.ndarray)))
     return GaitTorques(
         ts,
         tuple(mdl.joint_names),
@@ -181,4 +230,88 @@ def gait_torques(
         mass,
         str(method),
         mu,
+        **extra,
     )
+
+
+def _contact_frames(model: Any, data: Any, q_pin: np.ndarray, feet: np.ndarray) -> list[int]:
+    """Per leg, the model frame nearest to its foot at ``q_pin`` (the foot's own frame)."""
+    pin.framesForwardKinematics(model, data, q_pin)
+    pos = np.array([data.oMf[k].translation for k in range(model.nframes)])
+    return [int(np.argmin(np.linalg.norm(pos - f, axis=1))) for f in feet]
+
+
+def full_dynamics(
+    run: Any, *, method: ContactMethod = "min_norm", mu: float | None = None
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Full inverse-dynamics joint torques along a run (see the module doc).
+
+    Args:
+        run: A :class:`~hexapod_kin.gait.GaitRun` with its ``robot``.
+        method: ``"min_norm"`` or ``"friction"`` (Coulomb cones, ``mu``).
+        mu: Friction coefficient.
+
+    Returns:
+        ``(tau, forces, base_residual)``: (N, nq) torques [N·m] in ``run.robot.joint_names``
+        order, (N, L, 3) contact forces [N] (world axes), the largest base-row residual.
+
+    Raises:
+        ConfigurationError: No forces within the friction cones (names the time).
+
+    """
+    wb = run.robot
+    model = wb.model
+    data = model.createData()
+    Q, V, A = run.pinocchio_q(), run.pinocchio_v(), run.pinocchio_a()
+    support = np.asarray(run.support, dtype=bool)
+    feet = np.asarray(run.feet, dtype=float)
+    n, nl = support.shape
+    rad = float(getattr(run, "settings", {}).get("foot_radius", 0.0))
+    normals = getattr(run, "normals", None)
+    nrm = (
+        np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
+        if normals is None or not np.size(normals)
+        else np.asarray(normals, dtype=float)
+    )
+    fids = _contact_frames(model, data, Q[0], feet[0])
+    weight = float(run.mass) * 9.81
+    tau = np.zeros((n, model.nv - 6))
+    forces = np.zeros((n, nl, 3))
+    worst = 0.0
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for i in range(n):
+        b = np.array(pin.rnea(model, data, Q[i], V[i], A[i]))
+        stance = np.flatnonzero(support[i])
+        pin.computeJointJacobians(model, data, Q[i])
+        pin.updateFramePlacements(model, data)
+        jac = np.empty((len(stance), 3, model.nv))
+        for m, k in enumerate(stance):
+            J = pin.getFrameJacobian(model, data, fids[k], lwa)
+            arm = feet[i, k] - rad * nrm[i, k] - data.oMf[fids[k]].translation
+            skew = np.array(
+                [[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]]
+            )
+            jac[m] = J[:3] - skew @ J[3:]  # the contact point, fixed on the foot
+        a_base = jac[:, :, :6].transpose(2, 0, 1).reshape(6, -1)  # (6, 3k): Σ J_baseᵀ f
+        if len(stance):
+            pinv = np.linalg.pinv(a_base, rcond=1e-12)
+            f = pinv @ b[:6]
+            if method == "friction":
+                try:
+                    f = _friction_qp(a_base, b[:6], f, pinv, float(mu or 0.0), weight)
+                except ConfigurationError as exc:
+                    raise ConfigurationError(
+                        f"at t = {float(run.t[i]):.6g} s (full dynamics): {exc}",
+                        parameter=exc.parameter,
+                        value=exc.value,
+                        allowed=exc.allowed,
+                    ) from None
+        else:
+            f = np.zeros(0)
+        fk = f.reshape(-1, 3)
+        gen = np.einsum("kav,ka->v", jac, fk) if len(stance) else np.zeros(model.nv)
+        worst = max(worst, float(np.abs(b[:6] - gen[:6]).max()))
+        tau[i] = b[6:] - gen[6:]
+        forces[i, stance] = fk
+    read_only(tau, forces)
+    return tau, forces, worst

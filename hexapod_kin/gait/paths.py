@@ -8,6 +8,7 @@ height and duty factor, so that gait tables call it per leg with their phase off
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 from typing import Any, Literal
 
@@ -15,8 +16,19 @@ import numpy as np
 
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
+from .robot import BodyIK
 
-__all__ = ["FootStep", "foot_path", "foot_step"]
+__all__ = [
+    "FootStep",
+    "foot_path",
+    "foot_step",
+    "last_stance_value",
+    "rolling_ik",
+    "rolling_offsets",
+    "rotation_increments",
+    "stance_start_index",
+    "terrain_normals",
+]
 
 
 def foot_path(
@@ -195,3 +207,261 @@ def foot_step(
     stance = np.remainder(phase, 1.0) < duty_factor
     read_only(t, phase, stance, foot, qdot, actual)
     return FootStep(t, phase, stance, foot, q, qdot, reached, actual, within, step)
+
+
+# ---------------------------------------------------------------------- round feet
+def terrain_normals(ground: Any, x: Any, y: Any, step: float = 1e-6) -> np.ndarray:
+    """Unit normals (..., 3) of the ground ``z = h(x, y)`` at ``x``, ``y`` [m].
+
+    ``n ∝ (−∂h/∂x, −∂h/∂y, 1)`` with each slope the smaller (in size) of the forward and the
+    backward difference over ``step`` [m] (min-mod: exact on a plane up to rounding, and the
+    flat side at a step's edge); ``ẑ`` where the ground is undefined.
+    """
+    xa, ya = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    h0 = ground(xa, ya)
+
+    def slope(dx: float, dy: float) -> np.ndarray:
+        fwd = (ground(xa + dx, ya + dy) - h0) / step
+        bwd = (h0 - ground(xa - dx, ya - dy)) / step
+        g = np.where(np.abs(fwd) <= np.abs(bwd), fwd, bwd)
+        return np.where(np.isfinite(g), g, 0.0)
+
+    out = np.empty(xa.shape + (3,))
+    out[..., 0] = -slope(step, 0.0)
+    out[..., 1] = -slope(0.0, step)
+    out[..., 2] = 1.0
+    out /= np.linalg.norm(out, axis=-1, keepdims=True)
+    return out
+
+
+def rotation_increments(rot: np.ndarray) -> np.ndarray:
+    """Rotation vectors (N − 1, ...) ``θ_k = log(R_{k+1} R_kᵀ)`` of world rotations (N, ..., 3, 3).
+
+    ``θ_k`` is the world-frame rotation from sample k to k + 1 (``ω dt`` for a constant angular
+    velocity ω): axis-angle from the trace and the skew part (angles below π).
+    """
+    dR = np.matmul(rot[1:], np.swapaxes(rot[:-1], -1, -2))
+    cos = np.clip((np.trace(dR, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    ang = np.arccos(cos)
+    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+    small = ang < 1e-6
+    scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
+    vee = np.stack(
+        [
+            dR[..., 2, 1] - dR[..., 1, 2],
+            dR[..., 0, 2] - dR[..., 2, 0],
+            dR[..., 1, 0] - dR[..., 0, 1],
+        ],
+        axis=-1,
+    )
+    return np.asarray(vee * scale[..., None])
+
+
+def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.ndarray:
+    """How far each stance foot's centre has rolled since its first stance sample, (N, L, 3) [m].
+
+    A sphere of radius r rolling without slip on a plane of unit normal n has centre velocity
+    ``v = ω × (r n)`` (the material point in contact, ``c − r n``, is at rest). Discretely,
+    ``D_i = Σ_{k = s}^{i − 1} θ_k × (r n)`` from the stance's first sample s, ``θ_k`` the foot
+    frame's rotation increment (:func:`rotation_increments`) and n the stance's contact
+    normal; 0 in swing. The contact point then slips by ``c_i − c_s − D_i`` (zero when rolling).
+
+    Args:
+        rot: (N, L, 3, 3) world rotations of the foot frames.
+        support: (N, L) True in stance.
+        normals: (N, L, 3) the ground's unit normal at each stance contact.
+        radius: Foot radius r [m].
+
+    """
+    R = np.asarray(rot, dtype=float)
+    sup = np.asarray(support, dtype=bool)
+    n = np.asarray(normals, dtype=float)
+    out = np.zeros(sup.shape + (3,))
+    if radius == 0.0 or len(sup) < 2:
+        return out
+    inc = np.cross(rotation_increments(R), radius * n[:-1])  # (N-1, L, 3)
+    inc *= (sup[:-1] & sup[1:])[..., None]
+    cum = np.zeros_like(out)
+    np.cumsum(inc, axis=0, out=cum[1:])
+    ref = cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
+    return np.asarray(np.where(sup[..., None], cum - ref, 0.0))
+
+
+def stance_start_index(support: np.ndarray) -> np.ndarray:
+    """(N, L) index of the first sample of the current stance (or of the last one, in swing)."""
+    n = len(support)
+    start = support.copy()
+    start[1:] &= ~support[:-1]
+    idx = np.where(start, np.arange(n)[:, None], 0)
+    return np.asarray(np.maximum.accumulate(idx, axis=0))
+
+
+def last_stance_value(values: np.ndarray, support: np.ndarray) -> np.ndarray:
+    """(N, L, ...) ``values`` at each leg's latest stance sample (0 before the first one)."""
+    n = len(support)
+    idx = np.where(support, np.arange(n)[:, None], -1)
+    idx = np.maximum.accumulate(idx, axis=0)
+    out = values[np.maximum(idx, 0), np.arange(support.shape[1])[None, :]]
+    return np.asarray(np.where((idx >= 0)[..., None], out, 0.0))
+
+
+@dataclass(frozen=True)
+class _LegStructure:
+    """Which joints move each foot, each joint's axis in its own frame, each foot's link."""
+
+    joints: np.ndarray  # (L, M) joint columns of each leg (padded with -1)
+    axes: np.ndarray  # (nq, 3) joint axis in the joint's frame
+    revolute: np.ndarray  # (nq,) True: revolute, False: prismatic
+    link: np.ndarray  # (L,) the joint whose frame carries the foot (the deepest of the leg)
+
+
+_STRUCTURES: dict[int, tuple[Any, _LegStructure]] = {}
+
+
+def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
+    """Found once per robot by moving each joint by ε at one configuration (exact axes)."""
+    hit = _STRUCTURES.get(id(wb))
+    if hit is not None and hit[0] is wb:
+        return hit[1]
+    nq, eps = wb.nq, 1e-4
+    Q = np.repeat(q[None], nq + 1, axis=0)
+    Q[1:] += eps * np.eye(nq)
+    B = np.repeat(base[None], nq + 1, axis=0)
+    T = wb.joint_poses(Q, B)
+    feet = wb.points_of(T)[:, :, -1]  # (nq+1, L, 3)
+    moved = np.linalg.norm(feet[1:] - feet[0][None], axis=-1) > 1e-12  # (nq, L)
+    axes = np.zeros((nq, 3))
+    revolute = np.ones(nq, dtype=bool)
+    for j in range(nq):
+        R0, R1 = T[0, j, :3, :3], T[j + 1, j, :3, :3]
+        w = rotation_increments(np.stack([np.eye(3), R0.T @ R1]))[0] / eps
+        if np.linalg.norm(w) > 0.5:
+            axes[j] = w / np.linalg.norm(w)
+        else:
+            revolute[j] = False
+            d = R0.T @ (T[j + 1, j, :3, 3] - T[0, j, :3, 3]) / eps
+            axes[j] = d / max(np.linalg.norm(d), 1e-300)
+    cols = [np.flatnonzero(moved[:, k]) for k in range(moved.shape[1])]
+    width = max(1, max(len(c) for c in cols))
+    joints = np.full((len(cols), width), -1)
+    for k, c in enumerate(cols):
+        joints[k, : len(c)] = c
+    link = np.array([c.max() if len(c) else 0 for c in cols])
+    out = _LegStructure(joints, axes, revolute, link)
+    _STRUCTURES.clear()
+    _STRUCTURES[id(wb)] = (wb, out)
+    return out
+
+
+def _leg_jacobians(
+    st: _LegStructure,
+    T: np.ndarray,
+    centres: np.ndarray,
+    support: np.ndarray,
+    normals: np.ndarray,
+    rad: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per leg, ``(J, K)`` (N, L, 3, M): the rolled centre's Jacobian and the rolling part.
+
+    ``J_p`` has columns ``a × (c − o)`` for revolute joints and ``a`` for prismatic ones (a
+    the world axis, o the joint origin), ``J_ω`` columns a (revolute); in stance the centre
+    also rolls, ``δD = −r [n]ₓ J_ω δq``, so the Newton matrix is ``J = J_p + K`` with
+    ``K = r [n]ₓ J_ω`` (0 in swing).
+    """
+    jj = np.maximum(st.joints, 0)  # (L, M)
+    valid = (st.joints >= 0)[None, :, :, None]  # (1, L, M, 1)
+    Tj = T[:, jj]  # (N, L, M, 4, 4)
+    a = np.matmul(Tj[..., :3, :3], st.axes[jj][..., None])[..., 0]  # world axes (N, L, M, 3)
+    d = centres[:, :, None, :] - Tj[..., :3, 3]
+    rev = st.revolute[jj][None, :, :, None]
+    lin = np.where(rev, _cross(a, d), a) * valid
+    ang = np.where(rev, a, 0.0) * valid
+    roll = _cross(np.broadcast_to(normals[:, :, None, :], ang.shape), ang)
+    roll *= (rad * support)[:, :, None, None]
+    K = np.swapaxes(roll, -1, -2)
+    return np.swapaxes(lin, -1, -2) + K, K
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``u × v`` over the last axis (3), written out (faster than np.cross on small arrays)."""
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape))
+    out[..., 0] = u[..., 1] * v[..., 2] - u[..., 2] * v[..., 1]
+    out[..., 1] = u[..., 2] * v[..., 0] - u[..., 0] * v[..., 2]
+    out[..., 2] = u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+    return out
+
+
+def _min_norm(J: np.ndarray) -> np.ndarray:
+    """``J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹`` per leg and sample, (N, L, M, 3), λ = 1e-14 m²."""
+    JJ = J @ np.swapaxes(J, -1, -2)
+    JJ += 1e-14 * np.eye(3)
+    return np.asarray(np.swapaxes(J, -1, -2) @ np.linalg.inv(JJ))
+
+
+def _scatter(st: _LegStructure, dq_leg: np.ndarray, nq: int) -> np.ndarray:
+    out = np.zeros((dq_leg.shape[0], nq))
+    for m in range(st.joints.shape[1]):
+        cols = st.joints[:, m]
+        ok = cols >= 0
+        out[:, cols[ok]] += dq_leg[:, ok, m]
+    return out
+
+
+def rolling_ik(
+    wb: Any,
+    base: np.ndarray,
+    plan: np.ndarray,
+    support: np.ndarray,
+    swing: np.ndarray,
+    blend: np.ndarray,
+    normals: np.ndarray,
+    rad: float,
+    t: np.ndarray,
+    q0: Any,
+    tol: float,
+    max_passes: int,
+) -> tuple[np.ndarray, np.ndarray, Any, int, float, np.ndarray | None, np.ndarray]:
+    """IK of the planned feet with the stance feet rolling, iterated to a fixed point.
+
+    Pass 1: ``wb.body_ik`` of the plan (branches chosen there). Then, with the joint poses of
+    q: the rolling ``D(q)`` (:func:`rolling_offsets` of the rotations of each foot's link,
+    whose increments are the foot frame's), the targets ``plan + D`` (stance) or
+    ``plan + D_lift-off·(1 − blend)`` (swing), the error ``e = targets − centres(q)``, and a
+    Newton step (:func:`_leg_jacobians`, rolling included) — until
+    ``max|e| ≤ tol`` [m] or ``max_passes``. ``e`` is the planned contact points' slip (up to
+    rounding). Returns (feet, q, ik, passes, residual [m], joint poses of q or None, D: the
+    rolling of q's own foot rotations, by FK).
+    """
+    ik = wb.body_ik(base, plan, q_prev=q0, times=t, strict=False)
+    q = np.array(ik.q)
+    if rad == 0.0:
+        return plan, q, ik, 1, 0.0, None, np.zeros(plan.shape)
+    st = _leg_structure(wb, q[0], base[0])
+    passes, residual = 1, math.inf
+    while True:
+        T = wb.joint_poses(q, base)
+        centres = wb.points_of(T)[:, :, -1]
+        D = rolling_offsets(T[:, st.link, :3, :3], support, normals, rad)
+        lo = last_stance_value(D, support)
+        feet = plan + np.where(swing[..., None], lo * (1.0 - blend[..., None]), D)
+        err = feet - centres
+        residual = float(np.abs(err).max())
+        if residual <= tol or passes >= max_passes:
+            break
+        # Newton: stance samples first; the swing targets then follow the predicted
+        # lift-off rolling D + δD (δD = −K δq), and the swing samples are solved again
+        J, K = _leg_jacobians(st, T, centres, support, normals, rad)
+        pinv = _min_norm(J)
+        dq = np.matmul(pinv, err[..., None])
+        d_pred = D - np.matmul(K, dq)[..., 0]
+        lo = last_stance_value(d_pred, support)
+        err_sw = plan + lo * (1.0 - blend[..., None]) - centres
+        dq_sw = np.matmul(pinv, err_sw[..., None])
+        dq = np.asarray(np.where(swing[..., None, None], dq_sw, dq))[..., 0]
+        q = q + _scatter(st, dq, wb.nq)
+        passes += 1
+    margin = np.minimum(q - wb.lower, wb.upper - q)
+    for arr in (q, margin):
+        arr.setflags(write=False)
+    ik = BodyIK(q, ik.reached, ik.excess, margin, ik.leg_names)
+    return feet, q, ik, passes, residual, T, D

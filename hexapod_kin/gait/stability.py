@@ -14,13 +14,25 @@ Both run in numpy, vectorised over samples (in chunks of :data:`CHUNK` samples, 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import ParameterError
+from .robot import GaitError
+from .tables import PhaseTable
+from .terrain import Terrain
 
-__all__ = ["CHUNK", "segment_clearance", "support_margin"]
+__all__ = [
+    "CHUNK",
+    "accel_limit_of",
+    "check_swing_clearance",
+    "periodic_spline",
+    "raise_checks",
+    "segment_clearance",
+    "support_margin",
+]
 
 #: Samples per vectorised pass.
 CHUNK = 20_000
@@ -178,3 +190,181 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
     return np.concatenate(
         [_clearance_numpy(p[i : i + CHUNK], pr) for i in range(0, max(len(p), 1), CHUNK)]
     )
+
+
+def periodic_spline(knots: Any, values: Any, period: float, t: Any) -> np.ndarray:
+    """The periodic cubic spline through ``(knots, values)`` evaluated at ``t``, C² everywhere.
+
+    Args:
+        knots: (M,) distinct times in [0, period) [s] (any order).
+        values: (M, D) values at the knots.
+        period: The period T [s]; the spline repeats with it.
+        t: (N,) times [s] (any real).
+
+    Returns:
+        (N, D): value, with the second derivatives ``M_j`` at the knots solving the cyclic
+        system ``h_{j−1} M_{j−1} + 2 (h_{j−1} + h_j) M_j + h_j M_{j+1} = 6 (δ_j − δ_{j−1})``
+        (δ_j the slope of chord j), so value, slope and curvature are continuous, across the
+        period too. One knot gives a constant.
+
+    """
+    x = np.asarray(knots, dtype=float)
+    y = np.asarray(values, dtype=float)
+    order = np.argsort(x, kind="stable")
+    x, y = x[order], y[order]
+    tt = np.asarray(t, dtype=float)
+    m = len(x)
+    if m == 1:
+        return np.broadcast_to(y[0], (len(tt), y.shape[1])).copy()
+    h = np.diff(np.append(x, x[0] + period))  # (M,)
+    y_next = np.roll(y, -1, axis=0)
+    delta = (y_next - y) / h[:, None]
+    A = np.zeros((m, m))
+    rhs = 6.0 * (delta - np.roll(delta, 1, axis=0))
+    for j in range(m):
+        hp = h[j - 1]
+        A[j, (j - 1) % m] += hp
+        A[j, j] += 2.0 * (hp + h[j])
+        A[j, (j + 1) % m] += h[j]
+    M = np.linalg.solve(A, rhs)
+    u = np.remainder(tt - x[0], period) + x[0]
+    j = np.clip(np.searchsorted(x, u, side="right") - 1, 0, m - 1)
+    hj = h[j][:, None]
+    a = (x[j] + h[j])[:, None] - u[:, None]
+    b = u[:, None] - x[j][:, None]
+    M0, M1 = M[j], np.roll(M, -1, axis=0)[j]
+    y0, y1 = y[j], y_next[j]
+    return np.asarray(
+        (M0 * a**3 + M1 * b**3) / (6.0 * hj)
+        + (y0 / hj - M0 * hj / 6.0) * a
+        + (y1 / hj - M1 * hj / 6.0) * b
+    )
+
+
+def accel_limit_of(value: Any, nq: int) -> np.ndarray:
+    """(nq,) joint acceleration limits [rad/s²] from one number or one per joint (None: inf).
+
+    Raises:
+        ParameterError: Not positive numbers of the right shape.
+
+    """
+    if value is None:
+        return np.full(nq, np.inf)
+    try:
+        a = np.broadcast_to(np.asarray(value, dtype=float), (nq,)).copy()
+    except (TypeError, ValueError):
+        a = np.full(nq, np.nan)
+    if not np.all(a > 0):
+        raise ParameterError(
+            f"accel_limit={value!r}: one number > 0 [rad/s²] or one per joint ({nq})",
+            parameter="accel_limit",
+            value=repr(value),
+            allowed=f"> 0, scalar or ({nq},)",
+        )
+    return a
+
+
+def check_swing_clearance(
+    ground: Terrain,
+    plan: np.ndarray,
+    swing: np.ndarray,
+    rad: float,
+    t: np.ndarray,
+    names: tuple[str, ...],
+    H: float,
+) -> None:
+    """Swing foot spheres above the ground: centre height over h(x, y) at least r."""
+    if not swing.any():
+        return
+    under = ground(plan[..., 0], plan[..., 1])
+    gap = np.where(swing, plan[..., 2] - under - rad, np.inf)
+    gap = np.where(np.isnan(gap), -np.inf, gap)
+    if gap.min() < -1e-9:
+        i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        d = float(-gap[i, leg])
+        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m below the ground"
+        raise GaitError(
+            f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
+            f"clearance'; step_height={H:g} m is too low for this terrain)",
+            check="terrain clearance",
+            leg=names[leg],
+            time=float(t[i]),
+            amount=d,
+            parameter="step_height",
+            value=H,
+            allowed="a swing above the terrain",
+        )
+
+
+def raise_checks(
+    joint_names: tuple[str, ...],
+    table: PhaseTable,
+    names: tuple[str, ...],
+    pairs: tuple[tuple[int, int], ...],
+    t: np.ndarray,
+    clear: np.ndarray,
+    margin: np.ndarray,
+    tol: float,
+    strokes: np.ndarray,
+    qdot: np.ndarray,
+    qddot: np.ndarray,
+    vlim: np.ndarray,
+    acc_lim: np.ndarray,
+    support: np.ndarray,
+) -> None:
+    """Raise the first failed walk check: leg clearance, stability margin, joint speed/accel.
+
+    The margin fails below ``−tol`` [m] and only for a statically stable ``table``; a rate
+    fails above its limit × (1 + 1e-9).
+
+    Raises:
+        GaitError: Names the check, the legs or the joint, the time and by how much.
+
+    """
+    if clear.size and clear.min() <= 0:
+        i, k = np.unravel_index(int(np.argmin(clear)), clear.shape)
+        a, b = pairs[k]
+        raise GaitError(
+            f"legs {names[a]} and {names[b]} collide (links {-clear[i, k]:.4g} m into "
+            f"each other) at t={t[i]:.4g} s (check 'leg clearance')",
+            check="leg clearance",
+            leg=names[a],
+            time=float(t[i]),
+            amount=float(-clear[i, k]),
+            parameter="stride",
+            value=strokes.max(),
+        )
+    if table.statically_stable and margin.min() <= -tol:
+        im = int(np.argmin(margin))
+        raise GaitError(
+            f"the centre of mass leaves the support polygon by {-margin[im]:.4g} m at "
+            f"t={t[im]:.4g} s (check 'stability margin'; stance legs "
+            f"{[names[k] for k in np.flatnonzero(support[im])]})",
+            check="stability margin",
+            time=float(t[im]),
+            amount=float(-margin[im]),
+            parameter="pattern",
+            value=table.name,
+            allowed="margin > 0",
+        )
+    for rates, lim, check, unit in (
+        (qdot, vlim, "joint speed", "rad/s"),
+        (qddot, acc_lim, "joint acceleration", "rad/s²"),
+    ):
+        over = np.abs(rates) - lim * (1.0 + 1e-9)
+        if over.size and over.max() > 0:
+            i, j = np.unravel_index(int(np.argmax(over)), over.shape)
+            joint = joint_names[j]
+            d = float(np.abs(rates[i, j]) - lim[j])
+            raise GaitError(
+                f"joint {joint}: |rate| {abs(rates[i, j]):.4g} {unit} exceeds its limit "
+                f"{lim[j]:.4g} {unit} by {d:.4g} at t={t[i]:.4g} s (check '{check}'; slow "
+                "down or lengthen the period)",
+                check=check,
+                leg=None,
+                time=float(t[i]),
+                amount=d,
+                parameter=joint,
+                value=float(abs(rates[i, j])),
+                allowed=float(lim[j]),
+            )

@@ -5,12 +5,28 @@ A leg's phase is ``φ(t) = t / T + offset`` (in cycles, modulo 1); it is in stan
 ``t = (k + β − offset)·T`` and touches down ``(1 − β)·T`` later. Leg order is the robot's
 (``hexapod``: leg1 front-left, leg2 middle-left, leg3 rear-left, leg4 rear-right, leg5
 middle-right, leg6 front-right).
+
+The built-in patterns are defined from where the legs are (``positions``: each leg's xy in
+the body frame, x forward, y left; the walk passes the leg mounts), for any order of legs:
+
+* ``wave`` (any N ≥ 4): one leg at a time in the *lateral sequence* — the left legs rear to
+  front, then the right legs rear to front — lift-offs 1/N cycle apart,
+  ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
+  swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
+  diagonal, margin 0).
+* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
+  sways the body over each support triangle (:mod:`.walk`).
+* ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
+* ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
+  2/N cycle apart, the right side half a cycle after the left, ``β = 1 − 2/N``.
+* ``trot`` (N = 4, diagonal pairs) and ``pace`` (N = 4, lateral pairs), β = ½: two feet on the
+  ground, **not statically stable** (``statically_stable=False``: the walk reports their
+  margin but does not fail on it).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,7 +34,7 @@ import numpy as np
 
 from ..exceptions import ParameterError, choices
 
-__all__ = ["PATTERNS", "PhaseTable", "phase_table"]
+__all__ = ["PATTERNS", "PhaseTable", "default_positions", "pattern_names", "phase_table"]
 
 
 @dataclass(frozen=True)
@@ -29,12 +45,15 @@ class PhaseTable:
         name: Pattern name.
         offsets: Phase offset of each leg in cycles, in [0, 1).
         duty_factor: Fraction β of the cycle each leg spends in stance, in (0, 1).
+        statically_stable: False for a pattern meant to be dynamically balanced (trot, pace):
+            the walk then reports the static stability margin but never fails on it.
 
     """
 
     name: str
     offsets: tuple[float, ...]
     duty_factor: float
+    statically_stable: bool = True
 
     def __post_init__(self) -> None:
         offs = tuple(float(o) for o in self.offsets)
@@ -55,6 +74,7 @@ class PhaseTable:
                 allowed="(0, 1)",
             )
         object.__setattr__(self, "duty_factor", beta)
+        object.__setattr__(self, "statically_stable", bool(self.statically_stable))
 
     @property
     def n_legs(self) -> int:
@@ -65,7 +85,7 @@ class PhaseTable:
         """The same offsets with another duty factor (``None``: unchanged)."""
         if duty_factor is None:
             return self
-        return PhaseTable(self.name, self.offsets, duty_factor)
+        return PhaseTable(self.name, self.offsets, duty_factor, self.statically_stable)
 
     def phase(self, t: Any, period: float) -> np.ndarray:
         """Phases (N, L) in cycles in [0, 1) at times ``t`` [s] for cycle ``period`` [s]."""
@@ -77,8 +97,13 @@ class PhaseTable:
         return np.asarray(self.phase(t, period) < self.duty_factor)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: name, offsets [cycles], duty_factor."""
-        return {"name": self.name, "offsets": list(self.offsets), "duty_factor": self.duty_factor}
+        """JSON-ready: name, offsets [cycles], duty_factor, statically_stable."""
+        return {
+            "name": self.name,
+            "offsets": list(self.offsets),
+            "duty_factor": self.duty_factor,
+            "statically_stable": self.statically_stable,
+        }
 
 
 def _snap(x: float) -> float:
@@ -87,62 +112,159 @@ def _snap(x: float) -> float:
     return 0.0 if v < 1e-12 or v > 1.0 - 1e-12 else v
 
 
-def _lift_order(order: Sequence[int], beta: float, spacing: float) -> tuple[float, ...]:
-    """Offsets so that leg ``order[k]`` lifts off at ``k·spacing`` cycles."""
-    offs = [0.0] * len(order)
-    for k, leg in enumerate(order):
-        offs[leg] = _snap(beta - k * spacing)
-    return tuple(offs)
+def _offsets(lift: dict[int, float], beta: float, n: int) -> tuple[float, ...]:
+    """Offsets so that leg ``k`` lifts off at ``lift[k]`` cycles."""
+    return tuple(_snap(beta - lift[k]) for k in range(n))
 
 
-def _tripod() -> PhaseTable:
-    # legs 1, 3, 5 lift at t = 0; legs 2, 4, 6 half a cycle later
-    return PhaseTable("tripod", (0.5, 0.0, 0.5, 0.0, 0.5, 0.0), 0.5)
+def default_positions(n_legs: int) -> np.ndarray:
+    """The legs' layout assumed when none is given: (N, 2) xy in the body frame.
+
+    The built-in hexapod's convention: the first ⌈N/2⌉ legs on the left (y = +1) front to
+    rear, the others on the right (y = −1) rear to front (counter-clockwise from the
+    front-left leg); x in steps of 1 centred on 0.
+    """
+    n = int(n_legs)
+    left = (n + 1) // 2
+    right = n - left
+    out = np.empty((n, 2))
+    out[:left, 0] = (left - 1) / 2.0 - np.arange(left)
+    out[:left, 1] = 1.0
+    out[left:, 0] = np.arange(right) - (right - 1) / 2.0
+    out[left:, 1] = -1.0
+    return out
 
 
-def _wave() -> PhaseTable:
-    # one leg at a time, rear to front: left side then right side
-    beta = 5.0 / 6.0
-    return PhaseTable("wave", _lift_order([2, 1, 0, 3, 4, 5], beta, 1.0 / 6.0), beta)
+def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
+    """Left (y > 0) and right legs, each sorted rear to front (by x; ties by index)."""
+    left = [k for k in range(len(xy)) if xy[k, 1] > 0.0]
+    right = [k for k in range(len(xy)) if xy[k, 1] <= 0.0]
+    return (
+        sorted(left, key=lambda k: (xy[k, 0], k)),
+        sorted(right, key=lambda k: (xy[k, 0], k)),
+    )
 
 
-def _ripple() -> PhaseTable:
-    # each side rear to front, a third of a cycle apart; the right side half a cycle later
-    beta = 2.0 / 3.0
-    offs = [0.0] * 6
-    for leg, when in ((2, 0.0), (1, 1 / 3), (0, 2 / 3), (3, 0.5), (4, 5 / 6), (5, 1 / 6)):
-        offs[leg] = _snap(beta - when)
-    return PhaseTable("ripple", tuple(offs), beta)
+def _wave(xy: np.ndarray) -> PhaseTable:
+    n = len(xy)
+    left, right = _sides(xy)
+    beta = max((n - 1.0) / n, 0.8)
+    lift = {leg: k / n for k, leg in enumerate(left + right)}
+    return PhaseTable("wave", _offsets(lift, beta, n), beta)
 
 
-#: The built-in patterns of the six-legged robot.
-PATTERNS: dict[str, PhaseTable] = {p.name: p for p in (_tripod(), _wave(), _ripple())}
+def _crawl(xy: np.ndarray) -> PhaseTable:
+    return PhaseTable("crawl", _wave(xy).offsets, 0.8)
 
 
-def phase_table(pattern: str | PhaseTable, n_legs: int = 6) -> PhaseTable:
-    """A built-in pattern by name (``tripod``, ``wave``, ``ripple``) or a user's table.
+def _tripod(xy: np.ndarray) -> PhaseTable:
+    # alternate legs around the body (by the angle of their position); the front-left leg's
+    # set lifts at t = 0, the other half a cycle later
+    ring = [int(k) for k in np.argsort(np.arctan2(xy[:, 1], xy[:, 0]), kind="stable")]
+    left, right = _sides(xy)
+    first = left[-1] if left else ring[0]
+    parity = ring.index(first) % 2
+    lift = {leg: 0.0 if i % 2 == parity else 0.5 for i, leg in enumerate(ring)}
+    return PhaseTable("tripod", _offsets(lift, 0.5, len(xy)), 0.5)
+
+
+def _ripple(xy: np.ndarray) -> PhaseTable:
+    n = len(xy)
+    left, right = _sides(xy)
+    m = len(left)
+    beta = (m - 1.0) / m
+    lift = {leg: k / m for k, leg in enumerate(left)}
+    lift.update({leg: 0.5 + k / m for k, leg in enumerate(right)})
+    return PhaseTable("ripple", _offsets(lift, beta, n), beta)
+
+
+def _pairs(xy: np.ndarray, name: str) -> PhaseTable:
+    left, right = _sides(xy)  # rear, front each
+    lh, lf = left
+    rh, rf = right
+    first = (lf, rh) if name == "trot" else (lf, lh)
+    lift = {leg: (0.0 if leg in first else 0.5) for leg in (lh, lf, rh, rf)}
+    return PhaseTable(name, _offsets(lift, 0.5, 4), 0.5, statically_stable=False)
+
+
+def _allowed(n: int, xy: np.ndarray) -> dict[str, Any]:
+    left, right = _sides(xy)
+    out: dict[str, Any] = {}
+    if n == 4 and len(left) == 2 and len(right) == 2:
+        out["crawl"] = _crawl
+        out["pace"] = lambda p: _pairs(p, "pace")
+        out["trot"] = lambda p: _pairs(p, "trot")
+    if n == 6:
+        out["tripod"] = _tripod
+    if n >= 6 and n % 2 == 0 and len(left) == len(right):
+        out["ripple"] = _ripple
+    if n >= 4:
+        out["wave"] = _wave
+    return out
+
+
+def pattern_names(n_legs: int = 6, positions: Any = None) -> tuple[str, ...]:
+    """The built-in patterns for ``n_legs`` legs laid out at ``positions`` (sorted)."""
+    xy = _layout(int(n_legs), positions)
+    return tuple(sorted(_allowed(int(n_legs), xy)))
+
+
+def _layout(n: int, positions: Any) -> np.ndarray:
+    if positions is None:
+        return default_positions(n)
+    xy = np.asarray(positions, dtype=float)
+    if xy.ndim != 2 or xy.shape[0] != n or xy.shape[1] not in (2, 3) or not np.isfinite(xy).all():
+        raise ParameterError(
+            f"positions has shape {np.shape(positions)}; one finite (x, y) per leg: ({n}, 2)",
+            parameter="positions",
+            value=list(np.shape(positions)),
+            allowed=f"({n}, 2)",
+        )
+    return np.ascontiguousarray(xy[:, :2])
+
+
+#: The built-in patterns of the six-legged robot (its default layout).
+PATTERNS: dict[str, PhaseTable] = {
+    p.name: p for p in (f(default_positions(6)) for f in (_tripod, _wave, _ripple))
+}
+
+
+def phase_table(pattern: str | PhaseTable, n_legs: int = 6, positions: Any = None) -> PhaseTable:
+    """A built-in pattern by name, made for the robot's legs, or a user's table.
+
+    Args:
+        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 4, ``crawl``, ``trot``,
+            ``pace`` for four legs, ``tripod`` for six, ``ripple`` for an even N ≥ 6) or a
+            :class:`PhaseTable` with one offset per leg.
+        n_legs: Number of legs.
+        positions: (N, 2) the legs' xy in the body frame (x forward, y left), e.g. the mounts;
+            default :func:`default_positions` (the built-in hexapod's order).
 
     Raises:
-        ParameterError: Unknown name (the message lists them), or a table whose number of
-            offsets is not ``n_legs``.
+        ParameterError: Unknown name for this number of legs (the message lists the allowed
+            ones), or a table whose number of offsets is not ``n_legs``.
 
     """
+    n = int(n_legs)
     if isinstance(pattern, PhaseTable):
         table = pattern
-    elif isinstance(pattern, str) and pattern in PATTERNS:
-        table = PATTERNS[pattern]
     else:
+        xy = _layout(n, positions)
+        makers = _allowed(n, xy)
+        if not (isinstance(pattern, str) and pattern in makers):
+            raise ParameterError(
+                f"pattern={pattern!r} is not allowed for {n} legs; use one of "
+                f"{choices(makers) if makers else '(none built in)'} or a PhaseTable",
+                parameter="pattern",
+                value=repr(pattern),
+                allowed=sorted(makers),
+            )
+        table = makers[pattern](xy)
+    if table.n_legs != n:
         raise ParameterError(
-            f"pattern={pattern!r} is not allowed; use one of {choices(PATTERNS)} or a PhaseTable",
-            parameter="pattern",
-            value=repr(pattern),
-            allowed=sorted(PATTERNS),
-        )
-    if table.n_legs != n_legs:
-        raise ParameterError(
-            f"pattern {table.name!r} has {table.n_legs} offsets; the robot has {n_legs} legs",
+            f"pattern {table.name!r} has {table.n_legs} offsets; the robot has {n} legs",
             parameter="pattern",
             value=table.n_legs,
-            allowed=n_legs,
+            allowed=n,
         )
     return table

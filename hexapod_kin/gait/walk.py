@@ -9,17 +9,32 @@
   from lift-off to touch-down with the swing's own profile, so the body height is continuous).
 * **Feet**: each leg follows the phase table (:mod:`.tables`). Its touch-down point is fixed
   when the swing is planned (à la Raibert): the leg's neutral foot point under the body's pose
-  at the middle of the *next* stance, projected on the terrain; during stance the foot stays
-  exactly there in the world. The swing goes from the last contact to the next one with a
-  quintic horizontal profile ``10s³ − 15s⁴ + 6s⁵`` and a vertical lift ``16 s²(1 − s)²·h``:
-  zero velocity at lift-off and touch-down.
+  at the middle of the *next* stance, projected on the terrain. The swing goes from the last
+  contact to the next one with a quintic horizontal profile ``10s³ − 15s⁴ + 6s⁵`` and a
+  vertical lift ``64 s³(1 − s)³·h`` (peak h at s = ½): zero velocity **and zero acceleration**
+  at lift-off and touch-down.
+* **Round feet roll** (:func:`.paths.rolling_offsets`): the planned foot points are the centres
+  of the foot spheres (radius ``r = robot.foot_radius``), ``c = contact + r n`` (n the terrain
+  normal). During stance the centre moves as a sphere rolling without slip,
+  ``ċ = ω × (r n)`` with ω the foot frame's angular velocity, so the material point in contact
+  stays put and the body moves over the ground as planned. ω depends on the joint angles, so
+  IK and rolling are iterated to a fixed point (``settings["rolling_residual"]``). With
+  ``r = 0`` the feet are points fixed in the world during stance.
+* **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
+  periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
+  one knot per swing group at mid-swing; each knot moves the centre of mass to the centroid of
+  that swing's support polygon (the stance contacts at that instant), times the gain
+  ``sway`` (two correction passes with the centre of mass by FK).
 * The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
-  rates by second-order finite differences.
-* **Checks** at every sample: stance slip (world foot by forward kinematics, against its
-  position at the first stance sample), static stability margin (:mod:`.stability`), joint
-  limit margin, IK status, clearance between neighbouring legs (surface gap of the links).
+  rates and accelerations by second-order finite differences.
+* **Checks** at every sample: stance slip (the contact point's material point, by forward
+  kinematics), static stability margin (:mod:`.stability`; a margin within
+  ``MARGIN_TOL`` × the robot's size of zero is not a failure; patterns with
+  ``statically_stable=False`` report it but never fail on it), joint limit margin, joint speed
+  against the URDF's velocity limits (and acceleration against an optional limit), IK status,
+  clearance between neighbouring legs (surface gap of the links).
 """
 
 from __future__ import annotations
@@ -32,8 +47,20 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from ..motion import read_only
+from .paths import (
+    rolling_ik,
+    stance_start_index,
+    terrain_normals,
+)
 from .robot import GaitError, WholeBody, as_whole_body
-from .stability import segment_clearance, support_margin
+from .stability import (
+    accel_limit_of,
+    check_swing_clearance,
+    periodic_spline,
+    raise_checks,
+    segment_clearance,
+    support_margin,
+)
 from .tables import PhaseTable, phase_table
 from .terrain import Terrain
 from .terrain import terrain as make_terrain
@@ -42,6 +69,14 @@ __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 
 #: Default foot stroke during stance [m] when no velocity is given.
 DEFAULT_STRIDE = 0.05
+
+#: Rounding tolerance of the checks, relative to the robot's size (the largest mount-to-centre
+#: distance plus the foot reach) [m/m]: a margin above ``−MARGIN_TOL·size`` is not a failure.
+MARGIN_TOL = 1e-9
+
+#: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
+ROLLING_PASSES = 12
+ROLLING_TOL = 1e-12
 
 
 def _num(
@@ -91,13 +126,17 @@ def se2_pose(t: Any, velocity: Any) -> np.ndarray:
 
 
 def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 16 s²(1 − s)²)`` at ``s ∈ [0, 1]``.
+    """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 64 s³(1 − s)³)`` at ``s ∈ [0, 1]``.
 
     The first blends the horizontal position (and the ground height) from lift-off to
-    touch-down, the second scales the step height; both have zero slope at s = 0 and 1.
+    touch-down, the second scales the step height (1 at s = ½); both have zero first **and
+    second** derivatives at s = 0 and 1 (``30s²(1 − s)²`` and ``60s(1 − s)(1 − 2s)``;
+    ``192 s²(1 − s)²(1 − 2s)`` and ``384 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
+    with zero velocity and zero acceleration.
     """
     s = np.asarray(s, dtype=float)
-    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 16.0 * s * s * (1.0 - s) ** 2
+    u = s * (1.0 - s)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 64.0 * u * u * u
 
 
 @dataclass(frozen=True)
@@ -107,28 +146,40 @@ class GaitRun:
     Attributes:
         t: (N,) times [s].
         base_poses: (N, 4, 4) body poses ``worldMbody`` (the free-flyer's placement).
-        feet: (N, L, 3) feet in the world by forward kinematics of ``q`` [m].
+        feet: (N, L, 3) feet (foot-sphere centres) in the world by forward kinematics of ``q``
+            [m].
         feet_planned: (N, L, 3) planned feet [m].
-        q: (N, 18) joint angles [rad] (legs in order, hip/knee/ankle).
-        qdot: (N, 18) joint rates [rad/s] (second-order finite differences).
+        q: (N, nq) joint angles [rad] (in ``joint_names`` order).
+        qdot: (N, nq) joint rates [rad/s] (second-order finite differences).
         support: (N, L) True for the stance feet (the support set).
         phase: (N, L) gait phase in cycles [0, 1) (stance below the duty factor).
         com: (N, 3) whole-body centre of mass in the world [m].
-        slip: (N, L) distance of each stance foot from its position at the first stance
-            sample [m] (0 in swing).
-        margin: (N,) static stability margin [m] (negative: CoM outside the support polygon).
-        limit_margin: (N, 18) distance of each joint to its nearest limit [rad].
+        slip: (N, L) how far the material point of each stance foot in contact with the ground
+            has slid since the stance's first sample [m] (0 in swing): ``‖c − c_s − D‖``,
+            c the sphere's centre by FK and D its rolling (:func:`.paths.rolling_offsets`)
+            from the FK rotations (for point feet, the distance from the first stance sample).
+        margin: (N,) static stability margin [m] (negative: CoM outside the support polygon
+            of the contact points).
+        limit_margin: (N, nq) distance of each joint to its nearest limit [rad].
         ik_ok: (N, L) True where the leg's IK reached its foot inside the joint limits.
         reach_excess: (N, L) distance a foot is out of its leg's reach [m] (0 if reached).
         clearance: (N, P) surface gap between the links of each neighbouring pair [m].
         pairs: The neighbouring pairs, by leg index.
         leg_names: The legs.
-        joint_names: The 18 joints.
-        table: The phase table used.
+        joint_names: The joints.
+        table: The phase table used (``table.statically_stable``: False for trot and pace,
+            whose margin is reported but not a check).
         settings: The walk's parameters (stride [m], step_height [m], period [s],
             duty_factor, velocity (vx [m/s], vy [m/s], wz [rad/s]), body_height [m],
-            foot_reach [m], terrain, duration [s], rate [Hz]).
+            foot_reach [m], terrain, duration [s], rate [Hz], foot_radius [m], sway,
+            rolling_passes, rolling_residual [m], margin_tol [m]).
         mass: Total mass [kg].
+        qddot: (N, nq) joint accelerations [rad/s²] (second differences).
+        velocity_limit: (nq,) the joints' velocity limits [rad/s] (inf: none).
+        accel_limit: (nq,) the acceleration limits checked [rad/s²] (inf: none given).
+        robot: The whole-robot model that walked (for viewers and simulators).
+        normals: (N, L, 3) the ground's unit normal at each foot's current (stance) or next
+            (swing) contact; the contact point is ``feet − foot_radius · normals``.
 
     """
 
@@ -153,6 +204,11 @@ class GaitRun:
     table: PhaseTable
     settings: dict[str, Any] = field(default_factory=dict)
     mass: float = 0.0
+    qddot: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    velocity_limit: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    accel_limit: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    robot: WholeBody | None = field(default=None, repr=False)
+    normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
 
     @property
     def min_margin(self) -> float:
@@ -180,14 +236,46 @@ class GaitRun:
         return float(np.linalg.norm(self.feet - self.feet_planned, axis=-1).max())
 
     @property
+    def statically_stable(self) -> bool:
+        """False for patterns that are not statically stable (trot, pace): margin not checked."""
+        return self.table.statically_stable
+
+    @property
+    def margin_ok(self) -> bool:
+        """The margin check: ``min_margin > −margin_tol`` (always True if not statically stable)."""
+        tol = float(self.settings.get("margin_tol", 0.0))
+        return (not self.statically_stable) or self.min_margin > -tol
+
+    @property
+    def max_joint_speed(self) -> np.ndarray:
+        """(nq,) largest |q̇| of each joint over the run [rad/s]."""
+        return np.abs(self.qdot).max(axis=0) if self.qdot.size else np.zeros(self.q.shape[1])
+
+    @property
+    def max_joint_accel(self) -> np.ndarray:
+        """(nq,) largest |q̈| of each joint over the run [rad/s²]."""
+        return np.abs(self.qddot).max(axis=0) if self.qddot.size else np.zeros(self.q.shape[1])
+
+    @property
+    def speed_ok(self) -> bool:
+        """Every joint within its velocity limit (and acceleration limit, if given)."""
+        lim = self.velocity_limit if self.velocity_limit.size else np.inf
+        acc = self.accel_limit if self.accel_limit.size else np.inf
+        return bool(
+            np.all(self.max_joint_speed <= lim * (1 + 1e-9))
+            and np.all(self.max_joint_accel <= acc * (1 + 1e-9))
+        )
+
+    @property
     def ok(self) -> bool:
-        """True when every check passes at every sample."""
+        """True when every check passes at every sample (margin only if statically stable)."""
         return bool(
             self.ik_ok.all()
-            and self.min_margin > 0
+            and self.margin_ok
             and self.min_limit_margin >= 0
             and self.min_clearance > 0
             and self.max_slip <= 1e-9
+            and self.speed_ok
         )
 
     def pinocchio_q(self) -> np.ndarray:
@@ -201,46 +289,94 @@ class GaitRun:
         out[:, 7:] = self.q
         return out
 
+    def _base_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        n = len(self.t)
+        p = self.base_poses[:, :3, 3]
+        yaw = np.unwrap(np.arctan2(self.base_poses[:, 1, 0], self.base_poses[:, 0, 0]))
+        x = np.concatenate([p, yaw[:, None]], axis=1)
+        if n < 4:
+            return np.zeros_like(x), np.zeros_like(x)
+        return np.gradient(x, self.t, axis=0, edge_order=2), second_difference(x, self.t)
+
     def base_velocity(self) -> np.ndarray:
         """Body twist (N, 6) in the body frame: linear [m/s], angular [rad/s].
 
-        The free-flyer's velocity in Pinocchio's convention (``v[:6]``); by second-order
-        finite differences of :attr:`base_poses` (the body stays level: ω = (0, 0, ψ̇)).
+        The free-flyer's velocity in Pinocchio's convention (``v[:6] = (Rᵀ ṗ, ω)``); by
+        second-order finite differences of :attr:`base_poses` (the body stays level:
+        ω = (0, 0, ψ̇)).
         """
-        n = len(self.t)
-        if n < 3:
-            return np.zeros((n, 6))
-        p_dot = np.gradient(self.base_poses[:, :3, 3], self.t, axis=0, edge_order=2)
-        yaw = np.unwrap(np.arctan2(self.base_poses[:, 1, 0], self.base_poses[:, 0, 0]))
-        out = np.zeros((n, 6))
-        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], p_dot)
-        out[:, 5] = np.gradient(yaw, self.t, edge_order=2)
+        rate, _ = self._base_rates()
+        out = np.zeros((len(self.t), 6))
+        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], rate[:, :3])
+        out[:, 5] = rate[:, 3]
+        return out
+
+    def base_acceleration(self) -> np.ndarray:
+        """The free-flyer's acceleration (N, 6), Pinocchio's ``a[:6] = d/dt v[:6]``.
+
+        ``(Rᵀ p̈ − ω × Rᵀ ṗ, ω̇)`` with p̈ and ψ̈ by second differences (the classical
+        acceleration of the body origin is ``p̈``).
+        """
+        rate, acc = self._base_rates()
+        v = self.base_velocity()
+        out = np.zeros((len(self.t), 6))
+        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], acc[:, :3])
+        out[:, :3] -= np.cross(v[:, 3:], v[:, :3])
+        out[:, 5] = acc[:, 3]
         return out
 
     def pinocchio_v(self) -> np.ndarray:
-        """Pinocchio free-flyer velocities (N, 24): :meth:`base_velocity` then ``qdot``."""
+        """Pinocchio free-flyer velocities (N, 6 + nq): :meth:`base_velocity` then ``qdot``."""
         return np.concatenate([self.base_velocity(), self.qdot], axis=1)
+
+    def pinocchio_a(self) -> np.ndarray:
+        """Pinocchio free-flyer accelerations (N, 6 + nq): :meth:`base_acceleration`, ``qddot``."""
+        return np.concatenate([self.base_acceleration(), self.qddot], axis=1)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary of the checks and the settings.
 
-        Keys: min_margin [m], max_slip [m], min_limit_margin [rad], min_clearance [m],
-        max_foot_error [m], max_joint_rate [rad/s] (informative: joint velocity limits are
-        not a check), samples, ok, pattern (the table), mass [kg], and the settings.
+        Keys: min_margin [m], statically_stable, max_slip [m], min_limit_margin [rad],
+        min_clearance [m], max_foot_error [m], max_joint_rate [rad/s], max_joint_speed and
+        max_joint_accel per joint [rad/s], [rad/s²], velocity_limit [rad/s] (None: no
+        limit), speed_ok, samples, ok, pattern (the table), mass [kg], and the settings.
         """
+
+        def finite(a: np.ndarray) -> list[float | None]:
+            return [float(x) if math.isfinite(x) else None for x in a]
+
         return {
             "min_margin": self.min_margin,
+            "statically_stable": self.statically_stable,
             "max_slip": self.max_slip,
             "min_limit_margin": self.min_limit_margin,
             "min_clearance": self.min_clearance,
             "max_foot_error": self.max_foot_error,
             "max_joint_rate": float(np.abs(self.qdot).max()) if self.qdot.size else 0.0,
+            "max_joint_speed": dict(zip(self.joint_names, finite(self.max_joint_speed))),
+            "max_joint_accel": dict(zip(self.joint_names, finite(self.max_joint_accel))),
+            "velocity_limit": dict(zip(self.joint_names, finite(self.velocity_limit))),
+            "speed_ok": self.speed_ok,
             "samples": int(len(self.t)),
             "ok": self.ok,
             "pattern": self.table.to_dict(),
             "mass": self.mass,
             **{k: (list(v) if isinstance(v, tuple) else v) for k, v in self.settings.items()},
         }
+
+
+def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """d²x/dt² (N, ...) on uniform samples (N ≥ 4).
+
+    ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the second-order one-sided
+    ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends.
+    """
+    dt = float(t[1] - t[0])
+    out = np.empty_like(x)
+    out[1:-1] = x[2:] - 2.0 * x[1:-1] + x[:-2]
+    out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
+    out[-1] = 2.0 * x[-1] - 5.0 * x[-2] + 4.0 * x[-3] - x[-4]
+    return np.asarray(out / (dt * dt))
 
 
 def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
@@ -269,14 +405,19 @@ def walk(
     duration: float = 10.0,
     q0: Any = None,
     strict: bool = True,
+    foot_radius: float | None = None,
+    sway: float | None = None,
+    accel_limit: Any = None,
 ) -> GaitRun:
-    """Walk the hexapod and check every sample.
+    """Walk the robot and check every sample.
 
     Args:
         robot: The robot: a :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
             :func:`~.robot.as_whole_body` takes (a URDF path, ``erd:NAME``, a loaded model);
             default the built-in hexapod.
-        pattern: ``"tripod"``, ``"wave"``, ``"ripple"`` or a :class:`~.tables.PhaseTable`.
+        pattern: A name of :func:`~.tables.pattern_names` for the robot's legs (``tripod``,
+            ``wave``, ``ripple`` for six; ``crawl``, ``wave``, ``trot``, ``pace`` for four;
+            ``wave``, ``ripple`` for eight) or a :class:`~.tables.PhaseTable`.
         stride: Foot stroke during stance [m] for a straight forward walk (sets
             ``vx = stride / (duty_factor · period)``); default 0.05 m when ``velocity`` is
             not given. Give ``stride`` or ``velocity``, not both.
@@ -285,7 +426,7 @@ def walk(
         duty_factor: Stance fraction β in (0, 1) (default the pattern's).
         velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame (curves with
             vx and wz, turning in place with only wz).
-        body_height: Body above the mean ground height of the feet [m] (default the
+        body_height: Body above the mean ground height of the feet's contacts [m] (default the
             robot's :attr:`~.robot.WholeBody.body_height`; the built-in hexapod: 0.08 m).
         foot_reach: Horizontal distance from each leg's mount to its neutral foot point [m]
             (default the robot's own, :attr:`~.robot.WholeBody.foot_reach`; the built-in
@@ -294,8 +435,14 @@ def walk(
             :class:`~.terrain.Terrain` or ``h(x, y)``.
         rate: Sample rate [Hz].
         duration: Length of the run [s].
-        q0: (18,) joints the first sample's IK branches are nearest to.
+        q0: (nq,) joints the first sample's IK branches are nearest to.
         strict: Raise on the first failed check (else return the run with its checks).
+        foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
+            feet fixed in stance).
+        sway: Body-sway gain in [0, 1] (default 0.5 for a statically stable pattern on four
+            legs, else 0): see the module docstring.
+        accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
+            accelerations are reported, not checked; URDF has no acceleration limit).
 
     Returns:
         A :class:`GaitRun`.
@@ -305,12 +452,13 @@ def walk(
         GaitError: (``strict``) a check fails: ``"terrain"`` (a foot off the terrain),
             ``"terrain clearance"`` (a swing foot below the ground: step too low),
             ``"reach"`` (stride too long, step too high...), ``"joint limit"``,
-            ``"leg clearance"``, ``"stability margin"``; the message names the leg, the time
-            and by how much.
+            ``"leg clearance"``, ``"stability margin"`` (statically stable patterns only),
+            ``"joint speed"``, ``"joint acceleration"``; the message names the leg or joint,
+            the time and by how much.
 
     """
     wb = as_whole_body(robot)
-    table = phase_table(pattern, wb.n_legs).with_duty_factor(duty_factor)
+    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3]).with_duty_factor(duty_factor)
     beta = table.duty_factor
     T = _num("period", period, hi=1e3)
     H = _num("step_height", step_height, zero=True, hi=1.0)
@@ -318,6 +466,10 @@ def walk(
     reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
     dur = _num("duration", duration, zero=True, hi=1e5)
     hz = _num("rate", rate, hi=1e5)
+    rad = float(wb.foot_radius) if foot_radius is None else foot_radius
+    rad = _num("foot_radius", rad, zero=True, hi=1.0)
+    default_sway = 0.5 if (wb.n_legs == 4 and table.statically_stable) else 0.0
+    gain = default_sway if sway is None else _num("sway", sway, zero=True, hi=1.0)
     n = int(round(dur * hz)) + 1
     if n > 2_000_000:
         raise ParameterError(
@@ -326,6 +478,7 @@ def walk(
             value=rate,
             allowed="duration*rate <= 2e6",
         )
+    acc_lim = accel_limit_of(accel_limit, wb.nq)
     if stride is not None and velocity is not None:
         raise ParameterError(
             f"stride={stride!r} and velocity={velocity!r}: give one (stride sets a straight "
@@ -356,6 +509,8 @@ def walk(
     nl = wb.n_legs
     # neutral foot points in the body frame (xy)
     nb = wb.neutral_feet(reach)[:, :2]  # (L, 2)
+    size = float(np.hypot(wb.mounts[:, 0, 3], wb.mounts[:, 1, 3]).max()) + reach
+    tol = MARGIN_TOL * size
     vx, vy, w = vel
     strokes = np.hypot(vx - w * nb[:, 1], vy + w * nb[:, 0]) * beta * T
     # --- contacts and swings, per sample and leg
@@ -364,7 +519,7 @@ def walk(
     m = np.floor(t[:, None] / T + offs[None, :] - beta)  # latest lift-off index
     t_lo = (m + beta - offs[None, :]) * T
     s = (t[:, None] - t_lo) / tsw
-    swing = s < 1.0
+    swing = s < 1.0 - 1e-9  # a touch-down instant is stance, whatever the rounding of t
     support = ~swing
     t_td = t_lo + tsw
 
@@ -395,29 +550,12 @@ def walk(
             )
     sc = np.clip(s, 0.0, 1.0)
     blend, lift = swing_profile(sc)
-    feet = np.where(swing[..., None], prev + (nxt - prev) * blend[..., None], nxt)
-    feet[..., 2] += np.where(swing, H * lift, 0.0)
-    gz = feet[..., 2] - np.where(swing, H * lift, 0.0)  # ground height under each foot
-    # swing feet above the ground
-    if swing.any():
-        under = ground(feet[..., 0], feet[..., 1])
-        gap = np.where(swing, feet[..., 2] - under, np.inf)
-        gap = np.where(np.isnan(gap), -np.inf, gap)
-        if gap.min() < -1e-9:
-            i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
-            d = float(-gap[i, leg])
-            where = "off the terrain" if math.isinf(d) else f"{d:.4g} m below the ground"
-            raise GaitError(
-                f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
-                f"clearance'; step_height={H:g} m is too low for this terrain)",
-                check="terrain clearance",
-                leg=names[leg],
-                time=float(t[i]),
-                amount=d,
-                parameter="step_height",
-                value=H,
-                allowed="a swing above the terrain",
-            )
+    n_nxt = terrain_normals(ground, nxt[..., 0], nxt[..., 1])
+    n_prev = terrain_normals(ground, prev[..., 0], prev[..., 1]) if rad else n_nxt
+    c_nxt, c_prev = nxt + rad * n_nxt, prev + rad * n_prev  # sphere centres on the contacts
+    plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * blend[..., None], c_nxt)
+    plan[..., 2] += np.where(swing, H * lift, 0.0)
+    gz = np.where(swing, prev[..., 2] + (nxt[..., 2] - prev[..., 2]) * blend, nxt[..., 2])
     # --- body
     pose = se2_pose(t, vel)
     base = np.zeros((n, 4, 4))
@@ -426,51 +564,53 @@ def walk(
     base[:, 2, 2] = base[:, 3, 3] = 1.0
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
     base[:, 2, 3] = gz.mean(axis=1) + bh
-    # --- joints and checks
-    ik = wb.body_ik(base, feet, q_prev=q0, times=t, strict=strict)
-    q = np.array(ik.q)
-    pts, com = wb.points_and_com(q, base)
-    actual = np.ascontiguousarray(pts[:, :, 3])
-    start = support.copy()
-    start[1:] &= ~support[:-1]
-    idx = np.where(start, np.arange(n)[:, None], 0)
-    idx = np.maximum.accumulate(idx, axis=0)
-    ref = actual[idx, np.arange(nl)[None, :]]
-    slip = np.where(support, np.linalg.norm(actual - ref, axis=-1), 0.0)
-    margin = support_margin(actual, support, com)
+    # --- joints: sway (optional), then IK <-> rolling to a fixed point
+    if gain > 0.0:
+        base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
+    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(
+        wb, base, plan, support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES
+    )
+    check_swing_clearance(ground, feet, swing, rad, t, names, H)
+    if strict and not np.asarray(ik.ok).all():
+        wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
+    if T_last is None:
+        pts, com = wb.points_and_com(q, base)
+    else:
+        pts = wb.points_of(T_last)
+        com = wb.com_of(T_last, base) if hasattr(wb, "com_of") else wb.com(q, base)
+    actual = np.ascontiguousarray(pts[:, :, -1])
+    ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
+    # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
+    slip = np.where(support, np.linalg.norm(actual - ref - rolled, axis=-1), 0.0)
+    margin = support_margin(actual - rad * n_nxt, support, com)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
-    qdot = np.gradient(q, t, axis=0, edge_order=2) if n > 2 else np.zeros_like(q)
+    if n > 3:
+        qdot = np.gradient(q, t, axis=0, edge_order=2)
+        qddot = second_difference(q, t)
+    else:
+        qdot, qddot = np.zeros_like(q), np.zeros_like(q)
+    vlim = np.asarray(wb.velocity_limit, dtype=float).reshape(-1)
     if strict:
-        if clear.size and clear.min() <= 0:
-            i, k = np.unravel_index(int(np.argmin(clear)), clear.shape)
-            a, b = pairs[k]
-            raise GaitError(
-                f"legs {names[a]} and {names[b]} collide (links {-clear[i, k]:.4g} m into "
-                f"each other) at t={t[i]:.4g} s (check 'leg clearance')",
-                check="leg clearance",
-                leg=names[a],
-                time=float(t[i]),
-                amount=float(-clear[i, k]),
-                parameter="stride",
-                value=strokes.max(),
-            )
-        if margin.min() <= 0:
-            i = int(np.argmin(margin))
-            raise GaitError(
-                f"the centre of mass leaves the support polygon by {-margin[i]:.4g} m at "
-                f"t={t[i]:.4g} s (check 'stability margin'; stance legs "
-                f"{[names[k] for k in np.flatnonzero(support[i])]})",
-                check="stability margin",
-                time=float(t[i]),
-                amount=float(-margin[i]),
-                parameter="pattern",
-                value=table.name,
-                allowed="margin > 0",
-            )
+        raise_checks(
+            wb.joint_names,
+            table,
+            names,
+            pairs,
+            t,
+            clear,
+            margin,
+            tol,
+            strokes,
+            qdot,
+            qddot,
+            vlim,
+            acc_lim,
+            support,
+        )
     phase = table.phase(t, T)
-    read_only(t, base, actual, feet, q, qdot, support, phase, com, slip, margin, clear)
+    read_only(t, base, actual, feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
     settings = {
         "stride": float(strokes.max()),
         "step_height": H,
@@ -482,9 +622,14 @@ def walk(
         "terrain": ground.name,
         "duration": dur,
         "rate": hz,
+        "foot_radius": rad,
+        "sway": gain,
+        "rolling_passes": passes,
+        "rolling_residual": residual,
+        "margin_tol": tol,
     }
     ik_ok = np.asarray(ik.ok)
-    read_only(ik_ok)
+    read_only(ik_ok, vlim, acc_lim, n_nxt)
     return GaitRun(
         t=t,
         base_poses=base,
@@ -507,4 +652,64 @@ def walk(
         table=table,
         settings=settings,
         mass=wb.mass,
+        qddot=qddot,
+        velocity_limit=vlim,
+        accel_limit=acc_lim,
+        robot=wb,
+        normals=n_nxt,
     )
+
+
+def _sway(
+    wb: WholeBody,
+    table: PhaseTable,
+    T: float,
+    vel: tuple[float, float, float],
+    nb: np.ndarray,
+    gain: float,
+    base: np.ndarray,
+    plan: np.ndarray,
+    t: np.ndarray,
+    q0: Any,
+    support: np.ndarray,
+    rad: float,
+    normals: np.ndarray,
+) -> np.ndarray:
+    """The body poses with the periodic sway added (see the module docstring)."""
+    offs = np.asarray(table.offsets)
+    beta = table.duty_factor
+    mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
+    knots = np.unique(np.round(mid, 12))
+    targets = np.empty((len(knots), 2))
+    for k, tau in enumerate(knots):
+        phi = np.remainder(tau + offs, 1.0)
+        stance = phi < beta
+        rel = se2_pose((0.5 * beta - phi) * T, vel)  # the stance's mid-pose, body frame
+        c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
+        px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
+        py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
+        targets[k] = [px[stance].mean(), py[stance].mean()] if stance.any() else 0.0
+    targets *= gain
+    values = targets.copy()
+    nominal = base
+    rot2 = nominal[:, :2, :2]
+    phase_t = np.remainder(t, T)
+    dt = float(t[1] - t[0]) if len(t) > 1 else T
+    near = [
+        np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
+        for tau in knots
+    ]
+    out = nominal
+    for it in range(3):
+        off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
+        out = nominal.copy()
+        out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
+        if it == 2 or not any(m.any() for m in near):
+            break
+        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+        com = wb.com(q, out)
+        com_b = np.einsum("nji,nj->ni", rot2, com[:, :2] - nominal[:, :2, 3])
+        for k, m in enumerate(near):
+            if m.any():
+                values[k] += targets[k] - com_b[m].mean(axis=0)
+    return out

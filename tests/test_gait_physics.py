@@ -1,0 +1,344 @@
+"""Issue 22 (h2): patterns for any leg count, body sway, the C² swing, round feet rolling,
+joint speed/acceleration checks and full inverse-dynamics gait torques.
+
+Every number is held against something independent: closed-form derivatives, finite
+differences, scipy's periodic spline, Pinocchio (CRBA, frame velocities and Jacobians),
+a hand rule for the rolled distance.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from hexapod_kin.exceptions import ParameterError
+from hexapod_kin.gait import GaitError, PhaseTable, phase_table, swing_profile, walk, whole_body
+from hexapod_kin.gait.paths import rolling_offsets, rotation_increments
+from hexapod_kin.gait.stability import periodic_spline
+from hexapod_kin.gait.tables import default_positions, pattern_names
+from hexapod_kin.robots import hexapod
+
+pin = pytest.importorskip("pinocchio")
+
+QUAD_YAW = (45.0, 135.0, -135.0, -45.0)  # front-left, rear-left, rear-right, front-right
+OCTO_YAW = (22.5, 67.5, 112.5, 157.5, -157.5, -112.5, -67.5, -22.5)
+
+
+@pytest.fixture(scope="module")
+def quad():
+    return whole_body(hexapod(mount_yaw_deg=QUAD_YAW, name="quad"))
+
+
+@pytest.fixture(scope="module")
+def octo():
+    return whole_body(hexapod(mount_yaw_deg=OCTO_YAW, name="octo", body_radius=0.15))
+
+
+@pytest.fixture(scope="module")
+def wb():
+    return whole_body()
+
+
+# ====================================================================== swing profile
+def test_swing_profile_has_zero_velocity_and_acceleration_at_both_ends():
+    s = np.linspace(0.0, 1.0, 41)
+    blend, lift = swing_profile(s)
+    # closed forms of the derivatives (hand-differentiated) against central differences
+    d1 = (30 * s**2 * (1 - s) ** 2, 192 * s**2 * (1 - s) ** 2 * (1 - 2 * s))
+    d2 = (60 * s * (1 - s) * (1 - 2 * s), 384 * s * (1 - s) * (5 * s**2 - 5 * s + 1))
+    h = 1e-5
+    up, dn = swing_profile(s + h), swing_profile(s - h)
+    for k in range(2):
+        assert np.allclose((up[k] - dn[k]) / (2 * h), d1[k], atol=1e-6)
+        assert np.allclose((up[k] - 2 * (blend, lift)[k] + dn[k]) / h**2, d2[k], atol=2e-3)
+        assert d1[k][0] == d1[k][-1] == 0.0 and d2[k][0] == d2[k][-1] == 0.0
+    assert lift[20] == pytest.approx(1.0) and lift.max() == pytest.approx(1.0)  # peak h at s=½
+    assert blend[0] == 0.0 and blend[-1] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("pattern", ["tripod", "wave"])
+def test_planned_feet_start_and_end_swings_with_zero_acceleration(pattern):
+    """Second differences of the planned feet at lift-off / touch-down samples → 0 with dt."""
+
+    def edge_accel(rate: float) -> tuple[float, float]:
+        run = walk(pattern=pattern, duration=0.6, rate=rate, foot_radius=0.0)
+        acc = (
+            np.linalg.norm(
+                run.feet_planned[2:] - 2 * run.feet_planned[1:-1] + run.feet_planned[:-2], axis=-1
+            )
+            * rate**2
+        )  # (N-2, L) at samples 1..N-2
+        st = run.support[1:-1]
+        lift = st[:-1] & ~st[1:]  # last stance sample before a swing
+        touch = ~st[:-1] & st[1:]  # last swing sample
+        peak = float(acc.max())
+        return float(acc[1:][lift].max()) / peak, float(acc[:-1][touch].max()) / peak
+
+    # the jerk is not zero at the ends, so one sample in the acceleration is O(dt)
+    coarse, fine = edge_accel(2000.0), edge_accel(10000.0)
+    assert max(fine) < 2e-2  # relative to the peak swing acceleration
+    assert fine[0] < 0.3 * coarse[0] + 1e-12 and fine[1] < 0.3 * coarse[1] + 1e-12
+
+
+# ====================================================================== patterns
+def _stance_counts(table: PhaseTable) -> np.ndarray:
+    t = (np.arange(4000) + 0.5) / 4000
+    return table.stance(t, 1.0).sum(axis=1)
+
+
+def test_patterns_for_four_six_and_eight_legs(quad, octo):
+    assert pattern_names(4) == ("crawl", "pace", "trot", "wave")
+    assert pattern_names(6) == ("ripple", "tripod", "wave")
+    assert pattern_names(8) == ("ripple", "wave")
+    pos4 = quad.mounts[:, :2, 3]
+    crawl = phase_table("crawl", 4, pos4)
+    assert crawl.duty_factor == 0.8 and crawl.statically_stable
+    counts = _stance_counts(crawl)
+    assert counts.min() == 3 and counts.max() == 4  # never two feet: a statically stable crawl
+    # lateral sequence: left hind, left fore, right hind, right fore, a quarter cycle apart
+    lift = {k: (crawl.duty_factor - o) % 1.0 for k, o in enumerate(crawl.offsets)}
+    assert [lift[k] for k in (1, 0, 2, 3)] == pytest.approx([0.0, 0.25, 0.5, 0.75])
+    trot, pace = phase_table("trot", 4, pos4), phase_table("pace", 4, pos4)
+    assert not trot.statically_stable and not pace.statically_stable
+    assert trot.offsets[0] == trot.offsets[2] and trot.offsets[1] == trot.offsets[3]  # diagonals
+    assert pace.offsets[0] == pace.offsets[1] and pace.offsets[2] == pace.offsets[3]  # sides
+    pos8 = octo.mounts[:, :2, 3]
+    assert np.all(_stance_counts(phase_table("wave", 8, pos8)) == 7)
+    assert np.all(_stance_counts(phase_table("ripple", 8, pos8)) == 6)
+    assert np.all(_stance_counts(phase_table("wave", 5, default_positions(5))) == 4)
+    with pytest.raises(ParameterError, match="crawl") as err:
+        phase_table("tripod", 4, pos4)
+    assert err.value.allowed == ["crawl", "pace", "trot", "wave"]
+    with pytest.raises(ParameterError, match="positions"):
+        phase_table("wave", 4, np.zeros((3, 2)))
+
+
+def test_patterns_follow_the_legs_not_their_order(quad):
+    """Permuting the legs permutes the offsets (the pattern is built from where legs are)."""
+    pos = quad.mounts[:, :2, 3]
+    perm = [2, 0, 3, 1]
+    for name in ("crawl", "trot", "pace", "wave"):
+        a, b = phase_table(name, 4, pos), phase_table(name, 4, pos[perm])
+        assert np.allclose(np.asarray(a.offsets)[perm], b.offsets, atol=1e-12)
+
+
+def test_quadruped_crawls_ten_seconds_with_sway_and_positive_margin(quad):
+    run = walk(quad, pattern="crawl", duration=10.0, rate=100.0)
+    assert run.ok and run.settings["sway"] == 0.5 and run.min_margin > 0.005
+    assert run.robot is quad and run.statically_stable
+    # without sway the crawl is much closer to tipping
+    bare = walk(quad, pattern="crawl", duration=3.0, sway=0.0, strict=False)
+    assert bare.min_margin < 0.3 * run.min_margin
+    # the sway is C² and periodic: the body's lateral offset repeats every period and its
+    # second difference has no jumps bigger than a smooth curve's
+    y = run.base_poses[:, 1, 3]
+    assert np.allclose(y[:100], y[100:200], atol=1e-12)
+    acc = np.diff(y, 2) * 100**2
+    assert np.abs(np.diff(acc)).max() < 0.1 * np.abs(acc).max()
+
+
+def test_margin_within_rounding_of_zero_is_not_a_failure(quad):
+    """A β = 0.75 crawl without sway hands over on the diagonal: margin ≈ −1e-16 m."""
+    run = walk(quad, pattern="crawl", duty_factor=0.75, sway=0.0, foot_radius=0.0, stride=0.05)
+    assert -run.settings["margin_tol"] < run.min_margin < 1e-12 and run.ok
+    assert run.settings["margin_tol"] == pytest.approx(1e-9 * (0.12 + 0.16))
+
+
+def test_trot_and_pace_walk_but_are_reported_not_statically_stable(quad):
+    for name in ("trot", "pace"):
+        run = walk(quad, pattern=name, duration=2.0)  # strict: no margin failure raised
+        assert run.min_margin < 0 and run.ok and not run.statically_stable
+        d = run.to_dict()
+        assert d["statically_stable"] is False and d["pattern"]["statically_stable"] is False
+
+
+def test_eight_legs_walk_wave_and_ripple(octo):
+    for name, period in (("wave", 1.5), ("ripple", 1.0)):
+        run = walk(octo, pattern=name, period=period, duration=4.0)
+        assert run.ok and run.min_margin > 0.1 and run.max_slip <= 1e-9
+
+
+def test_periodic_spline_matches_scipy_and_is_c2():
+    from scipy.interpolate import CubicSpline
+
+    rng = np.random.default_rng(3)
+    knots = np.array([0.1, 0.35, 0.6, 0.8])
+    vals = rng.normal(size=(4, 2))
+    t = np.linspace(-1.0, 2.0, 301)
+    ours = periodic_spline(knots, vals, 1.0, t)
+    ref = CubicSpline(np.append(knots, 1.1), np.vstack([vals, vals[:1]]), bc_type="periodic")
+    assert np.allclose(ours, ref(np.remainder(t - 0.1, 1.0) + 0.1), atol=1e-12)
+    assert np.allclose(periodic_spline([0.3], vals[:1], 1.0, t), vals[0])
+
+
+# ====================================================================== rolling feet
+def test_rotation_increments_are_the_rotation_vectors():
+    rng = np.random.default_rng(0)
+    axis = rng.normal(size=(50, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    ang = rng.uniform(0, 1.0, 50)
+    ang[:5] = [0.0, 1e-9, 1e-7, 1e-5, 3.0]
+    R0 = np.array([pin.exp3(v) for v in rng.normal(size=(50, 3))])
+    R1 = np.array([pin.exp3(a * u) @ R for a, u, R in zip(ang, axis, R0)])
+    theta = rotation_increments(np.stack([R0, R1]))[0]
+    assert np.allclose(theta, ang[:, None] * axis, atol=1e-12)
+
+
+def test_round_feet_roll_without_slip_and_the_roll_is_r_times_the_pitch(wb):
+    run = walk(pattern="tripod", duration=3.0, rate=200.0)
+    r = wb.foot_radius
+    assert r == 0.012 and run.max_slip <= 1e-9
+    assert run.settings["rolling_residual"] <= 1e-10 and run.settings["rolling_passes"] >= 2
+    # hand rule: on level ground with a level body, the leg's foot frame turns about the
+    # horizontal knee/ankle axes at (q̇_knee + q̇_ankle) and about z (no rolling) with the hip:
+    # the contact point's path length over each stance is r Σ |Δ(q_knee + q_ankle)|
+    q = run.q.reshape(len(run.t), 6, 3)
+    pitch = q[:, :, 1] + q[:, :, 2]
+    for k in range(6):
+        st = run.support[:, k]
+        runs = np.flatnonzero(np.diff(st.astype(int)) != 0) + 1
+        for a, b in zip(np.r_[0, runs][:-1], runs):
+            if st[a] and b - a > 10:
+                path = np.linalg.norm(np.diff(run.feet[a:b, k], axis=0), axis=1).sum()
+                assert path == pytest.approx(r * np.abs(np.diff(pitch[a:b, k])).sum(), rel=1e-6)
+    # the stance centre moves (it rolls), unlike point feet
+    moved = np.linalg.norm(run.feet - run.feet[np.argmax(run.support, axis=0), range(6)], axis=-1)
+    assert moved[run.support].max() > 1e-3
+    point = walk(pattern="tripod", duration=3.0, rate=200.0, foot_radius=0.0)
+    assert point.settings["rolling_passes"] == 1 and point.max_slip <= 1e-12
+
+
+def test_rolling_offsets_of_a_wheel():
+    """A sphere turning at a constant rate about y rolls along x by r·angle (closed form)."""
+    n, r = 101, 0.02
+    ang = np.linspace(0.0, 1.5, n)
+    rot = np.array([pin.exp3(np.array([0.0, a, 0.0])) for a in ang])[:, None]
+    support = np.ones((n, 1), dtype=bool)
+    D = rolling_offsets(rot, support, np.tile([0.0, 0.0, 1.0], (n, 1, 1)), r)
+    assert np.allclose(D[:, 0, 0], r * ang, atol=1e-15) and np.allclose(D[:, 0, 1:], 0.0)
+
+
+# ====================================================================== joint speed
+def test_joint_speed_is_checked_against_the_urdf_limit(wb):
+    assert np.all(wb.velocity_limit == 10.0)
+    with pytest.raises(GaitError) as err:
+        walk(pattern="wave", terrain="slope", duration=2.0)
+    e = err.value
+    assert e.check == "joint speed" and e.amount > 0 and e.time is not None
+    assert e.parameter in wb.joint_names and e.allowed == 10.0
+    run = walk(pattern="wave", terrain="slope", duration=2.0, strict=False)
+    assert not run.ok and not run.speed_ok
+    j = wb.joint_names.index(e.parameter)
+    assert run.max_joint_speed[j] == pytest.approx(10.0 + e.amount)
+    d = run.to_dict()
+    assert d["max_joint_speed"][e.parameter] == pytest.approx(run.max_joint_speed[j])
+    json.dumps(d, allow_nan=False)
+
+
+def test_joint_acceleration_by_finite_differences_and_its_optional_limit():
+    run = walk(pattern="tripod", duration=1.0, rate=400.0)
+    assert np.allclose(run.qddot[1:-1], np.diff(run.q, 2, axis=0) * 400.0**2, atol=1e-9)
+    assert run.max_joint_accel == pytest.approx(np.abs(run.qddot).max(axis=0))
+    with pytest.raises(GaitError) as err:
+        walk(pattern="tripod", duration=1.0, rate=400.0, accel_limit=1.0)
+    assert err.value.check == "joint acceleration"
+    with pytest.raises(ParameterError, match="accel_limit"):
+        walk(duration=1.0, accel_limit=-1.0)
+
+
+def test_pinocchio_a_is_the_derivative_of_pinocchio_v():
+    run = walk(
+        pattern="ripple", velocity=(0.05, 0.01, 0.2), duration=1.0, rate=1000.0, foot_radius=0.0
+    )
+    v, a = run.pinocchio_v(), run.pinocchio_a()
+    fd = np.gradient(v, run.t, axis=0)
+    # (the two stencils differ by O(dt) where the jerk jumps: lift-off, touch-down)
+    assert np.abs(fd[5:-5] - a[5:-5]).max() < 2e-2 * np.abs(a).max()
+    # the base origin's classical acceleration is p̈ (Pinocchio's convention)
+    model, data = run.robot.model, run.robot.model.createData()
+    Q = run.pinocchio_q()
+    p_dd = np.diff(run.base_poses[:, :3, 3], 2, axis=0) * 1000.0**2
+    for i in (100, 500, 900):
+        pin.forwardKinematics(model, data, Q[i], v[i], a[i])
+        acc = pin.getFrameClassicalAcceleration(
+            model, data, model.getFrameId("root_joint"), pin.LOCAL_WORLD_ALIGNED
+        )
+        assert np.allclose(acc.linear, p_dd[i - 1], atol=1e-6)
+
+
+# ====================================================================== full dynamics
+def test_full_inverse_dynamics_equals_crba_plus_bias_with_the_contact_forces(wb):
+    from hexapod_kin.dynamics import gait_torques
+
+    run = walk(pattern="wave", duration=1.0, rate=200.0)
+    res = gait_torques(run)
+    assert res.base_residual <= 1e-9
+    model, data = wb.model, wb.model.createData()
+    Q, V, A = run.pinocchio_q(), run.pinocchio_v(), run.pinocchio_a()
+    fids = [model.getFrameId(f"{leg}_foot") for leg in wb.leg_names]
+    cols = [run.joint_names.index(n) for n in res.joint_names]
+    r = run.settings["foot_radius"]
+    worst = 0.0
+    for i in range(0, len(run.t), 7):
+        M = pin.crba(model, data, Q[i])
+        M = np.triu(M) + np.triu(M, 1).T
+        b = M @ A[i] + pin.nonLinearEffects(model, data, Q[i], V[i])
+        for k, f in enumerate(fids):
+            if run.support[i, k]:
+                J = pin.computeFrameJacobian(model, data, Q[i], f, pin.LOCAL_WORLD_ALIGNED)
+                arm = -r * run.normals[i, k]  # the contact point from the sphere's centre
+                Jc = J[:3] + np.cross(J[3:].T, arm).T  # v + ω × arm
+                b -= Jc.T @ res.forces_full[i, k]
+        assert np.abs(b[:6]).max() <= 1e-9  # the floating base is balanced
+        worst = max(worst, float(np.abs(b[6:][cols] - res.torque_full[i]).max()))
+    assert worst <= 1e-9
+    # Newton: the contact forces carry the weight and accelerate the centre of mass
+    com_acc = np.diff(run.com, 2, axis=0) * 200.0**2
+    total = res.forces_full.sum(axis=1)[1:-1]
+    m = run.mass
+    assert np.abs(total - m * (com_acc + [0, 0, 9.81])).max() < 0.02 * m * 9.81
+    d = res.to_dict()
+    assert d["peak_torque_full_max"] == pytest.approx(res.peak_full.max())
+    assert np.all(res.peak_difference <= res.peak + res.peak_full + 1e-12)
+    assert np.abs(res.torque_full - res.torque).max() == pytest.approx(res.peak_difference.max())
+
+
+def test_full_inverse_dynamics_equals_mujoco_mj_inverse_on_the_exported_mjcf(wb):
+    """MuJoCo's own inverse dynamics of the exported robot, sample by sample ≤ 1e-9 N·m."""
+    mujoco = pytest.importorskip("mujoco")
+    from hexapod_kin.dynamics import gait_torques
+    from hexapod_kin.export.mjcf import to_mjcf
+
+    run = walk(pattern="wave", duration=1.0, rate=200.0)
+    res = gait_torques(run)
+    m = mujoco.MjModel.from_xml_string(to_mjcf("hexapod", floating=True, floor=False).xml)
+    d = mujoco.MjData(m)
+    names = [m.joint(j).name for j in range(1, m.njnt)]
+    cols = [run.joint_names.index(n) for n in names]
+    ours_cols = [res.joint_names.index(n) for n in names]
+    V, A = run.pinocchio_v(), run.pinocchio_a()
+    r = run.settings["foot_radius"]
+    worst = base = 0.0
+    for i in range(0, len(run.t), 5):
+        B = run.base_poses[i]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, B[:3, :3].ravel())
+        d.qpos[:3], d.qpos[3:7], d.qpos[7:] = B[:3, 3], quat, run.q[i, cols]
+        # MuJoCo's free joint: world linear velocity, body angular velocity; qacc = d/dt qvel
+        v_b, w_b = V[i, :3], V[i, 3:6]
+        d.qvel[:3], d.qvel[3:6], d.qvel[6:] = B[:3, :3] @ v_b, w_b, run.qdot[i, cols]
+        d.qacc[:3] = B[:3, :3] @ (A[i, :3] + np.cross(w_b, v_b))
+        d.qacc[3:6], d.qacc[6:] = A[i, 3:6], run.qddot[i, cols]
+        mujoco.mj_inverse(m, d)
+        gen = d.qfrc_inverse + d.qfrc_passive
+        for k, leg in enumerate(run.leg_names):
+            if run.support[i, k]:
+                jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+                point = run.feet[i, k] - r * run.normals[i, k]
+                mujoco.mj_jac(m, d, jacp, jacr, point, m.body(f"{leg}_foot").id)
+                gen = gen - jacp.T @ res.forces_full[i, k]
+        base = max(base, float(np.abs(gen[:6]).max()))
+        worst = max(worst, float(np.abs(gen[6:] - res.torque_full[i, ours_cols]).max()))
+    assert base <= 1e-9 and worst <= 1e-9
