@@ -579,9 +579,7 @@ def _warn(message: str) -> None:
     outside the package but the interpreter's entry point, which has no source line.)
     """
     level, frame = 2, sys._getframe(1)
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(
-        _PACKAGE_DIR
-    ):
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
         level, frame = level + 1, frame.f_back  # type: ignore[assignment]
     warnings.warn(message, UrdfWarning, stacklevel=level)
 
@@ -623,21 +621,19 @@ def _mesh_lines(missing: tuple[tuple[str, str], ...]) -> list[str]:
     groups: dict[tuple[str, str], list[str]] = {}
     line_of: dict[tuple[str, str], str] = {}
     for uri, why in missing:
-        where, _, reason = why.partition(": ") if why.startswith("line ") else ("", "", why)
-        reason = reason.removeprefix(f"{uri!r}: ").removesuffix(" (not read)")
-        kind = "refused" if "refused" in reason else "empty" if "is empty" in reason else "not found"
-        reason = reason.removeprefix("refused: ").removeprefix("not found: ")
+        where, _, rest = why.partition(": ") if why.startswith("line ") else ("", "", why)
+        kind, _, reason = rest.removeprefix(f"{uri!r}: ").partition(": ")
+        if kind not in ("refused", "not found", "empty"):
+            kind, reason = "not found", rest
         if kind == "not found" and reason.endswith("does not exist"):
             reason = "file does not exist"
-        elif kind == "empty":
-            reason = "0 bytes"
         names = groups.setdefault((kind, reason), [])
         line_of.setdefault((kind, reason), where)
         if uri not in names:
             names.append(uri)
     return [
         f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
-        f"({_first(uris)}; first at {line_of[(kind, reason)] or 'an unknown line'}): {reason}"
+        f"({_first([u if len(u) <= 60 else '…/' + u.rsplit('/', 1)[-1] for u in uris])}; first at {line_of[(kind, reason)] or 'an unknown line'}): {reason}"
         for (kind, reason), uris in groups.items()
     ]
 

@@ -113,8 +113,8 @@ def resolve_mesh(
         candidates = [("", os.fspath(_absolute_mesh(uri, path, mesh_root)))]
     elif scheme:
         raise MeshOutside(
-            f"{uri!r}: URI scheme {scheme.group(1)!r} is refused; use package://<package>/"
-            "<path> or a path relative to the URDF file"
+            f"{uri!r}: refused: URI scheme {scheme.group(1)!r} is never read; use "
+            "package://<package>/<path> or a path relative to the URDF file"
         )
     elif uri.startswith("~"):
         raise MeshOutside(f"{uri!r}: refused: '~' is not expanded; give the path itself")
@@ -123,7 +123,8 @@ def resolve_mesh(
     else:
         if mesh_root is None:
             raise MeshMissing(
-                f"{uri!r}: relative mesh path but no mesh root (URDF given as text); load the "
+                f"{uri!r}: not found: relative mesh path but no mesh root (URDF given as "
+                "text); load the "
                 "URDF from its file so relative paths resolve next to it"
             )
         root = os.fspath(mesh_root)
@@ -146,7 +147,7 @@ def resolve_mesh(
                 f"{uri!r}: {real!r} has {st.st_size} bytes; the cap is {MAX_MESH_BYTES}"
             )
         if st.st_size == 0:
-            raise MeshEmpty(f"{uri!r}: {real!r} is empty (0 bytes)")
+            raise MeshEmpty(f"{uri!r}: empty: {real!r} has 0 bytes")
         return Path(real)
     assert last is not None
     raise last

@@ -310,8 +310,8 @@ def _check(
             except (MeshMissing, MeshOutside, MeshEmpty) as exc:
                 if not lenient:
                     raise error_at(node, "filename", uri, str(exc)) from None
-                read = " (not read)" if isinstance(exc, MeshOutside) else ""
-                missing.append((uri or "", f"line {node.sourceline}: {exc}{read}"))
+                # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
+                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
                 continue
             except UrdfError as exc:
                 raise error_at(node, "filename", uri, str(exc)) from None
