@@ -631,11 +631,15 @@ def _mesh_lines(missing: tuple[tuple[str, str], ...]) -> list[str]:
         line_of.setdefault((kind, reason), where)
         if uri not in names:
             names.append(uri)
-    return [
-        f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
-        f"({_first([u if len(u) <= 60 else '…/' + u.rsplit('/', 1)[-1] for u in uris])}; first at {line_of[(kind, reason)] or 'an unknown line'}): {reason}"
-        for (kind, reason), uris in groups.items()
-    ]
+    out = []
+    for (kind, reason), uris in groups.items():
+        short = [u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris]
+        where = line_of[(kind, reason)] or "an unknown line"
+        out.append(
+            f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
+            f"({_first(short)}; first at {where}): {reason}"
+        )
+    return out
 
 
 def _warn_defects(

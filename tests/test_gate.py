@@ -713,8 +713,8 @@ def test_collision_repair_matches_closed_forms(tmp_path: Path) -> None:
     bad = '<inertia ixx="1" iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/>'
     links = {
         "box": (f'{org}<geometry><box size="0.1 0.04 0.02"/></geometry>', org),
-        "cyl": ('<origin xyz="0 0 0.1"/><geometry><cylinder radius="0.02" length="0.2"/></geometry>',
-                '<origin xyz="0 0 0.05"/>'),
+        "cyl": ('<origin xyz="0 0 0.1"/><geometry><cylinder radius="0.02" length="0.2"/>'
+                "</geometry>", '<origin xyz="0 0 0.05"/>'),
         "ball": ('<geometry><sphere radius="0.03"/></geometry>', ""),
         "mesh": ('<origin rpy="0 0 1.5707963267948966"/><geometry>'
                  '<mesh filename="m.stl" scale="2 1 1"/></geometry>', ""),

@@ -23,8 +23,10 @@ class MeshMissing(UrdfError):
 
 
 class MeshOutside(UrdfError):
-    """A refused file name: another URI scheme (``http://``), ``~``, or an absolute/``file://``
-    path that is not a mesh file of a URDF loaded from its file.
+    """A refused file name (another URI scheme, ``~``, an absolute path that may not be read).
+
+    Absolute and ``file://`` paths are read only for a URDF loaded from its file and only for
+    mesh files (:data:`MESH_SUFFIXES`).
 
     It is never read (nor fetched). Strict checking refuses the document; lenient loading drops
     the element's visual/collision with a warning that says "refused". An escape out of the
@@ -54,7 +56,8 @@ def _absolute_mesh(uri: str, path: str, mesh_root: object) -> Path:
         if not name.lower().endswith(MESH_SUFFIXES):
             raise MeshOutside(
                 f"{uri!r}: refused: only mesh files ({', '.join(MESH_SUFFIXES)}) are read "
-                f"from an absolute or file:// path{'' if name == path else f' (it links to {real!r})'}"
+                "from an absolute or file:// path"
+                + ("" if name == path else f" (it links to {real!r})")
             )
     return Path(real)
 

@@ -132,7 +132,7 @@ def mesh_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
             except ImportError:
                 raise UrdfError(f"{path.name}: no reader for {suffix} (install trimesh)") from None
             mesh = trimesh.load(str(path), force="mesh")
-            pts = np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+            pts = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64).reshape(-1, 3)
     except (ValueError, struct.error) as exc:
         raise UrdfError(f"{path.name}: unreadable mesh ({exc})") from None
     if pts.size == 0 or not np.all(np.isfinite(pts)):
