@@ -5,9 +5,11 @@ them by hand), the URDF text it was built from, the names of the sub-chain (base
 the user picked, an optional tool frame, and one per-model cache (:meth:`Model.cached`) for
 what other modules derive from it. Names are checked here before any id reaches Pinocchio
 (whose ``getFrameId`` returns an out-of-range id for unknown names and then crashes). What a
-URDF may contain that kinematics does not need (missing meshes, implausible inertials) loads
-with a :class:`~hexapod_kin.exceptions.UrdfWarning`; :func:`check_inertials` is the strict
-check dynamics calls.
+URDF may contain that kinematics does not need (unusable meshes, implausible inertials) loads
+with a :class:`~hexapod_kin.exceptions.UrdfWarning` of one short line per kind, attributed to
+the caller's line; :func:`check_inertials` is the strict check dynamics calls, and
+``inertia="collision"`` or ``"point"`` a stated repair (:mod:`hexapod_kin._gate.repair`) that
+keeps every mass and centre of mass.
 """
 
 from __future__ import annotations
@@ -15,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import re
 import sys
 import threading
 import warnings
@@ -26,6 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ._gate import check_urdf
+from ._gate.messages import defect_lines, first_names, mesh_lines
 from ._gate.repair import INERTIA_MODES, InertiaRepair, check_mode, repair_inertials
 from .exceptions import (
     ConfigurationError,
@@ -499,7 +501,7 @@ class Model:
                 raise
             _warn(
                 f"{self.name!r}: meshes: {len(bad)} file(s) unreadable by the mesh loader, "
-                f"dropped with their visual/collision elements ({_first(sorted(bad))})"
+                f"dropped with their visual/collision elements ({first_names(sorted(bad))})"
             )
             geom = pin.buildGeomFromUrdfString(
                 self.full_model, self._geometry_text(drop | bad), kinds[kind], None, dirs
@@ -584,69 +586,11 @@ def _warn(message: str) -> None:
     warnings.warn(message, UrdfWarning, stacklevel=level)
 
 
-def _first(names: list[str], limit: int = 3) -> str:
-    return ", ".join(names[:limit]) + (", …" if len(names) > limit else "")
-
-
-#: Kinds of implausible inertials, by the words of the gate's message, and their one line.
-_DEFECT_KINDS = (
-    ("triangle inequality", "violate the triangle inequality I1 + I2 ≥ I3"),
-    ("indefinite", "have an indefinite inertia"),
-    ("not positive", "have an inertia that is not positive definite"),
-    ("mass > 0", "are moving bodies that have no mass"),
-)
-
-
-def _defect_lines(defects: tuple[tuple[str, str], ...]) -> list[str]:
-    """One line per kind of defect: count, the first few links, what to do."""
-    kinds: dict[str, list[str]] = {}
-    first: dict[str, str] = {}
-    for link, why in defects:
-        text = next((t for key, t in _DEFECT_KINDS if key in why), "have implausible inertials")
-        names = kinds.setdefault(text, [])
-        found = re.search(r"line (\d+)", why)
-        first.setdefault(text, f"line {found.group(1)}" if found else "an unknown line")
-        if link not in names:
-            names.append(link)
-    return [
-        f"inertia: {len(names)} link(s) {text} ({_first(names)}; first at {first[text]}); "
-        "kinematics ignores them, dynamics refuses them: load with inertia='collision' or "
-        "'point' (CLI: --inertia)"
-        for text, names in kinds.items()
-    ]
-
-
-def _mesh_lines(missing: tuple[tuple[str, str], ...]) -> list[str]:
-    """One line per kind of unusable file (refused, empty, not found): count, first few, why."""
-    groups: dict[tuple[str, str], list[str]] = {}
-    line_of: dict[tuple[str, str], str] = {}
-    for uri, why in missing:
-        where, _, rest = why.partition(": ") if why.startswith("line ") else ("", "", why)
-        kind, _, reason = rest.removeprefix(f"{uri!r}: ").partition(": ")
-        if kind not in ("refused", "not found", "empty"):
-            kind, reason = "not found", rest
-        if kind == "not found" and reason.endswith("does not exist"):
-            reason = "file does not exist"
-        names = groups.setdefault((kind, reason), [])
-        line_of.setdefault((kind, reason), where)
-        if uri not in names:
-            names.append(uri)
-    out = []
-    for (kind, reason), uris in groups.items():
-        short = [u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris]
-        where = line_of[(kind, reason)] or "an unknown line"
-        out.append(
-            f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
-            f"({_first(short)}; first at {where}): {reason}"
-        )
-    return out
-
-
 def _warn_defects(
     name: str, missing: tuple[tuple[str, str], ...], defects: tuple[tuple[str, str], ...]
 ) -> None:
     """One :class:`UrdfWarning` for the meshes, one for the inertials: a short line per kind."""
-    for lines in (_mesh_lines(missing), _defect_lines(defects)):
+    for lines in (mesh_lines(missing), defect_lines(defects)):
         if lines:
             _warn("\n".join(f"{name!r}: {line}" for line in lines))
 
