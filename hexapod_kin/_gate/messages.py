@@ -14,6 +14,7 @@ __all__ = ["defect_lines", "first_names", "mesh_lines"]
 
 
 def first_names(names: list[str], limit: int = 3) -> str:
+    """The first ``limit`` names, comma-separated, with ``…`` when there are more."""
     return ", ".join(names[:limit]) + (", …" if len(names) > limit else "")
 
 
@@ -62,10 +63,14 @@ def mesh_lines(missing: tuple[tuple[str, str], ...]) -> list[str]:
             names.append(uri)
     out = []
     for (kind, reason), uris in groups.items():
-        short = [u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris]
+        folder = uris[0].rsplit("/", 1)[0] + "/" if "/" in uris[0] else ""
+        if len(uris) > 1 and folder and all(u.startswith(folder) for u in uris[:3]):
+            names = f"{first_names([u[len(folder) :] for u in uris])} in {folder}"
+        else:
+            names = first_names([u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris])
         where = line_of[(kind, reason)] or "an unknown line"
         out.append(
             f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
-            f"({first_names(short)}; first at {where}): {reason}"
+            f"({names}; first at {where}): {reason}"
         )
     return out
