@@ -65,12 +65,12 @@ def mesh_lines(missing: tuple[tuple[str, str], ...]) -> list[str]:
     for (kind, reason), uris in groups.items():
         folder = uris[0].rsplit("/", 1)[0] + "/" if "/" in uris[0] else ""
         if len(uris) > 1 and folder and all(u.startswith(folder) for u in uris[:3]):
-            names = f"{first_names([u[len(folder) :] for u in uris])} in {folder}"
+            shown = f"{first_names([u[len(folder) :] for u in uris])} in {folder}"
         else:
-            names = first_names([u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris])
+            shown = first_names([u if len(u) <= 60 else "…/" + u.rsplit("/", 1)[-1] for u in uris])
         where = line_of[(kind, reason)] or "an unknown line"
         out.append(
             f"meshes: {len(uris)} file(s) {kind}, their visual/collision elements dropped "
-            f"({names}; first at {where}): {reason}"
+            f"({shown}; first at {where}): {reason}"
         )
     return out
