@@ -5,14 +5,19 @@ them by hand), the URDF text it was built from, the names of the sub-chain (base
 the user picked, an optional tool frame, and one per-model cache (:meth:`Model.cached`) for
 what other modules derive from it. Names are checked here before any id reaches Pinocchio
 (whose ``getFrameId`` returns an out-of-range id for unknown names and then crashes). What a
-URDF may contain that kinematics does not need (missing meshes, implausible inertials) loads
-with a :class:`~hexapod_kin.exceptions.UrdfWarning`; :func:`check_inertials` is the strict
-check dynamics calls.
+URDF may contain that kinematics does not need (unusable meshes, implausible inertials) loads
+with a :class:`~hexapod_kin.exceptions.UrdfWarning` of one short line per kind, attributed to
+the caller's line; :func:`check_inertials` is the strict check dynamics calls, and
+``inertia="collision"`` or ``"point"`` a stated repair (:mod:`hexapod_kin._gate.repair`) that
+keeps every mass and centre of mass.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
+import sys
 import threading
 import warnings
 from collections.abc import Callable
@@ -22,6 +27,8 @@ import numpy as np
 import pinocchio as pin
 
 from ._gate import check_urdf
+from ._gate.messages import defect_lines, first_names, mesh_lines
+from ._gate.repair import INERTIA_MODES, InertiaRepair, check_mode, repair_inertials
 from .exceptions import (
     ConfigurationError,
     FrameNotFoundError,
@@ -32,7 +39,6 @@ from .exceptions import (
 )
 from .frames import (
     add_tool_frame,
-    drop_missing_meshes,
     frame_index,
     last_body_frame,
     path_frames,
@@ -44,7 +50,7 @@ from .sources import ResolvedSource, resolve_source, yourdfpy_load
 
 _T = TypeVar("_T")
 
-__all__ = ["Model", "build", "check_inertials"]
+__all__ = ["INERTIA_MODES", "Model", "build", "check_inertials"]
 
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
@@ -128,24 +134,47 @@ class Model:
         q_ref: Any = None,
         tool: Any = None,
         strict_inertia: bool = False,
+        inertia: str = "urdf",
     ) -> None:
         self._cache: dict[str, Any] = {}
         self._cache_lock = threading.RLock()
+        check_mode(inertia)
         gate = check_urdf(
             resolved.text,
             package_dirs=resolved.package_dirs,
             mesh_root=resolved.mesh_root,
             lenient=True,
         )
+        #: The inertia repair applied (``inertia="collision"|"point"``), or ``None``.
+        self.inertia_repair: InertiaRepair | None = None
+        if inertia != "urdf":
+            repaired = repair_inertials(
+                resolved.text if gate.text is None else gate.text,
+                inertia,
+                package_dirs=resolved.package_dirs,
+                mesh_root=resolved.mesh_root,
+            )
+            self.inertia_repair = repaired
+            gate = check_urdf(
+                repaired.text,
+                package_dirs=resolved.package_dirs,
+                mesh_root=resolved.mesh_root,
+                lenient=True,
+            )
+            if gate.text is None:
+                gate = dataclasses.replace(gate, text=repaired.text)
+            _warn(f"{resolved.name!r}: {repaired.summary()}")
         #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
         self.missing_meshes: tuple[tuple[str, str], ...] = gate.missing_meshes
+        #: ``uri -> real path`` of the mesh and texture files the gate resolved and checked.
+        self.mesh_files: dict[str, str] = {uri: str(path) for uri, path in gate.meshes}
         #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
         self.inertia_defects: tuple[tuple[str, str], ...] = gate.inertia_defects
         if strict_inertia:
             _raise_inertia_defects(resolved.name, gate.inertia_defects)
         _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
         for repair in gate.repairs:
-            warnings.warn(f"{resolved.name!r}: {repair}", UrdfWarning, stacklevel=3)
+            _warn(f"{resolved.name!r}: {repair}")
         text = resolved.text if gate.text is None else gate.text
         try:
             full = pin.buildModelFromXML(text)
@@ -461,14 +490,53 @@ class Model:
         dirs = list(self.source.package_dirs)
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
-        text = drop_missing_meshes(self.urdf, self.missing_meshes)
-        geom = pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
+        drop = {uri for uri, _ in self.missing_meshes}
+        try:
+            geom = pin.buildGeomFromUrdfString(
+                self.full_model, self._geometry_text(drop), kinds[kind], None, dirs
+            )
+        except (RuntimeError, ValueError):  # a mesh the loader cannot read: find and drop it
+            bad = _unreadable_meshes(self.mesh_files)
+            if not bad:
+                raise
+            _warn(
+                f"{self.name!r}: meshes: {len(bad)} file(s) unreadable by the mesh loader, "
+                f"dropped with their visual/collision elements ({first_names(sorted(bad))})"
+            )
+            geom = pin.buildGeomFromUrdfString(
+                self.full_model, self._geometry_text(drop | bad), kinds[kind], None, dirs
+            )
         if self._locked:
             _, geoms = pin.buildReducedModel(
                 self.full_model, [geom], list(self._locked), self._q_ref
             )
             geom = geoms[0]
         return geom
+
+    def _geometry_text(self, drop: set[str]) -> str:
+        """The URDF without the visuals/collisions of ``drop``, every mesh by its real path.
+
+        (The gate resolved and checked each file; Pinocchio then reads exactly those, also
+        for ``file://`` and absolute paths, which it would otherwise resolve its own way.)
+        """
+        from lxml import etree
+
+        from ._gate import parse_urdf
+
+        if not drop and not self.mesh_files:
+            return self.urdf
+        root = parse_urdf(self.urdf)
+        for link in root.findall("link"):
+            for part in [*link.findall("visual"), *link.findall("collision")]:
+                nodes = list(part.iter("mesh", "texture"))
+                if any(m.get("filename") in drop for m in nodes):
+                    link.remove(part)
+                    continue
+                for m in nodes:
+                    path = self.mesh_files.get(m.get("filename") or "")
+                    if path is not None:
+                        m.set("filename", path)
+        return str(etree.tostring(root, encoding="unicode"))
 
     def yourdfpy(self) -> Any:
         """The same URDF text loaded by yourdfpy (a second engine; meshes not loaded)."""
@@ -502,31 +570,44 @@ class _PerThread(threading.local):
         self.hot = (owner.model, data, owner.tip_id, nq, owner._base_is_root)
 
 
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def _warn(message: str) -> None:
+    """One :class:`UrdfWarning` attributed to the first caller outside hexapod_kin.
+
+    (Python 3.12's ``skip_file_prefixes``, by hand: the warning points at the user's own
+    ``load(...)`` line, never at a line of this package. From the command line no frame is
+    outside the package but the interpreter's entry point, which has no source line.)
+    """
+    level, frame = 2, sys._getframe(1)
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
+        level, frame = level + 1, frame.f_back  # type: ignore[assignment]
+    warnings.warn(message, UrdfWarning, stacklevel=level)
+
+
 def _warn_defects(
     name: str, missing: tuple[tuple[str, str], ...], defects: tuple[tuple[str, str], ...]
 ) -> None:
-    """One :class:`UrdfWarning` for the missing meshes and one for the implausible inertials."""
-    if missing:
-        seen: dict[str, str] = {}
-        for uri, why in missing:
-            seen.setdefault(uri, why)
-        shown = "; ".join(seen[u] for u in list(seen)[:20])
-        more = f"; ... ({len(seen) - 20} more)" if len(seen) > 20 else ""
-        warnings.warn(
-            f"{name!r}: {len(seen)} mesh file(s) not found, their visual/collision elements are "
-            f"dropped (kinematics unaffected; give package_dirs= or set ROS_PACKAGE_PATH): "
-            f"{shown}{more}",
-            UrdfWarning,
-            stacklevel=4,
-        )
-    if defects:
-        listed = "; ".join(f"link {link!r}: {why}" for link, why in defects)
-        warnings.warn(
-            f"{name!r}: physically implausible inertials, ignored by kinematics and refused by "
-            f"dynamics: {listed}",
-            UrdfWarning,
-            stacklevel=4,
-        )
+    """One :class:`UrdfWarning` for the meshes, one for the inertials: a short line per kind."""
+    for lines in (mesh_lines(missing), defect_lines(defects)):
+        if lines:
+            _warn("\n".join(f"{name!r}: {line}" for line in lines))
+
+
+def _unreadable_meshes(files: dict[str, str]) -> set[str]:
+    """URIs of the mesh files Coal's loader (what Pinocchio uses) fails to read."""
+    import coal
+
+    bad = set()
+    for uri, path in files.items():
+        if not path.lower().endswith((".stl", ".dae", ".obj", ".ply", ".3ds", ".off")):
+            continue  # textures
+        try:
+            coal.MeshLoader().load(path, np.ones(3))
+        except (RuntimeError, ValueError, TypeError):
+            bad.add(uri)
+    return bad
 
 
 def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> None:
@@ -534,7 +615,8 @@ def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> N
         link, why = defects[0]
         more = f" (and {len(defects) - 1} more link(s))" if len(defects) > 1 else ""
         raise UrdfError(
-            f"{name!r}: link {link!r} has a physically implausible inertial{more}: {why}",
+            f"{name!r}: link {link!r} has a physically implausible inertial{more}: {why}; "
+            "repair with inertia='collision' or 'point' (CLI: --inertia)",
             parameter="inertial",
             value=link,
             allowed="mass > 0 and a positive-definite inertia obeying the triangle inequality",
@@ -568,10 +650,24 @@ def build(
     package_dirs: Any = (),
     tool: Any = None,
     strict_inertia: bool = False,
+    inertia: str = "urdf",
     **params: Any,
 ) -> Model:
-    """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``)."""
+    """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``).
+
+    ``inertia`` is one of :data:`INERTIA_MODES`: ``"urdf"`` (the file's inertias),
+    ``"collision"`` (recomputed from each link's collision shapes) or ``"point"`` (point
+    masses); the repairs keep every mass and centre of mass (:mod:`hexapod_kin._gate.repair`).
+    """
+    check_mode(inertia)
     resolved = resolve_source(source, package_dirs=package_dirs, **params)
     return cls(
-        resolved, base, tip, reduce=reduce, q_ref=q_ref, tool=tool, strict_inertia=strict_inertia
+        resolved,
+        base,
+        tip,
+        reduce=reduce,
+        q_ref=q_ref,
+        tool=tool,
+        strict_inertia=strict_inertia,
+        inertia=inertia,
     )

@@ -122,38 +122,38 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "joint_negative_damping": ("UrdfError", "damping='-0.1': must be >= 0", "<dynamics"),
     # mass and inertia
     "mass_negative": ("UrdfError", "value='-0.5': must be >= 0", "<mass"),
-    "mass_moving_massless": ("warn", "moved by joint 'j1' has no mass", '<link name="arm">'),
-    "mass_zero_moving": ("warn", "moved by joint 'j1' has no mass", '<link name="arm">'),
-    "inertia_indefinite": ("warn", "inertia is indefinite", "<inertia "),
-    "inertia_triangle": ("warn", "violate the triangle inequality", "<inertia "),
-    "inertia_zero_moving": ("warn", "not positive definite", "<inertia "),
+    "mass_moving_massless": ("warn", "1 link(s) are moving bodies that have no mass (arm;", None),
+    "mass_zero_moving": ("warn", "1 link(s) are moving bodies that have no mass (arm;", None),
+    "inertia_indefinite": ("warn", "1 link(s) have an indefinite inertia (arm;", "<inertia "),
+    "inertia_triangle": ("warn", "violate the triangle inequality I1 + I2 ≥ I3", "<inertia "),
+    "inertia_zero_moving": ("warn", "not positive definite (arm;", "<inertia "),
     "inertia_singular_offdiag": ("warn", "not positive definite", "<inertia "),
     "inertia_missing_entry": ("UrdfError", "izz=None: attribute is required", "<inertia "),
     "inertial_no_mass": ("UrdfError", "<mass> is required", "<inertial>"),
     # files (other schemes and absolute paths: never read nor fetched, the visual is dropped)
     "mesh_file_uri": (
         "warn",
-        "URI scheme 'file' is refused",
+        "refused",
         "<mesh",
     ),
     "mesh_absolute_path": (
         "warn",
-        "absolute paths are refused",
+        "1 file(s) refused, their visual/collision elements dropped (/etc/passwd;",
         "<mesh",
     ),
     "mesh_dotdot_escape": ("UrdfError", "outside the allowed root", "<mesh"),
     "mesh_package_without_dirs": ("warn", "no package directories", "<mesh"),
     "mesh_http_uri": (
         "warn",
-        "URI scheme 'http' is refused",
+        "refused, their visual/collision elements dropped (http://127.0.0.1:9/evil.stl",
         "<mesh",
     ),
-    "mesh_missing_file": ("warn", "missing.stl' does not exist", "<mesh"),
+    "mesh_missing_file": ("warn", "1 file(s) not found", "<mesh"),
     "mesh_directory": ("UrdfError", "is not a regular file", "<mesh"),
     "mesh_empty_filename": ("UrdfError", "empty file name", "<mesh"),
     "mesh_home_tilde": (
         "warn",
-        "absolute paths are refused",
+        "'~' is not expanded",
         "<mesh",
     ),
     "texture_escape": ("UrdfError", "<texture> filename='../../../../../etc/hostname'", "<texture"),
@@ -214,7 +214,7 @@ def test_corpus_case(case: str, corpus_results: _Results) -> None:
         if marker is not None:
             lines = (CORPUS / f"{case}.urdf").read_text(encoding="utf-8").splitlines()
             line = next(i for i, text in enumerate(lines, start=1) if marker in text)
-            assert f"line {line}:" in message, (line, message)
+            assert f"line {line}:" in message or f"first at line {line})" in message, message
         return
     assert rec["error"] == error, rec
     if error is None:
@@ -450,9 +450,9 @@ def test_relative_mesh_in_text_source_refused() -> None:
 
 
 def test_resolve_mesh_messages() -> None:
-    with pytest.raises(UrdfError, match="scheme 'FILE'"):
+    with pytest.raises(UrdfError, match="refused: only mesh files"):
         resolve_mesh("FILE:///etc/passwd", mesh_root=CORPUS)
-    with pytest.raises(UrdfError, match="scheme 'c'"):
+    with pytest.raises(UrdfError, match="refused: URI scheme 'c'"):
         resolve_mesh("c:/windows/system.ini", mesh_root=CORPUS)
 
 
@@ -559,3 +559,209 @@ def test_non_fixed_joint_without_limit_continuous_ok() -> None:
     # Limits default to 0 as in the URDF spec: lower = upper = 0 is allowed.
     zero = text.replace('lower="-1" upper="1" ', "")
     check_urdf(zero)
+
+
+# ------------------------------------------------------------------ absolute and file:// meshes
+def _box_stl(path: Path, lo: tuple[float, float, float], hi: tuple[float, float, float]) -> None:
+    """A binary STL of the box [lo, hi] (12 triangles)."""
+    import struct
+
+    c = np.array(
+        [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    )
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]  # fmt: skip
+    out = bytearray(b"\0" * 80 + struct.pack("<I", len(faces)))
+    for f in faces:
+        out += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *c[i]) for i in f)
+        out += b"\0\0"
+    path.write_bytes(bytes(out))
+
+
+def test_absolute_and_file_uri_meshes_read_for_a_file_loaded_urdf(tmp_path: Path) -> None:
+    elsewhere = tmp_path / "elsewhere" / "my pkg"
+    elsewhere.mkdir(parents=True)
+    mesh = elsewhere / "part.stl"
+    _box_stl(mesh, (0, 0, 0), (1, 1, 1))
+    (elsewhere / "notes.txt").write_text("not a mesh")
+    os.symlink("/etc/hostname", elsewhere / "sneaky.stl")
+    (elsewhere / "empty.stl").write_bytes(b"")
+    root = tmp_path / "robot"
+    root.mkdir()
+    uri = "file://" + str(mesh).replace(" ", "%20")
+    for name in (str(mesh), uri, "file://localhost" + str(mesh)):
+        assert check_urdf(_with_mesh(name), mesh_root=root).meshes[0][1] == mesh.resolve()
+    cases = [
+        (str(mesh), None, "refused: absolute and file:// paths are read only when the URDF"),
+        (str(elsewhere / "notes.txt"), root, "refused: only mesh files (.stl, .dae, .obj, .ply)"),
+        (str(elsewhere / "sneaky.stl"), root, "refused: only mesh files"),
+        ("file://host" + str(mesh), root, "refused: a file:// URI must name a local absolute"),
+        ("~/part.stl", root, "refused: '~' is not expanded"),
+        (str(elsewhere / "gone.stl"), root, "not found: file"),
+        (str(elsewhere / "empty.stl"), root, "empty: "),
+    ]
+    for name, mesh_root, fragment in cases:
+        with pytest.raises(UrdfError, match="line 21: .*<mesh>") as info:
+            check_urdf(_with_mesh(name), mesh_root=mesh_root)
+        assert fragment in str(info.value), (name, str(info.value))
+        lenient = check_urdf(_with_mesh(name), mesh_root=mesh_root, lenient=True)
+        assert [u for u, _ in lenient.missing_meshes] == [name]
+
+
+def test_warning_says_refused_empty_or_not_found_in_one_line_each(tmp_path: Path) -> None:
+    import warnings
+
+    from hexapod_kin.exceptions import UrdfWarning
+    from hexapod_kin.kinematics import load
+
+    good, empty = tmp_path / "good.stl", tmp_path / "empty.stl"
+    _box_stl(good, (0, 0, 0), (0.01, 0.01, 0.01))
+    empty.write_bytes(b"")
+    text = (CORPUS / "ok_minimal.urdf").read_text(encoding="utf-8")
+    extra = "".join(
+        f'<visual><geometry><mesh filename="{n}"/></geometry></visual>'
+        for n in ("file://" + str(good), str(empty), "/etc/hostname", str(tmp_path / "no.stl"))
+    )
+    path = tmp_path / "r.urdf"
+    path.write_text(text.replace("<visual>", f"{extra}<visual>", 1))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = load(path)
+    ours = [w for w in caught if issubclass(w.category, UrdfWarning)]
+    assert len(ours) == 1 and ours[0].filename == __file__  # the caller's line, not ours
+    lines = str(ours[0].message).splitlines()
+    assert [ln.split(": ", 1)[1].split(",")[0] for ln in lines] == [
+        "meshes: 1 file(s) empty",
+        "meshes: 1 file(s) refused",
+        "meshes: 1 file(s) not found",
+    ], lines
+    assert model.mesh_files["file://" + str(good)] == str(good.resolve())
+    geom = model.geometry_model("visual")  # the good mesh drawn, the three others dropped
+    meshes = [g for g in geom.geometryObjects if str(g.meshPath).endswith(".stl")]
+    assert [str(g.meshPath) for g in meshes] == [str(good.resolve())]
+    np.testing.assert_allclose(np.ptp(np.asarray(meshes[0].geometry.vertices()), axis=0), 0.01)
+
+
+# ------------------------------------------------------------------ inertia repairs
+PHANTOMX = HERE / "data" / "phantomx" / "phantomx.urdf"
+
+
+def _load_quiet(source, **kw):
+    import warnings
+
+    from hexapod_kin.kinematics import load
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = load(source, **kw)
+    return m, [str(w.message) for w in caught]
+
+
+def _triangle_ok(inertia: np.ndarray) -> bool:
+    e = np.linalg.eigvalsh(inertia)
+    return bool(e[0] > 0 and e[0] + e[1] >= e[2] * (1 - 1e-9))
+
+
+def test_phantomx_warning_is_one_short_line_per_kind() -> None:
+    _, messages = _load_quiet(PHANTOMX)
+    inertia = [m for m in messages if "inertia:" in m]
+    assert len(inertia) == 1 and "\n" not in inertia[0] and len(inertia[0]) < 300, inertia
+    assert (
+        "18 link(s) violate the triangle inequality I1 + I2 ≥ I3 (c1_rf, thigh_rf, tibia_rf, …"
+        in (inertia[0])
+    )
+    assert "inertia='collision' or 'point'" in inertia[0]
+    assert all(len(m) < 400 for m in messages)
+
+
+@pytest.mark.parametrize("mode", ["point", "collision"])
+def test_phantomx_repaired_keeps_masses_and_coms_and_passes_dynamics(mode: str) -> None:
+    from hexapod_kin.model import check_inertials
+
+    raw = model.pin.buildModelFromUrdf(str(PHANTOMX))  # the file as Pinocchio reads it
+    rep, messages = _load_quiet(PHANTOMX, inertia=mode)
+    assert rep.inertia_defects == ()
+    check_inertials(rep)  # dynamics accepts it
+    full = rep.full_model
+    assert full.nv == raw.nv == 18
+    assert sum(not _triangle_ok(raw.inertias[i].inertia) for i in range(1, raw.njoints)) == 18
+    for i in range(1, raw.njoints):
+        a, b = full.inertias[i], raw.inertias[i]
+        assert a.mass == pytest.approx(b.mass, rel=1e-12)
+        np.testing.assert_allclose(a.lever, b.lever, atol=1e-12)
+        assert _triangle_ok(a.inertia), (full.names[i], np.linalg.eigvalsh(a.inertia))
+    # without the package's meshes "collision" falls back to point masses, and says so
+    assert rep.inertia_repair is not None
+    assert len(rep.inertia_repair.as_point) == 25 and not rep.inertia_repair.from_collision
+    assert any(
+        f"inertia={mode!r}: masses and centres of mass kept; 25 link(s)" in m for m in messages
+    )
+    # a single link: the point repair is a sphere of radius 1 cm about the (unmoved) COM
+    tibia = full.inertias[full.getJointId("j_tibia_lf")]
+    np.testing.assert_allclose(tibia.inertia, np.eye(3) * 0.4 * tibia.mass * 0.01**2, atol=1e-15)
+    m = model.pin.crba(full, full.createData(), model.pin.neutral(full))
+    assert np.linalg.eigvalsh((m + m.T) / 2)[0] > 0
+
+
+def test_collision_repair_matches_closed_forms(tmp_path: Path) -> None:
+    """Box, cylinder, sphere and a scaled STL mesh: each link's inertia about its COM."""
+    import pinocchio as pin
+
+    _box_stl(tmp_path / "m.stl", (0.0, -0.01, 0.0), (0.04, 0.01, 0.02))  # box 0.04×0.02×0.02
+    xyz, rpy = np.array([0.05, 0.01, -0.02]), (0.3, -0.2, 0.7)
+    org = f'<origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/>'
+    bad = '<inertia ixx="1" iyy="1" izz="3" ixy="0" ixz="0" iyz="0"/>'
+    links = {
+        "box": (f'{org}<geometry><box size="0.1 0.04 0.02"/></geometry>', org),
+        "cyl": ('<origin xyz="0 0 0.1"/><geometry><cylinder radius="0.02" length="0.2"/>'
+                "</geometry>", '<origin xyz="0 0 0.05"/>'),
+        "ball": ('<geometry><sphere radius="0.03"/></geometry>', ""),
+        "mesh": ('<origin rpy="0 0 1.5707963267948966"/><geometry>'
+                 '<mesh filename="m.stl" scale="2 1 1"/></geometry>', ""),
+    }  # fmt: skip
+    parts = ['<robot name="r"><link name="base"/>']
+    for k, (name, (coll, iorg)) in enumerate(links.items()):
+        parts.append(
+            f'<link name="{name}"><inertial>{iorg}<mass value="{k + 1.5}"/>{bad}</inertial>'
+            f"<collision>{coll}</collision></link>"
+            f'<joint name="j{name}" type="revolute"><parent link="base"/><child link="{name}"/>'
+            f'<origin xyz="{k} 0 0"/><axis xyz="0 0 1"/>'
+            '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        )
+    path = tmp_path / "r.urdf"
+    path.write_text("".join(parts) + "</robot>")
+    rep, _ = _load_quiet(path, inertia="collision")
+    assert rep.inertia_repair.from_collision == list(links) and rep.inertia_defects == ()
+    got = {n: rep.full_model.inertias[rep.full_model.getJointId(f"j{n}")] for n in links}
+    mass = {n: k + 1.5 for k, n in enumerate(links)}
+
+    def box(m, a, b, c):
+        return m / 12 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+    rot = pin.rpy.rpyToMatrix(*rpy)
+    expected = {
+        "box": rot @ box(mass["box"], 0.1, 0.04, 0.02) @ rot.T,  # collision at the COM
+        "cyl": np.diag([(3 * 0.02**2 + 0.2**2) / 12] * 2 + [0.02**2 / 2]) * mass["cyl"]
+        + mass["cyl"] * (0.05**2 * np.diag([1.0, 1.0, 0.0])),  # centroid 5 cm above the COM
+        "ball": np.eye(3) * 0.4 * mass["ball"] * 0.03**2,
+    }
+    # the mesh: bounding box 0.08×0.02×0.02 (x scaled by 2) centred at (0.04, 0, 0.01) in the
+    # mesh frame, turned 90° about z: 0.02×0.08×0.02 centred at (0, 0.04, 0.01); COM at 0
+    d = np.array([0.0, 0.04, 0.01])
+    mm = mass["mesh"]
+    expected["mesh"] = box(mm, 0.02, 0.08, 0.02) + mm * (d @ d * np.eye(3) - np.outer(d, d))
+    for n in links:
+        assert got[n].mass == pytest.approx(mass[n])
+        np.testing.assert_allclose(got[n].inertia, expected[n], rtol=1e-6, atol=1e-12, err_msg=n)
+        assert _triangle_ok(got[n].inertia)
+    np.testing.assert_allclose(got["box"].lever, xyz, atol=1e-12)
+    np.testing.assert_allclose(got["cyl"].lever, [0, 0, 0.05], atol=1e-12)
+
+
+def test_inertia_option_refuses_unknown_modes() -> None:
+    from hexapod_kin.exceptions import ParameterError
+    from hexapod_kin.kinematics import load
+
+    with pytest.raises(ParameterError, match="'urdf', 'collision', 'point'") as info:
+        load("hexabot_leg", inertia="mesh")
+    assert info.value.parameter == "inertia"

@@ -495,3 +495,47 @@ def test_the_step_command_never_imports_numba():
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr[-2000:]
     assert res.stdout.strip().splitlines()[-1] == "False"
+
+
+def test_cli_step_velocity_plot_draws_the_run(tmp_path, capsys, monkeypatch):
+    """``step --velocity --plot`` writes the figure; its curves against raw Pinocchio."""
+    import pinocchio as pin
+
+    from hexapod_kin import plots
+
+    drawn: list = []
+    real = plots.save_figure
+
+    def keep(fig, path, **kw):
+        drawn.append(
+            [[(ln.get_xdata(), ln.get_ydata()) for ln in ax.get_lines()] for ax in fig.axes]
+        )
+        return real(fig, path, **kw)
+
+    monkeypatch.setattr(plots, "save_figure", keep)
+    png = tmp_path / "v.png"
+    v = np.array([0.01, 0.005, 0.0])
+    argv = ["step", "hexabot_leg", "--velocity", *map(str, v), "--duration", "0.5"]
+    assert main([*argv, "--plot", str(png), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["written"] == [str(png)] and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    qs, rates, sigma, drift = drawn[0]
+    q = np.array([y for _, y in qs]).T
+    assert q.shape == (501, 3) and len(rates) == 3
+    np.testing.assert_allclose(q[0], out["q0"], atol=0)
+    np.testing.assert_allclose(q[-1], out["q_end"], atol=0)
+    leg = hk.load("hexabot_leg")
+    model, data = leg.model, leg.model.createData()
+    feet, sig = [], []
+    for qi in q:
+        jac = pin.computeFrameJacobian(model, data, qi, leg.tip_id, pin.LOCAL_WORLD_ALIGNED)[:3]
+        pin.framesForwardKinematics(model, data, qi)
+        feet.append(data.oMf[leg.tip_id].translation.copy())
+        sig.append(np.linalg.svd(jac, compute_uv=False)[-1])
+    t = drift[0][0]
+    feet = np.array(feet)
+    exact = feet[0] + t[:, None] * v  # a straight line at constant speed
+    np.testing.assert_allclose(drift[0][1], np.maximum(np.linalg.norm(feet - exact, axis=1), 1e-18),
+                               atol=1e-12)  # fmt: skip
+    assert max(drift[0][1]) == pytest.approx(out["position_drift"], abs=1e-15)
+    np.testing.assert_allclose(sigma[0][1], sig, rtol=1e-9)

@@ -230,7 +230,7 @@ def test_best_design_for_seed_total_length_and_its_stride(tmp_path):
     space = DesignSpace(
         {"l1": Range(0.01, 0.09, 9), "l2": Range(0.05, 0.19, 15), "height": 0.1}, total=0.25
     )
-    res = sweep(space, mc_samples=2000, out=tmp_path / "t.csv")
+    res = sweep(space, mc_samples=2000, out=tmp_path / "t.json")
     best = res.summary["best"]
     r = row(**{p: best[p] for p in PARAMETERS})
     assert best["l1"] + best["l2"] + best["l3"] == pytest.approx(0.25)
@@ -261,7 +261,7 @@ def test_best_design_for_seed_total_length_and_its_stride(tmp_path):
     ]
     assert best["stride"] == pytest.approx(max(chord), rel=1e-10)
     assert np.allclose(t["stride"], chord, rtol=1e-10)
-    assert json.loads(Path(res.files["json"]).read_text())["best"]["index"] == best["index"]
+    assert json.loads((tmp_path / "t.json").read_text())["best"]["index"] == best["index"]
 
 
 def test_stride_limited_by_the_hip_and_through_the_hip_axis():
@@ -341,11 +341,27 @@ def dask_client():
     cluster.close()
 
 
-def test_parquet_and_csv_tables_agree(local_run):
-    csv, pq = read_results(local_run.files["csv"]), read_results(local_run.files["parquet"])
-    assert list(csv) == list(pq) == list(local_run.table)
-    for k in csv:
-        assert np.array_equal(csv[k], pq[k]) and np.array_equal(csv[k], local_run.table[k])
+def test_parquet_json_and_csv_tables_agree(local_run, tmp_path):
+    """Each run writes the one table asked for (format by extension) and nothing else."""
+    pytest.importorskip("pyarrow")
+    assert set(local_run.files) == {"csv"}
+    assert sorted(p.name for p in Path(local_run.files["csv"]).parent.iterdir()) == ["l.csv"]
+    csv = read_results(local_run.files["csv"])
+    for name in ("t.parquet", "t.json"):
+        res = sweep(SPACE, out=tmp_path / name, **{**OPTS, "chunk_size": 16})
+        assert list(res.files.values()) == [str(tmp_path / name)]
+        other = read_results(tmp_path / name)
+        assert list(other) == list(csv) == list(local_run.table)
+        for k in csv:
+            assert np.array_equal(csv[k], other[k]) and np.array_equal(csv[k], local_run.table[k])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.json", "t.parquet"]
+    summary = json.loads((tmp_path / "t.json").read_text())
+    assert (
+        summary["n_designs"] == 32
+        and summary["best"]["index"] == local_run.summary["best"]["index"]
+    )
+    with pytest.raises(ParameterError, match=r"\.csv, \.parquet, \.json"):
+        sweep(SPACE, out=tmp_path / "t.xlsx", **OPTS)
 
 
 def test_dask_table_equals_local(local_run, dask_client, tmp_path):
@@ -419,7 +435,7 @@ def _run_until_chunks(cmd: list[str], parts: Path, n: int, sig: int) -> int:
 
 def test_interrupted_cli_sweep_resumes_to_the_same_table(local_run, tmp_path):
     out = tmp_path / "s.csv"
-    parts = tmp_path / "s.parts"
+    parts = tmp_path / ".s.csv.sweep-parts"  # the hidden sidecar of the chunks
     rc = _run_until_chunks(_cli(out), parts, 1, signal.SIGINT)  # Ctrl-C
     assert rc == 130
     have = len(list(parts.glob("chunk_*.npz")))
@@ -432,11 +448,40 @@ def test_interrupted_cli_sweep_resumes_to_the_same_table(local_run, tmp_path):
     summary = json.loads(done.stdout)
     assert summary["scored"] == 32 - 2 * have
     assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.csv"]  # the sidecar is gone
 
 
-def test_other_sweep_in_same_out_is_refused(local_run):
+def test_other_sweep_over_an_interrupted_one_is_refused(local_run, tmp_path):
+    out = tmp_path / "i.csv"
+
+    def stop(k: int) -> None:
+        if k == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(SPACE, out=out, workers=1, on_chunk=stop, **OPTS)
+    assert not out.exists() and (tmp_path / ".i.csv.sweep-parts").is_dir()
     with pytest.raises(ConfigurationError, match="different sweep"):
-        sweep(SPACE, out=local_run.files["csv"], **{**OPTS, "seed": 8})
+        sweep(SPACE, out=out, **{**OPTS, "seed": 8})
+    res = sweep(SPACE, out=out, **OPTS)  # the same sweep finishes it
+    assert res.scored == 32 - 2 * 2
+    assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["i.csv"]
+
+
+def test_readme_example_runs_with_the_default_height(tmp_path, capsys, monkeypatch):
+    """``sweep --l2 … --l3 … --out designs.csv --plot sweep.png`` as the README has it."""
+    from hexapod_kin.cli import main
+    from hexapod_kin.sweep import DEFAULTS
+
+    monkeypatch.chdir(tmp_path)
+    argv = "sweep --l2 0.08:0.12:5 --l3 0.08:0.12:5 --out designs.csv --plot sweep.png"
+    assert main(argv.split()) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["designs.csv", "sweep.png"]
+    table = read_results(tmp_path / "designs.csv")
+    assert DEFAULTS["height"] == 0.10
+    assert len(table["index"]) == 25 and np.all(table["height"] == 0.10)
+    assert "height = 0.1 m" in capsys.readouterr().out
 
 
 def test_cli_errors_are_one_line(tmp_path):

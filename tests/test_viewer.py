@@ -734,3 +734,100 @@ def test_screenshot_tool_runs(browser, tmp_path):
         r, g, b = img[..., 0], img[..., 1], img[..., 2]
         orange = (r > 0.75) & (g > 0.4) & (g < 0.7) & (b < 0.35)
         assert orange.mean() > 0.005, name
+
+
+# ====================================================================== meshes of a real workspace
+def _box_stl(path: Path, size: tuple[float, float, float]) -> None:
+    """A binary STL of the box [0, size] (12 triangles)."""
+    import struct
+
+    xs, ys, zs = zip((0.0, 0.0, 0.0), size, strict=True)
+    c = [(x, y, z) for x in xs for y in ys for z in zs]
+    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
+             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]  # fmt: skip
+    out = bytearray(b"\0" * 80 + struct.pack("<I", len(faces)))
+    for f in faces:
+        out += (
+            struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *c[i]) for i in f) + b"\0\0"
+        )
+    path.write_bytes(bytes(out))
+
+
+def _mesh_workspace(tmp_path: Path) -> tuple[Path, dict[str, tuple[float, float, float]]]:
+    """ws/src/mypkg (package meshes: good, empty, garbage) + a file:// mesh elsewhere."""
+    pkg = tmp_path / "ws" / "src" / "mypkg"
+    (pkg / "urdf").mkdir(parents=True)
+    (pkg / "meshes").mkdir()
+    (pkg / "package.xml").write_text("<package><name>mypkg</name></package>")
+    other = tmp_path / "elsewhere"  # outside every package: what xacro's $(find pkg) gives
+    other.mkdir()
+    sizes = {"good": (0.04, 0.02, 0.1), "abs": (0.03, 0.03, 0.08)}
+    _box_stl(pkg / "meshes" / "good.stl", sizes["good"])
+    _box_stl(other / "abs.stl", sizes["abs"])
+    (pkg / "meshes" / "empty.stl").write_bytes(b"")
+    (pkg / "meshes" / "garbage.stl").write_bytes(b"\x00not a mesh\xff" * 3)
+    uris = {
+        "good": "package://mypkg/meshes/good.stl",
+        "empty": "package://mypkg/meshes/empty.stl",
+        "garbage": "package://mypkg/meshes/garbage.stl",
+        "abs": (other / "abs.stl").as_uri(),
+        "missing": "package://mypkg/meshes/missing.stl",
+    }
+    parts = ['<robot name="ws"><link name="base"/>']
+    for k, (name, uri) in enumerate(uris.items()):
+        parts.append(
+            f'<link name="{name}"><inertial><mass value="0.1"/><inertia ixx="1e-4" iyy="1e-4" '
+            f'izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial><visual><geometry>'
+            f'<mesh filename="{uri}"/></geometry></visual></link>'
+            f'<joint name="j{k}" type="revolute"><parent link="base"/><child link="{name}"/>'
+            f'<origin xyz="{0.1 * k} 0 0"/><axis xyz="0 0 1"/>'
+            '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+        )
+    path = pkg / "urdf" / "ws.urdf"
+    path.write_text("".join(parts) + "</robot>")
+    return path, sizes
+
+
+def test_package_empty_garbage_and_file_uri_meshes(browser, tmp_path):
+    """The good meshes are drawn; an empty, an unreadable and a missing one cost only themselves."""
+    import warnings
+
+    path, sizes = _mesh_workspace(tmp_path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = load(path)
+        html = viewer.export_html(model, [0.0], model.neutral()[None, :], tmp_path / "ws.html")
+    said = [str(w.message) for w in caught]
+    assert any("1 file(s) empty" in s and "empty.stl" in s for s in said), said
+    assert any("1 file(s) not found" in s and "missing.stl" in s for s in said), said
+    assert any("1 file(s) unreadable" in s and "garbage.stl" in s for s in said), said
+    assert all("\n" not in s for s in said if "meshes:" in s and "not found" not in s)
+    cmds = [_decode(c) for c in _html_data(html)["commands"]]
+    robot = [
+        c for c in cmds if c["type"] == "set_object" and c["path"].startswith("/meshcat/robot/")
+    ]
+    assert len(robot) == 2
+    extents = sorted(
+        tuple(np.ptp(_mesh_triangles(c["object"])[0].reshape(-1, 3), axis=0)) for c in robot
+    )  # the boxes' own sizes, within one int16 quantisation step (0.1 m / 65534)
+    np.testing.assert_allclose(extents, sorted(sizes.values()), atol=2e-6)
+    page = _Page(browser, allow=("file://",))
+    try:
+        page.page.goto(html.as_uri())
+        page.page.wait_for_function(
+            "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
+        )
+        n = page.page.evaluate(
+            """() => { var n = 0; hexapodKin.viewer.scene.traverse(function (o) {
+                 if (o.isMesh && o.geometry.index) { n += 1; } }); return n; }"""
+        )
+        page.page.wait_for_timeout(300)
+        with_robot = page.pixels()
+        page.page.evaluate("hexapodKin.setVisible('robot', false)")
+        page.page.wait_for_timeout(300)
+        without = page.pixels()
+    finally:
+        page.close()
+    assert page.blocked == [] and page.errors == []
+    assert n >= 2
+    assert _changed(with_robot, without) > 0.002

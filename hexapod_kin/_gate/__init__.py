@@ -48,24 +48,29 @@ Checks, in order (the first failure is raised):
 7. **Files** (``<mesh filename>``, ``<texture filename>``): always checked when present (the
    kinematics never read meshes, but geometry and the viewer do): ``package://pkg/path``
    resolves against ``package_dirs`` (as Pinocchio does: ``<dir>/pkg/path``), a relative
-   path against ``mesh_root`` (the URDF's directory); ``file://``, other URI schemes and
-   absolute paths are refused; the resolved real path (symlinks followed) must stay inside
-   the root it was resolved against; it must be an existing regular file of at most
-   :data:`MAX_MESH_BYTES` bytes.
+   path against ``mesh_root`` (the URDF's directory); the resolved real path (symlinks
+   followed) must stay inside the root it was resolved against. Absolute and ``file://``
+   paths (what xacro's ``$(find pkg)`` writes) are read only when the URDF was loaded from
+   its file (``mesh_root`` known) and only for mesh files (``.stl``, ``.dae``, ``.obj``,
+   ``.ply``, also after following links); other URI schemes and ``~`` are refused. Every
+   file must be an existing, non-empty regular file of at most :data:`MAX_MESH_BYTES` bytes.
 
 **Lenient mode** (``check_urdf(..., lenient=True)``, what :class:`~hexapod_kin.model.Model`
-uses for kinematics): a mesh that cannot be *found* (missing file, unknown package, relative
-path of URDF text) and the physical plausibility of inertials (rule 6 beyond ``mass >= 0`` and
-the six finite entries) are recorded in the result (``missing_meshes``, ``inertia_defects``)
-instead of raised; the loader warns and drops those visuals, dynamics refuses the inertials.
-Refused mesh URIs (schemes, absolute paths, escapes, non-regular or huge files) and every
-other rule stay errors in both modes.
+uses for kinematics): a mesh that is *not found* (missing file, unknown package, relative path
+of URDF text), *refused* (another scheme, ``~``, an absolute path that may not be read) or
+*empty*, and the physical plausibility of inertials (rule 6 beyond ``mass >= 0`` and the six
+finite entries) are recorded in the result (``missing_meshes`` as ``line N: 'uri': refused|not
+found|empty: why``, ``inertia_defects``) instead of raised; the loader warns (one line per
+kind) and drops those visuals, dynamics refuses the inertials unless the model is loaded with
+a stated repair (:mod:`.repair`: ``inertia="collision"`` or ``"point"``). Escapes out of a
+root, non-regular or huge files and every other rule stay errors in both modes.
 
 Layout (one decision, in the order a document flows through it): :mod:`.limits` (the caps
 and the numeric attribute table), :mod:`.parse` (strict XML, element paths in messages,
 numbers), :mod:`.meshes` (materials, geometry, mesh/texture files), :mod:`.inertials`
 (masses, inertias, moving bodies), :mod:`.tree` (structure, joints, the verdict and its
-cache). Pure numpy and lxml: importing the gate never imports numba, sympy or Pinocchio.
+cache), :mod:`.repair` (the stated inertia repairs, after the verdict). Pure numpy and
+lxml: importing the gate never imports numba, sympy or Pinocchio.
 """
 
 from __future__ import annotations

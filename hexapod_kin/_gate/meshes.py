@@ -9,6 +9,7 @@ import os
 import stat
 from collections.abc import Sequence
 from pathlib import Path
+from urllib.parse import unquote, urlsplit
 
 from lxml import etree
 
@@ -22,12 +23,43 @@ class MeshMissing(UrdfError):
 
 
 class MeshOutside(UrdfError):
-    """A mesh named by another URI scheme (``file://``, ``http://``) or an absolute path.
+    """A refused file name (another URI scheme, ``~``, an absolute path that may not be read).
+
+    Absolute and ``file://`` paths are read only for a URDF loaded from its file and only for
+    mesh files (:data:`MESH_SUFFIXES`).
 
     It is never read (nor fetched). Strict checking refuses the document; lenient loading drops
-    the element's visual/collision with a warning, as for a missing file. An escape out of the
-    root through ``..`` or a symbolic link is hostile and always refused.
+    the element's visual/collision with a warning that says "refused". An escape out of the
+    root through ``..`` or a symbolic link is hostile and always an error.
     """
+
+
+class MeshEmpty(UrdfError):
+    """A mesh file of 0 bytes (mesh loaders fail on it): dropped like a missing one."""
+
+
+#: Mesh formats read from an absolute or ``file://`` path (what xacro's ``$(find pkg)``
+#: produces) when the URDF was loaded from its file. Nothing else is read from outside the
+#: URDF's folder and the package directories.
+MESH_SUFFIXES = (".stl", ".dae", ".obj", ".ply")
+
+
+def _absolute_mesh(uri: str, path: str, mesh_root: object) -> Path:
+    """An absolute mesh path: read only for a file-loaded URDF and a mesh file."""
+    if mesh_root is None:
+        raise MeshOutside(
+            f"{uri!r}: refused: absolute and file:// paths are read only when the URDF is "
+            "loaded from its file (this source is URDF text)"
+        )
+    real = os.path.realpath(path)
+    for name in (path, real):
+        if not name.lower().endswith(MESH_SUFFIXES):
+            raise MeshOutside(
+                f"{uri!r}: refused: only mesh files ({', '.join(MESH_SUFFIXES)}) are read "
+                "from an absolute or file:// path"
+                + ("" if name == path else f" (it links to {real!r})")
+            )
+    return Path(real)
 
 
 def _inside(path: str, root: str) -> bool:
@@ -67,23 +99,35 @@ def resolve_mesh(
             raise UrdfError(f"package URI {uri!r} must be package://<package>/<path>")
         if not package_dirs:
             raise MeshMissing(
-                f"{uri!r}: no package directories are known for this source (URDF text or "
-                "file without package_dirs); package:// meshes cannot be resolved"
+                f"{uri!r}: not found: no package directories are known for this source "
+                "(give package_dirs= or set ROS_PACKAGE_PATH)"
             )
         candidates = [
             (os.path.realpath(os.fspath(d)), os.path.join(os.fspath(d), rest)) for d in package_dirs
         ]
+    elif scheme and scheme.group(1).lower() == "file" and uri[5:7] == "//":
+        parts = urlsplit(uri)
+        path = unquote(parts.path)
+        if parts.netloc not in ("", "localhost") or not os.path.isabs(path):
+            raise MeshOutside(
+                f"{uri!r}: refused: a file:// URI must name a local absolute path "
+                "(file:///path/to/mesh.stl)"
+            )
+        candidates = [("", os.fspath(_absolute_mesh(uri, path, mesh_root)))]
     elif scheme:
         raise MeshOutside(
-            f"{uri!r}: URI scheme {scheme.group(1)!r} is refused; use package://<package>/"
-            "<path> or a path relative to the URDF file"
+            f"{uri!r}: refused: URI scheme {scheme.group(1)!r} is never read; use "
+            "package://<package>/<path> or a path relative to the URDF file"
         )
-    elif os.path.isabs(uri) or uri.startswith("~"):
-        raise MeshOutside(f"{uri!r}: absolute paths are refused; use a path relative to the URDF")
+    elif uri.startswith("~"):
+        raise MeshOutside(f"{uri!r}: refused: '~' is not expanded; give the path itself")
+    elif os.path.isabs(uri):
+        candidates = [("", os.fspath(_absolute_mesh(uri, uri, mesh_root)))]
     else:
         if mesh_root is None:
             raise MeshMissing(
-                f"{uri!r}: relative mesh path but no mesh root (URDF given as text); load the "
+                f"{uri!r}: not found: relative mesh path but no mesh root (URDF given as "
+                "text); load the "
                 "URDF from its file so relative paths resolve next to it"
             )
         root = os.fspath(mesh_root)
@@ -91,13 +135,13 @@ def resolve_mesh(
     last: UrdfError | None = None
     for root_real, joined in candidates:
         real = os.path.realpath(joined)
-        if not _inside(real, root_real):
+        if root_real and not _inside(real, root_real):
             # an escape out of the root through ".." or a link is hostile: always refused
             raise UrdfError(f"{uri!r} resolves to {real!r}, outside the allowed root {root_real!r}")
         try:
             st = os.stat(real)
         except OSError:
-            last = MeshMissing(f"{uri!r}: file {real!r} does not exist")
+            last = MeshMissing(f"{uri!r}: not found: file {real!r} does not exist")
             continue
         if not stat.S_ISREG(st.st_mode):
             raise UrdfError(f"{uri!r}: {real!r} is not a regular file")
@@ -105,6 +149,8 @@ def resolve_mesh(
             raise UrdfError(
                 f"{uri!r}: {real!r} has {st.st_size} bytes; the cap is {MAX_MESH_BYTES}"
             )
+        if st.st_size == 0:
+            raise MeshEmpty(f"{uri!r}: empty: {real!r} has 0 bytes")
         return Path(real)
     assert last is not None
     raise last

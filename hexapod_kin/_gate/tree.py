@@ -17,7 +17,13 @@ from lxml import etree
 from ..exceptions import UrdfError
 from .inertials import check_moving_body, link_inertial
 from .limits import JOINT_CHILDREN, JOINT_DOF, JOINT_TYPES, MAX_DOF, MAX_LINKS, URDF_VERSION
-from .meshes import MeshMissing, MeshOutside, check_materials_and_geometry, resolve_mesh
+from .meshes import (
+    MeshEmpty,
+    MeshMissing,
+    MeshOutside,
+    check_materials_and_geometry,
+    resolve_mesh,
+)
 from .parse import (
     check_numbers,
     element_name,
@@ -301,11 +307,11 @@ def _check(
                 continue
             try:
                 path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
-            except (MeshMissing, MeshOutside) as exc:
+            except (MeshMissing, MeshOutside, MeshEmpty) as exc:
                 if not lenient:
                     raise error_at(node, "filename", uri, str(exc)) from None
-                read = " (not read)" if isinstance(exc, MeshOutside) else ""
-                missing.append((uri or "", f"line {node.sourceline}: {exc}{read}"))
+                # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
+                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
                 continue
             except UrdfError as exc:
                 raise error_at(node, "filename", uri, str(exc)) from None

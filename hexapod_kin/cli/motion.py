@@ -272,7 +272,12 @@ def _add_step(sub: Any) -> None:
         help="skip the plain Euler + np.linalg.solve comparison",
     )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    p.add_argument("--plot", metavar="FILE.png", help="write the seeds' figures (PNG)")
+    p.add_argument(
+        "--plot",
+        metavar="FILE.png",
+        help="the seeds' figures; with --velocity/--twist: joint values and rates, σ_min and "
+        "the tip's drift from the exact motion",
+    )
     p.add_argument("--html", metavar="FILE.html", help="write an animated 3-D page (HTML)")
     p.set_defaults(func=_cmd_step)
 
@@ -358,6 +363,68 @@ def _cmd_step(args: argparse.Namespace) -> int:
     return 0
 
 
+def plot_constant(tr: Any, drift: Any, rot_drift: Any, path: str, title: str, model: Any) -> str:
+    """A constant velocity/twist run in one PNG (2×2): joint angles, joint rates, σ_min, drift.
+
+    Args:
+        tr: The :class:`~hexapod_kin.motion.Trajectory`.
+        drift: (N,) distance [m] of the tip from the exact constant-twist motion.
+        rot_drift: (N,) rotation [rad] from the exact motion (6-D runs), or None.
+        path: Destination (``.png``, ``.svg``, ``.pdf``, ``.jpg``; written atomically).
+        title: Figure title.
+        model: The model (joint names, units).
+
+    Returns:
+        The path written.
+
+    """
+    import numpy as np
+
+    from ..plots import decimate, pyplot, save_figure
+
+    plt = pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(12, 8), sharex=True)
+    names = list(model.joint_names)
+    for k in range(tr.q.shape[1]):
+        axes[0, 0].plot(*decimate(tr.t, tr.q[:, k]), label=names[k] if k < len(names) else k)
+        axes[0, 1].plot(*decimate(tr.t, tr.qdot[:, k]))
+    axes[0, 0].set_title("joint values")
+    axes[0, 0].set_ylabel("q [rad] (prismatic: m)")
+    if tr.q.shape[1] <= 12:
+        axes[0, 0].legend(fontsize="small", ncol=2)
+    axes[0, 1].set_title("joint rates (the control law)")
+    axes[0, 1].set_ylabel("q̇ [rad/s] (prismatic: m/s)")
+    ax = axes[1, 0]
+    ax.plot(*decimate(tr.t, tr.sigma_min), color="tab:red", label="σ_min")
+    ax.set_yscale("log")
+    ax.set_title("smallest singular value of the task Jacobian")
+    ax.set_ylabel("σ_min (m/rad or 1)")
+    ca = tr.closest_approach
+    ax.axvline(ca.t, color="0.5", ls=":", label=f"closest approach {ca.sigma_min:.3g}")
+    ax.legend(fontsize="small")
+    ax = axes[1, 1]
+    floor = 1e-18  # a log axis needs positive values: exact samples drawn at the floor
+    ax.plot(*decimate(tr.t, np.maximum(drift, floor)), label="position [m]")
+    if rot_drift is not None:
+        ax.plot(*decimate(tr.t, np.maximum(rot_drift, floor)), label="orientation [rad]")
+    ax.set_yscale("log")
+    ax.set_title("tip drift from the exact constant-twist motion")
+    ax.set_ylabel("drift")
+    ax.legend(fontsize="small")
+    if tr.limited.any():
+        first = float(tr.t[np.argmax(tr.limited)])
+        for a in axes.ravel():
+            a.axvline(first, color="tab:orange", ls="--", lw=0.8)
+        ax.text(first, ax.get_ylim()[1], " limits hit", color="tab:orange", va="top", fontsize=8)
+    for a in axes.ravel():
+        a.grid(True, alpha=0.3)
+    for a in axes[1]:
+        a.set_xlabel("time t [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return str(save_figure(fig, path, crop=False))
+
+
 def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     """A constant linear velocity or twist: run it and compare with the exact motion."""
     import numpy as np
@@ -386,13 +453,21 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
     exact = motion.constant_twist_pose(model.fk(tr.q[0]), twist, tr.t, frame)
     reached = tr.poses  # Pinocchio's FK of the joint trajectory, sample by sample
+    from .._pose import rotation_angle
+
     drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
     rot = 0.0
     if vel.size == 6:  # ‖log(E Rᵀ)‖ of every sample, at once
-        from .._pose import rotation_angle
-
         rot = float(np.max(rotation_angle(exact[:, :3, :3], reached[:, :3, :3])))
+    drifts = np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)
+    rot_drifts = None
+    if vel.size == 6:
+        rot_drifts = rotation_angle(exact[:, :3, :3], reached[:, :3, :3])
     written = []
+    if args.plot:
+        written.append(
+            plot_constant(tr, drifts, rot_drifts, args.plot, f"{model.name}: {label}", model)
+        )
     if args.html:
         written.append(_write_html(model, tr, args.html, f"{model.name}: {label}"))
     ca = tr.closest_approach

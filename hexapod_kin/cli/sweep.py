@@ -42,7 +42,11 @@ def register(sub: Any) -> None:
     )
     for name, text in _OPTIONS:
         p.add_argument("--" + name.replace("_", "-"), dest=name, metavar="SPEC", help=text)
-    p.add_argument("--height", required=True, metavar="SPEC", help="body height [m]")
+    p.add_argument(
+        "--height",
+        metavar="SPEC",
+        help="body height [m] (default 0.10: the seed leg's standing height, robots.hexapod)",
+    )
     p.add_argument("--total", type=float, help="fix l1+l2+l3 [m]; l3 = total - l1 - l2")
     p.add_argument("--deg", action="store_true", help="angle options are in degrees")
     p.add_argument("--method", choices=("grid", "random", "lhs"), default="grid")
@@ -52,7 +56,12 @@ def register(sub: Any) -> None:
     p.add_argument("--chunk-size", type=int, help="designs per chunk (default ~1/20 of all)")
     p.add_argument("--workers", type=int, help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDR", help="Dask scheduler, e.g. tcp://host:8786")
-    p.add_argument("--out", default="sweep.csv", help="table (.csv; .parquet/.json/.parts)")
+    p.add_argument(
+        "--out",
+        default="sweep.csv",
+        help="the table, its format by extension: .csv, .parquet or .json (summary + columns); "
+        "resumable chunks live in a hidden .NAME.sweep-parts/ beside it until it is written",
+    )
     p.add_argument("--plot", metavar="FILE.png", help="score maps and the Pareto front")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")

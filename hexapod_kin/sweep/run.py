@@ -6,12 +6,13 @@ seed), so the table is identical whatever executes it: threads on this machine (
 one per core; numpy releases the GIL), or Dask distributed workers (``client=`` or
 ``scheduler=``; imported lazily, ``pip install 'hexapod-kin[sweep]'``).
 
-With ``out="results.csv"`` every finished chunk is written atomically to
-``results.parts/chunk_NNNNN.npz`` next to a ``manifest.json`` (the sweep's options and a key
-hashing them with the designs). Re-running the same sweep after an interruption (Ctrl-C,
-SIGKILL, a lost worker) loads the chunks present and scores only the missing ones; the merged
-table is the same. The merge writes ``results.csv``, ``results.parquet`` (when pyarrow is
-installed) and the JSON summary ``results.json``.
+``out`` names the one file written, its format by its extension: ``.csv``, ``.parquet``
+(pyarrow) or ``.json`` (the summary and the table's columns). While the sweep runs, every
+finished chunk is written atomically to a hidden sidecar folder next to it,
+``.results.csv.sweep-parts/chunk_NNNNN.npz`` with a ``manifest.json`` (the sweep's options
+and a key hashing them with the designs). Re-running the same sweep after an interruption
+(Ctrl-C, SIGKILL, a lost worker) loads the chunks present and scores only the missing ones;
+the merged table is the same. The sidecar is removed once the table is written.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from .designs import PARAMETERS, DesignSpace
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .scores import SCORES, score_designs
 
-__all__ = ["SweepResult", "read_results", "sweep", "table_paths"]
+__all__ = ["TABLE_FORMATS", "SweepResult", "read_results", "sweep", "table_paths"]
 
 _FORMAT = 1
 _UNCERTAIN = {"volume": "volume_se", "volume_mc": "volume_mc_se"}
@@ -52,7 +53,8 @@ class SweepResult:
             (:data:`~hexapod_kin.sweep.scores.SCORES`, units there) and ``pareto`` (1 on the
             front of stride, volume, σ_min).
         summary: JSON-ready summary (counts, best design with uncertainties, front, options).
-        files: Written files by kind (``csv``, ``parquet``, ``json``, ``parts``), [] without out.
+        files: The written table by its kind (``csv``, ``parquet`` or ``json``); empty without
+            ``out``.
         scored: Number of designs scored by this call (the others were loaded from chunks).
         elapsed: Wall time of this call in [s].
 
@@ -83,16 +85,31 @@ class SweepResult:
         }
 
 
+#: Table formats of ``out``, by extension.
+TABLE_FORMATS = {".csv": "csv", ".parquet": "parquet", ".json": "json"}
+
+
 def table_paths(out: str | Path) -> dict[str, Path]:
-    """Paths of a sweep's outputs for ``out`` (``x.csv`` → x.csv, x.parquet, x.json, x.parts)."""
+    """The table and the resumable chunks' sidecar of ``out``.
+
+    ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}`` (likewise ``.parquet``,
+    ``.json``); the sidecar is hidden, next to the table, and removed once the table is written.
+
+    Raises:
+        ParameterError: ``out`` has another extension.
+
+    """
     p = Path(out)
-    base = p.with_suffix("") if p.suffix in (".csv", ".parquet", ".json") else p
-    return {
-        "csv": base.with_name(base.name + ".csv"),
-        "parquet": base.with_name(base.name + ".parquet"),
-        "json": base.with_name(base.name + ".json"),
-        "parts": base.with_name(base.name + ".parts"),
-    }
+    kind = TABLE_FORMATS.get(p.suffix.lower())
+    if kind is None:
+        raise ParameterError(
+            f"out={str(out)!r}: the table's format comes from its extension; use "
+            f"{', '.join(TABLE_FORMATS)}",
+            parameter="out",
+            value=str(out),
+            allowed=list(TABLE_FORMATS),
+        )
+    return {kind: p, "parts": p.with_name(f".{p.name}.sweep-parts")}
 
 
 def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
@@ -180,7 +197,9 @@ def sweep(
         line_points: Grid steps per side of the stride search.
         stride_points: Points along the stride for the σ/singularity/limit minima.
         stride_use: Central fraction of the stride for those minima.
-        out: Table path (``x.csv``); chunks go to ``x.parts/``. None: nothing written.
+        out: The table to write (``x.csv``, ``x.parquet`` or ``x.json``); chunks go to the
+            hidden ``.x.csv.sweep-parts/`` meanwhile (removed at the end). None: nothing
+            written.
         chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
         workers: Local threads scoring chunks (default: one per core). Ignored on Dask.
         client: A ``distributed.Client`` to run the chunks on.
@@ -231,6 +250,14 @@ def sweep(
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     results: dict[int, np.ndarray] = {}
     paths = table_paths(out) if out is not None else None
+    if paths is not None and "parquet" in paths:
+        try:
+            import pyarrow.parquet  # noqa: F401
+        except ImportError:
+            raise OptionalDependencyError(
+                f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
+                "'hexapod-kin[sweep]'); or write .csv or .json"
+            ) from None
     if paths is not None:
         parts = paths["parts"]
         if not parts.parent.is_dir():
@@ -249,8 +276,8 @@ def sweep(
             if old.get("key") != key:
                 raise ConfigurationError(
                     f"out={str(out)!r}: {str(parts)!r} holds chunks of a different sweep "
-                    f"(key {str(old.get('key'))[:12]} != {key[:12]}); use another --out or "
-                    "remove that directory",
+                    f"(key {str(old.get('key'))[:12]} != {key[:12]}), interrupted; re-run that "
+                    "sweep to finish it, use another --out, or remove that folder",
                     parameter="out",
                     value=str(out),
                 )
@@ -397,28 +424,33 @@ def _csv_text(table: Mapping[str, np.ndarray]) -> str:
 def _write_tables(
     table: Mapping[str, np.ndarray], summary: dict[str, Any], paths: dict[str, Path]
 ) -> dict[str, str]:
-    files = {"csv": str(atomic_write(paths["csv"], _csv_text(table))), "parts": str(paths["parts"])}
-    try:
+    """Write the one table asked for, then remove the chunks' sidecar."""
+    import shutil
+
+    kind, path = next((k, v) for k, v in paths.items() if k != "parts")
+    if kind == "csv":
+        atomic_write(path, _csv_text(table))
+    elif kind == "parquet":
         import pyarrow as pa
         import pyarrow.parquet as pq
-    except ImportError:
-        pass
-    else:
+
         buf = io.BytesIO()
         pq.write_table(pa.table({k: np.asarray(v) for k, v in table.items()}), buf)
-        files["parquet"] = str(atomic_write(paths["parquet"], buf.getvalue()))
-    files["json"] = str(paths["json"])
-    atomic_write(
-        paths["json"], json.dumps({**summary, "files": files}, indent=1, allow_nan=False) + "\n"
-    )
-    return files
+        atomic_write(path, buf.getvalue())
+    else:
+        columns = {k: np.asarray(v).tolist() for k, v in table.items()}
+        atomic_write(
+            path, json.dumps({**summary, "table": columns}, indent=1, allow_nan=False) + "\n"
+        )
+    shutil.rmtree(paths["parts"], ignore_errors=True)
+    return {kind: str(path)}
 
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
-    """Read a sweep table written by :func:`sweep` (CSV or Parquet) as column → array.
+    """Read a sweep table written by :func:`sweep` (CSV, Parquet or JSON) as column → array.
 
     Args:
-        path: The ``.csv`` or ``.parquet`` file.
+        path: The ``.csv``, ``.parquet`` or ``.json`` file.
 
     Returns:
         Column name → (N,) float array.
@@ -435,12 +467,15 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
 
         t = pq.read_table(p)
         return {c: np.asarray(t.column(c).to_numpy(), dtype=float) for c in t.column_names}
+    if p.suffix == ".json":
+        cols = json.loads(p.read_text())["table"]
+        return {c: np.asarray(v, dtype=float) for c, v in cols.items()}
     if p.suffix != ".csv":
         raise ParameterError(
-            f"path={str(p)!r}: expected a .csv or .parquet file",
+            f"path={str(p)!r}: expected a .csv, .parquet or .json file",
             parameter="path",
             value=str(p),
-            allowed=[".csv", ".parquet"],
+            allowed=list(TABLE_FORMATS),
         )
     lines = p.read_text().splitlines()
     names = lines[0].split(",")

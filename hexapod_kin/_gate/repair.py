@@ -1,0 +1,254 @@
+"""The stated inertia repairs: ``load(..., inertia="collision" | "point")``.
+
+Part of :mod:`hexapod_kin._gate`. Real robot files often carry inertias no body can have
+(the PhantomX's break ``I1 + I2 >= I3`` on every link); kinematics ignores them and dynamics
+refuses them. A repair rewrites every ``<inertial>`` of the document and keeps what the file
+states with most confidence, each link's **mass** and **centre of mass** (the inertial origin):
+
+* ``"collision"``: the link's collision shapes, filled uniformly (the URDF mass shared in
+  proportion to their volumes): a box ``m (b² + c²) / 12`` about each axis, a cylinder
+  (axis z) ``m (3 r² + l²) / 12`` and ``m r² / 2``, a sphere ``2 m r² / 5``; a mesh by its
+  axis-aligned bounding box (scaled) taken as a box. Each shape is moved to the link's centre
+  of mass by the parallel-axis theorem and rotated into the inertial frame. A link without a
+  usable collision shape (none, or a mesh that cannot be found or read) gets the point repair.
+* ``"point"``: a point mass at the centre of mass with the tiny isotropic inertia of a solid
+  sphere of radius :data:`POINT_RADIUS` (``2 m r² / 5``).
+
+Both produce physical tensors (sums of ``tr(S)·E − S`` with ``S >= 0``), so the repaired
+model satisfies the triangle inequality on every link and on every merged moving body.
+Links of mass 0 get a zero inertia. A massless moving body stays a defect (mass is not
+invented). Pure numpy and lxml.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+from ..exceptions import ParameterError, UrdfError
+from .meshes import resolve_mesh
+from .parse import numbers_of, origin_of, parse_urdf
+
+#: The ``inertia=`` choices: the file's own inertias, or one of the two repairs.
+INERTIA_MODES = ("urdf", "collision", "point")
+#: Radius [m] of the solid sphere whose inertia ``"point"`` gives each link (1 cm).
+POINT_RADIUS = 0.01
+#: Largest mesh read for its bounding box by ``"collision"`` (bytes).
+MAX_BBOX_MESH_BYTES = 64 * 1024 * 1024
+
+
+@dataclass
+class InertiaRepair:
+    """What a repair did: the new document and which links were repaired how."""
+
+    text: str
+    mode: str
+    from_collision: list[str] = field(default_factory=list)
+    as_point: list[str] = field(default_factory=list)
+    #: ``(link, why)`` of links that ``"collision"`` could not use (they got the point repair).
+    fallbacks: list[tuple[str, str]] = field(default_factory=list)
+
+    def summary(self) -> str:
+        """One line: counts and the first few link names of each kind."""
+        parts = []
+        if self.from_collision:
+            parts.append(
+                f"{len(self.from_collision)} link(s) from their collision geometry "
+                f"({_names(self.from_collision)})"
+            )
+        if self.as_point:
+            what = "point masses" if self.mode == "point" else "point masses (no usable collision)"
+            parts.append(f"{len(self.as_point)} link(s) as {what} ({_names(self.as_point)})")
+        body = "; ".join(parts) if parts else "no link has mass"
+        return f"inertia={self.mode!r}: masses and centres of mass kept; {body}"
+
+
+def _names(names: Sequence[str], limit: int = 3) -> str:
+    shown = ", ".join(names[:limit])
+    return shown + (", …" if len(names) > limit else "")
+
+
+def check_mode(mode: object) -> str:
+    """Return ``mode`` if it is one of :data:`INERTIA_MODES`, else raise ParameterError."""
+    if not isinstance(mode, str) or mode not in INERTIA_MODES:
+        raise ParameterError(
+            f"inertia={mode!r} is not allowed; use one of {', '.join(map(repr, INERTIA_MODES))}",
+            parameter="inertia",
+            value=mode,
+            allowed=list(INERTIA_MODES),
+        )
+    return mode
+
+
+def _stl_vertices(data: bytes) -> np.ndarray:
+    """Vertices (N, 3) of a binary or ASCII STL file."""
+    if len(data) >= 84:
+        (count,) = struct.unpack_from("<I", data, 80)
+        if 84 + 50 * count == len(data) and count > 0:
+            rec = np.frombuffer(data, dtype=np.uint8, count=50 * count, offset=84).reshape(
+                count, 50
+            )
+            tri = rec[:, 12:48].copy().view("<f4").reshape(count * 3, 3)
+            return tri.astype(np.float64)
+    text = data.decode("ascii", errors="replace")
+    rows = [ln.split()[1:4] for ln in text.splitlines() if ln.strip().startswith("vertex")]
+    return np.array(rows, dtype=np.float64).reshape(-1, 3)
+
+
+def _obj_vertices(data: bytes) -> np.ndarray:
+    text = data.decode("utf-8", errors="replace")
+    rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
+    return np.array(rows, dtype=np.float64).reshape(-1, 3)
+
+
+def mesh_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned bounds ``(lo, hi)`` [mesh units] of a mesh file.
+
+    STL and OBJ are read here; other formats through ``trimesh`` when it is installed.
+
+    Raises:
+        UrdfError: Unreadable, empty or too large mesh, or a format without a reader.
+
+    """
+    size = path.stat().st_size
+    if size > MAX_BBOX_MESH_BYTES:
+        raise UrdfError(f"{path.name}: {size} bytes, over {MAX_BBOX_MESH_BYTES}")
+    suffix = path.suffix.lower()
+    data = path.read_bytes()
+    try:
+        if suffix == ".stl":
+            pts = _stl_vertices(data)
+        elif suffix == ".obj":
+            pts = _obj_vertices(data)
+        else:
+            try:
+                import trimesh  # optional
+            except ImportError:
+                raise UrdfError(f"{path.name}: no reader for {suffix} (install trimesh)") from None
+            mesh = trimesh.load(str(path), force="mesh")
+            pts = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64).reshape(-1, 3)
+    except (ValueError, struct.error) as exc:
+        raise UrdfError(f"{path.name}: unreadable mesh ({exc})") from None
+    if pts.size == 0 or not np.all(np.isfinite(pts)):
+        raise UrdfError(f"{path.name}: no (finite) vertices")
+    return pts.min(axis=0), pts.max(axis=0)
+
+
+def _box(m: float, size: Sequence[float]) -> np.ndarray:
+    a, b, c = size
+    return m / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+
+def _shape(
+    el: etree._Element, package_dirs: Sequence[str], mesh_root: str | None
+) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """``(volume, unit-mass inertia about the centroid, centroid, rotation)`` in link axes."""
+    rot, xyz = origin_of(el)
+    geometry = el.find("geometry")
+    shape = next(c for c in geometry if isinstance(c.tag, str))
+    centre = np.zeros(3)
+    if shape.tag == "box":
+        size = numbers_of(shape, "size", 3, 0.0)
+        vol, inertia = float(np.prod(size)), _box(1.0, size)
+    elif shape.tag == "cylinder":
+        r, h = float(shape.get("radius")), float(shape.get("length"))
+        vol = np.pi * r * r * h
+        side = (3 * r * r + h * h) / 12.0
+        inertia = np.diag([side, side, r * r / 2.0])
+    elif shape.tag == "sphere":
+        r = float(shape.get("radius"))
+        vol, inertia = 4.0 / 3.0 * np.pi * r**3, np.eye(3) * (0.4 * r * r)
+    else:  # mesh: its scaled bounding box
+        path = resolve_mesh(shape.get("filename") or "", package_dirs=package_dirs,
+                            mesh_root=mesh_root)  # fmt: skip
+        scale = np.array(numbers_of(shape, "scale", 3, None) or (1.0, 1.0, 1.0))
+        lo, hi = mesh_bounds(path)
+        lo, hi = np.minimum(lo * scale, hi * scale), np.maximum(lo * scale, hi * scale)
+        size = hi - lo
+        vol, inertia, centre = float(np.prod(size)), _box(1.0, size), (lo + hi) / 2.0
+    return vol, inertia, xyz + rot @ centre, rot
+
+
+def _collision_inertia(
+    link: etree._Element,
+    mass: float,
+    com: np.ndarray,
+    package_dirs: Sequence[str],
+    mesh_root: str | None,
+) -> np.ndarray:
+    """Inertia [kg m^2] about ``com`` in link axes from the link's collision shapes."""
+    shapes = [_shape(c, package_dirs, mesh_root) for c in link.findall("collision")]
+    if not shapes:
+        raise UrdfError("no <collision>")
+    total = sum(v for v, *_ in shapes)
+    if not total > 0.0:
+        raise UrdfError("collision shapes of zero volume")
+    out = np.zeros((3, 3))
+    for vol, unit, centre, rot in shapes:
+        m = mass * vol / total
+        d = centre - com
+        out += m * (rot @ unit @ rot.T) + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+    return out
+
+
+def _write(inertia_el: etree._Element, mat: np.ndarray) -> None:
+    for key, (i, j) in {
+        "ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2),
+    }.items():  # fmt: skip
+        inertia_el.set(key, repr(float(mat[i, j])))
+
+
+def repair_inertials(
+    text: str | bytes,
+    mode: str,
+    *,
+    package_dirs: Sequence[str | os.PathLike[str]] = (),
+    mesh_root: str | os.PathLike[str] | None = None,
+) -> InertiaRepair:
+    """Rewrite every ``<inertial>`` of a URDF by ``mode`` (see the module docstring).
+
+    Args:
+        text: URDF text (it must pass the gate; call this after :func:`check_urdf`).
+        mode: ``"collision"`` or ``"point"``.
+        package_dirs: Where ``package://`` collision meshes resolve.
+        mesh_root: The URDF's directory (relative mesh paths).
+
+    Returns:
+        An :class:`InertiaRepair` (its ``text`` keeps every line where it was).
+
+    """
+    check_mode(mode)
+    root = parse_urdf(text)
+    dirs = [os.fspath(d) for d in package_dirs]
+    mroot = None if mesh_root is None else os.fspath(mesh_root)
+    rep = InertiaRepair(text="", mode=mode)
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass_el, inertia_el = inertial.find("mass"), inertial.find("inertia")
+        mass = float(mass_el.get("value"))
+        name = str(link.get("name"))
+        if mass <= 0.0:
+            _write(inertia_el, np.zeros((3, 3)))
+            continue
+        rot_i, com = origin_of(inertial)
+        mat_link = None
+        if mode == "collision":
+            try:
+                mat_link = _collision_inertia(link, mass, com, dirs, mroot)
+                rep.from_collision.append(name)
+            except (UrdfError, OSError) as exc:
+                rep.fallbacks.append((name, str(exc)))
+        if mat_link is None:
+            rep.as_point.append(name)
+            mat_link = np.eye(3) * (0.4 * mass * POINT_RADIUS**2)
+        _write(inertia_el, rot_i.T @ mat_link @ rot_i)  # into the inertial frame's axes
+    rep.text = etree.tostring(root, encoding="unicode")
+    return rep
