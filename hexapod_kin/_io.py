@@ -7,7 +7,7 @@ import stat
 import tempfile
 from pathlib import Path
 
-from .exceptions import ParameterError, SourceError
+from .exceptions import HexapodKinError, ParameterError, SourceError
 
 __all__ = ["atomic_write", "cache_root", "decode_utf8", "read_regular"]
 
@@ -109,7 +109,12 @@ def cache_root(kind: str) -> Path:
         return Path.home() / ".cache" / "hexapod_kin" / kind
 
 
-def read_regular(path: str | os.PathLike[str], max_bytes: int, what: str = "source") -> bytes:
+def read_regular(
+    path: str | os.PathLike[str],
+    max_bytes: int,
+    what: str = "source",
+    too_big: type[HexapodKinError] | None = None,
+) -> bytes:
     """The bytes of a regular file, refused beyond ``max_bytes`` while reading.
 
     Only regular files are read: a device (``/dev/zero``), a named pipe, a socket or a folder
@@ -119,7 +124,8 @@ def read_regular(path: str | os.PathLike[str], max_bytes: int, what: str = "sour
 
     Raises:
         SourceError: Not a regular file, unreadable, or larger than ``max_bytes`` (one line
-            naming the file and the cap; ``parameter`` is ``what``).
+            naming the file and the cap; ``parameter`` is ``what``); ``too_big``, when given,
+            is the class raised for the size cap (e.g. :class:`~.exceptions.UrdfError`).
 
     """
     name = str(path)
@@ -157,8 +163,9 @@ def read_regular(path: str | os.PathLike[str], max_bytes: int, what: str = "sour
             chunks.append(block)
             total += len(block)
             if total > max_bytes:
-                raise SourceError(
-                    f"{what}={name!r}: more than {max_bytes} bytes; the cap is {max_bytes} bytes",
+                raise (too_big or SourceError)(
+                    f"{what}={name!r}: more than {max_bytes} bytes (exceeds the cap of "
+                    f"{max_bytes} bytes)",
                     parameter=what,
                     value=name,
                     allowed=f"at most {max_bytes} bytes",

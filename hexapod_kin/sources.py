@@ -222,7 +222,7 @@ def _read_text(path: Path) -> str:
     from ._gate import MAX_URDF_BYTES
     from ._io import read_regular
 
-    data = read_regular(path, MAX_URDF_BYTES)
+    data = read_regular(path, MAX_URDF_BYTES, too_big=UrdfError)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

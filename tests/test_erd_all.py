@@ -30,8 +30,8 @@ REFUSED = {
 #: them as they are: it ignores a mimic naming a missing joint).
 MENDED = {
     "alex_psyonic_hands": "<mimic> dropped",
-    # absolute file:// mesh URIs: never read, visuals dropped, kinematics intact
-    "romeo_laas_small": "not read",
+    # absolute file:// URIs of .mesh (Ogre) files: refused (not a mesh format read), dropped
+    "romeo_laas_small": "file(s) refused",
 }
 IMPLAUSIBLE_TOO = {"romeo_laas_small"}
 IMPLAUSIBLE = {
@@ -73,10 +73,11 @@ def test_erd_file_loads_and_matches_raw_pinocchio(path: Path) -> None:
         assert any(MENDED[path.stem] in str(w.message) for w in ours)
         ours = [w for w in ours if MENDED[path.stem] not in str(w.message)]
     if path.stem in IMPLAUSIBLE | IMPLAUSIBLE_TOO:
-        assert len(ours) == 1 and "implausible inertials" in str(ours[0].message)
-        assert model.inertia_defects and all(
-            f"link {link!r}" in str(ours[0].message) for link, _ in model.inertia_defects
-        )
+        text = str(ours[0].message)  # one short line per kind: count and first few links
+        assert len(ours) == 1 and "dynamics refuses them" in text
+        counted = sum(int(n) for n in re.findall(r"inertia: (\d+) link\(s\)", text))
+        assert model.inertia_defects and counted >= len({lk for lk, _ in model.inertia_defects})
+        assert model.inertia_defects[0][0] in text
     else:
         assert ours == [], [str(w.message)[:300] for w in ours]
     raw = pin.buildModelFromUrdf(str(path))

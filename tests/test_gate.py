@@ -765,3 +765,35 @@ def test_inertia_option_refuses_unknown_modes() -> None:
     with pytest.raises(ParameterError, match="'urdf', 'collision', 'point'") as info:
         load("hexabot_leg", inertia="mesh")
     assert info.value.parameter == "inertia"
+
+
+def test_cli_torques_with_repaired_inertias(capsys) -> None:
+    """``torques --inertia point|collision``: static torques need only masses and COMs."""
+    from hexapod_kin.cli import main
+
+    args = ["torques", str(PHANTOMX), "--tip", "tibia_lf", "--q", "0.2", "0.5", "-0.7", "--json"]
+    assert main(args) == 2  # the file's inertias: refused, one line naming the repair
+    assert "inertia='collision' or 'point'" in capsys.readouterr().err
+    got = {}
+    for mode in ("point", "collision"):
+        assert main([*args, "--inertia", mode]) == 0
+        got[mode] = json.loads(capsys.readouterr().out)
+    raw = model.pin.buildModelFromUrdf(str(PHANTOMX))  # gravity: masses and COMs alone
+    leg = [raw.joints[raw.getJointId(n)].idx_q for n in ("j_c1_lf", "j_thigh_lf", "j_tibia_lf")]
+    q = np.zeros(18)
+    q[leg] = [0.2, 0.5, -0.7]  # the other legs locked at 0, as --tip does
+    g = model.pin.computeGeneralizedGravity(raw, raw.createData(), q)
+    for out in got.values():
+        np.testing.assert_allclose(out["gravity"], g[leg], atol=1e-12)
+
+
+def test_cli_prints_the_loader_warnings_as_plain_lines() -> None:
+    """``hexapod-kin: warning: ...``: one line per kind, no file:line, no source line."""
+    env = {**os.environ, "PYTHONPATH": str(HERE.parent)}
+    cmd = [sys.executable, "-m", "hexapod_kin", "fk", str(PHANTOMX), "--tip", "tibia_lf"]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0, done.stderr
+    lines = done.stderr.splitlines()
+    assert [ln.split(": ")[3] for ln in lines] == ["meshes", "inertia"], lines
+    assert all(ln.startswith("hexapod-kin: warning: 'phantomx.urdf': ") for ln in lines)
+    assert len(done.stderr) < 700

@@ -15,6 +15,7 @@ import importlib
 import os
 import signal
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -75,6 +76,24 @@ def _one_line(text: object) -> str:
     return " ".join(str(text).split())
 
 
+def _one_line_warning(original: Any) -> Any:
+    """``warnings.showwarning`` printing the package's own warnings as plain lines.
+
+    ``hexapod-kin: warning: ...`` (one per line of the message, no file:line and no source
+    line); other warnings are shown as Python shows them.
+    """
+    from ..exceptions import UrdfWarning
+
+    def show(message: Any, category: Any, filename: Any, lineno: Any, *rest: Any) -> None:
+        if issubclass(category, UrdfWarning):
+            for text in str(message).splitlines():
+                print(f"hexapod-kin: warning: {text}", file=sys.stderr)
+        else:
+            original(message, category, filename, lineno, *rest)
+
+    return show
+
+
 def run() -> None:
     """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit."""
     sys.exit(main())
@@ -131,7 +150,9 @@ def _main(argv: Sequence[str] | None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
         _refuse_non_finite(args)
-        return int(args.func(args))
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning(warnings.showwarning)
+            return int(args.func(args))
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return int(exc.code) if isinstance(exc.code, int) else 2
     except HexapodKinError as exc:

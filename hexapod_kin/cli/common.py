@@ -163,6 +163,9 @@ def load_source(args: argparse.Namespace) -> Any:
     tool = getattr(args, "tool", None)
     if tool is not None:
         kwargs["tool"] = tool
+    inertia = getattr(args, "inertia", None)
+    if inertia is not None:
+        kwargs["inertia"] = inertia
     return load(
         args.source,
         base=getattr(args, "base", None),
@@ -263,6 +266,17 @@ def source_args(p: argparse.ArgumentParser, frames: bool = True) -> None:
     if frames:
         p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")
         p.add_argument("--tip", help="tip frame of the sub-chain (default: the last link)")
+
+
+def inertia_args(p: argparse.ArgumentParser) -> None:
+    """``--inertia urdf|collision|point``: the inertias dynamics uses (masses and COMs kept)."""
+    p.add_argument(
+        "--inertia",
+        choices=("urdf", "collision", "point"),
+        default="urdf",
+        help="inertias: the URDF's; recomputed from each link's collision shapes; or point "
+        "masses (1 cm spheres). Both repairs keep every mass and centre of mass",
+    )
 
 
 def q_args(p: argparse.ArgumentParser) -> None:

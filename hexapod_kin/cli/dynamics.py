@@ -13,6 +13,7 @@ from ..exceptions import ParameterError
 from .common import (
     PLOT_SUFFIXES,
     emit_json,
+    inertia_args,
     load_source,
     output_path,
     q_args,
@@ -189,6 +190,7 @@ def _add_torques(sub: Any) -> None:
     )
     source_args(p)
     q_args(p)
+    inertia_args(p)
     p.add_argument(
         "--force",
         nargs=3,
