@@ -30,6 +30,7 @@ MODULES: tuple[str, ...] = (
     "export",
     "sweep",
     "gait",
+    "simulate",
     "report",
     "precompile",
 )
