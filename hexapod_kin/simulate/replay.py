@@ -376,7 +376,7 @@ def _summary(
     lp, ls = float(np.linalg.norm(dp)), float(np.linalg.norm(ds))
     direction = 0.0
     if lp > 1e-6 and ls > 0:
-        direction = math.atan2(abs(float(np.cross(dp, ds))), float(dp @ ds))
+        direction = math.atan2(abs(float(dp[0] * ds[1] - dp[1] * ds[0])), float(dp @ ds))
     for a in (t, base, planned, qs, forces):
         a.setflags(write=False)
     contacts = tuple(sorted(((a, b, w) for (a, b), w in seen.items()), key=lambda x: x[2]))

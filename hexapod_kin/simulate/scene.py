@@ -300,7 +300,9 @@ def scene_mjcf(
     etree.SubElement(default, "geom", friction=f"{num(mu)} 0 0", solref=f"{num(tc)} 1")
     etree.SubElement(default, "joint", armature=num(arm))
     root.find("compiler").addnext(default)
-    option = etree.Element("option", timestep=num(dt), integrator="implicitfast")
+    option = etree.Element(
+        "option", timestep=num(dt), integrator="implicitfast", cone="elliptic", impratio="10"
+    )
     root.find("compiler").addnext(option)
     grounds = [dict(name="ground", type="plane", size="0 0 0.05", pos="0 0 0")]
     if terrain == "slope":

@@ -1,0 +1,263 @@
+"""The plan replayed open-loop in MuJoCo (hexapod_kin.simulate) against the plan itself.
+
+Independent references: the plan (gait.walk: body poses, turn, margin), the terrain height
+functions (gait.terrain) against MuJoCo ray casts on the scene, the whole-body kinematics
+(numpy) against MuJoCo's foot sphere centres, dynamics.stand() against MuJoCo's contact
+forces, and finite differences of a foot's material contact point against the slip speed.
+
+Each replay is 10 s at 1 kHz. One test per walk (parametrized, no shared fixture), so
+``pytest -n`` spreads the walks over the workers and each runs once.
+
+* Small feet (1 mm spheres): the plan treats feet as points, so with feet this small the
+  physics should do what the plan says (a 1 mm sphere rolling adds ~0.5 % to the distance):
+  distance within 1 %, heading <= 0.5 deg, roll and pitch <= 1 deg, no non-foot contact,
+  slip <= 5 mm per contact.
+* The robot's own 12 mm feet: the same limits. They hold once the plan rolls its round feet
+  (helper h2's rolling contact in gait.walk); until then the 12 mm spheres roll and the robot
+  goes 6 % too far, and these tests are expected failures (xfail, not run: detected by the
+  plan's stance foot centres not moving).
+* A stumble: a non-foot contact, roll or pitch over 1 deg, or a stance foot sliding more
+  than 5 mm in one contact (``SimRun.stumbled``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from hexapod_kin.cli import main  # noqa: E402
+from hexapod_kin.exceptions import OptionalDependencyError, ParameterError  # noqa: E402
+from hexapod_kin.gait import PhaseTable, terrain, walk, whole_body  # noqa: E402
+from hexapod_kin.simulate import (  # noqa: E402
+    LIMITS,
+    scene_mjcf,
+    simulate,
+    stand_forces,
+)
+
+SMALL = 0.001  # [m] foot radius of the small-feet replays
+
+#: name -> walk keywords (all 10 s, the built-in hexapod)
+WALKS = {
+    "tripod": {"pattern": "tripod"},
+    "wave": {"pattern": "wave"},
+    "ripple": {"pattern": "ripple"},
+    "turn": {"pattern": "tripod", "velocity": (0.0, 0.0, 0.2)},
+    "slope": {"pattern": "tripod", "terrain": "slope"},
+    "step": {"pattern": "tripod", "terrain": "step"},
+}
+
+
+def _assert_follows_plan(sim, run) -> None:
+    # the plan's own figures, computed here from the plan (not from the simulation's copy)
+    moved = float(np.linalg.norm(run.base_poses[-1, :2, 3] - run.base_poses[0, :2, 3]))
+    yaw = np.unwrap(np.arctan2(run.base_poses[:, 1, 0], run.base_poses[:, 0, 0]))
+    turned = float(yaw[-1] - yaw[0])
+    assert sim.distance_planned == pytest.approx(moved, abs=1e-12)
+    assert sim.turn_planned == pytest.approx(turned, abs=1e-12)
+    # the simulated body, from MuJoCo's recorded poses
+    went = float(np.linalg.norm(sim.base_poses[-1, :2, 3] - sim.base_poses[0, :2, 3]))
+    if moved > 1e-6:
+        assert abs(went - moved) <= 0.01 * moved, (went, moved)
+    else:
+        assert went < 0.01, went  # turning in place: the body stays put
+    if abs(turned) > 1e-6:
+        assert abs(sim.turn - turned) <= 0.01 * abs(turned), (sim.turn, turned)
+    assert math.degrees(sim.heading_error) <= 0.5
+    R = sim.base_poses[:, :3, :3]
+    assert math.degrees(np.abs(np.arctan2(R[:, 2, 1], R[:, 2, 2])).max()) <= 1.0  # roll
+    assert math.degrees(np.abs(np.arcsin(R[:, 2, 0])).max()) <= 1.0  # pitch
+    assert sim.non_foot_contacts == ()
+    assert sim.max_slip <= LIMITS["slip"]
+    assert not sim.stumbled and sim.ok
+
+
+@pytest.mark.parametrize("name", ["tripod", "wave", "ripple", "turn", "slope", "step"])
+def test_small_feet_walk_as_planned(name: str) -> None:
+    kw = dict(WALKS[name])
+    if name == "step":
+        # 0.03 m lifts the 1 mm foot over the edge but not the tibia's 8 mm cylinder above
+        # it (the plan clears the foot point only): 0.04 m clears both
+        kw["step_height"] = 0.04
+    run = walk(**kw)
+    assert run.ok and run.t[-1] == pytest.approx(10.0)
+    sim = simulate(run, foot_radius=SMALL, stand=False)
+    assert sim.scene.foot_radius == SMALL and sim.scene.terrain == run.settings["terrain"]
+    _assert_follows_plan(sim, run)
+
+
+def _plan_rolls(run) -> bool:
+    """True when the plan moves the stance feet's sphere centres (a rolling foot)."""
+    start = run.support.copy()
+    start[1:] &= ~run.support[:-1]
+    idx = np.maximum.accumulate(np.where(start, np.arange(len(run.t))[:, None], 0), axis=0)
+    ref = run.feet[idx, np.arange(run.feet.shape[1])[None, :]]
+    moved = np.where(run.support, np.linalg.norm(run.feet - ref, axis=-1), 0.0)
+    return bool(moved.max() > 1e-6)
+
+
+@pytest.mark.parametrize("name", list(WALKS))
+def test_robot_feet_walk_as_planned(name: str) -> None:
+    run = walk(**WALKS[name])
+    if not _plan_rolls(run):
+        pytest.xfail(
+            "the plan treats the feet as points while the 12 mm spheres roll (+6 % distance): "
+            "re-run after the rolling-feet plan (h2) is merged"
+        )
+    sim = simulate(run, stand=False)
+    _assert_follows_plan(sim, run)
+
+
+def test_negative_margin_plan_fails_the_same_check() -> None:
+    # the three left legs swing together: the CoM leaves the support polygon every half cycle
+    table = PhaseTable("left-right", (0.5, 0.5, 0.5, 0.0, 0.0, 0.0), 0.5)
+    run = walk(pattern=table, strict=False)
+    assert run.min_margin < -0.1  # the plan knows (the same support-polygon margin)
+    sim = simulate(run, foot_radius=SMALL, stand=False)
+    assert sim.stumbled and not sim.ok
+    failed = {k for k, row in sim.checks().items() if not row["ok"]}
+    assert {"roll", "travel", "heading"} <= failed
+    assert math.degrees(sim.max_roll) > 2.0
+
+
+def test_standing_forces_match_stand() -> None:
+    from hexapod_kin import load
+    from hexapod_kin.dynamics import stand
+
+    st = stand(load("hexapod"))
+    res = stand_forces()
+    assert res.legs == st.stance_legs
+    np.testing.assert_allclose(res.expected, st.forces[:, 2], atol=0)
+    assert res.max_error < 5e-4  # [N] of 3.2 N per foot
+    assert res.forces.sum() == pytest.approx(st.weight, abs=1e-6)
+
+
+def test_scene_feet_are_the_robots_feet_and_the_ground_is_the_terrain() -> None:
+    wb = whole_body()
+    for name in ("flat", "slope", "step"):
+        sc = scene_mjcf(terrain=name)
+        m = mujoco.MjModel.from_xml_string(sc.xml)
+        d = mujoco.MjData(m)
+        # ground height by ray casts straight down, against the gait's terrain function
+        h = terrain(name)
+        geomid = np.zeros(1, dtype=np.int32)
+        d.qpos[2] = 100.0  # the robot out of the way, far above the rays
+        mujoco.mj_forward(m, d)
+        down = np.array([0.0, 0.0, -1.0])
+        for x, y in ((-0.4, 0.1), (0.0, 0.0), (0.24, -0.2), (0.26, 0.3), (0.9, 0.0)):
+            dist = mujoco.mj_ray(m, d, np.array([x, y, 5.0]), down, None, 1, -1, geomid)
+            assert 5.0 - dist == pytest.approx(float(h(x, y)), abs=1e-12)
+    # foot sphere centres by MuJoCo's FK against the whole-body kinematics, random poses
+    sc = scene_mjcf(foot_radius=0.004)
+    m = mujoco.MjModel.from_xml_string(sc.xml)
+    d = mujoco.MjData(m)
+    feet = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in sc.foot_geoms]
+    assert np.allclose(m.geom_size[feet, 0], 0.004)
+    rng = np.random.default_rng(3)
+    jq = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in sc.joint_names]
+    for _ in range(5):
+        q = rng.uniform(-1.0, 1.0, wb.nq)
+        base = np.eye(4)
+        base[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        mat = np.empty(9)
+        mujoco.mju_quat2Mat(mat, quat)
+        base[:3, :3] = mat.reshape(3, 3)
+        d.qpos[:3], d.qpos[3:7], d.qpos[jq] = base[:3, 3], quat, q
+        mujoco.mj_kinematics(m, d)
+        np.testing.assert_allclose(d.geom_xpos[feet], wb.feet(q[None], base[None])[0], atol=1e-12)
+    # every leg joint has its servo, clamped to the URDF effort limit
+    for a in range(m.nu):
+        assert m.actuator_forcerange[a].tolist() == [-10.0, 10.0]
+    assert m.nu == wb.nq and m.opt.timestep == 1e-3
+
+
+def test_slip_speed_is_the_contact_points_velocity() -> None:
+    """A stance foot's slip speed equals the finite difference of its material contact point."""
+    from hexapod_kin.simulate.scene import _Engine
+
+    run = walk(duration=1.0)
+    sc = scene_mjcf(foot_radius=SMALL)
+    eng = _Engine(sc)
+    m, d = eng.model, eng.data
+    pose = np.array(run.base_poses[0])
+    pose[2, 3] += SMALL
+    eng.place(pose, np.asarray(run.q[0]))
+    d.qvel[0] = 0.05  # the body slides forward: the stance feet drag
+    for _ in range(3):
+        mujoco.mj_step(m, d)
+    mujoco.mj_forward(m, d)  # kinematics, velocities and contacts of the current state
+    g, ok = eng.contacts()
+    legs, speed = eng.slip_speeds(g, ok)
+    assert len(legs) >= 3
+    c = int(np.flatnonzero(ok)[0])
+    foot = int(g[c][0] if eng.leg_of[g[c][0]] >= 0 else g[c][1])
+    point = np.array(d.contact.pos[c])
+    normal = np.array(d.contact.frame[c][:3])
+    R0, x0 = d.geom_xmat[foot].reshape(3, 3).copy(), d.geom_xpos[foot].copy()
+    local = R0.T @ (point - x0)
+    # the same material point a tiny time later, by integrating the positions only
+    h = 1e-7
+    qpos = d.qpos.copy()
+    mujoco.mj_integratePos(m, qpos, d.qvel, h)
+    d2 = mujoco.MjData(m)
+    d2.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d2)
+    moved = (d2.geom_xmat[foot].reshape(3, 3) @ local + d2.geom_xpos[foot] - point) / h
+    tangential = moved - (moved @ normal) * normal
+    assert speed[0] == pytest.approx(np.linalg.norm(tangential), rel=1e-5, abs=1e-9)
+    assert speed.max() > 0.01
+
+
+def test_simulate_refuses_what_it_cannot_build(monkeypatch: pytest.MonkeyPatch) -> None:
+    with pytest.raises(ParameterError, match="terrain"):
+        simulate(terrain=lambda x, y: 0.0 * x)
+    with pytest.raises(ParameterError, match="timestep"):
+        simulate(walk(duration=0.1), timestep=3e-3, stand=False)
+    with pytest.raises(ParameterError, match="contact_time"):
+        scene_mjcf(contact_time=1e-3)
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    with pytest.raises(OptionalDependencyError, match="hexapod-kin\\[export\\]"):
+        simulate()
+
+
+def test_cli_simulate(tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
+    html = tmp_path / "sim.html"
+    xml = tmp_path / "scene.xml"
+    args = ["simulate", "--pattern", "tripod", "--duration", "2", "--foot-radius", "0.001"]
+    status = main(
+        [*args, "--velocity", "0.05,0,0", "--json", "--html", str(html), "--mjcf", str(xml)]
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert status == (0 if out["ok"] else 1)
+    assert out["distance_planned"] == pytest.approx(0.1, abs=1e-12)  # 0.05 m/s for 2 s
+    assert out["scene"]["foot_radius"] == 0.001 and out["stand"]["max_error"] < 5e-4
+    page = html.read_text()
+    assert page.count("<iframe srcdoc=") == 2 and "MuJoCo" in page
+    assert mujoco.MjModel.from_xml_path(str(xml)).nu == 18
+    assert main(["simulate", "--velocity", "1,2", "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hexapod-kin: error: --velocity") and err.count("\n") == 1
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    assert main(["simulate", "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "mujoco is not installed" in err and err.count("\n") == 1
+
+
+def test_walk_html_draws_the_runs_own_robot() -> None:
+    from types import SimpleNamespace
+
+    from hexapod_kin import robots
+    from hexapod_kin.gait.show import run_model
+
+    custom = robots.get("hexapod", l2=0.12)
+    mdl = run_model(SimpleNamespace(robot=whole_body(custom)))
+    assert mdl.params == custom
+    assert run_model(SimpleNamespace()).params == robots.hexapod()
