@@ -231,7 +231,16 @@ def test_simulate_refuses_what_it_cannot_build(monkeypatch: pytest.MonkeyPatch) 
 def test_cli_simulate(tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
     html = tmp_path / "sim.html"
     xml = tmp_path / "scene.xml"
-    args = ["simulate", "--pattern", "tripod", "--duration", "2", "--foot-radius", "0.001"]
+    args = [
+        "simulate",
+        "hexapod",
+        "--pattern",
+        "tripod",
+        "--duration",
+        "2",
+        "--foot-radius",
+        "0.001",
+    ]
     status = main(
         [*args, "--velocity", "0.05,0,0", "--json", "--html", str(html), "--mjcf", str(xml)]
     )
@@ -242,11 +251,11 @@ def test_cli_simulate(tmp_path, capsys: pytest.CaptureFixture[str], monkeypatch)
     page = html.read_text()
     assert page.count("<iframe srcdoc=") == 2 and "MuJoCo" in page
     assert mujoco.MjModel.from_xml_path(str(xml)).nu == 18
-    assert main(["simulate", "--velocity", "1,2", "--duration", "1"]) == 2
+    assert main(["simulate", "hexapod", "--velocity", "1,2", "--duration", "1"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("hexapod-kin: error: --velocity") and err.count("\n") == 1
     monkeypatch.setitem(sys.modules, "mujoco", None)
-    assert main(["simulate", "--duration", "1"]) == 2
+    assert main(["simulate", "hexapod", "--duration", "1"]) == 2
     err = capsys.readouterr().err
     assert "mujoco is not installed" in err and err.count("\n") == 1
 

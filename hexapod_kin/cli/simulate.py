@@ -29,10 +29,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "source",
-        nargs="?",
-        default=None,
-        help="the robot: preset name, table file, URDF path or erd:NAME (default: the "
-        "built-in hexapod)",
+        help="the robot: 'hexapod' (the built-in preset), a table file, URDF path or erd:NAME",
     )
     p.add_argument(
         "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
@@ -101,10 +98,7 @@ def _robot(args: argparse.Namespace) -> Any:
     from .common import set_params
 
     params = set_params(args.set)
-    as_whole_body = getattr(gait_robot, "as_whole_body", None)
-    if args.source is None and not params:
-        return None
-    if args.source is None or (params and args.source == "hexapod"):
+    if args.source == "hexapod":
         built = robots.get("hexapod", **params)
         assert isinstance(built, Hexapod)
         return gait_robot.whole_body(built)
@@ -112,6 +106,7 @@ def _robot(args: argparse.Namespace) -> Any:
         raise ParameterError(
             "-s applies to the hexapod preset only", parameter="--set", value=args.set
         )
+    as_whole_body = getattr(gait_robot, "as_whole_body", None)
     if as_whole_body is not None:
         return as_whole_body(args.source)
     table = resolve_source(args.source).params
