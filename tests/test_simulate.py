@@ -272,3 +272,24 @@ def test_walk_html_draws_the_runs_own_robot() -> None:
     mdl = run_model(SimpleNamespace(robot=whole_body(custom)))
     assert mdl.params == custom
     assert run_model(SimpleNamespace()).params == robots.hexapod()
+
+
+def test_third_party_urdf_exports_to_a_floating_scene_robot() -> None:
+    """The PhantomX URDF (package:// meshes not shipped, unbalanced inertials) compiles."""
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from lxml import etree
+
+    from hexapod_kin.simulate.scene import _robot_mjcf
+
+    text = (Path(__file__).parent / "data" / "phantomx" / "phantomx.urdf").read_text()
+    m = mujoco.MjModel.from_xml_string(_robot_mjcf(SimpleNamespace(urdf=text)))
+    root = etree.fromstring(text.encode())
+    mass = sum(float(e.get("value")) for e in root.iter("mass"))
+    revolute = [j.get("name") for j in root.iter("joint") if j.get("type") == "revolute"]
+    assert m.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE and m.nq == 7 + len(revolute) == 25
+    assert float(m.body_mass.sum()) == pytest.approx(mass, rel=1e-12)
+    names = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, m.njnt)}
+    assert names == set(revolute)
+    assert m.ngeom == 0  # every collision was a mesh: dropped (the feet come as spheres)

@@ -85,7 +85,7 @@ def reach(source: Chain | Hexapod) -> float:
     return max(body, legs)
 
 
-def _with_compiler(urdf_text: str, discard_visual: bool) -> str:
+def _with_compiler(urdf_text: str, discard_visual: bool, balance: bool = False) -> str:
     from lxml import etree
 
     root = etree.fromstring(urdf_text.encode("utf-8"))
@@ -95,7 +95,7 @@ def _with_compiler(urdf_text: str, discard_visual: bool) -> str:
         "compiler",
         discardvisual="true" if discard_visual else "false",
         fusestatic="false",
-        balanceinertia="false",
+        balanceinertia="true" if balance else "false",
         inertiafromgeom="false",
         strippath="false",
         angle="radian",
@@ -215,6 +215,7 @@ def to_mjcf(
     timestep: float | None = None,
     integrator: str | None = None,
     floating: bool = False,
+    balance_inertia: bool = False,
 ) -> MjcfExport:
     """Return the MJCF of a source, compiled by MuJoCo (deterministic).
 
@@ -234,6 +235,9 @@ def to_mjcf(
         floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
             ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor
             (a Hexapod or a robot's URDF; not a chain).
+        balance_inertia: Let MuJoCo raise principal inertias that break the triangle
+            inequality ``A + B >= C`` (``balanceinertia``; a URDF from elsewhere with rounded
+            inertials). Off: such a URDF is refused, and the MJCF's inertias are the URDF's.
 
     Returns:
         An :class:`MjcfExport`.
@@ -294,7 +298,9 @@ def to_mjcf(
         assets = {f"{mesh_prefix}{k}": v for k, v in meshed.files.items()}
     else:
         urdf = add_collisions(urdf)
-    saved, model, mujoco = _compile(_with_compiler(urdf, discard_visual=not meshes), assets)
+    saved, model, mujoco = _compile(
+        _with_compiler(urdf, discard_visual=not meshes, balance=balance_inertia), assets
+    )
     root = etree.fromstring(saved.encode("utf-8"))
     _patch(root, model, mujoco)
     _exclude_adjacent(root)

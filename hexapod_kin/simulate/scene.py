@@ -58,16 +58,37 @@ def _foot_radius(wb: Any) -> float:
     return float(r)
 
 
+def _without_meshes(urdf: str) -> str:
+    """The URDF without mesh geometry (visual or collision); primitives stay.
+
+    A robot's URDF from elsewhere often names ``package://`` meshes that are not at hand;
+    the simulation needs the feet (added as spheres) and the inertials, not the meshes.
+    Collisions that were meshes are gone, so contacts of those links go undetected.
+    """
+    from lxml import etree
+
+    root = etree.fromstring(urdf.encode("utf-8"))
+    for link in root.iter("link"):
+        for elem in list(link):
+            if elem.tag in ("visual", "collision") and elem.find("geometry/mesh") is not None:
+                link.remove(elem)
+    return str(etree.tostring(root, encoding="unicode"))
+
+
 def _robot_mjcf(wb: Any) -> str:
+    """The robot's MJCF with a free base: from its Hexapod table, else from its URDF."""
     from ..export.mjcf import to_mjcf
     from ..params import Hexapod
+    from ..sources import resolve_source
 
     params = getattr(wb, "params", None)
     if isinstance(params, Hexapod):
         return to_mjcf(params, floating=True, floor=False).xml
     urdf = getattr(wb, "urdf", None)
+    if not isinstance(urdf, str) and getattr(wb, "source", None) is not None:
+        urdf = resolve_source(wb.source).text
     if isinstance(urdf, str):
-        return to_mjcf(urdf, floating=True, floor=False).xml
+        return to_mjcf(_without_meshes(urdf), floating=True, floor=False, balance_inertia=True).xml
     raise ParameterError(
         f"robot {getattr(wb, 'name', wb)!r} has neither a Hexapod table nor URDF text to "
         "export to MJCF",
