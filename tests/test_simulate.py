@@ -87,9 +87,9 @@ def test_small_feet_walk_as_planned(name: str) -> None:
         # touches it: legs against the terrain are not a check of the plan. 0.06 m keeps
         # every foot off the edge.
         kw["stride"] = 0.06
-    run = walk(**kw)
+    sim = simulate(foot_radius=SMALL, stand=False, **kw)  # the plan with the same feet
+    run = sim.run
     assert run.ok and run.t[-1] == pytest.approx(10.0)
-    sim = simulate(run, foot_radius=SMALL, stand=False)
     assert sim.scene.foot_radius == SMALL and sim.scene.terrain == run.settings["terrain"]
     _assert_follows_plan(sim, run)
 
@@ -119,9 +119,8 @@ def test_robot_feet_walk_as_planned(name: str) -> None:
 def test_negative_margin_plan_fails_the_same_check() -> None:
     # the three left legs swing together: the CoM leaves the support polygon every half cycle
     table = PhaseTable("left-right", (0.5, 0.5, 0.5, 0.0, 0.0, 0.0), 0.5)
-    run = walk(pattern=table, strict=False)
-    assert run.min_margin < -0.1  # the plan knows (the same support-polygon margin)
-    sim = simulate(run, foot_radius=SMALL, stand=False)
+    sim = simulate(pattern=table, strict=False, foot_radius=SMALL, stand=False)
+    assert sim.run.min_margin < -0.1  # the plan knows (the same support-polygon margin)
     assert sim.stumbled and not sim.ok
     failed = {k for k, row in sim.checks().items() if not row["ok"]}
     assert {"roll", "travel", "heading"} <= failed

@@ -211,7 +211,8 @@ def simulate(
         terrain: ``flat`` (default), ``slope`` or ``step`` (when planning; a run's own
             terrain otherwise).
         duration: The walk's length [s] (when planning).
-        foot_radius: Foot sphere radius [m] (default the robot's).
+        foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
+            else the robot's); when planning, the plan's feet too.
         friction: Sliding friction coefficient.
         kp: Servo position gain [N·m/rad].
         kv: Servo velocity gain [N·m·s/rad].
@@ -232,6 +233,7 @@ def simulate(
         OptionalDependencyError: MuJoCo is not installed.
 
     """
+    import inspect
     import time
 
     from ..gait.walk import GaitRun, walk
@@ -252,6 +254,8 @@ def simulate(
         ground = "flat" if terrain is None else terrain
         one_of("terrain", ground, list(SCENE_TERRAINS))
         wb = _robot(run_or_robot)
+        if foot_radius is not None and "foot_radius" in inspect.signature(walk).parameters:
+            walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
             wb,
             pattern=pattern,
@@ -260,6 +264,8 @@ def simulate(
             duration=duration,
             **walk_options,
         )
+    if foot_radius is None:  # the feet the plan rolled, else the robot's
+        foot_radius = run.settings.get("foot_radius")
     one_of("terrain", ground, list(SCENE_TERRAINS))
     sc = scene_mjcf(
         wb,
