@@ -182,6 +182,7 @@ def test_scene_feet_are_the_robots_feet_and_the_ground_is_the_terrain() -> None:
 
 def test_slip_speed_is_the_contact_points_velocity() -> None:
     """A stance foot's slip speed equals the finite difference of its material contact point."""
+    from hexapod_kin.simulate.replay import _lift
     from hexapod_kin.simulate.scene import _Engine
 
     run = walk(duration=1.0)
@@ -189,7 +190,7 @@ def test_slip_speed_is_the_contact_points_velocity() -> None:
     eng = _Engine(sc)
     m, d = eng.model, eng.data
     pose = np.array(run.base_poses[0])
-    pose[2, 3] += SMALL
+    pose[2, 3] += _lift(run, sc)  # the stance spheres on the ground
     eng.place(pose, np.asarray(run.q[0]))
     d.qvel[0] = 0.05  # the body slides forward: the stance feet drag
     for _ in range(3):
