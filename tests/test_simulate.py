@@ -196,11 +196,10 @@ def test_slip_speed_is_the_contact_points_velocity() -> None:
     for _ in range(3):
         mujoco.mj_step(m, d)
     mujoco.mj_forward(m, d)  # kinematics, velocities and contacts of the current state
-    g, ok = eng.contacts()
-    legs, speed = eng.slip_speeds(g, ok)
-    assert len(legs) >= 3
-    c = int(np.flatnonzero(ok)[0])
-    foot = int(g[c][0] if eng.leg_of[g[c][0]] >= 0 else g[c][1])
+    others, feet = eng.scan()
+    assert len(feet) >= 3 and not others
+    leg, speed, c = feet[0]
+    foot = eng.feet[leg]
     point = np.array(d.contact.pos[c])
     normal = np.array(d.contact.frame[c][:3])
     R0, x0 = d.geom_xmat[foot].reshape(3, 3).copy(), d.geom_xpos[foot].copy()
@@ -214,8 +213,8 @@ def test_slip_speed_is_the_contact_points_velocity() -> None:
     mujoco.mj_kinematics(m, d2)
     moved = (d2.geom_xmat[foot].reshape(3, 3) @ local + d2.geom_xpos[foot] - point) / h
     tangential = moved - (moved @ normal) * normal
-    assert speed[0] == pytest.approx(np.linalg.norm(tangential), rel=1e-5, abs=1e-9)
-    assert speed.max() > 0.01
+    assert speed == pytest.approx(np.linalg.norm(tangential), rel=1e-5, abs=1e-9)
+    assert max(v for _, v, _ in feet) > 0.01
 
 
 def test_simulate_refuses_what_it_cannot_build(monkeypatch: pytest.MonkeyPatch) -> None:

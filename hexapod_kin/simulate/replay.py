@@ -308,7 +308,6 @@ def simulate(
     base = np.empty((n, 4, 4))
     qs = np.empty((n, len(cols)))
     forces = np.zeros((n, nl))
-    slide = np.zeros(nl)
     max_slip = max_speed = 0.0
     seen: dict[tuple[str, str], float] = {}
     start = time.perf_counter()
@@ -323,25 +322,28 @@ def simulate(
 
     record(0)
     dt = sc.timestep
+    slides = [0.0] * nl
+    in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     for i in range(n - 1):
-        stance = support[i]
+        stance = support[i].tolist()
         for k in range(sub):
-            d.ctrl[eng.act] = ctrl[i, k]
+            if in_order:
+                d.ctrl[:] = ctrl[i, k]
+            else:
+                d.ctrl[eng.act] = ctrl[i, k]
             mj.mj_step(m, d)
-            g, ok = eng.contacts()
-            if not ok.all():
-                for c in np.flatnonzero(~ok):
-                    pair = sorted((eng.label(int(g[c, 0])), eng.label(int(g[c, 1]))))
-                    seen.setdefault((pair[0], pair[1]), float(t[i] + (k + 1) * dt))
-            legs, speed = eng.slip_speeds(g, ok)
-            touching = np.zeros(nl, dtype=bool)
-            for leg, v in zip(legs, speed):
+            others, feet = eng.scan()
+            for g0, g1 in others:
+                pair = sorted((eng.label(g0), eng.label(g1)))
+                seen.setdefault((pair[0], pair[1]), float(t[i] + (k + 1) * dt))
+            touching = [False] * nl
+            for leg, v, _ in feet:
                 if stance[leg] and not touching[leg]:
                     touching[leg] = True
-                    slide[leg] += v * dt
-                    max_speed = max(max_speed, float(v))
-            max_slip = max(max_slip, float(slide.max()))
-            slide[~touching] = 0.0
+                    slides[leg] += v * dt
+                    max_speed = max(max_speed, v)
+            max_slip = max(max_slip, *slides)
+            slides = [x if on else 0.0 for x, on in zip(slides, touching)]
         record(i + 1)
     wall = time.perf_counter() - start
     stance = None

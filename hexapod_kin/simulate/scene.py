@@ -443,6 +443,9 @@ class _Engine:
                 self.ground[g] = True
         self._vel = np.zeros(6)
         self._force = np.zeros(6)
+        self._leg_list = [int(v) for v in self.leg_of]
+        self._ground_list = [bool(v) for v in self.ground]
+        self._geom_type = mujoco.mjtObj.mjOBJ_GEOM
 
     def label(self, g: int) -> str:
         """A geom's name, or ``body/index`` for an unnamed one."""
@@ -496,28 +499,48 @@ class _Engine:
             out[self.leg_of[g[c]].max()] += self._force[0]
         return out
 
-    def slip_speeds(self, g: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Legs of the foot contacts and the tangential speed of each foot's contact point.
+    def scan(self) -> tuple[list[tuple[int, int]], list[tuple[int, float, int]]]:
+        """The contacts now: non-foot geom pairs, and per foot contact its slip speed.
 
-        The foot's material point at the contact moves at ``v + ω × (p_c − c)`` (``v``, ``ω``
-        the foot's velocity at its centre ``c``, :func:`mujoco.mj_objectVelocity`); its part
-        along the contact plane is the slip (zero for a foot that rolls).
+        Returns ``(others, feet)``: ``others`` the geom pairs that are not a foot on the
+        ground; ``feet`` ``(leg, speed [m/s], contact index)``, the speed that of the foot's
+        material point at the contact point along the contact plane: ``v + ω × (p_c − c)``
+        (``v``, ``ω`` the foot's velocity at its centre ``c``,
+        :func:`mujoco.mj_objectVelocity`) less its normal part, zero for a foot that rolls.
+        Plain Python on the few contacts of a step (numpy's per-call cost would dominate).
         """
         mj, m, d = self.mj, self.model, self.data
-        idx = np.flatnonzero(ok)
-        if not len(idx):
-            return np.zeros(0, dtype=int), np.zeros(0)
-        pairs = g[idx]
-        foot = np.where(self.leg_of[pairs[:, 0]] >= 0, pairs[:, 0], pairs[:, 1])
-        vel = np.empty((len(idx), 6))
-        for k, f in enumerate(foot):
-            mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_GEOM, int(f), vel[k], 0)
-        frame = np.asarray(d.contact.frame)[idx]
-        normal = frame[:, :3]
-        arm = np.asarray(d.contact.pos)[idx] - d.geom_xpos[foot]
-        v = vel[:, 3:] + np.cross(vel[:, :3], arm)
-        vt = v - np.sum(v * normal, axis=1)[:, None] * normal
-        return self.leg_of[foot], np.sqrt(np.sum(vt * vt, axis=1))
+        nc = int(d.ncon)
+        if nc == 0:
+            return [], []
+        con = d.contact
+        pairs = con.geom[:nc].tolist()
+        leg_of, ground = self._leg_list, self._ground_list
+        others: list[tuple[int, int]] = []
+        feet: list[tuple[int, float, int]] = []
+        vel = self._vel
+        xpos = d.geom_xpos
+        for c, (g0, g1) in enumerate(pairs):
+            if leg_of[g0] >= 0 and ground[g1]:
+                foot = g0
+            elif leg_of[g1] >= 0 and ground[g0]:
+                foot = g1
+            else:
+                others.append((g0, g1))
+                continue
+            mj.mj_objectVelocity(m, d, self._geom_type, foot, vel, 0)
+            wx, wy, wz, vx, vy, vz = vel.tolist()
+            px, py, pz = con.pos[c].tolist()
+            cx, cy, cz = xpos[foot].tolist()
+            ax, ay, az = px - cx, py - cy, pz - cz
+            vx += wy * az - wz * ay
+            vy += wz * ax - wx * az
+            vz += wx * ay - wy * ax
+            nx, ny, nz = con.frame[c][:3].tolist()
+            vn = vx * nx + vy * ny + vz * nz
+            tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
+            feet.append((leg_of[foot], math.sqrt(tx * tx + ty * ty + tz * tz), c))
+        return others, feet
 
 
 def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
