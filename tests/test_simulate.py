@@ -73,7 +73,7 @@ def _assert_follows_plan(sim, run) -> None:
     R = sim.base_poses[:, :3, :3]
     assert math.degrees(np.abs(np.arctan2(R[:, 2, 1], R[:, 2, 2])).max()) <= 1.0  # roll
     assert math.degrees(np.abs(np.arcsin(R[:, 2, 0])).max()) <= 1.0  # pitch
-    assert sim.non_foot_contacts == ()
+    assert sim.non_foot_contacts == () and sim.swing_strikes == ()
     assert sim.max_slip <= LIMITS["slip"]
     assert not sim.stumbled and sim.ok
 
@@ -125,6 +125,24 @@ def test_negative_margin_plan_fails_the_same_check() -> None:
     failed = {k for k, row in sim.checks().items() if not row["ok"]}
     assert {"roll", "travel", "heading"} <= failed
     assert math.degrees(sim.max_roll) > 2.0
+
+
+def test_a_foot_the_plan_holds_up_but_touches_down_is_a_strike() -> None:
+    """The plan's copy says leg1 is 5 mm up in its stances too; its joints still put it down."""
+    import dataclasses
+
+    run = walk(duration=2.0)
+    support = np.array(run.support)
+    feet = np.array(run.feet)
+    feet[support[:, 0], 0, 2] += 0.005
+    support[:, 0] = False
+    fake = dataclasses.replace(run, support=support, feet=feet)
+    sim = simulate(fake, foot_radius=SMALL, stand=False)
+    struck = dict(sim.swing_strikes)
+    assert set(struck) == {"leg1"} and sim.stumbled
+    # leg1 first touches down at the end of its first swing: t = (1 - duty) * period
+    assert struck["leg1"] == pytest.approx(0.5, abs=0.05)
+    assert simulate(run, foot_radius=SMALL, stand=False).swing_strikes == ()
 
 
 def test_standing_forces_match_stand() -> None:

@@ -181,6 +181,11 @@ def _print(out: dict[str, Any]) -> None:
         "non-foot contacts  "
         + (", ".join(f"{a}-{b} at {w:.3f} s" for a, b, w in contacts) if contacts else "none")
     )
+    strikes = out["swing_strikes"]
+    print(
+        "swing foot strikes "
+        + (", ".join(f"{leg} at {w:.3f} s" for leg, w in strikes) if strikes else "none")
+    )
     stand = out["stand"]
     if stand is not None:
         print(

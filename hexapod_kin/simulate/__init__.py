@@ -31,8 +31,9 @@ plan's joint angles:
   :func:`hexapod_kin.dynamics.stand`.
 
 :meth:`SimRun.checks` is the verdict (limits in :data:`LIMITS`); a *stumble* is a non-foot
-contact, roll or pitch over its limit, or a stance foot sliding more than
-``LIMITS["slip"]`` in one contact.
+contact, a swing foot striking the ground (touching it where the plan has the sphere at least
+:data:`STRIKE_CLEARANCE` = 2 mm clear), roll or pitch over 1°, or a stance foot sliding more
+than ``LIMITS["slip"]`` = 5 mm in one contact.
 
 MuJoCo is the optional extra ``hexapod-kin[export]`` (MuJoCo 3.14 or later, or 4).
 """
@@ -40,13 +41,14 @@ MuJoCo is the optional extra ``hexapod-kin[export]`` (MuJoCo 3.14 or later, or 4
 from __future__ import annotations
 
 from .page import simulation_html
-from .replay import LIMITS, SimRun, simulate
+from .replay import LIMITS, STRIKE_CLEARANCE, SimRun, simulate
 from .scene import SCENE_TERRAINS, SimScene, scene_mjcf
 from .standing import StandForces, stand_forces
 
 __all__ = [
     "LIMITS",
     "SCENE_TERRAINS",
+    "STRIKE_CLEARANCE",
     "SimRun",
     "SimScene",
     "StandForces",

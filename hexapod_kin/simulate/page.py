@@ -83,6 +83,8 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
         f"{1e3 * sim.max_slip:.2f} mm per contact",
         "non-foot contacts: "
         + (", ".join(f"{a}–{b} at {w:.3f} s" for a, b, w in sim.non_foot_contacts) or "none"),
+        "swing feet striking the ground: "
+        + (", ".join(f"{leg} at {w:.3f} s" for leg, w in sim.swing_strikes) or "none"),
         "checks: " + ("pass" if sim.ok else "FAIL") + (" (stumbled)" if sim.stumbled else ""),
     ]
     title = f"hexapod_kin: {run.table.name} plan and MuJoCo replay"

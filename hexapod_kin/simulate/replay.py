@@ -12,7 +12,7 @@ from ..exceptions import ConfigurationError, ParameterError, one_of
 from .scene import SCENE_TERRAINS, SimScene, _Engine, _hermite, _mujoco, _robot, scene_mjcf
 from .standing import StandForces, stand_forces
 
-__all__ = ["LIMITS", "SimRun", "simulate"]
+__all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "simulate"]
 
 #: The check's limits: travel (relative), heading [rad], roll and pitch [rad], slip in one
 #: contact [m], body height error [m].
@@ -23,6 +23,10 @@ LIMITS: dict[str, float] = {
     "slip": 0.005,
     "height": 0.01,
 }
+
+#: A swing foot touching the ground where the plan has its sphere at least this far from
+#: the ground [m] (measured at the planned centre, along the ground's normal) is a strike.
+STRIKE_CLEARANCE = 0.002
 
 
 def _yaw(R: np.ndarray) -> np.ndarray:
@@ -60,6 +64,8 @@ class SimRun:
         max_slip: Largest tangential slide of a stance foot's contact point during one
             contact [m].
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
+        swing_strikes: ``(leg, first time [s])`` of every swing foot that touched the ground
+            where the plan has it at least :data:`STRIKE_CLEARANCE` clear of it.
         non_foot_contacts: ``(geom, geom, first time [s])`` of every pair in contact that is
             not a foot on the ground.
         stand: The standing forces check (None when skipped).
@@ -86,6 +92,7 @@ class SimRun:
     height_error: float
     max_slip: float
     max_slip_speed: float
+    swing_strikes: tuple[tuple[str, float], ...]
     non_foot_contacts: tuple[tuple[str, str, float], ...]
     stand: StandForces | None
     scene: SimScene
@@ -112,7 +119,8 @@ class SimRun:
 
         ``travel``: the larger of |distance_error| and |turn_error| (those that exist);
         ``heading``: the yaw error; ``roll``/``pitch``; ``slip``: ``max_slip``; ``height``:
-        ``height_error``; ``contacts``: the number of non-foot contact pairs (must be 0).
+        ``height_error``; ``contacts``: the number of non-foot contact pairs; ``strikes``:
+        the number of legs whose swing foot struck the ground (both must be 0).
         """
         lim = {**LIMITS, **(limits or {})}
         rel = [abs(e) for e in (self.distance_error, self.turn_error) if e is not None]
@@ -124,14 +132,15 @@ class SimRun:
             "slip": (self.max_slip, lim["slip"]),
             "height": (self.height_error, lim["height"]),
             "contacts": (float(len(self.non_foot_contacts)), 0.0),
+            "strikes": (float(len(self.swing_strikes)), 0.0),
         }
         return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
 
     @property
     def stumbled(self) -> bool:
-        """A non-foot contact, roll or pitch over its limit, or a slip over its limit."""
+        """A stumble: a non-foot contact, a swing strike, roll, pitch or slip over its limit."""
         c = self.checks()
-        return not all(c[k]["ok"] for k in ("contacts", "roll", "pitch", "slip"))
+        return not all(c[k]["ok"] for k in ("contacts", "strikes", "roll", "pitch", "slip"))
 
     @property
     def ok(self) -> bool:
@@ -154,6 +163,7 @@ class SimRun:
             "height_error": self.height_error,
             "max_slip": self.max_slip,
             "max_slip_speed": self.max_slip_speed,
+            "swing_strikes": [list(c) for c in self.swing_strikes],
             "lift": self.lift,
             "non_foot_contacts": [list(c) for c in self.non_foot_contacts],
             "stand": None if self.stand is None else self.stand.to_dict(),
@@ -208,8 +218,9 @@ def simulate(
             takes; None: the built-in hexapod) to plan with the keywords below.
         pattern: The walk's pattern (when planning).
         velocity: The walk's body twist ``(vx, vy, wz)`` (when planning).
-        terrain: ``flat`` (default), ``slope`` or ``step`` (when planning; a run's own
-            terrain otherwise).
+        terrain: ``flat`` (default), ``slope`` or ``step``: planned on and simulated on; with a
+            run, its own terrain unless given (a plan replayed on other ground: its first
+            sample's stance feet must stand on both).
         duration: The walk's length [s] (when planning).
         foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
             else the robot's); when planning, the plan's feet too.
@@ -242,7 +253,7 @@ def simulate(
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
-        ground = str(run.settings.get("terrain", "flat"))
+        ground = str(run.settings.get("terrain", "flat")) if terrain is None else terrain
     else:
         if terrain is not None and not isinstance(terrain, str):
             raise ParameterError(
@@ -323,6 +334,11 @@ def simulate(
     record(0)
     dt = sc.timestep
     slides = [0.0] * nl
+    strikes: dict[str, float] = {}
+    leg_names = sc.leg_names
+    centre = np.asarray(run.feet)
+    above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
+    clear = ((above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support).tolist()
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     for i in range(n - 1):
         stance = support[i].tolist()
@@ -338,7 +354,11 @@ def simulate(
                 seen.setdefault((pair[0], pair[1]), float(t[i] + (k + 1) * dt))
             touching = [False] * nl
             for leg, v, _ in feet:
-                if stance[leg] and not touching[leg]:
+                if not stance[leg]:
+                    if clear[i][leg] and leg_names[leg] not in strikes:
+                        strikes[leg_names[leg]] = float(t[i] + (k + 1) * dt)
+                    continue
+                if not touching[leg]:
                     touching[leg] = True
                     slides[leg] += v * dt
                     max_speed = max(max_speed, v)
@@ -357,7 +377,7 @@ def simulate(
             contact_time=sc.contact_time,
             timestep=sc.timestep,
         )
-    figures = (lift, max_slip, max_speed, seen, stance, wall)
+    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)
     return _summary(run, sc, t, base, planned, qs, forces, *figures)
 
 
@@ -372,6 +392,7 @@ def _summary(
     lift: float,
     max_slip: float,
     max_speed: float,
+    strikes: dict[str, float],
     seen: dict[tuple[str, str], float],
     stand: StandForces | None,
     wall: float,
@@ -406,6 +427,7 @@ def _summary(
         height_error=float(np.abs(base[:, 2, 3] - planned[:, 2, 3]).max()),
         max_slip=max_slip,
         max_slip_speed=max_speed,
+        swing_strikes=tuple(sorted(strikes.items(), key=lambda x: x[1])),
         non_foot_contacts=contacts,
         stand=stand,
         scene=sc,
