@@ -31,9 +31,9 @@ plan's joint angles:
   :func:`hexapod_kin.dynamics.stand`.
 
 :meth:`SimRun.checks` is the verdict (limits in :data:`LIMITS`); a *stumble* is a non-foot
-contact, a swing foot striking the ground (touching it where the plan has the sphere at least
-:data:`STRIKE_CLEARANCE` = 2 mm clear), roll or pitch over 1°, or a stance foot sliding more
-than ``LIMITS["slip"]`` = 5 mm in one contact.
+contact, a swing foot striking the ground (coming down on it where the plan has the sphere
+at least :data:`STRIKE_CLEARANCE` = 2 mm clear), roll or pitch over 1°, or a stance foot
+sliding more than ``LIMITS["slip"]`` = 5 mm in one contact.
 
 MuJoCo is the optional extra ``hexapod-kin[export]`` (MuJoCo 3.14 or later, or 4).
 """

@@ -64,8 +64,9 @@ class SimRun:
         max_slip: Largest tangential slide of a stance foot's contact point during one
             contact [m].
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
-        swing_strikes: ``(leg, first time [s])`` of every swing foot that touched the ground
-            where the plan has it at least :data:`STRIKE_CLEARANCE` clear of it.
+        swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
+            ground (a new contact, not a late lift-off) where the plan has it at least
+            :data:`STRIKE_CLEARANCE` clear of it.
         non_foot_contacts: ``(geom, geom, first time [s])`` of every pair in contact that is
             not a foot on the ground.
         stand: The standing forces check (None when skipped).
@@ -338,8 +339,10 @@ def simulate(
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
     above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
-    clear = ((above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support).tolist()
+    held = (above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support
+    clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
+    was_down = [True] * nl
     for i in range(n - 1):
         stance = support[i].tolist()
         for k in range(sub):
@@ -353,9 +356,12 @@ def simulate(
                 pair = sorted((eng.label(g0), eng.label(g1)))
                 seen.setdefault((pair[0], pair[1]), float(t[i] + (k + 1) * dt))
             touching = [False] * nl
+            down = [False] * nl
             for leg, v, _ in feet:
+                down[leg] = True
                 if not stance[leg]:
-                    if clear[i][leg] and leg_names[leg] not in strikes:
+                    # a new contact of a swing foot the plan holds clear (not a lift-off lag)
+                    if clear[i][leg] and not was_down[leg] and leg_names[leg] not in strikes:
                         strikes[leg_names[leg]] = float(t[i] + (k + 1) * dt)
                     continue
                 if not touching[leg]:
@@ -364,6 +370,7 @@ def simulate(
                     max_speed = max(max_speed, v)
             max_slip = max(max_slip, *slides)
             slides = [x if on else 0.0 for x, on in zip(slides, touching)]
+            was_down = down
         record(i + 1)
     wall = time.perf_counter() - start
     stance = None
