@@ -128,14 +128,15 @@ def test_negative_margin_plan_fails_the_same_check() -> None:
 
 
 def test_a_foot_the_plan_holds_up_but_touches_down_is_a_strike() -> None:
-    """The plan's copy says leg1 swings 5 mm higher all along; its joints still put it down."""
+    """The plan's copy says leg1 swings 5 mm higher from 0.25 s on; its joints put it down."""
     import dataclasses
 
     run = walk(duration=2.0)
     support = np.array(run.support)
     feet = np.array(run.feet)
-    feet[:, 0, 2] += 0.005
-    support[:, 0] = False
+    later = run.t >= 0.25  # after leg1's first lift-off (0 s), before its touch-down (0.5 s)
+    feet[later, 0, 2] += 0.005
+    support[later, 0] = False
     fake = dataclasses.replace(run, support=support, feet=feet)
     sim = simulate(fake, foot_radius=SMALL, stand=False)
     struck = dict(sim.swing_strikes)
