@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -279,8 +280,9 @@ def simulate(
     if foot_radius is None:  # the feet the plan rolled, else the robot's
         foot_radius = run.settings.get("foot_radius")
     one_of("terrain", ground, list(SCENE_TERRAINS))
+    by_name = isinstance(run_or_robot, (str, os.PathLike))  # the URDF text is at hand
     sc = scene_mjcf(
-        wb,
+        run_or_robot if by_name else wb,
         terrain=ground,
         foot_radius=foot_radius,
         friction=friction,

@@ -75,8 +75,15 @@ def _without_meshes(urdf: str) -> str:
     return str(etree.tostring(root, encoding="unicode"))
 
 
-def _robot_mjcf(wb: Any) -> str:
-    """The robot's MJCF with a free base: from its Hexapod table, else from its URDF."""
+def _robot_mjcf(wb: Any, source: Any = None) -> str:
+    """The robot's MJCF with a free base: from its Hexapod table, else from its URDF.
+
+    The URDF text is the robot's ``urdf`` attribute, else that of ``source`` (the path, text
+    or ``erd:NAME`` the robot was built from), else that of the robot's ``source`` label.
+    """
+    import os
+
+    from ..exceptions import HexapodKinError
     from ..export.mjcf import to_mjcf
     from ..params import Hexapod
     from ..sources import resolve_source
@@ -85,15 +92,20 @@ def _robot_mjcf(wb: Any) -> str:
     if isinstance(params, Hexapod):
         return to_mjcf(params, floating=True, floor=False).xml
     urdf = getattr(wb, "urdf", None)
-    if not isinstance(urdf, str) and getattr(wb, "source", None) is not None:
-        urdf = resolve_source(wb.source).text
+    for src in (source, getattr(wb, "source", None)):
+        if isinstance(urdf, str) or not isinstance(src, (str, os.PathLike)):
+            continue
+        try:
+            urdf = resolve_source(src).text
+        except HexapodKinError:
+            continue
     if isinstance(urdf, str):
         return to_mjcf(_without_meshes(urdf), floating=True, floor=False, balance_inertia=True).xml
     raise ParameterError(
-        f"robot {getattr(wb, 'name', wb)!r} has neither a Hexapod table nor URDF text to "
-        "export to MJCF",
+        f"robot {getattr(wb, 'source', wb)!r}: no Hexapod table or URDF text to export to "
+        "MJCF; give its URDF path or erd:NAME as the robot",
         parameter="robot",
-        value=repr(wb),
+        value=repr(getattr(wb, "source", wb)),
     )
 
 
@@ -267,7 +279,7 @@ def scene_mjcf(
     mujoco = _mujoco()
     wb = _robot(robot)
     r = _foot_radius(wb) if foot_radius is None else _positive("foot_radius", foot_radius)
-    xml = _robot_mjcf(wb)
+    xml = _robot_mjcf(wb, robot)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     # the robot at its neutral pose, base at the origin: where each foot is, in which body
