@@ -34,6 +34,13 @@ def register(sub: Any) -> None:
     p.add_argument(
         "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
     )
+    p.add_argument(
+        "--foot",
+        metavar="FRAME:X,Y,Z",
+        default=None,
+        help="feet of a URDF without foot links: frame and offset [m] per leg, "
+        "space-separated (e.g. 'tibia_lf:0,0.16,0.029 tibia_lm:...')",
+    )
     p.add_argument("--pattern", default="tripod", help="gait pattern (tripod, wave, ripple...)")
     p.add_argument(
         "--velocity",
@@ -106,9 +113,8 @@ def _robot(args: argparse.Namespace) -> Any:
         raise ParameterError(
             "-s applies to the hexapod preset only", parameter="--set", value=args.set
         )
-    as_whole_body = getattr(gait_robot, "as_whole_body", None)
-    if as_whole_body is not None:
-        return as_whole_body(args.source)
+    if getattr(gait_robot, "as_whole_body", None) is not None:
+        return args.source  # simulate() builds it (and exports its URDF)
     table = resolve_source(args.source).params
     if not isinstance(table, Hexapod):
         raise ParameterError(
@@ -126,8 +132,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
+    robot = _robot(args)
+    extra = {} if args.foot is None else {"feet": args.foot}
     sim = simulate(
-        _robot(args),
+        robot,
+        **extra,
         pattern=args.pattern,
         velocity=_velocity(args.velocity),
         stride=args.stride,

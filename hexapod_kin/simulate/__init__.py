@@ -42,11 +42,12 @@ from __future__ import annotations
 
 from .page import simulation_html
 from .replay import LIMITS, STRIKE_CLEARANCE, SimRun, simulate
-from .scene import SCENE_TERRAINS, SimScene, scene_mjcf
+from .scene import POINT_FOOT, SCENE_TERRAINS, SimScene, scene_mjcf
 from .standing import StandForces, stand_forces
 
 __all__ = [
     "LIMITS",
+    "POINT_FOOT",
     "SCENE_TERRAINS",
     "STRIKE_CLEARANCE",
     "SimRun",

@@ -10,7 +10,16 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, one_of
-from .scene import SCENE_TERRAINS, SimScene, _Engine, _hermite, _mujoco, _robot, scene_mjcf
+from .scene import (
+    POINT_FOOT,
+    SCENE_TERRAINS,
+    SimScene,
+    _Engine,
+    _hermite,
+    _mujoco,
+    _robot,
+    scene_mjcf,
+)
 from .standing import StandForces, stand_forces
 
 __all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "simulate"]
@@ -201,6 +210,7 @@ def simulate(
     velocity: Any = None,
     terrain: Any = None,
     duration: float = 10.0,
+    feet: Any = None,
     foot_radius: float | None = None,
     friction: float = 1.0,
     kp: float = 300.0,
@@ -224,6 +234,8 @@ def simulate(
             run, its own terrain unless given (a plan replayed on other ground: its first
             sample's stance feet must stand on both).
         duration: The walk's length [s] (when planning).
+        feet: The feet of a URDF robot without foot links (``"frame:x,y,z ..."``, as
+            :func:`~hexapod_kin.gait.robot.as_whole_body` takes them; when planning).
         foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
             else the robot's); when planning, the plan's feet too.
         friction: Sliding friction coefficient.
@@ -255,6 +267,13 @@ def simulate(
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
+        if tuple(wb.joint_names) != tuple(run.joint_names):
+            raise ParameterError(
+                f"the run's joints {list(run.joint_names)[:3]}... are not its robot's "
+                f"{list(wb.joint_names)[:3]}...: a run from a gait without `run.robot`; "
+                "simulate the robot (its source) with the walk's keywords instead",
+                parameter="run",
+            )
         ground = str(run.settings.get("terrain", "flat")) if terrain is None else terrain
     else:
         if terrain is not None and not isinstance(terrain, str):
@@ -266,7 +285,7 @@ def simulate(
             )
         ground = "flat" if terrain is None else terrain
         one_of("terrain", ground, list(SCENE_TERRAINS))
-        wb = _robot(run_or_robot)
+        wb = _robot(run_or_robot, feet)
         if foot_radius is not None and "foot_radius" in inspect.signature(walk).parameters:
             walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
@@ -277,12 +296,14 @@ def simulate(
             duration=duration,
             **walk_options,
         )
-    if foot_radius is None:  # the feet the plan rolled, else the robot's
-        foot_radius = run.settings.get("foot_radius")
+    planned_radius = run.settings.get("foot_radius")
+    if foot_radius is None and planned_radius is not None:  # the feet the plan rolled
+        foot_radius = float(planned_radius) if planned_radius > 0 else POINT_FOOT
     one_of("terrain", ground, list(SCENE_TERRAINS))
     by_name = isinstance(run_or_robot, (str, os.PathLike))  # the URDF text is at hand
     sc = scene_mjcf(
-        run_or_robot if by_name else wb,
+        wb,
+        source=run_or_robot if by_name else None,
         terrain=ground,
         foot_radius=foot_radius,
         friction=friction,
@@ -379,6 +400,7 @@ def simulate(
     if stand:
         stance = stand_forces(
             wb,
+            source=run_or_robot if by_name else None,
             foot_radius=sc.foot_radius,
             friction=sc.friction,
             kp=sc.kp,

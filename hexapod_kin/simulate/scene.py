@@ -39,23 +39,29 @@ def _mujoco() -> Any:
 
 
 # ----------------------------------------------------------------------------- the robot
-def _robot(robot: Any) -> Any:
-    """The whole-body model of ``robot`` (None: the built-in hexapod)."""
+def _robot(robot: Any, feet: Any = None) -> Any:
+    """The whole-body model of ``robot`` (None: the built-in hexapod), ``feet`` its foot spec."""
     from ..gait import robot as gait_robot
 
     as_whole_body = getattr(gait_robot, "as_whole_body", None)
     if as_whole_body is not None:
-        return as_whole_body(robot)
+        return as_whole_body(robot) if feet is None else as_whole_body(robot, feet=feet)
+    if feet is not None:
+        raise ParameterError("feet= needs a legged robot from a URDF", parameter="feet")
     if robot is None or isinstance(robot, gait_robot.WholeBody):
         return gait_robot.whole_body() if robot is None else robot
     return gait_robot.whole_body(robot)
+
+
+#: Radius [m] of the spheres that stand for point feet (a robot whose foot radius is 0).
+POINT_FOOT = 0.001
 
 
 def _foot_radius(wb: Any) -> float:
     r = getattr(wb, "foot_radius", None)
     if r is None:  # before the robot carried it: the export's foot sphere (1.5 link radius)
         r = 1.5 * float(wb.link_radius)
-    return float(r)
+    return float(r) if r > 0 else POINT_FOOT
 
 
 def _without_meshes(urdf: str) -> str:
@@ -219,6 +225,8 @@ def _positive(name: str, value: Any) -> float:
 def scene_mjcf(
     robot: Any = None,
     *,
+    feet: Any = None,
+    source: Any = None,
     terrain: str = "flat",
     foot_radius: float | None = None,
     friction: float = 1.0,
@@ -233,8 +241,12 @@ def scene_mjcf(
     Args:
         robot: The robot (a :class:`~hexapod_kin.gait.robot.WholeBody`, or what the gait
             accepts; None: the built-in hexapod).
+        feet: The feet of a URDF robot without foot links (as the gait takes them).
+        source: Where a built robot's URDF comes from (its path, text or ``erd:NAME``; a
+            robot given by path or name is its own source).
         terrain: ``flat``, ``slope`` (8° up along +x) or ``step`` (0.02 m up at x = 0.25 m).
-        foot_radius: Foot sphere radius [m] (default the robot's ``foot_radius``).
+        foot_radius: Foot sphere radius [m] (default the robot's ``foot_radius``; point
+            feet, radius 0, are :data:`POINT_FOOT` spheres).
         friction: Sliding friction coefficient of every geom (> 0).
         kp: Position gain [N·m/rad] (> 0); the force is clamped to the joints' effort limits.
         kv: Velocity gain [N·m·s/rad] (> 0).
@@ -277,9 +289,9 @@ def scene_mjcf(
             allowed=f">= {2 * dt:g}",
         )
     mujoco = _mujoco()
-    wb = _robot(robot)
+    wb = _robot(robot, feet)
     r = _foot_radius(wb) if foot_radius is None else _positive("foot_radius", foot_radius)
-    xml = _robot_mjcf(wb, robot)
+    xml = _robot_mjcf(wb, robot if source is None else source)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
     # the robot at its neutral pose, base at the origin: where each foot is, in which body

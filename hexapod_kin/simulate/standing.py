@@ -70,10 +70,10 @@ def stand_forces(
 ) -> StandForces:
     """The robot standing in MuJoCo at :func:`hexapod_kin.dynamics.stand`'s pose, flat ground.
 
-    The base is placed level at the stance height plus the foot radius (the spheres touch
-    the ground), the joints held at the stance's angles by the actuators; after ``settle``
-    seconds the normal force of each foot (mean over the last 0.2 s) is compared with the
-    stance's vertical contact force.
+    The base is placed level at the stance's height, raised so that the stance feet's
+    spheres touch the ground, the joints held at the stance's angles by the actuators;
+    after ``settle`` seconds the normal force of each foot (mean over the last 0.2 s) is
+    compared with the stance's vertical contact force.
 
     The servos have no armature here unless asked: with more feet than needed, MuJoCo's
     soft contacts share the load in proportion to each constraint's regularisation, which
@@ -92,7 +92,7 @@ def stand_forces(
         OptionalDependencyError: MuJoCo is not installed.
 
     """
-    wb = _robot(robot)
+    wb = _robot(robot, scene_options.get("feet"))
     scene_options.setdefault("armature", 0.0)
     sc = scene_mjcf(wb, **scene_options) if scene is None else scene
     if sc.terrain != "flat":
@@ -106,7 +106,11 @@ def stand_forces(
     cols = [list(st.joint_names).index(j) for j in sc.joint_names]
     q[:] = np.asarray(st.q)[cols]
     pose = np.eye(4)
-    pose[2, 3] = st.height + sc.foot_radius
+    pose[2, 3] = st.height
+    eng.place(pose, q)
+    stance = [list(sc.leg_names).index(n) for n in st.stance_legs]
+    centres = eng.data.geom_xpos[eng.feet[stance], 2]
+    pose[2, 3] += sc.foot_radius - float(centres.mean())  # the stance spheres on the ground
     eng.place(pose, q)
     steps = int(round(dur / sc.timestep))
     tail = max(1, int(round(0.2 / sc.timestep)))
