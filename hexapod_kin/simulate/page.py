@@ -69,7 +69,7 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     turn = d["turn_error"]
     plan_lines = [
         f"pattern {run.table.name}, terrain {d['scene']['terrain']}, "
-        f"{run.t[-1]:.4g} s at {len(run.t) / max(run.t[-1], 1e-12):.4g} Hz",
+        f"{run.t[-1]:.4g} s at {run.settings.get('rate', float('nan')):.4g} Hz",
         f"distance {sim.distance_planned:.4f} m, turn {math.degrees(sim.turn_planned):.3f}°",
         f"min stability margin {1e3 * run.min_margin:.2f} mm",
     ]
