@@ -33,6 +33,7 @@ MODULES: tuple[str, ...] = (
     "export",
     "sweep",
     "gait",
+    "simulate",
     "report",
     "precompile",
 )

@@ -85,7 +85,7 @@ def reach(source: Chain | Hexapod) -> float:
     return max(body, legs)
 
 
-def _with_compiler(urdf_text: str, discard_visual: bool) -> str:
+def _with_compiler(urdf_text: str, discard_visual: bool, balance: bool = False) -> str:
     from lxml import etree
 
     root = etree.fromstring(urdf_text.encode("utf-8"))
@@ -95,7 +95,7 @@ def _with_compiler(urdf_text: str, discard_visual: bool) -> str:
         "compiler",
         discardvisual="true" if discard_visual else "false",
         fusestatic="false",
-        balanceinertia="false",
+        balanceinertia="true" if balance else "false",
         inertiafromgeom="false",
         strippath="false",
         angle="radian",
@@ -163,15 +163,26 @@ def _exclude_adjacent(root: Any) -> None:
     """No contacts between a body and its parent (MuJoCo only filters moving parents).
 
     A link whose parent is welded to the world (the base, a leg mount) would otherwise touch
-    it at the joint all the time.
+    it at the joint all the time. Bodies without a joint are welded to their parent, so a
+    moving body is also excluded with every welded ancestor up to (and including) the first
+    ancestor that moves on its own joint (a leg's first link against the robot's body through
+    its jointless mount link).
     """
     from lxml import etree
 
-    pairs = [
-        (parent.get("name"), child.get("name"))
-        for parent in root.iter("body")
-        for child in parent.findall("body")
-    ]
+    def moves(body: Any) -> bool:
+        return any(body.find(tag) is not None for tag in ("joint", "freejoint"))
+
+    pairs: list[tuple[str, str]] = []
+    for parent in root.iter("body"):
+        for child in parent.findall("body"):
+            pairs.append((parent.get("name"), child.get("name")))
+            up = parent
+            while not moves(up):
+                up = up.getparent()
+                if up is None or up.tag != "body":
+                    break
+                pairs.append((up.get("name"), child.get("name")))
     if not pairs:
         return
     contact = etree.Element("contact")
@@ -204,6 +215,7 @@ def to_mjcf(
     timestep: float | None = None,
     integrator: str | None = None,
     floating: bool = False,
+    balance_inertia: bool = False,
 ) -> MjcfExport:
     """Return the MJCF of a source, compiled by MuJoCo (deterministic).
 
@@ -221,7 +233,11 @@ def to_mjcf(
         timestep: ``<option timestep>`` in [s] (> 0); default MuJoCo's (0.002 s).
         integrator: ``<option integrator>``: one of :data:`INTEGRATORS`; default MuJoCo's.
         floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
-            ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor.
+            ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor
+            (a Hexapod or a robot's URDF; not a chain).
+        balance_inertia: Let MuJoCo raise principal inertias that break the triangle
+            inequality ``A + B >= C`` (``balanceinertia``; a URDF from elsewhere with rounded
+            inertials). Off: such a URDF is refused, and the MJCF's inertias are the URDF's.
 
     Returns:
         An :class:`MjcfExport`.
@@ -257,10 +273,10 @@ def to_mjcf(
     else:
         resolved = resolve_source(source)
         params = resolved.params
-    if floating and not isinstance(params, Hexapod):
+    if floating and isinstance(params, Chain):
         raise ParameterError(
-            "floating=True needs a robot (Hexapod) whose root body has a mass; a chain's base "
-            "link has none",
+            "floating=True needs a robot (a Hexapod or a legged robot's URDF) whose root body "
+            "has a mass; a chain's base link has none",
             parameter="floating",
             value=floating,
         )
@@ -282,7 +298,9 @@ def to_mjcf(
         assets = {f"{mesh_prefix}{k}": v for k, v in meshed.files.items()}
     else:
         urdf = add_collisions(urdf)
-    saved, model, mujoco = _compile(_with_compiler(urdf, discard_visual=not meshes), assets)
+    saved, model, mujoco = _compile(
+        _with_compiler(urdf, discard_visual=not meshes, balance=balance_inertia), assets
+    )
     root = etree.fromstring(saved.encode("utf-8"))
     _patch(root, model, mujoco)
     _exclude_adjacent(root)

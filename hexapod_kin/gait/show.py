@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["support_polygons", "walk_html", "walk_live"]
+__all__ = ["run_model", "support_polygons", "walk_html", "walk_live"]
 
 
 def _hull(points: np.ndarray) -> np.ndarray:
@@ -80,6 +80,36 @@ def _joint_columns(run: Any, mdl: Any) -> list[int]:
         ) from None
 
 
+def run_model(run: Any) -> Any:
+    """The loaded model (:func:`hexapod_kin.load`) of the robot that walks ``run``.
+
+    The run's own robot (``run.robot``, a whole-body model) when it has one: its Hexapod
+    table, else its source or URDF text; otherwise the built-in ``hexapod``.
+
+    Raises:
+        ConfigurationError: The run's robot cannot be loaded as a model.
+
+    """
+    from .. import load
+    from ..exceptions import ConfigurationError
+    from ..params import Hexapod
+
+    robot = getattr(run, "robot", None)
+    if robot is None:
+        return load("hexapod")
+    params = getattr(robot, "params", None)
+    if isinstance(params, Hexapod):
+        return load(params)
+    for attr in ("source", "urdf"):
+        src = getattr(robot, attr, None)
+        if src is not None:
+            return load(src)
+    raise ConfigurationError(
+        f"the run's robot {robot!r} has no table, source or URDF to draw; pass model=",
+        parameter="model",
+    )
+
+
 def walk_live(run: Any, viewer: Any, **options: Any) -> None:
     """Play a walk in a live :class:`hexapod_kin.viewer.Viewer` of the hexapod (with overlays).
 
@@ -130,8 +160,9 @@ def walk_html(
     Args:
         run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
         path: Destination ``.html`` (written atomically).
-        model: The loaded hexapod (default ``hexapod_kin.load("hexapod")``); its joints are
-            matched to the run's by name.
+        model: The loaded robot (default :func:`run_model`: the run's own robot,
+            ``run.robot``, or the built-in hexapod); its joints are matched to the run's by
+            name.
         title: Page title (default: pattern, terrain and the minimum margin).
         **options: Passed to :func:`hexapod_kin.viewer.export_html` (``fps``, ``speed``...).
 
@@ -143,10 +174,9 @@ def walk_html(
         ConfigurationError: The model's joints are not the run's.
 
     """
-    from .. import load
     from ..viewer import export_html
 
-    mdl = load("hexapod") if model is None else model
+    mdl = run_model(run) if model is None else model
     cols = _joint_columns(run, mdl)
     poly, com = support_polygons(run)
     label = title or (

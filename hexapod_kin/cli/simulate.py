@@ -1,0 +1,209 @@
+"""The ``simulate`` subcommand: a planned walk replayed open-loop in MuJoCo, checked."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add the ``simulate`` subcommand to ``sub`` (an argparse subparsers object)."""
+    p = sub.add_parser(
+        "simulate",
+        help="plan a walk, replay it in MuJoCo and compare (distance, heading, tilt, slip)",
+        description=(
+            "Plan a walk (as the gait command does), export the robot to MJCF with the "
+            "terrain, foot contact spheres and stiff position servos on every leg joint, "
+            "replay the planned joint angles open-loop in MuJoCo and report: distance and "
+            "turn vs the plan, heading error, max roll and pitch, body height error, "
+            "stance-foot slip, any contact that is not a foot on the ground, and the "
+            "standing per-foot normal forces vs dynamics.stand(). Exit status 0 when every "
+            "check passes, 1 when one fails, 2 on an error. Needs MuJoCo "
+            "(pip install 'hexapod-kin[export]')."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "source",
+        help="the robot: 'hexapod' (the built-in preset), a table file, URDF path or erd:NAME",
+    )
+    p.add_argument(
+        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
+    )
+    p.add_argument(
+        "--foot",
+        metavar="FRAME:X,Y,Z",
+        default=None,
+        help="feet of a URDF without foot links: frame and offset [m] per leg, "
+        "space-separated (e.g. 'tibia_lf:0,0.16,0.029 tibia_lm:...')",
+    )
+    p.add_argument("--pattern", default="tripod", help="gait pattern (tripod, wave, ripple...)")
+    p.add_argument(
+        "--velocity",
+        nargs="+",
+        metavar="VX,VY,WZ",
+        default=None,
+        help="body twist: forward, sideways [m/s], yaw rate [rad/s] (vx,vy,wz or three numbers)",
+    )
+    p.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
+    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    p.add_argument(
+        "--terrain",
+        choices=("flat", "slope", "step"),
+        default="flat",
+        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
+    )
+    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    p.add_argument(
+        "--foot-radius",
+        type=float,
+        default=None,
+        help="foot sphere radius [m] (default: the robot's)",
+    )
+    p.add_argument("--friction", type=float, default=1.0, help="sliding friction coefficient")
+    p.add_argument(
+        "--no-stand", action="store_true", help="skip the standing foot-force comparison"
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--html", metavar="FILE.html", help="plan and simulation side by side (self-contained)"
+    )
+    p.add_argument("--mjcf", metavar="FILE.xml", help="also write the simulated scene's MJCF")
+    p.set_defaults(func=_cmd_simulate)
+
+
+def _velocity(values: list[str] | None) -> Any:
+    from ..exceptions import ParameterError
+
+    if values is None:
+        return None
+    parts = [v for item in values for v in item.replace(",", " ").split()]
+    try:
+        vel = [float(v) for v in parts]
+    except ValueError:
+        vel = []
+    if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
+        raise ParameterError(
+            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
+            parameter="--velocity",
+            value=" ".join(values),
+            allowed="vx,vy,wz",
+        )
+    return tuple(vel)
+
+
+def _robot(args: argparse.Namespace) -> Any:
+    from .. import robots
+    from ..exceptions import ParameterError
+    from ..gait import robot as gait_robot
+    from ..params import Hexapod
+    from ..sources import resolve_source
+    from .common import set_params
+
+    params = set_params(args.set)
+    if args.source == "hexapod":
+        built = robots.get("hexapod", **params)
+        assert isinstance(built, Hexapod)
+        return gait_robot.whole_body(built)
+    if params:
+        raise ParameterError(
+            "-s applies to the hexapod preset only", parameter="--set", value=args.set
+        )
+    if getattr(gait_robot, "as_whole_body", None) is not None:
+        return args.source  # simulate() builds it (and exports its URDF)
+    table = resolve_source(args.source).params
+    if not isinstance(table, Hexapod):
+        raise ParameterError(
+            f"source {args.source!r} is not a legged robot built from a Hexapod",
+            parameter="source",
+            value=args.source,
+        )
+    return gait_robot.whole_body(table)
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from .._io import atomic_write
+    from ..simulate import simulate, simulation_html
+    from .common import emit_json, output_path
+
+    html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
+    mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
+    robot = _robot(args)
+    extra = {} if args.foot is None else {"feet": args.foot}
+    sim = simulate(
+        robot,
+        **extra,
+        pattern=args.pattern,
+        velocity=_velocity(args.velocity),
+        stride=args.stride,
+        period=args.period,
+        terrain=args.terrain,
+        duration=args.duration,
+        foot_radius=args.foot_radius,
+        friction=args.friction,
+        stand=not args.no_stand,
+    )
+    out = sim.to_dict()
+    if mjcf is not None:
+        out["mjcf"] = str(atomic_write(mjcf, sim.scene.xml))
+    if html is not None:
+        out["html"] = str(simulation_html(sim, html))
+    if args.json:
+        emit_json(out)
+    else:
+        _print(out)
+    return 0 if sim.ok else 1
+
+
+def _pct(v: float | None) -> str:
+    return "-" if v is None else f"{100 * v:+.3f} %"
+
+
+def _print(out: dict[str, Any]) -> None:
+    plan, sc = out["plan"], out["scene"]
+    print(
+        f"{plan['pattern']['name']} walk on {sc['terrain']} terrain, {plan['duration']:g} s, "
+        f"replayed in MuJoCo (feet {1e3 * sc['foot_radius']:.3g} mm, friction "
+        f"{sc['friction']:g}, kp {sc['kp']:g} N·m/rad)"
+    )
+    print(
+        f"distance  {out['distance']:.5f} m vs {out['distance_planned']:.5f} m planned "
+        f"({_pct(out['distance_error'])})"
+    )
+    print(
+        f"turn      {math.degrees(out['turn']):.4f} deg vs "
+        f"{math.degrees(out['turn_planned']):.4f} deg planned ({_pct(out['turn_error'])})"
+    )
+    print(f"heading error      {out['heading_error_deg']:.4f} deg")
+    print(f"max roll / pitch   {out['max_roll_deg']:.4f} / {out['max_pitch_deg']:.4f} deg")
+    print(f"body height error  {1e3 * out['height_error']:.3f} mm")
+    print(
+        f"stance slip        {1e3 * out['max_slip']:.3f} mm per contact "
+        f"(max {out['max_slip_speed']:.4f} m/s)"
+    )
+    contacts = out["non_foot_contacts"]
+    print(
+        "non-foot contacts  "
+        + (", ".join(f"{a}-{b} at {w:.3f} s" for a, b, w in contacts) if contacts else "none")
+    )
+    strikes = out["swing_strikes"]
+    print(
+        "swing foot strikes "
+        + (", ".join(f"{leg} at {w:.3f} s" for leg, w in strikes) if strikes else "none")
+    )
+    stand = out["stand"]
+    if stand is not None:
+        print(
+            f"standing forces    max |MuJoCo - stand()| = {stand['max_error']:.3g} N "
+            f"(per foot {', '.join(f'{f:.4f}' for f in stand['forces'])} N vs "
+            f"{', '.join(f'{f:.4f}' for f in stand['expected'])} N)"
+        )
+    failed = [k for k, row in out["checks"].items() if not row["ok"]]
+    print("checks             " + ("pass" if not failed else "FAIL: " + ", ".join(failed)))
+    for key in ("html", "mjcf"):
+        if key in out:
+            print(f"wrote {out[key]}", file=sys.stderr)

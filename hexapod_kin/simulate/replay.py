@@ -1,0 +1,468 @@
+"""The replay: a plan's joint angles driven open-loop in MuJoCo, and the figures of merit."""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ConfigurationError, ParameterError, one_of
+from .scene import (
+    POINT_FOOT,
+    SCENE_TERRAINS,
+    SimScene,
+    _Engine,
+    _hermite,
+    _mujoco,
+    _robot,
+    scene_mjcf,
+)
+from .standing import StandForces, stand_forces
+
+__all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "simulate"]
+
+#: The check's limits: travel (relative), heading [rad], roll and pitch [rad], slip in one
+#: contact [m], body height error [m].
+LIMITS: dict[str, float] = {
+    "travel": 0.01,
+    "heading": math.radians(0.5),
+    "tilt": math.radians(1.0),
+    "slip": 0.005,
+    "height": 0.01,
+}
+
+#: A swing foot touching the ground where the plan has its sphere at least this far from
+#: the ground [m] (measured at the planned centre, along the ground's normal) is a strike.
+STRIKE_CLEARANCE = 0.002
+
+
+def _yaw(R: np.ndarray) -> np.ndarray:
+    return np.unwrap(np.arctan2(R[..., 1, 0], R[..., 0, 0]))
+
+
+def _roll_pitch(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roll and pitch [rad] of ``R = Rz(ψ) Ry(θ) Rx(φ)``."""
+    pitch = np.arcsin(np.clip(-R[..., 2, 0], -1.0, 1.0))
+    roll = np.arctan2(R[..., 2, 1], R[..., 2, 2])
+    return roll, pitch
+
+
+@dataclass(frozen=True)
+class SimRun:
+    """A plan replayed in MuJoCo, and how far the physics departs from it (SI units).
+
+    Attributes:
+        t: (N,) the plan's sample times [s].
+        base_poses: (N, 4, 4) simulated body poses.
+        planned: (N, 4, 4) planned body poses, raised by ``lift``.
+        q: (N, nq) simulated joint angles [rad].
+        foot_forces: (N, L) normal force on each foot at each sample [N].
+        lift: Vertical shift of the plan that puts the foot spheres on the ground [m].
+        distance_planned: Planned horizontal displacement of the body [m].
+        distance: Simulated horizontal displacement of the body [m].
+        turn_planned: Planned yaw change [rad].
+        turn: Simulated yaw change [rad].
+        heading_error: Max over time of the yaw error (both from their start) [rad].
+        direction_error: Angle between the simulated and planned displacements [rad]
+            (0 when the plan does not move).
+        max_roll: Max |roll| [rad].
+        max_pitch: Max |pitch| [rad].
+        height_error: Max |z − z_planned| of the body [m].
+        max_slip: Largest tangential slide of a stance foot's contact point during one
+            contact [m].
+        max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
+        swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
+            ground (a new contact, not a late lift-off) where the plan has it at least
+            :data:`STRIKE_CLEARANCE` clear of it.
+        non_foot_contacts: ``(geom, geom, first time [s])`` of every pair in contact that is
+            not a foot on the ground.
+        stand: The standing forces check (None when skipped).
+        scene: The scene simulated.
+        wall_time: Wall time of the replay (settling included) [s].
+        plan: The plan's own summary (:meth:`GaitRun.to_dict`).
+
+    """
+
+    t: np.ndarray
+    base_poses: np.ndarray
+    planned: np.ndarray
+    q: np.ndarray
+    foot_forces: np.ndarray
+    lift: float
+    distance_planned: float
+    distance: float
+    turn_planned: float
+    turn: float
+    heading_error: float
+    direction_error: float
+    max_roll: float
+    max_pitch: float
+    height_error: float
+    max_slip: float
+    max_slip_speed: float
+    swing_strikes: tuple[tuple[str, float], ...]
+    non_foot_contacts: tuple[tuple[str, str, float], ...]
+    stand: StandForces | None
+    scene: SimScene
+    wall_time: float
+    plan: dict[str, Any] = field(default_factory=dict)
+    run: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def distance_error(self) -> float | None:
+        """(distance − planned) / planned (None when the plan does not translate)."""
+        if self.distance_planned < 1e-6:
+            return None
+        return (self.distance - self.distance_planned) / self.distance_planned
+
+    @property
+    def turn_error(self) -> float | None:
+        """(turn − planned) / planned (None when the plan does not turn)."""
+        if abs(self.turn_planned) < 1e-6:
+            return None
+        return (self.turn - self.turn_planned) / self.turn_planned
+
+    def checks(self, limits: dict[str, float] | None = None) -> dict[str, dict[str, Any]]:
+        """Each check: its value, its limit and whether it passes (limits: :data:`LIMITS`).
+
+        ``travel``: the larger of |distance_error| and |turn_error| (those that exist);
+        ``heading``: the yaw error; ``roll``/``pitch``; ``slip``: ``max_slip``; ``height``:
+        ``height_error``; ``contacts``: the number of non-foot contact pairs; ``strikes``:
+        the number of legs whose swing foot struck the ground (both must be 0).
+        """
+        lim = {**LIMITS, **(limits or {})}
+        rel = [abs(e) for e in (self.distance_error, self.turn_error) if e is not None]
+        rows = {
+            "travel": (max(rel) if rel else 0.0, lim["travel"]),
+            "heading": (self.heading_error, lim["heading"]),
+            "roll": (self.max_roll, lim["tilt"]),
+            "pitch": (self.max_pitch, lim["tilt"]),
+            "slip": (self.max_slip, lim["slip"]),
+            "height": (self.height_error, lim["height"]),
+            "contacts": (float(len(self.non_foot_contacts)), 0.0),
+            "strikes": (float(len(self.swing_strikes)), 0.0),
+        }
+        return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
+
+    @property
+    def stumbled(self) -> bool:
+        """A stumble: a non-foot contact, a swing strike, roll, pitch or slip over its limit."""
+        c = self.checks()
+        return not all(c[k]["ok"] for k in ("contacts", "strikes", "roll", "pitch", "slip"))
+
+    @property
+    def ok(self) -> bool:
+        """Every check passes."""
+        return all(row["ok"] for row in self.checks().values())
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: the figures, the checks, the scene and the plan's summary."""
+        return {
+            "distance_planned": self.distance_planned,
+            "distance": self.distance,
+            "distance_error": self.distance_error,
+            "turn_planned": self.turn_planned,
+            "turn": self.turn,
+            "turn_error": self.turn_error,
+            "heading_error_deg": math.degrees(self.heading_error),
+            "direction_error_deg": math.degrees(self.direction_error),
+            "max_roll_deg": math.degrees(self.max_roll),
+            "max_pitch_deg": math.degrees(self.max_pitch),
+            "height_error": self.height_error,
+            "max_slip": self.max_slip,
+            "max_slip_speed": self.max_slip_speed,
+            "swing_strikes": [list(c) for c in self.swing_strikes],
+            "lift": self.lift,
+            "non_foot_contacts": [list(c) for c in self.non_foot_contacts],
+            "stand": None if self.stand is None else self.stand.to_dict(),
+            "checks": self.checks(),
+            "stumbled": self.stumbled,
+            "ok": self.ok,
+            "wall_time": self.wall_time,
+            "scene": self.scene.to_dict(),
+            "plan": self.plan,
+        }
+
+
+def _lift(run: Any, scene: SimScene) -> float:
+    """Vertical shift putting the first sample's stance spheres on the scene's ground."""
+    feet = np.asarray(run.feet[0])[np.asarray(run.support[0])]
+    if not len(feet):
+        feet = np.asarray(run.feet[0])
+    gap = (feet[:, 2] - scene.height(feet[:, 0], feet[:, 1])) * scene.normal_z
+    if np.ptp(gap) > 1e-6:
+        raise ConfigurationError(
+            f"the plan's stance feet are {np.ptp(gap):.3g} m apart in height above the scene's "
+            f"{scene.terrain!r} ground; the plan's terrain is not the scene's",
+            parameter="terrain",
+            value=scene.terrain,
+        )
+    return float((scene.foot_radius - gap.mean()) / scene.normal_z)
+
+
+def simulate(
+    run_or_robot: Any = None,
+    *,
+    pattern: Any = "tripod",
+    velocity: Any = None,
+    terrain: Any = None,
+    duration: float = 10.0,
+    feet: Any = None,
+    foot_radius: float | None = None,
+    friction: float = 1.0,
+    kp: float = 300.0,
+    kv: float = 3.0,
+    armature: float = 0.002,
+    contact_time: float = 0.005,
+    timestep: float = 1e-3,
+    settle: float = 0.5,
+    stand: bool = True,
+    **walk_options: Any,
+) -> SimRun:
+    """Replay a walk open-loop in MuJoCo and measure how far the physics departs from it.
+
+    Args:
+        run_or_robot: A :class:`~hexapod_kin.gait.walk.GaitRun` (its robot: ``run.robot``, or
+            the built-in hexapod), or a robot (what :func:`~hexapod_kin.gait.walk.walk`
+            takes; None: the built-in hexapod) to plan with the keywords below.
+        pattern: The walk's pattern (when planning).
+        velocity: The walk's body twist ``(vx, vy, wz)`` (when planning).
+        terrain: ``flat`` (default), ``slope`` or ``step``: planned on and simulated on; with a
+            run, its own terrain unless given (a plan replayed on other ground: its first
+            sample's stance feet must stand on both).
+        duration: The walk's length [s] (when planning).
+        feet: The feet of a URDF robot without foot links (``"frame:x,y,z ..."``, as
+            :func:`~hexapod_kin.gait.robot.as_whole_body` takes them; when planning).
+        foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
+            else the robot's); when planning, the plan's feet too.
+        friction: Sliding friction coefficient.
+        kp: Servo position gain [N·m/rad].
+        kv: Servo velocity gain [N·m·s/rad].
+        armature: Servo rotor inertia per leg joint [kg·m²] (see :func:`scene_mjcf`).
+        contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
+        timestep: Physics step [s]; must divide the plan's sample interval.
+        settle: Time [s] the robot stands at the first pose before the replay (≥ 0).
+        stand: Also run :func:`stand_forces` (flat ground).
+        **walk_options: More keywords of :func:`~hexapod_kin.gait.walk.walk` (when planning).
+
+    Returns:
+        A :class:`SimRun`.
+
+    Raises:
+        ParameterError: Bad values; a terrain the scene cannot build.
+        GaitError: The plan fails (as :func:`~hexapod_kin.gait.walk.walk`; pass
+            ``strict=False`` to replay a failing plan).
+        OptionalDependencyError: MuJoCo is not installed.
+
+    """
+    import inspect
+    import time
+
+    from ..gait.walk import GaitRun, walk
+
+    _mujoco()
+    if isinstance(run_or_robot, GaitRun):
+        run = run_or_robot
+        wb = _robot(getattr(run, "robot", None))
+        if tuple(wb.joint_names) != tuple(run.joint_names):
+            raise ParameterError(
+                f"the run's joints {list(run.joint_names)[:3]}... are not its robot's "
+                f"{list(wb.joint_names)[:3]}...: a run from a gait without `run.robot`; "
+                "simulate the robot (its source) with the walk's keywords instead",
+                parameter="run",
+            )
+        ground = str(run.settings.get("terrain", "flat")) if terrain is None else terrain
+    else:
+        if terrain is not None and not isinstance(terrain, str):
+            raise ParameterError(
+                f"terrain={terrain!r}: the simulation builds {list(SCENE_TERRAINS)} only",
+                parameter="terrain",
+                value=repr(terrain),
+                allowed=list(SCENE_TERRAINS),
+            )
+        ground = "flat" if terrain is None else terrain
+        one_of("terrain", ground, list(SCENE_TERRAINS))
+        wb = _robot(run_or_robot, feet)
+        if foot_radius is not None and "foot_radius" in inspect.signature(walk).parameters:
+            walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
+        run = walk(
+            wb,
+            pattern=pattern,
+            velocity=velocity,
+            terrain=ground,
+            duration=duration,
+            **walk_options,
+        )
+    planned_radius = run.settings.get("foot_radius")
+    if foot_radius is None and planned_radius is not None:  # the feet the plan rolled
+        foot_radius = float(planned_radius) if planned_radius > 0 else POINT_FOOT
+    one_of("terrain", ground, list(SCENE_TERRAINS))
+    by_name = isinstance(run_or_robot, (str, os.PathLike))  # the URDF text is at hand
+    sc = scene_mjcf(
+        wb,
+        source=run_or_robot if by_name else None,
+        terrain=ground,
+        foot_radius=foot_radius,
+        friction=friction,
+        kp=kp,
+        kv=kv,
+        armature=armature,
+        contact_time=contact_time,
+        timestep=timestep,
+    )
+    t = np.asarray(run.t, dtype=float)
+    if len(t) < 2:
+        raise ParameterError("the run has fewer than 2 samples", parameter="run")
+    h = float(t[1] - t[0])
+    sub = int(round(h / sc.timestep))
+    if sub < 1 or abs(sub * sc.timestep - h) > 1e-9 * h:
+        raise ParameterError(
+            f"timestep={sc.timestep!r} s does not divide the plan's sample interval {h!r} s",
+            parameter="timestep",
+            value=sc.timestep,
+            allowed=f"{h:g} / k",
+        )
+    wait = float(settle)
+    if not (math.isfinite(wait) and wait >= 0):
+        raise ParameterError(f"settle={settle!r}: a time >= 0 s", parameter="settle")
+    cols = [list(run.joint_names).index(j) for j in sc.joint_names]
+    q_plan = np.asarray(run.q)[:, cols]
+    qd_plan = np.asarray(run.qdot)[:, cols]
+    lift = _lift(run, sc)
+    planned = np.array(run.base_poses, dtype=float)
+    planned[:, 2, 3] += lift
+    ref, rate = _hermite(q_plan, qd_plan, h, sub)
+    ctrl = ref + (sc.kv / sc.kp) * rate
+    eng = _Engine(sc)
+    mj, m, d = eng.mj, eng.model, eng.data
+    support = np.asarray(run.support)
+    n, nl = len(t), len(sc.leg_names)
+    base = np.empty((n, 4, 4))
+    qs = np.empty((n, len(cols)))
+    forces = np.zeros((n, nl))
+    max_slip = max_speed = 0.0
+    seen: dict[tuple[str, str], float] = {}
+    start = time.perf_counter()
+    eng.place(planned[0], q_plan[0])
+    for _ in range(int(round(wait / sc.timestep))):
+        mj.mj_step(m, d)
+
+    def record(i: int) -> None:
+        base[i] = eng.base_pose()
+        qs[i] = d.qpos[eng.jq]
+        forces[i] = eng.normal_forces()
+
+    record(0)
+    dt = sc.timestep
+    slides = [0.0] * nl
+    strikes: dict[str, float] = {}
+    leg_names = sc.leg_names
+    centre = np.asarray(run.feet)
+    above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
+    held = (above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support
+    clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
+    in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
+    was_down = [True] * nl
+    for i in range(n - 1):
+        stance = support[i].tolist()
+        for k in range(sub):
+            if in_order:
+                d.ctrl[:] = ctrl[i, k]
+            else:
+                d.ctrl[eng.act] = ctrl[i, k]
+            mj.mj_step(m, d)
+            others, feet = eng.scan()
+            for g0, g1 in others:
+                pair = sorted((eng.label(g0), eng.label(g1)))
+                seen.setdefault((pair[0], pair[1]), float(t[i] + (k + 1) * dt))
+            touching = [False] * nl
+            down = [False] * nl
+            for leg, v, _ in feet:
+                down[leg] = True
+                if not stance[leg]:
+                    # a new contact of a swing foot the plan holds clear (not a lift-off lag)
+                    if clear[i][leg] and not was_down[leg] and leg_names[leg] not in strikes:
+                        strikes[leg_names[leg]] = float(t[i] + (k + 1) * dt)
+                    continue
+                if not touching[leg]:
+                    touching[leg] = True
+                    slides[leg] += v * dt
+                    max_speed = max(max_speed, v)
+            max_slip = max(max_slip, *slides)
+            slides = [x if on else 0.0 for x, on in zip(slides, touching)]
+            was_down = down
+        record(i + 1)
+    wall = time.perf_counter() - start
+    stance = None
+    if stand:
+        stance = stand_forces(
+            wb,
+            source=run_or_robot if by_name else None,
+            foot_radius=sc.foot_radius,
+            friction=sc.friction,
+            kp=sc.kp,
+            kv=sc.kv,
+            contact_time=sc.contact_time,
+            timestep=sc.timestep,
+        )
+    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)
+    return _summary(run, sc, t, base, planned, qs, forces, *figures)
+
+
+def _summary(
+    run: Any,
+    sc: SimScene,
+    t: np.ndarray,
+    base: np.ndarray,
+    planned: np.ndarray,
+    qs: np.ndarray,
+    forces: np.ndarray,
+    lift: float,
+    max_slip: float,
+    max_speed: float,
+    strikes: dict[str, float],
+    seen: dict[tuple[str, str], float],
+    stand: StandForces | None,
+    wall: float,
+) -> SimRun:
+    dp = planned[-1, :2, 3] - planned[0, :2, 3]
+    ds = base[-1, :2, 3] - base[0, :2, 3]
+    yaw_p, yaw_s = _yaw(planned[:, :3, :3]), _yaw(base[:, :3, :3])
+    yaw_p, yaw_s = yaw_p - yaw_p[0], yaw_s - yaw_s[0]
+    roll, pitch = _roll_pitch(base[:, :3, :3])
+    lp, ls = float(np.linalg.norm(dp)), float(np.linalg.norm(ds))
+    direction = 0.0
+    if lp > 1e-6 and ls > 0:
+        direction = math.atan2(abs(float(dp[0] * ds[1] - dp[1] * ds[0])), float(dp @ ds))
+    for a in (t, base, planned, qs, forces):
+        a.setflags(write=False)
+    contacts = tuple(sorted(((a, b, w) for (a, b), w in seen.items()), key=lambda x: x[2]))
+    return SimRun(
+        t=t,
+        base_poses=base,
+        planned=planned,
+        q=qs,
+        foot_forces=forces,
+        lift=lift,
+        distance_planned=lp,
+        distance=ls,
+        turn_planned=float(yaw_p[-1]),
+        turn=float(yaw_s[-1]),
+        heading_error=float(np.abs(yaw_s - yaw_p).max()),
+        direction_error=direction,
+        max_roll=float(np.abs(roll).max()),
+        max_pitch=float(np.abs(pitch).max()),
+        height_error=float(np.abs(base[:, 2, 3] - planned[:, 2, 3]).max()),
+        max_slip=max_slip,
+        max_slip_speed=max_speed,
+        swing_strikes=tuple(sorted(strikes.items(), key=lambda x: x[1])),
+        non_foot_contacts=contacts,
+        stand=stand,
+        scene=sc,
+        wall_time=wall,
+        plan=run.to_dict(),
+        run=run,
+    )

@@ -1,0 +1,579 @@
+"""The MuJoCo scene of a walk: the robot's MJCF, foot spheres, terrain, servos; the engine.
+
+:func:`scene_mjcf` builds the MJCF (see :mod:`hexapod_kin.simulate`); :class:`_Engine` holds
+the compiled model and reads contacts, foot forces and contact-point slip.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ConfigurationError, ParameterError, one_of
+
+__all__ = ["SCENE_TERRAINS", "SimScene", "scene_mjcf"]
+
+#: Terrains the scene can build (the named ones of :mod:`hexapod_kin.gait.terrain`).
+SCENE_TERRAINS = ("flat", "slope", "step")
+
+_SLOPE = math.radians(8.0)
+_STEP_RISE, _STEP_AT = 0.02, 0.25
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        from ..exceptions import OptionalDependencyError
+
+        raise OptionalDependencyError(
+            "mujoco is not installed; `pip install 'hexapod-kin[export]'` installs it "
+            "(MuJoCo >= 3.14)",
+            parameter="module",
+            value="mujoco",
+        ) from None
+    return mujoco
+
+
+# ----------------------------------------------------------------------------- the robot
+def _robot(robot: Any, feet: Any = None) -> Any:
+    """The whole-body model of ``robot`` (None: the built-in hexapod), ``feet`` its foot spec."""
+    from ..gait import robot as gait_robot
+
+    as_whole_body = getattr(gait_robot, "as_whole_body", None)
+    if as_whole_body is not None:
+        return as_whole_body(robot) if feet is None else as_whole_body(robot, feet=feet)
+    if feet is not None:
+        raise ParameterError("feet= needs a legged robot from a URDF", parameter="feet")
+    if robot is None or isinstance(robot, gait_robot.WholeBody):
+        return gait_robot.whole_body() if robot is None else robot
+    return gait_robot.whole_body(robot)
+
+
+#: Radius [m] of the spheres that stand for point feet (a robot whose foot radius is 0).
+POINT_FOOT = 0.001
+
+
+def _foot_radius(wb: Any) -> float:
+    r = getattr(wb, "foot_radius", None)
+    if r is None:  # before the robot carried it: the export's foot sphere (1.5 link radius)
+        r = 1.5 * float(wb.link_radius)
+    return float(r) if r > 0 else POINT_FOOT
+
+
+def _without_meshes(urdf: str) -> str:
+    """The URDF without mesh geometry (visual or collision); primitives stay.
+
+    A robot's URDF from elsewhere often names ``package://`` meshes that are not at hand;
+    the simulation needs the feet (added as spheres) and the inertials, not the meshes.
+    Collisions that were meshes are gone, so contacts of those links go undetected.
+    """
+    from lxml import etree
+
+    root = etree.fromstring(urdf.encode("utf-8"))
+    for link in root.iter("link"):
+        for elem in list(link):
+            if elem.tag in ("visual", "collision") and elem.find("geometry/mesh") is not None:
+                link.remove(elem)
+    return str(etree.tostring(root, encoding="unicode"))
+
+
+def _robot_mjcf(wb: Any, source: Any = None) -> str:
+    """The robot's MJCF with a free base: from its Hexapod table, else from its URDF.
+
+    The URDF text is the robot's ``urdf`` attribute, else that of ``source`` (the path, text
+    or ``erd:NAME`` the robot was built from), else that of the robot's ``source`` label.
+    """
+    import os
+
+    from ..exceptions import HexapodKinError
+    from ..export.mjcf import to_mjcf
+    from ..params import Hexapod
+    from ..sources import resolve_source
+
+    params = getattr(wb, "params", None)
+    if isinstance(params, Hexapod):
+        return to_mjcf(params, floating=True, floor=False).xml
+    urdf = getattr(wb, "urdf", None)
+    for src in (source, getattr(wb, "source", None)):
+        if isinstance(urdf, str) or not isinstance(src, (str, os.PathLike)):
+            continue
+        try:
+            urdf = resolve_source(src).text
+        except HexapodKinError:
+            continue
+    if isinstance(urdf, str):
+        return to_mjcf(_without_meshes(urdf), floating=True, floor=False, balance_inertia=True).xml
+    raise ParameterError(
+        f"robot {getattr(wb, 'source', wb)!r}: no Hexapod table or URDF text to export to "
+        "MJCF; give its URDF path or erd:NAME as the robot",
+        parameter="robot",
+        value=repr(getattr(wb, "source", wb)),
+    )
+
+
+def _leg_ends(wb: Any) -> list[int]:
+    """Per leg, the column of the joint nearest the foot (the deepest joint moving it).
+
+    Found by moving each joint by 1e-3 rad from the neutral pose: a joint belongs to the legs
+    whose foot moves; the deepest in the kinematic tree of those carries the foot.
+    """
+    q0 = np.asarray(wb.neutral_q(), dtype=float)
+    eye = np.eye(4)[None]
+    f0 = wb.feet(q0[None], eye)[0]
+    qs = q0[None] + 1e-3 * np.eye(wb.nq)
+    moved = np.linalg.norm(wb.feet(qs, np.repeat(eye, wb.nq, axis=0)) - f0, axis=-1) > 1e-9
+    parents = np.asarray(wb.model.parents)
+    names = list(wb.model.names)
+    depth = []
+    for name in wb.joint_names:
+        j, d = names.index(name), 0
+        while j > 0:
+            j, d = int(parents[j]), d + 1
+        depth.append(d)
+    out = []
+    for leg in range(wb.n_legs):
+        cols = np.flatnonzero(moved[:, leg])
+        if not len(cols):
+            raise ConfigurationError(f"leg {wb.leg_names[leg]}: no joint moves its foot")
+        out.append(int(max(cols, key=lambda c: depth[c])))
+    return out
+
+
+# ----------------------------------------------------------------------------- the scene
+@dataclass(frozen=True)
+class SimScene:
+    """The MJCF of a robot on a terrain, ready to simulate.
+
+    Attributes:
+        xml: The MJCF text (robot, terrain, foot spheres, actuators, options).
+        terrain: ``flat``, ``slope`` or ``step``.
+        foot_radius: Foot sphere radius [m].
+        foot_geoms: Per leg, the name of its foot sphere geom.
+        actuators: Per leg joint (``joint_names`` order), its actuator's name.
+        joint_names: The leg joints.
+        leg_names: The legs.
+        kp: Position gain [N·m/rad].
+        kv: Velocity gain [N·m·s/rad].
+        friction: Sliding friction coefficient.
+        timestep: Physics step [s].
+        armature: Servo rotor inertia per leg joint [kg·m²].
+        contact_time: Contact ``solref`` time constant [s].
+
+    """
+
+    xml: str
+    terrain: str
+    foot_radius: float
+    foot_geoms: tuple[str, ...]
+    actuators: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    leg_names: tuple[str, ...]
+    kp: float
+    kv: float
+    friction: float
+    timestep: float
+    armature: float = 0.0
+    contact_time: float = 0.02
+
+    def height(self, x: Any, y: Any) -> np.ndarray:
+        """Ground height [m] of the scene at ``x``, ``y`` [m]."""
+        x = np.asarray(x, dtype=float)
+        if self.terrain == "slope":
+            return np.asarray(math.tan(_SLOPE) * x + 0.0 * np.asarray(y))
+        if self.terrain == "step":
+            return np.asarray(np.where(x >= _STEP_AT, _STEP_RISE, 0.0) + 0.0 * np.asarray(y))
+        return np.asarray(0.0 * x + 0.0 * np.asarray(y))
+
+    @property
+    def normal_z(self) -> float:
+        """The z component of the ground normal (1 on flat ground and steps)."""
+        return math.cos(_SLOPE) if self.terrain == "slope" else 1.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready settings (SI units)."""
+        return {
+            "terrain": self.terrain,
+            "foot_radius": self.foot_radius,
+            "kp": self.kp,
+            "kv": self.kv,
+            "friction": self.friction,
+            "timestep": self.timestep,
+            "armature": self.armature,
+            "contact_time": self.contact_time,
+        }
+
+
+def _positive(name: str, value: Any) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and v > 0):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; give a finite number > 0 (SI units)",
+            parameter=name,
+            value=value,
+            allowed="> 0",
+        )
+    return v
+
+
+def scene_mjcf(
+    robot: Any = None,
+    *,
+    feet: Any = None,
+    source: Any = None,
+    terrain: str = "flat",
+    foot_radius: float | None = None,
+    friction: float = 1.0,
+    kp: float = 300.0,
+    kv: float = 3.0,
+    armature: float = 0.002,
+    contact_time: float = 0.005,
+    timestep: float = 1e-3,
+) -> SimScene:
+    """The robot on a terrain, with foot spheres and position actuators, as MJCF.
+
+    Args:
+        robot: The robot (a :class:`~hexapod_kin.gait.robot.WholeBody`, or what the gait
+            accepts; None: the built-in hexapod).
+        feet: The feet of a URDF robot without foot links (as the gait takes them).
+        source: Where a built robot's URDF comes from (its path, text or ``erd:NAME``; a
+            robot given by path or name is its own source).
+        terrain: ``flat``, ``slope`` (8° up along +x) or ``step`` (0.02 m up at x = 0.25 m).
+        foot_radius: Foot sphere radius [m] (default the robot's ``foot_radius``; point
+            feet, radius 0, are :data:`POINT_FOOT` spheres).
+        friction: Sliding friction coefficient of every geom (> 0).
+        kp: Position gain [N·m/rad] (> 0); the force is clamped to the joints' effort limits.
+        kv: Velocity gain [N·m·s/rad] (> 0).
+        armature: Rotor inertia of each leg joint's servo [kg·m²] (≥ 0; MuJoCo's
+            ``armature``): the reflected inertia of a geared servo, which also keeps the
+            light links from chattering on stiff contacts.
+        contact_time: Contact stiffness as MuJoCo's ``solref`` time constant [s] (critically
+            damped; at least twice the time step).
+        timestep: Physics time step [s] (> 0).
+
+    Returns:
+        A :class:`SimScene`.
+
+    Raises:
+        ParameterError: A bad value, or a terrain that is not one of :data:`SCENE_TERRAINS`.
+        OptionalDependencyError: MuJoCo is not installed.
+
+    """
+    from lxml import etree
+
+    from ..export._common import num, vec
+
+    one_of("terrain", terrain, list(SCENE_TERRAINS))
+    mu, kp, kv, dt, tc = (
+        _positive(n, v)
+        for n, v in (
+            ("friction", friction),
+            ("kp", kp),
+            ("kv", kv),
+            ("timestep", timestep),
+            ("contact_time", contact_time),
+        )
+    )
+    arm = 0.0 if armature == 0 else _positive("armature", armature)
+    if tc < 2 * dt:
+        raise ParameterError(
+            f"contact_time={contact_time!r} s is below twice the timestep ({2 * dt:g} s)",
+            parameter="contact_time",
+            value=contact_time,
+            allowed=f">= {2 * dt:g}",
+        )
+    mujoco = _mujoco()
+    wb = _robot(robot, feet)
+    r = _foot_radius(wb) if foot_radius is None else _positive("foot_radius", foot_radius)
+    xml = _robot_mjcf(wb, robot if source is None else source)
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    # the robot at its neutral pose, base at the origin: where each foot is, in which body
+    q0 = np.asarray(wb.neutral_q(), dtype=float)
+    jadr = _joint_qpos(mujoco, model, wb.joint_names)
+    data.qpos[:] = 0.0
+    data.qpos[3] = 1.0
+    data.qpos[jadr] = q0
+    mujoco.mj_kinematics(model, data)
+    feet = wb.feet(q0[None], np.eye(4)[None])[0]
+    ends = _leg_ends(wb)
+    root = etree.fromstring(xml.encode("utf-8"))
+    bodies = {b.get("name"): b for b in root.iter("body")}
+    foot_geoms = []
+    for leg, (name, col) in enumerate(zip(wb.leg_names, ends)):
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, wb.joint_names[col])
+        bid = int(model.jnt_bodyid[jid])
+        R, x = data.xmat[bid].reshape(3, 3), data.xpos[bid]
+        local = R.T @ (feet[leg] - x)
+        # drop the export's spheres at the foot point (this body or bodies welded to it)
+        for b in range(model.nbody):
+            welded, up = b == bid, b
+            while not welded and model.body_jntnum[up] == 0 and up > 0:
+                up = int(model.body_parentid[up])
+                welded = up == bid
+            if not welded:
+                continue
+            elems = bodies[mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)].findall("geom")
+            adr = int(model.body_geomadr[b])
+            for k, g in enumerate(range(adr, adr + len(elems))):
+                kind = int(model.geom_type[g])
+                if kind == int(mujoco.mjtGeom.mjGEOM_SPHERE) and (
+                    np.linalg.norm(data.geom_xpos[g] - feet[leg]) < 1e-9
+                ):
+                    elems[k].getparent().remove(elems[k])
+                elif kind == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
+                    _trim(elems[k], model, data, g, feet[leg], r)
+        gname = f"{name}_foot_contact"
+        etree.SubElement(
+            bodies[mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, bid)],
+            "geom",
+            name=gname,
+            type="sphere",
+            size=num(r),
+            pos=vec(local),
+            rgba="0.8 0.15 0.15 1",
+        )
+        foot_geoms.append(gname)
+    world = root.find("worldbody")
+    default = etree.Element("default")
+    etree.SubElement(default, "geom", friction=f"{num(mu)} 0 0", solref=f"{num(tc)} 1")
+    etree.SubElement(default, "joint", armature=num(arm))
+    root.find("compiler").addnext(default)
+    option = etree.Element(
+        "option", timestep=num(dt), integrator="implicitfast", cone="elliptic", impratio="10"
+    )
+    root.find("compiler").addnext(option)
+    grounds = [dict(name="ground", type="plane", size="0 0 0.05", pos="0 0 0")]
+    if terrain == "slope":
+        a = -_SLOPE / 2.0  # about y by -8°: the normal (−sin 8°, 0, cos 8°)
+        grounds[0]["quat"] = f"{num(math.cos(a))} 0 {num(math.sin(a))} 0"
+    if terrain == "step":
+        half = 5.0
+        grounds.append(
+            dict(
+                name="step",
+                type="box",
+                size=f"{num(half)} {num(half)} {num(_STEP_RISE / 2)}",
+                pos=f"{num(_STEP_AT + half)} 0 {num(_STEP_RISE / 2)}",
+            )
+        )
+    for k, spec in enumerate(grounds):
+        world.insert(k, etree.Element("geom", rgba="0.8 0.8 0.8 1", **spec))
+    world.insert(
+        0, etree.Element("light", name="hk_light", pos="0 0 3", dir="0 0 -1", directional="true")
+    )
+    act = etree.SubElement(root, "actuator")
+    names = []
+    effort = _effort(mujoco, model, wb.joint_names)
+    for jn, lim in zip(wb.joint_names, effort):
+        attrs = dict(name=f"{jn}_servo", joint=jn, kp=num(kp), kv=num(kv))
+        if math.isfinite(lim):
+            attrs.update(forcerange=f"{num(-lim)} {num(lim)}", forcelimited="true")
+        etree.SubElement(act, "position", **attrs)
+        names.append(attrs["name"])
+    etree.indent(root, space="  ")
+    text = etree.tostring(root, encoding="unicode") + "\n"
+    return SimScene(
+        xml=text,
+        terrain=terrain,
+        foot_radius=r,
+        foot_geoms=tuple(foot_geoms),
+        actuators=tuple(names),
+        joint_names=tuple(wb.joint_names),
+        leg_names=tuple(wb.leg_names),
+        kp=kp,
+        kv=kv,
+        friction=mu,
+        timestep=dt,
+        armature=arm,
+        contact_time=tc,
+    )
+
+
+def _trim(elem: Any, model: Any, data: Any, g: int, foot: np.ndarray, r: float) -> None:
+    """Shorten a link cylinder that ends at the foot point, when it is wider than the foot.
+
+    Its flat end (a disc of the link's radius ρ centred on the foot point) would stick out of
+    a foot sphere of radius r < ρ and touch the ground; the end moves back by ρ along the
+    link's axis, so only the sphere is at the tip.
+    """
+    from ..export._common import num, vec
+
+    rho, half = float(model.geom_size[g, 0]), float(model.geom_size[g, 1])
+    if rho <= r:
+        return
+    axis = data.geom_xmat[g].reshape(3, 3)[:, 2]
+    for sign in (1.0, -1.0):
+        if np.linalg.norm(data.geom_xpos[g] + sign * half * axis - foot) < 1e-9:
+            cut = min(rho, half)
+            local = model.geom_quat[g]
+            mat = np.empty(9)
+            mujoco = _mujoco()
+
+            mujoco.mju_quat2Mat(mat, local)
+            shift = -sign * 0.5 * cut * mat.reshape(3, 3)[:, 2]
+            elem.set("size", f"{num(rho)} {num(half - 0.5 * cut)}")
+            elem.set("pos", vec(np.asarray(model.geom_pos[g]) + shift))
+            return
+
+
+def _joint_qpos(mujoco: Any, model: Any, names: Any) -> np.ndarray:
+    out = []
+    for jn in names:
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
+        if jid < 0:
+            raise ConfigurationError(f"joint {jn!r} is not in the robot's MJCF")
+        out.append(int(model.jnt_qposadr[jid]))
+    return np.array(out)
+
+
+def _effort(mujoco: Any, model: Any, names: Any) -> np.ndarray:
+    out = []
+    for jn in names:
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
+        lim = model.jnt_actfrcrange[jid] if model.jnt_actfrclimited[jid] else (-np.inf, np.inf)
+        out.append(float(min(abs(lim[0]), abs(lim[1]))))
+    return np.array(out)
+
+
+# ----------------------------------------------------------------------------- the engine
+class _Engine:
+    """A compiled scene: ids of the joints, actuators, feet and the ground."""
+
+    def __init__(self, scene: SimScene) -> None:
+        mujoco = _mujoco()
+        self.mj = mujoco
+        self.scene = scene
+        self.model = m = mujoco.MjModel.from_xml_string(scene.xml)
+        self.data = mujoco.MjData(m)
+        self.jq = _joint_qpos(mujoco, m, scene.joint_names)
+        self.act = np.array(
+            [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
+        )
+        geom = mujoco.mjtObj.mjOBJ_GEOM
+        self.feet = np.array([mujoco.mj_name2id(m, geom, g) for g in scene.foot_geoms])
+        self.leg_of = np.full(m.ngeom, -1)
+        self.leg_of[self.feet] = np.arange(len(self.feet))
+        self.ground = np.zeros(m.ngeom, dtype=bool)
+        for name in ("ground", "step"):
+            g = mujoco.mj_name2id(m, geom, name)
+            if g >= 0:
+                self.ground[g] = True
+        self._vel = np.zeros(6)
+        self._force = np.zeros(6)
+        self._leg_list = [int(v) for v in self.leg_of]
+        self._ground_list = [bool(v) for v in self.ground]
+        self._geom_type = mujoco.mjtObj.mjOBJ_GEOM
+
+    def label(self, g: int) -> str:
+        """A geom's name, or ``body/index`` for an unnamed one."""
+        m, mj = self.model, self.mj
+        name = mj.mj_id2name(m, mj.mjtObj.mjOBJ_GEOM, g)
+        if name:
+            return str(name)
+        b = int(m.geom_bodyid[g])
+        return f"{mj.mj_id2name(m, mj.mjtObj.mjOBJ_BODY, b)}/{g - int(m.body_geomadr[b])}"
+
+    def place(self, pose: np.ndarray, q: np.ndarray) -> None:
+        """Base at ``pose`` (4×4), joints at ``q``, at rest."""
+        mj, d = self.mj, self.data
+        mj.mj_resetData(self.model, d)
+        d.qpos[:3] = pose[:3, 3]
+        quat = np.empty(4)
+        mj.mju_mat2Quat(quat, np.ascontiguousarray(pose[:3, :3]).reshape(-1))
+        d.qpos[3:7] = quat
+        d.qpos[self.jq] = q
+        d.ctrl[self.act] = q
+        mj.mj_forward(self.model, d)
+
+    def base_pose(self) -> np.ndarray:
+        """The free base's 4×4 world pose."""
+        d = self.data
+        out = np.eye(4)
+        mat = np.empty(9)
+        self.mj.mju_quat2Mat(mat, d.qpos[3:7])
+        out[:3, :3] = mat.reshape(3, 3)
+        out[:3, 3] = d.qpos[:3]
+        return out
+
+    def contacts(self) -> tuple[np.ndarray, np.ndarray]:
+        """(ncon, 2) geom pairs in contact, and (ncon,) True where one is a foot on the ground."""
+        d = self.data
+        nc = int(d.ncon)
+        if nc == 0:
+            return np.zeros((0, 2), dtype=int), np.zeros(0, dtype=bool)
+        g = np.asarray(d.contact.geom[:nc]).reshape(nc, 2)
+        feet = self.leg_of[g] >= 0
+        ground = self.ground[g]
+        ok = (feet[:, 0] & ground[:, 1]) | (feet[:, 1] & ground[:, 0])
+        return g, ok
+
+    def normal_forces(self) -> np.ndarray:
+        """(L,) normal force of the ground on each foot now [N]."""
+        out = np.zeros(len(self.feet))
+        g, ok = self.contacts()
+        for c in np.flatnonzero(ok):
+            self.mj.mj_contactForce(self.model, self.data, int(c), self._force)
+            out[self.leg_of[g[c]].max()] += self._force[0]
+        return out
+
+    def scan(self) -> tuple[list[tuple[int, int]], list[tuple[int, float, int]]]:
+        """The contacts now: non-foot geom pairs, and per foot contact its slip speed.
+
+        Returns ``(others, feet)``: ``others`` the geom pairs that are not a foot on the
+        ground; ``feet`` ``(leg, speed [m/s], contact index)``, the speed that of the foot's
+        material point at the contact point along the contact plane: ``v + ω × (p_c − c)``
+        (``v``, ``ω`` the foot's velocity at its centre ``c``,
+        :func:`mujoco.mj_objectVelocity`) less its normal part, zero for a foot that rolls.
+        Plain Python on the few contacts of a step (numpy's per-call cost would dominate).
+        """
+        mj, m, d = self.mj, self.model, self.data
+        nc = int(d.ncon)
+        if nc == 0:
+            return [], []
+        con = d.contact
+        pairs = con.geom[:nc].tolist()
+        leg_of, ground = self._leg_list, self._ground_list
+        others: list[tuple[int, int]] = []
+        feet: list[tuple[int, float, int]] = []
+        vel = self._vel
+        xpos = d.geom_xpos
+        for c, (g0, g1) in enumerate(pairs):
+            if leg_of[g0] >= 0 and ground[g1]:
+                foot = g0
+            elif leg_of[g1] >= 0 and ground[g0]:
+                foot = g1
+            else:
+                others.append((g0, g1))
+                continue
+            mj.mj_objectVelocity(m, d, self._geom_type, foot, vel, 0)
+            wx, wy, wz, vx, vy, vz = vel.tolist()
+            px, py, pz = con.pos[c].tolist()
+            cx, cy, cz = xpos[foot].tolist()
+            ax, ay, az = px - cx, py - cy, pz - cz
+            vx += wy * az - wz * ay
+            vy += wz * ax - wx * az
+            vz += wx * ay - wy * ax
+            nx, ny, nz = con.frame[c][:3].tolist()
+            vn = vx * nx + vy * ny + vz * nz
+            tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
+            feet.append((leg_of[foot], math.sqrt(tx * tx + ty * ty + tz * tz), c))
+        return others, feet
+
+
+def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic Hermite values and rates (N−1, sub, nq) at ``s = k / sub`` of every interval."""
+    s = (np.arange(sub) / sub)[None, :, None]
+    s2, s3 = s * s, s * s * s
+    q0, q1, d0, d1 = q[:-1, None], q[1:, None], h * qd[:-1, None], h * qd[1:, None]
+    val = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * q1
+    val = val + (s3 - s2) * d1
+    rate = (6 * s2 - 6 * s) * q0 + (3 * s2 - 4 * s + 1) * d0 + (-6 * s2 + 6 * s) * q1
+    rate = (rate + (3 * s2 - 2 * s) * d1) / h
+    return val, rate
