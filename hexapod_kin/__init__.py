@@ -78,6 +78,7 @@ _LAZY_SUBMODULES = (
     "report",
     "robots",
     "seeds",
+    "simulate",
     "singularity",
     "sources",
     "sweep",

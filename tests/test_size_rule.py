@@ -24,6 +24,7 @@ COMMANDS = [
     ["step", "hexabot_leg", "--duration", "1"],
     ["gait", "--duration", "2"],
     ["stand"],
+    ["simulate", "hexapod", "--duration", "1", "--no-stand"],
     ["derive", "hexabot_leg"],
 ]
 
