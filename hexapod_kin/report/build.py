@@ -565,8 +565,8 @@ def _html(
                 h.append(H.matrix_pair(v.cells))
             else:
                 h.append(
-                    f"<p>seed: <code>{e(v.claimed)}</code></p>"
-                    f"<p>hexapod_kin: <code>{e(v.computed)}</code></p>"
+                    f"<p>seed: <code>{e(H.pretty_entry(v.claimed))}</code></p>"
+                    f"<p>hexapod_kin: <code>{e(H.pretty_entry(v.computed))}</code></p>"
                 )
             h.append(H.verdict_html(v.text, v.status))
             h.append(f"<p><small>compared: {e(v.method)}</small></p></div>")

@@ -668,7 +668,7 @@ def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
             f"(decay rate measured {measured} 1/s vs b/(2I) = "
             f"{s.decay_rate_exact:.4f} 1/s) falls below {tol:g} θ0 by 10 s with the seed's "
             f"b = {d.damping:g} N·m·s/rad for any I < {i_max:.2g} kg·m² (e.g. a {mass:g} kg "
-            f"bob at less than {math.sqrt(i_max / mass):.2f} m); the seed gives "
+            f"bob at less than {math.sqrt(i_max / mass):.2f} m); the seed does not give "
             f"{c.data['unstated']}. Its damping unit 'Nm/s^2' should be N·m·s/rad"
         )
     if name == "step.velocity_over_input":
@@ -676,7 +676,7 @@ def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
             f"hexapod_kin's foot velocity amplitude equals the commanded one (ratio {val:.4f}); "
             f"a ratio of {float(c.data['value']):g} is what an input of 1/"
             f"{float(c.data['value']):g} the amplitude (or in a unit "
-            f"{float(c.data['value']):g}× larger) shows, and the seed gives "
+            f"{float(c.data['value']):g}× larger) shows, and the seed does not give "
             f"{c.data['unstated']}"
         )
     return None
