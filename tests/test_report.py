@@ -103,7 +103,9 @@ WRONG = {
 #: never defines its "input" signal's amplitude or unit).
 UNDERDETERMINED = {
     "001-pend-rest": r"for any I < 0\.022 kg·m².*does not give the link's length and mass",
-    "003-velocity-factor": r"ratio 1\.0000\).*the seed does not give the input's amplitude and unit",
+    "003-velocity-factor": (
+        r"ratio 1\.0000\).*the seed does not give the input's amplitude and unit"
+    ),
 }
 #: Seed 003's α2 = +90° table: a different convention, said with its FK.
 DIFFERS = {"003-leg-table": r"α = \+90° vs hexabot_leg's -90°.*\(x, y, −z\).*True"}
@@ -127,9 +129,7 @@ def test_every_claim_has_a_computed_verdict(built: tuple[dict, object]) -> None:
     assert set(got) == {c.id for c in claims}
     assert all(
         v["status"] in ("agrees", "wrong", "underdetermined", "differs") for v in got.values()
-    ), [
-        (k, v["verdict"]) for k, v in got.items() if v["status"] == "error"
-    ]
+    ), [(k, v["verdict"]) for k, v in got.items() if v["status"] == "error"]
     assert all(v["method"] for v in got.values())
     assert set(AGREE) | set(WRONG) | set(DIFFERS) | set(UNDERDETERMINED) == set(got)
 
@@ -145,7 +145,11 @@ def test_known_mistakes_found_with_reason(built: tuple[dict, object], claim: str
     got = {v["claim"]: v for v in built[0]["verdicts"]}[claim]
     status, pattern = next(
         (s, table[claim])
-        for s, table in (("wrong", WRONG), ("differs", DIFFERS), ("underdetermined", UNDERDETERMINED))
+        for s, table in (
+            ("wrong", WRONG),
+            ("differs", DIFFERS),
+            ("underdetermined", UNDERDETERMINED),
+        )
         if claim in table
     )
     assert got["status"] == status, got["verdict"]

@@ -89,7 +89,9 @@ def test_page_without_webgl(playwright_api, report) -> None:
             assert still.is_visible()
             box = still.bounding_box()
             assert box["width"] > 300 and box["height"] > 200
-            assert page.evaluate("(e) => e.complete && e.naturalWidth > 300", still.element_handle())
+            assert page.evaluate(
+                "(e) => e.complete && e.naturalWidth > 300", still.element_handle()
+            )
             assert a.locator("iframe").count() == 0 and not a.locator("button.play").is_visible()
         assert not [u for u in requests if not u.startswith(("file:", "data:", "blob:", "about:"))]
     finally:
@@ -119,10 +121,12 @@ def test_page_with_webgl_matrices_text_and_links(playwright_api, report) -> None
                 assert ys == sorted(ys) and len(set(ys)) == len(ys)
                 marked = t.locator("td.diff")
                 assert marked.count() == len(cells["differ"]), v["claim"]
-                for n, (i, j) in enumerate(sorted(map(tuple, cells["differ"]))):
+                for i, j in sorted(map(tuple, cells["differ"])):
                     cell = t.locator("tr").nth(i + header).locator("td").nth(j)
                     assert "diff" in (cell.get_attribute("class") or "")
-                    bg = page.evaluate("(e) => getComputedStyle(e).backgroundColor", cell.element_handle())
+                    bg = page.evaluate(
+                        "(e) => getComputedStyle(e).backgroundColor", cell.element_handle()
+                    )
                     assert bg not in ("rgba(0, 0, 0, 0)", "transparent")
         assert page.locator("td.diff").count() == 2 * sum(
             len(v["cells"]["differ"]) for v in data["verdicts"] if v["cells"]

@@ -15,8 +15,6 @@ heavy is imported at module level: a replay stays light.
 
 from __future__ import annotations
 
-import base64
-import html
 import json
 import time
 from dataclasses import dataclass
@@ -598,4 +596,3 @@ def _html(
     h.append(H.SCRIPT)
     h.append("</body></html>")
     return "\n".join(h)
-

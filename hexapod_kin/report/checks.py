@@ -266,9 +266,7 @@ def _verdict(
 _AT = re.compile(r"^\((\d+),(\d+)\):")
 
 
-def _cells(
-    seed_rows: Any, ours: sp.Matrix, diffs: list[str], note: str = ""
-) -> dict[str, Any]:
+def _cells(seed_rows: Any, ours: sp.Matrix, diffs: list[str], note: str = "") -> dict[str, Any]:
     """The matrix layout of a verdict: the seed's entries as written, ours, the differing ones."""
     differ = []
     for d in diffs:

@@ -85,8 +85,10 @@ class Verdict:
 
     @property
     def text(self) -> str:
-        """``agrees`` / ``seed is wrong: …`` / ``underdetermined: …`` / ``differs: …`` /
-        ``not computed: …``."""
+        """The verdict as a sentence: ``agrees`` or ``<label>: <reason>``.
+
+        Labels: ``seed is wrong``, ``underdetermined``, ``differs``, ``not computed``.
+        """
         if self.status == "agrees":
             return "agrees"
         if self.status == "wrong":
@@ -117,8 +119,10 @@ class Verdict:
         return cls(**{n: data[n] for n in names})
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (``verdict``: :attr:`text`; no ``reason``, which it holds; ``cells``
-        parsed, or None)."""
+        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed.
+
+        ``cells`` is None for a verdict that is not a matrix or table.
+        """
         out: dict[str, Any] = self.fields()
         del out["reason"], out["method"], out["cells"]
         cells = json.loads(self.cells) if self.cells else None

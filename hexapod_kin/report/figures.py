@@ -154,8 +154,10 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
 
 
 def _walk_png(run: Any, path: Path) -> Path:
-    """Gait diagram, margin and foot paths (:mod:`hexapod_kin.gait.plots`' panels), the foot
-    paths' limits fitted to the data and their legend beside the panel."""
+    """Gait diagram, margin and foot paths (the panels of :mod:`hexapod_kin.gait.plots`).
+
+    The foot paths' limits are fitted to the data and their legend sits beside the panel.
+    """
     from ..gait.plots import draw_foot_paths, draw_gait_diagram, draw_margin
     from ..plots import fit_limits, pyplot, save_figure
 
@@ -168,7 +170,9 @@ def _walk_png(run: Any, path: Path) -> Path:
     draw_foot_paths(ax, run)
     xs = [run.feet[..., 0], run.base_poses[:, 0, 3], run.com[:, 0]]
     ys = [run.feet[..., 1], run.base_poses[:, 1, 3], run.com[:, 1]]
-    fit_limits(ax, np.concatenate([np.ravel(x) for x in xs]), np.concatenate([np.ravel(y) for y in ys]))
+    fit_limits(
+        ax, np.concatenate([np.ravel(x) for x in xs]), np.concatenate([np.ravel(y) for y in ys])
+    )
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     fig.suptitle("tripod walk: gait, margin, foot paths")
     return save_figure(fig, path, crop=False)

@@ -90,7 +90,8 @@ dl.legend dt{font-weight:bold;float:left;clear:left;width:10em}dl.legend dd{marg
 SCRIPT = """<script>
 (function(){
   function webgl(){try{var c=document.createElement('canvas');
-    return !!(window.WebGLRenderingContext&&(c.getContext('webgl')||c.getContext('experimental-webgl')));
+    return !!(window.WebGLRenderingContext&&
+      (c.getContext('webgl')||c.getContext('experimental-webgl')));
   }catch(err){return false;}}
   var gl=webgl();
   document.documentElement.setAttribute('data-webgl',gl?'yes':'no');
