@@ -39,7 +39,7 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
     ),
     (
         "transforms",
-        "2. Every ^{j-1}T_j and ^0T_j, symbolically",
+        "2. Every ʲ⁻¹Tⱼ and ⁰Tⱼ, symbolically",
         "Each seed matrix is compared entry by entry with `hexapod_kin.symbolic.derive` of the "
         "seed's own table (α2 sign and lengths as the seed chose). The full derivations are at "
         "the end of the section.",
@@ -251,7 +251,7 @@ def _build(
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims, cache=cache)
     # the derivations first: the heat maps label their samples with the families derived here
-    derivations = {k: ctx.text(k) for k in _PRINTED}
+    derivations = {k: ctx.printed(k) for k in _PRINTED}
     verdicts = tuple(evaluate(claims, ctx))
     figs["step"].append(figures.step_figure(ctx, fdir))
     step = ctx.step
@@ -411,6 +411,21 @@ def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
     return out + ["| " + " | ".join(cell(x) for x in r) + " |" for r in rows]
 
 
+def _md_derivation(title: str, printed: dict[str, Any]) -> list[str]:
+    """A derivation (:meth:`~.checks.Context.printed`) as Markdown: matrices as tables."""
+    from .html import pretty_entry
+
+    out = ["", f"#### Derivation of {title}", ""] + [f"- {line}" for line in printed["header"]]
+    for item in printed["items"]:
+        if "rows" in item:
+            rows = [[pretty_entry(x) for x in r] for r in item["rows"]]
+            header = [f"c{j + 1}" for j in range(len(rows[0]))]
+            out += ["", f"{item['label']} =", ""] + _md_table(header, rows)
+        else:
+            out += ["", f"{item['label']} = {pretty_entry(item['value'])}"]
+    return out + [""] + [f"- {line}" for line in printed["footer"]]
+
+
 def _md_cells(cells: str) -> list[str]:
     """A matrix verdict as two Markdown tables (differing entries in bold)."""
     from .html import pretty_entry
@@ -446,7 +461,7 @@ def _markdown(
     seeds: dict[str, str],
     figs: dict[str, list[Path]],
     anims: dict[str, list[Path]],
-    derivations: dict[str, str],
+    derivations: dict[str, dict[str, Any]],
 ) -> str:
     lines = [
         "# hexapod_kin reproduces the four lab reports",
@@ -491,8 +506,8 @@ def _markdown(
         for p in anims[key]:
             lines += ["", f"Animation: [{p.name}]({p.name}) (self-contained, opens offline)"]
         if key == "transforms":
-            for k, text in derivations.items():
-                lines += ["", f"#### Derivation of {_DERIV[k]}", "", "```", text, "```"]
+            for k, printed in derivations.items():
+                lines += _md_derivation(_DERIV[k], printed)
     return "\n".join(lines) + "\n"
 
 
@@ -501,7 +516,7 @@ def _html(
     seeds: dict[str, str],
     figs: dict[str, list[Path]],
     anims: dict[str, list[Path]],
-    derivations: dict[str, str],
+    derivations: dict[str, dict[str, Any]],
     stills: dict[str, tuple[Path, str]] | None = None,
 ) -> str:
     from . import html as H
@@ -582,11 +597,7 @@ def _html(
             still, when = stills.get(p.stem, (None, ""))
             h.append(H.animation(p, still, when))
         if key == "transforms":
-            for k, text in derivations.items():
-                h.append(
-                    f"<details><summary>Derivation of {e(_DERIV[k])}</summary>"
-                    f"<pre>{e(text)}</pre></details>"
-                )
+            h += [H.derivation_html(_DERIV[k], printed) for k, printed in derivations.items()]
     h.append("<h2 id='seeds'>8. The seeds' texts</h2>")
     h.append(
         "<p>As shipped in <code>hexapod_kin/report/seeds/</code> (unchanged); the lines a "

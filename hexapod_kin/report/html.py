@@ -28,6 +28,7 @@ __all__ = [
     "LEGEND",
     "SCRIPT",
     "animation",
+    "derivation_html",
     "facts_html",
     "image",
     "inline",
@@ -194,6 +195,23 @@ def verdict_html(text: str, status: str) -> str:
         f"<div class='{status}'><b>verdict: {e(head)} entries differ:</b>"
         f"<ul>{''.join(li)}</ul></div>{tail}"
     )
+
+
+def derivation_html(title: str, printed: dict[str, Any]) -> str:
+    """A derivation (:meth:`~.checks.Context.printed`) in a ``<details>``: matrices as tables."""
+    h = [f"<details><summary>Derivation of {e(title)}</summary>"]
+    h.append("<p>" + "<br>".join(e(line) for line in printed["header"]) + "</p>")
+    for item in printed["items"]:
+        if "rows" in item:
+            h.append(
+                f"<div class='mats'><figure><figcaption>{e(item['label'])} =</figcaption>"
+                f"{_table(item['rows'], set(), None)}</figure></div>"
+            )
+        else:
+            h.append(f"<p>{e(item['label'])} = <code>{e(pretty_entry(item['value']))}</code></p>")
+    h.append("<ul>" + "".join(f"<li>{e(line)}</li>" for line in printed["footer"]) + "</ul>")
+    h.append("</details>")
+    return "".join(h)
 
 
 def _value(v: Any) -> str:
