@@ -2,10 +2,13 @@
 
 ``reproduce(out)`` writes into ``out``:
 
-* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``;
-* ``report.html`` — the same, standalone: figures as base64 PNG data URIs, the animations
-  embedded as ``<iframe srcdoc>`` (they also sit beside it as ``step.html`` and ``walk.html``),
-  so it opens offline from ``file://``;
+* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``, every
+  claim linked to its lines of the seed texts copied to ``seeds/``;
+* ``report.html`` — the same, standalone (:mod:`.html`): matrices as tables with the differing
+  entries marked, figures as base64 PNG data URIs, each animation as its still frame with a
+  button that starts it (``<iframe srcdoc>``; without WebGL the page says so and keeps the
+  still frame), the seed texts with one anchor per line; it opens offline from ``file://``.
+  The animations also sit beside it as ``step.html`` and ``walk.html``;
 * ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
 
 With ``cache=True`` a run whose inputs are those of an earlier successful build replays it
@@ -158,9 +161,8 @@ def reproduce(
         out: Report folder (created).
         quick: Reduced sizes (shorter runs, coarser scans) for tests.
         animations: Write the step and walk animations (needs the ``viewer`` extra).
-        cache: Replay an earlier build with the same inputs (:mod:`.replay`) and reuse the
-            printed derivations (:mod:`.cache`); ``False`` computes everything again (and
-            stores the result for the next run).
+        cache: Replay an earlier build with the same inputs (:mod:`.replay`); ``False``
+            computes everything again (and stores the result for the next run).
 
     Returns:
         The :class:`Report` (``replayed_from`` tells whether it was replayed).
