@@ -556,7 +556,7 @@ def _html(
     h += [f"<dt class='{s}'>{e(label)}</dt><dd>{e(text)}</dd>" for s, label, text in LEGEND]
     h.append("</dl><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
     for v in rep.verdicts:
-        where = e(v.where)
+        where = e(H.seed_notation(v.where))
         if v.lines:
             a = v.lines.partition("-")[0]
             where = f"<a href='#{H.line_anchor(v.seed, int(a))}'>{where}</a>"
@@ -574,7 +574,7 @@ def _html(
                 continue
             h.append(
                 f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
-                f"{e(v.where)}{passage(v)}</h3>"
+                f"{e(H.seed_notation(v.where))}{passage(v)}</h3>"
             )
             if v.cells:
                 h.append(H.matrix_pair(v.cells))

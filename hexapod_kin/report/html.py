@@ -35,6 +35,7 @@ __all__ = [
     "line_anchor",
     "matrix_pair",
     "pretty_entry",
+    "seed_notation",
     "seed_texts",
     "verdict_html",
 ]
@@ -122,6 +123,25 @@ def inline(text: str) -> str:
 
 
 _POW = {"2": "²", "3": "³", "4": "⁴"}
+_SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def seed_notation(text: str) -> str:
+    """Transform names written in ASCII (``^0_1T``, ``T_0^1``) as the seeds print them.
+
+    ``^0_1T`` → ``⁰₁T``, ``T_0^1`` → ``T₀¹``; other text unchanged (and not escaped).
+    """
+    text = re.sub(
+        r"\^(\d)_(\d)T",
+        lambda m: m.group(1).translate(_SUP) + m.group(2).translate(_SUB) + "T",
+        text,
+    )
+    return re.sub(
+        r"T_(\d)\^(\d)",
+        lambda m: "T" + m.group(1).translate(_SUB) + m.group(2).translate(_SUP),
+        text,
+    )
 
 
 def pretty_entry(text: str) -> str:
