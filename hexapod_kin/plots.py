@@ -224,6 +224,8 @@ def plot_still(
     for k, set_lim in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
         set_lim(mid[k] - half[k], mid[k] + half[k])
     ax.set_box_aspect(tuple(half / half.max()))
+    for axis, h in zip((ax.xaxis, ax.yaxis, ax.zaxis), half / half.max()):
+        axis.get_major_locator().set_params(nbins=max(2, int(round(6 * h))))
     ax.view_init(*view)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
