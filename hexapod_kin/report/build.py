@@ -421,7 +421,7 @@ def _md_derivation(title: str, printed: dict[str, Any]) -> list[str]:
     for item in printed["items"]:
         if "rows" in item:
             rows = [[pretty_entry(x) for x in r] for r in item["rows"]]
-            header = [f"c{j + 1}" for j in range(len(rows[0]))]
+            header = [f"col {j + 1}" for j in range(len(rows[0]))]
             out += ["", f"{item['label']} =", ""] + _md_table(header, rows)
         else:
             out += ["", f"{item['label']} = {pretty_entry(item['value'])}"]
@@ -443,7 +443,7 @@ def _md_cells(cells: str) -> list[str]:
             ]
             for i, row in enumerate(rows)
         ]
-        header = data.get("header") or [f"c{j + 1}" for j in range(len(rows[0]) if rows else 0)]
+        header = data.get("header") or [f"col {j + 1}" for j in range(len(rows[0]) if rows else 0)]
         out += ["", f"{name} (differing entries in bold):", ""] + _md_table(header, body)
     return out
 
