@@ -18,9 +18,11 @@ from .exceptions import OptionalDependencyError
 __all__ = [
     "FORMATS",
     "decimate",
+    "fit_limits",
     "plot_motion",
     "plot_singularity_map",
     "plot_step",
+    "plot_still",
     "plot_workspace",
     "pyplot",
     "save_figure",
@@ -133,6 +135,104 @@ def save_figure(
     finally:
         plt.close(fig)
     return atomic_write(path, buf.getvalue())
+
+
+def fit_limits(ax: Any, x: Any, y: Any, margin: float = 0.06, equal: bool = True) -> None:
+    """Set ``ax``'s limits to the data's extent plus ``margin`` of its span on each side.
+
+    With ``equal`` the axes keep one scale for x and y by shrinking the box
+    (``adjustable="box"``), never by widening the limits past the data.
+
+    Args:
+        ax: A matplotlib 2-D axes.
+        x: Every x value drawn (any shape; NaN ignored).
+        y: Every y value drawn.
+        margin: Fraction of the larger span added on each side.
+        equal: Equal scale on both axes.
+
+    """
+    import numpy as np
+
+    x = np.asarray(x, dtype=float).ravel()
+    y = np.asarray(y, dtype=float).ravel()
+    x0, x1 = float(np.nanmin(x)), float(np.nanmax(x))
+    y0, y1 = float(np.nanmin(y)), float(np.nanmax(y))
+    pad = margin * max(x1 - x0, y1 - y0, 1e-9)
+    ax.set_xlim(x0 - pad, x1 + pad)
+    ax.set_ylim(y0 - pad, y1 + pad)
+    if equal:
+        ax.set_aspect("equal", adjustable="box")
+
+
+def plot_still(
+    chains: Any,
+    path: str | os.PathLike[str],
+    *,
+    title: str,
+    traces: Any = (),
+    outlines: Any = (),
+    ghosts: Any = (),
+    view: tuple[float, float] = (22.0, -60.0),
+    size: tuple[float, float] = (7.0, 5.2),
+) -> Path:
+    """One frame of a 3-D scene as a stick figure (the still frame of an animation).
+
+    Args:
+        chains: Point lists (K, 3) in [m], each drawn as links with joint markers (a leg).
+        path: Destination PNG (written atomically).
+        title: Figure title (say which time the frame is).
+        traces: Paths (N, 3) drawn as thin lines (e.g. the foot's path over the run).
+        outlines: Closed polygons (M, 3) drawn as outlines (a body, a support polygon).
+        ghosts: Point lists drawn faint behind ``chains`` (e.g. the pose at t = 0).
+        view: Elevation and azimuth of the camera in [deg].
+        size: Figure size in inches.
+
+    Returns:
+        The path written.
+
+    """
+    import numpy as np
+
+    plt = pyplot()
+    fig = plt.figure(figsize=size)
+    ax = fig.add_subplot(projection="3d")
+    pts = []
+    for tr in traces:
+        tr = np.asarray(tr, dtype=float)
+        ax.plot(tr[:, 0], tr[:, 1], tr[:, 2], lw=0.8, color="0.55")
+        pts.append(tr)
+    for poly in outlines:
+        poly = np.asarray(poly, dtype=float)
+        loop = np.vstack([poly, poly[:1]])
+        ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], lw=1.6, color="tab:green")
+        pts.append(poly)
+    for ch in chains:
+        ch = np.asarray(ch, dtype=float)
+        ax.plot(ch[:, 0], ch[:, 1], ch[:, 2], "-o", lw=3.0, ms=4, color="tab:blue")
+        ax.plot(*ch[-1:].T, "o", ms=6, color="crimson")
+        pts.append(ch)
+    for ch in ghosts:
+        ch = np.asarray(ch, dtype=float)
+        ax.plot(ch[:, 0], ch[:, 1], ch[:, 2], "-o", lw=2.0, ms=3, color="0.75")
+        pts.append(ch)
+    allp = np.vstack(pts)
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    # one scale on every axis; a flat scene keeps a box at least a third as tall as wide
+    span = max(float((hi - lo).max()), 1e-3)
+    half = np.maximum((hi - lo) / 2, span / 6) * 1.08
+    mid = (lo + hi) / 2
+    for k, set_lim in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
+        set_lim(mid[k] - half[k], mid[k] + half[k])
+    ax.set_box_aspect(tuple(half / half.max()))
+    for axis, h in zip((ax.xaxis, ax.yaxis, ax.zaxis), half / half.max()):
+        axis.get_major_locator().set_params(nbins=max(2, int(round(6 * h))))
+    ax.view_init(*view)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    ax.set_title(title, fontsize=10)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.93)
+    return save_figure(fig, path, crop=False)
 
 
 # ---------------------------------------------------------------- singularity pictures
@@ -481,7 +581,8 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
                 f"x error {run.error_x:.1e} m"
             )
     fig.suptitle(title)
-    fig.tight_layout()
+    # the margins tight_layout finds for these panels, set directly (it costs a layout pass)
+    fig.subplots_adjust(left=0.075, right=0.985, bottom=0.075, top=0.91, wspace=0.18, hspace=0.14)
     return save_figure(fig, path, crop=False)
 
 

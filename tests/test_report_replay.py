@@ -133,6 +133,11 @@ def test_replay_is_byte_identical(
 def _changes(env: First, tmp_path: Path) -> dict[str, Any]:
     claims = tmp_path / "claims.toml"
     claims.write_bytes(replay.CLAIMS_FILE.read_bytes() + b"\n# one more line\n")
+    seeds = tmp_path / "seeds"
+    seeds.mkdir()
+    for f in replay.SEEDS_DIR.glob("*.txt"):
+        (seeds / f.name).write_bytes(f.read_bytes())
+    (seeds / f.name).write_bytes(f.read_bytes() + b"\n")  # one seed text one byte longer
     versions = replay.versions()
 
     def newer() -> dict[str, str]:
@@ -141,6 +146,7 @@ def _changes(env: First, tmp_path: Path) -> dict[str, Any]:
     return {
         "source": lambda mp: mp.setattr(replay, "source_digest", lambda: "0" * 64),
         "claims": lambda mp: mp.setattr(replay, "CLAIMS_FILE", claims),
+        "seeds": lambda mp: mp.setattr(replay, "SEEDS_DIR", seeds),
         "library": lambda mp: mp.setattr(replay, "versions", newer),
         "format": lambda mp: mp.setattr(replay, "FORMAT", replay.FORMAT + 1),
         "quick": {"quick": False, "animations": False},
@@ -149,7 +155,7 @@ def _changes(env: First, tmp_path: Path) -> dict[str, Any]:
 
 
 @pytest.mark.parametrize(
-    "change", ["none", "source", "claims", "library", "format", "quick", "animations"]
+    "change", ["none", "source", "claims", "seeds", "library", "format", "quick", "animations"]
 )
 def test_any_key_part_changed_rebuilds(
     env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, change: str

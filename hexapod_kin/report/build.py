@@ -2,10 +2,13 @@
 
 ``reproduce(out)`` writes into ``out``:
 
-* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``;
-* ``report.html`` — the same, standalone: figures as base64 PNG data URIs, the animations
-  embedded as ``<iframe srcdoc>`` (they also sit beside it as ``step.html`` and ``walk.html``),
-  so it opens offline from ``file://``;
+* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``, every
+  claim linked to its lines of the seed texts copied to ``seeds/``;
+* ``report.html`` — the same, standalone (:mod:`.html`): matrices as tables with the differing
+  entries marked, figures as base64 PNG data URIs, each animation as its still frame with a
+  button that starts it (``<iframe srcdoc>``; without WebGL the page says so and keeps the
+  still frame), the seed texts with one anchor per line; it opens offline from ``file://``.
+  The animations also sit beside it as ``step.html`` and ``walk.html``;
 * ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
 
 With ``cache=True`` a run whose inputs are those of an earlier successful build replays it
@@ -15,8 +18,6 @@ heavy is imported at module level: a replay stays light.
 
 from __future__ import annotations
 
-import base64
-import html
 import json
 import time
 from dataclasses import dataclass
@@ -25,7 +26,8 @@ from typing import Any
 
 from .._io import atomic_write
 from . import replay
-from .data import Verdict, load_claims
+from .data import Verdict, load_claims, seed_file
+from .html import LEGEND
 
 __all__ = ["SECTIONS", "Report", "reproduce"]
 
@@ -40,7 +42,7 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
     ),
     (
         "transforms",
-        "2. Every ^{j-1}T_j and ^0T_j, symbolically",
+        "2. Every ʲ⁻¹Tⱼ and ⁰Tⱼ, symbolically",
         "Each seed matrix is compared entry by entry with `hexapod_kin.symbolic.derive` of the "
         "seed's own table (α2 sign and lengths as the seed chose). The full derivations are at "
         "the end of the section.",
@@ -56,8 +58,7 @@ SECTIONS: tuple[tuple[str, str, str], ...] = (
         "4. The x-only step (foot velocity [A sin 2πt/T, 0, 0])",
         "`hexapod_kin.seeds.seed_experiment`: resolved rate, RK4, closed loop on the exact "
         "reference; the plain Euler + solve loop the seeds used is the baseline in the drift "
-        "panel. Not checkable: seed 003's 'velocity = 10 × the input' (the input amplitude is "
-        "not given).",
+        "panel.",
     ),
     (
         "leg2",
@@ -82,7 +83,7 @@ def _section(v: Verdict) -> str:
         return "transforms"
     if v.seed == "002":
         return "leg2"
-    if v.claim.endswith(("step", "phase")):
+    if v.claim.endswith(("step", "phase", "velocity-factor")):
         return "step"
     if "pend" in v.claim:
         return "pendulum"
@@ -120,17 +121,18 @@ class Report:
     @property
     def counts(self) -> dict[str, int]:
         """Number of verdicts per status."""
-        out = {"agrees": 0, "wrong": 0, "differs": 0, "error": 0}
+        out = {"agrees": 0, "wrong": 0, "underdetermined": 0, "differs": 0, "error": 0}
         for v in self.verdicts:
             out[v.status] = out.get(v.status, 0) + 1
         return out
 
     def summary(self) -> str:
-        """One line: how many claims, how many agree, are wrong, differ, failed."""
+        """One line: how many claims agree, are wrong, underdetermined, differ, failed."""
         c = self.counts
         text = (
             f"{len(self.verdicts)} claims checked: {c['agrees']} agree, {c['wrong']} "
-            f"seed is wrong, {c['differs']} differ (convention)"
+            f"seed is wrong, {c['underdetermined']} underdetermined (the seed leaves a "
+            f"deciding value open), {c['differs']} differ (convention)"
         )
         return text + (f", {c['error']} NOT COMPUTED" if c["error"] else "")
 
@@ -159,9 +161,8 @@ def reproduce(
         out: Report folder (created).
         quick: Reduced sizes (shorter runs, coarser scans) for tests.
         animations: Write the step and walk animations (needs the ``viewer`` extra).
-        cache: Replay an earlier build with the same inputs (:mod:`.replay`) and reuse the
-            printed derivations (:mod:`.cache`); ``False`` computes everything again (and
-            stores the result for the next run).
+        cache: Replay an earlier build with the same inputs (:mod:`.replay`); ``False``
+            computes everything again (and stores the result for the next run).
 
     Returns:
         The :class:`Report` (``replayed_from`` tells whether it was replayed).
@@ -247,16 +248,18 @@ def _build(
     fdir.mkdir(parents=True, exist_ok=True)
     figs: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
     anims: dict[str, list[Path]] = {k: [] for k, _, _ in SECTIONS}
+    stills: dict[str, tuple[Path, str]] = {}
     facts: dict[str, Any] = {}
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims, cache=cache)
     # the derivations first: the heat maps label their samples with the families derived here
-    derivations = {k: ctx.text(k) for k in _PRINTED}
+    derivations = {k: ctx.printed(k) for k in _PRINTED}
     verdicts = tuple(evaluate(claims, ctx))
     figs["step"].append(figures.step_figure(ctx, fdir))
     step = ctx.step
     facts["step"] = step.to_dict()
     if animations:
+        stills["step"] = figures.step_still(ctx, fdir)
         try:
             anims["step"].append(figures.step_animation(ctx, out))
         except Exception as exc:
@@ -264,22 +267,38 @@ def _build(
     maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
     figs["jacobian"] += maps
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))
-    walk_paths, facts["hexapod"] = figures.walk_figures(fdir, 1.5 if quick else 3.0, animations)
+    walk_paths, facts["hexapod"], walk_still = figures.walk_figures(
+        fdir, 1.5 if quick else 3.0, animations
+    )
+    if walk_still is not None:
+        stills["walk"] = walk_still
     figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
     for p in walk_paths:
         if p.suffix == ".html":
             anims["beyond"].append(p.replace(out / "walk.html"))
+    copies = _copy_seeds(seeds, out)
     md_path, html_path = out / "report.md", out / "report.html"
     parts = (Report(out, md_path, html_path, verdicts, facts, 0.0), seeds, figs, anims)
     atomic_write(md_path, _markdown(*parts, derivations))
-    atomic_write(html_path, _html(*parts, derivations))
+    atomic_write(html_path, _html(*parts, derivations, stills))
     seconds = time.perf_counter() - start
     rep = Report(out, md_path, html_path, verdicts, facts, seconds, None, seconds)
     atomic_write(out / "verdicts.json", json.dumps(rep.to_dict(), indent=1, default=str))
-    written = [md_path, html_path] + [p for k in figs for p in figs[k] + anims[k]]
+    written = [md_path, html_path, *copies, *(p for p, _ in stills.values())]
+    written += [p for k in figs for p in figs[k] + anims[k]]
     return rep, written
+
+
+def _copy_seeds(seeds: dict[str, str], out: Path) -> list[Path]:
+    """Copy the shipped seed texts into ``out/seeds/`` (the Markdown links there)."""
+    paths = []
+    (out / "seeds").mkdir(parents=True, exist_ok=True)
+    for title in seeds.values():
+        src = seed_file(title)
+        paths.append(atomic_write(out / "seeds" / src.name, src.read_bytes()))
+    return paths
 
 
 #: The derivations printed in the report, in its order.
@@ -289,6 +308,7 @@ _PRINTED = ("leg", "leg+", "scara")
 _LABEL = {
     "agrees": "agrees",
     "wrong": "seed is wrong",
+    "underdetermined": "underdetermined",
     "differs": "differs",
     "error": "NOT COMPUTED",
 }
@@ -299,32 +319,143 @@ _DERIV = {
 }
 
 
-def _facts_lines(key: str, rep: Report) -> list[str]:
+#: Labels of the hexapod's figures (``facts["hexapod"]``).
+_HEXAPOD = {
+    "stand_height_m": "standing height [m]",
+    "stand_mass_kg": "mass [kg]",
+    "stand_forces_z_N": "vertical foot forces [N]",
+    "stand_force_residual_N": "force balance residual [N]",
+    "stand_peak_torque_Nm": "peak joint torque standing [N·m]",
+    "walk_duration_s": "walk duration [s]",
+    "walk_min_margin_m": "minimum static stability margin [m]",
+    "walk_max_slip_m": "maximum stance-foot slip [m]",
+    "walk_ik_ok": "every foot reached inside the joint limits",
+    "walk_animation": "walk animation",
+}
+
+#: A block of computed figures: ``("p", text)`` (prose, Markdown code spans allowed) or
+#: ``("table", caption, header, rows)``.
+Block = tuple[Any, ...]
+
+
+def _facts(key: str, rep: Report) -> list[Block]:
+    """The computed figures of a section, as prose and tables (rendered by MD and HTML)."""
     f = rep.facts
     if key == "jacobian":
+        rows = [
+            [robot, family, str(n)]
+            for robot, fams in f["scan_family_counts"].items()
+            for family, n in fams.items()
+        ]
         return [
-            f"Scan family counts (flagged samples labelled by family): `{f['scan_family_counts']}`"
+            (
+                "table",
+                "Scan: flagged samples labelled by family",
+                ["robot", "family", "samples"],
+                rows,
+            )
         ]
     if key == "step":
         s = f["step"]
+        b = s["baseline_euler_solve"]
         return [
-            f"Drift of the closed-loop run: y {s['drift_y']:.2e} m, z {s['drift_z']:.2e} m, "
-            f"x error {s['error_x']:.2e} m; the seeds' plain Euler + solve loop: "
-            f"{ {k: float(f'{v:.2e}') for k, v in s['baseline_euler_solve'].items()} } m."
+            (
+                "table",
+                "Drift of the x-only step [m]",
+                ["run", "drift y", "drift z", "x error"],
+                [
+                    [
+                        "closed loop, RK4 (hexapod_kin)",
+                        f"{s['drift_y']:.2e}",
+                        f"{s['drift_z']:.2e}",
+                        f"{s['error_x']:.2e}",
+                    ],
+                    [
+                        "plain Euler + solve (the seeds' loop)",
+                        f"{b['drift_y']:.2e}",
+                        f"{b['drift_z']:.2e}",
+                        f"{b['error_x']:.2e}",
+                    ],
+                ],
+            )
         ]
     if key == "pendulum":
         p = f["pendulum"]
         return [
-            f"Undamped period {p['period']:.9f} s vs exact {p['period_exact']:.9f} s; "
-            f"damped period {p['damped_period']:.6f} s; decay rate {p['decay_rate']:.5f} 1/s "
-            f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s."
+            (
+                "p",
+                f"Undamped period {p['period']:.9f} s vs exact {p['period_exact']:.9f} s; "
+                f"damped period {p['damped_period']:.6f} s; decay rate {p['decay_rate']:.5f} 1/s "
+                f"vs b/(2I) = {p['decay_rate_exact']:.5f} 1/s.",
+            )
         ]
     if key == "beyond":
-        return [
-            f"- `{k}` = {v:.6g}" if isinstance(v, float) else f"- `{k}` = {v}"
-            for k, v in f["hexapod"].items()
-        ]
+        rows = []
+        for k, v in f["hexapod"].items():
+            if isinstance(v, bool):
+                text = "yes" if v else "no"
+            elif isinstance(v, float):
+                text = f"{v:.6g}"
+            elif isinstance(v, (list, tuple)):
+                text = ", ".join(f"{x:.6g}" if isinstance(x, float) else str(x) for x in v)
+            else:
+                text = str(v)
+            rows.append([_HEXAPOD.get(k, k.replace("_", " ")), text])
+        return [("table", "The hexapod standing and walking", ["figure", "value"], rows)]
     return []
+
+
+def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
+    def cell(x: str) -> str:
+        return str(x).replace("|", "/")
+
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return out + ["| " + " | ".join(cell(x) for x in r) + " |" for r in rows]
+
+
+def _md_derivation(title: str, printed: dict[str, Any]) -> list[str]:
+    """A derivation (:meth:`~.checks.Context.printed`) as Markdown: matrices as tables."""
+    from .html import pretty_entry
+
+    out = ["", f"#### Derivation of {title}", ""] + [f"- {line}" for line in printed["header"]]
+    for item in printed["items"]:
+        if "rows" in item:
+            rows = [[pretty_entry(x) for x in r] for r in item["rows"]]
+            header = [f"col {j + 1}" for j in range(len(rows[0]))]
+            out += ["", f"{item['label']} =", ""] + _md_table(header, rows)
+        else:
+            out += ["", f"{item['label']} = {pretty_entry(item['value'])}"]
+    return out + [""] + [f"- {line}" for line in printed["footer"]]
+
+
+def _md_cells(cells: str) -> list[str]:
+    """A matrix verdict as two Markdown tables (differing entries in bold)."""
+    from .html import pretty_entry
+
+    data = json.loads(cells)
+    differ = {(int(i), int(j)) for i, j in data.get("differ", [])}
+    out = []
+    for name, rows in (("seed", data["seed"]), ("hexapod_kin", data["ours"])):
+        body = [
+            [
+                f"**{pretty_entry(str(v))}**" if (i, j) in differ else pretty_entry(str(v))
+                for j, v in enumerate(row)
+            ]
+            for i, row in enumerate(rows)
+        ]
+        header = data.get("header") or [f"col {j + 1}" for j in range(len(rows[0]) if rows else 0)]
+        out += ["", f"{name} (differing entries in bold):", ""] + _md_table(header, body)
+    return out
+
+
+def _passage_md(v: Verdict, seeds: dict[str, str]) -> str:
+    """Where a claim's passage is in the shipped seed text (a link from the report folder)."""
+    if not v.lines or v.seed not in seeds:
+        return ""
+    name = seed_file(seeds[v.seed]).name
+    first, _, last = v.lines.partition("-")
+    span = f"line {first}" if first == last else f"lines {first}–{last}"
+    return f"[{name}, {span}](seeds/{name}#L{first})"
 
 
 def _markdown(
@@ -332,18 +463,21 @@ def _markdown(
     seeds: dict[str, str],
     figs: dict[str, list[Path]],
     anims: dict[str, list[Path]],
-    derivations: dict[str, str],
+    derivations: dict[str, dict[str, Any]],
 ) -> str:
     lines = [
         "# hexapod_kin reproduces the four lab reports",
         "",
         f"**{rep.summary()}.** Every verdict is computed (see `hexapod_kin/report/`): the "
-        "seeds' claims are data in `claims.toml`, each with its place in the seed.",
+        "seeds' claims are data in `claims.toml`, each with its passage in the seed's text "
+        "(shipped in `hexapod_kin/report/seeds/`, copied to `seeds/` here).",
         "",
         "Seeds:",
         "",
     ]
-    lines += [f"- **{k}**: {v}" for k, v in seeds.items()]
+    lines += [f"- **{k}**: [{v}](seeds/{seed_file(v).name})" for k, v in seeds.items()]
+    lines += ["", "Verdicts:", ""]
+    lines += [f"- **{label}**: {text}" for _, label, text in LEGEND]
     lines += ["", "| claim | seed | where | verdict |", "|---|---|---|---|"]
     for v in rep.verdicts:
         short = v.text if len(v.text) < 160 else v.text[:157] + "..."
@@ -355,37 +489,28 @@ def _markdown(
         for v in rep.verdicts:
             if _section(v) != key:
                 continue
-            lines += [
-                f"### {v.claim} — seed {v.seed}, {v.where}",
-                "",
-                f"- seed: `{v.claimed}`",
-                f"- hexapod_kin: `{v.computed}`",
-                f"- **verdict: {v.text}**",
-                f"- compared: {v.method}",
-                "",
-            ]
-        lines += _facts_lines(key, rep)
+            lines += [f"### {v.claim} — seed {v.seed}, {v.where}", ""]
+            passage = _passage_md(v, seeds)
+            if passage:
+                lines += [f"- passage: {passage}"]
+            if v.cells:
+                lines += _md_cells(v.cells) + [""]
+            else:
+                lines += [f"- seed: `{v.claimed}`", f"- hexapod_kin: `{v.computed}`"]
+            lines += [f"- **verdict: {v.text}**", f"- compared: {v.method}", ""]
+        for block in _facts(key, rep):
+            if block[0] == "p":
+                lines += ["", block[1]]
+            else:
+                lines += ["", f"{block[1]}:", ""] + _md_table(block[2], block[3])
         for p in figs[key]:
             lines += ["", f"![{p.stem}](figures/{p.name})"]
         for p in anims[key]:
             lines += ["", f"Animation: [{p.name}]({p.name}) (self-contained, opens offline)"]
         if key == "transforms":
-            for k, text in derivations.items():
-                lines += ["", f"#### Derivation of {_DERIV[k]}", "", "```", text, "```"]
+            for k, printed in derivations.items():
+                lines += _md_derivation(_DERIV[k], printed)
     return "\n".join(lines) + "\n"
-
-
-def _img(path: Path) -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    return f'<img alt="{path.stem}" src="data:image/png;base64,{data}">'
-
-
-_CSS = """body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em;line-height:1.4}
-code,pre{font-size:12px}pre{overflow-x:auto;background:#f6f6f6;padding:.5em}
-table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}
-.agrees{color:#17692b}.wrong{color:#b00020}.differs{color:#8a5a00}.error{color:#fff;background:#b00020}
-.item{border-left:4px solid #ddd;padding-left:.7em;margin:1em 0}img{max-width:100%}
-iframe{width:100%;height:520px;border:1px solid #ccc}"""
 
 
 def _html(
@@ -393,52 +518,94 @@ def _html(
     seeds: dict[str, str],
     figs: dict[str, list[Path]],
     anims: dict[str, list[Path]],
-    derivations: dict[str, str],
+    derivations: dict[str, dict[str, Any]],
+    stills: dict[str, tuple[Path, str]] | None = None,
 ) -> str:
-    e = html.escape
+    from . import html as H
+
+    e = H.e
+    stills = stills or {}
+    texts = {k: seed_file(v).read_text(encoding="utf-8") for k, v in seeds.items()}
+    cited: dict[str, dict[int, list[str]]] = {}
+    for v in rep.verdicts:
+        if v.lines:
+            a, _, b = v.lines.partition("-")
+            marks = cited.setdefault(v.seed, {})
+            for n in range(int(a), int(b) + 1):
+                marks.setdefault(n, []).append(v.claim if n == int(a) else "")
+
+    def passage(v: Verdict) -> str:
+        if not v.lines:
+            return ""
+        a, _, b = v.lines.partition("-")
+        span = f"line {a}" if a == b else f"lines {a}–{b}"
+        return f" (<a href='#{H.line_anchor(v.seed, int(a))}'>{span} of seed {e(v.seed)}</a>)"
+
     h = [
-        "<!DOCTYPE html><html><head><meta charset='utf-8'>",
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         "<title>hexapod_kin reproduces the seeds</title>",
-        f"<style>{_CSS}</style></head><body>",
+        f"<style>{H.CSS}</style></head><body>",
         "<h1>hexapod_kin reproduces the four lab reports</h1>",
         f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
-        "(<code>hexapod_kin/report/claims.toml</code>), each with its place in the seed.</p><ul>",
+        "(<code>hexapod_kin/report/claims.toml</code>), each linked to its passage in the "
+        "seed's text (<a href='#seeds'>section 8</a>, shipped in "
+        "<code>hexapod_kin/report/seeds/</code>).</p><ul>",
     ]
-    h += [f"<li><b>{e(k)}</b>: {e(v)}</li>" for k, v in seeds.items()]
-    h.append("</ul><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
+    h += [f"<li><a href='#seed-{e(k)}'><b>{e(k)}</b></a>: {e(v)}</li>" for k, v in seeds.items()]
+    h.append("</ul><dl class='legend'>")
+    h += [f"<dt class='{s}'>{e(label)}</dt><dd>{e(text)}</dd>" for s, label, text in LEGEND]
+    h.append("</dl><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
     for v in rep.verdicts:
+        where = e(H.seed_notation(v.where))
+        if v.lines:
+            a = v.lines.partition("-")[0]
+            where = f"<a href='#{H.line_anchor(v.seed, int(a))}'>{where}</a>"
         h.append(
             f"<tr><td><a href='#{e(v.claim)}'>{e(v.claim)}</a></td><td>{e(v.seed)}</td>"
-            f"<td>{e(v.where)}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>"
+            f"<td>{where}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>"
         )
     h.append("</table>")
     for key, title, intro in SECTIONS:
         h.append(f"<h2>{e(title)}</h2>")
         if intro:
-            h.append(f"<p>{e(intro)}</p>")
+            h.append(f"<p>{H.inline(intro)}</p>")
         for v in rep.verdicts:
             if _section(v) != key:
                 continue
             h.append(
                 f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
-                f"{e(v.where)}</h3><p>seed: <code>{e(v.claimed)}</code></p>"
-                f"<p>hexapod_kin: <code>{e(v.computed)}</code></p>"
-                f"<p class='{v.status}'><b>verdict: {e(v.text)}</b></p>"
-                f"<p><small>compared: {e(v.method)}</small></p></div>"
+                f"{e(H.seed_notation(v.where))}{passage(v)}</h3>"
             )
-        h += [f"<p>{e(line)}</p>" for line in _facts_lines(key, rep)]
-        h += [f"<p>{_img(p)}</p>" for p in figs[key]]
-        for p in anims[key]:
-            doc = e(p.read_text(encoding="utf-8"), quote=True)
-            h.append(
-                f"<p>Animation (also <a href='{p.name}'>{p.name}</a>):</p>"
-                f'<iframe srcdoc="{doc}"></iframe>'
-            )
-        if key == "transforms":
-            for k, text in derivations.items():
+            if v.cells:
+                h.append(H.matrix_pair(v.cells))
+            else:
                 h.append(
-                    f"<details><summary>Derivation of {e(_DERIV[k])}</summary>"
-                    f"<pre>{e(text)}</pre></details>"
+                    f"<p>seed: <code>{e(H.pretty_entry(v.claimed))}</code></p>"
+                    f"<p>hexapod_kin: <code>{e(H.pretty_entry(v.computed))}</code></p>"
                 )
+            h.append(H.verdict_html(v.text, v.status))
+            h.append(f"<p><small>compared: {e(v.method)}</small></p></div>")
+        for block in _facts(key, rep):
+            if block[0] == "p":
+                h.append(f"<p>{H.inline(block[1])}</p>")
+            else:
+                _, caption, header, rows = block
+                h.append(f"<table class='kv'><caption>{H.inline(caption)}</caption><tr>")
+                h.append("".join(f"<th>{e(x)}</th>" for x in header) + "</tr>")
+                h += ["<tr>" + "".join(f"<td>{e(x)}</td>" for x in r) + "</tr>" for r in rows]
+                h.append("</table>")
+        h += [f"<p>{H.image(p)}</p>" for p in figs[key]]
+        for p in anims[key]:
+            still, when = stills.get(p.stem, (None, ""))
+            h.append(H.animation(p, still, when))
+        if key == "transforms":
+            h += [H.derivation_html(_DERIV[k], printed) for k, printed in derivations.items()]
+    h.append("<h2 id='seeds'>8. The seeds' texts</h2>")
+    h.append(
+        "<p>As shipped in <code>hexapod_kin/report/seeds/</code> (unchanged); the lines a "
+        "claim cites are shaded, and a claim's link opens its seed at the first line.</p>"
+    )
+    h.append(H.seed_texts(seeds, texts, cited))
+    h.append(H.SCRIPT)
     h.append("</body></html>")
     return "\n".join(h)

@@ -21,7 +21,9 @@ in :mod:`.compare`); no verdict is written by hand:
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from collections.abc import Callable
 from functools import cached_property
 from typing import Any
@@ -60,6 +62,7 @@ MODELS: dict[str, tuple[str, dict[str, float]]] = {
 }
 _OTHER = {"leg": ("leg+", "+90°"), "leg+": ("leg", "−90°")}
 _SIGMA = {"0": "revolute", "1": "prismatic", "fixed": "fixed"}
+_COLUMN = {"σ": 0, "d": 1, "r": 3, "θ": 4}
 
 
 class Context:
@@ -112,6 +115,12 @@ class Context:
         from .cache import derivation_text
 
         return derivation_text(self.derivation(key), self.cache)
+
+    def printed(self, key: str) -> dict[str, Any]:
+        """The derivation laid out for the report (:func:`.cache.derivation_layout`)."""
+        from .cache import derivation_layout
+
+        return derivation_layout(self.derivation(key))
 
     def lengths(self, key: str) -> dict[sp.Symbol, float]:
         """The preset's length values by plain symbol."""
@@ -193,6 +202,9 @@ class Context:
         """A measured figure named in a ``bound`` claim."""
         if name == "step.drift_yz":
             return max(self.step.drift_y, self.step.drift_z)
+        if name == "step.velocity_over_input":
+            v = self.step.trajectory.foot_velocity[:, 0]
+            return float(np.abs(v).max() / self.step.amplitude)
         if name == "step.phase_deg":
             tr = self.step.trajectory
             w = 2 * math.pi / self.step.period
@@ -241,9 +253,35 @@ def _seed_ik(
 
 
 def _verdict(
-    c: Claim, claimed: str, computed: str, status: str, reason: str, method: str
+    c: Claim,
+    claimed: str,
+    computed: str,
+    status: str,
+    reason: str,
+    method: str,
+    cells: dict[str, Any] | None = None,
 ) -> Verdict:
-    return Verdict(c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method)
+    first, last = c.lines
+    lines = f"{first}-{last}" if first else ""
+    layout = json.dumps(cells, ensure_ascii=False) if cells else ""
+    return Verdict(
+        c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method, layout, lines
+    )
+
+
+_AT = re.compile(r"^\((\d+),(\d+)\):")
+
+
+def _cells(seed_rows: Any, ours: sp.Matrix, diffs: list[str], note: str = "") -> dict[str, Any]:
+    """The matrix layout of a verdict: the seed's entries as written, ours, the differing ones."""
+    differ = []
+    for d in diffs:
+        m = _AT.match(d)
+        if m:
+            differ.append([int(m.group(1)) - 1, int(m.group(2)) - 1])
+    rows = [[str(v) for v in row] for row in seed_rows]
+    mine = [[fmt(tidy(ours[i, j])) for j in range(ours.cols)] for i in range(ours.rows)]
+    return {"seed": rows, "ours": mine, "differ": differ, "note": note}
 
 
 def _at(m: Any, subs: dict[sp.Symbol, float]) -> Any:
@@ -281,8 +319,9 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
             c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
         )
     diffs = matrix_diff(seed, truth, c.id)
+    cells = _cells(c.data["value"], truth, diffs, _with(c).strip())
     if not diffs:
-        return _verdict(c, claimed, computed, "agrees", "", _SYMBOLIC)
+        return _verdict(c, claimed, computed, "agrees", "", _SYMBOLIC, cells)
     notes = [f"{len(diffs)} of {truth.rows * truth.cols} entries differ: " + "; ".join(diffs)]
     if key in _OTHER:
         other, label = _OTHER[key]
@@ -299,7 +338,8 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
             if not own
             else "nor is it the derivative of the seed's own p: " + "; ".join(own)
         )
-    return _verdict(c, claimed, computed, "wrong", " — ".join(n for n in notes if n), _SYMBOLIC)
+    reason = " — ".join(n for n in notes if n)
+    return _verdict(c, claimed, computed, "wrong", reason, _SYMBOLIC, cells)
 
 
 def _own_factors(c: Claim, ctx: Context) -> list[Claim]:
@@ -341,11 +381,12 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
     chain = ctx.chain(key)
     lengths = ctx.lengths(key)
     subs = _subs(c)
-    problems, alpha_rows = [], []
+    problems, alpha_rows, differ = [], [], []
     rows = c.data["rows"]
     for i, (row, (sig, d, alpha, r, theta)) in enumerate(zip(chain.rows, rows), start=1):
         if _SIGMA.get(sig) != row.sigma:
             problems.append(f"row {i}: σ {sig} vs {row.sigma}")
+            differ.append([i - 1, 0])
         for name, text, mine, var in (
             ("d", d, row.d, False),
             ("r", r, row.r, row.sigma == "prismatic"),
@@ -357,14 +398,17 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
                     problems.append(
                         f"row {i}: {name} = {text} is a joint variable here, not in hexapod_kin"
                     )
+                    differ.append([i - 1, _COLUMN[name]])
                 continue
             val = value_at(e.xreplace(lengths), {}) * (
                 unit if not (e.free_symbols & set(lengths)) else 1.0
             )
             if abs(val - mine) > 1e-9:
                 problems.append(f"row {i}: {name} = {text} ({val:g} m) vs {mine:g} m")
+                differ.append([i - 1, _COLUMN[name]])
         if abs(math.radians(float(alpha)) - row.alpha) > 1e-12:
             alpha_rows.append((i, float(alpha), math.degrees(row.alpha)))
+            differ.append([i - 1, 2])
     extra = chain.rows[len(rows) :]
     if len(rows) > len(chain.rows) or any(
         r.sigma != "fixed" or (r.alpha, r.d, r.theta, r.r) != (0, 0, 0, 0) for r in extra
@@ -376,10 +420,27 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
     )
     claimed = "; ".join("(" + ", ".join(str(v) for v in row) + ")" for row in rows)
     method = "numeric, per entry (|Δ| ≤ 1e-9 m or rad), lengths × unit"
+    q = iter(range(1, len(chain.rows) + 1))
+    cells = {
+        "header": ["σ", "d", "α [°]", "r", "θ"],
+        "seed": [[str(v) for v in row] for row in rows],
+        "ours": [
+            [
+                {"revolute": "0", "prismatic": "1"}.get(r.sigma, "fixed"),
+                f"{r.d:g} m",
+                f"{math.degrees(r.alpha):g}",
+                f"q{next(q)}" if r.sigma == "prismatic" else f"{r.r:g} m",
+                f"q{next(q)}" if r.sigma == "revolute" else f"{r.theta:g}",
+            ]
+            for r in chain.rows
+        ],
+        "differ": differ,
+        "note": f"seed lengths × {unit:g} m" if unit != 1.0 else "",
+    }
     if problems:
-        return _verdict(c, claimed, computed, "wrong", "; ".join(problems), method)
+        return _verdict(c, claimed, computed, "wrong", "; ".join(problems), method, cells)
     if not alpha_rows:
-        return _verdict(c, claimed, computed, "agrees", "", method)
+        return _verdict(c, claimed, computed, "agrees", "", method, cells)
     (i, seed_a, ours_a), *_ = alpha_rows
     p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
     mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
@@ -399,6 +460,7 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
         "differs",
         f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}",
         method,
+        cells,
     )
 
 
@@ -417,6 +479,7 @@ def _check_generic(c: Claim, ctx: Context) -> Verdict:
         "wrong" if diffs else "agrees",
         "; ".join(diffs),
         _SYMBOLIC,
+        _cells(c.data["value"], truth, diffs),
     )
 
 
@@ -589,8 +652,46 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     )
 
 
+def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
+    """Why a failed ``bound`` claim holds for an admissible value of what the seed leaves open.
+
+    Returns the reason (the claim is *underdetermined*), or None: no admissible value is known
+    to make it hold (the seed is *wrong*). Only claims with ``unstated`` are asked.
+    """
+    if "unstated" not in c.data:
+        return None
+    name, tol = c.data["quantity"], float(c.data["tol"])
+    if name == "pendulum.amplitude_ratio_10s":
+        d, s = ctx.pendulum.damped, ctx.pendulum.small
+        i_max = d.damping * 10.0 / (2 * math.log(1 / tol))
+        mass = d.pendulum.mass
+        measured = f"{s.decay_rate:.4f}" if s.decay_rate is not None else "n/a"
+        return (
+            f"with hexapod_kin's stand-in link (I = {d.pendulum.inertia:.3g} kg·m², "
+            f"{mass:g} kg) the amplitude at 10 s is {val:.3g} θ0; the envelope e^(−bt/(2I)) "
+            f"(decay rate measured {measured} 1/s vs b/(2I) = "
+            f"{s.decay_rate_exact:.4f} 1/s) falls below {tol:g} θ0 by 10 s with the seed's "
+            f"b = {d.damping:g} N·m·s/rad for any I < {i_max:.2g} kg·m² (e.g. a {mass:g} kg "
+            f"bob at less than {math.sqrt(i_max / mass):.2f} m); the seed does not give "
+            f"{c.data['unstated']}. Its damping unit 'Nm/s^2' should be N·m·s/rad"
+        )
+    if name == "step.velocity_over_input":
+        return (
+            f"hexapod_kin's foot velocity amplitude equals the commanded one (ratio {val:.4f}); "
+            f"a ratio of {float(c.data['value']):g} is what an input of 1/"
+            f"{float(c.data['value']):g} the amplitude (or in a unit "
+            f"{float(c.data['value']):g}× larger) shows, and the seed does not give "
+            f"{c.data['unstated']}"
+        )
+    return None
+
+
 def _check_bound(c: Claim, ctx: Context) -> Verdict:
-    """``bound``: a measured quantity within ``tol`` of the claimed value."""
+    """``bound``: a measured quantity within ``tol`` of the claimed value.
+
+    Out of ``tol``: *underdetermined* when :func:`_admissible` finds an admissible value of
+    the claim's ``unstated`` for which it holds, else *wrong*.
+    """
     val = ctx.quantity(c.data["quantity"])
     target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
     claimed = f"{c.data['quantity']} = {target:g} {unit}"
@@ -598,22 +699,15 @@ def _check_bound(c: Claim, ctx: Context) -> Verdict:
     method = f"numeric, |measured − claimed| ≤ {tol:g} {unit}"
     if abs(val - target) <= tol:
         return _verdict(c, claimed, computed, "agrees", "", method)
-    extra = ""
-    if c.data["quantity"] == "pendulum.amplitude_ratio_10s":
-        d = ctx.pendulum.damped
-        i_max = d.damping * 10.0 / (2 * math.log(1 / tol))
-        extra = (
-            f" (decay rate b/(2I) = {d.decay_rate_exact:.4f} 1/s for I = "
-            f"{d.pendulum.inertia:.3g} kg·m²; coming to rest within 10 s with b = "
-            f"{d.damping:g} N·m·s/rad needs I < {i_max:.2g} kg·m²; the seed gives no "
-            "length or mass; its damping unit 'Nm/s^2' should be N·m·s/rad)"
-        )
+    why = _admissible(c, ctx, val)
+    if why is not None:
+        return _verdict(c, claimed, computed, "underdetermined", why, method)
     return _verdict(
         c,
         claimed,
         computed,
         "wrong",
-        f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}{extra}",
+        f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}",
         method,
     )
 
@@ -643,5 +737,8 @@ def evaluate(claims: list[Claim], ctx: Context) -> list[Verdict]:
             out.append(CHECKS[claim.kind](claim, ctx))
         except Exception as exc:  # recorded, reported, and failed by the CLI and the test
             why = f"{type(exc).__name__}: {exc}"
-            out.append(_verdict(claim, str(claim.data.get("value")), "", "error", why, ""))
+            value = claim.data.get("value")
+            if isinstance(value, dict):
+                value = "; ".join(f"{k} = {v}" for k, v in value.items())
+            out.append(_verdict(claim, str(value), "", "error", why, ""))
     return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -9,12 +10,18 @@ from typing import Any
 
 from ..exceptions import ConfigurationError, OptionalDependencyError
 
-__all__ = ["CLAIMS_FILE", "STATUSES", "Claim", "Verdict", "load_claims"]
+__all__ = ["CLAIMS_FILE", "SEEDS_DIR", "STATUSES", "Claim", "Verdict", "load_claims", "seed_file"]
 
 #: The claims shipped with the package.
 CLAIMS_FILE = Path(__file__).with_name("claims.toml")
-#: The statuses of a computed verdict (``"error"``: the comparison could not run, a bug).
-STATUSES = ("agrees", "wrong", "differs", "error")
+#: The statuses of a computed verdict: ``"agrees"``; ``"wrong"`` (the seed is wrong for every
+#: value it leaves open); ``"underdetermined"`` (false with hexapod_kin's stand-in values but true
+#: for an admissible value of something the seed does not give: the claim's ``unstated``);
+#: ``"differs"`` (a different but consistent convention); ``"error"`` (the comparison could not
+#: run, a bug).
+STATUSES = ("agrees", "wrong", "underdetermined", "differs", "error")
+#: Where the seeds' texts are shipped (package data: a wheel has them).
+SEEDS_DIR = Path(__file__).with_name("seeds")
 
 
 @dataclass(frozen=True)
@@ -26,6 +33,14 @@ class Claim:
     where: str
     kind: str
     data: Mapping[str, Any]
+
+    @property
+    def lines(self) -> tuple[int, int]:
+        """First and last line (1-based) of the claim's passage in the shipped seed text."""
+        raw = [int(x) for x in self.data.get("lines", [])]
+        if not raw:
+            return (0, 0)
+        return (raw[0], raw[-1])
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the claim's TOML table."""
@@ -43,10 +58,16 @@ class Verdict:
         kind: The claim's kind.
         claimed: The seed's value, as text.
         computed: hexapod_kin's value, as text.
-        status: One of :data:`STATUSES` (``"wrong"``: the seed is wrong; ``"differs"``: a
-            different but consistent convention).
+        status: One of :data:`STATUSES` (``"wrong"``: the seed is wrong; ``"underdetermined"``:
+            the seed leaves a value open that decides it; ``"differs"``: a different but
+            consistent convention).
         reason: The computed reason (empty when it agrees).
         method: How it was compared, with the tolerance.
+        cells: For a matrix or table: JSON text ``{"seed": rows, "ours": rows, "differ":
+            [[i, j], ...] (0-based), "header": [...] or absent, "note": text}`` (entries as
+            text), so the report lays it out as a matrix; ``""`` otherwise.
+        lines: The claim's passage in the shipped seed text, ``"first-last"`` (1-based), or
+            ``""``.
 
     """
 
@@ -59,16 +80,23 @@ class Verdict:
     status: str
     reason: str
     method: str
+    cells: str = ""
+    lines: str = ""
 
     @property
     def text(self) -> str:
-        """``agrees`` / ``seed is wrong: …`` / ``differs: …`` / ``not computed: …``."""
+        """The verdict as a sentence: ``agrees`` or ``<label>: <reason>``.
+
+        Labels: ``seed is wrong``, ``underdetermined``, ``differs``, ``not computed``.
+        """
         if self.status == "agrees":
             return "agrees"
         if self.status == "wrong":
             return f"seed is wrong: {self.reason}"
         if self.status == "differs":
             return f"differs: {self.reason}"
+        if self.status == "underdetermined":
+            return f"underdetermined: {self.reason}"
         return f"not computed: {self.reason}"
 
     def fields(self) -> dict[str, str]:
@@ -91,10 +119,14 @@ class Verdict:
         return cls(**{n: data[n] for n in names})
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (``verdict``: :attr:`text`; no ``reason``, which it holds)."""
+        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed.
+
+        ``cells`` is None for a verdict that is not a matrix or table.
+        """
         out: dict[str, Any] = self.fields()
-        del out["reason"], out["method"]
-        return {**out, "verdict": self.text, "method": self.method}
+        del out["reason"], out["method"], out["cells"]
+        cells = json.loads(self.cells) if self.cells else None
+        return {**out, "verdict": self.text, "method": self.method, "cells": cells}
 
 
 def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, str]]:
@@ -130,3 +162,8 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
         seen.add(item["id"])
         out.append(Claim(item["id"], item["seed"], item["where"], item["kind"], item))
     return out, dict(raw.get("seeds", {}))
+
+
+def seed_file(title: str) -> Path:
+    """The shipped text of a seed from its title in the claims file (``"000_….txt — …"``)."""
+    return SEEDS_DIR / title.split(" ", 1)[0]

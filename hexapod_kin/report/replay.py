@@ -2,11 +2,12 @@
 
 The report is a deterministic function of its inputs (:func:`key_parts`, hashed by
 :func:`run_key`): the package's Python source (:func:`package_digest`), the bytes of
-``claims.toml``, the options (``quick``, ``animations``), the installed versions of Python,
-hexapod_kin and :data:`DISTRIBUTIONS` (read from their metadata, never imported) and the
-platform. An entry is the folder ``cache_root("report")/runs/<key>/``: ``files/`` holds every
-file the build wrote into the report folder but ``verdicts.json`` (rewritten by a replay: it
-names the folder and the run's time), ``manifest.json`` each file's SHA-256 and size, the
+``claims.toml`` and of the shipped seed texts, the options (``quick``, ``animations``), the
+installed versions of Python, hexapod_kin and :data:`DISTRIBUTIONS` (read from their
+metadata, never imported) and the platform. An entry is the folder
+``cache_root("report")/runs/<key>/``: ``files/`` holds every file the build wrote into the
+report folder but ``verdicts.json`` (rewritten by a replay: it names the folder and the run's
+time), ``manifest.json`` each file's SHA-256 and size, the
 build's verdicts, facts and wall time. The manifest is written last (removed first when an
 entry is rewritten), and a replay checks every file against it before copying any: a missing,
 damaged or foreign entry is no entry. Only builds without an ``"error"`` verdict and with
@@ -31,7 +32,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from .._io import atomic_write, cache_root
-from .data import CLAIMS_FILE
+from .data import CLAIMS_FILE, SEEDS_DIR
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -50,7 +51,7 @@ __all__ = [
 ]
 
 #: Version of the entry layout (part of the key).
-FORMAT = 1
+FORMAT = 2
 #: Number of run entries kept (the most recently built or replayed).
 KEEP = 4
 #: Distributions whose installed versions are part of the key.
@@ -115,10 +116,20 @@ def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> di
         "format": FORMAT,
         "code": digest if digest is not None else package_digest(),
         "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
+        "seeds": _seeds_digest(),
         "options": {"quick": bool(quick), "animations": bool(animations)},
         "versions": versions(),
         "platform": f"{sys.platform}-{platform.machine()}",
     }
+
+
+def _seeds_digest() -> str:
+    """SHA-256 of the shipped seed texts (names and bytes): the report quotes them."""
+    h = hashlib.sha256()
+    for f in sorted(SEEDS_DIR.glob("*.txt")):
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
 
 
 def run_key(parts: Mapping[str, Any]) -> str:

@@ -1,0 +1,329 @@
+"""The report as one standalone HTML page (offline: no CDN, no network, no external file).
+
+Pieces, each escaped here and nowhere else:
+
+* :func:`inline` — the report's prose: Markdown code spans and bold become ``<code>`` and
+  ``<b>`` (no Markdown reaches the page);
+* :func:`matrix_pair` — a matrix or table verdict laid out as two HTML tables (the seed's,
+  hexapod_kin's), the differing entries highlighted in both;
+* :func:`facts_html` — computed figures as HTML tables (never a Python ``repr``);
+* :func:`animation` — an animation (``<iframe srcdoc>``) with its still frame: a script in the
+  page tests WebGL and, without it, says so and shows the still frame instead;
+* :func:`seed_texts` — the shipped seed texts, one anchor per line (``#seed-000-L65``), which
+  every claim links to.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "CSS",
+    "LEGEND",
+    "SCRIPT",
+    "animation",
+    "derivation_html",
+    "facts_html",
+    "image",
+    "inline",
+    "line_anchor",
+    "matrix_pair",
+    "pretty_entry",
+    "seed_notation",
+    "seed_texts",
+    "verdict_html",
+]
+
+e = html.escape
+
+#: What each verdict category means (the legend; also in the Markdown).
+LEGEND: tuple[tuple[str, str, str], ...] = (
+    ("agrees", "agrees", "hexapod_kin computes the same (rule and tolerance under 'compared')."),
+    (
+        "wrong",
+        "seed is wrong",
+        "false for every value the seed leaves open: the seed's own data contradict it.",
+    ),
+    (
+        "underdetermined",
+        "underdetermined",
+        "false with hexapod_kin's stand-in values, but the seed does not give a value that "
+        "decides it (named in the verdict) and an admissible value makes it true: neither "
+        "confirmed nor refuted.",
+    ),
+    (
+        "differs",
+        "differs",
+        "a different but consistent convention (e.g. the sign of α2); what it changes is computed.",
+    ),
+    ("error", "NOT COMPUTED", "the comparison failed to run (a bug in hexapod_kin)."),
+)
+
+CSS = """body{font-family:sans-serif;max-width:1150px;margin:auto;padding:1em;line-height:1.4}
+code,pre{font-size:12px}pre{overflow-x:auto;background:#f6f6f6;padding:.5em}
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}
+.agrees{color:#17692b}.wrong{color:#b00020}.differs{color:#8a5a00}.underdetermined{color:#1f4e9e}
+.error{color:#fff;background:#b00020}
+.item{border-left:4px solid #ddd;padding-left:.7em;margin:1em 0}img{max-width:100%}
+.mats{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start;margin:.4em 0}
+.mats figure{margin:0}.mats figcaption{font-size:12px;color:#555;margin-bottom:2px}
+table.mat{border-left:2px solid #333;border-right:2px solid #333;font-family:monospace}
+table.mat td{border:none;padding:2px 9px;text-align:center;white-space:nowrap}
+table.mat th{border:none;border-bottom:1px solid #999;font-weight:normal;color:#555}
+table.mat td.diff{background:#ffd7d7;outline:1px solid #b00020}
+table.kv td:first-child{color:#444}table.kv td.num{text-align:right;font-family:monospace}
+.anim iframe{width:100%;height:520px;border:1px solid #ccc}
+.anim .nogl{display:none}.anim.nogl-on .nogl{display:block}.anim.nogl-on .gl{display:none}
+.anim.playing .still{display:none}.anim .still{display:block;max-width:760px}
+.nogl{background:#fff4d6;border:1px solid #c9a227;padding:.4em .7em}
+pre.seed{white-space:pre-wrap;line-height:1.3;background:#fafafa}
+pre.seed span{display:block;padding-left:4.5em;text-indent:-4.5em}
+pre.seed span.cited{background:#eef4ff}pre.seed span:target{background:#ffe58a}
+pre.seed a.ln{color:#999;text-decoration:none;display:inline-block;width:4em;text-indent:0}
+dl.legend dt{font-weight:bold;float:left;clear:left;width:10em}dl.legend dd{margin-left:10.5em}"""
+
+#: Opens the ``<details>`` around a linked seed line; flags animations when WebGL is missing.
+SCRIPT = """<script>
+(function(){
+  function webgl(){try{var c=document.createElement('canvas');
+    return !!(window.WebGLRenderingContext&&
+      (c.getContext('webgl')||c.getContext('experimental-webgl')));
+  }catch(err){return false;}}
+  var gl=webgl();
+  document.documentElement.setAttribute('data-webgl',gl?'yes':'no');
+  document.querySelectorAll('.anim').forEach(function(a){
+    if(!gl){a.classList.add('nogl-on');return;}
+    var b=a.querySelector('button.play'),t=a.querySelector('template');
+    b.addEventListener('click',function(){
+      a.appendChild(t.content.cloneNode(true));a.classList.add('playing');b.disabled=true;});
+  });
+  function reveal(){var id=decodeURIComponent(location.hash.slice(1));if(!id)return;
+    var t=document.getElementById(id);if(!t)return;
+    for(var p=t.parentElement;p;p=p.parentElement){if(p.tagName==='DETAILS'){p.open=true;}}
+    t.scrollIntoView();}
+  window.addEventListener('hashchange',reveal);reveal();
+})();
+</script>"""
+
+_CODE = re.compile(r"`([^`]+)`")
+_BOLD = re.compile(r"\*\*(.+?)\*\*")
+
+
+def inline(text: str) -> str:
+    """Escaped prose with Markdown code spans and bold rendered (``<code>``, ``<b>``)."""
+    out = e(text)
+    out = _CODE.sub(lambda m: f"<code>{m.group(1)}</code>", out)
+    return _BOLD.sub(lambda m: f"<b>{m.group(1)}</b>", out)
+
+
+_POW = {"2": "²", "3": "³", "4": "⁴"}
+_SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
+_SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def seed_notation(text: str) -> str:
+    """Transform names written in ASCII (``^0_1T``, ``T_0^1``) as the seeds print them.
+
+    ``^0_1T`` → ``⁰₁T``, ``T_0^1`` → ``T₀¹``; other text unchanged (and not escaped).
+    """
+    text = re.sub(
+        r"\^(\d)_(\d)T",
+        lambda m: m.group(1).translate(_SUP) + m.group(2).translate(_SUB) + "T",
+        text,
+    )
+    return re.sub(
+        r"T_(\d)\^(\d)",
+        lambda m: "T" + m.group(1).translate(_SUB) + m.group(2).translate(_SUP),
+        text,
+    )
+
+
+def pretty_entry(text: str) -> str:
+    """A matrix entry in sympy syntax made readable: ``a**2*b`` → ``a²·b`` (text, unescaped)."""
+    text = re.sub(r"\*\*(\d)\b", lambda m: _POW.get(m.group(1), "^" + m.group(1)), text)
+    return text.replace("*", "·")
+
+
+def _table(rows: Sequence[Sequence[str]], differ: set[tuple[int, int]], header: Any) -> str:
+    h = ["<table class='mat'>"]
+    if header:
+        h.append("<tr>" + "".join(f"<th>{e(str(x))}</th>" for x in header) + "</tr>")
+    for i, row in enumerate(rows):
+        cells = []
+        for j, v in enumerate(row):
+            cls = " class='diff'" if (i, j) in differ else ""
+            cells.append(f"<td{cls}>{e(pretty_entry(str(v)))}</td>")
+        h.append("<tr>" + "".join(cells) + "</tr>")
+    h.append("</table>")
+    return "".join(h)
+
+
+def matrix_pair(cells: str | dict[str, Any]) -> str:
+    """The seed's and hexapod_kin's matrix (or table) side by side, differing entries marked.
+
+    Args:
+        cells: :attr:`~.data.Verdict.cells` (JSON text or its data).
+
+    """
+    data = json.loads(cells) if isinstance(cells, str) else cells
+    differ = {(int(i), int(j)) for i, j in data.get("differ", [])}
+    header = data.get("header")
+    n = len(differ)
+    total = sum(len(r) for r in data["ours"])
+    note = data.get("note") or ""
+    seed_cap = "seed (as written" + (f"; {note}" if note else "") + ")"
+    ours_cap = "hexapod_kin" + (
+        f" — {n} of {total} entries differ (highlighted)" if n else " — every entry agrees"
+    )
+    return (
+        "<div class='mats'>"
+        f"<figure><figcaption>{e(seed_cap)}</figcaption>"
+        f"{_table(data['seed'], differ, header)}</figure>"
+        f"<figure><figcaption>{e(ours_cap)}</figcaption>"
+        f"{_table(data['ours'], differ, header)}</figure></div>"
+    )
+
+
+_ENTRY = re.compile(r"^\((\d+),(\d+)\): seed (.*) vs (.*?)( \(sign slip\))?$")
+
+
+def verdict_html(text: str, status: str) -> str:
+    """A verdict's text; a list of differing entries (``(i,j): seed a vs b``) as a list."""
+    head, sep, items = text.partition(" entries differ: ")
+    if not sep:
+        return f"<p class='{status}'><b>verdict: {e(text)}</b></p>"
+    first, *notes = items.split(" — ")
+    li = []
+    for item in re.split(r"; (?=\(\d+,\d+\):)", first):
+        m = _ENTRY.match(item)
+        if m is None:
+            li.append(f"<li>{e(item)}</li>")
+            continue
+        i, j, a, b, slip = m.groups()
+        li.append(
+            f"<li>({i},{j}): seed <code>{e(pretty_entry(a))}</code> vs "
+            f"<code>{e(pretty_entry(b))}</code>{' — sign slip' if slip else ''}</li>"
+        )
+    tail = "".join(f"<p class='{status}'>{e(n)}</p>" for n in notes)
+    return (
+        f"<div class='{status}'><b>verdict: {e(head)} entries differ:</b>"
+        f"<ul>{''.join(li)}</ul></div>{tail}"
+    )
+
+
+def derivation_html(title: str, printed: dict[str, Any]) -> str:
+    """A derivation (:meth:`~.checks.Context.printed`) in a ``<details>``: matrices as tables."""
+    h = [f"<details><summary>Derivation of {e(title)}</summary>"]
+    h.append("<p>" + "<br>".join(e(line) for line in printed["header"]) + "</p>")
+    for item in printed["items"]:
+        if "rows" in item:
+            h.append(
+                f"<div class='mats'><figure><figcaption>{e(item['label'])} =</figcaption>"
+                f"{_table(item['rows'], set(), None)}</figure></div>"
+            )
+        else:
+            h.append(f"<p>{e(item['label'])} = <code>{e(pretty_entry(item['value']))}</code></p>")
+    h.append("<ul>" + "".join(f"<li>{e(line)}</li>" for line in printed["footer"]) + "</ul>")
+    h.append("</details>")
+    return "".join(h)
+
+
+def _value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (list, tuple)):
+        return ", ".join(_value(x) for x in v)
+    return str(v)
+
+
+def facts_html(rows: Sequence[tuple[str, Any]], caption: str = "") -> str:
+    """Label → value rows as a two-column table (numbers formatted, lists joined)."""
+    h = ["<table class='kv'>"]
+    if caption:
+        h.append(f"<caption>{inline(caption)}</caption>")
+    for label, value in rows:
+        h.append(f"<tr><td>{inline(label)}</td><td class='num'>{e(_value(value))}</td></tr>")
+    h.append("</table>")
+    return "".join(h)
+
+
+def image(path: Path, alt: str | None = None, cls: str = "") -> str:
+    """A PNG inlined as a data URI."""
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    c = f" class='{cls}'" if cls else ""
+    return f'<img{c} alt="{e(alt or path.stem)}" src="data:image/png;base64,{data}">'
+
+
+def animation(page: Path, still: Path | None, when: str) -> str:
+    """An animation as its still frame with a play button (or the no-WebGL message).
+
+    The page (embedded as ``srcdoc`` inside a ``<template>``, inert until asked) is started
+    by the button: a report with two WebGL animations running from the start keeps a slow
+    machine busy. :data:`SCRIPT` swaps the button for the message where WebGL is missing.
+
+    Args:
+        page: The self-contained animation page.
+        still: A PNG of the same scene (matplotlib), or None.
+        when: What the still frame shows (e.g. ``"t = 1.00 s"``).
+
+    """
+    doc = e(page.read_text(encoding="utf-8"), quote=True)
+    link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
+    msg = (
+        f"This browser has no WebGL: showing a still frame ({e(when)}) instead of the "
+        f"animation (open {link} in a browser with WebGL to play it)."
+    )
+    still_html = image(still, f"still frame of {page.stem} ({when})", "still") if still else ""
+    return (
+        f"<div class='anim'><p>Animation (also {link}, self-contained):</p>"
+        f"<p class='nogl'>{msg}</p>"
+        f"<p class='gl'><button type='button' class='play'>▶ play the {e(page.stem)} "
+        f"animation here</button> <small>(WebGL; the picture below is its still frame, "
+        f"{e(when)})</small></p>{still_html}"
+        f'<template><iframe title="{e(page.stem)} animation" srcdoc="{doc}"></iframe></template>'
+        "<noscript><p>Scripts are off: the animation needs them; above is its still frame."
+        "</p></noscript></div>"
+    )
+
+
+def line_anchor(seed: str, line: int) -> str:
+    """The id of a line of a shipped seed text in the page."""
+    return f"seed-{seed}-L{line}"
+
+
+def seed_texts(
+    seeds: dict[str, str], texts: dict[str, str], cited: dict[str, dict[int, list[str]]]
+) -> str:
+    """Every shipped seed text, one anchored line per line; cited passages marked.
+
+    Args:
+        seeds: Seed key → title (``claims.toml``'s ``[seeds]``).
+        texts: Seed key → its text.
+        cited: Seed key → line → ids of the claims whose passage starts or runs there.
+
+    """
+    h = []
+    for key, title in seeds.items():
+        marks = cited.get(key, {})
+        h.append(
+            f"<details id='seed-{e(key)}'><summary><b>{e(key)}</b>: {e(title)}</summary>"
+            "<pre class='seed'>"
+        )
+        for n, line in enumerate(texts.get(key, "").split("\n"), start=1):
+            ids = marks.get(n, [])
+            cls = " class='cited'" if ids else ""
+            back = "".join(f" <a href='#{e(c)}'>[{e(c)}]</a>" for c in ids if c)
+            h.append(
+                f"<span id='{line_anchor(key, n)}'{cls}>"
+                f"<a class='ln' href='#{line_anchor(key, n)}'>{n:4d}</a>{e(line)}{back}</span>"
+            )
+        h.append("</pre></details>")
+    return "".join(h)
