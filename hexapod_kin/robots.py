@@ -4,7 +4,7 @@ Every preset is a function returning a frozen, validated :class:`~hexapod_kin.pa
 (or :class:`~hexapod_kin.params.Hexapod`); every argument is a dimension in SI units.
 :data:`PRESETS` maps names to those functions (kept sorted; a test checks it).
 
-Sources (lab reports in ``shared/seeds/``):
+Sources (lab reports shipped in ``hexapod_kin/report/seeds/``):
 
 * ``hexabot_leg`` — seed 001 Table 1 (also seeds 000 and 003): hip/knee/ankle, L1 = 50 mm,
   L2 = L3 = 100 mm. Foot position

@@ -1,4 +1,4 @@
-"""The lab reports' experiments, as functions (seeds in ``shared/seeds``).
+"""The lab reports' experiments, as functions (reports shipped in ``hexapod_kin/report/seeds/``).
 
 * :func:`seed_experiment` is the seeds' run: the 3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``, with
   the drift figures, and :func:`euler_baseline`, the plain Euler + ``np.linalg.solve`` loop the
