@@ -230,3 +230,32 @@ def test_closed_pipe_is_quiet():
         timeout=120,
     )
     assert "Traceback" not in shell.stderr and "BrokenPipe" not in shell.stderr, shell.stderr
+
+
+# --------------------------------------------------------------------- the exit-status rule
+#: (argv, status): 0 achieved, 1 answered but not achieved, 2 bad input or failure.
+EXIT_RULE = [
+    (["ik", "hexabot_leg", "--target", "0.15", "0.05", "-0.1"], 0),  # reached (closed form)
+    (["ik", "hexabot_leg", "--target", "1", "0", "0"], 1),  # unreachable: nearest printed
+    (["ik", "hexabot_leg", "--target", "1", "0"], 2),  # bad input
+    (["step", "hexabot_leg", "--duration", "0.3", "--no-baseline"], 0),
+    (["step", "hexabot_leg", "--velocity", "0.5", "0", "0", "--duration", "1"], 1),  # limits
+    (["step", "hexabot_leg", "--velocity", "0.5", "0"], 2),
+    (["gait", "--duration", "1"], 0),
+    (["gait", "--stride", "0.4", "--duration", "1"], 1),  # a check fails: not walkable
+    (["gait", "--pattern", "gallop"], 2),
+    (["fk", "hexabot_leg", "--q", "0", "0", "0"], 0),
+    (["fk", "hexabot_leg", "--q", "0", "0"], 2),
+]
+
+
+@pytest.mark.parametrize(("argv", "status"), EXIT_RULE, ids=lambda v: str(v))
+def test_exit_status_rule(capsys, argv, status):
+    assert main(argv) == status
+    cap = capsys.readouterr()
+    err = [ln for ln in cap.err.splitlines() if ln.startswith("hexapod-kin")]
+    if status == 2:  # one line on stderr says why
+        assert len(err) == 1 and "error" in err[0], cap.err
+    elif status == 1:  # the answer says what was not achieved
+        said = (cap.out + cap.err).lower()
+        assert any(w in said for w in ("unreachable", "limits", "not walkable")), said

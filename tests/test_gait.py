@@ -480,8 +480,9 @@ def test_cli_json_and_text(capsys):
     assert "min stability margin" in text and "max stance slip" in text
 
 
-def test_cli_infeasible_is_one_line_exit_2(capsys):
-    assert main(["gait", "--stride", "0.4", "--duration", "1"]) == 2
+def test_cli_infeasible_is_one_line_exit_1(capsys):
+    """A plan that fails a check is answered, not achieved: one line, exit status 1."""
+    assert main(["gait", "--stride", "0.4", "--duration", "1"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "out of reach" in err[0] and "leg" in err[0]
 

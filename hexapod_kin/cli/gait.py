@@ -103,8 +103,8 @@ def register(sub: Any) -> None:
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
-    from .. import load, robots
-    from ..gait.robot import as_whole_body
+    from .. import robots
+    from ..gait.robot import GaitError, as_whole_body
     from ..gait.walk import walk
     from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
 
@@ -128,20 +128,24 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     elif args.source is not None or args.foot or args.foot_radius is not None:
         robot = as_whole_body(source, feet=feet_arg(args), foot_radius=args.foot_radius)
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
-    run = walk(
-        robot,
-        pattern=args.pattern,
-        stride=args.stride,
-        step_height=args.height,
-        period=args.period,
-        duty_factor=args.duty_factor,
-        velocity=args.velocity,
-        body_height=args.body_height,
-        foot_reach=args.foot_reach,
-        terrain=args.terrain,
-        rate=args.rate,
-        duration=args.duration,
-    )
+    try:
+        run = walk(
+            robot,
+            pattern=args.pattern,
+            stride=args.stride,
+            step_height=args.height,
+            period=args.period,
+            duty_factor=args.duty_factor,
+            velocity=args.velocity,
+            body_height=args.body_height,
+            foot_reach=args.foot_reach,
+            terrain=args.terrain,
+            rate=args.rate,
+            duration=args.duration,
+        )
+    except GaitError as exc:  # a check failed: answered, not achieved (exit status 1)
+        print(f"hexapod-kin: not walkable: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 1
     out = run.to_dict()
     if plot is not None:
         from ..gait.plots import plot_gait
@@ -150,8 +154,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     if html is not None:
         from ..gait.show import walk_html
 
-        shown = None if robot is None or robot.params is not None else load(source)
-        out["html"] = str(walk_html(run, html, model=shown))
+        out["html"] = str(walk_html(run, html))  # the run's own robot
     if args.json:
         emit_json(out)
     else:

@@ -184,7 +184,9 @@ def _cmd_ik(args: argparse.Namespace) -> int:
             rot_tol=args.rot_tol,
             restarts=args.restarts,
         )
-    status = 0 if res is None or res.status in ("converged", "unreachable") else 1
+    # the exit rule (cli docs): 0 the target is reached within the limits; 1 answered but not
+    # achieved (unreachable: the nearest point is printed; or only beyond the joint limits)
+    status = 0 if inside or (res is not None and res.status == "converged") else 1
     if args.json:
         emit_json(
             {
@@ -333,9 +335,10 @@ def _cmd_step(args: argparse.Namespace) -> int:
                 f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
             )
         )
+    status = 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})
-        return 0
+        return status
     ca = tr.closest_approach
     print(
         f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
@@ -360,7 +363,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
     )
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
-    return 0
+    return status
 
 
 def plot_constant(tr: Any, drift: Any, rot_drift: Any, path: str, title: str, model: Any) -> str:
@@ -490,7 +493,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "written": written,
             }
         )
-        return 0
+        return 1 if tr.limited.any() else 0
     print(
         f"{model.name} (tip {model.tip}): {label} for {tr.t[-1]:g} s, dt = {tr.dt:g} s, "
         f"{tr.method}, gain {tr.gain:g} 1/s"
@@ -506,7 +509,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     )
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
-    return 0
+    return 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
 
 
 def register(sub: Any) -> None:
