@@ -7,6 +7,7 @@ without the visuals whose meshes are missing.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -162,3 +163,93 @@ def path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
         return (model.frames[base_id].name, model.frames[tip_id].name)
     names.reverse()
     return tuple(names)
+
+
+@dataclass(frozen=True)
+class DefaultTips:
+    """The tip a user would pick for a URDF with no ``tip`` given (see :func:`default_tips`).
+
+    Attributes:
+        kind: ``"chain"`` (one serial chain: its last frame), ``"gripper"`` (an arm whose end
+            branches into fingers: the TCP or flange, the finger joints locked) or ``"limbs"``
+            (several limbs from the root, e.g. the legs of a legged robot: every limb's end).
+        tips: The tip frame(s); ``tips[0]`` is the model's tip.
+        locked: Joints locked by this choice (the fingers of a gripper).
+        note: One line saying what was chosen (empty for a plain chain).
+
+    """
+
+    kind: str
+    tips: tuple[str, ...]
+    locked: tuple[str, ...] = ()
+    note: str = ""
+
+
+def default_tips(model: pin.Model) -> DefaultTips:
+    """The default tip(s) of a URDF model from its kinematic tree.
+
+    End frames (BODY or fixed-joint frames no other frame hangs from) carried by at least one
+    joint are grouped by the limb they belong to (the first joint from the root on their
+    path). Two or more limbs of two or more joints each: ``"limbs"``, the deepest end of each
+    (a legged robot's feet; sensor links on the body are not limbs). One limb: where its ends
+    part (the last joint they share), ends with at most two joints of their own are fingers
+    when one end needs none of them (a TCP or the hand itself): ``"gripper"``, the fingers
+    locked. Otherwise ``"chain"``: the last of the deepest ends in frame order.
+    """
+    frames = list(model.frames)
+    has_child = [False] * len(frames)
+    for i, f in enumerate(frames):
+        if i and f.parentFrame < len(frames) and f.parentFrame != i:
+            has_child[f.parentFrame] = True
+    kinds = (pin.FrameType.BODY, pin.FrameType.FIXED_JOINT)
+    ends = []
+    for i, f in enumerate(frames):
+        path = list(model.supports[f.parentJoint])[1:]  # joints from the root, root excluded
+        if not has_child[i] and f.type in kinds and path:
+            ends.append((i, str(f.name), path))
+    if not ends:
+        return DefaultTips("chain", (last_body_frame(model),))
+    limbs: dict[int, list[tuple[int, str, list[int]]]] = {}
+    for end in ends:
+        limbs.setdefault(end[2][0], []).append(end)
+    long = [v for v in limbs.values() if max(len(p) for _, _, p in v) >= 2]
+    if len(long) >= 2:
+        tips = tuple(
+            max(v, key=lambda e: (len(e[2]), "foot" in e[1].lower(), e[0]))[1] for v in long
+        )
+        return DefaultTips(
+            "limbs",
+            tips,
+            note=f"{len(tips)} limbs from the root: every limb's end ({', '.join(tips)}); "
+            "--tip picks one",
+        )
+    shared = list(ends[0][2])
+    for _, _, p in ends[1:]:
+        k = 0
+        while k < min(len(shared), len(p)) and shared[k] == p[k]:
+            k += 1
+        shared = shared[:k]
+    own = [(i, name, p[len(shared) :]) for i, name, p in ends]
+    if len(own) >= 2 and all(len(extra) <= 2 for _, _, extra in own):
+        bare = [(i, name) for i, name, extra in own if not extra]
+        fingers = sorted({j for _, _, extra in own for j in extra})
+        if bare:  # a TCP (or the hand) needs no finger joint
+            hints = ("tcp", "tool", "ee")
+            tip = max(bare, key=lambda e: (any(k in e[1].lower() for k in hints), e[0]))[1]
+        else:  # only fingers: the flange, the link of the last joint the ends share
+            tip = next(
+                (str(f.name) for f in frames
+                 if shared and f.parentJoint == shared[-1] and f.type == pin.FrameType.BODY),
+                "",
+            )  # fmt: skip
+        if tip and fingers:
+            names = tuple(str(model.names[j]) for j in fingers)
+            return DefaultTips(
+                "gripper",
+                (tip,),
+                names,
+                note=f"tip {tip} (gripper joints {', '.join(names)} locked); --tip picks "
+                "another frame",
+            )
+    depth = max(len(p) for _, _, p in ends)
+    return DefaultTips("chain", (max((i, n) for i, n, p in ends if len(p) == depth)[1],))

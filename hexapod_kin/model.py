@@ -38,9 +38,10 @@ from .exceptions import (
     choices,
 )
 from .frames import (
+    DefaultTips,
     add_tool_frame,
+    default_tips,
     frame_index,
-    last_body_frame,
     path_frames,
     reduce_model,
     root_link_frame,
@@ -194,13 +195,17 @@ class Model:
             if isinstance(params, Hexapod)
             else root_link_frame(full)
         )
+        #: the default tip(s) of a URDF given without ``tip`` (every limb's end, a gripper's
+        #: TCP with its fingers locked, a chain's last frame: :func:`frames.default_tips`)
+        self.default_tips: DefaultTips | None = None
         if tip is None:
             if isinstance(params, Chain):
                 tip_name = params.tip
             elif isinstance(params, Hexapod):
                 tip_name = params.foot_frames[0]
             else:
-                tip_name = last_body_frame(full)
+                self.default_tips = default_tips(full)
+                tip_name = self.default_tips.tips[0]
         else:
             tip_name = tip
         base_name = default_base if base is None else base
@@ -211,6 +216,8 @@ class Model:
                     f"{choices(full_frames, limit=200)}"
                 )
         do_reduce = (base is not None or tip is not None) if reduce is None else reduce
+        if reduce is None and self.default_tips is not None and self.default_tips.locked:
+            do_reduce = True  # the gripper's fingers are locked
         reduced, self._locked, self._q_ref = reduce_model(
             full, base_name, tip_name, do_reduce, q_ref
         )

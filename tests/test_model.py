@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import json
 
 import numpy as np
 import pinocchio as pin
@@ -435,3 +436,48 @@ def test_resolved_source_and_gate_result_to_dict():
     assert d["name"] == "hexabot_leg" and d["params"] == resolved.params.name
     gate = json.loads(json.dumps(check_urdf(resolved.text).to_dict()))
     assert gate["root_link"] == resolved.params.base and len(gate["joints"]) >= 3
+
+
+# --------------------------------------------------------------------- default tips of URDFs
+def test_default_tips_a_user_would_pick() -> None:
+    """A URDF loaded without ``tip``: the arm's TCP with the gripper locked, every limb's end
+    of a legged robot, a chain's last frame — each checked against raw Pinocchio's tree."""
+    import pinocchio as pin
+
+    panda = hk.load("erd:panda")
+    assert panda.default_tips.kind == "gripper" and panda.tip == "panda_hand_tcp"
+    assert panda.nq == 7 and set(panda.default_tips.locked) == {
+        "panda_finger_joint1",
+        "panda_finger_joint2",
+    }
+    # the TCP pose equals raw Pinocchio's on the full model with the fingers anywhere
+    full = panda.full_model
+    data = full.createData()
+    q7 = panda.random_q(1, seed=4)[0]
+    qf = pin.neutral(full)
+    qf[:7] = q7
+    qf[7:] = 0.02
+    pin.framesForwardKinematics(full, data, qf)
+    ref = data.oMf[full.getFrameId("panda_hand_tcp")].homogeneous
+    assert np.abs(panda.fk(q7) - ref).max() <= 1e-12
+    anymal = hk.load("erd:anymal")
+    assert anymal.default_tips.kind == "limbs"
+    assert sorted(anymal.default_tips.tips) == ["LF_FOOT", "LH_FOOT", "RF_FOOT", "RH_FOOT"]
+    assert anymal.nq == 12  # nothing locked: fk prints every foot
+    ur5 = hk.load("erd:ur5_robot")
+    assert ur5.default_tips.kind == "chain" and ur5.tip == "tool0" and ur5.nq == 6
+    assert hk.load("hexabot_leg").default_tips is None  # a table's own tip
+
+
+def test_fk_prints_every_limb_end(capsys) -> None:
+    from hexapod_kin.cli import main
+
+    q = [str(v) for v in np.linspace(-0.3, 0.3, 12)]
+    assert main(["fk", "erd:solo12", "--q", *q, "--json"]) == 0
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    assert sorted(out["ends"]) == ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
+    assert "every limb's end" in cap.err  # said on one line
+    m = hk.load("erd:solo12")
+    for name, T in out["ends"].items():
+        assert np.abs(np.array(T) - m.placement(np.array(q, dtype=float), name)).max() <= 1e-12

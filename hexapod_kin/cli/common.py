@@ -166,13 +166,20 @@ def load_source(args: argparse.Namespace) -> Any:
     inertia = getattr(args, "inertia", None)
     if inertia is not None:
         kwargs["inertia"] = inertia
-    return load(
+    dirs = getattr(args, "package_dir", None)
+    if dirs:
+        kwargs["package_dirs"] = tuple(dirs)
+    model = load(
         args.source,
         base=getattr(args, "base", None),
         tip=getattr(args, "tip", None),
         **kwargs,
         **params,
     )
+    chosen = getattr(model, "default_tips", None)
+    if chosen is not None and chosen.note:  # the default a user would pick, said on one line
+        print(f"hexapod-kin: {model.name}: {chosen.note}", file=sys.stderr)
+    return model
 
 
 def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
@@ -263,9 +270,19 @@ def source_args(p: argparse.ArgumentParser, frames: bool = True) -> None:
         help="preset parameter (SI units); a list as comma-separated numbers, e.g. "
         "-s mount_yaw_deg=45,90,135,-135,-90,-45",
     )
+    p.add_argument(
+        "--package-dir",
+        action="append",
+        metavar="DIR",
+        help="a folder where package:// meshes resolve (repeatable; before ROS_PACKAGE_PATH)",
+    )
     if frames:
         p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")
-        p.add_argument("--tip", help="tip frame of the sub-chain (default: the last link)")
+        p.add_argument(
+            "--tip",
+            help="tip frame of the sub-chain (default: a chain's last frame; an arm's TCP or "
+            "flange with the gripper joints locked; every limb's end of a legged robot)",
+        )
 
 
 def inertia_args(p: argparse.ArgumentParser) -> None:

@@ -130,6 +130,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
 def _add_fk(sub: Any) -> None:
     p = sub.add_parser("fk", help="tip transform and every intermediate transform")
     source_args(p)
+    _tool_arg(p)
     q_args(p)
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
@@ -141,6 +142,9 @@ def _cmd_fk(args: argparse.Namespace) -> int:
     rel = model.transforms(q)
     cum = model.cumulative_transforms(q)
     frames = list(model.path_frames)
+    chosen = model.default_tips
+    limbs = chosen.tips if chosen is not None and chosen.kind == "limbs" else ()
+    ends = {name: model.placement(q, name) for name in limbs}  # every limb's end
     if args.json:
         emit_json(
             {
@@ -154,8 +158,19 @@ def _cmd_fk(args: argparse.Namespace) -> int:
                 "position": tip[:3, 3].tolist(),
                 "transforms": [t.tolist() for t in rel],
                 "cumulative": [t.tolist() for t in cum],
+                "ends": {name: T.tolist() for name, T in ends.items()},
             }
         )
+        return 0
+    if ends:  # a tree robot: every limb's end, not one leaf
+        print(
+            f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
+            f"({', '.join(model.joint_names)})"
+        )
+        for name, T in ends.items():
+            print(f"T  ({model.base} -> {name}):")
+            print(matrix_text(T))
+            print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
         return 0
     print(
         f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
@@ -178,6 +193,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
 def _add_jacobian(sub: Any) -> None:
     p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
     source_args(p)
+    _tool_arg(p)
     q_args(p)
     p.add_argument(
         "--reference",

@@ -22,7 +22,11 @@ def _resolve(args: argparse.Namespace, allow_urdf: bool = False) -> Any:
     """The Chain/Hexapod of SOURCE (or, with ``allow_urdf``, SOURCE itself: a URDF)."""
     from ..sources import resolve_source
 
-    resolved = resolve_source(args.source, **set_params(args.set, source=args.source))
+    resolved = resolve_source(
+        args.source,
+        package_dirs=tuple(getattr(args, "package_dir", None) or ()),
+        **set_params(args.set, source=args.source),
+    )
     if resolved.params is not None:
         return resolved.params
     if allow_urdf:
