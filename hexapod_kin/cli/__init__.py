@@ -33,6 +33,7 @@ MODULES: tuple[str, ...] = (
     "sweep",
     "gait",
     "report",
+    "timeline",
     "precompile",
 )
 
