@@ -28,6 +28,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 copied into _static: maths render offline
     "sphinx.ext.viewcode",
     "sphinx_gallery.gen_gallery",
 ]
@@ -52,9 +53,6 @@ napoleon_attr_annotations = True
 python_use_unqualified_type_names = True
 suppress_warnings = ["myst.xref_missing", "myst.header"]
 
-# MathJax is loaded by the reader's browser when a page shows maths;
-# the build itself never reaches the network.
-mathjax_path = "https://cdn.jsdelivr.net/npm/mathjax@3/es5/tex-mml-chtml.js"
 
 sphinx_gallery_conf = {
     "examples_dirs": ["gallery"],
