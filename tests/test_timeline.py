@@ -210,3 +210,21 @@ def test_cli_gait_and_path(tmp_path):
     assert done.returncode == 0, done.stderr
     back = read_timeline(out)
     np.testing.assert_allclose(back.q[:, 1], np.interp(back.t, t, q[:, 1]), atol=1e-15)
+
+
+def test_step_timeline_cli_matches_the_api(tmp_path):
+    from hexapod_kin.cli import main
+    from hexapod_kin.seeds import seed_experiment
+
+    model = hk.load("hexabot_leg")
+    run = seed_experiment(model, duration=2.0, baseline=False)
+    ref = timeline(run.trajectory, rate=100, joint_names=model.joint_names)
+    # the step's own rates (q̇ of the control law) interpolated: equal to the plan's at knots
+    k = np.searchsorted(run.trajectory.t, ref.t)
+    np.testing.assert_allclose(ref.q, run.trajectory.q[k], atol=1e-12)
+    np.testing.assert_allclose(ref.qdot, run.trajectory.qdot[k], atol=1e-12)
+    out = tmp_path / "step.json"
+    assert main(["timeline", "step", "--duration", "2", "--rate", "100", "-o", str(out)]) == 0
+    back = read_timeline(out)
+    assert back.joint_names == model.joint_names
+    np.testing.assert_allclose(back.q, ref.q, atol=1e-15)

@@ -1,7 +1,8 @@
 """The ``timeline`` subcommand: a planned motion as a servo timeline (CSV, JSON, ROS 2 YAML).
 
 ``hexapod-kin timeline gait ...`` walks the hexapod (the ``gait`` command's options) and writes
-the joints' timeline; ``hexapod-kin timeline path FILE`` takes any joint path from a file (an
+the joints' timeline; ``hexapod-kin timeline step [SOURCE]`` the seeds' resolved-rate step of
+a leg; ``hexapod-kin timeline path FILE`` takes any joint path from a file (an
 IK path, a step's joint trajectory: CSV ``t,<joint>,...`` in [s] and [rad], or JSON ``t``,
 ``q``, ``joint_names``). Both resample at ``--rate`` (``--interpolation linear|cubic``), map
 each joint through ``--calibration`` (YAML/TOML/JSON) and refuse the first sample beyond a
@@ -76,6 +77,18 @@ def register(sub: Any) -> None:
     g.add_argument("--plan-rate", type=float, default=100.0, help="the walk's own rate [Hz]")
     _common(g)
     g.set_defaults(func=_cmd_gait)
+    st = kinds.add_parser(
+        "step",
+        help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    st.add_argument("source", nargs="?", default="hexabot_leg", help="a 3-joint leg (source)")
+    st.add_argument("--amplitude", type=float, default=0.05, help="A [m/s]")
+    st.add_argument("--period", type=float, default=2.0, help="T [s]")
+    st.add_argument("--dt", type=float, default=1e-3, help="integration step [s]")
+    st.add_argument("--duration", type=float, default=4.0, help="[s]")
+    _common(st)
+    st.set_defaults(func=_cmd_step)
     f = kinds.add_parser(
         "path",
         help="a joint path from a file (IK path, a step): CSV t,<joint>,... or JSON",
@@ -106,6 +119,25 @@ def _cmd_gait(args: argparse.Namespace) -> int:
         duration=args.duration,
     )
     return _write(run, args, out, None)
+
+
+def _cmd_step(args: argparse.Namespace) -> int:
+    from .. import load
+    from ..seeds import seed_experiment
+    from .common import output_path
+
+    out = output_path(args.output, "-o", _SUFFIXES)
+    model = load(args.source)
+    run = seed_experiment(
+        model,
+        amplitude=args.amplitude,
+        period=args.period,
+        dt=args.dt,
+        duration=args.duration,
+        baseline=False,
+    )
+    traj = run.trajectory
+    return _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names)
 
 
 def _cmd_path(args: argparse.Namespace) -> int:
