@@ -71,6 +71,7 @@ COMMANDS: dict[str, list[str]] = {
         "--out",
         "{out}/sweep.csv",
     ],
+    "timeline": ["timeline", "gait", "--duration", "2", "-o", "{out}/walk.csv"],
     "reproduce": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
     # the README's first command: the whole report (animations included)
     "reproduce-full": ["reproduce", "--out", "{out}/report_full"],

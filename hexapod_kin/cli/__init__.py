@@ -35,6 +35,7 @@ MODULES: tuple[str, ...] = (
     "gait",
     "simulate",
     "report",
+    "timeline",
     "precompile",
 )
 

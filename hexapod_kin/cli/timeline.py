@@ -1,0 +1,190 @@
+"""The ``timeline`` subcommand: a planned motion as a servo timeline (CSV, JSON, ROS 2 YAML).
+
+``hexapod-kin timeline gait ...`` walks the hexapod (the ``gait`` command's options) and writes
+the joints' timeline; ``hexapod-kin timeline step [SOURCE]`` the seeds' resolved-rate step of
+a leg; ``hexapod-kin timeline path FILE`` takes any joint path from a file (an
+IK path, a step's joint trajectory: CSV ``t,<joint>,...`` in [s] and [rad], or JSON ``t``,
+``q``, ``joint_names``). Both resample at ``--rate`` (``--interpolation linear|cubic``), map
+each joint through ``--calibration`` (YAML/TOML/JSON) and refuse the first sample beyond a
+servo's limits or a joint's speed limit with one line naming the joint, the time and the value
+(exit status 2). The output format follows the suffix of ``-o``: ``.csv``, ``.json``,
+``.yaml``/``.yml`` (a ROS 2 ``trajectory_msgs/JointTrajectory``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+__all__ = ["register"]
+
+_SUFFIXES = (".csv", ".json", ".yaml", ".yml")
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--rate", type=float, default=50.0, help="timeline samples per second [Hz]")
+    p.add_argument(
+        "--interpolation",
+        choices=("linear", "cubic"),
+        default="linear",
+        help="resampling: linear (positions and plan rates) or a cubic spline",
+    )
+    p.add_argument(
+        "--calibration",
+        metavar="FILE",
+        help="servo calibration (.yaml/.toml/.json): offset, direction, units, limits "
+        "(default: every joint in rad, unlimited)",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="FILE",
+        help="output: .csv, .json or .yaml/.yml (ROS 2 JointTrajectory)",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON summary object")
+
+
+def register(sub: Any) -> None:
+    """Add the ``timeline`` subcommand to ``sub`` (an argparse subparsers object)."""
+    p = sub.add_parser(
+        "timeline",
+        help="export a planned motion as a servo timeline (CSV, JSON, ROS 2 YAML)",
+        description=__doc__.split("\n\n", 1)[1].strip() if __doc__ else None,
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    kinds = p.add_subparsers(dest="plan", required=True, metavar="PLAN")
+    g = kinds.add_parser(
+        "gait",
+        help="a walk of the hexapod preset",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    g.add_argument("--pattern", choices=("tripod", "wave", "ripple"), default="tripod")
+    g.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
+    g.add_argument("--height", type=float, default=0.03, help="step height [m]")
+    g.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    g.add_argument(
+        "--velocity",
+        type=float,
+        nargs=3,
+        metavar=("VX", "VY", "WZ"),
+        default=None,
+        help="body twist [m/s, m/s, rad/s] (not with --stride)",
+    )
+    g.add_argument("--body-height", type=float, default=0.08, help="[m]")
+    g.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    g.add_argument("--plan-rate", type=float, default=100.0, help="the walk's own rate [Hz]")
+    _common(g)
+    g.set_defaults(func=_cmd_gait)
+    st = kinds.add_parser(
+        "step",
+        help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    st.add_argument("source", nargs="?", default="hexabot_leg", help="a 3-joint leg (source)")
+    st.add_argument("--amplitude", type=float, default=0.05, help="A [m/s]")
+    st.add_argument("--period", type=float, default=2.0, help="T [s]")
+    st.add_argument("--dt", type=float, default=1e-3, help="integration step [s]")
+    st.add_argument("--duration", type=float, default=4.0, help="[s]")
+    _common(st)
+    st.set_defaults(func=_cmd_step)
+    f = kinds.add_parser(
+        "path",
+        help="a joint path from a file (IK path, a step): CSV t,<joint>,... or JSON",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    f.add_argument("file", help="plan file: CSV (header t,<joint>,...; [s], [rad]) or JSON")
+    f.add_argument(
+        "--source",
+        help="the robot (preset, table file, URDF, erd:NAME) whose joints' speed limits apply",
+    )
+    _common(f)
+    f.set_defaults(func=_cmd_path)
+
+
+def _cmd_gait(args: argparse.Namespace) -> int:
+    from ..gait.walk import walk
+    from .common import output_path
+
+    out = output_path(args.output, "-o", _SUFFIXES)
+    run = walk(
+        pattern=args.pattern,
+        stride=args.stride,
+        step_height=args.height,
+        period=args.period,
+        velocity=args.velocity,
+        body_height=args.body_height,
+        rate=args.plan_rate,
+        duration=args.duration,
+    )
+    return _write(run, args, out, None)
+
+
+def _cmd_step(args: argparse.Namespace) -> int:
+    from .. import load
+    from ..seeds import seed_experiment
+    from .common import output_path
+
+    out = output_path(args.output, "-o", _SUFFIXES)
+    model = load(args.source)
+    run = seed_experiment(
+        model,
+        amplitude=args.amplitude,
+        period=args.period,
+        dt=args.dt,
+        duration=args.duration,
+        baseline=False,
+    )
+    traj = run.trajectory
+    return _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names)
+
+
+def _cmd_path(args: argparse.Namespace) -> int:
+    from ..export.timeline import read_plan
+    from .common import output_path
+
+    out = output_path(args.output, "-o", _SUFFIXES)
+    t, q, names = read_plan(args.file)
+    vlim = None
+    if args.source:
+        from .. import load
+
+        model = load(args.source)
+        limits = dict(zip(model.joint_names, model.velocity_limit))
+        vlim = [float(limits.get(n, float("inf"))) for n in names]
+    return _write((t, q), args, out, vlim, names)
+
+
+def _write(plan: Any, args: argparse.Namespace, out: Any, vlim: Any, names: Any = None) -> int:
+    from ..export.timeline import timeline
+    from .common import emit_json
+
+    tl = timeline(
+        plan,
+        rate=args.rate,
+        interpolation=args.interpolation,
+        calibration=args.calibration,
+        joint_names=names,
+        velocity_limit=vlim,
+    )
+    path = tl.write(out)
+    summary = {
+        "path": str(path),
+        "samples": len(tl.t),
+        "duration": float(tl.t[-1] - tl.t[0]),
+        "rate": tl.rate,
+        "interpolation": tl.interpolation,
+        "joints": list(tl.joint_names),
+        "units": [s.units for s in tl.servos],
+    }
+    if args.json:
+        emit_json(summary)
+    else:
+        print(
+            f"{summary['samples']} samples of {len(tl.joint_names)} joints over "
+            f"{summary['duration']:g} s at {tl.rate:g} Hz ({tl.interpolation}); every sample "
+            f"within the servos' limits"
+        )
+        print(f"wrote {path}", file=sys.stderr)
+    return 0

@@ -1,0 +1,369 @@
+r"""Servo calibration: how each joint's angle maps to its servo's command, and the servo's limits.
+
+A calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``) has a ``defaults`` table (the
+settings of every joint not listed) and a ``joints`` table (per joint, overriding the
+defaults). Keys: ``units`` (``rad``, ``deg``, ``ticks``, ``us``), ``offset`` (joint angle at
+the servo's centre [rad]), ``direction`` (±1), ``ticks_per_revolution`` and ``centre``
+(ticks), ``us_per_rad`` and ``centre`` (PWM pulse width, µs), ``limits`` ([lowest, highest]
+in the servo's units), ``velocity_limit`` [rad/s], ``resolution`` (the command's step in its
+units). The map is :math:`u = c + d\,s\,(q - q_0)` with ``s`` the servo units per radian.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import decode_utf8, read_regular
+from ..exceptions import OptionalDependencyError, ParameterError, SourceError, choices
+
+__all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
+
+#: Servo units understood by :class:`Servo`.
+UNITS: tuple[str, ...] = ("rad", "deg", "ticks", "us")
+_MAX_BYTES = 1 << 20  # calibration files
+_SERVO_KEYS = (
+    "units",
+    "offset",
+    "direction",
+    "ticks_per_revolution",
+    "centre",
+    "us_per_rad",
+    "limits",
+    "velocity_limit",
+    "resolution",
+)
+
+
+def _bad(message: str, parameter: str, value: Any, allowed: Any) -> ParameterError:
+    return ParameterError(message, parameter=parameter, value=value, allowed=allowed)
+
+
+@dataclass(frozen=True)
+class Servo:
+    """The servo that drives one joint, and how its command maps to the joint angle.
+
+    Attributes:
+        joint: The joint's name.
+        units: ``"rad"``, ``"deg"``, ``"ticks"`` or ``"us"`` (PWM pulse width in µs).
+        offset: Joint angle at the servo's centre (zero for rad/deg) [rad].
+        direction: +1 or -1 (servo angle = ``direction * (q - offset)``).
+        ticks_per_revolution: Ticks per turn (``"ticks"``; e.g. 1228.8 for 1024 ticks over
+            300°, an AX-12).
+        centre: The command at the centre: ticks (``"ticks"``) or µs (``"us"``; e.g. 1500).
+        us_per_rad: Pulse width per radian [µs/rad] (``"us"``).
+        limits: The servo's own (lowest, highest) command, in its units (None: unlimited).
+        velocity_limit: The joint's speed limit [rad/s] (None: the model's, or unlimited).
+        resolution: The command's step, in its units (1 for ticks and µs; 0 = exact).
+
+    """
+
+    joint: str
+    units: str = "rad"
+    offset: float = 0.0
+    direction: int = 1
+    ticks_per_revolution: float | None = None
+    centre: float = 0.0
+    us_per_rad: float | None = None
+    limits: tuple[float, float] | None = None
+    velocity_limit: float | None = None
+    resolution: float | None = None
+
+    def __post_init__(self) -> None:
+        where = f"calibration of {self.joint}"
+        if self.units not in UNITS:
+            raise _bad(
+                f"{where}: units {self.units!r} unknown; {choices(UNITS)}",
+                "units",
+                self.units,
+                UNITS,
+            )
+        if self.direction not in (1, -1):
+            raise _bad(
+                f"{where}: direction {self.direction!r}; allowed: 1 or -1",
+                "direction",
+                self.direction,
+                (1, -1),
+            )
+        for name in ("offset", "centre"):
+            if not math.isfinite(getattr(self, name)):
+                raise _bad(f"{where}: {name} must be finite", name, getattr(self, name), "finite")
+        if self.units == "ticks" and not (
+            self.ticks_per_revolution is not None
+            and math.isfinite(self.ticks_per_revolution)
+            and self.ticks_per_revolution > 0
+        ):
+            raise _bad(
+                f"{where}: units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 "
+                f"ticks over 300°), got {self.ticks_per_revolution!r}",
+                "ticks_per_revolution",
+                self.ticks_per_revolution,
+                "> 0",
+            )
+        if self.units == "us" and not (
+            self.us_per_rad is not None and math.isfinite(self.us_per_rad) and self.us_per_rad > 0
+        ):
+            raise _bad(
+                f"{where}: units 'us' need us_per_rad > 0, got {self.us_per_rad!r}",
+                "us_per_rad",
+                self.us_per_rad,
+                "> 0",
+            )
+        if self.limits is not None:
+            lo, hi = self.limits
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise _bad(
+                    f"{where}: limits {list(self.limits)} must be finite with lowest < highest",
+                    "limits",
+                    self.limits,
+                    "[lowest, highest]",
+                )
+        if self.velocity_limit is not None and not self.velocity_limit > 0:
+            raise _bad(
+                f"{where}: velocity_limit {self.velocity_limit!r} must be > 0 [rad/s]",
+                "velocity_limit",
+                self.velocity_limit,
+                "> 0",
+            )
+        if self.resolution is not None and not (
+            math.isfinite(self.resolution) and self.resolution >= 0
+        ):
+            raise _bad(
+                f"{where}: resolution {self.resolution!r} must be >= 0",
+                "resolution",
+                self.resolution,
+                ">= 0",
+            )
+
+    @property
+    def scale(self) -> float:
+        """Servo units per radian of servo angle."""
+        if self.units == "deg":
+            return 180.0 / math.pi
+        if self.units == "ticks":
+            return float(self.ticks_per_revolution) / (2.0 * math.pi)  # type: ignore[arg-type]
+        if self.units == "us":
+            return float(self.us_per_rad)  # type: ignore[arg-type]
+        return 1.0
+
+    @property
+    def step(self) -> float:
+        """The command's resolution in its units (0: not rounded)."""
+        if self.resolution is not None:
+            return float(self.resolution)
+        return 1.0 if self.units in ("ticks", "us") else 0.0
+
+    @property
+    def zero(self) -> float:
+        """The command at the centre (0 for rad and deg)."""
+        return self.centre if self.units in ("ticks", "us") else 0.0
+
+    def command(self, q: Any) -> np.ndarray:
+        """Servo commands for joint angles ``q`` [rad], rounded to the resolution."""
+        u = self.zero + self.direction * self.scale * (np.asarray(q, dtype=float) - self.offset)
+        s = self.step
+        return np.round(u / s) * s if s > 0 else u
+
+    def angle(self, u: Any) -> np.ndarray:
+        """Joint angles [rad] for servo commands ``u`` (the inverse of :meth:`command`)."""
+        u = np.asarray(u, dtype=float)
+        return self.offset + self.direction * (u - self.zero) / self.scale
+
+    def to_dict(self) -> dict[str, Any]:
+        """The servo as a calibration-file entry (only the keys that matter for its units)."""
+        d: dict[str, Any] = {"units": self.units, "offset": self.offset}
+        d["direction"] = self.direction
+        if self.units == "ticks":
+            d["ticks_per_revolution"] = self.ticks_per_revolution
+        if self.units == "us":
+            d["us_per_rad"] = self.us_per_rad
+        if self.units in ("ticks", "us"):
+            d["centre"] = self.centre
+        if self.limits is not None:
+            d["limits"] = list(self.limits)
+        if self.velocity_limit is not None:
+            d["velocity_limit"] = self.velocity_limit
+        if self.resolution is not None:
+            d["resolution"] = self.resolution
+        return d
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Each joint's servo (see :class:`Servo`); joints not listed use ``default``.
+
+    Attributes:
+        servos: The listed joints' servos, by joint name.
+        default: The servo settings of joints not listed (its ``joint`` is ``"*"``), or None:
+            then every joint of a plan must be listed.
+
+    """
+
+    servos: Mapping[str, Servo] = field(default_factory=dict)
+    default: Servo | None = None
+
+    def servo(self, joint: str) -> Servo:
+        """The servo of ``joint`` (the default's settings under the joint's name)."""
+        if joint in self.servos:
+            return self.servos[joint]
+        if self.default is None:
+            raise ParameterError(
+                f"calibration: no servo for joint {joint!r} and no 'defaults'; listed: "
+                f"{sorted(self.servos)}",
+                parameter="calibration",
+                value=joint,
+                allowed=sorted(self.servos),
+            )
+        return Servo(**{**self.default.__dict__, "joint": joint})
+
+    def check_joints(self, joint_names: Sequence[str]) -> None:
+        """Refuse a listed joint that the plan does not have (a typo would go unnoticed)."""
+        extra = [j for j in self.servos if j not in joint_names]
+        if extra:
+            raise ParameterError(
+                f"calibration: joint {extra[0]!r} is not in the plan; {choices(joint_names)}",
+                parameter="calibration",
+                value=extra[0],
+                allowed=list(joint_names),
+            )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The calibration as a file's data: ``{"defaults": {...}, "joints": {...}}``."""
+        out: dict[str, Any] = {}
+        if self.default is not None:
+            out["defaults"] = self.default.to_dict()
+        out["joints"] = {k: s.to_dict() for k, s in self.servos.items()}
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], name: str = "calibration") -> Calibration:
+        """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc)."""
+        if not isinstance(data, Mapping):
+            raise _bad(f"{name}: must be a mapping", "calibration", type(data).__name__, "mapping")
+        unknown = [k for k in data if k not in ("defaults", "joints")]
+        if unknown:
+            raise _bad(
+                f"{name}: unknown key {unknown[0]!r}; allowed: defaults, joints",
+                "calibration",
+                unknown[0],
+                ("defaults", "joints"),
+            )
+        base = data.get("defaults") or {}
+        joints = data.get("joints") or {}
+        if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
+            raise _bad(
+                f"{name}: 'defaults' and 'joints' must be tables",
+                "calibration",
+                None,
+                "tables",
+            )
+        default = _servo("*", base, name) if "defaults" in data else None
+        servos = {}
+        for joint, entry in joints.items():
+            if not isinstance(entry, Mapping):
+                raise _bad(
+                    f"{name}: joint {joint!r} must be a table of servo settings",
+                    "calibration",
+                    joint,
+                    _SERVO_KEYS,
+                )
+            servos[str(joint)] = _servo(str(joint), {**base, **entry}, name)
+        return cls(servos=servos, default=default)
+
+
+def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
+    kw: dict[str, Any] = {}
+    for key, value in entry.items():
+        if key not in _SERVO_KEYS:
+            raise _bad(
+                f"{name}: joint {joint!r}: unknown key {key!r}; {choices(_SERVO_KEYS)}",
+                "calibration",
+                key,
+                _SERVO_KEYS,
+            )
+        try:
+            if key == "units":
+                kw[key] = str(value)
+            elif key == "direction":
+                kw[key] = int(value) if float(value) in (1.0, -1.0) else value
+            elif key == "limits":
+                lo, hi = value
+                kw[key] = (float(lo), float(hi))
+            else:
+                kw[key] = float(value)
+        except (TypeError, ValueError):
+            raise _bad(
+                f"{name}: joint {joint!r}: {key} = {value!r} is not a number"
+                + (" pair [lowest, highest]" if key == "limits" else ""),
+                key,
+                value,
+                "numbers",
+            ) from None
+    return Servo(joint=joint, **kw)
+
+
+def read_calibration(path: str | os.PathLike[str]) -> Calibration:
+    """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
+
+    Example (AX-12-like servos: 1024 ticks over 300°, centre 512)::
+
+        defaults: {units: ticks, ticks_per_revolution: 1228.8, centre: 512,
+                   limits: [0, 1023], velocity_limit: 11.9}
+        joints:
+          leg1_knee: {direction: -1, offset: -0.3}
+
+    Raises:
+        SourceError: The file cannot be read or parsed.
+        ParameterError: An unknown key or unit, a bad number.
+
+    """
+    p = Path(path)
+    text = decode_utf8(read_regular(p, _MAX_BYTES, "calibration"), str(p), "calibration")
+    data = _parse(text, p)
+    return Calibration.from_dict(data, p.name)
+
+
+def _parse(text: str, p: Path) -> Any:
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".json":
+            return json.loads(text)
+        if suffix == ".toml":
+            try:
+                import tomllib as toml  # type: ignore[import-not-found,unused-ignore]
+            except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+                import tomli as toml  # type: ignore[no-redef,import-not-found,unused-ignore]
+            return toml.loads(text)
+        return yaml_module().safe_load(text)
+    except (ValueError, RecursionError) as exc:  # JSON, TOML decode errors are ValueErrors
+        raise SourceError(
+            f"{p.name}: cannot be parsed ({' '.join(str(exc).split())[:160]})",
+            parameter="calibration",
+            value=str(p),
+        ) from None
+    except Exception as exc:  # yaml.YAMLError
+        if type(exc).__module__.startswith("yaml"):
+            raise SourceError(
+                f"{p.name}: not valid YAML ({' '.join(str(exc).split())[:160]})",
+                parameter="calibration",
+                value=str(p),
+            ) from None
+        raise
+
+
+def yaml_module() -> Any:
+    try:
+        import yaml
+    except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the tables extra
+        raise OptionalDependencyError(
+            "YAML calibration and timeline files need PyYAML; `pip install hexapod-kin[tables]`",
+            parameter="format",
+        ) from None
+    return yaml

@@ -1,0 +1,544 @@
+r"""Joint timelines for hardware: a planned motion resampled for servos, CSV, JSON, ROS 2 YAML.
+
+A *plan* is any motion with sample times and joint angles: a
+:class:`~hexapod_kin.gait.walk.GaitRun` (``gait.walk``), a
+:class:`~hexapod_kin.motion.rate.Trajectory` (``motion.resolved_rate``, a step), or an IK path
+given as ``(times, q)`` arrays. :func:`timeline` resamples it at a chosen rate and maps every
+joint to its servo through a :class:`Calibration`:
+
+.. math::
+
+    \theta_s = d\,(q - q_0), \qquad
+    u = \begin{cases}
+      \theta_s & \text{rad} \\
+      \theta_s \cdot 180/\pi & \text{deg} \\
+      c + \theta_s \, T / (2\pi) & \text{ticks (T ticks per revolution, centre c)} \\
+      c_{\mu s} + \theta_s \, k & \text{us (k µs per rad, centre } c_{\mu s})
+    \end{cases}
+
+with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction.
+Commands are rounded to the servo's resolution (1 tick, 1 µs; none for rad/deg unless
+``resolution`` says so). Every sample is checked against the servo's own limits (in its
+units) and the joint's speed limit [rad/s] (the calibration's ``velocity_limit``, else the
+model's); the first sample out of range is refused with a
+:class:`~hexapod_kin.exceptions.ConfigurationError` naming the joint, the time and the value.
+
+Interpolation: ``"linear"`` (positions and velocities interpolated linearly between the plan's
+samples; the velocity is the plan's own, or its second-order finite difference) or ``"cubic"``
+(a not-a-knot cubic spline through the plan's positions; velocities are its derivative).
+
+Files (:meth:`Timeline.write`, :func:`read_timeline`):
+
+* CSV: ``# key: value`` header lines (format, rate, interpolation, the calibration as JSON), one
+  column ``t [s]``, one column per joint in its servo units, one speed column per joint in servo
+  units per second.
+* JSON: the same as one object.
+* ROS 2 YAML: a ``trajectory_msgs/msg/JointTrajectory`` (header, joint_names, points with
+  positions [rad] and velocities [rad/s] of the commanded (rounded) servo values,
+  time_from_start {sec, nanosec}); ``ros2 topic pub`` or a test can load it.
+
+Reading back inverts the servo map, so the angles read equal the plan's to half the servo's
+resolution.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from .._io import atomic_write, decode_utf8, read_regular
+from ..exceptions import ConfigurationError, ParameterError, SourceError, choices
+from .servos import UNITS, Calibration, Servo, read_calibration, yaml_module
+
+__all__ = [
+    "UNITS",
+    "Calibration",
+    "Servo",
+    "Timeline",
+    "read_calibration",
+    "read_plan",
+    "read_timeline",
+    "timeline",
+]
+
+#: Interpolations understood by :func:`timeline`.
+INTERPOLATIONS: tuple[str, ...] = ("linear", "cubic")
+FORMAT = "hexapod-kin timeline"
+_MAX_TIMELINE_BYTES = 256 << 20
+
+Interpolation = Literal["linear", "cubic"]
+
+
+def _bad(message: str, parameter: str, value: Any, allowed: Any) -> ParameterError:
+    return ParameterError(message, parameter=parameter, value=value, allowed=allowed)
+
+
+@dataclass(frozen=True)
+class Timeline:
+    """A plan resampled for servos (arrays read-only).
+
+    Attributes:
+        t: (N,) sample times [s], ``k / rate``.
+        joint_names: The joints, in column order.
+        q: (N, J) joint angles of the commands sent [rad] (the servo values mapped back).
+        qdot: (N, J) joint rates [rad/s].
+        command: (N, J) servo commands in each servo's units (rounded to its resolution).
+        speed: (N, J) servo speeds in servo units per second.
+        calibration: The servos used.
+        rate: Samples per second [Hz].
+        interpolation: ``"linear"`` or ``"cubic"``.
+
+    """
+
+    t: np.ndarray
+    joint_names: tuple[str, ...]
+    q: np.ndarray
+    qdot: np.ndarray
+    command: np.ndarray
+    speed: np.ndarray
+    calibration: Calibration
+    rate: float
+    interpolation: str
+
+    @property
+    def servos(self) -> tuple[Servo, ...]:
+        """The servo of each column."""
+        return tuple(self.calibration.servo(j) for j in self.joint_names)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The timeline as JSON-ready data (the JSON file's content)."""
+        return {
+            "format": FORMAT,
+            "version": 1,
+            "rate": self.rate,
+            "interpolation": self.interpolation,
+            "joint_names": list(self.joint_names),
+            "units": [s.units for s in self.servos],
+            "calibration": self.calibration.to_dict(),
+            "t": self.t.tolist(),
+            "command": self.command.tolist(),
+            "speed": self.speed.tolist(),
+        }
+
+    def to_csv(self) -> str:
+        """CSV text: header lines, then ``t [s]``, the commands and the speeds."""
+        units = [s.units for s in self.servos]
+        lines = [
+            f"# format: {FORMAT} 1",
+            f"# rate: {self.rate!r}",
+            f"# interpolation: {self.interpolation}",
+            f"# calibration: {json.dumps(self.calibration.to_dict(), sort_keys=True)}",
+            ",".join(
+                ["t [s]"]
+                + [f"{j} [{u}]" for j, u in zip(self.joint_names, units)]
+                + [f"{j} speed [{u}/s]" for j, u in zip(self.joint_names, units)]
+            ),
+        ]
+        for k in range(len(self.t)):
+            row = [self.t[k], *self.command[k], *self.speed[k]]
+            lines.append(",".join(_num(v) for v in row))
+        return "\n".join(lines) + "\n"
+
+    def to_ros2_yaml(self, frame_id: str = "") -> str:
+        """A ROS 2 ``trajectory_msgs/msg/JointTrajectory`` as YAML (positions in [rad])."""
+        out = [
+            "# trajectory_msgs/msg/JointTrajectory, written by hexapod-kin "
+            f"({self.interpolation} resampling at {self.rate:g} Hz)",
+            "header:",
+            "  stamp: {sec: 0, nanosec: 0}",
+            f"  frame_id: {json.dumps(frame_id)}",
+            "joint_names: [" + ", ".join(json.dumps(j) for j in self.joint_names) + "]",
+            "points:",
+        ]
+        for k in range(len(self.t)):
+            sec, nanosec = _duration(float(self.t[k]))
+            out += [
+                "- positions: [" + ", ".join(_num(v) for v in self.q[k]) + "]",
+                "  velocities: [" + ", ".join(_num(v) for v in self.qdot[k]) + "]",
+                "  accelerations: []",
+                "  effort: []",
+                f"  time_from_start: {{sec: {sec}, nanosec: {nanosec}}}",
+            ]
+        return "\n".join(out) + "\n"
+
+    def write(self, path: str | os.PathLike[str], fmt: str | None = None) -> Path:
+        """Write the timeline atomically; ``fmt`` = ``"csv"``, ``"json"`` or ``"ros2"``.
+
+        The format defaults to the suffix: ``.csv``, ``.json``, ``.yaml``/``.yml`` (ROS 2).
+
+        Raises:
+            ParameterError: Unknown format or suffix.
+
+        """
+        kind = _format(Path(path), fmt)
+        if kind == "csv":
+            text = self.to_csv()
+        elif kind == "json":
+            text = json.dumps(self.to_dict(), indent=None, separators=(",", ":")) + "\n"
+        else:
+            text = self.to_ros2_yaml()
+        return atomic_write(path, text)
+
+
+def _num(v: float) -> str:
+    return repr(float(v))
+
+
+def _duration(t: float) -> tuple[int, int]:
+    """``builtin_interfaces/Duration`` of ``t`` [s]: (sec, nanosec), nanosec in [0, 1e9)."""
+    ns = int(round(t * 1e9))
+    sec, nanosec = divmod(ns, 1_000_000_000)
+    return int(sec), int(nanosec)
+
+
+FORMATS: tuple[str, ...] = ("csv", "json", "ros2")
+
+
+def _format(path: Path, fmt: str | None) -> str:
+    if fmt is not None:
+        if fmt not in FORMATS:
+            raise _bad(f"format {fmt!r} unknown; {choices(FORMATS)}", "format", fmt, FORMATS)
+        return fmt
+    suffix = path.suffix.lower()
+    kinds = {".csv": "csv", ".json": "json", ".yaml": "ros2", ".yml": "ros2"}
+    if suffix not in kinds:
+        raise _bad(
+            f"{path.name}: suffix {suffix or '(none)'!r} unknown; allowed: .csv, .json, "
+            ".yaml/.yml (ROS 2 JointTrajectory)",
+            "path",
+            str(path),
+            sorted(kinds),
+        )
+    return kinds[suffix]
+
+
+def _plan_arrays(
+    plan: Any, times: Any, joint_names: Sequence[str] | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, tuple[str, ...]]:
+    if isinstance(plan, tuple) and len(plan) == 2 and times is None:
+        times, plan = plan
+    if hasattr(plan, "t") and hasattr(plan, "q"):
+        t = np.asarray(plan.t, dtype=float)
+        q = np.asarray(plan.q, dtype=float)
+        qd = getattr(plan, "qdot", None)
+        qdot = None if qd is None else np.asarray(qd, dtype=float)
+        names = joint_names or getattr(plan, "joint_names", None)
+    else:
+        if times is None:
+            raise ConfigurationError(
+                "an IK path needs its sample times: timeline((times, q)) or times=",
+                parameter="times",
+                value=None,
+                allowed="(N,) increasing times [s]",
+            )
+        t = np.asarray(times, dtype=float)
+        q = np.asarray(plan, dtype=float)
+        qdot = None
+        names = joint_names
+    if q.ndim != 2 or t.ndim != 1 or len(t) != len(q) or len(t) < 2:
+        raise ConfigurationError(
+            f"a plan needs (N,) times and (N, J) joint angles with N >= 2, got times "
+            f"{t.shape} and q {q.shape}",
+            parameter="q",
+            value=q.shape,
+            allowed="(N, J), N >= 2",
+        )
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
+        raise ConfigurationError(
+            "the plan's times and joint angles must be finite",
+            parameter="q",
+            value="non-finite",
+            allowed="finite",
+        )
+    if not np.all(np.diff(t) > 0):
+        raise ConfigurationError(
+            "the plan's times must increase strictly",
+            parameter="times",
+            value=None,
+            allowed="strictly increasing",
+        )
+    if names is None:
+        names = tuple(f"joint{i + 1}" for i in range(q.shape[1]))
+    names = tuple(str(n) for n in names)
+    if len(names) != q.shape[1] or len(set(names)) != len(names):
+        raise ConfigurationError(
+            f"{len(names)} joint names for {q.shape[1]} columns (names must be distinct)",
+            parameter="joint_names",
+            value=list(names),
+            allowed=f"{q.shape[1]} distinct names",
+        )
+    if qdot is not None and qdot.shape != q.shape:
+        qdot = None
+    return t, q, qdot, names
+
+
+def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
+    if velocity_limit is not None:
+        v = np.broadcast_to(np.asarray(velocity_limit, dtype=float), (n,)).copy()
+    else:
+        robot = getattr(plan, "robot", None)
+        v = np.asarray(getattr(robot, "velocity_limit", np.full(n, np.inf)), dtype=float)
+        if v.shape != (n,):
+            v = np.full(n, np.inf)
+    v[~(v > 0)] = np.inf  # Pinocchio's 0 = not given
+    return v
+
+
+def timeline(
+    plan: Any,
+    *,
+    rate: float,
+    interpolation: Interpolation = "linear",
+    calibration: Calibration | str | os.PathLike[str] | None = None,
+    times: Any = None,
+    joint_names: Sequence[str] | None = None,
+    velocity_limit: Any = None,
+) -> Timeline:
+    """Resample a plan at ``rate`` and map it to the servos, checking every sample.
+
+    Args:
+        plan: A ``GaitRun``, a resolved-rate ``Trajectory``, anything with ``t`` and ``q``
+            (and optionally ``qdot``, ``joint_names``, ``robot``), a ``(times, q)`` pair or
+            (N, J) joint angles with ``times=`` (an IK path) [rad].
+        rate: Samples per second [Hz]; samples at ``t0 + k / rate`` up to the plan's end.
+        interpolation: ``"linear"`` or ``"cubic"`` (see the module doc).
+        calibration: A :class:`Calibration`, a calibration file, or None (every joint in rad,
+            unlimited).
+        times: (N,) times [s] of an array plan.
+        joint_names: The plan's joint names (default: the plan's own, else joint1..J).
+        velocity_limit: Speed limits [rad/s], scalar or (J,), used where the calibration
+            gives none (default: the plan's robot's ``velocity_limit``, else unlimited).
+
+    Returns:
+        The :class:`Timeline`.
+
+    Raises:
+        ConfigurationError: A sample beyond a servo's limits or a joint's speed limit (the
+            message names the joint, the time [s] and the value; ``parameter`` is the joint),
+            or a malformed plan.
+        ParameterError: Bad rate, interpolation or calibration.
+
+    """
+    if interpolation not in INTERPOLATIONS:
+        raise _bad(
+            f"interpolation {interpolation!r} unknown; {choices(INTERPOLATIONS)}",
+            "interpolation",
+            interpolation,
+            INTERPOLATIONS,
+        )
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+        raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
+    t, q, qdot, names = _plan_arrays(plan, times, joint_names)
+    if calibration is None:
+        cal = Calibration(default=Servo(joint="*"))
+    elif isinstance(calibration, Calibration):
+        cal = calibration
+    else:
+        cal = read_calibration(calibration)
+    cal.check_joints(names)
+    servos = [cal.servo(j) for j in names]
+
+    n = int(math.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1
+    ts = t[0] + np.arange(n) / float(rate)
+    ts = np.minimum(ts, t[-1])
+    if interpolation == "cubic":
+        from scipy.interpolate import CubicSpline
+
+        spline = CubicSpline(t, q, axis=0)
+        qs = spline(ts)
+        vs = spline(ts, 1)
+    else:
+        qd = np.gradient(q, t, axis=0, edge_order=2) if qdot is None else qdot
+        qs = np.column_stack([np.interp(ts, t, q[:, j]) for j in range(q.shape[1])])
+        vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
+
+    vlim = _model_speed_limits(plan, velocity_limit, len(names))
+    command = np.empty_like(qs)
+    speed = np.empty_like(vs)
+    q_sent = np.empty_like(qs)
+    for j, s in enumerate(servos):
+        exact = s.zero + s.direction * s.scale * (qs[:, j] - s.offset)
+        command[:, j] = s.command(qs[:, j])
+        speed[:, j] = s.direction * s.scale * vs[:, j]
+        q_sent[:, j] = s.angle(command[:, j])
+        if s.limits is not None:
+            lo, hi = s.limits
+            bad = np.flatnonzero((command[:, j] < lo) | (command[:, j] > hi))
+            if bad.size:
+                k = int(bad[0])
+                raise ConfigurationError(
+                    f"joint {s.joint} at t={ts[k]:.4f} s: {exact[k]:.6g} {s.units} "
+                    f"(q = {qs[k, j]:.6g} rad) is beyond its servo's limits "
+                    f"[{lo:g}, {hi:g}] {s.units}",
+                    parameter=s.joint,
+                    value=float(exact[k]),
+                    allowed=(lo, hi),
+                )
+        lim = s.velocity_limit if s.velocity_limit is not None else float(vlim[j])
+        bad = np.flatnonzero(np.abs(vs[:, j]) > lim)
+        if bad.size:
+            k = int(bad[0])
+            raise ConfigurationError(
+                f"joint {s.joint} at t={ts[k]:.4f} s: speed {vs[k, j]:.6g} rad/s is beyond its "
+                f"limit {lim:g} rad/s",
+                parameter=s.joint,
+                value=float(vs[k, j]),
+                allowed=(-lim, lim),
+            )
+    for arr in (ts, q_sent, vs, command, speed):
+        arr.setflags(write=False)
+    return Timeline(
+        t=ts,
+        joint_names=names,
+        q=q_sent,
+        qdot=vs,
+        command=command,
+        speed=speed,
+        calibration=cal,
+        rate=float(rate),
+        interpolation=interpolation,
+    )
+
+
+def _from_commands(
+    t: np.ndarray,
+    names: tuple[str, ...],
+    command: np.ndarray,
+    speed: np.ndarray,
+    cal: Calibration,
+    rate: float,
+    interpolation: str,
+) -> Timeline:
+    servos = [cal.servo(j) for j in names]
+    q = np.column_stack([s.angle(command[:, j]) for j, s in enumerate(servos)])
+    qdot = np.column_stack([speed[:, j] / (s.direction * s.scale) for j, s in enumerate(servos)])
+    for arr in (t, q, qdot, command, speed):
+        arr.setflags(write=False)
+    return Timeline(t, names, q, qdot, command, speed, cal, rate, interpolation)
+
+
+def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timeline:
+    """Read a timeline written by :meth:`Timeline.write` (CSV, JSON or ROS 2 YAML).
+
+    CSV and JSON carry their calibration, so the joint angles ``q`` are the servo commands
+    mapped back (the plan's angles to half the servo's resolution). A ROS 2 file holds
+    angles [rad] and rates [rad/s]; it reads back with an identity (rad) calibration.
+
+    Raises:
+        SourceError: The file cannot be read or is not a timeline.
+
+    """
+    p = Path(path)
+    kind = _format(p, fmt)
+    text = decode_utf8(read_regular(p, _MAX_TIMELINE_BYTES, "timeline"), str(p), "timeline")
+    try:
+        if kind == "json":
+            d = json.loads(text)
+            if d.get("format") != FORMAT:
+                raise KeyError("format")
+            cal = Calibration.from_dict(d["calibration"], p.name)
+            return _from_commands(
+                np.asarray(d["t"], dtype=float),
+                tuple(d["joint_names"]),
+                np.asarray(d["command"], dtype=float).reshape(len(d["t"]), -1),
+                np.asarray(d["speed"], dtype=float).reshape(len(d["t"]), -1),
+                cal,
+                float(d["rate"]),
+                str(d["interpolation"]),
+            )
+        if kind == "csv":
+            return _read_csv(text, p)
+        return _read_ros2(text, p)
+    except (KeyError, ValueError, TypeError, IndexError) as exc:
+        if isinstance(exc, SourceError):
+            raise
+        raise SourceError(
+            f"{p.name}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
+            f"{' '.join(str(exc).split())[:120]})",
+            parameter="timeline",
+            value=str(p),
+        ) from None
+
+
+def _read_csv(text: str, p: Path) -> Timeline:
+    meta: dict[str, str] = {}
+    rows: list[str] = []
+    for line in text.splitlines():
+        if line.startswith("#"):
+            key, _, value = line[1:].partition(":")
+            meta[key.strip()] = value.strip()
+        elif line.strip():
+            rows.append(line)
+    if not meta.get("format", "").startswith(FORMAT):
+        raise KeyError("format")
+    header = rows[0].split(",")
+    n = (len(header) - 1) // 2
+    names = tuple(h.rsplit(" [", 1)[0] for h in header[1 : 1 + n])
+    data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
+    data = data.reshape(len(rows) - 1, 1 + 2 * n)
+    cal = Calibration.from_dict(json.loads(meta["calibration"]), p.name)
+    return _from_commands(
+        data[:, 0].copy(),
+        names,
+        data[:, 1 : 1 + n].copy(),
+        data[:, 1 + n :].copy(),
+        cal,
+        float(meta["rate"]),
+        meta["interpolation"],
+    )
+
+
+def _read_ros2(text: str, p: Path) -> Timeline:
+    d = yaml_module().safe_load(text)
+    names = tuple(str(j) for j in d["joint_names"])
+    pts = d["points"]
+    t = np.array([pt["time_from_start"]["sec"] + pt["time_from_start"]["nanosec"] * 1e-9
+                  for pt in pts], dtype=float)  # fmt: skip
+    q = np.array([pt["positions"] for pt in pts], dtype=float).reshape(len(pts), len(names))
+    v = np.array([pt["velocities"] for pt in pts], dtype=float).reshape(len(pts), len(names))
+    rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    head = text.splitlines()[0] if text else ""
+    interp = "cubic" if "cubic" in head else "linear"
+    return _from_commands(t, names, q, v, Calibration(default=Servo(joint="*")), rate, interp)
+
+
+def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Read a plan (an IK path, a step's joint trajectory) from a file: ``(t, q, joint_names)``.
+
+    CSV: a header row ``t,<joint>,<joint>,...`` then one row per sample (times [s], angles
+    [rad]); lines starting with ``#`` are ignored. JSON: ``{"t": [...], "q": [[...], ...],
+    "joint_names": [...]}``.
+
+    Raises:
+        SourceError: The file cannot be read or is malformed.
+
+    """
+    p = Path(path)
+    text = decode_utf8(read_regular(p, _MAX_TIMELINE_BYTES, "plan"), str(p), "plan")
+    try:
+        if p.suffix.lower() == ".json":
+            d = json.loads(text)
+            t = np.asarray(d["t"], dtype=float)
+            q = np.asarray(d["q"], dtype=float)
+            names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
+            return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
+        rows = [r for r in text.splitlines() if r.strip() and not r.startswith("#")]
+        header = [h.strip() for h in rows[0].split(",")]
+        data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
+        data = data.reshape(len(rows) - 1, len(header))
+        names = tuple(h.rsplit(" [", 1)[0] for h in header[1:])
+        return data[:, 0].copy(), data[:, 1:].copy(), names
+    except (KeyError, ValueError, TypeError, IndexError) as exc:
+        raise SourceError(
+            f"{p.name}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
+            f"joint_names) ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})",
+            parameter="plan",
+            value=str(p),
+        ) from None
