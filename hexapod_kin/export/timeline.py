@@ -284,7 +284,7 @@ def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
         v = np.broadcast_to(np.asarray(velocity_limit, dtype=float), (n,)).copy()
     else:
         robot = getattr(plan, "robot", None)
-        v = np.asarray(getattr(robot, "velocity_limit", np.full(n, np.inf)), dtype=float)
+        v = np.array(getattr(robot, "velocity_limit", np.full(n, np.inf)), dtype=float)
         if v.shape != (n,):
             v = np.full(n, np.inf)
     v[~(v > 0)] = np.inf  # Pinocchio's 0 = not given
