@@ -1,7 +1,9 @@
 """Disk cache and time budget for :func:`hexapod_kin.symbolic.derive`.
 
 * **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
-  tool poses, the row selection, the length names and a format version), under
+  tool poses, the row selection, the length names and a format version), holding the stages
+  reached and, for an unfinished one, why and with which budget (:class:`Writer` writes it
+  from inside the budgeted process, stage by stage), under
   ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
   ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
   subfolder. Sympy objects are
@@ -28,7 +30,7 @@ import sympy as sp
 from .._io import atomic_write, cache_root
 from .families import SingularFamily
 
-FORMAT = 3
+FORMAT = 4
 Stages = Callable[[], Iterator[tuple[str, Any]]]
 
 
@@ -97,6 +99,34 @@ def store(digest: str, stages: dict[str, Any]) -> Path | None:
         return atomic_write(folder / f"{digest}.json", text)
     except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
         return None
+
+
+class Writer:
+    """Writes the stages of one derivation as they come, each encoded once.
+
+    Used inside the derivation's (child) process: after every stage the file holds all the
+    stages reached so far and ``attempt`` (why it is unfinished, and with which budget), so a
+    run killed at its budget has left on disk what it reached. Writes are atomic.
+    """
+
+    def __init__(self, digest: str, have: dict[str, Any]) -> None:
+        """Start from the stages ``have`` (of an earlier, unfinished run)."""
+        self.digest = digest
+        self.parts = {name: _encode(value) for name, value in have.items()}
+
+    def add(self, name: str, value: Any, attempt: Any, key: str) -> None:
+        """Add a stage and write the file; ``attempt`` (stored under ``key``) None: complete."""
+        self.parts[name] = _encode(value)
+        items = [[k, v] for k, v in self.parts.items()]
+        if attempt is not None:
+            items.append([key, _encode(attempt)])
+        try:
+            text = json.dumps({"format": FORMAT, "key": self.digest, "stages": {"__dict__": items}})
+            folder = cache_dir()
+            folder.mkdir(parents=True, exist_ok=True)
+            atomic_write(folder / f"{self.digest}.json", text)
+        except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+            pass
 
 
 def _child(conn: Any, stages: Stages) -> None:  # pragma: no cover - runs in the child
