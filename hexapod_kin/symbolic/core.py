@@ -592,7 +592,7 @@ def rank_deficiency(
     common: list[tuple[Any, int]] | None = None
     minors: list[tuple[Any, list[tuple[Any, int]]]] = []
     stopped = ""
-    for _, sub, m in subsets:
+    for _, _sub, m in subsets:
         if common is not None and not common:
             break
         if common is not None and time.perf_counter() > deadline:

@@ -18,10 +18,15 @@
 For the 3-DOF leg (``hexabot_leg``) the factored determinant is
 ``l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
 
+For a redundant chain (more joints than rows, e.g. a 5-DOF leg's position rows) there is no
+square determinant: the families are where ``J`` loses rank, the factors common to all its
+maximal minors (:func:`~hexapod_kin.symbolic.core.rank_deficiency`).
+
 **Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds and returns what it
-has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: finished derivations
-are stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
-second process gets them in milliseconds. How the determinant is kept fast (per-joint
+has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: derivations are
+stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
+second process gets them in milliseconds; an unfinished one is kept with its budget and
+what it reached (a call with at most that budget gets it back, a larger one carries on). How the determinant is kept fast (per-joint
 simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
 
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
@@ -546,16 +551,16 @@ def derive(
             reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
         if reason is not None:
             stages[ATTEMPT] = (reason, tried)
-            if cache and "kinematics" in stages and not reason.startswith("budget of"):
-                _cache.store(digest, stages)  # an error: the child's file says "budget"
+            if cache and ("kinematics" not in stages or not reason.startswith("budget of")):
+                _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
         from_cache = False
-    if cache and "kinematics" in stages:
+    if cache:
         if len(_MEMO) > 64:
             _MEMO.clear()
         _MEMO[digest] = stages
         alias = _alias(chain, rows, lengths, stages)
-        if alias is not None:
-            _MEMO.setdefault(alias, stages)
+        if alias is not None and (alias not in _MEMO or ATTEMPT in _MEMO[alias]):
+            _MEMO[alias] = stages
     return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
 
 
