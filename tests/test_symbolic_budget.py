@@ -146,7 +146,7 @@ def test_scan_keeps_an_unfinished_family_derivation(monkeypatch):
     assert "kept" in second.family_reason and len(calls) == 1  # not derived again
     third = scan(model, grid=5, family_budget=600.0)  # larger: tries again, finishes
     assert len(calls) == 2 and third.families == ()
-    assert third.family_reason == "the factored det has no factor that depends on q"
+    assert third.family_reason.startswith("no factor of det J")
 
 
 def test_printed_derivation_is_tidy_and_within_100_columns(leg5):

@@ -238,7 +238,9 @@ def _write_cache(
 
 
 # ------------------------------------------------------------------------ deriving
-_NO_FACTOR = "the factored det has no factor that depends on q"
+_NO_FACTOR = (
+    "no factor of det J (square J) nor common to its maximal minors (redundant J) depends on q"
+)
 
 
 class _Miss(Exception):
