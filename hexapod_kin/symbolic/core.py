@@ -356,8 +356,8 @@ def _candidates(
     frame_of = [j + 1 for j in joints]
     ms = [frame_of[k] for k in (n - 3, n - 2, n // 2, n - 4, 0) if 0 <= k < n]
     ms = list(dict.fromkeys(ms))
-    if len(sel) != n:  # maximal minors: the frame only changes their length, try two
-        ms = ms[:2]
+    if len(sel) != n:  # maximal minors: the frame only changes their length, one is enough
+        ms = ms[:1]
     out: list[tuple[int, str, sp.Matrix, bool]] = []
     for m in ms:
         if out and time.perf_counter() > deadline:

@@ -76,18 +76,29 @@ def wrap(text: str, width: int = WIDTH, indent: int = 8) -> list[str]:
 
 
 def _split(text: str, top_only: bool) -> list[str]:
-    """``text`` cut before each ``" + "``/``" - "`` (outside parentheses with ``top_only``)."""
-    pieces: list[str] = []
-    depth, start = 0, 0
+    """``text`` cut before each ``" + "``/``" - "`` at the shallowest parenthesis depth found.
+
+    With ``top_only`` only outside parentheses (depth 0); else at the smallest depth that
+    has such a break (a sum inside one pair of parentheses breaks there, never deeper).
+    """
+    found: list[tuple[int, int]] = []
+    depth = 0
     for i in range(1, len(text) - 1):
         ch = text[i]
         if ch in "([":
             depth += 1
         elif ch in ")]":
             depth -= 1
-        elif ch in "+-" and text[i - 1] == " " and text[i + 1] == " " and not (top_only and depth):
-            pieces.append(text[start : i - 1])
-            start = i
+        elif ch in "+-" and text[i - 1] == " " and text[i + 1] == " ":
+            found.append((depth, i))
+    if not found:
+        return [text]
+    level = 0 if top_only else min(d for d, _ in found)
+    cuts = [i for d, i in found if d == level]
+    pieces, start = [], 0
+    for i in cuts:
+        pieces.append(text[start : i - 1])
+        start = i
     pieces.append(text[start:])
     return pieces
 
