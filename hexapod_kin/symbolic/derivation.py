@@ -39,6 +39,7 @@ returns a vectorised numpy function of ``q``; the families as numbers for scans 
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -394,7 +395,23 @@ def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
     return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
 
+def _numeric_default_rows(chain: Chain) -> tuple[str, ...]:
+    """The default rows, from the numeric Jacobian (rows not zero at three random q).
+
+    A row of ``J`` that is identically zero is zero at every ``q``, and one that is not is
+    non-zero at random ``q`` (almost surely): the same selection as the symbolic one, known
+    before any sympy work, so that ``rows=None`` and its rows spelled out share one key.
+    """
+    rng = np.random.default_rng(20260101)
+    qs = rng.uniform(-math.pi, math.pi, (3, chain.nq))
+    jac = np.array([_core.numeric_jacobian(chain, q, range(6)) for q in qs])
+    return choose_rows([bool(np.abs(jac[:, i]).max() > 1e-12) for i in range(6)], chain.nq)
+
+
 def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
+    """The key of a derivation: the table and the row names (``None``: the default ones)."""
+    if rows is None:
+        rows = _numeric_default_rows(chain)
     return _cache.key(
         {
             "rows": [
@@ -403,7 +420,7 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
             "sigmas": list(chain.sigmas),
             "base": None if chain.base_pose is None else chain.base_pose.matrix.tolist(),
             "tool": None if chain.tool is None else chain.tool.matrix.tolist(),
-            "select": None if rows is None else [ROW_NAMES[i] for i in row_indices(rows)],
+            "select": [ROW_NAMES[i] for i in row_indices(rows)],
             "lengths": sorted((lengths or {}).items()),
             "limits": [[lim.lower, lim.upper] for lim in chain.limits or ()],
         }
