@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import fields
@@ -124,8 +125,28 @@ class Writer:
             text = json.dumps({"format": FORMAT, "key": self.digest, "stages": {"__dict__": items}})
             folder = cache_dir()
             folder.mkdir(parents=True, exist_ok=True)
-            atomic_write(folder / f"{self.digest}.json", text)
+            _replace(folder / f"{self.digest}.json", text)
         except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+            pass
+
+
+def _replace(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (a temporary file renamed), without ``fsync``.
+
+    Inside a budget: an ``fsync`` on a busy disk can take seconds, and a process killed in
+    one dies only when it returns. A file torn by a crash reads as "not cached".
+    """
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def sweep(digest: str) -> None:
+    """Remove the temporary files a killed derivation of ``digest`` may have left."""
+    for tmp in cache_dir().glob(f".{digest}.json.*.tmp"):
+        try:
+            tmp.unlink()
+        except OSError:
             pass
 
 
@@ -188,7 +209,7 @@ def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | Non
     finally:
         if proc.is_alive():
             proc.kill()
-        proc.join(5)
+        proc.join(1.0)  # SIGKILL is immediate unless the child is inside a system call
         recv.close()
     return done, reason
 

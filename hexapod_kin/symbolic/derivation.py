@@ -564,6 +564,8 @@ def derive(
             _core.import_ahead()  # import here once, not in each forked child
         done, reason = _cache.run(gen, run_for)
         _BUDGETED += forks
+        if reason is not None and writer is not None:
+            _cache.sweep(digest)
         stages = {**have, **done}
         if reason is not None and budget is not None and (run_for or 0) < budget:
             reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
