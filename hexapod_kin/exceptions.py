@@ -111,7 +111,15 @@ class OptionalDependencyError(HexapodKinError, ImportError):
     """An optional dependency (viewer, plots, browser) is missing; says what to install."""
 
 
-class UrdfWarning(UserWarning):
+class HexapodKinWarning(UserWarning):
+    """The package's own warnings (the command line prints each as one line)."""
+
+
+class CacheWarning(HexapodKinWarning):
+    """A cache entry that was damaged, edited or planted: discarded and recomputed."""
+
+
+class UrdfWarning(HexapodKinWarning):
     """A URDF loaded for kinematics despite a defect that only geometry or dynamics would use.
 
     Raised through :func:`warnings.warn` for a mesh that cannot be found (its visual is

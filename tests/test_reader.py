@@ -59,3 +59,32 @@ def test_planted_code_never_runs(tmp_path: Path) -> None:
     with pytest.raises(CacheFormatError):
         read_srepr(f"__import__('pathlib').Path({str(marker)!r}).touch()")
     assert not marker.exists()
+
+
+def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path) -> None:
+    """Code planted in a stored expression of the symbolic cache never runs: the next
+    ``derive`` (a new process) discards the entry with one warning line and recomputes."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, HEXAPOD_KIN_CACHE_DIR=str(tmp_path / "hk"))
+    argv = [sys.executable, "-m", "hexapod_kin", "derive", "hexabot_leg", "--budget", "60"]
+    first = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=120)
+    assert first.returncode == 0, first.stderr
+    files = list((tmp_path / "hk" / "symbolic").glob("*.json"))
+    assert files
+    marker = tmp_path / "ran"
+    planted = f"__import__('pathlib').Path({str(marker)!r}).touch()"
+    for f in files:
+        text = json.dumps(json.loads(f.read_text()))
+        head = '"__sympy__": "'
+        f.write_text(text.replace(head, head + planted.replace('"', '\\"') + "#", 1))
+    again = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert not marker.exists()
+    warned = [ln for ln in again.stderr.splitlines() if "damaged or was edited" in ln]
+    assert len(warned) == 1 and warned[0].startswith("hexapod-kin: warning:"), again.stderr
+    det = [ln for ln in first.stdout.splitlines() if "det" in ln.lower()]
+    assert det and det == [ln for ln in again.stdout.splitlines() if "det" in ln.lower()]

@@ -84,10 +84,10 @@ def _one_line_warning(original: Any) -> Any:
     ``hexapod-kin: warning: ...`` (one per line of the message, no file:line and no source
     line); other warnings are shown as Python shows them.
     """
-    from ..exceptions import UrdfWarning
+    from ..exceptions import HexapodKinWarning
 
     def show(message: Any, category: Any, filename: Any, lineno: Any, *rest: Any) -> None:
-        if issubclass(category, UrdfWarning):
+        if issubclass(category, HexapodKinWarning):
             for text in str(message).splitlines():
                 print(f"hexapod-kin: warning: {text}", file=sys.stderr)
         else:

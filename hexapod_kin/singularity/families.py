@@ -27,7 +27,7 @@ from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
-_VERSION = 2
+_VERSION = 3
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
 
@@ -213,18 +213,23 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
     )
 
 
-def _read_cache(key: str, nq: int) -> tuple[Family, ...] | None:
+def _read_cache(key: str, nq: int) -> tuple[tuple[Family, ...], str, float] | None:
+    """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``."""
     try:
         data = json.loads((cache_dir() / f"{key}.json").read_text(encoding="utf-8"))
         if data.get("v") != _VERSION or data.get("nq") != nq:
             return None
-        return _from_json(data)
+        return _from_json(data), str(data.get("incomplete", "")), float(data.get("budget", 0.0))
     except (OSError, KeyError, TypeError, ValueError):  # missing or corrupt: derive again
         return None
 
 
-def _write_cache(key: str, nq: int, fams: tuple[Family, ...]) -> None:
-    data = {"v": _VERSION, "nq": nq, "families": [f.to_dict() for f in fams]}
+def _write_cache(
+    key: str, nq: int, fams: tuple[Family, ...], incomplete: str = "", budget: float = 0.0
+) -> None:
+    data: dict[str, Any] = {"v": _VERSION, "nq": nq, "families": [f.to_dict() for f in fams]}
+    if incomplete:
+        data.update(incomplete=incomplete, budget=budget)
     try:
         cache_dir().mkdir(parents=True, exist_ok=True)
         atomic_write(cache_dir() / f"{key}.json", json.dumps(data, indent=1))
@@ -233,7 +238,9 @@ def _write_cache(key: str, nq: int, fams: tuple[Family, ...]) -> None:
 
 
 # ------------------------------------------------------------------------ deriving
-_NO_FACTOR = "the factored det has no factor that depends on q"
+_NO_FACTOR = (
+    "no factor of det J (square J) nor common to its maximal minors (redundant J) depends on q"
+)
 
 
 class _Miss(Exception):
@@ -301,7 +308,10 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Time budget of the derivation in [s].
+        budget: Time budget of the derivation in [s]. A derivation stopped at its budget is
+            kept on disk with what it reached and that budget: later calls with at most that
+            budget get it back without deriving (nor importing sympy); a larger budget
+            carries on from where it stopped.
 
     Returns:
         The :class:`Families` (empty with a reason when none are available).
@@ -324,16 +334,21 @@ def families_for(
     mem = f"singularity.families.{key}"
 
     def load() -> tuple[Family, ...]:
-        fams = _read_cache(key, model.nq)
-        if fams is None:
-            raise _Miss
-        return fams
+        found = _read_cache(key, model.nq)
+        if found is None or found[1]:
+            raise _Miss  # unfinished runs are read from disk each time (a later one may finish)
+        return found[0]
 
     try:
         hit = model.cached(mem, load)
         return Families(hit, "cache", "" if hit else _NO_FACTOR, key)
     except _Miss:
         pass
+    partial = _read_cache(key, model.nq)
+    if partial is not None and (not derive or budget <= partial[2]):
+        return Families(  # stopped at a budget at least this large: not spent again
+            partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key
+        )
     if not derive:
         return Families(
             (),
@@ -344,16 +359,21 @@ def families_for(
         )
     from .. import symbolic
 
+    tried = max(float(budget), partial[2] if partial is not None else 0.0)
     try:
         deriv = symbolic.derive(chain, rows=rows, budget=float(budget))
-        incomplete = "; ".join(deriv.incomplete)
+        incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
-            return Families((), "none", f"derivation incomplete: {incomplete}", key)
+            reason = f"derivation incomplete: {incomplete}"
+            _write_cache(key, model.nq, (), reason, tried)
+            return Families((), "none", reason, key)
         fams = _numeric_families(deriv, model, rows)
     except _derive_errors() as err:
         return Families((), "none", f"derivation failed: {type(err).__name__}: {err}", key)
-    if incomplete:  # partial families: used, but not kept (a later call may finish)
-        return Families(fams, "derived", f"derivation incomplete: {incomplete}", key)
+    if incomplete:  # partial families: used and kept with the budget they had
+        reason = f"derivation incomplete: {incomplete}"
+        _write_cache(key, model.nq, fams, reason, tried)
+        return Families(fams, "derived", reason, key)
     _write_cache(key, model.nq, fams)
     model.cached(mem, lambda: fams)
     return Families(fams, "derived", "" if fams else _NO_FACTOR, key)

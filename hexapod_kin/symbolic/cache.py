@@ -1,13 +1,16 @@
 """Disk cache and time budget for :func:`hexapod_kin.symbolic.derive`.
 
 * **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
-  tool poses, the row selection, the length names and a format version), under
+  tool poses, the row selection, the length names and a format version), holding the stages
+  reached and, for an unfinished one, why and with which budget (:class:`Writer` writes it
+  from inside the budgeted process, stage by stage), under
   ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
   ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
   subfolder. Sympy objects are
-  stored as ``srepr`` text and rebuilt with ``sympify`` (so treat the folder as code, like any
-  cache of your own). Files are written atomically; a corrupt or foreign file is ignored (and
-  rewritten).
+  stored as ``srepr`` text and rebuilt by a restricted reader (:mod:`._reader`: no ``eval``,
+  a fixed table of sympy constructors), so a planted entry cannot run code. Files are written
+  atomically; a corrupt, edited or foreign file is ignored with one :class:`CacheWarning`
+  and rewritten.
 * **Budget**: the stages run in a forked child process that sends each finished stage back;
   at the deadline the child is killed and the caller gets the stages that finished. Where
   ``fork`` does not exist the stages run inline, checking the clock between stages.
@@ -17,7 +20,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import fields
 from pathlib import Path
@@ -26,9 +31,11 @@ from typing import Any
 import sympy as sp
 
 from .._io import atomic_write, cache_root
+from ..exceptions import CacheWarning
+from ._reader import read_srepr
 from .families import SingularFamily
 
-FORMAT = 3
+FORMAT = 4
 Stages = Callable[[], Iterator[tuple[str, Any]]]
 
 
@@ -64,9 +71,9 @@ def _decode(obj: Any) -> Any:
         if "__family__" in obj:
             return SingularFamily(**{k: _decode(v) for k, v in obj["__family__"].items()})
         if "__matrix__" in obj:
-            return sp.Matrix(sp.sympify(obj["__matrix__"]))
+            return sp.Matrix(read_srepr(obj["__matrix__"]))
         if "__sympy__" in obj:
-            return sp.sympify(obj["__sympy__"])
+            return read_srepr(obj["__sympy__"])
         if "__dict__" in obj:
             return {_decode(k): _decode(v) for k, v in obj["__dict__"]}
         if "__tuple__" in obj:
@@ -84,7 +91,15 @@ def load(digest: str) -> dict[str, Any] | None:
             return None
         stages = _decode(data["stages"])
         return stages if isinstance(stages, dict) else None
-    except Exception:  # noqa: BLE001 - any damage to the file means "not cached"
+    except FileNotFoundError:
+        return None
+    except Exception as exc:  # noqa: BLE001 - any damage to the file means "not cached"
+        warnings.warn(
+            f"symbolic cache entry {path.name} is damaged or was edited "
+            f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); recomputing it",
+            CacheWarning,
+            stacklevel=2,
+        )
         return None
 
 
@@ -97,6 +112,54 @@ def store(digest: str, stages: dict[str, Any]) -> Path | None:
         return atomic_write(folder / f"{digest}.json", text)
     except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
         return None
+
+
+class Writer:
+    """Writes the stages of one derivation as they come, each encoded once.
+
+    Used inside the derivation's (child) process: after every stage the file holds all the
+    stages reached so far and ``attempt`` (why it is unfinished, and with which budget), so a
+    run killed at its budget has left on disk what it reached. Writes are atomic.
+    """
+
+    def __init__(self, digest: str, have: dict[str, Any]) -> None:
+        """Start from the stages ``have`` (of an earlier, unfinished run)."""
+        self.digest = digest
+        self.parts = {name: _encode(value) for name, value in have.items()}
+
+    def add(self, name: str, value: Any, attempt: Any, key: str) -> None:
+        """Add a stage and write the file; ``attempt`` (stored under ``key``) None: complete."""
+        self.parts[name] = _encode(value)
+        items = [[k, v] for k, v in self.parts.items()]
+        if attempt is not None:
+            items.append([key, _encode(attempt)])
+        try:
+            text = json.dumps({"format": FORMAT, "key": self.digest, "stages": {"__dict__": items}})
+            folder = cache_dir()
+            folder.mkdir(parents=True, exist_ok=True)
+            _replace(folder / f"{self.digest}.json", text)
+        except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+            pass
+
+
+def _replace(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (a temporary file renamed), without ``fsync``.
+
+    Inside a budget: an ``fsync`` on a busy disk can take seconds, and a process killed in
+    one dies only when it returns. A file torn by a crash reads as "not cached".
+    """
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def sweep(digest: str) -> None:
+    """Remove the temporary files a killed derivation of ``digest`` may have left."""
+    for tmp in cache_dir().glob(f".{digest}.json.*.tmp"):
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
 
 
 def _child(conn: Any, stages: Stages) -> None:  # pragma: no cover - runs in the child
@@ -158,7 +221,7 @@ def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | Non
     finally:
         if proc.is_alive():
             proc.kill()
-        proc.join(5)
+        proc.join(1.0)  # SIGKILL is immediate unless the child is inside a system call
         recv.close()
     return done, reason
 

@@ -188,9 +188,12 @@ def kinematics(
 ) -> dict[str, Any]:
     """Stage 1: transforms, cumulative products, tip, both Jacobians (cheaply simplified).
 
-    With ``simplify=False`` the products are left as they come (fast fallback).
+    With ``simplify=False`` the products are left as they come and ``J_indirect`` is *not*
+    derived (it is the direct method's linear rows): the fast fallback.
     """
-    cheap_ = (cheap if has_parallel_axes(chain) else _expand) if simplify else _same
+    # expanded products only: folding angle sums (TR10i) costs seconds here and is undone
+    # by the determinant's factoring; the printed forms are folded afterwards (:func:`tidy`)
+    cheap_ = _expand if simplify else _same
     transforms = []
     k = 0
     for row, (d, r) in zip(chain.rows, syms["per_row"]):
@@ -220,14 +223,25 @@ def kinematics(
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
     tip = cheap_(acc * tool_t)
     p = tip[:3, 3]
+    # Direct method, column by column in its own joint frame: z_j x (p - o_j) = R_0j (z x ^jp),
+    # with ^jp (the tip seen from frame j) built backwards from the tool. Each term then holds
+    # sin/cos of distinct joints only: no sin^2 + cos^2 left to fold (see module docstring).
+    tip_in = [sp.zeros(3, 1)] * len(transforms)
+    vec = tool_t[:3, 3]
+    for j in range(len(transforms) - 1, -1, -1):
+        tip_in[j] = vec
+        if j > 0:
+            t = transforms[j]
+            vec = cheap_(t[:3, :3] * vec + t[:3, 3])
     cols = []
     for j in chain.joint_rows:
-        z = cumulative[j][:3, 2]
-        o = cumulative[j][:3, 3]
+        rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
-            cols.append(sp.Matrix.vstack(cheap_(z.cross(p - o)), z))
+            v = tip_in[j]
+            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
+            cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
-            cols.append(sp.Matrix.vstack(z, sp.zeros(3, 1)))
+            cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
     return {
         "transforms": tuple(transforms),
         "base": base_t,
@@ -236,8 +250,51 @@ def kinematics(
         "tip": tip,
         "p": p,
         "J_direct": sp.Matrix.hstack(*cols),
-        "J_indirect": cheap_(p.jacobian(sp.Matrix(q))),
+        # without simplification (the caller's fallback at a budget too small even for
+        # stage 1) no derivative is taken: differentiating the nested products takes seconds
+        "J_indirect": _indirect(p, q, chain.sigmas) if simplify else cols_lin(cols),
     }
+
+
+def cols_lin(cols: Sequence[sp.Matrix]) -> sp.Matrix:
+    """The linear rows of the direct Jacobian's columns (3×n)."""
+    return sp.Matrix.hstack(*[c[:3, :] for c in cols])
+
+
+def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp.Matrix:
+    """``∂p/∂q`` (the indirect method), as polynomials when ``p`` is one.
+
+    When every ``sin``/``cos`` in ``p`` has a single joint as argument, ``p`` is a polynomial
+    in ``s_k = sin q_k``, ``c_k = cos q_k`` (and the prismatic ``q_k``), and
+    ``∂/∂q_k = c_k ∂/∂s_k − s_k ∂/∂c_k`` is applied to it as a polynomial (sympy's ``diff``
+    on a 7-joint arm's tip takes seconds; this takes a tenth of one). Otherwise ``diff``.
+    """
+    s, c = _trig_symbols(q)
+    fwd: dict[Any, Any] = {}
+    gens: list[Any] = []
+    for k, qk in enumerate(q):
+        if sigmas[k] == "revolute":
+            fwd[sp.sin(qk)] = s[k]
+            fwd[sp.cos(qk)] = c[k]
+            gens += [s[k], c[k]]
+        else:
+            gens.append(qk)
+    plain = all(f.args[0] in q for e in p for f in e.atoms(sp.sin, sp.cos) if e.has(*q))
+    if not plain:
+        return _expand(p.jacobian(sp.Matrix(q)))
+    back = {v: k for k, v in fwd.items()}
+    rows = []
+    for e in p:
+        poly = sp.Poly(e.xreplace(fwd), *gens)
+        row = []
+        for k, qk in enumerate(q):
+            if sigmas[k] == "revolute":
+                d = poly.diff(s[k]) * sp.Poly(c[k], *gens) - poly.diff(c[k]) * sp.Poly(s[k], *gens)
+            else:
+                d = poly.diff(qk)
+            row.append(d.as_expr().xreplace(back))
+        rows.append(row)
+    return sp.Matrix(rows)
 
 
 def _inverse(t: sp.Matrix) -> sp.Matrix:
@@ -299,6 +356,8 @@ def _candidates(
     frame_of = [j + 1 for j in joints]
     ms = [frame_of[k] for k in (n - 3, n - 2, n // 2, n - 4, 0) if 0 <= k < n]
     ms = list(dict.fromkeys(ms))
+    if len(sel) != n:  # maximal minors: the frame only changes their length, one is enough
+        ms = ms[:1]
     out: list[tuple[int, str, sp.Matrix, bool]] = []
     for m in ms:
         if out and time.perf_counter() > deadline:
@@ -434,8 +493,16 @@ def factored_determinant(
     q: tuple[sp.Symbol, ...],
     row_names: Sequence[str],
     deadline: float,
+    minors_deadline: float | None = None,
 ) -> dict[str, Any]:
-    """Stage 2: det J (square) or det(J Jᵀ), factored; the finest split over a few frames."""
+    """Stage 2: det J (square) factored, or the rank-deficiency factors of a non-square J.
+
+    Square: ``det J`` factored; the finest split over a few frames. Non-square (a redundant
+    chain, or fewer joints than rows): the common factors of the maximal minors
+    (:func:`rank_deficiency`), in the simplest frame only (a rotation of both row blocks
+    changes no maximal minor); ``gram`` is then ``det(J Jᵀ)`` (or ``det(Jᵀ J)``). Extra
+    frames are tried until ``deadline``; minors are factored until ``minors_deadline``.
+    """
     n = len(q)
     sel = [ROW_NAMES.index(r) for r in row_names]
     sigmas = chain.sigmas
@@ -447,97 +514,221 @@ def factored_determinant(
             candidates.append((f"frame {m}, point: {label}", _const(jac)))
     else:
         candidates.append(("base frame", lambda: jd.extract(sel, list(range(n)))))
+    if len(sel) != n:
+        label, make = candidates[0]
+        mat = make()
+        end = deadline if minors_deadline is None else minors_deadline
+        out = rank_deficiency(mat, q, sigmas, end)
+        out["how"] = f"{label}, {out['how']}"
+        return out
     best: dict[str, Any] | None = None
     for label, make in candidates:
         if best is not None and time.perf_counter() > deadline:
             break
         mat = make()
-        square = mat.shape[0] == n
-        if (
-            square
-            and mat.shape == (6, 6)
-            and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
-        ):
+        if mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6)):
             raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
             how = f"{label} (wrist centre), det J11 * det J22"
-        elif square:
+        else:
             raw = mat.det(method="berkowitz")
             how = label
-        else:
-            const, factors, rest = _gram_by_minors(mat, q, sigmas)
-            how = (
-                f"{label}, Gram determinant by Cauchy-Binet: common factors of the maximal "
-                "minors; the remaining sum of squares vanishes only where every minor does"
-            )
-            cand = {"const": const, "factors": factors, "how": how, "square": False, "rest": rest}
-            if best is None or _split_score(factors) > _split_score(best["factors"]):
-                best = cand
-            continue
         const, factors = trig_factor(raw, q, sigmas)
-        cand = {"const": const, "factors": factors, "how": how, "square": square}
+        cand = {"const": const, "factors": factors, "how": how}
         if best is None or _split_score(factors) > _split_score(best["factors"]):
             best = cand
     assert best is not None
     product = best["const"] * sp.Mul(*[f**m for f, m in best["factors"]])
-    out = {"how": best["how"], "factors": tuple(best["factors"]), "const": best["const"]}
-    if best["square"]:
-        out["det"] = product
-        out["gram"] = best["const"] ** 2 * sp.Mul(*[f ** (2 * m) for f, m in best["factors"]])
-    else:
-        out["det"] = None
-        out["gram"] = (
-            best["const"] ** 2 * sp.Mul(*[f ** (2 * m) for f, m in best["factors"]]) * best["rest"]
-        )
-    return out
+    return {
+        "how": best["how"],
+        "factors": tuple(best["factors"]),
+        "const": best["const"],
+        "det": product,
+        "gram": best["const"] ** 2 * sp.Mul(*[f ** (2 * m) for f, m in best["factors"]]),
+        "unconfirmed": (),
+    }
 
 
-def _gram_by_minors(
-    mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]
-) -> tuple[Any, list[tuple[Any, int]], Any]:
-    """``det(J Jᵀ)`` (or ``det(Jᵀ J)``) = Σ minors² (Cauchy–Binet), factored by common factors.
+def _plain_det(m: sp.Matrix) -> Any:
+    """``det m`` by cofactors along the first row, left unexpanded (no simplification step).
+
+    sympy's ``det`` methods simplify between steps, which on a Gram matrix of long entries
+    takes minutes; this is the plain sum of products (``n!`` of them at most).
+    """
+    if m.rows == 1:
+        return m[0, 0]
+    terms = []
+    for j in range(m.cols):
+        if m[0, j] != 0:
+            rest = m.extract(list(range(1, m.rows)), [c for c in range(m.cols) if c != j])
+            terms.append((-1) ** j * m[0, j] * _plain_det(rest))
+    return sp.Add(*terms)
+
+
+def _same_factor(f: Any, g: Any) -> bool:
+    return sp.expand(f - g) == 0 or sp.expand(f + g) == 0
+
+
+def rank_deficiency(
+    mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str], deadline: float
+) -> dict[str, Any]:
+    """Where a k×n ``mat`` (k ≠ n) loses rank: the common factors of its maximal minors.
+
+    ``rank J < min(k, n)`` exactly where every maximal (``min(k, n)``-square) minor vanishes;
+    a factor common to all of them is a family of rank deficiency (a hypersurface of joint
+    space); where they share none, rank drops only on sets of codimension ≥ 2 (no family).
+    The minors are factored (:func:`trig_factor`) smallest first, keeping the factors common
+    to all so far; it stops as soon as none is left (then no factor is common, exactly). At
+    the deadline (with at least one minor factored) the remaining minors are not factored:
+    the factors kept are then *candidates*, listed in ``unconfirmed``, which the families'
+    σ_min check (rank of the numeric J on points of the family) keeps or drops.
 
     Returns:
-        ``(constant, common factors with multiplicity, rest)`` with
-        ``gram = constant² · Π factor^(2m) · rest`` and ``rest`` a sum of squares.
+        ``{"factors", "const", "det": None, "gram", "how", "unconfirmed"}``: ``gram`` is
+        ``const² · Π f^(2m) · rest`` (Cauchy–Binet, ``rest`` a sum of squares) when every
+        minor was factored, else ``det(J Jᵀ)`` (``det(Jᵀ J)`` when k > n) unexpanded.
 
     """
     from itertools import combinations
 
     k, n = mat.shape
     small = min(k, n)
-    subsets = combinations(range(max(k, n)), small)
-    minors = []
-    for sub in subsets:
+    subsets = []
+    for sub in combinations(range(max(k, n)), small):
         rows_, cols_ = (list(range(k)), list(sub)) if k < n else (list(sub), list(range(n)))
         m = mat.extract(rows_, cols_)
-        val = m.det(method="berkowitz")
-        if val != 0:
-            minors.append(trig_factor(val, q, sigmas))
-    minors = [(c, f) for c, f in minors if c != 0]
-    if not minors:
-        return sp.Integer(0), [], sp.Integer(0)
-    common: list[tuple[Any, int]] = []
-    for f, mult in minors[0][1]:
-        least = mult
-        for _, others in minors[1:]:
-            hit = [m2 for g, m2 in others if sp.expand(f - g) == 0 or sp.expand(f + g) == 0]
-            least = min(least, hit[0]) if hit else 0
-        if least > 0:
-            common.append((f, least))
+        if any(all(e == 0 for e in m.col(j)) for j in range(small)) or any(
+            all(e == 0 for e in m.row(i)) for i in range(small)
+        ):
+            continue  # a zero row or column: the minor is 0
+        subsets.append((sum(sp.count_ops(e) for e in m), sub, m))
+    subsets.sort(key=lambda t: (t[0], t[1]))
+    total = len(subsets)
+    common: list[tuple[Any, int]] | None = None
+    minors: list[tuple[Any, list[tuple[Any, int]]]] = []
+    stopped = ""
+    for _, _sub, m in subsets:
+        if common is not None and not common:
+            break
+        if common is not None and time.perf_counter() > deadline:
+            stopped = "deadline"
+            break
+        const, factors = trig_factor(m.det(method="berkowitz"), q, sigmas)
+        if const == 0:
+            continue
+        minors.append((const, factors))
+        if common is None:
+            common = list(factors)
+            continue
+        kept = []
+        for f, mult in common:
+            hit = [m2 for g, m2 in factors if _same_factor(f, g)]
+            if hit:
+                kept.append((f, min(mult, hit[0])))
+        common = kept
+    gram_raw = _plain_det(mat * mat.T if k < n else mat.T * mat)
+    what = f"{small}x{small} minors"
+    if common is None:  # every maximal minor is zero: rank < min(k, n) everywhere
+        return {
+            "factors": (), "const": sp.Integer(0), "det": None, "gram": sp.Integer(0),
+            "how": f"every maximal minor ({what}) is zero: J never has full rank",
+            "unconfirmed": (),
+        }  # fmt: skip
+    if not common:
+        return {
+            "factors": (), "const": sp.Integer(1), "det": None, "gram": gram_raw,
+            "how": (
+                f"rank deficiency: the maximal minors ({what}) share no factor ({len(minors)} "
+                f"of {total} non-zero minors factored): rank J drops only on sets of "
+                "codimension >= 2, no family"
+            ),
+            "unconfirmed": (),
+        }  # fmt: skip
+    if stopped:
+        return {
+            "factors": tuple(common), "const": sp.Integer(1), "det": None, "gram": gram_raw,
+            "how": (
+                f"rank deficiency: factors common to {len(minors)} of the {total} non-zero "
+                f"maximal minors ({what}; time ran out for the others): candidates, kept "
+                "only where the numeric J loses rank on them (sigma_min)"
+            ),
+            "unconfirmed": tuple(range(len(common))),
+        }  # fmt: skip
     consts = [c for c, _ in minors]
-    base = consts[0] if all(sp.simplify(c**2 - consts[0] ** 2) == 0 for c in consts) else 1
+    base = consts[0] if all(sp.expand(c**2 - consts[0] ** 2) == 0 for c in consts) else 1
     rest_terms = []
     for c, factors in minors:
         term = c / base
         for f, mult in factors:
-            have = next((m for g, m in common if sp.expand(f - g) == 0 or sp.expand(f + g) == 0), 0)
+            have = next((m for g, m in common if _same_factor(f, g)), 0)
             term = term * f ** (mult - have)
         rest_terms.append(term**2)
     rest = sp.Add(*rest_terms)
-    reduced = _reduce(_to_poly(rest, q, sigmas), q)
-    if not _depends(reduced, q):
-        rest = sp.factor(reduced)
-    return base, common, rest
+    if time.perf_counter() < deadline and sum(sp.count_ops(t) for t in rest_terms) < 400:
+        reduced = _reduce(_to_poly(rest, q, sigmas), q)
+        if not _depends(reduced, q):
+            rest = sp.factor(reduced)
+    gram = base**2 * sp.Mul(*[f ** (2 * m) for f, m in common]) * rest
+    return {
+        "factors": tuple(common), "const": base, "det": None, "gram": gram,
+        "how": (
+            f"rank deficiency: common factors of all {total} non-zero maximal minors ({what}); "
+            "det(J Jt) = Cauchy-Binet sum of their squares"
+        ),
+        "unconfirmed": (),
+    }  # fmt: skip
+
+
+# ---------------------------------------------------------------------- printing
+def _trig_power(expr: Any) -> bool:
+    return any(
+        p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer and p.exp > 1
+        for p in expr.atoms(sp.Pow)
+    )
+
+
+def _collect_trig(expr: Any) -> Any:
+    """Terms grouped by their trigonometric part, each coefficient factored (an identity)."""
+    groups: dict[Any, list[Any]] = {}
+    for term in sp.Add.make_args(sp.expand(expr)):
+        coeff, trig = sp.S.One, sp.S.One
+        for f in sp.Mul.make_args(term):
+            if f.has(sp.sin, sp.cos):
+                trig = trig * f
+            else:
+                coeff = coeff * f
+        groups.setdefault(trig, []).append(coeff)
+    out = sp.Add(*[sp.factor(sp.Add(*cs)) * trig for trig, cs in groups.items()])
+    return sp.factor_terms(out)
+
+
+def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 400) -> Any:
+    """``expr`` shorter for printing, exactly equal: ``sin² + cos² = 1`` folded, terms grouped.
+
+    Powers of ``sin``/``cos`` are reduced modulo ``s² + c² = 1`` (:func:`_reduce`; so
+    ``-d3 sin²(q1) cos(q2) - d3 cos²(q1) cos(q2)`` prints ``-d3 cos(q2)``); then terms with
+    the same trigonometric part are grouped, their coefficients factored
+    (``r5 cos(q4) + r6 cos(q4)`` → ``(r5 + r6) cos(q4)``) and common factors taken out.
+    The shortest form (``count_ops``) wins; expressions over ``ops`` operations are left
+    as they are (the cost grows faster than their length).
+    """
+    if not isinstance(expr, sp.Expr) or not expr.args or sp.count_ops(expr) > ops:
+        return expr
+    best, size = expr, sp.count_ops(expr)
+    forms = []
+    try:
+        e = expr
+        if _trig_power(e):
+            e = _reduce(_to_poly(e, q, sigmas), q)
+        e = _to_trig(e, q) if e is not expr else cheap(e)  # folds angle sums
+        forms.append(e)
+        forms.append(_collect_trig(e))
+    except (sp.PolynomialError, TypeError, ValueError):  # an entry outside the trig ring
+        return expr
+    for form in forms:
+        n = sp.count_ops(form)
+        if n < size:
+            best, size = form, n
+    return best
 
 
 # ---------------------------------------------------------------------- numbers

@@ -18,11 +18,17 @@
 For the 3-DOF leg (``hexabot_leg``) the factored determinant is
 ``l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
 
+For a redundant chain (more joints than rows, e.g. a 5-DOF leg's position rows) there is no
+square determinant: the families are where ``J`` loses rank, the factors common to all its
+maximal minors (:func:`~hexapod_kin.symbolic.core.rank_deficiency`).
+
 **Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds and returns what it
-has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: finished derivations
-are stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
-second process gets them in milliseconds. How the determinant is kept fast (per-joint
-simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
+has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: derivations are
+stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
+second process gets them in milliseconds; an unfinished one is kept with its budget and
+what it reached (a call with at most that budget gets it back, a larger one carries on).
+How the determinant is kept fast (per-joint simplification, a middle joint frame, the wrist
+centre) is in :mod:`hexapod_kin.symbolic.core`.
 
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
 else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
@@ -33,6 +39,7 @@ returns a vectorised numpy function of ``q``; the families as numbers for scans 
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -48,6 +55,7 @@ from . import cache as _cache
 from . import core as _core
 from .core import ROW_NAMES, khalil_matrix
 from .families import SingularFamily, check_families, families_of
+from .printing import expr_text, matrix_lines, wrap
 from .sources import chain_of as _chain_of
 
 __all__ = [
@@ -62,6 +70,9 @@ __all__ = [
 
 #: Default time budget of :func:`derive` in [s].
 DEFAULT_BUDGET = 5.0
+
+#: A Gram determinant (redundant chain) longer than this is described, not printed.
+_GRAM_OPS = 300
 
 
 @dataclass(frozen=True)
@@ -94,6 +105,13 @@ class Derivation:
         incomplete: What could not be done, and why (empty when complete).
         seconds: Wall time of the derivation in [s] (0 when read from the cache).
         cached: True when read from the disk cache.
+        agree: The exact comparison of the direct and indirect position Jacobians, as made
+            within the budget (``None``: not made; :attr:`methods_agree` then makes it).
+        families_done: True when the determinant, the families and their σ_min checks were
+            all reached (:attr:`families` is then final, whatever else is missing).
+        formed: False when not even stage 1 (expanded products) was reached: then
+            :attr:`cumulative`, :attr:`p` and the Jacobians are unexpanded products,
+            :attr:`J_indirect` is the direct method's rows, and they are not printed.
 
     """
 
@@ -121,6 +139,9 @@ class Derivation:
     incomplete: tuple[str, ...] = ()
     seconds: float = 0.0
     cached: bool = False
+    agree: bool | None = None
+    families_done: bool = False
+    formed: bool = True
 
     # ------------------------------------------------------------------ numbers
     def numeric(self, expr: Any) -> Any:
@@ -160,14 +181,12 @@ class Derivation:
         """True when the direct and indirect position Jacobians are the same trig polynomial.
 
         Both are reduced to polynomials in ``sin q_i``, ``cos q_i`` modulo ``sin² + cos² = 1``
-        and compared exactly.
+        and compared exactly (the derivation's own result when it made it in time).
         """
-        sig = self.chain.sigmas
-        for a, b in zip(self.J_direct[:3, :], self.J_indirect):
-            diff = _core._to_poly(a - b, self.q, sig)
-            if _core._reduce(diff, self.q) != 0:
-                return False
-        return True
+        if self.agree is not None:
+            return self.agree
+        return _agree({"J_direct": self.J_direct, "J_indirect": self.J_indirect}, self.q,
+                      self.chain.sigmas)  # fmt: skip
 
     @property
     def complete(self) -> bool:
@@ -187,6 +206,8 @@ class Derivation:
             items.append(
                 (f"^{n}T_tool", f"{{}}^{{{n}}}T_{{\\mathrm{{tool}}}}", self.tool_transform)
             )
+        if not self.formed:
+            return items
         for j in range(1, n):
             items.append((f"^0T_{j + 1}", f"{{}}^{{0}}T_{{{j + 1}}}", self.cumulative[j]))
         items.append(("p(q)", "p(q)", self.p))
@@ -201,34 +222,53 @@ class Derivation:
     def _header(self) -> list[str]:
         joints = ", ".join(f"{s} ({n})" for s, n in zip(self.q, self.joint_names))
         lens = ", ".join(
-            f"{s} = {self.length_sources[s]} = {v:g} m" for s, v in self.lengths.items()
+            f"{s} = {v:g} m"
+            if str(s) == self.length_sources[s]
+            else f"{s} ({self.length_sources[s]}) = {v:g} m"
+            for s, v in self.lengths.items()
         )
-        return [
+        head = [
             f"{self.chain.name}: Khalil-Kleinfinger table, T = Rx(alpha) Tx(d) Rz(theta) Tz(r)",
             f"joints: {joints}",
             f"lengths: {lens or '(none)'}",
             f"reference: p and J in the axes of {self.reference!r}, tip {self.tip!r}",
         ]
+        return [line for h in head for line in wrap(h, indent=4)]
 
     def text(self) -> str:
-        """The derivation as plain text (sympy pretty-printing, unicode)."""
+        """The derivation as plain text, one formula a line (see :mod:`.printing`).
+
+        Matrices print as matrices when they fit in 100 columns, else entry by entry
+        (``[row,column] = …``, from 1). Linear in the expressions' size: no simplification
+        or comparison is made here (what the derivation did not reach says ``NOT DONE``).
+        """
         lines = self._header()
         for label, _, expr in self._items():
             lines.append("")
-            lines.append(f"{label} =")
-            lines.append(sp.pretty(expr, use_unicode=True, wrap_line=False))
+            if isinstance(expr, sp.MatrixBase):
+                lines.append(f"{label} =")
+                lines.extend(matrix_lines(expr))
+            elif self.det is None and sp.count_ops(expr) > _GRAM_OPS:
+                lines.append(
+                    f"{label} = sum of the squares of the maximal minors (Cauchy-Binet; "
+                    f"{sp.count_ops(expr)} operations, not printed)"
+                )
+            else:
+                lines.extend(wrap(f"{label} = {expr_text(expr)}", indent=4))
         lines.append("")
-        lines.append(f"direct and indirect Jacobians agree: {self.methods_agree}")
+        agree = {True: "yes", False: "NO", None: "not compared within the budget"}[self.agree]
+        lines.append(f"direct and indirect Jacobians agree: {agree}")
         if self.method:
-            lines.append(f"determinant: {self.method}")
+            lines.extend(wrap(f"determinant: {self.method}", indent=4))
         lines.append("singular families:")
         for fam in self.families or ():
             mark = {True: "checked", False: "CHECK FAILED", None: "not checked"}[fam.verified]
-            lines.append(f"  {fam.name}   [{mark}: {fam.check}]" if fam.check else f"  {fam.name}")
+            text = f"  {fam.name}   [{mark}: {fam.check}]" if fam.check else f"  {fam.name}"
+            lines.extend(wrap(text, indent=6))
         if not self.families and not self.incomplete:
-            lines.append("  (none: the determinant has no factor depending on q)")
+            lines.append("  (none: no factor depending on q)")
         for what in self.incomplete:
-            lines.append(f"NOT DONE: {what}")
+            lines.extend(wrap(f"NOT DONE: {what}", indent=4))
         return "\n".join(lines)
 
     def latex(self) -> str:
@@ -266,25 +306,86 @@ class Derivation:
 
 
 # ---------------------------------------------------------------------- stages
-def _stages(chain: Chain, rows: Any, lengths: Any, budget_end: float) -> Iterator[tuple[str, Any]]:
+def _tidied(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[str],
+            end: float) -> dict[str, Any]:  # fmt: skip
+    """The printed matrices with each entry :func:`~.core.tidy`-ed, until ``end``."""
+
+    def one(mat: sp.Matrix) -> sp.Matrix:
+        out = mat.copy()
+        for i in range(mat.rows):
+            for j in range(mat.cols):
+                if time.perf_counter() > end:
+                    return out
+                out[i, j] = _core.tidy(mat[i, j], q, sigmas)
+        return out
+
+    return {
+        "p": one(kin["p"]),
+        "J_indirect": one(kin["J_indirect"]),
+        "J_direct": one(kin["J_direct"]),
+        "cumulative": tuple(one(t) for t in kin["cumulative"]),
+    }
+
+
+def _agree(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[str]) -> bool:
+    """Direct and indirect position Jacobians equal as trigonometric polynomials (exact)."""
+    for a, b in zip(kin["J_direct"][:3, :], kin["J_indirect"]):
+        diff = sp.expand(a - b)
+        if diff != 0 and _core._reduce(_core._to_poly(diff, q, sigmas), q) != 0:
+            return False
+    return True
+
+
+def _stages(
+    chain: Chain, rows: Any, lengths: Any, start: float, budget: float | None,
+    have: Mapping[str, Any],
+) -> Iterator[tuple[str, Any]]:  # fmt: skip
+    """The derivation's stages in order, skipping those in ``have`` (a cached partial run).
+
+    ``budget`` (s from ``start``; ``None``: none) paces the optional work: extra determinant
+    frames are tried during its first 15 %, maximal minors factored during the first 70 %,
+    the printed forms tidied (last, after the families) until 80 % or for 20 % of it, never
+    past 90 %; the caller kills the process at the budget itself.
+    """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     syms = _core.length_symbols(chain, lengths)
+    span = 1e9 if budget is None else budget
     t0 = time.perf_counter()
-    kin = _core.kinematics(chain, q, syms)
-    yield "kinematics", kin
-    if rows is None:
-        row_names = _default_rows(kin, n)
-    else:
-        row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
-    yield "rows", row_names
-    det = _core.factored_determinant(chain, kin, q, row_names, budget_end)
-    yield "determinant", det
-    fams = families_of(det["factors"], q, chain, syms["values"])
-    yield "families", fams
-    checked = check_families(fams, q, chain, syms["values"], row_names)
-    yield "checks", checked
-    yield "seconds", time.perf_counter() - t0
+    kin = have.get("kinematics")
+    if kin is None:
+        kin = _core.kinematics(chain, q, syms)
+        yield "kinematics", kin
+    row_names = have.get("rows")
+    if row_names is None:
+        if rows is None:
+            row_names = _default_rows(kin, n)
+        else:
+            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
+        yield "rows", row_names
+    det = have.get("determinant")
+    if det is None:
+        det = _core.factored_determinant(
+            chain, kin, q, row_names, start + 0.15 * span, start + 0.7 * span
+        )
+        yield "determinant", det
+    fams = have.get("families")
+    if fams is None:
+        fams = families_of(det["factors"], q, chain, syms["values"])
+        yield "families", fams
+    if "checks" not in have:
+        checked = check_families(fams, q, chain, syms["values"], row_names)
+        unconfirmed = {det["factors"][i][0] for i in det.get("unconfirmed", ())}
+        # a candidate factor (not common to every minor factored) that the numeric J does
+        # not lose rank on is no family
+        kept = tuple(f for f in checked if not (f.factor in unconfirmed and f.verified is False))
+        yield "checks", kept
+    if "agree" not in have:
+        yield "agree", _agree(kin, q, chain.sigmas)
+    if "tidy" not in have:
+        end = min(max(time.perf_counter() + 0.2 * span, start + 0.8 * span), start + 0.9 * span)
+        yield "tidy", _tidied(kin, q, chain.sigmas, end)
+    yield "seconds", float(have.get("seconds", 0.0)) + time.perf_counter() - t0
 
 
 # ---------------------------------------------------------------------- derive
@@ -294,7 +395,23 @@ def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
     return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
 
+def _numeric_default_rows(chain: Chain) -> tuple[str, ...]:
+    """The default rows, from the numeric Jacobian (rows not zero at three random q).
+
+    A row of ``J`` that is identically zero is zero at every ``q``, and one that is not is
+    non-zero at random ``q`` (almost surely): the same selection as the symbolic one, known
+    before any sympy work, so that ``rows=None`` and its rows spelled out share one key.
+    """
+    rng = np.random.default_rng(20260101)
+    qs = rng.uniform(-math.pi, math.pi, (3, chain.nq))
+    jac = np.array([_core.numeric_jacobian(chain, q, range(6)) for q in qs])
+    return choose_rows([bool(np.abs(jac[:, i]).max() > 1e-12) for i in range(6)], chain.nq)
+
+
 def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
+    """The key of a derivation: the table and the row names (``None``: the default ones)."""
+    if rows is None:
+        rows = _numeric_default_rows(chain)
     return _cache.key(
         {
             "rows": [
@@ -303,7 +420,7 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
             "sigmas": list(chain.sigmas),
             "base": None if chain.base_pose is None else chain.base_pose.matrix.tolist(),
             "tool": None if chain.tool is None else chain.tool.matrix.tolist(),
-            "select": None if rows is None else [ROW_NAMES[i] for i in row_indices(rows)],
+            "select": [ROW_NAMES[i] for i in row_indices(rows)],
             "lengths": sorted((lengths or {}).items()),
             "limits": [[lim.lower, lim.upper] for lim in chain.limits or ()],
         }
@@ -329,17 +446,34 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
     return _cache_key(chain, None, lengths)
 
 
-#: Complete derivations of this process, by cache key (in front of the disk cache).
+#: Derivations of this process, complete or not, by cache key (in front of the disk cache).
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
 #: Derivations this process forked (from the second on, their imports are made here first).
 _BUDGETED = 0
 
+#: Seconds kept between the end of a derivation's child process and ``deadline``.
+_MARGIN = 0.25
+
+#: The key of the stages dict recording an unfinished run: ``(reason, budget in s)``.
+ATTEMPT = "__attempt__"
+
 
 def clear_memory() -> None:
     """Forget the derivations memoised in this process (the disk cache stays)."""
     _MEMO.clear()
+
+
+def _usable(stages: Mapping[str, Any] | None, budget: float | None) -> bool:
+    """A cached run answers a call: complete, or stopped at a budget at least as large."""
+    if stages is None:
+        return False
+    attempt = stages.get(ATTEMPT)
+    if attempt is None:
+        return True
+    tried = attempt[1]
+    return budget is not None and tried is not None and budget <= tried
 
 
 def derive(
@@ -351,6 +485,7 @@ def derive(
     tip: str | None = None,
     budget: float | None = DEFAULT_BUDGET,
     cache: bool = True,
+    deadline: float | None = None,
 ) -> Derivation:
     """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
 
@@ -368,7 +503,13 @@ def derive(
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
         budget: Time budget in [s] (``None``: no limit). At the budget the work stops and
             the result says in :attr:`Derivation.incomplete` what is missing.
-        cache: Read and write the on-disk cache (complete derivations only).
+        cache: Read and write the on-disk cache. An unfinished derivation is kept too,
+            with the budget it had: a later call with at most that budget gets it back at
+            once (its :attr:`~Derivation.incomplete` unchanged), a larger budget (or
+            ``None``) carries on from the stages it reached.
+        deadline: A :func:`time.monotonic` instant by which to return, whatever ``budget``
+            allows (the command line passes its own start plus ``--budget``): the work
+            stops a quarter second before it. ``budget`` still decides the cache reuse.
 
     Returns:
         The :class:`Derivation`.
@@ -387,31 +528,59 @@ def derive(
         row_indices(rows)
     syms = _core.length_symbols(chain, lengths)  # validates names early
     digest = _cache_key(chain, rows, lengths)
-    stages = (_MEMO.get(digest) or _cache.load(digest)) if cache else None
-    from_cache = stages is not None
-    reason: str | None = None
-    if stages is None:
+    found = (_MEMO.get(digest) or _cache.load(digest)) if cache else None
+    if _usable(found, budget):
+        assert found is not None
+        stages: dict[str, Any] = dict(found)
+        attempt = stages.get(ATTEMPT)
+        reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
+        from_cache = True
+    else:
+        have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
         start = time.perf_counter()
-        end = start + (budget if budget is not None else 1e9) * 0.15
+        run_for = budget
+        if deadline is not None:
+            left = max(0.05, deadline - time.monotonic() - _MARGIN)
+            run_for = left if run_for is None else min(run_for, left)
+        before = (found or {}).get(ATTEMPT)
+        tried = budget
+        if budget is not None and before is not None and before[1] is not None:
+            tried = max(budget, before[1])
+        stop = (  # what the file says until the last stage is written
+            (f"budget of {budget:g} s reached", tried)
+            if budget is not None
+            else ("stopped before the end", None)
+        )
+        writer = _cache.Writer(digest, have) if cache else None
 
         def gen() -> Iterator[tuple[str, Any]]:
-            return _stages(chain, rows, lengths, end)
+            for name, value in _stages(chain, rows, lengths, start, run_for, have):
+                if writer is not None:  # on disk before the parent hears of it
+                    writer.add(name, value, None if name == "seconds" else stop, ATTEMPT)
+                yield name, value
 
-        forks = budget is not None
+        forks = run_for is not None
         if forks and _BUDGETED:  # a process that derives again and again:
             _core.import_ahead()  # import here once, not in each forked child
-        stages, reason = _cache.run(gen, budget)
+        done, reason = _cache.run(gen, run_for)
         _BUDGETED += forks
-        stages.setdefault("seconds", time.perf_counter() - start)
-        if reason is None and cache:
-            _cache.store(digest, stages)
-    if cache and reason is None:
+        if reason is not None and writer is not None:
+            _cache.sweep(digest)
+        stages = {**have, **done}
+        if reason is not None and budget is not None and (run_for or 0) < budget:
+            reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
+        if reason is not None:
+            stages[ATTEMPT] = (reason, tried)
+            if cache and ("kinematics" not in stages or not reason.startswith("budget of")):
+                _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
+        from_cache = False
+    if cache:
         if len(_MEMO) > 64:
             _MEMO.clear()
         _MEMO[digest] = stages
         alias = _alias(chain, rows, lengths, stages)
-        if alias is not None:
-            _MEMO.setdefault(alias, stages)
+        if alias is not None and (alias not in _MEMO or ATTEMPT in _MEMO[alias]):
+            _MEMO[alias] = stages
     return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
 
 
@@ -425,7 +594,11 @@ def _assemble(
     kin = stages.get("kinematics")
     if kin is None:  # not even stage 1 in time: plain products, no simplification
         kin = _core.kinematics(chain, q, syms, simplify=False)
-        incomplete.append(f"simplified transforms and Jacobians ({reason}); shown unsimplified")
+        incomplete.append(
+            f"products, p and Jacobians ({reason}); kept as unexpanded products (J_indirect "
+            "not derived: the direct one's rows) and not printed"
+        )
+    kin = {**kin, **(stages.get("tidy") or {})}  # the tidied forms are equal, shorter
     row_names = stages.get("rows")
     if row_names is None:
         row_names = (
@@ -448,6 +621,9 @@ def _assemble(
             incomplete.append(f"numeric check of the families against sigma_min ({reason})")
         elif det_stage is not None:
             incomplete.append(f"singular families ({reason})")
+    agree = stages.get("agree")
+    if agree is None and det_stage is not None and fams is not None:
+        incomplete.append(f"direct = indirect Jacobian, exactly ({reason})")
     return Derivation(
         chain=chain,
         q=q,
@@ -473,6 +649,9 @@ def _assemble(
         incomplete=tuple(incomplete),
         seconds=0.0 if from_cache else float(stages.get("seconds", 0.0)),
         cached=from_cache,
+        agree=agree,
+        families_done=det_stage is not None and stages.get("checks") is not None,
+        formed="kinematics" in stages,
     )
 
 
@@ -501,4 +680,6 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
         return None
     _MEMO[digest] = stages
     syms = _core.length_symbols(chain, None)
-    return _assemble(chain, reference, tip_name, syms, stages, None, True, rows)
+    attempt = stages.get(ATTEMPT)
+    reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
+    return _assemble(chain, reference, tip_name, syms, stages, reason, True, rows)

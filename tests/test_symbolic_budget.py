@@ -1,0 +1,178 @@
+"""Symbolic budgets: unfinished derivations kept, redundant chains' rank deficiency, printing.
+
+The 5-DOF leg of ``examples/leg5.yaml`` (hip yaw, roll and pitch axes meeting at one point,
+knee, foot roll about the shank): its position Jacobian (3×5) loses rank where the knee
+stretches the shank in line with the femur. Every claim is checked against Pinocchio's
+Jacobian by SVD; no test measures time (see ``tools/bench_symbolic_budget.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from hexapod_kin import load
+from hexapod_kin.symbolic import derive
+
+pytestmark = pytest.mark.usefixtures("own_cache_dir")
+
+LEG5 = str(Path(__file__).resolve().parent.parent / "examples" / "leg5.yaml")
+
+
+def _ratio(jac: np.ndarray) -> float:
+    s = np.linalg.svd(jac, compute_uv=False)
+    return float(s[-1] / s[0])
+
+
+@pytest.fixture(scope="module")
+def leg5():
+    return load(LEG5), derive(LEG5, budget=None)
+
+
+def _coxa_leg(coxa: float = 0.03):
+    """The same leg with a coxa [m] between the yaw axis and the roll/pitch axes.
+
+    (The cache is keyed by the table: each test that must derive takes its own length.)
+    """
+    from dataclasses import replace
+
+    from hexapod_kin.sources import resolve_source
+
+    chain = resolve_source(LEG5).params
+    rows = list(chain.rows)
+    rows[1] = replace(rows[1], r=coxa)
+    return chain.replace(rows=tuple(rows), name="leg5_coxa")
+
+
+def test_leg5_rank_deficiency_families_against_sigma_min(leg5):
+    model, d = leg5
+    assert d.complete and d.det is None and d.rows == ("x", "y", "z")
+    assert "common factors of all" in d.method
+    q4 = sp.Symbol("q4", real=True)
+    assert [f.factor for f in d.families] == [sp.cos(q4)] * 2
+    assert sorted(f.value for f in d.families) == pytest.approx([-math.pi / 2, math.pi / 2])
+    rng = np.random.default_rng(5)
+    lo, hi = model.lower, model.upper
+    for fam in d.families:
+        assert fam.verified
+        on = rng.uniform(lo, hi, (20, 5))
+        on[:, fam.joint] = fam.value
+        # on the family: rank 2 (every 3x3 minor of Pinocchio's position Jacobian vanishes)
+        assert max(_ratio(model.jacobian(q)[:3]) for q in on) < 1e-12
+    off = rng.uniform(lo, hi, (200, 5))
+    ratios = [_ratio(model.jacobian(q)[:3]) for q in off]
+    near = np.abs(np.cos(off[:, 3]))  # distance-like to the families
+    # off them: full rank, sigma_min growing with |cos q4| (no other codimension-1 family)
+    assert min(r / c for r, c in zip(ratios, near)) > 1e-3
+
+
+def test_leg5_gram_and_jacobians_equal_pinocchio(leg5):
+    model, d = leg5
+    qs = model.random_q(40, seed=11)
+    gram = d.function(d.gram)(qs)
+    jac = d.function(d.J_direct)(qs)
+    for i, q in enumerate(qs):
+        jp = model.jacobian(q)
+        np.testing.assert_allclose(jac[i], jp, atol=1e-12)
+        assert abs(gram[i] - np.linalg.det(jp[:3] @ jp[:3].T)) < 1e-14
+    assert d.methods_agree and d.agree is True
+
+
+def test_redundant_leg_without_common_factor_has_no_family():
+    chain = _coxa_leg()
+    d = derive(chain, budget=None)
+    model = load(chain)
+    assert d.complete and d.families == () and "share no factor" in d.method
+    # cos(q5) divides some minors (foot roll at 90 deg) but not all: J keeps rank 3 there
+    rng = np.random.default_rng(6)
+    qs = rng.uniform(model.lower, model.upper, (30, 5))
+    qs[:, 4] = math.pi / 2
+    assert min(_ratio(model.jacobian(q)[:3]) for q in qs) > 1e-4
+    qs = model.random_q(20, seed=12)
+    gram = d.function(d.gram)(qs)
+    for i, q in enumerate(qs):
+        jp = model.jacobian(q)[:3]
+        assert abs(gram[i] - np.linalg.det(jp @ jp.T)) < 1e-14
+
+
+def test_unfinished_derivation_is_kept_and_a_larger_budget_carries_on(monkeypatch):
+    from hexapod_kin.symbolic import cache as symbolic_cache
+    from hexapod_kin.symbolic import clear_memory
+
+    chain = _coxa_leg(0.032)
+    runs: list[float | None] = []
+    real = symbolic_cache.run
+
+    def counting(stages, budget):
+        runs.append(budget)
+        return real(stages, budget)
+
+    monkeypatch.setattr(symbolic_cache, "run", counting)
+    first = derive(chain, budget=0.3)
+    assert first.incomplete and not first.cached and len(runs) == 1
+    clear_memory()  # a new process: from the disk
+    again = derive(chain, budget=0.3)
+    assert again.cached and len(runs) == 1  # not spent again
+    assert [w.split(" (")[0] for w in again.incomplete] == [
+        w.split(" (")[0] for w in first.incomplete
+    ]
+    smaller = derive(chain, budget=0.1)
+    assert smaller.cached and len(runs) == 1
+    done = derive(chain, budget=None)  # larger: carries on from what was reached
+    assert not done.cached and done.complete and len(runs) == 2
+    assert derive(chain, budget=0.3).complete and len(runs) == 2
+
+
+def test_scan_keeps_an_unfinished_family_derivation(monkeypatch):
+    from hexapod_kin import symbolic
+    from hexapod_kin.singularity import scan
+
+    model = load(_coxa_leg(0.034))
+    calls = []
+    real = symbolic.derive
+
+    def counting(*args, **kwargs):
+        calls.append(kwargs.get("budget"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(symbolic, "derive", counting)
+    first = scan(model, grid=5, family_budget=0.2)
+    assert "incomplete" in first.family_reason and len(calls) == 1
+    second = scan(model, grid=5, family_budget=0.2)
+    assert "kept" in second.family_reason and len(calls) == 1  # not derived again
+    third = scan(model, grid=5, family_budget=600.0)  # larger: tries again, finishes
+    assert len(calls) == 2 and third.families == ()
+    assert third.family_reason.startswith("no factor of det J")
+
+
+def test_printed_derivation_is_tidy_and_within_100_columns(leg5):
+    from hexapod_kin.symbolic import core
+
+    _, d = leg5
+    text = d.text()
+    assert max(len(line) for line in text.splitlines()) <= 100
+    assert "lengths: d4 = 0.11 m, r5 = 0.13 m, r6 = 0.02 m" in text
+    assert "sin²(q1)" not in text and "cos²(q1)" not in text
+    assert "(r5 + r6)" in text  # terms grouped, lengths factored
+    q1, q2 = sp.symbols("q1 q2", real=True)
+    d3 = sp.Symbol("d3", positive=True)
+    messy = -d3 * sp.sin(q1) ** 2 * sp.cos(q2) - d3 * sp.cos(q1) ** 2 * sp.cos(q2)
+    assert core.tidy(messy, (q1, q2), ("revolute", "revolute")) == -d3 * sp.cos(q2)
+    q = np.array([0.3, -0.2, 0.5, 0.7, -0.4])  # the tidied forms are the same functions
+    ref = core.numeric_jacobian(d.chain, q, range(6))
+    np.testing.assert_allclose(d.function(d.J_direct)(q), ref, atol=1e-14)
+    np.testing.assert_allclose(d.function(d.J_indirect)(q), ref[:3], atol=1e-14)
+
+
+def test_cli_derive_of_the_leg_table_file(capsys):
+    from hexapod_kin.cli import main
+
+    assert main(["derive", LEG5, "--budget", "600"]) == 0
+    out = capsys.readouterr().out
+    assert "q4 = pi/2 (mod 2*pi)" in out and "q4 = -pi/2 (mod 2*pi)" in out
+    assert "check vs Pinocchio" in out and "NOT DONE" not in out
+    assert max(len(line) for line in out.splitlines()) <= 100
