@@ -37,3 +37,56 @@ def test_readme_python_examples_run(index, tmp_path):
         timeout=300,
     )
     assert run.returncode == 0, run.stderr[-2000:]
+
+
+def _command_lines() -> list[str]:
+    """Every ``hexapod-kin ...`` line of the README's bash blocks (comments stripped)."""
+    lines = []
+    for block in re.findall(r"```bash\n(.*?)```", README, re.S):
+        for line in block.splitlines():
+            line = line.split("  #", 1)[0].strip()
+            if line.startswith("hexapod-kin "):
+                lines.append(line)
+    return lines
+
+
+COMMAND_LINES = _command_lines()
+
+
+def test_readme_has_command_lines():
+    assert len(COMMAND_LINES) >= 15
+
+
+@pytest.mark.parametrize(
+    "line", COMMAND_LINES, ids=[ln.split()[1] + str(i) for i, ln in enumerate(COMMAND_LINES)]
+)
+def test_readme_command_line_runs(line, tmp_path):
+    """Each command line of the README, as written, in a fresh folder: exit status 0.
+
+    ``view`` serves until interrupted: it must come up (its address printed) and end with
+    status 130 and one line on Ctrl-C.
+    """
+    import shlex
+    import signal
+    import time
+
+    for name in ("examples", "tests"):
+        os.symlink(ROOT / name, tmp_path / name)
+    argv = [sys.executable, "-m", "hexapod_kin", *shlex.split(line)[1:]]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    if argv[3] == "view":
+        proc = subprocess.Popen(
+            argv, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        )
+        deadline = time.monotonic() + 60
+        out = ""
+        while time.monotonic() < deadline and "127.0.0.1" not in out:
+            out += proc.stdout.readline()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+        assert "127.0.0.1" in out, (out, err)
+        assert proc.returncode in (130, -signal.SIGINT), err  # a shell reports both as 130
+        assert err.strip().splitlines()[-1] == "hexapod-kin: interrupted", err
+        return
+    run = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)
+    assert run.returncode == 0, (line, run.stdout[-1000:], run.stderr[-2000:])
