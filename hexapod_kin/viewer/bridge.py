@@ -29,11 +29,89 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
     import tornado.httpserver
     import tornado.ioloop
     import tornado.netutil
+    import tornado.web
     import zmq
     from meshcat.servers.tree import SceneTree
-    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+    from meshcat.servers.zmqserver import (
+        VIEWER_HTML,
+        VIEWER_ROOT,
+        StaticFileHandlerNoCache,
+        WebSocketHandler,
+        ZMQWebSocketBridge,
+    )
+
+    class LoopbackStatic(StaticFileHandlerNoCache):
+        """The viewer's files, for a request whose Host is this server's loopback address."""
+
+        def prepare(self) -> Any:
+            if not local(self.request.headers.get("Host")):
+                self.set_status(403)
+                self.finish("forbidden: this viewer serves 127.0.0.1 only")
+                return None
+            return super().prepare()
+
+    allowed_hosts: set[str] = set()  # "127.0.0.1:PORT" once the port is known
+
+    def local(value: str | None) -> bool:
+        """A Host or Origin naming this server's own loopback address (not a DNS name)."""
+        if not value:
+            return False
+        host = value.split("://", 1)[-1].rstrip("/")
+        return host in allowed_hosts
+
+    class LoopbackSocket(WebSocketHandler):
+        """Meshcat's websocket, for this server's own Host and Origin only.
+
+        A request whose Host or Origin is not ``127.0.0.1:PORT`` (the shape of a DNS-rebinding
+        page: Host and Origin both ``evil.example:PORT``) is refused.
+        """
+
+        def check_origin(self, origin: str) -> bool:
+            return local(origin) and local(self.request.headers.get("Host"))
+
+        def prepare(self) -> Any:
+            if not local(self.request.headers.get("Host")):
+                self.set_status(403)
+                self.finish("forbidden: this viewer serves 127.0.0.1 only")
+                return None
+            return super().prepare()
 
     class LoopbackBridge(ZMQWebSocketBridge):
+        COMMANDS = frozenset(("set_object", "set_transform", "set_property", "set_animation",
+                              "delete", "get_scene", "url"))  # fmt: skip
+
+        def make_app(self) -> Any:
+            return tornado.web.Application(
+                [
+                    (r"/static/(.*)", LoopbackStatic,
+                     {"path": VIEWER_ROOT, "default_filename": VIEWER_HTML}),
+                    (r"/", LoopbackSocket, {"bridge": self}),
+                ]
+            )  # fmt: skip
+
+        def handle_zmq(self, frames: list[bytes]) -> None:
+            """Meshcat's handler, refusing what it cannot answer.
+
+            A malformed or unknown message gets an error reply and is dropped: it never
+            leaves the REP socket waiting (a wedged server).
+            """
+            try:
+                cmd = frames[0].decode("utf-8") if frames else ""
+                if (
+                    cmd not in self.COMMANDS
+                    or (cmd.startswith("set_") or cmd == "delete")
+                    and (len(frames) != 3)
+                ):
+                    raise ValueError(f"unknown or malformed command {cmd[:40]!r}")
+                if len(frames) == 3:
+                    frames[1].decode("utf-8")
+                super().handle_zmq(frames)
+            except Exception as exc:  # noqa: BLE001 - any bad message: reply, drop, go on
+                try:
+                    self.zmq_socket.send(f"error: {type(exc).__name__}".encode())
+                except zmq.ZMQError:
+                    pass
+
         def __init__(self) -> None:  # noqa: D401 - not super().__init__: it binds 0.0.0.0
             self.host = LOOPBACK
             self.websocket_pool: set[Any] = set()
@@ -45,6 +123,7 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
             self.http_server = tornado.httpserver.HTTPServer(self.app)
             self.http_server.add_sockets(socks)
             self.fileserver_port = socks[0].getsockname()[1]
+            allowed_hosts.add(f"{LOOPBACK}:{self.fileserver_port}")
             self.web_url = f"http://{LOOPBACK}:{self.fileserver_port}/static/"
             self.tree = SceneTree()
 
