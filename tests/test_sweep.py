@@ -535,3 +535,47 @@ def test_cli_plot(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "best (max stride)" in text and "±" in text
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("damage", ["swap", "edit", "truncate"])
+def test_damaged_chunks_are_scored_again(local_run, tmp_path, damage):
+    """Chunks are checked against what they claim: swapped, edited or truncated ones are
+    discarded with one CacheWarning and scored again; the table equals the undamaged run."""
+    from hexapod_kin.exceptions import CacheWarning
+
+    out = tmp_path / "d.csv"
+    parts = tmp_path / ".d.csv.sweep-parts"
+
+    def stop(k: int) -> None:
+        if k == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(SPACE, out=out, workers=1, on_chunk=stop, **OPTS)
+    files = sorted(parts.glob("chunk_*.npz"))
+    assert len(files) >= 2
+    a, b = files[0], files[1]
+    if damage == "swap":
+        da, db = a.read_bytes(), b.read_bytes()
+        a.write_bytes(db)
+        b.write_bytes(da)
+    elif damage == "edit":
+        with np.load(a) as z:
+            arrays = {k: np.array(z[k]) for k in z.files}
+        arrays["scores"][0, 0] += 1e-3  # a plausible value, digest left as it was
+        with open(a, "wb") as fh:
+            np.savez(fh, **arrays)
+    else:
+        a.write_bytes(a.read_bytes()[:50])
+    with pytest.warns(CacheWarning, match="does not hold what it claims"):
+        res = sweep(SPACE, out=out, workers=1, **OPTS)
+    assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
+    assert res.scored >= 2
+
+
+def test_a_huge_sweep_is_estimated_and_refused(tmp_path):
+    big = DesignSpace({"l2": Range(0.05, 0.15, 3000), "l3": Range(0.05, 0.15, 3000)})
+    with pytest.raises(ParameterError, match="9000000 designs: estimated") as err:
+        sweep(big, out=tmp_path / "x.csv")
+    assert err.value.parameter == "samples"
+    assert not list(tmp_path.iterdir())  # refused before anything is written

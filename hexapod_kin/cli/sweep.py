@@ -57,6 +57,11 @@ def register(sub: Any) -> None:
     p.add_argument("--workers", type=int, help="local threads (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDR", help="Dask scheduler, e.g. tcp://host:8786")
     p.add_argument(
+        "--yes",
+        action="store_true",
+        help="run a sweep estimated beyond 1 h of scoring or 4 GB (refused otherwise)",
+    )
+    p.add_argument(
         "--out",
         default="sweep.csv",
         help="the table, its format by extension: .csv, .parquet or .json (summary + columns); "
@@ -103,6 +108,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
         progress=False if args.no_progress else None,
+        allow_large=args.yes,
     )
     if args.plot:
         res.files["plot"] = str(plot_sweep(res, args.plot))

@@ -210,6 +210,17 @@ class DesignSpace:
                 out[p] = v
         return {"values": out, "total": self.total}
 
+    def count(self, method: str = "grid", samples: int = 100) -> int:
+        """How many designs :meth:`designs` draws at most, without drawing them."""
+        one_of("method", method, METHODS)
+        if method == "grid" or not self.swept:
+            n = 1
+            for p in PARAMETERS:
+                v = self._value(p)
+                n *= v.n if isinstance(v, Range) else 1
+            return n
+        return int(samples)
+
     def designs(self, method: str = "grid", samples: int = 100, seed: int = 0) -> np.ndarray:
         """The designs as a (N, len(PARAMETERS)) array, one row per design, columns PARAMETERS.
 

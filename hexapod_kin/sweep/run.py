@@ -24,6 +24,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,14 +33,19 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write
-from ..exceptions import ConfigurationError, OptionalDependencyError, ParameterError
+from ..exceptions import (
+    CacheWarning,
+    ConfigurationError,
+    OptionalDependencyError,
+    ParameterError,
+)
 from .designs import PARAMETERS, DesignSpace
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .scores import SCORES, score_designs
 
 __all__ = ["TABLE_FORMATS", "SweepResult", "read_results", "sweep", "table_paths"]
 
-_FORMAT = 1
+_FORMAT = 2  # chunks carry their number and a SHA-256 of their scores
 _UNCERTAIN = {"volume": "volume_se", "volume_mc": "volume_mc_se"}
 
 
@@ -124,14 +130,85 @@ def _npz_bytes(**arrays: Any) -> bytes:
     return buf.getvalue()
 
 
-def _load_chunk(path: Path, key: str, n: int) -> np.ndarray | None:
+def _chunk_digest(key: str, k: int, scores: np.ndarray) -> str:
+    h = hashlib.sha256(f"{key}:{k}:".encode())
+    h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
+    return h.hexdigest()
+
+
+def _load_chunk(
+    path: Path, key: str, k: int, designs: np.ndarray, options: Mapping[str, Any]
+) -> np.ndarray | None:
+    """A stored chunk's scores, checked against what it claims before use.
+
+    The sweep's key, the chunk's number and the SHA-256 of its scores must match (a swapped,
+    truncated or damaged file fails here), and one of its designs is scored again and must
+    give the same bits (an edited value fails here). A chunk that fails is discarded with
+    one :class:`~hexapod_kin.exceptions.CacheWarning` and scored again.
+    """
+    n = designs.shape[0]
     try:
         with np.load(path, allow_pickle=False) as z:
-            if str(z["key"]) != key or z["scores"].shape != (n, len(SCORES)):
-                return None
-            return np.array(z["scores"])
-    except (OSError, ValueError, KeyError):
+            scores = np.array(z["scores"], dtype=float)
+            ok = (
+                str(z["key"]) == key
+                and int(z["chunk"]) == k
+                and scores.shape == (n, len(SCORES))
+                and str(z["digest"]) == _chunk_digest(key, k, scores)
+            )
+    except Exception:  # noqa: BLE001 - a damaged file (bad zip, truncated, wrong arrays)
+        ok, scores = False, np.empty(0)
+    if ok:
+        r = int(hashlib.sha256(f"{key}:{k}".encode()).hexdigest(), 16) % n
+        ok = np.array_equal(_score_chunk(designs[r : r + 1], options)[0], scores[r], equal_nan=True)
+    if not ok:
+        warnings.warn(
+            f"sweep chunk {path.name} does not hold what it claims (damaged, swapped or "
+            "edited); scoring it again",
+            CacheWarning,
+            stacklevel=3,
+        )
         return None
+    return scores
+
+
+#: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
+MAX_HOURS = 1.0
+MAX_GB = 4.0
+
+
+def _refuse_large(
+    space: Any,
+    method: str,
+    samples: int,
+    options: Mapping[str, Any],
+    workers: int | None,
+    client: Any,
+    scheduler: str | None,
+) -> None:
+    """Estimate time and memory before starting; refuse beyond the limits (one line).
+
+    Time: two designs scored here (the first of the space), times the count, over the local
+    threads (a Dask cluster: not divided, its size is unknown here). Memory: the designs and
+    the score table, 8 bytes a value.
+    """
+    n = space.count(method, samples)
+    memory = n * (len(PARAMETERS) + len(SCORES) + 1) * 8 * 2 / 1e9  # arrays + the written table
+    probe = np.asarray(space.designs("grid" if method == "grid" else method, 2, 0))[:2]
+    t = time.perf_counter()
+    _score_chunk(probe, options)
+    per = (time.perf_counter() - t) / max(1, len(probe))
+    threads = 1 if (client is not None or scheduler is not None) else _check_workers(workers)
+    hours = n * per / threads / 3600.0
+    if hours > MAX_HOURS or memory > MAX_GB:
+        raise ParameterError(
+            f"sweep of {n} designs: estimated {hours:.3g} h of scoring on {threads} thread(s) "
+            f"and {memory:.3g} GB; the limits are {MAX_HOURS:g} h and {MAX_GB:g} GB: fewer "
+            "designs, fewer --mc-samples, or --yes (allow_large=True) to run it anyway",
+            parameter="samples",
+            value=n,
+            allowed=f"<= {MAX_HOURS:g} h and <= {MAX_GB:g} GB (estimated), or allow_large",
+        )
 
 
 def _check_workers(workers: int | None) -> int:
@@ -185,6 +262,7 @@ def sweep(
     scheduler: str | None = None,
     progress: bool | None = None,
     on_chunk: Callable[[int], None] | None = None,
+    allow_large: bool = False,
 ) -> SweepResult:
     """Score every design of a design space; resumable, local or on Dask.
 
@@ -206,6 +284,8 @@ def sweep(
         scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
         progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
         on_chunk: Called with the chunk number after each chunk is scored (and written).
+        allow_large: Run a sweep whose estimate (printed in the refusal) is beyond
+            :data:`MAX_HOURS` of scoring or :data:`MAX_GB` of memory (``--yes``).
 
     Returns:
         A :class:`SweepResult`.
@@ -217,8 +297,6 @@ def sweep(
 
     """
     t0 = time.perf_counter()
-    designs = space.designs(method, samples, seed)
-    n = designs.shape[0]
     options = {
         "mc_samples": int(mc_samples),
         "seed": int(seed),
@@ -226,6 +304,10 @@ def sweep(
         "stride_points": int(stride_points),
         "stride_use": float(stride_use),
     }
+    if not allow_large:
+        _refuse_large(space, method, samples, options, workers, client, scheduler)
+    designs = space.designs(method, samples, seed)
+    n = designs.shape[0]
     if chunk_size is None:
         chunk_size = min(250, max(10, math.ceil(n / 20)))
     if int(chunk_size) != chunk_size or chunk_size < 1:
@@ -289,7 +371,7 @@ def sweep(
         for k, (a, b) in enumerate(bounds):
             f = parts / f"chunk_{k:05d}.npz"
             if f.exists():
-                got = _load_chunk(f, key, b - a)
+                got = _load_chunk(f, key, k, designs[a:b], options)
                 if got is not None:
                     results[k] = got
     missing = [k for k in range(len(bounds)) if k not in results]
@@ -311,7 +393,13 @@ def sweep(
         results[k] = scores
         if paths is not None:
             atomic_write(
-                paths["parts"] / f"chunk_{k:05d}.npz", _npz_bytes(key=np.array(key), scores=scores)
+                paths["parts"] / f"chunk_{k:05d}.npz",
+                _npz_bytes(
+                    key=np.array(key),
+                    chunk=np.array(k),
+                    scores=scores,
+                    digest=np.array(_chunk_digest(key, k, scores)),
+                ),
             )
         bar.update(bounds[k][1] - bounds[k][0])
         if on_chunk is not None:
