@@ -380,3 +380,28 @@ def test_replay_imports_nothing_heavy(env: First, tmp_path: Path) -> None:
     assert "replayed: same code, data and libraries as the build of" in said
     assert "--no-cache recomputes" in said
     assert json.loads((out / "verdicts.json").read_text())["replayed_from"]
+
+
+def test_edited_manifest_verdicts_are_not_replayed(
+    env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A manifest whose verdicts were edited (e.g. to count more agreements) is not the
+    report it lists: the build runs again with one CacheWarning, never a wrong summary."""
+    import shutil
+
+    from hexapod_kin.exceptions import CacheWarning
+
+    copy = tmp_path / "cache"
+    shutil.copytree(env.cache, copy)  # the module's cache stays untouched
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(copy))
+    entry = replay.lookup(env.key)
+    assert entry is not None
+    assert replay.verdicts_match(entry.record["verdicts"], entry.files)
+    record = json.loads((entry.folder / "manifest.json").read_text())
+    wrong = next(i for i, v in enumerate(record["verdicts"]) if v["status"] == "wrong")
+    record["verdicts"][wrong]["status"] = "agrees"
+    assert not replay.verdicts_match(record["verdicts"], entry.files)
+    (entry.folder / "manifest.json").write_text(json.dumps(record))
+    with pytest.warns(CacheWarning, match="not the report's"):
+        rep = reproduce(tmp_path / "again", quick=True, animations=False)
+    assert rep.counts == env.rep.counts and rep.replayed_from is None

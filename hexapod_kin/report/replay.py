@@ -203,6 +203,33 @@ def lookup(key: str) -> Entry | None:
     return Entry(key, folder, record, files)
 
 
+#: The word a verdict's status starts with in the report's table.
+_LABEL = {"wrong": "seed is wrong"}
+
+
+def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -> bool:
+    """Whether the manifest's verdicts are the report's.
+
+    Each claim's row of ``report.md`` (a file checked by its SHA-256) must start its verdict
+    column with the manifest's status: an edited manifest (e.g. its counts) is no entry.
+    """
+    md = files.get("report.md")
+    if md is None:
+        return False
+    text = md.decode("utf-8")
+    for v in verdicts:
+        row = f"| {v['claim']} | {v['seed']} |"
+        i = text.find(row)
+        if i < 0:
+            return False
+        line = text[i : text.find("\n", i) if "\n" in text[i:] else len(text)]
+        cols = line.split(" | ")
+        status = str(v["status"])
+        if len(cols) < 4 or not cols[3].startswith(_LABEL.get(status, status)[:6]):
+            return False
+    return True
+
+
 def restore(entry: Entry, out: Path) -> list[Path]:
     """Write the entry's files into ``out`` (atomically, folders created); mark it used.
 
