@@ -22,16 +22,17 @@ import numpy as np
 from ..exceptions import ParameterError
 from .robot import GaitError
 from .tables import PhaseTable
-from .terrain import Terrain
+from .terrain import Terrain, sphere_gap
 
 __all__ = [
     "CHUNK",
     "accel_limit_of",
-    "check_swing_clearance",
+    "leg_terrain_clearance",
     "periodic_spline",
     "raise_checks",
     "segment_clearance",
     "support_margin",
+    "terrain_clearance",
 ]
 
 #: Samples per vectorised pass.
@@ -264,36 +265,94 @@ def accel_limit_of(value: Any, nq: int) -> np.ndarray:
     return a
 
 
-def check_swing_clearance(
+def terrain_clearance(
     ground: Terrain,
-    plan: np.ndarray,
+    feet: np.ndarray,
     swing: np.ndarray,
     rad: float,
     t: np.ndarray,
     names: tuple[str, ...],
     H: float,
-) -> None:
-    """Swing foot spheres above the ground: centre height over h(x, y) at least r."""
-    if not swing.any():
-        return
-    under = ground(plan[..., 0], plan[..., 1])
-    gap = np.where(swing, plan[..., 2] - under - rad, np.inf)
-    gap = np.where(np.isnan(gap), -np.inf, gap)
-    if gap.min() < -1e-9:
+    strict: bool = True,
+) -> np.ndarray:
+    """The foot spheres against the terrain: (N, L) gaps [m] (:func:`~.terrain.sphere_gap`).
+
+    Every foot, swing and stance (a stance sphere touches its ground: gap 0): the sphere of
+    radius ``rad`` at each centre ``feet`` (N, L, 3) must not enter the terrain (sampled in
+    a disc of radius ``rad``, ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``).
+
+    Raises:
+        GaitError: (``strict``) check ``"terrain clearance"``: a sphere more than 1e-9 m
+            into the ground (the leg, the time, the depth).
+
+    """
+    gap = sphere_gap(ground, feet, rad)
+    if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
         d = float(-gap[i, leg])
-        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m below the ground"
+        kind = "swing" if swing[i, leg] else "stance"
+        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m into the ground"
         raise GaitError(
-            f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
-            f"clearance'; step_height={H:g} m is too low for this terrain)",
+            f"leg {names[leg]}: {kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s "
+            f"(check 'terrain clearance'; step_height={H:g} m, or the footholds near an edge)",
             check="terrain clearance",
             leg=names[leg],
             time=float(t[i]),
             amount=d,
             parameter="step_height",
             value=H,
-            allowed="a swing above the terrain",
+            allowed="foot spheres clear of the terrain",
         )
+    return gap
+
+
+#: Samples per leg segment of :func:`leg_terrain_clearance` (ends included).
+SEGMENT_SAMPLES = 5
+
+
+def leg_terrain_clearance(
+    ground: Terrain,
+    points: np.ndarray,
+    link_radius: float,
+    planes: np.ndarray,
+    t: np.ndarray,
+    names: tuple[str, ...],
+    strict: bool = True,
+) -> np.ndarray:
+    """The legs' links against the terrain: (N, L) smallest gap [m] of each leg.
+
+    Each segment of ``points`` (N, L, K, 3) (the polylines of ``points_and_com``) is a
+    capsule of radius ``link_radius``, sampled at :data:`SEGMENT_SAMPLES` balls per segment;
+    each ball is held against the terrain as :func:`~.terrain.sphere_gap` does, ignoring the
+    ground within :data:`~.terrain.EDGE_TOL` of the leg's own foot plane ``planes``
+    (N, L, 4): ``n·x = k`` (the foot sphere carries that ground; a capsule ends in its foot).
+
+    Raises:
+        GaitError: (``strict``) check ``"leg terrain clearance"``: a link into the terrain.
+
+    """
+    p = np.asarray(points, dtype=float)
+    u = np.linspace(0.0, 1.0, SEGMENT_SAMPLES)[:-1]
+    seg = p[:, :, :-1, None, :] + (p[:, :, 1:] - p[:, :, :-1])[:, :, :, None, :] * u[:, None]
+    n, nl = p.shape[:2]
+    balls = np.concatenate([seg.reshape(n, nl, -1, 3), p[:, :, -1:]], axis=2)
+    pl = np.broadcast_to(np.asarray(planes, dtype=float)[:, :, None, :], balls.shape[:3] + (4,))
+    gap = sphere_gap(ground, balls, link_radius, below=pl).min(axis=2)
+    if strict and gap.min() < -1e-9:
+        i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        d = float(-gap[i, leg])
+        raise GaitError(
+            f"leg {names[leg]}: a link (capsule r={link_radius:g} m) {d:.4g} m into the "
+            f"terrain at t={t[i]:.4g} s (check 'leg terrain clearance'; another stride or "
+            "body height moves the legs off the edge)",
+            check="leg terrain clearance",
+            leg=names[leg],
+            time=float(t[i]),
+            amount=d,
+            parameter="stride",
+            allowed="legs clear of the terrain",
+        )
+    return gap
 
 
 def raise_checks(
