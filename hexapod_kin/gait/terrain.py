@@ -231,7 +231,8 @@ def off_edges(
     """Footholds moved off terrain edges along a direction (the edge-aware foothold rule).
 
     A point whose disc of ``radius`` is not flat (:func:`disc_residual` above
-    :data:`EDGE_TOL`) moves along the unit ``direction`` (its direction of travel) to the
+    :data:`EDGE_TOL`; sampled on rings of ``radius / cos(π/16)``, so that an edge line inside
+    the disc crosses a sample) moves along the unit ``direction`` (its direction of travel) to the
     nearest point, forward or backward, at a multiple of ``radius/16`` and at most ``reach``
     away, whose disc is flat (a tie goes forward); points with no such place stay.
 
@@ -249,6 +250,7 @@ def off_edges(
     p = np.asarray(points, dtype=float)[:, :2]
     u = np.asarray(direction, dtype=float)
     shift = np.zeros(len(p))
+    radius = radius / math.cos(math.pi / ANGLES)  # the sampled rings circumscribe the disc
     bad = np.flatnonzero(disc_residual(ground, p, radius) > EDGE_TOL)
     if len(bad) and radius > 0.0:
         step = radius / 16.0
@@ -264,6 +266,9 @@ def off_edges(
 
 #: The swing raise's ramps: fraction of the swing over which it rises (and falls).
 RAMP = 0.25
+
+#: The swing raise is sized on the samples where its profile is at least this.
+RAISE_FROM = 0.05
 
 
 def raise_profile(s: Any) -> np.ndarray:
@@ -285,7 +290,6 @@ def swing_raise(
     height: float,
     radius: float,
     margin: float,
-    slack: float = 0.0,
     samples: int = 48,
 ) -> np.ndarray:
     """The extra height [m] each swing needs to clear the terrain (0 where it passes no edge).
@@ -295,10 +299,13 @@ def swing_raise(
     b, ℓ) on ``samples + 1`` values of s. A swing whose path passes over a terrain edge (a disc
     of radius ``r + margin`` around a point of its path is not flat, :func:`disc_residual`)
     is raised by ``ΔH·p(s)`` (p = :func:`raise_profile`) with the smallest ΔH ≥ 0 for which
-    the sphere clears the terrain (:func:`sphere_gap`) by ``margin·p(s)`` all along:
-    ``ΔH = max(0, maxₛ (margin − gap(s)/p(s)))`` over the samples with ``p(s) > 0``, the
-    gap being the smallest of the sphere's at c(s) and at c(s) moved ``±slack`` [m]
-    horizontally along the swing (room for the stance's rolling, which shifts the lift-off).
+    the sphere clears the terrain (:func:`sphere_gap`) by ``margin·p(s)`` where its path is
+    by the edge (the disc above is not flat) and by 0 elsewhere:
+    ``ΔH = max(0, maxₛ (m(s) − gap(s)/p(s)))`` (m = margin or 0) over the samples, at
+    most ``height`` (a swing at most doubles its lift: a taller rise needs a higher step,
+    and the clearance check says so).
+    Samples with ``p(s) <`` :data:`RAISE_FROM` (next to the
+    contacts, where no raise helps) are left to the footholds and to the clearance check.
     """
     c0, c1 = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     s = np.linspace(0.0, 1.0, samples + 1)
@@ -306,17 +313,13 @@ def swing_raise(
     lift = 64.0 * (s * (1.0 - s)) ** 3
     path = c0[:, None] + (c1 - c0)[:, None] * b[:, None] + (height * lift)[:, None] * [0, 0, 1]
     out = np.zeros(len(c0))
-    edge = (disc_residual(ground, path, radius + margin) > EDGE_TOL).any(axis=1)
+    near = disc_residual(ground, path, radius + margin) > EDGE_TOL  # (M, S+1) by an edge
+    edge = near.any(axis=1)
     edge &= np.isfinite(c0[:, 2]) & np.isfinite(c1[:, 2])
     if edge.any():
         p = raise_profile(s)
-        inside = p > 1e-9
-        pe = path[edge][:, inside]
-        u = (c1 - c0)[edge] * [1.0, 1.0, 0.0]
-        u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
-        gap = np.minimum.reduce(
-            [sphere_gap(ground, pe + k * slack * u[:, None], radius) for k in (-1, 0, 1)]
-        )
-        need = (margin - gap / p[inside]).max(axis=1)
-        out[edge] = np.maximum(need, 0.0)
+        inside = p >= RAISE_FROM
+        gap = sphere_gap(ground, path[edge][:, inside], radius)
+        need = (np.where(near[edge][:, inside], margin, 0.0) - gap / p[inside]).max(axis=1)
+        out[edge] = np.clip(need, 0.0, height)
     return out

@@ -596,15 +596,20 @@ def walk(
     c_nxt, c_prev = c_tab[row, legs], c_tab[row - 1, legs]
     plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * blend[..., None], c_nxt)
     plan[..., 2] += np.where(swing, H * lift, 0.0)
-    # swings over an edge: raised to clear it (terrain.swing_raise)
-    extra = np.zeros(tab.shape[:2])
-    if np.isfinite(tab[..., 2]).all():
-        extra[1:] = swing_raise(
-            ground, c_tab[:-1].reshape(-1, 3), c_tab[1:].reshape(-1, 3), H, rad, SWING_MARGIN,
-            FOOTHOLD_MARGIN,
-        ).reshape(len(tab) - 1, nl)
-    if extra.any():
-        plan[..., 2] += np.where(swing, extra[row, legs] * raise_profile(sc), 0.0)
+    # swings over an edge: raised to clear it (terrain.swing_raise); sized again from the
+    # lift-off's rolling once the IK knows it (a swing's height does not change its stance)
+    lift2 = raise_profile(sc)
+    ok_tab = bool(np.isfinite(tab[..., 2]).all())
+
+    def raised(lo: np.ndarray) -> np.ndarray:
+        out = np.zeros(tab.shape[:2])
+        if ok_tab:
+            c0, c1 = (c_tab[:-1] + lo[1:]).reshape(-1, 3), c_tab[1:].reshape(-1, 3)
+            out[1:] = swing_raise(ground, c0, c1, H, rad, SWING_MARGIN).reshape(-1, nl)
+        return out
+
+    extra = raised(np.zeros(tab.shape))
+    plan[..., 2] += np.where(swing, extra[row, legs] * lift2, 0.0)
     gz = np.where(swing, prev[..., 2] + (nxt[..., 2] - prev[..., 2]) * blend, nxt[..., 2])
     # --- body
     pose = se2_pose(t, vel)
@@ -617,9 +622,19 @@ def walk(
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
     if gain > 0.0:
         base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
-    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(
-        wb, base, plan, support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES
-    )
+    args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
+    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
+    if extra.any():
+        lo = np.zeros(tab.shape)  # each swing's lift-off rolling: feet − plan = lo·(1 − b)
+        sw = swing & (blend < 0.5)
+        lo[row[sw], np.broadcast_to(legs, sw.shape)[sw]] = ((feet - plan)[sw]) / (
+            1.0 - blend[sw]
+        )[:, None]
+        more = np.maximum(raised(lo) - extra, 0.0)
+        if more.any():
+            extra += more
+            plan[..., 2] += np.where(swing, more[row, legs] * lift2, 0.0)
+            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
     foot_gap = terrain_clearance(ground, feet, swing, rad, t, names, H, strict)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
