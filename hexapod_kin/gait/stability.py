@@ -306,14 +306,15 @@ def terrain_clearance(
     return gap
 
 
-#: Samples per leg segment of :func:`leg_terrain_clearance` (ends included).
-SEGMENT_SAMPLES = 5
+#: Ball spacing along a leg segment in :func:`leg_terrain_clearance`, in link radii.
+SEGMENT_SPACING = 0.5
 
 
 def leg_terrain_clearance(
     ground: Terrain,
     points: np.ndarray,
     link_radius: float,
+    foot_radius: float,
     planes: np.ndarray,
     t: np.ndarray,
     names: tuple[str, ...],
@@ -322,22 +323,32 @@ def leg_terrain_clearance(
     """The legs' links against the terrain: (N, L) smallest gap [m] of each leg.
 
     Each segment of ``points`` (N, L, K, 3) (the polylines of ``points_and_com``) is a
-    capsule of radius ``link_radius``, sampled at :data:`SEGMENT_SAMPLES` balls per segment;
+    capsule of radius ``link_radius`` ρ, sampled as balls of radius ρ at most
+    :data:`SEGMENT_SPACING`·ρ apart (the capsule's surface between two balls is then at most
+    ρ(1 − cos asin(1/4)) ≈ 0.03ρ outside them);
     each ball is held against the terrain as :func:`~.terrain.sphere_gap` does, ignoring the
-    ground within :data:`~.terrain.EDGE_TOL` of the leg's own foot plane ``planes``
-    (N, L, 4): ``n·x = k`` (the foot sphere carries that ground; a capsule ends in its foot).
+    ground within :data:`~.terrain.EDGE_TOL` of the leg's own ground plane ``planes``
+    (N, L, 4): ``n·x = k`` (its stance contact's; in swing the lower contact's), and the
+    balls within ``link_radius + foot_radius`` of the foot centre (the foot's neighbourhood,
+    which the foot sphere's own check covers; the MJCF export trims a link wider than the
+    foot there).
 
     Raises:
         GaitError: (``strict``) check ``"leg terrain clearance"``: a link into the terrain.
 
     """
     p = np.asarray(points, dtype=float)
-    u = np.linspace(0.0, 1.0, SEGMENT_SAMPLES)[:-1]
+    longest = float(np.linalg.norm(np.diff(p, axis=2), axis=-1).max()) if p.size else 0.0
+    count = int(np.ceil(longest / max(SEGMENT_SPACING * link_radius, 1e-6))) + 1
+    u = np.linspace(0.0, 1.0, min(max(count, 2), 200))[:-1]
     seg = p[:, :, :-1, None, :] + (p[:, :, 1:] - p[:, :, :-1])[:, :, :, None, :] * u[:, None]
     n, nl = p.shape[:2]
-    balls = np.concatenate([seg.reshape(n, nl, -1, 3), p[:, :, -1:]], axis=2)
+    balls = seg.reshape(n, nl, -1, 3)
+    far = np.linalg.norm(balls - p[:, :, -1:], axis=-1) >= link_radius + foot_radius
     pl = np.broadcast_to(np.asarray(planes, dtype=float)[:, :, None, :], balls.shape[:3] + (4,))
-    gap = sphere_gap(ground, balls, link_radius, below=pl).min(axis=2)
+    gap = np.full(far.shape, np.inf)
+    gap[far] = sphere_gap(ground, balls[far], link_radius, below=pl[far])
+    gap = gap.min(axis=2)
     if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
         d = float(-gap[i, leg])

@@ -184,14 +184,13 @@ def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) 
             :data:`EDGE_TOL` above its point's plane is ignored (a leg's own foot ground).
 
     Points whose centre is at least ``r +`` :attr:`Terrain.relief` above the ground under it
-    are not sampled: their gap is the bound ``c_z − h(c_xy) − r − relief`` (≥ 0).
+    are not sampled (they clear it): their gap is the centre sample's, ``c_z − h(c_xy) − r``.
 
     """
     c = np.asarray(centres, dtype=float)
     h0 = ground(c[..., 0], c[..., 1])
     gap = c[..., 2] - h0 - radius  # exact on level ground, a bound below for the rest
-    gap = gap - ground.relief
-    near = ~(gap >= 0.0) if radius <= RELIEF_RADIUS else np.ones(gap.shape, bool)
+    near = ~(gap >= ground.relief) if radius <= RELIEF_RADIUS else np.ones(gap.shape, bool)
     if near.any():
         cn = c[near]
         d = disc_offsets(radius)

@@ -76,7 +76,7 @@ DEFAULT_STRIDE = 0.05
 MARGIN_TOL = 1e-9
 
 #: Footholds keep a flat disc of radius ``foot_radius`` + this [m] (terrain.off_edges).
-FOOTHOLD_MARGIN = 0.005
+FOOTHOLD_MARGIN = 0.01
 
 #: Swings over an edge clear the terrain by this [m] (terrain.swing_raise).
 SWING_MARGIN = 0.005
@@ -651,8 +651,11 @@ def walk(
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
-    plane = np.concatenate([n_nxt, np.einsum("nli,nli->nl", n_nxt, nxt)[..., None]], axis=-1)
-    leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, plane, t, names, strict)
+    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
+    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
+    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
+    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
+    leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, rad, plane, t, names, strict)
     if n > 3:
         qdot = np.gradient(q, t, axis=0, edge_order=2)
         qddot = second_difference(q, t)
