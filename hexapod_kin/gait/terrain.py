@@ -232,7 +232,7 @@ def off_edges(
     A point whose disc of ``radius`` is not flat (:func:`disc_residual` above
     :data:`EDGE_TOL`; sampled on rings of ``radius / cos(π/16)``, so that an edge line inside
     the disc crosses a sample) moves along the unit ``direction`` (its direction of travel) to the
-    nearest point, forward or backward, at a multiple of ``radius/16`` and at most ``reach``
+    nearest point, forward or backward, at a multiple of ``radius/64`` and at most ``reach``
     away, whose disc is flat (a tie goes forward); points with no such place stay.
 
     Args:
@@ -252,7 +252,7 @@ def off_edges(
     radius = radius / math.cos(math.pi / ANGLES)  # the sampled rings circumscribe the disc
     bad = np.flatnonzero(disc_residual(ground, p, radius) > EDGE_TOL)
     if len(bad) and radius > 0.0:
-        step = radius / 16.0
+        step = radius / 64.0
         k = np.arange(1, int(np.ceil(reach / step)) + 1)
         ks = np.stack([k, -k], axis=1).reshape(-1) * step  # +1, −1, +2, −2, ... (forward first)
         cand = p[bad, None, :] + ks[None, :, None] * u[bad, None, :]

@@ -76,7 +76,7 @@ DEFAULT_STRIDE = 0.05
 MARGIN_TOL = 1e-9
 
 #: Footholds keep a flat disc of radius ``foot_radius`` + this [m] (terrain.off_edges).
-FOOTHOLD_MARGIN = 0.01
+FOOTHOLD_MARGIN = 0.007
 
 #: Swings over an edge clear the terrain by this [m] (terrain.swing_raise).
 SWING_MARGIN = 0.005
