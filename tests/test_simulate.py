@@ -128,7 +128,7 @@ def test_robot_feet_walk_as_planned(name: str) -> None:
     if name == "step":
         # the plan keeps its footholds off the edge, raises the swings over it and checks
         # the spheres and the legs against the terrain; by hand, no sphere enters the step
-        assert _into_the_step(run) == 0.0 and run.settings["swings_raised"] > 0
+        assert _into_the_step(run) <= 1e-9 and run.settings["swings_raised"] > 0
         assert run.foot_gap.min() >= -1e-9 and run.leg_gap.min() >= -1e-9
     sim = simulate(run, stand=False)
     _assert_follows_plan(sim, run)

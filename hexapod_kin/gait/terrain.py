@@ -249,10 +249,10 @@ def off_edges(
     p = np.asarray(points, dtype=float)[:, :2]
     u = np.asarray(direction, dtype=float)
     shift = np.zeros(len(p))
+    step = radius / 64.0
     radius = radius / math.cos(math.pi / ANGLES)  # the sampled rings circumscribe the disc
     bad = np.flatnonzero(disc_residual(ground, p, radius) > EDGE_TOL)
     if len(bad) and radius > 0.0:
-        step = radius / 64.0
         k = np.arange(1, int(np.ceil(reach / step)) + 1)
         ks = np.stack([k, -k], axis=1).reshape(-1) * step  # +1, −1, +2, −2, ... (forward first)
         cand = p[bad, None, :] + ks[None, :, None] * u[bad, None, :]
