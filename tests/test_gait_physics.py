@@ -382,7 +382,11 @@ def test_sphere_gap_against_the_box_step_by_hand():
     # and clear (>= 0) wherever the hand distance to the box and the ground is at least r
     rng = np.random.default_rng(5)
     pts = np.column_stack(
-        [EDGE + rng.uniform(-0.02, 0.01, 60), rng.uniform(-0.01, 0.01, 60), rng.uniform(0.01, 0.04, 60)]
+        [
+            EDGE + rng.uniform(-0.02, 0.01, 60),
+            rng.uniform(-0.01, 0.01, 60),
+            rng.uniform(0.01, 0.04, 60),
+        ]
     )
     sampled = sphere_gap(ground, pts, r)
     dense = np.array([_dense_gap(p, r) for p in pts])
@@ -448,7 +452,9 @@ def test_raise_profile_is_c2_with_zero_rate_and_acceleration_at_both_ends():
     u = np.clip(s / RAMP, 0, 1)
     # the quintic ramp by hand: q'(u)/a = 30u²(1 − u)²/a
     rising = s < RAMP
-    np.testing.assert_allclose(d1[rising][1:], (30 * u**2 * (1 - u) ** 2 / RAMP)[rising][1:], atol=1e-5)
+    np.testing.assert_allclose(
+        d1[rising][1:], (30 * u**2 * (1 - u) ** 2 / RAMP)[rising][1:], atol=1e-5
+    )
     assert p[0] == p[-1] == 0.0 and np.all(p[(s >= RAMP) & (s <= 1 - RAMP)] == 1.0)
     ends = (s == 0.0) | (s == 1.0)
     # by hand: p(h) = 10(h/a)³, so the differences are 5h²/a³ and 10h/a³ there

@@ -278,7 +278,9 @@ def raise_profile(s: Any) -> np.ndarray:
     and touch-down and at the joins, and up to ``q(0.4) = 0.32`` already at s = 0.1 (the
     lift ``64 s³(1 − s)³`` is 0.05 there): it clears a rise close to the lift-off.
     """
-    u = np.clip(np.minimum(np.asarray(s, dtype=float), 1.0 - np.asarray(s, dtype=float)) / RAMP, 0, 1)
+    u = np.clip(
+        np.minimum(np.asarray(s, dtype=float), 1.0 - np.asarray(s, dtype=float)) / RAMP, 0, 1
+    )
     return np.asarray(u**3 * (10.0 - 15.0 * u + 6.0 * u * u))
 
 

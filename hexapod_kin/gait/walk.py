@@ -559,7 +559,10 @@ def walk(
     moved = np.zeros(tab.shape[:2])
     if FOOTHOLD_MARGIN >= 0 and np.isfinite(tab[..., 2]).all():
         xy, moved_flat = off_edges(
-            ground, tab.reshape(-1, 3), along.reshape(-1, 2), rad + FOOTHOLD_MARGIN,
+            ground,
+            tab.reshape(-1, 3),
+            along.reshape(-1, 2),
+            rad + FOOTHOLD_MARGIN,
             4.0 * (rad + FOOTHOLD_MARGIN),
         )
         moved = moved_flat.reshape(moved.shape)
@@ -627,9 +630,9 @@ def walk(
     if extra.any():
         lo = np.zeros(tab.shape)  # each swing's lift-off rolling: feet − plan = lo·(1 − b)
         sw = swing & (blend < 0.5)
-        lo[row[sw], np.broadcast_to(legs, sw.shape)[sw]] = ((feet - plan)[sw]) / (
-            1.0 - blend[sw]
-        )[:, None]
+        lo[row[sw], np.broadcast_to(legs, sw.shape)[sw]] = (
+            ((feet - plan)[sw]) / (1.0 - blend[sw])[:, None]
+        )
         more = np.maximum(raised(lo) - extra, 0.0)
         if more.any():
             extra += more
