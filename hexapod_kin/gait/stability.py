@@ -22,7 +22,7 @@ import numpy as np
 from ..exceptions import ParameterError
 from .robot import GaitError
 from .tables import PhaseTable
-from .terrain import Terrain, sphere_gap
+from .terrain import RELIEF_RADIUS, Terrain, sphere_gap
 
 __all__ = [
     "CHUNK",
@@ -331,23 +331,37 @@ def leg_terrain_clearance(
     (N, L, 4): ``n·x = k`` (its stance contact's; in swing the lower contact's), and the
     balls within ``link_radius + foot_radius`` of the foot centre (the foot's neighbourhood,
     which the foot sphere's own check covers; the MJCF export trims a link wider than the
-    foot there).
+    foot there). A segment whose points are all within :data:`~.terrain.RELIEF_RADIUS`
+    (horizontally, plus the link radius) of one of its ends, and whose lower end is
+    ``link_radius + relief`` above the higher of the grounds under its ends, is clear without
+    sampling (its gap is then that bound).
 
     Raises:
         GaitError: (``strict``) check ``"leg terrain clearance"``: a link into the terrain.
 
     """
     p = np.asarray(points, dtype=float)
-    longest = float(np.linalg.norm(np.diff(p, axis=2), axis=-1).max()) if p.size else 0.0
-    count = int(np.ceil(longest / max(SEGMENT_SPACING * link_radius, 1e-6))) + 1
-    u = np.linspace(0.0, 1.0, min(max(count, 2), 200))[:-1]
-    seg = p[:, :, :-1, None, :] + (p[:, :, 1:] - p[:, :, :-1])[:, :, :, None, :] * u[:, None]
-    n, nl = p.shape[:2]
-    balls = seg.reshape(n, nl, -1, 3)
-    far = np.linalg.norm(balls - p[:, :, -1:], axis=-1) >= link_radius + foot_radius
-    pl = np.broadcast_to(np.asarray(planes, dtype=float)[:, :, None, :], balls.shape[:3] + (4,))
-    gap = np.full(far.shape, np.inf)
-    gap[far] = sphere_gap(ground, balls[far], link_radius, below=pl[far])
+    a, b = p[:, :, :-1], p[:, :, 1:]  # (N, L, K-1, 3) segment ends
+    # every point of a segment within RELIEF_RADIUS of one of its ends lies over ground below
+    # max(h(a), h(b)) + relief: it is clear when its lower end is a link radius above that
+    # (then the gap given is that lower bound)
+    top = np.maximum(ground(a[..., 0], a[..., 1]), ground(b[..., 0], b[..., 1]))
+    side = 0.5 * np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]) + link_radius
+    gap = np.minimum(a[..., 2], b[..., 2]) - link_radius - top - ground.relief
+    check = ~((side <= RELIEF_RADIUS) & (gap >= 0.0))
+    if check.any():
+        i, leg, k = np.nonzero(check)
+        a0, d = a[i, leg, k], b[i, leg, k] - a[i, leg, k]  # (S, 3)
+        longest = float(np.linalg.norm(d, axis=1).max())
+        count = int(np.ceil(longest / max(SEGMENT_SPACING * link_radius, 1e-6))) + 1
+        u = np.linspace(0.0, 1.0, min(max(count, 2), 200))
+        balls = a0[:, None, :] + d[:, None, :] * u[:, None]  # (S, U, 3)
+        foot = p[i, leg, -1]
+        far = np.linalg.norm(balls - foot[:, None, :], axis=-1) >= link_radius + foot_radius
+        pl = np.broadcast_to(np.asarray(planes, dtype=float)[i, leg][:, None, :], far.shape + (4,))
+        g = np.full(far.shape, np.inf)
+        g[far] = sphere_gap(ground, balls[far], link_radius, below=pl[far])
+        gap[i, leg, k] = g.min(axis=1)
     gap = gap.min(axis=2)
     if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)

@@ -249,6 +249,8 @@ def off_edges(
     p = np.asarray(points, dtype=float)[:, :2]
     u = np.asarray(direction, dtype=float)
     shift = np.zeros(len(p))
+    if ground.relief == 0.0:  # level ground: no edge
+        return p.copy(), shift
     step = radius / 64.0
     radius = radius / math.cos(math.pi / ANGLES)  # the sampled rings circumscribe the disc
     bad = np.flatnonzero(disc_residual(ground, p, radius) > EDGE_TOL)
@@ -314,6 +316,8 @@ def swing_raise(
     lift = 64.0 * (s * (1.0 - s)) ** 3
     path = c0[:, None] + (c1 - c0)[:, None] * b[:, None] + (height * lift)[:, None] * [0, 0, 1]
     out = np.zeros(len(c0))
+    if ground.relief == 0.0:  # level ground: no edge
+        return out
     near = disc_residual(ground, path, radius + margin) > EDGE_TOL  # (M, S+1) by an edge
     edge = near.any(axis=1)
     edge &= np.isfinite(c0[:, 2]) & np.isfinite(c1[:, 2])
