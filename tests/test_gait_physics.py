@@ -472,10 +472,15 @@ def test_legs_against_the_terrain_by_hand():
     ground, rho = step_terrain(), 0.008
     t = np.zeros(1)
     below = np.array([[[0.0, 0.0, 1.0, -1.0]]])  # a plane far below: nothing ignored
-    # a level link 30 mm above the top, its foot end far past the corner: gap z − 0.02 − ρ
+    # a level link 30 mm above the top, its foot end far past the corner: clear without
+    # sampling, its gap the bound z − ρ − max(h(a), h(b)) − relief (relief = the rise)
     pts = np.array([[[[0.2, 0.0, 0.05], [0.3, 0.0, 0.05], [0.4, 0.0, 0.05]]]])
     gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",))
-    assert float(gap[0, 0]) == pytest.approx(0.05 - RISE - rho, abs=1e-15)
+    assert float(gap[0, 0]) == pytest.approx(0.05 - rho - RISE - RISE, abs=1e-15)
+    # 12 mm lower the bound fails and the balls are sampled: the exact z − 0.02 − ρ
+    pts[..., 2] = 0.038
+    gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",))
+    assert float(gap[0, 0]) == pytest.approx(0.038 - RISE - rho, abs=1e-15)
     # lowered to 5 mm above the top: 3 mm into the corner's top
     pts[..., 2] = RISE + 0.005
     gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",), strict=False)

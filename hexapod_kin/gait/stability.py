@@ -350,18 +350,18 @@ def leg_terrain_clearance(
     gap = np.minimum(a[..., 2], b[..., 2]) - link_radius - top - ground.relief
     check = ~((side <= RELIEF_RADIUS) & (gap >= 0.0))
     if check.any():
-        i, leg, k = np.nonzero(check)
-        a0, d = a[i, leg, k], b[i, leg, k] - a[i, leg, k]  # (S, 3)
+        si, sl, sk = np.nonzero(check)
+        a0, d = a[si, sl, sk], b[si, sl, sk] - a[si, sl, sk]  # (S, 3)
         longest = float(np.linalg.norm(d, axis=1).max())
         count = int(np.ceil(longest / max(SEGMENT_SPACING * link_radius, 1e-6))) + 1
         u = np.linspace(0.0, 1.0, min(max(count, 2), 200))
         balls = a0[:, None, :] + d[:, None, :] * u[:, None]  # (S, U, 3)
-        foot = p[i, leg, -1]
+        foot = p[si, sl, -1]
         far = np.linalg.norm(balls - foot[:, None, :], axis=-1) >= link_radius + foot_radius
-        pl = np.broadcast_to(np.asarray(planes, dtype=float)[i, leg][:, None, :], far.shape + (4,))
+        pl = np.broadcast_to(np.asarray(planes, dtype=float)[si, sl][:, None, :], far.shape + (4,))
         g = np.full(far.shape, np.inf)
         g[far] = sphere_gap(ground, balls[far], link_radius, below=pl[far])
-        gap[i, leg, k] = g.min(axis=1)
+        gap[si, sl, sk] = g.min(axis=1)
     gap = gap.min(axis=2)
     if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)

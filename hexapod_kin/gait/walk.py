@@ -29,12 +29,15 @@
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
   rates and accelerations by second-order finite differences.
+* **Terrain edges**: a touch-down whose disc of radius r + ``FOOTHOLD_MARGIN`` is not flat
+  moves along its travel to the nearest flat one (:func:`.terrain.off_edges`); a swing over an
+  edge is raised by ΔH·p(s) (:func:`.terrain.swing_raise`; ΔH ≤ step_height).
 * **Checks** at every sample: stance slip (the contact point's material point, by forward
   kinematics), static stability margin (:mod:`.stability`; a margin within
   ``MARGIN_TOL`` × the robot's size of zero is not a failure; patterns with
   ``statically_stable=False`` report it but never fail on it), joint limit margin, joint speed
   against the URDF's velocity limits (and acceleration against an optional limit), IK status,
-  clearance between neighbouring legs (surface gap of the links).
+  clearance between neighbouring legs; foot spheres and leg links against the terrain.
 """
 
 from __future__ import annotations
@@ -465,7 +468,8 @@ def walk(
     Raises:
         ParameterError: A bad parameter (named, with what is allowed).
         GaitError: (``strict``) a check fails: ``"terrain"`` (a foot off the terrain),
-            ``"terrain clearance"`` (a swing foot below the ground: step too low),
+            ``"terrain clearance"`` (a foot sphere into the ground: step too low),
+            ``"leg terrain clearance"`` (a link into the terrain),
             ``"reach"`` (stride too long, step too high...), ``"joint limit"``,
             ``"leg clearance"``, ``"stability margin"`` (statically stable patterns only),
             ``"joint speed"``, ``"joint acceleration"``; the message names the leg or joint,
