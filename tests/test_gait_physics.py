@@ -342,3 +342,154 @@ def test_full_inverse_dynamics_equals_mujoco_mj_inverse_on_the_exported_mjcf(wb)
         base = max(base, float(np.abs(gen[:6]).max()))
         worst = max(worst, float(np.abs(gen[6:] - res.torque_full[i, ours_cols]).max()))
     assert base <= 1e-9 and worst <= 1e-9
+
+
+# ====================================================================== terrain edges (h9)
+# The reference is a box step by hand: ground z = 0 for x < 0.25 m, the step's solid is the
+# box x >= 0.25 m, z <= 0.02 m (gait.terrain.step_terrain()).
+EDGE, RISE = 0.25, 0.02
+
+
+def _box_distance(c: np.ndarray) -> np.ndarray:
+    """Distance [m] from points (..., 3) to the step's box, and to the lower ground (z = 0)."""
+    to_box = np.hypot(np.maximum(EDGE - c[..., 0], 0.0), np.maximum(c[..., 2] - RISE, 0.0))
+    return np.minimum(to_box, np.where(c[..., 0] < EDGE, c[..., 2], np.inf))
+
+
+def _dense_gap(c: np.ndarray, r: float) -> float:
+    """min over a 0.1 mm grid of the disc of c_z − h(c + d) − √(r² − |d|²), by brute force."""
+    g = np.arange(-r, r + 1e-12, 1e-4)
+    dx, dy = np.meshgrid(g, g)
+    keep = dx**2 + dy**2 <= r * r
+    dx, dy = dx[keep], dy[keep]
+    h = np.where(c[0] + dx >= EDGE, RISE, 0.0)
+    return float((c[2] - h - np.sqrt(np.maximum(r * r - dx**2 - dy**2, 0.0))).min())
+
+
+def test_sphere_gap_against_the_box_step_by_hand():
+    from hexapod_kin.gait.terrain import sphere_gap, step_terrain
+
+    ground, r = step_terrain(), 0.012
+    # level ground, far from the edge: exactly c_z − r (the centre sample)
+    c = np.array([[0.0, 0.1, 0.05], [0.6, -0.2, 0.035]])
+    np.testing.assert_allclose(sphere_gap(ground, c, r), [0.05 - r, 0.035 - 0.02 - r], atol=0)
+    # beside the riser, 6 mm into it: the ring r/2 is turned by π/16 (reaches 5.9 mm along x),
+    # so the innermost sample on the top is on the ring 3r/4 at angle 0:
+    # c_z − 0.02 − √(r² − (3r/4)²) by hand
+    c = np.array([EDGE - 0.006, 0.0, r])
+    assert float(sphere_gap(ground, c, r)) == pytest.approx(r - RISE - np.sqrt(r**2 * 7 / 16))
+    # around the corner: never below the dense minimum, within the rings' resolution of it,
+    # and clear (>= 0) wherever the hand distance to the box and the ground is at least r
+    rng = np.random.default_rng(5)
+    pts = np.column_stack(
+        [
+            EDGE + rng.uniform(-0.02, 0.01, 60),
+            rng.uniform(-0.01, 0.01, 60),
+            rng.uniform(0.01, 0.04, 60),
+        ]
+    )
+    sampled = sphere_gap(ground, pts, r)
+    dense = np.array([_dense_gap(p, r) for p in pts])
+    assert np.all(sampled >= dense - 1e-9)
+    # a sphere more than r/4 (the ring spacing) into the box or the ground is always caught
+    deep = _box_distance(pts) < 0.75 * r
+    assert deep.any() and np.all(sampled[deep] < 0)
+    clear = _box_distance(pts) >= r
+    assert clear.any() and (~clear).any()
+    assert np.all(sampled[clear] >= -1e-12)
+    assert np.all(dense[~clear] < 0)  # the dense reference agrees with the hand distance
+
+
+def test_footholds_move_off_the_edge_to_the_nearest_flat_disc_by_hand():
+    from hexapod_kin.gait.terrain import disc_residual, off_edges, step_terrain
+
+    ground, rho = step_terrain(), 0.019
+    q = rho / 64  # the search step
+    p = np.array([[EDGE - 0.010, 0.0, 0.0], [EDGE + 0.040, 0.0, RISE], [EDGE + 0.012, 0.0, RISE]])
+    u = np.array([[1.0, 0.0], [1.0, 0.0], [1.0, 0.0]])
+    xy, shift = off_edges(ground, p, u, rho, 4 * rho)
+    # the sampled rings reach rho along x (the outer ring, r/cos(π/16), turned by π/16):
+    # a disc is flat before the edge when x + rho < 0.25 and on the top when x − rho >= 0.25
+    back = -(np.floor(0.009 / q) + 1) * q  # 0.24 + s + 0.019 < 0.25: s < −0.009
+    assert shift[0] == pytest.approx(back, abs=1e-15)  # backward (forward would be 29 mm)
+    assert shift[1] == 0.0  # 40 mm onto the top: flat already
+    fwd = np.ceil((rho - 0.012) / q - 1e-9) * q  # 0.262 + s − 0.019 >= 0.25: s >= 0.007
+    assert shift[2] == pytest.approx(fwd, abs=1e-15)  # forward (backward would be 31 mm)
+    np.testing.assert_allclose(xy[:, 0], p[:, 0] + shift, atol=0)
+    assert np.all(disc_residual(ground, xy, rho / np.cos(np.pi / 16)) <= 1e-3)
+
+
+def test_the_step_walk_keeps_contacts_off_the_edge_and_swing_spheres_out_of_the_step():
+    from hexapod_kin.gait.walk import FOOTHOLD_MARGIN
+
+    run = walk(pattern="tripod", terrain="step", duration=10.0)
+    r = run.settings["foot_radius"]
+    # every touch-down contact by FK is at least r + margin from the edge (by hand: |x − 0.25|)
+    start = run.support.copy()
+    start[1:] &= ~run.support[:-1]
+    contacts = (run.feet - r * run.normals)[start]
+    assert np.all(np.abs(contacts[:, 0] - EDGE) >= r + FOOTHOLD_MARGIN - 1e-9)
+    assert run.settings["footholds_moved"] >= 1 and run.settings["foothold_shift_max"] > 0
+    # no foot sphere (swing or stance, by FK) enters the box or the ground: hand distance
+    assert _box_distance(np.asarray(run.feet)).min() >= r - 1e-9
+    # the swings over the edge were raised, the others not
+    assert run.settings["swings_raised"] >= 1
+    assert 0 < run.settings["swing_raise_max"] <= run.settings["step_height"]
+    assert run.foot_gap.min() >= -1e-9 and run.leg_gap.min() > 0 and run.ok
+    # flat ground: nothing moves or rises (the same plan as before the edge rules)
+    flat = walk(pattern="tripod", duration=2.0)
+    assert flat.settings["footholds_moved"] == flat.settings["swings_raised"] == 0
+
+
+def test_raise_profile_is_c2_with_zero_rate_and_acceleration_at_both_ends():
+    from hexapod_kin.gait.terrain import RAMP, raise_profile
+
+    s = np.linspace(0.0, 1.0, 401)
+    p = raise_profile(s)
+    h = 1e-5
+    d1 = (raise_profile(s + h) - raise_profile(s - h)) / (2 * h)
+    d2 = (raise_profile(s + h) - 2 * p + raise_profile(s - h)) / h**2
+    u = np.clip(s / RAMP, 0, 1)
+    # the quintic ramp by hand: q'(u)/a = 30u²(1 − u)²/a
+    rising = s < RAMP
+    np.testing.assert_allclose(
+        d1[rising][1:], (30 * u**2 * (1 - u) ** 2 / RAMP)[rising][1:], atol=1e-5
+    )
+    assert p[0] == p[-1] == 0.0 and np.all(p[(s >= RAMP) & (s <= 1 - RAMP)] == 1.0)
+    ends = (s == 0.0) | (s == 1.0)
+    # by hand: p(h) = 10(h/a)³, so the differences are 5h²/a³ and 10h/a³ there
+    assert np.abs(d1[ends]).max() < 1e-7 and np.abs(d2[ends]).max() < 1e-2
+    # no jump of the acceleration at the joins: between samples ds apart it changes by at
+    # most max|q3|·ds/a³ = 60·ds/a³ (q3 = 60 − 360u + 360u², the third derivative); a jump
+    # would be of the order of q''/a²
+    assert np.abs(np.diff(d2[1:-1])).max() <= 60 * (s[1] - s[0]) / RAMP**3 * 1.01
+
+
+def test_legs_against_the_terrain_by_hand():
+    from hexapod_kin.gait.stability import leg_terrain_clearance
+    from hexapod_kin.gait.terrain import step_terrain
+
+    ground, rho = step_terrain(), 0.008
+    t = np.zeros(1)
+    below = np.array([[[0.0, 0.0, 1.0, -1.0]]])  # a plane far below: nothing ignored
+    # a level link 30 mm above the top, its foot end far past the corner: clear without
+    # sampling, its gap the bound z − ρ − max(h(a), h(b)) − relief (relief = the rise)
+    pts = np.array([[[[0.2, 0.0, 0.05], [0.3, 0.0, 0.05], [0.4, 0.0, 0.05]]]])
+    gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",))
+    assert float(gap[0, 0]) == pytest.approx(0.05 - rho - RISE - RISE, abs=1e-15)
+    # 12 mm lower the bound fails and the balls are sampled: the exact z − 0.02 − ρ
+    pts[..., 2] = 0.038
+    gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",))
+    assert float(gap[0, 0]) == pytest.approx(0.038 - RISE - rho, abs=1e-15)
+    # lowered to 5 mm above the top: 3 mm into the corner's top
+    pts[..., 2] = RISE + 0.005
+    gap = leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",), strict=False)
+    assert float(gap[0, 0]) == pytest.approx(0.005 - rho, abs=1e-15)
+    with pytest.raises(GaitError) as err:
+        leg_terrain_clearance(ground, pts, rho, 0.0, below, t, ("a",))
+    assert err.value.check == "leg terrain clearance" and err.value.leg == "a"
+    assert err.value.amount == pytest.approx(rho - 0.005, abs=1e-15)
+    # the leg's own ground plane (z = 0.02 here) is ignored: the same link is then clear
+    own = np.array([[[0.0, 0.0, 1.0, RISE]]])
+    pts2 = np.array([[[[0.3, 0.0, 0.05], [0.35, 0.0, 0.05], [0.4, 0.0, RISE + 0.005]]]])
+    assert leg_terrain_clearance(ground, pts2, rho, 0.0, own, t, ("a",)).min() > 0

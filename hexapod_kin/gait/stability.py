@@ -22,16 +22,17 @@ import numpy as np
 from ..exceptions import ParameterError
 from .robot import GaitError
 from .tables import PhaseTable
-from .terrain import Terrain
+from .terrain import RELIEF_RADIUS, Terrain, sphere_gap
 
 __all__ = [
     "CHUNK",
     "accel_limit_of",
-    "check_swing_clearance",
+    "leg_terrain_clearance",
     "periodic_spline",
     "raise_checks",
     "segment_clearance",
     "support_margin",
+    "terrain_clearance",
 ]
 
 #: Samples per vectorised pass.
@@ -264,36 +265,119 @@ def accel_limit_of(value: Any, nq: int) -> np.ndarray:
     return a
 
 
-def check_swing_clearance(
+def terrain_clearance(
     ground: Terrain,
-    plan: np.ndarray,
+    feet: np.ndarray,
     swing: np.ndarray,
     rad: float,
     t: np.ndarray,
     names: tuple[str, ...],
     H: float,
-) -> None:
-    """Swing foot spheres above the ground: centre height over h(x, y) at least r."""
-    if not swing.any():
-        return
-    under = ground(plan[..., 0], plan[..., 1])
-    gap = np.where(swing, plan[..., 2] - under - rad, np.inf)
-    gap = np.where(np.isnan(gap), -np.inf, gap)
-    if gap.min() < -1e-9:
+    strict: bool = True,
+) -> np.ndarray:
+    """The foot spheres against the terrain: (N, L) gaps [m] (:func:`~.terrain.sphere_gap`).
+
+    Every foot, swing and stance (a stance sphere touches its ground: gap 0): the sphere of
+    radius ``rad`` at each centre ``feet`` (N, L, 3) must not enter the terrain (sampled in
+    a disc of radius ``rad``, ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``).
+
+    Raises:
+        GaitError: (``strict``) check ``"terrain clearance"``: a sphere more than 1e-9 m
+            into the ground (the leg, the time, the depth).
+
+    """
+    gap = sphere_gap(ground, feet, rad)
+    if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
         d = float(-gap[i, leg])
-        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m below the ground"
+        kind = "swing" if swing[i, leg] else "stance"
+        where = "off the terrain" if math.isinf(d) else f"{d:.4g} m into the ground"
         raise GaitError(
-            f"leg {names[leg]}: swing foot {where} at t={t[i]:.4g} s (check 'terrain "
-            f"clearance'; step_height={H:g} m is too low for this terrain)",
+            f"leg {names[leg]}: {kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s "
+            f"(check 'terrain clearance'; step_height={H:g} m, or the footholds near an edge)",
             check="terrain clearance",
             leg=names[leg],
             time=float(t[i]),
             amount=d,
             parameter="step_height",
             value=H,
-            allowed="a swing above the terrain",
+            allowed="foot spheres clear of the terrain",
         )
+    return gap
+
+
+#: Ball spacing along a leg segment in :func:`leg_terrain_clearance`, in link radii.
+SEGMENT_SPACING = 0.5
+
+
+def leg_terrain_clearance(
+    ground: Terrain,
+    points: np.ndarray,
+    link_radius: float,
+    foot_radius: float,
+    planes: np.ndarray,
+    t: np.ndarray,
+    names: tuple[str, ...],
+    strict: bool = True,
+) -> np.ndarray:
+    """The legs' links against the terrain: (N, L) smallest gap [m] of each leg.
+
+    Each segment of ``points`` (N, L, K, 3) (the polylines of ``points_and_com``) is a
+    capsule of radius ``link_radius`` ρ, sampled as balls of radius ρ at most
+    :data:`SEGMENT_SPACING`·ρ apart (the capsule's surface between two balls is then at most
+    ρ(1 − cos asin(1/4)) ≈ 0.03ρ outside them);
+    each ball is held against the terrain as :func:`~.terrain.sphere_gap` does, ignoring the
+    ground within :data:`~.terrain.EDGE_TOL` of the leg's own ground plane ``planes``
+    (N, L, 4): ``n·x = k`` (its stance contact's; in swing the lower contact's), and the
+    balls within ``link_radius + foot_radius`` of the foot centre (the foot's neighbourhood,
+    which the foot sphere's own check covers; the MJCF export trims a link wider than the
+    foot there). A segment whose points are all within :data:`~.terrain.RELIEF_RADIUS`
+    (horizontally, plus the link radius) of one of its ends, and whose lower end is
+    ``link_radius + relief`` above the higher of the grounds under its ends, is clear without
+    sampling (its gap is then that bound).
+
+    Raises:
+        GaitError: (``strict``) check ``"leg terrain clearance"``: a link into the terrain.
+
+    """
+    p = np.asarray(points, dtype=float)
+    a, b = p[:, :, :-1], p[:, :, 1:]  # (N, L, K-1, 3) segment ends
+    # every point of a segment within RELIEF_RADIUS of one of its ends lies over ground below
+    # max(h(a), h(b)) + relief: it is clear when its lower end is a link radius above that
+    # (then the gap given is that lower bound)
+    top = np.maximum(ground(a[..., 0], a[..., 1]), ground(b[..., 0], b[..., 1]))
+    side = 0.5 * np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]) + link_radius
+    gap = np.minimum(a[..., 2], b[..., 2]) - link_radius - top - ground.relief
+    check = ~((side <= RELIEF_RADIUS) & (gap >= 0.0))
+    if check.any():
+        si, sl, sk = np.nonzero(check)
+        a0, d = a[si, sl, sk], b[si, sl, sk] - a[si, sl, sk]  # (S, 3)
+        longest = float(np.linalg.norm(d, axis=1).max())
+        count = int(np.ceil(longest / max(SEGMENT_SPACING * link_radius, 1e-6))) + 1
+        u = np.linspace(0.0, 1.0, min(max(count, 2), 200))
+        balls = a0[:, None, :] + d[:, None, :] * u[:, None]  # (S, U, 3)
+        foot = p[si, sl, -1]
+        far = np.linalg.norm(balls - foot[:, None, :], axis=-1) >= link_radius + foot_radius
+        pl = np.broadcast_to(np.asarray(planes, dtype=float)[si, sl][:, None, :], far.shape + (4,))
+        g = np.full(far.shape, np.inf)
+        g[far] = sphere_gap(ground, balls[far], link_radius, below=pl[far])
+        gap[si, sl, sk] = g.min(axis=1)
+    gap = gap.min(axis=2)
+    if strict and gap.min() < -1e-9:
+        i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        d = float(-gap[i, leg])
+        raise GaitError(
+            f"leg {names[leg]}: a link (capsule r={link_radius:g} m) {d:.4g} m into the "
+            f"terrain at t={t[i]:.4g} s (check 'leg terrain clearance'; another stride or "
+            "body height moves the legs off the edge)",
+            check="leg terrain clearance",
+            leg=names[leg],
+            time=float(t[i]),
+            amount=d,
+            parameter="stride",
+            allowed="legs clear of the terrain",
+        )
+    return gap
 
 
 def raise_checks(

@@ -17,7 +17,25 @@ import numpy as np
 
 from ..exceptions import ParameterError, one_of
 
-__all__ = ["TERRAINS", "Terrain", "flat", "slope", "step_terrain", "terrain"]
+__all__ = [
+    "EDGE_TOL",
+    "RELIEF_RADIUS",
+    "TERRAINS",
+    "Terrain",
+    "disc_offsets",
+    "disc_residual",
+    "flat",
+    "off_edges",
+    "raise_profile",
+    "slope",
+    "sphere_gap",
+    "step_terrain",
+    "swing_raise",
+    "terrain",
+]
+
+#: The horizontal radius [m] over which :attr:`Terrain.relief` bounds the height change.
+RELIEF_RADIUS = 0.1
 
 
 @dataclass(frozen=True, eq=False)
@@ -29,12 +47,16 @@ class Terrain:
         height: ``h(x, y) -> z``: arrays in [m] (same shape) to heights in [m]; NaN where
             there is no ground.
         bounds: Optional domain ``(x_min, x_max, y_min, y_max)`` in [m] (NaN outside).
+        relief: A bound on ``|h(p + d) − h(p)|`` for ``|d| ≤`` :data:`RELIEF_RADIUS` [m]
+            (∞: unknown). The sampled checks skip points higher above the ground than their
+            radius plus this (they cannot touch it).
 
     """
 
     name: str
     height: Callable[[np.ndarray, np.ndarray], Any]
     bounds: tuple[float, float, float, float] | None = None
+    relief: float = math.inf
 
     def __post_init__(self) -> None:
         if not callable(self.height):
@@ -64,7 +86,7 @@ class Terrain:
 def flat(z: float = 0.0) -> Terrain:
     """Level ground at height ``z`` [m]."""
     z0 = float(z)
-    return Terrain("flat", lambda x, y: np.full(np.shape(x), z0))
+    return Terrain("flat", lambda x, y: np.full(np.shape(x), z0), relief=0.0)
 
 
 def slope(angle: float = math.radians(8.0), heading: float = 0.0, z0: float = 0.0) -> Terrain:
@@ -83,7 +105,11 @@ def slope(angle: float = math.radians(8.0), heading: float = 0.0, z0: float = 0.
             allowed="(-pi/2, pi/2) rad",
         )
     g, c, s = math.tan(a), math.cos(heading), math.sin(heading)
-    return Terrain("slope", lambda x, y: z0 + g * (c * np.asarray(x) + s * np.asarray(y)))
+    return Terrain(
+        "slope",
+        lambda x, y: z0 + g * (c * np.asarray(x) + s * np.asarray(y)),
+        relief=abs(g) * RELIEF_RADIUS,
+    )
 
 
 def step_terrain(rise: float = 0.02, at: float = 0.25, heading: float = 0.0) -> Terrain:
@@ -93,7 +119,9 @@ def step_terrain(rise: float = 0.02, at: float = 0.25, heading: float = 0.0) -> 
     """
     r, d, c, s = float(rise), float(at), math.cos(heading), math.sin(heading)
     return Terrain(
-        "step", lambda x, y: np.where(c * np.asarray(x) + s * np.asarray(y) >= d, r, 0.0)
+        "step",
+        lambda x, y: np.where(c * np.asarray(x) + s * np.asarray(y) >= d, r, 0.0),
+        relief=abs(r),
     )
 
 
@@ -116,3 +144,187 @@ def terrain(spec: str | Terrain | Callable[..., Any] | None = None) -> Terrain:
         one_of("terrain", spec, sorted(TERRAINS), also=" or h(x, y)")
         return TERRAINS[spec]()
     return Terrain(getattr(spec, "__name__", "custom"), spec)
+
+
+# ---------------------------------------------------------------- sampled terrain geometry
+#: Disc sampling: the centre plus rings at these fractions of the radius, :data:`ANGLES`
+#: directions each (every other ring turned by half a step).
+RINGS = (0.25, 0.5, 0.75, 1.0)
+ANGLES = 16
+
+#: A disc is flat when the plane fitted (least squares) to its sampled heights leaves no
+#: residual above this [m]: a height discontinuity (an edge) inside it does.
+EDGE_TOL = 1e-3
+
+
+def disc_offsets(radius: float) -> np.ndarray:
+    """(S, 2) horizontal sample offsets [m] of a disc: centre, :data:`RINGS` × :data:`ANGLES`."""
+    rows = [np.zeros((1, 2))]
+    for k, f in enumerate(RINGS):
+        a = (np.arange(ANGLES) + 0.5 * (k % 2)) * (2.0 * np.pi / ANGLES)
+        rows.append(f * radius * np.stack([np.cos(a), np.sin(a)], axis=1))
+    return np.concatenate(rows)
+
+
+def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) -> np.ndarray:
+    """How far spheres clear the terrain [m], sampled: negative = depth into it.
+
+    For a sphere of radius r at centre ``c``, the ground point at horizontal offset d
+    (|d| ≤ r) is outside the sphere when ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``; the gap is
+    the smallest ``c_z − h(c_xy + d) − √(r² − |d|²)`` over the offsets of
+    :func:`disc_offsets` (exact for a level ground: ``c_z − h − r``; a sampled estimate
+    elsewhere, the ring spacing r/4 and 16 directions its resolution). −∞ where the ground
+    is undefined.
+
+    Args:
+        ground: The terrain.
+        centres: (..., 3) sphere centres [m].
+        radius: r [m] (≥ 0).
+        below: Optional (..., 4) planes ``n·x = k`` (n_z > 0): the ground at most
+            :data:`EDGE_TOL` above its point's plane is ignored (a leg's own foot ground).
+
+    Points whose centre is at least ``r +`` :attr:`Terrain.relief` above the ground under it
+    are not sampled (they clear it): their gap is the centre sample's, ``c_z − h(c_xy) − r``.
+
+    """
+    c = np.asarray(centres, dtype=float)
+    h0 = ground(c[..., 0], c[..., 1])
+    gap = c[..., 2] - h0 - radius  # exact on level ground, a bound below for the rest
+    near = ~(gap >= ground.relief) if radius <= RELIEF_RADIUS else np.ones(gap.shape, bool)
+    if near.any():
+        cn = c[near]
+        d = disc_offsets(radius)
+        cap = np.sqrt(np.maximum(radius * radius - np.einsum("si,si->s", d, d), 0.0))
+        h = ground(cn[:, None, 0] + d[:, 0], cn[:, None, 1] + d[:, 1])
+        if below is not None:  # the ground at or under each point's plane is ignored
+            pl = np.asarray(below, dtype=float)[near]  # (n, 4): n_xyz, offset
+            plane = (pl[:, 3:4] - pl[:, 0:1] * (cn[:, None, 0] + d[:, 0])) - pl[:, 1:2] * (
+                cn[:, None, 1] + d[:, 1]
+            )
+            plane = plane / pl[:, 2:3]
+            h = np.where(h > plane + EDGE_TOL, h, -np.inf)
+        gap = np.array(gap, dtype=float)
+        gap[near] = (cn[:, None, 2] - h - cap).min(axis=-1)
+    return np.asarray(np.where(np.isnan(gap), -np.inf, gap))
+
+
+def disc_residual(ground: Terrain, points: Any, radius: float) -> np.ndarray:
+    """Largest residual [m] of the plane fitted to the heights sampled in discs.
+
+    Least squares ``h ≈ a + b·dx + c·dy`` over :func:`disc_offsets` around each point
+    (..., 2|3) [m]; a disc straddling a height discontinuity leaves a residual of the order
+    of the jump, a plane or a gently curved ground ~0 (∞ where the ground is undefined).
+    """
+    p = np.asarray(points, dtype=float)
+    d = disc_offsets(radius)
+    A = np.column_stack([np.ones(len(d)), d])
+    proj = np.eye(len(d)) - A @ np.linalg.pinv(A)  # residual operator
+    h = ground(p[..., None, 0] + d[:, 0], p[..., None, 1] + d[:, 1])
+    res = np.abs(np.einsum("st,...t->...s", proj, h)).max(axis=-1)
+    return np.asarray(np.where(np.isnan(res), np.inf, res))
+
+
+def off_edges(
+    ground: Terrain, points: Any, direction: Any, radius: float, reach: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Footholds moved off terrain edges along a direction (the edge-aware foothold rule).
+
+    A point whose disc of ``radius`` is not flat (:func:`disc_residual` above
+    :data:`EDGE_TOL`; sampled on rings of ``radius / cos(π/16)``, so that an edge line inside
+    the disc crosses a sample) moves along the unit ``direction`` (its direction of travel) to the
+    nearest point, forward or backward, at a multiple of ``radius/64`` and at most ``reach``
+    away, whose disc is flat (a tie goes forward); points with no such place stay.
+
+    Args:
+        ground: The terrain.
+        points: (M, 2|3) footholds [m].
+        direction: (M, 2) horizontal unit directions of travel.
+        radius: Disc radius [m] (the foot radius plus a margin).
+        reach: Largest move [m].
+
+    Returns:
+        ``(xy, shift)``: (M, 2) the footholds and (M,) the signed move along ``direction`` [m].
+
+    """
+    p = np.asarray(points, dtype=float)[:, :2]
+    u = np.asarray(direction, dtype=float)
+    shift = np.zeros(len(p))
+    if ground.relief == 0.0:  # level ground: no edge
+        return p.copy(), shift
+    step = radius / 64.0
+    radius = radius / math.cos(math.pi / ANGLES)  # the sampled rings circumscribe the disc
+    bad = np.flatnonzero(disc_residual(ground, p, radius) > EDGE_TOL)
+    if len(bad) and radius > 0.0:
+        k = np.arange(1, int(np.ceil(reach / step)) + 1)
+        ks = np.stack([k, -k], axis=1).reshape(-1) * step  # +1, −1, +2, −2, ... (forward first)
+        cand = p[bad, None, :] + ks[None, :, None] * u[bad, None, :]
+        ok = disc_residual(ground, cand, radius) <= EDGE_TOL
+        found = ok.any(axis=1)
+        first = np.argmax(ok, axis=1)
+        shift[bad] = np.where(found, ks[first], 0.0)
+    return p + shift[:, None] * u, shift
+
+
+#: The swing raise's ramps: fraction of the swing over which it rises (and falls).
+RAMP = 0.25
+
+#: The swing raise is sized on the samples where its profile is at least this.
+RAISE_FROM = 0.05
+
+
+def raise_profile(s: Any) -> np.ndarray:
+    """The swing raise's shape at ``s ∈ [0, 1]``: a plateau with quintic ramps, C².
+
+    ``q(s/a)`` for ``s < a``, 1 on ``[a, 1 − a]``, ``q((1 − s)/a)`` beyond (``a`` =
+    :data:`RAMP`, ``q(u) = 10u³ − 15u⁴ + 6u⁵``): zero velocity and acceleration at lift-off
+    and touch-down and at the joins, and up to ``q(0.4) = 0.32`` already at s = 0.1 (the
+    lift ``64 s³(1 − s)³`` is 0.05 there): it clears a rise close to the lift-off.
+    """
+    u = np.clip(
+        np.minimum(np.asarray(s, dtype=float), 1.0 - np.asarray(s, dtype=float)) / RAMP, 0, 1
+    )
+    return np.asarray(u**3 * (10.0 - 15.0 * u + 6.0 * u * u))
+
+
+def swing_raise(
+    ground: Terrain,
+    start: np.ndarray,
+    end: np.ndarray,
+    height: float,
+    radius: float,
+    margin: float,
+    samples: int = 48,
+) -> np.ndarray:
+    """The extra height [m] each swing needs to clear the terrain (0 where it passes no edge).
+
+    A swing's sphere centre (radius r) goes from ``start`` to ``end`` (M, 3) as
+    ``c(s) = start + (end − start)·b(s) + height·ℓ(s)·ẑ`` (:func:`~.walk.swing_profile`'s
+    b, ℓ) on ``samples + 1`` values of s. A swing whose path passes over a terrain edge (a disc
+    of radius ``r + margin`` around a point of its path is not flat, :func:`disc_residual`)
+    is raised by ``ΔH·p(s)`` (p = :func:`raise_profile`) with the smallest ΔH ≥ 0 for which
+    the sphere clears the terrain (:func:`sphere_gap`) by ``margin·p(s)`` where its path is
+    by the edge (the disc above is not flat) and by 0 elsewhere:
+    ``ΔH = max(0, maxₛ (m(s) − gap(s)/p(s)))`` (m = margin or 0) over the samples, at
+    most ``height`` (a swing at most doubles its lift: a taller rise needs a higher step,
+    and the clearance check says so).
+    Samples with ``p(s) <`` :data:`RAISE_FROM` (next to the
+    contacts, where no raise helps) are left to the footholds and to the clearance check.
+    """
+    c0, c1 = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    s = np.linspace(0.0, 1.0, samples + 1)
+    b = s**3 * (10.0 - 15.0 * s + 6.0 * s * s)
+    lift = 64.0 * (s * (1.0 - s)) ** 3
+    path = c0[:, None] + (c1 - c0)[:, None] * b[:, None] + (height * lift)[:, None] * [0, 0, 1]
+    out = np.zeros(len(c0))
+    if ground.relief == 0.0:  # level ground: no edge
+        return out
+    near = disc_residual(ground, path, radius + margin) > EDGE_TOL  # (M, S+1) by an edge
+    edge = near.any(axis=1)
+    edge &= np.isfinite(c0[:, 2]) & np.isfinite(c1[:, 2])
+    if edge.any():
+        p = raise_profile(s)
+        inside = p >= RAISE_FROM
+        gap = sphere_gap(ground, path[edge][:, inside], radius)
+        need = (np.where(near[edge][:, inside], margin, 0.0) - gap / p[inside]).max(axis=1)
+        out[edge] = np.clip(need, 0.0, height)
+    return out

@@ -29,12 +29,15 @@
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
   rates and accelerations by second-order finite differences.
+* **Terrain edges**: a touch-down whose disc of radius r + ``FOOTHOLD_MARGIN`` is not flat
+  moves along its travel to the nearest flat one (:func:`.terrain.off_edges`); a swing over an
+  edge is raised by ΔH·p(s) (:func:`.terrain.swing_raise`; ΔH ≤ step_height).
 * **Checks** at every sample: stance slip (the contact point's material point, by forward
   kinematics), static stability margin (:mod:`.stability`; a margin within
   ``MARGIN_TOL`` × the robot's size of zero is not a failure; patterns with
   ``statically_stable=False`` report it but never fail on it), joint limit margin, joint speed
   against the URDF's velocity limits (and acceleration against an optional limit), IK status,
-  clearance between neighbouring legs (surface gap of the links).
+  clearance between neighbouring legs; foot spheres and leg links against the terrain.
 """
 
 from __future__ import annotations
@@ -55,14 +58,15 @@ from .paths import (
 from .robot import GaitError, WholeBody, as_whole_body
 from .stability import (
     accel_limit_of,
-    check_swing_clearance,
+    leg_terrain_clearance,
     periodic_spline,
     raise_checks,
     segment_clearance,
     support_margin,
+    terrain_clearance,
 )
 from .tables import PhaseTable, phase_table
-from .terrain import Terrain
+from .terrain import Terrain, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
 
 __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
@@ -73,6 +77,12 @@ DEFAULT_STRIDE = 0.05
 #: Rounding tolerance of the checks, relative to the robot's size (the largest mount-to-centre
 #: distance plus the foot reach) [m/m]: a margin above ``−MARGIN_TOL·size`` is not a failure.
 MARGIN_TOL = 1e-9
+
+#: Footholds keep a flat disc of radius ``foot_radius`` + this [m] (terrain.off_edges).
+FOOTHOLD_MARGIN = 0.007
+
+#: Swings over an edge clear the terrain by this [m] (terrain.swing_raise).
+SWING_MARGIN = 0.005
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
@@ -180,6 +190,10 @@ class GaitRun:
         robot: The whole-robot model that walked (for viewers and simulators).
         normals: (N, L, 3) the ground's unit normal at each foot's current (stance) or next
             (swing) contact; the contact point is ``feet − foot_radius · normals``.
+        foot_gap: (N, L) how far each foot sphere clears the terrain [m] (sampled,
+            :func:`.stability.terrain_clearance`; 0 in stance, negative: into it).
+        leg_gap: (N, L) how far each leg's links clear the terrain above its foot's ground
+            [m] (:func:`.stability.leg_terrain_clearance`).
 
     """
 
@@ -209,6 +223,8 @@ class GaitRun:
     accel_limit: np.ndarray = field(default_factory=lambda: np.zeros(0))
     robot: WholeBody | None = field(default=None, repr=False)
     normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    foot_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    leg_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def min_margin(self) -> float:
@@ -276,6 +292,8 @@ class GaitRun:
             and self.min_clearance > 0
             and self.max_slip <= 1e-9
             and self.speed_ok
+            and (not self.foot_gap.size or self.foot_gap.min() >= -1e-9)
+            and (not self.leg_gap.size or self.leg_gap.min() >= -1e-9)
         )
 
     def pinocchio_q(self) -> np.ndarray:
@@ -450,7 +468,8 @@ def walk(
     Raises:
         ParameterError: A bad parameter (named, with what is allowed).
         GaitError: (``strict``) a check fails: ``"terrain"`` (a foot off the terrain),
-            ``"terrain clearance"`` (a swing foot below the ground: step too low),
+            ``"terrain clearance"`` (a foot sphere into the ground: step too low),
+            ``"leg terrain clearance"`` (a link into the terrain),
             ``"reach"`` (stride too long, step too high...), ``"joint limit"``,
             ``"leg clearance"``, ``"stability margin"`` (statically stable patterns only),
             ``"joint speed"``, ``"joint acceleration"``; the message names the leg or joint,
@@ -522,17 +541,45 @@ def walk(
     swing = s < 1.0 - 1e-9  # a touch-down instant is stance, whatever the rounding of t
     support = ~swing
     t_td = t_lo + tsw
+    # one contact per swing (m, leg): a table over the swings the run touches, m0 - 1 first
+    m0 = int(m.min()) - 1
+    mm = np.arange(m0, int(m.max()) + 1, dtype=float)[:, None]
+    td_tab = (mm + beta - offs[None, :]) * T + tsw  # (M, L) touch-down times
+    legs = np.arange(nl)[None, :]
+    row = (m - m0).astype(np.int64)
+    gb = np.stack([vx - w * nb[:, 1], vy + w * nb[:, 0]], axis=1)  # feet's travel, body frame
+    gb[np.hypot(gb[:, 0], gb[:, 1]) == 0.0] = (1.0, 0.0)
+    gb /= np.hypot(gb[:, 0], gb[:, 1])[:, None]
 
-    def contact(t_touch: np.ndarray) -> np.ndarray:
+    def contact(t_touch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         pose = se2_pose(t_touch + 0.5 * beta * T, vel)  # body at mid-stance
         c, sn = np.cos(pose[..., 2]), np.sin(pose[..., 2])
         x = pose[..., 0] + c * nb[:, 0] - sn * nb[:, 1]
         y = pose[..., 1] + sn * nb[:, 0] + c * nb[:, 1]
-        return np.stack([x, y, ground(x, y)], axis=-1)
+        u = np.stack([c * gb[:, 0] - sn * gb[:, 1], sn * gb[:, 0] + c * gb[:, 1]], axis=-1)
+        return np.stack([x, y, ground(x, y)], axis=-1), u
 
-    nxt = contact(t_td)  # TD_m: the contact after swing m
-    prev = contact(t_td - T)  # TD_{m-1}: the contact before it
-    for pts, when in ((nxt, t_td), (prev, t_td - T)):
+    tab, along = contact(td_tab)
+    moved = np.zeros(tab.shape[:2])
+    if FOOTHOLD_MARGIN >= 0 and np.isfinite(tab[..., 2]).all():
+        xy, moved_flat = off_edges(
+            ground,
+            tab.reshape(-1, 3),
+            along.reshape(-1, 2),
+            rad + FOOTHOLD_MARGIN,
+            4.0 * (rad + FOOTHOLD_MARGIN),
+        )
+        moved = moved_flat.reshape(moved.shape)
+        if moved.any():
+            tab = np.concatenate([xy, ground(xy[:, 0], xy[:, 1])[:, None]], axis=1).reshape(
+                tab.shape
+            )
+    nxt = tab[row, legs]  # TD_m: the contact after swing m
+    prev = tab[row - 1, legs]  # TD_{m-1}: the contact before it
+    used = np.zeros(tab.shape[:2], dtype=bool)
+    used[row, legs] = True
+    used[(row - 1)[swing], np.broadcast_to(legs, row.shape)[swing]] = True
+    for pts, when in ((nxt, t_td), (prev, td_tab[row - 1, legs])):
         bad = ~np.isfinite(pts[..., 2]) & (swing | (pts is nxt))
         if bad.any():
             i, leg = np.argwhere(bad)[0]
@@ -550,11 +597,26 @@ def walk(
             )
     sc = np.clip(s, 0.0, 1.0)
     blend, lift = swing_profile(sc)
-    n_nxt = terrain_normals(ground, nxt[..., 0], nxt[..., 1])
-    n_prev = terrain_normals(ground, prev[..., 0], prev[..., 1]) if rad else n_nxt
-    c_nxt, c_prev = nxt + rad * n_nxt, prev + rad * n_prev  # sphere centres on the contacts
+    n_tab = terrain_normals(ground, tab[..., 0], tab[..., 1])
+    c_tab = tab + rad * n_tab  # sphere centres on the contacts
+    n_nxt = n_tab[row, legs]
+    c_nxt, c_prev = c_tab[row, legs], c_tab[row - 1, legs]
     plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * blend[..., None], c_nxt)
     plan[..., 2] += np.where(swing, H * lift, 0.0)
+    # swings over an edge: raised to clear it (terrain.swing_raise); sized again from the
+    # lift-off's rolling once the IK knows it (a swing's height does not change its stance)
+    lift2 = raise_profile(sc)
+    ok_tab = bool(np.isfinite(tab[..., 2]).all())
+
+    def raised(lo: np.ndarray) -> np.ndarray:
+        out = np.zeros(tab.shape[:2])
+        if ok_tab:
+            c0, c1 = (c_tab[:-1] + lo[1:]).reshape(-1, 3), c_tab[1:].reshape(-1, 3)
+            out[1:] = swing_raise(ground, c0, c1, H, rad, SWING_MARGIN).reshape(-1, nl)
+        return out
+
+    extra = raised(np.zeros(tab.shape))
+    plan[..., 2] += np.where(swing, extra[row, legs] * lift2, 0.0)
     gz = np.where(swing, prev[..., 2] + (nxt[..., 2] - prev[..., 2]) * blend, nxt[..., 2])
     # --- body
     pose = se2_pose(t, vel)
@@ -567,10 +629,20 @@ def walk(
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
     if gain > 0.0:
         base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
-    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(
-        wb, base, plan, support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES
-    )
-    check_swing_clearance(ground, feet, swing, rad, t, names, H)
+    args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
+    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
+    if extra.any():
+        lo = np.zeros(tab.shape)  # each swing's lift-off rolling: feet − plan = lo·(1 − b)
+        sw = swing & (blend < 0.5)
+        lo[row[sw], np.broadcast_to(legs, sw.shape)[sw]] = (
+            ((feet - plan)[sw]) / (1.0 - blend[sw])[:, None]
+        )
+        more = np.maximum(raised(lo) - extra, 0.0)
+        if more.any():
+            extra += more
+            plan[..., 2] += np.where(swing, more[row, legs] * lift2, 0.0)
+            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
+    foot_gap = terrain_clearance(ground, feet, swing, rad, t, names, H, strict)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     if T_last is None:
@@ -586,6 +658,11 @@ def walk(
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
+    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
+    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
+    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
+    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
+    leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, rad, plane, t, names, strict)
     if n > 3:
         qdot = np.gradient(q, t, axis=0, edge_order=2)
         qddot = second_difference(q, t)
@@ -627,9 +704,13 @@ def walk(
         "rolling_passes": passes,
         "rolling_residual": residual,
         "margin_tol": tol,
+        "footholds_moved": int(np.count_nonzero(used & (moved != 0))),
+        "foothold_shift_max": float(np.abs(np.where(used, moved, 0.0)).max()),
+        "swings_raised": int(np.count_nonzero(used[1:] & (extra[1:] > 0))),
+        "swing_raise_max": float(np.where(used, extra, 0.0).max()),
     }
     ik_ok = np.asarray(ik.ok)
-    read_only(ik_ok, vlim, acc_lim, n_nxt)
+    read_only(ik_ok, vlim, acc_lim, n_nxt, foot_gap, leg_gap)
     return GaitRun(
         t=t,
         base_poses=base,
@@ -657,6 +738,8 @@ def walk(
         accel_limit=acc_lim,
         robot=wb,
         normals=n_nxt,
+        foot_gap=foot_gap,
+        leg_gap=leg_gap,
     )
 
 
