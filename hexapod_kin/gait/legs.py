@@ -469,6 +469,17 @@ def finite_or_inf(v: Any) -> np.ndarray:
 def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
 
+    The rule is sequential: at each sample with a valid slot, the slot whose wrapped
+    difference to the previous value has the smallest sum of absolute values
+    (``Σ|wrap(q_k − q_prev)|``, the first on a tie) is taken and continued,
+    ``q = q_prev + wrap(q_k − q_prev)``; samples without a valid slot keep ``q_prev``. It is
+    evaluated for all samples at once: the choice at sample i only depends on which slot was
+    chosen at the last sample with one (the wrap is 2π-periodic), so each sample is a map
+    ``F_i`` from that slot to its own (a K × K table of distances), the chosen slots are the
+    prefix compositions ``F_i ∘ … ∘ F_0`` (by doubling, log₂ N rounds), and the unwrapped
+    value is the candidate plus 2π times an integer count of turns accumulated along the
+    samples (so no rounding accumulates).
+
     Args:
         qk: (G, N, K, m) candidate solutions of G legs at N samples.
         valid: (G, N, K) which candidates exist.
@@ -479,25 +490,55 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
         slot is valid) and (G, N) whether a slot was found.
 
     """
-    g, n, _, m = qk.shape
-    out = np.empty((n, g, m))
-    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
-    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
-    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
-    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
-    prev = np.array(q0, dtype=float)
-    rows = np.arange(g)
-    step = np.empty(cand.shape[1:])
+    g, n, k, m = qk.shape
+    usable = np.asarray(valid, dtype=bool)
+    ok = np.asarray(usable.any(axis=2))  # (G, N)
+    q0 = np.asarray(q0, dtype=float)
     two_pi = 2.0 * np.pi
-    for i in range(n):
-        np.subtract(cand[i], prev[:, None, :], out=step)
-        step += np.pi
-        np.mod(step, two_pi, out=step)
-        step -= np.pi
-        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
-        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
-        out[i] = prev
-    out = np.moveaxis(out, 0, 1)
+    rows = np.arange(g)[:, None]
+    # the last sample with a slot at or before each sample (−1: none yet, q0 is the reference)
+    last = np.maximum.accumulate(np.where(ok, np.arange(n), -1), axis=1)
+    ref = np.empty_like(last)
+    ref[:, 0] = -1
+    ref[:, 1:] = last[:, :-1]
+    # candidates per joint, with q0 as a sample −1 in every slot; missing slots at 0
+    cand = np.empty((m, g, n + 1, k))
+    cand[:, :, 0] = q0.T[:, :, None]
+    cand[:, :, 1:] = np.moveaxis(qk, 3, 0)
+    np.copyto(cand[:, :, 1:], 0.0, where=~usable[None])
+    prv = cand[:, rows, ref + 1]  # (m, G, N, K): the reference sample's slots
+    # d[g, i, a, b] = Σ_j |wrap(q_b(i) − q_a(ref i))|
+    d = np.zeros((g, n, k, k))
+    x = np.empty((g, n, k, k))
+    y = np.empty((g, n, k, k))
+    for j in range(m):
+        np.subtract(cand[j, :, 1:, None, :], prv[j][:, :, :, None], out=x)
+        np.multiply(x, 1.0 / two_pi, out=y)
+        np.rint(y, out=y)
+        y *= two_pi
+        x -= y
+        np.abs(x, out=x)
+        d += x
+    np.copyto(d, np.inf, where=~usable[:, :, None, :])
+    F = d.argmin(axis=3)  # (G, N, K): slot at i given the reference's slot
+    F[~ok] = np.arange(k)  # no slot: the reference's stays
+    off = (np.arange(g * n) * k).reshape(g, n, 1)
+    span = 1
+    while span < n:  # F_i <- F_i ∘ F_{i − span}
+        nxt = F.copy()
+        nxt[:, span:] = np.take(F.ravel(), F[:, :-span] + off[:, span:])
+        F = nxt
+        span *= 2
+    slot = F[:, :, 0]  # q0 stands in every slot of sample −1
+    chosen = np.take_along_axis(cand[:, :, 1:], slot[None, :, :, None], axis=3)[..., 0]
+    chosen = np.moveaxis(chosen, 0, 2)  # (G, N, m)
+    # unwrapped: q_i = c_i + 2π M_i, M_i = M_ref + round((c_ref + wrap(c_i − c_ref) − c_i) / 2π)
+    c_ref = np.where((ref >= 0)[..., None], chosen[rows, np.maximum(ref, 0)], q0[:, None, :])
+    step = np.mod(chosen - c_ref + np.pi, two_pi) - np.pi
+    turns = np.where(ok[..., None], np.rint((c_ref + step - chosen) / two_pi), 0.0)
+    turns = np.cumsum(turns, axis=1)
+    at = np.maximum(last, 0)
+    out = np.where((last >= 0)[..., None], chosen[rows, at] + two_pi * turns, q0[:, None, :])
     return out, ok
 
 
