@@ -17,6 +17,7 @@ import numpy as np
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 from .robot import BodyIK
+from .tree import _mv
 
 __all__ = [
     "FootStep",
@@ -240,21 +241,21 @@ def rotation_increments(rot: np.ndarray) -> np.ndarray:
     ``θ_k`` is the world-frame rotation from sample k to k + 1 (``ω dt`` for a constant angular
     velocity ω): axis-angle from the trace and the skew part (angles below π).
     """
-    dR = np.matmul(rot[1:], np.swapaxes(rot[:-1], -1, -2))
-    cos = np.clip((np.trace(dR, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    # R_{k+1} R_kᵀ = Σ_j b_j a_jᵀ (columns a_j of R_k, b_j of R_{k+1}): trace Σ a_j·b_j,
+    # skew part (vee) Σ a_j × b_j
+    R0, R1 = rot[:-1], rot[1:]
+    tr = np.einsum("...ij,...ij->...", R0, R1)
+    cos = np.clip((tr - 1.0) / 2.0, -1.0, 1.0)
     ang = np.arccos(cos)
     sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
     small = ang < 1e-6
     scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
-    vee = np.stack(
-        [
-            dR[..., 2, 1] - dR[..., 1, 2],
-            dR[..., 0, 2] - dR[..., 2, 0],
-            dR[..., 1, 0] - dR[..., 0, 1],
-        ],
-        axis=-1,
-    )
-    return np.asarray(vee * scale[..., None])
+    a, b = np.swapaxes(R0, -1, -2), np.swapaxes(R1, -1, -2)  # rows: the columns
+    vee = _cross(a[..., 0, :], b[..., 0, :])
+    vee += _cross(a[..., 1, :], b[..., 1, :])
+    vee += _cross(a[..., 2, :], b[..., 2, :])
+    vee *= scale[..., None]
+    return vee
 
 
 def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.ndarray:
@@ -279,12 +280,8 @@ def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.n
     out = np.zeros(sup.shape + (3,))
     if radius == 0.0 or len(sup) < 2:
         return out
-    inc = np.cross(rotation_increments(R), radius * n[:-1])  # (N-1, L, 3)
-    inc *= (sup[:-1] & sup[1:])[..., None]
-    cum = np.zeros_like(out)
-    np.cumsum(inc, axis=0, out=cum[1:])
-    ref = cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
-    return np.asarray(np.where(sup[..., None], cum - ref, 0.0))
+    inc = _cross(rotation_increments(R), radius * n[:-1] * (sup[:-1] & sup[1:])[..., None])
+    return _rolled(inc, sup, stance_start_index(sup))
 
 
 def stance_start_index(support: np.ndarray) -> np.ndarray:
@@ -316,6 +313,9 @@ class _LegStructure:
 
 
 _STRUCTURES: dict[int, tuple[Any, _LegStructure]] = {}
+
+#: Fixed-point sweeps of the Newton step's coupling between samples (:func:`rolling_ik`).
+_SWEEPS = 2
 
 
 def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
@@ -353,33 +353,23 @@ def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
     return out
 
 
-def _leg_jacobians(
-    st: _LegStructure,
-    T: np.ndarray,
-    centres: np.ndarray,
-    support: np.ndarray,
-    normals: np.ndarray,
-    rad: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per leg, ``(J, K)`` (N, L, 3, M): the rolled centre's Jacobian and the rolling part.
+def _world_axes(
+    st: _LegStructure, T: np.ndarray, centres: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per leg ``(J_p, J_ω, a)``: (N, L, 3, M) position and angular Jacobians of the centres.
 
     ``J_p`` has columns ``a × (c − o)`` for revolute joints and ``a`` for prismatic ones (a
-    the world axis, o the joint origin), ``J_ω`` columns a (revolute); in stance the centre
-    also rolls, ``δD = −r [n]ₓ J_ω δq``, so the Newton matrix is ``J = J_p + K`` with
-    ``K = r [n]ₓ J_ω`` (0 in swing).
+    the world axis, o the joint origin), ``J_ω`` columns a (revolute) and 0 (prismatic);
+    padding columns are 0.
     """
     jj = np.maximum(st.joints, 0)  # (L, M)
-    valid = (st.joints >= 0)[None, :, :, None]  # (1, L, M, 1)
-    Tj = T[:, jj]  # (N, L, M, 4, 4)
-    a = np.matmul(Tj[..., :3, :3], st.axes[jj][..., None])[..., 0]  # world axes (N, L, M, 3)
-    d = centres[:, :, None, :] - Tj[..., :3, 3]
+    valid = (st.joints >= 0)[None, :, :, None]
+    ax = _mv(T[..., :3, :3], st.axes)[:, jj]  # world axes (N, L, M, 3)
+    d = centres[:, :, None, :] - T[..., :3, 3][:, jj]
     rev = st.revolute[jj][None, :, :, None]
-    lin = np.where(rev, _cross(a, d), a) * valid
-    ang = np.where(rev, a, 0.0) * valid
-    roll = _cross(np.broadcast_to(normals[:, :, None, :], ang.shape), ang)
-    roll *= (rad * support)[:, :, None, None]
-    K = np.swapaxes(roll, -1, -2)
-    return np.swapaxes(lin, -1, -2) + K, K
+    lin = np.where(rev, _cross(ax, d), ax) * valid
+    ang = ax * (rev & valid)
+    return np.swapaxes(lin, -1, -2), np.swapaxes(ang, -1, -2), ang
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -391,11 +381,20 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _min_norm(J: np.ndarray) -> np.ndarray:
-    """``J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹`` per leg and sample, (N, L, M, 3), λ = 1e-14 m²."""
-    JJ = J @ np.swapaxes(J, -1, -2)
-    JJ += 1e-14 * np.eye(3)
-    return np.asarray(np.swapaxes(J, -1, -2) @ np.linalg.inv(JJ))
+def _inv_sym3(A: np.ndarray) -> np.ndarray:
+    """Inverses (..., 3, 3) of stacked symmetric positive-definite 3×3 matrices (adjugate)."""
+    a, b, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
+    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
+    out = np.empty(A.shape)
+    out[..., 0, 0] = d * f - e * e
+    out[..., 0, 1] = out[..., 1, 0] = c * e - b * f
+    out[..., 0, 2] = out[..., 2, 0] = b * e - c * d
+    out[..., 1, 1] = a * f - c * c
+    out[..., 1, 2] = out[..., 2, 1] = b * c - a * e
+    out[..., 2, 2] = a * d - b * b
+    det = a * out[..., 0, 0] + b * out[..., 0, 1] + c * out[..., 0, 2]
+    out /= det[..., None, None]
+    return out
 
 
 def _scatter(st: _LegStructure, dq_leg: np.ndarray, nq: int) -> np.ndarray:
@@ -405,6 +404,15 @@ def _scatter(st: _LegStructure, dq_leg: np.ndarray, nq: int) -> np.ndarray:
         ok = cols >= 0
         out[:, cols[ok]] += dq_leg[:, ok, m]
     return out
+
+
+def _rolled(inc: np.ndarray, sup: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``Σ_{k=s}^{i−1} inc_k`` over each stance (0 in swing) from increments (N − 1, L, 3)."""
+    cum = np.zeros((len(sup),) + inc.shape[1:])
+    np.cumsum(inc, axis=0, out=cum[1:])
+    cum -= cum[start, np.arange(sup.shape[1])[None, :]]
+    cum *= sup[..., None]
+    return cum
 
 
 def rolling_ik(
@@ -427,37 +435,72 @@ def rolling_ik(
     q: the rolling ``D(q)`` (:func:`rolling_offsets` of the rotations of each foot's link,
     whose increments are the foot frame's), the targets ``plan + D`` (stance) or
     ``plan + D_lift-off·(1 − blend)`` (swing), the error ``e = targets − centres(q)``, and a
-    Newton step (:func:`_leg_jacobians`, rolling included) — until
-    ``max|e| ≤ tol`` [m] or ``max_passes``. ``e`` is the planned contact points' slip (up to
-    rounding). Returns (feet, q, ik, passes, residual [m], joint poses of q or None, D: the
-    rolling of q's own foot rotations, by FK).
+    Newton step — until ``max|e| ≤ tol`` [m] or ``max_passes``. ``e`` is the planned contact
+    points' slip (up to rounding). Returns (feet, q, ik, passes, residual [m], joint poses of
+    q or None, D: the rolling of q's own foot rotations, by FK).
+
+    The Newton step is the exact linearisation of the whole stance: a foot rotation
+    ``δφ_k = J_ω δq_k`` (world frame) changes the increment ``θ_k = log(R_{k+1} R_kᵀ)`` by
+    ``δθ_k = J_l⁻¹(θ_k) δφ_{k+1} − J_r⁻¹(θ_k) δφ_k``, i.e.
+    ``δφ_{k+1} − δφ_k − ½ θ_k × (δφ_{k+1} + δφ_k) + β θ_k × (θ_k × (δφ_{k+1} − δφ_k))``,
+    ``β = 1/θ² − (1 + cos θ)/(2θ sin θ)`` (SO(3)'s left/right Jacobians), so that
+    ``δD_i = Σ_{k=s}^{i−1} δθ_k × (r n)``. Sample i's own term ``δφ_i × (r n) = −K_i δq_i``
+    (``K = r [n]ₓ J_ω``) goes into the per-sample matrix ``J = J_p + K``; the rest (earlier
+    samples, through the sum) is small (the increments are ~ω dt) and is solved for by
+    fixed-point sweeps ``J δq = e + δD(δq) + K δq`` (each sweep gains a factor ~θ, a few
+    hundred here; :data:`_SWEEPS`), so the Newton iteration converges quadratically. Swing
+    targets follow the lift-off rolling ``D_ℓ + δD_ℓ``.
     """
     ik = wb.body_ik(base, plan, q_prev=q0, times=t, strict=False)
     q = np.array(ik.q)
     if rad == 0.0:
         return plan, q, ik, 1, 0.0, None, np.zeros(plan.shape)
     st = _leg_structure(wb, q[0], base[0])
+    sup = np.asarray(support, dtype=bool)
+    start = stance_start_index(sup)
+    both = (sup[:-1] & sup[1:])[..., None]
+    rn = rad * np.asarray(normals, dtype=float)
+    rn_inc = rn[:-1] * both  # the increments' lever r n, 0 outside a stance
+    keep = np.where(swing, 1.0 - blend, 0.0)[..., None]  # swing: share of the lift-off rolling
+    legs = np.arange(sup.shape[1])[None, :]
+    last = np.maximum.accumulate(np.where(sup, np.arange(len(sup))[:, None], -1), axis=0)
+    last_at, seen = np.maximum(last, 0), (last >= 0)[..., None]
     passes, residual = 1, math.inf
     while True:
         T = wb.joint_poses(q, base)
-        centres = wb.points_of(T)[:, :, -1]
-        D = rolling_offsets(T[:, st.link, :3, :3], support, normals, rad)
-        lo = last_stance_value(D, support)
-        feet = plan + np.where(swing[..., None], lo * (1.0 - blend[..., None]), D)
+        centres = wb.feet_of(T)
+        theta = rotation_increments(T[:, st.link, :3, :3]) if len(sup) > 1 else None
+        D = np.zeros(plan.shape) if theta is None else _rolled(_cross(theta, rn_inc), sup, start)
+        lo = D[last_at, legs] * seen  # the rolling at each leg's latest stance sample
+        feet = plan + np.where(swing[..., None], lo * keep, D)
         err = feet - centres
         residual = float(np.abs(err).max())
-        if residual <= tol or passes >= max_passes:
+        if residual <= tol or passes >= max_passes or theta is None:
             break
-        # Newton: stance samples first; the swing targets then follow the predicted
-        # lift-off rolling D + δD (δD = −K δq), and the swing samples are solved again
-        J, K = _leg_jacobians(st, T, centres, support, normals, rad)
-        pinv = _min_norm(J)
-        dq = np.matmul(pinv, err[..., None])
-        d_pred = D - np.matmul(K, dq)[..., 0]
-        lo = last_stance_value(d_pred, support)
-        err_sw = plan + lo * (1.0 - blend[..., None]) - centres
-        dq_sw = np.matmul(pinv, err_sw[..., None])
-        dq = np.asarray(np.where(swing[..., None, None], dq_sw, dq))[..., 0]
+        Jp, Jw, _ax = _world_axes(st, T, centres)
+        K = np.swapaxes(_cross(rn[:, :, None, :], np.swapaxes(Jw, -1, -2)), -1, -2)
+        K *= sup[:, :, None, None]
+        J = Jp + K
+        Jt = np.swapaxes(J, -1, -2)
+        A_inv = _inv_sym3(J @ Jt + 1e-14 * np.eye(3))  # J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹
+        ang = np.sqrt(np.einsum("...i,...i->...", theta, theta))[..., None]
+        small = ang < 1e-3
+        a_ = np.where(small, 1.0, ang)
+        exact = 1.0 / a_**2 - (1.0 + np.cos(a_)) / (2.0 * a_ * np.sin(a_))
+        beta = np.where(small, 1.0 / 12.0 + ang * ang / 720.0, exact)
+        rhs = err
+        for sweep in range(_SWEEPS + 1):
+            dq = _mv(Jt, _mv(A_inv, rhs))
+            if sweep == _SWEEPS:
+                break
+            phi = _mv(Jw, dq) * sup[..., None]  # foot-link rotations δφ (stance)
+            dif = phi[1:] - phi[:-1]
+            d_theta = dif - 0.5 * _cross(theta, phi[1:] + phi[:-1])
+            d_theta += beta * _cross(theta, _cross(theta, dif))
+            dD = _rolled(_cross(d_theta, rn_inc), sup, start)
+            own = _cross(phi, rn)  # δφ_i × r n, in J through K
+            lo = (D + dD)[last_at, legs] * seen
+            rhs = np.where(swing[..., None], plan + lo * keep - centres, err + dD - own)
         q = q + _scatter(st, dq, wb.nq)
         passes += 1
     margin = np.minimum(q - wb.lower, wb.upper - q)

@@ -34,7 +34,7 @@ from .legs import (
     pick_branch,
     sphere_radius,
 )
-from .tree import Tree, solve_legs, tree_poses
+from .tree import Tree, _mv, solve_legs, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
@@ -189,10 +189,8 @@ class WholeBody:
 
     def feet_of(self, T: np.ndarray) -> np.ndarray:
         """World foot positions (N, L, 3) from joint poses ``T``."""
-        Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
-        return np.asarray(
-            np.matmul(Ta[..., :3, :3], self._foot[None, :, :3, 3, None])[..., 0] + Ta[..., :3, 3]
-        )
+        j = self._foot_joint
+        return _mv(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
 
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""

@@ -22,6 +22,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -50,6 +51,45 @@ class Tree:
     axes: np.ndarray
     prismatic: np.ndarray
 
+    @cached_property
+    def levels(self) -> tuple[tuple[np.ndarray, np.ndarray | None], ...]:
+        """The joints by depth: per level ``(joints, their parents)`` (parents ``None``: the body).
+
+        Pinocchio numbers a parent before its children, so one pass gives every depth.
+        """
+        par = np.asarray(self.parents)
+        depth = np.zeros(len(par), dtype=int)
+        for j, p in enumerate(par):
+            depth[j] = 0 if p < 0 else depth[p] + 1
+        out = []
+        for d in range(int(depth.max()) + 1 if len(par) else 0):
+            idx = np.flatnonzero(depth == d)
+            out.append((idx, None if d == 0 else par[idx]))
+        return tuple(out)
+
+    @cached_property
+    def local_terms(self) -> tuple[np.ndarray, ...]:
+        """``(P_R, P_t, P_R[a]×, (P_R a) aᵀ, P_R a)`` per joint (n, 3, 3) / (n, 3).
+
+        With ``P`` the placement (rotation ``P_R``, translation ``P_t``) and ``a`` the axis:
+        ``P_R R(a, q) = cos q P_R + sin q P_R[a]× + (1 − cos q)(P_R a) aᵀ`` (Rodrigues), and a
+        prismatic joint's frame is at ``P_t + (P_R a) q``.
+        """
+        Pr = np.ascontiguousarray(self.placements[:, :3, :3])
+        a = np.asarray(self.axes, dtype=float)
+        skew = np.zeros(a.shape + (3,))
+        skew[:, 0, 1], skew[:, 0, 2] = -a[:, 2], a[:, 1]
+        skew[:, 1, 0], skew[:, 1, 2] = a[:, 2], -a[:, 0]
+        skew[:, 2, 0], skew[:, 2, 1] = -a[:, 1], a[:, 0]
+        Pa = np.einsum("nij,nj->ni", Pr, a)
+        return (
+            Pr,
+            np.ascontiguousarray(self.placements[:, :3, 3]),
+            Pr @ skew,
+            Pa[:, :, None] * a[:, None, :],
+            Pa,
+        )
+
 
 def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rotations (..., 3, 3) about unit ``axes`` (..., 3) by ``q`` (...) [rad] (Rodrigues)."""
@@ -69,33 +109,44 @@ def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
     return R
 
 
-def _local(P: np.ndarray, axis: np.ndarray, prismatic: Any, q: np.ndarray) -> np.ndarray:
-    """``P · M(q)`` (N, 4, 4) for one joint (placement P (..., 4, 4), axis (..., 3))."""
-    n = q.shape[0]
-    out = np.empty((n, 4, 4))
-    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
-    Pr = P[..., :3, :3]
-    if np.ndim(prismatic) == 0 and not prismatic:
-        out[:, :3, :3] = Pr @ axis_rotation(np.broadcast_to(axis, (n, 3)), q)
-        out[:, :3, 3] = P[..., :3, 3]
-        return out
-    pr = np.broadcast_to(np.asarray(prismatic, dtype=bool), (n,))
-    rot = axis_rotation(np.broadcast_to(axis, (n, 3)), np.where(pr, 0.0, q))
-    out[:, :3, :3] = Pr @ rot
-    shift = np.where(pr[:, None], np.broadcast_to(axis, (n, 3)) * q[:, None], 0.0)
-    out[:, :3, 3] = P[..., :3, 3] + (Pr @ shift[..., None])[..., 0]
-    return out
-
-
 def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
+    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``.
+
+    All joints' local transforms at once (:attr:`Tree.local_terms`), then one stacked
+    product per depth of the tree (:attr:`Tree.levels`).
+    """
     n, nj = q.shape
+    Pr, Pt, K1, K2, Pa = tree.local_terms
+    pris = np.asarray(tree.prismatic, dtype=bool)
+    any_p = bool(pris.any())
+    qr = np.where(pris, 0.0, q) if any_p else q
+    co = np.cos(qr)[..., None, None]
+    si = np.sin(qr)[..., None, None]
+    M = co * Pr
+    M += si * K1
+    M += (1.0 - co) * K2  # (N, n, 3, 3) local rotations
+    tl = Pt + np.where(pris[:, None], Pa * q[..., None], 0.0) if any_p else None
     out = np.empty((n, nj, 4, 4))
-    for j in range(nj):
-        local = _local(tree.placements[j], tree.axes[j], bool(tree.prismatic[j]), q[:, j])
-        par = int(tree.parents[j])
-        out[:, j] = (base if par < 0 else out[:, par]) @ local
+    out[:, :, 3, :3] = 0.0
+    out[:, :, 3, 3] = 1.0
+    rot, pos = out[..., :3, :3], out[..., :3, 3]  # views
+    for idx, par in tree.levels:
+        if par is None:
+            Rp, tp = base[:, None, :3, :3], base[:, None, :3, 3]
+        else:
+            Rp, tp = rot[:, par], pos[:, par]
+        rot[:, idx] = Rp @ M[:, idx]
+        pos[:, idx] = _mv(Rp, Pt[idx] if tl is None else tl[:, idx]) + tp
     return out
+
+
+def _mm3(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Stacked 3×3 matrix products (..., 3, 3) (broadcast sums: faster than matmul here)."""
+    return np.asarray(
+        A[..., :, 0, None] * B[..., None, 0, :]
+        + A[..., :, 1, None] * B[..., None, 1, :]
+        + A[..., :, 2, None] * B[..., None, 2, :]
+    )
 
 
 def _mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -76,7 +76,7 @@ MARGIN_TOL = 1e-9
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
-ROLLING_TOL = 1e-12
+ROLLING_TOL = 1e-13
 
 
 def _num(
