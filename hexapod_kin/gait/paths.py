@@ -17,7 +17,7 @@ import numpy as np
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 from .robot import BodyIK
-from .tree import _mv
+from .tree import poses_of
 
 __all__ = [
     "FootStep",
@@ -281,7 +281,11 @@ def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.n
     if radius == 0.0 or len(sup) < 2:
         return out
     inc = _cross(rotation_increments(R), radius * n[:-1] * (sup[:-1] & sup[1:])[..., None])
-    return _rolled(inc, sup, stance_start_index(sup))
+    cum = np.zeros_like(out)
+    np.cumsum(inc, axis=0, out=cum[1:])
+    cum -= cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
+    cum *= sup[..., None]
+    return cum
 
 
 def stance_start_index(support: np.ndarray) -> np.ndarray:
@@ -310,6 +314,7 @@ class _LegStructure:
     axes: np.ndarray  # (nq, 3) joint axis in the joint's frame
     revolute: np.ndarray  # (nq,) True: revolute, False: prismatic
     link: np.ndarray  # (L,) the joint whose frame carries the foot (the deepest of the leg)
+    foot: np.ndarray  # (L, 3) the foot in that joint's frame
 
 
 _STRUCTURES: dict[int, tuple[Any, _LegStructure]] = {}
@@ -347,29 +352,12 @@ def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
     for k, c in enumerate(cols):
         joints[k, : len(c)] = c
     link = np.array([c.max() if len(c) else 0 for c in cols])
-    out = _LegStructure(joints, axes, revolute, link)
+    Tl = T[0, link]
+    foot = np.einsum("lji,lj->li", Tl[:, :3, :3], feet[0] - Tl[:, :3, 3])
+    out = _LegStructure(joints, axes, revolute, link, foot)
     _STRUCTURES.clear()
     _STRUCTURES[id(wb)] = (wb, out)
     return out
-
-
-def _world_axes(
-    st: _LegStructure, T: np.ndarray, centres: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per leg ``(J_p, J_ω, a)``: (N, L, 3, M) position and angular Jacobians of the centres.
-
-    ``J_p`` has columns ``a × (c − o)`` for revolute joints and ``a`` for prismatic ones (a
-    the world axis, o the joint origin), ``J_ω`` columns a (revolute) and 0 (prismatic);
-    padding columns are 0.
-    """
-    jj = np.maximum(st.joints, 0)  # (L, M)
-    valid = (st.joints >= 0)[None, :, :, None]
-    ax = _mv(T[..., :3, :3], st.axes)[:, jj]  # world axes (N, L, M, 3)
-    d = centres[:, :, None, :] - T[..., :3, 3][:, jj]
-    rev = st.revolute[jj][None, :, :, None]
-    lin = np.where(rev, _cross(ax, d), ax) * valid
-    ang = ax * (rev & valid)
-    return np.swapaxes(lin, -1, -2), np.swapaxes(ang, -1, -2), ang
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -381,38 +369,47 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _inv_sym3(A: np.ndarray) -> np.ndarray:
-    """Inverses (..., 3, 3) of stacked symmetric positive-definite 3×3 matrices (adjugate)."""
-    a, b, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
-    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
-    out = np.empty(A.shape)
-    out[..., 0, 0] = d * f - e * e
-    out[..., 0, 1] = out[..., 1, 0] = c * e - b * f
-    out[..., 0, 2] = out[..., 2, 0] = b * e - c * d
-    out[..., 1, 1] = a * f - c * c
-    out[..., 1, 2] = out[..., 2, 1] = b * c - a * e
-    out[..., 2, 2] = a * d - b * b
-    det = a * out[..., 0, 0] + b * out[..., 0, 1] + c * out[..., 0, 2]
-    out /= det[..., None, None]
-    return out
+def _x(u: Any, v: Any) -> np.ndarray:
+    """``u × v`` of component-first vectors (3, ...)."""
+    return np.stack(
+        [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    )
 
 
-def _scatter(st: _LegStructure, dq_leg: np.ndarray, nq: int) -> np.ndarray:
-    out = np.zeros((dq_leg.shape[0], nq))
-    for m in range(st.joints.shape[1]):
-        cols = st.joints[:, m]
-        ok = cols >= 0
-        out[:, cols[ok]] += dq_leg[:, ok, m]
-    return out
+def _increments(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rotation_increments` components first: (3, L, N − 1) from (3, 3, L, N); and θ."""
+    a, b = R[..., :-1], R[..., 1:]
+    cos = np.clip((np.einsum("ij...,ij...->...", a, b) - 1.0) / 2.0, -1.0, 1.0)
+    ang = np.arccos(cos)
+    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+    small = ang < 1e-6
+    scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
+    vee = _x(a[:, 0], b[:, 0]) + _x(a[:, 1], b[:, 1]) + _x(a[:, 2], b[:, 2])
+    vee *= scale
+    return vee, ang
 
 
 def _rolled(inc: np.ndarray, sup: np.ndarray, start: np.ndarray) -> np.ndarray:
-    """``Σ_{k=s}^{i−1} inc_k`` over each stance (0 in swing) from increments (N − 1, L, 3)."""
-    cum = np.zeros((len(sup),) + inc.shape[1:])
-    np.cumsum(inc, axis=0, out=cum[1:])
-    cum -= cum[start, np.arange(sup.shape[1])[None, :]]
-    cum *= sup[..., None]
+    """``Σ_{k=s}^{i−1} inc_k`` over each stance (0 in swing), (3, L, N) from (3, L, N − 1)."""
+    cum = np.zeros(inc.shape[:-1] + (inc.shape[-1] + 1,))
+    np.cumsum(inc, axis=-1, out=cum[..., 1:])
+    cum -= np.take_along_axis(cum, np.broadcast_to(start, cum.shape), axis=-1)
+    cum *= sup
     return cum
+
+
+def _inv_sym3(A: np.ndarray) -> np.ndarray:
+    """Inverses of symmetric positive-definite 3×3 matrices, components first (3, 3, ...)."""
+    a, b, c, d, e, f = A[0, 0], A[0, 1], A[0, 2], A[1, 1], A[1, 2], A[2, 2]
+    out = np.empty(A.shape)
+    out[0, 0] = d * f - e * e
+    out[0, 1] = out[1, 0] = c * e - b * f
+    out[0, 2] = out[2, 0] = b * e - c * d
+    out[1, 1] = a * f - c * c
+    out[1, 2] = out[2, 1] = b * c - a * e
+    out[2, 2] = a * d - b * b
+    out /= a * out[0, 0] + b * out[0, 1] + c * out[0, 2]
+    return out
 
 
 def rolling_ik(
@@ -449,62 +446,86 @@ def rolling_ik(
     samples, through the sum) is small (the increments are ~ω dt) and is solved for by
     fixed-point sweeps ``J δq = e + δD(δq) + K δq`` (each sweep gains a factor ~θ, a few
     hundred here; :data:`_SWEEPS`), so the Newton iteration converges quadratically. Swing
-    targets follow the lift-off rolling ``D_ℓ + δD_ℓ``.
+    targets follow the lift-off rolling ``D_ℓ + δD_ℓ``. Arrays are components first with the
+    samples last (long vector operations).
     """
     ik = wb.body_ik(base, plan, q_prev=q0, times=t, strict=False)
     q = np.array(ik.q)
     if rad == 0.0:
         return plan, q, ik, 1, 0.0, None, np.zeros(plan.shape)
     st = _leg_structure(wb, q[0], base[0])
-    sup = np.asarray(support, dtype=bool)
-    start = stance_start_index(sup)
-    both = (sup[:-1] & sup[1:])[..., None]
-    rn = rad * np.asarray(normals, dtype=float)
-    rn_inc = rn[:-1] * both  # the increments' lever r n, 0 outside a stance
-    keep = np.where(swing, 1.0 - blend, 0.0)[..., None]  # swing: share of the lift-off rolling
-    legs = np.arange(sup.shape[1])[None, :]
-    last = np.maximum.accumulate(np.where(sup, np.arange(len(sup))[:, None], -1), axis=0)
-    last_at, seen = np.maximum(last, 0), (last >= 0)[..., None]
+    n, nl = support.shape
+    sup = np.ascontiguousarray(np.asarray(support, dtype=bool).T)  # (L, N)
+    sw = np.ascontiguousarray(np.asarray(swing, dtype=bool).T)
+    start = stance_start_index(np.asarray(support, dtype=bool)).T  # (L, N)
+    both = sup[:, :-1] & sup[:, 1:]
+    rn = rad * np.ascontiguousarray(np.asarray(normals, dtype=float).transpose(2, 1, 0))
+    rn_inc = rn[..., :-1] * both  # the increments' lever r n, 0 outside a stance
+    planT = np.ascontiguousarray(np.asarray(plan, dtype=float).transpose(2, 1, 0))  # (3, L, N)
+    keep = np.where(sw, 1.0 - np.asarray(blend, dtype=float).T, 0.0)  # swing: lift-off share
+    last = np.maximum.accumulate(np.where(sup, np.arange(n), -1), axis=1)
+    last_at = np.broadcast_to(np.maximum(last, 0), (3, nl, n))
+    seen = last >= 0
+    jj = np.maximum(st.joints, 0)  # (L, M)
+    valid = st.joints >= 0
+    rev = (st.revolute[jj] & valid)[..., None]  # (L, M, 1)
+    lin_ok = valid[..., None]
+    ax_j = st.axes.T[..., None]  # (3, nq, 1)
+    foot = st.foot.T[..., None]  # (3, L, 1): the foot in its link's frame
+    qt = np.ascontiguousarray(q.T)  # (nq, N)
     passes, residual = 1, math.inf
     while True:
-        T = wb.joint_poses(q, base)
-        centres = wb.feet_of(T)
-        theta = rotation_increments(T[:, st.link, :3, :3]) if len(sup) > 1 else None
-        D = np.zeros(plan.shape) if theta is None else _rolled(_cross(theta, rn_inc), sup, start)
-        lo = D[last_at, legs] * seen  # the rolling at each leg's latest stance sample
-        feet = plan + np.where(swing[..., None], lo * keep, D)
+        R, p = wb.joint_frames(qt.T, base)
+        Rl = R[:, :, st.link]
+        centres = Rl[:, 0] * foot[0] + Rl[:, 1] * foot[1] + Rl[:, 2] * foot[2] + p[:, st.link]
+        if n > 1:
+            theta, ang = _increments(Rl)
+            D = _rolled(_x(theta, rn_inc), sup, start)
+        else:
+            D = np.zeros(centres.shape)
+        lo = np.take_along_axis(D, last_at, axis=-1) * seen
+        feet = planT + np.where(sw, lo * keep, D)
         err = feet - centres
         residual = float(np.abs(err).max())
-        if residual <= tol or passes >= max_passes or theta is None:
+        if residual <= tol or passes >= max_passes or n < 2:
             break
-        Jp, Jw, _ax = _world_axes(st, T, centres)
-        K = np.swapaxes(_cross(rn[:, :, None, :], np.swapaxes(Jw, -1, -2)), -1, -2)
-        K *= sup[:, :, None, None]
-        J = Jp + K
-        Jt = np.swapaxes(J, -1, -2)
-        A_inv = _inv_sym3(J @ Jt + 1e-14 * np.eye(3))  # J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹
-        ang = np.sqrt(np.einsum("...i,...i->...", theta, theta))[..., None]
+        # Jacobians (3, L, M, N): world axes a, J_p = a × (c − o) (prismatic: a), J_ω = a
+        a = (R[:, 0] * ax_j[0] + R[:, 1] * ax_j[1] + R[:, 2] * ax_j[2])[:, jj]
+        Jw = a * rev
+        J = np.where(rev, _x(a, centres[:, :, None] - p[:, jj]), a * lin_ok)
+        J += _x(rn[:, :, None], Jw) * sup[:, None]  # + K = r [n]ₓ J_ω in stance
+        A = np.einsum("ilmn,klmn->ikln", J, J)
+        A[0, 0] += 1e-14
+        A[1, 1] += 1e-14
+        A[2, 2] += 1e-14
+        A_inv = _inv_sym3(A)  # J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹
         small = ang < 1e-3
         a_ = np.where(small, 1.0, ang)
         exact = 1.0 / a_**2 - (1.0 + np.cos(a_)) / (2.0 * a_ * np.sin(a_))
         beta = np.where(small, 1.0 / 12.0 + ang * ang / 720.0, exact)
         rhs = err
         for sweep in range(_SWEEPS + 1):
-            dq = _mv(Jt, _mv(A_inv, rhs))
+            y = A_inv[:, 0] * rhs[0] + A_inv[:, 1] * rhs[1] + A_inv[:, 2] * rhs[2]
+            dq = J[0] * y[0, :, None] + J[1] * y[1, :, None] + J[2] * y[2, :, None]  # (L, M, N)
             if sweep == _SWEEPS:
                 break
-            phi = _mv(Jw, dq) * sup[..., None]  # foot-link rotations δφ (stance)
-            dif = phi[1:] - phi[:-1]
-            d_theta = dif - 0.5 * _cross(theta, phi[1:] + phi[:-1])
-            d_theta += beta * _cross(theta, _cross(theta, dif))
-            dD = _rolled(_cross(d_theta, rn_inc), sup, start)
-            own = _cross(phi, rn)  # δφ_i × r n, in J through K
-            lo = (D + dD)[last_at, legs] * seen
-            rhs = np.where(swing[..., None], plan + lo * keep - centres, err + dD - own)
-        q = q + _scatter(st, dq, wb.nq)
+            phi = np.einsum("ilmn,lmn->iln", Jw, dq) * sup  # foot-link rotations δφ (stance)
+            dif = phi[..., 1:] - phi[..., :-1]
+            d_theta = dif - 0.5 * _x(theta, phi[..., 1:] + phi[..., :-1])
+            d_theta += beta * _x(theta, _x(theta, dif))
+            dD = _rolled(_x(d_theta, rn_inc), sup, start)
+            lo = np.take_along_axis(D + dD, last_at, axis=-1) * seen
+            rhs = np.where(sw, planT + lo * keep - centres, err + dD - _x(phi, rn))
+        for m in range(jj.shape[1]):
+            ok = valid[:, m]
+            qt[jj[ok, m]] += dq[ok, m]
         passes += 1
+    q = np.ascontiguousarray(qt.T)
     margin = np.minimum(q - wb.lower, wb.upper - q)
     for arr in (q, margin):
         arr.setflags(write=False)
     ik = BodyIK(q, ik.reached, ik.excess, margin, ik.leg_names)
-    return feet, q, ik, passes, residual, T, D
+    back = (2, 1, 0)
+    T = poses_of(R, p)
+    feet_out, d_out = (np.ascontiguousarray(x.transpose(back)) for x in (feet, D))
+    return feet_out, q, ik, passes, residual, T, d_out

@@ -34,7 +34,7 @@ from .legs import (
     pick_branch,
     sphere_radius,
 )
-from .tree import Tree, _mv, solve_legs, tree_poses
+from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
@@ -173,6 +173,10 @@ class WholeBody:
 
         """
         return tree_poses(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
+
+    def joint_frames(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`joint_poses` components first: rotations (3, 3, nq, N), origins (3, nq, N)."""
+        return tree_frames(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
 
     def leg_points(self, q: Any, base: Any) -> np.ndarray:
         """World positions (N, L, K, 3) of each leg's joints (hip first) and foot, in [m]."""

@@ -27,7 +27,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["REACH_TOL", "Tree", "axis_rotation", "leg_fk", "solve_legs", "tree_poses"]
+__all__ = [
+    "REACH_TOL",
+    "Tree",
+    "axis_rotation",
+    "leg_fk",
+    "poses_of",
+    "solve_legs",
+    "tree_frames",
+    "tree_poses",
+]
 
 #: A foot is reached when the numerical IK residual is at most this [m].
 REACH_TOL = 1e-10
@@ -66,6 +75,17 @@ class Tree:
             idx = np.flatnonzero(depth == d)
             out.append((idx, None if d == 0 else par[idx]))
         return tuple(out)
+
+    @cached_property
+    def soa_terms(self) -> tuple[np.ndarray, ...]:
+        """:attr:`local_terms` components first, for :func:`tree_frames`: (3, 3, n, 1), (3, n, 1).
+
+        The third matrix is ``(P_R a) aᵀ − P_R`` (so ``M = P_R + sin q K1 + (1 − cos q) K2``).
+        """
+        Pr, Pt, K1, K2, Pa = self.local_terms
+        mat = [np.ascontiguousarray(x.transpose(1, 2, 0)[..., None]) for x in (Pr, K1, K2 - Pr)]
+        vec = [np.ascontiguousarray(x.T[..., None]) for x in (Pt, Pa)]
+        return mat[0], vec[0], mat[1], mat[2], vec[1]
 
     @cached_property
     def local_terms(self) -> tuple[np.ndarray, ...]:
@@ -109,35 +129,55 @@ def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
     return R
 
 
-def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``.
+def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The joints' world frames, components first: rotations (3, 3, n, N), origins (3, n, N).
 
-    All joints' local transforms at once (:attr:`Tree.local_terms`), then one stacked
-    product per depth of the tree (:attr:`Tree.levels`).
+    Args:
+        tree: The tree.
+        q: (N, n) joint values.
+        base: (N, 4, 4) body poses.
+
+    All joints' local rotations at once (:attr:`Tree.local_terms`), then one product per depth
+    of the tree (:attr:`Tree.levels`). The samples are the last (contiguous) axis, so every
+    step is a long vector operation.
+
     """
-    n, nj = q.shape
-    Pr, Pt, K1, K2, Pa = tree.local_terms
+    qt = np.ascontiguousarray(np.asarray(q, dtype=float).T)  # (n, N)
+    nj, n = qt.shape
+    Pr, Pt, K1, K2, Pa = tree.soa_terms
     pris = np.asarray(tree.prismatic, dtype=bool)
     any_p = bool(pris.any())
-    qr = np.where(pris, 0.0, q) if any_p else q
-    co = np.cos(qr)[..., None, None]
-    si = np.sin(qr)[..., None, None]
-    M = co * Pr
-    M += si * K1
-    M += (1.0 - co) * K2  # (N, n, 3, 3) local rotations
-    tl = Pt + np.where(pris[:, None], Pa * q[..., None], 0.0) if any_p else None
-    out = np.empty((n, nj, 4, 4))
-    out[:, :, 3, :3] = 0.0
-    out[:, :, 3, 3] = 1.0
-    rot, pos = out[..., :3, :3], out[..., :3, 3]  # views
+    qr = np.where(pris[:, None], 0.0, qt) if any_p else qt
+    M = np.sin(qr) * K1
+    M += (1.0 - np.cos(qr)) * K2
+    M += Pr  # (3, 3, n, N): P_R R(a, q)
+    tl = Pt + np.where(pris[:, None], Pa * qt, 0.0) if any_p else Pt  # (3, n, N | 1)
+    R = np.empty((3, 3, nj, n))
+    p = np.empty((3, nj, n))
+    Rb = np.ascontiguousarray(base[:, :3, :3].transpose(1, 2, 0))[:, :, None, :]
+    pb = np.ascontiguousarray(base[:, :3, 3].T)[:, None, :]
     for idx, par in tree.levels:
-        if par is None:
-            Rp, tp = base[:, None, :3, :3], base[:, None, :3, 3]
-        else:
-            Rp, tp = rot[:, par], pos[:, par]
-        rot[:, idx] = Rp @ M[:, idx]
-        pos[:, idx] = _mv(Rp, Pt[idx] if tl is None else tl[:, idx]) + tp
+        Rp, pp = (Rb, pb) if par is None else (R[:, :, par], p[:, par])
+        Mi, ti = M[:, :, idx], tl[:, idx]
+        R[:, :, idx] = Rp[:, 0, None] * Mi[None, 0] + Rp[:, 1, None] * Mi[None, 1]
+        R[:, :, idx] += Rp[:, 2, None] * Mi[None, 2]
+        p[:, idx] = Rp[:, 0] * ti[0] + Rp[:, 1] * ti[1] + Rp[:, 2] * ti[2] + pp
+    return R, p
+
+
+def poses_of(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(N, n, 4, 4) homogeneous poses from :func:`tree_frames`' (3, 3, n, N) and (3, n, N)."""
+    out = np.empty((R.shape[-1], R.shape[2], 4, 4))
+    out[..., :3, :3] = R.transpose(3, 2, 0, 1)
+    out[..., :3, 3] = p.transpose(2, 1, 0)
+    out[..., 3, :3] = 0.0
+    out[..., 3, 3] = 1.0
     return out
+
+
+def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
+    return poses_of(*tree_frames(tree, q, base))
 
 
 def _mm3(A: np.ndarray, B: np.ndarray) -> np.ndarray:
