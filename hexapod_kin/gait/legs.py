@@ -491,55 +491,56 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
 
     """
     g, n, k, m = qk.shape
-    usable = np.asarray(valid, dtype=bool)
-    ok = np.asarray(usable.any(axis=2))  # (G, N)
+    usable = np.moveaxis(np.asarray(valid, dtype=bool), 2, 0)  # (K, G, N)
+    ok = np.asarray(usable.any(axis=0))  # (G, N)
     q0 = np.asarray(q0, dtype=float)
     two_pi = 2.0 * np.pi
-    rows = np.arange(g)[:, None]
     # the last sample with a slot at or before each sample (−1: none yet, q0 is the reference)
     last = np.maximum.accumulate(np.where(ok, np.arange(n), -1), axis=1)
     ref = np.empty_like(last)
     ref[:, 0] = -1
     ref[:, 1:] = last[:, :-1]
-    # candidates per joint, with q0 as a sample −1 in every slot; missing slots at 0
-    cand = np.empty((m, g, n + 1, k))
-    cand[:, :, 0] = q0.T[:, :, None]
-    cand[:, :, 1:] = np.moveaxis(qk, 3, 0)
-    np.copyto(cand[:, :, 1:], 0.0, where=~usable[None])
-    prv = cand[:, rows, ref + 1]  # (m, G, N, K): the reference sample's slots
-    # d[g, i, a, b] = Σ_j |wrap(q_b(i) − q_a(ref i))|
-    d = np.zeros((g, n, k, k))
-    x = np.empty((g, n, k, k))
-    y = np.empty((g, n, k, k))
+    # components first, samples last; q0 as a sample −1 in every slot; missing slots at 0
+    cand = np.empty((m, k, g, n + 1))
+    cand[..., 0] = q0.T[:, None, :]
+    cand[..., 1:] = np.transpose(qk, (3, 2, 0, 1))
+    np.copyto(cand[..., 1:], 0.0, where=~usable[None])
+    prv = np.take_along_axis(cand, np.broadcast_to(ref + 1, (m, k, g, n)), axis=3)
+    # d[a, b, g, i] = Σ_j |wrap(q_b(i) − q_a(ref i))|
+    d = np.zeros((k, k, g, n))
+    x = np.empty((k, k, g, n))
+    y = np.empty((k, k, g, n))
     for j in range(m):
-        np.subtract(cand[j, :, 1:, None, :], prv[j][:, :, :, None], out=x)
+        np.subtract(cand[j, None, :, :, 1:], prv[j][:, None], out=x)
         np.multiply(x, 1.0 / two_pi, out=y)
         np.rint(y, out=y)
         y *= two_pi
         x -= y
         np.abs(x, out=x)
         d += x
-    np.copyto(d, np.inf, where=~usable[:, :, None, :])
-    F = d.argmin(axis=3)  # (G, N, K): slot at i given the reference's slot
-    F[~ok] = np.arange(k)  # no slot: the reference's stays
-    off = (np.arange(g * n) * k).reshape(g, n, 1)
+    np.copyto(d, np.inf, where=~usable[None])
+    F = d.argmin(axis=1)  # (K, G, N): slot at i given the reference's slot
+    np.copyto(F, np.arange(k)[:, None, None], where=~ok[None])  # no slot: the reference's stays
+    off = np.arange(g * n).reshape(g, n)
     span = 1
     while span < n:  # F_i <- F_i ∘ F_{i − span}
         nxt = F.copy()
-        nxt[:, span:] = np.take(F.ravel(), F[:, :-span] + off[:, span:])
+        nxt[..., span:] = np.take(F.ravel(), F[..., :-span] * (g * n) + off[:, span:])
         F = nxt
         span *= 2
-    slot = F[:, :, 0]  # q0 stands in every slot of sample −1
-    chosen = np.take_along_axis(cand[:, :, 1:], slot[None, :, :, None], axis=3)[..., 0]
-    chosen = np.moveaxis(chosen, 0, 2)  # (G, N, m)
+    slot = F[0]  # q0 stands in every slot of sample −1
+    chosen = np.take_along_axis(cand[..., 1:], slot[None, None], axis=1)[:, 0]  # (m, G, N)
     # unwrapped: q_i = c_i + 2π M_i, M_i = M_ref + round((c_ref + wrap(c_i − c_ref) − c_i) / 2π)
-    c_ref = np.where((ref >= 0)[..., None], chosen[rows, np.maximum(ref, 0)], q0[:, None, :])
+    idx = np.broadcast_to(np.maximum(ref, 0), chosen.shape)
+    c_ref = np.where(ref >= 0, np.take_along_axis(chosen, idx, axis=2), q0.T[:, :, None])
     step = np.mod(chosen - c_ref + np.pi, two_pi) - np.pi
-    turns = np.where(ok[..., None], np.rint((c_ref + step - chosen) / two_pi), 0.0)
-    turns = np.cumsum(turns, axis=1)
-    at = np.maximum(last, 0)
-    out = np.where((last >= 0)[..., None], chosen[rows, at] + two_pi * turns, q0[:, None, :])
-    return out, ok
+    turns = np.where(ok, np.rint((c_ref + step - chosen) / two_pi), 0.0)
+    turns = np.cumsum(turns, axis=2)
+    at = np.broadcast_to(np.maximum(last, 0), chosen.shape)
+    out = np.where(
+        last >= 0, np.take_along_axis(chosen, at, axis=2) + two_pi * turns, q0.T[:, :, None]
+    )
+    return np.moveaxis(out, 0, 2), ok
 
 
 def leg_layout(
