@@ -2,7 +2,9 @@
 
 Targets (issue 22): planning 10 s of tripod at 100 Hz (1,001 samples) with every check in
 <= 0.05 s with closed-form legs (the built-in hexapod) and <= 0.3 s with numerical leg IK
-(the PhantomX URDF, whose legs no closed form solves exactly). Also measured: the
+(the PhantomX URDF, whose legs no closed form solves exactly; its wave and ripple exceed the
+URDF's 5.655 rad/s thigh speed limit at the default period, so they run with
+``strict=False``: every check computed, none raised). Also measured: the
 numerical body-pose IK alone, the same IK forced onto the built-in legs, and building the
 robot from its URDF (legs from the tree, closed-form checks, standing seed).
 
@@ -87,7 +89,7 @@ def rows(repeat: int = 5) -> list[tuple[str, float, str]]:
         out.append(
             (
                 f"PhantomX URDF: {pattern} 10 s @ 100 Hz, all checks (numerical leg IK)",
-                _best(lambda p=pattern: walk(phx, pattern=p), repeat),
+                _best(lambda p=pattern: walk(phx, pattern=p, strict=p == "tripod"), repeat),
                 "<= 0.3 s" if pattern == "tripod" else "(informative)",
             )
         )
