@@ -505,7 +505,7 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
     cand[..., 0] = q0.T[:, None, :]
     cand[..., 1:] = np.transpose(qk, (3, 2, 0, 1))
     np.copyto(cand[..., 1:], 0.0, where=~usable[None])
-    prv = np.take_along_axis(cand, np.broadcast_to(ref + 1, (m, k, g, n)), axis=3)
+    prv = cand[:, :, np.arange(g)[:, None], ref + 1]  # (m, K, G, N): the reference's slots
     # d[a, b, g, i] = Σ_j |wrap(q_b(i) − q_a(ref i))|
     d = np.zeros((k, k, g, n))
     x = np.empty((k, k, g, n))
@@ -519,7 +519,12 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
         np.abs(x, out=x)
         d += x
     np.copyto(d, np.inf, where=~usable[None])
-    F = d.argmin(axis=1)  # (K, G, N): slot at i given the reference's slot
+    F = np.zeros((k, g, n), dtype=np.intp)  # slot at i given the reference's (first on a tie)
+    best = d[:, 0].copy()
+    for b in range(1, k):
+        nearer = d[:, b] < best
+        F[nearer] = b
+        np.copyto(best, d[:, b], where=nearer)
     np.copyto(F, np.arange(k)[:, None, None], where=~ok[None])  # no slot: the reference's stays
     off = np.arange(g * n).reshape(g, n)
     span = 1

@@ -504,10 +504,11 @@ def rolling_ik(
         exact = 1.0 / a_**2 - (1.0 + np.cos(a_)) / (2.0 * a_ * np.sin(a_))
         beta = np.where(small, 1.0 / 12.0 + ang * ang / 720.0, exact)
         rhs = err
-        for sweep in range(_SWEEPS + 1):
+        sweeps = 1 if passes == 1 else _SWEEPS  # the first step is far from quadratic anyway
+        for sweep in range(sweeps + 1):
             y = A_inv[:, 0] * rhs[0] + A_inv[:, 1] * rhs[1] + A_inv[:, 2] * rhs[2]
             dq = J[0] * y[0, :, None] + J[1] * y[1, :, None] + J[2] * y[2, :, None]  # (L, M, N)
-            if sweep == _SWEEPS:
+            if sweep == sweeps:
                 break
             phi = np.einsum("ilmn,lmn->iln", Jw, dq) * sup  # foot-link rotations δφ (stance)
             dif = phi[..., 1:] - phi[..., :-1]

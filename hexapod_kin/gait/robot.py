@@ -213,8 +213,9 @@ class WholeBody:
         """:meth:`com` from joint poses ``T`` (N, nq, 4, 4) and body poses (N, 4, 4)."""
         base = np.asarray(base, dtype=float)
         acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
-        pts = np.einsum("njab,jb->nja", T[:, :, :3, :3], self._levers[1:]) + T[:, :, :3, 3]
-        acc = acc + np.einsum("j,nja->na", self._masses[1:], pts)
+        m = self._masses[1:]  # Σ_j m_j (R_j l_j + p_j), contracted over j at once
+        acc += np.tensordot(T[:, :, :3, :3], m[:, None] * self._levers[1:], axes=([1, 3], [0, 1]))
+        acc += np.tensordot(T[:, :, :3, 3], m, axes=([1], [0]))
         return np.asarray(acc / self.mass)
 
     def points_and_com(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
