@@ -466,6 +466,36 @@ def finite_or_inf(v: Any) -> np.ndarray:
     return a
 
 
+def _nearest(cand: np.ndarray, refs: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """For each reference, the valid slot nearest to it (the first on a tie), (A, G, N).
+
+    ``cand`` (m, K, G, N) candidates, ``refs`` (m, A, G, N) references, ``usable`` (K, G, N);
+    the distance is ``Σ_j |wrap(cand_j − ref_j)|`` (all-invalid samples give slot 0).
+    """
+    m, k = cand.shape[:2]
+    shape = (refs.shape[1], k) + np.broadcast_shapes(cand.shape[2:], refs.shape[2:])
+    d = np.zeros(shape)
+    x = np.empty(shape)
+    y = np.empty(shape)
+    two_pi = 2.0 * np.pi
+    for j in range(m):
+        np.subtract(cand[j, None], refs[j][:, None], out=x)
+        np.multiply(x, 1.0 / two_pi, out=y)
+        np.rint(y, out=y)
+        y *= two_pi
+        x -= y
+        np.abs(x, out=x)
+        d += x
+    np.copyto(d, np.inf, where=~usable[None])
+    out = np.zeros((shape[0],) + shape[2:], dtype=np.intp)
+    best = d[:, 0].copy()
+    for b in range(1, k):
+        nearer = d[:, b] < best
+        out[nearer] = b
+        np.copyto(best, d[:, b], where=nearer)
+    return out
+
+
 def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
 
@@ -478,7 +508,9 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
     ``F_i`` from that slot to its own (a K × K table of distances), the chosen slots are the
     prefix compositions ``F_i ∘ … ∘ F_0`` (by doubling, log₂ N rounds), and the unwrapped
     value is the candidate plus 2π times an integer count of turns accumulated along the
-    samples (so no rounding accumulates).
+    samples (so no rounding accumulates). When every leg keeps the slot of its first sample
+    (checked: each sample's nearest slot to that slot's previous value is that slot) the
+    composition is skipped.
 
     Args:
         qk: (G, N, K, m) candidate solutions of G legs at N samples.
@@ -505,35 +537,27 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
     cand[..., 0] = q0.T[:, None, :]
     cand[..., 1:] = np.transpose(qk, (3, 2, 0, 1))
     np.copyto(cand[..., 1:], 0.0, where=~usable[None])
-    prv = cand[:, :, np.arange(g)[:, None], ref + 1]  # (m, K, G, N): the reference's slots
-    # d[a, b, g, i] = Σ_j |wrap(q_b(i) − q_a(ref i))|
-    d = np.zeros((k, k, g, n))
-    x = np.empty((k, k, g, n))
-    y = np.empty((k, k, g, n))
-    for j in range(m):
-        np.subtract(cand[j, None, :, :, 1:], prv[j][:, None], out=x)
-        np.multiply(x, 1.0 / two_pi, out=y)
-        np.rint(y, out=y)
-        y *= two_pi
-        x -= y
-        np.abs(x, out=x)
-        d += x
-    np.copyto(d, np.inf, where=~usable[None])
-    F = np.zeros((k, g, n), dtype=np.intp)  # slot at i given the reference's (first on a tie)
-    best = d[:, 0].copy()
-    for b in range(1, k):
-        nearer = d[:, b] < best
-        F[nearer] = b
-        np.copyto(best, d[:, b], where=nearer)
-    np.copyto(F, np.arange(k)[:, None, None], where=~ok[None])  # no slot: the reference's stays
-    off = np.arange(g * n).reshape(g, n)
-    span = 1
-    while span < n:  # F_i <- F_i ∘ F_{i − span}
-        nxt = F.copy()
-        nxt[..., span:] = np.take(F.ravel(), F[..., :-span] * (g * n) + off[:, span:])
-        F = nxt
-        span *= 2
-    slot = F[0]  # q0 stands in every slot of sample −1
+    rows = np.arange(g)[:, None]
+    cur = cand[..., 1:]
+    # the usual case first: every leg keeps the slot it takes at its first sample with one
+    first = np.argmax(ok, axis=1)
+    at_first = cur[:, :, np.arange(g), first][..., None]  # (m, K, G, 1)
+    s0 = _nearest(at_first, q0.T[:, None, :, None], usable[:, np.arange(g), first][..., None])
+    s0 = s0[0, :, 0]  # (G,)
+    kept = _nearest(cur, cand[:, s0[:, None], rows, ref + 1][:, None], usable)[0]
+    if np.all((kept == s0[:, None]) | ~ok):
+        slot = np.broadcast_to(s0[:, None], (g, n))
+    else:  # slot maps F_i (reference slot → slot), composed: F_i ∘ … ∘ F_0 by doubling
+        F = _nearest(cur, cand[:, :, rows, ref + 1], usable)  # (K, G, N)
+        np.copyto(F, np.arange(k)[:, None, None], where=~ok[None])  # no slot: the same
+        off = np.arange(g * n).reshape(g, n)
+        span = 1
+        while span < n:  # F_i <- F_i ∘ F_{i − span}
+            nxt = F.copy()
+            nxt[..., span:] = np.take(F.ravel(), F[..., :-span] * (g * n) + off[:, span:])
+            F = nxt
+            span *= 2
+        slot = F[0]  # q0 stands in every slot of sample −1
     chosen = np.take_along_axis(cand[..., 1:], slot[None, None], axis=1)[:, 0]  # (m, G, N)
     # unwrapped: q_i = c_i + 2π M_i, M_i = M_ref + round((c_ref + wrap(c_i − c_ref) − c_i) / 2π)
     idx = np.broadcast_to(np.maximum(ref, 0), chosen.shape)
