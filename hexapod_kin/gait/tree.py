@@ -77,6 +77,28 @@ class Tree:
         return tuple(out)
 
     @cached_property
+    def groups(self) -> tuple[tuple[np.ndarray, np.ndarray | None, int, np.ndarray], ...]:
+        """:attr:`levels` split by axis: ``(joints, parents, k, sign)``.
+
+        ``k`` = 0, 1, 2 for revolute joints about ``±x, ±y, ±z`` of their frame (``sign``
+        (n_g, 1): ±1), 3 for the others (unaligned axes, prismatic joints).
+        """
+        a = np.asarray(self.axes, dtype=float)
+        pr = np.asarray(self.prismatic, dtype=bool)
+        kind = np.full(len(a), 3)
+        for k in range(3):
+            kind[(np.abs(a[:, k]) == 1.0) & ~pr] = k
+        out = []
+        for idx, par in self.levels:
+            for k in range(4):
+                sel = kind[idx] == k
+                if sel.any():
+                    sub = idx[sel]
+                    sign = np.where(a[sub, min(k, 2)] < 0, -1.0, 1.0)[:, None]
+                    out.append((sub, None if par is None else par[sel], k, sign))
+        return tuple(out)
+
+    @cached_property
     def soa_terms(self) -> tuple[np.ndarray, ...]:
         """:attr:`local_terms` components first, for :func:`tree_frames`: (3, 3, n, 1), (3, n, 1).
 
@@ -137,30 +159,41 @@ def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray
         q: (N, n) joint values.
         base: (N, 4, 4) body poses.
 
-    All joints' local rotations at once (:attr:`Tree.local_terms`), then one product per depth
-    of the tree (:attr:`Tree.levels`). The samples are the last (contiguous) axis, so every
-    step is a long vector operation.
+    One product per depth of the tree and axis kind (:attr:`Tree.groups`): for a joint about
+    ``±x, ±y, ±z`` the parent's rotation times the placement, then two columns mixed by
+    ``cos q, ±sin q``; other joints by Rodrigues (:attr:`Tree.soa_terms`). The samples are
+    the last (contiguous) axis, so every step is a long vector operation.
 
     """
     qt = np.ascontiguousarray(np.asarray(q, dtype=float).T)  # (n, N)
     nj, n = qt.shape
     Pr, Pt, K1, K2, Pa = tree.soa_terms
-    pris = np.asarray(tree.prismatic, dtype=bool)
-    any_p = bool(pris.any())
-    qr = np.where(pris[:, None], 0.0, qt) if any_p else qt
-    M = np.sin(qr) * K1
-    M += (1.0 - np.cos(qr)) * K2
-    M += Pr  # (3, 3, n, N): P_R R(a, q)
-    tl = Pt + np.where(pris[:, None], Pa * qt, 0.0) if any_p else Pt  # (3, n, N | 1)
     R = np.empty((3, 3, nj, n))
     p = np.empty((3, nj, n))
     Rb = np.ascontiguousarray(base[:, :3, :3].transpose(1, 2, 0))[:, :, None, :]
     pb = np.ascontiguousarray(base[:, :3, 3].T)[:, None, :]
-    for idx, par in tree.levels:
+    for idx, par, k, sign in tree.groups:
         Rp, pp = (Rb, pb) if par is None else (R[:, :, par], p[:, par])
-        Mi, ti = M[:, :, idx], tl[:, idx]
-        R[:, :, idx] = Rp[:, 0, None] * Mi[None, 0] + Rp[:, 1, None] * Mi[None, 1]
-        R[:, :, idx] += Rp[:, 2, None] * Mi[None, 2]
+        qi = qt[idx]
+        if k < 3:  # X = R_parent P_R, then X R_k(±q) mixes two columns
+            P = Pr[:, :, idx]
+            X = Rp[:, 0, None] * P[None, 0] + Rp[:, 1, None] * P[None, 1]
+            X += Rp[:, 2, None] * P[None, 2]
+            c, s_ = np.cos(qi), np.sin(qi) * sign
+            u, v = (k + 1) % 3, (k + 2) % 3
+            R[:, k, idx] = X[:, k]
+            R[:, u, idx] = c * X[:, u] + s_ * X[:, v]
+            R[:, v, idx] = c * X[:, v] - s_ * X[:, u]
+            ti = Pt[:, idx]
+        else:  # P_R R(a, q) = P_R + sin q P_R[a]× + (1 − cos q)((P_R a) aᵀ − P_R)
+            pris = np.asarray(tree.prismatic, dtype=bool)[idx][:, None]
+            qr = np.where(pris, 0.0, qi)
+            Mi = np.sin(qr) * K1[:, :, idx]
+            Mi += (1.0 - np.cos(qr)) * K2[:, :, idx]
+            Mi += Pr[:, :, idx]
+            R[:, :, idx] = Rp[:, 0, None] * Mi[None, 0] + Rp[:, 1, None] * Mi[None, 1]
+            R[:, :, idx] += Rp[:, 2, None] * Mi[None, 2]
+            ti = Pt[:, idx] + np.where(pris, Pa[:, idx] * qi, 0.0)
         p[:, idx] = Rp[:, 0] * ti[0] + Rp[:, 1] * ti[1] + Rp[:, 2] * ti[2] + pp
     return R, p
 
