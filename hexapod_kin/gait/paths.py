@@ -371,9 +371,12 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def _x(u: Any, v: Any) -> np.ndarray:
     """``u × v`` of component-first vectors (3, ...)."""
-    return np.stack(
-        [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
-    )
+    out = np.empty((3,) + np.broadcast_shapes(np.shape(u[0]), np.shape(v[0])))
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        np.multiply(u[j], v[k], out=out[i])
+        out[i] -= u[k] * v[j]
+    return out
 
 
 def _increments(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -393,7 +396,7 @@ def _rolled(inc: np.ndarray, sup: np.ndarray, start: np.ndarray) -> np.ndarray:
     """``Σ_{k=s}^{i−1} inc_k`` over each stance (0 in swing), (3, L, N) from (3, L, N − 1)."""
     cum = np.zeros(inc.shape[:-1] + (inc.shape[-1] + 1,))
     np.cumsum(inc, axis=-1, out=cum[..., 1:])
-    cum -= np.take_along_axis(cum, np.broadcast_to(start, cum.shape), axis=-1)
+    cum -= cum[:, np.arange(len(start))[:, None], start]
     cum *= sup
     return cum
 
@@ -464,7 +467,7 @@ def rolling_ik(
     planT = np.ascontiguousarray(np.asarray(plan, dtype=float).transpose(2, 1, 0))  # (3, L, N)
     keep = np.where(sw, 1.0 - np.asarray(blend, dtype=float).T, 0.0)  # swing: lift-off share
     last = np.maximum.accumulate(np.where(sup, np.arange(n), -1), axis=1)
-    last_at = np.broadcast_to(np.maximum(last, 0), (3, nl, n))
+    last_at = (np.arange(nl)[:, None], np.maximum(last, 0))
     seen = last >= 0
     jj = np.maximum(st.joints, 0)  # (L, M)
     valid = st.joints >= 0
@@ -483,7 +486,7 @@ def rolling_ik(
             D = _rolled(_x(theta, rn_inc), sup, start)
         else:
             D = np.zeros(centres.shape)
-        lo = np.take_along_axis(D, last_at, axis=-1) * seen
+        lo = D[:, last_at[0], last_at[1]] * seen
         feet = planT + np.where(sw, lo * keep, D)
         err = feet - centres
         residual = float(np.abs(err).max())
@@ -515,7 +518,7 @@ def rolling_ik(
             d_theta = dif - 0.5 * _x(theta, phi[..., 1:] + phi[..., :-1])
             d_theta += beta * _x(theta, _x(theta, dif))
             dD = _rolled(_x(d_theta, rn_inc), sup, start)
-            lo = np.take_along_axis(D + dD, last_at, axis=-1) * seen
+            lo = (D + dD)[:, last_at[0], last_at[1]] * seen
             rhs = np.where(sw, planT + lo * keep - centres, err + dD - _x(phi, rn))
         for m in range(jj.shape[1]):
             ok = valid[:, m]
