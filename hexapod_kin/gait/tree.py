@@ -390,6 +390,40 @@ def solve_legs(
     return q, res, res <= REACH_TOL
 
 
+def _fk_soa(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`leg_fk_of` components first: q (m, G, N) → (3, m, G, N) ×2 and feet (3, G, N)."""
+    m = q.shape[0]
+    origins = np.empty((3,) + q.shape)
+    waxes = np.empty((3,) + q.shape)
+    any_p = bool(c.prismatic.any())
+    R: np.ndarray | None = None
+    t: Any = 0.0
+    for k in range(m):
+        qk = q[k]
+        pk = c.prismatic[:, k][:, None]
+        qr = np.where(pk, 0.0, qk) if any_p else qk
+        Pr = c.Pr[:, k].transpose(1, 2, 0)[..., None]  # (3, 3, G, 1)
+        M = np.sin(qr) * c.K1[:, k].transpose(1, 2, 0)[..., None]
+        M += (1.0 - np.cos(qr)) * (c.K2[:, k] - c.Pr[:, k]).transpose(1, 2, 0)[..., None]
+        M += Pr
+        Pt = c.Pt[:, k].T[..., None]
+        Pa = c.Pa[:, k].T[..., None]
+        if R is None:
+            o = np.broadcast_to(Pt, (3,) + qk.shape)
+            w = np.broadcast_to(Pa, (3,) + qk.shape)
+            R = M
+        else:
+            o = t + R[:, 0] * Pt[0] + R[:, 1] * Pt[1] + R[:, 2] * Pt[2]
+            w = R[:, 0] * Pa[0] + R[:, 1] * Pa[1] + R[:, 2] * Pa[2]
+            R = R[:, 0, None] * M[None, 0] + R[:, 1, None] * M[None, 1] + R[:, 2, None] * M[None, 2]
+        origins[:, k] = o
+        waxes[:, k] = w
+        t = o + np.where(pk, w * qk, 0.0) if any_p else o
+    assert R is not None
+    f = c.foot.T[..., None]
+    return origins, waxes, t + R[:, 0] * f[0] + R[:, 1] * f[1] + R[:, 2] * f[2]
+
+
 def _dls(
     c: LegConsts,
     lower: np.ndarray,
@@ -403,43 +437,76 @@ def _dls(
 
     Levenberg–Marquardt acceptance: a step is kept only when it lowers the residual (then
     the damping factor μ shrinks ×0.3), else it is refused and μ grows ×10; an element stops
-    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual).
+    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual). Each element
+    is independent: an iteration only visits the samples with a leg still running, and the
+    arrays are components first with the samples last (long vector operations).
     """
     m = q.shape[-1]
     lam_floor = 1e-14 * span * span
     done_tol = 1e-13 * span
-    eye = np.eye(m)
-    o, w, p = leg_fk_of(c, q)
-    err = tgt - p
-    norm = np.linalg.norm(err, axis=-1)
+    qs = np.ascontiguousarray(np.transpose(q, (2, 1, 0)))  # (m, G, N)
+    ts = np.ascontiguousarray(np.transpose(tgt, (2, 1, 0)))  # (3, G, N)
+    lo = np.asarray(lower, dtype=float).T[..., None]
+    hi = np.asarray(upper, dtype=float).T[..., None]
+    pr = c.prismatic.T[None, :, :, None]  # (1, m, G, 1)
+    o, w, p = _fk_soa(c, qs)
+    err = ts - p
+    norm = np.sqrt(np.einsum("i...,i...->...", err, err))
     mu = np.full(norm.shape, 1e-2)
     for _ in range(iterations):
         live = (norm > done_tol) & (mu < 1e10)
-        if not live.any():
+        cols = np.flatnonzero(live.any(axis=0))
+        if not cols.size:
             break
-        pr = c.prismatic[:, None, :]
-        rev = np.swapaxes(np.cross(w, p[..., None, :] - o), -1, -2)  # (N, G, 3, m)
-        J = np.where(pr, np.swapaxes(w, -1, -2), rev)
-        Jt = np.swapaxes(J, -1, -2)
-        lam2 = mu * norm * norm + lam_floor
-        dq = _solve_spd(Jt @ J + lam2[..., None, None] * eye, _mv(Jt, err))
-        big = np.abs(dq).max(axis=-1)
-        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[..., None]
-        new = np.clip(q + dq, lower, upper)
-        o2, w2, p2 = leg_fk_of(c, new)
-        err2 = tgt - p2
-        norm2 = np.linalg.norm(err2, axis=-1)
-        acc = live & (norm2 < norm)
-        q[acc] = new[acc]
-        o[acc], w[acc], p[acc], err[acc], norm[acc] = (
-            o2[acc],
-            w2[acc],
-            p2[acc],
-            err2[acc],
-            norm2[acc],
+        lv, nm, e_, q_ = live[:, cols], norm[:, cols], err[..., cols], qs[..., cols]
+        o_, w_, p_ = o[..., cols], w[..., cols], p[..., cols]
+        d = p_[:, None] - o_
+        J = np.stack(
+            [w_[1] * d[2] - w_[2] * d[1], w_[2] * d[0] - w_[0] * d[2], w_[0] * d[1] - w_[1] * d[0]]
         )
-        mu = np.where(acc, np.maximum(mu * 0.3, 1e-9), np.where(live, mu * 10.0, mu))
-    return norm
+        J = np.where(pr, w_, J)  # (3, m, G, n')
+        A = np.einsum("iagn,ibgn->abgn", J, J)
+        lam2 = mu[:, cols] * nm * nm + lam_floor
+        for a in range(m):
+            A[a, a] += lam2
+        b = np.einsum("iagn,ign->agn", J, e_)
+        dq = _solve_spd_soa(A, b)
+        big = np.abs(dq).max(axis=0)
+        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))
+        new = np.clip(q_ + dq, lo, hi)
+        o2, w2, p2 = _fk_soa(c, new)
+        err2 = ts[..., cols] - p2
+        norm2 = np.sqrt(np.einsum("i...,i...->...", err2, err2))
+        acc = lv & (norm2 < nm)
+        qs[..., cols] = np.where(acc, new, q_)
+        o[..., cols] = np.where(acc, o2, o_)
+        w[..., cols] = np.where(acc, w2, w_)
+        p[..., cols] = np.where(acc, p2, p_)
+        err[..., cols] = np.where(acc, err2, e_)
+        norm[:, cols] = np.where(acc, norm2, nm)
+        mu[:, cols] = np.where(
+            acc, np.maximum(mu[:, cols] * 0.3, 1e-9), np.where(lv, mu[:, cols] * 10.0, mu[:, cols])
+        )
+    q[:] = np.transpose(qs, (2, 1, 0))
+    return np.ascontiguousarray(norm.T)
+
+
+def _solve_spd_soa(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`_solve_spd` components first: A (m, m, ...), b (m, ...)."""
+    if A.shape[0] != 3:
+        x = np.linalg.solve(np.moveaxis(A, (0, 1), (-2, -1)), np.moveaxis(b, 0, -1)[..., None])
+        return np.moveaxis(x[..., 0], -1, 0)
+    a, bb, c = A[0, 0], A[0, 1], A[0, 2]
+    d, e, f = A[1, 1], A[1, 2], A[2, 2]
+    c00, c01, c02 = d * f - e * e, c * e - bb * f, bb * e - c * d
+    c11, c12, c22 = a * f - c * c, bb * c - a * e, a * d - bb * bb
+    det = a * c00 + bb * c01 + c * c02
+    x = np.empty(b.shape)
+    x[0] = c00 * b[0] + c01 * b[1] + c02 * b[2]
+    x[1] = c01 * b[0] + c11 * b[1] + c12 * b[2]
+    x[2] = c02 * b[0] + c12 * b[1] + c22 * b[2]
+    x /= det
+    return x
 
 
 def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
