@@ -213,15 +213,6 @@ def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
     return poses_of(*tree_frames(tree, q, base))
 
 
-def _mm3(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Stacked 3×3 matrix products (..., 3, 3) (broadcast sums: faster than matmul here)."""
-    return np.asarray(
-        A[..., :, 0, None] * B[..., None, 0, :]
-        + A[..., :, 1, None] * B[..., None, 1, :]
-        + A[..., :, 2, None] * B[..., None, 2, :]
-    )
-
-
 def _mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Stacked 3×3 matrix times 3-vector (..., 3) (broadcast sums: faster than matmul here)."""
     return np.asarray(
@@ -470,7 +461,7 @@ def _dls(
         for a in range(m):
             A[a, a] += lam2
         b = np.einsum("iagn,ign->agn", J, e_)
-        dq = _solve_spd_soa(A, b)
+        dq = _solve_spd(A, b)
         big = np.abs(dq).max(axis=0)
         dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))
         new = np.clip(q_ + dq, lo, hi)
@@ -491,8 +482,12 @@ def _dls(
     return np.ascontiguousarray(norm.T)
 
 
-def _solve_spd_soa(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`_solve_spd` components first: A (m, m, ...), b (m, ...)."""
+def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve stacked symmetric positive-definite systems ``A x = b``, A (m, m, ...), b (m, ...).
+
+    m = 3: by the adjugate (element-wise, faster than a batched LAPACK call for 3×3);
+    otherwise ``numpy.linalg.solve``.
+    """
     if A.shape[0] != 3:
         x = np.linalg.solve(np.moveaxis(A, (0, 1), (-2, -1)), np.moveaxis(b, 0, -1)[..., None])
         return np.moveaxis(x[..., 0], -1, 0)
@@ -507,23 +502,3 @@ def _solve_spd_soa(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     x[2] = c02 * b[0] + c12 * b[1] + c22 * b[2]
     x /= det
     return x
-
-
-def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve stacked symmetric positive-definite systems ``A x = b`` (E, m, m), (E, m).
-
-    m = 3: by the adjugate (element-wise, faster than a batched LAPACK call for 3×3);
-    otherwise ``numpy.linalg.solve``.
-    """
-    if A.shape[-1] != 3:
-        return np.asarray(np.linalg.solve(A, b[..., None])[..., 0])
-    a, bb, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
-    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
-    c00, c01, c02 = d * f - e * e, c * e - bb * f, bb * e - c * d
-    c11, c12, c22 = a * f - c * c, bb * c - a * e, a * d - bb * bb
-    det = a * c00 + bb * c01 + c * c02
-    x = np.empty_like(b)
-    x[..., 0] = c00 * b[..., 0] + c01 * b[..., 1] + c02 * b[..., 2]
-    x[..., 1] = c01 * b[..., 0] + c11 * b[..., 1] + c12 * b[..., 2]
-    x[..., 2] = c02 * b[..., 0] + c12 * b[..., 1] + c22 * b[..., 2]
-    return x / det[..., None]
