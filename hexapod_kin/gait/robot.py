@@ -695,6 +695,8 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
             allowed="hexapod_kin.params.Hexapod (e.g. robots.hexapod())",
         )
     try:
+        if params == _default().params:  # the default stays one object, whatever the LRU holds
+            return _default()
         return _cached(params)
     except TypeError:  # unhashable parameters
         return _build(params)
