@@ -466,8 +466,51 @@ def finite_or_inf(v: Any) -> np.ndarray:
     return a
 
 
+def _nearest(cand: np.ndarray, refs: np.ndarray, usable: np.ndarray) -> np.ndarray:
+    """For each reference, the valid slot nearest to it (the first on a tie), (A, G, N).
+
+    ``cand`` (m, K, G, N) candidates, ``refs`` (m, A, G, N) references, ``usable`` (K, G, N);
+    the distance is ``Σ_j |wrap(cand_j − ref_j)|`` (all-invalid samples give slot 0).
+    """
+    m, k = cand.shape[:2]
+    shape = (refs.shape[1], k) + np.broadcast_shapes(cand.shape[2:], refs.shape[2:])
+    d = np.zeros(shape)
+    x = np.empty(shape)
+    y = np.empty(shape)
+    two_pi = 2.0 * np.pi
+    for j in range(m):
+        np.subtract(cand[j, None], refs[j][:, None], out=x)
+        np.multiply(x, 1.0 / two_pi, out=y)
+        np.rint(y, out=y)
+        y *= two_pi
+        x -= y
+        np.abs(x, out=x)
+        d += x
+    np.copyto(d, np.inf, where=~usable[None])
+    out = np.zeros((shape[0],) + shape[2:], dtype=np.intp)
+    best = d[:, 0].copy()
+    for b in range(1, k):
+        nearer = d[:, b] < best
+        out[nearer] = b
+        np.copyto(best, d[:, b], where=nearer)
+    return out
+
+
 def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
+
+    The rule is sequential: at each sample with a valid slot, the slot whose wrapped
+    difference to the previous value has the smallest sum of absolute values
+    (``Σ|wrap(q_k − q_prev)|``, the first on a tie) is taken and continued,
+    ``q = q_prev + wrap(q_k − q_prev)``; samples without a valid slot keep ``q_prev``. It is
+    evaluated for all samples at once: the choice at sample i only depends on which slot was
+    chosen at the last sample with one (the wrap is 2π-periodic), so each sample is a map
+    ``F_i`` from that slot to its own (a K × K table of distances), the chosen slots are the
+    prefix compositions ``F_i ∘ … ∘ F_0`` (by doubling, log₂ N rounds), and the unwrapped
+    value is the candidate plus 2π times an integer count of turns accumulated along the
+    samples (so no rounding accumulates). When every leg keeps the slot of its first sample
+    (checked: each sample's nearest slot to that slot's previous value is that slot) the
+    composition is skipped.
 
     Args:
         qk: (G, N, K, m) candidate solutions of G legs at N samples.
@@ -479,26 +522,54 @@ def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.n
         slot is valid) and (G, N) whether a slot was found.
 
     """
-    g, n, _, m = qk.shape
-    out = np.empty((n, g, m))
-    ok = np.asarray(np.asarray(valid, dtype=bool).any(axis=2))
-    cand = np.ascontiguousarray(np.moveaxis(qk, 1, 0))  # (N, G, K, m)
-    usable = np.ascontiguousarray(np.moveaxis(valid, 1, 0))  # (N, G, K)
-    found = np.ascontiguousarray(ok.T[:, :, None])  # (N, G, 1)
-    prev = np.array(q0, dtype=float)
-    rows = np.arange(g)
-    step = np.empty(cand.shape[1:])
+    g, n, k, m = qk.shape
+    usable = np.moveaxis(np.asarray(valid, dtype=bool), 2, 0)  # (K, G, N)
+    ok = np.asarray(usable.any(axis=0))  # (G, N)
+    q0 = np.asarray(q0, dtype=float)
     two_pi = 2.0 * np.pi
-    for i in range(n):
-        np.subtract(cand[i], prev[:, None, :], out=step)
-        step += np.pi
-        np.mod(step, two_pi, out=step)
-        step -= np.pi
-        d = np.where(usable[i], np.abs(step).sum(axis=2), np.inf)
-        prev = np.where(found[i], prev + step[rows, d.argmin(axis=1)], prev)
-        out[i] = prev
-    out = np.moveaxis(out, 0, 1)
-    return out, ok
+    # the last sample with a slot at or before each sample (−1: none yet, q0 is the reference)
+    last = np.maximum.accumulate(np.where(ok, np.arange(n), -1), axis=1)
+    ref = np.empty_like(last)
+    ref[:, 0] = -1
+    ref[:, 1:] = last[:, :-1]
+    # components first, samples last; q0 as a sample −1 in every slot; missing slots at 0
+    cand = np.empty((m, k, g, n + 1))
+    cand[..., 0] = q0.T[:, None, :]
+    cand[..., 1:] = np.transpose(qk, (3, 2, 0, 1))
+    np.copyto(cand[..., 1:], 0.0, where=~usable[None])
+    rows = np.arange(g)[:, None]
+    cur = cand[..., 1:]
+    # the usual case first: every leg keeps the slot it takes at its first sample with one
+    first = np.argmax(ok, axis=1)
+    at_first = cur[:, :, np.arange(g), first][..., None]  # (m, K, G, 1)
+    s0 = _nearest(at_first, q0.T[:, None, :, None], usable[:, np.arange(g), first][..., None])
+    s0 = s0[0, :, 0]  # (G,)
+    kept = _nearest(cur, cand[:, s0[:, None], rows, ref + 1][:, None], usable)[0]
+    if np.all((kept == s0[:, None]) | ~ok):
+        slot = np.broadcast_to(s0[:, None], (g, n))
+    else:  # slot maps F_i (reference slot → slot), composed: F_i ∘ … ∘ F_0 by doubling
+        F = _nearest(cur, cand[:, :, rows, ref + 1], usable)  # (K, G, N)
+        np.copyto(F, np.arange(k)[:, None, None], where=~ok[None])  # no slot: the same
+        off = np.arange(g * n).reshape(g, n)
+        span = 1
+        while span < n:  # F_i <- F_i ∘ F_{i − span}
+            nxt = F.copy()
+            nxt[..., span:] = np.take(F.ravel(), F[..., :-span] * (g * n) + off[:, span:])
+            F = nxt
+            span *= 2
+        slot = F[0]  # q0 stands in every slot of sample −1
+    chosen = np.take_along_axis(cand[..., 1:], slot[None, None], axis=1)[:, 0]  # (m, G, N)
+    # unwrapped: q_i = c_i + 2π M_i, M_i = M_ref + round((c_ref + wrap(c_i − c_ref) − c_i) / 2π)
+    idx = np.broadcast_to(np.maximum(ref, 0), chosen.shape)
+    c_ref = np.where(ref >= 0, np.take_along_axis(chosen, idx, axis=2), q0.T[:, :, None])
+    step = np.mod(chosen - c_ref + np.pi, two_pi) - np.pi
+    turns = np.where(ok, np.rint((c_ref + step - chosen) / two_pi), 0.0)
+    turns = np.cumsum(turns, axis=2)
+    at = np.broadcast_to(np.maximum(last, 0), chosen.shape)
+    out = np.where(
+        last >= 0, np.take_along_axis(chosen, at, axis=2) + two_pi * turns, q0.T[:, :, None]
+    )
+    return np.moveaxis(out, 0, 2), ok
 
 
 def leg_layout(

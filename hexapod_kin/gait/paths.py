@@ -17,6 +17,7 @@ import numpy as np
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 from .robot import BodyIK
+from .tree import poses_of
 
 __all__ = [
     "FootStep",
@@ -240,21 +241,21 @@ def rotation_increments(rot: np.ndarray) -> np.ndarray:
     ``θ_k`` is the world-frame rotation from sample k to k + 1 (``ω dt`` for a constant angular
     velocity ω): axis-angle from the trace and the skew part (angles below π).
     """
-    dR = np.matmul(rot[1:], np.swapaxes(rot[:-1], -1, -2))
-    cos = np.clip((np.trace(dR, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    # R_{k+1} R_kᵀ = Σ_j b_j a_jᵀ (columns a_j of R_k, b_j of R_{k+1}): trace Σ a_j·b_j,
+    # skew part (vee) Σ a_j × b_j
+    R0, R1 = rot[:-1], rot[1:]
+    tr = np.einsum("...ij,...ij->...", R0, R1)
+    cos = np.clip((tr - 1.0) / 2.0, -1.0, 1.0)
     ang = np.arccos(cos)
     sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
     small = ang < 1e-6
     scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
-    vee = np.stack(
-        [
-            dR[..., 2, 1] - dR[..., 1, 2],
-            dR[..., 0, 2] - dR[..., 2, 0],
-            dR[..., 1, 0] - dR[..., 0, 1],
-        ],
-        axis=-1,
-    )
-    return np.asarray(vee * scale[..., None])
+    a, b = np.swapaxes(R0, -1, -2), np.swapaxes(R1, -1, -2)  # rows: the columns
+    vee = _cross(a[..., 0, :], b[..., 0, :])
+    vee += _cross(a[..., 1, :], b[..., 1, :])
+    vee += _cross(a[..., 2, :], b[..., 2, :])
+    vee *= scale[..., None]
+    return vee
 
 
 def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.ndarray:
@@ -279,12 +280,12 @@ def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.n
     out = np.zeros(sup.shape + (3,))
     if radius == 0.0 or len(sup) < 2:
         return out
-    inc = np.cross(rotation_increments(R), radius * n[:-1])  # (N-1, L, 3)
-    inc *= (sup[:-1] & sup[1:])[..., None]
+    inc = _cross(rotation_increments(R), radius * n[:-1] * (sup[:-1] & sup[1:])[..., None])
     cum = np.zeros_like(out)
     np.cumsum(inc, axis=0, out=cum[1:])
-    ref = cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
-    return np.asarray(np.where(sup[..., None], cum - ref, 0.0))
+    cum -= cum[stance_start_index(sup), np.arange(sup.shape[1])[None, :]]
+    cum *= sup[..., None]
+    return cum
 
 
 def stance_start_index(support: np.ndarray) -> np.ndarray:
@@ -313,9 +314,13 @@ class _LegStructure:
     axes: np.ndarray  # (nq, 3) joint axis in the joint's frame
     revolute: np.ndarray  # (nq,) True: revolute, False: prismatic
     link: np.ndarray  # (L,) the joint whose frame carries the foot (the deepest of the leg)
+    foot: np.ndarray  # (L, 3) the foot in that joint's frame
 
 
 _STRUCTURES: dict[int, tuple[Any, _LegStructure]] = {}
+
+#: Fixed-point sweeps of the Newton step's coupling between samples (:func:`rolling_ik`).
+_SWEEPS = 2
 
 
 def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
@@ -347,39 +352,12 @@ def _leg_structure(wb: Any, q: np.ndarray, base: np.ndarray) -> _LegStructure:
     for k, c in enumerate(cols):
         joints[k, : len(c)] = c
     link = np.array([c.max() if len(c) else 0 for c in cols])
-    out = _LegStructure(joints, axes, revolute, link)
+    Tl = T[0, link]
+    foot = np.einsum("lji,lj->li", Tl[:, :3, :3], feet[0] - Tl[:, :3, 3])
+    out = _LegStructure(joints, axes, revolute, link, foot)
     _STRUCTURES.clear()
     _STRUCTURES[id(wb)] = (wb, out)
     return out
-
-
-def _leg_jacobians(
-    st: _LegStructure,
-    T: np.ndarray,
-    centres: np.ndarray,
-    support: np.ndarray,
-    normals: np.ndarray,
-    rad: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per leg, ``(J, K)`` (N, L, 3, M): the rolled centre's Jacobian and the rolling part.
-
-    ``J_p`` has columns ``a × (c − o)`` for revolute joints and ``a`` for prismatic ones (a
-    the world axis, o the joint origin), ``J_ω`` columns a (revolute); in stance the centre
-    also rolls, ``δD = −r [n]ₓ J_ω δq``, so the Newton matrix is ``J = J_p + K`` with
-    ``K = r [n]ₓ J_ω`` (0 in swing).
-    """
-    jj = np.maximum(st.joints, 0)  # (L, M)
-    valid = (st.joints >= 0)[None, :, :, None]  # (1, L, M, 1)
-    Tj = T[:, jj]  # (N, L, M, 4, 4)
-    a = np.matmul(Tj[..., :3, :3], st.axes[jj][..., None])[..., 0]  # world axes (N, L, M, 3)
-    d = centres[:, :, None, :] - Tj[..., :3, 3]
-    rev = st.revolute[jj][None, :, :, None]
-    lin = np.where(rev, _cross(a, d), a) * valid
-    ang = np.where(rev, a, 0.0) * valid
-    roll = _cross(np.broadcast_to(normals[:, :, None, :], ang.shape), ang)
-    roll *= (rad * support)[:, :, None, None]
-    K = np.swapaxes(roll, -1, -2)
-    return np.swapaxes(lin, -1, -2) + K, K
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -391,19 +369,49 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out
 
 
-def _min_norm(J: np.ndarray) -> np.ndarray:
-    """``J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹`` per leg and sample, (N, L, M, 3), λ = 1e-14 m²."""
-    JJ = J @ np.swapaxes(J, -1, -2)
-    JJ += 1e-14 * np.eye(3)
-    return np.asarray(np.swapaxes(J, -1, -2) @ np.linalg.inv(JJ))
+def _x(u: Any, v: Any) -> np.ndarray:
+    """``u × v`` of component-first vectors (3, ...)."""
+    out = np.empty((3,) + np.broadcast_shapes(np.shape(u[0]), np.shape(v[0])))
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        np.multiply(u[j], v[k], out=out[i])
+        out[i] -= u[k] * v[j]
+    return out
 
 
-def _scatter(st: _LegStructure, dq_leg: np.ndarray, nq: int) -> np.ndarray:
-    out = np.zeros((dq_leg.shape[0], nq))
-    for m in range(st.joints.shape[1]):
-        cols = st.joints[:, m]
-        ok = cols >= 0
-        out[:, cols[ok]] += dq_leg[:, ok, m]
+def _increments(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`rotation_increments` components first: (3, L, N − 1) from (3, 3, L, N); and θ."""
+    a, b = R[..., :-1], R[..., 1:]
+    cos = np.clip((np.einsum("ij...,ij...->...", a, b) - 1.0) / 2.0, -1.0, 1.0)
+    ang = np.arccos(cos)
+    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+    small = ang < 1e-6
+    scale = np.where(small, 0.5 + ang * ang / 12.0, ang / (2.0 * np.where(small, 1.0, sin)))
+    vee = _x(a[:, 0], b[:, 0]) + _x(a[:, 1], b[:, 1]) + _x(a[:, 2], b[:, 2])
+    vee *= scale
+    return vee, ang
+
+
+def _rolled(inc: np.ndarray, sup: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """``Σ_{k=s}^{i−1} inc_k`` over each stance (0 in swing), (3, L, N) from (3, L, N − 1)."""
+    cum = np.zeros(inc.shape[:-1] + (inc.shape[-1] + 1,))
+    np.cumsum(inc, axis=-1, out=cum[..., 1:])
+    cum -= cum[:, np.arange(len(start))[:, None], start]
+    cum *= sup
+    return cum
+
+
+def _inv_sym3(A: np.ndarray) -> np.ndarray:
+    """Inverses of symmetric positive-definite 3×3 matrices, components first (3, 3, ...)."""
+    a, b, c, d, e, f = A[0, 0], A[0, 1], A[0, 2], A[1, 1], A[1, 2], A[2, 2]
+    out = np.empty(A.shape)
+    out[0, 0] = d * f - e * e
+    out[0, 1] = out[1, 0] = c * e - b * f
+    out[0, 2] = out[2, 0] = b * e - c * d
+    out[1, 1] = a * f - c * c
+    out[1, 2] = out[2, 1] = b * c - a * e
+    out[2, 2] = a * d - b * b
+    out /= a * out[0, 0] + b * out[0, 1] + c * out[0, 2]
     return out
 
 
@@ -427,41 +435,101 @@ def rolling_ik(
     q: the rolling ``D(q)`` (:func:`rolling_offsets` of the rotations of each foot's link,
     whose increments are the foot frame's), the targets ``plan + D`` (stance) or
     ``plan + D_lift-off·(1 − blend)`` (swing), the error ``e = targets − centres(q)``, and a
-    Newton step (:func:`_leg_jacobians`, rolling included) — until
-    ``max|e| ≤ tol`` [m] or ``max_passes``. ``e`` is the planned contact points' slip (up to
-    rounding). Returns (feet, q, ik, passes, residual [m], joint poses of q or None, D: the
-    rolling of q's own foot rotations, by FK).
+    Newton step — until ``max|e| ≤ tol`` [m] or ``max_passes``. ``e`` is the planned contact
+    points' slip (up to rounding). Returns (feet, q, ik, passes, residual [m], joint poses of
+    q or None, D: the rolling of q's own foot rotations, by FK).
+
+    The Newton step is the exact linearisation of the whole stance: a foot rotation
+    ``δφ_k = J_ω δq_k`` (world frame) changes the increment ``θ_k = log(R_{k+1} R_kᵀ)`` by
+    ``δθ_k = J_l⁻¹(θ_k) δφ_{k+1} − J_r⁻¹(θ_k) δφ_k``, i.e.
+    ``δφ_{k+1} − δφ_k − ½ θ_k × (δφ_{k+1} + δφ_k) + β θ_k × (θ_k × (δφ_{k+1} − δφ_k))``,
+    ``β = 1/θ² − (1 + cos θ)/(2θ sin θ)`` (SO(3)'s left/right Jacobians), so that
+    ``δD_i = Σ_{k=s}^{i−1} δθ_k × (r n)``. Sample i's own term ``δφ_i × (r n) = −K_i δq_i``
+    (``K = r [n]ₓ J_ω``) goes into the per-sample matrix ``J = J_p + K``; the rest (earlier
+    samples, through the sum) is small (the increments are ~ω dt) and is solved for by
+    fixed-point sweeps ``J δq = e + δD(δq) + K δq`` (each sweep gains a factor ~θ, a few
+    hundred here; :data:`_SWEEPS`), so the Newton iteration converges quadratically. Swing
+    targets follow the lift-off rolling ``D_ℓ + δD_ℓ``. Arrays are components first with the
+    samples last (long vector operations).
     """
     ik = wb.body_ik(base, plan, q_prev=q0, times=t, strict=False)
     q = np.array(ik.q)
     if rad == 0.0:
         return plan, q, ik, 1, 0.0, None, np.zeros(plan.shape)
     st = _leg_structure(wb, q[0], base[0])
+    n, nl = support.shape
+    sup = np.ascontiguousarray(np.asarray(support, dtype=bool).T)  # (L, N)
+    sw = np.ascontiguousarray(np.asarray(swing, dtype=bool).T)
+    start = stance_start_index(np.asarray(support, dtype=bool)).T  # (L, N)
+    both = sup[:, :-1] & sup[:, 1:]
+    rn = rad * np.ascontiguousarray(np.asarray(normals, dtype=float).transpose(2, 1, 0))
+    rn_inc = rn[..., :-1] * both  # the increments' lever r n, 0 outside a stance
+    planT = np.ascontiguousarray(np.asarray(plan, dtype=float).transpose(2, 1, 0))  # (3, L, N)
+    keep = np.where(sw, 1.0 - np.asarray(blend, dtype=float).T, 0.0)  # swing: lift-off share
+    last = np.maximum.accumulate(np.where(sup, np.arange(n), -1), axis=1)
+    last_at = (np.arange(nl)[:, None], np.maximum(last, 0))
+    seen = last >= 0
+    jj = np.maximum(st.joints, 0)  # (L, M)
+    valid = st.joints >= 0
+    rev = (st.revolute[jj] & valid)[..., None]  # (L, M, 1)
+    lin_ok = valid[..., None]
+    ax_j = st.axes.T[..., None]  # (3, nq, 1)
+    foot = st.foot.T[..., None]  # (3, L, 1): the foot in its link's frame
+    qt = np.ascontiguousarray(q.T)  # (nq, N)
     passes, residual = 1, math.inf
     while True:
-        T = wb.joint_poses(q, base)
-        centres = wb.points_of(T)[:, :, -1]
-        D = rolling_offsets(T[:, st.link, :3, :3], support, normals, rad)
-        lo = last_stance_value(D, support)
-        feet = plan + np.where(swing[..., None], lo * (1.0 - blend[..., None]), D)
+        R, p = wb.joint_frames(qt.T, base)
+        Rl = R[:, :, st.link]
+        centres = Rl[:, 0] * foot[0] + Rl[:, 1] * foot[1] + Rl[:, 2] * foot[2] + p[:, st.link]
+        if n > 1:
+            theta, ang = _increments(Rl)
+            D = _rolled(_x(theta, rn_inc), sup, start)
+        else:
+            D = np.zeros(centres.shape)
+        lo = D[:, last_at[0], last_at[1]] * seen
+        feet = planT + np.where(sw, lo * keep, D)
         err = feet - centres
         residual = float(np.abs(err).max())
-        if residual <= tol or passes >= max_passes:
+        if residual <= tol or passes >= max_passes or n < 2:
             break
-        # Newton: stance samples first; the swing targets then follow the predicted
-        # lift-off rolling D + δD (δD = −K δq), and the swing samples are solved again
-        J, K = _leg_jacobians(st, T, centres, support, normals, rad)
-        pinv = _min_norm(J)
-        dq = np.matmul(pinv, err[..., None])
-        d_pred = D - np.matmul(K, dq)[..., 0]
-        lo = last_stance_value(d_pred, support)
-        err_sw = plan + lo * (1.0 - blend[..., None]) - centres
-        dq_sw = np.matmul(pinv, err_sw[..., None])
-        dq = np.asarray(np.where(swing[..., None, None], dq_sw, dq))[..., 0]
-        q = q + _scatter(st, dq, wb.nq)
+        # Jacobians (3, L, M, N): world axes a, J_p = a × (c − o) (prismatic: a), J_ω = a
+        a = (R[:, 0] * ax_j[0] + R[:, 1] * ax_j[1] + R[:, 2] * ax_j[2])[:, jj]
+        Jw = a * rev
+        J = np.where(rev, _x(a, centres[:, :, None] - p[:, jj]), a * lin_ok)
+        J += _x(rn[:, :, None], Jw) * sup[:, None]  # + K = r [n]ₓ J_ω in stance
+        A = np.einsum("ilmn,klmn->ikln", J, J)
+        A[0, 0] += 1e-14
+        A[1, 1] += 1e-14
+        A[2, 2] += 1e-14
+        A_inv = _inv_sym3(A)  # J⁺ = Jᵀ (J Jᵀ + λ I)⁻¹
+        small = ang < 1e-3
+        a_ = np.where(small, 1.0, ang)
+        exact = 1.0 / a_**2 - (1.0 + np.cos(a_)) / (2.0 * a_ * np.sin(a_))
+        beta = np.where(small, 1.0 / 12.0 + ang * ang / 720.0, exact)
+        rhs = err
+        sweeps = 1 if passes == 1 else _SWEEPS  # the first step is far from quadratic anyway
+        for sweep in range(sweeps + 1):
+            y = A_inv[:, 0] * rhs[0] + A_inv[:, 1] * rhs[1] + A_inv[:, 2] * rhs[2]
+            dq = J[0] * y[0, :, None] + J[1] * y[1, :, None] + J[2] * y[2, :, None]  # (L, M, N)
+            if sweep == sweeps:
+                break
+            phi = np.einsum("ilmn,lmn->iln", Jw, dq) * sup  # foot-link rotations δφ (stance)
+            dif = phi[..., 1:] - phi[..., :-1]
+            d_theta = dif - 0.5 * _x(theta, phi[..., 1:] + phi[..., :-1])
+            d_theta += beta * _x(theta, _x(theta, dif))
+            dD = _rolled(_x(d_theta, rn_inc), sup, start)
+            lo = (D + dD)[:, last_at[0], last_at[1]] * seen
+            rhs = np.where(sw, planT + lo * keep - centres, err + dD - _x(phi, rn))
+        for m in range(jj.shape[1]):
+            ok = valid[:, m]
+            qt[jj[ok, m]] += dq[ok, m]
         passes += 1
+    q = np.ascontiguousarray(qt.T)
     margin = np.minimum(q - wb.lower, wb.upper - q)
     for arr in (q, margin):
         arr.setflags(write=False)
     ik = BodyIK(q, ik.reached, ik.excess, margin, ik.leg_names)
-    return feet, q, ik, passes, residual, T, D
+    back = (2, 1, 0)
+    T = poses_of(R, p)
+    feet_out, d_out = (np.ascontiguousarray(x.transpose(back)) for x in (feet, D))
+    return feet_out, q, ik, passes, residual, T, d_out

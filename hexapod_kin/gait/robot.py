@@ -34,7 +34,7 @@ from .legs import (
     pick_branch,
     sphere_radius,
 )
-from .tree import Tree, solve_legs, tree_poses
+from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
@@ -174,6 +174,10 @@ class WholeBody:
         """
         return tree_poses(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
 
+    def joint_frames(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`joint_poses` components first: rotations (3, 3, nq, N), origins (3, nq, N)."""
+        return tree_frames(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
+
     def leg_points(self, q: Any, base: Any) -> np.ndarray:
         """World positions (N, L, K, 3) of each leg's joints (hip first) and foot, in [m]."""
         return self.points_of(self.joint_poses(q, base))
@@ -189,10 +193,8 @@ class WholeBody:
 
     def feet_of(self, T: np.ndarray) -> np.ndarray:
         """World foot positions (N, L, 3) from joint poses ``T``."""
-        Ta = T[:, self._foot_joint]  # (N, L, 4, 4)
-        return np.asarray(
-            np.matmul(Ta[..., :3, :3], self._foot[None, :, :3, 3, None])[..., 0] + Ta[..., :3, 3]
-        )
+        j = self._foot_joint
+        return _mv(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
 
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
@@ -211,8 +213,9 @@ class WholeBody:
         """:meth:`com` from joint poses ``T`` (N, nq, 4, 4) and body poses (N, 4, 4)."""
         base = np.asarray(base, dtype=float)
         acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
-        pts = np.einsum("njab,jb->nja", T[:, :, :3, :3], self._levers[1:]) + T[:, :, :3, 3]
-        acc = acc + np.einsum("j,nja->na", self._masses[1:], pts)
+        m = self._masses[1:]  # Σ_j m_j (R_j l_j + p_j), contracted over j at once
+        acc += np.tensordot(T[:, :, :3, :3], m[:, None] * self._levers[1:], axes=([1, 3], [0, 1]))
+        acc += np.tensordot(T[:, :, :3, 3], m, axes=([1], [0]))
         return np.asarray(acc / self.mass)
 
     def points_and_com(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -692,6 +695,8 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
             allowed="hexapod_kin.params.Hexapod (e.g. robots.hexapod())",
         )
     try:
+        if params == _default().params:  # the default stays one object, whatever the LRU holds
+            return _default()
         return _cached(params)
     except TypeError:  # unhashable parameters
         return _build(params)

@@ -22,11 +22,21 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
-__all__ = ["REACH_TOL", "Tree", "axis_rotation", "leg_fk", "solve_legs", "tree_poses"]
+__all__ = [
+    "REACH_TOL",
+    "Tree",
+    "axis_rotation",
+    "leg_fk",
+    "poses_of",
+    "solve_legs",
+    "tree_frames",
+    "tree_poses",
+]
 
 #: A foot is reached when the numerical IK residual is at most this [m].
 REACH_TOL = 1e-10
@@ -50,6 +60,78 @@ class Tree:
     axes: np.ndarray
     prismatic: np.ndarray
 
+    @cached_property
+    def levels(self) -> tuple[tuple[np.ndarray, np.ndarray | None], ...]:
+        """The joints by depth: per level ``(joints, their parents)`` (parents ``None``: the body).
+
+        Pinocchio numbers a parent before its children, so one pass gives every depth.
+        """
+        par = np.asarray(self.parents)
+        depth = np.zeros(len(par), dtype=int)
+        for j, p in enumerate(par):
+            depth[j] = 0 if p < 0 else depth[p] + 1
+        out = []
+        for d in range(int(depth.max()) + 1 if len(par) else 0):
+            idx = np.flatnonzero(depth == d)
+            out.append((idx, None if d == 0 else par[idx]))
+        return tuple(out)
+
+    @cached_property
+    def groups(self) -> tuple[tuple[np.ndarray, np.ndarray | None, int, np.ndarray], ...]:
+        """:attr:`levels` split by axis: ``(joints, parents, k, sign)``.
+
+        ``k`` = 0, 1, 2 for revolute joints about ``±x, ±y, ±z`` of their frame (``sign``
+        (n_g, 1): ±1), 3 for the others (unaligned axes, prismatic joints).
+        """
+        a = np.asarray(self.axes, dtype=float)
+        pr = np.asarray(self.prismatic, dtype=bool)
+        kind = np.full(len(a), 3)
+        for k in range(3):
+            kind[(np.abs(a[:, k]) == 1.0) & ~pr] = k
+        out = []
+        for idx, par in self.levels:
+            for k in range(4):
+                sel = kind[idx] == k
+                if sel.any():
+                    sub = idx[sel]
+                    sign = np.where(a[sub, min(k, 2)] < 0, -1.0, 1.0)[:, None]
+                    out.append((sub, None if par is None else par[sel], k, sign))
+        return tuple(out)
+
+    @cached_property
+    def soa_terms(self) -> tuple[np.ndarray, ...]:
+        """:attr:`local_terms` components first, for :func:`tree_frames`: (3, 3, n, 1), (3, n, 1).
+
+        The third matrix is ``(P_R a) aᵀ − P_R`` (so ``M = P_R + sin q K1 + (1 − cos q) K2``).
+        """
+        Pr, Pt, K1, K2, Pa = self.local_terms
+        mat = [np.ascontiguousarray(x.transpose(1, 2, 0)[..., None]) for x in (Pr, K1, K2 - Pr)]
+        vec = [np.ascontiguousarray(x.T[..., None]) for x in (Pt, Pa)]
+        return mat[0], vec[0], mat[1], mat[2], vec[1]
+
+    @cached_property
+    def local_terms(self) -> tuple[np.ndarray, ...]:
+        """``(P_R, P_t, P_R[a]×, (P_R a) aᵀ, P_R a)`` per joint (n, 3, 3) / (n, 3).
+
+        With ``P`` the placement (rotation ``P_R``, translation ``P_t``) and ``a`` the axis:
+        ``P_R R(a, q) = cos q P_R + sin q P_R[a]× + (1 − cos q)(P_R a) aᵀ`` (Rodrigues), and a
+        prismatic joint's frame is at ``P_t + (P_R a) q``.
+        """
+        Pr = np.ascontiguousarray(self.placements[:, :3, :3])
+        a = np.asarray(self.axes, dtype=float)
+        skew = np.zeros(a.shape + (3,))
+        skew[:, 0, 1], skew[:, 0, 2] = -a[:, 2], a[:, 1]
+        skew[:, 1, 0], skew[:, 1, 2] = a[:, 2], -a[:, 0]
+        skew[:, 2, 0], skew[:, 2, 1] = -a[:, 1], a[:, 0]
+        Pa = np.einsum("nij,nj->ni", Pr, a)
+        return (
+            Pr,
+            np.ascontiguousarray(self.placements[:, :3, 3]),
+            Pr @ skew,
+            Pa[:, :, None] * a[:, None, :],
+            Pa,
+        )
+
 
 def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rotations (..., 3, 3) about unit ``axes`` (..., 3) by ``q`` (...) [rad] (Rodrigues)."""
@@ -69,33 +151,66 @@ def axis_rotation(axes: np.ndarray, q: np.ndarray) -> np.ndarray:
     return R
 
 
-def _local(P: np.ndarray, axis: np.ndarray, prismatic: Any, q: np.ndarray) -> np.ndarray:
-    """``P · M(q)`` (N, 4, 4) for one joint (placement P (..., 4, 4), axis (..., 3))."""
-    n = q.shape[0]
-    out = np.empty((n, 4, 4))
-    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
-    Pr = P[..., :3, :3]
-    if np.ndim(prismatic) == 0 and not prismatic:
-        out[:, :3, :3] = Pr @ axis_rotation(np.broadcast_to(axis, (n, 3)), q)
-        out[:, :3, 3] = P[..., :3, 3]
-        return out
-    pr = np.broadcast_to(np.asarray(prismatic, dtype=bool), (n,))
-    rot = axis_rotation(np.broadcast_to(axis, (n, 3)), np.where(pr, 0.0, q))
-    out[:, :3, :3] = Pr @ rot
-    shift = np.where(pr[:, None], np.broadcast_to(axis, (n, 3)) * q[:, None], 0.0)
-    out[:, :3, 3] = P[..., :3, 3] + (Pr @ shift[..., None])[..., 0]
+def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The joints' world frames, components first: rotations (3, 3, n, N), origins (3, n, N).
+
+    Args:
+        tree: The tree.
+        q: (N, n) joint values.
+        base: (N, 4, 4) body poses.
+
+    One product per depth of the tree and axis kind (:attr:`Tree.groups`): for a joint about
+    ``±x, ±y, ±z`` the parent's rotation times the placement, then two columns mixed by
+    ``cos q, ±sin q``; other joints by Rodrigues (:attr:`Tree.soa_terms`). The samples are
+    the last (contiguous) axis, so every step is a long vector operation.
+
+    """
+    qt = np.ascontiguousarray(np.asarray(q, dtype=float).T)  # (n, N)
+    nj, n = qt.shape
+    Pr, Pt, K1, K2, Pa = tree.soa_terms
+    R = np.empty((3, 3, nj, n))
+    p = np.empty((3, nj, n))
+    Rb = np.ascontiguousarray(base[:, :3, :3].transpose(1, 2, 0))[:, :, None, :]
+    pb = np.ascontiguousarray(base[:, :3, 3].T)[:, None, :]
+    for idx, par, k, sign in tree.groups:
+        Rp, pp = (Rb, pb) if par is None else (R[:, :, par], p[:, par])
+        qi = qt[idx]
+        if k < 3:  # X = R_parent P_R, then X R_k(±q) mixes two columns
+            P = Pr[:, :, idx]
+            X = Rp[:, 0, None] * P[None, 0] + Rp[:, 1, None] * P[None, 1]
+            X += Rp[:, 2, None] * P[None, 2]
+            c, s_ = np.cos(qi), np.sin(qi) * sign
+            u, v = (k + 1) % 3, (k + 2) % 3
+            R[:, k, idx] = X[:, k]
+            R[:, u, idx] = c * X[:, u] + s_ * X[:, v]
+            R[:, v, idx] = c * X[:, v] - s_ * X[:, u]
+            ti = Pt[:, idx]
+        else:  # P_R R(a, q) = P_R + sin q P_R[a]× + (1 − cos q)((P_R a) aᵀ − P_R)
+            pris = np.asarray(tree.prismatic, dtype=bool)[idx][:, None]
+            qr = np.where(pris, 0.0, qi)
+            Mi = np.sin(qr) * K1[:, :, idx]
+            Mi += (1.0 - np.cos(qr)) * K2[:, :, idx]
+            Mi += Pr[:, :, idx]
+            R[:, :, idx] = Rp[:, 0, None] * Mi[None, 0] + Rp[:, 1, None] * Mi[None, 1]
+            R[:, :, idx] += Rp[:, 2, None] * Mi[None, 2]
+            ti = Pt[:, idx] + np.where(pris, Pa[:, idx] * qi, 0.0)
+        p[:, idx] = Rp[:, 0] * ti[0] + Rp[:, 1] * ti[1] + Rp[:, 2] * ti[2] + pp
+    return R, p
+
+
+def poses_of(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(N, n, 4, 4) homogeneous poses from :func:`tree_frames`' (3, 3, n, N) and (3, n, N)."""
+    out = np.empty((R.shape[-1], R.shape[2], 4, 4))
+    out[..., :3, :3] = R.transpose(3, 2, 0, 1)
+    out[..., :3, 3] = p.transpose(2, 1, 0)
+    out[..., 3, :3] = 0.0
+    out[..., 3, 3] = 1.0
     return out
 
 
 def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
     """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
-    n, nj = q.shape
-    out = np.empty((n, nj, 4, 4))
-    for j in range(nj):
-        local = _local(tree.placements[j], tree.axes[j], bool(tree.prismatic[j]), q[:, j])
-        par = int(tree.parents[j])
-        out[:, j] = (base if par < 0 else out[:, par]) @ local
-    return out
+    return poses_of(*tree_frames(tree, q, base))
 
 
 def _mv(A: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -266,6 +381,40 @@ def solve_legs(
     return q, res, res <= REACH_TOL
 
 
+def _fk_soa(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`leg_fk_of` components first: q (m, G, N) → (3, m, G, N) ×2 and feet (3, G, N)."""
+    m = q.shape[0]
+    origins = np.empty((3,) + q.shape)
+    waxes = np.empty((3,) + q.shape)
+    any_p = bool(c.prismatic.any())
+    R: np.ndarray | None = None
+    t: Any = 0.0
+    for k in range(m):
+        qk = q[k]
+        pk = c.prismatic[:, k][:, None]
+        qr = np.where(pk, 0.0, qk) if any_p else qk
+        Pr = c.Pr[:, k].transpose(1, 2, 0)[..., None]  # (3, 3, G, 1)
+        M = np.sin(qr) * c.K1[:, k].transpose(1, 2, 0)[..., None]
+        M += (1.0 - np.cos(qr)) * (c.K2[:, k] - c.Pr[:, k]).transpose(1, 2, 0)[..., None]
+        M += Pr
+        Pt = c.Pt[:, k].T[..., None]
+        Pa = c.Pa[:, k].T[..., None]
+        if R is None:
+            o = np.broadcast_to(Pt, (3,) + qk.shape)
+            w = np.broadcast_to(Pa, (3,) + qk.shape)
+            R = M
+        else:
+            o = t + R[:, 0] * Pt[0] + R[:, 1] * Pt[1] + R[:, 2] * Pt[2]
+            w = R[:, 0] * Pa[0] + R[:, 1] * Pa[1] + R[:, 2] * Pa[2]
+            R = R[:, 0, None] * M[None, 0] + R[:, 1, None] * M[None, 1] + R[:, 2, None] * M[None, 2]
+        origins[:, k] = o
+        waxes[:, k] = w
+        t = o + np.where(pk, w * qk, 0.0) if any_p else o
+    assert R is not None
+    f = c.foot.T[..., None]
+    return origins, waxes, t + R[:, 0] * f[0] + R[:, 1] * f[1] + R[:, 2] * f[2]
+
+
 def _dls(
     c: LegConsts,
     lower: np.ndarray,
@@ -279,60 +428,77 @@ def _dls(
 
     Levenberg–Marquardt acceptance: a step is kept only when it lowers the residual (then
     the damping factor μ shrinks ×0.3), else it is refused and μ grows ×10; an element stops
-    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual).
+    at ``‖e‖ ≤ 10⁻¹³ s`` or when μ passes 10¹⁰ (no step lowers the residual). Each element
+    is independent: an iteration only visits the samples with a leg still running, and the
+    arrays are components first with the samples last (long vector operations).
     """
     m = q.shape[-1]
     lam_floor = 1e-14 * span * span
     done_tol = 1e-13 * span
-    eye = np.eye(m)
-    o, w, p = leg_fk_of(c, q)
-    err = tgt - p
-    norm = np.linalg.norm(err, axis=-1)
+    qs = np.ascontiguousarray(np.transpose(q, (2, 1, 0)))  # (m, G, N)
+    ts = np.ascontiguousarray(np.transpose(tgt, (2, 1, 0)))  # (3, G, N)
+    lo = np.asarray(lower, dtype=float).T[..., None]
+    hi = np.asarray(upper, dtype=float).T[..., None]
+    pr = c.prismatic.T[None, :, :, None]  # (1, m, G, 1)
+    o, w, p = _fk_soa(c, qs)
+    err = ts - p
+    norm = np.sqrt(np.einsum("i...,i...->...", err, err))
     mu = np.full(norm.shape, 1e-2)
     for _ in range(iterations):
         live = (norm > done_tol) & (mu < 1e10)
-        if not live.any():
+        cols = np.flatnonzero(live.any(axis=0))
+        if not cols.size:
             break
-        pr = c.prismatic[:, None, :]
-        rev = np.swapaxes(np.cross(w, p[..., None, :] - o), -1, -2)  # (N, G, 3, m)
-        J = np.where(pr, np.swapaxes(w, -1, -2), rev)
-        Jt = np.swapaxes(J, -1, -2)
-        lam2 = mu * norm * norm + lam_floor
-        dq = _solve_spd(Jt @ J + lam2[..., None, None] * eye, _mv(Jt, err))
-        big = np.abs(dq).max(axis=-1)
-        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))[..., None]
-        new = np.clip(q + dq, lower, upper)
-        o2, w2, p2 = leg_fk_of(c, new)
-        err2 = tgt - p2
-        norm2 = np.linalg.norm(err2, axis=-1)
-        acc = live & (norm2 < norm)
-        q[acc] = new[acc]
-        o[acc], w[acc], p[acc], err[acc], norm[acc] = (
-            o2[acc],
-            w2[acc],
-            p2[acc],
-            err2[acc],
-            norm2[acc],
+        lv, nm, e_, q_ = live[:, cols], norm[:, cols], err[..., cols], qs[..., cols]
+        o_, w_, p_ = o[..., cols], w[..., cols], p[..., cols]
+        d = p_[:, None] - o_
+        J = np.stack(
+            [w_[1] * d[2] - w_[2] * d[1], w_[2] * d[0] - w_[0] * d[2], w_[0] * d[1] - w_[1] * d[0]]
         )
-        mu = np.where(acc, np.maximum(mu * 0.3, 1e-9), np.where(live, mu * 10.0, mu))
-    return norm
+        J = np.where(pr, w_, J)  # (3, m, G, n')
+        A = np.einsum("iagn,ibgn->abgn", J, J)
+        lam2 = mu[:, cols] * nm * nm + lam_floor
+        for a in range(m):
+            A[a, a] += lam2
+        b = np.einsum("iagn,ign->agn", J, e_)
+        dq = _solve_spd(A, b)
+        big = np.abs(dq).max(axis=0)
+        dq *= np.minimum(1.0, 0.5 / np.maximum(big, 1e-300))
+        new = np.clip(q_ + dq, lo, hi)
+        o2, w2, p2 = _fk_soa(c, new)
+        err2 = ts[..., cols] - p2
+        norm2 = np.sqrt(np.einsum("i...,i...->...", err2, err2))
+        acc = lv & (norm2 < nm)
+        qs[..., cols] = np.where(acc, new, q_)
+        o[..., cols] = np.where(acc, o2, o_)
+        w[..., cols] = np.where(acc, w2, w_)
+        p[..., cols] = np.where(acc, p2, p_)
+        err[..., cols] = np.where(acc, err2, e_)
+        norm[:, cols] = np.where(acc, norm2, nm)
+        mu[:, cols] = np.where(
+            acc, np.maximum(mu[:, cols] * 0.3, 1e-9), np.where(lv, mu[:, cols] * 10.0, mu[:, cols])
+        )
+    q[:] = np.transpose(qs, (2, 1, 0))
+    return np.ascontiguousarray(norm.T)
 
 
 def _solve_spd(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve stacked symmetric positive-definite systems ``A x = b`` (E, m, m), (E, m).
+    """Solve stacked symmetric positive-definite systems ``A x = b``, A (m, m, ...), b (m, ...).
 
     m = 3: by the adjugate (element-wise, faster than a batched LAPACK call for 3×3);
     otherwise ``numpy.linalg.solve``.
     """
-    if A.shape[-1] != 3:
-        return np.asarray(np.linalg.solve(A, b[..., None])[..., 0])
-    a, bb, c = A[..., 0, 0], A[..., 0, 1], A[..., 0, 2]
-    d, e, f = A[..., 1, 1], A[..., 1, 2], A[..., 2, 2]
+    if A.shape[0] != 3:
+        x = np.linalg.solve(np.moveaxis(A, (0, 1), (-2, -1)), np.moveaxis(b, 0, -1)[..., None])
+        return np.moveaxis(x[..., 0], -1, 0)
+    a, bb, c = A[0, 0], A[0, 1], A[0, 2]
+    d, e, f = A[1, 1], A[1, 2], A[2, 2]
     c00, c01, c02 = d * f - e * e, c * e - bb * f, bb * e - c * d
     c11, c12, c22 = a * f - c * c, bb * c - a * e, a * d - bb * bb
     det = a * c00 + bb * c01 + c * c02
-    x = np.empty_like(b)
-    x[..., 0] = c00 * b[..., 0] + c01 * b[..., 1] + c02 * b[..., 2]
-    x[..., 1] = c01 * b[..., 0] + c11 * b[..., 1] + c12 * b[..., 2]
-    x[..., 2] = c02 * b[..., 0] + c12 * b[..., 1] + c22 * b[..., 2]
-    return x / det[..., None]
+    x = np.empty(b.shape)
+    x[0] = c00 * b[0] + c01 * b[1] + c02 * b[2]
+    x[1] = c01 * b[0] + c11 * b[1] + c12 * b[2]
+    x[2] = c02 * b[0] + c12 * b[1] + c22 * b[2]
+    x /= det
+    return x

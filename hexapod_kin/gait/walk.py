@@ -86,7 +86,7 @@ SWING_MARGIN = 0.005
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
-ROLLING_TOL = 1e-12
+ROLLING_TOL = 1e-13
 
 
 def _num(
