@@ -72,6 +72,7 @@ COMMANDS: dict[str, list[str]] = {
         "{out}/sweep.csv",
     ],
     "timeline": ["timeline", "gait", "--duration", "2", "-o", "{out}/walk.csv"],
+    "simulate": ["simulate", "hexapod", "--duration", "2", "--no-stand"],
     "reproduce": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
     # the README's first command: the whole report (animations included)
     "reproduce-full": ["reproduce", "--out", "{out}/report_full"],

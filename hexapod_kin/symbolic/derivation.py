@@ -336,6 +336,11 @@ def _agree(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[st
     return True
 
 
+#: The pace [s] of the optional work (extra determinant frames, tidied printing) when no
+#: budget is given: the required stages are never cut, the optional ones do not run for hours.
+UNBOUNDED_PACE = 30.0
+
+
 def _stages(
     chain: Chain, rows: Any, lengths: Any, start: float, budget: float | None,
     have: Mapping[str, Any],
@@ -345,12 +350,13 @@ def _stages(
     ``budget`` (s from ``start``; ``None``: none) paces the optional work: extra determinant
     frames are tried during its first 15 %, maximal minors factored during the first 70 %,
     the printed forms tidied (last, after the families) until 80 % or for 20 % of it, never
-    past 90 %; the caller kills the process at the budget itself.
+    past 90 %; the caller kills the process at the budget itself. With no budget the required
+    stages run to the end and the optional work is paced as for :data:`UNBOUNDED_PACE`.
     """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     syms = _core.length_symbols(chain, lengths)
-    span = 1e9 if budget is None else budget
+    span = UNBOUNDED_PACE if budget is None else budget
     t0 = time.perf_counter()
     kin = have.get("kinematics")
     if kin is None:
