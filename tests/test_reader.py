@@ -88,3 +88,43 @@ def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path) -> None:
     assert len(warned) == 1 and warned[0].startswith("hexapod-kin: warning:"), again.stderr
     det = [ln for ln in first.stdout.splitlines() if "det" in ln.lower()]
     assert det and det == [ln for ln in again.stdout.splitlines() if "det" in ln.lower()]
+
+
+def _entry(pairs: list, name: str) -> dict:
+    return next(v for k, v in pairs if k == name)
+
+
+@pytest.mark.parametrize("what", ["p", "det", "family"])
+def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: str) -> None:
+    """An edited value in the symbolic cache (a plausible expression, no code) is checked
+    against the table before use: discarded with one CacheWarning and recomputed."""
+    import json
+
+    import hexapod_kin as hk
+    from hexapod_kin.exceptions import CacheWarning
+    from hexapod_kin.symbolic import cache, clear_memory, derive
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "hk"))
+    clear_memory()
+    first = derive(hk.robots.hexabot_leg(), budget=None)
+    (path,) = list(cache.cache_dir().glob("*.json"))
+    data = json.loads(path.read_text())
+    stages = data["stages"]["__dict__"]
+    if what == "p":  # the foot's position: q1 becomes q2 in p only
+        entry = _entry(_entry(stages, "kinematics")["__dict__"], "p")
+        key, old, new = "__matrix__", "cos(Symbol('q1'", "cos(Symbol('q2'"
+    elif what == "det":  # det(J Jt) with sin(q3) turned into cos(q3)
+        entry = _entry(_entry(stages, "determinant")["__dict__"], "gram")
+        key, old, new = "__sympy__", "sin(Symbol('q3'", "cos(Symbol('q3'"
+    else:  # a family's factor that is no factor of det J
+        entry = _entry(stages, "families")["__tuple__"][-1]["__family__"]["factor"]
+        key, old, new = "__sympy__", "Symbol('q3'", "Symbol('q1'"
+    assert old in entry[key]
+    entry[key] = entry[key].replace(old, new)
+    path.write_text(json.dumps(data))
+    clear_memory()
+    with pytest.warns(CacheWarning):
+        again = derive(hk.robots.hexabot_leg(), budget=None)
+    assert sp.simplify(again.det - first.det) == 0
+    assert [f.name for f in again.families] == [f.name for f in first.families]
+    clear_memory()

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -48,7 +49,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from ..exceptions import ParameterError
+from ..exceptions import CacheWarning, ParameterError
 from ..params import Chain
 from ..singularity.rows import choose_rows, row_indices
 from . import cache as _cache
@@ -482,6 +483,53 @@ def _usable(stages: Mapping[str, Any] | None, budget: float | None) -> bool:
     return budget is not None and tried is not None and budget <= tried
 
 
+def _claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
+    """A cached derivation checked against what it claims, before use.
+
+    At three random configurations (fixed seed): the stored ``p`` against the table's own
+    forward kinematics (:func:`~hexapod_kin._table_kin.table_fk`, plain numpy), the stored
+    position Jacobian against :func:`~hexapod_kin._table_kin.table_position_jacobian`, and
+    the stored ``det(J Jᵀ)`` against the stored J's own rows. Each stored family's factor must
+    be a factor of the stored determinant. An edited entry fails one of these.
+    """
+    from .._table_kin import table_fk, table_position_jacobian
+
+    kin = stages.get("kinematics")
+    if kin is None:
+        return True  # nothing stored that could be wrong
+    n = chain.nq
+    q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
+    rng = np.random.default_rng(20251202)
+    qs = rng.uniform(-math.pi, math.pi, (3, n))
+    scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
+    p_f = sp.lambdify(q, sp.Matrix(kin["p"]).subs(values), "numpy")
+    j_f = sp.lambdify(q, sp.Matrix(kin["J_direct"]).subs(values), "numpy")
+    det = stages.get("determinant")
+    rows = stages.get("rows")
+    g_f = None
+    if det is not None and rows is not None and det.get("gram") is not None:
+        g_f = sp.lambdify(q, sp.sympify(det["gram"]).subs(values), "numpy")
+    for qv in qs:
+        p = np.asarray(p_f(*qv), dtype=float).reshape(-1)[:3]
+        if not np.allclose(p, table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
+            return False
+        jac = np.asarray(j_f(*qv), dtype=float)
+        if not np.allclose(jac[:3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
+            return False
+        if g_f is not None and rows is not None:
+            sel = jac[[ROW_NAMES.index(r) for r in rows]]
+            want = float(np.linalg.det(sel @ sel.T))
+            if abs(float(g_f(*qv)) - want) > 1e-8 * max(1.0, abs(want)) * scale**4:
+                return False
+    if det is not None:
+        factors = [sp.expand(f) for f, _m in det.get("factors", ())]
+        for fam in stages.get("families") or ():
+            f = sp.expand(fam.factor)
+            if factors and not any(sp.expand(f - g) == 0 or sp.expand(f + g) == 0 for g in factors):
+                return False
+    return True
+
+
 def derive(
     source: Any,
     rows: str | Sequence[str] | None = None,
@@ -534,7 +582,17 @@ def derive(
         row_indices(rows)
     syms = _core.length_symbols(chain, lengths)  # validates names early
     digest = _cache_key(chain, rows, lengths)
-    found = (_MEMO.get(digest) or _cache.load(digest)) if cache else None
+    found = _MEMO.get(digest) if cache else None
+    if cache and found is None:
+        found = _cache.load(digest)
+        if found is not None and not _claims_hold(found, chain, syms["values"]):
+            warnings.warn(
+                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
+                "do not match the table (edited); recomputing it",
+                CacheWarning,
+                stacklevel=2,
+            )
+            found = None
     if _usable(found, budget):
         assert found is not None
         stages: dict[str, Any] = dict(found)
