@@ -96,8 +96,14 @@ def _one_line_warning(original: Any) -> Any:
     return show
 
 
+#: Set by :func:`run`: the process ends after :func:`main`, so a Ctrl-C that arrives once the
+#: command is done is ignored (the status stands) instead of killing the exiting interpreter.
+_ENTRY = [False]
+
+
 def run() -> None:
     """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit."""
+    _ENTRY[0] = True
     sys.exit(main())
 
 
@@ -144,7 +150,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         sys.unraisablehook = hook
         if previous is not None:
-            signal.signal(signal.SIGINT, previous)
+            signal.signal(signal.SIGINT, signal.SIG_IGN if _ENTRY[0] else previous)
     if interrupted and status != 130:
         print("hexapod-kin: interrupted", file=sys.stderr)
         return 130
