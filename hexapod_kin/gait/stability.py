@@ -84,17 +84,21 @@ def _clearance_numpy(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     n, _, k, _ = pts.shape
     if not len(pairs):
         return np.empty((n, 0))
-    p0 = pts[:, pairs[:, 0], :-1][:, :, :, None, :]  # (N, P, K-1, 1, 3)
-    u = (pts[:, pairs[:, 0], 1:] - pts[:, pairs[:, 0], :-1])[:, :, :, None, :]
-    q0 = pts[:, pairs[:, 1], :-1][:, :, None, :, :]  # (N, P, 1, K-1, 3)
-    v = (pts[:, pairs[:, 1], 1:] - pts[:, pairs[:, 1], :-1])[:, :, None, :, :]
+    # components first, (3, N, P, K): every operation below is one long vector operation
+    ca = np.ascontiguousarray(np.moveaxis(pts[:, pairs[:, 0]], -1, 0))
+    cb = np.ascontiguousarray(np.moveaxis(pts[:, pairs[:, 1]], -1, 0))
+    p0 = ca[..., :-1, None]  # (3, N, P, K-1, 1)
+    u = (ca[..., 1:] - ca[..., :-1])[..., :, None]
+    q0 = cb[..., None, :-1]  # (3, N, P, 1, K-1)
+    v = (cb[..., 1:] - cb[..., :-1])[..., None, :]
     r = p0 - q0
 
     def dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1] + x[..., 2] * y[..., 2]
+        return np.asarray(x[0] * y[0] + x[1] * y[1] + x[2] * y[2])
 
-    a, e, f, c, b = dot(u, u), dot(v, v), dot(v, r), dot(u, r), dot(u, v)
-    a, e, f, c, b = np.broadcast_arrays(a, e, f, c, b)
+    a = np.broadcast_to(dot(u, u), r.shape[1:])
+    e = np.broadcast_to(dot(v, v), r.shape[1:])
+    f, c, b = dot(v, r), dot(u, r), dot(u, v)
     eps = 1e-18
     with np.errstate(divide="ignore", invalid="ignore"):
         den = a * e - b * b
@@ -105,14 +109,14 @@ def _clearance_numpy(pts: np.ndarray, pairs: np.ndarray) -> np.ndarray:
             low, np.clip(-c / a, 0.0, 1.0), np.where(high, np.clip((b - c) / a, 0.0, 1.0), s)
         )
         t = np.clip(t, 0.0, 1.0)
-        # degenerate segments (a point): one parameter fixed at 0
-        s = np.where(e <= eps, np.clip(-c / a, 0.0, 1.0), s)
-        t = np.where(e <= eps, 0.0, t)
-        t = np.where(a <= eps, np.clip(f / e, 0.0, 1.0), t)
-        s = np.where(a <= eps, 0.0, s)
-        both = (a <= eps) & (e <= eps)
-        s, t = np.where(both, 0.0, s), np.where(both, 0.0, t)
-    d = r + u * s[..., None] - v * t[..., None]
+        if (e <= eps).any() or (a <= eps).any():  # degenerate segments (a point)
+            s = np.where(e <= eps, np.clip(-c / a, 0.0, 1.0), s)
+            t = np.where(e <= eps, 0.0, t)
+            t = np.where(a <= eps, np.clip(f / e, 0.0, 1.0), t)
+            s = np.where(a <= eps, 0.0, s)
+            both = (a <= eps) & (e <= eps)
+            s, t = np.where(both, 0.0, s), np.where(both, 0.0, t)
+    d = r + u * s - v * t
     dist = np.sqrt(dot(d, d))
     return np.asarray(dist.reshape(n, len(pairs), -1).min(axis=2))
 
