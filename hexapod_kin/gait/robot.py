@@ -11,7 +11,6 @@ forward, z up).
 
 from __future__ import annotations
 
-import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
@@ -20,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
+from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
 from ..params import Hexapod, rpy_to_matrix
 from .legs import (
     BodyIK,
@@ -261,18 +260,7 @@ class WholeBody:
         if foot_reach is None:
             r = self._reach
         else:
-            try:
-                v = float(foot_reach)
-            except (TypeError, ValueError):
-                v = math.nan
-            if not (math.isfinite(v) and v >= 0):
-                raise ParameterError(
-                    f"foot_reach={foot_reach!r} is not allowed; give a distance >= 0 m",
-                    parameter="foot_reach",
-                    value=foot_reach,
-                    allowed=">= 0",
-                )
-            r = np.full(self.n_legs, v)
+            r = np.full(self.n_legs, positive("foot_reach", foot_reach, allow_zero=True))
         out = np.empty((self.n_legs, 3))
         out[:, :2] = self.mounts[:, :2, 3] + r[:, None] * self._reach_dir
         out[:, 2] = -self.body_height + self.foot_radius
@@ -572,7 +560,7 @@ def _build_model(
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
-        rad = _num_nonneg("foot_radius", foot_radius)
+        rad = positive("foot_radius", foot_radius, allow_zero=True)
     elif hexa:
         rad = 1.5 * float(params.legs[0].chain.link_radius)  # type: ignore[union-attr]
     elif feet is None:  # leaf feet: their links' sphere collisions, if every foot has one
@@ -618,21 +606,6 @@ def _build_model(
     for a in (lower, upper, vel, eff, mounts, tree.placements, tree.axes, foot, wb._seed):
         a.setflags(write=False)
     return wb
-
-
-def _num_nonneg(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if not (math.isfinite(v) and v >= 0):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; give a length >= 0 m",
-            parameter=name,
-            value=value,
-            allowed=">= 0",
-        )
-    return v
 
 
 def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
@@ -738,7 +711,7 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
             )
         return robot
     spec = parse_feet(feet)
-    rad = None if foot_radius is None else _num_nonneg("foot_radius", foot_radius)
+    rad = None if foot_radius is None else positive("foot_radius", foot_radius, allow_zero=True)
     if robot is None:
         robot = "hexapod"
     params = robot if isinstance(robot, Hexapod) else getattr(robot, "params", None)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError, one_of
+from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 
 __all__ = ["SCENE_TERRAINS", "SimScene", "scene_mjcf"]
 
@@ -207,21 +207,6 @@ class SimScene:
         }
 
 
-def _positive(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    if not (math.isfinite(v) and v > 0):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; give a finite number > 0 (SI units)",
-            parameter=name,
-            value=value,
-            allowed="> 0",
-        )
-    return v
-
-
 def scene_mjcf(
     robot: Any = None,
     *,
@@ -271,7 +256,7 @@ def scene_mjcf(
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
     mu, kp, kv, dt, tc = (
-        _positive(n, v)
+        positive(n, v)
         for n, v in (
             ("friction", friction),
             ("kp", kp),
@@ -280,7 +265,7 @@ def scene_mjcf(
             ("contact_time", contact_time),
         )
     )
-    arm = 0.0 if armature == 0 else _positive("armature", armature)
+    arm = 0.0 if armature == 0 else positive("armature", armature)
     if tc < 2 * dt:
         raise ParameterError(
             f"contact_time={contact_time!r} s is below twice the timestep ({2 * dt:g} s)",
@@ -290,7 +275,7 @@ def scene_mjcf(
         )
     mujoco = _mujoco()
     wb = _robot(robot, feet)
-    r = _foot_radius(wb) if foot_radius is None else _positive("foot_radius", foot_radius)
+    r = _foot_radius(wb) if foot_radius is None else positive("foot_radius", foot_radius)
     xml = _robot_mjcf(wb, robot if source is None else source)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)

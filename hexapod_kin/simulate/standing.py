@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError
-from .scene import SimScene, _Engine, _positive, _robot, scene_mjcf
+from ..exceptions import ParameterError, positive
+from .scene import SimScene, _Engine, _robot, scene_mjcf
 
 __all__ = ["StandForces", "stand_forces"]
 
@@ -99,7 +99,7 @@ def stand_forces(
         raise ParameterError(
             f"stand_forces needs a flat scene, not {sc.terrain!r}", parameter="scene"
         )
-    dur = _positive("settle", settle)
+    dur = positive("settle", settle)
     st = _stance(wb)
     eng = _Engine(sc)
     q = np.zeros(len(sc.joint_names))
