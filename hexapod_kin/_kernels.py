@@ -176,16 +176,29 @@ def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
 
     A compiled-code cache that cannot be loaded (truncated, emptied, random bytes, swapped
     files: numba raises while unpickling it) is never fatal: one line on stderr, the cache
-    entries that failed are reset, and the kernel is compiled again.
+    entries that failed are reset, and the kernel is compiled again. A Ctrl-C that numba's
+    compile callback swallowed (reported as unraisable) and that made the compile fail is
+    raised as the ``KeyboardInterrupt`` it was.
     """
     if area in _SEEN:
         return run(0, 0)
     _notice(area)
+    swallowed: list[BaseException] = []
+    hook = sys.unraisablehook
+
+    def record(info: Any) -> None:
+        if isinstance(info.exc_value, KeyboardInterrupt):
+            swallowed.append(info.exc_value)
+        hook(info)
+
+    sys.unraisablehook = record
     try:
         out = run(0, 0)
     except (ParameterError, ConfigurationError):
         raise
     except Exception as exc:  # noqa: BLE001 - any failure to load the cache: rebuild once
+        if swallowed:  # Ctrl-C in numba's compile callback (swallowed there): not a damaged cache
+            raise KeyboardInterrupt from exc
         detail = " ".join(str(exc).split())[:120]
         print(
             f"hexapod-kin: warning: the compiled-code cache of the {area} kernels could not be "
@@ -195,6 +208,9 @@ def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
         )
         _rebuild_unloaded()
         out = run(0, 0)
+    finally:
+        if sys.unraisablehook is record:
+            sys.unraisablehook = hook
     mark_compiled(area)
     return out
 

@@ -1,61 +1,305 @@
-"""Ctrl-C ends every long command with one line and exit status 130, leaving no partial file.
+"""Ctrl-C ends every long command with one line and exit status 130, leaving nothing behind.
 
-SIGINT is sent at random times (from just after Python's own start-up, whose handling is the
-interpreter's, to the end of the work) to commands that run longer than a second. Each try
-must end either interrupted (status 130, the one line ``hexapod-kin: interrupted``, no
-traceback, no temporary or half-written file) or, when the signal came after the work was
-done, as a normal success.
+Every command form below runs longer than a second on the 2-core reference machine with
+fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading). For each:
+
+1. a **reference run**, uninterrupted, with fresh caches: its wall time ``D``, exit status
+   and files;
+2. ``TRIES`` **interrupted runs**, each with fresh caches: SIGINT at a uniformly random time
+   between the end of start-up (``python -c "import hexapod_kin"``, whose handling is the
+   interpreter's) and ``D``, sent either to the process group (what a terminal's Ctrl-C
+   does: forked workers and servers get it too) or to the command's process alone
+   (``kill -INT``). Each try ends either interrupted — status 130, last stderr line
+   ``hexapod-kin: interrupted`` (one notice line may precede it), no traceback — or, when
+   the signal came after the work, exactly as the reference run. Either way: no temporary
+   file (``*.tmp*``) in the output folder or the caches, no process of the run left alive,
+   and every output file is whole: byte-identical to the reference run's file (every run
+   writes to the same paths, so even the paths inside the files agree);
+3. a **next run**, uninterrupted, on the output folder and caches of the interrupted try
+   whose signal came last (the most state written): the same status and the same files as
+   the reference run. Nothing an interrupt leaves blocks or changes the next run.
+
+``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES`` (default 2, the regular suite; the ``soak`` step of
+``.ci/run`` sets 20). The numba-compiling forms (tens of seconds cold) run only when the
+variable is set. ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with
+its outcome counts.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import random
 import signal
 import subprocess
 import sys
 import time
+import uuid
 from pathlib import Path
-from xml.etree import ElementTree
 
 import pytest
 
-TRIES = 5
+ROOT = Path(__file__).resolve().parent.parent
+TRIES = int(os.environ.get("HEXAPOD_KIN_CTRL_C_TRIES", "2"))
+SOAK = "HEXAPOD_KIN_CTRL_C_TRIES" in os.environ
 
-COMMANDS = {
-    "gait": ["gait", "--duration", "10", "--json"],
+#: name -> arguments; ``{out}`` is the output folder. One form per command that runs longer
+#: than a second (its heavier typical options), cold caches in every run.
+COMMANDS: dict[str, list[str]] = {
+    "derive-5dof": ["derive", str(ROOT / "examples" / "leg5.yaml")],
+    "derive-7dof": ["derive", "erd:panda"],
+    "scan-ur5": ["scan", "erd:ur5_robot", "--plot", "{out}/scan.png"],
+    "step-twist-ur5": ["step", "erd:ur5_robot", "--twist", "0", "0", "0.01", "0", "0", "0.1"],
+    "step-plot": ["step", "hexabot_leg", "--plot", "{out}/step.png"],
+    "pendulum": ["pendulum", "--plot", "{out}/p.png", "--html", "{out}/p.html"],
+    "gait": ["gait", "--duration", "10", "--html", "{out}/walk.html", "--plot", "{out}/w.png"],
+    "timeline": ["timeline", "gait", "--duration", "60", "-o", "{out}/walk.csv"],
+    "animate": ["animate", "erd:ur5_robot", "--html", "{out}/anim.html"],
+    "view": ["view", "hexapod", "--serve-for", "1"],
     "mjcf": ["mjcf", "hexapod", "--meshes", "-o", "{out}/robot.xml"],
-    "export-package": ["export-package", "hexabot_leg", "-o", "{out}/pkg", "-f"],
-    "reproduce": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
+    "export-package": ["export-package", "hexapod", "--meshes", "-o", "{out}/pkg", "-f"],
+    "sweep": [
+        *("sweep", "--height", "0.1", "--l1", "0.03:0.05:3", "--l2", "0.08:0.12:10"),
+        *("--l3", "0.1:0.14:10", "--mc-samples", "2000", "--no-progress"),
+        *("--out", "{out}/sweep.csv"),
+    ],
+    "simulate": ["simulate", "hexapod", "--duration", "10", "--json"],
+    "reproduce-quick": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
+    "reproduce": ["reproduce", "--out", "{out}/report"],
+    # numba compiling (only with HEXAPOD_KIN_CTRL_C_TRIES set)
+    "scan-compiled": ["scan", "hexabot_leg", "--samples", "6000"],
+    "precompile": ["precompile", "--only", "batch"],
+}
+SOAK_ONLY = ("scan-compiled", "precompile")
+#: Hidden files that are resumable state by design (``sweep``: its chunks' sidecar, removed
+#: once the table is written).
+RESUMABLE = (".sweep.csv.sweep-parts",)
+INTERRUPTED = "hexapod-kin: interrupted"
+#: Files that the next run writes differently when an interrupted try left the symbolic cache
+#: filled: expressions read back from that cache print expanded (``-(a + b)`` becomes
+#: ``-a - b``), a "same bits whatever ran before" bug of the cache reader, not of the
+#: interrupt (``reproduce --no-cache`` after ``reproduce`` shows it with no interrupt at
+#: all). For them the next run is only checked whole (the reference's last line). Remove an
+#: entry once its bug is fixed.
+WARM_DIFFERS = {
+    "reproduce": ("report/report.md", "report/report.html"),
+    "reproduce-quick": ("report/report.md", "report/report.html"),
 }
 
 
-def _no_partial_files(out: Path) -> None:
-    leftovers = [p for p in out.rglob("*") if p.name.endswith(".tmp") or p.name.startswith(".")]
-    assert not leftovers, leftovers
-    for xml in out.rglob("*.xml"):
-        ElementTree.parse(xml)  # every file written is whole (atomic writes)
+def _params() -> list[object]:
+    marks = {n: pytest.mark.skipif(not SOAK, reason="soak only") for n in SOAK_ONLY}
+    return [pytest.param(n, marks=marks.get(n, ())) for n in sorted(COMMANDS)]
 
 
-@pytest.mark.parametrize("name", sorted(COMMANDS))
-def test_ctrl_c(tmp_path: Path, name: str) -> None:
-    rng = random.Random(name)
-    for attempt in range(TRIES):
-        out = tmp_path / f"try{attempt}"
-        out.mkdir()
-        argv = [a.replace("{out}", str(out)) for a in COMMANDS[name]]
-        proc = subprocess.Popen(
+@pytest.fixture(scope="module")
+def startup() -> float:
+    """Seconds until ``import hexapod_kin`` is done in a new interpreter (slowest of 5)."""
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import hexapod_kin"], check=True, cwd=ROOT)
+        times.append(time.perf_counter() - t0)
+    return max(times)
+
+
+class Run:
+    """One process of a command in ``work`` (output ``work/out``, caches ``work/cache``)."""
+
+    def __init__(self, name: str, work: Path) -> None:
+        self.work = work
+        (work / "out").mkdir(parents=True, exist_ok=True)
+        self.marker = uuid.uuid4().hex
+        env = dict(os.environ, MPLBACKEND="Agg", HEXAPOD_KIN_CTRL_C_MARK=self.marker)
+        env.update(
+            NUMBA_CACHE_DIR=str(work / "cache" / "numba"),
+            HEXAPOD_KIN_CACHE_DIR=str(work / "cache" / "hexapod_kin"),
+        )
+        env.pop("HEXAPOD_KIN_DEBUG", None)
+        argv = [a.replace("{out}", str(work / "out")) for a in COMMANDS[name]]
+        self.start = time.perf_counter()
+        self.proc = subprocess.Popen(
             [sys.executable, "-m", "hexapod_kin", *argv],
+            cwd=work / "out",
+            env=env,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
+            start_new_session=True,  # its own process group, as a shell's foreground job
         )
-        time.sleep(rng.uniform(0.3, 1.5))  # after Python's own start-up (its own handling)
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
-        assert "Traceback" not in err, err
-        if proc.returncode in (130, -signal.SIGINT):  # a shell reports both as 130
-            assert err.strip().splitlines()[-1] == "hexapod-kin: interrupted", err
-            assert len(err.strip().splitlines()) <= 2, err  # a notice line may precede it
+        self.signalled: str | None = None
+
+    def interrupt_at(self, at: float, group: bool) -> None:
+        """Send SIGINT ``at`` seconds after the start (unless it has already ended)."""
+        time.sleep(max(0.0, self.start + at - time.perf_counter()))
+        if self.proc.poll() is None:
+            try:
+                if group:
+                    os.killpg(self.proc.pid, signal.SIGINT)
+                else:
+                    self.proc.send_signal(signal.SIGINT)
+                self.signalled = "group" if group else "process"
+            except ProcessLookupError:
+                pass
+
+    def finish(self, timeout: float) -> tuple[int, str, float]:
+        """Exit status, stderr and wall seconds; then checks that no process is left."""
+        try:
+            _, err = self.proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            _, err = self.proc.communicate()
+            pytest.fail(f"no exit within {timeout:.0f} s after the signal: {err[-2000:]}")
+        wall = time.perf_counter() - self.start
+        return self.proc.returncode, err, wall
+
+    def survivors(self) -> list[int]:
+        """Processes still alive that this run started (its environment mark), after ≤ 5 s."""
+        deadline = time.monotonic() + 5.0
+        while True:
+            alive = []
+            for env in Path("/proc").glob("[0-9]*/environ"):
+                try:
+                    if f"HEXAPOD_KIN_CTRL_C_MARK={self.marker}".encode() in env.read_bytes():
+                        status = (env.parent / "stat").read_text().split(")")[-1].split()
+                        if status[0] != "Z":  # a zombie is already dead (its parent reaps it)
+                            alive.append(int(env.parent.name))
+                except OSError:
+                    pass
+            if not alive or time.monotonic() > deadline:
+                return alive
+            time.sleep(0.1)
+
+
+#: ``reproduce``'s verdicts: the fields that describe the run itself (its time, whether it
+#: was replayed from the cache), not the report.
+RUN_FIELDS = ("seconds", "build_seconds", "replayed_from")
+
+
+def _content(path: Path) -> bytes:
+    data = path.read_bytes()
+    if path.name == "verdicts.json":
+        try:
+            doc = json.loads(data)
+        except ValueError:
+            return data  # not whole: unlike the reference
+        return json.dumps({k: v for k, v in doc.items() if k not in RUN_FIELDS}).encode()
+    return data
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): _content(p)
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and not p.is_symlink()
+    }
+
+
+def _problems(work: Path, reference: dict[str, bytes], lenient: tuple[str, ...] = ()) -> list[str]:
+    """Temporary files, unexpected hidden files and files unlike the reference run's.
+
+    ``lenient`` files need only end as the reference's does (see :data:`WARM_DIFFERS`).
+    """
+    found = []
+    for p in sorted(work.rglob("*")):
+        if ".tmp" in p.name:
+            found.append(f"temporary file left: {p.relative_to(work)}")
+        elif p.name.startswith(".") and p.name not in RESUMABLE and "cache" not in p.parts:
+            found.append(f"hidden file left: {p.relative_to(work)}")
+    for rel, data in _files(work / "out").items():
+        if rel.split("/")[0] in RESUMABLE:
+            continue
+        if rel not in reference:
+            found.append(f"a file the complete run does not write: {rel}")
+        elif rel in lenient:
+            if data.rstrip().splitlines()[-1:] != reference[rel].rstrip().splitlines()[-1:]:
+                found.append(f"a file that does not end as the complete run's: {rel}")
+        elif data != reference[rel]:
+            found.append(f"a file unlike the complete run's (partial?): {rel}")
+    return found
+
+
+def _stderr_problems(status: int, err: str, ref_status: int, ref_err: str) -> list[str]:
+    """The interrupt adds one line; any line before it is one the complete run prints too."""
+    lines = err.strip().splitlines()
+    if "Traceback" in err or "Exception ignored" in err:
+        return [f"a traceback: {err[-3000:]}"]
+    if status == 130:
+        notices = set(ref_err.strip().splitlines())
+        if not lines or lines[-1] != INTERRUPTED or len(lines) > 2:
+            return [f"status 130 but stderr is not the one line: {err[-1000:]!r}"]
+        if any(line not in notices for line in lines[:-1]):
+            return [f"status 130 after a line the complete run does not print: {err[-1000:]!r}"]
+        return []
+    if status != ref_status:
+        return [f"status {status} (reference {ref_status}): {err[-1000:]!r}"]
+    return []
+
+
+@pytest.mark.soak
+@pytest.mark.parametrize("name", _params())
+def test_ctrl_c(tmp_path: Path, name: str, startup: float) -> None:
+    timeout = 300.0
+    work = tmp_path / "work"
+    # 1. the reference run
+    ref = Run(name, work)
+    ref_status, ref_err, duration = ref.finish(timeout)
+    assert ref_status in (0, 1), (ref_status, ref_err[-2000:])
+    reference = _files(work / "out")
+    assert bool(reference) == any("{out}" in a for a in COMMANDS[name]), sorted(reference)
+    assert not ref.survivors()
+    work.rename(tmp_path / "reference")
+
+    # 2. interrupted tries, fresh caches each
+    rng = random.Random(f"{name}:{os.environ.get('HEXAPOD_KIN_CTRL_C_SEED', '0')}")
+    counts = {"130": 0, "finished": 0, "failed": 0}
+    failures: list[str] = []
+    latest: tuple[float, Path] | None = None
+    for attempt in range(TRIES):
+        at = startup + rng.uniform(0.0, max(duration - startup, 0.05))
+        group = rng.random() < 0.5
+        run = Run(name, work)
+        run.interrupt_at(at, group)
+        status, err, _ = run.finish(timeout)
+        where = f"try {attempt}: SIGINT to the {run.signalled} at {at:.3f} s of {duration:.2f} s"
+        problems = _stderr_problems(status, err, ref_status, ref_err)
+        if run.signalled is None and status == 130:
+            problems.append("status 130 without a signal")
+        problems += _problems(work, reference)
+        if alive := run.survivors():
+            problems.append(f"processes left alive: {alive}")
+        if problems:
+            counts["failed"] += 1
+            failures += [f"{where}: status {status}: {p}" for p in problems]
+            if status != 130:
+                failures.append(f"{where}: its stderr: {err[-1500:]!r}")
         else:
-            assert proc.returncode == 0, (proc.returncode, err)  # done before the signal
-        _no_partial_files(out)
+            counts["130" if status == 130 else "finished"] += 1
+        kept = tmp_path / f"try{attempt}"
+        work.rename(kept)
+        if status == 130 and (latest is None or at > latest[0]):
+            latest = (at, kept)
+
+    # 3. the next run, on the state the latest interrupt left
+    if latest is None:
+        latest = (0.0, kept)
+    latest[1].rename(work)
+    after = Run(name, work)
+    status, err, _ = after.finish(timeout)
+    if status != ref_status or "Traceback" in err:
+        failures.append(
+            f"next run (after the {latest[0]:.3f} s try): status {status}: {err[-2000:]}"
+        )
+    lenient = WARM_DIFFERS.get(name, ())
+    failures += [f"next run: {p}" for p in _problems(work, reference, lenient)]
+    missing = sorted(set(reference) - set(_files(work / "out")))
+    if missing:
+        failures.append(f"next run: files missing {missing}")
+    if alive := after.survivors():
+        failures.append(f"next run: processes left alive: {alive}")
+
+    summary = {"command": name, "duration_s": round(duration, 2), "tries": TRIES, **counts}
+    if path := os.environ.get("HEXAPOD_KIN_CTRL_C_REPORT"):
+        with open(path, "a", encoding="utf-8") as fh:
+            fh.write(json.dumps({**summary, "failures": failures[:20]}) + "\n")
+    assert not failures, "\n".join([json.dumps(summary), *failures[:10]])

@@ -15,6 +15,7 @@ import importlib
 import os
 import signal
 import sys
+import threading
 import warnings
 from collections.abc import Sequence
 from typing import Any
@@ -104,7 +105,27 @@ _ENTRY = [False]
 def run() -> None:
     """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit."""
     _ENTRY[0] = True
-    sys.exit(main())
+    status = main()
+    if status == 130:
+        _forget_escaped_interrupt()
+    sys.exit(status)
+
+
+def _forget_escaped_interrupt() -> None:
+    """Let an interrupted command end with status 130, not killed by its own SIGINT.
+
+    CPython records a ``KeyboardInterrupt`` that escapes code run through its ``PyRun_*``
+    C API (Boost.Python's ``exec`` inside Pinocchio's import, MuJoCo's callbacks), even when
+    :func:`main` catches it later, and then ends the process by SIGINT instead of the exit
+    status. Every ``PyRun_*`` call clears that record first, so one harmless
+    ``PyRun_SimpleString`` (public C API) leaves the status as given.
+    """
+    try:
+        import ctypes
+
+        ctypes.pythonapi.PyRun_SimpleString(b"pass")
+    except Exception:  # noqa: BLE001 - not CPython, or no ctypes: the signal ends it (a shell says 130)
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -120,22 +141,43 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Ctrl-C (SIGINT) is recorded as well as raised, so that a library that swallows the
     ``KeyboardInterrupt`` (e.g. inside an import, or where Python can only report it as
-    "Exception ignored") cannot turn it into a success: an interrupted command ends with one
-    line and status 130. (When the interrupt lands inside Python code that an extension
+    "Exception ignored": then it is delivered again, to stop the work where it can
+    propagate) cannot turn it into a success: an interrupted command ends with one line and
+    status 130. (When the interrupt lands inside Python code that an extension
     module runs at import, CPython ends the process by SIGINT itself after this status is
-    returned; a shell reports that as 130 too.)
+    returned, unless :func:`run` is the entry point: it clears that, see
+    :func:`_forget_escaped_interrupt`.)
     """
     interrupted: list[int] = []
+    active = [True]  # False once the command is done: a late signal is only recorded
+    lock = threading.Lock()
 
     def on_sigint(signum: int, frame: object) -> None:
         interrupted.append(signum)
-        raise KeyboardInterrupt
+        if active[0]:
+            raise KeyboardInterrupt
 
-    def unraisable(info: Any) -> None:  # an interrupt raised where Python cannot raise it
-        if isinstance(info.exc_value, KeyboardInterrupt):
+    def deliver_again() -> None:
+        with lock:
+            if active[0]:
+                os.kill(os.getpid(), signal.SIGINT)
+
+    def unraisable(info: Any) -> None:  # an exception raised where Python cannot raise it
+        try:
+            if not isinstance(info.exc_value, KeyboardInterrupt):
+                hook(info)
+                return
             interrupted.append(signal.SIGINT)
-        else:
-            hook(info)
+        except KeyboardInterrupt:  # a Ctrl-C inside this hook (recorded by on_sigint)
+            pass
+        if previous is not None:
+            # The interrupt was swallowed (a ctypes callback, a finalizer): deliver it again
+            # once this hook has returned (a signal raised here would be handled here), so
+            # that it stops the work where it can propagate. (numba's compile callback would
+            # otherwise leave the compile to fail later, and the failure would be retried.)
+            timer = threading.Timer(0.01, deliver_again)
+            timer.daemon = True
+            timer.start()
 
     try:
         previous = signal.signal(signal.SIGINT, on_sigint)
@@ -148,6 +190,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = 130
         print("hexapod-kin: interrupted", file=sys.stderr)
     finally:
+        with lock:
+            active[0] = False
         sys.unraisablehook = hook
         if previous is not None:
             signal.signal(signal.SIGINT, signal.SIG_IGN if _ENTRY[0] else previous)

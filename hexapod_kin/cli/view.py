@@ -48,13 +48,10 @@ def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
         return 0
     print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
     end = None if args.serve_for is None else time.monotonic() + args.serve_for
-    try:
-        while end is None or time.monotonic() < end:
-            if not viewer.server.running:
-                raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
-            time.sleep(0.2 if end is None else max(0.0, min(0.2, end - time.monotonic())))
-    except KeyboardInterrupt:
-        print("stopped", file=sys.stderr)
+    while end is None or time.monotonic() < end:  # Ctrl-C: the one line of main, status 130
+        if not viewer.server.running:
+            raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
+        time.sleep(0.2 if end is None else max(0.0, min(0.2, end - time.monotonic())))
     return 0
 
 
