@@ -303,3 +303,77 @@ def test_ctrl_c(tmp_path: Path, name: str, startup: float) -> None:
         with open(path, "a", encoding="utf-8") as fh:
             fh.write(json.dumps({**summary, "failures": failures[:20]}) + "\n")
     assert not failures, "\n".join([json.dumps(summary), *failures[:10]])
+
+
+class _OneCommand:
+    """A parser stand-in whose only command is ``func`` (for :func:`hexapod_kin.cli.main`)."""
+
+    def __init__(self, func: object) -> None:
+        self.func = func
+
+    def parse_args(self, argv: object) -> object:
+        import argparse
+
+        return argparse.Namespace(func=self.func)
+
+
+def test_swallowed_interrupt_stops_the_work(monkeypatch: pytest.MonkeyPatch, capsys) -> None:
+    """A Ctrl-C that a finalizer or callback swallows ("Exception ignored") still stops it.
+
+    The command's own code keeps running after the swallowed interrupt (a 20 s sleep here);
+    ``main`` delivers the interrupt again, so it ends within a second with one line and 130.
+    """
+    import threading
+
+    from hexapod_kin import cli
+
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals are handled in the main thread only")
+
+    class Finalized:
+        def __del__(self) -> None:
+            raise KeyboardInterrupt  # reported as unraisable, not raised
+
+    def command(args: object) -> int:
+        Finalized()
+        time.sleep(20)
+        return 0
+
+    monkeypatch.setattr(cli, "build_parser", lambda: _OneCommand(command))
+    t0 = time.perf_counter()
+    status = cli.main([])
+    assert status == 130
+    assert time.perf_counter() - t0 < 5.0
+    assert capsys.readouterr().err.strip().splitlines()[-1] == INTERRUPTED
+
+
+def test_interrupt_escaping_pyrun_code_exits_130(tmp_path: Path) -> None:
+    """An interrupt raised through CPython's ``PyRun_*`` API (as in Boost.Python's ``exec``
+    during Pinocchio's import) and caught by ``main`` ends the process with status 130, not by
+    SIGINT (CPython would otherwise re-raise the signal at exit). Run with ``-m`` as
+    ``python -m hexapod_kin`` is: ``-c`` exits from inside its own ``PyRun`` call instead."""
+    script = """if True:
+        import argparse, ctypes
+        from hexapod_kin import cli
+
+        def command(args):
+            run = ctypes.pythonapi.PyRun_String
+            run.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.py_object, ctypes.py_object]
+            run.restype = ctypes.py_object
+            run(b"raise KeyboardInterrupt", 257, {}, {})  # 257: Py_file_input
+            return 0
+
+        class Parser:
+            def parse_args(self, argv):
+                return argparse.Namespace(func=command)
+
+        cli.build_parser = Parser
+        cli.run()
+    """
+    (tmp_path / "pyrun_probe.py").write_text(script, encoding="utf-8")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]))
+    res = subprocess.run(
+        [sys.executable, "-m", "pyrun_probe"], capture_output=True, text=True, timeout=60, env=env
+    )
+    assert res.returncode == 130, (res.returncode, res.stderr)
+    assert res.stderr.strip().splitlines() == [INTERRUPTED], res.stderr
