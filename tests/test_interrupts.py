@@ -19,9 +19,8 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
    whose signal came last (the most state written): the same status and the same files as
    the reference run. Nothing an interrupt leaves blocks or changes the next run.
 
-``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES`` (default 2, the regular suite; the ``soak`` step of
-``.ci/run`` sets 20). The numba-compiling forms (tens of seconds cold) run only when the
-variable is set. ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with
+``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset, the regular suite runs 2 tries of the
+commands in :data:`REGULAR`; set (the ``soak`` step of ``.ci/run`` sets 20), every command. ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with
 its outcome counts.
 """
 
@@ -66,11 +65,13 @@ COMMANDS: dict[str, list[str]] = {
     "simulate": ["simulate", "hexapod", "--duration", "10", "--json"],
     "reproduce-quick": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
     "reproduce": ["reproduce", "--out", "{out}/report"],
-    # numba compiling (only with HEXAPOD_KIN_CTRL_C_TRIES set)
+    # numba compiling (tens of seconds cold)
     "scan-compiled": ["scan", "hexabot_leg", "--samples", "6000"],
     "precompile": ["precompile", "--only", "batch"],
 }
-SOAK_ONLY = ("scan-compiled", "precompile")
+#: The regular suite's share (a few seconds each: the sympy worker, trimesh and MuJoCo
+#: imports, matplotlib, the resumable sweep, the viewer's server); the soak runs them all.
+REGULAR = ("derive-5dof", "export-package", "gait", "mjcf", "sweep", "view")
 #: Hidden files that are resumable state by design (``sweep``: its chunks' sidecar, removed
 #: once the table is written).
 RESUMABLE = (".sweep.csv.sweep-parts",)
@@ -88,8 +89,8 @@ WARM_DIFFERS = {
 
 
 def _params() -> list[object]:
-    marks = {n: pytest.mark.skipif(not SOAK, reason="soak only") for n in SOAK_ONLY}
-    return [pytest.param(n, marks=marks.get(n, ())) for n in sorted(COMMANDS)]
+    soak_only = pytest.mark.skipif(not SOAK, reason="soak only (HEXAPOD_KIN_CTRL_C_TRIES)")
+    return [pytest.param(n, marks=() if n in REGULAR else soak_only) for n in sorted(COMMANDS)]
 
 
 @pytest.fixture(scope="module")
