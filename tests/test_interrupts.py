@@ -20,8 +20,8 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
    the reference run. Nothing an interrupt leaves blocks or changes the next run.
 
 ``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset, the regular suite runs 2 tries of the
-commands in :data:`REGULAR`; set (the ``soak`` step of ``.ci/run`` sets 20), every command. ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with
-its outcome counts.
+commands in :data:`REGULAR`; set (the ``soak`` step of ``.ci/run`` sets 20), every command.
+``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with its outcome counts.
 """
 
 from __future__ import annotations
