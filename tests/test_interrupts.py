@@ -38,6 +38,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and sessions")
+
 ROOT = Path(__file__).resolve().parent.parent
 TRIES = int(os.environ.get("HEXAPOD_KIN_CTRL_C_TRIES", "2"))
 SOAK = "HEXAPOD_KIN_CTRL_C_TRIES" in os.environ
@@ -144,7 +146,7 @@ class Run:
                 pass
 
     def finish(self, timeout: float) -> tuple[int, str, float]:
-        """Exit status, stderr and wall seconds; then checks that no process is left."""
+        """Exit status, stderr and wall seconds (a run over ``timeout`` fails the test)."""
         try:
             _, err = self.proc.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
@@ -378,3 +380,28 @@ def test_interrupt_escaping_pyrun_code_exits_130(tmp_path: Path) -> None:
     )
     assert res.returncode == 130, (res.returncode, res.stderr)
     assert res.stderr.strip().splitlines() == [INTERRUPTED], res.stderr
+
+
+def test_error_made_of_an_interrupt_is_the_one_line(
+    monkeypatch: pytest.MonkeyPatch, capsys
+) -> None:
+    """A library that turns Ctrl-C into an error (pybind11: ``ImportError`` "initialization
+    failed", then "mujoco is not installed") gives the one line of the interrupt only."""
+    import threading
+
+    from hexapod_kin import cli
+    from hexapod_kin.exceptions import OptionalDependencyError
+
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals are handled in the main thread only")
+
+    def command(args: object) -> int:
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except KeyboardInterrupt:
+            raise OptionalDependencyError("mujoco is not installed") from None
+        return 0
+
+    monkeypatch.setattr(cli, "build_parser", lambda: _OneCommand(command))
+    assert cli.main([]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == [INTERRUPTED]

@@ -185,7 +185,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         previous = None
     hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
-        status = _main(argv)
+        status = _main(argv, interrupted)
     except KeyboardInterrupt:  # between the handler and _main's own handler
         status = 130
         print("hexapod-kin: interrupted", file=sys.stderr)
@@ -201,7 +201,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     return status
 
 
-def _main(argv: Sequence[str] | None) -> int:
+def _main(argv: Sequence[str] | None, interrupted: Sequence[int] = ()) -> int:
+    """Run the command; return its status.
+
+    An error that follows a Ctrl-C (``interrupted`` not empty: a library turned the
+    interrupt into an error, e.g. pybind11's ``ImportError`` "initialization failed") prints
+    nothing: :func:`main` prints the one line of the interrupt.
+    """
+
+    def error(text: str) -> int:
+        if not interrupted:
+            print(f"hexapod-kin: error: {text}", file=sys.stderr)
+        return 2
+
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -212,8 +224,7 @@ def _main(argv: Sequence[str] | None) -> int:
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return int(exc.code) if isinstance(exc.code, int) else 2
     except HexapodKinError as exc:
-        print(f"hexapod-kin: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
+        return error(_one_line(exc))
     except KeyboardInterrupt:
         print("hexapod-kin: interrupted", file=sys.stderr)
         return 130
@@ -227,20 +238,13 @@ def _main(argv: Sequence[str] | None) -> int:
         return 0
     except OSError as exc:
         where = f" {exc.filename!r}" if exc.filename else ""
-        print(f"hexapod-kin: error: {exc.strerror or exc}{where}", file=sys.stderr)
-        return 2
+        return error(f"{exc.strerror or exc}{where}")
     except MemoryError:
-        print(
-            "hexapod-kin: error: not enough memory for this request; ask for fewer samples",
-            file=sys.stderr,
-        )
-        return 2
+        return error("not enough memory for this request; ask for fewer samples")
     except Exception as exc:  # the last line of defence: one line, never a traceback
-        if os.environ.get("HEXAPOD_KIN_DEBUG"):
+        if os.environ.get("HEXAPOD_KIN_DEBUG") and not interrupted:
             raise
-        print(
-            f"hexapod-kin: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
-            "(a bug: please report it; HEXAPOD_KIN_DEBUG=1 shows the traceback)",
-            file=sys.stderr,
+        return error(
+            f"unexpected {type(exc).__name__}: {_one_line(exc)} "
+            "(a bug: please report it; HEXAPOD_KIN_DEBUG=1 shows the traceback)"
         )
-        return 2
