@@ -278,16 +278,14 @@ def _build(
     figs["jacobian"] += maps
     figs["leg2"].append(figures.leg2_figure(ctx, fdir))
     walk_paths, facts["hexapod"], walk_still = figures.walk_figures(
-        fdir, 1.5 if quick else 3.0, animations
+        fdir, 1.5 if quick else 3.0, animations, html_dir=out
     )
     if walk_still is not None:
         stills["walk"] = walk_still
     figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
-    for p in walk_paths:
-        if p.suffix == ".html":
-            anims["beyond"].append(p.replace(out / "walk.html"))
+    anims["beyond"] += [p for p in walk_paths if p.suffix == ".html"]
     copies = _copy_seeds(seeds, out)
     md_path, html_path = out / "report.md", out / "report.html"
     parts = (Report(out, md_path, html_path, verdicts, facts, 0.0), seeds, figs, anims)

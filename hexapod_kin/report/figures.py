@@ -209,9 +209,12 @@ def _walk_still(run: Any, out: Path) -> tuple[Path, str]:
 
 
 def walk_figures(
-    out: Path, duration: float, animation: bool = True
+    out: Path, duration: float, animation: bool = True, html_dir: Path | None = None
 ) -> tuple[list[Path], dict[str, Any], tuple[Path, str] | None]:
     """The hexapod standing and walking: gait figure, walk animation and its still frame.
+
+    The figures go into ``out``, the animation ``walk.html`` into ``html_dir`` (default
+    ``out``): written where it stays, so that an interrupted build leaves no stray copy.
 
     Returns:
         The figure and animation paths, the facts, and the still frame (path, what it shows)
@@ -241,7 +244,7 @@ def walk_figures(
     try:
         from ..gait.show import walk_html
 
-        paths.append(walk_html(run, out / "walk.html", fps=30))
+        paths.append(walk_html(run, (html_dir or out) / "walk.html", fps=30))
     except Exception as exc:  # the viewer extra missing: said in the report
         facts["walk_animation"] = f"not written: {exc}"
     return paths, facts, still
