@@ -107,25 +107,27 @@ def run() -> None:
     _ENTRY[0] = True
     status = main()
     if status == 130:
-        _forget_escaped_interrupt()
+        _exit_interrupted()
     sys.exit(status)
 
 
-def _forget_escaped_interrupt() -> None:
-    """Let an interrupted command end with status 130, not killed by its own SIGINT.
+def _exit_interrupted() -> None:
+    """End an interrupted command now with status 130, without the interpreter's teardown.
 
-    CPython records a ``KeyboardInterrupt`` that escapes code run through its ``PyRun_*``
-    C API (Boost.Python's ``exec`` inside Pinocchio's import, MuJoCo's callbacks), even when
-    :func:`main` catches it later, and then ends the process by SIGINT instead of the exit
-    status. Every ``PyRun_*`` call clears that record first, so one harmless
-    ``PyRun_SimpleString`` (public C API) leaves the status as given.
+    When :func:`main` returns, the command's own clean-up has run (``finally`` blocks and
+    context managers: temporary files, the viewer's server, the symbolic worker). The
+    teardown would then finalize what the interrupt left half-built — a numba/LLVM compile
+    cut short has crashed it (SIGSEGV after the line) — and CPython ends the process by
+    SIGINT instead of the status when the interrupt escaped code run through its
+    ``PyRun_*`` API (Boost.Python's ``exec`` inside Pinocchio's import). Exit handlers are
+    not run: none of the package's is needed once its context managers have closed.
     """
-    try:
-        import ctypes
-
-        ctypes.pythonapi.PyRun_SimpleString(b"pass")
-    except Exception:  # noqa: BLE001 - not CPython, or no ctypes: the signal ends it (a shell says 130)
-        pass
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:  # noqa: BLE001 - a closed pipe: nothing more to say
+            pass
+    os._exit(130)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -145,8 +147,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     propagate) cannot turn it into a success: an interrupted command ends with one line and
     status 130. (When the interrupt lands inside Python code that an extension
     module runs at import, CPython ends the process by SIGINT itself after this status is
-    returned, unless :func:`run` is the entry point: it clears that, see
-    :func:`_forget_escaped_interrupt`.)
+    returned, unless :func:`run` is the entry point: it exits with 130 at once, see
+    :func:`_exit_interrupted`.)
     """
     interrupted: list[int] = []
     active = [True]  # False once the command is done: a late signal is only recorded

@@ -181,12 +181,9 @@ def _view(run: Any) -> None:
         walk_live(run, viewer)
         print(f"meshcat viewer of the walk: {viewer.url}", file=sys.stderr, flush=True)
         print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
-        try:
-            while viewer.server.running:
-                time.sleep(0.2)
-            raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
-        except KeyboardInterrupt:
-            print("stopped", file=sys.stderr)
+        while viewer.server.running:  # Ctrl-C: the one line of main, status 130
+            time.sleep(0.2)
+        raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
 
 
 def _print(out: dict[str, Any]) -> None:
