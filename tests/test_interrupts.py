@@ -10,8 +10,9 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
    interpreter's) and ``D``, sent either to the process group (what a terminal's Ctrl-C
    does: forked workers and servers get it too) or to the command's process alone
    (``kill -INT``). Each try ends either interrupted — status 130, last stderr line
-   ``hexapod-kin: interrupted`` (one notice line may precede it), no traceback — or, when
-   the signal came after the work, exactly as the reference run. Either way: no temporary
+   ``hexapod-kin: interrupted``, at most one line before it and only one that the complete
+   run prints too (a notice such as numba's "compiling"), no traceback — or, when the
+   signal came after the work, with the reference run's status. Either way: no temporary
    file (``*.tmp*``) in the output folder or the caches, no process of the run left alive,
    and every output file is whole: byte-identical to the reference run's file (every run
    writes to the same paths, so even the paths inside the files agree);
@@ -67,7 +68,8 @@ COMMANDS: dict[str, list[str]] = {
     "simulate": ["simulate", "hexapod", "--duration", "10", "--json"],
     "reproduce-quick": ["reproduce", "--quick", "--no-animations", "--out", "{out}/report"],
     "reproduce": ["reproduce", "--out", "{out}/report"],
-    # numba compiling (tens of seconds cold)
+    # numba compiling (tens of seconds cold; precompile's other areas compile the same way,
+    # 3 to 5 times longer)
     "scan-compiled": ["scan", "hexabot_leg", "--samples", "6000"],
     "precompile": ["precompile", "--only", "batch"],
 }
