@@ -6,16 +6,17 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
 1. a **reference run**, uninterrupted, with fresh caches: its wall time ``D``, exit status
    and files;
 2. ``TRIES`` **interrupted runs**, each with fresh caches: SIGINT at a uniformly random time
-   between the end of start-up (``python -c "import hexapod_kin"``, whose handling is the
-   interpreter's) and ``D``, sent either to the process group (what a terminal's Ctrl-C
-   does: forked workers and servers get it too) or to the command's process alone
-   (``kill -INT``). Each try ends either interrupted — status 130, last stderr line
-   ``hexapod-kin: interrupted``, at most one line before it and only one that the complete
-   run prints too (a notice such as numba's "compiling"), no traceback — or, when the
-   signal came after the work, with the reference run's status. Either way: no temporary
-   file (``*.tmp*``) in the output folder or the caches, no process of the run left alive,
-   and every output file is whole: byte-identical to the reference run's file (every run
-   writes to the same paths, so even the paths inside the files agree);
+   between the end of start-up (measured in each try by a concurrent ``python -c "import
+   hexapod_kin"``: before that, Ctrl-C is the interpreter's to handle) and ``D``, sent
+   either to the process group (what a terminal's Ctrl-C does: forked workers and servers
+   get it too) or to the command's process alone (``kill -INT``). Each try ends either
+   interrupted — status 130, last stderr line ``hexapod-kin: interrupted``, at most one
+   line before it and only one that the complete run prints too (a notice such as numba's
+   "compiling"), no traceback — or, when the signal came after the work, with the
+   reference run's status. Either way: no temporary file (``*.tmp*``) in the output folder
+   or the caches, no process of the run left alive, and every output file is whole:
+   byte-identical to the reference run's file (every run writes to the same paths, so even
+   the paths inside the files agree);
 3. a **next run**, uninterrupted, on the output folder and caches of the interrupted try
    whose signal came last (the most state written): the same status and the same files as
    the reference run. Nothing an interrupt leaves blocks or changes the next run.
@@ -97,17 +98,6 @@ def _params() -> list[object]:
     return [pytest.param(n, marks=() if n in REGULAR else soak_only) for n in sorted(COMMANDS)]
 
 
-@pytest.fixture(scope="module")
-def startup() -> float:
-    """Seconds until ``import hexapod_kin`` is done in a new interpreter (slowest of 5)."""
-    times = []
-    for _ in range(5):
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-c", "import hexapod_kin"], check=True, cwd=ROOT)
-        times.append(time.perf_counter() - t0)
-    return max(times)
-
-
 class Run:
     """One process of a command in ``work`` (output ``work/out``, caches ``work/cache``)."""
 
@@ -134,8 +124,17 @@ class Run:
         )
         self.signalled: str | None = None
 
-    def interrupt_at(self, at: float, group: bool) -> None:
-        """Send SIGINT ``at`` seconds after the start (unless it has already ended)."""
+    def interrupt_at(self, fraction: float, duration: float, group: bool) -> float:
+        """Send SIGINT ``fraction`` of the way from the end of start-up to ``duration`` [s].
+
+        The end of start-up is measured now, under the machine's present load: a probe
+        ``python -c "import hexapod_kin"`` started with the command ends about when the
+        command's own interpreter has started and imported the package (before that, Ctrl-C
+        is the interpreter's to handle). Returns the time sent, in seconds from the start.
+        """
+        subprocess.run([sys.executable, "-c", "import hexapod_kin"], cwd=ROOT, check=True)
+        ready = 1.2 * (time.perf_counter() - self.start)
+        at = ready + fraction * max(duration - ready, 0.05)
         time.sleep(max(0.0, self.start + at - time.perf_counter()))
         if self.proc.poll() is None:
             try:
@@ -146,6 +145,7 @@ class Run:
                 self.signalled = "group" if group else "process"
             except ProcessLookupError:
                 pass
+        return at
 
     def finish(self, timeout: float) -> tuple[int, str, float]:
         """Exit status, stderr and wall seconds (a run over ``timeout`` fails the test)."""
@@ -243,7 +243,7 @@ def _stderr_problems(status: int, err: str, ref_status: int, ref_err: str) -> li
 
 @pytest.mark.soak
 @pytest.mark.parametrize("name", _params())
-def test_ctrl_c(tmp_path: Path, name: str, startup: float) -> None:
+def test_ctrl_c(tmp_path: Path, name: str) -> None:
     timeout = 300.0
     work = tmp_path / "work"
     # 1. the reference run
@@ -261,10 +261,9 @@ def test_ctrl_c(tmp_path: Path, name: str, startup: float) -> None:
     failures: list[str] = []
     latest: tuple[float, Path] | None = None
     for attempt in range(TRIES):
-        at = startup + rng.uniform(0.0, max(duration - startup, 0.05))
-        group = rng.random() < 0.5
+        fraction, group = rng.random(), rng.random() < 0.5
         run = Run(name, work)
-        run.interrupt_at(at, group)
+        at = run.interrupt_at(fraction, duration, group)
         status, err, _ = run.finish(timeout)
         where = f"try {attempt}: SIGINT to the {run.signalled} at {at:.3f} s of {duration:.2f} s"
         problems = _stderr_problems(status, err, ref_status, ref_err)
