@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import os
+import secrets
 import stat
-import tempfile
 from pathlib import Path
 
 from .exceptions import HexapodKinError, ParameterError, SourceError
@@ -38,11 +38,10 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
     if dest.is_dir():
         raise ParameterError(f"path={str(dest)!r} is a directory; expected a file path")
     payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
+    # the name first, then the file, inside the clean-up: a Ctrl-C at any point leaves nothing
+    tmp = str(parent / f".{dest.name}.{secrets.token_hex(8)}.tmp")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent)
-    except OSError as exc:
-        raise _cannot_write(dest, exc) from None
-    try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
             fh.flush()
@@ -57,7 +56,8 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
         os.replace(tmp, dest)
     except BaseException as exc:
         try:
-            os.unlink(tmp)
+            if not isinstance(exc, FileExistsError):  # else the name was another's: keep it
+                os.unlink(tmp)
         except FileNotFoundError:
             pass
         if isinstance(exc, OSError):

@@ -406,3 +406,25 @@ def test_error_made_of_an_interrupt_is_the_one_line(
     monkeypatch.setattr(cli, "build_parser", lambda: _OneCommand(command))
     assert cli.main([]) == 130
     assert capsys.readouterr().err.strip().splitlines() == [INTERRUPTED]
+
+
+def test_atomic_write_interrupted_as_its_file_is_created(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A Ctrl-C that arrives just as the temporary file is created leaves no file behind (the
+    soak found ``.chunk_00016.npz.*.tmp`` in an interrupted sweep's sidecar)."""
+    from hexapod_kin._io import atomic_write
+
+    real_open = os.open
+
+    def open_then_interrupt(path: str, flags: int, *args: object) -> int:
+        fd = real_open(path, flags, *args)
+        if path.endswith(".tmp"):
+            os.close(fd)
+            raise KeyboardInterrupt
+        return fd
+
+    monkeypatch.setattr(os, "open", open_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(tmp_path / "x.txt", "whole")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
