@@ -33,6 +33,7 @@ from .legs import (
     pick_branch,
     sphere_radius,
 )
+from .posture import roomiest_stance
 from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
@@ -208,8 +209,18 @@ class WholeBody:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
         return self.com_of(self.joint_poses(q, base), base)
 
+    def require_mass(self) -> None:
+        """Raise a :class:`ConfigurationError` when the robot has no mass (CoM undefined)."""
+        if not self.mass > 0:
+            raise ConfigurationError(
+                f"{self.source}: the robot has no mass (no link gives an <inertial> mass), so "
+                "its centre of mass, stability margin and standing forces are undefined; "
+                "add <inertial> masses to the URDF"
+            )
+
     def com_of(self, T: np.ndarray, base: Any) -> np.ndarray:
         """:meth:`com` from joint poses ``T`` (N, nq, 4, 4) and body poses (N, 4, 4)."""
+        self.require_mass()
         base = np.asarray(base, dtype=float)
         acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
         m = self._masses[1:]  # Σ_j m_j (R_j l_j + p_j), contracted over j at once
@@ -603,6 +614,11 @@ def _build_model(
         _seed=np.zeros(nq),
     )
     object.__setattr__(wb, "_seed", _standing_seed(wb, params))
+    better = None if hexa else roomiest_stance(wb)
+    if better is not None:  # the geometric default leaves a joint no room to step
+        reach = np.full(len(cols), better[1])
+        wb = replace(wb, body_height=better[0], _reach=reach, _seed=np.zeros(nq))
+        object.__setattr__(wb, "_seed", _standing_seed(wb, params))
     for a in (lower, upper, vel, eff, mounts, tree.placements, tree.axes, foot, wb._seed):
         a.setflags(write=False)
     return wb
