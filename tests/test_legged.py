@@ -635,3 +635,28 @@ def test_a_robot_without_mass_is_refused_in_one_line(tmp_path):
         )
         errors = [ln for ln in res.stderr.splitlines() if "warning" not in ln]
         assert res.returncode == 2 and len(errors) == 1 and "no mass" in errors[0], res.stderr
+
+
+@pytest.mark.parametrize("name", ["go1", "a1"])
+def test_unitree_quadrupeds_stand_symmetric_and_crawl(name):
+    """Unitree's knee range excludes 0, so at q = 0 clipped every foot is ~0.16 m forward of
+    its hip; that shared offset is not a stance: the default feet are symmetric front/rear
+    about the hips (by raw Pinocchio: the hips' mean equals the feet's mean), and the crawl
+    holds 10 s strict (before: the centre of mass left the support polygon by 0.039 m)."""
+    wb = as_whole_body(f"erd:{name}")
+    pose = standing_pose(wb)
+    m, d = _raw_model(_erd_text(name))
+    qp = wb.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.framesForwardKinematics(m, d, qp)
+    hips = np.array([d.oMi[m.getJointId(f"{leg}_hip_joint")].translation for leg in wb.leg_names])
+    feet = np.array([d.oMf[m.getFrameId(f"{leg}_foot")].translation for leg in wb.leg_names])
+    assert np.abs(feet - pose.feet).max() <= 1e-9  # the URDF foot links are the feet
+    assert np.abs((feet - hips)[:, :2].mean(axis=0)).max() <= 1e-9
+    run = walk(wb, pattern="crawl", duration=10.0, strict=True)
+    assert run.min_margin > 0.005
+
+
+def _erd_text(name: str) -> str:
+    from hexapod_kin.sources import resolve_source
+
+    return resolve_source(f"erd:{name}").text

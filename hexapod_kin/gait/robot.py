@@ -256,8 +256,10 @@ class WholeBody:
         """Neutral foot points (L, 3) in the body frame [m] (the contact spheres' centres).
 
         Horizontally, foot i is at ``mount_i + r_i ê_i``: ``ê_i`` the horizontal direction
-        from the leg's mount to its foot at q = 0 (a Hexapod: the mount's x axis; a leg
-        hanging straight down: outward from the body centre), ``r_i = foot_reach``, or by
+        from the leg's mount to its foot at q = 0 (clipped into the joint ranges), less the
+        offset every leg shares (a joint-zero convention such as Unitree's bent knees; a
+        Hexapod: the mount's x axis; a leg hanging straight down: outward from the body
+        centre), ``r_i = foot_reach``, or by
         default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that horizontal distance at q = 0 and
         ``ℓ_i`` the leg's span (the lengths from mount to foot through every joint, at
         q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
