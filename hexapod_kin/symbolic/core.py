@@ -31,6 +31,7 @@ from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
+from ._ringdet import ring_det
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -444,8 +445,33 @@ def trig_factor(
         form; the product ``constant · Π factor**mult`` equals ``expr``.
 
     """
-    poly = _chop(_to_poly(expr, q, sigmas))
-    const, raw = sp.factor_list(poly)
+    return _factor_poly(_to_poly(expr, q, sigmas), q)
+
+
+def _det_poly(mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str],
+              split: bool = False) -> Any:  # fmt: skip
+    """``_to_poly(det mat)`` (``split``: of ``det J11 · det J22``, block-triangular 6×6).
+
+    In a polynomial ring (:func:`._ringdet.ring_det`: the same polynomial, in milliseconds)
+    when every entry is a polynomial with rational coefficients, else by expanding the
+    expression (floats then round as ``expand`` rounds them).
+    """
+    s, c = _trig_symbols(q)
+    gens = [g for k, qk in enumerate(q)
+            for g in ((s[k], c[k]) if sigmas[k] == "revolute" else (qk,))]  # fmt: skip
+    out = ring_det([_to_poly(e, q, sigmas) for e in mat], mat.rows, gens)
+    if out is not None:
+        return out
+    if split:
+        raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
+    else:
+        raw = mat.det(method="berkowitz")
+    return _to_poly(raw, q, sigmas)
+
+
+def _factor_poly(poly: Any, q: Sequence[sp.Symbol]) -> tuple[Any, list[tuple[Any, int]]]:
+    """:func:`trig_factor` of a polynomial in ``s_k``, ``c_k`` (:func:`_to_poly`'s form)."""
+    const, raw = sp.factor_list(_chop(poly))
     found: list[tuple[Any, int]] = []
 
     def add(f: Any, mult: int) -> None:
@@ -522,17 +548,19 @@ def factored_determinant(
         out["how"] = f"{label}, {out['how']}"
         return out
     best: dict[str, Any] | None = None
+    seen: list[Any] = []  # the polynomials factored: another frame often gives the same one
     for label, make in candidates:
         if best is not None and time.perf_counter() > deadline:
             break
-        mat = make()
-        if mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6)):
-            raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
+        mat, how = make(), label
+        split = mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
+        if split:
             how = f"{label} (wrist centre), det J11 * det J22"
-        else:
-            raw = mat.det(method="berkowitz")
-            how = label
-        const, factors = trig_factor(raw, q, sigmas)
+        poly = _det_poly(mat, q, sigmas, split)
+        if poly in seen:
+            continue  # the same factors, the same score: the first one stays
+        seen.append(poly)
+        const, factors = _factor_poly(poly, q)
         cand = {"const": const, "factors": factors, "how": how}
         if best is None or _split_score(factors) > _split_score(best["factors"]):
             best = cand
@@ -612,7 +640,7 @@ def rank_deficiency(
         if common is not None and time.perf_counter() > deadline:
             stopped = "deadline"
             break
-        const, factors = trig_factor(m.det(method="berkowitz"), q, sigmas)
+        const, factors = _factor_poly(_det_poly(m, q, sigmas), q)
         if const == 0:
             continue
         minors.append((const, factors))
