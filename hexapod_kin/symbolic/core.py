@@ -31,7 +31,7 @@ from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
-from ._ringdet import ring_det
+from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -381,46 +381,6 @@ def _candidates(
 
 
 # ---------------------------------------------------------------------- factoring
-def _trig_symbols(q: Sequence[sp.Symbol]) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Symbol, ...]]:
-    s = tuple(sp.Symbol(f"_s{k}", real=True) for k in range(len(q)))
-    c = tuple(sp.Symbol(f"_c{k}", real=True) for k in range(len(q)))
-    return s, c
-
-
-def _to_poly(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> Any:
-    s, c = _trig_symbols(q)
-    e = sp.expand(sp.expand_trig(expr))
-    sub = {}
-    for k, qk in enumerate(q):
-        if sigmas[k] == "revolute":
-            sub[sp.sin(qk)] = s[k]
-            sub[sp.cos(qk)] = c[k]
-    return sp.expand(e.xreplace(sub))
-
-
-def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
-    s, c = _trig_symbols(q)
-    e = poly
-    for sk, ck in zip(s, c):
-        if e.has(sk):
-            e = sp.rem(sp.Poly(e, sk), sp.Poly(sk**2 + ck**2 - 1, sk)).as_expr()
-    return sp.expand(e)
-
-
-def _chop(expr: Any, rel: float = 1e-12) -> Any:
-    """Float coefficients below ``rel`` × the largest one, set to 0.
-
-    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
-    that would otherwise factor as real terms.
-    """
-    floats = expr.atoms(sp.Float)
-    if not floats:
-        return expr
-    tiny = rel * max(abs(float(f)) for f in floats)
-    zero = {f: sp.Integer(0) for f in floats if abs(float(f)) < tiny}
-    return sp.expand(expr.xreplace(zero)) if zero else expr
-
-
 def _to_trig(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     s, c = _trig_symbols(q)
     sub = {}
@@ -446,27 +406,6 @@ def trig_factor(
 
     """
     return _factor_poly(_to_poly(expr, q, sigmas), q)
-
-
-def _det_poly(mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str],
-              split: bool = False) -> Any:  # fmt: skip
-    """``_to_poly(det mat)`` (``split``: of ``det J11 · det J22``, block-triangular 6×6).
-
-    In a polynomial ring (:func:`._ringdet.ring_det`: the same polynomial, in milliseconds)
-    when every entry is a polynomial with rational coefficients, else by expanding the
-    expression (floats then round as ``expand`` rounds them).
-    """
-    s, c = _trig_symbols(q)
-    gens = [g for k, qk in enumerate(q)
-            for g in ((s[k], c[k]) if sigmas[k] == "revolute" else (qk,))]  # fmt: skip
-    out = ring_det([_to_poly(e, q, sigmas) for e in mat], mat.rows, gens)
-    if out is not None:
-        return out
-    if split:
-        raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
-    else:
-        raw = mat.det(method="berkowitz")
-    return _to_poly(raw, q, sigmas)
 
 
 def _factor_poly(poly: Any, q: Sequence[sp.Symbol]) -> tuple[Any, list[tuple[Any, int]]]:
