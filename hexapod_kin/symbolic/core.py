@@ -27,10 +27,13 @@ import numpy as np
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
+from ._numbers import import_ahead as import_ahead  # re-exported: the stages' helpers
+from ._numbers import numeric_jacobian as numeric_jacobian
+from ._numbers import sigma_ratio as sigma_ratio
+from ._numbers import single_joint_roots as single_joint_roots
 from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
 
 
@@ -696,71 +699,3 @@ def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 40
         if n < size:
             best, size = form, n
     return best
-
-
-# ---------------------------------------------------------------------- numbers
-def numeric_jacobian(chain: Chain, q: np.ndarray, sel: Sequence[int]) -> np.ndarray:
-    """Independent numeric Jacobian (base frame, tool point) from the table, rows ``sel``."""
-    ts = table_transforms(chain, q)
-    acc = chain.base_matrix
-    frames = []
-    for t in ts:
-        acc = acc @ t
-        frames.append(acc)
-    tip = (acc @ chain.tool_matrix)[:3, 3]
-    cols = []
-    for j in chain.joint_rows:
-        z, o = frames[j][:3, 2], frames[j][:3, 3]
-        if chain.rows[j].sigma == "revolute":
-            cols.append(np.concatenate([np.cross(z, tip - o), z]))
-        else:
-            cols.append(np.concatenate([z, np.zeros(3)]))
-    return np.column_stack(cols)[list(sel)]
-
-
-def sigma_ratio(jac: np.ndarray) -> float:
-    """``σ_min / max(1, σ_max)`` of a k×n matrix (min(k, n) singular values)."""
-    s = np.linalg.svd(jac, compute_uv=False)
-    return float(s[-1] / max(1.0, s[0]))
-
-
-def import_ahead() -> None:
-    """Import what the stages import on first use (``scipy.optimize``).
-
-    Called before a derivation runs in a forked child: the child inherits the module instead
-    of importing it again, once per derivation.
-    """
-    import scipy.optimize  # noqa: F401
-
-
-def single_joint_roots(
-    func: Callable[[np.ndarray], np.ndarray], lo: float, hi: float
-) -> list[float]:
-    """Real roots of a scalar function of one joint on ``[lo, hi]`` (sign changes, brentq)."""
-    from scipy.optimize import brentq
-
-    grid = np.linspace(lo, hi, 3601)
-    vals = np.asarray(func(grid), dtype=float)
-    roots: list[float] = []
-    scale = max(1e-300, float(np.abs(vals).max()))
-    for i in range(len(grid) - 1):
-        a, b = vals[i], vals[i + 1]
-        if a == 0.0:
-            roots.append(float(grid[i]))
-        elif a * b < 0:
-            roots.append(
-                float(
-                    brentq(
-                        lambda x: float(func(np.array([x]))[0]), grid[i], grid[i + 1], xtol=1e-15
-                    )
-                )
-            )
-        elif abs(a) < 1e-12 * scale and i > 0 and (vals[i - 1] - a) * (b - a) > 0:
-            roots.append(float(grid[i]))  # a tangency at a grid point
-    if vals[-1] == 0.0:
-        roots.append(float(grid[-1]))
-    out: list[float] = []
-    for r in sorted(roots):
-        if not out or abs(r - out[-1]) > 1e-9:
-            out.append(r)
-    return out
