@@ -37,6 +37,7 @@ def ring_det(entries: Sequence[Any], n: int, gens: Sequence[sp.Symbol]) -> Any |
         polynomial with rational coefficients.
 
     """
+    entries = [sp.sympify(e) for e in entries]
     if any(e.has(sp.Float) for e in entries):
         return None
     others = set().union(*(e.free_symbols for e in entries)) - set(gens)
