@@ -108,17 +108,24 @@ def _chop(expr: Any, rel: float = 1e-12) -> Any:
 
 
 def _det_poly(mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str],
-              split: bool = False) -> Any:  # fmt: skip
+              split: bool = False, memo: dict[Any, Any] | None = None) -> Any:  # fmt: skip
     """``_to_poly(det mat)`` (``split``: of ``det J11 · det J22``, block-triangular 6×6).
 
     In a polynomial ring (:func:`ring_det`: the same polynomial, in milliseconds)
     when every entry is a polynomial with rational coefficients, else by expanding the
-    expression (floats then round as ``expand`` rounds them).
+    expression (floats then round as ``expand`` rounds them). ``memo``: the entries'
+    polynomials by entry, shared by calls on matrices with entries in common.
     """
     s, c = _trig_symbols(q)
     gens = [g for k, qk in enumerate(q)
             for g in ((s[k], c[k]) if sigmas[k] == "revolute" else (qk,))]  # fmt: skip
-    out = ring_det([_to_poly(e, q, sigmas) for e in mat], mat.rows, gens)
+    memo = {} if memo is None else memo
+    entries = []
+    for e in mat:
+        if e not in memo:
+            memo[e] = _to_poly(e, q, sigmas)
+        entries.append(memo[e])
+    out = ring_det(entries, mat.rows, gens)
     if out is not None:
         return out
     if split:

@@ -491,6 +491,7 @@ def factored_determinant(
         return out
     best: dict[str, Any] | None = None
     seen: list[Any] = []  # the polynomials factored: another frame often gives the same one
+    memo: dict[Any, Any] = {}  # entries' polynomials (the frames' points share the w rows)
     for label, make in candidates:
         if best is not None and time.perf_counter() > deadline:
             break
@@ -498,7 +499,7 @@ def factored_determinant(
         split = mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
         if split:
             how = f"{label} (wrist centre), det J11 * det J22"
-        poly = _det_poly(mat, q, sigmas, split)
+        poly = _det_poly(mat, q, sigmas, split, memo)
         if poly in seen:
             continue  # the same factors, the same score: the first one stays
         seen.append(poly)
@@ -574,6 +575,7 @@ def rank_deficiency(
     subsets.sort(key=lambda t: (t[0], t[1]))
     total = len(subsets)
     common: list[tuple[Any, int]] | None = None
+    memo: dict[Any, Any] = {}  # entries' polynomials, shared by the minors
     minors: list[tuple[Any, list[tuple[Any, int]]]] = []
     stopped = ""
     for _, _sub, m in subsets:
@@ -582,7 +584,7 @@ def rank_deficiency(
         if common is not None and time.perf_counter() > deadline:
             stopped = "deadline"
             break
-        const, factors = _factor_poly(_det_poly(m, q, sigmas), q)
+        const, factors = _factor_poly(_det_poly(m, q, sigmas, memo=memo), q)
         if const == 0:
             continue
         minors.append((const, factors))
