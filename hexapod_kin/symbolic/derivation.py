@@ -462,9 +462,6 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
-#: Derivations this process forked (from the second on, their imports are made here first).
-_BUDGETED = 0
-
 #: Seconds kept between the end of a derivation's child process and ``deadline``.
 _MARGIN = 0.25
 
@@ -594,7 +591,6 @@ def derive(
         ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
-    global _BUDGETED
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
     chain, reference, tip_name = _chain_of(source, base, tip)
@@ -647,10 +643,9 @@ def derive(
                 yield name, value
 
         forks = run_for is not None
-        if forks and _BUDGETED:  # a process that derives again and again:
-            _core.import_ahead()  # import here once, not in each forked child
+        if forks:  # what the stages import on first use, here: the caller's later
+            _core.import_ahead()  # lambdify (a scan's check) or next derivation reuses it
         done, reason = _cache.run(gen, run_for)
-        _BUDGETED += forks
         if reason is not None and writer is not None:
             _cache.sweep(digest)
         stages = {**have, **done}
