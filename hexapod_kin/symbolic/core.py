@@ -12,7 +12,11 @@ Speed comes from structure, not from ``simplify``:
 * the determinant is factored as a polynomial in ``s_i = sin q_i``, ``c_i = cos q_i``
   *before* reducing modulo ``s_i² + c_i² = 1`` (reducing first can glue families together,
   e.g. PUMA's elbow and shoulder), then each factor is reduced, factored again and turned
-  back into compact trigonometry. A few frames ``m`` are tried; the finest split wins.
+  back into compact trigonometry. A few frames ``m`` are tried; the finest split wins;
+* that polynomial is computed entry by entry in a polynomial ring
+  (:func:`~._trigpoly.ring_det`: the same polynomial as expanding ``det J``, in
+  milliseconds instead of seconds), and a frame that gives a polynomial already factored is
+  not factored again (its split is the same).
 """
 
 from __future__ import annotations
