@@ -649,7 +649,7 @@ def derive(
         if reason is not None and writer is not None:
             _cache.sweep(digest)
         stages = {**have, **done}
-        if reason is None and "seconds" not in stages:  # families_only: kept as unfinished
+        if reason is None and families_only and "seconds" not in stages:  # kept as unfinished
             reason = FAMILIES_ONLY  # (the file says so since the "checks" stage)
             stages[ATTEMPT] = (reason, None)
         elif reason is not None:
