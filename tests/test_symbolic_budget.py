@@ -177,3 +177,37 @@ def test_cli_derive_of_the_leg_table_file(capsys):
     assert "q4 = pi/2 (mod 2*pi)" in out and "q4 = -pi/2 (mod 2*pi)" in out
     assert "check vs Pinocchio" in out and "NOT DONE" not in out
     assert max(len(line) for line in out.splitlines()) <= 100
+
+
+def test_families_only_stops_after_the_families_and_a_full_call_carries_on(monkeypatch):
+    from dataclasses import replace
+
+    from hexapod_kin import robots
+    from hexapod_kin.symbolic import cache as symbolic_cache
+    from hexapod_kin.symbolic import clear_memory
+
+    leg = robots.hexabot_leg()
+    rows = list(leg.rows)
+    rows[-1] = replace(rows[-1], d=0.107)  # a table of its own (the cache is keyed by it)
+    chain = leg.replace(rows=tuple(rows), name="leg_107")
+    stages: list[list[str]] = []
+    real = symbolic_cache.run
+
+    def recording(gen, budget):
+        done, reason = real(gen, budget)
+        stages.append(list(done))
+        return done, reason
+
+    monkeypatch.setattr(symbolic_cache, "run", recording)
+    part = derive(chain, budget=None, families_only=True)
+    assert stages == [["kinematics", "rows", "determinant", "families", "checks"]]
+    assert part.families_done and part.agree is None and len(part.families) == 3
+    assert [w.split(" (")[0] for w in part.incomplete] == ["direct = indirect Jacobian, exactly"]
+    clear_memory()  # a new process: from the disk, not derived again
+    again = derive(chain, budget=None, families_only=True)
+    assert again.cached and len(stages) == 1 and again.families == part.families
+    full = derive(chain, budget=None)  # carries on: only what families_only left out
+    assert stages[1] == ["agree", "tidy", "seconds"]
+    assert full.complete and full.agree is True and full.families == part.families
+    clear_memory()
+    assert derive(chain, budget=None).cached and len(stages) == 2

@@ -361,7 +361,7 @@ def families_for(
 
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
     try:
-        deriv = symbolic.derive(chain, rows=rows, budget=float(budget))
+        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
         incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             reason = f"derivation incomplete: {incomplete}"

@@ -344,9 +344,12 @@ UNBOUNDED_PACE = 30.0
 
 def _stages(
     chain: Chain, rows: Any, lengths: Any, start: float, budget: float | None,
-    have: Mapping[str, Any],
+    have: Mapping[str, Any], families_only: bool = False,
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """The derivation's stages in order, skipping those in ``have`` (a cached partial run).
+
+    ``families_only``: the last stage is ``"checks"`` (the families checked; no ``"agree"``,
+    ``"tidy"`` nor ``"seconds"``).
 
     ``budget`` (s from ``start``; ``None``: none) paces the optional work: extra determinant
     frames are tried during its first 15 %, maximal minors factored during the first 70 %,
@@ -387,6 +390,8 @@ def _stages(
         # not lose rank on is no family
         kept = tuple(f for f in checked if not (f.factor in unconfirmed and f.verified is False))
         yield "checks", kept
+    if families_only:
+        return
     if "agree" not in have:
         yield "agree", _agree(kin, q, chain.sigmas)
     if "tidy" not in have:
@@ -457,9 +462,6 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
-#: Derivations this process forked (from the second on, their imports are made here first).
-_BUDGETED = 0
-
 #: Seconds kept between the end of a derivation's child process and ``deadline``.
 _MARGIN = 0.25
 
@@ -472,12 +474,21 @@ def clear_memory() -> None:
     _MEMO.clear()
 
 
-def _usable(stages: Mapping[str, Any] | None, budget: float | None) -> bool:
-    """A cached run answers a call: complete, or stopped at a budget at least as large."""
+#: The reason kept by a run stopped after the families on purpose (``families_only``).
+FAMILIES_ONLY = "stopped after the families (families_only); a later call carries on"
+
+
+def _usable(
+    stages: Mapping[str, Any] | None, budget: float | None, families_only: bool = False
+) -> bool:
+    """A cached run answers a call: complete, or stopped at a budget at least as large.
+
+    With ``families_only``: also any run that reached the families' checks.
+    """
     if stages is None:
         return False
     attempt = stages.get(ATTEMPT)
-    if attempt is None:
+    if attempt is None or (families_only and "checks" in stages):
         return True
     tried = attempt[1]
     return budget is not None and tried is not None and budget <= tried
@@ -540,6 +551,7 @@ def derive(
     budget: float | None = DEFAULT_BUDGET,
     cache: bool = True,
     deadline: float | None = None,
+    families_only: bool = False,
 ) -> Derivation:
     """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
 
@@ -564,6 +576,11 @@ def derive(
         deadline: A :func:`time.monotonic` instant by which to return, whatever ``budget``
             allows (the command line passes its own start plus ``--budget``): the work
             stops a quarter second before it. ``budget`` still decides the cache reuse.
+        families_only: Stop once the singular families are derived and checked (what a scan
+            needs): the exact comparison of the direct and indirect Jacobians and the tidied
+            printed forms are left out (:attr:`Derivation.incomplete` says so;
+            :attr:`Derivation.families_done` is True). It is kept like a run stopped at a
+            budget: a later call without ``families_only`` carries on from there.
 
     Returns:
         The :class:`Derivation`.
@@ -574,7 +591,6 @@ def derive(
         ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
-    global _BUDGETED
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
     chain, reference, tip_name = _chain_of(source, base, tip)
@@ -593,11 +609,13 @@ def derive(
                 stacklevel=2,
             )
             found = None
-    if _usable(found, budget):
+    if _usable(found, budget, families_only):
         assert found is not None
         stages: dict[str, Any] = dict(found)
         attempt = stages.get(ATTEMPT)
         reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
+        if attempt is not None and attempt[0] == FAMILIES_ONLY:
+            reason = FAMILIES_ONLY
         from_cache = True
     else:
         have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
@@ -618,22 +636,25 @@ def derive(
         writer = _cache.Writer(digest, have) if cache else None
 
         def gen() -> Iterator[tuple[str, Any]]:
-            for name, value in _stages(chain, rows, lengths, start, run_for, have):
+            for name, value in _stages(chain, rows, lengths, start, run_for, have, families_only):
                 if writer is not None:  # on disk before the parent hears of it
-                    writer.add(name, value, None if name == "seconds" else stop, ATTEMPT)
+                    mark = (FAMILIES_ONLY, None) if families_only and name == "checks" else stop
+                    writer.add(name, value, None if name == "seconds" else mark, ATTEMPT)
                 yield name, value
 
         forks = run_for is not None
-        if forks and _BUDGETED:  # a process that derives again and again:
-            _core.import_ahead()  # import here once, not in each forked child
+        if forks:  # what the stages import on first use, here: the caller's later
+            _core.import_ahead()  # lambdify (a scan's check) or next derivation reuses it
         done, reason = _cache.run(gen, run_for)
-        _BUDGETED += forks
         if reason is not None and writer is not None:
             _cache.sweep(digest)
         stages = {**have, **done}
-        if reason is not None and budget is not None and (run_for or 0) < budget:
-            reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
-        if reason is not None:
+        if reason is None and families_only and "seconds" not in stages:  # kept as unfinished
+            reason = FAMILIES_ONLY  # (the file says so since the "checks" stage)
+            stages[ATTEMPT] = (reason, None)
+        elif reason is not None:
+            if budget is not None and (run_for or 0) < budget:
+                reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
             stages[ATTEMPT] = (reason, tried)
             if cache and ("kinematics" not in stages or not reason.startswith("budget of")):
                 _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
