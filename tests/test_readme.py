@@ -44,7 +44,7 @@ def _command_lines() -> list[str]:
     lines = []
     for block in re.findall(r"```bash\n(.*?)```", README, re.S):
         for line in block.splitlines():
-            line = line.split("  #", 1)[0].strip()
+            line = shlex.join(shlex.split(line, comments=True))  # as bash reads it
             if line.startswith("hexapod-kin "):
                 lines.append(line)
     return lines
