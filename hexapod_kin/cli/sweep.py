@@ -86,6 +86,18 @@ def _fmt(d: dict[str, Any], name: str, unit: str, mc: int) -> str:
     return f"{name} = {v:.6g} {unit} {how}"
 
 
+def _quiet_distributed() -> None:
+    """Silence the log handler that ``import distributed`` installs (its levels are per logger)."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401 - installs its handler and levels
+    except ImportError:
+        return  # sweep() says how to install it
+    for handler in logging.getLogger("distributed").handlers:
+        handler.setLevel(logging.CRITICAL + 1)
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from ..sweep import DesignSpace, parse_range, plot_sweep, sweep
     from ..sweep.designs import ANGLES
@@ -97,6 +109,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             scale = math.pi / 180 if (args.deg and name in ANGLES) else 1.0
             values[name] = parse_range("--" + name.replace("_", "-"), text, scale)
     space = DesignSpace(values, total=args.total)
+    if args.scheduler:  # a lost scheduler is one line (our error), not distributed's tracebacks
+        _quiet_distributed()
     res = sweep(
         space,
         method=args.method,

@@ -24,7 +24,6 @@ import math
 import os
 import sys
 import time
-import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,11 +33,11 @@ import numpy as np
 
 from .._io import atomic_write
 from ..exceptions import (
-    CacheWarning,
     ConfigurationError,
     OptionalDependencyError,
     ParameterError,
 )
+from ._chunks import ChunkStore, check_scores
 from .designs import PARAMETERS, DesignSpace
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .scores import SCORES, score_designs
@@ -124,54 +123,6 @@ def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
     return np.stack([cols[k] for k in SCORES], axis=1)
 
 
-def _npz_bytes(**arrays: Any) -> bytes:
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    return buf.getvalue()
-
-
-def _chunk_digest(key: str, k: int, scores: np.ndarray) -> str:
-    h = hashlib.sha256(f"{key}:{k}:".encode())
-    h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
-    return h.hexdigest()
-
-
-def _load_chunk(
-    path: Path, key: str, k: int, designs: np.ndarray, options: Mapping[str, Any]
-) -> np.ndarray | None:
-    """A stored chunk's scores, checked against what it claims before use.
-
-    The sweep's key, the chunk's number and the SHA-256 of its scores must match (a swapped,
-    truncated or damaged file fails here), and one of its designs is scored again and must
-    give the same bits (an edited value fails here). A chunk that fails is discarded with
-    one :class:`~hexapod_kin.exceptions.CacheWarning` and scored again.
-    """
-    n = designs.shape[0]
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            scores = np.array(z["scores"], dtype=float)
-            ok = (
-                str(z["key"]) == key
-                and int(z["chunk"]) == k
-                and scores.shape == (n, len(SCORES))
-                and str(z["digest"]) == _chunk_digest(key, k, scores)
-            )
-    except Exception:  # noqa: BLE001 - a damaged file (bad zip, truncated, wrong arrays)
-        ok, scores = False, np.empty(0)
-    if ok:
-        r = int(hashlib.sha256(f"{key}:{k}".encode()).hexdigest(), 16) % n
-        ok = np.array_equal(_score_chunk(designs[r : r + 1], options)[0], scores[r], equal_nan=True)
-    if not ok:
-        warnings.warn(
-            f"sweep chunk {path.name} does not hold what it claims (damaged, swapped or "
-            "edited); scoring it again",
-            CacheWarning,
-            stacklevel=3,
-        )
-        return None
-    return scores
-
-
 #: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
 MAX_HOURS = 1.0
 MAX_GB = 4.0
@@ -193,17 +144,26 @@ def _refuse_large(
     the score table, 8 bytes a value.
     """
     n = space.count(method, samples)
-    memory = n * (len(PARAMETERS) + len(SCORES) + 1) * 8 * 2 / 1e9  # arrays + the written table
-    probe = np.asarray(space.designs("grid" if method == "grid" else method, 2, 0))[:2]
-    t = time.perf_counter()
-    _score_chunk(probe, options)
-    per = (time.perf_counter() - t) / max(1, len(probe))
     threads = 1 if (client is not None or scheduler is not None) else _check_workers(workers)
-    hours = n * per / threads / 3600.0
-    if hours > MAX_HOURS or memory > MAX_GB:
+    # the designs and scores, the written table; each thread's Monte-Carlo points and temporaries
+    memory = (
+        n * (len(PARAMETERS) + len(SCORES) + 1) * 8 * 2 + options["mc_samples"] * 8 * 8 * threads
+    ) / 1e9
+    hours = math.nan  # not probed: the memory alone is far beyond the limit
+    if memory <= 10 * MAX_GB:
+        # the first designs only (a grid's head is built without the rest of the grid)
+        probe = np.asarray(space.designs(method, 2, 0, first=64))[:2]
+        t = time.perf_counter()
+        _score_chunk(probe, options)
+        per = (time.perf_counter() - t) / max(1, len(probe))
+        hours = n * per / threads / 3600.0
+    if not hours <= MAX_HOURS or memory > MAX_GB:
+        scoring = (
+            "" if math.isnan(hours) else f"{hours:.3g} h of scoring on {threads} thread(s) and "
+        )
         raise ParameterError(
-            f"sweep of {n} designs: estimated {hours:.3g} h of scoring on {threads} thread(s) "
-            f"and {memory:.3g} GB; the limits are {MAX_HOURS:g} h and {MAX_GB:g} GB: fewer "
+            f"sweep of {n} designs: estimated {scoring}{memory:.3g} GB; the limits are "
+            f"{MAX_HOURS:g} h and {MAX_GB:g} GB: fewer "
             "designs, fewer --mc-samples, or --yes (allow_large=True) to run it anyway",
             parameter="samples",
             value=n,
@@ -340,40 +300,24 @@ def sweep(
                 f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
                 "'hexapod-kin[sweep]'); or write .csv or .json"
             ) from None
+    store = None
     if paths is not None:
-        parts = paths["parts"]
-        if not parts.parent.is_dir():
+        table_path = next(v for k, v in paths.items() if k != "parts")
+        if not table_path.parent.is_dir() or table_path.is_dir():
             raise ParameterError(
-                f"out={str(out)!r}: directory {str(parts.parent)!r} does not exist",
+                f"out={str(out)!r}: "
+                + (
+                    f"{str(out)!r} is a folder"
+                    if table_path.is_dir()
+                    else f"directory {str(table_path.parent)!r} does not exist"
+                )
+                + "; expected a table file path such as results.csv",
                 parameter="out",
                 value=str(out),
+                allowed="a .csv, .parquet or .json path in an existing folder",
             )
-        parts.mkdir(exist_ok=True)
-        manifest = parts / "manifest.json"
-        if manifest.exists():
-            try:
-                old = json.loads(manifest.read_text())
-            except (OSError, ValueError):
-                old = {}
-            if old.get("key") != key:
-                raise ConfigurationError(
-                    f"out={str(out)!r}: {str(parts)!r} holds chunks of a different sweep "
-                    f"(key {str(old.get('key'))[:12]} != {key[:12]}), interrupted; re-run that "
-                    "sweep to finish it, use another --out, or remove that folder",
-                    parameter="out",
-                    value=str(out),
-                )
-        else:
-            atomic_write(
-                manifest,
-                json.dumps({"key": key, "spec": spec, "chunks": len(bounds)}, indent=1) + "\n",
-            )
-        for k, (a, b) in enumerate(bounds):
-            f = parts / f"chunk_{k:05d}.npz"
-            if f.exists():
-                got = _load_chunk(f, key, k, designs[a:b], options)
-                if got is not None:
-                    results[k] = got
+        store = ChunkStore(paths["parts"], key, spec, len(bounds))
+        results = store.resume(bounds, designs, lambda d: _score_chunk(d, options), str(out))
     missing = [k for k in range(len(bounds)) if k not in results]
     scored = sum(bounds[k][1] - bounds[k][0] for k in missing)
 
@@ -389,18 +333,26 @@ def sweep(
         dynamic_ncols=True,
     )
 
-    def done(k: int, scores: np.ndarray) -> None:
-        results[k] = scores
-        if paths is not None:
-            atomic_write(
-                paths["parts"] / f"chunk_{k:05d}.npz",
-                _npz_bytes(
-                    key=np.array(key),
-                    chunk=np.array(k),
-                    scores=scores,
-                    digest=np.array(_chunk_digest(key, k, scores)),
-                ),
+    def done(k: int, scores: Any) -> None:
+        a, b = bounds[k]
+        scores = np.asarray(scores)
+        why = (
+            check_scores(scores.astype(float))
+            if scores.dtype.kind in "fiub"
+            and scores.shape == (bounds[k][1] - bounds[k][0], len(SCORES))
+            else f"a {type(scores).__name__} of {scores.dtype} {scores.shape}"
+        )
+        if why is not None:  # never stored: a later run must not trust it
+            raise ConfigurationError(
+                f"sweep chunk {k} (designs {a}..{b - 1}) came back without valid "
+                f"scores ({why}); nothing of it is kept",
+                parameter="designs",
+                value=k,
             )
+        scores = scores.astype(float)
+        results[k] = scores
+        if store is not None:
+            store.save(k, scores)
         bar.update(bounds[k][1] - bounds[k][0])
         if on_chunk is not None:
             on_chunk(k)
@@ -422,7 +374,15 @@ def sweep(
             }
             try:
                 for fut, res in as_completed(list(futures), with_results=True):
-                    done(futures[fut], np.asarray(res))
+                    if fut.status != "finished" or isinstance(res, BaseException):
+                        raise ConfigurationError(
+                            f"the Dask cluster lost sweep chunk {futures[fut]} ({fut.status}: "
+                            f"{type(res).__name__}; was the scheduler stopped?); the finished "
+                            "chunks are kept: run the same command again to finish",
+                            parameter="scheduler",
+                            value=scheduler,
+                        )
+                    done(futures[fut], res)
             finally:
                 for fut in futures:
                     fut.cancel()
