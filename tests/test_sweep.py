@@ -579,3 +579,34 @@ def test_a_huge_sweep_is_estimated_and_refused(tmp_path):
         sweep(big, out=tmp_path / "x.csv")
     assert err.value.parameter == "samples"
     assert not list(tmp_path.iterdir())  # refused before anything is written
+
+
+def test_grid_head_is_the_full_grids_head():
+    """``designs(first=k)`` builds only k grid points: the first k of the meshgrid order."""
+    space = DesignSpace({"l1": Range(0.03, 0.07, 3), "l2": Range(0.08, 0.12, 4), "height": 0.09})
+    full = space.designs()
+    axes = np.meshgrid(np.linspace(0.03, 0.07, 3), np.linspace(0.08, 0.12, 4), indexing="ij")
+    assert np.array_equal(full[:, 0], axes[0].ravel()) and np.array_equal(
+        full[:, 1], axes[1].ravel()
+    )
+    assert np.array_equal(space.designs(first=5), full[:5])
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [({"seed": -1}, "seed=-1"), ({"mc_samples": 0, "allow_large": True}, "mc_samples=0")],
+)
+def test_refused_sweep_leaves_nothing(tmp_path, kw, match):
+    """Refused before the first chunk: no sidecar folder blocks the corrected call."""
+    space = DesignSpace({"l1": Range(0.03, 0.07, 2)})
+    with pytest.raises(ParameterError, match=match):
+        sweep(space, out=tmp_path / "r.csv", **kw)
+    assert not list(tmp_path.iterdir())
+    assert sweep(space, out=tmp_path / "r.csv", mc_samples=500).n == 2
+
+
+@pytest.mark.parametrize("name, value", [("l2", 1e300), ("height", 2e3), ("mount_yaw", 1e300)])
+def test_absurd_designs_are_refused(name, value):
+    """Beyond 1 km or 1000 rad the closed forms overflow (NaN scores): refused up front."""
+    with pytest.raises(ParameterError, match=f"{name}="):
+        DesignSpace({name: value}).designs()
