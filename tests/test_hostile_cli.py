@@ -223,6 +223,12 @@ def test_table_naming_every_link_but_no_tip_loads(tmp_path: Path, record_propert
     assert np.allclose([float(v) for v in got.groups()], [x, y, 0.0], atol=1e-6)
 
 
+def test_scan_seed_minus_1(tmp_path: Path, record_property) -> None:
+    run = cli("scan", "hexabot_leg", "--samples", "10", "--seed", "-1", cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, "argument --seed: '-1'")
+
+
 # ---------------------------------------------------------------- urdf round trip
 @pytest.mark.parametrize(
     "source", [("hexabot_leg", "l1=1e12"), ("hexabot_leg", "l1=1e4"), ("table", "d = 1000")]
@@ -267,7 +273,7 @@ def _no_parts(folder: Path) -> None:
 
 
 SWEEP_REFUSALS = {
-    "seed-minus-1": (("--seed", "-1", "--out", "s.csv"), "seed=-1"),
+    "seed-minus-1": (("--seed", "-1", "--out", "s.csv"), "argument --seed: '-1'"),
     "out-dot": (("--out", "."), "out='.'"),
     "out-folder": (("--out", "f.csv"), "is a folder"),
     "nan-score-design": (("--l3", "1e300", "--out", "s.csv"), "l3=1e+300"),

@@ -24,6 +24,7 @@ __all__ = [
     "output_path",
     "q_args",
     "q_from_args",
+    "seed",
     "set_params",
     "source_args",
 ]
@@ -58,6 +59,17 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """Print ``hexapod-kin: error: <message>`` (with the subcommand) and exit 2."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def seed(text: str) -> int:
+    """An argparse ``type`` for ``--seed``: an integer in [0, 2**63) (numpy's seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 2**63:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected an integer in [0, 2**63)")
+    return value
 
 
 def set_params(pairs: Sequence[str] | None, source: Any = None) -> dict[str, Any]:

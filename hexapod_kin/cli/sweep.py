@@ -8,6 +8,8 @@ import math
 import sys
 from typing import Any
 
+from .common import seed
+
 __all__ = ["register"]
 
 _OPTIONS = (
@@ -51,7 +53,7 @@ def register(sub: Any) -> None:
     p.add_argument("--deg", action="store_true", help="angle options are in degrees")
     p.add_argument("--method", choices=("grid", "random", "lhs"), default="grid")
     p.add_argument("--samples", type=int, default=100, help="designs for random/lhs")
-    p.add_argument("--seed", type=int, default=0, help="design sampling and Monte-Carlo seed")
+    p.add_argument("--seed", type=seed, default=0, help="design sampling and Monte-Carlo seed")
     p.add_argument("--mc-samples", type=int, default=10_000, help="Monte-Carlo points/design")
     p.add_argument("--chunk-size", type=int, help="designs per chunk (default ~1/20 of all)")
     p.add_argument("--workers", type=int, help="local threads (default: all cores)")
