@@ -47,6 +47,7 @@ class Run:
     stderr: str
     seconds: float
     peak: int
+    cpu: float = 0.0
 
     @property
     def lines(self) -> list[str]:
@@ -98,13 +99,15 @@ def _finish(
     stdout, stderr = out_path.read_text(errors="replace"), err_path.read_text(errors="replace")
     out_path.unlink()
     err_path.unlink()
-    return Run(proc.returncode, stdout, stderr, seconds, usage.ru_maxrss * 1024)
+    cpu = usage.ru_utime + usage.ru_stime
+    return Run(proc.returncode, stdout, stderr, seconds, usage.ru_maxrss * 1024, cpu)
 
 
 def _record(record: Callable[[str, object], None], run: Run) -> None:
     record("line", run.lines[-1] if run.lines else "")
     record("seconds", round(run.seconds, 3))
     record("peak_mb", round(run.peak / 2**20, 1))
+    record("cpu_s", round(run.cpu, 3))
 
 
 def within_limits(run: Run) -> None:

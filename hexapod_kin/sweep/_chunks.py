@@ -40,32 +40,38 @@ _NON_NEGATIVE = ("volume", "volume_se", "volume_mc", "volume_mc_se")
 
 
 def _secret() -> bytes:
-    """The per-user key of chunk digests (created once; b"" when the cache is not writable)."""
-    folder = cache_root("sweep")
-    path = folder / "chunk.key"
-    try:
-        data = path.read_bytes()
-        if len(data) == _SECRET_BYTES:
-            return data
-    except OSError:
-        pass
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        tmp = folder / f".chunk.key.{os.getpid()}.{secrets.token_hex(4)}"
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(secrets.token_bytes(_SECRET_BYTES))
+    """The per-user key of chunk digests (created once; b"" when the cache is not writable).
+
+    Created race-free: a private temporary file is hard-linked to the name, so of concurrent
+    first runs one wins and the others read its key. A damaged key (wrong length) is replaced;
+    chunks digested with the old one are then scored again.
+    """
+    path = cache_root("sweep") / "chunk.key"
+    for _ in range(2):
         try:
-            if path.exists():  # damaged (wrong length): replaced
-                os.replace(tmp, path)
-            else:
-                os.link(tmp, path)  # the first of concurrent writers wins
-        finally:
-            tmp.unlink(missing_ok=True)
-        data = path.read_bytes()
-        return data if len(data) == _SECRET_BYTES else b""
-    except OSError:
-        return b""
+            data = path.read_bytes()
+            if len(data) == _SECRET_BYTES:
+                return data
+        except OSError:
+            pass
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f".chunk.key.{os.getpid()}.{secrets.token_hex(4)}")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(secrets.token_bytes(_SECRET_BYTES))
+            try:
+                if path.exists():
+                    os.replace(tmp, path)
+                else:
+                    os.link(tmp, path)
+            except FileExistsError:
+                pass  # another process made it first: read its key
+            finally:
+                tmp.unlink(missing_ok=True)
+        except OSError:
+            return b""
+    return b""
 
 
 def check_scores(scores: np.ndarray) -> str | None:

@@ -10,9 +10,14 @@ one per core; numpy releases the GIL), or Dask distributed workers (``client=`` 
 (pyarrow) or ``.json`` (the summary and the table's columns). While the sweep runs, every
 finished chunk is written atomically to a hidden sidecar folder next to it,
 ``.results.csv.sweep-parts/chunk_NNNNN.npz`` with a ``manifest.json`` (the sweep's options
-and a key hashing them with the designs). Re-running the same sweep after an interruption
-(Ctrl-C, SIGKILL, a lost worker) loads the chunks present and scores only the missing ones;
-the merged table is the same. The sidecar is removed once the table is written.
+and a key hashing them with the designs); the folder appears with the first finished chunk,
+so a sweep refused before scoring leaves nothing. Re-running the same sweep after an
+interruption (Ctrl-C, SIGKILL, a lost worker or scheduler) loads the chunks that pass the
+checks of :mod:`._chunks` and scores only the others; the merged table is the same. The
+sidecar is removed once the table is written.
+
+Before anything runs, the sweep is estimated (time from two designs scored here, memory from
+the counts) and refused beyond :data:`MAX_HOURS` or :data:`MAX_GB` unless ``allow_large``.
 """
 
 from __future__ import annotations
