@@ -399,6 +399,16 @@ def _damage(parts: Path, how: str, marker: Path) -> None:
         _rewrite(a, scores=evil)
     elif how == "plant-code-pickle":
         a.write_bytes(pickle.dumps(_Planted(marker)))
+    elif how == "chunk-is-a-named-pipe":  # np.load would block on it
+        a.unlink()
+        os.mkfifo(a)
+    elif how == "chunk-links-to-dev-zero":
+        a.unlink()
+        os.symlink("/dev/zero", a)
+    elif how == "manifest-is-a-named-pipe":
+        (parts / "manifest.json").unlink()
+        os.mkfifo(parts / "manifest.json")
+        return
     elif how == "manifest-garbage":
         (parts / "manifest.json").write_bytes(b"\x00garbage{")
         return
@@ -408,7 +418,8 @@ def _damage(parts: Path, how: str, marker: Path) -> None:
 
 CHUNK_DAMAGES = (
     "truncate", "empty", "random-bytes", "swap-two", "edit-value", "edit-value-plain-digest",
-    "nan-score-keyed-digest", "plant-code-npz", "plant-code-pickle", "manifest-garbage",
+    "nan-score-keyed-digest", "plant-code-npz", "plant-code-pickle", "chunk-is-a-named-pipe",
+    "chunk-links-to-dev-zero", "manifest-garbage", "manifest-is-a-named-pipe",
 )  # fmt: skip
 
 
@@ -423,7 +434,7 @@ def test_damaged_sweep_chunks(tmp_path: Path, sweep_state, how: str, record_prop
     _record(record_property, run)
     within_limits(run)
     assert run.status == 0, run.stderr
-    if how == "manifest-garbage":  # every chunk carries its own key: all are used
+    if how.startswith("manifest"):  # every chunk carries its own key: all are used
         assert run.stderr == "", run.stderr
     else:
         assert len(run.lines) == 1, run.stderr

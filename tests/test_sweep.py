@@ -610,3 +610,39 @@ def test_absurd_designs_are_refused(name, value):
     """Beyond 1 km or 1000 rad the closed forms overflow (NaN scores): refused up front."""
     with pytest.raises(ParameterError, match=f"{name}="):
         DesignSpace({name: value}).designs()
+
+
+def test_a_zip_bomb_chunk_is_not_inflated(local_run, tmp_path):
+    """A chunk whose member would inflate far beyond its scores' size is discarded unread."""
+    import io
+    import tracemalloc
+    import zipfile
+
+    from hexapod_kin.exceptions import CacheWarning
+
+    out = tmp_path / "z.csv"
+
+    def stop(k: int) -> None:
+        if k == 15:  # every chunk stored, the table not yet written
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(SPACE, out=out, workers=1, on_chunk=stop, **OPTS)
+    chunk = tmp_path / ".z.csv.sweep-parts" / "chunk_00000.npz"
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (1 << 23, 1)}
+    )
+    with zipfile.ZipFile(chunk, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("scores.npy", header.getvalue() + bytes(8 << 23))  # 64 MiB in ~64 kB
+    assert chunk.stat().st_size < 1 << 17
+    tracemalloc.start()
+    try:
+        with pytest.warns(CacheWarning, match="chunk_00000.npz"):
+            res = sweep(SPACE, out=out, workers=1, **OPTS)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 20  # the 64 MiB never inflated (scoring itself peaks near 40 MiB)
+    assert res.scored == 2
+    assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()

@@ -4,7 +4,8 @@ A sweep writing ``x.csv`` keeps each finished chunk in the hidden ``.x.csv.sweep
 (``chunk_NNNNN.npz`` and a ``manifest.json`` naming the sweep's key). The folder is created
 with the first finished chunk, so a sweep refused before scoring leaves nothing behind.
 
-A stored chunk is used only if it is a plain ``.npz`` (never unpickled), names this sweep's
+A stored chunk is used only if it is a regular file of a bounded size holding a plain ``.npz``
+(never unpickled; its members' inflated sizes checked before inflating), names this sweep's
 key and its own number, carries the right digest of its scores, holds plausible scores
 (finite; 0/1 flags; non-negative volumes) and one of its designs, scored again, gives the same
 bits. The digest is an HMAC-SHA256 keyed by a random secret kept in the package's cache folder
@@ -22,19 +23,21 @@ import json
 import os
 import secrets
 import warnings
+import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write, cache_root
-from ..exceptions import CacheWarning, ConfigurationError
+from .._io import atomic_write, cache_root, read_regular
+from ..exceptions import CacheWarning, ConfigurationError, HexapodKinError
 from .scores import SCORES
 
 __all__ = ["ChunkStore", "check_scores"]
 
 _SECRET_BYTES = 32
+_SLACK = 1 << 16  # bytes of a chunk file beside its scores (zip headers, key, digest)
 _FLAGS = ("feasible", "volume_exact")
 _NON_NEGATIVE = ("volume", "volume_se", "volume_mc", "volume_mc_se")
 
@@ -130,9 +133,9 @@ class ChunkStore:
             return {}
         files = sorted(self.parts.glob("chunk_*.npz"))
         try:
-            old = json.loads((self.parts / "manifest.json").read_text(encoding="utf-8"))
+            old = json.loads(read_regular(self.parts / "manifest.json", 1 << 20))
             old_key = old.get("key") if isinstance(old, dict) else None
-        except (OSError, ValueError):
+        except (HexapodKinError, ValueError):
             old_key = None
         if old_key is not None and old_key != self.key and files:
             raise ConfigurationError(
@@ -167,8 +170,13 @@ class ChunkStore:
         self, path: Path, k: int, designs: np.ndarray, rescore: Callable[[np.ndarray], np.ndarray]
     ) -> np.ndarray | None:
         n = designs.shape[0]
+        room = n * len(SCORES) * 8 + _SLACK  # the scores' bytes and the small arrays
         try:
-            with np.load(path, allow_pickle=False) as z:
+            data = read_regular(path, room)  # a regular file only (a pipe would block np.load)
+            with zipfile.ZipFile(io.BytesIO(data)) as zf:  # the members' sizes, before inflating
+                if sum(info.file_size for info in zf.infolist()) > room:
+                    return None
+            with np.load(io.BytesIO(data), allow_pickle=False) as z:
                 scores = np.array(z["scores"], dtype=float)
                 ok = (
                     str(z["key"]) == self.key
