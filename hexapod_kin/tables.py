@@ -38,6 +38,7 @@ YAML with PyYAML (``pip install hexapod-kin[tables]``).
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -188,8 +189,7 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             raise _refuse(path, "values nested too deeply for the TOML reader",
                           f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
         except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _refuse(path, f"a value the TOML reader refuses ({_short(exc)})",
-                          "integers of at most 15 digits") from None  # fmt: skip
+            raise _value_refused(path, "TOML", exc) from None
     else:
         try:
             import yaml
@@ -210,8 +210,7 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             raise _refuse(path, "values nested too deeply for the YAML reader",
                           f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
         except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _refuse(path, f"a value the YAML reader refuses ({_short(exc)})",
-                          "integers of at most 15 digits") from None  # fmt: skip
+            raise _value_refused(path, "YAML", exc) from None
     if not isinstance(data, dict):
         raise SourceError(
             f"{path.name}: the file must hold a mapping (name, convention, row, ...), got "
@@ -220,6 +219,16 @@ def _load_mapping(path: Path) -> dict[str, Any]:
         )
     _check_structure(data, path)
     return data
+
+
+def _value_refused(path: Path, reader: str, exc: ValueError) -> SourceError:
+    """A value the reader cannot build: an integer beyond Python's digit limit, or another."""
+    digits = re.search(r"value has (\d+) digits", str(exc))
+    if digits:
+        what = f"an integer of {digits.group(1)} digits"
+    else:
+        what = f"a value the {reader} reader refuses ({_short(exc)})"
+    return _refuse(path, what, "integers of at most 15 digits")
 
 
 def _short(exc: BaseException) -> str:
