@@ -490,6 +490,7 @@ def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> Non
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
     parts = tmp_path / ".k.csv.sweep-parts"
+    proc = None
     try:
         out, err = tmp_path / ".stdout", tmp_path / ".stderr"
         with open(out, "wb") as fo, open(err, "wb") as fe:
@@ -504,9 +505,12 @@ def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> Non
             sched.send_signal(signal.SIGKILL)
             run = _finish(proc, t0, LIMIT_S, out, err)
     finally:
-        for p in (sched, worker):
-            p.kill()
-            p.wait()
+        for p in (sched, worker, proc):
+            if p is not None and p.returncode is None:
+                p.kill()
+                p.wait()
+        if sched.stderr is not None:
+            sched.stderr.close()
     _record(record_property, run)
     refused(run, "lost sweep chunk")
     kept = sorted(parts.glob("chunk_*.npz"))

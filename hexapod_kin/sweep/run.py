@@ -343,8 +343,7 @@ def sweep(
         scores = np.asarray(scores)
         why = (
             check_scores(scores.astype(float))
-            if scores.dtype.kind in "fiub"
-            and scores.shape == (bounds[k][1] - bounds[k][0], len(SCORES))
+            if scores.dtype.kind in "fiub" and scores.shape == (b - a, len(SCORES))
             else f"a {type(scores).__name__} of {scores.dtype} {scores.shape}"
         )
         if why is not None:  # never stored: a later run must not trust it
@@ -358,7 +357,7 @@ def sweep(
         results[k] = scores
         if store is not None:
             store.save(k, scores)
-        bar.update(bounds[k][1] - bounds[k][0])
+        bar.update(b - a)
         if on_chunk is not None:
             on_chunk(k)
 
@@ -382,8 +381,13 @@ def sweep(
                     if fut.status != "finished" or isinstance(res, BaseException):
                         raise ConfigurationError(
                             f"the Dask cluster lost sweep chunk {futures[fut]} ({fut.status}: "
-                            f"{type(res).__name__}; was the scheduler stopped?); the finished "
-                            "chunks are kept: run the same command again to finish",
+                            f"{type(res).__name__}; was the scheduler stopped?); "
+                            + (
+                                "the finished chunks are kept: run the same sweep again to "
+                                "finish it"
+                                if store is not None
+                                else "nothing was written"
+                            ),
                             parameter="scheduler",
                             value=scheduler,
                         )
