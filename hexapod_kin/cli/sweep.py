@@ -8,7 +8,7 @@ import math
 import sys
 from typing import Any
 
-from .common import seed
+from .common import PLOT_SUFFIXES, output_path, seed
 
 __all__ = ["register"]
 
@@ -111,6 +111,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             scale = math.pi / 180 if (args.deg and name in ANGLES) else 1.0
             values[name] = parse_range("--" + name.replace("_", "-"), text, scale)
     space = DesignSpace(values, total=args.total)
+    if args.plot:  # checked before any work, not after the sweep
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
     if args.scheduler:  # a lost scheduler is one line (our error), not distributed's tracebacks
         _quiet_distributed()
     res = sweep(

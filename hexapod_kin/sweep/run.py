@@ -210,6 +210,40 @@ def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
         ) from None
 
 
+def _check_out(out: str | Path | None) -> dict[str, Path] | None:
+    """The table and sidecar paths of ``out``, checked before any work (None: no ``out``)."""
+    if out is None:
+        return None
+    paths = table_paths(out)
+    if "parquet" in paths:
+        try:
+            import pyarrow.parquet  # noqa: F401
+        except ImportError:
+            raise OptionalDependencyError(
+                f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
+                "'hexapod-kin[sweep]'); or write .csv or .json"
+            ) from None
+    table_path = next(v for k, v in paths.items() if k != "parts")
+    folder = table_path.parent
+    problem = (
+        f"{str(out)!r} is a folder"
+        if table_path.is_dir()
+        else f"directory {str(folder)!r} does not exist"
+        if not folder.is_dir()
+        else f"directory {str(folder)!r} is not writable"
+        if not os.access(folder, os.W_OK | os.X_OK)
+        else None
+    )
+    if problem is not None:  # before any work
+        raise ParameterError(
+            f"out={str(out)!r}: {problem}; expected a table file path such as results.csv",
+            parameter="out",
+            value=str(out),
+            allowed="a .csv, .parquet or .json path in an existing folder",
+        )
+    return paths
+
+
 def sweep(
     space: DesignSpace,
     *,
@@ -269,6 +303,7 @@ def sweep(
         "stride_points": int(stride_points),
         "stride_use": float(stride_use),
     }
+    paths = _check_out(out)
     if not allow_large:
         _refuse_large(space, method, samples, options, workers, client, scheduler)
     designs = space.designs(method, samples, seed)
@@ -296,31 +331,8 @@ def sweep(
     key = h.hexdigest()
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     results: dict[int, np.ndarray] = {}
-    paths = table_paths(out) if out is not None else None
-    if paths is not None and "parquet" in paths:
-        try:
-            import pyarrow.parquet  # noqa: F401
-        except ImportError:
-            raise OptionalDependencyError(
-                f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
-                "'hexapod-kin[sweep]'); or write .csv or .json"
-            ) from None
     store = None
     if paths is not None:
-        table_path = next(v for k, v in paths.items() if k != "parts")
-        if not table_path.parent.is_dir() or table_path.is_dir():
-            raise ParameterError(
-                f"out={str(out)!r}: "
-                + (
-                    f"{str(out)!r} is a folder"
-                    if table_path.is_dir()
-                    else f"directory {str(table_path.parent)!r} does not exist"
-                )
-                + "; expected a table file path such as results.csv",
-                parameter="out",
-                value=str(out),
-                allowed="a .csv, .parquet or .json path in an existing folder",
-            )
         store = ChunkStore(paths["parts"], key, spec, len(bounds))
         results = store.resume(bounds, designs, lambda d: _score_chunk(d, options), str(out))
     missing = [k for k in range(len(bounds)) if k not in results]
