@@ -75,6 +75,11 @@ MAX_STRING = 10_000
 MAX_LENGTH = 1e3
 #: Largest magnitude of any other number (the URDF gate's bound on any value).
 MAX_NUMBER = 1e9
+#: Most rows and most joint rows of a table: the URDF gate's caps on links and degrees of
+#: freedom (``_gate.limits.MAX_LINKS``, ``MAX_DOF``) in the table's terms: a row is a link,
+#: and the base, frame 0, tool and DH tip links take the other four.
+MAX_ROWS = 996
+MAX_JOINTS = 128
 
 
 def _refuse(path: Path, what: str, allowed: str) -> SourceError:
@@ -361,6 +366,13 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             "table: at least one [[row]] is required (one per row of the table)",
             parameter="row",
         )
+    if len(rows_in) > MAX_ROWS:
+        raise ParameterError(
+            f"table: {len(rows_in)} rows; allowed: at most {MAX_ROWS}",
+            parameter="row",
+            value=len(rows_in),
+            allowed=f"at most {MAX_ROWS} rows",
+        )
     geometry = _GEOMETRY[convention]
     allowed = (*geometry, *ROW_KEYS)
     rows: list[KhalilRow | DHRow] = []
@@ -436,6 +448,14 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             if "com" in row or "inertia" in row:
                 raise ParameterError(f"{where}: com/inertia need a mass", parameter="mass")
             masses.append(None)
+    if len(joint_names) > MAX_JOINTS:
+        raise ParameterError(
+            f"table: {len(joint_names)} joint rows; allowed: at most {MAX_JOINTS} (the loader's "
+            "cap on degrees of freedom)",
+            parameter="row",
+            value=len(joint_names),
+            allowed=f"at most {MAX_JOINTS} joint rows",
+        )
     if links and len(links) != len(rows):
         raise ParameterError(
             f"table: 'link' given on {len(links)} of {len(rows)} rows; name all links or none",

@@ -137,3 +137,23 @@ def test_urdf_never_writes_what_its_loader_refuses(l1: float, ok: bool) -> None:
         return
     model = hk.load(to_urdf(chain))
     assert abs(model.fk([0.0, 0.0, 0.0])[0, 3] - (l1 + 0.2)) < 1e-6 * l1
+
+
+def test_table_caps_are_the_loaders(tmp_path: Path) -> None:
+    """The table's caps are the URDF gate's, in the table's terms: the largest table loads."""
+    from hexapod_kin import _gate, tables
+
+    assert tables.MAX_JOINTS == _gate.MAX_DOF and tables.MAX_NUMBER == _gate.MAX_ABS
+    path = tmp_path / "long.toml"
+    pose = "{ xyz = [0, 0, 0.1], rpy = [0, 0, 0] }"
+    path.write_text(
+        f'convention = "dh"\nbase_pose = {pose}\ntool = {pose}\n'
+        + "[[row]]\na = 0.001\n"
+        + '[[row]]\ntype = "fixed"\na = 0.001\n' * (tables.MAX_ROWS - 1),
+        encoding="utf-8",
+    )
+    model = hk.load(str(path))
+    assert model.nq == 1
+    path.write_text(path.read_text() + '[[row]]\ntype = "fixed"\n', encoding="utf-8")
+    with pytest.raises(hk.exceptions.ParameterError, match=f"{tables.MAX_ROWS + 1} rows"):
+        hk.load(str(path))
