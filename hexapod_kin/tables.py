@@ -388,6 +388,15 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         if "type" in row and "sigma" in row:
             raise ParameterError(f"{where}: give type or sigma, not both", parameter="type")
         sigma: Any = row["type"] if "type" in row else row.get("sigma", "revolute")
+        if isinstance(sigma, bool) or not isinstance(sigma, (str, int)):
+            key = "type" if "type" in row else "sigma"
+            raise ParameterError(
+                f"{where}.{key}={_clip(sigma)} is not allowed; use 'revolute', 'prismatic' or "
+                "'fixed' (sigma 0, 1 or 2)",
+                parameter=key,
+                value=_clip(sigma),
+                allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
+            )
         geo = {
             k: _number(
                 row.get(k, 0.0), f"{where}.{k}", MAX_NUMBER if k in _ANGLE_KEYS else MAX_LENGTH

@@ -157,3 +157,37 @@ def test_table_caps_are_the_loaders(tmp_path: Path) -> None:
     path.write_text(path.read_text() + '[[row]]\ntype = "fixed"\n', encoding="utf-8")
     with pytest.raises(hk.exceptions.ParameterError, match=f"{tables.MAX_ROWS + 1} rows"):
         hk.load(str(path))
+
+
+ODD_VALUES = [None, True, -1, 0, 1e300, -1e300, 1e-300, "x", "", [], [1], [1, 2, 3],
+              [1, 2, 3, 4, 5, 6], {}, {"a": 1}, {"xyz": [0, 0, 1e300]}, {"rpy": "a"}, [[1]],
+              ["a", "b", "c"], 2**70, -(2**70), math.nan]  # fmt: skip
+
+
+@pytest.mark.parametrize("convention", ["khalil", "dh"])
+def test_every_key_with_odd_values(convention: str) -> None:
+    """Any value under any key gives a chain or the package's error, never another exception."""
+    from hexapod_kin.exceptions import HexapodKinError
+    from hexapod_kin.params import Chain
+    from hexapod_kin.tables import ROW_KEYS, TOP_KEYS, chain_from_table
+
+    good = {"khalil": {"d": 0.1, "alpha": 1.0}, "dh": {"a": 0.1, "alpha": 1.0}}[convention]
+    geometry = ("alpha", "d", "theta", "r", "a")
+    tables = [
+        {"convention": convention, key: value, "row": [{"d": 0.1}, dict(good)]}
+        for key in TOP_KEYS
+        if key != "convention"
+        for value in ODD_VALUES
+    ] + [
+        {"convention": convention, "row": [{key: value}, dict(good)]}
+        for key in (*geometry, *ROW_KEYS)
+        for value in ODD_VALUES
+    ]
+    refused = 0
+    for table in tables:
+        try:
+            assert isinstance(chain_from_table(table), Chain)
+        except HexapodKinError as exc:
+            assert "\n" not in str(exc) and len(str(exc)) < 400, str(exc)
+            refused += 1
+    assert 0.5 * len(tables) < refused < len(tables)  # most are refused, some are fine

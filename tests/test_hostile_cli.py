@@ -187,6 +187,7 @@ TABLE_FILES: dict[str, tuple[str, str | bytes, str]] = {
     "long-string": ("s.yaml", "name: " + "x" * 20_000 + "\nrow: [{d: 0}]\n", "characters"),
     "two-megabytes": ("big.yaml", "#" * 2_000_000, "more than 1000000 bytes"),
     "empty-file": ("empty.yaml", "", "mapping"),
+    "row-type-a-list": ("t.yaml", "row:\n  - {type: [1], d: 0.1}\n", "row 1.type=[1]"),
     "twenty-thousand-rows": ("rows.toml", "[[row]]\nd = 0.01\n" * 20_000, "20000 rows"),
     "two-hundred-joints": ("rows.toml", "[[row]]\nd = 0.01\n" * 200, "200 joint rows"),
 }
