@@ -242,9 +242,31 @@ def test_scan_seed_minus_1(tmp_path: Path, record_property) -> None:
     refused(run, "argument --seed: '-1'")
 
 
+PRESET_VALUES = {
+    # -s NAME=VALUE on a preset: (argv, phrase of the one line)
+    "preset-l1-1e300": (("hexabot_leg", "-s", "l1=1e300"), "l1=1e+300 is beyond 1e9"),
+    "preset-body-radius-1e300": (("hexapod", "-s", "body_radius=1e300"), "body_radius=1e+300"),
+    "preset-5000-digit-number": (("hexabot_leg", "-s", "l1=" + "9" * 5000), "5000 characters"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PRESET_VALUES))
+def test_hostile_preset_value(tmp_path: Path, case: str, record_property) -> None:
+    args, phrase = PRESET_VALUES[case]
+    run = cli("fk", *args, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, phrase)
+
+
 # ---------------------------------------------------------------- urdf round trip
 @pytest.mark.parametrize(
-    "source", [("hexabot_leg", "l1=1e12"), ("hexabot_leg", "l1=1e4"), ("table", "d = 1000")]
+    "source",
+    [
+        ("hexabot_leg", "l1=1e12"),
+        ("hexabot_leg", "l1=1e8"),
+        ("hexabot_leg", "l1=1e4"),
+        ("table", "d = 1000"),
+    ],
 )
 def test_urdf_writes_only_what_its_loader_reads(tmp_path: Path, source, record_property) -> None:
     """``urdf`` either refuses in one line (no file) or writes a file ``fk`` then loads."""
@@ -256,8 +278,8 @@ def test_urdf_writes_only_what_its_loader_reads(tmp_path: Path, source, record_p
         first = cli("urdf", name, "-s", value, "-o", "x.urdf", cwd=tmp_path)
     _record(record_property, first)
     within_limits(first)
-    if value == "l1=1e12":  # a rod inertia of ~1e22 kg m²: beyond the loader's 1e9
-        refused(first, "beyond 1e+09")
+    if value in ("l1=1e12", "l1=1e8"):  # a length, or a rod's inertia, beyond the loader's 1e9
+        refused(first, "beyond 1e9" if value == "l1=1e12" else "<inertia iyy> would be 4.16667e+13")
         assert not (tmp_path / "x.urdf").exists()
         return
     assert first.status == 0, first.stderr

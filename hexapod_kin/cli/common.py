@@ -113,6 +113,13 @@ def _set_value(key: str, text: str) -> Any:
         parsed = None
         if "," not in text:
             return text
+    except ValueError:  # an integer beyond Python's digit limit
+        raise ParameterError(
+            f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot",
+            parameter=key,
+            value=f"{text[:20]}...",
+            allowed="a number of at most 15 digits",
+        ) from None
     else:
         return tuple(parsed) if isinstance(parsed, list) else parsed
     items = [t.strip() for t in text.split(",")]
@@ -125,8 +132,10 @@ def _set_value(key: str, text: str) -> Any:
         except ValueError:
             v = math.nan
         if not math.isfinite(v):
+            shown = text if len(text) <= 60 else f"{text[:40]}...({len(text)} characters)"
+            one = item if len(item) <= 30 else f"{item[:20]}...({len(item)} characters)"
             raise ParameterError(
-                f"-s {key}={text}: item {i} ({item!r}) is not a finite number; a list value "
+                f"-s {key}={shown}: item {i} ({one!r}) is not a finite number; a list value "
                 f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)",
                 parameter=key,
                 value=text,
