@@ -291,7 +291,6 @@ def test_urdf_writes_only_what_its_loader_reads(tmp_path: Path, source, record_p
 # ---------------------------------------------------------------- sweeps
 SWEEP = ("sweep", "--l1", "0.03:0.07:2", "--l2", "0.08:0.12:4", "--mc-samples", "2000",
          "--chunk-size", "2", "--no-progress")  # fmt: skip
-N_CHUNKS = 4
 
 
 def _sweep_space() -> tuple[object, dict[str, object]]:
