@@ -205,6 +205,16 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             ) from None
         try:
             data = _strict_yaml(text, path)
+        except yaml.constructor.ConstructorError as exc:  # a tag such as !!python/object
+            found = re.search(r"tag '([^']*)'", str(exc.problem))
+            tag = found.group(1).replace("tag:yaml.org,2002:", "!!") if found else "?"
+            mark = exc.problem_mark
+            where = f"line {mark.line + 1}: " if mark is not None else ""
+            raise _refuse(
+                path,
+                f"{where}the YAML tag {_clip(tag)} is not allowed",
+                "plain YAML values (numbers, strings, lists, mappings)",
+            ) from None
         except yaml.YAMLError as exc:
             raise SourceError(
                 f"{path.name}: not valid YAML ({_short(exc)})", parameter="source"
