@@ -646,3 +646,19 @@ def test_a_zip_bomb_chunk_is_not_inflated(local_run, tmp_path):
     assert peak < 64 << 20  # the 64 MiB never inflated (scoring itself peaks near 40 MiB)
     assert res.scored == 2
     assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
+
+
+def test_yes_runs_a_sweep_beyond_the_estimate_limits(tmp_path, monkeypatch, capsys):
+    """The refusal is the estimate's (limits lowered here so a small sweep is "too large"):
+    ``--yes`` runs it, and nothing is written by the refused run."""
+    from hexapod_kin.cli import main
+    from hexapod_kin.sweep import run
+
+    monkeypatch.setattr(run, "MAX_HOURS", 1e-12)
+    argv = ["sweep", "--l1", "0.03:0.07:2", "--mc-samples", "500", "--out", str(tmp_path / "y.csv")]
+    assert main(argv) == 2
+    assert "2 designs: estimated" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+    assert main([*argv, "--yes", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["n_designs"] == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["y.csv"]
