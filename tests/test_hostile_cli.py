@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import builtins
 import hashlib
+import importlib.util
 import json
 import os
 import pickle
@@ -317,6 +318,12 @@ SWEEP_REFUSALS = {
     "nan-score-design": (("--l3", "1e300", "--out", "s.csv"), "l3=1e+300"),
     "mc-samples-huge": (("--mc-samples", "2000000000", "--out", "s.csv"), "estimated"),
     "workers-zero": (("--workers", "0", "--out", "s.csv"), "workers=0"),
+    "scheduler-refusing": (  # connection refused: retried for 5 s, not distributed's 30 s
+        ("--scheduler", "tcp://127.0.0.1:9", "--out", "s.csv"),
+        "scheduler='tcp://127.0.0.1:9': cannot connect"
+        if importlib.util.find_spec("distributed")
+        else "needs dask[distributed]",
+    ),
     "ten-million-designs": (
         ("--l1", "0.05", "--l2", "0.05:0.15:3163", "--l3", "0.05:0.15:3163", "--out", "s.csv"),
         "10004569 designs: estimated",

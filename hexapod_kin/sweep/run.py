@@ -128,6 +128,10 @@ def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
     return np.stack([cols[k] for k in SCORES], axis=1)
 
 
+#: Seconds to reach a Dask scheduler before the sweep is refused (distributed's default is 30 s:
+#: a wrong address should be one line within the command line's 10 s).
+CONNECT_TIMEOUT = 5.0
+
 #: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
 MAX_HOURS = 1.0
 MAX_GB = 4.0
@@ -200,7 +204,7 @@ def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
             "a Dask scheduler needs dask[distributed]: pip install 'hexapod-kin[sweep]'"
         ) from None
     try:
-        return Client(scheduler, timeout=30), True
+        return Client(scheduler, timeout=CONNECT_TIMEOUT), True
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigurationError(
             f"scheduler={scheduler!r}: cannot connect ({exc}); expected a running Dask "
