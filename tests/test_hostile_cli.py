@@ -318,7 +318,7 @@ SWEEP_REFUSALS = {
     "nan-score-design": (("--l3", "1e300", "--out", "s.csv"), "l3=1e+300"),
     "mc-samples-huge": (("--mc-samples", "2000000000", "--out", "s.csv"), "estimated"),
     "workers-zero": (("--workers", "0", "--out", "s.csv"), "workers=0"),
-    "scheduler-refusing": (  # connection refused: retried for 5 s, not distributed's 30 s
+    "scheduler-refusing": (  # connection refused: retried for 4 s, not distributed's 30 s
         ("--scheduler", "tcp://127.0.0.1:9", "--out", "s.csv"),
         "scheduler='tcp://127.0.0.1:9': cannot connect"
         if importlib.util.find_spec("distributed")

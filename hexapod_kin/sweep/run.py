@@ -130,7 +130,7 @@ def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
 
 #: Seconds to reach a Dask scheduler before the sweep is refused (distributed's default is 30 s:
 #: a wrong address should be one line within the command line's 10 s).
-CONNECT_TIMEOUT = 5.0
+CONNECT_TIMEOUT = 4.0
 
 #: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
 MAX_HOURS = 1.0
