@@ -23,6 +23,7 @@ from .common import (
     output_path,
     q_args,
     q_from_args,
+    seed,
     set_params,
     source_args,
 )
@@ -444,7 +445,7 @@ def _add_scan(sub: Any) -> None:
     p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
     p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
-    p.add_argument("--seed", type=int, help="seed of --samples (default: scan()'s, 0)")
+    p.add_argument("--seed", type=seed, help="seed of --samples (default: scan()'s, 0)")
     p.add_argument(
         "--families",
         choices=list(_FAMILIES),
