@@ -5,19 +5,25 @@ byte runs as is). Beside the stamps (:mod:`._kernels`), a manifest
 ``hexapod_kin-<stamp key>.manifest.json`` (sealed by its own SHA-256) lists the SHA-256 of
 every cache file of the package's modules, rewritten after each area's first completed call
 (:func:`write_manifest`). Before anything is loaded in a process (:func:`verify`), every
-listed file is checked: one that is truncated, emptied, overwritten, swapped with another or
-edited is removed before numba opens it (one :class:`~hexapod_kin.exceptions.CacheWarning`),
-and numba compiles that function again; a damaged manifest disowns every file. Files written
-since the manifest (another process compiling) are numba's own. Only numba's documented
-cache location (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources) is read.
+data file (``.nbc``) listed must match its line, and every index (``.nbi``) must match its
+line or read, through an unpickler that admits only numba's types, as an index numba writes
+for that very function (numba rewrites an index when it adds an overload). A file that is
+truncated, emptied, overwritten, swapped with another, edited or planted is removed before
+numba opens it (one :class:`~hexapod_kin.exceptions.CacheWarning`), and numba compiles that
+function again; a damaged manifest disowns every file. Data files written since the manifest
+(another process compiling) are numba's own. Only numba's documented cache location
+(``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources) is read, and no numba API
+but the dispatchers' public ones is called.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import io
 import json
 import os
+import pickle
 import sys
 import threading
 import warnings
@@ -126,34 +132,93 @@ def _seal(listed: Any) -> str:
     return hashlib.sha256(json.dumps(listed, sort_keys=True).encode()).hexdigest()
 
 
-def verify() -> None:
-    """Once per process, before numba loads anything: remove the files the manifest disowns.
+class _IndexReader(pickle.Unpickler):
+    """Reads a numba index (``.nbi``) allowing only the classes a real one holds.
 
-    A listed file whose SHA-256 differs from its line is removed (numba then compiles that
-    function again); a damaged manifest disowns every file. One warning when anything is
-    removed. No manifest (a cache being filled for the first time): nothing to check.
+    numba's types (classes of ``numba.core.types``), their reconstructor, ``object`` and
+    ``copyreg._reconstructor``: a pickle that names anything else (a function that runs a
+    command, opens a file...) is refused before it is called.
+    """
+
+    SAFE = frozenset(
+        (
+            ("builtins", "object"),
+            ("copyreg", "_reconstructor"),
+            ("numba.core.types.abstract", "_type_reconstructor"),
+        )
+    )
+
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) in self.SAFE:
+            return super().find_class(module, name)
+        if module.startswith("numba.core.types.") and "." not in name:
+            found = super().find_class(module, name)
+            if isinstance(found, type) and issubclass(found, numba.types.Type):
+                return found
+        raise pickle.UnpicklingError(f"{module}.{name} is not allowed in a numba index")
+
+
+def _index_ok(path: Path) -> bool:
+    """Whether ``path`` reads as an index numba itself writes for this function.
+
+    The layout numba reads: a pickled version string, then a pickled ``(stamp, overloads)``
+    whose values name this function's own data files (``<stem>.<n>.nbc``). Read with
+    :class:`_IndexReader` (nothing outside numba's types is ever called).
+    """
+    stem = path.name[: -len(".nbi")]
+    try:
+        with path.open("rb") as f:
+            version = _IndexReader(f).load()
+            stamp, overloads = _IndexReader(io.BytesIO(f.read())).load()
+    except Exception:  # noqa: BLE001 - anything unreadable is no index
+        return False
+    return (
+        version == numba.__version__
+        and isinstance(stamp, (bytes, tuple))
+        and isinstance(overloads, dict)
+        and all(
+            isinstance(name, str)
+            and name.startswith(f"{stem}.")
+            and name.endswith(".nbc")
+            and os.sep not in name
+            for name in overloads.values()
+        )
+    )
+
+
+def verify() -> None:
+    """Once per process, before numba loads anything: remove the files that are not vouched for.
+
+    A data file (``.nbc``, machine code) listed in the manifest must match its SHA-256; an
+    index (``.nbi``) must match its line or read as an index numba writes for that function
+    (:func:`_index_ok`: numba adds overloads to an index, rewriting it). A file that fails is
+    removed (numba then compiles that function again), with one warning for all of them; a
+    damaged manifest disowns every file. Unlisted data files (written since the manifest,
+    e.g. by another process) are numba's own; without a manifest only the indexes are checked.
     """
     with _VERIFY_LOCK:
         if _VERIFIED[0]:
             return
         _VERIFIED[0] = True
         manifest = _manifest()
+        files = cache_files()
         try:
             text = manifest.read_text(encoding="utf-8")
         except FileNotFoundError:
-            return
+            text = None
         except OSError:
             text = ""
-        files = cache_files()
+        why = "do not match the manifest"
         try:
-            data = json.loads(text)
-            listed = data["files"]
-            if not isinstance(listed, dict) or data.get("seal") != _seal(listed):
-                raise ValueError("seal")
-            bad = [f for f in files if _rel(f) in listed and _sha(f) != listed[_rel(f)]]
-            why = "differ from the manifest"
+            listed: dict[str, str] = {}
+            if text is not None:
+                data = json.loads(text)
+                listed = data["files"]
+                if not isinstance(listed, dict) or data.get("seal") != _seal(listed):
+                    raise ValueError("seal")
+            bad = [f for f in files if not _vouched(f, listed)]
         except Exception:  # noqa: BLE001 - the manifest itself is damaged: trust nothing
-            bad, why = files, "cannot be checked: its manifest is damaged"
+            bad, why = files, "cannot be checked: the manifest is damaged"
             manifest.unlink(missing_ok=True)
         if not bad:
             return
@@ -166,6 +231,14 @@ def verify() -> None:
         )
         for f in bad:
             remove_file(f)
+
+
+def _vouched(path: Path, listed: dict[str, str]) -> bool:
+    """A data file matching its line (or unlisted); an index matching it or numba's own."""
+    line = listed.get(_rel(path))
+    if path.suffix == ".nbc":
+        return line is None or _sha(path) == line
+    return (line is not None and _sha(path) == line) or _index_ok(path)
 
 
 def remove_file(path: Path) -> None:

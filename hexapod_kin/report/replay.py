@@ -13,8 +13,8 @@ name, size and hash, the verdicts and facts are bound together, so files swapped
 their manifest lines, or an edited count, break it). The manifest is written last (removed
 first when an entry is rewritten), and a replay checks it before copying any file
 (:func:`lookup`): the seal, every file's size and hash, the verdicts against the rows of
-``report.md``, and every PNG against the copy inlined in ``report.html`` under its name. A missing entry is
-no entry; a damaged, edited or foreign one is no entry with one
+``report.md``, and every PNG against the copy inlined in ``report.html`` under its name. A
+missing entry is no entry; a damaged, edited or foreign one is no entry with one
 :class:`~hexapod_kin.exceptions.CacheWarning` (the report is built again and the entry
 rewritten). Nothing of an entry is ever run: its files are copied as bytes, only to paths
 inside the report folder. Only builds without an ``"error"`` verdict and with
