@@ -134,3 +134,32 @@ def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: s
     assert sp.simplify(again.det - first.det) == 0
     assert [f.name for f in again.families] == [f.name for f in first.families]
     clear_memory()
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "scara", "coxa_tibia_leg"])
+def test_cached_derivation_is_the_computed_one(tmp_path: Path, monkeypatch, name: str) -> None:
+    """Read back from the cache, a derivation is the one computed, expression for expression
+    (the reader does not distribute ``-1`` over the sums the tidied forms keep factored), and
+    its own entry passes the check against the table (no warning: e.g. the 2-DOF leg, whose
+    Jacobian has more rows than joints)."""
+    import warnings
+
+    import hexapod_kin as hk
+    from hexapod_kin.symbolic import clear_memory, derive
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "hk"))
+    chain = getattr(hk.robots, name)()
+    clear_memory()
+    fresh = derive(chain, budget=None)
+    clear_memory()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = derive(chain, budget=None)
+    clear_memory()
+    assert back.cached and not fresh.cached
+    for field in ("p", "J_direct", "J_indirect", "det", "gram", "transforms", "cumulative"):
+        assert sp.srepr(getattr(back, field)) == sp.srepr(getattr(fresh, field)), field
+    assert [sp.srepr(f.factor) for f in back.families] == [
+        sp.srepr(f.factor) for f in fresh.families
+    ]
+    assert back.text() == fresh.text()
