@@ -219,13 +219,42 @@ def _seal(data: dict[str, Any]) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
-def _read_cache(key: str, nq: int) -> tuple[tuple[Family, ...], str, float] | None:
+def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
+    """Families read from disk checked against the model before use.
+
+    On each family ``q_k = value``, ``J`` (rows ``rows``) loses rank: at three random
+    configurations with ``q_k`` set to the value, ``σ_min ≤ 1e-9 σ_max`` (of ``J`` at the
+    random configurations). Implicit families are held to their factor's parse only.
+
+    Raises:
+        ValueError: A family where the model's ``J`` keeps its rank (an edited entry).
+
+    """
+    from .measure import measures
+
+    explicit = [f for f in fams if f.joint is not None and f.value is not None]
+    if not explicit:
+        return
+    qs = model.random_q(3, seed=20251202)
+    size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
+    for fam in explicit:
+        for q in qs:
+            on = np.array(q, dtype=float)
+            on[fam.joint] = fam.value
+            if not measures(model, on, rows).sigma_min <= 1e-9 * size:
+                raise ValueError(f"the model's J keeps its rank on {fam.name}")
+
+
+def _read_cache(
+    key: str, nq: int, check: Any = None
+) -> tuple[tuple[Family, ...], str, float] | None:
     """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
 
     Missing, or of another version: ``None``. Torn, edited (its seal broken), another
     key's (a swapped or copied file) or unreadable: ``None`` with one ``CacheWarning`` (the
     families are derived again, or reported as not derived). The factor texts are parsed
-    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated.
+    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated; a finished entry is
+    then held to ``check(families)`` (:func:`_holds`), which raises if it fails.
     """
     path = cache_dir() / f"{key}.json"
     try:
@@ -239,7 +268,10 @@ def _read_cache(key: str, nq: int) -> tuple[tuple[Family, ...], str, float] | No
         fams = _from_json(data)
         for fam in fams:  # every factor through the parser's whitelist now, never evaluated
             compile_factor(fam.factor, fam.variables)
-        return fams, str(data.get("incomplete", "")), float(data.get("budget", 0.0))
+        incomplete = str(data.get("incomplete", ""))
+        if check is not None and not incomplete:
+            check(fams)
+        return fams, incomplete, float(data.get("budget", 0.0))
     except FileNotFoundError:
         return None
     except Exception as exc:  # noqa: BLE001 - any damage: derive again
@@ -371,7 +403,7 @@ def families_for(
     read: list[Any] = []  # the disk entry, read once (a damaged one warns once)
 
     def load() -> tuple[Family, ...]:
-        read.append(_read_cache(key, model.nq))
+        read.append(_read_cache(key, model.nq, lambda fams: _holds(fams, model, rows)))
         found = read[0]
         if found is None or found[1]:
             raise _Miss  # unfinished runs are read from disk each time (a later one may finish)
@@ -382,7 +414,7 @@ def families_for(
         return Families(hit, "cache", "" if hit else _NO_FACTOR, key)
     except _Miss:
         pass
-    partial = read[0] if read else _read_cache(key, model.nq)
+    partial = read[0] if read else _read_cache(key, model.nq, lambda f: _holds(f, model, rows))
     if partial is not None and (not derive or budget <= partial[2]):
         return Families(  # stopped at a budget at least this large: not spent again
             partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key
