@@ -234,12 +234,21 @@ def test_damaged_or_incomplete_entry_is_not_replayed(
         record["files"]["../report.md"] = meta
         shutil.copy(entry / "files" / "report.md", entry / "report.md")
         manifest.write_text(json.dumps(record))
-    assert replay.lookup(env.key) is None
+    import warnings
+
+    from hexapod_kin.exceptions import CacheWarning
+
     calls: list[dict[str, Any]] = []
     monkeypatch.setattr(build, "_build", _no_build(calls))
-    with pytest.raises(Built):
-        reproduce(tmp_path / "out", quick=True, animations=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert replay.lookup(env.key) is None
+        with pytest.raises(Built):
+            reproduce(tmp_path / "out", quick=True, animations=False)
     assert len(calls) == 1
+    said = [w for w in caught if issubclass(w.category, CacheWarning)]
+    # once per look: a damaged entry warns, a missing manifest (nothing stored) does not
+    assert len(said) == (0 if damage == "no-manifest" else 2), [str(w.message) for w in said]
 
 
 def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> None:
@@ -248,7 +257,10 @@ def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> 
     original = html.read_bytes()
     _flip(html, at=len(original) // 2)
     out = tmp_path / "out"
-    rep = reproduce(out, quick=True, animations=False)
+    from hexapod_kin.exceptions import CacheWarning
+
+    with pytest.warns(CacheWarning, match="report.html does not match its manifest line"):
+        rep = reproduce(out, quick=True, animations=False)
     assert rep.replayed_from is None  # computed, not replayed
     assert rep.verdicts == env.rep.verdicts
     # the same bytes as the first build (every figure too), and the entry written again
