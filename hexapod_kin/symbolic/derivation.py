@@ -749,11 +749,21 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     if rows is not None:
         row_indices(rows)
     digest = _cache_key(chain, rows, None)
-    stages = _MEMO.get(digest) or _cache.load(digest)
+    syms = _core.length_symbols(chain, None)
+    stages = _MEMO.get(digest)
+    if stages is None:
+        stages = _cache.load(digest)
+        if stages is not None and not _claims_hold(stages, chain, syms["values"]):
+            warnings.warn(
+                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
+                "do not match the table (edited); not used",
+                CacheWarning,
+                stacklevel=2,
+            )
+            return None
     if stages is None:
         return None
     _MEMO[digest] = stages
-    syms = _core.length_symbols(chain, None)
     attempt = stages.get(ATTEMPT)
     reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
     return _assemble(chain, reference, tip_name, syms, stages, reason, True, rows)
