@@ -27,7 +27,7 @@ from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
-_VERSION = 3
+_VERSION = 4
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
 
@@ -213,23 +213,90 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
     )
 
 
-def _read_cache(key: str, nq: int) -> tuple[tuple[Family, ...], str, float] | None:
-    """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``."""
+def _seal(data: dict[str, Any]) -> str:
+    """SHA-256 of an entry without its ``"seal"`` (canonical JSON): binds key and content."""
+    body = {k: v for k, v in data.items() if k != "seal"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
+    """Families read from disk checked against the model before use.
+
+    On each family ``q_k = value``, ``J`` (rows ``rows``) loses rank: at three random
+    configurations with ``q_k`` set to the value, ``σ_min ≤ 1e-9 σ_max`` (of ``J`` at the
+    random configurations). Implicit families are held to their factor's parse only.
+
+    Raises:
+        ValueError: A family where the model's ``J`` keeps its rank (an edited entry).
+
+    """
+    from .measure import measures
+
+    explicit = [f for f in fams if f.joint is not None and f.value is not None]
+    if not explicit:
+        return
+    qs = model.random_q(3, seed=20251202)
+    size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
+    for fam in explicit:
+        for q in qs:
+            on = np.array(q, dtype=float)
+            on[fam.joint] = fam.value
+            if not measures(model, on, rows).sigma_min <= 1e-9 * size:
+                raise ValueError(f"the model's J keeps its rank on {fam.name}")
+
+
+def _read_cache(
+    key: str, nq: int, check: Any = None
+) -> tuple[tuple[Family, ...], str, float] | None:
+    """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
+
+    Missing, or of another version: ``None``. Torn, edited (its seal broken), another
+    key's (a swapped or copied file) or unreadable: ``None`` with one ``CacheWarning`` (the
+    families are derived again, or reported as not derived). The factor texts are parsed
+    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated; a finished entry is
+    then held to ``check(families)`` (:func:`_holds`), which raises if it fails.
+    """
+    path = cache_dir() / f"{key}.json"
     try:
-        data = json.loads((cache_dir() / f"{key}.json").read_text(encoding="utf-8"))
-        if data.get("v") != _VERSION or data.get("nq") != nq:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(data, dict) and "v" in data and data["v"] != _VERSION:
             return None
-        return _from_json(data), str(data.get("incomplete", "")), float(data.get("budget", 0.0))
-    except (OSError, KeyError, TypeError, ValueError):  # missing or corrupt: derive again
+        if not isinstance(data, dict) or data.get("key") != key or data.get("nq") != nq:
+            raise ValueError("not the entry of this table and rows (another key)")
+        if data.get("seal") != _seal(data):
+            raise ValueError("its seal does not match its content")
+        fams = _from_json(data)
+        for fam in fams:  # every factor through the parser's whitelist now, never evaluated
+            compile_factor(fam.factor, fam.variables)
+        incomplete = str(data.get("incomplete", ""))
+        if check is not None and not incomplete:
+            check(fams)
+        return fams, incomplete, float(data.get("budget", 0.0))
+    except FileNotFoundError:
+        return None
+    except Exception as exc:  # noqa: BLE001 - any damage: derive again
+        import warnings
+
+        from ..exceptions import CacheWarning
+
+        warnings.warn(
+            f"families cache entry {key[:12]} is damaged or was edited ({type(exc).__name__}: "
+            f"{' '.join(str(exc).split())[:80]}); not used",
+            CacheWarning,
+            stacklevel=2,
+        )
         return None
 
 
 def _write_cache(
     key: str, nq: int, fams: tuple[Family, ...], incomplete: str = "", budget: float = 0.0
 ) -> None:
-    data: dict[str, Any] = {"v": _VERSION, "nq": nq, "families": [f.to_dict() for f in fams]}
+    data: dict[str, Any] = {
+        "v": _VERSION, "key": key, "nq": nq, "families": [f.to_dict() for f in fams]
+    }  # fmt: skip
     if incomplete:
         data.update(incomplete=incomplete, budget=budget)
+    data["seal"] = _seal(json.loads(json.dumps(data)))
     try:
         cache_dir().mkdir(parents=True, exist_ok=True)
         atomic_write(cache_dir() / f"{key}.json", json.dumps(data, indent=1))
@@ -333,8 +400,11 @@ def families_for(
     key = _key(chain, rows)
     mem = f"singularity.families.{key}"
 
+    read: list[Any] = []  # the disk entry, read once (a damaged one warns once)
+
     def load() -> tuple[Family, ...]:
-        found = _read_cache(key, model.nq)
+        read.append(_read_cache(key, model.nq, lambda fams: _holds(fams, model, rows)))
+        found = read[0]
         if found is None or found[1]:
             raise _Miss  # unfinished runs are read from disk each time (a later one may finish)
         return found[0]
@@ -344,7 +414,7 @@ def families_for(
         return Families(hit, "cache", "" if hit else _NO_FACTOR, key)
     except _Miss:
         pass
-    partial = _read_cache(key, model.nq)
+    partial = read[0] if read else _read_cache(key, model.nq, lambda f: _holds(f, model, rows))
     if partial is not None and (not derive or budget <= partial[2]):
         return Families(  # stopped at a budget at least this large: not spent again
             partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key

@@ -500,7 +500,8 @@ def _claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, A
     At three random configurations (fixed seed): the stored ``p`` against the table's own
     forward kinematics (:func:`~hexapod_kin._table_kin.table_fk`, plain numpy), the stored
     position Jacobian against :func:`~hexapod_kin._table_kin.table_position_jacobian`, and
-    the stored ``det(J Jᵀ)`` against the stored J's own rows. Each stored family's factor must
+    the stored Gram determinant (``det(J Jᵀ)``, or ``det(Jᵀ J)`` for more rows than joints)
+    against the stored J's own rows; the tidied forms too. Each stored family's factor must
     be a factor of the stored determinant. An edited entry fails one of these.
     """
     from .._table_kin import table_fk, table_position_jacobian
@@ -508,33 +509,42 @@ def _claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, A
     kin = stages.get("kinematics")
     if kin is None:
         return True  # nothing stored that could be wrong
+    tidy = stages.get("tidy") or {}
+    forms = [kin, {**kin, **tidy}] if tidy else [kin]  # as stored, and as used (_assemble)
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     rng = np.random.default_rng(20251202)
     qs = rng.uniform(-math.pi, math.pi, (3, n))
     scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
-    p_f = sp.lambdify(q, sp.Matrix(kin["p"]).subs(values), "numpy")
-    j_f = sp.lambdify(q, sp.Matrix(kin["J_direct"]).subs(values), "numpy")
+    fns = [
+        (
+            sp.lambdify(q, sp.Matrix(k["p"]).subs(values), "numpy"),
+            sp.lambdify(q, sp.Matrix(k["J_direct"]).subs(values), "numpy"),
+        )
+        for k in forms
+    ]
     det = stages.get("determinant")
     rows = stages.get("rows")
     g_f = None
     if det is not None and rows is not None and det.get("gram") is not None:
         g_f = sp.lambdify(q, sp.sympify(det["gram"]).subs(values), "numpy")
     for qv in qs:
-        p = np.asarray(p_f(*qv), dtype=float).reshape(-1)[:3]
-        if not np.allclose(p, table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
-            return False
-        jac = np.asarray(j_f(*qv), dtype=float)
-        if not np.allclose(jac[:3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
-            return False
+        for p_f, j_f in fns:
+            p = np.asarray(p_f(*qv), dtype=float).reshape(-1)[:3]
+            if not np.allclose(p, table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
+                return False
+            jac = np.asarray(j_f(*qv), dtype=float)
+            if not np.allclose(jac[:3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
+                return False
         if g_f is not None and rows is not None:
             sel = jac[[ROW_NAMES.index(r) for r in rows]]
-            want = float(np.linalg.det(sel @ sel.T))
+            gram = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
+            want = float(np.linalg.det(gram))
             if abs(float(g_f(*qv)) - want) > 1e-8 * max(1.0, abs(want)) * scale**4:
                 return False
     if det is not None:
         factors = [sp.expand(f) for f, _m in det.get("factors", ())]
-        for fam in stages.get("families") or ():
+        for fam in (*(stages.get("families") or ()), *(stages.get("checks") or ())):
             f = sp.expand(fam.factor)
             if factors and not any(sp.expand(f - g) == 0 or sp.expand(f + g) == 0 for g in factors):
                 return False
@@ -760,11 +770,21 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     if rows is not None:
         row_indices(rows)
     digest = _cache_key(chain, rows, None)
-    stages = _MEMO.get(digest) or _cache.load(digest)
+    syms = _core.length_symbols(chain, None)
+    stages = _MEMO.get(digest)
+    if stages is None:
+        stages = _cache.load(digest)
+        if stages is not None and not _claims_hold(stages, chain, syms["values"]):
+            warnings.warn(
+                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
+                "do not match the table (edited); not used",
+                CacheWarning,
+                stacklevel=2,
+            )
+            return None
     if stages is None:
         return None
     _MEMO[digest] = stages
-    syms = _core.length_symbols(chain, None)
     attempt = stages.get(ATTEMPT)
     reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
     return _assemble(chain, reference, tip_name, syms, stages, reason, True, rows)
