@@ -22,7 +22,7 @@ import numpy as np
 import sympy as sp
 
 from ..params import Chain
-from .core import ROW_NAMES
+from ..singularity.rows import ROW_NAMES
 
 __all__ = ["claims_hold", "evaluate", "evaluate_matrix"]
 

@@ -31,6 +31,7 @@ from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
+from .fallback import affine, product, z_cross
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -214,15 +215,14 @@ def kinematics(
     tool_t = sp.eye(4)
     if chain.tool is not None:
         tool_t = _homogeneous(_rotation(np.array(chain.tool.rotation)), syms["tool"])
-    mul = _matmul if simplify else _product
     cumulative = []
     acc = base_t
     for t in transforms:
-        acc = cheap_(mul(acc, t))
+        acc = cheap_(acc * t) if simplify else product(acc, t)
         cumulative.append(acc)
         if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
-    tip = cheap_(mul(acc, tool_t))
+    tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]
     # Direct method, column by column in its own joint frame: z_j x (p - o_j) = R_0j (z x ^jp),
     # with ^jp (the tip seen from frame j) built backwards from the tool. Each term then holds
@@ -233,19 +233,13 @@ def kinematics(
         tip_in[j] = vec
         if j > 0:
             t = transforms[j]
-            if simplify:
-                vec = cheap_(t[:3, :3] * vec + t[:3, 3])
-            else:  # R v + o as one product
-                vec = _product(t[:3, :], sp.Matrix([*vec, 1]))
+            vec = cheap_(t[:3, :3] * vec + t[:3, 3]) if simplify else affine(t, vec)
     cols = []
     for j in chain.joint_rows:
         rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
             v = tip_in[j]
-            if simplify:
-                lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
-            else:
-                lin = _product(rot[:, :2], sp.Matrix([sp.Mul(-1, v[1], evaluate=False), v[0]]))
+            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1]) if simplify else z_cross(rot, v)
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
@@ -261,31 +255,6 @@ def kinematics(
         # stage 1) no derivative is taken: differentiating the nested products takes seconds
         "J_indirect": _indirect(p, q, chain.sigmas) if simplify else cols_lin(cols),
     }
-
-
-def _matmul(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
-    return a * b
-
-
-def _product(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
-    """``a·b`` as unevaluated sums of products: the fallback's product, in milliseconds.
-
-    (``*`` converts the entries to a polynomial ring, and sympy's evaluation asks the
-    assumptions of every long factor: a second on a 12-joint chain, past the budget.)
-    """
-
-    def entry(i: int, j: int) -> Any:
-        terms = []
-        for k in range(a.cols):
-            x, y = a[i, k], b[k, j]
-            if x == 0 or y == 0:
-                continue
-            terms.append(x if y == 1 else y if x == 1 else sp.Mul(x, y, evaluate=False))
-        if not terms:
-            return sp.Integer(0)
-        return terms[0] if len(terms) == 1 else sp.Add(*terms, evaluate=False)
-
-    return sp.Matrix(a.rows, b.cols, entry)
 
 
 def cols_lin(cols: Sequence[sp.Matrix]) -> sp.Matrix:
