@@ -522,9 +522,9 @@ def _read(chain: Chain, lengths: Any, digest: str, seconds: float | None) -> tup
         said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
         yield "entry", (got, said)
 
-    done, _ = _cache.run(gen, seconds)
-    if "entry" not in done:
-        return None, False
+    done, reason = _cache.run(gen, seconds)
+    if "entry" not in done:  # out of time (kept as it is), or an error (not cached)
+        return None, reason is None or not reason.startswith("budget of")
     got, said = done["entry"]
     for text in said:
         warnings.warn(text, CacheWarning, stacklevel=3)
