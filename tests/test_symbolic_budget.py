@@ -3,7 +3,8 @@
 The 5-DOF leg of ``examples/leg5.yaml`` (hip yaw, roll and pitch axes meeting at one point,
 knee, foot roll about the shank): its position Jacobian (3×5) loses rank where the knee
 stretches the shank in line with the femur. Every claim is checked against Pinocchio's
-Jacobian by SVD; no test measures time (see ``tools/bench_symbolic_budget.py``).
+Jacobian by SVD. One test times two commands on the 12-joint chain of ``tests/data``
+against their budgets, with a loose allowance (figures: ``tools/bench_symbolic_budget.py``).
 """
 
 from __future__ import annotations
