@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -330,15 +331,18 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
 
 def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Family, ...]:
     """Check ``deriv`` against the model's Jacobian and turn its families into text forms."""
+    from ..symbolic.checks import evaluate
     from .measure import measures
 
     qs = model.random_q(16, seed=4242)
     res = [measures(model, q, rows) for q in qs]
+    # one pass over the expression (lambdify of a 7-joint Gram determinant takes seconds)
+    at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
     if deriv.det is not None:
-        sym = np.abs(deriv.function(deriv.det)(qs))
+        sym = np.abs(np.broadcast_to(evaluate(deriv.det, at), (len(qs),)))
         num = np.abs([m.det for m in res])
     elif deriv.gram is not None:
-        sym = np.abs(deriv.function(deriv.gram)(qs))
+        sym = np.abs(np.broadcast_to(evaluate(deriv.gram, at), (len(qs),)))
         num = np.array([m.manipulability for m in res]) ** 2
     else:
         raise ParameterError("the derivation has no determinant to check the families against")
@@ -375,7 +379,9 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Time budget of the derivation in [s]. A derivation stopped at its budget is
+        budget: Time budget in [s] of the derivation, the cache reading and the check against
+            the model, together (the call returns within it, plus a fraction of a second
+            for the check when the derivation used it all). A derivation stopped at its budget is
             kept on disk with what it reached and that budget: later calls with at most that
             budget get it back without deriving (nor importing sympy); a larger budget
             carries on from where it stopped.
@@ -430,8 +436,11 @@ def families_for(
     from .. import symbolic
 
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
+    deadline = time.monotonic() + float(budget)  # the derivation and its check, together
     try:
-        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
+        deriv = symbolic.derive(
+            chain, rows=rows, budget=float(budget), deadline=deadline, families_only=True
+        )
         incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             reason = f"derivation incomplete: {incomplete}"

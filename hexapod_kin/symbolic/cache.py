@@ -13,7 +13,7 @@
   atomically. A corrupt, truncated, edited (seal broken) or foreign file (another
   derivation's key: a swapped or copied file) is ignored with one :class:`CacheWarning` and
   rewritten; the derivation then checks what a sealed entry claims against the table
-  (``derivation._claims_hold``) before using it. A file of another format version is
+  (``checks.claims_hold``) before using it. A file of another format version is
   ignored quietly (an older package's).
 * **Budget**: the stages run in a forked child process that sends each finished stage back;
   at the deadline the child is killed and the caller gets the stages that finished. Where

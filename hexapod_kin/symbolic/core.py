@@ -39,6 +39,7 @@ from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio
 from ._numbers import single_joint_roots as single_joint_roots
 from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
+from .fallback import affine, product, z_cross
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -225,11 +226,11 @@ def kinematics(
     cumulative = []
     acc = base_t
     for t in transforms:
-        acc = cheap_(acc * t)
+        acc = cheap_(acc * t) if simplify else product(acc, t)
         cumulative.append(acc)
         if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
-    tip = cheap_(acc * tool_t)
+    tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]
     # Direct method, column by column in its own joint frame: z_j x (p - o_j) = R_0j (z x ^jp),
     # with ^jp (the tip seen from frame j) built backwards from the tool. Each term then holds
@@ -240,13 +241,13 @@ def kinematics(
         tip_in[j] = vec
         if j > 0:
             t = transforms[j]
-            vec = cheap_(t[:3, :3] * vec + t[:3, 3])
+            vec = cheap_(t[:3, :3] * vec + t[:3, 3]) if simplify else affine(t, vec)
     cols = []
     for j in chain.joint_rows:
         rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
             v = tip_in[j]
-            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
+            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1]) if simplify else z_cross(rot, v)
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
