@@ -26,25 +26,31 @@ cache directory (else ``hexapod_kin/__pycache__``), the key made of the package 
 numba's version, Python's and the CPU name; written after the area's first completed call
 and by ``precompile``. Deleting numba's cache deletes the stamps with it.
 
+**A cache that is not trusted blindly** (:mod:`._kcache`): before numba loads anything in a
+process, the package's cache files are checked against a manifest of their SHA-256; a file
+that differs is removed (one :class:`~hexapod_kin.exceptions.CacheWarning`) and compiled
+again. A cache that still fails to load is rebuilt the same way (:func:`_load_or_rebuild`),
+never fatal.
+
 Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: rows
 ``[v; ω]``.
 """
 
 from __future__ import annotations
 
-import functools
 import itertools
 import math
 import sys
 import threading
+import warnings
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
+from ._kcache import cache_files, remove_file, stamp, verify, write_manifest
 from ._kmath import (
     POLY_TRIG_MAX,
     det_lu,
@@ -58,7 +64,7 @@ from ._kmath import (
     solve_spd,
     wrap_angle,
 )
-from .exceptions import ConfigurationError, ParameterError
+from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
 __all__ = [
     "BLOCK",
@@ -112,41 +118,25 @@ def silence_notice() -> None:
     _NOTICE[0] = False
 
 
-@functools.cache
-def _stamp(area: str) -> Path:
-    """The stamp file of ``area`` (see the module docstring)."""
-    import importlib.metadata
-
-    import llvmlite.binding
-
-    try:
-        version = importlib.metadata.version("hexapod-kin")
-    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - run from a checkout
-        version = "dev"
-    root = Path(numba.config.CACHE_DIR or Path(__file__).resolve().parent / "__pycache__")
-    py = f"{sys.version_info[0]}{sys.version_info[1]}"
-    key = f"{version}-numba{numba.__version__}-py{py}-{llvmlite.binding.get_host_cpu_name()}"
-    return root / f"hexapod_kin-{area}-{key}.stamp"
-
-
 def mark_compiled(area: str) -> None:
-    """Record that numba's cache holds ``area``'s kernels (its stamp file).
+    """Record that numba's cache holds ``area``'s kernels (its stamp file, the manifest).
 
     Best effort: a read-only cache directory only means the notice shows again.
     """
     with _SEEN_LOCK:
         _SEEN.add(area)
     try:
-        path = _stamp(area)
+        path = stamp(area)
         path.parent.mkdir(parents=True, exist_ok=True)
         path.touch()
     except OSError:
         pass
+    write_manifest()
 
 
 def _notice(area: str) -> None:
     """The first time in a process, one line if no stamp says the disk cache holds ``area``."""
-    if _NOTICE[0] and not _stamp(area).exists():
+    if _NOTICE[0] and not stamp(area).exists():
         print(
             f"hexapod-kin: compiling {area} kernels for this machine "
             "(once; 'hexapod-kin precompile' does it ahead)",
@@ -155,34 +145,54 @@ def _notice(area: str) -> None:
         )
 
 
-def _rebuild_unloaded() -> None:
-    """Reset the disk cache of every package kernel that holds no machine code yet.
-
-    ``Dispatcher.recompile()`` (numba's public method) with no signature loaded drops the
-    dispatcher's cache index, so the next call compiles afresh and writes a new entry.
-    Kernels already loaded in this process are left as they are.
-    """
+def _dispatchers() -> list[Any]:
+    """The package's compiled functions loaded in this process (numba dispatchers)."""
+    out = []
     for name, module in list(sys.modules.items()):
         if not name.startswith("hexapod_kin") or module is None:
             continue
         for obj in list(vars(module).values()):
             if callable(getattr(obj, "recompile", None)) and hasattr(obj, "py_func"):
-                if not obj.overloads:
-                    obj.recompile()
+                out.append(obj)
+    return out
+
+
+def _rebuild(before: dict[int, int]) -> None:
+    """Forget what a failed load left: the package's cache files, and what was loaded.
+
+    Every cache file of the package is removed (it is suspect). ``Dispatcher.recompile()``
+    (numba's public method) resets a dispatcher's loaded code and its cache index, then
+    compiles its signatures again: done for those with nothing loaded and for those that
+    loaded something in the failed attempt (``before``: overload counts by ``id``; such a
+    signature may not even be theirs, so the compile may fail: then nothing is loaded and
+    the next call compiles afresh). Kernels loaded earlier in this process are left alone.
+    """
+    for f in cache_files():
+        remove_file(f)
+    for obj in _dispatchers():
+        if not obj.overloads or len(obj.overloads) != before.get(id(obj), 0):
+            try:
+                obj.recompile()
+            except Exception:  # noqa: BLE001, S110 - a foreign signature: left empty
+                pass
 
 
 def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
     """``run(0, 0)`` (no blocks: loads or compiles the kernel); a damaged cache is rebuilt.
 
-    A compiled-code cache that cannot be loaded (truncated, emptied, random bytes, swapped
-    files: numba raises while unpickling it) is never fatal: one line on stderr, the cache
-    entries that failed are reset, and the kernel is compiled again. A Ctrl-C that numba's
-    compile callback swallowed (reported as unraisable) and that made the compile fail is
-    raised as the ``KeyboardInterrupt`` it was.
+    The first time in a process, the cache files are checked against their manifest before
+    numba opens any (:func:`._kcache.verify`). A compiled-code cache that still cannot be
+    loaded (numba raises while unpickling it) is never fatal: one
+    :class:`~hexapod_kin.exceptions.CacheWarning`, the package's cache files removed, what
+    the attempt loaded reset, and the kernel compiled again. A Ctrl-C that numba's compile
+    callback swallowed (reported as unraisable) and that made the compile fail is raised as
+    the ``KeyboardInterrupt`` it was.
     """
     if area in _SEEN:
         return run(0, 0)
+    verify()
     _notice(area)
+    before = {id(d): len(d.overloads) for d in _dispatchers()}
     swallowed: list[BaseException] = []
     hook = sys.unraisablehook
 
@@ -200,13 +210,13 @@ def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
         if swallowed:  # Ctrl-C in numba's compile callback (swallowed there): not a damaged cache
             raise KeyboardInterrupt from exc
         detail = " ".join(str(exc).split())[:120]
-        print(
-            f"hexapod-kin: warning: the compiled-code cache of the {area} kernels could not be "
-            f"loaded ({type(exc).__name__}: {detail}); compiling them again",
-            file=sys.stderr,
-            flush=True,
+        warnings.warn(
+            f"the compiled-code cache of the {area} kernels could not be loaded "
+            f"({type(exc).__name__}: {detail}); compiling them again",
+            CacheWarning,
+            stacklevel=4,
         )
-        _rebuild_unloaded()
+        _rebuild(before)
         out = run(0, 0)
     finally:
         if sys.unraisablehook is record:

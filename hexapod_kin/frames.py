@@ -139,8 +139,32 @@ def reduce_model(
         )
     if not lock:
         return full, (), ref
-    reduced = pin.buildReducedModel(full, lock, ref)
-    return reduced, tuple(lock), ref
+    return _reduced(full, lock, ref), tuple(lock), ref
+
+
+def _reduced(full: pin.Model, lock: list[int], ref: np.ndarray) -> pin.Model:
+    """``pin.buildReducedModel``, also for URDFs that name a link and a joint alike.
+
+    Pinocchio looks frames up by name alone while reducing and raises on such a pair
+    (anymal_c: link and joint ``LF_HAA``); the non-joint frames of a shared name are renamed
+    in a copy for the reduction and given their names back in the reduced model.
+    """
+    names = [f.name for f in full.frames]
+    shared = {n for n in names if names.count(n) > 1}
+    if not shared:
+        return pin.buildReducedModel(full, lock, ref)
+    work = pin.Model(full)
+    renamed: dict[str, str] = {}
+    for i, frame in enumerate(work.frames):
+        if frame.name in shared and frame.type != pin.FrameType.JOINT:
+            tag = f"{frame.name}\x00{i}"  # NUL never occurs in a URDF name
+            renamed[tag] = frame.name
+            work.frames[i].name = tag
+    reduced = pin.buildReducedModel(work, lock, ref)
+    for i, frame in enumerate(reduced.frames):
+        if frame.name in renamed:
+            reduced.frames[i].name = renamed[frame.name]
+    return reduced
 
 
 def path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:

@@ -343,11 +343,12 @@ def names() -> list[str]:
     return sorted(PRESETS)
 
 
-def get(name: str, **params: Any) -> Chain | Hexapod:
+def get(name: str, /, **params: Any) -> Chain | Hexapod:
     """Build the preset ``name`` with ``params`` overriding its defaults.
 
     Raises:
-        ParameterError: If the name or a parameter is unknown (the message lists valid ones).
+        ParameterError: If the name or a parameter is unknown (the message lists valid ones),
+            or a number is beyond 1e9 (SI units: the loader's cap on any value).
 
     """
     if name not in PRESETS:
@@ -362,6 +363,16 @@ def get(name: str, **params: Any) -> Chain | Hexapod:
                 f"{name}: parameter {key!r} does not exist; parameters are "
                 f"{choices(sig.parameters)}"
             )
+    for key, value in params.items():
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and not abs(v) <= 1e9:
+                text = f"{v:g}" if isinstance(v, float) else f"an integer of {v.bit_length()} bits"
+                raise ParameterError(
+                    f"{name}: {key}={text} is beyond 1e9 (SI units), the loader's cap on any value",
+                    parameter=key,
+                    value=text,
+                    allowed="|value| <= 1e9",
+                )
     try:
         return func(**params)  # type: ignore[no-any-return,unused-ignore]
     except HexapodKinError:

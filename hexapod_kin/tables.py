@@ -38,6 +38,7 @@ YAML with PyYAML (``pip install hexapod-kin[tables]``).
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +75,11 @@ MAX_STRING = 10_000
 MAX_LENGTH = 1e3
 #: Largest magnitude of any other number (the URDF gate's bound on any value).
 MAX_NUMBER = 1e9
+#: Most rows and most joint rows of a table: the URDF gate's caps on links and degrees of
+#: freedom (``_gate.limits.MAX_LINKS``, ``MAX_DOF``) in the table's terms: a row is a link,
+#: and the base, frame 0, tool and DH tip links take the other four.
+MAX_ROWS = 996
+MAX_JOINTS = 128
 
 
 def _refuse(path: Path, what: str, allowed: str) -> SourceError:
@@ -188,8 +194,7 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             raise _refuse(path, "values nested too deeply for the TOML reader",
                           f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
         except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _refuse(path, f"a value the TOML reader refuses ({_short(exc)})",
-                          "integers of at most 15 digits") from None  # fmt: skip
+            raise _value_refused(path, "TOML", exc) from None
     else:
         try:
             import yaml
@@ -200,6 +205,16 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             ) from None
         try:
             data = _strict_yaml(text, path)
+        except yaml.constructor.ConstructorError as exc:  # a tag such as !!python/object
+            found = re.search(r"tag '([^']*)'", str(exc.problem))
+            tag = found.group(1).replace("tag:yaml.org,2002:", "!!") if found else "?"
+            mark = exc.problem_mark
+            where = f"line {mark.line + 1}: " if mark is not None else ""
+            raise _refuse(
+                path,
+                f"{where}the YAML tag {_clip(tag)} is not allowed",
+                "plain YAML values (numbers, strings, lists, mappings)",
+            ) from None
         except yaml.YAMLError as exc:
             raise SourceError(
                 f"{path.name}: not valid YAML ({_short(exc)})", parameter="source"
@@ -210,8 +225,7 @@ def _load_mapping(path: Path) -> dict[str, Any]:
             raise _refuse(path, "values nested too deeply for the YAML reader",
                           f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
         except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _refuse(path, f"a value the YAML reader refuses ({_short(exc)})",
-                          "integers of at most 15 digits") from None  # fmt: skip
+            raise _value_refused(path, "YAML", exc) from None
     if not isinstance(data, dict):
         raise SourceError(
             f"{path.name}: the file must hold a mapping (name, convention, row, ...), got "
@@ -220,6 +234,16 @@ def _load_mapping(path: Path) -> dict[str, Any]:
         )
     _check_structure(data, path)
     return data
+
+
+def _value_refused(path: Path, reader: str, exc: ValueError) -> SourceError:
+    """A value the reader cannot build: an integer beyond Python's digit limit, or another."""
+    digits = re.search(r"value has (\d+) digits", str(exc))
+    if digits:
+        what = f"an integer of {digits.group(1)} digits"
+    else:
+        what = f"a value the {reader} reader refuses ({_short(exc)})"
+    return _refuse(path, what, "integers of at most 15 digits")
 
 
 def _short(exc: BaseException) -> str:
@@ -352,6 +376,13 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             "table: at least one [[row]] is required (one per row of the table)",
             parameter="row",
         )
+    if len(rows_in) > MAX_ROWS:
+        raise ParameterError(
+            f"table: {len(rows_in)} rows; allowed: at most {MAX_ROWS}",
+            parameter="row",
+            value=len(rows_in),
+            allowed=f"at most {MAX_ROWS} rows",
+        )
     geometry = _GEOMETRY[convention]
     allowed = (*geometry, *ROW_KEYS)
     rows: list[KhalilRow | DHRow] = []
@@ -367,6 +398,15 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         if "type" in row and "sigma" in row:
             raise ParameterError(f"{where}: give type or sigma, not both", parameter="type")
         sigma: Any = row["type"] if "type" in row else row.get("sigma", "revolute")
+        if isinstance(sigma, bool) or not isinstance(sigma, (str, int)):
+            key = "type" if "type" in row else "sigma"
+            raise ParameterError(
+                f"{where}.{key}={_clip(sigma)} is not allowed; use 'revolute', 'prismatic' or "
+                "'fixed' (sigma 0, 1 or 2)",
+                parameter=key,
+                value=_clip(sigma),
+                allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
+            )
         geo = {
             k: _number(
                 row.get(k, 0.0), f"{where}.{k}", MAX_NUMBER if k in _ANGLE_KEYS else MAX_LENGTH
@@ -427,6 +467,14 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             if "com" in row or "inertia" in row:
                 raise ParameterError(f"{where}: com/inertia need a mass", parameter="mass")
             masses.append(None)
+    if len(joint_names) > MAX_JOINTS:
+        raise ParameterError(
+            f"table: {len(joint_names)} joint rows; allowed: at most {MAX_JOINTS} (the loader's "
+            "cap on degrees of freedom)",
+            parameter="row",
+            value=len(joint_names),
+            allowed=f"at most {MAX_JOINTS} joint rows",
+        )
     if links and len(links) != len(rows):
         raise ParameterError(
             f"table: 'link' given on {len(links)} of {len(rows)} rows; name all links or none",

@@ -18,7 +18,9 @@ from :mod:`hexapod_kin.params` (the package's one RPY convention).
 
 from __future__ import annotations
 
+import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +29,7 @@ from ._io import atomic_write
 from ._version import __version__
 from .exceptions import ParameterError
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
+from .tables import MAX_NUMBER
 
 __all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
@@ -307,6 +310,46 @@ def _robot_urdf(robot: Hexapod, leg: str | None, header: str | None) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: Tags whose numbers may reach :data:`_MAX_LIMIT` (the loader's cap there: "unbounded" ±1e16).
+_LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
+_MAX_LIMIT = 1e20
+_NUMERIC = (
+    "xyz", "rpy", "value", "mass", "ixx", "iyy", "izz", "ixy", "ixz", "iyz", "radius", "length",
+    "size", "lower", "upper", "velocity", "effort", "damping", "friction",
+)  # fmt: skip
+_ELEMENT = re.compile(r"<([A-Za-z_]\w*)\s([^>]*)>")
+_ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
+
+
+def _check_magnitudes(text: str, name: str) -> None:
+    """Refuse to emit a number the package's own URDF loader would refuse (a round trip).
+
+    The loader caps every number at |x| <= :data:`~hexapod_kin.tables.MAX_NUMBER` (1e9, SI
+    units; 1e20 in ``<limit>``-like tags): a chain whose lengths, masses or inertias go beyond
+    it (e.g. ``hexabot_leg(l1=1e12)``: a rod inertia of 1e23 kg m²) gets one clear error here,
+    not a file that ``fk`` then refuses.
+    """
+    for element in _ELEMENT.finditer(text):
+        tag = element.group(1)
+        cap = _MAX_LIMIT if tag in _LIMIT_TAGS else MAX_NUMBER
+        for attribute, value in _ATTRIBUTE.findall(element.group(2)):
+            if attribute not in _NUMERIC:
+                continue
+            for word in value.split():
+                try:
+                    x = float(word)
+                except ValueError:
+                    continue
+                if not math.isfinite(x) or abs(x) > cap:
+                    raise ParameterError(
+                        f"{name}: <{tag} {attribute}> would be {x:g}, beyond {cap:g} (the URDF "
+                        "loader's cap, SI units: m, kg, kg m^2); choose smaller lengths or masses",
+                        parameter=attribute,
+                        value=x,
+                        allowed=f"|value| <= {cap:g}",
+                    )
+
+
 def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
     """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
 
@@ -319,18 +362,22 @@ def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | No
         The URDF document as a string.
 
     Raises:
-        ParameterError: If ``source`` is of another type, or ``leg`` is given for a chain.
+        ParameterError: If ``source`` is of another type, ``leg`` is given for a chain, or a
+            number would be beyond what the package's URDF loader accepts (|x| <= 1e9).
 
     """
     if isinstance(source, Chain):
         if leg is not None:
             raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
-        return _chain_urdf(source, header)
-    if isinstance(source, Hexapod):
-        return _robot_urdf(source, leg, header)
-    raise ParameterError(
-        f"source={type(source).__name__} is not allowed; to_urdf takes a Chain or a Hexapod"
-    )
+        text = _chain_urdf(source, header)
+    elif isinstance(source, Hexapod):
+        text = _robot_urdf(source, leg, header)
+    else:
+        raise ParameterError(
+            f"source={type(source).__name__} is not allowed; to_urdf takes a Chain or a Hexapod"
+        )
+    _check_magnitudes(text, source.name)
+    return text
 
 
 def write_urdf(

@@ -122,3 +122,42 @@ def test_meshes_of_a_file_path_resolve_like_ros(name: str) -> None:
     ]
     assert meshes and all(Path(m).is_file() for m in meshes)
     assert all(str(Path(m).resolve()).startswith(str(erd_share().resolve())) for m in meshes)
+
+
+@pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROBOTS)) for p in FILES])
+def test_erd_file_reduced_to_each_default_tip_matches_raw_pinocchio(path: Path) -> None:
+    """The default load (the model reduced to the path to a tip, every other joint locked at
+    its neutral value) of every limb end equals raw Pinocchio's full model at that neutral:
+    anymal_c names links and joints alike, which Pinocchio's reduction refuses on its own."""
+    if path.stem in REFUSED:
+        return
+    from hexapod_kin.frames import default_tips
+
+    raw = pin.buildModelFromUrdf(str(path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tips = default_tips(hk.load(path, reduce=False).model).tips
+        for tip in tips[:4]:
+            model = hk.load(path, tip=tip)
+            red = model.model
+            q = model.random_q(1, seed=5)[0]
+            qp = pin.neutral(raw)
+            for j in range(1, red.njoints):
+                k = raw.getJointId(red.names[j])
+                jr, jm = raw.joints[k], red.joints[j]
+                if jr.nq == 2:
+                    v = q[jm.idx_v]
+                    qp[jr.idx_q], qp[jr.idx_q + 1] = np.cos(v), np.sin(v)
+                else:
+                    qp[jr.idx_q : jr.idx_q + jr.nq] = model.pinocchio_q(q)[
+                        jm.idx_q : jm.idx_q + jm.nq
+                    ]
+            omf = _raw_oMf(raw, qp)
+            want = omf[frame_of(raw, model.base)].inverse() * omf[frame_of(raw, tip)]
+            np.testing.assert_allclose(model.fk(q), want.homogeneous, atol=1e-12)
+
+
+def frame_of(model: pin.Model, name: str) -> int:
+    from hexapod_kin.frames import frame_index
+
+    return frame_index(model, name)

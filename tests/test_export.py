@@ -724,3 +724,44 @@ def test_mjcf_floating_robot_fk_and_it_lands_on_the_floor():
     assert floor_z < md.qpos[2] < 0.0  # fell from 0, stopped above the floor
     with pytest.raises(ParameterError, match="floating"):
         to_mjcf(robots.hexabot_leg(), floating=True)
+
+
+def test_rounded_zero_inertias_of_a_real_urdf_are_lifted_only_when_asked():
+    """erd:anymal's dummy ``base`` link gives ixx = iyy = 0 (eigenvalues ±2e-22): MuJoCo refuses
+    it; ``balance_inertia`` raises only such moments, to 1e-6 of the link's largest (then
+    MuJoCo's ``balanceinertia`` averages moments that break A + B >= C), and every other
+    body's inertia in the compiled MJCF is the URDF's (MuJoCo's own principal axes)."""
+    mujoco = pytest.importorskip("mujoco")
+    from hexapod_kin.exceptions import UrdfError
+    from hexapod_kin.export.mjcf import to_mjcf
+    from hexapod_kin.sources import resolve_source
+
+    with pytest.raises(UrdfError, match="positive eigenvalues"):
+        to_mjcf("erd:anymal", floor=False)
+    xml = to_mjcf("erd:anymal", floor=False, balance_inertia=True).xml
+    model = mujoco.MjModel.from_xml_string(xml)
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(resolve_source("erd:anymal").text)
+    checked = 0
+    for link in root.iter("link"):
+        node = link.find("inertial/inertia")
+        if node is None or float(link.find("inertial/mass").get("value")) == 0:
+            continue
+        a = {k: float(v) for k, v in node.attrib.items()}
+        tensor = np.array(
+            [
+                [a["ixx"], a["ixy"], a["ixz"]],
+                [a["ixy"], a["iyy"], a["iyz"]],
+                [a["ixz"], a["iyz"], a["izz"]],
+            ]
+        )
+        lam = np.linalg.eigvalsh(tensor)
+        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, link.get("name"))
+        got = np.sort(model.body_inertia[body])
+        want = np.maximum(lam, 1e-6 * lam[-1])
+        if want[0] + want[1] < want[2]:  # MuJoCo's balanceinertia: the three set to their mean
+            want = np.full(3, want.mean())
+        assert np.allclose(got, want, rtol=1e-9, atol=1e-15), link.get("name")
+        checked += 1
+    assert checked >= 10

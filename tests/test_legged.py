@@ -494,3 +494,169 @@ def test_the_default_stance_rule_by_hand():
     assert np.allclose(pose.feet[:, :2], feet_q0[:, :2], atol=1e-12)
     reached = solo.feet(pose.q[None], pose.base[None])[0]
     assert np.abs(reached - pose.feet).max() <= 1e-10
+
+
+def _upturned_hexapod(masses: bool) -> str:
+    """Six legs whose tibia bends upwards twice (0.22 and 0.35 rad), knee range [0, 2.136] rad:
+    a real hexapod's shape, for which the geometric default stance puts the knee at the edge
+    of its range."""
+
+    def inert(m: float) -> str:
+        i = 4e-5 * m
+        return (
+            (
+                f'<inertial><mass value="{m}"/><inertia ixx="{i}" iyy="{i}" izz="{i}" '
+                'ixy="0" ixz="0" iyz="0"/></inertial>'
+            )
+            if masses
+            else ""
+        )
+
+    def link(name: str, m: float) -> str:
+        return f'<link name="{name}">{inert(m)}</link>'
+
+    def joint(
+        name: str,
+        kind: str,
+        parent: str,
+        child: str,
+        xyz: str,
+        rpy: str = "0 0 0",
+        axis: str = "",
+        lim: str = "",
+    ) -> str:
+        extra = f'<axis xyz="{axis}"/><limit {lim} effort="10" velocity="3"/>' if axis else ""
+        return (
+            f'<joint name="{name}" type="{kind}"><parent link="{parent}"/>'
+            f'<child link="{child}"/><origin xyz="{xyz}" rpy="{rpy}"/>{extra}</joint>'
+        )
+
+    out = ['<robot name="upturned">', link("body", 0.8)]
+    for k, yaw in enumerate(np.radians([60, 90, 120, -120, -90, -60])):
+        p = f"l{k}"
+        r = 0.09
+        out += [
+            joint(
+                f"{p}_mount",
+                "fixed",
+                "body",
+                f"{p}_hip",
+                f"{r * math.cos(yaw):.6f} {r * math.sin(yaw):.6f} 0",
+                f"0 0 {yaw:.6f}",
+            ),
+            link(f"{p}_hip", 0.0),
+            joint(
+                f"{p}_coxa",
+                "revolute",
+                f"{p}_hip",
+                f"{p}_c",
+                "0 0 0",
+                axis="0 0 1",
+                lim='lower="-0.785" upper="0.785"',
+            ),
+            link(f"{p}_c", 0.04),
+            joint(
+                f"{p}_femur",
+                "revolute",
+                f"{p}_c",
+                f"{p}_f",
+                "0.053 0 0",
+                axis="0 1 0",
+                lim='lower="-1.789" upper="0"',
+            ),
+            link(f"{p}_f", 0.05),
+            joint(
+                f"{p}_knee",
+                "revolute",
+                f"{p}_f",
+                f"{p}_t",
+                "0.077 0 0",
+                axis="0 1 0",
+                lim='lower="0" upper="2.136"',
+            ),
+            link(f"{p}_t", 0.03),
+            joint(f"{p}_bend1", "fixed", f"{p}_t", f"{p}_t2", "0.022358 0 0", "0 -0.2234 0"),
+            link(f"{p}_t2", 0.03),
+            joint(f"{p}_bend2", "fixed", f"{p}_t2", f"{p}_t3", "0.071518 0 0", "0 -0.3508 0"),
+            link(f"{p}_t3", 0.01),
+            joint(f"{p}_tip", "fixed", f"{p}_t3", f"{p}_foot", "0.03114 0 0"),
+            link(f"{p}_foot", 0.0),
+        ]
+    return "\n".join([*out, "</robot>"])
+
+
+def test_a_default_stance_with_no_joint_room_is_replaced_by_the_roomiest(tmp_path):
+    """The geometric default (0.64 / 0.32 of the span) leaves the upturned knee beyond its
+    range on the first step; the default becomes the grid stance that keeps the most range,
+    checked here by raw Pinocchio: feet where planned, every joint ≥ 10 % inside its range
+    over the default step box, and a strict 10 s tripod."""
+    from hexapod_kin.gait.posture import MIN_ROOM, room
+
+    path = tmp_path / "upturned.urdf"
+    path.write_text(_upturned_hexapod(True))
+    wb = as_whole_body(str(path))
+    # the rule's own default, recomputed by hand, has no room
+    span = float(np.mean(wb._span))
+    geo_reach = min(0.64 * span, span)  # q = 0 points the legs outwards, past 0.64 span
+    geo_height = math.sqrt((math.hypot(0.64, 0.32) * span) ** 2 - geo_reach**2)
+    assert room(wb, geo_height, geo_reach) < 0  # a joint leaves its range on the first step
+    with pytest.raises(GaitError, match="joint limit"):
+        walk(wb, duration=2.0, body_height=geo_height, foot_reach=geo_reach, strict=True)
+    assert (wb.body_height, wb.foot_reach) != pytest.approx((geo_height, geo_reach))
+    assert room(wb, wb.body_height) >= MIN_ROOM
+    # independent check of the standing pose by raw Pinocchio
+    pose = standing_pose(wb)
+    m, d = _raw_model(path.read_text())
+    qp = wb.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.framesForwardKinematics(m, d, qp)
+    feet = np.array([d.oMf[m.getFrameId(f"l{k}_foot")].translation for k in range(6)])
+    assert np.abs(feet - pose.feet).max() <= 1e-9
+    rng = wb.upper - wb.lower
+    assert np.all(np.minimum(pose.q - wb.lower, wb.upper - pose.q) >= MIN_ROOM * rng)
+    run = walk(wb, pattern="tripod", duration=10.0, strict=True)
+    assert run.min_margin > 0 and run.min_limit_margin > 0
+
+
+def test_a_robot_without_mass_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "massless.urdf"
+    path.write_text(_upturned_hexapod(False))
+    wb = as_whole_body(str(path))  # kinematics works without masses
+    assert wb.mass == 0 and np.isfinite(wb.feet(wb.neutral_q()[None], np.eye(4)[None])).all()
+    with pytest.raises(ConfigurationError, match="no mass"):
+        walk(wb, duration=1.0)
+    with pytest.raises(ConfigurationError, match="no mass"):
+        stand(str(path))
+    import subprocess
+    import sys
+
+    for cmd in (["gait", str(path), "--duration", "1"], ["stand", str(path)]):
+        res = subprocess.run(
+            [sys.executable, "-m", "hexapod_kin", *cmd], capture_output=True, text=True, timeout=120
+        )
+        errors = [ln for ln in res.stderr.splitlines() if "warning" not in ln]
+        assert res.returncode == 2 and len(errors) == 1 and "no mass" in errors[0], res.stderr
+
+
+@pytest.mark.parametrize("name", ["go1", "a1"])
+def test_unitree_quadrupeds_stand_symmetric_and_crawl(name):
+    """Unitree's knee range excludes 0, so at q = 0 clipped every foot is ~0.16 m forward of
+    its hip; that shared offset is not a stance: the default feet are symmetric front/rear
+    about the hips (by raw Pinocchio: the hips' mean equals the feet's mean), and the crawl
+    holds 10 s strict (before: the centre of mass left the support polygon by 0.039 m)."""
+    wb = as_whole_body(f"erd:{name}")
+    pose = standing_pose(wb)
+    m, d = _raw_model(_erd_text(name))
+    qp = wb.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.framesForwardKinematics(m, d, qp)
+    hips = np.array([d.oMi[m.getJointId(f"{leg}_hip_joint")].translation for leg in wb.leg_names])
+    feet = np.array([d.oMf[m.getFrameId(f"{leg}_foot")].translation for leg in wb.leg_names])
+    assert np.abs(feet - pose.feet).max() <= 1e-9  # the URDF foot links are the feet
+    assert np.abs((feet - hips)[:, :2].mean(axis=0)).max() <= 1e-9
+    run = walk(wb, pattern="crawl", duration=10.0, strict=True)
+    assert run.min_margin > 0.001 and run.min_zmp_margin > -3e-3
+
+
+def _erd_text(name: str) -> str:
+    from hexapod_kin.sources import resolve_source
+
+    return resolve_source(f"erd:{name}").text

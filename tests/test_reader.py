@@ -77,10 +77,14 @@ def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path) -> None:
     assert files
     marker = tmp_path / "ran"
     planted = f"__import__('pathlib').Path({str(marker)!r}).touch()"
-    for f in files:
+    from hexapod_kin.symbolic import cache
+
+    for f in files:  # the seal recomputed: what refuses the code is the reader itself
         text = json.dumps(json.loads(f.read_text()))
         head = '"__sympy__": "'
-        f.write_text(text.replace(head, head + planted.replace('"', '\\"') + "#", 1))
+        data = json.loads(text.replace(head, head + planted.replace('"', '\\"') + "#", 1))
+        data["seal"] = cache.seal(data["key"], data["stages"])
+        f.write_text(json.dumps(data))
     again = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=120)
     assert again.returncode == 0, again.stderr
     assert not marker.exists()
@@ -96,8 +100,9 @@ def _entry(pairs: list, name: str) -> dict:
 
 @pytest.mark.parametrize("what", ["p", "det", "family"])
 def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: str) -> None:
-    """An edited value in the symbolic cache (a plausible expression, no code) is checked
-    against the table before use: discarded with one CacheWarning and recomputed."""
+    """An edited value in the symbolic cache (a plausible expression, no code, the seal
+    recomputed) is checked against the table before use: discarded with one CacheWarning
+    and recomputed."""
     import json
 
     import hexapod_kin as hk
@@ -121,10 +126,44 @@ def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: s
         key, old, new = "__sympy__", "Symbol('q3'", "Symbol('q1'"
     assert old in entry[key]
     entry[key] = entry[key].replace(old, new)
+    data["seal"] = cache.seal(data["key"], data["stages"])
     path.write_text(json.dumps(data))
     clear_memory()
-    with pytest.warns(CacheWarning):
+    from hexapod_kin.symbolic import cached
+
+    with pytest.warns(CacheWarning, match="do not match the table"):
+        assert cached(hk.robots.hexabot_leg()) is None  # the read-only look checks it too
+    with pytest.warns(CacheWarning, match="do not match the table"):
         again = derive(hk.robots.hexabot_leg(), budget=None)
     assert sp.simplify(again.det - first.det) == 0
     assert [f.name for f in again.families] == [f.name for f in first.families]
     clear_memory()
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "scara", "coxa_tibia_leg"])
+def test_cached_derivation_is_the_computed_one(tmp_path: Path, monkeypatch, name: str) -> None:
+    """Read back from the cache, a derivation is the one computed, expression for expression
+    (the reader does not distribute ``-1`` over the sums the tidied forms keep factored), and
+    its own entry passes the check against the table (no warning: e.g. the 2-DOF leg, whose
+    Jacobian has more rows than joints)."""
+    import warnings
+
+    import hexapod_kin as hk
+    from hexapod_kin.symbolic import clear_memory, derive
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "hk"))
+    chain = getattr(hk.robots, name)()
+    clear_memory()
+    fresh = derive(chain, budget=None)
+    clear_memory()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = derive(chain, budget=None)
+    clear_memory()
+    assert back.cached and not fresh.cached
+    for field in ("p", "J_direct", "J_indirect", "det", "gram", "transforms", "cumulative"):
+        assert sp.srepr(getattr(back, field)) == sp.srepr(getattr(fresh, field)), field
+    assert [sp.srepr(f.factor) for f in back.families] == [
+        sp.srepr(f.factor) for f in fresh.families
+    ]
+    assert back.text() == fresh.text()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -44,7 +45,7 @@ def _command_lines() -> list[str]:
     lines = []
     for block in re.findall(r"```bash\n(.*?)```", README, re.S):
         for line in block.splitlines():
-            line = line.split("  #", 1)[0].strip()
+            line = shlex.join(shlex.split(line, comments=True))  # as bash reads it
             if line.startswith("hexapod-kin "):
                 lines.append(line)
     return lines

@@ -234,12 +234,21 @@ def test_damaged_or_incomplete_entry_is_not_replayed(
         record["files"]["../report.md"] = meta
         shutil.copy(entry / "files" / "report.md", entry / "report.md")
         manifest.write_text(json.dumps(record))
-    assert replay.lookup(env.key) is None
+    import warnings
+
+    from hexapod_kin.exceptions import CacheWarning
+
     calls: list[dict[str, Any]] = []
     monkeypatch.setattr(build, "_build", _no_build(calls))
-    with pytest.raises(Built):
-        reproduce(tmp_path / "out", quick=True, animations=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert replay.lookup(env.key) is None
+        with pytest.raises(Built):
+            reproduce(tmp_path / "out", quick=True, animations=False)
     assert len(calls) == 1
+    said = [w for w in caught if issubclass(w.category, CacheWarning)]
+    # once per look: a damaged entry warns, a missing manifest (nothing stored) does not
+    assert len(said) == (0 if damage == "no-manifest" else 2), [str(w.message) for w in said]
 
 
 def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> None:
@@ -248,7 +257,10 @@ def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> 
     original = html.read_bytes()
     _flip(html, at=len(original) // 2)
     out = tmp_path / "out"
-    rep = reproduce(out, quick=True, animations=False)
+    from hexapod_kin.exceptions import CacheWarning
+
+    with pytest.warns(CacheWarning, match="report.html does not match its manifest line"):
+        rep = reproduce(out, quick=True, animations=False)
     assert rep.replayed_from is None  # computed, not replayed
     assert rep.verdicts == env.rep.verdicts
     # the same bytes as the first build (every figure too), and the entry written again
@@ -262,7 +274,7 @@ def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> 
 def _fake_out(tmp_path: Path, text: str) -> tuple[Path, list[Path]]:
     out = tmp_path / f"out-{text}"
     (out / "figures").mkdir(parents=True)
-    files = [out / "report.md", out / "figures" / "a.png"]
+    files = [out / "report.md", out / "figures" / "a.txt"]
     for i, f in enumerate(files):
         f.write_text(f"{text} {i}")
     return out, files
@@ -319,6 +331,7 @@ def test_prune_keeps_the_newest_four(
     assert replay.KEEP == 4
     assert sorted(d.name for d in replay.runs_dir().iterdir()) == keys[2:6]
     # a replay marks its entry used: the oldest one, replayed, survives the next store
+    monkeypatch.setattr(replay, "verdicts_match", lambda *a: True)  # no real report here
     entry = replay.lookup(keys[2])
     assert entry is not None
     restored = replay.restore(entry, tmp_path / "restored")
@@ -382,12 +395,16 @@ def test_replay_imports_nothing_heavy(env: First, tmp_path: Path) -> None:
     assert json.loads((out / "verdicts.json").read_text())["replayed_from"]
 
 
+@pytest.mark.parametrize("resealed", [False, True])
 def test_edited_manifest_verdicts_are_not_replayed(
-    env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, resealed: bool
 ) -> None:
     """A manifest whose verdicts were edited (e.g. to count more agreements) is not the
-    report it lists: the build runs again with one CacheWarning, never a wrong summary."""
+    report it lists: the build runs again with one CacheWarning, never a wrong summary.
+    Edited as is, the manifest's seal is broken; resealed (an editor who recomputes it),
+    the verdicts no longer match the rows of ``report.md``."""
     import shutil
+    import warnings
 
     from hexapod_kin.exceptions import CacheWarning
 
@@ -401,7 +418,13 @@ def test_edited_manifest_verdicts_are_not_replayed(
     wrong = next(i for i, v in enumerate(record["verdicts"]) if v["status"] == "wrong")
     record["verdicts"][wrong]["status"] = "agrees"
     assert not replay.verdicts_match(record["verdicts"], entry.files)
+    if resealed:
+        record["seal"] = replay.seal(record)
     (entry.folder / "manifest.json").write_text(json.dumps(record))
-    with pytest.warns(CacheWarning, match="not the report's"):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         rep = reproduce(tmp_path / "again", quick=True, animations=False)
+    said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
+    why = "verdicts are not the report's" if resealed else "does not match its seal"
+    assert len(said) == 1 and why in said[0], said
     assert rep.counts == env.rep.counts and rep.replayed_from is None

@@ -329,3 +329,28 @@ def test_third_party_urdf_exports_to_a_floating_scene_robot() -> None:
     names = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(1, m.njnt)}
     assert names == set(revolute)
     assert m.ngeom == 0  # every collision was a mesh: dropped (the feet come as spheres)
+
+
+def test_servo_gains_scale_with_the_robots_weight_and_size() -> None:
+    """Built-in hexapod: exactly the AX-12-class gains; ANYmal's from m ℓ (30.5 kg, 0.685 m)."""
+    from hexapod_kin.gait import as_whole_body
+    from hexapod_kin.simulate.scene import servo_defaults
+
+    assert servo_defaults(whole_body()) == (300.0, 3.0, 0.002)
+    wb = as_whole_body("erd:anymal")
+    m, span = wb.mass, float(np.mean(wb._span))
+    kp, kv, arm = servo_defaults(wb)
+    assert kp == pytest.approx(300 * m * span / (1.96 * 0.25), rel=5e-3) and kp == 12800
+    assert kv == pytest.approx(0.01 * kp) and arm == pytest.approx(
+        0.002 * m * span**2 / (1.96 * 0.0625), rel=5e-3
+    )
+
+
+def test_anymal_crawls_in_mujoco_as_planned() -> None:
+    """A quadruped from example-robot-data, replayed open-loop: every check passes (the base's
+    rounded-zero inertia mended, the thigh boxes that cross the base box at rest excluded,
+    servos scaled, the sway placing the zero-moment point), standing forces as stand()'s."""
+    res = simulate("erd:anymal", pattern="crawl", duration=10.0)
+    assert res.ok, res.to_dict()["checks"]
+    assert abs(res.distance / res.distance_planned - 1) < 0.01 and math.degrees(res.max_roll) < 1.0
+    assert res.stand is not None and res.stand.max_error < 0.01  # N, of 75 N per foot

@@ -320,14 +320,14 @@ def test_families_only_when_asked_then_from_disk_without_sympy(fresh_cache):
 def test_derivation_failures_are_recorded_and_bugs_propagate(fresh_cache, monkeypatch):
     from hexapod_kin import symbolic
 
-    def refuse(chain, rows=None, budget=None):
+    def refuse(chain, rows=None, budget=None, deadline=None, families_only=False):
         raise ParameterError("no table for you")
 
     monkeypatch.setattr(symbolic, "derive", refuse)
     res = scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
     assert res.families == () and "no table for you" in res.family_reason
 
-    def bug(chain, rows=None, budget=None):
+    def bug(chain, rows=None, budget=None, deadline=None, families_only=False):
         raise KeyError("a bug")
 
     monkeypatch.setattr(symbolic, "derive", bug)

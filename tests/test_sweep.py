@@ -567,7 +567,7 @@ def test_damaged_chunks_are_scored_again(local_run, tmp_path, damage):
             np.savez(fh, **arrays)
     else:
         a.write_bytes(a.read_bytes()[:50])
-    with pytest.warns(CacheWarning, match="does not hold what it claims"):
+    with pytest.warns(CacheWarning, match="not hold what (it claims|they claim)"):
         res = sweep(SPACE, out=out, workers=1, **OPTS)
     assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
     assert res.scored >= 2
@@ -579,3 +579,86 @@ def test_a_huge_sweep_is_estimated_and_refused(tmp_path):
         sweep(big, out=tmp_path / "x.csv")
     assert err.value.parameter == "samples"
     assert not list(tmp_path.iterdir())  # refused before anything is written
+
+
+def test_grid_head_is_the_full_grids_head():
+    """``designs(first=k)`` builds only k grid points: the first k of the meshgrid order."""
+    space = DesignSpace({"l1": Range(0.03, 0.07, 3), "l2": Range(0.08, 0.12, 4), "height": 0.09})
+    full = space.designs()
+    axes = np.meshgrid(np.linspace(0.03, 0.07, 3), np.linspace(0.08, 0.12, 4), indexing="ij")
+    assert np.array_equal(full[:, 0], axes[0].ravel()) and np.array_equal(
+        full[:, 1], axes[1].ravel()
+    )
+    assert np.array_equal(space.designs(first=5), full[:5])
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [({"seed": -1}, "seed=-1"), ({"mc_samples": 0, "allow_large": True}, "mc_samples=0")],
+)
+def test_refused_sweep_leaves_nothing(tmp_path, kw, match):
+    """Refused before the first chunk: no sidecar folder blocks the corrected call."""
+    space = DesignSpace({"l1": Range(0.03, 0.07, 2)})
+    with pytest.raises(ParameterError, match=match):
+        sweep(space, out=tmp_path / "r.csv", **kw)
+    assert not list(tmp_path.iterdir())
+    assert sweep(space, out=tmp_path / "r.csv", mc_samples=500).n == 2
+
+
+@pytest.mark.parametrize("name, value", [("l2", 1e300), ("height", 2e3), ("mount_yaw", 1e300)])
+def test_absurd_designs_are_refused(name, value):
+    """Beyond 1 km or 1000 rad the closed forms overflow (NaN scores): refused up front."""
+    with pytest.raises(ParameterError, match=f"{name}="):
+        DesignSpace({name: value}).designs()
+
+
+def test_a_zip_bomb_chunk_is_not_inflated(local_run, tmp_path):
+    """A chunk whose member would inflate far beyond its scores' size is discarded unread."""
+    import io
+    import tracemalloc
+    import zipfile
+
+    from hexapod_kin.exceptions import CacheWarning
+
+    out = tmp_path / "z.csv"
+
+    def stop(k: int) -> None:
+        if k == 15:  # every chunk stored, the table not yet written
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(SPACE, out=out, workers=1, on_chunk=stop, **OPTS)
+    chunk = tmp_path / ".z.csv.sweep-parts" / "chunk_00000.npz"
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (1 << 23, 1)}
+    )
+    with zipfile.ZipFile(chunk, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("scores.npy", header.getvalue() + bytes(8 << 23))  # 64 MiB in ~64 kB
+    assert chunk.stat().st_size < 1 << 17
+    tracemalloc.start()
+    try:
+        with pytest.warns(CacheWarning, match="chunk_00000.npz"):
+            res = sweep(SPACE, out=out, workers=1, **OPTS)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 20  # the 64 MiB never inflated (scoring itself peaks near 40 MiB)
+    assert res.scored == 2
+    assert out.read_bytes() == Path(local_run.files["csv"]).read_bytes()
+
+
+def test_yes_runs_a_sweep_beyond_the_estimate_limits(tmp_path, monkeypatch, capsys):
+    """The refusal is the estimate's (limits lowered here so a small sweep is "too large"):
+    ``--yes`` runs it, and nothing is written by the refused run."""
+    from hexapod_kin.cli import main
+    from hexapod_kin.sweep import run
+
+    monkeypatch.setattr(run, "MAX_HOURS", 1e-12)
+    argv = ["sweep", "--l1", "0.03:0.07:2", "--mc-samples", "500", "--out", str(tmp_path / "y.csv")]
+    assert main(argv) == 2
+    assert "2 designs: estimated" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+    assert main([*argv, "--yes", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["n_designs"] == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["y.csv"]

@@ -357,3 +357,58 @@ def test_all_six_rows_gram_equals_numeric(name):
     for i, q in enumerate(qs):
         jac = model.jacobian(q)
         assert abs(gram[i] - np.linalg.det(jac.T @ jac)) < 1e-12
+
+
+# ------------------------------------------------------------------ the exact and numeric tools
+def test_ring_determinant_equals_the_expanded_one_and_numpy():
+    """The ring route gives the polynomial the expression route gives; both equal numpy's det."""
+    from hexapod_kin.symbolic._trigpoly import _det_poly, _to_poly, _trig_symbols, ring_det
+
+    q = sp.symbols("q1:4", real=True)
+    a, b = sp.symbols("a b", positive=True)
+    sigmas = ("revolute", "revolute", "prismatic")
+    rng = np.random.default_rng(8)
+    atoms = [sp.sin(q[0]), sp.cos(q[0] + q[1]), sp.sin(q[1]), q[2], a, b * sp.cos(q[1])]
+    entries = [
+        sum(sp.Rational(int(rng.integers(-3, 4)), 2) * atoms[int(rng.integers(6))]
+            * atoms[int(rng.integers(6))] for _ in range(3))
+        for _ in range(16)
+    ]  # fmt: skip
+    mat = sp.Matrix(4, 4, entries)
+    poly = _det_poly(mat, q, sigmas)
+    assert poly == _to_poly(mat.det(method="berkowitz"), q, sigmas)
+    s, c = _trig_symbols(q)
+    for qv in rng.uniform(-3, 3, (5, 3)):
+        vals = {a: 0.7, b: 1.3, q[0]: qv[0], q[1]: qv[1], q[2]: qv[2]}
+        vals.update({s[k]: math.sin(qv[k]) for k in range(2)})
+        vals.update({c[k]: math.cos(qv[k]) for k in range(2)})
+        want = np.linalg.det(np.array(mat.subs(vals).evalf(), dtype=float))
+        assert float(poly.subs(vals)) == pytest.approx(want, rel=1e-12, abs=1e-12)
+    x = sp.Symbol("x")
+    assert ring_det([x, sp.Float(0.5)], 1, [x]) is None  # floats keep the expression route
+    assert ring_det([sp.sqrt(3) * x], 1, [x]) is None  # so do algebraic numbers
+    assert ring_det([x, 1, 2, x], 2, [x]) == x**2 - 2
+
+
+def test_root_finder_is_scipy_brentq_to_the_bit():
+    from scipy.optimize import brentq
+
+    from hexapod_kin.symbolic._numbers import brent_root
+
+    rng = np.random.default_rng(11)
+    solved = 0
+    for _ in range(100):
+        c = rng.normal(size=4)
+        ph = float(rng.uniform(-3, 3))
+
+        def f(x, c=c, ph=ph):
+            return c[0] + c[1] * math.cos(x + ph) + c[2] * math.sin(2 * x) + c[3] * x**3
+
+        grid = np.linspace(-math.pi, math.pi, 40)
+        vals = [f(x) for x in grid]
+        for lo, hi, flo, fhi in zip(grid, grid[1:], vals, vals[1:]):
+            if flo * fhi < 0:
+                for xtol in (1e-15, 2e-12):
+                    assert brent_root(f, lo, hi, xtol) == brentq(f, lo, hi, xtol=xtol)
+                solved += 1
+    assert solved > 100

@@ -3,7 +3,8 @@
 The 5-DOF leg of ``examples/leg5.yaml`` (hip yaw, roll and pitch axes meeting at one point,
 knee, foot roll about the shank): its position Jacobian (3×5) loses rank where the knee
 stretches the shank in line with the femur. Every claim is checked against Pinocchio's
-Jacobian by SVD; no test measures time (see ``tools/bench_symbolic_budget.py``).
+Jacobian by SVD. One test times two commands on the 12-joint chain of ``tests/data``
+against their budgets, with a loose allowance (figures: ``tools/bench_symbolic_budget.py``).
 """
 
 from __future__ import annotations
@@ -99,33 +100,24 @@ def test_redundant_leg_without_common_factor_has_no_family():
         assert abs(gram[i] - np.linalg.det(jp @ jp.T)) < 1e-14
 
 
-def test_unfinished_derivation_is_kept_and_a_larger_budget_carries_on(monkeypatch):
-    from hexapod_kin.symbolic import cache as symbolic_cache
+def test_unfinished_derivation_is_kept_and_a_larger_budget_carries_on():
     from hexapod_kin.symbolic import clear_memory
 
     chain = _coxa_leg(0.032)
-    runs: list[float | None] = []
-    real = symbolic_cache.run
-
-    def counting(stages, budget):
-        runs.append(budget)
-        return real(stages, budget)
-
-    monkeypatch.setattr(symbolic_cache, "run", counting)
     # a budget short enough that even an idle machine stops early (the child is killed)
     first = derive(chain, budget=0.03)
-    assert first.incomplete and not first.cached and len(runs) == 1
-    clear_memory()  # a new process: from the disk
+    assert first.incomplete and not first.cached
+    clear_memory()  # a new process: from the disk (read within the budget, not derived)
     again = derive(chain, budget=0.03)
-    assert again.cached and len(runs) == 1  # not spent again
+    assert again.cached  # not spent again
     assert [w.split(" (")[0] for w in again.incomplete] == [
         w.split(" (")[0] for w in first.incomplete
     ]
     smaller = derive(chain, budget=0.01)
-    assert smaller.cached and len(runs) == 1
+    assert smaller.cached
     done = derive(chain, budget=None)  # larger: carries on from what was reached
-    assert not done.cached and done.complete and len(runs) == 2
-    assert derive(chain, budget=0.03).complete and len(runs) == 2
+    assert not done.cached and done.complete
+    assert derive(chain, budget=0.03).complete
 
 
 def test_scan_keeps_an_unfinished_family_derivation(monkeypatch):
@@ -177,3 +169,79 @@ def test_cli_derive_of_the_leg_table_file(capsys):
     assert "q4 = pi/2 (mod 2*pi)" in out and "q4 = -pi/2 (mod 2*pi)" in out
     assert "check vs Pinocchio" in out and "NOT DONE" not in out
     assert max(len(line) for line in out.splitlines()) <= 100
+
+
+def test_families_only_stops_after_the_families_and_a_full_call_carries_on(monkeypatch):
+    from dataclasses import replace
+
+    from hexapod_kin import robots
+    from hexapod_kin.symbolic import cache as symbolic_cache
+    from hexapod_kin.symbolic import clear_memory
+
+    leg = robots.hexabot_leg()
+    rows = list(leg.rows)
+    rows[-1] = replace(rows[-1], d=0.107)  # a table of its own (the cache is keyed by it)
+    chain = leg.replace(rows=tuple(rows), name="leg_107")
+    stages: list[list[str]] = []
+    real = symbolic_cache.run
+
+    def recording(gen, budget):
+        done, reason = real(gen, budget)
+        if list(done) != ["entry"]:  # reading the disk cache runs through cache.run too
+            stages.append(list(done))
+        return done, reason
+
+    monkeypatch.setattr(symbolic_cache, "run", recording)
+    part = derive(chain, budget=None, families_only=True)
+    assert stages == [["kinematics", "rows", "determinant", "families", "checks"]]
+    assert part.families_done and part.agree is None and len(part.families) == 3
+    assert [w.split(" (")[0] for w in part.incomplete] == ["direct = indirect Jacobian, exactly"]
+    clear_memory()  # a new process: from the disk, not derived again
+    again = derive(chain, budget=None, families_only=True)
+    assert again.cached and len(stages) == 1 and again.families == part.families
+    full = derive(chain, budget=None)  # carries on: only what families_only left out
+    assert stages[1] == ["agree", "tidy", "seconds"]
+    assert full.complete and full.agree is True and full.families == part.families
+    clear_memory()
+    assert derive(chain, budget=None).cached and len(stages) == 2
+
+
+CHAIN12 = str(Path(__file__).resolve().parent / "data" / "chain12.yaml")
+
+
+def _timed_cli(argv: list[str], cache: Path) -> tuple[float, int, str]:
+    """Wall time [s], exit status and stdout of ``python -m hexapod_kin ARGV`` (own caches)."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    root = Path(__file__).resolve().parent.parent
+    env = {**os.environ, "HEXAPOD_KIN_CACHE_DIR": str(cache), "PYTHONPATH": str(root)}
+    t0 = time.monotonic()
+    run = subprocess.run(
+        [sys.executable, "-m", "hexapod_kin", *argv],
+        env=env, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    wall = time.monotonic() - t0
+    assert "Traceback" not in run.stderr, run.stderr
+    return wall, run.returncode, run.stdout
+
+
+def test_budgets_bound_the_whole_command_on_a_12_joint_chain(tmp_path):
+    """``derive --budget B`` and ``scan --family-budget B`` on a chain sympy cannot finish.
+
+    The derive command counts B from its own start (imports included): wall ≤ B + 2.5 s
+    (the target is B + 1.5 s; a loaded test machine is given 1 s more). The scan's families
+    (reading the cache, deriving, checking against the model) take at most B more than the
+    same scan without families (+ 1.5 s). Both say what is not done and exit with 1.
+    """
+    budget = 2.0
+    wall, code, out = _timed_cli(["derive", CHAIN12, "--budget", f"{budget:g}"], tmp_path / "a")
+    assert code == 1 and wall <= budget + 2.5, (wall, code, out[-2000:])
+    assert "NOT DONE: det J factored and singular families (budget of 2 s reached)" in out
+    argv = ["scan", CHAIN12, "--grid", "5"]
+    base, code0, _ = _timed_cli([*argv, "--families", "off"], tmp_path / "b")
+    wall, code, out = _timed_cli([*argv, "--family-budget", f"{budget:g}"], tmp_path / "b")
+    assert code0 == 0 and code == 1 and wall <= base + budget + 1.5, (base, wall, out)
+    assert "no families: derivation incomplete:" in out and "budget of 2 s reached" in out

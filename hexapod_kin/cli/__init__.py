@@ -136,10 +136,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     One rule for every command: **0** done (the answer achieves what was asked); **1**
     answered but not achieved (``ik``: the target is unreachable or only beyond the joint
     limits — the nearest point is printed; ``step``: joint or speed limits cut the motion;
-    ``gait``: a check of the plan fails; ``simulate``: a physics check fails); **2** bad input
-    or any failure (one line on stderr, never a traceback; ``HEXAPOD_KIN_DEBUG=1`` shows the
-    traceback of an unexpected error); **130** interrupted. A closed stdout
-    (``hexapod-kin fk ... | head``) ends quietly.
+    ``gait``: a check of the plan fails; ``simulate``: a physics check fails; ``derive``:
+    ``--budget`` ran out before all was derived, checked and printed; ``scan``: the families
+    were not all derived within ``--family-budget`` — ``NOT DONE`` lines say what is
+    missing); **2** bad input or any failure (one line on stderr, never a traceback;
+    ``HEXAPOD_KIN_DEBUG=1`` shows the traceback of an unexpected error); **130**
+    interrupted. A closed stdout (``hexapod-kin fk ... | head``) ends quietly.
 
     Ctrl-C (SIGINT) is recorded as well as raised, so that a library that swallows the
     ``KeyboardInterrupt`` (e.g. inside an import, or where Python can only report it as

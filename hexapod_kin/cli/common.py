@@ -24,6 +24,7 @@ __all__ = [
     "output_path",
     "q_args",
     "q_from_args",
+    "seed",
     "set_params",
     "source_args",
 ]
@@ -58,6 +59,17 @@ class OneLineParser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """Print ``hexapod-kin: error: <message>`` (with the subcommand) and exit 2."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def seed(text: str) -> int:
+    """An argparse ``type`` for ``--seed``: an integer in [0, 2**63) (numpy's seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value < 2**63:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected an integer in [0, 2**63)")
+    return value
 
 
 def set_params(pairs: Sequence[str] | None, source: Any = None) -> dict[str, Any]:
@@ -101,6 +113,13 @@ def _set_value(key: str, text: str) -> Any:
         parsed = None
         if "," not in text:
             return text
+    except ValueError:  # an integer beyond Python's digit limit
+        raise ParameterError(
+            f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot",
+            parameter=key,
+            value=f"{text[:20]}...",
+            allowed="a number of at most 15 digits",
+        ) from None
     else:
         return tuple(parsed) if isinstance(parsed, list) else parsed
     items = [t.strip() for t in text.split(",")]
@@ -113,8 +132,10 @@ def _set_value(key: str, text: str) -> Any:
         except ValueError:
             v = math.nan
         if not math.isfinite(v):
+            shown = text if len(text) <= 60 else f"{text[:40]}...({len(text)} characters)"
+            one = item if len(item) <= 30 else f"{item[:20]}...({len(item)} characters)"
             raise ParameterError(
-                f"-s {key}={text}: item {i} ({item!r}) is not a finite number; a list value "
+                f"-s {key}={shown}: item {i} ({one!r}) is not a finite number; a list value "
                 f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)",
                 parameter=key,
                 value=text,

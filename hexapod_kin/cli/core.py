@@ -23,6 +23,7 @@ from .common import (
     output_path,
     q_args,
     q_from_args,
+    seed,
     set_params,
     source_args,
 )
@@ -336,33 +337,46 @@ def _started() -> float:
     return now - age if 0.0 <= age < 600.0 else now
 
 
-#: Seconds of ``--budget`` kept for what follows the derivation (check, printing).
+#: Seconds of ``--budget`` kept for what follows the derivation (formulas as text, check):
+#: the text until half of it is left, the check until :data:`_WRITE` is left.
 _AFTER = 0.6
+
+#: Seconds before the end of ``--budget`` by which the output is ready to be written.
+_WRITE = 0.05
 
 
 def _pinocchio_check(deriv: Any, model: Any, seconds: float) -> tuple[dict[str, float], str]:
     """Symbolic J (and det J) against Pinocchio's at 100 random q, within ``seconds``.
 
-    Runs in a forked process killed at the time (lambdify of a 7-joint arm's Jacobian takes
-    seconds); returns the maximum differences and, when cut short, why.
+    The symbolic side is evaluated in one pass over each expression
+    (:func:`~hexapod_kin.symbolic.checks.evaluate`), in a forked process killed at the
+    time; returns the maximum differences and, when cut short, why.
     """
     import numpy as np
 
     from ..singularity.rows import ROW_NAMES
-    from ..symbolic.cache import run
+    from ..symbolic.checks import evaluate, evaluate_matrix
 
     def stages() -> Any:
         qs = model.random_q(100, seed=0)
         idx = [ROW_NAMES.index(r) for r in deriv.rows]
         jac_pin = np.array([model.jacobian(q)[idx] for q in qs])
-        jac_sym = deriv.function(deriv.J_rows)(qs)
+        at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
+        jac_sym = evaluate_matrix(deriv.J_rows, at, len(qs))
         yield "max_abs_J_sym_minus_J_pinocchio", float(np.abs(jac_sym - jac_pin).max())
         if deriv.det is not None and jac_pin.shape[1] == jac_pin.shape[2]:
-            det_sym = deriv.function(deriv.det)(qs)
+            det_sym = np.broadcast_to(evaluate(deriv.det, at), (len(qs),))
             yield (
                 "max_abs_det_sym_minus_det_pinocchio",
                 float(np.abs(det_sym - np.linalg.det(jac_pin)).max()),
             )
+
+    return _within(stages, seconds)
+
+
+def _within(stages: Any, seconds: float) -> tuple[dict[str, Any], str]:
+    """``symbolic.cache.run(stages, seconds)``: what came back, and "" or why it stopped."""
+    from ..symbolic.cache import run
 
     if seconds <= 0.05:
         return {}, "no time left in the budget"
@@ -372,7 +386,39 @@ def _pinocchio_check(deriv: Any, model: Any, seconds: float) -> tuple[dict[str, 
     ) else reason
 
 
+def _derive_output(deriv: Any, args: argparse.Namespace, seconds: float) -> tuple[str, str]:
+    """The printed derivation (text, LaTeX or JSON), made within ``seconds``, and what is cut.
+
+    Printing a 7-joint arm's expressions takes seconds: the text is made in a forked process
+    killed at the time, formula by formula, and what came back is printed, then one line
+    says what was not. JSON cut short leaves out ``det`` and ``gram`` (their text is what
+    takes the time).
+    """
+    import dataclasses
+    import json
+
+    if args.json:
+        done, why = _within(lambda: iter([("0", json.dumps(deriv.to_dict()))]), seconds)
+        if why:
+            short = dataclasses.replace(deriv, det=None, gram=None).to_dict()
+            short["incomplete"].append(f"det and gram as text ({why})")
+            return json.dumps(short), why
+        return done["0"], ""
+    if args.latex:
+        done, why = _within(lambda: iter([("0", deriv.latex())]), seconds)
+        if why:
+            return f"% {deriv.chain.name}\n% NOT DONE: the LaTeX of the formulas ({why})", why
+        return done["0"], ""
+    done, why = _within(lambda: ((str(i), t) for i, t in enumerate(deriv.text_parts())), seconds)
+    lines = [done[str(i)] for i in range(len(done))]
+    if why:  # what the derivation did not reach is said in any case (the text's last part)
+        lines.append(f"NOT DONE: printing the formulas after the {len(done)} first ({why})")
+        lines.extend(f"NOT DONE: {what}" for what in deriv.incomplete)
+    return "\n".join(lines), why
+
+
 def _cmd_derive(args: argparse.Namespace) -> int:
+    import json
     import math
     import time
 
@@ -390,20 +436,22 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     model = load_source(args)
     deriv = derive(model, rows=args.rows, budget=budget, deadline=end - _AFTER)
     # compare like with like: the derivation is in the model's own base frame, as Pinocchio's
-    check, why = _pinocchio_check(deriv, model, end - _AFTER / 2 - time.monotonic())
+    # the formulas first, then the check with the time they leave
+    text, cut = _derive_output(deriv, args, end - _AFTER / 2 - time.monotonic())
+    check, why = _pinocchio_check(deriv, model, end - _WRITE - time.monotonic())
     recovered = deriv.chain.description.startswith("Khalil table recovered")
+    status = 1 if deriv.incomplete or why or cut else 0  # answered, not all of it
     if args.json:
-        out = {**deriv.to_dict(), "check_vs_pinocchio_100_random_q": check}
+        out = {**json.loads(text), "check_vs_pinocchio_100_random_q": check}
         if why:
             out["check_incomplete"] = why
         if recovered:
             out["table_from_urdf"] = deriv.chain.description
         emit_json(out)
-        return 0
+        return status
+    print(text)
     if args.latex:
-        print(deriv.latex())
-        return 0
-    print(deriv.text())
+        return status
     if recovered:  # the URDF's table: what was snapped, one line
         print(f"table: {deriv.chain.description}")
     labels = {
@@ -417,7 +465,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         )
     if why:
         print(f"NOT DONE: check vs Pinocchio at 100 random q ({why})")
-    return 0
+    return status
 
 
 # ------------------------------------------------------------------------ scan
@@ -444,7 +492,7 @@ def _add_scan(sub: Any) -> None:
     p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
     p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
-    p.add_argument("--seed", type=int, help="seed of --samples (default: scan()'s, 0)")
+    p.add_argument("--seed", type=seed, help="seed of --samples (default: scan()'s, 0)")
     p.add_argument(
         "--families",
         choices=list(_FAMILIES),
@@ -483,14 +531,20 @@ def _cmd_scan(args: argparse.Namespace) -> int:
         "progress": False if args.json else None,
     }
     result = scan(model, **{k: v for k, v in given.items() if v is not None})
+    reason = result.family_reason
     if args.plot:
         from ..plots import plot_singularity_map
 
         path = plot_singularity_map(result, args.plot)
         print(f"wrote {path}", file=sys.stderr)
+    # families asked for (the default) but not all derived in --family-budget: answered, not all
+    status = int(
+        args.families in (None, "derive")
+        and ("derivation incomplete" in reason or reason.startswith("derivation failed"))
+    )
     if args.json:
         emit_json(result.to_dict())
-        return 0
+        return status
     n = result.q.shape[0]
     how = f"grid {result.grid_shape}" if result.grid_shape else "random samples"
     over = ", ".join(result.joint_names[j] for j in result.joints)
@@ -499,15 +553,15 @@ def _cmd_scan(args: argparse.Namespace) -> int:
     print(f"singular: {int(result.singular.sum())}  unexplained: {int(result.unexplained.sum())}")
     for name, count in result.family_counts.items():
         print(f"  family {name}: {count}")
-    if result.family_reason:
-        print(f"  no families: {result.family_reason}")
+    if reason:
+        print(f"  {'NOT DONE' if result.families else 'no families'}: {reason}")
     finite = np.isfinite(result.condition)
     print(
         f"manipulability: min {result.manipulability.min():.4g}  max "
         f"{result.manipulability.max():.4g}; condition (finite) max "
         f"{result.condition[finite].max() if finite.any() else float('nan'):.4g}"
     )
-    return 0
+    return status
 
 
 # ------------------------------------------------------------------------ main

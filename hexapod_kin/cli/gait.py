@@ -194,6 +194,7 @@ def _print(out: dict[str, Any]) -> None:
         f"stride {out['stride']:.4g} m)"
     )
     print(f"min stability margin   {out['min_margin']:.6g} m")
+    print(f"min ZMP margin         {out['min_zmp_margin']:.6g} m (dynamic; reported)")
     print(f"max stance slip        {out['max_slip']:.3g} m")
     print(f"min joint-limit margin {out['min_limit_margin']:.6g} rad")
     print(f"min leg clearance      {out['min_clearance']:.6g} m")

@@ -8,6 +8,8 @@ import math
 import sys
 from typing import Any
 
+from .common import PLOT_SUFFIXES, output_path, seed
+
 __all__ = ["register"]
 
 _OPTIONS = (
@@ -51,7 +53,7 @@ def register(sub: Any) -> None:
     p.add_argument("--deg", action="store_true", help="angle options are in degrees")
     p.add_argument("--method", choices=("grid", "random", "lhs"), default="grid")
     p.add_argument("--samples", type=int, default=100, help="designs for random/lhs")
-    p.add_argument("--seed", type=int, default=0, help="design sampling and Monte-Carlo seed")
+    p.add_argument("--seed", type=seed, default=0, help="design sampling and Monte-Carlo seed")
     p.add_argument("--mc-samples", type=int, default=10_000, help="Monte-Carlo points/design")
     p.add_argument("--chunk-size", type=int, help="designs per chunk (default ~1/20 of all)")
     p.add_argument("--workers", type=int, help="local threads (default: all cores)")
@@ -86,6 +88,18 @@ def _fmt(d: dict[str, Any], name: str, unit: str, mc: int) -> str:
     return f"{name} = {v:.6g} {unit} {how}"
 
 
+def _quiet_distributed() -> None:
+    """Silence the log handler that ``import distributed`` installs (its levels are per logger)."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401 - installs its handler and levels
+    except ImportError:
+        return  # sweep() says how to install it
+    for handler in logging.getLogger("distributed").handlers:
+        handler.setLevel(logging.CRITICAL + 1)
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from ..sweep import DesignSpace, parse_range, plot_sweep, sweep
     from ..sweep.designs import ANGLES
@@ -97,6 +111,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             scale = math.pi / 180 if (args.deg and name in ANGLES) else 1.0
             values[name] = parse_range("--" + name.replace("_", "-"), text, scale)
     space = DesignSpace(values, total=args.total)
+    if args.plot:  # checked before any work, not after the sweep
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if args.scheduler:  # a lost scheduler is one line (our error), not distributed's tracebacks
+        _quiet_distributed()
     res = sweep(
         space,
         method=args.method,

@@ -554,6 +554,7 @@ def _legged_stance(pose: Any, legs: Any, method: ContactMethod, mu: float | None
     pm = wb.model
     data = pm.createData()
     qp = wb.pinocchio_q(pose.q[None], pose.base[None])[0]
+    wb.require_mass()
     mass = float(pin.computeTotalMass(pm))
     com = np.array(pin.centerOfMass(pm, data, qp))
     g = float(np.linalg.norm(pm.gravity.linear))

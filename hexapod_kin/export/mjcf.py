@@ -89,6 +89,8 @@ def _with_compiler(urdf_text: str, discard_visual: bool, balance: bool = False) 
     from lxml import etree
 
     root = etree.fromstring(urdf_text.encode("utf-8"))
+    if balance:
+        _lift_degenerate(root)
     ext = etree.Element("mujoco")
     etree.SubElement(
         ext,
@@ -102,6 +104,43 @@ def _with_compiler(urdf_text: str, discard_visual: bool, balance: bool = False) 
     )
     root.insert(0, ext)
     return str(etree.tostring(root, encoding="unicode"))
+
+
+#: Principal moments below this fraction of a link's largest (or below ``_FLOOR_ABS``) are
+#: rounding, not physics: with ``balance_inertia`` they are raised to it (MuJoCo refuses a
+#: tensor that is not positive definite; many URDFs give dummy or sensor links ``ixx = 0``).
+_FLOOR_REL, _FLOOR_ABS = 1e-6, 1e-12
+
+
+def _lift_degenerate(root: Any) -> None:
+    """Raise rounding-level principal moments of the URDF's inertias (in place).
+
+    Only tensors whose smallest eigenvalue lies within ``_FLOOR_REL`` of zero (relative to the
+    largest) are touched; a clearly negative moment is a defect left for MuJoCo to refuse.
+    The change is at most ``_FLOOR_REL`` of the largest moment (or ``_FLOOR_ABS`` kg·m²).
+    """
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    for inertia in root.iterfind("link/inertial/inertia"):
+        try:
+            v = dict(zip(keys, (float(inertia.get(k, "0")) for k in keys)))
+        except ValueError:
+            continue  # the gate reports unreadable numbers
+        tensor = np.array(
+            [
+                [v["ixx"], v["ixy"], v["ixz"]],
+                [v["ixy"], v["iyy"], v["iyz"]],
+                [v["ixz"], v["iyz"], v["izz"]],
+            ]
+        )
+        if not np.all(np.isfinite(tensor)):
+            continue
+        lam, vecs = np.linalg.eigh(tensor)
+        floor = max(_FLOOR_REL * float(lam[-1]), _FLOOR_ABS)
+        if lam[0] >= floor or lam[0] < -_FLOOR_REL * max(float(lam[-1]), _FLOOR_ABS):
+            continue
+        fixed = (vecs * np.maximum(lam, floor)) @ vecs.T
+        for k, (i, j) in zip(keys, ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+            inertia.set(k, repr(float(fixed[i, j])))
 
 
 def _set(elem: Any, key: str, values: Any) -> None:
@@ -235,9 +274,11 @@ def to_mjcf(
         floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
             ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor
             (a Hexapod or a robot's URDF; not a chain).
-        balance_inertia: Let MuJoCo raise principal inertias that break the triangle
-            inequality ``A + B >= C`` (``balanceinertia``; a URDF from elsewhere with rounded
-            inertials). Off: such a URDF is refused, and the MJCF's inertias are the URDF's.
+        balance_inertia: Mend a URDF from elsewhere with rounded inertials: principal
+            moments within 1e-6 of zero (relative to the link's largest; dummy and sensor
+            links with ``ixx = 0``) are raised to that floor, and MuJoCo raises those that
+            break the triangle inequality ``A + B >= C`` (``balanceinertia``). Off: such a
+            URDF is refused, and the MJCF's inertias are the URDF's.
 
     Returns:
         An :class:`MjcfExport`.

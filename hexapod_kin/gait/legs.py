@@ -614,6 +614,9 @@ def leg_layout(
     else:
         mounts = np.array([tree.placements[c[0]] for c in cols])
         d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
+        # an offset every foot shares (Unitree's knees, clipped into their range at q = 0,
+        # put every foot 0.16 m forward of its hip) is a joint-zero convention, not a stance
+        d0 -= d0.mean(axis=0)
         direction = np.zeros((len(cols), 2))
         for i, d in enumerate(d0):
             out = mounts[i, :2, 3]
@@ -621,7 +624,9 @@ def leg_layout(
                 if np.linalg.norm(v) > 1e-6 * span[i]:
                     direction[i] = v / np.linalg.norm(v)
                     break
-    d_horiz = np.einsum("li,li->l", np.array(feet0)[:, :2] - mounts[:, :2, 3], direction)
+    if hexa:
+        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
+    d_horiz = np.einsum("li,li->l", d0, direction)
     reach = np.minimum(np.maximum(d_horiz, 0.0), 0.64 * span)
     rho = span * math.hypot(0.64, 0.32)
     depth = np.sqrt(np.maximum(rho**2 - reach**2, 0.0))

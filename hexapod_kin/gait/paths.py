@@ -27,6 +27,7 @@ __all__ = [
     "rolling_ik",
     "rolling_offsets",
     "rotation_increments",
+    "se2_pose",
     "stance_start_index",
     "terrain_normals",
 ]
@@ -533,3 +534,30 @@ def rolling_ik(
     T = poses_of(R, p)
     feet_out, d_out = (np.ascontiguousarray(x.transpose(back)) for x in (feet, D))
     return feet_out, q, ik, passes, residual, T, d_out
+
+
+def se2_pose(t: Any, velocity: Any) -> np.ndarray:
+    """Exact SE(2) integration of a constant body twist from the origin.
+
+    Args:
+        t: Times (...) in [s].
+        velocity: ``(vx, vy, wz)``: body-frame velocity [m/s] and yaw rate [rad/s].
+
+    Returns:
+        (..., 3) ``x, y`` [m] and yaw ``ψ`` [rad]:
+        ``x = (vx sin ψ − vy (1 − cos ψ)) / ωz``, ``y = (vx (1 − cos ψ) + vy sin ψ) / ωz``,
+        ``ψ = ωz t`` (the limits ``vx t, vy t`` for ωz = 0).
+
+    """
+    vx, vy, w = (float(v) for v in velocity)
+    tt = np.asarray(t, dtype=float)
+    psi = w * tt
+    half = psi / 2.0
+    sinc = np.sinc(half / np.pi)  # sin(ψ/2)/(ψ/2)
+    s = tt * sinc * np.cos(half)  # sin(ψ)/ω
+    c = tt * sinc * np.sin(half)  # (1 − cos ψ)/ω
+    out = np.empty(tt.shape + (3,))
+    out[..., 0] = vx * s - vy * c
+    out[..., 1] = vx * c + vy * s
+    out[..., 2] = psi
+    return out

@@ -33,6 +33,7 @@ from .legs import (
     pick_branch,
     sphere_radius,
 )
+from .posture import roomiest_stance
 from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
@@ -142,6 +143,7 @@ class WholeBody:
     _tree: Tree = field(repr=False)
     _masses: np.ndarray = field(repr=False)
     _levers: np.ndarray = field(repr=False)
+    _rot_inertia: np.ndarray = field(repr=False)
     _foot: np.ndarray = field(repr=False)  # (L, 4, 4) foot frame in its joint's frame
     _foot_joint: np.ndarray = field(repr=False)
     _leg_joints: np.ndarray = field(repr=False)  # (L, M) padded at the front
@@ -208,8 +210,28 @@ class WholeBody:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
         return self.com_of(self.joint_poses(q, base), base)
 
+    def link_inertias(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The body's then every joint's link inertia, in their joint frames.
+
+        Returns:
+            Masses (1+nq,) [kg], CoM levers (1+nq, 3) [m], rotational inertias about the CoM
+            (1+nq, 3, 3) [kg·m²].
+
+        """
+        return self._masses, self._levers, self._rot_inertia
+
+    def require_mass(self) -> None:
+        """Raise a :class:`ConfigurationError` when the robot has no mass (CoM undefined)."""
+        if not self.mass > 0:
+            raise ConfigurationError(
+                f"{self.source}: the robot has no mass (no link gives an <inertial> mass), so "
+                "its centre of mass, stability margin and standing forces are undefined; "
+                "add <inertial> masses to the URDF"
+            )
+
     def com_of(self, T: np.ndarray, base: Any) -> np.ndarray:
         """:meth:`com` from joint poses ``T`` (N, nq, 4, 4) and body poses (N, 4, 4)."""
+        self.require_mass()
         base = np.asarray(base, dtype=float)
         acc = self._masses[0] * (base[:, :3, :3] @ self._levers[0] + base[:, :3, 3])
         m = self._masses[1:]  # Σ_j m_j (R_j l_j + p_j), contracted over j at once
@@ -245,8 +267,10 @@ class WholeBody:
         """Neutral foot points (L, 3) in the body frame [m] (the contact spheres' centres).
 
         Horizontally, foot i is at ``mount_i + r_i ê_i``: ``ê_i`` the horizontal direction
-        from the leg's mount to its foot at q = 0 (a Hexapod: the mount's x axis; a leg
-        hanging straight down: outward from the body centre), ``r_i = foot_reach``, or by
+        from the leg's mount to its foot at q = 0 (clipped into the joint ranges), less the
+        offset every leg shares (a joint-zero convention such as Unitree's bent knees; a
+        Hexapod: the mount's x axis; a leg hanging straight down: outward from the body
+        centre), ``r_i = foot_reach``, or by
         default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that horizontal distance at q = 0 and
         ``ℓ_i`` the leg's span (the lengths from mount to foot through every joint, at
         q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
@@ -592,6 +616,7 @@ def _build_model(
         _tree=tree,
         _masses=np.array([x.mass for x in inertias]),
         _levers=np.array([x.lever for x in inertias]),
+        _rot_inertia=np.array([x.inertia for x in inertias]),
         _foot=foot,
         _foot_joint=foot_joint,
         _leg_joints=padded,
@@ -603,6 +628,11 @@ def _build_model(
         _seed=np.zeros(nq),
     )
     object.__setattr__(wb, "_seed", _standing_seed(wb, params))
+    better = None if hexa else roomiest_stance(wb)
+    if better is not None:  # the geometric default leaves a joint no room to step
+        reach = np.full(len(cols), better[1])
+        wb = replace(wb, body_height=better[0], _reach=reach, _seed=np.zeros(nq))
+        object.__setattr__(wb, "_seed", _standing_seed(wb, params))
     for a in (lower, upper, vel, eff, mounts, tree.placements, tree.axes, foot, wb._seed):
         a.setflags(write=False)
     return wb

@@ -52,6 +52,7 @@ from ..exceptions import ParameterError
 from ..motion import read_only
 from .paths import (
     rolling_ik,
+    se2_pose,
     stance_start_index,
     terrain_normals,
 )
@@ -59,15 +60,16 @@ from .robot import GaitError, WholeBody, as_whole_body
 from .stability import (
     accel_limit_of,
     leg_terrain_clearance,
-    periodic_spline,
     raise_checks,
     segment_clearance,
     support_margin,
     terrain_clearance,
 )
+from .sway import sway_poses
 from .tables import PhaseTable, phase_table
 from .terrain import Terrain, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
+from .zmp import zmp_points
 
 __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 
@@ -106,33 +108,6 @@ def _num(
             allowed=rng,
         )
     return v
-
-
-def se2_pose(t: Any, velocity: Any) -> np.ndarray:
-    """Exact SE(2) integration of a constant body twist from the origin.
-
-    Args:
-        t: Times (...) in [s].
-        velocity: ``(vx, vy, wz)``: body-frame velocity [m/s] and yaw rate [rad/s].
-
-    Returns:
-        (..., 3) ``x, y`` [m] and yaw ``ψ`` [rad]:
-        ``x = (vx sin ψ − vy (1 − cos ψ)) / ωz``, ``y = (vx (1 − cos ψ) + vy sin ψ) / ωz``,
-        ``ψ = ωz t`` (the limits ``vx t, vy t`` for ωz = 0).
-
-    """
-    vx, vy, w = (float(v) for v in velocity)
-    tt = np.asarray(t, dtype=float)
-    psi = w * tt
-    half = psi / 2.0
-    sinc = np.sinc(half / np.pi)  # sin(ψ/2)/(ψ/2)
-    s = tt * sinc * np.cos(half)  # sin(ψ)/ω
-    c = tt * sinc * np.sin(half)  # (1 − cos ψ)/ω
-    out = np.empty(tt.shape + (3,))
-    out[..., 0] = vx * s - vy * c
-    out[..., 1] = vx * c + vy * s
-    out[..., 2] = psi
-    return out
 
 
 def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -194,6 +169,10 @@ class GaitRun:
             :func:`.stability.terrain_clearance`; 0 in stance, negative: into it).
         leg_gap: (N, L) how far each leg's links clear the terrain above its foot's ground
             [m] (:func:`.stability.leg_terrain_clearance`).
+        zmp_margin: (N,) the zero-moment point's signed distance to the support polygon's
+            edge [m] (:func:`.zmp.zmp_points`: the whole robot's centroidal dynamics, the
+            legs' momentum included, on the stance contacts' mean height). Reported, not a
+            check.
 
     """
 
@@ -225,6 +204,12 @@ class GaitRun:
     normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
     foot_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     leg_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    zmp_margin: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def min_zmp_margin(self) -> float:
+        """Smallest dynamic (zero-moment point) stability margin over the run [m] (nan: none)."""
+        return float(self.zmp_margin.min()) if self.zmp_margin.size else math.nan
 
     @property
     def min_margin(self) -> float:
@@ -365,6 +350,7 @@ class GaitRun:
 
         return {
             "min_margin": self.min_margin,
+            "min_zmp_margin": self.min_zmp_margin,
             "statically_stable": self.statically_stable,
             "max_slip": self.max_slip,
             "min_limit_margin": self.min_limit_margin,
@@ -395,6 +381,23 @@ def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
     out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
     out[-1] = 2.0 * x[-1] - 5.0 * x[-2] + 4.0 * x[-3] - x[-4]
     return np.asarray(out / (dt * dt))
+
+
+def _zmp_margin(
+    wb: WholeBody,
+    T: np.ndarray,
+    base: np.ndarray,
+    contacts: np.ndarray,
+    support: np.ndarray,
+    t: np.ndarray,
+) -> np.ndarray:
+    """(N,) :attr:`GaitRun.zmp_margin` (empty below 4 samples or without a mass)."""
+    if len(t) < 4 or not wb.mass > 0:
+        return np.zeros(0)
+    sup = support[..., None]
+    h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
+    zmp = np.ascontiguousarray(zmp_points(wb, T, base, t, h))
+    return np.asarray(support_margin(contacts, support, zmp))
 
 
 def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
@@ -628,7 +631,7 @@ def walk(
     base[:, 2, 3] = gz.mean(axis=1) + bh
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
     if gain > 0.0:
-        base = _sway(wb, table, T, vel, nb, gain, base, plan, t, q0, support, rad, n_nxt)
+        base = sway_poses(wb, table, T, vel, nb, gain, base, plan, t, q0)
     args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
     feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
     if extra.any():
@@ -655,6 +658,8 @@ def walk(
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
     slip = np.where(support, np.linalg.norm(actual - ref - rolled, axis=-1), 0.0)
     margin = support_margin(actual - rad * n_nxt, support, com)
+    T_all = wb.joint_poses(q, base) if T_last is None else T_last
+    zmp_margin = _zmp_margin(wb, T_all, base, actual - rad * n_nxt, support, t)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
@@ -723,6 +728,7 @@ def walk(
         com=com,
         slip=slip,
         margin=margin,
+        zmp_margin=zmp_margin,
         limit_margin=ik.limit_margin,
         ik_ok=ik_ok,
         reach_excess=ik.excess,
@@ -741,58 +747,3 @@ def walk(
         foot_gap=foot_gap,
         leg_gap=leg_gap,
     )
-
-
-def _sway(
-    wb: WholeBody,
-    table: PhaseTable,
-    T: float,
-    vel: tuple[float, float, float],
-    nb: np.ndarray,
-    gain: float,
-    base: np.ndarray,
-    plan: np.ndarray,
-    t: np.ndarray,
-    q0: Any,
-    support: np.ndarray,
-    rad: float,
-    normals: np.ndarray,
-) -> np.ndarray:
-    """The body poses with the periodic sway added (see the module docstring)."""
-    offs = np.asarray(table.offsets)
-    beta = table.duty_factor
-    mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
-    knots = np.unique(np.round(mid, 12))
-    targets = np.empty((len(knots), 2))
-    for k, tau in enumerate(knots):
-        phi = np.remainder(tau + offs, 1.0)
-        stance = phi < beta
-        rel = se2_pose((0.5 * beta - phi) * T, vel)  # the stance's mid-pose, body frame
-        c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
-        px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
-        py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
-        targets[k] = [px[stance].mean(), py[stance].mean()] if stance.any() else 0.0
-    targets *= gain
-    values = targets.copy()
-    nominal = base
-    rot2 = nominal[:, :2, :2]
-    phase_t = np.remainder(t, T)
-    dt = float(t[1] - t[0]) if len(t) > 1 else T
-    near = [
-        np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
-        for tau in knots
-    ]
-    out = nominal
-    for it in range(3):
-        off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
-        out = nominal.copy()
-        out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
-        if it == 2 or not any(m.any() for m in near):
-            break
-        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
-        com = wb.com(q, out)
-        com_b = np.einsum("nji,nj->ni", rot2, com[:, :2] - nominal[:, :2, 3])
-        for k, m in enumerate(near):
-            if m.any():
-                values[k] += targets[k] - com_b[m].mean(axis=0)
-    return out

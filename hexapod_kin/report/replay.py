@@ -8,15 +8,23 @@ metadata, never imported) and the platform. An entry is the folder
 ``cache_root("report")/runs/<key>/``: ``files/`` holds every file the build wrote into the
 report folder but ``verdicts.json`` (rewritten by a replay: it names the folder and the run's
 time), ``manifest.json`` each file's SHA-256 and size, the
-build's verdicts, facts and wall time. The manifest is written last (removed first when an
-entry is rewritten), and a replay checks every file against it before copying any: a missing,
-damaged or foreign entry is no entry. Only builds without an ``"error"`` verdict and with
+build's verdicts, facts and wall time, sealed by a SHA-256 of all of it (:func:`seal`: a file's
+name, size and hash, the verdicts and facts are bound together, so files swapped together with
+their manifest lines, or an edited count, break it). The manifest is written last (removed
+first when an entry is rewritten), and a replay checks it before copying any file
+(:func:`lookup`): the seal, every file's size and hash, the verdicts against the rows of
+``report.md``, and every PNG against the copy inlined in ``report.html`` under its name. A
+missing entry is no entry; a damaged, edited or foreign one is no entry with one
+:class:`~hexapod_kin.exceptions.CacheWarning` (the report is built again and the entry
+rewritten). Nothing of an entry is ever run: its files are copied as bytes, only to paths
+inside the report folder. Only builds without an ``"error"`` verdict and with
 every animation written are stored; the :data:`KEEP` most recently used entries are kept.
 Light: a replay imports neither sympy, matplotlib, Pinocchio nor numba.
 """
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import json
 import os
@@ -24,6 +32,7 @@ import platform
 import shutil
 import sys
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -32,7 +41,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from .._io import atomic_write, cache_root
-from .data import CLAIMS_FILE, SEEDS_DIR
+from ..exceptions import CacheWarning
+from .data import CLAIMS_FILE, SEEDS_DIR, Verdict
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -47,11 +57,12 @@ __all__ = [
     "run_key",
     "runs_dir",
     "save",
+    "seal",
     "source_digest",
 ]
 
 #: Version of the entry layout (part of the key).
-FORMAT = 2
+FORMAT = 3
 #: Number of run entries kept (the most recently built or replayed).
 KEEP = 4
 #: Distributions whose installed versions are part of the key.
@@ -170,37 +181,111 @@ def _safe(rel: Any) -> bool:
     return not p.is_absolute() and all(part not in ("", ".", "..") for part in p.parts)
 
 
+def seal(record: Mapping[str, Any]) -> str:
+    """SHA-256 of a manifest without its ``"seal"`` field (canonical JSON of its JSON form)."""
+    body = {k: v for k, v in record.items() if k != "seal"}
+    body = json.loads(json.dumps(body, default=str))
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class _Damaged(ValueError):
+    """An entry that is there but is not the sealed, complete entry of its key."""
+
+
 def lookup(key: str) -> Entry | None:
     """The complete entry of ``key`` with every file matching its manifest, else ``None``.
 
-    Nothing is raised: a missing, incomplete, damaged or foreign entry is simply no entry.
+    Nothing is raised. A missing entry (or one still being stored: no manifest yet) is
+    ``None``; a damaged, incomplete, edited or foreign one is ``None`` with one
+    :class:`~hexapod_kin.exceptions.CacheWarning` naming what is wrong.
     """
     folder = runs_dir() / key
     try:
-        record = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
-        listed = record["files"]
-        if not (
-            record.get("format") == FORMAT
-            and record.get("key") == key
-            and isinstance(record.get("built"), str)
-            and isinstance(record.get("seconds"), (int, float))
-            and isinstance(record.get("verdicts"), list)
-            and isinstance(record.get("facts"), dict)
-            and isinstance(listed, dict)
-            and listed
-        ):
-            return None
-        files: dict[str, bytes] = {}
-        for rel, meta in listed.items():
-            if not _safe(rel) or rel == "verdicts.json":
-                return None
-            data = (folder / "files" / rel).read_bytes()
-            if len(data) != meta["size"] or hashlib.sha256(data).hexdigest() != meta["sha256"]:
-                return None
-            files[rel] = data
-    except Exception:  # noqa: BLE001 - any damage means "no entry"
+        text = (folder / MANIFEST).read_text(encoding="utf-8")
+    except FileNotFoundError:
         return None
+    except Exception as exc:  # noqa: BLE001 - unreadable: no entry
+        _warn(key, exc)
+        return None
+    try:
+        return _checked(key, folder, text)
+    except Exception as exc:  # noqa: BLE001 - any damage means "no entry"
+        _warn(key, exc)
+        return None
+
+
+def _warn(key: str, exc: BaseException) -> None:
+    what = " ".join(str(exc).split())[:100] if isinstance(exc, _Damaged) else type(exc).__name__
+    warnings.warn(
+        f"report cache entry {key[:12]} is damaged or was edited ({what}); building again",
+        CacheWarning,
+        stacklevel=4,
+    )
+
+
+def _checked(key: str, folder: Path, text: str) -> Entry:
+    """The entry of ``key`` read from its manifest ``text``, every check passed.
+
+    Raises:
+        _Damaged: The entry is not the sealed, complete entry of ``key`` (or another error
+            of reading it).
+
+    """
+    record = json.loads(text)
+    if not isinstance(record, dict) or record.get("format") != FORMAT:
+        raise _Damaged("not a manifest of this format")
+    if record.get("key") != key:
+        raise _Damaged("the manifest of another key")
+    if record.get("seal") != seal(record):
+        raise _Damaged("its manifest does not match its seal")
+    listed = record.get("files")
+    if not (
+        isinstance(record.get("built"), str)
+        and isinstance(record.get("seconds"), (int, float))
+        and isinstance(record.get("verdicts"), list)
+        and isinstance(record.get("facts"), dict)
+        and isinstance(listed, dict)
+        and listed
+    ):
+        raise _Damaged("an incomplete manifest")
+    for v in record["verdicts"]:
+        if not isinstance(v, dict) or Verdict.from_fields(v).status == "error":
+            raise _Damaged("a verdict that is not a computed verdict")
+    files: dict[str, bytes] = {}
+    for rel, meta in listed.items():
+        if not _safe(rel) or rel == "verdicts.json":
+            raise _Damaged(f"a file name outside the report folder: {str(rel)[:40]!r}")
+        try:
+            data = (folder / "files" / rel).read_bytes()
+        except OSError:
+            raise _Damaged(f"{rel} is missing") from None
+        if len(data) != meta["size"] or hashlib.sha256(data).hexdigest() != meta["sha256"]:
+            raise _Damaged(f"{rel} does not match its manifest line")
+        files[rel] = data
+    if not verdicts_match(record["verdicts"], files):
+        raise _Damaged("its manifest's verdicts are not the report's")
+    html = files.get("report.html", b"")
+    for rel, data in files.items():
+        if rel.endswith(".png") and not _shown(html, PurePosixPath(rel).stem, data):
+            raise _Damaged(f"{rel} is not the figure report.html shows under its name")
     return Entry(key, folder, record, files)
+
+
+def _shown(html: bytes, stem: str, png: bytes) -> bool:
+    """Whether ``report.html`` inlines ``png`` in an image named after ``stem``.
+
+    The report's images carry their file's stem as ``alt`` (a still frame: ``still frame of
+    <animation>``), so a figure is bound to its name as well as to its bytes.
+    """
+    at = html.find(b'src="data:image/png;base64,' + base64.b64encode(png) + b'"')
+    if at < 0:
+        return False
+    tag = html[html.rfind(b"<img", 0, at) : at]
+    names = [f'alt="{stem}"']
+    if stem.endswith("_still"):
+        names.append(f'alt="still frame of {stem[: -len("_still")]} (')
+    return any(n.encode() in tag for n in names)
 
 
 #: The word a verdict's status starts with in the report's table.
@@ -301,6 +386,7 @@ def save(
             "built": _utc_now(),
             "files": listed,
         }
+        manifest["seal"] = seal(manifest)
         atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, default=str))
     except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
         return None

@@ -213,9 +213,9 @@ def simulate(
     feet: Any = None,
     foot_radius: float | None = None,
     friction: float = 1.0,
-    kp: float = 300.0,
-    kv: float = 3.0,
-    armature: float = 0.002,
+    kp: float | None = None,
+    kv: float | None = None,
+    armature: float | None = None,
     contact_time: float = 0.005,
     timestep: float = 1e-3,
     settle: float = 0.5,
@@ -239,8 +239,9 @@ def simulate(
         foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
             else the robot's); when planning, the plan's feet too.
         friction: Sliding friction coefficient.
-        kp: Servo position gain [N·m/rad].
-        kv: Servo velocity gain [N·m·s/rad].
+        kp: Servo position gain [N·m/rad] (default: scaled to the robot,
+            :func:`~.scene.servo_defaults`; 300 for the built-in hexapod).
+        kv: Servo velocity gain [N·m·s/rad] (default ``0.01 s × kp``).
         armature: Servo rotor inertia per leg joint [kg·m²] (see :func:`scene_mjcf`).
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
         timestep: Physics step [s]; must divide the plan's sample interval.
@@ -403,8 +404,6 @@ def simulate(
             source=run_or_robot if by_name else None,
             foot_radius=sc.foot_radius,
             friction=sc.friction,
-            kp=sc.kp,
-            kv=sc.kv,
             contact_time=sc.contact_time,
             timestep=sc.timestep,
         )

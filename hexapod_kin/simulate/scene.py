@@ -207,6 +207,31 @@ class SimScene:
         }
 
 
+#: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
+#: leg span 0.25 m), for which the servos are kp = 300 N·m/rad, kv = 3 N·m·s/rad and an
+#: armature of 0.002 kg·m² (AX-12-class servos).
+_REF_ML, _REF_ML2 = 1.96 * 0.25, 1.96 * 0.25**2
+
+
+def servo_defaults(robot: Any) -> tuple[float, float, float]:
+    """Default servo ``(kp, kv, armature)`` for a robot, scaled to its weight and size.
+
+    The position gain keeps the sag under the robot's own weight the same fraction of a
+    radian for every robot: ``kp = 300 N·m/rad × m ℓ / (1.96 kg × 0.25 m)`` (``m`` the mass,
+    ``ℓ`` the mean leg span), ``kv = 0.01 s × kp``, and the armature (reflected rotor
+    inertia) grows as ``m ℓ²`` from 0.002 kg·m². Three significant digits: the built-in
+    hexapod gets exactly 300, 3 and 0.002; erd:anymal (30.5 kg, 0.685 m) 12,800 N·m/rad.
+    """
+    wb = _robot(robot, None)
+    span = float(np.mean(wb._span)) if hasattr(wb, "_span") else 0.25
+    m = float(wb.mass)
+    if not (m > 0 and span > 0):
+        return 300.0, 3.0, 0.002
+    kp = float(f"{300.0 * m * span / _REF_ML:.3g}")
+    arm = float(f"{0.002 * m * span**2 / _REF_ML2:.3g}")
+    return kp, float(f"{0.01 * kp:.3g}"), arm
+
+
 def scene_mjcf(
     robot: Any = None,
     *,
@@ -215,9 +240,9 @@ def scene_mjcf(
     terrain: str = "flat",
     foot_radius: float | None = None,
     friction: float = 1.0,
-    kp: float = 300.0,
-    kv: float = 3.0,
-    armature: float = 0.002,
+    kp: float | None = None,
+    kv: float | None = None,
+    armature: float | None = None,
     contact_time: float = 0.005,
     timestep: float = 1e-3,
 ) -> SimScene:
@@ -234,10 +259,11 @@ def scene_mjcf(
             feet, radius 0, are :data:`POINT_FOOT` spheres).
         friction: Sliding friction coefficient of every geom (> 0).
         kp: Position gain [N·m/rad] (> 0); the force is clamped to the joints' effort limits.
-        kv: Velocity gain [N·m·s/rad] (> 0).
+            Default :func:`servo_defaults` (scaled to the robot's weight and size).
+        kv: Velocity gain [N·m·s/rad] (> 0); default ``0.01 s × kp``.
         armature: Rotor inertia of each leg joint's servo [kg·m²] (≥ 0; MuJoCo's
             ``armature``): the reflected inertia of a geared servo, which also keeps the
-            light links from chattering on stiff contacts.
+            light links from chattering on stiff contacts. Default :func:`servo_defaults`.
         contact_time: Contact stiffness as MuJoCo's ``solref`` time constant [s] (critically
             damped; at least twice the time step).
         timestep: Physics time step [s] (> 0).
@@ -255,6 +281,11 @@ def scene_mjcf(
     from ..export._common import num, vec
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
+    wb = _robot(robot, feet)
+    auto = servo_defaults(wb)
+    kp = auto[0] if kp is None else kp
+    kv = auto[1] if kv is None else kv
+    armature = auto[2] if armature is None else armature
     mu, kp, kv, dt, tc = (
         positive(n, v)
         for n, v in (
@@ -274,7 +305,6 @@ def scene_mjcf(
             allowed=f">= {2 * dt:g}",
         )
     mujoco = _mujoco()
-    wb = _robot(robot, feet)
     r = _foot_radius(wb) if foot_radius is None else positive("foot_radius", foot_radius)
     xml = _robot_mjcf(wb, robot if source is None else source)
     model = mujoco.MjModel.from_xml_string(xml)
@@ -362,6 +392,7 @@ def scene_mjcf(
             attrs.update(forcerange=f"{num(-lim)} {num(lim)}", forcelimited="true")
         etree.SubElement(act, "position", **attrs)
         names.append(attrs["name"])
+    _exclude_touching(root, mujoco, wb, q0)
     etree.indent(root, space="  ")
     text = etree.tostring(root, encoding="unicode") + "\n"
     return SimScene(
@@ -379,6 +410,37 @@ def scene_mjcf(
         armature=arm,
         contact_time=tc,
     )
+
+
+def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
+    """Exclude contacts between robot bodies whose collision shapes touch in the neutral pose.
+
+    Overlapping collision shapes at rest are a modelling artefact of the URDF (ANYmal's thigh
+    boxes cross its base box), not a collision of the plan: left in, they push the legs apart
+    from the first step. The robot is held in the air, so only its own contacts count.
+    """
+    from lxml import etree
+
+    model = mujoco.MjModel.from_xml_string(etree.tostring(root, encoding="unicode"))
+    data = mujoco.MjData(model)
+    data.qpos[:] = 0.0
+    data.qpos[2], data.qpos[3] = 100.0, 1.0
+    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    mujoco.mj_forward(model, data)
+    pairs: set[tuple[str, str]] = set()
+    for c in data.contact[: data.ncon]:
+        b1, b2 = int(model.geom_bodyid[c.geom1]), int(model.geom_bodyid[c.geom2])
+        if b1 and b2 and b1 != b2:
+            name = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
+            pairs.add(tuple(sorted((name(b1), name(b2)))))
+    if not pairs:
+        return
+    contact = root.find("contact")
+    if contact is None:
+        contact = etree.Element("contact")
+        root.find("worldbody").addnext(contact)
+    for a, b in sorted(pairs):
+        etree.SubElement(contact, "exclude", body1=a, body2=b)
 
 
 def _trim(elem: Any, model: Any, data: Any, g: int, foot: np.ndarray, r: float) -> None:

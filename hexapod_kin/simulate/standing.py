@@ -78,7 +78,11 @@ def stand_forces(
     The servos have no armature here unless asked: with more feet than needed, MuJoCo's
     soft contacts share the load in proportion to each constraint's regularisation, which
     scales with the joint-space inertia; a rotor inertia of 0.002 kg·m² moves the built-in
-    hexapod's shares by about 0.004 N (without it they are equal to 2e-4 N).
+    hexapod's shares by about 0.004 N (without it they are equal to 2e-4 N). The servos
+    are soft here too (kp 300 N·m/rad, kv 3 N·m·s/rad unless asked, whatever the robot's
+    walking gains): such a stance is statically indeterminate, and stiff servos keep the
+    internal forces friction locks in at touch-down (erd:anymal at its walking kp of 12,800:
+    85 N apart on a diagonal), soft ones let them relax to the shares ``stand()`` computes.
 
     Args:
         robot: As :func:`scene_mjcf`.
@@ -94,6 +98,8 @@ def stand_forces(
     """
     wb = _robot(robot, scene_options.get("feet"))
     scene_options.setdefault("armature", 0.0)
+    scene_options.setdefault("kp", 300.0)
+    scene_options.setdefault("kv", 3.0)
     sc = scene_mjcf(wb, **scene_options) if scene is None else scene
     if sc.terrain != "flat":
         raise ParameterError(

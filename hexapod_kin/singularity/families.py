@@ -14,6 +14,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
-_VERSION = 3
+_VERSION = 4
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
 
@@ -213,23 +214,90 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
     )
 
 
-def _read_cache(key: str, nq: int) -> tuple[tuple[Family, ...], str, float] | None:
-    """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``."""
+def _seal(data: dict[str, Any]) -> str:
+    """SHA-256 of an entry without its ``"seal"`` (canonical JSON): binds key and content."""
+    body = {k: v for k, v in data.items() if k != "seal"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
+
+
+def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
+    """Families read from disk checked against the model before use.
+
+    On each family ``q_k = value``, ``J`` (rows ``rows``) loses rank: at three random
+    configurations with ``q_k`` set to the value, ``σ_min ≤ 1e-9 σ_max`` (of ``J`` at the
+    random configurations). Implicit families are held to their factor's parse only.
+
+    Raises:
+        ValueError: A family where the model's ``J`` keeps its rank (an edited entry).
+
+    """
+    from .measure import measures
+
+    explicit = [f for f in fams if f.joint is not None and f.value is not None]
+    if not explicit:
+        return
+    qs = model.random_q(3, seed=20251202)
+    size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
+    for fam in explicit:
+        for q in qs:
+            on = np.array(q, dtype=float)
+            on[fam.joint] = fam.value
+            if not measures(model, on, rows).sigma_min <= 1e-9 * size:
+                raise ValueError(f"the model's J keeps its rank on {fam.name}")
+
+
+def _read_cache(
+    key: str, nq: int, check: Any = None
+) -> tuple[tuple[Family, ...], str, float] | None:
+    """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
+
+    Missing, or of another version: ``None``. Torn, edited (its seal broken), another
+    key's (a swapped or copied file) or unreadable: ``None`` with one ``CacheWarning`` (the
+    families are derived again, or reported as not derived). The factor texts are parsed
+    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated; a finished entry is
+    then held to ``check(families)`` (:func:`_holds`), which raises if it fails.
+    """
+    path = cache_dir() / f"{key}.json"
     try:
-        data = json.loads((cache_dir() / f"{key}.json").read_text(encoding="utf-8"))
-        if data.get("v") != _VERSION or data.get("nq") != nq:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(data, dict) and "v" in data and data["v"] != _VERSION:
             return None
-        return _from_json(data), str(data.get("incomplete", "")), float(data.get("budget", 0.0))
-    except (OSError, KeyError, TypeError, ValueError):  # missing or corrupt: derive again
+        if not isinstance(data, dict) or data.get("key") != key or data.get("nq") != nq:
+            raise ValueError("not the entry of this table and rows (another key)")
+        if data.get("seal") != _seal(data):
+            raise ValueError("its seal does not match its content")
+        fams = _from_json(data)
+        for fam in fams:  # every factor through the parser's whitelist now, never evaluated
+            compile_factor(fam.factor, fam.variables)
+        incomplete = str(data.get("incomplete", ""))
+        if check is not None and not incomplete:
+            check(fams)
+        return fams, incomplete, float(data.get("budget", 0.0))
+    except FileNotFoundError:
+        return None
+    except Exception as exc:  # noqa: BLE001 - any damage: derive again
+        import warnings
+
+        from ..exceptions import CacheWarning
+
+        warnings.warn(
+            f"families cache entry {key[:12]} is damaged or was edited ({type(exc).__name__}: "
+            f"{' '.join(str(exc).split())[:80]}); not used",
+            CacheWarning,
+            stacklevel=2,
+        )
         return None
 
 
 def _write_cache(
     key: str, nq: int, fams: tuple[Family, ...], incomplete: str = "", budget: float = 0.0
 ) -> None:
-    data: dict[str, Any] = {"v": _VERSION, "nq": nq, "families": [f.to_dict() for f in fams]}
+    data: dict[str, Any] = {
+        "v": _VERSION, "key": key, "nq": nq, "families": [f.to_dict() for f in fams]
+    }  # fmt: skip
     if incomplete:
         data.update(incomplete=incomplete, budget=budget)
+    data["seal"] = _seal(json.loads(json.dumps(data)))
     try:
         cache_dir().mkdir(parents=True, exist_ok=True)
         atomic_write(cache_dir() / f"{key}.json", json.dumps(data, indent=1))
@@ -263,15 +331,18 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
 
 def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Family, ...]:
     """Check ``deriv`` against the model's Jacobian and turn its families into text forms."""
+    from ..symbolic.checks import evaluate
     from .measure import measures
 
     qs = model.random_q(16, seed=4242)
     res = [measures(model, q, rows) for q in qs]
+    # one pass over the expression (lambdify of a 7-joint Gram determinant takes seconds)
+    at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
     if deriv.det is not None:
-        sym = np.abs(deriv.function(deriv.det)(qs))
+        sym = np.abs(np.broadcast_to(evaluate(deriv.det, at), (len(qs),)))
         num = np.abs([m.det for m in res])
     elif deriv.gram is not None:
-        sym = np.abs(deriv.function(deriv.gram)(qs))
+        sym = np.abs(np.broadcast_to(evaluate(deriv.gram, at), (len(qs),)))
         num = np.array([m.manipulability for m in res]) ** 2
     else:
         raise ParameterError("the derivation has no determinant to check the families against")
@@ -308,7 +379,9 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Time budget of the derivation in [s]. A derivation stopped at its budget is
+        budget: Time budget in [s] of the derivation, the cache reading and the check against
+            the model, together (the call returns within it, plus a fraction of a second
+            for the check when the derivation used it all). A derivation stopped at its budget is
             kept on disk with what it reached and that budget: later calls with at most that
             budget get it back without deriving (nor importing sympy); a larger budget
             carries on from where it stopped.
@@ -333,8 +406,11 @@ def families_for(
     key = _key(chain, rows)
     mem = f"singularity.families.{key}"
 
+    read: list[Any] = []  # the disk entry, read once (a damaged one warns once)
+
     def load() -> tuple[Family, ...]:
-        found = _read_cache(key, model.nq)
+        read.append(_read_cache(key, model.nq, lambda fams: _holds(fams, model, rows)))
+        found = read[0]
         if found is None or found[1]:
             raise _Miss  # unfinished runs are read from disk each time (a later one may finish)
         return found[0]
@@ -344,7 +420,7 @@ def families_for(
         return Families(hit, "cache", "" if hit else _NO_FACTOR, key)
     except _Miss:
         pass
-    partial = _read_cache(key, model.nq)
+    partial = read[0] if read else _read_cache(key, model.nq, lambda f: _holds(f, model, rows))
     if partial is not None and (not derive or budget <= partial[2]):
         return Families(  # stopped at a budget at least this large: not spent again
             partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key
@@ -360,8 +436,11 @@ def families_for(
     from .. import symbolic
 
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
+    deadline = time.monotonic() + float(budget)  # the derivation and its check, together
     try:
-        deriv = symbolic.derive(chain, rows=rows, budget=float(budget))
+        deriv = symbolic.derive(
+            chain, rows=rows, budget=float(budget), deadline=deadline, families_only=True
+        )
         incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             reason = f"derivation incomplete: {incomplete}"

@@ -473,7 +473,9 @@ def scan(
         families: ``True`` (default): derive them when needed (sympy, within
             ``family_budget``; then kept on disk); ``"cached"``: only families already derived
             (this process or the disk cache), never waiting on sympy; ``False``: none.
-        family_budget: Time budget in [s] of a derivation (``families=True``).
+        family_budget: Time budget in [s] of the families (``families=True``): reading the
+            cache, deriving (sympy) and checking against the model, together (see
+            :func:`~.families.families_for`).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
         chunk: Configurations per kernel call (progress granularity; scans above

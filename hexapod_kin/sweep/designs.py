@@ -68,6 +68,11 @@ DEFAULTS: dict[str, float] = {
 #: Parameters that are angles (the CLI's ``--deg`` converts them).
 ANGLES: frozenset[str] = frozenset(p for p in PARAMETERS if p.startswith("q") or "yaw" in p)
 
+#: Largest design length or height [m] and largest magnitude of an angle [rad]: far beyond any
+#: leg, small enough that the closed forms stay finite (a 1e300 m femur overflows to NaN).
+MAX_LENGTH = 1e3
+MAX_ANGLE = 1e3
+
 #: Sampling methods of :meth:`DesignSpace.designs`.
 METHODS: tuple[str, ...] = ("grid", "random", "lhs")
 
@@ -221,7 +226,9 @@ class DesignSpace:
             return n
         return int(samples)
 
-    def designs(self, method: str = "grid", samples: int = 100, seed: int = 0) -> np.ndarray:
+    def designs(
+        self, method: str = "grid", samples: int = 100, seed: int = 0, first: int | None = None
+    ) -> np.ndarray:
         """The designs as a (N, len(PARAMETERS)) array, one row per design, columns PARAMETERS.
 
         Args:
@@ -229,6 +236,8 @@ class DesignSpace:
                 ``"lhs"`` (Latin hypercube).
             samples: Number of designs drawn by ``random``/``lhs``.
             seed: Seed of ``random``/``lhs``.
+            first: Only the grid's first ``first`` points (before ``total`` drops rows; may
+                then be empty), built without the rest: a probe of a huge grid.
 
         Returns:
             A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
@@ -245,8 +254,10 @@ class DesignSpace:
                 v.grid() if isinstance(v, Range) else np.array([v])
                 for v in (self._value(p) for p in PARAMETERS)
             ]
-            mesh = np.meshgrid(*axes, indexing="ij")
-            table = np.stack([m.ravel() for m in mesh], axis=1)
+            shape = tuple(a.size for a in axes)
+            count = math.prod(shape) if first is None else min(int(first), math.prod(shape))
+            index = np.unravel_index(np.arange(count), shape)  # C order: the meshgrid's "ij"
+            table = np.stack([a[i] for a, i in zip(axes, index)], axis=1)
         else:
             if int(samples) != samples or samples < 1:
                 raise ParameterError(
@@ -272,7 +283,7 @@ class DesignSpace:
             l3 = self.total - table[:, 0] - table[:, 1]
             table[:, 2] = l3
             table = table[l3 > 1e-12 * self.total]
-        self._validate(table)
+        self._validate(table, empty_ok=first is not None)
         table = np.ascontiguousarray(table)
         table.setflags(write=False)
         return table
@@ -283,15 +294,23 @@ class DesignSpace:
         return self.values.get(p, DEFAULTS[p])
 
     @staticmethod
-    def _validate(table: np.ndarray) -> None:
+    def _validate(table: np.ndarray, empty_ok: bool = False) -> None:
         col = {p: table[:, j] for j, p in enumerate(PARAMETERS)}
+        top, ang = MAX_LENGTH, MAX_ANGLE
         checks = [
-            (col["l1"] > 0, "l1", "> 0 [m]"),
-            (col["l2"] > 0, "l2", "> 0 [m]"),
-            (col["l3"] > 0, "l3", "> 0 [m]"),
-            (col["height"] >= 0, "height", ">= 0 [m]"),
-            (col["mount_radius"] >= 0, "mount_radius", ">= 0 [m]"),
+            ((col["l1"] > 0) & (col["l1"] <= top), "l1", f"> 0 and <= {top:g} [m]"),
+            ((col["l2"] > 0) & (col["l2"] <= top), "l2", f"> 0 and <= {top:g} [m]"),
+            ((col["l3"] > 0) & (col["l3"] <= top), "l3", f"> 0 and <= {top:g} [m]"),
+            ((col["height"] >= 0) & (col["height"] <= top), "height", f"in [0, {top:g}] [m]"),
+            (
+                (col["mount_radius"] >= 0) & (col["mount_radius"] <= top),
+                "mount_radius",
+                f"in [0, {top:g}] [m]",
+            ),
             ((col["neutral"] >= 0) & (col["neutral"] <= 1), "neutral", "in [0, 1]"),
+        ]
+        checks += [
+            (np.abs(col[p]) <= ang, p, f"|{p}| <= {ang:g} [rad]") for p in PARAMETERS if p in ANGLES
         ]
         for j in (1, 2, 3):
             checks.append(
@@ -308,7 +327,7 @@ class DesignSpace:
                     value=float(row[PARAMETERS.index(name)]),
                     allowed=allowed,
                 )
-        if table.shape[0] == 0:
+        if table.shape[0] == 0 and not empty_ok:
             raise ParameterError(
                 "the design space is empty (with total, every design had l3 <= 0)",
                 parameter="total",

@@ -10,9 +10,14 @@ one per core; numpy releases the GIL), or Dask distributed workers (``client=`` 
 (pyarrow) or ``.json`` (the summary and the table's columns). While the sweep runs, every
 finished chunk is written atomically to a hidden sidecar folder next to it,
 ``.results.csv.sweep-parts/chunk_NNNNN.npz`` with a ``manifest.json`` (the sweep's options
-and a key hashing them with the designs). Re-running the same sweep after an interruption
-(Ctrl-C, SIGKILL, a lost worker) loads the chunks present and scores only the missing ones;
-the merged table is the same. The sidecar is removed once the table is written.
+and a key hashing them with the designs); the folder appears with the first finished chunk,
+so a sweep refused before scoring leaves nothing. Re-running the same sweep after an
+interruption (Ctrl-C, SIGKILL, a lost worker or scheduler) loads the chunks that pass the
+checks of :mod:`._chunks` and scores only the others; the merged table is the same. The
+sidecar is removed once the table is written.
+
+Before anything runs, the sweep is estimated (time from two designs scored here, memory from
+the counts) and refused beyond :data:`MAX_HOURS` or :data:`MAX_GB` unless ``allow_large``.
 """
 
 from __future__ import annotations
@@ -24,7 +29,6 @@ import math
 import os
 import sys
 import time
-import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,11 +38,11 @@ import numpy as np
 
 from .._io import atomic_write
 from ..exceptions import (
-    CacheWarning,
     ConfigurationError,
     OptionalDependencyError,
     ParameterError,
 )
+from ._chunks import ChunkStore, check_scores
 from .designs import PARAMETERS, DesignSpace
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .scores import SCORES, score_designs
@@ -124,53 +128,9 @@ def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
     return np.stack([cols[k] for k in SCORES], axis=1)
 
 
-def _npz_bytes(**arrays: Any) -> bytes:
-    buf = io.BytesIO()
-    np.savez(buf, **arrays)
-    return buf.getvalue()
-
-
-def _chunk_digest(key: str, k: int, scores: np.ndarray) -> str:
-    h = hashlib.sha256(f"{key}:{k}:".encode())
-    h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
-    return h.hexdigest()
-
-
-def _load_chunk(
-    path: Path, key: str, k: int, designs: np.ndarray, options: Mapping[str, Any]
-) -> np.ndarray | None:
-    """A stored chunk's scores, checked against what it claims before use.
-
-    The sweep's key, the chunk's number and the SHA-256 of its scores must match (a swapped,
-    truncated or damaged file fails here), and one of its designs is scored again and must
-    give the same bits (an edited value fails here). A chunk that fails is discarded with
-    one :class:`~hexapod_kin.exceptions.CacheWarning` and scored again.
-    """
-    n = designs.shape[0]
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            scores = np.array(z["scores"], dtype=float)
-            ok = (
-                str(z["key"]) == key
-                and int(z["chunk"]) == k
-                and scores.shape == (n, len(SCORES))
-                and str(z["digest"]) == _chunk_digest(key, k, scores)
-            )
-    except Exception:  # noqa: BLE001 - a damaged file (bad zip, truncated, wrong arrays)
-        ok, scores = False, np.empty(0)
-    if ok:
-        r = int(hashlib.sha256(f"{key}:{k}".encode()).hexdigest(), 16) % n
-        ok = np.array_equal(_score_chunk(designs[r : r + 1], options)[0], scores[r], equal_nan=True)
-    if not ok:
-        warnings.warn(
-            f"sweep chunk {path.name} does not hold what it claims (damaged, swapped or "
-            "edited); scoring it again",
-            CacheWarning,
-            stacklevel=3,
-        )
-        return None
-    return scores
-
+#: Seconds to reach a Dask scheduler before the sweep is refused (distributed's default is 30 s:
+#: a wrong address should be one line within the command line's 10 s).
+CONNECT_TIMEOUT = 4.0
 
 #: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
 MAX_HOURS = 1.0
@@ -193,17 +153,26 @@ def _refuse_large(
     the score table, 8 bytes a value.
     """
     n = space.count(method, samples)
-    memory = n * (len(PARAMETERS) + len(SCORES) + 1) * 8 * 2 / 1e9  # arrays + the written table
-    probe = np.asarray(space.designs("grid" if method == "grid" else method, 2, 0))[:2]
-    t = time.perf_counter()
-    _score_chunk(probe, options)
-    per = (time.perf_counter() - t) / max(1, len(probe))
     threads = 1 if (client is not None or scheduler is not None) else _check_workers(workers)
-    hours = n * per / threads / 3600.0
-    if hours > MAX_HOURS or memory > MAX_GB:
+    # the designs and scores, the written table; each thread's Monte-Carlo points and temporaries
+    memory = (
+        n * (len(PARAMETERS) + len(SCORES) + 1) * 8 * 2 + options["mc_samples"] * 8 * 8 * threads
+    ) / 1e9
+    hours = math.nan  # not probed: the memory alone is far beyond the limit
+    if memory <= 10 * MAX_GB:
+        # the first designs only (a grid's head is built without the rest of the grid)
+        probe = np.asarray(space.designs(method, 2, 0, first=64))[:2]
+        t = time.perf_counter()
+        _score_chunk(probe, options)
+        per = (time.perf_counter() - t) / max(1, len(probe))
+        hours = n * per / threads / 3600.0
+    if not hours <= MAX_HOURS or memory > MAX_GB:
+        scoring = (
+            "" if math.isnan(hours) else f"{hours:.3g} h of scoring on {threads} thread(s) and "
+        )
         raise ParameterError(
-            f"sweep of {n} designs: estimated {hours:.3g} h of scoring on {threads} thread(s) "
-            f"and {memory:.3g} GB; the limits are {MAX_HOURS:g} h and {MAX_GB:g} GB: fewer "
+            f"sweep of {n} designs: estimated {scoring}{memory:.3g} GB; the limits are "
+            f"{MAX_HOURS:g} h and {MAX_GB:g} GB: fewer "
             "designs, fewer --mc-samples, or --yes (allow_large=True) to run it anyway",
             parameter="samples",
             value=n,
@@ -235,7 +204,7 @@ def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
             "a Dask scheduler needs dask[distributed]: pip install 'hexapod-kin[sweep]'"
         ) from None
     try:
-        return Client(scheduler, timeout=30), True
+        return Client(scheduler, timeout=CONNECT_TIMEOUT), True
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigurationError(
             f"scheduler={scheduler!r}: cannot connect ({exc}); expected a running Dask "
@@ -243,6 +212,40 @@ def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
             parameter="scheduler",
             value=scheduler,
         ) from None
+
+
+def _check_out(out: str | Path | None) -> dict[str, Path] | None:
+    """The table and sidecar paths of ``out``, checked before any work (None: no ``out``)."""
+    if out is None:
+        return None
+    paths = table_paths(out)
+    if "parquet" in paths:
+        try:
+            import pyarrow.parquet  # noqa: F401
+        except ImportError:
+            raise OptionalDependencyError(
+                f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
+                "'hexapod-kin[sweep]'); or write .csv or .json"
+            ) from None
+    table_path = next(v for k, v in paths.items() if k != "parts")
+    folder = table_path.parent
+    problem = (
+        f"{str(out)!r} is a folder"
+        if table_path.is_dir()
+        else f"directory {str(folder)!r} does not exist"
+        if not folder.is_dir()
+        else f"directory {str(folder)!r} is not writable"
+        if not os.access(folder, os.W_OK | os.X_OK)
+        else None
+    )
+    if problem is not None:  # before any work
+        raise ParameterError(
+            f"out={str(out)!r}: {problem}; expected a table file path such as results.csv",
+            parameter="out",
+            value=str(out),
+            allowed="a .csv, .parquet or .json path in an existing folder",
+        )
+    return paths
 
 
 def sweep(
@@ -304,6 +307,7 @@ def sweep(
         "stride_points": int(stride_points),
         "stride_use": float(stride_use),
     }
+    paths = _check_out(out)
     if not allow_large:
         _refuse_large(space, method, samples, options, workers, client, scheduler)
     designs = space.designs(method, samples, seed)
@@ -331,49 +335,10 @@ def sweep(
     key = h.hexdigest()
     bounds = [(s, min(s + chunk_size, n)) for s in range(0, n, chunk_size)]
     results: dict[int, np.ndarray] = {}
-    paths = table_paths(out) if out is not None else None
-    if paths is not None and "parquet" in paths:
-        try:
-            import pyarrow.parquet  # noqa: F401
-        except ImportError:
-            raise OptionalDependencyError(
-                f"out={str(out)!r}: writing Parquet needs pyarrow (pip install "
-                "'hexapod-kin[sweep]'); or write .csv or .json"
-            ) from None
+    store = None
     if paths is not None:
-        parts = paths["parts"]
-        if not parts.parent.is_dir():
-            raise ParameterError(
-                f"out={str(out)!r}: directory {str(parts.parent)!r} does not exist",
-                parameter="out",
-                value=str(out),
-            )
-        parts.mkdir(exist_ok=True)
-        manifest = parts / "manifest.json"
-        if manifest.exists():
-            try:
-                old = json.loads(manifest.read_text())
-            except (OSError, ValueError):
-                old = {}
-            if old.get("key") != key:
-                raise ConfigurationError(
-                    f"out={str(out)!r}: {str(parts)!r} holds chunks of a different sweep "
-                    f"(key {str(old.get('key'))[:12]} != {key[:12]}), interrupted; re-run that "
-                    "sweep to finish it, use another --out, or remove that folder",
-                    parameter="out",
-                    value=str(out),
-                )
-        else:
-            atomic_write(
-                manifest,
-                json.dumps({"key": key, "spec": spec, "chunks": len(bounds)}, indent=1) + "\n",
-            )
-        for k, (a, b) in enumerate(bounds):
-            f = parts / f"chunk_{k:05d}.npz"
-            if f.exists():
-                got = _load_chunk(f, key, k, designs[a:b], options)
-                if got is not None:
-                    results[k] = got
+        store = ChunkStore(paths["parts"], key, spec, len(bounds))
+        results = store.resume(bounds, designs, lambda d: _score_chunk(d, options), str(out))
     missing = [k for k in range(len(bounds)) if k not in results]
     scored = sum(bounds[k][1] - bounds[k][0] for k in missing)
 
@@ -389,19 +354,26 @@ def sweep(
         dynamic_ncols=True,
     )
 
-    def done(k: int, scores: np.ndarray) -> None:
-        results[k] = scores
-        if paths is not None:
-            atomic_write(
-                paths["parts"] / f"chunk_{k:05d}.npz",
-                _npz_bytes(
-                    key=np.array(key),
-                    chunk=np.array(k),
-                    scores=scores,
-                    digest=np.array(_chunk_digest(key, k, scores)),
-                ),
+    def done(k: int, scores: Any) -> None:
+        a, b = bounds[k]
+        scores = np.asarray(scores)
+        why = (
+            check_scores(scores.astype(float))
+            if scores.dtype.kind in "fiub" and scores.shape == (b - a, len(SCORES))
+            else f"a {type(scores).__name__} of {scores.dtype} {scores.shape}"
+        )
+        if why is not None:  # never stored: a later run must not trust it
+            raise ConfigurationError(
+                f"sweep chunk {k} (designs {a}..{b - 1}) came back without valid "
+                f"scores ({why}); nothing of it is kept",
+                parameter="designs",
+                value=k,
             )
-        bar.update(bounds[k][1] - bounds[k][0])
+        scores = scores.astype(float)
+        results[k] = scores
+        if store is not None:
+            store.save(k, scores)
+        bar.update(b - a)
         if on_chunk is not None:
             on_chunk(k)
 
@@ -422,7 +394,20 @@ def sweep(
             }
             try:
                 for fut, res in as_completed(list(futures), with_results=True):
-                    done(futures[fut], np.asarray(res))
+                    if fut.status != "finished" or isinstance(res, BaseException):
+                        raise ConfigurationError(
+                            f"the Dask cluster lost sweep chunk {futures[fut]} ({fut.status}: "
+                            f"{type(res).__name__}; was the scheduler stopped?); "
+                            + (
+                                "the finished chunks are kept: run the same sweep again to "
+                                "finish it"
+                                if store is not None
+                                else "nothing was written"
+                            ),
+                            parameter="scheduler",
+                            value=scheduler,
+                        )
+                    done(futures[fut], res)
             finally:
                 for fut in futures:
                     fut.cancel()

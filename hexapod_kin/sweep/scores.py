@@ -271,6 +271,13 @@ def score_designs(
             f"{stride_points}: need >= 1, >= 2, >= 1",
             parameter="mc_samples",
         )
+    if isinstance(seed, bool) or int(seed) != seed or not 0 <= int(seed) < 2**63:
+        raise ParameterError(
+            f"seed={seed!r}: expected an integer in [0, 2**63)",
+            parameter="seed",
+            value=seed,
+            allowed="0 <= seed < 2**63",
+        )
     if not 0.0 < stride_use <= 1.0:
         raise ParameterError(
             f"stride_use={stride_use}: expected a fraction in (0, 1]", parameter="stride_use"

@@ -8,7 +8,9 @@ constructors: calls of listed names with literal arguments (numbers, strings, bo
 lists and tuples of them, nested calls), the listed constants, and keyword arguments only
 for symbol assumptions and ``Float`` precision. Anything else (attribute access, other names,
 lambdas, comprehensions, operators, subscripts...) is refused with :class:`CacheFormatError`
-naming what was found. Size is bounded (characters and nodes).
+naming what was found. Size is bounded (characters and nodes). A number is not distributed
+over a sum while building (sympy's ``distribute(False)``): ``-(a + b)`` stored factored is
+read back factored, so a derivation read from the cache is the one computed, bit for bit.
 """
 
 from __future__ import annotations
@@ -70,8 +72,11 @@ def read_srepr(text: str) -> Any:
     count = sum(1 for _ in ast.walk(tree))
     if count > MAX_NODES:
         raise CacheFormatError(f"{count} syntax nodes; at most {MAX_NODES}")
+    from sympy.core.parameters import distribute
+
     try:
-        return _build(tree.body)
+        with distribute(False):  # thread-local in sympy
+            return _build(tree.body)
     except RecursionError:
         raise CacheFormatError("nested too deeply") from None
 

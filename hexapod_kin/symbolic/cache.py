@@ -8,9 +8,13 @@
   ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
   subfolder. Sympy objects are
   stored as ``srepr`` text and rebuilt by a restricted reader (:mod:`._reader`: no ``eval``,
-  a fixed table of sympy constructors), so a planted entry cannot run code. Files are written
-  atomically; a corrupt, edited or foreign file is ignored with one :class:`CacheWarning`
-  and rewritten.
+  a fixed table of sympy constructors), so a planted entry cannot run code. Each file holds
+  its key and a seal (SHA-256 of the format, key and stages, :func:`seal`); files are written
+  atomically. A corrupt, truncated, edited (seal broken) or foreign file (another
+  derivation's key: a swapped or copied file) is ignored with one :class:`CacheWarning` and
+  rewritten; the derivation then checks what a sealed entry claims against the table
+  (``checks.claims_hold``) before using it. A file of another format version is
+  ignored quietly (an older package's).
 * **Budget**: the stages run in a forked child process that sends each finished stage back;
   at the deadline the child is killed and the caller gets the stages that finished. Where
   ``fork`` does not exist the stages run inline, checking the clock between stages.
@@ -35,7 +39,7 @@ from ..exceptions import CacheWarning
 from ._reader import read_srepr
 from .families import SingularFamily
 
-FORMAT = 4
+FORMAT = 5
 Stages = Callable[[], Iterator[tuple[str, Any]]]
 
 
@@ -48,6 +52,25 @@ def key(parts: Any) -> str:
     """SHA-256 of the JSON of ``parts`` (plus the format version)."""
     text = json.dumps({"format": FORMAT, "parts": parts}, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def seal(digest: str, stages: Any) -> str:
+    """SHA-256 of the format, the key and the encoded ``stages`` (canonical JSON).
+
+    Any change to a stored file that is not written by :func:`store` or :class:`Writer`
+    (an edited value, a torn write, a file renamed to another key) breaks it.
+    """
+    text = json.dumps(
+        {"format": FORMAT, "key": digest, "stages": stages}, sort_keys=True, separators=(",", ":")
+    )
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _file_text(digest: str, stages: Any) -> str:
+    """The file's JSON: format, key, encoded stages and their :func:`seal`."""
+    return json.dumps(
+        {"format": FORMAT, "key": digest, "stages": stages, "seal": seal(digest, stages)}
+    )
 
 
 def _encode(obj: Any) -> Any:
@@ -83,30 +106,49 @@ def _decode(obj: Any) -> Any:
 
 
 def load(digest: str) -> dict[str, Any] | None:
-    """Stages stored under ``digest``, or ``None`` (missing, unreadable or corrupt)."""
+    """Stages stored under ``digest``, or ``None`` (missing, or damaged: one warning).
+
+    A file of another format version is no entry (quietly); anything else that is not the
+    sealed entry of ``digest`` (unreadable, torn, edited, another key) warns once.
+    """
     path = cache_dir() / f"{digest}.json"
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if data.get("format") != FORMAT or data.get("key") != digest:
-            return None
-        stages = _decode(data["stages"])
-        return stages if isinstance(stages, dict) else None
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         return None
-    except Exception as exc:  # noqa: BLE001 - any damage to the file means "not cached"
-        warnings.warn(
-            f"symbolic cache entry {path.name} is damaged or was edited "
-            f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); recomputing it",
-            CacheWarning,
-            stacklevel=2,
-        )
+    except Exception as exc:  # noqa: BLE001 - unreadable: not cached
+        _damaged(path, exc)
         return None
+    try:
+        data = json.loads(text)
+        if isinstance(data, dict) and data.get("format") != FORMAT and "format" in data:
+            return None  # an older (or newer) package's file: rewritten quietly
+        if not isinstance(data, dict) or data.get("key") != digest:
+            raise ValueError("not the entry of this derivation (another key)")
+        if data.get("seal") != seal(digest, data["stages"]):
+            raise ValueError("its seal does not match its content")
+        stages = _decode(data["stages"])
+        if not isinstance(stages, dict):
+            raise ValueError("no stages")
+        return stages
+    except Exception as exc:  # noqa: BLE001 - any damage to the file means "not cached"
+        _damaged(path, exc)
+        return None
+
+
+def _damaged(path: Path, exc: BaseException) -> None:
+    warnings.warn(
+        f"symbolic cache entry {path.name[:12]} is damaged or was edited "
+        f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); recomputing it",
+        CacheWarning,
+        stacklevel=3,
+    )
 
 
 def store(digest: str, stages: dict[str, Any]) -> Path | None:
     """Write ``stages`` atomically; returns the path, or ``None`` when it cannot be written."""
     try:
-        text = json.dumps({"format": FORMAT, "key": digest, "stages": _encode(stages)})
+        text = _file_text(digest, _encode(stages))
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
         return atomic_write(folder / f"{digest}.json", text)
@@ -134,7 +176,7 @@ class Writer:
         if attempt is not None:
             items.append([key, _encode(attempt)])
         try:
-            text = json.dumps({"format": FORMAT, "key": self.digest, "stages": {"__dict__": items}})
+            text = _file_text(self.digest, {"__dict__": items})
             folder = cache_dir()
             folder.mkdir(parents=True, exist_ok=True)
             _replace(folder / f"{self.digest}.json", text)

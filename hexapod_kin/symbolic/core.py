@@ -12,7 +12,11 @@ Speed comes from structure, not from ``simplify``:
 * the determinant is factored as a polynomial in ``s_i = sin q_i``, ``c_i = cos q_i``
   *before* reducing modulo ``s_i² + c_i² = 1`` (reducing first can glue families together,
   e.g. PUMA's elbow and shoulder), then each factor is reduced, factored again and turned
-  back into compact trigonometry. A few frames ``m`` are tried; the finest split wins.
+  back into compact trigonometry. A few frames ``m`` are tried; the finest split wins;
+* that polynomial is computed entry by entry in a polynomial ring
+  (:func:`~._trigpoly.ring_det`: the same polynomial as expanding ``det J``, in
+  milliseconds instead of seconds), and a frame that gives a polynomial already factored is
+  not factored again (its split is the same).
 """
 
 from __future__ import annotations
@@ -27,10 +31,15 @@ import numpy as np
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-from .._table_kin import table_transforms
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
+from ._numbers import import_ahead as import_ahead  # re-exported: the stages' helpers
+from ._numbers import numeric_jacobian as numeric_jacobian
+from ._numbers import sigma_ratio as sigma_ratio
+from ._numbers import single_joint_roots as single_joint_roots
+from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
+from .fallback import affine, product, z_cross
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -217,11 +226,11 @@ def kinematics(
     cumulative = []
     acc = base_t
     for t in transforms:
-        acc = cheap_(acc * t)
+        acc = cheap_(acc * t) if simplify else product(acc, t)
         cumulative.append(acc)
         if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
-    tip = cheap_(acc * tool_t)
+    tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]
     # Direct method, column by column in its own joint frame: z_j x (p - o_j) = R_0j (z x ^jp),
     # with ^jp (the tip seen from frame j) built backwards from the tool. Each term then holds
@@ -232,13 +241,13 @@ def kinematics(
         tip_in[j] = vec
         if j > 0:
             t = transforms[j]
-            vec = cheap_(t[:3, :3] * vec + t[:3, 3])
+            vec = cheap_(t[:3, :3] * vec + t[:3, 3]) if simplify else affine(t, vec)
     cols = []
     for j in chain.joint_rows:
         rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
             v = tip_in[j]
-            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
+            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1]) if simplify else z_cross(rot, v)
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
@@ -380,46 +389,6 @@ def _candidates(
 
 
 # ---------------------------------------------------------------------- factoring
-def _trig_symbols(q: Sequence[sp.Symbol]) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Symbol, ...]]:
-    s = tuple(sp.Symbol(f"_s{k}", real=True) for k in range(len(q)))
-    c = tuple(sp.Symbol(f"_c{k}", real=True) for k in range(len(q)))
-    return s, c
-
-
-def _to_poly(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> Any:
-    s, c = _trig_symbols(q)
-    e = sp.expand(sp.expand_trig(expr))
-    sub = {}
-    for k, qk in enumerate(q):
-        if sigmas[k] == "revolute":
-            sub[sp.sin(qk)] = s[k]
-            sub[sp.cos(qk)] = c[k]
-    return sp.expand(e.xreplace(sub))
-
-
-def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
-    s, c = _trig_symbols(q)
-    e = poly
-    for sk, ck in zip(s, c):
-        if e.has(sk):
-            e = sp.rem(sp.Poly(e, sk), sp.Poly(sk**2 + ck**2 - 1, sk)).as_expr()
-    return sp.expand(e)
-
-
-def _chop(expr: Any, rel: float = 1e-12) -> Any:
-    """Float coefficients below ``rel`` × the largest one, set to 0.
-
-    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
-    that would otherwise factor as real terms.
-    """
-    floats = expr.atoms(sp.Float)
-    if not floats:
-        return expr
-    tiny = rel * max(abs(float(f)) for f in floats)
-    zero = {f: sp.Integer(0) for f in floats if abs(float(f)) < tiny}
-    return sp.expand(expr.xreplace(zero)) if zero else expr
-
-
 def _to_trig(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     s, c = _trig_symbols(q)
     sub = {}
@@ -444,8 +413,12 @@ def trig_factor(
         form; the product ``constant · Π factor**mult`` equals ``expr``.
 
     """
-    poly = _chop(_to_poly(expr, q, sigmas))
-    const, raw = sp.factor_list(poly)
+    return _factor_poly(_to_poly(expr, q, sigmas), q)
+
+
+def _factor_poly(poly: Any, q: Sequence[sp.Symbol]) -> tuple[Any, list[tuple[Any, int]]]:
+    """:func:`trig_factor` of a polynomial in ``s_k``, ``c_k`` (:func:`_to_poly`'s form)."""
+    const, raw = sp.factor_list(_chop(poly))
     found: list[tuple[Any, int]] = []
 
     def add(f: Any, mult: int) -> None:
@@ -522,17 +495,20 @@ def factored_determinant(
         out["how"] = f"{label}, {out['how']}"
         return out
     best: dict[str, Any] | None = None
+    seen: list[Any] = []  # the polynomials factored: another frame often gives the same one
+    memo: dict[Any, Any] = {}  # entries' polynomials (the frames' points share the w rows)
     for label, make in candidates:
         if best is not None and time.perf_counter() > deadline:
             break
-        mat = make()
-        if mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6)):
-            raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
+        mat, how = make(), label
+        split = mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
+        if split:
             how = f"{label} (wrist centre), det J11 * det J22"
-        else:
-            raw = mat.det(method="berkowitz")
-            how = label
-        const, factors = trig_factor(raw, q, sigmas)
+        poly = _det_poly(mat, q, sigmas, split, memo)
+        if poly in seen:
+            continue  # the same factors, the same score: the first one stays
+        seen.append(poly)
+        const, factors = _factor_poly(poly, q)
         cand = {"const": const, "factors": factors, "how": how}
         if best is None or _split_score(factors) > _split_score(best["factors"]):
             best = cand
@@ -604,6 +580,7 @@ def rank_deficiency(
     subsets.sort(key=lambda t: (t[0], t[1]))
     total = len(subsets)
     common: list[tuple[Any, int]] | None = None
+    memo: dict[Any, Any] = {}  # entries' polynomials, shared by the minors
     minors: list[tuple[Any, list[tuple[Any, int]]]] = []
     stopped = ""
     for _, _sub, m in subsets:
@@ -612,7 +589,7 @@ def rank_deficiency(
         if common is not None and time.perf_counter() > deadline:
             stopped = "deadline"
             break
-        const, factors = trig_factor(m.det(method="berkowitz"), q, sigmas)
+        const, factors = _factor_poly(_det_poly(m, q, sigmas, memo=memo), q)
         if const == 0:
             continue
         minors.append((const, factors))
@@ -729,71 +706,3 @@ def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 40
         if n < size:
             best, size = form, n
     return best
-
-
-# ---------------------------------------------------------------------- numbers
-def numeric_jacobian(chain: Chain, q: np.ndarray, sel: Sequence[int]) -> np.ndarray:
-    """Independent numeric Jacobian (base frame, tool point) from the table, rows ``sel``."""
-    ts = table_transforms(chain, q)
-    acc = chain.base_matrix
-    frames = []
-    for t in ts:
-        acc = acc @ t
-        frames.append(acc)
-    tip = (acc @ chain.tool_matrix)[:3, 3]
-    cols = []
-    for j in chain.joint_rows:
-        z, o = frames[j][:3, 2], frames[j][:3, 3]
-        if chain.rows[j].sigma == "revolute":
-            cols.append(np.concatenate([np.cross(z, tip - o), z]))
-        else:
-            cols.append(np.concatenate([z, np.zeros(3)]))
-    return np.column_stack(cols)[list(sel)]
-
-
-def sigma_ratio(jac: np.ndarray) -> float:
-    """``σ_min / max(1, σ_max)`` of a k×n matrix (min(k, n) singular values)."""
-    s = np.linalg.svd(jac, compute_uv=False)
-    return float(s[-1] / max(1.0, s[0]))
-
-
-def import_ahead() -> None:
-    """Import what the stages import on first use (``scipy.optimize``).
-
-    Called before a derivation runs in a forked child: the child inherits the module instead
-    of importing it again, once per derivation.
-    """
-    import scipy.optimize  # noqa: F401
-
-
-def single_joint_roots(
-    func: Callable[[np.ndarray], np.ndarray], lo: float, hi: float
-) -> list[float]:
-    """Real roots of a scalar function of one joint on ``[lo, hi]`` (sign changes, brentq)."""
-    from scipy.optimize import brentq
-
-    grid = np.linspace(lo, hi, 3601)
-    vals = np.asarray(func(grid), dtype=float)
-    roots: list[float] = []
-    scale = max(1e-300, float(np.abs(vals).max()))
-    for i in range(len(grid) - 1):
-        a, b = vals[i], vals[i + 1]
-        if a == 0.0:
-            roots.append(float(grid[i]))
-        elif a * b < 0:
-            roots.append(
-                float(
-                    brentq(
-                        lambda x: float(func(np.array([x]))[0]), grid[i], grid[i + 1], xtol=1e-15
-                    )
-                )
-            )
-        elif abs(a) < 1e-12 * scale and i > 0 and (vals[i - 1] - a) * (b - a) > 0:
-            roots.append(float(grid[i]))  # a tangency at a grid point
-    if vals[-1] == 0.0:
-        roots.append(float(grid[-1]))
-    out: list[float] = []
-    for r in sorted(roots):
-        if not out or abs(r - out[-1]) > 1e-9:
-            out.append(r)
-    return out

@@ -243,9 +243,13 @@ class Derivation:
         (``[row,column] = …``, from 1). Linear in the expressions' size: no simplification
         or comparison is made here (what the derivation did not reach says ``NOT DONE``).
         """
-        lines = self._header()
+        return "\n".join(self.text_parts())
+
+    def text_parts(self) -> Iterator[str]:
+        """:meth:`text` in pieces, one per formula (a command prints what its budget allows)."""
+        yield "\n".join(self._header())
         for label, _, expr in self._items():
-            lines.append("")
+            lines = [""]
             if isinstance(expr, sp.MatrixBase):
                 lines.append(f"{label} =")
                 lines.extend(matrix_lines(expr))
@@ -256,7 +260,8 @@ class Derivation:
                 )
             else:
                 lines.extend(wrap(f"{label} = {expr_text(expr)}", indent=4))
-        lines.append("")
+            yield "\n".join(lines)
+        lines = [""]
         agree = {True: "yes", False: "NO", None: "not compared within the budget"}[self.agree]
         lines.append(f"direct and indirect Jacobians agree: {agree}")
         if self.method:
@@ -270,7 +275,7 @@ class Derivation:
             lines.append("  (none: no factor depending on q)")
         for what in self.incomplete:
             lines.extend(wrap(f"NOT DONE: {what}", indent=4))
-        return "\n".join(lines)
+        yield "\n".join(lines)
 
     def latex(self) -> str:
         """The derivation as LaTeX (one ``align*`` environment)."""
@@ -344,9 +349,12 @@ UNBOUNDED_PACE = 30.0
 
 def _stages(
     chain: Chain, rows: Any, lengths: Any, start: float, budget: float | None,
-    have: Mapping[str, Any],
+    have: Mapping[str, Any], families_only: bool = False,
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """The derivation's stages in order, skipping those in ``have`` (a cached partial run).
+
+    ``families_only``: the last stage is ``"checks"`` (the families checked; no ``"agree"``,
+    ``"tidy"`` nor ``"seconds"``).
 
     ``budget`` (s from ``start``; ``None``: none) paces the optional work: extra determinant
     frames are tried during its first 15 %, maximal minors factored during the first 70 %,
@@ -387,6 +395,8 @@ def _stages(
         # not lose rank on is no family
         kept = tuple(f for f in checked if not (f.factor in unconfirmed and f.verified is False))
         yield "checks", kept
+    if families_only:
+        return
     if "agree" not in have:
         yield "agree", _agree(kin, q, chain.sigmas)
     if "tidy" not in have:
@@ -457,9 +467,6 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
-#: Derivations this process forked (from the second on, their imports are made here first).
-_BUDGETED = 0
-
 #: Seconds kept between the end of a derivation's child process and ``deadline``.
 _MARGIN = 0.25
 
@@ -472,62 +479,67 @@ def clear_memory() -> None:
     _MEMO.clear()
 
 
-def _usable(stages: Mapping[str, Any] | None, budget: float | None) -> bool:
-    """A cached run answers a call: complete, or stopped at a budget at least as large."""
+#: The reason kept by a run stopped after the families on purpose (``families_only``).
+FAMILIES_ONLY = "stopped after the families (families_only); a later call carries on"
+
+
+def _usable(
+    stages: Mapping[str, Any] | None, budget: float | None, families_only: bool = False
+) -> bool:
+    """A cached run answers a call: complete, or stopped at a budget at least as large.
+
+    With ``families_only``: also any run that reached the families' checks.
+    """
     if stages is None:
         return False
     attempt = stages.get(ATTEMPT)
-    if attempt is None:
+    if attempt is None or (families_only and "checks" in stages):
         return True
     tried = attempt[1]
     return budget is not None and tried is not None and budget <= tried
 
 
-def _claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
-    """A cached derivation checked against what it claims, before use.
+#: Seconds a budgeted call may spend reading and checking its cache entry, whatever its
+#: budget (a tiny budget still gets back what a run with it stored).
+_READ_FLOOR = 0.25
 
-    At three random configurations (fixed seed): the stored ``p`` against the table's own
-    forward kinematics (:func:`~hexapod_kin._table_kin.table_fk`, plain numpy), the stored
-    position Jacobian against :func:`~hexapod_kin._table_kin.table_position_jacobian`, and
-    the stored ``det(J Jᵀ)`` against the stored J's own rows. Each stored family's factor must
-    be a factor of the stored determinant. An edited entry fails one of these.
+
+def _read(chain: Chain, lengths: Any, digest: str, seconds: float | None) -> tuple[Any, bool]:
+    """The disk cache's entry ``digest``, checked (:func:`~.checks.claims_hold`), in time.
+
+    Read in a child process killed after ``seconds`` (``None``: in this process, no
+    limit): a large entry takes seconds to read and check. Returns ``(stages or None,
+    read)``; ``read`` is False when the time ran out first (the entry is then neither used
+    nor overwritten). The cache's warnings are said here.
     """
-    from .._table_kin import table_fk, table_position_jacobian
+    from .checks import claims_hold
 
-    kin = stages.get("kinematics")
-    if kin is None:
-        return True  # nothing stored that could be wrong
-    n = chain.nq
-    q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
-    rng = np.random.default_rng(20251202)
-    qs = rng.uniform(-math.pi, math.pi, (3, n))
-    scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
-    p_f = sp.lambdify(q, sp.Matrix(kin["p"]).subs(values), "numpy")
-    j_f = sp.lambdify(q, sp.Matrix(kin["J_direct"]).subs(values), "numpy")
-    det = stages.get("determinant")
-    rows = stages.get("rows")
-    g_f = None
-    if det is not None and rows is not None and det.get("gram") is not None:
-        g_f = sp.lambdify(q, sp.sympify(det["gram"]).subs(values), "numpy")
-    for qv in qs:
-        p = np.asarray(p_f(*qv), dtype=float).reshape(-1)[:3]
-        if not np.allclose(p, table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
-            return False
-        jac = np.asarray(j_f(*qv), dtype=float)
-        if not np.allclose(jac[:3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
-            return False
-        if g_f is not None and rows is not None:
-            sel = jac[[ROW_NAMES.index(r) for r in rows]]
-            want = float(np.linalg.det(sel @ sel.T))
-            if abs(float(g_f(*qv)) - want) > 1e-8 * max(1.0, abs(want)) * scale**4:
-                return False
-    if det is not None:
-        factors = [sp.expand(f) for f, _m in det.get("factors", ())]
-        for fam in stages.get("families") or ():
-            f = sp.expand(fam.factor)
-            if factors and not any(sp.expand(f - g) == 0 or sp.expand(f + g) == 0 for g in factors):
-                return False
-    return True
+    if not (_cache.cache_dir() / f"{digest}.json").exists():
+        return None, True
+
+    def gen() -> Iterator[tuple[str, Any]]:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            got = _cache.load(digest)
+            values = _core.length_symbols(chain, lengths)["values"]
+            if got is not None and not claims_hold(got, chain, values):
+                warnings.warn(
+                    f"symbolic cache entry {digest[:12]}: its kinematics, determinant or "
+                    "families do not match the table (edited); recomputing it",
+                    CacheWarning,
+                    stacklevel=1,
+                )
+                got = None
+        said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
+        yield "entry", (got, said)
+
+    done, reason = _cache.run(gen, seconds)
+    if "entry" not in done:  # out of time (kept as it is), or an error (not cached)
+        return None, reason is None or not reason.startswith("budget of")
+    got, said = done["entry"]
+    for text in said:
+        warnings.warn(text, CacheWarning, stacklevel=3)
+    return got, True
 
 
 def derive(
@@ -540,6 +552,7 @@ def derive(
     budget: float | None = DEFAULT_BUDGET,
     cache: bool = True,
     deadline: float | None = None,
+    families_only: bool = False,
 ) -> Derivation:
     """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
 
@@ -564,6 +577,11 @@ def derive(
         deadline: A :func:`time.monotonic` instant by which to return, whatever ``budget``
             allows (the command line passes its own start plus ``--budget``): the work
             stops a quarter second before it. ``budget`` still decides the cache reuse.
+        families_only: Stop once the singular families are derived and checked (what a scan
+            needs): the exact comparison of the direct and indirect Jacobians and the tidied
+            printed forms are left out (:attr:`Derivation.incomplete` says so;
+            :attr:`Derivation.families_done` is True). It is kept like a run stopped at a
+            budget: a later call without ``families_only`` carries on from there.
 
     Returns:
         The :class:`Derivation`.
@@ -574,7 +592,6 @@ def derive(
         ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
-    global _BUDGETED
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
     chain, reference, tip_name = _chain_of(source, base, tip)
@@ -583,29 +600,25 @@ def derive(
     syms = _core.length_symbols(chain, lengths)  # validates names early
     digest = _cache_key(chain, rows, lengths)
     found = _MEMO.get(digest) if cache else None
+    start = time.perf_counter()
+    run_for = budget
+    if deadline is not None:
+        left = max(0.05, deadline - time.monotonic() - _MARGIN)
+        run_for = left if run_for is None else min(run_for, left)
+    read = True
     if cache and found is None:
-        found = _cache.load(digest)
-        if found is not None and not _claims_hold(found, chain, syms["values"]):
-            warnings.warn(
-                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
-                "do not match the table (edited); recomputing it",
-                CacheWarning,
-                stacklevel=2,
-            )
-            found = None
-    if _usable(found, budget):
+        limit = None if run_for is None else max(run_for, _READ_FLOOR)
+        found, read = _read(chain, lengths, digest, limit)
+    if _usable(found, budget, families_only):
         assert found is not None
         stages: dict[str, Any] = dict(found)
         attempt = stages.get(ATTEMPT)
         reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
+        if attempt is not None and attempt[0] == FAMILIES_ONLY:
+            reason = FAMILIES_ONLY
         from_cache = True
     else:
         have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
-        start = time.perf_counter()
-        run_for = budget
-        if deadline is not None:
-            left = max(0.05, deadline - time.monotonic() - _MARGIN)
-            run_for = left if run_for is None else min(run_for, left)
         before = (found or {}).get(ATTEMPT)
         tried = budget
         if budget is not None and before is not None and before[1] is not None:
@@ -615,27 +628,37 @@ def derive(
             if budget is not None
             else ("stopped before the end", None)
         )
-        writer = _cache.Writer(digest, have) if cache else None
+        write = cache and read  # an entry not read in time is not overwritten
+        if run_for is not None:  # what the stages import on first use, here: the caller's
+            _core.import_ahead()  # later lambdify (a scan's check) or derivation reuses it
+        begin = time.perf_counter()
+        if run_for is not None:  # what the reading and the imports left
+            run_for = max(0.0, run_for - (begin - start))
 
         def gen() -> Iterator[tuple[str, Any]]:
-            for name, value in _stages(chain, rows, lengths, start, run_for, have):
+            writer = _cache.Writer(digest, have) if write else None
+            for name, value in _stages(chain, rows, lengths, begin, run_for, have, families_only):
                 if writer is not None:  # on disk before the parent hears of it
-                    writer.add(name, value, None if name == "seconds" else stop, ATTEMPT)
+                    mark = (FAMILIES_ONLY, None) if families_only and name == "checks" else stop
+                    writer.add(name, value, None if name == "seconds" else mark, ATTEMPT)
                 yield name, value
 
-        forks = run_for is not None
-        if forks and _BUDGETED:  # a process that derives again and again:
-            _core.import_ahead()  # import here once, not in each forked child
-        done, reason = _cache.run(gen, run_for)
-        _BUDGETED += forks
-        if reason is not None and writer is not None:
+        if run_for is not None and run_for < 0.01:
+            done: dict[str, Any] = {}
+            reason = "deadline reached" if budget is None else f"budget of {budget:g} s reached"
+        else:
+            done, reason = _cache.run(gen, run_for)
+        if reason is not None and write:
             _cache.sweep(digest)
         stages = {**have, **done}
-        if reason is not None and budget is not None and (run_for or 0) < budget:
-            reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
-        if reason is not None:
+        if reason is None and families_only and "seconds" not in stages:  # kept as unfinished
+            reason = FAMILIES_ONLY  # (the file says so since the "checks" stage)
+            stages[ATTEMPT] = (reason, None)
+        elif reason is not None:
+            if budget is not None and (run_for or 0) < budget:
+                reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
             stages[ATTEMPT] = (reason, tried)
-            if cache and ("kinematics" not in stages or not reason.startswith("budget of")):
+            if write and ("kinematics" not in stages or not reason.startswith("budget of")):
                 _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
         from_cache = False
     if cache:
@@ -665,11 +688,12 @@ def _assemble(
     kin = {**kin, **(stages.get("tidy") or {})}  # the tidied forms are equal, shorter
     row_names = stages.get("rows")
     if row_names is None:
-        row_names = (
-            _default_rows(kin, n)
-            if rows is None
-            else tuple(ROW_NAMES[i] for i in row_indices(rows))
-        )
+        if rows is not None:
+            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
+        elif "kinematics" in stages:
+            row_names = _default_rows(kin, n)
+        else:  # the fallback's sums are unevaluated: the rows from numbers
+            row_names = _numeric_default_rows(chain)
     sel = [ROW_NAMES.index(r) for r in row_names]
     det_stage = stages.get("determinant")
     det = gram = None
@@ -739,11 +763,23 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     if rows is not None:
         row_indices(rows)
     digest = _cache_key(chain, rows, None)
-    stages = _MEMO.get(digest) or _cache.load(digest)
+    syms = _core.length_symbols(chain, None)
+    stages = _MEMO.get(digest)
+    if stages is None:
+        from .checks import claims_hold
+
+        stages = _cache.load(digest)
+        if stages is not None and not claims_hold(stages, chain, syms["values"]):
+            warnings.warn(
+                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
+                "do not match the table (edited); not used",
+                CacheWarning,
+                stacklevel=2,
+            )
+            return None
     if stages is None:
         return None
     _MEMO[digest] = stages
-    syms = _core.length_symbols(chain, None)
     attempt = stages.get(ATTEMPT)
     reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
     return _assemble(chain, reference, tip_name, syms, stages, reason, True, rows)

@@ -1,0 +1,114 @@
+"""Body sway of a statically stable walk on few legs: the zero-moment point to each support.
+
+A quadruped's crawl lifts one leg at a time; the body must move so that the support (the
+three stance feet) holds it. Moving the centre of mass (CoM) into the triangle is the static
+rule, but a body that sways accelerates, and the ground then holds it at the zero-moment point
+(ZMP), not under the CoM: on flat ground ``z = c − (h / g) c̈`` (h the CoM height above the
+ground; the legs' own momentum about the CoM neglected). At a 1 s cycle the difference is
+several centimetres for a 0.25 m tall body, larger than the triangle's inscribed margin.
+
+The sway is a periodic cubic spline (C², period T) in the body frame, one knot per swing
+group at mid-swing. The knot values are solved so that the ZMP, not the CoM, sits at
+``gain`` × the centroid of that swing's support polygon: the spline, its second derivative and
+so the ZMP at the knots are linear in the knot values (one small linear solve), then two
+correction passes with the ZMP of the whole robot (:func:`.zmp.zmp_points`: the planned
+joints by IK, the legs' momentum included).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .paths import se2_pose
+from .stability import periodic_spline
+from .zmp import GRAVITY, zmp_points
+
+__all__ = ["sway_poses"]
+
+
+def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
+    """(K, K) map from knot values to the ZMP offsets at the knots: ``s − (h/g) s̈``."""
+    k = len(knots)
+    delta = 1e-4 * T
+    times = np.concatenate([knots * T - delta, knots * T, knots * T + delta])
+    out = np.empty((k, k))
+    for j in range(k):
+        unit = np.zeros((k, 1))
+        unit[j, 0] = 1.0
+        s = periodic_spline(knots * T, unit, T, times)[:, 0].reshape(3, k)
+        acc = (s[0] - 2.0 * s[1] + s[2]) / delta**2
+        out[:, j] = s[1] - height / GRAVITY * acc
+    return out
+
+
+def sway_poses(
+    wb: Any,
+    table: Any,
+    T: float,
+    vel: tuple[float, float, float],
+    nb: np.ndarray,
+    gain: float,
+    base: np.ndarray,
+    plan: np.ndarray,
+    t: np.ndarray,
+    q0: Any,
+) -> np.ndarray:
+    """The body poses (N, 4, 4) with the periodic sway added (see the module docstring).
+
+    Args:
+        wb: The robot (:class:`~.robot.WholeBody`).
+        table: The phase table.
+        T: Cycle time [s].
+        vel: Body twist ``(vx, vy, wz)``.
+        nb: (L, 2) neutral feet in the body frame [m].
+        gain: Sway gain in [0, 1].
+        base: (N, 4, 4) nominal body poses.
+        plan: (N, L, 3) planned foot points in the world [m].
+        t: (N,) sample times [s].
+        q0: Joints the first sample's IK branch is nearest to.
+
+    """
+    offs = np.asarray(table.offsets)
+    beta = table.duty_factor
+    mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
+    knots = np.unique(np.round(mid, 12))
+    targets = np.empty((len(knots), 2))
+    for k, tau in enumerate(knots):
+        phi = np.remainder(tau + offs, 1.0)
+        stance = phi < beta
+        rel = se2_pose((0.5 * beta - phi) * T, vel)  # the stance's mid-pose, body frame
+        c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
+        px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
+        py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
+        targets[k] = [px[stance].mean(), py[stance].mean()] if stance.any() else 0.0
+    targets *= gain
+    nominal = base
+    rot2 = nominal[:, :2, :2]
+    ground = float(np.mean(plan[0, :, 2]))
+    height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
+    zmp_of = _zmp_matrix(knots, T, height)
+    values = np.linalg.solve(zmp_of, targets)
+    phase_t = np.remainder(t, T)
+    dt = float(t[1] - t[0]) if len(t) > 1 else T
+    near = [
+        np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
+        for tau in knots
+    ]
+    out = nominal
+    for it in range(3):
+        off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
+        out = nominal.copy()
+        out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
+        if it == 2 or not any(m.any() for m in near) or len(t) < 5:
+            break
+        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+        zmp = zmp_points(wb, wb.joint_poses(q, out), out, t, np.full(len(t), ground))
+        zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
+        err = np.zeros_like(targets)
+        for k, m in enumerate(near):
+            if m.any():
+                err[k] = targets[k] - zmp_b[m].mean(axis=0)
+        values += np.linalg.solve(zmp_of, err)
+    return out

@@ -1,0 +1,211 @@
+"""The resumable chunks of a sweep: written atomically, checked against what they claim.
+
+A sweep writing ``x.csv`` keeps each finished chunk in the hidden ``.x.csv.sweep-parts/``
+(``chunk_NNNNN.npz`` and a ``manifest.json`` naming the sweep's key). The folder is created
+with the first finished chunk, so a sweep refused before scoring leaves nothing behind.
+
+A stored chunk is used only if it is a regular file of a bounded size holding a plain ``.npz``
+(never unpickled; its members' inflated sizes checked before inflating), names this sweep's
+key and its own number, carries the right digest of its scores, holds plausible scores
+(finite; 0/1 flags; non-negative volumes) and one of its designs, scored again, gives the same
+bits. The digest is an HMAC-SHA256 keyed by a random secret kept in the package's cache folder
+(``$HEXAPOD_KIN_CACHE_DIR/sweep/chunk.key``), so an edited value cannot be "fixed" by
+recomputing a plain hash. Chunks that fail are discarded (one
+:class:`~hexapod_kin.exceptions.CacheWarning` for all of them) and scored again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import io
+import json
+import os
+import secrets
+import warnings
+import zipfile
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._io import atomic_write, cache_root, read_regular
+from ..exceptions import CacheWarning, ConfigurationError, HexapodKinError
+from .scores import SCORES
+
+__all__ = ["ChunkStore", "check_scores"]
+
+_SECRET_BYTES = 32
+_SLACK = 1 << 16  # bytes of a chunk file beside its scores (zip headers, key, digest)
+_FLAGS = ("feasible", "volume_exact")
+_NON_NEGATIVE = ("volume", "volume_se", "volume_mc", "volume_mc_se")
+
+
+def _secret() -> bytes:
+    """The per-user key of chunk digests (created once; b"" when the cache is not writable).
+
+    Created race-free: a private temporary file is hard-linked to the name, so of concurrent
+    first runs one wins and the others read its key. A damaged key (wrong length) is replaced;
+    chunks digested with the old one are then scored again.
+    """
+    path = cache_root("sweep") / "chunk.key"
+    for _ in range(2):
+        try:
+            data = path.read_bytes()
+            if len(data) == _SECRET_BYTES:
+                return data
+        except OSError:
+            pass
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f".chunk.key.{os.getpid()}.{secrets.token_hex(4)}")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(secrets.token_bytes(_SECRET_BYTES))
+            try:
+                if path.exists():
+                    os.replace(tmp, path)
+                else:
+                    os.link(tmp, path)
+            except FileExistsError:
+                pass  # another process made it first: read its key
+            finally:
+                tmp.unlink(missing_ok=True)
+        except OSError:
+            return b""
+    return b""
+
+
+def check_scores(scores: np.ndarray) -> str | None:
+    """Why ``scores`` (n, len(SCORES)) cannot be a chunk's scores, or None when plausible."""
+    if scores.ndim != 2 or scores.shape[1] != len(SCORES):
+        return f"scores of shape {scores.shape}"
+    bad = ~np.isfinite(scores)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        return f"{list(SCORES)[j]} = {scores[i, j]} (design {i} of the chunk)"
+    names = list(SCORES)
+    for name in _FLAGS:
+        col = scores[:, names.index(name)]
+        if not np.all((col == 0) | (col == 1)):
+            return f"{name} not 0 or 1"
+    for name in _NON_NEGATIVE:
+        if np.any(scores[:, names.index(name)] < 0):
+            return f"{name} < 0"
+    return None
+
+
+class ChunkStore:
+    """The sidecar folder of one sweep (see the module docstring)."""
+
+    def __init__(self, parts: Path, key: str, spec: Mapping[str, Any], chunks: int) -> None:
+        self.parts = parts
+        self.key = key
+        self.manifest = json.dumps({"key": key, "spec": spec, "chunks": chunks}, indent=1) + "\n"
+        self._secret = _secret()
+        self._ready = False
+
+    def _digest(self, k: int, scores: np.ndarray) -> str:
+        h = hmac.new(self._secret, f"{self.key}:{k}:".encode(), hashlib.sha256)
+        h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
+        return h.hexdigest()
+
+    def path(self, k: int) -> Path:
+        """The file of chunk ``k``."""
+        return self.parts / f"chunk_{k:05d}.npz"
+
+    def resume(
+        self,
+        bounds: Sequence[tuple[int, int]],
+        designs: np.ndarray,
+        rescore: Callable[[np.ndarray], np.ndarray],
+        out: str,
+    ) -> dict[int, np.ndarray]:
+        """The stored chunks that pass every check, by number (the others: one warning).
+
+        Raises:
+            ConfigurationError: The folder holds chunks of another sweep (its readable
+                manifest names another key): an interrupted sweep is never overwritten.
+
+        """
+        if not self.parts.is_dir():
+            return {}
+        files = sorted(self.parts.glob("chunk_*.npz"))
+        try:
+            old = json.loads(read_regular(self.parts / "manifest.json", 1 << 20))
+            old_key = old.get("key") if isinstance(old, dict) else None
+        except (HexapodKinError, ValueError):
+            old_key = None
+        if old_key is not None and old_key != self.key and files:
+            raise ConfigurationError(
+                f"out={out!r}: {str(self.parts)!r} holds chunks of a different sweep "
+                f"(key {str(old_key)[:12]} != {self.key[:12]}), interrupted; re-run that "
+                "sweep to finish it, use another --out, or remove that folder",
+                parameter="out",
+                value=out,
+            )
+        results: dict[int, np.ndarray] = {}
+        bad: list[str] = []
+        for k, (a, b) in enumerate(bounds):
+            f = self.path(k)
+            if f.exists():
+                got = self._load(f, k, designs[a:b], rescore)
+                if got is None:
+                    bad.append(f.name)
+                else:
+                    results[k] = got
+        if bad:
+            names = ", ".join(bad[:3]) + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
+            verb = "do not hold what they claim" if len(bad) > 1 else "does not hold what it claims"
+            warnings.warn(
+                f"sweep chunk{'s' if len(bad) > 1 else ''} {names} in {self.parts.name} {verb} "
+                "(damaged, swapped or edited); scoring again",
+                CacheWarning,
+                stacklevel=3,
+            )
+        return results
+
+    def _load(
+        self, path: Path, k: int, designs: np.ndarray, rescore: Callable[[np.ndarray], np.ndarray]
+    ) -> np.ndarray | None:
+        n = designs.shape[0]
+        room = n * len(SCORES) * 8 + _SLACK  # the scores' bytes and the small arrays
+        try:
+            data = read_regular(path, room)  # a regular file only (a pipe would block np.load)
+            with zipfile.ZipFile(io.BytesIO(data)) as zf:  # the members' sizes, before inflating
+                if sum(info.file_size for info in zf.infolist()) > room:
+                    return None
+            with np.load(io.BytesIO(data), allow_pickle=False) as z:
+                scores = np.array(z["scores"], dtype=float)
+                ok = (
+                    str(z["key"]) == self.key
+                    and int(z["chunk"]) == k
+                    and scores.shape == (n, len(SCORES))
+                    and hmac.compare_digest(str(z["digest"]), self._digest(k, scores))
+                    and check_scores(scores) is None
+                )
+        except Exception:  # noqa: BLE001 - a damaged file (bad zip, truncated, pickled, ...)
+            return None
+        if not ok:
+            return None
+        r = int(hashlib.sha256(f"{self.key}:{k}".encode()).hexdigest(), 16) % n
+        if not np.array_equal(rescore(designs[r : r + 1])[0], scores[r]):
+            return None
+        return scores
+
+    def save(self, k: int, scores: np.ndarray) -> None:
+        """Write chunk ``k`` atomically (the folder and its manifest with the first one)."""
+        if not self._ready:
+            self.parts.mkdir(exist_ok=True)
+            atomic_write(self.parts / "manifest.json", self.manifest)
+            self._ready = True
+        buf = io.BytesIO()
+        np.savez(
+            buf,
+            key=np.array(self.key),
+            chunk=np.array(k),
+            scores=np.ascontiguousarray(scores, dtype=float),
+            digest=np.array(self._digest(k, scores)),
+        )
+        atomic_write(self.path(k), buf.getvalue())

@@ -1,0 +1,135 @@
+"""Trigonometric polynomials of the joints as polynomials in ``s_k = sin q_k``, ``c_k = cos q_k``.
+
+Part of :mod:`hexapod_kin.symbolic.core` (which factors them): the change of variables
+(:func:`_to_poly`), the reduction modulo ``s_k² + c_k² = 1`` (:func:`_reduce`), rounding noise
+of float tables (:func:`_chop`) and determinants (:func:`_det_poly`).
+
+Determinants: sympy's expression route (``Matrix.det``, then ``expand`` of the whole) builds
+the unexpanded sum of products first; on a 6×6 Jacobian in a joint frame that takes seconds,
+most of it in ``expand``. :func:`ring_det` converts each entry (expanded on its own) to an
+element of a sparse polynomial ring over ℚ (:func:`sympy.polys.rings.ring`) and takes the
+determinant there, by cofactors along the rows with every minor kept (at most 2ⁿ of them):
+milliseconds. Expanding is a ring homomorphism, so the result is *the same polynomial* the
+expression route gives (and factors the same). Entries with a coefficient outside ℚ (a float,
+``sqrt(3)``, ``pi``) are refused: floats would round in another order than ``expand`` rounds
+them, so those keep the expression route.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import sympy as sp
+from sympy.polys.rings import ring
+
+
+def ring_det(entries: Sequence[Any], n: int, gens: Sequence[sp.Symbol]) -> Any | None:
+    """``det`` of the n×n matrix of expanded polynomial ``entries`` (row-major), expanded.
+
+    Args:
+        entries: n² sympy expressions, polynomials in ``gens`` and other symbols.
+        n: The size.
+        gens: The generators to put first (the other symbols follow, by name).
+
+    Returns:
+        The determinant as an expanded sympy expression, or ``None`` when an entry is not a
+        polynomial with rational coefficients.
+
+    """
+    entries = [sp.sympify(e) for e in entries]
+    if any(e.has(sp.Float) for e in entries):
+        return None
+    others = set().union(*(e.free_symbols for e in entries)) - set(gens)
+    r, *_ = ring([*gens, *sorted(others, key=str)], sp.QQ)
+    try:
+        rows = [[r.from_expr(e) if e != 0 else r.zero for e in entries[i * n : (i + 1) * n]]
+                for i in range(n)]  # fmt: skip
+    except ValueError:  # not a polynomial over QQ (sqrt(3), pi, a leftover sin)
+        return None
+    memo: dict[tuple[int, ...], Any] = {}
+
+    def minor(cols: tuple[int, ...]) -> Any:
+        """The minor of the last ``len(cols)`` rows and the columns ``cols``."""
+        if not cols:
+            return r.one
+        if cols in memo:
+            return memo[cols]
+        row = rows[n - len(cols)]
+        acc = r.zero
+        for k, j in enumerate(cols):
+            if row[j]:
+                term = row[j] * minor(cols[:k] + cols[k + 1 :])
+                acc = acc - term if k % 2 else acc + term
+        memo[cols] = acc
+        return acc
+
+    return minor(tuple(range(n))).as_expr()
+
+
+def _trig_symbols(q: Sequence[sp.Symbol]) -> tuple[tuple[sp.Symbol, ...], tuple[sp.Symbol, ...]]:
+    s = tuple(sp.Symbol(f"_s{k}", real=True) for k in range(len(q)))
+    c = tuple(sp.Symbol(f"_c{k}", real=True) for k in range(len(q)))
+    return s, c
+
+
+def _to_poly(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> Any:
+    s, c = _trig_symbols(q)
+    e = sp.expand(sp.expand_trig(expr))
+    sub = {}
+    for k, qk in enumerate(q):
+        if sigmas[k] == "revolute":
+            sub[sp.sin(qk)] = s[k]
+            sub[sp.cos(qk)] = c[k]
+    return sp.expand(e.xreplace(sub))
+
+
+def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
+    s, c = _trig_symbols(q)
+    e = poly
+    for sk, ck in zip(s, c):
+        if e.has(sk):
+            e = sp.rem(sp.Poly(e, sk), sp.Poly(sk**2 + ck**2 - 1, sk)).as_expr()
+    return sp.expand(e)
+
+
+def _chop(expr: Any, rel: float = 1e-12) -> Any:
+    """Float coefficients below ``rel`` × the largest one, set to 0.
+
+    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
+    that would otherwise factor as real terms.
+    """
+    floats = expr.atoms(sp.Float)
+    if not floats:
+        return expr
+    tiny = rel * max(abs(float(f)) for f in floats)
+    zero = {f: sp.Integer(0) for f in floats if abs(float(f)) < tiny}
+    return sp.expand(expr.xreplace(zero)) if zero else expr
+
+
+def _det_poly(mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str],
+              split: bool = False, memo: dict[Any, Any] | None = None) -> Any:  # fmt: skip
+    """``_to_poly(det mat)`` (``split``: of ``det J11 · det J22``, block-triangular 6×6).
+
+    In a polynomial ring (:func:`ring_det`: the same polynomial, in milliseconds)
+    when every entry is a polynomial with rational coefficients, else by expanding the
+    expression (floats then round as ``expand`` rounds them). ``memo``: the entries'
+    polynomials by entry, shared by calls on matrices with entries in common.
+    """
+    s, c = _trig_symbols(q)
+    gens = [g for k, qk in enumerate(q)
+            for g in ((s[k], c[k]) if sigmas[k] == "revolute" else (qk,))]  # fmt: skip
+    memo = {} if memo is None else memo
+    entries = []
+    for e in mat:
+        if e not in memo:
+            memo[e] = _to_poly(e, q, sigmas)
+        entries.append(memo[e])
+    out = ring_det(entries, mat.rows, gens)
+    if out is not None:
+        return out
+    if split:
+        raw = mat[:3, :3].det(method="berkowitz") * mat[3:, 3:].det(method="berkowitz")
+    else:
+        raw = mat.det(method="berkowitz")
+    return _to_poly(raw, q, sigmas)

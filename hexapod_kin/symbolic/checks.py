@@ -1,0 +1,177 @@
+"""Numbers from a sympy expression in one pass over it, and the checks made with them.
+
+:func:`evaluate` walks the expression once, bottom up, each distinct sub-expression once
+(sympy shares equal sub-trees, so a 100,000-operation Gram determinant or a nested product of
+twelve transforms is a few thousand distinct nodes), with numpy arrays at the leaves: linear in
+the distinct nodes, no substitution (``subs`` of the lengths alone takes seconds on a 7-joint
+arm) and no generated code (``lambdify`` compiles a Python function as long as the
+expression). It serves the checks that must stay within a time budget: a cached derivation
+against the table, the families against the model, the command line's comparison with
+Pinocchio. :meth:`~hexapod_kin.symbolic.Derivation.function` (``lambdify``) stays the one way
+to get a reusable numpy function of ``q``. :func:`claims_hold` checks a cached derivation
+against its table before it is used.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from ..params import Chain
+from ..singularity.rows import ROW_NAMES
+
+__all__ = ["claims_hold", "evaluate", "evaluate_matrix"]
+
+_FUNCTIONS: dict[Any, Any] = {
+    sp.sin: np.sin,
+    sp.cos: np.cos,
+    sp.tan: np.tan,
+    sp.exp: np.exp,
+    sp.log: np.log,
+    sp.Abs: np.abs,
+    sp.atan2: np.arctan2,
+    sp.asin: np.arcsin,
+    sp.acos: np.arccos,
+    sp.atan: np.arctan,
+}
+
+
+def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
+    """The value of ``expr`` with ``values`` (symbol → number or array) at its symbols.
+
+    Args:
+        expr: A sympy expression built of numbers, symbols, ``+``, ``*``, powers and
+            the functions ``sin cos tan exp log Abs atan2 asin acos atan``.
+        values: A value for every symbol of ``expr``: floats, or numpy arrays that
+            broadcast together (one value per point).
+
+    Returns:
+        A float or an array (the broadcast shape of the values used).
+
+    Raises:
+        ValueError: A symbol without a value, or a function outside the list.
+
+    """
+    return _value(sp.sympify(expr), values, {})
+
+
+def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
+    """:func:`evaluate` with ``memo`` (node → value) shared between calls."""
+    stack: list[tuple[Any, bool]] = [(root, False)]
+    while stack:
+        node, ready = stack.pop()
+        if node in memo:
+            continue
+        if not ready:
+            if node.is_Symbol:
+                if node not in values:
+                    raise ValueError(f"no value for the symbol {node}")
+                memo[node] = values[node]
+            elif node.is_Number or node.is_NumberSymbol:
+                memo[node] = float(node)
+            else:
+                stack.append((node, True))
+                stack.extend((a, False) for a in node.args if a not in memo)
+            continue
+        args = [memo[a] for a in node.args]
+        if node.is_Add:
+            out = args[0]
+            for v in args[1:]:
+                out = out + v
+        elif node.is_Mul:
+            out = args[0]
+            for v in args[1:]:
+                out = out * v
+        elif node.is_Pow:
+            out = np.power(args[0], args[1])
+        elif node.func in _FUNCTIONS:
+            out = _FUNCTIONS[node.func](*args)
+        else:
+            raise ValueError(f"cannot evaluate {node.func} here")
+        memo[node] = out
+    return memo[root]
+
+
+def evaluate_matrix(mat: Any, values: Mapping[Any, Any], points: int) -> np.ndarray:
+    """A sympy matrix at ``points`` points: shape (points, rows, cols) (see :func:`evaluate`)."""
+    rows, cols = mat.shape
+    out = np.empty((points, rows, cols))
+    memo: dict[Any, Any] = {}  # entries share sub-expressions
+    for i in range(rows):
+        for j in range(cols):
+            value = np.asarray(_value(sp.sympify(mat[i, j]), values, memo), dtype=float)
+            out[:, i, j] = np.broadcast_to(value, (points,))
+    return out
+
+
+def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
+    """A cached derivation checked against what it claims, before use.
+
+    At three random configurations (fixed seed): the stored ``p`` against the table's own
+    forward kinematics (:func:`~hexapod_kin._table_kin.table_fk`, plain numpy), the stored
+    position Jacobian against :func:`~hexapod_kin._table_kin.table_position_jacobian`, and
+    the stored Gram determinant (``det(J Jᵀ)``, or ``det(Jᵀ J)`` for more rows than joints)
+    against the stored J's own rows; the tidied forms too. Each stored family's factor must
+    be, at the same configurations, ± one factor of the stored determinant. An edited entry
+    fails one of these. Evaluated in one pass over each expression
+    (:func:`evaluate`): a fraction of a second where
+    ``subs`` and ``lambdify`` take tens of seconds (a 7-joint arm's Gram determinant).
+    """
+    kin = stages.get("kinematics")
+    if kin is None:
+        return True  # nothing stored that could be wrong
+    tidy = stages.get("tidy") or {}
+    forms = [kin, {**kin, **tidy}] if tidy else [kin]  # as stored, and as used (_assemble)
+    with np.errstate(all="ignore"):  # an edited entry may overflow: it then fails
+        return all(_claims(stages, k, chain, values) for k in forms)
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Equal values, relatively to 1e-9."""
+    return bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(np.abs(a), np.abs(b)) + 1e-300))
+
+
+def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[Any, Any]) -> bool:
+    """:func:`claims_hold` for an entry with kinematics (numpy warnings silenced)."""
+    from .._table_kin import table_fk, table_position_jacobian
+
+    n = chain.nq
+    q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
+    rng = np.random.default_rng(20251202)
+    qs = rng.uniform(-math.pi, math.pi, (3, n))
+    scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
+    at = {**{s: float(v) for s, v in values.items()}, **{s: qs[:, k] for k, s in enumerate(q)}}
+    try:
+        p = evaluate_matrix(sp.Matrix(kin["p"]), at, 3)[:, :3, 0]
+        jac = evaluate_matrix(sp.Matrix(kin["J_direct"]), at, 3)
+    except (ValueError, TypeError, KeyError):
+        return False  # a symbol or a function the table has not
+    for k, qv in enumerate(qs):
+        if not np.allclose(p[k], table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
+            return False
+        if not np.allclose(jac[k, :3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
+            return False
+    det = stages.get("determinant")
+    rows = stages.get("rows")
+    try:
+        if det is not None and rows is not None and det.get("gram") is not None:
+            gram = np.broadcast_to(evaluate(det["gram"], at), (3,))
+            for k in range(3):
+                sel = jac[k][[ROW_NAMES.index(r) for r in rows]]
+                gram_k = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
+                want = float(np.linalg.det(gram_k))
+                if abs(float(gram[k]) - want) > 1e-8 * max(1.0, abs(want)) * scale**4:
+                    return False
+        if det is not None:
+            factors = [np.broadcast_to(evaluate(f, at), (3,)) for f, _m in det.get("factors", ())]
+            for fam in (*(stages.get("families") or ()), *(stages.get("checks") or ())):
+                f = np.broadcast_to(evaluate(fam.factor, at), (3,))
+                if factors and not any(_same(f, g) or _same(f, -g) for g in factors):
+                    return False
+    except (ValueError, TypeError, KeyError):
+        return False
+    return True

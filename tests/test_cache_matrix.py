@@ -1,0 +1,536 @@
+"""Every cache × every damage (issue 25): recomputed with one warning, or refused; never wrong.
+
+Caches (each filled once per module, then copied per case):
+
+* ``symbolic`` — a derivation of the symbolic cache (``symbolic/cache.py``); the command is
+  ``derive``; the entry damaged is the 2-DOF leg's, the other entry the 3-DOF leg's.
+* ``families`` — the singular families kept as numbers (``singularity/families.py``); the
+  command is ``families_for(derive=True)``; two entries: two row selections of one model.
+* ``text`` — the printed derivation of ``hexapod-kin derive`` (``report/cache.py``); the
+  command is ``derivation_text``; two entries: two derivations.
+* ``replay`` — a seed-report replay entry (``report/replay.py``: manifest + files); the command
+  is ``reproduce``, its build replaced by a stand-in that writes the report the entry holds
+  (a real build takes ~20 s; what is tested is that a damaged entry is never replayed).
+* ``figures`` — the figure files of that replay entry (the report's figure cache).
+* ``numba`` — numba's compiled-code cache (subprocesses: numba loads once per process); the
+  command computes ``fk_batch`` (its kernel loaded first, the cache checked then) and then
+  calls the small compiled ``wrap_angle``, whose cache files are the ones damaged (so a
+  rebuild is one small compile); ``swap`` exchanges its data file with ``sincos``'s.
+
+Damages: ``truncate`` (a file cut to a third), ``empty``, ``random`` (random bytes), ``swap``
+(two entries' contents exchanged; for a replay entry two files exchanged *together with their
+manifest lines*, so each file still matches its line), ``edit`` (one value changed in place,
+any checksum left as it was), ``plant`` (code where data is read: a ``srepr`` (symbolic), a
+factor text (families), a pickle that runs code when loaded (numba), a script as a figure or
+listed under a path that leaves the report folder (replay); where a reader parses the data
+(symbolic, families, replay, figures) the seal is recomputed, so what refuses is the reader
+itself; a printed text (``text``) is never run, only its seal guards it). ``X-resealed``: the
+damage with the seal recomputed, for caches that check what an entry claims beyond its seal
+(a derivation against the table, a family ``q_k = value`` against the model's rank, a
+manifest's verdicts against ``report.md``, a figure against the copy ``report.html`` inlines
+under its name).
+
+Each case asserts: the result equals the undamaged one bit for bit, exactly one
+:class:`~hexapod_kin.exceptions.CacheWarning`, the planted code did not run (its marker file
+does not exist), and the run after it uses the rewritten cache without a warning.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import os
+import pickle
+import random
+import shutil
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin.exceptions import CacheWarning
+
+DAMAGES = ("truncate", "empty", "random", "swap", "edit", "plant")
+CACHES = ("symbolic", "families", "text", "replay", "figures", "numba")
+#: Damages also made with the seal recomputed, where a check beyond the seal catches them.
+RESEALED = (
+    ("symbolic", "edit"),
+    ("families", "edit"),
+    ("replay", "edit"),
+    ("figures", "edit"),
+    ("figures", "swap"),
+)
+CASES = [(c, d) for c in CACHES for d in DAMAGES] + [(c, f"{d}-resealed") for c, d in RESEALED]
+
+
+def _cut(path: Path) -> None:
+    path.write_bytes(path.read_bytes()[: max(1, path.stat().st_size // 3)])
+
+
+def _noise(path: Path) -> None:
+    path.write_bytes(random.Random(7).randbytes(400))
+
+
+def _swap(a: Path, b: Path) -> None:
+    da, db = a.read_bytes(), b.read_bytes()
+    a.write_bytes(db)
+    b.write_bytes(da)
+
+
+def _raw(path: Path, how: str) -> bool:
+    """The damages that need no knowledge of the format; False for the others."""
+    if how == "truncate":
+        _cut(path)
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "random":
+        _noise(path)
+    else:
+        return False
+    return True
+
+
+def _planted(marker: Path) -> str:
+    return f"__import__('pathlib').Path({str(marker)!r}).touch()"
+
+
+def _caught(call: Callable[[], Any]) -> tuple[Any, list[str]]:
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        out = call()
+    return out, [str(w.message) for w in seen if issubclass(w.category, CacheWarning)]
+
+
+# ---------------------------------------------------------------------------- symbolic
+def _fingerprint(d: Any) -> str:
+    import sympy as sp
+
+    parts = [d.p, d.J_direct, d.J_indirect, d.det, d.gram, *d.transforms, d.rows, d.agree]
+    parts += [(f.name, f.factor, f.verified) for f in d.families]
+    return sp.srepr(parts) + repr(d.incomplete)
+
+
+class Symbolic:
+    """The 2-DOF leg's derivation (file ``a``), the 3-DOF leg's beside it (``b``)."""
+
+    def fill(self, root: Path) -> None:
+        from hexapod_kin.symbolic import clear_memory, derive
+
+        clear_memory()
+        derive(hk.robots.coxa_tibia_leg(), budget=None)
+        (self.a,) = [p.name for p in (root / "symbolic").glob("*.json")]
+        derive(hk.robots.hexabot_leg(), budget=None)
+        (self.b,) = [p.name for p in (root / "symbolic").glob("*.json") if p.name != self.a]
+
+    def run(self, root: Path) -> str:
+        from hexapod_kin.symbolic import clear_memory, derive
+
+        clear_memory()
+        return _fingerprint(derive(hk.robots.coxa_tibia_leg(), budget=None))
+
+    def damage(self, root: Path, how: str, marker: Path) -> None:
+        from hexapod_kin.symbolic import cache
+
+        path = root / "symbolic" / self.a
+        if _raw(path, how):
+            return
+        if how == "swap":
+            return _swap(path, root / "symbolic" / self.b)
+        data = json.loads(path.read_text())
+        stages = data["stages"]["__dict__"]
+        kin = next(v for k, v in stages if k == "kinematics")["__dict__"]
+        p = next(v for k, v in kin if k == "p")
+        if how.startswith("edit"):  # the foot's position: q1 becomes q2 in one entry of p
+            assert "cos(Symbol('q1'" in p["__matrix__"]
+            p["__matrix__"] = p["__matrix__"].replace("cos(Symbol('q1'", "cos(Symbol('q2'", 1)
+        else:  # plant: code in place of an expression, the seal recomputed
+            p["__matrix__"] = _planted(marker)
+        if how != "edit":
+            data["seal"] = cache.seal(data["key"], data["stages"])
+        path.write_text(json.dumps(data))
+
+
+# ---------------------------------------------------------------------------- families
+class Families:
+    """Families of the 2-DOF leg for rows x, z (file ``a``) and y, z (``b``)."""
+
+    A, B = ("x", "z"), ("y", "z")
+
+    def _call(self, rows: tuple[str, ...]) -> Any:
+        from hexapod_kin.singularity.families import families_for
+        from hexapod_kin.symbolic import clear_memory
+
+        clear_memory()
+        model = hk.load(hk.robots.coxa_tibia_leg())  # a new model: no families in memory
+        return families_for(model, rows, derive=True, budget=60.0)
+
+    def fill(self, root: Path) -> None:
+        self._call(self.A)
+        (self.a,) = [p.name for p in (root / "families").glob("*.json")]
+        self._call(self.B)
+        (self.b,) = [p.name for p in (root / "families").glob("*.json") if p.name != self.a]
+
+    def run(self, root: Path) -> str:
+        fams = self._call(self.A)
+        assert fams.families
+        return json.dumps([f.to_dict() for f in fams.families])
+
+    def damage(self, root: Path, how: str, marker: Path) -> None:
+        from hexapod_kin.singularity import families
+
+        path = root / "families" / self.a
+        if _raw(path, how):
+            return
+        if how == "swap":
+            return _swap(path, root / "families" / self.b)
+        data = json.loads(path.read_text())
+        if how.startswith("edit"):  # a family moved: q2 = -pi/2 becomes q2 = -1
+            assert data["families"][0]["value"] == pytest.approx(-1.5707963267948966)
+            data["families"][0]["value"] = -1.0
+        else:  # plant: code as a factor text
+            data["families"][0]["factor"] = _planted(marker)
+        if how != "edit":  # the seal recomputed
+            data["seal"] = families._seal(data)
+        path.write_text(json.dumps(data))
+
+
+# ---------------------------------------------------------------------------- text
+class Text:
+    """The printed derivation of the 2-DOF leg (file ``a``), of the 3-DOF leg (``b``)."""
+
+    def _text(self, chain: Any) -> str:
+        from hexapod_kin.report.cache import derivation_text
+        from hexapod_kin.symbolic import derive
+
+        return derivation_text(derive(chain, budget=None))
+
+    def fill(self, root: Path) -> None:
+        self._text(hk.robots.coxa_tibia_leg())
+        (self.a,) = [p.name for p in (root / "report").glob("text-*.json")]
+        self._text(hk.robots.hexabot_leg())
+        (self.b,) = [p.name for p in (root / "report").glob("text-*.json") if p.name != self.a]
+
+    def run(self, root: Path) -> str:
+        return self._text(hk.robots.coxa_tibia_leg())
+
+    def damage(self, root: Path, how: str, marker: Path) -> None:
+        path = root / "report" / self.a
+        if _raw(path, how):
+            return
+        if how == "swap":
+            return _swap(path, root / "report" / self.b)
+        data = json.loads(path.read_text())
+        if how == "edit":  # one printed length changed
+            assert "l2" in data["text"]
+            data["text"] = data["text"].replace("l2", "l3", 1)
+        else:  # plant: code as the text (a text is only ever printed)
+            data["text"] = _planted(marker)
+        path.write_text(json.dumps(data))
+
+
+# ---------------------------------------------------------------------------- replay, figures
+def _png(seed: int) -> bytes:
+    return b"\x89PNG\r\n\x1a\n" + random.Random(seed).randbytes(300)
+
+
+class Replay:
+    """A report replay entry: ``report.md``, ``report.html``, two figures, a seed text."""
+
+    figures = False
+
+    def _files(self) -> dict[str, bytes]:
+        rows = [
+            "| c1 | 000 | Eq. 1 | agrees: 1 = 1 |",
+            "| c2 | 001 | Eq. 2 | seed is wrong: 2 ≠ 3 |",
+        ]
+        a, b = _png(1), _png(2)
+        html = "".join(
+            f'<img alt="{n}" src="data:image/png;base64,{base64.b64encode(d).decode()}">'
+            for n, d in (("a", a), ("b", b))
+        )
+        return {
+            "report.md": ("\n".join(rows) + "\n").encode(),
+            "report.html": f"<html><body>{html}</body></html>".encode(),
+            "figures/a.png": a,
+            "figures/b.png": b,
+            "seeds/000.txt": b"the seed's own text\n",
+        }
+
+    def _report(self, out: Path) -> tuple[Any, list[Path]]:
+        from hexapod_kin.report import Report
+        from hexapod_kin.report.data import Verdict
+
+        written = []
+        for rel, data in self._files().items():
+            (out / rel).parent.mkdir(parents=True, exist_ok=True)
+            (out / rel).write_bytes(data)
+            written.append(out / rel)
+        fields = dict(where="", kind="value", claimed="1", computed="1", reason="", method="")
+        verdicts = (
+            Verdict(claim="c1", seed="000", status="agrees", **fields),
+            Verdict(claim="c2", seed="001", status="wrong", **fields),
+        )
+        facts = {"walk_min_margin_m": 0.0128, "scan_family_counts": {"leg": {"q3 = 0": 12}}}
+        rep = Report(out, out / "report.md", out / "report.html", verdicts, facts, 1.5, None, 1.5)
+        (out / "verdicts.json").write_text(json.dumps(rep.to_dict(), default=str))
+        return rep, written
+
+    def _reproduce(self, out: Path) -> Any:
+        from hexapod_kin.report import build, reproduce
+
+        built: list[Path] = []
+
+        def stand_in(folder: Path, **kw: Any) -> Any:
+            built.append(folder)
+            return self._report(folder)
+
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(build, "_build", stand_in)
+            rep = reproduce(out, quick=True, animations=False)
+        self.built = bool(built)
+        return rep
+
+    def fill(self, root: Path) -> None:
+        from hexapod_kin.report import replay
+
+        self.n = 0
+        self._reproduce(root.parent / "fill-out")
+        (self.entry,) = [p.name for p in replay.runs_dir().iterdir()]
+        rep = self._reproduce(root.parent / "fill-replayed")
+        assert rep.replayed_from is not None and not self.built
+
+    def run(self, root: Path) -> str:
+        self.n += 1
+        out = root.parent / f"out-{self.n}"
+        rep = self._reproduce(out)
+        files = {
+            p.relative_to(out).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(out.rglob("*"))
+            if p.is_file() and p.name != "verdicts.json"
+        }
+        verdicts = [v.to_dict() for v in rep.verdicts]
+        return json.dumps([files, rep.summary(), rep.facts, verdicts], sort_keys=True)
+
+    def damage(self, root: Path, how: str, marker: Path) -> None:
+        from hexapod_kin.report import replay
+
+        folder = root / "report" / "runs" / self.entry
+        manifest = folder / "manifest.json"
+        record = json.loads(manifest.read_text())
+        files = folder / "files"
+        if self.figures:
+            target, other = "figures/a.png", "figures/b.png"
+        else:
+            target, other = {
+                "truncate": ("manifest", ""),
+                "empty": ("report.md", ""),
+                "random": ("report.html", ""),
+            }.get(how, ("report.md", "seeds/000.txt"))
+        path = manifest if target == "manifest" else files / target
+        if _raw(path, how):
+            return
+        if how.startswith("swap"):  # two files and their manifest lines: each matches its line
+            _swap(path, files / other)
+            lines = record["files"]
+            lines[target], lines[other] = lines[other], lines[target]
+        elif how.startswith("edit") and self.figures:  # one byte of a figure
+            data = bytearray(path.read_bytes())
+            data[100] ^= 0x01
+            path.write_bytes(bytes(data))
+            if how == "edit-resealed":
+                record["files"][target] = {
+                    "sha256": hashlib.sha256(data).hexdigest(),
+                    "size": len(data),
+                }
+        elif how == "edit":  # a fact the report returns, e.g. the walk's margin
+            record["facts"]["walk_min_margin_m"] = 0.5
+        elif how == "edit-resealed":  # a verdict counted as agreeing
+            record["verdicts"][1]["status"] = "agrees"
+        elif how == "plant" and self.figures:  # a script in place of a figure
+            script = (_planted(marker) + "\n").encode()
+            path.write_bytes(script)
+            record["files"][target] = {
+                "sha256": hashlib.sha256(script).hexdigest(),
+                "size": len(script),
+            }
+        else:  # plant: a script listed with a path that leaves the report folder
+            script = (_planted(marker) + "\n").encode()
+            (folder / "planted.py").write_bytes(script)
+            record["files"]["../../planted.py"] = {
+                "sha256": hashlib.sha256(script).hexdigest(),
+                "size": len(script),
+            }
+        if how.endswith("resealed") or how == "plant":
+            record["seal"] = replay.seal(record)
+        manifest.write_text(json.dumps(record))
+
+
+class Figures(Replay):
+    """The figures of a report replay entry (the report's figure cache)."""
+
+    figures = True
+
+
+# ---------------------------------------------------------------------------- numba
+#: ``fk_batch`` loads its kernel (the cache checked first), then ``wrap_angle`` is called
+#: directly: in the package every compile happens inside an area's first call, which then
+#: records the cache's manifest (``mark_compiled``); the direct call does the same by hand.
+NUMBA_CODE = r"""
+import hashlib, hexapod_kin as hk
+from hexapod_kin._kernels import mark_compiled
+from hexapod_kin._kmath import wrap_angle
+leg = hk.load("hexabot_leg")
+poses = leg.fk_batch(leg.random_q(300, seed=3))
+print(hashlib.sha256(poses.tobytes()).hexdigest(), repr(wrap_angle(7.0)))
+mark_compiled("batch")
+"""
+
+
+class _Plant:
+    """A pickle that, when loaded, creates the marker file (what numba would load)."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self) -> Any:
+        return (Path.touch, (self.marker,))
+
+
+class Numba:
+    """numba's cache: the kernel of ``fk_batch`` and the small ``wrap_angle``, ``sincos``."""
+
+    def _env(self, root: Path) -> dict[str, str]:
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(root / "numba"))
+        env["HEXAPOD_KIN_CACHE_DIR"] = str(root / "hk")
+        return env
+
+    def _proc(self, root: Path) -> tuple[str, str]:
+        res = subprocess.run(
+            [sys.executable, "-c", NUMBA_CODE],
+            env=self._env(root),
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert res.returncode == 0, res.stderr[-2000:]
+        return res.stdout.strip(), res.stderr
+
+    def fill(self, root: Path) -> None:
+        out, err = self._proc(root)  # compiles; the manifest then lists wrap_angle too
+        assert "compiling batch kernels" in err and "Warning" not in err, err
+
+    def run(self, root: Path) -> tuple[str, list[str]]:
+        out, err = self._proc(root)
+        return out, [ln for ln in err.splitlines() if "CacheWarning:" in ln]
+
+    def file(self, root: Path, name: str, suffix: str) -> Path:
+        (path,) = (root / "numba").glob(f"*/_kmath.{name}-*{suffix}")
+        return path
+
+    def damage(self, root: Path, how: str, marker: Path) -> None:
+        nbc, nbi = self.file(root, "wrap_angle", ".1.nbc"), self.file(root, "wrap_angle", ".nbi")
+        if how == "empty":
+            nbi.write_bytes(b"")
+        elif _raw(nbc, how):
+            return
+        elif how == "swap":
+            _swap(nbc, self.file(root, "sincos", ".1.nbc"))
+        elif how == "edit":  # one byte of the machine code's pickle
+            data = bytearray(nbc.read_bytes())
+            data[len(data) // 2] ^= 0x10
+            nbc.write_bytes(bytes(data))
+        elif how == "plant":
+            nbi.write_bytes(pickle.dumps(_Plant(marker)))
+
+
+HARNESS: dict[str, Any] = {
+    "symbolic": Symbolic,
+    "families": Families,
+    "text": Text,
+    "replay": Replay,
+    "figures": Figures,
+    "numba": Numba,
+}
+
+
+# ---------------------------------------------------------------------------- the matrix
+@pytest.fixture(scope="module")
+def filled(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """Per cache: the harness, its pristine filled cache folder and the undamaged result."""
+    return {}
+
+
+def _prepare(filled: dict[str, Any], name: str, tmp: Path) -> tuple[Any, Path, Any]:
+    if name not in filled:
+        h = HARNESS[name]()
+        pristine = tmp / f"pristine-{name}" / "cache"
+        pristine.mkdir(parents=True)
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(pristine))
+            if name == "numba":
+                h.fill(pristine)
+                base, said = h.run(pristine)  # loaded, quietly
+            else:
+                h.fill(pristine)
+                base, said = _caught(lambda: h.run(pristine))
+        assert not said, said
+        filled[name] = (h, pristine, base)
+    return filled[name]
+
+
+@pytest.mark.parametrize(("cache", "damage"), CASES, ids=[f"{c}-{d}" for c, d in CASES])
+def test_damaged_cache(
+    filled: dict[str, Any],
+    tmp_path_factory: pytest.TempPathFactory,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    cache: str,
+    damage: str,
+) -> None:
+    h, pristine, base = _prepare(filled, cache, tmp_path_factory.getbasetemp())
+    root = tmp_path / "cache"
+    shutil.copytree(pristine, root)
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(root))
+    marker = tmp_path / "planted-code-ran"
+    h.damage(root, damage.replace("-resealed", "") if cache == "numba" else damage, marker)
+    if cache == "numba":
+        again, said = h.run(root)
+        # the run after: quiet (one case per kind of repair: each run is a process)
+        third, quiet = h.run(root) if damage in ("swap", "plant") else (base, [])
+    else:
+        again, said = _caught(lambda: h.run(root))
+        third, quiet = _caught(lambda: h.run(root))
+    assert again == base  # bit for bit the undamaged result
+    assert len(said) == 1, said  # one warning line
+    assert not marker.exists()  # the planted code never ran
+    assert third == base and not quiet, quiet  # the rewritten cache is used quietly
+    if cache in ("replay", "figures"):
+        assert not (tmp_path / "planted.py").exists() and not (root / "planted.py").exists()
+
+
+def test_numba_cache_without_manifest_is_rebuilt_when_loading_fails(
+    filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
+) -> None:
+    """A cache the manifest cannot vouch for (deleted: e.g. filled by an older version) with
+    the kernel's data file swapped with ``sincos``'s: numba loads ``sincos``'s code as the
+    kernel and the call fails (it was fatal: ``TypeError: sincos expected 1 argument``). The
+    failure is caught: one warning, the package's cache files removed, what the attempt
+    loaded reset, the kernel compiled again: the same bits, and the next run is quiet."""
+    h, pristine, base = _prepare(filled, "numba", tmp_path_factory.getbasetemp())
+    root = tmp_path / "cache"
+    shutil.copytree(pristine, root)
+    (manifest,) = (root / "numba").glob("*.manifest.json")
+    manifest.unlink()
+    (kernel,) = (root / "numba").glob("*/_kernels.pose_jacobian_kernel-*.1.nbc")
+    _swap(kernel, h.file(root, "sincos", ".1.nbc"))
+    again, said = h.run(root)
+    assert again == base
+    assert len(said) == 1 and "could not be loaded" in said[0], said
+    third, quiet = h.run(root)
+    assert third == base and not quiet, quiet

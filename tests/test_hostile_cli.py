@@ -1,0 +1,581 @@
+"""The hostile-input corpus of issue 25, run as the real command line.
+
+Every case is one ``python -m hexapod_kin ...`` child process. A refusal must end with exit
+status 2 and exactly one line on stderr, ``hexapod-kin: error: ...`` holding the case's phrase
+and never the catch-all "(a bug: please report it)"; a damaged cache must instead be
+recomputed with exactly one ``hexapod-kin: warning: ...`` line and the undamaged result. Each
+child is measured with ``os.wait4``: wall time under :data:`LIMIT_S` and peak resident memory
+(``ru_maxrss``) under :data:`LIMIT_BYTES` are asserted. An address-space cap
+(:data:`SAFETY_AS`) keeps a runaway case from taking the machine down; it sits above the
+asserted peak, and a case that hits it fails on its phrase ("not enough memory" is no case's
+phrase). The measured line, time and peak are recorded as test properties (``--junitxml``).
+"""
+
+from __future__ import annotations
+
+import builtins
+import hashlib
+import importlib.util
+import json
+import os
+import pickle
+import re
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+LIMIT_S = 10.0
+LIMIT_BYTES = 1 << 30
+SAFETY_AS = 3 << 30
+CATCH_ALL = "a bug: please report it"
+
+
+@dataclass(frozen=True)
+class Run:
+    """One finished child: exit status, output, wall time [s] and peak RSS [bytes]."""
+
+    status: int
+    stdout: str
+    stderr: str
+    seconds: float
+    peak: int
+    cpu: float = 0.0
+
+    @property
+    def lines(self) -> list[str]:
+        return self.stderr.strip().splitlines()
+
+
+#: ``ru_maxrss`` is in kB on Linux, in bytes on macOS.
+RSS_UNIT = 1 if sys.platform == "darwin" else 1024
+
+
+def _cap() -> None:  # pragma: no cover - runs in the child
+    try:
+        resource.setrlimit(resource.RLIMIT_AS, (SAFETY_AS, SAFETY_AS))
+    except (ValueError, OSError):  # not settable here (macOS): the asserted peak still holds
+        pass
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("HEXAPOD_KIN_DEBUG", None)
+    return env
+
+
+def cli(*args: str, cwd: Path, timeout: float = LIMIT_S) -> Run:
+    """Run ``python -m hexapod_kin ARGS`` in ``cwd``; kill it past ``timeout`` (then it fails)."""
+    out_path, err_path = cwd / ".stdout", cwd / ".stderr"
+    with open(out_path, "wb") as out, open(err_path, "wb") as err:
+        t0 = time.monotonic()
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "hexapod_kin", *args],
+            cwd=cwd,
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=err,
+            env=_env(),
+            preexec_fn=_cap,
+        )
+        return _finish(proc, t0, timeout, out_path, err_path)
+
+
+def _finish(
+    proc: subprocess.Popen[bytes], t0: float, timeout: float, out_path: Path, err_path: Path
+) -> Run:
+    """Reap ``proc`` with ``os.wait4`` (its own peak RSS); killed 5 s past ``timeout``."""
+    while True:
+        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
+        if pid:
+            break
+        if time.monotonic() - t0 > timeout + 5:
+            proc.kill()
+            pid, status, usage = os.wait4(proc.pid, 0)
+            break
+        time.sleep(0.005)
+    seconds = time.monotonic() - t0
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    stdout, stderr = out_path.read_text(errors="replace"), err_path.read_text(errors="replace")
+    out_path.unlink()
+    err_path.unlink()
+    cpu = usage.ru_utime + usage.ru_stime
+    return Run(proc.returncode, stdout, stderr, seconds, usage.ru_maxrss * RSS_UNIT, cpu)
+
+
+def _record(record: Callable[[str, object], None], run: Run) -> None:
+    record("line", run.lines[-1] if run.lines else "")
+    record("seconds", round(run.seconds, 3))
+    record("peak_mb", round(run.peak / 2**20, 1))
+    record("cpu_s", round(run.cpu, 3))
+
+
+def within_limits(run: Run) -> None:
+    assert run.seconds < LIMIT_S, f"{run.seconds:.1f} s: {run.stderr[-300:]}"
+    assert run.peak < LIMIT_BYTES, f"peak RSS {run.peak / 2**20:.0f} MB"
+    assert CATCH_ALL not in run.stderr and "Traceback" not in run.stderr, run.stderr
+
+
+def refused(run: Run, phrase: str) -> str:
+    """Exit 2, one line ``hexapod-kin: error: ...`` holding ``phrase``, within the limits."""
+    within_limits(run)
+    assert run.status == 2, (run.status, run.stderr)
+    assert len(run.lines) == 1, run.stderr
+    line = run.lines[0]
+    assert re.match(r"hexapod-kin( \w+)?: error: ", line), line
+    assert phrase in line, line
+    assert len(line) < 400, line
+    return line
+
+
+# ---------------------------------------------------------------- hostile table files
+def _bomb(where: str) -> str:
+    """The "billion laughs": 9 levels of 9 aliases (9⁹ strings expanded) used in ``where``."""
+    lines = ["a: &a [x, x, x, x, x, x, x, x, x]"]
+    for i in range(8):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 9) + "]")
+    body = "\n".join("_" + ln for ln in lines)  # under unknown keys: only the alias matters
+    if where == "alpha":
+        return body + "\nrow: [{alpha: *_i, d: 0.1}]\n"
+    return body + f"\n{where}: *_i\nrow: [{{d: 0.1}}]\n"
+
+
+def _few_alias_bomb() -> str:
+    """60 aliases (under the alias cap) that still expand to 6¹⁰ values."""
+    lines = ["a: &a [x, x, x, x, x, x]"]
+    for i in range(10):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 6) + "]")
+    return "\n".join(lines) + "\nrow: [{alpha: 0}]\n"
+
+
+DEEP = 50_000
+#: case → (file name, content, phrase of the one line). Each runs ``fk FILE``.
+TABLE_FILES: dict[str, tuple[str, str | bytes, str]] = {
+    "alias-bomb-name": ("bomb.yaml", _bomb("name"), "aliases"),
+    "alias-bomb-alpha": ("bomb.yaml", _bomb("alpha"), "aliases"),
+    "alias-bomb-convention": ("bomb.yaml", _bomb("convention"), "aliases"),
+    "alias-bomb-few-aliases": ("bomb6.yaml", _few_alias_bomb(), "after alias expansion"),
+    "int-401-digits-yaml": ("i.yaml", "row:\n  - d: " + "9" * 401 + "\n", "401 digits"),
+    "int-401-digits-toml": ("i.toml", "[[row]]\nd = " + "9" * 401 + "\n", "401 digits"),
+    "int-5001-digits-yaml": ("i.yaml", "row:\n  - d: " + "9" * 5001 + "\n", "5001 digits"),
+    "int-5001-digits-toml": ("i.toml", "[[row]]\nd = " + "9" * 5001 + "\n", "5001 digits"),
+    "not-utf8-yaml": ("t.yaml", "name: caf\xe9\nrow: [{d: 0}]\n".encode("latin-1"), "UTF-8"),
+    "not-utf8-toml": ("t.toml", 'name = "caf\xe9"\n[[row]]\n'.encode("latin-1"), "UTF-8"),
+    "deep-yaml-lists": ("deep.yaml", "row: " + "[" * DEEP + "]" * DEEP + "\n", "nest"),
+    "deep-yaml-maps": ("deep.yaml", "row: " + "{a: " * DEEP + "1" + "}" * DEEP + "\n", "nest"),
+    "deep-toml-arrays": ("deep.toml", "row = " + "[" * DEEP + "]" * DEEP + "\n", "nest"),
+    "deep-toml-tables": ("deep.toml", "row = " + "{a = " * DEEP + "1" + "}" * DEEP, "nest"),
+    "duplicate-key-d": ("dup.yaml", "row:\n  - {d: 0.1, d: 0.5}\n", "key 'd' given twice"),
+    "duplicate-key-angles": (
+        "dup.yaml",
+        "angles: deg\nangles: rad\nrow: [{d: 0.1}]\n",
+        "key 'angles' given twice",
+    ),
+    "d-1e300-toml": ("big.toml", "[[row]]\nd = 1e300\n", "row 1.d=1e+300 is out of range"),
+    "d-1e300-yaml": ("big.yaml", "row:\n  - d: 1.0e+300\n", "row 1.d=1e+300 is out of range"),
+    "d-1e12": ("big.toml", "[[row]]\nd = 1e12\n", "row 1.d=1e+12 is out of range"),
+    "python-tag": (
+        "tag.yaml",
+        "name: !!python/object/apply:os.system [echo hi]\n",
+        "line 1: the YAML tag '!!python/object/apply:os.system' is not allowed",
+    ),
+    "long-string": ("s.yaml", "name: " + "x" * 20_000 + "\nrow: [{d: 0}]\n", "characters"),
+    "two-megabytes": ("big.yaml", "#" * 2_000_000, "more than 1000000 bytes"),
+    "empty-file": ("empty.yaml", "", "mapping"),
+    "row-type-a-list": ("t.yaml", "row:\n  - {type: [1], d: 0.1}\n", "row 1.type=[1]"),
+    "twenty-thousand-rows": ("rows.toml", "[[row]]\nd = 0.01\n" * 20_000, "20000 rows"),
+    "two-hundred-joints": ("rows.toml", "[[row]]\nd = 0.01\n" * 200, "200 joint rows"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(TABLE_FILES))
+def test_hostile_table_file(tmp_path: Path, case: str, record_property) -> None:
+    name, content, phrase = TABLE_FILES[case]
+    path = tmp_path / name
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content, encoding="utf-8")
+    run = cli("fk", name, cwd=tmp_path)
+    _record(record_property, run)
+    line = refused(run, phrase)
+    assert name in line, line  # the file is named
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom", "zero.yaml", "pipe.yaml"])
+def test_devices_and_pipes_are_not_read(tmp_path: Path, device: str, record_property) -> None:
+    """Not read at all (no hang on a pipe with no writer, no endless device read)."""
+    if device == "zero.yaml":
+        os.symlink("/dev/zero", tmp_path / device)  # a table-looking name
+    elif device == "pipe.yaml":
+        os.mkfifo(tmp_path / device)
+    run = cli("fk", device, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, "named pipe" if "pipe" in device else "a device")
+
+
+def test_table_naming_every_link_but_no_tip_loads(tmp_path: Path, record_property) -> None:
+    """The last link is the tip: FK by hand, planar 3R with 0.1 m links."""
+    (tmp_path / "named.toml").write_text(
+        "".join(f'[[row]]\nd = 0.1\nlink = "l{i}"\n' for i in range(3)), encoding="utf-8"
+    )
+    q = (0.4, -0.3, 0.2)
+    run = cli("fk", "named.toml", "--q", *map(str, q), cwd=tmp_path)
+    _record(record_property, run)
+    within_limits(run)
+    assert run.status == 0 and run.stderr == "", run.stderr
+    got = re.search(r"position \[m\]:\s+(\S+)\s+(\S+)\s+(\S+)", run.stdout)
+    assert got, run.stdout
+    x = 0.1 * (1 + np.cos(q[0]) + np.cos(q[0] + q[1]))
+    y = 0.1 * (np.sin(q[0]) + np.sin(q[0] + q[1]))
+    assert np.allclose([float(v) for v in got.groups()], [x, y, 0.0], atol=1e-6)
+
+
+def test_scan_seed_minus_1(tmp_path: Path, record_property) -> None:
+    run = cli("scan", "hexabot_leg", "--samples", "10", "--seed", "-1", cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, "argument --seed: '-1'")
+
+
+PRESET_VALUES = {
+    # -s NAME=VALUE on a preset: (argv, phrase of the one line)
+    "preset-l1-1e300": (("hexabot_leg", "-s", "l1=1e300"), "l1=1e+300 is beyond 1e9"),
+    "preset-body-radius-1e300": (("hexapod", "-s", "body_radius=1e300"), "body_radius=1e+300"),
+    "preset-5000-digit-number": (("hexabot_leg", "-s", "l1=" + "9" * 5000), "5000 characters"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PRESET_VALUES))
+def test_hostile_preset_value(tmp_path: Path, case: str, record_property) -> None:
+    args, phrase = PRESET_VALUES[case]
+    run = cli("fk", *args, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, phrase)
+
+
+# ---------------------------------------------------------------- urdf round trip
+@pytest.mark.parametrize(
+    "source",
+    [
+        ("hexabot_leg", "l1=1e12"),
+        ("hexabot_leg", "l1=1e8"),
+        ("hexabot_leg", "l1=1e4"),
+        ("table", "d = 1000"),
+    ],
+)
+def test_urdf_writes_only_what_its_loader_reads(tmp_path: Path, source, record_property) -> None:
+    """``urdf`` either refuses in one line (no file) or writes a file ``fk`` then loads."""
+    name, value = source
+    if name == "table":
+        (tmp_path / "t.toml").write_text(f"[[row]]\n{value}\nmass = 2.0\n", encoding="utf-8")
+        first = cli("urdf", "t.toml", "-o", "x.urdf", cwd=tmp_path)
+    else:
+        first = cli("urdf", name, "-s", value, "-o", "x.urdf", cwd=tmp_path)
+    _record(record_property, first)
+    within_limits(first)
+    if value in ("l1=1e12", "l1=1e8"):  # a length, or a rod's inertia, beyond the loader's 1e9
+        refused(first, "beyond 1e9" if value == "l1=1e12" else "<inertia iyy> would be 4.16667e+13")
+        assert not (tmp_path / "x.urdf").exists()
+        return
+    assert first.status == 0, first.stderr
+    second = cli("fk", "x.urdf", cwd=tmp_path)
+    within_limits(second)
+    assert second.status == 0, second.stderr
+
+
+# ---------------------------------------------------------------- sweeps
+SWEEP = ("sweep", "--l1", "0.03:0.07:2", "--l2", "0.08:0.12:4", "--mc-samples", "2000",
+         "--chunk-size", "2", "--no-progress")  # fmt: skip
+
+
+def _sweep_space() -> tuple[object, dict[str, object]]:
+    """The design space and options of :data:`SWEEP`, built as the CLI builds them."""
+    from hexapod_kin.sweep import DesignSpace, parse_range
+
+    space = DesignSpace({"l1": parse_range("--l1", SWEEP[2]), "l2": parse_range("--l2", SWEEP[4])})
+    return space, {"mc_samples": 2000, "chunk_size": 2, "seed": 0, "samples": 100}
+
+
+def _no_parts(folder: Path) -> None:
+    left = [p.name for p in folder.iterdir() if p.name.endswith(".sweep-parts")]
+    assert not left, left
+
+
+SWEEP_REFUSALS = {
+    "seed-minus-1": (("--seed", "-1", "--out", "s.csv"), "argument --seed: '-1'"),
+    "out-dot": (("--out", "."), "out='.'"),
+    "out-folder": (("--out", "f.csv"), "is a folder"),
+    "nan-score-design": (("--l3", "1e300", "--out", "s.csv"), "l3=1e+300"),
+    "mc-samples-huge": (("--mc-samples", "2000000000", "--out", "s.csv"), "estimated"),
+    "workers-zero": (("--workers", "0", "--out", "s.csv"), "workers=0"),
+    "scheduler-refusing": (  # connection refused: retried for 4 s, not distributed's 30 s
+        ("--scheduler", "tcp://127.0.0.1:9", "--out", "s.csv"),
+        "scheduler='tcp://127.0.0.1:9': cannot connect"
+        if importlib.util.find_spec("distributed")
+        else "needs dask[distributed]",
+    ),
+    "ten-million-designs": (
+        ("--l1", "0.05", "--l2", "0.05:0.15:3163", "--l3", "0.05:0.15:3163", "--out", "s.csv"),
+        "10004569 designs: estimated",
+    ),
+    "grid-axis-of-10-to-the-12": (
+        ("--l3", "0.05:0.15:1000000000000", "--out", "s.csv"),
+        "8000000000000 designs: estimated",
+    ),
+    "ten-million-random": (
+        ("--method", "random", "--samples", "10000000", "--out", "s.csv"),
+        "10000000 designs: estimated",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SWEEP_REFUSALS))
+def test_sweep_refusal(tmp_path: Path, case: str, record_property) -> None:
+    args, phrase = SWEEP_REFUSALS[case]
+    (tmp_path / "f.csv").mkdir()
+    run = cli(*SWEEP, *args, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, phrase)
+    _no_parts(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+@pytest.mark.parametrize("yes", [False, True])
+def test_refused_sweep_does_not_block_the_corrected_one(tmp_path: Path, yes, record_property):
+    """``--mc-samples 0`` (even with ``--yes``, past the estimate) leaves nothing behind."""
+    bad = cli(*SWEEP, "--mc-samples", "0", *(["--yes"] if yes else []), "--out", "s.csv",
+              cwd=tmp_path)  # fmt: skip
+    _record(record_property, bad)
+    refused(bad, "mc_samples=0")
+    _no_parts(tmp_path)
+    good = cli(*SWEEP, "--out", "s.csv", cwd=tmp_path)
+    within_limits(good)
+    assert good.status == 0 and good.stderr == "", good.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.csv"]
+
+
+@pytest.fixture(scope="module")
+def sweep_state(tmp_path_factory):
+    """The reference table of :data:`SWEEP` and the chunks of a run stopped after 3 chunks."""
+    from hexapod_kin.sweep import sweep
+
+    space, opts = _sweep_space()
+    ref = tmp_path_factory.mktemp("ref") / "s.csv"
+    sweep(space, out=ref, **opts)
+    part = tmp_path_factory.mktemp("part")
+
+    def stop(k: int) -> None:
+        if k == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(space, out=part / "s.csv", workers=1, on_chunk=stop, **opts)
+    parts = part / ".s.csv.sweep-parts"
+    assert len(list(parts.glob("chunk_*.npz"))) == 3
+    return ref.read_bytes(), parts
+
+
+class _Planted:
+    """Unpickling this creates a file: proof that a pickle was loaded."""
+
+    def __init__(self, marker: Path) -> None:
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (builtins.open, (self.marker, "w"))
+
+
+def _rewrite(path: Path, **changes) -> None:
+    with np.load(path) as z:
+        arrays = {k: np.array(z[k]) for k in z.files}
+    arrays.update(changes)
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def _hmac(scores: np.ndarray, key: str, k: int) -> str:
+    import hmac
+
+    from hexapod_kin._io import cache_root
+
+    secret = (cache_root("sweep") / "chunk.key").read_bytes()
+    h = hmac.new(secret, f"{key}:{k}:".encode(), hashlib.sha256)
+    h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
+    return h.hexdigest()
+
+
+def _damage(parts: Path, how: str, marker: Path) -> None:
+    a, b = parts / "chunk_00000.npz", parts / "chunk_00001.npz"
+    with np.load(a) as z:
+        key, scores = str(z["key"]), np.array(z["scores"])
+    if how == "truncate":
+        a.write_bytes(a.read_bytes()[:100])
+    elif how == "empty":
+        a.write_bytes(b"")
+    elif how == "random-bytes":
+        a.write_bytes(np.random.default_rng(1).bytes(a.stat().st_size))
+    elif how == "swap-two":
+        da, db = a.read_bytes(), b.read_bytes()
+        a.write_bytes(db)
+        b.write_bytes(da)
+    elif how == "edit-value":
+        scores[1, 6] *= 1.01  # the stride of design 1, a plausible value
+        _rewrite(a, scores=scores)
+    elif how == "edit-value-plain-digest":  # the digest recomputed as a plain hash
+        scores[1, 6] *= 1.01
+        h = hashlib.sha256(f"{key}:0:".encode())
+        h.update(scores.tobytes())
+        _rewrite(a, scores=scores, digest=np.array(h.hexdigest()))
+    elif how == "nan-score-keyed-digest":  # even with the secret: a NaN is not a score
+        scores[1, 1] = np.nan
+        _rewrite(a, scores=scores, digest=np.array(_hmac(scores, key, 0)))
+    elif how == "plant-code-npz":
+        evil = np.empty(1, dtype=object)
+        evil[0] = _Planted(marker)
+        _rewrite(a, scores=evil)
+    elif how == "plant-code-pickle":
+        a.write_bytes(pickle.dumps(_Planted(marker)))
+    elif how == "chunk-is-a-named-pipe":  # np.load would block on it
+        a.unlink()
+        os.mkfifo(a)
+    elif how == "chunk-links-to-dev-zero":
+        a.unlink()
+        os.symlink("/dev/zero", a)
+    elif how == "manifest-is-a-named-pipe":
+        (parts / "manifest.json").unlink()
+        os.mkfifo(parts / "manifest.json")
+        return
+    elif how == "manifest-garbage":
+        (parts / "manifest.json").write_bytes(b"\x00garbage{")
+        return
+    else:  # pragma: no cover
+        raise AssertionError(how)
+
+
+CHUNK_DAMAGES = (
+    "truncate", "empty", "random-bytes", "swap-two", "edit-value", "edit-value-plain-digest",
+    "nan-score-keyed-digest", "plant-code-npz", "plant-code-pickle", "chunk-is-a-named-pipe",
+    "chunk-links-to-dev-zero", "manifest-garbage", "manifest-is-a-named-pipe",
+)  # fmt: skip
+
+
+@pytest.mark.parametrize("how", CHUNK_DAMAGES)
+def test_damaged_sweep_chunks(tmp_path: Path, sweep_state, how: str, record_property) -> None:
+    """Recomputed with one warning line; the table is the undamaged one; no code ran."""
+    reference, parts = sweep_state
+    shutil.copytree(parts, tmp_path / parts.name)
+    marker = tmp_path / "planted-code-ran"
+    _damage(tmp_path / parts.name, how, marker)
+    run = cli(*SWEEP, "--out", "s.csv", cwd=tmp_path)
+    _record(record_property, run)
+    within_limits(run)
+    assert run.status == 0, run.stderr
+    if how.startswith("manifest"):  # every chunk carries its own key: all are used
+        assert run.stderr == "", run.stderr
+    else:
+        assert len(run.lines) == 1, run.stderr
+        assert run.lines[0].startswith("hexapod-kin: warning: sweep chunk"), run.lines[0]
+        assert "scoring again" in run.lines[0], run.lines[0]
+    assert (tmp_path / "s.csv").read_bytes() == reference
+    assert not marker.exists()
+    _no_parts(tmp_path)
+
+
+def _start_scheduler() -> tuple[subprocess.Popen[str], str]:
+    sched = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+         "--port", "0", "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert sched.stderr is not None
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 30:
+        line = sched.stderr.readline()
+        found = re.search(r"Scheduler at:\s+(tcp://\S+)", line)
+        if found:
+            return sched, found.group(1)
+        if not line and sched.poll() is not None:
+            break
+    sched.kill()
+    raise AssertionError("the Dask scheduler did not start")
+
+
+def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> None:
+    """One line, status 2; the chunks left are plain scores, and the next run finishes from
+    them to the same table as an undisturbed run."""
+    pytest.importorskip("distributed")
+    from hexapod_kin.sweep import SCORES, DesignSpace, parse_range, sweep
+
+    args = ("sweep", "--l1", "0.03:0.07:3", "--l2", "0.08:0.12:4", "--mc-samples", "40000",
+            "--chunk-size", "1", "--no-progress", "--out", "k.csv")  # fmt: skip
+    sched, addr = _start_scheduler()
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
+         "--no-nanny", "--no-dashboard"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    parts = tmp_path / ".k.csv.sweep-parts"
+    proc = None
+    try:
+        out, err = tmp_path / ".stdout", tmp_path / ".stderr"
+        with open(out, "wb") as fo, open(err, "wb") as fe:
+            t0 = time.monotonic()
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "hexapod_kin", *args, "--scheduler", addr],
+                cwd=tmp_path, stdout=fo, stderr=fe, env=_env(), preexec_fn=_cap,
+            )  # fmt: skip
+            while not list(parts.glob("chunk_*.npz")):  # the first chunk is stored: kill
+                assert time.monotonic() - t0 < LIMIT_S, "no chunk stored"
+                time.sleep(0.005)
+            sched.send_signal(signal.SIGKILL)
+            run = _finish(proc, t0, LIMIT_S, out, err)
+    finally:
+        for p in (sched, worker, proc):
+            if p is not None and p.returncode is None:
+                p.kill()
+                p.wait()
+        if sched.stderr is not None:
+            sched.stderr.close()
+    _record(record_property, run)
+    refused(run, "lost sweep chunk")
+    kept = sorted(parts.glob("chunk_*.npz"))
+    assert 0 < len(kept) < 12
+    for f in kept:  # plain float scores: nothing pickled
+        with np.load(f, allow_pickle=False) as z:
+            assert z["scores"].dtype == np.float64 and z["scores"].shape == (1, len(SCORES))
+    again = cli(*args, "--json", cwd=tmp_path)
+    within_limits(again)
+    assert again.status == 0 and again.stderr == "", again.stderr
+    assert json.loads(again.stdout)["scored"] == 12 - len(kept)
+    space = DesignSpace({"l1": parse_range("--l1", args[2]), "l2": parse_range("--l2", args[4])})
+    (tmp_path / "ref").mkdir()
+    ref = sweep(space, mc_samples=40_000, chunk_size=1, out=tmp_path / "ref" / "k.csv")
+    assert (tmp_path / "k.csv").read_bytes() == Path(ref.files["csv"]).read_bytes()
+
+
+def test_the_catch_all_is_still_the_last_resort(monkeypatch, capsys) -> None:
+    """An unexpected error (a bug) still ends in one line and status 2, naming itself."""
+    from hexapod_kin import kinematics
+    from hexapod_kin.cli import main
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(kinematics, "load", boom)
+    monkeypatch.delenv("HEXAPOD_KIN_DEBUG", raising=False)
+    assert main(["fk", "hexabot_leg"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [
+        "hexapod-kin: error: unexpected RuntimeError: boom (a bug: please report it; "
+        "HEXAPOD_KIN_DEBUG=1 shows the traceback)"
+    ]
