@@ -195,6 +195,32 @@ def _replace(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
+def snapshot(digest: str) -> bytes | None:
+    """The entry file of ``digest`` as it is now (None: there is none), for :func:`restore`."""
+    try:
+        return (cache_dir() / f"{digest}.json").read_bytes()
+    except OSError:
+        return None
+
+
+def restore(digest: str, data: bytes | None) -> None:
+    """Put the entry of ``digest`` back as :func:`snapshot` found it (after a Ctrl-C).
+
+    The worker writes each stage as it finishes, marked as a budget stop; an interrupted run
+    reached no budget, and that mark would keep every later run with the same budget from
+    carrying on.
+    """
+    path = cache_dir() / f"{digest}.json"
+    try:
+        if data is None:
+            path.unlink(missing_ok=True)
+        else:
+            _replace(path, data.decode("utf-8"))
+    except (OSError, UnicodeDecodeError):
+        pass
+    sweep(digest)
+
+
 def sweep(digest: str) -> None:
     """Remove the temporary files a killed derivation of ``digest`` may have left."""
     for tmp in cache_dir().glob(f".{digest}.json.*.tmp"):

@@ -647,7 +647,13 @@ def derive(
             done: dict[str, Any] = {}
             reason = "deadline reached" if budget is None else f"budget of {budget:g} s reached"
         else:
-            done, reason = _cache.run(gen, run_for)
+            kept = _cache.snapshot(digest) if write else None
+            try:
+                done, reason = _cache.run(gen, run_for)
+            except KeyboardInterrupt:  # the worker's stages are on disk as a budget stop
+                if write:
+                    _cache.restore(digest, kept)
+                raise
         if reason is not None and write:
             _cache.sweep(digest)
         stages = {**have, **done}
