@@ -37,6 +37,7 @@ import sys
 import time
 import uuid
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -428,3 +429,28 @@ def test_atomic_write_interrupted_as_its_file_is_created(
     with pytest.raises(KeyboardInterrupt):
         atomic_write(tmp_path / "x.txt", "whole")
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_interrupted_derivation_leaves_its_entry_as_it_was(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The worker writes its stages as they finish, marked as a budget stop; after a Ctrl-C
+    the entry is put back as it was (here: none), so the next run with the same budget
+    carries on instead of stopping at NOT DONE (the soak found exit 1 after an interrupt)."""
+    from hexapod_kin.symbolic import cache, derive
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    written: list[Path] = []
+
+    def interrupted_run(stages: Any, budget: object) -> object:
+        for _stage in stages():  # the worker's first stages reach the disk, then Ctrl-C
+            written.extend(cache.cache_dir().glob("*.json"))
+            if written:
+                raise KeyboardInterrupt
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cache, "run", interrupted_run)
+    with pytest.raises(KeyboardInterrupt):
+        derive(str(ROOT / "examples" / "leg5.yaml"))
+    assert written, "the stages were not written as they finished"
+    assert sorted(cache.cache_dir().glob("*.json")) == []
