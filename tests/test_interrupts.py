@@ -82,16 +82,6 @@ REGULAR = ("derive-5dof", "export-package", "gait", "mjcf", "sweep", "view")
 #: once the table is written).
 RESUMABLE = (".sweep.csv.sweep-parts",)
 INTERRUPTED = "hexapod-kin: interrupted"
-#: Files that the next run writes differently when an interrupted try left the symbolic cache
-#: filled: expressions read back from that cache print expanded (``-(a + b)`` becomes
-#: ``-a - b``), a "same bits whatever ran before" bug of the cache reader, not of the
-#: interrupt (``reproduce --no-cache`` after ``reproduce`` shows it with no interrupt at
-#: all). For them the next run is only checked whole (the reference's last line). Remove an
-#: entry once its bug is fixed.
-WARM_DIFFERS = {
-    "reproduce": ("report/report.md", "report/report.html"),
-    "reproduce-quick": ("report/report.md", "report/report.html"),
-}
 
 
 def _params() -> list[object]:
@@ -201,11 +191,8 @@ def _files(folder: Path) -> dict[str, bytes]:
     }
 
 
-def _problems(work: Path, reference: dict[str, bytes], lenient: tuple[str, ...] = ()) -> list[str]:
-    """Temporary files, unexpected hidden files and files unlike the reference run's.
-
-    ``lenient`` files need only end as the reference's does (see :data:`WARM_DIFFERS`).
-    """
+def _problems(work: Path, reference: dict[str, bytes]) -> list[str]:
+    """Temporary files, unexpected hidden files and files unlike the reference run's."""
     found = []
     for p in sorted(work.rglob("*")):
         if ".tmp" in p.name:
@@ -217,9 +204,6 @@ def _problems(work: Path, reference: dict[str, bytes], lenient: tuple[str, ...] 
             continue
         if rel not in reference:
             found.append(f"a file the complete run does not write: {rel}")
-        elif rel in lenient:
-            if data.rstrip().splitlines()[-1:] != reference[rel].rstrip().splitlines()[-1:]:
-                found.append(f"a file that does not end as the complete run's: {rel}")
         elif data != reference[rel]:
             found.append(f"a file unlike the complete run's (partial?): {rel}")
     return found
@@ -295,8 +279,7 @@ def test_ctrl_c(tmp_path: Path, name: str) -> None:
         failures.append(
             f"next run (after the {latest[0]:.3f} s try): status {status}: {err[-2000:]}"
         )
-    lenient = WARM_DIFFERS.get(name, ())
-    failures += [f"next run: {p}" for p in _problems(work, reference, lenient)]
+    failures += [f"next run: {p}" for p in _problems(work, reference)]
     missing = sorted(set(reference) - set(_files(work / "out")))
     if missing:
         failures.append(f"next run: files missing {missing}")
