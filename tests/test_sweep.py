@@ -437,7 +437,7 @@ def test_interrupted_cli_sweep_resumes_to_the_same_table(local_run, tmp_path):
     out = tmp_path / "s.csv"
     parts = tmp_path / ".s.csv.sweep-parts"  # the hidden sidecar of the chunks
     rc = _run_until_chunks(_cli(out), parts, 1, signal.SIGINT)  # Ctrl-C
-    assert rc == 130
+    assert rc in (130, -signal.SIGINT)  # a shell's $? = 130 for both
     have = len(list(parts.glob("chunk_*.npz")))
     rc = _run_until_chunks(_cli(out), parts, have + 2, signal.SIGKILL)
     assert rc == -signal.SIGKILL

@@ -112,22 +112,24 @@ def run() -> None:
 
 
 def _exit_interrupted() -> None:
-    """End an interrupted command now with status 130, without the interpreter's teardown.
+    """End an interrupted command now, by SIGINT, without the interpreter's teardown.
 
     When :func:`main` returns, the command's own clean-up has run (``finally`` blocks and
     context managers: temporary files, the viewer's server, the symbolic worker). The
     teardown would then finalize what the interrupt left half-built — a numba/LLVM compile
-    cut short has crashed it (SIGSEGV after the line) — and CPython ends the process by
-    SIGINT instead of the status when the interrupt escaped code run through its
-    ``PyRun_*`` API (Boost.Python's ``exec`` inside Pinocchio's import). Exit handlers are
-    not run: none of the package's is needed once its context managers have closed.
+    cut short has crashed it (SIGSEGV after the line). The process ends the way POSIX asks
+    an interrupted program to end, by its own SIGINT with the default action, so that the
+    shell sees status 130 (``$?``; ``subprocess`` reports ``-2``) and a calling script
+    stops too (CPython itself ends so after an unhandled ``KeyboardInterrupt``).
     """
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
         except Exception:  # noqa: BLE001 - a closed pipe: nothing more to say
             pass
-    os._exit(130)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.raise_signal(signal.SIGINT)
+    sys.exit(130)  # pragma: no cover - only where SIGINT's default action does not end us
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -147,10 +149,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ``KeyboardInterrupt`` (e.g. inside an import, or where Python can only report it as
     "Exception ignored": then it is delivered again, to stop the work where it can
     propagate) cannot turn it into a success: an interrupted command ends with one line and
-    status 130. (When the interrupt lands inside Python code that an extension
-    module runs at import, CPython ends the process by SIGINT itself after this status is
-    returned, unless :func:`run` is the entry point: it exits with 130 at once, see
-    :func:`_exit_interrupted`.)
+    status 130 (:func:`run`, the entry point, then ends the process by its own SIGINT after
+    the command's clean-up, as POSIX asks of an interrupted program: the shell's ``$?`` is
+    130; see :func:`_exit_interrupted`).
     """
     interrupted: list[int] = []
     active = [True]  # False once the command is done: a late signal is only recorded
