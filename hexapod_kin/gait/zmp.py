@@ -49,17 +49,18 @@ def zmp_points(
     masses, levers, rot_i = wb.link_inertias()
     R = np.concatenate([base[:, None, :3, :3], joint_poses[:, :, :3, :3]], axis=1)
     p = np.concatenate([base[:, None, :3, 3], joint_poses[:, :, :3, 3]], axis=1)
-    x = np.einsum("nkij,kj->nki", R, levers) + p  # (N, K, 3) link CoMs
+    x = (R @ levers[None, :, :, None])[..., 0] + p  # (N, K, 3) link CoMs
     mass = float(masses.sum())
-    c = np.einsum("k,nki->ni", masses, x) / mass
+    c = (masses @ x) / mass
     dt = float(t[1] - t[0])
     xd = np.gradient(x, dt, axis=0, edge_order=2)
     Rd = np.gradient(R, dt, axis=0, edge_order=2)
-    W = np.einsum("nkij,nklj->nkil", Rd, R)  # Ṙ Rᵀ = [ω]×
+    W = Rd @ np.swapaxes(R, -1, -2)  # Ṙ Rᵀ = [ω]×
     w = 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0],
                         W[..., 1, 0] - W[..., 0, 1]], axis=-1)  # fmt: skip
-    spin = np.einsum("nkij,kjl,nkml,nkm->nki", R, rot_i, R, w)
-    L = np.einsum("k,nki->ni", masses, np.cross(x - c[:, None], xd)) + spin.sum(axis=1)
+    local = np.swapaxes(R, -1, -2) @ w[..., None]  # ω in each link's frame
+    spin = (R @ (rot_i[None] @ local))[..., 0]  # R I Rᵀ ω
+    L = masses @ np.cross(x - c[:, None], xd) + spin.sum(axis=1)
     Ld = np.gradient(L, dt, axis=0, edge_order=2)
     cdd = _second(c, dt)
     den = GRAVITY + cdd[:, 2]
