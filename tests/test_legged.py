@@ -596,8 +596,8 @@ def test_a_default_stance_with_no_joint_room_is_replaced_by_the_roomiest(tmp_pat
     path.write_text(_upturned_hexapod(True))
     wb = as_whole_body(str(path))
     # the rule's own default, recomputed by hand, has no room
-    span = float(np.mean(wb._span))
-    geo_reach = min(0.64 * span, span)  # q = 0 points the legs outwards, past 0.64 span
+    span = wb.leg_span
+    geo_reach = 0.64 * span  # q = 0 points the legs outwards, past 0.64 of the span
     geo_height = math.sqrt((math.hypot(0.64, 0.32) * span) ** 2 - geo_reach**2)
     assert room(wb, geo_height, geo_reach) < 0  # a joint leaves its range on the first step
     with pytest.raises(GaitError, match="joint limit"):

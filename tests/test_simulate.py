@@ -338,7 +338,7 @@ def test_servo_gains_scale_with_the_robots_weight_and_size() -> None:
 
     assert servo_defaults(whole_body()) == (300.0, 3.0, 0.002)
     wb = as_whole_body("erd:anymal")
-    m, span = wb.mass, float(np.mean(wb._span))
+    m, span = wb.mass, wb.leg_span
     kp, kv, arm = servo_defaults(wb)
     assert kp == pytest.approx(300 * m * span / (1.96 * 0.25), rel=5e-3) and kp == 12800
     assert kv == pytest.approx(0.01 * kp) and arm == pytest.approx(

@@ -69,7 +69,7 @@ def roomiest_stance(wb: Any) -> tuple[float, float] | None:
     here = room(wb, wb.body_height)
     if here >= MIN_ROOM:
         return None
-    span = float(np.mean(wb._span))
+    span = wb.leg_span
     mount_z = float(np.min(wb.mounts[:, 2, 3]))
     best_score, best_dist, choice = here, math.inf, None
     for r in np.linspace(0.2, 0.9, 12) * span:

@@ -259,6 +259,11 @@ class WholeBody:
 
     # ------------------------------------------------------------------ standing defaults
     @property
+    def leg_span(self) -> float:
+        """The legs' mean span [m]: joint to joint to foot, at q = 0 (clipped into the limits)."""
+        return float(np.mean(self._span))
+
+    @property
     def foot_reach(self) -> float:
         """The default mount-to-foot horizontal distance [m] (legs' mean, :meth:`neutral_feet`)."""
         return float(np.mean(self._reach))

@@ -69,7 +69,7 @@ from .sway import sway_poses
 from .tables import PhaseTable, phase_table
 from .terrain import Terrain, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
-from .zmp import zmp_points
+from .zmp import second_difference, zmp_points
 
 __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 
@@ -367,20 +367,6 @@ class GaitRun:
             "mass": self.mass,
             **{k: (list(v) if isinstance(v, tuple) else v) for k, v in self.settings.items()},
         }
-
-
-def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """d²x/dt² (N, ...) on uniform samples (N ≥ 4).
-
-    ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the second-order one-sided
-    ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends.
-    """
-    dt = float(t[1] - t[0])
-    out = np.empty_like(x)
-    out[1:-1] = x[2:] - 2.0 * x[1:-1] + x[:-2]
-    out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
-    out[-1] = 2.0 * x[-1] - 5.0 * x[-2] + 4.0 * x[-3] - x[-4]
-    return np.asarray(out / (dt * dt))
 
 
 def _zmp_margin(

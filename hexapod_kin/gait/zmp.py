@@ -19,13 +19,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GRAVITY", "zmp_points"]
+__all__ = ["GRAVITY", "second_difference", "zmp_points"]
 
 #: Gravity [m/s²].
 GRAVITY = 9.81
 
 
-def _second(x: np.ndarray, dt: float) -> np.ndarray:
+def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """d²x/dt² (N, ...) on uniform samples (N ≥ 4).
+
+    ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the second-order one-sided
+    ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends.
+    """
+    dt = float(t[1] - t[0])
     out = np.empty_like(x)
     out[1:-1] = x[2:] - 2.0 * x[1:-1] + x[:-2]
     out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
@@ -62,7 +68,7 @@ def zmp_points(
     spin = (R @ (rot_i[None] @ local))[..., 0]  # R I Rᵀ ω
     L = masses @ np.cross(x - c[:, None], xd) + spin.sum(axis=1)
     Ld = np.gradient(L, dt, axis=0, edge_order=2)
-    cdd = _second(c, dt)
+    cdd = second_difference(c, t)
     den = GRAVITY + cdd[:, 2]
     out = np.empty_like(c)
     lever = (c[:, 2] - ground) / den

@@ -13,7 +13,7 @@ from __future__ import annotations
 import builtins
 import hashlib
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from types import BuiltinFunctionType
 from typing import Any
@@ -23,6 +23,8 @@ import sympy as sp
 from sympy.core.rules import Transform
 from sympy.parsing.sympy_parser import parse_expr
 from sympy.simplify.radsimp import collect_abs
+
+from ..symbolic.checks import NUMPY_FUNCTIONS
 
 __all__ = [
     "POINTS",
@@ -127,18 +129,7 @@ class _Unsupported(Exception):
     """An expression :func:`_evaluate` has no numpy rule for."""
 
 
-_NUMPY: dict[Any, Callable[..., Any]] = {
-    sp.sin: np.sin,
-    sp.cos: np.cos,
-    sp.tan: np.tan,
-    sp.exp: np.exp,
-    sp.log: np.log,
-    sp.Abs: np.abs,
-    sp.asin: np.arcsin,
-    sp.acos: np.arccos,
-    sp.atan: np.arctan,
-    sp.atan2: np.arctan2,
-}
+_NUMPY = NUMPY_FUNCTIONS  # one table of sympy → numpy functions
 
 
 def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:

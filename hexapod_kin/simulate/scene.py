@@ -226,7 +226,7 @@ def servo_defaults(robot: Any) -> tuple[float, float, float]:
     hexapod gets exactly 300, 3 and 0.002; erd:anymal (30.5 kg, 0.685 m) 12,800 N·m/rad.
     """
     wb = _robot(robot, None)
-    span = float(np.mean(wb._span)) if hasattr(wb, "_span") else 0.25
+    span = wb.leg_span
     m = float(wb.mass)
     if not (m > 0 and span > 0):
         return 300.0, 3.0, 0.002
@@ -430,12 +430,16 @@ def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
     data.qpos[2], data.qpos[3] = 100.0, 1.0
     data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
     mujoco.mj_forward(model, data)
+
+    def name(b: int) -> str:
+        return str(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b))
+
     pairs: set[tuple[str, str]] = set()
     for c in data.contact[: data.ncon]:
         b1, b2 = int(model.geom_bodyid[c.geom1]), int(model.geom_bodyid[c.geom2])
         if b1 and b2 and b1 != b2:
-            name = lambda b: mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)  # noqa: E731
-            pairs.add(tuple(sorted((name(b1), name(b2)))))
+            a, b = sorted((name(b1), name(b2)))
+            pairs.add((a, b))
     if not pairs:
         return
     contact = root.find("contact")

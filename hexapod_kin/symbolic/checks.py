@@ -24,9 +24,10 @@ import sympy as sp
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
 
-__all__ = ["claims_hold", "evaluate", "evaluate_matrix"]
+__all__ = ["NUMPY_FUNCTIONS", "claims_hold", "evaluate", "evaluate_matrix"]
 
-_FUNCTIONS: dict[Any, Any] = {
+#: sympy functions and their numpy twins (also the seed report's numeric comparison).
+NUMPY_FUNCTIONS: dict[Any, Any] = {
     sp.sin: np.sin,
     sp.cos: np.cos,
     sp.tan: np.tan,
@@ -88,8 +89,8 @@ def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
                 out = out * v
         elif node.is_Pow:
             out = np.power(args[0], args[1])
-        elif node.func in _FUNCTIONS:
-            out = _FUNCTIONS[node.func](*args)
+        elif node.func in NUMPY_FUNCTIONS:
+            out = NUMPY_FUNCTIONS[node.func](*args)
         else:
             raise ValueError(f"cannot evaluate {node.func} here")
         memo[node] = out
