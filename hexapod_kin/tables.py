@@ -38,14 +38,13 @@ YAML with PyYAML (``pip install hexapod-kin[tables]``).
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._io import decode_utf8, read_regular
-from .exceptions import OptionalDependencyError, ParameterError, SourceError, did_you_mean
+from ._reader import clip, format_of, read_data
+from .exceptions import ParameterError, did_you_mean
 from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
 
 __all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
@@ -64,13 +63,6 @@ _GEOMETRY = {"khalil": ("alpha", "d", "theta", "r"), "dh": ("theta", "d", "a", "
 _ANGLE_KEYS = {"alpha", "theta"}
 _MAX_BYTES = 1_000_000
 
-
-#: Structure bounds of a table file (a real table is far inside them): nesting depth,
-#: values after YAML alias expansion, YAML aliases, characters of one string.
-MAX_DEPTH = 16
-MAX_VALUES = 100_000
-MAX_ALIASES = 64
-MAX_STRING = 10_000
 #: Largest magnitude of a length in a table [m] (and of a com or pose offset).
 MAX_LENGTH = 1e3
 #: Largest magnitude of any other number (the URDF gate's bound on any value).
@@ -80,175 +72,6 @@ MAX_NUMBER = 1e9
 #: and the base, frame 0, tool and DH tip links take the other four.
 MAX_ROWS = 996
 MAX_JOINTS = 128
-
-
-def _refuse(path: Path, what: str, allowed: str) -> SourceError:
-    return SourceError(
-        f"{path.name}: {what}; allowed: {allowed}", parameter="source", value=str(path),
-        allowed=allowed,
-    )  # fmt: skip
-
-
-def _strict_yaml(text: str, path: Path) -> Any:
-    """PyYAML's safe loader refusing duplicate keys, deep nesting and many aliases."""
-    import yaml
-
-    class Loader(yaml.SafeLoader):
-        depth = 0
-        aliases = 0
-
-        def compose_node(self, parent: Any, index: Any) -> Any:
-            if self.check_event(yaml.AliasEvent):
-                self.aliases += 1
-                if self.aliases > MAX_ALIASES:
-                    raise _refuse(path, f"more than {MAX_ALIASES} YAML aliases",
-                                  f"at most {MAX_ALIASES} aliases")  # fmt: skip
-                return super().compose_node(parent, index)
-            self.depth += 1
-            if self.depth > MAX_DEPTH:
-                raise _refuse(path, f"values nested deeper than {MAX_DEPTH} levels",
-                              f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
-            try:
-                return super().compose_node(parent, index)
-            finally:
-                self.depth -= 1
-
-        def construct_mapping(self, node: Any, deep: bool = False) -> Any:
-            seen: set[Any] = set()
-            for key_node, _ in node.value:
-                key = self.construct_object(key_node, deep=True)
-                try:
-                    dup = key in seen
-                    seen.add(key)
-                except TypeError:  # an unhashable key: the base class refuses it
-                    continue
-                if dup:
-                    line = key_node.start_mark.line + 1
-                    raise _refuse(path, f"key {key!r} given twice (line {line})",
-                                  "each key once per table")  # fmt: skip
-            return super().construct_mapping(node, deep=deep)
-
-    loader = Loader(text)
-    try:
-        return loader.get_single_data()
-    finally:
-        loader.dispose()
-
-
-def _check_structure(data: Any, path: Path) -> None:
-    """Refuse deep, huge (after alias expansion) or odd values; iterative, stops early."""
-    stack: list[tuple[Any, int, str]] = [(data, 0, "")]
-    count = 0
-    while stack:
-        value, depth, key = stack.pop()
-        count += 1
-        if count > MAX_VALUES:
-            raise _refuse(path, f"more than {MAX_VALUES} values (after alias expansion)",
-                          f"at most {MAX_VALUES} values")  # fmt: skip
-        if depth > MAX_DEPTH:
-            raise _refuse(path, f"values nested deeper than {MAX_DEPTH} levels",
-                          f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
-        where = f"key {key!r}" if key else "a value"
-        if isinstance(value, dict):
-            for k, v in value.items():
-                stack.append((k, depth + 1, key))
-                stack.append((v, depth + 1, str(k)[:40]))
-        elif isinstance(value, (list, tuple)):
-            stack.extend((v, depth + 1, key) for v in value)
-        elif isinstance(value, bool) or value is None:
-            continue
-        elif isinstance(value, int):
-            if abs(value) > 2**53:
-                raise _refuse(path, f"{where}: an integer of {len(str(abs(value)))} digits",
-                              "integers of at most 15 digits")  # fmt: skip
-        elif isinstance(value, str):
-            if len(value) > MAX_STRING:
-                raise _refuse(path, f"{where}: a string of {len(value)} characters",
-                              f"strings of at most {MAX_STRING} characters")  # fmt: skip
-        elif not isinstance(value, float):
-            raise _refuse(path, f"{where}: a value of type {type(value).__name__}",
-                          "numbers, strings, lists and tables")  # fmt: skip
-
-
-def _load_mapping(path: Path) -> dict[str, Any]:
-    suffix = path.suffix.lower()
-    text = decode_utf8(read_regular(path, _MAX_BYTES), str(path))
-    if suffix == ".toml":
-        try:
-            import tomllib as toml_reader  # type: ignore[import-not-found,unused-ignore]
-        except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-            try:
-                import tomli as toml_reader  # type: ignore[no-redef,import-not-found,unused-ignore]
-            except ModuleNotFoundError:
-                raise OptionalDependencyError(
-                    "reading TOML on Python 3.10 needs tomli; `pip install hexapod-kin[tables]`",
-                    parameter="source",
-                ) from None
-        try:
-            data = toml_reader.loads(text)
-        except toml_reader.TOMLDecodeError as exc:
-            raise SourceError(f"{path.name}: not valid TOML ({exc})", parameter="source") from None
-        except SourceError:
-            raise
-        except RecursionError:
-            raise _refuse(path, "values nested too deeply for the TOML reader",
-                          f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
-        except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _value_refused(path, "TOML", exc) from None
-    else:
-        try:
-            import yaml
-        except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the test extra
-            raise OptionalDependencyError(
-                "reading YAML table files needs PyYAML; `pip install hexapod-kin[tables]`",
-                parameter="source",
-            ) from None
-        try:
-            data = _strict_yaml(text, path)
-        except yaml.constructor.ConstructorError as exc:  # a tag such as !!python/object
-            found = re.search(r"tag '([^']*)'", str(exc.problem))
-            tag = found.group(1).replace("tag:yaml.org,2002:", "!!") if found else "?"
-            mark = exc.problem_mark
-            where = f"line {mark.line + 1}: " if mark is not None else ""
-            raise _refuse(
-                path,
-                f"{where}the YAML tag {_clip(tag)} is not allowed",
-                "plain YAML values (numbers, strings, lists, mappings)",
-            ) from None
-        except yaml.YAMLError as exc:
-            raise SourceError(
-                f"{path.name}: not valid YAML ({_short(exc)})", parameter="source"
-            ) from None
-        except SourceError:
-            raise
-        except RecursionError:
-            raise _refuse(path, "values nested too deeply for the YAML reader",
-                          f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
-        except ValueError as exc:  # e.g. an integer beyond Python's digit limit
-            raise _value_refused(path, "YAML", exc) from None
-    if not isinstance(data, dict):
-        raise SourceError(
-            f"{path.name}: the file must hold a mapping (name, convention, row, ...), got "
-            f"{type(data).__name__}",
-            parameter="source",
-        )
-    _check_structure(data, path)
-    return data
-
-
-def _value_refused(path: Path, reader: str, exc: ValueError) -> SourceError:
-    """A value the reader cannot build: an integer beyond Python's digit limit, or another."""
-    digits = re.search(r"value has (\d+) digits", str(exc))
-    if digits:
-        what = f"an integer of {digits.group(1)} digits"
-    else:
-        what = f"a value the {reader} reader refuses ({_short(exc)})"
-    return _refuse(path, what, "integers of at most 15 digits")
-
-
-def _short(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return text if len(text) <= 160 else text[:157] + "..."
 
 
 def read_table(path: Path | str, **overrides: Any) -> Chain:
@@ -267,7 +90,10 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
 
     """
     path = Path(path)
-    data = _load_mapping(path)
+    data = read_data(
+        path, "source", fmt=format_of(path), max_bytes=_MAX_BYTES,
+        mapping="name, convention, row, ...",
+    )  # fmt: skip
     unknown = sorted(set(overrides) - set(TOP_KEYS))
     if unknown:
         raise ParameterError(
@@ -294,7 +120,7 @@ def _number(value: Any, where: str, limit: float = MAX_NUMBER) -> float:
         out = math.inf
     if not math.isfinite(out):
         raise ParameterError(
-            f"{where}={_clip(value)} is not finite", parameter=where, value=_clip(value)
+            f"{where}={clip(value)} is not finite", parameter=where, value=clip(value)
         )
     if abs(out) > limit:
         raise ParameterError(
@@ -306,19 +132,26 @@ def _number(value: Any, where: str, limit: float = MAX_NUMBER) -> float:
     return out
 
 
-def _clip(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
-
-
 def _numbers(value: Any, n: int, where: str, limit: float = MAX_NUMBER) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)) or len(value) != n:
         raise ParameterError(
-            f"{where}={_clip(value)}: a list of {n} numbers is required",
+            f"{where}={clip(value)}: a list of {n} numbers is required",
             parameter=where,
-            value=_clip(value),
+            value=clip(value),
         )
     return tuple(_number(v, f"{where}[{i}]", limit) for i, v in enumerate(value))
+
+
+def _text(value: Any, where: str) -> str:
+    """A name or a text of the table: a string, never a number or a boolean made into one."""
+    if not isinstance(value, str):
+        raise ParameterError(
+            f"{where}={clip(value)} must be a string (quote it)",
+            parameter=where,
+            value=clip(value),
+            allowed="a string",
+        )
+    return value
 
 
 def _check_keys(got: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
@@ -401,10 +234,10 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         if isinstance(sigma, bool) or not isinstance(sigma, (str, int)):
             key = "type" if "type" in row else "sigma"
             raise ParameterError(
-                f"{where}.{key}={_clip(sigma)} is not allowed; use 'revolute', 'prismatic' or "
+                f"{where}.{key}={clip(sigma)} is not allowed; use 'revolute', 'prismatic' or "
                 "'fixed' (sigma 0, 1 or 2)",
                 parameter=key,
-                value=_clip(sigma),
+                value=clip(sigma),
                 allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
             )
         geo = {
@@ -422,8 +255,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             raise ParameterError(f"{where}: {exc}", parameter="type", value=sigma) from None
         rows.append(built)
         if built.sigma != "fixed":
-            name = row.get("name", f"q{len(joint_names) + 1}")
-            joint_names.append(str(name))
+            joint_names.append(_text(row.get("name", f"q{len(joint_names) + 1}"), f"{where}.name"))
             lim_scale = scale if built.sigma == "revolute" else 1.0
             default = (
                 JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
@@ -452,7 +284,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
                         f"{where}: {key!r} is for joint rows; this row is fixed", parameter=key
                     )
         if "link" in row:
-            links.append(str(row["link"]))
+            links.append(_text(row["link"], f"{where}.link"))
         if "mass" in row:
             mass = _number(row["mass"], f"{where}.mass")
             com = _numbers(row["com"], 3, f"{where}.com", MAX_LENGTH) if "com" in row else None
@@ -483,11 +315,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
     kwargs: dict[str, Any] = {"joint_names": tuple(joint_names), "limits": tuple(limits)}
     for key in ("name", "description", "base", "tip"):
         if key in data:
-            if not isinstance(data[key], str):
-                raise ParameterError(
-                    f"{key}={data[key]!r} must be a string", parameter=key, value=data[key]
-                )
-            kwargs[key] = data[key]
+            kwargs[key] = _text(data[key], key)
     for key in ("link_mass", "link_radius"):
         if key in data:
             kwargs[key] = _number(data[key], key)

@@ -1,0 +1,319 @@
+"""The one strict reader of every file a user gives: tables, calibrations, feet, plans, timelines.
+
+:func:`read_data` reads a JSON, TOML or YAML file; :func:`read_text` the text of any other
+(a CSV). Every such file passes the same checks, with the same messages:
+
+* **the file**: a regular file only (a folder, a device such as ``/dev/zero``, a named pipe
+  or a socket is refused without reading it, saying what it is), at most ``max_bytes``
+  counted while reading, strict UTF-8 (the offset of the first bad byte is named);
+* **the syntax**: duplicate keys refused in JSON, TOML and YAML (a key given twice never
+  silently takes the last value); only plain YAML (no tags such as ``!!python/object``);
+  ``Infinity``/``NaN`` are not JSON;
+* **the structure**: at most :data:`MAX_ALIASES` YAML aliases, nesting at most
+  :data:`MAX_DEPTH` levels, at most ``max_values`` values after alias expansion (a 400-byte
+  "billion laughs" is refused in milliseconds), keys that are strings, integers of at most
+  15 digits, strings of at most :data:`MAX_STRING` characters.
+
+TOML is read with ``tomllib`` (Python ≥ 3.11) or ``tomli`` (3.10); YAML with PyYAML.
+Every refusal is a :class:`~.exceptions.SourceError` whose ``parameter`` is the kind of file
+(``what``: ``"source"``, ``"feet"``, ``"calibration"``, ...) and whose message is one line
+naming the file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+from typing import Any
+
+from ._io import decode_utf8, read_regular
+from .exceptions import HexapodKinError, OptionalDependencyError, SourceError
+
+__all__ = [
+    "FORMATS",
+    "MAX_ALIASES",
+    "MAX_BYTES",
+    "MAX_DEPTH",
+    "MAX_STRING",
+    "MAX_VALUES",
+    "clip",
+    "format_of",
+    "parse_data",
+    "read_data",
+    "read_text",
+]
+
+#: Formats of :func:`read_data`, by file suffix.
+FORMATS = {".json": "json", ".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
+#: Default byte cap of a user file.
+MAX_BYTES = 1_000_000
+#: Deepest nesting of values (a real file is far inside it).
+MAX_DEPTH = 16
+#: Most values of a file after YAML alias expansion (default of ``max_values``).
+MAX_VALUES = 100_000
+#: Most YAML aliases of a file.
+MAX_ALIASES = 64
+#: Most characters of one string.
+MAX_STRING = 10_000
+_MAX_INT = 2**53
+
+
+def _refuse(name: str, what: str, problem: str, allowed: str) -> SourceError:
+    return SourceError(
+        f"{name}: {problem}; allowed: {allowed}", parameter=what, value=name, allowed=allowed
+    )
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def format_of(path: str | os.PathLike[str], default: str = "yaml") -> str:
+    """The format of ``path`` by its suffix (``json``, ``toml``, ``yaml``), else ``default``."""
+    return FORMATS.get(Path(path).suffix.lower(), default)
+
+
+def read_text(
+    path: str | os.PathLike[str],
+    what: str = "source",
+    max_bytes: int = MAX_BYTES,
+    too_big: type[HexapodKinError] | None = None,
+) -> str:
+    """The UTF-8 text of the regular file ``path``, at most ``max_bytes`` long.
+
+    Raises:
+        SourceError: Not a regular file, unreadable, larger than ``max_bytes`` (``too_big``
+            when given) or not UTF-8; ``parameter`` is ``what``.
+
+    """
+    return decode_utf8(read_regular(path, max_bytes, what, too_big), str(path), what)
+
+
+def read_data(
+    path: str | os.PathLike[str],
+    what: str = "source",
+    *,
+    fmt: str | None = None,
+    max_bytes: int = MAX_BYTES,
+    max_values: int = MAX_VALUES,
+    mapping: str | None = None,
+) -> Any:
+    """The values of a JSON, TOML or YAML file, read strictly (see the module docstring).
+
+    Args:
+        path: The file.
+        what: The kind of file, named in errors (``parameter``).
+        fmt: ``"json"``, ``"toml"`` or ``"yaml"``; default: by the suffix, else YAML.
+        max_bytes: Byte cap.
+        max_values: Most values after alias expansion.
+        mapping: When given, the file must hold a mapping; the text names what it holds
+            (e.g. ``"name, convention, row, ..."``).
+
+    Raises:
+        SourceError: Any refusal of the module docstring, or a syntax error.
+        OptionalDependencyError: YAML without PyYAML, TOML on Python 3.10 without tomli.
+
+    """
+    name = Path(path).name
+    text = read_text(path, what, max_bytes)
+    data = parse_data(text, name, fmt or format_of(path), what, max_values)
+    if mapping is not None and not isinstance(data, dict):
+        raise SourceError(
+            f"{name}: the file must hold a mapping ({mapping}), got {type(data).__name__}",
+            parameter=what,
+            value=name,
+            allowed="a mapping",
+        )
+    return data
+
+
+def parse_data(
+    text: str, name: str, fmt: str, what: str = "source", max_values: int = MAX_VALUES
+) -> Any:
+    """The values of ``text`` in ``fmt`` (``json``, ``toml``, ``yaml``), checked as a file's.
+
+    Raises:
+        SourceError: A syntax error, a duplicate key, or a value beyond the structure caps.
+        OptionalDependencyError: YAML without PyYAML, TOML on Python 3.10 without tomli.
+
+    """
+    try:
+        if fmt == "json":
+            data = _json(text, name, what)
+        elif fmt == "toml":
+            toml = _toml_module(what)
+            try:
+                data = toml.loads(text)
+            except toml.TOMLDecodeError as exc:
+                raise SourceError(
+                    f"{name}: not valid TOML ({_short(exc)})", parameter=what, value=name
+                ) from None
+        else:
+            data = _yaml(text, name, what)
+    except RecursionError:
+        raise _refuse(name, what, f"values nested too deeply for the {fmt.upper()} reader",
+                      f"nesting up to {MAX_DEPTH} levels") from None  # fmt: skip
+    except ValueError as exc:  # e.g. an integer beyond Python's digit limit
+        if isinstance(exc, HexapodKinError):  # the package's own errors are ValueErrors
+            raise
+        digits = re.search(r"value has (\d+) digits", str(exc))
+        problem = (
+            f"an integer of {digits.group(1)} digits" if digits
+            else f"a value the {fmt.upper()} reader refuses ({_short(exc)})"
+        )  # fmt: skip
+        raise _refuse(name, what, problem, "integers of at most 15 digits") from None
+    _check_structure(data, name, what, max_values)
+    return data
+
+
+def _json(text: str, name: str, what: str) -> Any:
+    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key, value in items:
+            if key in out:
+                raise _refuse(name, what, f"key {clip(key)} given twice",
+                              "each key once per mapping")  # fmt: skip
+            out[key] = value
+        return out
+
+    def constant(word: str) -> Any:
+        raise _refuse(name, what, f"{word} is not a JSON number", "finite numbers")
+
+    try:
+        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
+    except json.JSONDecodeError as exc:
+        raise SourceError(
+            f"{name}: not valid JSON ({_short(exc)})", parameter=what, value=name
+        ) from None
+
+
+def _toml_module(what: str) -> Any:
+    try:
+        import tomllib  # type: ignore[import-not-found,unused-ignore]
+    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+        try:
+            import tomli as tomllib  # type: ignore[no-redef,import-not-found,unused-ignore]
+        except ModuleNotFoundError:
+            raise OptionalDependencyError(
+                "reading TOML on Python 3.10 needs tomli; `pip install tomli`", parameter=what
+            ) from None
+    return tomllib
+
+
+def yaml_module(what: str = "source") -> Any:
+    """PyYAML, or :class:`OptionalDependencyError` with the install hint."""
+    try:
+        import yaml
+    except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the test extra
+        raise OptionalDependencyError(
+            "reading YAML files needs PyYAML; `pip install hexapod-kin[tables]`", parameter=what
+        ) from None
+    return yaml
+
+
+def _yaml(text: str, name: str, what: str) -> Any:
+    """PyYAML's safe loader refusing duplicate keys, deep nesting, many aliases and tags."""
+    yaml = yaml_module(what)
+
+    class Loader(yaml.SafeLoader):  # type: ignore[misc,name-defined]
+        depth = 0
+        aliases = 0
+
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            if self.check_event(yaml.AliasEvent):
+                self.aliases += 1
+                if self.aliases > MAX_ALIASES:
+                    raise _refuse(name, what, f"more than {MAX_ALIASES} YAML aliases",
+                                  f"at most {MAX_ALIASES} aliases")  # fmt: skip
+                return super().compose_node(parent, index)
+            self.depth += 1
+            if self.depth > MAX_DEPTH:
+                raise _refuse(name, what, f"values nested deeper than {MAX_DEPTH} levels",
+                              f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
+            try:
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+        def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    dup = key in seen
+                    seen.add(key)
+                except TypeError:  # an unhashable key: the base class refuses it
+                    continue
+                if dup:
+                    line = key_node.start_mark.line + 1
+                    raise _refuse(name, what, f"key {clip(key)} given twice (line {line})",
+                                  "each key once per mapping")  # fmt: skip
+            return super().construct_mapping(node, deep=deep)
+
+    loader = Loader(text)
+    try:
+        return loader.get_single_data()
+    except yaml.constructor.ConstructorError as exc:  # a tag such as !!python/object
+        found = re.search(r"tag '([^']*)'", str(exc.problem))
+        if found is None:
+            raise SourceError(
+                f"{name}: not valid YAML ({_short(exc)})", parameter=what, value=name
+            ) from None
+        tag = found.group(1).replace("tag:yaml.org,2002:", "!!")
+        mark = exc.problem_mark
+        where = f"line {mark.line + 1}: " if mark is not None else ""
+        raise _refuse(name, what, f"{where}the YAML tag {clip(tag)} is not allowed",
+                      "plain YAML values (numbers, strings, lists, mappings)") from None  # fmt: skip
+    except yaml.YAMLError as exc:
+        raise SourceError(
+            f"{name}: not valid YAML ({_short(exc)})", parameter=what, value=name
+        ) from None
+    finally:
+        loader.dispose()
+
+
+def clip(value: Any) -> str:
+    """``repr(value)``, shortened past 40 characters (a value quoted in a message)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
+
+
+def _check_structure(data: Any, name: str, what: str, max_values: int) -> None:
+    """Refuse deep, huge (after alias expansion) or odd values; iterative, stops early."""
+    stack: list[tuple[Any, int, str]] = [(data, 0, "")]
+    count = 0
+    while stack:
+        value, depth, key = stack.pop()
+        count += 1
+        if count > max_values:
+            raise _refuse(name, what, f"more than {max_values} values (after alias expansion)",
+                          f"at most {max_values} values")  # fmt: skip
+        if depth > MAX_DEPTH:
+            raise _refuse(name, what, f"values nested deeper than {MAX_DEPTH} levels",
+                          f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
+        where = f"key {key!r}" if key else "a value"
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if not isinstance(k, str):
+                    raise _refuse(name, what, f"the key {clip(k)} is not a string",
+                                  "keys that are strings")  # fmt: skip
+                stack.append((k, depth + 1, key))
+                stack.append((v, depth + 1, k[:40]))
+        elif isinstance(value, (list, tuple)):
+            stack.extend((v, depth + 1, key) for v in value)
+        elif isinstance(value, bool) or value is None:
+            continue
+        elif isinstance(value, int):
+            if abs(value) > _MAX_INT:
+                raise _refuse(name, what, f"{where}: an integer of {len(str(abs(value)))} digits",
+                              "integers of at most 15 digits")  # fmt: skip
+        elif isinstance(value, str):
+            if len(value) > MAX_STRING:
+                raise _refuse(name, what, f"{where}: a string of {len(value)} characters",
+                              f"strings of at most {MAX_STRING} characters")  # fmt: skip
+        elif not isinstance(value, float):
+            raise _refuse(name, what, f"{where}: a value of type {type(value).__name__}",
+                          "numbers, strings, lists and mappings")  # fmt: skip
