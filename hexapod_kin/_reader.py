@@ -62,7 +62,10 @@ _MAX_INT = 2**53
 
 def _refuse(name: str, what: str, problem: str, allowed: str) -> SourceError:
     return SourceError(
-        f"{name}: {problem}; allowed: {allowed}", parameter=what, value=name, allowed=allowed
+        f"{what}={name!r}: {problem}; allowed: {allowed}",
+        parameter=what,
+        value=name,
+        allowed=allowed,
     )
 
 
@@ -117,12 +120,12 @@ def read_data(
         OptionalDependencyError: YAML without PyYAML, TOML on Python 3.10 without tomli.
 
     """
-    name = Path(path).name
+    name = str(path)
     text = read_text(path, what, max_bytes)
     data = parse_data(text, name, fmt or format_of(path), what, max_values)
     if mapping is not None and not isinstance(data, dict):
         raise SourceError(
-            f"{name}: the file must hold a mapping ({mapping}), got {type(data).__name__}",
+            f"{what}={name!r} must hold a mapping ({mapping}), got {type(data).__name__}",
             parameter=what,
             value=name,
             allowed="a mapping",
@@ -149,7 +152,7 @@ def parse_data(
                 data = toml.loads(text)
             except toml.TOMLDecodeError as exc:
                 raise SourceError(
-                    f"{name}: not valid TOML ({_short(exc)})", parameter=what, value=name
+                    f"{what}={name!r}: not valid TOML ({_short(exc)})", parameter=what, value=name
                 ) from None
         else:
             data = _yaml(text, name, what)
@@ -186,7 +189,7 @@ def _json(text: str, name: str, what: str) -> Any:
         return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
     except json.JSONDecodeError as exc:
         raise SourceError(
-            f"{name}: not valid JSON ({_short(exc)})", parameter=what, value=name
+            f"{what}={name!r}: not valid JSON ({_short(exc)})", parameter=what, value=name
         ) from None
 
 
@@ -218,7 +221,7 @@ def _yaml(text: str, name: str, what: str) -> Any:
     """PyYAML's safe loader refusing duplicate keys, deep nesting, many aliases and tags."""
     yaml = yaml_module(what)
 
-    class Loader(yaml.SafeLoader):  # type: ignore[misc,name-defined]
+    class Loader(yaml.SafeLoader):  # type: ignore[name-defined,unused-ignore]
         depth = 0
         aliases = 0
 
@@ -260,16 +263,18 @@ def _yaml(text: str, name: str, what: str) -> Any:
         found = re.search(r"tag '([^']*)'", str(exc.problem))
         if found is None:
             raise SourceError(
-                f"{name}: not valid YAML ({_short(exc)})", parameter=what, value=name
+                f"{what}={name!r}: not valid YAML ({_short(exc)})", parameter=what, value=name
             ) from None
         tag = found.group(1).replace("tag:yaml.org,2002:", "!!")
         mark = exc.problem_mark
         where = f"line {mark.line + 1}: " if mark is not None else ""
-        raise _refuse(name, what, f"{where}the YAML tag {clip(tag)} is not allowed",
-                      "plain YAML values (numbers, strings, lists, mappings)") from None  # fmt: skip
+        allowed = "plain YAML values (numbers, strings, lists, mappings)"
+        raise _refuse(
+            name, what, f"{where}the YAML tag {clip(tag)} is not allowed", allowed
+        ) from None
     except yaml.YAMLError as exc:
         raise SourceError(
-            f"{name}: not valid YAML ({_short(exc)})", parameter=what, value=name
+            f"{what}={name!r}: not valid YAML ({_short(exc)})", parameter=what, value=name
         ) from None
     finally:
         loader.dispose()

@@ -11,7 +11,6 @@ units). The map is :math:`u = c + d\,s\,(q - q_0)` with ``s`` the servo units pe
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -21,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from .._io import decode_utf8, read_regular
-from ..exceptions import OptionalDependencyError, ParameterError, SourceError, choices
+from .._reader import clip, format_of, read_data
+from ..exceptions import ParameterError, choices
 
 __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
 
@@ -288,29 +287,50 @@ def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
                 key,
                 _SERVO_KEYS,
             )
-        try:
-            if key == "units":
-                kw[key] = str(value)
-            elif key == "direction":
-                kw[key] = int(value) if float(value) in (1.0, -1.0) else value
-            elif key == "limits":
-                lo, hi = value
-                kw[key] = (float(lo), float(hi))
-            else:
-                kw[key] = float(value)
-        except (TypeError, ValueError):
-            raise _bad(
-                f"{name}: joint {joint!r}: {key} = {value!r} is not a number"
-                + (" pair [lowest, highest]" if key == "limits" else ""),
-                key,
-                value,
-                "numbers",
-            ) from None
+        if key == "units":
+            if not isinstance(value, str):
+                raise _bad(
+                    f"{name}: joint {joint!r}: units = {clip(value)} is not a string; "
+                    f"{choices(UNITS)}",
+                    key,
+                    clip(value),
+                    UNITS,
+                )
+            kw[key] = value
+        elif key == "limits":
+            if not isinstance(value, (list, tuple)) or len(value) != 2:
+                raise _bad(
+                    f"{name}: joint {joint!r}: limits = {clip(value)} is not a number pair "
+                    "[lowest, highest]",
+                    key,
+                    clip(value),
+                    "[lowest, highest]",
+                )
+            kw[key] = (_number(value[0], key, joint, name), _number(value[1], key, joint, name))
+        else:
+            kw[key] = _number(value, key, joint, name)
+    if "direction" in kw and kw["direction"] in (1.0, -1.0):
+        kw["direction"] = int(kw["direction"])
     return Servo(joint=joint, **kw)
+
+
+def _number(value: Any, key: str, joint: str, name: str) -> float:
+    """A calibration number: an int or a float (never a text or a boolean), finite."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise _bad(
+            f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number",
+            key,
+            clip(value),
+            "finite numbers",
+        )
+    return float(value)
 
 
 def read_calibration(path: str | os.PathLike[str]) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
+
+    The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
+    regular file of at most 1 MiB, UTF-8, no key given twice, YAML alias and depth caps).
 
     Example (AX-12-like servos: 1024 ticks over 300°, centre 512)::
 
@@ -320,50 +340,9 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
           leg1_knee: {direction: -1, offset: -0.3}
 
     Raises:
-        SourceError: The file cannot be read or parsed.
+        SourceError: The file cannot be read or parsed, or is refused by the reader.
         ParameterError: An unknown key or unit, a bad number.
 
     """
-    p = Path(path)
-    text = decode_utf8(read_regular(p, _MAX_BYTES, "calibration"), str(p), "calibration")
-    data = _parse(text, p)
-    return Calibration.from_dict(data, p.name)
-
-
-def _parse(text: str, p: Path) -> Any:
-    suffix = p.suffix.lower()
-    try:
-        if suffix == ".json":
-            return json.loads(text)
-        if suffix == ".toml":
-            try:
-                import tomllib as toml  # type: ignore[import-not-found,unused-ignore]
-            except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-                import tomli as toml  # type: ignore[no-redef,import-not-found,unused-ignore]
-            return toml.loads(text)
-        return yaml_module().safe_load(text)
-    except (ValueError, RecursionError) as exc:  # JSON, TOML decode errors are ValueErrors
-        raise SourceError(
-            f"{p.name}: cannot be parsed ({' '.join(str(exc).split())[:160]})",
-            parameter="calibration",
-            value=str(p),
-        ) from None
-    except Exception as exc:  # yaml.YAMLError
-        if type(exc).__module__.startswith("yaml"):
-            raise SourceError(
-                f"{p.name}: not valid YAML ({' '.join(str(exc).split())[:160]})",
-                parameter="calibration",
-                value=str(p),
-            ) from None
-        raise
-
-
-def yaml_module() -> Any:
-    try:
-        import yaml
-    except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the tables extra
-        raise OptionalDependencyError(
-            "YAML calibration and timeline files need PyYAML; `pip install hexapod-kin[tables]`",
-            parameter="format",
-        ) from None
-    return yaml
+    data = read_data(path, "calibration", fmt=format_of(path), max_bytes=_MAX_BYTES)
+    return Calibration.from_dict(data, Path(path).name)

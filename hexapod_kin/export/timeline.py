@@ -53,9 +53,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .._io import atomic_write, decode_utf8, read_regular
-from ..exceptions import ConfigurationError, ParameterError, SourceError, choices
-from .servos import UNITS, Calibration, Servo, read_calibration, yaml_module
+from .._io import atomic_write
+from .._reader import parse_data, read_text
+from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, SourceError, choices
+from .servos import UNITS, Calibration, Servo, read_calibration
 
 __all__ = [
     "UNITS",
@@ -72,6 +73,8 @@ __all__ = [
 INTERPOLATIONS: tuple[str, ...] = ("linear", "cubic")
 FORMAT = "hexapod-kin timeline"
 _MAX_TIMELINE_BYTES = 256 << 20
+#: Most values of a timeline or plan file (no more than its bytes: a value takes one or more).
+_MAX_TIMELINE_VALUES = _MAX_TIMELINE_BYTES
 
 Interpolation = Literal["linear", "cubic"]
 
@@ -437,10 +440,10 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
     """
     p = Path(path)
     kind = _format(p, fmt)
-    text = decode_utf8(read_regular(p, _MAX_TIMELINE_BYTES, "timeline"), str(p), "timeline")
+    text = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
     try:
         if kind == "json":
-            d = json.loads(text)
+            d = parse_data(text, str(p), "json", "timeline", _MAX_TIMELINE_VALUES)
             if d.get("format") != FORMAT:
                 raise KeyError("format")
             cal = Calibration.from_dict(d["calibration"], p.name)
@@ -456,8 +459,8 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
         if kind == "csv":
             return _read_csv(text, p)
         return _read_ros2(text, p)
-    except (KeyError, ValueError, TypeError, IndexError) as exc:
-        if isinstance(exc, SourceError):
+    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+        if isinstance(exc, HexapodKinError):  # the reader's and the calibration's own errors
             raise
         raise SourceError(
             f"{p.name}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
@@ -483,7 +486,8 @@ def _read_csv(text: str, p: Path) -> Timeline:
     names = tuple(h.rsplit(" [", 1)[0] for h in header[1 : 1 + n])
     data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
     data = data.reshape(len(rows) - 1, 1 + 2 * n)
-    cal = Calibration.from_dict(json.loads(meta["calibration"]), p.name)
+    cal_data = parse_data(meta["calibration"], str(p), "json", "timeline")
+    cal = Calibration.from_dict(cal_data, p.name)
     return _from_commands(
         data[:, 0].copy(),
         names,
@@ -496,7 +500,7 @@ def _read_csv(text: str, p: Path) -> Timeline:
 
 
 def _read_ros2(text: str, p: Path) -> Timeline:
-    d = yaml_module().safe_load(text)
+    d = parse_data(text, str(p), "yaml", "timeline", _MAX_TIMELINE_VALUES)
     names = tuple(str(j) for j in d["joint_names"])
     pts = d["points"]
     t = np.array([pt["time_from_start"]["sec"] + pt["time_from_start"]["nanosec"] * 1e-9
@@ -521,10 +525,10 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
 
     """
     p = Path(path)
-    text = decode_utf8(read_regular(p, _MAX_TIMELINE_BYTES, "plan"), str(p), "plan")
+    text = read_text(p, "plan", _MAX_TIMELINE_BYTES)
     try:
         if p.suffix.lower() == ".json":
-            d = json.loads(text)
+            d = parse_data(text, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
             t = np.asarray(d["t"], dtype=float)
             q = np.asarray(d["q"], dtype=float)
             names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
@@ -535,7 +539,9 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
         data = data.reshape(len(rows) - 1, len(header))
         names = tuple(h.rsplit(" [", 1)[0] for h in header[1:])
         return data[:, 0].copy(), data[:, 1:].copy(), names
-    except (KeyError, ValueError, TypeError, IndexError) as exc:
+    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+        if isinstance(exc, HexapodKinError):  # the reader's own errors
+            raise
         raise SourceError(
             f"{p.name}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
             f"joint_names) ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})",

@@ -12,7 +12,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Mapping
@@ -22,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from .._reader import FORMATS, format_of, read_data
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 from .tree import leg_fk
 
@@ -116,25 +116,6 @@ def _split_specs(text: str) -> list[str]:
     return items
 
 
-def _load_file(path: Path) -> Any:
-    text = path.read_text(encoding="utf-8")
-    suffix = path.suffix.lower()
-    try:
-        if suffix == ".json":
-            return json.loads(text)
-        if suffix == ".toml":
-            import tomllib
-
-            return tomllib.loads(text)
-        import yaml
-
-        return yaml.safe_load(text)
-    except Exception as exc:  # the parsers' own error types differ
-        raise ParameterError(
-            f"feet file {str(path)!r}: cannot be read ({exc})", parameter="feet", value=str(path)
-        ) from None
-
-
 def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
     """Foot specifications from any of the accepted forms (``None`` stays ``None``).
 
@@ -146,22 +127,16 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
 
     Raises:
         ParameterError: A malformed spec (named).
+        SourceError: A feet file refused by the strict reader (:mod:`hexapod_kin._reader`).
 
     """
     if spec is None:
         return None
-    if isinstance(spec, Path) or (
-        isinstance(spec, str) and Path(spec).suffix.lower() in (".yaml", ".yml", ".toml", ".json")
-    ):
-        path = Path(spec)
-        if not path.is_file():
-            raise ParameterError(
-                f"feet file {str(path)!r} does not exist", parameter="feet", value=str(path)
-            )
-        data = _load_file(path)
+    if isinstance(spec, Path) or (isinstance(spec, str) and Path(spec).suffix.lower() in FORMATS):
+        data = read_data(spec, "feet", fmt=format_of(spec))
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
-        return parse_feet(data)
+        return parse_feet([data] if isinstance(data, str) else data)  # a text is a spec, not a file
     out: list[FootSpec] = []
     if isinstance(spec, str):
         items: list[Any] = _split_specs(spec)
