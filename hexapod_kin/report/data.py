@@ -8,7 +8,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..exceptions import ConfigurationError, OptionalDependencyError
+from .._reader import read_data
+from ..exceptions import ConfigurationError
 
 __all__ = ["CLAIMS_FILE", "SEEDS_DIR", "STATUSES", "Claim", "Verdict", "load_claims", "seed_file"]
 
@@ -133,23 +134,13 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
     """Read the claims file; return the claims and the seed titles.
 
     Raises:
+        SourceError: The file is refused by the strict reader (:mod:`hexapod_kin._reader`).
         OptionalDependencyError: Python 3.10 without ``tomli``.
         ConfigurationError: A claim without ``id``, ``seed``, ``where`` or ``kind``, or a
             duplicated id.
 
     """
-    try:
-        import tomllib as toml_reader  # type: ignore[import-not-found,unused-ignore]
-    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        try:
-            import tomli as toml_reader  # type: ignore[no-redef,import-not-found,unused-ignore]
-        except ModuleNotFoundError:
-            raise OptionalDependencyError(
-                "reading the claims file on Python 3.10 needs tomli; "
-                "`pip install hexapod-kin[tables]`",
-                parameter="claims",
-            ) from None
-    raw = toml_reader.loads(Path(path or CLAIMS_FILE).read_text(encoding="utf-8"))
+    raw = read_data(path or CLAIMS_FILE, "claims", fmt="toml", mapping="claim, seeds")
     out: list[Claim] = []
     seen: set[str] = set()
     for item in raw.get("claim", []):
