@@ -105,6 +105,10 @@ _ENTRY = [False]
 def run() -> None:
     """The ``hexapod-kin`` and ``python -m hexapod_kin`` entry point: :func:`main`, then exit."""
     _ENTRY[0] = True
+    # The program owns its process (the library never writes os.environ): MuJoCo, never used
+    # to render here, is imported without its OpenGL backends, whose glfw probe would start a
+    # child process that a Ctrl-C to the process group interrupts with a fatal error.
+    os.environ.setdefault("MUJOCO_GL", "disable")
     status = main()
     if status == 130:
         _exit_interrupted()

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import importlib
-import os
 import re
 from typing import Any
 
@@ -72,16 +71,6 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
     return params
 
 
-def without_gl() -> None:
-    """Let MuJoCo import without its OpenGL backends (``MUJOCO_GL=disable``, unless set).
-
-    The toolkit never renders with MuJoCo (meshcat draws); its default import loads glfw,
-    whose library probe starts a Python subprocess (slower, and a Ctrl-C sent to the
-    process group interrupts that child's own start-up, which prints a fatal error).
-    """
-    os.environ.setdefault("MUJOCO_GL", "disable")
-
-
 def need(module: str, extra: str = "export") -> Any:
     """Import an optional dependency or raise :class:`OptionalDependencyError` with the hint.
 
@@ -89,8 +78,6 @@ def need(module: str, extra: str = "export") -> Any:
         OptionalDependencyError: If ``module`` is not installed.
 
     """
-    if module == "mujoco":
-        without_gl()
     try:
         return importlib.import_module(module)
     except ImportError:

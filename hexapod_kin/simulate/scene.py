@@ -24,9 +24,6 @@ _STEP_RISE, _STEP_AT = 0.02, 0.25
 
 
 def _mujoco() -> Any:
-    from ..export._common import without_gl
-
-    without_gl()
     try:
         import mujoco
     except ImportError:

@@ -1,0 +1,323 @@
+"""The one strict reader of user files (``hexapod_kin._reader``), and every reader going through it.
+
+Each hostile case is refused with a :class:`SourceError` naming the kind of file and the file,
+for every kind of user file: tables, feet files, calibrations, plans, timelines, claims.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin import _reader
+from hexapod_kin.exceptions import OptionalDependencyError, ParameterError, SourceError
+
+
+def _cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def billion_laughs() -> str:
+    """The 424-byte "billion laughs" of the probe: 9 levels of 9 aliases (9⁹ strings)."""
+    lines = ['a: &a ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]']
+    for i in range(8):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ",".join([f"*{prev}"] * 9) + "]")
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------ the reader itself
+def test_billion_laughs_refused_at_once(tmp_path: Path) -> None:
+    path = tmp_path / "bomb.yaml"
+    path.write_text(billion_laughs())
+    assert path.stat().st_size < 450
+    cpu = _cpu()
+    with pytest.raises(SourceError, match="more than 64 YAML aliases") as info:
+        _reader.read_data(path, "feet")
+    assert _cpu() - cpu < 0.5
+    assert info.value.parameter == "feet" and str(path) in str(info.value)
+
+
+def test_aliases_under_the_cap_that_expand_are_refused(tmp_path: Path) -> None:
+    """60 aliases (under the cap) expanding to 6¹⁰ values: the walk stops at the value cap."""
+    lines = ["a: &a [x, x, x, x, x, x]"]
+    for i in range(10):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 6) + "]")
+    path = tmp_path / "b.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    cpu = _cpu()
+    with pytest.raises(SourceError, match="after alias expansion"):
+        _reader.read_data(path)
+    assert _cpu() - cpu < 1.0
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "phrase"),
+    [
+        ("d.json", '{"offset": 1, "offset": 2}', "key 'offset' given twice"),
+        ("d.yaml", "offset: 1\noffset: 2\n", "key 'offset' given twice (line 2)"),
+        ("d.toml", "offset = 1\noffset = 2\n", "not valid TOML"),
+        ("n.json", '{"a": NaN}', "NaN is not a JSON number"),
+        ("i.json", '{"a": [1, Infinity]}', "Infinity is not a JSON number"),
+        ("big.json", '{"a": ' + "9" * 5001 + "}", "an integer of 5001 digits"),
+        ("big.yaml", "a: " + "9" * 401 + "\n", "an integer of 401 digits"),
+        ("deep.json", "[" * 100_000 + "]" * 100_000, "nest"),
+        ("deep2.json", "[" * 20 + "]" * 20, "nested deeper than 16 levels"),
+        ("deep.yaml", "a: " + "[" * 50_000 + "]" * 50_000, "nest"),
+        ("deep.toml", "a = " + "[" * 50_000 + "]" * 50_000, "nest"),
+        ("key.yaml", "5: [0, 0, 0]\n", "the key 5 is not a string"),
+        ("key2.yaml", "true: 1\n", "the key True is not a string"),
+        ("tag.yaml", "a: !!python/object/apply:os.system [echo hi]\n", "the YAML tag"),
+        ("date.yaml", "a: 2024-01-01\n", "a value of type date"),
+        ("long.json", '{"a": "' + "x" * 20_000 + '"}', "a string of 20000 characters"),
+        ("bad.json", "{", "not valid JSON"),
+        ("bad.yaml", "a: [", "not valid YAML"),
+    ],
+)
+def test_hostile_contents(tmp_path: Path, name: str, text: str, phrase: str) -> None:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    cpu = _cpu()
+    with pytest.raises(SourceError) as info:
+        _reader.read_data(path, "calibration")
+    assert _cpu() - cpu < 1.0
+    message = str(info.value)
+    assert phrase in message and str(path) in message and "\n" not in message, message
+    assert info.value.parameter == "calibration"
+
+
+def test_files_that_are_not_regular(tmp_path: Path) -> None:
+    os.mkfifo(tmp_path / "pipe.yaml")  # no writer: a blocking open would hang
+    os.symlink("/dev/zero", tmp_path / "zero.yaml")
+    (tmp_path / "dir.yaml").mkdir()
+    for name, kind in [("pipe.yaml", "a named pipe"), ("zero.yaml", "a device"),
+                       ("dir.yaml", "a folder")]:  # fmt: skip
+        with pytest.raises(SourceError, match=f"is {kind}; only regular files are read"):
+            _reader.read_data(tmp_path / name, "feet")
+    with pytest.raises(SourceError, match=r"cannot read it \(No such file"):
+        _reader.read_data(tmp_path / "none.yaml", "feet")
+
+
+def test_byte_cap_and_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "big.yaml"
+    path.write_bytes(b"#" * 1001)
+    assert _reader.read_data(path, max_bytes=1001) is None  # a YAML file of comments only
+    with pytest.raises(SourceError, match="more than 1000 bytes"):
+        _reader.read_data(path, max_bytes=1000)
+    path.write_bytes("name: caf\xe9\n".encode("latin-1"))
+    with pytest.raises(SourceError, match=r"is not UTF-8 text \(byte 9: invalid"):
+        _reader.read_data(path)
+
+
+def test_the_same_values_from_json_toml_and_yaml(tmp_path: Path) -> None:
+    data = {"defaults": {"units": "ticks", "limits": [0, 1023], "centre": 512.0},
+            "joints": {"j1": {"direction": -1, "offset": -0.25}}}  # fmt: skip
+    (tmp_path / "c.json").write_text(json.dumps(data))
+    (tmp_path / "c.yaml").write_text(
+        "defaults: {units: ticks, limits: [0, 1023], centre: 512.0}\n"
+        "joints:\n  j1: {direction: -1, offset: -0.25}\n"
+    )
+    (tmp_path / "c.toml").write_text(
+        '[defaults]\nunits = "ticks"\nlimits = [0, 1023]\ncentre = 512.0\n'
+        "[joints.j1]\ndirection = -1\noffset = -0.25\n"
+    )
+    for suffix in ("json", "yaml", "toml"):
+        assert _reader.read_data(tmp_path / f"c.{suffix}") == data
+
+
+def test_toml_on_python_310_uses_tomli(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """Without ``tomllib`` (3.10) the reader takes ``tomli`` (same API), else says to install it."""
+    import tomllib
+
+    path = tmp_path / "t.toml"
+    path.write_text("a = 1\n")
+    monkeypatch.setitem(sys.modules, "tomllib", None)  # as on 3.10: no such module
+    monkeypatch.setitem(sys.modules, "tomli", tomllib)  # tomli installed (same API)
+    assert _reader.read_data(path) == {"a": 1}
+    monkeypatch.setitem(sys.modules, "tomli", None)
+    with pytest.raises(OptionalDependencyError, match="tomli"):
+        _reader.read_data(path)
+
+
+# ------------------------------------------------------------ every reader uses it
+def _table(path: Path) -> Any:
+    return hk.load(path)
+
+
+def _feet(path: Path) -> Any:
+    from hexapod_kin.gait.legs import parse_feet
+
+    return parse_feet(str(path))
+
+
+def _calibration(path: Path) -> Any:
+    from hexapod_kin.export.timeline import read_calibration
+
+    return read_calibration(path)
+
+
+def _plan(path: Path) -> Any:
+    from hexapod_kin.export.timeline import read_plan
+
+    return read_plan(path)
+
+
+def _timeline(path: Path) -> Any:
+    from hexapod_kin.export.timeline import read_timeline
+
+    return read_timeline(path)
+
+
+def _claims(path: Path) -> Any:
+    from hexapod_kin.report.data import load_claims
+
+    return load_claims(path)
+
+
+READERS: dict[str, tuple[Callable[[Path], Any], str, str]] = {
+    # kind: (reader, parameter of its errors, suffix it reads)
+    "table": (_table, "source", ".yaml"),
+    "feet": (_feet, "feet", ".yaml"),
+    "calibration": (_calibration, "calibration", ".yaml"),
+    "plan": (_plan, "plan", ".json"),
+    "timeline": (_timeline, "timeline", ".json"),
+    "claims": (_claims, "claims", ".toml"),
+}
+HOSTILE = {
+    "pipe": "is a named pipe",
+    "folder": "is a folder",
+    "not-utf8": "is not UTF-8 text",
+    "duplicate": "given twice",
+}
+
+
+def _hostile(tmp_path: Path, case: str, suffix: str) -> Path:
+    path = tmp_path / f"f{suffix}"
+    if case == "pipe":
+        os.mkfifo(path)
+    elif case == "folder":
+        path.mkdir()
+    elif case == "not-utf8":
+        path.write_bytes(b"\xff\xfe")
+    elif suffix == ".toml":
+        path.write_text("[a]\nb = 1\n[a]\nb = 2\n")
+    elif suffix == ".json":
+        path.write_text('{"t": [0], "t": [1]}')
+    else:
+        path.write_text("a: 1\na: 2\n")
+    return path
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE))
+@pytest.mark.parametrize("kind", sorted(READERS))
+def test_every_user_file_goes_through_the_reader(tmp_path: Path, kind: str, case: str) -> None:
+    read, parameter, suffix = READERS[kind]
+    path = _hostile(tmp_path, case, suffix)
+    with pytest.raises(SourceError) as info:
+        read(path)
+    phrase = "not valid TOML" if case == "duplicate" and suffix == ".toml" else HOSTILE[case]
+    assert phrase in str(info.value) and info.value.parameter == parameter, str(info.value)
+
+
+def test_yaml_alias_bomb_in_every_yaml_reader(tmp_path: Path) -> None:
+    path = tmp_path / "bomb.yaml"
+    path.write_text(billion_laughs())
+    for kind in ("table", "feet", "calibration"):
+        cpu = _cpu()
+        with pytest.raises(SourceError, match="YAML aliases"):
+            READERS[kind][0](path)
+        assert _cpu() - cpu < 0.5, kind
+    from hexapod_kin.export.timeline import read_timeline
+
+    with pytest.raises(SourceError, match="YAML aliases"):
+        read_timeline(path, fmt="ros2")
+
+
+# ------------------------------------------------------------ the readers' own values
+def test_calibration_key_twice_is_refused_not_the_last(tmp_path: Path) -> None:
+    from hexapod_kin.export.timeline import read_calibration
+
+    path = tmp_path / "cal.yaml"
+    path.write_text("joints:\n  knee: {offset: 0.1, offset: 0.3}\n")
+    with pytest.raises(SourceError, match=r"key 'offset' given twice \(line 2\)"):
+        read_calibration(path)
+    path.write_text("joints:\n  knee: {offset: 0.3}\n")
+    assert read_calibration(path).servo("knee").offset == 0.3
+
+
+@pytest.mark.parametrize(
+    ("entry", "phrase"),
+    [
+        ("{offset: '0.5'}", "offset = '0.5' is not a finite number"),
+        ("{direction: true}", "direction = True is not a finite number"),
+        ("{offset: .inf}", "offset = inf is not a finite number"),
+        ("{units: 5}", "units = 5 is not a string"),
+        ("{limits: 5}", "limits = 5 is not a number pair"),
+        ("{limits: [0, .nan]}", "limits = nan is not a finite number"),
+    ],
+)
+def test_calibration_values_are_numbers(tmp_path: Path, entry: str, phrase: str) -> None:
+    from hexapod_kin.export.timeline import read_calibration
+
+    path = tmp_path / "cal.yaml"
+    path.write_text(f"joints:\n  knee: {entry}\n")
+    with pytest.raises(ParameterError, match=phrase.replace("(", r"\(").replace(")", r"\)")):
+        read_calibration(path)
+
+
+@pytest.mark.parametrize(
+    ("row", "phrase"),
+    [("link = true", "row 1.link=True must be a string"),
+     ("name = 5", "row 1.name=5 must be a string")],
+)  # fmt: skip
+def test_non_string_names_in_a_table_are_refused(tmp_path: Path, row: str, phrase: str) -> None:
+    path = tmp_path / "t.toml"
+    path.write_text(f"[[row]]\nd = 0.1\n{row}\n[[row]]\nd = 0.1\n{row.split()[0]} = 'b'\n")
+    with pytest.raises(ParameterError, match=phrase):
+        hk.load(path)
+
+
+def test_a_feet_file_holding_a_file_name_is_not_followed(tmp_path: Path) -> None:
+    """A feet file whose content is the name of a file (itself) is a spec, not a path."""
+    from hexapod_kin.gait.legs import parse_feet
+
+    path = tmp_path / "self.yaml"
+    path.write_text(f"{path}\n")
+    (foot,) = parse_feet(str(path))  # a frame of that name (refused later by the robot)
+    assert foot.frame == str(path) and foot.offset == (0.0, 0.0, 0.0)
+
+
+def test_a_good_feet_file_in_every_format(tmp_path: Path) -> None:
+    from hexapod_kin.gait.legs import FootSpec, parse_feet
+
+    want = (FootSpec("tibia_lf", (0.0, 0.16, 0.029)),)
+    (tmp_path / "f.json").write_text('{"feet": {"tibia_lf": [0, 0.16, 0.029]}}')
+    (tmp_path / "f.toml").write_text('[[feet]]\nframe = "tibia_lf"\noffset = [0, 0.16, 0.029]\n')
+    (tmp_path / "f.yml").write_text("tibia_lf: [0, 0.16, 0.029]\n")
+    for name in ("f.json", "f.toml", "f.yml"):
+        assert parse_feet(str(tmp_path / name)) == want
+
+
+def test_timeline_files_still_read_back(tmp_path: Path) -> None:
+    """A written timeline (CSV with its calibration, JSON, ROS 2 YAML) reads back exactly."""
+    from hexapod_kin.export.timeline import read_timeline, timeline
+
+    t = np.linspace(0.0, 1.0, 11)
+    q = np.column_stack([0.3 * np.sin(t), -0.2 * t])
+    tl = timeline((t, q), rate=20, joint_names=["j1", "j2"])
+    for suffix in ("csv", "json", "yaml"):
+        path = tl.write(tmp_path / f"w.{suffix}")
+        back = read_timeline(path)
+        np.testing.assert_allclose(back.q, tl.q, atol=1e-12)
+        np.testing.assert_allclose(back.t, tl.t, atol=1e-12)
