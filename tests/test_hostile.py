@@ -9,7 +9,10 @@ their peak memory measured, in ``test_hostile_cli.py``.
 from __future__ import annotations
 
 import math
+import os
 import subprocess
+import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -198,3 +201,115 @@ def test_a_preset_parameter_called_name(capsys: pytest.CaptureFixture[str]) -> N
     assert main(["fk", "hexabot_leg", "-s", "name=front", "--json"]) == 0
     assert hk.robots.get("hexabot_leg", name="front").name == "front"
     assert "position" in capsys.readouterr().out
+
+
+# ------------------------------------------- hostile feet files and calibrations, real children
+PHX = Path(__file__).parent / "data" / "phantomx" / "phantomx.urdf"
+
+
+def _laughs() -> str:
+    """The probe's 424-byte "billion laughs" (9 levels of 9 aliases)."""
+    lines = ['a: &a ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for i in range(8):
+        prev, cur = chr(97 + i), chr(98 + i)
+        lines.append(f"{cur}: &{cur} [" + ", ".join([f"*{prev}"] * 9) + "]")
+    return "\n".join(lines) + "\n"
+
+
+def _make(tmp_path: Path, case: str, suffix: str) -> Path:
+    """A hostile user file: its name ends in ``suffix`` whatever it is."""
+    path = tmp_path / f"{case}{suffix}"
+    if case == "pipe":
+        os.mkfifo(path)
+    elif case == "device":
+        os.symlink("/dev/zero", path)
+    elif case == "folder":
+        path.mkdir()
+    elif case == "huge":  # 100 MB (sparse): read up to the cap only
+        with open(path, "wb") as f:
+            f.truncate(100 << 20)
+    elif case == "not-utf8":
+        path.write_bytes("caf\xe9: [0, 0, 0]\n".encode("latin-1"))
+    elif case == "bomb":
+        path.write_text(_laughs())
+    elif case == "duplicate-foot":
+        path.write_text("tibia_lf: [0, 0.16, 0.029]\ntibia_lf: [0, 0.2, 0]\n")
+    elif case == "duplicate-offset":
+        path.write_text("defaults: {units: rad}\njoints:\n  j1: {offset: 0.1, offset: 0.3}\n")
+    elif case == "offset-text":
+        path.write_text("defaults: {units: rad}\njoints:\n  j1: {offset: '0.3'}\n")
+    elif case == "duplicate-json":
+        path.write_text('{"t": [0, 1], "q": [[0], [1]], "t": [0, 2]}')
+    return path
+
+
+PHRASES = {
+    "pipe": "is a named pipe",
+    "device": "is a device",
+    "folder": "is a folder",
+    "huge": "more than",
+    "not-utf8": "is not UTF-8 text",
+    "bomb": "more than 64 YAML aliases",
+    "duplicate-foot": "key 'tibia_lf' given twice",
+    "duplicate-offset": "key 'offset' given twice",
+    "offset-text": "offset = '0.3' is not a finite number",
+    "duplicate-json": "key 't' given twice",
+}
+COMMANDS = {
+    # name: (hostile cases, suffix, the command line with {f} the hostile file)
+    "stand --foot": (
+        ("pipe", "device", "folder", "huge", "not-utf8", "bomb", "duplicate-foot"),
+        ".yaml",
+        ("stand", str(PHX), "--foot", "{f}"),
+    ),
+    "timeline --calibration": (
+        ("pipe", "device", "not-utf8", "bomb", "duplicate-offset", "offset-text"),
+        ".yaml",
+        ("timeline", "path", "plan.csv", "--calibration", "{f}", "-o", "out.csv"),
+    ),
+    "timeline path": (
+        ("pipe", "folder", "not-utf8", "duplicate-json"),
+        ".json",
+        ("timeline", "path", "{f}", "-o", "out.csv"),
+    ),
+}
+CHILD_CASES = [(cmd, case) for cmd, (cases, _, _) in COMMANDS.items() for case in cases]
+
+
+def _child(args: list[str], cwd: Path) -> tuple[int, str, float, int]:
+    """``python -m hexapod_kin ARGS``: exit status, stderr, CPU time [s], peak RSS [bytes].
+
+    Reaped with ``os.wait4`` (the child's own CPU time and peak); killed after 60 s.
+    """
+    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_KIN_DEBUG"}
+    err_path = cwd / ".stderr"
+    with open(err_path, "wb") as err:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "hexapod_kin", *args],
+            cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
+        )  # fmt: skip
+    killer = threading.Timer(60.0, proc.kill)
+    killer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+    finally:
+        killer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    rss_unit = 1 if sys.platform == "darwin" else 1024
+    cpu = usage.ru_utime + usage.ru_stime
+    return proc.returncode, err_path.read_text(errors="replace"), cpu, usage.ru_maxrss * rss_unit
+
+
+@pytest.mark.parametrize(("command", "case"), CHILD_CASES, ids=[f"{c}-{k}" for c, k in CHILD_CASES])
+def test_hostile_user_file_on_the_command_line(tmp_path: Path, command: str, case: str) -> None:
+    """One line, exit 2, within 1 s of CPU and 1 GB (the probe: 23.6 s and 2.3 GB for a bomb)."""
+    _, suffix, argv = COMMANDS[command]
+    (tmp_path / "plan.csv").write_text("t,j1\n0,0\n1,0.1\n")
+    path = _make(tmp_path, case, suffix)
+    status, err, cpu, peak = _child([a.format(f=path.name) for a in argv], tmp_path)
+    lines = err.strip().splitlines()
+    assert status == 2 and len(lines) == 1, err
+    assert lines[0].startswith("hexapod-kin: error: ") and PHRASES[case] in lines[0], lines[0]
+    assert path.name in lines[0] and "a bug" not in err, lines[0]
+    assert cpu < 1.0, f"{cpu:.2f} s of CPU"
+    assert peak < 1 << 30, f"peak RSS {peak / 2**20:.0f} MB"
