@@ -185,6 +185,12 @@ def _claims(path: Path) -> Any:
     return load_claims(path)
 
 
+def _sweep(path: Path) -> Any:
+    from hexapod_kin.sweep import read_results
+
+    return read_results(path)
+
+
 READERS: dict[str, tuple[Callable[[Path], Any], str, str]] = {
     # kind: (reader, parameter of its errors, suffix it reads)
     "table": (_table, "source", ".yaml"),
@@ -193,6 +199,7 @@ READERS: dict[str, tuple[Callable[[Path], Any], str, str]] = {
     "plan": (_plan, "plan", ".json"),
     "timeline": (_timeline, "timeline", ".json"),
     "claims": (_claims, "claims", ".toml"),
+    "sweep table": (_sweep, "path", ".json"),
 }
 HOSTILE = {
     "pipe": "is a named pipe",

@@ -37,10 +37,13 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write
+from .._reader import parse_data, read_text
 from ..exceptions import (
     ConfigurationError,
+    HexapodKinError,
     OptionalDependencyError,
     ParameterError,
+    SourceError,
 )
 from ._chunks import ChunkStore, check_scores
 from .designs import PARAMETERS, DesignSpace
@@ -97,6 +100,8 @@ class SweepResult:
 
 #: Table formats of ``out``, by extension.
 TABLE_FORMATS = {".csv": "csv", ".parquet": "parquet", ".json": "json"}
+#: Byte cap (and value cap) of a sweep table read back by :func:`read_results`.
+_MAX_TABLE_BYTES = 1 << 30
 
 
 def table_paths(out: str | Path) -> dict[str, Path]:
@@ -530,6 +535,8 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
 
     Raises:
         ParameterError: Missing file or unknown suffix.
+        SourceError: A file the strict reader refuses (:mod:`hexapod_kin._reader`), or not a
+            sweep table.
 
     """
     p = Path(path)
@@ -540,18 +547,29 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
 
         t = pq.read_table(p)
         return {c: np.asarray(t.column(c).to_numpy(), dtype=float) for c in t.column_names}
-    if p.suffix == ".json":
-        cols = json.loads(p.read_text())["table"]
-        return {c: np.asarray(v, dtype=float) for c, v in cols.items()}
-    if p.suffix != ".csv":
+    if p.suffix not in (".json", ".csv"):
         raise ParameterError(
             f"path={str(p)!r}: expected a .csv, .parquet or .json file",
             parameter="path",
             value=str(p),
             allowed=list(TABLE_FORMATS),
         )
-    lines = p.read_text().splitlines()
-    names = lines[0].split(",")
-    data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]], dtype=float)
-    data = data.reshape(-1, len(names))
-    return {c: data[:, j] for j, c in enumerate(names)}
+    text = read_text(p, "path", _MAX_TABLE_BYTES)  # the one strict reader of user files
+    try:
+        if p.suffix == ".json":
+            cols = parse_data(text, str(p), "json", "path", _MAX_TABLE_BYTES)["table"]
+            return {str(c): np.asarray(v, dtype=float) for c, v in cols.items()}
+        lines = text.splitlines()
+        names = lines[0].split(",")
+        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]], dtype=float)
+        data = data.reshape(-1, len(names))
+        return {c: data[:, j] for j, c in enumerate(names)}
+    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+        if isinstance(exc, HexapodKinError):
+            raise
+        why = " ".join(str(exc).split())[:120]
+        raise SourceError(
+            f"path={str(p)!r}: not a sweep table ({type(exc).__name__}: {why})",
+            parameter="path",
+            value=str(p),
+        ) from None
