@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write
+from .._io import atomic_write, read_regular
 from .._reader import parse_data, read_text
 from ..exceptions import (
     ConfigurationError,
@@ -534,18 +534,16 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
         Column name → (N,) float array.
 
     Raises:
-        ParameterError: Missing file or unknown suffix.
-        SourceError: A file the strict reader refuses (:mod:`hexapod_kin._reader`), or not a
-            sweep table.
+        ParameterError: An unknown suffix.
+        SourceError: A missing file, one the strict reader refuses
+            (:mod:`hexapod_kin._reader`), or not a sweep table.
 
     """
     p = Path(path)
-    if not p.is_file():
-        raise ParameterError(f"path={str(p)!r}: no such file", parameter="path", value=str(p))
     if p.suffix == ".parquet":
         import pyarrow.parquet as pq
 
-        t = pq.read_table(p)
+        t = pq.read_table(io.BytesIO(read_regular(p, _MAX_TABLE_BYTES, "path")))
         return {c: np.asarray(t.column(c).to_numpy(), dtype=float) for c in t.column_names}
     if p.suffix not in (".json", ".csv"):
         raise ParameterError(
