@@ -9,7 +9,7 @@ from pathlib import Path
 
 from .exceptions import HexapodKinError, ParameterError, SourceError
 
-__all__ = ["atomic_write", "cache_root", "decode_utf8", "read_regular"]
+__all__ = ["atomic_write", "cache_root", "read_regular"]
 
 
 def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
@@ -177,16 +177,3 @@ def read_regular(
         ) from None
     finally:
         os.close(fd)
-
-
-def decode_utf8(data: bytes, name: str, what: str = "source") -> str:
-    """``data`` as UTF-8 text, or a :class:`SourceError` naming the file and the byte offset."""
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise SourceError(
-            f"{what}={name!r} is not UTF-8 text (byte {exc.start}: {exc.reason})",
-            parameter=what,
-            value=name,
-            allowed="UTF-8 text",
-        ) from None

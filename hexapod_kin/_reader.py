@@ -28,22 +28,11 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ._io import decode_utf8, read_regular
+from ._io import read_regular
 from .exceptions import HexapodKinError, OptionalDependencyError, SourceError
 
-__all__ = [
-    "FORMATS",
-    "MAX_ALIASES",
-    "MAX_BYTES",
-    "MAX_DEPTH",
-    "MAX_STRING",
-    "MAX_VALUES",
-    "clip",
-    "format_of",
-    "parse_data",
-    "read_data",
-    "read_text",
-]
+__all__ = ["FORMATS", "MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_STRING", "MAX_VALUES",
+           "clip", "parse_data", "read_data", "read_text"]  # fmt: skip
 
 #: Formats of :func:`read_data`, by file suffix.
 FORMATS = {".json": "json", ".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
@@ -74,11 +63,6 @@ def _short(exc: BaseException) -> str:
     return text if len(text) <= 160 else text[:157] + "..."
 
 
-def format_of(path: str | os.PathLike[str], default: str = "yaml") -> str:
-    """The format of ``path`` by its suffix (``json``, ``toml``, ``yaml``), else ``default``."""
-    return FORMATS.get(Path(path).suffix.lower(), default)
-
-
 def read_text(
     path: str | os.PathLike[str],
     what: str = "source",
@@ -92,7 +76,16 @@ def read_text(
             when given) or not UTF-8; ``parameter`` is ``what``.
 
     """
-    return decode_utf8(read_regular(path, max_bytes, what, too_big), str(path), what)
+    data = read_regular(path, max_bytes, what, too_big)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SourceError(
+            f"{what}={str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})",
+            parameter=what,
+            value=str(path),
+            allowed="UTF-8 text",
+        ) from None
 
 
 def read_data(
@@ -122,7 +115,9 @@ def read_data(
     """
     name = str(path)
     text = read_text(path, what, max_bytes)
-    data = parse_data(text, name, fmt or format_of(path), what, max_values)
+    data = parse_data(
+        text, name, fmt or FORMATS.get(Path(path).suffix.lower(), "yaml"), what, max_values
+    )
     if mapping is not None and not isinstance(data, dict):
         raise SourceError(
             f"{what}={name!r} must hold a mapping ({mapping}), got {type(data).__name__}",

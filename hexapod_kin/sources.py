@@ -220,13 +220,9 @@ class ResolvedSource:
 
 def _read_text(path: Path) -> str:
     from ._gate import MAX_URDF_BYTES
-    from ._io import read_regular
+    from ._reader import read_text
 
-    data = read_regular(path, MAX_URDF_BYTES, too_big=UrdfError)
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise UrdfError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+    return read_text(path, "source", MAX_URDF_BYTES, too_big=UrdfError)
 
 
 def _no_params(params: dict[str, Any], what: str) -> None:

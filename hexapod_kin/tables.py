@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from ._reader import clip, format_of, read_data
+from ._reader import clip, read_data
 from .exceptions import ParameterError, did_you_mean
 from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
 
@@ -90,10 +90,7 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
 
     """
     path = Path(path)
-    data = read_data(
-        path, "source", fmt=format_of(path), max_bytes=_MAX_BYTES,
-        mapping="name, convention, row, ...",
-    )  # fmt: skip
+    data = read_data(path, "source", max_bytes=_MAX_BYTES, mapping="name, convention, row, ...")
     unknown = sorted(set(overrides) - set(TOP_KEYS))
     if unknown:
         raise ParameterError(

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .._reader import clip, format_of, read_data
+from .._reader import clip, read_data
 from ..exceptions import ParameterError, choices
 
 __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
@@ -344,5 +344,5 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
         ParameterError: An unknown key or unit, a bad number.
 
     """
-    data = read_data(path, "calibration", fmt=format_of(path), max_bytes=_MAX_BYTES)
+    data = read_data(path, "calibration", max_bytes=_MAX_BYTES)
     return Calibration.from_dict(data, Path(path).name)

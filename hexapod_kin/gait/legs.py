@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .._reader import FORMATS, format_of, read_data
+from .._reader import FORMATS, read_data
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 from .tree import leg_fk
 
@@ -133,7 +133,7 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
     if spec is None:
         return None
     if isinstance(spec, Path) or (isinstance(spec, str) and Path(spec).suffix.lower() in FORMATS):
-        data = read_data(spec, "feet", fmt=format_of(spec))
+        data = read_data(spec, "feet")
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
         return parse_feet([data] if isinstance(data, str) else data)  # a text is a spec, not a file
