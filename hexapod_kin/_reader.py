@@ -80,12 +80,8 @@ def read_text(
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise SourceError(
-            f"{what}={str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})",
-            parameter=what,
-            value=str(path),
-            allowed="UTF-8 text",
-        ) from None
+        problem = f"not UTF-8 text (byte {exc.start}: {exc.reason})"
+        raise _refuse(str(path), what, problem, "UTF-8 text") from None
 
 
 def read_data(
@@ -113,18 +109,11 @@ def read_data(
         OptionalDependencyError: YAML without PyYAML, TOML on Python 3.10 without tomli.
 
     """
-    name = str(path)
-    text = read_text(path, what, max_bytes)
-    data = parse_data(
-        text, name, fmt or FORMATS.get(Path(path).suffix.lower(), "yaml"), what, max_values
-    )
+    fmt = fmt or FORMATS.get(Path(path).suffix.lower(), "yaml")
+    data = parse_data(read_text(path, what, max_bytes), str(path), fmt, what, max_values)
     if mapping is not None and not isinstance(data, dict):
-        raise SourceError(
-            f"{what}={name!r} must hold a mapping ({mapping}), got {type(data).__name__}",
-            parameter=what,
-            value=name,
-            allowed="a mapping",
-        )
+        problem = f"the file must hold a mapping ({mapping}), not a {type(data).__name__}"
+        raise _refuse(str(path), what, problem, "a mapping")
     return data
 
 

@@ -248,7 +248,7 @@ PHRASES = {
     "device": "is a device",
     "folder": "is a folder",
     "huge": "more than",
-    "not-utf8": "is not UTF-8 text",
+    "not-utf8": "not UTF-8 text",
     "bomb": "more than 64 YAML aliases",
     "duplicate-foot": "key 'tibia_lf' given twice",
     "duplicate-offset": "key 'offset' given twice",

@@ -116,7 +116,7 @@ def test_byte_cap_and_utf8(tmp_path: Path) -> None:
     with pytest.raises(SourceError, match="more than 1000 bytes"):
         _reader.read_data(path, max_bytes=1000)
     path.write_bytes("name: caf\xe9\n".encode("latin-1"))
-    with pytest.raises(SourceError, match=r"is not UTF-8 text \(byte 9: invalid"):
+    with pytest.raises(SourceError, match=r"not UTF-8 text \(byte 9: invalid"):
         _reader.read_data(path)
 
 
@@ -204,7 +204,7 @@ READERS: dict[str, tuple[Callable[[Path], Any], str, str]] = {
 HOSTILE = {
     "pipe": "is a named pipe",
     "folder": "is a folder",
-    "not-utf8": "is not UTF-8 text",
+    "not-utf8": "not UTF-8 text",
     "duplicate": "given twice",
 }
 

@@ -55,8 +55,8 @@ import numpy as np
 
 from .._io import atomic_write
 from .._reader import parse_data, read_text
-from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, SourceError, choices
-from .servos import UNITS, Calibration, Servo, read_calibration
+from ..exceptions import ConfigurationError, HexapodKinError, SourceError, choices
+from .servos import UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [
     "UNITS",
@@ -72,15 +72,12 @@ __all__ = [
 #: Interpolations understood by :func:`timeline`.
 INTERPOLATIONS: tuple[str, ...] = ("linear", "cubic")
 FORMAT = "hexapod-kin timeline"
-_MAX_TIMELINE_BYTES = 256 << 20
+#: Byte cap of a timeline or plan file (parsing one takes some ten times its size in memory).
+_MAX_TIMELINE_BYTES = 64 << 20
 #: Most values of a timeline or plan file (no more than its bytes: a value takes one or more).
 _MAX_TIMELINE_VALUES = _MAX_TIMELINE_BYTES
 
 Interpolation = Literal["linear", "cubic"]
-
-
-def _bad(message: str, parameter: str, value: Any, allowed: Any) -> ParameterError:
-    return ParameterError(message, parameter=parameter, value=value, allowed=allowed)
 
 
 @dataclass(frozen=True)
@@ -470,7 +467,8 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
         ) from None
 
 
-def _read_csv(text: str, p: Path) -> Timeline:
+def _csv(text: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
+    """``# key: value`` lines, the column names (units dropped) and the (N, columns) numbers."""
     meta: dict[str, str] = {}
     rows: list[str] = []
     for line in text.splitlines():
@@ -479,13 +477,18 @@ def _read_csv(text: str, p: Path) -> Timeline:
             meta[key.strip()] = value.strip()
         elif line.strip():
             rows.append(line)
+    header = [h.strip() for h in rows[0].split(",")]
+    data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
+    names = tuple(h.rsplit(" [", 1)[0] for h in header)
+    return meta, names, data.reshape(len(rows) - 1, len(header))
+
+
+def _read_csv(text: str, p: Path) -> Timeline:
+    meta, columns, data = _csv(text)
     if not meta.get("format", "").startswith(FORMAT):
         raise KeyError("format")
-    header = rows[0].split(",")
-    n = (len(header) - 1) // 2
-    names = tuple(h.rsplit(" [", 1)[0] for h in header[1 : 1 + n])
-    data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
-    data = data.reshape(len(rows) - 1, 1 + 2 * n)
+    n = (len(columns) - 1) // 2
+    names = columns[1 : 1 + n]
     cal_data = parse_data(meta["calibration"], str(p), "json", "timeline")
     cal = Calibration.from_dict(cal_data, p.name)
     return _from_commands(
@@ -533,12 +536,8 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
             q = np.asarray(d["q"], dtype=float)
             names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
             return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
-        rows = [r for r in text.splitlines() if r.strip() and not r.startswith("#")]
-        header = [h.strip() for h in rows[0].split(",")]
-        data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
-        data = data.reshape(len(rows) - 1, len(header))
-        names = tuple(h.rsplit(" [", 1)[0] for h in header[1:])
-        return data[:, 0].copy(), data[:, 1:].copy(), names
+        _, columns, data = _csv(text)
+        return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
         if isinstance(exc, HexapodKinError):  # the reader's own errors
             raise
