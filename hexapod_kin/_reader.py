@@ -47,6 +47,7 @@ MAX_ALIASES = 64
 #: Most characters of one string.
 MAX_STRING = 10_000
 _MAX_INT = 2**53
+_EXPONENT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
 
 
 def _refuse(name: str, what: str, problem: str, allowed: str) -> SourceError:
@@ -240,6 +241,8 @@ def _yaml(text: str, name: str, what: str) -> Any:
                                   "each key once per mapping")  # fmt: skip
             return super().construct_mapping(node, deep=deep)
 
+    # YAML 1.2 floats: PyYAML (YAML 1.1) reads 1e-3 or 1.5e3 as text (its exponent needs a sign)
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", _EXPONENT, list("-+0123456789."))
     loader = Loader(text)
     try:
         return loader.get_single_data()

@@ -28,6 +28,8 @@ __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
 #: Servo units understood by :class:`Servo`.
 UNITS: tuple[str, ...] = ("rad", "deg", "ticks", "us")
 _MAX_BYTES = 1 << 20  # calibration files
+#: Largest magnitude of a servo command in its units (any real servo is far inside).
+MAX_COMMAND = 1e9
 _SERVO_KEYS = (
     "units",
     "offset",
@@ -139,6 +141,25 @@ class Servo:
                 "resolution",
                 self.resolution,
                 ">= 0",
+            )
+        # plausible: two turns either side of the centre stay within MAX_COMMAND, in whole steps
+        key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "centre")
+        reach = abs(self.zero) + self.scale * 4.0 * math.pi
+        if not reach <= MAX_COMMAND:
+            raise _bad(
+                f"{where}: {key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
+                f"allowed: commands within ±{MAX_COMMAND:g}",
+                key,
+                getattr(self, key),
+                f"commands within ±{MAX_COMMAND:g}",
+            )
+        if self.step > 0 and not reach / self.step < 2.0**52:
+            raise _bad(
+                f"{where}: resolution {self.step!r} is too fine for commands up to {reach:g} "
+                f"{self.units} (more than 2^52 steps)",
+                "resolution",
+                self.step,
+                f">= {reach / 2.0**52:.3g}",
             )
 
     @property

@@ -69,6 +69,8 @@ __all__ = [
     "timeline",
 ]
 
+#: Most samples of a timeline (a day at 100 Hz is 8.6e6).
+MAX_SAMPLES = 1e7
 #: Interpolations understood by :func:`timeline`.
 INTERPOLATIONS: tuple[str, ...] = ("linear", "cubic")
 FORMAT = "hexapod-kin timeline"
@@ -291,6 +293,7 @@ def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
     return v
 
 
+@np.errstate(over="ignore", invalid="ignore", divide="ignore")  # non-finite results refused
 def timeline(
     plan: Any,
     *,
@@ -345,7 +348,16 @@ def timeline(
     cal.check_joints(names)
     servos = [cal.servo(j) for j in names]
 
-    n = int(math.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1
+    samples = float(np.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1.0
+    if not samples <= MAX_SAMPLES:  # bounded work: no allocation of an absurd size
+        raise ConfigurationError(
+            f"{samples:.3g} samples ({t[-1] - t[0]:.6g} s at {rate:g} Hz); allowed: at most "
+            f"{MAX_SAMPLES:g}: lower the rate or shorten the plan",
+            parameter="rate",
+            value=rate,
+            allowed=f"at most {MAX_SAMPLES:g} samples",
+        )
+    n = int(samples)
     ts = t[0] + np.arange(n) / float(rate)
     ts = np.minimum(ts, t[-1])
     if interpolation == "cubic":
@@ -355,7 +367,12 @@ def timeline(
         qs = spline(ts)
         vs = spline(ts, 1)
     else:
-        qd = np.gradient(q, t, axis=0, edge_order=2) if qdot is None else qdot
+        if qdot is not None:
+            qd = qdot
+        elif len(t) > 2:
+            qd = np.gradient(q, t, axis=0, edge_order=2)
+        else:  # second order needs three samples
+            qd = np.gradient(q, t, axis=0, edge_order=1)
         qs = np.column_stack([np.interp(ts, t, q[:, j]) for j in range(q.shape[1])])
         vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
 
@@ -368,6 +385,17 @@ def timeline(
         command[:, j] = s.command(qs[:, j])
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
+        bad = np.flatnonzero(~(np.isfinite(command[:, j]) & np.isfinite(speed[:, j])))
+        if bad.size:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
+            k = int(bad[0])
+            raise ConfigurationError(
+                f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
+                f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
+                "check the calibration's scale and resolution and the plan",
+                parameter=s.joint,
+                value=float(command[k, j]),
+                allowed="finite commands and speeds",
+            )
         if s.limits is not None:
             lo, hi = s.limits
             bad = np.flatnonzero((command[:, j] < lo) | (command[:, j] > hi))
