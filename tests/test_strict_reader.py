@@ -328,3 +328,113 @@ def test_timeline_files_still_read_back(tmp_path: Path) -> None:
         back = read_timeline(path)
         np.testing.assert_allclose(back.q, tl.q, atol=1e-12)
         np.testing.assert_allclose(back.t, tl.t, atol=1e-12)
+
+
+# ------------------------------------------------ YAML 1.2 numbers, calibrations, timelines
+def test_yaml_exponents_are_numbers(tmp_path: Path) -> None:
+    """PyYAML alone reads ``1e-3`` as text (YAML 1.1); the reader reads it as YAML 1.2 does."""
+    data = _reader.parse_data("a: [1e-3, 1.5e3, -2E5, 1.0e+3, 12, x1e3, '1e3']", "x", "yaml")
+    assert data == {"a": [0.001, 1500.0, -200000.0, 1000.0, 12, "x1e3", "1e3"]}
+    path = tmp_path / "t.yaml"
+    path.write_text("row:\n  - {d: 1e-1}\n  - {d: 2e-1}\n")
+    p = hk.load(path).fk([0.0, 0.0])[:3, 3]
+    np.testing.assert_allclose(p, [0.3, 0.0, 0.0], atol=1e-15)  # two rows along x: 0.1 + 0.2
+
+
+@pytest.mark.parametrize(
+    ("entry", "key"),
+    [
+        ("{units: us, us_per_rad: 1e308, centre: 1500}", "us_per_rad"),
+        ("{units: ticks, ticks_per_revolution: 1e308, centre: 0}", "ticks_per_revolution"),
+        ("{units: us, us_per_rad: 600, centre: 1e12}", "centre"),
+        ("{units: ticks, ticks_per_revolution: 4096, centre: 2048, resolution: 1e-320}",
+         "resolution"),
+    ],
+)  # fmt: skip
+def test_implausible_calibrations_are_refused(tmp_path: Path, entry: str, key: str) -> None:
+    from hexapod_kin.export.timeline import read_calibration
+
+    path = tmp_path / "cal.yaml"
+    path.write_text(f"defaults: {entry}\n")
+    with pytest.raises(ParameterError) as info:
+        read_calibration(path)
+    assert info.value.parameter == key, str(info.value)
+
+
+def test_a_two_sample_plan_has_its_finite_difference_speed() -> None:
+    from hexapod_kin.export.timeline import timeline
+
+    tl = timeline((np.array([0.0, 2.0]), np.array([[0.0], [0.5]])), rate=4)
+    np.testing.assert_allclose(tl.qdot[:, 0], 0.25, rtol=1e-15)  # 0.5 rad over 2 s
+    np.testing.assert_allclose(tl.q[:, 0], 0.25 * tl.t, atol=1e-15)
+
+
+def test_non_finite_commands_are_refused_naming_joint_and_time() -> None:
+    from hexapod_kin.exceptions import ConfigurationError
+    from hexapod_kin.export.timeline import timeline
+
+    t = np.array([0.0, 0.5, 1.0])
+    with pytest.raises(ConfigurationError, match=r"joint j1 at t=0\.\d+ s: .*not finite"):
+        timeline((t, np.array([[0.0], [1.0], [1e308]])), rate=10, joint_names=["j1"])
+    with pytest.raises(ConfigurationError, match="samples"):
+        timeline((np.array([0.0, 1e300]), np.zeros((2, 1))), rate=50)
+
+
+def _servo_entry(draw: Any) -> dict[str, Any]:
+    from hypothesis import strategies as st
+
+    units = draw(st.sampled_from(["rad", "deg", "ticks", "us"]))
+    big = st.floats(1e-320, 1e308, allow_nan=False)
+    entry: dict[str, Any] = {"units": units, "offset": draw(st.floats(-4, 4)),
+                             "direction": draw(st.sampled_from([1, -1]))}  # fmt: skip
+    if units == "ticks":
+        entry.update(ticks_per_revolution=draw(big), centre=draw(st.floats(-1e12, 1e12)))
+    if units == "us":
+        entry.update(us_per_rad=draw(big), centre=draw(st.floats(-1e12, 1e12)))
+    if draw(st.booleans()):
+        entry["resolution"] = draw(st.floats(0, 1e3) | big)
+    if draw(st.booleans()):
+        lo = draw(st.floats(-1e4, 1e4))
+        entry["limits"] = [lo, lo + draw(st.floats(1e-3, 1e4))]
+    return entry
+
+
+def test_every_timeline_is_finite_within_range_or_refused_by_name() -> None:
+    """Random calibrations and motions: a timeline holds only finite commands and speeds
+    inside the servos' limits, written as valid JSON; or it is refused naming the joint."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from hexapod_kin.exceptions import ConfigurationError
+    from hexapod_kin.export.timeline import Calibration, timeline
+
+    seen: set[str] = set()
+
+    @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
+    @given(st.data())
+    def check(data: Any) -> None:
+        try:
+            cal = Calibration.from_dict({"joints": {"j1": _servo_entry(data.draw)}})
+        except ParameterError:
+            return  # refused before any command is made
+        n = data.draw(st.integers(2, 6))
+        t = np.cumsum([0.0] + [data.draw(st.floats(1e-3, 10.0)) for _ in range(n - 1)])
+        angle = st.floats(-4.0, 4.0) | st.floats(-1e308, 1e308)
+        q = np.array([[data.draw(angle)] for _ in range(n)])
+        try:
+            tl = timeline((t, q), rate=data.draw(st.floats(1.0, 50.0)), joint_names=["j1"],
+                          calibration=cal)  # fmt: skip
+        except ConfigurationError as exc:
+            assert str(exc).startswith("joint j1 at t="), str(exc)
+            seen.add("refused")
+            return
+        seen.add("written")
+        assert np.all(np.isfinite(tl.command)) and np.all(np.isfinite(tl.speed))
+        limits = cal.servo("j1").limits
+        if limits is not None:
+            assert np.all((tl.command >= limits[0]) & (tl.command <= limits[1]))
+        text = json.dumps(tl.to_dict(), allow_nan=False)  # valid JSON: no Infinity, no NaN
+        assert json.loads(text)["joint_names"] == ["j1"]
+
+    check()
+    assert seen == {"refused", "written"}  # both outcomes drawn: the test can fail

@@ -144,6 +144,7 @@ class Servo:
             )
         # plausible: two turns either side of the centre stay within MAX_COMMAND, in whole steps
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "centre")
+        key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
         reach = abs(self.zero) + self.scale * 4.0 * math.pi
         if not reach <= MAX_COMMAND:
             raise _bad(
