@@ -238,6 +238,11 @@ def _make(tmp_path: Path, case: str, suffix: str) -> Path:
         path.write_text("defaults: {units: rad}\njoints:\n  j1: {offset: 0.1, offset: 0.3}\n")
     elif case == "offset-text":
         path.write_text("defaults: {units: rad}\njoints:\n  j1: {offset: '0.3'}\n")
+    elif case == "us-per-rad-1e308":
+        path.write_text("defaults: {units: us, us_per_rad: 1e308, centre: 1500}\n")
+    elif case == "resolution-1e-320":
+        path.write_text("defaults: {units: ticks, ticks_per_revolution: 4096, centre: 2048, "
+                        "resolution: 1e-320}\n")  # fmt: skip
     elif case == "duplicate-json":
         path.write_text('{"t": [0, 1], "q": [[0], [1]], "t": [0, 2]}')
     return path
@@ -254,6 +259,8 @@ PHRASES = {
     "duplicate-offset": "key 'offset' given twice",
     "offset-text": "offset = '0.3' is not a finite number",
     "duplicate-json": "key 't' given twice",
+    "us-per-rad-1e308": "us_per_rad 1e+308 maps two turns to inf us",
+    "resolution-1e-320": "resolution 1e-320 is too fine",
 }
 COMMANDS = {
     # name: (hostile cases, suffix, the command line with {f} the hostile file)
@@ -263,7 +270,16 @@ COMMANDS = {
         ("stand", str(PHX), "--foot", "{f}"),
     ),
     "timeline --calibration": (
-        ("pipe", "device", "not-utf8", "bomb", "duplicate-offset", "offset-text"),
+        (
+            "pipe",
+            "device",
+            "not-utf8",
+            "bomb",
+            "duplicate-offset",
+            "offset-text",
+            "us-per-rad-1e308",
+            "resolution-1e-320",
+        ),  # fmt: skip
         ".yaml",
         ("timeline", "path", "plan.csv", "--calibration", "{f}", "-o", "out.csv"),
     ),

@@ -333,7 +333,11 @@ def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
             kw[key] = _number(value, key, joint, name)
     if "direction" in kw and kw["direction"] in (1.0, -1.0):
         kw["direction"] = int(kw["direction"])
-    return Servo(joint=joint, **kw)
+    try:
+        return Servo(joint=joint, **kw)
+    except ParameterError as exc:  # name the file
+        key = exc.parameter or "calibration"
+        raise _bad(f"{name}: {exc}", key, exc.value, exc.allowed) from None
 
 
 def _number(value: Any, key: str, joint: str, name: str) -> float:
