@@ -64,6 +64,12 @@ def _short(exc: BaseException) -> str:
     return text if len(text) <= 160 else text[:157] + "..."
 
 
+def _invalid(name: str, what: str, fmt: str, exc: BaseException) -> SourceError:
+    return SourceError(
+        f"{what}={name!r}: not valid {fmt} ({_short(exc)})", parameter=what, value=name
+    )
+
+
 def read_text(
     path: str | os.PathLike[str],
     what: str = "source",
@@ -136,9 +142,7 @@ def parse_data(
             try:
                 data = toml.loads(text)
             except toml.TOMLDecodeError as exc:
-                raise SourceError(
-                    f"{what}={name!r}: not valid TOML ({_short(exc)})", parameter=what, value=name
-                ) from None
+                raise _invalid(name, what, "TOML", exc) from None
         else:
             data = _yaml(text, name, what)
     except RecursionError:
@@ -173,9 +177,7 @@ def _json(text: str, name: str, what: str) -> Any:
     try:
         return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
     except json.JSONDecodeError as exc:
-        raise SourceError(
-            f"{what}={name!r}: not valid JSON ({_short(exc)})", parameter=what, value=name
-        ) from None
+        raise _invalid(name, what, "JSON", exc) from None
 
 
 def _toml_module(what: str) -> Any:
@@ -191,20 +193,14 @@ def _toml_module(what: str) -> Any:
     return tomllib
 
 
-def yaml_module(what: str = "source") -> Any:
-    """PyYAML, or :class:`OptionalDependencyError` with the install hint."""
+def _yaml(text: str, name: str, what: str) -> Any:
+    """PyYAML's safe loader refusing duplicate keys, deep nesting, many aliases and tags."""
     try:
         import yaml
     except ModuleNotFoundError:  # pragma: no cover - pyyaml ships with the test extra
         raise OptionalDependencyError(
             "reading YAML files needs PyYAML; `pip install hexapod-kin[tables]`", parameter=what
         ) from None
-    return yaml
-
-
-def _yaml(text: str, name: str, what: str) -> Any:
-    """PyYAML's safe loader refusing duplicate keys, deep nesting, many aliases and tags."""
-    yaml = yaml_module(what)
 
     class Loader(yaml.SafeLoader):  # type: ignore[name-defined,unused-ignore]
         depth = 0
@@ -249,9 +245,7 @@ def _yaml(text: str, name: str, what: str) -> Any:
     except yaml.constructor.ConstructorError as exc:  # a tag such as !!python/object
         found = re.search(r"tag '([^']*)'", str(exc.problem))
         if found is None:
-            raise SourceError(
-                f"{what}={name!r}: not valid YAML ({_short(exc)})", parameter=what, value=name
-            ) from None
+            raise _invalid(name, what, "YAML", exc) from None
         tag = found.group(1).replace("tag:yaml.org,2002:", "!!")
         mark = exc.problem_mark
         where = f"line {mark.line + 1}: " if mark is not None else ""
@@ -260,9 +254,7 @@ def _yaml(text: str, name: str, what: str) -> Any:
             name, what, f"{where}the YAML tag {clip(tag)} is not allowed", allowed
         ) from None
     except yaml.YAMLError as exc:
-        raise SourceError(
-            f"{what}={name!r}: not valid YAML ({_short(exc)})", parameter=what, value=name
-        ) from None
+        raise _invalid(name, what, "YAML", exc) from None
     finally:
         loader.dispose()
 
