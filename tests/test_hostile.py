@@ -269,6 +269,8 @@ COMMANDS = {
         ".yaml",
         ("stand", str(PHX), "--foot", "{f}"),
     ),
+    "gait --foot": (("bomb", "pipe"), ".yaml", ("gait", str(PHX), "--foot", "{f}")),
+    "simulate --foot": (("bomb", "device"), ".yaml", ("simulate", str(PHX), "--foot", "{f}")),
     "timeline --calibration": (
         (
             "pipe",
