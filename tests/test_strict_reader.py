@@ -349,6 +349,7 @@ def test_yaml_exponents_are_numbers(tmp_path: Path) -> None:
         ("{units: us, us_per_rad: 600, centre: 1e12}", "centre"),
         ("{units: ticks, ticks_per_revolution: 4096, centre: 2048, resolution: 1e-320}",
          "resolution"),
+        ("{units: ticks, ticks_per_revolution: 1e-300, centre: 0.5}", "ticks_per_revolution"),
     ],
 )  # fmt: skip
 def test_implausible_calibrations_are_refused(tmp_path: Path, entry: str, key: str) -> None:
@@ -429,7 +430,7 @@ def test_every_timeline_is_finite_within_range_or_refused_by_name() -> None:
             seen.add("refused")
             return
         seen.add("written")
-        assert np.all(np.isfinite(tl.command)) and np.all(np.isfinite(tl.speed))
+        assert all(np.all(np.isfinite(a)) for a in (tl.command, tl.speed, tl.q, tl.qdot))
         limits = cal.servo("j1").limits
         if limits is not None:
             assert np.all((tl.command >= limits[0]) & (tl.command <= limits[1]))

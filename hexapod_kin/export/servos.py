@@ -154,6 +154,14 @@ class Servo:
                 getattr(self, key),
                 f"commands within ±{MAX_COMMAND:g}",
             )
+        if self.step > 0 and not self.step / self.scale <= 2.0 * math.pi:
+            raise _bad(
+                f"{where}: {key} {getattr(self, key)!r} makes one step of {self.step:g} "
+                f"{self.units} {self.step / self.scale:g} rad; allowed: at most one turn",
+                key,
+                getattr(self, key),
+                "at most one turn per step",
+            )
         if self.step > 0 and not reach / self.step < 2.0**52:
             raise _bad(
                 f"{where}: resolution {self.step!r} is too fine for commands up to {reach:g} "

@@ -385,7 +385,8 @@ def timeline(
         command[:, j] = s.command(qs[:, j])
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
-        bad = np.flatnonzero(~(np.isfinite(command[:, j]) & np.isfinite(speed[:, j])))
+        finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
+        bad = np.flatnonzero(~finite)
         if bad.size:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
             k = int(bad[0])
             raise ConfigurationError(
