@@ -61,7 +61,6 @@ ROW_KEYS = (
 )  # fmt: skip
 _GEOMETRY = {"khalil": ("alpha", "d", "theta", "r"), "dh": ("theta", "d", "a", "alpha")}
 _ANGLE_KEYS = {"alpha", "theta"}
-_MAX_BYTES = 1_000_000
 
 #: Largest magnitude of a length in a table [m] (and of a com or pose offset).
 MAX_LENGTH = 1e3
@@ -90,7 +89,7 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
 
     """
     path = Path(path)
-    data = read_data(path, "source", max_bytes=_MAX_BYTES, mapping="name, convention, row, ...")
+    data = read_data(path, "source", mapping="name, convention, row, ...")
     unknown = sorted(set(overrides) - set(TOP_KEYS))
     if unknown:
         raise ParameterError(

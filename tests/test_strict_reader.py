@@ -138,8 +138,7 @@ def test_the_same_values_from_json_toml_and_yaml(tmp_path: Path) -> None:
 
 def test_toml_on_python_310_uses_tomli(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     """Without ``tomllib`` (3.10) the reader takes ``tomli`` (same API), else says to install it."""
-    import tomllib
-
+    tomllib = pytest.importorskip("tomllib")  # the same API as tomli
     path = tmp_path / "t.toml"
     path.write_text("a = 1\n")
     monkeypatch.setitem(sys.modules, "tomllib", None)  # as on 3.10: no such module

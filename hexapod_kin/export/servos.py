@@ -27,7 +27,6 @@ __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
 
 #: Servo units understood by :class:`Servo`.
 UNITS: tuple[str, ...] = ("rad", "deg", "ticks", "us")
-_MAX_BYTES = 1 << 20  # calibration files
 #: Largest magnitude of a servo command in its units (any real servo is far inside).
 MAX_COMMAND = 1e9
 _SERVO_KEYS = (
@@ -364,7 +363,7 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
 
     The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
-    regular file of at most 1 MiB, UTF-8, no key given twice, YAML alias and depth caps).
+    regular file of at most 1 MB, UTF-8, no key given twice, YAML alias and depth caps).
 
     Example (AX-12-like servos: 1024 ticks over 300°, centre 512)::
 
@@ -378,5 +377,5 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
         ParameterError: An unknown key or unit, a bad number.
 
     """
-    data = read_data(path, "calibration", max_bytes=_MAX_BYTES)
+    data = read_data(path, "calibration")
     return Calibration.from_dict(data, Path(path).name)
