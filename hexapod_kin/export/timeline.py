@@ -489,7 +489,7 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
         if isinstance(exc, HexapodKinError):  # the reader's and the calibration's own errors
             raise
         raise SourceError(
-            f"{p.name}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
+            f"timeline={str(p)!r}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
             f"{' '.join(str(exc).split())[:120]})",
             parameter="timeline",
             value=str(p),
@@ -571,7 +571,7 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
         if isinstance(exc, HexapodKinError):  # the reader's own errors
             raise
         raise SourceError(
-            f"{p.name}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
+            f"plan={str(p)!r}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
             f"joint_names) ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})",
             parameter="plan",
             value=str(p),
