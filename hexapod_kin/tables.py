@@ -38,6 +38,7 @@ YAML with PyYAML (``pip install hexapod-kin[tables]``).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -256,21 +257,10 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             default = (
                 JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
             )
+            units = {"lower": lim_scale, "upper": lim_scale, "velocity": lim_scale, "effort": 1.0}
             try:
-                limits.append(
-                    JointLimits(
-                        lower=_number(row["lower"], f"{where}.lower") * lim_scale
-                        if "lower" in row
-                        else default.lower,
-                        upper=_number(row["upper"], f"{where}.upper") * lim_scale
-                        if "upper" in row
-                        else default.upper,
-                        velocity=_number(row["velocity"], f"{where}.velocity") * lim_scale
-                        if "velocity" in row
-                        else default.velocity,
-                        effort=_number(row.get("effort", default.effort), f"{where}.effort"),
-                    )
-                )
+                given = {k: _number(row[k], f"{where}.{k}") * units[k] for k in units if k in row}
+                limits.append(replace(default, **given))
             except ParameterError as exc:
                 raise ParameterError(f"{where}: {exc}", parameter="lower") from None
         else:
