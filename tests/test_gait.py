@@ -622,7 +622,7 @@ def test_tools_bench_gait_runs():
 def test_walk_live_sends_the_overlays_in_the_animation():
     pytest.importorskip("umsgpack")
     from hexapod_kin import load
-    from hexapod_kin.gait.show import walk_live
+    from hexapod_kin.viewer import walk_live
 
     class FakeViewer:  # the two Viewer methods walk_live uses, recorded
         def __init__(self) -> None:
@@ -650,7 +650,7 @@ def test_walk_live_sends_the_overlays_in_the_animation():
 def test_walk_live_in_a_real_viewer():
     pytest.importorskip("meshcat")
     from hexapod_kin import load
-    from hexapod_kin.gait.show import walk_live
+    from hexapod_kin.viewer import walk_live
     from hexapod_kin.viewer import Viewer
 
     with Viewer(load("hexapod")) as v:

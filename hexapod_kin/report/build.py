@@ -519,6 +519,7 @@ def _html(
     derivations: dict[str, dict[str, Any]],
     stills: dict[str, tuple[Path, str]] | None = None,
 ) -> str:
+    from .._page import Html, page
     from . import html as H
 
     e = H.e
@@ -540,9 +541,6 @@ def _html(
         return f" (<a href='#{H.line_anchor(v.seed, int(a))}'>{span} of seed {e(v.seed)}</a>)"
 
     h = [
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
-        "<title>hexapod_kin reproduces the seeds</title>",
-        f"<style>{H.CSS}</style></head><body>",
         "<h1>hexapod_kin reproduces the four lab reports</h1>",
         f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
         "(<code>hexapod_kin/report/claims.toml</code>), each linked to its passage in the "
@@ -605,5 +603,4 @@ def _html(
     )
     h.append(H.seed_texts(seeds, texts, cited))
     h.append(H.SCRIPT)
-    h.append("</body></html>")
-    return "\n".join(h)
+    return page("hexapod_kin reproduces the seeds", Html("\n".join(h)), style=H.CSS)

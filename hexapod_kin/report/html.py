@@ -1,6 +1,6 @@
-"""The report as one standalone HTML page (offline: no CDN, no network, no external file).
+"""The report's pieces of HTML (the page itself is :func:`hexapod_kin._page.page`).
 
-Pieces, each escaped here and nowhere else:
+Text is escaped by the package's one rule (:func:`hexapod_kin._page.escape`); the pieces:
 
 * :func:`inline` — the report's prose: Markdown code spans and bold become ``<code>`` and
   ``<b>`` (no Markdown reaches the page);
@@ -16,12 +16,14 @@ Pieces, each escaped here and nowhere else:
 from __future__ import annotations
 
 import base64
-import html
 import json
 import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+from .._page import escape as e
+from .._page import frame
 
 __all__ = [
     "CSS",
@@ -39,8 +41,6 @@ __all__ = [
     "seed_texts",
     "verdict_html",
 ]
-
-e = html.escape
 
 #: What each verdict category means (the legend; also in the Markdown).
 LEGEND: tuple[tuple[str, str, str], ...] = (
@@ -275,7 +275,6 @@ def animation(page: Path, still: Path | None, when: str) -> str:
         when: What the still frame shows (e.g. ``"t = 1.00 s"``).
 
     """
-    doc = e(page.read_text(encoding="utf-8"), quote=True)
     link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
     msg = (
         f"This browser has no WebGL: showing a still frame ({e(when)}) instead of the "
@@ -288,7 +287,8 @@ def animation(page: Path, still: Path | None, when: str) -> str:
         f"<p class='gl'><button type='button' class='play'>▶ play the {e(page.stem)} "
         f"animation here</button> <small>(WebGL; the picture below is its still frame, "
         f"{e(when)})</small></p>{still_html}"
-        f'<template><iframe title="{e(page.stem)} animation" srcdoc="{doc}"></iframe></template>'
+        f"<template>{frame(page.read_text(encoding='utf-8'), title=f'{page.stem} animation')}"
+        "</template>"
         "<noscript><p>Scripts are off: the animation needs them; above is its still frame."
         "</p></noscript></div>"
     )
