@@ -552,7 +552,7 @@ def _html(
     h += [f"<dt class='{s}'>{e(label)}</dt><dd>{e(text)}</dd>" for s, label, text in LEGEND]
     h.append("</dl><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
     for v in rep.verdicts:
-        where = e(H.seed_notation(v.where))
+        where: str = e(H.seed_notation(v.where))
         if v.lines:
             a = v.lines.partition("-")[0]
             where = f"<a href='#{H.line_anchor(v.seed, int(a))}'>{where}</a>"

@@ -117,7 +117,7 @@ _BOLD = re.compile(r"\*\*(.+?)\*\*")
 
 def inline(text: str) -> str:
     """Escaped prose with Markdown code spans and bold rendered (``<code>``, ``<b>``)."""
-    out = e(text)
+    out: str = e(text)
     out = _CODE.sub(lambda m: f"<code>{m.group(1)}</code>", out)
     return _BOLD.sub(lambda m: f"<b>{m.group(1)}</b>", out)
 
