@@ -57,7 +57,11 @@ def fill(template: str, **values: Any) -> Html:
         KeyError: A hole has no value (a bug in the caller's template).
 
     """
-    return Html(Template(template).substitute({k: escape(v) for k, v in values.items()}))
+    return Html(_substitute(template, values))
+
+
+def _substitute(template: str, values: dict[str, Any]) -> str:
+    return Template(template).substitute({k: escape(v) for k, v in values.items()})
 
 
 def script_json(obj: Any) -> Html:
@@ -107,14 +111,8 @@ def page(title: str, body: Html, *, style: str = "", policy: str | None = None) 
         if policy is not None
         else ""
     )
-    return fill(
-        SKELETON,
-        policy=Html(meta),
-        version=__version__,
-        title=title,
-        style=Html(style),
-        body=body,
-    )
+    values = {"policy": Html(meta), "version": __version__, "title": title, "style": Html(style)}
+    return _substitute(SKELETON, {**values, "body": body})  # a document (text), not markup
 
 
 def check_height(height: Any) -> int:
@@ -161,6 +159,6 @@ def frame(doc: str, *, height: int | None = None, title: str | None = None) -> H
     return fill(
         '<iframe ${named}srcdoc="$doc"$sized sandbox="allow-scripts"></iframe>',
         named=named,
-        doc=doc,
+        doc=Html(html.escape(doc, quote=True)),  # a page, even one built here, is text here
         sized=sized,
     )
