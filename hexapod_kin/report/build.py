@@ -336,6 +336,17 @@ _HEXAPOD = {
 Block = tuple[Any, ...]
 
 
+def _value(v: Any) -> str:
+    """A computed figure as text (never a Python ``repr``)."""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (list, tuple)):
+        return ", ".join(_value(x) for x in v)
+    return str(v)
+
+
 def _facts(key: str, rep: Report) -> list[Block]:
     """The computed figures of a section, as prose and tables (rendered by MD and HTML)."""
     f = rep.facts
@@ -388,17 +399,7 @@ def _facts(key: str, rep: Report) -> list[Block]:
             )
         ]
     if key == "beyond":
-        rows = []
-        for k, v in f["hexapod"].items():
-            if isinstance(v, bool):
-                text = "yes" if v else "no"
-            elif isinstance(v, float):
-                text = f"{v:.6g}"
-            elif isinstance(v, (list, tuple)):
-                text = ", ".join(f"{x:.6g}" if isinstance(x, float) else str(x) for x in v)
-            else:
-                text = str(v)
-            rows.append([_HEXAPOD.get(k, k.replace("_", " ")), text])
+        rows = [[_HEXAPOD.get(k, k.replace("_", " ")), _value(v)] for k, v in f["hexapod"].items()]
         return [("table", "The hexapod standing and walking", ["figure", "value"], rows)]
     return []
 

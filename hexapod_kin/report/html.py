@@ -6,7 +6,6 @@ Text is escaped by the package's one rule (:func:`hexapod_kin._page.escape`); th
   ``<b>`` (no Markdown reaches the page);
 * :func:`matrix_pair` — a matrix or table verdict laid out as two HTML tables (the seed's,
   hexapod_kin's), the differing entries highlighted in both;
-* :func:`facts_html` — computed figures as HTML tables (never a Python ``repr``);
 * :func:`animation` — an animation (``<iframe srcdoc>``) with its still frame: a script in the
   page tests WebGL and, without it, says so and shows the still frame instead;
 * :func:`seed_texts` — the shipped seed texts, one anchor per line (``#seed-000-L65``), which
@@ -31,7 +30,6 @@ __all__ = [
     "SCRIPT",
     "animation",
     "derivation_html",
-    "facts_html",
     "image",
     "inline",
     "line_anchor",
@@ -231,27 +229,6 @@ def derivation_html(title: str, printed: dict[str, Any]) -> str:
             h.append(f"<p>{e(item['label'])} = <code>{e(pretty_entry(item['value']))}</code></p>")
     h.append("<ul>" + "".join(f"<li>{e(line)}</li>" for line in printed["footer"]) + "</ul>")
     h.append("</details>")
-    return "".join(h)
-
-
-def _value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        return f"{v:.6g}"
-    if isinstance(v, (list, tuple)):
-        return ", ".join(_value(x) for x in v)
-    return str(v)
-
-
-def facts_html(rows: Sequence[tuple[str, Any]], caption: str = "") -> str:
-    """Label → value rows as a two-column table (numbers formatted, lists joined)."""
-    h = ["<table class='kv'>"]
-    if caption:
-        h.append(f"<caption>{inline(caption)}</caption>")
-    for label, value in rows:
-        h.append(f"<tr><td>{inline(label)}</td><td class='num'>{e(_value(value))}</td></tr>")
-    h.append("</table>")
     return "".join(h)
 
 

@@ -125,8 +125,10 @@ class Viewer:
             kwargs.get("play", True),
             kwargs.get("loop", True),
             scene=self._scene,
+            overlays=kwargs.get("overlays"),
         )
-        for part in ("trace", "frames", "singular"):  # after the checks: a bad call keeps them
+        # after the checks: a bad call keeps them
+        for part in ("trace", "frames", "singular", "overlays"):
             self.send(delete(f"/meshcat/{part}"))
         for cmd in built.static:
             self.send(cmd)
@@ -172,10 +174,11 @@ class Viewer:
         fps: float | None = None,
         loop: bool = True,
         play: bool = True,
+        overlays: Any = None,
     ) -> None:
         """Animate a trajectory in the browser (meshcat's player: play, pause, time, speed).
 
-        Arguments as in :func:`export_html`.
+        Arguments as in :func:`~hexapod_kin.viewer.page.render_html`.
 
         Raises:
             ConfigurationError: Bad shapes or values.
@@ -193,6 +196,7 @@ class Viewer:
             fps=fps,
             loop=loop,
             play=play,
+            overlays=overlays,
         )
 
     def set_visible(self, part: str, visible: bool) -> None:

@@ -280,17 +280,7 @@ def render_html(
 def export_html(
     model: Model, times: Any, qs: Any, path: str | os.PathLike[str], **options: Any
 ) -> Path:
-    """Write :func:`render_html`'s page to ``path`` (atomically).
-
-    Args:
-        model: A loaded model (``hexapod_kin.load(...)``).
-        times: Sample times (N,) in [s].
-        qs: Joint configurations (N, nq), or one (nq,) still pose.
-        path: Destination ``.html`` file.
-        **options: The keywords of :func:`render_html` (``title``, ``fps``, ``overlays``...).
-
-    Returns:
-        The path written.
+    """Write :func:`render_html` (``options``: its keywords) to ``path`` atomically; return it.
 
     Raises:
         ParameterError: Bad destination (and every error of :func:`render_html`).

@@ -18,7 +18,6 @@ from .._io import atomic_write
 from ..exceptions import ConfigurationError
 from ..gait.show import run_model, support_polygons
 from .page import render_html
-from .scene import scene_commands
 
 __all__ = ["walk_html", "walk_live", "walk_page"]
 
@@ -35,14 +34,11 @@ def _joint_columns(run: Any, mdl: Any) -> list[int]:
 
 
 def walk_live(run: Any, viewer: Any, **options: Any) -> None:
-    """Play a walk in a live :class:`hexapod_kin.viewer.Viewer` of the hexapod (with overlays).
-
-    The viewer animates the robot and the foot traces (``Viewer.animate``); the support
-    polygon and the projected centre of mass are then added to the same animation.
+    """Play a walk in a live :class:`hexapod_kin.viewer.Viewer` (support polygon and CoM drawn).
 
     Args:
         run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
-        viewer: A live viewer of the hexapod model.
+        viewer: A live viewer of the walking robot.
         **options: Passed to ``Viewer.animate`` (``fps``, ``loop``, ``play``).
 
     Raises:
@@ -51,22 +47,9 @@ def walk_live(run: Any, viewer: Any, **options: Any) -> None:
 
     """
     q = run.q[:, _joint_columns(run, viewer.model)]
-    viewer.animate(run.t, q, base_poses=run.base_poses, **options)
     poly, com = support_polygons(run)
-    cmds = scene_commands(
-        viewer.model,
-        run.t,
-        q,
-        base_poses=run.base_poses,
-        overlays={"support_polygon": poly, "com": com},
-        **options,
-    )
-    viewer.send({"type": "delete", "path": "/meshcat/overlays"})
-    for cmd in cmds:
-        if cmd["type"] == "set_animation" or str(cmd.get("path", "")).startswith(
-            "/meshcat/overlays/"
-        ):
-            viewer.send(cmd)
+    overlays = {"support_polygon": poly, "com": com}
+    viewer.animate(run.t, q, base_poses=run.base_poses, overlays=overlays, **options)
 
 
 def walk_page(run: Any, *, model: Any = None, title: str | None = None, **options: Any) -> str:
@@ -108,18 +91,5 @@ def walk_page(run: Any, *, model: Any = None, title: str | None = None, **option
 
 
 def walk_html(run: Any, path: str | os.PathLike[str], **options: Any) -> Path:
-    """Write :func:`walk_page` to ``path`` (atomically).
-
-    Args:
-        run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
-        path: Destination ``.html``.
-        **options: The keywords of :func:`walk_page` (``model``, ``title``, ``fps``...).
-
-    Returns:
-        The path written.
-
-    Raises:
-        ParameterError: Bad destination (and every error of :func:`walk_page`).
-
-    """
+    """Write :func:`walk_page` (``options``: its keywords) to ``path`` atomically; return it."""
     return atomic_write(path, walk_page(run, **options))
