@@ -303,13 +303,7 @@ def _copy_seeds(seeds: dict[str, str], out: Path) -> list[Path]:
 _PRINTED = ("leg", "leg+", "scara")
 
 
-_LABEL = {
-    "agrees": "agrees",
-    "wrong": "seed is wrong",
-    "underdetermined": "underdetermined",
-    "differs": "differs",
-    "error": "NOT COMPUTED",
-}
+_LABEL = {status: label for status, label, _ in LEGEND}
 _DERIV = {
     "leg": "hexabot_leg (α2 = −90°, seeds 000/001)",
     "leg+": "hexabot_leg(alpha2=+π/2) (seed 003)",
