@@ -245,15 +245,15 @@ def render_html(
         model,
         times,
         qs,
-        base_poses,
-        trace_frame,
-        frame_triads,
-        singular_mask,
-        fps,
-        play,
-        loop,
-        scene=Scene(model, normals=False),  # the page computes the normals
+        base_poses=base_poses,
+        trace_frame=trace_frame,
+        frame_triads=frame_triads,
+        singular_mask=singular_mask,
+        fps=fps,
+        play=play,
+        loop=loop,
         overlays=overlays,
+        scene=Scene(model, normals=False),  # the page computes the normals
     )
     label = title if title is not None else f"hexapod_kin: {model.name}"
     data = {
