@@ -6,7 +6,7 @@ notebook frames) is :data:`SKELETON` filled by :func:`page`; every fragment with
 :func:`html.escape` (``& < > " '``), unless it is :class:`Html` (markup built here or written
 in the package's source); a template is filled in one pass, so an inserted value is never
 read again (a title holding ``$data``, ``${x}`` or ``__DATA__`` stays that text). A leaf
-module (standard library only).
+module (the standard library, ``exceptions`` and ``_version`` only).
 """
 
 from __future__ import annotations
