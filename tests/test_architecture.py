@@ -4,6 +4,9 @@
 * no import circle, counting every import (module level, inside functions, under
   ``TYPE_CHECKING``): ``from . import sibling`` is an import of the module ``sibling``, and of
   the package ``__init__`` only when ``sibling`` is not a module;
+* no two parts of the package (subpackages and top-level modules) import each other, even
+  through different modules of each and inside functions (e.g. ``viewer`` may import ``gait``,
+  then no module of ``gait`` imports ``viewer``);
 * no ``from X import _private`` across modules, except between modules of the same subpackage;
 * the core (everything left of viewer/plots/cli in the data flow) never imports the
   application layer (:data:`APP_LAYER`) at module level;
@@ -277,6 +280,48 @@ def test_the_circle_finder_sees_planted_circles() -> None:
     src = "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .params import Chain\n"
     src += "def f():\n    from . import robots, load\n    import hexapod_kin.model\n"
     assert _imported(kin, ast.parse(src), known) == known
+
+
+def _part(dotted: str) -> str:
+    """The part of the package a module belongs to: ``hexapod_kin.gait.walk`` -> ``gait``."""
+    parts = dotted.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _mutual_parts(graph: dict[str, set[str]]) -> dict[tuple[str, str], list[str]]:
+    """Pairs of parts that import each other, each with the imports that make the pair."""
+    edges: dict[tuple[str, str], list[str]] = {}
+    for here, targets in graph.items():
+        for there in targets:
+            a, b = _part(here), _part(there)
+            if a and b and a != b:
+                edges.setdefault((a, b), []).append(f"{here} -> {there}")
+    return {
+        (a, b): sorted(why + edges[(b, a)])
+        for (a, b), why in edges.items()
+        if a < b and (b, a) in edges
+    }
+
+
+def test_no_two_parts_import_each_other() -> None:
+    bad = _mutual_parts(_import_graph())
+    text = "\n".join(f"{a} <-> {b}: {why}" for (a, b), why in sorted(bad.items()))
+    assert not bad, "parts of the package importing each other:\n" + text
+
+
+def test_the_pair_finder_sees_planted_pairs() -> None:
+    graph = {
+        "hexapod_kin.gait.show": {"hexapod_kin.viewer.page"},  # gait -> viewer ...
+        "hexapod_kin.viewer.live": {"hexapod_kin.gait.stand"},  # ... and viewer -> gait
+        "hexapod_kin.viewer.page": {"hexapod_kin._page", "hexapod_kin.viewer.scene"},
+        "hexapod_kin.report.build": {"hexapod_kin._page", "hexapod_kin"},
+        "hexapod_kin": {"hexapod_kin.report.build"},  # the root package is no part
+    }
+    assert list(_mutual_parts(graph)) == [("gait", "viewer")]
+    # an import inside a function counts (the graph reads every import)
+    show = ROOT / "gait" / "show.py"
+    src = "def f():\n    from ..viewer import export_html\n"
+    assert _imported(show, ast.parse(src), {"hexapod_kin.viewer"}) == {"hexapod_kin.viewer"}
 
 
 def test_data_classes_never_reach_the_loader() -> None:

@@ -620,42 +620,36 @@ def test_tools_bench_gait_runs():
 
 
 def test_walk_live_sends_the_overlays_in_the_animation():
-    pytest.importorskip("umsgpack")
-    from hexapod_kin import load
-    from hexapod_kin.gait.show import walk_live
-
-    class FakeViewer:  # the two Viewer methods walk_live uses, recorded
-        def __init__(self) -> None:
-            self.model = load("hexapod")
-            self.sent: list[dict] = []
-            self.animated: tuple | None = None
-
-        def animate(self, times, qs, **kw):
-            self.animated = (np.asarray(times), np.asarray(qs), kw)
-
-        def send(self, cmd):
-            self.sent.append(cmd)
-
-    run = walk(duration=1.0)
-    v = FakeViewer()
-    walk_live(run, v)
-    assert v.animated is not None and np.array_equal(v.animated[1], run.q)
-    assert v.sent[0] == {"type": "delete", "path": "/meshcat/overlays"}
-    anim = v.sent[-1]
-    assert anim["type"] == "set_animation"
-    paths = {c["path"] for c in anim["animations"]}
-    assert "/meshcat/overlays/com/0" in paths and any(p.startswith("/meshcat/robot") for p in paths)
-
-
-def test_walk_live_in_a_real_viewer():
     pytest.importorskip("meshcat")
     from hexapod_kin import load
-    from hexapod_kin.gait.show import walk_live
-    from hexapod_kin.viewer import Viewer
+    from hexapod_kin.gait.show import support_polygons
+    from hexapod_kin.viewer import Viewer, walk_live
 
+    run = walk(duration=1.0)
+    poly, com = support_polygons(run)
     with Viewer(load("hexapod")) as v:
-        walk_live(walk(duration=1.0), v)
+        sent: list[dict] = []
+        real = v.send
+        v.send = lambda cmd: (sent.append(cmd), real(cmd))[1]  # type: ignore[method-assign]
+        walk_live(run, v)
         assert v.server.running
+    deleted = [
+        i for i, c in enumerate(sent) if c == {"type": "delete", "path": "/meshcat/overlays"}
+    ]
+    paths = [c.get("path") for c in sent]
+    assert deleted and deleted[0] < paths.index("/meshcat/overlays/com/0")  # old ones first
+    anim = sent[-1]
+    assert anim["type"] == "set_animation"
+    tracks = {c["path"]: c for c in anim["animations"]}
+    assert "/meshcat/overlays/com/0" in tracks and any(
+        p.startswith("/meshcat/robot") for p in tracks
+    )
+    # the CoM marker's track is the run's projected CoM (the live viewer at the run's samples)
+    pos = next(
+        t for t in tracks["/meshcat/overlays/com/0"]["clip"]["tracks"] if "position" in t["name"]
+    )
+    xyz = np.frombuffer(pos["values"].data, dtype=np.float32).reshape(-1, 3)
+    assert len(xyz) == len(run.t) and np.allclose(xyz, com[:, 0], atol=1e-6)
 
 
 def test_joint_rates_keep_stance_feet_still_pinocchio(wb):

@@ -158,6 +158,10 @@ def test_page_with_webgl_matrices_text_and_links(playwright_api, report) -> None
         anims.first.locator("button.play").click()
         frame = anims.first.locator("iframe")
         assert frame.count() == 1 and frame.is_visible()
+        assert frame.get_attribute("sandbox") == "allow-scripts"  # the page cannot reach ours
+        inner = frame.element_handle().content_frame()
+        assert inner is not None  # the animation runs inside its sandbox
+        inner.wait_for_function("() => window.hexapodKin && window.hexapodKin.ready", timeout=60000)
         assert not [u for u in requests if not u.startswith(("file:", "data:", "blob:", "about:"))]
     finally:
         browser.close()

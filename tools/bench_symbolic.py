@@ -23,7 +23,7 @@ from typing import Any
 import sympy as sp
 
 from hexapod_kin import Chain, DHRow, KhalilRow, robots, symbolic
-from hexapod_kin.singularity.rows import choose_rows
+from hexapod_kin.jacobian_rows import choose_rows
 from hexapod_kin.symbolic import cache, core
 
 PI = math.pi

@@ -354,7 +354,7 @@ def _pinocchio_check(deriv: Any, model: Any, seconds: float) -> tuple[dict[str, 
     """
     import numpy as np
 
-    from ..singularity.rows import ROW_NAMES
+    from ..jacobian_rows import ROW_NAMES
     from ..symbolic.checks import evaluate, evaluate_matrix
 
     def stages() -> Any:

@@ -152,7 +152,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
 
         out["plot"] = str(plot_gait(run, plot))
     if html is not None:
-        from ..gait.show import walk_html
+        from ..viewer import walk_html
 
         out["html"] = str(walk_html(run, html))  # the run's own robot
     if args.json:
@@ -174,8 +174,7 @@ def _view(run: Any) -> None:
 
     from .. import load
     from ..exceptions import ViewerError
-    from ..gait.show import walk_live
-    from ..viewer import Viewer
+    from ..viewer import Viewer, walk_live
 
     with Viewer(load("hexapod")) as viewer:
         walk_live(run, viewer)

@@ -8,7 +8,8 @@
 * :mod:`.stability` — support-polygon margin and leg clearance.
 * :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`).
 * :mod:`.plots` — gait diagram, margin over time, foot paths from above (matplotlib).
-* :mod:`.show` — the walk in the viewer (HTML file or live), with the support polygon and CoM.
+* :mod:`.show` — what a drawing of a walk needs: support polygons, projected CoM, the robot's
+  model (the pages are :mod:`hexapod_kin.viewer.walk`).
 """
 
 from __future__ import annotations

@@ -303,13 +303,7 @@ def _copy_seeds(seeds: dict[str, str], out: Path) -> list[Path]:
 _PRINTED = ("leg", "leg+", "scara")
 
 
-_LABEL = {
-    "agrees": "agrees",
-    "wrong": "seed is wrong",
-    "underdetermined": "underdetermined",
-    "differs": "differs",
-    "error": "NOT COMPUTED",
-}
+_LABEL = {status: label for status, label, _ in LEGEND}
 _DERIV = {
     "leg": "hexabot_leg (α2 = −90°, seeds 000/001)",
     "leg+": "hexabot_leg(alpha2=+π/2) (seed 003)",
@@ -334,6 +328,17 @@ _HEXAPOD = {
 #: A block of computed figures: ``("p", text)`` (prose, Markdown code spans allowed) or
 #: ``("table", caption, header, rows)``.
 Block = tuple[Any, ...]
+
+
+def _value(v: Any) -> str:
+    """A computed figure as text (never a Python ``repr``)."""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, (list, tuple)):
+        return ", ".join(_value(x) for x in v)
+    return str(v)
 
 
 def _facts(key: str, rep: Report) -> list[Block]:
@@ -388,17 +393,7 @@ def _facts(key: str, rep: Report) -> list[Block]:
             )
         ]
     if key == "beyond":
-        rows = []
-        for k, v in f["hexapod"].items():
-            if isinstance(v, bool):
-                text = "yes" if v else "no"
-            elif isinstance(v, float):
-                text = f"{v:.6g}"
-            elif isinstance(v, (list, tuple)):
-                text = ", ".join(f"{x:.6g}" if isinstance(x, float) else str(x) for x in v)
-            else:
-                text = str(v)
-            rows.append([_HEXAPOD.get(k, k.replace("_", " ")), text])
+        rows = [[_HEXAPOD.get(k, k.replace("_", " ")), _value(v)] for k, v in f["hexapod"].items()]
         return [("table", "The hexapod standing and walking", ["figure", "value"], rows)]
     return []
 
@@ -519,6 +514,7 @@ def _html(
     derivations: dict[str, dict[str, Any]],
     stills: dict[str, tuple[Path, str]] | None = None,
 ) -> str:
+    from .._page import Html, page
     from . import html as H
 
     e = H.e
@@ -540,9 +536,6 @@ def _html(
         return f" (<a href='#{H.line_anchor(v.seed, int(a))}'>{span} of seed {e(v.seed)}</a>)"
 
     h = [
-        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
-        "<title>hexapod_kin reproduces the seeds</title>",
-        f"<style>{H.CSS}</style></head><body>",
         "<h1>hexapod_kin reproduces the four lab reports</h1>",
         f"<p><b>{e(rep.summary())}.</b> Every verdict is computed; the seeds' claims are data "
         "(<code>hexapod_kin/report/claims.toml</code>), each linked to its passage in the "
@@ -554,7 +547,7 @@ def _html(
     h += [f"<dt class='{s}'>{e(label)}</dt><dd>{e(text)}</dd>" for s, label, text in LEGEND]
     h.append("</dl><table><tr><th>claim</th><th>seed</th><th>where</th><th>verdict</th></tr>")
     for v in rep.verdicts:
-        where = e(H.seed_notation(v.where))
+        where: str = e(H.seed_notation(v.where))
         if v.lines:
             a = v.lines.partition("-")[0]
             where = f"<a href='#{H.line_anchor(v.seed, int(a))}'>{where}</a>"
@@ -605,5 +598,4 @@ def _html(
     )
     h.append(H.seed_texts(seeds, texts, cited))
     h.append(H.SCRIPT)
-    h.append("</body></html>")
-    return "\n".join(h)
+    return page("hexapod_kin reproduces the seeds", Html("\n".join(h)), style=H.CSS)

@@ -242,7 +242,7 @@ def walk_figures(
         return paths, facts, None
     still = _walk_still(run, out)
     try:
-        from ..gait.show import walk_html
+        from ..viewer import walk_html
 
         paths.append(walk_html(run, (html_dir or out) / "walk.html", fps=30))
     except Exception as exc:  # the viewer extra missing: said in the report

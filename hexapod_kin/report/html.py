@@ -1,12 +1,11 @@
-"""The report as one standalone HTML page (offline: no CDN, no network, no external file).
+"""The report's pieces of HTML (the page itself is :func:`hexapod_kin._page.page`).
 
-Pieces, each escaped here and nowhere else:
+Text is escaped by the package's one rule (:func:`hexapod_kin._page.escape`); the pieces:
 
 * :func:`inline` — the report's prose: Markdown code spans and bold become ``<code>`` and
   ``<b>`` (no Markdown reaches the page);
 * :func:`matrix_pair` — a matrix or table verdict laid out as two HTML tables (the seed's,
   hexapod_kin's), the differing entries highlighted in both;
-* :func:`facts_html` — computed figures as HTML tables (never a Python ``repr``);
 * :func:`animation` — an animation (``<iframe srcdoc>``) with its still frame: a script in the
   page tests WebGL and, without it, says so and shows the still frame instead;
 * :func:`seed_texts` — the shipped seed texts, one anchor per line (``#seed-000-L65``), which
@@ -16,12 +15,14 @@ Pieces, each escaped here and nowhere else:
 from __future__ import annotations
 
 import base64
-import html
 import json
 import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
+
+from .._page import escape as e
+from .._page import frame
 
 __all__ = [
     "CSS",
@@ -29,7 +30,6 @@ __all__ = [
     "SCRIPT",
     "animation",
     "derivation_html",
-    "facts_html",
     "image",
     "inline",
     "line_anchor",
@@ -39,8 +39,6 @@ __all__ = [
     "seed_texts",
     "verdict_html",
 ]
-
-e = html.escape
 
 #: What each verdict category means (the legend; also in the Markdown).
 LEGEND: tuple[tuple[str, str, str], ...] = (
@@ -117,7 +115,7 @@ _BOLD = re.compile(r"\*\*(.+?)\*\*")
 
 def inline(text: str) -> str:
     """Escaped prose with Markdown code spans and bold rendered (``<code>``, ``<b>``)."""
-    out = e(text)
+    out: str = e(text)
     out = _CODE.sub(lambda m: f"<code>{m.group(1)}</code>", out)
     return _BOLD.sub(lambda m: f"<b>{m.group(1)}</b>", out)
 
@@ -234,27 +232,6 @@ def derivation_html(title: str, printed: dict[str, Any]) -> str:
     return "".join(h)
 
 
-def _value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        return f"{v:.6g}"
-    if isinstance(v, (list, tuple)):
-        return ", ".join(_value(x) for x in v)
-    return str(v)
-
-
-def facts_html(rows: Sequence[tuple[str, Any]], caption: str = "") -> str:
-    """Label → value rows as a two-column table (numbers formatted, lists joined)."""
-    h = ["<table class='kv'>"]
-    if caption:
-        h.append(f"<caption>{inline(caption)}</caption>")
-    for label, value in rows:
-        h.append(f"<tr><td>{inline(label)}</td><td class='num'>{e(_value(value))}</td></tr>")
-    h.append("</table>")
-    return "".join(h)
-
-
 def image(path: Path, alt: str | None = None, cls: str = "") -> str:
     """A PNG inlined as a data URI."""
     data = base64.b64encode(path.read_bytes()).decode("ascii")
@@ -275,7 +252,6 @@ def animation(page: Path, still: Path | None, when: str) -> str:
         when: What the still frame shows (e.g. ``"t = 1.00 s"``).
 
     """
-    doc = e(page.read_text(encoding="utf-8"), quote=True)
     link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
     msg = (
         f"This browser has no WebGL: showing a still frame ({e(when)}) instead of the "
@@ -288,7 +264,8 @@ def animation(page: Path, still: Path | None, when: str) -> str:
         f"<p class='gl'><button type='button' class='play'>▶ play the {e(page.stem)} "
         f"animation here</button> <small>(WebGL; the picture below is its still frame, "
         f"{e(when)})</small></p>{still_html}"
-        f'<template><iframe title="{e(page.stem)} animation" srcdoc="{doc}"></iframe></template>'
+        f"<template>{frame(page.read_text(encoding='utf-8'), title=f'{page.stem} animation')}"
+        "</template>"
         "<noscript><p>Scripts are off: the animation needs them; above is its still frame."
         "</p></noscript></div>"
     )

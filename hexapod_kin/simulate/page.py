@@ -1,27 +1,42 @@
-"""Plan and simulation side by side: one self-contained HTML page (viewer imported lazily)."""
+"""Plan and simulation side by side: one self-contained HTML page (the viewer imported lazily)."""
 
 from __future__ import annotations
 
+import math
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from .._io import atomic_write
+from .._page import Html, fill, frame, page
+from ..exceptions import ParameterError
 
 __all__ = ["simulation_html"]
 
 
-def _panel(title: str, frame: str, lines: list[str]) -> str:
-    from html import escape
+#: The page's style sheet.
+_STYLE = (
+    "body{font-family:sans-serif;margin:1em}main{display:flex;gap:1em}"
+    "section{flex:1;min-width:0}h2{font-size:1.1em}h1{font-size:1.3em}"
+)
 
-    rows = "".join(f"<li>{escape(line)}</li>" for line in lines)
-    return f"<section><h2>{escape(title)}</h2>{frame}<ul>{rows}</ul></section>"
+
+def _panel(title: str, doc: str, lines: list[str]) -> Html:
+    """A side of the page: its heading, its animation (``doc``, framed) and its figures."""
+    items = Html("".join(fill("<li>$line</li>", line=line) for line in lines))
+    return fill(
+        "<section><h2>$title</h2>$frame<ul>$items</ul></section>",
+        title=title,
+        frame=frame(doc, height=520),
+        items=items,
+    )
 
 
 def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> Path:
     """Write the plan (left) and its MuJoCo replay (right) as one self-contained page.
 
-    Each side is the viewer's offline page (:func:`hexapod_kin.gait.show.walk_html` for the
-    plan, with its support polygon and centre of mass; :func:`hexapod_kin.viewer.export_html`
+    Each side is the viewer's offline page (:func:`hexapod_kin.viewer.walk_page` for the
+    plan, with its support polygon and centre of mass; :func:`hexapod_kin.viewer.render_html`
     of the simulated body poses and joint angles), embedded with ``<iframe srcdoc>``; below
     each, the figures (planned vs simulated distance, heading, roll/pitch, slip, non-foot
     contacts).
@@ -39,13 +54,8 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
         ParameterError: ``sim`` carries no plan.
 
     """
-    import math
-    from html import escape
-
-    from .._io import atomic_write
-    from ..exceptions import ParameterError
-    from ..gait.show import run_model, walk_html
-    from ..viewer import export_html, iframe
+    from ..gait.show import run_model
+    from ..viewer import render_html, walk_page
 
     run = getattr(sim, "run", None)
     if run is None:
@@ -53,18 +63,10 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     mdl = run_model(run)
     cols = [list(sim.scene.joint_names).index(j) for j in mdl.joint_names]
     d = sim.to_dict()
-    with tempfile.TemporaryDirectory(prefix="hexapod_kin_sim_") as tmp:
-        left = walk_html(run, Path(tmp) / "plan.html", model=mdl, title="plan", **options)
-        right = export_html(
-            mdl,
-            sim.t,
-            sim.q[:, cols],
-            Path(tmp) / "sim.html",
-            base_poses=sim.base_poses,
-            title="MuJoCo",
-            **options,
-        )
-        frames = [iframe(left, height=520), iframe(right, height=520)]
+    left = walk_page(run, model=mdl, title="plan", **options)
+    right = render_html(
+        mdl, sim.t, sim.q[:, cols], base_poses=sim.base_poses, title="MuJoCo", **options
+    )
     err = d["distance_error"]
     turn = d["turn_error"]
     plan_lines = [
@@ -88,14 +90,10 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
         "checks: " + ("pass" if sim.ok else "FAIL") + (" (stumbled)" if sim.stumbled else ""),
     ]
     title = f"hexapod_kin: {run.table.name} plan and MuJoCo replay"
-    page = (
-        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-        f"<title>{escape(title)}</title><style>body{{font-family:sans-serif;margin:1em}}"
-        "main{display:flex;gap:1em}section{flex:1;min-width:0}h2{font-size:1.1em}"
-        "</style></head><body>"
-        f'<h1 style="font-size:1.3em">{escape(title)}</h1><main>'
-        + _panel("plan", frames[0], plan_lines)
-        + _panel("simulation (MuJoCo, open loop)", frames[1], sim_lines)
-        + "</main></body></html>\n"
+    body = fill(
+        "<h1>$title</h1><main>$plan$sim</main>",
+        title=title,
+        plan=_panel("plan", left, plan_lines),
+        sim=_panel("simulation (MuJoCo, open loop)", right, sim_lines),
     )
-    return atomic_write(path, page)
+    return atomic_write(path, page(title, body, style=_STYLE))

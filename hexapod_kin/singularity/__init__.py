@@ -5,7 +5,8 @@ The package, from the kernel up:
 * :mod:`._kernel` — the compiled kernel: fused FK + Jacobian rows + measures over blocks of
   configurations, on :mod:`hexapod_kin._numerics`; :mod:`._plan` — its Python side (chain
   with z joint axes, Gram/minor plans, output buffers, kept in ``Model.cached``);
-* :mod:`.rows` — row names and selections (no sympy: ``ROW_NAMES`` lives here);
+* row names and selections: :mod:`hexapod_kin.jacobian_rows` (a leaf shared with
+  :mod:`hexapod_kin.symbolic`; ``ROW_NAMES``, ``row_indices``, ``row_names`` re-exported here);
 * :mod:`.measure` — :func:`measures` (Pinocchio + numpy), :func:`measures_batch` (the
   kernel), :func:`default_rows`, :func:`reach`;
 * :mod:`._zeroset` — a family's factor compiled to numpy value/gradient/Hessian evaluators,
@@ -26,7 +27,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from .rows import ROW_NAMES, row_indices, row_names
+from ..jacobian_rows import ROW_NAMES, row_indices, row_names
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..workspace import WorkspaceResult, cross_section, workspace

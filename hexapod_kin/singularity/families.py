@@ -375,7 +375,7 @@ def families_for(
 
     Args:
         model: A loaded model.
-        rows: Row names (see :mod:`.rows`).
+        rows: Row names (see :mod:`hexapod_kin.jacobian_rows`).
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.

@@ -31,7 +31,7 @@ import numpy as np
 
 from .._numerics import chain_length
 from ..exceptions import ConfigurationError
-from .rows import ROW_NAMES, choose_rows, row_names
+from ..jacobian_rows import ROW_NAMES, choose_rows, row_names
 
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
 
@@ -144,7 +144,7 @@ def default_rows(model: Any) -> tuple[str, ...]:
         model: A loaded model (or a source for :func:`hexapod_kin.load`).
 
     Returns:
-        Row names from :data:`~.rows.ROW_NAMES`.
+        Row names from :data:`~hexapod_kin.jacobian_rows.ROW_NAMES`.
 
     """
     mdl = as_model(model)

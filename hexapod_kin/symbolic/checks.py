@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from ..jacobian_rows import ROW_NAMES
 from ..params import Chain
-from ..singularity.rows import ROW_NAMES
 
 __all__ = ["NUMPY_FUNCTIONS", "claims_hold", "evaluate", "evaluate_matrix"]
 

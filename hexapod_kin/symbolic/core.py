@@ -32,8 +32,8 @@ import sympy as sp
 from sympy.simplify.fu import TR10i
 
 from ..exceptions import ParameterError, choices
+from ..jacobian_rows import ROW_NAMES
 from ..params import Chain
-from ..singularity.rows import ROW_NAMES
 from ._numbers import import_ahead as import_ahead  # re-exported: the stages' helpers
 from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio

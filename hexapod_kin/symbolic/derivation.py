@@ -50,8 +50,8 @@ import numpy as np
 import sympy as sp
 
 from ..exceptions import CacheWarning, ParameterError
+from ..jacobian_rows import choose_rows, row_indices
 from ..params import Chain
-from ..singularity.rows import choose_rows, row_indices
 from . import cache as _cache
 from . import core as _core
 from .core import ROW_NAMES, khalil_matrix
@@ -407,7 +407,7 @@ def _stages(
 
 # ---------------------------------------------------------------------- derive
 def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
-    """The default row selection (:func:`~hexapod_kin.singularity.rows.choose_rows`)."""
+    """The default row selection (:func:`~hexapod_kin.jacobian_rows.choose_rows`)."""
     jd = kin["J_direct"]
     return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
@@ -563,7 +563,7 @@ def derive(
             or a loaded model (its own base and tip frames are used: ``load("hexapod",
             tip="leg2_foot")`` derives leg 2 in the body frame).
         rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default
-            (:func:`~hexapod_kin.singularity.rows.choose_rows`), ``"position"``, ``"all"`` or
+            (:func:`~hexapod_kin.jacobian_rows.choose_rows`), ``"position"``, ``"all"`` or
             names such as ``("x", "y", "z", "wz")``.
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.

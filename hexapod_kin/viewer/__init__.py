@@ -18,7 +18,8 @@ The package, imports pointing one way (left to right)::
     trajectory  times/q/root poses checked and resampled; keyframe clips
     overlays    caller-given per-frame polylines
     scene       the model's visual geometry and every command of a trajectory
-    page        the offline page (export_html, iframe)
+    page        the offline page (render_html, export_html, iframe), on hexapod_kin._page
+    walk        a walk's page and live playback, with its support polygon and CoM
     server      the loopback meshcat server and its ZeroMQ client (bridge: its child)
     live        the live Viewer
 
@@ -28,10 +29,11 @@ The scene layout and the pose convention are described in :mod:`hexapod_kin.view
 from __future__ import annotations
 
 from .live import Viewer
-from .page import export_html, iframe
+from .page import export_html, iframe, render_html
 from .scene import PARTS, khalil_frames, scene_commands
 from .server import LOOPBACK, MeshcatServer
 from .trajectory import MAX_SAMPLES
+from .walk import walk_html, walk_live, walk_page
 
 __all__ = [
     "LOOPBACK",
@@ -42,5 +44,9 @@ __all__ = [
     "export_html",
     "iframe",
     "khalil_frames",
+    "render_html",
     "scene_commands",
+    "walk_html",
+    "walk_live",
+    "walk_page",
 ]

@@ -69,7 +69,13 @@ class Viewer:
             self._scene = Scene(model)
             q0 = default_configuration(model) if q is None else model.check_q(q)
             pose = standing_base(model, q0) if base_pose is None else base_pose
-            self._show(np.asarray(q0)[None, :], pose, animate=False)
+            self._show(
+                np.zeros(1),
+                np.asarray(q0)[None, :],
+                animate=False,
+                base_poses=pose,
+                trace_frame=False,
+            )
         except BaseException:
             self.close()
             raise
@@ -107,30 +113,14 @@ class Viewer:
             raise ViewerError("the viewer is closed; open a new Viewer")
         self._client.send(cmd)
 
-    def _show(
-        self, qs: np.ndarray, base: Any, *, animate: bool, times: Any = None, **kwargs: Any
-    ) -> None:
-        if times is None:
-            times = np.arange(len(qs), dtype=float)
-        triads = kwargs.get("frame_triads", False)
-        built = build_for(
-            self.model,
-            times,
-            qs,
-            base,
-            kwargs.get("trace_frame", False),
-            triads,
-            kwargs.get("singular_mask"),
-            kwargs.get("fps"),
-            kwargs.get("play", True),
-            kwargs.get("loop", True),
-            scene=self._scene,
-        )
-        for part in ("trace", "frames", "singular"):  # after the checks: a bad call keeps them
+    def _show(self, times: Any, qs: Any, *, animate: bool, **options: Any) -> None:
+        built = build_for(self.model, times, qs, scene=self._scene, **options)
+        # after the checks: a bad call keeps them
+        for part in ("trace", "frames", "singular", "overlays"):
             self.send(delete(f"/meshcat/{part}"))
         for cmd in built.static:
             self.send(cmd)
-        self._triads = resolve_triad_frames(self.model, triads)
+        self._triads = resolve_triad_frames(self.model, options.get("frame_triads", False))
         if animate and built.animation is not None:
             self.send(built.animation)
             self._animated = True
@@ -160,40 +150,19 @@ class Viewer:
             for k in range(len(self._triads)):
                 self.send(set_transform(f"/meshcat/frames/{k}", frames[0, k]))
 
-    def animate(
-        self,
-        times: Any,
-        qs: Any,
-        *,
-        base_poses: Any = None,
-        trace_frame: Any = None,
-        frame_triads: Any = False,
-        singular_mask: Any = None,
-        fps: float | None = None,
-        loop: bool = True,
-        play: bool = True,
-    ) -> None:
+    def animate(self, times: Any, qs: Any, **options: Any) -> None:
         """Animate a trajectory in the browser (meshcat's player: play, pause, time, speed).
 
-        Arguments as in :func:`export_html`.
+        ``options``: the keywords of :func:`~hexapod_kin.viewer.scene.scene_commands`
+        (``base_poses``, ``trace_frame``, ``frame_triads``, ``singular_mask``, ``fps``,
+        ``loop``, ``play``, ``overlays``; see :func:`~hexapod_kin.viewer.page.render_html`).
 
         Raises:
             ConfigurationError: Bad shapes or values.
             ViewerError: The server is gone or did not answer within the timeout.
 
         """
-        self._show(
-            np.asarray(qs),
-            base_poses,
-            animate=True,
-            times=times,
-            trace_frame=trace_frame,
-            frame_triads=frame_triads,
-            singular_mask=singular_mask,
-            fps=fps,
-            loop=loop,
-            play=play,
-        )
+        self._show(times, qs, animate=True, **options)
 
     def set_visible(self, part: str, visible: bool) -> None:
         """Show or hide a part of the scene (one of :data:`PARTS`).

@@ -3,7 +3,7 @@
 :func:`show` (a model, a pose or a trajectory) and :func:`show_walk` (a
 :class:`~hexapod_kin.gait.walk.GaitRun`) return a :class:`NotebookView`, whose
 ``_repr_html_`` is an ``<iframe srcdoc="...">`` holding the page that
-:func:`~hexapod_kin.viewer.export_html` writes (meshcat's bundle and the scene inlined; the
+:func:`~hexapod_kin.viewer.render_html` builds (meshcat's bundle and the scene inlined; the
 page's Content-Security-Policy forbids every fetch). The last expression of a cell displays
 it; the notebook file keeps it, so a saved notebook replays offline (nbviewer, a static
 site) with no kernel. The frame is sandboxed (``allow-scripts`` only): the page cannot reach
@@ -19,9 +19,7 @@ Example::
 
 from __future__ import annotations
 
-import html
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,8 +27,9 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write
-from ..exceptions import ParameterError
-from .page import export_html
+from .._page import check_height, frame
+from .page import render_html
+from .walk import walk_page
 
 __all__ = ["NotebookView", "show", "show_walk"]
 
@@ -49,31 +48,15 @@ class NotebookView:
     height: int = 480
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.height, int) and 100 <= self.height <= 4000):
-            raise ParameterError(
-                f"height={self.height!r} is not allowed; give pixels in [100, 4000]",
-                parameter="height",
-                value=self.height,
-                allowed="[100, 4000]",
-            )
+        check_height(self.height)
 
     def _repr_html_(self) -> str:
         """The page in a sandboxed ``<iframe srcdoc>`` (HTML-escaped, quotes included)."""
-        return (
-            f'<iframe srcdoc="{html.escape(self.page, quote=True)}" '
-            f'style="width: 100%; height: {self.height}px; border: 0;" '
-            'sandbox="allow-scripts"></iframe>'
-        )
+        return frame(self.page, height=self.height)
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the page to ``path`` (atomically); it opens from disk with no server."""
         return atomic_write(path, self.page)
-
-
-def _page(write: Any) -> str:
-    with tempfile.TemporaryDirectory(prefix="hexapod_kin_nb_") as tmp:
-        path = Path(write(Path(tmp) / "view.html"))
-        return path.read_text(encoding="utf-8")
 
 
 def show(
@@ -92,7 +75,7 @@ def show(
         times: (N,) sample times [s] of a trajectory (None: a still pose).
         qs: (N, nq) joint values [rad]/[m], or one (nq,) pose (default: the neutral pose).
         height: Frame height [px].
-        **options: Passed to :func:`~hexapod_kin.viewer.export_html` (``trace_frame``,
+        **options: Passed to :func:`~hexapod_kin.viewer.render_html` (``trace_frame``,
             ``frame_triads``, ``fps``, ``speed``, ``title``...).
 
     Returns:
@@ -111,20 +94,20 @@ def show(
     q = np.asarray(qs, dtype=float)
     if times is None:
         times = np.zeros(1) if q.ndim == 1 else np.arange(len(q)) / 30.0
-    return NotebookView(_page(lambda p: export_html(mdl, times, q, p, **options)), height=height)
+    return NotebookView(render_html(mdl, times, q, **options), height=height)
 
 
 def show_walk(run: Any, *, model: Any = None, height: int = 480, **options: Any) -> NotebookView:
     """A walk (a :class:`~hexapod_kin.gait.walk.GaitRun`) animated inline in a notebook.
 
     The support polygon and the projected centre of mass are drawn per frame, as in
-    :func:`hexapod_kin.gait.show.walk_html`.
+    :func:`hexapod_kin.viewer.walk_html`.
 
     Args:
         run: The walk.
         model: The loaded robot (default: the hexapod preset).
         height: Frame height [px].
-        **options: Passed to :func:`~hexapod_kin.viewer.export_html` (``fps``, ``speed``...).
+        **options: Passed to :func:`~hexapod_kin.viewer.render_html` (``fps``, ``speed``...).
 
     Returns:
         The :class:`NotebookView`.
@@ -133,6 +116,4 @@ def show_walk(run: Any, *, model: Any = None, height: int = 480, **options: Any)
         OptionalDependencyError: meshcat (the ``viewer`` extra) is missing.
 
     """
-    from ..gait.show import walk_html
-
-    return NotebookView(_page(lambda p: walk_html(run, p, model=model, **options)), height=height)
+    return NotebookView(walk_page(run, model=model, **options), height=height)

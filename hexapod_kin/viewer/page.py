@@ -1,4 +1,4 @@
-"""The self-contained offline page: :func:`export_html` and :func:`iframe`.
+"""The self-contained offline page: :func:`render_html`, :func:`export_html`, :func:`iframe`.
 
 The page inlines meshcat's JavaScript bundle and the scene as meshcat commands (msgpack;
 meshes as int16 vertices without normals), both gzipped and base64, unpacked by the page
@@ -13,7 +13,6 @@ from __future__ import annotations
 import base64
 import functools
 import gzip
-import json
 import math
 import os
 from pathlib import Path
@@ -22,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._io import atomic_write
+from .._page import fill, frame, page, script_json
 from ..exceptions import ParameterError
 from .objects import bundle, pack
 from .scene import PARTS, Scene, build_for, resolve_triad_frames
@@ -36,36 +36,28 @@ _CSP = (
     "default-src 'none'; script-src 'unsafe-inline' blob:; style-src 'unsafe-inline'; "
     "img-src data: blob:; worker-src blob:"
 )
-_PAGE = """<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta http-equiv="Content-Security-Policy" content="__CSP__">
-<meta name="generator" content="hexapod_kin __VERSION__ (meshcat 0.3.2 bundle)">
-<title>__TITLE__</title>
-<style>
-body { margin: 0; overflow: hidden; font-family: sans-serif; }
+#: The page's style sheet.
+_STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
 #meshcat-pane { width: 100vw; height: 100vh; overflow: hidden; }
 #hk-panel { position: absolute; left: 8px; top: 8px; padding: 6px 10px; border-radius: 6px;
   background: rgba(255,255,255,0.82); color: #222; font-size: 13px; line-height: 1.5; }
 #hk-panel b { font-size: 14px; }
 #hk-panel button, #hk-panel select { font-size: 12px; }
-#hk-help { color: #555; font-size: 11px; }
-</style>
-</head>
-<body>
-<div id="meshcat-pane"></div>
+#hk-help { color: #555; font-size: 11px; }"""
+
+#: The page's body: the meshcat pane, the panel (``$help``), the script (``$data``).
+_BODY = """<div id="meshcat-pane"></div>
 <div id="hk-panel"><b id="hk-title"></b><br>
 <span id="hk-controls"><button id="hk-play">pause</button>
 <label><input type="checkbox" id="hk-loop"> loop</label>
 speed <select id="hk-speed"><option>0.25</option><option>0.5</option><option>1</option>
 <option>2</option><option>4</option></select>
 t = <span id="hk-time">0.000</span> s</span><br>
-<span id="hk-help">__HELP__</span></div>
+<span id="hk-help">$help</span></div>
 <script>
 (function () {
   "use strict";
-  var DATA = __DATA__;
+  var DATA = $data;
   var help = document.getElementById("hk-help");
   function bytes(b64) {
     var s = atob(b64), out = new Uint8Array(s.length);
@@ -162,8 +154,6 @@ t = <span id="hk-time">0.000</span> s</span><br>
   }
 })();
 </script>
-</body>
-</html>
 """
 
 
@@ -187,27 +177,10 @@ def _scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) 
     return gzip.compress(b"".join(parts), compresslevel=9, mtime=0)
 
 
-def _html_data(obj: Any) -> str:
-    """JSON for an inline <script> (no ``</`` or ``<!--`` can close it)."""
-    return (
-        json.dumps(obj, allow_nan=False)
-        .replace("<", "\\u003c")
-        .replace(">", "\\u003e")
-        .replace("&", "\\u0026")
-    )
-
-
-def _html_text(text: str) -> str:
-    return (
-        text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
-    )
-
-
-def export_html(
+def render_html(
     model: Model,
     times: Any,
     qs: Any,
-    path: str | os.PathLike[str],
     *,
     base_poses: Any = None,
     trace_frame: Any = None,
@@ -219,8 +192,8 @@ def export_html(
     speed: float = 1.0,
     play: bool = True,
     overlays: Any = None,
-) -> Path:
-    """Write a self-contained animated HTML file of a trajectory (opens from disk, no network).
+) -> str:
+    """The self-contained animated HTML page of a trajectory (opens from disk, no network).
 
     The page inlines meshcat's JavaScript bundle and the scene as meshcat commands; it works
     from ``file://``, in an iframe (Colab, Binder, Jupyter) and offline. Controls: drag to
@@ -233,7 +206,6 @@ def export_html(
         model: A loaded model (``hexapod_kin.load(...)``).
         times: Sample times (N,) in [s], strictly increasing.
         qs: Joint configurations (N, nq) in [rad] / [m]. A single (nq,) shows a still pose.
-        path: Destination ``.html`` file (written atomically).
         base_poses: Optional world pose of the model's root per sample, (N, 4, 4) or one (4, 4)
             (a floating body, e.g. a walking hexapod).
         trace_frame: Frame(s) whose path is drawn: a name, a sequence of names, ``False`` for
@@ -256,12 +228,12 @@ def export_html(
             polygon and projected centre of mass).
 
     Returns:
-        The path written.
+        The page (:func:`export_html` writes it to a file).
 
     Raises:
         ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``/``overlays``.
         FrameNotFoundError: A frame name does not exist.
-        ParameterError: Bad ``fps``, ``speed`` or destination.
+        ParameterError: Bad ``fps`` or ``speed``.
         OptionalDependencyError: meshcat is not installed.
         ViewerError: The visual geometry cannot be built.
 
@@ -273,15 +245,15 @@ def export_html(
         model,
         times,
         qs,
-        base_poses,
-        trace_frame,
-        frame_triads,
-        singular_mask,
-        fps,
-        play,
-        loop,
-        scene=Scene(model, normals=False),  # the page computes the normals
+        base_poses=base_poses,
+        trace_frame=trace_frame,
+        frame_triads=frame_triads,
+        singular_mask=singular_mask,
+        fps=fps,
+        play=play,
+        loop=loop,
         overlays=overlays,
+        scene=Scene(model, normals=False),  # the page computes the normals
     )
     label = title if title is not None else f"hexapod_kin: {model.name}"
     data = {
@@ -296,21 +268,25 @@ def export_html(
         "play": bool(play),
         "parts": list(PARTS),
     }
-    from .. import __version__
-
     help_text = "drag: orbit · right-drag: pan · wheel: zoom"
     if resolve_triad_frames(model, frame_triads):
         help_text += " · triads x/y/z = red/green/blue, label = Khalil frame index"
     if built.static and singular_mask is not None and np.any(singular_mask):
         help_text += " · red spheres: near-singular samples"
-    page = (
-        _PAGE.replace("__VERSION__", __version__)
-        .replace("__CSP__", _CSP)
-        .replace("__TITLE__", _html_text(label))
-        .replace("__HELP__", _html_text(help_text))
-        .replace("__DATA__", _html_data(data))
-    )
-    return atomic_write(path, page)
+    body = fill(_BODY, help=help_text, data=script_json(data))
+    return page(label, body, style=_STYLE, policy=_CSP)
+
+
+def export_html(
+    model: Model, times: Any, qs: Any, path: str | os.PathLike[str], **options: Any
+) -> Path:
+    """Write :func:`render_html` (``options``: its keywords) to ``path`` atomically; return it.
+
+    Raises:
+        ParameterError: Bad destination (and every error of :func:`render_html`).
+
+    """
+    return atomic_write(path, render_html(model, times, qs, **options))
 
 
 def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
@@ -331,13 +307,7 @@ def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
         ParameterError: Bad ``height`` or not a file.
 
     """
-    if not (isinstance(height, int) and 100 <= height <= 4000):
-        raise ParameterError(f"height={height!r} is not allowed; give pixels in [100, 4000]")
     path = Path(html)
     if not path.is_file():
         raise ParameterError(f"html={str(path)!r} is not a file written by export_html")
-    doc = path.read_text(encoding="utf-8")
-    return (
-        f'<iframe srcdoc="{_html_text(doc)}" style="width: 100%; height: {height}px; '
-        'border: 0;" sandbox="allow-scripts"></iframe>'
-    )
+    return frame(path.read_text(encoding="utf-8"), height=height)

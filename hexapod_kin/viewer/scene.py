@@ -466,7 +466,26 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
     return o.lower(o.node("Group", children=kids))
 
 
-def scene_commands(
+def scene_commands(model: Model, times: Any, qs: Any, **options: Any) -> list[dict[str, Any]]:
+    """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
+
+    The same commands feed the offline page and :meth:`Viewer.animate`; the last one is the
+    ``set_animation`` when there is more than one sample. ``options``: the keywords of
+    :func:`build_for` (those of :func:`~hexapod_kin.viewer.page.render_html`, documented there,
+    but ``title`` and ``speed``).
+
+    Raises:
+        ConfigurationError: Bad shapes or values of ``times``, ``qs``, ``base_poses``,
+            ``singular_mask``, ``overlays``.
+        FrameNotFoundError: A traced or triad frame does not exist.
+        ViewerError: The visual geometry cannot be built.
+
+    """
+    built = build_for(model, times, qs, **options)
+    return built.static + ([built.animation] if built.animation else [])
+
+
+def build_for(
     model: Model,
     times: Any,
     qs: Any,
@@ -479,49 +498,7 @@ def scene_commands(
     play: bool = True,
     loop: bool = True,
     overlays: Any = None,
-) -> list[dict[str, Any]]:
-    """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
-
-    The same commands feed :func:`export_html` and :meth:`Viewer.animate`; the last one is the
-    ``set_animation`` when there is more than one sample. See :func:`export_html` for the
-    arguments.
-
-    Raises:
-        ConfigurationError: Bad shapes or values of ``times``, ``qs``, ``base_poses``,
-            ``singular_mask``.
-        FrameNotFoundError: A traced or triad frame does not exist.
-        ViewerError: The visual geometry cannot be built.
-
-    """
-    built = build_for(
-        model,
-        times,
-        qs,
-        base_poses,
-        trace_frame,
-        frame_triads,
-        singular_mask,
-        fps,
-        play,
-        loop,
-        overlays=overlays,
-    )
-    return built.static + ([built.animation] if built.animation else [])
-
-
-def build_for(
-    model: Model,
-    times: Any,
-    qs: Any,
-    base_poses: Any,
-    trace_frame: Any,
-    frame_triads: Any,
-    singular_mask: Any,
-    fps: float | None,
-    play: bool,
-    loop: bool,
     scene: Scene | None = None,
-    overlays: Any = None,
 ) -> Built:
     """Check the inputs, resample, and :func:`build` (``scene`` reused if given)."""
     motion = check_motion(model, times, qs, base_poses)

@@ -1,4 +1,7 @@
-"""Names of the Jacobian rows and the row selections of the singularity measures (no sympy).
+"""Names of the Jacobian rows and their selections (a leaf: no sympy, no numpy).
+
+Shared by :mod:`hexapod_kin.singularity` (the measures) and :mod:`hexapod_kin.symbolic` (the
+derivations), so that neither imports the other for them.
 
 ``J`` here is the tip Jacobian ``[v; ω]`` with rows ``x, y, z, wx, wy, wz`` (linear velocity
 of the tip in [m/s per joint unit], angular velocity in [rad/s per joint unit]), expressed
@@ -9,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..exceptions import ParameterError, choices
+from .exceptions import ParameterError, choices
 
 __all__ = ["ROW_NAMES", "row_indices", "row_names", "choose_rows"]
 

@@ -1,0 +1,95 @@
+"""A walk in the browser: the self-contained page and the live viewer, with its overlays.
+
+:func:`walk_page` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with
+:func:`~hexapod_kin.viewer.page.render_html`: the body and legs, the foot traces, and at every
+frame the support polygon (the convex hull of the stance feet, drawn on the ground under them)
+and the centre of mass projected on it (:func:`hexapod_kin.gait.show.support_polygons`, the
+page's ``overlays``); :func:`walk_html` writes it; :func:`walk_live` plays the same in the live
+viewer. The viewer imports the gait, never the other way round.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from .._io import atomic_write
+from ..exceptions import ConfigurationError
+from ..gait.show import run_model, support_polygons
+from .page import render_html
+
+__all__ = ["walk_html", "walk_live", "walk_page"]
+
+
+def _joint_columns(run: Any, mdl: Any) -> list[int]:
+    """The run's column of each of the model's joints (matched by name)."""
+    try:
+        return [run.joint_names.index(name) for name in mdl.joint_names]
+    except ValueError:
+        raise ConfigurationError(
+            f"model joints {list(mdl.joint_names)} are not the run's {list(run.joint_names)}",
+            parameter="model",
+        ) from None
+
+
+def walk_live(run: Any, viewer: Any, **options: Any) -> None:
+    """Play a walk in a live :class:`hexapod_kin.viewer.Viewer` (support polygon and CoM drawn).
+
+    Args:
+        run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
+        viewer: A live viewer of the walking robot.
+        **options: Passed to ``Viewer.animate`` (``fps``, ``loop``, ``play``).
+
+    Raises:
+        ViewerError: The server is gone.
+        ConfigurationError: The viewer's model joints are not the run's.
+
+    """
+    q = run.q[:, _joint_columns(run, viewer.model)]
+    poly, com = support_polygons(run)
+    overlays = {"support_polygon": poly, "com": com}
+    viewer.animate(run.t, q, base_poses=run.base_poses, overlays=overlays, **options)
+
+
+def walk_page(run: Any, *, model: Any = None, title: str | None = None, **options: Any) -> str:
+    """The self-contained animation page of a walk (opens from disk, no network).
+
+    Args:
+        run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
+        model: The loaded robot (default :func:`~hexapod_kin.gait.show.run_model`: the run's
+            own robot, ``run.robot``, or the built-in hexapod); its joints are matched to the
+            run's by name.
+        title: Page title (default: pattern, terrain and the minimum margin).
+        **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``,
+            ``speed``...).
+
+    Returns:
+        The page.
+
+    Raises:
+        OptionalDependencyError: The viewer extra (meshcat) is missing.
+        ConfigurationError: The model's joints are not the run's.
+
+    """
+    mdl = run_model(run) if model is None else model
+    cols = _joint_columns(run, mdl)
+    poly, com = support_polygons(run)
+    label = title or (
+        f"hexapod_kin: {run.table.name} gait on {run.settings.get('terrain', '?')} terrain "
+        f"(min margin {1e3 * run.min_margin:.1f} mm)"
+    )
+    return render_html(
+        mdl,
+        run.t,
+        run.q[:, cols],
+        base_poses=run.base_poses,
+        title=label,
+        overlays={"support_polygon": poly, "com": com},
+        **options,
+    )
+
+
+def walk_html(run: Any, path: str | os.PathLike[str], **options: Any) -> Path:
+    """Write :func:`walk_page` (``options``: its keywords) to ``path`` atomically; return it."""
+    return atomic_write(path, walk_page(run, **options))
