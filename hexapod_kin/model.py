@@ -41,6 +41,7 @@ from .frames import (
     DefaultTips,
     add_tool_frame,
     default_tips,
+    floating_model,
     frame_index,
     path_frames,
     reduce_model,
@@ -378,6 +379,16 @@ class Model:
             if key not in cache:
                 cache[key] = factory()
             return cache[key]
+
+    @property
+    def floating_model(self) -> pin.Model:
+        """:attr:`full_model` with a free-flyer root (a legged robot's floating base), shared.
+
+        Built once from the loaded model (:func:`~hexapod_kin.frames.floating_model`), never
+        by parsing the URDF again; treat it as read-only (copy it with ``pinocchio.Model(m)``
+        to add frames).
+        """
+        return self.cached("model.floating", lambda: floating_model(self.full_model))
 
     @property
     def arrays(self) -> Any:

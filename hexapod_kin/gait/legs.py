@@ -383,21 +383,37 @@ def find_legs(
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
 
-def joint_axis(jm: Any, name: str) -> tuple[np.ndarray, bool]:
-    """Unit axis (in the joint frame) and whether the joint is prismatic."""
+def joint_axis(jm: Any, name: str, label: str = "") -> tuple[np.ndarray, bool]:
+    """Unit axis (in the joint frame) and whether the joint is prismatic.
+
+    Every one-variable joint Pinocchio loads from a URDF: revolute and continuous (its
+    unbounded revolute, ``JointModelRUBX`` …) about any axis, and prismatic along any axis.
+
+    Raises:
+        ConfigurationError: Any other joint (the message names it and its kind).
+
+    """
     kind = jm.shortname()
-    for prefix, prismatic in (("JointModelR", False), ("JointModelP", True)):
-        if kind in (f"{prefix}X", f"{prefix}Y", f"{prefix}Z"):
+    for prefix, prismatic in (
+        ("JointModelRUB", False),
+        ("JointModelR", False),
+        ("JointModelP", True),
+    ):
+        if kind[:-1] == prefix and kind[-1] in _AXES:
             return np.array(_AXES[kind[-1]]), prismatic
-    if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+    if kind in (
+        "JointModelRevoluteUnaligned",
+        "JointModelRevoluteUnboundedUnaligned",
+        "JointModelPrismaticUnaligned",
+    ):
         a = np.asarray(jm.extract().axis, dtype=float)
         return a / np.linalg.norm(a), kind.startswith("JointModelP")
     raise ConfigurationError(
-        f"joint {name!r} is a {kind}; a leg joint must be revolute (limited) or prismatic "
-        "(continuous joints: give them limits in the URDF)",
+        f"joint {name!r}{f' of {label!r}' if label else ''} is a {kind}; a leg joint must be "
+        "revolute, continuous or prismatic (one variable)",
         parameter="source",
         value=name,
-        allowed="revolute or prismatic joints",
+        allowed="revolute, continuous or prismatic joints",
     )
 
 

@@ -92,14 +92,21 @@ class WholeBody:
     """A legged robot with a floating base: Pinocchio model and vectorised kinematics.
 
     Build it with :func:`as_whole_body` (any source) or :func:`whole_body` (a Hexapod),
-    both cached. Joint order: Pinocchio's ``q[7:]`` (the URDF tree, depth first); the joints
-    that belong to no leg are locked at their neutral value (:attr:`locked_joints`).
+    both cached. A view of the one loaded robot (:attr:`kinematic`): legs as joint indices,
+    mounts and feet (a frame and an offset). Joint order: Pinocchio's ``v[6:]`` (the URDF
+    tree, depth first); one angle per joint, continuous joints included (Pinocchio's ``q``
+    holds their cosine and sine: :meth:`pinocchio_q`); the joints that belong to no leg are
+    locked at their neutral value (:attr:`locked_joints`).
 
     Attributes:
         params: The Hexapod it was built from (``None`` for a URDF robot).
         source: A label of the source (preset, file name, ``erd:NAME``).
-        model: Pinocchio model with a free-flyer root (nq = 7 + :attr:`nq`); one frame
-            ``<leg>_contact`` per foot (the contact sphere's centre) is added.
+        model: Pinocchio model with a free-flyer root (a copy of the loaded robot's
+            :attr:`~hexapod_kin.model.Model.floating_model`, reduced to the legs' joints);
+            one frame ``<leg>_contact`` per foot (the contact sphere's centre) is added.
+            Its ``nq`` is 7 + :attr:`nq` plus one per continuous joint (a (cos, sin) pair).
+        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source): the one
+            model this description is a view of.
         leg_names: The legs' names (the order of phase tables).
         joint_names: The leg joints (the columns of q).
         mass: Total mass in [kg] (from the URDF's inertials).
@@ -125,6 +132,7 @@ class WholeBody:
     params: Hexapod | None
     source: str
     model: Any
+    kinematic: Any
     leg_names: tuple[str, ...]
     joint_names: tuple[str, ...]
     mass: float
@@ -153,6 +161,8 @@ class WholeBody:
     _reach: np.ndarray = field(repr=False)  # (L,) default horizontal mount-to-foot distance
     _span: np.ndarray = field(repr=False)  # (L,) leg spans [m]
     _seed: np.ndarray = field(repr=False)
+    _q_index: np.ndarray = field(repr=False)  # (nq,) each leg joint's first index in model q
+    _bounded: np.ndarray = field(repr=False)  # (nq,) False for continuous joints (cos, sin)
 
     @property
     def n_legs(self) -> int:
@@ -245,17 +255,31 @@ class WholeBody:
         return self.points_of(T), self.com_of(T, base)
 
     def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
-        """Pinocchio configurations (N, 7 + nq): base xyz, quaternion (x, y, z, w), joints."""
+        """Pinocchio configurations (N, model.nq): base xyz, quaternion (x, y, z, w), joints.
+
+        A continuous joint's angle becomes its ``(cos, sin)`` pair.
+        """
         import pinocchio as pin
 
         q = np.asarray(q, dtype=float)
         base = np.asarray(base, dtype=float)
-        out = np.empty((len(q), 7 + self.nq))
+        out = np.empty((len(q), int(self.model.nq)))
         for i in range(len(q)):
             out[i, :3] = base[i, :3, 3]
             out[i, 3:7] = pin.Quaternion(base[i, :3, :3]).coeffs()
-        out[:, 7:] = q
+        if self._bounded.all():
+            out[:, 7:] = q
+        else:
+            b = self._bounded
+            out[:, self._q_index[b]] = q[:, b]
+            out[:, self._q_index[~b]] = np.cos(q[:, ~b])
+            out[:, self._q_index[~b] + 1] = np.sin(q[:, ~b])
         return out
+
+    @property
+    def urdf(self) -> str:
+        """The URDF text of the robot (the loaded model's)."""
+        return str(self.kinematic.urdf)
 
     # ------------------------------------------------------------------ standing defaults
     @property
@@ -511,18 +535,17 @@ class WholeBody:
 
 
 def _build_model(
-    text: str,
-    label: str,
+    km: Any,
     *,
     params: Hexapod | None = None,
     feet: tuple[FootSpec, ...] | None = None,
     foot_radius: float | None = None,
-    chain_source: Any = None,
 ) -> WholeBody:
-    """The :class:`WholeBody` of a URDF ``text`` (gate-checked by the caller)."""
+    """The :class:`WholeBody` on the loaded robot ``km`` (its floating-base model, no new parse)."""
     import pinocchio as pin
 
-    full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    text, label = km.urdf, km.name
+    full = pin.Model(km.floating_model)  # a copy: the feet's contact frames are added to it
     hexa = params is not None
     if hexa:
         feet = tuple(FootSpec(f) for f in params.foot_frames)  # type: ignore[union-attr]
@@ -536,19 +559,11 @@ def _build_model(
         )
         model = pin.buildReducedModel(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
-    for j in range(2, model.njoints):
-        if model.joints[j].nq != 1 or model.joints[j].idx_q != 5 + j:
-            raise ConfigurationError(
-                f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; "
-                "legs need one-variable revolute or prismatic joints",
-                parameter="source",
-                value=str(model.names[j]),
-            )
     nq = model.njoints - 2
     axes = np.empty((nq, 3))
     prismatic = np.zeros(nq, dtype=bool)
     for j in range(2, model.njoints):
-        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]))
+        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]), label)
     tree = Tree(
         parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
         placements=np.array(
@@ -574,9 +589,11 @@ def _build_model(
                 )
             )
         foot_names.append(fname)
-    lower = finite_or_inf(model.lowerPositionLimit[7:])
+    iq = np.array([model.joints[j].idx_q for j in range(2, model.njoints)], dtype=int)
+    bounded = np.array([model.joints[j].nq == 1 for j in range(2, model.njoints)])
+    lower = np.where(bounded, finite_or_inf(model.lowerPositionLimit[iq]), np.inf)
     lower[np.isinf(lower)] = -np.inf
-    upper = finite_or_inf(model.upperPositionLimit[7:])
+    upper = np.where(bounded, finite_or_inf(model.upperPositionLimit[iq]), np.inf)
     vel = finite_or_inf(model.velocityLimit[6:])
     eff = finite_or_inf(model.effortLimit[6:])
     cols = tuple(leg.joints for leg in legs)
@@ -585,7 +602,7 @@ def _build_model(
     foot = np.array([leg.foot_placement for leg in legs])
     foot_joint = np.array([leg.foot_joint for leg in legs])
     q_zero = np.clip(np.zeros(nq), lower, upper)
-    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, chain_source)
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, text)
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
@@ -603,6 +620,7 @@ def _build_model(
         params=params,
         source=label,
         model=model,
+        kinematic=km,
         leg_names=names,
         joint_names=tuple(str(model.names[j]) for j in range(2, model.njoints)),
         mass=float(pin.computeTotalMass(model)),
@@ -631,6 +649,8 @@ def _build_model(
         _reach=lay["reach"],
         _span=span,
         _seed=np.zeros(nq),
+        _q_index=iq,
+        _bounded=bounded,
     )
     object.__setattr__(wb, "_seed", _standing_seed(wb, params))
     better = None if hexa else roomiest_stance(wb)
@@ -669,12 +689,9 @@ def _cached(params: Hexapod) -> WholeBody:
 
 
 def _build(params: Hexapod) -> WholeBody:
-    from .._gate import check_urdf
-    from ..urdf import to_urdf
+    from ..kinematics import load
 
-    text = to_urdf(params)
-    check_urdf(text)
-    return _build_model(text, params.name, params=params)
+    return _build_model(load(params), params=params)
 
 
 @lru_cache(maxsize=1)
@@ -795,4 +812,4 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
             value=km.name,
             allowed="a legged robot",
         )
-    return _build_model(km.urdf, km.name, feet=spec, foot_radius=rad, chain_source=km.urdf)
+    return _build_model(km, feet=spec, foot_radius=rad)
