@@ -660,3 +660,61 @@ def _erd_text(name: str) -> str:
     from hexapod_kin.sources import resolve_source
 
     return resolve_source(f"erd:{name}").text
+
+
+# ----------------------------------------------------------------------------- joint kinds
+def test_continuous_legs_match_raw_pinocchio_and_walk_like_revolute(tmp_path):
+    text = PHX.read_text()
+    assert text.count('type="revolute"') == 18
+    (tmp_path / "rev.urdf").write_text(text)
+    (tmp_path / "cont.urdf").write_text(text.replace('type="revolute"', 'type="continuous"'))
+    rev = as_whole_body(str(tmp_path / "rev.urdf"), feet=SPEC)
+    cont = as_whole_body(str(tmp_path / "cont.urdf"), feet=SPEC)
+    m, d = _raw_model((tmp_path / "cont.urdf").read_text())
+    assert m.nq == 7 + 2 * 18 and cont.model.nq == m.nq and cont.nq == 18
+    assert {m.joints[j].shortname() for j in range(2, m.njoints)} == {"JointModelRUBX"}
+    assert np.all(np.isinf(cont.lower)) and np.all(np.isinf(cont.upper))
+    # the (cos, sin) pairs: feet, joint frames and CoM against raw Pinocchio
+    q, base = _random_state(cont, 20, 3)
+    spec = [(f"tibia_{name}", OFFSET) for name in cont.leg_names]
+    ref = _raw_feet(cont, m, d, q, base, spec)
+    assert np.abs(cont.feet(q, base) - ref).max() <= 1e-12
+    Q = cont.pinocchio_q(q, base)
+    T, com = cont.joint_poses(q, base), cont.com(q, base)
+    for i in (0, 19):
+        pin.forwardKinematics(m, d, Q[i])
+        for j in range(cont.nq):
+            assert np.abs(T[i, j] - d.oMi[j + 2].homogeneous).max() <= 1e-12
+        assert np.abs(com[i] - pin.centerOfMass(m, d, Q[i])).max() <= 1e-12
+    # the same stance and the same walk, joint angle for joint angle
+    assert np.array_equal(standing_pose(cont).q, standing_pose(rev).q)
+    a, b = walk(rev, duration=1.0), walk(cont, duration=1.0)
+    assert a.ok and b.ok
+    assert np.array_equal(a.q, b.q) and np.array_equal(a.com, b.com)
+    assert a.pinocchio_q().shape[1] == 25 and b.pinocchio_q().shape[1] == 43
+    s = stand(cont)
+    r = stand(rev)
+    assert s.feasible and np.allclose(s.forces, r.forces, atol=1e-9)
+    assert np.allclose(s.torque, r.torque, atol=1e-9)
+
+
+def test_a_leg_joint_of_another_kind_is_refused_by_name(tmp_path):
+    text = PHX.read_text().replace(
+        '<joint name="j_c1_lf" type="revolute">', '<joint name="j_c1_lf" type="floating">', 1
+    )
+    assert "floating" in text
+    (tmp_path / "f.urdf").write_text(text)
+    with pytest.raises(HexapodKinError, match="'j_c1_lf' is a JointModelFreeFlyer"):
+        as_whole_body(str(tmp_path / "f.urdf"), feet=SPEC)
+
+
+def test_the_whole_body_is_a_view_of_the_loaded_robot():
+    from hexapod_kin import load
+
+    km = load(str(PHX))
+    wb = as_whole_body(km, feet=SPEC)
+    assert wb.kinematic is km and wb.urdf == km.urdf
+    ref = pin.buildModelFromXML(km.urdf, pin.JointModelFreeFlyer())
+    assert km.floating_model == ref  # built from the loaded model, equal to a fresh parse
+    assert wb.model is not km.floating_model  # its contact frames go on a copy
+    assert km.floating_model.nframes == ref.nframes
