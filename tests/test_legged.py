@@ -718,3 +718,62 @@ def test_the_whole_body_is_a_view_of_the_loaded_robot():
     assert km.floating_model == ref  # built from the loaded model, equal to a fresh parse
     assert wb.model is not km.floating_model  # its contact frames go on a copy
     assert km.floating_model.nframes == ref.nframes
+
+
+# ----------------------------------------------------------------------------- URDF elsewhere
+@pytest.fixture()
+def elsewhere(tmp_path, monkeypatch):
+    """PhantomX in ``robots/``, the cwd ``work/`` holding a decoy ``phx.urdf`` (the hexapod)."""
+    from hexapod_kin.urdf import to_urdf
+
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "work").mkdir()
+    (tmp_path / "robots" / "phx.urdf").write_text(PHX.read_text())
+    (tmp_path / "work" / "phx.urdf").write_text(to_urdf(robots.hexapod()))
+    monkeypatch.chdir(tmp_path / "work")
+    return tmp_path / "robots" / "phx.urdf"
+
+
+@pytest.fixture()
+def pages(monkeypatch):
+    """The joint names of every model a walk page is drawn from (the page data is packed)."""
+    import hexapod_kin.viewer as viewer
+
+    seen: list[tuple[str, ...]] = []
+    real = viewer.export_html
+
+    def spy(model, *args, **kwargs):
+        seen.append(tuple(model.joint_names))
+        return real(model, *args, **kwargs)
+
+    monkeypatch.setattr(viewer, "export_html", spy)
+    return seen
+
+
+@pytest.mark.parametrize("how", ["relative", "absolute"])
+def test_a_urdf_in_another_folder_walks_and_shows_itself(elsewhere, how, tmp_path, pages):
+    from hexapod_kin.gait.show import run_model, walk_html
+    from hexapod_kin.simulate.scene import _robot_mjcf
+
+    path = "../robots/phx.urdf" if how == "relative" else str(elsewhere)
+    run = walk(as_whole_body(path, feet=SPEC), duration=0.5)
+    assert run.robot.urdf == PHX.read_text()
+    km = run_model(run)
+    assert km is run.robot.kinematic and "j_c1_lf" in km.joint_names
+    assert walk_html(run, tmp_path / "walk.html").is_file()
+    assert pages == [km.joint_names]  # PhantomX, not the decoy of the same name
+    assert "j_c1_lf" in _robot_mjcf(run.robot)
+
+
+def test_cli_gait_and_simulate_pages_of_a_urdf_in_another_folder(elsewhere, tmp_path, pages):
+    from hexapod_kin.cli import main
+
+    feet = [a for s in SIDES for a in ("--foot", f"tibia_{s}:0,0.16,0.029")]
+    out = tmp_path / "gait.html"
+    argv = ["gait", "../robots/phx.urdf", *feet, "--duration", "0.5", "--html", str(out)]
+    assert main(argv) == 0 and out.is_file()
+    assert len(pages) == 1 and "j_c1_lf" in pages[0]
+    pytest.importorskip("mujoco")
+    out = tmp_path / "sim.html"
+    argv = ["simulate", str(elsewhere), "--foot", SPEC, "--duration", "0.5", "--html", str(out)]
+    assert main(argv) == 0 and out.is_file()
