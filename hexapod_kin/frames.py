@@ -20,6 +20,7 @@ __all__ = [
     "drop_missing_meshes",
     "floating_model",
     "frame_index",
+    "joint_kind",
     "last_body_frame",
     "path_frames",
     "reduce_model",
@@ -34,6 +35,44 @@ _FRAME_PREFERENCE = (
     pin.FrameType.FIXED_JOINT,
     pin.FrameType.SENSOR,
 )
+
+
+#: The one-variable joints Pinocchio builds from a URDF, by kind (``shortname()`` prefixes).
+_JOINT_KINDS = (
+    ("JointModelRUB", "continuous"),
+    ("JointModelRevoluteUnboundedUnaligned", "continuous"),
+    ("JointModelRevoluteUnaligned", "revolute"),
+    ("JointModelPrismaticUnaligned", "prismatic"),
+    ("JointModelR", "revolute"),
+    ("JointModelP", "prismatic"),
+)
+_UNIT = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_kind(joint: Any) -> tuple[str, np.ndarray] | None:
+    """The kind and axis of a one-variable Pinocchio joint model; ``None`` for other joints.
+
+    The one place joint kinds are told apart: ``"revolute"`` (``JointModelRX/RY/RZ``,
+    ``RevoluteUnaligned``), ``"continuous"`` (the unbounded revolute ``JointModelRUBX/Y/Z``,
+    ``RevoluteUnboundedUnaligned``: two entries ``(cos q, sin q)`` in Pinocchio's ``q``, one
+    in ``v``) and ``"prismatic"`` (``JointModelPX/PY/PZ``, ``PrismaticUnaligned``). The axis
+    is in the joint's frame: exactly a unit vector for the X/Y/Z kinds, Pinocchio's stored
+    axis otherwise. Free-flyer, spherical, planar, translation, mimic and composite joints
+    give ``None``.
+    """
+    name = str(joint.shortname())
+    for prefix, kind in _JOINT_KINDS:
+        if name == prefix and "Unaligned" in prefix:
+            concrete = joint.extract() if hasattr(joint, "extract") else joint
+            if hasattr(concrete, "axis"):
+                return kind, np.asarray(concrete.axis, dtype=float)
+            data = joint.createData()  # no axis in the binding: the motion subspace S
+            joint.calc(data, np.r_[1.0, np.zeros(joint.nq - 1)])
+            s = np.asarray(data.S, dtype=float).reshape(6)
+            return kind, s[:3].copy() if kind == "prismatic" else s[3:].copy()
+        if name[:-1] == prefix and name[-1] in _UNIT:
+            return kind, np.array(_UNIT[name[-1]])
+    return None
 
 
 def frame_index(model: pin.Model, name: str) -> int:

@@ -43,6 +43,7 @@ from .frames import (
     default_tips,
     floating_model,
     frame_index,
+    joint_kind,
     path_frames,
     reduce_model,
     root_link_frame,
@@ -87,26 +88,6 @@ def _check_values(arr: np.ndarray, label: str) -> None:
         raise ConfigurationError(f"{label} contains non-finite values")
     if not np.all(np.abs(arr) < 1e150):
         raise ConfigurationError(f"{label} has values too large (|x| >= 1e150)")
-
-
-_UNBOUNDED_JOINTS = {
-    "JointModelRUBX",
-    "JointModelRUBY",
-    "JointModelRUBZ",
-    "JointModelRevoluteUnboundedUnaligned",
-}
-
-_SIMPLE_JOINTS = {
-    *_UNBOUNDED_JOINTS,
-    "JointModelRX",
-    "JointModelRY",
-    "JointModelRZ",
-    "JointModelRevoluteUnaligned",
-    "JointModelPX",
-    "JointModelPY",
-    "JointModelPZ",
-    "JointModelPrismaticUnaligned",
-}
 
 
 # ------------------------------------------------------------------------ the model
@@ -239,12 +220,13 @@ class Model:
         self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
-        self._simple = all(m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints))
+        kinds = [joint_kind(m.joints[i]) for i in range(1, m.njoints)]
+        self._simple = all(k is not None for k in kinds)
         if not self._simple:
             bad = [
                 f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
                 for i in range(1, m.njoints)
-                if m.joints[i].shortname() not in _SIMPLE_JOINTS
+                if kinds[i - 1] is None
             ]
             raise SourceError(
                 f"{resolved.name!r}: joints of kind other than 1-DOF revolute/prismatic between "
@@ -257,13 +239,13 @@ class Model:
         self._unbounded = tuple(
             (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
             for i in range(1, m.njoints)
-            if m.joints[i].shortname() in _UNBOUNDED_JOINTS
+            if kinds[i - 1][0] == "continuous"  # type: ignore[index]
         )
         self._plain_idx = np.array(
             [
                 (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
                 for i in range(1, m.njoints)
-                if m.joints[i].shortname() not in _UNBOUNDED_JOINTS
+                if kinds[i - 1][0] != "continuous"  # type: ignore[index]
             ],
             dtype=np.int64,
         ).reshape(-1, 2)
@@ -285,10 +267,7 @@ class Model:
         self.lower, self.upper = self._limits_v(m)
         self.velocity_limit = np.array(m.velocityLimit, dtype=float)
         self.effort_limit = np.array(m.effortLimit, dtype=float)
-        self.is_prismatic = np.array(
-            [m.joints[i].shortname().startswith("JointModelP") for i in range(1, m.njoints)],
-            dtype=bool,
-        )
+        self.is_prismatic = np.array([k[0] == "prismatic" for k in kinds], dtype=bool)  # type: ignore[index]
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = path_frames(m, self.base_id, self.tip_id)

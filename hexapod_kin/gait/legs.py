@@ -7,7 +7,7 @@
 * **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
   Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
   and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
-  solved numerically (:func:`~.tree.solve_legs`).
+  solved numerically (:func:`~.leg_ik.solve_legs`).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from .._tree import leg_fk
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
-from .tree import leg_fk
 
 __all__ = [
     "BodyIK",
@@ -31,7 +31,6 @@ __all__ = [
     "LegTree",
     "closed_leg",
     "finite_or_inf",
-    "joint_axis",
     "pick_branch",
     "sphere_radius",
     "find_legs",
@@ -380,41 +379,6 @@ def find_legs(
 
 
 # ============================================================================ build helpers
-_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
-
-
-def joint_axis(jm: Any, name: str, label: str = "") -> tuple[np.ndarray, bool]:
-    """Unit axis (in the joint frame) and whether the joint is prismatic.
-
-    Every one-variable joint Pinocchio loads from a URDF: revolute and continuous (its
-    unbounded revolute, ``JointModelRUBX`` …) about any axis, and prismatic along any axis.
-
-    Raises:
-        ConfigurationError: Any other joint (the message names it and its kind).
-
-    """
-    kind = jm.shortname()
-    for prefix, prismatic in (
-        ("JointModelRUB", False),
-        ("JointModelR", False),
-        ("JointModelP", True),
-    ):
-        if kind[:-1] == prefix and kind[-1] in _AXES:
-            return np.array(_AXES[kind[-1]]), prismatic
-    if kind in (
-        "JointModelRevoluteUnaligned",
-        "JointModelRevoluteUnboundedUnaligned",
-        "JointModelPrismaticUnaligned",
-    ):
-        a = np.asarray(jm.extract().axis, dtype=float)
-        return a / np.linalg.norm(a), kind.startswith("JointModelP")
-    raise ConfigurationError(
-        f"joint {name!r}{f' of {label!r}' if label else ''} is a {kind}; a leg joint must be "
-        "revolute, continuous or prismatic (one variable)",
-        parameter="source",
-        value=name,
-        allowed="revolute, continuous or prismatic joints",
-    )
 
 
 def sphere_radius(text: str, link: str) -> float | None:

@@ -19,14 +19,16 @@ from typing import Any
 
 import numpy as np
 
+from .._tree import Tree, mat_vec, tree_frames, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
+from ..frames import joint_kind
 from ..params import Hexapod, rpy_to_matrix
+from .leg_ik import solve_legs
 from .legs import (
     BodyIK,
     FootSpec,
     find_legs,
     finite_or_inf,
-    joint_axis,
     leg_layout,
     offset_of,
     parse_feet,
@@ -34,7 +36,6 @@ from .legs import (
     sphere_radius,
 )
 from .posture import roomiest_stance
-from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
 
@@ -125,7 +126,7 @@ class WholeBody:
         foot_offsets: (L, 3) the feet in those frames [m].
         locked_joints: Joints of no leg, locked at their neutral value.
         ik_kind: Per leg, ``"closed"`` (closed form, :mod:`hexapod_kin.ik.closed`) or
-            ``"numerical"`` (damped least squares, :func:`~.legs.solve_legs`).
+            ``"numerical"`` (damped least squares, :func:`~.leg_ik.solve_legs`).
 
     """
 
@@ -205,7 +206,7 @@ class WholeBody:
     def feet_of(self, T: np.ndarray) -> np.ndarray:
         """World foot positions (N, L, 3) from joint poses ``T``."""
         j = self._foot_joint
-        return _mv(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
+        return mat_vec(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
 
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
@@ -384,7 +385,7 @@ class WholeBody:
 
         Each leg is solved on its own: by its closed form where :mod:`hexapod_kin.ik.closed`
         recognises it (at each sample the branch nearest to the previous sample's, the first
-        to ``q_prev``), otherwise numerically (:func:`~.legs.solve_legs`, warm-started from
+        to ``q_prev``), otherwise numerically (:func:`~.leg_ik.solve_legs`, warm-started from
         the previous sample; :attr:`ik_kind` says which).
 
         Args:
@@ -563,7 +564,17 @@ def _build_model(
     axes = np.empty((nq, 3))
     prismatic = np.zeros(nq, dtype=bool)
     for j in range(2, model.njoints):
-        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]), label)
+        kind = joint_kind(model.joints[j])
+        if kind is None:
+            raise ConfigurationError(
+                f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; a "
+                "leg joint must be revolute, continuous or prismatic (one variable)",
+                parameter="source",
+                value=str(model.names[j]),
+                allowed="revolute, continuous or prismatic joints",
+            )
+        axes[j - 2] = kind[1] / np.linalg.norm(kind[1])
+        prismatic[j - 2] = kind[0] == "prismatic"
     tree = Tree(
         parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
         placements=np.array(
