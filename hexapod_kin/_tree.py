@@ -54,6 +54,48 @@ class Tree:
     axes: np.ndarray
     prismatic: np.ndarray
 
+    @classmethod
+    def of_model(cls, model: Any, first: int = 1, label: str = "") -> Tree:
+        """The joints ``first``, ``first + 1``, … of a Pinocchio model (q: one per joint).
+
+        ``first = 2`` takes the joints below a free-flyer root (their parent is then the
+        floating body, −1). Axes are unit vectors (:func:`hexapod_kin.frames.joint_kind`).
+
+        Raises:
+            ConfigurationError: A joint that is not revolute, continuous or prismatic (named,
+                with ``label``, the robot's name).
+
+        """
+        from .exceptions import ConfigurationError
+        from .frames import joint_kind
+
+        n = model.njoints - first
+        axes = np.empty((n, 3))
+        prismatic = np.zeros(n, dtype=bool)
+        for j in range(first, model.njoints):
+            kind = joint_kind(model.joints[j])
+            if kind is None:
+                raise ConfigurationError(
+                    f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; "
+                    "a leg joint must be revolute, continuous or prismatic (one variable)",
+                    parameter="source",
+                    value=str(model.names[j]),
+                    allowed="revolute, continuous or prismatic joints",
+                )
+            axes[j - first] = kind[1] / np.linalg.norm(kind[1])
+            prismatic[j - first] = kind[0] == "prismatic"
+        parents = np.array([int(model.parents[j]) - first for j in range(first, model.njoints)])
+        parents[parents < 0] = -1
+        placements = np.array(
+            [model.jointPlacements[j].homogeneous for j in range(first, model.njoints)]
+        )
+        return cls(
+            parents=parents.reshape(n),
+            placements=placements.reshape(n, 4, 4),
+            axes=axes,
+            prismatic=prismatic,
+        )
+
     @cached_property
     def levels(self) -> tuple[tuple[np.ndarray, np.ndarray | None], ...]:
         """The joints by depth: per level ``(joints, their parents)`` (parents ``None``: the body).

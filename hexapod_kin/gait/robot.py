@@ -21,7 +21,6 @@ import numpy as np
 
 from .._tree import Tree, mat_vec, tree_frames, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
-from ..frames import joint_kind
 from ..params import Hexapod, rpy_to_matrix
 from .leg_ik import solve_legs
 from .legs import (
@@ -561,29 +560,7 @@ def _build_model(
         model = pin.buildReducedModel(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
     nq = model.njoints - 2
-    axes = np.empty((nq, 3))
-    prismatic = np.zeros(nq, dtype=bool)
-    for j in range(2, model.njoints):
-        kind = joint_kind(model.joints[j])
-        if kind is None:
-            raise ConfigurationError(
-                f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; a "
-                "leg joint must be revolute, continuous or prismatic (one variable)",
-                parameter="source",
-                value=str(model.names[j]),
-                allowed="revolute, continuous or prismatic joints",
-            )
-        axes[j - 2] = kind[1] / np.linalg.norm(kind[1])
-        prismatic[j - 2] = kind[0] == "prismatic"
-    tree = Tree(
-        parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
-        placements=np.array(
-            [model.jointPlacements[j].homogeneous for j in range(2, model.njoints)]
-        ),
-        axes=axes,
-        prismatic=prismatic,
-    )
-    tree.parents[tree.parents < 0] = -1
+    tree = Tree.of_model(model, first=2, label=label)
     names = tuple(leg.name for leg in legs) if not hexa else tuple(x.name for x in params.legs)  # type: ignore[union-attr]
     foot_names = []
     for leg, name in zip(legs, names):
