@@ -28,6 +28,7 @@ from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 __all__ = [
     "BodyIK",
     "FootSpec",
+    "GaitError",
     "LegTree",
     "closed_leg",
     "finite_or_inf",
@@ -41,6 +42,37 @@ __all__ = [
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
 _SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
+
+
+class GaitError(ConfigurationError):
+    """A gait or body pose that the robot cannot perform (a check failed).
+
+    Attributes:
+        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
+            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
+        leg: The leg's name (``None`` when the check is about the whole robot).
+        time: Time of the first failing sample in [s] (``None`` for a single pose).
+        amount: By how much the check fails, in [m] or [rad] (≥ 0).
+
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        check: str,
+        leg: str | None = None,
+        time: float | None = None,
+        amount: float | None = None,
+        parameter: str | None = None,
+        value: Any = None,
+        allowed: Any = None,
+    ) -> None:
+        super().__init__(message, parameter=parameter, value=value, allowed=allowed)
+        self.check = check
+        self.leg = leg
+        self.time = time
+        self.amount = amount
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ from .leg_ik import solve_legs
 from .legs import (
     BodyIK,
     FootSpec,
+    GaitError,
     find_legs,
     finite_or_inf,
     leg_layout,
@@ -37,37 +38,6 @@ from .legs import (
 from .posture import roomiest_stance
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
-
-
-class GaitError(ConfigurationError):
-    """A gait or body pose that the robot cannot perform (a check failed).
-
-    Attributes:
-        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
-            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
-        leg: The leg's name (``None`` when the check is about the whole robot).
-        time: Time of the first failing sample in [s] (``None`` for a single pose).
-        amount: By how much the check fails, in [m] or [rad] (≥ 0).
-
-    """
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        check: str,
-        leg: str | None = None,
-        time: float | None = None,
-        amount: float | None = None,
-        parameter: str | None = None,
-        value: Any = None,
-        allowed: Any = None,
-    ) -> None:
-        super().__init__(message, parameter=parameter, value=value, allowed=allowed)
-        self.check = check
-        self.leg = leg
-        self.time = time
-        self.amount = amount
 
 
 def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
