@@ -234,18 +234,19 @@ class Model:
                 "base=/tip="
             )
         self._shape = (self.nq,)
+        names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
         self._unbounded = tuple(
             (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
             for i in range(1, m.njoints)
-            if kinds[i - 1][0] == "continuous"  # type: ignore[index]
+            if names[i - 1] == "continuous"
         )
         self._plain_idx = np.array(
             [
                 (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
                 for i in range(1, m.njoints)
-                if kinds[i - 1][0] != "continuous"  # type: ignore[index]
+                if names[i - 1] != "continuous"
             ],
             dtype=np.int64,
         ).reshape(-1, 2)
@@ -267,7 +268,7 @@ class Model:
         self.lower, self.upper = self._limits_v(m)
         self.velocity_limit = np.array(m.velocityLimit, dtype=float)
         self.effort_limit = np.array(m.effortLimit, dtype=float)
-        self.is_prismatic = np.array([k[0] == "prismatic" for k in kinds], dtype=bool)  # type: ignore[index]
+        self.is_prismatic = np.array([kind == "prismatic" for kind in names], dtype=bool)
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = path_frames(m, self.base_id, self.tip_id)
