@@ -696,6 +696,10 @@ def test_continuous_legs_match_raw_pinocchio_and_walk_like_revolute(tmp_path):
     r = stand(rev)
     assert s.feasible and np.allclose(s.forces, r.forces, atol=1e-9)
     assert np.allclose(s.torque, r.torque, atol=1e-9)
+    pytest.importorskip("mujoco")
+    from hexapod_kin.simulate import simulate
+
+    assert simulate(walk(cont, duration=0.5)).ok
 
 
 def test_a_leg_joint_of_another_kind_is_refused_by_name(tmp_path):
