@@ -221,8 +221,7 @@ class Model:
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
         kinds = [joint_kind(m.joints[i]) for i in range(1, m.njoints)]
-        self._simple = all(k is not None for k in kinds)
-        if not self._simple:
+        if not all(k is not None for k in kinds):
             bad = [
                 f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
                 for i in range(1, m.njoints)

@@ -813,3 +813,16 @@ def test_com_and_angular_momentum_equal_pinocchio_centroidal(source):
         ref[i] = pin.computeCentroidalMomentum(m, d, Q[i], V[i]).angular
     L = angular_momentum(masses, rot_i, R, x, com, xd, w)
     assert np.abs(L - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max())
+
+
+def test_the_same_relative_path_in_two_folders_is_two_robots(elsewhere):
+    import os
+
+    decoy = PHX.read_text().replace('name="j_c1_', 'name="j_coxa_')
+    (elsewhere.parent.parent / "work" / "phx.urdf").write_text(decoy)
+    st = os.stat(elsewhere)
+    os.utime(elsewhere.parent.parent / "work" / "phx.urdf", ns=(st.st_atime_ns, st.st_mtime_ns))
+    here = as_whole_body("phx.urdf", feet=SPEC)  # the cwd is work/
+    os.chdir(elsewhere.parent)
+    there = as_whole_body("phx.urdf", feet=SPEC)
+    assert "j_coxa_lf" in here.joint_names and "j_c1_lf" in there.joint_names

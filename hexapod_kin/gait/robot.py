@@ -737,7 +737,10 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
     key: Any = None
     if isinstance(robot, (str, os.PathLike)):
         text = os.fspath(robot)
-        stamp = os.stat(text).st_mtime_ns if os.path.isfile(text) else None
+        stamp = None
+        if os.path.isfile(text):  # the file itself: a relative path means another in another cwd
+            st = os.stat(text)
+            text, stamp = os.path.realpath(text), (st.st_mtime_ns, st.st_size, st.st_ino)
         key = (text, stamp, spec, rad)
         with _SOURCES_LOCK:
             if key in _SOURCES:
