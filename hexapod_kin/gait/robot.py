@@ -1,9 +1,11 @@
 """A legged robot with a floating base (Pinocchio free-flyer), from any source; body-pose IK.
 
-:func:`as_whole_body` builds a :class:`WholeBody` from a Hexapod, a URDF, ``erd:NAME`` or a
-loaded model: legs from the kinematic tree (:mod:`.legs`), the tree's constants as arrays so
-that forward kinematics, the centre of mass and the leg segments are computed for many samples
-at once (:mod:`.tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
+:func:`as_whole_body` describes the legs of the one robot :func:`hexapod_kin.load` gives for
+a Hexapod, a URDF, ``erd:NAME`` or a loaded model (its floating-base twin,
+:attr:`~hexapod_kin.model.Model.floating_model`; no second parse): legs from the kinematic
+tree (:mod:`.legs`), the tree's constants as arrays so that forward kinematics, the centre of
+mass and the leg segments are computed for many samples at once (the batch path,
+:mod:`hexapod_kin._tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
 solves the leg joints of body poses with the feet fixed in the world, leg by leg: closed form
 where recognised, else numerically. Poses are 4×4 ``worldMbody`` arrays (body frame: x
 forward, z up).
