@@ -718,6 +718,7 @@ def test_the_whole_body_is_a_view_of_the_loaded_robot():
     km = load(str(PHX))
     wb = as_whole_body(km, feet=SPEC)
     assert wb.kinematic is km and wb.urdf == km.urdf
+    assert as_whole_body(km, feet=SPEC) is wb  # kept in the loaded robot's cache
     ref = pin.buildModelFromXML(km.urdf, pin.JointModelFreeFlyer())
     assert km.floating_model == ref  # built from the loaded model, equal to a fresh parse
     assert wb.model is not km.floating_model  # its contact frames go on a copy

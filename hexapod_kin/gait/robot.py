@@ -775,4 +775,6 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
             value=km.name,
             allowed="a legged robot",
         )
-    return _build_model(km, feet=spec, foot_radius=rad)
+    return km.cached(  # one description per loaded robot and feet
+        f"gait.whole_body {spec!r} {rad!r}", lambda: _build_model(km, feet=spec, foot_radius=rad)
+    )
