@@ -827,3 +827,14 @@ def test_the_same_relative_path_in_two_folders_is_two_robots(elsewhere):
     os.chdir(elsewhere.parent)
     there = as_whole_body("phx.urdf", feet=SPEC)
     assert "j_coxa_lf" in here.joint_names and "j_c1_lf" in there.joint_names
+
+
+def test_gait_torques_default_to_the_robot_that_walked():
+    from hexapod_kin.dynamics.gait_loads import gait_torques
+
+    four = as_whole_body(robots.hexapod(mount_yaw_deg=(45, 135, -135, -45)))
+    run = walk(four, pattern="crawl", duration=1.0)
+    loads = gait_torques(run)  # the four-legged robot, not the built-in six-legged one
+    assert loads.joint_names == four.kinematic.joint_names and loads.forces.shape[1] == 4
+    W = four.mass * G
+    assert np.abs(loads.forces.sum(axis=1)[:, 2] - W).max() <= 1e-9 * W
