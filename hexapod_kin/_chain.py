@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .exceptions import SourceError
+from .frames import joint_kind
 
 __all__ = ["AlignedChain", "ChainArrays", "aligned_chain"]
 
@@ -63,19 +64,13 @@ class ChainArrays:
         rots, trans, axes, kinds, cols = [], [], [], [], []
         for k, i in enumerate(path):
             placement = model.baseMo * m.jointPlacements[i] if k == 0 else m.jointPlacements[i]
-            name = m.joints[i].shortname()
-            if name.startswith("JointModelR"):
-                kinds.append(0)
-            elif name.startswith("JointModelP"):
-                kinds.append(1)
-            else:
-                raise SourceError(f"joint {m.names[i]!r} of kind {name} is not 1-DOF rev/prism")
-            if name[-1] in "XYZ":
-                ax = np.zeros(3)
-                ax["XYZ".index(name[-1])] = 1.0
-            else:
-                ax = np.asarray(m.joints[i].extract().axis, dtype=float)
-                ax = ax / np.linalg.norm(ax)
+            kind = joint_kind(m.joints[i])
+            if kind is None:
+                raise SourceError(
+                    f"joint {m.names[i]!r} of kind {m.joints[i].shortname()} is not 1-DOF rev/prism"
+                )
+            kinds.append(1 if kind[0] == "prismatic" else 0)
+            ax = kind[1] / np.linalg.norm(kind[1])
             rots.append(np.array(placement.rotation))
             trans.append(np.array(placement.translation))
             axes.append(ax)

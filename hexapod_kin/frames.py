@@ -18,7 +18,9 @@ from .exceptions import ConfigurationError, FrameNotFoundError
 __all__ = [
     "add_tool_frame",
     "drop_missing_meshes",
+    "floating_model",
     "frame_index",
+    "joint_kind",
     "last_body_frame",
     "path_frames",
     "reduce_model",
@@ -33,6 +35,44 @@ _FRAME_PREFERENCE = (
     pin.FrameType.FIXED_JOINT,
     pin.FrameType.SENSOR,
 )
+
+
+#: The one-variable joints Pinocchio builds from a URDF, by kind (``shortname()`` prefixes).
+_JOINT_KINDS = (
+    ("JointModelRUB", "continuous"),
+    ("JointModelRevoluteUnboundedUnaligned", "continuous"),
+    ("JointModelRevoluteUnaligned", "revolute"),
+    ("JointModelPrismaticUnaligned", "prismatic"),
+    ("JointModelR", "revolute"),
+    ("JointModelP", "prismatic"),
+)
+_UNIT = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_kind(joint: Any) -> tuple[str, np.ndarray] | None:
+    """The kind and axis of a one-variable Pinocchio joint model; ``None`` for other joints.
+
+    The one place joint kinds are told apart: ``"revolute"`` (``JointModelRX/RY/RZ``,
+    ``RevoluteUnaligned``), ``"continuous"`` (the unbounded revolute ``JointModelRUBX/Y/Z``,
+    ``RevoluteUnboundedUnaligned``: two entries ``(cos q, sin q)`` in Pinocchio's ``q``, one
+    in ``v``) and ``"prismatic"`` (``JointModelPX/PY/PZ``, ``PrismaticUnaligned``). The axis
+    is in the joint's frame: exactly a unit vector for the X/Y/Z kinds, Pinocchio's stored
+    axis otherwise. Free-flyer, spherical, planar, translation, mimic and composite joints
+    give ``None``.
+    """
+    name = str(joint.shortname())
+    for prefix, kind in _JOINT_KINDS:
+        if name == prefix and "Unaligned" in prefix:
+            concrete = joint.extract() if hasattr(joint, "extract") else joint
+            if hasattr(concrete, "axis"):
+                return kind, np.asarray(concrete.axis, dtype=float)
+            data = joint.createData()  # no axis in the binding: the motion subspace S
+            joint.calc(data, np.r_[1.0, np.zeros(joint.nq - 1)])
+            s = np.asarray(data.S, dtype=float).reshape(6)
+            return kind, s[:3].copy() if kind == "prismatic" else s[3:].copy()
+        if name[:-1] == prefix and name[-1] in _UNIT:
+            return kind, np.array(_UNIT[name[-1]])
+    return None
 
 
 def frame_index(model: pin.Model, name: str) -> int:
@@ -81,6 +121,55 @@ def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Mo
     placement = tip_frame.placement * pin.SE3(tool[:3, :3].copy(), tool[:3, 3].copy())
     out.addFrame(pin.Frame(name, tip_frame.parentJoint, tip_id, placement, pin.FrameType.OP_FRAME))
     return out, name
+
+
+def floating_model(fixed: pin.Model) -> pin.Model:
+    """``fixed`` (a URDF's fixed-base model) with a free-flyer ``root_joint`` at its root.
+
+    The same model as ``pinocchio.buildModelFromXML(text, JointModelFreeFlyer())`` of the
+    same URDF (``==`` holds; the tests check it on URDFs of every kind), built from the loaded
+    model instead of a second parse: every joint moves one index up under ``root_joint``
+    (q grows by 7, v by 6), the root link's inertia (Pinocchio keeps it on ``universe`` in a
+    fixed-base model) moves onto ``root_joint``, and every frame keeps its name, type,
+    placement and inertia (the root link's body frame gives its inertia to the joint, as
+    Pinocchio's parser does).
+    """
+    out = pin.Model()
+    out.name = fixed.name
+    root = out.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root_joint")
+    if fixed.nframes > 1 and fixed.frames[1].inertia.mass > 0:  # the root link's <inertial>
+        out.appendBodyToJoint(root, pin.Inertia.Zero(), pin.SE3.Identity())
+    out.addJointFrame(root, 0)
+    for j in range(1, fixed.njoints):
+        jm = fixed.joints[j]
+        iq, iv = slice(jm.idx_q, jm.idx_q + jm.nq), slice(jm.idx_v, jm.idx_v + jm.nv)
+        k = out.addJoint(
+            int(fixed.parents[j]) + 1,
+            jm,
+            fixed.jointPlacements[j],
+            fixed.names[j],
+            fixed.lowerEffortLimit[iv],
+            fixed.upperEffortLimit[iv],
+            fixed.lowerVelocityLimit[iv],
+            fixed.upperVelocityLimit[iv],
+            fixed.lowerPositionLimit[iq],
+            fixed.upperPositionLimit[iq],
+            fixed.positionLimitMargin[iq],
+            fixed.lowerDryFrictionLimit[iv],
+            fixed.upperDryFrictionLimit[iv],
+            fixed.damping[iv],
+        )
+        out.appendBodyToJoint(k, pin.Inertia.Zero(), pin.SE3.Identity())
+    for i in range(1, fixed.nframes):
+        f = fixed.frames[i]
+        inertia = pin.Inertia.Zero() if i == 1 else f.inertia
+        frame = pin.Frame(
+            f.name, int(f.parentJoint) + 1, int(f.parentFrame) + 1, f.placement, f.type, inertia
+        )
+        out.addFrame(frame, False)
+    for j in range(fixed.njoints):  # assigned last: a frame added on a joint adds to it
+        out.inertias[j + 1] = fixed.inertias[j]
+    return out
 
 
 def root_link_frame(model: pin.Model) -> str:

@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import ParameterError, choices
+from .frames import joint_kind
 from .model import Model, build, fast_q_ok
 
 # The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
@@ -417,15 +418,9 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
 
 
 def _joint_axis(model: pin.Model, i: int) -> np.ndarray:
-    joint = model.joints[i]
-    name = joint.shortname()
-    if name.endswith("X"):
-        return np.array([1.0, 0.0, 0.0])
-    if name.endswith("Y"):
-        return np.array([0.0, 1.0, 0.0])
-    if name.endswith("Z"):
-        return np.array([0.0, 0.0, 1.0])
-    return np.asarray(joint.extract().axis, dtype=float)
+    kind = joint_kind(model.joints[i])
+    assert kind is not None  # the loader admits one-variable joints only
+    return kind[1]
 
 
 def load(

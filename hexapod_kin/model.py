@@ -41,7 +41,9 @@ from .frames import (
     DefaultTips,
     add_tool_frame,
     default_tips,
+    floating_model,
     frame_index,
+    joint_kind,
     path_frames,
     reduce_model,
     root_link_frame,
@@ -86,26 +88,6 @@ def _check_values(arr: np.ndarray, label: str) -> None:
         raise ConfigurationError(f"{label} contains non-finite values")
     if not np.all(np.abs(arr) < 1e150):
         raise ConfigurationError(f"{label} has values too large (|x| >= 1e150)")
-
-
-_UNBOUNDED_JOINTS = {
-    "JointModelRUBX",
-    "JointModelRUBY",
-    "JointModelRUBZ",
-    "JointModelRevoluteUnboundedUnaligned",
-}
-
-_SIMPLE_JOINTS = {
-    *_UNBOUNDED_JOINTS,
-    "JointModelRX",
-    "JointModelRY",
-    "JointModelRZ",
-    "JointModelRevoluteUnaligned",
-    "JointModelPX",
-    "JointModelPY",
-    "JointModelPZ",
-    "JointModelPrismaticUnaligned",
-}
 
 
 # ------------------------------------------------------------------------ the model
@@ -238,12 +220,12 @@ class Model:
         self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
-        self._simple = all(m.joints[i].shortname() in _SIMPLE_JOINTS for i in range(1, m.njoints))
-        if not self._simple:
+        kinds = [joint_kind(m.joints[i]) for i in range(1, m.njoints)]
+        if not all(k is not None for k in kinds):
             bad = [
                 f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
                 for i in range(1, m.njoints)
-                if m.joints[i].shortname() not in _SIMPLE_JOINTS
+                if kinds[i - 1] is None
             ]
             raise SourceError(
                 f"{resolved.name!r}: joints of kind other than 1-DOF revolute/prismatic between "
@@ -251,18 +233,19 @@ class Model:
                 "base=/tip="
             )
         self._shape = (self.nq,)
+        names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
         self._unbounded = tuple(
             (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
             for i in range(1, m.njoints)
-            if m.joints[i].shortname() in _UNBOUNDED_JOINTS
+            if names[i - 1] == "continuous"
         )
         self._plain_idx = np.array(
             [
                 (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
                 for i in range(1, m.njoints)
-                if m.joints[i].shortname() not in _UNBOUNDED_JOINTS
+                if names[i - 1] != "continuous"
             ],
             dtype=np.int64,
         ).reshape(-1, 2)
@@ -284,10 +267,7 @@ class Model:
         self.lower, self.upper = self._limits_v(m)
         self.velocity_limit = np.array(m.velocityLimit, dtype=float)
         self.effort_limit = np.array(m.effortLimit, dtype=float)
-        self.is_prismatic = np.array(
-            [m.joints[i].shortname().startswith("JointModelP") for i in range(1, m.njoints)],
-            dtype=bool,
-        )
+        self.is_prismatic = np.array([kind == "prismatic" for kind in names], dtype=bool)
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = path_frames(m, self.base_id, self.tip_id)
@@ -378,6 +358,16 @@ class Model:
             if key not in cache:
                 cache[key] = factory()
             return cache[key]
+
+    @property
+    def floating_model(self) -> pin.Model:
+        """:attr:`full_model` with a free-flyer root (a legged robot's floating base), shared.
+
+        Built once from the loaded model (:func:`~hexapod_kin.frames.floating_model`), never
+        by parsing the URDF again; treat it as read-only (copy it with ``pinocchio.Model(m)``
+        to add frames).
+        """
+        return self.cached("model.floating", lambda: floating_model(self.full_model))
 
     @property
     def arrays(self) -> Any:

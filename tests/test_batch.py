@@ -120,3 +120,26 @@ def test_aligned_chain_rotations_map_z_to_the_axis():
         np.testing.assert_allclose(a @ [0.0, 0.0, 1.0], u, rtol=0, atol=1e-15)
         np.testing.assert_allclose(a.T @ a, np.eye(3), rtol=0, atol=1e-15)
         assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-15)
+
+
+def test_the_tree_fk_benchmark_runs_and_its_engines_agree():
+    """tools/bench_tree_fk.py (why fk_batch stays compiled) in quick mode: every row carries
+    its peer's time and the engines agree to rounding (timings are not asserted)."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    tool = Path(__file__).resolve().parent.parent / "tools" / "bench_tree_fk.py"
+    res = subprocess.run(
+        [sys.executable, str(tool), "--quick", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    rows = json.loads(res.stdout.strip().splitlines()[-1])
+    assert len(rows) == 3
+    assert rows[0]["speedup_vs_pinocchio"] > 0 and rows[0]["max_diff_m"] <= 1e-12
+    assert all(r["ratio_tree_over_numba"] > 0 and r["max_diff_m"] <= 1e-12 for r in rows[1:])

@@ -660,3 +660,181 @@ def _erd_text(name: str) -> str:
     from hexapod_kin.sources import resolve_source
 
     return resolve_source(f"erd:{name}").text
+
+
+# ----------------------------------------------------------------------------- joint kinds
+def test_continuous_legs_match_raw_pinocchio_and_walk_like_revolute(tmp_path):
+    text = PHX.read_text()
+    assert text.count('type="revolute"') == 18
+    (tmp_path / "rev.urdf").write_text(text)
+    (tmp_path / "cont.urdf").write_text(text.replace('type="revolute"', 'type="continuous"'))
+    rev = as_whole_body(str(tmp_path / "rev.urdf"), feet=SPEC)
+    cont = as_whole_body(str(tmp_path / "cont.urdf"), feet=SPEC)
+    m, d = _raw_model((tmp_path / "cont.urdf").read_text())
+    assert m.nq == 7 + 2 * 18 and cont.model.nq == m.nq and cont.nq == 18
+    assert {m.joints[j].shortname() for j in range(2, m.njoints)} == {"JointModelRUBX"}
+    assert np.all(np.isinf(cont.lower)) and np.all(np.isinf(cont.upper))
+    # the (cos, sin) pairs: feet, joint frames and CoM against raw Pinocchio
+    q, base = _random_state(cont, 20, 3)
+    spec = [(f"tibia_{name}", OFFSET) for name in cont.leg_names]
+    ref = _raw_feet(cont, m, d, q, base, spec)
+    assert np.abs(cont.feet(q, base) - ref).max() <= 1e-12
+    Q = cont.pinocchio_q(q, base)
+    T, com = cont.joint_poses(q, base), cont.com(q, base)
+    for i in (0, 19):
+        pin.forwardKinematics(m, d, Q[i])
+        for j in range(cont.nq):
+            assert np.abs(T[i, j] - d.oMi[j + 2].homogeneous).max() <= 1e-12
+        assert np.abs(com[i] - pin.centerOfMass(m, d, Q[i])).max() <= 1e-12
+    # the same stance and the same walk, joint angle for joint angle
+    assert np.array_equal(standing_pose(cont).q, standing_pose(rev).q)
+    a, b = walk(rev, duration=1.0), walk(cont, duration=1.0)
+    assert a.ok and b.ok
+    assert np.array_equal(a.q, b.q) and np.array_equal(a.com, b.com)
+    assert a.pinocchio_q().shape[1] == 25 and b.pinocchio_q().shape[1] == 43
+    s = stand(cont)
+    r = stand(rev)
+    assert s.feasible and np.allclose(s.forces, r.forces, atol=1e-9)
+    assert np.allclose(s.torque, r.torque, atol=1e-9)
+    pytest.importorskip("mujoco")
+    from hexapod_kin.simulate import simulate
+
+    assert simulate(walk(cont, duration=0.5)).ok
+
+
+def test_a_leg_joint_of_another_kind_is_refused_by_name(tmp_path):
+    text = PHX.read_text().replace(
+        '<joint name="j_c1_lf" type="revolute">', '<joint name="j_c1_lf" type="floating">', 1
+    )
+    assert "floating" in text
+    (tmp_path / "f.urdf").write_text(text)
+    with pytest.raises(HexapodKinError, match="'j_c1_lf' is a JointModelFreeFlyer"):
+        as_whole_body(str(tmp_path / "f.urdf"), feet=SPEC)
+
+
+def test_the_whole_body_is_a_view_of_the_loaded_robot():
+    from hexapod_kin import load
+
+    km = load(str(PHX))
+    wb = as_whole_body(km, feet=SPEC)
+    assert wb.kinematic is km and wb.urdf == km.urdf
+    assert as_whole_body(km, feet=SPEC) is wb  # kept in the loaded robot's cache
+    ref = pin.buildModelFromXML(km.urdf, pin.JointModelFreeFlyer())
+    assert km.floating_model == ref  # built from the loaded model, equal to a fresh parse
+    assert wb.model is not km.floating_model  # its contact frames go on a copy
+    assert km.floating_model.nframes == ref.nframes
+
+
+# ----------------------------------------------------------------------------- URDF elsewhere
+@pytest.fixture()
+def elsewhere(tmp_path, monkeypatch):
+    """PhantomX in ``robots/``, the cwd ``work/`` holding a decoy ``phx.urdf`` (the hexapod)."""
+    from hexapod_kin.urdf import to_urdf
+
+    (tmp_path / "robots").mkdir()
+    (tmp_path / "work").mkdir()
+    (tmp_path / "robots" / "phx.urdf").write_text(PHX.read_text())
+    (tmp_path / "work" / "phx.urdf").write_text(to_urdf(robots.hexapod()))
+    monkeypatch.chdir(tmp_path / "work")
+    return tmp_path / "robots" / "phx.urdf"
+
+
+@pytest.fixture()
+def pages(monkeypatch):
+    """The joint names of every model a walk page is drawn from (the page data is packed)."""
+    import hexapod_kin.viewer as viewer
+
+    seen: list[tuple[str, ...]] = []
+    real = viewer.export_html
+
+    def spy(model, *args, **kwargs):
+        seen.append(tuple(model.joint_names))
+        return real(model, *args, **kwargs)
+
+    monkeypatch.setattr(viewer, "export_html", spy)
+    return seen
+
+
+@pytest.mark.parametrize("how", ["relative", "absolute"])
+def test_a_urdf_in_another_folder_walks_and_shows_itself(elsewhere, how, tmp_path, pages):
+    from hexapod_kin.gait.show import run_model, walk_html
+    from hexapod_kin.simulate.scene import _robot_mjcf
+
+    path = "../robots/phx.urdf" if how == "relative" else str(elsewhere)
+    run = walk(as_whole_body(path, feet=SPEC), duration=0.5)
+    assert run.robot.urdf == PHX.read_text()
+    km = run_model(run)
+    assert km is run.robot.kinematic and "j_c1_lf" in km.joint_names
+    assert walk_html(run, tmp_path / "walk.html").is_file()
+    assert pages == [km.joint_names]  # PhantomX, not the decoy of the same name
+    assert "j_c1_lf" in _robot_mjcf(run.robot)
+
+
+def test_cli_gait_and_simulate_pages_of_a_urdf_in_another_folder(elsewhere, tmp_path, pages):
+    from hexapod_kin.cli import main
+
+    feet = [a for s in SIDES for a in ("--foot", f"tibia_{s}:0,0.16,0.029")]
+    out = tmp_path / "gait.html"
+    argv = ["gait", "../robots/phx.urdf", *feet, "--duration", "0.5", "--html", str(out)]
+    assert main(argv) == 0 and out.is_file()
+    assert len(pages) == 1 and "j_c1_lf" in pages[0]
+    pytest.importorskip("mujoco")
+    out = tmp_path / "sim.html"
+    argv = ["simulate", str(elsewhere), "--foot", SPEC, "--duration", "0.5", "--html", str(out)]
+    assert main(argv) == 0 and out.is_file()
+
+
+# ----------------------------------------------------------------------------- centroidal
+@pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
+def test_com_and_angular_momentum_equal_pinocchio_centroidal(source):
+    """The vectorised CoM and angular momentum (the ZMP's) against Pinocchio's
+    ``centerOfMass`` and ``computeCentroidalMomentum`` at random states, to 1e-9."""
+    from hexapod_kin.gait.zmp import angular_momentum
+
+    wb = as_whole_body(source)
+    m, d = wb.model, wb.model.createData()
+    q, base = _random_state(wb, 12, 5)
+    rng = np.random.default_rng(6)
+    V = rng.normal(size=(len(q), m.nv))
+    Q = wb.pinocchio_q(q, base)
+    masses, levers, rot_i = wb.link_inertias()
+    com = wb.com(q, base)
+    K = 1 + wb.nq
+    R, x, xd, w = (np.empty((len(q), K, 3, 3)),) + tuple(np.empty((len(q), K, 3)) for _ in "123")
+    ref = np.empty((len(q), 3))
+    for i in range(len(q)):
+        pin.forwardKinematics(m, d, Q[i], V[i])
+        assert np.abs(com[i] - pin.centerOfMass(m, d, Q[i])).max() <= 1e-9
+        for k in range(K):  # the body (joint 1), then every leg joint
+            Rk, pk = d.oMi[k + 1].rotation, d.oMi[k + 1].translation
+            vel = pin.getVelocity(m, d, k + 1, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            R[i, k], x[i, k] = Rk, Rk @ levers[k] + pk
+            w[i, k] = vel.angular
+            xd[i, k] = vel.linear + np.cross(vel.angular, Rk @ levers[k])
+        ref[i] = pin.computeCentroidalMomentum(m, d, Q[i], V[i]).angular
+    L = angular_momentum(masses, rot_i, R, x, com, xd, w)
+    assert np.abs(L - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max())
+
+
+def test_the_same_relative_path_in_two_folders_is_two_robots(elsewhere):
+    import os
+
+    decoy = PHX.read_text().replace('name="j_c1_', 'name="j_coxa_')
+    (elsewhere.parent.parent / "work" / "phx.urdf").write_text(decoy)
+    st = os.stat(elsewhere)
+    os.utime(elsewhere.parent.parent / "work" / "phx.urdf", ns=(st.st_atime_ns, st.st_mtime_ns))
+    here = as_whole_body("phx.urdf", feet=SPEC)  # the cwd is work/
+    os.chdir(elsewhere.parent)
+    there = as_whole_body("phx.urdf", feet=SPEC)
+    assert "j_coxa_lf" in here.joint_names and "j_c1_lf" in there.joint_names
+
+
+def test_gait_torques_default_to_the_robot_that_walked():
+    from hexapod_kin.dynamics.gait_loads import gait_torques
+
+    four = as_whole_body(robots.hexapod(mount_yaw_deg=(45, 135, -135, -45)))
+    run = walk(four, pattern="crawl", duration=1.0)
+    loads = gait_torques(run)  # the four-legged robot, not the built-in six-legged one
+    assert loads.joint_names == four.kinematic.joint_names and loads.forces.shape[1] == 4
+    W = four.mass * G
+    assert np.abs(loads.forces.sum(axis=1)[:, 2] - W).max() <= 1e-9 * W

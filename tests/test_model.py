@@ -484,3 +484,48 @@ def test_fk_prints_every_limb_end(capsys) -> None:
     for name, T in out["ends"].items():
         ref = data.oMf[raw.getFrameId(name)].homogeneous
         assert np.abs(np.array(T) - ref).max() <= 1e-12
+
+
+# ------------------------------------------------------------------ joint kinds, floating twin
+def test_joint_kinds_are_told_apart_in_one_place():
+    from hexapod_kin.frames import joint_kind
+
+    m = pin.Model()
+    axis = np.array([0.0, 0.6, 0.8])
+    cases = [
+        (pin.JointModelRX(), "revolute", [1, 0, 0]),
+        (pin.JointModelRY(), "revolute", [0, 1, 0]),
+        (pin.JointModelRUBZ(), "continuous", [0, 0, 1]),
+        (pin.JointModelPY(), "prismatic", [0, 1, 0]),
+        (pin.JointModelRevoluteUnaligned(*axis), "revolute", axis),
+        (pin.JointModelPrismaticUnaligned(*axis), "prismatic", axis),
+    ]
+    for k, (jm, kind, ax) in enumerate(cases):
+        j = m.addJoint(0, jm, pin.SE3.Identity(), f"j{k}")
+        got = joint_kind(m.joints[j])
+        assert got is not None and got[0] == kind and np.array_equal(got[1], ax)
+    for jm in (pin.JointModelFreeFlyer(), pin.JointModelSpherical(), pin.JointModelPlanar()):
+        assert joint_kind(jm) is None
+    # the loader, the batch arrays and the reference Jacobian read the same kinds
+    km = hk.load(erd_path("double_pendulum_continuous"))
+    assert not km.is_prismatic.any() and km.arrays.kind.tolist() == [0] * km.nq
+
+
+@pytest.mark.parametrize(
+    "source", ["hexapod", "erd:solo12", "erd:a1", "erd:anymal_c", "erd:double_pendulum_continuous"]
+)
+def test_the_floating_model_is_the_urdf_parsed_with_a_free_flyer(source):
+    """Built from the loaded model (no second parse), equal (``==``: joints, limits,
+    inertias, frames) to Pinocchio's own parse of the URDF with a free-flyer root."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        km = hk.load(source)
+    ref = pin.buildModelFromXML(km.urdf, pin.JointModelFreeFlyer())
+    ff = km.floating_model
+    assert ff == ref and ff is km.floating_model  # built once, kept in the model's cache
+    assert ff.nq == km.full_model.nq + 7 and ff.nv == km.full_model.nv + 6
+    q = pin.integrate(ref, pin.neutral(ref), np.random.default_rng(2).normal(size=ref.nv))
+    d1, d2 = ff.createData(), ref.createData()
+    assert np.array_equal(pin.centerOfMass(ff, d1, q), pin.centerOfMass(ref, d2, q))

@@ -132,7 +132,8 @@ def gait_torques(
             ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L);
             with ``robot`` (its floating-base WholeBody), ``pinocchio_q/v/a()`` and ``feet``
             the full inverse dynamics too.
-        model: The fixed-base whole robot the run walks (default ``load("hexapod")``).
+        model: The fixed-base whole robot the run walks (default: the run's own robot,
+            ``run.robot.kinematic``, else ``load("hexapod")``).
         method: ``"min_norm"`` or ``"friction"``.
         mu: Friction coefficient.
 
@@ -141,7 +142,9 @@ def gait_torques(
         ConfigurationError: A sample whose stance feet cannot hold the robot (names the time).
 
     """
-    mdl = as_model("hexapod" if model is None else model)
+    if model is None:  # the robot that walked, as loaded
+        model = getattr(getattr(run, "robot", None), "kinematic", None) or "hexapod"
+    mdl = as_model(model)
     params = _hexapod(mdl)
     check_inertials(mdl)
     names = tuple(run.joint_names)

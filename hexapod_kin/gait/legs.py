@@ -7,7 +7,7 @@
 * **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
   Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
   and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
-  solved numerically (:func:`~.tree.solve_legs`).
+  solved numerically (:func:`~.leg_ik.solve_legs`).
 """
 
 from __future__ import annotations
@@ -22,16 +22,16 @@ from typing import Any
 import numpy as np
 
 from .._reader import FORMATS, read_data
+from .._tree import leg_fk
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
-from .tree import leg_fk
 
 __all__ = [
     "BodyIK",
     "FootSpec",
+    "GaitError",
     "LegTree",
     "closed_leg",
     "finite_or_inf",
-    "joint_axis",
     "pick_branch",
     "sphere_radius",
     "find_legs",
@@ -42,6 +42,37 @@ __all__ = [
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
 _SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
+
+
+class GaitError(ConfigurationError):
+    """A gait or body pose that the robot cannot perform (a check failed).
+
+    Attributes:
+        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
+            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
+        leg: The leg's name (``None`` when the check is about the whole robot).
+        time: Time of the first failing sample in [s] (``None`` for a single pose).
+        amount: By how much the check fails, in [m] or [rad] (≥ 0).
+
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        check: str,
+        leg: str | None = None,
+        time: float | None = None,
+        amount: float | None = None,
+        parameter: str | None = None,
+        value: Any = None,
+        allowed: Any = None,
+    ) -> None:
+        super().__init__(message, parameter=parameter, value=value, allowed=allowed)
+        self.check = check
+        self.leg = leg
+        self.time = time
+        self.amount = amount
 
 
 @dataclass(frozen=True)
@@ -355,25 +386,6 @@ def find_legs(
 
 
 # ============================================================================ build helpers
-_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
-
-
-def joint_axis(jm: Any, name: str) -> tuple[np.ndarray, bool]:
-    """Unit axis (in the joint frame) and whether the joint is prismatic."""
-    kind = jm.shortname()
-    for prefix, prismatic in (("JointModelR", False), ("JointModelP", True)):
-        if kind in (f"{prefix}X", f"{prefix}Y", f"{prefix}Z"):
-            return np.array(_AXES[kind[-1]]), prismatic
-    if kind in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
-        a = np.asarray(jm.extract().axis, dtype=float)
-        return a / np.linalg.norm(a), kind.startswith("JointModelP")
-    raise ConfigurationError(
-        f"joint {name!r} is a {kind}; a leg joint must be revolute (limited) or prismatic "
-        "(continuous joints: give them limits in the URDF)",
-        parameter="source",
-        value=name,
-        allowed="revolute or prismatic joints",
-    )
 
 
 def sphere_radius(text: str, link: str) -> float | None:

@@ -14,10 +14,10 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._tree import poses_of
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 from .robot import BodyIK
-from .tree import poses_of
 
 __all__ = [
     "FootStep",

@@ -1,9 +1,11 @@
 """A legged robot with a floating base (Pinocchio free-flyer), from any source; body-pose IK.
 
-:func:`as_whole_body` builds a :class:`WholeBody` from a Hexapod, a URDF, ``erd:NAME`` or a
-loaded model: legs from the kinematic tree (:mod:`.legs`), the tree's constants as arrays so
-that forward kinematics, the centre of mass and the leg segments are computed for many samples
-at once (:mod:`.tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
+:func:`as_whole_body` describes the legs of the one robot :func:`hexapod_kin.load` gives for
+a Hexapod, a URDF, ``erd:NAME`` or a loaded model (its floating-base twin,
+:attr:`~hexapod_kin.model.Model.floating_model`; no second parse): legs from the kinematic
+tree (:mod:`.legs`), the tree's constants as arrays so that forward kinematics, the centre of
+mass and the leg segments are computed for many samples at once (the batch path,
+:mod:`hexapod_kin._tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
 solves the leg joints of body poses with the feet fixed in the world, leg by leg: closed form
 where recognised, else numerically. Poses are 4×4 ``worldMbody`` arrays (body frame: x
 forward, z up).
@@ -19,14 +21,16 @@ from typing import Any
 
 import numpy as np
 
+from .._tree import Tree, mat_vec, tree_frames, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
 from ..params import Hexapod, rpy_to_matrix
+from .leg_ik import solve_legs
 from .legs import (
     BodyIK,
     FootSpec,
+    GaitError,
     find_legs,
     finite_or_inf,
-    joint_axis,
     leg_layout,
     offset_of,
     parse_feet,
@@ -34,40 +38,8 @@ from .legs import (
     sphere_radius,
 )
 from .posture import roomiest_stance
-from .tree import Tree, _mv, solve_legs, tree_frames, tree_poses
 
 __all__ = ["BodyIK", "GaitError", "WholeBody", "as_whole_body", "body_pose", "whole_body"]
-
-
-class GaitError(ConfigurationError):
-    """A gait or body pose that the robot cannot perform (a check failed).
-
-    Attributes:
-        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
-            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
-        leg: The leg's name (``None`` when the check is about the whole robot).
-        time: Time of the first failing sample in [s] (``None`` for a single pose).
-        amount: By how much the check fails, in [m] or [rad] (≥ 0).
-
-    """
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        check: str,
-        leg: str | None = None,
-        time: float | None = None,
-        amount: float | None = None,
-        parameter: str | None = None,
-        value: Any = None,
-        allowed: Any = None,
-    ) -> None:
-        super().__init__(message, parameter=parameter, value=value, allowed=allowed)
-        self.check = check
-        self.leg = leg
-        self.time = time
-        self.amount = amount
 
 
 def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
@@ -92,14 +64,21 @@ class WholeBody:
     """A legged robot with a floating base: Pinocchio model and vectorised kinematics.
 
     Build it with :func:`as_whole_body` (any source) or :func:`whole_body` (a Hexapod),
-    both cached. Joint order: Pinocchio's ``q[7:]`` (the URDF tree, depth first); the joints
-    that belong to no leg are locked at their neutral value (:attr:`locked_joints`).
+    both cached. A view of the one loaded robot (:attr:`kinematic`): legs as joint indices,
+    mounts and feet (a frame and an offset). Joint order: Pinocchio's ``v[6:]`` (the URDF
+    tree, depth first); one angle per joint, continuous joints included (Pinocchio's ``q``
+    holds their cosine and sine: :meth:`pinocchio_q`); the joints that belong to no leg are
+    locked at their neutral value (:attr:`locked_joints`).
 
     Attributes:
         params: The Hexapod it was built from (``None`` for a URDF robot).
         source: A label of the source (preset, file name, ``erd:NAME``).
-        model: Pinocchio model with a free-flyer root (nq = 7 + :attr:`nq`); one frame
-            ``<leg>_contact`` per foot (the contact sphere's centre) is added.
+        model: Pinocchio model with a free-flyer root (a copy of the loaded robot's
+            :attr:`~hexapod_kin.model.Model.floating_model`, reduced to the legs' joints);
+            one frame ``<leg>_contact`` per foot (the contact sphere's centre) is added.
+            Its ``nq`` is 7 + :attr:`nq` plus one per continuous joint (a (cos, sin) pair).
+        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source): the one
+            model this description is a view of.
         leg_names: The legs' names (the order of phase tables).
         joint_names: The leg joints (the columns of q).
         mass: Total mass in [kg] (from the URDF's inertials).
@@ -118,13 +97,14 @@ class WholeBody:
         foot_offsets: (L, 3) the feet in those frames [m].
         locked_joints: Joints of no leg, locked at their neutral value.
         ik_kind: Per leg, ``"closed"`` (closed form, :mod:`hexapod_kin.ik.closed`) or
-            ``"numerical"`` (damped least squares, :func:`~.legs.solve_legs`).
+            ``"numerical"`` (damped least squares, :func:`~.leg_ik.solve_legs`).
 
     """
 
     params: Hexapod | None
     source: str
     model: Any
+    kinematic: Any
     leg_names: tuple[str, ...]
     joint_names: tuple[str, ...]
     mass: float
@@ -153,6 +133,8 @@ class WholeBody:
     _reach: np.ndarray = field(repr=False)  # (L,) default horizontal mount-to-foot distance
     _span: np.ndarray = field(repr=False)  # (L,) leg spans [m]
     _seed: np.ndarray = field(repr=False)
+    _q_index: np.ndarray = field(repr=False)  # (nq,) each leg joint's first index in model q
+    _bounded: np.ndarray = field(repr=False)  # (nq,) False for continuous joints (cos, sin)
 
     @property
     def n_legs(self) -> int:
@@ -195,7 +177,7 @@ class WholeBody:
     def feet_of(self, T: np.ndarray) -> np.ndarray:
         """World foot positions (N, L, 3) from joint poses ``T``."""
         j = self._foot_joint
-        return _mv(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
+        return mat_vec(T[..., :3, :3][:, j], self._foot[:, :3, 3]) + T[..., :3, 3][:, j]
 
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
@@ -245,17 +227,31 @@ class WholeBody:
         return self.points_of(T), self.com_of(T, base)
 
     def pinocchio_q(self, q: Any, base: Any) -> np.ndarray:
-        """Pinocchio configurations (N, 7 + nq): base xyz, quaternion (x, y, z, w), joints."""
+        """Pinocchio configurations (N, model.nq): base xyz, quaternion (x, y, z, w), joints.
+
+        A continuous joint's angle becomes its ``(cos, sin)`` pair.
+        """
         import pinocchio as pin
 
         q = np.asarray(q, dtype=float)
         base = np.asarray(base, dtype=float)
-        out = np.empty((len(q), 7 + self.nq))
+        out = np.empty((len(q), int(self.model.nq)))
         for i in range(len(q)):
             out[i, :3] = base[i, :3, 3]
             out[i, 3:7] = pin.Quaternion(base[i, :3, :3]).coeffs()
-        out[:, 7:] = q
+        if self._bounded.all():
+            out[:, 7:] = q
+        else:
+            b = self._bounded
+            out[:, self._q_index[b]] = q[:, b]
+            out[:, self._q_index[~b]] = np.cos(q[:, ~b])
+            out[:, self._q_index[~b] + 1] = np.sin(q[:, ~b])
         return out
+
+    @property
+    def urdf(self) -> str:
+        """The URDF text of the robot (the loaded model's)."""
+        return str(self.kinematic.urdf)
 
     # ------------------------------------------------------------------ standing defaults
     @property
@@ -360,7 +356,7 @@ class WholeBody:
 
         Each leg is solved on its own: by its closed form where :mod:`hexapod_kin.ik.closed`
         recognises it (at each sample the branch nearest to the previous sample's, the first
-        to ``q_prev``), otherwise numerically (:func:`~.legs.solve_legs`, warm-started from
+        to ``q_prev``), otherwise numerically (:func:`~.leg_ik.solve_legs`, warm-started from
         the previous sample; :attr:`ik_kind` says which).
 
         Args:
@@ -511,18 +507,17 @@ class WholeBody:
 
 
 def _build_model(
-    text: str,
-    label: str,
+    km: Any,
     *,
     params: Hexapod | None = None,
     feet: tuple[FootSpec, ...] | None = None,
     foot_radius: float | None = None,
-    chain_source: Any = None,
 ) -> WholeBody:
-    """The :class:`WholeBody` of a URDF ``text`` (gate-checked by the caller)."""
+    """The :class:`WholeBody` on the loaded robot ``km`` (its floating-base model, no new parse)."""
     import pinocchio as pin
 
-    full = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    text, label = km.urdf, km.name
+    full = pin.Model(km.floating_model)  # a copy: the feet's contact frames are added to it
     hexa = params is not None
     if hexa:
         feet = tuple(FootSpec(f) for f in params.foot_frames)  # type: ignore[union-attr]
@@ -536,28 +531,8 @@ def _build_model(
         )
         model = pin.buildReducedModel(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
-    for j in range(2, model.njoints):
-        if model.joints[j].nq != 1 or model.joints[j].idx_q != 5 + j:
-            raise ConfigurationError(
-                f"joint {model.names[j]!r} of {label!r} is a {model.joints[j].shortname()}; "
-                "legs need one-variable revolute or prismatic joints",
-                parameter="source",
-                value=str(model.names[j]),
-            )
     nq = model.njoints - 2
-    axes = np.empty((nq, 3))
-    prismatic = np.zeros(nq, dtype=bool)
-    for j in range(2, model.njoints):
-        axes[j - 2], prismatic[j - 2] = joint_axis(model.joints[j], str(model.names[j]))
-    tree = Tree(
-        parents=np.array([int(model.parents[j]) - 2 for j in range(2, model.njoints)]),
-        placements=np.array(
-            [model.jointPlacements[j].homogeneous for j in range(2, model.njoints)]
-        ),
-        axes=axes,
-        prismatic=prismatic,
-    )
-    tree.parents[tree.parents < 0] = -1
+    tree = Tree.of_model(model, first=2, label=label)
     names = tuple(leg.name for leg in legs) if not hexa else tuple(x.name for x in params.legs)  # type: ignore[union-attr]
     foot_names = []
     for leg, name in zip(legs, names):
@@ -574,9 +549,11 @@ def _build_model(
                 )
             )
         foot_names.append(fname)
-    lower = finite_or_inf(model.lowerPositionLimit[7:])
+    iq = np.array([model.joints[j].idx_q for j in range(2, model.njoints)], dtype=int)
+    bounded = np.array([model.joints[j].nq == 1 for j in range(2, model.njoints)])
+    lower = np.where(bounded, finite_or_inf(model.lowerPositionLimit[iq]), np.inf)
     lower[np.isinf(lower)] = -np.inf
-    upper = finite_or_inf(model.upperPositionLimit[7:])
+    upper = np.where(bounded, finite_or_inf(model.upperPositionLimit[iq]), np.inf)
     vel = finite_or_inf(model.velocityLimit[6:])
     eff = finite_or_inf(model.effortLimit[6:])
     cols = tuple(leg.joints for leg in legs)
@@ -585,7 +562,7 @@ def _build_model(
     foot = np.array([leg.foot_placement for leg in legs])
     foot_joint = np.array([leg.foot_joint for leg in legs])
     q_zero = np.clip(np.zeros(nq), lower, upper)
-    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, chain_source)
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, text)
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
@@ -603,6 +580,7 @@ def _build_model(
         params=params,
         source=label,
         model=model,
+        kinematic=km,
         leg_names=names,
         joint_names=tuple(str(model.names[j]) for j in range(2, model.njoints)),
         mass=float(pin.computeTotalMass(model)),
@@ -631,6 +609,8 @@ def _build_model(
         _reach=lay["reach"],
         _span=span,
         _seed=np.zeros(nq),
+        _q_index=iq,
+        _bounded=bounded,
     )
     object.__setattr__(wb, "_seed", _standing_seed(wb, params))
     better = None if hexa else roomiest_stance(wb)
@@ -669,12 +649,9 @@ def _cached(params: Hexapod) -> WholeBody:
 
 
 def _build(params: Hexapod) -> WholeBody:
-    from .._gate import check_urdf
-    from ..urdf import to_urdf
+    from ..kinematics import load
 
-    text = to_urdf(params)
-    check_urdf(text)
-    return _build_model(text, params.name, params=params)
+    return _build_model(load(params), params=params)
 
 
 @lru_cache(maxsize=1)
@@ -762,7 +739,10 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
     key: Any = None
     if isinstance(robot, (str, os.PathLike)):
         text = os.fspath(robot)
-        stamp = os.stat(text).st_mtime_ns if os.path.isfile(text) else None
+        stamp = None
+        if os.path.isfile(text):  # the file itself: a relative path means another in another cwd
+            st = os.stat(text)
+            text, stamp = os.path.realpath(text), (st.st_mtime_ns, st.st_size, st.st_ino)
         key = (text, stamp, spec, rad)
         with _SOURCES_LOCK:
             if key in _SOURCES:
@@ -795,4 +775,6 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
             value=km.name,
             allowed="a legged robot",
         )
-    return _build_model(km.urdf, km.name, feet=spec, foot_radius=rad, chain_source=km.urdf)
+    return km.cached(  # one description per loaded robot and feet
+        f"gait.whole_body {spec!r} {rad!r}", lambda: _build_model(km, feet=spec, foot_radius=rad)
+    )

@@ -85,7 +85,9 @@ def run_model(run: Any) -> Any:
     params = getattr(robot, "params", None)
     if isinstance(params, Hexapod):
         return load(params)
-    for attr in ("source", "urdf"):
+    if getattr(robot, "kinematic", None) is not None:  # the robot that walked, as loaded
+        return robot.kinematic
+    for attr in ("urdf", "source"):
         src = getattr(robot, attr, None)
         if src is not None:
             return load(src)

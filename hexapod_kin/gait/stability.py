@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ParameterError
-from .robot import GaitError
+from .legs import GaitError
 from .tables import PhaseTable
 from .terrain import RELIEF_RADIUS, Terrain, sphere_gap
 

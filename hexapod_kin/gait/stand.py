@@ -128,7 +128,7 @@ def frame_poses(
     m = model.model
     out = np.empty((len(qs), len(ids), 4, 4))
     for i, q in enumerate(qs):
-        pin.forwardKinematics(m, data, q)
+        pin.forwardKinematics(m, data, model.pinocchio_q(q))  # continuous: (cos, sin)
         for j, fid in enumerate(ids):
             out[i, j] = pin.updateFramePlacement(m, data, fid).homogeneous
     if base_poses is not None:

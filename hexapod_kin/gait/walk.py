@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError
+from ..exceptions import ConfigurationError, ParameterError
 from ..motion import read_only
 from .paths import (
     rolling_ik,
@@ -282,15 +282,19 @@ class GaitRun:
         )
 
     def pinocchio_q(self) -> np.ndarray:
-        """Pinocchio free-flyer configurations (N, 25): xyz, quaternion (x, y, z, w), q."""
-        import pinocchio as pin
+        """Pinocchio free-flyer configurations (N, nq): xyz, quaternion (x, y, z, w), joints.
 
-        out = np.empty((len(self.q), 7 + self.q.shape[1]))
-        out[:, :3] = self.base_poses[:, :3, 3]
-        for i, B in enumerate(self.base_poses):
-            out[i, 3:7] = pin.Quaternion(B[:3, :3]).coeffs()
-        out[:, 7:] = self.q
-        return out
+        Raises:
+            ConfigurationError: A run without its robot (``robot=None``).
+
+        """
+        if self.robot is None:
+            raise ConfigurationError(
+                "this run carries no robot (robot=None): its Pinocchio configurations are "
+                "the robot's (WholeBody.pinocchio_q)",
+                parameter="robot",
+            )
+        return self.robot.pinocchio_q(self.q, self.base_poses)
 
     def _base_rates(self) -> tuple[np.ndarray, np.ndarray]:
         n = len(self.t)

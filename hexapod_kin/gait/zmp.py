@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GRAVITY", "second_difference", "zmp_points"]
+__all__ = ["GRAVITY", "angular_momentum", "second_difference", "zmp_points"]
 
 #: Gravity [m/s²].
 GRAVITY = 9.81
@@ -37,6 +37,35 @@ def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
     out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
     out[-1] = 2.0 * x[-1] - 5.0 * x[-2] + 4.0 * x[-3] - x[-4]
     return np.asarray(out / (dt * dt))
+
+
+def angular_momentum(
+    masses: np.ndarray,
+    rot_inertia: np.ndarray,
+    R: np.ndarray,
+    x: np.ndarray,
+    c: np.ndarray,
+    xd: np.ndarray,
+    w: np.ndarray,
+) -> np.ndarray:
+    """Angular momentum about the centre of mass (N, 3) [kg·m²/s], world axes.
+
+    ``L = Σ_j m_j (x_j − c) × ẋ_j + R_j I_j R_jᵀ ω_j`` (Pinocchio's centroidal momentum
+    ``h_G``, angular part).
+
+    Args:
+        masses: (K,) link masses [kg].
+        rot_inertia: (K, 3, 3) rotational inertias about each link's CoM, link axes [kg·m²].
+        R: (N, K, 3, 3) link rotations in the world.
+        x: (N, K, 3) link CoMs in the world [m].
+        c: (N, 3) the centre of mass [m].
+        xd: (N, K, 3) link CoM velocities [m/s].
+        w: (N, K, 3) link angular velocities, world axes [rad/s].
+
+    """
+    local = np.swapaxes(R, -1, -2) @ w[..., None]  # ω in each link's frame
+    spin = (R @ (rot_inertia[None] @ local))[..., 0]  # R I Rᵀ ω
+    return np.asarray(masses @ np.cross(x - c[:, None], xd) + spin.sum(axis=1))
 
 
 def zmp_points(
@@ -64,9 +93,7 @@ def zmp_points(
     W = Rd @ np.swapaxes(R, -1, -2)  # Ṙ Rᵀ = [ω]×
     w = 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0],
                         W[..., 1, 0] - W[..., 0, 1]], axis=-1)  # fmt: skip
-    local = np.swapaxes(R, -1, -2) @ w[..., None]  # ω in each link's frame
-    spin = (R @ (rot_i[None] @ local))[..., 0]  # R I Rᵀ ω
-    L = masses @ np.cross(x - c[:, None], xd) + spin.sum(axis=1)
+    L = angular_momentum(masses, rot_i, R, x, c, xd, w)
     Ld = np.gradient(L, dt, axis=0, edge_order=2)
     cdd = second_difference(c, t)
     den = GRAVITY + cdd[:, 2]

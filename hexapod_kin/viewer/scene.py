@@ -203,7 +203,7 @@ class Scene:
         m, d = self.model.model, self.data
         out = np.empty((len(qs), len(self.kept), 4, 4))
         for i, q in enumerate(qs):
-            pin.forwardKinematics(m, d, q)
+            pin.forwardKinematics(m, d, self.model.pinocchio_q(q))  # continuous: (cos, sin)
             pin.updateGeometryPlacements(m, d, self.geom, self.gdata)
             for j, k in enumerate(self.kept):
                 out[i, j] = self.gdata.oMg[k].homogeneous
