@@ -16,6 +16,7 @@ __all__ = [
     "HexapodKinError",
     "ParameterError",
     "ConfigurationError",
+    "LimitError",
     "FrameNotFoundError",
     "UrdfError",
     "SourceError",
@@ -85,6 +86,13 @@ class ParameterError(HexapodKinError):
 
 class ConfigurationError(HexapodKinError):
     """A joint configuration, velocity or target has the wrong shape or non-finite values."""
+
+
+class LimitError(ConfigurationError):
+    """A plan that reaches a limit (a servo's range, a joint's speed): answered, not achieved.
+
+    The command line exits with status 1 for it (not 2: the input was good).
+    """
 
 
 class FrameNotFoundError(HexapodKinError):

@@ -232,9 +232,11 @@ def _read_text(path: Path) -> str:
 def _no_params(params: dict[str, Any], what: str) -> None:
     if params:
         raise SourceError(
-            f"preset parameters {sorted(params)} given for non-preset {what}",
+            f"preset parameters {sorted(params)} given for non-preset {what}; only a preset "
+            "name or a table file takes parameters (-s/--set NAME=VALUE on the command line)",
             parameter="params",
             value=sorted(params),
+            allowed="a preset name or a .toml/.yaml table file",
         )
 
 

@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .dynamics import add_feet_args, feet_arg
+from .common import robot_args, robot_of
 
 __all__ = ["register"]
 
@@ -18,29 +18,20 @@ def register(sub: Any) -> None:
         "gait",
         help="walk a legged robot (tripod, wave, ripple, ...) and check every sample",
         description=(
-            "Walk a legged robot (SOURCE: the hexapod preset by default, a URDF path or "
-            "erd:NAME; name the feet with --foot when the URDF has no foot links) with a phase "
-            "table and report, over every sample: the "
+            "Walk a legged robot with a phase table and report, over every sample: the "
             "minimum static stability margin (signed distance of the projected centre of mass "
             "to the support polygon's edge), the worst stance-foot slip and the smallest "
             "joint-limit margin (SI units). An infeasible walk (a foot out of reach, off the "
             "terrain, a joint beyond its limit, legs colliding, the CoM outside the support "
-            "polygon) stops with an error naming the leg, the time and the check."
+            "polygon) stops with one line naming the leg, the time and the check, exit status "
+            "1; so does a walk whose minimum static or ZMP margin is negative."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("source", nargs="?", metavar="SOURCE", help="the robot (default: hexapod)")
-    p.add_argument(
-        "-s",
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="hexapod preset parameter (SI units), e.g. -s body_radius=0.14",
-    )
+    robot_args(p, kinds="legged", default="hexapod")
     p.add_argument(
         "--pattern", default="tripod", help="phase table: tripod, wave, ripple (6 legs), ..."
     )
-    add_feet_args(p)
     p.add_argument(
         "--foot-reach",
         type=float,
@@ -103,49 +94,28 @@ def register(sub: Any) -> None:
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
-    from .. import robots
-    from ..gait.robot import GaitError, as_whole_body
+    from ..gait.robot import as_whole_body
     from ..gait.walk import walk
-    from .common import PLOT_SUFFIXES, emit_json, output_path, set_params
+    from .common import PLOT_SUFFIXES, emit_json, margin_failures, not_achieved, output_path
 
     plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
-    source = args.source or "hexapod"
-    params = set_params(args.set, source=source)
-    robot: Any = None
-    if params:  # robots.get checks the names and values (one error naming the parameter)
-        if source not in robots.PRESETS:
-            raise ParameterError(
-                f"-s/--set is for the presets; {source!r} is not one",
-                parameter="set",
-                value=sorted(params),
-            )
-        built = robots.get(source, **params)
-        if not isinstance(built, robots.Hexapod):
-            raise ParameterError(
-                f"{source!r} is not a legged robot preset", parameter="source", value=source
-            )
-        robot = as_whole_body(built, foot_radius=args.foot_radius)
-    elif args.source is not None or args.foot or args.foot_radius is not None:
-        robot = as_whole_body(source, feet=feet_arg(args), foot_radius=args.foot_radius)
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
-    try:
-        run = walk(
-            robot,
-            pattern=args.pattern,
-            stride=args.stride,
-            step_height=args.height,
-            period=args.period,
-            duty_factor=args.duty_factor,
-            velocity=args.velocity,
-            body_height=args.body_height,
-            foot_reach=args.foot_reach,
-            terrain=args.terrain,
-            rate=args.rate,
-            duration=args.duration,
-        )
-    except GaitError as exc:  # a check failed: answered, not achieved (exit status 1)
-        print(f"hexapod-kin: not walkable: {' '.join(str(exc).split())}", file=sys.stderr)
-        return 1
+    robot = robot_of(args)
+    model = robot.load()
+    run = walk(
+        as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius),
+        pattern=args.pattern,
+        stride=args.stride,
+        step_height=args.height,
+        period=args.period,
+        duty_factor=args.duty_factor,
+        velocity=args.velocity,
+        body_height=args.body_height,
+        foot_reach=args.foot_reach,
+        terrain=args.terrain,
+        rate=args.rate,
+        duration=args.duration,
+    )  # a check that fails raises GaitError: one line, exit status 1 (cli.main)
     out = run.to_dict()
     if plot is not None:
         from ..gait.plots import plot_gait
@@ -154,19 +124,20 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     if html is not None:
         from ..gait.show import walk_html
 
-        out["html"] = str(walk_html(run, html))  # the run's own robot
+        out["html"] = str(walk_html(run, html, model=model))  # the robot as loaded here
     if args.json:
         emit_json(out)
     else:
         _print(out)
+    status = not_achieved(margin_failures(run))
     if args.view:
-        if args.source not in (None, "hexapod") or params:
+        if args.source != "hexapod" or robot.params:
             raise ParameterError(
                 "--view plays the built-in hexapod; use --html for other robots",
                 parameter="view",
             )
         _view(run)
-    return 0
+    return status
 
 
 def _view(run: Any) -> None:
@@ -194,7 +165,7 @@ def _print(out: dict[str, Any]) -> None:
         f"stride {out['stride']:.4g} m)"
     )
     print(f"min stability margin   {out['min_margin']:.6g} m")
-    print(f"min ZMP margin         {out['min_zmp_margin']:.6g} m (dynamic; reported)")
+    print(f"min ZMP margin         {out['min_zmp_margin']:.6g} m (dynamic)")
     print(f"max stance slip        {out['max_slip']:.3g} m")
     print(f"min joint-limit margin {out['min_limit_margin']:.6g} rad")
     print(f"min leg clearance      {out['min_clearance']:.6g} m")

@@ -24,29 +24,10 @@ from .common import (
     output_path,
     q_args,
     q_from_args,
-    source_args,
+    robot_args,
 )
 
 __all__ = ["register"]
-
-
-def _tool_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="rigid tool offset on the tip: xyz [m] and URDF rpy [rad] (deg with --deg)",
-    )
-
-
-def _load(args: argparse.Namespace) -> Any:
-    """Load the source; ``--tool`` (xyz + rpy, rpy in degrees with ``--deg``) as ``tool=``."""
-    tool = getattr(args, "tool", None)
-    if tool is not None:
-        rpy = [math.radians(v) if args.deg else v for v in tool[3:]]
-        args.tool = (tuple(tool[:3]), tuple(rpy))
-    return load_source(args)
 
 
 def _angle(args: argparse.Namespace, v: float) -> float:
@@ -60,7 +41,7 @@ def _add_ik(sub: Any) -> None:
         help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True, tool=True)
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument(
         "--target",
@@ -96,7 +77,6 @@ def _add_ik(sub: Any) -> None:
         metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
         help="weight of each task row",
     )
-    _tool_args(p)
     p.add_argument(
         "--q0",
         nargs="+",
@@ -149,7 +129,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     from .. import ik
     from ..exceptions import IKError
 
-    model = _load(args)
+    model = load_source(args)
     target = _target(args)
     closed: list[list[float]] | None = None
     inside = 0  # closed-form solutions within the joint limits
@@ -238,9 +218,8 @@ def _add_step(sub: Any) -> None:
         "velocity / 6-D twist",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True, tool=True)
     q_args(p)
-    _tool_args(p)
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--velocity",
@@ -303,7 +282,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
         output_path(args.plot, "--plot", PLOT_SUFFIXES)
     if args.html:
         output_path(args.html, "--html", (".html", ".htm"))
-    model = _load(args)
+    model = load_source(args)
     q0 = None if args.q is None else q_from_args(args, model)
     if args.velocity is not None or args.twist is not None:
         return _constant(args, model, q0)

@@ -11,7 +11,7 @@ import argparse
 import sys
 from typing import Any
 
-from .common import emit_json, load_source, output_path, q_args, q_from_args, source_args
+from .common import emit_json, load_source, output_path, q_args, q_from_args, robot_args
 
 __all__ = ["register"]
 
@@ -62,7 +62,7 @@ def _add_view(sub: Any) -> None:
         help="show a model in the browser (meshcat server on 127.0.0.1)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True)
     q_args(p)
     _wait_args(p)
     p.add_argument("--triads", action="store_true", help="draw the Khalil frames (labelled j)")
@@ -90,7 +90,7 @@ def _add_animate(sub: Any) -> None:
         help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True)
     p.add_argument(
         "--html",
         metavar="FILE",
