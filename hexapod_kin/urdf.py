@@ -22,14 +22,16 @@ import math
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from . import robots
 from ._io import atomic_write
 from ._version import __version__
-from .exceptions import ParameterError
+from .exceptions import ParameterError, choices
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
-from .tables import MAX_NUMBER
+from .tables import MAX_NUMBER, read_table
 
 __all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
@@ -350,11 +352,46 @@ def _check_magnitudes(text: str, name: str) -> None:
                     )
 
 
-def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
+#: File suffixes of parameter-table files (:mod:`hexapod_kin.tables`), wherever a source is read.
+TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
+
+
+def _table(source: Any) -> Chain | Hexapod:
+    """The table of a source :func:`to_urdf` takes, read as everywhere (:mod:`~.sources`).
+
+    A Chain or Hexapod is itself; a preset name builds the preset; a ``.toml``/``.yaml``
+    path reads the table file. A URDF (path, text, ``erd:NAME``) is already a URDF.
+    """
+    if isinstance(source, (Chain, Hexapod)):
+        return source
+    if isinstance(source, (str, os.PathLike)):
+        text = os.fspath(source).strip()
+        if text in robots.PRESETS:
+            return robots.get(text)
+        if not text.startswith("<") and Path(text).suffix.lower() in TABLE_SUFFIXES:
+            return read_table(Path(text).expanduser())
+    shown = type(source).__name__ if not isinstance(source, (str, os.PathLike)) else repr(source)
+    raise ParameterError(
+        f"source={shown} is not allowed; to_urdf writes what hexapod_kin builds: a Chain, a "
+        f"Hexapod, a preset name ({choices(robots.names())}) or a table file (.toml/.yaml); "
+        "a URDF or erd:NAME is already a URDF",
+        parameter="source",
+        value=shown,
+        allowed="a Chain, a Hexapod, a preset name or a table file",
+    )
+
+
+def to_urdf(
+    source: Chain | Hexapod | str | os.PathLike[str],
+    *,
+    leg: str | None = None,
+    header: str | None = None,
+) -> str:
     """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
 
     Args:
-        source: A :class:`Chain` or a :class:`Hexapod`.
+        source: A :class:`Chain` or a :class:`Hexapod`, a preset name (``"hexabot_leg"``)
+            or a table file (``.toml``/``.yaml``), as :func:`hexapod_kin.load` reads them.
         leg: For a :class:`Hexapod`, emit only this leg with its mount on the body.
         header: Extra line for the header comment (e.g. which command made the file).
 
@@ -362,26 +399,25 @@ def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | No
         The URDF document as a string.
 
     Raises:
-        ParameterError: If ``source`` is of another type, ``leg`` is given for a chain, or a
-            number would be beyond what the package's URDF loader accepts (|x| <= 1e9).
+        ParameterError: If ``source`` is of another kind (a URDF), ``leg`` is given for a
+            chain, or a number would be beyond what the package's URDF loader accepts
+            (|x| <= 1e9).
+        SourceError: A table file that cannot be read.
 
     """
+    source = _table(source)
     if isinstance(source, Chain):
         if leg is not None:
             raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
         text = _chain_urdf(source, header)
-    elif isinstance(source, Hexapod):
-        text = _robot_urdf(source, leg, header)
     else:
-        raise ParameterError(
-            f"source={type(source).__name__} is not allowed; to_urdf takes a Chain or a Hexapod"
-        )
+        text = _robot_urdf(source, leg, header)
     _check_magnitudes(text, source.name)
     return text
 
 
 def write_urdf(
-    source: Chain | Hexapod,
+    source: Chain | Hexapod | str | os.PathLike[str],
     path: str | os.PathLike[str],
     *,
     leg: str | None = None,
