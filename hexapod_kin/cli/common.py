@@ -26,6 +26,8 @@ __all__ = [
     "matrix_text",
     "not_achieved",
     "output_path",
+    "pattern_arg",
+    "pattern_of",
     "q_args",
     "q_from_args",
     "robot_args",
@@ -443,6 +445,20 @@ def not_achieved(why: Sequence[str]) -> int:
         return 0
     print(f"hexapod-kin: not achieved: {'; '.join(why)}", file=sys.stderr)
     return 1
+
+
+def pattern_arg(p: argparse.ArgumentParser) -> None:
+    """``--pattern``: a phase table for the robot's legs; the default fits any leg count."""
+    p.add_argument(
+        "--pattern",
+        help="phase table: tripod, wave, ripple (6 legs); crawl, wave, trot, pace (4 legs); "
+        "wave, ripple (8 legs) (default: tripod for six legs, else wave)",
+    )
+
+
+def pattern_of(args: argparse.Namespace, wb: Any) -> str:
+    """``--pattern``, or the default for the robot's legs (tripod for six, else wave)."""
+    return str(args.pattern or ("tripod" if wb.n_legs == 6 else "wave"))
 
 
 def margin_failures(run: Any) -> list[str]:

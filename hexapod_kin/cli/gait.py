@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import robot_args, robot_of
+from .common import pattern_arg, pattern_of, robot_args, robot_of
 
 __all__ = ["register"]
 
@@ -29,9 +29,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod")
-    p.add_argument(
-        "--pattern", default="tripod", help="phase table: tripod, wave, ripple (6 legs), ..."
-    )
+    pattern_arg(p)
     p.add_argument(
         "--foot-reach",
         type=float,
@@ -102,9 +100,10 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     robot = robot_of(args)
     model = robot.load()
+    wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     run = walk(
-        as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius),
-        pattern=args.pattern,
+        wb,
+        pattern=pattern_of(args, wb),
         stride=args.stride,
         step_height=args.height,
         period=args.period,

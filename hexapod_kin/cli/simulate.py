@@ -7,7 +7,14 @@ import math
 import sys
 from typing import Any
 
-from .common import margin_failures, not_achieved, robot_args, robot_of
+from .common import (
+    margin_failures,
+    not_achieved,
+    pattern_arg,
+    pattern_of,
+    robot_args,
+    robot_of,
+)
 
 __all__ = ["register"]
 
@@ -31,7 +38,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod")
-    p.add_argument("--pattern", default="tripod", help="gait pattern (tripod, wave, ripple...)")
+    pattern_arg(p)
     p.add_argument(
         "--velocity",
         nargs="+",
@@ -88,10 +95,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
+    model = robot.load()
+    pattern = args.pattern or pattern_of(args, robot.legged())
     sim = simulate(
-        robot.load(),
+        model,
         feet=robot.feet,
-        pattern=args.pattern,
+        pattern=pattern,
         velocity=_velocity(args.velocity),
         stride=args.stride,
         period=args.period,

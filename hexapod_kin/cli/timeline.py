@@ -25,6 +25,8 @@ from .common import (
     margin_failures,
     not_achieved,
     output_path,
+    pattern_arg,
+    pattern_of,
     robot_args,
     robot_of,
 )
@@ -73,9 +75,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(g, kinds="legged", default="hexapod")
-    g.add_argument(
-        "--pattern", default="tripod", help="phase table: tripod, wave, ripple (6 legs), ..."
-    )
+    pattern_arg(g)
     g.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
     g.add_argument("--height", type=float, default=0.03, help="step height [m]")
     g.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
@@ -130,9 +130,10 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     height = args.body_height
     if height is None and isinstance(model.params, Hexapod):
         height = 0.08
+    wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     run = walk(
-        as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius),
-        pattern=args.pattern,
+        wb,
+        pattern=pattern_of(args, wb),
         stride=args.stride,
         step_height=args.height,
         period=args.period,
