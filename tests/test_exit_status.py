@@ -130,7 +130,8 @@ def test_the_table_lists_every_command() -> None:
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     tmp = tmp_path_factory.mktemp("exit")
-    (tmp / "cal.yaml").write_text("joints:\n  leg1_ankle: {limits: [-0.5, 0.5]}\n")
+    ankle = "joints:\n  leg1_ankle: {limits: [-0.5, 0.5]}\n"
+    (tmp / "cal.yaml").write_text("defaults: {units: rad}\n" + ankle)
     (tmp / "cal1.yaml").write_text("defaults: {limits: [-0.1, 0.1]}\n")
     (tmp / "path.csv").write_text("t,j1,j2\n0,0,0\n0.5,0.25,-0.5\n1,1,-1\n")
     return tmp

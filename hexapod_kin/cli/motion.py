@@ -21,6 +21,7 @@ from .common import (
     PLOT_SUFFIXES,
     emit_json,
     load_source,
+    not_achieved,
     output_path,
     q_args,
     q_from_args,
@@ -314,7 +315,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
                 f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
             )
         )
-    status = 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
+    status = _limited(tr)
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})
         return status
@@ -343,6 +344,14 @@ def _cmd_step(args: argparse.Namespace) -> int:
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
     return status
+
+
+def _limited(tr: Any) -> int:
+    """Exit status of a motion: 1 (answered, not achieved) when limits cut it."""
+    first = float(tr.t[tr.limited.argmax()]) if tr.limited.any() else None
+    return not_achieved(
+        [] if first is None else [f"joint or speed limits cut the motion at t={first:g} s"]
+    )
 
 
 def plot_constant(tr: Any, drift: Any, rot_drift: Any, path: str, title: str, model: Any) -> str:
@@ -472,7 +481,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "written": written,
             }
         )
-        return 1 if tr.limited.any() else 0
+        return _limited(tr)
     print(
         f"{model.name} (tip {model.tip}): {label} for {tr.t[-1]:g} s, dt = {tr.dt:g} s, "
         f"{tr.method}, gain {tr.gain:g} 1/s"
@@ -488,7 +497,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     )
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
-    return 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
+    return _limited(tr)
 
 
 def register(sub: Any) -> None:
