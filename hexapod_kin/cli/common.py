@@ -21,6 +21,8 @@ __all__ = [
     "OneLineParser",
     "emit_json",
     "Robot",
+    "check_outputs",
+    "html_page",
     "load_source",
     "margin_failures",
     "matrix_text",
@@ -476,6 +478,34 @@ def margin_failures(run: Any) -> list[str]:
         if value < 0:
             why.append(f"min {what} margin {value:.6g} m < 0 (the {point} leaves the support)")
     return why
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse bad ``--plot``/``--html`` paths before any computation (:func:`output_path`)."""
+    if getattr(args, "plot", None):
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if getattr(args, "html", None):
+        output_path(args.html, "--html", (".html", ".htm"))
+
+
+def html_page(model: Any, t: Any, q: Any, path: str, title: str, every: float) -> str:
+    """``--html``: the motion ``q`` at times ``t`` [s] as an offline page, a frame per ``every`` s.
+
+    Raises:
+        ParameterError: The viewer extra is missing.
+
+    """
+    try:
+        from ..viewer import export_html
+    except ImportError as exc:
+        raise ParameterError(
+            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
+            parameter="--html",
+            value=path,
+            allowed="install hexapod-kin[viewer]",
+        ) from None
+    stride = max(1, int(round(every / float(t[1] - t[0])))) if len(t) > 1 else 1
+    return str(export_html(model, t[::stride], q[::stride], path, title=title))
 
 
 def matrix_text(m: Any, indent: str = "  ") -> str:

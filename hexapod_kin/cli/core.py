@@ -16,7 +16,7 @@ from typing import Any
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
     load_source,
     matrix_text,
@@ -90,14 +90,6 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(to_urdf(built, leg=args.leg, header=f"made by: {command}"))
     return 0
-
-
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse bad ``--plot``/``--html`` paths before any computation."""
-    if getattr(args, "plot", None):
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if getattr(args, "html", None):
-        output_path(args.html, "--html", (".html", ".htm"))
 
 
 # ------------------------------------------------------------------------ fk
@@ -464,7 +456,7 @@ def _add_scan(sub: Any) -> None:
 
 
 def _cmd_scan(args: argparse.Namespace) -> int:
-    _check_outputs(args)
+    check_outputs(args)
     import numpy as np
 
     from ..singularity import scan

@@ -11,11 +11,11 @@ from typing import Any, cast
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
+    html_page,
     load_source,
     not_achieved,
-    output_path,
     q_args,
     q_from_args,
     robot_args,
@@ -93,10 +93,7 @@ def plot_pendulum(experiment: Any, path: Any) -> Any:
 
 
 def _cmd_pendulum(args: argparse.Namespace) -> int:
-    if args.plot:
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if args.html:
-        output_path(args.html, "--html", (".html", ".htm"))
+    check_outputs(args)
     for name in ("theta0_deg", "decay_theta0_deg"):
         value = getattr(args, name)
         if not (math.isfinite(value) and 0 < value < 180):
@@ -164,21 +161,15 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
 
 
 def _pendulum_html(exp: Any, args: argparse.Namespace) -> str:
-    try:
-        from ..viewer import export_html
-    except ImportError as exc:
-        raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
     from ..kinematics import load
 
     run = exp.damped
     model = load("pendulum", damping=run.damping, length=args.length, mass=args.mass)
-    sim = run.simulation
-    stride = max(1, int(round((1 / 30) / sim.dt)))
     title = (
         f"pendulum: theta0 = {math.degrees(run.theta0):g} deg, damping {run.damping:g} "
         "N m s/rad (Pinocchio ABA)"
     )
-    return str(export_html(model, sim.t[::stride], sim.q[::stride], args.html, title=title))
+    return html_page(model, run.simulation.t, run.simulation.q, args.html, title, 1 / 30)
 
 
 # ------------------------------------------------------------------------ torques

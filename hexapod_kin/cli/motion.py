@@ -18,11 +18,11 @@ from typing import Any, Literal
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
+    html_page,
     load_source,
     not_achieved,
-    output_path,
     q_args,
     q_from_args,
     robot_args,
@@ -264,25 +264,8 @@ def _add_step(sub: Any) -> None:
     p.set_defaults(func=_cmd_step)
 
 
-def _write_html(model: Any, tr: Any, path: str, title: str) -> str:
-    try:
-        from ..viewer import export_html
-    except ImportError as exc:
-        raise ParameterError(
-            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
-            parameter="--html",
-            value=path,
-            allowed="install hexapod-kin[viewer]",
-        ) from None
-    stride = max(1, int(round(0.02 / tr.dt)))
-    return str(export_html(model, tr.t[::stride], tr.q[::stride], path, title=title))
-
-
 def _cmd_step(args: argparse.Namespace) -> int:
-    if args.plot:
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if args.html:
-        output_path(args.html, "--html", (".html", ".htm"))
+    check_outputs(args)
     model = load_source(args)
     q0 = None if args.q is None else q_from_args(args, model)
     if args.velocity is not None or args.twist is not None:
@@ -308,11 +291,13 @@ def _cmd_step(args: argparse.Namespace) -> int:
         written.append(str(plot_motion(run, args.plot)))
     if args.html:
         written.append(
-            _write_html(
+            html_page(
                 model,
-                tr,
+                tr.t,
+                tr.q,
                 args.html,
                 f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
+                0.02,
             )
         )
     status = _limited(tr)
@@ -446,21 +431,18 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     reached = tr.poses  # Pinocchio's FK of the joint trajectory, sample by sample
     from .._pose import rotation_angle
 
-    drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
-    rot = 0.0
-    if vel.size == 6:  # ‖log(E Rᵀ)‖ of every sample, at once
-        rot = float(np.max(rotation_angle(exact[:, :3, :3], reached[:, :3, :3])))
     drifts = np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)
-    rot_drifts = None
-    if vel.size == 6:
-        rot_drifts = rotation_angle(exact[:, :3, :3], reached[:, :3, :3])
+    # ‖log(E Rᵀ)‖ of every sample, at once
+    rot_drifts = rotation_angle(exact[:, :3, :3], reached[:, :3, :3]) if vel.size == 6 else None
+    drift = float(np.max(drifts))
+    rot = 0.0 if rot_drifts is None else float(np.max(rot_drifts))
     written = []
     if args.plot:
         written.append(
             plot_constant(tr, drifts, rot_drifts, args.plot, f"{model.name}: {label}", model)
         )
     if args.html:
-        written.append(_write_html(model, tr, args.html, f"{model.name}: {label}"))
+        written.append(html_page(model, tr.t, tr.q, args.html, f"{model.name}: {label}", 0.02))
     ca = tr.closest_approach
     if args.json:
         emit_json(
