@@ -89,9 +89,10 @@ class ConfigurationError(HexapodKinError):
 
 
 class LimitError(ConfigurationError):
-    """A plan that reaches a limit (a servo's range, a joint's speed): answered, not achieved.
+    """A plan that reaches a limit: answered, not achieved (a ``ConfigurationError``).
 
-    The command line exits with status 1 for it (not 2: the input was good).
+    A servo's range or a joint's speed (timelines), a leg's reach or the friction cone
+    (standing). The command line exits with status 1 for it (not 2: the input was good).
     """
 
 

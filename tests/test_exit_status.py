@@ -67,6 +67,10 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
     "stand": [
         ([], 0),
         (["--legs", "1", "2", "4", "--shift", "0.06", "0"], 1),  # a foot pulls: infeasible
+        (["--shift", "0.2", "0"], 1),  # a leg cannot reach its foot point
+        (["--legs", "1", "2", "4", "--shift", "0.06", "0", "--method", "friction"], 2),  # no mu
+        ([*"--legs 1 2 4 --shift 0.06 0 --method friction --mu 0.5".split()], 1),  # no forces
+        (["--legs", "1", "2"], 2),  # two feet cannot hold a body: ask for three
         (["erd:solo12", "-s", "l1=3"], 2),  # -s for a non-preset: one message
     ],
     "xacro": [(["hexabot_leg"], 0), (["erd:ur5"], 2)],
@@ -86,6 +90,7 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
     "simulate": [
         (["--duration", "1", "--no-stand"], 0),
         (["--stride", "0.4", "--duration", "1"], 1),  # the plan fails, as gait's
+        (["erd:anymal", "--pattern", "crawl", "--duration", "2"], 1),  # ZMP margin < 0
         (["--terrain", "mud"], 2),
     ],
     "reproduce": [(["--out", "/proc/no/such"], 2)],  # a full run takes minutes: test_report

@@ -28,14 +28,14 @@ __all__ = [
     "matrix_text",
     "not_achieved",
     "output_path",
-    "pattern_arg",
-    "pattern_of",
     "q_args",
     "q_from_args",
     "robot_args",
     "robot_of",
     "seed",
     "set_params",
+    "walk_args",
+    "walk_options",
 ]
 
 #: Image formats that ``--plot`` accepts (matplotlib writes each natively).
@@ -449,18 +449,93 @@ def not_achieved(why: Sequence[str]) -> int:
     return 1
 
 
-def pattern_arg(p: argparse.ArgumentParser) -> None:
-    """``--pattern``: a phase table for the robot's legs; the default fits any leg count."""
+def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
+    """The options of a planned walk, declared once for ``gait``, ``simulate``, ``timeline gait``.
+
+    ``rate`` is the flag of the walk's sample rate (``timeline gait`` has its own ``--rate``).
+    :func:`walk_options` reads them back.
+    """
     p.add_argument(
         "--pattern",
         help="phase table: tripod, wave, ripple (6 legs); crawl, wave, trot, pace (4 legs); "
         "wave, ripple (8 legs) (default: tripod for six legs, else wave)",
     )
+    p.add_argument(
+        "--stride",
+        type=float,
+        help="foot stroke in stance [m] for a straight walk (default 0.05; not with --velocity)",
+    )
+    p.add_argument("--height", type=float, default=0.03, help="step height [m]")
+    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    p.add_argument(
+        "--duty-factor", type=float, help="stance fraction in (0, 1) (default: the pattern's)"
+    )
+    p.add_argument(
+        "--velocity",
+        nargs="+",
+        metavar="V",
+        help="body twist: forward, sideways [m/s], yaw rate [rad/s] as three numbers or "
+        "vx,vy,wz (not with --stride)",
+    )
+    p.add_argument(
+        "--body-height",
+        type=float,
+        help="body above the mean ground height of the feet [m] (default: the robot's own)",
+    )
+    p.add_argument(
+        "--foot-reach",
+        type=float,
+        help="mount to neutral foot point, horizontal [m] (default: the robot's own)",
+    )
+    p.add_argument(
+        "--terrain",
+        choices=("flat", "slope", "step"),
+        default="flat",
+        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
+    )
+    p.add_argument(rate, dest="walk_rate", type=float, default=100.0, help="the walk's rate [Hz]")
+    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
 
 
-def pattern_of(args: argparse.Namespace, wb: Any) -> str:
-    """``--pattern``, or the default for the robot's legs (tripod for six, else wave)."""
-    return str(args.pattern or ("tripod" if wb.n_legs == 6 else "wave"))
+def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
+    """``--velocity``: three finite numbers, given apart or as ``vx,vy,wz``."""
+    import math
+
+    if values is None:
+        return None
+    parts = [v for item in values for v in item.replace(",", " ").split()]
+    try:
+        vel = [float(v) for v in parts]
+    except ValueError:
+        vel = []
+    if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
+        raise ParameterError(
+            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
+            parameter="--velocity",
+            value=" ".join(values),
+            allowed="vx,vy,wz",
+        )
+    return tuple(vel)
+
+
+def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
+    """The keywords of :func:`hexapod_kin.gait.walk.walk` the options of :func:`walk_args` give.
+
+    ``--pattern`` defaults to the robot's legs (``wb``): tripod for six, else wave.
+    """
+    return {
+        "pattern": args.pattern or ("tripod" if wb.n_legs == 6 else "wave"),
+        "stride": args.stride,
+        "step_height": args.height,
+        "period": args.period,
+        "duty_factor": args.duty_factor,
+        "velocity": _velocity(args.velocity),
+        "body_height": args.body_height,
+        "foot_reach": args.foot_reach,
+        "terrain": args.terrain,
+        "rate": args.walk_rate,
+        "duration": args.duration,
+    }
 
 
 def margin_failures(run: Any) -> list[str]:

@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import pattern_arg, pattern_of, robot_args, robot_of
+from .common import robot_args, robot_of, walk_args, walk_options
 
 __all__ = ["register"]
 
@@ -29,49 +29,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod")
-    pattern_arg(p)
-    p.add_argument(
-        "--foot-reach",
-        type=float,
-        default=None,
-        help="mount to neutral foot point, horizontal [m] (default: the robot's own)",
-    )
-    p.add_argument(
-        "--stride",
-        type=float,
-        default=None,
-        help="foot stroke in stance [m] for a straight walk (default 0.05; not with --velocity)",
-    )
-    p.add_argument("--height", type=float, default=0.03, help="step height [m]")
-    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
-    p.add_argument(
-        "--duty-factor",
-        type=float,
-        default=None,
-        help="stance fraction in (0, 1) (default: the pattern's)",
-    )
-    p.add_argument(
-        "--velocity",
-        type=float,
-        nargs=3,
-        metavar=("VX", "VY", "WZ"),
-        default=None,
-        help="body twist: forward, sideways [m/s], yaw rate [rad/s] (not with --stride)",
-    )
-    p.add_argument(
-        "--body-height",
-        type=float,
-        default=None,
-        help="body above the mean ground height of the feet [m] (default: the robot's own)",
-    )
-    p.add_argument(
-        "--terrain",
-        choices=("flat", "slope", "step"),
-        default="flat",
-        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
-    )
-    p.add_argument("--rate", type=float, default=100.0, help="sample rate [Hz]")
-    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    walk_args(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
         "--plot",
@@ -101,20 +59,8 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     robot = robot_of(args)
     model = robot.load()
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
-    run = walk(
-        wb,
-        pattern=pattern_of(args, wb),
-        stride=args.stride,
-        step_height=args.height,
-        period=args.period,
-        duty_factor=args.duty_factor,
-        velocity=args.velocity,
-        body_height=args.body_height,
-        foot_reach=args.foot_reach,
-        terrain=args.terrain,
-        rate=args.rate,
-        duration=args.duration,
-    )  # a check that fails raises GaitError: one line, exit status 1 (cli.main)
+    # a check that fails raises GaitError: one line, exit status 1 (cli.main)
+    run = walk(wb, **walk_options(args, wb))
     out = run.to_dict()
     if plot is not None:
         from ..gait.plots import plot_gait

@@ -10,10 +10,10 @@ from typing import Any
 from .common import (
     margin_failures,
     not_achieved,
-    pattern_arg,
-    pattern_of,
     robot_args,
     robot_of,
+    walk_args,
+    walk_options,
 )
 
 __all__ = ["register"]
@@ -38,23 +38,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod")
-    pattern_arg(p)
-    p.add_argument(
-        "--velocity",
-        nargs="+",
-        metavar="VX,VY,WZ",
-        default=None,
-        help="body twist: forward, sideways [m/s], yaw rate [rad/s] (vx,vy,wz or three numbers)",
-    )
-    p.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
-    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
-    p.add_argument(
-        "--terrain",
-        choices=("flat", "slope", "step"),
-        default="flat",
-        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
-    )
-    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    walk_args(p)
     p.add_argument("--friction", type=float, default=1.0, help="sliding friction coefficient")
     p.add_argument(
         "--no-stand", action="store_true", help="skip the standing foot-force comparison"
@@ -67,26 +51,6 @@ def register(sub: Any) -> None:
     p.set_defaults(func=_cmd_simulate)
 
 
-def _velocity(values: list[str] | None) -> Any:
-    from ..exceptions import ParameterError
-
-    if values is None:
-        return None
-    parts = [v for item in values for v in item.replace(",", " ").split()]
-    try:
-        vel = [float(v) for v in parts]
-    except ValueError:
-        vel = []
-    if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
-        raise ParameterError(
-            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
-            parameter="--velocity",
-            value=" ".join(values),
-            allowed="vx,vy,wz",
-        )
-    return tuple(vel)
-
-
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .._io import atomic_write
     from ..simulate import simulate, simulation_html
@@ -96,19 +60,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
     model = robot.load()
-    pattern = args.pattern or pattern_of(args, robot.legged())
     sim = simulate(
         model,
         feet=robot.feet,
-        pattern=pattern,
-        velocity=_velocity(args.velocity),
-        stride=args.stride,
-        period=args.period,
-        terrain=args.terrain,
-        duration=args.duration,
         foot_radius=robot.foot_radius,
         friction=args.friction,
         stand=not args.no_stand,
+        **walk_options(args, robot.legged() if args.pattern is None else None),
     )
     out = sim.to_dict()
     if mjcf is not None:

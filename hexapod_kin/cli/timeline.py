@@ -25,10 +25,10 @@ from .common import (
     margin_failures,
     not_achieved,
     output_path,
-    pattern_arg,
-    pattern_of,
     robot_args,
     robot_of,
+    walk_args,
+    walk_options,
 )
 
 __all__ = ["register"]
@@ -75,25 +75,7 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(g, kinds="legged", default="hexapod")
-    pattern_arg(g)
-    g.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
-    g.add_argument("--height", type=float, default=0.03, help="step height [m]")
-    g.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
-    g.add_argument(
-        "--velocity",
-        type=float,
-        nargs=3,
-        metavar=("VX", "VY", "WZ"),
-        default=None,
-        help="body twist [m/s, m/s, rad/s] (not with --stride)",
-    )
-    g.add_argument(
-        "--body-height",
-        type=float,
-        help="body above the ground [m] (default: 0.08 for a Hexapod, else the robot's own)",
-    )
-    g.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
-    g.add_argument("--plan-rate", type=float, default=100.0, help="the walk's own rate [Hz]")
+    walk_args(g, rate="--plan-rate")
     _common(g)
     g.set_defaults(func=_cmd_gait)
     st = kinds.add_parser(
@@ -127,21 +109,11 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     out = output_path(args.output, "-o", _SUFFIXES)
     robot = robot_of(args)
     model = robot.load()
-    height = args.body_height
-    if height is None and isinstance(model.params, Hexapod):
-        height = 0.08
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
-    run = walk(
-        wb,
-        pattern=pattern_of(args, wb),
-        stride=args.stride,
-        step_height=args.height,
-        period=args.period,
-        velocity=args.velocity,
-        body_height=height,
-        rate=args.plan_rate,
-        duration=args.duration,
-    )
+    options = walk_options(args, wb)
+    if options["body_height"] is None and isinstance(model.params, Hexapod):
+        options["body_height"] = 0.08  # the timelines' walk of the hexapod
+    run = walk(wb, **options)
     return max(_write(run, args, out, None), not_achieved(margin_failures(run)))
 
 
