@@ -493,7 +493,9 @@ def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
         default="flat",
         help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
     )
-    p.add_argument(rate, dest="walk_rate", type=float, default=100.0, help="the walk's rate [Hz]")
+    p.add_argument(
+        rate, dest="walk_rate", metavar="HZ", type=float, default=100.0, help="the walk's rate [Hz]"
+    )
     p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
 
 
