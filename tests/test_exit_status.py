@@ -86,6 +86,8 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         # every check passes but the CoM and the ZMP leave the support polygon
         (["erd:anymal", "--pattern", "trot", "--velocity", "0.3", "0", "0", "--duration", "2"], 1),
         (["--pattern", "gallop"], 2),
+        (["--duration", "0.5", "--view", "--no-wait"], 0),
+        (["erd:solo12", "--view"], 2),  # --view plays the hexapod preset only
     ],
     "simulate": [
         (["--duration", "1", "--no-stand"], 0),

@@ -8,6 +8,7 @@ from typing import Any
 
 from ..exceptions import ParameterError
 from .common import robot_args, robot_of, walk_args, walk_options
+from .view import wait_args
 
 __all__ = ["register"]
 
@@ -44,8 +45,9 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--view",
         action="store_true",
-        help="play the walk in the live viewer (127.0.0.1) until Ctrl-C",
+        help="play the walk in the live viewer (127.0.0.1) until Ctrl-C (the hexapod preset)",
     )
+    wait_args(p)
     p.set_defaults(func=_cmd_gait)
 
 
@@ -57,6 +59,10 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     robot = robot_of(args)
+    if args.view and (args.source != "hexapod" or robot.params):
+        raise ParameterError(
+            "--view plays the built-in hexapod; use --html for other robots", parameter="view"
+        )
     model = robot.load()
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     # a check that fails raises GaitError: one line, exit status 1 (cli.main)
@@ -76,30 +82,19 @@ def _cmd_gait(args: argparse.Namespace) -> int:
         _print(out)
     status = not_achieved(margin_failures(run))
     if args.view:
-        if args.source != "hexapod" or robot.params:
-            raise ParameterError(
-                "--view plays the built-in hexapod; use --html for other robots",
-                parameter="view",
-            )
-        _view(run)
+        status = max(status, _view(run, args))
     return status
 
 
-def _view(run: Any) -> None:
-    import time
-
+def _view(run: Any, args: argparse.Namespace) -> int:
     from .. import load
-    from ..exceptions import ViewerError
     from ..gait.show import walk_live
     from ..viewer import Viewer
+    from .view import serve_until
 
     with Viewer(load("hexapod")) as viewer:
         walk_live(run, viewer)
-        print(f"meshcat viewer of the walk: {viewer.url}", file=sys.stderr, flush=True)
-        print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
-        while viewer.server.running:  # Ctrl-C: the one line of main, status 130
-            time.sleep(0.2)
-        raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
+        return serve_until(viewer, args)
 
 
 def _print(out: dict[str, Any]) -> None:
