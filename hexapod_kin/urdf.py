@@ -29,11 +29,11 @@ import numpy as np
 from . import robots
 from ._io import atomic_write
 from ._version import __version__
-from .exceptions import ParameterError, choices
+from .exceptions import ParameterError, SourceError, choices, did_you_mean
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
 from .tables import MAX_NUMBER, read_table
 
-__all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
+__all__ = ["table_of", "to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
 #: Material colours (RGBA) of the generated robots (the exporters in :mod:`hexapod_kin.export`
 #: use the same). ``num``, ``vec`` and ``comment`` are the number and comment text they share.
@@ -356,29 +356,52 @@ def _check_magnitudes(text: str, name: str) -> None:
 TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
 
 
-def _table(source: Any) -> Chain | Hexapod:
-    """The table of a source :func:`to_urdf` takes, read as everywhere (:mod:`~.sources`).
+def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
+    """The parameter table of a source, read as :func:`hexapod_kin.load` reads it.
 
-    A Chain or Hexapod is itself; a preset name builds the preset; a ``.toml``/``.yaml``
-    path reads the table file. A URDF (path, text, ``erd:NAME``) is already a URDF.
+    A Chain or Hexapod is itself; a preset name builds the preset; a ``.toml``/``.yaml`` path
+    reads the table file (:func:`~hexapod_kin.tables.read_table`). The exports of what
+    hexapod_kin builds (URDF, xacro, a ROS 2 package) take exactly these.
+
+    Raises:
+        ParameterError: A URDF (path, text or ``erd:NAME``: it has no table), another type,
+            or ``leg`` for a chain or not one of the robot's legs.
+        SourceError: A string that names no preset and no file (close names suggested).
+
     """
-    if isinstance(source, (Chain, Hexapod)):
-        return source
     if isinstance(source, (str, os.PathLike)):
         text = os.fspath(source).strip()
         if text in robots.PRESETS:
-            return robots.get(text)
-        if not text.startswith("<") and Path(text).suffix.lower() in TABLE_SUFFIXES:
-            return read_table(Path(text).expanduser())
-    shown = type(source).__name__ if not isinstance(source, (str, os.PathLike)) else repr(source)
-    raise ParameterError(
-        f"source={shown} is not allowed; to_urdf writes what hexapod_kin builds: a Chain, a "
-        f"Hexapod, a preset name ({choices(robots.names())}) or a table file (.toml/.yaml); "
-        "a URDF or erd:NAME is already a URDF",
-        parameter="source",
-        value=shown,
-        allowed="a Chain, a Hexapod, a preset name or a table file",
-    )
+            source = robots.get(text)
+        elif not text.startswith("<") and Path(text).suffix.lower() in TABLE_SUFFIXES:
+            source = read_table(Path(text).expanduser())
+        elif not (text.startswith(("<", "erd:")) or Path(text).suffix.lower() in (".urdf", ".xml")):
+            raise SourceError(
+                f"source={text!r} is not a preset or a table file"
+                f"{did_you_mean(text, robots.names())}; presets are {choices(robots.names())}",
+                parameter="source",
+                value=text,
+                allowed=robots.names(),
+            )
+    if not isinstance(source, (Chain, Hexapod)):
+        shown = repr(source) if isinstance(source, (str, os.PathLike)) else type(source).__name__
+        raise ParameterError(
+            f"source {shown[:80]} is a URDF without a parameter table (or not a source); this "
+            "export writes what hexapod_kin builds: a Chain, a Hexapod, a preset name or a "
+            "table file (.toml/.yaml)",
+            parameter="source",
+            value=shown[:80],
+            allowed="a Chain, a Hexapod, a preset name or a table file",
+        )
+    if leg is not None:
+        if isinstance(source, Chain):
+            raise ParameterError(
+                f"leg={leg!r} only applies to a Hexapod, not to a Chain",
+                parameter="leg",
+                value=leg,
+            )
+        source.leg(leg)  # raises with the list of legs
+    return source
 
 
 def to_urdf(
@@ -405,7 +428,7 @@ def to_urdf(
         SourceError: A table file that cannot be read.
 
     """
-    source = _table(source)
+    source = table_of(source)
     if isinstance(source, Chain):
         if leg is not None:
             raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")

@@ -191,10 +191,12 @@ def test_to_urdf_takes_what_load_takes(tmp_path):
     assert hk.to_urdf("hexabot_leg") == hk.to_urdf(leg)
     table = "examples/leg4.toml"
     assert hk.to_urdf(table) == hk.to_urdf(hk.load(table).params)
-    with pytest.raises(ParameterError, match="already a URDF"):
+    with pytest.raises(ParameterError, match="URDF without a parameter table"):
         hk.to_urdf("erd:ur5")
-    with pytest.raises(ParameterError):  # the same refusal on the exports
-        to_xacro("erd:ur5")
+    with pytest.raises(ParameterError, match="URDF without a parameter table"):
+        to_xacro("erd:ur5")  # the same refusal on every export of a table
+    with pytest.raises(hk.SourceError, match="did you mean 'hexabot_leg'"):
+        hk.to_urdf("hexabot_le")
 
 
 def test_mjcf_of_a_urdf_with_package_meshes():
