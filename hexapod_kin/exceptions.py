@@ -16,6 +16,7 @@ __all__ = [
     "HexapodKinError",
     "ParameterError",
     "ConfigurationError",
+    "LimitError",
     "FrameNotFoundError",
     "UrdfError",
     "SourceError",
@@ -85,6 +86,14 @@ class ParameterError(HexapodKinError):
 
 class ConfigurationError(HexapodKinError):
     """A joint configuration, velocity or target has the wrong shape or non-finite values."""
+
+
+class LimitError(ConfigurationError):
+    """A plan that reaches a limit: answered, not achieved (a ``ConfigurationError``).
+
+    A servo's range or a joint's speed (timelines), a leg's reach or the friction cone
+    (standing). The command line exits with status 1 for it (not 2: the input was good).
+    """
 
 
 class FrameNotFoundError(HexapodKinError):

@@ -24,7 +24,7 @@ from typing import Any
 from . import robots
 from .exceptions import SourceError, UrdfError, choices, did_you_mean
 from .params import Chain, Hexapod
-from .urdf import to_urdf
+from .urdf import TABLE_SUFFIXES, to_urdf
 
 __all__ = [
     "ResolvedSource",
@@ -34,9 +34,6 @@ __all__ = [
     "resolve_source",
     "yourdfpy_load",
 ]
-
-#: File suffixes read as parameter-table files (see :mod:`hexapod_kin.tables`).
-_TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
 
 
 # ------------------------------------------------------------------------ example-robot-data
@@ -228,9 +225,11 @@ def _read_text(path: Path) -> str:
 def _no_params(params: dict[str, Any], what: str) -> None:
     if params:
         raise SourceError(
-            f"preset parameters {sorted(params)} given for non-preset {what}",
+            f"preset parameters {sorted(params)} given for non-preset {what}; only a preset "
+            "name or a table file takes parameters (-s/--set NAME=VALUE on the command line)",
             parameter="params",
             value=sorted(params),
+            allowed="a preset name or a .toml/.yaml table file",
         )
 
 
@@ -239,7 +238,7 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
         raise SourceError(
             f"source={str(path)!r}: no such file", parameter="source", value=str(path)
         )
-    if path.suffix.lower() in _TABLE_SUFFIXES:
+    if path.suffix.lower() in TABLE_SUFFIXES:
         from .tables import read_table
 
         chain = read_table(path, **params)
@@ -328,7 +327,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             path=str(path),
         )
     path = Path(text).expanduser()
-    if path.suffix.lower() in (".urdf", ".xml", *_TABLE_SUFFIXES) or path.exists():
+    if path.suffix.lower() in (".urdf", ".xml", *TABLE_SUFFIXES) or path.exists():
         return _from_file(path, extra, **params)
     hint = _hint(text)
     raise SourceError(

@@ -22,16 +22,18 @@ import math
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from . import robots
 from ._io import atomic_write
 from ._version import __version__
-from .exceptions import ParameterError
+from .exceptions import ParameterError, SourceError, choices, did_you_mean
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
-from .tables import MAX_NUMBER
+from .tables import MAX_NUMBER, read_table
 
-__all__ = ["to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
+__all__ = ["table_of", "to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
 #: Material colours (RGBA) of the generated robots (the exporters in :mod:`hexapod_kin.export`
 #: use the same). ``num``, ``vec`` and ``comment`` are the number and comment text they share.
@@ -350,11 +352,69 @@ def _check_magnitudes(text: str, name: str) -> None:
                     )
 
 
-def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | None = None) -> str:
+#: File suffixes of parameter-table files (:mod:`hexapod_kin.tables`), wherever a source is read.
+TABLE_SUFFIXES = (".toml", ".yaml", ".yml")
+
+
+def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
+    """The parameter table of a source, read as :func:`hexapod_kin.load` reads it.
+
+    A Chain or Hexapod is itself; a preset name builds the preset; a ``.toml``/``.yaml`` path
+    reads the table file (:func:`~hexapod_kin.tables.read_table`). The exports of what
+    hexapod_kin builds (URDF, xacro, a ROS 2 package) take exactly these.
+
+    Raises:
+        ParameterError: A URDF (path, text or ``erd:NAME``: it has no table), another type,
+            or ``leg`` for a chain or not one of the robot's legs.
+        SourceError: A string that names no preset and no file (close names suggested).
+
+    """
+    if isinstance(source, (str, os.PathLike)):
+        text = os.fspath(source).strip()
+        if text in robots.PRESETS:
+            source = robots.get(text)
+        elif not text.startswith("<") and Path(text).suffix.lower() in TABLE_SUFFIXES:
+            source = read_table(Path(text).expanduser())
+        elif not (text.startswith(("<", "erd:")) or Path(text).suffix.lower() in (".urdf", ".xml")):
+            raise SourceError(
+                f"source={text!r} is not a preset or a table file"
+                f"{did_you_mean(text, robots.names())}; presets are {choices(robots.names())}",
+                parameter="source",
+                value=text,
+                allowed=robots.names(),
+            )
+    if not isinstance(source, (Chain, Hexapod)):
+        shown = repr(source) if isinstance(source, (str, os.PathLike)) else type(source).__name__
+        raise ParameterError(
+            f"source {shown[:80]} is a URDF without a parameter table (or not a source); this "
+            "export writes what hexapod_kin builds: a Chain, a Hexapod, a preset name or a "
+            "table file (.toml/.yaml)",
+            parameter="source",
+            value=shown[:80],
+            allowed="a Chain, a Hexapod, a preset name or a table file",
+        )
+    if leg is not None:
+        if isinstance(source, Chain):
+            raise ParameterError(
+                f"leg={leg!r} only applies to a Hexapod, not to a Chain",
+                parameter="leg",
+                value=leg,
+            )
+        source.leg(leg)  # raises with the list of legs
+    return source
+
+
+def to_urdf(
+    source: Chain | Hexapod | str | os.PathLike[str],
+    *,
+    leg: str | None = None,
+    header: str | None = None,
+) -> str:
     """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
 
     Args:
-        source: A :class:`Chain` or a :class:`Hexapod`.
+        source: A :class:`Chain` or a :class:`Hexapod`, a preset name (``"hexabot_leg"``)
+            or a table file (``.toml``/``.yaml``), as :func:`hexapod_kin.load` reads them.
         leg: For a :class:`Hexapod`, emit only this leg with its mount on the body.
         header: Extra line for the header comment (e.g. which command made the file).
 
@@ -362,26 +422,25 @@ def to_urdf(source: Chain | Hexapod, *, leg: str | None = None, header: str | No
         The URDF document as a string.
 
     Raises:
-        ParameterError: If ``source`` is of another type, ``leg`` is given for a chain, or a
-            number would be beyond what the package's URDF loader accepts (|x| <= 1e9).
+        ParameterError: If ``source`` is of another kind (a URDF), ``leg`` is given for a
+            chain, or a number would be beyond what the package's URDF loader accepts
+            (|x| <= 1e9).
+        SourceError: A table file that cannot be read.
 
     """
+    source = table_of(source)
     if isinstance(source, Chain):
         if leg is not None:
             raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
         text = _chain_urdf(source, header)
-    elif isinstance(source, Hexapod):
-        text = _robot_urdf(source, leg, header)
     else:
-        raise ParameterError(
-            f"source={type(source).__name__} is not allowed; to_urdf takes a Chain or a Hexapod"
-        )
+        text = _robot_urdf(source, leg, header)
     _check_magnitudes(text, source.name)
     return text
 
 
 def write_urdf(
-    source: Chain | Hexapod,
+    source: Chain | Hexapod | str | os.PathLike[str],
     path: str | os.PathLike[str],
     *,
     leg: str | None = None,

@@ -116,3 +116,95 @@ def test_console_script_demo(tmp_path):
     res = subprocess.run([exe, "demo", "--out", str(tmp_path)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "hexabot_leg.urdf").exists() and "det(J_position)" in res.stdout
+
+
+# --------------------------------------------------------------------- one robot argument
+def test_one_message_per_misuse_of_set(capsys):
+    """-s given for a source that takes no parameters: the same one line from every command."""
+    said = set()
+    for argv in (
+        ["fk", "erd:solo12"],
+        ["mjcf", "erd:solo12"],
+        ["stand", "erd:solo12"],
+        ["gait", "erd:solo12"],
+        ["simulate", "erd:solo12"],
+        ["timeline", "gait", "erd:solo12", "-o", "x.csv"],
+    ):
+        assert main([*argv, "-s", "l1=0.05"]) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1, err
+        said.add(err[0])
+    assert len(said) == 1, said
+    assert "non-preset 'erd:solo12'" in said.pop()
+
+
+def test_foot_is_appended_on_every_legged_command():
+    """--foot given once per leg reaches the robot whole (simulate kept only the last one)."""
+    from hexapod_kin.cli import build_parser
+    from hexapod_kin.cli.common import robot_of
+
+    feet = ["a:0,0,0.1", "b:0,0,0.2"]
+    for cmd in (["stand"], ["gait"], ["simulate"], ["timeline", "gait", "-o", "x.csv"]):
+        argv = [*cmd, "x.urdf", "--foot", feet[0], "--foot", feet[1], "--foot-radius", "0.01"]
+        robot = robot_of(build_parser().parse_args(argv))
+        assert robot.feet == " ".join(feet) and robot.foot_radius == 0.01, cmd
+        assert robot.source == "x.urdf"
+
+
+def test_tool_is_one_option_in_degrees_with_deg(capsys):
+    """--tool reads its rpy in degrees with --deg, on fk as on ik: the same tip."""
+    q = ["10", "20", "-30"]
+    tool = ["0.01", "0.02", "0.03"]
+    code, out, _ = run(capsys, "fk", "hexabot_leg", "--q", *q, "--deg", "--json",
+                       "--tool", *tool, "90", "0", "45")  # fmt: skip
+    assert code == 0
+    deg = np.array(json.loads(out)["T_tip"])
+    code, out, _ = run(capsys, "fk", "hexabot_leg", "--q", *np.radians([10, 20, -30]).astype(str),
+                       "--json", "--tool", *tool, str(np.pi / 2), "0", str(np.pi / 4))  # fmt: skip
+    assert code == 0
+    np.testing.assert_allclose(deg, np.array(json.loads(out)["T_tip"]), atol=1e-12)
+    model = hk.load("hexabot_leg", tool=((0.01, 0.02, 0.03), (np.pi / 2, 0.0, np.pi / 4)))
+    np.testing.assert_allclose(deg, model.fk(np.radians([10, 20, -30])), atol=1e-12)
+
+
+def test_gait_html_of_a_urdf_in_another_folder(tmp_path, monkeypatch, capsys):
+    """The page is of the robot given (a relative path from elsewhere), not of a namesake."""
+    pytest.importorskip("umsgpack")
+    robots_dir = tmp_path / "robots"
+    robots_dir.mkdir()
+    (robots_dir / "hexapod.urdf").write_text(hk.to_urdf("hexapod"))
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    page = here / "walk.html"
+    code = main(["gait", "../robots/hexapod.urdf", "--duration", "0.5", "--html", str(page)])
+    assert code == 0, capsys.readouterr().err
+    assert page.stat().st_size > 10_000
+
+
+def test_to_urdf_takes_what_load_takes(tmp_path):
+    """A source means the same in every export: a preset name or a table file, as load reads."""
+    from hexapod_kin.exceptions import ParameterError
+    from hexapod_kin.export import to_xacro
+
+    leg = hk.robots.hexabot_leg()
+    assert hk.to_urdf("hexabot_leg") == hk.to_urdf(leg)
+    table = "examples/leg4.toml"
+    assert hk.to_urdf(table) == hk.to_urdf(hk.load(table).params)
+    with pytest.raises(ParameterError, match="URDF without a parameter table"):
+        hk.to_urdf("erd:ur5")
+    with pytest.raises(ParameterError, match="URDF without a parameter table"):
+        to_xacro("erd:ur5")  # the same refusal on every export of a table
+    with pytest.raises(hk.SourceError, match="did you mean 'hexabot_leg'"):
+        hk.to_urdf("hexabot_le")
+
+
+def test_mjcf_of_a_urdf_with_package_meshes():
+    """`mjcf erd:ur5`: offered by --help, and exported (without its meshes): 6 joints kept."""
+    mujoco = pytest.importorskip("mujoco")
+    from hexapod_kin.export.mjcf import to_mjcf
+
+    xml = to_mjcf("erd:ur5", floor=False).xml
+    assert "<mesh" not in xml
+    model = mujoco.MjModel.from_xml_string(xml)
+    assert model.njnt == hk.load("erd:ur5").nq == 6

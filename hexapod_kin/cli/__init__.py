@@ -5,7 +5,8 @@ Subcommands live in the modules of this package, one module per area; each modul
 runner with ``set_defaults(func=...)``. Heavy imports stay inside the runners.
 ``--json`` output is one JSON object on stdout; progress and messages go to stderr.
 Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one line
-``hexapod-kin: error: ...`` and exit with status 2.
+``hexapod-kin: error: ...`` and exit with status 2; a plan that reaches a limit or fails a
+check exits with 1 (the rule: :func:`main`).
 """
 
 from __future__ import annotations
@@ -139,13 +140,16 @@ def _exit_interrupted() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status.
 
-    One rule for every command: **0** done (the answer achieves what was asked); **1**
-    answered but not achieved (``ik``: the target is unreachable or only beyond the joint
-    limits — the nearest point is printed; ``step``: joint or speed limits cut the motion;
-    ``gait``: a check of the plan fails; ``simulate``: a physics check fails; ``derive``:
-    ``--budget`` ran out before all was derived, checked and printed; ``scan``: the families
-    were not all derived within ``--family-budget`` — ``NOT DONE`` lines say what is
-    missing); **2** bad input or any failure (one line on stderr, never a traceback;
+    One rule for every command: **0** achieved (the answer achieves what was asked); **1**
+    answered but not achieved — a check of the plan fails, infeasible, a limit reached
+    (``ik``: the target is unreachable or only beyond the joint limits, the nearest point is
+    printed; ``step`` and ``timeline``: a joint, speed or servo limit; ``gait``,
+    ``simulate``, ``timeline gait``: a check of the plan fails, or the walk's static or ZMP
+    margin is negative; ``simulate``: a physics check fails; ``stand``: the contact forces
+    are not feasible; ``derive``: ``--budget`` ran out before all was derived, checked and
+    printed; ``scan``: the families were not all derived within ``--family-budget``;
+    ``reproduce``: a claim's computation failed) — one line ``hexapod-kin: not achieved:
+    ...`` says why; **2** bad input or any failure (one line on stderr, never a traceback;
     ``HEXAPOD_KIN_DEBUG=1`` shows the traceback of an unexpected error); **130**
     interrupted. A closed stdout (``hexapod-kin fk ... | head``) ends quietly.
 
@@ -210,6 +214,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     return status
 
 
+def _not_achieved(exc: BaseException) -> bool:
+    """An error that answers "not achieved" (status 1): a limit reached, a gait check failed.
+
+    :class:`~hexapod_kin.exceptions.LimitError`, and the gait's ``GaitError`` (looked up
+    only when the gait was imported: raising one imports it).
+    """
+    from ..exceptions import LimitError
+
+    gait = sys.modules.get("hexapod_kin.gait.robot")
+    kinds: tuple[type, ...] = (LimitError,)
+    if gait is not None and isinstance(getattr(gait, "GaitError", None), type):
+        kinds += (gait.GaitError,)
+    return isinstance(exc, kinds)
+
+
 def _main(argv: Sequence[str] | None, interrupted: Sequence[int] = ()) -> int:
     """Run the command; return its status.
 
@@ -233,6 +252,10 @@ def _main(argv: Sequence[str] | None, interrupted: Sequence[int] = ()) -> int:
     except SystemExit as exc:  # argparse: --help (0) or a usage error (2, already printed)
         return int(exc.code) if isinstance(exc.code, int) else 2
     except HexapodKinError as exc:
+        if _not_achieved(exc):  # good input; the plan reached a limit or failed a check
+            if not interrupted:
+                print(f"hexapod-kin: not achieved: {_one_line(exc)}", file=sys.stderr)
+            return 1
         return error(_one_line(exc))
     except KeyboardInterrupt:
         print("hexapod-kin: interrupted", file=sys.stderr)

@@ -11,6 +11,7 @@ import json
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -19,14 +20,22 @@ from ..exceptions import ParameterError
 __all__ = [
     "OneLineParser",
     "emit_json",
+    "Robot",
+    "check_outputs",
+    "html_page",
     "load_source",
+    "margin_failures",
     "matrix_text",
+    "not_achieved",
     "output_path",
     "q_args",
     "q_from_args",
+    "robot_args",
+    "robot_of",
     "seed",
     "set_params",
-    "source_args",
+    "walk_args",
+    "walk_options",
 ]
 
 #: Image formats that ``--plot`` accepts (matplotlib writes each natively).
@@ -175,28 +184,188 @@ def _fit_to_preset(source: str, params: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def load_source(args: argparse.Namespace) -> Any:
-    """Load ``args.source`` (preset, table file, URDF path or ``erd:NAME``) with -s/--base/--tip."""
-    from ..kinematics import load
+#: What SOURCE may be, said once for every command that takes a robot (``kinds`` of
+#: :func:`robot_args`); the ``--help`` test holds each command to what it offers.
+SOURCE_KINDS: dict[str, str] = {
+    "any": "a preset name (hexapod-kin list), a table file (.toml/.yaml), a URDF path or "
+    "erd:NAME (example-robot-data)",
+    "table": "a preset name (hexapod-kin list) or a table file (.toml/.yaml): what "
+    "hexapod_kin builds (a URDF is already a URDF)",
+    "legged": "a legged robot: a Hexapod preset, a URDF path or erd:NAME (name the feet with "
+    "--foot when the URDF has no foot links)",
+}
 
-    params = set_params(getattr(args, "set", None), source=args.source)
-    kwargs: dict[str, Any] = {}
+
+def robot_args(
+    p: argparse.ArgumentParser,
+    *,
+    kinds: str = "any",
+    default: str | None = None,
+    required: bool = True,
+    frames: bool = False,
+    tool: bool = False,
+    inertia: bool = False,
+) -> None:
+    """Declare the one robot argument of a command: every command that takes a robot calls this.
+
+    ``SOURCE`` (optional with a ``default`` or not ``required``), ``-s/--set NAME=VALUE``
+    (repeatable), ``--package-dir DIR`` (repeatable; not for ``kinds="table"``); with ``frames``
+    ``--base``/``--tip``; with ``tool`` ``--tool X Y Z ROLL PITCH YAW``; for
+    ``kinds="legged"`` ``--foot`` (repeatable, appended) and ``--foot-radius``; with
+    ``inertia`` ``--inertia``. :func:`robot_of` reads them back, once.
+    """
+    help_ = SOURCE_KINDS[kinds] + ("" if default is None else f" (default {default})")
+    if default is None and required:
+        p.add_argument("source", metavar="SOURCE", help=help_)
+    else:
+        p.add_argument("source", nargs="?", default=default, metavar="SOURCE", help=help_)
+    p.add_argument(
+        "-s",
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="a parameter of a preset or table file (SI units; repeatable); a list as "
+        "comma-separated numbers, e.g. -s mount_yaw_deg=45,90,135,-135,-90,-45",
+    )
+    if kinds != "table":
+        p.add_argument(
+            "--package-dir",
+            action="append",
+            metavar="DIR",
+            help="a folder where package:// meshes resolve (repeatable; before ROS_PACKAGE_PATH)",
+        )
+    if frames:
+        p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")
+        p.add_argument(
+            "--tip",
+            help="tip frame of the sub-chain (default: a chain's last frame; an arm's TCP or "
+            "flange with the gripper joints locked; every limb's end of a legged robot)",
+        )
+    if tool:
+        p.add_argument(
+            "--tool",
+            nargs=6,
+            type=float,
+            metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+            help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (deg with --deg), "
+            "e.g. a foot point on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0",
+        )
+    if kinds == "legged":
+        p.add_argument(
+            "--foot",
+            action="append",
+            metavar="FRAME:X,Y,Z",
+            help="a foot as a frame plus an offset in it [m], once per leg (appended; or "
+            "several space-separated, or a .yaml/.toml/.json file), for a URDF without foot "
+            "links; e.g. --foot tibia_lf:0,0.16,0.029",
+        )
+        p.add_argument(
+            "--foot-radius",
+            type=float,
+            help="contact radius of the feet [m] (default: the robot's)",
+        )
+    if inertia:
+        p.add_argument(
+            "--inertia",
+            choices=("urdf", "collision", "point"),
+            default="urdf",
+            help="inertias: the URDF's; recomputed from each link's collision shapes; or point "
+            "masses (1 cm spheres). Both repairs keep every mass and centre of mass",
+        )
+
+
+@dataclass(frozen=True)
+class Robot:
+    """The robot a command line names: its source and every option about it, read once.
+
+    Attributes:
+        source: SOURCE as given (a path is passed on as given: relative to the cwd).
+        params: ``-s`` values, fitted to the preset's parameters.
+        options: Keywords of :func:`hexapod_kin.load` (``base``, ``tip``, ``tool``,
+            ``inertia``, ``package_dirs``) that were given.
+        feet: ``--foot`` values as one spec (None when absent).
+        foot_radius: ``--foot-radius`` [m] (None when absent).
+
+    """
+
+    source: str
+    params: dict[str, Any]
+    options: dict[str, Any]
+    feet: str | None = None
+    foot_radius: float | None = None
+
+    def load(self) -> Any:
+        """The loaded model (:func:`hexapod_kin.load`) with every option given."""
+        from ..kinematics import load
+
+        return load(self.source, **self.options, **self.params)
+
+    def table(self, urdf: bool = False) -> Any:
+        """The parameter table (Chain or Hexapod) of a preset or table file.
+
+        With ``urdf``, a URDF source (no table) comes back as the source itself.
+
+        Raises:
+            ParameterError: SOURCE is a URDF (it has no table to export) and not ``urdf``.
+
+        """
+        from ..sources import resolve_source
+
+        dirs = self.options.get("package_dirs", ())
+        resolved = resolve_source(self.source, package_dirs=dirs, **self.params)
+        if resolved.params is None and urdf:
+            return self.source
+        if resolved.params is None:
+            raise ParameterError(
+                f"SOURCE {self.source!r} is a URDF without a parameter table; this command "
+                f"exports what hexapod_kin builds: {SOURCE_KINDS['table'].split(':')[0]}",
+                parameter="SOURCE",
+                value=self.source,
+                allowed="a preset name or a .toml/.yaml table",
+            )
+        return resolved.params
+
+    def legged(self) -> Any:
+        """The legged robot (:func:`hexapod_kin.gait.robot.as_whole_body`) with its feet."""
+        from ..gait.robot import as_whole_body
+
+        return as_whole_body(self.load(), feet=self.feet, foot_radius=self.foot_radius)
+
+
+def robot_of(args: argparse.Namespace) -> Robot:
+    """Read the robot arguments of :func:`robot_args` back: the command line's one parse.
+
+    Raises:
+        ParameterError: A ``-s`` pair that is not NAME=VALUE, a value that does not fit.
+
+    """
+    import math
+
+    source = args.source
+    options: dict[str, Any] = {}
+    for key in ("base", "tip", "inertia"):
+        if getattr(args, key, None) is not None:
+            options[key] = getattr(args, key)
     tool = getattr(args, "tool", None)
     if tool is not None:
-        kwargs["tool"] = tool
-    inertia = getattr(args, "inertia", None)
-    if inertia is not None:
-        kwargs["inertia"] = inertia
+        rpy = [math.radians(v) if getattr(args, "deg", False) else v for v in tool[3:]]
+        options["tool"] = (tuple(tool[:3]), tuple(rpy))
     dirs = getattr(args, "package_dir", None)
     if dirs:
-        kwargs["package_dirs"] = tuple(dirs)
-    model = load(
-        args.source,
-        base=getattr(args, "base", None),
-        tip=getattr(args, "tip", None),
-        **kwargs,
-        **params,
+        options["package_dirs"] = tuple(dirs)
+    feet = getattr(args, "foot", None)
+    return Robot(
+        source=source,
+        params=set_params(getattr(args, "set", None), source=source),
+        options=options,
+        feet=" ".join(feet) if feet else None,
+        foot_radius=getattr(args, "foot_radius", None),
     )
+
+
+def load_source(args: argparse.Namespace) -> Any:
+    """The loaded model of the command line's robot; the default tips said on one line."""
+    model = robot_of(args).load()
     chosen = getattr(model, "default_tips", None)
     if chosen is not None and chosen.note:  # the default a user would pick, said on one line
         print(f"hexapod-kin: {model.name}: {chosen.note}", file=sys.stderr)
@@ -267,6 +436,155 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
     return p
 
 
+def not_achieved(why: Sequence[str]) -> int:
+    """The exit status of an answer: 0 when ``why`` is empty, else 1 and one line saying why.
+
+    The rule of every command (:func:`hexapod_kin.cli.main`): 1 is *answered but not
+    achieved* (a check of the plan fails, infeasible, a limit reached); the answer itself
+    is printed as usual.
+    """
+    if not why:
+        return 0
+    print(f"hexapod-kin: not achieved: {'; '.join(why)}", file=sys.stderr)
+    return 1
+
+
+def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
+    """The options of a planned walk, declared once for ``gait``, ``simulate``, ``timeline gait``.
+
+    ``rate`` is the flag of the walk's sample rate (``timeline gait`` has its own ``--rate``).
+    :func:`walk_options` reads them back.
+    """
+    p.add_argument(
+        "--pattern",
+        help="phase table: tripod, wave, ripple (6 legs); crawl, wave, trot, pace (4 legs); "
+        "wave, ripple (8 legs) (default: tripod for six legs, else wave)",
+    )
+    p.add_argument(
+        "--stride",
+        type=float,
+        help="foot stroke in stance [m] for a straight walk (default 0.05; not with --velocity)",
+    )
+    p.add_argument("--height", type=float, default=0.03, help="step height [m]")
+    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    p.add_argument(
+        "--duty-factor", type=float, help="stance fraction in (0, 1) (default: the pattern's)"
+    )
+    p.add_argument(
+        "--velocity",
+        nargs="+",
+        metavar="V",
+        help="body twist: forward, sideways [m/s], yaw rate [rad/s] as three numbers or "
+        "vx,vy,wz (not with --stride)",
+    )
+    p.add_argument(
+        "--body-height",
+        type=float,
+        help="body above the mean ground height of the feet [m] (default: the robot's own)",
+    )
+    p.add_argument(
+        "--foot-reach",
+        type=float,
+        help="mount to neutral foot point, horizontal [m] (default: the robot's own)",
+    )
+    p.add_argument(
+        "--terrain",
+        choices=("flat", "slope", "step"),
+        default="flat",
+        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
+    )
+    p.add_argument(
+        rate, dest="walk_rate", metavar="HZ", type=float, default=100.0, help="the walk's rate [Hz]"
+    )
+    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+
+
+def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
+    """``--velocity``: three finite numbers, given apart or as ``vx,vy,wz``."""
+    import math
+
+    if values is None:
+        return None
+    parts = [v for item in values for v in item.replace(",", " ").split()]
+    try:
+        vel = [float(v) for v in parts]
+    except ValueError:
+        vel = []
+    if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
+        raise ParameterError(
+            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
+            parameter="--velocity",
+            value=" ".join(values),
+            allowed="vx,vy,wz",
+        )
+    return tuple(vel)
+
+
+def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
+    """The keywords of :func:`hexapod_kin.gait.walk.walk` the options of :func:`walk_args` give.
+
+    ``--pattern`` defaults to the robot's legs (``wb``): tripod for six, else wave.
+    """
+    return {
+        "pattern": args.pattern or ("tripod" if wb.n_legs == 6 else "wave"),
+        "stride": args.stride,
+        "step_height": args.height,
+        "period": args.period,
+        "duty_factor": args.duty_factor,
+        "velocity": _velocity(args.velocity),
+        "body_height": args.body_height,
+        "foot_reach": args.foot_reach,
+        "terrain": args.terrain,
+        "rate": args.walk_rate,
+        "duration": args.duration,
+    }
+
+
+def margin_failures(run: Any) -> list[str]:
+    """Why a planned walk is not achieved though every check passed: a negative margin.
+
+    The minimum static stability margin (the projected centre of mass) or ZMP margin (the
+    zero-moment point) below 0 [m]: the point leaves the support polygon.
+    """
+    why = []
+    for attr, what, point in (
+        ("min_margin", "static stability", "projected centre of mass"),
+        ("min_zmp_margin", "ZMP", "zero-moment point"),
+    ):
+        value = float(getattr(run, attr))
+        if value < 0:
+            why.append(f"min {what} margin {value:.6g} m < 0 (the {point} leaves the support)")
+    return why
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse bad ``--plot``/``--html`` paths before any computation (:func:`output_path`)."""
+    if getattr(args, "plot", None):
+        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    if getattr(args, "html", None):
+        output_path(args.html, "--html", (".html", ".htm"))
+
+
+def html_page(model: Any, t: Any, q: Any, path: str, title: str, every: float) -> str:
+    """``--html``: the motion ``q`` at times ``t`` [s] as an offline page, a frame per ``every`` s.
+
+    Raises:
+        ParameterError: The viewer extra is missing.
+
+    """
+    try:
+        from ..viewer import export_html
+    except ImportError as exc:
+        raise ParameterError(
+            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
+            parameter="--html",
+            value=path,
+            allowed="install hexapod-kin[viewer]",
+        ) from None
+    stride = max(1, int(round(every / float(t[1] - t[0])))) if len(t) > 1 else 1
+    return str(export_html(model, t[::stride], q[::stride], path, title=title))
+
+
 def matrix_text(m: Any, indent: str = "  ") -> str:
     """Rows of a matrix, 6 decimals, one line each."""
     return "\n".join(indent + " ".join(f"{v: .6f}" for v in row) for row in m)
@@ -275,46 +593,6 @@ def matrix_text(m: Any, indent: str = "  ") -> str:
 def emit_json(obj: dict[str, Any]) -> None:
     """Write one JSON object (no NaN) and a newline on stdout."""
     sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
-
-
-def source_args(p: argparse.ArgumentParser, frames: bool = True) -> None:
-    """The SOURCE positional, ``-s/--set`` and (with ``frames``) ``--base``/``--tip``."""
-    p.add_argument(
-        "source",
-        help="preset name, table file (.toml/.yaml), URDF path, or erd:NAME (example-robot-data)",
-    )
-    p.add_argument(
-        "-s",
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="preset parameter (SI units); a list as comma-separated numbers, e.g. "
-        "-s mount_yaw_deg=45,90,135,-135,-90,-45",
-    )
-    p.add_argument(
-        "--package-dir",
-        action="append",
-        metavar="DIR",
-        help="a folder where package:// meshes resolve (repeatable; before ROS_PACKAGE_PATH)",
-    )
-    if frames:
-        p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")
-        p.add_argument(
-            "--tip",
-            help="tip frame of the sub-chain (default: a chain's last frame; an arm's TCP or "
-            "flange with the gripper joints locked; every limb's end of a legged robot)",
-        )
-
-
-def inertia_args(p: argparse.ArgumentParser) -> None:
-    """``--inertia urdf|collision|point``: the inertias dynamics uses (masses and COMs kept)."""
-    p.add_argument(
-        "--inertia",
-        choices=("urdf", "collision", "point"),
-        default="urdf",
-        help="inertias: the URDF's; recomputed from each link's collision shapes; or point "
-        "masses (1 cm spheres). Both repairs keep every mass and centre of mass",
-    )
 
 
 def q_args(p: argparse.ArgumentParser) -> None:

@@ -16,16 +16,16 @@ from typing import Any
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
     load_source,
     matrix_text,
     output_path,
     q_args,
     q_from_args,
+    robot_args,
+    robot_of,
     seed,
-    set_params,
-    source_args,
 )
 
 __all__ = ["COMMANDS", "register"]
@@ -67,14 +67,7 @@ def _add_urdf(sub: Any) -> None:
         help="export the URDF of a preset or a table file",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("preset", help="preset name (see `hexapod-kin list`) or a table file")
-    p.add_argument(
-        "-s",
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="preset parameter; a list as comma-separated numbers (e.g. mount_yaw_deg=45,90)",
-    )
+    robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
 
@@ -84,10 +77,10 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
 
     if args.output:
         output_path(args.output, "-o/--output", (".urdf", ".xml"))
-    built = _params_of(args.preset, set_params(args.set, source=args.preset))
+    built = robot_of(args).table()
     # Short options only: an XML comment cannot contain "--".
     command = "hexapod-kin urdf " + " ".join(
-        [args.preset]
+        [args.source]
         + [f"-s {s}" for s in args.set or ()]
         + ([f"-l {args.leg}"] if args.leg else [])
     )
@@ -99,39 +92,10 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
-def _params_of(source: str, params: dict[str, Any]) -> Any:
-    """The parameter object (Chain or Hexapod) of a preset name or a table file."""
-    from .. import robots
-
-    if source in robots.names():
-        return robots.get(source, **params)
-    from .. import sources
-
-    resolved = sources.resolve_source(source, **params)
-    if resolved.params is None:
-        raise ParameterError(
-            f"urdf {source!r}: not a preset or a table file; `urdf` exports what hexapod_kin "
-            "builds (a URDF source is already a URDF)",
-            parameter="SOURCE",
-            value=source,
-            allowed="a preset name or a .toml/.yaml table",
-        )
-    return resolved.params
-
-
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Refuse bad ``--plot``/``--html`` paths before any computation."""
-    if getattr(args, "plot", None):
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if getattr(args, "html", None):
-        output_path(args.html, "--html", (".html", ".htm"))
-
-
 # ------------------------------------------------------------------------ fk
 def _add_fk(sub: Any) -> None:
     p = sub.add_parser("fk", help="tip transform and every intermediate transform")
-    source_args(p)
-    _tool_arg(p)
+    robot_args(p, frames=True, tool=True)
     q_args(p)
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
@@ -193,8 +157,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ jacobian
 def _add_jacobian(sub: Any) -> None:
     p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
-    source_args(p)
-    _tool_arg(p)
+    robot_args(p, frames=True, tool=True)
     q_args(p)
     p.add_argument(
         "--reference",
@@ -278,26 +241,13 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------ derive
-def _tool_arg(p: argparse.ArgumentParser) -> None:
-    """``--tool X Y Z ROLL PITCH YAW``: a point (frame) fixed to the tip, e.g. a foot."""
-    p.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (e.g. a foot point "
-        "on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0)",
-    )
-
-
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
         "derive",
         help="symbolic T, p, J (direct/indirect), det J factored, singular families",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
-    _tool_arg(p)
+    robot_args(p, frames=True, tool=True)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
     p.add_argument(
@@ -479,8 +429,7 @@ def _add_scan(sub: Any) -> None:
         help="singularity measures over a joint grid; singular families",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
-    _tool_arg(p)
+    robot_args(p, frames=True, tool=True)
     p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")
     p.add_argument(
@@ -507,7 +456,7 @@ def _add_scan(sub: Any) -> None:
 
 
 def _cmd_scan(args: argparse.Namespace) -> int:
-    _check_outputs(args)
+    check_outputs(args)
     import numpy as np
 
     from ..singularity import scan

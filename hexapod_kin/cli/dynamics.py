@@ -11,15 +11,15 @@ from typing import Any, cast
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
-    inertia_args,
+    html_page,
     load_source,
-    output_path,
+    not_achieved,
     q_args,
     q_from_args,
-    set_params,
-    source_args,
+    robot_args,
+    robot_of,
 )
 
 __all__ = ["plot_pendulum", "register"]
@@ -93,10 +93,7 @@ def plot_pendulum(experiment: Any, path: Any) -> Any:
 
 
 def _cmd_pendulum(args: argparse.Namespace) -> int:
-    if args.plot:
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if args.html:
-        output_path(args.html, "--html", (".html", ".htm"))
+    check_outputs(args)
     for name in ("theta0_deg", "decay_theta0_deg"):
         value = getattr(args, name)
         if not (math.isfinite(value) and 0 < value < 180):
@@ -164,21 +161,15 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
 
 
 def _pendulum_html(exp: Any, args: argparse.Namespace) -> str:
-    try:
-        from ..viewer import export_html
-    except ImportError as exc:
-        raise ParameterError(f"--html needs the viewer (hexapod_kin.viewer): {exc}") from None
     from ..kinematics import load
 
     run = exp.damped
     model = load("pendulum", damping=run.damping, length=args.length, mass=args.mass)
-    sim = run.simulation
-    stride = max(1, int(round((1 / 30) / sim.dt)))
     title = (
         f"pendulum: theta0 = {math.degrees(run.theta0):g} deg, damping {run.damping:g} "
         "N m s/rad (Pinocchio ABA)"
     )
-    return str(export_html(model, sim.t[::stride], sim.q[::stride], args.html, title=title))
+    return html_page(model, run.simulation.t, run.simulation.q, args.html, title, 1 / 30)
 
 
 # ------------------------------------------------------------------------ torques
@@ -188,9 +179,8 @@ def _add_torques(sub: Any) -> None:
         help="joint torques of a leg under gravity and a foot force (J^T F, RNEA cross-check)",
         formatter_class=_FMT,
     )
-    source_args(p)
+    robot_args(p, frames=True, inertia=True)
     q_args(p)
-    inertia_args(p)
     p.add_argument(
         "--force",
         nargs=3,
@@ -260,18 +250,12 @@ def _add_stand(sub: Any) -> None:
         help="a legged robot standing: contact forces holding its weight, joint torques",
         description=(
             "Stand a legged robot level on flat ground and print the contact forces that hold "
-            "its weight and the joint torques. SOURCE: a Hexapod preset (default 'hexapod'), a "
-            "URDF path or erd:NAME (legs found from the kinematic tree; name the feet with "
-            "--foot when the URDF has no foot links)."
+            "its weight and the joint torques (legs found from the kinematic tree). Exit "
+            "status 1 when the forces are not feasible (a foot pulls, or slides beyond --mu)."
         ),
         formatter_class=_FMT,
     )
-    p.add_argument("source_pos", nargs="?", metavar="SOURCE", help="the robot (default hexapod)")
-    p.add_argument("--source", help="the robot (same as SOURCE)")
-    p.add_argument(
-        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
-    )
-    add_feet_args(p)
+    robot_args(p, kinds="legged", default="hexapod")
     p.add_argument(
         "--height",
         "--body-height",
@@ -309,38 +293,6 @@ def _add_stand(sub: Any) -> None:
     p.set_defaults(func=_cmd_stand)
 
 
-def add_feet_args(p: Any) -> None:
-    """``--foot FRAME:X,Y,Z`` (repeatable) and ``--foot-radius R`` on parser ``p``."""
-    p.add_argument(
-        "--foot",
-        action="append",
-        metavar="FRAME:X,Y,Z",
-        help="a foot as a frame plus an offset in it [m], once per leg (or comma-separated, or "
-        "a .yaml/.toml/.json file), for a URDF without foot links; e.g. "
-        "--foot tibia_lf:0,0.16,0.029",
-    )
-    p.add_argument(
-        "--foot-radius", type=float, help="contact radius of the feet [m] (default: the robot's)"
-    )
-
-
-def source_arg(args: argparse.Namespace) -> str | None:
-    """The robot source of a command: the positional SOURCE or ``--source`` (not both)."""
-    pos, opt = getattr(args, "source_pos", None), getattr(args, "source", None)
-    if pos is not None and opt is not None and pos != opt:
-        raise ParameterError(
-            f"two sources given: {pos!r} and --source {opt!r}; give one",
-            parameter="source",
-            value=[pos, opt],
-        )
-    return pos if pos is not None else opt
-
-
-def feet_arg(args: argparse.Namespace) -> Any:
-    """The ``--foot`` values as one spec (None when absent)."""
-    return None if not args.foot else " ".join(args.foot)
-
-
 def _legs_arg(values: Any) -> Any:
     if values is None:
         return None
@@ -350,42 +302,29 @@ def _legs_arg(values: Any) -> Any:
 def _cmd_stand(args: argparse.Namespace) -> int:
     from ..dynamics import stand
     from ..dynamics.standing import hexapod_model
-    from ..kinematics import load
 
-    source = source_arg(args) or "hexapod"
-    feet, radius = feet_arg(args), args.foot_radius
-    params = set_params(args.set, source=source)
-    model = load(source, **params) if params else None
-    hexa = (
-        None
-        if model is None and (feet or radius is not None)
-        else hexapod_model(model if model is not None else source)
-    )
-    if hexa is None and params:
-        raise ParameterError(
-            f"-s/--set is for the Hexapod presets; {source!r} is not one",
-            parameter="set",
-            value=sorted(params),
-        )
+    robot = robot_of(args)
+    model = robot.load()
+    hexa = hexapod_model(model)
     st = stand(
-        hexa if hexa is not None else source,
+        model,
         height=args.height,
         reach=args.reach,
         shift=args.shift,
         legs=_legs_arg(args.legs),
         method=args.method,
         mu=args.mu,
-        feet=feet,
-        foot_radius=radius,
+        feet=robot.feet,
+        foot_radius=robot.foot_radius,
     )
-    name = hexa.name if hexa is not None else source
+    name = hexa.name if hexa is not None else robot.source
     out = {"source": name, **st.to_dict()}
     gt = None
     if args.gait:
         if hexa is None:
             raise ParameterError(
                 "--gait (walking loads) needs a Hexapod preset; walk other robots with "
-                f"'hexapod-kin gait {source}'",
+                f"'hexapod-kin gait {robot.source}'",
                 parameter="gait",
                 value=args.gait,
             )
@@ -403,9 +342,13 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         )
         gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}
+    why = [] if st.feasible else ["standing: a foot pulls or slides (feasible False)"]
+    if gt is not None and not gt.feasible:
+        why.append(f"walking ({args.gait}): a foot pulls or slides (feasible False)")
+    status = not_achieved(why)
     if args.json:
         emit_json(out)
-        return 0
+        return status
     print(
         f"{name}: mass {st.mass:.6g} kg, weight {st.weight:.6g} N, CoM "
         f"{[round(v, 6) for v in st.com.tolist()]} m, body at {st.height:g} m"
@@ -432,7 +375,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         print("peak torque per joint [N m] (at t [s]):")
         for i, name in enumerate(gt.joint_names):
             print(f"  {name:<12} {gt.peak[i]: .6f}  ({gt.peak_time[i]:g})")
-    return 0
+    return status
 
 
 def register(sub: Any) -> None:

@@ -1,9 +1,9 @@
 """Export subcommands: ``xacro``, ``export-package``, ``mjcf``.
 
-SOURCE is a preset name (with ``-s NAME=VALUE`` parameters) or a table file; ``mjcf`` also
-takes a URDF path. Each file written records the command that made it in its header (short
-options only: an XML comment cannot contain ``--``; output paths are left out so that the same
-input gives the same bytes wherever it is written).
+SOURCE is a preset name (with ``-s NAME=VALUE`` parameters) or a table file; ``mjcf`` also takes
+a URDF path or ``erd:NAME`` (exported without its meshes). Each file written records the command
+that made it in its header (short options only: an XML comment cannot contain ``--``; output
+paths are left out so that the same input gives the same bytes wherever it is written).
 """
 
 from __future__ import annotations
@@ -13,30 +13,9 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import emit_json, output_path, set_params, source_args
+from .common import emit_json, output_path, robot_args, robot_of
 
 __all__ = ["register"]
-
-
-def _resolve(args: argparse.Namespace, allow_urdf: bool = False) -> Any:
-    """The Chain/Hexapod of SOURCE (or, with ``allow_urdf``, SOURCE itself: a URDF)."""
-    from ..sources import resolve_source
-
-    resolved = resolve_source(
-        args.source,
-        package_dirs=tuple(getattr(args, "package_dir", None) or ()),
-        **set_params(args.set, source=args.source),
-    )
-    if resolved.params is not None:
-        return resolved.params
-    if allow_urdf:
-        return args.source
-    raise ParameterError(
-        f"source={args.source!r} is a URDF without a parameter table; {args.command} needs a "
-        "preset name or a table file",
-        parameter="source",
-        value=args.source,
-    )
 
 
 def _command(args: argparse.Namespace, extra: list[str]) -> str:
@@ -51,7 +30,7 @@ def _add_xacro(sub: Any) -> None:
         help="parametric xacro (a macro per leg family, a property per dimension)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p, frames=False)
+    robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
     p.add_argument(
         "-o", "--output", default=None, help="file to write (atomically); stdout if unset"
@@ -68,7 +47,7 @@ def _cmd_xacro(args: argparse.Namespace) -> int:
 
     if args.output:
         output_path(args.output, "--output", (".xacro", ".urdf"))
-    src = _resolve(args)
+    src = robot_of(args).table()
     extra = ([f"-l {args.leg}"] if args.leg else []) + (["-x"] if args.expand else [])
     text = to_xacro(src, leg=args.leg, header=_command(args, extra))
     if args.expand:
@@ -88,7 +67,7 @@ def _add_package(sub: Any) -> None:
         help="ROS 2 description package (package.xml, CMakeLists, urdf/, launch/, rviz/, meshes/)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p, frames=False)
+    robot_args(p, kinds="table")
     p.add_argument("-o", "--out", required=True, help="package folder to create")
     p.add_argument(
         "-n", "--name", default=None, help="ROS package name (default <robot>_description)"
@@ -105,7 +84,7 @@ def _add_package(sub: Any) -> None:
 def _cmd_package(args: argparse.Namespace) -> int:
     from ..export.ros2 import export_package
 
-    src = _resolve(args)
+    src = robot_of(args).table()
     extra = ([f"-n {args.name}"] if args.name else []) + (["-m"] if args.meshes else [])
     result = export_package(
         src,
@@ -135,7 +114,7 @@ def _add_mjcf(sub: Any) -> None:
         help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p, frames=False)
+    robot_args(p)
     p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")
     p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in <stem>_meshes/")
     p.add_argument("--no-floor", action="store_true", help="no floor plane and light")
@@ -155,7 +134,7 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
 
     if args.output:
         output_path(args.output, "--output", (".xml", ".mjcf"))
-    src = _resolve(args, allow_urdf=True)
+    src = robot_of(args).table(urdf=True)
     extra = (
         (["-m"] if args.meshes else [])
         + (["(no floor)"] if args.no_floor else [])

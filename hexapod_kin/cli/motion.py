@@ -18,35 +18,17 @@ from typing import Any, Literal
 
 from ..exceptions import ParameterError
 from .common import (
-    PLOT_SUFFIXES,
+    check_outputs,
     emit_json,
+    html_page,
     load_source,
-    output_path,
+    not_achieved,
     q_args,
     q_from_args,
-    source_args,
+    robot_args,
 )
 
 __all__ = ["register"]
-
-
-def _tool_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument(
-        "--tool",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="rigid tool offset on the tip: xyz [m] and URDF rpy [rad] (deg with --deg)",
-    )
-
-
-def _load(args: argparse.Namespace) -> Any:
-    """Load the source; ``--tool`` (xyz + rpy, rpy in degrees with ``--deg``) as ``tool=``."""
-    tool = getattr(args, "tool", None)
-    if tool is not None:
-        rpy = [math.radians(v) if args.deg else v for v in tool[3:]]
-        args.tool = (tuple(tool[:3]), tuple(rpy))
-    return load_source(args)
 
 
 def _angle(args: argparse.Namespace, v: float) -> float:
@@ -60,7 +42,7 @@ def _add_ik(sub: Any) -> None:
         help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True, tool=True)
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument(
         "--target",
@@ -96,7 +78,6 @@ def _add_ik(sub: Any) -> None:
         metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
         help="weight of each task row",
     )
-    _tool_args(p)
     p.add_argument(
         "--q0",
         nargs="+",
@@ -149,7 +130,7 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     from .. import ik
     from ..exceptions import IKError
 
-    model = _load(args)
+    model = load_source(args)
     target = _target(args)
     closed: list[list[float]] | None = None
     inside = 0  # closed-form solutions within the joint limits
@@ -238,9 +219,8 @@ def _add_step(sub: Any) -> None:
         "velocity / 6-D twist",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True, tool=True)
     q_args(p)
-    _tool_args(p)
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--velocity",
@@ -284,26 +264,9 @@ def _add_step(sub: Any) -> None:
     p.set_defaults(func=_cmd_step)
 
 
-def _write_html(model: Any, tr: Any, path: str, title: str) -> str:
-    try:
-        from ..viewer import export_html
-    except ImportError as exc:
-        raise ParameterError(
-            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
-            parameter="--html",
-            value=path,
-            allowed="install hexapod-kin[viewer]",
-        ) from None
-    stride = max(1, int(round(0.02 / tr.dt)))
-    return str(export_html(model, tr.t[::stride], tr.q[::stride], path, title=title))
-
-
 def _cmd_step(args: argparse.Namespace) -> int:
-    if args.plot:
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
-    if args.html:
-        output_path(args.html, "--html", (".html", ".htm"))
-    model = _load(args)
+    check_outputs(args)
+    model = load_source(args)
     q0 = None if args.q is None else q_from_args(args, model)
     if args.velocity is not None or args.twist is not None:
         return _constant(args, model, q0)
@@ -328,14 +291,16 @@ def _cmd_step(args: argparse.Namespace) -> int:
         written.append(str(plot_motion(run, args.plot)))
     if args.html:
         written.append(
-            _write_html(
+            html_page(
                 model,
-                tr,
+                tr.t,
+                tr.q,
                 args.html,
                 f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
+                0.02,
             )
         )
-    status = 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
+    status = _limited(tr)
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})
         return status
@@ -364,6 +329,14 @@ def _cmd_step(args: argparse.Namespace) -> int:
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
     return status
+
+
+def _limited(tr: Any) -> int:
+    """Exit status of a motion: 1 (answered, not achieved) when limits cut it."""
+    first = float(tr.t[tr.limited.argmax()]) if tr.limited.any() else None
+    return not_achieved(
+        [] if first is None else [f"joint or speed limits cut the motion at t={first:g} s"]
+    )
 
 
 def plot_constant(tr: Any, drift: Any, rot_drift: Any, path: str, title: str, model: Any) -> str:
@@ -458,21 +431,18 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     reached = tr.poses  # Pinocchio's FK of the joint trajectory, sample by sample
     from .._pose import rotation_angle
 
-    drift = float(np.max(np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)))
-    rot = 0.0
-    if vel.size == 6:  # ‖log(E Rᵀ)‖ of every sample, at once
-        rot = float(np.max(rotation_angle(exact[:, :3, :3], reached[:, :3, :3])))
     drifts = np.linalg.norm(reached[:, :3, 3] - exact[:, :3, 3], axis=1)
-    rot_drifts = None
-    if vel.size == 6:
-        rot_drifts = rotation_angle(exact[:, :3, :3], reached[:, :3, :3])
+    # ‖log(E Rᵀ)‖ of every sample, at once
+    rot_drifts = rotation_angle(exact[:, :3, :3], reached[:, :3, :3]) if vel.size == 6 else None
+    drift = float(np.max(drifts))
+    rot = 0.0 if rot_drifts is None else float(np.max(rot_drifts))
     written = []
     if args.plot:
         written.append(
             plot_constant(tr, drifts, rot_drifts, args.plot, f"{model.name}: {label}", model)
         )
     if args.html:
-        written.append(_write_html(model, tr, args.html, f"{model.name}: {label}"))
+        written.append(html_page(model, tr.t, tr.q, args.html, f"{model.name}: {label}", 0.02))
     ca = tr.closest_approach
     if args.json:
         emit_json(
@@ -493,7 +463,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "written": written,
             }
         )
-        return 1 if tr.limited.any() else 0
+        return _limited(tr)
     print(
         f"{model.name} (tip {model.tip}): {label} for {tr.t[-1]:g} s, dt = {tr.dt:g} s, "
         f"{tr.method}, gain {tr.gain:g} 1/s"
@@ -509,7 +479,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     )
     for path in written:
         print(f"wrote {path}", file=sys.stderr)
-    return 1 if tr.limited.any() else 0  # limits hit: answered, the motion not achieved
+    return _limited(tr)
 
 
 def register(sub: Any) -> None:

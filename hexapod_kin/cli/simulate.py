@@ -7,6 +7,15 @@ import math
 import sys
 from typing import Any
 
+from .common import (
+    margin_failures,
+    not_achieved,
+    robot_args,
+    robot_of,
+    walk_args,
+    walk_options,
+)
+
 __all__ = ["register"]
 
 
@@ -22,48 +31,14 @@ def register(sub: Any) -> None:
             "turn vs the plan, heading error, max roll and pitch, body height error, "
             "stance-foot slip, any contact that is not a foot on the ground, and the "
             "standing per-foot normal forces vs dynamics.stand(). Exit status 0 when every "
-            "check passes, 1 when one fails, 2 on an error. Needs MuJoCo "
+            "check passes, 1 when one fails (the plan's, as gait, or the physics'), 2 on bad "
+            "input. Needs MuJoCo "
             "(pip install 'hexapod-kin[export]')."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument(
-        "source",
-        help="the robot: 'hexapod' (the built-in preset), a table file, URDF path or erd:NAME",
-    )
-    p.add_argument(
-        "-s", "--set", action="append", metavar="NAME=VALUE", help="preset parameter (SI units)"
-    )
-    p.add_argument(
-        "--foot",
-        metavar="FRAME:X,Y,Z",
-        default=None,
-        help="feet of a URDF without foot links: frame and offset [m] per leg, "
-        "space-separated (e.g. 'tibia_lf:0,0.16,0.029 tibia_lm:...')",
-    )
-    p.add_argument("--pattern", default="tripod", help="gait pattern (tripod, wave, ripple...)")
-    p.add_argument(
-        "--velocity",
-        nargs="+",
-        metavar="VX,VY,WZ",
-        default=None,
-        help="body twist: forward, sideways [m/s], yaw rate [rad/s] (vx,vy,wz or three numbers)",
-    )
-    p.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
-    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
-    p.add_argument(
-        "--terrain",
-        choices=("flat", "slope", "step"),
-        default="flat",
-        help="slope: 8 degrees uphill along x; step: 0.02 m up at x = 0.25 m",
-    )
-    p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
-    p.add_argument(
-        "--foot-radius",
-        type=float,
-        default=None,
-        help="foot sphere radius [m] (default: the robot's)",
-    )
+    robot_args(p, kinds="legged", default="hexapod")
+    walk_args(p)
     p.add_argument("--friction", type=float, default=1.0, help="sliding friction coefficient")
     p.add_argument(
         "--no-stand", action="store_true", help="skip the standing foot-force comparison"
@@ -76,55 +51,6 @@ def register(sub: Any) -> None:
     p.set_defaults(func=_cmd_simulate)
 
 
-def _velocity(values: list[str] | None) -> Any:
-    from ..exceptions import ParameterError
-
-    if values is None:
-        return None
-    parts = [v for item in values for v in item.replace(",", " ").split()]
-    try:
-        vel = [float(v) for v in parts]
-    except ValueError:
-        vel = []
-    if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
-        raise ParameterError(
-            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
-            parameter="--velocity",
-            value=" ".join(values),
-            allowed="vx,vy,wz",
-        )
-    return tuple(vel)
-
-
-def _robot(args: argparse.Namespace) -> Any:
-    from .. import robots
-    from ..exceptions import ParameterError
-    from ..gait import robot as gait_robot
-    from ..params import Hexapod
-    from ..sources import resolve_source
-    from .common import set_params
-
-    params = set_params(args.set)
-    if args.source == "hexapod":
-        built = robots.get("hexapod", **params)
-        assert isinstance(built, Hexapod)
-        return gait_robot.whole_body(built)
-    if params:
-        raise ParameterError(
-            "-s applies to the hexapod preset only", parameter="--set", value=args.set
-        )
-    if getattr(gait_robot, "as_whole_body", None) is not None:
-        return args.source  # simulate() builds it (and exports its URDF)
-    table = resolve_source(args.source).params
-    if not isinstance(table, Hexapod):
-        raise ParameterError(
-            f"source {args.source!r} is not a legged robot built from a Hexapod",
-            parameter="source",
-            value=args.source,
-        )
-    return gait_robot.whole_body(table)
-
-
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .._io import atomic_write
     from ..simulate import simulate, simulation_html
@@ -132,20 +58,15 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
-    robot = _robot(args)
-    extra = {} if args.foot is None else {"feet": args.foot}
+    robot = robot_of(args)
+    model = robot.load()
     sim = simulate(
-        robot,
-        **extra,
-        pattern=args.pattern,
-        velocity=_velocity(args.velocity),
-        stride=args.stride,
-        period=args.period,
-        terrain=args.terrain,
-        duration=args.duration,
-        foot_radius=args.foot_radius,
+        model,
+        feet=robot.feet,
+        foot_radius=robot.foot_radius,
         friction=args.friction,
         stand=not args.no_stand,
+        **walk_options(args, robot.legged() if args.pattern is None else None),
     )
     out = sim.to_dict()
     if mjcf is not None:
@@ -156,7 +77,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         emit_json(out)
     else:
         _print(out)
-    return 0 if sim.ok else 1
+    failed = [k for k, row in out["checks"].items() if not row["ok"]]
+    why = margin_failures(sim.run)
+    return not_achieved(
+        why + ([f"the physics check(s) {', '.join(failed)} fail"] if failed else [])
+    )
 
 
 def _pct(v: float | None) -> str:

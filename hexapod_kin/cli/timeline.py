@@ -1,14 +1,16 @@
 """The ``timeline`` subcommand: a planned motion as a servo timeline (CSV, JSON, ROS 2 YAML).
 
-``hexapod-kin timeline gait ...`` walks the hexapod (the ``gait`` command's options) and writes
-the joints' timeline; ``hexapod-kin timeline step [SOURCE]`` the seeds' resolved-rate step of
-a leg; ``hexapod-kin timeline path FILE`` takes any joint path from a file (an
-IK path, a step's joint trajectory: CSV ``t,<joint>,...`` in [s] and [rad], or JSON ``t``,
-``q``, ``joint_names``). Both resample at ``--rate`` (``--interpolation linear|cubic``), map
-each joint through ``--calibration`` (YAML/TOML/JSON) and refuse the first sample beyond a
-servo's limits or a joint's speed limit with one line naming the joint, the time and the value
-(exit status 2). The output format follows the suffix of ``-o``: ``.csv``, ``.json``,
-``.yaml``/``.yml`` (a ROS 2 ``trajectory_msgs/JointTrajectory``).
+``hexapod-kin timeline gait [SOURCE]`` walks a legged robot (default the hexapod; the ``gait``
+command's options) and writes the joints' timeline; ``hexapod-kin timeline step [SOURCE]`` the
+seeds' resolved-rate step of a leg; ``hexapod-kin timeline path FILE [SOURCE]`` takes any joint
+path from a file (an IK path, a step's joint trajectory: CSV ``t,<joint>,...`` in [s] and [rad],
+or JSON ``t``, ``q``, ``joint_names``; SOURCE's speed limits apply). All resample at ``--rate``
+(``--interpolation linear|cubic``), map each joint through ``--calibration`` (YAML/TOML/JSON)
+and stop at the first sample beyond a servo's limits or a joint's speed limit with one line
+naming the joint, the time and the value (exit status 1: answered, not achieved; as when the
+step or the walk reaches a joint limit or fails a check). The output format follows the suffix
+of ``-o``: ``.csv``, ``.json``, ``.yaml``/``.yml`` (a ROS 2
+``trajectory_msgs/JointTrajectory``).
 """
 
 from __future__ import annotations
@@ -16,6 +18,18 @@ from __future__ import annotations
 import argparse
 import sys
 from typing import Any
+
+from .common import (
+    emit_json,
+    load_source,
+    margin_failures,
+    not_achieved,
+    output_path,
+    robot_args,
+    robot_of,
+    walk_args,
+    walk_options,
+)
 
 __all__ = ["register"]
 
@@ -57,24 +71,11 @@ def register(sub: Any) -> None:
     kinds = p.add_subparsers(dest="plan", required=True, metavar="PLAN")
     g = kinds.add_parser(
         "gait",
-        help="a walk of the hexapod preset",
+        help="a walk of a legged robot (default the hexapod preset)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    g.add_argument("--pattern", choices=("tripod", "wave", "ripple"), default="tripod")
-    g.add_argument("--stride", type=float, default=None, help="foot stroke in stance [m]")
-    g.add_argument("--height", type=float, default=0.03, help="step height [m]")
-    g.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
-    g.add_argument(
-        "--velocity",
-        type=float,
-        nargs=3,
-        metavar=("VX", "VY", "WZ"),
-        default=None,
-        help="body twist [m/s, m/s, rad/s] (not with --stride)",
-    )
-    g.add_argument("--body-height", type=float, default=0.08, help="[m]")
-    g.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
-    g.add_argument("--plan-rate", type=float, default=100.0, help="the walk's own rate [Hz]")
+    robot_args(g, kinds="legged", default="hexapod")
+    walk_args(g, rate="--plan-rate")
     _common(g)
     g.set_defaults(func=_cmd_gait)
     st = kinds.add_parser(
@@ -82,7 +83,7 @@ def register(sub: Any) -> None:
         help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    st.add_argument("source", nargs="?", default="hexabot_leg", help="a 3-joint leg (source)")
+    robot_args(st, default="hexabot_leg", frames=True, tool=True)
     st.add_argument("--amplitude", type=float, default=0.05, help="A [m/s]")
     st.add_argument("--period", type=float, default=2.0, help="T [s]")
     st.add_argument("--dt", type=float, default=1e-3, help="integration step [s]")
@@ -95,39 +96,32 @@ def register(sub: Any) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     f.add_argument("file", help="plan file: CSV (header t,<joint>,...; [s], [rad]) or JSON")
-    f.add_argument(
-        "--source",
-        help="the robot (preset, table file, URDF, erd:NAME) whose joints' speed limits apply",
-    )
+    robot_args(f, required=False)
     _common(f)
     f.set_defaults(func=_cmd_path)
 
 
 def _cmd_gait(args: argparse.Namespace) -> int:
+    from ..gait.robot import as_whole_body
     from ..gait.walk import walk
-    from .common import output_path
+    from ..params import Hexapod
 
     out = output_path(args.output, "-o", _SUFFIXES)
-    run = walk(
-        pattern=args.pattern,
-        stride=args.stride,
-        step_height=args.height,
-        period=args.period,
-        velocity=args.velocity,
-        body_height=args.body_height,
-        rate=args.plan_rate,
-        duration=args.duration,
-    )
-    return _write(run, args, out, None)
+    robot = robot_of(args)
+    model = robot.load()
+    wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
+    options = walk_options(args, wb)
+    if options["body_height"] is None and isinstance(model.params, Hexapod):
+        options["body_height"] = 0.08  # the timelines' walk of the hexapod
+    run = walk(wb, **options)
+    return max(_write(run, args, out, None), not_achieved(margin_failures(run)))
 
 
 def _cmd_step(args: argparse.Namespace) -> int:
-    from .. import load
     from ..seeds import seed_experiment
-    from .common import output_path
 
     out = output_path(args.output, "-o", _SUFFIXES)
-    model = load(args.source)
+    model = load_source(args)
     run = seed_experiment(
         model,
         amplitude=args.amplitude,
@@ -137,20 +131,19 @@ def _cmd_step(args: argparse.Namespace) -> int:
         baseline=False,
     )
     traj = run.trajectory
-    return _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names)
+    status = _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names)
+    limited = bool(traj.limited.any())  # as `step`: limits cut the motion
+    return max(status, not_achieved(["joint or speed limits cut the step"] if limited else []))
 
 
 def _cmd_path(args: argparse.Namespace) -> int:
     from ..export.timeline import read_plan
-    from .common import output_path
 
     out = output_path(args.output, "-o", _SUFFIXES)
     t, q, names = read_plan(args.file)
     vlim = None
     if args.source:
-        from .. import load
-
-        model = load(args.source)
+        model = load_source(args)
         limits = dict(zip(model.joint_names, model.velocity_limit))
         vlim = [float(limits.get(n, float("inf"))) for n in names]
     return _write((t, q), args, out, vlim, names)
@@ -158,7 +151,6 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
 def _write(plan: Any, args: argparse.Namespace, out: Any, vlim: Any, names: Any = None) -> int:
     from ..export.timeline import timeline
-    from .common import emit_json
 
     tl = timeline(
         plan,

@@ -11,12 +11,13 @@ import argparse
 import sys
 from typing import Any
 
-from .common import emit_json, load_source, output_path, q_args, q_from_args, source_args
+from .common import emit_json, load_source, output_path, q_args, q_from_args, robot_args
 
-__all__ = ["register"]
+__all__ = ["register", "serve_until", "wait_args"]
 
 
-def _wait_args(p: argparse.ArgumentParser) -> None:
+def wait_args(p: argparse.ArgumentParser) -> None:
+    """``--serve-for S`` or ``--no-wait``: how long a live viewer serves (default until Ctrl-C)."""
     g = p.add_mutually_exclusive_group()
     g.add_argument(
         "--serve-for",
@@ -31,7 +32,8 @@ def _wait_args(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _serve_until(viewer: Any, args: argparse.Namespace) -> int:
+def serve_until(viewer: Any, args: argparse.Namespace) -> int:
+    """Print the viewer's URL and serve until Ctrl-C, ``--serve-for`` seconds or not at all."""
     import time
 
     from ..exceptions import ParameterError, ViewerError
@@ -62,9 +64,9 @@ def _add_view(sub: Any) -> None:
         help="show a model in the browser (meshcat server on 127.0.0.1)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True)
     q_args(p)
-    _wait_args(p)
+    wait_args(p)
     p.add_argument("--triads", action="store_true", help="draw the Khalil frames (labelled j)")
     p.set_defaults(func=_cmd_view)
 
@@ -80,7 +82,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     with Viewer(model, q=q) as viewer:
         if args.triads:
             viewer.animate([0.0], np.asarray(q)[None, :], trace_frame=False, frame_triads=True)
-        return _serve_until(viewer, args)
+        return serve_until(viewer, args)
 
 
 # ------------------------------------------------------------------------ animate
@@ -90,7 +92,7 @@ def _add_animate(sub: Any) -> None:
         help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    source_args(p)
+    robot_args(p, frames=True)
     p.add_argument(
         "--html",
         metavar="FILE",
@@ -111,7 +113,7 @@ def _add_animate(sub: Any) -> None:
     )
     p.add_argument("--title", help="page title")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
-    _wait_args(p)
+    wait_args(p)
     p.set_defaults(func=_cmd_animate)
 
 
@@ -155,7 +157,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         return 0
     with Viewer(model, q=qs[0]) as viewer:
         viewer.animate(times, qs, **common)
-        return _serve_until(viewer, args)
+        return serve_until(viewer, args)
 
 
 def register(sub: Any) -> None:

@@ -42,7 +42,14 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
+from ..exceptions import (
+    ConfigurationError,
+    LimitError,
+    ParameterError,
+    choices,
+    one_of,
+    positive,
+)
 from ..params import Hexapod
 from ._common import as_model, check_inertials, finite_vector, read_only
 
@@ -127,7 +134,7 @@ def standing_configuration(
 
     Raises:
         ParameterError: Not a Hexapod, bad numbers.
-        ConfigurationError: A foot cannot reach its ground point (names the leg).
+        LimitError: A foot cannot reach its ground point (names the leg).
 
     """
     from .. import ik
@@ -146,7 +153,7 @@ def standing_configuration(
         target = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], d[2]])
         sols = np.asarray(ik.analytic(chain, target[None, :])[0])  # (k, n): one target
         if len(sols) == 0:
-            raise ConfigurationError(
+            raise LimitError(
                 f"leg {leg.name!r} cannot reach its foot point {target.round(6).tolist()} m "
                 f"(mount frame) for height={h}, reach={r}, shift={sh.tolist()}",
                 parameter="height",
@@ -214,8 +221,9 @@ def contact_forces(
 
     Raises:
         ParameterError: Bad method or ``mu``.
-        ConfigurationError: The feet cannot balance the weight (collinear/too few feet, or no
-            friction-cone solution: the CoM outside the support polygon or ``mu`` too small).
+        ConfigurationError: The feet cannot balance the weight (collinear/too few feet).
+        LimitError: No friction-cone solution (a ``ConfigurationError``): the CoM outside the
+            support polygon or ``mu`` too small.
 
     """
     one_of("method", method, CONTACT_METHODS)
@@ -294,7 +302,7 @@ def _friction_qp(
     )
     f = res.x - pinv @ (a @ res.x - b)
     if not ok(f):
-        raise ConfigurationError(
+        raise LimitError(
             f"no contact forces within the friction cone mu={mu} hold the robot (its centre "
             "of mass is outside the support polygon, or mu is too small)",
             parameter="mu",

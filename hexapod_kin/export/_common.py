@@ -7,10 +7,8 @@ import re
 from typing import Any
 
 from .._version import __version__
-from ..exceptions import OptionalDependencyError, ParameterError
-from ..params import Chain, Hexapod
-from ..sources import resolve_source
-from ..urdf import COLORS, comment, num, vec  # one home: the URDF text
+from ..exceptions import OptionalDependencyError
+from ..urdf import COLORS, comment, num, table_of, vec  # one home: the URDF text and a table
 
 __all__ = [
     "COLORS",
@@ -39,36 +37,6 @@ def header_lines(what: str, description: str, header: str | None) -> list[str]:
     return lines
 
 
-def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
-    """The parameter table of ``source``, resolved as everywhere (:func:`resolve_source`).
-
-    Raises:
-        ParameterError: A source without a table (a URDF), or ``leg`` that does not fit.
-        SourceError: A source that does not resolve.
-
-    """
-    if isinstance(source, (Chain, Hexapod)):
-        params: Chain | Hexapod | None = source
-    else:
-        resolved = resolve_source(source)
-        params = resolved.params
-        if params is None:
-            raise ParameterError(
-                f"source {resolved.name!r} is a URDF without a parameter table; this export needs "
-                "a Chain, a Hexapod, a preset name or a table file",
-                parameter="source",
-                value=resolved.name,
-            )
-    assert params is not None
-    if leg is not None:
-        if isinstance(params, Chain):
-            raise ParameterError(
-                f"leg={leg!r} only applies to a Hexapod, not to a Chain",
-                parameter="leg",
-                value=leg,
-            )
-        params.leg(leg)  # raises with the list of legs
-    return params
 
 
 def need(module: str, extra: str = "export") -> Any:

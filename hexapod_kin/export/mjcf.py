@@ -243,6 +243,24 @@ def _compile(urdf_text: str, assets: dict[str, bytes]) -> tuple[str, Any, Any]:
     return text, model, mujoco
 
 
+def _without_meshes(urdf: str) -> str:
+    """The URDF without mesh geometry (visual or collision); primitives stay.
+
+    A robot's URDF from elsewhere often names ``package://`` meshes that MuJoCo's compiler
+    cannot open (it reads plain file paths, and not every format); the MJCF of such a URDF
+    keeps its bodies, joints, inertials and primitive shapes. Collisions that were meshes are
+    gone, so contacts of those links go undetected (the simulation adds its foot spheres).
+    """
+    from lxml import etree
+
+    root = etree.fromstring(urdf.encode("utf-8"))
+    for link in root.iter("link"):
+        for elem in list(link):
+            if elem.tag in ("visual", "collision") and elem.find("geometry/mesh") is not None:
+                link.remove(elem)
+    return str(etree.tostring(root, encoding="unicode"))
+
+
 def to_mjcf(
     source: Any,
     *,
@@ -262,7 +280,8 @@ def to_mjcf(
         source: What :func:`hexapod_kin.load` takes (resolved by
             :func:`~hexapod_kin.sources.resolve_source`): a chain, a robot, a preset name, a
             table file, a URDF path or text, ``erd:NAME``. A URDF without a parameter table is
-            used as it is (no meshes, no reach-based floor).
+            used without its mesh geometry (primitives, inertials and joints kept; no
+            reach-based floor).
         meshes: STL visuals (trimesh) as non-colliding mesh geoms (group 1); the primitive
             collision geoms move to group 3.
         mesh_prefix: Folder of the mesh files relative to the MJCF file.
@@ -323,7 +342,7 @@ def to_mjcf(
         )
     if params is None:
         assert resolved is not None
-        urdf, default_floor, desc = resolved.text, -1.0, resolved.name
+        urdf, default_floor, desc = _without_meshes(resolved.text), -1.0, resolved.name
         if meshes:
             raise ParameterError(
                 "meshes=True needs a source with a parameter table, not a URDF", parameter="meshes"

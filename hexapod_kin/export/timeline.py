@@ -55,7 +55,13 @@ import numpy as np
 
 from .._io import atomic_write
 from .._reader import parse_data, read_text
-from ..exceptions import ConfigurationError, HexapodKinError, SourceError, choices
+from ..exceptions import (
+    ConfigurationError,
+    HexapodKinError,
+    LimitError,
+    SourceError,
+    choices,
+)
 from .servos import UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [
@@ -323,9 +329,9 @@ def timeline(
         The :class:`Timeline`.
 
     Raises:
-        ConfigurationError: A sample beyond a servo's limits or a joint's speed limit (the
-            message names the joint, the time [s] and the value; ``parameter`` is the joint),
-            or a malformed plan.
+        LimitError: A sample beyond a servo's limits or a joint's speed limit (the
+            message names the joint, the time [s] and the value; ``parameter`` is the joint).
+        ConfigurationError: A malformed plan.
         ParameterError: Bad rate, interpolation or calibration.
 
     """
@@ -402,7 +408,7 @@ def timeline(
             bad = np.flatnonzero((command[:, j] < lo) | (command[:, j] > hi))
             if bad.size:
                 k = int(bad[0])
-                raise ConfigurationError(
+                raise LimitError(
                     f"joint {s.joint} at t={ts[k]:.4f} s: {exact[k]:.6g} {s.units} "
                     f"(q = {qs[k, j]:.6g} rad) is beyond its servo's limits "
                     f"[{lo:g}, {hi:g}] {s.units}",
@@ -414,7 +420,7 @@ def timeline(
         bad = np.flatnonzero(np.abs(vs[:, j]) > lim)
         if bad.size:
             k = int(bad[0])
-            raise ConfigurationError(
+            raise LimitError(
                 f"joint {s.joint} at t={ts[k]:.4f} s: speed {vs[k, j]:.6g} rad/s is beyond its "
                 f"limit {lim:g} rad/s",
                 parameter=s.joint,

@@ -301,10 +301,11 @@ def simulate(
     if foot_radius is None and planned_radius is not None:  # the feet the plan rolled
         foot_radius = float(planned_radius) if planned_radius > 0 else POINT_FOOT
     one_of("terrain", ground, list(SCENE_TERRAINS))
-    by_name = isinstance(run_or_robot, (str, os.PathLike))  # the URDF text is at hand
+    # the URDF text at hand: the robot's path, text or erd:NAME, or a loaded model's own URDF
+    by_name = isinstance(run_or_robot, (str, os.PathLike))
     sc = scene_mjcf(
         wb,
-        source=run_or_robot if by_name else None,
+        source=run_or_robot if by_name else getattr(run_or_robot, "urdf", None),
         terrain=ground,
         foot_radius=foot_radius,
         friction=friction,

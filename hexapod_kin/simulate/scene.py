@@ -64,23 +64,6 @@ def _foot_radius(wb: Any) -> float:
     return float(r) if r > 0 else POINT_FOOT
 
 
-def _without_meshes(urdf: str) -> str:
-    """The URDF without mesh geometry (visual or collision); primitives stay.
-
-    A robot's URDF from elsewhere often names ``package://`` meshes that are not at hand;
-    the simulation needs the feet (added as spheres) and the inertials, not the meshes.
-    Collisions that were meshes are gone, so contacts of those links go undetected.
-    """
-    from lxml import etree
-
-    root = etree.fromstring(urdf.encode("utf-8"))
-    for link in root.iter("link"):
-        for elem in list(link):
-            if elem.tag in ("visual", "collision") and elem.find("geometry/mesh") is not None:
-                link.remove(elem)
-    return str(etree.tostring(root, encoding="unicode"))
-
-
 def _robot_mjcf(wb: Any, source: Any = None) -> str:
     """The robot's MJCF with a free base: from its Hexapod table, else from its URDF.
 
@@ -106,7 +89,7 @@ def _robot_mjcf(wb: Any, source: Any = None) -> str:
         except HexapodKinError:
             continue
     if isinstance(urdf, str):
-        return to_mjcf(_without_meshes(urdf), floating=True, floor=False, balance_inertia=True).xml
+        return to_mjcf(urdf, floating=True, floor=False, balance_inertia=True).xml
     raise ParameterError(
         f"robot {getattr(wb, 'source', wb)!r}: no Hexapod table or URDF text to export to "
         "MJCF; give its URDF path or erd:NAME as the robot",
