@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from ._pose import rodrigues
 from ._table_kin import table_fk
 from .exceptions import ConfigurationError, ParameterError, SourceError
 from .params import Chain, JointLimits, KhalilRow, Pose
@@ -234,9 +235,7 @@ def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     c = float(np.dot(a, b))
     if s == 0.0:
         return np.eye(3)
-    k = axis / s
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + s * kx + (1.0 - c) * (kx @ kx)
+    return rodrigues(axis / s, s, c)
 
 
 def _snap(
