@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from ._fields import fields_dict
 from ._pose import rodrigues
 from ._table_kin import table_fk
 from .exceptions import ConfigurationError, ParameterError, SourceError
@@ -165,12 +166,7 @@ class Snap:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (angle in [rad], reach in [m])."""
-        return {
-            "joints": list(self.joints),
-            "kind": self.kind,
-            "angle": self.angle,
-            "reach": self.reach,
-        }
+        return fields_dict(self, "joints", "kind", "angle", "reach")
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 
 __all__ = ["SCENE_TERRAINS", "SimScene", "scene_mjcf"]
@@ -198,16 +199,8 @@ class SimScene:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (SI units)."""
-        return {
-            "terrain": self.terrain,
-            "foot_radius": self.foot_radius,
-            "kp": self.kp,
-            "kv": self.kv,
-            "friction": self.friction,
-            "timestep": self.timestep,
-            "armature": self.armature,
-            "contact_time": self.contact_time,
-        }
+        names = ("terrain", "foot_radius", "kp", "kv", "friction", "timestep", "armature")
+        return fields_dict(self, *names, "contact_time")
 
 
 #: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
