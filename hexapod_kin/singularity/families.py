@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +22,7 @@ import numpy as np
 
 from .._io import atomic_write, cache_root
 from .._numerics import wrap_angles
-from ..exceptions import HexapodKinError, ParameterError
+from ..exceptions import HexapodKinError, ParameterError, positive
 from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
@@ -393,13 +392,7 @@ def families_for(
         ParameterError: ``budget`` not a finite value > 0.
 
     """
-    if not (isinstance(budget, (int, float)) and math.isfinite(budget) and budget > 0):
-        raise ParameterError(
-            f"budget={budget!r}: a finite time > 0 s is required",
-            parameter="budget",
-            value=budget,
-            allowed="> 0 s",
-        )
+    positive("budget", budget)
     chain, why = _table(model)
     if chain is None:
         return Families((), "none", why)
