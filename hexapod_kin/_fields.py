@@ -1,4 +1,4 @@
-"""JSON-ready dictionaries of the result dataclasses' fields."""
+"""Helpers of the result dataclasses: JSON-ready field dictionaries, read-only arrays."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["fields_dict"]
+__all__ = ["fields_dict", "read_only"]
 
 
 def fields_dict(obj: Any, *names: str) -> dict[str, Any]:
@@ -20,3 +20,9 @@ def fields_dict(obj: Any, *names: str) -> dict[str, Any]:
             v = list(v)
         out[name] = v
     return out
+
+
+def read_only(*arrays: np.ndarray) -> None:
+    """Mark arrays read-only (results handed to users are protected)."""
+    for a in arrays:
+        a.setflags(write=False)
