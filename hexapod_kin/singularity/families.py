@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from .._io import atomic_write, cache_root
 from .._numerics import wrap_angles
 from ..exceptions import HexapodKinError, ParameterError, positive
@@ -93,18 +94,10 @@ class Family:
 
     def to_dict(self, joint_names: tuple[str, ...] | None = None) -> dict[str, Any]:
         """JSON-ready dict (joint by name when ``joint_names`` is given)."""
-        joint: Any = self.joint
-        if joint is not None and joint_names is not None:
-            joint = joint_names[joint]
-        return {
-            "name": self.name,
-            "equation": self.equation,
-            "variables": list(self.variables),
-            "joint": joint,
-            "value": self.value,
-            "periodic": self.periodic,
-            "factor": self.factor,
-        }
+        out = fields_dict(self, "name", "equation", "variables", "joint", "value", "periodic")
+        if self.joint is not None and joint_names is not None:
+            out["joint"] = joint_names[self.joint]
+        return out | {"factor": self.factor}
 
 
 @dataclass(frozen=True)
