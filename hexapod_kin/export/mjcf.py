@@ -70,7 +70,7 @@ def _chain_reach(chain: Chain) -> float:
             lim = (chain.limits or ())[k]
             total += max(abs(lim.lower), abs(lim.upper))
         k += int(row.is_joint)
-    for pose in (getattr(chain, "base_pose", None), getattr(chain, "tool", None)):
+    for pose in (chain.base_pose, chain.tool):
         if pose is not None:
             total += float(np.linalg.norm(pose.xyz))
     return total + 3.0 * chain.link_radius

@@ -201,12 +201,10 @@ def _family(chain: Chain, macro: str) -> _Family:
             for key, value in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), inn.inertia):
                 p[f"{lid}_{key}"] = num(value)
     p["link_radius"] = num(chain.link_radius)
-    base_pose = getattr(chain, "base_pose", None)
-    if base_pose is not None:
-        p.update(_pose_params("base", base_pose.matrix))
-    tool = getattr(chain, "tool", None)
-    if tool is not None:
-        p.update(_pose_params("tool", tool.matrix))
+    if chain.base_pose is not None:
+        p.update(_pose_params("base", chain.base_pose.matrix))
+    if chain.tool is not None:
+        p.update(_pose_params("tool", chain.tool.matrix))
     return fam
 
 
@@ -259,8 +257,7 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
         f"{pad}</xacro:unless>",
     ]
     prev = base
-    base_pose = getattr(chain, "base_pose", None)
-    if base_pose is not None:
+    if chain.base_pose is not None:
         frame0 = f"${{prefix}}{chain.base}_frame0"
         out += [
             *fixed_joint(
@@ -325,9 +322,8 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
             )
         out.append(f"{pad}</link>")
         prev = child
-    tool = getattr(chain, "tool", None)
-    if tool is not None:
-        t_tool = tool.matrix
+    if chain.tool is not None:
+        t_tool = chain.tool.matrix
         back = -t_tool[:3, :3].T @ t_tool[:3, 3]
         tip = f"${{prefix}}{chain.tip}"
         out += [
