@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write
-from ..exceptions import ParameterError, UrdfError, one_of, positive
+from ..exceptions import ParameterError, UrdfError, finite, one_of, positive
 from ..params import Chain, Hexapod
 from ..sources import resolve_source
 from ..urdf import to_urdf
@@ -296,8 +296,8 @@ def to_mjcf(
         positive("timestep", timestep)
     if integrator is not None:
         one_of("integrator", integrator, INTEGRATORS)
-    if floor_z is not None and not np.isfinite(floor_z):
-        raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
+    if floor_z is not None:
+        finite("floor_z", floor_z)
     params: Chain | Hexapod | None = None
     resolved = None
     if isinstance(source, (Chain, Hexapod)):

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError, one_of, positive
+from ..exceptions import ParameterError, finite, one_of, positive
 
 __all__ = [
     "ANGLES",
@@ -172,17 +172,7 @@ class DesignSpace:
             if isinstance(v, Range):
                 vals[k] = v
             else:
-                try:
-                    fv = float(v)
-                except (TypeError, ValueError):
-                    fv = math.nan
-                if not math.isfinite(fv):
-                    raise ParameterError(
-                        f"design parameter {k}={v!r}: expected a finite number or a Range",
-                        parameter=k,
-                        value=v,
-                    )
-                vals[k] = fv
+                vals[k] = finite(k, v)
         if self.total is not None:
             if "l3" in vals:
                 raise ParameterError(
