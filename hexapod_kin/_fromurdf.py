@@ -213,15 +213,9 @@ class TableRecovery:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
-        return {
-            "chain": self.chain.name,
-            "snaps": [s.to_dict() for s in self.snaps],
-            "angle_tol": self.angle_tol,
-            "size": self.size,
-            "fk_bound": self.fk_bound,
-            "fk_error": self.fk_error,
-            "zeroed": {k: v for k, v in self.zeroed},
-        }
+        out = {"chain": self.chain.name, "snaps": [s.to_dict() for s in self.snaps]}
+        out |= fields_dict(self, "angle_tol", "size", "fk_bound", "fk_error")
+        return out | {"zeroed": dict(self.zeroed)}
 
 
 def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from .._fields import read_only
+from .._fields import fields_dict, read_only
 from ..exceptions import ConfigurationError, ParameterError, positive
 from ..kinematics import KinematicModel, load
 from ._law import integrate
@@ -81,13 +81,10 @@ class ClosestApproach:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (a non-finite condition becomes None)."""
-        return {
-            "index": self.index,
-            "t": self.t,
-            "sigma_min": self.sigma_min,
-            "condition": self.condition if math.isfinite(self.condition) else None,
-            "q": list(self.q),
-        }
+        out = fields_dict(self, "index", "t", "sigma_min", "condition", "q")
+        if not math.isfinite(self.condition):
+            out["condition"] = None
+        return out
 
 
 @dataclass(frozen=True)
