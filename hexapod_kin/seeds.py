@@ -255,7 +255,7 @@ def seed_baseline(
         None when the loop met a singular J), and why it stopped (or None).
 
     """
-    a = float(amplitude)
+    a = finite("amplitude", amplitude)
     per = positive("period", period)
     q_start = _start(model, q0)
     vel = _x_velocity(a, per)
