@@ -187,16 +187,8 @@ class Context:
             if claim is not None
             else np.full_like(q, np.nan)
         )
-        return {
-            "t": t,
-            "q": q,
-            "feet": feet,
-            "ours": ours,
-            "back": back,
-            "seed": seed,
-            "knots_t": sched.times,
-            "knots_q": sched.values,
-        }
+        knots = {"knots_t": sched.times, "knots_q": sched.values}
+        return dict(t=t, q=q, feet=feet, ours=ours, back=back, seed=seed, **knots)
 
     def quantity(self, name: str) -> float:
         """A measured figure named in a ``bound`` claim."""
