@@ -48,6 +48,8 @@ from typing import Any
 
 import numpy as np
 
+from ._fields import fields_dict
+from ._pose import rodrigues
 from ._table_kin import table_fk
 from .exceptions import ConfigurationError, ParameterError, SourceError
 from .params import Chain, JointLimits, KhalilRow, Pose
@@ -164,12 +166,7 @@ class Snap:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (angle in [rad], reach in [m])."""
-        return {
-            "joints": list(self.joints),
-            "kind": self.kind,
-            "angle": self.angle,
-            "reach": self.reach,
-        }
+        return fields_dict(self, "joints", "kind", "angle", "reach")
 
 
 @dataclass(frozen=True)
@@ -216,15 +213,9 @@ class TableRecovery:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
-        return {
-            "chain": self.chain.name,
-            "snaps": [s.to_dict() for s in self.snaps],
-            "angle_tol": self.angle_tol,
-            "size": self.size,
-            "fk_bound": self.fk_bound,
-            "fk_error": self.fk_error,
-            "zeroed": {k: v for k, v in self.zeroed},
-        }
+        out = {"chain": self.chain.name, "snaps": [s.to_dict() for s in self.snaps]}
+        out |= fields_dict(self, "angle_tol", "size", "fk_bound", "fk_error")
+        return out | {"zeroed": dict(self.zeroed)}
 
 
 def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -234,9 +225,7 @@ def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     c = float(np.dot(a, b))
     if s == 0.0:
         return np.eye(3)
-    k = axis / s
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + s * kx + (1.0 - c) * (kx @ kx)
+    return rodrigues(axis / s, s, c)
 
 
 def _snap(

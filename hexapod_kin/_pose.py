@@ -15,7 +15,7 @@ import numpy as np
 
 from .exceptions import ParameterError
 
-__all__ = ["Pose", "matrix_to_rpy", "rotation_angle", "rpy_to_matrix"]
+__all__ = ["Pose", "matrix_to_rpy", "rodrigues", "rotation_angle", "rpy_to_matrix"]
 
 
 def rotation_angle(r_a: Any, r_b: Any) -> np.ndarray:
@@ -35,6 +35,12 @@ def rotation_angle(r_a: Any, r_b: Any) -> np.ndarray:
     sin_t = 0.5 * np.linalg.norm(skew, axis=-1)
     cos_t = 0.5 * (np.trace(m, axis1=-2, axis2=-1) - 1.0)
     return np.arctan2(sin_t, cos_t)
+
+
+def rodrigues(k: np.ndarray, sin: float, cos: float) -> np.ndarray:
+    """Rotation about the unit axis ``k`` by the angle of ``(sin, cos)`` (Rodrigues)."""
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + sin * kx + (1.0 - cos) * (kx @ kx)
 
 
 def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:

@@ -27,6 +27,7 @@ __all__ = [
     "choices",
     "one_of",
     "did_you_mean",
+    "finite",
     "positive",
 ]
 
@@ -203,6 +204,41 @@ def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.
     return " (did you mean " + " or ".join(repr(x) for x in found) + "?)"
 
 
+def finite(name: str, value: Any, need: str = "") -> float:
+    """``value`` as a finite float: the package's one such check (a bool is not a number).
+
+    Args:
+        name: The parameter's name (in the message and the error's fields).
+        value: What was given.
+        need: A range also required, for the message (e.g. ``"> 0"``).
+
+    Raises:
+        ParameterError: Not a number or not finite.
+
+    """
+    allowed = f"finite {need}".rstrip()
+    what = f"a finite value {need}".rstrip()
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name}={value!r} is not a number; {what} is needed",
+            parameter=name,
+            value=value,
+            allowed=allowed,
+        ) from None
+    if not math.isfinite(v):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; {what} is needed",
+            parameter=name,
+            value=value,
+            allowed=allowed,
+        )
+    return v
+
+
 def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """``value`` as a finite float > 0 (>= 0 with ``allow_zero``): the package's one such check.
 
@@ -212,18 +248,8 @@ def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
 
     """
     need = ">= 0" if allow_zero else "> 0"
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"{name}={value!r} is not a number; a finite value {need} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"finite {need}",
-        ) from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+    v = finite(name, value, need)
+    if v < 0 or (v == 0 and not allow_zero):
         raise ParameterError(
             f"{name}={value!r} is not allowed; a finite value {need} is needed",
             parameter=name,

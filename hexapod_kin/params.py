@@ -43,7 +43,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ._pose import Pose, matrix_to_rpy, rpy_to_matrix
-from .exceptions import ParameterError, choices
+from .exceptions import ParameterError, choices, finite
 
 __all__ = [
     "KhalilRow",
@@ -86,18 +86,6 @@ def _sigma(value: Any, where: str) -> SigmaName:
             "'fixed' (2)"
         )
     return _SIGMA[key]
-
-
-def _finite(value: Any, where: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(
-            f"{where}={value!r} is not a number; a finite float is required"
-        ) from None
-    if not math.isfinite(x):
-        raise ParameterError(f"{where}={value!r} is not finite; a finite float is required")
-    return x
 
 
 def _name(value: Any, where: str) -> str:
@@ -182,7 +170,7 @@ class KhalilRow:
     def __post_init__(self) -> None:
         object.__setattr__(self, "sigma", _sigma(self.sigma, "KhalilRow"))
         for f in ("alpha", "d", "theta", "r"):
-            object.__setattr__(self, f, _finite(getattr(self, f), f"KhalilRow.{f}"))
+            object.__setattr__(self, f, finite(f"KhalilRow.{f}", getattr(self, f)))
 
     @property
     def is_joint(self) -> bool:
@@ -220,7 +208,7 @@ class DHRow:
     def __post_init__(self) -> None:
         object.__setattr__(self, "sigma", _sigma(self.sigma, "DHRow"))
         for f in ("theta", "d", "a", "alpha"):
-            object.__setattr__(self, f, _finite(getattr(self, f), f"DHRow.{f}"))
+            object.__setattr__(self, f, finite(f"DHRow.{f}", getattr(self, f)))
 
     def transform(self, q: float = 0.0) -> np.ndarray:
         """Return ``^{i-1}T_i`` at joint value ``q``."""
@@ -250,7 +238,7 @@ class JointLimits:
 
     def __post_init__(self) -> None:
         for f in ("lower", "upper", "velocity", "effort"):
-            object.__setattr__(self, f, _finite(getattr(self, f), f"JointLimits.{f}"))
+            object.__setattr__(self, f, finite(f"JointLimits.{f}", getattr(self, f)))
         if self.lower > self.upper:
             raise ParameterError(
                 f"JointLimits: lower={self.lower} > upper={self.upper}; lower <= upper required"
@@ -278,20 +266,20 @@ class Inertial:
     inertia: tuple[float, float, float, float, float, float] = (1e-6, 1e-6, 1e-6, 0, 0, 0)
 
     def __post_init__(self) -> None:
-        m = _finite(self.mass, "Inertial.mass")
+        m = finite("Inertial.mass", self.mass)
         if m <= 0:
             raise ParameterError(f"Inertial.mass={m} is not allowed; mass must be > 0 kg")
         object.__setattr__(self, "mass", m)
         if len(tuple(self.com)) != 3:
             raise ParameterError(f"Inertial.com={self.com!r}: three numbers (x, y, z) required")
         object.__setattr__(
-            self, "com", tuple(_finite(v, f"Inertial.com[{i}]") for i, v in enumerate(self.com))
+            self, "com", tuple(finite(f"Inertial.com[{i}]", v) for i, v in enumerate(self.com))
         )
         if len(tuple(self.inertia)) != 6:
             raise ParameterError(
                 f"Inertial.inertia={self.inertia!r}: six numbers (ixx, iyy, izz, ixy, ixz, iyz)"
             )
-        ii = tuple(_finite(v, f"Inertial.inertia[{i}]") for i, v in enumerate(self.inertia))
+        ii = tuple(finite(f"Inertial.inertia[{i}]", v) for i, v in enumerate(self.inertia))
         object.__setattr__(self, "inertia", ii)
         mat = self.matrix()
         eig = np.linalg.eigvalsh(mat)
@@ -478,10 +466,10 @@ class Chain:
             raise ParameterError(f"Chain link names must be unique, got {all_names}")
         if len(set(names)) != len(names):
             raise ParameterError(f"Chain.joint_names must be unique, got {names}")
-        lm = _finite(self.link_mass, "Chain.link_mass")
+        lm = finite("Chain.link_mass", self.link_mass)
         if lm <= 0:
             raise ParameterError(f"Chain.link_mass={lm} is not allowed; must be > 0 kg")
-        lr = _finite(self.link_radius, "Chain.link_radius")
+        lr = finite("Chain.link_radius", self.link_radius)
         if lr <= 0:
             raise ParameterError(f"Chain.link_radius={lr} is not allowed; must be > 0 m")
         if self.inertials is not None:
@@ -496,7 +484,7 @@ class Chain:
             vals = (v,) * nj if isinstance(v, (int, float)) else tuple(v)
             if len(vals) != nj:
                 raise ParameterError(f"Chain.{f}: one value or {nj} values required, got {v!r}")
-            vals = tuple(_finite(x, f"Chain.{f}") for x in vals)
+            vals = tuple(finite(f"Chain.{f}", x) for x in vals)
             if any(x < 0 for x in vals):
                 raise ParameterError(f"Chain.{f}={v!r}: values must be >= 0")
             object.__setattr__(self, f, vals if not isinstance(v, (int, float)) else float(v))
@@ -664,9 +652,9 @@ class LegMount:
         if len(tuple(self.xyz)) != 3:
             raise ParameterError(f"LegMount.xyz={self.xyz!r}: three numbers required")
         object.__setattr__(
-            self, "xyz", tuple(_finite(v, f"LegMount.xyz[{i}]") for i, v in enumerate(self.xyz))
+            self, "xyz", tuple(finite(f"LegMount.xyz[{i}]", v) for i, v in enumerate(self.xyz))
         )
-        object.__setattr__(self, "yaw", _finite(self.yaw, "LegMount.yaw"))
+        object.__setattr__(self, "yaw", finite("LegMount.yaw", self.yaw))
 
     def transform(self) -> np.ndarray:
         """Return ``^{body}T_{mount}`` (4×4)."""
@@ -706,11 +694,11 @@ class Hexapod:
         names = [x.name for x in legs]
         if len(set(names)) != len(names):
             raise ParameterError(f"Hexapod.legs names must be unique, got {names}")
-        size = tuple(_finite(v, "Hexapod.body_size") for v in self.body_size)
+        size = tuple(finite("Hexapod.body_size", v) for v in self.body_size)
         if len(size) != 3 or min(size) <= 0:
             raise ParameterError(f"Hexapod.body_size={self.body_size!r}: three lengths > 0 m")
         object.__setattr__(self, "body_size", size)
-        m = _finite(self.body_mass, "Hexapod.body_mass")
+        m = finite("Hexapod.body_mass", self.body_mass)
         if m <= 0:
             raise ParameterError(f"Hexapod.body_mass={m}: must be > 0 kg")
         object.__setattr__(self, "body_mass", m)

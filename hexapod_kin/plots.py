@@ -227,8 +227,7 @@ def plot_still(
     for axis, h in zip((ax.xaxis, ax.yaxis, ax.zaxis), half / half.max()):
         axis.get_major_locator().set_params(nbins=max(2, int(round(6 * h))))
     ax.view_init(*view)
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.set(xlabel="x [m]", ylabel="y [m]")
     ax.set_zlabel("z [m]")
     ax.set_title(title, fontsize=10)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.93)
@@ -406,8 +405,7 @@ def singularity_map_figure(
             title_fontsize=9,
             frameon=False,
         )
-    ax.set_xlabel(label_a)
-    ax.set_ylabel(label_b)
+    ax.set(xlabel=label_a, ylabel=label_b)
     others = []
     for j in range(len(result.joint_names)):
         if j in (ja, jb):
@@ -487,8 +485,7 @@ def plot_workspace(
         sp_sec = cross_section(np.asarray(singular_points, float), plane)
         ax.scatter(sp_sec[:, 0], sp_sec[:, 1], s=2, c="tab:red", label="singular configurations")
     ax.set_aspect("equal")
-    ax.set_xlabel(f"{plane[0]} [m]")
-    ax.set_ylabel(f"{plane[1]} [m]")
+    ax.set(xlabel=f"{plane[0]} [m]", ylabel=f"{plane[1]} [m]")
     ax.legend(loc="upper right", markerscale=6)
     ax.set_title(
         title or f"{ws.source}: workspace section ({plane} plane); volume ~ {ws.volume:.3g} m^3"
@@ -523,8 +520,7 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
     ax = axes[0, 0]
     for k, name in enumerate("xyz"):
         ax.plot(*decimate(t, tr.foot[:, k]), label=name)
-    ax.set_ylabel("foot position [m]")
-    ax.set_title("foot position (base frame)")
+    ax.set(ylabel="foot position [m]", title="foot position (base frame)")
     ax.legend(loc="center right")
     ax.grid(True, alpha=0.3)
     ax = axes[0, 1]
@@ -537,16 +533,13 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
             alpha=0.8,
             label=f"commanded v{name}",
         )
-    ax.set_ylabel("foot velocity [m/s]")
-    ax.set_title("commanded vs actual foot velocity")
+    ax.set(ylabel="foot velocity [m/s]", title="commanded vs actual foot velocity")
     ax.legend(loc="best", fontsize=8, ncol=2)
     ax.grid(True, alpha=0.3)
     ax = axes[1, 0]
     for j in range(tr.q.shape[1]):
         ax.plot(*decimate(t, tr.q[:, j]), label=f"q{j + 1}")
-    ax.set_ylabel("joint value [rad]")
-    ax.set_xlabel("t [s]")
-    ax.set_title("joint angles")
+    ax.set(ylabel="joint value [rad]", xlabel="t [s]", title="joint angles")
     ax.legend(loc="best")
     ax.grid(True, alpha=0.3)
     ax = axes[1, 1]
@@ -567,9 +560,7 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
             lw=0.8,
             label="|x − x_ref| Euler + solve",
         )
-    ax.set_ylabel("deviation from the reference path [m]")
-    ax.set_xlabel("t [s]")
-    ax.set_title("drift")
+    ax.set(ylabel="deviation from the reference path [m]", xlabel="t [s]", title="drift")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if title is None:
@@ -607,17 +598,13 @@ def plot_step(step: Any, path: str | os.PathLike[str], title: str | None = None)
     a1.plot(foot[:, 0], foot[:, 2], "-", color="0.7", lw=4, label="planned")
     a1.plot(act[st, 0], act[st, 2], ".", ms=3, label="stance (FK of IK)")
     a1.plot(act[~st, 0], act[~st, 2], ".", ms=3, label="swing (FK of IK)")
-    a1.set_xlabel("x [m]")
-    a1.set_ylabel("z [m]")
+    a1.set(xlabel="x [m]", ylabel="z [m]", title="foot path (side view)")
     a1.set_aspect("equal", adjustable="datalim")
-    a1.set_title("foot path (side view)")
     a1.legend(loc="best", fontsize=8)
     a1.grid(True, alpha=0.3)
     for j in range(step.q.shape[1]):
         a2.plot(step.t, step.q[:, j], label=f"q{j + 1}")
-    a2.set_xlabel("t [s]")
-    a2.set_ylabel("joint value [rad]")
-    a2.set_title("joint trajectories by IK")
+    a2.set(xlabel="t [s]", ylabel="joint value [rad]", title="joint trajectories by IK")
     a2.legend(loc="best")
     a2.grid(True, alpha=0.3)
     fig.suptitle(title or f"foot step: max IK error {step.max_error:.1e} m")

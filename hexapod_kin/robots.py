@@ -41,10 +41,6 @@ __all__ = [
 ]
 
 
-def _positive(name: str, value: float) -> float:
-    return positive(name, value)
-
-
 def hexabot_leg(
     l1: float = 0.05,
     l2: float = 0.10,
@@ -81,7 +77,7 @@ def hexabot_leg(
         The chain, tip frame ``foot``, joints ``hip, knee, ankle``.
 
     """
-    l1, l2, l3 = _positive("l1", l1), _positive("l2", l2), _positive("l3", l3)
+    l1, l2, l3 = positive("l1", l1), positive("l2", l2), positive("l3", l3)
     return Chain(
         rows=(
             KhalilRow("revolute", 0.0, 0.0, 0.0, 0.0),
@@ -130,7 +126,7 @@ def coxa_tibia_leg(
         The chain, joints ``coxa, tibia``, tip ``foot``.
 
     """
-    l1, l2 = _positive("l1", l1), _positive("l2", l2)
+    l1, l2 = positive("l1", l1), positive("l2", l2)
     scale = max(l1, l2)
     return Chain(
         rows=(
@@ -183,8 +179,8 @@ def scara(
         The chain, joints ``theta1, theta2, theta3, q4``, tip ``tool``.
 
     """
-    r1 = _positive("r1", r1)
-    d2, d3, stroke = _positive("d2", d2), _positive("d3", d3), _positive("stroke", stroke)
+    r1 = positive("r1", r1)
+    d2, d3, stroke = positive("d2", d2), positive("d3", d3), positive("stroke", stroke)
     return Chain(
         rows=(
             KhalilRow("revolute", 0.0, 0.0, 0.0, r1),
@@ -233,10 +229,8 @@ def pendulum(
         The chain, joint ``swing``, tip ``bob``.
 
     """
-    length, mass = _positive("length", length), _positive("mass", mass)
-    damping = float(damping)
-    if not math.isfinite(damping) or damping < 0:
-        raise ParameterError(f"damping={damping!r} is not allowed; a finite value >= 0 required")
+    length, mass = positive("length", length), positive("mass", mass)
+    damping = positive("damping", damping, allow_zero=True)
     rod_r = 0.01 * length
     bob_r = 0.05 * length
     bob = Inertial(mass=mass, inertia=(0.4 * mass * bob_r**2,) * 3 + (0.0, 0.0, 0.0))
@@ -297,8 +291,8 @@ def hexapod(
         The :class:`Hexapod` (joints ``leg<i>_hip/knee/ankle``, feet ``leg<i>_foot``).
 
     """
-    body_radius = _positive("body_radius", body_radius)
-    body_height = _positive("body_height", body_height)
+    body_radius = positive("body_radius", body_radius)
+    body_height = positive("body_height", body_height)
     yaws = tuple(float(y) for y in mount_yaw_deg)
     if not yaws:
         raise ParameterError("mount_yaw_deg=() is empty; one yaw per leg is required")

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .exceptions import ConfigurationError, ParameterError, positive
+from .exceptions import ConfigurationError, ParameterError, finite, positive
 from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, resolved_rate
 
 if TYPE_CHECKING:
@@ -202,10 +202,8 @@ def seed_experiment(
     from .kinematics import load
 
     mdl = load("hexabot_leg") if model is None else model
-    a = float(amplitude)
+    a = finite("amplitude", amplitude)
     per = positive("period", period)
-    if not math.isfinite(a):
-        raise ParameterError(f"amplitude={amplitude!r} is not finite")
     q_start = _start(mdl, q0)
     w = 2 * np.pi / per
     vel = _x_velocity(a, per)
@@ -257,7 +255,7 @@ def seed_baseline(
         None when the loop met a singular J), and why it stopped (or None).
 
     """
-    a = float(amplitude)
+    a = finite("amplitude", amplitude)
     per = positive("period", period)
     q_start = _start(model, q0)
     vel = _x_velocity(a, per)

@@ -65,6 +65,17 @@ def _origin(t: np.ndarray) -> str:
     return f'<origin xyz="{vec(t[:3, 3])}" rpy="{vec(rpy)}"/>'
 
 
+def fixed_joint(pad: str, name: str, parent: str, child: str, origin: str) -> list[str]:
+    """The lines of a fixed joint ``name`` from ``parent`` to ``child``, indented by ``pad``."""
+    return [
+        f'{pad}<joint name="{name}" type="fixed">',
+        f'{pad}  <parent link="{parent}"/>',
+        f'{pad}  <child link="{child}"/>',
+        f"{pad}  {origin}",
+        f"{pad}</joint>",
+    ]
+
+
 def _z_to(v: np.ndarray) -> tuple[float, float, float]:
     """Rpy of a rotation taking +z onto the unit vector ``v``."""
     z = v / np.linalg.norm(v)
@@ -157,11 +168,13 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         frame0 = prefix + chain.frame0_link
         lines += [
             indent + comment(f"base offset T_{chain.base}_0 (Khalil frame 0 in the base link)"),
-            f'{indent}<joint name="{prefix}{chain.name}_base_offset" type="fixed">',
-            f'{indent}  <parent link="{prev}"/>',
-            f'{indent}  <child link="{frame0}"/>',
-            f"{indent}  {_origin(chain.base_pose.matrix)}",
-            f"{indent}</joint>",
+            *fixed_joint(
+                indent,
+                f"{prefix}{chain.name}_base_offset",
+                prev,
+                frame0,
+                _origin(chain.base_pose.matrix),
+            ),
             f'{indent}<link name="{frame0}"/>',
         ]
         prev = frame0
@@ -191,13 +204,7 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
             ]
             k += 1
         else:
-            lines += [
-                f'{indent}<joint name="{child}_fixed" type="fixed">',
-                f'{indent}  <parent link="{prev}"/>',
-                f'{indent}  <child link="{child}"/>',
-                f"{indent}  {_origin(t0)}",
-                f"{indent}</joint>",
-            ]
+            lines += fixed_joint(indent, f"{child}_fixed", prev, child, _origin(t0))
         lines.append(f'{indent}<link name="{child}">')
         lines += _inertial_xml(chain, j, indent + "  ")
         lines += _visuals(chain, j, indent + "  ")
@@ -208,11 +215,7 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         t_tool = chain.tool.matrix
         lines += [
             indent + comment(f"tool frame T_{len(chain.rows)}_tool"),
-            f'{indent}<joint name="{tool}_fixed" type="fixed">',
-            f'{indent}  <parent link="{prev}"/>',
-            f'{indent}  <child link="{tool}"/>',
-            f"{indent}  {_origin(t_tool)}",
-            f"{indent}</joint>",
+            *fixed_joint(indent, f"{tool}_fixed", prev, tool, _origin(t_tool)),
             f'{indent}<link name="{tool}">',
             f"{indent}  <visual>",
             f'{indent}    <origin xyz="0 0 0" rpy="0 0 0"/>',
@@ -292,11 +295,7 @@ def _mount(robot: Hexapod, leg: LegMount) -> list[str]:
     base = f"{leg.name}_{leg.chain.base}"
     return [
         "  " + comment(f"{leg.name}: mount xyz={vec(leg.xyz)} yaw={num(leg.yaw)} rad"),
-        f'  <joint name="{leg.name}_mount" type="fixed">',
-        f'    <parent link="{robot.body}"/>',
-        f'    <child link="{base}"/>',
-        f"    {_origin(leg.transform())}",
-        "  </joint>",
+        *fixed_joint("  ", f"{leg.name}_mount", robot.body, base, _origin(leg.transform())),
         f'  <link name="{base}"/>',
     ] + _chain_body(leg.chain, f"{leg.name}_", base)
 

@@ -285,3 +285,38 @@ def test_identity_base_is_no_base_and_base_given_twice_is_refused():
         Chain(rows=(KhalilRow(0),), base=np.eye(4), base_pose=((1, 0, 0), (0, 0, 0)))
     with pytest.raises(ParameterError, match="unique"):
         Chain(rows=(KhalilRow(0),), tool=np.eye(4), tip="link1")
+
+
+def test_rodrigues_matches_pinocchio_exp3():
+    import pinocchio as pin
+
+    from hexapod_kin._pose import rodrigues
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        angle = rng.uniform(-math.pi, math.pi)
+        got = rodrigues(axis, math.sin(angle), math.cos(angle))
+        np.testing.assert_allclose(got, pin.exp3(axis * angle), atol=1e-14)
+
+
+@pytest.mark.parametrize("value", [True, "x", None, float("nan"), float("inf")])
+def test_finite_refuses_non_numbers_naming_the_parameter(value):
+    from hexapod_kin.exceptions import finite
+
+    with pytest.raises(ParameterError, match="^speed=") as err:
+        finite("speed", value)
+    assert err.value.parameter == "speed"
+    assert err.value.allowed == "finite"
+
+
+def test_finite_and_positive_return_floats():
+    from hexapod_kin.exceptions import finite, positive
+
+    assert finite("x", np.float32(0.5)) == 0.5 and type(finite("x", 2)) is float
+    assert positive("x", 0, allow_zero=True) == 0.0
+    with pytest.raises(ParameterError, match=r"> 0"):
+        positive("x", 0)
+    with pytest.raises(ParameterError, match="not a number"):
+        KhalilRow("revolute", True)

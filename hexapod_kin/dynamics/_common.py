@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import read_only
 from ..exceptions import ParameterError
 from ..model import check_inertials as loader_check_inertials
 
@@ -31,12 +32,6 @@ def as_model(model: Any, **params: Any) -> Any:
     from ..kinematics import load
 
     return load(model, **params)
-
-
-def read_only(*arrays: np.ndarray) -> None:
-    """Mark result arrays read-only."""
-    for a in arrays:
-        a.setflags(write=False)
 
 
 def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -> np.ndarray:

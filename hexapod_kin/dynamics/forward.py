@@ -38,6 +38,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 from ._common import as_model, check_inertials, check_state, finite_vector, read_only
 
@@ -83,13 +84,7 @@ class PassiveJoints:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (lists of floats, SI units)."""
-        return {
-            "damping": self.damping.tolist(),
-            "friction": self.friction.tolist(),
-            "friction_velocity": self.friction_velocity,
-            "stiffness": self.stiffness.tolist(),
-            "q_rest": self.q_rest.tolist(),
-        }
+        return fields_dict(self, "damping", "friction", "friction_velocity", "stiffness", "q_rest")
 
 
 def passive_joints(
@@ -167,19 +162,9 @@ class Simulation:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: every array as (nested) lists of floats, units as in the fields."""
-        return {
-            "method": self.method,
-            "dt": self.dt,
-            "joint_names": list(self.joint_names),
-            "passive": self.passive.to_dict(),
-            "t": self.t.tolist(),
-            "q": self.q.tolist(),
-            "v": self.v.tolist(),
-            "a": self.a.tolist(),
-            "kinetic": self.kinetic.tolist(),
-            "potential": self.potential.tolist(),
-            "total": self.total.tolist(),
-        }
+        out = fields_dict(self, "method", "dt", "joint_names")
+        out["passive"] = self.passive.to_dict()
+        return out | fields_dict(self, "t", "q", "v", "a", "kinetic", "potential", "total")
 
 
 def _steps(dt: Any, duration: Any) -> tuple[int, float]:

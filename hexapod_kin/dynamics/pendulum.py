@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import ParameterError, positive
 from ._common import as_model, check_inertials, read_only
 from .forward import Method, Simulation, simulate
@@ -73,13 +74,7 @@ class PhysicalPendulum:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready."""
-        return {
-            "inertia": self.inertia,
-            "mass": self.mass,
-            "com_distance": self.com_distance,
-            "gravity": self.gravity,
-            "q_hanging": self.q_hanging,
-        }
+        return fields_dict(self, "inertia", "mass", "com_distance", "gravity", "q_hanging")
 
 
 def physical_pendulum(model: Any) -> PhysicalPendulum:
@@ -272,12 +267,8 @@ class PendulumRun:
             "decay_rate_error": rel(self.decay_rate, self.decay_rate_exact),
         }
         if samples:
-            out.update(
-                t=self.simulation.t.tolist(),
-                theta=self.theta.tolist(),
-                omega=self.omega.tolist(),
-                energy=self.energy.tolist(),
-            )
+            out["t"] = self.simulation.t.tolist()
+            out.update(fields_dict(self, "theta", "omega", "energy"))
         return out
 
 

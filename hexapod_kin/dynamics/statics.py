@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import ParameterError
 from ._common import as_model, check_inertials, finite_vector, read_only, zero_gravity_model
 
@@ -88,20 +89,12 @@ class LegTorques:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (lists of floats, SI units)."""
-        return {
-            "q": self.q.tolist(),
-            "force": self.force.tolist(),
-            "frame": self.frame,
-            "joint_names": list(self.joint_names),
-            "gravity": self.gravity.tolist(),
-            "force_torque": self.force_torque.tolist(),
-            "total": self.total.tolist(),
-            "force_torque_rnea": self.force_torque_rnea.tolist(),
-            "crosscheck_error": self.crosscheck_error,
-            "gravity_crosscheck_error": self.gravity_crosscheck_error,
-            "effort_limit": self.effort_limit.tolist(),
-            "within_effort_limits": self.within_effort_limits,
-        }
+        return fields_dict(
+            self,
+            *("q", "force", "frame", "joint_names", "gravity", "force_torque", "total"),
+            *("force_torque_rnea", "crosscheck_error", "gravity_crosscheck_error"),
+            *("effort_limit", "within_effort_limits"),
+        )
 
 
 class _LegStatics:
@@ -235,13 +228,7 @@ class StepTorques:
             "crosscheck_error": self.crosscheck_error,
         }
         if samples:
-            out.update(
-                t=self.t.tolist(),
-                q=self.q.tolist(),
-                total=self.total.tolist(),
-                gravity=self.gravity.tolist(),
-                force_torque=self.force_torque.tolist(),
-            )
+            out.update(fields_dict(self, "t", "q", "total", "gravity", "force_torque"))
         return out
 
 

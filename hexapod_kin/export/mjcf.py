@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._io import atomic_write
-from ..exceptions import ParameterError, UrdfError
+from ..exceptions import ParameterError, UrdfError, finite, one_of, positive
 from ..params import Chain, Hexapod
 from ..sources import resolve_source
 from ..urdf import to_urdf
@@ -70,7 +70,7 @@ def _chain_reach(chain: Chain) -> float:
             lim = (chain.limits or ())[k]
             total += max(abs(lim.lower), abs(lim.upper))
         k += int(row.is_joint)
-    for pose in (getattr(chain, "base_pose", None), getattr(chain, "tool", None)):
+    for pose in (chain.base_pose, chain.tool):
         if pose is not None:
             total += float(np.linalg.norm(pose.xyz))
     return total + 3.0 * chain.link_radius
@@ -311,21 +311,12 @@ def to_mjcf(
     """
     from lxml import etree
 
-    if timestep is not None and not (np.isfinite(timestep) and timestep > 0):
-        raise ParameterError(
-            f"timestep={timestep!r} is not allowed; a finite step > 0 s is required",
-            parameter="timestep",
-            value=timestep,
-        )
-    if integrator is not None and integrator not in INTEGRATORS:
-        raise ParameterError(
-            f"integrator={integrator!r} is not allowed; use one of {list(INTEGRATORS)}",
-            parameter="integrator",
-            value=integrator,
-            allowed=list(INTEGRATORS),
-        )
-    if floor_z is not None and not np.isfinite(floor_z):
-        raise ParameterError(f"floor_z={floor_z!r} is not finite", parameter="floor_z")
+    if timestep is not None:
+        positive("timestep", timestep)
+    if integrator is not None:
+        one_of("integrator", integrator, INTEGRATORS)
+    if floor_z is not None:
+        finite("floor_z", floor_z)
     params: Chain | Hexapod | None = None
     resolved = None
     if isinstance(source, (Chain, Hexapod)):

@@ -33,6 +33,7 @@ import numpy as np
 from .._io import atomic_write
 from ..exceptions import UrdfError
 from ..params import Chain, Hexapod, matrix_to_rpy
+from ..urdf import fixed_joint
 from ._common import COLORS, comment, header_lines, ident, need, num, table_of
 
 __all__ = ["to_xacro", "write_xacro", "expand_xacro"]
@@ -200,13 +201,18 @@ def _family(chain: Chain, macro: str) -> _Family:
             for key, value in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), inn.inertia):
                 p[f"{lid}_{key}"] = num(value)
     p["link_radius"] = num(chain.link_radius)
-    base_pose = getattr(chain, "base_pose", None)
-    if base_pose is not None:
-        p.update(_pose_params("base", base_pose.matrix))
-    tool = getattr(chain, "tool", None)
-    if tool is not None:
-        p.update(_pose_params("tool", tool.matrix))
+    if chain.base_pose is not None:
+        p.update(_pose_params("base", chain.base_pose.matrix))
+    if chain.tool is not None:
+        p.update(_pose_params("tool", chain.tool.matrix))
     return fam
+
+
+def _pose_origin(name: str) -> str:
+    """The ``<origin>`` of the pose properties ``<name>_x .. <name>_yaw``."""
+    xyz = " ".join(f"${{{name}_{k}}}" for k in ("x", "y", "z"))
+    rpy = " ".join(f"${{{name}_{k}}}" for k in ("roll", "pitch", "yaw"))
+    return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
 def _default_inertial(chain: Chain, j: int) -> bool:
@@ -244,25 +250,19 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
         f"{pad}  </link>",
         f"{pad}</xacro:if>",
         f"{pad}<xacro:unless value=\"${{parent == ''}}\">",
-        f'{pad}  <joint name="${{prefix}}mount" type="fixed">',
-        f'{pad}    <parent link="${{parent}}"/>',
-        f'{pad}    <child link="{base}"/>',
-        f'{pad}    <origin xyz="${{xyz}}" rpy="${{rpy}}"/>',
-        f"{pad}  </joint>",
+        *fixed_joint(
+            pad + "  ", "${prefix}mount", "${parent}", base, '<origin xyz="${xyz}" rpy="${rpy}"/>'
+        ),
         f'{pad}  <link name="{base}"/>',
         f"{pad}</xacro:unless>",
     ]
     prev = base
-    base_pose = getattr(chain, "base_pose", None)
-    if base_pose is not None:
+    if chain.base_pose is not None:
         frame0 = f"${{prefix}}{chain.base}_frame0"
         out += [
-            f'{pad}<joint name="${{prefix}}{chain.name}_base_offset" type="fixed">',
-            f'{pad}  <parent link="{prev}"/>',
-            f'{pad}  <child link="{frame0}"/>',
-            f'{pad}  <origin xyz="${{base_x}} ${{base_y}} ${{base_z}}" '
-            f'rpy="${{base_roll}} ${{base_pitch}} ${{base_yaw}}"/>',
-            f"{pad}</joint>",
+            *fixed_joint(
+                pad, f"${{prefix}}{chain.name}_base_offset", prev, frame0, _pose_origin("base")
+            ),
             f'{pad}<link name="{frame0}"/>',
         ]
         prev = frame0
@@ -293,13 +293,7 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
             ]
             k += 1
         else:
-            out += [
-                f'{pad}<joint name="${{prefix}}{link_names[j0]}_fixed" type="fixed">',
-                f'{pad}  <parent link="{prev}"/>',
-                f'{pad}  <child link="{child}"/>',
-                f"{pad}  {origin}",
-                f"{pad}</joint>",
-            ]
+            out += fixed_joint(pad, f"${{prefix}}{link_names[j0]}_fixed", prev, child, origin)
         out.append(f'{pad}<link name="{child}">')
         vx, vy, vz = _next_origin(j, len(rows))
         if _default_inertial(chain, j0):
@@ -328,19 +322,13 @@ def _macro_lines(fam: _Family, forward: bool) -> list[str]:
             )
         out.append(f"{pad}</link>")
         prev = child
-    tool = getattr(chain, "tool", None)
-    if tool is not None:
-        t_tool = tool.matrix
+    if chain.tool is not None:
+        t_tool = chain.tool.matrix
         back = -t_tool[:3, :3].T @ t_tool[:3, 3]
         tip = f"${{prefix}}{chain.tip}"
         out += [
             pad + comment("tool frame (its back-pointing visual is drawn for the exported pose)"),
-            f'{pad}<joint name="{tip}_fixed" type="fixed">',
-            f'{pad}  <parent link="{prev}"/>',
-            f'{pad}  <child link="{tip}"/>',
-            f'{pad}  <origin xyz="${{tool_x}} ${{tool_y}} ${{tool_z}}" '
-            f'rpy="${{tool_roll}} ${{tool_pitch}} ${{tool_yaw}}"/>',
-            f"{pad}</joint>",
+            *fixed_joint(pad, f"{tip}_fixed", prev, tip, _pose_origin("tool")),
             f'{pad}<link name="{tip}">',
             f'{pad}  <xacro:hk_ball radius="${{1.2*link_radius}}" material="foot"/>',
             f'{pad}  <xacro:hk_segment vx="{num(back[0])}" vy="{num(back[1])}" '

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict, read_only
 from ..exceptions import ConfigurationError, ParameterError, positive
 from ..kinematics import KinematicModel, load
 from ._law import integrate
@@ -45,12 +46,6 @@ __all__ = [
 Method = Literal["euler", "rk4"]
 Frame = Literal["base", "tip"]
 FRAMES: tuple[str, ...] = ("base", "tip")
-
-
-def read_only(*arrays: np.ndarray) -> None:
-    """Mark arrays read-only (results handed to users are protected)."""
-    for a in arrays:
-        a.setflags(write=False)
 
 
 def default_stance(model: ModelLike) -> np.ndarray:
@@ -86,13 +81,10 @@ class ClosestApproach:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (a non-finite condition becomes None)."""
-        return {
-            "index": self.index,
-            "t": self.t,
-            "sigma_min": self.sigma_min,
-            "condition": self.condition if math.isfinite(self.condition) else None,
-            "q": list(self.q),
-        }
+        out = fields_dict(self, "index", "t", "sigma_min", "condition", "q")
+        if not math.isfinite(self.condition):
+            out["condition"] = None
+        return out
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import IKError, ParameterError, positive
 from .rate import Method, Trajectory, _as_model, read_only, resolved_rate
 
@@ -70,11 +71,7 @@ class JointSchedule:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ([s], [rad]/[m])."""
-        return {
-            "times": self.times.tolist(),
-            "values": self.values.tolist(),
-            "description": self.description,
-        }
+        return fields_dict(self, "times", "values", "description")
 
 
 # ============================================================================ pose path

@@ -350,38 +350,19 @@ def _facts(key: str, rep: Report) -> list[Block]:
             for robot, fams in f["scan_family_counts"].items()
             for family, n in fams.items()
         ]
-        return [
-            (
-                "table",
-                "Scan: flagged samples labelled by family",
-                ["robot", "family", "samples"],
-                rows,
-            )
-        ]
+        header = ["robot", "family", "samples"]
+        return [("table", "Scan: flagged samples labelled by family", header, rows)]
     if key == "step":
         s = f["step"]
-        b = s["baseline_euler_solve"]
-        return [
-            (
-                "table",
-                "Drift of the x-only step [m]",
-                ["run", "drift y", "drift z", "x error"],
-                [
-                    [
-                        "closed loop, RK4 (hexapod_kin)",
-                        f"{s['drift_y']:.2e}",
-                        f"{s['drift_z']:.2e}",
-                        f"{s['error_x']:.2e}",
-                    ],
-                    [
-                        "plain Euler + solve (the seeds' loop)",
-                        f"{b['drift_y']:.2e}",
-                        f"{b['drift_z']:.2e}",
-                        f"{b['error_x']:.2e}",
-                    ],
-                ],
-            )
+        runs = (
+            ("closed loop, RK4 (hexapod_kin)", s),
+            ("plain Euler + solve (the seeds' loop)", s["baseline_euler_solve"]),
+        )
+        rows = [
+            [run, *(f"{r[k]:.2e}" for k in ("drift_y", "drift_z", "error_x"))] for run, r in runs
         ]
+        header = ["run", "drift y", "drift z", "x error"]
+        return [("table", "Drift of the x-only step [m]", header, rows)]
     if key == "pendulum":
         p = f["pendulum"]
         return [

@@ -187,16 +187,8 @@ class Context:
             if claim is not None
             else np.full_like(q, np.nan)
         )
-        return {
-            "t": t,
-            "q": q,
-            "feet": feet,
-            "ours": ours,
-            "back": back,
-            "seed": seed,
-            "knots_t": sched.times,
-            "knots_q": sched.values,
-        }
+        knots = {"knots_t": sched.times, "knots_q": sched.values}
+        return dict(t=t, q=q, feet=feet, ours=ours, back=back, seed=seed, **knots)
 
     def quantity(self, name: str) -> float:
         """A measured figure named in a ``bound`` claim."""
@@ -267,6 +259,14 @@ def _verdict(
     return Verdict(
         c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method, layout, lines
     )
+
+
+def _judged(
+    c: Claim, claimed: str, computed: str, problems: list[str], method: str, cells: Any = None
+) -> Verdict:
+    """*agrees* without ``problems``, else *wrong* with them as the reason."""
+    status = "wrong" if problems else "agrees"
+    return _verdict(c, claimed, computed, status, "; ".join(problems), method, cells)
 
 
 _AT = re.compile(r"^\((\d+),(\d+)\):")
@@ -472,15 +472,8 @@ def _check_generic(c: Claim, ctx: Context) -> Verdict:
     truth = sp.Matrix(khalil_matrix(s["alpha"], s["d"], s["theta"], s["r"]))
     seed = parse_matrix(c.data["value"])
     diffs = matrix_diff(seed, truth, c.id)
-    return _verdict(
-        c,
-        fmt_matrix(seed),
-        fmt_matrix(truth),
-        "wrong" if diffs else "agrees",
-        "; ".join(diffs),
-        _SYMBOLIC,
-        _cells(c.data["value"], truth, diffs),
-    )
+    cells = _cells(c.data["value"], truth, diffs)
+    return _judged(c, fmt_matrix(seed), fmt_matrix(truth), diffs, _SYMBOLIC, cells)
 
 
 def _check_methods(c: Claim, ctx: Context) -> Verdict:
@@ -550,10 +543,8 @@ def _check_families(c: Claim, ctx: Context) -> Verdict:
         "< 1e-7 on 5 points of the family; a seed set is singular when |det J| < 1e-9 "
         "(relative) on 5 of its points"
     )
-    if not missing and not spurious:
-        return _verdict(c, claimed, computed, "agrees", "", method)
     parts = [f"misses the family {m}" for m in missing] + spurious
-    return _verdict(c, claimed, computed, "wrong", "; ".join(parts), method)
+    return _judged(c, claimed, computed, parts, method)
 
 
 def _check_fk(c: Claim, ctx: Context) -> Verdict:
@@ -570,11 +561,8 @@ def _check_fk(c: Claim, ctx: Context) -> Verdict:
         f"{np.round(ours, 6).tolist()} (table product: |Δ| = {np.max(np.abs(table - ours)):.1e})"
     )
     method = f"numeric, max |Δ| ≤ {tol:g} (the seed's 4 decimals)"
-    if err <= tol:
-        return _verdict(c, str(seed.tolist()), computed, "agrees", "", method)
-    return _verdict(
-        c, str(seed.tolist()), computed, "wrong", f"max |Δ| = {err:.3g} > {tol:g}", method
-    )
+    bad = [] if err <= tol else [f"max |Δ| = {err:.3g} > {tol:g}"]
+    return _judged(c, str(seed.tolist()), computed, bad, method)
 
 
 def _ik_reason(seed: np.ndarray, q: np.ndarray, ours: np.ndarray, tol: float) -> list[str]:
@@ -609,8 +597,7 @@ def _check_ik(c: Claim, ctx: Context) -> Verdict:
         f"ik.analytic → {np.round(np.degrees(ours), 4).tolist()}° (FK back: |Δ| = {back:.1e})"
     )
     method = f"numeric, |Δθ| ≤ {tol:g}° against the angles P was made from"
-    bad = _ik_reason(seed, q, ours, tol)
-    return _verdict(c, claimed, computed, "wrong" if bad else "agrees", "; ".join(bad), method)
+    return _judged(c, claimed, computed, _ik_reason(seed, q, ours, tol), method)
 
 
 def _check_schedule(c: Claim, ctx: Context) -> Verdict:
@@ -702,14 +689,8 @@ def _check_bound(c: Claim, ctx: Context) -> Verdict:
     why = _admissible(c, ctx, val)
     if why is not None:
         return _verdict(c, claimed, computed, "underdetermined", why, method)
-    return _verdict(
-        c,
-        claimed,
-        computed,
-        "wrong",
-        f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}",
-        method,
-    )
+    why = f"measured {val:.4g} {unit}, |Δ| = {abs(val - target):.3g} > {tol:g}"
+    return _verdict(c, claimed, computed, "wrong", why, method)
 
 
 CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {

@@ -102,8 +102,7 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
     fig, axes = plt.subplots(3, 1, figsize=(9.5, 9), sharex=True, gridspec_kw=margins)
     for k, lab in enumerate(("θ1 (coxa)", "θ2 (tibia)")):
         axes[0].plot(*decimate(t, np.degrees(s["q"][:, k])), label=lab)
-    axes[0].set_ylabel("input angle [deg]")
-    axes[0].set_title("Fig. 11: planned input (Table I)")
+    axes[0].set(ylabel="input angle [deg]", title="Fig. 11: planned input (Table I)")
     for k, lab in enumerate("xyz"):
         axes[1].plot(*decimate(t, s["feet"][:, k]), label=lab)
     axes[1].set_ylabel("foot position [unit of l1, l2]")
@@ -111,8 +110,7 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
     for k, lab in enumerate(("θ1", "θ2")):
         axes[2].plot(*decimate(t, np.degrees(s["ours"][:, k])), label=f"{lab} ik.analytic")
         axes[2].plot(*decimate(t, np.degrees(s["seed"][:, k])), "--", label=f"{lab} seed Eqs. 9-12")
-    axes[2].set_ylabel("IK output [deg]")
-    axes[2].set_xlabel("time [s]")
+    axes[2].set(ylabel="IK output [deg]", xlabel="time [s]")
     axes[2].set_title("Fig. 13: inverse kinematics of the foot positions")
     for ax in axes:
         ax.grid(True, alpha=0.3)
@@ -134,12 +132,10 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
     ):
         t = run.simulation.t
         axes[0, col].plot(*decimate(t, run.theta))
-        axes[0, col].set_title(f"rotation of the link {name}")
-        axes[0, col].set_ylabel("θ [rad] (from hanging)")
+        axes[0, col].set(title=f"rotation of the link {name}", ylabel="θ [rad] (from hanging)")
         axes[1, col].plot(*decimate(t, run.theta), label="θ [rad]")
         axes[1, col].plot(*decimate(t, run.omega), label="ω [rad/s]")
-        axes[1, col].set_title(f"rotation and angular velocity {name}")
-        axes[1, col].set_xlabel("time [s]")
+        axes[1, col].set(title=f"rotation and angular velocity {name}", xlabel="time [s]")
         axes[1, col].set_ylabel("θ [rad], ω [rad/s]")
         axes[1, col].legend(loc="upper right", fontsize=8)
         for ax in axes[:, col]:

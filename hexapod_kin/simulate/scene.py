@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 
 __all__ = ["SCENE_TERRAINS", "SimScene", "scene_mjcf"]
@@ -41,16 +42,9 @@ def _mujoco() -> Any:
 # ----------------------------------------------------------------------------- the robot
 def _robot(robot: Any, feet: Any = None) -> Any:
     """The whole-body model of ``robot`` (None: the built-in hexapod), ``feet`` its foot spec."""
-    from ..gait import robot as gait_robot
+    from ..gait import as_whole_body
 
-    as_whole_body = getattr(gait_robot, "as_whole_body", None)
-    if as_whole_body is not None:
-        return as_whole_body(robot) if feet is None else as_whole_body(robot, feet=feet)
-    if feet is not None:
-        raise ParameterError("feet= needs a legged robot from a URDF", parameter="feet")
-    if robot is None or isinstance(robot, gait_robot.WholeBody):
-        return gait_robot.whole_body() if robot is None else robot
-    return gait_robot.whole_body(robot)
+    return as_whole_body(robot, feet=feet)
 
 
 #: Radius [m] of the spheres that stand for point feet (a robot whose foot radius is 0).
@@ -58,9 +52,7 @@ POINT_FOOT = 0.001
 
 
 def _foot_radius(wb: Any) -> float:
-    r = getattr(wb, "foot_radius", None)
-    if r is None:  # before the robot carried it: the export's foot sphere (1.5 link radius)
-        r = 1.5 * float(wb.link_radius)
+    r = wb.foot_radius
     return float(r) if r > 0 else POINT_FOOT
 
 
@@ -178,16 +170,8 @@ class SimScene:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (SI units)."""
-        return {
-            "terrain": self.terrain,
-            "foot_radius": self.foot_radius,
-            "kp": self.kp,
-            "kv": self.kv,
-            "friction": self.friction,
-            "timestep": self.timestep,
-            "armature": self.armature,
-            "contact_time": self.contact_time,
-        }
+        names = ("terrain", "foot_radius", "kp", "kv", "friction", "timestep", "armature")
+        return fields_dict(self, *names, "contact_time")
 
 
 #: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict, read_only
 from ..exceptions import ParameterError, positive
 from .scene import SimScene, _Engine, _robot, scene_mjcf
 
@@ -39,14 +40,7 @@ class StandForces:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (SI units)."""
-        return {
-            "legs": list(self.legs),
-            "forces": self.forces.tolist(),
-            "expected": self.expected.tolist(),
-            "max_error": self.max_error,
-            "weight": self.weight,
-            "height": self.height,
-        }
+        return fields_dict(self, "legs", "forces", "expected", "max_error", "weight", "height")
 
 
 def _stance(wb: Any) -> Any:
@@ -128,8 +122,7 @@ def stand_forces(
     forces = acc / tail
     idx = [list(sc.leg_names).index(n) for n in st.stance_legs]
     mine, expected = forces[idx], np.asarray(st.forces)[:, 2].copy()
-    for a in (mine, expected):
-        a.setflags(write=False)
+    read_only(mine, expected)
     return StandForces(
         legs=tuple(st.stance_legs),
         forces=mine,

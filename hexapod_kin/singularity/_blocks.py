@@ -30,50 +30,15 @@ JACOBI_MIN_SWEEPS_BIG = 4
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _jacobi_rot(
-    app: float, aqq: float, apq: float, arp: float, arq: float
+def _rot_cs(
+    app: float, aqq: float, apq: float
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``.
+    """Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq)`` and ``(c, s)``.
 
     Golub & Van Loan's ``t = sign(τ) a_pq / (|τ| + ρ)``, ``ρ = hypot(τ, a_pq)``, written with
     ``D = τ + sign(τ) ρ``: ``c = |D| / Q``, ``s = sign(D) a_pq / Q``, ``Q = sqrt(2 ρ |D|)``
     (the half-angle form ``c² = (1 + |τ|/ρ) / 2``, no cancellation), so one division
     ``W = 1 / (D Q)`` gives ``1/Q = D W`` and ``t = a_pq Q W``: two square roots, one division.
-    """
-    tau = 0.5 * (aqq - app)
-    rad = math.sqrt(tau * tau + apq * apq)
-    den = tau + rad if tau >= 0.0 else tau - rad
-    zero = den == 0.0  # a_pq = 0 and equal diagonal: the identity rotation
-    den = 1.0 if zero else den
-    rad = 0.5 if zero else rad
-    qq = math.sqrt(2.0 * rad * abs(den))
-    wi = 1.0 / (den * qq)
-    inv_q = den * wi
-    c = abs(den) * inv_q
-    s = apq * inv_q if den > 0.0 else -apq * inv_q
-    t = apq * qq * wi
-    return app - t * apq, aqq + t * apq, c * arp - s * arq, s * arp + c * arq
-
-
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _jacobi_sweep(gb: np.ndarray, i: int) -> float:  # pragma: no cover - compiled
-    """One cyclic sweep on matrix ``i`` of ``gb``; returns its off-diagonal excess (≤ 0: done)."""
-    a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
-    a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
-    a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
-    a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
-    a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
-    gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
-    gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
-    return abs(a01) + abs(a02) - JACOBI_TOL * (a00 + a11 + a22)
-
-
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
-def _rot_cs(
-    app: float, aqq: float, apq: float
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq)``, ``(c, s)`` (as :func:`_jacobi_rot`).
-
     The other entries transform as ``a_rp ← c a_rp − s a_rq``, ``a_rq ← s a_rp + c a_rq``.
     """
     tau = 0.5 * (aqq - app)
@@ -89,6 +54,28 @@ def _rot_cs(
     s = apq * inv_q if den > 0.0 else -apq * inv_q
     t = apq * qq * wi
     return app - t * apq, aqq + t * apq, c, s
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_rot(
+    app: float, aqq: float, apq: float, arp: float, arq: float
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """One symmetric Jacobi rotation zeroing ``a_pq``: new ``(a_pp, a_qq, a_rp, a_rq)``."""
+    app, aqq, c, s = _rot_cs(app, aqq, apq)
+    return app, aqq, c * arp - s * arq, s * arp + c * arq
+
+
+@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+def _jacobi_sweep(gb: np.ndarray, i: int) -> float:  # pragma: no cover - compiled
+    """One cyclic sweep on matrix ``i`` of ``gb``; returns its off-diagonal excess (≤ 0: done)."""
+    a00, a01, a02 = gb[0, i], gb[1, i], gb[2, i]
+    a11, a12, a22 = gb[3, i], gb[4, i], gb[5, i]
+    a00, a11, a02, a12 = _jacobi_rot(a00, a11, a01, a02, a12)
+    a00, a22, a01, a12 = _jacobi_rot(a00, a22, a02, 0.0, a12)
+    a11, a22, a01, a02 = _jacobi_rot(a11, a22, a12, a01, 0.0)
+    gb[0, i], gb[1, i], gb[2, i] = a00, a01, a02
+    gb[3, i], gb[4, i], gb[5, i] = a11, 0.0, a22
+    return abs(a01) + abs(a02) - JACOBI_TOL * (a00 + a11 + a22)
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")

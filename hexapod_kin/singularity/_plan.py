@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .._kernels import AlignedChain, aligned_chain, run_blocks
+from .._pose import rodrigues
 from ._kernel import measures_kernel
 
 __all__ = [
@@ -168,12 +169,6 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
     )
 
 
-def _axis_rotation(u: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` [rad] about the unit axis ``u`` (Rodrigues)."""
-    ux = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * ux + (1.0 - math.cos(angle)) * (ux @ ux)
-
-
 def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
     """Whether the measures of the ``sel`` rows of ``J`` do not depend on the first joint.
 
@@ -192,7 +187,7 @@ def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
     u = u / np.linalg.norm(u)
     rows = np.eye(6)[list(sel)]
     for angle in (0.7, 2.3):
-        rot = _axis_rotation(u, angle)
+        rot = rodrigues(u, math.sin(angle), math.cos(angle))
         b = np.zeros((6, 6))
         b[:3, :3] = rot
         b[3:, 3:] = rot

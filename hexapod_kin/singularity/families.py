@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,9 +20,10 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from .._io import atomic_write, cache_root
 from .._numerics import wrap_angles
-from ..exceptions import HexapodKinError, ParameterError
+from ..exceptions import HexapodKinError, ParameterError, positive
 from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
@@ -94,18 +94,10 @@ class Family:
 
     def to_dict(self, joint_names: tuple[str, ...] | None = None) -> dict[str, Any]:
         """JSON-ready dict (joint by name when ``joint_names`` is given)."""
-        joint: Any = self.joint
-        if joint is not None and joint_names is not None:
-            joint = joint_names[joint]
-        return {
-            "name": self.name,
-            "equation": self.equation,
-            "variables": list(self.variables),
-            "joint": joint,
-            "value": self.value,
-            "periodic": self.periodic,
-            "factor": self.factor,
-        }
+        out = fields_dict(self, "name", "equation", "variables", "joint", "value", "periodic")
+        if self.joint is not None and joint_names is not None:
+            out["joint"] = joint_names[self.joint]
+        return out | {"factor": self.factor}
 
 
 @dataclass(frozen=True)
@@ -393,13 +385,7 @@ def families_for(
         ParameterError: ``budget`` not a finite value > 0.
 
     """
-    if not (isinstance(budget, (int, float)) and math.isfinite(budget) and budget > 0):
-        raise ParameterError(
-            f"budget={budget!r}: a finite time > 0 s is required",
-            parameter="budget",
-            value=budget,
-            allowed="> 0 s",
-        )
+    positive("budget", budget)
     chain, why = _table(model)
     if chain is None:
         return Families((), "none", why)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError, choices, one_of
+from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
 from .families import Families, Family, families_for
 from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
@@ -521,14 +521,9 @@ def scan(
         qf = default_q_fixed(mdl, names, jidx) if len(jidx) < mdl.nq else mdl.neutral()
     else:
         qf = mdl.check_q(q_fixed, "q_fixed").copy()
-    thr = float(rtol * reach(mdl)) if threshold is None else float(threshold)
-    if not math.isfinite(thr) or thr < 0:
-        raise ParameterError(
-            f"threshold={threshold!r}: a finite value >= 0 is required",
-            parameter="threshold",
-            value=threshold,
-            allowed=">= 0",
-        )
+    thr = positive(
+        "threshold", rtol * reach(mdl) if threshold is None else threshold, allow_zero=True
+    )
     if samples is not None:
         q = _sample_points(mdl, jidx, samples, qf, seed)
         shape = None

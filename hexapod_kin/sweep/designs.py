@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ParameterError, one_of
+from ..exceptions import ParameterError, finite, one_of, positive
 
 __all__ = [
     "ANGLES",
@@ -172,17 +172,7 @@ class DesignSpace:
             if isinstance(v, Range):
                 vals[k] = v
             else:
-                try:
-                    fv = float(v)
-                except (TypeError, ValueError):
-                    fv = math.nan
-                if not math.isfinite(fv):
-                    raise ParameterError(
-                        f"design parameter {k}={v!r}: expected a finite number or a Range",
-                        parameter=k,
-                        value=v,
-                    )
-                vals[k] = fv
+                vals[k] = finite(k, v)
         if self.total is not None:
             if "l3" in vals:
                 raise ParameterError(
@@ -190,13 +180,7 @@ class DesignSpace:
                     parameter="l3",
                     value=vals["l3"],
                 )
-            if not (math.isfinite(float(self.total)) and float(self.total) > 0):
-                raise ParameterError(
-                    f"total={self.total!r}: expected a length > 0 in [m]",
-                    parameter="total",
-                    value=self.total,
-                )
-            object.__setattr__(self, "total", float(self.total))
+            object.__setattr__(self, "total", positive("total", self.total))
         object.__setattr__(self, "values", vals)
 
     @property
@@ -298,17 +282,14 @@ class DesignSpace:
         col = {p: table[:, j] for j, p in enumerate(PARAMETERS)}
         top, ang = MAX_LENGTH, MAX_ANGLE
         checks = [
-            ((col["l1"] > 0) & (col["l1"] <= top), "l1", f"> 0 and <= {top:g} [m]"),
-            ((col["l2"] > 0) & (col["l2"] <= top), "l2", f"> 0 and <= {top:g} [m]"),
-            ((col["l3"] > 0) & (col["l3"] <= top), "l3", f"> 0 and <= {top:g} [m]"),
-            ((col["height"] >= 0) & (col["height"] <= top), "height", f"in [0, {top:g}] [m]"),
-            (
-                (col["mount_radius"] >= 0) & (col["mount_radius"] <= top),
-                "mount_radius",
-                f"in [0, {top:g}] [m]",
-            ),
-            ((col["neutral"] >= 0) & (col["neutral"] <= 1), "neutral", "in [0, 1]"),
+            ((col[p] > 0) & (col[p] <= top), p, f"> 0 and <= {top:g} [m]")
+            for p in ("l1", "l2", "l3")
         ]
+        checks += [
+            ((col[p] >= 0) & (col[p] <= top), p, f"in [0, {top:g}] [m]")
+            for p in ("height", "mount_radius")
+        ]
+        checks.append(((col["neutral"] >= 0) & (col["neutral"] <= 1), "neutral", "in [0, 1]"))
         checks += [
             (np.abs(col[p]) <= ang, p, f"|{p}| <= {ang:g} [rad]") for p in PARAMETERS if p in ANGLES
         ]

@@ -80,8 +80,7 @@ def plot_sweep(
         else:
             m = ax.scatter(x, y, c=v, s=12, cmap="viridis")
         fig.colorbar(m, ax=ax, label=label)
-        ax.set_xlabel(px)
-        ax.set_ylabel(py)
+        ax.set(xlabel=px, ylabel=py)
         title = f"best {name} over the other parameters" if gridded else f"{name} per design"
         ax.set_title(title, fontsize=9)
     ax = axes[3]
@@ -102,8 +101,7 @@ def plot_sweep(
         label="Pareto front",
     )
     fig.colorbar(s, ax=ax, label="min σ_min [m/rad]")
-    ax.set_xlabel("stride [m]")
-    ax.set_ylabel("volume [m³]")
+    ax.set(xlabel="stride [m]", ylabel="volume [m³]")
     ax.legend(loc="best", fontsize=8)
     ax.set_title("front: max stride, volume, σ_min", fontsize=9)
     fig.tight_layout()

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import read_only
 from .._io import atomic_write, read_regular
 from .._reader import parse_data, read_text
 from ..exceptions import (
@@ -441,8 +442,7 @@ def sweep(
     for j, s in enumerate(SCORES):
         table[s] = scores[:, j]
     table["pareto"] = pareto_front(table).astype(float)
-    for v in table.values():
-        v.setflags(write=False)
+    read_only(*table.values())
     summary = _summary(table, spec, key)
     files: dict[str, str] = {}
     if paths is not None:

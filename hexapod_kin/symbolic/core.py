@@ -91,16 +91,6 @@ def _terms(mat: sp.Matrix) -> int:
     return sum(len(sp.Add.make_args(e)) for e in mat)
 
 
-def has_parallel_axes(chain: Chain) -> bool:
-    """True when two consecutive joint axes are parallel (only then do angle sums fold)."""
-    joints = chain.joint_rows
-    for a, b in zip(joints, joints[1:]):
-        twist = sum(chain.rows[k].alpha for k in range(a + 1, b + 1))
-        if abs(math.sin(twist)) < 1e-9:
-            return True
-    return False
-
-
 def _expand(expr: Any) -> Any:
     if isinstance(expr, sp.MatrixBase):
         return expr.applyfunc(sp.expand)

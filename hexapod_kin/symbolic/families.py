@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .._fields import fields_dict
 from ..params import Chain
 from . import core as _core
 from .core import ROW_NAMES
@@ -52,20 +53,11 @@ class SingularFamily:
 
     def to_dict(self, joint_names: Sequence[str] | None = None) -> dict[str, Any]:
         """JSON-ready dict (sympy objects as text; the joint by name with ``joint_names``)."""
-        joint: Any = self.joint
-        if joint is not None and joint_names is not None:
-            joint = joint_names[joint]
-        return {
-            "name": self.name,
-            "equation": str(self.equation),
-            "factor": str(self.factor),
-            "variables": list(self.variables),
-            "joint": joint,
-            "value": self.value,
-            "periodic": self.periodic,
-            "verified": self.verified,
-            "check": self.check,
-        }
+        out = {"name": self.name, "equation": str(self.equation), "factor": str(self.factor)}
+        out |= fields_dict(self, "variables", "joint", "value", "periodic", "verified", "check")
+        if self.joint is not None and joint_names is not None:
+            out["joint"] = joint_names[self.joint]
+        return out
 
 
 def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
