@@ -209,7 +209,7 @@ def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no c
 
 
 # ------------------------------------------------------------------------ linear solve
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
     """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
     n = a.shape[0]
@@ -240,7 +240,7 @@ def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma:
 
 
 # ------------------------------------------------------------------------ damped least squares
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def dls_into(
     jac: np.ndarray,
     e: np.ndarray,

@@ -25,7 +25,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from .._numerics import dls_step, wrap_angles
+from .._numerics import wrap_angles
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
@@ -211,20 +211,50 @@ class IKResult:
 # ============================================================================ the loop's setup
 @dataclass(frozen=True)
 class _Setup:
-    """Checked options as the loop's parameters (the order of ``step.P_*`` / ``step.I_*``)."""
+    """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
+
+    Every array is C-contiguous and read-only, the same types for one target and for many
+    (one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`).
+    """
 
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
     posture: np.ndarray
     restarts: int
+    starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
+    chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.ascontiguousarray(a)
+    if a.flags.writeable:
+        a = a.copy()
+        a.setflags(write=False)
+    return a
 
 
 def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
+    """The loop's arguments for ``opts`` and task ``mode`` (cached per model when hashable)."""
+    try:
+        key: Any = (opts, mode)
+        hash(key)
+    except TypeError:  # arrays in the options: built each time
+        return _build_setup(mdl, opts, mode)
+    table = mdl.cached("ik.setups", dict)
+    found = table.get(key)
+    if found is None:
+        if len(table) >= 64:
+            table.clear()
+        found = table[key] = _build_setup(mdl, opts, mode)
+    return found
+
+
+def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     prep = prepared(mdl)
     posture, use = prep.middle, opts.posture is not None and opts.posture is not False
     if use and not isinstance(opts.posture, str):
-        posture = np.ascontiguousarray(mdl.check_q(opts.posture, "posture"), dtype=float)
+        posture = mdl.check_q(opts.posture, "posture")
     par = np.array(
         [
             float(opts.tol),
@@ -237,135 +267,88 @@ def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
         ]
     )
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
-    return _Setup(prep, par, ipar, posture, int(opts.restarts))
+    restarts = int(opts.restarts)
+    starts = np.vstack([prep.home, prep.starts[:restarts]])
+    arrays = mdl.arrays
+    chain = tuple(_frozen(a) for a in (*arrays.packed, arrays.tip_rot))
+    return _Setup(
+        prep, _frozen(par), _frozen(ipar), _frozen(posture), restarts, _frozen(starts), chain
+    )
 
 
-# ============================================================================ numpy loop
-def _skew(e: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
+#: Set once the ik kernels are loaded in this process (the first call goes through
+#: ``run_blocks``: the cache check, the compile notice, the stamp).
+_LOADED = [False]
 
 
-def _rows(
-    mdl: KinematicModel, task: Task, q: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray]:
-    """Weighted task rows at q: ``(e, J, ‖e_p‖², ‖e_ω‖², LWA Jacobian)`` (Pinocchio FK, J)."""
-    pose, jac = mdl.fk_jacobian(q)
-    w = task.weights
-    ep = task.pose[:3, 3] - pose[:3, 3]
-    keep = w[:3] != 0
-    es, js = [w[:3][keep] * ep[keep]], [w[:3][keep, None] * jac[:3][keep]]
-    pos2 = float(ep[keep] @ ep[keep])
-    rot2 = 0.0
-    if task.code == 1 and w[5] != 0:
-        x0, x1, x2 = pose[0, 0], pose[1, 0], pose[2, 0]
-        h2 = x0 * x0 + x1 * x1
-        e = float(wrap_angles(task.yaw - math.atan2(x1, x0)))
-        rot2 = e * e
-        a, b = (-x2 * x0 / h2, -x2 * x1 / h2) if h2 > 1e-24 else (0.0, 0.0)
-        es.append(np.array([w[5] * e]))
-        js.append(w[5] * (a * jac[3] + b * jac[4] + jac[5])[None, :])
-    elif task.code == 2:
-        ev = pin.log3(task.pose[:3, :3] @ pose[:3, :3].T)
-        th2 = float(ev @ ev)
-        th = math.sqrt(th2)
-        c = 1.0 / 12.0 + th2 / 720.0 if th < 1e-4 else 1.0 / th2 - 0.5 / (th * math.tan(0.5 * th))
-        # e(q + dq) ≈ e − Jr⁻¹(e) J_ω dq, Jr⁻¹ = I + [e]/2 + c [e]² (right Jacobian of SO(3))
-        jr_inv = np.eye(3) + 0.5 * _skew(ev) + c * (np.outer(ev, ev) - th2 * np.eye(3))
-        keep = w[3:] != 0
-        rot2 = float(ev[keep] @ ev[keep])
-        es.append(w[3:][keep] * ev[keep])
-        js.append(w[3:][keep, None] * (jr_inv @ jac[3:])[keep])
-    return np.concatenate(es), np.concatenate(js), pos2, rot2, jac
+def _run(
+    s: _Setup,
+    tgts: np.ndarray,
+    w6: np.ndarray,
+    pars: np.ndarray,
+    ipar: np.ndarray,
+    starts: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
-
-def _limit(q: np.ndarray, prep: Prepared, use_limits: bool) -> np.ndarray:
-    """Continuous joints wrapped into their range; the others clamped (``use_limits``)."""
-    lower, upper = prep.lim[0], prep.lim[1]
-    out = (q < lower) | (q > upper)
-    wrapped = np.where(prep.cont & out, lower + np.remainder(q - lower, upper - lower), q)
-    if use_limits:
-        return np.where(prep.cont, wrapped, np.clip(q, lower, upper))
-    return wrapped
-
-
-def _lm(
-    mdl: KinematicModel, s: _Setup, task: Task, starts: np.ndarray, use_limits: bool, max_iter: int
-) -> tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray]:
-    """The Levenberg–Marquardt loop (module docstring) from each start in turn.
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n): read-only and C-contiguous.
+    Each target's numbers are its own: the same bits alone, in a batch or on any thread.
 
     Returns:
-        ``(attempts, steps, code, q, history, Jacobian)`` of the best attempt; code 0
-        converged, 1 stalled, 2 iteration cap.
+        ``(q (N, n), history (N, max_iter + 1), LWA Jacobian (N, 6, n), (attempts, steps,
+        code) (N, 3))``.
 
     """
-    prep, par = s.prep, s.par
-    tol2, rtol2 = par[0] ** 2, par[1] ** 2
-    wbar, gain, floor2 = par[2], par[4], par[6] ** 2
-    lower, upper, cap = prep.lim
-    cont = prep.cont
-    best: tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray] | None = None
-    best_cost = math.inf
-    tried = 0
-    for start in starts:
-        tried += 1
-        q = _limit(np.array(start, dtype=float), prep, use_limits)
-        e, jt, pos2, rot2, jac = _rows(mdl, task, q)
-        cost = float(e @ e)
-        hist = [math.sqrt(cost)]
-        use_post = bool(s.ipar[3]) and q.size > e.size
-        mu, tries, slow, code = par[3], 0, 0, 1
-        while True:
-            if pos2 <= tol2 and rot2 <= rtol2:
-                code = 0
-                break
-            if len(hist) > max_iter:
-                code = 2
-                break
-            g = jt.T @ e
-            free = ~(((q <= lower) & (g < 0)) | ((q >= upper) & (g > 0))) | cont | (not use_limits)
-            lam2 = mu * (cost + wbar)
-            with_z = use_post and cost > floor2
-            kept = stalled = False
-            for _ in range(2):
-                if with_z:
-                    d = s.posture - q
-                    z = np.where(free, gain * np.where(cont, wrap_angles(d), d), 0.0)
-                    dq = z + dls_step(jt, e - (jt * free) @ z, lam2, free)
-                else:
-                    dq = dls_step(jt, e, lam2, free)
-                big = np.abs(dq) > cap
-                scale = float(np.min(cap[big] / np.abs(dq[big]))) if big.any() else 1.0
-                qn = _limit(q + scale * dq, prep, use_limits)
-                en, jtn, pos2n, rot2n, jacn = _rows(mdl, task, qn)
-                cost_n = float(en @ en)
-                if cost_n < (0.25 * cost if with_z else cost):
-                    slow = slow + 1 if cost_n > cost * (1.0 - 1e-10) else 0
-                    q, e, jt, pos2, rot2, jac, cost = qn, en, jtn, pos2n, rot2n, jacn, cost_n
-                    hist.append(math.sqrt(cost))
-                    mu, tries, kept, stalled = max(mu * 0.25, 1e-12), 0, True, slow >= 8
-                    break
-                if not with_z:
-                    break
-                with_z = use_post = False  # the plain step next; no posture in this attempt
-            if stalled:
-                break
-            if not kept:
-                mu *= 8.0
-                tries += 1
-                if tries > 40:
-                    break
-        if cost < best_cost or best is None or code == 0:
-            best_cost = cost
-            best = (0, len(hist) - 1, code, q, np.array(hist), jac)
-        if code == 0:
-            break
-    assert best is not None
-    return (tried,) + best[1:]
+    from .step import lm_batch
+
+    n_t, n = len(tgts), starts.shape[2]
+    q = np.empty((n_t, n))
+    hist = np.empty((n_t, int(ipar[1]) + 1))
+    jac = np.empty((n_t, 6, n))
+    res = np.empty((n_t, 3), dtype=np.int64)
+    head, tail = s.chain, (s.prep.lim, s.prep.cont, s.posture)
+    if n_t == 1 and _LOADED[0]:  # one target: straight in (a few µs of call overhead)
+        lm_batch(*head, tgts, w6, pars, ipar, starts, *tail, q, hist, jac, res)
+        return q, hist, jac, res
+    from .._kernels import run_blocks
+
+    def run(a: int, b: int) -> None:  # targets a..b-1
+        lm_batch(*head, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
+                 hist[a:b], jac[a:b], res[a:b])  # fmt: skip
+
+    run_blocks("ik", run, n_t, 1, _PER_THREAD)
+    _LOADED[0] = True
+    return q, hist, jac, res
+
+
+def _evaluate(
+    s: _Setup, task: Task, qs: np.ndarray, ipar: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(‖W e‖² (K,), Jᵀ W² e (K, n))`` of the task at configurations ``qs`` (K, n)."""
+    from .step import task_eval
+
+    qs = _frozen(np.asarray(qs, dtype=float))
+    cost = np.empty(len(qs))
+    grad = np.empty(qs.shape)
+    par = s.par if task.yaw == 0.0 else _with_yaw(s.par[None], [task.yaw])[0]
+    task_eval(*s.chain, task.pose, task.weights, par, s.ipar if ipar is None else ipar, qs,
+              cost, grad)  # fmt: skip
+    return cost, grad
+
+
+def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
+    out = np.array(pars)
+    out[:, 5] = yaws
+    out.setflags(write=False)
+    return out
 
 
 # ============================================================================ solve
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
+
+    The compiled loop of :func:`solve_many` for one target (the same bits as its row of a
+    batch); the result is measured with Pinocchio.
 
     Args:
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
@@ -389,28 +372,37 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         ParameterError: Unknown or bad options.
 
     """
-    mdl = as_model(model)
-    opts = IKOptions.of(options)
+    mdl = model if isinstance(model, KinematicModel) else as_model(model)
+    opts = IKOptions.of(options) if options else _DEFAULT
     task = build_task(target, mask=opts.mask, weights=opts.weights)
     s = _setup(mdl, opts, task.code)
-    starts = np.vstack([s.prep.home, s.prep.starts[: s.restarts]])
+    starts = s.starts
     if q0 is not None:
+        starts = np.array(starts)
         starts[0] = mdl.check_q(q0, "q0")
-    attempts, it, code, q, hist, jac = _lm(
-        mdl, s, task, starts, bool(opts.within_limits), int(opts.max_iter)
-    )
-    poses, err, rot, smin = _measures(mdl, [task], q[None], jac[None])
+        starts.setflags(write=False)
+    pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
+    q, hist, jac, res = _run(s, task.pose[None], task.weights, pars, s.ipar, starts[None])
+    poses, err, rot, smin = _measures(mdl, [task], q, jac)
+    attempts, it, code = res[0].tolist()
     measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
-    return _report(mdl, s, task, q, hist, jac, attempts, it, code, measured)
+    return _report(mdl, s, task, q[0], hist[0, : it + 1], jac[0], attempts, it, code, measured)
+
+
+_DEFAULT = IKOptions()
 
 
 def _measures(
     mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched)."""
-    poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
+    if len(tasks) == 1:
+        poses = mdl.fk(qs[0])[None]
+        tgt = tasks[0].pose[None]
+    else:
+        poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
+        tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
     w = tasks[0].weights
-    tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
     d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
     err = np.sqrt(np.einsum("ij,ij->i", d, d))
     rot = np.zeros(len(tasks))
@@ -471,10 +463,13 @@ def _report(
             "not_converged",
             f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing",
         )
-    blocked = _blocked(mdl, prep, task, q) if s.ipar[2] else np.empty(0, dtype=int)
+    blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
-        free = _lm(mdl, s, task, np.vstack([q, prep.starts[:8]]), False, 200)
-        if free[2] == 0:
+        # the same loop without limits, 200 steps, from q and 8 seeded starts
+        free_ipar = _frozen(np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64))
+        starts = _frozen(np.vstack([q, prep.starts[:8]])[None])
+        pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
+        if _run(s, task.pose[None], task.weights, pars, free_ipar, starts)[3][0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             return result(
                 "joint_limits",
@@ -498,11 +493,10 @@ def _report(
     return result("not_converged", f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)")
 
 
-def _blocked(mdl: KinematicModel, prep: Prepared, task: Task, q: np.ndarray) -> np.ndarray:
+def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:
     """Joints at a limit whose task-error gradient points outward."""
-    e, jt, _, _, _ = _rows(mdl, task, np.array(q))
-    g = jt.T @ e
-    lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
+    g = _evaluate(s, task, q[None])[1][0]
+    lower, upper, cont = s.prep.lim[0], s.prep.lim[1], s.prep.cont
     at_lo = (~cont) & (q <= lower + 1e-12) & (g < 0)
     at_hi = (~cont) & (q >= upper - 1e-12) & (g > 0)
     return np.flatnonzero(at_lo | at_hi)
@@ -526,11 +520,7 @@ def _is_local_min(
     if s.ipar[2]:
         trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
     floor = cost_root - 1e-9 * prep.scale
-    for qt in trial:
-        e = _rows(mdl, task, qt)[0]
-        if math.sqrt(float(e @ e)) < floor:
-            return False
-    return True
+    return not bool(np.any(np.sqrt(_evaluate(s, task, trial)[0]) < floor))
 
 
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
@@ -544,17 +534,13 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         **options: As in :func:`solve` (one set for all targets).
 
     Returns:
-        One :class:`IKResult` per target, equal to :func:`solve`'s to rounding (the compiled
-        loop runs its own FK; the report is Pinocchio's).
+        One :class:`IKResult` per target, the same bits as :func:`solve` of that target.
 
     Raises:
         IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
         ParameterError: Unknown or bad options.
 
     """
-    from .._kernels import run_blocks
-    from .step import lm_batch
-
     mdl = as_model(model)
     opts = IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
@@ -575,11 +561,10 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     n_t = len(tasks)
     s = _setup(mdl, opts, tasks[0].code)
     starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
-    if q0 is None:
-        starts[:, 0] = s.prep.home
-    elif np.ndim(q0) == 1:
+    starts[:] = s.starts
+    if q0 is not None and np.ndim(q0) == 1:
         starts[:, 0] = mdl.check_q(q0, "q0")
-    else:
+    elif q0 is not None:
         rows = mdl.check_q_batch(q0, "q0")
         if len(rows) != n_t:
             raise ConfigurationError(
@@ -589,36 +574,13 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
                 allowed=f"{n_t} rows",
             )
         starts[:, 0] = rows
-    starts[:, 1:] = s.prep.starts[: s.restarts]
-    pars = np.tile(s.par, (n_t, 1))
-    pars[:, 5] = [task.yaw for task in tasks]
-    m = int(opts.max_iter)
-    q = np.empty((n_t, mdl.nq))
-    hist = np.empty((n_t, m + 1))
-    jac = np.empty((n_t, 6, mdl.nq))
-    res = np.empty((n_t, 3), dtype=np.int64)
-    tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
-    w6 = np.ascontiguousarray(tasks[0].weights)
-
-    def run(a: int, b: int) -> None:  # targets a..b-1; each target's numbers are its own
-        lm_batch(
-            *s.prep.packed,
-            s.prep.tip_rot,
-            tgts[a:b],
-            w6,
-            pars[a:b],
-            s.ipar,
-            starts[a:b],
-            s.prep.lim,
-            s.prep.cont,
-            s.posture,
-            q[a:b],
-            hist[a:b],
-            jac[a:b],
-            res[a:b],
-        )
-
-    run_blocks("ik", run, n_t, 1, _PER_THREAD)
+    starts.setflags(write=False)
+    pars = np.broadcast_to(s.par, (n_t, len(s.par)))
+    if tasks[0].code == 1:
+        pars = _with_yaw(pars, [task.yaw for task in tasks])
+    pars = _frozen(pars)
+    tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
+    q, hist, jac, res = _run(s, tgts, tasks[0].weights, pars, s.ipar, starts)
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):

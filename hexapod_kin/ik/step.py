@@ -28,8 +28,9 @@ from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 __all__ = [
     "lm_batch",
     "lm_loop",
-    "log3_into",
+    "log3",
     "step_into",
+    "task_eval",
     "task_into",
 ]
 
@@ -38,9 +39,9 @@ P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
 
 
-@njit(cache=True, nogil=True)
-def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - compiled
-    """``out = log(M)`` (rotation vector, [rad]) of a rotation matrix; returns the angle.
+@njit(cache=True, nogil=True, inline="always")
+def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """``log(M)`` (rotation vector, [rad]) of a rotation matrix and its angle: ``(x, y, z, θ)``.
 
     ``θ = atan2(‖v‖, (tr M − 1)/2)`` with ``v = vee(M − Mᵀ)/2 = sin θ·a`` (accurate at small
     angles); near π the axis comes from the symmetric part ``(M + Mᵀ)/2 = cos θ I + (1 − cos θ)
@@ -54,8 +55,7 @@ def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - co
     theta = math.atan2(s, c)
     if c > -0.5 or s > 0.5:
         f = theta / s if s > 1e-300 else 1.0
-        out[0], out[1], out[2] = f * vx, f * vy, f * vz
-        return theta
+        return f * vx, f * vy, f * vz, theta
     d = 1.0 - c
     a0 = max((m[0, 0] - c) / d, 0.0)
     a1 = max((m[1, 1] - c) / d, 0.0)
@@ -75,11 +75,10 @@ def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - co
     norm = math.sqrt(x * x + y * y + z * z)
     sign = -1.0 if x * vx + y * vy + z * vz < 0.0 else 1.0
     f = sign * theta / norm
-    out[0], out[1], out[2] = f * x, f * y, f * z
-    return theta
+    return f * x, f * y, f * z, theta
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def task_into(
     mode: int,
     tgt: np.ndarray,
@@ -138,7 +137,7 @@ def task_into(
         for a in range(3):
             for b in range(3):
                 work3[a, b] = tgt[a, 0] * r[b, 0] + tgt[a, 1] * r[b, 1] + tgt[a, 2] * r[b, 2]
-        e0, e1, e2 = _log3(work3)
+        e0, e1, e2, _ = log3(work3)
         # e(q + dq) = log(E exp(−J_ω dq)) ≈ e − Jr⁻¹(e) J_ω dq: the rows are Jr⁻¹(e) J_ω, exact
         # also when masked rows leave a large rotation error (Jr: right Jacobian of SO(3))
         th2 = e0 * e0 + e1 * e1 + e2 * e2
@@ -177,13 +176,6 @@ def task_into(
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _log3(w3: np.ndarray) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    ew = np.empty(3)
-    log3_into(w3, ew)
-    return ew[0], ew[1], ew[2]
-
-
-@njit(cache=True, nogil=True)
 def step_into(
     jt: np.ndarray,
     et: np.ndarray,
@@ -221,7 +213,7 @@ def step_into(
     return ok
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _limit_into(
     q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
 ) -> None:  # pragma: no cover - compiled
@@ -479,3 +471,47 @@ def lm_batch(
         res_out[i, 0] = a
         res_out[i, 1] = it
         res_out[i, 2] = c
+
+
+@njit(cache=True, nogil=True)
+def task_eval(
+    rot: np.ndarray,
+    trans: np.ndarray,
+    axis: np.ndarray,
+    kind: np.ndarray,
+    col: np.ndarray,
+    tip_rot: np.ndarray,
+    tgt: np.ndarray,
+    w6: np.ndarray,
+    par: np.ndarray,
+    ipar: np.ndarray,
+    qs: np.ndarray,
+    cost_out: np.ndarray,
+    g_out: np.ndarray,
+) -> None:  # pragma: no cover - compiled
+    """The task at K configurations ``qs`` (K, n), as the loop sees it (no step taken).
+
+    Writes ``cost_out[k] = ‖W e‖²`` and ``g_out[k] = Jᵀ W² e`` (the weighted rows' ``Jᵀ e``,
+    the direction in which the error decreases) for the report's checks (a joint blocked at
+    a limit, a local minimum).
+    """
+    n = qs.shape[1]
+    scratch = np.empty((6, max(rot.shape[0], 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    jac = np.empty((6, n))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
+    for k in range(qs.shape[0]):
+        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0, tip_rot, r)
+        m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
+        c = 0.0
+        for i in range(m):
+            c += et[i] * et[i]
+        cost_out[k] = c
+        for i in range(n):
+            g = 0.0
+            for row in range(m):
+                g += jt[row, i] * et[row]
+            g_out[k, i] = g
