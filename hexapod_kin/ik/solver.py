@@ -25,13 +25,14 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
-from .._numerics import wrap_angles
+from .._chain import ChainArrays
+from .._numerics import chain_scale, wrap_angles
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import Task, build_task, build_tasks
 
-__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_many"]
+__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
 STATUSES: tuple[str, ...] = (
@@ -225,6 +226,11 @@ class _Setup:
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
     chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
 
+    @property
+    def tail(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The loop's last inputs: limits and step caps, continuous joints, posture."""
+        return self.prep.lim, self.prep.cont, self.posture
+
 
 def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.ascontiguousarray(a)
@@ -282,7 +288,8 @@ _LOADED = [False]
 
 
 def _run(
-    s: _Setup,
+    chain: tuple[np.ndarray, ...],
+    tail: tuple[np.ndarray, np.ndarray, np.ndarray],
     tgts: np.ndarray,
     w6: np.ndarray,
     pars: np.ndarray,
@@ -291,6 +298,7 @@ def _run(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
+    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture.
     ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n): read-only and C-contiguous.
     Each target's numbers are its own: the same bits alone, in a batch or on any thread.
 
@@ -306,7 +314,7 @@ def _run(
     hist = np.empty((n_t, int(ipar[1]) + 1))
     jac = np.empty((n_t, 6, n))
     res = np.empty((n_t, 3), dtype=np.int64)
-    head, tail = s.chain, (s.prep.lim, s.prep.cont, s.posture)
+    head = chain
     if n_t == 1 and _LOADED[0]:  # one target: straight in (a few µs of call overhead)
         lm_batch(*head, tgts, w6, pars, ipar, starts, *tail, q, hist, jac, res)
         return q, hist, jac, res
@@ -382,7 +390,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         starts[0] = mdl.check_q(q0, "q0")
         starts.setflags(write=False)
     pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-    q, hist, jac, res = _run(s, task.pose[None], task.weights, pars, s.ipar, starts[None])
+    tgt = task.pose[None]
+    q, hist, jac, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
     poses, err, rot, smin = _measures(mdl, [task], q, jac)
     attempts, it, code = res[0].tolist()
     measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
@@ -469,7 +478,8 @@ def _report(
         free_ipar = _frozen(np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64))
         starts = _frozen(np.vstack([q, prep.starts[:8]])[None])
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-        if _run(s, task.pose[None], task.weights, pars, free_ipar, starts)[3][0, 2] == 0:
+        free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
+        if free[3][0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             return result(
                 "joint_limits",
@@ -580,7 +590,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         pars = _with_yaw(pars, [task.yaw for task in tasks])
     pars = _frozen(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
-    q, hist, jac, res = _run(s, tgts, tasks[0].weights, pars, s.ipar, starts)
+    q, hist, jac, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
     out = []
     for i, task in enumerate(tasks):
@@ -590,3 +600,70 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
             _report(mdl, s, task, q[i], hist[i, : it + 1].copy(), jac[i], a, it, c, measured)
         )
     return out
+
+
+def solve_chain(
+    chain: ChainArrays,
+    targets: Any,
+    seeds: Any,
+    lower: Any,
+    upper: Any,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 100,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position IK of a chain view for N targets, each from its own seed (the one loop).
+
+    The compiled loop of :func:`solve_many` on a chain given as arrays (a leg: mount → foot,
+    :class:`~hexapod_kin._chain.ChainArrays`), position rows only, no restarts and no
+    posture task; limited joints are clamped, continuous ones (range ≥ 2π) wrap.
+
+    Args:
+        chain: The chain's placements, axes and tip (its frame: the targets' frame).
+        targets: (N, 3) tip positions [m].
+        seeds: (N, nq) start configurations (e.g. the previous sample's solution).
+        lower: (nq,) lower joint limits [rad]/[m].
+        upper: (nq,) upper joint limits.
+        tol: Convergence threshold on the position error [m].
+        max_iter: Accepted steps per target.
+
+    Returns:
+        ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
+        its position error and whether it is within ``tol``.
+
+    Raises:
+        IKError: ``targets`` or ``seeds`` of the wrong shape or not finite.
+        ParameterError: ``tol`` or ``max_iter`` out of range.
+
+    """
+    opts = IKOptions(tol=tol, rot_tol=tol, max_iter=max_iter)
+    n = int(chain.nq)
+    t = np.asarray(targets, dtype=float)
+    q0 = np.asarray(seeds, dtype=float)
+    if t.ndim != 2 or t.shape[1] != 3 or q0.shape != (len(t), n):
+        raise IKError(
+            f"targets {t.shape} and seeds {q0.shape} do not match; (N, 3) and (N, {n}) needed",
+            parameter="targets",
+            value=t.shape,
+            allowed=f"(N, 3) targets and (N, {n}) seeds",
+        )
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q0))):
+        raise IKError("targets and seeds must be finite", parameter="targets", value=t.tolist())
+    lo = np.broadcast_to(np.asarray(lower, dtype=float), (n,))
+    hi = np.broadcast_to(np.asarray(upper, dtype=float), (n,))
+    prism = np.asarray(chain.kind, dtype=bool)
+    cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
+    scale = chain_scale(chain.trans)
+    lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
+    par = [opts.tol, opts.rot_tol, 1e-8 * scale**2, _MU0, opts.posture_gain, 0.0, 1e-6 * scale]
+    tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+    tgts[:, :3, 3] = t
+    head = tuple(_frozen(a) for a in (*chain.packed, chain.tip_rot))
+    tail = (_frozen(lim), _frozen(cont), _frozen(np.zeros(n)))
+    pars = _frozen(np.tile(par, (len(t), 1)))
+    ipar = _frozen(np.array([0, opts.max_iter, 1, 0], np.int64))
+    w6 = _frozen(np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))
+    starts = _frozen(q0[:, None, :])
+    q, hist, _, res = _run(head, tail, _frozen(tgts), w6, pars, ipar, starts)
+    residual = hist[np.arange(len(t)), res[:, 1]]
+    return q, residual, res[:, 2] == 0
