@@ -7,8 +7,8 @@ inputs give the same bits in every process and thread.
 
 Contents: symmetric eigenvalues (:func:`eig2_sym`, :func:`eig3_sym` closed forms, descending;
 :func:`jacobi_eig` any small size); determinants (:func:`det3`, :func:`det_lu`,
-:func:`det_small`); :func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least
-squares, frozen joints); :func:`wrap_angle`
+:func:`det_small`); :func:`solve_spd` / :func:`cholesky_solve` (Cholesky, in place);
+:func:`dls_into` / :func:`dls_rows` (damped least squares, frozen joints); :func:`wrap_angle`
 (scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp for ``|x| ≤ POLY_TRIG_MAX``).
 Angles in [rad].
 """
@@ -31,7 +31,9 @@ __all__ = [
     "det3",
     "det_lu",
     "det_small",
+    "cholesky_solve",
     "solve_spd",
+    "dls_rows",
     "dls_into",
     "wrap_angle",
 ]
@@ -210,9 +212,13 @@ def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no c
 
 # ------------------------------------------------------------------------ linear solve
 @njit(cache=True, nogil=True, inline="always")
-def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
-    """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
-    n = a.shape[0]
+def cholesky_solve(
+    a: np.ndarray, b: np.ndarray, out: np.ndarray, n: int
+) -> bool:  # pragma: no cover - compiled
+    """Solve ``a x = b`` for the leading n×n block of an SPD ``a``; False if not SPD.
+
+    Reads the lower triangle of ``a`` and overwrites it with the Cholesky factor.
+    """
     for j in range(n):
         s = a[j, j]
         for k in range(j):
@@ -239,8 +245,70 @@ def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma:
     return True
 
 
+@njit(cache=True, nogil=True)
+def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
+    """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
+    return cholesky_solve(a, b, out, a.shape[0])
+
+
 # ------------------------------------------------------------------------ damped least squares
 @njit(cache=True, nogil=True, inline="always")
+def dls_rows(
+    jac: np.ndarray,
+    e: np.ndarray,
+    m: int,
+    lam2: float,
+    free: np.ndarray,
+    dq: np.ndarray,
+    work: np.ndarray,
+    rhs: np.ndarray,
+    sol: np.ndarray,
+) -> bool:  # pragma: no cover - compiled
+    """:func:`dls_into` of the first ``m`` rows of ``jac`` and ``e`` (the loop's form).
+
+    Only the lower triangle of the damped system is formed (the Cholesky reads no more).
+    """
+    n = jac.shape[1]
+    if n <= m:
+        for i in range(n):
+            g = 0.0
+            if free[i]:
+                for r in range(m):
+                    g += jac[r, i] * e[r]
+            rhs[i] = g
+            for k in range(i + 1):
+                s = 0.0
+                if free[i] and free[k]:
+                    for r in range(m):
+                        s += jac[r, i] * jac[r, k]
+                work[i, k] = s
+            work[i, i] += lam2
+        ok = cholesky_solve(work, rhs, sol, n)
+        for i in range(n):
+            dq[i] = sol[i] if free[i] else 0.0
+        return ok
+    for a in range(m):
+        rhs[a] = e[a]
+        for b in range(a + 1):
+            s = 0.0
+            for k in range(n):
+                if free[k]:
+                    s += jac[a, k] * jac[b, k]
+            work[a, b] = s
+        work[a, a] += lam2
+    ok = cholesky_solve(work, rhs, sol, m)
+    for k in range(n):
+        if free[k]:
+            s = 0.0
+            for a in range(m):
+                s += jac[a, k] * sol[a]
+            dq[k] = s
+        else:
+            dq[k] = 0.0
+    return ok
+
+
+@njit(cache=True, nogil=True)
 def dls_into(
     jac: np.ndarray,
     e: np.ndarray,
@@ -254,48 +322,11 @@ def dls_into(
     """Damped least squares for an (m, n) task Jacobian; frozen joints (``~free``) get 0.
 
     ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
-    system). ``work`` is at least (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n).
-    Returns False if the system is not SPD (λ² = 0 at a singularity).
+    system), by Cholesky. ``work`` is at least (max(m, n), max(m, n)); ``rhs``/``sol`` at
+    least max(m, n). Returns False if the system is not SPD (λ² = 0 at a singularity).
+    The numpy twin of this step is :func:`hexapod_kin._numerics.dls_step`.
     """
-    m = jac.shape[0]
-    n = jac.shape[1]
-    if n <= m:
-        for i in range(n):
-            g = 0.0
-            if free[i]:
-                for r in range(m):
-                    g += jac[r, i] * e[r]
-            rhs[i] = g
-            for k in range(n):
-                s = 0.0
-                if free[i] and free[k]:
-                    for r in range(m):
-                        s += jac[r, i] * jac[r, k]
-                work[i, k] = s
-            work[i, i] += lam2
-        ok = solve_spd(work[:n, :n], rhs[:n], sol[:n])
-        for i in range(n):
-            dq[i] = sol[i] if free[i] else 0.0
-        return ok
-    for a in range(m):
-        rhs[a] = e[a]
-        for b in range(m):
-            s = 0.0
-            for k in range(n):
-                if free[k]:
-                    s += jac[a, k] * jac[b, k]
-            work[a, b] = s
-        work[a, a] += lam2
-    ok = solve_spd(work[:m, :m], rhs[:m], sol[:m])
-    for k in range(n):
-        if free[k]:
-            s = 0.0
-            for a in range(m):
-                s += jac[a, k] * sol[a]
-            dq[k] = s
-        else:
-            dq[k] = 0.0
-    return ok
+    return dls_rows(jac, e, jac.shape[0], lam2, free, dq, work, rhs, sol)
 
 
 # ------------------------------------------------------------------------ angles

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
+from .._kernels import dls_rows, fk_jac_into, njit, wrap_angle
 
 __all__ = [
     "lm_batch",
@@ -205,7 +205,7 @@ def step_into(
                 if free[i]:
                     s -= jt[r, i] * z[i]
         e2[r] = s
-    ok = dls_into(jt[:m], e2[:m], lam2, free, dq, work, rhs, sol)
+    ok = dls_rows(jt, e2, m, lam2, free, dq, work, rhs, sol)
     if use_z:
         for i in range(n):
             if free[i]:
@@ -368,14 +368,10 @@ def lm_loop(
                         slow += 1
                     else:
                         slow = 0
-                    for i in range(n):
-                        q[i] = qn[i]
-                        for row in range(6):
-                            jac[row, i] = jac_n[row, i]
-                        for row in range(m_n):
-                            jt[row, i] = jt_n[row, i]
-                    for row in range(m_n):
-                        et[row] = et_n[row]
+                    q, qn = qn, q  # the trial becomes the iterate (buffers swapped)
+                    jac, jac_n = jac_n, jac
+                    jt, jt_n = jt_n, jt
+                    et, et_n = et_n, et
                     m, pos2, rot2, cost = m_n, pos2_n, rot2_n, cost_n
                     accepted += 1
                     hist[accepted] = math.sqrt(cost)
