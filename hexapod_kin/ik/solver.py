@@ -214,8 +214,9 @@ class IKResult:
 class _Setup:
     """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
 
-    Every array is C-contiguous and read-only, the same types for one target and for many
-    (one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`).
+    Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
+    them); the targets and weights are the tasks' read-only arrays. The same types for one
+    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`.
     """
 
     prep: Prepared
@@ -225,18 +226,24 @@ class _Setup:
     restarts: int
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
     chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
+    lim: np.ndarray  # lower, upper, step caps
+    cont: np.ndarray  # continuous joints
 
     @property
     def tail(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The loop's last inputs: limits and step caps, continuous joints, posture."""
-        return self.prep.lim, self.prep.cont, self.posture
+        return self.lim, self.cont, self.posture
 
 
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a)
-    if a.flags.writeable:
-        a = a.copy()
-        a.setflags(write=False)
+def _arg(a: Any) -> np.ndarray:
+    """A private C-contiguous writeable copy: an input of the compiled loop (never written)."""
+    return np.array(a, order="C")
+
+
+def _frozen(a: Any) -> np.ndarray:
+    """A read-only C-contiguous array: the targets' input of the compiled loop."""
+    a = np.array(a, order="C")
+    a.setflags(write=False)
     return a
 
 
@@ -276,9 +283,9 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     restarts = int(opts.restarts)
     starts = np.vstack([prep.home, prep.starts[:restarts]])
     arrays = mdl.arrays
-    chain = tuple(_frozen(a) for a in (*arrays.packed, arrays.tip_rot))
+    chain = tuple(_arg(a) for a in (*arrays.packed, arrays.tip_rot))
     return _Setup(
-        prep, _frozen(par), _frozen(ipar), _frozen(posture), restarts, _frozen(starts), chain
+        prep, par, ipar, _arg(posture), restarts, starts, chain, _arg(prep.lim), _arg(prep.cont)
     )
 
 
@@ -335,7 +342,7 @@ def _evaluate(
     """``(‖W e‖² (K,), Jᵀ W² e (K, n))`` of the task at configurations ``qs`` (K, n)."""
     from .step import task_eval
 
-    qs = _frozen(np.asarray(qs, dtype=float))
+    qs = _arg(np.asarray(qs, dtype=float))
     cost = np.empty(len(qs))
     grad = np.empty(qs.shape)
     par = s.par if task.yaw == 0.0 else _with_yaw(s.par[None], [task.yaw])[0]
@@ -347,7 +354,6 @@ def _evaluate(
 def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
     out = np.array(pars)
     out[:, 5] = yaws
-    out.setflags(write=False)
     return out
 
 
@@ -388,7 +394,6 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     if q0 is not None:
         starts = np.array(starts)
         starts[0] = mdl.check_q(q0, "q0")
-        starts.setflags(write=False)
     pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
     tgt = task.pose[None]
     q, hist, jac, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
@@ -404,27 +409,40 @@ _DEFAULT = IKOptions()
 def _measures(
     mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched)."""
-    if len(tasks) == 1:
+    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched).
+
+    One target takes the same numpy calls on (1, ...) arrays (the same bits as its row of a
+    batch), without the stacking.
+    """
+    code, w = tasks[0].code, tasks[0].weights
+    if len(tasks) == 1:  # (t − p)·[w ≠ 0] on floats: the same IEEE products as numpy's
         poses = mdl.fk(qs[0])[None]
         tgt = tasks[0].pose[None]
+        p, t, k = poses[0, :3, 3].tolist(), tgt[0, :3, 3].tolist(), w[:3].tolist()
+        d = np.array([[(a - b) * (1.0 if c != 0 else 0.0) for a, b, c in zip(t, p, k)]])
     else:
         poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
         tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
-    w = tasks[0].weights
-    d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
+        d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
     err = np.sqrt(np.einsum("ij,ij->i", d, d))
-    rot = np.zeros(len(tasks))
-    if tasks[0].code == 1 and w[5] != 0:
+    rot = _ZERO if len(tasks) == 1 else np.zeros(len(tasks))
+    if code == 1 and w[5] != 0:
         yaw = np.array([t.yaw for t in tasks])
         rot = np.abs(wrap_angles(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
-    elif tasks[0].code == 2:
+    elif code == 2:
         rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
-        ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
+        if len(tasks) == 1:
+            ev = pin.log3(rel[0])[None] * (w[3:] != 0)
+        else:
+            ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
         rot = np.sqrt(np.einsum("ij,ij->i", ev, ev))
     sv = np.linalg.svd(jacs[:, :3], compute_uv=False)
     smin = sv[:, 2] if sv.shape[1] >= 3 else np.zeros(len(tasks))
     return poses, err, rot, smin
+
+
+_ZERO = np.zeros(1)
+_ZERO.setflags(write=False)
 
 
 def _report(
@@ -475,8 +493,8 @@ def _report(
     blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
         # the same loop without limits, 200 steps, from q and 8 seeded starts
-        free_ipar = _frozen(np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64))
-        starts = _frozen(np.vstack([q, prep.starts[:8]])[None])
+        free_ipar = np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64)
+        starts = np.vstack([q, prep.starts[:8]])[None]
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
         free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
         if free[3][0, 2] == 0:
@@ -584,11 +602,10 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
                 allowed=f"{n_t} rows",
             )
         starts[:, 0] = rows
-    starts.setflags(write=False)
     pars = np.broadcast_to(s.par, (n_t, len(s.par)))
     if tasks[0].code == 1:
         pars = _with_yaw(pars, [task.yaw for task in tasks])
-    pars = _frozen(pars)
+    pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
     q, hist, jac, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
     poses, err, rot, smin = _measures(mdl, tasks, q, jac)
@@ -658,12 +675,12 @@ def solve_chain(
     par = [opts.tol, opts.rot_tol, 1e-8 * scale**2, _MU0, opts.posture_gain, 0.0, 1e-6 * scale]
     tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
     tgts[:, :3, 3] = t
-    head = tuple(_frozen(a) for a in (*chain.packed, chain.tip_rot))
-    tail = (_frozen(lim), _frozen(cont), _frozen(np.zeros(n)))
-    pars = _frozen(np.tile(par, (len(t), 1)))
-    ipar = _frozen(np.array([0, opts.max_iter, 1, 0], np.int64))
-    w6 = _frozen(np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))
-    starts = _frozen(q0[:, None, :])
+    head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))
+    tail = (_arg(lim), _arg(cont), np.zeros(n))
+    pars = np.tile(par, (len(t), 1))
+    ipar = np.array([0, opts.max_iter, 1, 0], np.int64)
+    w6 = _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+    starts = _arg(q0[:, None, :])
     q, hist, _, res = _run(head, tail, _frozen(tgts), w6, pars, ipar, starts)
     residual = hist[np.arange(len(t)), res[:, 1]]
     return q, residual, res[:, 2] == 0
