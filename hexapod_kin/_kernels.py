@@ -228,7 +228,7 @@ def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
 
 
 # ------------------------------------------------------------------------ one configuration
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def fk_jac_into(
     rot: np.ndarray,
     trans: np.ndarray,

@@ -211,7 +211,7 @@ def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no c
 
 
 # ------------------------------------------------------------------------ linear solve
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def cholesky_solve(
     a: np.ndarray, b: np.ndarray, out: np.ndarray, n: int
 ) -> bool:  # pragma: no cover - compiled
@@ -252,7 +252,7 @@ def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma:
 
 
 # ------------------------------------------------------------------------ damped least squares
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def dls_rows(
     jac: np.ndarray,
     e: np.ndarray,

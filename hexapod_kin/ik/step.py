@@ -39,7 +39,7 @@ P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """``log(M)`` (rotation vector, [rad]) of a rotation matrix and its angle: ``(x, y, z, θ)``.
 
@@ -78,7 +78,7 @@ def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cove
     return f * x, f * y, f * z, theta
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def task_into(
     mode: int,
     tgt: np.ndarray,
@@ -175,7 +175,7 @@ def task_into(
     return m, pos2, rot2
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def step_into(
     jt: np.ndarray,
     et: np.ndarray,
@@ -213,7 +213,7 @@ def step_into(
     return ok
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _limit_into(
     q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
 ) -> None:  # pragma: no cover - compiled
