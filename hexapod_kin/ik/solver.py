@@ -254,7 +254,7 @@ def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
         hash(key)
     except TypeError:  # arrays in the options: built each time
         return _build_setup(mdl, opts, mode)
-    table = mdl.cached("ik.setups", dict)
+    table: dict[Any, _Setup] = mdl.cached("ik.setups", dict)
     found = table.get(key)
     if found is None:
         if len(table) >= 64:
