@@ -7,8 +7,8 @@ inputs give the same bits in every process and thread.
 
 Contents: symmetric eigenvalues (:func:`eig2_sym`, :func:`eig3_sym` closed forms, descending;
 :func:`jacobi_eig` any small size); determinants (:func:`det3`, :func:`det_lu`,
-:func:`det_small`); :func:`solve_spd` / :func:`cholesky_solve` (Cholesky, in place);
-:func:`dls_into` / :func:`dls_rows` (damped least squares, frozen joints); :func:`wrap_angle`
+:func:`det_small`); :func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least
+squares, frozen joints); :func:`wrap_angle`
 (scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp for ``|x| ≤ POLY_TRIG_MAX``).
 Angles in [rad].
 """
@@ -31,9 +31,7 @@ __all__ = [
     "det3",
     "det_lu",
     "det_small",
-    "cholesky_solve",
     "solve_spd",
-    "dls_rows",
     "dls_into",
     "wrap_angle",
 ]
@@ -212,7 +210,7 @@ def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no c
 
 # ------------------------------------------------------------------------ linear solve
 @njit(cache=True, nogil=True)
-def cholesky_solve(
+def solve_spd(
     a: np.ndarray, b: np.ndarray, out: np.ndarray, n: int
 ) -> bool:  # pragma: no cover - compiled
     """Solve ``a x = b`` for the leading n×n block of an SPD ``a``; False if not SPD.
@@ -245,15 +243,9 @@ def cholesky_solve(
     return True
 
 
-@njit(cache=True, nogil=True)
-def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
-    """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
-    return cholesky_solve(a, b, out, a.shape[0])
-
-
 # ------------------------------------------------------------------------ damped least squares
 @njit(cache=True, nogil=True)
-def dls_rows(
+def dls_into(
     jac: np.ndarray,
     e: np.ndarray,
     m: int,
@@ -264,9 +256,12 @@ def dls_rows(
     rhs: np.ndarray,
     sol: np.ndarray,
 ) -> bool:  # pragma: no cover - compiled
-    """:func:`dls_into` of the first ``m`` rows of ``jac`` and ``e`` (the loop's form).
+    """Damped least squares of the first ``m`` rows of a task; frozen joints (``~free``) get 0.
 
-    Only the lower triangle of the damped system is formed (the Cholesky reads no more).
+    ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
+    system), by Cholesky on the lower triangle (the only part formed). ``work`` is at least
+    (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n). Returns False if the system
+    is not SPD (λ² = 0 at a singularity). Its numpy twin: :func:`hexapod_kin._numerics.dls_step`.
     """
     n = jac.shape[1]
     if n <= m:
@@ -283,7 +278,7 @@ def dls_rows(
                         s += jac[r, i] * jac[r, k]
                 work[i, k] = s
             work[i, i] += lam2
-        ok = cholesky_solve(work, rhs, sol, n)
+        ok = solve_spd(work, rhs, sol, n)
         for i in range(n):
             dq[i] = sol[i] if free[i] else 0.0
         return ok
@@ -296,7 +291,7 @@ def dls_rows(
                     s += jac[a, k] * jac[b, k]
             work[a, b] = s
         work[a, a] += lam2
-    ok = cholesky_solve(work, rhs, sol, m)
+    ok = solve_spd(work, rhs, sol, m)
     for k in range(n):
         if free[k]:
             s = 0.0
@@ -306,27 +301,6 @@ def dls_rows(
         else:
             dq[k] = 0.0
     return ok
-
-
-@njit(cache=True, nogil=True)
-def dls_into(
-    jac: np.ndarray,
-    e: np.ndarray,
-    lam2: float,
-    free: np.ndarray,
-    dq: np.ndarray,
-    work: np.ndarray,
-    rhs: np.ndarray,
-    sol: np.ndarray,
-) -> bool:  # pragma: no cover - compiled
-    """Damped least squares for an (m, n) task Jacobian; frozen joints (``~free``) get 0.
-
-    ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
-    system), by Cholesky. ``work`` is at least (max(m, n), max(m, n)); ``rhs``/``sol`` at
-    least max(m, n). Returns False if the system is not SPD (λ² = 0 at a singularity).
-    The numpy twin of this step is :func:`hexapod_kin._numerics.dls_step`.
-    """
-    return dls_rows(jac, e, jac.shape[0], lam2, free, dq, work, rhs, sol)
 
 
 # ------------------------------------------------------------------------ angles

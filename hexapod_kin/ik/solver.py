@@ -223,7 +223,6 @@ class _Setup:
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
     posture: np.ndarray
-    restarts: int
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
     chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
     lim: np.ndarray  # lower, upper, step caps
@@ -280,13 +279,9 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
         ]
     )
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
-    restarts = int(opts.restarts)
-    starts = np.vstack([prep.home, prep.starts[:restarts]])
-    arrays = mdl.arrays
-    chain = tuple(_arg(a) for a in (*arrays.packed, arrays.tip_rot))
-    return _Setup(
-        prep, par, ipar, _arg(posture), restarts, starts, chain, _arg(prep.lim), _arg(prep.cont)
-    )
+    starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
+    chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
+    return _Setup(prep, par, ipar, _arg(posture), starts, chain, _arg(prep.lim), _arg(prep.cont))
 
 
 #: Set once the ik kernels are loaded in this process (the first call goes through
@@ -305,14 +300,10 @@ def _run(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
-    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture.
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n): read-only and C-contiguous.
-    Each target's numbers are its own: the same bits alone, in a batch or on any thread.
-
-    Returns:
-        ``(q (N, n), history (N, max_iter + 1), LWA Jacobian (N, 6, n), (attempts, steps,
-        code) (N, 3))``.
-
+    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture; ``tgts``
+    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the
+    same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
+    + 1), LWA Jacobian (N, 6, n), (attempts, steps, code) (N, 3))``.
     """
     from .step import lm_batch
 
@@ -321,14 +312,13 @@ def _run(
     hist = np.empty((n_t, int(ipar[1]) + 1))
     jac = np.empty((n_t, 6, n))
     res = np.empty((n_t, 3), dtype=np.int64)
-    head = chain
     if n_t == 1 and _LOADED[0]:  # one target: straight in (a few µs of call overhead)
-        lm_batch(*head, tgts, w6, pars, ipar, starts, *tail, q, hist, jac, res)
+        lm_batch(*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, jac, res)
         return q, hist, jac, res
     from .._kernels import run_blocks
 
     def run(a: int, b: int) -> None:  # targets a..b-1
-        lm_batch(*head, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
+        lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
                  hist[a:b], jac[a:b], res[a:b])  # fmt: skip
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
@@ -336,9 +326,7 @@ def _run(
     return q, hist, jac, res
 
 
-def _evaluate(
-    s: _Setup, task: Task, qs: np.ndarray, ipar: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
+def _evaluate(s: _Setup, task: Task, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(‖W e‖² (K,), Jᵀ W² e (K, n))`` of the task at configurations ``qs`` (K, n)."""
     from .step import task_eval
 
@@ -346,8 +334,7 @@ def _evaluate(
     cost = np.empty(len(qs))
     grad = np.empty(qs.shape)
     par = s.par if task.yaw == 0.0 else _with_yaw(s.par[None], [task.yaw])[0]
-    task_eval(*s.chain, task.pose, task.weights, par, s.ipar if ipar is None else ipar, qs,
-              cost, grad)  # fmt: skip
+    task_eval(*s.chain, task.pose, task.weights, par, s.ipar, qs, cost, grad)
     return cost, grad
 
 
@@ -588,7 +575,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         return []
     n_t = len(tasks)
     s = _setup(mdl, opts, tasks[0].code)
-    starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
+    starts = np.empty((n_t, *s.starts.shape))
     starts[:] = s.starts
     if q0 is not None and np.ndim(q0) == 1:
         starts[:, 0] = mdl.check_q(q0, "q0")

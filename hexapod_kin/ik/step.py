@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .._kernels import dls_rows, fk_jac_into, njit, wrap_angle
+from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
 __all__ = [
     "lm_batch",
@@ -205,7 +205,7 @@ def step_into(
                 if free[i]:
                     s -= jt[r, i] * z[i]
         e2[r] = s
-    ok = dls_rows(jt, e2, m, lam2, free, dq, work, rhs, sol)
+    ok = dls_into(jt, e2, m, lam2, free, dq, work, rhs, sol)
     if use_z:
         for i in range(n):
             if free[i]:
