@@ -11,9 +11,10 @@ each step first tries ``z = g·(q_posture − q)`` projected on the task's null 
 ``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
 the posture task for that attempt).
 
-Size rule: :func:`solve` (one target) runs that loop in numpy over Pinocchio's FK and
-Jacobian — no compiled code; :func:`solve_many` (a batch) runs the same algorithm compiled
-(:func:`~hexapod_kin.ik.step.lm_batch`). Both report with Pinocchio's FK.
+One loop, compiled (:func:`~hexapod_kin.ik.step.lm_batch`): :func:`solve` runs it for one
+target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
+:func:`solve_chain` for a chain view (a leg) with a seed per target. Both report with
+Pinocchio's FK.
 """
 
 from __future__ import annotations
