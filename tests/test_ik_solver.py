@@ -35,7 +35,7 @@ def models():
 def _check(model, r, target):
     """A converged result, checked with Pinocchio's FK at the solution."""
     assert r.status == "converged", r.reason
-    np.testing.assert_array_equal(r.position, model.position(r.q))
+    np.testing.assert_allclose(r.position, model.position(r.q), rtol=0, atol=1e-15)
     assert np.max(np.abs(r.position - target[..., :3])) <= 1e-9
     assert np.all(r.q >= model.lower) and np.all(r.q <= model.upper)
     assert np.all(np.diff(r.history) < 0)  # strictly decreasing, step by step
@@ -403,3 +403,35 @@ def test_build_tasks_equals_build_task_row_by_row():
     bad[7, :3, :3] *= 1.01  # not a rotation: the row-by-row path names it
     with pytest.raises(IKError, match="rigid transform"):
         ik.build_tasks(bad)
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "erd:ur5_robot", "erd:panda", "scara"])
+def test_reported_measures_against_pinocchio(name):
+    """Position, rotation, errors and σ_min of the result (compiled) against Pinocchio + SVD."""
+    model = hk.load(name)
+    qs = model.random_q(60, seed=12)
+    targets = np.array([model.fk(q) for q in qs])
+    if model.nq != 6 and name != "erd:panda":
+        targets = targets[:, :3, 3] * np.where(np.arange(60) % 7 == 0, 3.0, 1.0)[:, None]
+    for r, t in zip(ik.solve_many(model, targets), targets):
+        pose = model.fk(r.q)
+        np.testing.assert_allclose(r.position, pose[:3, 3], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(r.rotation, pose[:3, :3], rtol=0, atol=1e-15)
+        assert r.error == pytest.approx(
+            np.linalg.norm(t[..., :3, 3] - pose[:3, 3])
+            if t.ndim == 2
+            else np.linalg.norm(t[:3] - pose[:3, 3]),
+            abs=1e-15,
+        )
+        if t.ndim == 2:
+            rot = np.linalg.norm(pin.log3(t[:3, :3] @ pose[:3, :3].T))
+            assert r.rotation_error == pytest.approx(rot, abs=1e-14)
+        sv = np.linalg.svd(model.jacobian(r.q)[:3], compute_uv=False)
+        smin = sv[2] if model.nq >= 3 else 0.0
+        assert r.sigma_min == pytest.approx(smin, rel=1e-9, abs=1e-15 * sv[0])
+    # at an exact singularity (the stretched leg): 0 to rounding, as the SVD
+    leg = hk.load("hexabot_leg")
+    r = ik.solve(leg, [0.2, 0.0, 0.0], q0=[0.0, 0.0, 0.0], restarts=0)
+    assert (
+        r.sigma_min <= 1e-15 and np.linalg.svd(leg.jacobian(r.q)[:3], compute_uv=False)[-1] <= 1e-15
+    )

@@ -13,8 +13,9 @@ the posture task for that attempt).
 
 One loop, compiled (:func:`~hexapod_kin.ik.step.lm_batch`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
-:func:`solve_chain` for a chain view (a leg) with a seed per target. Both report with
-Pinocchio's FK.
+:func:`solve_chain` for a chain view (a leg) with a seed per target. The result is measured
+in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
+position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
@@ -24,10 +25,9 @@ from dataclasses import dataclass, fields
 from typing import Any, Literal
 
 import numpy as np
-import pinocchio as pin
 
 from .._chain import ChainArrays
-from .._numerics import chain_scale, wrap_angles
+from .._numerics import chain_scale
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
@@ -141,14 +141,14 @@ class IKResult:
         status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
             ``"not_converged"``.
         error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
-            with Pinocchio.
+            at ``q``.
         rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
-            position + yaw: |ψ* − ψ|; position: 0), recomputed with Pinocchio.
+            position + yaw: |ψ* − ψ|; position: 0), recomputed at ``q``.
         iterations: Accepted steps of the returned attempt.
         history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
             (starts with the initial residual; strictly decreasing).
-        position: p(q) in [m] (Pinocchio).
-        rotation: R(q) (3, 3), the tip's rotation in the base frame (Pinocchio).
+        position: p(q) in [m].
+        rotation: R(q) (3, 3), the tip's rotation in the base frame.
         target: The target position in [m].
         task: The task solved (mode, target pose, yaw, weights).
         attempts: How many starts were tried (1 + restarts used).
@@ -304,27 +304,27 @@ def _run(
     ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture; ``tgts``
     (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the
     same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
-    + 1), LWA Jacobian (N, 6, n), (attempts, steps, code) (N, 3))``.
+    + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
     """
     from .step import lm_batch
 
     n_t, n = len(tgts), starts.shape[2]
     q = np.empty((n_t, n))
     hist = np.empty((n_t, int(ipar[1]) + 1))
-    jac = np.empty((n_t, 6, n))
+    meas = np.empty((n_t, 15))
     res = np.empty((n_t, 3), dtype=np.int64)
     if n_t == 1 and _LOADED[0]:  # one target: straight in (a few µs of call overhead)
-        lm_batch(*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, jac, res)
-        return q, hist, jac, res
+        lm_batch(*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
+        return q, hist, meas, res
     from .._kernels import run_blocks
 
     def run(a: int, b: int) -> None:  # targets a..b-1
         lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
-                 hist[a:b], jac[a:b], res[a:b])  # fmt: skip
+                 hist[a:b], meas[a:b], res[a:b])  # fmt: skip
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
     _LOADED[0] = True
-    return q, hist, jac, res
+    return q, hist, meas, res
 
 
 def _evaluate(s: _Setup, task: Task, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -350,7 +350,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
     The compiled loop of :func:`solve_many` for one target (the same bits as its row of a
-    batch); the result is measured with Pinocchio.
+    batch), measured in the same compiled call.
 
     Args:
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
@@ -384,53 +384,12 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         starts[0] = mdl.check_q(q0, "q0")
     pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
     tgt = task.pose[None]
-    q, hist, jac, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
-    poses, err, rot, smin = _measures(mdl, [task], q, jac)
+    q, hist, meas, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
     attempts, it, code = res[0].tolist()
-    measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
-    return _report(mdl, s, task, q[0], hist[0, : it + 1], jac[0], attempts, it, code, measured)
+    return _report(mdl, s, task, q[0], hist[0, : it + 1], meas[0], attempts, it, code)
 
 
 _DEFAULT = IKOptions()
-
-
-def _measures(
-    mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched).
-
-    One target takes the same numpy calls on (1, ...) arrays (the same bits as its row of a
-    batch), without the stacking.
-    """
-    code, w = tasks[0].code, tasks[0].weights
-    if len(tasks) == 1:  # (t − p)·[w ≠ 0] on floats: the same IEEE products as numpy's
-        poses = mdl.fk(qs[0])[None]
-        tgt = tasks[0].pose[None]
-        p, t, k = poses[0, :3, 3].tolist(), tgt[0, :3, 3].tolist(), w[:3].tolist()
-        d = np.array([[(a - b) * (1.0 if c != 0 else 0.0) for a, b, c in zip(t, p, k)]])
-    else:
-        poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
-        tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
-        d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
-    err = np.sqrt(np.einsum("ij,ij->i", d, d))
-    rot = _ZERO if len(tasks) == 1 else np.zeros(len(tasks))
-    if code == 1 and w[5] != 0:
-        yaw = np.array([t.yaw for t in tasks])
-        rot = np.abs(wrap_angles(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
-    elif code == 2:
-        rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
-        if len(tasks) == 1:
-            ev = pin.log3(rel[0])[None] * (w[3:] != 0)
-        else:
-            ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
-        rot = np.sqrt(np.einsum("ij,ij->i", ev, ev))
-    sv = np.linalg.svd(jacs[:, :3], compute_uv=False)
-    smin = sv[:, 2] if sv.shape[1] >= 3 else np.zeros(len(tasks))
-    return poses, err, rot, smin
-
-
-_ZERO = np.zeros(1)
-_ZERO.setflags(write=False)
 
 
 def _report(
@@ -439,17 +398,16 @@ def _report(
     task: Task,
     q: np.ndarray,
     hist: np.ndarray,
-    jac: np.ndarray,
+    meas: np.ndarray,
     attempts: int,
     it: int,
     code: int,
-    measured: tuple[np.ndarray, float, float, float],
 ) -> IKResult:
     prep = s.prep
-    pose, err, rot, smin = measured
-    for a in (pose, q, hist):
+    for a in (meas, q, hist):
         a.setflags(write=False)
-    tgt, pos = task.pose[:3, 3], pose[:3, 3]
+    err, rot, smin = meas[12:].tolist()
+    tgt, pos = task.pose[:3, 3], meas[:3]
     tol, rot_tol = float(s.par[0]), float(s.par[1])
 
     def result(status: Status, reason: str, far: bool = False) -> IKResult:
@@ -461,7 +419,7 @@ def _report(
             iterations=it,
             history=hist,
             position=pos,
-            rotation=pose[:3, :3],
+            rotation=meas[3:12].reshape(3, 3),
             target=tgt,
             task=task,
             attempts=attempts,
@@ -595,15 +553,11 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         pars = _with_yaw(pars, [task.yaw for task in tasks])
     pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
-    q, hist, jac, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
-    poses, err, rot, smin = _measures(mdl, tasks, q, jac)
+    q, hist, meas, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
     out = []
     for i, task in enumerate(tasks):
-        a, it, c = (int(v) for v in res[i])
-        measured = (poses[i], float(err[i]), float(rot[i]), float(smin[i]))
-        out.append(
-            _report(mdl, s, task, q[i], hist[i, : it + 1].copy(), jac[i], a, it, c, measured)
-        )
+        a, it, c = res[i].tolist()
+        out.append(_report(mdl, s, task, q[i], hist[i, : it + 1], meas[i], a, it, c))
     return out
 
 
@@ -660,7 +614,15 @@ def solve_chain(
     cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
     scale = chain_scale(chain.trans)
     lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
-    par = [opts.tol, opts.rot_tol, 1e-8 * scale**2, _MU0, opts.posture_gain, 0.0, 1e-6 * scale]
+    par = [
+        opts.tol,
+        opts.rot_tol,
+        1e-8 * scale**2,
+        _MU0,
+        opts.posture_gain,
+        0.0,
+        1e-6 * scale,
+    ]
     tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
     tgts[:, :3, 3] = t
     head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))

@@ -29,6 +29,7 @@ __all__ = [
     "lm_batch",
     "lm_loop",
     "log3",
+    "sigma_min3",
     "step_into",
     "task_eval",
     "task_into",
@@ -40,7 +41,9 @@ I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
 
 
 @njit(cache=True, nogil=True)
-def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+def log3(
+    m: np.ndarray,
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """``log(M)`` (rotation vector, [rad]) of a rotation matrix and its angle: ``(x, y, z, θ)``.
 
     ``θ = atan2(‖v‖, (tr M − 1)/2)`` with ``v = vee(M − Mᵀ)/2 = sin θ·a`` (accurate at small
@@ -215,7 +218,11 @@ def step_into(
 
 @njit(cache=True, nogil=True)
 def _limit_into(
-    q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
+    q: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    cont: np.ndarray,
+    use_limits: bool,
 ) -> None:  # pragma: no cover - compiled
     """Wrap continuous joints into their range; clamp the others (when ``use_limits``)."""
     for i in range(q.shape[0]):
@@ -357,7 +364,20 @@ def lm_loop(
                 for i in range(n):
                     qn[i] = q[i] + scale * dq[i]
                 _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r)
+                fk_jac_into(
+                    rot,
+                    trans,
+                    axis,
+                    kind,
+                    col,
+                    qn,
+                    p,
+                    jac_n,
+                    scratch,
+                    n >= 0,
+                    tip_rot,
+                    r,
+                )
                 m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
                 cost_n = 0.0
                 for i in range(m_n):
@@ -419,6 +439,54 @@ def lm_loop(
 
 
 @njit(cache=True, nogil=True)
+def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
+
+    One-sided Jacobi (Hestenes): plane rotations make the three rows mutually orthogonal
+    (to ``|aᵢ·aⱼ| ≤ 1e-15 ‖aᵢ‖‖aⱼ‖``); the singular values are then the rows' norms, with
+    high relative accuracy (Demmel & Veselić 1992), also at a singularity.
+    """
+    n = jac.shape[1]
+    if n < 3:
+        return 0.0
+    a = np.empty((3, n))
+    for r in range(3):
+        for k in range(n):
+            a[r, k] = jac[r, k]
+    for _sweep in range(40):
+        rotated = False
+        for i in range(2):
+            for j in range(i + 1, 3):
+                alpha = 0.0
+                beta = 0.0
+                gamma = 0.0
+                for k in range(n):
+                    alpha += a[i, k] * a[i, k]
+                    beta += a[j, k] * a[j, k]
+                    gamma += a[i, k] * a[j, k]
+                if gamma == 0.0 or abs(gamma) <= 1e-15 * math.sqrt(alpha * beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = c * t
+                for k in range(n):
+                    x, y = a[i, k], a[j, k]
+                    a[i, k] = c * x - s * y
+                    a[j, k] = s * x + c * y
+        if not rotated:
+            break
+    out = np.inf
+    for r in range(3):
+        norm2 = 0.0
+        for k in range(n):
+            norm2 += a[r, k] * a[r, k]
+        out = min(out, math.sqrt(norm2))
+    return out
+
+
+@njit(cache=True, nogil=True)
 def lm_batch(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -436,14 +504,25 @@ def lm_batch(
     posture: np.ndarray,
     q_out: np.ndarray,
     hist_out: np.ndarray,
-    jac_out: np.ndarray,
+    meas_out: np.ndarray,
     res_out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`lm_loop` for N targets in one compiled call.
+    """:func:`lm_loop` for N targets in one compiled call, each result measured.
 
     ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
-    steps, code).
+    steps, code); ``meas_out[i]`` (15,) at the returned q: the tip position (3) [m] and
+    rotation (9, row-major), the error over the kept position rows [m], over the kept
+    rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0) and
+    the smallest singular value of the position Jacobian (:func:`sigma_min3`).
     """
+    n = starts.shape[2]
+    jac = np.empty((6, n))
+    scratch = np.empty((6, max(rot.shape[0], 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
     for i in range(tgts.shape[0]):
         a, it, c = lm_loop(
             rot,
@@ -462,11 +541,21 @@ def lm_batch(
             posture,
             q_out[i],
             hist_out[i],
-            jac_out[i],
+            jac,
         )
         res_out[i, 0] = a
         res_out[i, 1] = it
         res_out[i, 2] = c
+        fk_jac_into(rot, trans, axis, kind, col, q_out[i], p, jac, scratch, n >= 0, tip_rot, r)
+        _, pos2, rot2 = task_into(ipar[I_MODE], tgts[i], w6, pars[i, P_YAW], p, r, jac, w3, et, jt)
+        out = meas_out[i]
+        for k in range(3):
+            out[k] = p[k]
+            for j in range(3):
+                out[3 + 3 * k + j] = r[k, j]
+        out[12] = math.sqrt(pos2)
+        out[13] = math.sqrt(rot2)
+        out[14] = sigma_min3(jac)
 
 
 @njit(cache=True, nogil=True)
