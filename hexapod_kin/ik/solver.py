@@ -327,16 +327,15 @@ def _run(
     return q, hist, meas, res
 
 
-def _evaluate(s: _Setup, task: Task, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(‖W e‖² (K,), Jᵀ W² e (K, n))`` of the task at configurations ``qs`` (K, n)."""
-    from .step import task_eval
-
-    qs = _arg(np.asarray(qs, dtype=float))
-    cost = np.empty(len(qs))
-    grad = np.empty(qs.shape)
-    par = s.par if task.yaw == 0.0 else _with_yaw(s.par[None], [task.yaw])[0]
-    task_eval(*s.chain, task.pose, task.weights, par, s.ipar, qs, cost, grad)
-    return cost, grad
+def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
+    """‖W e‖ of the task at K configurations ``qs`` (K, n): the loop for 0 steps, no limits."""
+    k = len(qs)
+    par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
+    tgts = _frozen(np.broadcast_to(task.pose, (k, 4, 4)))
+    ipar = np.array([s.ipar[0], 0, 0, 0], np.int64)
+    starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
+    pars = _arg(np.tile(par, (k, 1)))
+    return _run(s.chain, s.tail, tgts, task.weights, pars, ipar, starts)[1][:, 0]
 
 
 def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
@@ -468,12 +467,16 @@ def _report(
 
 
 def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:
-    """Joints at a limit whose task-error gradient points outward."""
-    g = _evaluate(s, task, q[None])[1][0]
+    """Joints at a limit where the task error decreases outward (1e-7 rad/m beyond it)."""
     lower, upper, cont = s.prep.lim[0], s.prep.lim[1], s.prep.cont
-    at_lo = (~cont) & (q <= lower + 1e-12) & (g < 0)
-    at_hi = (~cont) & (q >= upper - 1e-12) & (g > 0)
-    return np.flatnonzero(at_lo | at_hi)
+    at_lo = (~cont) & (q <= lower + 1e-12)
+    idx = np.flatnonzero(at_lo | ((~cont) & (q >= upper - 1e-12)))
+    if not idx.size:
+        return idx
+    trial = np.repeat(q[None], len(idx) + 1, axis=0)
+    trial[np.arange(1, len(idx) + 1), idx] += np.where(at_lo[idx], -1e-7, 1e-7)
+    res = _residuals(s, task, trial)
+    return idx[res[1:] < res[0]]
 
 
 def _is_local_min(
@@ -494,7 +497,7 @@ def _is_local_min(
     if s.ipar[2]:
         trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
     floor = cost_root - 1e-9 * prep.scale
-    return not bool(np.any(np.sqrt(_evaluate(s, task, trial)[0]) < floor))
+    return not bool(np.any(_residuals(s, task, trial) < floor))
 
 
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:

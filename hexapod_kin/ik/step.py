@@ -31,7 +31,6 @@ __all__ = [
     "log3",
     "sigma_min3",
     "step_into",
-    "task_eval",
     "task_into",
 ]
 
@@ -556,47 +555,3 @@ def lm_batch(
         out[12] = math.sqrt(pos2)
         out[13] = math.sqrt(rot2)
         out[14] = sigma_min3(jac)
-
-
-@njit(cache=True, nogil=True)
-def task_eval(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
-    tgt: np.ndarray,
-    w6: np.ndarray,
-    par: np.ndarray,
-    ipar: np.ndarray,
-    qs: np.ndarray,
-    cost_out: np.ndarray,
-    g_out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
-    """The task at K configurations ``qs`` (K, n), as the loop sees it (no step taken).
-
-    Writes ``cost_out[k] = ‖W e‖²`` and ``g_out[k] = Jᵀ W² e`` (the weighted rows' ``Jᵀ e``,
-    the direction in which the error decreases) for the report's checks (a joint blocked at
-    a limit, a local minimum).
-    """
-    n = qs.shape[1]
-    scratch = np.empty((6, max(rot.shape[0], 1)))
-    p = np.empty(3)
-    r = np.empty((3, 3))
-    jac = np.empty((6, n))
-    w3 = np.empty((3, 3))
-    et = np.empty(6)
-    jt = np.empty((6, n))
-    for k in range(qs.shape[0]):
-        fk_jac_into(rot, trans, axis, kind, col, qs[k], p, jac, scratch, n >= 0, tip_rot, r)
-        m, _, _ = task_into(ipar[I_MODE], tgt, w6, par[P_YAW], p, r, jac, w3, et, jt)
-        c = 0.0
-        for i in range(m):
-            c += et[i] * et[i]
-        cost_out[k] = c
-        for i in range(n):
-            g = 0.0
-            for row in range(m):
-                g += jt[row, i] * et[row]
-            g_out[k, i] = g
