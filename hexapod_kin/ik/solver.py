@@ -127,6 +127,9 @@ class IKOptions:
         return out
 
 
+#: The options of a call that gives none.
+_DEFAULT = IKOptions()
+
 #: Fewest targets per thread of :func:`solve_many` (the compiled loop releases the GIL).
 _PER_THREAD = 64
 
@@ -249,13 +252,12 @@ def _frozen(a: Any) -> np.ndarray:
 
 def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     """The loop's arguments for ``opts`` and task ``mode`` (cached per model when hashable)."""
+    table: dict[Any, _Setup] = mdl.cached("ik.setups", dict)
+    key: Any = mode if opts is _DEFAULT else (opts, mode)
     try:
-        key: Any = (opts, mode)
-        hash(key)
+        found = table.get(key)
     except TypeError:  # arrays in the options: built each time
         return _build_setup(mdl, opts, mode)
-    table: dict[Any, _Setup] = mdl.cached("ik.setups", dict)
-    found = table.get(key)
     if found is None:
         if len(table) >= 64:
             table.clear()
@@ -285,9 +287,9 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     return _Setup(prep, par, ipar, _arg(posture), starts, chain, _arg(prep.lim), _arg(prep.cont))
 
 
-#: Set once the ik kernels are loaded in this process (the first call goes through
-#: ``run_blocks``: the cache check, the compile notice, the stamp).
-_LOADED = [False]
+#: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
+#: the cache check, the compile notice, the stamp).
+_LOADED: list[Any] = []
 
 
 def _run(
@@ -306,24 +308,23 @@ def _run(
     same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
     + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
     """
-    from .step import lm_batch
-
     n_t, n = len(tgts), starts.shape[2]
     q = np.empty((n_t, n))
     hist = np.empty((n_t, int(ipar[1]) + 1))
     meas = np.empty((n_t, 15))
     res = np.empty((n_t, 3), dtype=np.int64)
-    if n_t == 1 and _LOADED[0]:  # one target: straight in (a few µs of call overhead)
-        lm_batch(*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
+    if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
+        _LOADED[0](*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
         return q, hist, meas, res
     from .._kernels import run_blocks
+    from .step import lm_batch
 
     def run(a: int, b: int) -> None:  # targets a..b-1
         lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
                  hist[a:b], meas[a:b], res[a:b])  # fmt: skip
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    _LOADED[0] = True
+    _LOADED[:] = [lm_batch]
     return q, hist, meas, res
 
 
@@ -386,9 +387,6 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     q, hist, meas, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
     attempts, it, code = res[0].tolist()
     return _report(mdl, s, task, q[0], hist[0, : it + 1], meas[0], attempts, it, code)
-
-
-_DEFAULT = IKOptions()
 
 
 def _report(
