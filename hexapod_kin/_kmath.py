@@ -210,9 +210,13 @@ def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no c
 
 # ------------------------------------------------------------------------ linear solve
 @njit(cache=True, nogil=True)
-def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma: no cover
-    """Cholesky solve ``a x = b`` of a small SPD system (``a`` overwritten); False if not SPD."""
-    n = a.shape[0]
+def solve_spd(
+    a: np.ndarray, b: np.ndarray, out: np.ndarray, n: int
+) -> bool:  # pragma: no cover - compiled
+    """Solve ``a x = b`` for the leading n×n block of an SPD ``a``; False if not SPD.
+
+    Reads the lower triangle of ``a`` and overwrites it with the Cholesky factor.
+    """
     for j in range(n):
         s = a[j, j]
         for k in range(j):
@@ -244,6 +248,7 @@ def solve_spd(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> bool:  # pragma:
 def dls_into(
     jac: np.ndarray,
     e: np.ndarray,
+    m: int,
     lam2: float,
     free: np.ndarray,
     dq: np.ndarray,
@@ -251,13 +256,13 @@ def dls_into(
     rhs: np.ndarray,
     sol: np.ndarray,
 ) -> bool:  # pragma: no cover - compiled
-    """Damped least squares for an (m, n) task Jacobian; frozen joints (``~free``) get 0.
+    """Damped least squares of the first ``m`` rows of a task; frozen joints (``~free``) get 0.
 
     ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
-    system). ``work`` is at least (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n).
-    Returns False if the system is not SPD (λ² = 0 at a singularity).
+    system), by Cholesky on the lower triangle (the only part formed). ``work`` is at least
+    (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n). Returns False if the system
+    is not SPD (λ² = 0 at a singularity). Its numpy twin: :func:`hexapod_kin._numerics.dls_step`.
     """
-    m = jac.shape[0]
     n = jac.shape[1]
     if n <= m:
         for i in range(n):
@@ -266,27 +271,27 @@ def dls_into(
                 for r in range(m):
                     g += jac[r, i] * e[r]
             rhs[i] = g
-            for k in range(n):
+            for k in range(i + 1):
                 s = 0.0
                 if free[i] and free[k]:
                     for r in range(m):
                         s += jac[r, i] * jac[r, k]
                 work[i, k] = s
             work[i, i] += lam2
-        ok = solve_spd(work[:n, :n], rhs[:n], sol[:n])
+        ok = solve_spd(work, rhs, sol, n)
         for i in range(n):
             dq[i] = sol[i] if free[i] else 0.0
         return ok
     for a in range(m):
         rhs[a] = e[a]
-        for b in range(m):
+        for b in range(a + 1):
             s = 0.0
             for k in range(n):
                 if free[k]:
                     s += jac[a, k] * jac[b, k]
             work[a, b] = s
         work[a, a] += lam2
-    ok = solve_spd(work[:m, :m], rhs[:m], sol[:m])
+    ok = solve_spd(work, rhs, sol, m)
     for k in range(n):
         if free[k]:
             s = 0.0

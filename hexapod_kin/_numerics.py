@@ -2,7 +2,8 @@
 
 One home each: angle wrapping (:func:`wrap_angles`), the chain's length scale
 (:func:`chain_length` / :func:`chain_scale`, ONE formula) and the damped-least-squares step
-(:func:`dls_step`, the per-call IK and the resolved-rate law). The compiled counterparts used
+(:func:`dls_step`, :func:`dls_step3`: the resolved-rate law, the legs' closed forms finished on
+the table; the compiled loop's twin). The compiled counterparts used
 inside kernels (``wrap_angle``, ``dls_into``, eigenvalues, determinants...)
 live in :mod:`hexapod_kin._kmath`, re-exported by :mod:`hexapod_kin._kernels`.
 
@@ -16,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["chain_length", "chain_scale", "dls_step", "wrap_angles"]
+__all__ = ["chain_length", "chain_scale", "dls_step", "dls_step3", "wrap_angles"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -54,28 +55,68 @@ def chain_scale(trans: Any) -> float:
 
 
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
-    """One damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (pure function).
+    """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (pure function).
 
-    The smaller system is solved: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else
+    The per-call twin of the compiled loop's step (:func:`hexapod_kin._kmath.dls_into`). The
+    smaller system is solved: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else
     ``Jfᵀ(JfJfᵀ + λ²I)⁻¹ e`` (the same Δq). ``Jf`` is ``jac`` with the columns of frozen
-    joints (``free`` False or 0) zeroed, so they get Δq = 0.
+    joints (``free`` False or 0) zeroed, so they get Δq = 0. A stack of tasks ((..., m, n)
+    Jacobians, (..., m) errors) is solved at once (n ≤ m).
 
     Args:
-        jac: Task Jacobian (m, n).
-        error: Task error or velocity (m,), in the task's units.
+        jac: Task Jacobian (m, n), or a stack (..., m, n).
+        error: Task error or velocity (m,) (stack: (..., m)), in the task's units.
         lam2: Damping ``λ² ≥ 0`` in the task's units squared.
         free: Optional (n,) booleans or 0/1 weights of the joints.
 
     Returns:
-        Δq (n,); zeros when the system is singular (``λ² = 0`` at a singularity).
+        Δq (n,) (stack: (..., n)); zeros when the system is singular (``λ² = 0`` at a
+        singularity).
 
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)
-    m, n = jf.shape
+    m, n = jf.shape[-2:]
     e = np.asarray(error, dtype=float)
+    if jf.ndim > 2:
+        jt = np.swapaxes(jf, -1, -2)
+        return np.linalg.solve(jt @ jf + lam2 * np.eye(n), jt @ e[..., None])[..., 0]
     try:
         if n <= m:
             return np.linalg.solve(jf.T @ jf + lam2 * np.eye(n), jf.T @ e)
         return jf.T @ np.linalg.solve(jf @ jf.T + lam2 * np.eye(m), e)
     except np.linalg.LinAlgError:
         return np.zeros(n)
+
+
+def dls_step3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:
+    """:func:`dls_step` of a 3×3 ``J`` (rows ``j``) on Python floats; None if not SPD.
+
+    ``(JᵀJ + λ² I)⁻¹ Jᵀ x`` by Cholesky, the arithmetic of the compiled
+    :func:`~hexapod_kin._kmath.dls_into` unrolled (a 3-joint leg's step, a few µs).
+    """
+    (a, b, c), (d, e, f), (g, h, i) = j
+    x0, x1, x2 = x
+    r0, r1, r2 = a * x0 + d * x1 + g * x2, b * x0 + e * x1 + h * x2, c * x0 + f * x1 + i * x2
+    w00 = a * a + d * d + g * g + lam2
+    w10, w20 = b * a + e * d + h * g, c * a + f * d + i * g
+    w11 = b * b + e * e + h * h + lam2
+    w21 = c * b + f * e + i * h
+    w22 = c * c + f * f + i * i + lam2
+    if not w00 > 0.0:
+        return None
+    l00 = math.sqrt(w00)
+    l10, l20 = w10 / l00, w20 / l00
+    s = w11 - l10 * l10
+    if not s > 0.0:
+        return None
+    l11 = math.sqrt(s)
+    l21 = (w21 - l20 * l10) / l11
+    s = w22 - l20 * l20 - l21 * l21
+    if not s > 0.0:
+        return None
+    l22 = math.sqrt(s)
+    y0 = r0 / l00
+    y1 = (r1 - l10 * y0) / l11
+    z2 = (r2 - l20 * y0 - l21 * y1) / l22 / l22
+    z1 = (y1 - l21 * z2) / l11
+    return [(y0 - l10 * z1 - l20 * z2) / l00, z1, z2]

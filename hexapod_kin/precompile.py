@@ -35,7 +35,8 @@ def _ik() -> None:
     from .kinematics import load
 
     leg = load("hexabot_leg")
-    solve_many(leg, np.array([leg.fk(q)[:3, 3] for q in leg.random_q(4, seed=1)]))
+    targets = [leg.fk(q)[:3, 3] for q in leg.random_q(4, seed=1)] + [[1.0, 0.0, 0.0]]
+    solve_many(leg, np.array(targets))  # the last one unreachable: the report's checks too
     arm = load("erd:ur5_robot")
     pose = arm.fk(arm.random_q(1, seed=2)[0])
     solve_many(arm, np.array([pose, pose]))

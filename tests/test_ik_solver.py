@@ -35,7 +35,7 @@ def models():
 def _check(model, r, target):
     """A converged result, checked with Pinocchio's FK at the solution."""
     assert r.status == "converged", r.reason
-    np.testing.assert_array_equal(r.position, model.position(r.q))
+    np.testing.assert_allclose(r.position, model.position(r.q), rtol=0, atol=1e-15)
     assert np.max(np.abs(r.position - target[..., :3])) <= 1e-9
     assert np.all(r.q >= model.lower) and np.all(r.q <= model.upper)
     assert np.all(np.diff(r.history) < 0)  # strictly decreasing, step by step
@@ -304,22 +304,89 @@ def test_threads_give_the_single_thread_answers(arms):
         np.testing.assert_array_equal(a, b)
 
 
-def test_one_target_runs_without_numba():
-    """Size rule: ik.solve, ik.analytic and analytic_batch import no compiled layer."""
+def test_closed_forms_run_without_numba():
+    """Size rule: ik.analytic and analytic_batch import no compiled layer (ik.solve does)."""
     import subprocess
     import sys
 
     code = (
         "import sys, hexapod_kin as hk\n"
-        "r = hk.ik.solve('hexabot_leg', [0.15, 0.0, -0.1])\n"
-        "assert r.converged\n"
-        "hk.ik.solve(hk.load('erd:ur5_robot', tip='tool0'), __import__('numpy').eye(4))\n"
         "hk.ik.analytic('hexabot_leg', [0.15, 0.0, -0.1])\n"
         "hk.ik.analytic_batch('scara', [[0.3, 0.2, 0.1]], within_limits=True)\n"
         "assert 'numba' not in sys.modules, 'numba imported'\n"
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
+
+
+#: One target per call and the same targets as one batch, digested field by field.
+_BITS = """
+import hashlib, json, sys
+import numpy as np
+import hexapod_kin as hk
+from hexapod_kin import ik
+
+def digest(results):
+    h = hashlib.sha256()
+    for r in results:
+        for k, v in sorted(r.to_dict().items()):
+            h.update(k.encode() + repr(v).encode())
+        for a in (r.q, r.history, r.position, r.rotation):
+            h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+def cases():
+    leg, arm = hk.load("hexabot_leg"), hk.load("erd:ur5_robot")
+    scara = hk.load("scara")
+    pos = np.array([leg.position(q) for q in leg.random_q(12, seed=4)])
+    pos[::4] *= 3.0  # unreachable ones too
+    poses = np.array([arm.fk(q) for q in arm.random_q(12, seed=4)])
+    yaw = np.array([np.append(scara.position(q), 0.2) for q in scara.random_q(6, seed=4)])
+    return [(leg, pos, {}), (arm, poses, {}), (arm, poses[:4], {"max_iter": 3}),
+            (scara, yaw, {}), (leg, pos[:4], {"restarts": 0, "tol": 1e-6})]
+
+out = []
+for model, targets, kw in cases():
+    one = digest([ik.solve(model, t, **kw) for t in targets])  # per call first (cold)
+    out.append([one, digest(ik.solve_many(model, targets, **kw))])
+print(json.dumps(out))
+"""
+
+
+def test_per_call_and_batch_give_the_same_bits_fresh_and_warm():
+    """ik.solve of one target == its row of solve_many, in a fresh process and a warm one."""
+    import json
+    import subprocess
+    import sys
+
+    runs = []
+    for _ in range(2):  # the second process: everything loaded from the warm caches
+        res = subprocess.run(
+            [sys.executable, "-c", _BITS], capture_output=True, text=True, timeout=600
+        )
+        assert res.returncode == 0, res.stderr[-2000:]
+        runs.append(json.loads(res.stdout.splitlines()[-1]))
+    for one, many in runs[0]:
+        assert one == many
+    assert runs[1] == runs[0]
+
+
+def test_solve_chain_is_the_loop_of_solve_many_on_a_chain_view():
+    leg = hk.load("hexabot_leg")
+    qs = leg.random_q(40, seed=8)
+    targets = np.array([leg.position(q) for q in qs])
+    seeds = qs + np.random.default_rng(8).normal(scale=0.2, size=qs.shape)
+    q, residual, ok = ik.solve_chain(leg.arrays, targets, seeds, leg.lower, leg.upper)
+    many = ik.solve_many(leg, targets, seeds, restarts=0)
+    for i, r in enumerate(many):
+        np.testing.assert_array_equal(q[i], r.q)
+        assert ok[i] == r.converged
+        assert residual[i] == r.history[-1]
+    reached = np.array([leg.position(x) for x in q[ok]])
+    assert np.abs(reached - targets[ok]).max() <= 1e-9  # Pinocchio's FK, independent
+    assert ok.mean() >= 0.9
+    with pytest.raises(IKError):
+        ik.solve_chain(leg.arrays, targets, seeds[:3], leg.lower, leg.upper)
 
 
 def test_build_tasks_equals_build_task_row_by_row():
@@ -336,3 +403,35 @@ def test_build_tasks_equals_build_task_row_by_row():
     bad[7, :3, :3] *= 1.01  # not a rotation: the row-by-row path names it
     with pytest.raises(IKError, match="rigid transform"):
         ik.build_tasks(bad)
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "erd:ur5_robot", "erd:panda", "scara"])
+def test_reported_measures_against_pinocchio(name):
+    """Position, rotation, errors and σ_min of the result (compiled) against Pinocchio + SVD."""
+    model = hk.load(name)
+    qs = model.random_q(60, seed=12)
+    targets = np.array([model.fk(q) for q in qs])
+    if model.nq != 6 and name != "erd:panda":
+        targets = targets[:, :3, 3] * np.where(np.arange(60) % 7 == 0, 3.0, 1.0)[:, None]
+    for r, t in zip(ik.solve_many(model, targets), targets):
+        pose = model.fk(r.q)
+        np.testing.assert_allclose(r.position, pose[:3, 3], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(r.rotation, pose[:3, :3], rtol=0, atol=1e-15)
+        assert r.error == pytest.approx(
+            np.linalg.norm(t[..., :3, 3] - pose[:3, 3])
+            if t.ndim == 2
+            else np.linalg.norm(t[:3] - pose[:3, 3]),
+            abs=1e-15,
+        )
+        if t.ndim == 2:
+            rot = np.linalg.norm(pin.log3(t[:3, :3] @ pose[:3, :3].T))
+            assert r.rotation_error == pytest.approx(rot, abs=1e-14)
+        sv = np.linalg.svd(model.jacobian(r.q)[:3], compute_uv=False)
+        smin = sv[2] if model.nq >= 3 else 0.0
+        assert r.sigma_min == pytest.approx(smin, rel=1e-9, abs=1e-15 * sv[0])
+    # at an exact singularity (the stretched leg): 0 to rounding, as the SVD
+    leg = hk.load("hexabot_leg")
+    r = ik.solve(leg, [0.2, 0.0, 0.0], q0=[0.0, 0.0, 0.0], restarts=0)
+    assert (
+        r.sigma_min <= 1e-15 and np.linalg.svd(leg.jacobian(r.q)[:3], compute_uv=False)[-1] <= 1e-15
+    )

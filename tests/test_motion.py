@@ -14,9 +14,10 @@ import pytest
 
 import hexapod_kin as hk
 from hexapod_kin import gait, motion, robots, seeds
+from hexapod_kin._numerics import dls_step3
 from hexapod_kin.cli import main
 from hexapod_kin.exceptions import ConfigurationError, ParameterError
-from hexapod_kin.motion._law import _dls3, _sigma3
+from hexapod_kin.motion._law import _sigma3
 from hexapod_kin.params import JointLimits
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -362,7 +363,7 @@ def test_closed_forms_of_the_3x3_law_match_numpy():
         u, s, vt = np.linalg.svd(jac)
         ref = vt.T @ (s / (s * s + lam2) * (u.T @ x))  # the DLS solution by the SVD
         cond = (s[0] ** 2 + lam2) / (s[-1] ** 2 + lam2)  # of the Cholesky's matrix
-        got = np.array(_dls3(jac.tolist(), x.tolist(), lam2))
+        got = np.array(dls_step3(jac.tolist(), x.tolist(), lam2))
         assert np.abs(got - ref).max() <= 1e-14 * cond * np.abs(ref).max()
     assert _sigma3([[0.0] * 3] * 3) == (0.0, 0.0)
 

@@ -55,9 +55,9 @@ def test_solve_spd_and_non_spd() -> None:
     a = _sym(5) + 0.1 * np.eye(5)
     b = RNG.normal(size=5)
     out = np.empty(5)
-    assert K.solve_spd(a.copy(), b, out)
+    assert K.solve_spd(a.copy(), b, out, len(b))
     assert np.allclose(a @ out, b, atol=1e-10)
-    assert not K.solve_spd(-np.eye(2), np.ones(2), np.empty(2))
+    assert not K.solve_spd(-np.eye(2), np.ones(2), np.empty(2), 2)
 
 
 @pytest.mark.parametrize("shape", [(3, 2), (3, 3), (3, 7), (6, 6), (6, 7), (2, 5)])
@@ -148,8 +148,25 @@ def test_compiled_dls_into_is_the_damped_least_squares_solution(shape: tuple[int
     free = np.arange(n) != 1
     big = max(m, n)
     dq = np.empty(n)
-    assert K.dls_into(j, e, lam2, free, dq, np.empty((big, big)), np.empty(big), np.empty(big))
+    assert K.dls_into(j, e, m, lam2, free, dq, np.empty((big, big)), np.empty(big), np.empty(big))
     stacked = np.vstack([j[:, free], math.sqrt(lam2) * np.eye(n)[:, free]])
     ref = np.linalg.lstsq(stacked, np.concatenate([e, np.zeros(n)]), rcond=None)[0]
     assert dq[1] == 0.0
     assert np.allclose(dq[free], ref, atol=1e-12)
+
+
+def test_the_step_per_call_is_the_compiled_step() -> None:
+    """dls_step3 (Python floats) is dls_into's arithmetic: the same bits; dls_step to rounding."""
+    rng = np.random.default_rng(11)
+    free = np.ones(3, dtype=bool)
+    for _ in range(200):
+        j, e, lam2 = rng.normal(size=(3, 3)), rng.normal(size=3), 10.0 ** rng.uniform(-12, -1)
+        dq = np.empty(3)
+        assert K.dls_into(j, e, 3, lam2, free, dq, np.empty((3, 3)), np.empty(3), np.empty(3))
+        assert N.dls_step3(j.tolist(), e.tolist(), lam2) == dq.tolist()
+        cond = np.linalg.cond(j.T @ j + lam2 * np.eye(3))
+        assert np.allclose(N.dls_step(j, e, lam2), dq, rtol=0, atol=1e-14 * cond * np.abs(dq).max())
+    stack = rng.normal(size=(5, 4, 3))
+    errs = rng.normal(size=(5, 4))
+    one_by_one = [N.dls_step(a, b, 0.01) for a, b in zip(stack, errs)]
+    np.testing.assert_allclose(N.dls_step(stack, errs, 0.01), one_by_one, atol=1e-13)

@@ -1,8 +1,9 @@
 """The size rule: command-line-sized work never imports numba (Pinocchio and numpy only).
 
 Each command runs in a fresh interpreter through ``hexapod_kin.cli.main``; afterwards
-``numba`` must not be in ``sys.modules`` (importing it costs 0.3–0.7 s). Batch APIs are the
-only users of the compiled layer (:mod:`hexapod_kin._kernels`).
+``numba`` must not be in ``sys.modules`` (importing it costs 0.3–0.7 s). Batch APIs and the
+one IK loop (``ik.solve``; ``ik`` when the closed form does not answer) are the only users of
+the compiled layer (:mod:`hexapod_kin._kernels`).
 """
 
 from __future__ import annotations

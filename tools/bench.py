@@ -8,9 +8,12 @@ child processes on those caches: the first leg ``fk_batch`` of 1e6 in a fresh pr
 processes: min / median / max), then
 (one process) the default ``scan(grid=100)`` with family labels, ``measures_batch`` of 1e6
 (leg, SCARA, Solo12 leg, UR5), leg ``fk_batch`` of 1e6, UR5 6-D IK through ``solve_many``
-(mean µs per pose and success) and ``ik.solve`` (median µs per pose); with the ratio to a peer
-measured in the same run where one exists (a Pinocchio loop, numpy's SVD, Pinocchio's IK
-example loop). A row that fails prints its error and the run goes on.
+(mean µs per pose and success) and ``ik.solve`` (median µs per pose); ``ik.solve`` per call
+on 1,000 random reachable targets (UR5 and Panda poses, the leg's positions: median µs and
+success checked with Pinocchio) beside Robotics Toolbox's ``ik_LM`` (C++) on its own models,
+the two called in turn, target by target;
+with the ratio to a peer measured in the same run where one exists (a Pinocchio loop, numpy's
+SVD, Pinocchio's IK example loop). A row that fails prints its error and the run goes on.
 
 The other sections live in ``tools/bench_<section>.py`` (one per concern) and expose
 ``run(quick: bool) -> list[dict]``; each dict is one line of the report.
@@ -168,6 +171,67 @@ for src, kw, target in [("hexabot_leg", {}, 0.05), ("scara", {}, 0.1),
     row(f"measures_batch {src}", lambda: measures_row(src, kw, target))
 row("fk_batch hexabot_leg", fk_row)
 row("6-D IK erd:ur5_robot", ik_row)
+
+
+def rtb_robot(name):
+    import roboticstoolbox as rtb
+    if name != "leg":
+        return getattr(rtb.models.DH, name)()
+    from spatialmath import SE3
+    links = [rtb.RevoluteMDH(alpha=a, a=d, qlim=[-np.pi, np.pi])
+             for a, d in ((0.0, 0.0), (-np.pi / 2, 0.05), (0.0, 0.1))]
+    return rtb.DHRobot(links, tool=SE3.Tx(0.1), name="hexabot_leg")
+
+
+def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
+    # ik.solve and RTB's ik_LM one target at a time, in turn (both see the same load)
+    model = hk.load(src, **kw)
+    n = 200 if QUICK else 1000
+    poses = [model.fk(q) for q in model.random_q(n, seed=21)]  # reachable, within the limits
+    targets = [p[:3, 3].copy() for p in poses] if position else poses
+    try:
+        robot = rtb_robot(rtb_name)
+    except ImportError:
+        robot = None
+    if robot is not None:
+        ets, mask = robot.ets(), [1, 1, 1, 0, 0, 0] if position else [1] * 6
+        qs = np.random.default_rng(21).uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
+        teps = [ets.eval(q) for q in qs]
+    ik.solve(model, targets[0])
+    times, ok, ptimes, pok = [], 0, [], 0
+    for i in range(n):
+        t0 = time.perf_counter()
+        r = ik.solve(model, targets[i])
+        times.append(time.perf_counter() - t0)
+        got, p = model.fk(r.q), poses[i]  # checked with Pinocchio's FK and log map
+        rot = 0.0 if position else np.linalg.norm(pin.log3(p[:3, :3] @ got[:3, :3].T))
+        ok += bool(r.converged and np.linalg.norm(got[:3, 3] - p[:3, 3]) <= 1e-9 and rot <= 1e-9)
+        if robot is None:
+            continue
+        tep = teps[i]
+        t0 = time.perf_counter()
+        sol = ets.ik_LM(tep, tol=1e-18, ilimit=60, slimit=100, joint_limits=True, mask=mask)
+        ptimes.append(time.perf_counter() - t0)
+        got = ets.eval(sol[0])
+        rot = 0.0 if position else np.linalg.norm(pin.log3(tep[:3, :3] @ got[:3, :3].T))
+        pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
+    ours = float(np.median(times)) * 1e6
+    out = {"n": n, "median_us": round(ours, 1), "target_us": target_us,
+           "success": round(ok / n, 4), "target_success": target_ok}
+    if robot is None:
+        return out | {"peer_rtb": "not installed (pip install hexapod-kin[bench])"}
+    peer = float(np.median(ptimes)) * 1e6
+    return out | {"peer_rtb_ik_LM_median_us": round(peer, 1), "peer_success": round(pok / n, 4),
+                  "speedup": round(peer / ours, 2)}
+
+
+for name, src, kw, rtb_name, position, target_us, target_ok in (
+    ("UR5 6-D", "erd:ur5_robot", {}, "UR5", False, 30, 0.999),
+    ("Panda 6-D", "erd:panda", {}, "Panda", False, 40, 0.999),
+    ("hexabot_leg position", "hexabot_leg", {}, "leg", True, 10, 1.0),
+):
+    row(f"ik.solve per call, {name}", lambda: per_call_row(src, kw, rtb_name, position,
+                                                            target_us, target_ok))
 """
 
 _FIRST = r"""

@@ -8,8 +8,9 @@
   weights (:func:`build_task`).
 * :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
   and the package's one home pose :func:`home` (IK start, resolved-rate start).
-* :mod:`.solver` — :func:`solve` (numpy over Pinocchio), :func:`solve_many` (the compiled
-  loop of :mod:`.step`, imported on first use), :class:`IKOptions`, :class:`IKResult`.
+* :mod:`.solver` — the one numerical loop (compiled, :mod:`.step`, imported on first use)
+  for one target (:func:`solve`), many (:func:`solve_many`) or a chain view such as a leg
+  (:func:`solve_chain`); :class:`IKOptions`, :class:`IKResult`.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from .closed import (
     leg_solutions,
 )
 from .prepare import LEG_HOME, Prepared, home, prepared
-from .solver import STATUSES, IKOptions, IKResult, solve, solve_many
+from .solver import STATUSES, IKOptions, IKResult, solve, solve_chain, solve_many
 from .task import AXES, Task, build_task, build_tasks
 
 __all__ = [
@@ -51,5 +52,6 @@ __all__ = [
     "leg_solutions",
     "prepared",
     "solve",
+    "solve_chain",
     "solve_many",
 ]

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import wrap_angles
+from .._numerics import dls_step, wrap_angles
 from ..params import Chain
 
 __all__ = ["finish_on_table", "fit_angles"]
@@ -101,13 +101,12 @@ def finish_on_table(
     if len(idx):
         qa = q[idx[:, 0], idx[:, 1]]
         xa = x[idx[:, 0], :3]
-        damp = 1e-12 * scale**2 * np.eye(n)
+        damp = 1e-12 * scale**2
         act = np.arange(len(qa))  # the slots still moving
         for _ in range(12):
             p, jac = _leg_fk(ch, qa[act])
             res = xa[act] - p
-            jt = np.swapaxes(jac, 1, 2)
-            step = np.linalg.solve(jt @ jac + damp, (jt @ res[:, :, None]))[:, :, 0]
+            step = dls_step(jac, res, damp)
             qa[act] += step
             act = act[np.abs(step).max(axis=1) >= 1e-14]
             if not len(act):

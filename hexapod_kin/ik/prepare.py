@@ -43,9 +43,6 @@ def as_model(model: ModelLike) -> KinematicModel:
 class Prepared:
     """What the solver needs of one model, built once (arrays read-only).
 
-    The compiled batch loops also read :attr:`packed` and :attr:`tip_rot`, the model's chain
-    arrays (:attr:`~hexapod_kin.model.Model.arrays`), fetched on first use only.
-
     Attributes:
         lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
         cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
@@ -64,16 +61,6 @@ class Prepared:
     starts: np.ndarray
     middle: np.ndarray
     model: Any = field(repr=False, compare=False)
-
-    @property
-    def packed(self) -> tuple[np.ndarray, ...]:
-        """The chain arrays in the compiled kernels' order (rot, trans, axis, kind, col)."""
-        return tuple(self.model.arrays.packed)
-
-    @property
-    def tip_rot(self) -> np.ndarray:
-        """(3, 3) rotation of the tip in its joint frame (compiled kernels)."""
-        return np.asarray(self.model.arrays.tip_rot)
 
 
 def _build_prepared(model: KinematicModel) -> Prepared:

@@ -11,9 +11,11 @@ each step first tries ``z = g·(q_posture − q)`` projected on the task's null 
 ``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
 the posture task for that attempt).
 
-Size rule: :func:`solve` (one target) runs that loop in numpy over Pinocchio's FK and
-Jacobian — no compiled code; :func:`solve_many` (a batch) runs the same algorithm compiled
-(:func:`~hexapod_kin.ik.step.lm_batch`). Both report with Pinocchio's FK.
+One loop, compiled (:func:`~hexapod_kin.ik.step.lm_batch`): :func:`solve` runs it for one
+target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
+:func:`solve_chain` for a chain view (a leg) with a seed per target. The result is measured
+in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
+position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
@@ -23,15 +25,15 @@ from dataclasses import dataclass, fields
 from typing import Any, Literal
 
 import numpy as np
-import pinocchio as pin
 
-from .._numerics import dls_step, wrap_angles
+from .._chain import ChainArrays
+from .._numerics import chain_scale
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import Task, build_task, build_tasks
 
-__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_many"]
+__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
 STATUSES: tuple[str, ...] = (
@@ -125,6 +127,9 @@ class IKOptions:
         return out
 
 
+#: The options of a call that gives none.
+_DEFAULT = IKOptions()
+
 #: Fewest targets per thread of :func:`solve_many` (the compiled loop releases the GIL).
 _PER_THREAD = 64
 
@@ -139,14 +144,14 @@ class IKResult:
         status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
             ``"not_converged"``.
         error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
-            with Pinocchio.
+            at ``q``.
         rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
-            position + yaw: |ψ* − ψ|; position: 0), recomputed with Pinocchio.
+            position + yaw: |ψ* − ψ|; position: 0), recomputed at ``q``.
         iterations: Accepted steps of the returned attempt.
         history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
             (starts with the initial residual; strictly decreasing).
-        position: p(q) in [m] (Pinocchio).
-        rotation: R(q) (3, 3), the tip's rotation in the base frame (Pinocchio).
+        position: p(q) in [m].
+        rotation: R(q) (3, 3), the tip's rotation in the base frame.
         target: The target position in [m].
         task: The task solved (mode, target pose, yaw, weights).
         attempts: How many starts were tried (1 + restarts used).
@@ -211,20 +216,60 @@ class IKResult:
 # ============================================================================ the loop's setup
 @dataclass(frozen=True)
 class _Setup:
-    """Checked options as the loop's parameters (the order of ``step.P_*`` / ``step.I_*``)."""
+    """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
+
+    Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
+    them); the targets and weights are the tasks' read-only arrays. The same types for one
+    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`.
+    """
 
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
     posture: np.ndarray
-    restarts: int
+    starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
+    chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
+    lim: np.ndarray  # lower, upper, step caps
+    cont: np.ndarray  # continuous joints
+
+    @property
+    def tail(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The loop's last inputs: limits and step caps, continuous joints, posture."""
+        return self.lim, self.cont, self.posture
+
+
+def _arg(a: Any) -> np.ndarray:
+    """A private C-contiguous writeable copy: an input of the compiled loop (never written)."""
+    return np.array(a, order="C")
+
+
+def _frozen(a: Any) -> np.ndarray:
+    """A read-only C-contiguous array: the targets' input of the compiled loop."""
+    a = np.array(a, order="C")
+    a.setflags(write=False)
+    return a
 
 
 def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
+    """The loop's arguments for ``opts`` and task ``mode`` (cached per model when hashable)."""
+    table: dict[Any, _Setup] = mdl.cached("ik.setups", dict)
+    key: Any = mode if opts is _DEFAULT else (opts, mode)
+    try:
+        found = table.get(key)
+    except TypeError:  # arrays in the options: built each time
+        return _build_setup(mdl, opts, mode)
+    if found is None:
+        if len(table) >= 64:
+            table.clear()
+        found = table[key] = _build_setup(mdl, opts, mode)
+    return found
+
+
+def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     prep = prepared(mdl)
     posture, use = prep.middle, opts.posture is not None and opts.posture is not False
     if use and not isinstance(opts.posture, str):
-        posture = np.ascontiguousarray(mdl.check_q(opts.posture, "posture"), dtype=float)
+        posture = mdl.check_q(opts.posture, "posture")
     par = np.array(
         [
             float(opts.tol),
@@ -237,135 +282,75 @@ def _setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
         ]
     )
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
-    return _Setup(prep, par, ipar, posture, int(opts.restarts))
+    starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
+    chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
+    return _Setup(prep, par, ipar, _arg(posture), starts, chain, _arg(prep.lim), _arg(prep.cont))
 
 
-# ============================================================================ numpy loop
-def _skew(e: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
+#: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
+#: the cache check, the compile notice, the stamp).
+_LOADED: list[Any] = []
 
 
-def _rows(
-    mdl: KinematicModel, task: Task, q: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, float, float, np.ndarray]:
-    """Weighted task rows at q: ``(e, J, ‖e_p‖², ‖e_ω‖², LWA Jacobian)`` (Pinocchio FK, J)."""
-    pose, jac = mdl.fk_jacobian(q)
-    w = task.weights
-    ep = task.pose[:3, 3] - pose[:3, 3]
-    keep = w[:3] != 0
-    es, js = [w[:3][keep] * ep[keep]], [w[:3][keep, None] * jac[:3][keep]]
-    pos2 = float(ep[keep] @ ep[keep])
-    rot2 = 0.0
-    if task.code == 1 and w[5] != 0:
-        x0, x1, x2 = pose[0, 0], pose[1, 0], pose[2, 0]
-        h2 = x0 * x0 + x1 * x1
-        e = float(wrap_angles(task.yaw - math.atan2(x1, x0)))
-        rot2 = e * e
-        a, b = (-x2 * x0 / h2, -x2 * x1 / h2) if h2 > 1e-24 else (0.0, 0.0)
-        es.append(np.array([w[5] * e]))
-        js.append(w[5] * (a * jac[3] + b * jac[4] + jac[5])[None, :])
-    elif task.code == 2:
-        ev = pin.log3(task.pose[:3, :3] @ pose[:3, :3].T)
-        th2 = float(ev @ ev)
-        th = math.sqrt(th2)
-        c = 1.0 / 12.0 + th2 / 720.0 if th < 1e-4 else 1.0 / th2 - 0.5 / (th * math.tan(0.5 * th))
-        # e(q + dq) ≈ e − Jr⁻¹(e) J_ω dq, Jr⁻¹ = I + [e]/2 + c [e]² (right Jacobian of SO(3))
-        jr_inv = np.eye(3) + 0.5 * _skew(ev) + c * (np.outer(ev, ev) - th2 * np.eye(3))
-        keep = w[3:] != 0
-        rot2 = float(ev[keep] @ ev[keep])
-        es.append(w[3:][keep] * ev[keep])
-        js.append(w[3:][keep, None] * (jr_inv @ jac[3:])[keep])
-    return np.concatenate(es), np.concatenate(js), pos2, rot2, jac
+def _run(
+    chain: tuple[np.ndarray, ...],
+    tail: tuple[np.ndarray, np.ndarray, np.ndarray],
+    tgts: np.ndarray,
+    w6: np.ndarray,
+    pars: np.ndarray,
+    ipar: np.ndarray,
+    starts: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
-
-def _limit(q: np.ndarray, prep: Prepared, use_limits: bool) -> np.ndarray:
-    """Continuous joints wrapped into their range; the others clamped (``use_limits``)."""
-    lower, upper = prep.lim[0], prep.lim[1]
-    out = (q < lower) | (q > upper)
-    wrapped = np.where(prep.cont & out, lower + np.remainder(q - lower, upper - lower), q)
-    if use_limits:
-        return np.where(prep.cont, wrapped, np.clip(q, lower, upper))
-    return wrapped
-
-
-def _lm(
-    mdl: KinematicModel, s: _Setup, task: Task, starts: np.ndarray, use_limits: bool, max_iter: int
-) -> tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray]:
-    """The Levenberg–Marquardt loop (module docstring) from each start in turn.
-
-    Returns:
-        ``(attempts, steps, code, q, history, Jacobian)`` of the best attempt; code 0
-        converged, 1 stalled, 2 iteration cap.
-
+    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture; ``tgts``
+    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the
+    same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
+    + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
     """
-    prep, par = s.prep, s.par
-    tol2, rtol2 = par[0] ** 2, par[1] ** 2
-    wbar, gain, floor2 = par[2], par[4], par[6] ** 2
-    lower, upper, cap = prep.lim
-    cont = prep.cont
-    best: tuple[int, int, int, np.ndarray, np.ndarray, np.ndarray] | None = None
-    best_cost = math.inf
-    tried = 0
-    for start in starts:
-        tried += 1
-        q = _limit(np.array(start, dtype=float), prep, use_limits)
-        e, jt, pos2, rot2, jac = _rows(mdl, task, q)
-        cost = float(e @ e)
-        hist = [math.sqrt(cost)]
-        use_post = bool(s.ipar[3]) and q.size > e.size
-        mu, tries, slow, code = par[3], 0, 0, 1
-        while True:
-            if pos2 <= tol2 and rot2 <= rtol2:
-                code = 0
-                break
-            if len(hist) > max_iter:
-                code = 2
-                break
-            g = jt.T @ e
-            free = ~(((q <= lower) & (g < 0)) | ((q >= upper) & (g > 0))) | cont | (not use_limits)
-            lam2 = mu * (cost + wbar)
-            with_z = use_post and cost > floor2
-            kept = stalled = False
-            for _ in range(2):
-                if with_z:
-                    d = s.posture - q
-                    z = np.where(free, gain * np.where(cont, wrap_angles(d), d), 0.0)
-                    dq = z + dls_step(jt, e - (jt * free) @ z, lam2, free)
-                else:
-                    dq = dls_step(jt, e, lam2, free)
-                big = np.abs(dq) > cap
-                scale = float(np.min(cap[big] / np.abs(dq[big]))) if big.any() else 1.0
-                qn = _limit(q + scale * dq, prep, use_limits)
-                en, jtn, pos2n, rot2n, jacn = _rows(mdl, task, qn)
-                cost_n = float(en @ en)
-                if cost_n < (0.25 * cost if with_z else cost):
-                    slow = slow + 1 if cost_n > cost * (1.0 - 1e-10) else 0
-                    q, e, jt, pos2, rot2, jac, cost = qn, en, jtn, pos2n, rot2n, jacn, cost_n
-                    hist.append(math.sqrt(cost))
-                    mu, tries, kept, stalled = max(mu * 0.25, 1e-12), 0, True, slow >= 8
-                    break
-                if not with_z:
-                    break
-                with_z = use_post = False  # the plain step next; no posture in this attempt
-            if stalled:
-                break
-            if not kept:
-                mu *= 8.0
-                tries += 1
-                if tries > 40:
-                    break
-        if cost < best_cost or best is None or code == 0:
-            best_cost = cost
-            best = (0, len(hist) - 1, code, q, np.array(hist), jac)
-        if code == 0:
-            break
-    assert best is not None
-    return (tried,) + best[1:]
+    n_t, n = len(tgts), starts.shape[2]
+    q = np.empty((n_t, n))
+    hist = np.empty((n_t, int(ipar[1]) + 1))
+    meas = np.empty((n_t, 15))
+    res = np.empty((n_t, 3), dtype=np.int64)
+    if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
+        _LOADED[0](*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
+        return q, hist, meas, res
+    from .._kernels import run_blocks
+    from .step import lm_batch
+
+    def run(a: int, b: int) -> None:  # targets a..b-1
+        lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
+                 hist[a:b], meas[a:b], res[a:b])  # fmt: skip
+
+    run_blocks("ik", run, n_t, 1, _PER_THREAD)
+    _LOADED[:] = [lm_batch]
+    return q, hist, meas, res
+
+
+def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
+    """‖W e‖ of the task at K configurations ``qs`` (K, n): the loop for 0 steps, no limits."""
+    k = len(qs)
+    par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
+    tgts = _frozen(np.broadcast_to(task.pose, (k, 4, 4)))
+    ipar = np.array([s.ipar[0], 0, 0, 0], np.int64)
+    starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
+    pars = _arg(np.tile(par, (k, 1)))
+    return _run(s.chain, s.tail, tgts, task.weights, pars, ipar, starts)[1][:, 0]
+
+
+def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
+    out = np.array(pars)
+    out[:, 5] = yaws
+    return out
 
 
 # ============================================================================ solve
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
+
+    The compiled loop of :func:`solve_many` for one target (the same bits as its row of a
+    batch), measured in the same compiled call.
 
     Args:
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
@@ -389,41 +374,19 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         ParameterError: Unknown or bad options.
 
     """
-    mdl = as_model(model)
-    opts = IKOptions.of(options)
+    mdl = model if isinstance(model, KinematicModel) else as_model(model)
+    opts = IKOptions.of(options) if options else _DEFAULT
     task = build_task(target, mask=opts.mask, weights=opts.weights)
     s = _setup(mdl, opts, task.code)
-    starts = np.vstack([s.prep.home, s.prep.starts[: s.restarts]])
+    starts = s.starts
     if q0 is not None:
+        starts = np.array(starts)
         starts[0] = mdl.check_q(q0, "q0")
-    attempts, it, code, q, hist, jac = _lm(
-        mdl, s, task, starts, bool(opts.within_limits), int(opts.max_iter)
-    )
-    poses, err, rot, smin = _measures(mdl, [task], q[None], jac[None])
-    measured = (poses[0], float(err[0]), float(rot[0]), float(smin[0]))
-    return _report(mdl, s, task, q, hist, jac, attempts, it, code, measured)
-
-
-def _measures(
-    mdl: KinematicModel, tasks: list[Task], qs: np.ndarray, jacs: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Poses (Pinocchio's FK), errors over the kept rows and σ_min of N results (batched)."""
-    poses = np.array([mdl.fk(q) for q in qs]).reshape(-1, 4, 4)
-    w = tasks[0].weights
-    tgt = np.array([t.pose for t in tasks]).reshape(-1, 4, 4)
-    d = (tgt[:, :3, 3] - poses[:, :3, 3]) * (w[:3] != 0)
-    err = np.sqrt(np.einsum("ij,ij->i", d, d))
-    rot = np.zeros(len(tasks))
-    if tasks[0].code == 1 and w[5] != 0:
-        yaw = np.array([t.yaw for t in tasks])
-        rot = np.abs(wrap_angles(yaw - np.arctan2(poses[:, 1, 0], poses[:, 0, 0])))
-    elif tasks[0].code == 2:
-        rel = np.matmul(tgt[:, :3, :3], np.swapaxes(poses[:, :3, :3], 1, 2))
-        ev = np.array([pin.log3(r) for r in rel]).reshape(-1, 3) * (w[3:] != 0)
-        rot = np.sqrt(np.einsum("ij,ij->i", ev, ev))
-    sv = np.linalg.svd(jacs[:, :3], compute_uv=False)
-    smin = sv[:, 2] if sv.shape[1] >= 3 else np.zeros(len(tasks))
-    return poses, err, rot, smin
+    pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
+    tgt = task.pose[None]
+    q, hist, meas, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
+    attempts, it, code = res[0].tolist()
+    return _report(mdl, s, task, q[0], hist[0, : it + 1], meas[0], attempts, it, code)
 
 
 def _report(
@@ -432,17 +395,16 @@ def _report(
     task: Task,
     q: np.ndarray,
     hist: np.ndarray,
-    jac: np.ndarray,
+    meas: np.ndarray,
     attempts: int,
     it: int,
     code: int,
-    measured: tuple[np.ndarray, float, float, float],
 ) -> IKResult:
     prep = s.prep
-    pose, err, rot, smin = measured
-    for a in (pose, q, hist):
+    for a in (meas, q, hist):
         a.setflags(write=False)
-    tgt, pos = task.pose[:3, 3], pose[:3, 3]
+    err, rot, smin = meas[12:].tolist()
+    tgt, pos = task.pose[:3, 3], meas[:3]
     tol, rot_tol = float(s.par[0]), float(s.par[1])
 
     def result(status: Status, reason: str, far: bool = False) -> IKResult:
@@ -454,7 +416,7 @@ def _report(
             iterations=it,
             history=hist,
             position=pos,
-            rotation=pose[:3, :3],
+            rotation=meas[3:12].reshape(3, 3),
             target=tgt,
             task=task,
             attempts=attempts,
@@ -471,10 +433,14 @@ def _report(
             "not_converged",
             f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing",
         )
-    blocked = _blocked(mdl, prep, task, q) if s.ipar[2] else np.empty(0, dtype=int)
+    blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
-        free = _lm(mdl, s, task, np.vstack([q, prep.starts[:8]]), False, 200)
-        if free[2] == 0:
+        # the same loop without limits, 200 steps, from q and 8 seeded starts
+        free_ipar = np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64)
+        starts = np.vstack([q, prep.starts[:8]])[None]
+        pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
+        free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
+        if free[3][0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             return result(
                 "joint_limits",
@@ -498,14 +464,17 @@ def _report(
     return result("not_converged", f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)")
 
 
-def _blocked(mdl: KinematicModel, prep: Prepared, task: Task, q: np.ndarray) -> np.ndarray:
-    """Joints at a limit whose task-error gradient points outward."""
-    e, jt, _, _, _ = _rows(mdl, task, np.array(q))
-    g = jt.T @ e
-    lower, upper, cont = prep.lim[0], prep.lim[1], prep.cont
-    at_lo = (~cont) & (q <= lower + 1e-12) & (g < 0)
-    at_hi = (~cont) & (q >= upper - 1e-12) & (g > 0)
-    return np.flatnonzero(at_lo | at_hi)
+def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:
+    """Joints at a limit where the task error decreases outward (1e-7 rad/m beyond it)."""
+    lower, upper, cont = s.prep.lim[0], s.prep.lim[1], s.prep.cont
+    at_lo = (~cont) & (q <= lower + 1e-12)
+    idx = np.flatnonzero(at_lo | ((~cont) & (q >= upper - 1e-12)))
+    if not idx.size:
+        return idx
+    trial = np.repeat(q[None], len(idx) + 1, axis=0)
+    trial[np.arange(1, len(idx) + 1), idx] += np.where(at_lo[idx], -1e-7, 1e-7)
+    res = _residuals(s, task, trial)
+    return idx[res[1:] < res[0]]
 
 
 def _is_local_min(
@@ -526,11 +495,7 @@ def _is_local_min(
     if s.ipar[2]:
         trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
     floor = cost_root - 1e-9 * prep.scale
-    for qt in trial:
-        e = _rows(mdl, task, qt)[0]
-        if math.sqrt(float(e @ e)) < floor:
-            return False
-    return True
+    return not bool(np.any(_residuals(s, task, trial) < floor))
 
 
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
@@ -544,17 +509,13 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         **options: As in :func:`solve` (one set for all targets).
 
     Returns:
-        One :class:`IKResult` per target, equal to :func:`solve`'s to rounding (the compiled
-        loop runs its own FK; the report is Pinocchio's).
+        One :class:`IKResult` per target, the same bits as :func:`solve` of that target.
 
     Raises:
         IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
         ParameterError: Unknown or bad options.
 
     """
-    from .._kernels import run_blocks
-    from .step import lm_batch
-
     mdl = as_model(model)
     opts = IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
@@ -574,12 +535,11 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         return []
     n_t = len(tasks)
     s = _setup(mdl, opts, tasks[0].code)
-    starts = np.empty((n_t, 1 + s.restarts, mdl.nq))
-    if q0 is None:
-        starts[:, 0] = s.prep.home
-    elif np.ndim(q0) == 1:
+    starts = np.empty((n_t, *s.starts.shape))
+    starts[:] = s.starts
+    if q0 is not None and np.ndim(q0) == 1:
         starts[:, 0] = mdl.check_q(q0, "q0")
-    else:
+    elif q0 is not None:
         rows = mdl.check_q_batch(q0, "q0")
         if len(rows) != n_t:
             raise ConfigurationError(
@@ -589,42 +549,89 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
                 allowed=f"{n_t} rows",
             )
         starts[:, 0] = rows
-    starts[:, 1:] = s.prep.starts[: s.restarts]
-    pars = np.tile(s.par, (n_t, 1))
-    pars[:, 5] = [task.yaw for task in tasks]
-    m = int(opts.max_iter)
-    q = np.empty((n_t, mdl.nq))
-    hist = np.empty((n_t, m + 1))
-    jac = np.empty((n_t, 6, mdl.nq))
-    res = np.empty((n_t, 3), dtype=np.int64)
-    tgts = np.array([task.pose for task in tasks]).reshape(n_t, 4, 4)
-    w6 = np.ascontiguousarray(tasks[0].weights)
-
-    def run(a: int, b: int) -> None:  # targets a..b-1; each target's numbers are its own
-        lm_batch(
-            *s.prep.packed,
-            s.prep.tip_rot,
-            tgts[a:b],
-            w6,
-            pars[a:b],
-            s.ipar,
-            starts[a:b],
-            s.prep.lim,
-            s.prep.cont,
-            s.posture,
-            q[a:b],
-            hist[a:b],
-            jac[a:b],
-            res[a:b],
-        )
-
-    run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    poses, err, rot, smin = _measures(mdl, tasks, q, jac)
+    pars = np.broadcast_to(s.par, (n_t, len(s.par)))
+    if tasks[0].code == 1:
+        pars = _with_yaw(pars, [task.yaw for task in tasks])
+    pars = _arg(pars)
+    tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
+    q, hist, meas, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
     out = []
     for i, task in enumerate(tasks):
-        a, it, c = (int(v) for v in res[i])
-        measured = (poses[i], float(err[i]), float(rot[i]), float(smin[i]))
-        out.append(
-            _report(mdl, s, task, q[i], hist[i, : it + 1].copy(), jac[i], a, it, c, measured)
-        )
+        a, it, c = res[i].tolist()
+        out.append(_report(mdl, s, task, q[i], hist[i, : it + 1], meas[i], a, it, c))
     return out
+
+
+def solve_chain(
+    chain: ChainArrays,
+    targets: Any,
+    seeds: Any,
+    lower: Any,
+    upper: Any,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 100,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Position IK of a chain view for N targets, each from its own seed (the one loop).
+
+    The compiled loop of :func:`solve_many` on a chain given as arrays (a leg: mount → foot,
+    :class:`~hexapod_kin._chain.ChainArrays`), position rows only, no restarts and no
+    posture task; limited joints are clamped, continuous ones (range ≥ 2π) wrap.
+
+    Args:
+        chain: The chain's placements, axes and tip (its frame: the targets' frame).
+        targets: (N, 3) tip positions [m].
+        seeds: (N, nq) start configurations (e.g. the previous sample's solution).
+        lower: (nq,) lower joint limits [rad]/[m].
+        upper: (nq,) upper joint limits.
+        tol: Convergence threshold on the position error [m].
+        max_iter: Accepted steps per target.
+
+    Returns:
+        ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
+        its position error and whether it is within ``tol``.
+
+    Raises:
+        IKError: ``targets`` or ``seeds`` of the wrong shape or not finite.
+        ParameterError: ``tol`` or ``max_iter`` out of range.
+
+    """
+    opts = IKOptions(tol=tol, rot_tol=tol, max_iter=max_iter)
+    n = int(chain.nq)
+    t = np.asarray(targets, dtype=float)
+    q0 = np.asarray(seeds, dtype=float)
+    if t.ndim != 2 or t.shape[1] != 3 or q0.shape != (len(t), n):
+        raise IKError(
+            f"targets {t.shape} and seeds {q0.shape} do not match; (N, 3) and (N, {n}) needed",
+            parameter="targets",
+            value=t.shape,
+            allowed=f"(N, 3) targets and (N, {n}) seeds",
+        )
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q0))):
+        raise IKError("targets and seeds must be finite", parameter="targets", value=t.tolist())
+    lo = np.broadcast_to(np.asarray(lower, dtype=float), (n,))
+    hi = np.broadcast_to(np.asarray(upper, dtype=float), (n,))
+    prism = np.asarray(chain.kind, dtype=bool)
+    cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
+    scale = chain_scale(chain.trans)
+    lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
+    par = [
+        opts.tol,
+        opts.rot_tol,
+        1e-8 * scale**2,
+        _MU0,
+        opts.posture_gain,
+        0.0,
+        1e-6 * scale,
+    ]
+    tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+    tgts[:, :3, 3] = t
+    head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))
+    tail = (_arg(lim), _arg(cont), np.zeros(n))
+    pars = np.tile(par, (len(t), 1))
+    ipar = np.array([0, opts.max_iter, 1, 0], np.int64)
+    w6 = _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+    starts = _arg(q0[:, None, :])
+    q, hist, _, res = _run(head, tail, _frozen(tgts), w6, pars, ipar, starts)
+    residual = hist[np.arange(len(t)), res[:, 1]]
+    return q, residual, res[:, 2] == 0

@@ -28,7 +28,8 @@ from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 __all__ = [
     "lm_batch",
     "lm_loop",
-    "log3_into",
+    "log3",
+    "sigma_min3",
     "step_into",
     "task_into",
 ]
@@ -39,8 +40,10 @@ I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
 
 
 @njit(cache=True, nogil=True)
-def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - compiled
-    """``out = log(M)`` (rotation vector, [rad]) of a rotation matrix; returns the angle.
+def log3(
+    m: np.ndarray,
+) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """``log(M)`` (rotation vector, [rad]) of a rotation matrix and its angle: ``(x, y, z, θ)``.
 
     ``θ = atan2(‖v‖, (tr M − 1)/2)`` with ``v = vee(M − Mᵀ)/2 = sin θ·a`` (accurate at small
     angles); near π the axis comes from the symmetric part ``(M + Mᵀ)/2 = cos θ I + (1 − cos θ)
@@ -54,8 +57,7 @@ def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - co
     theta = math.atan2(s, c)
     if c > -0.5 or s > 0.5:
         f = theta / s if s > 1e-300 else 1.0
-        out[0], out[1], out[2] = f * vx, f * vy, f * vz
-        return theta
+        return f * vx, f * vy, f * vz, theta
     d = 1.0 - c
     a0 = max((m[0, 0] - c) / d, 0.0)
     a1 = max((m[1, 1] - c) / d, 0.0)
@@ -75,8 +77,7 @@ def log3_into(m: np.ndarray, out: np.ndarray) -> float:  # pragma: no cover - co
     norm = math.sqrt(x * x + y * y + z * z)
     sign = -1.0 if x * vx + y * vy + z * vz < 0.0 else 1.0
     f = sign * theta / norm
-    out[0], out[1], out[2] = f * x, f * y, f * z
-    return theta
+    return f * x, f * y, f * z, theta
 
 
 @njit(cache=True, nogil=True)
@@ -138,7 +139,7 @@ def task_into(
         for a in range(3):
             for b in range(3):
                 work3[a, b] = tgt[a, 0] * r[b, 0] + tgt[a, 1] * r[b, 1] + tgt[a, 2] * r[b, 2]
-        e0, e1, e2 = _log3(work3)
+        e0, e1, e2, _ = log3(work3)
         # e(q + dq) = log(E exp(−J_ω dq)) ≈ e − Jr⁻¹(e) J_ω dq: the rows are Jr⁻¹(e) J_ω, exact
         # also when masked rows leave a large rotation error (Jr: right Jacobian of SO(3))
         th2 = e0 * e0 + e1 * e1 + e2 * e2
@@ -176,13 +177,6 @@ def task_into(
     return m, pos2, rot2
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _log3(w3: np.ndarray) -> tuple[float, float, float]:  # pragma: no cover - compiled
-    ew = np.empty(3)
-    log3_into(w3, ew)
-    return ew[0], ew[1], ew[2]
-
-
 @njit(cache=True, nogil=True)
 def step_into(
     jt: np.ndarray,
@@ -213,7 +207,7 @@ def step_into(
                 if free[i]:
                     s -= jt[r, i] * z[i]
         e2[r] = s
-    ok = dls_into(jt[:m], e2[:m], lam2, free, dq, work, rhs, sol)
+    ok = dls_into(jt, e2, m, lam2, free, dq, work, rhs, sol)
     if use_z:
         for i in range(n):
             if free[i]:
@@ -223,7 +217,11 @@ def step_into(
 
 @njit(cache=True, nogil=True)
 def _limit_into(
-    q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
+    q: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    cont: np.ndarray,
+    use_limits: bool,
 ) -> None:  # pragma: no cover - compiled
     """Wrap continuous joints into their range; clamp the others (when ``use_limits``)."""
     for i in range(q.shape[0]):
@@ -365,7 +363,20 @@ def lm_loop(
                 for i in range(n):
                     qn[i] = q[i] + scale * dq[i]
                 _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r)
+                fk_jac_into(
+                    rot,
+                    trans,
+                    axis,
+                    kind,
+                    col,
+                    qn,
+                    p,
+                    jac_n,
+                    scratch,
+                    n >= 0,
+                    tip_rot,
+                    r,
+                )
                 m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
                 cost_n = 0.0
                 for i in range(m_n):
@@ -376,14 +387,10 @@ def lm_loop(
                         slow += 1
                     else:
                         slow = 0
-                    for i in range(n):
-                        q[i] = qn[i]
-                        for row in range(6):
-                            jac[row, i] = jac_n[row, i]
-                        for row in range(m_n):
-                            jt[row, i] = jt_n[row, i]
-                    for row in range(m_n):
-                        et[row] = et_n[row]
+                    q, qn = qn, q  # the trial becomes the iterate (buffers swapped)
+                    jac, jac_n = jac_n, jac
+                    jt, jt_n = jt_n, jt
+                    et, et_n = et_n, et
                     m, pos2, rot2, cost = m_n, pos2_n, rot2_n, cost_n
                     accepted += 1
                     hist[accepted] = math.sqrt(cost)
@@ -431,6 +438,54 @@ def lm_loop(
 
 
 @njit(cache=True, nogil=True)
+def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
+
+    One-sided Jacobi (Hestenes): plane rotations make the three rows mutually orthogonal
+    (to ``|aᵢ·aⱼ| ≤ 1e-15 ‖aᵢ‖‖aⱼ‖``); the singular values are then the rows' norms, with
+    high relative accuracy (Demmel & Veselić 1992), also at a singularity.
+    """
+    n = jac.shape[1]
+    if n < 3:
+        return 0.0
+    a = np.empty((3, n))
+    for r in range(3):
+        for k in range(n):
+            a[r, k] = jac[r, k]
+    for _sweep in range(40):
+        rotated = False
+        for i in range(2):
+            for j in range(i + 1, 3):
+                alpha = 0.0
+                beta = 0.0
+                gamma = 0.0
+                for k in range(n):
+                    alpha += a[i, k] * a[i, k]
+                    beta += a[j, k] * a[j, k]
+                    gamma += a[i, k] * a[j, k]
+                if gamma == 0.0 or abs(gamma) <= 1e-15 * math.sqrt(alpha * beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = c * t
+                for k in range(n):
+                    x, y = a[i, k], a[j, k]
+                    a[i, k] = c * x - s * y
+                    a[j, k] = s * x + c * y
+        if not rotated:
+            break
+    out = np.inf
+    for r in range(3):
+        norm2 = 0.0
+        for k in range(n):
+            norm2 += a[r, k] * a[r, k]
+        out = min(out, math.sqrt(norm2))
+    return out
+
+
+@njit(cache=True, nogil=True)
 def lm_batch(
     rot: np.ndarray,
     trans: np.ndarray,
@@ -448,14 +503,25 @@ def lm_batch(
     posture: np.ndarray,
     q_out: np.ndarray,
     hist_out: np.ndarray,
-    jac_out: np.ndarray,
+    meas_out: np.ndarray,
     res_out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`lm_loop` for N targets in one compiled call.
+    """:func:`lm_loop` for N targets in one compiled call, each result measured.
 
     ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
-    steps, code).
+    steps, code); ``meas_out[i]`` (15,) at the returned q: the tip position (3) [m] and
+    rotation (9, row-major), the error over the kept position rows [m], over the kept
+    rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0) and
+    the smallest singular value of the position Jacobian (:func:`sigma_min3`).
     """
+    n = starts.shape[2]
+    jac = np.empty((6, n))
+    scratch = np.empty((6, max(rot.shape[0], 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
     for i in range(tgts.shape[0]):
         a, it, c = lm_loop(
             rot,
@@ -474,8 +540,18 @@ def lm_batch(
             posture,
             q_out[i],
             hist_out[i],
-            jac_out[i],
+            jac,
         )
         res_out[i, 0] = a
         res_out[i, 1] = it
         res_out[i, 2] = c
+        fk_jac_into(rot, trans, axis, kind, col, q_out[i], p, jac, scratch, n >= 0, tip_rot, r)
+        _, pos2, rot2 = task_into(ipar[I_MODE], tgts[i], w6, pars[i, P_YAW], p, r, jac, w3, et, jt)
+        out = meas_out[i]
+        for k in range(3):
+            out[k] = p[k]
+            for j in range(3):
+                out[3 + 3 * k + j] = r[k, j]
+        out[12] = math.sqrt(pos2)
+        out[13] = math.sqrt(rot2)
+        out[14] = sigma_min3(jac)

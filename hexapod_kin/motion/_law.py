@@ -16,7 +16,8 @@ One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
    and the system solved again, once. Then ``q̇`` is scaled uniformly to the speed limits.
 
 A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
-3×3 Gram matrix and an unrolled Cholesky solve; larger tasks on numpy.
+3×3 Gram matrix and the step's unrolled Cholesky (:func:`~hexapod_kin._numerics.dls_step3`);
+larger tasks on numpy (:func:`~hexapod_kin._numerics.dls_step`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .._numerics import dls_step
+from .._numerics import dls_step, dls_step3
 
 __all__ = ["integrate"]
 
@@ -68,36 +69,6 @@ def _sigma3(j: list[list[float]]) -> tuple[float, float]:
     e2 = 0.5 * (s + math.sqrt(max(s * s - 4.0 * det * det / e1, 0.0)))
     s12 = math.sqrt(e1 * e2)
     return (abs(det) / s12 if s12 > 0.0 else 0.0), math.sqrt(e1)
-
-
-def _dls3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:
-    """``(JᵀJ + λ² I)⁻¹ Jᵀ x`` for a 3×3 ``J`` (rows ``j``) by Cholesky; None if not SPD."""
-    (a, b, c), (d, e, f), (g, h, i) = j
-    x0, x1, x2 = x
-    r0, r1, r2 = a * x0 + d * x1 + g * x2, b * x0 + e * x1 + h * x2, c * x0 + f * x1 + i * x2
-    w00 = a * a + d * d + g * g + lam2
-    w10, w20 = b * a + e * d + h * g, c * a + f * d + i * g
-    w11 = b * b + e * e + h * h + lam2
-    w21 = c * b + f * e + i * h
-    w22 = c * c + f * f + i * i + lam2
-    if not w00 > 0.0:
-        return None
-    l00 = math.sqrt(w00)
-    l10, l20 = w10 / l00, w20 / l00
-    s = w11 - l10 * l10
-    if not s > 0.0:
-        return None
-    l11 = math.sqrt(s)
-    l21 = (w21 - l20 * l10) / l11
-    s = w22 - l20 * l20 - l21 * l21
-    if not s > 0.0:
-        return None
-    l22 = math.sqrt(s)
-    y0 = r0 / l00
-    y1 = (r1 - l10 * y0) / l11
-    z2 = (r2 - l20 * y0 - l21 * y1) / l22 / l22
-    z1 = (y1 - l21 * z2) / l11
-    return [(y0 - l10 * z1 - l20 * z2) / l00, z1, z2]
 
 
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
@@ -194,7 +165,7 @@ def integrate(
                 lam2 = lam2max * (1.0 - ratio * ratio)
             lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
         if j3 is not None:
-            qd = _dls3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
+            qd = dls_step3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
         else:
             qd = dls_step(rows, xd, lam_use).tolist()
         limited = False
