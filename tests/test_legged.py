@@ -742,22 +742,23 @@ def elsewhere(tmp_path, monkeypatch):
 @pytest.fixture()
 def pages(monkeypatch):
     """The joint names of every model a walk page is drawn from (the page data is packed)."""
-    import hexapod_kin.viewer as viewer
+    import hexapod_kin.viewer.walk as walk_pages
 
     seen: list[tuple[str, ...]] = []
-    real = viewer.export_html
+    real = walk_pages.render_html
 
     def spy(model, *args, **kwargs):
         seen.append(tuple(model.joint_names))
         return real(model, *args, **kwargs)
 
-    monkeypatch.setattr(viewer, "export_html", spy)
+    monkeypatch.setattr(walk_pages, "render_html", spy)
     return seen
 
 
 @pytest.mark.parametrize("how", ["relative", "absolute"])
 def test_a_urdf_in_another_folder_walks_and_shows_itself(elsewhere, how, tmp_path, pages):
-    from hexapod_kin.gait.show import run_model, walk_html
+    from hexapod_kin.gait.show import run_model
+    from hexapod_kin.viewer import walk_html
     from hexapod_kin.simulate.scene import _robot_mjcf
 
     path = "../robots/phx.urdf" if how == "relative" else str(elsewhere)

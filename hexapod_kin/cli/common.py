@@ -283,7 +283,8 @@ class Robot:
         params: ``-s`` values, fitted to the preset's parameters.
         options: Keywords of :func:`hexapod_kin.load` (``base``, ``tip``, ``tool``,
             ``inertia``, ``package_dirs``) that were given.
-        feet: ``--foot`` values as one spec (None when absent).
+        feet: ``--foot`` values parsed (:func:`~hexapod_kin.gait.legs.parse_feet`; None when
+            absent).
         foot_radius: ``--foot-radius`` [m] (None when absent).
 
     """
@@ -291,7 +292,7 @@ class Robot:
     source: str
     params: dict[str, Any]
     options: dict[str, Any]
-    feet: str | None = None
+    feet: Any = None
     foot_radius: float | None = None
 
     def load(self) -> Any:
@@ -354,11 +355,15 @@ def robot_of(args: argparse.Namespace) -> Robot:
     if dirs:
         options["package_dirs"] = tuple(dirs)
     feet = getattr(args, "foot", None)
+    if feet:  # a bad feet spec or file is refused before the robot is loaded
+        from ..gait.legs import parse_feet
+
+        feet = parse_feet(" ".join(feet))
     return Robot(
         source=source,
         params=set_params(getattr(args, "set", None), source=source),
         options=options,
-        feet=" ".join(feet) if feet else None,
+        feet=feet or None,
         foot_radius=getattr(args, "foot_radius", None),
     )
 
