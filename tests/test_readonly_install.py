@@ -1,0 +1,142 @@
+"""A read-only install used by another user: the batch APIs and ``scan --grid 91`` work.
+
+The package is copied into a folder nobody but root can write (as a system-wide install
+is), and run from there as the unprivileged user ``nobody`` (``setpriv``) with a fresh home
+folder: neither the package folder nor ``site-packages`` is writable. numba's cache is used
+as numba documents it: ``__pycache__`` beside the sources is not writable, so numba keeps the
+machine code in the user's own cache folder (``~/.cache/numba``). Nothing is written into the
+install. Once with nothing compiled, once after root ran ``precompile`` there (its cache in
+the install's ``__pycache__``, which ``nobody`` reads but cannot write).
+
+Needs root (to switch user) and an interpreter ``nobody`` can run; skipped otherwise.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import hexapod_kin
+
+pytestmark = pytest.mark.slow
+
+NOBODY = 65534
+SETPRIV = shutil.which("setpriv")
+
+#: The batch calls of the issue, each printing a digest of its result.
+PROBE = r"""
+import hashlib, sys
+import numpy as np
+import hexapod_kin as hk
+from hexapod_kin.ik import solve_many
+from hexapod_kin.singularity import measures_batch
+
+assert hk.__file__.startswith(sys.argv[1]), hk.__file__
+leg = hk.load("hexabot_leg")
+qs = leg.random_q(2000, seed=0)
+poses = leg.fk_batch(qs)
+ms = measures_batch(leg, qs)
+targets = np.array([leg.fk(q)[:3, 3] for q in leg.random_q(8, seed=1)])
+sols = solve_many(leg, targets)
+h = hashlib.sha256(poses.tobytes())
+h.update(np.ascontiguousarray(ms.sigma_min).tobytes())
+h.update(repr([(s.converged, np.asarray(s.q).tobytes()) for s in sols]).encode())
+print(h.hexdigest())
+"""
+
+
+def _interpreter() -> str | None:
+    """This interpreter if ``nobody`` may run it, else the system's of the same version."""
+    for exe in (sys.executable, f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}"):
+        probe = subprocess.run(
+            [SETPRIV or "setpriv", f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
+             exe, "-c", "import sys; print(sys.version_info[:2])"],
+            capture_output=True, text=True, check=False,
+        )  # fmt: skip
+        if probe.returncode == 0 and probe.stdout.strip() == str(tuple(sys.version_info[:2])):
+            return exe
+    return None
+
+
+@pytest.fixture(scope="module")
+def install(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+    """The read-only copy of the package, and how to run as ``nobody`` beside it."""
+    if os.geteuid() != 0 or SETPRIV is None:
+        pytest.skip("needs root and setpriv to run as another user")
+    exe = _interpreter()
+    if exe is None:
+        pytest.skip("no interpreter the user nobody may run")
+    base = tmp_path_factory.mktemp("ro")
+    os.chmod(base, 0o755)
+    site = base / "site"
+    src = Path(hexapod_kin.__file__).parent
+    shutil.copytree(src, site / "hexapod_kin", ignore=shutil.ignore_patterns("__pycache__"))
+    for p in [site, *site.rglob("*")]:  # readable by all, writable by nobody
+        mode = 0o555 if p.is_dir() else 0o444
+        os.chmod(p, mode)
+    # the libraries this interpreter sees (site-packages and what its .pth files add): not the
+    # checkout itself, and all of them unwritable by nobody (root's)
+    paths = [
+        p for p in sys.path
+        if p and os.path.isdir(p) and not os.path.isdir(os.path.join(p, "hexapod_kin"))
+        and not p.endswith(".zip")
+    ]  # fmt: skip
+    for p in paths:
+        assert not os.stat(p).st_mode & stat.S_IWOTH, p
+    return {"base": base, "site": site, "exe": exe, "pythonpath": [str(site), *paths]}
+
+
+def _run(install: dict[str, object], home: Path, args: list[str], user: bool) -> str:
+    env = {
+        "PATH": "/usr/bin:/bin",
+        "HOME": str(home),
+        "PYTHONPATH": os.pathsep.join(install["pythonpath"]),  # type: ignore[arg-type]
+        "LANG": "C.UTF-8",
+    }
+    prefix = [SETPRIV, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups"] if user else []
+    res = subprocess.run(
+        [*prefix, str(install["exe"]), *args],  # type: ignore[list-item]
+        env=env, capture_output=True, text=True, timeout=1800, check=False,
+    )  # fmt: skip
+    assert res.returncode == 0, (args, res.stderr[-3000:])
+    assert "Traceback" not in res.stderr and "Permission denied" not in res.stderr, res.stderr
+    return res.stdout
+
+
+def _fresh_home(install: dict[str, object], name: str) -> Path:
+    home = Path(str(install["base"])) / name
+    home.mkdir()
+    os.chown(home, NOBODY, NOBODY)
+    return home
+
+
+def _writable_by_nobody_in(site: Path) -> list[Path]:
+    return [p for p in [site, *site.rglob("*")] if p.stat().st_uid == NOBODY]
+
+
+@pytest.mark.parametrize("precompiled", [False, True], ids=["fresh", "after-root-precompile"])
+def test_readonly_install_as_another_user(install: dict[str, object], precompiled: bool) -> None:
+    site = Path(str(install["site"]))
+    if precompiled:  # root fills the install's own cache, as a package manager would
+        root_home = Path(str(install["base"])) / "root-home"
+        root_home.mkdir(exist_ok=True)
+        _run(install, root_home, ["-m", "hexapod_kin", "precompile"], user=False)
+    home = _fresh_home(install, f"home-{precompiled}")
+    digest = _run(install, home, ["-c", PROBE, str(site)], user=True).strip()
+    scan = _run(install, home, ["-m", "hexapod_kin", "scan", "hexabot_leg", "--grid", "91"], True)
+    assert "singular" in scan.lower()
+    # the same answers as this (writable) checkout gives, bit for bit
+    here = subprocess.run(
+        [sys.executable, "-c", PROBE, str(Path(hexapod_kin.__file__).parent)],
+        capture_output=True, text=True, timeout=1800, check=True,
+    ).stdout.strip()  # fmt: skip
+    assert digest == here
+    # numba kept its machine code in nobody's own cache folder; nothing written in the install
+    assert list((home / ".cache" / "numba").rglob("*.nbi")), "numba cached nothing"
+    assert not _writable_by_nobody_in(site)
