@@ -102,7 +102,7 @@ def _run(install: dict[str, object], home: Path, args: list[str], user: bool) ->
     prefix = [SETPRIV, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups"] if user else []
     res = subprocess.run(
         [*prefix, str(install["exe"]), *args],  # type: ignore[list-item]
-        env=env, capture_output=True, text=True, timeout=1800, check=False,
+        env=env, cwd=home, capture_output=True, text=True, timeout=1800, check=False,
     )  # fmt: skip
     assert res.returncode == 0, (args, res.stderr[-3000:])
     assert "Traceback" not in res.stderr and "Permission denied" not in res.stderr, res.stderr
@@ -134,7 +134,7 @@ def test_readonly_install_as_another_user(install: dict[str, object], precompile
     # the same answers as this (writable) checkout gives, bit for bit
     here = subprocess.run(
         [sys.executable, "-c", PROBE, str(Path(hexapod_kin.__file__).parent)],
-        capture_output=True, text=True, timeout=1800, check=True,
+        cwd=home, capture_output=True, text=True, timeout=1800, check=True,
     ).stdout.strip()  # fmt: skip
     assert digest == here
     # numba kept its machine code in nobody's own cache folder; nothing written in the install
