@@ -18,6 +18,8 @@ import shutil
 import stat
 import subprocess
 import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -65,14 +67,14 @@ def _interpreter() -> str | None:
 
 
 @pytest.fixture(scope="module")
-def install(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+def install() -> Iterator[dict[str, object]]:
     """The read-only copy of the package, and how to run as ``nobody`` beside it."""
     if os.geteuid() != 0 or SETPRIV is None:
         pytest.skip("needs root and setpriv to run as another user")
     exe = _interpreter()
     if exe is None:
         pytest.skip("no interpreter the user nobody may run")
-    base = tmp_path_factory.mktemp("ro")
+    base = Path(tempfile.mkdtemp(prefix="hexapod-kin-ro-"))  # pytest's folders are root's only
     os.chmod(base, 0o755)
     site = base / "site"
     src = Path(hexapod_kin.__file__).parent
@@ -89,7 +91,10 @@ def install(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
     ]  # fmt: skip
     for p in paths:
         assert not os.stat(p).st_mode & stat.S_IWOTH, p
-    return {"base": base, "site": site, "exe": exe, "pythonpath": [str(site), *paths]}
+    yield {"base": base, "site": site, "exe": exe, "pythonpath": [str(site), *paths]}
+    for p in [site, *site.rglob("*")]:
+        os.chmod(p, 0o755 if p.is_dir() else 0o644)
+    shutil.rmtree(base, ignore_errors=True)
 
 
 def _run(install: dict[str, object], home: Path, args: list[str], user: bool) -> str:
