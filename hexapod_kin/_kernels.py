@@ -593,7 +593,8 @@ def run_blocks(
 
     ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``): the first call in a
     process loads them with no blocks first (:func:`_first_call`: the compile notice, a
-    cache that cannot be read or written never fatal, the stamp written). Then up to ``numba.get_num_threads()`` plain
+    cache that cannot be read or written never fatal, the stamp written). Then up to
+    ``numba.get_num_threads()`` plain
     threads (the kernels release the GIL), each taking the next chunk of blocks from a shared
     counter when done with one, so that a thread sharing its core with another process does
     less of the work. Which thread runs a block never changes its numbers (see the module

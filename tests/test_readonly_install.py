@@ -54,14 +54,15 @@ print(h.hexdigest())
 
 
 def _interpreter() -> str | None:
-    """This interpreter if ``nobody`` may run it, else the system's of the same version."""
+    """This interpreter if ``nobody`` may run it cleanly, else the system's of the same version."""
     for exe in (sys.executable, f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}"):
         probe = subprocess.run(
             [SETPRIV or "setpriv", f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
              exe, "-c", "import sys; print(sys.version_info[:2])"],
             capture_output=True, text=True, check=False,
         )  # fmt: skip
-        if probe.returncode == 0 and probe.stdout.strip() == str(tuple(sys.version_info[:2])):
+        same = probe.stdout.strip() == str(tuple(sys.version_info[:2]))
+        if probe.returncode == 0 and same and not probe.stderr:  # e.g. a .pth it cannot read
             return exe
     return None
 

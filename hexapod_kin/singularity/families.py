@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -352,9 +351,9 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Time budget in [s] of the derivation, the cache reading and the check against
-            the model, together (the call returns within it, plus a fraction of a second
-            for the check when the derivation used it all). A derivation stopped at its budget is
+        budget: Budget in [s] of CPU time of the derivation and its cache reading (one child
+            process, :func:`hexapod_kin.symbolic.derive`; never wall-clock time, so the answer
+            does not depend on the machine's load). A derivation stopped at its budget is
             kept on disk with what it reached and that budget: later calls with at most that
             budget get it back without deriving (nor importing sympy); a larger budget
             carries on from where it stopped.
@@ -409,11 +408,8 @@ def families_for(
     from .. import symbolic
 
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
-    deadline = time.monotonic() + float(budget)  # the derivation and its check, together
     try:
-        deriv = symbolic.derive(
-            chain, rows=rows, budget=float(budget), deadline=deadline, families_only=True
-        )
+        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
         incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             reason = f"derivation incomplete: {incomplete}"

@@ -9,7 +9,8 @@ A stored chunk is used only if it is a regular file of a bounded size holding a 
 key and its own number, carries the right digest of its scores, holds plausible scores
 (finite; 0/1 flags; non-negative volumes) and one of its designs, scored again, gives the same
 bits. The digest is the package's keyed seal (:func:`hexapod_kin._cache.mac`, a per-user
-secret), so an edited value cannot be "fixed" by recomputing a plain hash. Chunks that fail are discarded (one
+secret), so an edited value cannot be "fixed" by recomputing a plain hash. Chunks that fail
+are discarded (one
 :class:`~hexapod_kin.exceptions.CacheWarning` for all of them) and scored again.
 """
 
@@ -117,7 +118,9 @@ class ChunkStore:
                     results[k] = got
         if bad:
             names = ", ".join(bad[:3]) + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
-            verb = "they do not hold what they claim" if len(bad) > 1 else "it does not hold what it claims"
+            verb = "it does not hold what it claims"
+            if len(bad) > 1:
+                verb = "they do not hold what they claim"
             _disk.damaged(
                 "sweep", f"{names} in {self.parts.name}", f"{verb}", "scoring again", stacklevel=3
             )

@@ -1,29 +1,19 @@
-"""Disk cache and time budget for :func:`hexapod_kin.symbolic.derive`.
+"""The disk cache of :func:`hexapod_kin.symbolic.derive`: one sealed entry per derivation.
 
-* **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
-  tool poses, the row selection, the length names and a format version), holding the stages
-  reached and, for an unfinished one, why and with which budget (:class:`Writer` writes it
-  from inside the budgeted process, stage by stage), under
-  ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
-  ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
-  subfolder. Sympy objects are
-  stored as ``srepr`` text and rebuilt by a restricted reader (:mod:`._reader`: no ``eval``,
-  a fixed table of sympy constructors), so a planted entry cannot run code. Each file holds
-  its key and a seal (SHA-256 of the format, key and stages, :func:`seal`); files are written
-  atomically. A corrupt, truncated, edited (seal broken) or foreign file (another
-  derivation's key: a swapped or copied file) is ignored with one :class:`CacheWarning` and
-  rewritten; the derivation then checks what a sealed entry claims against the table
-  (``checks.claims_hold``) before using it. A file of another format version is
-  ignored quietly (an older package's).
-* **Budget**: the stages run in a forked child process that sends each finished stage back;
-  at the deadline the child is killed and the caller gets the stages that finished. Where
-  ``fork`` does not exist the stages run inline, checking the clock between stages.
+One entry per derivation (:mod:`hexapod_kin._cache`, kind ``"symbolic"``: the one key, keyed
+seal and warning), keyed by the table (rows, base and tool poses, the row selection, the
+length names and :data:`FORMAT`), holding the stages reached and, for an unfinished one, why
+and with which budget (:class:`Writer` writes it from inside the budgeted run, stage by
+stage). Sympy objects are stored as ``srepr`` text and rebuilt by a restricted reader
+(:mod:`._reader`: no ``eval``, a fixed table of sympy constructors), so a planted entry
+cannot run code. A damaged, edited or foreign entry is ignored with one
+:class:`~hexapod_kin.exceptions.CacheWarning` and rewritten; the derivation then checks what a
+sealed entry claims against the table (``checks.claims_hold``) before using it. The budget
+itself is :mod:`hexapod_kin._budget`'s.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Iterator
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -39,7 +29,6 @@ from .families import SingularFamily
 FORMAT = 6
 KIND = "symbolic"
 THEN = "recomputing it"
-Stages = Callable[[], Iterator[tuple[str, Any]]]
 
 
 def cache_dir() -> Path:
@@ -168,77 +157,3 @@ def sweep(digest: str) -> None:
             tmp.unlink()
         except OSError:
             pass
-
-
-def _child(conn: Any, stages: Stages) -> None:  # pragma: no cover - runs in the child
-    try:
-        for name, value in stages():
-            conn.send((name, value))
-        conn.send(("__done__", None))
-    except BaseException as exc:  # noqa: BLE001 - report, never hang the parent
-        try:
-            conn.send(("__error__", f"{type(exc).__name__}: {exc}"))
-        except Exception:  # noqa: BLE001
-            pass
-    finally:
-        conn.close()
-
-
-def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | None]:
-    """Run the stage generator within ``budget`` seconds.
-
-    Returns:
-        ``(finished stages by name, None)`` when all finished, else the finished ones and a
-        reason (``"budget of 5 s reached"`` or the error text).
-
-    """
-    done: dict[str, Any] = {}
-    if budget is None:
-        for name, value in stages():
-            done[name] = value
-        return done, None
-    import multiprocessing as mp
-
-    try:
-        ctx = mp.get_context("fork")
-    except ValueError:
-        return _inline(stages, budget)
-    start = time.perf_counter()
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, stages), daemon=True)
-    proc.start()
-    send.close()
-    reason: str | None = f"budget of {budget:g} s reached"
-    try:
-        while True:
-            left = budget - (time.perf_counter() - start)
-            if left <= 0 or not recv.poll(left):
-                break
-            try:
-                name, value = recv.recv()
-            except (EOFError, OSError):
-                reason = "the derivation process ended unexpectedly"
-                break
-            if name == "__done__":
-                reason = None
-                break
-            if name == "__error__":
-                reason = str(value)
-                break
-            done[name] = value
-    finally:
-        if proc.is_alive():
-            proc.kill()
-        proc.join(1.0)  # SIGKILL is immediate unless the child is inside a system call
-        recv.close()
-    return done, reason
-
-
-def _inline(stages: Stages, budget: float) -> tuple[dict[str, Any], str | None]:
-    done: dict[str, Any] = {}
-    start = time.perf_counter()
-    for name, value in stages():
-        done[name] = value
-        if time.perf_counter() - start > budget:
-            return done, f"budget of {budget:g} s reached"
-    return done, None
