@@ -209,9 +209,7 @@ def load(kind: str, digest: str, fmt: int, then: str) -> Any | None:
         if not isinstance(data, dict) or data.get("key") != digest:
             raise ValueError("not the entry of its key")
         expected = seal(kind, digest, data.get("body")) or ""
-        if not isinstance(data.get("seal"), str) or not hmac.compare_digest(
-            data["seal"], expected
-        ):
+        if not isinstance(data.get("seal"), str) or not hmac.compare_digest(data["seal"], expected):
             raise ValueError("its seal does not match its content")
         return data["body"]
     except Exception as exc:  # noqa: BLE001 - any damage means "no entry"

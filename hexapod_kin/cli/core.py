@@ -445,9 +445,9 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         deriv = dataclasses.replace(deriv, reference=reference, tip=tip)
         lines = [f"NOT DONE: {what}" for what in deriv.incomplete]
         done["text"] = (
-            json.dumps(deriv.to_dict()) if fmt == "json" else "\n".join(
-                ("% " if fmt == "latex" else "") + line for line in lines
-            ),
+            json.dumps(deriv.to_dict())
+            if fmt == "json"
+            else "\n".join(("% " if fmt == "latex" else "") + line for line in lines),
             "the budget ran out",
         )
     else:

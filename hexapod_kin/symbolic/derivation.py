@@ -26,9 +26,9 @@ maximal minors (:func:`~hexapod_kin.symbolic.core.rank_deficiency`).
 same answer on a busy machine) and returns what it has; :attr:`Derivation.incomplete` says
 what it could not do. **Cached**: derivations are stored on disk keyed by a hash of the table
 (see :mod:`hexapod_kin.symbolic.cache`), so a second process gets them in milliseconds; an
-unfinished one is kept with its budget and what it reached (a call with at most that budget gets it back, a larger one carries on).
-How the determinant is kept fast (per-joint simplification, a middle joint frame, the wrist
-centre) is in :mod:`hexapod_kin.symbolic.core`.
+unfinished one is kept with its budget and what it reached (a call with at most that budget
+gets it back, a larger one carries on). How the determinant is kept fast (per-joint
+simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
 
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
 else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
