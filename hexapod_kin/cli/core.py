@@ -354,6 +354,7 @@ def _derive_job(
     """
     import dataclasses
     import json
+    import pickle
     import time
     import warnings
 
@@ -369,7 +370,8 @@ def _derive_job(
         warnings.simplefilter("always")
         deriv = derive(chain, rows=rows, budget=budget, within=budget - _AFTER)
     yield "warnings", [(w.category, str(w.message)) for w in caught]
-    deriv = dataclasses.replace(deriv, reference=reference, tip=tip)
+    # as a budgeted derive() returns it: through pickle (sympy rebuilds -(a + b) as -a - b)
+    deriv = pickle.loads(pickle.dumps(dataclasses.replace(deriv, reference=reference, tip=tip)))
     yield "derivation", deriv
     ran_out = "the budget ran out"
     if fmt == "json":
