@@ -17,6 +17,9 @@ depend on what else runs on the machine:
   child stuck in C code. Nothing outlives the call.
 * Inside a budgeted child (a job calling a budgeted function), or where no child can be
   started, the job runs inline under a nested :func:`cpu_limit`.
+* A Ctrl-C reaches the child once, from the parent (``SIGTERM``, raised in the job as a
+  ``KeyboardInterrupt``: its clean-up runs), whether it was sent to the parent or to the
+  whole process group.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ Job = Callable[..., Iterator[tuple[str, Any]]]
 _ENDS: list[float] = []
 #: Seconds of CPU time after the budget at which ``RLIMIT_CPU`` ends a stuck child.
 _HARD_SLACK = 3.0
+#: Wall seconds a child interrupted by a Ctrl-C may take to clean up (then it is killed).
+_CLEANUP = 10.0
 #: The child's start: read its inputs, then serve (``python -c``; no ``__main__`` re-run).
 _BOOT = (
     "import sys, pickle; sys.path[:] = pickle.load(sys.stdin.buffer); "
@@ -162,6 +167,11 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
                 done[name] = value
         except BrokenPipeError:
             pass
+        except KeyboardInterrupt:  # the child ignores Ctrl-C: told once, it cleans up as after one
+            proc.send_signal(signal.SIGTERM)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(_CLEANUP)
+            raise
         finally:
             if proc.poll() is None:
                 proc.kill()
@@ -171,11 +181,18 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
     return done, reason
 
 
+def _interrupted(signum: int, frame: Any) -> None:  # pragma: no cover - in the child
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    raise KeyboardInterrupt
+
+
 def _serve() -> None:  # pragma: no cover - runs in the child
     """The child: read the job, run it under its budget, send each item as it comes."""
     import resource
 
     out = os.fdopen(int(sys.argv[1]), "wb")
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches it once, from the parent:
+    signal.signal(signal.SIGTERM, _interrupted)  # as a KeyboardInterrupt in the job
     job, args, budget = pickle.load(sys.stdin.buffer)
     used = time.process_time()
     hard = math.ceil(used + budget + _HARD_SLACK)
