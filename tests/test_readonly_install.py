@@ -54,12 +54,13 @@ print(h.hexdigest())
 
 
 def _interpreter() -> str | None:
-    """This interpreter if ``nobody`` may run it cleanly, else the system's of the same version."""
-    for exe in (sys.executable, f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}"):
+    """The system's interpreter of this version (a venv's may process ``.pth`` files that
+    ``nobody`` cannot read), else this one, if ``nobody`` may run it cleanly."""
+    for exe in (f"/usr/bin/python{sys.version_info[0]}.{sys.version_info[1]}", sys.executable):
         probe = subprocess.run(
             [SETPRIV or "setpriv", f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
              exe, "-c", "import sys; print(sys.version_info[:2])"],
-            capture_output=True, text=True, check=False,
+            capture_output=True, text=True, check=False, cwd="/",
         )  # fmt: skip
         same = probe.stdout.strip() == str(tuple(sys.version_info[:2]))
         if probe.returncode == 0 and same and not probe.stderr:  # e.g. a .pth it cannot read
