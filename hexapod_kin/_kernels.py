@@ -107,6 +107,8 @@ Q_MAX = 1e150
 _SEEN: set[str] = set()
 _SEEN_LOCK = threading.Lock()
 _NOTICE = [True]
+#: Areas whose cache could not be written (said once per process: the next areas are alike).
+_SAID: list[str] = []
 #: Most first calls of an area: each failed save of numba's cache leaves one more kernel in memory.
 _ATTEMPTS = 64
 
@@ -227,7 +229,7 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
                 if swallowed:  # Ctrl-C in numba's compile callback: not a cache problem
                     raise KeyboardInterrupt from exc
                 full = _unwritable(exc)
-                if not said:
+                if not said and not (full and _SAID):
                     detail = " ".join(str(exc).split())[:120]
                     warnings.warn(
                         f"numba's compiled-code cache of the {area} kernels "
@@ -238,6 +240,8 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
                         stacklevel=4,
                     )
                     said = True
+                    if full:
+                        _SAID.append(area)
                 progress = any(len(d.overloads) != before.get(id(d), 0) for d in _dispatchers())
                 if not full:
                     for obj in _dispatchers():

@@ -539,3 +539,65 @@ def test_numba_cache_is_rebuilt_when_loading_fails(
     assert len(said) == 1 and "could not be loaded" in said[0], said
     third, quiet = h.run(root)
     assert third == base and not quiet, quiet
+
+
+# ---------------------------------------------------------------------------- faults
+def _small_files() -> None:  # pragma: no cover - in the child, before exec
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+
+def test_numba_cache_that_cannot_be_written_compiles_in_memory(
+    filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
+) -> None:
+    """numba's cache folder as on a full disk (no file can grow past 4 kB): the kernels are
+    compiled in memory with one warning, the same bits, and no temporary file is left."""
+    h, _, base = _prepare(filled, "numba", tmp_path_factory.getbasetemp())
+    res = subprocess.run(
+        [sys.executable, "-c", NUMBA_CODE],
+        env=h._env(tmp_path),
+        capture_output=True, text=True, timeout=600, preexec_fn=_small_files,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr[-3000:]
+    said = [ln for ln in res.stderr.splitlines() if "CacheWarning:" in ln]
+    assert len(said) == 1 and "cannot be written" in said[0], res.stderr[-3000:]
+    assert res.stdout.strip() == base
+    assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name]
+
+
+def test_package_cache_on_a_full_disk_leaves_no_temporary_file(tmp_path: Path) -> None:
+    """``HEXAPOD_KIN_CACHE_DIR`` where no file can grow past 4 kB: ``derive`` answers as with
+    a working cache, and no temporary file is left (issue 35)."""
+    env = dict(os.environ, HEXAPOD_KIN_CACHE_DIR=str(tmp_path / "full"))
+    argv = [sys.executable, "-m", "hexapod_kin", "derive", "hexabot_leg"]
+    full = subprocess.run(
+        argv, env=env, capture_output=True, text=True, timeout=600, preexec_fn=_small_files
+    )
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / "working")
+    working = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=600)
+    assert full.returncode == working.returncode == 0, full.stderr[-2000:]
+    assert full.stdout == working.stdout and "Traceback" not in full.stderr
+    assert not [p for p in (tmp_path / "full").rglob("*") if ".tmp" in p.name]
+    assert list((tmp_path / "working" / "symbolic").glob("*.json"))  # it does cache there
+
+
+def test_cache_folder_that_is_a_regular_file_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``HEXAPOD_KIN_CACHE_DIR`` naming a regular file: one warning that says so (not a
+    "damaged entry"), nothing cached, the answer unchanged."""
+    from hexapod_kin import _cache
+    from hexapod_kin.symbolic import clear_memory, derive
+
+    plain = tmp_path / "a-file"
+    plain.write_text("not a folder")
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(plain))
+    monkeypatch.setattr(_cache, "_SECRETS", {})
+    clear_memory()
+    d, said = _caught(lambda: derive(hk.robots.coxa_tibia_leg(), budget=None))
+    assert len(said) == 1 and "is not a folder" in said[0], said
+    assert plain.read_text() == "not a folder" and d.complete
+    clear_memory()
