@@ -147,3 +147,28 @@ def test_readonly_install_as_another_user(install: dict[str, object], precompile
     # numba kept its machine code in nobody's own cache folder; nothing written in the install
     assert list((home / ".cache" / "numba").rglob("*.nbi")), "numba cached nothing"
     assert not _writable_by_nobody_in(site)
+
+
+def test_no_writable_cache_folder_at_all_compiles_in_memory(install: dict[str, object]) -> None:
+    """A home folder ``nobody`` cannot write either: numba has no folder to cache in (its
+    ``cache=True`` would fail at import); the kernels compile in memory with one warning."""
+    home = Path(str(install["base"])) / "home-unwritable"
+    home.mkdir()  # root's, mode 0755: not writable by nobody
+    env = {
+        "PATH": "/usr/bin:/bin",
+        "HOME": str(home),
+        "PYTHONPATH": os.pathsep.join(install["pythonpath"]),  # type: ignore[arg-type]
+    }
+    code = (
+        "import hexapod_kin as hk; leg = hk.load('hexabot_leg'); "
+        "print(leg.fk_batch(leg.random_q(100, seed=0)).sum())"
+    )
+    res = subprocess.run(
+        [SETPRIV, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
+         str(install["exe"]), "-c", code],
+        env=env, cwd="/", capture_output=True, text=True, timeout=1800, check=False,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr[-3000:]
+    said = [ln for ln in res.stderr.splitlines() if "CacheWarning" in ln]
+    assert len(said) == 1 and "compiled in memory" in said[0], res.stderr
+    assert not list(home.rglob("*"))
