@@ -80,7 +80,10 @@ def cpu_limit(seconds: float) -> Iterator[None]:
     """
     import threading
 
-    if threading.current_thread() is not threading.main_thread():
+    if (
+        not hasattr(signal, "setitimer")
+        or threading.current_thread() is not threading.main_thread()
+    ):
         yield
         return
     end = time.process_time() + max(0.0, seconds)
@@ -101,10 +104,13 @@ def cpu_limit(seconds: float) -> Iterator[None]:
 
 def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, Any], str | None]:
     done: dict[str, Any] = {}
+    end = time.process_time() + budget
     try:
         with cpu_limit(budget):
             for name, value in job(*args):
                 done[name] = value
+                if time.process_time() > end:  # no CPU timer (another platform, thread)
+                    raise BudgetReached
     except BudgetReached:
         if _ENDS and time.process_time() >= _ENDS[-1]:
             raise  # the enclosing budget is spent too: its caller answers

@@ -506,6 +506,25 @@ def _tried(found: Mapping[str, Any] | None, budget: float | None) -> float | Non
     return budget
 
 
+def _checked_load(
+    chain: Chain, lengths: Any, digest: str, then: str, stacklevel: int = 2
+) -> dict[str, Any] | None:
+    """The disk cache's entry ``digest`` if what it claims holds for the table (else a warning)."""
+    from .checks import claims_hold
+
+    found = _cache.load(digest)
+    values = _core.length_symbols(chain, lengths)["values"]
+    if found is None or claims_hold(found, chain, values):
+        return found
+    warnings.warn(
+        f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families do not "
+        f"match the table (edited); {then}",
+        CacheWarning,
+        stacklevel=stacklevel,
+    )
+    return None
+
+
 def _job(
     chain: Chain, rows: Any, lengths: Any, digest: str, budget: float | None,
     families_only: bool, found: Mapping[str, Any] | None, read: bool, write: bool,
@@ -520,20 +539,9 @@ def _job(
     """
     start = time.process_time()
     if read:
-        from .checks import claims_hold
-
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            found = _cache.load(digest)
-            values = _core.length_symbols(chain, lengths)["values"]
-            if found is not None and not claims_hold(found, chain, values):
-                warnings.warn(
-                    f"symbolic cache entry {digest[:12]}: its kinematics, determinant or "
-                    "families do not match the table (edited); recomputing it",
-                    CacheWarning,
-                    stacklevel=1,
-                )
-                found = None
+            found = _checked_load(chain, lengths, digest, "recomputing it")
         said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
         yield "__found__", (found, said)
     if _usable(found, budget, families_only):
@@ -762,17 +770,7 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     syms = _core.length_symbols(chain, None)
     stages = _MEMO.get(digest)
     if stages is None:
-        from .checks import claims_hold
-
-        stages = _cache.load(digest)
-        if stages is not None and not claims_hold(stages, chain, syms["values"]):
-            warnings.warn(
-                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
-                "do not match the table (edited); not used",
-                CacheWarning,
-                stacklevel=2,
-            )
-            return None
+        stages = _checked_load(chain, None, digest, "not used", stacklevel=3)
     if stages is None:
         return None
     _MEMO[digest] = stages
