@@ -282,20 +282,24 @@ def test_derive_command_starts_one_child(monkeypatch, capsys, tmp_path):
 
 @pytest.mark.slow
 def test_derive_gives_the_same_bytes_beside_eight_busy_processes(tmp_path):
-    """Budgets count CPU time: the seeds' leg gives the same output idle and with 8 busy-loop
-    processes on the machine's cores (each run with a fresh cache)."""
+    """Budgets count CPU time: ``derive`` and ``scan`` (its families derived within their
+    budget) of the seeds' leg give the same output idle and with 8 busy-loop processes on the
+    machine's cores (each run with fresh caches)."""
     import os
     import subprocess
     import sys
 
     def derive_cli(cache: Path) -> bytes:
         env = {**os.environ, "HEXAPOD_KIN_CACHE_DIR": str(cache)}
-        res = subprocess.run(
-            [sys.executable, "-m", "hexapod_kin", "derive", "hexabot_leg"],
-            env=env, capture_output=True, timeout=900, check=False,
-        )  # fmt: skip
-        assert res.returncode == 0, res.stderr.decode()[-2000:]
-        return res.stdout
+        out = b""
+        for argv in (["derive", "hexabot_leg"], ["scan", "hexabot_leg", "--json"]):
+            res = subprocess.run(
+                [sys.executable, "-m", "hexapod_kin", *argv],
+                env=env, capture_output=True, timeout=900, check=False,
+            )  # fmt: skip
+            assert res.returncode == 0, res.stderr.decode()[-2000:]
+            out += res.stdout
+        return out
 
     idle = derive_cli(tmp_path / "idle")
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(8)]
