@@ -215,7 +215,7 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
             swallowed.append(info.exc_value)
         hook(info)
 
-    said = False
+    reloaded = False
     sys.unraisablehook = record
     try:
         for _ in range(_ATTEMPTS):
@@ -229,7 +229,9 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
                 if swallowed:  # Ctrl-C in numba's compile callback: not a cache problem
                     raise KeyboardInterrupt from exc
                 full = _unwritable(exc)
-                if not said and not (full and _SAID):
+                if not full and reloaded:  # compiled afresh and still failing: not the cache
+                    raise
+                if not (full and _SAID):
                     detail = " ".join(str(exc).split())[:120]
                     warnings.warn(
                         f"numba's compiled-code cache of the {area} kernels "
@@ -239,9 +241,9 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
                         CacheWarning,
                         stacklevel=4,
                     )
-                    said = True
                     if full:
                         _SAID.append(area)
+                reloaded = reloaded or not full
                 progress = any(len(d.overloads) != before.get(id(d), 0) for d in _dispatchers())
                 if not full:
                     for obj in _dispatchers():
