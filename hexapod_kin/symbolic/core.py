@@ -34,7 +34,6 @@ from sympy.simplify.fu import TR10i
 from ..exceptions import ParameterError, choices
 from ..params import Chain
 from ..singularity.rows import ROW_NAMES
-from ._numbers import import_ahead as import_ahead  # re-exported: the stages' helpers
 from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio
 from ._numbers import single_joint_roots as single_joint_roots
