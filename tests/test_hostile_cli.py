@@ -486,7 +486,8 @@ def test_damaged_sweep_chunks(tmp_path: Path, sweep_state, how: str, record_prop
         assert run.stderr == "", run.stderr
     else:
         assert len(run.lines) == 1, run.stderr
-        assert run.lines[0].startswith("hexapod-kin: warning: sweep cache entry chunk"), run.lines[0]
+        first = run.lines[0]
+        assert first.startswith("hexapod-kin: warning: sweep cache entry chunk"), first
         assert "scoring again" in run.lines[0], run.lines[0]
     assert (tmp_path / "s.csv").read_bytes() == reference
     assert not marker.exists()
