@@ -144,9 +144,8 @@ def _seeds_digest() -> str:
 
 
 def run_key(parts: Mapping[str, Any]) -> str:
-    """SHA-256 (hex) of ``parts`` (:func:`key_parts`)."""
-    text = json.dumps(parts, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
+    """The cache key (:func:`hexapod_kin._cache.key`) of ``parts`` (:func:`key_parts`)."""
+    return _disk.key(parts)
 
 
 @dataclass(frozen=True)
