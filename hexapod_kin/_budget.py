@@ -20,6 +20,7 @@ depend on what else runs on the machine:
 * A Ctrl-C reaches the child once, from the parent (``SIGTERM``, raised in the job as a
   ``KeyboardInterrupt``: its clean-up runs), whether it was sent to the parent or to the
   whole process group.
+* A warning in the child is said in the parent (its category and text), as if raised there.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -167,6 +169,9 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
                 if name == "__done__":
                     reason = None
                     break
+                if name == "__warning__":  # said in the child: said here, once
+                    warnings.warn(value[1], value[0], stacklevel=2)
+                    continue
                 if name in ("__budget__", "__error__"):
                     reason = f"budget of {budget:g} s reached" if name == "__budget__" else value
                     break
@@ -214,6 +219,10 @@ def _serve() -> None:  # pragma: no cover - runs in the child
         finally:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, prof)
 
+    def forward(message: Any, category: Any, *rest: Any, **kw: Any) -> None:
+        send(("__warning__", (category, str(message))))
+
+    warnings.showwarning = forward
     try:
         try:
             with cpu_limit(budget):

@@ -349,14 +349,13 @@ def _derive_job(
     The derivation (the disk cache read, the stages) until :data:`_AFTER` is left, the
     formulas printed (``fmt``: ``"text"``, ``"json"`` or ``"latex"``) until half of it is
     left, then the check against Pinocchio's Jacobians ``jac_pin`` at ``qs`` (computed by the
-    parent: no Pinocchio here). Yields the cache's warnings, the derivation, the output and
+    parent: no Pinocchio here). Yields the derivation, the output and
     what was cut, the check and why it is incomplete.
     """
     import dataclasses
     import json
     import pickle
     import time
-    import warnings
 
     import numpy as np
 
@@ -366,10 +365,7 @@ def _derive_job(
 
     end = time.process_time() + budget
     chain, reference, tip = pinned
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        deriv = derive(chain, rows=rows, budget=budget, within=budget - _AFTER)
-    yield "warnings", [(w.category, str(w.message)) for w in caught]
+    deriv = derive(chain, rows=rows, budget=budget, within=budget - _AFTER)
     # as a budgeted derive() returns it: through pickle (sympy rebuilds -(a + b) as -a - b)
     deriv = pickle.loads(pickle.dumps(dataclasses.replace(deriv, reference=reference, tip=tip)))
     yield "derivation", deriv
@@ -414,7 +410,6 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     import dataclasses
     import json
     import math
-    import warnings
 
     import numpy as np
 
@@ -437,8 +432,6 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     fmt = "json" if args.json else "latex" if args.latex else "text"
     job = (args.rows, fmt, budget, jac_pin, qs, (chain, reference, tip))
     done, reason = run(_derive_job, job, budget + _SLACK)
-    for category, message in done.get("warnings", []):
-        warnings.warn(message, category, stacklevel=1)
     if "derivation" not in done:
         if reason is None or not reason.startswith("budget of"):
             raise RuntimeError(f"derive: the derivation process failed: {reason}")

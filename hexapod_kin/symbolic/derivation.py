@@ -532,18 +532,15 @@ def _job(
     """What a derivation does within its budget (in its child process, or inline).
 
     With ``read``: the disk cache's entry ``digest``, checked against the table
-    (:func:`~.checks.claims_hold`), is yielded first as ``"__found__"`` with the cache's
-    warnings (said by the caller). Unless it answers the call, the stages follow, each
+    (:func:`~.checks.claims_hold`), is yielded first as ``"__found__"`` (its warnings reach
+    the caller's process). Unless it answers the call, the stages follow, each
     written to the disk cache (``write``) before it is yielded, marked unfinished until the
     last one.
     """
     start = time.process_time()
     if read:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            found = _checked_load(chain, lengths, digest, "recomputing it")
-        said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
-        yield "__found__", (found, said)
+        found = _checked_load(chain, lengths, digest, "recomputing it")
+        yield "__found__", found
     if _usable(found, budget, families_only):
         return
     have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
@@ -635,9 +632,7 @@ def derive(
                 _cache.restore(digest, kept)
             raise
         if "__found__" in done:
-            found, said = done.pop("__found__")
-            for text in said:
-                warnings.warn(text, CacheWarning, stacklevel=2)
+            found = done.pop("__found__")
         else:
             unread = read
     if _usable(found, budget, families_only):
