@@ -1,4 +1,4 @@
-"""Files: atomic writing (never a half-written file) and the package's cache root."""
+"""Files: atomic writing (never a half-written file) and regular files read with a byte cap."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ from pathlib import Path
 
 from .exceptions import HexapodKinError, ParameterError, SourceError
 
-__all__ = ["atomic_write", "cache_root", "read_regular"]
+__all__ = ["atomic_write", "read_regular"]
 
 
-def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
+def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool = True) -> Path:
     """Write ``data`` to ``path`` atomically.
 
     The data goes to a temporary file in the same directory, is flushed and fsync'ed, then
@@ -23,6 +23,8 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
     Args:
         path: Destination file.
         data: Text (written as UTF-8) or bytes.
+        sync: ``fsync`` the file and its folder (False: a cache entry, where a torn file
+            after a crash only reads as "not cached").
 
     Returns:
         The destination as a :class:`~pathlib.Path`.
@@ -44,8 +46,9 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(fd, "wb") as fh:
             fh.write(payload)
-            fh.flush()
-            os.fsync(fh.fileno())
+            if sync:
+                fh.flush()
+                os.fsync(fh.fileno())
         if dest.exists():
             try:
                 os.chmod(tmp, dest.stat().st_mode & 0o777)
@@ -63,7 +66,8 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> Path:
         if isinstance(exc, OSError):
             raise _cannot_write(dest, exc) from None
         raise
-    _fsync_dir(parent)
+    if sync:
+        _fsync_dir(parent)
     return dest
 
 
@@ -90,23 +94,6 @@ def _fsync_dir(directory: Path) -> None:
         pass
     finally:
         os.close(fd)
-
-
-def cache_root(kind: str) -> Path:
-    """The package's cache folder for ``kind`` (``"symbolic"``, ``"families"``; not created here).
-
-    ``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else ``platformdirs.user_cache_dir("hexapod_kin")/<kind>``
-    when platformdirs is installed, else ``~/.cache/hexapod_kin/<kind>``.
-    """
-    env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
-    if env:
-        return Path(env) / kind
-    try:
-        import platformdirs
-
-        return Path(platformdirs.user_cache_dir("hexapod_kin")) / kind
-    except ImportError:
-        return Path.home() / ".cache" / "hexapod_kin" / kind
 
 
 def read_regular(

@@ -17,20 +17,14 @@ input only (never on its neighbours in a block, the block size or the thread tha
 so a result is the same in any process, warm or cold, and from any number of threads.
 
 **When it compiles**: only batch APIs import this module (the size rule: per-call work runs
-on Pinocchio and numpy). Kernels are ``cache=True``: compiled on first use, then loaded from
-numba's disk cache (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the sources).
-``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area
-in a process, :func:`run_blocks` prints one notice on stderr unless a stamp file says this
-machine's cache already holds that area: ``hexapod_kin-<area>-<stamp key>.stamp`` in numba's
-cache directory (else ``hexapod_kin/__pycache__``), the key made of the package version,
-numba's version, Python's and the CPU name; written after the area's first completed call
-and by ``precompile``. Deleting numba's cache deletes the stamps with it.
-
-**A cache that is not trusted blindly** (:mod:`._kcache`): before numba loads anything in a
-process, the package's cache files are checked against a manifest of their SHA-256; a file
-that differs is removed (one :class:`~hexapod_kin.exceptions.CacheWarning`) and compiled
-again. A cache that still fails to load is rebuilt the same way (:func:`_load_or_rebuild`),
-never fatal.
+on Pinocchio and numpy). Kernels are ``cache=True``, numba's disk cache used as numba
+documents it: ``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` beside the sources when
+writable, else numba's user-wide cache folder (a read-only install works); where no folder is
+writable, compiled in memory (:func:`hexapod_kin._kmath.njit`, one warning). Nothing reads
+numba's files. ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel
+call of an area in a process, :func:`run_blocks` prints one notice on stderr unless a stamp
+file in numba's chosen folder says that area is compiled there (:func:`mark_compiled`).
+A cache that cannot be loaded or written is never fatal (:func:`_first_call`).
 
 Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: rows
 ``[v; ω]``.
@@ -38,19 +32,21 @@ Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said oth
 
 from __future__ import annotations
 
+import errno
+import functools
 import itertools
 import math
 import sys
 import threading
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
-from ._kcache import cache_files, remove_file, stamp, verify, write_manifest
 from ._kmath import (
     POLY_TRIG_MAX,
     det_lu,
@@ -111,6 +107,10 @@ Q_MAX = 1e150
 _SEEN: set[str] = set()
 _SEEN_LOCK = threading.Lock()
 _NOTICE = [True]
+#: Areas whose cache could not be written (said once per process: the next areas are alike).
+_SAID: list[str] = []
+#: Most first calls of an area: each failed save of numba's cache leaves one more kernel in memory.
+_ATTEMPTS = 64
 
 
 def silence_notice() -> None:
@@ -118,25 +118,49 @@ def silence_notice() -> None:
     _NOTICE[0] = False
 
 
-def mark_compiled(area: str) -> None:
-    """Record that numba's cache holds ``area``'s kernels (its stamp file, the manifest).
+@functools.cache
+def _stamp_key() -> str:
+    """Package version, numba's, Python's and the CPU name: what numba's machine code depends on."""
+    import importlib.metadata
 
-    Best effort: a read-only cache directory only means the notice shows again.
+    import llvmlite.binding
+
+    try:
+        version = importlib.metadata.version("hexapod-kin")
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - run from a checkout
+        version = "dev"
+    py = f"{sys.version_info[0]}{sys.version_info[1]}"
+    return f"{version}-numba{numba.__version__}-py{py}-{llvmlite.binding.get_host_cpu_name()}"
+
+
+def _stamp(area: str) -> Path | None:
+    """The stamp file of ``area``, in the folder numba chose for this module's cache.
+
+    That folder is numba's public ``Dispatcher.stats.cache_path`` (``NUMBA_CACHE_DIR``, else
+    ``__pycache__`` beside the sources when writable, else numba's user-wide cache folder);
+    ``None`` when numba caches nothing. Only the stamp is written there: numba's own files
+    are never read.
     """
+    folder = pose_jacobian_kernel.stats.cache_path
+    return None if folder is None else Path(folder) / f"hexapod_kin-{area}-{_stamp_key()}.stamp"
+
+
+def mark_compiled(area: str) -> None:
+    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort)."""
     with _SEEN_LOCK:
         _SEEN.add(area)
-    try:
-        path = stamp(area)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.touch()
-    except OSError:
-        pass
-    write_manifest()
+    path = _stamp(area)
+    if path is not None:
+        try:
+            path.touch()
+        except OSError:
+            pass
 
 
 def _notice(area: str) -> None:
     """The first time in a process, one line if no stamp says the disk cache holds ``area``."""
-    if _NOTICE[0] and not stamp(area).exists():
+    path = _stamp(area)
+    if _NOTICE[0] and (path is None or not path.exists()):
         print(
             f"hexapod-kin: compiling {area} kernels for this machine "
             "(once; 'hexapod-kin precompile' does it ahead)",
@@ -157,42 +181,32 @@ def _dispatchers() -> list[Any]:
     return out
 
 
-def _rebuild(before: dict[int, int]) -> None:
-    """Forget what a failed load left: the package's cache files, and what was loaded.
-
-    Every cache file of the package is removed (it is suspect). ``Dispatcher.recompile()``
-    (numba's public method) resets a dispatcher's loaded code and its cache index, then
-    compiles its signatures again: done for those with nothing loaded and for those that
-    loaded something in the failed attempt (``before``: overload counts by ``id``; such a
-    signature may not even be theirs, so the compile may fail: then nothing is loaded and
-    the next call compiles afresh). Kernels loaded earlier in this process are left alone.
-    """
-    for f in cache_files():
-        remove_file(f)
-    for obj in _dispatchers():
-        if not obj.overloads or len(obj.overloads) != before.get(id(obj), 0):
-            try:
-                obj.recompile()
-            except Exception:  # noqa: BLE001, S110 - a foreign signature: left empty
-                pass
+def _unwritable(exc: BaseException) -> bool:
+    """Whether ``exc`` (or what it wraps) is a failed write of numba's cache (disk full...)."""
+    seen: BaseException | None = exc
+    while seen is not None:
+        if isinstance(seen, OSError):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return any(f"[Errno {e}]" in str(exc) for e in (errno.ENOSPC, errno.EFBIG, errno.EACCES,
+                                                   errno.EROFS, errno.EDQUOT))  # fmt: skip
 
 
-def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
-    """``run(0, 0)`` (no blocks: loads or compiles the kernel); a damaged cache is rebuilt.
+def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
+    """``run(0, 0)`` (no blocks: loads or compiles the kernel), never failing on the cache.
 
-    The first time in a process, the cache files are checked against their manifest before
-    numba opens any (:func:`._kcache.verify`). A compiled-code cache that still cannot be
-    loaded (numba raises while unpickling it) is never fatal: one
-    :class:`~hexapod_kin.exceptions.CacheWarning`, the package's cache files removed, what
-    the attempt loaded reset, and the kernel compiled again. A Ctrl-C that numba's compile
-    callback swallowed (reported as unraisable) and that made the compile fail is raised as
-    the ``KeyboardInterrupt`` it was.
+    numba's cache is used as numba documents it (``cache=True``): nothing here reads its
+    files. A cache that cannot be written (a full disk, a folder made read-only) costs one
+    :class:`~hexapod_kin.exceptions.CacheWarning`: numba adds each kernel to memory before
+    saving it, so calling again compiles the rest in memory. A cache that cannot be loaded
+    (numba raises while reading it) costs one warning too: every kernel with nothing loaded
+    is reset by numba's public ``Dispatcher.recompile()`` (its cache index emptied) and
+    compiled again. A Ctrl-C that numba's compile callback swallowed (reported as
+    unraisable) and that made the compile fail is raised as the ``KeyboardInterrupt`` it was.
     """
     if area in _SEEN:
         return run(0, 0)
-    verify()
     _notice(area)
-    before = {id(d): len(d.overloads) for d in _dispatchers()}
     swallowed: list[BaseException] = []
     hook = sys.unraisablehook
 
@@ -201,23 +215,47 @@ def _load_or_rebuild(area: str, run: Callable[[int, int], Any]) -> Any:
             swallowed.append(info.exc_value)
         hook(info)
 
+    reloaded = False
     sys.unraisablehook = record
     try:
-        out = run(0, 0)
-    except (ParameterError, ConfigurationError):
-        raise
-    except Exception as exc:  # noqa: BLE001 - any failure to load the cache: rebuild once
-        if swallowed:  # Ctrl-C in numba's compile callback (swallowed there): not a damaged cache
-            raise KeyboardInterrupt from exc
-        detail = " ".join(str(exc).split())[:120]
-        warnings.warn(
-            f"the compiled-code cache of the {area} kernels could not be loaded "
-            f"({type(exc).__name__}: {detail}); compiling them again",
-            CacheWarning,
-            stacklevel=4,
-        )
-        _rebuild(before)
-        out = run(0, 0)
+        for _ in range(_ATTEMPTS):
+            before = {id(d): len(d.overloads) for d in _dispatchers()}
+            try:
+                out = run(0, 0)
+                break
+            except (ParameterError, ConfigurationError):
+                raise
+            except Exception as exc:  # noqa: BLE001 - the cache, never the answer
+                if swallowed:  # Ctrl-C in numba's compile callback: not a cache problem
+                    raise KeyboardInterrupt from exc
+                full = _unwritable(exc)
+                if not full and reloaded:  # compiled afresh and still failing: not the cache
+                    raise
+                if not (full and _SAID):
+                    detail = " ".join(str(exc).split())[:120]
+                    warnings.warn(
+                        f"numba's compiled-code cache of the {area} kernels "
+                        + ("cannot be written" if full else "could not be loaded")
+                        + f" ({type(exc).__name__}: {detail}); compiling "
+                        + ("in memory" if full else "them again"),
+                        CacheWarning,
+                        stacklevel=4,
+                    )
+                    if full:
+                        _SAID.append(area)
+                reloaded = reloaded or not full
+                progress = any(len(d.overloads) != before.get(id(d), 0) for d in _dispatchers())
+                if not full:
+                    for obj in _dispatchers():
+                        if not obj.overloads or len(obj.overloads) != before.get(id(obj), 0):
+                            try:
+                                obj.recompile()
+                            except Exception:  # noqa: BLE001, S110 - left empty: compiled on call
+                                pass
+                elif not progress:
+                    raise
+        else:  # pragma: no cover - more kernels than attempts
+            out = run(0, 0)
     finally:
         if sys.unraisablehook is record:
             sys.unraisablehook = hook
@@ -560,14 +598,15 @@ def run_blocks(
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
     ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``): the first call in a
-    process loads them with no blocks first (:func:`_load_or_rebuild`: the compile notice, a
-    damaged cache rebuilt, the stamp written). Then up to ``numba.get_num_threads()`` plain
+    process loads them with no blocks first (:func:`_first_call`: the compile notice, a
+    cache that cannot be read or written never fatal, the stamp written). Then up to
+    ``numba.get_num_threads()`` plain
     threads (the kernels release the GIL), each taking the next chunk of blocks from a shared
     counter when done with one, so that a thread sharing its core with another process does
     less of the work. Which thread runs a block never changes its numbers (see the module
     docstring).
     """
-    results = [_load_or_rebuild(area, run)]
+    results = [_first_call(area, run)]
     nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))
     if nwork == 1:
         return [*results, run(0, nblocks)]

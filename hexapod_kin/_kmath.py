@@ -16,10 +16,13 @@ Angles in [rad].
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numba
 import numpy as np
+
+from .exceptions import CacheWarning
 
 __all__ = [
     "POLY_TRIG_MAX",
@@ -45,11 +48,37 @@ def njit(*args: Any, **options: Any) -> Any:
     ``fastmath`` lets the compiler reassociate and contract arithmetic differently in the
     vectorised body and the scalar remainder of a loop, so a value would depend on its
     position in a batch (see "the same bits" in ``docs/ARCHITECTURE.md``).
+
+    Where numba finds no writable cache folder at all (its documented locators: the
+    ``NUMBA_CACHE_DIR``, ``__pycache__`` beside the sources, the user-wide cache folder),
+    ``cache=True`` would fail at import: the kernels are compiled in memory instead, with one
+    :class:`~hexapod_kin.exceptions.CacheWarning` per process.
     """
     if options.get("fastmath"):
         raise ValueError("hexapod_kin kernels never use fastmath (the same bits every time)")
     options.setdefault("cache", True)
-    return numba.njit(*args, **options)
+
+    def decorate(func: Any) -> Any:
+        try:
+            return numba.njit(**options)(func)
+        except RuntimeError as exc:
+            if not options["cache"] or "cannot cache" not in str(exc):
+                raise
+            if not _IN_MEMORY:
+                _IN_MEMORY.append(True)
+                warnings.warn(
+                    f"no writable folder for numba's compiled-code cache ({exc}); the kernels "
+                    "are compiled in memory in this process (set NUMBA_CACHE_DIR to a "
+                    "writable folder to keep them)",
+                    CacheWarning,
+                    stacklevel=3,
+                )
+            return numba.njit(**{**options, "cache": False})(func)
+
+    return decorate(args[0]) if args and callable(args[0]) else decorate
+
+
+_IN_MEMORY: list[bool] = []
 
 
 # ------------------------------------------------------------------------ eigenvalues

@@ -15,13 +15,14 @@ Caches (each filled once per module, then copied per case):
 * ``numba`` — numba's compiled-code cache (subprocesses: numba loads once per process); the
   command computes ``fk_batch`` (its kernel loaded first, the cache checked then) and then
   calls the small compiled ``wrap_angle``, whose cache files are the ones damaged (so a
-  rebuild is one small compile); ``swap`` exchanges its data file with ``sincos``'s.
+  rebuild is one small compile); only the damages that make numba fail to load
+  (``NUMBA_DAMAGES``): nothing reads numba's files.
 
 Damages: ``truncate`` (a file cut to a third), ``empty``, ``random`` (random bytes), ``swap``
 (two entries' contents exchanged; for a replay entry two files exchanged *together with their
 manifest lines*, so each file still matches its line), ``edit`` (one value changed in place,
 any checksum left as it was), ``plant`` (code where data is read: a ``srepr`` (symbolic), a
-factor text (families), a pickle that runs code when loaded (numba), a script as a figure or
+factor text (families), a script as a figure or
 listed under a path that leaves the report folder (replay); where a reader parses the data
 (symbolic, families, replay, figures) the seal is recomputed, so what refuses is the reader
 itself; a printed text (``text``) is never run, only its seal guards it). ``X-resealed``: the
@@ -41,7 +42,6 @@ import base64
 import hashlib
 import json
 import os
-import pickle
 import random
 import shutil
 import subprocess
@@ -66,7 +66,15 @@ RESEALED = (
     ("figures", "edit"),
     ("figures", "swap"),
 )
-CASES = [(c, d) for c in CACHES for d in DAMAGES] + [(c, f"{d}-resealed") for c, d in RESEALED]
+#: numba's cache is used as numba documents it and nothing reads its files (issue 30): a file
+#: that fails to load is handled; a swapped, edited or planted one is numba's trusted input
+#: (the user's own cache folder), out of this matrix.
+NUMBA_DAMAGES = ("truncate", "empty", "random")
+CASES = [(c, d) for c in CACHES for d in DAMAGES if c != "numba" or d in NUMBA_DAMAGES]
+CASES += [(c, f"{d}-resealed") for c, d in RESEALED]
+#: An edit resealed by someone without the per-user secret (the keyed seal catches it; the
+#: printed text has no other check).
+CASES += [(c, "forged") for c in ("symbolic", "families", "text")]
 
 
 def _cut(path: Path) -> None:
@@ -98,6 +106,27 @@ def _raw(path: Path, how: str) -> bool:
 
 def _planted(marker: Path) -> str:
     return f"__import__('pathlib').Path({str(marker)!r}).touch()"
+
+
+def _reseal(kind: str, data: dict[str, Any], how: str) -> None:
+    """The seal after a damage ``how``: left as it was (``edit``), recomputed with the user's
+    secret (a knowing edit: the content checks must catch it), or ``forged`` by someone
+    without the secret (the same scheme with a guessed key: the keyed seal catches it)."""
+    import hmac
+
+    from hexapod_kin import _cache
+
+    if how == "edit":
+        return
+    if how != "forged":
+        data["seal"] = _cache.seal(kind, data["key"], data["body"])
+        return
+    h = hmac.new(b"", digestmod=hashlib.sha256)
+    body = json.dumps(data["body"], sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    for chunk in (kind.encode(), data["key"].encode(), body.encode()):
+        h.update(len(chunk).to_bytes(8, "big"))
+        h.update(chunk)
+    data["seal"] = h.hexdigest()
 
 
 def _caught(call: Callable[[], Any]) -> tuple[Any, list[str]]:
@@ -135,24 +164,23 @@ class Symbolic:
         return _fingerprint(derive(hk.robots.coxa_tibia_leg(), budget=None))
 
     def damage(self, root: Path, how: str, marker: Path) -> None:
-        from hexapod_kin.symbolic import cache
-
         path = root / "symbolic" / self.a
         if _raw(path, how):
             return
         if how == "swap":
             return _swap(path, root / "symbolic" / self.b)
         data = json.loads(path.read_text())
-        stages = data["stages"]["__dict__"]
+        stages = data["body"]["__dict__"]
         kin = next(v for k, v in stages if k == "kinematics")["__dict__"]
         p = next(v for k, v in kin if k == "p")
         if how.startswith("edit"):  # the foot's position: q1 becomes q2 in one entry of p
             assert "cos(Symbol('q1'" in p["__matrix__"]
             p["__matrix__"] = p["__matrix__"].replace("cos(Symbol('q1'", "cos(Symbol('q2'", 1)
+        elif how == "forged":
+            p["__matrix__"] = p["__matrix__"].replace("cos(Symbol('q1'", "cos(Symbol('q2'", 1)
         else:  # plant: code in place of an expression, the seal recomputed
             p["__matrix__"] = _planted(marker)
-        if how != "edit":
-            data["seal"] = cache.seal(data["key"], data["stages"])
+        _reseal("symbolic", data, how)
         path.write_text(json.dumps(data))
 
 
@@ -182,21 +210,19 @@ class Families:
         return json.dumps([f.to_dict() for f in fams.families])
 
     def damage(self, root: Path, how: str, marker: Path) -> None:
-        from hexapod_kin.singularity import families
-
         path = root / "families" / self.a
         if _raw(path, how):
             return
         if how == "swap":
             return _swap(path, root / "families" / self.b)
         data = json.loads(path.read_text())
-        if how.startswith("edit"):  # a family moved: q2 = -pi/2 becomes q2 = -1
-            assert data["families"][0]["value"] == pytest.approx(-1.5707963267948966)
-            data["families"][0]["value"] = -1.0
+        body = data["body"]
+        if how.startswith(("edit", "forged")):  # a family moved: q2 = -pi/2 becomes q2 = -1
+            assert body["families"][0]["value"] == pytest.approx(-1.5707963267948966)
+            body["families"][0]["value"] = -1.0
         else:  # plant: code as a factor text
-            data["families"][0]["factor"] = _planted(marker)
-        if how != "edit":  # the seal recomputed
-            data["seal"] = families._seal(data)
+            body["families"][0]["factor"] = _planted(marker)
+        _reseal("families", data, how)
         path.write_text(json.dumps(data))
 
 
@@ -226,11 +252,12 @@ class Text:
         if how == "swap":
             return _swap(path, root / "report" / self.b)
         data = json.loads(path.read_text())
-        if how == "edit":  # one printed length changed
-            assert "l2" in data["text"]
-            data["text"] = data["text"].replace("l2", "l3", 1)
+        if how in ("edit", "forged"):  # one printed length changed
+            assert "l2" in data["body"]
+            data["body"] = data["body"].replace("l2", "l3", 1)
         else:  # plant: code as the text (a text is only ever printed)
-            data["text"] = _planted(marker)
+            data["body"] = _planted(marker)
+        _reseal("report", data, how if how != "plant" else "edit")
         path.write_text(json.dumps(data))
 
 
@@ -378,28 +405,17 @@ class Figures(Replay):
 
 
 # ---------------------------------------------------------------------------- numba
-#: ``fk_batch`` loads its kernel (the cache checked first), then ``wrap_angle`` is called
-#: directly: in the package every compile happens inside an area's first call, which then
-#: records the cache's manifest (``mark_compiled``); the direct call does the same by hand.
+#: ``fk_batch`` loads its kernel, then ``wrap_angle`` is called as an area of its own: in the
+#: package every compile happens inside an area's first call (``run_blocks``).
 NUMBA_CODE = r"""
 import hashlib, hexapod_kin as hk
-from hexapod_kin._kernels import mark_compiled
+from hexapod_kin._kernels import run_blocks
 from hexapod_kin._kmath import wrap_angle
 leg = hk.load("hexabot_leg")
 poses = leg.fk_batch(leg.random_q(300, seed=3))
-print(hashlib.sha256(poses.tobytes()).hexdigest(), repr(wrap_angle(7.0)))
-mark_compiled("batch")
+wrapped = run_blocks("wrap", lambda a, b: wrap_angle(7.0), 1, 1, 1)[-1]
+print(hashlib.sha256(poses.tobytes()).hexdigest(), repr(wrapped))
 """
-
-
-class _Plant:
-    """A pickle that, when loaded, creates the marker file (what numba would load)."""
-
-    def __init__(self, marker: Path) -> None:
-        self.marker = marker
-
-    def __reduce__(self) -> Any:
-        return (Path.touch, (self.marker,))
 
 
 class Numba:
@@ -422,7 +438,7 @@ class Numba:
         return res.stdout.strip(), res.stderr
 
     def fill(self, root: Path) -> None:
-        out, err = self._proc(root)  # compiles; the manifest then lists wrap_angle too
+        out, err = self._proc(root)  # compiles
         assert "compiling batch kernels" in err and "Warning" not in err, err
 
     def run(self, root: Path) -> tuple[str, list[str]]:
@@ -439,14 +455,6 @@ class Numba:
             nbi.write_bytes(b"")
         elif _raw(nbc, how):
             return
-        elif how == "swap":
-            _swap(nbc, self.file(root, "sincos", ".1.nbc"))
-        elif how == "edit":  # one byte of the machine code's pickle
-            data = bytearray(nbc.read_bytes())
-            data[len(data) // 2] ^= 0x10
-            nbc.write_bytes(bytes(data))
-        elif how == "plant":
-            nbi.write_bytes(pickle.dumps(_Plant(marker)))
 
 
 HARNESS: dict[str, Any] = {
@@ -514,19 +522,16 @@ def test_damaged_cache(
         assert not (tmp_path / "planted.py").exists() and not (root / "planted.py").exists()
 
 
-def test_numba_cache_without_manifest_is_rebuilt_when_loading_fails(
+def test_numba_cache_is_rebuilt_when_loading_fails(
     filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
 ) -> None:
-    """A cache the manifest cannot vouch for (deleted: e.g. filled by an older version) with
-    the kernel's data file swapped with ``sincos``'s: numba loads ``sincos``'s code as the
-    kernel and the call fails (it was fatal: ``TypeError: sincos expected 1 argument``). The
-    failure is caught: one warning, the package's cache files removed, what the attempt
-    loaded reset, the kernel compiled again: the same bits, and the next run is quiet."""
+    """The kernel's data file swapped with ``sincos``'s: numba loads ``sincos``'s code as the
+    kernel and the call fails (``TypeError: sincos expected 1 argument``). The failure is
+    caught: one warning, what the attempt loaded reset (numba's ``recompile``), the kernel
+    compiled again: the same bits, and the next run is quiet."""
     h, pristine, base = _prepare(filled, "numba", tmp_path_factory.getbasetemp())
     root = tmp_path / "cache"
     shutil.copytree(pristine, root)
-    (manifest,) = (root / "numba").glob("*.manifest.json")
-    manifest.unlink()
     (kernel,) = (root / "numba").glob("*/_kernels.pose_jacobian_kernel-*.1.nbc")
     _swap(kernel, h.file(root, "sincos", ".1.nbc"))
     again, said = h.run(root)
@@ -534,3 +539,65 @@ def test_numba_cache_without_manifest_is_rebuilt_when_loading_fails(
     assert len(said) == 1 and "could not be loaded" in said[0], said
     third, quiet = h.run(root)
     assert third == base and not quiet, quiet
+
+
+# ---------------------------------------------------------------------------- faults
+def _small_files() -> None:  # pragma: no cover - in the child, before exec
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+    resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+
+def test_numba_cache_that_cannot_be_written_compiles_in_memory(
+    filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
+) -> None:
+    """numba's cache folder as on a full disk (no file can grow past 4 kB): the kernels are
+    compiled in memory with one warning, the same bits, and no temporary file is left."""
+    h, _, base = _prepare(filled, "numba", tmp_path_factory.getbasetemp())
+    res = subprocess.run(
+        [sys.executable, "-c", NUMBA_CODE],
+        env=h._env(tmp_path),
+        capture_output=True, text=True, timeout=600, preexec_fn=_small_files,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr[-3000:]
+    said = [ln for ln in res.stderr.splitlines() if "CacheWarning:" in ln]
+    assert len(said) == 1 and "cannot be written" in said[0], res.stderr[-3000:]
+    assert res.stdout.strip() == base
+    assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name]
+
+
+def test_package_cache_on_a_full_disk_leaves_no_temporary_file(tmp_path: Path) -> None:
+    """``HEXAPOD_KIN_CACHE_DIR`` where no file can grow past 4 kB: ``derive`` answers as with
+    a working cache, and no temporary file is left (issue 35)."""
+    env = dict(os.environ, HEXAPOD_KIN_CACHE_DIR=str(tmp_path / "full"))
+    argv = [sys.executable, "-m", "hexapod_kin", "derive", "hexabot_leg"]
+    full = subprocess.run(
+        argv, env=env, capture_output=True, text=True, timeout=600, preexec_fn=_small_files
+    )
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / "working")
+    working = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=600)
+    assert full.returncode == working.returncode == 0, full.stderr[-2000:]
+    assert full.stdout == working.stdout and "Traceback" not in full.stderr
+    assert not [p for p in (tmp_path / "full").rglob("*") if ".tmp" in p.name]
+    assert list((tmp_path / "working" / "symbolic").glob("*.json"))  # it does cache there
+
+
+def test_cache_folder_that_is_a_regular_file_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``HEXAPOD_KIN_CACHE_DIR`` naming a regular file: one warning that says so (not a
+    "damaged entry"), nothing cached, the answer unchanged."""
+    from hexapod_kin import _cache
+    from hexapod_kin.symbolic import clear_memory, derive
+
+    plain = tmp_path / "a-file"
+    plain.write_text("not a folder")
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(plain))
+    monkeypatch.setattr(_cache, "_SECRETS", {})
+    clear_memory()
+    d, said = _caught(lambda: derive(hk.robots.coxa_tibia_leg(), budget=None))
+    assert len(said) == 1 and "is not a folder" in said[0], said
+    assert plain.read_text() == "not a folder" and d.complete
+    clear_memory()

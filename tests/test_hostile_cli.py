@@ -406,11 +406,13 @@ def _rewrite(path: Path, **changes) -> None:
 def _hmac(scores: np.ndarray, key: str, k: int) -> str:
     import hmac
 
-    from hexapod_kin._io import cache_root
+    from hexapod_kin._cache import root
 
-    secret = (cache_root("sweep") / "chunk.key").read_bytes()
-    h = hmac.new(secret, f"{key}:{k}:".encode(), hashlib.sha256)
-    h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
+    secret = (root() / "seal.key").read_bytes()  # the user's own secret: a knowing edit
+    h = hmac.new(secret, digestmod=hashlib.sha256)
+    for chunk in (b"sweep", f"{key}:{k}".encode(), np.ascontiguousarray(scores, float).tobytes()):
+        h.update(len(chunk).to_bytes(8, "big"))
+        h.update(chunk)
     return h.hexdigest()
 
 
@@ -484,7 +486,8 @@ def test_damaged_sweep_chunks(tmp_path: Path, sweep_state, how: str, record_prop
         assert run.stderr == "", run.stderr
     else:
         assert len(run.lines) == 1, run.stderr
-        assert run.lines[0].startswith("hexapod-kin: warning: sweep chunk"), run.lines[0]
+        first = run.lines[0]
+        assert first.startswith("hexapod-kin: warning: sweep cache entry chunk"), first
         assert "scoring again" in run.lines[0], run.lines[0]
     assert (tmp_path / "s.csv").read_bytes() == reference
     assert not marker.exists()

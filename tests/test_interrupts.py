@@ -421,19 +421,20 @@ def test_interrupted_derivation_leaves_its_entry_as_it_was(
     """The worker writes its stages as they finish, marked as a budget stop; after a Ctrl-C
     the entry is put back as it was (here: none), so the next run with the same budget
     carries on instead of stopping at NOT DONE (the soak found exit 1 after an interrupt)."""
+    from hexapod_kin import _budget
     from hexapod_kin.symbolic import cache, derive
 
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
     written: list[Path] = []
 
-    def interrupted_run(stages: Any, budget: object) -> object:
-        for _stage in stages():  # the worker's first stages reach the disk, then Ctrl-C
+    def interrupted_run(job: Any, args: Any, budget: object) -> object:
+        for _stage in job(*args):  # the worker's first stages reach the disk, then Ctrl-C
             written.extend(cache.cache_dir().glob("*.json"))
             if written:
                 raise KeyboardInterrupt
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cache, "run", interrupted_run)
+    monkeypatch.setattr(_budget, "run", interrupted_run)
     with pytest.raises(KeyboardInterrupt):
         derive(str(ROOT / "examples" / "leg5.yaml"))
     assert written, "the stages were not written as they finished"

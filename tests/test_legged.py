@@ -758,8 +758,8 @@ def pages(monkeypatch):
 @pytest.mark.parametrize("how", ["relative", "absolute"])
 def test_a_urdf_in_another_folder_walks_and_shows_itself(elsewhere, how, tmp_path, pages):
     from hexapod_kin.gait.show import run_model
-    from hexapod_kin.viewer import walk_html
     from hexapod_kin.simulate.scene import _robot_mjcf
+    from hexapod_kin.viewer import walk_html
 
     path = "../robots/phx.urdf" if how == "relative" else str(elsewhere)
     run = walk(as_whole_body(path, feet=SPEC), duration=0.5)

@@ -61,7 +61,7 @@ def test_planted_code_never_runs(tmp_path: Path) -> None:
     assert not marker.exists()
 
 
-def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path) -> None:
+def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path, monkeypatch) -> None:
     """Code planted in a stored expression of the symbolic cache never runs: the next
     ``derive`` (a new process) discards the entry with one warning line and recomputes."""
     import json
@@ -77,13 +77,14 @@ def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path) -> None:
     assert files
     marker = tmp_path / "ran"
     planted = f"__import__('pathlib').Path({str(marker)!r}).touch()"
-    from hexapod_kin.symbolic import cache
+    from hexapod_kin import _cache
 
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "hk"))  # the user's own secret
     for f in files:  # the seal recomputed: what refuses the code is the reader itself
         text = json.dumps(json.loads(f.read_text()))
         head = '"__sympy__": "'
         data = json.loads(text.replace(head, head + planted.replace('"', '\\"') + "#", 1))
-        data["seal"] = cache.seal(data["key"], data["stages"])
+        data["seal"] = _cache.seal("symbolic", data["key"], data["body"])
         f.write_text(json.dumps(data))
     again = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=120)
     assert again.returncode == 0, again.stderr
@@ -114,7 +115,7 @@ def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: s
     first = derive(hk.robots.hexabot_leg(), budget=None)
     (path,) = list(cache.cache_dir().glob("*.json"))
     data = json.loads(path.read_text())
-    stages = data["stages"]["__dict__"]
+    stages = data["body"]["__dict__"]
     if what == "p":  # the foot's position: q1 becomes q2 in p only
         entry = _entry(_entry(stages, "kinematics")["__dict__"], "p")
         key, old, new = "__matrix__", "cos(Symbol('q1'", "cos(Symbol('q2'"
@@ -126,7 +127,9 @@ def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: s
         key, old, new = "__sympy__", "Symbol('q3'", "Symbol('q1'"
     assert old in entry[key]
     entry[key] = entry[key].replace(old, new)
-    data["seal"] = cache.seal(data["key"], data["stages"])
+    from hexapod_kin import _cache
+
+    data["seal"] = _cache.seal("symbolic", data["key"], data["body"])
     path.write_text(json.dumps(data))
     clear_memory()
     from hexapod_kin.symbolic import cached

@@ -195,6 +195,7 @@ def _entry_copy(env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> 
     """A copy of the module's entry in another cache folder (free to damage)."""
     root = tmp_path / "other-cache"
     shutil.copytree(replay.runs_dir() / env.key, root / "report" / "runs" / env.key)
+    shutil.copy(env.cache / "seal.key", root / "seal.key")  # the same user's secret
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(root))
     assert replay.lookup(env.key) is not None
     return root / "report" / "runs" / env.key

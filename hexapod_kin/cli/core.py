@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from ..exceptions import ParameterError
@@ -259,120 +259,113 @@ def _add_derive(sub: Any) -> None:
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
 
-def _started() -> float:
-    """:func:`time.monotonic` at this process's start when the process is the command line.
-
-    ``derive --budget`` counts from there: Python's start-up and the imports are part of
-    the command's wall time. Read from Linux's ``/proc``; elsewhere, or when the CLI is
-    called from Python (``main([...])``), it counts from now.
-    """
-    import os
-    import time
-
-    now = time.monotonic()
-    main = sys.modules.get("__main__")
-    spec = getattr(main, "__spec__", None)
-    is_cli = getattr(spec, "name", "") == "hexapod_kin.__main__" or os.path.basename(
-        sys.argv[0] if sys.argv else ""
-    ) in ("hexapod-kin", "hexapod_kin")
-    if not is_cli:
-        return now
-    try:
-        with open("/proc/self/stat", encoding="ascii") as f:
-            after = f.read().rsplit(")", 1)[1].split()
-        ticks = int(after[19])  # field 22, starttime, in clock ticks since boot
-        age = time.clock_gettime(time.CLOCK_BOOTTIME) - ticks / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError, AttributeError):
-        return now
-    return now - age if 0.0 <= age < 600.0 else now
-
-
-#: Seconds of ``--budget`` kept for what follows the derivation (formulas as text, check):
+#: CPU seconds of ``--budget`` kept for what follows the derivation (formulas as text, check):
 #: the text until half of it is left, the check until :data:`_WRITE` is left.
 _AFTER = 0.6
 
-#: Seconds before the end of ``--budget`` by which the output is ready to be written.
+#: CPU seconds before the end of ``--budget`` by which the output is ready.
 _WRITE = 0.05
 
+#: CPU seconds the child may spend past ``--budget`` on linear work (the unfinished
+#: derivation's plain products): its own limit, never reached by the work it bounds.
+_SLACK = 1.0
 
-def _pinocchio_check(deriv: Any, model: Any, seconds: float) -> tuple[dict[str, float], str]:
-    """Symbolic J (and det J) against Pinocchio's at 100 random q, within ``seconds``.
-
-    The symbolic side is evaluated in one pass over each expression
-    (:func:`~hexapod_kin.symbolic.checks.evaluate`), in a forked process killed at the
-    time; returns the maximum differences and, when cut short, why.
-    """
-    import numpy as np
-
-    from ..jacobian_rows import ROW_NAMES
-    from ..symbolic.checks import evaluate, evaluate_matrix
-
-    def stages() -> Any:
-        qs = model.random_q(100, seed=0)
-        idx = [ROW_NAMES.index(r) for r in deriv.rows]
-        jac_pin = np.array([model.jacobian(q)[idx] for q in qs])
-        at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
-        jac_sym = evaluate_matrix(deriv.J_rows, at, len(qs))
-        yield "max_abs_J_sym_minus_J_pinocchio", float(np.abs(jac_sym - jac_pin).max())
-        if deriv.det is not None and jac_pin.shape[1] == jac_pin.shape[2]:
-            det_sym = np.broadcast_to(evaluate(deriv.det, at), (len(qs),))
-            yield (
-                "max_abs_det_sym_minus_det_pinocchio",
-                float(np.abs(det_sym - np.linalg.det(jac_pin)).max()),
-            )
-
-    return _within(stages, seconds)
+_CHECK_LABELS = {
+    "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
+    "max_abs_det_sym_minus_det_pinocchio": "max |det_sym - det_pin|",
+}
 
 
-def _within(stages: Any, seconds: float) -> tuple[dict[str, Any], str]:
-    """``symbolic.cache.run(stages, seconds)``: what came back, and "" or why it stopped."""
-    from ..symbolic.cache import run
+def _phase(end: float, make: Callable[[], Iterator[Any]]) -> tuple[list[Any], bool]:
+    """The items of ``make()`` until ``end`` (:func:`time.process_time`); whether all came."""
+    import time
 
-    if seconds <= 0.05:
-        return {}, "no time left in the budget"
-    done, reason = run(stages, seconds)
-    return done, "" if reason is None else "the budget ran out" if reason.startswith(
-        "budget"
-    ) else reason
+    from .._budget import BudgetReached, cpu_limit
+
+    out: list[Any] = []
+    try:
+        with cpu_limit(end - time.process_time()):
+            out.extend(make())
+    except BudgetReached:
+        return out, False
+    return out, True
 
 
-def _derive_output(deriv: Any, args: argparse.Namespace, seconds: float) -> tuple[str, str]:
-    """The printed derivation (text, LaTeX or JSON), made within ``seconds``, and what is cut.
+def _derive_job(
+    rows: Any, fmt: str, budget: float, jac_pin: Any, qs: Any, pinned: tuple[Any, str, str]
+) -> Iterator[tuple[str, Any]]:  # pragma: no cover - runs in the child process
+    """``derive``'s work within ``budget`` CPU seconds, in one child process.
 
-    Printing a 7-joint arm's expressions takes seconds: the text is made in a forked process
-    killed at the time, formula by formula, and what came back is printed, then one line
-    says what was not. JSON cut short leaves out ``det`` and ``gram`` (their text is what
-    takes the time).
+    The derivation (the disk cache read, the stages) until :data:`_AFTER` is left, the
+    formulas printed (``fmt``: ``"text"``, ``"json"`` or ``"latex"``) until half of it is
+    left, then the check against Pinocchio's Jacobians ``jac_pin`` at ``qs`` (computed by the
+    parent: no Pinocchio here). Yields the derivation, the output and
+    what was cut, the check and why it is incomplete.
     """
     import dataclasses
     import json
+    import pickle
+    import time
 
-    if args.json:
-        done, why = _within(lambda: iter([("0", json.dumps(deriv.to_dict()))]), seconds)
-        if why:
+    import numpy as np
+
+    from ..jacobian_rows import ROW_NAMES
+    from ..symbolic import derive
+    from ..symbolic.checks import evaluate, evaluate_matrix
+
+    end = time.process_time() + budget
+    chain, reference, tip = pinned
+    deriv = derive(chain, rows=rows, budget=budget, within=budget - _AFTER)
+    # as a budgeted derive() returns it: through pickle (sympy rebuilds -(a + b) as -a - b)
+    deriv = pickle.loads(pickle.dumps(dataclasses.replace(deriv, reference=reference, tip=tip)))
+    yield "derivation", deriv
+    ran_out = "the budget ran out"
+    if fmt == "json":
+        made, whole = _phase(end - _AFTER / 2, lambda: iter([json.dumps(deriv.to_dict())]))
+        if not whole:
             short = dataclasses.replace(deriv, det=None, gram=None).to_dict()
-            short["incomplete"].append(f"det and gram as text ({why})")
-            return json.dumps(short), why
-        return done["0"], ""
-    if args.latex:
-        done, why = _within(lambda: iter([("0", deriv.latex())]), seconds)
-        if why:
-            return f"% {deriv.chain.name}\n% NOT DONE: the LaTeX of the formulas ({why})", why
-        return done["0"], ""
-    done, why = _within(lambda: ((str(i), t) for i, t in enumerate(deriv.text_parts())), seconds)
-    lines = [done[str(i)] for i in range(len(done))]
-    if why:  # what the derivation did not reach is said in any case (the text's last part)
-        lines.append(f"NOT DONE: printing the formulas after the {len(done)} first ({why})")
-        lines.extend(f"NOT DONE: {what}" for what in deriv.incomplete)
-    return "\n".join(lines), why
+            short["incomplete"].append(f"det and gram as text ({ran_out})")
+            made = [json.dumps(short)]
+    elif fmt == "latex":
+        made, whole = _phase(end - _AFTER / 2, lambda: iter([deriv.latex()]))
+        if not whole:
+            made = [f"% {deriv.chain.name}\n% NOT DONE: the LaTeX of the formulas ({ran_out})"]
+    else:
+        made, whole = _phase(end - _AFTER / 2, deriv.text_parts)
+        if not whole:  # what the derivation did not reach is said in any case
+            made.append(f"NOT DONE: printing the formulas after the {len(made)} first ({ran_out})")
+            made.extend(f"NOT DONE: {what}" for what in deriv.incomplete)
+    yield "text", ("\n".join(made), "" if whole else ran_out)
+
+    def check() -> Iterator[tuple[str, float]]:
+        at = {**deriv.lengths, **{sym: qs[:, k] for k, sym in enumerate(deriv.q)}}
+        jac = jac_pin[:, [ROW_NAMES.index(r) for r in deriv.rows]]
+        jac_sym = evaluate_matrix(deriv.J_rows, at, len(qs))
+        yield "max_abs_J_sym_minus_J_pinocchio", float(np.abs(jac_sym - jac).max())
+        if deriv.det is not None and jac.shape[1] == jac.shape[2]:
+            det_sym = np.broadcast_to(evaluate(deriv.det, at), (len(qs),))
+            yield (
+                "max_abs_det_sym_minus_det_pinocchio",
+                float(np.abs(det_sym - np.linalg.det(jac)).max()),
+            )
+
+    if end - _WRITE - time.process_time() <= 0.05:
+        yield "check", ({}, "no time left in the budget")
+        return
+    got, whole = _phase(end - _WRITE, check)
+    yield "check", (dict(got), "" if whole else ran_out)
 
 
 def _cmd_derive(args: argparse.Namespace) -> int:
+    import dataclasses
     import json
     import math
-    import time
 
+    import numpy as np
+
+    from .._budget import run
     from ..symbolic import DEFAULT_BUDGET, derive
+    from ..symbolic.sources import chain_of
 
     if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
         raise ParameterError(
@@ -382,13 +375,30 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             allowed="> 0 s",
         )
     budget = DEFAULT_BUDGET if args.budget is None else float(args.budget)
-    end = _started() + budget  # the whole command, imports included
     model = load_source(args)
-    deriv = derive(model, rows=args.rows, budget=budget, deadline=end - _AFTER)
-    # compare like with like: the derivation is in the model's own base frame, as Pinocchio's
-    # the formulas first, then the check with the time they leave
-    text, cut = _derive_output(deriv, args, end - _AFTER / 2 - time.monotonic())
-    check, why = _pinocchio_check(deriv, model, end - _WRITE - time.monotonic())
+    chain, reference, tip = chain_of(model, None, None)
+    qs = model.random_q(100, seed=0)
+    jac_pin = np.array([model.jacobian(q) for q in qs])  # Pinocchio here, sympy in the child
+    fmt = "json" if args.json else "latex" if args.latex else "text"
+    job = (args.rows, fmt, budget, jac_pin, qs, (chain, reference, tip))
+    done, reason = run(_derive_job, job, budget + _SLACK)
+    if "derivation" not in done:
+        if reason is None or not reason.startswith("budget of"):
+            raise RuntimeError(f"derive: the derivation process failed: {reason}")
+        # the budget ran out before anything came back: the plain products, nothing printed
+        deriv = derive(chain, rows=args.rows, budget=budget, within=0.0, cache=False)
+        deriv = dataclasses.replace(deriv, reference=reference, tip=tip)
+        lines = [f"NOT DONE: {what}" for what in deriv.incomplete]
+        done["text"] = (
+            json.dumps(deriv.to_dict())
+            if fmt == "json"
+            else "\n".join(("% " if fmt == "latex" else "") + line for line in lines),
+            "the budget ran out",
+        )
+    else:
+        deriv = done["derivation"]
+    text, cut = done.get("text", ("", "the budget ran out"))
+    check, why = done.get("check", ({}, "the budget ran out"))
     recovered = deriv.chain.description.startswith("Khalil table recovered")
     status = 1 if deriv.incomplete or why or cut else 0  # answered, not all of it
     if args.json:
@@ -404,14 +414,10 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         return status
     if recovered:  # the URDF's table: what was snapped, one line
         print(f"table: {deriv.chain.description}")
-    labels = {
-        "max_abs_J_sym_minus_J_pinocchio": "max |J_sym - J_pin|",
-        "max_abs_det_sym_minus_det_pinocchio": "max |det_sym - det_pin|",
-    }
     if check:
         print(
             f"check vs Pinocchio at 100 random q (reference {deriv.reference}): "
-            + ", ".join(f"{labels[k]} = {v:.2e}" for k, v in check.items())
+            + ", ".join(f"{_CHECK_LABELS[k]} = {v:.2e}" for k, v in check.items())
         )
     if why:
         print(f"NOT DONE: check vs Pinocchio at 100 random q ({why})")

@@ -37,8 +37,6 @@ def header_lines(what: str, description: str, header: str | None) -> list[str]:
     return lines
 
 
-
-
 def need(module: str, extra: str = "export") -> Any:
     """Import an optional dependency or raise :class:`OptionalDependencyError` with the hint.
 

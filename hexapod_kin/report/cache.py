@@ -4,34 +4,28 @@ The text (``sympy.pretty`` of every matrix, for ``hexapod-kin derive``) takes a 
 cached on disk. The report lays the matrices out as tables instead
 (:func:`derivation_layout`: ``sympy.sstr`` per entry, fast, not cached).
 
-One JSON file per derivation under :func:`hexapod_kin._io.cache_root` ``("report")``, named by
-a SHA-256 of every field of the derivation but its timing (sympy objects by ``srepr``), the
-package and sympy versions, :data:`FORMAT` and the package's source
-(:func:`.replay.package_digest`), holding that key, the text and a seal (SHA-256 of key and
-text). A missing file is printed and written quietly; a corrupt, truncated, edited (seal
-broken) or foreign one (another derivation's key: swapped or copied) is printed again and
-rewritten with one :class:`~hexapod_kin.exceptions.CacheWarning`. The text is only ever
-printed, never evaluated.
+One sealed entry per derivation (:mod:`hexapod_kin._cache`, kind ``"report"``), keyed by
+every field of the derivation but its timing (sympy objects by ``srepr``), the package and
+sympy versions, :data:`FORMAT` and the package's source (:func:`.replay.package_digest`). A
+missing entry is printed and written quietly; a damaged, edited or foreign one is printed
+again and rewritten with one :class:`~hexapod_kin.exceptions.CacheWarning`. The text is only
+ever printed, never evaluated.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-import warnings
 from dataclasses import fields
 from typing import Any
 
 import sympy as sp
 
-from .._io import atomic_write, cache_root
-from ..exceptions import CacheWarning
+from .. import _cache as _disk
 from .replay import package_digest
 
 __all__ = ["FORMAT", "derivation_layout", "derivation_text"]
 
 #: Version of the file layout and of the key's parts.
-FORMAT = 3
+FORMAT = 4
 
 
 def _text(obj: Any) -> Any:
@@ -51,44 +45,7 @@ def _key(d: Any) -> str:
     parts = {f.name: _text(getattr(d, f.name)) for f in fields(d)}
     del parts["seconds"], parts["cached"]
     parts.update(format=FORMAT, version=__version__, sympy=sp.__version__, code=package_digest())
-    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()
-
-
-def _seal(digest: str, text: str) -> str:
-    """SHA-256 binding ``text`` to the key ``digest`` (and to :data:`FORMAT`)."""
-    blob = json.dumps([FORMAT, digest, text], ensure_ascii=False, separators=(",", ":"))
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
-def _read(path: Any, digest: str) -> str | None:
-    """The kept text of ``digest``; ``None`` if missing or damaged (then one CacheWarning)."""
-    try:
-        raw = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        return None
-    except Exception as exc:  # noqa: BLE001 - unreadable: print it again
-        _damaged(path, exc)
-        return None
-    try:
-        data = json.loads(raw)
-        if not isinstance(data, dict) or data.get("key") != digest:
-            raise ValueError("not the entry of this derivation (another key)")
-        text = data["text"]
-        if not isinstance(text, str) or data.get("seal") != _seal(digest, text):
-            raise ValueError("its seal does not match its text")
-        return text
-    except Exception as exc:  # noqa: BLE001 - damaged: print it again
-        _damaged(path, exc)
-        return None
-
-
-def _damaged(path: Any, exc: BaseException) -> None:
-    warnings.warn(
-        f"report cache entry {path.name[:17]} (printed derivation) is damaged or was edited "
-        f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); printing it again",
-        CacheWarning,
-        stacklevel=4,
-    )
+    return "text-" + _disk.key(parts)
 
 
 def derivation_text(d: Any, cache: bool = True) -> str:
@@ -102,17 +59,11 @@ def derivation_text(d: Any, cache: bool = True) -> str:
         digest = _key(d)
     except Exception:  # noqa: BLE001 - no key: print it
         return str(d.text())
-    path = cache_root("report") / f"text-{digest}.json"
-    found = _read(path, digest)
-    if found is not None:
+    found = _disk.load("report", digest, FORMAT, "printing it again")
+    if isinstance(found, str):
         return found
     text = str(d.text())
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        entry = {"key": digest, "text": text, "seal": _seal(digest, text)}
-        atomic_write(path, json.dumps(entry, ensure_ascii=False))
-    except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
-        pass
+    _disk.store("report", digest, text, FORMAT)
     return text
 
 

@@ -5,10 +5,11 @@ The report is a deterministic function of its inputs (:func:`key_parts`, hashed 
 ``claims.toml`` and of the shipped seed texts, the options (``quick``, ``animations``), the
 installed versions of Python, hexapod_kin and :data:`DISTRIBUTIONS` (read from their
 metadata, never imported) and the platform. An entry is the folder
-``cache_root("report")/runs/<key>/``: ``files/`` holds every file the build wrote into the
+``_cache.folder("report")/runs/<key>/``: ``files/`` holds every file the build wrote into the
 report folder but ``verdicts.json`` (rewritten by a replay: it names the folder and the run's
 time), ``manifest.json`` each file's SHA-256 and size, the
-build's verdicts, facts and wall time, sealed by a SHA-256 of all of it (:func:`seal`: a file's
+build's verdicts, facts and wall time, sealed by the package's keyed seal of all of it
+(:func:`seal`, :mod:`hexapod_kin._cache`: a file's
 name, size and hash, the verdicts and facts are bound together, so files swapped together with
 their manifest lines, or an edited count, break it). The manifest is written last (removed
 first when an entry is rewritten), and a replay checks it before copying any file
@@ -32,7 +33,6 @@ import platform
 import shutil
 import sys
 import time
-import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -40,8 +40,8 @@ from functools import lru_cache
 from pathlib import Path, PurePosixPath
 from typing import Any
 
-from .._io import atomic_write, cache_root
-from ..exceptions import CacheWarning
+from .. import _cache as _disk
+from .._io import atomic_write
 from .data import CLAIMS_FILE, SEEDS_DIR, Verdict
 
 __all__ = [
@@ -62,7 +62,7 @@ __all__ = [
 ]
 
 #: Version of the entry layout (part of the key).
-FORMAT = 3
+FORMAT = 4
 #: Number of run entries kept (the most recently built or replayed).
 KEEP = 4
 #: Distributions whose installed versions are part of the key.
@@ -74,8 +74,8 @@ _STALE = 3600.0
 
 
 def runs_dir() -> Path:
-    """The entries' folder (not created here): ``cache_root("report") / "runs"``."""
-    return cache_root("report") / "runs"
+    """The entries' folder (not created here): ``_cache.folder("report") / "runs"``."""
+    return _disk.folder("report") / "runs"
 
 
 def source_digest() -> str:
@@ -144,9 +144,8 @@ def _seeds_digest() -> str:
 
 
 def run_key(parts: Mapping[str, Any]) -> str:
-    """SHA-256 (hex) of ``parts`` (:func:`key_parts`)."""
-    text = json.dumps(parts, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
+    """The cache key (:func:`hexapod_kin._cache.key`) of ``parts`` (:func:`key_parts`)."""
+    return _disk.key(parts)
 
 
 @dataclass(frozen=True)
@@ -181,12 +180,14 @@ def _safe(rel: Any) -> bool:
     return not p.is_absolute() and all(part not in ("", ".", "..") for part in p.parts)
 
 
-def seal(record: Mapping[str, Any]) -> str:
-    """SHA-256 of a manifest without its ``"seal"`` field (canonical JSON of its JSON form)."""
+def seal(record: Mapping[str, Any]) -> str | None:
+    """The keyed seal (:func:`hexapod_kin._cache.seal`) of a manifest without its ``"seal"``.
+
+    ``None`` when there is no per-user secret (nothing is cached then).
+    """
     body = {k: v for k, v in record.items() if k != "seal"}
     body = json.loads(json.dumps(body, default=str))
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
-    return hashlib.sha256(text.encode()).hexdigest()
+    return _disk.seal("replay", str(record.get("key")), body)
 
 
 class _Damaged(ValueError):
@@ -217,11 +218,7 @@ def lookup(key: str) -> Entry | None:
 
 def _warn(key: str, exc: BaseException) -> None:
     what = " ".join(str(exc).split())[:100] if isinstance(exc, _Damaged) else type(exc).__name__
-    warnings.warn(
-        f"report cache entry {key[:12]} is damaged or was edited ({what}); building again",
-        CacheWarning,
-        stacklevel=4,
-    )
+    _disk.damaged("report", key, what, "building again", stacklevel=4)
 
 
 def _checked(key: str, folder: Path, text: str) -> Entry:
@@ -237,7 +234,7 @@ def _checked(key: str, folder: Path, text: str) -> Entry:
         raise _Damaged("not a manifest of this format")
     if record.get("key") != key:
         raise _Damaged("the manifest of another key")
-    if record.get("seal") != seal(record):
+    if record.get("seal") != seal(record) or record.get("seal") is None:
         raise _Damaged("its manifest does not match its seal")
     listed = record.get("files")
     if not (
@@ -387,6 +384,8 @@ def save(
             "files": listed,
         }
         manifest["seal"] = seal(manifest)
+        if manifest["seal"] is None:
+            return None
         atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, default=str))
     except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
         return None

@@ -11,24 +11,23 @@ The text is compiled once into numpy evaluators (:mod:`._zeroset`), never ``eval
 
 from __future__ import annotations
 
-import hashlib
 import json
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import _cache as _disk
 from .._fields import fields_dict
-from .._io import atomic_write, cache_root
 from .._numerics import wrap_angles
 from ..exceptions import HexapodKinError, ParameterError, positive
 from ._zeroset import closest_distance, compile_factor
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
-_VERSION = 4
+_VERSION = 5
+_THEN = "not used"
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
 
@@ -151,8 +150,8 @@ class Families:
 
 # ------------------------------------------------------------------------ tables and keys
 def cache_dir() -> Path:
-    """Where derived families are kept: :func:`hexapod_kin._io.cache_root` ``("families")``."""
-    return cache_root("families")
+    """Where derived families are kept: :func:`hexapod_kin._cache.folder` ``("families")``."""
+    return _disk.folder("families")
 
 
 def _table(model: Any) -> tuple[Any, str]:
@@ -178,17 +177,15 @@ def _table(model: Any) -> tuple[Any, str]:
 
 def _key(chain: Any, rows: tuple[str, ...]) -> str:
     table = [(r.sigma, repr(r.alpha), repr(r.d), repr(r.theta), repr(r.r)) for r in chain.rows]
-    text = json.dumps(
+    return _disk.key(
         {
             "v": _VERSION,
             "rows": list(rows),
             "table": table,
             "base": repr(getattr(chain, "base_pose", None)),
             "tool": repr(getattr(chain, "tool", None)),
-        },
-        sort_keys=True,
-    )
-    return hashlib.sha256(text.encode()).hexdigest()[:32]
+        }
+    )[:32]
 
 
 def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
@@ -204,12 +201,6 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
         )
         for f in data["families"]
     )
-
-
-def _seal(data: dict[str, Any]) -> str:
-    """SHA-256 of an entry without its ``"seal"`` (canonical JSON): binds key and content."""
-    body = {k: v for k, v in data.items() if k != "seal"}
-    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
@@ -243,21 +234,19 @@ def _read_cache(
 ) -> tuple[tuple[Family, ...], str, float] | None:
     """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
 
-    Missing, or of another version: ``None``. Torn, edited (its seal broken), another
-    key's (a swapped or copied file) or unreadable: ``None`` with one ``CacheWarning`` (the
-    families are derived again, or reported as not derived). The factor texts are parsed
-    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated; a finished entry is
-    then held to ``check(families)`` (:func:`_holds`), which raises if it fails.
+    The sealed entry of :func:`hexapod_kin._cache.load` (missing or of another version:
+    ``None``; torn, edited, resealed without the secret, another key's: ``None`` with one
+    ``CacheWarning``). The factor texts are parsed by :func:`~._zeroset.compile_factor`'s
+    whitelist, never evaluated; a finished entry is then held to ``check(families)``
+    (:func:`_holds`), which raises if it fails (one warning too: the families are derived
+    again, or reported as not derived).
     """
-    path = cache_dir() / f"{key}.json"
+    data = _disk.load("families", key, _VERSION, _THEN)
+    if data is None:
+        return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if isinstance(data, dict) and "v" in data and data["v"] != _VERSION:
-            return None
-        if not isinstance(data, dict) or data.get("key") != key or data.get("nq") != nq:
+        if not isinstance(data, dict) or data.get("nq") != nq:
             raise ValueError("not the entry of this table and rows (another key)")
-        if data.get("seal") != _seal(data):
-            raise ValueError("its seal does not match its content")
         fams = _from_json(data)
         for fam in fams:  # every factor through the parser's whitelist now, never evaluated
             compile_factor(fam.factor, fam.variables)
@@ -265,36 +254,19 @@ def _read_cache(
         if check is not None and not incomplete:
             check(fams)
         return fams, incomplete, float(data.get("budget", 0.0))
-    except FileNotFoundError:
-        return None
     except Exception as exc:  # noqa: BLE001 - any damage: derive again
-        import warnings
-
-        from ..exceptions import CacheWarning
-
-        warnings.warn(
-            f"families cache entry {key[:12]} is damaged or was edited ({type(exc).__name__}: "
-            f"{' '.join(str(exc).split())[:80]}); not used",
-            CacheWarning,
-            stacklevel=2,
-        )
+        _disk.damaged("families", key, exc, _THEN, stacklevel=2)
         return None
 
 
 def _write_cache(
     key: str, nq: int, fams: tuple[Family, ...], incomplete: str = "", budget: float = 0.0
 ) -> None:
-    data: dict[str, Any] = {
-        "v": _VERSION, "key": key, "nq": nq, "families": [f.to_dict() for f in fams]
-    }  # fmt: skip
+    """Keep the families of ``key`` (best effort: a read-only cache costs a derivation)."""
+    data: dict[str, Any] = {"nq": nq, "families": [f.to_dict() for f in fams]}
     if incomplete:
         data.update(incomplete=incomplete, budget=budget)
-    data["seal"] = _seal(json.loads(json.dumps(data)))
-    try:
-        cache_dir().mkdir(parents=True, exist_ok=True)
-        atomic_write(cache_dir() / f"{key}.json", json.dumps(data, indent=1))
-    except (OSError, HexapodKinError):
-        pass  # a read-only cache only costs the next process a derivation
+    _disk.store("families", key, json.loads(json.dumps(data)), _VERSION)
 
 
 # ------------------------------------------------------------------------ deriving
@@ -371,9 +343,9 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Time budget in [s] of the derivation, the cache reading and the check against
-            the model, together (the call returns within it, plus a fraction of a second
-            for the check when the derivation used it all). A derivation stopped at its budget is
+        budget: Budget in [s] of CPU time of the derivation and its cache reading (one child
+            process, :func:`hexapod_kin.symbolic.derive`; never wall-clock time, so the answer
+            does not depend on the machine's load). A derivation stopped at its budget is
             kept on disk with what it reached and that budget: later calls with at most that
             budget get it back without deriving (nor importing sympy); a larger budget
             carries on from where it stopped.
@@ -422,11 +394,8 @@ def families_for(
     from .. import symbolic
 
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
-    deadline = time.monotonic() + float(budget)  # the derivation and its check, together
     try:
-        deriv = symbolic.derive(
-            chain, rows=rows, budget=float(budget), deadline=deadline, families_only=True
-        )
+        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
         incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
         if incomplete and not deriv.families:
             reason = f"derivation incomplete: {incomplete}"

@@ -8,9 +8,9 @@ A stored chunk is used only if it is a regular file of a bounded size holding a 
 (never unpickled; its members' inflated sizes checked before inflating), names this sweep's
 key and its own number, carries the right digest of its scores, holds plausible scores
 (finite; 0/1 flags; non-negative volumes) and one of its designs, scored again, gives the same
-bits. The digest is an HMAC-SHA256 keyed by a random secret kept in the package's cache folder
-(``$HEXAPOD_KIN_CACHE_DIR/sweep/chunk.key``), so an edited value cannot be "fixed" by
-recomputing a plain hash. Chunks that fail are discarded (one
+bits. The digest is the package's keyed seal (:func:`hexapod_kin._cache.mac`, a per-user
+secret), so an edited value cannot be "fixed" by recomputing a plain hash. Chunks that fail
+are discarded (one
 :class:`~hexapod_kin.exceptions.CacheWarning` for all of them) and scored again.
 """
 
@@ -20,9 +20,6 @@ import hashlib
 import hmac
 import io
 import json
-import os
-import secrets
-import warnings
 import zipfile
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -30,51 +27,16 @@ from typing import Any
 
 import numpy as np
 
-from .._io import atomic_write, cache_root, read_regular
-from ..exceptions import CacheWarning, ConfigurationError, HexapodKinError
+from .. import _cache as _disk
+from .._io import atomic_write, read_regular
+from ..exceptions import ConfigurationError, HexapodKinError
 from .scores import SCORES
 
 __all__ = ["ChunkStore", "check_scores"]
 
-_SECRET_BYTES = 32
 _SLACK = 1 << 16  # bytes of a chunk file beside its scores (zip headers, key, digest)
 _FLAGS = ("feasible", "volume_exact")
 _NON_NEGATIVE = ("volume", "volume_se", "volume_mc", "volume_mc_se")
-
-
-def _secret() -> bytes:
-    """The per-user key of chunk digests (created once; b"" when the cache is not writable).
-
-    Created race-free: a private temporary file is hard-linked to the name, so of concurrent
-    first runs one wins and the others read its key. A damaged key (wrong length) is replaced;
-    chunks digested with the old one are then scored again.
-    """
-    path = cache_root("sweep") / "chunk.key"
-    for _ in range(2):
-        try:
-            data = path.read_bytes()
-            if len(data) == _SECRET_BYTES:
-                return data
-        except OSError:
-            pass
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f".chunk.key.{os.getpid()}.{secrets.token_hex(4)}")
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(secrets.token_bytes(_SECRET_BYTES))
-            try:
-                if path.exists():
-                    os.replace(tmp, path)
-                else:
-                    os.link(tmp, path)
-            except FileExistsError:
-                pass  # another process made it first: read its key
-            finally:
-                tmp.unlink(missing_ok=True)
-        except OSError:
-            return b""
-    return b""
 
 
 def check_scores(scores: np.ndarray) -> str | None:
@@ -103,13 +65,12 @@ class ChunkStore:
         self.parts = parts
         self.key = key
         self.manifest = json.dumps({"key": key, "spec": spec, "chunks": chunks}, indent=1) + "\n"
-        self._secret = _secret()
         self._ready = False
 
     def _digest(self, k: int, scores: np.ndarray) -> str:
-        h = hmac.new(self._secret, f"{self.key}:{k}:".encode(), hashlib.sha256)
-        h.update(np.ascontiguousarray(scores, dtype=float).tobytes())
-        return h.hexdigest()
+        """The keyed seal of chunk ``k`` (:func:`hexapod_kin._cache.mac`; "" without a secret)."""
+        data = np.ascontiguousarray(scores, dtype=float).tobytes()
+        return _disk.mac(b"sweep", f"{self.key}:{k}".encode(), data) or ""
 
     def path(self, k: int) -> Path:
         """The file of chunk ``k``."""
@@ -157,12 +118,11 @@ class ChunkStore:
                     results[k] = got
         if bad:
             names = ", ".join(bad[:3]) + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
-            verb = "do not hold what they claim" if len(bad) > 1 else "does not hold what it claims"
-            warnings.warn(
-                f"sweep chunk{'s' if len(bad) > 1 else ''} {names} in {self.parts.name} {verb} "
-                "(damaged, swapped or edited); scoring again",
-                CacheWarning,
-                stacklevel=3,
+            verb = "it does not hold what it claims"
+            if len(bad) > 1:
+                verb = "they do not hold what they claim"
+            _disk.damaged(
+                "sweep", f"{names} in {self.parts.name}", f"{verb}", "scoring again", stacklevel=3
             )
         return results
 
@@ -182,7 +142,7 @@ class ChunkStore:
                     str(z["key"]) == self.key
                     and int(z["chunk"]) == k
                     and scores.shape == (n, len(SCORES))
-                    and hmac.compare_digest(str(z["digest"]), self._digest(k, scores))
+                    and hmac.compare_digest(str(z["digest"]), self._digest(k, scores) or "-")
                     and check_scores(scores) is None
                 )
         except Exception:  # noqa: BLE001 - a damaged file (bad zip, truncated, pickled, ...)

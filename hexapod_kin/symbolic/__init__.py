@@ -8,8 +8,8 @@ The folder reads in the order the data flows:
   ``det J`` or Gram determinant), no caching, no budget;
 * :mod:`~hexapod_kin.symbolic.families` — singular families read off the factors, checked
   against the numeric σ_min;
-* :mod:`~hexapod_kin.symbolic.cache` — the disk cache keyed by the table, and the time budget
-  (stages run in a forked child killed at the deadline);
+* :mod:`~hexapod_kin.symbolic.cache` — the disk cache keyed by the table (the budget, in CPU
+  time, is :mod:`hexapod_kin._budget`'s: one child process, never a fork);
 * :mod:`~hexapod_kin.symbolic.derivation` — the public face: :func:`derive`,
   :class:`Derivation`, :func:`cached`.
 

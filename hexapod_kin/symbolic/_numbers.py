@@ -40,17 +40,6 @@ def sigma_ratio(jac: np.ndarray) -> float:
     return float(s[-1] / max(1.0, s[0]))
 
 
-def import_ahead() -> None:
-    """Import what the stages import on first use (sympy's ``lambdify`` and its numpy names).
-
-    Called before a derivation runs in a forked child: the child inherits the modules instead
-    of importing them again, once per derivation.
-    """
-    import sympy as sp
-
-    sp.lambdify((), 0, "numpy")
-
-
 def brent_root(f: Callable[[float], float], xa: float, xb: float, xtol: float,
                rtol: float = 4 * sys.float_info.epsilon, maxiter: int = 100) -> float:  # fmt: skip
     """A root of ``f`` in ``[xa, xb]`` (``f(xa)``, ``f(xb)`` of opposite signs or zero).

@@ -1,76 +1,44 @@
-"""Disk cache and time budget for :func:`hexapod_kin.symbolic.derive`.
+"""The disk cache of :func:`hexapod_kin.symbolic.derive`: one sealed entry per derivation.
 
-* **Cache**: one JSON file per derivation, named by a SHA-256 of the table (rows, base and
-  tool poses, the row selection, the length names and a format version), holding the stages
-  reached and, for an unfinished one, why and with which budget (:class:`Writer` writes it
-  from inside the budgeted process, stage by stage), under
-  ``platformdirs.user_cache_dir("hexapod_kin")`` when platformdirs is installed, else
-  ``~/.cache/hexapod_kin`` (``$HEXAPOD_KIN_CACHE_DIR`` overrides both), in a ``symbolic``
-  subfolder. Sympy objects are
-  stored as ``srepr`` text and rebuilt by a restricted reader (:mod:`._reader`: no ``eval``,
-  a fixed table of sympy constructors), so a planted entry cannot run code. Each file holds
-  its key and a seal (SHA-256 of the format, key and stages, :func:`seal`); files are written
-  atomically. A corrupt, truncated, edited (seal broken) or foreign file (another
-  derivation's key: a swapped or copied file) is ignored with one :class:`CacheWarning` and
-  rewritten; the derivation then checks what a sealed entry claims against the table
-  (``checks.claims_hold``) before using it. A file of another format version is
-  ignored quietly (an older package's).
-* **Budget**: the stages run in a forked child process that sends each finished stage back;
-  at the deadline the child is killed and the caller gets the stages that finished. Where
-  ``fork`` does not exist the stages run inline, checking the clock between stages.
+One entry per derivation (:mod:`hexapod_kin._cache`, kind ``"symbolic"``: the one key, keyed
+seal and warning), keyed by the table (rows, base and tool poses, the row selection, the
+length names and :data:`FORMAT`), holding the stages reached and, for an unfinished one, why
+and with which budget (:class:`Writer` writes it from inside the budgeted run, stage by
+stage). Sympy objects are stored as ``srepr`` text and rebuilt by a restricted reader
+(:mod:`._reader`: no ``eval``, a fixed table of sympy constructors), so a planted entry
+cannot run code. A damaged, edited or foreign entry is ignored with one
+:class:`~hexapod_kin.exceptions.CacheWarning` and rewritten; the derivation then checks what a
+sealed entry claims against the table (``checks.claims_hold``) before using it. The budget
+itself is :mod:`hexapod_kin._budget`'s.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-import os
-import time
-import warnings
-from collections.abc import Callable, Iterator
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 import sympy as sp
 
-from .._io import atomic_write, cache_root
-from ..exceptions import CacheWarning
+from .. import _cache as _disk
+from .._io import atomic_write
+from ..exceptions import HexapodKinError
 from ._reader import read_srepr
 from .families import SingularFamily
 
-FORMAT = 5
-Stages = Callable[[], Iterator[tuple[str, Any]]]
+FORMAT = 6
+KIND = "symbolic"
+THEN = "recomputing it"
 
 
 def cache_dir() -> Path:
-    """The cache folder (not created here): :func:`hexapod_kin._io.cache_root` ``("symbolic")``."""
-    return cache_root("symbolic")
+    """The cache folder (not created here): :func:`hexapod_kin._cache.folder` ``("symbolic")``."""
+    return _disk.folder(KIND)
 
 
 def key(parts: Any) -> str:
-    """SHA-256 of the JSON of ``parts`` (plus the format version)."""
-    text = json.dumps({"format": FORMAT, "parts": parts}, sort_keys=True, default=repr)
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def seal(digest: str, stages: Any) -> str:
-    """SHA-256 of the format, the key and the encoded ``stages`` (canonical JSON).
-
-    Any change to a stored file that is not written by :func:`store` or :class:`Writer`
-    (an edited value, a torn write, a file renamed to another key) breaks it.
-    """
-    text = json.dumps(
-        {"format": FORMAT, "key": digest, "stages": stages}, sort_keys=True, separators=(",", ":")
-    )
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _file_text(digest: str, stages: Any) -> str:
-    """The file's JSON: format, key, encoded stages and their :func:`seal`."""
-    return json.dumps(
-        {"format": FORMAT, "key": digest, "stages": stages, "seal": seal(digest, stages)}
-    )
+    """The key of a derivation: :func:`hexapod_kin._cache.key` of ``parts`` and the format."""
+    return _disk.key({"format": FORMAT, "parts": parts})
 
 
 def _encode(obj: Any) -> Any:
@@ -108,52 +76,29 @@ def _decode(obj: Any) -> Any:
 def load(digest: str) -> dict[str, Any] | None:
     """Stages stored under ``digest``, or ``None`` (missing, or damaged: one warning).
 
-    A file of another format version is no entry (quietly); anything else that is not the
-    sealed entry of ``digest`` (unreadable, torn, edited, another key) warns once.
+    The sealed envelope of :func:`hexapod_kin._cache.load`; its stages are then rebuilt by the
+    restricted reader (anything it refuses: damaged, one warning).
     """
-    path = cache_dir() / f"{digest}.json"
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        return None
-    except Exception as exc:  # noqa: BLE001 - unreadable: not cached
-        _damaged(path, exc)
+    body = _disk.load(KIND, digest, FORMAT, THEN)
+    if body is None:
         return None
     try:
-        data = json.loads(text)
-        if isinstance(data, dict) and data.get("format") != FORMAT and "format" in data:
-            return None  # an older (or newer) package's file: rewritten quietly
-        if not isinstance(data, dict) or data.get("key") != digest:
-            raise ValueError("not the entry of this derivation (another key)")
-        if data.get("seal") != seal(digest, data["stages"]):
-            raise ValueError("its seal does not match its content")
-        stages = _decode(data["stages"])
+        stages = _decode(body)
         if not isinstance(stages, dict):
             raise ValueError("no stages")
         return stages
     except Exception as exc:  # noqa: BLE001 - any damage to the file means "not cached"
-        _damaged(path, exc)
+        _disk.damaged(KIND, digest, exc, THEN)
         return None
-
-
-def _damaged(path: Path, exc: BaseException) -> None:
-    warnings.warn(
-        f"symbolic cache entry {path.name[:12]} is damaged or was edited "
-        f"({type(exc).__name__}: {' '.join(str(exc).split())[:80]}); recomputing it",
-        CacheWarning,
-        stacklevel=3,
-    )
 
 
 def store(digest: str, stages: dict[str, Any]) -> Path | None:
     """Write ``stages`` atomically; returns the path, or ``None`` when it cannot be written."""
     try:
-        text = _file_text(digest, _encode(stages))
-        folder = cache_dir()
-        folder.mkdir(parents=True, exist_ok=True)
-        return atomic_write(folder / f"{digest}.json", text)
-    except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
+        body = _encode(stages)
+    except TypeError:
         return None
+    return _disk.store(KIND, digest, body, FORMAT)
 
 
 class Writer:
@@ -161,7 +106,8 @@ class Writer:
 
     Used inside the derivation's (child) process: after every stage the file holds all the
     stages reached so far and ``attempt`` (why it is unfinished, and with which budget), so a
-    run killed at its budget has left on disk what it reached. Writes are atomic.
+    run stopped at its budget has left on disk what it reached. Writes are atomic, without
+    ``fsync`` (a torn file after a crash reads as "not cached").
     """
 
     def __init__(self, digest: str, have: dict[str, Any]) -> None:
@@ -175,24 +121,7 @@ class Writer:
         items = [[k, v] for k, v in self.parts.items()]
         if attempt is not None:
             items.append([key, _encode(attempt)])
-        try:
-            text = _file_text(self.digest, {"__dict__": items})
-            folder = cache_dir()
-            folder.mkdir(parents=True, exist_ok=True)
-            _replace(folder / f"{self.digest}.json", text)
-        except Exception:  # noqa: BLE001 - a cache that cannot be written is only slower
-            pass
-
-
-def _replace(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (a temporary file renamed), without ``fsync``.
-
-    Inside a budget: an ``fsync`` on a busy disk can take seconds, and a process killed in
-    one dies only when it returns. A file torn by a crash reads as "not cached".
-    """
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+        _disk.store(KIND, self.digest, {"__dict__": items}, FORMAT, sync=False)
 
 
 def snapshot(digest: str) -> bytes | None:
@@ -215,8 +144,8 @@ def restore(digest: str, data: bytes | None) -> None:
         if data is None:
             path.unlink(missing_ok=True)
         else:
-            _replace(path, data.decode("utf-8"))
-    except (OSError, UnicodeDecodeError):
+            atomic_write(path, data, sync=False)
+    except (OSError, HexapodKinError):
         pass
     sweep(digest)
 
@@ -228,77 +157,3 @@ def sweep(digest: str) -> None:
             tmp.unlink()
         except OSError:
             pass
-
-
-def _child(conn: Any, stages: Stages) -> None:  # pragma: no cover - runs in the child
-    try:
-        for name, value in stages():
-            conn.send((name, value))
-        conn.send(("__done__", None))
-    except BaseException as exc:  # noqa: BLE001 - report, never hang the parent
-        try:
-            conn.send(("__error__", f"{type(exc).__name__}: {exc}"))
-        except Exception:  # noqa: BLE001
-            pass
-    finally:
-        conn.close()
-
-
-def run(stages: Stages, budget: float | None) -> tuple[dict[str, Any], str | None]:
-    """Run the stage generator within ``budget`` seconds.
-
-    Returns:
-        ``(finished stages by name, None)`` when all finished, else the finished ones and a
-        reason (``"budget of 5 s reached"`` or the error text).
-
-    """
-    done: dict[str, Any] = {}
-    if budget is None:
-        for name, value in stages():
-            done[name] = value
-        return done, None
-    import multiprocessing as mp
-
-    try:
-        ctx = mp.get_context("fork")
-    except ValueError:
-        return _inline(stages, budget)
-    start = time.perf_counter()
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, stages), daemon=True)
-    proc.start()
-    send.close()
-    reason: str | None = f"budget of {budget:g} s reached"
-    try:
-        while True:
-            left = budget - (time.perf_counter() - start)
-            if left <= 0 or not recv.poll(left):
-                break
-            try:
-                name, value = recv.recv()
-            except (EOFError, OSError):
-                reason = "the derivation process ended unexpectedly"
-                break
-            if name == "__done__":
-                reason = None
-                break
-            if name == "__error__":
-                reason = str(value)
-                break
-            done[name] = value
-    finally:
-        if proc.is_alive():
-            proc.kill()
-        proc.join(1.0)  # SIGKILL is immediate unless the child is inside a system call
-        recv.close()
-    return done, reason
-
-
-def _inline(stages: Stages, budget: float) -> tuple[dict[str, Any], str | None]:
-    done: dict[str, Any] = {}
-    start = time.perf_counter()
-    for name, value in stages():
-        done[name] = value
-        if time.perf_counter() - start > budget:
-            return done, f"budget of {budget:g} s reached"
-    return done, None

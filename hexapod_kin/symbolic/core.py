@@ -34,7 +34,6 @@ from sympy.simplify.fu import TR10i
 from ..exceptions import ParameterError, choices
 from ..jacobian_rows import ROW_NAMES
 from ..params import Chain
-from ._numbers import import_ahead as import_ahead  # re-exported: the stages' helpers
 from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio
 from ._numbers import single_joint_roots as single_joint_roots
@@ -359,7 +358,7 @@ def _candidates(
         ms = ms[:1]
     out: list[tuple[int, str, sp.Matrix, bool]] = []
     for m in ms:
-        if out and time.perf_counter() > deadline:
+        if out and time.process_time() > deadline:
             break
         frames = _frames_in(stage1["transforms"], m)
         if len(sel) == 3 or n != 6:  # det(J Jt) of a non-square J depends on the point
@@ -488,7 +487,7 @@ def factored_determinant(
     seen: list[Any] = []  # the polynomials factored: another frame often gives the same one
     memo: dict[Any, Any] = {}  # entries' polynomials (the frames' points share the w rows)
     for label, make in candidates:
-        if best is not None and time.perf_counter() > deadline:
+        if best is not None and time.process_time() > deadline:
             break
         mat, how = make(), label
         split = mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
@@ -576,7 +575,7 @@ def rank_deficiency(
     for _, _sub, m in subsets:
         if common is not None and not common:
             break
-        if common is not None and time.perf_counter() > deadline:
+        if common is not None and time.process_time() > deadline:
             stopped = "deadline"
             break
         const, factors = _factor_poly(_det_poly(m, q, sigmas, memo=memo), q)
@@ -630,7 +629,7 @@ def rank_deficiency(
             term = term * f ** (mult - have)
         rest_terms.append(term**2)
     rest = sp.Add(*rest_terms)
-    if time.perf_counter() < deadline and sum(sp.count_ops(t) for t in rest_terms) < 400:
+    if time.process_time() < deadline and sum(sp.count_ops(t) for t in rest_terms) < 400:
         reduced = _reduce(_to_poly(rest, q, sigmas), q)
         if not _depends(reduced, q):
             rest = sp.factor(reduced)

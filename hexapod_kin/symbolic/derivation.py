@@ -22,13 +22,13 @@ For a redundant chain (more joints than rows, e.g. a 5-DOF leg's position rows) 
 square determinant: the families are where ``J`` loses rank, the factors common to all its
 maximal minors (:func:`~hexapod_kin.symbolic.core.rank_deficiency`).
 
-**Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds and returns what it
-has; :attr:`Derivation.incomplete` says what it could not do. **Cached**: derivations are
-stored on disk keyed by a hash of the table (see :mod:`hexapod_kin.symbolic.cache`), so a
-second process gets them in milliseconds; an unfinished one is kept with its budget and
-what it reached (a call with at most that budget gets it back, a larger one carries on).
-How the determinant is kept fast (per-joint simplification, a middle joint frame, the wrist
-centre) is in :mod:`hexapod_kin.symbolic.core`.
+**Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds of CPU time (the
+same answer on a busy machine) and returns what it has; :attr:`Derivation.incomplete` says
+what it could not do. **Cached**: derivations are stored on disk keyed by a hash of the table
+(see :mod:`hexapod_kin.symbolic.cache`), so a second process gets them in milliseconds; an
+unfinished one is kept with its budget and what it reached (a call with at most that budget
+gets it back, a larger one carries on). How the determinant is kept fast (per-joint
+simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
 
 Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
 else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from .. import _budget
 from ..exceptions import CacheWarning, ParameterError
 from ..jacobian_rows import choose_rows, row_indices
 from ..params import Chain
@@ -104,7 +105,7 @@ class Derivation:
         tool_transform: ``T_n_tip`` (4×4 sympy; identity without a tool).
         method: How the determinant was computed (frame, wrist-centre split, Gram).
         incomplete: What could not be done, and why (empty when complete).
-        seconds: Wall time of the derivation in [s] (0 when read from the cache).
+        seconds: CPU time of the derivation in [s] (0 when read from the cache).
         cached: True when read from the disk cache.
         agree: The exact comparison of the direct and indirect position Jacobians, as made
             within the budget (``None``: not made; :attr:`methods_agree` then makes it).
@@ -320,7 +321,7 @@ def _tidied(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[s
         out = mat.copy()
         for i in range(mat.rows):
             for j in range(mat.cols):
-                if time.perf_counter() > end:
+                if time.process_time() > end:
                     return out
                 out[i, j] = _core.tidy(mat[i, j], q, sigmas)
         return out
@@ -356,17 +357,18 @@ def _stages(
     ``families_only``: the last stage is ``"checks"`` (the families checked; no ``"agree"``,
     ``"tidy"`` nor ``"seconds"``).
 
-    ``budget`` (s from ``start``; ``None``: none) paces the optional work: extra determinant
-    frames are tried during its first 15 %, maximal minors factored during the first 70 %,
-    the printed forms tidied (last, after the families) until 80 % or for 20 % of it, never
-    past 90 %; the caller kills the process at the budget itself. With no budget the required
+    ``budget`` (CPU seconds from ``start``, :func:`time.process_time`; ``None``: none) paces
+    the optional work: extra determinant frames are tried during its first 15 %, maximal
+    minors factored during the first 70 %, the printed forms tidied (last, after the families)
+    until 80 % or for 20 % of it, never past 90 %; the caller stops the work at the budget
+    itself. With no budget the required
     stages run to the end and the optional work is paced as for :data:`UNBOUNDED_PACE`.
     """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     syms = _core.length_symbols(chain, lengths)
     span = UNBOUNDED_PACE if budget is None else budget
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     kin = have.get("kinematics")
     if kin is None:
         kin = _core.kinematics(chain, q, syms)
@@ -400,9 +402,9 @@ def _stages(
     if "agree" not in have:
         yield "agree", _agree(kin, q, chain.sigmas)
     if "tidy" not in have:
-        end = min(max(time.perf_counter() + 0.2 * span, start + 0.8 * span), start + 0.9 * span)
+        end = min(max(time.process_time() + 0.2 * span, start + 0.8 * span), start + 0.9 * span)
         yield "tidy", _tidied(kin, q, chain.sigmas, end)
-    yield "seconds", float(have.get("seconds", 0.0)) + time.perf_counter() - t0
+    yield "seconds", float(have.get("seconds", 0.0)) + time.process_time() - t0
 
 
 # ---------------------------------------------------------------------- derive
@@ -467,9 +469,6 @@ def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> 
 _MEMO: dict[str, Mapping[str, Any]] = {}
 
 
-#: Seconds kept between the end of a derivation's child process and ``deadline``.
-_MARGIN = 0.25
-
 #: The key of the stages dict recording an unfinished run: ``(reason, budget in s)``.
 ATTEMPT = "__attempt__"
 
@@ -499,47 +498,63 @@ def _usable(
     return budget is not None and tried is not None and budget <= tried
 
 
-#: Seconds a budgeted call may spend reading and checking its cache entry, whatever its
-#: budget (a tiny budget still gets back what a run with it stored).
-_READ_FLOOR = 0.25
+def _tried(found: Mapping[str, Any] | None, budget: float | None) -> float | None:
+    """The budget an unfinished run is kept with: the larger of this one and the earlier."""
+    before = (found or {}).get(ATTEMPT)
+    if budget is not None and before is not None and before[1] is not None:
+        return max(budget, before[1])
+    return budget
 
 
-def _read(chain: Chain, lengths: Any, digest: str, seconds: float | None) -> tuple[Any, bool]:
-    """The disk cache's entry ``digest``, checked (:func:`~.checks.claims_hold`), in time.
-
-    Read in a child process killed after ``seconds`` (``None``: in this process, no
-    limit): a large entry takes seconds to read and check. Returns ``(stages or None,
-    read)``; ``read`` is False when the time ran out first (the entry is then neither used
-    nor overwritten). The cache's warnings are said here.
-    """
+def _checked_load(
+    chain: Chain, lengths: Any, digest: str, then: str, stacklevel: int = 2
+) -> dict[str, Any] | None:
+    """The disk cache's entry ``digest`` if what it claims holds for the table (else a warning)."""
     from .checks import claims_hold
 
-    if not (_cache.cache_dir() / f"{digest}.json").exists():
-        return None, True
+    found = _cache.load(digest)
+    values = _core.length_symbols(chain, lengths)["values"]
+    if found is None or claims_hold(found, chain, values):
+        return found
+    warnings.warn(
+        f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families do not "
+        f"match the table (edited); {then}",
+        CacheWarning,
+        stacklevel=stacklevel,
+    )
+    return None
 
-    def gen() -> Iterator[tuple[str, Any]]:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            got = _cache.load(digest)
-            values = _core.length_symbols(chain, lengths)["values"]
-            if got is not None and not claims_hold(got, chain, values):
-                warnings.warn(
-                    f"symbolic cache entry {digest[:12]}: its kinematics, determinant or "
-                    "families do not match the table (edited); recomputing it",
-                    CacheWarning,
-                    stacklevel=1,
-                )
-                got = None
-        said = [str(w.message) for w in caught if issubclass(w.category, CacheWarning)]
-        yield "entry", (got, said)
 
-    done, reason = _cache.run(gen, seconds)
-    if "entry" not in done:  # out of time (kept as it is), or an error (not cached)
-        return None, reason is None or not reason.startswith("budget of")
-    got, said = done["entry"]
-    for text in said:
-        warnings.warn(text, CacheWarning, stacklevel=3)
-    return got, True
+def _job(
+    chain: Chain, rows: Any, lengths: Any, digest: str, budget: float | None,
+    families_only: bool, found: Mapping[str, Any] | None, read: bool, write: bool,
+) -> Iterator[tuple[str, Any]]:  # fmt: skip
+    """What a derivation does within its budget (in its child process, or inline).
+
+    With ``read``: the disk cache's entry ``digest``, checked against the table
+    (:func:`~.checks.claims_hold`), is yielded first as ``"__found__"`` (its warnings reach
+    the caller's process). Unless it answers the call, the stages follow, each
+    written to the disk cache (``write``) before it is yielded, marked unfinished until the
+    last one.
+    """
+    start = time.process_time()
+    if read:
+        found = _checked_load(chain, lengths, digest, "recomputing it")
+        yield "__found__", found
+    if _usable(found, budget, families_only):
+        return
+    have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
+    stop = (  # what the file says until the last stage is written
+        (f"budget of {budget:g} s reached", _tried(found, budget))
+        if budget is not None
+        else ("stopped before the end", None)
+    )
+    writer = _cache.Writer(digest, have) if write else None
+    for name, value in _stages(chain, rows, lengths, start, budget, have, families_only):
+        if writer is not None:  # on disk before the caller hears of it
+            mark = (FAMILIES_ONLY, None) if families_only and name == "checks" else stop
+            writer.add(name, value, None if name == "seconds" else mark, ATTEMPT)
+        yield name, value
 
 
 def derive(
@@ -551,7 +566,7 @@ def derive(
     tip: str | None = None,
     budget: float | None = DEFAULT_BUDGET,
     cache: bool = True,
-    deadline: float | None = None,
+    within: float | None = None,
     families_only: bool = False,
 ) -> Derivation:
     """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
@@ -568,15 +583,17 @@ def derive(
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
-        budget: Time budget in [s] (``None``: no limit). At the budget the work stops and
-            the result says in :attr:`Derivation.incomplete` what is missing.
+        budget: Budget in [s] of CPU time of the work (``None``: no limit), never wall-clock
+            time: the work runs in one child process (:func:`hexapod_kin._budget.run`), its
+            start-up not counted. At the budget the work stops and the result says in
+            :attr:`Derivation.incomplete` what is missing.
         cache: Read and write the on-disk cache. An unfinished derivation is kept too,
             with the budget it had: a later call with at most that budget gets it back at
             once (its :attr:`~Derivation.incomplete` unchanged), a larger budget (or
             ``None``) carries on from the stages it reached.
-        deadline: A :func:`time.monotonic` instant by which to return, whatever ``budget``
-            allows (the command line passes its own start plus ``--budget``): the work
-            stops a quarter second before it. ``budget`` still decides the cache reuse.
+        within: CPU seconds this call may spend, whatever ``budget`` allows (the command
+            line keeps part of its ``--budget`` for printing). ``budget`` still decides the
+            cache reuse and is the one named when the work stops.
         families_only: Stop once the singular families are derived and checked (what a scan
             needs): the exact comparison of the direct and indirect Jacobians and the tidied
             printed forms are left out (:attr:`Derivation.incomplete` says so;
@@ -600,15 +617,24 @@ def derive(
     syms = _core.length_symbols(chain, lengths)  # validates names early
     digest = _cache_key(chain, rows, lengths)
     found = _MEMO.get(digest) if cache else None
-    start = time.perf_counter()
-    run_for = budget
-    if deadline is not None:
-        left = max(0.05, deadline - time.monotonic() - _MARGIN)
-        run_for = left if run_for is None else min(run_for, left)
-    read = True
-    if cache and found is None:
-        limit = None if run_for is None else max(run_for, _READ_FLOOR)
-        found, read = _read(chain, lengths, digest, limit)
+    run_for = budget if within is None else min(within, budget or math.inf)
+    done: dict[str, Any] = {}
+    reason: str | None = None
+    unread = False  # an entry not read within the budget is neither used nor overwritten
+    if not _usable(found, budget, families_only):
+        read = cache and found is None and (_cache.cache_dir() / f"{digest}.json").exists()
+        kept = _cache.snapshot(digest) if cache else None
+        args = (chain, rows, lengths, digest, budget, families_only, found, read, cache)
+        try:
+            done, reason = _budget.run(_job, args, None if run_for is None else max(run_for, 0.0))
+        except KeyboardInterrupt:  # the worker's stages are on disk as a budget stop
+            if cache:
+                _cache.restore(digest, kept)
+            raise
+        if "__found__" in done:
+            found = done.pop("__found__")
+        else:
+            unread = read
     if _usable(found, budget, families_only):
         assert found is not None
         stages: dict[str, Any] = dict(found)
@@ -618,51 +644,18 @@ def derive(
             reason = FAMILIES_ONLY
         from_cache = True
     else:
+        write = cache and not unread
         have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
-        before = (found or {}).get(ATTEMPT)
-        tried = budget
-        if budget is not None and before is not None and before[1] is not None:
-            tried = max(budget, before[1])
-        stop = (  # what the file says until the last stage is written
-            (f"budget of {budget:g} s reached", tried)
-            if budget is not None
-            else ("stopped before the end", None)
-        )
-        write = cache and read  # an entry not read in time is not overwritten
-        if run_for is not None:  # what the stages import on first use, here: the caller's
-            _core.import_ahead()  # later lambdify (a scan's check) or derivation reuses it
-        begin = time.perf_counter()
-        if run_for is not None:  # what the reading and the imports left
-            run_for = max(0.0, run_for - (begin - start))
-
-        def gen() -> Iterator[tuple[str, Any]]:
-            writer = _cache.Writer(digest, have) if write else None
-            for name, value in _stages(chain, rows, lengths, begin, run_for, have, families_only):
-                if writer is not None:  # on disk before the parent hears of it
-                    mark = (FAMILIES_ONLY, None) if families_only and name == "checks" else stop
-                    writer.add(name, value, None if name == "seconds" else mark, ATTEMPT)
-                yield name, value
-
-        if run_for is not None and run_for < 0.01:
-            done: dict[str, Any] = {}
-            reason = "deadline reached" if budget is None else f"budget of {budget:g} s reached"
-        else:
-            kept = _cache.snapshot(digest) if write else None
-            try:
-                done, reason = _cache.run(gen, run_for)
-            except KeyboardInterrupt:  # the worker's stages are on disk as a budget stop
-                if write:
-                    _cache.restore(digest, kept)
-                raise
-        if reason is not None and write:
+        tried = _tried(found, budget)
+        if reason is not None and cache:
             _cache.sweep(digest)
         stages = {**have, **done}
         if reason is None and families_only and "seconds" not in stages:  # kept as unfinished
             reason = FAMILIES_ONLY  # (the file says so since the "checks" stage)
             stages[ATTEMPT] = (reason, None)
         elif reason is not None:
-            if budget is not None and (run_for or 0) < budget:
-                reason = f"budget of {budget:g} s reached"  # the command's budget, not the rest
+            if budget is not None and reason.startswith("budget of"):
+                reason = f"budget of {budget:g} s reached"  # the call's budget, not the rest
             stages[ATTEMPT] = (reason, tried)
             if write and ("kinematics" not in stages or not reason.startswith("budget of")):
                 _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
@@ -772,17 +765,7 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     syms = _core.length_symbols(chain, None)
     stages = _MEMO.get(digest)
     if stages is None:
-        from .checks import claims_hold
-
-        stages = _cache.load(digest)
-        if stages is not None and not claims_hold(stages, chain, syms["values"]):
-            warnings.warn(
-                f"symbolic cache entry {digest[:12]}: its kinematics, determinant or families "
-                "do not match the table (edited); not used",
-                CacheWarning,
-                stacklevel=2,
-            )
-            return None
+        stages = _checked_load(chain, None, digest, "not used", stacklevel=3)
     if stages is None:
         return None
     _MEMO[digest] = stages

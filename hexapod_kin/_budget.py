@@ -1,0 +1,240 @@
+"""Budgets in CPU time: work that sympy cannot interrupt, run in one child and cut at its budget.
+
+:func:`run` runs a job (a module-level generator function yielding ``(name, value)`` pairs)
+within a budget of **CPU time of the work**, never wall-clock time, so an answer does not
+depend on what else runs on the machine:
+
+* In a process of its own: a fresh interpreter (``subprocess``, like multiprocessing's
+  ``spawn``: never a ``fork`` of a process holding Pinocchio, numba or threads; the user's
+  ``__main__`` is not run again). The job, its arguments and the parent's ``sys.path`` go
+  down its stdin, each finished item comes back on a pipe of its own as it is yielded. The
+  child's start-up (the interpreter, the imports the job needs) is the floor: it is not
+  counted; the budget starts with the job.
+* The budget is kept inside the child by the kernel's CPU-time timer of the process
+  (``ITIMER_PROF``): at the budget, :class:`BudgetReached` is raised in the job between two
+  bytecodes (sympy is pure Python), the job may catch it to finish a phase (:func:`cpu_limit`
+  nests), and the items sent so far are the answer. ``RLIMIT_CPU`` a few seconds later ends a
+  child stuck in C code. Nothing outlives the call.
+* Inside a budgeted child (a job calling a budgeted function), or where no child can be
+  started, the job runs inline under a nested :func:`cpu_limit`.
+* A Ctrl-C reaches the child once, from the parent (``SIGTERM``, raised in the job as a
+  ``KeyboardInterrupt``: its clean-up runs), whether it was sent to the parent or to the
+  whole process group.
+* A warning in the child is said in the parent (its category and text), as if raised there.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+import warnings
+from collections.abc import Callable, Iterator
+from typing import Any
+
+__all__ = ["BudgetReached", "cpu_limit", "run"]
+
+Job = Callable[..., Iterator[tuple[str, Any]]]
+
+#: Ends (``time.process_time()``) of the CPU limits open in this process, innermost last.
+_ENDS: list[float] = []
+#: Seconds of CPU time after the budget at which ``RLIMIT_CPU`` ends a stuck child.
+_HARD_SLACK = 3.0
+#: Wall seconds a child interrupted by a Ctrl-C may take to clean up (then it is killed).
+_CLEANUP = 10.0
+#: The child's start: read its inputs, then serve (``python -c``; no ``__main__`` re-run).
+_BOOT = (
+    "import sys, pickle; sys.path[:] = pickle.load(sys.stdin.buffer); "
+    "from hexapod_kin._budget import _serve; _serve()"
+)
+
+
+class BudgetReached(BaseException):  # noqa: N818 - a control-flow signal, like KeyboardInterrupt
+    """The CPU time of a :func:`cpu_limit` block is spent.
+
+    A ``BaseException``: no ``except Exception`` in the work swallows it.
+    """
+
+
+def _expired(signum: int, frame: Any) -> None:
+    raise BudgetReached
+
+
+def _arm(end: float) -> None:
+    left = end - time.process_time()
+    if left <= 0:
+        raise BudgetReached
+    signal.setitimer(signal.ITIMER_PROF, left)
+
+
+@contextlib.contextmanager
+def cpu_limit(seconds: float) -> Iterator[None]:
+    """Raise :class:`BudgetReached` in the block after ``seconds`` of this process's CPU time.
+
+    Nested limits: the tightest end applies, and leaving an inner block re-arms the outer
+    one (which raises at once if it is spent too). Main thread only (signals); elsewhere the
+    block runs unbounded.
+    """
+    import threading
+
+    if (
+        not hasattr(signal, "setitimer")
+        or threading.current_thread() is not threading.main_thread()
+    ):
+        yield
+        return
+    end = time.process_time() + max(0.0, seconds)
+    if _ENDS:
+        end = min(end, _ENDS[-1])
+    _ENDS.append(end)
+    old = signal.signal(signal.SIGPROF, _expired)
+    try:
+        _arm(end)
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        _ENDS.pop()
+        signal.signal(signal.SIGPROF, old)
+        if _ENDS:
+            _arm(_ENDS[-1])
+
+
+def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, Any], str | None]:
+    done: dict[str, Any] = {}
+    end = time.process_time() + budget
+    try:
+        with cpu_limit(budget):
+            for name, value in job(*args):
+                done[name] = value
+                if time.process_time() > end:  # no CPU timer (another platform, thread)
+                    raise BudgetReached
+    except BudgetReached:
+        if _ENDS and time.process_time() >= _ENDS[-1]:
+            raise  # the enclosing budget is spent too: its caller answers
+        return done, f"budget of {budget:g} s reached"
+    return done, None
+
+
+def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str, Any], str | None]:
+    """Run ``job(*args)`` within ``budget`` seconds of CPU time (see the module docstring).
+
+    Args:
+        job: A module-level generator function (it is named to the child, not pickled by
+            value) yielding ``(name, value)`` pairs of picklable values.
+        args: Its (picklable) arguments.
+        budget: CPU seconds, or ``None``: no limit, run here.
+
+    Returns:
+        ``(items by name, None)`` when the job finished, else the items yielded before it
+        stopped and why: ``"budget of 5 s reached"``, or the error the job ended with.
+
+    """
+    if budget is None:
+        return dict(job(*args)), None
+    if budget <= 0:
+        return {}, f"budget of {budget:g} s reached"
+    if _ENDS or not hasattr(signal, "setitimer"):
+        return _inline(job, args, budget)
+    read, write = os.pipe()
+    try:
+        proc = subprocess.Popen(  # noqa: S603 - this interpreter, our own bootstrap
+            [sys.executable, "-c", _BOOT, str(write)],
+            stdin=subprocess.PIPE,
+            pass_fds=(write,),
+            close_fds=True,
+        )
+    except OSError:
+        os.close(read)
+        os.close(write)
+        return _inline(job, args, budget)
+    os.close(write)
+    done: dict[str, Any] = {}
+    reason: str | None = "the budgeted process ended unexpectedly"
+    with os.fdopen(read, "rb") as items:
+        try:
+            assert proc.stdin is not None
+            with proc.stdin:
+                pickle.dump(list(sys.path), proc.stdin)
+                pickle.dump((job, args, budget), proc.stdin)
+            while True:
+                try:
+                    name, value = pickle.load(items)
+                except (EOFError, OSError, pickle.UnpicklingError):
+                    break
+                if name == "__done__":
+                    reason = None
+                    break
+                if name == "__warning__":  # said in the child: said here, once
+                    warnings.warn(value[1], value[0], stacklevel=2)
+                    continue
+                if name in ("__budget__", "__error__"):
+                    reason = f"budget of {budget:g} s reached" if name == "__budget__" else value
+                    break
+                done[name] = value
+        except BrokenPipeError:
+            pass
+        except KeyboardInterrupt:  # the child ignores Ctrl-C: told once, it cleans up as after one
+            proc.send_signal(signal.SIGTERM)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(_CLEANUP)
+            raise
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+            proc.wait()
+    if proc.returncode == -getattr(signal, "SIGXCPU", -1):
+        reason = f"budget of {budget:g} s reached"
+    return done, reason
+
+
+def _interrupted(signum: int, frame: Any) -> None:  # pragma: no cover - in the child
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    raise KeyboardInterrupt
+
+
+def _serve() -> None:  # pragma: no cover - runs in the child
+    """The child: read the job, run it under its budget, send each item as it comes."""
+    import resource
+
+    out = os.fdopen(int(sys.argv[1]), "wb")
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches it once, from the parent:
+    signal.signal(signal.SIGTERM, _interrupted)  # as a KeyboardInterrupt in the job
+    job, args, budget = pickle.load(sys.stdin.buffer)
+    used = time.process_time()
+    hard = math.ceil(used + budget + _HARD_SLACK)
+    with contextlib.suppress(ValueError, OSError):
+        resource.setrlimit(resource.RLIMIT_CPU, (hard, hard + 1))
+    prof = {signal.SIGPROF}
+
+    def send(item: tuple[str, Any]) -> None:
+        signal.pthread_sigmask(signal.SIG_BLOCK, prof)  # never cut a message in two
+        try:
+            pickle.dump(item, out)
+            out.flush()
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, prof)
+
+    def forward(message: Any, category: Any, *rest: Any, **kw: Any) -> None:
+        send(("__warning__", (category, str(message))))
+
+    warnings.showwarning = forward
+    try:
+        try:
+            with cpu_limit(budget):
+                for item in job(*args):
+                    send(item)
+            send(("__done__", None))
+        except BudgetReached:
+            send(("__budget__", None))
+        except BaseException as exc:  # noqa: BLE001 - report, never hang the parent
+            send(("__error__", f"{type(exc).__name__}: {exc}"))
+    except BaseException:  # noqa: BLE001, S110 - the parent is gone or the budget hit a send
+        pass
+    finally:
+        with contextlib.suppress(OSError):
+            out.close()
