@@ -1,0 +1,279 @@
+"""One of each: the package's numeric FK implementations, IK loops and rotation builders, by name.
+
+The package source is parsed (AST; nothing is imported) and three kinds of function are
+listed (issue 30, "one of each"):
+
+* **FK** — a numeric forward-kinematics implementation: a loop over joints that makes each
+  joint's rotation itself (numeric ``cos`` and ``sin``, ``sincos``, or a per-row transform
+  builder ``*transform(s)``) and accumulates the frame across iterations (a variable both read
+  and written in the loop). Calls into Pinocchio are not implementations.
+* **IK loop** — a damped-least-squares / Newton iteration: a loop that solves a (damped)
+  normal system or applies a pseudo-inverse (``solve``, ``inv``, ``pinv``, ``lstsq``,
+  ``cholesky``, the package's ``dls_*`` / ``step_into`` / ``*solve_spd`` / ``_inv_sym*``)
+  and re-evaluates the kinematics in the same loop (a call whose name holds ``fk``,
+  ``frames``, ``poses`` or ``jac``).
+* **rotation** — a rotation matrix built from angles: numeric ``cos`` and ``sin`` of the same
+  angle in a function that writes a matrix (a nested list literal, or an element store with
+  two or more indices such as ``R[0, 1] = …``), or ``sincos``.
+
+Each list must equal the allowed one: a new implementation makes the test fail, and the
+second test proves it on a planted copy of the package.
+"""
+
+from __future__ import annotations
+
+import ast
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1] / "hexapod_kin"
+
+#: One FK per engine (Pinocchio per call is Pinocchio's own): the numpy batch tree path, the
+#: compiled layer (one FK + Jacobian core, per configuration and per block), the plain table
+#: reference used by the tests and the seed report.
+ALLOWED_FK = {
+    "_tree.tree_frames",  # the numpy batch path (N configurations, structure of arrays)
+    "_kernels.fk_jac_into",  # the compiled core, one configuration
+    "_kernels.fk_jac_block",  # the compiled core, a block of configurations (z axes)
+    "_table_kin.table_fk",  # the plain table reference (tests, seed report)
+}
+
+#: One IK loop: the compiled Levenberg–Marquardt loop of ik.solve / solve_many / solve_chain.
+ALLOWED_IK_LOOPS = {
+    "ik.step.lm_loop",
+}
+
+#: Where rotation matrices are built from angles: the pose module, the two FK engines that make
+#: joint rotations in their inner loops, the per-row table transforms (Khalil, DH), and the
+#: sympy-free places listed with their reason.
+ALLOWED_ROTATIONS = {
+    "_pose.rpy_to_matrix",  # roll/pitch/yaw → R (the one Euler convention)
+    "_kernels.fk_jac_into",  # joint rotations of the compiled core
+    "_kernels.fk_jac_block",
+    "_kmath.sincos",  # the compiled core's sin/cos pair
+    "params.khalil_transform",  # one Khalil row's transform (the table)
+    "params.dh_transform",  # one standard-DH row's transform
+}
+
+_TRIG = {"cos", "sin"}
+_SOLVES = {
+    "solve",
+    "inv",
+    "pinv",
+    "lstsq",
+    "cholesky",
+    "cho_solve",
+    "solve_spd",
+    "dls_step",
+    "dls_step3",
+    "dls_into",
+    "step_into",
+}
+_SYMBOLIC = {"sp", "sympy", "se", "symengine"}
+
+
+def _name(call: ast.Call) -> str:
+    f = call.func
+    if isinstance(f, ast.Attribute):
+        return f.attr
+    return f.id if isinstance(f, ast.Name) else ""
+
+
+def _numeric_trig(call: ast.Call) -> str:
+    """``cos`` / ``sin`` / ``sincos`` of a numeric library (not sympy's), else ``""``."""
+    f = call.func
+    if isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name):
+        if f.value.id in _SYMBOLIC:
+            return ""
+    name = _name(call)
+    return name if name in _TRIG or name == "sincos" else ""
+
+
+def _own(nodes: list[ast.stmt] | ast.AST) -> Iterator[ast.AST]:
+    """The nodes of a body, nested function and class bodies excluded."""
+    stack: list[ast.AST] = list(nodes) if isinstance(nodes, list) else [nodes]
+    while stack:
+        node = stack.pop()
+        yield node
+        for child in ast.iter_child_nodes(node):
+            if not isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                stack.append(child)
+
+
+def _functions(tree: ast.Module) -> Iterator[tuple[str, ast.FunctionDef | ast.AsyncFunctionDef]]:
+    def visit(node: ast.AST, prefix: str) -> Iterator[tuple[str, ast.FunctionDef]]:
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                yield prefix + child.name, child  # type: ignore[misc]
+                yield from visit(child, prefix + child.name + ".")
+            elif isinstance(child, ast.ClassDef):
+                yield from visit(child, prefix + child.name + ".")
+            else:
+                yield from visit(child, prefix)
+
+    yield from visit(tree, "")
+
+
+def _base(target: ast.AST) -> list[str]:
+    """The variables a store target writes (``R``, ``R[…]``, ``a, b``, ``x.attr``)."""
+    if isinstance(target, ast.Name):
+        return [target.id]
+    if isinstance(target, (ast.Subscript, ast.Attribute, ast.Starred)):
+        return _base(target.value)
+    if isinstance(target, (ast.Tuple, ast.List)):
+        return [n for t in target.elts for n in _base(t)]
+    return []
+
+
+def _accumulates(loop: ast.For | ast.While) -> bool:
+    """True if a variable is both written and read in the loop's body (a carried frame)."""
+    written: set[str] = set()
+    read: set[str] = set()
+    for node in _own(loop.body):
+        if isinstance(node, ast.Assign):
+            for t in node.targets:
+                written.update(_base(t))
+        elif isinstance(node, (ast.AugAssign, ast.AnnAssign)):
+            written.update(_base(node.target))
+            if isinstance(node, ast.AugAssign):
+                read.update(_base(node.target))
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
+            read.add(node.id)
+    return bool(written & read)
+
+
+def _loops(fn: ast.AST) -> Iterator[ast.For | ast.While]:
+    for node in _own(fn.body):  # type: ignore[attr-defined]
+        if isinstance(node, (ast.For, ast.While)):
+            yield node
+
+
+def _calls(node: ast.AST) -> list[ast.Call]:
+    return [n for n in _own([node]) if isinstance(n, ast.Call)]  # type: ignore[list-item]
+
+
+def _is_fk(fn: ast.AST) -> bool:
+    for loop in _loops(fn):
+        calls = _calls(loop)
+        trig = {_numeric_trig(c) for c in calls}
+        rotates = _TRIG <= trig or "sincos" in trig
+        builds = any(_name(c).endswith(("transform", "transforms")) for c in calls)
+        if (rotates or builds) and _accumulates(loop):
+            return True
+    return False
+
+
+def _is_ik_loop(fn: ast.AST) -> bool:
+    for loop in _loops(fn):
+        names = [_name(c) for c in _calls(loop)]
+        solves = any(
+            n in _SOLVES or n.endswith("solve_spd") or n.startswith("_inv_sym") for n in names
+        )
+        kin = any(k in n.lower() for n in names for k in ("fk", "frames", "poses", "jac"))
+        if solves and kin:
+            return True
+    return False
+
+
+def _is_rotation(fn: ast.AST) -> bool:
+    calls = _calls(fn)  # type: ignore[arg-type]
+    if any(_numeric_trig(c) == "sincos" for c in calls) or getattr(fn, "name", "") == "sincos":
+        return True
+    args: dict[str, set[str]] = {"cos": set(), "sin": set()}
+    for c in calls:
+        kind = _numeric_trig(c)
+        if kind in args and c.args:
+            args[kind].add(ast.dump(c.args[0]))
+    if not args["cos"] & args["sin"]:
+        return False
+    for node in _own(fn.body):  # type: ignore[attr-defined]
+        if isinstance(node, ast.List) and any(isinstance(e, ast.List) for e in node.elts):
+            return True
+        targets = node.targets if isinstance(node, ast.Assign) else []
+        for t in targets:
+            if isinstance(t, ast.Subscript) and isinstance(t.slice, ast.Tuple):
+                ints = [e for e in t.slice.elts if isinstance(e, ast.Constant)]
+                if len(ints) >= 2:
+                    return True
+    return False
+
+
+def scan(root: Path) -> dict[str, set[str]]:
+    """The FK implementations, IK loops and rotation builders under ``root``, by name.
+
+    Names are ``module.function`` relative to the package (``_tree.tree_frames``), methods
+    and nested functions with their dotted path.
+    """
+    found: dict[str, set[str]] = {"fk": set(), "ik": set(), "rotation": set()}
+    for path in sorted(root.rglob("*.py")):
+        module = ".".join(path.relative_to(root).with_suffix("").parts)
+        module = module.removesuffix(".__init__").removesuffix("__init__")
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for name, fn in _functions(tree):
+            full = f"{module}.{name}" if module else name
+            if _is_fk(fn):
+                found["fk"].add(full)
+            if _is_ik_loop(fn):
+                found["ik"].add(full)
+            if _is_rotation(fn):
+                found["rotation"].add(full)
+    return found
+
+
+def _check(found: dict[str, set[str]]) -> None:
+    for kind, allowed in (
+        ("fk", ALLOWED_FK),
+        ("ik", ALLOWED_IK_LOOPS),
+        ("rotation", ALLOWED_ROTATIONS),
+    ):
+        extra, missing = sorted(found[kind] - allowed), sorted(allowed - found[kind])
+        assert not extra and not missing, (
+            f"{kind}: new implementation(s) {extra} (use the existing one instead), "
+            f"allowed but no longer found {missing} (update the allowed list)"
+        )
+
+
+def test_one_fk_per_engine_one_ik_loop_and_the_listed_rotations() -> None:
+    _check(scan(ROOT))
+
+
+PLANTED = '''
+import math
+import numpy as np
+
+
+def my_fk(rows, q):
+    t = np.eye(4)
+    for row, v in zip(rows, q):
+        c, s = math.cos(v), math.sin(v)
+        t = t @ np.array([[c, -s, 0, row[0]], [s, c, 0, 0], [0, 0, 1, row[1]], [0, 0, 0, 1]])
+    return t
+
+
+def my_ik(rows, target, q):
+    for _ in range(50):
+        p, jac = my_fk_jac(rows, q)
+        q = q + np.linalg.solve(jac.T @ jac + 1e-6 * np.eye(len(q)), jac.T @ (target - p))
+    return q
+
+
+def my_rot(a):
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+'''
+
+
+def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
+    copy = tmp_path / "hexapod_kin"
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    (copy / "gait" / "planted.py").write_text(PLANTED, encoding="utf-8")
+    found = scan(copy)
+    assert found["fk"] - ALLOWED_FK == {"gait.planted.my_fk"}
+    assert found["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik"}
+    assert found["rotation"] - ALLOWED_ROTATIONS == {"gait.planted.my_fk", "gait.planted.my_rot"}
+    try:
+        _check(found)
+    except AssertionError as exc:
+        assert "gait.planted.my_fk" in str(exc)
+    else:  # pragma: no cover - the check must fail
+        raise AssertionError("the planted FK was not caught")
