@@ -39,21 +39,53 @@ ALLOWED_FK = {
     "_table_kin.table_fk",  # the plain table reference (tests, seed report)
 }
 
-#: One IK loop: the compiled Levenberg–Marquardt loop of ik.solve / solve_many / solve_chain.
+#: One IK loop: the compiled Levenberg–Marquardt loop of ik.solve / solve_many / solve_chain
+#: (gait's numerical leg IK runs it through solve_chain).
 ALLOWED_IK_LOOPS = {
     "ik.step.lm_loop",
 }
 
-#: Where rotation matrices are built from angles: the pose module, the two FK engines that make
-#: joint rotations in their inner loops, the per-row table transforms (Khalil, DH), and the
-#: sympy-free places listed with their reason.
+#: Rotation matrices from angles: the pose module, the compiled core's sin/cos pair and block
+#: FK, and one table row's transform (Khalil, standard DH).
 ALLOWED_ROTATIONS = {
     "_pose.rpy_to_matrix",  # roll/pitch/yaw → R (the one Euler convention)
-    "_kernels.fk_jac_into",  # joint rotations of the compiled core
-    "_kernels.fk_jac_block",
-    "_kmath.sincos",  # the compiled core's sin/cos pair
+    "_kernels.fk_jac_block",  # joint rotations of the compiled block core
+    "_kmath.sincos",  # the compiled core's sin/cos pair (fk_jac_into's rotations)
     "params.khalil_transform",  # one Khalil row's transform (the table)
     "params.dh_transform",  # one standard-DH row's transform
+}
+
+#: Still there, to be removed (issue 30): each named with what stands in the way. The test
+#: fails when one disappears (then delete its entry) as when a new one appears.
+PENDING = {
+    "fk": {
+        # the table's own FK inside the closed-form finish (below); goes with it
+        "ik._table_finish._leg_fk",
+    },
+    "ik": {
+        # 12 damped Newton steps finishing the near-pattern closed forms on the table; to run
+        # on ik.solve_chain with the table as a ChainArrays (changes those legs' last bits)
+        "ik._table_finish.finish_on_table",
+        # Gauss–Newton on rolling contact: the targets move with q (the feet roll) and the
+        # samples are coupled through the stance; not a fixed-target problem of lm_loop
+        "gait.paths.rolling_ik",
+    },
+    "rotation": {
+        "gait.walk.walk",  # Rz(ψ) of the SE(2) body path (→ _pose)
+        "motion.rate.constant_twist_pose",  # exp of a constant twist (→ Pinocchio's exp6)
+    },
+}
+
+#: Matches of the patterns that are something else (reviewed by hand).
+REVIEWED = {
+    "fk": set(),
+    "ik": {
+        "gait.sway.sway_poses",  # the body sway's ZMP fixed point (solves for sway knots)
+        "seeds.euler_baseline",  # the seed report's open-loop Euler + solve, kept on purpose
+    },
+    "rotation": {
+        "sweep.scores.jacobian_position",  # closed-form J of the 3-link leg (a sweep score)
+    },
 }
 
 _TRIG = {"cos", "sin"}
@@ -70,6 +102,7 @@ _SOLVES = {
     "dls_into",
     "step_into",
 }
+_BUILDERS = {"transform", "khalil_transform", "dh_transform", "table_transforms"}
 _SYMBOLIC = {"sp", "sympy", "se", "symengine"}
 
 
@@ -126,21 +159,57 @@ def _base(target: ast.AST) -> list[str]:
     return []
 
 
+def _events(node: ast.AST, out: list[tuple[str, bool]]) -> None:
+    """Reads (False) and writes (True) of variables in execution order (values before targets)."""
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef, ast.Lambda)):
+        return
+    if isinstance(node, ast.Assign):
+        _events(node.value, out)
+        for t in node.targets:
+            _target(t, out)
+    elif isinstance(node, ast.AugAssign):
+        _events(node.value, out)
+        out.extend((n, False) for n in _base(node.target))
+        _target(node.target, out)
+    elif isinstance(node, ast.Name):
+        out.append((node.id, not isinstance(node.ctx, ast.Load)))
+    else:
+        for child in ast.iter_child_nodes(node):
+            _events(child, out)
+
+
+def _target(t: ast.AST, out: list[tuple[str, bool]]) -> None:
+    if isinstance(t, ast.Subscript):
+        _events(t.slice, out)
+    out.extend((n, True) for n in _base(t))
+
+
 def _accumulates(loop: ast.For | ast.While) -> bool:
-    """True if a variable is both written and read in the loop's body (a carried frame)."""
-    written: set[str] = set()
-    read: set[str] = set()
+    """True if a frame is carried across iterations into a product.
+
+    A variable read before it is written in an iteration (loop-carried), or one assigned from
+    such a variable, is an operand of a product (``*`` or ``@``) in the loop.
+    """
+    events: list[tuple[str, bool]] = []
+    for stmt in loop.body:
+        _events(stmt, events)
+    first: dict[str, bool] = {}
+    for name, write in events:
+        first.setdefault(name, write)
+    written = {n for n, w in events if w}
+    carried = {n for n, w in first.items() if not w and n in written}
     for node in _own(loop.body):
         if isinstance(node, ast.Assign):
-            for t in node.targets:
-                written.update(_base(t))
-        elif isinstance(node, (ast.AugAssign, ast.AnnAssign)):
-            written.update(_base(node.target))
-            if isinstance(node, ast.AugAssign):
-                read.update(_base(node.target))
-        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
-            read.add(node.id)
-    return bool(written & read)
+            loads = {n.id for n in ast.walk(node.value) if isinstance(n, ast.Name)}
+            if loads & carried:
+                for t in node.targets:
+                    carried.update(_base(t))
+    for node in _own(loop.body):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.MatMult)):
+            names = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+            if names & carried:
+                return True
+    return False
 
 
 def _loops(fn: ast.AST) -> Iterator[ast.For | ast.While]:
@@ -153,13 +222,34 @@ def _calls(node: ast.AST) -> list[ast.Call]:
     return [n for n in _own([node]) if isinstance(n, ast.Call)]  # type: ignore[list-item]
 
 
+def _calls_kinematics(calls: list[ast.Call]) -> bool:
+    """A call whose name holds ``fk``, ``frames``, ``poses`` or ``jac`` (a kinematics user)."""
+    return any(k in _name(c).lower() for c in calls for k in ("fk", "frames", "poses", "jac"))
+
+
+def _steps(loop: ast.For | ast.While) -> bool:
+    """True if the loop steps a carried iterate: ``x += …``, ``x -= …`` or ``x = x ± …``."""
+    for node in _own(loop.body):
+        if isinstance(node, ast.AugAssign) and isinstance(node.op, (ast.Add, ast.Sub)):
+            return True
+        if isinstance(node, ast.Assign) and isinstance(node.value, ast.BinOp):
+            if isinstance(node.value.op, (ast.Add, ast.Sub)):
+                left = {n.id for n in ast.walk(node.value.left) if isinstance(n, ast.Name)}
+                if left & {n for t in node.targets for n in _base(t)}:
+                    return True
+    return False
+
+
 def _is_fk(fn: ast.AST) -> bool:
     for loop in _loops(fn):
         calls = _calls(loop)
         trig = {_numeric_trig(c) for c in calls}
         rotates = _TRIG <= trig or "sincos" in trig
-        builds = any(_name(c).endswith(("transform", "transforms")) for c in calls)
-        if (rotates or builds) and _accumulates(loop):
+        builds = any(
+            _name(c) in _BUILDERS and c.args and not isinstance(c.args[0], ast.Constant)
+            for c in calls
+        )
+        if (rotates or builds) and _accumulates(loop) and not _calls_kinematics(calls):
             return True
     return False
 
@@ -170,8 +260,7 @@ def _is_ik_loop(fn: ast.AST) -> bool:
         solves = any(
             n in _SOLVES or n.endswith("solve_spd") or n.startswith("_inv_sym") for n in names
         )
-        kin = any(k in n.lower() for n in names for k in ("fk", "frames", "poses", "jac"))
-        if solves and kin:
+        if solves and _calls_kinematics(_calls(loop)) and _steps(loop):
             return True
     return False
 
@@ -193,7 +282,7 @@ def _is_rotation(fn: ast.AST) -> bool:
         targets = node.targets if isinstance(node, ast.Assign) else []
         for t in targets:
             if isinstance(t, ast.Subscript) and isinstance(t.slice, ast.Tuple):
-                ints = [e for e in t.slice.elts if isinstance(e, ast.Constant)]
+                ints = [e for e in t.slice.elts if isinstance(e, ast.Constant) and type(e.value) is int]
                 if len(ints) >= 2:
                     return True
     return False
@@ -227,10 +316,11 @@ def _check(found: dict[str, set[str]]) -> None:
         ("ik", ALLOWED_IK_LOOPS),
         ("rotation", ALLOWED_ROTATIONS),
     ):
-        extra, missing = sorted(found[kind] - allowed), sorted(allowed - found[kind])
+        known = allowed | PENDING[kind] | REVIEWED[kind]
+        extra, missing = sorted(found[kind] - known), sorted(known - found[kind])
         assert not extra and not missing, (
             f"{kind}: new implementation(s) {extra} (use the existing one instead), "
-            f"allowed but no longer found {missing} (update the allowed list)"
+            f"listed but no longer found {missing} (update the lists)"
         )
 
 
@@ -268,9 +358,10 @@ def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
     shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
     (copy / "gait" / "planted.py").write_text(PLANTED, encoding="utf-8")
     found = scan(copy)
-    assert found["fk"] - ALLOWED_FK == {"gait.planted.my_fk"}
-    assert found["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik"}
-    assert found["rotation"] - ALLOWED_ROTATIONS == {"gait.planted.my_fk", "gait.planted.my_rot"}
+    new = {k: v - PENDING[k] - REVIEWED[k] for k, v in found.items()}
+    assert new["fk"] - ALLOWED_FK == {"gait.planted.my_fk"}
+    assert new["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik"}
+    assert new["rotation"] - ALLOWED_ROTATIONS == {"gait.planted.my_fk", "gait.planted.my_rot"}
     try:
         _check(found)
     except AssertionError as exc:
