@@ -58,14 +58,8 @@ ALLOWED_ROTATIONS = {
 #: Still there, to be removed (issue 30): each named with what stands in the way. The test
 #: fails when one disappears (then delete its entry) as when a new one appears.
 PENDING = {
-    "fk": {
-        # the table's own FK inside the closed-form finish (below); goes with it
-        "ik._table_finish._leg_fk",
-    },
+    "fk": set(),
     "ik": {
-        # 12 damped Newton steps finishing the near-pattern closed forms on the table; to run
-        # on ik.solve_chain with the table as a ChainArrays (changes those legs' last bits)
-        "ik._table_finish.finish_on_table",
         # Gauss–Newton on rolling contact: the targets move with q (the feet roll) and the
         # samples are coupled through the stance; not a fixed-target problem of lm_loop
         "gait.paths.rolling_ik",
@@ -282,7 +276,9 @@ def _is_rotation(fn: ast.AST) -> bool:
         targets = node.targets if isinstance(node, ast.Assign) else []
         for t in targets:
             if isinstance(t, ast.Subscript) and isinstance(t.slice, ast.Tuple):
-                ints = [e for e in t.slice.elts if isinstance(e, ast.Constant) and type(e.value) is int]
+                ints = [
+                    e for e in t.slice.elts if isinstance(e, ast.Constant) and type(e.value) is int
+                ]
                 if len(ints) >= 2:
                     return True
     return False
@@ -328,7 +324,7 @@ def test_one_fk_per_engine_one_ik_loop_and_the_listed_rotations() -> None:
     _check(scan(ROOT))
 
 
-PLANTED = '''
+PLANTED = """
 import math
 import numpy as np
 
@@ -350,7 +346,7 @@ def my_ik(rows, target, q):
 
 def my_rot(a):
     return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-'''
+"""
 
 
 def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
