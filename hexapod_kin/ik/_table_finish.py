@@ -83,7 +83,7 @@ def finish_on_table(
         valid: (N, K) the slots to finish.
         tol_abs: A slot stays valid when its foot ends within this distance [m] of the
             target (2 DOF: the target's distance to the table's surface, Gauss–Newton).
-        scale: The chain's length scale [m] (the loop stops at ``‖e‖ ≤ 1e-14 · scale``).
+        scale: The chain's length scale [m] (the loop stops at ``‖e‖ ≤ 1e-15 · scale``).
         limits: Optional (lower, upper) (n,): slots outside (after ±2π shifts) are invalid.
 
     Returns:
@@ -98,7 +98,7 @@ def finish_on_table(
         xa = x[idx[:, 0], :3]
         free = np.full(n, np.inf)
         qa, miss, _ok = solve_chain(
-            table_chain(ch, n), xa, qa, -free, free, tol=1e-14 * scale, max_iter=12
+            table_chain(ch, n), xa, qa, -free, free, tol=1e-15 * scale, max_iter=12
         )
         qa = wrap_angles(qa)
         ok = miss <= max(tol_abs, 1e-12 * scale)
