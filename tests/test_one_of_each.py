@@ -350,6 +350,28 @@ def my_ik(rows, target, q):
 
 def my_rot(a):
     return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+def my_table_fk(rows, q):
+    t = np.eye(4)
+    for k, row in enumerate(rows):
+        t = t @ row.transform(q[k])
+    return t
+
+
+def my_compiled_fk(q, out):
+    r00, r01, r10, r11 = 1.0, 0.0, 0.0, 1.0
+    for k in range(q.shape[0]):
+        s, c = sincos(q[k])
+        r00, r01, r10, r11 = c * r00 + s * r01, c * r01 - s * r00, c * r10 + s * r11, r11
+    out[0] = r00
+
+
+def my_pinv_ik(model, data, target, q):
+    while True:
+        jac = pin.computeFrameJacobian(model, data, q, 3)
+        q += np.linalg.pinv(jac) @ (target - data.oMf[3].translation)
+    return q
 """
 
 
@@ -359,9 +381,14 @@ def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
     (copy / "gait" / "planted.py").write_text(PLANTED, encoding="utf-8")
     found = scan(copy)
     new = {k: v - PENDING[k] - REVIEWED[k] for k, v in found.items()}
-    assert new["fk"] - ALLOWED_FK == {"gait.planted.my_fk"}
-    assert new["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik"}
-    assert new["rotation"] - ALLOWED_ROTATIONS == {"gait.planted.my_fk", "gait.planted.my_rot"}
+    planted = {f"gait.planted.my_{n}" for n in ("fk", "table_fk", "compiled_fk")}
+    assert new["fk"] - ALLOWED_FK == planted
+    assert new["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik", "gait.planted.my_pinv_ik"}
+    assert new["rotation"] - ALLOWED_ROTATIONS == {
+        "gait.planted.my_fk",
+        "gait.planted.my_rot",
+        "gait.planted.my_compiled_fk",
+    }
     try:
         _check(found)
     except AssertionError as exc:
