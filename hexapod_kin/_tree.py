@@ -9,27 +9,21 @@ reference in the tests.
 
 * :class:`Tree` and :func:`tree_frames` — every joint frame of a floating-base tree for N
   samples (one vector operation per depth of the tree and axis kind).
-* :class:`LegConsts`, :func:`leg_fk_of` / :func:`leg_fk` (samples first) and
-  :func:`leg_fk_soa` (components first, samples last: the numerical leg IK's inner FK) —
-  serial legs with their joint origins and world axes, for position Jacobians
-  ``J_k = w_k × (p − o_k)`` (revolute) or ``w_k`` (prismatic).
+* :func:`leg_fk` — one serial leg (its joint origins and foot), the same path on the leg
+  as a chain-shaped tree.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 __all__ = [
-    "LegConsts",
     "Tree",
     "leg_fk",
-    "leg_fk_of",
-    "leg_fk_soa",
-    "leg_subset",
     "mat_vec",
     "poses_of",
     "tree_frames",
@@ -240,132 +234,29 @@ def mat_vec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
     )
 
 
-@dataclass(frozen=True)
-class LegConsts:
-    """Per-leg constants of G serial legs of m joints, for :func:`leg_fk_of`.
-
-    With ``P`` the placement rotation and ``a`` the axis: ``P R(a, q) = c P + s P[a]× +
-    (1 − c) (P a) aᵀ``, so each joint costs one 3×3 product per sample.
-    """
-
-    Pr: np.ndarray  # (G, m, 3, 3)
-    Pt: np.ndarray  # (G, m, 3)
-    K1: np.ndarray  # (G, m, 3, 3) P [a]×
-    K2: np.ndarray  # (G, m, 3, 3) (P a) aᵀ
-    Pa: np.ndarray  # (G, m, 3)
-    prismatic: np.ndarray  # (G, m)
-    foot: np.ndarray  # (G, 3)
-
-    @classmethod
-    def of(
-        cls, placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray
-    ) -> LegConsts:
-        """From (G, m, 4, 4) placements, (G, m, 3) axes, (G, m) flags and (G, 3) feet."""
-        Pr = np.ascontiguousarray(placements[..., :3, :3])
-        a = np.asarray(axes, dtype=float)
-        skew = np.zeros(a.shape + (3,))
-        skew[..., 0, 1], skew[..., 0, 2] = -a[..., 2], a[..., 1]
-        skew[..., 1, 0], skew[..., 1, 2] = a[..., 2], -a[..., 0]
-        skew[..., 2, 0], skew[..., 2, 1] = -a[..., 1], a[..., 0]
-        Pa = mat_vec(Pr, a)
-        return cls(
-            Pr,
-            np.ascontiguousarray(placements[..., :3, 3]),
-            Pr @ skew,
-            Pa[..., :, None] * a[..., None, :],
-            Pa,
-            np.asarray(prismatic, dtype=bool),
-            np.asarray(foot, dtype=float),
-        )
-
-
-def leg_subset(c: LegConsts, idx: np.ndarray) -> LegConsts:
-    """The legs ``idx`` of ``c``."""
-    return LegConsts(*(getattr(c, f.name)[idx] for f in fields(LegConsts)))
-
-
-def leg_fk_of(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`leg_fk` of the G legs of ``c`` at ``q`` (..., G, m) (constants broadcast)."""
-    m = q.shape[-1]
-    shape = q.shape[:-1]
-    origins = np.empty(shape + (m, 3))
-    waxes = np.empty(shape + (m, 3))
-    any_p = bool(c.prismatic.any())
-    R: np.ndarray | None = None
-    t = np.zeros(shape + (3,))
-    for k in range(m):
-        qk = q[..., k]
-        pk = c.prismatic[:, k]
-        qr = np.where(pk, 0.0, qk) if any_p else qk
-        co, si = np.cos(qr)[..., None, None], np.sin(qr)[..., None, None]
-        M = co * c.Pr[:, k] + si * c.K1[:, k] + (1.0 - co) * c.K2[:, k]
-        if R is None:
-            o = np.broadcast_to(c.Pt[:, k], shape + (3,))
-            w = np.broadcast_to(c.Pa[:, k], shape + (3,))
-            R = M
-        else:
-            o = t + mat_vec(R, c.Pt[:, k])
-            w = mat_vec(R, c.Pa[:, k])
-            R = R @ M
-        origins[..., k, :] = o
-        waxes[..., k, :] = w
-        t = o + np.where(pk[:, None], w * qk[..., None], 0.0) if any_p else o
-    assert R is not None
-    feet = t + mat_vec(R, c.foot)
-    return origins, waxes, feet
-
-
 def leg_fk(
     placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray, q: Any
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Body-frame kinematics of E leg instances (one serial chain each, m joints).
+) -> tuple[np.ndarray, np.ndarray]:
+    """Body-frame kinematics of one serial leg (m joints) at N configurations.
+
+    The leg as a chain-shaped :class:`Tree` through :func:`tree_frames` (the one batch FK).
 
     Args:
-        placements: (E, m, 4, 4) each joint's placement in the previous joint's frame (the
+        placements: (m, 4, 4) each joint's placement in the previous joint's frame (the
             first in the body frame).
-        axes: (E, m, 3) unit axes.
-        prismatic: (E, m) True for prismatic joints.
-        foot: (E, 3) the foot in the last joint's frame.
-        q: (E, m) joint values.
+        axes: (m, 3) unit axes.
+        prismatic: (m,) True for prismatic joints.
+        foot: (3,) the foot in the last joint's frame [m].
+        q: (N, m) joint values.
 
     Returns:
-        ``(origins, world_axes, feet)``: (E, m, 3) joint origins, (E, m, 3) joint axes in the
-        body frame, (E, 3) feet.
+        ``(origins, feet)``: (N, m, 3) joint origins and (N, 3) feet in the body frame [m].
 
     """
     q = np.asarray(q, dtype=float)
-    return leg_fk_of(LegConsts.of(placements, axes, prismatic, foot), q)
-
-
-def leg_fk_soa(c: LegConsts, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`leg_fk_of` components first: q (m, G, N) → (3, m, G, N) ×2 and feet (3, G, N)."""
-    m = q.shape[0]
-    origins = np.empty((3,) + q.shape)
-    waxes = np.empty((3,) + q.shape)
-    any_p = bool(c.prismatic.any())
-    R: np.ndarray | None = None
-    t: Any = 0.0
-    for k in range(m):
-        qk = q[k]
-        pk = c.prismatic[:, k][:, None]
-        qr = np.where(pk, 0.0, qk) if any_p else qk
-        Pr = c.Pr[:, k].transpose(1, 2, 0)[..., None]  # (3, 3, G, 1)
-        M = np.sin(qr) * c.K1[:, k].transpose(1, 2, 0)[..., None]
-        M += (1.0 - np.cos(qr)) * (c.K2[:, k] - c.Pr[:, k]).transpose(1, 2, 0)[..., None]
-        M += Pr
-        Pt = c.Pt[:, k].T[..., None]
-        Pa = c.Pa[:, k].T[..., None]
-        if R is None:
-            o = np.broadcast_to(Pt, (3,) + qk.shape)
-            w = np.broadcast_to(Pa, (3,) + qk.shape)
-            R = M
-        else:
-            o = t + R[:, 0] * Pt[0] + R[:, 1] * Pt[1] + R[:, 2] * Pt[2]
-            w = R[:, 0] * Pa[0] + R[:, 1] * Pa[1] + R[:, 2] * Pa[2]
-            R = R[:, 0, None] * M[None, 0] + R[:, 1, None] * M[None, 1] + R[:, 2, None] * M[None, 2]
-        origins[:, k] = o
-        waxes[:, k] = w
-        t = o + np.where(pk, w * qk, 0.0) if any_p else o
-    assert R is not None
-    f = c.foot.T[..., None]
-    return origins, waxes, t + R[:, 0] * f[0] + R[:, 1] * f[1] + R[:, 2] * f[2]
+    m = len(placements)
+    leg = Tree(np.arange(m) - 1, np.asarray(placements), np.asarray(axes), np.asarray(prismatic))
+    R, p = tree_frames(leg, q, np.broadcast_to(np.eye(4), (len(q), 4, 4)))
+    f = np.asarray(foot, dtype=float)
+    feet = R[:, 0, -1] * f[0] + R[:, 1, -1] * f[1] + R[:, 2, -1] * f[2] + p[:, -1]
+    return np.ascontiguousarray(p.transpose(2, 1, 0)), np.ascontiguousarray(feet.T)

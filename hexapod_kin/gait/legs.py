@@ -429,8 +429,7 @@ def closed_leg(
     rng = np.random.default_rng(7)
     qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
     e = len(qs)
-    _o, _w, p = leg_fk(P[None], A[None], pr[None], foot[None], qs[:, None])
-    p = p[:, 0]
+    _o, p = leg_fk(P, A, pr, foot, qs)
     p0 = (p - T0[:3, 3]) @ T0[:3, :3]
     try:
         batch = analytic_batch(table, p0)
@@ -440,7 +439,7 @@ def closed_leg(
     cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
     if cand.shape[1] != len(lo):
         return False
-    _o, _w, pk = leg_fk(P[None], A[None], pr[None], foot[None], cand[:, None])
+    _o, pk = leg_fk(P, A, pr, foot, cand)
     err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
     err = np.where(np.asarray(batch.valid), err, np.inf)
     return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
@@ -589,7 +588,7 @@ def leg_layout(
         cc = list(c)
         k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
         consts.append(k)
-        o, _w, p = leg_fk(k[0][None], k[1][None], k[2][None], k[3][None], q_zero[cc][None])
+        o, p = leg_fk(*k, q_zero[cc][None])
         pts = np.vstack([o[0], p])
         spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
         origins.append(o[0, 0])

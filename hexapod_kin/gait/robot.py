@@ -24,7 +24,7 @@ import numpy as np
 from .._tree import Tree, mat_vec, tree_frames, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
 from ..params import Hexapod, rpy_to_matrix
-from .leg_ik import solve_legs
+from .leg_ik import leg_chain, solve_legs
 from .legs import (
     BodyIK,
     FootSpec,
@@ -324,18 +324,15 @@ class WholeBody:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Numerical IK of ``legs`` (same joint count) at body-frame targets (N, G, 3)."""
         cols = np.array([self._leg_cols[k] for k in legs])  # (G, m)
-        tr = self._tree
-        P = tr.placements[cols]
-        A = tr.axes[cols]
-        pr = tr.prismatic[cols]
-        foot = np.array([self._foot[k][:3, 3] for k in legs])
         if np.any(self._foot_joint[legs] != cols[:, -1]):  # pragma: no cover - by construction
             raise ConfigurationError("a foot is not on its leg's last joint")
+        tr = self._tree
+        chains = [
+            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], self._foot[k][:3, 3])
+            for k, c in zip(legs, cols)
+        ]
         return solve_legs(
-            P,
-            A,
-            pr,
-            foot,
+            chains,
             self.lower[cols],
             self.upper[cols],
             p_body,

@@ -2,11 +2,11 @@
 
 A leg whose twists are within ``angle_tol`` of the closed-form pattern (``α2 = ±π/2``,
 ``α3 ∈ {0, π}``; e.g. a URDF's rounded constants) is first solved by the exact pattern's
-closed form (:mod:`hexapod_kin.ik.closed`); each solution is then finished by damped Newton
-steps ``Δq = (JᵀJ + λI)⁻¹ Jᵀ (x − p(q))`` on the table's own forward kinematics (numpy,
-vectorised over all solutions; ``J = [z_j × (p − o_j)]``). From a start ``O(deviation)``
-away, the steps converge quadratically (≤ 12 steps; a solution stops moving once its step is
-below 1e-14 rad).
+closed form (:mod:`hexapod_kin.ik.closed`); each solution is then finished on the table's own
+kinematics by the package's one numerical loop (:func:`hexapod_kin.ik.solve_chain`: the
+table as a chain view, :func:`table_chain`). From a start ``O(deviation)`` away the
+Levenberg–Marquardt steps are Gauss–Newton steps to rounding (λ² ≪ JᵀJ) and converge
+quadratically.
 """
 
 from __future__ import annotations
@@ -16,10 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from .._numerics import dls_step, wrap_angles
-from ..params import Chain
+from .._chain import ChainArrays
+from .._numerics import wrap_angles
+from ..params import Chain, khalil_transform
+from .solver import solve_chain
 
-__all__ = ["finish_on_table", "fit_angles"]
+__all__ = ["finish_on_table", "fit_angles", "table_chain"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -31,43 +33,36 @@ def fit_angles(v: np.ndarray, lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray]
     return v, (v >= lo) & (v <= hi)
 
 
-def _leg_fk(ch: Chain, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Foot (M, 3) and ∂foot/∂q (M, 3, n) of the table itself, in the mount frame.
+def table_chain(ch: Chain, n: int) -> ChainArrays:
+    """The table's first ``n`` joint rows as a chain view, in the mount frame.
 
-    The rows ``Rx(α)·Tx(d)·Rz(θ + q)·Tz(r)`` are applied to the frame's columns
-    ``(x, y, z)`` and origin ``p`` as (M, 3) arrays (row 1's α1, d1 are in the mount).
+    Row ``j``'s placement is its Khalil transform at ``q = 0`` (``Rx(α) Tx(d) Rz(θ) Tz(r)``;
+    the joint then turns about, or slides along, its z axis); row 1's α1 and d1 are in the
+    mount and left out. The tip is the product of the remaining rows and the tool.
     """
-    n, m = q.shape[1], len(q)
     rows = ch.rows
-    t = np.eye(4)
+    rots, trans = [], []
+    for j, row in enumerate(rows[:n]):
+        t = row.transform() if j else khalil_transform(0.0, 0.0, row.theta, row.r)
+        rots.append(t[:3, :3])
+        trans.append(t[:3, 3])
+    tip = np.eye(4)
     for row in rows[n:]:
-        t = t @ row.transform()
-    foot = (t @ ch.tool_matrix)[:3, 3]
-    eye = np.eye(3)
-    cx, cy, cz = (np.broadcast_to(eye[k], (m, 3)) for k in range(3))
-    p = np.zeros((m, 3))
-    axes, origins = [], []
-    for j in range(n):
-        row = rows[j]
-        if j > 0:
-            ca, sa = math.cos(row.alpha), math.sin(row.alpha)
-            p = p + row.d * cx
-            cy, cz = ca * cy + sa * cz, ca * cz - sa * cy
-        phi = row.theta + q[:, j]
-        c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
-        cx, cy = c * cx + s * cy, c * cy - s * cx
-        if row.r:
-            p = p + row.r * cz
-        axes.append(cz)
-        origins.append(p)
-    tip = p + foot[0] * cx + foot[1] * cy + foot[2] * cz
-    jac = np.empty((m, 3, n))
-    for j, (z, o) in enumerate(zip(axes, origins)):
-        v = tip - o  # z × v, by components (np.cross is slow on (M, 3))
-        jac[:, 0, j] = z[:, 1] * v[:, 2] - z[:, 2] * v[:, 1]
-        jac[:, 1, j] = z[:, 2] * v[:, 0] - z[:, 0] * v[:, 2]
-        jac[:, 2, j] = z[:, 0] * v[:, 1] - z[:, 1] * v[:, 0]
-    return tip, jac
+        tip = tip @ row.transform()
+    tip = tip @ ch.tool_matrix
+    trans.append(tip[:3, 3])
+    arrays = ChainArrays(
+        rot=np.ascontiguousarray(np.array(rots).reshape(n, 3, 3)),
+        trans=np.ascontiguousarray(np.array(trans).reshape(n + 1, 3)),
+        tip_rot=np.ascontiguousarray(tip[:3, :3]),
+        axis=np.tile([0.0, 0.0, 1.0], (n, 1)),
+        kind=np.array([int(r.sigma == "prismatic") for r in rows[:n]], dtype=np.int64),
+        col=np.arange(n, dtype=np.int64),
+        nq=n,
+    )
+    for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
+        arr.setflags(write=False)
+    return arrays
 
 
 def finish_on_table(
@@ -79,7 +74,7 @@ def finish_on_table(
     scale: float,
     limits: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Finish leg solutions with Newton steps on the table's own forward kinematics.
+    """Finish leg solutions on the table's own kinematics (the one loop, no limits).
 
     Args:
         ch: The leg's chain (its joint rows first; α1 and d1 are taken as in the mount).
@@ -88,7 +83,7 @@ def finish_on_table(
         valid: (N, K) the slots to finish.
         tol_abs: A slot stays valid when its foot ends within this distance [m] of the
             target (2 DOF: the target's distance to the table's surface, Gauss–Newton).
-        scale: The chain's length scale [m] (damping ``1e-12 · scale²`` keeps steps finite).
+        scale: The chain's length scale [m] (the loop stops at ``‖e‖ ≤ 1e-15 · scale``).
         limits: Optional (lower, upper) (n,): slots outside (after ±2π shifts) are invalid.
 
     Returns:
@@ -101,18 +96,10 @@ def finish_on_table(
     if len(idx):
         qa = q[idx[:, 0], idx[:, 1]]
         xa = x[idx[:, 0], :3]
-        damp = 1e-12 * scale**2
-        act = np.arange(len(qa))  # the slots still moving
-        for _ in range(12):
-            p, jac = _leg_fk(ch, qa[act])
-            res = xa[act] - p
-            step = dls_step(jac, res, damp)
-            qa[act] += step
-            act = act[np.abs(step).max(axis=1) >= 1e-14]
-            if not len(act):
-                break
-        p, _ = _leg_fk(ch, qa)
-        miss = np.linalg.norm(xa - p, axis=1)
+        free = np.full(n, np.inf)
+        qa, miss, _ok = solve_chain(
+            table_chain(ch, n), xa, qa, -free, free, tol=1e-15 * scale, max_iter=12
+        )
         qa = wrap_angles(qa)
         ok = miss <= max(tol_abs, 1e-12 * scale)
         if limits is not None:

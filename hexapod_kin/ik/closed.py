@@ -26,8 +26,8 @@ last joint's frame is an effective last length ``√(p_x² + p_y²)``, an angle 
 ``atan2(p_y, p_x)`` on the last joint and a lateral offset ``e`` along the knee axis (the hip
 then turns by ``atan2(−σe, ±√(x² + y² − e²))``) — an ankle axis anti-parallel to the knee's
 (``α3 = π``: that joint enters negated), and twists within ``angle_tol`` (default
-:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished by Newton
-steps on the table itself (:mod:`hexapod_kin.ik._table_finish`).
+:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished on the
+table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`).
 
 Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
@@ -112,8 +112,8 @@ class LegFamily:
             (targets are mapped through it), else None.
         deviation: Legs: how far [rad] the table's twists are from the exact pattern
             (``|α2 ∓ π/2|``, ``α3`` from 0 or π); 0 for an exact table. Above 1e-12 the
-            closed form solves the exact pattern and Newton steps on the table itself
-            finish each solution (see :func:`analytic_batch`).
+            closed form solves the exact pattern and the one IK loop finishes each
+            solution on the table itself (see :func:`analytic_batch`).
 
     """
 
@@ -241,8 +241,8 @@ def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) 
     last joint's frame: it becomes the effective last length ``√(p_x² + p_y²)``, an angle
     offset ``atan2(p_y, p_x)`` on the last joint and a lateral offset along the knee axis),
     an ankle axis anti-parallel to the knee's (``α3 = π``), and twists within ``angle_tol`` of
-    the pattern (``α2 = ±π/2``, ``α3 ∈ {0, π}``; then the solutions are finished by Newton
-    steps on the exact table: :func:`analytic_batch`).
+    the pattern (``α2 = ±π/2``, ``α3 ∈ {0, π}``; then the solutions are finished on the
+    exact table by the one IK loop: :func:`analytic_batch`).
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -458,7 +458,7 @@ def analytic_batch(
 
     A leg whose twists are off the pattern (``LegFamily.deviation`` > 0, within
     :data:`FAMILY_TOL`) is solved by the exact pattern's closed form, then each solution is
-    finished by Newton steps on the table itself (:mod:`hexapod_kin.ik._table_finish`); a slot
+    finished on the table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`); a slot
     stays valid when its foot lands within ``tol`` × the length scale of the target (2 DOF:
     the target that close to the table's surface) and, with ``within_limits``, inside the
     limits. The slots keep their meaning.
