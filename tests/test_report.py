@@ -269,7 +269,7 @@ def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) 
     assert not (tmp_path / "report").exists()
     assert report_cache.derivation_text(d) == text
     (path,) = tmp_path.glob("report/text-*.json")
-    assert json.loads(path.read_text())["body"]["text"] == text  # the _cache envelope
+    assert json.loads(path.read_text())["body"] == text  # the _cache envelope
     path.write_text("[]")  # foreign content
     assert report_cache.derivation_text(d) == text
 
