@@ -255,7 +255,7 @@ def _add_stand(sub: Any) -> None:
         ),
         formatter_class=_FMT,
     )
-    robot_args(p, kinds="legged", default="hexapod")
+    robot_args(p, kinds="legged", default="hexapod", inertia=True)
     p.add_argument(
         "--height",
         "--body-height",

@@ -29,7 +29,7 @@ def register(sub: Any) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    robot_args(p, kinds="legged", default="hexapod")
+    robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(

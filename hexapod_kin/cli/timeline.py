@@ -74,7 +74,7 @@ def register(sub: Any) -> None:
         help="a walk of a legged robot (default the hexapod preset)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    robot_args(g, kinds="legged", default="hexapod")
+    robot_args(g, kinds="legged", default="hexapod", inertia=True)
     walk_args(g, rate="--plan-rate")
     _common(g)
     g.set_defaults(func=_cmd_gait)
