@@ -27,6 +27,7 @@ from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 
 __all__ = [
     "BodyIK",
+    "check_offsets",
     "FootSpec",
     "GaitError",
     "LegTree",
@@ -38,7 +39,11 @@ __all__ = [
     "leg_layout",
     "offset_of",
     "parse_feet",
+    "robot_size",
 ]
+
+#: A foot offset may be at most this many times the robot's size (:func:`robot_size`).
+OFFSET_FACTOR = 2.0
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
 _SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
@@ -147,17 +152,54 @@ def _split_specs(text: str) -> list[str]:
     return items
 
 
-def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
+def robot_size(model: Any) -> float:
+    """The robot's size [m]: the diagonal of the bounding box of its frames' origins at q = 0.
+
+    ``model`` is a Pinocchio model (its neutral configuration; every joint's frame is one of
+    its frames); at least 1e-3 m.
+    """
+    import pinocchio as pin
+
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    pts = np.array([f.translation for f in data.oMf])
+    return max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1e-3)
+
+
+def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
+    """Refuse a foot offset larger than the robot (:data:`OFFSET_FACTOR` × :func:`robot_size`).
+
+    Raises:
+        ParameterError: The first such foot, its offset and the allowed range.
+
+    """
+    size = robot_size(model)
+    limit = OFFSET_FACTOR * size
+    for f in feet:
+        big = max(abs(v) for v in f.offset)
+        if big > limit:
+            raise ParameterError(
+                f"foot {f.frame}: offset {','.join(f'{v:.6g}' for v in f.offset)} m is larger "
+                f"than the robot; allowed |x|, |y|, |z| <= {limit:.4g} m ({OFFSET_FACTOR:g} x "
+                f"the robot's size {size:.4g} m)",
+                parameter="feet",
+                value=f"{f.frame}:{','.join(repr(v) for v in f.offset)}",
+                allowed=[-limit, limit],
+            )
+
+
+def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
     """Foot specifications from any of the accepted forms (``None`` stays ``None``).
 
     Accepted: ``"tibia_lf:0,0.16,0.029"`` (several separated by spaces, ``;`` or commas), a
     list of such strings, a mapping ``{"tibia_lf": (x, y, z), ...}``, a sequence of
     :class:`FootSpec`, or a table file (``.yaml``/``.yml``/``.toml``/``.json``) holding either
     such a mapping or ``feet = [{frame = "...", offset = [x, y, z]}, ...]`` (optionally under
-    a ``feet`` key). Offsets in [m], in the named frame.
+    a ``feet`` key). Offsets in [m], in the named frame; with ``model`` (a Pinocchio model)
+    each is checked against the robot's size (:func:`check_offsets`).
 
     Raises:
-        ParameterError: A malformed spec (named).
+        ParameterError: A malformed spec (named), an offset larger than the robot.
         SourceError: A feet file refused by the strict reader (:mod:`hexapod_kin._reader`).
 
     """
@@ -167,7 +209,8 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
         data = read_data(spec, "feet")
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
-        return parse_feet([data] if isinstance(data, str) else data)  # a text is a spec, not a file
+        # a text is a spec, not a file
+        return parse_feet([data] if isinstance(data, str) else data, model)
     out: list[FootSpec] = []
     if isinstance(spec, str):
         items: list[Any] = _split_specs(spec)
@@ -208,6 +251,8 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
         raise ParameterError(
             f"feet: a frame is named twice in {frames}", parameter="feet", value=frames
         )
+    if model is not None:
+        check_offsets(tuple(out), model)
     return tuple(out)
 
 
@@ -277,6 +322,7 @@ def find_legs(
         into q[7:]) and the ids of the joints that belong to no leg.
 
     Raises:
+        ParameterError: A foot offset larger than the robot (:func:`check_offsets`).
         ConfigurationError: A frame that does not exist, a foot on the floating body, legs
             sharing joints, no leg found.
 
@@ -291,6 +337,7 @@ def find_legs(
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     found: list[tuple[str, int, np.ndarray]] = []  # (frame name, joint id, foot in joint)
     if feet is not None:
+        check_offsets(feet, model)
         names = [f.name for f in model.frames]
         for spec in feet:
             if not model.existFrame(spec.frame):
