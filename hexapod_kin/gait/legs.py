@@ -22,12 +22,13 @@ from typing import Any
 import numpy as np
 
 from .._reader import FORMATS, read_data
-from .._tree import leg_fk
+from .._tree import leg_fk, robot_size
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 
 __all__ = [
     "BodyIK",
     "check_offsets",
+    "check_radius",
     "FootSpec",
     "GaitError",
     "LegTree",
@@ -39,10 +40,10 @@ __all__ = [
     "leg_layout",
     "offset_of",
     "parse_feet",
-    "robot_size",
 ]
 
-#: A foot offset may be at most this many times the robot's size (:func:`robot_size`).
+#: A foot offset (and a foot radius) may be at most this many times the robot's size
+#: (:func:`hexapod_kin._tree.robot_size`).
 OFFSET_FACTOR = 2.0
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
@@ -152,22 +153,8 @@ def _split_specs(text: str) -> list[str]:
     return items
 
 
-def robot_size(model: Any) -> float:
-    """The robot's size [m]: the diagonal of the bounding box of its frames' origins at q = 0.
-
-    ``model`` is a Pinocchio model (its neutral configuration; every joint's frame is one of
-    its frames); at least 1e-3 m.
-    """
-    import pinocchio as pin
-
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
-    pts = np.array([f.translation for f in data.oMf])
-    return max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1e-3)
-
-
 def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
-    """Refuse a foot offset larger than the robot (:data:`OFFSET_FACTOR` × :func:`robot_size`).
+    """Refuse a foot offset larger than the robot (:data:`OFFSET_FACTOR` × its size).
 
     Raises:
         ParameterError: The first such foot, its offset and the allowed range.
@@ -186,6 +173,26 @@ def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
                 value=f"{f.frame}:{','.join(repr(v) for v in f.offset)}",
                 allowed=[-limit, limit],
             )
+
+
+def check_radius(radius: float, model: Any) -> float:
+    """``radius`` [m], refused when over :data:`OFFSET_FACTOR` × the robot's size.
+
+    Raises:
+        ParameterError: A foot radius larger than the robot.
+
+    """
+    size = robot_size(model)
+    limit = OFFSET_FACTOR * size
+    if radius > limit:
+        raise ParameterError(
+            f"foot_radius={radius!r} m is larger than the robot; allowed 0 to {limit:.4g} m "
+            f"({OFFSET_FACTOR:g} x the robot's size {size:.4g} m)",
+            parameter="foot_radius",
+            value=radius,
+            allowed=[0.0, limit],
+        )
+    return radius
 
 
 def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
