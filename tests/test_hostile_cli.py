@@ -747,3 +747,18 @@ def test_api_refuses_unbounded_work_at_once(
     assert run.status == 0, (run.status, run.stdout, run.stderr)
     name, message = run.stdout.splitlines()[:2]
     assert name == parameter and phrase in message, run.stdout
+
+
+@pytest.mark.parametrize(
+    "args, phrase",
+    [
+        (["stand", "--height", "1e308"], "height=1e+308 m is larger than the robot"),
+        (["stand", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
+        (["gait", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
+    ],
+)
+def test_standing_numbers_larger_than_the_robot(tmp_path: Path, args, phrase, record_property):
+    run = cli(*args, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, phrase)
+    bounded(run)
