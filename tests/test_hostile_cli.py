@@ -755,6 +755,7 @@ def test_api_refuses_unbounded_work_at_once(
         (["stand", "--height", "1e308"], "height=1e+308 m is larger than the robot"),
         (["stand", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
         (["gait", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
+        (["simulate", "--friction", "1e308"], "friction=1e+308 is not allowed"),  # was 15 s/0.5 s
     ],
 )
 def test_standing_numbers_larger_than_the_robot(tmp_path: Path, args, phrase, record_property):
