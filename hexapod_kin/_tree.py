@@ -26,6 +26,7 @@ __all__ = [
     "leg_fk",
     "mat_vec",
     "poses_of",
+    "robot_size",
     "tree_frames",
     "tree_poses",
 ]
@@ -260,3 +261,18 @@ def leg_fk(
     f = np.asarray(foot, dtype=float)
     feet = R[:, 0, -1] * f[0] + R[:, 1, -1] * f[1] + R[:, 2, -1] * f[2] + p[:, -1]
     return np.ascontiguousarray(p.transpose(2, 1, 0)), np.ascontiguousarray(feet.T)
+
+
+def robot_size(model: Any) -> float:
+    """A robot's size [m]: the diagonal of the bounding box of its frames' origins at q = 0.
+
+    ``model`` is a Pinocchio model (at its neutral configuration; every joint's frame is
+    one of its frames); at least 1e-3 m. The scale user numbers (foot offsets, foot radius,
+    a standing height) are checked against.
+    """
+    import pinocchio as pin
+
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    pts = np.array([f.translation for f in data.oMf])
+    return max(float(np.linalg.norm(pts.max(axis=0) - pts.min(axis=0))), 1e-3)

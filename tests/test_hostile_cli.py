@@ -582,3 +582,184 @@ def test_the_catch_all_is_still_the_last_resort(monkeypatch, capsys) -> None:
         "hexapod-kin: error: unexpected RuntimeError: boom (a bug: please report it; "
         "HEXAPOD_KIN_DEBUG=1 shows the traceback)"
     ]
+
+
+# ============================================================================ bounds35
+# Issue 35, "Huge finite numbers", "Unbounded simulation", "Bounded work everywhere": a foot
+# offset larger than the robot is refused at once; the stance search, the MuJoCo replay and
+# the standing check refuse or fail in under a second of CPU (the child's own, by wait4),
+# with at most two stderr lines, no traceback and a peak RSS under 1 GB.
+CPU_LIMIT_S = 1.0
+PHANTOMX = Path(__file__).parent / "data" / "phantomx" / "phantomx.urdf"
+SIDES35 = ("lf", "lm", "lr", "rf", "rm", "rr")
+
+
+def _clean_phantomx(tmp_path: Path, prismatic_knees: bool = False) -> Path:
+    """PhantomX without meshes and with plain inertias (no load warning); knees prismatic."""
+    text = PHANTOMX.read_text()
+    text = re.sub(r"<(visual|collision)>.*?</\1>", "", text, flags=re.S)
+    inertia = '<inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/>'
+    text = re.sub(r"<inertia [^>]*/>", inertia, text)
+    if prismatic_knees:  # a ±2 cm slide: the stance search finds no stance
+        text = re.sub(
+            r'(<joint name="j_tibia_\w+" type=")revolute(">(?:(?!</joint>).)*?lower=")'
+            r'-2.6179939(" upper=")2.6179939',
+            r"\1prismatic\g<2>-0.02\g<3>0.02",
+            text,
+            flags=re.S,
+        )
+        assert text.count('type="prismatic"') == 6
+    path = tmp_path / ("knees.urdf" if prismatic_knees else "phantomx.urdf")
+    path.write_text(text)
+    return path
+
+
+def _feet_args(**offsets: str) -> list[str]:
+    return [a for s in SIDES35 for a in ("--foot", f"tibia_{s}:{offsets.get(s, '0,0.16,0.029')}")]
+
+
+def bounded(run: Run) -> None:
+    """Within the limits, at most two stderr lines and under a second of CPU."""
+    within_limits(run)
+    assert len(run.lines) <= 2, run.stderr
+    assert run.cpu < CPU_LIMIT_S, f"{run.cpu:.2f} s CPU: {run.stderr[-300:]}"
+
+
+def py(code: str, *, cwd: Path, timeout: float = LIMIT_S) -> Run:
+    """Run ``python -c CODE`` in ``cwd`` as :func:`cli` runs the command line."""
+    out_path, err_path = cwd / ".stdout", cwd / ".stderr"
+    with open(out_path, "wb") as out, open(err_path, "wb") as err:
+        t0 = time.monotonic()
+        proc = subprocess.Popen(
+            [sys.executable, "-c", code],
+            cwd=cwd,
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=err,
+            env=_env(),
+            preexec_fn=_cap,
+        )
+        return _finish(proc, t0, timeout, out_path, err_path)
+
+
+@pytest.mark.parametrize("command", ["stand", "gait", "simulate"])
+@pytest.mark.parametrize("value", ["1e308,0,0", "0,-1e308,0", "1000,0,0", "0,0,2"])
+def test_foot_offset_larger_than_the_robot(tmp_path: Path, command, value, record_property):
+    urdf = _clean_phantomx(tmp_path)
+    run = cli(command, str(urdf), *_feet_args(lf=value), cwd=tmp_path)
+    _record(record_property, run)
+    line = refused(run, "foot tibia_lf: offset")
+    assert "larger than the robot" in line and "allowed |x|, |y|, |z| <= " in line, line
+    bounded(run)
+
+
+def test_six_huge_feet_give_one_line(tmp_path: Path, record_property) -> None:
+    urdf = _clean_phantomx(tmp_path)
+    run = cli(
+        "stand", str(urdf), *_feet_args(**dict.fromkeys(SIDES35, "1e308,1e308,1e308")), cwd=tmp_path
+    )
+    _record(record_property, run)
+    refused(run, "larger than the robot")
+    bounded(run)
+
+
+def test_feet_within_the_robot_still_stand(tmp_path: Path, record_property) -> None:
+    urdf = _clean_phantomx(tmp_path)
+    run = cli("stand", str(urdf), *_feet_args(), "--json", cwd=tmp_path)
+    _record(record_property, run)
+    within_limits(run)
+    assert run.status == 0 and run.stderr == "", run.stderr
+    assert len(json.loads(run.stdout)["forces"]) == 6
+
+
+def test_a_stance_search_with_no_stance_fails_fast(tmp_path: Path, record_property) -> None:
+    """Prismatic knees: every grid stance is out of reach (was 144 numerical IKs, 12 s)."""
+    urdf = _clean_phantomx(tmp_path, prismatic_knees=True)
+    run = cli("stand", str(urdf), *_feet_args(), cwd=tmp_path)
+    _record(record_property, run)
+    bounded(run)
+    assert run.status == 1 and "out of reach" in run.lines[-1], run.stderr
+
+
+@pytest.mark.parametrize(
+    "args, option",
+    [(["--duration", "15000"], "duration="), (["--duration", "1e300"], "duration=")],
+)
+def test_simulate_cli_steps_capped(tmp_path: Path, args, option, record_property) -> None:
+    run = cli("simulate", *args, cwd=tmp_path)
+    _record(record_property, run)
+    line = refused(run, option)
+    assert "physics steps; at most 5000000" in line, line
+    bounded(run)
+
+
+_API = """
+import sys
+from hexapod_kin.exceptions import ParameterError
+{imports}
+try:
+    {call}
+except ParameterError as exc:
+    print(exc.parameter)
+    print(exc)
+    sys.exit(0)
+sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize(
+    "imports, call, parameter, phrase",
+    [
+        ("from hexapod_kin.simulate import simulate", "simulate(settle=1e9)", "settle", "steps"),
+        ("from hexapod_kin.simulate import simulate", "simulate(timestep=1e-7)", "timestep", ""),
+        ("from hexapod_kin.simulate import simulate", "simulate(timestep=5e-324)", "timestep", ""),
+        ("from hexapod_kin.simulate import simulate", "simulate(settle=1e308)", "settle", ""),
+        ("from hexapod_kin.simulate import simulate", "simulate(duration=1e7)", "duration", ""),
+        ("from hexapod_kin.simulate import simulate", "simulate(settle=-1)", "settle", ">= 0"),
+        (
+            "from hexapod_kin.simulate import stand_forces",
+            "stand_forces(settle=1e9)",
+            "settle",
+            "steps",
+        ),
+        (
+            "from hexapod_kin.gait import as_whole_body",
+            "as_whole_body(URDF, feet={f'tibia_{s}': (0, 1e308, 0) for s in SIDES})",
+            "feet",
+            "larger than the robot",
+        ),
+        (
+            "import pinocchio as pin\nfrom hexapod_kin.gait.legs import parse_feet",
+            "parse_feet('tibia_lf:5,0,0', pin.buildModelFromUrdf(URDF))",
+            "feet",
+            "larger than the robot",
+        ),
+    ],
+)
+def test_api_refuses_unbounded_work_at_once(
+    tmp_path: Path, imports, call, parameter, phrase, record_property
+) -> None:
+    urdf = _clean_phantomx(tmp_path)
+    head = f"URDF = {str(urdf)!r}\nSIDES = {SIDES35!r}\n{imports}"
+    run = py(_API.format(imports=head, call=call), cwd=tmp_path)
+    _record(record_property, run)
+    bounded(run)
+    assert run.status == 0, (run.status, run.stdout, run.stderr)
+    name, message = run.stdout.splitlines()[:2]
+    assert name == parameter and phrase in message, run.stdout
+
+
+@pytest.mark.parametrize(
+    "args, phrase",
+    [
+        (["stand", "--height", "1e308"], "height=1e+308 m is larger than the robot"),
+        (["stand", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
+        (["gait", "--foot-radius", "1e308"], "foot_radius=1e+308 m is larger than the robot"),
+        (["simulate", "--friction", "1e308"], "friction=1e+308 is not allowed"),  # was 15 s/0.5 s
+    ],
+)
+def test_standing_numbers_larger_than_the_robot(tmp_path: Path, args, phrase, record_property):
+    run = cli(*args, cwd=tmp_path)
+    _record(record_property, run)
+    refused(run, phrase)
+    bounded(run)

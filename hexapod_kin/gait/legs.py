@@ -22,11 +22,13 @@ from typing import Any
 import numpy as np
 
 from .._reader import FORMATS, read_data
-from .._tree import leg_fk
+from .._tree import leg_fk, robot_size
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 
 __all__ = [
     "BodyIK",
+    "check_offsets",
+    "check_radius",
     "FootSpec",
     "GaitError",
     "LegTree",
@@ -39,6 +41,10 @@ __all__ = [
     "offset_of",
     "parse_feet",
 ]
+
+#: A foot offset (and a foot radius) may be at most this many times the robot's size
+#: (:func:`hexapod_kin._tree.robot_size`).
+OFFSET_FACTOR = 2.0
 
 #: ``frame:x,y,z`` (the offset optional: ``frame`` alone is the frame's origin).
 _SPEC = re.compile(r"^\s*([^:\s,]+)\s*(?::\s*([^:]+))?$")
@@ -147,17 +153,60 @@ def _split_specs(text: str) -> list[str]:
     return items
 
 
-def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
+def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
+    """Refuse a foot offset larger than the robot (:data:`OFFSET_FACTOR` × its size).
+
+    Raises:
+        ParameterError: The first such foot, its offset and the allowed range.
+
+    """
+    size = robot_size(model)
+    limit = OFFSET_FACTOR * size
+    for f in feet:
+        big = max(abs(v) for v in f.offset)
+        if big > limit:
+            raise ParameterError(
+                f"foot {f.frame}: offset {','.join(f'{v:.6g}' for v in f.offset)} m is larger "
+                f"than the robot; allowed |x|, |y|, |z| <= {limit:.4g} m ({OFFSET_FACTOR:g} x "
+                f"the robot's size {size:.4g} m)",
+                parameter="feet",
+                value=f"{f.frame}:{','.join(repr(v) for v in f.offset)}",
+                allowed=[-limit, limit],
+            )
+
+
+def check_radius(radius: float, model: Any) -> float:
+    """``radius`` [m], refused when over :data:`OFFSET_FACTOR` × the robot's size.
+
+    Raises:
+        ParameterError: A foot radius larger than the robot.
+
+    """
+    size = robot_size(model)
+    limit = OFFSET_FACTOR * size
+    if radius > limit:
+        raise ParameterError(
+            f"foot_radius={radius!r} m is larger than the robot; allowed 0 to {limit:.4g} m "
+            f"({OFFSET_FACTOR:g} x the robot's size {size:.4g} m)",
+            parameter="foot_radius",
+            value=radius,
+            allowed=[0.0, limit],
+        )
+    return radius
+
+
+def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
     """Foot specifications from any of the accepted forms (``None`` stays ``None``).
 
     Accepted: ``"tibia_lf:0,0.16,0.029"`` (several separated by spaces, ``;`` or commas), a
     list of such strings, a mapping ``{"tibia_lf": (x, y, z), ...}``, a sequence of
     :class:`FootSpec`, or a table file (``.yaml``/``.yml``/``.toml``/``.json``) holding either
     such a mapping or ``feet = [{frame = "...", offset = [x, y, z]}, ...]`` (optionally under
-    a ``feet`` key). Offsets in [m], in the named frame.
+    a ``feet`` key). Offsets in [m], in the named frame; with ``model`` (a Pinocchio model)
+    each is checked against the robot's size (:func:`check_offsets`).
 
     Raises:
-        ParameterError: A malformed spec (named).
+        ParameterError: A malformed spec (named), an offset larger than the robot.
         SourceError: A feet file refused by the strict reader (:mod:`hexapod_kin._reader`).
 
     """
@@ -167,7 +216,8 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
         data = read_data(spec, "feet")
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
-        return parse_feet([data] if isinstance(data, str) else data)  # a text is a spec, not a file
+        # a text is a spec, not a file
+        return parse_feet([data] if isinstance(data, str) else data, model)
     out: list[FootSpec] = []
     if isinstance(spec, str):
         items: list[Any] = _split_specs(spec)
@@ -208,6 +258,8 @@ def parse_feet(spec: Any) -> tuple[FootSpec, ...] | None:
         raise ParameterError(
             f"feet: a frame is named twice in {frames}", parameter="feet", value=frames
         )
+    if model is not None:
+        check_offsets(tuple(out), model)
     return tuple(out)
 
 
@@ -277,6 +329,7 @@ def find_legs(
         into q[7:]) and the ids of the joints that belong to no leg.
 
     Raises:
+        ParameterError: A foot offset larger than the robot (:func:`check_offsets`).
         ConfigurationError: A frame that does not exist, a foot on the floating body, legs
             sharing joints, no leg found.
 
@@ -291,6 +344,7 @@ def find_legs(
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     found: list[tuple[str, int, np.ndarray]] = []  # (frame name, joint id, foot in joint)
     if feet is not None:
+        check_offsets(feet, model)
         names = [f.name for f in model.frames]
         for spec in feet:
             if not model.existFrame(spec.frame):

@@ -8,6 +8,12 @@ box a default step sweeps around each neutral foot (± half the stride along x a
 height up), and when some joint keeps less than :data:`MIN_ROOM` of its range there, the
 stance (one body height, one reach for every leg) that keeps the most range is searched on a
 grid of reaches and depths.
+
+The search is bounded: a grid stance is tried by IK only when every target of the box lies
+within each leg's reach (:func:`max_reach`, a bound from the leg's geometry) and every
+numerically solved leg reaches its neutral foot from the seed (one batched solve for the
+whole grid: a necessary condition of the full check); when a leg is solved numerically, at
+most :data:`MAX_TRIES` stances are tried.
 """
 
 from __future__ import annotations
@@ -24,10 +30,81 @@ MIN_ROOM = 0.1
 #: step height 0.03 m), in the body frame [m].
 _STRIDE, _LIFT = 0.05, 0.03
 
+#: At most this many grid stances are checked by numerical IK (those past the cheap tests, in
+#: grid order) when a leg has no closed form; closed-form legs are checked at every one.
+MAX_TRIES = 6
+
 
 def _box(stride: float, lift: float) -> np.ndarray:
     h = stride / 2
     return np.array([[0, 0, 0], [h, 0, 0], [-h, 0, 0], [0, h, 0], [0, -h, 0], [0, 0, lift]])
+
+
+def max_reach(wb: Any) -> np.ndarray:
+    """(L,) an upper bound of the distance from each leg's first joint to its foot [m].
+
+    The leg's span at q = 0 (:attr:`~.robot.WholeBody.leg_span` per leg: the lengths from
+    joint to joint to the foot) plus the travel (upper − lower) of its prismatic joints: a
+    revolute joint turns about its own origin (the next length is kept), a prismatic one
+    lengthens the next by at most its travel (``inf`` when unbounded).
+    """
+    tr = wb._tree
+    out = np.array(wb._span, dtype=float)
+    for i, cols in enumerate(wb._leg_cols):
+        c = list(cols)
+        pr = np.asarray(tr.prismatic[c], dtype=bool)
+        if pr.any():
+            out[i] += float(np.sum((wb.upper[c] - wb.lower[c])[pr]))
+    return out
+
+
+def _beyond_reach(wb: Any, targets_body: np.ndarray) -> np.ndarray:
+    """(..., ) True where a body-frame target (..., L, 3) is out of its leg's reach by geometry."""
+    first = np.array([wb._tree.placements[c[0]][:3, 3] for c in wb._leg_cols])
+    dist = np.linalg.norm(targets_body - first, axis=-1)
+    return np.asarray(np.any(dist > max_reach(wb) * (1 + 1e-9) + 1e-12, axis=-1))
+
+
+def _centre_reached(wb: Any, heights: np.ndarray, reaches: np.ndarray) -> np.ndarray:
+    """(K,) False where a numerically solved leg misses its neutral foot (stance k) from the seed.
+
+    The same first solve :meth:`~.robot.WholeBody.body_ik` runs for the box's centre (its
+    first sample), for all K stances in one batch: a miss there makes :func:`room` −1.
+    """
+    from .leg_ik import solve_legs
+
+    k = len(heights)
+    ok = np.ones(k, dtype=bool)
+    groups: dict[int, list[int]] = {}
+    for leg, closed in enumerate(wb._closed):
+        if closed is None:
+            groups.setdefault(len(wb._leg_cols[leg]), []).append(leg)
+    if not groups or not k:
+        return ok
+    seed = wb.neutral_q()
+    tr = wb._tree
+    for legs in groups.values():
+        cols = np.array([wb._leg_cols[j] for j in legs])  # (G, m)
+        g = len(legs)
+        tgt = np.empty((k, g, 3))
+        tgt[:, :, :2] = wb.mounts[legs, None, :2, 3].transpose(1, 0, 2) + (
+            reaches[:, None, None] * wb._reach_dir[legs][None]
+        )
+        tgt[:, :, 2] = (wb.foot_radius - heights)[:, None]
+        tile = (k,) + (1,) * (cols.ndim - 1)
+        _q, _res, reached = solve_legs(
+            np.tile(tr.placements[cols], tile + (1, 1)),
+            np.tile(tr.axes[cols], tile + (1,)),
+            np.tile(tr.prismatic[cols], tile),
+            np.tile(np.array([wb._foot[j][:3, 3] for j in legs]), (k, 1)),
+            np.tile(wb.lower[cols], tile),
+            np.tile(wb.upper[cols], tile),
+            tgt.reshape(1, k * g, 3),
+            np.tile(seed[cols], tile),
+            span=float(wb._span[legs].max()),
+        )
+        ok &= reached.reshape(k, g).all(axis=1)
+    return ok
 
 
 def room(wb: Any, body_height: float, reach: Any = None) -> float:
@@ -49,6 +126,8 @@ def room(wb: Any, body_height: float, reach: Any = None) -> float:
     base = np.repeat(np.eye(4)[None], len(box), axis=0)
     base[:, 2, 3] = body_height
     targets = feet[None] + box[:, None, :]
+    if bool(np.any(_beyond_reach(wb, targets))):  # body frame: z below the body
+        return -1.0
     targets[:, :, 2] += body_height
     ik = wb.body_ik(base, targets, strict=False)
     if not bool(np.all(ik.reached)):
@@ -64,21 +143,36 @@ def roomiest_stance(wb: Any) -> tuple[float, float] | None:
     ``None`` when the robot's geometric default already keeps :data:`MIN_ROOM` of every
     joint's range over the default step box, or when no grid stance does better than it.
     The grid: reaches 0.2–0.9 and depths 0.1–0.85 of the legs' mean span, 12 × 12, within
-    0.92 of the span from the mount; ties go to the stance nearest the default.
+    0.92 of the span from the mount; ties go to the stance nearest the default. Bounded (see
+    the module doc).
     """
     here = room(wb, wb.body_height)
     if here >= MIN_ROOM:
         return None
     span = wb.leg_span
     mount_z = float(np.min(wb.mounts[:, 2, 3]))
+    grid = [
+        (float(d - mount_z), float(r))
+        for r in np.linspace(0.2, 0.9, 12) * span
+        for d in np.linspace(0.1, 0.85, 12) * span
+        if math.hypot(r, d) <= 0.92 * span
+    ]
+    if not grid:
+        return None
+    heights, reaches = np.array(grid).T
+    feet = np.empty((len(grid), wb.n_legs, 3))
+    feet[:, :, :2] = wb.mounts[None, :, :2, 3] + reaches[:, None, None] * wb._reach_dir[None]
+    feet[:, :, 2] = (wb.foot_radius - heights)[:, None]
+    box = _box(_STRIDE, _LIFT)
+    far = _beyond_reach(wb, feet[:, None] + box[None, :, None, :]).any(axis=1)
+    live = np.flatnonzero(~far)
+    live = live[_centre_reached(wb, heights[live], reaches[live])]
+    if any(c is None for c in wb._closed):  # numerical legs: a bounded number of tries
+        live = live[:MAX_TRIES]
     best_score, best_dist, choice = here, math.inf, None
-    for r in np.linspace(0.2, 0.9, 12) * span:
-        for d in np.linspace(0.1, 0.85, 12) * span:
-            if math.hypot(r, d) > 0.92 * span:
-                continue
-            height = float(d - mount_z)
-            score = room(wb, height, r)
-            dist = math.hypot(r - wb.foot_reach, height - wb.body_height)
-            if score > best_score or (score == best_score and choice and dist < best_dist):
-                best_score, best_dist, choice = score, dist, (height, float(r))
+    for height, r in (grid[i] for i in live):
+        score = room(wb, height, r)
+        dist = math.hypot(r - wb.foot_reach, height - wb.body_height)
+        if score > best_score or (score == best_score and choice and dist < best_dist):
+            best_score, best_dist, choice = score, dist, (height, r)
     return choice

@@ -19,8 +19,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..exceptions import HexapodKinError, ParameterError
+from .._tree import robot_size
+from ..exceptions import HexapodKinError, ParameterError, positive
 from ..params import Hexapod
+from .legs import OFFSET_FACTOR
 from .robot import WholeBody, as_whole_body, body_pose
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -80,7 +82,8 @@ def standing_pose(
         foot_radius: Contact radius of the feet [m].
 
     Raises:
-        ParameterError: Bad numbers.
+        ParameterError: Bad numbers; ``height``, ``reach`` or a ``shift`` component larger
+            than :data:`~.legs.OFFSET_FACTOR` × the robot's size.
         GaitError: A foot out of reach or a joint beyond its limit (names the leg).
 
     """
@@ -101,8 +104,19 @@ def standing_pose(
         raise ParameterError(
             f"shift={shift!r}: two finite numbers dx, dy [m]", parameter="shift", value=shift
         )
+    r = None if reach is None else positive("reach", reach, allow_zero=True)
+    limit = OFFSET_FACTOR * robot_size(wb.model)
+    for name, v in (("height", h), ("reach", r), ("shift", float(np.abs(sh).max()))):
+        if v is not None and abs(v) > limit:  # refused before any IK (no overflow)
+            raise ParameterError(
+                f"{name}={v!r} m is larger than the robot; allowed up to {limit:.4g} m "
+                f"({OFFSET_FACTOR:g} x the robot's size)",
+                parameter=name,
+                value=v,
+                allowed=[0.0, limit],
+            )
     base = body_pose([0.0, 0.0, h])
-    pts = wb.neutral_feet(reach)
+    pts = wb.neutral_feet(r)
     pts[:, :2] -= sh
     pts[:, 2] = wb.foot_radius
     ik = wb.body_ik(base, pts, strict=True)

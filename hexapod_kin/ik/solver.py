@@ -33,7 +33,10 @@ from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import Task, build_task, build_tasks
 
-__all__ = ["STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
+__all__ = ["MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
+
+#: Cap on ``max_iter`` (the residual history holds max_iter + 1 values per target).
+MAX_ITER = 100_000
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
 STATUSES: tuple[str, ...] = (
@@ -66,7 +69,7 @@ class IKOptions:
         weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
         tol: Convergence threshold on the position error in [m].
         rot_tol: Convergence threshold on the orientation error in [rad].
-        max_iter: Accepted steps per attempt.
+        max_iter: Accepted steps per attempt (1 to :data:`MAX_ITER`).
         restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
         within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
         posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
@@ -99,6 +102,8 @@ class IKOptions:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
                 raise _bad(name, v, f"an int >= {least}")
+        if self.max_iter > MAX_ITER:
+            raise _bad("max_iter", self.max_iter, f"an int from 1 to {MAX_ITER}")
         if self.restarts > N_STARTS:
             raise _bad("restarts", self.restarts, f"at most {N_STARTS}")
         if isinstance(self.posture, str) and self.posture != "middle":

@@ -18,9 +18,10 @@ from .scene import (
     _hermite,
     _mujoco,
     _robot,
+    check_steps,
     scene_mjcf,
 )
-from .standing import StandForces, stand_forces
+from .standing import STAND_SETTLE, StandForces, stand_forces
 
 __all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "simulate"]
 
@@ -245,7 +246,9 @@ def simulate(
         armature: Servo rotor inertia per leg joint [kg·m²] (see :func:`scene_mjcf`).
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
         timestep: Physics step [s]; must divide the plan's sample interval.
-        settle: Time [s] the robot stands at the first pose before the replay (≥ 0).
+        settle: Time [s] the robot stands at the first pose before the replay (≥ 0). The
+            replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
+            the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
         stand: Also run :func:`stand_forces` (flat ground).
         **walk_options: More keywords of :func:`~hexapod_kin.gait.walk.walk` (when planning).
 
@@ -253,7 +256,8 @@ def simulate(
         A :class:`SimRun`.
 
     Raises:
-        ParameterError: Bad values; a terrain the scene cannot build.
+        ParameterError: Bad values; a terrain the scene cannot build; too many physics
+            steps (names the option).
         GaitError: The plan fails (as :func:`~hexapod_kin.gait.walk.walk`; pass
             ``strict=False`` to replay a failing plan).
         OptionalDependencyError: MuJoCo is not installed.
@@ -265,6 +269,20 @@ def simulate(
     from ..gait.walk import GaitRun, walk
 
     _mujoco()
+    try:
+        wait = float(settle)
+    except (TypeError, ValueError):
+        raise ParameterError(f"settle={settle!r}: a time >= 0 s", parameter="settle") from None
+    if isinstance(run_or_robot, GaitRun):
+        t_run = np.asarray(run_or_robot.t, dtype=float)
+        walked = float(t_run[-1] - t_run[0]) if len(t_run) else 0.0
+    else:
+        try:
+            walked = float(duration)
+        except (TypeError, ValueError):
+            walked = 0.0  # the walk refuses it
+    spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
+    check_steps(timestep, spans)  # bounded work: refused before planning
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
@@ -327,17 +345,13 @@ def simulate(
             value=sc.timestep,
             allowed=f"{h:g} / k",
         )
-    wait = float(settle)
-    if not (math.isfinite(wait) and wait >= 0):
-        raise ParameterError(f"settle={settle!r}: a time >= 0 s", parameter="settle")
     cols = [list(run.joint_names).index(j) for j in sc.joint_names]
     q_plan = np.asarray(run.q)[:, cols]
     qd_plan = np.asarray(run.qdot)[:, cols]
     lift = _lift(run, sc)
     planned = np.array(run.base_poses, dtype=float)
     planned[:, 2, 3] += lift
-    ref, rate = _hermite(q_plan, qd_plan, h, sub)
-    ctrl = ref + (sc.kv / sc.kp) * rate
+    chunk = max(1, 65536 // sub)  # intervals of servo targets computed at a time
     eng = _Engine(sc)
     mj, m, d = eng.mj, eng.model, eng.data
     support = np.asarray(run.support)
@@ -369,12 +383,15 @@ def simulate(
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
     for i in range(n - 1):
+        if i % chunk == 0:
+            ref, rate = _hermite(q_plan[i : i + chunk + 1], qd_plan[i : i + chunk + 1], h, sub)
+            ctrl = ref + (sc.kv / sc.kp) * rate
         stance = support[i].tolist()
         for k in range(sub):
             if in_order:
-                d.ctrl[:] = ctrl[i, k]
+                d.ctrl[:] = ctrl[i % chunk, k]
             else:
-                d.ctrl[eng.act] = ctrl[i, k]
+                d.ctrl[eng.act] = ctrl[i % chunk, k]
             mj.mj_step(m, d)
             others, feet = eng.scan()
             for g0, g1 in others:
@@ -407,6 +424,7 @@ def simulate(
             friction=sc.friction,
             contact_time=sc.contact_time,
             timestep=sc.timestep,
+            settle=STAND_SETTLE,
         )
     figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)
     return _summary(run, sc, t, base, planned, qs, forces, *figures)

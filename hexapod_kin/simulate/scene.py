@@ -15,7 +15,10 @@ import numpy as np
 from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 
-__all__ = ["SCENE_TERRAINS", "SimScene", "scene_mjcf"]
+__all__ = ["MAX_FRICTION", "SCENE_TERRAINS", "SimScene", "check_steps", "scene_mjcf"]
+
+#: The largest sliding friction coefficient a scene takes (a coefficient of 100 is glue).
+MAX_FRICTION = 100.0
 
 #: Terrains the scene can build (the named ones of :mod:`hexapod_kin.gait.terrain`).
 SCENE_TERRAINS = ("flat", "slope", "step")
@@ -224,7 +227,7 @@ def scene_mjcf(
         terrain: ``flat``, ``slope`` (8° up along +x) or ``step`` (0.02 m up at x = 0.25 m).
         foot_radius: Foot sphere radius [m] (default the robot's ``foot_radius``; point
             feet, radius 0, are :data:`POINT_FOOT` spheres).
-        friction: Sliding friction coefficient of every geom (> 0).
+        friction: Sliding friction coefficient of every geom (> 0, <= :data:`MAX_FRICTION`).
         kp: Position gain [N·m/rad] (> 0); the force is clamped to the joints' effort limits.
             Default :func:`servo_defaults` (scaled to the robot's weight and size).
         kv: Velocity gain [N·m·s/rad] (> 0); default ``0.01 s × kp``.
@@ -263,6 +266,13 @@ def scene_mjcf(
             ("contact_time", contact_time),
         )
     )
+    if mu > MAX_FRICTION:  # beyond it MuJoCo's solver crawls (1e308: 15 s per simulated 0.5 s)
+        raise ParameterError(
+            f"friction={friction!r} is not allowed; a coefficient from 0 to {MAX_FRICTION:g}",
+            parameter="friction",
+            value=friction,
+            allowed=f"(0, {MAX_FRICTION:g}]",
+        )
     arm = 0.0 if armature == 0 else positive("armature", armature)
     if tc < 2 * dt:
         raise ParameterError(
@@ -583,6 +593,42 @@ class _Engine:
             tx, ty, tz = vx - vn * nx, vy - vn * ny, vz - vn * nz
             feet.append((leg_of[foot], math.sqrt(tx * tx + ty * ty + tz * tz), c))
         return others, feet
+
+
+def check_steps(timestep: Any, spans: dict[str, float], default_timestep: float = 1e-3) -> float:
+    """Refuse a simulation of more than ``dynamics.MAX_STEPS`` physics steps; the timestep [s].
+
+    ``spans`` maps each option to the simulated time it adds [s] (e.g. ``settle``, the
+    walk's ``duration``). Past the cap the refusal names the option adding the most steps,
+    or ``timestep`` when the spans would fit at ``default_timestep``.
+
+    Raises:
+        ParameterError: A timestep that is not > 0, a span not finite >= 0, too many steps.
+
+    """
+    from ..dynamics.forward import MAX_STEPS
+
+    dt = positive("timestep", timestep)
+    for name, span in spans.items():
+        if not (isinstance(span, (int, float)) and math.isfinite(span) and span >= 0):
+            raise ParameterError(
+                f"{name}={span!r}: a time >= 0 s", parameter=name, value=span, allowed=">= 0"
+            )
+    total = sum(spans.values())
+    if total / dt <= MAX_STEPS:
+        return dt
+    name = max(spans, key=lambda k: spans[k])
+    if dt < default_timestep and total / default_timestep <= MAX_STEPS:
+        name = "timestep"
+    value = dt if name == "timestep" else spans[name]
+    raise ParameterError(
+        f"{name}={value!r}: {' + '.join(f'{k} {v:g} s' for k, v in spans.items())} at "
+        f"timestep {dt:g} s is {total / dt:.3g} physics steps; at most {MAX_STEPS} (a larger "
+        f"timestep or less simulated time)",
+        parameter=name,
+        value=value,
+        allowed=f"(simulated time) / timestep <= {MAX_STEPS}",
+    )
 
 
 def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:

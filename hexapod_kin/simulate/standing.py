@@ -9,9 +9,12 @@ import numpy as np
 
 from .._fields import fields_dict, read_only
 from ..exceptions import ParameterError, positive
-from .scene import SimScene, _Engine, _robot, scene_mjcf
+from .scene import SimScene, _Engine, _robot, check_steps, scene_mjcf
 
-__all__ = ["StandForces", "stand_forces"]
+__all__ = ["STAND_SETTLE", "StandForces", "stand_forces"]
+
+#: The simulated time [s] of :func:`stand_forces` (its ``settle``'s default).
+STAND_SETTLE = 2.0
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,7 @@ def stand_forces(
     robot: Any = None,
     *,
     scene: SimScene | None = None,
-    settle: float = 2.0,
+    settle: float = STAND_SETTLE,
     **scene_options: Any,
 ) -> StandForces:
     """The robot standing in MuJoCo at :func:`hexapod_kin.dynamics.stand`'s pose, flat ground.
@@ -81,15 +84,19 @@ def stand_forces(
     Args:
         robot: As :func:`scene_mjcf`.
         scene: A flat :class:`SimScene` of the robot (default built from ``scene_options``).
-        settle: Simulated time [s] (> 0.2).
+        settle: Simulated time [s] (> 0.2; at most ``dynamics.MAX_STEPS`` timesteps).
         **scene_options: Passed to :func:`scene_mjcf` (``foot_radius``, ``kp``...;
             ``armature`` defaults to 0 here).
 
     Raises:
-        ParameterError: Bad values, a scene that is not flat.
+        ParameterError: Bad values, a scene that is not flat, too many physics steps.
         OptionalDependencyError: MuJoCo is not installed.
 
     """
+    dur = positive("settle", settle)
+    check_steps(
+        scene_options.get("timestep", 1e-3) if scene is None else scene.timestep, {"settle": dur}
+    )
     wb = _robot(robot, scene_options.get("feet"))
     scene_options.setdefault("armature", 0.0)
     scene_options.setdefault("kp", 300.0)
@@ -99,7 +106,6 @@ def stand_forces(
         raise ParameterError(
             f"stand_forces needs a flat scene, not {sc.terrain!r}", parameter="scene"
         )
-    dur = positive("settle", settle)
     st = _stance(wb)
     eng = _Engine(sc)
     q = np.zeros(len(sc.joint_names))
