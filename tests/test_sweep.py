@@ -424,9 +424,11 @@ def _cli(out: Path) -> list[str]:
 
 def _run_until_chunks(cmd: list[str], parts: Path, n: int, sig: int) -> int:
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    t0 = time.monotonic()
+    guard = time.monotonic() + 900  # guards a hang only (never a speed): generous
     while len(list(parts.glob("chunk_*.npz"))) < n and proc.poll() is None:
-        assert time.monotonic() - t0 < 120
+        if time.monotonic() > guard:
+            proc.kill()
+            pytest.fail(f"hang: fewer than {n} chunks after 900 s")
         time.sleep(0.01)
     proc.send_signal(sig)
     proc.communicate(timeout=60)
