@@ -508,7 +508,10 @@ def test_cli_errors_are_one_line(tmp_path):
     )
 
 
-def test_cli_plot(tmp_path, capsys):
+def test_cli_plot(tmp_path, capsys, drawn):
+    """The front panel draws the table's feasible designs, and circles the non-dominated ones."""
+    import csv
+
     from hexapod_kin.cli import main
 
     png = tmp_path / "f.png"
@@ -536,6 +539,17 @@ def test_cli_plot(tmp_path, capsys):
     )
     text = capsys.readouterr().out
     assert "best (max stride)" in text and "±" in text
+    with open(tmp_path / "p.csv", newline="", encoding="utf-8") as fh:
+        rows = [r for r in csv.DictReader(fh) if float(r["feasible"]) > 0]
+    designs = np.array([[float(r[k]) for k in ("stride", "volume", "sigma_min")] for r in rows])
+    dots, circles = drawn[-1].axes[3].collections[:2]  # panels first, then colour bars
+    np.testing.assert_allclose(dots.get_offsets(), designs[:, :2], rtol=1e-12)
+    # brute force: a design is on the front iff no other is >= on all three and > on one
+    front = [
+        not any(np.all(o >= d) and np.any(o > d) for o in designs) for d in designs
+    ]
+    np.testing.assert_allclose(circles.get_offsets(), designs[front, :2], rtol=1e-12)
+    assert 0 < sum(front) < len(designs)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
