@@ -115,7 +115,15 @@ def test_console_script_demo(tmp_path):
     )
     res = subprocess.run([exe, "demo", "--out", str(tmp_path)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert (tmp_path / "hexabot_leg.urdf").exists() and "det(J_position)" in res.stdout
+    assert "det(J_position)" in res.stdout
+    # the demo's URDF is the seeds' leg: the same foot as the preset's, by FK
+    import numpy as np
+
+    import hexapod_kin as hk
+
+    written, preset = hk.load(str(tmp_path / "hexabot_leg.urdf")), hk.load("hexabot_leg")
+    for q in preset.random_q(5, seed=4):
+        np.testing.assert_allclose(written.fk(q), preset.fk(q), atol=1e-12)
 
 
 # --------------------------------------------------------------------- one robot argument

@@ -619,7 +619,7 @@ def test_cli_pendulum_html_and_short_runs(
     assert d["decay_rate_exact"] == 0.0
     # the page animates the undamped swing from 30 deg: the exact solution (Jacobi sn),
     # theta(t) = 2 asin(k sn(K - w t, k^2)), k = sin(theta0 / 2), w^2 = m g l_c / I
-    (t, q), = shown
+    ((t, q),) = shown
     i, m, lc = hand_pendulum()
     k = math.sin(math.radians(30) / 2)
     sn = ellipj(float(ellipk(k**2)) - math.sqrt(m * G * lc / i) * t, k**2)[0]

@@ -545,9 +545,7 @@ def test_cli_plot(tmp_path, capsys, drawn):
     dots, circles = drawn[-1].axes[3].collections[:2]  # panels first, then colour bars
     np.testing.assert_allclose(dots.get_offsets(), designs[:, :2], rtol=1e-12)
     # brute force: a design is on the front iff no other is >= on all three and > on one
-    front = [
-        not any(np.all(o >= d) and np.any(o > d) for o in designs) for d in designs
-    ]
+    front = [not any(np.all(o >= d) and np.any(o > d) for o in designs) for d in designs]
     np.testing.assert_allclose(circles.get_offsets(), designs[front, :2], rtol=1e-12)
     assert 0 < sum(front) < len(designs)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -117,9 +117,7 @@ def test_check_rows_refuses_wrong_figures() -> None:
 def test_bench_quick_prints_ratios_for_every_section(section: str) -> None:
     rows = _quick(section)
     compared = [
-        r
-        for r in rows
-        if any(COMPARISON.search(k) and (_number(v) or 0) > 0 for k, v in r.items())
+        r for r in rows if any(COMPARISON.search(k) and (_number(v) or 0) > 0 for k, v in r.items())
     ]
     assert compared, f"no row of section {section} compares against a peer: {rows[:2]}"
     check_rows(section, rows)
