@@ -21,8 +21,10 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
    whose signal came last (the most state written): the same status and the same files as
    the reference run. Nothing an interrupt leaves blocks or changes the next run.
 
-``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset, the regular suite runs 2 tries of the
-commands in :data:`REGULAR`; set (the ``soak`` step of ``.ci/run`` sets 20), every command.
+These runs are marked ``soak``: the default run leaves them out (pyproject's addopts) and the
+``soak`` step of ``.ci/run`` runs them. ``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset
+(``pytest -m soak``), 2 tries of the commands in :data:`REGULAR`; set (``.ci/run`` sets 20),
+every command.
 ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with its outcome counts.
 """
 
