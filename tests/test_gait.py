@@ -46,6 +46,11 @@ REACH = 0.16  # walk() default foot_reach [m]
 R_FOOT = R_HIP + REACH
 
 
+#: Two animation frames of the page: what it drew before this call is on the canvas (a wait
+#: counted in frames, never in milliseconds: a busy machine only makes it longer).
+FRAMES = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
+
+
 @pytest.fixture(scope="module")
 def wb():
     return whole_body()
@@ -563,14 +568,14 @@ def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
         shots = {}
         for t in (0.2, 0.7):
             page.evaluate(f"hexapodKin.seek({t})")
-            page.wait_for_timeout(300)
+            page.evaluate(FRAMES)
             shots[t] = _pixels(page)
         page.evaluate("hexapodKin.setVisible('robot', false)")
         page.evaluate("hexapodKin.setVisible('trace', false)")
-        page.wait_for_timeout(300)
+        page.evaluate(FRAMES)
         overlays_only = _pixels(page)
         page.evaluate("hexapodKin.setVisible('overlays', false)")
-        page.wait_for_timeout(300)
+        page.evaluate(FRAMES)
         empty = _pixels(page)
     finally:
         page.close()

@@ -39,6 +39,12 @@ umsgpack = pytest.importorskip("umsgpack")
 
 
 # ====================================================================== helpers
+
+#: Two animation frames of the page: what it drew before this call is on the canvas (a wait
+#: counted in frames, never in milliseconds: a busy machine only makes it longer).
+FRAMES = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
+
+
 def _alive(pid: int) -> bool:
     """True if ``pid`` exists and is not a zombie (a zombie has exited)."""
     try:
@@ -466,17 +472,17 @@ def test_exported_step_renders_and_moves_offline(browser, step_html):
             "() => window.hexapodKin && window.hexapodKin.ready", timeout=60000
         )
         page.page.evaluate(f"hexapodKin.seek({times[0]})")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         start = page.pixels()
         page.page.evaluate(f"hexapodKin.seek({times[len(times) // 2]})")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         middle = page.pixels()
         for part in ("robot", "trace", "frames", "singular"):
             page.page.evaluate(f"hexapodKin.setVisible('{part}', false)")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         empty = page.pixels()
         page.page.evaluate("hexapodKin.setVisible('robot', true)")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         robot_only = page.pixels()
     finally:
         page.close()
@@ -504,10 +510,10 @@ def test_mesh_page_unpacks_and_computes_normals(browser, tmp_path):
                   n += 1; if (o.geometry.getAttribute("normal")) { shaded += 1; } } });
               return [n, shaded]; }"""
         )
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         with_robot = page.pixels()
         page.page.evaluate("hexapodKin.setVisible('robot', false)")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         without = page.pixels()
     finally:
         page.close()
@@ -570,10 +576,14 @@ def test_live_page_shows_the_hexapod(browser):
                 f".children).length >= {n}",
                 timeout=60000,
             )
-            page.page.wait_for_timeout(500)
+            page.page.evaluate(FRAMES)
             shown = page.pixels()
             v.set_visible("robot", False)
-            page.page.wait_for_timeout(500)
+            page.page.wait_for_function(  # the message arrived (however long that took)
+                "() => viewer.scene_tree.find(['meshcat','robot']).object.visible === false",
+                timeout=60000,
+            )
+            page.page.evaluate(FRAMES)
             hidden = page.pixels()
         finally:
             page.close()
@@ -821,10 +831,10 @@ def test_package_empty_garbage_and_file_uri_meshes(browser, tmp_path):
             """() => { var n = 0; hexapodKin.viewer.scene.traverse(function (o) {
                  if (o.isMesh && o.geometry.index) { n += 1; } }); return n; }"""
         )
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         with_robot = page.pixels()
         page.page.evaluate("hexapodKin.setVisible('robot', false)")
-        page.page.wait_for_timeout(300)
+        page.page.evaluate(FRAMES)
         without = page.pixels()
     finally:
         page.close()
