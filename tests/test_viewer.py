@@ -54,7 +54,9 @@ def _alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
-def _wait_gone(pid: int, timeout: float = 15.0) -> bool:
+def _wait_gone(pid: int, timeout: float = 120.0) -> bool:
+    """True once ``pid`` has ended. ``timeout`` [s] only guards a hang (an orphan that never
+    ends): generous, so that a busy machine cannot fail the test."""
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         if not _alive(pid):
@@ -596,12 +598,12 @@ def test_no_orphan_after_exit_and_after_an_error():
     with viewer.Viewer(leg) as v:
         pid = v.pid
         assert _alive(pid)
-    assert _wait_gone(pid, 1.0)
+    assert _wait_gone(pid)
     with pytest.raises(RuntimeError, match="boom"):
         with viewer.Viewer(leg) as v:
             pid = v.pid
             raise RuntimeError("boom")
-    assert _wait_gone(pid, 1.0)
+    assert _wait_gone(pid)
 
 
 def test_no_orphan_when_the_parent_dies():
@@ -612,7 +614,7 @@ def test_no_orphan_when_the_parent_dies():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 3
     pid = int(out.stdout.split()[0])
-    assert _wait_gone(pid, 15.0), f"server {pid} survived its parent"
+    assert _wait_gone(pid), f"server {pid} survived its parent"
 
 
 def _call_in_thread(fn, limit: float = 60.0):
@@ -639,14 +641,14 @@ def test_no_hang_when_the_server_stops_answering():
         os.kill(pid, signal.SIGSTOP)  # alive but silent: the zmq timeout must fire
         exc = _call_in_thread(lambda: v.display(q))
         assert isinstance(exc, ViewerError) and "did not answer" in str(exc)
-    assert _wait_gone(pid, 1.0)  # close() also ends a stopped server
+    assert _wait_gone(pid)  # close() also ends a stopped server
 
 
 def test_no_hang_when_the_server_is_killed():
     leg = load("hexabot_leg")
     with viewer.Viewer(leg, timeout=1.0) as v:
         os.kill(v.pid, signal.SIGKILL)
-        assert _wait_gone(v.pid, 5.0)
+        assert _wait_gone(v.pid)
         exc = _call_in_thread(lambda: v.display(np.zeros(3)))
         assert isinstance(exc, ViewerError)
         exc = _call_in_thread(lambda: v.set_visible("robot", True))
