@@ -168,7 +168,7 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
 _Results = tuple[dict[str, dict], subprocess.CompletedProcess]
 
 
-def _run(paths: list[Path], timeout: float = 120.0) -> _Results:
+def _run(paths: list[Path], timeout: float = 600.0) -> _Results:
     """Load ``paths`` in one child process; map case stem -> result line."""
     proc = subprocess.run(
         [sys.executable, str(RUNNER), *map(str, paths)],
@@ -791,7 +791,7 @@ def test_cli_prints_the_loader_warnings_as_plain_lines() -> None:
     """``hexapod-kin: warning: ...``: one line per kind, no file:line, no source line."""
     env = {**os.environ, "PYTHONPATH": str(HERE.parent)}
     cmd = [sys.executable, "-m", "hexapod_kin", "fk", str(PHANTOMX), "--tip", "tibia_lf"]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
     assert done.returncode == 0, done.stderr
     lines = done.stderr.splitlines()
     assert [ln.split(": ")[3] for ln in lines] == ["meshes", "inertia"], lines

@@ -262,7 +262,7 @@ def _modules_after(code: str) -> set[str]:
         capture_output=True,
         text=True,
         check=True,
-        timeout=120,
+        timeout=600,
     )
     return set(json.loads(out.stdout.strip().splitlines()[-1]))
 

@@ -389,7 +389,7 @@ def test_replay_imports_nothing_heavy(env: First, tmp_path: Path) -> None:
         capture_output=True,
         text=True,
         env={**os.environ, "HEXAPOD_KIN_CACHE_DIR": str(env.cache)},
-        timeout=120,
+        timeout=600,
         check=False,
     )
     assert proc.returncode == 0, proc.stderr

@@ -431,7 +431,7 @@ def _run_until_chunks(cmd: list[str], parts: Path, n: int, sig: int) -> int:
             pytest.fail(f"hang: fewer than {n} chunks after 900 s")
         time.sleep(0.01)
     proc.send_signal(sig)
-    proc.communicate(timeout=60)
+    proc.communicate(timeout=600)
     return proc.returncode
 
 

@@ -611,7 +611,7 @@ def test_no_orphan_when_the_parent_dies():
         "import os, sys; from hexapod_kin.viewer import MeshcatServer; "
         "s = MeshcatServer(); print(s.pid, flush=True); os._exit(3)"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert out.returncode == 3
     pid = int(out.stdout.split()[0])
     assert _wait_gone(pid), f"server {pid} survived its parent"
