@@ -155,7 +155,12 @@ def test_foot_is_appended_on_every_legged_command():
     for cmd in (["stand"], ["gait"], ["simulate"], ["timeline", "gait", "-o", "x.csv"]):
         argv = [*cmd, "x.urdf", "--foot", feet[0], "--foot", feet[1], "--foot-radius", "0.01"]
         robot = robot_of(build_parser().parse_args(argv))
-        assert robot.feet == " ".join(feet) and robot.foot_radius == 0.01, cmd
+        # parsed before the robot loads: one spec per --foot, in order
+        assert [(f.frame, f.offset) for f in robot.feet] == [
+            ("a", (0.0, 0.0, 0.1)),
+            ("b", (0.0, 0.0, 0.2)),
+        ], cmd
+        assert robot.foot_radius == 0.01, cmd
         assert robot.source == "x.urdf"
 
 
