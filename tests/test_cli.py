@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -185,14 +186,30 @@ def test_gait_html_of_a_urdf_in_another_folder(tmp_path, monkeypatch, capsys):
     pytest.importorskip("umsgpack")
     robots_dir = tmp_path / "robots"
     robots_dir.mkdir()
-    (robots_dir / "hexapod.urdf").write_text(hk.to_urdf("hexapod"))
+    import hexapod_kin.viewer.walk as walk_pages
+
+    drawn_joints: list[tuple[str, ...]] = []
+    real = walk_pages.render_html
+
+    def spy(model, *args, **kwargs):
+        drawn_joints.append(tuple(model.joint_names))
+        return real(model, *args, **kwargs)
+
+    monkeypatch.setattr(walk_pages, "render_html", spy)
+    text = hk.to_urdf("hexapod")
+    assert text.count('"leg1_hip"') == 1
+    # the file's robot differs from the preset by one joint's name
+    (robots_dir / "hexapod.urdf").write_text(text.replace('"leg1_hip"', '"leg1_hip_there"'))
     here = tmp_path / "here"
     here.mkdir()
     monkeypatch.chdir(here)
     page = here / "walk.html"
     code = main(["gait", "../robots/hexapod.urdf", "--duration", "0.5", "--html", str(page)])
     assert code == 0, capsys.readouterr().err
-    assert page.stat().st_size > 10_000
+    ((*joints,),) = drawn_joints
+    assert "leg1_hip_there" in joints and "leg1_hip" not in joints  # that file's robot
+    data = json.loads(re.search(r"var DATA = (\{.*?\});\n", page.read_text()).group(1))
+    assert data["animation"] is True and data["duration"] == pytest.approx(0.5, abs=0.05)
 
 
 def test_to_urdf_takes_what_load_takes(tmp_path):
