@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -390,7 +391,16 @@ def test_solo12_loads_with_meshes_checked() -> None:
 
     leg = load("erd:solo12", tip="FL_FOOT")
     assert leg.nq == 3
-    assert len(_erd_check("solo12").meshes) > 0
+    meshes = _erd_check("solo12").meshes
+    # one per <mesh> of the file, in order, each an existing file under the package's folder
+    text = sources.erd_path("solo12").read_text(encoding="utf-8")
+    assert [uri for uri, _ in meshes] == re.findall(r'<mesh filename="([^"]+)"', text)
+    share = Path(sources.erd_share()).resolve()
+    for uri, path in meshes:
+        rel = uri.removeprefix("package://").split("/", 1)[1]
+        assert Path(path).resolve() == (share / "example-robot-data" / rel).resolve()
+        assert Path(path).is_file()
+    assert len(meshes) == 34
 
 
 # ------------------------------------------------------------------------ mesh roots
