@@ -29,3 +29,22 @@ def own_cache_dir(tmp_path_factory):
     mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(path))
     yield path
     mp.undo()
+
+
+@pytest.fixture
+def drawn(monkeypatch):
+    """The figures written through ``plots.save_figure`` (still written), in order.
+
+    Tests read what a figure draws (line and image data) instead of a file's header.
+    """
+    from hexapod_kin import plots
+
+    figs = []
+    real = plots.save_figure
+
+    def keep(fig, path, *args, **kwargs):
+        figs.append(fig)
+        return real(fig, path, *args, **kwargs)
+
+    monkeypatch.setattr(plots, "save_figure", keep)
+    return figs

@@ -522,6 +522,7 @@ def test_damaged_cache(
         assert not (tmp_path / "planted.py").exists() and not (root / "planted.py").exists()
 
 
+@pytest.mark.slow  # a child compiles the kernels into fresh caches
 def test_numba_cache_is_rebuilt_when_loading_fails(
     filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
 ) -> None:
@@ -550,6 +551,7 @@ def _small_files() -> None:  # pragma: no cover - in the child, before exec
     resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
 
 
+@pytest.mark.slow  # a child compiles the kernels into fresh caches
 def test_numba_cache_that_cannot_be_written_compiles_in_memory(
     filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
 ) -> None:

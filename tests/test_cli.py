@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -115,7 +116,15 @@ def test_console_script_demo(tmp_path):
     )
     res = subprocess.run([exe, "demo", "--out", str(tmp_path)], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert (tmp_path / "hexabot_leg.urdf").exists() and "det(J_position)" in res.stdout
+    assert "det(J_position)" in res.stdout
+    # the demo's URDF is the seeds' leg: the same foot as the preset's, by FK
+    import numpy as np
+
+    import hexapod_kin as hk
+
+    written, preset = hk.load(str(tmp_path / "hexabot_leg.urdf")), hk.load("hexabot_leg")
+    for q in preset.random_q(5, seed=4):
+        np.testing.assert_allclose(written.fk(q), preset.fk(q), atol=1e-12)
 
 
 # --------------------------------------------------------------------- one robot argument
@@ -147,6 +156,7 @@ def test_foot_is_appended_on_every_legged_command():
     for cmd in (["stand"], ["gait"], ["simulate"], ["timeline", "gait", "-o", "x.csv"]):
         argv = [*cmd, "x.urdf", "--foot", feet[0], "--foot", feet[1], "--foot-radius", "0.01"]
         robot = robot_of(build_parser().parse_args(argv))
+        # parsed before the robot loads: one spec per --foot, in order
         assert [(f.frame, f.offset) for f in robot.feet] == [
             ("a", (0.0, 0.0, 0.1)),
             ("b", (0.0, 0.0, 0.2)),
@@ -176,14 +186,30 @@ def test_gait_html_of_a_urdf_in_another_folder(tmp_path, monkeypatch, capsys):
     pytest.importorskip("umsgpack")
     robots_dir = tmp_path / "robots"
     robots_dir.mkdir()
-    (robots_dir / "hexapod.urdf").write_text(hk.to_urdf("hexapod"))
+    import hexapod_kin.viewer.walk as walk_pages
+
+    drawn_joints: list[tuple[str, ...]] = []
+    real = walk_pages.render_html
+
+    def spy(model, *args, **kwargs):
+        drawn_joints.append(tuple(model.joint_names))
+        return real(model, *args, **kwargs)
+
+    monkeypatch.setattr(walk_pages, "render_html", spy)
+    text = hk.to_urdf("hexapod")
+    assert text.count('"leg1_hip"') == 1
+    # the file's robot differs from the preset by one joint's name
+    (robots_dir / "hexapod.urdf").write_text(text.replace('"leg1_hip"', '"leg1_hip_there"'))
     here = tmp_path / "here"
     here.mkdir()
     monkeypatch.chdir(here)
     page = here / "walk.html"
     code = main(["gait", "../robots/hexapod.urdf", "--duration", "0.5", "--html", str(page)])
     assert code == 0, capsys.readouterr().err
-    assert page.stat().st_size > 10_000
+    ((*joints,),) = drawn_joints
+    assert "leg1_hip_there" in joints and "leg1_hip" not in joints  # that file's robot
+    data = json.loads(re.search(r"var DATA = (\{.*?\});\n", page.read_text()).group(1))
+    assert data["animation"] is True and data["duration"] == pytest.approx(0.5, abs=0.05)
 
 
 def test_to_urdf_takes_what_load_takes(tmp_path):

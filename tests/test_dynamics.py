@@ -591,9 +591,23 @@ def test_gait_loads_balance_and_match_a_floating_base_model() -> None:
 
 
 def test_cli_pendulum_html_and_short_runs(
-    capsys: pytest.CaptureFixture[str], tmp_path: object
+    capsys: pytest.CaptureFixture[str], tmp_path: object, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     pytest.importorskip("meshcat")
+    import re
+
+    from scipy.special import ellipj
+
+    from hexapod_kin import viewer
+
+    shown = []
+    real_export = viewer.export_html
+
+    def spy(model, t, q, path, **kw):
+        shown.append((np.array(t), np.array(q)))
+        return real_export(model, t, q, path, **kw)
+
+    monkeypatch.setattr(viewer, "export_html", spy)
     page = f"{tmp_path}/p.html"
     code, out, _ = run_cli(
         ["pendulum", "--json", "--duration", "0.5", "--damping", "0", "--html", page], capsys
@@ -603,9 +617,21 @@ def test_cli_pendulum_html_and_short_runs(
     # half a second is less than one period: no period measured, said as null (never NaN)
     assert d["period"] is None and d["period_error"] is None
     assert d["decay_rate_exact"] == 0.0
+    # the page animates the undamped swing from 30 deg: the exact solution (Jacobi sn),
+    # theta(t) = 2 asin(k sn(K - w t, k^2)), k = sin(theta0 / 2), w^2 = m g l_c / I
+    ((t, q),) = shown
+    i, m, lc = hand_pendulum()
+    k = math.sin(math.radians(30) / 2)
+    sn = ellipj(float(ellipk(k**2)) - math.sqrt(m * G * lc / i) * t, k**2)[0]
+    assert t[0] == 0.0 and t[-1] == pytest.approx(0.5, abs=1 / 30)
+    assert np.abs(q[:, 0] + math.pi / 2 - 2 * np.arcsin(k * sn)).max() < 1e-6  # q = 0: level
+    assert np.diff(t) == pytest.approx(0.033, abs=1e-9)  # every 33rd step of 1 ms (~30 fps)
+    # and the page's own data says so: its title, its animation of that length
     with open(page, encoding="utf-8") as fh:
         text = fh.read()
-    assert "<html" in text.lower() and "pendulum" in text
+    data = json.loads(re.search(r"var DATA = (\{.*?\});\n", text).group(1))
+    assert data["title"].startswith("pendulum: theta0 = 30 deg, damping 0 N m s/rad")
+    assert data["animation"] is True and data["duration"] == pytest.approx(t[-1] - t[0])
 
 
 @pytest.mark.parametrize("method", ["rk4", "symplectic_euler"])

@@ -189,7 +189,7 @@ def test_interrupted_is_130(folder: Path) -> None:
         assert "meshcat viewer" in line, line
         time.sleep(0.5)
         proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=120)
+        proc.wait(timeout=600)
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -178,7 +178,7 @@ def check_urdf_binary() -> str:
 
 def run_check_urdf(path: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [check_urdf_binary(), str(path)], capture_output=True, text=True, timeout=60
+        [check_urdf_binary(), str(path)], capture_output=True, text=True, timeout=600
     )
 
 
@@ -425,7 +425,7 @@ def _check_cmake(pkg_dir: Path, pkg: str, tmp_path: Path) -> None:
         ["cmake", "-S", str(pkg_dir), "-B", str(build), f"-DCMAKE_PREFIX_PATH={stub}"],
         ["cmake", "--install", str(build), "--prefix", str(prefix)],
     ):
-        res = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         assert res.returncode == 0, res.stdout + res.stderr
     share = prefix / "share" / pkg
     for rel in ("urdf", "launch/display.launch.py", "rviz/display.rviz", "meshes"):

@@ -46,6 +46,11 @@ REACH = 0.16  # walk() default foot_reach [m]
 R_FOOT = R_HIP + REACH
 
 
+#: Two animation frames of the page: what it drew before this call is on the canvas (a wait
+#: counted in frames, never in milliseconds: a busy machine only makes it longer).
+FRAMES = "() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))"
+
+
 @pytest.fixture(scope="module")
 def wb():
     return whole_body()
@@ -487,10 +492,18 @@ def test_cli_infeasible_is_one_line_exit_1(capsys):
     assert len(err) == 1 and "out of reach" in err[0] and "leg" in err[0]
 
 
-def test_plot_writes_a_png(tmp_path, capsys):
+def test_plot_writes_a_png(tmp_path, capsys, drawn):
+    """The figure draws the walk: its margin curve and foot paths are the run's samples."""
     pytest.importorskip("matplotlib")
     path = tmp_path / "gait.png"
     assert main(["gait", "--pattern", "ripple", "--duration", "3", "--plot", str(path)]) == 0
+    run = walk(pattern="ripple", duration=3.0)
+    _, margin, paths = drawn[-1].axes[:3]
+    np.testing.assert_array_equal(margin.lines[0].get_xdata(), run.t)
+    np.testing.assert_allclose(margin.lines[0].get_ydata(), 1e3 * run.margin, rtol=1e-12)
+    for k in range(6):  # a path and its stance dots per leg
+        line = paths.lines[2 * k]
+        np.testing.assert_array_equal(line.get_xydata(), run.feet[:, k, :2])
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -555,14 +568,14 @@ def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
         shots = {}
         for t in (0.2, 0.7):
             page.evaluate(f"hexapodKin.seek({t})")
-            page.wait_for_timeout(300)
+            page.evaluate(FRAMES)
             shots[t] = _pixels(page)
         page.evaluate("hexapodKin.setVisible('robot', false)")
         page.evaluate("hexapodKin.setVisible('trace', false)")
-        page.wait_for_timeout(300)
+        page.evaluate(FRAMES)
         overlays_only = _pixels(page)
         page.evaluate("hexapodKin.setVisible('overlays', false)")
-        page.wait_for_timeout(300)
+        page.evaluate(FRAMES)
         empty = _pixels(page)
     finally:
         page.close()

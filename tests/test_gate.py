@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -168,7 +169,7 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
 _Results = tuple[dict[str, dict], subprocess.CompletedProcess]
 
 
-def _run(paths: list[Path], timeout: float = 120.0) -> _Results:
+def _run(paths: list[Path], timeout: float = 600.0) -> _Results:
     """Load ``paths`` in one child process; map case stem -> result line."""
     proc = subprocess.run(
         [sys.executable, str(RUNNER), *map(str, paths)],
@@ -390,7 +391,16 @@ def test_solo12_loads_with_meshes_checked() -> None:
 
     leg = load("erd:solo12", tip="FL_FOOT")
     assert leg.nq == 3
-    assert len(_erd_check("solo12").meshes) > 0
+    meshes = _erd_check("solo12").meshes
+    # one per <mesh> of the file, in order, each an existing file under the package's folder
+    text = sources.erd_path("solo12").read_text(encoding="utf-8")
+    assert [uri for uri, _ in meshes] == re.findall(r'<mesh filename="([^"]+)"', text)
+    share = Path(sources.erd_share()).resolve()
+    for uri, path in meshes:
+        rel = uri.removeprefix("package://").split("/", 1)[1]
+        assert Path(path).resolve() == (share / "example-robot-data" / rel).resolve()
+        assert Path(path).is_file()
+    assert len(meshes) == 34
 
 
 # ------------------------------------------------------------------------ mesh roots
@@ -791,7 +801,7 @@ def test_cli_prints_the_loader_warnings_as_plain_lines() -> None:
     """``hexapod-kin: warning: ...``: one line per kind, no file:line, no source line."""
     env = {**os.environ, "PYTHONPATH": str(HERE.parent)}
     cmd = [sys.executable, "-m", "hexapod_kin", "fk", str(PHANTOMX), "--tip", "tibia_lf"]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=env)
     assert done.returncode == 0, done.stderr
     lines = done.stderr.splitlines()
     assert [ln.split(": ")[3] for ln in lines] == ["meshes", "inertia"], lines

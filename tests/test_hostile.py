@@ -93,12 +93,45 @@ def test_hostile_table_file(tmp_path: Path, case: str, capsys: pytest.CaptureFix
     assert path.name in line, line  # the file is named
 
 
-def test_growing_file_capped_while_reading(tmp_path: Path) -> None:
-    """The cap holds on the bytes read, not the size the file system reports."""
+def test_growing_file_capped_while_reading(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The cap holds on the bytes read, not the size the file system reports.
+
+    The file really grows after it is opened and ``fstat``-ed (another writer appends on the
+    first read): a reader trusting the reported size (1,000 bytes, under the cap) would pass.
+    """
     from hexapod_kin._io import read_regular
     from hexapod_kin.exceptions import SourceError
 
     path = tmp_path / "t.yaml"
+    real_read = os.read
+
+    def grow_then_read(extra: int):
+        grown: list[int] = []
+
+        def read(fd: int, n: int) -> bytes:
+            if not grown:  # the writer appends between fstat and the first read
+                with open(path, "ab") as fh:
+                    fh.write(b"+" * extra)
+                grown.append(extra)
+            return real_read(fd, n)
+
+        return read, grown
+
+    # under the cap after growing: every byte read, the appended ones included
+    path.write_bytes(b"#" * 1000)
+    read, grown = grow_then_read(500)
+    monkeypatch.setattr(os, "read", read)
+    assert read_regular(path, 1999) == b"#" * 1000 + b"+" * 500
+    assert grown == [500]
+    # over the cap after growing: refused although fstat said 1,000 bytes
+    path.write_bytes(b"#" * 1000)
+    read, grown = grow_then_read(2000)
+    monkeypatch.setattr(os, "read", read)
+    with pytest.raises(SourceError, match="more than 1999 bytes"):
+        read_regular(path, 1999)
+    assert grown == [2000] and path.stat().st_size == 3000
+    monkeypatch.undo()
+    # the plain cap, at and one byte under the file's size
     path.write_bytes(b"#" * 2000)
     assert read_regular(path, 2000) == b"#" * 2000
     with pytest.raises(SourceError, match="more than 1999 bytes"):

@@ -147,6 +147,12 @@ def test_vectorised_list_and_batch_shapes():
     assert b.q.shape == (5, 4, 3) and b.valid.shape == (5, 4)
     assert not b.q.flags.writeable
     assert np.all(np.isnan(b.q[~b.valid]))
+    # every branch reaches its target (FK), and the batch holds the list's branches
+    for target, sols, q, valid in zip(targets, out, b.q, b.valid):
+        assert len(sols) >= 1
+        for sol in sols:
+            np.testing.assert_allclose(model.position(sol), target, atol=1e-9)
+        np.testing.assert_allclose(np.sort(q[valid], axis=0), np.sort(sols, axis=0), atol=1e-12)
 
 
 @pytest.mark.parametrize("bad", [[np.nan, 0, 0], [0, np.inf, 0], [1, 2], "abc"])

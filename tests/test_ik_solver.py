@@ -315,7 +315,7 @@ def test_closed_forms_run_without_numba():
         "hk.ik.analytic_batch('scara', [[0.3, 0.2, 0.1]], within_limits=True)\n"
         "assert 'numba' not in sys.modules, 'numba imported'\n"
     )
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
 
 

@@ -21,8 +21,10 @@ fresh caches (numba compiling, sympy deriving, trimesh/MuJoCo/matplotlib loading
    whose signal came last (the most state written): the same status and the same files as
    the reference run. Nothing an interrupt leaves blocks or changes the next run.
 
-``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset, the regular suite runs 2 tries of the
-commands in :data:`REGULAR`; set (the ``soak`` step of ``.ci/run`` sets 20), every command.
+These runs are marked ``soak``: the default run leaves them out (pyproject's addopts) and the
+``soak`` step of ``.ci/run`` runs them. ``TRIES`` is ``HEXAPOD_KIN_CTRL_C_TRIES``: unset
+(``pytest -m soak``), 2 tries of the commands in :data:`REGULAR`; set (``.ci/run`` sets 20),
+every command.
 ``HEXAPOD_KIN_CTRL_C_REPORT=FILE`` appends one JSON line per command with its outcome counts.
 """
 
@@ -310,7 +312,7 @@ def test_swallowed_interrupt_stops_the_work(monkeypatch: pytest.MonkeyPatch, cap
     """A Ctrl-C that a finalizer or callback swallows ("Exception ignored") still stops it.
 
     The command's own code keeps running after the swallowed interrupt (a 20 s sleep here);
-    ``main`` delivers the interrupt again, so it ends within a second with one line and 130.
+    ``main`` delivers the interrupt again, so the sleep never completes: one line and 130.
     """
     import threading
 
@@ -323,16 +325,18 @@ def test_swallowed_interrupt_stops_the_work(monkeypatch: pytest.MonkeyPatch, cap
         def __del__(self) -> None:
             raise KeyboardInterrupt  # reported as unraisable, not raised
 
+    slept: list[bool] = []
+
     def command(args: object) -> int:
         Finalized()
         time.sleep(20)
+        slept.append(True)  # reached only if the interrupt was not delivered again
         return 0
 
     monkeypatch.setattr(cli, "build_parser", lambda: _OneCommand(command))
-    t0 = time.perf_counter()
     status = cli.main([])
     assert status == 130
-    assert time.perf_counter() - t0 < 5.0
+    assert slept == []  # the sleep was cut short (no clock read: a busy machine changes none)
     assert capsys.readouterr().err.strip().splitlines()[-1] == INTERRUPTED
 
 
@@ -362,7 +366,7 @@ def test_interrupt_escaping_pyrun_code_exits_130(tmp_path: Path) -> None:
     (tmp_path / "pyrun_probe.py").write_text(script, encoding="utf-8")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]))
     res = subprocess.run(
-        [sys.executable, "-m", "pyrun_probe"], capture_output=True, text=True, timeout=60, env=env
+        [sys.executable, "-m", "pyrun_probe"], capture_output=True, text=True, timeout=600, env=env
     )
     assert res.returncode in (130, -signal.SIGINT), (res.returncode, res.stderr)  # $? = 130
     assert res.stderr.strip().splitlines() == [INTERRUPTED], res.stderr

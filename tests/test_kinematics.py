@@ -179,8 +179,15 @@ def test_outputs_are_fresh_arrays(preset_models):
     a[:] = 0
     assert model.fk(q)[3, 3] == 1.0
     j = model.jacobian(q)
+    kept = j.copy()
     j[:] = 0
-    assert np.abs(model.jacobian(q)).max() > 0
+    assert np.array_equal(model.jacobian(q), kept)  # the caller's zeros reached nothing inside
+    # and that Jacobian is FK's: central differences of the foot position
+    h = 1e-6
+    fd = np.column_stack(
+        [(model.fk(q + h * e)[:3, 3] - model.fk(q - h * e)[:3, 3]) / (2 * h) for e in np.eye(3)]
+    )
+    np.testing.assert_allclose(kept[:3], fd, atol=1e-8)
 
 
 def test_text_and_file_load_to_the_same_model(tmp_path):

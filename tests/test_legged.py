@@ -631,7 +631,7 @@ def test_a_robot_without_mass_is_refused_in_one_line(tmp_path):
 
     for cmd in (["gait", str(path), "--duration", "1"], ["stand", str(path)]):
         res = subprocess.run(
-            [sys.executable, "-m", "hexapod_kin", *cmd], capture_output=True, text=True, timeout=120
+            [sys.executable, "-m", "hexapod_kin", *cmd], capture_output=True, text=True, timeout=600
         )
         errors = [ln for ln in res.stderr.splitlines() if "warning" not in ln]
         assert res.returncode == 2 and len(errors) == 1 and "no mass" in errors[0], res.stderr

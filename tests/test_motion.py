@@ -307,18 +307,36 @@ def test_cli_ik(capsys):
     assert "unreachable" in capsys.readouterr().out
 
 
-def test_plots_and_html(tmp_path, leg):
+def test_plots_and_html(tmp_path, leg, drawn):
+    """The figures draw the run: the plotted foot is FK of the plotted joints; the page's data."""
+    import re
+
+    import matplotlib.image as mpimg
+
     from hexapod_kin.plots import plot_motion, plot_step
 
     run = seeds.seed_experiment(leg, duration=1.0)
     png = plot_motion(run, tmp_path / "run.png")
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    feet, _, joints, _ = drawn[-1].axes[:4]
+    q = np.column_stack([line.get_ydata() for line in joints.lines[:3]])
+    foot = np.column_stack([line.get_ydata() for line in feet.lines[:3]])
+    assert len(q) == len(run.trajectory.t)  # 1,001 samples: drawn unthinned
+    np.testing.assert_allclose(foot, [leg.position(qi) for qi in q], atol=1e-12)
+    np.testing.assert_allclose(feet.lines[0].get_xdata(), run.trajectory.t)
+    img = mpimg.imread(png)[..., :3]
+    assert img.shape[1] > 1000 and np.count_nonzero(img.std(axis=-1) > 0.1) > 2000  # colour
     step = gait.foot_step(leg, dt=0.01)
-    assert plot_step(step, tmp_path / "step.png").stat().st_size > 1000
+    plot_step(step, tmp_path / "step.png")
+    planned = drawn[-1].axes[0].lines[0]
+    np.testing.assert_allclose(planned.get_xdata(), np.asarray(step.foot)[:, 0])
+    np.testing.assert_allclose(planned.get_ydata(), np.asarray(step.foot)[:, 2])
     html = tmp_path / "step.html"
     argv = ["step", "hexabot_leg", "--duration", "1", "--no-baseline"]
     assert main([*argv, "--html", str(html), "--plot", str(tmp_path / "cli.png")]) == 0
-    assert html.stat().st_size > 1000 and (tmp_path / "cli.png").exists()
+    data = json.loads(re.search(r"var DATA = (\{.*?\});\n", html.read_text()).group(1))
+    assert data["animation"] is True and data["duration"] == pytest.approx(1.0, abs=0.05)
+    assert "hexabot_leg" in data["title"] or "step" in data["title"]
+    assert len(drawn) == 3 and drawn[-1].axes  # the CLI's figure went through the same writer
 
 
 def test_default_stance_is_far_from_singularities_for_any_chain():
@@ -494,7 +512,7 @@ def test_the_step_command_never_imports_numba():
         "main(['step', 'hexabot_leg', '--duration', '0.2']); "
         "print('numba' in sys.modules)"
     )
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
     assert res.stdout.strip().splitlines()[-1] == "False"
 

@@ -19,6 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
+
+#: Minutes of compiling in fresh caches (four runs): the slow step of ``.ci/run``.
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -239,7 +239,7 @@ def test_scan_errors(leg):
         measures_batch(leg, np.zeros((4, 2)))
 
 
-def test_cli_scan_json_and_plot(tmp_path, capsys, fresh_cache):
+def test_cli_scan_json_and_plot(tmp_path, capsys, fresh_cache, drawn):
     # families derived once through the API (kept on disk), then shown by the CLI
     scan(load("hexabot_leg"), grid=5, joints=("knee", "ankle"), families=True)
     scan(load("scara"), samples=10, families=True)
@@ -248,6 +248,18 @@ def test_cli_scan_json_and_plot(tmp_path, capsys, fresh_cache):
     out = json.loads(capsys.readouterr().out)
     assert out["joints"] == ["knee", "ankle"] and len(out["det"]) == 625
     assert {f["name"] for f in out["families"]} >= {"q3 = 0 (mod 2*pi)"}
+    # the heat map is det J at the scanned configurations: the closed form (seed 001),
+    # det = l2 l3 sin(q3) (l1 + l2 cos q2 + l3 cos(q2 + q3)), up to one sign for the whole map
+    q = np.asarray(out["q"])
+    reach = 0.05 + 0.1 * np.cos(q[:, 1]) + 0.1 * np.cos(q[:, 1] + q[:, 2])
+    closed = 0.1 * 0.1 * np.sin(q[:, 2]) * reach
+    (heat,) = [c for c in drawn[-1].axes[0].collections if hasattr(c, "get_coordinates")]
+    shown = np.asarray(heat.get_array()).T.ravel()  # drawn as det.T on (knee, ankle) axes
+    sign = np.sign(shown @ closed)
+    np.testing.assert_allclose(sign * shown, closed, atol=1e-12)
+    edges = heat.get_coordinates()  # cell corners, degrees: knee along x, ankle along y
+    assert np.allclose(np.radians(edges[0, :-1, 0] + edges[0, 1:, 0]) / 2, np.unique(q[:, 1]))
+    assert np.allclose(np.radians(edges[:-1, 0, 1] + edges[1:, 0, 1]) / 2, np.unique(q[:, 2]))
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["scan", "scara", "--samples", "2000"]) == 0
     text = capsys.readouterr().out

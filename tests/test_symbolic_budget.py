@@ -100,6 +100,7 @@ def test_redundant_leg_without_common_factor_has_no_family():
         assert abs(gram[i] - np.linalg.det(jp @ jp.T)) < 1e-14
 
 
+@pytest.mark.slow  # the whole derivation at the end: ~15-25 s of sympy's CPU
 def test_unfinished_derivation_is_kept_and_a_larger_budget_carries_on():
     from hexapod_kin.symbolic import clear_memory
 
@@ -120,6 +121,7 @@ def test_unfinished_derivation_is_kept_and_a_larger_budget_carries_on():
     assert derive(chain, budget=0.03).complete
 
 
+@pytest.mark.slow  # the whole derivation at the end: ~15-25 s of sympy's CPU
 def test_scan_keeps_an_unfinished_family_derivation(monkeypatch):
     from hexapod_kin import symbolic
     from hexapod_kin.singularity import scan
