@@ -4,7 +4,7 @@ Every case is one ``python -m hexapod_kin ...`` child process. A refusal must en
 status 2 and exactly one line on stderr, ``hexapod-kin: error: ...`` holding the case's phrase
 and never the catch-all "(a bug: please report it)"; a damaged cache must instead be
 recomputed with exactly one ``hexapod-kin: warning: ...`` line and the undamaged result. Each
-child is measured with ``os.wait4``: wall time under :data:`LIMIT_S` and peak resident memory
+child is measured with ``os.wait4``: CPU time under :data:`LIMIT_S` and peak resident memory
 (``ru_maxrss``) under :data:`LIMIT_BYTES` are asserted. An address-space cap
 (:data:`SAFETY_AS`) keeps a runaway case from taking the machine down; it sits above the
 asserted peak, and a case that hits it fails on its phrase ("not enough memory" is no case's
@@ -33,7 +33,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: CPU seconds a child may take (user + system, ``os.wait4``): never wall time, so that a busy
+#: machine changes no verdict.
 LIMIT_S = 10.0
+#: Wall seconds after which a child is taken for hung and killed (a guard, not a measure).
+HANG_S = 600.0
 LIMIT_BYTES = 1 << 30
 SAFETY_AS = 3 << 30
 CATCH_ALL = "a bug: please report it"
@@ -72,7 +76,7 @@ def _env() -> dict[str, str]:
     return env
 
 
-def cli(*args: str, cwd: Path, timeout: float = LIMIT_S) -> Run:
+def cli(*args: str, cwd: Path, timeout: float = HANG_S) -> Run:
     """Run ``python -m hexapod_kin ARGS`` in ``cwd``; kill it past ``timeout`` (then it fails)."""
     out_path, err_path = cwd / ".stdout", cwd / ".stderr"
     with open(out_path, "wb") as out, open(err_path, "wb") as err:
@@ -119,7 +123,7 @@ def _record(record: Callable[[str, object], None], run: Run) -> None:
 
 
 def within_limits(run: Run) -> None:
-    assert run.seconds < LIMIT_S, f"{run.seconds:.1f} s: {run.stderr[-300:]}"
+    assert run.cpu < LIMIT_S, f"{run.cpu:.1f} s of CPU: {run.stderr[-300:]}"
     assert run.peak < LIMIT_BYTES, f"peak RSS {run.peak / 2**20:.0f} MB"
     assert CATCH_ALL not in run.stderr and "Traceback" not in run.stderr, run.stderr
 
@@ -502,7 +506,7 @@ def _start_scheduler() -> tuple[subprocess.Popen[str], str]:
     )  # fmt: skip
     assert sched.stderr is not None
     t0 = time.monotonic()
-    while time.monotonic() - t0 < 30:
+    while time.monotonic() - t0 < HANG_S:  # a guard against a hang, not a measure
         line = sched.stderr.readline()
         found = re.search(r"Scheduler at:\s+(tcp://\S+)", line)
         if found:
@@ -538,10 +542,10 @@ def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> Non
                 cwd=tmp_path, stdout=fo, stderr=fe, env=_env(), preexec_fn=_cap,
             )  # fmt: skip
             while not list(parts.glob("chunk_*.npz")):  # the first chunk is stored: kill
-                assert time.monotonic() - t0 < LIMIT_S, "no chunk stored"
+                assert time.monotonic() - t0 < HANG_S, "no chunk stored"
                 time.sleep(0.005)
             sched.send_signal(signal.SIGKILL)
-            run = _finish(proc, t0, LIMIT_S, out, err)
+            run = _finish(proc, t0, HANG_S, out, err)
     finally:
         for p in (sched, worker, proc):
             if p is not None and p.returncode is None:
@@ -625,7 +629,7 @@ def bounded(run: Run) -> None:
     assert run.cpu < CPU_LIMIT_S, f"{run.cpu:.2f} s CPU: {run.stderr[-300:]}"
 
 
-def py(code: str, *, cwd: Path, timeout: float = LIMIT_S) -> Run:
+def py(code: str, *, cwd: Path, timeout: float = HANG_S) -> Run:
     """Run ``python -c CODE`` in ``cwd`` as :func:`cli` runs the command line."""
     out_path, err_path = cwd / ".stdout", cwd / ".stderr"
     with open(out_path, "wb") as out, open(err_path, "wb") as err:
