@@ -230,6 +230,7 @@ class _Setup:
     chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
     tail: tuple[np.ndarray, np.ndarray, np.ndarray]  # lower/upper/step caps, continuous, posture
     tols: tuple[float, float]  # tol, rot_tol as Python floats
+    tols_text: str  # "{tol:g}, {rot_tol:g}" (the converged reason's tail)
     one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
 
 
@@ -282,7 +283,8 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     lim, cont, posture = _arg(prep.lim), _arg(prep.cont), _arg(posture)
     tols = (float(opts.tol), float(opts.rot_tol))
     one = (par[None], starts[None])
-    return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, one)
+    text = f"{tols[0]:g}, {tols[1]:g}"
+    return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, text, one)
 
 
 #: The compiled loop's entry once loaded in this process (the first call goes through
@@ -425,7 +427,7 @@ def _report(
         "sigma_min": smin,
     }
     if code == 0 or (err <= tol and rot <= rot_tol):
-        why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {tol:g}, {rot_tol:g}"
+        why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}"
         return _result(fields, "converged", why, False)
     if code == 2:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"

@@ -64,8 +64,11 @@ class Task:
 
 
 def _task(mode: Mode, pose: np.ndarray, yaw: float, weights: np.ndarray) -> Task:
-    """``Task(mode, pose, yaw, weights)`` of checked values, built without the frozen
-    dataclass's ``__init__`` (one ``object.__setattr__`` per field): the per-call path."""
+    """``Task(mode, pose, yaw, weights)`` of checked values: the per-call path.
+
+    Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field);
+    the object equals the one ``__init__`` builds.
+    """
     out = object.__new__(Task)
     out.__dict__.update(mode=mode, pose=pose, yaw=yaw, weights=weights)
     return out
