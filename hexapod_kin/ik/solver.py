@@ -287,8 +287,8 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, text, one)
 
 
-#: The compiled loop's entry once loaded in this process (the first call goes through
-#: ``run_blocks``: the cache check, the compile notice, the stamp).
+#: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
+#: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
 
 
@@ -309,8 +309,7 @@ def _run(
     + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
 
     Every caller passes the same array types (C-contiguous float64 / int64 / bool; targets
-    and weights read-only, the rest writeable): one compiled specialisation, whose entry a
-    single target calls straight (numba's dispatcher would type 18 arguments, ~1 µs).
+    and weights read-only, the rest writeable): one compiled specialisation.
     """
     n_t, n = len(tgts), starts.shape[2]
     q = np.empty((n_t, n))
@@ -322,14 +321,14 @@ def _run(
         _LOADED[0](*args)
         return q, hist, meas, res
     from .._kernels import run_blocks
-    from .step import lm_batch, lm_entry
+    from .step import lm_batch
 
     def run(a: int, b: int) -> None:  # targets a..b-1
         lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
                  hist[a:b], meas[a:b], res[a:b])  # fmt: skip
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    _LOADED[:] = [lm_entry(args)]
+    _LOADED[:] = [lm_batch]
     return q, hist, meas, res
 
 

@@ -20,17 +20,13 @@ Each row is multiplied by its weight (0 drops the row). Every buffer is allocate
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any
 
 import numpy as np
-from numba import typeof
 
 from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
 __all__ = [
     "lm_batch",
-    "lm_entry",
     "lm_loop",
     "log3",
     "sigma_min3",
@@ -559,16 +555,3 @@ def lm_batch(
         out[12] = math.sqrt(pos2)
         out[13] = math.sqrt(rot2)
         out[14] = sigma_min3(jac)
-
-
-def lm_entry(args: tuple[Any, ...]) -> Callable[..., None]:
-    """The compiled :func:`lm_batch` for the types of ``args``, to call without dispatch.
-
-    numba's dispatcher types every argument on each call (~1 µs for 18 arrays); the entry
-    point of the specialisation already compiled for these types skips that. Only for
-    arguments of exactly these types (dtype, dimensions, layout, writeability): the caller
-    guarantees them. Falls back to the dispatcher when no such specialisation exists.
-    """
-    sig = tuple(typeof(a) for a in args)
-    found = lm_batch.overloads.get(sig)
-    return lm_batch if found is None else found.entry_point
