@@ -32,14 +32,16 @@ Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said oth
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import functools
 import itertools
 import math
 import sys
 import threading
+import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -157,16 +159,50 @@ def mark_compiled(area: str) -> None:
             pass
 
 
-def _notice(area: str) -> None:
-    """The first time in a process, one line if no stamp says the disk cache holds ``area``."""
+def _notice(area: str) -> bool:
+    """The first time in a process, one line if no stamp says the disk cache holds ``area``.
+
+    The line is left open: :func:`_progress` adds a dot per function numba compiles and the
+    seconds it took. Returns whether it was said.
+    """
     path = _stamp(area)
     if _NOTICE[0] and (path is None or not path.exists()):
         print(
             f"hexapod-kin: compiling {area} kernels for this machine "
-            "(once; 'hexapod-kin precompile' does it ahead)",
+            "(once; 'hexapod-kin precompile' does it ahead) ",
+            end="",
             file=sys.stderr,
             flush=True,
         )
+        return True
+    return False
+
+
+@contextlib.contextmanager
+def _progress(said: bool) -> Iterator[None]:
+    """While numba compiles: a dot on stderr per function compiled, then the seconds taken.
+
+    numba's public event API (``numba.core.event``, kind ``"numba:compile"``), the listener
+    installed for this block only; nothing when the notice was not said.
+    """
+    if not said:
+        yield
+        return
+    from numba.core import event
+
+    class _Dots(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            pass
+
+        def on_end(self, ev: Any) -> None:
+            print(".", end="", file=sys.stderr, flush=True)
+
+    t0 = time.perf_counter()
+    try:
+        with event.install_listener("numba:compile", _Dots()):
+            yield
+    finally:
+        print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
 def _dispatchers() -> list[Any]:
@@ -206,7 +242,12 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     """
     if area in _SEEN:
         return run(0, 0)
-    _notice(area)
+    with _progress(_notice(area)):
+        return _first_run(area, run)
+
+
+def _first_run(area: str, run: Callable[[int, int], Any]) -> Any:
+    """The body of :func:`_first_call`: ``run(0, 0)`` until the cache gives no more trouble."""
     swallowed: list[BaseException] = []
     hook = sys.unraisablehook
 

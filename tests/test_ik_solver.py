@@ -435,3 +435,33 @@ def test_reported_measures_against_pinocchio(name):
     assert (
         r.sigma_min <= 1e-15 and np.linalg.svd(leg.jacobian(r.q)[:3], compute_uv=False)[-1] <= 1e-15
     )
+
+
+def test_every_path_uses_the_one_compiled_loop(arms):
+    """solve, solve_many, solve_chain, masks, strided weights, yaw, q0 and the statuses' checks
+    all pass the loop the same argument types (one specialisation, never a second compile);
+    the caller's weights stay writeable; the result equals the one its dataclass ``__init__``
+    builds."""
+    from dataclasses import fields
+
+    from hexapod_kin.ik import step
+
+    ur5, leg = arms["ur5"], hk.load("hexabot_leg")
+    target = ur5.fk(np.array([0.5, -1.0, 1.2, -0.4, 1.3, 0.2]))
+    strided = np.array([1.0, 0, 1, 0, 1, 0, 1, 0, 0.5, 0, 0.5, 0, 0.5, 0])[::2][:6]
+    assert not strided.flags.c_contiguous
+    ik.solve(ur5, target, weights=strided)
+    assert strided.flags.writeable
+    ik.solve(ur5, target, mask=[1, 1, 1, 0, 0, 1], q0=np.zeros(6))
+    ik.solve(hk.load("scara"), [0.3, 0.1, 0.0, 0.4])
+    ik.solve(ur5, target[:3, 3] * 5)  # unreachable: the local-minimum check runs the loop
+    ik.solve_many(ur5, np.array([target, target]))
+    q = leg.random_q(3, seed=1)
+    ik.solve_chain(leg.arrays, [leg.position(x) for x in q], q, leg.lower, leg.upper)
+    assert len(step.lm_batch.signatures) == 1
+    res = ik.solve(ur5, target)
+    built = ik.IKResult(**{f.name: getattr(res, f.name) for f in fields(ik.IKResult)})
+    assert built == res and repr(built) == repr(res)
+    assert vars(built).keys() == vars(res).keys()
+    task = ik.build_task(target)
+    assert ik.Task(task.mode, task.pose, task.yaw, task.weights) == task

@@ -317,3 +317,53 @@ def test_a_measure_does_not_depend_on_its_neighbours(source, kw):
         one = compute(model, qs[i : i + 1].copy(), sel, output_arrays(1))
         for w, o in zip(whole, one):
             np.testing.assert_array_equal(o[0], w[i])
+
+
+_SWEEPS = """
+import numpy as np
+from hexapod_kin.singularity import _blocks
+for m in (3, 6):  # unrolled sweeps and the pair-by-pair ones
+    k, nb = m * (m + 1) // 2, 8
+    gb = np.zeros((k, nb))
+    gb[[i * m - i * (i - 1) // 2 for i in range(m)]] = 1.0
+    gb[1] = 0.5
+    _blocks.eig_block(gb, nb, m, np.empty((k, nb)), np.empty(nb, np.int64))
+print(len(_blocks._sweep_many.signatures), len(_blocks._sweep_gen.signatures))
+"""
+
+
+@pytest.mark.slow
+def test_the_jacobi_sweeps_compile_once(tmp_path):
+    """One specialisation per sweep on a fresh cache (the open count once was numba's literal
+    0: each sweep compiled twice)."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    env["HEXAPOD_KIN_CACHE_DIR"] = str(tmp_path / "hk")
+    res = subprocess.run(
+        [sys.executable, "-c", _SWEEPS], env=env, capture_output=True, text=True, timeout=900
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.split() == ["1", "1"]
+
+
+def test_precompile_in_child_processes(monkeypatch: pytest.MonkeyPatch):
+    """Areas in parallel children (their seconds, in the order asked), a failed child's area
+    compiled here instead, and the arguments checked."""
+    from hexapod_kin import precompile as pc
+    from hexapod_kin.exceptions import ParameterError
+
+    seconds = pc.precompile(["batch", "ik"], processes=2)
+    assert list(seconds) == ["batch", "ik"] and all(v > 0 for v in seconds.values())
+    called: list[str] = []
+    monkeypatch.setattr(pc, "_CHILD", "raise SystemExit(3)")
+    monkeypatch.setitem(pc.AREAS, "batch", lambda: called.append("batch"))
+    monkeypatch.setitem(pc.AREAS, "ik", lambda: called.append("ik"))
+    assert list(pc.precompile(["ik", "batch"], processes=2)) == ["ik", "batch"]
+    assert called == ["ik", "batch"]  # both children failed: both compiled in this process
+    with pytest.raises(ParameterError, match="processes"):
+        pc.precompile(["batch"], processes=0)
+    with pytest.raises(ParameterError):
+        pc.precompile(["nope"])

@@ -34,6 +34,7 @@ from typing import Any
 
 SECTIONS = [
     "headline",
+    "percall",
     "spine",
     "singularity",
     "ik",
@@ -48,7 +49,7 @@ TOOLS = Path(__file__).resolve().parent
 
 #: The speed rows, run in one child process after ``precompile`` (prints one JSON per row).
 _SPEED = r"""
-import json, sys, time
+import json, os, sys, time
 import numpy as np
 import pinocchio as pin
 import hexapod_kin as hk
@@ -165,12 +166,14 @@ def ik_row():
             "speedup": round(peer / ours, 1)}
 
 
-row("scan(grid=100) hexabot_leg", scan_row)
-for src, kw, target in [("hexabot_leg", {}, 0.05), ("scara", {}, 0.1),
-                        ("erd:solo12", {"tip": "FL_FOOT"}, 0.1), ("erd:ur5_robot", {}, 0.3)]:
-    row(f"measures_batch {src}", lambda: measures_row(src, kw, target))
-row("fk_batch hexabot_leg", fk_row)
-row("6-D IK erd:ur5_robot", ik_row)
+PER_CALL_ONLY = sys.argv[3:] == ["percall"]
+if not PER_CALL_ONLY:
+    row("scan(grid=100) hexabot_leg", scan_row)
+    for src, kw, target in [("hexabot_leg", {}, 0.05), ("scara", {}, 0.1),
+                            ("erd:solo12", {"tip": "FL_FOOT"}, 0.1), ("erd:ur5_robot", {}, 0.3)]:
+        row(f"measures_batch {src}", lambda: measures_row(src, kw, target))
+    row("fk_batch hexabot_leg", fk_row)
+    row("6-D IK erd:ur5_robot", ik_row)
 
 
 def rtb_robot(name):
@@ -217,7 +220,8 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
     ours = float(np.median(times)) * 1e6
     out = {"n": n, "median_us": round(ours, 1), "target_us": target_us,
-           "success": round(ok / n, 4), "target_success": target_ok}
+           "success": round(ok / n, 4), "target_success": target_ok,
+           "load_1min": round(os.getloadavg()[0], 1)}
     if robot is None:
         return out | {"peer_rtb": "not installed (pip install hexapod-kin[bench])"}
     peer = float(np.median(ptimes)) * 1e6
@@ -313,11 +317,13 @@ def main(argv: list[str] | None = None) -> int:
     results = []
     for name in args.only:
         try:
-            rows = (
-                headline(args.quick)
-                if name == "headline"
-                else importlib.import_module(f"bench_{name}").run(args.quick)
-            )
+            if name == "headline":
+                rows = headline(args.quick)
+            elif name == "percall":  # the headline's ik.solve per-call rows alone
+                rows = _child(_SPEED, dict(os.environ), "1" if args.quick else "0", str(TOOLS),
+                              "percall")  # fmt: skip
+            else:
+                rows = importlib.import_module(f"bench_{name}").run(args.quick)
         except Exception as exc:  # noqa: BLE001 - one failing section does not end the run
             rows = [{"error": f"{type(exc).__name__}: {exc}"}]
         for row in rows:

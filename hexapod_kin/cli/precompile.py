@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from .common import emit_json
@@ -30,13 +31,19 @@ def register(sub: Any) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..precompile import precompile
+    import os
 
-    seconds = precompile(args.only)
+    from ..precompile import AREAS, precompile
+
+    areas = args.only or list(AREAS)
+    jobs = max(1, min(len(areas), os.cpu_count() or 1))
+    if not args.json:
+        print(f"compiling {', '.join(areas)} in {jobs} process(es)", file=sys.stderr, flush=True)
+    seconds = precompile(areas, processes=jobs)
     if args.json:
         emit_json({"seconds": {k: round(v, 3) for k, v in seconds.items()}})
         return 0
     for name, dt in seconds.items():
         print(f"{name:<12} {dt:7.2f} s")
-    print(f"{'total':<12} {sum(seconds.values()):7.2f} s (machine code now in numba's disk cache)")
+    print(f"{'sum':<12} {sum(seconds.values()):7.2f} s (machine code now in numba's disk cache)")
     return 0

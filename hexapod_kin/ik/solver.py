@@ -231,16 +231,12 @@ class _Setup:
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
-    posture: np.ndarray
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
     chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
-    lim: np.ndarray  # lower, upper, step caps
-    cont: np.ndarray  # continuous joints
-
-    @property
-    def tail(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The loop's last inputs: limits and step caps, continuous joints, posture."""
-        return self.lim, self.cont, self.posture
+    tail: tuple[np.ndarray, np.ndarray, np.ndarray]  # lower/upper/step caps, continuous, posture
+    tols: tuple[float, float]  # tol, rot_tol as Python floats
+    tols_text: str  # "{tol:g}, {rot_tol:g}" (the converged reason's tail)
+    one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
 
 
 def _arg(a: Any) -> np.ndarray:
@@ -289,7 +285,11 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
     chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
-    return _Setup(prep, par, ipar, _arg(posture), starts, chain, _arg(prep.lim), _arg(prep.cont))
+    lim, cont, posture = _arg(prep.lim), _arg(prep.cont), _arg(posture)
+    tols = (float(opts.tol), float(opts.rot_tol))
+    one = (par[None], starts[None])
+    text = f"{tols[0]:g}, {tols[1]:g}"
+    return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, text, one)
 
 
 #: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
@@ -312,14 +312,18 @@ def _run(
     (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the
     same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
     + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
+
+    Every caller passes the same array types (C-contiguous float64 / int64 / bool; targets
+    and weights read-only, the rest writeable): one compiled specialisation.
     """
     n_t, n = len(tgts), starts.shape[2]
     q = np.empty((n_t, n))
     hist = np.empty((n_t, int(ipar[1]) + 1))
     meas = np.empty((n_t, 15))
     res = np.empty((n_t, 3), dtype=np.int64)
+    args = (*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
     if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
-        _LOADED[0](*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
+        _LOADED[0](*args)
         return q, hist, meas, res
     from .._kernels import run_blocks
     from .step import lm_batch
@@ -383,13 +387,13 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     opts = IKOptions.of(options) if options else _DEFAULT
     task = build_task(target, mask=opts.mask, weights=opts.weights)
     s = _setup(mdl, opts, task.code)
-    starts = s.starts
+    pars, starts = s.one
     if q0 is not None:
         starts = np.array(starts)
-        starts[0] = mdl.check_q(q0, "q0")
-    pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-    tgt = task.pose[None]
-    q, hist, meas, res = _run(s.chain, s.tail, tgt, task.weights, pars, s.ipar, starts[None])
+        starts[0, 0] = mdl.check_q(q0, "q0")
+    if task.code == 1:
+        pars = _with_yaw(pars, [task.yaw])
+    q, hist, meas, res = _run(s.chain, s.tail, task.pose[None], task.weights, pars, s.ipar, starts)
     attempts, it, code = res[0].tolist()
     return _report(mdl, s, task, q[0], hist[0, : it + 1], meas[0], attempts, it, code)
 
@@ -405,39 +409,62 @@ def _report(
     it: int,
     code: int,
 ) -> IKResult:
-    prep = s.prep
     for a in (meas, q, hist):
         a.setflags(write=False)
     err, rot, smin = meas[12:].tolist()
-    tgt, pos = task.pose[:3, 3], meas[:3]
-    tol, rot_tol = float(s.par[0]), float(s.par[1])
-
-    def result(status: Status, reason: str, far: bool = False) -> IKResult:
-        return IKResult(
-            q=q,
-            status=status,
-            error=err,
-            rotation_error=rot,
-            iterations=it,
-            history=hist,
-            position=pos,
-            rotation=meas[3:12].reshape(3, 3),
-            target=tgt,
-            task=task,
-            attempts=attempts,
-            reason=reason,
-            distance=err if far else 0.0,
-            nearest=pos if far else tgt,
-            sigma_min=smin,
-        )
-
+    tol, rot_tol = s.tols
+    fields = {
+        "q": q,
+        "status": "converged",
+        "error": err,
+        "rotation_error": rot,
+        "iterations": it,
+        "history": hist,
+        "position": meas[:3],
+        "rotation": meas[3:12].reshape(3, 3),
+        "target": task.pose[:3, 3],
+        "task": task,
+        "attempts": attempts,
+        "reason": "",
+        "distance": 0.0,
+        "nearest": None,
+        "sigma_min": smin,
+    }
     if code == 0 or (err <= tol and rot <= rot_tol):
-        return result("converged", f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {tol:g}, {rot_tol:g}")
+        why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}"
+        return _result(fields, "converged", why, False)
     if code == 2:
-        return result(
-            "not_converged",
-            f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing",
-        )
+        why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
+        return _result(fields, "not_converged", why, False)
+    return _diagnose(mdl, s, task, q, hist, fields)
+
+
+def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
+    """The frozen :class:`IKResult` of ``fields`` (built without ``__init__``: the per-call path).
+
+    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0 and the
+    target). The object equals ``IKResult(**fields)``; a frozen dataclass's ``__init__`` sets
+    15 fields one ``object.__setattr__`` at a time, several µs per solve.
+    """
+    fields["status"], fields["reason"] = status, reason
+    fields["distance"] = fields["error"] if far else 0.0
+    fields["nearest"] = fields["position"] if far else fields["target"]
+    out = object.__new__(IKResult)
+    out.__dict__.update(fields)
+    return out
+
+
+def _diagnose(
+    mdl: KinematicModel,
+    s: _Setup,
+    task: Task,
+    q: np.ndarray,
+    hist: np.ndarray,
+    fields: dict[str, Any],
+) -> IKResult:
+    """The status of a stalled attempt: joint limits, unreachable, singular or not converged."""
+    prep = s.prep
+    err, rot, smin = fields["error"], fields["rotation_error"], fields["sigma_min"]
     blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
         # the same loop without limits, 200 steps, from q and 8 seeded starts
@@ -447,26 +474,25 @@ def _report(
         free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
         if free[3][0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
-            return result(
-                "joint_limits",
+            why = (
                 f"reachable only beyond the limits of {names}; the nearest point within the "
-                f"limits is {err:.3g} m, {rot:.3g} rad away",
-                far=True,
+                f"limits is {err:.3g} m, {rot:.3g} rad away"
             )
+            return _result(fields, "joint_limits", why, True)
     if _is_local_min(mdl, s, task, q, float(hist[-1])):
-        return result(
-            "unreachable",
+        why = (
             f"outside the workspace: every start ends at a local minimum of the error, "
-            f"{err:.6g} m, {rot:.6g} rad from the target",
-            far=True,
+            f"{err:.6g} m, {rot:.6g} rad from the target"
         )
+        return _result(fields, "unreachable", why, True)
     if smin <= 1e-6 * prep.scale:
-        return result(
-            "singular",
+        why = (
             f"stalled at a singular configuration (σ_min = {smin:.3g}) that is not a minimum "
-            "of the error; try another q0 or more restarts",
+            "of the error; try another q0 or more restarts"
         )
-    return result("not_converged", f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)")
+        return _result(fields, "singular", why, False)
+    why = f"stalled at ‖e‖ = {err:.3g} m (no step lowers the error)"
+    return _result(fields, "not_converged", why, False)
 
 
 def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:

@@ -63,6 +63,17 @@ class Task:
         }
 
 
+def _task(mode: Mode, pose: np.ndarray, yaw: float, weights: np.ndarray) -> Task:
+    """``Task(mode, pose, yaw, weights)`` of checked values: the per-call path.
+
+    Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field);
+    the object equals the one ``__init__`` builds.
+    """
+    out = object.__new__(Task)
+    out.__dict__.update(mode=mode, pose=pose, yaw=yaw, weights=weights)
+    return out
+
+
 def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
     """(6,) row weights from ``mask`` or ``weights``; rows not in ``allowed`` must be 0."""
     if mask is not None and weights is not None:
@@ -79,7 +90,7 @@ def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
         return w
     name = "mask" if mask is not None else "weights"
     try:
-        arr = np.asarray(given, dtype=np.float64)
+        arr = np.array(given, dtype=np.float64)  # a private C-contiguous copy
     except (TypeError, ValueError):
         raise IKError(
             f"{name}={given!r} is not 6 numbers",
@@ -129,7 +140,7 @@ def _fast(t: np.ndarray) -> Task | None:
         pose = _EYE4.copy()
         pose[0, 3], pose[1, 3], pose[2, 3] = x, y, z
         pose.setflags(write=False)
-        return Task(mode="position", pose=pose, yaw=0.0, weights=_POSITION_WEIGHTS)
+        return _task("position", pose, 0.0, _POSITION_WEIGHTS)
     if t.shape != (4, 4):
         return None
     (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
@@ -148,7 +159,7 @@ def _fast(t: np.ndarray) -> Task | None:
         return None
     pose = t.copy()
     pose.setflags(write=False)
-    return Task(mode="pose", pose=pose, yaw=0.0, weights=_POSE_WEIGHTS)
+    return _task("pose", pose, 0.0, _POSE_WEIGHTS)
 
 
 def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
@@ -244,7 +255,7 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
             poses = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
             poses[:, :3, 3] = t
             poses.setflags(write=False)
-            return [Task("position", p, 0.0, _POSITION_WEIGHTS) for p in poses]
+            return [_task("position", p, 0.0, _POSITION_WEIGHTS) for p in poses]
         if t.ndim == 3 and t.shape[1:] == (4, 4) and np.all(np.isfinite(t)):
             rot = t[:, :3, :3]
             gram = np.einsum("nji,njk->nik", rot, rot) - np.eye(3)
@@ -256,5 +267,5 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
             if rigid:
                 poses = np.array(t)
                 poses.setflags(write=False)
-                return [Task("pose", p, 0.0, _POSE_WEIGHTS) for p in poses]
+                return [_task("pose", p, 0.0, _POSE_WEIGHTS) for p in poses]
     return [build_task(ti, mask=mask, weights=weights) for ti in t]

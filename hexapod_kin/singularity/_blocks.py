@@ -240,7 +240,7 @@ def eig_block(
     else:
         _sweep_many(gb, nb, m)
         sweeps = 1
-    n_open = 0
+    n_open = np.int64(0)  # not the literal 0: numba would compile the sweeps once more for it
     for i in range(nb):
         if _jacobi_open(gb, i, m):
             idx[n_open] = i
