@@ -266,6 +266,15 @@ def test_help_offers_nothing_that_is_refused(
     if cmd == "simulate":
         pytest.importorskip("mujoco")
     argv = [a.replace("{src}", src).replace("{tmp}", str(folder)) for a in CHEAP[cmd]]
+    if cmd == "timeline path":  # a plan for this robot: its own joints, at rest
+        import hexapod_kin as hk
+
+        plan = folder / f"path-{abs(hash(src))}.csv"
+        names = hk.load(src).joint_names
+        plan.write_text(
+            "t," + ",".join(names) + "\n0" + ",0" * len(names) + "\n1" + ",0" * len(names) + "\n"
+        )
+        argv[2] = str(plan)
     status = main(argv)
     err = capsys.readouterr().err
     assert status in (0, 1), (argv, err)

@@ -228,3 +228,32 @@ def test_step_timeline_cli_matches_the_api(tmp_path):
     back = read_timeline(out)
     assert back.joint_names == model.joint_names
     np.testing.assert_allclose(back.q, ref.q, atol=1e-15)
+
+
+def test_a_path_for_a_robot_is_held_to_its_joint_limits_and_names(tmp_path):
+    """`timeline path FILE SOURCE`: the plan's joints by name, inside the robot's limits."""
+    import hexapod_kin as hk
+    from hexapod_kin.cli import main
+    from hexapod_kin.exceptions import LimitError
+    from hexapod_kin.export.timeline import timeline
+
+    leg = hk.load("hexabot_leg")
+    hi = float(leg.upper[0])
+    for q_end, status in ((1e308, 1), (hi + 0.01, 1), (hi - 0.01, 0)):
+        plan = tmp_path / "p.csv"
+        plan.write_text(f"t,hip,knee,ankle\n0,0,0,0\n1,{q_end!r},0,0\n")
+        out = tmp_path / "o.json"
+        assert main(["timeline", "path", str(plan), "hexabot_leg", "-o", str(out)]) == status
+        assert out.exists() == (status == 0)
+        if status == 0:
+            import json
+
+            data = json.loads(out.read_text())  # valid JSON, every angle inside the limits
+            assert max(max(abs(v) for v in row) for row in data["command"]) <= hi  # rad units
+        out.unlink(missing_ok=True)
+    plan.write_text("t,q1,knee,ankle\n0,0,0,0\n1,0.1,0,0\n")
+    assert main(["timeline", "path", str(plan), "hexabot_leg", "-o", str(out)]) == 2
+    # the API: limits given, or the plan's robot's
+    with pytest.raises(LimitError) as err:
+        timeline(([0.0, 1.0], [[0.0], [2.0]]), rate=10, position_limit=([-1.0], [1.0]))
+    assert err.value.parameter == "joint1" and "t=0.5000" in str(err.value)

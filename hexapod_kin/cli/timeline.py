@@ -19,6 +19,7 @@ import argparse
 import sys
 from typing import Any
 
+from ..exceptions import ParameterError
 from .common import (
     emit_json,
     load_source,
@@ -131,7 +132,8 @@ def _cmd_step(args: argparse.Namespace) -> int:
         baseline=False,
     )
     traj = run.trajectory
-    status = _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names)
+    limits = (model.lower, model.upper)
+    status = _write((traj.t, traj.q), args, out, model.velocity_limit, model.joint_names, limits)
     limited = bool(traj.limited.any())  # as `step`: limits cut the motion
     return max(status, not_achieved(["joint or speed limits cut the step"] if limited else []))
 
@@ -141,15 +143,32 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
     out = output_path(args.output, "-o", _SUFFIXES)
     t, q, names = read_plan(args.file)
-    vlim = None
-    if args.source:
+    vlim = plim = None
+    if args.source:  # the plan is for this robot: its joints by name, their limits checked
         model = load_source(args)
-        limits = dict(zip(model.joint_names, model.velocity_limit))
-        vlim = [float(limits.get(n, float("inf"))) for n in names]
-    return _write((t, q), args, out, vlim, names)
+        unknown = [n for n in names if n not in model.joint_names]
+        if unknown:
+            raise ParameterError(
+                f"plan {args.file!r}: joint(s) {', '.join(map(repr, unknown))} not in "
+                f"{model.name!r}; its joints: {', '.join(model.joint_names)}",
+                parameter="file",
+                value=unknown[0],
+                allowed=tuple(model.joint_names),
+            )
+        idx = [model.joint_names.index(n) for n in names]
+        vlim = [float(model.velocity_limit[i]) for i in idx]
+        plim = ([float(model.lower[i]) for i in idx], [float(model.upper[i]) for i in idx])
+    return _write((t, q), args, out, vlim, names, plim)
 
 
-def _write(plan: Any, args: argparse.Namespace, out: Any, vlim: Any, names: Any = None) -> int:
+def _write(
+    plan: Any,
+    args: argparse.Namespace,
+    out: Any,
+    vlim: Any,
+    names: Any = None,
+    plim: Any = None,
+) -> int:
     from ..export.timeline import timeline
 
     tl = timeline(
@@ -159,6 +178,7 @@ def _write(plan: Any, args: argparse.Namespace, out: Any, vlim: Any, names: Any 
         calibration=args.calibration,
         joint_names=names,
         velocity_limit=vlim,
+        position_limit=plim,
     )
     path = tl.write(out)
     summary = {

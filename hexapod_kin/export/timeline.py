@@ -299,6 +299,23 @@ def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
     return v
 
 
+def _model_position_limits(plan: Any, position_limit: Any, n: int) -> np.ndarray:
+    """(2, n) joint limits [rad or m]: given, else the plan's robot's ``lower``/``upper``."""
+    if position_limit is not None:
+        lo, hi = position_limit
+    else:
+        robot = getattr(plan, "robot", None)
+        lo, hi = getattr(robot, "lower", None), getattr(robot, "upper", None)
+    out = np.array([np.full(n, -np.inf), np.full(n, np.inf)])
+    if lo is None or hi is None:
+        return out
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    if lo.shape == hi.shape == (n,):
+        out[0] = np.where(np.isnan(lo), -np.inf, lo)
+        out[1] = np.where(np.isnan(hi), np.inf, hi)
+    return out
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # non-finite results refused
 def timeline(
     plan: Any,
@@ -309,6 +326,7 @@ def timeline(
     times: Any = None,
     joint_names: Sequence[str] | None = None,
     velocity_limit: Any = None,
+    position_limit: Any = None,
 ) -> Timeline:
     """Resample a plan at ``rate`` and map it to the servos, checking every sample.
 
@@ -324,13 +342,17 @@ def timeline(
         joint_names: The plan's joint names (default: the plan's own, else joint1..J).
         velocity_limit: Speed limits [rad/s], scalar or (J,), used where the calibration
             gives none (default: the plan's robot's ``velocity_limit``, else unlimited).
+        position_limit: The joints' ``(lower, upper)`` limits, each (J,) [rad or m]
+            (default: the plan's robot's ``lower``/``upper``, else none): every resampled
+            sample must lie within them (1e-9 of slack).
 
     Returns:
         The :class:`Timeline`.
 
     Raises:
-        LimitError: A sample beyond a servo's limits or a joint's speed limit (the
-            message names the joint, the time [s] and the value; ``parameter`` is the joint).
+        LimitError: A sample beyond a servo's limits, a joint's limits or its speed limit
+            (the message names the joint, the time [s] and the value; ``parameter`` is the
+            joint).
         ConfigurationError: A malformed plan.
         ParameterError: Bad rate, interpolation or calibration.
 
@@ -383,6 +405,7 @@ def timeline(
         vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
 
     vlim = _model_speed_limits(plan, velocity_limit, len(names))
+    plim = _model_position_limits(plan, position_limit, len(names))
     command = np.empty_like(qs)
     speed = np.empty_like(vs)
     q_sent = np.empty_like(qs)
@@ -402,6 +425,16 @@ def timeline(
                 parameter=s.joint,
                 value=float(command[k, j]),
                 allowed="finite commands and speeds",
+            )
+        bad = np.flatnonzero((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
+        if bad.size:
+            k = int(bad[0])
+            raise LimitError(
+                f"joint {s.joint} at t={ts[k]:.4f} s: q = {qs[k, j]:.6g} is beyond the joint's "
+                f"limits [{plim[0, j]:.6g}, {plim[1, j]:.6g}]",
+                parameter=s.joint,
+                value=float(qs[k, j]),
+                allowed=(float(plim[0, j]), float(plim[1, j])),
             )
         if s.limits is not None:
             lo, hi = s.limits
