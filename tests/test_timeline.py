@@ -256,4 +256,4 @@ def test_a_path_for_a_robot_is_held_to_its_joint_limits_and_names(tmp_path):
     # the API: limits given, or the plan's robot's
     with pytest.raises(LimitError) as err:
         timeline(([0.0, 1.0], [[0.0], [2.0]]), rate=10, position_limit=([-1.0], [1.0]))
-    assert err.value.parameter == "joint1" and "t=0.5000" in str(err.value)
+    assert err.value.parameter == "joint1" and "t=0.6000" in str(err.value)  # q = 2t > 1
