@@ -1,8 +1,8 @@
 """Scans of joint space: measures on a grid or random samples, flags, family labels.
 
 A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
-reach``, with ``reach`` the sum of the chain's link offsets) or ``sigma_min = 0``. Every flagged sample is
-labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
+reach``, with ``reach`` the sum of the chain's link offsets) or ``sigma_min = 0``. Every
+flagged sample is labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
 it; flagged samples farther than ``family_tol`` from every family are "unexplained".
 
 Defaults fit the robot (the API and the ``scan`` command share them): the two joints that
