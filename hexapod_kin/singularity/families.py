@@ -206,27 +206,41 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
     """Families read from disk checked against the model before use.
 
-    On each family ``q_k = value``, ``J`` (rows ``rows``) loses rank: at three random
-    configurations with ``q_k`` set to the value, ``σ_min ≤ 1e-9 σ_max`` (of ``J`` at the
-    random configurations). Implicit families are held to their factor's parse only.
+    Every family's factor (its printed text and what the scan's distances use) must vanish
+    only where ``J`` (rows ``rows``) loses rank, as a factor of ``det J`` (or common to the
+    maximal minors) does: from each of three random configurations the factor's zero set is
+    reached by Gauss–Newton steps in the family's variables (:func:`~._zeroset.project`, to
+    ``|f| ≤ 1e-12 ‖∇f‖``), and there ``σ_min ≤ 1e-7 σ_max`` (``σ_max`` over the random
+    configurations). A factor whose zero set none of the starts reaches fails too. For
+    ``q_k = value`` the model is also held at ``q_k = value`` (``σ_min ≤ 1e-9 σ_max``).
 
     Raises:
         ValueError: A family where the model's ``J`` keeps its rank (an edited entry).
 
     """
+    from ._zeroset import project
     from .measure import measures
 
-    explicit = [f for f in fams if f.joint is not None and f.value is not None]
-    if not explicit:
+    if not fams:
         return
     qs = model.random_q(3, seed=20251202)
     size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
-    for fam in explicit:
-        for q in qs:
+    for fam in fams:
+        cols = list(fam.variables)
+        on_zero = project(fam._jet, np.array([q[cols] for q in qs], dtype=float))
+        if all(x is None for x in on_zero):
+            raise ValueError(f"no zero of the factor of {fam.name} is reached")
+        for q, x in zip(qs, on_zero):
             on = np.array(q, dtype=float)
-            on[fam.joint] = fam.value
-            if not measures(model, on, rows).sigma_min <= 1e-9 * size:
-                raise ValueError(f"the model's J keeps its rank on {fam.name}")
+            if x is not None:
+                on[cols] = x
+                if not measures(model, on, rows).sigma_min <= 1e-7 * size:
+                    raise ValueError(f"the model's J keeps its rank where {fam.name}'s factor is 0")
+            if fam.joint is not None and fam.value is not None:
+                on = np.array(q, dtype=float)
+                on[fam.joint] = fam.value
+                if not measures(model, on, rows).sigma_min <= 1e-9 * size:
+                    raise ValueError(f"the model's J keeps its rank on {fam.name}")
 
 
 def _read_cache(

@@ -2,8 +2,9 @@
 
 A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
 reach``, with ``reach`` the sum of the chain's link offsets) or ``sigma_min = 0``. Every
-flagged sample is labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
-it; flagged samples farther than ``family_tol`` from every family are "unexplained".
+flagged sample is labelled with its nearest singular family (:mod:`.families`) and the
+joint-space distance to it; flagged samples farther than ``family_tol`` from every family are
+"unexplained".
 
 Defaults fit the robot (the API and the ``scan`` command share them): the two joints that
 change ``sigma_min`` most (:func:`default_joints`; every joint of a chain of at most two) at
