@@ -748,7 +748,7 @@ def test_zero_reach_is_singular_everywhere() -> None:
     from hexapod_kin.params import Chain, KhalilRow
     from hexapod_kin.singularity import scan
 
-    chain = Chain("point", (KhalilRow("revolute"), KhalilRow("revolute", alpha=1.0)))
+    chain = Chain(rows=(KhalilRow("revolute"), KhalilRow("revolute", alpha=1.0)), name="point")
     result = scan(chain, grid=7, families=False)
     assert bool(np.all(result.singular)) and result.threshold == 0.0
 
@@ -760,7 +760,7 @@ def test_reach_below_the_floor_is_refused() -> None:
 
     rows = (KhalilRow("revolute"), KhalilRow("revolute", alpha=1.0, d=1e-12))
     with pytest.raises(ParameterError, match=r"reach .* below 1e-09 m"):
-        scan(Chain("tiny", rows), grid=7, families=False)
+        scan(Chain(rows=rows, name="tiny"), grid=7, families=False)
 
 
 def interrupted_cli(*args: str, cwd: Path, delay: float, timeout: float = 120) -> Run:
