@@ -220,10 +220,10 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
         sel_rows = [ROW_NAMES.index(r) for r in rows] if rows is not None else None
         if det is not None and sel_rows is not None:
             square = len(sel_rows) == n
-            tol = 1e-8 * scale ** (2 * len(sel_rows))
+            tol = 1e-8 * scale**4
             gram = det.get("gram")
             gram_v = None if gram is None else np.broadcast_to(evaluate(gram, at), (3,))
-            dets = [np.broadcast_to(evaluate(det[k], at), (3,)) for k in ("det",) if square]
+            dets = [np.broadcast_to(evaluate(det["det"], at), (3,))] if square else []
             if square:
                 const = np.broadcast_to(evaluate(det.get("const", 1), at), (3,))
                 prod = const.astype(float)
@@ -233,8 +233,10 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
             for k in range(3):
                 sel = jac[k][sel_rows]
                 gram_k = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
-                want = float(np.linalg.det(gram_k))
-                if gram_v is not None and abs(float(gram_v[k]) - want) > tol * max(1.0, abs(want)):
+                want_g = float(np.linalg.det(gram_k))
+                if gram_v is not None and abs(float(gram_v[k]) - want_g) > tol * max(
+                    1.0, abs(want_g)
+                ):
                     return False
                 if square:
                     size = abs(float(np.linalg.det(sel)))
