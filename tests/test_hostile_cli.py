@@ -782,8 +782,7 @@ def interrupted_cli(*args: str, cwd: Path, delay: float, timeout: float = 120) -
             preexec_fn=_cap,
         )
         time.sleep(delay)
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
+        os.kill(proc.pid, signal.SIGINT)  # not reaped before _finish (at worst a zombie)
         return _finish(proc, t0, timeout, out_path, err_path)
 
 
