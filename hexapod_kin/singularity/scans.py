@@ -27,11 +27,9 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
+from ..tables import MIN_LENGTH as MIN_REACH  # a table's smallest length: the smallest reach
 from .families import Families, Family, families_for
 from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
-
-#: Smallest non-zero reach of a scanned chain [m] (a table's smallest length, ``MIN_LENGTH``).
-MIN_REACH = 1e-9
 
 __all__ = [
     "DEFAULT_GRID",
