@@ -198,3 +198,28 @@ def test_four_concurrent_cold_scans_agree(tmp_path: Path, monkeypatch: pytest.Mo
         assert run.status == 0, run.stderr
     assert {run.stdout for run in runs} == {warm.stdout}
     _no_tmp(tmp_path / "cold")
+
+
+@pytest.mark.parametrize("fault", [KeyboardInterrupt, OSError], ids=["ctrl-c", "disk-full"])
+def test_mjcf_stopped_between_its_files_leaves_none(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fault: type[BaseException]
+) -> None:
+    """``write_mjcf`` stopped after some meshes: none of the files it made is left."""
+    pytest.importorskip("trimesh")
+    pytest.importorskip("mujoco")
+    from hexapod_kin.export import mjcf
+
+    real, calls = mjcf.atomic_write, []
+
+    def flaky(path, data, **kwargs):
+        calls.append(path)
+        if len(calls) == 3:
+            raise fault(28, "No space left on device") if fault is OSError else fault()
+        return real(path, data, **kwargs)
+
+    (tmp_path / "keep.txt").write_text("mine")
+    monkeypatch.setattr(mjcf, "atomic_write", flaky)
+    with pytest.raises(fault):
+        mjcf.write_mjcf("hexabot_leg", tmp_path / "robot.xml", meshes=True)
+    assert len(calls) == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.txt"]
