@@ -97,11 +97,17 @@ def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
     return memo[root]
 
 
-def evaluate_matrix(mat: Any, values: Mapping[Any, Any], points: int) -> np.ndarray:
-    """A sympy matrix at ``points`` points: shape (points, rows, cols) (see :func:`evaluate`)."""
+def evaluate_matrix(
+    mat: Any, values: Mapping[Any, Any], points: int, memo: dict[Any, Any] | None = None
+) -> np.ndarray:
+    """A sympy matrix at ``points`` points: shape (points, rows, cols) (see :func:`evaluate`).
+
+    ``memo`` (node → value) may be shared between calls on the same ``values``.
+    """
+    mat = sp.Matrix(mat)
     rows, cols = mat.shape
     out = np.empty((points, rows, cols))
-    memo: dict[Any, Any] = {}  # entries share sub-expressions
+    memo = {} if memo is None else memo  # entries share sub-expressions
     for i in range(rows):
         for j in range(cols):
             value = np.asarray(_value(sp.sympify(mat[i, j]), values, memo), dtype=float)
@@ -137,21 +143,6 @@ def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, An
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
     """Equal values, relatively to 1e-9."""
     return bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(np.abs(a), np.abs(b)) + 1e-300))
-
-
-def _matrices(mats: Mapping[str, Any], at: Mapping[Any, Any]) -> dict[str, np.ndarray]:
-    """Each sympy matrix of ``mats`` at the 3 points of ``at``: (3, rows, cols), one memo."""
-    memo: dict[Any, Any] = {}  # the matrices share sub-expressions (products, columns)
-    out = {}
-    for name, mat in mats.items():
-        m = sp.Matrix(mat)
-        vals = np.empty((3, m.rows, m.cols))
-        for i in range(m.rows):
-            for j in range(m.cols):
-                value = np.asarray(_value(sp.sympify(m[i, j]), at, memo), dtype=float)
-                vals[:, i, j] = np.broadcast_to(value, (3,))
-        out[name] = vals
-    return out
 
 
 def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
@@ -203,7 +194,8 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
     if "p" not in mats or "J_direct" not in mats:
         return False
     try:
-        got = _matrices(mats, at)
+        memo: dict[Any, Any] = {}  # the matrices share sub-expressions (products, columns)
+        got = {name: evaluate_matrix(m, at, 3, memo) for name, m in mats.items()}
     except (ValueError, TypeError, KeyError, AttributeError):
         return False  # a symbol or a function the table has not, or not a matrix
     jac = got["J_direct"]
