@@ -65,6 +65,9 @@ _ANGLE_KEYS = {"alpha", "theta"}
 
 #: Largest magnitude of a length in a table [m] (and of a com or pose offset).
 MAX_LENGTH = 1e3
+#: Smallest magnitude of a non-zero length of a row [m]: below it (down to subnormal numbers)
+#: the Jacobian's singular values underflow and every measure is noise; write 0 instead.
+MIN_LENGTH = 1e-9
 #: Largest magnitude of any other number (the URDF gate's bound on any value).
 MAX_NUMBER = 1e9
 #: Most rows and most joint rows of a table: the URDF gate's caps on links and degrees of
@@ -108,7 +111,7 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
         ) from None
 
 
-def _number(value: Any, where: str, limit: float = MAX_NUMBER) -> float:
+def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.0) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ParameterError(f"{where}={value!r} is not a number", parameter=where, value=value)
     try:
@@ -125,6 +128,15 @@ def _number(value: Any, where: str, limit: float = MAX_NUMBER) -> float:
             parameter=where,
             value=out,
             allowed=f"|value| <= {limit:g}",
+        )
+    if 0.0 < abs(out) < floor:
+        key = where.rsplit(".", 1)[-1]
+        raise ParameterError(
+            f"{where}={out:g} is below the smallest length {floor:g} m; allowed 0 or "
+            f"{floor:g} <= |{key}| <= {limit:g}",
+            parameter=where,
+            value=out,
+            allowed=f"0 or {floor:g} <= |value| <= {limit:g}",
         )
     return out
 
@@ -238,8 +250,10 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
                 allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
             )
         geo = {
-            k: _number(
-                row.get(k, 0.0), f"{where}.{k}", MAX_NUMBER if k in _ANGLE_KEYS else MAX_LENGTH
+            k: (
+                _number(row.get(k, 0.0), f"{where}.{k}")
+                if k in _ANGLE_KEYS
+                else _number(row.get(k, 0.0), f"{where}.{k}", MAX_LENGTH, MIN_LENGTH)
             )
             * (scale if k in _ANGLE_KEYS else 1.0)
             for k in geometry

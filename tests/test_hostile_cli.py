@@ -767,3 +767,242 @@ def test_standing_numbers_larger_than_the_robot(tmp_path: Path, args, phrase, re
     _record(record_property, run)
     refused(run, phrase)
     bounded(run)
+
+
+# =====================================================================================
+# Issue 35 (helper faults35): resealed caches, subnormal lengths, Ctrl-C in mesh exports.
+# Each case is a real child process; besides the status and the line, its CPU time, peak
+# RSS (< 1 GB), no "(a bug" / traceback and at most two stderr lines are asserted.
+# =====================================================================================
+FAULTS_CPU_S = 30.0  # a derivation or a cold families scan on the 2-core reference machine
+REFUSAL_CPU_S = 1.0  # beside the interpreter's and the package's imports
+
+
+def bounded_fault(run: Run, cpu: float = FAULTS_CPU_S, lines: int = 2, cli: bool = True) -> None:
+    """Within CPU time, peak RSS, no catch-all nor traceback, at most ``lines`` stderr lines.
+
+    ``cli``: the command line's stderr, where no Python warning text may appear (the
+    package's warnings are its own one-line ``hexapod-kin: warning:``).
+    """
+    assert run.cpu < cpu, f"{run.cpu:.1f} s of CPU: {run.stderr[-300:]}"
+    assert run.peak < LIMIT_BYTES, f"peak RSS {run.peak / 2**20:.0f} MB"
+    assert CATCH_ALL not in run.stderr and "Traceback" not in run.stderr, run.stderr
+    assert not cli or "Warning:" not in run.stderr, run.stderr  # no numpy/python warning
+    assert len(run.lines) <= lines, run.stderr
+
+
+def _import_cpu(cwd: Path) -> float:
+    """CPU time of starting the command line and refusing at once (the imports' share)."""
+    run = cli("fk", "no-such-preset", cwd=cwd)
+    return run.cpu
+
+
+def forge(cache: Path, kind: str, old: str, new: str, *, secret: bool) -> None:
+    """Edit the one ``kind`` entry of ``cache`` (``old`` → ``new``, first occurrence) and
+    reseal it: with the per-user secret (a stolen key), or with a guessed one (no key)."""
+    import hmac as _hmac
+
+    (entry,) = sorted((cache / kind).glob("*.json"))
+    data = json.loads(entry.read_text())
+    body = json.dumps(data["body"])
+    assert old in body, (old, body[:300])
+    data["body"] = json.loads(body.replace(old, new, 1))
+    key = (cache / "seal.key").read_bytes() if secret else b"\0" * 32
+    h = _hmac.new(key, digestmod=hashlib.sha256)
+    canonical = json.dumps(data["body"], sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    for chunk in (kind.encode(), data["key"].encode(), canonical.encode()):
+        h.update(len(chunk).to_bytes(8, "big"))
+        h.update(chunk)
+    data["seal"] = h.hexdigest()
+    entry.write_text(json.dumps(data))
+
+
+def test_forge_matches_the_package_seal(tmp_path: Path, monkeypatch) -> None:
+    """The forger above computes the package's own seal (else the cases below prove little)."""
+    from hexapod_kin import _cache
+
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(_cache, "_SECRETS", {})
+    assert _cache.store("symbolic", "ab" * 32, {"x": "l1"}, 6) is not None
+    forge(tmp_path, "symbolic", "l1", "l2", secret=True)
+    assert _cache.load("symbolic", "ab" * 32, 6, "recomputing it") == {"x": "l2"}
+
+
+@pytest.mark.parametrize("secret", [True, False], ids=["with-secret", "without-secret"])
+@pytest.mark.parametrize(
+    "old,new",
+    [
+        ("Symbol('l1', positive=True)", "Symbol('l2', positive=True)"),  # ^1T_2's l1 -> l2
+        ("Symbol('l3', positive=True)", "Symbol('l1', positive=True)"),  # ^3T_4's l3 -> l1
+        ("cos(Symbol('q1', real=True))", "sin(Symbol('q1', real=True))"),  # ^0T_1's rotation
+    ],
+    ids=["T12-l1-l2", "T34-l3-l1", "T01-cos-sin"],
+)
+def test_resealed_derivation_is_not_printed(
+    tmp_path: Path, monkeypatch, secret: bool, old: str, new: str, record_property
+) -> None:
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(cache))
+    first = cli("derive", "hexabot_leg", cwd=tmp_path, timeout=120)
+    bounded_fault(first)
+    assert first.status == 0 and first.stderr == "", first.stderr
+    assert "^1T_2 =" in first.stdout
+    forge(cache, "symbolic", old, new, secret=secret)
+    run = cli("derive", "hexabot_leg", cwd=tmp_path, timeout=120)
+    _record(record_property, run)
+    bounded_fault(run, lines=1)
+    assert run.status == 0, run.stderr
+    assert run.lines and "symbolic cache entry" in run.lines[0], run.stderr
+    assert "edited" in run.lines[0], run.stderr
+    assert run.stdout == first.stdout  # the table's derivation, not the edited one
+
+
+def _families_factor(cache: Path) -> str:
+    (entry,) = sorted((cache / "families").glob("*.json"))
+    fams = json.loads(entry.read_text())["body"]["families"]
+    return next(f["factor"] for f in fams if f["joint"] is None)
+
+
+@pytest.mark.parametrize("secret", [True, False], ids=["with-secret", "without-secret"])
+@pytest.mark.parametrize("edit", ["constant", "coefficient", "explicit-value"])
+def test_resealed_families_do_not_change_the_scan(
+    tmp_path: Path, monkeypatch, secret: bool, edit: str, record_property
+) -> None:
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(cache))
+    args = ("scan", "hexabot_leg", "--families", "derive", "--json")
+    first = cli(*args, cwd=tmp_path, timeout=120)
+    bounded_fault(first)
+    assert first.status == 0 and first.stderr == "", first.stderr
+    want = json.loads(first.stdout)
+    assert want["n_unexplained"] == 0 and len(want["families"]) == 3
+    factor = _families_factor(cache)
+    assert factor == "0.1*cos(q2) + 0.1*cos(q2 + q3) + 0.05", factor  # l1 = 0.05, l2 = l3 = 0.1
+    old, new = {
+        "constant": ("+ 0.05", "+ 0.1"),  # l1 -> l2 in the implicit family
+        "coefficient": ("0.1*cos(q2) +", "0.05*cos(q2) +"),  # l2 -> l1
+        "explicit-value": ('"value": 0.0', '"value": 0.5'),  # q3 = 0 -> q3 = 0.5
+    }[edit]
+    forge(cache, "families", old, new, secret=secret)
+    run = cli(*args, cwd=tmp_path, timeout=120)
+    _record(record_property, run)
+    bounded_fault(run, lines=1)
+    assert run.status == 0, run.stderr
+    assert len(run.lines) == 1 and "families cache entry" in run.lines[0], run.stderr
+    assert json.loads(run.stdout) == want
+
+
+SUBNORMAL = {
+    "d-1e-320": ("[[row]]\nd = 1e-320\n[[row]]\nd = 1e-320\n[[row]]\nd = 1e-320\n", "row 1.d"),
+    "second-row-1e-200": ("[[row]]\nd = 0.3\n[[row]]\nd = 1e-200\n", "row 2.d"),
+    "r-5e-324": ("[[row]]\nr = 5e-324\n[[row]]\nd = 0.1\n", "row 1.r"),
+    "dh-a-1e-12": ('convention = "dh"\n[[row]]\na = 1e-12\n[[row]]\na = 0.2\n', "row 1.a"),
+}
+
+
+@pytest.mark.parametrize("command", ["scan", "fk", "derive"])
+@pytest.mark.parametrize("case", sorted(SUBNORMAL))
+def test_lengths_below_the_floor_are_refused(
+    tmp_path: Path, case: str, command: str, record_property
+) -> None:
+    text, where = SUBNORMAL[case]
+    (tmp_path / "tiny.toml").write_text(text, encoding="utf-8")
+    run = cli(command, "tiny.toml", cwd=tmp_path)
+    _record(record_property, run)
+    line = refused(run, f"{where}=")
+    bounded_fault(run, cpu=_import_cpu(tmp_path) + REFUSAL_CPU_S, lines=1)
+    assert "below the smallest length 1e-09 m" in line, line
+
+
+def test_lengths_at_the_floor_are_measured(tmp_path: Path) -> None:
+    """1e-9 m itself loads; the scan is scale-free: the same flags as the table in metres."""
+    table = (
+        "[[row]]\nd = 0\n[[row]]\nalpha = 1.5707963267948966\nd = {a}\n[[row]]\nd = {b}\n"
+        '[[row]]\ntype = "fixed"\nd = {b}\n'
+    )
+    (tmp_path / "nano.toml").write_text(table.format(a="1e-9", b="2e-9"), encoding="utf-8")
+    (tmp_path / "metre.toml").write_text(table.format(a="1", b="2"), encoding="utf-8")
+    args = ("--grid", "21", "--families", "off", "--json")
+    nano = cli("scan", "nano.toml", *args, cwd=tmp_path, timeout=120)
+    metre = cli("scan", "metre.toml", *args, cwd=tmp_path, timeout=120)
+    for run in (nano, metre):
+        bounded_fault(run, lines=0)
+        assert run.status == 0, run.stderr
+    a, b = json.loads(nano.stdout), json.loads(metre.stdout)
+    assert a["singular"] == b["singular"] and 0 < a["n_singular"] < len(a["singular"])
+
+
+def test_zero_reach_is_singular_everywhere() -> None:
+    """A chain whose offsets are all 0 has J = 0 (position rows): every sample is singular."""
+    from hexapod_kin.params import Chain, KhalilRow
+    from hexapod_kin.singularity import scan
+
+    chain = Chain(rows=(KhalilRow("revolute"), KhalilRow("revolute", alpha=1.0)), name="point")
+    result = scan(chain, grid=7, families=False)
+    assert bool(np.all(result.singular)) and result.threshold == 0.0
+
+
+def test_reach_below_the_floor_is_refused() -> None:
+    from hexapod_kin.exceptions import ParameterError
+    from hexapod_kin.params import Chain, KhalilRow
+    from hexapod_kin.singularity import scan
+
+    rows = (KhalilRow("revolute"), KhalilRow("revolute", alpha=1.0, d=1e-12))
+    with pytest.raises(ParameterError, match=r"reach .* below 1e-09 m"):
+        scan(Chain(rows=rows, name="tiny"), grid=7, families=False)
+
+
+def interrupted_cli(*args: str, cwd: Path, delay: float, timeout: float = 120) -> Run:
+    """``cli`` with a SIGINT (Ctrl-C) sent ``delay`` seconds after the start."""
+    out_path, err_path = cwd / ".stdout", cwd / ".stderr"
+    with open(out_path, "wb") as out, open(err_path, "wb") as err:
+        t0 = time.monotonic()
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "hexapod_kin", *args],
+            cwd=cwd,
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=err,
+            env=_env(),
+            preexec_fn=_cap,
+        )
+        time.sleep(delay)
+        os.kill(proc.pid, signal.SIGINT)  # not reaped before _finish (at worst a zombie)
+        return _finish(proc, t0, timeout, out_path, err_path)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("trimesh") is None, reason="needs trimesh")
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("export-package", "hexapod", "--meshes", "-o", "pkg"),
+        ("mjcf", "hexapod", "--meshes", "-o", "robot.xml"),
+    ],
+    ids=["export-package", "mjcf"],
+)
+def test_ctrl_c_in_a_mesh_export_writes_nothing(
+    tmp_path: Path, command: tuple[str, ...], record_property
+) -> None:
+    """Ctrl-C while trimesh works (it swallows KeyboardInterrupt): 130, no ``wrote``, no file.
+
+    The delays cover the issue's 0.3–0.6 s and the loaded machine's later meshing; a run
+    that finished before its signal is not an interrupted one (at least one must be).
+    """
+    if "mjcf" in command and importlib.util.find_spec("mujoco") is None:
+        pytest.skip("needs mujoco")
+    stopped = 0
+    for delay in (0.3, 0.45, 0.6, 1.0, 1.5, 2.5):
+        work = tmp_path / f"d{delay}"
+        work.mkdir()
+        run = interrupted_cli(*command, cwd=work, delay=delay)
+        _record(record_property, run)
+        bounded_fault(run, lines=1)
+        if run.status == 0:  # done before the signal came: the whole output
+            assert run.stderr.startswith("wrote") or run.stdout.startswith("wrote"), run
+            continue
+        stopped += 1
+        assert run.status in (130, -signal.SIGINT), (run.status, run.stderr)
+        assert run.lines == ["hexapod-kin: interrupted"], run.stderr
+        assert "wrote" not in run.stdout + run.stderr
+        assert sorted(p.name for p in work.iterdir()) == [], list(work.iterdir())
+    assert stopped, "no run was interrupted: every one finished before its Ctrl-C"

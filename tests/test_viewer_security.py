@@ -1,7 +1,8 @@
 """The viewer's server: loopback Host/Origin only, and malformed messages never wedge it.
 
 * A DNS-rebinding page reaches the server with Host and Origin both ``evil.example:PORT``:
-  the page and the websocket are refused (403), while ``127.0.0.1:PORT`` is served.
+  the page and the websocket are refused (403), while ``127.0.0.1:PORT``, ``localhost:PORT``
+  and ``[::1]:PORT`` are served; another port or any other name is refused.
 * 1,000 random ZeroMQ messages (random frame counts, bytes, commands, bad UTF-8) each get a
   reply, and a normal scene command still works afterwards.
 """
@@ -66,6 +67,37 @@ def test_dns_rebinding_request_refused(server: MeshcatServer) -> None:
     assert _ws(port, evil, f"http://{evil}").startswith("refused")
     assert _ws(port, own, f"http://{evil}").startswith("refused")  # a foreign page
     assert _ws(port, evil, f"http://{own}").startswith("refused")
+
+
+@pytest.mark.parametrize("name", ["localhost", "LOCALHOST", "[::1]"])
+def test_loopback_names_of_its_own_port_are_served(server: MeshcatServer, name: str) -> None:
+    port = _port(server)
+    own = f"{name}:{port}"
+    assert _get(server.web_url, own) == 200
+    assert _ws(port, own, f"http://{own}") == "open"
+    assert _ws(port, own, f"http://127.0.0.1:{port}") == "open"  # either loopback name
+
+
+@pytest.mark.parametrize(
+    "host",
+    [
+        "localhost",  # no port: not this server's own address
+        "localhost:{other}",
+        "127.0.0.1:{other}",
+        "[::1]:{other}",
+        "localhost.evil.example:{port}",
+        "127.0.0.2:{port}",
+        "0.0.0.0:{port}",
+        "[::ffff:127.0.0.1]:{port}",
+        "localhost:{port}.evil.example",
+    ],
+)
+def test_other_hosts_and_ports_refused(server: MeshcatServer, host: str) -> None:
+    port = _port(server)
+    name = host.format(port=port, other=port + 1 if port < 65535 else port - 1)
+    assert _get(server.web_url, name) == 403
+    assert _ws(port, name, f"http://{name}").startswith("refused")
+    assert _ws(port, f"localhost:{port}", f"http://{name}").startswith("refused")
 
 
 def test_random_frames_never_wedge_the_server(server: MeshcatServer) -> None:

@@ -84,12 +84,19 @@ def _one_line_warning(original: Any) -> Any:
     """``warnings.showwarning`` printing the package's own warnings as plain lines.
 
     ``hexapod-kin: warning: ...`` (one per line of the message, no file:line and no source
-    line); other warnings are shown as Python shows them.
+    line), each distinct text once (the same warning said again by a child process, e.g. a
+    cache folder that is a file, is not repeated); other warnings are shown as Python shows
+    them.
     """
     from ..exceptions import HexapodKinWarning
 
+    said: set[str] = set()
+
     def show(message: Any, category: Any, filename: Any, lineno: Any, *rest: Any) -> None:
         if issubclass(category, HexapodKinWarning):
+            if str(message) in said:
+                return
+            said.add(str(message))
             for text in str(message).splitlines():
                 print(f"hexapod-kin: warning: {text}", file=sys.stderr)
         else:

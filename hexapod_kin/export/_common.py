@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import re
+import signal
+import threading
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from .._version import __version__
@@ -19,6 +23,7 @@ __all__ = [
     "table_of",
     "header_lines",
     "ident",
+    "held_interrupt",
 ]
 
 
@@ -37,15 +42,51 @@ def header_lines(what: str, description: str, header: str | None) -> list[str]:
     return lines
 
 
+@contextlib.contextmanager
+def held_interrupt() -> Iterator[Callable[[], None]]:
+    """Hold Ctrl-C while a library that swallows it runs; yield ``check``, which delivers it.
+
+    trimesh catches ``BaseException`` around its optional imports and some computations, so a
+    ``KeyboardInterrupt`` raised inside it is lost and the export runs to its end. Inside this
+    block a SIGINT is only recorded; ``check()`` (called between units of work) and the end of
+    the block hand it to the handler that was there before (the command line's: status 130),
+    so the work stops promptly and nothing is written. Outside the main thread (where signal
+    handlers cannot be set) ``check`` does nothing.
+    """
+    got: list[int] = []
+    try:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    except ValueError:  # not the main thread
+        yield lambda: None
+        return
+
+    def check() -> None:
+        if got and threading.current_thread() is threading.main_thread():
+            got.clear()
+            signal.signal(signal.SIGINT, previous)
+            signal.raise_signal(signal.SIGINT)  # the previous handler acts on it here
+            signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+
+    try:
+        yield check
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if got:
+            signal.raise_signal(signal.SIGINT)
+
+
 def need(module: str, extra: str = "export") -> Any:
     """Import an optional dependency or raise :class:`OptionalDependencyError` with the hint.
+
+    The import runs with Ctrl-C held (:func:`held_interrupt`): trimesh's import swallows it.
 
     Raises:
         OptionalDependencyError: If ``module`` is not installed.
 
     """
     try:
-        return importlib.import_module(module)
+        with held_interrupt():
+            return importlib.import_module(module)
     except ImportError:
         raise OptionalDependencyError(
             f"{module} is not installed; `pip install 'hexapod-kin[{extra}]'` installs xacro, "

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..exceptions import UrdfError
 from ..params import rpy_to_matrix
-from ._common import need
+from ._common import held_interrupt, need
 
 __all__ = ["add_collisions", "mesh_visuals", "MeshedUrdf", "COLLIDING_MATERIALS"]
 
@@ -166,36 +166,43 @@ def mesh_visuals(urdf_text: str, uri_prefix: str) -> MeshedUrdf:
         UrdfError: If the text is not a URDF.
 
     """
-    from lxml import etree
-
     trimesh = need("trimesh")
     tree = _parse(add_collisions(urdf_text))
     files: dict[str, bytes] = {}
-    for link in tree.getroot().iter("link"):
-        visuals = link.findall("visual")
-        groups: dict[str, list[Any]] = {}
-        for visual in visuals:
-            geom = visual.find("geometry")
-            mesh = None if geom is None else _primitive(geom, _material(visual))
-            if mesh is None:
-                continue
-            mesh.apply_transform(_origin_matrix(visual))
-            groups.setdefault(_material(visual), []).append(mesh)
-            link.remove(visual)
-        anchor = link.find("collision")
-        for material in sorted(groups):
-            combined = trimesh.util.concatenate(groups[material])
-            fname = f"{link.get('name')}_{material or 'visual'}.stl"
-            files[fname] = bytes(trimesh.exchange.stl.export_stl(combined))
-            visual = etree.Element("visual")
-            etree.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
-            geometry = etree.SubElement(visual, "geometry")
-            etree.SubElement(geometry, "mesh", filename=f"{uri_prefix}{fname}")
-            if material:
-                etree.SubElement(visual, "material", name=material)
-            visual.tail = "\n    "
-            if anchor is not None:
-                anchor.addprevious(visual)
-            else:
-                link.append(visual)
+    with held_interrupt() as check:  # trimesh swallows a KeyboardInterrupt: checked per link
+        for link in tree.getroot().iter("link"):
+            check()
+            _mesh_link(trimesh, link, uri_prefix, files)
     return MeshedUrdf(urdf=_serialize(tree), files=dict(sorted(files.items())))
+
+
+def _mesh_link(trimesh: Any, link: Any, uri_prefix: str, files: dict[str, bytes]) -> None:
+    """Replace the primitive visuals of ``link`` by STL meshes, added to ``files``."""
+    from lxml import etree
+
+    visuals = link.findall("visual")
+    groups: dict[str, list[Any]] = {}
+    for visual in visuals:
+        geom = visual.find("geometry")
+        mesh = None if geom is None else _primitive(geom, _material(visual))
+        if mesh is None:
+            continue
+        mesh.apply_transform(_origin_matrix(visual))
+        groups.setdefault(_material(visual), []).append(mesh)
+        link.remove(visual)
+    anchor = link.find("collision")
+    for material in sorted(groups):
+        combined = trimesh.util.concatenate(groups[material])
+        fname = f"{link.get('name')}_{material or 'visual'}.stl"
+        files[fname] = bytes(trimesh.exchange.stl.export_stl(combined))
+        visual = etree.Element("visual")
+        etree.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
+        geometry = etree.SubElement(visual, "geometry")
+        etree.SubElement(geometry, "mesh", filename=f"{uri_prefix}{fname}")
+        if material:
+            etree.SubElement(visual, "material", name=material)
+        visual.tail = "\n    "
+        if anchor is not None:
+            anchor.addprevious(visual)
+        else:
+            link.append(visual)

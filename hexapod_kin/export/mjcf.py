@@ -20,6 +20,7 @@ their joint.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import tempfile
@@ -413,7 +414,8 @@ def write_mjcf(
     """Write :func:`to_mjcf` to ``path`` (meshes into ``<stem>_meshes/`` beside it), atomically.
 
     Every file is written with :func:`hexapod_kin._io.atomic_write`; the meshes first, the
-    MJCF last, so a complete MJCF never references a missing mesh.
+    MJCF last, so a complete MJCF never references a missing mesh. A write stopped between
+    two files (Ctrl-C, a full disk) removes the files and folders this call created.
 
     Raises:
         ParameterError: As :func:`to_mjcf`, or when the directory does not exist.
@@ -437,9 +439,20 @@ def write_mjcf(
         integrator=integrator,
         floating=floating,
     )
-    for rel, data in out.assets.items():
-        target = parent / rel
-        target.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(target, data)
-    atomic_write(dest, out.xml)
+    made: list[Path] = []  # files and folders this call creates: removed if it is stopped
+    try:
+        for rel, data in out.assets.items():
+            target = parent / rel
+            if not target.parent.exists():
+                target.parent.mkdir(parents=True)
+                made.append(target.parent)
+            if not target.exists():
+                made.append(target)
+            atomic_write(target, data)
+        atomic_write(dest, out.xml)
+    except BaseException:  # a Ctrl-C or a full disk between two files: none of the new ones
+        for path in reversed(made):
+            with contextlib.suppress(OSError):
+                path.rmdir() if path.is_dir() else path.unlink()
+        raise
     return out

@@ -269,6 +269,18 @@ def _project(jet: Eval, x: np.ndarray, steps: int) -> np.ndarray:
     return x
 
 
+def project(jet: Eval, x: np.ndarray, steps: int = 60) -> list[np.ndarray | None]:
+    """Points of ``f = 0`` reached from the rows of ``x`` (M, v) by :func:`_project`.
+
+    A row that does not reach ``|f| ≤ 1e-12 ‖∇f‖`` within ``steps`` capped steps is ``None``.
+    """
+    out = _project(jet, np.array(x, dtype=float), steps)
+    with np.errstate(all="ignore"):
+        f, g, _h = jet(out, False)
+        ok = np.abs(f) <= _TOL * np.linalg.norm(g, axis=1)
+    return [row if good else None for row, good in zip(out, ok)]
+
+
 def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``‖x* − p‖`` (M,) from Newton on ``x − p + λ∇f = 0, f = 0`` started at ``x`` on ``f = 0``.
 

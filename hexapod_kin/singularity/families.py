@@ -12,6 +12,7 @@ The text is compiled once into numpy evaluators (:mod:`._zeroset`), never ``eval
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -206,27 +207,82 @@ def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
     """Families read from disk checked against the model before use.
 
-    On each family ``q_k = value``, ``J`` (rows ``rows``) loses rank: at three random
-    configurations with ``q_k`` set to the value, ``σ_min ≤ 1e-9 σ_max`` (of ``J`` at the
-    random configurations). Implicit families are held to their factor's parse only.
+    Both ways, at fixed random configurations of the model:
+
+    * **every zero is singular**: from each of three configurations each family's factor (its
+      printed text, and what the scan's distances use) is followed to its zero set by
+      Gauss–Newton steps in the family's variables (:func:`~._zeroset.project`, to ``|f| ≤
+      1e-12 ‖∇f‖``); there ``σ_min ≤ 1e-7 σ_max`` of ``J`` (rows ``rows``; ``σ_max`` over the
+      configurations). A factor may have no real zero (``l1 + l2 cos q2`` with ``l1 > l2``).
+      For ``q_k = value``, ``J`` is also held at ``q_k = value`` (``σ_min ≤ 1e-9 σ_max``).
+    * **every singularity is a family's** (square ``J``): along four random lines of joint
+      space, each sign change of the model's ``det J`` is bisected to a singular
+      configuration, which must lie within 1e-6 of a family. An entry that moved or dropped
+      a family's zeros fails here.
 
     Raises:
-        ValueError: A family where the model's ``J`` keeps its rank (an edited entry).
+        ValueError: A family where the model's ``J`` keeps its rank, or a singular
+            configuration of the model that no family explains (an edited entry).
 
+    """
+    from ._zeroset import project
+    from .measure import measures
+
+    qs = model.random_q(3, seed=20251202)
+    size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
+    for fam in fams:
+        cols = list(fam.variables)
+        on_zero = project(fam._jet, np.array([q[cols] for q in qs], dtype=float))
+        for q, x in zip(qs, on_zero):
+            if x is not None:
+                on = np.array(q, dtype=float)
+                on[cols] = x
+                if not measures(model, on, rows).sigma_min <= 1e-7 * size:
+                    raise ValueError(f"the model's J keeps its rank where {fam.name}'s factor is 0")
+            if fam.joint is not None and fam.value is not None:
+                on = np.array(q, dtype=float)
+                on[fam.joint] = fam.value
+                if not measures(model, on, rows).sigma_min <= 1e-9 * size:
+                    raise ValueError(f"the model's J keeps its rank on {fam.name}")
+    if len(rows) == model.nq:
+        for q in _singular_points(model, rows):
+            near = min((float(f.distance(q[None])[0]) for f in fams), default=np.inf)
+            if not near <= 1e-6:
+                raise ValueError(f"a singular configuration of the model is on no family: {q}")
+
+
+def _singular_points(model: Any, rows: tuple[str, ...]) -> list[np.ndarray]:
+    """Zeros of the model's ``det J`` (square, rows ``rows``) on four random lines.
+
+    Each line of joint space is sampled 65 times over ``[-π, π]``; each sign change of
+    ``det J`` is bisected 50 times.
     """
     from .measure import measures
 
-    explicit = [f for f in fams if f.joint is not None and f.value is not None]
-    if not explicit:
-        return
-    qs = model.random_q(3, seed=20251202)
-    size = max(float(measures(model, q, rows).singular_values[0]) for q in qs)
-    for fam in explicit:
-        for q in qs:
-            on = np.array(q, dtype=float)
-            on[fam.joint] = fam.value
-            if not measures(model, on, rows).sigma_min <= 1e-9 * size:
-                raise ValueError(f"the model's J keeps its rank on {fam.name}")
+    rng = np.random.default_rng(20251203)
+    starts = model.random_q(4, seed=20251203)
+    ts = np.linspace(-math.pi, math.pi, 65)
+    found = []
+    for q0 in starts:
+        u = rng.normal(size=model.nq)
+        u /= np.linalg.norm(u)
+
+        def det(t: float, q0: np.ndarray = q0, u: np.ndarray = u) -> float:
+            return float(measures(model, q0 + t * u, rows).det)
+
+        vals = [det(t) for t in ts]
+        for a, b, fa, fb in zip(ts[:-1], ts[1:], vals[:-1], vals[1:]):
+            if not (fa < 0 < fb or fb < 0 < fa):
+                continue
+            for _ in range(50):
+                mid = 0.5 * (a + b)
+                fm = det(mid)
+                if (fm < 0) == (fa < 0):
+                    a, fa = mid, fm
+                else:
+                    b = mid
+            found.append(q0 + 0.5 * (a + b) * u)
+    return found
 
 
 def _read_cache(

@@ -120,7 +120,7 @@ def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
     square = jac.shape[1] == jac.shape[2]
     det = np.linalg.det(jac) if square else np.full(jac.shape[0], np.nan)
     manip = np.abs(det) if square else np.prod(sv, axis=1)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 where sigma_max is 0 too
         cond = np.where(sv[:, -1] > 0, sv[:, 0] / sv[:, -1], np.inf)
     return det, manip, cond, sv[:, -1], sv
 

@@ -1,9 +1,10 @@
 """Scans of joint space: measures on a grid or random samples, flags, family labels.
 
-A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default
-``rtol × reach``, with ``reach`` the sum of the chain's link offsets). Every flagged sample is
-labelled with its nearest singular family (:mod:`.families`) and the joint-space distance to
-it; flagged samples farther than ``family_tol`` from every family are "unexplained".
+A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
+reach``, with ``reach`` the sum of the chain's link offsets) or ``sigma_min = 0``. Every
+flagged sample is labelled with its nearest singular family (:mod:`.families`) and the
+joint-space distance to it; flagged samples farther than ``family_tol`` from every family are
+"unexplained".
 
 Defaults fit the robot (the API and the ``scan`` command share them): the two joints that
 change ``sigma_min`` most (:func:`default_joints`; every joint of a chain of at most two) at
@@ -26,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
+from ..tables import MIN_LENGTH as MIN_REACH  # a table's smallest length: the smallest reach
 from .families import Families, Family, families_for
 from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
@@ -87,7 +89,7 @@ class ScanResult:
         manipulability: (N,) ``sqrt(det(J Jᵀ))``.
         condition: (N,) ``σmax/σmin`` (``inf`` where singular).
         sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
-        singular: (N,) boolean mask ``sigma_min < threshold``.
+        singular: (N,) boolean mask ``sigma_min < threshold`` or ``sigma_min = 0``.
         family: (N,) index into :attr:`families` of the nearest family of each flagged
             configuration, −1 where not flagged or when no family is known.
         family_distance: (N,) joint-space distance in [rad]/[m] from each flagged
@@ -521,9 +523,17 @@ def scan(
         qf = default_q_fixed(mdl, names, jidx) if len(jidx) < mdl.nq else mdl.neutral()
     else:
         qf = mdl.check_q(q_fixed, "q_fixed").copy()
-    thr = positive(
-        "threshold", rtol * reach(mdl) if threshold is None else threshold, allow_zero=True
-    )
+    length = reach(mdl)
+    if 0.0 < length < MIN_REACH:
+        raise ParameterError(
+            f"model: the chain's reach (sum of its link offsets) is {length:g} m, below "
+            f"{MIN_REACH:g} m: its Jacobian's singular values underflow and no verdict holds; "
+            f"allowed a reach of 0 or >= {MIN_REACH:g} m",
+            parameter="model",
+            value=length,
+            allowed=f"reach 0 or >= {MIN_REACH:g} m",
+        )
+    thr = positive("threshold", rtol * length if threshold is None else threshold, allow_zero=True)
     if samples is not None:
         q = _sample_points(mdl, jidx, samples, qf, seed)
         shape = None
@@ -534,7 +544,7 @@ def scan(
         det, manip, cond, smin = _measures_small(mdl, q, names)
     else:
         det, manip, cond, smin = _kernel_scan(mdl, q, names, progress, int(chunk))
-    singular = smin < thr
+    singular = (smin < thr) | (smin <= 0.0)  # a zero sigma_min is singular at any threshold
     family = np.full(n, -1, dtype=np.int64)
     distance = np.full(n, np.nan)
     second = np.full(n, -1, dtype=np.int64)

@@ -97,11 +97,17 @@ def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
     return memo[root]
 
 
-def evaluate_matrix(mat: Any, values: Mapping[Any, Any], points: int) -> np.ndarray:
-    """A sympy matrix at ``points`` points: shape (points, rows, cols) (see :func:`evaluate`)."""
+def evaluate_matrix(
+    mat: Any, values: Mapping[Any, Any], points: int, memo: dict[Any, Any] | None = None
+) -> np.ndarray:
+    """A sympy matrix at ``points`` points: shape (points, rows, cols) (see :func:`evaluate`).
+
+    ``memo`` (node → value) may be shared between calls on the same ``values``.
+    """
+    mat = sp.Matrix(mat)
     rows, cols = mat.shape
     out = np.empty((points, rows, cols))
-    memo: dict[Any, Any] = {}  # entries share sub-expressions
+    memo = {} if memo is None else memo  # entries share sub-expressions
     for i in range(rows):
         for j in range(cols):
             value = np.asarray(_value(sp.sympify(mat[i, j]), values, memo), dtype=float)
@@ -112,11 +118,14 @@ def evaluate_matrix(mat: Any, values: Mapping[Any, Any], points: int) -> np.ndar
 def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
     """A cached derivation checked against what it claims, before use.
 
-    At three random configurations (fixed seed): the stored ``p`` against the table's own
-    forward kinematics (:func:`~hexapod_kin._table_kin.table_fk`, plain numpy), the stored
-    position Jacobian against :func:`~hexapod_kin._table_kin.table_position_jacobian`, and
-    the stored Gram determinant (``det(J Jᵀ)``, or ``det(Jᵀ J)`` for more rows than joints)
-    against the stored J's own rows; the tidied forms too. Each stored family's factor must
+    At three random configurations (fixed seed): every stored matrix that a derivation prints
+    (each ``^{j-1}T_j``, base and tool, the cumulative products, the tip, ``p``, the direct
+    and indirect Jacobians) against the table's own numbers
+    (:func:`~hexapod_kin._table_kin.table_transforms` and
+    :func:`~hexapod_kin._table_kin.table_position_jacobian`, plain numpy); a square J's
+    stored ``det`` and ``const · Π fᵐ`` against ``|det J|``; the stored Gram determinant
+    (``det(J Jᵀ)``, or ``det(Jᵀ J)`` for more rows than joints) against the stored J's own
+    rows; the tidied forms too. Each stored family's factor must
     be, at the same configurations, ± one factor of the stored determinant. An edited entry
     fails one of these. Evaluated in one pass over each expression
     (:func:`evaluate`): a fraction of a second where
@@ -136,43 +145,102 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(np.abs(a), np.abs(b)) + 1e-300))
 
 
-def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[Any, Any]) -> bool:
-    """:func:`claims_hold` for an entry with kinematics (numpy warnings silenced)."""
-    from .._table_kin import table_fk, table_position_jacobian
+def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
+    """The table's own numbers at ``qv`` (plain numpy), named as the stored matrices."""
+    from .._table_kin import table_position_jacobian, table_transforms
 
+    ts = table_transforms(chain, qv)
+    base, tool = chain.base_matrix, chain.tool_matrix
+    out = {"base": base, "tool": tool}
+    acc = base
+    for j, t in enumerate(ts):
+        out[f"transforms.{j}"] = t
+        acc = acc @ t
+        out[f"cumulative.{j}"] = acc
+    out["tip"] = acc @ tool
+    out["p"] = out["tip"][:3, 3:4]
+    lin = table_position_jacobian(chain, qv)
+    ang = np.column_stack(
+        [
+            out[f"cumulative.{j}"][:3, 2] if chain.rows[j].sigma == "revolute" else np.zeros(3)
+            for j in chain.joint_rows
+        ]
+    )
+    out["J_indirect"] = lin
+    out["J_direct"] = np.vstack([lin, ang])
+    return out
+
+
+def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[Any, Any]) -> bool:
+    """:func:`claims_hold` for an entry with kinematics (numpy warnings silenced).
+
+    Every matrix a derivation prints is held to the table's own numbers: each ``^{j-1}T_j``,
+    the base and tool poses, each cumulative product, the tip, ``p``, both Jacobians; then
+    the determinant stage (square J: ``|det|`` and ``|const · Π fᵐ|`` against the numeric
+    ``|det J|``; the Gram determinant against the stored J's rows) and the families.
+    """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     rng = np.random.default_rng(20251202)
     qs = rng.uniform(-math.pi, math.pi, (3, n))
     scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
     at = {**{s: float(v) for s, v in values.items()}, **{s: qs[:, k] for k, s in enumerate(q)}}
+    mats: dict[str, Any] = {}
+    for name in ("base", "tool", "tip", "p", "J_indirect", "J_direct"):
+        if name in kin:
+            mats[name] = kin[name]
+    for name in ("transforms", "cumulative"):
+        mats.update({f"{name}.{j}": m for j, m in enumerate(kin.get(name) or ())})
+    if "p" not in mats or "J_direct" not in mats:
+        return False
     try:
-        p = evaluate_matrix(sp.Matrix(kin["p"]), at, 3)[:, :3, 0]
-        jac = evaluate_matrix(sp.Matrix(kin["J_direct"]), at, 3)
-    except (ValueError, TypeError, KeyError):
-        return False  # a symbol or a function the table has not
+        memo: dict[Any, Any] = {}  # the matrices share sub-expressions (products, columns)
+        got = {name: evaluate_matrix(m, at, 3, memo) for name, m in mats.items()}
+    except (ValueError, TypeError, KeyError, AttributeError):
+        return False  # a symbol or a function the table has not, or not a matrix
+    jac = got["J_direct"]
     for k, qv in enumerate(qs):
-        if not np.allclose(p[k], table_fk(chain, qv)[:3, 3], atol=1e-9 * scale, rtol=0.0):
-            return False
-        if not np.allclose(jac[k, :3], table_position_jacobian(chain, qv), atol=1e-9 * scale):
-            return False
+        want = _reference(chain, qv)
+        for name, vals in got.items():
+            if name not in want or vals[k].shape != want[name].shape:
+                return False
+            if not np.allclose(vals[k], want[name], atol=1e-9 * scale, rtol=0.0):
+                return False
     det = stages.get("determinant")
     rows = stages.get("rows")
     try:
-        if det is not None and rows is not None and det.get("gram") is not None:
-            gram = np.broadcast_to(evaluate(det["gram"], at), (3,))
+        sel_rows = [ROW_NAMES.index(r) for r in rows] if rows is not None else None
+        if det is not None and sel_rows is not None:
+            square = len(sel_rows) == n
+            tol = 1e-8 * scale**4
+            gram = det.get("gram")
+            gram_v = None if gram is None else np.broadcast_to(evaluate(gram, at), (3,))
+            dets = [np.broadcast_to(evaluate(det["det"], at), (3,))] if square else []
+            if square:
+                const = np.broadcast_to(evaluate(det.get("const", 1), at), (3,))
+                prod = const.astype(float)
+                for f, m in det.get("factors", ()):
+                    prod = prod * np.power(np.broadcast_to(evaluate(f, at), (3,)), int(m))
+                dets.append(prod)
             for k in range(3):
-                sel = jac[k][[ROW_NAMES.index(r) for r in rows]]
+                sel = jac[k][sel_rows]
                 gram_k = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
-                want = float(np.linalg.det(gram_k))
-                if abs(float(gram[k]) - want) > 1e-8 * max(1.0, abs(want)) * scale**4:
+                want_g = float(np.linalg.det(gram_k))
+                if gram_v is not None and abs(float(gram_v[k]) - want_g) > tol * max(
+                    1.0, abs(want_g)
+                ):
                     return False
+                if square:
+                    size = abs(float(np.linalg.det(sel)))
+                    for d in dets:
+                        if abs(abs(float(d[k])) - size) > 1e-8 * max(1.0, size) * scale**n:
+                            return False
         if det is not None:
             factors = [np.broadcast_to(evaluate(f, at), (3,)) for f, _m in det.get("factors", ())]
             for fam in (*(stages.get("families") or ()), *(stages.get("checks") or ())):
                 f = np.broadcast_to(evaluate(fam.factor, at), (3,))
                 if factors and not any(_same(f, g) or _same(f, -g) for g in factors):
                     return False
-    except (ValueError, TypeError, KeyError):
+    except (ValueError, TypeError, KeyError, AttributeError):
         return False
     return True

@@ -16,6 +16,12 @@ from typing import Any
 
 from .server import LOOPBACK
 
+#: The names a browser may use for the server in its Host and Origin headers, with its port:
+#: the loopback address it listens on and the loopback names that resolve to it. Nothing else
+#: (a DNS name, even one resolving to 127.0.0.1, is what a DNS-rebinding page sends).
+HOSTS = (LOOPBACK, "localhost", "[::1]")
+FORBIDDEN = "forbidden: this viewer answers to 127.0.0.1, localhost and [::1] on its port only"
+
 
 def serve() -> None:  # pragma: no cover - runs in the server subprocess
     """Run meshcat's websocket bridge bound to 127.0.0.1 (the child of :class:`MeshcatServer`).
@@ -41,29 +47,29 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
     )
 
     class LoopbackStatic(StaticFileHandlerNoCache):
-        """The viewer's files, for a request whose Host is this server's loopback address."""
+        """The viewer's files, for a request whose Host names this server's own port."""
 
         def prepare(self) -> Any:
             if not local(self.request.headers.get("Host")):
                 self.set_status(403)
-                self.finish("forbidden: this viewer serves 127.0.0.1 only")
+                self.finish(FORBIDDEN)
                 return None
             return super().prepare()
 
-    allowed_hosts: set[str] = set()  # "127.0.0.1:PORT" once the port is known
+    allowed_hosts: set[str] = set()  # "127.0.0.1:PORT", "localhost:PORT", "[::1]:PORT"
 
     def local(value: str | None) -> bool:
-        """A Host or Origin naming this server's own loopback address (not a DNS name)."""
+        """A Host or Origin naming this server's own port on a loopback name (:data:`HOSTS`)."""
         if not value:
             return False
-        host = value.split("://", 1)[-1].rstrip("/")
+        host = value.split("://", 1)[-1].rstrip("/").lower()
         return host in allowed_hosts
 
     class LoopbackSocket(WebSocketHandler):
         """Meshcat's websocket, for this server's own Host and Origin only.
 
-        A request whose Host or Origin is not ``127.0.0.1:PORT`` (the shape of a DNS-rebinding
-        page: Host and Origin both ``evil.example:PORT``) is refused.
+        A request whose Host or Origin is not one of :data:`HOSTS` with this server's port (the
+        shape of a DNS-rebinding page: Host and Origin both ``evil.example:PORT``) is refused.
         """
 
         def check_origin(self, origin: str) -> bool:
@@ -72,7 +78,7 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
         def prepare(self) -> Any:
             if not local(self.request.headers.get("Host")):
                 self.set_status(403)
-                self.finish("forbidden: this viewer serves 127.0.0.1 only")
+                self.finish(FORBIDDEN)
                 return None
             return super().prepare()
 
@@ -123,7 +129,7 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
             self.http_server = tornado.httpserver.HTTPServer(self.app)
             self.http_server.add_sockets(socks)
             self.fileserver_port = socks[0].getsockname()[1]
-            allowed_hosts.add(f"{LOOPBACK}:{self.fileserver_port}")
+            allowed_hosts.update(f"{host}:{self.fileserver_port}" for host in HOSTS)
             self.web_url = f"http://{LOOPBACK}:{self.fileserver_port}/static/"
             self.tree = SceneTree()
 
