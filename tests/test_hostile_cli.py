@@ -76,13 +76,25 @@ def _env() -> dict[str, str]:
     return env
 
 
-def cli(*args: str, cwd: Path, timeout: float = HANG_S) -> Run:
-    """Run ``python -m hexapod_kin ARGS`` in ``cwd``; kill it past ``timeout`` (then it fails)."""
+def cli(
+    *args: str, cwd: Path, timeout: float = HANG_S, interrupt_after: float | None = None
+) -> Run:
+    """Run ``python -m hexapod_kin ARGS`` in ``cwd``; kill it past ``timeout`` (then it fails).
+
+    With ``interrupt_after``, a SIGINT (Ctrl-C) is sent that many seconds after the start.
+    """
+    return child([sys.executable, "-m", "hexapod_kin", *args], cwd, timeout, interrupt_after)
+
+
+def child(
+    argv: list[str], cwd: Path, timeout: float = HANG_S, interrupt_after: float | None = None
+) -> Run:
+    """Run ``argv`` in ``cwd`` with the package's environment, measured by ``os.wait4``."""
     out_path, err_path = cwd / ".stdout", cwd / ".stderr"
     with open(out_path, "wb") as out, open(err_path, "wb") as err:
         t0 = time.monotonic()
         proc = subprocess.Popen(
-            [sys.executable, "-m", "hexapod_kin", *args],
+            argv,
             cwd=cwd,
             stdin=subprocess.DEVNULL,
             stdout=out,
@@ -90,6 +102,9 @@ def cli(*args: str, cwd: Path, timeout: float = HANG_S) -> Run:
             env=_env(),
             preexec_fn=_cap,
         )
+        if interrupt_after is not None:
+            time.sleep(interrupt_after)
+            os.kill(proc.pid, signal.SIGINT)  # not reaped before _finish (at worst a zombie)
         return _finish(proc, t0, timeout, out_path, err_path)
 
 
@@ -631,19 +646,7 @@ def bounded(run: Run) -> None:
 
 def py(code: str, *, cwd: Path, timeout: float = HANG_S) -> Run:
     """Run ``python -c CODE`` in ``cwd`` as :func:`cli` runs the command line."""
-    out_path, err_path = cwd / ".stdout", cwd / ".stderr"
-    with open(out_path, "wb") as out, open(err_path, "wb") as err:
-        t0 = time.monotonic()
-        proc = subprocess.Popen(
-            [sys.executable, "-c", code],
-            cwd=cwd,
-            stdin=subprocess.DEVNULL,
-            stdout=out,
-            stderr=err,
-            env=_env(),
-            preexec_fn=_cap,
-        )
-        return _finish(proc, t0, timeout, out_path, err_path)
+    return child([sys.executable, "-c", code], cwd, timeout)
 
 
 @pytest.mark.parametrize("command", ["stand", "gait", "simulate"])
@@ -954,21 +957,7 @@ def test_reach_below_the_floor_is_refused() -> None:
 
 def interrupted_cli(*args: str, cwd: Path, delay: float, timeout: float = 120) -> Run:
     """``cli`` with a SIGINT (Ctrl-C) sent ``delay`` seconds after the start."""
-    out_path, err_path = cwd / ".stdout", cwd / ".stderr"
-    with open(out_path, "wb") as out, open(err_path, "wb") as err:
-        t0 = time.monotonic()
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "hexapod_kin", *args],
-            cwd=cwd,
-            stdin=subprocess.DEVNULL,
-            stdout=out,
-            stderr=err,
-            env=_env(),
-            preexec_fn=_cap,
-        )
-        time.sleep(delay)
-        os.kill(proc.pid, signal.SIGINT)  # not reaped before _finish (at worst a zombie)
-        return _finish(proc, t0, timeout, out_path, err_path)
+    return cli(*args, cwd=cwd, timeout=timeout, interrupt_after=delay)
 
 
 @pytest.mark.skipif(importlib.util.find_spec("trimesh") is None, reason="needs trimesh")
