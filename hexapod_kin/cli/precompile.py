@@ -45,5 +45,7 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     for name, dt in seconds.items():
         print(f"{name:<12} {dt:7.2f} s")
-    print(f"{'sum':<12} {sum(seconds.values()):7.2f} s (in numba's disk cache, unless warned above)")
+    print(
+        f"{'sum':<12} {sum(seconds.values()):7.2f} s (in numba's disk cache, unless warned above)"
+    )
     return 0
