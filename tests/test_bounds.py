@@ -189,3 +189,22 @@ def test_ik_iterations_capped() -> None:
     assert IKOptions(max_iter=MAX_ITER).max_iter == MAX_ITER
     with pytest.raises(ParameterError, match="max_iter"):
         IKOptions(max_iter=MAX_ITER + 1)
+
+
+@pytest.mark.parametrize("velocity", [(1e308, 0.0, 0.0), (0.0, 1e308, 0.0), (0.0, 0.0, 1e308)])
+def test_absurd_twists_are_refused_before_any_overflow(velocity) -> None:
+    """A walk's twist whose stance stroke passes the stride's cap: one error, no warning."""
+    import warnings
+
+    from hexapod_kin.exceptions import ParameterError
+    from hexapod_kin.gait import walk
+    from hexapod_kin.gait.walk import MAX_STROKE
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy overflow warning would fail here
+        with pytest.raises(ParameterError) as err:
+            walk(velocity=velocity, duration=0.2)
+    assert err.value.parameter == "velocity" and f"{MAX_STROKE:g} m" in str(err.value)
+    # the cap is the stride's: a twist just inside it plans (and is judged by the checks)
+    run = walk(velocity=(0.05, 0.0, 0.0), duration=0.2)
+    assert run.t.size > 0

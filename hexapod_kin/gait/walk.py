@@ -73,6 +73,10 @@ from .zmp import second_difference, zmp_points
 
 __all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
 
+#: The longest foot stroke during one stance [m] a velocity may ask (the stride's own cap).
+MAX_STROKE = 10.0
+#: The largest body turn during one stance [rad] a velocity may ask.
+MAX_TURN = 2.0 * math.pi
 #: Default foot stroke during stance [m] when no velocity is given.
 DEFAULT_STRIDE = 0.05
 
@@ -500,7 +504,7 @@ def walk(
             allowed="stride or velocity",
         )
     if velocity is None:
-        L = _num("stride", DEFAULT_STRIDE if stride is None else stride, zero=True, hi=10.0)
+        L = _num("stride", DEFAULT_STRIDE if stride is None else stride, zero=True, hi=MAX_STROKE)
         vel = (L / (beta * T), 0.0, 0.0)
     else:
         try:
@@ -524,7 +528,17 @@ def walk(
     size = float(np.hypot(wb.mounts[:, 0, 3], wb.mounts[:, 1, 3]).max()) + reach
     tol = MARGIN_TOL * size
     vx, vy, w = vel
-    strokes = np.hypot(vx - w * nb[:, 1], vy + w * nb[:, 0]) * beta * T
+    with np.errstate(over="ignore", invalid="ignore"):
+        strokes = np.hypot(vx - w * nb[:, 1], vy + w * nb[:, 0]) * beta * T
+    if not (np.all(strokes <= MAX_STROKE) and abs(w) * beta * T <= MAX_TURN):
+        raise ParameterError(  # absurd twists refused before any arithmetic overflows
+            f"velocity={vel!r}: a foot would stroke {float(np.max(strokes)):.3g} m and the body "
+            f"turn {abs(w) * beta * T:.3g} rad during one stance; allowed: strokes up to "
+            f"{MAX_STROKE:g} m (as stride) and turns up to {MAX_TURN:g} rad",
+            parameter="velocity",
+            value=velocity,
+            allowed=f"strokes <= {MAX_STROKE:g} m, turns <= {MAX_TURN:g} rad per stance",
+        )
     # --- contacts and swings, per sample and leg
     offs = np.asarray(table.offsets)
     tsw = (1.0 - beta) * T
