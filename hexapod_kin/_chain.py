@@ -46,6 +46,33 @@ class ChainArrays:
     nq: int
 
     @classmethod
+    def serial(cls, rot: Any, trans: Any, axis: Any, kind: Any, tip_rot: Any = None) -> ChainArrays:
+        """A chain of its own joints alone (``col = 0..m-1``, ``nq = m``), read-only arrays.
+
+        Args:
+            rot: (m, 3, 3) each joint frame's rotation in the previous one's.
+            trans: (m + 1, 3) each joint frame's origin in the previous one's, then the tip's
+                in the last joint's frame [m].
+            axis: (m, 3) unit joint axes in their joint frames.
+            kind: (m,) 1 for a prismatic joint, else 0.
+            tip_rot: (3, 3) the tip's rotation in the last joint's frame (default identity).
+
+        """
+        m = len(rot)
+        arrays = cls(
+            rot=np.ascontiguousarray(rot, dtype=float).reshape(m, 3, 3),
+            trans=np.ascontiguousarray(trans, dtype=float).reshape(m + 1, 3),
+            tip_rot=np.ascontiguousarray(np.eye(3) if tip_rot is None else tip_rot, dtype=float),
+            axis=np.ascontiguousarray(axis, dtype=float),
+            kind=np.asarray(kind, dtype=np.int64),
+            col=np.arange(m, dtype=np.int64),
+            nq=m,
+        )
+        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
+            arr.setflags(write=False)
+        return arrays
+
+    @classmethod
     def from_model(cls, model: Any, frame: str | None = None) -> ChainArrays:
         """Extract the chain from root to ``frame`` (default: the tip) of a loaded model.
 

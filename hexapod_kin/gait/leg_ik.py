@@ -44,19 +44,9 @@ def leg_chain(
         foot: (3,) the foot in the last joint's frame [m].
 
     """
-    m = len(placements)
-    arrays = ChainArrays(
-        rot=np.ascontiguousarray(placements[:, :3, :3], dtype=float),
-        trans=np.ascontiguousarray(np.vstack([placements[:, :3, 3], foot]), dtype=float),
-        tip_rot=np.eye(3),
-        axis=np.ascontiguousarray(axes, dtype=float),
-        kind=np.asarray(prismatic, dtype=np.int64),
-        col=np.arange(m, dtype=np.int64),
-        nq=m,
+    return ChainArrays.serial(
+        placements[:, :3, :3], np.vstack([placements[:, :3, 3], foot]), axes, prismatic
     )
-    for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-        arr.setflags(write=False)
-    return arrays
 
 
 def solve_legs(

@@ -51,18 +51,8 @@ def table_chain(ch: Chain, n: int) -> ChainArrays:
         tip = tip @ row.transform()
     tip = tip @ ch.tool_matrix
     trans.append(tip[:3, 3])
-    arrays = ChainArrays(
-        rot=np.ascontiguousarray(np.array(rots).reshape(n, 3, 3)),
-        trans=np.ascontiguousarray(np.array(trans).reshape(n + 1, 3)),
-        tip_rot=np.ascontiguousarray(tip[:3, :3]),
-        axis=np.tile([0.0, 0.0, 1.0], (n, 1)),
-        kind=np.array([int(r.sigma == "prismatic") for r in rows[:n]], dtype=np.int64),
-        col=np.arange(n, dtype=np.int64),
-        nq=n,
-    )
-    for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-        arr.setflags(write=False)
-    return arrays
+    kind = [int(r.sigma == "prismatic") for r in rows[:n]]
+    return ChainArrays.serial(rots, trans, np.tile([0.0, 0.0, 1.0], (n, 1)), kind, tip[:3, :3])
 
 
 def finish_on_table(
