@@ -28,17 +28,13 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from bench_legs import best_of  # tools/ is the script's folder
 
 CLOCK: Callable[[], float] = time.process_time
 
 
 def _best(fn: Callable[[], Any], repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = CLOCK()
-        fn()
-        times.append(CLOCK() - t0)
-    return min(times)
+    return best_of(fn, repeat, CLOCK)
 
 
 def walk_rows(repeat: int, samples: int) -> list[dict[str, Any]]:
