@@ -316,6 +316,22 @@ def _model_position_limits(plan: Any, position_limit: Any, n: int) -> np.ndarray
     return out
 
 
+def _first(bad: np.ndarray) -> int | None:
+    """The first sample where ``bad`` holds (None: none)."""
+    hits = np.flatnonzero(bad)
+    return int(hits[0]) if hits.size else None
+
+
+def _beyond(joint: str, t: float, what: str, value: Any, allowed: Any) -> LimitError:
+    """The refusal of a sample beyond a limit, naming the joint and the time [s]."""
+    return LimitError(
+        f"joint {joint} at t={t:.4f} s: {what}",
+        parameter=joint,
+        value=float(value),
+        allowed=allowed,
+    )
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # non-finite results refused
 def timeline(
     plan: Any,
@@ -415,9 +431,8 @@ def timeline(
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
         finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
-        bad = np.flatnonzero(~finite)
-        if bad.size:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
-            k = int(bad[0])
+        k = _first(~finite)
+        if k is not None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
             raise ConfigurationError(
                 f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
                 f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
@@ -426,40 +441,25 @@ def timeline(
                 value=float(command[k, j]),
                 allowed="finite commands and speeds",
             )
-        bad = np.flatnonzero((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
-        if bad.size:
-            k = int(bad[0])
-            raise LimitError(
-                f"joint {s.joint} at t={ts[k]:.4f} s: q = {qs[k, j]:.6g} is beyond the joint's "
-                f"limits [{plim[0, j]:.6g}, {plim[1, j]:.6g}]",
-                parameter=s.joint,
-                value=float(qs[k, j]),
-                allowed=(float(plim[0, j]), float(plim[1, j])),
-            )
+        k = _first((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
+        if k is not None:
+            lo, hi = float(plim[0, j]), float(plim[1, j])
+            what = f"q = {qs[k, j]:.6g} is beyond the joint's limits [{lo:.6g}, {hi:.6g}]"
+            raise _beyond(s.joint, ts[k], what, qs[k, j], (lo, hi))
         if s.limits is not None:
             lo, hi = s.limits
-            bad = np.flatnonzero((command[:, j] < lo) | (command[:, j] > hi))
-            if bad.size:
-                k = int(bad[0])
-                raise LimitError(
-                    f"joint {s.joint} at t={ts[k]:.4f} s: {exact[k]:.6g} {s.units} "
-                    f"(q = {qs[k, j]:.6g} rad) is beyond its servo's limits "
-                    f"[{lo:g}, {hi:g}] {s.units}",
-                    parameter=s.joint,
-                    value=float(exact[k]),
-                    allowed=(lo, hi),
+            k = _first((command[:, j] < lo) | (command[:, j] > hi))
+            if k is not None:
+                what = (
+                    f"{exact[k]:.6g} {s.units} (q = {qs[k, j]:.6g} rad) is beyond its servo's "
+                    f"limits [{lo:g}, {hi:g}] {s.units}"
                 )
+                raise _beyond(s.joint, ts[k], what, exact[k], (lo, hi))
         lim = s.velocity_limit if s.velocity_limit is not None else float(vlim[j])
-        bad = np.flatnonzero(np.abs(vs[:, j]) > lim)
-        if bad.size:
-            k = int(bad[0])
-            raise LimitError(
-                f"joint {s.joint} at t={ts[k]:.4f} s: speed {vs[k, j]:.6g} rad/s is beyond its "
-                f"limit {lim:g} rad/s",
-                parameter=s.joint,
-                value=float(vs[k, j]),
-                allowed=(-lim, lim),
-            )
+        k = _first(np.abs(vs[:, j]) > lim)
+        if k is not None:
+            what = f"speed {vs[k, j]:.6g} rad/s is beyond its limit {lim:g} rad/s"
+            raise _beyond(s.joint, ts[k], what, vs[k, j], (-lim, lim))
     for arr in (ts, q_sent, vs, command, speed):
         arr.setflags(write=False)
     return Timeline(
