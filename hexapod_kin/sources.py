@@ -4,7 +4,8 @@
 its meshes resolve, and the parameter table when there is one). A source is a
 :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a path, or a string read in this order:
 URDF text (it starts with ``<``), a preset name, ``erd:NAME`` (example-robot-data), a file
-path (``.urdf``/``.xml``, or a table file ``.toml``/``.yaml``). This module also holds the
+path (``.urdf``/``.xml``, a ROS ``.xacro`` expanded without ROS, or a table file
+``.toml``/``.yaml``). This module also holds the
 example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second engine
 (:func:`yourdfpy_load`). It never imports Pinocchio: building the model is
 :mod:`hexapod_kin.model`'s job.
@@ -16,6 +17,7 @@ import importlib.metadata
 import io
 import os
 import re
+import threading
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -233,6 +235,98 @@ def _no_params(params: dict[str, Any], what: str) -> None:
         )
 
 
+# ------------------------------------------------------------------------ xacro
+_FIND = re.compile(r"\$\(find\s+([^)\s]+)\s*\)")
+_XACRO_LOCK = threading.Lock()
+
+
+def _split_package_dirs(given: tuple[str, ...]) -> tuple[tuple[str, ...], dict[str, str]]:
+    """``package_dirs`` entries: plain folders, and ``NAME=PATH`` (package NAME is PATH)."""
+    dirs: list[str] = []
+    named: dict[str, str] = {}
+    for entry in given:
+        name, eq, folder = entry.partition("=")
+        if eq and name and "/" not in name and os.sep not in name:
+            if not os.path.isdir(folder):
+                raise SourceError(
+                    f"package_dirs entry {entry!r}: {folder!r} is not a directory; give "
+                    "NAME=PATH with PATH the package's folder (the one holding package.xml)",
+                    parameter="package_dirs",
+                    value=entry,
+                    allowed="DIR or NAME=PATH",
+                )
+            named[name] = os.path.abspath(folder)
+        else:
+            dirs.append(entry)
+    return tuple(dirs), named
+
+
+def _find_package(pkg: str, path: Path, dirs: tuple[str, ...], named: dict[str, str]) -> str:
+    """The folder of ROS package ``pkg`` for ``$(find pkg)``, without ROS (see :func:`_expand`)."""
+    if pkg in named:
+        return named[pkg]
+    for folder in _package_dirs_for(path, f"package://{pkg}/", dirs):
+        if (Path(folder) / pkg).is_dir():
+            return str(Path(folder) / pkg)
+    raise SourceError(
+        f"source={str(path)!r}: $(find {pkg}) names a ROS package that was not found; give "
+        f"--package-dir {pkg}=PATH (package_dirs=['{pkg}=PATH']), a folder holding {pkg}/, "
+        "or set ROS_PACKAGE_PATH",
+        parameter="package_dirs",
+        value=pkg,
+        allowed="DIR or NAME=PATH",
+    )
+
+
+def _expand(path: Path, text: str, dirs: tuple[str, ...], named: dict[str, str]) -> str:
+    """A ROS xacro file expanded by the ``xacro`` package without ROS.
+
+    ``$(find PKG)`` resolves, in this order, to ``NAME=PATH`` entries of ``package_dirs``,
+    then a ``PKG`` folder in the plain ``package_dirs``, ``ROS_PACKAGE_PATH`` or the folders
+    above the file (:func:`_package_dirs_for`), in the file and in the files it includes.
+    ``xacro`` keeps its state in module globals, so expansions are serialised by a lock, and
+    its ``$(find)`` hook is swapped for the call only.
+
+    Raises:
+        SourceError: A package that cannot be found.
+        UrdfError: xacro refuses the document.
+
+    """
+    from .exceptions import OptionalDependencyError
+
+    try:
+        import xacro
+        from xacro import substitution_args
+    except ImportError:
+        raise OptionalDependencyError(
+            "expanding a .xacro file needs the xacro package; `pip install 'hexapod-kin[export]'`",
+            parameter="source",
+        ) from None
+    found: dict[str, str] = {}
+
+    def find(pkg: str) -> str:
+        if pkg not in found:
+            found[pkg] = _find_package(pkg, path, dirs, named)
+        return found[pkg]
+
+    for pkg in _FIND.findall(text):  # a missing package: one clear error before xacro runs
+        find(pkg)
+    with _XACRO_LOCK:
+        saved = substitution_args._eval_find, xacro.filestack, xacro.macrostack
+        substitution_args._eval_find = find
+        xacro.init_stacks(str(path))  # relative includes resolve next to the file
+        try:
+            doc = xacro.parse(text)
+            xacro.process_doc(doc)
+            return str(doc.toxml())
+        except SourceError:
+            raise
+        except Exception as exc:  # xacro raises XacroException, expat errors, NameError, ...
+            raise UrdfError(f"source={str(path)!r}: xacro could not expand it: {exc}") from None
+        finally:
+            substitution_args._eval_find, xacro.filestack, xacro.macrostack = saved
+
+
 def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> ResolvedSource:
     if not path.exists():
         raise SourceError(
@@ -245,6 +339,12 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
         return ResolvedSource(to_urdf(chain), path.name, params=chain, path=str(path))
     _no_params(params, f"file {str(path)!r}")
     text = _read_text(path)
+    package_dirs, named = _split_package_dirs(package_dirs)
+    if path.suffix.lower() == ".xacro":
+        text = _expand(path, text, package_dirs, named)
+    for name, folder in named.items():  # package://NAME/ resolves in NAME=PATH's parent
+        if Path(folder).name == name:
+            package_dirs = (*package_dirs, str(Path(folder).parent))
     return ResolvedSource(
         text,
         path.name,
@@ -268,7 +368,9 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             name (``"hexabot_leg"``), a URDF file path, URDF text, a table file (``.toml``,
             ``.yaml``; see :mod:`hexapod_kin.tables`) or ``"erd:NAME"``.
         package_dirs: Extra directories where ``package://PKG/...`` resolves (``<dir>/PKG``),
-            tried before ``ROS_PACKAGE_PATH`` and the folders above a URDF file.
+            tried before ``ROS_PACKAGE_PATH`` and the folders above a URDF file; an entry
+            ``NAME=PATH`` says package NAME is the folder PATH (for a xacro's
+            ``$(find NAME)``, and ``package://NAME/`` when PATH's last part is NAME).
         **params: Preset parameters (only with a preset name).
 
     Raises:
@@ -327,7 +429,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             path=str(path),
         )
     path = Path(text).expanduser()
-    if path.suffix.lower() in (".urdf", ".xml", *TABLE_SUFFIXES) or path.exists():
+    if path.suffix.lower() in (".urdf", ".xml", ".xacro", *TABLE_SUFFIXES) or path.exists():
         return _from_file(path, extra, **params)
     hint = _hint(text)
     raise SourceError(

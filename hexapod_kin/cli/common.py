@@ -231,8 +231,9 @@ def robot_args(
         p.add_argument(
             "--package-dir",
             action="append",
-            metavar="DIR",
-            help="a folder where package:// meshes resolve (repeatable; before ROS_PACKAGE_PATH)",
+            metavar="DIR|NAME=PATH",
+            help="a folder where package:// meshes resolve, or NAME=PATH: ROS package NAME is the "
+            "folder PATH (a .xacro's $(find NAME)); repeatable; before ROS_PACKAGE_PATH",
         )
     if frames:
         p.add_argument("--base", help="base frame of the sub-chain (default: the root link)")

@@ -37,7 +37,7 @@ def register(sub: Any) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    robot_args(p, kinds="legged", default="hexapod")
+    robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
     p.add_argument("--friction", type=float, default=1.0, help="sliding friction coefficient")
     p.add_argument(
