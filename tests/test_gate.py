@@ -129,6 +129,11 @@ CASES: dict[str, tuple[str | None, str, str | None]] = {
     "inertia_triangle": ("warn", "violate the triangle inequality I1 + I2 ≥ I3", "<inertia "),
     "inertia_zero_moving": ("warn", "not positive definite (arm;", "<inertia "),
     "inertia_singular_offdiag": ("warn", "not positive definite", "<inertia "),
+    "inertia_gyration": (
+        "warn",
+        "1 link(s) have a radius of gyration far beyond the robot's size (arm;",
+        "<inertia ",
+    ),
     "inertia_missing_entry": ("UrdfError", "izz=None: attribute is required", "<inertia "),
     "inertial_no_mass": ("UrdfError", "<mass> is required", "<inertial>"),
     # files (other schemes and absolute paths: never read nor fetched, the visual is dropped)

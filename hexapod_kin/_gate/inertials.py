@@ -15,7 +15,7 @@ import numpy as np
 from lxml import etree
 
 from ..exceptions import UrdfError
-from .limits import INERTIA_FLOOR, TRIANGLE_RTOL
+from .limits import GYRATION_FACTOR, GYRATION_MAX, INERTIA_FLOOR, TRIANGLE_RTOL
 from .parse import error_at, number_of, origin_of, single
 
 
@@ -115,6 +115,44 @@ def link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = 
             raise err
         defects.append((str(link.get("name")), str(err)))
     return _Inertial(mass, (ixx, iyy, izz, ixy, ixz, iyz), eig, inertial)
+
+
+def robot_size(offsets: Sequence[np.ndarray]) -> float:
+    """The robot's size [m]: the sum of its joints' offsets (no two points of it are farther)."""
+    return math.fsum(float(np.linalg.norm(o)) for o in offsets)
+
+
+def check_gyration(
+    name: str,
+    link: etree._Element,
+    inertial: _Inertial,
+    size: float,
+    defects: list[tuple[str, str]] | None = None,
+) -> None:
+    """A link whose radius of gyration is far beyond the robot's size (:data:`GYRATION_FACTOR`).
+
+    ``sqrt(I_max / m)`` is the distance at which the link's whole mass would give its largest
+    principal moment; a real link's is below its own size. With ``defects`` (lenient mode)
+    the defect is recorded there instead of raised.
+    """
+    if inertial.mass <= 0.0 or inertial.element is None:
+        return
+    radius = math.sqrt(max(inertial.eig[2], 0.0) / inertial.mass)
+    limit = max(GYRATION_MAX, GYRATION_FACTOR * size)
+    if radius <= limit:
+        return
+    err = error_at(
+        inertial.element.find("inertia"),
+        None,
+        None,
+        f"link {name!r} has a radius of gyration sqrt(I_max / m) = {radius:.4g} m (largest "
+        f"principal moment {inertial.eig[2]:.6g} kg m^2, mass {inertial.mass:g} kg), more than "
+        f"{GYRATION_FACTOR:g} times the robot's size ({size:.4g} m, the sum of its joint "
+        f"offsets) and {GYRATION_MAX:g} m: no link of this robot can have it (units?)",
+    )
+    if defects is None:
+        raise err
+    defects.append((name, str(err)))
 
 
 def check_moving_body(

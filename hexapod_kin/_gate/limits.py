@@ -40,6 +40,12 @@ MAX_MESH_BYTES = 200 * 1024 * 1024
 #: Relative tolerance of the triangle inequality ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)``
 #: (CAD exports round their inertias; 1e-6 accepts that rounding, not a wrong tensor).
 TRIANGLE_RTOL = 1e-6
+#: A link's radius of gyration ``sqrt(I_max / m)`` beyond ``GYRATION_FACTOR`` times the robot's
+#: size (the sum of its joint offsets, an upper bound on any distance inside it) and beyond
+#: ``GYRATION_MAX`` [m] cannot belong to the link: no part of a body is farther from its centre
+#: of mass than the body's own size. (A CAD export in g·mm² read as kg·m² gives 1e6 too much.)
+GYRATION_FACTOR = 10.0
+GYRATION_MAX = 1.0
 #: Joint types of the URDF spec.
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 

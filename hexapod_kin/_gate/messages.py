@@ -24,6 +24,7 @@ _DEFECT_KINDS = (
     ("indefinite", "have an indefinite inertia"),
     ("not positive", "have an inertia that is not positive definite"),
     ("mass > 0", "are moving bodies that have no mass"),
+    ("radius of gyration", "have a radius of gyration far beyond the robot's size"),
 )
 
 

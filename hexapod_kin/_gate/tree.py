@@ -15,7 +15,7 @@ from typing import Any
 from lxml import etree
 
 from ..exceptions import UrdfError
-from .inertials import check_moving_body, link_inertial
+from .inertials import check_gyration, check_moving_body, link_inertial, robot_size
 from .limits import JOINT_CHILDREN, JOINT_DOF, JOINT_TYPES, MAX_DOF, MAX_LINKS, URDF_VERSION
 from .meshes import (
     MeshEmpty,
@@ -30,6 +30,7 @@ from .parse import (
     error_at,
     number_of,
     numbers_of,
+    origin_of,
     parse_strict,
     single,
 )
@@ -296,6 +297,9 @@ def _check(
     for child, jname in parent_of.items():
         if joint_el[jname].get("type") != "fixed":
             check_moving_body(jname, child, link_el, inertials, fixed_children, defects)
+    size = robot_size([origin_of(joint)[1] for joint in joint_el.values()])
+    for name, el in link_el.items():
+        check_gyration(name, el, inertials[name], size, defects)
 
     meshes: list[tuple[str, Path]] = []
     missing: list[tuple[str, str]] = []

@@ -1,0 +1,351 @@
+"""Legged robots from GitHub that the project has never seen, run as a new user would.
+
+Each robot is run from the command line in a folder of its own (not the project's), with at
+most ``--foot`` and ``--inertia``: ``stand``, ``gait`` with every pattern for its number of
+legs, ``simulate`` (``--robust`` once the command has it), ``timeline gait`` and ``gait
+--html``. Every cell must exit 0; the cells known to fail today are marked ``xfail`` with
+their cause (:data:`KNOWN`). :func:`test_table_page` writes the table to
+``docs/guide/robots.md``.
+
+The robots whose licence allows it ship under ``tests/data/<robot>/`` (with the licence and a
+README saying where they come from); the others (:data:`FETCHED`) are fetched from GitHub at
+a pinned commit by tests marked ``network``, skipped offline. ``HEXAPOD_KIN_ROBOT_MIRROR``
+may name a folder holding them as ``<owner>+<repo>/<path>`` (read, never written).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+DATA = ROOT / "tests" / "data"
+PAGE = ROOT / "docs" / "guide" / "robots.md"
+BEGIN, END = "<!-- robot table: begin (tests/test_robot_table.py) -->", "<!-- robot table: end -->"
+#: CPU seconds one command may take before it counts as failed.
+CELL_TIMEOUT = 900
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A robot of the table: where it comes from and the options a user gives it."""
+
+    name: str
+    legs: int
+    source: str  # under tests/data, or "<owner>/<repo>@<commit>:<path>" (fetched)
+    origin: str
+    licence: str
+    feet: tuple[str, ...] = ()
+    inertia: str | None = None
+    note: str = ""
+
+    @property
+    def fetched(self) -> bool:
+        return "@" in self.source
+
+    def options(self) -> list[str]:
+        out = [f"--foot={' '.join(self.feet)}"] if self.feet else []
+        return out + ([f"--inertia={self.inertia}"] if self.inertia else [])
+
+
+def _feet(fmt: str, names: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(fmt.format(n) for n in names)
+
+
+ROBOTS = (
+    Robot(
+        "Kraby",
+        6,
+        "kraby/hexapod.urdf",
+        "erdnaxe/kraby",
+        "MIT",
+        note="base frame at ground level",
+    ),
+    Robot(
+        "hexaross",
+        6,
+        "hexaross/hexapod_description/urdf/hexapod.urdf",
+        "Hexapod-h-da/hexaross",
+        "MIT",
+        feet=_feet("leg{}_rubber_tip:0.1427,-0.1474,0", ("1", "2", "3", "4", "5", "6")),
+        note="no foot frames: the rubber tip's far end",
+    ),
+    Robot(
+        "hexa",
+        6,
+        "hexa/hexa_description/urdf/hexapod.urdf.xacro",
+        "olli-io/hexapod-ros2-control",
+        "Apache-2.0",
+        note="ROS 2 xacro reading a YAML through $(find)",
+    ),
+    Robot(
+        "RARL hexapod-sim",
+        6,
+        "chrismailer/hexapod-sim@666d788248312b2ae858d018449394a926d3cc79:"
+        "urdf/hexapod_simplified.urdf",
+        "chrismailer/hexapod-sim",
+        "none stated (fetched)",
+        feet=_feet("link_{}_3:0.14735,0,0", ("1", "2", "3", "4", "5", "6")),
+        note="two legs on the x axis",
+    ),
+    Robot(
+        "CHAMP",
+        4,
+        "champ/champ_description/urdf/champ.urdf",
+        "chvmp/champ",
+        "BSD-3-Clause",
+    ),
+    Robot(
+        "MIT Mini Cheetah",
+        4,
+        "mini_cheetah/mini_cheetah.urdf",
+        "Derek-TH-Wang/mini_cheetah_urdf",
+        "BSD (package.xml)",
+        feet=_feet("shank_{}:0,0,-0.18", ("fr", "fl", "hr", "hl")),
+        inertia="point",
+        note="continuous joints; inertias that break I1 + I2 >= I3",
+    ),
+    Robot(
+        "Mini Pupper",
+        4,
+        "mini_pupper/mini_pupper_description/urdf/mini_pupper/mini_pupper_description.urdf.xacro",
+        "mangdangroboticsclub/mini_pupper_ros",
+        "Apache-2.0",
+        note="ROS xacro; joints limited to 1.5 rad/s",
+    ),
+    Robot(
+        "SpotMicroAI",
+        4,
+        "chvmp/spotmicro_description@395276f036f1d0c56852fe06e5c8377efb964aee:"
+        "urdf/spotmicroai.urdf",
+        "chvmp/spotmicro_description",
+        "GPL-3.0 launch files, CC-BY-3.0 meshes, URDF unstated (fetched)",
+        inertia="point",
+        note="inertias of 100-1000 kg m^2 on 0.05-0.2 kg links",
+    ),
+)
+
+PATTERNS = {6: ("tripod", "wave", "ripple"), 4: ("crawl", "wave", "trot", "pace")}
+
+
+def _cells(robot: Robot) -> list[str]:
+    return [
+        "stand",
+        *(f"gait {p}" for p in PATTERNS[robot.legs]),
+        "simulate",
+        "timeline gait",
+        "gait --html",
+    ]
+
+
+#: Cells that fail today, with their cause (the ``xfail`` reasons; see issue 31). A cell
+#: that passes is reported as XPASS, and leaves this list when it passes everywhere.
+KNOWN: dict[tuple[str, str], str] = {}
+
+FETCHED = tuple(r for r in ROBOTS if r.fetched)
+
+
+# ------------------------------------------------------------------------ sources
+def _fetch(robot: Robot, into: Path) -> Path:
+    """The fetched robot's file: from ``HEXAPOD_KIN_ROBOT_MIRROR`` or GitHub, else skip."""
+    repo, _, rest = robot.source.partition("@")
+    commit, _, path = rest.partition(":")
+    target = into / repo.replace("/", "+") / path
+    if target.is_file():
+        return target
+    mirror = os.environ.get("HEXAPOD_KIN_ROBOT_MIRROR")
+    if mirror and (Path(mirror) / repo.replace("/", "+") / path).is_file():
+        return Path(mirror) / repo.replace("/", "+") / path
+    url = f"https://raw.githubusercontent.com/{repo}/{commit}/{path}"
+    try:
+        with urllib.request.urlopen(url, timeout=20) as reply:  # noqa: S310 (https, pinned)
+            text = reply.read(4_000_000)
+    except OSError as exc:
+        pytest.skip(f"{robot.name}: cannot fetch {url} ({exc}); needs the network")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(text)
+    return target
+
+
+@pytest.fixture(scope="module")
+def fetched_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("robots")
+
+
+_RESULTS: dict[tuple[str, str], tuple[int, str]] = {}
+
+
+def _argv(robot: Robot, source: str, cell: str) -> list[str]:
+    opts = robot.options()
+    if cell == "stand":
+        return ["stand", source, *opts]
+    if cell.startswith("gait ") and cell != "gait --html":
+        return ["gait", source, "--pattern", cell.split()[1], *opts]
+    if cell == "simulate":
+        return ["simulate", source, *(["--robust"] if _robust() else []), *opts]
+    if cell == "timeline gait":
+        return ["timeline", "gait", source, "-o", "walk.csv", *opts]
+    assert cell == "gait --html"
+    return ["gait", source, "--html", "walk.html", *opts]
+
+
+_ROBUST: list[bool] = []
+
+
+def _robust() -> bool:
+    """Whether ``simulate`` has ``--robust`` yet (else plain ``simulate``, marked pending)."""
+    if not _ROBUST:
+        out = subprocess.run(
+            [sys.executable, "-m", "hexapod_kin", "simulate", "--help"],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        ).stdout
+        _ROBUST.append("--robust" in out)
+    return _ROBUST[0]
+
+
+def _reason(stderr: str) -> str:
+    """The one line that says why (the last ``hexapod-kin:`` line that is not a warning)."""
+    lines = [
+        ln for ln in stderr.splitlines() if ln.startswith("hexapod-kin:") and "warning:" not in ln
+    ]
+    if not lines:
+        tail = [ln for ln in stderr.splitlines() if ln.strip()]
+        return tail[-1][:200] if tail else ""
+    return re.sub(r"^hexapod-kin: (error: |not achieved: )?", "", lines[-1])[:300]
+
+
+def run_cell(robot: Robot, cell: str, where: Path, fetched_dir: Path) -> tuple[int, str]:
+    """Run one cell from ``where`` (a folder of its own); (exit status, one-line reason)."""
+    key = (robot.name, cell)
+    if key not in _RESULTS:
+        source = str(_fetch(robot, fetched_dir) if robot.fetched else DATA / robot.source)
+        argv = [sys.executable, "-m", "hexapod_kin", *_argv(robot, source, cell)]
+        try:
+            done = subprocess.run(
+                argv, cwd=where, capture_output=True, text=True, timeout=CELL_TIMEOUT
+            )
+            _RESULTS[key] = (done.returncode, _reason(done.stderr) if done.returncode else "")
+        except subprocess.TimeoutExpired:
+            _RESULTS[key] = (-1, f"no answer within {CELL_TIMEOUT} s")
+    return _RESULTS[key]
+
+
+def _params() -> list[object]:
+    out = []
+    for robot in ROBOTS:
+        for cell in _cells(robot):
+            marks = [pytest.mark.network] if robot.fetched else []
+            if (robot.name, cell) in KNOWN:
+                marks.append(pytest.mark.xfail(strict=False, reason=KNOWN[robot.name, cell]))
+            out.append(pytest.param(robot, cell, marks=marks, id=f"{robot.name}:{cell}"))
+    return out
+
+
+# ------------------------------------------------------------------------ the tests
+@pytest.mark.slow
+@pytest.mark.parametrize(("robot", "cell"), _params())
+def test_cell(robot: Robot, cell: str, tmp_path: Path, fetched_dir: Path) -> None:
+    status, why = run_cell(robot, cell, tmp_path, fetched_dir)
+    assert status == 0, f"{robot.name}: {cell}: exit {status}: {why}"
+
+
+def test_robots_cover_the_issue() -> None:
+    """8 robots or more from outside the project: 3+ hexapods, 4+ quadrupeds; each shipped
+    one has its licence and a README naming its origin."""
+    assert len(ROBOTS) >= 8
+    assert sum(r.legs == 6 for r in ROBOTS) >= 3 and sum(r.legs == 4 for r in ROBOTS) >= 4
+    for robot in ROBOTS:
+        if robot.fetched:
+            continue
+        folder = DATA / robot.source.split("/")[0]
+        assert (DATA / robot.source).is_file()
+        assert (folder / "LICENSE").is_file() or "package.xml" in robot.licence
+        assert robot.origin in (folder / "README.md").read_text()
+    text = (DATA / "mini_cheetah" / "mini_cheetah.urdf").read_text()
+    assert 'type="continuous"' in text and 'type="revolute"' not in text
+
+
+def table_markdown(rows: dict[tuple[str, str], tuple[int, str]], robust: bool) -> str:
+    """The page's table: one row per robot, one column per command (exit status)."""
+    sim = "simulate --robust" if robust else "simulate (--robust pending)"
+    lines = [
+        "| robot | legs | licence | options | stand | gait (each pattern) | "
+        f"{sim} | timeline gait | gait --html |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    reasons: list[str] = []
+
+    def cell(robot: Robot, name: str, label: str = "") -> str:
+        status, why = rows.get((robot.name, name), (None, "not run"))
+        mark = "–" if status is None else str(status)
+        if status not in (0, None):
+            reasons.append(f"{len(reasons) + 1}. {robot.name}, `{name}`: exit {status}: {why}")
+            return f"{label}{mark} [{len(reasons)}]"
+        return f"{label}{mark}"
+
+    for robot in ROBOTS:
+        gaits = ", ".join(cell(robot, f"gait {p}", f"{p} ") for p in PATTERNS[robot.legs])
+        opts = " ".join(f"`{shlex.quote(o)}`" for o in robot.options()) or "–"
+        if robot.feet:
+            opts = f"`--foot` ({len(robot.feet)} feet)" + (
+                f" `--inertia={robot.inertia}`" if robot.inertia else ""
+            )
+        lines.append(
+            f"| [{robot.name}](https://github.com/{robot.origin}) | {robot.legs} | "
+            f"{robot.licence} | {opts} | {cell(robot, 'stand')} | {gaits} | "
+            f"{cell(robot, 'simulate')} | {cell(robot, 'timeline gait')} | "
+            f"{cell(robot, 'gait --html')} |"
+        )
+    return "\n".join(lines) + "\n\nWhy a cell is not 0:\n\n" + "\n".join(reasons or ["none"])
+
+
+@pytest.mark.slow
+@pytest.mark.network
+def test_table_page(tmp_path: Path, fetched_dir: Path) -> None:
+    """Every cell run (the network robots too), the table written between the page's markers."""
+    for robot in ROBOTS:
+        for cell in _cells(robot):
+            where = tmp_path / f"{robot.name}-{cell}".replace(" ", "_")
+            where.mkdir()
+            run_cell(robot, cell, where, fetched_dir)
+    page = PAGE.read_text()
+    head, rest = page.split(BEGIN, 1)
+    _, tail = rest.split(END, 1)
+    new = f"{head}{BEGIN}\n{table_markdown(_RESULTS, _robust())}\n{END}{tail}"
+    if new != page:
+        PAGE.write_text(new)
+    failing = sorted(k for k, (status, _) in _RESULTS.items() if status != 0)
+    assert set(failing) <= set(KNOWN), f"cells failing that are not known: {failing}"
+
+
+def test_absurd_inertias_flagged_and_repaired() -> None:
+    """SpotMicroAI's kind of inertia (100 kg m^2 on 0.05 kg: a radius of gyration of
+    sqrt(100 / 0.05) = 44.72 m on a 0.1 m robot) is flagged; ``inertia="point"`` repairs it."""
+    import warnings
+
+    import hexapod_kin as hk
+
+    path = ROOT / "tests" / "urdf_corpus" / "inertia_gyration.urdf"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = hk.load(path)
+    assert [d for d in model.inertia_defects if "44.72 m" in d[1] and d[0] == "arm"]
+    assert any("radius of gyration" in str(w.message) for w in caught)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        repaired = hk.load(path, inertia="point")
+    assert not repaired.inertia_defects
+    assert not any("radius of gyration" in str(w.message) for w in caught)
+    inertia = repaired.model.inertias[1]
+    assert inertia.mass == pytest.approx(0.05)
+    assert inertia.inertia[2, 2] == pytest.approx(0.4 * 0.05 * 0.01**2)  # 2 m r^2 / 5, r = 1 cm
