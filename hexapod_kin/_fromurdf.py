@@ -75,12 +75,12 @@ _EPS = 1e-10
 
 
 def _axis(joint: Any) -> np.ndarray:
-    name = joint.shortname()
-    for suffix, vec in (("X", (1.0, 0, 0)), ("Y", (0, 1.0, 0)), ("Z", (0, 0, 1.0))):
-        if name.endswith(suffix) and ("Unaligned" not in name):
-            return np.array(vec, dtype=float)
-    axis = np.asarray(joint.extract().axis, dtype=float)
-    return axis / np.linalg.norm(axis)
+    from .frames import joint_kind  # the one place joint kinds (and their axes) are told apart
+
+    kind = joint_kind(joint)
+    if kind is None:
+        raise ParameterError(f"joint {joint.shortname()} has no single axis", parameter="joint")
+    return kind[1] / np.linalg.norm(kind[1])
 
 
 def _clean(name: str) -> str:
