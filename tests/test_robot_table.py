@@ -349,3 +349,31 @@ def test_absurd_inertias_flagged_and_repaired() -> None:
     inertia = repaired.model.inertias[1]
     assert inertia.mass == pytest.approx(0.05)
     assert inertia.inertia[2, 2] == pytest.approx(0.4 * 0.05 * 0.01**2)  # 2 m r^2 / 5, r = 1 cm
+
+
+def test_jacobian_of_a_legged_urdf_names_its_leg(capsys: pytest.CaptureFixture[str]) -> None:
+    """``jacobian`` of a legged URDF says whose columns it prints (the first limb's end)."""
+    import json
+
+    import numpy as np
+
+    import hexapod_kin as hk
+    from hexapod_kin.cli import main
+
+    source = str(DATA / "kraby" / "hexapod.urdf")
+    assert main(["jacobian", source]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("J of frame 'endcap_0' (the first of 6 limbs' ends, --tip picks another)")
+    assert main(["jacobian", source, "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["tip"] == "endcap_0"
+    own = hk.load(source, tip="endcap_0")
+    jac, q = np.asarray(got["jacobian"]), dict(zip(got["joint_names"], got["q"]))
+    for tip, nonzero in (("endcap_0", True), ("endcap_3", False)):
+        leg = hk.load(source, tip=tip)  # the one limb, built by Pinocchio on its own
+        cols = [got["joint_names"].index(n) for n in leg.joint_names]
+        ref = leg.jacobian([q[n] for n in leg.joint_names], "local_world_aligned")
+        if nonzero:  # the printed columns are this leg's Jacobian ...
+            np.testing.assert_allclose(jac[:, cols], ref, atol=1e-12)
+        else:  # ... and no other leg moves the printed tip
+            assert np.abs(jac[:, cols]).max() == 0.0 and np.abs(ref).max() > 0.01

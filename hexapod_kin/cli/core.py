@@ -185,13 +185,19 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
                 "joint_names": list(model.joint_names),
                 "q": [float(v) for v in model.check_q(q)],
                 "reference": args.reference,
+                "tip": model.tip,
                 "jacobian": jac.tolist(),
                 "det_position": det,
                 "singular_values_position": sv.tolist(),
             }
         )
         return 0
-    print(f"J ({args.reference}, rows vx vy vz wx wy wz; columns {', '.join(model.joint_names)}):")
+    tips = model.default_tips.tips if model.default_tips is not None else ()
+    if args.tip is None and len(getattr(model.params, "foot_frames", ())) > 1:
+        tips = model.params.foot_frames  # a legged preset: its first foot
+    which = f" of {len(tips)} limbs' ends, --tip picks another" if len(tips) > 1 else ""
+    print(f"J of frame {model.tip!r} (the first{which})" if which else f"J of frame {model.tip!r}")
+    print(f"({args.reference}, rows vx vy vz wx wy wz; columns {', '.join(model.joint_names)}):")
     print(matrix_text(jac))
     if det is not None:
         print(f"det(J_position) = {det:.6e}  (tip linear velocity, base-aligned)")
