@@ -367,7 +367,6 @@ def test_jacobian_of_a_legged_urdf_names_its_leg(capsys: pytest.CaptureFixture[s
     assert main(["jacobian", source, "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
     assert got["tip"] == "endcap_0"
-    own = hk.load(source, tip="endcap_0")
     jac, q = np.asarray(got["jacobian"]), dict(zip(got["joint_names"], got["q"]))
     for tip, nonzero in (("endcap_0", True), ("endcap_3", False)):
         leg = hk.load(source, tip=tip)  # the one limb, built by Pinocchio on its own
