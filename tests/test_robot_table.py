@@ -376,3 +376,39 @@ def test_jacobian_of_a_legged_urdf_names_its_leg(capsys: pytest.CaptureFixture[s
             np.testing.assert_allclose(jac[:, cols], ref, atol=1e-12)
         else:  # ... and no other leg moves the printed tip
             assert np.abs(jac[:, cols]).max() == 0.0 and np.abs(ref).max() > 0.01
+
+
+def test_stick_figure_where_meshes_are_missing() -> None:
+    """A robot copied without its meshes is drawn as sticks from joint to joint (to the foot,
+    or to the centre of mass of a last link), each stick as long as the model's offset."""
+    import warnings
+
+    import numpy as np
+
+    import hexapod_kin as hk
+    from hexapod_kin.viewer.scene import Scene
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = hk.load(DATA / "mini_cheetah" / "mini_cheetah.urdf")
+    scene = Scene(model)
+    sticks = [g for g in scene.geom.geometryObjects if g.name.startswith("stick_")]
+    assert len(scene.visuals) == len(sticks) == 16  # base to 4 hips, 3 links per leg
+    m = model.model
+    for go in sticks:
+        length = 2.0 * go.geometry.halfLength
+        end = go.placement.translation * 2.0  # centred on the segment
+        assert length == pytest.approx(float(np.linalg.norm(end)))
+        axis = go.placement.rotation[:, 2]
+        np.testing.assert_allclose(axis * length, end, atol=1e-12)
+    lengths = sorted(round(2.0 * g.geometry.halfLength, 6) for g in sticks)
+    thigh = float(
+        np.linalg.norm(m.jointPlacements[m.getJointId("thigh_fl_to_knee_fl_j")].translation)
+    )
+    shank_com = float(np.linalg.norm(m.inertias[m.getJointId("thigh_fl_to_knee_fl_j")].lever))
+    assert thigh == pytest.approx(0.209) and shank_com == pytest.approx(0.209)
+    assert lengths.count(round(thigh, 6)) == 8  # 4 thighs, 4 shanks (to their centre of mass)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        drawn = Scene(hk.load("hexabot_leg"))
+    assert not [g for g in drawn.geom.geometryObjects if g.name.startswith("stick_")]

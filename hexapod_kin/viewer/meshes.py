@@ -9,6 +9,10 @@ uint16 when fewer than 65,536 vertices, else uint32. Normals are optional: the o
 recomputes them in the browser (``computeVertexNormals``), the live viewer sends them.
 Compared with embedding the file (meshcat's ``_meshfile_geometry``), a Franka Panda's
 meshes shrink from about 14 MB of COLLADA text to about 1.2 MB before compression.
+
+A robot whose meshes are missing (copied without its ``meshes/`` folder) would draw nothing:
+:func:`add_sticks` gives every joint without geometry a stick figure instead (a thin cylinder
+from the joint to each child joint and to each of its link frames).
 """
 
 from __future__ import annotations
@@ -20,7 +24,12 @@ import numpy as np
 
 from .objects import attribute, translation
 
-__all__ = ["MeshGeometry", "mesh_geometry"]
+__all__ = ["MeshGeometry", "add_sticks", "mesh_geometry"]
+
+#: Stick radius as a fraction of the robot's longest joint-to-joint segment.
+STICK_RADIUS_FRACTION = 0.05
+#: Stick colour (RGBA).
+STICK_RGBA = (0.35, 0.38, 0.45, 1.0)
 
 #: Largest magnitude of a quantised coordinate.
 QUANT_MAX = 32767
@@ -110,3 +119,57 @@ def mesh_geometry(geometry: Any, *, normals: bool) -> MeshGeometry | None:
         "data": {"attributes": attributes, "index": attribute(index, 1)},
     }
     return MeshGeometry(data, matrix, len(verts), len(tris))
+
+
+def add_sticks(model: Any, geom: Any) -> int:
+    """Add a stick figure to ``geom`` for the joints of ``model`` that carry no geometry.
+
+    For each such joint (the base included), one cylinder from the joint's origin to each
+    child joint's origin and to each link frame (body or fixed-joint frame) attached to it
+    and not at its origin; a last link with neither, to its centre of mass. ``geom`` is
+    changed in place (a fresh ``GeometryModel``).
+
+    Args:
+        model: The Pinocchio model.
+        geom: Its visual ``pinocchio.GeometryModel``.
+
+    Returns:
+        The number of sticks added.
+
+    """
+    import coal
+    import pinocchio as pin
+
+    drawn = {int(go.parentJoint) for go in geom.geometryObjects}
+    ends: dict[int, list[np.ndarray]] = {}
+    for j in range(1, model.njoints):
+        ends.setdefault(int(model.parents[j]), []).append(model.jointPlacements[j].translation)
+    for f in model.frames:
+        if f.type in (pin.FrameType.BODY, pin.FrameType.FIXED_JOINT):
+            ends.setdefault(int(f.parentJoint), []).append(f.placement.translation)
+    for j in range(1, model.njoints):  # nothing beyond the joint: to the centre of mass
+        if not any(np.linalg.norm(p) > 1e-6 for p in ends.get(j, [])):
+            ends.setdefault(j, []).append(model.inertias[j].lever)
+    segments = [
+        (j, np.array(p, dtype=float))
+        for j, points in sorted(ends.items())
+        if j not in drawn
+        for p in points
+        if np.linalg.norm(p) > 1e-6
+    ]
+    if not segments:
+        return 0
+    longest = max(float(np.linalg.norm(p)) for _, p in segments)
+    radius = max(STICK_RADIUS_FRACTION * longest, 1e-4)
+    for k, (j, p) in enumerate(segments):
+        length = float(np.linalg.norm(p))
+        z = p / length
+        x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+        x /= np.linalg.norm(x)
+        rot = np.column_stack([x, np.cross(z, x), z])  # the cylinder's axis z along the stick
+        go = pin.GeometryObject(
+            f"stick_{model.names[j]}_{k}", j, pin.SE3(rot, p / 2), coal.Cylinder(radius, length)
+        )
+        go.meshColor = np.array(STICK_RGBA)
+        geom.addGeometryObject(go)
+    return len(segments)

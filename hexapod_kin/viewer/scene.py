@@ -32,7 +32,7 @@ import numpy as np
 
 from ..exceptions import ParameterError, ViewerError
 from ..gait.stand import frame_poses
-from .meshes import mesh_geometry
+from .meshes import add_sticks, mesh_geometry
 from .objects import (
     TRACE_COLORS,
     ObjectJSON,
@@ -121,6 +121,7 @@ class Scene:
                 f"against package_dirs={list(model.source.package_dirs)} and "
                 f"mesh_root={model.source.mesh_root!r})"
             ) from exc
+        add_sticks(model.model, self.geom)  # links whose meshes are missing: a stick figure
         self.gdata = pin.GeometryData(self.geom)
         self.data = model.model.createData()
         self.visuals: list[Visual] = []
