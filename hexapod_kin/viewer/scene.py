@@ -121,7 +121,8 @@ class Scene:
                 f"against package_dirs={list(model.source.package_dirs)} and "
                 f"mesh_root={model.source.mesh_root!r})"
             ) from exc
-        add_sticks(model.model, self.geom)  # links whose meshes are missing: a stick figure
+        if getattr(model, "missing_meshes", ()) or not self.geom.ngeoms:
+            add_sticks(model.model, self.geom)  # meshes missing: a stick figure where they were
         self.gdata = pin.GeometryData(self.geom)
         self.data = model.model.createData()
         self.visuals: list[Visual] = []
