@@ -246,7 +246,7 @@ def _split_package_dirs(given: tuple[str, ...]) -> tuple[tuple[str, ...], dict[s
     named: dict[str, str] = {}
     for entry in given:
         name, eq, folder = entry.partition("=")
-        if eq and name and "/" not in name and os.sep not in name:
+        if eq and name and "/" not in name and os.sep not in name and not os.path.isdir(entry):
             if not os.path.isdir(folder):
                 raise SourceError(
                     f"package_dirs entry {entry!r}: {folder!r} is not a directory; give "
