@@ -299,7 +299,8 @@ def _expand(path: Path, text: str, dirs: tuple[str, ...], named: dict[str, str])
         from xacro import substitution_args
     except ImportError:
         raise OptionalDependencyError(
-            "expanding a .xacro file needs the xacro package; `pip install 'hexapod-kin[export]'`",
+            "expanding a .xacro file needs the xacro package (the `export` extra: "
+            "`pip install -e '.[export]'` in a clone)",
             parameter="source",
         ) from None
     found: dict[str, str] = {}
