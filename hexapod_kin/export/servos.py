@@ -204,6 +204,45 @@ class Servo:
         u = np.asarray(u, dtype=float)
         return self.offset + self.direction * (u - self.zero) / self.scale
 
+    def check_range(self, lower: float, upper: float) -> None:
+        """Refuse a servo that cannot drive a joint of limits [lower, upper] [rad or m].
+
+        The centre (``offset``) must lie within a turn (2π) of the joint's range, and the angles
+        the servo's own ``limits`` reach must overlap it. Infinite limits check nothing.
+
+        Raises:
+            ParameterError: Naming the joint, the key (``offset`` or ``limits``), the value and
+                the allowed range.
+
+        """
+        lo, hi = float(lower), float(upper)
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            return
+        where, turn = f"calibration of {self.joint}", 2.0 * math.pi
+        if not lo - turn <= self.offset <= hi + turn:
+            span = (lo - turn, hi + turn)
+            raise _bad(
+                f"{where}: offset {self.offset:g} is more than a turn outside the joint's limits "
+                f"[{lo:.6g}, {hi:.6g}]; allowed: [{span[0]:.6g}, {span[1]:.6g}]",
+                "offset",
+                self.offset,
+                span,
+            )
+        if self.limits is not None:
+            a, b = sorted(float(x) for x in self.angle(self.limits))
+            if b < lo or a > hi:
+                u = sorted(
+                    self.zero + self.direction * self.scale * (x - self.offset) for x in (lo, hi)
+                )
+                raise _bad(
+                    f"{where}: limits {list(self.limits)} {self.units} reach the joint only at "
+                    f"[{a:.6g}, {b:.6g}], outside its limits [{lo:.6g}, {hi:.6g}]; allowed: "
+                    f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}",
+                    "limits",
+                    list(self.limits),
+                    (u[0], u[1]),
+                )
+
     def to_dict(self) -> dict[str, Any]:
         """The servo as a calibration-file entry (only the keys that matter for its units)."""
         d: dict[str, Any] = {"units": self.units, "offset": self.offset}
@@ -251,16 +290,32 @@ class Calibration:
             )
         return Servo(**{**self.default.__dict__, "joint": joint})
 
-    def check_joints(self, joint_names: Sequence[str]) -> None:
-        """Refuse a listed joint that the plan does not have (a typo would go unnoticed)."""
+    def check_joints(
+        self, joint_names: Sequence[str], lower: Any = None, upper: Any = None, of: str = "the plan"
+    ) -> None:
+        """Refuse a listed joint not in ``joint_names`` and a servo that cannot drive its joint.
+
+        A typo would go unnoticed. With the joints' ``lower``/``upper`` limits [rad or m] every
+        joint's servo (unlisted ones through the defaults) is held to :meth:`Servo.check_range`.
+
+        Raises:
+            ParameterError: An unknown joint (naming it and the joints allowed); a range or
+                offset incompatible with the joint's limits.
+
+        """
         extra = [j for j in self.servos if j not in joint_names]
         if extra:
             raise ParameterError(
-                f"calibration: joint {extra[0]!r} is not in the plan; {choices(joint_names)}",
+                f"calibration: joint {extra[0]!r} is not in {of}; {choices(joint_names)}",
                 parameter="calibration",
                 value=extra[0],
                 allowed=list(joint_names),
             )
+        if lower is None or upper is None:
+            return
+        for joint, lo, hi in zip(joint_names, lower, upper):
+            if joint in self.servos or self.default is not None:
+                self.servo(joint).check_range(lo, hi)
 
     def to_dict(self) -> dict[str, Any]:
         """The calibration as a file's data: ``{"defaults": {...}, "joints": {...}}``."""
@@ -359,8 +414,11 @@ def _number(value: Any, key: str, joint: str, name: str) -> float:
     return float(value)
 
 
-def read_calibration(path: str | os.PathLike[str]) -> Calibration:
+def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
+
+    With ``robot`` (a model: ``joint_names``, ``lower``, ``upper``) every entry must name one
+    of its joints and fit that joint's limits (:meth:`Calibration.check_joints`).
 
     The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
     regular file of at most 1 MB, UTF-8, no key given twice, YAML alias and depth caps).
@@ -374,8 +432,17 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
 
     Raises:
         SourceError: The file cannot be read or parsed, or is refused by the reader.
-        ParameterError: An unknown key or unit, a bad number.
+        ParameterError: An unknown key or unit, a bad number; with ``robot``, an unknown
+            joint or a servo that does not fit its joint's limits.
 
     """
-    data = read_data(path, "calibration")
-    return Calibration.from_dict(data, Path(path).name)
+    name = Path(path).name
+    cal = Calibration.from_dict(read_data(path, "calibration"), name)
+    if robot is not None:
+        try:
+            cal.check_joints(robot.joint_names, robot.lower, robot.upper, of=repr(robot.name))
+        except ParameterError as exc:
+            raise _bad(
+                f"{name}: {exc}", exc.parameter or "calibration", exc.value, exc.allowed
+            ) from None
+    return cal

@@ -370,7 +370,8 @@ def timeline(
             (the message names the joint, the time [s] and the value; ``parameter`` is the
             joint).
         ConfigurationError: A malformed plan.
-        ParameterError: Bad rate, interpolation or calibration.
+        ParameterError: Bad rate, interpolation or calibration (a calibration is checked
+            against the joints' limits before any sample: :meth:`Calibration.check_joints`).
 
     """
     if interpolation not in INTERPOLATIONS:
@@ -389,7 +390,8 @@ def timeline(
         cal = calibration
     else:
         cal = read_calibration(calibration)
-    cal.check_joints(names)
+    plim = _model_position_limits(plan, position_limit, len(names))
+    cal.check_joints(names, plim[0], plim[1])
     servos = [cal.servo(j) for j in names]
 
     samples = float(np.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1.0
@@ -421,7 +423,6 @@ def timeline(
         vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
 
     vlim = _model_speed_limits(plan, velocity_limit, len(names))
-    plim = _model_position_limits(plan, position_limit, len(names))
     command = np.empty_like(qs)
     speed = np.empty_like(vs)
     q_sent = np.empty_like(qs)
