@@ -62,11 +62,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------ urdf
 def _add_urdf(sub: Any) -> None:
-    p = sub.add_parser(
-        "urdf",
-        help="export the URDF of a preset or a table file",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("urdf", help="export the URDF of a preset or a table file")
     robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
@@ -243,9 +239,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
-        "derive",
-        help="symbolic T, p, J (direct/indirect), det J factored, singular families",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "derive", help="symbolic T, p, J (direct/indirect), det J factored, singular families"
     )
     robot_args(p, frames=True, tool=True)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
@@ -430,11 +424,7 @@ _FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": F
 
 
 def _add_scan(sub: Any) -> None:
-    p = sub.add_parser(
-        "scan",
-        help="singularity measures over a joint grid; singular families",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("scan", help="singularity measures over a joint grid; singular families")
     robot_args(p, frames=True, tool=True)
     p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")

@@ -24,15 +24,12 @@ from .common import (
 
 __all__ = ["plot_pendulum", "register"]
 
-_FMT = argparse.ArgumentDefaultsHelpFormatter
-
 
 # ------------------------------------------------------------------------ pendulum
 def _add_pendulum(sub: Any) -> None:
     p = sub.add_parser(
         "pendulum",
         help="the seed pendulum (ABA), undamped and damped, against the exact period and decay",
-        formatter_class=_FMT,
     )
     p.add_argument(
         "--theta0-deg",
@@ -177,7 +174,6 @@ def _add_torques(sub: Any) -> None:
     p = sub.add_parser(
         "torques",
         help="joint torques of a leg under gravity and a foot force (J^T F, RNEA cross-check)",
-        formatter_class=_FMT,
     )
     robot_args(p, frames=True, inertia=True)
     q_args(p)
@@ -253,7 +249,6 @@ def _add_stand(sub: Any) -> None:
             "its weight and the joint torques (legs found from the kinematic tree). Exit "
             "status 1 when the forces are not feasible (a foot pulls, or slides beyond --mu)."
         ),
-        formatter_class=_FMT,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     p.add_argument(
@@ -335,10 +330,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         if args.reach is not None:
             kw["foot_reach"] = args.reach
         run = walk(
-            whole_body(cast(Any, hexa.params)),
-            pattern=args.gait,
-            duration=args.gait_duration,
-            **kw,
+            whole_body(cast(Any, hexa.params)), pattern=args.gait, duration=args.gait_duration, **kw
         )
         gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}

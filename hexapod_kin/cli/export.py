@@ -26,9 +26,7 @@ def _command(args: argparse.Namespace, extra: list[str]) -> str:
 # ------------------------------------------------------------------------ xacro
 def _add_xacro(sub: Any) -> None:
     p = sub.add_parser(
-        "xacro",
-        help="parametric xacro (a macro per leg family, a property per dimension)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "xacro", help="parametric xacro (a macro per leg family, a property per dimension)"
     )
     robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
@@ -65,7 +63,6 @@ def _add_package(sub: Any) -> None:
     p = sub.add_parser(
         "export-package",
         help="ROS 2 description package (package.xml, CMakeLists, urdf/, launch/, rviz/, meshes/)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="table")
     p.add_argument("-o", "--out", required=True, help="package folder to create")
@@ -112,7 +109,6 @@ def _add_mjcf(sub: Any) -> None:
     p = sub.add_parser(
         "mjcf",
         help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p)
     p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")

@@ -38,9 +38,7 @@ def _angle(args: argparse.Namespace, v: float) -> float:
 # ------------------------------------------------------------------------ ik
 def _add_ik(sub: Any) -> None:
     p = sub.add_parser(
-        "ik",
-        help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "ik", help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)"
     )
     robot_args(p, frames=True, tool=True)
     g = p.add_mutually_exclusive_group(required=True)
@@ -217,7 +215,6 @@ def _add_step(sub: Any) -> None:
         "step",
         help="resolved rate: the seeds' experiment (v = [A sin(2πt/T), 0, 0]) or a constant "
         "velocity / 6-D twist",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, frames=True, tool=True)
     q_args(p)
@@ -416,14 +413,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         vel = np.array(args.velocity, dtype=float)
         label = f"velocity {vel.tolist()} m/s (base axes)"
     tr = motion.resolved_rate(
-        model,
-        vel,
-        q0,
-        args.dt,
-        args.duration,
-        frame=args.frame,
-        method=args.method,
-        gain=args.gain,
+        model, vel, q0, args.dt, args.duration, frame=args.frame, method=args.method, gain=args.gain
     )
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"

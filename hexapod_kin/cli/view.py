@@ -59,11 +59,7 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------ view
 def _add_view(sub: Any) -> None:
-    p = sub.add_parser(
-        "view",
-        help="show a model in the browser (meshcat server on 127.0.0.1)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
     robot_args(p, frames=True)
     q_args(p)
     wait_args(p)
@@ -90,7 +86,6 @@ def _add_animate(sub: Any) -> None:
     p = sub.add_parser(
         "animate",
         help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, frames=True)
     p.add_argument(

@@ -342,10 +342,7 @@ class Calibration:
         joints = data.get("joints") or {}
         if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
             raise _bad(
-                f"{name}: 'defaults' and 'joints' must be tables",
-                "calibration",
-                None,
-                "tables",
+                f"{name}: 'defaults' and 'joints' must be tables", "calibration", None, "tables"
             )
         default = _servo("*", base, name) if "defaults" in data else None
         servos = {}

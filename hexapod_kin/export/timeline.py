@@ -55,13 +55,7 @@ import numpy as np
 
 from .._io import atomic_write
 from .._reader import parse_data, read_text
-from ..exceptions import (
-    ConfigurationError,
-    HexapodKinError,
-    LimitError,
-    SourceError,
-    choices,
-)
+from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [

@@ -502,11 +502,7 @@ def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) 
 
 
 def write_xacro(
-    source: Any,
-    path: str | os.PathLike[str],
-    *,
-    leg: str | None = None,
-    header: str | None = None,
+    source: Any, path: str | os.PathLike[str], *, leg: str | None = None, header: str | None = None
 ) -> Path:
     """Write :func:`to_xacro` of ``source`` to ``path`` atomically; return the path.
 
