@@ -1,22 +1,7 @@
-"""One check per claim kind, the :class:`Context` holding hexapod_kin's values, :func:`evaluate`.
+"""One check per claim kind (:data:`CHECKS`), the :class:`Context` of hexapod_kin's values.
 
-Each claim of ``claims.toml`` is compared with hexapod_kin's own value (rules and tolerances
-in :mod:`.compare`); no verdict is written by hand:
-
-* ``table`` — the seed's Khalil rows against the preset's (lengths × the claim's ``unit``); a
-  different α is reported with what it does to the FK (checked symbolically);
-* ``matrix`` — ``^{j-1}T_j``, ``^0T_j``, ``p``, ``J`` against
-  :func:`hexapod_kin.symbolic.derive`, entry by entry; a wrong matrix is also tried against
-  the other α2 sign, the product of the seed's own factors and the derivative of the seed's
-  own ``p``, to say where the slip comes from;
-* ``det`` — the seed's det J against hexapod_kin's (and its opposite);
-* ``families`` — points on every true family must zero a seed residual (else *missing*),
-  points on every seed set must zero det J (else *not singular*);
-* ``generic`` — against :func:`hexapod_kin.symbolic.khalil_matrix`; ``methods_equal`` —
-  :attr:`Derivation.methods_agree`;
-* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
-  :func:`hexapod_kin.ik.analytic`, the seed's IK formulas evaluated as written;
-* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``.
+Every claim is compared with hexapod_kin's own value (rules in :mod:`.compare`); no verdict is
+written by hand. Each ``_check_<kind>`` says what it compares.
 """
 
 from __future__ import annotations

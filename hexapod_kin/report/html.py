@@ -1,16 +1,4 @@
-"""The report's pieces of HTML (the page itself is :func:`hexapod_kin._page.page`).
-
-Text is escaped by the package's one rule (:func:`hexapod_kin._page.escape`); the pieces:
-
-* :func:`inline` — the report's prose: Markdown code spans and bold become ``<code>`` and
-  ``<b>`` (no Markdown reaches the page);
-* :func:`matrix_pair` — a matrix or table verdict laid out as two HTML tables (the seed's,
-  hexapod_kin's), the differing entries highlighted in both;
-* :func:`animation` — an animation (``<iframe srcdoc>``) with its still frame: a script in the
-  page tests WebGL and, without it, says so and shows the still frame instead;
-* :func:`seed_texts` — the shipped seed texts, one anchor per line (``#seed-000-L65``), which
-  every claim links to.
-"""
+"""The report's pieces of HTML (the page is :func:`hexapod_kin._page.page`; one escaping rule)."""
 
 from __future__ import annotations
 
@@ -240,17 +228,9 @@ def image(path: Path, alt: str | None = None, cls: str = "") -> str:
 
 
 def animation(page: Path, still: Path | None, when: str) -> str:
-    """An animation as its still frame with a play button (or the no-WebGL message).
+    """The animation ``page`` (inert in a ``<template>`` until its button) over its ``still``.
 
-    The page (embedded as ``srcdoc`` inside a ``<template>``, inert until asked) is started
-    by the button: a report with two WebGL animations running from the start keeps a slow
-    machine busy. :data:`SCRIPT` swaps the button for the message where WebGL is missing.
-
-    Args:
-        page: The self-contained animation page.
-        still: A PNG of the same scene (matplotlib), or None.
-        when: What the still frame shows (e.g. ``"t = 1.00 s"``).
-
+    ``when`` says what the still frame shows; without WebGL :data:`SCRIPT` shows a message.
     """
     link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
     msg = (
@@ -279,13 +259,9 @@ def line_anchor(seed: str, line: int) -> str:
 def seed_texts(
     seeds: dict[str, str], texts: dict[str, str], cited: dict[str, dict[int, list[str]]]
 ) -> str:
-    """Every shipped seed text, one anchored line per line; cited passages marked.
+    """Every seed text (by key, titled by ``seeds``), one anchor per line, ``cited`` lines marked.
 
-    Args:
-        seeds: Seed key → title (``claims.toml``'s ``[seeds]``).
-        texts: Seed key → its text.
-        cited: Seed key → line → ids of the claims whose passage starts or runs there.
-
+    ``cited``: seed key → line → the claims whose passage starts (an id) or runs (``""``) there.
     """
     h = []
     for key, title in seeds.items():
