@@ -1,16 +1,8 @@
-"""Collision primitives and generated STL visuals for exported URDFs (trimesh).
+"""Collision primitives and STL visuals (trimesh) for URDF text as ``to_urdf`` writes it.
 
-Both functions work on URDF *text* as :func:`hexapod_kin.urdf.to_urdf` writes it, so the
-meshes are built from exactly the primitives the URDF already draws:
-
-* :func:`add_collisions` gives every link a ``<collision>`` twin of each of its primitive
-  visuals (link cylinders, feet, base and body boxes; not the joint markers). Collision
-  geometry stays primitive.
-* :func:`mesh_visuals` replaces each link's visuals by one STL mesh per material (capsules
-  along the link segments, spheres at joints and feet, boxes for base and body), returning the
-  new URDF text and the mesh files (binary STL, deterministic bytes).
-
-Kinematics and inertials are untouched: the loader sees the same model.
+:func:`add_collisions` gives every primitive visual but the joint markers a ``<collision>``
+twin; :func:`mesh_visuals` replaces each link's visuals by one STL per material. Kinematics
+and inertials are untouched.
 """
 
 from __future__ import annotations

@@ -1,20 +1,8 @@
 """A ROS 2 description package (ament_cmake) for a chain or robot, written atomically.
 
-Layout of ``<out>`` (the package folder; its name need not be the package name)::
-
-    package.xml                 format 3: name, version, description, maintainer, license,
-                                buildtool_depend ament_cmake, exec_depend launch, launch_ros,
-                                robot_state_publisher, joint_state_publisher(_gui), rviz2, xacro
-    CMakeLists.txt              ament_cmake; installs urdf/ launch/ rviz/ meshes/ to share/
-    urdf/<robot>.urdf           the URDF (to_urdf + primitive collisions; STL visuals with meshes)
-    urdf/<robot>.urdf.xacro     the parametric xacro (hexapod_kin.export.xacro)
-    launch/display.launch.py    robot_state_publisher + joint_state_publisher_gui + rviz2
-    rviz/display.rviz           RobotModel, TF and grid, fixed frame = the root link
-    meshes/                     <link>_<material>.stl with meshes=True (else a README)
-    README.md                   how to build and launch it
-
-No ROS installation is needed to write it. The whole tree is built in a temporary folder next
-to ``out`` and renamed into place, so a failed export never leaves a half-written package.
+``package.xml`` (format 3), ``CMakeLists.txt``, ``urdf/<robot>.urdf`` and ``.urdf.xacro``,
+``launch/display.launch.py``, ``rviz/display.rviz``, ``meshes/`` and a README; built in a
+temporary folder beside ``out`` and renamed into place. No ROS installation is needed.
 """
 
 from __future__ import annotations
@@ -309,20 +297,9 @@ def package_files(
     email: str = "user@example.com",
     license: str = "BSD-3-Clause",  # noqa: A002
 ) -> tuple[str, dict[str, bytes]]:
-    """The files of the description package (path relative to the package → bytes).
+    """The package name and its files (path relative to the package → bytes, sorted).
 
-    Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
-        name: ROS package name (REP 144); default ``<robot>_description``.
-        meshes: Write STL visuals into ``meshes/`` (referenced as ``package://<name>/...``).
-        header: Header line for every file (e.g. the command that made it).
-        maintainer: Maintainer name for ``package.xml``.
-        email: Maintainer e-mail (required by package format 3).
-        license: License identifier for ``package.xml``.
-
-    Returns:
-        ``(package name, files)``, files sorted by path.
+    Arguments as :func:`export_package`.
 
     Raises:
         ParameterError: For an invalid name, e-mail or source.
@@ -391,12 +368,12 @@ def export_package(
         source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
             a preset name or a table file (any source with a parameter table).
         out: The package folder to create (its parent must exist).
-        name: ROS package name; default ``<robot>_description``.
-        meshes: Generate STL visuals (trimesh) into ``meshes/``.
+        name: ROS package name (REP 144); default ``<robot>_description``.
+        meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
         header: Header line recorded in every file (the command that made it).
         force: Replace ``out`` if it exists and is not empty.
         maintainer: Maintainer name.
-        email: Maintainer e-mail.
+        email: Maintainer e-mail (package format 3 requires one).
         license: License identifier.
 
     Returns:

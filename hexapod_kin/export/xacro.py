@@ -1,23 +1,12 @@
 """Parameter tables → a parametric xacro document (``<xacro:macro>`` per leg family).
 
-The document defines a ``<xacro:property>`` for every dimension (Khalil table entries, joint
-limits, damping, masses, link radius, body size, mount placement), a macro per *leg family*
-(one distinct :class:`~hexapod_kin.params.Chain`; the six legs of the hexapod share one), and
-instantiates it: once for a single chain, once per leg for a robot. Expanded by the ``xacro``
-package it gives a URDF with the same frames, joints, limits, damping and inertials as
-:func:`hexapod_kin.urdf.to_urdf` (the tests compare both through the loader).
-
-Names inside a family macro: ``alpha<j> d<j> theta<j> r<j>`` for row ``j`` (1-based, as in
-the table), ``<joint>_lower/_upper/_velocity/_effort/_damping/_friction``, ``<link>_mass``
-(and ``<link>_cx .. _izz`` for links with a given inertial; default links are rods whose
-inertia follows their length), ``link_radius``, ``base_x .. base_yaw`` / ``tool_x .. tool_yaw``
-for a base or tool pose. Every parameter defaults to the global property of the same name
-(``name:=^``), so a call only passes ``prefix``, ``parent``, ``xyz`` and ``rpy``, and any
-dimension can be overridden for one instance. When a robot has legs of several families, the
-global properties are prefixed by the family name and every call passes them.
-
-The macro is generic (one joint per table row), so it also serves chains that are not legs
-(SCARA, the pendulum, any Chain): the "family" is then the chain itself.
+A ``<xacro:property>`` per dimension and a macro per distinct chain (the hexapod's six legs
+share one), instantiated once per leg; expanded it gives :func:`hexapod_kin.urdf.to_urdf`'s
+model. Macro parameters: ``alpha<j> d<j> theta<j> r<j>`` per row (1-based),
+``<joint>_lower/_upper/_velocity/_effort/_damping/_friction``, ``<link>_mass`` (``_cx .. _izz``
+for given inertials; else rods), ``link_radius``, ``base_x .. base_yaw``/``tool_x .. tool_yaw``;
+each defaults to the global property of its name (``name:=^``). With several families the
+globals are prefixed by the family and every call passes them.
 """
 
 from __future__ import annotations
