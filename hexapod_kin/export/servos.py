@@ -78,97 +78,83 @@ class Servo:
 
     def __post_init__(self) -> None:
         where = f"calibration of {self.joint}"
-        if self.units not in UNITS:
-            raise _bad(
-                f"{where}: units {self.units!r} unknown; {choices(UNITS)}",
-                "units",
-                self.units,
-                UNITS,
-            )
-        if self.direction not in (1, -1):
-            raise _bad(
-                f"{where}: direction {self.direction!r}; allowed: 1 or -1",
-                "direction",
-                self.direction,
-                (1, -1),
-            )
+
+        def need(ok: bool, key: str, text: str, allowed: Any, value: Any = None) -> None:
+            if not ok:
+                shown = getattr(self, key) if value is None else value
+                raise _bad(f"{where}: {text}", key, shown, allowed)
+
+        need(self.units in UNITS, "units", f"units {self.units!r} unknown; {choices(UNITS)}", UNITS)
+        need(
+            self.direction in (1, -1),
+            "direction",
+            f"direction {self.direction!r}; allowed: 1 or -1",
+            (1, -1),
+        )
         for name in ("offset", "centre"):
-            if not math.isfinite(getattr(self, name)):
-                raise _bad(f"{where}: {name} must be finite", name, getattr(self, name), "finite")
-        if self.units == "ticks" and not (
-            self.ticks_per_revolution is not None
-            and math.isfinite(self.ticks_per_revolution)
-            and self.ticks_per_revolution > 0
-        ):
-            raise _bad(
-                f"{where}: units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 "
-                f"ticks over 300°), got {self.ticks_per_revolution!r}",
-                "ticks_per_revolution",
-                self.ticks_per_revolution,
-                "> 0",
-            )
-        if self.units == "us" and not (
-            self.us_per_rad is not None and math.isfinite(self.us_per_rad) and self.us_per_rad > 0
-        ):
-            raise _bad(
-                f"{where}: units 'us' need us_per_rad > 0, got {self.us_per_rad!r}",
-                "us_per_rad",
-                self.us_per_rad,
-                "> 0",
-            )
+            need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
+        tpr, upr = self.ticks_per_revolution, self.us_per_rad
+        need(
+            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr > 0),
+            "ticks_per_revolution",
+            "units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 ticks over "
+            f"300°), got {tpr!r}",
+            "> 0",
+        )
+        need(
+            self.units != "us" or (upr is not None and math.isfinite(upr) and upr > 0),
+            "us_per_rad",
+            f"units 'us' need us_per_rad > 0, got {upr!r}",
+            "> 0",
+        )
         if self.limits is not None:
             lo, hi = self.limits
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise _bad(
-                    f"{where}: limits {list(self.limits)} must be finite with lowest < highest",
-                    "limits",
-                    self.limits,
-                    "[lowest, highest]",
-                )
-        if self.velocity_limit is not None and not self.velocity_limit > 0:
-            raise _bad(
-                f"{where}: velocity_limit {self.velocity_limit!r} must be > 0 [rad/s]",
-                "velocity_limit",
-                self.velocity_limit,
-                "> 0",
+            need(
+                math.isfinite(lo) and math.isfinite(hi) and lo < hi,
+                "limits",
+                f"limits {list(self.limits)} must be finite with lowest < highest",
+                "[lowest, highest]",
             )
-        if self.resolution is not None and not (
-            math.isfinite(self.resolution) and self.resolution >= 0
-        ):
-            raise _bad(
-                f"{where}: resolution {self.resolution!r} must be >= 0",
-                "resolution",
-                self.resolution,
-                ">= 0",
-            )
+        vel, res = self.velocity_limit, self.resolution
+        need(
+            vel is None or vel > 0,
+            "velocity_limit",
+            f"velocity_limit {vel!r} must be > 0 [rad/s]",
+            "> 0",
+        )
+        need(
+            res is None or (math.isfinite(res) and res >= 0),
+            "resolution",
+            f"resolution {res!r} must be >= 0",
+            ">= 0",
+        )
         # plausible: two turns either side of the centre stay within MAX_COMMAND, in whole steps
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "centre")
         key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
         reach = abs(self.zero) + self.scale * 4.0 * math.pi
-        if not reach <= MAX_COMMAND:
-            raise _bad(
-                f"{where}: {key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
-                f"allowed: commands within ±{MAX_COMMAND:g}",
-                key,
-                getattr(self, key),
-                f"commands within ±{MAX_COMMAND:g}",
-            )
-        if self.step > 0 and not self.step / self.scale <= 2.0 * math.pi:
-            raise _bad(
-                f"{where}: {key} {getattr(self, key)!r} makes one step of {self.step:g} "
-                f"{self.units} {self.step / self.scale:g} rad; allowed: at most one turn",
-                key,
-                getattr(self, key),
-                "at most one turn per step",
-            )
-        if self.step > 0 and not reach / self.step < 2.0**52:
-            raise _bad(
-                f"{where}: resolution {self.step!r} is too fine for commands up to {reach:g} "
-                f"{self.units} (more than 2^52 steps)",
-                "resolution",
-                self.step,
-                f">= {reach / 2.0**52:.3g}",
-            )
+        within = f"commands within ±{MAX_COMMAND:g}"
+        need(
+            reach <= MAX_COMMAND,
+            key,
+            f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
+            f"allowed: {within}",
+            within,
+        )
+        need(
+            not self.step > 0 or self.step / self.scale <= 2.0 * math.pi,
+            key,
+            f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units} "
+            f"{self.step / self.scale:g} rad; allowed: at most one turn",
+            "at most one turn per step",
+        )
+        need(
+            not self.step > 0 or reach / self.step < 2.0**52,
+            "resolution",
+            f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units} "
+            "(more than 2^52 steps)",
+            f">= {reach / 2.0**52:.3g}" if self.step > 0 else "",
+            value=self.step,
+        )
 
     @property
     def scale(self) -> float:
