@@ -221,6 +221,10 @@ def _format(path: Path, fmt: str | None) -> str:
     return kinds[suffix]
 
 
+def _malformed(text: str, parameter: str, value: Any, allowed: Any) -> ConfigurationError:
+    return ConfigurationError(text, parameter=parameter, value=value, allowed=allowed)
+
+
 def _plan_arrays(
     plan: Any, times: Any, joint_names: Sequence[str] | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, tuple[str, ...]]:
@@ -234,48 +238,27 @@ def _plan_arrays(
         names = joint_names or getattr(plan, "joint_names", None)
     else:
         if times is None:
-            raise ConfigurationError(
-                "an IK path needs its sample times: timeline((times, q)) or times=",
-                parameter="times",
-                value=None,
-                allowed="(N,) increasing times [s]",
-            )
+            text = "an IK path needs its sample times: timeline((times, q)) or times="
+            raise _malformed(text, "times", None, "(N,) increasing times [s]")
         t = np.asarray(times, dtype=float)
         q = np.asarray(plan, dtype=float)
         qdot = None
         names = joint_names
     if q.ndim != 2 or t.ndim != 1 or len(t) != len(q) or len(t) < 2:
-        raise ConfigurationError(
-            f"a plan needs (N,) times and (N, J) joint angles with N >= 2, got times "
-            f"{t.shape} and q {q.shape}",
-            parameter="q",
-            value=q.shape,
-            allowed="(N, J), N >= 2",
-        )
+        text = f"a plan needs (N,) times and (N, J) joint angles with N >= 2, got times {t.shape}"
+        raise _malformed(f"{text} and q {q.shape}", "q", q.shape, "(N, J), N >= 2")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
-        raise ConfigurationError(
-            "the plan's times and joint angles must be finite",
-            parameter="q",
-            value="non-finite",
-            allowed="finite",
-        )
+        text = "the plan's times and joint angles must be finite"
+        raise _malformed(text, "q", "non-finite", "finite")
     if not np.all(np.diff(t) > 0):
-        raise ConfigurationError(
-            "the plan's times must increase strictly",
-            parameter="times",
-            value=None,
-            allowed="strictly increasing",
-        )
+        text = "the plan's times must increase strictly"
+        raise _malformed(text, "times", None, "strictly increasing")
     if names is None:
         names = tuple(f"joint{i + 1}" for i in range(q.shape[1]))
     names = tuple(str(n) for n in names)
     if len(names) != q.shape[1] or len(set(names)) != len(names):
-        raise ConfigurationError(
-            f"{len(names)} joint names for {q.shape[1]} columns (names must be distinct)",
-            parameter="joint_names",
-            value=list(names),
-            allowed=f"{q.shape[1]} distinct names",
-        )
+        text = f"{len(names)} joint names for {q.shape[1]} columns (names must be distinct)"
+        raise _malformed(text, "joint_names", list(names), f"{q.shape[1]} distinct names")
     if qdot is not None and qdot.shape != q.shape:
         qdot = None
     return t, q, qdot, names
@@ -390,12 +373,10 @@ def timeline(
 
     samples = float(np.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1.0
     if not samples <= MAX_SAMPLES:  # bounded work: no allocation of an absurd size
-        raise ConfigurationError(
-            f"{samples:.3g} samples ({t[-1] - t[0]:.6g} s at {rate:g} Hz); allowed: at most "
-            f"{MAX_SAMPLES:g}: lower the rate or shorten the plan",
-            parameter="rate",
-            value=rate,
-            allowed=f"at most {MAX_SAMPLES:g} samples",
+        most = f"at most {MAX_SAMPLES:g}"
+        text = f"{samples:.3g} samples ({t[-1] - t[0]:.6g} s at {rate:g} Hz); allowed: {most}"
+        raise _malformed(
+            f"{text}: lower the rate or shorten the plan", "rate", rate, f"{most} samples"
         )
     n = int(samples)
     ts = t[0] + np.arange(n) / float(rate)
@@ -428,14 +409,12 @@ def timeline(
         finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
         k = _first(~finite)
         if k is not None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
-            raise ConfigurationError(
+            text = (
                 f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
                 f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
-                "check the calibration's scale and resolution and the plan",
-                parameter=s.joint,
-                value=float(command[k, j]),
-                allowed="finite commands and speeds",
+                "check the calibration's scale and resolution and the plan"
             )
+            raise _malformed(text, s.joint, float(command[k, j]), "finite commands and speeds")
         k = _first((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
         if k is not None:
             lo, hi = float(plim[0, j]), float(plim[1, j])
@@ -468,6 +447,18 @@ def timeline(
         rate=float(rate),
         interpolation=interpolation,
     )
+
+
+#: What a malformed file's content raises while it is read (the package's own errors pass).
+_MALFORMED = (KeyError, ValueError, TypeError, IndexError, AttributeError)
+
+
+def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
+    """The error of a file that is not ``what``; the reader's and calibration's own as they are."""
+    if isinstance(exc, HexapodKinError):
+        return exc
+    why = f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}"
+    return SourceError(f"{kind}={str(p)!r}: not {what} ({why})", parameter=kind, value=str(p))
 
 
 def _from_commands(
@@ -519,15 +510,8 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
         if kind == "csv":
             return _read_csv(text, p)
         return _read_ros2(text, p)
-    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
-        if isinstance(exc, HexapodKinError):  # the reader's and the calibration's own errors
-            raise
-        raise SourceError(
-            f"timeline={str(p)!r}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
-            f"{' '.join(str(exc).split())[:120]})",
-            parameter="timeline",
-            value=str(p),
-        ) from None
+    except _MALFORMED as exc:
+        raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
 
 
 def _csv(text: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
@@ -601,12 +585,6 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
             return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
         _, columns, data = _csv(text)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
-    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
-        if isinstance(exc, HexapodKinError):  # the reader's own errors
-            raise
-        raise SourceError(
-            f"plan={str(p)!r}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
-            f"joint_names) ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})",
-            parameter="plan",
-            value=str(p),
-        ) from None
+    except _MALFORMED as exc:
+        what = "a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, joint_names)"
+        raise _not_a(exc, "plan", p, what) from None
