@@ -16,29 +16,13 @@ joint to its servo through a :class:`Calibration`:
       c_{\mu s} + \theta_s \, k & \text{us (k µs per rad, centre } c_{\mu s})
     \end{cases}
 
-with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction.
-Commands are rounded to the servo's resolution (1 tick, 1 µs; none for rad/deg unless
-``resolution`` says so). Every sample is checked against the servo's own limits (in its
-units) and the joint's speed limit [rad/s] (the calibration's ``velocity_limit``, else the
-model's); the first sample out of range is refused with a
-:class:`~hexapod_kin.exceptions.ConfigurationError` naming the joint, the time and the value.
-
-Interpolation: ``"linear"`` (positions and velocities interpolated linearly between the plan's
-samples; the velocity is the plan's own, or its second-order finite difference) or ``"cubic"``
-(a not-a-knot cubic spline through the plan's positions; velocities are its derivative).
-
-Files (:meth:`Timeline.write`, :func:`read_timeline`):
-
-* CSV: ``# key: value`` header lines (format, rate, interpolation, the calibration as JSON), one
-  column ``t [s]``, one column per joint in its servo units, one speed column per joint in servo
-  units per second.
-* JSON: the same as one object.
-* ROS 2 YAML: a ``trajectory_msgs/msg/JointTrajectory`` (header, joint_names, points with
-  positions [rad] and velocities [rad/s] of the commanded (rounded) servo values,
-  time_from_start {sec, nanosec}); ``ros2 topic pub`` or a test can load it.
-
-Reading back inverts the servo map, so the angles read equal the plan's to half the servo's
-resolution.
+with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction,
+rounded to the servo's resolution. Every sample is checked (finite; the joint's limits; the
+servo's limits; the speed limit [rad/s]); the first one beyond is refused naming the joint,
+the time and the value. Interpolation: ``"linear"`` (velocities the plan's own or its
+second-order finite difference) or ``"cubic"`` (a not-a-knot spline and its derivative).
+Files: CSV (``# key: value`` header, ``t [s]``, commands and speeds in servo units), JSON (the
+same), ROS 2 ``JointTrajectory`` YAML (commanded angles [rad]); read back to half a step.
 """
 
 from __future__ import annotations
