@@ -51,51 +51,10 @@ LEGEND: tuple[tuple[str, str, str], ...] = (
     ("error", "NOT COMPUTED", "the comparison failed to run (a bug in hexapod_kin)."),
 )
 
-CSS = """body{font-family:sans-serif;max-width:1150px;margin:auto;padding:1em;line-height:1.4}
-code,pre{font-size:12px}pre{overflow-x:auto;background:#f6f6f6;padding:.5em}
-table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}
-.agrees{color:#17692b}.wrong{color:#b00020}.differs{color:#8a5a00}.underdetermined{color:#1f4e9e}
-.error{color:#fff;background:#b00020}
-.item{border-left:4px solid #ddd;padding-left:.7em;margin:1em 0}img{max-width:100%}
-.mats{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start;margin:.4em 0}
-.mats figure{margin:0}.mats figcaption{font-size:12px;color:#555;margin-bottom:2px}
-table.mat{border-left:2px solid #333;border-right:2px solid #333;font-family:monospace}
-table.mat td{border:none;padding:2px 9px;text-align:center;white-space:nowrap}
-table.mat th{border:none;border-bottom:1px solid #999;font-weight:normal;color:#555}
-table.mat td.diff{background:#ffd7d7;outline:1px solid #b00020}
-table.kv td:first-child{color:#444}table.kv td.num{text-align:right;font-family:monospace}
-.anim iframe{width:100%;height:520px;border:1px solid #ccc}
-.anim .nogl{display:none}.anim.nogl-on .nogl{display:block}.anim.nogl-on .gl{display:none}
-.anim.playing .still{display:none}.anim .still{display:block;max-width:760px}
-.nogl{background:#fff4d6;border:1px solid #c9a227;padding:.4em .7em}
-pre.seed{white-space:pre-wrap;line-height:1.3;background:#fafafa}
-pre.seed span{display:block;padding-left:4.5em;text-indent:-4.5em}
-pre.seed span.cited{background:#eef4ff}pre.seed span:target{background:#ffe58a}
-pre.seed a.ln{color:#999;text-decoration:none;display:inline-block;width:4em;text-indent:0}
-dl.legend dt{font-weight:bold;float:left;clear:left;width:10em}dl.legend dd{margin-left:10.5em}"""
-
-#: Opens the ``<details>`` around a linked seed line; flags animations when WebGL is missing.
-SCRIPT = """<script>
-(function(){
-  function webgl(){try{var c=document.createElement('canvas');
-    return !!(window.WebGLRenderingContext&&
-      (c.getContext('webgl')||c.getContext('experimental-webgl')));
-  }catch(err){return false;}}
-  var gl=webgl();
-  document.documentElement.setAttribute('data-webgl',gl?'yes':'no');
-  document.querySelectorAll('.anim').forEach(function(a){
-    if(!gl){a.classList.add('nogl-on');return;}
-    var b=a.querySelector('button.play'),t=a.querySelector('template');
-    b.addEventListener('click',function(){
-      a.appendChild(t.content.cloneNode(true));a.classList.add('playing');b.disabled=true;});
-  });
-  function reveal(){var id=decodeURIComponent(location.hash.slice(1));if(!id)return;
-    var t=document.getElementById(id);if(!t)return;
-    for(var p=t.parentElement;p;p=p.parentElement){if(p.tagName==='DETAILS'){p.open=true;}}
-    t.scrollIntoView();}
-  window.addEventListener('hashchange',reveal);reveal();
-})();
-</script>"""
+#: The page's style and script (package data): the script opens the ``<details>`` around a
+#: linked seed line and flags animations when WebGL is missing.
+CSS = Path(__file__).with_name("report.css").read_text(encoding="utf-8").removesuffix("\n")
+SCRIPT = Path(__file__).with_name("report.js").read_text(encoding="utf-8").removesuffix("\n")
 
 _CODE = re.compile(r"`([^`]+)`")
 _BOLD = re.compile(r"\*\*(.+?)\*\*")
