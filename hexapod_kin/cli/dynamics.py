@@ -22,7 +22,7 @@ from .common import (
     robot_of,
 )
 
-__all__ = ["plot_pendulum", "register"]
+__all__ = ["register"]
 
 
 # ------------------------------------------------------------------------ pendulum
@@ -62,33 +62,6 @@ def _add_pendulum(sub: Any) -> None:
     p.set_defaults(func=_cmd_pendulum)
 
 
-def plot_pendulum(experiment: Any, path: Any) -> Any:
-    """Seed 001's figures: angle [rad] and angular velocity [rad/s] vs time, both runs."""
-    from ..plots import pyplot, save_figure
-
-    plt = pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
-    runs = ((experiment.undamped, "undamped"), (experiment.damped, "damped"))
-    for col, (run, label) in enumerate(runs):
-        t = run.simulation.t
-        title = f"{label} (b = {run.damping:g} N·m·s/rad), θ0 = {math.degrees(run.theta0):g}°"
-        axes[0, col].plot(t, run.theta, color="tab:blue")
-        axes[0, col].set_title(title)
-        axes[0, col].set_ylabel("angle θ [rad]")
-        axes[1, col].plot(t, run.omega, color="tab:orange")
-        axes[1, col].set_ylabel("angular velocity θ̇ [rad/s]")
-        axes[1, col].set_xlabel("time t [s]")
-        for ax in axes[:, col]:
-            ax.grid(True, alpha=0.3)
-    fig.suptitle(
-        "Seed 001 §1: simple pendulum (Pinocchio ABA, "
-        f"{experiment.undamped.simulation.method}, dt = "
-        f"{experiment.undamped.simulation.dt:g} s)"
-    )
-    fig.tight_layout()
-    return save_figure(fig, path, crop=False)
-
-
 def _cmd_pendulum(args: argparse.Namespace) -> int:
     check_outputs(args)
     for name in ("theta0_deg", "decay_theta0_deg"):
@@ -116,6 +89,8 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
     )
     written = []
     if args.plot:
+        from ..report.figures import plot_pendulum
+
         written.append(str(plot_pendulum(exp, args.plot)))
     if args.html:
         written.append(_pendulum_html(exp, args))
