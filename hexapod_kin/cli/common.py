@@ -415,29 +415,21 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
 
     """
     p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise ParameterError(
-            f"{option} {str(path)!r}: unknown file type {p.suffix or '(none)'!r}; "
-            f"use one of {', '.join(suffixes)}",
-            parameter=option,
-            value=str(path),
-            allowed=list(suffixes),
-        )
     parent = p.parent if str(p.parent) else Path(".")
+
+    def refuse(why: str, allowed: Any) -> NoReturn:
+        text = f"{option} {str(path)!r}: {why}"
+        raise ParameterError(text, parameter=option, value=str(path), allowed=allowed)
+
+    if p.suffix.lower() not in suffixes:
+        refuse(
+            f"unknown file type {p.suffix or '(none)'!r}; use one of {', '.join(suffixes)}",
+            list(suffixes),
+        )
     if not parent.is_dir():
-        raise ParameterError(
-            f"{option} {str(path)!r}: directory {str(parent)!r} does not exist",
-            parameter=option,
-            value=str(path),
-            allowed="a path in an existing directory",
-        )
+        refuse(f"directory {str(parent)!r} does not exist", "a path in an existing directory")
     if not os.access(parent, os.W_OK) or p.is_dir():
-        raise ParameterError(
-            f"{option} {str(path)!r}: cannot write there (permission denied or a directory)",
-            parameter=option,
-            value=str(path),
-            allowed="a writable file path",
-        )
+        refuse("cannot write there (permission denied or a directory)", "a writable file path")
     return p
 
 

@@ -123,20 +123,16 @@ def _cmd_fk(args: argparse.Namespace) -> int:
             }
         )
         return 0
-    if ends:  # a tree robot: every limb's end, not one leaf
-        print(
-            f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
-            f"({', '.join(model.joint_names)})"
-        )
-        for name, T in ends.items():
-            print(f"T  ({model.base} -> {name}):")
-            print(matrix_text(T))
-            print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
-        return 0
     print(
         f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
         f"({', '.join(model.joint_names)})"
     )
+    for name, T in ends.items():  # a tree robot: every limb's end, not one leaf
+        print(f"T  ({model.base} -> {name}):")
+        print(matrix_text(T))
+        print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
+    if ends:
+        return 0
     n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
         print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")

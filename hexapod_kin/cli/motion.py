@@ -301,7 +301,6 @@ def _cmd_step(args: argparse.Namespace) -> int:
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})
         return status
-    ca = tr.closest_approach
     print(
         f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
         f"{tr.t[-1]:g} s, dt = {tr.dt:g} s, {tr.method}, gain {tr.gain:g} 1/s"
@@ -319,6 +318,12 @@ def _cmd_step(args: argparse.Namespace) -> int:
             f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
             f"drift_z = {b['drift_z']:.3e} m   error_x = {b['error_x']:.3e} m"
         )
+    return _tail(tr, written, status)
+
+
+def _tail(tr: Any, written: list[str], status: int) -> int:
+    """The closest approach to a singularity, the files written; ``status``."""
+    ca = tr.closest_approach
     print(
         f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
         f"{ca.t:.3f} s (condition {ca.condition:.4g})"
@@ -433,7 +438,6 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         )
     if args.html:
         written.append(html_page(model, tr.t, tr.q, args.html, f"{model.name}: {label}", 0.02))
-    ca = tr.closest_approach
     if args.json:
         emit_json(
             {
@@ -449,7 +453,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "position_drift": drift,
                 "rotation_drift": rot,
                 "limited": bool(tr.limited.any()),
-                "closest_approach": ca.to_dict(),
+                "closest_approach": tr.closest_approach.to_dict(),
                 "written": written,
             }
         )
@@ -463,13 +467,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         f"drift from the exact motion: position {drift:.3e} m, orientation {rot:.3e} rad"
         + ("  (joint limits or speed limits were hit)" if tr.limited.any() else "")
     )
-    print(
-        f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
-        f"{ca.t:.3f} s (condition {ca.condition:.4g})"
-    )
-    for path in written:
-        print(f"wrote {path}", file=sys.stderr)
-    return _limited(tr)
+    return _tail(tr, written, _limited(tr))
 
 
 def register(sub: Any) -> None:
