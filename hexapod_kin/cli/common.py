@@ -27,6 +27,7 @@ __all__ = [
     "margin_failures",
     "matrix_text",
     "not_achieved",
+    "numbers",
     "output_path",
     "q_args",
     "q_from_args",
@@ -242,11 +243,10 @@ def robot_args(
             "flange with the gripper joints locked; every limb's end of a legged robot)",
         )
     if tool:
-        p.add_argument(
+        numbers(
+            p,
             "--tool",
-            nargs=6,
-            type=float,
-            metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+            "X Y Z ROLL PITCH YAW",
             help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (deg with --deg), "
             "e.g. a foot point on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0",
         )
@@ -590,6 +590,12 @@ def matrix_text(m: Any, indent: str = "  ") -> str:
 def emit_json(obj: dict[str, Any]) -> None:
     """Write one JSON object (no NaN) and a newline on stdout."""
     sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
+
+
+def numbers(p: Any, flag: str, names: str, kind: type = float, **kw: Any) -> None:
+    """An option of as many numbers (``kind``) as ``names`` (its metavar, space-separated)."""
+    metavar = tuple(names.split())
+    p.add_argument(flag, nargs=len(metavar), type=kind, metavar=metavar, **kw)
 
 
 def q_args(p: argparse.ArgumentParser) -> None:

@@ -16,6 +16,7 @@ from .common import (
     html_page,
     load_source,
     not_achieved,
+    numbers,
     q_args,
     q_from_args,
     robot_args,
@@ -152,11 +153,10 @@ def _add_torques(sub: Any) -> None:
     )
     robot_args(p, frames=True, inertia=True)
     q_args(p)
-    p.add_argument(
+    numbers(
+        p,
         "--force",
-        nargs=3,
-        type=float,
-        metavar=("FX", "FY", "FZ"),
+        "FX FY FZ",
         default=[0.0, 0.0, 0.0],
         help="force of the foot on its environment [N], base axes",
     )
@@ -237,14 +237,7 @@ def _add_stand(sub: Any) -> None:
     p.add_argument(
         "--reach", type=float, help="mount to foot, horizontal [m] (default: l1 + l2 / own)"
     )
-    p.add_argument(
-        "--shift",
-        nargs=2,
-        type=float,
-        metavar=("DX", "DY"),
-        default=[0.0, 0.0],
-        help="body shifted over the feet [m]",
-    )
+    numbers(p, "--shift", "DX DY", default=[0.0, 0.0], help="body shifted over the feet [m]")
     p.add_argument("--legs", nargs="+", help="stance legs (names or 1-based numbers); all")
     p.add_argument(
         "--method",

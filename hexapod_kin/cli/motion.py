@@ -23,6 +23,7 @@ from .common import (
     html_page,
     load_source,
     not_achieved,
+    numbers,
     q_args,
     q_from_args,
     robot_args,
@@ -42,18 +43,11 @@ def _add_ik(sub: Any) -> None:
     )
     robot_args(p, frames=True, tool=True)
     g = p.add_mutually_exclusive_group(required=True)
-    g.add_argument(
-        "--target",
-        nargs=3,
-        type=float,
-        metavar=("X", "Y", "Z"),
-        help="tip position in the base frame [m]",
-    )
-    g.add_argument(
+    numbers(g, "--target", "X Y Z", help="tip position in the base frame [m]")
+    numbers(
+        g,
         "--pose",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        "X Y Z ROLL PITCH YAW",
         help="tip pose: xyz [m] and URDF rpy [rad] (deg with --deg)",
     )
     p.add_argument(
@@ -62,20 +56,10 @@ def _add_ik(sub: Any) -> None:
         help="with --target: yaw of the tool's x axis in the base xy-plane [rad]",
     )
     w = p.add_mutually_exclusive_group()
-    w.add_argument(
-        "--mask",
-        nargs=6,
-        type=int,
-        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
-        help="rows of the task to keep (1) or drop (0)",
+    numbers(
+        w, "--mask", "X Y Z WX WY WZ", kind=int, help="rows of the task to keep (1) or drop (0)"
     )
-    w.add_argument(
-        "--weights",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
-        help="weight of each task row",
-    )
+    numbers(w, "--weights", "X Y Z WX WY WZ", help="weight of each task row")
     p.add_argument(
         "--q0",
         nargs="+",
@@ -219,18 +203,11 @@ def _add_step(sub: Any) -> None:
     robot_args(p, frames=True, tool=True)
     q_args(p)
     g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--velocity",
-        nargs=3,
-        type=float,
-        metavar=("VX", "VY", "VZ"),
-        help="constant linear tip velocity [m/s] (base axes)",
-    )
-    g.add_argument(
+    numbers(g, "--velocity", "VX VY VZ", help="constant linear tip velocity [m/s] (base axes)")
+    numbers(
+        g,
         "--twist",
-        nargs=6,
-        type=float,
-        metavar=("VX", "VY", "VZ", "WX", "WY", "WZ"),
+        "VX VY VZ WX WY WZ",
         help="constant twist [m/s, rad/s] (deg/s with --deg) in --frame",
     )
     p.add_argument(
