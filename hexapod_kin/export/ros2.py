@@ -83,25 +83,16 @@ def _template(file: str, **fields: str) -> str:
 
 def _check_out(out: Path, force: bool) -> None:
     parent = out.parent if str(out.parent) else Path(".")
+    why = None
     if not parent.is_dir():
-        raise ParameterError(
-            f"out={str(out)!r}: directory {str(parent)!r} does not exist",
-            parameter="out",
-            value=str(out),
-        )
-    if out.exists() and not out.is_dir():
-        raise ParameterError(
-            f"out={str(out)!r} is a file; expected a directory for the package",
-            parameter="out",
-            value=str(out),
-        )
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise ParameterError(
-            f"out={str(out)!r} exists and is not empty; choose a new folder or pass force=True "
-            "(--force) to replace it",
-            parameter="out",
-            value=str(out),
-        )
+        why = f": directory {str(parent)!r} does not exist"
+    elif out.exists() and not out.is_dir():
+        why = " is a file; expected a directory for the package"
+    elif out.is_dir() and any(out.iterdir()) and not force:
+        why = " exists and is not empty; choose a new folder or pass force=True (--force) to "
+        why += "replace it"
+    if why is not None:
+        raise ParameterError(f"out={str(out)!r}{why}", parameter="out", value=str(out))
 
 
 def package_files(

@@ -7,8 +7,10 @@ and ``a − b`` is exactly 0, cheapest proof first (:func:`_zero`).
 from __future__ import annotations
 
 import builtins
+import functools
 import hashlib
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from types import BuiltinFunctionType
@@ -145,16 +147,8 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
             v = env[e]
         elif (e.is_Number or e.is_NumberSymbol) and e.is_extended_real:
             v = float(e)
-        elif e.is_Add:
-            args = [ev(x) for x in e.args]
-            v = args[0]
-            for x in args[1:]:
-                v = v + x
-        elif e.is_Mul:
-            args = [ev(x) for x in e.args]
-            v = args[0]
-            for x in args[1:]:
-                v = v * x
+        elif e.is_Add or e.is_Mul:  # left to right, as written
+            v = functools.reduce(operator.add if e.is_Add else operator.mul, map(ev, e.args))
         elif e.is_Pow:
             base, exp = ev(e.base), e.exp
             if exp.is_Integer:

@@ -68,9 +68,14 @@ def runs_dir() -> Path:
 
 def source_digest() -> str:
     """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``), read now."""
+    return _digest(_PACKAGE, _PACKAGE.rglob("*.py"))
+
+
+def _digest(root: Path, files: Any) -> str:
+    """SHA-256 of ``files`` (their paths relative to ``root`` and bytes), in sorted order."""
     h = hashlib.sha256()
-    for f in sorted(_PACKAGE.rglob("*.py")):
-        h.update(str(f.relative_to(_PACKAGE)).encode())
+    for f in sorted(files):
+        h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())
     return h.hexdigest()
 
@@ -110,20 +115,11 @@ def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> di
         "format": FORMAT,
         "code": digest if digest is not None else package_digest(),
         "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
-        "seeds": _seeds_digest(),
+        "seeds": _digest(SEEDS_DIR, SEEDS_DIR.glob("*.txt")),
         "options": {"quick": bool(quick), "animations": bool(animations)},
         "versions": versions(),
         "platform": f"{sys.platform}-{platform.machine()}",
     }
-
-
-def _seeds_digest() -> str:
-    """SHA-256 of the shipped seed texts (names and bytes): the report quotes them."""
-    h = hashlib.sha256()
-    for f in sorted(SEEDS_DIR.glob("*.txt")):
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
 
 
 def run_key(parts: Mapping[str, Any]) -> str:
