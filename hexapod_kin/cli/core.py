@@ -1,10 +1,6 @@
-"""The core subcommands: list, urdf, fk, jacobian, demo, view, animate, ik, step, derive, scan.
+"""The core subcommands: list, urdf, fk, jacobian, demo, derive, scan.
 
-Each subcommand has an ``_add_<name>(sub)`` that declares its arguments and a
-``_cmd_<name>(args)`` that runs it; heavy imports stay inside the ``_cmd_`` functions.
-``--json`` output is one JSON object on stdout; progress and messages go to stderr.
-Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one line
-``hexapod-kin: error: ...`` and exit with status 2.
+Each has an ``_add_<name>(sub)`` declaring its arguments and a ``_cmd_<name>(args)`` running it.
 """
 
 from __future__ import annotations

@@ -131,18 +131,11 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
     if args.output:
         output_path(args.output, "--output", (".xml", ".mjcf"))
     src = robot_of(args).table(urdf=True)
-    extra = (
-        (["-m"] if args.meshes else [])
-        + (["(no floor)"] if args.no_floor else [])
-        + (["(floating)"] if args.floating else [])
-    )
-    for label, value in (
-        ("floor-z", args.floor_z),
-        ("timestep", args.timestep),
-        ("integrator", args.integrator),
-    ):
-        if value is not None:
-            extra.append(f"({label} {value})")
+    flags = (("-m", args.meshes), ("(no floor)", args.no_floor), ("(floating)", args.floating))
+    extra = [flag for flag, given in flags if given]
+    for label in ("floor_z", "timestep", "integrator"):
+        if getattr(args, label) is not None:
+            extra.append(f"({label.replace('_', '-')} {getattr(args, label)})")
     kwargs: dict[str, Any] = {
         "meshes": args.meshes,
         "header": _command(args, extra),

@@ -1,10 +1,5 @@
 """Subcommands ``ik`` (position, position + yaw, or 6-D pose targets) and ``step`` (resolved rate).
 
-``ik``: ``--target X Y Z`` (position), plus ``--yaw PSI`` (position + yaw), or ``--pose X Y Z
-ROLL PITCH YAW`` (a full pose, URDF rpy ``Rz·Ry·Rx``), ``--mask``/``--weights`` for the rows
-x y z wx wy wz, ``--tool X Y Z ROLL PITCH YAW`` (a rigid tool offset on the tip).
-``step``: the seeds' experiment (foot velocity ``[A sin(2πt/T), 0, 0]``), or a constant
-``--velocity VX VY VZ`` / ``--twist VX VY VZ WX WY WZ`` in ``--frame base|tip``.
 ``--deg`` converts angles (revolute joints, rpy, yaw, angular velocities) from degrees; prismatic
 joints stay in metres.
 """

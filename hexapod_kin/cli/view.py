@@ -1,8 +1,7 @@
 """The viewer subcommands: ``view`` (a model in the browser) and ``animate`` (a demo motion).
 
-Both serve a live meshcat viewer on 127.0.0.1 until Ctrl-C, ``--serve-for`` seconds or at
-once with ``--no-wait``; ``animate --html FILE`` writes a self-contained page instead. Heavy
-imports (numpy, Pinocchio, the viewer) stay inside the runners.
+Both serve meshcat on 127.0.0.1 until Ctrl-C, ``--serve-for`` or ``--no-wait``; ``animate
+--html FILE`` writes a self-contained page instead.
 """
 
 from __future__ import annotations

@@ -51,15 +51,9 @@ def _material(visual: Any) -> str:
 
 
 def add_collisions(urdf_text: str) -> str:
-    """Return ``urdf_text`` with a primitive ``<collision>`` for each colliding visual.
+    """``urdf_text`` with a primitive ``<collision>`` per colliding visual (deterministic).
 
     Links that already have collision elements are left as they are.
-
-    Args:
-        urdf_text: URDF document (as written by :func:`hexapod_kin.urdf.to_urdf`).
-
-    Returns:
-        The URDF text with collision elements (deterministic).
 
     Raises:
         UrdfError: If the text is not XML.
@@ -145,13 +139,7 @@ def mesh_visuals(urdf_text: str, uri_prefix: str) -> MeshedUrdf:
 
     Collision primitives are added first (:func:`add_collisions`), so collisions stay simple.
 
-    Args:
-        urdf_text: URDF document with primitive visuals.
-        uri_prefix: What goes before each file name in ``<mesh filename=...>``, e.g.
-            ``"package://my_robot_description/meshes/"`` or ``"meshes/"``.
-
-    Returns:
-        A :class:`MeshedUrdf` (the text and the STL files).
+    ``uri_prefix`` goes before each file name in ``<mesh filename=...>`` (e.g. ``"meshes/"``).
 
     Raises:
         OptionalDependencyError: If trimesh is not installed.
