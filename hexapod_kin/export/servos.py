@@ -314,65 +314,48 @@ class Calibration:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], name: str = "calibration") -> Calibration:
         """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc)."""
+
+        def refuse(why: str, value: Any, allowed: Any) -> ParameterError:
+            return _bad(f"{name}: {why}", "calibration", value, allowed)
+
         if not isinstance(data, Mapping):
-            raise _bad(f"{name}: must be a mapping", "calibration", type(data).__name__, "mapping")
+            raise refuse("must be a mapping", type(data).__name__, "mapping")
         unknown = [k for k in data if k not in ("defaults", "joints")]
         if unknown:
-            raise _bad(
-                f"{name}: unknown key {unknown[0]!r}; allowed: defaults, joints",
-                "calibration",
-                unknown[0],
-                ("defaults", "joints"),
-            )
+            why = f"unknown key {unknown[0]!r}; allowed: defaults, joints"
+            raise refuse(why, unknown[0], ("defaults", "joints"))
         base = data.get("defaults") or {}
         joints = data.get("joints") or {}
         if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
-            raise _bad(
-                f"{name}: 'defaults' and 'joints' must be tables", "calibration", None, "tables"
-            )
+            raise refuse("'defaults' and 'joints' must be tables", None, "tables")
         default = _servo("*", base, name) if "defaults" in data else None
         servos = {}
         for joint, entry in joints.items():
             if not isinstance(entry, Mapping):
-                raise _bad(
-                    f"{name}: joint {joint!r} must be a table of servo settings",
-                    "calibration",
-                    joint,
-                    _SERVO_KEYS,
-                )
+                why = f"joint {joint!r} must be a table of servo settings"
+                raise refuse(why, joint, _SERVO_KEYS)
             servos[str(joint)] = _servo(str(joint), {**base, **entry}, name)
         return cls(servos=servos, default=default)
 
 
 def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
+    def refuse(key: str, value: Any, why: str, allowed: Any) -> ParameterError:
+        return _bad(f"{name}: joint {joint!r}: {why}", key, value, allowed)
+
     kw: dict[str, Any] = {}
     for key, value in entry.items():
         if key not in _SERVO_KEYS:
-            raise _bad(
-                f"{name}: joint {joint!r}: unknown key {key!r}; {choices(_SERVO_KEYS)}",
-                "calibration",
-                key,
-                _SERVO_KEYS,
-            )
+            why = f"unknown key {key!r}; {choices(_SERVO_KEYS)}"
+            raise refuse("calibration", key, why, _SERVO_KEYS)
         if key == "units":
             if not isinstance(value, str):
-                raise _bad(
-                    f"{name}: joint {joint!r}: units = {clip(value)} is not a string; "
-                    f"{choices(UNITS)}",
-                    key,
-                    clip(value),
-                    UNITS,
-                )
+                why = f"units = {clip(value)} is not a string; {choices(UNITS)}"
+                raise refuse(key, clip(value), why, UNITS)
             kw[key] = value
         elif key == "limits":
             if not isinstance(value, (list, tuple)) or len(value) != 2:
-                raise _bad(
-                    f"{name}: joint {joint!r}: limits = {clip(value)} is not a number pair "
-                    "[lowest, highest]",
-                    key,
-                    clip(value),
-                    "[lowest, highest]",
-                )
+                why = f"limits = {clip(value)} is not a number pair [lowest, highest]"
+                raise refuse(key, clip(value), why, "[lowest, highest]")
             kw[key] = (_number(value[0], key, joint, name), _number(value[1], key, joint, name))
         else:
             kw[key] = _number(value, key, joint, name)
@@ -388,12 +371,8 @@ def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
 def _number(value: Any, key: str, joint: str, name: str) -> float:
     """A calibration number: an int or a float (never a text or a boolean), finite."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _bad(
-            f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number",
-            key,
-            clip(value),
-            "finite numbers",
-        )
+        why = f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number"
+        raise _bad(why, key, clip(value), "finite numbers")
     return float(value)
 
 
