@@ -378,16 +378,9 @@ def _intro() -> list[str]:
 
 
 def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) -> str:
-    """Return the xacro document of a chain or robot (deterministic: same input, same bytes).
+    """The ``.urdf.xacro`` text of a source with a parameter table (deterministic).
 
-    Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
-        leg: For a robot, emit only this leg with its mount on the body.
-        header: Extra header comment line (e.g. the command that made the file).
-
-    Returns:
-        The ``.urdf.xacro`` text.
+    ``leg``: a robot's one leg with its mount on the body; ``header``: an extra comment line.
 
     Raises:
         ParameterError: If ``source`` is of another type or ``leg`` does not fit.
@@ -412,14 +405,7 @@ def write_xacro(
 
 
 def expand_xacro(text: str, mappings: dict[str, str] | None = None) -> str:
-    """Expand a xacro document with the ``xacro`` package (optional extra ``export``).
-
-    Args:
-        text: The xacro document.
-        mappings: ``xacro:arg`` values (``name → value``).
-
-    Returns:
-        The URDF text.
+    """The URDF of a xacro document, expanded by the ``xacro`` package (``mappings``: its args).
 
     Raises:
         OptionalDependencyError: If ``xacro`` is not installed.
