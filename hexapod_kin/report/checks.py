@@ -429,24 +429,16 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
     (i, seed_a, ours_a), *_ = alpha_rows
     p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
     mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
-    fk = (
-        (
+    if not mirror:
+        fk = f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}"
+    else:
+        fk = (
             f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
             f"(checked symbolically: {mirror}): p_z = {fmt(p_plus[2])}, a positive knee "
             f"angle lifts the foot; the lengths agree"
         )
-        if mirror
-        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}")
-    )
-    return _verdict(
-        c,
-        claimed,
-        computed,
-        "differs",
-        f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}",
-        method,
-        cells,
-    )
+    why = f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}"
+    return _verdict(c, claimed, computed, "differs", why, method, cells)
 
 
 def _check_generic(c: Claim, ctx: Context) -> Verdict:
@@ -609,19 +601,12 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     if n_bad == 0:
         return _verdict(c, claimed, computed, "agrees", "", method)
     t, j = float(s["t"][worst[0]]), int(worst[1])
-    return _verdict(
-        c,
-        claimed,
-        computed,
-        "wrong",
-        (
-            f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of "
-            f"{len(s['t'])} samples: "
-            f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
-            f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"
-        ),
-        method,
+    why = (
+        f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of {len(s['t'])} samples: "
+        f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
+        f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"
     )
+    return _verdict(c, claimed, computed, "wrong", why, method)
 
 
 def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
