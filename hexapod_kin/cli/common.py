@@ -24,6 +24,7 @@ __all__ = [
     "check_outputs",
     "html_page",
     "load_source",
+    "made_by",
     "margin_failures",
     "matrix_text",
     "not_achieved",
@@ -431,6 +432,16 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
     if not os.access(parent, os.W_OK) or p.is_dir():
         refuse("cannot write there (permission denied or a directory)", "a writable file path")
     return p
+
+
+def made_by(args: argparse.Namespace, extra: Sequence[str] = ()) -> str:
+    """The header line of an exported file: the command that made it, short options only.
+
+    An XML comment cannot contain ``--``; output paths are left out (the same input gives the
+    same bytes wherever it is written).
+    """
+    words = [args.command, args.source, *(f"-s {s}" for s in args.set or ()), *extra]
+    return "made by: hexapod-kin " + " ".join(words)
 
 
 def not_achieved(why: Sequence[str]) -> int:

@@ -15,6 +15,7 @@ from .common import (
     check_outputs,
     emit_json,
     load_source,
+    made_by,
     matrix_text,
     output_path,
     q_args,
@@ -70,17 +71,12 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     if args.output:
         output_path(args.output, "-o/--output", (".urdf", ".xml"))
     built = robot_of(args).table()
-    # Short options only: an XML comment cannot contain "--".
-    command = "hexapod-kin urdf " + " ".join(
-        [args.source]
-        + [f"-s {s}" for s in args.set or ()]
-        + ([f"-l {args.leg}"] if args.leg else [])
-    )
+    header = made_by(args, [f"-l {args.leg}"] if args.leg else [])
     if args.output:
-        path = write_urdf(built, args.output, leg=args.leg, header=f"made by: {command}")
+        path = write_urdf(built, args.output, leg=args.leg, header=header)
         print(f"wrote {path}", file=sys.stderr)
     else:
-        sys.stdout.write(to_urdf(built, leg=args.leg, header=f"made by: {command}"))
+        sys.stdout.write(to_urdf(built, leg=args.leg, header=header))
     return 0
 
 

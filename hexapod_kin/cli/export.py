@@ -1,10 +1,4 @@
-"""Export subcommands: ``xacro``, ``export-package``, ``mjcf``.
-
-SOURCE is a preset name (with ``-s NAME=VALUE`` parameters) or a table file; ``mjcf`` also takes
-a URDF path or ``erd:NAME`` (exported without its meshes). Each file written records the command
-that made it in its header (short options only: an XML comment cannot contain ``--``; output
-paths are left out so that the same input gives the same bytes wherever it is written).
-"""
+"""Export subcommands: ``xacro``, ``export-package``, ``mjcf`` (headers: :func:`.common.made_by`)."""
 
 from __future__ import annotations
 
@@ -13,14 +7,9 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import emit_json, output_path, robot_args, robot_of
+from .common import emit_json, made_by, output_path, robot_args, robot_of
 
 __all__ = ["register"]
-
-
-def _command(args: argparse.Namespace, extra: list[str]) -> str:
-    words = [args.command, args.source] + [f"-s {s}" for s in args.set or ()] + extra
-    return "made by: hexapod-kin " + " ".join(words)
 
 
 # ------------------------------------------------------------------------ xacro
@@ -47,7 +36,7 @@ def _cmd_xacro(args: argparse.Namespace) -> int:
         output_path(args.output, "--output", (".xacro", ".urdf"))
     src = robot_of(args).table()
     extra = ([f"-l {args.leg}"] if args.leg else []) + (["-x"] if args.expand else [])
-    text = to_xacro(src, leg=args.leg, header=_command(args, extra))
+    text = to_xacro(src, leg=args.leg, header=made_by(args, extra))
     if args.expand:
         text = expand_xacro(text)
     if args.output:
@@ -88,7 +77,7 @@ def _cmd_package(args: argparse.Namespace) -> int:
         args.out,
         name=args.name,
         meshes=args.meshes,
-        header=_command(args, extra),
+        header=made_by(args, extra),
         force=args.force,
         maintainer=args.maintainer,
         email=args.email,
@@ -138,7 +127,7 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
             extra.append(f"({label.replace('_', '-')} {getattr(args, label)})")
     kwargs: dict[str, Any] = {
         "meshes": args.meshes,
-        "header": _command(args, extra),
+        "header": made_by(args, extra),
         "floor": not args.no_floor,
         "floor_z": args.floor_z,
         "timestep": args.timestep,
