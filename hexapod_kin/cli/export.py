@@ -1,4 +1,4 @@
-"""Export subcommands: ``xacro``, ``export-package``, ``mjcf`` (headers: :func:`.common.made_by`)."""
+"""Export subcommands: ``xacro``, ``export-package``, ``mjcf`` (header: :func:`.common.made_by`)."""
 
 from __future__ import annotations
 
