@@ -130,8 +130,8 @@ _NUMPY = NUMPY_FUNCTIONS  # one table of sympy → numpy functions
 def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:
     """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
 
-    Each distinct sub-expression once, no code generated; numbers, symbols, ``+ * **`` and
-    :data:`NUMPY_FUNCTIONS` only, else :class:`_Unsupported`.
+    Each distinct sub-expression once, no code generated, for numbers, symbols, ``+ * **`` and
+    :data:`NUMPY_FUNCTIONS`; anything else by ``sympy.lambdify``.
     """
     memo: dict[Any, Any] = {}
     points = len(next(iter(env.values()))) if env else POINTS
@@ -165,8 +165,13 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
         return v
 
     out = np.empty((len(exprs), points), dtype=complex)
-    for k, e in enumerate(exprs):
-        out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
+    try:
+        for k, e in enumerate(exprs):
+            out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
+    except _Unsupported:  # sympy.lambdify for what the rules above do not know
+        syms = sorted(env, key=str)
+        raw = sp.lambdify(syms, list(exprs), modules="numpy")(*[env[s] for s in syms])
+        return np.array([np.broadcast_to(np.asarray(v, dtype=complex), (points,)) for v in raw])
     return out
 
 
@@ -186,12 +191,7 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     pts = [_point(ordered, rng) for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
     with np.errstate(all="ignore"):
-        try:
-            vals = _evaluate(ea + eb, dict(zip(ordered, args)))
-        except _Unsupported:
-            raw = sp.lambdify(ordered, ea + eb, modules="numpy")(*args)
-            vals = np.array([np.broadcast_to(np.asarray(v, dtype=complex), (POINTS,)) for v in raw])
-    vals = vals.reshape(2, len(ea), POINTS)
+        vals = _evaluate(ea + eb, dict(zip(ordered, args))).reshape(2, len(ea), POINTS)
     real = np.all(np.isfinite(vals) & (vals.imag == 0), axis=(0, 2))
     va, vb = vals.real
     tol = RTOL * (1.0 + np.abs(va) + np.abs(vb))
@@ -350,12 +350,7 @@ def values(expr: Any, qs: np.ndarray) -> np.ndarray:
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     env = {s: qs[:, k] for k, s in enumerate(Q[: qs.shape[1]])}
     with np.errstate(all="ignore"):
-        try:
-            v = _evaluate([expr], env)[0]
-        except _Unsupported:
-            args = sorted(env, key=str)
-            raw = sp.lambdify(args, expr, modules="numpy")(*[env[s] for s in args])
-            v = np.broadcast_to(np.asarray(raw, dtype=complex), (qs.shape[0],))
+        v = _evaluate([expr], env)[0]
     return np.where(v.imag == 0, v.real, np.nan)
 
 
