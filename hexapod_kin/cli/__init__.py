@@ -64,12 +64,8 @@ def _refuse_non_finite(args: argparse.Namespace) -> None:
         for v in values:
             if isinstance(v, float) and not math.isfinite(v):
                 option = "--" + dest.replace("_", "-")
-                raise ParameterError(
-                    f"{option} {v}: not a finite number; give a finite value",
-                    parameter=option,
-                    value=v,
-                    allowed="a finite number",
-                )
+                msg = f"{option} {v}: not a finite number; give a finite value"
+                raise ParameterError(msg, parameter=option, value=v, allowed="a finite number")
 
 
 def _one_line(text: object) -> str:

@@ -203,11 +203,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        msg = f"--out {args.out!r}: cannot create the directory ({exc.strerror})"
         raise ParameterError(
-            f"--out {args.out!r}: cannot create the directory ({exc.strerror})",
-            parameter="--out",
-            value=args.out,
-            allowed="a writable directory",
+            msg, parameter="--out", value=args.out, allowed="a writable directory"
         ) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
@@ -350,12 +348,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..symbolic.sources import chain_of
 
     if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
-        raise ParameterError(
-            f"--budget {args.budget!r} is not allowed; a time in seconds > 0",
-            parameter="--budget",
-            value=args.budget,
-            allowed="> 0 s",
-        )
+        msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
+        raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
     budget = DEFAULT_BUDGET if args.budget is None else float(args.budget)
     model = load_source(args)
     chain, reference, tip = chain_of(model, None, None)

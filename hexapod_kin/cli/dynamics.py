@@ -76,13 +76,11 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
         value = getattr(args, name)
         if not (math.isfinite(value) and 0 < value < 180):
             opt = "--" + name.replace("_", "-")
-            raise ParameterError(
+            msg = (
                 f"{opt}={value!r} is not allowed; an angle in (0, 180) degrees from the hanging "
-                "equilibrium is needed",
-                parameter=opt,
-                value=value,
-                allowed="(0, 180) deg",
+                "equilibrium is needed"
             )
+            raise ParameterError(msg, parameter=opt, value=value, allowed="(0, 180) deg")
     from ..dynamics import pendulum_experiment
 
     exp = pendulum_experiment(
@@ -290,12 +288,11 @@ def _cmd_stand(args: argparse.Namespace) -> int:
     gt = None
     if args.gait:
         if hexa is None:
-            raise ParameterError(
+            msg = (
                 "--gait (walking loads) needs a Hexapod preset; walk other robots with "
-                f"'hexapod-kin gait {robot.source}'",
-                parameter="gait",
-                value=args.gait,
+                f"'hexapod-kin gait {robot.source}'"
             )
+            raise ParameterError(msg, parameter="gait", value=args.gait)
         from ..dynamics import gait_torques
         from ..gait import walk, whole_body
 

@@ -84,11 +84,9 @@ def _target(args: argparse.Namespace) -> Any:
 
     if args.pose is not None:
         if args.yaw is not None:
+            msg = "--yaw goes with --target, not --pose (the pose has its own rpy)"
             raise ParameterError(
-                "--yaw goes with --target, not --pose (the pose has its own rpy)",
-                parameter="--yaw",
-                value=args.yaw,
-                allowed="only with --target",
+                msg, parameter="--yaw", value=args.yaw, allowed="only with --target"
             )
         from ..params import rpy_to_matrix
 

@@ -38,11 +38,9 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
     from ..exceptions import ParameterError, ViewerError
 
     if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
+        msg = f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]"
         raise ParameterError(
-            f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]",
-            parameter="--serve-for",
-            value=args.serve_for,
-            allowed="seconds in [0, 1e7]",
+            msg, parameter="--serve-for", value=args.serve_for, allowed="seconds in [0, 1e7]"
         )
     print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
     if args.no_wait:

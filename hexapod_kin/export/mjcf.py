@@ -304,12 +304,11 @@ def to_mjcf(
         resolved = resolve_source(source)
         params = resolved.params
     if floating and isinstance(params, Chain):
-        raise ParameterError(
+        msg = (
             "floating=True needs a robot (a Hexapod or a legged robot's URDF) whose root body "
-            "has a mass; a chain's base link has none",
-            parameter="floating",
-            value=floating,
+            "has a mass; a chain's base link has none"
         )
+        raise ParameterError(msg, parameter="floating", value=floating)
     if params is None:
         assert resolved is not None
         urdf, default_floor, desc = _without_meshes(resolved.text), -1.0, resolved.name

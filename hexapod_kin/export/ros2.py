@@ -116,18 +116,14 @@ def package_files(
     src = table_of(source)
     pkg = package_name_for(src.name) if name is None else name
     if not isinstance(pkg, str) or not PACKAGE_NAME_RE.match(pkg):
-        raise ParameterError(
+        msg = (
             f"name={pkg!r} is not a valid ROS package name; use lower case letters, digits and "
-            "underscores, starting with a letter (REP 144)",
-            parameter="name",
-            value=pkg,
+            "underscores, starting with a letter (REP 144)"
         )
+        raise ParameterError(msg, parameter="name", value=pkg)
     if not _EMAIL_RE.match(email):
-        raise ParameterError(
-            f"email={email!r} is not an e-mail address (package.xml requires one)",
-            parameter="email",
-            value=email,
-        )
+        msg = f"email={email!r} is not an e-mail address (package.xml requires one)"
+        raise ParameterError(msg, parameter="email", value=email)
     for label, value in (("maintainer", maintainer), ("license", license)):
         if not value.strip():
             raise ParameterError(f"{label}={value!r} is empty", parameter=label, value=value)

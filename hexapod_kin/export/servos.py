@@ -267,12 +267,12 @@ class Calibration:
         if joint in self.servos:
             return self.servos[joint]
         if self.default is None:
-            raise ParameterError(
+            msg = (
                 f"calibration: no servo for joint {joint!r} and no 'defaults'; listed: "
-                f"{sorted(self.servos)}",
-                parameter="calibration",
-                value=joint,
-                allowed=sorted(self.servos),
+                f"{sorted(self.servos)}"
+            )
+            raise ParameterError(
+                msg, parameter="calibration", value=joint, allowed=sorted(self.servos)
             )
         return Servo(**{**self.default.__dict__, "joint": joint})
 
@@ -291,11 +291,9 @@ class Calibration:
         """
         extra = [j for j in self.servos if j not in joint_names]
         if extra:
+            msg = f"calibration: joint {extra[0]!r} is not in {of}; {choices(joint_names)}"
             raise ParameterError(
-                f"calibration: joint {extra[0]!r} is not in {of}; {choices(joint_names)}",
-                parameter="calibration",
-                value=extra[0],
-                allowed=list(joint_names),
+                msg, parameter="calibration", value=extra[0], allowed=list(joint_names)
             )
         if lower is None or upper is None:
             return
