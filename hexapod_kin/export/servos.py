@@ -207,27 +207,23 @@ class Servo:
         where, turn = f"calibration of {self.joint}", 2.0 * math.pi
         if not lo - turn <= self.offset <= hi + turn:
             span = (lo - turn, hi + turn)
-            raise _bad(
+            msg = (
                 f"{where}: offset {self.offset:g} is more than a turn outside the joint's limits "
-                f"[{lo:.6g}, {hi:.6g}]; allowed: [{span[0]:.6g}, {span[1]:.6g}]",
-                "offset",
-                self.offset,
-                span,
+                f"[{lo:.6g}, {hi:.6g}]; allowed: [{span[0]:.6g}, {span[1]:.6g}]"
             )
+            raise _bad(msg, "offset", self.offset, span)
         if self.limits is not None:
             a, b = sorted(float(x) for x in self.angle(self.limits))
             if b < lo or a > hi:
                 u = sorted(
                     self.zero + self.direction * self.scale * (x - self.offset) for x in (lo, hi)
                 )
-                raise _bad(
+                msg = (
                     f"{where}: limits {list(self.limits)} {self.units} reach the joint only at "
                     f"[{a:.6g}, {b:.6g}], outside its limits [{lo:.6g}, {hi:.6g}]; allowed: "
-                    f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}",
-                    "limits",
-                    list(self.limits),
-                    (u[0], u[1]),
+                    f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}"
                 )
+                raise _bad(msg, "limits", list(self.limits), (u[0], u[1]))
 
     def to_dict(self) -> dict[str, Any]:
         """The servo as a calibration-file entry (only the keys that matter for its units)."""

@@ -195,13 +195,8 @@ def _format(path: Path, fmt: str | None) -> str:
     suffix = path.suffix.lower()
     kinds = {".csv": "csv", ".json": "json", ".yaml": "ros2", ".yml": "ros2"}
     if suffix not in kinds:
-        raise _bad(
-            f"{path.name}: suffix {suffix or '(none)'!r} unknown; allowed: .csv, .json, "
-            ".yaml/.yml (ROS 2 JointTrajectory)",
-            "path",
-            str(path),
-            sorted(kinds),
-        )
+        msg = f"{path.name}: suffix {suffix or '(none)'!r} unknown; allowed: .csv, .json, "
+        raise _bad(msg + ".yaml/.yml (ROS 2 JointTrajectory)", "path", str(path), sorted(kinds))
     return kinds[suffix]
 
 
@@ -336,12 +331,8 @@ def timeline(
 
     """
     if interpolation not in INTERPOLATIONS:
-        raise _bad(
-            f"interpolation {interpolation!r} unknown; {choices(INTERPOLATIONS)}",
-            "interpolation",
-            interpolation,
-            INTERPOLATIONS,
-        )
+        msg = f"interpolation {interpolation!r} unknown; {choices(INTERPOLATIONS)}"
+        raise _bad(msg, "interpolation", interpolation, INTERPOLATIONS)
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
     t, q, qdot, names = _plan_arrays(plan, times, joint_names)
