@@ -227,20 +227,14 @@ class Servo:
 
     def to_dict(self) -> dict[str, Any]:
         """The servo as a calibration-file entry (only the keys that matter for its units)."""
-        d: dict[str, Any] = {"units": self.units, "offset": self.offset}
-        d["direction"] = self.direction
-        if self.units == "ticks":
-            d["ticks_per_revolution"] = self.ticks_per_revolution
-        if self.units == "us":
-            d["us_per_rad"] = self.us_per_rad
-        if self.units in ("ticks", "us"):
-            d["centre"] = self.centre
+        scale = {"ticks": ["ticks_per_revolution", "centre"], "us": ["us_per_rad", "centre"]}
+        keys = ["units", "offset", "direction", *scale.get(self.units, [])]
+        keys += [
+            k for k in ("limits", "velocity_limit", "resolution") if getattr(self, k) is not None
+        ]
+        d = {k: getattr(self, k) for k in keys}
         if self.limits is not None:
             d["limits"] = list(self.limits)
-        if self.velocity_limit is not None:
-            d["velocity_limit"] = self.velocity_limit
-        if self.resolution is not None:
-            d["resolution"] = self.resolution
         return d
 
 
