@@ -1,12 +1,8 @@
 """The ``hexapod-kin`` command line: ``main(argv=None) -> int``.
 
-Subcommands live in the modules of this package, one module per area; each module has a
-``register(sub)`` that declares its subcommands (``sub.add_parser``) and binds each one's
-runner with ``set_defaults(func=...)``. Heavy imports stay inside the runners.
-``--json`` output is one JSON object on stdout; progress and messages go to stderr.
-Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one line
-``hexapod-kin: error: ...`` and exit with status 2; a plan that reaches a limit or fails a
-check exits with 1 (the rule: :func:`main`).
+One module per area, each with a ``register(sub)`` that adds its subcommands and binds their
+runners (``set_defaults(func=...)``); heavy imports stay inside the runners. ``--json`` is one
+JSON object on stdout; messages go to stderr. Exit statuses: :func:`main`.
 """
 
 from __future__ import annotations
@@ -68,12 +64,8 @@ def _refuse_non_finite(args: argparse.Namespace) -> None:
         for v in values:
             if isinstance(v, float) and not math.isfinite(v):
                 option = "--" + dest.replace("_", "-")
-                raise ParameterError(
-                    f"{option} {v}: not a finite number; give a finite value",
-                    parameter=option,
-                    value=v,
-                    allowed="a finite number",
-                )
+                msg = f"{option} {v}: not a finite number; give a finite value"
+                raise ParameterError(msg, parameter=option, value=v, allowed="a finite number")
 
 
 def _one_line(text: object) -> str:
@@ -81,11 +73,9 @@ def _one_line(text: object) -> str:
 
 
 def _one_line_warning(original: Any) -> Any:
-    """``warnings.showwarning`` printing the package's own warnings as plain lines.
+    """``warnings.showwarning`` printing the package's warnings as ``hexapod-kin: warning: ...``.
 
-    ``hexapod-kin: warning: ...`` (one per line of the message, no file:line and no source
-    line), each distinct text once (the same warning said again by a child process, e.g. a
-    cache folder that is a file, is not repeated); other warnings are shown as Python shows
+    One line per line of the message, each distinct text once; other warnings as Python shows
     them.
     """
     from ..exceptions import HexapodKinWarning
@@ -105,8 +95,7 @@ def _one_line_warning(original: Any) -> Any:
     return show
 
 
-#: Set by :func:`run`: the process ends after :func:`main`, so a Ctrl-C that arrives once the
-#: command is done is ignored (the status stands) instead of killing the exiting interpreter.
+#: Set by :func:`run`: a Ctrl-C once the command is done is ignored (the status stands).
 _ENTRY = [False]
 
 
@@ -124,15 +113,10 @@ def run() -> None:
 
 
 def _exit_interrupted() -> None:
-    """End an interrupted command now, by SIGINT, without the interpreter's teardown.
+    """End an interrupted command by its own SIGINT, without the interpreter's teardown.
 
-    When :func:`main` returns, the command's own clean-up has run (``finally`` blocks and
-    context managers: temporary files, the viewer's server, the symbolic worker). The
-    teardown would then finalize what the interrupt left half-built — a numba/LLVM compile
-    cut short has crashed it (SIGSEGV after the line). The process ends the way POSIX asks
-    an interrupted program to end, by its own SIGINT with the default action, so that the
-    shell sees status 130 (``$?``; ``subprocess`` reports ``-2``) and a calling script
-    stops too (CPython itself ends so after an unhandled ``KeyboardInterrupt``).
+    The command's clean-up has run; the teardown would finalize what the interrupt left
+    half-built (a numba compile cut short). POSIX: the shell sees 130 and a calling script stops.
     """
     for stream in (sys.stdout, sys.stderr):
         try:
@@ -147,26 +131,14 @@ def _exit_interrupted() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status.
 
-    One rule for every command: **0** achieved (the answer achieves what was asked); **1**
-    answered but not achieved — a check of the plan fails, infeasible, a limit reached
-    (``ik``: the target is unreachable or only beyond the joint limits, the nearest point is
-    printed; ``step`` and ``timeline``: a joint, speed or servo limit; ``gait``,
-    ``simulate``, ``timeline gait``: a check of the plan fails, or the walk's static or ZMP
-    margin is negative; ``simulate``: a physics check fails; ``stand``: the contact forces
-    are not feasible; ``derive``: ``--budget`` ran out before all was derived, checked and
-    printed; ``scan``: the families were not all derived within ``--family-budget``;
-    ``reproduce``: a claim's computation failed) — one line ``hexapod-kin: not achieved:
-    ...`` says why; **2** bad input or any failure (one line on stderr, never a traceback;
-    ``HEXAPOD_KIN_DEBUG=1`` shows the traceback of an unexpected error); **130**
-    interrupted. A closed stdout (``hexapod-kin fk ... | head``) ends quietly.
+    **0** achieved; **1** answered but not achieved (a limit reached, a check of the plan
+    failed, a negative static or ZMP margin, infeasible forces, a budget ran out, a claim
+    not computed), one line ``hexapod-kin: not achieved: ...``; **2** bad input or any
+    failure, one line on stderr (``HEXAPOD_KIN_DEBUG=1`` shows an unexpected traceback);
+    **130** interrupted. A closed stdout ends quietly.
 
-    Ctrl-C (SIGINT) is recorded as well as raised, so that a library that swallows the
-    ``KeyboardInterrupt`` (e.g. inside an import, or where Python can only report it as
-    "Exception ignored": then it is delivered again, to stop the work where it can
-    propagate) cannot turn it into a success: an interrupted command ends with one line and
-    status 130 (:func:`run`, the entry point, then ends the process by its own SIGINT after
-    the command's clean-up, as POSIX asks of an interrupted program: the shell's ``$?`` is
-    130; see :func:`_exit_interrupted`).
+    Ctrl-C is recorded as well as raised, so a library that swallows the
+    ``KeyboardInterrupt`` cannot turn it into a success (a swallowed one is delivered again).
     """
     interrupted: list[int] = []
     active = [True]  # False once the command is done: a late signal is only recorded
@@ -222,11 +194,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _not_achieved(exc: BaseException) -> bool:
-    """An error that answers "not achieved" (status 1): a limit reached, a gait check failed.
-
-    :class:`~hexapod_kin.exceptions.LimitError`, and the gait's ``GaitError`` (looked up
-    only when the gait was imported: raising one imports it).
-    """
+    """A ``LimitError`` or the gait's ``GaitError`` (if the gait was imported): status 1."""
     from ..exceptions import LimitError
 
     gait = sys.modules.get("hexapod_kin.gait.robot")
@@ -237,12 +205,7 @@ def _not_achieved(exc: BaseException) -> bool:
 
 
 def _main(argv: Sequence[str] | None, interrupted: Sequence[int] = ()) -> int:
-    """Run the command; return its status.
-
-    An error that follows a Ctrl-C (``interrupted`` not empty: a library turned the
-    interrupt into an error, e.g. pybind11's ``ImportError`` "initialization failed") prints
-    nothing: :func:`main` prints the one line of the interrupt.
-    """
+    """Run the command; return its status (after a Ctrl-C an error prints nothing)."""
 
     def error(text: str) -> int:
         if not interrupted:

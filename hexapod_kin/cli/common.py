@@ -24,9 +24,11 @@ __all__ = [
     "check_outputs",
     "html_page",
     "load_source",
+    "made_by",
     "margin_failures",
     "matrix_text",
     "not_achieved",
+    "numbers",
     "output_path",
     "q_args",
     "q_from_args",
@@ -98,12 +100,8 @@ def set_params(pairs: Sequence[str] | None, source: Any = None) -> dict[str, Any
     out: dict[str, Any] = {}
     for pair in pairs or ():
         if "=" not in pair:
-            raise ParameterError(
-                f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)",
-                parameter="--set",
-                value=pair,
-                allowed="NAME=VALUE",
-            )
+            msg = f"--set {pair!r}: expected NAME=VALUE (e.g. --set l1=0.06)"
+            raise ParameterError(msg, parameter="--set", value=pair, allowed="NAME=VALUE")
         key, value = pair.split("=", 1)
         key = key.strip()
         out[key] = _set_value(key, value.strip())
@@ -123,11 +121,9 @@ def _set_value(key: str, text: str) -> Any:
         if "," not in text:
             return text
     except ValueError:  # an integer beyond Python's digit limit
+        msg = f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot"
         raise ParameterError(
-            f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot",
-            parameter=key,
-            value=f"{text[:20]}...",
-            allowed="a number of at most 15 digits",
+            msg, parameter=key, value=f"{text[:20]}...", allowed="a number of at most 15 digits"
         ) from None
     else:
         return tuple(parsed) if isinstance(parsed, list) else parsed
@@ -143,12 +139,12 @@ def _set_value(key: str, text: str) -> Any:
         if not math.isfinite(v):
             shown = text if len(text) <= 60 else f"{text[:40]}...({len(text)} characters)"
             one = item if len(item) <= 30 else f"{item[:20]}...({len(item)} characters)"
-            raise ParameterError(
+            msg = (
                 f"-s {key}={shown}: item {i} ({one!r}) is not a finite number; a list value "
-                f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)",
-                parameter=key,
-                value=text,
-                allowed="comma-separated finite numbers",
+                f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)"
+            )
+            raise ParameterError(
+                msg, parameter=key, value=text, allowed="comma-separated finite numbers"
             )
         values.append(v)
     return tuple(values)
@@ -174,13 +170,11 @@ def _fit_to_preset(source: str, params: dict[str, Any]) -> dict[str, Any]:
         if takes_list and is_number:
             out[key] = (value,)
         elif takes_number and isinstance(value, tuple):
-            raise ParameterError(
+            msg = (
                 f"-s {key}={','.join(f'{v:g}' for v in value)}: {source} parameter {key!r} "
-                f"takes one number (SI units), not a list of {len(value)}",
-                parameter=key,
-                value=list(value),
-                allowed="one number",
+                f"takes one number (SI units), not a list of {len(value)}"
             )
+            raise ParameterError(msg, parameter=key, value=list(value), allowed="one number")
     return out
 
 
@@ -243,11 +237,10 @@ def robot_args(
             "flange with the gripper joints locked; every limb's end of a legged robot)",
         )
     if tool:
-        p.add_argument(
+        numbers(
+            p,
             "--tool",
-            nargs=6,
-            type=float,
-            metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+            "X Y Z ROLL PITCH YAW",
             help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (deg with --deg), "
             "e.g. a foot point on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0",
         )
@@ -318,9 +311,12 @@ class Robot:
         if resolved.params is None and urdf:
             return self.source
         if resolved.params is None:
-            raise ParameterError(
+            msg = (
                 f"SOURCE {self.source!r} is a URDF without a parameter table; this command "
-                f"exports what hexapod_kin builds: {SOURCE_KINDS['table'].split(':')[0]}",
+                f"exports what hexapod_kin builds: {SOURCE_KINDS['table'].split(':')[0]}"
+            )
+            raise ParameterError(
+                msg,
                 parameter="SOURCE",
                 value=self.source,
                 allowed="a preset name or a .toml/.yaml table",
@@ -395,12 +391,12 @@ def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
         return np.zeros(model.nq)
     q = np.array(values, dtype=float)
     if q.shape != (model.nq,):
-        raise ParameterError(
+        msg = (
             f"--{attr} has {q.size} values; {model.name} has {model.nq} joints "
-            f"({', '.join(model.joint_names)})",
-            parameter=f"--{attr}",
-            value=list(values),
-            allowed=f"{model.nq} values",
+            f"({', '.join(model.joint_names)})"
+        )
+        raise ParameterError(
+            msg, parameter=f"--{attr}", value=list(values), allowed=f"{model.nq} values"
         )
     if getattr(args, "deg", False):
         prismatic = np.asarray(model.is_prismatic, dtype=bool)
@@ -416,30 +412,32 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
 
     """
     p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise ParameterError(
-            f"{option} {str(path)!r}: unknown file type {p.suffix or '(none)'!r}; "
-            f"use one of {', '.join(suffixes)}",
-            parameter=option,
-            value=str(path),
-            allowed=list(suffixes),
-        )
     parent = p.parent if str(p.parent) else Path(".")
+
+    def refuse(why: str, allowed: Any) -> NoReturn:
+        text = f"{option} {str(path)!r}: {why}"
+        raise ParameterError(text, parameter=option, value=str(path), allowed=allowed)
+
+    if p.suffix.lower() not in suffixes:
+        refuse(
+            f"unknown file type {p.suffix or '(none)'!r}; use one of {', '.join(suffixes)}",
+            list(suffixes),
+        )
     if not parent.is_dir():
-        raise ParameterError(
-            f"{option} {str(path)!r}: directory {str(parent)!r} does not exist",
-            parameter=option,
-            value=str(path),
-            allowed="a path in an existing directory",
-        )
+        refuse(f"directory {str(parent)!r} does not exist", "a path in an existing directory")
     if not os.access(parent, os.W_OK) or p.is_dir():
-        raise ParameterError(
-            f"{option} {str(path)!r}: cannot write there (permission denied or a directory)",
-            parameter=option,
-            value=str(path),
-            allowed="a writable file path",
-        )
+        refuse("cannot write there (permission denied or a directory)", "a writable file path")
     return p
+
+
+def made_by(args: argparse.Namespace, extra: Sequence[str] = ()) -> str:
+    """The header line of an exported file: the command that made it, short options only.
+
+    An XML comment cannot contain ``--``; output paths are left out (the same input gives the
+    same bytes wherever it is written).
+    """
+    words = [args.command, args.source, *(f"-s {s}" for s in args.set or ()), *extra]
+    return "made by: hexapod-kin " + " ".join(words)
 
 
 def not_achieved(why: Sequence[str]) -> int:
@@ -517,11 +515,9 @@ def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
     except ValueError:
         vel = []
     if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
+        msg = f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]"
         raise ParameterError(
-            f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]",
-            parameter="--velocity",
-            value=" ".join(values),
-            allowed="vx,vy,wz",
+            msg, parameter="--velocity", value=" ".join(values), allowed="vx,vy,wz"
         )
     return tuple(vel)
 
@@ -581,11 +577,9 @@ def html_page(model: Any, t: Any, q: Any, path: str, title: str, every: float) -
     try:
         from ..viewer import export_html
     except ImportError as exc:
+        msg = f"--html needs the viewer (hexapod_kin.viewer): {exc}"
         raise ParameterError(
-            f"--html needs the viewer (hexapod_kin.viewer): {exc}",
-            parameter="--html",
-            value=path,
-            allowed="install hexapod-kin[viewer]",
+            msg, parameter="--html", value=path, allowed="install hexapod-kin[viewer]"
         ) from None
     stride = max(1, int(round(every / float(t[1] - t[0])))) if len(t) > 1 else 1
     return str(export_html(model, t[::stride], q[::stride], path, title=title))
@@ -599,6 +593,12 @@ def matrix_text(m: Any, indent: str = "  ") -> str:
 def emit_json(obj: dict[str, Any]) -> None:
     """Write one JSON object (no NaN) and a newline on stdout."""
     sys.stdout.write(json.dumps(obj, allow_nan=False) + "\n")
+
+
+def numbers(p: Any, flag: str, names: str, kind: type = float, **kw: Any) -> None:
+    """An option of as many numbers (``kind``) as ``names`` (its metavar, space-separated)."""
+    metavar = tuple(names.split())
+    p.add_argument(flag, nargs=len(metavar), type=kind, metavar=metavar, **kw)
 
 
 def q_args(p: argparse.ArgumentParser) -> None:

@@ -1,10 +1,6 @@
-"""The core subcommands: list, urdf, fk, jacobian, demo, view, animate, ik, step, derive, scan.
+"""The core subcommands: list, urdf, fk, jacobian, demo, derive, scan.
 
-Each subcommand has an ``_add_<name>(sub)`` that declares its arguments and a
-``_cmd_<name>(args)`` that runs it; heavy imports stay inside the ``_cmd_`` functions.
-``--json`` output is one JSON object on stdout; progress and messages go to stderr.
-Errors of the :class:`~hexapod_kin.exceptions.HexapodKinError` family print one line
-``hexapod-kin: error: ...`` and exit with status 2.
+Each has an ``_add_<name>(sub)`` declaring its arguments and a ``_cmd_<name>(args)`` running it.
 """
 
 from __future__ import annotations
@@ -19,6 +15,7 @@ from .common import (
     check_outputs,
     emit_json,
     load_source,
+    made_by,
     matrix_text,
     output_path,
     q_args,
@@ -62,11 +59,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------ urdf
 def _add_urdf(sub: Any) -> None:
-    p = sub.add_parser(
-        "urdf",
-        help="export the URDF of a preset or a table file",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("urdf", help="export the URDF of a preset or a table file")
     robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount (e.g. leg1)")
     p.add_argument("-o", "--output", help="file to write (atomically); default stdout")
@@ -78,17 +71,12 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     if args.output:
         output_path(args.output, "-o/--output", (".urdf", ".xml"))
     built = robot_of(args).table()
-    # Short options only: an XML comment cannot contain "--".
-    command = "hexapod-kin urdf " + " ".join(
-        [args.source]
-        + [f"-s {s}" for s in args.set or ()]
-        + ([f"-l {args.leg}"] if args.leg else [])
-    )
+    header = made_by(args, [f"-l {args.leg}"] if args.leg else [])
     if args.output:
-        path = write_urdf(built, args.output, leg=args.leg, header=f"made by: {command}")
+        path = write_urdf(built, args.output, leg=args.leg, header=header)
         print(f"wrote {path}", file=sys.stderr)
     else:
-        sys.stdout.write(to_urdf(built, leg=args.leg, header=f"made by: {command}"))
+        sys.stdout.write(to_urdf(built, leg=args.leg, header=header))
     return 0
 
 
@@ -127,20 +115,16 @@ def _cmd_fk(args: argparse.Namespace) -> int:
             }
         )
         return 0
-    if ends:  # a tree robot: every limb's end, not one leaf
-        print(
-            f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
-            f"({', '.join(model.joint_names)})"
-        )
-        for name, T in ends.items():
-            print(f"T  ({model.base} -> {name}):")
-            print(matrix_text(T))
-            print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
-        return 0
     print(
         f"{model.name}: q = {[round(float(v), 6) for v in model.check_q(q)]} "
         f"({', '.join(model.joint_names)})"
     )
+    for name, T in ends.items():  # a tree robot: every limb's end, not one leaf
+        print(f"T  ({model.base} -> {name}):")
+        print(matrix_text(T))
+        print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
+    if ends:
+        return 0
     n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
         print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
@@ -225,11 +209,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        msg = f"--out {args.out!r}: cannot create the directory ({exc.strerror})"
         raise ParameterError(
-            f"--out {args.out!r}: cannot create the directory ({exc.strerror})",
-            parameter="--out",
-            value=args.out,
-            allowed="a writable directory",
+            msg, parameter="--out", value=args.out, allowed="a writable directory"
         ) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
@@ -249,9 +231,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 # ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
-        "derive",
-        help="symbolic T, p, J (direct/indirect), det J factored, singular families",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "derive", help="symbolic T, p, J (direct/indirect), det J factored, singular families"
     )
     robot_args(p, frames=True, tool=True)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
@@ -374,12 +354,8 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     from ..symbolic.sources import chain_of
 
     if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
-        raise ParameterError(
-            f"--budget {args.budget!r} is not allowed; a time in seconds > 0",
-            parameter="--budget",
-            value=args.budget,
-            allowed="> 0 s",
-        )
+        msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
+        raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
     budget = DEFAULT_BUDGET if args.budget is None else float(args.budget)
     model = load_source(args)
     chain, reference, tip = chain_of(model, None, None)
@@ -436,11 +412,7 @@ _FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": F
 
 
 def _add_scan(sub: Any) -> None:
-    p = sub.add_parser(
-        "scan",
-        help="singularity measures over a joint grid; singular families",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("scan", help="singularity measures over a joint grid; singular families")
     robot_args(p, frames=True, tool=True)
     p.add_argument("--grid", type=int, help="points per scanned joint (default: scan()'s, 61)")
     p.add_argument("--samples", type=int, help="random configurations instead of a grid")

@@ -16,6 +16,7 @@ from .common import (
     html_page,
     load_source,
     not_achieved,
+    numbers,
     q_args,
     q_from_args,
     robot_args,
@@ -24,15 +25,12 @@ from .common import (
 
 __all__ = ["plot_pendulum", "register"]
 
-_FMT = argparse.ArgumentDefaultsHelpFormatter
-
 
 # ------------------------------------------------------------------------ pendulum
 def _add_pendulum(sub: Any) -> None:
     p = sub.add_parser(
         "pendulum",
         help="the seed pendulum (ABA), undamped and damped, against the exact period and decay",
-        formatter_class=_FMT,
     )
     p.add_argument(
         "--theta0-deg",
@@ -66,30 +64,10 @@ def _add_pendulum(sub: Any) -> None:
 
 
 def plot_pendulum(experiment: Any, path: Any) -> Any:
-    """Seed 001's figures: angle [rad] and angular velocity [rad/s] vs time, both runs."""
-    from ..plots import pyplot, save_figure
+    """Seed 001's figures (one home: :func:`hexapod_kin.report.figures.plot_pendulum`)."""
+    from ..report.figures import plot_pendulum as plot
 
-    plt = pyplot()
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
-    runs = ((experiment.undamped, "undamped"), (experiment.damped, "damped"))
-    for col, (run, label) in enumerate(runs):
-        t = run.simulation.t
-        title = f"{label} (b = {run.damping:g} N·m·s/rad), θ0 = {math.degrees(run.theta0):g}°"
-        axes[0, col].plot(t, run.theta, color="tab:blue")
-        axes[0, col].set_title(title)
-        axes[0, col].set_ylabel("angle θ [rad]")
-        axes[1, col].plot(t, run.omega, color="tab:orange")
-        axes[1, col].set_ylabel("angular velocity θ̇ [rad/s]")
-        axes[1, col].set_xlabel("time t [s]")
-        for ax in axes[:, col]:
-            ax.grid(True, alpha=0.3)
-    fig.suptitle(
-        "Seed 001 §1: simple pendulum (Pinocchio ABA, "
-        f"{experiment.undamped.simulation.method}, dt = "
-        f"{experiment.undamped.simulation.dt:g} s)"
-    )
-    fig.tight_layout()
-    return save_figure(fig, path, crop=False)
+    return plot(experiment, path)
 
 
 def _cmd_pendulum(args: argparse.Namespace) -> int:
@@ -98,13 +76,11 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
         value = getattr(args, name)
         if not (math.isfinite(value) and 0 < value < 180):
             opt = "--" + name.replace("_", "-")
-            raise ParameterError(
+            msg = (
                 f"{opt}={value!r} is not allowed; an angle in (0, 180) degrees from the hanging "
-                "equilibrium is needed",
-                parameter=opt,
-                value=value,
-                allowed="(0, 180) deg",
+                "equilibrium is needed"
             )
+            raise ParameterError(msg, parameter=opt, value=value, allowed="(0, 180) deg")
     from ..dynamics import pendulum_experiment
 
     exp = pendulum_experiment(
@@ -177,15 +153,13 @@ def _add_torques(sub: Any) -> None:
     p = sub.add_parser(
         "torques",
         help="joint torques of a leg under gravity and a foot force (J^T F, RNEA cross-check)",
-        formatter_class=_FMT,
     )
     robot_args(p, frames=True, inertia=True)
     q_args(p)
-    p.add_argument(
+    numbers(
+        p,
         "--force",
-        nargs=3,
-        type=float,
-        metavar=("FX", "FY", "FZ"),
+        "FX FY FZ",
         default=[0.0, 0.0, 0.0],
         help="force of the foot on its environment [N], base axes",
     )
@@ -253,7 +227,6 @@ def _add_stand(sub: Any) -> None:
             "its weight and the joint torques (legs found from the kinematic tree). Exit "
             "status 1 when the forces are not feasible (a foot pulls, or slides beyond --mu)."
         ),
-        formatter_class=_FMT,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     p.add_argument(
@@ -267,14 +240,7 @@ def _add_stand(sub: Any) -> None:
     p.add_argument(
         "--reach", type=float, help="mount to foot, horizontal [m] (default: l1 + l2 / own)"
     )
-    p.add_argument(
-        "--shift",
-        nargs=2,
-        type=float,
-        metavar=("DX", "DY"),
-        default=[0.0, 0.0],
-        help="body shifted over the feet [m]",
-    )
+    numbers(p, "--shift", "DX DY", default=[0.0, 0.0], help="body shifted over the feet [m]")
     p.add_argument("--legs", nargs="+", help="stance legs (names or 1-based numbers); all")
     p.add_argument(
         "--method",
@@ -322,12 +288,11 @@ def _cmd_stand(args: argparse.Namespace) -> int:
     gt = None
     if args.gait:
         if hexa is None:
-            raise ParameterError(
+            msg = (
                 "--gait (walking loads) needs a Hexapod preset; walk other robots with "
-                f"'hexapod-kin gait {robot.source}'",
-                parameter="gait",
-                value=args.gait,
+                f"'hexapod-kin gait {robot.source}'"
             )
+            raise ParameterError(msg, parameter="gait", value=args.gait)
         from ..dynamics import gait_torques
         from ..gait import walk, whole_body
 
@@ -335,10 +300,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         if args.reach is not None:
             kw["foot_reach"] = args.reach
         run = walk(
-            whole_body(cast(Any, hexa.params)),
-            pattern=args.gait,
-            duration=args.gait_duration,
-            **kw,
+            whole_body(cast(Any, hexa.params)), pattern=args.gait, duration=args.gait_duration, **kw
         )
         gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}

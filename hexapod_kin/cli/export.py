@@ -1,10 +1,4 @@
-"""Export subcommands: ``xacro``, ``export-package``, ``mjcf``.
-
-SOURCE is a preset name (with ``-s NAME=VALUE`` parameters) or a table file; ``mjcf`` also takes
-a URDF path or ``erd:NAME`` (exported without its meshes). Each file written records the command
-that made it in its header (short options only: an XML comment cannot contain ``--``; output
-paths are left out so that the same input gives the same bytes wherever it is written).
-"""
+"""Export subcommands: ``xacro``, ``export-package``, ``mjcf`` (header: :func:`.common.made_by`)."""
 
 from __future__ import annotations
 
@@ -13,22 +7,15 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import emit_json, output_path, robot_args, robot_of
+from .common import emit_json, made_by, output_path, robot_args, robot_of
 
 __all__ = ["register"]
-
-
-def _command(args: argparse.Namespace, extra: list[str]) -> str:
-    words = [args.command, args.source] + [f"-s {s}" for s in args.set or ()] + extra
-    return "made by: hexapod-kin " + " ".join(words)
 
 
 # ------------------------------------------------------------------------ xacro
 def _add_xacro(sub: Any) -> None:
     p = sub.add_parser(
-        "xacro",
-        help="parametric xacro (a macro per leg family, a property per dimension)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "xacro", help="parametric xacro (a macro per leg family, a property per dimension)"
     )
     robot_args(p, kinds="table")
     p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
@@ -49,7 +36,7 @@ def _cmd_xacro(args: argparse.Namespace) -> int:
         output_path(args.output, "--output", (".xacro", ".urdf"))
     src = robot_of(args).table()
     extra = ([f"-l {args.leg}"] if args.leg else []) + (["-x"] if args.expand else [])
-    text = to_xacro(src, leg=args.leg, header=_command(args, extra))
+    text = to_xacro(src, leg=args.leg, header=made_by(args, extra))
     if args.expand:
         text = expand_xacro(text)
     if args.output:
@@ -65,7 +52,6 @@ def _add_package(sub: Any) -> None:
     p = sub.add_parser(
         "export-package",
         help="ROS 2 description package (package.xml, CMakeLists, urdf/, launch/, rviz/, meshes/)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="table")
     p.add_argument("-o", "--out", required=True, help="package folder to create")
@@ -91,7 +77,7 @@ def _cmd_package(args: argparse.Namespace) -> int:
         args.out,
         name=args.name,
         meshes=args.meshes,
-        header=_command(args, extra),
+        header=made_by(args, extra),
         force=args.force,
         maintainer=args.maintainer,
         email=args.email,
@@ -112,7 +98,6 @@ def _add_mjcf(sub: Any) -> None:
     p = sub.add_parser(
         "mjcf",
         help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p)
     p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")
@@ -135,21 +120,14 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
     if args.output:
         output_path(args.output, "--output", (".xml", ".mjcf"))
     src = robot_of(args).table(urdf=True)
-    extra = (
-        (["-m"] if args.meshes else [])
-        + (["(no floor)"] if args.no_floor else [])
-        + (["(floating)"] if args.floating else [])
-    )
-    for label, value in (
-        ("floor-z", args.floor_z),
-        ("timestep", args.timestep),
-        ("integrator", args.integrator),
-    ):
-        if value is not None:
-            extra.append(f"({label} {value})")
+    flags = (("-m", args.meshes), ("(no floor)", args.no_floor), ("(floating)", args.floating))
+    extra = [flag for flag, given in flags if given]
+    for label in ("floor_z", "timestep", "integrator"):
+        if getattr(args, label) is not None:
+            extra.append(f"({label.replace('_', '-')} {getattr(args, label)})")
     kwargs: dict[str, Any] = {
         "meshes": args.meshes,
-        "header": _command(args, extra),
+        "header": made_by(args, extra),
         "floor": not args.no_floor,
         "floor_z": args.floor_z,
         "timestep": args.timestep,

@@ -1,10 +1,5 @@
 """Subcommands ``ik`` (position, position + yaw, or 6-D pose targets) and ``step`` (resolved rate).
 
-``ik``: ``--target X Y Z`` (position), plus ``--yaw PSI`` (position + yaw), or ``--pose X Y Z
-ROLL PITCH YAW`` (a full pose, URDF rpy ``Rz·Ry·Rx``), ``--mask``/``--weights`` for the rows
-x y z wx wy wz, ``--tool X Y Z ROLL PITCH YAW`` (a rigid tool offset on the tip).
-``step``: the seeds' experiment (foot velocity ``[A sin(2πt/T), 0, 0]``), or a constant
-``--velocity VX VY VZ`` / ``--twist VX VY VZ WX WY WZ`` in ``--frame base|tip``.
 ``--deg`` converts angles (revolute joints, rpy, yaw, angular velocities) from degrees; prismatic
 joints stay in metres.
 """
@@ -23,6 +18,7 @@ from .common import (
     html_page,
     load_source,
     not_achieved,
+    numbers,
     q_args,
     q_from_args,
     robot_args,
@@ -38,24 +34,15 @@ def _angle(args: argparse.Namespace, v: float) -> float:
 # ------------------------------------------------------------------------ ik
 def _add_ik(sub: Any) -> None:
     p = sub.add_parser(
-        "ik",
-        help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        "ik", help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)"
     )
     robot_args(p, frames=True, tool=True)
     g = p.add_mutually_exclusive_group(required=True)
-    g.add_argument(
-        "--target",
-        nargs=3,
-        type=float,
-        metavar=("X", "Y", "Z"),
-        help="tip position in the base frame [m]",
-    )
-    g.add_argument(
+    numbers(g, "--target", "X Y Z", help="tip position in the base frame [m]")
+    numbers(
+        g,
         "--pose",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+        "X Y Z ROLL PITCH YAW",
         help="tip pose: xyz [m] and URDF rpy [rad] (deg with --deg)",
     )
     p.add_argument(
@@ -64,20 +51,10 @@ def _add_ik(sub: Any) -> None:
         help="with --target: yaw of the tool's x axis in the base xy-plane [rad]",
     )
     w = p.add_mutually_exclusive_group()
-    w.add_argument(
-        "--mask",
-        nargs=6,
-        type=int,
-        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
-        help="rows of the task to keep (1) or drop (0)",
+    numbers(
+        w, "--mask", "X Y Z WX WY WZ", kind=int, help="rows of the task to keep (1) or drop (0)"
     )
-    w.add_argument(
-        "--weights",
-        nargs=6,
-        type=float,
-        metavar=("X", "Y", "Z", "WX", "WY", "WZ"),
-        help="weight of each task row",
-    )
+    numbers(w, "--weights", "X Y Z WX WY WZ", help="weight of each task row")
     p.add_argument(
         "--q0",
         nargs="+",
@@ -107,11 +84,9 @@ def _target(args: argparse.Namespace) -> Any:
 
     if args.pose is not None:
         if args.yaw is not None:
+            msg = "--yaw goes with --target, not --pose (the pose has its own rpy)"
             raise ParameterError(
-                "--yaw goes with --target, not --pose (the pose has its own rpy)",
-                parameter="--yaw",
-                value=args.yaw,
-                allowed="only with --target",
+                msg, parameter="--yaw", value=args.yaw, allowed="only with --target"
             )
         from ..params import rpy_to_matrix
 
@@ -217,23 +192,15 @@ def _add_step(sub: Any) -> None:
         "step",
         help="resolved rate: the seeds' experiment (v = [A sin(2πt/T), 0, 0]) or a constant "
         "velocity / 6-D twist",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, frames=True, tool=True)
     q_args(p)
     g = p.add_mutually_exclusive_group()
-    g.add_argument(
-        "--velocity",
-        nargs=3,
-        type=float,
-        metavar=("VX", "VY", "VZ"),
-        help="constant linear tip velocity [m/s] (base axes)",
-    )
-    g.add_argument(
+    numbers(g, "--velocity", "VX VY VZ", help="constant linear tip velocity [m/s] (base axes)")
+    numbers(
+        g,
         "--twist",
-        nargs=6,
-        type=float,
-        metavar=("VX", "VY", "VZ", "WX", "WY", "WZ"),
+        "VX VY VZ WX WY WZ",
         help="constant twist [m/s, rad/s] (deg/s with --deg) in --frame",
     )
     p.add_argument(
@@ -304,7 +271,6 @@ def _cmd_step(args: argparse.Namespace) -> int:
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})
         return status
-    ca = tr.closest_approach
     print(
         f"{model.name}: v = [{run.amplitude} sin(2πt/{run.period}), 0, 0] m/s for "
         f"{tr.t[-1]:g} s, dt = {tr.dt:g} s, {tr.method}, gain {tr.gain:g} 1/s"
@@ -322,6 +288,12 @@ def _cmd_step(args: argparse.Namespace) -> int:
             f"plain Euler + np.linalg.solve: drift_y = {b['drift_y']:.3e} m   "
             f"drift_z = {b['drift_z']:.3e} m   error_x = {b['error_x']:.3e} m"
         )
+    return _tail(tr, written, status)
+
+
+def _tail(tr: Any, written: list[str], status: int) -> int:
+    """The closest approach to a singularity, the files written; ``status``."""
+    ca = tr.closest_approach
     print(
         f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
         f"{ca.t:.3f} s (condition {ca.condition:.4g})"
@@ -416,14 +388,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         vel = np.array(args.velocity, dtype=float)
         label = f"velocity {vel.tolist()} m/s (base axes)"
     tr = motion.resolved_rate(
-        model,
-        vel,
-        q0,
-        args.dt,
-        args.duration,
-        frame=args.frame,
-        method=args.method,
-        gain=args.gain,
+        model, vel, q0, args.dt, args.duration, frame=args.frame, method=args.method, gain=args.gain
     )
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
@@ -443,7 +408,6 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         )
     if args.html:
         written.append(html_page(model, tr.t, tr.q, args.html, f"{model.name}: {label}", 0.02))
-    ca = tr.closest_approach
     if args.json:
         emit_json(
             {
@@ -459,7 +423,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
                 "position_drift": drift,
                 "rotation_drift": rot,
                 "limited": bool(tr.limited.any()),
-                "closest_approach": ca.to_dict(),
+                "closest_approach": tr.closest_approach.to_dict(),
                 "written": written,
             }
         )
@@ -473,13 +437,7 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
         f"drift from the exact motion: position {drift:.3e} m, orientation {rot:.3e} rad"
         + ("  (joint limits or speed limits were hit)" if tr.limited.any() else "")
     )
-    print(
-        f"closest approach to a singularity: σ_min = {ca.sigma_min:.4g} at t = "
-        f"{ca.t:.3f} s (condition {ca.condition:.4g})"
-    )
-    for path in written:
-        print(f"wrote {path}", file=sys.stderr)
-    return _limited(tr)
+    return _tail(tr, written, _limited(tr))
 
 
 def register(sub: Any) -> None:

@@ -39,7 +39,6 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "reproduce",
         help="redo every result of the four lab reports; write the checked report (MD + HTML)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--out", default="report", help="report folder (created)")
     p.add_argument(

@@ -40,7 +40,6 @@ def register(sub: Any) -> None:
             "front. Each parameter is VALUE, A:B or A:B:N (N grid points). Resumable: re-run "
             "the same command after an interruption."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     for name, text in _OPTIONS:
         p.add_argument("--" + name.replace("_", "-"), dest=name, metavar="SPEC", help=text)

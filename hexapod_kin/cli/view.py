@@ -1,8 +1,7 @@
 """The viewer subcommands: ``view`` (a model in the browser) and ``animate`` (a demo motion).
 
-Both serve a live meshcat viewer on 127.0.0.1 until Ctrl-C, ``--serve-for`` seconds or at
-once with ``--no-wait``; ``animate --html FILE`` writes a self-contained page instead. Heavy
-imports (numpy, Pinocchio, the viewer) stay inside the runners.
+Both serve meshcat on 127.0.0.1 until Ctrl-C, ``--serve-for`` or ``--no-wait``; ``animate
+--html FILE`` writes a self-contained page instead.
 """
 
 from __future__ import annotations
@@ -39,11 +38,9 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
     from ..exceptions import ParameterError, ViewerError
 
     if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
+        msg = f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]"
         raise ParameterError(
-            f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]",
-            parameter="--serve-for",
-            value=args.serve_for,
-            allowed="seconds in [0, 1e7]",
+            msg, parameter="--serve-for", value=args.serve_for, allowed="seconds in [0, 1e7]"
         )
     print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
     if args.no_wait:
@@ -59,11 +56,7 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------------ view
 def _add_view(sub: Any) -> None:
-    p = sub.add_parser(
-        "view",
-        help="show a model in the browser (meshcat server on 127.0.0.1)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
-    )
+    p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
     robot_args(p, frames=True)
     q_args(p)
     wait_args(p)
@@ -90,7 +83,6 @@ def _add_animate(sub: Any) -> None:
     p = sub.add_parser(
         "animate",
         help="animate a demo motion (joint sweep; hexapod: body sway with feet on the ground)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, frames=True)
     p.add_argument(

@@ -1,19 +1,8 @@
-"""Exports that other tools consume: xacro, a ROS 2 description package, MJCF, STL meshes.
+"""Exports other tools consume: xacro, a ROS 2 description package, MJCF, STL meshes.
 
-Each exporter takes a source as :func:`hexapod_kin.load` does (a chain, a robot, a preset name, a
-table file; :func:`to_mjcf` also a URDF) and writes files that are deterministic (same input,
-same bytes), atomically, with a header recording the command that made them:
-
-* :func:`to_xacro` / :func:`write_xacro` — ``<xacro:macro>`` per leg family, a property per
-  dimension; :func:`expand_xacro` runs the real ``xacro`` package on it.
-* :func:`export_package` — a ROS 2 ``ament_cmake`` description package (package.xml format 3,
-  CMakeLists.txt, urdf/, launch/, rviz/, meshes/, README).
-* :func:`to_mjcf` / :func:`write_mjcf` — MJCF through MuJoCo's own URDF compiler, with a floor.
-* :func:`mesh_visuals` / :func:`add_collisions` — STL visuals (trimesh) and primitive
-  collisions.
-
-xacro, mujoco and trimesh are the optional extra ``hexapod-kin[export]``; each is imported
-only when the function that needs it runs.
+Each takes a source as :func:`hexapod_kin.load` does (:func:`to_mjcf` also a URDF) and writes
+deterministic files atomically, headed by the command that made them. xacro, mujoco and
+trimesh (extra ``hexapod-kin[export]``) are imported only when needed.
 """
 
 from __future__ import annotations

@@ -44,14 +44,10 @@ def header_lines(what: str, description: str, header: str | None) -> list[str]:
 
 @contextlib.contextmanager
 def held_interrupt() -> Iterator[Callable[[], None]]:
-    """Hold Ctrl-C while a library that swallows it runs; yield ``check``, which delivers it.
+    """Hold Ctrl-C while a library that swallows it (trimesh) runs; yield ``check``.
 
-    trimesh catches ``BaseException`` around its optional imports and some computations, so a
-    ``KeyboardInterrupt`` raised inside it is lost and the export runs to its end. Inside this
-    block a SIGINT is only recorded; ``check()`` (called between units of work) and the end of
-    the block hand it to the handler that was there before (the command line's: status 130),
-    so the work stops promptly and nothing is written. Outside the main thread (where signal
-    handlers cannot be set) ``check`` does nothing.
+    A SIGINT is only recorded; ``check()`` (between units of work) and the block's end hand it
+    to the previous handler. Outside the main thread ``check`` does nothing.
     """
     got: list[int] = []
     try:

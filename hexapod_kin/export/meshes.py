@@ -1,16 +1,8 @@
-"""Collision primitives and generated STL visuals for exported URDFs (trimesh).
+"""Collision primitives and STL visuals (trimesh) for URDF text as ``to_urdf`` writes it.
 
-Both functions work on URDF *text* as :func:`hexapod_kin.urdf.to_urdf` writes it, so the
-meshes are built from exactly the primitives the URDF already draws:
-
-* :func:`add_collisions` gives every link a ``<collision>`` twin of each of its primitive
-  visuals (link cylinders, feet, base and body boxes; not the joint markers). Collision
-  geometry stays primitive.
-* :func:`mesh_visuals` replaces each link's visuals by one STL mesh per material (capsules
-  along the link segments, spheres at joints and feet, boxes for base and body), returning the
-  new URDF text and the mesh files (binary STL, deterministic bytes).
-
-Kinematics and inertials are untouched: the loader sees the same model.
+:func:`add_collisions` gives every primitive visual but the joint markers a ``<collision>``
+twin; :func:`mesh_visuals` replaces each link's visuals by one STL per material. Kinematics
+and inertials are untouched.
 """
 
 from __future__ import annotations
@@ -59,15 +51,9 @@ def _material(visual: Any) -> str:
 
 
 def add_collisions(urdf_text: str) -> str:
-    """Return ``urdf_text`` with a primitive ``<collision>`` for each colliding visual.
+    """``urdf_text`` with a primitive ``<collision>`` per colliding visual (deterministic).
 
     Links that already have collision elements are left as they are.
-
-    Args:
-        urdf_text: URDF document (as written by :func:`hexapod_kin.urdf.to_urdf`).
-
-    Returns:
-        The URDF text with collision elements (deterministic).
 
     Raises:
         UrdfError: If the text is not XML.
@@ -153,13 +139,7 @@ def mesh_visuals(urdf_text: str, uri_prefix: str) -> MeshedUrdf:
 
     Collision primitives are added first (:func:`add_collisions`), so collisions stay simple.
 
-    Args:
-        urdf_text: URDF document with primitive visuals.
-        uri_prefix: What goes before each file name in ``<mesh filename=...>``, e.g.
-            ``"package://my_robot_description/meshes/"`` or ``"meshes/"``.
-
-    Returns:
-        A :class:`MeshedUrdf` (the text and the STL files).
+    ``uri_prefix`` goes before each file name in ``<mesh filename=...>`` (e.g. ``"meshes/"``).
 
     Raises:
         OptionalDependencyError: If trimesh is not installed.

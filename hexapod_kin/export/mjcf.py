@@ -1,21 +1,11 @@
 """URDF → MJCF through MuJoCo's own URDF compiler, with a floor and full-precision numbers.
 
-Steps: :func:`hexapod_kin.urdf.to_urdf` (plus primitive collisions, or STL visuals with
-``meshes=True``) gets a ``<mujoco><compiler .../></mujoco>`` extension (``fusestatic="false"``
-so every URDF link stays a body with its name, ``discardvisual`` unless meshes are asked,
-``inertiafromgeom="false"`` so only the URDF inertials count, ``balanceinertia="false"``);
-``mujoco.MjModel.from_xml_string`` compiles it and ``mujoco.mj_saveLastXML`` writes the MJCF.
-MuJoCo writes 6 significant digits, so every number that matters (body poses, inertials,
-joint ranges, damping, friction loss, effort ranges, primitive geoms) is written back from the
-compiled model with full precision (``repr``); then a floor plane, a light and the optional
-``<option>`` (timestep, integrator) are added with lxml.
-
-What carries over: joint damping (``damping``), dry friction (``frictionloss``), position
-limits (``range``), effort limits (``actuatorfrcrange``), masses and inertias; URDF velocity
-limits have no MJCF counterpart. The base is fixed to the world, as in the URDF, unless
-``floating=True`` gives a robot's body a free joint. Contacts
-between a body and its parent are excluded (``<contact><exclude>``): adjacent links meet at
-their joint.
+The URDF gets a ``<mujoco><compiler/>`` extension (every link a body, only the URDF's
+inertials); MuJoCo compiles and saves it, then every number that matters is written back from
+the compiled model in full precision (MuJoCo writes 6 digits), and a floor, a light and
+``<option>`` are added. Damping, friction loss, ranges, effort limits, masses and inertias
+carry over (velocity limits have no MJCF counterpart). The base is fixed unless ``floating``;
+contacts between a body and its parent are excluded.
 """
 
 from __future__ import annotations
@@ -114,11 +104,9 @@ _FLOOR_REL, _FLOOR_ABS = 1e-6, 1e-12
 
 
 def _lift_degenerate(root: Any) -> None:
-    """Raise rounding-level principal moments of the URDF's inertias (in place).
+    """Raise principal moments within ``_FLOOR_REL`` of zero to that floor (in place).
 
-    Only tensors whose smallest eigenvalue lies within ``_FLOOR_REL`` of zero (relative to the
-    largest) are touched; a clearly negative moment is a defect left for MuJoCo to refuse.
-    The change is at most ``_FLOOR_REL`` of the largest moment (or ``_FLOOR_ABS`` kg·m²).
+    A clearly negative moment is a defect left for MuJoCo to refuse.
     """
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     for inertia in root.iterfind("link/inertial/inertia"):
@@ -202,11 +190,7 @@ def _patch(root: Any, model: Any, mujoco: Any) -> None:
 def _exclude_adjacent(root: Any) -> None:
     """No contacts between a body and its parent (MuJoCo only filters moving parents).
 
-    A link whose parent is welded to the world (the base, a leg mount) would otherwise touch
-    it at the joint all the time. Bodies without a joint are welded to their parent, so a
-    moving body is also excluded with every welded ancestor up to (and including) the first
-    ancestor that moves on its own joint (a leg's first link against the robot's body through
-    its jointless mount link).
+    A body is also excluded with every welded (jointless) ancestor up to the first that moves.
     """
     from lxml import etree
 
@@ -245,13 +229,7 @@ def _compile(urdf_text: str, assets: dict[str, bytes]) -> tuple[str, Any, Any]:
 
 
 def _without_meshes(urdf: str) -> str:
-    """The URDF without mesh geometry (visual or collision); primitives stay.
-
-    A robot's URDF from elsewhere often names ``package://`` meshes that MuJoCo's compiler
-    cannot open (it reads plain file paths, and not every format); the MJCF of such a URDF
-    keeps its bodies, joints, inertials and primitive shapes. Collisions that were meshes are
-    gone, so contacts of those links go undetected (the simulation adds its foot spheres).
-    """
+    """The URDF without mesh geometry (MuJoCo cannot open ``package://`` ones); primitives stay."""
     from lxml import etree
 
     root = etree.fromstring(urdf.encode("utf-8"))
@@ -326,12 +304,11 @@ def to_mjcf(
         resolved = resolve_source(source)
         params = resolved.params
     if floating and isinstance(params, Chain):
-        raise ParameterError(
+        msg = (
             "floating=True needs a robot (a Hexapod or a legged robot's URDF) whose root body "
-            "has a mass; a chain's base link has none",
-            parameter="floating",
-            value=floating,
+            "has a mass; a chain's base link has none"
         )
+        raise ParameterError(msg, parameter="floating", value=floating)
     if params is None:
         assert resolved is not None
         urdf, default_floor, desc = _without_meshes(resolved.text), -1.0, resolved.name
@@ -413,9 +390,7 @@ def write_mjcf(
 ) -> MjcfExport:
     """Write :func:`to_mjcf` to ``path`` (meshes into ``<stem>_meshes/`` beside it), atomically.
 
-    Every file is written with :func:`hexapod_kin._io.atomic_write`; the meshes first, the
-    MJCF last, so a complete MJCF never references a missing mesh. A write stopped between
-    two files (Ctrl-C, a full disk) removes the files and folders this call created.
+    Meshes first, the MJCF last; a write stopped between two files removes what it created.
 
     Raises:
         ParameterError: As :func:`to_mjcf`, or when the directory does not exist.

@@ -1,20 +1,8 @@
 """A ROS 2 description package (ament_cmake) for a chain or robot, written atomically.
 
-Layout of ``<out>`` (the package folder; its name need not be the package name)::
-
-    package.xml                 format 3: name, version, description, maintainer, license,
-                                buildtool_depend ament_cmake, exec_depend launch, launch_ros,
-                                robot_state_publisher, joint_state_publisher(_gui), rviz2, xacro
-    CMakeLists.txt              ament_cmake; installs urdf/ launch/ rviz/ meshes/ to share/
-    urdf/<robot>.urdf           the URDF (to_urdf + primitive collisions; STL visuals with meshes)
-    urdf/<robot>.urdf.xacro     the parametric xacro (hexapod_kin.export.xacro)
-    launch/display.launch.py    robot_state_publisher + joint_state_publisher_gui + rviz2
-    rviz/display.rviz           RobotModel, TF and grid, fixed frame = the root link
-    meshes/                     <link>_<material>.stl with meshes=True (else a README)
-    README.md                   how to build and launch it
-
-No ROS installation is needed to write it. The whole tree is built in a temporary folder next
-to ``out`` and renamed into place, so a failed export never leaves a half-written package.
+``package.xml`` (format 3), ``CMakeLists.txt``, ``urdf/<robot>.urdf`` and ``.urdf.xacro``,
+``launch/display.launch.py``, ``rviz/display.rviz``, ``meshes/`` and a README; built in a
+temporary folder beside ``out`` and renamed into place. No ROS installation is needed.
 """
 
 from __future__ import annotations
@@ -41,6 +29,8 @@ __all__ = ["export_package", "package_name_for", "PackageExport", "PACKAGE_NAME_
 #: REP 144 package names: lower case letters, digits and underscores, starting with a letter.
 PACKAGE_NAME_RE = re.compile(r"^[a-z][a-z0-9_]*$")
 _EMAIL_RE = re.compile(r"^[^@\s<>\"]+@[^@\s<>\"]+\.[A-Za-z]{2,}$")
+#: The package's file templates (``str.format`` fields; package data).
+_TEMPLATES = Path(__file__).with_name("templates")
 
 #: exec_depend of package.xml: everything the launch file imports or runs.
 EXEC_DEPENDS = (
@@ -86,217 +76,23 @@ def _xml_text(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-def _package_xml(
-    name: str, description: str, maintainer: str, email: str, license_: str, header: str
-) -> str:
-    deps = "\n".join(f"  <exec_depend>{d}</exec_depend>" for d in EXEC_DEPENDS)
-    return (
-        '<?xml version="1.0"?>\n'
-        '<?xml-model href="http://download.ros.org/schema/package_format3.xsd" '
-        'schematypens="http://www.w3.org/2001/XMLSchema"?>\n'
-        f"{comment(header)}\n"
-        '<package format="3">\n'
-        f"  <name>{name}</name>\n"
-        "  <version>0.1.0</version>\n"
-        f"  <description>{_xml_text(description)}</description>\n"
-        f'  <maintainer email="{_xml_text(email)}">{_xml_text(maintainer)}</maintainer>\n'
-        f"  <license>{_xml_text(license_)}</license>\n"
-        "\n"
-        "  <buildtool_depend>ament_cmake</buildtool_depend>\n"
-        "\n"
-        f"{deps}\n"
-        "\n"
-        "  <export>\n"
-        "    <build_type>ament_cmake</build_type>\n"
-        "  </export>\n"
-        "</package>\n"
-    )
-
-
-def _cmakelists(name: str, header: str) -> str:
-    return (
-        f"# {header}\n"
-        "cmake_minimum_required(VERSION 3.8)\n"
-        f"project({name})\n"
-        "\n"
-        "find_package(ament_cmake REQUIRED)\n"
-        "\n"
-        "install(\n"
-        "  DIRECTORY urdf launch rviz meshes\n"
-        "  DESTINATION share/${PROJECT_NAME}\n"
-        ")\n"
-        "\n"
-        "ament_package()\n"
-    )
-
-
-def _launch(name: str, robot: str, header: str) -> str:
-    return f'''"""Display {robot} in RViz: robot_state_publisher, joint_state_publisher_gui, rviz2.
-
-{header}
-Run: ros2 launch {name} display.launch.py [model:=/path/to/robot.urdf.xacro] [gui:=false]
-"""
-
-from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
-from launch.conditions import IfCondition, UnlessCondition
-from launch.substitutions import Command, LaunchConfiguration, PathJoinSubstitution
-from launch_ros.actions import Node
-from launch_ros.parameter_descriptions import ParameterValue
-from launch_ros.substitutions import FindPackageShare
-
-PACKAGE = "{name}"
-MODEL_FILE = ("urdf", "{robot}.urdf.xacro")
-RVIZ_FILE = ("rviz", "display.rviz")
-
-
-def generate_launch_description():
-    """The launch description (the model is expanded by xacro; plain URDF works too)."""
-    share = FindPackageShare(PACKAGE)
-    model = LaunchConfiguration("model")
-    gui = LaunchConfiguration("gui")
-    robot_description = ParameterValue(Command(["xacro ", model]), value_type=str)
-    return LaunchDescription(
-        [
-            DeclareLaunchArgument(
-                "model",
-                default_value=PathJoinSubstitution([share, *MODEL_FILE]),
-                description="URDF or xacro file of the robot",
-            ),
-            DeclareLaunchArgument(
-                "gui", default_value="true", description="joint_state_publisher_gui sliders"
-            ),
-            Node(
-                package="robot_state_publisher",
-                executable="robot_state_publisher",
-                parameters=[{{"robot_description": robot_description}}],
-                output="screen",
-            ),
-            Node(
-                package="joint_state_publisher_gui",
-                executable="joint_state_publisher_gui",
-                condition=IfCondition(gui),
-            ),
-            Node(
-                package="joint_state_publisher",
-                executable="joint_state_publisher",
-                condition=UnlessCondition(gui),
-            ),
-            Node(
-                package="rviz2",
-                executable="rviz2",
-                arguments=["-d", PathJoinSubstitution([share, *RVIZ_FILE])],
-                output="screen",
-            ),
-        ]
-    )
-'''
-
-
-def _rviz(fixed_frame: str, header: str) -> str:
-    return f"""# {header}
-Panels:
-  - Class: rviz_common/Displays
-    Name: Displays
-Visualization Manager:
-  Class: ""
-  Displays:
-    - Class: rviz_default_plugins/Grid
-      Enabled: true
-      Name: Grid
-      Cell Size: 0.1
-      Plane Cell Count: 20
-      Reference Frame: <Fixed Frame>
-    - Class: rviz_default_plugins/RobotModel
-      Enabled: true
-      Name: RobotModel
-      Description Source: Topic
-      Description Topic:
-        Value: /robot_description
-      Visual Enabled: true
-      Collision Enabled: false
-    - Class: rviz_default_plugins/TF
-      Enabled: true
-      Name: TF
-      Show Names: false
-      Marker Scale: 0.2
-  Enabled: true
-  Global Options:
-    Fixed Frame: {fixed_frame}
-    Background Color: 48; 48; 48
-    Frame Rate: 30
-  Name: root
-  Tools:
-    - Class: rviz_default_plugins/MoveCamera
-    - Class: rviz_default_plugins/Select
-  Value: true
-  Views:
-    Current:
-      Class: rviz_default_plugins/Orbit
-      Distance: 1.0
-      Focal Point:
-        X: 0
-        Y: 0
-        Z: 0
-      Name: Current View
-      Pitch: 0.6
-      Yaw: 0.8
-Window Geometry:
-  Height: 800
-  Width: 1200
-"""
-
-
-def _readme(name: str, robot: str, description: str, header: str, meshes: bool) -> str:
-    vis = (
-        "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
-        if meshes
-        else "primitives (cylinders, spheres, boxes)"
-    )
-    return f"""# {name}
-
-ROS 2 description package of **{robot}**: {description}
-
-{header}. Generated by hexapod_kin {__version__}: do not edit by hand, regenerate it.
-
-| file | what |
-|---|---|
-| `urdf/{robot}.urdf` | the URDF (Khalil-Kleinfinger frames, SI units); visuals: {vis}; \
-collisions: primitives |
-| `urdf/{robot}.urdf.xacro` | the same robot as xacro macros with one property per dimension |
-| `launch/display.launch.py` | robot_state_publisher, joint_state_publisher_gui, rviz2 |
-| `rviz/display.rviz` | RViz config: RobotModel, TF, grid |
-
-```bash
-cd ~/ros2_ws/src && cp -r /path/to/this/folder {name}
-cd ~/ros2_ws && colcon build --packages-select {name} && source install/setup.bash
-ros2 launch {name} display.launch.py                          # the xacro, with sliders
-ros2 launch {name} display.launch.py model:=$(ros2 pkg prefix {name})/share/{name}/urdf/{robot}.urdf
-```
-"""
+def _template(file: str, **fields: str) -> str:
+    """The file template ``templates/<file>.tmpl`` filled with ``fields`` (``str.format``)."""
+    return (_TEMPLATES / f"{file}.tmpl").read_text(encoding="utf-8").format(**fields)
 
 
 def _check_out(out: Path, force: bool) -> None:
     parent = out.parent if str(out.parent) else Path(".")
+    why = None
     if not parent.is_dir():
-        raise ParameterError(
-            f"out={str(out)!r}: directory {str(parent)!r} does not exist",
-            parameter="out",
-            value=str(out),
-        )
-    if out.exists() and not out.is_dir():
-        raise ParameterError(
-            f"out={str(out)!r} is a file; expected a directory for the package",
-            parameter="out",
-            value=str(out),
-        )
-    if out.is_dir() and any(out.iterdir()) and not force:
-        raise ParameterError(
-            f"out={str(out)!r} exists and is not empty; choose a new folder or pass force=True "
-            "(--force) to replace it",
-            parameter="out",
-            value=str(out),
-        )
+        why = f": directory {str(parent)!r} does not exist"
+    elif out.exists() and not out.is_dir():
+        why = " is a file; expected a directory for the package"
+    elif out.is_dir() and any(out.iterdir()) and not force:
+        why = " exists and is not empty; choose a new folder or pass force=True (--force) to "
+        why += "replace it"
+    if why is not None:
+        raise ParameterError(f"out={str(out)!r}{why}", parameter="out", value=str(out))
 
 
 def package_files(
@@ -309,20 +105,9 @@ def package_files(
     email: str = "user@example.com",
     license: str = "BSD-3-Clause",  # noqa: A002
 ) -> tuple[str, dict[str, bytes]]:
-    """The files of the description package (path relative to the package → bytes).
+    """The package name and its files (path relative to the package → bytes, sorted).
 
-    Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
-        name: ROS package name (REP 144); default ``<robot>_description``.
-        meshes: Write STL visuals into ``meshes/`` (referenced as ``package://<name>/...``).
-        header: Header line for every file (e.g. the command that made it).
-        maintainer: Maintainer name for ``package.xml``.
-        email: Maintainer e-mail (required by package format 3).
-        license: License identifier for ``package.xml``.
-
-    Returns:
-        ``(package name, files)``, files sorted by path.
+    Arguments as :func:`export_package`.
 
     Raises:
         ParameterError: For an invalid name, e-mail or source.
@@ -331,18 +116,14 @@ def package_files(
     src = table_of(source)
     pkg = package_name_for(src.name) if name is None else name
     if not isinstance(pkg, str) or not PACKAGE_NAME_RE.match(pkg):
-        raise ParameterError(
+        msg = (
             f"name={pkg!r} is not a valid ROS package name; use lower case letters, digits and "
-            "underscores, starting with a letter (REP 144)",
-            parameter="name",
-            value=pkg,
+            "underscores, starting with a letter (REP 144)"
         )
+        raise ParameterError(msg, parameter="name", value=pkg)
     if not _EMAIL_RE.match(email):
-        raise ParameterError(
-            f"email={email!r} is not an e-mail address (package.xml requires one)",
-            parameter="email",
-            value=email,
-        )
+        msg = f"email={email!r} is not an e-mail address (package.xml requires one)"
+        raise ParameterError(msg, parameter="email", value=email)
     for label, value in (("maintainer", maintainer), ("license", license)):
         if not value.strip():
             raise ParameterError(f"{label}={value!r} is empty", parameter=label, value=value)
@@ -361,14 +142,37 @@ def package_files(
             "No meshes: this package was exported without `--meshes`; visuals are primitives.\n"
         )
     files[f"urdf/{src.name}.urdf.xacro"] = to_xacro(src, header=made)
-    files["package.xml"] = _package_xml(
-        pkg, f"Robot description of {src.name}: {description}", maintainer, email, license, made
+    deps = "\n".join(f"  <exec_depend>{d}</exec_depend>" for d in EXEC_DEPENDS)
+    files["package.xml"] = _template(
+        "package.xml",
+        name=pkg,
+        description=_xml_text(f"Robot description of {src.name}: {description}"),
+        maintainer=_xml_text(maintainer),
+        email=_xml_text(email),
+        license=_xml_text(license),
+        comment=comment(made),
+        deps=deps,
     )
-    files["CMakeLists.txt"] = _cmakelists(pkg, made)
-    files["launch/display.launch.py"] = _launch(pkg, src.name, made)
+    files["CMakeLists.txt"] = _template("CMakeLists.txt", name=pkg, header=made)
+    files["launch/display.launch.py"] = _template(
+        "display.launch.py", name=pkg, robot=src.name, header=made
+    )
     root = src.base if isinstance(src, Chain) else src.body
-    files["rviz/display.rviz"] = _rviz(root, made)
-    files["README.md"] = _readme(pkg, src.name, description, made, meshes)
+    files["rviz/display.rviz"] = _template("display.rviz", fixed_frame=root, header=made)
+    visuals = (
+        "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
+        if meshes
+        else "primitives (cylinders, spheres, boxes)"
+    )
+    files["README.md"] = _template(
+        "README.md",
+        name=pkg,
+        robot=src.name,
+        description=description,
+        header=made,
+        visuals=visuals,
+        version=__version__,
+    )
     out = {k: (v.encode("utf-8") if isinstance(v, str) else v) for k, v in files.items()}
     return pkg, dict(sorted(out.items()))
 
@@ -391,12 +195,12 @@ def export_package(
         source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
             a preset name or a table file (any source with a parameter table).
         out: The package folder to create (its parent must exist).
-        name: ROS package name; default ``<robot>_description``.
-        meshes: Generate STL visuals (trimesh) into ``meshes/``.
+        name: ROS package name (REP 144); default ``<robot>_description``.
+        meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
         header: Header line recorded in every file (the command that made it).
         force: Replace ``out`` if it exists and is not empty.
         maintainer: Maintainer name.
-        email: Maintainer e-mail.
+        email: Maintainer e-mail (package format 3 requires one).
         license: License identifier.
 
     Returns:

@@ -78,97 +78,83 @@ class Servo:
 
     def __post_init__(self) -> None:
         where = f"calibration of {self.joint}"
-        if self.units not in UNITS:
-            raise _bad(
-                f"{where}: units {self.units!r} unknown; {choices(UNITS)}",
-                "units",
-                self.units,
-                UNITS,
-            )
-        if self.direction not in (1, -1):
-            raise _bad(
-                f"{where}: direction {self.direction!r}; allowed: 1 or -1",
-                "direction",
-                self.direction,
-                (1, -1),
-            )
+
+        def need(ok: bool, key: str, text: str, allowed: Any, value: Any = None) -> None:
+            if not ok:
+                shown = getattr(self, key) if value is None else value
+                raise _bad(f"{where}: {text}", key, shown, allowed)
+
+        need(self.units in UNITS, "units", f"units {self.units!r} unknown; {choices(UNITS)}", UNITS)
+        need(
+            self.direction in (1, -1),
+            "direction",
+            f"direction {self.direction!r}; allowed: 1 or -1",
+            (1, -1),
+        )
         for name in ("offset", "centre"):
-            if not math.isfinite(getattr(self, name)):
-                raise _bad(f"{where}: {name} must be finite", name, getattr(self, name), "finite")
-        if self.units == "ticks" and not (
-            self.ticks_per_revolution is not None
-            and math.isfinite(self.ticks_per_revolution)
-            and self.ticks_per_revolution > 0
-        ):
-            raise _bad(
-                f"{where}: units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 "
-                f"ticks over 300°), got {self.ticks_per_revolution!r}",
-                "ticks_per_revolution",
-                self.ticks_per_revolution,
-                "> 0",
-            )
-        if self.units == "us" and not (
-            self.us_per_rad is not None and math.isfinite(self.us_per_rad) and self.us_per_rad > 0
-        ):
-            raise _bad(
-                f"{where}: units 'us' need us_per_rad > 0, got {self.us_per_rad!r}",
-                "us_per_rad",
-                self.us_per_rad,
-                "> 0",
-            )
+            need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
+        tpr, upr = self.ticks_per_revolution, self.us_per_rad
+        need(
+            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr > 0),
+            "ticks_per_revolution",
+            "units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 ticks over "
+            f"300°), got {tpr!r}",
+            "> 0",
+        )
+        need(
+            self.units != "us" or (upr is not None and math.isfinite(upr) and upr > 0),
+            "us_per_rad",
+            f"units 'us' need us_per_rad > 0, got {upr!r}",
+            "> 0",
+        )
         if self.limits is not None:
             lo, hi = self.limits
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise _bad(
-                    f"{where}: limits {list(self.limits)} must be finite with lowest < highest",
-                    "limits",
-                    self.limits,
-                    "[lowest, highest]",
-                )
-        if self.velocity_limit is not None and not self.velocity_limit > 0:
-            raise _bad(
-                f"{where}: velocity_limit {self.velocity_limit!r} must be > 0 [rad/s]",
-                "velocity_limit",
-                self.velocity_limit,
-                "> 0",
+            need(
+                math.isfinite(lo) and math.isfinite(hi) and lo < hi,
+                "limits",
+                f"limits {list(self.limits)} must be finite with lowest < highest",
+                "[lowest, highest]",
             )
-        if self.resolution is not None and not (
-            math.isfinite(self.resolution) and self.resolution >= 0
-        ):
-            raise _bad(
-                f"{where}: resolution {self.resolution!r} must be >= 0",
-                "resolution",
-                self.resolution,
-                ">= 0",
-            )
+        vel, res = self.velocity_limit, self.resolution
+        need(
+            vel is None or vel > 0,
+            "velocity_limit",
+            f"velocity_limit {vel!r} must be > 0 [rad/s]",
+            "> 0",
+        )
+        need(
+            res is None or (math.isfinite(res) and res >= 0),
+            "resolution",
+            f"resolution {res!r} must be >= 0",
+            ">= 0",
+        )
         # plausible: two turns either side of the centre stay within MAX_COMMAND, in whole steps
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "centre")
         key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
         reach = abs(self.zero) + self.scale * 4.0 * math.pi
-        if not reach <= MAX_COMMAND:
-            raise _bad(
-                f"{where}: {key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
-                f"allowed: commands within ±{MAX_COMMAND:g}",
-                key,
-                getattr(self, key),
-                f"commands within ±{MAX_COMMAND:g}",
-            )
-        if self.step > 0 and not self.step / self.scale <= 2.0 * math.pi:
-            raise _bad(
-                f"{where}: {key} {getattr(self, key)!r} makes one step of {self.step:g} "
-                f"{self.units} {self.step / self.scale:g} rad; allowed: at most one turn",
-                key,
-                getattr(self, key),
-                "at most one turn per step",
-            )
-        if self.step > 0 and not reach / self.step < 2.0**52:
-            raise _bad(
-                f"{where}: resolution {self.step!r} is too fine for commands up to {reach:g} "
-                f"{self.units} (more than 2^52 steps)",
-                "resolution",
-                self.step,
-                f">= {reach / 2.0**52:.3g}",
-            )
+        within = f"commands within ±{MAX_COMMAND:g}"
+        need(
+            reach <= MAX_COMMAND,
+            key,
+            f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
+            f"allowed: {within}",
+            within,
+        )
+        need(
+            not self.step > 0 or self.step / self.scale <= 2.0 * math.pi,
+            key,
+            f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units} "
+            f"{self.step / self.scale:g} rad; allowed: at most one turn",
+            "at most one turn per step",
+        )
+        need(
+            not self.step > 0 or reach / self.step < 2.0**52,
+            "resolution",
+            f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units} "
+            "(more than 2^52 steps)",
+            f">= {reach / 2.0**52:.3g}" if self.step > 0 else "",
+            value=self.step,
+        )
 
     @property
     def scale(self) -> float:
@@ -204,22 +190,51 @@ class Servo:
         u = np.asarray(u, dtype=float)
         return self.offset + self.direction * (u - self.zero) / self.scale
 
+    def check_range(self, lower: float, upper: float) -> None:
+        """Refuse a servo that cannot drive a joint of limits [lower, upper] [rad or m].
+
+        The centre (``offset``) must lie within a turn (2π) of the joint's range, and the angles
+        the servo's own ``limits`` reach must overlap it. Infinite limits check nothing.
+
+        Raises:
+            ParameterError: Naming the joint, the key (``offset`` or ``limits``), the value and
+                the allowed range.
+
+        """
+        lo, hi = float(lower), float(upper)
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            return
+        where, turn = f"calibration of {self.joint}", 2.0 * math.pi
+        if not lo - turn <= self.offset <= hi + turn:
+            span = (lo - turn, hi + turn)
+            msg = (
+                f"{where}: offset {self.offset:g} is more than a turn outside the joint's limits "
+                f"[{lo:.6g}, {hi:.6g}]; allowed: [{span[0]:.6g}, {span[1]:.6g}]"
+            )
+            raise _bad(msg, "offset", self.offset, span)
+        if self.limits is not None:
+            a, b = sorted(float(x) for x in self.angle(self.limits))
+            if b < lo or a > hi:
+                u = sorted(
+                    self.zero + self.direction * self.scale * (x - self.offset) for x in (lo, hi)
+                )
+                msg = (
+                    f"{where}: limits {list(self.limits)} {self.units} reach the joint only at "
+                    f"[{a:.6g}, {b:.6g}], outside its limits [{lo:.6g}, {hi:.6g}]; allowed: "
+                    f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}"
+                )
+                raise _bad(msg, "limits", list(self.limits), (u[0], u[1]))
+
     def to_dict(self) -> dict[str, Any]:
         """The servo as a calibration-file entry (only the keys that matter for its units)."""
-        d: dict[str, Any] = {"units": self.units, "offset": self.offset}
-        d["direction"] = self.direction
-        if self.units == "ticks":
-            d["ticks_per_revolution"] = self.ticks_per_revolution
-        if self.units == "us":
-            d["us_per_rad"] = self.us_per_rad
-        if self.units in ("ticks", "us"):
-            d["centre"] = self.centre
+        scale = {"ticks": ["ticks_per_revolution", "centre"], "us": ["us_per_rad", "centre"]}
+        keys = ["units", "offset", "direction", *scale.get(self.units, [])]
+        keys += [
+            k for k in ("limits", "velocity_limit", "resolution") if getattr(self, k) is not None
+        ]
+        d = {k: getattr(self, k) for k in keys}
         if self.limits is not None:
             d["limits"] = list(self.limits)
-        if self.velocity_limit is not None:
-            d["velocity_limit"] = self.velocity_limit
-        if self.resolution is not None:
-            d["resolution"] = self.resolution
         return d
 
 
@@ -242,25 +257,39 @@ class Calibration:
         if joint in self.servos:
             return self.servos[joint]
         if self.default is None:
-            raise ParameterError(
+            msg = (
                 f"calibration: no servo for joint {joint!r} and no 'defaults'; listed: "
-                f"{sorted(self.servos)}",
-                parameter="calibration",
-                value=joint,
-                allowed=sorted(self.servos),
+                f"{sorted(self.servos)}"
+            )
+            raise ParameterError(
+                msg, parameter="calibration", value=joint, allowed=sorted(self.servos)
             )
         return Servo(**{**self.default.__dict__, "joint": joint})
 
-    def check_joints(self, joint_names: Sequence[str]) -> None:
-        """Refuse a listed joint that the plan does not have (a typo would go unnoticed)."""
+    def check_joints(
+        self, joint_names: Sequence[str], lower: Any = None, upper: Any = None, of: str = "the plan"
+    ) -> None:
+        """Refuse a listed joint not in ``joint_names`` and a servo that cannot drive its joint.
+
+        A typo would go unnoticed. With the joints' ``lower``/``upper`` limits [rad or m] every
+        joint's servo (unlisted ones through the defaults) is held to :meth:`Servo.check_range`.
+
+        Raises:
+            ParameterError: An unknown joint (naming it and the joints allowed); a range or
+                offset incompatible with the joint's limits.
+
+        """
         extra = [j for j in self.servos if j not in joint_names]
         if extra:
+            msg = f"calibration: joint {extra[0]!r} is not in {of}; {choices(joint_names)}"
             raise ParameterError(
-                f"calibration: joint {extra[0]!r} is not in the plan; {choices(joint_names)}",
-                parameter="calibration",
-                value=extra[0],
-                allowed=list(joint_names),
+                msg, parameter="calibration", value=extra[0], allowed=list(joint_names)
             )
+        if lower is None or upper is None:
+            return
+        for joint, lo, hi in zip(joint_names, lower, upper):
+            if joint in self.servos or self.default is not None:
+                self.servo(joint).check_range(lo, hi)
 
     def to_dict(self) -> dict[str, Any]:
         """The calibration as a file's data: ``{"defaults": {...}, "joints": {...}}``."""
@@ -273,68 +302,48 @@ class Calibration:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], name: str = "calibration") -> Calibration:
         """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc)."""
+
+        def refuse(why: str, value: Any, allowed: Any) -> ParameterError:
+            return _bad(f"{name}: {why}", "calibration", value, allowed)
+
         if not isinstance(data, Mapping):
-            raise _bad(f"{name}: must be a mapping", "calibration", type(data).__name__, "mapping")
+            raise refuse("must be a mapping", type(data).__name__, "mapping")
         unknown = [k for k in data if k not in ("defaults", "joints")]
         if unknown:
-            raise _bad(
-                f"{name}: unknown key {unknown[0]!r}; allowed: defaults, joints",
-                "calibration",
-                unknown[0],
-                ("defaults", "joints"),
-            )
+            why = f"unknown key {unknown[0]!r}; allowed: defaults, joints"
+            raise refuse(why, unknown[0], ("defaults", "joints"))
         base = data.get("defaults") or {}
         joints = data.get("joints") or {}
         if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
-            raise _bad(
-                f"{name}: 'defaults' and 'joints' must be tables",
-                "calibration",
-                None,
-                "tables",
-            )
+            raise refuse("'defaults' and 'joints' must be tables", None, "tables")
         default = _servo("*", base, name) if "defaults" in data else None
         servos = {}
         for joint, entry in joints.items():
             if not isinstance(entry, Mapping):
-                raise _bad(
-                    f"{name}: joint {joint!r} must be a table of servo settings",
-                    "calibration",
-                    joint,
-                    _SERVO_KEYS,
-                )
+                why = f"joint {joint!r} must be a table of servo settings"
+                raise refuse(why, joint, _SERVO_KEYS)
             servos[str(joint)] = _servo(str(joint), {**base, **entry}, name)
         return cls(servos=servos, default=default)
 
 
 def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
+    def refuse(key: str, value: Any, why: str, allowed: Any) -> ParameterError:
+        return _bad(f"{name}: joint {joint!r}: {why}", key, value, allowed)
+
     kw: dict[str, Any] = {}
     for key, value in entry.items():
         if key not in _SERVO_KEYS:
-            raise _bad(
-                f"{name}: joint {joint!r}: unknown key {key!r}; {choices(_SERVO_KEYS)}",
-                "calibration",
-                key,
-                _SERVO_KEYS,
-            )
+            why = f"unknown key {key!r}; {choices(_SERVO_KEYS)}"
+            raise refuse("calibration", key, why, _SERVO_KEYS)
         if key == "units":
             if not isinstance(value, str):
-                raise _bad(
-                    f"{name}: joint {joint!r}: units = {clip(value)} is not a string; "
-                    f"{choices(UNITS)}",
-                    key,
-                    clip(value),
-                    UNITS,
-                )
+                why = f"units = {clip(value)} is not a string; {choices(UNITS)}"
+                raise refuse(key, clip(value), why, UNITS)
             kw[key] = value
         elif key == "limits":
             if not isinstance(value, (list, tuple)) or len(value) != 2:
-                raise _bad(
-                    f"{name}: joint {joint!r}: limits = {clip(value)} is not a number pair "
-                    "[lowest, highest]",
-                    key,
-                    clip(value),
-                    "[lowest, highest]",
-                )
+                why = f"limits = {clip(value)} is not a number pair [lowest, highest]"
+                raise refuse(key, clip(value), why, "[lowest, highest]")
             kw[key] = (_number(value[0], key, joint, name), _number(value[1], key, joint, name))
         else:
             kw[key] = _number(value, key, joint, name)
@@ -350,17 +359,16 @@ def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
 def _number(value: Any, key: str, joint: str, name: str) -> float:
     """A calibration number: an int or a float (never a text or a boolean), finite."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _bad(
-            f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number",
-            key,
-            clip(value),
-            "finite numbers",
-        )
+        why = f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number"
+        raise _bad(why, key, clip(value), "finite numbers")
     return float(value)
 
 
-def read_calibration(path: str | os.PathLike[str]) -> Calibration:
+def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
+
+    With ``robot`` (a model: ``joint_names``, ``lower``, ``upper``) every entry must name one
+    of its joints and fit that joint's limits (:meth:`Calibration.check_joints`).
 
     The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
     regular file of at most 1 MB, UTF-8, no key given twice, YAML alias and depth caps).
@@ -374,8 +382,17 @@ def read_calibration(path: str | os.PathLike[str]) -> Calibration:
 
     Raises:
         SourceError: The file cannot be read or parsed, or is refused by the reader.
-        ParameterError: An unknown key or unit, a bad number.
+        ParameterError: An unknown key or unit, a bad number; with ``robot``, an unknown
+            joint or a servo that does not fit its joint's limits.
 
     """
-    data = read_data(path, "calibration")
-    return Calibration.from_dict(data, Path(path).name)
+    name = Path(path).name
+    cal = Calibration.from_dict(read_data(path, "calibration"), name)
+    if robot is not None:
+        try:
+            cal.check_joints(robot.joint_names, robot.lower, robot.upper, of=repr(robot.name))
+        except ParameterError as exc:
+            raise _bad(
+                f"{name}: {exc}", exc.parameter or "calibration", exc.value, exc.allowed
+            ) from None
+    return cal

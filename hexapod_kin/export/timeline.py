@@ -16,29 +16,13 @@ joint to its servo through a :class:`Calibration`:
       c_{\mu s} + \theta_s \, k & \text{us (k µs per rad, centre } c_{\mu s})
     \end{cases}
 
-with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction.
-Commands are rounded to the servo's resolution (1 tick, 1 µs; none for rad/deg unless
-``resolution`` says so). Every sample is checked against the servo's own limits (in its
-units) and the joint's speed limit [rad/s] (the calibration's ``velocity_limit``, else the
-model's); the first sample out of range is refused with a
-:class:`~hexapod_kin.exceptions.ConfigurationError` naming the joint, the time and the value.
-
-Interpolation: ``"linear"`` (positions and velocities interpolated linearly between the plan's
-samples; the velocity is the plan's own, or its second-order finite difference) or ``"cubic"``
-(a not-a-knot cubic spline through the plan's positions; velocities are its derivative).
-
-Files (:meth:`Timeline.write`, :func:`read_timeline`):
-
-* CSV: ``# key: value`` header lines (format, rate, interpolation, the calibration as JSON), one
-  column ``t [s]``, one column per joint in its servo units, one speed column per joint in servo
-  units per second.
-* JSON: the same as one object.
-* ROS 2 YAML: a ``trajectory_msgs/msg/JointTrajectory`` (header, joint_names, points with
-  positions [rad] and velocities [rad/s] of the commanded (rounded) servo values,
-  time_from_start {sec, nanosec}); ``ros2 topic pub`` or a test can load it.
-
-Reading back inverts the servo map, so the angles read equal the plan's to half the servo's
-resolution.
+with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction,
+rounded to the servo's resolution. Every sample is checked (finite; the joint's limits; the
+servo's limits; the speed limit [rad/s]); the first one beyond is refused naming the joint,
+the time and the value. Interpolation: ``"linear"`` (velocities the plan's own or its
+second-order finite difference) or ``"cubic"`` (a not-a-knot spline and its derivative).
+Files: CSV (``# key: value`` header, ``t [s]``, commands and speeds in servo units), JSON (the
+same), ROS 2 ``JointTrajectory`` YAML (commanded angles [rad]); read back to half a step.
 """
 
 from __future__ import annotations
@@ -55,13 +39,7 @@ import numpy as np
 
 from .._io import atomic_write
 from .._reader import parse_data, read_text
-from ..exceptions import (
-    ConfigurationError,
-    HexapodKinError,
-    LimitError,
-    SourceError,
-    choices,
-)
+from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [
@@ -217,14 +195,13 @@ def _format(path: Path, fmt: str | None) -> str:
     suffix = path.suffix.lower()
     kinds = {".csv": "csv", ".json": "json", ".yaml": "ros2", ".yml": "ros2"}
     if suffix not in kinds:
-        raise _bad(
-            f"{path.name}: suffix {suffix or '(none)'!r} unknown; allowed: .csv, .json, "
-            ".yaml/.yml (ROS 2 JointTrajectory)",
-            "path",
-            str(path),
-            sorted(kinds),
-        )
+        msg = f"{path.name}: suffix {suffix or '(none)'!r} unknown; allowed: .csv, .json, "
+        raise _bad(msg + ".yaml/.yml (ROS 2 JointTrajectory)", "path", str(path), sorted(kinds))
     return kinds[suffix]
+
+
+def _malformed(text: str, parameter: str, value: Any, allowed: Any) -> ConfigurationError:
+    return ConfigurationError(text, parameter=parameter, value=value, allowed=allowed)
 
 
 def _plan_arrays(
@@ -240,48 +217,27 @@ def _plan_arrays(
         names = joint_names or getattr(plan, "joint_names", None)
     else:
         if times is None:
-            raise ConfigurationError(
-                "an IK path needs its sample times: timeline((times, q)) or times=",
-                parameter="times",
-                value=None,
-                allowed="(N,) increasing times [s]",
-            )
+            text = "an IK path needs its sample times: timeline((times, q)) or times="
+            raise _malformed(text, "times", None, "(N,) increasing times [s]")
         t = np.asarray(times, dtype=float)
         q = np.asarray(plan, dtype=float)
         qdot = None
         names = joint_names
     if q.ndim != 2 or t.ndim != 1 or len(t) != len(q) or len(t) < 2:
-        raise ConfigurationError(
-            f"a plan needs (N,) times and (N, J) joint angles with N >= 2, got times "
-            f"{t.shape} and q {q.shape}",
-            parameter="q",
-            value=q.shape,
-            allowed="(N, J), N >= 2",
-        )
+        text = f"a plan needs (N,) times and (N, J) joint angles with N >= 2, got times {t.shape}"
+        raise _malformed(f"{text} and q {q.shape}", "q", q.shape, "(N, J), N >= 2")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
-        raise ConfigurationError(
-            "the plan's times and joint angles must be finite",
-            parameter="q",
-            value="non-finite",
-            allowed="finite",
-        )
+        text = "the plan's times and joint angles must be finite"
+        raise _malformed(text, "q", "non-finite", "finite")
     if not np.all(np.diff(t) > 0):
-        raise ConfigurationError(
-            "the plan's times must increase strictly",
-            parameter="times",
-            value=None,
-            allowed="strictly increasing",
-        )
+        text = "the plan's times must increase strictly"
+        raise _malformed(text, "times", None, "strictly increasing")
     if names is None:
         names = tuple(f"joint{i + 1}" for i in range(q.shape[1]))
     names = tuple(str(n) for n in names)
     if len(names) != q.shape[1] or len(set(names)) != len(names):
-        raise ConfigurationError(
-            f"{len(names)} joint names for {q.shape[1]} columns (names must be distinct)",
-            parameter="joint_names",
-            value=list(names),
-            allowed=f"{q.shape[1]} distinct names",
-        )
+        text = f"{len(names)} joint names for {q.shape[1]} columns (names must be distinct)"
+        raise _malformed(text, "joint_names", list(names), f"{q.shape[1]} distinct names")
     if qdot is not None and qdot.shape != q.shape:
         qdot = None
     return t, q, qdot, names
@@ -370,16 +326,13 @@ def timeline(
             (the message names the joint, the time [s] and the value; ``parameter`` is the
             joint).
         ConfigurationError: A malformed plan.
-        ParameterError: Bad rate, interpolation or calibration.
+        ParameterError: Bad rate, interpolation or calibration (a calibration is checked
+            against the joints' limits before any sample: :meth:`Calibration.check_joints`).
 
     """
     if interpolation not in INTERPOLATIONS:
-        raise _bad(
-            f"interpolation {interpolation!r} unknown; {choices(INTERPOLATIONS)}",
-            "interpolation",
-            interpolation,
-            INTERPOLATIONS,
-        )
+        msg = f"interpolation {interpolation!r} unknown; {choices(INTERPOLATIONS)}"
+        raise _bad(msg, "interpolation", interpolation, INTERPOLATIONS)
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
     t, q, qdot, names = _plan_arrays(plan, times, joint_names)
@@ -389,17 +342,16 @@ def timeline(
         cal = calibration
     else:
         cal = read_calibration(calibration)
-    cal.check_joints(names)
+    plim = _model_position_limits(plan, position_limit, len(names))
+    cal.check_joints(names, plim[0], plim[1])
     servos = [cal.servo(j) for j in names]
 
     samples = float(np.floor((t[-1] - t[0]) * rate * (1 + 1e-12))) + 1.0
     if not samples <= MAX_SAMPLES:  # bounded work: no allocation of an absurd size
-        raise ConfigurationError(
-            f"{samples:.3g} samples ({t[-1] - t[0]:.6g} s at {rate:g} Hz); allowed: at most "
-            f"{MAX_SAMPLES:g}: lower the rate or shorten the plan",
-            parameter="rate",
-            value=rate,
-            allowed=f"at most {MAX_SAMPLES:g} samples",
+        most = f"at most {MAX_SAMPLES:g}"
+        text = f"{samples:.3g} samples ({t[-1] - t[0]:.6g} s at {rate:g} Hz); allowed: {most}"
+        raise _malformed(
+            f"{text}: lower the rate or shorten the plan", "rate", rate, f"{most} samples"
         )
     n = int(samples)
     ts = t[0] + np.arange(n) / float(rate)
@@ -421,7 +373,6 @@ def timeline(
         vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
 
     vlim = _model_speed_limits(plan, velocity_limit, len(names))
-    plim = _model_position_limits(plan, position_limit, len(names))
     command = np.empty_like(qs)
     speed = np.empty_like(vs)
     q_sent = np.empty_like(qs)
@@ -433,14 +384,12 @@ def timeline(
         finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
         k = _first(~finite)
         if k is not None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
-            raise ConfigurationError(
+            text = (
                 f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
                 f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
-                "check the calibration's scale and resolution and the plan",
-                parameter=s.joint,
-                value=float(command[k, j]),
-                allowed="finite commands and speeds",
+                "check the calibration's scale and resolution and the plan"
             )
+            raise _malformed(text, s.joint, float(command[k, j]), "finite commands and speeds")
         k = _first((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
         if k is not None:
             lo, hi = float(plim[0, j]), float(plim[1, j])
@@ -473,6 +422,18 @@ def timeline(
         rate=float(rate),
         interpolation=interpolation,
     )
+
+
+#: What a malformed file's content raises while it is read (the package's own errors pass).
+_MALFORMED = (KeyError, ValueError, TypeError, IndexError, AttributeError)
+
+
+def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
+    """The error of a file that is not ``what``; the reader's and calibration's own as they are."""
+    if isinstance(exc, HexapodKinError):
+        return exc
+    why = f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}"
+    return SourceError(f"{kind}={str(p)!r}: not {what} ({why})", parameter=kind, value=str(p))
 
 
 def _from_commands(
@@ -524,15 +485,8 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
         if kind == "csv":
             return _read_csv(text, p)
         return _read_ros2(text, p)
-    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
-        if isinstance(exc, HexapodKinError):  # the reader's and the calibration's own errors
-            raise
-        raise SourceError(
-            f"timeline={str(p)!r}: not a hexapod-kin {kind} timeline ({type(exc).__name__}: "
-            f"{' '.join(str(exc).split())[:120]})",
-            parameter="timeline",
-            value=str(p),
-        ) from None
+    except _MALFORMED as exc:
+        raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
 
 
 def _csv(text: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
@@ -606,12 +560,6 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
             return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
         _, columns, data = _csv(text)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
-    except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
-        if isinstance(exc, HexapodKinError):  # the reader's own errors
-            raise
-        raise SourceError(
-            f"plan={str(p)!r}: not a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, "
-            f"joint_names) ({type(exc).__name__}: {' '.join(str(exc).split())[:120]})",
-            parameter="plan",
-            value=str(p),
-        ) from None
+    except _MALFORMED as exc:
+        what = "a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, joint_names)"
+        raise _not_a(exc, "plan", p, what) from None

@@ -1,23 +1,12 @@
 """Parameter tables → a parametric xacro document (``<xacro:macro>`` per leg family).
 
-The document defines a ``<xacro:property>`` for every dimension (Khalil table entries, joint
-limits, damping, masses, link radius, body size, mount placement), a macro per *leg family*
-(one distinct :class:`~hexapod_kin.params.Chain`; the six legs of the hexapod share one), and
-instantiates it: once for a single chain, once per leg for a robot. Expanded by the ``xacro``
-package it gives a URDF with the same frames, joints, limits, damping and inertials as
-:func:`hexapod_kin.urdf.to_urdf` (the tests compare both through the loader).
-
-Names inside a family macro: ``alpha<j> d<j> theta<j> r<j>`` for row ``j`` (1-based, as in
-the table), ``<joint>_lower/_upper/_velocity/_effort/_damping/_friction``, ``<link>_mass``
-(and ``<link>_cx .. _izz`` for links with a given inertial; default links are rods whose
-inertia follows their length), ``link_radius``, ``base_x .. base_yaw`` / ``tool_x .. tool_yaw``
-for a base or tool pose. Every parameter defaults to the global property of the same name
-(``name:=^``), so a call only passes ``prefix``, ``parent``, ``xyz`` and ``rpy``, and any
-dimension can be overridden for one instance. When a robot has legs of several families, the
-global properties are prefixed by the family name and every call passes them.
-
-The macro is generic (one joint per table row), so it also serves chains that are not legs
-(SCARA, the pendulum, any Chain): the "family" is then the chain itself.
+A ``<xacro:property>`` per dimension and a macro per distinct chain (the hexapod's six legs
+share one), instantiated once per leg; expanded it gives :func:`hexapod_kin.urdf.to_urdf`'s
+model. Macro parameters: ``alpha<j> d<j> theta<j> r<j>`` per row (1-based),
+``<joint>_lower/_upper/_velocity/_effort/_damping/_friction``, ``<link>_mass`` (``_cx .. _izz``
+for given inertials; else rods), ``link_radius``, ``base_x .. base_yaw``/``tool_x .. tool_yaw``;
+each defaults to the global property of its name (``name:=^``). With several families the
+globals are prefixed by the family and every call passes them.
 """
 
 from __future__ import annotations
@@ -40,99 +29,8 @@ __all__ = ["to_xacro", "write_xacro", "expand_xacro"]
 
 _NS = "http://www.ros.org/wiki/xacro"
 
-_HELPERS = """\
-  <!-- helper macros (hk_ = hexapod_kin) -->
-  <xacro:macro name="hk_khalil_origin" params="alpha d theta r">
-    <!-- Khalil row at q = 0: Rx(alpha) Tx(d) Rz(theta) Tz(r) as a URDF origin -->
-    <xacro:property name="hk_g" value="${hypot(cos(theta), cos(alpha)*sin(theta))}"/>
-    <xacro:if value="${hk_g >= 1e-12}">
-      <origin xyz="${d} ${-r*sin(alpha)} ${r*cos(alpha)}"
-              rpy="${atan2(sin(alpha)*cos(theta), cos(alpha))}
-                   ${atan2(-(sin(alpha)*sin(theta)), hk_g)}
-                   ${atan2(cos(alpha)*sin(theta), cos(theta))}"/>
-    </xacro:if>
-    <xacro:unless value="${hk_g >= 1e-12}">
-      <origin xyz="${d} ${-r*sin(alpha)} ${r*cos(alpha)}"
-              rpy="${atan2(sin(alpha), cos(alpha)*cos(theta))}
-                   ${atan2(-(sin(alpha)*sin(theta)), hk_g)} 0"/>
-    </xacro:unless>
-  </xacro:macro>
-  <xacro:macro name="hk_rod_inertial" params="mass radius vx vy vz">
-    <!-- solid rod from the frame origin to (vx, vy, vz); a sphere when that is a point -->
-    <xacro:property name="hk_l" value="${sqrt(vx**2 + vy**2 + vz**2)}"/>
-    <inertial>
-      <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}" rpy="0 0 0"/>
-      <mass value="${mass}"/>
-      <xacro:if value="${1e-9 > hk_l}">
-        <inertia ixx="${0.4*mass*radius**2}" ixy="0" ixz="0" iyy="${0.4*mass*radius**2}"
-                 iyz="0" izz="${0.4*mass*radius**2}"/>
-      </xacro:if>
-      <xacro:unless value="${1e-9 > hk_l}">
-        <xacro:property name="hk_a" value="${0.5*mass*radius**2}"/>
-        <xacro:property name="hk_t" value="${mass*(3*radius**2 + hk_l**2)/12.0}"/>
-        <xacro:property name="hk_ux" value="${vx/hk_l}"/>
-        <xacro:property name="hk_uy" value="${vy/hk_l}"/>
-        <xacro:property name="hk_uz" value="${vz/hk_l}"/>
-        <inertia ixx="${hk_t*(1.0 - hk_ux*hk_ux) + hk_a*(hk_ux*hk_ux)}"
-                 ixy="${hk_t*(0.0 - hk_ux*hk_uy) + hk_a*(hk_ux*hk_uy)}"
-                 ixz="${hk_t*(0.0 - hk_ux*hk_uz) + hk_a*(hk_ux*hk_uz)}"
-                 iyy="${hk_t*(1.0 - hk_uy*hk_uy) + hk_a*(hk_uy*hk_uy)}"
-                 iyz="${hk_t*(0.0 - hk_uy*hk_uz) + hk_a*(hk_uy*hk_uz)}"
-                 izz="${hk_t*(1.0 - hk_uz*hk_uz) + hk_a*(hk_uz*hk_uz)}"/>
-      </xacro:unless>
-    </inertial>
-  </xacro:macro>
-  <xacro:macro name="hk_segment" params="vx vy vz radius material">
-    <!-- cylinder from the frame origin to (vx, vy, vz): visual and (primitive) collision -->
-    <xacro:property name="hk_l" value="${sqrt(vx**2 + vy**2 + vz**2)}"/>
-    <xacro:if value="${hk_l > 1e-9}">
-      <visual>
-        <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}"
-                rpy="${atan2(-vy, hypot(vx, vz))} ${atan2(vx, vz)} 0"/>
-        <geometry><cylinder radius="${radius}" length="${hk_l}"/></geometry>
-        <material name="${material}"/>
-      </visual>
-      <collision>
-        <origin xyz="${0.5*vx} ${0.5*vy} ${0.5*vz}"
-                rpy="${atan2(-vy, hypot(vx, vz))} ${atan2(vx, vz)} 0"/>
-        <geometry><cylinder radius="${radius}" length="${hk_l}"/></geometry>
-      </collision>
-    </xacro:if>
-  </xacro:macro>
-  <xacro:macro name="hk_joint_marker" params="radius">
-    <visual>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><sphere radius="${1.4*radius}"/></geometry>
-      <material name="joint"/>
-    </visual>
-    <visual>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><cylinder radius="${0.8*radius}" length="${4.0*radius}"/></geometry>
-      <material name="joint"/>
-    </visual>
-  </xacro:macro>
-  <xacro:macro name="hk_ball" params="radius material">
-    <visual>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><sphere radius="${radius}"/></geometry>
-      <material name="${material}"/>
-    </visual>
-    <collision>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><sphere radius="${radius}"/></geometry>
-    </collision>
-  </xacro:macro>
-  <xacro:macro name="hk_box" params="x y z material">
-    <visual>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><box size="${x} ${y} ${z}"/></geometry>
-      <material name="${material}"/>
-    </visual>
-    <collision>
-      <origin xyz="0 0 0" rpy="0 0 0"/>
-      <geometry><box size="${x} ${y} ${z}"/></geometry>
-    </collision>
-  </xacro:macro>"""
+#: The helper macros (``hk_`` prefix) every document defines, one string per line.
+_HELPERS = Path(__file__).with_name("templates").joinpath("xacro_helpers.xml")
 
 
 @dataclass
@@ -381,7 +279,7 @@ def _chain_doc(chain: Chain, header: str | None) -> str:
     lines += _materials()
     lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
     lines += _properties(fam.params, notes=fam.notes)
-    lines += _HELPERS.splitlines()
+    lines += _HELPERS.read_text(encoding="utf-8").splitlines()
     lines += _macro_lines(fam, forward=True)
     lines.append(f'  <xacro:{fam.macro} prefix="" parent=""/>')
     lines.append("</robot>")
@@ -442,7 +340,7 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
         if not forward:
             lines.append("  " + comment(f"leg family {fam.macro}"))
         lines += _properties(fam.params, "" if forward else f"{fam.macro}_", fam.notes)
-    lines += _HELPERS.splitlines()
+    lines += _HELPERS.read_text(encoding="utf-8").splitlines()
     for fam in fams:
         lines += _macro_lines(fam, forward=forward)
     lines += [
@@ -480,16 +378,9 @@ def _intro() -> list[str]:
 
 
 def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) -> str:
-    """Return the xacro document of a chain or robot (deterministic: same input, same bytes).
+    """The ``.urdf.xacro`` text of a source with a parameter table (deterministic).
 
-    Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
-        leg: For a robot, emit only this leg with its mount on the body.
-        header: Extra header comment line (e.g. the command that made the file).
-
-    Returns:
-        The ``.urdf.xacro`` text.
+    ``leg``: a robot's one leg with its mount on the body; ``header``: an extra comment line.
 
     Raises:
         ParameterError: If ``source`` is of another type or ``leg`` does not fit.
@@ -502,11 +393,7 @@ def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) 
 
 
 def write_xacro(
-    source: Any,
-    path: str | os.PathLike[str],
-    *,
-    leg: str | None = None,
-    header: str | None = None,
+    source: Any, path: str | os.PathLike[str], *, leg: str | None = None, header: str | None = None
 ) -> Path:
     """Write :func:`to_xacro` of ``source`` to ``path`` atomically; return the path.
 
@@ -518,14 +405,7 @@ def write_xacro(
 
 
 def expand_xacro(text: str, mappings: dict[str, str] | None = None) -> str:
-    """Expand a xacro document with the ``xacro`` package (optional extra ``export``).
-
-    Args:
-        text: The xacro document.
-        mappings: ``xacro:arg`` values (``name → value``).
-
-    Returns:
-        The URDF text.
+    """The URDF of a xacro document, expanded by the ``xacro`` package (``mappings``: its args).
 
     Raises:
         OptionalDependencyError: If ``xacro`` is not installed.

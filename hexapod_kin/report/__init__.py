@@ -1,22 +1,9 @@
 """Reproduce the four lab reports: one command, one report, every result checked.
 
-In data-flow order:
-
-* ``seeds/`` — the four lab reports' texts, unchanged, shipped as package data (a wheel has
-  them; the report quotes them and links every claim to its lines);
-* ``claims.toml`` — the seeds' claims as data, each with its place (and lines) in the seed;
-* :mod:`.data` — :class:`Claim`, :class:`Verdict`, :func:`load_claims` (light);
-* :mod:`.compare` — parsing the seeds' expressions and the comparison rules (sympy, numpy);
-* :mod:`.replay` — the run cache: a run with the same source, claims, options and library
-  versions as an earlier successful build copies its files (light);
-* :mod:`.cache` — the disk cache of the printed derivations (``hexapod-kin derive``);
-* :mod:`.checks` — :class:`~.checks.Context` (hexapod_kin's values) and one check per claim kind;
-* :mod:`.figures` — the seed-like figures, the animations and their still frames;
-* :mod:`.html` — the page's pieces (matrices as tables, the no-WebGL fallback, the seed texts);
-* :mod:`.build` — :func:`reproduce`: Markdown + standalone HTML + ``verdicts.json``.
-
-Importing this package is light (no sympy, matplotlib, Pinocchio, numba, scipy or meshcat).
-``hexapod-kin reproduce --out DIR`` is the command line.
+``seeds/`` (the texts, package data) and ``claims.toml`` (their claims as data) feed
+:mod:`.data` (claims, verdicts), :mod:`.compare` (the rules), :mod:`.checks` (one check per
+kind), :mod:`.figures`, :mod:`.html` and :mod:`.build` (:func:`reproduce`); :mod:`.replay` and
+:mod:`.cache` are its caches. Importing it is light. Command line: ``hexapod-kin reproduce``.
 """
 
 from __future__ import annotations

@@ -1,19 +1,9 @@
-"""Build the report: run every comparison and experiment, write Markdown and standalone HTML.
+"""Build the report: every comparison and experiment, written as Markdown and standalone HTML.
 
-``reproduce(out)`` writes into ``out``:
-
-* ``report.md`` — the walk through the four seeds, figures linked from ``figures/``, every
-  claim linked to its lines of the seed texts copied to ``seeds/``;
-* ``report.html`` — the same, standalone (:mod:`.html`): matrices as tables with the differing
-  entries marked, figures as base64 PNG data URIs, each animation as its still frame with a
-  button that starts it (``<iframe srcdoc>``; without WebGL the page says so and keeps the
-  still frame), the seed texts with one anchor per line; it opens offline from ``file://``.
-  The animations also sit beside it as ``step.html`` and ``walk.html``;
-* ``verdicts.json`` — every verdict (:meth:`Verdict.to_dict`).
-
-With ``cache=True`` a run whose inputs are those of an earlier successful build replays it
-(:mod:`.replay`): its files are copied and only ``verdicts.json`` is written anew. Nothing
-heavy is imported at module level: a replay stays light.
+``reproduce(out)`` writes ``report.md`` (figures in ``figures/``, claims linked to the seed
+texts copied to ``seeds/``), ``report.html`` (standalone, offline: :mod:`.html`), the
+animations ``step.html``/``walk.html`` and ``verdicts.json``. A run with the inputs of an
+earlier build replays it (:mod:`.replay`). Nothing heavy is imported at module level.
 """
 
 from __future__ import annotations
@@ -157,15 +147,9 @@ def reproduce(
 ) -> Report:
     """Redo every result of the four seeds, compare, and write the report into ``out``.
 
-    Args:
-        out: Report folder (created).
-        quick: Reduced sizes (shorter runs, coarser scans) for tests.
-        animations: Write the step and walk animations (needs the ``viewer`` extra).
-        cache: Replay an earlier build with the same inputs (:mod:`.replay`); ``False``
-            computes everything again (and stores the result for the next run).
-
-    Returns:
-        The :class:`Report` (``replayed_from`` tells whether it was replayed).
+    ``quick``: reduced sizes; ``animations``: the step and walk animations (the ``viewer``
+    extra); ``cache``: replay an earlier build with the same inputs (:mod:`.replay`), else
+    compute again (and store). The :class:`Report` says whether it was replayed.
 
     Raises:
         ParameterError: A file of ``out`` cannot be written.

@@ -1,15 +1,8 @@
-"""The printed derivations: the disk cache of their text, and their layout for the report.
+"""The printed derivations: their text cached on disk, and their layout for the report.
 
-The text (``sympy.pretty`` of every matrix, for ``hexapod-kin derive``) takes a while: it is
-cached on disk. The report lays the matrices out as tables instead
-(:func:`derivation_layout`: ``sympy.sstr`` per entry, fast, not cached).
-
-One sealed entry per derivation (:mod:`hexapod_kin._cache`, kind ``"report"``), keyed by
-every field of the derivation but its timing (sympy objects by ``srepr``), the package and
-sympy versions, :data:`FORMAT` and the package's source (:func:`.replay.package_digest`). A
-missing entry is printed and written quietly; a damaged, edited or foreign one is printed
-again and rewritten with one :class:`~hexapod_kin.exceptions.CacheWarning`. The text is only
-ever printed, never evaluated.
+The text (``sympy.pretty``) is one sealed entry of :mod:`hexapod_kin._cache` per derivation,
+keyed by its fields (``srepr``) but timing, the versions, :data:`FORMAT` and the package's
+source; a damaged entry is printed again with one ``CacheWarning``. Text is never evaluated.
 """
 
 from __future__ import annotations

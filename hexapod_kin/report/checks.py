@@ -1,22 +1,7 @@
-"""One check per claim kind, the :class:`Context` holding hexapod_kin's values, :func:`evaluate`.
+"""One check per claim kind (:data:`CHECKS`), the :class:`Context` of hexapod_kin's values.
 
-Each claim of ``claims.toml`` is compared with hexapod_kin's own value (rules and tolerances
-in :mod:`.compare`); no verdict is written by hand:
-
-* ``table`` — the seed's Khalil rows against the preset's (lengths × the claim's ``unit``); a
-  different α is reported with what it does to the FK (checked symbolically);
-* ``matrix`` — ``^{j-1}T_j``, ``^0T_j``, ``p``, ``J`` against
-  :func:`hexapod_kin.symbolic.derive`, entry by entry; a wrong matrix is also tried against
-  the other α2 sign, the product of the seed's own factors and the derivative of the seed's
-  own ``p``, to say where the slip comes from;
-* ``det`` — the seed's det J against hexapod_kin's (and its opposite);
-* ``families`` — points on every true family must zero a seed residual (else *missing*),
-  points on every seed set must zero det J (else *not singular*);
-* ``generic`` — against :func:`hexapod_kin.symbolic.khalil_matrix`; ``methods_equal`` —
-  :attr:`Derivation.methods_agree`;
-* ``fk`` / ``ik`` / ``schedule`` — numbers against the Pinocchio model and
-  :func:`hexapod_kin.ik.analytic`, the seed's IK formulas evaluated as written;
-* ``bound`` — a measured quantity of an experiment (``step.*``, ``pendulum.*``) within ``tol``.
+Every claim is compared with hexapod_kin's own value (rules in :mod:`.compare`); no verdict is
+written by hand. Each ``_check_<kind>`` says what it compares.
 """
 
 from __future__ import annotations
@@ -444,24 +429,16 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
     (i, seed_a, ours_a), *_ = alpha_rows
     p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
     mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
-    fk = (
-        (
+    if not mirror:
+        fk = f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}"
+    else:
+        fk = (
             f"with α{i} = {seed_a:+g}° the foot is (x, y, −z) of the α{i} = {ours_a:+g}° leg "
             f"(checked symbolically: {mirror}): p_z = {fmt(p_plus[2])}, a positive knee "
             f"angle lifts the foot; the lengths agree"
         )
-        if mirror
-        else (f"α{i} = {seed_a:+g}° vs {ours_a:+g}° changes the FK to p = {fmt_matrix(p_plus.T)}")
-    )
-    return _verdict(
-        c,
-        claimed,
-        computed,
-        "differs",
-        f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}",
-        method,
-        cells,
-    )
+    why = f"row {i}: α = {seed_a:+g}° vs hexabot_leg's {ours_a:+g}° (seeds 000/001) — {fk}"
+    return _verdict(c, claimed, computed, "differs", why, method, cells)
 
 
 def _check_generic(c: Claim, ctx: Context) -> Verdict:
@@ -624,19 +601,12 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     if n_bad == 0:
         return _verdict(c, claimed, computed, "agrees", "", method)
     t, j = float(s["t"][worst[0]]), int(worst[1])
-    return _verdict(
-        c,
-        claimed,
-        computed,
-        "wrong",
-        (
-            f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of "
-            f"{len(s['t'])} samples: "
-            f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
-            f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"
-        ),
-        method,
+    why = (
+        f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of {len(s['t'])} samples: "
+        f"at t = {t:g} s θ{j + 1} = {np.degrees(s['seed'][worst]):+.3f}° for an input of "
+        f"{np.degrees(s['q'][worst]):+.3f}° — acos loses the sign of the tibia angle"
     )
+    return _verdict(c, claimed, computed, "wrong", why, method)
 
 
 def _admissible(c: Claim, ctx: Context, val: float) -> str | None:

@@ -1,18 +1,16 @@
 """The report's comparison rules: the seeds' expressions parsed, screened numerically, proved.
 
-A symbolic entry agrees when it matches at :data:`POINTS` random points (:func:`screen`,
-relative tolerance :data:`RTOL`) and ``simplify(a − b) == 0``, decided exactly, cheapest first
-(:func:`_zero`): ``expand(expand_trig(a − b)) == 0``; else that expansion reduced modulo
-``sin(x)² + cos(x)² = 1`` for every angle ``x`` is 0 (:func:`_reduces_to_zero`); else
-``sympy.simplify(...) == 0``. A non-zero result of the first two only passes the question on.
-hexapod_kin's expressions are printed by :func:`tidy`.
+An entry agrees when it matches at :data:`POINTS` random points (:func:`screen`, :data:`RTOL`)
+and ``a − b`` is exactly 0, cheapest proof first (:func:`_zero`).
 """
 
 from __future__ import annotations
 
 import builtins
+import functools
 import hashlib
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from types import BuiltinFunctionType
@@ -80,10 +78,7 @@ def parse(text: Any) -> sp.Expr:
 
 @lru_cache(maxsize=1)
 def _globals() -> dict[str, Any]:
-    """The namespace ``parse_expr`` would build on every call, built once.
-
-    ``from sympy import *``, the builtin functions, ``max``/``min`` as ``Max``/``Min``.
-    """
+    """``parse_expr``'s namespace, built once: sympy, the builtins, ``max``/``min`` as Max/Min."""
     out: dict[str, Any] = {}
     exec("from sympy import *", out)  # noqa: S102 - sympy's own namespace, as parse_expr does
     out.update({k: v for k, v in vars(builtins).items() if isinstance(v, BuiltinFunctionType)})
@@ -135,11 +130,8 @@ _NUMPY = NUMPY_FUNCTIONS  # one table of sympy → numpy functions
 def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:
     """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
 
-    Each distinct sub-expression is evaluated once (the entries of a kinematic matrix share
-    most of theirs), without generating code as ``sympy.lambdify`` does. Numbers, π and ``E``,
-    symbols, sums, products,
-    powers and ``sin cos tan exp log Abs asin acos atan atan2`` only; anything else (an
-    imaginary unit, another function) raises :class:`_Unsupported`.
+    Each distinct sub-expression once, no code generated, for numbers, symbols, ``+ * **`` and
+    :data:`NUMPY_FUNCTIONS`; anything else by ``sympy.lambdify``.
     """
     memo: dict[Any, Any] = {}
     points = len(next(iter(env.values()))) if env else POINTS
@@ -155,16 +147,8 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
             v = env[e]
         elif (e.is_Number or e.is_NumberSymbol) and e.is_extended_real:
             v = float(e)
-        elif e.is_Add:
-            args = [ev(x) for x in e.args]
-            v = args[0]
-            for x in args[1:]:
-                v = v + x
-        elif e.is_Mul:
-            args = [ev(x) for x in e.args]
-            v = args[0]
-            for x in args[1:]:
-                v = v * x
+        elif e.is_Add or e.is_Mul:  # left to right, as written
+            v = functools.reduce(operator.add if e.is_Add else operator.mul, map(ev, e.args))
         elif e.is_Pow:
             base, exp = ev(e.base), e.exp
             if exp.is_Integer:
@@ -181,28 +165,22 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
         return v
 
     out = np.empty((len(exprs), points), dtype=complex)
-    for k, e in enumerate(exprs):
-        out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
+    try:
+        for k, e in enumerate(exprs):
+            out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
+    except _Unsupported:  # sympy.lambdify for what the rules above do not know
+        syms = sorted(env, key=str)
+        raw = sp.lambdify(syms, list(exprs), modules="numpy")(*[env[s] for s in syms])
+        return np.array([np.broadcast_to(np.asarray(v, dtype=complex), (points,)) for v in raw])
     return out
 
 
 def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarray, np.ndarray]:
     """Numeric screening of entry pairs: ``(a == b, a == −b)`` at :data:`POINTS` random points.
 
-    Every expression is evaluated (numpy, float64: :func:`_evaluate`, or ``sympy.lambdify``
-    for what it does not know) at the same :data:`POINTS` points, seeded by ``key``: joint
-    angles, ``theta`` and ``alpha`` uniform in
-    [−π, π] rad, every other symbol (a length) uniform in [0.5, 2]. A pair agrees when
-    ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (a NaN or complex value never agrees).
-
-    Args:
-        a: Expressions (a flat sequence, e.g. a matrix in row-major order).
-        b: Expressions, as many as ``a``.
-        key: Seed text of the points.
-
-    Returns:
-        Two boolean arrays of ``len(a)``: equal, and equal with the opposite sign.
-
+    Points seeded by ``key``: angles uniform in [−π, π] rad, lengths in [0.5, 2]. A pair agrees
+    when ``|a − b| ≤ RTOL·(1 + |a| + |b|)`` at every point (NaN or complex never agrees).
+    Returns two boolean arrays of ``len(a)``.
     """
     ea, eb = [plain(x) for x in a], [plain(x) for x in b]
     syms: set[sp.Symbol] = set()
@@ -213,12 +191,7 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     pts = [_point(ordered, rng) for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
     with np.errstate(all="ignore"):
-        try:
-            vals = _evaluate(ea + eb, dict(zip(ordered, args)))
-        except _Unsupported:
-            raw = sp.lambdify(ordered, ea + eb, modules="numpy")(*args)
-            vals = np.array([np.broadcast_to(np.asarray(v, dtype=complex), (POINTS,)) for v in raw])
-    vals = vals.reshape(2, len(ea), POINTS)
+        vals = _evaluate(ea + eb, dict(zip(ordered, args))).reshape(2, len(ea), POINTS)
     real = np.all(np.isfinite(vals) & (vals.imag == 0), axis=(0, 2))
     va, vb = vals.real
     tol = RTOL * (1.0 + np.abs(va) + np.abs(vb))
@@ -250,15 +223,9 @@ _HOLLOW = Transform(lambda x: sp.Mul(*x.args), _hollow)
 def tidy(expr: Any) -> Any:
     """``expr`` as printed in a verdict: common factors out, the sign in front (exactly equal).
 
-    The non-trigonometric steps of ``sympy.simplify`` in its order — ``signsimp``,
-    ``factor_terms(sign=False)``, a lone number no longer held in front of a sum, the minus
-    sign taken out of a quotient, the original kept when the result is 1.7 times as long
-    (``count_ops``) — without its trigonometric search (``trigsimp``/``futrig``, most of its
-    time): hexapod_kin's entries are already folded by :func:`hexapod_kin.symbolic.derive`
-    (``cos(q2 + q3)``, not ``c2 c3 − s2 s3``), so on them it prints what ``simplify`` prints;
-    an expression with a power of ``sin`` or ``cos`` (``sin² + cos²`` may fold) is handed to
-    ``simplify`` itself; other unfolded input may print in a longer, equal form. Every step
-    is an identity. Used only to print; no verdict depends on it.
+    ``sympy.simplify``'s non-trigonometric steps in its order (``signsimp``, ``factor_terms``,
+    a lone number released from a sum, the sign out of a quotient, the original kept when 1.7
+    times shorter); a power of ``sin``/``cos`` goes to ``simplify`` itself. Print only.
     """
     expr = sp.sympify(expr)
     if not expr.args:
@@ -277,12 +244,9 @@ def tidy(expr: Any) -> Any:
 def _reduces_to_zero(poly: Any) -> bool:
     """True when ``poly`` is 0 modulo ``sin(x)² + cos(x)² = 1`` for every angle ``x`` in it.
 
-    ``poly`` is an expanded expression whose ``sin``/``cos`` have plain symbols as
-    arguments (``expand_trig`` done). With ``s = sin x``, ``c = cos x`` it is a polynomial;
-    its remainder by ``s² + c² − 1`` in ``s``, taken for each angle in turn, is 0 only if
-    ``poly`` is a combination of those relations: then it vanishes for every real value of
-    the symbols (a proof; a non-zero remainder proves nothing here). Anything else
-    (``sin(q/2)``, ``tan``, a non-polynomial term) gives False.
+    ``poly``: expanded, ``sin``/``cos`` of plain symbols. Its remainder by ``s² + c² − 1`` in
+    ``s = sin x``, angle by angle, is 0 only for a combination of those relations (a proof; a
+    non-zero remainder proves nothing). Anything else gives False.
     """
     trig = poly.atoms(sp.sin, sp.cos)
     if not trig or any(not f.args[0].is_Symbol for f in trig):
@@ -325,10 +289,9 @@ def equal(a: Any, b: Any, key: str = "") -> bool:
 
 
 def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -> Any:
-    """``det`` factored the way :func:`~hexapod_kin.symbolic.derive` factors det J.
+    """``det`` factored as :func:`~hexapod_kin.symbolic.derive` factors det J (checked equal).
 
-    :func:`~hexapod_kin.symbolic.core.trig_factor` (exact, joints ``q`` of kinds ``sigmas``),
-    then ``sympy.factor``, checked equal to ``det`` (:func:`equal`); else
+    ``trig_factor`` over the joints ``q`` of kinds ``sigmas`` then ``factor``; else
     ``factor(simplify(det))``.
     """
     from ..symbolic.core import trig_factor
@@ -358,9 +321,7 @@ def fmt_matrix(m: sp.Matrix) -> str:
 def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = True) -> list[str]:
     """Differing entries of two same-shape matrices, 1-based, with a sign-slip note.
 
-    An entry agrees when it passes the numeric screening and ``simplify(a − b) == 0``; sympy
-    simplifies only the entries that differ (their explanation). With ``explain=False`` the
-    list holds one empty string per differing entry (only the count is wanted).
+    ``explain=False``: one empty string per differing entry (only the count is wanted).
     """
     a, b = [plain(x) for x in seed], [plain(x) for x in truth]
     same, opposite = screen(a, b, key)
@@ -384,21 +345,12 @@ def parse_matrix(rows: Any) -> sp.Matrix:
 
 # ---------------------------------------------------------------------- family sampling
 def values(expr: Any, qs: np.ndarray) -> np.ndarray:
-    """A real expression of the joints ``q1 … q4`` (numbers for lengths) at each row of ``qs``.
-
-    numpy float64 (:func:`_evaluate`, or ``sympy.lambdify`` for what it does not know); an
-    imaginary value becomes NaN.
-    """
+    """A real expression of ``q1 … q4`` at each row of ``qs`` (an imaginary value is NaN)."""
     expr = plain(expr)
     qs = np.atleast_2d(np.asarray(qs, dtype=float))
     env = {s: qs[:, k] for k, s in enumerate(Q[: qs.shape[1]])}
     with np.errstate(all="ignore"):
-        try:
-            v = _evaluate([expr], env)[0]
-        except _Unsupported:
-            args = sorted(env, key=str)
-            raw = sp.lambdify(args, expr, modules="numpy")(*[env[s] for s in args])
-            v = np.broadcast_to(np.asarray(raw, dtype=complex), (qs.shape[0],))
+        v = _evaluate([expr], env)[0]
     return np.where(v.imag == 0, v.real, np.nan)
 
 
@@ -407,9 +359,8 @@ def points_on(
 ) -> np.ndarray:
     """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (numbers for lengths).
 
-    Random values for every joint but the last one ``expr`` depends on, which is a root on
-    ``[−π, π]`` (:func:`hexapod_kin.symbolic.core.single_joint_roots`) picked at random;
-    ``fixed`` pins joints (0-based) to values.
+    Random joints, the last one ``expr`` depends on a random root in [−π, π]; ``fixed`` pins
+    joints (0-based).
     """
     from ..symbolic.core import single_joint_roots
 

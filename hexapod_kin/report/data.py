@@ -15,11 +15,7 @@ __all__ = ["CLAIMS_FILE", "SEEDS_DIR", "STATUSES", "Claim", "Verdict", "load_cla
 
 #: The claims shipped with the package.
 CLAIMS_FILE = Path(__file__).with_name("claims.toml")
-#: The statuses of a computed verdict: ``"agrees"``; ``"wrong"`` (the seed is wrong for every
-#: value it leaves open); ``"underdetermined"`` (false with hexapod_kin's stand-in values but true
-#: for an admissible value of something the seed does not give: the claim's ``unstated``);
-#: ``"differs"`` (a different but consistent convention); ``"error"`` (the comparison could not
-#: run, a bug).
+#: The statuses of a computed verdict (their meaning: :data:`~.html.LEGEND`).
 STATUSES = ("agrees", "wrong", "underdetermined", "differs", "error")
 #: Where the seeds' texts are shipped (package data: a wheel has them).
 SEEDS_DIR = Path(__file__).with_name("seeds")
@@ -59,9 +55,7 @@ class Verdict:
         kind: The claim's kind.
         claimed: The seed's value, as text.
         computed: hexapod_kin's value, as text.
-        status: One of :data:`STATUSES` (``"wrong"``: the seed is wrong; ``"underdetermined"``:
-            the seed leaves a value open that decides it; ``"differs"``: a different but
-            consistent convention).
+        status: One of :data:`STATUSES`.
         reason: The computed reason (empty when it agrees).
         method: How it was compared, with the tolerance.
         cells: For a matrix or table: JSON text ``{"seed": rows, "ours": rows, "differ":
@@ -86,19 +80,15 @@ class Verdict:
 
     @property
     def text(self) -> str:
-        """The verdict as a sentence: ``agrees`` or ``<label>: <reason>``.
-
-        Labels: ``seed is wrong``, ``underdetermined``, ``differs``, ``not computed``.
-        """
+        """The verdict as a sentence: ``agrees`` or ``<label>: <reason>``."""
         if self.status == "agrees":
             return "agrees"
-        if self.status == "wrong":
-            return f"seed is wrong: {self.reason}"
-        if self.status == "differs":
-            return f"differs: {self.reason}"
-        if self.status == "underdetermined":
-            return f"underdetermined: {self.reason}"
-        return f"not computed: {self.reason}"
+        label = {
+            "wrong": "seed is wrong",
+            "differs": "differs",
+            "underdetermined": "underdetermined",
+        }
+        return f"{label.get(self.status, 'not computed')}: {self.reason}"
 
     def fields(self) -> dict[str, str]:
         """Every field by name (what :meth:`from_fields` reads back)."""

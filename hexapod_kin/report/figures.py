@@ -17,6 +17,7 @@ __all__ = [
     "heat_maps",
     "leg2_figure",
     "pendulum_figure",
+    "plot_pendulum",
     "step_animation",
     "step_figure",
     "step_still",
@@ -120,11 +121,19 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
 
 
 def pendulum_figure(ctx: Any, out: Path) -> Path:
-    """Seed 001 Figs. 5-8: rotation (and angular velocity) of the link, undamped and damped."""
+    """Seed 001 Figs. 5-8 of the report's pendulum (:func:`plot_pendulum`)."""
+    return plot_pendulum(ctx.pendulum, out / "pendulum.png")
+
+
+def plot_pendulum(experiment: Any, path: Any) -> Path:
+    """Seed 001 Figs. 5-8: angle [rad] and angular velocity [rad/s] vs time, undamped and damped.
+
+    ``experiment``: :func:`hexapod_kin.dynamics.pendulum_experiment`'s result.
+    """
     from ..plots import decimate, pyplot, save_figure
 
     plt = pyplot()
-    p = ctx.pendulum
+    p = experiment
     margins = {"left": 0.071, "right": 0.986, "bottom": 0.084, "top": 0.902}
     fig, axes = plt.subplots(2, 2, figsize=(11, 7), sharex=True, gridspec_kw=margins)
     for col, (run, name) in enumerate(
@@ -146,7 +155,7 @@ def pendulum_figure(ctx: Any, out: Path) -> Path:
         f"exact {u.period_exact:.6f} s"
     )
     fig.subplots_adjust(wspace=0.169, hspace=0.155)
-    return save_figure(fig, out / "pendulum.png", crop=False)
+    return save_figure(fig, path, crop=False)
 
 
 def _walk_png(run: Any, path: Path) -> Path:

@@ -1,16 +1,4 @@
-"""The report's pieces of HTML (the page itself is :func:`hexapod_kin._page.page`).
-
-Text is escaped by the package's one rule (:func:`hexapod_kin._page.escape`); the pieces:
-
-* :func:`inline` — the report's prose: Markdown code spans and bold become ``<code>`` and
-  ``<b>`` (no Markdown reaches the page);
-* :func:`matrix_pair` — a matrix or table verdict laid out as two HTML tables (the seed's,
-  hexapod_kin's), the differing entries highlighted in both;
-* :func:`animation` — an animation (``<iframe srcdoc>``) with its still frame: a script in the
-  page tests WebGL and, without it, says so and shows the still frame instead;
-* :func:`seed_texts` — the shipped seed texts, one anchor per line (``#seed-000-L65``), which
-  every claim links to.
-"""
+"""The report's pieces of HTML (the page is :func:`hexapod_kin._page.page`; one escaping rule)."""
 
 from __future__ import annotations
 
@@ -63,51 +51,10 @@ LEGEND: tuple[tuple[str, str, str], ...] = (
     ("error", "NOT COMPUTED", "the comparison failed to run (a bug in hexapod_kin)."),
 )
 
-CSS = """body{font-family:sans-serif;max-width:1150px;margin:auto;padding:1em;line-height:1.4}
-code,pre{font-size:12px}pre{overflow-x:auto;background:#f6f6f6;padding:.5em}
-table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px}
-.agrees{color:#17692b}.wrong{color:#b00020}.differs{color:#8a5a00}.underdetermined{color:#1f4e9e}
-.error{color:#fff;background:#b00020}
-.item{border-left:4px solid #ddd;padding-left:.7em;margin:1em 0}img{max-width:100%}
-.mats{display:flex;flex-wrap:wrap;gap:1.2em;align-items:flex-start;margin:.4em 0}
-.mats figure{margin:0}.mats figcaption{font-size:12px;color:#555;margin-bottom:2px}
-table.mat{border-left:2px solid #333;border-right:2px solid #333;font-family:monospace}
-table.mat td{border:none;padding:2px 9px;text-align:center;white-space:nowrap}
-table.mat th{border:none;border-bottom:1px solid #999;font-weight:normal;color:#555}
-table.mat td.diff{background:#ffd7d7;outline:1px solid #b00020}
-table.kv td:first-child{color:#444}table.kv td.num{text-align:right;font-family:monospace}
-.anim iframe{width:100%;height:520px;border:1px solid #ccc}
-.anim .nogl{display:none}.anim.nogl-on .nogl{display:block}.anim.nogl-on .gl{display:none}
-.anim.playing .still{display:none}.anim .still{display:block;max-width:760px}
-.nogl{background:#fff4d6;border:1px solid #c9a227;padding:.4em .7em}
-pre.seed{white-space:pre-wrap;line-height:1.3;background:#fafafa}
-pre.seed span{display:block;padding-left:4.5em;text-indent:-4.5em}
-pre.seed span.cited{background:#eef4ff}pre.seed span:target{background:#ffe58a}
-pre.seed a.ln{color:#999;text-decoration:none;display:inline-block;width:4em;text-indent:0}
-dl.legend dt{font-weight:bold;float:left;clear:left;width:10em}dl.legend dd{margin-left:10.5em}"""
-
-#: Opens the ``<details>`` around a linked seed line; flags animations when WebGL is missing.
-SCRIPT = """<script>
-(function(){
-  function webgl(){try{var c=document.createElement('canvas');
-    return !!(window.WebGLRenderingContext&&
-      (c.getContext('webgl')||c.getContext('experimental-webgl')));
-  }catch(err){return false;}}
-  var gl=webgl();
-  document.documentElement.setAttribute('data-webgl',gl?'yes':'no');
-  document.querySelectorAll('.anim').forEach(function(a){
-    if(!gl){a.classList.add('nogl-on');return;}
-    var b=a.querySelector('button.play'),t=a.querySelector('template');
-    b.addEventListener('click',function(){
-      a.appendChild(t.content.cloneNode(true));a.classList.add('playing');b.disabled=true;});
-  });
-  function reveal(){var id=decodeURIComponent(location.hash.slice(1));if(!id)return;
-    var t=document.getElementById(id);if(!t)return;
-    for(var p=t.parentElement;p;p=p.parentElement){if(p.tagName==='DETAILS'){p.open=true;}}
-    t.scrollIntoView();}
-  window.addEventListener('hashchange',reveal);reveal();
-})();
-</script>"""
+#: The page's style and script (package data): the script opens the ``<details>`` around a
+#: linked seed line and flags animations when WebGL is missing.
+CSS = Path(__file__).with_name("report.css").read_text(encoding="utf-8").removesuffix("\n")
+SCRIPT = Path(__file__).with_name("report.js").read_text(encoding="utf-8").removesuffix("\n")
 
 _CODE = re.compile(r"`([^`]+)`")
 _BOLD = re.compile(r"\*\*(.+?)\*\*")
@@ -240,17 +187,9 @@ def image(path: Path, alt: str | None = None, cls: str = "") -> str:
 
 
 def animation(page: Path, still: Path | None, when: str) -> str:
-    """An animation as its still frame with a play button (or the no-WebGL message).
+    """The animation ``page`` (inert in a ``<template>`` until its button) over its ``still``.
 
-    The page (embedded as ``srcdoc`` inside a ``<template>``, inert until asked) is started
-    by the button: a report with two WebGL animations running from the start keeps a slow
-    machine busy. :data:`SCRIPT` swaps the button for the message where WebGL is missing.
-
-    Args:
-        page: The self-contained animation page.
-        still: A PNG of the same scene (matplotlib), or None.
-        when: What the still frame shows (e.g. ``"t = 1.00 s"``).
-
+    ``when`` says what the still frame shows; without WebGL :data:`SCRIPT` shows a message.
     """
     link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
     msg = (
@@ -279,13 +218,9 @@ def line_anchor(seed: str, line: int) -> str:
 def seed_texts(
     seeds: dict[str, str], texts: dict[str, str], cited: dict[str, dict[int, list[str]]]
 ) -> str:
-    """Every shipped seed text, one anchored line per line; cited passages marked.
+    """Every seed text (by key, titled by ``seeds``), one anchor per line, ``cited`` lines marked.
 
-    Args:
-        seeds: Seed key → title (``claims.toml``'s ``[seeds]``).
-        texts: Seed key → its text.
-        cited: Seed key → line → ids of the claims whose passage starts or runs there.
-
+    ``cited``: seed key → line → the claims whose passage starts (an id) or runs (``""``) there.
     """
     h = []
     for key, title in seeds.items():

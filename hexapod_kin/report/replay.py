@@ -1,26 +1,14 @@
 """Replay of whole reports: a second ``reproduce`` with the same inputs copies the first's files.
 
-The report is a deterministic function of its inputs (:func:`key_parts`, hashed by
-:func:`run_key`): the package's Python source (:func:`package_digest`), the bytes of
-``claims.toml`` and of the shipped seed texts, the options (``quick``, ``animations``), the
-installed versions of Python, hexapod_kin and :data:`DISTRIBUTIONS` (read from their
-metadata, never imported) and the platform. An entry is the folder
-``_cache.folder("report")/runs/<key>/``: ``files/`` holds every file the build wrote into the
-report folder but ``verdicts.json`` (rewritten by a replay: it names the folder and the run's
-time), ``manifest.json`` each file's SHA-256 and size, the
-build's verdicts, facts and wall time, sealed by the package's keyed seal of all of it
-(:func:`seal`, :mod:`hexapod_kin._cache`: a file's
-name, size and hash, the verdicts and facts are bound together, so files swapped together with
-their manifest lines, or an edited count, break it). The manifest is written last (removed
-first when an entry is rewritten), and a replay checks it before copying any file
-(:func:`lookup`): the seal, every file's size and hash, the verdicts against the rows of
-``report.md``, and every PNG against the copy inlined in ``report.html`` under its name. A
-missing entry is no entry; a damaged, edited or foreign one is no entry with one
-:class:`~hexapod_kin.exceptions.CacheWarning` (the report is built again and the entry
-rewritten). Nothing of an entry is ever run: its files are copied as bytes, only to paths
-inside the report folder. Only builds without an ``"error"`` verdict and with
-every animation written are stored; the :data:`KEEP` most recently used entries are kept.
-Light: a replay imports neither sympy, matplotlib, Pinocchio nor numba.
+The key (:func:`key_parts`, :func:`run_key`): the package's source, ``claims.toml``, the seed
+texts, the options, the installed versions (from metadata, never imported) and the platform.
+An entry ``_cache.folder("report")/runs/<key>/`` holds ``files/`` (all the build wrote but
+``verdicts.json``) and ``manifest.json`` (each file's SHA-256 and size, the verdicts, facts and
+wall time) under the package's keyed seal (:func:`seal`), written last. :func:`lookup` checks
+the seal, every file, the verdicts against ``report.md`` and every PNG against ``report.html``
+before copying anything; a damaged entry is no entry, with one
+:class:`~hexapod_kin.exceptions.CacheWarning`. Files are copied as bytes, never run, only inside
+the report folder. Only complete builds are stored; :data:`KEEP` entries are kept. Light.
 """
 
 from __future__ import annotations
@@ -80,9 +68,14 @@ def runs_dir() -> Path:
 
 def source_digest() -> str:
     """SHA-256 of the package's Python source (every ``.py`` file of ``hexapod_kin``), read now."""
+    return _digest(_PACKAGE, _PACKAGE.rglob("*.py"))
+
+
+def _digest(root: Path, files: Any) -> str:
+    """SHA-256 of ``files`` (their paths relative to ``root`` and bytes), in sorted order."""
     h = hashlib.sha256()
-    for f in sorted(_PACKAGE.rglob("*.py")):
-        h.update(str(f.relative_to(_PACKAGE)).encode())
+    for f in sorted(files):
+        h.update(str(f.relative_to(root)).encode())
         h.update(f.read_bytes())
     return h.hexdigest()
 
@@ -112,12 +105,7 @@ def versions() -> dict[str, str]:
 
 
 def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> dict[str, Any]:
-    """Everything a report depends on, as JSON-ready data.
-
-    Args:
-        quick: The ``quick`` option of :func:`~hexapod_kin.report.reproduce`.
-        animations: Its ``animations`` option.
-        digest: The source digest (default :func:`package_digest`).
+    """Everything a report of these options depends on, JSON-ready (``digest``: the source's).
 
     Raises:
         OSError: The package's source or ``claims.toml`` cannot be read.
@@ -127,20 +115,11 @@ def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> di
         "format": FORMAT,
         "code": digest if digest is not None else package_digest(),
         "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
-        "seeds": _seeds_digest(),
+        "seeds": _digest(SEEDS_DIR, SEEDS_DIR.glob("*.txt")),
         "options": {"quick": bool(quick), "animations": bool(animations)},
         "versions": versions(),
         "platform": f"{sys.platform}-{platform.machine()}",
     }
-
-
-def _seeds_digest() -> str:
-    """SHA-256 of the shipped seed texts (names and bytes): the report quotes them."""
-    h = hashlib.sha256()
-    for f in sorted(SEEDS_DIR.glob("*.txt")):
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()
 
 
 def run_key(parts: Mapping[str, Any]) -> str:
@@ -197,9 +176,7 @@ class _Damaged(ValueError):
 def lookup(key: str) -> Entry | None:
     """The complete entry of ``key`` with every file matching its manifest, else ``None``.
 
-    Nothing is raised. A missing entry (or one still being stored: no manifest yet) is
-    ``None``; a damaged, incomplete, edited or foreign one is ``None`` with one
-    :class:`~hexapod_kin.exceptions.CacheWarning` naming what is wrong.
+    Never raises; a damaged, edited or foreign entry also warns once (``CacheWarning``).
     """
     folder = runs_dir() / key
     try:
@@ -270,11 +247,7 @@ def _checked(key: str, folder: Path, text: str) -> Entry:
 
 
 def _shown(html: bytes, stem: str, png: bytes) -> bool:
-    """Whether ``report.html`` inlines ``png`` in an image named after ``stem``.
-
-    The report's images carry their file's stem as ``alt`` (a still frame: ``still frame of
-    <animation>``), so a figure is bound to its name as well as to its bytes.
-    """
+    """Whether ``report.html`` inlines ``png`` in an image whose ``alt`` names ``stem``."""
     at = html.find(b'src="data:image/png;base64,' + base64.b64encode(png) + b'"')
     if at < 0:
         return False
@@ -290,11 +263,7 @@ _LABEL = {"wrong": "seed is wrong"}
 
 
 def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -> bool:
-    """Whether the manifest's verdicts are the report's.
-
-    Each claim's row of ``report.md`` (a file checked by its SHA-256) must start its verdict
-    column with the manifest's status: an edited manifest (e.g. its counts) is no entry.
-    """
+    """Whether each claim's row of ``report.md`` starts its verdict with the manifest's status."""
     md = files.get("report.md")
     if md is None:
         return False
@@ -344,20 +313,11 @@ def save(
     record: Mapping[str, Any],
     keep: int = KEEP,
 ) -> Path | None:
-    """Keep a successful build's files under ``runs/<key>/``; the entry, or ``None``.
+    """Keep a successful build's ``files`` (written into ``out``) under ``runs/<key>/``.
 
-    Never raises: a cache that cannot be written is only slower (``None``); a record with an
-    ``"error"`` verdict is not kept.
-
-    Args:
-        key: :func:`run_key` of ``parts``.
-        parts: :func:`key_parts` of the build.
-        out: The report folder the build wrote.
-        files: The files it wrote there (but ``verdicts.json``).
-        record: The build's ``verdicts`` (each a dict of :class:`~.data.Verdict`'s fields),
-            ``facts``, ``summary``, ``counts`` and ``seconds``.
-        keep: Entries kept after this one is stored (:func:`prune`).
-
+    ``record``: the build's verdicts (:meth:`~.data.Verdict.fields`), facts, summary, counts
+    and seconds. Returns the entry's folder, or ``None`` (never raises; an ``"error"`` verdict
+    is not kept); then keeps ``keep`` entries (:func:`prune`).
     """
     folder = runs_dir() / key
     try:
@@ -394,10 +354,9 @@ def save(
 
 
 def prune(keep: int = KEEP) -> list[Path]:
-    """Remove all but the ``keep`` most recently used complete entries; the removed folders.
+    """Remove all but the ``keep`` most recently used entries; return the removed folders.
 
-    Entries without a manifest are left alone for an hour (another process may be storing
-    them), then removed. Never raises.
+    An entry without a manifest is removed after an hour (it may be being stored). Never raises.
     """
     removed: list[Path] = []
     try:
