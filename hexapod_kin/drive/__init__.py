@@ -79,6 +79,10 @@ class DriveSession:
         """The walk's pattern (see :meth:`Cockpit.set_pattern`)."""
         self.cockpit.set_pattern(name)
 
+    def reset(self) -> None:
+        """Back to home / standing (see :meth:`Cockpit.reset`)."""
+        self.cockpit.reset()
+
     def session(self) -> dict[str, Any]:
         """The recorded session (see :meth:`Cockpit.session`)."""
         return self.cockpit.session()

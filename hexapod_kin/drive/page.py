@@ -60,6 +60,7 @@ min margin while walking <span id="hk-minm"></span></div>
 <pre id="hk-status"></pre>
 FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
 <div id="hk-legged">margin <span id="hk-margin"></span> · CoM <span id="hk-com"></span></div>
+<button id="hk-reset">reset</button>
 <button id="hk-json">download session (JSON)</button>
 <button id="hk-csv">download timeline (CSV)</button>
 </div>
@@ -143,6 +144,10 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       el("hk-tab-" + k).className = "hk-tab" + (k === m ? " on" : "");
       el("hk-mode-" + k).className = k === m ? "on" : "";
     });
+    if (m === "target" && api.state && !el("hk-tx").value) {  // start from the foot
+      var p = api.state.readout.point;
+      ["hk-tx", "hk-ty", "hk-tz"].forEach(function (id, i) { el(id).value = p[i].toFixed(4); });
+    }
   }
   // joint sliders
   var sliders = [];
@@ -231,6 +236,9 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     a.download = name; document.body.appendChild(a); a.click(); a.remove();
   }
   var wantDownload = null;
+  el("hk-reset").onclick = function () {
+    send({ type: "reset" }); body.forEach(function (b) { b[0].value = 0; });
+  };
   el("hk-json").onclick = function () { wantDownload = "json"; send({ type: "session" }); };
   el("hk-csv").onclick = function () { wantDownload = "csv"; send({ type: "session" }); };
   var fmt = function (a, n) { return a.map(function (x) { return x.toFixed(n); }).join(" "); };

@@ -63,6 +63,8 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
         cockpit.set_drive(msg["axes"])
     elif kind == "pattern":
         cockpit.set_pattern(str(msg["pattern"]))
+    elif kind == "reset":
+        cockpit.reset()
     elif kind == "session":
         return {"type": "session", "session": cockpit.session(), "csv": cockpit.timeline_csv()}
     elif kind == "ping":
@@ -70,7 +72,7 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
     else:
         raise KeyError(
             f"type={kind!r}: use one of 'joint', 'q', 'mode', 'foot', 'target', 'body', "
-            "'drive', 'pattern', 'session', 'ping'"
+            "'drive', 'pattern', 'reset', 'session', 'ping'"
         )
     return None
 

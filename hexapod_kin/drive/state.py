@@ -84,9 +84,6 @@ class Cockpit:
             if feet is not None:
                 raise
             self.not_legged = str(exc)
-        self.mode = "joints"
-        self.message = ""
-        self.status = "idle"
         self.target: np.ndarray | None = None
         self.time = 0.0
         self.record: list[tuple[float, list[float], list[float]]] = []
@@ -95,8 +92,6 @@ class Cockpit:
         self.margins: list[float] = []
         self._actual = np.zeros(3)
         if self.body is None:
-            self.q = np.asarray(model.check_q(self._home()), dtype=float)
-            self.base = np.eye(4)
             self.limbs = [Limb(model)]
             self.patterns: tuple[str, ...] = ()
             self.pattern = ""
@@ -109,25 +104,37 @@ class Cockpit:
                     f"the legged robot's joints {list(wb.joint_names)} are not the model's",
                     parameter="model",
                 ) from None
-            self.base = body_pose([0.0, 0.0, wb.body_height])
-            self.feet = self.base[:3, :3] @ wb.neutral_feet().T
-            self.feet = (self.feet + self.base[:3, 3:4]).T
-            ik = wb.body_ik(self.base, self.feet, strict=False)
-            self.qb = np.asarray(ik.q[0] if np.all(ik.ok) else wb.neutral_q(), dtype=float)
-            self.q = np.asarray(model.neutral(), dtype=float)
-            self.q[self._cols] = self.qb
-            self.feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
-            self.stand = self.base.copy()
             self.limbs = [Limb(None, wb, i) for i in range(wb.n_legs)]
             self.patterns = pattern_names(wb.n_legs)
             self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
             self.walker = Walker(wb)
         self.limb = 0
-        self.body_xyz = np.zeros(3)
-        self.body_rpy = np.zeros(3)
-        self.drive = (0.0, 0.0, 0.0)
         self.speed = (0.05, 0.05, 0.3) if self.body is not None else (0.0, 0.0, 0.0)
-        self._record()
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the home pose (a chain) or standing on flat ground at z = 0 (legs)."""
+        with self.lock:
+            self.mode, self.status, self.message, self.target = "joints", "idle", "", None
+            self.body_xyz = np.zeros(3)
+            self.body_rpy = np.zeros(3)
+            self.drive = (0.0, 0.0, 0.0)
+            if self.body is None:
+                self.q = np.asarray(self.model.check_q(self._home()), dtype=float)
+                self.base = np.eye(4)
+            else:
+                wb = self.body
+                self.walker.cycle = None
+                self.base = body_pose([0.0, 0.0, wb.body_height])
+                feet = (self.base[:3, :3] @ wb.neutral_feet().T + self.base[:3, 3:4]).T
+                ik = wb.body_ik(self.base, feet, strict=False)
+                self.qb = np.asarray(ik.q[0] if np.all(ik.ok) else wb.neutral_q(), dtype=float)
+                self.q = np.asarray(self.model.neutral(), dtype=float)
+                self.q[self._cols] = self.qb
+                self.feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
+                self.stand = self.base.copy()
+            self._event("reset")
+            self._record()
 
     def _home(self) -> np.ndarray:
         from ..gait.stand import default_configuration
@@ -437,7 +444,7 @@ class Cockpit:
         """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots)."""
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
-        stance = feet[:, 2] <= feet[:, 2].min() + 2e-3
+        stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
         if self.mode == "walk" and self.walker.cycle is not None:
             k = self.walker.sample()[2]
             stance = np.asarray(self.walker.cycle.run.support[k])
