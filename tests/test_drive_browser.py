@@ -199,7 +199,6 @@ def test_timing_fps_and_key_latency(browser, robot):
         time.sleep(3.0)
         fps = page.evaluate("hexapodKin.fps(2000)")
         page.evaluate("hexapodKin.setContinuous(false)")
-        page.click("#meshcat-pane")
         for _ in range(20):
             page.keyboard.down("w")
             _wait(page, "hexapodKin.state.readout.status === 'walking'")

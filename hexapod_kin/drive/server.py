@@ -109,6 +109,7 @@ class DriveServer:
         self._frame = frame
         self._sockets: set[Any] = set()
         self.pages_seen = 0
+        self._last = ""
         self.last_close = math.inf
         self._loop: Any = None
         self._error: BaseException | None = None
@@ -189,6 +190,7 @@ class DriveServer:
                 return None
 
             def open(self, *args: str, **kwargs: str) -> None:
+                owner._last = ""  # the new page gets the state at the next tick
                 owner._sockets.add(self)
                 owner.pages_seen += 1
                 owner.last_close = math.inf
@@ -222,7 +224,7 @@ class DriveServer:
                 finally:
                     last[0] = now
                 if self._sockets:
-                    self._broadcast(self._frame())
+                    self._push()
 
             clock = tornado.ioloop.PeriodicCallback(tick, TICK * 1000)
             clock.start()
@@ -257,6 +259,19 @@ class DriveServer:
             self._send(sock, {"type": "error", "id": ident, "error": text[:500]})
             return
         self._send(sock, reply or {"type": "ack", "id": ident})
+        self._push()  # a command is shown at once, not at the next tick
+
+    def _push(self) -> None:
+        """Send the state to every page when it changed since the last one sent."""
+        frame = self._frame()
+        key = json.dumps(
+            [frame.get("poses"), {k: v for k, v in frame.get("readout", {}).items() if k != "time"}],
+            default=_plain,
+        )
+        if key == self._last or not self._sockets:
+            return
+        self._last = key
+        self._broadcast(frame)
 
     def _send(self, sock: Any, msg: dict[str, Any]) -> None:
         with contextlib.suppress(Exception):
