@@ -16,7 +16,6 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -43,7 +42,9 @@ def _reachable(c: Cockpit) -> np.ndarray:
     """A target the selected limb reaches: FK of its joints moved by 0.15 rad (in limits)."""
     limb = c.limbs[c.limb]
     q = c._limb_q().copy()
-    q[limb.columns] = np.clip(q[limb.columns] + 0.15, limb.lower[limb.columns], limb.upper[limb.columns])
+    q[limb.columns] = np.clip(
+        q[limb.columns] + 0.15, limb.lower[limb.columns], limb.upper[limb.columns]
+    )
     return limb.point(q, c.base)
 
 
@@ -53,7 +54,7 @@ def test_joint_sets_fk_exactly(model):
     v = float(np.clip(0.37, model.lower[j], model.upper[j]))
     c.set_joint(model.joint_names[j], v)
     q_ref = np.asarray(model.neutral(), dtype=float) if c.legged else c._home()
-    np.testing.assert_array_equal(np.delete(c.q, j)[: 0], np.delete(q_ref, j)[:0])
+    np.testing.assert_array_equal(np.delete(c.q, j)[:0], np.delete(q_ref, j)[:0])
     np.testing.assert_allclose(c.readout()["fk"], model.fk(c.q), atol=1e-12, rtol=0)
     assert c.q[j] == v
     with pytest.raises(ParameterError, match="limits"):
@@ -228,7 +229,10 @@ def test_server_hygiene():
             for addr in others:
                 assert sock.connect_ex((addr, port)) != 0
         ws = f"ws://127.0.0.1:{port}/ws"
-        with pytest.raises(Exception):  # a foreign Origin is refused
+        from tornado.httpclient import HTTPClientError
+        from tornado.websocket import WebSocketError
+
+        with pytest.raises((WebSocketError, HTTPClientError)):  # a foreign Origin: refused
             asyncio.run(_ws_exchange(ws, "http://evil.example", [], 1))
         bad = ["{not json", json.dumps({"type": "joint", "name": "hip", "value": 99, "id": 7})]
         good = json.dumps({"type": "joint", "name": "hip", "value": 0.2, "id": 8})
@@ -240,7 +244,9 @@ def test_server_hygiene():
         assert replies[2] == {"type": "ack", "id": 8}
         assert s.state()["q"][0] == 0.2  # the good one applied, the bad ones dropped
         # a second page on the same server works
-        got = asyncio.run(_ws_exchange(ws, f"http://localhost:{port}", [json.dumps({"type": "ping", "t": 5})], 1))
+        got = asyncio.run(
+            _ws_exchange(ws, f"http://localhost:{port}", [json.dumps({"type": "ping", "t": 5})], 1)
+        )
         assert {"type": "pong", "t": 5} in got
         assert s.server.pages_seen == 2  # the foreign Origin never opened
     assert not s.running

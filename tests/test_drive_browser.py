@@ -17,7 +17,6 @@ import time
 import numpy as np
 import pytest
 
-import hexapod_kin as hk
 from hexapod_kin.drive import drive
 
 ROBOTS = ("hexabot_leg", "hexapod", "erd:solo12")
@@ -85,7 +84,9 @@ def test_joint_slider_prints_fk(browser, session):
     _wait(page, f"Math.abs(hexapodKin.state.readout.q[{j}] - {v!r}) < 1e-12")
     time.sleep(0.1)
     q = np.array(_readout(page)["q"])
-    printed = np.array([[float(x) for x in row.split()] for row in page.inner_text("#hk-fk").split("\n")])
+    printed = np.array(
+        [[float(x) for x in row.split()] for row in page.inner_text("#hk-fk").split("\n")]
+    )
     np.testing.assert_allclose(printed, model.fk(q), atol=1e-9, rtol=0)
     assert q[j] == pytest.approx(v, abs=1e-12)
     assert page.errors == []  # type: ignore[attr-defined]

@@ -113,7 +113,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
               replies: [], ready: false };
   window.hexapodKin = api;
-  var ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
+  var ws = new WebSocket("ws://" + location.host + "/ws");
   var nextId = 1;
   function send(msg) {
     msg.id = nextId++;
@@ -163,14 +163,17 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   });
   // feet
   DATA.feet.forEach(function (f, i) {
-    var o = document.createElement("option"); o.value = i; o.textContent = f; el("hk-foot").appendChild(o);
+    var o = document.createElement("option");
+    o.value = i; o.textContent = f; el("hk-foot").appendChild(o);
   });
-  el("hk-foot").onchange = function () { send({ type: "foot", foot: parseInt(el("hk-foot").value, 10) }); };
+  el("hk-foot").onchange = function () {
+    send({ type: "foot", foot: parseInt(el("hk-foot").value, 10) });
+  };
   function goTarget(p) {
     send({ type: "target", xyz: p }); showMode("target");
   }
   el("hk-go").onclick = function () {
-    goTarget([parseFloat(el("hk-tx").value), parseFloat(el("hk-ty").value), parseFloat(el("hk-tz").value)]);
+    goTarget(["hk-tx", "hk-ty", "hk-tz"].map(function (id) { return parseFloat(el(id).value); }));
   };
   // shift+click: a target on the horizontal plane through the current foot point
   var ray = new THREE.Raycaster();
@@ -195,7 +198,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   ["x", "y", "z", "roll", "pitch", "yaw"].forEach(function (n, i) {
     var lim = i < 3 ? DATA.body_shift : DATA.body_angle;
     var row = document.createElement("div");
-    row.innerHTML = '<span style="display:inline-block;width:50px">' + n + (i < 3 ? " [m]" : " [rad]") + '</span>';
+    row.innerHTML = '<span style="display:inline-block;width:70px">' + n +
+      (i < 3 ? " [m]" : " [rad]") + '</span>';
     var s = document.createElement("input");
     s.type = "range"; s.min = -lim; s.max = lim; s.step = "any"; s.value = 0; s.id = "hk-body-" + n;
     var v = document.createElement("span");
@@ -209,7 +213,9 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   DATA.patterns.forEach(function (p) {
     var o = document.createElement("option"); o.textContent = p; el("hk-pattern").appendChild(o);
   });
-  el("hk-pattern").onchange = function () { send({ type: "pattern", pattern: el("hk-pattern").value }); };
+  el("hk-pattern").onchange = function () {
+    send({ type: "pattern", pattern: el("hk-pattern").value });
+  };
   var keys = {}, pressAt = null, cmdBefore = null, baseBefore = null;
   function axes() {
     var k = function (c) { return keys[c] ? 1 : 0; };
@@ -217,7 +223,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   }
   function onKey(ev, down) {
     var c = (ev.key || "").toLowerCase();
-    if (!DATA.legged || "wasdqe".indexOf(c) < 0 || c === "" || ev.target.tagName === "INPUT") { return; }
+    if (!DATA.legged || c === "" || "wasdqe".indexOf(c) < 0) { return; }
+    if (ev.target.tagName === "INPUT") { return; }
     if (!!keys[c] === down) { return; }
     keys[c] = down;
     if (down) {
@@ -292,13 +299,15 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       polyGeom.attributes.position.needsUpdate = true; polyGeom.computeBoundingSphere();
       var lost = s.margin < 0;
       polyMat.color.setHex(lost ? 0xff0000 : 0x2288ff);
-      com.position.set(s.com[0], s.com[1], s.com[2]); comGround.position.set(s.com[0], s.com[1], zmin);
+      com.position.set(s.com[0], s.com[1], s.com[2]);
+      comGround.position.set(s.com[0], s.com[1], zmin);
       el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
       el("hk-margin").className = lost ? "lost" : "";
       el("hk-com").textContent = fmt(s.com, 3) + " m";
       el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-act").textContent = fmt(r.actual, 3);
-      el("hk-minm").textContent = r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
+      el("hk-minm").textContent =
+        r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
       if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
     }
     viewer.set_dirty();
@@ -308,9 +317,13 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   ws.onmessage = function (ev) {
     var m = JSON.parse(ev.data);
     if (m.type === "state") { onState(m); return; }
-    if (m.type === "error") { api.errors.push(m); el("hk-msg").textContent = "refused: " + m.error; return; }
+    if (m.type === "error") {
+      api.errors.push(m); el("hk-msg").textContent = "refused: " + m.error; return;
+    }
     if (m.type === "session" && wantDownload) {
-      if (wantDownload === "json") { download("session.json", JSON.stringify(m.session), "application/json"); }
+      if (wantDownload === "json") {
+        download("session.json", JSON.stringify(m.session), "application/json");
+      }
       else { download("timeline.csv", m.csv, "text/csv"); }
       wantDownload = null;
     }
@@ -336,17 +349,16 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
 
     """
     model = cockpit.model
-    cmds = scene_commands(
-        model, [0.0], cockpit.q[None], base_poses=cockpit.base, trace_frame=False
-    )
+    cmds = scene_commands(model, [0.0], cockpit.q[None], base_poses=cockpit.base, trace_frame=False)
     span = float(cockpit.body.leg_span) if cockpit.legged else float(cockpit.limbs[0].max_reach)
     joints = []
     for i, name in enumerate(model.joint_names):
         lo, hi = _limits(float(model.lower[i]), float(model.upper[i]))
         joints.append({"name": name, "lower": lo, "upper": hi, "value": float(cockpit.q[i])})
     fams = cockpit.families
+    label = title or f"hexapod_kin drive: {model.name}"
     data = {
-        "title": title or f"hexapod_kin drive: {model.name}",
+        "title": label,
         "scene": [base64.b64encode(pack(c)).decode("ascii") for c in cmds],
         "paths": [v.path for v in scene.visuals],
         "joints": joints,
@@ -358,9 +370,11 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "scale": span,
         "families": "per leg: not derived (legged robot)"
         if cockpit.legged
-        else (fams.reason or "none") if fams is not None else "deriving…",
+        else (fams.reason or "none")
+        if fams is not None
+        else "deriving…",
     }
-    return page(data["title"], fill(_BODY, data=script_json(data)), style=_STYLE, policy=_CSP)
+    return page(label, fill(_BODY, data=script_json(data)), style=_STYLE, policy=_CSP)
 
 
 def _clean(value: Any) -> Any:

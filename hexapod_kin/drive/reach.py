@@ -140,7 +140,9 @@ class Limb:
             return center, float(np.linalg.norm(pts - center, axis=1).max())
         nq = self.body.nq
         qs = np.repeat(((lo + hi) / 2)[None], 4096, axis=0)
-        qs[:, self.columns] = rng.uniform(lo[self.columns], hi[self.columns], (4096, len(self.columns)))
+        qs[:, self.columns] = rng.uniform(
+            lo[self.columns], hi[self.columns], (4096, len(self.columns))
+        )
         pts = self.body.leg_points(qs, np.repeat(np.eye(4)[None], 4096, axis=0))[:, self.leg]
         del nq
         return np.zeros(3), float(np.linalg.norm(pts[:, -1] - pts[:, 0], axis=1).max())
@@ -198,7 +200,8 @@ class Limb:
             err_new = float(np.linalg.norm(target - self.point(q_new, base)))
             if err - err_new < 1e-7 * max(dt, 1e-3) / 1e-3:
                 at = np.flatnonzero(
-                    (q_new[cols] <= self.lower[cols] + 1e-9) | (q_new[cols] >= self.upper[cols] - 1e-9)
+                    (q_new[cols] <= self.lower[cols] + 1e-9)
+                    | (q_new[cols] >= self.upper[cols] - 1e-9)
                 )
                 if at.size:
                     j = int(at[0])

@@ -265,7 +265,10 @@ class DriveServer:
         """Send the state to every page when it changed since the last one sent."""
         frame = self._frame()
         key = json.dumps(
-            [frame.get("poses"), {k: v for k, v in frame.get("readout", {}).items() if k != "time"}],
+            [
+                frame.get("poses"),
+                {k: v for k, v in frame.get("readout", {}).items() if k != "time"},
+            ],
             default=_plain,
         )
         if key == self._last or not self._sockets:

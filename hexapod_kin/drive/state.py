@@ -216,7 +216,7 @@ class Cockpit:
                 raise FrameNotFoundError(
                     f"joint {name!r} is not in {self.model.name}; use one of {choices(names)}"
                 )
-            j = names.index(name)  # type: ignore[arg-type]
+            j = names.index(name)
         v = float(_finite("value", value, 1)[0])
         lo, hi = float(self.model.lower[j]), float(self.model.upper[j])
         if not lo - 1e-12 <= v <= hi + 1e-12:
@@ -269,7 +269,7 @@ class Cockpit:
         names = list(self.body.leg_names) if self.body is not None else [str(self.model.tip)]
         i = limb if isinstance(limb, int) and 0 <= limb < len(names) else None
         if i is None and limb in names:
-            i = names.index(limb)  # type: ignore[arg-type]
+            i = names.index(limb)
         if i is None:
             raise ParameterError(
                 f"foot={limb!r} is not allowed; use one of {choices(names)}",
@@ -343,7 +343,7 @@ class Cockpit:
             self._record()
 
     def set_drive(self, axes: Any) -> None:
-        """Walk: ``axes`` (forward, left, turn) each in [-1, 1] of :attr:`speed` (keys W/S, A/D, Q/E).
+        """Walk: ``axes`` (forward, left, turn), each in [-1, 1] of :attr:`speed` (W/S, A/D, Q/E).
 
         Raises:
             ParameterError: Not a legged robot, or not three numbers in [-1, 1].
@@ -434,7 +434,11 @@ class Cockpit:
                 d = self.base[:3, 3] - before[0]
                 c, s = math.cos(yaw), math.sin(yaw)
                 inst = np.array(
-                    [(c * d[0] + s * d[1]) / dt, (-s * d[0] + c * d[1]) / dt, (yaw - before[1]) / dt]
+                    [
+                        (c * d[0] + s * d[1]) / dt,
+                        (-s * d[0] + c * d[1]) / dt,
+                        (yaw - before[1]) / dt,
+                    ]
                 )
                 self._actual = 0.9 * self._actual + 0.1 * inst
             self._record()
@@ -511,7 +515,7 @@ class Cockpit:
             }
 
     def timeline_csv(self) -> str:
-        """The session's joints as a plan CSV (``t,<joint>...``; ``hexapod-kin timeline`` reads it)."""
+        """The session's joints as a plan CSV (``t,<joint>...``; ``hexapod-kin timeline``)."""
         with self.lock:
             rec = list(self.record)
         lines = ["t," + ",".join(self.model.joint_names)]

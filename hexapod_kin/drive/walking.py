@@ -65,11 +65,12 @@ class Walker:
             HexapodKinError: The planner refuses it (its reason: reach, joint limit, margin).
 
         """
-        key = (pattern, tuple(round(float(c), 6) for c in command))
+        vx, vy, wz = (round(float(c), 6) for c in command)
+        key = (pattern, (vx, vy, wz))
         if key not in self._runs:
             if len(self._runs) > 64:
                 self._runs.pop(next(iter(self._runs)))
-            self._runs[key] = walk(  # type: ignore[assignment]
+            self._runs[key] = walk(
                 self.body,
                 pattern=pattern,
                 velocity=key[1],
