@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import HexapodKinError
+from ..gait.robot import body_pose
 from ..gait.walk import walk
 
 __all__ = ["Cycle", "Walker"]
@@ -90,9 +91,7 @@ class Walker:
         run = self.plan(pattern, command)
         start = np.asarray(run.base_poses[0])
         yaw = float(np.arctan2(base[1, 0], base[0, 0]))
-        place = np.eye(4)
-        c, s = np.cos(yaw), np.sin(yaw)
-        place[:2, :2] = [[c, -s], [s, c]]
+        place = body_pose((0.0, 0.0, 0.0), (0.0, 0.0, yaw))  # the run turned to the heading
         place[:2, 3] = base[:2, 3] - place[:2, :2] @ start[:2, 3]
         self.cycle = Cycle(run, place, tuple(command), pattern)  # type: ignore[arg-type]
         self.time = 0.0
