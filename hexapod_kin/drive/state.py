@@ -84,6 +84,9 @@ class Cockpit:
             if feet is not None:
                 raise
             self.not_legged = str(exc)
+        if self.body is not None and not pattern_names(self.body.n_legs):
+            self.not_legged = f"{self.body.n_legs} limb(s) and no gait for them: one chain"
+            self.body = None  # an arm or a single leg found as limbs of a tree
         self.target: np.ndarray | None = None
         self.time = 0.0
         self.record: list[tuple[float, list[float], list[float]]] = []
