@@ -217,3 +217,34 @@ def test_timing_fps_and_key_latency(browser, robot):
         assert len(moved) == 20
         assert statistics.median(moved) <= 100.0
         assert fps >= 30.0
+
+
+def test_joystick_walks_forward(browser, session):
+    _legged(session)
+    _reset(session)
+    page = _open(browser, session)
+    page.click("#hk-mode-walk")
+    _wait(page, "hexapodKin.state.readout.mode === 'walk'")
+    x0 = _readout(page)["base"][0][3]
+    box = page.locator("#hk-stick").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx, cy - box["height"] / 2, steps=4)  # full forward
+    _wait(page, "hexapodKin.state.readout.command[0] > 0.049")
+    time.sleep(1.0)
+    page.mouse.up()
+    _wait(page, "hexapodKin.state.readout.status === 'standing'")
+    assert _readout(page)["base"][0][3] - x0 >= 0.8 * session.cockpit.speed[0] * 1.0
+    page.close()
+
+
+def test_notebook_iframe_shows_the_page(browser, session):
+    html = session._repr_html_()
+    assert f'src="{session.url}"' in html
+    page = browser.new_page()
+    page.set_content(html)  # the iframe's page is the server's own origin: accepted
+    frame = page.frames[1]
+    frame.wait_for_function("() => window.hexapodKin && hexapodKin.ready && hexapodKin.state")
+    assert frame.evaluate("hexapodKin.state.readout.q.length") == session.cockpit.model.nq
+    page.close()

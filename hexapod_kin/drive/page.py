@@ -40,7 +40,11 @@ _STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
 .hk-tab { display: none; } .hk-tab.on { display: block; }
 #hk-modes button.on { font-weight: bold; background: #cde; }
 #hk-msg { color: #a00; min-height: 1em; } #hk-margin.lost { color: #d00; font-weight: bold; }
-.hk-num { width: 64px; }"""
+.hk-num { width: 64px; }
+#hk-stick { position: relative; width: 90px; height: 90px; border-radius: 45px;
+  background: #dde; touch-action: none; margin: 4px 0; }
+#hk-knob { position: absolute; left: 30px; top: 30px; width: 30px; height: 30px;
+  border-radius: 15px; background: #558; pointer-events: none; }"""
 
 _BODY = """<div id="meshcat-pane"></div>
 <div id="hk-panel"><b id="hk-title"></b> <span id="hk-conn">connecting…</span><br>
@@ -55,7 +59,9 @@ target [m] <input class="hk-num" id="hk-tx"><input class="hk-num" id="hk-ty">
 <div class="hk-tab" id="hk-tab-walk">pattern <select id="hk-pattern"></select>
 <span class="hk-help">W/S forward, A/D sideways, Q/E turn (hold)</span><br>
 command <span id="hk-cmd"></span><br>actual <span id="hk-act"></span><br>
-min margin while walking <span id="hk-minm"></span></div>
+min margin while walking <span id="hk-minm"></span><br>
+<div id="hk-stick"><div id="hk-knob"></div></div>
+<span class="hk-help">drag: up/down forward, left/right turn</span></div>
 <div id="hk-msg"></div>
 <pre id="hk-status"></pre>
 FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
@@ -234,6 +240,25 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     }
     send({ type: "drive", axes: axes() }); showMode("walk");
   }
+  // on-screen joystick: up/down = forward/back, left/right = turn (Q/E)
+  var stick = el("hk-stick"), knob = el("hk-knob"), sticking = false, lastSent = "";
+  function stickAt(ev, done) {
+    var r = stick.getBoundingClientRect(), R = r.width / 2;
+    var dx = done ? 0 : (ev.clientX - r.left - R) / R, dy = done ? 0 : (ev.clientY - r.top - R) / R;
+    var n = Math.hypot(dx, dy);
+    if (n > 1) { dx /= n; dy /= n; }
+    knob.style.left = (30 + 30 * dx) + "px"; knob.style.top = (30 + 30 * dy) + "px";
+    var axes = [Math.round(-20 * dy) / 20, 0, Math.round(-20 * dx) / 20];  // steps of 0.05
+    if (done || JSON.stringify(axes) !== lastSent) {
+      lastSent = JSON.stringify(axes);
+      send({ type: "drive", axes: axes });
+    }
+  }
+  stick.addEventListener("pointerdown", function (ev) {
+    sticking = true; stick.setPointerCapture(ev.pointerId); stickAt(ev, false);
+  });
+  stick.addEventListener("pointermove", function (ev) { if (sticking) { stickAt(ev, false); } });
+  stick.addEventListener("pointerup", function (ev) { sticking = false; stickAt(ev, true); });
   window.addEventListener("keydown", function (ev) { onKey(ev, true); });
   window.addEventListener("keyup", function (ev) { onKey(ev, false); });
   // downloads
