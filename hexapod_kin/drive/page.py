@@ -20,6 +20,7 @@ from .._page import fill, page, script_json
 from ..viewer import scene_commands
 from ..viewer.objects import pack
 from ..viewer.scene import Scene
+from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
 __all__ = ["drive_page", "state_frame"]
@@ -65,7 +66,8 @@ min margin while walking <span id="hk-minm"></span><br>
 <div id="hk-msg"></div>
 <pre id="hk-status"></pre>
 FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
-<div id="hk-legged">margin <span id="hk-margin"></span> · CoM <span id="hk-com"></span></div>
+<div id="hk-legged">margin <span id="hk-margin"></span> · ZMP margin <span id="hk-zmp">-</span>
+· CoM <span id="hk-com"></span></div>
 <button id="hk-reset">reset</button>
 <button id="hk-json">download session (JSON)</button>
 <button id="hk-csv">download timeline (CSV)</button>
@@ -105,6 +107,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   var comGround = dot(0x22aa22, DATA.scale * 0.025);
   group.add(poly); group.add(com); group.add(comGround); group.add(target);
   target.visible = false;
+  var footDot = dot(0x22aa22, DATA.scale * 0.022);  // red when near a singularity
+  group.add(footDot);
   viewer.scene_tree.find(["meshcat", "drive"]).set_object(group);
   var renders = [], origRender = viewer.render.bind(viewer), continuous = false;
   viewer.render = function () {
@@ -305,6 +309,10 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       if (document.activeElement !== sliders[i][0]) { sliders[i][0].value = r.q[i]; }
       sliders[i][1].textContent = " " + r.q[i].toFixed(3);
     });
+    var near = r.sigma_min < DATA.sigma_eps || (r.family && r.family.distance < 0.05);
+    footDot.position.set(r.point[0], r.point[1], r.point[2]);
+    footDot.material.color.setHex(near ? 0xff0000 : 0x22aa22);
+    el("hk-status").style.color = near ? "#d00" : "";
     target.visible = !!r.target;
     if (r.target) { target.position.set(r.target[0], r.target[1], r.target[2]); }
     if (r.support) {
@@ -329,6 +337,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
       el("hk-margin").className = lost ? "lost" : "";
       el("hk-com").textContent = fmt(s.com, 3) + " m";
+      el("hk-zmp").textContent =
+        s.zmp_margin === null ? "-" : (1000 * s.zmp_margin).toFixed(1) + " mm";
       el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-act").textContent = fmt(r.actual, 3);
       el("hk-minm").textContent =
@@ -393,6 +403,7 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,
         "scale": span,
+        "sigma_eps": SIGMA_EPS,
         "families": "per leg: not derived (legged robot)"
         if cockpit.legged
         else (fams.reason or "none")

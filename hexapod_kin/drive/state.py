@@ -448,13 +448,21 @@ class Cockpit:
 
     # ------------------------------------------------------------------ readouts
     def support(self) -> dict[str, Any]:
-        """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots)."""
+        """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots).
+
+        While walking, also the planner's ZMP margin [m] of the sample (``zmp_margin``; None
+        when standing: a still robot's ZMP is its CoM's projection).
+        """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
         stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
+        zmp = None
         if self.mode == "walk" and self.walker.cycle is not None:
+            run = self.walker.cycle.run
             k = self.walker.sample()[2]
-            stance = np.asarray(self.walker.cycle.run.support[k])
+            stance = np.asarray(run.support[k])
+            if len(run.zmp_margin) > k:
+                zmp = float(run.zmp_margin[k])
         com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
         margin = float(support_margin(feet, stance, com))
         return {
@@ -462,6 +470,7 @@ class Cockpit:
             "stance": stance.tolist(),
             "com": com.tolist(),
             "margin": margin,
+            "zmp_margin": zmp,
         }
 
     def readout(self) -> dict[str, Any]:
