@@ -306,3 +306,17 @@ def test_cli_refuses_bad_input():
 
     assert main(["drive", "hexabot_leg", "--no-open", "--port", "70000"]) == 2
     assert main(["drive", "no_such_robot", "--no-open"]) == 2
+
+
+@pytest.mark.parametrize("src", ROBOTS[1:])
+def test_stance_width_puts_the_feet_at_the_reach(src):
+    c = Cockpit(hk.load(src))
+    wb = c.body
+    c.set_stance(1.2)
+    assert c.status == "held", c.message
+    feet = wb.feet(c.qb[None], c.base[None])[0]  # FK of the IK's joints
+    expect = (c.stand[:3, :3] @ wb.neutral_feet(1.2 * wb.foot_reach).T + c.stand[:3, 3:4]).T
+    np.testing.assert_allclose(feet[:, :2], expect[:, :2], atol=1e-6)
+    np.testing.assert_allclose(feet[:, 2], wb.foot_radius, atol=1e-6)
+    with pytest.raises(ParameterError, match=r"\[0.6, 1.4\]"):
+        c.set_stance(3.0)

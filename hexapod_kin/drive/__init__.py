@@ -71,6 +71,10 @@ class DriveSession:
         """Body pose with the feet held (see :meth:`Cockpit.set_body`)."""
         self.cockpit.set_body(xyz, rpy)
 
+    def set_stance(self, scale: float) -> None:
+        """Stance width as a factor of the reach (see :meth:`Cockpit.set_stance`)."""
+        self.cockpit.set_stance(scale)
+
     def set_drive(self, axes: Any) -> None:
         """Walk: (forward, left, turn) in [-1, 1] (see :meth:`Cockpit.set_drive`)."""
         self.cockpit.set_drive(axes)

@@ -219,6 +219,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     };
     row.appendChild(s); row.appendChild(v); el("hk-body").appendChild(row); body.push([s, v]);
   });
+  (function () {  // stance width: a factor of the robot's own reach
+    var row = document.createElement("div");
+    row.innerHTML = '<span style="display:inline-block;width:70px">stance ×</span>';
+    var s = document.createElement("input");
+    s.type = "range"; s.min = 0.6; s.max = 1.4; s.step = "any"; s.value = 1; s.id = "hk-stance";
+    s.oninput = function () { send({ type: "stance", scale: parseFloat(s.value) }); };
+    row.appendChild(s); el("hk-body").appendChild(row);
+  })();
   // walking
   DATA.patterns.forEach(function (p) {
     var o = document.createElement("option"); o.textContent = p; el("hk-pattern").appendChild(o);

@@ -59,6 +59,8 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
         cockpit.set_target(msg["xyz"])
     elif kind == "body":
         cockpit.set_body(msg.get("xyz", (0, 0, 0)), msg.get("rpy", (0, 0, 0)))
+    elif kind == "stance":
+        cockpit.set_stance(msg["scale"])
     elif kind == "drive":
         cockpit.set_drive(msg["axes"])
     elif kind == "pattern":
@@ -72,7 +74,7 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
     else:
         raise KeyError(
             f"type={kind!r}: use one of 'joint', 'q', 'mode', 'foot', 'target', 'body', "
-            "'drive', 'pattern', 'reset', 'session', 'ping'"
+            "'stance', 'drive', 'pattern', 'reset', 'session', 'ping'"
         )
     return None
 

@@ -122,6 +122,7 @@ class Cockpit:
             self.body_xyz = np.zeros(3)
             self.body_rpy = np.zeros(3)
             self.drive = (0.0, 0.0, 0.0)
+            self.min_margin, self.margins = math.inf, []
             if self.body is None:
                 self.q = np.asarray(self.model.check_q(self._home()), dtype=float)
                 self.base = np.eye(4)
@@ -343,6 +344,47 @@ class Cockpit:
             self.base = base
             self._set_limb_q(np.asarray(ik.q[0], dtype=float))
             self.status, self.message = "held", ""
+            self._record()
+
+    def set_stance(self, scale: float) -> None:
+        """Stance width: every foot back on the ground at ``scale`` × the robot's reach.
+
+        The reach is the robot's mean mount-to-foot distance
+        (:meth:`~hexapod_kin.gait.WholeBody.neutral_feet`), ``scale`` in [0.6, 1.4]; the body
+        stays where it stands (its height is the body's z slider).
+
+        Raises:
+            ParameterError: Not a legged robot, or ``scale`` outside [0.6, 1.4].
+
+        """
+        if not self.legged:
+            raise ParameterError(f"{self.model.name} has no legs", parameter="stance")
+        k = float(_finite("stance", scale, 1)[0])
+        if not 0.6 <= k <= 1.4:
+            raise ParameterError(
+                f"stance={k!r} is not allowed; give a factor of the reach in [0.6, 1.4]",
+                parameter="stance",
+                value=k,
+                allowed="[0.6, 1.4]",
+            )
+        wb = self.body
+        with self.lock:
+            if self.mode != "body":
+                self.set_mode("body")
+            local = wb.neutral_feet(k * wb.foot_reach)
+            local[:, 2] = 0.0
+            feet = (self.stand[:3, :3] @ local.T + self.stand[:3, 3:4]).T
+            feet[:, 2] = wb.foot_radius  # on the ground z = 0
+            ik = wb.body_ik(self.base, feet, q_prev=self.qb, strict=False)
+            ok = np.asarray(ik.ok)[0]
+            if not np.all(ok):
+                leg = wb.leg_names[int(np.flatnonzero(~ok)[0])]
+                self.status, self.message = "refused", f"stance refused: {leg} cannot reach it"
+                return
+            self.feet = feet
+            self._set_limb_q(np.asarray(ik.q[0], dtype=float))
+            self.status, self.message = "held", ""
+            self._event("stance", scale=k)
             self._record()
 
     def set_drive(self, axes: Any) -> None:
