@@ -62,7 +62,7 @@ def _readout(page):
     return page.evaluate("hexapodKin.state.readout")
 
 
-def _wait(page, expr: str, timeout: float = 30000):
+def _wait(page, expr: str, timeout: float = 60000):
     page.wait_for_function(f"() => ({expr})", timeout=timeout)  # a function: the CSP forbids eval
 
 
@@ -169,7 +169,8 @@ def test_hold_w_walks_and_switch_keeps_margins(browser, session):
     page.keyboard.up("w")
     _wait(page, "hexapodKin.state.readout.status === 'standing'")
     r = _readout(page)
-    assert r["pattern"] == other and r["min_margin"] > 0 and min(c.margins) > 0
+    assert r["pattern"] == other, r
+    assert r["min_margin"] > 0 and min(c.margins) > 0, (r["min_margin"], r["message"])
     assert any(e["type"] == "pattern" and e["pattern"] == other for e in c.session()["events"])
     page.close()
 
