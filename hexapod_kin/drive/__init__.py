@@ -127,8 +127,9 @@ def drive(
             ``hexabot_leg`` or ``hexapod``, a URDF, ``erd:NAME``).
         feet: Feet of a legged URDF without foot links (``"FRAME:X,Y,Z ..."``).
         port: Port on 127.0.0.1 (0: a free one).
-        families: Look up the chain's singular families (already derived, else derived in the
-            background within 10 s of CPU) to show the distance to the nearest.
+        families: Show the distance to the chain's nearest singular family when its families
+            are already derived (``hexapod-kin derive SOURCE``; looked up in the background,
+            never derived here: no child process).
         title: The page's title.
 
     Returns:
@@ -174,6 +175,4 @@ def _families(cockpit: Cockpit) -> None:
     from ..singularity import default_rows, families_for
 
     with contextlib.suppress(Exception):
-        cockpit.families = families_for(
-            cockpit.model, default_rows(cockpit.model), derive=True, budget=10.0
-        )
+        cockpit.families = families_for(cockpit.model, default_rows(cockpit.model), derive=False)
