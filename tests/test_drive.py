@@ -320,3 +320,22 @@ def test_stance_width_puts_the_feet_at_the_reach(src):
     np.testing.assert_allclose(feet[:, 2], wb.foot_radius, atol=1e-6)
     with pytest.raises(ParameterError, match=r"\[0.6, 1.4\]"):
         c.set_stance(3.0)
+
+
+def test_nearest_family_and_sigma_min_at_a_singular_pose():
+    """ankle = 0 stretches the seeds' leg: family q3 = 0 at distance 0, σ_min = 0 (SVD)."""
+    from hexapod_kin.singularity import default_rows, families_for
+
+    m = hk.load("hexabot_leg")
+    fams = families_for(m, default_rows(m), derive=False)
+    c = Cockpit(m, families=fams)
+    c.set_joint("ankle", 0.0)
+    r = c.readout()
+    assert r["sigma_min"] < 1e-12
+    s = np.linalg.svd(m.jacobian(c.q)[:3], compute_uv=False)
+    assert r["manipulability"] == pytest.approx(float(np.prod(s)), abs=1e-15)
+    if not fams.families:
+        pytest.skip("the leg's families are not derived on this machine (hexapod-kin derive)")
+    assert r["family"]["name"].startswith("q3 = 0") and r["family"]["distance"] < 1e-12
+    c.set_joint("ankle", 0.3)
+    assert c.readout()["family"]["distance"] == pytest.approx(0.3, abs=1e-9)
