@@ -36,7 +36,7 @@ _STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
   overflow-y: auto; padding: 6px 10px; border-radius: 6px; background: rgba(255,255,255,0.88);
   color: #222; font-size: 12px; line-height: 1.4; }
 #hk-panel b { font-size: 14px; }
-#hk-panel pre { margin: 2px 0; font-size: 10px; }
+#hk-panel pre { margin: 2px 0; font-size: 10px; white-space: pre-wrap; }
 #hk-panel input[type=range] { width: 170px; vertical-align: middle; }
 .hk-tab { display: none; } .hk-tab.on { display: block; }
 #hk-modes button.on { font-weight: bold; background: #cde; }
