@@ -31,7 +31,7 @@ LONG_MODULES: dict[str, str] = {
     # none today; an entry reads "path relative to hexapod_kin/": "why one job needs the length"
 }
 #: The application layer: the core never imports these at module level.
-APP_LAYER = ("viewer", "plots", "cli", "report", "sweep")
+APP_LAYER = ("viewer", "plots", "cli", "report", "sweep", "drive")
 
 
 def _modules() -> list[Path]:

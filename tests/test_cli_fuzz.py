@@ -37,7 +37,7 @@ BASE_ARGS: dict[str, list[str]] = {
     ],
 }
 # commands that serve or run long: only the parser-level checks
-PARSER_ONLY = {"view", "reproduce", "sweep"}
+PARSER_ONLY = {"view", "drive", "reproduce", "sweep"}
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:

@@ -48,6 +48,11 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         (["hexabot_leg", "--rows", "q"], 2),
     ],
     "view": [(["hexabot_leg", "--no-wait"], 0), (["hexabot_leg", "--serve-for", "-1"], 2)],
+    "drive": [
+        (["hexabot_leg", "--no-open", "--serve-for", "0"], 0),
+        (["hexabot_leg", "--no-open", "--serve-for", "-1"], 2),
+        (["hexabot_leg", "--no-open", "--port", "70000"], 2),
+    ],
     "animate": [
         (["hexabot_leg", "--samples", "5", "--html", "{tmp}/a.html"], 0),
         (["hexabot_leg", "--html", "{tmp}/a.txt"], 2),
@@ -214,6 +219,7 @@ CHEAP = {
     "derive": ["derive", "{src}", "--budget", "0.01"],
     "scan": ["scan", "{src}", "--grid", "3", "--families", "off", "--json"],
     "view": ["view", "{src}", "--no-wait"],
+    "drive": ["drive", "{src}", "--no-open", "--serve-for", "0"],
     "animate": ["animate", "{src}", "--samples", "3", "--html", "{tmp}/a.html", "--json"],
     "ik": ["ik", "{src}", "--target", "0.1", "0.1", "0.1", "--restarts", "0"],
     "step": ["step", "{src}", "--duration", "0.01", "--no-baseline", "--json"],

@@ -62,6 +62,7 @@ COMMANDS: dict[str, list[str]] = {
     "timeline": ["timeline", "gait", "--duration", "60", "-o", "{out}/walk.csv"],
     "animate": ["animate", "erd:ur5_robot", "--html", "{out}/anim.html"],
     "view": ["view", "hexapod", "--serve-for", "1"],
+    "drive": ["drive", "hexapod", "--no-open", "--serve-for", "1"],
     "mjcf": ["mjcf", "hexapod", "--meshes", "-o", "{out}/robot.xml"],
     "export-package": ["export-package", "hexapod", "--meshes", "-o", "{out}/pkg", "-f"],
     "sweep": [

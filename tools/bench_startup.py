@@ -77,9 +77,9 @@ COMMANDS: dict[str, list[str]] = {
     # the README's first command: the whole report (animations included)
     "reproduce-full": ["reproduce", "--out", "{out}/report_full"],
 }
-#: Not timed: ``view`` serves a page until interrupted (no start-to-exit time); ``precompile``
-#: exists to pay every compile at once.
-UNTIMED = ("view", "precompile")  # precompile compiles every kernel on purpose
+#: Not timed: ``view`` and ``drive`` serve a page until interrupted (no start-to-exit time);
+#: ``precompile`` exists to pay every compile at once.
+UNTIMED = ("view", "drive", "precompile")  # precompile compiles every kernel on purpose
 #: The commands of ``--quick`` (a smoke test of the section: one of each kind of cost).
 QUICK = ("list", "fk", "scan")
 

@@ -26,6 +26,7 @@ __all__ = ["build_parser", "main", "run"]
 MODULES: tuple[str, ...] = (
     "core",
     "view",
+    "drive",
     "motion",
     "dynamics",
     "export",

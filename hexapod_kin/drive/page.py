@@ -1,0 +1,442 @@
+"""The cockpit's page: meshcat's scene, a panel per mode, the websocket to the server.
+
+One page (:func:`drive_page`) on :mod:`hexapod_kin._page`: the robot's scene is the viewer's
+(:func:`hexapod_kin.viewer.scene_commands`, msgpack, inlined); meshcat's bundle comes from the
+same loopback server (no CDN); the page's Content-Security-Policy allows nothing else. Every
+tick the server sends the visuals' poses and the readout (:func:`state_frame`). For scripts and
+tests the page exposes ``window.hexapodKin`` (``send(msg)``, ``state``, ``fps()``,
+``latencies``, ``setContinuous(on)``).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+from typing import Any
+
+import numpy as np
+
+from .._page import fill, page, script_json
+from ..viewer import scene_commands
+from ..viewer.objects import pack
+from ..viewer.scene import Scene
+from .reach import SIGMA_EPS
+from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
+
+__all__ = ["drive_page", "state_frame"]
+
+_CSP = (
+    "default-src 'none'; script-src 'self' 'unsafe-inline'; style-src 'unsafe-inline'; "
+    "img-src data: blob:; connect-src 'self'; worker-src blob:"
+)
+
+_STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
+#meshcat-pane { width: 100vw; height: 100vh; overflow: hidden; }
+#hk-panel { position: absolute; left: 8px; top: 8px; width: 400px; max-height: 96vh;
+  overflow-y: auto; padding: 6px 10px; border-radius: 6px; background: rgba(255,255,255,0.88);
+  color: #222; font-size: 12px; line-height: 1.4; }
+#hk-panel b { font-size: 14px; }
+#hk-panel pre { margin: 2px 0; font-size: 10px; white-space: pre-wrap; }
+#hk-panel input[type=range] { width: 170px; vertical-align: middle; }
+.hk-tab { display: none; } .hk-tab.on { display: block; }
+#hk-modes button.on { font-weight: bold; background: #cde; }
+#hk-msg { color: #a00; min-height: 1em; } #hk-margin.lost { color: #d00; font-weight: bold; }
+.hk-num { width: 64px; }
+#hk-stick { position: relative; width: 90px; height: 90px; border-radius: 45px;
+  background: #dde; touch-action: none; margin: 4px 0; }
+#hk-knob { position: absolute; left: 30px; top: 30px; width: 30px; height: 30px;
+  border-radius: 15px; background: #558; pointer-events: none; }"""
+
+_BODY = """<div id="meshcat-pane"></div>
+<div id="hk-panel"><b id="hk-title"></b> <span id="hk-conn">connecting…</span><br>
+<span id="hk-modes"></span>
+<div class="hk-tab" id="hk-tab-joints"><div id="hk-joints"></div></div>
+<div class="hk-tab" id="hk-tab-target">foot/tool <select id="hk-foot"></select><br>
+target [m] <input class="hk-num" id="hk-tx"><input class="hk-num" id="hk-ty">
+<input class="hk-num" id="hk-tz"> <button id="hk-go">go</button><br>
+<span class="hk-help">shift+click in the view: target on the horizontal plane at its height</span>
+</div>
+<div class="hk-tab" id="hk-tab-body"><div id="hk-body"></div></div>
+<div class="hk-tab" id="hk-tab-walk">pattern <select id="hk-pattern"></select>
+<span class="hk-help">W/S forward, A/D sideways, Q/E turn (hold)</span><br>
+command <span id="hk-cmd"></span><br>actual <span id="hk-act"></span><br>
+min margin while walking <span id="hk-minm"></span><br>
+<div id="hk-stick"><div id="hk-knob"></div></div>
+<span class="hk-help">drag: up/down forward, left/right turn</span></div>
+<div id="hk-msg"></div>
+<pre id="hk-status"></pre>
+FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
+<div id="hk-legged">margin <span id="hk-margin"></span> · ZMP margin <span id="hk-zmp">-</span>
+· CoM <span id="hk-com"></span></div>
+<button id="hk-reset">reset</button>
+<button id="hk-json">download session (JSON)</button>
+<button id="hk-csv">download timeline (CSV)</button>
+</div>
+<script src="/meshcat.js"></script>
+<script>
+(function () {
+  "use strict";
+  var DATA = $data;
+  var el = function (id) { return document.getElementById(id); };
+  function bytes(b64) {
+    var s = atob(b64), out = new Uint8Array(s.length);
+    for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
+    return out;
+  }
+  var viewer = new MeshCat.Viewer(el("meshcat-pane"));
+  DATA.scene.forEach(function (c) { viewer.handle_command_bytearray(bytes(c)); });
+  viewer.scene.traverse(function (o) {
+    var g = o.geometry;
+    if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
+      g.computeVertexNormals();
+    }
+  });
+  var THREE = MeshCat.THREE;
+  var paths = DATA.paths.map(function (p) { return p.split("/").filter(Boolean); });
+  // overlays: support polygon, CoM, target
+  var group = new THREE.Group();
+  var polyGeom = new THREE.BufferGeometry();
+  polyGeom.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * 17), 3));
+  var polyMat = new THREE.LineBasicMaterial({ color: 0x2288ff });
+  var poly = new THREE.Line(polyGeom, polyMat);
+  var dot = function (color, r) {
+    return new THREE.Mesh(new THREE.SphereGeometry(r, 16, 12),
+                          new THREE.MeshBasicMaterial({ color: color }));
+  };
+  var com = dot(0x22aa22, DATA.scale * 0.04), target = dot(0xff8800, DATA.scale * 0.03);
+  var comGround = dot(0x22aa22, DATA.scale * 0.025);
+  group.add(poly); group.add(com); group.add(comGround); group.add(target);
+  target.visible = false;
+  var footDot = dot(0x22aa22, DATA.scale * 0.022);  // red when near a singularity
+  group.add(footDot);
+  viewer.scene_tree.find(["meshcat", "drive"]).set_object(group);
+  var renders = [], origRender = viewer.render.bind(viewer), continuous = false;
+  viewer.render = function () {
+    renders.push(performance.now()); if (renders.length > 600) { renders.shift(); }
+    origRender();
+  };
+  (function spin() {
+    if (continuous) { viewer.set_dirty(); }
+    requestAnimationFrame(spin);
+  })();
+  el("hk-title").textContent = DATA.title;
+  var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
+              replies: [], ready: false };
+  window.hexapodKin = api;
+  var ws = new WebSocket("ws://" + location.host + "/ws");
+  var nextId = 1;
+  function send(msg) {
+    msg.id = nextId++;
+    if (ws.readyState === 1) { ws.send(JSON.stringify(msg)); }
+    return msg.id;
+  }
+  api.send = send;
+  api.sendRaw = function (text) { ws.send(text); };
+  api.fps = function (span) {
+    span = span || 1000;
+    var now = performance.now(), n = 0;
+    for (var i = renders.length - 1; i >= 0 && renders[i] > now - span; i--) { n++; }
+    return n * 1000 / span;
+  };
+  api.setContinuous = function (on) { continuous = !!on; };
+  // modes
+  var modes = DATA.legged ? ["joints", "target", "body", "walk"] : ["joints", "target"];
+  modes.forEach(function (m) {
+    var b = document.createElement("button"); b.textContent = m; b.id = "hk-mode-" + m;
+    b.onclick = function () { send({ type: "mode", mode: m }); showMode(m); };
+    el("hk-modes").appendChild(b);
+  });
+  var shown = null;
+  function showMode(m) {
+    if (m === shown) { return; }
+    shown = m;
+    modes.forEach(function (k) {
+      el("hk-tab-" + k).className = "hk-tab" + (k === m ? " on" : "");
+      el("hk-mode-" + k).className = k === m ? "on" : "";
+    });
+    if (m === "target" && api.state && !el("hk-tx").value) {  // start from the foot
+      var p = api.state.readout.point;
+      ["hk-tx", "hk-ty", "hk-tz"].forEach(function (id, i) { el(id).value = p[i].toFixed(4); });
+    }
+  }
+  // joint sliders
+  var sliders = [];
+  DATA.joints.forEach(function (j, i) {
+    var row = document.createElement("div");
+    row.innerHTML = '<span style="display:inline-block;width:110px">' + j.name + '</span>';
+    var s = document.createElement("input");
+    s.type = "range"; s.min = j.lower; s.max = j.upper; s.step = "any"; s.value = j.value;
+    s.id = "hk-joint-" + i; s.dataset.name = j.name;
+    var v = document.createElement("span"); v.id = "hk-jv-" + i;
+    s.oninput = function () { send({ type: "joint", name: j.name, value: parseFloat(s.value) }); };
+    row.appendChild(s); row.appendChild(v); el("hk-joints").appendChild(row); sliders.push([s, v]);
+  });
+  // feet
+  DATA.feet.forEach(function (f, i) {
+    var o = document.createElement("option");
+    o.value = i; o.textContent = f; el("hk-foot").appendChild(o);
+  });
+  el("hk-foot").onchange = function () {
+    send({ type: "foot", foot: parseInt(el("hk-foot").value, 10) });
+  };
+  function goTarget(p) {
+    send({ type: "target", xyz: p }); showMode("target");
+  }
+  el("hk-go").onclick = function () {
+    goTarget(["hk-tx", "hk-ty", "hk-tz"].map(function (id) { return parseFloat(el(id).value); }));
+  };
+  // shift+click: a target on the horizontal plane through the current foot point
+  var ray = new THREE.Raycaster();
+  viewer.renderer.domElement.addEventListener("pointerdown", function (ev) {
+    if (!ev.shiftKey || !api.state) { return; }
+    var rect = ev.target.getBoundingClientRect();
+    var ndc = new THREE.Vector2((ev.clientX - rect.left) / rect.width * 2 - 1,
+                                -(ev.clientY - rect.top) / rect.height * 2 + 1);
+    ray.setFromCamera(ndc, viewer.camera);
+    var root = viewer.scene_tree.find(["meshcat"]).object;
+    root.updateMatrixWorld();
+    var inv = new THREE.Matrix4().copy(root.matrixWorld).invert();
+    var o = ray.ray.origin.clone().applyMatrix4(inv);
+    var d = ray.ray.origin.clone().add(ray.ray.direction).applyMatrix4(inv).sub(o);
+    var z = (api.state.readout.target || api.state.readout.point)[2];
+    if (Math.abs(d.z) < 1e-9) { return; }
+    var s = (z - o.z) / d.z;
+    goTarget([o.x + s * d.x, o.y + s * d.y, z]);
+  });
+  // body sliders
+  var body = [];
+  ["x", "y", "z", "roll", "pitch", "yaw"].forEach(function (n, i) {
+    var lim = i < 3 ? DATA.body_shift : DATA.body_angle;
+    var row = document.createElement("div");
+    row.innerHTML = '<span style="display:inline-block;width:70px">' + n +
+      (i < 3 ? " [m]" : " [rad]") + '</span>';
+    var s = document.createElement("input");
+    s.type = "range"; s.min = -lim; s.max = lim; s.step = "any"; s.value = 0; s.id = "hk-body-" + n;
+    var v = document.createElement("span");
+    s.oninput = function () {
+      var vals = body.map(function (b) { return parseFloat(b[0].value); });
+      send({ type: "body", xyz: vals.slice(0, 3), rpy: vals.slice(3) });
+    };
+    row.appendChild(s); row.appendChild(v); el("hk-body").appendChild(row); body.push([s, v]);
+  });
+  (function () {  // stance width: a factor of the robot's own reach
+    var row = document.createElement("div");
+    row.innerHTML = '<span style="display:inline-block;width:70px">stance ×</span>';
+    var s = document.createElement("input");
+    s.type = "range"; s.min = 0.6; s.max = 1.4; s.step = "any"; s.value = 1; s.id = "hk-stance";
+    s.oninput = function () { send({ type: "stance", scale: parseFloat(s.value) }); };
+    row.appendChild(s); el("hk-body").appendChild(row);
+  })();
+  // walking
+  DATA.patterns.forEach(function (p) {
+    var o = document.createElement("option"); o.textContent = p; el("hk-pattern").appendChild(o);
+  });
+  el("hk-pattern").onchange = function () {
+    send({ type: "pattern", pattern: el("hk-pattern").value });
+  };
+  var keys = {}, pressAt = null, cmdBefore = null, baseBefore = null;
+  function axes() {
+    var k = function (c) { return keys[c] ? 1 : 0; };
+    return [k("w") - k("s"), k("a") - k("d"), k("q") - k("e")];
+  }
+  function onKey(ev, down) {
+    var c = (ev.key || "").toLowerCase();
+    if (!DATA.legged || c === "" || "wasdqe".indexOf(c) < 0) { return; }
+    if (ev.target.tagName === "INPUT") { return; }
+    if (!!keys[c] === down) { return; }
+    keys[c] = down;
+    if (down) {
+      pressAt = performance.now();
+      cmdBefore = api.state ? JSON.stringify(api.state.readout.command) : null;
+      baseBefore = api.state ? api.state.readout.base : null;
+    }
+    send({ type: "drive", axes: axes() }); showMode("walk");
+  }
+  // on-screen joystick: up/down = forward/back, left/right = turn (Q/E)
+  var stick = el("hk-stick"), knob = el("hk-knob"), sticking = false, lastSent = "";
+  function stickAt(ev, done) {
+    var r = stick.getBoundingClientRect(), R = r.width / 2;
+    var dx = done ? 0 : (ev.clientX - r.left - R) / R, dy = done ? 0 : (ev.clientY - r.top - R) / R;
+    var n = Math.hypot(dx, dy);
+    if (n > 1) { dx /= n; dy /= n; }
+    knob.style.left = (30 + 30 * dx) + "px"; knob.style.top = (30 + 30 * dy) + "px";
+    var axes = [Math.round(-20 * dy) / 20, 0, Math.round(-20 * dx) / 20];  // steps of 0.05
+    if (done || JSON.stringify(axes) !== lastSent) {
+      lastSent = JSON.stringify(axes);
+      send({ type: "drive", axes: axes });
+    }
+  }
+  stick.addEventListener("pointerdown", function (ev) {
+    sticking = true; stick.setPointerCapture(ev.pointerId); stickAt(ev, false);
+  });
+  stick.addEventListener("pointermove", function (ev) { if (sticking) { stickAt(ev, false); } });
+  stick.addEventListener("pointerup", function (ev) { sticking = false; stickAt(ev, true); });
+  window.addEventListener("keydown", function (ev) { onKey(ev, true); });
+  window.addEventListener("keyup", function (ev) { onKey(ev, false); });
+  // downloads
+  function download(name, text, type) {
+    var a = document.createElement("a");
+    a.href = URL.createObjectURL(new Blob([text], { type: type }));
+    a.download = name; document.body.appendChild(a); a.click(); a.remove();
+  }
+  var wantDownload = null;
+  el("hk-reset").onclick = function () {
+    send({ type: "reset" }); body.forEach(function (b) { b[0].value = 0; });
+  };
+  el("hk-json").onclick = function () { wantDownload = "json"; send({ type: "session" }); };
+  el("hk-csv").onclick = function () { wantDownload = "csv"; send({ type: "session" }); };
+  var fmt = function (a, n) { return a.map(function (x) { return x.toFixed(n); }).join(" "); };
+  function moved(b0, b1) {
+    if (!b0) { return false; }
+    for (var i = 0; i < 3; i++) { if (Math.abs(b0[i][3] - b1[i][3]) > 1e-9) { return true; } }
+    return false;
+  }
+  function onState(st) {
+    api.state = st; api.seq = st.seq;
+    var r = st.readout, now = performance.now();
+    for (var k = 0; k < paths.length; k++) {
+      viewer.set_transform(paths[k], st.poses.slice(16 * k, 16 * k + 16));
+    }
+    if (pressAt !== null && JSON.stringify(r.command) !== cmdBefore) {
+      api.latencies.push(now - pressAt); cmdBefore = "seen";
+    }
+    if (pressAt !== null && moved(baseBefore, r.base)) {
+      api.motion.push(now - pressAt); pressAt = null;
+    }
+    showMode(r.mode);
+    el("hk-fk").textContent = r.fk.map(function (row) {
+      return row.map(function (x) { return x.toFixed(12); }).join(" ");
+    }).join("\\n");
+    var fam = r.family ? ("nearest singular family " + r.family.name + ": " +
+      r.family.distance.toFixed(4) + " rad") : "singular families: " + DATA.families;
+    el("hk-status").textContent = r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
+      r.sigma_min.toExponential(3) + " m · manipulability " + r.manipulability.toExponential(3) +
+      "\\n" + fam + "\\nstatus: " + r.status;
+    el("hk-msg").textContent = r.message || "";
+    DATA.joints.forEach(function (j, i) {
+      if (document.activeElement !== sliders[i][0]) { sliders[i][0].value = r.q[i]; }
+      sliders[i][1].textContent = " " + r.q[i].toFixed(3);
+    });
+    var near = r.sigma_min < DATA.sigma_eps || (r.family && r.family.distance < 0.05);
+    footDot.position.set(r.point[0], r.point[1], r.point[2]);
+    footDot.material.color.setHex(near ? 0xff0000 : 0x22aa22);
+    el("hk-status").style.color = near ? "#d00" : "";
+    target.visible = !!r.target;
+    if (r.target) { target.position.set(r.target[0], r.target[1], r.target[2]); }
+    if (r.support) {
+      var s = r.support, pts = [];
+      s.feet.forEach(function (p, i) { if (s.stance[i]) { pts.push(p); } });
+      var c = [0, 0];
+      pts.forEach(function (p) { c[0] += p[0] / pts.length; c[1] += p[1] / pts.length; });
+      pts.sort(function (a, b) {
+        return Math.atan2(a[1] - c[1], a[0] - c[0]) - Math.atan2(b[1] - c[1], b[0] - c[0]);
+      });
+      var arr = polyGeom.attributes.position.array, n = Math.min(pts.length, 16);
+      var zmin = Math.min.apply(null, s.feet.map(function (p) { return p[2]; }));
+      for (var i = 0; i <= 16; i++) {
+        var p = pts[n ? (Math.min(i, n) % n) : 0] || [0, 0, 0];
+        arr[3 * i] = p[0]; arr[3 * i + 1] = p[1]; arr[3 * i + 2] = zmin;
+      }
+      polyGeom.attributes.position.needsUpdate = true; polyGeom.computeBoundingSphere();
+      var lost = s.margin < 0;
+      polyMat.color.setHex(lost ? 0xff0000 : 0x2288ff);
+      com.position.set(s.com[0], s.com[1], s.com[2]);
+      comGround.position.set(s.com[0], s.com[1], zmin);
+      el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
+      el("hk-margin").className = lost ? "lost" : "";
+      el("hk-com").textContent = fmt(s.com, 3) + " m";
+      el("hk-zmp").textContent =
+        s.zmp_margin === null ? "-" : (1000 * s.zmp_margin).toFixed(1) + " mm";
+      el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
+      el("hk-act").textContent = fmt(r.actual, 3);
+      el("hk-minm").textContent =
+        r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
+      if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
+    }
+    viewer.set_dirty();
+  }
+  ws.onopen = function () { el("hk-conn").textContent = "live"; api.ready = true; };
+  ws.onclose = function () { el("hk-conn").textContent = "disconnected"; api.ready = false; };
+  ws.onmessage = function (ev) {
+    var m = JSON.parse(ev.data);
+    if (m.type === "state") { onState(m); return; }
+    if (m.type === "error") {
+      api.errors.push(m); el("hk-msg").textContent = "refused: " + m.error; return;
+    }
+    if (m.type === "session" && wantDownload) {
+      if (wantDownload === "json") {
+        download("session.json", JSON.stringify(m.session), "application/json");
+      }
+      else { download("timeline.csv", m.csv, "text/csv"); }
+      wantDownload = null;
+    }
+    api.replies.push(m); if (api.replies.length > 50) { api.replies.shift(); }
+  };
+  if (!DATA.legged) { el("hk-legged").style.display = "none"; }
+  showMode("joints");
+})();
+</script>
+"""
+
+
+def _limits(lo: float, hi: float) -> tuple[float, float]:
+    return (lo if math.isfinite(lo) else -math.pi), (hi if math.isfinite(hi) else math.pi)
+
+
+def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> str:
+    """The cockpit's page for one robot (served by :class:`~.server.DriveServer`).
+
+    Raises:
+        OptionalDependencyError: meshcat is missing.
+        ViewerError: The visual geometry cannot be built.
+
+    """
+    model = cockpit.model
+    cmds = scene_commands(model, [0.0], cockpit.q[None], base_poses=cockpit.base, trace_frame=False)
+    span = float(cockpit.body.leg_span) if cockpit.legged else float(cockpit.limbs[0].max_reach)
+    joints = []
+    for i, name in enumerate(model.joint_names):
+        lo, hi = _limits(float(model.lower[i]), float(model.upper[i]))
+        joints.append({"name": name, "lower": lo, "upper": hi, "value": float(cockpit.q[i])})
+    fams = cockpit.families
+    label = title or f"hexapod_kin drive: {model.name}"
+    data = {
+        "title": label,
+        "scene": [base64.b64encode(pack(c)).decode("ascii") for c in cmds],
+        "paths": [v.path for v in scene.visuals],
+        "joints": joints,
+        "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
+        "legged": cockpit.legged,
+        "patterns": list(cockpit.patterns),
+        "body_shift": BODY_SHIFT * span,
+        "body_angle": BODY_ANGLE,
+        "scale": span,
+        "sigma_eps": SIGMA_EPS,
+        "families": "per leg: not derived (legged robot)"
+        if cockpit.legged
+        else (fams.reason or "none")
+        if fams is not None
+        else "deriving…",
+    }
+    return page(label, fill(_BODY, data=script_json(data)), style=_STYLE, policy=_CSP)
+
+
+def _clean(value: Any) -> Any:
+    """JSON-safe: non-finite numbers become None (JSON has no inf or NaN)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def state_frame(cockpit: Cockpit, scene: Scene, seq: int) -> dict[str, Any]:
+    """The state message of one tick: the visuals' poses (column-major) and the readout."""
+    with cockpit.lock:
+        q, base = cockpit.q.copy(), cockpit.base.copy()
+        readout = cockpit.readout()
+    poses = scene.placements(q[None], base[None])[0]
+    flat = np.round(np.transpose(poses, (0, 2, 1)).reshape(-1), 7)
+    return {"type": "state", "seq": seq, "poses": flat.tolist(), "readout": _clean(readout)}

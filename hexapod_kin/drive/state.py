@@ -1,0 +1,583 @@
+"""The cockpit's state and its laws, apart from any page: :class:`Cockpit`.
+
+One robot (the one loaded model; a legged robot is also viewed as its
+:class:`~hexapod_kin.gait.robot.WholeBody`), one configuration ``q`` (the model's joint order)
+and one body pose, changed by four kinds of command, each in the robot's terms:
+
+* **joints** — :meth:`Cockpit.set_joint` (within the joint's limits);
+* **target** — :meth:`Cockpit.set_target`: the selected foot or tool follows by resolved-rate
+  steps (:mod:`.reach`) on every :meth:`Cockpit.advance`, and stops with a reason;
+* **body** — :meth:`Cockpit.set_body`: 6-DOF body pose with every foot held (body-pose IK);
+* **walk** — :meth:`Cockpit.set_drive` / :meth:`Cockpit.set_pattern`: the planner's walk,
+  cycle by cycle (:mod:`.walking`).
+
+:meth:`Cockpit.readout` is what the page prints: FK (``model.fk``), σ_min and manipulability of
+the foot/tool Jacobian, the distance to the nearest singular family (a chain whose families are
+known), the support polygon, CoM and static margin, commanded and actual velocity. The server
+advances it in real time; tests advance it by fixed steps.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ConfigurationError, FrameNotFoundError, ParameterError, choices
+from ..gait.robot import as_whole_body, body_pose
+from ..gait.stability import support_margin
+from ..gait.tables import pattern_names
+from .reach import Limb
+from .walking import Walker
+
+__all__ = ["MODES", "Cockpit"]
+
+#: The page's modes.
+MODES = ("joints", "target", "body", "walk")
+#: Body-pose slider ranges: translation as a fraction of the leg span, angles [rad].
+BODY_SHIFT, BODY_ANGLE = 0.3, 0.4
+#: Recorded samples kept (a session of about 30 min at 50 Hz).
+MAX_RECORD = 90_000
+
+
+def _finite(name: str, value: Any, size: int) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        arr = np.array([math.nan])
+    if arr.shape != (size,) or not np.all(np.isfinite(arr)):
+        raise ParameterError(
+            f"{name}={value!r} is not allowed; give {size} finite number(s)",
+            parameter=name,
+            value=repr(value)[:80],
+            allowed=f"{size} finite numbers",
+        )
+    return arr
+
+
+class Cockpit:
+    """A robot driven live: state, commands and readouts (thread-safe).
+
+    Args:
+        model: The loaded robot (:func:`hexapod_kin.load`).
+        feet: Feet of a legged URDF without foot links (see
+            :func:`~hexapod_kin.gait.robot.as_whole_body`).
+        families: The chain's singular families (:class:`~hexapod_kin.singularity.Families`)
+            or ``None``; may be given later (:attr:`families`).
+
+    Raises:
+        ParameterError, ConfigurationError: Bad ``feet``.
+
+    """
+
+    def __init__(self, model: Any, *, feet: Any = None, families: Any = None) -> None:
+        self.model = model
+        self.families = families
+        self.lock = threading.RLock()
+        self.body: Any = None
+        self.not_legged = ""
+        try:
+            self.body = as_whole_body(model, feet=feet)
+        except (ParameterError, ConfigurationError) as exc:
+            if feet is not None:
+                raise
+            self.not_legged = str(exc)
+        if self.body is not None and not pattern_names(self.body.n_legs):
+            self.not_legged = f"{self.body.n_legs} limb(s) and no gait for them: one chain"
+            self.body = None  # an arm or a single leg found as limbs of a tree
+        self.target: np.ndarray | None = None
+        self.time = 0.0
+        self.record: list[tuple[float, list[float], list[float]]] = []
+        self.events: list[dict[str, Any]] = []
+        self.min_margin = math.inf
+        self.margins: list[float] = []
+        self._actual = np.zeros(3)
+        if self.body is None:
+            self.limbs = [Limb(model)]
+            self.patterns: tuple[str, ...] = ()
+            self.pattern = ""
+        else:
+            wb = self.body
+            try:
+                self._cols = np.array([model.joint_names.index(n) for n in wb.joint_names])
+            except ValueError:
+                raise ConfigurationError(
+                    f"the legged robot's joints {list(wb.joint_names)} are not the model's",
+                    parameter="model",
+                ) from None
+            self.limbs = [Limb(None, wb, i) for i in range(wb.n_legs)]
+            self.patterns = pattern_names(wb.n_legs)
+            self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
+            self.walker = Walker(wb)
+        self.limb = 0
+        self.speed = (0.05, 0.05, 0.3) if self.body is not None else (0.0, 0.0, 0.0)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the home pose (a chain) or standing on flat ground at z = 0 (legs)."""
+        with self.lock:
+            self.mode, self.status, self.message, self.target = "joints", "idle", "", None
+            self.body_xyz = np.zeros(3)
+            self.body_rpy = np.zeros(3)
+            self.drive = (0.0, 0.0, 0.0)
+            self.min_margin, self.margins = math.inf, []
+            if self.body is None:
+                self.q = np.asarray(self.model.check_q(self._home()), dtype=float)
+                self.base = np.eye(4)
+            else:
+                wb = self.body
+                self.walker.cycle = None
+                self.base = body_pose([0.0, 0.0, wb.body_height])
+                feet = (self.base[:3, :3] @ wb.neutral_feet().T + self.base[:3, 3:4]).T
+                ik = wb.body_ik(self.base, feet, strict=False)
+                self.qb = np.asarray(ik.q[0] if np.all(ik.ok) else wb.neutral_q(), dtype=float)
+                self.q = np.asarray(self.model.neutral(), dtype=float)
+                self.q[self._cols] = self.qb
+                self.feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
+                self.stand = self.base.copy()
+            self._event("reset")
+            self._record()
+
+    def _home(self) -> np.ndarray:
+        from ..gait.stand import default_configuration
+
+        return np.asarray(default_configuration(self.model), dtype=float)
+
+    # ------------------------------------------------------------------ helpers
+    @property
+    def legged(self) -> bool:
+        """Whether the robot has legs (body and walk modes)."""
+        return self.body is not None
+
+    def _limb_q(self) -> np.ndarray:
+        return self.q if self.body is None else self.qb
+
+    def _set_limb_q(self, qv: np.ndarray) -> None:
+        if self.body is None:
+            self.q = qv
+        else:
+            self.qb = qv
+            self.q = self.q.copy()
+            self.q[self._cols] = qv
+
+    def _event(self, kind: str, **data: Any) -> None:
+        self.events.append({"t": round(self.time, 6), "type": kind, **data})
+        del self.events[:-1000]
+
+    def _record(self) -> None:
+        self.record.append((self.time, self.q.tolist(), self.base.reshape(-1).tolist()))
+        if len(self.record) > MAX_RECORD:
+            del self.record[: len(self.record) - MAX_RECORD]
+
+    # ------------------------------------------------------------------ commands
+    def set_mode(self, mode: str) -> None:
+        """Switch the page's mode (one of :data:`MODES`; body and walk need legs).
+
+        Raises:
+            ParameterError: Unknown mode, or a legged mode for a robot without legs.
+
+        """
+        allowed = MODES if self.legged else MODES[:2]
+        if mode not in allowed:
+            raise ParameterError(
+                f"mode={mode!r} is not allowed for {self.model.name}; use one of "
+                f"{choices(allowed)}",
+                parameter="mode",
+                value=mode,
+                allowed=allowed,
+            )
+        with self.lock:
+            if self.legged and mode != "walk":
+                self.drive = (0.0, 0.0, 0.0)
+            if self.legged and mode == "body" and self.mode != "body":
+                self._hold_feet()
+            self.mode = mode
+            self.target = None if mode != "target" else self.target
+            self._event("mode", mode=mode)
+
+    def _hold_feet(self) -> None:
+        """The feet where they are now are held; the body sliders move from here."""
+        self.feet = np.asarray(self.body.feet(self.qb[None], self.base[None])[0])
+        yaw = math.atan2(self.base[1, 0], self.base[0, 0])
+        self.stand = body_pose(self.base[:3, 3], (0.0, 0.0, yaw))
+        self.body_xyz[:] = 0.0
+        self.body_rpy[:] = 0.0
+
+    def set_joint(self, name: str | int, value: float) -> None:
+        """Set one joint [rad] / [m] (the joints mode).
+
+        Raises:
+            FrameNotFoundError: Unknown joint.
+            ParameterError: A value outside the joint's limits.
+
+        """
+        names = list(self.model.joint_names)
+        j = name if isinstance(name, int) and 0 <= name < len(names) else None
+        if j is None:
+            if name not in names:
+                raise FrameNotFoundError(
+                    f"joint {name!r} is not in {self.model.name}; use one of {choices(names)}"
+                )
+            j = names.index(name)
+        v = float(_finite("value", value, 1)[0])
+        lo, hi = float(self.model.lower[j]), float(self.model.upper[j])
+        if not lo - 1e-12 <= v <= hi + 1e-12:
+            raise ParameterError(
+                f"value={v!r} of joint {names[j]!r} is not allowed; its limits are "
+                f"[{lo:.6g}, {hi:.6g}]",
+                parameter=names[j],
+                value=v,
+                allowed=f"[{lo:.6g}, {hi:.6g}]",
+            )
+        with self.lock:
+            self.q = self.q.copy()
+            self.q[j] = v
+            if self.body is not None:
+                self.qb = self.q[self._cols].copy()
+            self.status, self.message = "idle", ""
+            self._record()
+
+    def set_q(self, q: Any) -> None:
+        """Set every joint at once (``q`` (nq,) in the model's order, inside the limits).
+
+        Raises:
+            ConfigurationError: Bad ``q``.
+            ParameterError: A joint beyond its limits.
+
+        """
+        qv = np.asarray(self.model.check_q(q), dtype=float)
+        bad = np.flatnonzero((qv < self.model.lower - 1e-12) | (qv > self.model.upper + 1e-12))
+        if bad.size:
+            j = int(bad[0])
+            raise ParameterError(
+                f"q[{j}]={qv[j]!r} ({self.model.joint_names[j]}) is beyond its limits "
+                f"[{self.model.lower[j]:.6g}, {self.model.upper[j]:.6g}]",
+                parameter="q",
+                value=float(qv[j]),
+            )
+        with self.lock:
+            self.q = qv
+            if self.body is not None:
+                self.qb = qv[self._cols].copy()
+            self._record()
+
+    def select(self, limb: int | str) -> None:
+        """Select the driven foot (legged: a leg name or index; a chain has one tip).
+
+        Raises:
+            ParameterError: Unknown leg.
+
+        """
+        names = list(self.body.leg_names) if self.body is not None else [str(self.model.tip)]
+        i = limb if isinstance(limb, int) and 0 <= limb < len(names) else None
+        if i is None and limb in names:
+            i = names.index(limb)
+        if i is None:
+            raise ParameterError(
+                f"foot={limb!r} is not allowed; use one of {choices(names)}",
+                parameter="foot",
+                value=repr(limb),
+                allowed=names,
+            )
+        with self.lock:
+            self.limb = i
+            self.target = None
+
+    def set_target(self, xyz: Any) -> None:
+        """Set the selected foot's or tool's target point [m] (world; a chain: its base frame).
+
+        The point is followed on each :meth:`advance` (target mode).
+
+        Raises:
+            ParameterError: Not three finite numbers.
+
+        """
+        t = _finite("target", xyz, 3)
+        with self.lock:
+            if self.legged and self.mode == "walk":
+                self.drive = (0.0, 0.0, 0.0)
+            self.mode = "target"
+            self.target = t
+            self.status, self.message = "moving", ""
+            self._event("target", xyz=t.tolist())
+
+    def set_body(self, xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> None:
+        """Body pose relative to the standing pose, every foot held: ``xyz`` [m], ``rpy`` [rad].
+
+        A pose the legs cannot take (a foot out of reach, a joint beyond its limit) is refused
+        with the reason (:attr:`message`) and the body stays where it was.
+
+        Raises:
+            ParameterError: Not a legged robot, or not finite numbers.
+
+        """
+        if not self.legged:
+            raise ParameterError(
+                f"{self.model.name} has no legs to hold: {self.not_legged}", parameter="body"
+            )
+        p, a = _finite("xyz", xyz, 3), _finite("rpy", rpy, 3)
+        with self.lock:
+            if self.mode != "body":
+                self.set_mode("body")
+            base = self.stand @ body_pose(p, a)
+            ik = self.body.body_ik(base, self.feet, q_prev=self.qb, strict=False)
+            ok = np.asarray(ik.ok)[0]
+            if not np.all(ok):
+                leg = int(np.flatnonzero(~ok)[0])
+                name = self.body.leg_names[leg]
+                excess = float(ik.excess[0, leg])
+                if excess > 0:
+                    why = f"{name}: its foot is {excess * 1e3:.1f} mm out of reach"
+                else:
+                    per = np.asarray(ik.limit_margin[0])
+                    bad = [j for j in self.limbs[leg].columns if per[j] < 0]
+                    j = bad[0] if bad else self.limbs[leg].columns[0]
+                    why = (
+                        f"{name}: joint {self.body.joint_names[j]} would pass its limit by "
+                        f"{-per[j]:.4f}"
+                    )
+                self.status, self.message = "refused", f"body pose refused: {why}"
+                return
+            self.body_xyz, self.body_rpy = p, a
+            self.base = base
+            self._set_limb_q(np.asarray(ik.q[0], dtype=float))
+            self.status, self.message = "held", ""
+            self._record()
+
+    def set_stance(self, scale: float) -> None:
+        """Stance width: every foot back on the ground at ``scale`` × the robot's reach.
+
+        The reach is the robot's mean mount-to-foot distance
+        (:meth:`~hexapod_kin.gait.WholeBody.neutral_feet`), ``scale`` in [0.6, 1.4]; the body
+        stays where it stands (its height is the body's z slider).
+
+        Raises:
+            ParameterError: Not a legged robot, or ``scale`` outside [0.6, 1.4].
+
+        """
+        if not self.legged:
+            raise ParameterError(f"{self.model.name} has no legs", parameter="stance")
+        k = float(_finite("stance", scale, 1)[0])
+        if not 0.6 <= k <= 1.4:
+            raise ParameterError(
+                f"stance={k!r} is not allowed; give a factor of the reach in [0.6, 1.4]",
+                parameter="stance",
+                value=k,
+                allowed="[0.6, 1.4]",
+            )
+        wb = self.body
+        with self.lock:
+            if self.mode != "body":
+                self.set_mode("body")
+            local = wb.neutral_feet(k * wb.foot_reach)
+            local[:, 2] = 0.0
+            feet = (self.stand[:3, :3] @ local.T + self.stand[:3, 3:4]).T
+            feet[:, 2] = wb.foot_radius  # on the ground z = 0
+            ik = wb.body_ik(self.base, feet, q_prev=self.qb, strict=False)
+            ok = np.asarray(ik.ok)[0]
+            if not np.all(ok):
+                leg = wb.leg_names[int(np.flatnonzero(~ok)[0])]
+                self.status, self.message = "refused", f"stance refused: {leg} cannot reach it"
+                return
+            self.feet = feet
+            self._set_limb_q(np.asarray(ik.q[0], dtype=float))
+            self.status, self.message = "held", ""
+            self._event("stance", scale=k)
+            self._record()
+
+    def set_drive(self, axes: Any) -> None:
+        """Walk: ``axes`` (forward, left, turn), each in [-1, 1] of :attr:`speed` (W/S, A/D, Q/E).
+
+        Raises:
+            ParameterError: Not a legged robot, or not three numbers in [-1, 1].
+
+        """
+        if not self.legged:
+            raise ParameterError(f"{self.model.name} has no legs to walk with", parameter="drive")
+        a = _finite("drive", axes, 3)
+        if np.any(np.abs(a) > 1):
+            raise ParameterError(
+                f"drive={axes!r} is not allowed; give three numbers in [-1, 1]",
+                parameter="drive",
+                value=repr(axes),
+            )
+        cmd = tuple(float(x * s) for x, s in zip(a, self.speed))
+        with self.lock:
+            if self.mode != "walk":
+                self.mode = "walk"
+                self.target = None
+            self.drive = cmd  # type: ignore[assignment]
+            self._event("drive", command=list(cmd))
+            if any(cmd) and self.walker.cycle is None:
+                self._start_cycle()
+
+    def set_pattern(self, name: str) -> None:
+        """The walk's phase pattern (one of :attr:`patterns`; from the next cycle on).
+
+        Raises:
+            ParameterError: Unknown pattern.
+
+        """
+        if name not in self.patterns:
+            raise ParameterError(
+                f"pattern={name!r} is not allowed; use one of {choices(self.patterns)}",
+                parameter="pattern",
+                value=name,
+                allowed=self.patterns,
+            )
+        with self.lock:
+            self.pattern = name
+            self._event("pattern", pattern=name)
+
+    def _start_cycle(self) -> None:
+        from ..exceptions import HexapodKinError
+
+        try:
+            self.walker.start(self.pattern, self.drive, self.base)
+        except HexapodKinError as exc:
+            self.drive = (0.0, 0.0, 0.0)
+            self.status, self.message = "refused", f"walk refused: {exc}"
+            return
+        self.status, self.message = "walking", ""
+        self._apply_walk_sample()
+
+    def _apply_walk_sample(self) -> None:
+        q, base, k = self.walker.sample()
+        self._set_limb_q(np.asarray(q, dtype=float))
+        self.base = base
+        run = self.walker.cycle.run  # type: ignore[union-attr]
+        self.margins.append(float(run.margin[k]))
+        del self.margins[:-5000]
+        self.min_margin = min(self.min_margin, float(run.margin[k]))
+
+    # ------------------------------------------------------------------ time
+    def advance(self, dt: float) -> None:
+        """Move the robot on by ``dt`` [s] (a follow's steps, a walk's samples) and record it."""
+        dt = float(min(max(dt, 0.0), 0.1))
+        with self.lock:
+            self.time += dt
+            before = self.base[:3, 3].copy(), math.atan2(self.base[1, 0], self.base[0, 0])
+            if self.mode == "target" and self.target is not None and self.status == "moving":
+                limb = self.limbs[self.limb]
+                res = limb.follow(self._limb_q(), self.base, self.target, dt=dt / 10, steps=10)
+                self._set_limb_q(res.q)
+                if res.status != "moving":
+                    self.status, self.message = res.status, res.reason
+                    self._event("target stop", status=res.status, reason=res.reason)
+            elif self.legged and self.mode == "walk" and self.walker.cycle is not None:
+                why = self.walker.advance(dt, self.pattern, self.drive)
+                if self.walker.cycle is not None:
+                    self._apply_walk_sample()
+                else:
+                    self.status = "standing" if why == "stopped" else "refused"
+                    self.message = "" if why == "stopped" else f"walk stopped: {why}"
+                    self.drive = (0.0, 0.0, 0.0) if why != "stopped" else self.drive
+            if dt > 0:
+                yaw = math.atan2(self.base[1, 0], self.base[0, 0])
+                d = self.base[:3, 3] - before[0]
+                c, s = math.cos(yaw), math.sin(yaw)
+                inst = np.array(
+                    [
+                        (c * d[0] + s * d[1]) / dt,
+                        (-s * d[0] + c * d[1]) / dt,
+                        (yaw - before[1]) / dt,
+                    ]
+                )
+                self._actual = 0.9 * self._actual + 0.1 * inst
+            self._record()
+
+    # ------------------------------------------------------------------ readouts
+    def support(self) -> dict[str, Any]:
+        """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots).
+
+        While walking, also the planner's ZMP margin [m] of the sample (``zmp_margin``; None
+        when standing: a still robot's ZMP is its CoM's projection).
+        """
+        wb = self.body
+        feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
+        stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
+        zmp = None
+        if self.mode == "walk" and self.walker.cycle is not None:
+            run = self.walker.cycle.run
+            k = self.walker.sample()[2]
+            stance = np.asarray(run.support[k])
+            if len(run.zmp_margin) > k:
+                zmp = float(run.zmp_margin[k])
+        com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
+        margin = float(support_margin(feet, stance, com))
+        return {
+            "feet": feet.tolist(),
+            "stance": stance.tolist(),
+            "com": com.tolist(),
+            "margin": margin,
+            "zmp_margin": zmp,
+        }
+
+    def readout(self) -> dict[str, Any]:
+        """What the page prints, JSON-ready (SI units)."""
+        with self.lock:
+            limb = self.limbs[self.limb]
+            qv = self._limb_q()
+            smin, manip = limb.measures(qv, self.base)
+            out: dict[str, Any] = {
+                "time": self.time,
+                "mode": self.mode,
+                "q": self.q.tolist(),
+                "base": self.base.tolist(),
+                "fk": np.asarray(self.model.fk(self.q)).tolist(),
+                "foot": limb.label,
+                "point": limb.point(qv, self.base).tolist(),
+                "sigma_min": smin,
+                "manipulability": manip,
+                "family": self._family(),
+                "status": self.status,
+                "message": self.message,
+                "target": None if self.target is None else self.target.tolist(),
+            }
+            if self.legged:
+                out["support"] = self.support()
+                out["body"] = {"xyz": self.body_xyz.tolist(), "rpy": self.body_rpy.tolist()}
+                out["command"] = list(self.drive)
+                out["actual"] = self._actual.tolist()
+                out["pattern"] = self.pattern
+                out["min_margin"] = None if math.isinf(self.min_margin) else self.min_margin
+            return out
+
+    def _family(self) -> dict[str, Any] | None:
+        fams = self.families
+        if self.body is not None or fams is None or not fams.families:
+            return None
+        idx, dist, _, _ = fams.nearest(self.q[None])
+        if idx[0] < 0:
+            return None
+        fam = fams.families[int(idx[0])]
+        return {"name": str(getattr(fam, "name", idx[0])), "distance": float(dist[0])}
+
+    def session(self) -> dict[str, Any]:
+        """The recorded session: times [s], q (model order), body poses, events (JSON-ready)."""
+        with self.lock:
+            rec = list(self.record)
+            return {
+                "robot": self.model.name,
+                "joint_names": list(self.model.joint_names),
+                "t": [r[0] for r in rec],
+                "q": [r[1] for r in rec],
+                "base_poses": [r[2] for r in rec],
+                "events": list(self.events),
+            }
+
+    def timeline_csv(self) -> str:
+        """The session's joints as a plan CSV (``t,<joint>...``; ``hexapod-kin timeline``)."""
+        with self.lock:
+            rec = list(self.record)
+        lines = ["t," + ",".join(self.model.joint_names)]
+        last = -1.0
+        for t, q, _ in rec:
+            if t <= last:  # a plan's times increase strictly: commands at one time keep the last
+                lines[-1] = f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q)
+                continue
+            lines.append(f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q))
+            last = t
+        return "\n".join(lines) + "\n"

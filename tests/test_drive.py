@@ -1,0 +1,341 @@
+"""The cockpit without a browser: its laws, its server's hygiene, the command's lifetime.
+
+Numbers are held to independent references: ``model.fk`` / the legged robot's vectorised FK,
+the body pose's own rotation, the planner's commanded twist; the resolved-rate follow's error
+must shrink step by step.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import hexapod_kin as hk
+from hexapod_kin.drive import Cockpit, drive
+from hexapod_kin.drive.reach import TOLERANCE
+from hexapod_kin.drive.server import handle
+from hexapod_kin.exceptions import FrameNotFoundError, HexapodKinError, ParameterError
+
+ROBOTS = ("hexabot_leg", "hexapod", "erd:solo12")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module", params=ROBOTS)
+def model(request):
+    return hk.load(request.param)
+
+
+def _reachable(c: Cockpit) -> np.ndarray:
+    """A target the selected limb reaches: FK of its joints moved by 0.15 rad (in limits)."""
+    limb = c.limbs[c.limb]
+    q = c._limb_q().copy()
+    q[limb.columns] = np.clip(
+        q[limb.columns] + 0.15, limb.lower[limb.columns], limb.upper[limb.columns]
+    )
+    return limb.point(q, c.base)
+
+
+def test_joint_sets_fk_exactly(model):
+    c = Cockpit(model)
+    j = model.nq - 1
+    v = float(np.clip(0.37, model.lower[j], model.upper[j]))
+    c.set_joint(model.joint_names[j], v)
+    q_ref = np.asarray(model.neutral(), dtype=float) if c.legged else c._home()
+    np.testing.assert_array_equal(np.delete(c.q, j)[:0], np.delete(q_ref, j)[:0])
+    np.testing.assert_allclose(c.readout()["fk"], model.fk(c.q), atol=1e-12, rtol=0)
+    assert c.q[j] == v
+    with pytest.raises(ParameterError, match="limits"):
+        c.set_joint(model.joint_names[j], float(model.upper[j]) + 0.5)
+    with pytest.raises(FrameNotFoundError, match="use one of"):
+        c.set_joint("no_such_joint", 0.0)
+
+
+def test_target_converges_step_by_step(model):
+    c = Cockpit(model)
+    target = _reachable(c)
+    c.set_target(target)
+    limb = c.limbs[c.limb]
+    errors = [float(np.linalg.norm(limb.point(c._limb_q(), c.base) - target))]
+    for _ in range(400):
+        if c.status != "moving":
+            break
+        c.advance(0.02)
+        errors.append(float(np.linalg.norm(limb.point(c._limb_q(), c.base) - target)))
+    assert c.status == "reached", c.message
+    assert errors[-1] < 1e-3 and errors[-1] <= TOLERANCE
+    assert all(b <= a + 1e-12 for a, b in zip(errors, errors[1:]))  # never moves away
+    # the foot point is the independent FK's: model.fk for a chain, the feet's tree FK else
+    if not c.legged:
+        np.testing.assert_allclose(model.fk(c.q)[:3, 3], limb.point(c.q, c.base), atol=1e-12)
+
+
+def test_unreachable_target_stops_with_reason(model):
+    c = Cockpit(model)
+    limb = c.limbs[c.limb]
+    far = limb.hip(c._limb_q(), c.base) + np.array([0.0, 0.0, 2.0 * limb.max_reach])
+    q0 = c.q.copy()
+    c.set_target(far)
+    c.advance(0.02)
+    assert c.status == "out of reach"
+    assert "out of reach" in c.message and "too far" in c.message
+    np.testing.assert_array_equal(c.q, q0)  # refused before any step
+
+
+def test_limit_or_singularity_reason():
+    """A target straight above the hip at 0.9 reach: the leg stops and says why."""
+    c = Cockpit(hk.load("hexabot_leg"))
+    limb = c.limbs[0]
+    c.set_target(limb.hip(c.q, c.base) + np.array([0.0, 0.0, 0.9 * limb.max_reach]))
+    for _ in range(400):
+        if c.status != "moving":
+            break
+        c.advance(0.02)
+    assert c.status in ("joint limit", "singularity"), (c.status, c.message)
+    assert c.message.startswith(c.status)
+    assert np.all(c.q >= c.model.lower - 1e-12) and np.all(c.q <= c.model.upper + 1e-12)
+
+
+@pytest.mark.parametrize("src", ROBOTS[1:])
+def test_body_pitch_holds_every_foot(src):
+    c = Cockpit(hk.load(src))
+    feet0 = c.body.feet(c.qb[None], c.base[None])[0]
+    c.set_body((0.0, 0.0, 0.0), (0.0, 0.1, 0.0))
+    assert c.status == "held", c.message
+    R = c.base[:3, :3]
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    assert abs(pitch - 0.1) < 1e-6
+    feet = c.body.feet(c.qb[None], c.base[None])[0]  # FK of the IK's joints
+    np.testing.assert_allclose(feet, feet0, atol=1e-6)
+    # an impossible pose is refused with its reason; the body stays
+    base = c.base.copy()
+    c.set_body((0.0, 0.0, 1.0), (0.0, 0.0, 0.0))
+    assert c.status == "refused" and "out of reach" in c.message
+    np.testing.assert_array_equal(c.base, base)
+
+
+@pytest.mark.parametrize("src", ROBOTS[1:])
+def test_walk_forward_and_switch_pattern(src):
+    c = Cockpit(hk.load(src))
+    x0 = c.base[:3, 3].copy()
+    c.set_drive((1.0, 0.0, 0.0))
+    dt, hold = 0.02, 2.0
+    for _ in range(int(hold / dt)):
+        c.advance(dt)
+    walked = float(c.base[0, 3] - x0[0])
+    assert walked >= 0.8 * c.speed[0] * hold
+    stable = [p for p in c.patterns if c.walker.plan(p, c.drive).table.statically_stable]
+    other = [p for p in stable if p != c.pattern][0]  # trot and pace: margins not a check
+    c.set_pattern(other)
+    for _ in range(int(2.5 / dt)):
+        c.advance(dt)
+    assert c.walker.cycle is not None and c.walker.cycle.pattern == other
+    c.set_drive((0.0, 0.0, 0.0))
+    for _ in range(int(1.5 / dt)):
+        c.advance(dt)
+    assert c.status == "standing" and c.walker.cycle is None
+    assert c.min_margin > 0 and min(c.margins) > 0
+    ro = c.readout()
+    assert ro["command"] == [0.0, 0.0, 0.0] and ro["pattern"] == other
+
+
+def test_session_and_timeline_read_back(tmp_path):
+    from hexapod_kin.export.timeline import read_plan
+
+    c = Cockpit(hk.load("hexapod"))
+    c.set_drive((1.0, 0.0, 0.0))
+    for _ in range(30):
+        c.advance(0.02)
+    s = c.session()
+    assert len(s["t"]) == len(s["q"]) == len(s["base_poses"]) == 31
+    path = tmp_path / "timeline.csv"
+    path.write_text(c.timeline_csv())
+    t, q, names = read_plan(path)
+    assert names == tuple(c.model.joint_names)
+    np.testing.assert_allclose(q[-1], c.q, atol=1e-8)
+    json.dumps(s)  # JSON-ready
+
+
+def test_handle_refuses_bad_messages():
+    c = Cockpit(hk.load("hexabot_leg"))
+    for bad in (
+        [],
+        {"type": 3},
+        {"type": "nope"},
+        {"type": "joint"},
+        {"type": "joint", "name": "hip", "value": "x"},
+        {"type": "joint", "name": "hip", "value": float("nan")},
+        {"type": "target", "xyz": [1, 2]},
+        {"type": "mode", "mode": "walk"},  # no legs
+        {"type": "drive", "axes": [1, 0, 0]},
+    ):
+        with pytest.raises((HexapodKinError, KeyError, TypeError, ValueError)):
+            handle(c, bad)
+    assert handle(c, {"type": "ping", "t": 1}) == {"type": "pong", "t": 1}
+
+
+# ======================================================================== the server
+def _get(url: str, host: str | None = None) -> tuple[int, bytes]:
+    req = urllib.request.Request(url, headers={"Host": host} if host else {})
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            return r.status, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read()
+
+
+async def _ws_exchange(url: str, origin: str, messages: list[str], n: int) -> list[dict]:
+    from tornado.httpclient import HTTPRequest
+    from tornado.websocket import websocket_connect
+
+    conn = await websocket_connect(HTTPRequest(url, headers={"Origin": origin}))
+    for m in messages:
+        conn.write_message(m)
+    out: list[dict] = []
+    while len([m for m in out if m["type"] != "state"]) < n:
+        msg = await asyncio.wait_for(conn.read_message(), 10)
+        assert msg is not None
+        out.append(json.loads(msg))
+    conn.close()
+    return out
+
+
+def test_server_hygiene():
+    with drive("hexabot_leg", families=False) as s:
+        port = s.server.port
+        assert s.url == f"http://127.0.0.1:{port}/"
+        status, body = _get(s.url)
+        assert status == 200 and b"hexapod_kin drive" in body and b"cdn" not in body.lower()
+        assert _get(s.url + "meshcat.js")[0] == 200
+        assert _get(s.url, host=f"evil.example:{port}")[0] == 403
+        assert _get(s.url + "meshcat.js", host=f"localhost.evil:{port}")[0] == 403
+        # not listening on other interfaces
+        with socket.socket() as sock:
+            sock.settimeout(1)
+            others = [a for a in socket.gethostbyname_ex(socket.gethostname())[2]]
+            others = [a for a in others if not a.startswith("127.")]
+            for addr in others:
+                assert sock.connect_ex((addr, port)) != 0
+        ws = f"ws://127.0.0.1:{port}/ws"
+        from tornado.httpclient import HTTPClientError
+        from tornado.websocket import WebSocketError
+
+        with pytest.raises((WebSocketError, HTTPClientError)):  # a foreign Origin: refused
+            asyncio.run(_ws_exchange(ws, "http://evil.example", [], 1))
+        bad = ["{not json", json.dumps({"type": "joint", "name": "hip", "value": 99, "id": 7})]
+        good = json.dumps({"type": "joint", "name": "hip", "value": 0.2, "id": 8})
+        got = asyncio.run(_ws_exchange(ws, f"http://127.0.0.1:{port}", [*bad, good], 3))
+        replies = [m for m in got if m["type"] != "state"]
+        assert replies[0]["type"] == "error" and replies[0]["id"] is None
+        assert replies[1]["type"] == "error" and replies[1]["id"] == 7
+        assert "limits" in replies[1]["error"]
+        assert replies[2] == {"type": "ack", "id": 8}
+        assert s.state()["q"][0] == 0.2  # the good one applied, the bad ones dropped
+        # a second page on the same server works
+        got = asyncio.run(
+            _ws_exchange(ws, f"http://localhost:{port}", [json.dumps({"type": "ping", "t": 5})], 1)
+        )
+        assert {"type": "pong", "t": 5} in got
+        assert s.server.pages_seen == 2  # the foreign Origin never opened
+    assert not s.running
+    with socket.socket() as sock:
+        assert sock.connect_ex(("127.0.0.1", port)) != 0
+
+
+def _start_cli(*extra: str) -> tuple[subprocess.Popen, str]:
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hexapod_kin", "drive", "hexabot_leg", "--no-open", *extra],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        text=True,
+    )
+    line = proc.stdout.readline()
+    m = re.search(r"(http://127\.0\.0\.1:\d+/)", line)
+    assert m, (line, proc.stderr.read() if proc.poll() is not None else "")
+    return proc, m.group(1)
+
+
+def test_cli_ctrl_c_leaves_nothing():
+    proc, url = _start_cli()
+    try:
+        assert _get(url)[0] == 200
+        proc.send_signal(signal.SIGINT)
+        rc = proc.wait(30)
+        assert (130 if rc == -signal.SIGINT else rc) == 130  # a shell's $? for both
+        assert proc.stderr.read().strip().endswith("hexapod-kin: interrupted")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    port = int(url.rsplit(":", 1)[1].strip("/"))
+    with socket.socket() as sock:
+        assert sock.connect_ex(("127.0.0.1", port)) != 0
+
+
+def test_cli_stops_when_the_page_closes():
+    proc, url = _start_cli("--until-closed")
+    try:
+        ws = url.replace("http", "ws") + "ws"
+        asyncio.run(_ws_exchange(ws, url.rstrip("/"), [json.dumps({"type": "ping"})], 1))
+        assert proc.wait(30) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+
+
+def test_drive_refuses_bad_port():
+    with pytest.raises(ParameterError, match="port"):
+        drive("hexabot_leg", port=-1)
+
+
+def test_cli_refuses_bad_input():
+    from hexapod_kin.cli import main
+
+    assert main(["drive", "hexabot_leg", "--no-open", "--port", "70000"]) == 2
+    assert main(["drive", "no_such_robot", "--no-open"]) == 2
+
+
+@pytest.mark.parametrize("src", ROBOTS[1:])
+def test_stance_width_puts_the_feet_at_the_reach(src):
+    c = Cockpit(hk.load(src))
+    wb = c.body
+    c.set_stance(1.2)
+    assert c.status == "held", c.message
+    feet = wb.feet(c.qb[None], c.base[None])[0]  # FK of the IK's joints
+    expect = (c.stand[:3, :3] @ wb.neutral_feet(1.2 * wb.foot_reach).T + c.stand[:3, 3:4]).T
+    np.testing.assert_allclose(feet[:, :2], expect[:, :2], atol=1e-6)
+    np.testing.assert_allclose(feet[:, 2], wb.foot_radius, atol=1e-6)
+    with pytest.raises(ParameterError, match=r"\[0.6, 1.4\]"):
+        c.set_stance(3.0)
+
+
+def test_nearest_family_and_sigma_min_at_a_singular_pose():
+    """ankle = 0 stretches the seeds' leg: family q3 = 0 at distance 0, σ_min = 0 (SVD)."""
+    from hexapod_kin.singularity import default_rows, families_for
+
+    m = hk.load("hexabot_leg")
+    fams = families_for(m, default_rows(m), derive=False)
+    c = Cockpit(m, families=fams)
+    c.set_joint("ankle", 0.0)
+    r = c.readout()
+    assert r["sigma_min"] < 1e-12
+    s = np.linalg.svd(m.jacobian(c.q)[:3], compute_uv=False)
+    assert r["manipulability"] == pytest.approx(float(np.prod(s)), abs=1e-15)
+    if not fams.families:
+        pytest.skip("the leg's families are not derived on this machine (hexapod-kin derive)")
+    assert r["family"]["name"].startswith("q3 = 0") and r["family"]["distance"] < 1e-12
+    c.set_joint("ankle", 0.3)
+    assert c.readout()["family"]["distance"] == pytest.approx(0.3, abs=1e-9)

@@ -1,0 +1,95 @@
+"""Screenshots of the cockpit (``hexapod-kin drive``) for the docs, one per mode.
+
+Serves :func:`hexapod_kin.drive.drive` on 127.0.0.1, opens the page in headless Debian
+Chromium (Playwright, software GL), drives each mode through the page and saves a PNG:
+
+    python tools/drive_screenshots.py               # docs/img/drive_{joints,target,body,walk}.png
+    python tools/drive_screenshots.py --out /tmp/img
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from headless import launch_chromium  # noqa: E402
+
+from hexapod_kin.drive import drive  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _open(browser: Any, url: str) -> Any:
+    page = browser.new_page(viewport={"width": 1100, "height": 680})
+    page.goto(url)
+    page.wait_for_function("() => window.hexapodKin && hexapodKin.ready && hexapodKin.state")
+    return page
+
+
+def _wait(page: Any, expr: str) -> None:
+    page.wait_for_function(f"() => ({expr})", timeout=60000)
+
+
+def shoot(out: Path) -> list[Path]:
+    """Write the four screenshots to ``out``; return their paths."""
+    from playwright.sync_api import sync_playwright
+
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        with drive("hexabot_leg") as s:  # joints, then a target the leg stops short of
+            page = _open(browser, s.url)
+            page.evaluate(
+                "() => { const k = document.getElementById('hk-joint-1'); k.value = 0.7;"
+                " k.dispatchEvent(new Event('input')); }"
+            )
+            time.sleep(1.5)
+            paths.append(out / "drive_joints.png")
+            page.screenshot(path=str(paths[-1]))
+            limb = s.cockpit.limbs[0]
+            s.set_target(limb.hip(s.cockpit.q, s.cockpit.base) + [0.2, 0.22, -0.12])
+            _wait(page, "hexapodKin.state.readout.status !== 'moving'")
+            time.sleep(1.0)
+            paths.append(out / "drive_target.png")
+            page.screenshot(path=str(paths[-1]))
+        with drive("hexapod") as s:  # body pitched and rolled, feet held
+            page = _open(browser, s.url)
+            page.click("#hk-mode-body")
+            for name, value in (("pitch", 0.2), ("roll", -0.12), ("z", 0.02)):
+                page.evaluate(
+                    "([n, v]) => { const k = document.getElementById('hk-body-' + n); k.value = v;"
+                    " k.dispatchEvent(new Event('input')); }",
+                    [name, value],
+                )
+            time.sleep(1.5)
+            paths.append(out / "drive_body.png")
+            page.screenshot(path=str(paths[-1]))
+        with drive("hexapod") as s:  # walking forward and turning
+            page = _open(browser, s.url)
+            page.keyboard.down("w")
+            page.keyboard.down("q")
+            time.sleep(2.5)
+            paths.append(out / "drive_walk.png")
+            page.screenshot(path=str(paths[-1]))
+            page.keyboard.up("w")
+            page.keyboard.up("q")
+        browser.close()
+    return paths
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "img")
+    args = ap.parse_args(argv)
+    for path in shoot(args.out):
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
