@@ -15,6 +15,7 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
+    scene_foot_radius,
     _hermite,
     _mujoco,
     _robot,
@@ -63,7 +64,7 @@ class SimRun:
         foot_forces: (N, L) normal force on each foot at each sample [N].
         lift: Vertical shift of the plan that puts the foot spheres on the ground [m].
         distance_planned: Planned horizontal displacement of the body [m].
-        distance: Simulated horizontal displacement of the body [m].
+        distance: Simulated horizontal displacement of the body [m] (its length).
         turn_planned: Planned yaw change [rad].
         turn: Simulated yaw change [rad].
         heading_error: Max over time of the yaw error (both from their start) [rad].
@@ -73,7 +74,8 @@ class SimRun:
         max_pitch: Max |pitch| [rad].
         height_error: Max |z − z_planned| of the body [m].
         max_slip: Largest tangential slide of a stance foot's contact point during one
-            contact [m].
+            planned stance [m], added up across contact breaks (the foot's horizontal
+            displacement while off the ground counts).
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
         swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
             ground (a new contact, not a late lift-off) where the plan has it at least
@@ -113,11 +115,30 @@ class SimRun:
     run: Any = field(default=None, repr=False, compare=False)
 
     @property
+    def distance_along(self) -> float:
+        """The simulated displacement along the planned one [m] (< 0: went backwards)."""
+        return self.distance * math.cos(self.direction_error)
+
+    @property
+    def direction(self) -> str:
+        """Where the body went relative to the plan's direction, in words."""
+        if self.distance_planned < 1e-6 or self.distance < 1e-9:
+            return "-"
+        deg = math.degrees(self.direction_error)
+        if deg <= 10.0:
+            return f"as planned ({deg:.2f} deg off)"
+        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
+
+    @property
     def distance_error(self) -> float | None:
-        """(distance − planned) / planned (None when the plan does not translate)."""
+        """(distance along the plan's direction − planned) / planned (None: no translation).
+
+        The displacement is projected on the planned one (:attr:`distance_along`), so a
+        robot that went sideways or backwards does not pass on its distance alone.
+        """
         if self.distance_planned < 1e-6:
             return None
-        return (self.distance - self.distance_planned) / self.distance_planned
+        return (self.distance_along - self.distance_planned) / self.distance_planned
 
     @property
     def turn_error(self) -> float | None:
@@ -165,6 +186,8 @@ class SimRun:
             "distance_planned": self.distance_planned,
             "distance": self.distance,
             "distance_error": self.distance_error,
+            "distance_along": self.distance_along,
+            "direction": self.direction,
             "turn_planned": self.turn_planned,
             "turn": self.turn,
             "turn_error": self.turn_error,
@@ -221,6 +244,8 @@ def simulate(
     timestep: float = 1e-3,
     settle: float = 0.5,
     stand: bool = True,
+    bumps: float = 0.0,
+    seed: int = 0,
     **walk_options: Any,
 ) -> SimRun:
     """Replay a walk open-loop in MuJoCo and measure how far the physics departs from it.
@@ -250,6 +275,9 @@ def simulate(
             replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
             the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
         stand: Also run :func:`stand_forces` (flat ground).
+        bumps: Random bumps of this amplitude [m] on flat ground (see :func:`scene_mjcf`);
+            the plan stays the flat one.
+        seed: The bumps' seed.
         **walk_options: More keywords of :func:`~hexapod_kin.gait.walk.walk` (when planning).
 
     Returns:
@@ -305,7 +333,9 @@ def simulate(
         ground = "flat" if terrain is None else terrain
         one_of("terrain", ground, list(SCENE_TERRAINS))
         wb = _robot(run_or_robot, feet)
-        if foot_radius is not None and "foot_radius" in inspect.signature(walk).parameters:
+        if foot_radius is None:  # the robot's feet, from its collision shapes if need be
+            foot_radius = scene_foot_radius(wb)
+        if "foot_radius" in inspect.signature(walk).parameters:
             walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
             wb,
@@ -332,6 +362,8 @@ def simulate(
         armature=armature,
         contact_time=contact_time,
         timestep=timestep,
+        bumps=bumps,
+        seed=seed,
     )
     t = np.asarray(run.t, dtype=float)
     if len(t) < 2:
@@ -377,11 +409,13 @@ def simulate(
     strikes: dict[str, float] = {}
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
-    above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
+    above = centre[..., 2] + lift - sc.ground(centre[..., 0], centre[..., 1])
     held = (above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
+    left: list[Any] = [None] * nl  # where a stance foot left the ground (a contact break)
+    xpos = d.geom_xpos
     for i in range(n - 1):
         if i % chunk == 0:
             ref, rate = _hermite(q_plan[i : i + chunk + 1], qd_plan[i : i + chunk + 1], h, sub)
@@ -410,8 +444,16 @@ def simulate(
                     touching[leg] = True
                     slides[leg] += v * dt
                     max_speed = max(max_speed, v)
+                    if left[leg] is not None:  # back down in the same stance: the hop's slide
+                        dx, dy = (xpos[eng.feet[leg], :2] - left[leg]).tolist()
+                        slides[leg] += math.hypot(dx, dy)
+                        left[leg] = None
+            for leg in range(nl):
+                if not stance[leg]:  # the slide adds up over the whole stance, not per contact
+                    slides[leg], left[leg] = 0.0, None
+                elif was_down[leg] and not down[leg]:
+                    left[leg] = xpos[eng.feet[leg], :2].copy()
             max_slip = max(max_slip, *slides)
-            slides = [x if on else 0.0 for x, on in zip(slides, touching)]
             was_down = down
         record(i + 1)
     wall = time.perf_counter() - start
