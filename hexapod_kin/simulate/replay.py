@@ -241,7 +241,7 @@ def simulate(
     kv: float | None = None,
     armature: float | None = None,
     contact_time: float = 0.005,
-    timestep: float = 1e-3,
+    timestep: float | None = None,
     settle: float = 0.5,
     stand: bool = True,
     bumps: float = 0.0,
@@ -270,7 +270,8 @@ def simulate(
         kv: Servo velocity gain [N·m·s/rad] (default ``0.01 s × kp``).
         armature: Servo rotor inertia per leg joint [kg·m²] (see :func:`scene_mjcf`).
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
-        timestep: Physics step [s]; must divide the plan's sample interval.
+        timestep: Physics step [s]; must divide the plan's sample interval (default: 1 ms
+            or less for the servos' stability, see :func:`scene_mjcf`).
         settle: Time [s] the robot stands at the first pose before the replay (≥ 0). The
             replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
             the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
@@ -310,7 +311,7 @@ def simulate(
         except (TypeError, ValueError):
             walked = 0.0  # the walk refuses it
     spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
-    check_steps(timestep, spans)  # bounded work: refused before planning
+    check_steps(1e-3 if timestep is None else timestep, spans)  # bounded work: refused before planning
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
@@ -365,6 +366,7 @@ def simulate(
         bumps=bumps,
         seed=seed,
     )
+    check_steps(sc.timestep, spans)  # the automatic timestep too
     t = np.asarray(run.t, dtype=float)
     if len(t) < 2:
         raise ParameterError("the run has fewer than 2 samples", parameter="run")

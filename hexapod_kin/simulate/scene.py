@@ -20,6 +20,17 @@ __all__ = ["MAX_FRICTION", "SCENE_TERRAINS", "SimScene", "check_steps", "scene_m
 #: The largest sliding friction coefficient a scene takes (a coefficient of 100 is glue).
 MAX_FRICTION = 100.0
 
+#: The default (and largest automatic) physics step [s].
+MAX_TIMESTEP = 1e-3
+
+#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows:
+#: the value of the scaled servos with their scaled armature at 1 ms (0.21 to 0.32 on the
+#: example-robot-data quadrupeds).
+STABLE_OMEGA_DT = 0.35
+
+#: The automatic timestep is at least ``MAX_TIMESTEP / MAX_SPLIT`` (bounded work).
+MAX_SPLIT = 10
+
 #: The largest bump amplitude [m] of a scene's ground.
 MAX_BUMPS = 0.01
 
@@ -254,7 +265,7 @@ def scene_mjcf(
     kv: float | None = None,
     armature: float | None = None,
     contact_time: float = 0.005,
-    timestep: float = 1e-3,
+    timestep: float | None = None,
     bumps: float = 0.0,
     seed: int = 0,
 ) -> SimScene:
@@ -278,7 +289,14 @@ def scene_mjcf(
             light links from chattering on stiff contacts. Default :func:`servo_defaults`.
         contact_time: Contact stiffness as MuJoCo's ``solref`` time constant [s] (critically
             damped; at least twice the time step).
-        timestep: Physics time step [s] (> 0).
+        timestep: Physics time step [s] (> 0). Default: :data:`MAX_TIMESTEP`, divided by
+            the smallest whole number that keeps every servo's ``ω dt`` within
+            :data:`STABLE_OMEGA_DT` (``ω = sqrt(kp / I)``, ``I`` the joint's effective
+            inertia ``1 / (M⁻¹)_jj`` at the neutral pose, armature included): the position
+            gain is explicit in MuJoCo's integrator, and a light link without armature on a
+            gain scaled to the whole robot is otherwise integrated near its stability limit
+            (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
+            ``MAX_TIMESTEP / MAX_SPLIT``.
         bumps: Amplitude [m] of random bumps on flat ground (0: none; at most 0.01): a
             height field of 5 cm cells, heights uniform in ``[-bumps, bumps]`` (seeded).
         seed: The bumps' random seed.
@@ -307,7 +325,7 @@ def scene_mjcf(
             ("friction", friction),
             ("kp", kp),
             ("kv", kv),
-            ("timestep", timestep),
+            ("timestep", MAX_TIMESTEP if timestep is None else timestep),
             ("contact_time", contact_time),
         )
     )
@@ -442,6 +460,9 @@ def scene_mjcf(
         etree.SubElement(act, "position", **attrs)
         names.append(attrs["name"])
     _exclude_touching(root, mujoco, wb, q0)
+    if timestep is None:
+        dt = _stable_timestep(mujoco, root, wb, q0, kp)
+        option.set("timestep", num(dt))
     etree.indent(root, space="  ")
     text = etree.tostring(root, encoding="unicode") + "\n"
     return SimScene(
@@ -461,6 +482,27 @@ def scene_mjcf(
         bumps=bump,
         seed=int(seed),
     )
+
+
+def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float) -> float:
+    """:data:`MAX_TIMESTEP` / k, the smallest whole k with ``ω dt <= STABLE_OMEGA_DT``."""
+    from lxml import etree
+
+    model = mujoco.MjModel.from_xml_string(etree.tostring(root, encoding="unicode"))
+    data = mujoco.MjData(model)
+    data.qpos[3] = 1.0
+    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    mujoco.mj_forward(model, data)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    dofs = [
+        int(model.jnt_dofadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
+        for j in wb.joint_names
+    ]
+    inertia = 1.0 / np.diag(np.linalg.inv(full))[dofs]
+    omega = float(np.sqrt(kp / inertia).max())
+    k = math.ceil(MAX_TIMESTEP * omega / STABLE_OMEGA_DT)
+    return MAX_TIMESTEP / min(MAX_SPLIT, max(1, k))
 
 
 def _bump_field(bump: float, seed: int) -> np.ndarray:
