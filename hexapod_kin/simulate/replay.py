@@ -37,7 +37,8 @@ LIMITS: dict[str, float] = {
 }
 
 #: A swing foot touching the ground where the plan has its sphere at least this far from
-#: the ground [m] (measured at the planned centre, along the ground's normal) is a strike.
+#: the ground [m] (measured at the planned centre, along the ground's normal, lowered by
+#: how far the body sank into the soft contacts while settling) is a strike.
 STRIKE_CLEARANCE = 0.002
 
 
@@ -412,7 +413,11 @@ def simulate(
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
     above = centre[..., 2] + lift - sc.ground(centre[..., 0], centre[..., 1])
-    held = (above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support
+    # the body as it stands after settling: soft contacts sink it (MuJoCo's default contact
+    # by ~4 mm), and the swing feet, held by the servos relative to it, with it
+    sink = max(0.0, float(planned[0, 2, 3] - base[0, 2, 3]))
+    gap = (above - sink) * sc.normal_z - sc.foot_radius
+    held = (gap >= STRIKE_CLEARANCE) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
@@ -467,7 +472,7 @@ def simulate(
             foot_radius=sc.foot_radius,
             friction=sc.friction,
             contact_time=sc.contact_time,
-            timestep=sc.timestep,
+            timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
     figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)

@@ -101,7 +101,7 @@ def stand_forces(
     """
     dur = positive("settle", settle)
     check_steps(
-        scene_options.get("timestep", 1e-3) if scene is None else scene.timestep, {"settle": dur}
+        scene_options.get("timestep") or 1e-3 if scene is None else scene.timestep, {"settle": dur}
     )
     wb = _robot(robot, scene_options.get("feet"))
     scene_options.setdefault("armature", 0.0)
