@@ -199,9 +199,10 @@ class SimScene:
             return h
         field = _bump_field(self.bumps, self.seed)
         n = field.shape[0]
-        # MuJoCo's height field: row i at y, column j at x, over [-extent, extent]
+        # MuJoCo's height field: row i at y = extent − i·cell, column j at x (bilinear here,
+        # two triangles per cell there: equal at the nodes, within the bumps' slope between)
         u = np.clip((np.asarray(x) + _BUMP_EXTENT) / _BUMP_CELL, 0, n - 1.000001)
-        v = np.clip((np.asarray(y) + _BUMP_EXTENT) / _BUMP_CELL, 0, n - 1.000001)
+        v = np.clip((_BUMP_EXTENT - np.asarray(y)) / _BUMP_CELL, 0, n - 1.000001)
         j, i = np.floor(u).astype(int), np.floor(v).astype(int)
         fu, fv = u - j, v - i
         z = (field[i, j] * (1 - fu) * (1 - fv) + field[i, j + 1] * fu * (1 - fv)) + (
@@ -507,11 +508,18 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
 
 
 def _bump_field(bump: float, seed: int) -> np.ndarray:
-    """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps)."""
+    """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps).
+
+    Row ``i`` at ``y = extent − i·cell``, column ``j`` at ``x = −extent + j·cell`` (MuJoCo's
+    height field order); spanning exactly ``[−bump, bump]`` (MuJoCo rescales the elevation
+    data to its range).
+    """
     n = int(round(2 * _BUMP_EXTENT / _BUMP_CELL)) + 1
     if not bump:
         return np.zeros((n, n))
-    return np.random.default_rng(seed).uniform(-bump, bump, size=(n, n))
+    raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
+    lo, hi = raw.min(), raw.max()
+    return bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
 
 
 def _add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
