@@ -80,7 +80,9 @@ def test_bumps_are_the_height_field_mujoco_collides() -> None:
     geomid = np.zeros(1, dtype=np.int32)
     group = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # geom group 0 only (the ground)
     for x, y in nodes:
-        dist = mujoco.mj_ray(m, d, np.array([x, y, 1.0]), np.array([0, 0, -1.0]), group, 1, -1, geomid)
+        dist = mujoco.mj_ray(
+            m, d, np.array([x, y, 1.0]), np.array([0, 0, -1.0]), group, 1, -1, geomid
+        )
         assert geomid[0] == m.geom("ground").id
         assert 1.0 - dist == pytest.approx(float(sc.ground(x, y)), abs=1e-9)
     heights = sc.ground(nodes[:, 0], nodes[:, 1])

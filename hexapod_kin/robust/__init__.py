@@ -203,6 +203,4 @@ def simulate_robust(
 
 
 #: The keywords of :func:`~hexapod_kin.simulate.simulate` that concern the replay, not the plan.
-_REPLAY_KEYS = frozenset(
-    ("foot_radius", "kp", "kv", "armature", "timestep", "settle", "terrain")
-)
+_REPLAY_KEYS = frozenset(("foot_radius", "kp", "kv", "armature", "timestep", "settle", "terrain"))

@@ -15,11 +15,11 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
-    scene_foot_radius,
     _hermite,
     _mujoco,
     _robot,
     check_steps,
+    scene_foot_radius,
     scene_mjcf,
 )
 from .standing import STAND_SETTLE, StandForces, stand_forces
@@ -312,7 +312,8 @@ def simulate(
         except (TypeError, ValueError):
             walked = 0.0  # the walk refuses it
     spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
-    check_steps(1e-3 if timestep is None else timestep, spans)  # bounded work: refused before planning
+    # bounded work: refused before planning
+    check_steps(1e-3 if timestep is None else timestep, spans)
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
