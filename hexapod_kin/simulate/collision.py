@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MeshHull", "collision_hulls", "foot_radius_of"]
+__all__ = ["MeshHull", "add_hulls", "collision_hulls", "foot_radius_of"]
 
 
 @dataclass(frozen=True)
@@ -155,3 +155,36 @@ def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
             continue
         out.append(MeshHull(link=link, name=str(obj.name), vertices=v[hull.vertices]))
     return out
+
+
+def add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
+    """Add the robot's mesh collisions to an MJCF tree as convex mesh geoms.
+
+    ``root`` the MJCF's root element, ``bodies`` its bodies by name, ``r`` the foot radius
+    [m] (:func:`collision_hulls`); each hull a ``<mesh>`` asset of its vertices (MuJoCo
+    takes their convex hull) and a massless geom in its link's body.
+    """
+    from lxml import etree
+
+    from ..export._common import num
+
+    hulls = [h for h in collision_hulls(wb, r) if h.link in bodies]
+    if not hulls:
+        return
+    asset = root.find("asset")
+    if asset is None:
+        asset = etree.Element("asset")
+        root.find("compiler").addnext(asset)
+    for k, hull in enumerate(hulls):
+        name = f"hk_hull_{k}"
+        verts = " ".join(num(float(v)) for v in hull.vertices.ravel())
+        etree.SubElement(asset, "mesh", name=name, vertex=verts, inertia="shell")
+        etree.SubElement(
+            bodies[hull.link],
+            "geom",
+            name=f"{hull.link}/{hull.name}",
+            type="mesh",
+            mesh=name,
+            mass="0",
+            rgba="0.5 0.5 0.6 1",
+        )

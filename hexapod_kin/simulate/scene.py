@@ -314,6 +314,7 @@ def scene_mjcf(
     from lxml import etree
 
     from ..export._common import num, vec
+    from .collision import add_hulls
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
     wb = _robot(robot, feet)
@@ -406,7 +407,7 @@ def scene_mjcf(
             rgba="0.8 0.15 0.15 1",
         )
         foot_geoms.append(gname)
-    _add_hulls(root, bodies, wb, r)
+    add_hulls(root, bodies, wb, r)
     world = root.find("worldbody")
     default = etree.Element("default")
     etree.SubElement(default, "geom", friction=f"{num(mu)} 0 0", solref=f"{num(tc)} 1")
@@ -520,35 +521,6 @@ def _bump_field(bump: float, seed: int) -> np.ndarray:
     raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
     lo, hi = raw.min(), raw.max()
     return bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
-
-
-def _add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
-    """The robot's mesh collisions as convex mesh geoms (:func:`.collision.collision_hulls`)."""
-    from lxml import etree
-
-    from ..export._common import num
-    from .collision import collision_hulls
-
-    hulls = [h for h in collision_hulls(wb, r) if h.link in bodies]
-    if not hulls:
-        return
-    asset = root.find("asset")
-    if asset is None:
-        asset = etree.Element("asset")
-        root.find("compiler").addnext(asset)
-    for k, hull in enumerate(hulls):
-        name = f"hk_hull_{k}"
-        verts = " ".join(num(float(v)) for v in hull.vertices.ravel())
-        etree.SubElement(asset, "mesh", name=name, vertex=verts, inertia="shell")
-        etree.SubElement(
-            bodies[hull.link],
-            "geom",
-            name=f"{hull.link}/{hull.name}",
-            type="mesh",
-            mesh=name,
-            mass="0",
-            rgba="0.5 0.5 0.6 1",
-        )
 
 
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
