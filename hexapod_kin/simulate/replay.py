@@ -75,8 +75,9 @@ class SimRun:
         max_pitch: Max |pitch| [rad].
         height_error: Max |z − z_planned| of the body [m].
         max_slip: Largest tangential slide of a stance foot's contact point during one
-            planned stance [m], added up across contact breaks (the foot's horizontal
-            displacement while off the ground counts).
+            planned stance [m], added up across contact breaks (a stance foot off the ground
+            that comes down again in the same stance: its sphere's lowest point's slide
+            meanwhile counts).
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
         swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
             ground (a new contact, not a late lift-off) where the plan has it at least
@@ -422,8 +423,10 @@ def simulate(
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
-    left: list[Any] = [None] * nl  # where a stance foot left the ground (a contact break)
-    xpos = d.geom_xpos
+    landed = [False] * nl  # the stance foot has touched down in this stance
+    pending = [0.0] * nl  # its lowest point's slide while off the ground since
+    sn = math.sqrt(max(0.0, 1.0 - sc.normal_z**2))
+    normal = (-sn, 0.0, sc.normal_z)  # the ground's (slope: rising along +x)
     for i in range(n - 1):
         if i % chunk == 0:
             ref, rate = _hermite(q_plan[i : i + chunk + 1], qd_plan[i : i + chunk + 1], h, sub)
@@ -450,17 +453,15 @@ def simulate(
                     continue
                 if not touching[leg]:
                     touching[leg] = True
-                    slides[leg] += v * dt
+                    landed[leg] = True
+                    slides[leg] += v * dt + pending[leg]  # a break within the stance counts
+                    pending[leg] = 0.0
                     max_speed = max(max_speed, v)
-                    if left[leg] is not None:  # back down in the same stance: the hop's slide
-                        dx, dy = (xpos[eng.feet[leg], :2] - left[leg]).tolist()
-                        slides[leg] += math.hypot(dx, dy)
-                        left[leg] = None
             for leg in range(nl):
                 if not stance[leg]:  # the slide adds up over the whole stance, not per contact
-                    slides[leg], left[leg] = 0.0, None
-                elif was_down[leg] and not down[leg]:
-                    left[leg] = xpos[eng.feet[leg], :2].copy()
+                    slides[leg], landed[leg], pending[leg] = 0.0, False, 0.0
+                elif landed[leg] and not down[leg]:  # a break: the sphere's lowest point slides
+                    pending[leg] += eng.bottom_speed(leg, normal) * dt  # (an early lift-off not)
             max_slip = max(max_slip, *slides)
             was_down = down
         record(i + 1)

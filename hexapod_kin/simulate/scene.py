@@ -697,6 +697,15 @@ class _Engine:
             out[self.leg_of[g[c]].max()] += world if foot_second else -world
         return out
 
+    def bottom_speed(self, leg: int, normal: tuple[float, float, float]) -> float:
+        """Tangential speed [m/s] of a foot sphere's lowest point: ``v + ω × (−r n)`` ⟂ ``n``."""
+        foot = int(self.feet[leg])
+        self.mj.mj_objectVelocity(self.model, self.data, self._geom_type, foot, self._vel, 0)
+        w, v = self._vel[:3], self._vel[3:]
+        n = np.asarray(normal)
+        u = v + np.cross(w, -self.scene.foot_radius * n)
+        return float(np.linalg.norm(u - (u @ n) * n))
+
     def scan(self) -> tuple[list[tuple[int, int]], list[tuple[int, float, int]]]:
         """The contacts now: non-foot geom pairs, and per foot contact its slip speed.
 
