@@ -164,3 +164,52 @@ def test_cli_simulate_takes_the_inertia_repair(
     b = m.body("FL_UPPER_LEG").id
     mass = float(m.body_mass[b])
     np.testing.assert_allclose(m.body_inertia[b], 0.4 * mass * 0.01**2, rtol=1e-6)
+
+
+@pytest.mark.slow
+def test_page_plays_the_two_animations_in_step(tmp_path) -> None:
+    """The simulation's frame follows the plan's seek and pause: in a browser."""
+    import os
+    import shutil
+
+    from hexapod_kin.simulate import simulation_html
+
+    chromium = shutil.which("chromium")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        sync_playwright = None
+    if chromium is None or sync_playwright is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI is set but Chromium or playwright is missing")
+        pytest.skip("Chromium or playwright is missing; browser test skipped")
+    from headless import launch_chromium
+
+    sim = simulate(pattern="tripod", duration=2.0, stand=False, foot_radius=0.001)
+    path = simulation_html(sim, tmp_path / "sim.html", play=False)
+    with sync_playwright() as p:
+        b = launch_chromium(p, chromium)
+        page = b.new_page(viewport={"width": 1200, "height": 700})
+        page.goto(path.as_uri())
+        frames = [f for f in page.frames if f != page.main_frame]
+        assert len(frames) == 2
+        for f in frames:
+            f.wait_for_function("() => window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+        plan, replay = frames
+        plan.evaluate("() => hexapodKin.seek(1.25)")
+        replay.wait_for_function(
+            "() => Math.abs(hexapodKin.viewer.animator.time - 1.25) < 0.11", timeout=20000
+        )
+        reach = page.evaluate(
+            "() => Array.from(document.querySelectorAll('iframe')).map("
+            "f => { try { return f.contentWindow.hexapodKin ? 1 : 0; } catch (e) { return -1; } })"
+        )
+        assert reach == [-1, -1]  # the frames are sandboxed: only messages cross
+        plan.evaluate("() => hexapodKin.seek(0.5)")
+        t_plan = plan.evaluate("() => hexapodKin.viewer.animator.time")
+        replay.wait_for_function(
+            f"() => !hexapodKin.viewer.animator.playing && "
+            f"Math.abs(hexapodKin.viewer.animator.time - {t_plan}) < 0.11",
+            timeout=20000,
+        )
+        b.close()
