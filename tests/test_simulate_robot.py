@@ -194,11 +194,13 @@ def test_page_plays_the_two_animations_in_step(tmp_path) -> None:
         frames = [f for f in page.frames if f != page.main_frame]
         assert len(frames) == 2
         for f in frames:
-            f.wait_for_function("() => window.hexapodKin && window.hexapodKin.ready", timeout=60000)
+            f.wait_for_function(
+                "() => window.hexapodKin && window.hexapodKin.ready", timeout=120000
+            )
         plan, replay = frames
         plan.evaluate("() => hexapodKin.seek(1.25)")
         replay.wait_for_function(
-            "() => Math.abs(hexapodKin.viewer.animator.time - 1.25) < 0.11", timeout=20000
+            "() => Math.abs(hexapodKin.viewer.animator.time - 1.25) < 0.11", timeout=90000
         )
         reach = page.evaluate(
             "() => Array.from(document.querySelectorAll('iframe')).map("
@@ -210,6 +212,6 @@ def test_page_plays_the_two_animations_in_step(tmp_path) -> None:
         replay.wait_for_function(
             f"() => !hexapodKin.viewer.animator.playing && "
             f"Math.abs(hexapodKin.viewer.animator.time - {t_plan}) < 0.11",
-            timeout=20000,
+            timeout=90000,
         )
         b.close()
