@@ -150,7 +150,7 @@ def _print(out: dict[str, Any]) -> None:
     print(f"max roll / pitch   {out['max_roll_deg']:.4f} / {out['max_pitch_deg']:.4f} deg")
     print(f"body height error  {1e3 * out['height_error']:.3f} mm")
     print(
-        f"stance slip        {1e3 * out['max_slip']:.3f} mm per contact "
+        f"stance slip        {1e3 * out['max_slip']:.3f} mm per stance "
         f"(max {out['max_slip_speed']:.4f} m/s)"
     )
     contacts = out["non_foot_contacts"]

@@ -92,7 +92,7 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
         f"heading error {d['heading_error_deg']:.3f}°, max roll {d['max_roll_deg']:.3f}°, "
         f"max pitch {d['max_pitch_deg']:.3f}°",
         f"body height error {1e3 * sim.height_error:.2f} mm, stance slip "
-        f"{1e3 * sim.max_slip:.2f} mm per contact",
+        f"{1e3 * sim.max_slip:.2f} mm per stance",
         "non-foot contacts: "
         + (", ".join(f"{a}–{b} at {w:.3f} s" for a, b, w in sim.non_foot_contacts) or "none"),
         "swing feet striking the ground: "

@@ -38,7 +38,8 @@ LIMITS: dict[str, float] = {
 
 #: A swing foot touching the ground where the plan has its sphere at least this far from
 #: the ground [m] (measured at the planned centre, along the ground's normal, lowered by
-#: how far the body sank into the soft contacts while settling) is a strike.
+#: how far the body sank into the soft contacts while settling; on bumps, plus twice their
+#: amplitude) is a strike.
 STRIKE_CLEARANCE = 0.002
 
 
@@ -414,12 +415,14 @@ def simulate(
     strikes: dict[str, float] = {}
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
-    above = centre[..., 2] + lift - sc.ground(centre[..., 0], centre[..., 1])
+    above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
     # the body as it stands after settling: soft contacts sink it (MuJoCo's default contact
     # by ~4 mm), and the swing feet, held by the servos relative to it, with it
     sink = max(0.0, float(planned[0, 2, 3] - base[0, 2, 3]))
     gap = (above - sink) * sc.normal_z - sc.foot_radius
-    held = (gap >= STRIKE_CLEARANCE) & ~support
+    # on bumps the ground under the swing foot and under the stance feet carrying the body
+    # are each up to ±bumps off the plan's: 2 × bumps more clearance before it is a strike
+    held = (gap >= STRIKE_CLEARANCE + 2.0 * sc.bumps) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
