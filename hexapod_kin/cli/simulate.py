@@ -30,9 +30,12 @@ def register(sub: Any) -> None:
             "replay the planned joint angles open-loop in MuJoCo and report: distance and "
             "turn vs the plan, heading error, max roll and pitch, body height error, "
             "stance-foot slip, any contact that is not a foot on the ground, and the "
-            "standing per-foot normal forces vs dynamics.stand(). Exit status 0 when every "
-            "check passes, 1 when one fails (the plan's, as gait, or the physics'), 2 on bad "
-            "input. Needs MuJoCo "
+            "standing per-foot contact forces vs dynamics.stand(). With --robust the plan is "
+            "replayed under an ensemble of settings the robot's data do not fix (MuJoCo's "
+            "default contact and the project's, armature as given and zero, friction 0.6 and "
+            "1.0, three floors with random 3 mm bumps), each member listed and the worst "
+            "printed in full. Exit status 0 when every check passes (of every member), 1 when "
+            "one fails (the plan's, as gait, or the physics'), 2 on bad input. Needs MuJoCo "
             "(pip install 'hexapod-kin[export]')."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -42,6 +45,12 @@ def register(sub: Any) -> None:
     p.add_argument("--friction", type=float, default=1.0, help="sliding friction coefficient")
     p.add_argument(
         "--no-stand", action="store_true", help="skip the standing foot-force comparison"
+    )
+    p.add_argument(
+        "--robust",
+        action="store_true",
+        help="the verdict over the ensemble of hexapod_kin.robust.ENSEMBLE (11 replays: "
+        "about 11 times the CPU time, more for the members without armature)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
@@ -60,15 +69,24 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
     model = robot.load()
-    sim = simulate(
-        model,
+    options = dict(
         feet=robot.feet,
         foot_radius=robot.foot_radius,
-        friction=args.friction,
         stand=not args.no_stand,
         **walk_options(args, robot.legged() if args.pattern is None else None),
     )
+    ensemble = None
+    if args.robust:
+        from ..robust import simulate_robust
+
+        ensemble = simulate_robust(model, **options)
+        sim = ensemble.runs[ensemble.worst]
+    else:
+        sim = simulate(model, friction=args.friction, **options)
     out = sim.to_dict()
+    if ensemble is not None:
+        out["robust"] = ensemble.to_dict()
+        out["stand"] = out["stand"] or ensemble.nominal.to_dict()["stand"]
     if mjcf is not None:
         out["mjcf"] = str(atomic_write(mjcf, sim.scene.xml))
     if html is not None:
@@ -76,12 +94,33 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         emit_json(out)
     else:
+        if ensemble is not None:
+            _print_members(out["robust"])
         _print(out)
-    failed = [k for k, row in out["checks"].items() if not row["ok"]]
     why = margin_failures(sim.run)
+    if ensemble is not None:
+        bad = ensemble.failures
+        if bad:
+            worst = ensemble.members[ensemble.worst]
+            failed = [k for k, row in out["checks"].items() if not row["ok"]]
+            why.append(
+                f"{len(bad)} of {len(ensemble.members)} ensemble members fail the physics "
+                f"checks; worst {worst.name!r}: {', '.join(failed)}"
+            )
+        return not_achieved(why)
+    failed = [k for k, row in out["checks"].items() if not row["ok"]]
     return not_achieved(
         why + ([f"the physics check(s) {', '.join(failed)} fail"] if failed else [])
     )
+
+
+def _print_members(rob: dict[str, Any]) -> None:
+    print("ensemble (travel along the plan, failed checks):")
+    for k, row in enumerate(rob["members"]):
+        mark = "worst " if k == rob["worst"] else "      "
+        bad = ", ".join(row["failed"]) or "pass"
+        print(f"  {mark}{row['name']:<52} {_pct(row['distance_error']):>10}  {bad}")
+    print(f"worst member, in full: {rob['members'][rob['worst']]['name']}")
 
 
 def _pct(v: float | None) -> str:
@@ -93,12 +132,16 @@ def _print(out: dict[str, Any]) -> None:
     print(
         f"{plan['pattern']['name']} walk on {sc['terrain']} terrain, {plan['duration']:g} s, "
         f"replayed in MuJoCo (feet {1e3 * sc['foot_radius']:.3g} mm, friction "
-        f"{sc['friction']:g}, kp {sc['kp']:g} N·m/rad)"
+        f"{sc['friction']:g}, kp {sc['kp']:g} N·m/rad, armature {sc['armature']:g} kg·m², "
+        f"contact time {1e3 * sc['contact_time']:g} ms, timestep {1e3 * sc['timestep']:g} ms"
+        + (f", bumps {1e3 * sc['bumps']:g} mm seed {sc['seed']}" if sc["bumps"] else "")
+        + ")"
     )
     print(
-        f"distance  {out['distance']:.5f} m vs {out['distance_planned']:.5f} m planned "
-        f"({_pct(out['distance_error'])})"
+        f"distance  {out['distance_along']:.5f} m along the plan vs "
+        f"{out['distance_planned']:.5f} m planned ({_pct(out['distance_error'])})"
     )
+    print(f"direction {out['direction']}")
     print(
         f"turn      {math.degrees(out['turn']):.4f} deg vs "
         f"{math.degrees(out['turn_planned']):.4f} deg planned ({_pct(out['turn_error'])})"
@@ -107,7 +150,7 @@ def _print(out: dict[str, Any]) -> None:
     print(f"max roll / pitch   {out['max_roll_deg']:.4f} / {out['max_pitch_deg']:.4f} deg")
     print(f"body height error  {1e3 * out['height_error']:.3f} mm")
     print(
-        f"stance slip        {1e3 * out['max_slip']:.3f} mm per contact "
+        f"stance slip        {1e3 * out['max_slip']:.3f} mm per stance "
         f"(max {out['max_slip_speed']:.4f} m/s)"
     )
     contacts = out["non_foot_contacts"]
@@ -124,8 +167,9 @@ def _print(out: dict[str, Any]) -> None:
     if stand is not None:
         print(
             f"standing forces    max |MuJoCo - stand()| = {stand['max_error']:.3g} N "
-            f"(per foot {', '.join(f'{f:.4f}' for f in stand['forces'])} N vs "
-            f"{', '.join(f'{f:.4f}' for f in stand['expected'])} N)"
+            f"(3-D; vertical {stand['max_normal_error']:.3g} N; per foot vertical "
+            f"{', '.join(f'{f[2]:.4f}' for f in stand['forces'])} N vs "
+            f"{', '.join(f'{f[2]:.4f}' for f in stand['expected'])} N)"
         )
     failed = [k for k, row in out["checks"].items() if not row["ok"]]
     print("checks             " + ("pass" if not failed else "FAIL: " + ", ".join(failed)))

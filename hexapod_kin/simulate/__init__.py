@@ -21,19 +21,26 @@ plan's joint angles:
   spheres touch the ground (the vertical shift ``lift`` [m], 0 when the plan already
   puts the sphere centres one radius above the ground); the joints held at the first
   sample for ``settle`` [s]; then the plan, from its first sample.
+* **The robot's own body** (:mod:`.collision`): feet of the radius the foot links'
+  collision shapes give when the robot names none (planned and simulated alike), mesh
+  collisions of body and legs as convex hulls; the servo armature of
+  :func:`~.scene.servo_defaults` (a URDF has none); a physics step small enough for the
+  servos' stability (:func:`scene_mjcf`); optional random bumps on flat ground.
 * **Report** (:class:`SimRun`), over the replay, against the plan shifted by ``lift``:
-  distance travelled (the body's horizontal displacement from start to end) vs planned, and
-  the yaw turned vs planned; the heading (yaw) error, max over time; max roll and pitch;
-  body height error; stance-foot slip (the velocity of the foot's material point at its
-  contact point, tangential part, integrated over each contact: a rolling foot does not
+  distance travelled along the planned direction (the body's horizontal displacement
+  projected on the plan's) vs planned, and the direction; the yaw turned vs planned; the
+  heading (yaw) error, max over time; max roll and pitch; body height error; stance-foot
+  slip (the velocity of the foot's material point at its contact point, tangential part,
+  integrated over each planned stance, across contact breaks: a rolling foot does not
   slip); every contact that is not foot-on-ground (geom labels ``body/index``); and the
-  per-foot normal forces of the robot standing (:func:`stand_forces`) against
-  :func:`hexapod_kin.dynamics.stand`.
+  per-foot contact forces of the robot standing at its own gains (:func:`stand_forces`)
+  against :func:`hexapod_kin.dynamics.stand`.
 
 :meth:`SimRun.checks` is the verdict (limits in :data:`LIMITS`); a *stumble* is a non-foot
 contact, a swing foot striking the ground (coming down on it where the plan has the sphere
 at least :data:`STRIKE_CLEARANCE` = 2 mm clear), roll or pitch over 1°, or a stance foot
-sliding more than ``LIMITS["slip"]`` = 5 mm in one contact.
+sliding more than ``LIMITS["slip"]`` = 5 mm in one stance. :mod:`hexapod_kin.robust`
+judges a plan over an ensemble of simulator settings.
 
 MuJoCo is the optional extra ``hexapod-kin[export]`` (MuJoCo 3.14 or later, or 4).
 """

@@ -21,6 +21,15 @@ _STYLE = (
 )
 
 
+#: The two animations in step: the plan's frame leads (its time, playing or not), the
+#: simulation's follows (it seeks when it is more than 0.1 s apart).
+_SYNC = (
+    'window.addEventListener("message",function(e){var f=document.querySelectorAll("iframe");'
+    'if(f.length<2||!e.data||e.data.hk!=="time"||e.source!==f[0].contentWindow){return;}'
+    'f[1].contentWindow.postMessage({hk:"follow",t:e.data.t,on:e.data.on},"*");});'
+)
+
+
 def _panel(title: str, doc: str, lines: list[str]) -> Html:
     """A side of the page: its heading, its animation (``doc``, framed) and its figures."""
     items = Html("".join(fill("<li>$line</li>", line=line) for line in lines))
@@ -39,7 +48,8 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     plan, with its support polygon and centre of mass; :func:`hexapod_kin.viewer.render_html`
     of the simulated body poses and joint angles), embedded with ``<iframe srcdoc>``; below
     each, the figures (planned vs simulated distance, heading, roll/pitch, slip, non-foot
-    contacts).
+    contacts). The two play in step: the simulation follows the plan's play, pause and
+    time (the frames' messages, relayed by the page).
 
     Args:
         sim: A :class:`~hexapod_kin.simulate.SimRun` (with its plan, ``sim.run``).
@@ -82,7 +92,7 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
         f"heading error {d['heading_error_deg']:.3f}°, max roll {d['max_roll_deg']:.3f}°, "
         f"max pitch {d['max_pitch_deg']:.3f}°",
         f"body height error {1e3 * sim.height_error:.2f} mm, stance slip "
-        f"{1e3 * sim.max_slip:.2f} mm per contact",
+        f"{1e3 * sim.max_slip:.2f} mm per stance",
         "non-foot contacts: "
         + (", ".join(f"{a}–{b} at {w:.3f} s" for a, b, w in sim.non_foot_contacts) or "none"),
         "swing feet striking the ground: "
@@ -91,7 +101,8 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     ]
     title = f"hexapod_kin: {run.table.name} plan and MuJoCo replay"
     body = fill(
-        "<h1>$title</h1><main>$plan$sim</main>",
+        "<h1>$title</h1><main>$plan$sim</main><script>$sync</script>",
+        sync=Html(_SYNC),
         title=title,
         plan=_panel("plan", left, plan_lines),
         sim=_panel("simulation (MuJoCo, open loop)", right, sim_lines),

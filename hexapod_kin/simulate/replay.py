@@ -19,6 +19,7 @@ from .scene import (
     _mujoco,
     _robot,
     check_steps,
+    scene_foot_radius,
     scene_mjcf,
 )
 from .standing import STAND_SETTLE, StandForces, stand_forces
@@ -36,7 +37,9 @@ LIMITS: dict[str, float] = {
 }
 
 #: A swing foot touching the ground where the plan has its sphere at least this far from
-#: the ground [m] (measured at the planned centre, along the ground's normal) is a strike.
+#: the ground [m] (measured at the planned centre, along the ground's normal, lowered by
+#: how far the body sank into the soft contacts while settling; on bumps, plus twice their
+#: amplitude) is a strike.
 STRIKE_CLEARANCE = 0.002
 
 
@@ -63,7 +66,7 @@ class SimRun:
         foot_forces: (N, L) normal force on each foot at each sample [N].
         lift: Vertical shift of the plan that puts the foot spheres on the ground [m].
         distance_planned: Planned horizontal displacement of the body [m].
-        distance: Simulated horizontal displacement of the body [m].
+        distance: Simulated horizontal displacement of the body [m] (its length).
         turn_planned: Planned yaw change [rad].
         turn: Simulated yaw change [rad].
         heading_error: Max over time of the yaw error (both from their start) [rad].
@@ -73,7 +76,9 @@ class SimRun:
         max_pitch: Max |pitch| [rad].
         height_error: Max |z − z_planned| of the body [m].
         max_slip: Largest tangential slide of a stance foot's contact point during one
-            contact [m].
+            planned stance [m], added up across contact breaks (a stance foot off the ground
+            that comes down again in the same stance: its sphere's lowest point's slide
+            meanwhile counts).
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
         swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
             ground (a new contact, not a late lift-off) where the plan has it at least
@@ -113,11 +118,30 @@ class SimRun:
     run: Any = field(default=None, repr=False, compare=False)
 
     @property
+    def distance_along(self) -> float:
+        """The simulated displacement along the planned one [m] (< 0: went backwards)."""
+        return self.distance * math.cos(self.direction_error)
+
+    @property
+    def direction(self) -> str:
+        """Where the body went relative to the plan's direction, in words."""
+        if self.distance_planned < 1e-6 or self.distance < 1e-9:
+            return "-"
+        deg = math.degrees(self.direction_error)
+        if deg <= 10.0:
+            return f"as planned ({deg:.2f} deg off)"
+        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
+
+    @property
     def distance_error(self) -> float | None:
-        """(distance − planned) / planned (None when the plan does not translate)."""
+        """(distance along the plan's direction − planned) / planned (None: no translation).
+
+        The displacement is projected on the planned one (:attr:`distance_along`), so a
+        robot that went sideways or backwards does not pass on its distance alone.
+        """
         if self.distance_planned < 1e-6:
             return None
-        return (self.distance - self.distance_planned) / self.distance_planned
+        return (self.distance_along - self.distance_planned) / self.distance_planned
 
     @property
     def turn_error(self) -> float | None:
@@ -165,6 +189,8 @@ class SimRun:
             "distance_planned": self.distance_planned,
             "distance": self.distance,
             "distance_error": self.distance_error,
+            "distance_along": self.distance_along,
+            "direction": self.direction,
             "turn_planned": self.turn_planned,
             "turn": self.turn,
             "turn_error": self.turn_error,
@@ -218,9 +244,11 @@ def simulate(
     kv: float | None = None,
     armature: float | None = None,
     contact_time: float = 0.005,
-    timestep: float = 1e-3,
+    timestep: float | None = None,
     settle: float = 0.5,
     stand: bool = True,
+    bumps: float = 0.0,
+    seed: int = 0,
     **walk_options: Any,
 ) -> SimRun:
     """Replay a walk open-loop in MuJoCo and measure how far the physics departs from it.
@@ -245,11 +273,15 @@ def simulate(
         kv: Servo velocity gain [N·m·s/rad] (default ``0.01 s × kp``).
         armature: Servo rotor inertia per leg joint [kg·m²] (see :func:`scene_mjcf`).
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
-        timestep: Physics step [s]; must divide the plan's sample interval.
+        timestep: Physics step [s]; must divide the plan's sample interval (default: 1 ms
+            or less for the servos' stability, see :func:`scene_mjcf`).
         settle: Time [s] the robot stands at the first pose before the replay (≥ 0). The
             replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
             the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
         stand: Also run :func:`stand_forces` (flat ground).
+        bumps: Random bumps of this amplitude [m] on flat ground (see :func:`scene_mjcf`);
+            the plan stays the flat one.
+        seed: The bumps' seed.
         **walk_options: More keywords of :func:`~hexapod_kin.gait.walk.walk` (when planning).
 
     Returns:
@@ -282,7 +314,8 @@ def simulate(
         except (TypeError, ValueError):
             walked = 0.0  # the walk refuses it
     spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
-    check_steps(timestep, spans)  # bounded work: refused before planning
+    # bounded work: refused before planning
+    check_steps(1e-3 if timestep is None else timestep, spans)
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
@@ -305,7 +338,9 @@ def simulate(
         ground = "flat" if terrain is None else terrain
         one_of("terrain", ground, list(SCENE_TERRAINS))
         wb = _robot(run_or_robot, feet)
-        if foot_radius is not None and "foot_radius" in inspect.signature(walk).parameters:
+        if foot_radius is None:  # the robot's feet, from its collision shapes if need be
+            foot_radius = scene_foot_radius(wb)
+        if "foot_radius" in inspect.signature(walk).parameters:
             walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
             wb,
@@ -332,7 +367,10 @@ def simulate(
         armature=armature,
         contact_time=contact_time,
         timestep=timestep,
+        bumps=bumps,
+        seed=seed,
     )
+    check_steps(sc.timestep, spans)  # the automatic timestep too
     t = np.asarray(run.t, dtype=float)
     if len(t) < 2:
         raise ParameterError("the run has fewer than 2 samples", parameter="run")
@@ -378,10 +416,20 @@ def simulate(
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
     above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
-    held = (above * sc.normal_z - sc.foot_radius >= STRIKE_CLEARANCE) & ~support
+    # the body as it stands after settling: soft contacts sink it (MuJoCo's default contact
+    # by ~4 mm), and the swing feet, held by the servos relative to it, with it
+    sink = max(0.0, float(planned[0, 2, 3] - base[0, 2, 3]))
+    gap = (above - sink) * sc.normal_z - sc.foot_radius
+    # on bumps the ground under the swing foot and under the stance feet carrying the body
+    # are each up to ±bumps off the plan's: 2 × bumps more clearance before it is a strike
+    held = (gap >= STRIKE_CLEARANCE + 2.0 * sc.bumps) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
     was_down = [True] * nl
+    landed = [False] * nl  # the stance foot has touched down in this stance
+    pending = [0.0] * nl  # its lowest point's slide while off the ground since
+    sn = math.sqrt(max(0.0, 1.0 - sc.normal_z**2))
+    normal = (-sn, 0.0, sc.normal_z)  # the ground's (slope: rising along +x)
     for i in range(n - 1):
         if i % chunk == 0:
             ref, rate = _hermite(q_plan[i : i + chunk + 1], qd_plan[i : i + chunk + 1], h, sub)
@@ -408,10 +456,16 @@ def simulate(
                     continue
                 if not touching[leg]:
                     touching[leg] = True
-                    slides[leg] += v * dt
+                    landed[leg] = True
+                    slides[leg] += v * dt + pending[leg]  # a break within the stance counts
+                    pending[leg] = 0.0
                     max_speed = max(max_speed, v)
+            for leg in range(nl):
+                if not stance[leg]:  # the slide adds up over the whole stance, not per contact
+                    slides[leg], landed[leg], pending[leg] = 0.0, False, 0.0
+                elif landed[leg] and not down[leg]:  # a break: the sphere's lowest point slides
+                    pending[leg] += eng.bottom_speed(leg, normal) * dt  # (an early lift-off not)
             max_slip = max(max_slip, *slides)
-            slides = [x if on else 0.0 for x, on in zip(slides, touching)]
             was_down = down
         record(i + 1)
     wall = time.perf_counter() - start
@@ -423,7 +477,7 @@ def simulate(
             foot_radius=sc.foot_radius,
             friction=sc.friction,
             contact_time=sc.contact_time,
-            timestep=sc.timestep,
+            timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
     figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)

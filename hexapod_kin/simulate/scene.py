@@ -20,6 +20,24 @@ __all__ = ["MAX_FRICTION", "SCENE_TERRAINS", "SimScene", "check_steps", "scene_m
 #: The largest sliding friction coefficient a scene takes (a coefficient of 100 is glue).
 MAX_FRICTION = 100.0
 
+#: The default (and largest automatic) physics step [s].
+MAX_TIMESTEP = 1e-3
+
+#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows:
+#: above the values of the scaled servos with their scaled armature at 1 ms (0.21 to 0.32 on
+#: the example-robot-data quadrupeds, 0.37 on the built-in hexapod), far below those without
+#: armature (0.9 to 1.3).
+STABLE_OMEGA_DT = 0.4
+
+#: The automatic timestep is at least ``MAX_TIMESTEP / MAX_SPLIT`` (bounded work).
+MAX_SPLIT = 10
+
+#: The largest bump amplitude [m] of a scene's ground.
+MAX_BUMPS = 0.01
+
+#: Cell size [m] of the bumps' height field, and its extent from the origin [m].
+_BUMP_CELL, _BUMP_EXTENT = 0.05, 5.0
+
 #: Terrains the scene can build (the named ones of :mod:`hexapod_kin.gait.terrain`).
 SCENE_TERRAINS = ("flat", "slope", "step")
 
@@ -54,9 +72,21 @@ def _robot(robot: Any, feet: Any = None) -> Any:
 POINT_FOOT = 0.001
 
 
-def _foot_radius(wb: Any) -> float:
-    r = wb.foot_radius
-    return float(r) if r > 0 else POINT_FOOT
+def scene_foot_radius(robot: Any) -> float:
+    """The feet's contact radius [m] the scene gives a robot when none is asked.
+
+    The robot's own ``foot_radius`` when it has one; else the radius of its foot links'
+    collision shapes (:func:`.collision.foot_radius_of`: a sphere's, a cylinder's, a mesh's
+    half-size); else :data:`POINT_FOOT`.
+    """
+    from .collision import foot_radius_of
+
+    wb = _robot(robot, None)
+    r = float(wb.foot_radius)
+    if r > 0:
+        return r
+    found = foot_radius_of(wb)
+    return float(found) if found is not None and found > 0 else POINT_FOOT
 
 
 def _robot_mjcf(wb: Any, source: Any = None) -> str:
@@ -75,7 +105,8 @@ def _robot_mjcf(wb: Any, source: Any = None) -> str:
     params = getattr(wb, "params", None)
     if isinstance(params, Hexapod):
         return to_mjcf(params, floating=True, floor=False).xml
-    urdf = getattr(wb, "urdf", None)
+    repair = getattr(getattr(wb, "kinematic", None), "inertia_repair", None)
+    urdf = getattr(wb, "urdf", None) if repair is None else repair.text
     for src in (source, getattr(wb, "source", None)):
         if isinstance(urdf, str) or not isinstance(src, (str, os.PathLike)):
             continue
@@ -140,6 +171,8 @@ class SimScene:
         timestep: Physics step [s].
         armature: Servo rotor inertia per leg joint [kg·m²].
         contact_time: Contact ``solref`` time constant [s].
+        bumps: Amplitude of the ground's random bumps [m] (0: none).
+        seed: The bumps' random seed.
 
     """
 
@@ -156,6 +189,26 @@ class SimScene:
     timestep: float
     armature: float = 0.0
     contact_time: float = 0.02
+    bumps: float = 0.0
+    seed: int = 0
+
+    def ground(self, x: Any, y: Any) -> np.ndarray:
+        """Ground height [m] at ``x``, ``y`` [m] with the bumps (:meth:`height` without)."""
+        h = self.height(x, y)
+        if not self.bumps:
+            return h
+        field = _bump_field(self.bumps, self.seed)
+        n = field.shape[0]
+        # MuJoCo's height field: row i at y = extent − i·cell, column j at x (bilinear here,
+        # two triangles per cell there: equal at the nodes, within the bumps' slope between)
+        u = np.clip((np.asarray(x) + _BUMP_EXTENT) / _BUMP_CELL, 0, n - 1.000001)
+        v = np.clip((_BUMP_EXTENT - np.asarray(y)) / _BUMP_CELL, 0, n - 1.000001)
+        j, i = np.floor(u).astype(int), np.floor(v).astype(int)
+        fu, fv = u - j, v - i
+        z = (field[i, j] * (1 - fu) * (1 - fv) + field[i, j + 1] * fu * (1 - fv)) + (
+            field[i + 1, j] * (1 - fu) * fv + field[i + 1, j + 1] * fu * fv
+        )
+        return np.asarray(h + z)
 
     def height(self, x: Any, y: Any) -> np.ndarray:
         """Ground height [m] of the scene at ``x``, ``y`` [m]."""
@@ -174,7 +227,7 @@ class SimScene:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (SI units)."""
         names = ("terrain", "foot_radius", "kp", "kv", "friction", "timestep", "armature")
-        return fields_dict(self, *names, "contact_time")
+        return fields_dict(self, *names, "contact_time", "bumps", "seed")
 
 
 #: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
@@ -214,7 +267,9 @@ def scene_mjcf(
     kv: float | None = None,
     armature: float | None = None,
     contact_time: float = 0.005,
-    timestep: float = 1e-3,
+    timestep: float | None = None,
+    bumps: float = 0.0,
+    seed: int = 0,
 ) -> SimScene:
     """The robot on a terrain, with foot spheres and position actuators, as MJCF.
 
@@ -236,7 +291,17 @@ def scene_mjcf(
             light links from chattering on stiff contacts. Default :func:`servo_defaults`.
         contact_time: Contact stiffness as MuJoCo's ``solref`` time constant [s] (critically
             damped; at least twice the time step).
-        timestep: Physics time step [s] (> 0).
+        timestep: Physics time step [s] (> 0). Default: :data:`MAX_TIMESTEP`, divided by
+            the smallest whole number that keeps every servo's ``ω dt`` within
+            :data:`STABLE_OMEGA_DT` (``ω = sqrt(kp / I)``, ``I`` the joint's effective
+            inertia ``1 / (M⁻¹)_jj`` at the neutral pose, armature included): the position
+            gain is explicit in MuJoCo's integrator, and a light link without armature on a
+            gain scaled to the whole robot is otherwise integrated near its stability limit
+            (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
+            ``MAX_TIMESTEP / MAX_SPLIT``.
+        bumps: Amplitude [m] of random bumps on flat ground (0: none; at most 0.01): a
+            height field of 5 cm cells, heights uniform in ``[-bumps, bumps]`` (seeded).
+        seed: The bumps' random seed.
 
     Returns:
         A :class:`SimScene`.
@@ -249,6 +314,7 @@ def scene_mjcf(
     from lxml import etree
 
     from ..export._common import num, vec
+    from .collision import add_hulls
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
     wb = _robot(robot, feet)
@@ -262,7 +328,7 @@ def scene_mjcf(
             ("friction", friction),
             ("kp", kp),
             ("kv", kv),
-            ("timestep", timestep),
+            ("timestep", MAX_TIMESTEP if timestep is None else timestep),
             ("contact_time", contact_time),
         )
     )
@@ -281,8 +347,17 @@ def scene_mjcf(
             value=contact_time,
             allowed=f">= {2 * dt:g}",
         )
+    bump = 0.0 if bumps == 0 else positive("bumps", bumps)
+    if bump > MAX_BUMPS or (bump and terrain != "flat"):
+        raise ParameterError(
+            f"bumps={bumps!r} m on {terrain!r} ground; bumps from 0 to {MAX_BUMPS:g} m, on "
+            "flat ground only",
+            parameter="bumps",
+            value=bumps,
+            allowed=f"[0, {MAX_BUMPS:g}] on flat ground",
+        )
     mujoco = _mujoco()
-    r = _foot_radius(wb) if foot_radius is None else positive("foot_radius", foot_radius)
+    r = scene_foot_radius(wb) if foot_radius is None else positive("foot_radius", foot_radius)
     xml = _robot_mjcf(wb, robot if source is None else source)
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)
@@ -332,6 +407,7 @@ def scene_mjcf(
             rgba="0.8 0.15 0.15 1",
         )
         foot_geoms.append(gname)
+    add_hulls(root, bodies, wb, r)
     world = root.find("worldbody")
     default = etree.Element("default")
     etree.SubElement(default, "geom", friction=f"{num(mu)} 0 0", solref=f"{num(tc)} 1")
@@ -355,6 +431,23 @@ def scene_mjcf(
                 pos=f"{num(_STEP_AT + half)} 0 {num(_STEP_RISE / 2)}",
             )
         )
+    field = _bump_field(bump, seed)
+    if bump:
+        n = field.shape[0]
+        asset = root.find("asset")
+        if asset is None:
+            asset = etree.Element("asset")
+            root.find("compiler").addnext(asset)
+        etree.SubElement(
+            asset,
+            "hfield",
+            name="bumps",
+            nrow=str(n),
+            ncol=str(n),
+            size=f"{num(_BUMP_EXTENT)} {num(_BUMP_EXTENT)} {num(2 * bump)} {num(0.05)}",
+            elevation=" ".join(num(v) for v in ((field + bump) / (2 * bump)).ravel()),
+        )
+        grounds = [dict(name="ground", type="hfield", hfield="bumps", pos=f"0 0 {num(-bump)}")]
     for k, spec in enumerate(grounds):
         world.insert(k, etree.Element("geom", rgba="0.8 0.8 0.8 1", **spec))
     world.insert(
@@ -370,6 +463,9 @@ def scene_mjcf(
         etree.SubElement(act, "position", **attrs)
         names.append(attrs["name"])
     _exclude_touching(root, mujoco, wb, q0)
+    if timestep is None:
+        dt = _stable_timestep(mujoco, root, wb, q0, kp)
+        option.set("timestep", num(dt))
     etree.indent(root, space="  ")
     text = etree.tostring(root, encoding="unicode") + "\n"
     return SimScene(
@@ -386,7 +482,45 @@ def scene_mjcf(
         timestep=dt,
         armature=arm,
         contact_time=tc,
+        bumps=bump,
+        seed=int(seed),
     )
+
+
+def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float) -> float:
+    """:data:`MAX_TIMESTEP` / k, the smallest whole k with ``ω dt <= STABLE_OMEGA_DT``."""
+    from lxml import etree
+
+    model = mujoco.MjModel.from_xml_string(etree.tostring(root, encoding="unicode"))
+    data = mujoco.MjData(model)
+    data.qpos[3] = 1.0
+    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    mujoco.mj_forward(model, data)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    dofs = [
+        int(model.jnt_dofadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
+        for j in wb.joint_names
+    ]
+    inertia = 1.0 / np.diag(np.linalg.inv(full))[dofs]
+    omega = float(np.sqrt(kp / inertia).max())
+    k = math.ceil(MAX_TIMESTEP * omega / STABLE_OMEGA_DT)
+    return MAX_TIMESTEP / min(MAX_SPLIT, max(1, k))
+
+
+def _bump_field(bump: float, seed: int) -> np.ndarray:
+    """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps).
+
+    Row ``i`` at ``y = extent − i·cell``, column ``j`` at ``x = −extent + j·cell`` (MuJoCo's
+    height field order); spanning exactly ``[−bump, bump]`` (MuJoCo rescales the elevation
+    data to its range).
+    """
+    n = int(round(2 * _BUMP_EXTENT / _BUMP_CELL)) + 1
+    if not bump:
+        return np.zeros((n, n))
+    raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
+    lo, hi = raw.min(), raw.max()
+    return bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
 
 
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
@@ -550,6 +684,27 @@ class _Engine:
             self.mj.mj_contactForce(self.model, self.data, int(c), self._force)
             out[self.leg_of[g[c]].max()] += self._force[0]
         return out
+
+    def contact_forces(self) -> np.ndarray:
+        """(L, 3) force of the ground on each foot now, world frame [N]."""
+        out = np.zeros((len(self.feet), 3))
+        g, ok = self.contacts()
+        frames = self.data.contact.frame
+        for c in np.flatnonzero(ok):
+            self.mj.mj_contactForce(self.model, self.data, int(c), self._force)
+            world = np.asarray(frames[c]).reshape(3, 3).T @ self._force[:3]
+            foot_second = self.leg_of[g[c, 1]] >= 0  # the force acts on geom2 along +normal
+            out[self.leg_of[g[c]].max()] += world if foot_second else -world
+        return out
+
+    def bottom_speed(self, leg: int, normal: tuple[float, float, float]) -> float:
+        """Tangential speed [m/s] of a foot sphere's lowest point: ``v + ω × (−r n)`` ⟂ ``n``."""
+        foot = int(self.feet[leg])
+        self.mj.mj_objectVelocity(self.model, self.data, self._geom_type, foot, self._vel, 0)
+        w, v = self._vel[:3], self._vel[3:]
+        n = np.asarray(normal)
+        u = v + np.cross(w, -self.scene.foot_radius * n)
+        return float(np.linalg.norm(u - (u @ n) * n))
 
     def scan(self) -> tuple[list[tuple[int, int]], list[tuple[int, float, int]]]:
         """The contacts now: non-foot geom pairs, and per foot contact its slip speed.

@@ -1,4 +1,4 @@
-"""The robot standing in MuJoCo: per-foot normal forces against :func:`dynamics.stand`."""
+"""The robot standing in MuJoCo: per-foot contact forces against :func:`dynamics.stand`."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 
 from .._fields import fields_dict, read_only
 from ..exceptions import ParameterError, positive
-from .scene import SimScene, _Engine, _robot, check_steps, scene_mjcf
+from .scene import SimScene, _Engine, _robot, check_steps, scene_mjcf, servo_defaults
 
 __all__ = ["STAND_SETTLE", "StandForces", "stand_forces"]
 
@@ -19,12 +19,13 @@ STAND_SETTLE = 2.0
 
 @dataclass(frozen=True)
 class StandForces:
-    """Per-foot normal forces of the robot standing in MuJoCo vs :func:`dynamics.stand`.
+    """Per-foot contact forces of the robot standing in MuJoCo vs :func:`dynamics.stand`.
 
     Attributes:
         legs: The stance legs.
-        forces: (L,) MuJoCo's normal force per foot [N] (mean over the last 0.2 s).
-        expected: (L,) ``stand()``'s vertical force per foot [N].
+        forces: (L, 3) MuJoCo's contact force on each foot, world frame [N] (mean over the
+            last 0.2 s).
+        expected: (L, 3) ``stand()``'s contact force on each foot [N].
         weight: ``m g`` [N].
         height: Body height of the stance [m] (foot points at the ground).
 
@@ -38,12 +39,18 @@ class StandForces:
 
     @property
     def max_error(self) -> float:
-        """Largest per-foot difference [N]."""
-        return float(np.abs(self.forces - self.expected).max())
+        """Largest per-foot difference, the norm of the force vectors' difference [N]."""
+        return float(np.linalg.norm(self.forces - self.expected, axis=-1).max())
+
+    @property
+    def max_normal_error(self) -> float:
+        """Largest per-foot difference of the vertical components [N]."""
+        return float(np.abs(self.forces[:, 2] - self.expected[:, 2]).max())
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (SI units)."""
-        return fields_dict(self, "legs", "forces", "expected", "max_error", "weight", "height")
+        names = ("legs", "forces", "expected", "max_error", "max_normal_error", "weight")
+        return fields_dict(self, *names, "height")
 
 
 def _stance(wb: Any) -> Any:
@@ -69,17 +76,16 @@ def stand_forces(
 
     The base is placed level at the stance's height, raised so that the stance feet's
     spheres touch the ground, the joints held at the stance's angles by the actuators;
-    after ``settle`` seconds the normal force of each foot (mean over the last 0.2 s) is
-    compared with the stance's vertical contact force.
+    after ``settle`` seconds the contact force of each foot (3-D, mean over the last 0.2 s)
+    is compared with the stance's contact force.
 
-    The servos have no armature here unless asked: with more feet than needed, MuJoCo's
-    soft contacts share the load in proportion to each constraint's regularisation, which
-    scales with the joint-space inertia; a rotor inertia of 0.002 kg·m² moves the built-in
-    hexapod's shares by about 0.004 N (without it they are equal to 2e-4 N). The servos
-    are soft here too (kp 300 N·m/rad, kv 3 N·m·s/rad unless asked, whatever the robot's
-    walking gains): such a stance is statically indeterminate, and stiff servos keep the
-    internal forces friction locks in at touch-down (erd:anymal at its walking kp of 12,800:
-    85 N apart on a diagonal), soft ones let them relax to the shares ``stand()`` computes.
+    The servos are the robot's own (:func:`~.scene.servo_defaults`, the walking gains)
+    once settled: the first half of ``settle`` they hold at a tenth of that gain, so that
+    the load spreads over the feet as the stance's shares (a statically indeterminate
+    stance under stiff servos keeps the internal forces friction locks in at touch-down),
+    then the gain ramps to the robot's over a quarter of ``settle`` and holds. The servos
+    have no armature here unless asked (it moves MuJoCo's load shares, which follow each
+    constraint's regularisation, by about 0.004 N on the built-in hexapod).
 
     Args:
         robot: As :func:`scene_mjcf`.
@@ -95,12 +101,13 @@ def stand_forces(
     """
     dur = positive("settle", settle)
     check_steps(
-        scene_options.get("timestep", 1e-3) if scene is None else scene.timestep, {"settle": dur}
+        scene_options.get("timestep") or 1e-3 if scene is None else scene.timestep, {"settle": dur}
     )
     wb = _robot(robot, scene_options.get("feet"))
     scene_options.setdefault("armature", 0.0)
-    scene_options.setdefault("kp", 300.0)
-    scene_options.setdefault("kv", 3.0)
+    kp, kv, _ = servo_defaults(wb)
+    scene_options.setdefault("kp", kp)
+    scene_options.setdefault("kv", kv)
     sc = scene_mjcf(wb, **scene_options) if scene is None else scene
     if sc.terrain != "flat":
         raise ParameterError(
@@ -120,14 +127,19 @@ def stand_forces(
     eng.place(pose, q)
     steps = int(round(dur / sc.timestep))
     tail = max(1, int(round(0.2 / sc.timestep)))
-    acc = np.zeros(len(sc.leg_names))
+    acc = np.zeros((len(sc.leg_names), 3))
+    m = eng.model
+    gain0, bias0 = m.actuator_gainprm[:, 0].copy(), m.actuator_biasprm[:, 1:3].copy()
     for k in range(steps):
-        eng.mj.mj_step(eng.model, eng.data)
+        scale = min(1.0, 0.1 + 0.9 * max(0.0, (k / steps - 0.5) / 0.25))
+        m.actuator_gainprm[:, 0] = scale * gain0
+        m.actuator_biasprm[:, 1:3] = scale * bias0
+        eng.mj.mj_step(m, eng.data)
         if k >= steps - tail:
-            acc += eng.normal_forces()
+            acc += eng.contact_forces()
     forces = acc / tail
     idx = [list(sc.leg_names).index(n) for n in st.stance_legs]
-    mine, expected = forces[idx], np.asarray(st.forces)[:, 2].copy()
+    mine, expected = forces[idx], np.asarray(st.forces, dtype=float).copy()
     read_only(mine, expected)
     return StandForces(
         legs=tuple(st.stance_legs),

@@ -138,8 +138,19 @@ t = <span id="hk-time">0.000</span> s</span><br>
   (function tick() {
     timeEl.textContent = (DATA.t0 + (animator.time || 0)).toFixed(3);
     if (DATA.animation && !animator.playing) { playBtn.textContent = "play"; }
+    if (window.parent !== window) {  // a host page may keep other animations in step
+      window.parent.postMessage({hk: "time", t: animator.time || 0, on: !!animator.playing}, "*");
+    }
     requestAnimationFrame(tick);
   })();
+  window.addEventListener("message", function (e) {  // {hk: "follow"}: take the host's time
+    var m = e.data;
+    if (!m || m.hk !== "follow" || !DATA.animation) { return; }
+    var off = Math.abs((animator.time || 0) - m.t) > 0.1;
+    if (off) { seek(DATA.t0 + m.t); }
+    if (m.on && (off || !animator.playing)) { animator.play(); playBtn.textContent = "pause"; }
+    if (!m.on && animator.playing) { pause(); }
+  });
   window.hexapodKin = {
     viewer: viewer, duration: DATA.duration, t0: DATA.t0, parts: DATA.parts,
     play: play, pause: pause, seek: seek, setLoop: setLoop,

@@ -1,0 +1,206 @@
+"""A walk's physics verdict over a small ensemble of simulator settings (``simulate --robust``).
+
+One replay in MuJoCo (:func:`hexapod_kin.simulate.simulate`) passes or fails under settings
+the robot's data do not fix: the contact's softness, the servos' rotor inertia (a URDF has
+no armature), the friction of the floor, the floor's flatness. :func:`simulate_robust`
+plans the walk once and replays it under each member of :data:`ENSEMBLE`:
+
+* contact: the project's (``solref`` time constant 5 ms) and MuJoCo's default (20 ms);
+* armature: as given (the robot's data, else :func:`~hexapod_kin.simulate.scene.servo_defaults`)
+  and zero;
+* friction: 0.6 and 1.0 (the eight corners of these three);
+* bumps: random ±3 mm bumps on the floor (a height field of 5 cm cells, friction 0.8),
+  three seeds (flat terrain only: on a slope or a step the bumpy members are left out).
+
+The verdict is every member's :meth:`~hexapod_kin.simulate.SimRun.checks`; the worst member
+(a failing one first, then the largest travel error) is the one printed. Eleven replays of
+the walk's duration: about eleven times the CPU time of one ``simulate`` (the standing check
+runs once).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["ENSEMBLE", "Member", "RobustRun", "simulate_robust"]
+
+
+@dataclass(frozen=True)
+class Member:
+    """One setting of the ensemble.
+
+    Attributes:
+        name: A short label.
+        contact_time: Contact ``solref`` time constant [s].
+        zero_armature: The servos without rotor inertia (else the armature as given).
+        friction: Sliding friction coefficient.
+        bumps: Amplitude of the floor's random bumps [m].
+        seed: The bumps' seed.
+
+    """
+
+    name: str
+    contact_time: float
+    zero_armature: bool
+    friction: float
+    bumps: float = 0.0
+    seed: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (SI units)."""
+        return {
+            "name": self.name,
+            "contact_time": self.contact_time,
+            "armature": "zero" if self.zero_armature else "as given",
+            "friction": self.friction,
+            "bumps": self.bumps,
+            "seed": self.seed,
+        }
+
+
+def _corners() -> tuple[Member, ...]:
+    out = []
+    for mu in (1.0, 0.6):
+        for tc, contact in ((0.005, "project contact"), (0.02, "MuJoCo contact")):
+            for zero in (False, True):
+                arm = "armature 0" if zero else "armature as given"
+                out.append(Member(f"{contact}, {arm}, friction {mu:g}", tc, zero, mu))
+    return tuple(out)
+
+
+#: The ensemble: the eight corners of contact × armature × friction, then three bumpy floors.
+ENSEMBLE: tuple[Member, ...] = _corners() + tuple(
+    Member(f"bumps 3 mm seed {s}, friction 0.8", 0.005, False, 0.8, 0.003, s) for s in range(3)
+)
+
+
+@dataclass(frozen=True)
+class RobustRun:
+    """The ensemble's replays of one plan.
+
+    Attributes:
+        members: The settings, in :data:`ENSEMBLE` order.
+        runs: One :class:`~hexapod_kin.simulate.SimRun` per member.
+
+    """
+
+    members: tuple[Member, ...]
+    runs: tuple[Any, ...]
+
+    @property
+    def failures(self) -> list[tuple[Member, list[str]]]:
+        """The members that fail and their failing checks."""
+        out = []
+        for m, r in zip(self.members, self.runs):
+            bad = [k for k, row in r.checks().items() if not row["ok"]]
+            if bad:
+                out.append((m, bad))
+        return out
+
+    @property
+    def ok(self) -> bool:
+        """Every member passes every check."""
+        return not self.failures
+
+    @property
+    def worst(self) -> int:
+        """The index of the worst member: failing checks first, then the travel error."""
+
+        def key(i: int) -> tuple[int, float]:
+            c = self.runs[i].checks()
+            bad = sum(not row["ok"] for row in c.values())
+            return bad, float(c["travel"]["value"])
+
+        return max(range(len(self.runs)), key=key)
+
+    @property
+    def nominal(self) -> Any:
+        """The first member's replay (the project's settings)."""
+        return self.runs[0]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: per member its settings and figures; the worst; the verdict."""
+        rows = []
+        for m, r in zip(self.members, self.runs):
+            c = r.checks()
+            rows.append(
+                {
+                    **m.to_dict(),
+                    "distance_error": r.distance_error,
+                    "turn_error": r.turn_error,
+                    "direction": r.direction,
+                    "failed": [k for k, row in c.items() if not row["ok"]],
+                    "checks": c,
+                }
+            )
+        return {"members": rows, "worst": self.worst, "ok": self.ok}
+
+
+def simulate_robust(
+    run_or_robot: Any = None,
+    *,
+    members: tuple[Member, ...] = ENSEMBLE,
+    stand: bool = True,
+    **options: Any,
+) -> RobustRun:
+    """Plan a walk once and replay it under every member of the ensemble.
+
+    Args:
+        run_or_robot: As :func:`hexapod_kin.simulate.simulate` (a run, or a robot to plan).
+        members: The settings (default :data:`ENSEMBLE`).
+        stand: Run the standing check (once, with the first member).
+        **options: Keywords of :func:`~hexapod_kin.simulate.simulate` (the walk's, the
+            feet's, the servos'; not ``friction``, ``contact_time``, ``bumps``, ``seed``:
+            the members set them; ``armature`` is the "as given" value).
+
+    Returns:
+        A :class:`RobustRun`.
+
+    Raises:
+        ParameterError: Bad values (as :func:`~hexapod_kin.simulate.simulate`), an option
+            the members set, no members.
+        GaitError: The plan fails (as :func:`~hexapod_kin.gait.walk.walk`).
+        OptionalDependencyError: MuJoCo is not installed.
+
+    """
+    from ..exceptions import ParameterError
+    from ..simulate import simulate
+
+    taken = sorted({"friction", "contact_time", "bumps", "seed"} & set(options))
+    if taken:
+        raise ParameterError(
+            f"{taken[0]}= is set by each member of the ensemble; leave it out",
+            parameter=taken[0],
+            allowed="the ensemble's own values",
+        )
+    if (options.get("terrain") or "flat") != "flat":  # bumps are for flat ground
+        members = tuple(m for m in members if not m.bumps)
+    if not members:
+        raise ParameterError("members=(): at least one setting", parameter="members")
+    runs = []
+    first = None
+    for k, m in enumerate(members):
+        opts = dict(options)
+        if m.zero_armature:
+            opts["armature"] = 0.0
+        target = run_or_robot if first is None else first.run
+        if first is not None:  # the plan is made once; its keywords are spent
+            opts = {key: v for key, v in opts.items() if key in _REPLAY_KEYS}
+        sim = simulate(
+            target,
+            friction=m.friction,
+            contact_time=m.contact_time,
+            bumps=m.bumps,
+            seed=m.seed,
+            stand=stand and k == 0,
+            **opts,
+        )
+        if first is None:
+            first = sim
+        runs.append(sim)
+    return RobustRun(members=tuple(members), runs=tuple(runs))
+
+
+#: The keywords of :func:`~hexapod_kin.simulate.simulate` that concern the replay, not the plan.
+_REPLAY_KEYS = frozenset(("foot_radius", "kp", "kv", "armature", "timestep", "settle", "terrain"))

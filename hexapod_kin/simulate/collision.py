@@ -1,0 +1,190 @@
+"""The robot's own collision geometry, read through Pinocchio, for the MuJoCo scene.
+
+* :func:`foot_radius_of`: the contact radius of the feet from the foot links' collision
+  shapes (sphere: its radius; cylinder or capsule: its radius; mesh: the mean of the two
+  largest half-extents of its bounding box, the radius of a ball or a wheel), when the shape
+  is centred on the foot point (within a quarter of its size). The smallest over the legs.
+* :func:`collision_hulls`: every mesh collision of the body and the legs as the vertices of
+  its convex hull, in its link's frame (MuJoCo collides the convex hull of a mesh geom; the
+  hull's vertices are what it keeps). The foot link's own shapes are left out (the scene's
+  foot sphere stands for them), and so are the mesh vertices within two foot radii of a
+  foot point (a lower leg's mesh that models the foot too).
+
+Both take the geometry Pinocchio built from the URDF
+(:meth:`hexapod_kin.model.KinematicModel.geometry_model`), so meshes resolve with the
+source's package directories, as for the viewer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["MeshHull", "add_hulls", "collision_hulls", "foot_radius_of"]
+
+
+@dataclass(frozen=True)
+class MeshHull:
+    """A mesh collision as its convex hull's vertices.
+
+    Attributes:
+        link: The URDF link the shape belongs to (a MuJoCo body of the same name).
+        name: The geometry's name.
+        vertices: (V, 3) hull vertices in the link's frame [m].
+
+    """
+
+    link: str
+    name: str
+    vertices: np.ndarray
+
+
+def _collision_model(wb: Any) -> tuple[Any, Any] | None:
+    """``(full model, collision GeometryModel)`` of a robot built from a URDF, else None."""
+    km = getattr(wb, "kinematic", None)
+    if km is None or not hasattr(km, "geometry_model"):
+        return None
+    try:
+        geom = km.geometry_model("collision")
+    except Exception:  # noqa: BLE001 - a robot without readable collisions has none
+        return None
+    return km.full_model, geom
+
+
+def _foot_links(wb: Any) -> list[tuple[str, str, np.ndarray]]:
+    """Per leg: its foot link, the joint moving it and the foot point in that joint's frame."""
+    model = wb.model
+    out = []
+    for fname in wb.foot_frames:
+        frame = model.frames[model.getFrameId(fname)]
+        link = model.frames[frame.parentFrame]
+        joint = str(model.names[frame.parentJoint])
+        out.append((str(link.name), joint, np.asarray(frame.placement.translation, dtype=float)))
+    return out
+
+
+def _vertices(shape: Any) -> np.ndarray | None:
+    verts = getattr(shape, "vertices", None)
+    if verts is None:
+        return None
+    v = np.asarray(verts(), dtype=float).reshape(-1, 3)
+    return v if len(v) >= 4 else None
+
+
+def _act(placement: Any, v: np.ndarray) -> np.ndarray:
+    """Points ``v`` (V, 3) moved by the rigid transform ``placement`` (``pinocchio.SE3``)."""
+    return v @ np.asarray(placement.rotation).T + np.asarray(placement.translation)
+
+
+def foot_radius_of(wb: Any) -> float | None:
+    """The feet's contact radius [m] from the foot links' collision shapes (None: not found).
+
+    Every leg must have a shape centred on its foot point (sphere, cylinder, capsule or
+    mesh; see the module's docstring); the smallest radius is returned.
+    """
+    found = _collision_model(wb)
+    if found is None:
+        return None
+    full, geom = found
+    radii = []
+    for link, _, point in _foot_links(wb):
+        best = None
+        for obj in geom.geometryObjects:
+            if str(full.frames[obj.parentFrame].name) != link:
+                continue
+            shape = obj.geometry
+            centre_local = np.asarray(obj.placement.actInv(point), dtype=float)
+            kind = type(shape).__name__
+            if kind in ("Sphere", "Cylinder", "Capsule"):
+                r = float(shape.radius)
+                if np.linalg.norm(centre_local) <= 0.25 * r + 1e-9:
+                    best = r
+            else:
+                v = _vertices(shape)
+                if v is None:
+                    continue
+                lo, hi = v.min(axis=0), v.max(axis=0)
+                half = np.sort(0.5 * (hi - lo))
+                r = float(half[1:].mean())
+                if r > 0 and np.linalg.norm(0.5 * (lo + hi) - centre_local) <= 0.25 * r:
+                    best = r
+            if best is not None:
+                break
+        if best is None:
+            return None
+        radii.append(best)
+    return min(radii) if radii else None
+
+
+def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
+    """The mesh collisions of the body and the legs as convex hull vertices (link frames).
+
+    ``foot_radius`` [m] sets the region around each foot point whose vertices are left to
+    the foot sphere (within ``2 × foot_radius``, at least 5 mm).
+    """
+    from scipy.spatial import ConvexHull, QhullError
+
+    found = _collision_model(wb)
+    if found is None:
+        return []
+    full, geom = found
+    feet = _foot_links(wb)
+    foot_links = {link for link, _, _ in feet}
+    keep_out = max(2.0 * foot_radius, 0.005)
+    out = []
+    for obj in geom.geometryObjects:
+        frame = full.frames[obj.parentFrame]
+        link, joint = str(frame.name), str(full.names[obj.parentJoint])
+        if link in foot_links:
+            continue
+        v = _vertices(obj.geometry)
+        if v is None:
+            continue
+        v = _act(obj.placement, v)  # in the joint's frame
+        for _, fjoint, point in feet:
+            if fjoint == joint:
+                v = v[np.linalg.norm(v - point, axis=1) > keep_out]
+        v = _act(frame.placement.inverse(), v)  # in the link's frame
+        if len(v) < 4:
+            continue
+        try:
+            hull = ConvexHull(v)
+        except QhullError:  # flat or degenerate: no volume to collide
+            continue
+        out.append(MeshHull(link=link, name=str(obj.name), vertices=v[hull.vertices]))
+    return out
+
+
+def add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
+    """Add the robot's mesh collisions to an MJCF tree as convex mesh geoms.
+
+    ``root`` the MJCF's root element, ``bodies`` its bodies by name, ``r`` the foot radius
+    [m] (:func:`collision_hulls`); each hull a ``<mesh>`` asset of its vertices (MuJoCo
+    takes their convex hull) and a massless geom in its link's body.
+    """
+    from lxml import etree
+
+    from ..export._common import num
+
+    hulls = [h for h in collision_hulls(wb, r) if h.link in bodies]
+    if not hulls:
+        return
+    asset = root.find("asset")
+    if asset is None:
+        asset = etree.Element("asset")
+        root.find("compiler").addnext(asset)
+    for k, hull in enumerate(hulls):
+        name = f"hk_hull_{k}"
+        verts = " ".join(num(float(v)) for v in hull.vertices.ravel())
+        etree.SubElement(asset, "mesh", name=name, vertex=verts, inertia="shell")
+        etree.SubElement(
+            bodies[hull.link],
+            "geom",
+            name=f"{hull.link}/{hull.name}",
+            type="mesh",
+            mesh=name,
+            mass="0",
+            rgba="0.5 0.5 0.6 1",
+        )

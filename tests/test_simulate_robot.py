@@ -1,0 +1,217 @@
+"""The robot in the simulator is the robot (issue 31): feet, collision hulls, bumps, timestep,
+direction, the ensemble verdict (hexapod_kin.simulate, hexapod_kin.robust).
+
+Independent references: the foot mesh's own bounding box (trimesh), MuJoCo's ray casts on the
+height field, MuJoCo's mass matrix, closed forms of the travel along the plan.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from hexapod_kin.cli import main  # noqa: E402
+from hexapod_kin.exceptions import ParameterError  # noqa: E402
+from hexapod_kin.gait import as_whole_body  # noqa: E402
+from hexapod_kin.robust import ENSEMBLE, Member, simulate_robust  # noqa: E402
+from hexapod_kin.simulate import scene_mjcf, simulate  # noqa: E402
+from hexapod_kin.simulate.collision import collision_hulls, foot_radius_of  # noqa: E402
+from hexapod_kin.simulate.scene import (  # noqa: E402
+    MAX_TIMESTEP,
+    STABLE_OMEGA_DT,
+    _joint_qpos,
+    scene_foot_radius,
+)
+
+
+def test_solo12_feet_from_its_foot_mesh() -> None:
+    trimesh = pytest.importorskip("trimesh")
+    from hexapod_kin.sources import erd_share
+
+    wb = as_whole_body("erd:solo12")
+    assert wb.foot_radius == 0.0  # its URDF has no sphere: the mesh is what says it
+    path = erd_share() / "example-robot-data/robots/solo_description/meshes/stl/with_foot"
+    half = np.sort(trimesh.load(path / "solo_foot.stl").extents / 2)
+    assert foot_radius_of(wb) == pytest.approx(half[1:].mean(), abs=1e-9)
+    assert scene_foot_radius(wb) == pytest.approx(0.016, abs=1e-4)  # the 16 mm wheel
+    assert scene_foot_radius("erd:anymal") == as_whole_body("erd:anymal").foot_radius
+
+
+def test_collision_meshes_are_kept_as_hulls_so_a_body_contact_is_real() -> None:
+    wb = as_whole_body("erd:solo12")
+    hulls = collision_hulls(wb, 0.016)
+    assert {h.link for h in hulls} >= {"base_link", "FL_UPPER_LEG", "HR_LOWER_LEG"}
+    assert not any(h.link.endswith("_FOOT") for h in hulls)  # the foot sphere stands for them
+    sc = scene_mjcf(wb)
+    m = mujoco.MjModel.from_xml_string(sc.xml)
+    d = mujoco.MjData(m)
+    meshes = [g for g in range(m.ngeom) if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH]
+    assert len(meshes) == len(hulls)
+    # the body lying on the floor, legs at rest: the base hull touches the ground
+    d.qpos[3] = 1.0
+    d.qpos[_joint_qpos(mujoco, m, sc.joint_names)] = wb.neutral_q()
+    mujoco.mj_forward(m, d)
+    base = m.body("base_link").id
+    d.qpos[2] = -float(d.xpos[base][2]) + 0.0  # base frame at the floor
+    mujoco.mj_forward(m, d)
+    ground = m.geom("ground").id
+    touching = {
+        int(m.geom_bodyid[c.geom2 if c.geom1 == ground else c.geom1])
+        for c in d.contact[: d.ncon]
+        if ground in (c.geom1, c.geom2)
+    }
+    assert base in touching
+
+
+def test_bumps_are_the_height_field_mujoco_collides() -> None:
+    sc = scene_mjcf(bumps=0.003, seed=1)
+    m = mujoco.MjModel.from_xml_string(sc.xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    rng = np.random.default_rng(0)
+    cell = 0.05
+    nodes = rng.integers(10, 40, size=(20, 2)) * cell  # grid nodes: exact in both (robot-free)
+    geomid = np.zeros(1, dtype=np.int32)
+    group = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)  # geom group 0 only (the ground)
+    for x, y in nodes:
+        dist = mujoco.mj_ray(
+            m, d, np.array([x, y, 1.0]), np.array([0, 0, -1.0]), group, 1, -1, geomid
+        )
+        assert geomid[0] == m.geom("ground").id
+        assert 1.0 - dist == pytest.approx(float(sc.ground(x, y)), abs=1e-9)
+    heights = sc.ground(nodes[:, 0], nodes[:, 1])
+    assert np.abs(heights).max() <= 0.003 and np.ptp(heights) > 0.003
+    assert float(sc.height(0.1, 0.2)) == 0.0  # the plan's ground stays flat
+    with pytest.raises(ParameterError, match="bumps"):
+        scene_mjcf(terrain="slope", bumps=0.003)
+
+
+def test_timestep_keeps_every_servo_stable() -> None:
+    for arm, split in ((None, 1), (0.0, None)):
+        sc = scene_mjcf("erd:go1", armature=arm)
+        m = mujoco.MjModel.from_xml_string(sc.xml)
+        d = mujoco.MjData(m)
+        wb = as_whole_body("erd:go1")
+        d.qpos[3] = 1.0
+        d.qpos[_joint_qpos(mujoco, m, sc.joint_names)] = wb.neutral_q()
+        mujoco.mj_forward(m, d)
+        full = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, full)
+        dofs = [m.joint(j).dofadr[0] for j in sc.joint_names]
+        omega = np.sqrt(sc.kp * np.diag(np.linalg.inv(full))[dofs]).max()
+        assert omega * sc.timestep <= STABLE_OMEGA_DT
+        assert m.opt.timestep == sc.timestep
+        if split:
+            assert sc.timestep == MAX_TIMESTEP  # the scaled armature: the 1 ms default kept
+        else:
+            assert omega * 2 * sc.timestep > STABLE_OMEGA_DT  # the largest step that holds
+
+
+def test_travel_is_measured_along_the_plan() -> None:
+    sim = simulate(pattern="tripod", duration=1.0, stand=False, foot_radius=0.001)
+    lp = sim.distance_planned
+    back = dataclasses.replace(sim, distance=0.648 * lp, direction_error=math.pi)
+    assert back.distance_error == pytest.approx(-1.648)  # not -64.8 %
+    assert "backwards" in back.direction
+    side = dataclasses.replace(sim, distance=lp, direction_error=math.radians(30))
+    assert side.distance_error == pytest.approx(math.cos(math.radians(30)) - 1)
+    assert not side.checks()["travel"]["ok"]
+
+
+def test_ensemble_verdict_and_worst_member(capsys: pytest.CaptureFixture[str]) -> None:
+    members = (Member("nominal", 0.005, False, 1.0), Member("bumpy", 0.005, False, 0.6, 0.003, 2))
+    rr = simulate_robust(pattern="tripod", duration=1.0, members=members, foot_radius=0.001)
+    assert [r.scene.bumps for r in rr.runs] == [0.0, 0.003]
+    assert rr.runs[1].scene.friction == 0.6 and rr.runs[1].run is rr.runs[0].run  # planned once
+    failing = [m.name for m, _ in rr.failures]
+    assert rr.ok == (not failing)
+    c = [r.checks() for r in rr.runs]
+    bad = [sum(not row["ok"] for row in x.values()) for x in c]
+    assert bad[rr.worst] == max(bad)
+    assert len(ENSEMBLE) == 11 and {m.friction for m in ENSEMBLE} >= {0.6, 1.0}
+    with pytest.raises(ParameterError, match="friction"):
+        simulate_robust(friction=0.5)
+
+
+@pytest.mark.slow
+def test_cli_robust_lists_every_member_and_exits_on_the_worst(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = ["simulate", "hexapod", "--duration", "2", "--robust", "--json", "--no-stand"]
+    status = main(args)
+    out = json.loads(capsys.readouterr().out)
+    rows = out["robust"]["members"]
+    assert len(rows) == len(ENSEMBLE)
+    assert status == (0 if all(not r["failed"] for r in rows) else 1)
+    assert out["robust"]["ok"] == (status == 0)
+
+
+def test_cli_simulate_takes_the_inertia_repair(
+    tmp_path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    xml = tmp_path / "scene.xml"
+    args = ["simulate", "erd:solo12", "--inertia", "point", "--duration", "1", "--no-stand"]
+    assert main([*args, "--json", "--mjcf", str(xml)]) in (0, 1)
+    json.loads(capsys.readouterr().out)
+    m = mujoco.MjModel.from_xml_path(str(xml))
+    # point masses: 1 cm spheres, I = 2/5 m r^2 about every axis (the URDF's are not)
+    b = m.body("FL_UPPER_LEG").id
+    mass = float(m.body_mass[b])
+    np.testing.assert_allclose(m.body_inertia[b], 0.4 * mass * 0.01**2, rtol=1e-6)
+
+
+@pytest.mark.slow
+def test_page_plays_the_two_animations_in_step(tmp_path) -> None:
+    """The simulation's frame follows the plan's seek and pause: in a browser."""
+    import os
+    import shutil
+
+    from hexapod_kin.simulate import simulation_html
+
+    chromium = shutil.which("chromium")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        sync_playwright = None
+    if chromium is None or sync_playwright is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI is set but Chromium or playwright is missing")
+        pytest.skip("Chromium or playwright is missing; browser test skipped")
+    from headless import launch_chromium
+
+    sim = simulate(pattern="tripod", duration=2.0, stand=False, foot_radius=0.001)
+    path = simulation_html(sim, tmp_path / "sim.html", play=False)
+    with sync_playwright() as p:
+        b = launch_chromium(p, chromium)
+        page = b.new_page(viewport={"width": 1200, "height": 700})
+        page.goto(path.as_uri())
+        frames = [f for f in page.frames if f != page.main_frame]
+        assert len(frames) == 2
+        for f in frames:
+            f.wait_for_function(
+                "() => window.hexapodKin && window.hexapodKin.ready", timeout=120000
+            )
+        plan, replay = frames
+        plan.evaluate("() => hexapodKin.seek(1.25)")
+        replay.wait_for_function(
+            "() => Math.abs(hexapodKin.viewer.animator.time - 1.25) < 0.11", timeout=90000
+        )
+        reach = page.evaluate(
+            "() => Array.from(document.querySelectorAll('iframe')).map("
+            "f => { try { return f.contentWindow.hexapodKin ? 1 : 0; } catch (e) { return -1; } })"
+        )
+        assert reach == [-1, -1]  # the frames are sandboxed: only messages cross
+        plan.evaluate("() => hexapodKin.seek(0.5)")
+        t_plan = plan.evaluate("() => hexapodKin.viewer.animator.time")
+        replay.wait_for_function(
+            f"() => !hexapodKin.viewer.animator.playing && "
+            f"Math.abs(hexapodKin.viewer.animator.time - {t_plan}) < 0.11",
+            timeout=90000,
+        )
+        b.close()
