@@ -1,22 +1,13 @@
 """The compiled layer of the singularity scans: FK + Jacobian rows + measures, in blocks.
 
-One job: given a chain with z joint axes (:class:`~hexapod_kin._chain.AlignedChain`), a row
-selection and a batch of configurations, write ``det``, ``manipulability``, ``condition`` and
-``sigma_min`` of every configuration, without storing the Jacobians. Configurations are
-processed in structure-of-arrays blocks by the one block FK + Jacobian core
-(:func:`hexapod_kin._kernels.fk_jac_block`, inlined), so the inner loops vectorise (SIMD);
-when the selected rows are invariant under the first revolute joint, that joint is not
-evaluated at all. Every shape with ``m = min(k, n) ≤ 6`` is reduced over the whole block
-(:func:`_reduce_block`): the Gram matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal
-blocks where the chain's structure makes it block diagonal) gives the largest eigenvalues —
-closed forms for blocks of size ≤ 2, cyclic Jacobi over the block for 3 to 6 (backward stable
-for clustered eigenvalues) — and ``det G`` comes from ``J``'s own minors (``det(J)²`` when
-square, Cauchy–Binet otherwise), so that ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full
-accuracy near a singularity. Larger ``m`` goes through a per-configuration reduction
-(:func:`_reduce_one`). Every decision is taken per configuration (never per block), so a
-value does not depend on its neighbours in the batch.
-
-The block linear algebra (cyclic Jacobi eigenvalues, Laplace minors) is in :mod:`._blocks`.
+Configurations go through the block FK + Jacobian core (:func:`hexapod_kin._kernels.fk_jac_block`)
+in structure-of-arrays blocks, never storing the Jacobians. For ``m = min(k, n) ≤ 6``
+(:func:`_reduce_block`) the Gram matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal blocks
+where the chain makes it block diagonal) gives the largest eigenvalues (closed forms up to size
+2, cyclic Jacobi for 3 to 6) and ``det G`` comes from ``J``'s own minors (``det(J)²`` or
+Cauchy–Binet), so ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity.
+Larger ``m``: :func:`_reduce_one` per configuration. Every decision is taken per configuration,
+so a value does not depend on its neighbours in the batch.
 """
 
 from __future__ import annotations
@@ -205,16 +196,11 @@ def _reduce_block(
 ) -> None:  # pragma: no cover - compiled
     """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 6``.
 
-    ``plan`` is :attr:`._plan.GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
-    triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
-    ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
-    ``JACOBI_TOL · trace`` (checked per configuration; Weyl bounds the effect), each
-    diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`eig_block` for 3
-    to 6; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
-    when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
-    ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
-    accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
-    ``ε λmax^m``). ``ev2`` (m, B) and ``flag`` (B,) are scratch.
+    ``plan`` is :attr:`._plan.GramPlan.arrays`. Where the plan's ``drop`` entries of ``G``
+    (packed upper triangle) are below ``JACOBI_TOL · trace`` (per configuration; Weyl bounds
+    the effect) each diagonal block is solved alone, else ``G`` whole. ``det G`` is ``det(J)²``
+    or the sum of the squared maximal minors (rows ``rsub[s]``, columns ``csub[s]``), so that
+    ``λmin = det G / Π_{i<m} λi`` keeps relative accuracy. ``ev2`` and ``flag`` are scratch.
     """
     pack, rsub, csub, gram_t, perm, csize, drop = plan
     k, n = jb.shape[0], jb.shape[1]
@@ -356,17 +342,13 @@ def measures_kernel(
 ) -> None:  # pragma: no cover - compiled
     """FK + selected-row Jacobian + measures for blocks ``first_block`` to ``last_block - 1``.
 
-    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot``, ``ptr``, ``flags``,
-    ``kind``, ``col``); ``qs`` (N, nq) is cut into blocks of ``block`` configurations, each
-    through :func:`~hexapod_kin._kernels.fk_jac_block` (the caller runs one call per thread;
-    the GIL is released). ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend
-    on it, see :func:`._plan.first_joint_invariant`). ``per_conf`` False (``min(k, n) ≤ 6``,
-    see :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the
-    whole block by :func:`_reduce_block`; True: :func:`_reduce_one` per configuration.
-    ``use_jacobi`` False: the plan's diagonal blocks are all of size ≤ 2 and m ≤ 3 (legs), so
-    a configuration whose split fails gets the 3×3 closed form, else cyclic Jacobi. ``tmp``:
-    this thread's (2, B) scratch of :func:`minor_big` (m = 5, 6). One compiled signature
-    serves every chain: these choices are runtime flags, per chain, never per element.
+    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot`` … ``col``); ``qs``
+    (N, nq) is cut into blocks of ``block`` configurations. ``skip0``: joint 0 is left at 0
+    (:func:`._plan.first_joint_invariant`). ``per_conf``: :func:`_reduce_one` per
+    configuration instead of :func:`_reduce_block`. ``use_jacobi`` False: every diagonal
+    block has size ≤ 2 and m ≤ 3, so a failed split gets the 3×3 closed form. ``tmp``: this
+    thread's (2, B) scratch of :func:`minor_big`. The flags are runtime values: one compiled
+    signature serves every chain.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]

@@ -1,23 +1,11 @@
 """Singularity measures of one configuration or of many.
 
-Measures of a Jacobian ``J`` (k selected rows of the ``local_world_aligned`` tip Jacobian
-``[v; ω]``, i.e. the tip's own velocity in the base frame's axes, n joints;
-``m = min(k, n)`` singular values ``σ1 ≥ … ≥ σm``):
-
-* ``det`` — ``det J`` when ``k == n``, else NaN;
-* ``manipulability`` — Yoshikawa's ``sqrt(det(J Jᵀ))`` (``sqrt(det(Jᵀ J))`` when ``k > n``),
-  the product of the singular values (``|det J|`` when square);
-* ``condition`` — ``σ1 / σm`` (``inf`` at a singularity);
-* ``sigma_min`` — ``σm``, in [m] for position rows of revolute joints.
-
-Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the position rows, plus
-the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
-gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
-
-Engines (the size rule): :func:`measures` of one configuration is Pinocchio's Jacobian and
-numpy's SVD; :func:`measures_batch` is always the fused compiled kernel (:mod:`._kernel`),
-generic over any loaded 1-DOF serial chain; scans of at most
-:data:`~.scans.SMALL_SCAN` configurations use Pinocchio + numpy (no numba import).
+Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian ``[v; ω]`` over n joints,
+with singular values ``σ1 ≥ … ≥ σm``, ``m = min(k, n)``: ``det`` (``det J``, NaN unless
+square), ``manipulability`` (Yoshikawa's ``sqrt(det(J Jᵀ))``, the product of the σ),
+``condition`` (``σ1 / σm``, ``inf`` when singular) and ``sigma_min`` (``σm``, in [m] for
+position rows of revolute joints). Default rows: :func:`default_rows`.
+:func:`measures` uses Pinocchio and numpy's SVD; :func:`measures_batch` the compiled kernel.
 """
 
 from __future__ import annotations
@@ -137,8 +125,8 @@ def as_model(model: Any) -> Any:
 def default_rows(model: Any) -> tuple[str, ...]:
     """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
 
-    Angular rows are tested at a few random configurations (a row is "zero" when it is below
-    1e-12 everywhere). SCARA → ``("x", "y", "z", "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+    A row is zero when below 1e-12 at 8 random configurations. SCARA → ``("x", "y", "z",
+    "wz")``; 3-DOF leg → ``("x", "y", "z")``.
 
     Args:
         model: A loaded model (or a source for :func:`hexapod_kin.load`).
@@ -151,7 +139,6 @@ def default_rows(model: Any) -> tuple[str, ...]:
 
     def build() -> tuple[str, ...]:
         qs = mdl.random_q(8, seed=12345)
-        # 8 Pinocchio calls: no batch kernel to compile for this (cold start)
         jac = np.array([mdl.jacobian(q, "local_world_aligned") for q in qs])
         flags = np.abs(jac).max(axis=(0, 2)) > 1e-12
         return choose_rows([bool(f) for f in flags], mdl.nq)
@@ -165,10 +152,7 @@ def selected_rows(model: Any, rows: Any) -> tuple[str, ...]:
 
 
 def reach(model: Any) -> float:
-    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance).
-
-    The chain's one length scale (:func:`hexapod_kin._numerics.chain_length`).
-    """
+    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance)."""
     return float(chain_length(as_model(model).arrays.trans))
 
 
@@ -248,11 +232,7 @@ def measures_batch(
 
 
 def _measures_small(model: Any, qs: np.ndarray, rows: tuple[str, ...]) -> MeasuresBatch:
-    """:func:`measures_batch` of a checked (N, nq) array on Pinocchio Jacobians and numpy SVD.
-
-    The path of command-line-sized work (no numba import): one Pinocchio call per
-    configuration, then one batched numpy SVD.
-    """
+    """:func:`measures_batch` of a checked (N, nq) array on Pinocchio Jacobians and numpy SVD."""
     jac = np.empty((qs.shape[0], 6, qs.shape[1]))
     for i, q in enumerate(qs):
         jac[i] = model.jacobian(q, "local_world_aligned")
