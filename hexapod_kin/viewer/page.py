@@ -1,11 +1,8 @@
 """The self-contained offline page: :func:`render_html`, :func:`export_html`, :func:`iframe`.
 
-The page inlines meshcat's JavaScript bundle and the scene as meshcat commands (msgpack;
-meshes as int16 vertices without normals), both gzipped and base64, unpacked by the page
-itself (``DecompressionStream``, no fetch; the bundle runs from a ``blob:`` URL the page
-makes, the only script source its policy adds; normals computed in the browser), so it
-opens from disk (``file://``) with no server and no network: its Content-Security-Policy
-forbids every fetch.
+The page inlines meshcat's bundle and the scene (msgpack commands, meshes without normals),
+gzipped and base64, unpacked by the page itself (no fetch; the bundle runs from a ``blob:``
+URL), so it opens from disk with no network: its Content-Security-Policy forbids every fetch.
 """
 
 from __future__ import annotations
@@ -164,11 +161,7 @@ def _bundle_gz() -> str:
 
 
 def _scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) -> bytes:
-    """The page's scene: every command (msgpack) after its uint32 LE length, gzipped.
-
-    The animation, if any, is the last command. Deterministic (no time stamp in the gzip
-    header), so the same inputs give the same page.
-    """
+    """The page's scene: each command (msgpack) after its uint32 LE length, gzipped, no mtime."""
     cmds = static + ([animation] if animation is not None else [])
     parts = []
     for cmd in cmds:
@@ -195,12 +188,9 @@ def render_html(
 ) -> str:
     """The self-contained animated HTML page of a trajectory (opens from disk, no network).
 
-    The page inlines meshcat's JavaScript bundle and the scene as meshcat commands; it works
-    from ``file://``, in an iframe (Colab, Binder, Jupyter) and offline. Controls: drag to
-    orbit, right-drag to pan, wheel to zoom; a panel with play/pause, loop, speed and the time;
-    meshcat's "Open Controls" menu (scene tree visibility, animation scrubber). For scripts and
-    tests the page exposes ``window.hexapodKin`` (``seek(t)``, ``play()``, ``pause()``,
-    ``setVisible(part, on)``, ``setLoop(on)``, ``setSpeed(s)``).
+    A panel with play/pause, loop, speed and the time; for scripts the page exposes
+    ``window.hexapodKin`` (``seek(t)``, ``play()``, ``pause()``, ``setVisible(part, on)``,
+    ``setLoop(on)``, ``setSpeed(s)``).
 
     Args:
         model: A loaded model (``hexapod_kin.load(...)``).
@@ -222,10 +212,8 @@ def render_html(
         speed: Playback speed factor (> 0).
         play: Start playing when the page opens.
         overlays: Optional mapping ``name -> (N, M, 3)`` array: a polyline of M world points
-            [m] per sample, drawn as thin tubes and moved with the animation (close a polygon
-            by repeating its first point; repeated points make hidden segments; M = 1 draws
-            a moving sphere), under ``/meshcat/overlays/<name>`` (e.g. a walk's support
-            polygon and projected centre of mass).
+            [m] per sample, drawn as thin tubes (M = 1: a moving sphere) under
+            ``/meshcat/overlays/<name>``.
 
     Returns:
         The page (:func:`export_html` writes it to a file).
@@ -291,10 +279,6 @@ def export_html(
 
 def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
     """An ``<iframe srcdoc=...>`` embedding an exported page (Jupyter, Colab, Binder).
-
-    ``IPython.display.HTML(viewer.iframe("step.html"))`` shows the animation inline; the page
-    stays isolated in its frame (ids, scripts, its Content-Security-Policy), so several can be
-    shown in one notebook.
 
     Args:
         html: Path of a file written by :func:`export_html`.
