@@ -36,7 +36,7 @@ MAX_CONFIGURATIONS = 50_000_000
 #: Points per scanned joint when neither ``grid`` nor ``samples`` is given.
 DEFAULT_GRID = 61
 #: Largest scan run on Pinocchio + numpy; above it, the compiled kernel.
-SMALL_SCAN = 5_000
+SMALL_SCAN = 10_000
 
 
 def _kernel_scan(
