@@ -240,22 +240,13 @@ class PendulumRun:
         def rel(meas: float | None, exact: float) -> float | None:
             return None if meas is None or exact == 0 else abs(meas - exact) / exact
 
-        out: dict[str, Any] = {
-            "theta0": self.theta0,
-            "damping": self.damping,
-            "method": self.simulation.method,
-            "dt": self.simulation.dt,
-            "duration": float(self.simulation.t[-1]),
-            "period": self.period,
-            "period_exact": self.period_exact,
-            "period_error": rel(self.period, self.period_exact),
-            "energy_drift": self.energy_drift,
-            "energy_max_increase": self.energy_max_increase,
-            "energy_monotone": self.energy_monotone,
-            "decay_rate": self.decay_rate,
-            "decay_rate_exact": self.decay_rate_exact,
-            "decay_rate_error": rel(self.decay_rate, self.decay_rate_exact),
-        }
+        sim = self.simulation
+        out = fields_dict(self, "theta0", "damping") | fields_dict(sim, "method", "dt")
+        out |= {"duration": float(sim.t[-1])} | fields_dict(self, "period", "period_exact")
+        out["period_error"] = rel(self.period, self.period_exact)
+        out |= fields_dict(self, "energy_drift", "energy_max_increase", "energy_monotone")
+        out |= fields_dict(self, "decay_rate", "decay_rate_exact")
+        out["decay_rate_error"] = rel(self.decay_rate, self.decay_rate_exact)
         if samples:
             out["t"] = self.simulation.t.tolist()
             out.update(fields_dict(self, "theta", "omega", "energy"))

@@ -27,6 +27,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import (
     ConfigurationError,
     LimitError,
@@ -191,11 +192,7 @@ class ContactSolution:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready."""
-        return {
-            "forces": self.forces.tolist(),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-        }
+        return fields_dict(self, "forces", "force_residual", "moment_residual")
 
 
 def contact_forces(
@@ -369,27 +366,12 @@ class Stance:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (lists of floats, SI units)."""
-        return {
-            "height": self.height,
-            "method": self.method,
-            "mu": self.mu,
-            "mass": self.mass,
-            "weight": self.weight,
-            "com": self.com.tolist(),
-            "joint_names": list(self.joint_names),
-            "q": self.q.tolist(),
-            "stance_legs": list(self.stance_legs),
-            "feet": self.feet.tolist(),
-            "forces": self.forces.tolist(),
-            "force_sum": self.forces.sum(axis=0).tolist(),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-            "friction_ratio": self.friction_ratio,
-            "feasible": self.feasible,
-            "gravity_torque": self.gravity_torque.tolist(),
-            "torque": self.torque.tolist(),
-            "peak_torque": float(np.max(np.abs(self.torque))),
-        }
+        out = fields_dict(self, *"height method mu mass weight com joint_names q".split())
+        out |= fields_dict(self, "stance_legs", "feet", "forces")
+        out["force_sum"] = self.forces.sum(axis=0).tolist()
+        out |= fields_dict(self, "force_residual", "moment_residual", "friction_ratio", "feasible")
+        out |= fields_dict(self, "gravity_torque", "torque")
+        return out | {"peak_torque": float(np.max(np.abs(self.torque)))}
 
 
 def _stance_of(names: list[str], legs: Any) -> tuple[int, ...]:

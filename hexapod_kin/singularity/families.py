@@ -137,12 +137,8 @@ class Families:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
-        return {
-            "families": [f.to_dict() for f in self.families],
-            "origin": self.origin,
-            "reason": self.reason,
-            "key": self.key,
-        }
+        families = [f.to_dict() for f in self.families]
+        return {"families": families, **fields_dict(self, "origin", "reason", "key")}
 
 
 # ------------------------------------------------------------------------ tables and keys

@@ -63,6 +63,18 @@ def _kernel_scan(
     return out
 
 
+#: The (N,) arrays of a :class:`ScanResult`, in the order of its JSON.
+_PER_SAMPLE = (
+    "det manipulability condition sigma_min singular family family_distance second_family "
+    "second_distance"
+).split()
+
+
+def _listed(arr: np.ndarray) -> list[Any]:
+    """A float array as a list with NaN / inf as ``None``; any other as its list."""
+    return _clean(arr) if arr.dtype.kind == "f" else arr.tolist()
+
+
 def _ro(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.setflags(write=False)
@@ -184,8 +196,7 @@ class ScanResult:
         """
         if self.grid_shape is None:
             raise ParameterError("grid(): this scan used random samples, not a grid")
-        names = "det manipulability condition sigma_min singular family family_distance"
-        one_of("name", name, names.split())
+        one_of("name", name, _PER_SAMPLE[:7])
         return np.asarray(getattr(self, name)).reshape(self.grid_shape)
 
     def to_dict(self) -> dict[str, Any]:
@@ -201,15 +212,7 @@ class ScanResult:
             "grid_shape": list(self.grid_shape) if self.grid_shape else None,
             "q_fixed": self.q_fixed.tolist(),
             "q": self.q.tolist(),
-            "det": _clean(self.det),
-            "manipulability": _clean(self.manipulability),
-            "condition": _clean(self.condition),
-            "sigma_min": _clean(self.sigma_min),
-            "singular": self.singular.tolist(),
-            "family": self.family.tolist(),
-            "family_distance": _clean(self.family_distance),
-            "second_family": self.second_family.tolist(),
-            "second_distance": _clean(self.second_distance),
+            **{k: _listed(getattr(self, k)) for k in _PER_SAMPLE},
             "family_tol": self.family_tol,
             "family_tols": list(self.family_tols),
             "family_reason": self.family_reason,
