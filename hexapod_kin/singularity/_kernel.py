@@ -6,8 +6,9 @@ in structure-of-arrays blocks, never storing the Jacobians. For ``m = min(k, n) 
 where the chain makes it block diagonal) gives the largest eigenvalues (closed forms up to size
 2, cyclic Jacobi for 3 to 6) and ``det G`` comes from ``J``'s own minors (``det(J)²`` or
 Cauchy–Binet), so ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity.
-Larger ``m``: :func:`_reduce_one` per configuration. Every decision is taken per configuration,
-so a value does not depend on its neighbours in the batch.
+Shapes with more than ``_plan._MAX_MINORS`` maximal minors (chains of 9 joints and more) are
+not the kernel's: :func:`~.measure.measures_batch` serves them with Pinocchio and numpy. Every
+decision is taken per configuration, so a value does not depend on its neighbours.
 """
 
 from __future__ import annotations
@@ -17,16 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import (
-    POLY_TRIG_MAX,
-    det_small,
-    eig2_sym,
-    eig3_sym,
-    fk_jac_block,
-    jacobi_eig,
-    njit,
-    sincos,
-)
+from .._kernels import POLY_TRIG_MAX, eig3_sym, fk_jac_block, njit, sincos
 from ._blocks import JACOBI_TOL, eig_block, minor_big, minor_block
 
 __all__ = [
@@ -38,77 +30,6 @@ __all__ = [
     "minor_block",
     "sincos",
 ]
-
-
-@njit(cache=True, nogil=True)
-def _reduce_one(
-    js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """Measures ``(det, manipulability, condition, sigma_min)`` of one k×n Jacobian ``js``."""
-    k, n = js.shape
-    square = k == n
-    m = k if k <= n else n
-    # Gram matrix
-    if k <= n:
-        for a in range(m):
-            for b in range(a, m):
-                s = 0.0
-                for c in range(n):
-                    s += js[a, c] * js[b, c]
-                g[a, b] = s
-                g[b, a] = s
-    else:
-        for a in range(m):
-            for b in range(a, m):
-                s = 0.0
-                for c in range(k):
-                    s += js[c, a] * js[c, b]
-                g[a, b] = s
-                g[b, a] = s
-    # determinant (square) and det G
-    det = np.nan
-    if square:
-        det = det_small(js, n, work)
-        det_g = det * det
-    else:
-        det_g = det_small(g, m, work)
-    if det_g < 0.0:
-        det_g = 0.0
-    # the m-1 largest eigenvalues of G
-    if m == 1:
-        lmax = g[0, 0]
-        prod_top = 1.0
-    elif m == 2:
-        lmax, _ = eig2_sym(g[0, 0], g[0, 1], g[1, 1])
-        prod_top = lmax
-    elif m == 3:
-        lmax, l2, _ = eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
-        prod_top = lmax * l2
-    else:
-        for a in range(m):
-            for b in range(m):
-                work[a, b] = g[a, b]
-        jacobi_eig(work[:m, :m], lam)
-        lmax = lam[0]
-        prod_top = 1.0
-        for a in range(m - 1):
-            prod_top *= lam[a]
-    if m == 1:
-        lmin = g[0, 0]
-    elif prod_top > 0.0:
-        lmin = det_g / prod_top
-    else:
-        lmin = 0.0
-    if lmin < 0.0:
-        lmin = 0.0
-    smin = math.sqrt(lmin)
-    smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
-    if square:
-        manip = abs(det)
-    else:
-        manip = math.sqrt(det_g)
-    cond = smax / smin if smin > 0.0 else np.inf
-    return det, manip, cond, smin
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -327,7 +248,6 @@ def measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
-    per_conf: bool,
     plan: tuple[Any, ...],
     use_jacobi: bool,
     tmp: np.ndarray,
@@ -344,8 +264,7 @@ def measures_kernel(
 
     The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot`` … ``col``); ``qs``
     (N, nq) is cut into blocks of ``block`` configurations. ``skip0``: joint 0 is left at 0
-    (:func:`._plan.first_joint_invariant`). ``per_conf``: :func:`_reduce_one` per
-    configuration instead of :func:`_reduce_block`. ``use_jacobi`` False: every diagonal
+    (:func:`._plan.first_joint_invariant`). ``use_jacobi`` False: every diagonal
     block has size ≤ 2 and m ≤ 3, so a failed split gets the 3×3 closed form. ``tmp``: this
     thread's (2, B) scratch of :func:`minor_big`. The flags are runtime values: one compiled
     signature serves every chain.
@@ -354,10 +273,8 @@ def measures_kernel(
     nq = qs.shape[1]
     k = sel.shape[0]
     mm = k if k <= nq else nq
-    big = k if k > nq else nq
-    use_block = not per_conf
-    npk = mm * (mm + 1) // 2 if use_block else 1
-    nev = mm if use_block else 1
+    npk = mm * (mm + 1) // 2
+    nev = mm
     bsz = block
     rr = np.empty((9, bsz))
     pp = np.empty((3, bsz))
@@ -374,10 +291,6 @@ def measures_kernel(
     open_idx = np.empty(bsz, dtype=np.int64)
     dg = np.empty(bsz)
     mnr = np.empty(bsz)
-    js = np.empty((k, nq))
-    g = np.empty((mm, mm))
-    work = np.empty((big, big))
-    lam = np.empty(mm)
     for blk in range(first_block, last_block):
         start = blk * bsz
         nb = min(nconf, start + bsz) - start
@@ -392,35 +305,7 @@ def measures_kernel(
             for b in range(nq):
                 for i in range(nb):
                     jb[a, b, i] = jfull[r + b, i]
-        if use_block:
-            _reduce_block(
-                jb,
-                nb,
-                plan,
-                gb,
-                hb,
-                wb,
-                ev,
-                ev2,
-                flag,
-                open_idx,
-                dg,
-                mnr,
-                tmp,
-                use_jacobi,
-                start,
-                out_det,
-                out_manip,
-                out_cond,
-                out_smin,
-            )
-        else:
-            for i in range(nb):
-                for a in range(k):
-                    for b in range(nq):
-                        js[a, b] = jb[a, b, i]
-                d, mp, cn, sm = _reduce_one(js, g, work, lam)
-                out_det[start + i] = d
-                out_manip[start + i] = mp
-                out_cond[start + i] = cn
-                out_smin[start + i] = sm
+        _reduce_block(
+            jb, nb, plan, gb, hb, wb, ev, ev2, flag, open_idx, dg, mnr, tmp, use_jacobi, start,
+            out_det, out_manip, out_cond, out_smin,
+        )  # fmt: skip

@@ -47,7 +47,7 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
     ``rsub[s]`` / ``csub[s]``: rows / columns of the s-th maximal minor of ``J`` (the one
     square minor when ``k == n``; all ``C(max(k, n), m)`` of them otherwise, for Cauchy–Binet
     ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 6`` or there are more than
-    ``_MAX_MINORS`` minors (the per-configuration path then serves).
+    ``_MAX_MINORS`` minors (:func:`~.measure.measures_batch` then uses Pinocchio and numpy).
     """
     from itertools import combinations
 
@@ -244,7 +244,7 @@ def compute(
     plan = gram_plan(model, key, skip0)
     m = min(len(key), q.shape[1])
     use_jacobi = not (m <= 3 and int(plan.csize.max()) <= 2)
-    args = (*al.packed, q, sel, not plan.use_block, plan.arrays, use_jacobi)
+    args = (*al.packed, q, sel, plan.arrays, use_jacobi)
 
     def run(first: int, last: int) -> None:
         tmp = np.empty((2, BLOCK if m > 4 else 1))  # this thread's scratch (m = 5, 6)

@@ -24,6 +24,10 @@ from ..jacobian_rows import ROW_NAMES, choose_rows, row_names
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
 
 
+#: The four measures, in the order of a :class:`MeasuresBatch`'s iteration.
+_MEASURES = ("det", "manipulability", "condition", "sigma_min")
+
+
 def _clean(a: np.ndarray) -> list[Any]:
     return [v if math.isfinite(v) else None for v in np.asarray(a, dtype=float).tolist()]
 
@@ -51,13 +55,9 @@ class Measures:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        names = ("det", "manipulability", "condition", "sigma_min")
-        values = _clean(np.array([getattr(self, k) for k in names]))
-        return {
-            **dict(zip(names, values)),
-            "singular_values": _clean(self.singular_values),
-            "rows": list(self.rows),
-        }
+        values = _clean(np.array([getattr(self, k) for k in _MEASURES]))
+        sv = _clean(self.singular_values)
+        return {**dict(zip(_MEASURES, values)), "singular_values": sv, "rows": list(self.rows)}
 
 
 @dataclass(frozen=True)
@@ -83,23 +83,17 @@ class MeasuresBatch:
     rows: tuple[str, ...]
 
     def __iter__(self) -> Iterator[np.ndarray]:
-        return iter((self.det, self.manipulability, self.condition, self.sigma_min))
+        return (getattr(self, k) for k in _MEASURES)
 
     def __len__(self) -> int:
         return 4
 
     def __getitem__(self, i: int) -> np.ndarray:
-        return (self.det, self.manipulability, self.condition, self.sigma_min)[i]
+        return tuple(self)[i]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        return {
-            "rows": list(self.rows),
-            "det": _clean(self.det),
-            "manipulability": _clean(self.manipulability),
-            "condition": _clean(self.condition),
-            "sigma_min": _clean(self.sigma_min),
-        }
+        return {"rows": list(self.rows), **{k: _clean(getattr(self, k)) for k in _MEASURES}}
 
 
 def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -191,6 +185,9 @@ def measures_batch(
 ) -> MeasuresBatch:
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
+    Chains whose Jacobian has more than 70 maximal minors (9 joints and more) are measured
+    with Pinocchio and numpy instead.
+
     Args:
         model: A loaded model (or a source).
         qs: Configurations (N, nq) in [rad] / [m].
@@ -206,7 +203,7 @@ def measures_batch(
         ParameterError: Bad ``rows``.
 
     """
-    from ._plan import compute, output_arrays
+    from ._plan import block_plan, compute, output_arrays
 
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -227,7 +224,11 @@ def measures_batch(
         )
     if out is None:
         out = output_arrays(n)
-    compute(mdl, q, sel, out)
+    if block_plan(len(sel), mdl.nq)[0]:
+        compute(mdl, q, sel, out)
+    else:  # too many maximal minors for the kernel (9 joints and more)
+        for o, values in zip(out, _measures_small(mdl, q, names)):
+            o[:] = values
     return MeasuresBatch(out[0], out[1], out[2], out[3], rows=names)
 
 
