@@ -33,125 +33,12 @@ _CSP = (
     "default-src 'none'; script-src 'unsafe-inline' blob:; style-src 'unsafe-inline'; "
     "img-src data: blob:; worker-src blob:"
 )
-#: The page's style sheet.
-_STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
-#meshcat-pane { width: 100vw; height: 100vh; overflow: hidden; }
-#hk-panel { position: absolute; left: 8px; top: 8px; padding: 6px 10px; border-radius: 6px;
-  background: rgba(255,255,255,0.82); color: #222; font-size: 13px; line-height: 1.5; }
-#hk-panel b { font-size: 14px; }
-#hk-panel button, #hk-panel select { font-size: 12px; }
-#hk-help { color: #555; font-size: 11px; }"""
 
-#: The page's body: the meshcat pane, the panel (``$help``), the script (``$data``).
-_BODY = """<div id="meshcat-pane"></div>
-<div id="hk-panel"><b id="hk-title"></b><br>
-<span id="hk-controls"><button id="hk-play">pause</button>
-<label><input type="checkbox" id="hk-loop"> loop</label>
-speed <select id="hk-speed"><option>0.25</option><option>0.5</option><option>1</option>
-<option>2</option><option>4</option></select>
-t = <span id="hk-time">0.000</span> s</span><br>
-<span id="hk-help">$help</span></div>
-<script>
-(function () {
-  "use strict";
-  var DATA = $data;
-  var help = document.getElementById("hk-help");
-  function bytes(b64) {
-    var s = atob(b64), out = new Uint8Array(s.length);
-    for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
-    return out;
-  }
-  // The scene: meshcat commands (msgpack), each after its uint32 length, gzipped together.
-  function inflate(b64) {
-    var stream = new Blob([bytes(b64)]).stream().pipeThrough(new DecompressionStream("gzip"));
-    return new Response(stream).arrayBuffer();
-  }
-  function split(buf) {
-    var view = new DataView(buf), out = [], at = 0;
-    while (at + 4 <= buf.byteLength) {
-      var n = view.getUint32(at, true);
-      out.push(new Uint8Array(buf.slice(at + 4, at + 4 + n)));
-      at += 4 + n;
-    }
-    return out;
-  }
-  if (typeof DecompressionStream === "undefined") {
-    help.textContent = "this browser cannot unpack the scene (no DecompressionStream): " +
-      "open the page in Chrome 80+, Firefox 113+ or Safari 16.4+";
-    return;
-  }
-  // meshcat's bundle, gzipped too, runs from a blob: URL made here (script-src blob:).
-  Promise.all([inflate(DATA.bundle), inflate(DATA.scene)]).then(function (parts) {
-    var url = URL.createObjectURL(new Blob([parts[0]], { type: "text/javascript" }));
-    var tag = document.createElement("script");
-    tag.onload = function () { URL.revokeObjectURL(url); start(split(parts[1])); };
-    tag.onerror = function () { help.textContent = "could not run meshcat's bundle"; };
-    tag.src = url;
-    document.head.appendChild(tag);
-  }).catch(function (err) {
-    help.textContent = "could not unpack the scene: " + err;
-  });
-  function start(cmds) {
-  var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-  var anim = DATA.animation ? cmds.pop() : null;
-  cmds.forEach(function (c) { viewer.handle_command_bytearray(c); });
-  viewer.scene.traverse(function (o) {  // meshes come without normals: computed here
-    var g = o.geometry;
-    if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
-      g.computeVertexNormals();
-    }
-  });
-  var animator = viewer.animator;
-  if (anim) {
-    viewer.handle_command_bytearray(anim);
-    animator.mixer.timeScale = DATA.speed;
-  }
-  document.getElementById("hk-title").textContent = DATA.title;
-  var playBtn = document.getElementById("hk-play"), loopBox = document.getElementById("hk-loop");
-  var speedSel = document.getElementById("hk-speed"), timeEl = document.getElementById("hk-time");
-  if (!DATA.animation) { document.getElementById("hk-controls").style.display = "none"; }
-  loopBox.checked = DATA.loop;
-  speedSel.value = String(DATA.speed);
-  function setLoop(on) {
-    animator.actions.forEach(function (a) { a.repetitions = on ? Infinity : 1; });
-  }
-  function play() {
-    if (animator.actions.length && animator.actions.every(function (a) { return a.paused; })) {
-      animator.reset();
-    }
-    animator.play(); playBtn.textContent = "pause";
-  }
-  function pause() { animator.pause(); playBtn.textContent = "play"; }
-  function seek(t) {
-    animator.actions.forEach(function (a) { a.enabled = true; a.paused = false; a.play(); });
-    animator.pause(); playBtn.textContent = "play";
-    animator.seek(t - DATA.t0); animator.display_progress(t - DATA.t0);
-    viewer.render();
-  }
-  playBtn.onclick = function () { if (animator.playing) { pause(); } else { play(); } };
-  loopBox.onchange = function () { setLoop(loopBox.checked); };
-  speedSel.onchange = function () { animator.mixer.timeScale = parseFloat(speedSel.value); };
-  if (!DATA.play) { playBtn.textContent = "play"; }
-  (function tick() {
-    timeEl.textContent = (DATA.t0 + (animator.time || 0)).toFixed(3);
-    if (DATA.animation && !animator.playing) { playBtn.textContent = "play"; }
-    requestAnimationFrame(tick);
-  })();
-  window.hexapodKin = {
-    viewer: viewer, duration: DATA.duration, t0: DATA.t0, parts: DATA.parts,
-    play: play, pause: pause, seek: seek, setLoop: setLoop,
-    setSpeed: function (s) { animator.mixer.timeScale = s; speedSel.value = String(s); },
-    setVisible: function (part, on) {
-      viewer.set_property(["meshcat", part], "visible", !!on); viewer.render();
-    },
-    render: function () { viewer.render(); },
-    ready: true
-  };
-  viewer.render();
-  }
-})();
-</script>
-"""
+
+@functools.lru_cache(maxsize=2)
+def _template(name: str) -> str:
+    """``page.css`` or ``page.html`` (holes ``$help``, ``$data``), beside this module."""
+    return (Path(__file__).parent / name).read_text(encoding="utf-8")
 
 
 @functools.lru_cache(maxsize=1)
@@ -261,8 +148,8 @@ def render_html(
         help_text += " · triads x/y/z = red/green/blue, label = Khalil frame index"
     if built.static and singular_mask is not None and np.any(singular_mask):
         help_text += " · red spheres: near-singular samples"
-    body = fill(_BODY, help=help_text, data=script_json(data))
-    return page(label, body, style=_STYLE, policy=_CSP)
+    body = fill(_template("page.html"), help=help_text, data=script_json(data))
+    return page(label, body, style=_template("page.css").removesuffix("\n"), policy=_CSP)
 
 
 def export_html(

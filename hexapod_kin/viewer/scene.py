@@ -330,8 +330,8 @@ def build(
             geom = tube(fposes[:, tracked.index(name), :3, 3], tube_r)
             if geom is None:
                 continue
-            mat = t.material(trace_rgba(k))
-            kids.append(t.node("Mesh", geometry=t.geometry(geom), material=mat, name=name))
+            gid = t.geometry(geom)  # before the material: the UUIDs count in order
+            kids.append(t.node("Mesh", geometry=gid, material=t.material(trace_rgba(k)), name=name))
         if kids:
             cmds.append(set_object("/meshcat/trace", t.lower(t.node("Group", children=kids))))
     # -- singular markers (on the first traced frame, or the tip)
