@@ -90,8 +90,8 @@ CHAINS = [
     ("scara", None, "all"),  # 6×4: 15 minors, 4×4 Jacobi
     ("five_dof", None, "all"),  # 6×5: m = 5, 6 minors of 5×5 (Laplace 2 + 3)
     ("erd:ur5_robot", None, "all"),  # 6×6: generic block Jacobi, Laplace 3 + 3
-    ("erd:panda", None, "all"),  # 6×9 (fingers: zero columns): 84 minors, per configuration
-    ("erd:panda", None, ("x", "y", "z", "wx")),  # 4×9: 126 minors, per configuration
+    ("erd:panda", None, "all"),  # 6×9 (fingers: zero columns): 84 minors: Pinocchio + numpy
+    ("erd:panda", None, ("x", "y", "z", "wx")),  # 4×9: 126 minors: Pinocchio + numpy
 ]
 
 
@@ -169,7 +169,6 @@ def test_wrong_split_guess_is_caught_per_block(use_jacobi):
         al.col,
         qs,
         np.arange(3),
-        False,
         bad.arrays,
         use_jacobi,  # False: no Jacobi (the 3×3 closed form where a split fails)
         np.empty((2, 1)),

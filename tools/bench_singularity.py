@@ -183,7 +183,6 @@ def run(quick: bool) -> list[dict]:
             al.col,
             qs,
             sel,
-            False,
             plans[skip0].arrays,
             False,
             np.empty((2, 1)),

@@ -101,13 +101,9 @@ def _inertial_problem(inertia: pin.Inertia) -> str | None:
 def check_inertials(model: Any) -> None:
     """Refuse a model whose moving bodies have implausible inertials (before any dynamics).
 
-    First the loader's verdict (``hexapod_kin.model.check_inertials``: the defects the URDF
-    gate found link by link, raised as ``UrdfError``); then every body moved by a joint
-    (Pinocchio's ``model.inertias[i]``, i >= 1, the links rigidly attached to joint i merged)
-    must have a finite mass > 0 and a positive-definite inertia about its centre of mass:
-    otherwise the joint-space inertia matrix can be singular and ABA divides by zero. The
-    second check also covers models edited or built without the loader. Its result is cached
-    per model.
+    The loader's verdict first (``hexapod_kin.model.check_inertials``); then every body moved
+    by a joint (``model.inertias[i]``, i >= 1) needs a finite mass > 0 and a positive-definite
+    inertia about its centre of mass, else ABA can divide by zero (cached per model).
 
     Args:
         model: A loaded model.

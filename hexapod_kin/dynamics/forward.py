@@ -1,31 +1,20 @@
 """Forward dynamics of a loaded model: Pinocchio ABA, passive joint forces, fixed-step integration.
 
-The equation of motion, in joint space (q in [rad]/[m], gravity ``model.gravity``: −z,
-9.81 m/s², Pinocchio's default)::
+The equation of motion (q in [rad]/[m], gravity ``model.gravity``)::
 
     M(q) q̈ + C(q, q̇) q̇ + g(q) = τ(t) + τ_passive(q, q̇)
     τ_passive = − b ⊙ q̇ − F ⊙ tanh(q̇ / v_F) − K ⊙ (q − q_rest)
 
-solved for ``q̈`` by the articulated-body algorithm (``pin.aba``, which itself applies no joint
-damping). ``b`` is the URDF's viscous joint damping (``model.damping`` [N·m·s/rad]), ``F`` its
-Coulomb friction (``model.friction`` [N·m]) — smoothed by ``tanh(q̇/v_F)`` (``v_F`` =
-``friction_velocity``, default 1e-3 rad/s) so that the right-hand side stays Lipschitz for a
-fixed-step integrator (no stiction: a joint under a load below ``F`` creeps at about
-``v_F·atanh(load/F)``); ``K`` and ``q_rest`` an optional joint spring. Joint limits are not
-enforced (the model is a free multibody system).
+solved for ``q̈`` by ``pin.aba``. ``b`` is the URDF's viscous damping, ``F`` its Coulomb
+friction smoothed by ``tanh(q̇/v_F)`` (Lipschitz for a fixed step; no stiction), ``K`` and
+``q_rest`` an optional spring. Joint limits are not enforced.
 
-Integrators (fixed step ``dt``):
+Integrators (fixed step ``dt``): ``"rk4"`` (default; global error O(dt⁴), not symplectic) and
+``"symplectic_euler"`` (``q̇ₖ₊₁ = q̇ₖ + dt q̈(qₖ, q̇ₖ)``, ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``; first order,
+bounded energy error without damping).
 
-* ``"rk4"`` (default): the classic 4th-order Runge–Kutta. Global error O(dt⁴); on smooth
-  conservative motion the energy error per step is O((ω dt)⁶). Not symplectic: over very long
-  runs its energy drifts (slowly).
-* ``"symplectic_euler"``: semi-implicit Euler, ``q̇ₖ₊₁ = q̇ₖ + dt q̈(qₖ, q̇ₖ)``,
-  ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``. First order, one ABA per step; symplectic, so without damping its
-  energy error stays bounded (no drift) but oscillates with amplitude O(ω dt).
-
-Energies: kinetic ``½ q̇ᵀ M q̇`` (``pin.computeKineticEnergy``) and potential
-``−Σ mᵢ g·cᵢ`` (``pin.computePotentialEnergy``: zero at the world origin; bodies fixed to the
-world are left out, they do not move) plus the springs' ``½ K (q − q_rest)²``.
+Energies: kinetic ``½ q̇ᵀ M q̇``, potential ``−Σ mᵢ g·cᵢ`` (Pinocchio's, zero at the world
+origin) plus the springs' ``½ K (q − q_rest)²``.
 """
 
 from __future__ import annotations
@@ -287,10 +276,9 @@ def simulate(
 def _run(
     acc: Callable[[float, Any, Any], Any], q: Any, v: Any, ts: np.ndarray, h: float, method: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """RK4 or symplectic Euler from (q, v): the positions, velocities and accelerations.
+    """RK4 or symplectic Euler from (q, v): positions, velocities, accelerations.
 
-    The state is (nq,) arrays, or Python floats for one joint (the same operations either way,
-    so the same numbers, without numpy's per-operation cost on 1-element arrays).
+    The state is (nq,) arrays, or Python floats for one joint (the same operations).
     """
     qs, vs, accs = [q], [v], []
     a = acc(0.0, q, v)

@@ -1,27 +1,17 @@
 """The seed pendulum (seed 001 §1), simulated with ABA and measured against exact physics.
 
-Geometry: the ``pendulum`` preset swings about a horizontal axis; the angle ``θ`` is measured
-from the hanging (stable) equilibrium ``q_hang`` (found from the potential energy, −π/2 for the
-preset): ``θ = q − q_hang``. The seed's "state target" of 30° is the initial angle ``θ0``, released
-from rest.
-
-The exact physics it is checked against, for a rigid body of mass ``m`` swinging about a fixed
-horizontal axis, ``I`` its moment of inertia about that axis, ``l_c`` the distance from the axis
-to the centre of mass, ``b`` the joint's viscous damping::
+``θ = q − q_hang``, measured from the hanging equilibrium (found from the potential energy);
+the seed's 30° is ``θ0``, released from rest. For a rigid body about a horizontal axis (``I``
+about the axis, ``l_c`` axis to centre of mass, ``b`` viscous damping)::
 
     I θ̈ + b θ̇ + m g l_c sin θ = 0
     undamped period   T = 4 sqrt(I / (m g l_c)) K(k),  k = sin(θ0/2)
     small amplitude   θ ≈ A e^{−γt} cos(ω_d t + φ),     γ = b / (2 I)
 
-``K`` is the complete elliptic integral of the first kind (``scipy.special.ellipk(k**2)``: scipy
-takes the parameter ``m = k²``).
-
-Measurements: turning points are the zero crossings of ``θ̇``, located inside each step by the
-cubic Hermite interpolant of ``θ̇`` (its slope is ``θ̈``, known at every sample) — local error
-O(dt⁴); the period is the mean spacing of same-direction crossings; the envelope decay rate is
-minus the least-squares slope of ``ln θ_peak`` against the peak times (for the linear damped
-oscillator the peaks lie exactly on ``A' e^{−γt}``, so the slope is ``−γ``; at large amplitude
-the nonlinearity changes it by O(θ0²), which is why the decay check runs at a small amplitude).
+``K`` is ``scipy.special.ellipk(k**2)``. Turning points are zero crossings of ``θ̇`` located
+by its cubic Hermite interpolant (slope ``θ̈``; local error O(dt⁴)); the period is the mean
+spacing of same-direction crossings; the decay rate is minus the least-squares slope of ``ln
+θ_peak`` against time (exact for the linear oscillator, hence the small-amplitude run).
 """
 
 from __future__ import annotations
@@ -250,22 +240,13 @@ class PendulumRun:
         def rel(meas: float | None, exact: float) -> float | None:
             return None if meas is None or exact == 0 else abs(meas - exact) / exact
 
-        out: dict[str, Any] = {
-            "theta0": self.theta0,
-            "damping": self.damping,
-            "method": self.simulation.method,
-            "dt": self.simulation.dt,
-            "duration": float(self.simulation.t[-1]),
-            "period": self.period,
-            "period_exact": self.period_exact,
-            "period_error": rel(self.period, self.period_exact),
-            "energy_drift": self.energy_drift,
-            "energy_max_increase": self.energy_max_increase,
-            "energy_monotone": self.energy_monotone,
-            "decay_rate": self.decay_rate,
-            "decay_rate_exact": self.decay_rate_exact,
-            "decay_rate_error": rel(self.decay_rate, self.decay_rate_exact),
-        }
+        sim = self.simulation
+        out = fields_dict(self, "theta0", "damping") | fields_dict(sim, "method", "dt")
+        out |= {"duration": float(sim.t[-1])} | fields_dict(self, "period", "period_exact")
+        out["period_error"] = rel(self.period, self.period_exact)
+        out |= fields_dict(self, "energy_drift", "energy_max_increase", "energy_monotone")
+        out |= fields_dict(self, "decay_rate", "decay_rate_exact")
+        out["decay_rate_error"] = rel(self.decay_rate, self.decay_rate_exact)
         if samples:
             out["t"] = self.simulation.t.tolist()
             out.update(fields_dict(self, "theta", "omega", "energy"))

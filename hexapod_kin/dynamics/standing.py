@@ -1,36 +1,21 @@
 """The standing hexapod: a standing pose, the contact forces that hold its weight, joint torques.
 
-Frames: the body is level, its origin at height ``h`` above flat ground (world z up, gravity
-−z); every foot touches the ground (z = 0). Pinocchio's fixed-base model has the body at its
-origin, so world = body frame shifted by (0, 0, h); forces and moments do not care.
+The body is level at height ``h`` above flat ground (world z up; the feet at z = 0). The
+robot's mass and centre of mass include the body fixed to the universe (``model.inertias[0]``,
+which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out).
 
-Mass and centre of mass of the whole robot: Pinocchio's ``computeTotalMass`` and
-``centerOfMass`` sum the bodies moved by joints only; the body link itself is fixed to the
-universe in the fixed-base model and its inertial sits in ``model.inertias[0]``, so it is added
-here: ``m = m_0 + Σ m_i``, ``c = (m_0 c_0 + Σ m_i c_i) / m``.
+Contact forces ``f_i`` (ground on foot i, world axes, point contacts) balance gravity::
 
-Contact forces ``f_i`` (ground on foot i, world axes, point contacts, no contact torques) of the
-stance feet balance gravity — 6 equations, 3k unknowns::
+    Σ f_i = m g ẑ,    Σ (p_i − c) × f_i = 0
 
-    Σ f_i = m g ẑ                 (forces)
-    Σ (p_i − c) × f_i = 0         (moments about the centre of mass)
+``method="min_norm"``: ``f = A⁺ b`` (least Σ‖f_i‖²; it may pull or slide, ``feasible`` says);
+``"friction"``: the least Σ‖f_i‖² with ``f_z ≥ 0`` and ``‖f_t‖ ≤ μ f_z`` (SLSQP from the
+minimum-norm point, projected back onto the equations). Joint torques (static):
+``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i.
 
-* ``method="min_norm"``: the minimum-norm solution ``f = A⁺ b`` (least Σ‖f_i‖²; with feet
-  symmetric about the CoM it is the equal vertical share ``m g / k``). It may ask a foot to pull
-  (``f_z < 0``) or to slide (``‖f_t‖ > μ f_z``); ``feasible`` says whether it does.
-* ``method="friction"``: the least Σ‖f_i‖² subject to the same equations, ``f_z ≥ 0`` and the
-  Coulomb cone ``‖f_t‖ ≤ μ f_z`` (scipy SLSQP from the minimum-norm point, then projected back
-  onto the equations so that they hold to rounding). Equal to min-norm when that is feasible.
-
-Joint torques (static, q̇ = q̈ = 0): ``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED
-linear Jacobian of foot i (only that leg's columns are non-zero).
-
-Any other legged robot (a URDF path, ``erd:NAME``, a loaded model, a
-:class:`~hexapod_kin.gait.robot.WholeBody`; feet named with ``feet=`` when the URDF has no foot
-links) stands by :func:`hexapod_kin.gait.stand.standing_pose` on its floating-base model: the
-forces act at the contact points (the foot spheres' lowest points), ``J_i`` is the contact
-point's Jacobian ``J_v − [c_i − p_i]× J_ω`` and the torques are the joint rows of
-``g(q) − Σ J_iᵀ f_i`` (its six base rows vanish when the forces balance the weight).
+Any other legged robot (URDF, ``erd:NAME``, a ``WholeBody``; ``feet=`` for a URDF without foot
+links) stands by :func:`hexapod_kin.gait.stand.standing_pose` on its floating-base model, the
+forces at the foot spheres' lowest points (``J_i = J_v − [c_i − p_i]× J_ω``).
 """
 
 from __future__ import annotations
@@ -42,6 +27,7 @@ from typing import Any, Literal
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import (
     ConfigurationError,
     LimitError,
@@ -206,11 +192,7 @@ class ContactSolution:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready."""
-        return {
-            "forces": self.forces.tolist(),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-        }
+        return fields_dict(self, "forces", "force_residual", "moment_residual")
 
 
 def contact_forces(
@@ -250,8 +232,7 @@ def contact_forces(
     a = np.zeros((6, 3 * k))
     for i in range(k):
         a[0:3, 3 * i : 3 * i + 3] = np.eye(3)
-        x, y, z = r[i]
-        a[3:6, 3 * i : 3 * i + 3] = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+        a[3:6, 3 * i : 3 * i + 3] = pin.skew(r[i])
     b = np.array([0.0, 0.0, w, 0.0, 0.0, 0.0])
     pinv = np.linalg.pinv(a, rcond=1e-12)
     f = pinv @ b
@@ -385,31 +366,12 @@ class Stance:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (lists of floats, SI units)."""
-        return {
-            "height": self.height,
-            "method": self.method,
-            "mu": self.mu,
-            "mass": self.mass,
-            "weight": self.weight,
-            "com": self.com.tolist(),
-            "joint_names": list(self.joint_names),
-            "q": self.q.tolist(),
-            "stance_legs": list(self.stance_legs),
-            "feet": self.feet.tolist(),
-            "forces": self.forces.tolist(),
-            "force_sum": self.forces.sum(axis=0).tolist(),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-            "friction_ratio": self.friction_ratio,
-            "feasible": self.feasible,
-            "gravity_torque": self.gravity_torque.tolist(),
-            "torque": self.torque.tolist(),
-            "peak_torque": float(np.max(np.abs(self.torque))),
-        }
-
-
-def _stance_legs(params: Hexapod, legs: Any) -> tuple[int, ...]:
-    return _stance_of([leg.name for leg in params.legs], legs)
+        out = fields_dict(self, *"height method mu mass weight com joint_names q".split())
+        out |= fields_dict(self, "stance_legs", "feet", "forces")
+        out["force_sum"] = self.forces.sum(axis=0).tolist()
+        out |= fields_dict(self, "force_residual", "moment_residual", "friction_ratio", "feasible")
+        out |= fields_dict(self, "gravity_torque", "torque")
+        return out | {"peak_torque": float(np.max(np.abs(self.torque)))}
 
 
 def _stance_of(names: list[str], legs: Any) -> tuple[int, ...]:
@@ -466,43 +428,45 @@ def stance_at(
     check_inertials(mdl)
     h = positive("height", height)
     qv = np.array(mdl.check_q(q), dtype=float)
-    idx = _stance_legs(params, legs)
+    idx = _stance_of([leg.name for leg in params.legs], legs)
     pm = mdl.model
     data = pm.createData()
     mass, com = robot_mass_com(mdl, qv)
-    g = float(np.linalg.norm(pm.gravity.linear))
-    weight = mass * g
     lift = np.array([0.0, 0.0, h])
     pin.computeJointJacobians(pm, data, qv)
     pin.updateFramePlacements(pm, data)
     fids = [mdl.frame_id(params.foot_frames[i]) for i in idx]
     feet = np.array([data.oMf[f].translation for f in fids]) + lift
+    names = (tuple(mdl.joint_names), tuple(params.legs[i].name for i in idx))
+    return _stance(pm, data, qv, fids, feet, None, mass, com + lift, method, mu, h, qv, names, 0)
+
+
+def _stance(
+    pm: pin.Model, data: pin.Data, qp: np.ndarray, fids: list[int], contacts: np.ndarray,
+    offsets: np.ndarray | None, mass: float, com: np.ndarray, method: ContactMethod,
+    mu: float | None, height: float, q: np.ndarray, names: tuple[Any, Any], base: int,
+) -> Stance:  # fmt: skip
+    """The :class:`Stance` of forces at ``contacts`` holding ``mass`` at ``com``.
+
+    ``data`` holds the joint Jacobians and frame placements at ``qp``. The torques are ``g(q) −
+    Σ J_iᵀ f_i`` from joint ``base`` on, ``J_i`` the linear Jacobian of the point ``offsets[i]``
+    (world axes) from frame ``fids[i]``: ``J_v − [d]× J_ω`` (``J_v`` when ``offsets`` is None).
+    """
+    weight = mass * float(np.linalg.norm(pm.gravity.linear))
     mu_v = None if mu is None else positive("mu", mu)
-    sol = contact_forces(feet, com + lift, weight, method=method, mu=mu_v)
-    grav = np.array(pin.computeGeneralizedGravity(pm, data, qv))
+    sol = contact_forces(contacts, com, weight, method=method, mu=mu_v)
+    grav = np.array(pin.computeGeneralizedGravity(pm, data, qp))
     tau = grav.copy()
-    for fid, f in zip(fids, sol.forces):
-        jac = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[:3]
-        tau -= jac.T @ f
-    com_w = com + lift
-    read_only(qv, feet, com_w, grav, tau)
+    for k, (fid, f) in enumerate(zip(fids, sol.forces)):
+        jac = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        lin = jac[:3] if offsets is None else jac[:3] - pin.skew(offsets[k]) @ jac[3:]
+        tau -= lin.T @ f
+    g_j, t_j = grav[base:].copy(), tau[base:].copy()
+    read_only(q, contacts, com, g_j, t_j)
     return Stance(
-        h,
-        qv,
-        tuple(mdl.joint_names),
-        tuple(params.legs[i].name for i in idx),
-        feet,
-        mass,
-        com_w,
-        weight,
-        sol.forces,
-        str(method),
-        mu_v,
-        sol.force_residual,
-        sol.moment_residual,
-        grav,
-        tau,
-    )
+        height, q, names[0], names[1], contacts, mass, com, weight, sol.forces, str(method),
+        mu_v, sol.force_residual, sol.moment_residual, g_j, t_j,
+    )  # fmt: skip
 
 
 def stand(
@@ -580,38 +544,13 @@ def _legged_stance(pose: Any, legs: Any, method: ContactMethod, mu: float | None
     wb.require_mass()
     mass = float(pin.computeTotalMass(pm))
     com = np.array(pin.centerOfMass(pm, data, qp))
-    g = float(np.linalg.norm(pm.gravity.linear))
-    weight = mass * g
     contacts = np.array(pose.contacts)[list(idx)]
-    mu_v = None if mu is None else positive("mu", mu)
-    sol = contact_forces(contacts, com, weight, method=method, mu=mu_v)
     pin.computeJointJacobians(pm, data, qp)
     pin.updateFramePlacements(pm, data)
-    grav = np.array(pin.computeGeneralizedGravity(pm, data, qp))
-    tau = grav.copy()
-    for k, f in zip(idx, sol.forces):
-        fid = pm.getFrameId(wb.foot_frames[k])
-        J = pin.getFrameJacobian(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        d = contacts[list(idx).index(k)] - np.asarray(data.oMf[fid].translation)
-        skew = np.array([[0, -d[2], d[1]], [d[2], 0, -d[0]], [-d[1], d[0], 0]])
-        tau -= (J[:3] - skew @ J[3:]).T @ f
+    fids = [pm.getFrameId(wb.foot_frames[k]) for k in idx]
+    offsets = contacts - np.array([data.oMf[f].translation for f in fids]).reshape(-1, 3)
+    names = (tuple(wb.joint_names), tuple(wb.leg_names[i] for i in idx))
     qv = np.array(pose.q)
-    g_j, t_j = grav[6:].copy(), tau[6:].copy()
-    read_only(qv, contacts, com, g_j, t_j)
-    return Stance(
-        pose.height,
-        qv,
-        tuple(wb.joint_names),
-        tuple(wb.leg_names[i] for i in idx),
-        contacts,
-        mass,
-        com,
-        weight,
-        sol.forces,
-        str(method),
-        mu_v,
-        sol.force_residual,
-        sol.moment_residual,
-        g_j,
-        t_j,
+    return _stance(
+        pm, data, qp, fids, contacts, offsets, mass, com, method, mu, pose.height, qv, names, 6
     )

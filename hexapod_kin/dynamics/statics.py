@@ -1,13 +1,9 @@
 """Joint torques of a leg: gravity (RNEA), a foot force (Jᵀ F), along a joint trajectory.
 
-Sign convention: ``force`` is the force the foot exerts **on its environment** (pushing on the
-ground, pulling a load), in [N], in the model's base axes. The joint torques that hold it are
-``τ_F = Jᵀ F`` (``J`` the foot's LOCAL_WORLD_ALIGNED linear Jacobian, 3×nq), and with gravity
-``τ = g(q) + Jᵀ F`` (``g = ∂V/∂q``, ``pin.computeGeneralizedGravity``). The environment pushes
-back on the foot with ``−F``; the cross-check computes ``τ_F`` a second way, by RNEA with that
-reaction applied as an external force (``pin.rnea(q, 0, 0, fext)`` on a copy of the model with
-gravity off; ``fext[i]`` is the spatial force on joint i's body **in joint i's frame**: the
-world force moved to the joint with the frame placement ``oMi``).
+``force`` is the force the foot exerts on its environment, in [N], base axes: ``τ = g(q) + Jᵀ
+F`` (``J`` the foot's LOCAL_WORLD_ALIGNED linear Jacobian). The cross-check computes ``Jᵀ F``
+again by RNEA with the reaction ``−F`` as external force (gravity off; ``fext[i]`` in joint
+i's frame).
 """
 
 from __future__ import annotations

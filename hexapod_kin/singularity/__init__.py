@@ -1,25 +1,11 @@
 """Singularity measures, scans of joint space, singular families.
 
-The package, from the kernel up:
-
-* :mod:`._kernel` — the compiled kernel: fused FK + Jacobian rows + measures over blocks of
-  configurations, on :mod:`hexapod_kin._numerics`; :mod:`._plan` — its Python side (chain
-  with z joint axes, Gram/minor plans, output buffers, kept in ``Model.cached``);
-* row names and selections: :mod:`hexapod_kin.jacobian_rows` (a leaf shared with
-  :mod:`hexapod_kin.symbolic`; ``ROW_NAMES``, ``row_indices``, ``row_names`` re-exported here);
-* :mod:`.measure` — :func:`measures` (Pinocchio + numpy), :func:`measures_batch` (the
-  kernel), :func:`default_rows`, :func:`reach`;
-* :mod:`._zeroset` — a family's factor compiled to numpy value/gradient/Hessian evaluators,
-  and the exact distance to its zero set;
-* :mod:`.families` — singular families as numbers, derived only when asked, cached on disk;
-* :mod:`.scans` — :func:`scan` / :class:`ScanResult` (Pinocchio + numpy up to
-  ``SMALL_SCAN`` configurations, the kernel above), defaults, family labels.
-
-(``measure`` and ``scans`` are named apart from the functions ``measures`` and ``scan``: a
-submodule of the same name would replace the function as the package's attribute.)
-
-The reachable workspace is :mod:`hexapod_kin.workspace` (re-exported here). Names load on first
-use (PEP 562), so ``import hexapod_kin.singularity`` imports neither numba nor sympy.
+:mod:`.measure` (:func:`measures`, :func:`measures_batch`), :mod:`.scans` (:func:`scan`),
+:mod:`.families` (families as numbers, cached on disk), :mod:`._zeroset` (exact distances to
+a family), :mod:`._kernel` / :mod:`._plan` (the compiled batch kernel and its Python side).
+Row names come from :mod:`hexapod_kin.jacobian_rows`; the workspace is
+:mod:`hexapod_kin.workspace`. Names load on first use (PEP 562): importing the package imports
+neither numba nor sympy.
 """
 
 from __future__ import annotations
@@ -34,6 +20,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .families import Families, Family, families_for
     from .measure import Measures, MeasuresBatch, default_rows, measures, measures_batch, reach
     from .scans import ScanResult, default_joints, default_q_fixed, scan
+
 
 __all__ = [
     "ROW_NAMES",
@@ -58,22 +45,15 @@ __all__ = [
 ]
 
 _WHERE = {
-    "Families": ".families",
-    "Family": ".families",
-    "families_for": ".families",
-    "Measures": ".measure",
-    "MeasuresBatch": ".measure",
-    "default_rows": ".measure",
-    "measures": ".measure",
-    "measures_batch": ".measure",
-    "reach": ".measure",
-    "ScanResult": ".scans",
-    "default_joints": ".scans",
-    "default_q_fixed": ".scans",
-    "scan": ".scans",
-    "WorkspaceResult": "..workspace",
-    "cross_section": "..workspace",
-    "workspace": "..workspace",
+    name: where
+    for where, names in (
+        (".families", ("Families", "Family", "families_for")),
+        (".measure", ("Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch")),
+        (".measure", ("reach",)),
+        (".scans", ("ScanResult", "default_joints", "default_q_fixed", "scan")),
+        ("..workspace", ("WorkspaceResult", "cross_section", "workspace")),
+    )
+    for name in names
 }
 
 

@@ -1,15 +1,8 @@
 """Block linear algebra of the singularity kernel: cyclic Jacobi eigenvalues and Laplace minors.
 
-Structure of arrays: every routine works on a *block* of ``nb`` small matrices at once (entry
-``p`` of matrix ``i`` at ``g[p, i]``), so the inner loops over ``i`` vectorise. Used by
-:func:`hexapod_kin.singularity._kernel._reduce_block` (the Gram eigenvalues for diagonal blocks
-of size 3 to 6 by :func:`eig_block`; ``det J`` and Cauchy–Binet minors by :func:`minor_block` /
-:func:`minor_big`). The rotations and sweeps are ``inline="always"`` at one call site each, so
-they compile into the kernel's loop only when a chain needs them (legs never do).
-
-Numba's disk cache checks only the caller's own file: after editing this module (or the
-block core in :mod:`hexapod_kin._kernels`), touch ``_kernel.py`` too (or clear
-``NUMBA_CACHE_DIR``), so that ``measures_kernel`` recompiles.
+Structure of arrays: every routine works on a block of ``nb`` small matrices at once (entry
+``p`` of matrix ``i`` at ``g[p, i]``), so the inner loops over ``i`` vectorise. numba's disk
+cache checks only the caller's file: after editing this module, touch ``_kernel.py`` too.
 """
 
 from __future__ import annotations
@@ -25,7 +18,7 @@ __all__ = ["JACOBI_TOL", "eig_block", "minor_big", "minor_block"]
 #: Jacobi sweeps stop when every off-diagonal sum of a block is below this × its trace.
 JACOBI_TOL = 1e-15
 JACOBI_MAX_SWEEPS = 12
-#: Sweeps of m ≥ 5 matrices before the first convergence test (UR5: 64 % done after 4, all 5).
+#: Sweeps of m ≥ 5 matrices before the first convergence test.
 JACOBI_MIN_SWEEPS_BIG = 4
 
 
@@ -152,10 +145,7 @@ def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _sweep_many(g: np.ndarray, count: int, m: int) -> None:  # pragma: no cover - compiled
-    """One sweep on matrices ``0 .. count - 1`` of ``g`` (m = 3 or 4; SIMD over the matrices).
-
-    The one place the unrolled sweeps are inlined (compile time grows with every copy).
-    """
+    """One sweep on matrices ``0 .. count - 1`` of ``g`` (m = 3 or 4; the one inlined copy)."""
     if m == 3:
         for i in range(count):
             _jacobi_sweep(g, i)
@@ -181,11 +171,7 @@ def _pack_table(m: int) -> np.ndarray:  # pragma: no cover - compiled
 def _sweep_gen(
     gb: np.ndarray, nb: int, m: int, pack: np.ndarray, cs: np.ndarray
 ) -> None:  # pragma: no cover - compiled
-    """One cyclic Jacobi sweep over every matrix of the block, any m (structure of arrays).
-
-    Pair by pair: the rotation ``(c, s)`` of every matrix in one loop over the block, then each
-    other row ``r`` updated in its own loop over the block — contiguous, so it vectorises.
-    """
+    """One cyclic Jacobi sweep over every matrix of the block, any m, pair by pair."""
     for p in range(m - 1):
         for q in range(p + 1, m):
             ppp, pqq, ppq = pack[p, p], pack[q, q], pack[p, q]
@@ -213,20 +199,11 @@ def eig_block(
 ) -> None:  # pragma: no cover - compiled
     """Diagonalise ``nb`` packed symmetric m×m matrices in place by cyclic Jacobi.
 
-    m = 3 and 4 have unrolled sweeps; larger m (5, 6: arms) sweep pair by pair over the block
-    (:func:`_sweep_gen`, structure of arrays: an unrolled 6×6 sweep spills its 21 entries and
-    measured 2.7× slower), ``JACOBI_MIN_SWEEPS_BIG`` times before the first test (a 6×6 needs
-    5, rarely 6).
-
-    ``gb`` is (m(m+1)/2, B), rows the packed upper triangle (m = 3: ``g00 g01 g02 g11 g12
-    g22``; m = 4: ``g00 g01 g02 g03 g11 g12 g13 g22 g23 g33``); ``wb`` the same shape and
-    ``idx`` (B,) int are scratch. The first sweep(s) run over the whole block (SIMD); the
-    matrices still open (:func:`_jacobi_open`) are gathered (compacted) into ``wb`` and swept
-    there, contiguously (SIMD again), each scattered back as soon as it converges, until
-    none is left: every matrix gets exactly the sweeps its own test asks for, whatever its
-    neighbours in the block (Weyl: the diagonal then holds the eigenvalues to that
-    absolute accuracy). Jacobi is backward stable for any eigenvalue clustering, unlike the
-    characteristic-polynomial / trigonometric closed forms.
+    m = 3 and 4 have unrolled sweeps; m = 5, 6 sweep pair by pair (:func:`_sweep_gen`),
+    ``JACOBI_MIN_SWEEPS_BIG`` times before the first test. ``gb`` is (m(m+1)/2, B), rows the
+    packed upper triangle; ``wb`` (same shape) and ``idx`` (B,) are scratch. The matrices
+    still open (:func:`_jacobi_open`) are gathered into ``wb`` and swept there until each
+    converges: every matrix gets the sweeps its own test asks for, whatever its neighbours.
     """
     npk = gb.shape[0]
     sweeps = 0

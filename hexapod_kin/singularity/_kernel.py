@@ -1,22 +1,14 @@
 """The compiled layer of the singularity scans: FK + Jacobian rows + measures, in blocks.
 
-One job: given a chain with z joint axes (:class:`~hexapod_kin._chain.AlignedChain`), a row
-selection and a batch of configurations, write ``det``, ``manipulability``, ``condition`` and
-``sigma_min`` of every configuration, without storing the Jacobians. Configurations are
-processed in structure-of-arrays blocks by the one block FK + Jacobian core
-(:func:`hexapod_kin._kernels.fk_jac_block`, inlined), so the inner loops vectorise (SIMD);
-when the selected rows are invariant under the first revolute joint, that joint is not
-evaluated at all. Every shape with ``m = min(k, n) ≤ 6`` is reduced over the whole block
-(:func:`_reduce_block`): the Gram matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal
-blocks where the chain's structure makes it block diagonal) gives the largest eigenvalues —
-closed forms for blocks of size ≤ 2, cyclic Jacobi over the block for 3 to 6 (backward stable
-for clustered eigenvalues) — and ``det G`` comes from ``J``'s own minors (``det(J)²`` when
-square, Cauchy–Binet otherwise), so that ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full
-accuracy near a singularity. Larger ``m`` goes through a per-configuration reduction
-(:func:`_reduce_one`). Every decision is taken per configuration (never per block), so a
-value does not depend on its neighbours in the batch.
-
-The block linear algebra (cyclic Jacobi eigenvalues, Laplace minors) is in :mod:`._blocks`.
+Configurations go through the block FK + Jacobian core (:func:`hexapod_kin._kernels.fk_jac_block`)
+in structure-of-arrays blocks, never storing the Jacobians. For ``m = min(k, n) ≤ 6``
+(:func:`_reduce_block`) the Gram matrix ``G`` (``J Jᵀ`` or ``Jᵀ J``, split into diagonal blocks
+where the chain makes it block diagonal) gives the largest eigenvalues (closed forms up to size
+2, cyclic Jacobi for 3 to 6) and ``det G`` comes from ``J``'s own minors (``det(J)²`` or
+Cauchy–Binet), so ``σm = sqrt(det G / Π_{i<m} λi)`` keeps full accuracy near a singularity.
+Shapes with more than ``_plan._MAX_MINORS`` maximal minors (chains of 9 joints and more) are
+not the kernel's: :func:`~.measure.measures_batch` serves them with Pinocchio and numpy. Every
+decision is taken per configuration, so a value does not depend on its neighbours.
 """
 
 from __future__ import annotations
@@ -26,16 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._kernels import (
-    POLY_TRIG_MAX,
-    det_small,
-    eig2_sym,
-    eig3_sym,
-    fk_jac_block,
-    jacobi_eig,
-    njit,
-    sincos,
-)
+from .._kernels import POLY_TRIG_MAX, eig3_sym, fk_jac_block, njit, sincos
 from ._blocks import JACOBI_TOL, eig_block, minor_big, minor_block
 
 __all__ = [
@@ -47,77 +30,6 @@ __all__ = [
     "minor_block",
     "sincos",
 ]
-
-
-@njit(cache=True, nogil=True)
-def _reduce_one(
-    js: np.ndarray, g: np.ndarray, work: np.ndarray, lam: np.ndarray
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """Measures ``(det, manipulability, condition, sigma_min)`` of one k×n Jacobian ``js``."""
-    k, n = js.shape
-    square = k == n
-    m = k if k <= n else n
-    # Gram matrix
-    if k <= n:
-        for a in range(m):
-            for b in range(a, m):
-                s = 0.0
-                for c in range(n):
-                    s += js[a, c] * js[b, c]
-                g[a, b] = s
-                g[b, a] = s
-    else:
-        for a in range(m):
-            for b in range(a, m):
-                s = 0.0
-                for c in range(k):
-                    s += js[c, a] * js[c, b]
-                g[a, b] = s
-                g[b, a] = s
-    # determinant (square) and det G
-    det = np.nan
-    if square:
-        det = det_small(js, n, work)
-        det_g = det * det
-    else:
-        det_g = det_small(g, m, work)
-    if det_g < 0.0:
-        det_g = 0.0
-    # the m-1 largest eigenvalues of G
-    if m == 1:
-        lmax = g[0, 0]
-        prod_top = 1.0
-    elif m == 2:
-        lmax, _ = eig2_sym(g[0, 0], g[0, 1], g[1, 1])
-        prod_top = lmax
-    elif m == 3:
-        lmax, l2, _ = eig3_sym(g[0, 0], g[1, 1], g[2, 2], g[0, 1], g[0, 2], g[1, 2])
-        prod_top = lmax * l2
-    else:
-        for a in range(m):
-            for b in range(m):
-                work[a, b] = g[a, b]
-        jacobi_eig(work[:m, :m], lam)
-        lmax = lam[0]
-        prod_top = 1.0
-        for a in range(m - 1):
-            prod_top *= lam[a]
-    if m == 1:
-        lmin = g[0, 0]
-    elif prod_top > 0.0:
-        lmin = det_g / prod_top
-    else:
-        lmin = 0.0
-    if lmin < 0.0:
-        lmin = 0.0
-    smin = math.sqrt(lmin)
-    smax = math.sqrt(lmax) if lmax > 0.0 else 0.0
-    if square:
-        manip = abs(det)
-    else:
-        manip = math.sqrt(det_g)
-    cond = smax / smin if smin > 0.0 else np.inf
-    return det, manip, cond, smin
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
@@ -205,16 +117,11 @@ def _reduce_block(
 ) -> None:  # pragma: no cover - compiled
     """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 6``.
 
-    ``plan`` is :attr:`._plan.GramPlan.arrays`. ``G`` (``J Jᵀ`` or ``Jᵀ J``, m×m, packed upper
-    triangle) gives the largest eigenvalues. When the plan found ``G`` block diagonal (entries
-    ``drop`` zero at random samples, e.g. the leg's ``{q1} ⊕ {q2, q3}``) and they are below
-    ``JACOBI_TOL · trace`` (checked per configuration; Weyl bounds the effect), each
-    diagonal block is solved alone: closed forms for sizes 1 and 2, :func:`eig_block` for 3
-    to 6; otherwise ``G`` as a whole. ``det G`` comes from the Jacobian itself — ``det(J)²``
-    when square, else Cauchy–Binet, the sum of the squared maximal minors of ``J`` (rows
-    ``rsub[s]``, columns ``csub[s]``) — so that ``λmin = det G / Π_{i<m} λi`` keeps relative
-    accuracy near a singularity (forming ``det G`` from ``G`` would lose it: its error is
-    ``ε λmax^m``). ``ev2`` (m, B) and ``flag`` (B,) are scratch.
+    ``plan`` is :attr:`._plan.GramPlan.arrays`. Where the plan's ``drop`` entries of ``G``
+    (packed upper triangle) are below ``JACOBI_TOL · trace`` (per configuration; Weyl bounds
+    the effect) each diagonal block is solved alone, else ``G`` whole. ``det G`` is ``det(J)²``
+    or the sum of the squared maximal minors (rows ``rsub[s]``, columns ``csub[s]``), so that
+    ``λmin = det G / Π_{i<m} λi`` keeps relative accuracy. ``ev2`` and ``flag`` are scratch.
     """
     pack, rsub, csub, gram_t, perm, csize, drop = plan
     k, n = jb.shape[0], jb.shape[1]
@@ -341,7 +248,6 @@ def measures_kernel(
     col: np.ndarray,
     qs: np.ndarray,
     sel: np.ndarray,
-    per_conf: bool,
     plan: tuple[Any, ...],
     use_jacobi: bool,
     tmp: np.ndarray,
@@ -356,26 +262,19 @@ def measures_kernel(
 ) -> None:  # pragma: no cover - compiled
     """FK + selected-row Jacobian + measures for blocks ``first_block`` to ``last_block - 1``.
 
-    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot``, ``ptr``, ``flags``,
-    ``kind``, ``col``); ``qs`` (N, nq) is cut into blocks of ``block`` configurations, each
-    through :func:`~hexapod_kin._kernels.fk_jac_block` (the caller runs one call per thread;
-    the GIL is released). ``skip0``: joint 0 is left at ``q = 0`` (the measures do not depend
-    on it, see :func:`._plan.first_joint_invariant`). ``per_conf`` False (``min(k, n) ≤ 6``,
-    see :func:`._plan.block_plan` for ``pack`` / ``rsub`` / ``csub``): the measures of the
-    whole block by :func:`_reduce_block`; True: :func:`_reduce_one` per configuration.
-    ``use_jacobi`` False: the plan's diagonal blocks are all of size ≤ 2 and m ≤ 3 (legs), so
-    a configuration whose split fails gets the 3×3 closed form, else cyclic Jacobi. ``tmp``:
-    this thread's (2, B) scratch of :func:`minor_big` (m = 5, 6). One compiled signature
-    serves every chain: these choices are runtime flags, per chain, never per element.
+    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot`` … ``col``); ``qs``
+    (N, nq) is cut into blocks of ``block`` configurations. ``skip0``: joint 0 is left at 0
+    (:func:`._plan.first_joint_invariant`). ``use_jacobi`` False: every diagonal
+    block has size ≤ 2 and m ≤ 3, so a failed split gets the 3×3 closed form. ``tmp``: this
+    thread's (2, B) scratch of :func:`minor_big`. The flags are runtime values: one compiled
+    signature serves every chain.
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
     k = sel.shape[0]
     mm = k if k <= nq else nq
-    big = k if k > nq else nq
-    use_block = not per_conf
-    npk = mm * (mm + 1) // 2 if use_block else 1
-    nev = mm if use_block else 1
+    npk = mm * (mm + 1) // 2
+    nev = mm
     bsz = block
     rr = np.empty((9, bsz))
     pp = np.empty((3, bsz))
@@ -392,10 +291,6 @@ def measures_kernel(
     open_idx = np.empty(bsz, dtype=np.int64)
     dg = np.empty(bsz)
     mnr = np.empty(bsz)
-    js = np.empty((k, nq))
-    g = np.empty((mm, mm))
-    work = np.empty((big, big))
-    lam = np.empty(mm)
     for blk in range(first_block, last_block):
         start = blk * bsz
         nb = min(nconf, start + bsz) - start
@@ -410,35 +305,7 @@ def measures_kernel(
             for b in range(nq):
                 for i in range(nb):
                     jb[a, b, i] = jfull[r + b, i]
-        if use_block:
-            _reduce_block(
-                jb,
-                nb,
-                plan,
-                gb,
-                hb,
-                wb,
-                ev,
-                ev2,
-                flag,
-                open_idx,
-                dg,
-                mnr,
-                tmp,
-                use_jacobi,
-                start,
-                out_det,
-                out_manip,
-                out_cond,
-                out_smin,
-            )
-        else:
-            for i in range(nb):
-                for a in range(k):
-                    for b in range(nq):
-                        js[a, b] = jb[a, b, i]
-                d, mp, cn, sm = _reduce_one(js, g, work, lam)
-                out_det[start + i] = d
-                out_manip[start + i] = mp
-                out_cond[start + i] = cn
-                out_smin[start + i] = sm
+        _reduce_block(
+            jb, nb, plan, gb, hb, wb, ev, ev2, flag, open_idx, dg, mnr, tmp, use_jacobi, start,
+            out_det, out_manip, out_cond, out_smin,
+        )  # fmt: skip

@@ -1,9 +1,7 @@
 """The Python side of the singularity kernel: block plans, output buffers, the threads.
 
-:func:`compute` runs :func:`~._kernel.measures_kernel` for a loaded model, a row selection and a
-batch of configurations; everything it derives from the model (the z-aligned chain of
-:mod:`hexapod_kin._chain`, shared with the batch FK; Gram plans) is kept in the model's one
-cache (:meth:`hexapod_kin.model.Model.cached`).
+:func:`compute` runs :func:`~._kernel.measures_kernel`; what it derives from the model (the
+z-aligned chain, Gram plans) is kept in ``Model.cached``.
 """
 
 from __future__ import annotations
@@ -49,7 +47,7 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
     ``rsub[s]`` / ``csub[s]``: rows / columns of the s-th maximal minor of ``J`` (the one
     square minor when ``k == n``; all ``C(max(k, n), m)`` of them otherwise, for Cauchy–Binet
     ``det G = Σ_s minor_s²``). ``use_block`` is false when ``m > 6`` or there are more than
-    ``_MAX_MINORS`` minors (the per-configuration path then serves).
+    ``_MAX_MINORS`` minors (:func:`~.measure.measures_batch` then uses Pinocchio and numpy).
     """
     from itertools import combinations
 
@@ -120,12 +118,9 @@ def gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
     """Plan the block reduction for ``model``'s rows ``sel`` (kept in ``model.cached``).
 
     ``G`` is ``J Jᵀ`` when k < n, ``Jᵀ J`` when k > n, and, when square, whichever splits
-    into smaller diagonal blocks: the entries of both are evaluated at 16 random
-    configurations (the first joint at 0 when ``skip0``, as in the kernel) and those below
-    ``1e-14 · max |G|`` at all of them are taken as structural zeros. The kernel re-checks them
-    on every block (a block where one is not negligible is solved whole), so a wrong guess
-    only costs time. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}`` (the hip column is
-    orthogonal to the leg plane), the SCARA's (x, y, z, wz) ``{θ1, θ2, θ3} ⊕ {d4}``.
+    into smaller diagonal blocks: entries below ``1e-14 · max |G|`` at 16 random
+    configurations (the first joint at 0 when ``skip0``) are taken as structural zeros; the
+    kernel re-checks them per configuration. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}``.
     """
     return model.cached(
         f"singularity.gram_plan.{sel}.{skip0}", lambda: _build_gram_plan(model, sel, skip0)
@@ -142,7 +137,6 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
         q = model.random_q(16, seed=2024)
         if skip0:
             q[:, arrays.col[0]] = 0.0
-        # 16 Pinocchio calls: no batch kernel to compile for a plan (cold start)
         jac = np.array([model.jacobian(qi, "local_world_aligned") for qi in q])[:, list(sel), :]
         for gram_t in (False, True) if k == n else (k > n,):
             g = np.swapaxes(jac, 1, 2) @ jac if gram_t else jac @ np.swapaxes(jac, 1, 2)
@@ -172,14 +166,11 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
 def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
     """Whether the measures of the ``sel`` rows of ``J`` do not depend on the first joint.
 
-    Turning revolute joint 0 (axis ``u`` in the base frame) by ``θ`` rotates everything after it
-    rigidly, so ``J(q) = B J(q with q0 = 0)`` with ``B = blockdiag(R, R)``, ``R = Rot(u, θ)``
-    (linear velocities and axes both rotate; the origin of the rotation does not matter for
-    differences of points). With ``S`` the k×6 row selection, ``S J(q) = Q S J(q0 = 0)`` and
-    ``Q = S B Sᵀ`` holds exactly when ``Q`` is orthogonal (the selected rows span a subspace
-    invariant under ``B``); then the singular values are the same, and ``det Q = +1``
-    (``Q(θ)`` is continuous with ``Q(0) = I``) keeps ``det J``. Checked at two generic angles.
-    Also requires ``q0`` to drive joint 0 only.
+    Turning revolute joint 0 (axis ``u``) by ``θ`` gives ``J(q) = B J(q0 = 0)``, ``B =
+    blockdiag(R, R)``, ``R = Rot(u, θ)``. With ``S`` the row selection, ``S J(q) = Q S J(q0 =
+    0)``, ``Q = S B Sᵀ``, holds when ``Q`` is orthogonal; then the singular values and (``det Q
+    = +1``) ``det J`` are unchanged. Checked at two generic angles; ``q0`` must drive joint 0
+    only.
     """
     if al.kind.shape[0] == 0 or al.kind[0] != 0 or np.count_nonzero(al.col == al.col[0]) != 1:
         return False
@@ -207,11 +198,8 @@ _OUT_POOL_MAX_BYTES = 128 * 2**20
 def output_arrays(n: int) -> tuple[np.ndarray, ...]:
     """Four (n,) float64 arrays for :func:`measures_batch`: the rows of one (4, n) buffer.
 
-    Touching fresh memory is slow on the 2-core VM (first-touch page faults, ~1.3 ms per MB:
-    ~40 ms for the 32 MB of 1e6 configurations, as long as the kernel itself), so the last
-    buffer (up to ``_OUT_POOL_MAX_BYTES``) is kept and handed out again — only when nothing
-    references it any more: the rows returned hold it through ``.base``, so while any result
-    array (or a view of one) is alive its reference count stays above the pool's own.
+    The last buffer (up to ``_OUT_POOL_MAX_BYTES``; fresh memory is slow to touch) is handed
+    out again once nothing references it: the rows returned hold it through ``.base``.
     """
     with _OUT_LOCK:
         if _OUT_POOL:
@@ -236,10 +224,8 @@ def compute(
 ) -> tuple[np.ndarray, ...]:
     """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
 
-    Chunks of blocks on up to ``numba.get_num_threads()`` plain threads
-    (:func:`hexapod_kin._kernels.run_blocks`; the kernel releases the GIL), not numba's
-    ``parallel=True``. The threads only run the compiled kernel, which raises nothing (inputs
-    are checked before).
+    Chunks of blocks on plain threads (:func:`hexapod_kin._kernels.run_blocks`; the kernel
+    releases the GIL and raises nothing).
 
     Args:
         model: A loaded model.
@@ -258,7 +244,7 @@ def compute(
     plan = gram_plan(model, key, skip0)
     m = min(len(key), q.shape[1])
     use_jacobi = not (m <= 3 and int(plan.csize.max()) <= 2)
-    args = (*al.packed, q, sel, not plan.use_block, plan.arrays, use_jacobi)
+    args = (*al.packed, q, sel, plan.arrays, use_jacobi)
 
     def run(first: int, last: int) -> None:
         tmp = np.empty((2, BLOCK if m > 4 else 1))  # this thread's scratch (m = 5, 6)

@@ -321,11 +321,9 @@ def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
 def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
     """Distance (M,) from each row of ``p`` (M, v) to the zero set ``f = 0`` of ``jet``.
 
-    The nearest of several closest-point candidates, each converged to 1e-12 (:func:`_closest`;
-    ``tests/test_singularity.py`` checks it against a brute-force closest point), ``inf``
-    where none converges, 0 where ``f(p) = 0``. Each distinct row is solved once (a grid
-    scan repeats the family's variables along the other joints), :data:`_CHUNK` rows at a
-    time, every row on its own (the same bits whatever the other rows).
+    The nearest of several closest-point candidates converged to 1e-12 (:func:`_closest`),
+    ``inf`` where none converges, 0 where ``f(p) = 0``. Each distinct row is solved once, on
+    its own (the same bits whatever the other rows).
     """
     rows, back = np.unique(p, axis=0, return_inverse=True)
     out = np.concatenate(

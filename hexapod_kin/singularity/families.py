@@ -1,12 +1,9 @@
 """Singular families as numbers: residuals, exact distances, labels — without waiting on sympy.
 
-A family is the zero set of one factor of ``det J`` (or of ``det(J Jᵀ)``), derived by
-:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table (the model's own, or the one
-:func:`hexapod_kin.chain_from_urdf` recovers). Deriving is sympy work, done only when
-asked (:func:`families_for` with ``derive=True``, within a time budget); the result is checked
-against the model's own Jacobian, turned into text (lengths substituted) and kept on disk
-(:func:`cache_dir`), so later scans in any process read it back without importing sympy.
-The text is compiled once into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
+A family is the zero set of one factor of ``det J`` (or ``det(J Jᵀ)``) derived by
+:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table, only when asked; it is
+checked against the model's Jacobian, kept on disk as text (lengths substituted) and compiled
+into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
 """
 
 from __future__ import annotations
@@ -78,13 +75,12 @@ class Family:
         return np.asarray(self._jet(x, False)[0]).reshape(qa.shape[:-1])
 
     def distance(self, q: Any) -> np.ndarray:
-        """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m]: the closest point.
+        """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m].
 
-        ``q_k = value``: ``|q_k − value|`` (wrapped for a revolute joint). Implicit families:
-        ``min ‖x − q‖`` over ``f(x) = 0`` in the family's variables (the other joints do not
-        change ``f``), to 1e-12 (:func:`~._zeroset.closest_distance`). Revolute angles wrap by
-        themselves: ``f`` is 2π-periodic in them, so the nearest point of the unwrapped zero
-        set is the nearest of all its 2π copies.
+        ``q_k = value``: ``|q_k − value|`` (wrapped for a revolute joint); implicit families:
+        ``min ‖x − q‖`` over ``f(x) = 0`` in the family's variables, to 1e-12
+        (:func:`~._zeroset.closest_distance`; ``f`` is 2π-periodic, so angles wrap by
+        themselves).
         """
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -141,12 +137,8 @@ class Families:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
-        return {
-            "families": [f.to_dict() for f in self.families],
-            "origin": self.origin,
-            "reason": self.reason,
-            "key": self.key,
-        }
+        families = [f.to_dict() for f in self.families]
+        return {"families": families, **fields_dict(self, "origin", "reason", "key")}
 
 
 # ------------------------------------------------------------------------ tables and keys
@@ -189,36 +181,27 @@ def _key(chain: Any, rows: tuple[str, ...]) -> str:
     )[:32]
 
 
-def _from_json(data: dict[str, Any]) -> tuple[Family, ...]:
-    return tuple(
-        Family(
-            name=str(f["name"]),
-            equation=str(f["equation"]),
-            variables=tuple(int(v) for v in f["variables"]),
-            joint=None if f["joint"] is None else int(f["joint"]),
-            value=None if f["value"] is None else float(f["value"]),
-            periodic=bool(f["periodic"]),
-            factor=str(f["factor"]),
-        )
-        for f in data["families"]
+def _family(f: Any) -> Family:
+    """A :class:`Family` from a mapping of its fields (JSON, or a derivation's family)."""
+    return Family(
+        name=str(f["name"]),
+        equation=str(f["equation"]),
+        variables=tuple(int(v) for v in f["variables"]),
+        joint=None if f["joint"] is None else int(f["joint"]),
+        value=None if f["value"] is None else float(f["value"]),
+        periodic=bool(f["periodic"]),
+        factor=str(f["factor"]),
     )
 
 
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
-    """Families read from disk checked against the model before use.
+    """Families read from disk checked against the model before use, both ways.
 
-    Both ways, at fixed random configurations of the model:
-
-    * **every zero is singular**: from each of three configurations each family's factor (its
-      printed text, and what the scan's distances use) is followed to its zero set by
-      Gauss–Newton steps in the family's variables (:func:`~._zeroset.project`, to ``|f| ≤
-      1e-12 ‖∇f‖``); there ``σ_min ≤ 1e-7 σ_max`` of ``J`` (rows ``rows``; ``σ_max`` over the
-      configurations). A factor may have no real zero (``l1 + l2 cos q2`` with ``l1 > l2``).
-      For ``q_k = value``, ``J`` is also held at ``q_k = value`` (``σ_min ≤ 1e-9 σ_max``).
-    * **every singularity is a family's** (square ``J``): along four random lines of joint
-      space, each sign change of the model's ``det J`` is bisected to a singular
-      configuration, which must lie within 1e-6 of a family. An entry that moved or dropped
-      a family's zeros fails here.
+    * every zero is singular: from three random configurations each factor is projected onto
+      its zero set (:func:`~._zeroset.project`); there ``σ_min ≤ 1e-7 σ_max`` (``q_k =
+      value`` families: ``1e-9``);
+    * every singularity is a family's (square ``J``): the sign changes of ``det J`` along four
+      random lines (:func:`_singular_points`) lie within 1e-6 of a family.
 
     Raises:
         ValueError: A family where the model's ``J`` keeps its rank, or a singular
@@ -252,11 +235,7 @@ def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
 
 
 def _singular_points(model: Any, rows: tuple[str, ...]) -> list[np.ndarray]:
-    """Zeros of the model's ``det J`` (square, rows ``rows``) on four random lines.
-
-    Each line of joint space is sampled 65 times over ``[-π, π]``; each sign change of
-    ``det J`` is bisected 50 times.
-    """
+    """Zeros of ``det J`` on four random lines (65 samples over ``[-π, π]``, 50 bisections)."""
     from .measure import measures
 
     rng = np.random.default_rng(20251203)
@@ -290,12 +269,9 @@ def _read_cache(
 ) -> tuple[tuple[Family, ...], str, float] | None:
     """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
 
-    The sealed entry of :func:`hexapod_kin._cache.load` (missing or of another version:
-    ``None``; torn, edited, resealed without the secret, another key's: ``None`` with one
-    ``CacheWarning``). The factor texts are parsed by :func:`~._zeroset.compile_factor`'s
-    whitelist, never evaluated; a finished entry is then held to ``check(families)``
-    (:func:`_holds`), which raises if it fails (one warning too: the families are derived
-    again, or reported as not derived).
+    ``None`` when missing; ``None`` with one ``CacheWarning`` when damaged, of another key, or
+    when a finished entry fails ``check(families)`` (:func:`_holds`). The factors are parsed
+    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated.
     """
     data = _disk.load("families", key, _VERSION, _THEN)
     if data is None:
@@ -303,7 +279,7 @@ def _read_cache(
     try:
         if not isinstance(data, dict) or data.get("nq") != nq:
             raise ValueError("not the entry of this table and rows (another key)")
-        fams = _from_json(data)
+        fams = tuple(_family(f) for f in data["families"])
         for fam in fams:  # every factor through the parser's whitelist now, never evaluated
             compile_factor(fam.factor, fam.variables)
         incomplete = str(data.get("incomplete", ""))
@@ -374,16 +350,9 @@ def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Fa
             parameter="rows",
             value=rows,
         )
+    fields = ("name", "equation", "variables", "joint", "value", "periodic")
     return tuple(
-        Family(
-            name=str(fam.name),
-            equation=str(fam.equation),
-            variables=tuple(int(v) for v in fam.variables),
-            joint=fam.joint,
-            value=None if fam.value is None else float(fam.value),
-            periodic=bool(fam.periodic),
-            factor=str(deriv.numeric(fam.factor)),
-        )
+        _family({**{k: getattr(fam, k) for k in fields}, "factor": deriv.numeric(fam.factor)})
         for fam in deriv.families
     )
 
@@ -399,12 +368,9 @@ def families_for(
         derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
             Without it, only families already derived (this process or the disk cache) are
             returned, so the call never waits on sympy.
-        budget: Budget in [s] of CPU time of the derivation and its cache reading (one child
-            process, :func:`hexapod_kin.symbolic.derive`; never wall-clock time, so the answer
-            does not depend on the machine's load). A derivation stopped at its budget is
-            kept on disk with what it reached and that budget: later calls with at most that
-            budget get it back without deriving (nor importing sympy); a larger budget
-            carries on from where it stopped.
+        budget: CPU budget in [s] of the derivation (:func:`hexapod_kin.symbolic.derive`). A
+            derivation stopped at its budget is kept on disk with that budget: later calls
+            with at most that budget get it back, a larger one carries on.
 
     Returns:
         The :class:`Families` (empty with a reason when none are available).

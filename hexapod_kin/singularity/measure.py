@@ -1,23 +1,11 @@
 """Singularity measures of one configuration or of many.
 
-Measures of a Jacobian ``J`` (k selected rows of the ``local_world_aligned`` tip Jacobian
-``[v; ω]``, i.e. the tip's own velocity in the base frame's axes, n joints;
-``m = min(k, n)`` singular values ``σ1 ≥ … ≥ σm``):
-
-* ``det`` — ``det J`` when ``k == n``, else NaN;
-* ``manipulability`` — Yoshikawa's ``sqrt(det(J Jᵀ))`` (``sqrt(det(Jᵀ J))`` when ``k > n``),
-  the product of the singular values (``|det J|`` when square);
-* ``condition`` — ``σ1 / σm`` (``inf`` at a singularity);
-* ``sigma_min`` — ``σm``, in [m] for position rows of revolute joints.
-
-Rows are chosen by name (``rows=("x", "y", "z", "wz")``); by default the position rows, plus
-the angular rows that are not identically zero when that makes a square ``J`` — so the SCARA
-gets ``x, y, z, wz`` and the 3-DOF leg ``x, y, z`` (see :func:`default_rows`).
-
-Engines (the size rule): :func:`measures` of one configuration is Pinocchio's Jacobian and
-numpy's SVD; :func:`measures_batch` is always the fused compiled kernel (:mod:`._kernel`),
-generic over any loaded 1-DOF serial chain; scans of at most
-:data:`~.scans.SMALL_SCAN` configurations use Pinocchio + numpy (no numba import).
+Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian ``[v; ω]`` over n joints,
+with singular values ``σ1 ≥ … ≥ σm``, ``m = min(k, n)``: ``det`` (``det J``, NaN unless
+square), ``manipulability`` (Yoshikawa's ``sqrt(det(J Jᵀ))``, the product of the σ),
+``condition`` (``σ1 / σm``, ``inf`` when singular) and ``sigma_min`` (``σm``, in [m] for
+position rows of revolute joints). Default rows: :func:`default_rows`.
+:func:`measures` uses Pinocchio and numpy's SVD; :func:`measures_batch` the compiled kernel.
 """
 
 from __future__ import annotations
@@ -34,6 +22,10 @@ from ..exceptions import ConfigurationError
 from ..jacobian_rows import ROW_NAMES, choose_rows, row_names
 
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
+
+
+#: The four measures, in the order of a :class:`MeasuresBatch`'s iteration.
+_MEASURES = ("det", "manipulability", "condition", "sigma_min")
 
 
 def _clean(a: np.ndarray) -> list[Any]:
@@ -63,13 +55,9 @@ class Measures:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        names = ("det", "manipulability", "condition", "sigma_min")
-        values = _clean(np.array([getattr(self, k) for k in names]))
-        return {
-            **dict(zip(names, values)),
-            "singular_values": _clean(self.singular_values),
-            "rows": list(self.rows),
-        }
+        values = _clean(np.array([getattr(self, k) for k in _MEASURES]))
+        sv = _clean(self.singular_values)
+        return {**dict(zip(_MEASURES, values)), "singular_values": sv, "rows": list(self.rows)}
 
 
 @dataclass(frozen=True)
@@ -95,23 +83,17 @@ class MeasuresBatch:
     rows: tuple[str, ...]
 
     def __iter__(self) -> Iterator[np.ndarray]:
-        return iter((self.det, self.manipulability, self.condition, self.sigma_min))
+        return (getattr(self, k) for k in _MEASURES)
 
     def __len__(self) -> int:
         return 4
 
     def __getitem__(self, i: int) -> np.ndarray:
-        return (self.det, self.manipulability, self.condition, self.sigma_min)[i]
+        return tuple(self)[i]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        return {
-            "rows": list(self.rows),
-            "det": _clean(self.det),
-            "manipulability": _clean(self.manipulability),
-            "condition": _clean(self.condition),
-            "sigma_min": _clean(self.sigma_min),
-        }
+        return {"rows": list(self.rows), **{k: _clean(getattr(self, k)) for k in _MEASURES}}
 
 
 def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -137,8 +119,8 @@ def as_model(model: Any) -> Any:
 def default_rows(model: Any) -> tuple[str, ...]:
     """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
 
-    Angular rows are tested at a few random configurations (a row is "zero" when it is below
-    1e-12 everywhere). SCARA → ``("x", "y", "z", "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+    A row is zero when below 1e-12 at 8 random configurations. SCARA → ``("x", "y", "z",
+    "wz")``; 3-DOF leg → ``("x", "y", "z")``.
 
     Args:
         model: A loaded model (or a source for :func:`hexapod_kin.load`).
@@ -151,7 +133,6 @@ def default_rows(model: Any) -> tuple[str, ...]:
 
     def build() -> tuple[str, ...]:
         qs = mdl.random_q(8, seed=12345)
-        # 8 Pinocchio calls: no batch kernel to compile for this (cold start)
         jac = np.array([mdl.jacobian(q, "local_world_aligned") for q in qs])
         flags = np.abs(jac).max(axis=(0, 2)) > 1e-12
         return choose_rows([bool(f) for f in flags], mdl.nq)
@@ -165,10 +146,7 @@ def selected_rows(model: Any, rows: Any) -> tuple[str, ...]:
 
 
 def reach(model: Any) -> float:
-    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance).
-
-    The chain's one length scale (:func:`hexapod_kin._numerics.chain_length`).
-    """
+    """Sum of the chain's link offsets in [m] (an upper bound of the base-to-tip distance)."""
     return float(chain_length(as_model(model).arrays.trans))
 
 
@@ -207,6 +185,9 @@ def measures_batch(
 ) -> MeasuresBatch:
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
+    Chains whose Jacobian has more than 70 maximal minors (9 joints and more) are measured
+    with Pinocchio and numpy instead.
+
     Args:
         model: A loaded model (or a source).
         qs: Configurations (N, nq) in [rad] / [m].
@@ -222,7 +203,7 @@ def measures_batch(
         ParameterError: Bad ``rows``.
 
     """
-    from ._plan import compute, output_arrays
+    from ._plan import block_plan, compute, output_arrays
 
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -243,16 +224,16 @@ def measures_batch(
         )
     if out is None:
         out = output_arrays(n)
-    compute(mdl, q, sel, out)
+    if block_plan(len(sel), mdl.nq)[0]:
+        compute(mdl, q, sel, out)
+    else:  # too many maximal minors for the kernel (9 joints and more)
+        for o, values in zip(out, _measures_small(mdl, q, names)):
+            o[:] = values
     return MeasuresBatch(out[0], out[1], out[2], out[3], rows=names)
 
 
 def _measures_small(model: Any, qs: np.ndarray, rows: tuple[str, ...]) -> MeasuresBatch:
-    """:func:`measures_batch` of a checked (N, nq) array on Pinocchio Jacobians and numpy SVD.
-
-    The path of command-line-sized work (no numba import): one Pinocchio call per
-    configuration, then one batched numpy SVD.
-    """
+    """:func:`measures_batch` of a checked (N, nq) array on Pinocchio Jacobians and numpy SVD."""
     jac = np.empty((qs.shape[0], 6, qs.shape[1]))
     for i, q in enumerate(qs):
         jac[i] = model.jacobian(q, "local_world_aligned")

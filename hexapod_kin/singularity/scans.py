@@ -1,19 +1,10 @@
 """Scans of joint space: measures on a grid or random samples, flags, family labels.
 
 A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
-reach``, with ``reach`` the sum of the chain's link offsets) or ``sigma_min = 0``. Every
-flagged sample is labelled with its nearest singular family (:mod:`.families`) and the
-joint-space distance to it; flagged samples farther than ``family_tol`` from every family are
-"unexplained".
-
-Defaults fit the robot (the API and the ``scan`` command share them): the two joints that
-change ``sigma_min`` most (:func:`default_joints`; every joint of a chain of at most two) at
-:data:`DEFAULT_GRID` points each, the others at a *dexterous* configuration
-(:func:`default_q_fixed`: away from singular values, e.g. not PUMA's q5 = 0).
-
-Engines (the size rule): a scan of at most :data:`SMALL_SCAN` configurations runs on
-Pinocchio's Jacobians and numpy's SVD (no numba import: command-line sized); a larger one on
-the compiled :func:`~.measure.measures_batch` kernel.
+reach``) or ``sigma_min = 0``; each flagged sample is labelled with its nearest singular family
+(:mod:`.families`) and its joint-space distance to it. A scan of at most :data:`SMALL_SCAN`
+configurations runs on Pinocchio + numpy (no numba import), a larger one on the compiled
+:func:`~.measure.measures_batch` kernel.
 """
 
 from __future__ import annotations
@@ -44,9 +35,8 @@ __all__ = [
 MAX_CONFIGURATIONS = 50_000_000
 #: Points per scanned joint when neither ``grid`` nor ``samples`` is given.
 DEFAULT_GRID = 61
-#: Largest scan run on Pinocchio + numpy, with no numba import (the default 61 × 61 grid and
-#: other command-line sizes); above it, the compiled kernel (``tools/bench_singularity.py``).
-SMALL_SCAN = 5_000
+#: Largest scan run on Pinocchio + numpy; above it, the compiled kernel.
+SMALL_SCAN = 10_000
 
 
 def _kernel_scan(
@@ -71,6 +61,18 @@ def _kernel_scan(
         if bar is not None:
             bar.close()
     return out
+
+
+#: The (N,) arrays of a :class:`ScanResult`, in the order of its JSON.
+_PER_SAMPLE = (
+    "det manipulability condition sigma_min singular family family_distance second_family "
+    "second_distance"
+).split()
+
+
+def _listed(arr: np.ndarray) -> list[Any]:
+    """A float array as a list with NaN / inf as ``None``; any other as its list."""
+    return _clean(arr) if arr.dtype.kind == "f" else arr.tolist()
 
 
 def _ro(arr: np.ndarray) -> np.ndarray:
@@ -194,16 +196,7 @@ class ScanResult:
         """
         if self.grid_shape is None:
             raise ParameterError("grid(): this scan used random samples, not a grid")
-        allowed = (
-            "det",
-            "manipulability",
-            "condition",
-            "sigma_min",
-            "singular",
-            "family",
-            "family_distance",
-        )
-        one_of("name", name, allowed)
+        one_of("name", name, _PER_SAMPLE[:7])
         return np.asarray(getattr(self, name)).reshape(self.grid_shape)
 
     def to_dict(self) -> dict[str, Any]:
@@ -219,15 +212,7 @@ class ScanResult:
             "grid_shape": list(self.grid_shape) if self.grid_shape else None,
             "q_fixed": self.q_fixed.tolist(),
             "q": self.q.tolist(),
-            "det": _clean(self.det),
-            "manipulability": _clean(self.manipulability),
-            "condition": _clean(self.condition),
-            "sigma_min": _clean(self.sigma_min),
-            "singular": self.singular.tolist(),
-            "family": self.family.tolist(),
-            "family_distance": _clean(self.family_distance),
-            "second_family": self.second_family.tolist(),
-            "second_distance": _clean(self.second_distance),
+            **{k: _listed(getattr(self, k)) for k in _PER_SAMPLE},
             "family_tol": self.family_tol,
             "family_tols": list(self.family_tols),
             "family_reason": self.family_reason,
@@ -282,8 +267,7 @@ def default_q_fixed(
     """A dexterous configuration for the joints that a scan does not move, in [rad]/[m].
 
     Among 256 seeded random configurations, the one whose worst ``σmin/σmax`` over a coarse
-    grid (5 points per joint) of the scanned ``joints`` is largest — every fixed joint away
-    from its singular values (PUMA's q5 = 0 would flag the whole map).
+    grid (5 points per joint) of the scanned ``joints`` is largest.
 
     Args:
         model: A loaded model (or a source).
@@ -302,7 +286,7 @@ def default_q_fixed(
     def build() -> np.ndarray:
         cand = mdl.random_q(256, seed=seed)
         cand[0] = mdl.neutral()
-        sub = [j for j in scanned][:3]
+        sub = list(scanned)[:3]
         if sub:
             axes = [np.linspace(mdl.lower[j], mdl.upper[j], 5) for j in sub]
             mesh = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(sub))
@@ -327,9 +311,8 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     """The ``count`` joints that change ``sigma_min`` most: the ones a heat map should show.
 
     Each joint that moves the tip is swept over its range (17 points) at 32 seeded random
-    configurations of the others; its score is the mean spread of ``log σmin`` (a joint that
-    only rotates ``J``, like a leg's hip yaw, scores 0). Ties go to revolute joints, then to
-    later joints.
+    configurations of the others; its score is the mean spread of ``log σmin``. Ties go to
+    revolute joints, then to later joints.
 
     Args:
         model: A loaded model (or a source).
@@ -469,15 +452,12 @@ def scan(
             ``rtol × reach(model)``.
         rtol: Relative threshold (see ``threshold``).
         family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
-            counts as lying on its nearest family; default ``15 × rtol``. (Near a family
-            ``σmin ≈ s·d`` with ``s`` a lever arm in [m/rad]; with ``threshold = rtol·reach``
-            flagged points lie within ``rtol·reach/s``: the default allows ``s ≥ reach/15``.)
+            counts as lying on its nearest family; default ``15 × rtol`` (near a family
+            ``σmin ≈ s·d``, ``s`` a lever arm: the default allows ``s ≥ reach/15``).
         families: ``True`` (default): derive them when needed (sympy, within
-            ``family_budget``; then kept on disk); ``"cached"``: only families already derived
-            (this process or the disk cache), never waiting on sympy; ``False``: none.
-        family_budget: Time budget in [s] of the families (``families=True``): reading the
-            cache, deriving (sympy) and checking against the model, together (see
-            :func:`~.families.families_for`).
+            ``family_budget``; then kept on disk); ``"cached"``: only families already derived;
+            ``False``: none.
+        family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
         chunk: Configurations per kernel call (progress granularity; scans above
@@ -498,13 +478,7 @@ def scan(
         jidx = default_joints(mdl, names, 2) if mdl.nq > 2 else tuple(range(mdl.nq))
     else:
         jidx = _joint_indices(mdl, joints)
-    if families not in (True, False, "cached"):
-        raise ParameterError(
-            f"families={families!r} is not allowed; use True, False or 'cached'",
-            parameter="families",
-            value=families,
-            allowed=[True, False, "cached"],
-        )
+    one_of("families", families, (True, False, "cached"))
     if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
         raise ParameterError(
             f"chunk={chunk!r}: an integer >= 1 is required",

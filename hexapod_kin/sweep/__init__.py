@@ -1,17 +1,8 @@
 """Leg design sweeps: many designs of the hexabot leg scored on all cores or a Dask cluster.
 
-``designs`` builds the design table (grid, random, Latin hypercube), ``scores`` scores it
-(exact closed-form membership, Monte-Carlo volume with standard errors and the closed form
-where one exists, stride, σ_min, singular distances, limit margins), ``run`` executes the
-sweep in resumable chunks (threads or Dask) and writes CSV/Parquet/JSON, ``pareto``
-finds the front, ``plot`` draws maps and the front.
-
-Example:
-    >>> from hexapod_kin.sweep import DesignSpace, Range, sweep
-    >>> space = DesignSpace({"l1": Range(0.02, 0.08, 4), "l2": Range(0.06, 0.14, 5)},
-    ...                     total=0.25)
-    >>> res = sweep(space, mc_samples=2000)  # doctest: +SKIP
-
+:mod:`.designs` (the design table), :mod:`.scores` (volume, stride, σ_min, singular distances,
+limit margins), :mod:`.run` (resumable chunks on threads or Dask; CSV/Parquet/JSON),
+:mod:`.pareto` (the front), :mod:`.plot` (maps and the front).
 """
 
 from __future__ import annotations

@@ -1,17 +1,12 @@
 """The resumable chunks of a sweep: written atomically, checked against what they claim.
 
 A sweep writing ``x.csv`` keeps each finished chunk in the hidden ``.x.csv.sweep-parts/``
-(``chunk_NNNNN.npz`` and a ``manifest.json`` naming the sweep's key). The folder is created
-with the first finished chunk, so a sweep refused before scoring leaves nothing behind.
-
-A stored chunk is used only if it is a regular file of a bounded size holding a plain ``.npz``
-(never unpickled; its members' inflated sizes checked before inflating), names this sweep's
-key and its own number, carries the right digest of its scores, holds plausible scores
-(finite; 0/1 flags; non-negative volumes) and one of its designs, scored again, gives the same
-bits. The digest is the package's keyed seal (:func:`hexapod_kin._cache.mac`, a per-user
-secret), so an edited value cannot be "fixed" by recomputing a plain hash. Chunks that fail
-are discarded (one
-:class:`~hexapod_kin.exceptions.CacheWarning` for all of them) and scored again.
+(``chunk_NNNNN.npz`` and a ``manifest.json`` naming the sweep's key), created with the first
+finished chunk. A stored chunk is used only when it is a bounded regular file holding a plain
+``.npz`` (never unpickled, inflated sizes checked first) that names this sweep's key and its
+own number, carries the keyed seal of its scores (:func:`hexapod_kin._cache.mac`), holds
+plausible scores, and one of its designs scored again gives the same bits; the others are
+discarded (one ``CacheWarning``) and scored again.
 """
 
 from __future__ import annotations

@@ -1,23 +1,12 @@
 """Run a sweep: chunks scored on all local cores or on a Dask cluster, resumable output.
 
-The designs are split into chunks of ``chunk_size`` consecutive indices. Each chunk's scores
-depend only on its designs and the sweep options (the Monte-Carlo samples come from the sweep
-seed), so the table is identical whatever executes it: threads on this machine (default,
-one per core; numpy releases the GIL), or Dask distributed workers (``client=`` or
-``scheduler=``; imported lazily, ``pip install 'hexapod-kin[sweep]'``).
-
-``out`` names the one file written, its format by its extension: ``.csv``, ``.parquet``
-(pyarrow) or ``.json`` (the summary and the table's columns). While the sweep runs, every
-finished chunk is written atomically to a hidden sidecar folder next to it,
-``.results.csv.sweep-parts/chunk_NNNNN.npz`` with a ``manifest.json`` (the sweep's options
-and a key hashing them with the designs); the folder appears with the first finished chunk,
-so a sweep refused before scoring leaves nothing. Re-running the same sweep after an
-interruption (Ctrl-C, SIGKILL, a lost worker or scheduler) loads the chunks that pass the
-checks of :mod:`._chunks` and scores only the others; the merged table is the same. The
-sidecar is removed once the table is written.
-
-Before anything runs, the sweep is estimated (time from two designs scored here, memory from
-the counts) and refused beyond :data:`MAX_HOURS` or :data:`MAX_GB` unless ``allow_large``.
+Chunks of ``chunk_size`` consecutive designs depend only on their designs and the options (the
+Monte-Carlo samples come from the sweep's seed), so the table is the same on local threads
+(default) or Dask workers (``client=`` / ``scheduler=``). ``out`` is the one file written
+(``.csv``, ``.parquet`` or ``.json``); finished chunks are kept meanwhile in a hidden sidecar
+(:mod:`._chunks`), so a sweep run again after an interruption scores only the missing chunks.
+A sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB` is refused unless
+``allow_large``.
 """
 
 from __future__ import annotations
@@ -134,8 +123,7 @@ def _score_chunk(designs: np.ndarray, options: Mapping[str, Any]) -> np.ndarray:
     return np.stack([cols[k] for k in SCORES], axis=1)
 
 
-#: Seconds to reach a Dask scheduler before the sweep is refused (distributed's default is 30 s:
-#: a wrong address should be one line within the command line's 10 s).
+#: Seconds to reach a Dask scheduler before the sweep is refused.
 CONNECT_TIMEOUT = 4.0
 
 #: A sweep estimated beyond these is refused unless asked (``allow_large`` / ``--yes``).
@@ -152,12 +140,7 @@ def _refuse_large(
     client: Any,
     scheduler: str | None,
 ) -> None:
-    """Estimate time and memory before starting; refuse beyond the limits (one line).
-
-    Time: two designs scored here (the first of the space), times the count, over the local
-    threads (a Dask cluster: not divided, its size is unknown here). Memory: the designs and
-    the score table, 8 bytes a value.
-    """
+    """Refuse a sweep estimated beyond the limits (time from two designs scored here)."""
     n = space.count(method, samples)
     threads = 1 if (client is not None or scheduler is not None) else _check_workers(workers)
     # the designs and scores, the written table; each thread's Monte-Carlo points and temporaries

@@ -1,32 +1,21 @@
 """Scores of leg designs: workspace volume, stride, σ_min / manipulability, singular distances.
 
-Every design is the ``hexabot_leg(l1, l2, l3)`` of :mod:`hexapod_kin.robots` (α2 = −π/2),
-foot ``Rz(q1)·[l1 + l2 c2 + l3 c23, 0, −(l2 s2 + l3 s23)]`` in the hip frame, with joint limits,
-on a body mount (radius, yaw). Conventions (all in the hip frame unless said):
+A design is ``hexabot_leg(l1, l2, l3)`` (α2 = −π/2), foot ``Rz(q1)·[l1 + l2 c2 + l3 c23, 0,
+−(l2 s2 + l3 s23)]`` in the hip frame, with joint limits, on a body mount (radius, yaw).
 
-* **ground**: the plane ``z = −height``. Its points reachable by the unlimited leg have
-  distances ``ρ = l1 + u`` from the hip axis with ``u ∈ [b, a]``, ``a = √((l2+l3)² − h²)``,
-  ``b = √(max((l2−l3)² − h², 0))``.
-* **neutral foot** ``p0 = ρ0·(cos q1m, sin q1m, 0) − h·z``: ``ρ0 = l1 + b + neutral·(a − b)``,
-  ``q1m`` the middle of the hip limits.
-* **stride**: the walking direction is body x, i.e. ``d = (cos ψ, −sin ψ, 0)`` for a mount
-  yaw ψ. The stride is the longest segment ``p0 + t·d``, ``t ∈ [−back, forward]``, reachable
-  within the joint limits at every point (exact closed-form membership; found on a grid of
-  ``line_points`` steps per side, then bisected to rounding).
-* **along the stride**: the central ``stride_use`` fraction of it (the ends of a
-  reach-limited stride are the stretched-leg singularity), ``stride_points`` points; at each
-  point the within-limits IK branch with the largest σ_min is used. Reported minima over the
-  points: σ_min [m/rad] and manipulability ``√det(J Jᵀ)`` [m³/rad³] of the 3×3 position
-  Jacobian (closed form: σ values ``|ρ|`` and those of the 2×2 planar block,
-  ``det J = ρ·l2·l3·sin q3`` up to sign), the distance of the foot to the hip axis ``|ρ|``
-  [m] (family ``l1 + l2 c2 + l3 c23 = 0``), the angular distance of q3 to {0, π} [rad]
-  (family ``sin q3 = 0``) and the joint-limit margin [rad].
-* **volume**: Monte-Carlo over ``mc_samples`` points uniform in the bounding cylinder
-  (radius ``l1+l2+l3``, ``|z| <= l2+l3``) with the exact membership test (a within-limits
-  solution of the one leg closed form, :func:`hexapod_kin.ik.leg_solutions`); binomial
-  standard error. The same unit samples serve every design (common random numbers, seeded by the
-  sweep's seed), so close designs rank by their difference, not by sampling noise. The closed
-  form of :func:`volume_closed_form` is used where it exists (knee unlimited).
+* ground: ``z = −height``; its reachable distances from the hip axis are ``ρ = l1 + u``, ``u
+  ∈ [b, a]``, ``a = √((l2+l3)² − h²)``, ``b = √(max((l2−l3)² − h², 0))``;
+* neutral foot ``p0 = ρ0·(cos q1m, sin q1m, 0) − h·z``, ``ρ0 = l1 + b + neutral·(a − b)``,
+  ``q1m`` the middle of the hip limits;
+* stride: the longest segment ``p0 + t·d``, ``d = (cos ψ, −sin ψ, 0)`` (body x), reachable
+  within the limits at every point (a grid of ``line_points`` steps per side, then bisection);
+* along its central ``stride_use`` fraction (``stride_points`` points, the within-limits IK
+  branch of largest σ_min): the minima of σ_min and manipulability of the 3×3 position
+  Jacobian, of ``|ρ|`` (family ``l1 + l2 c2 + l3 c23 = 0``), of q3's distance to {0, π} and
+  of the joint-limit margin;
+* volume: Monte-Carlo over ``mc_samples`` points in the bounding cylinder with the exact
+  membership test, the same unit samples for every design (common random numbers), binomial
+  standard error; :func:`volume_closed_form` where it exists (knee unlimited).
 """
 
 from __future__ import annotations

@@ -44,11 +44,9 @@ def brent_root(f: Callable[[float], float], xa: float, xb: float, xtol: float,
                rtol: float = 4 * sys.float_info.epsilon, maxiter: int = 100) -> float:  # fmt: skip
     """A root of ``f`` in ``[xa, xb]`` (``f(xa)``, ``f(xb)`` of opposite signs or zero).
 
-    Brent's method as :func:`scipy.optimize.brentq` runs it (its C ``brentq`` by C. Harris):
-    inverse quadratic extrapolation or secant steps while they shrink the bracket fast enough,
-    else bisection; stops when half the bracket is below ``(xtol + rtol |x|) / 2``. The same
-    steps in the same floating-point operations, hence the same root to the bit, without
-    importing ``scipy.optimize`` (a quarter of a second, in each derivation's process).
+    Brent's method in the same floating-point operations as :func:`scipy.optimize.brentq`
+    (its C ``brentq`` by C. Harris), hence the same root to the bit, without importing
+    ``scipy.optimize``; stops when half the bracket is below ``(xtol + rtol |x|) / 2``.
     """
     x_prev, x_cur = float(xa), float(xb)
     f_prev, f_cur = float(f(x_prev)), float(f(x_cur))

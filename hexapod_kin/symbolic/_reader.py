@@ -1,16 +1,10 @@
 """A restricted reader of sympy's ``srepr`` text: rebuilds expressions without ``eval``.
 
-The symbolic cache stores expressions as ``srepr`` text (``Add(Mul(Integer(-1),
-Symbol('d3', positive=True), ...))``). Reading them back with ``sympify`` would ``eval`` the
-text, so a planted entry could run code. :func:`read_srepr` parses the text with
-:func:`ast.parse` (no evaluation) and builds the expression from a fixed table of sympy
-constructors: calls of listed names with literal arguments (numbers, strings, booleans,
-lists and tuples of them, nested calls), the listed constants, and keyword arguments only
-for symbol assumptions and ``Float`` precision. Anything else (attribute access, other names,
-lambdas, comprehensions, operators, subscripts...) is refused with :class:`CacheFormatError`
-naming what was found. Size is bounded (characters and nodes). A number is not distributed
-over a sum while building (sympy's ``distribute(False)``): ``-(a + b)`` stored factored is
-read back factored, so a derivation read from the cache is the one computed, bit for bit.
+:func:`read_srepr` parses with :func:`ast.parse` and builds the expression from a fixed table
+of sympy constructors (listed names with literal arguments, the listed constants, keywords
+only for symbol assumptions and ``Float`` precision); anything else raises
+:class:`CacheFormatError`. Size is bounded. Numbers are not distributed over sums while
+building (``distribute(False)``), so what is read is the expression stored, bit for bit.
 """
 
 from __future__ import annotations

@@ -1,18 +1,11 @@
 """Trigonometric polynomials of the joints as polynomials in ``s_k = sin q_k``, ``c_k = cos q_k``.
 
-Part of :mod:`hexapod_kin.symbolic.core` (which factors them): the change of variables
-(:func:`_to_poly`), the reduction modulo ``s_k² + c_k² = 1`` (:func:`_reduce`), rounding noise
-of float tables (:func:`_chop`) and determinants (:func:`_det_poly`).
-
-Determinants: sympy's expression route (``Matrix.det``, then ``expand`` of the whole) builds
-the unexpanded sum of products first; on a 6×6 Jacobian in a joint frame that takes seconds,
-most of it in ``expand``. :func:`ring_det` converts each entry (expanded on its own) to an
-element of a sparse polynomial ring over ℚ (:func:`sympy.polys.rings.ring`) and takes the
-determinant there, by cofactors along the rows with every minor kept (at most 2ⁿ of them):
-milliseconds. Expanding is a ring homomorphism, so the result is *the same polynomial* the
-expression route gives (and factors the same). Entries with a coefficient outside ℚ (a float,
-``sqrt(3)``, ``pi``) are refused: floats would round in another order than ``expand`` rounds
-them, so those keep the expression route.
+The change of variables (:func:`_to_poly`), the reduction modulo ``s_k² + c_k² = 1``
+(:func:`_reduce`), rounding noise of float tables (:func:`_chop`) and determinants
+(:func:`_det_poly`). :func:`ring_det` takes a determinant in a sparse polynomial ring over ℚ
+(cofactors, every minor kept): expanding is a ring homomorphism, so it is the same polynomial
+as sympy's ``Matrix.det`` then ``expand``, in milliseconds instead of seconds. Entries with a
+coefficient outside ℚ keep the expression route.
 """
 
 from __future__ import annotations

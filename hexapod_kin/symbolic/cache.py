@@ -1,15 +1,10 @@
 """The disk cache of :func:`hexapod_kin.symbolic.derive`: one sealed entry per derivation.
 
-One entry per derivation (:mod:`hexapod_kin._cache`, kind ``"symbolic"``: the one key, keyed
-seal and warning), keyed by the table (rows, base and tool poses, the row selection, the
-length names and :data:`FORMAT`), holding the stages reached and, for an unfinished one, why
-and with which budget (:class:`Writer` writes it from inside the budgeted run, stage by
-stage). Sympy objects are stored as ``srepr`` text and rebuilt by a restricted reader
-(:mod:`._reader`: no ``eval``, a fixed table of sympy constructors), so a planted entry
-cannot run code. A damaged, edited or foreign entry is ignored with one
-:class:`~hexapod_kin.exceptions.CacheWarning` and rewritten; the derivation then checks what a
-sealed entry claims against the table (``checks.claims_hold``) before using it. The budget
-itself is :mod:`hexapod_kin._budget`'s.
+Entries (:mod:`hexapod_kin._cache`, kind ``"symbolic"``) are keyed by the table, the row
+selection, the length names and :data:`FORMAT`, and hold the stages reached (and, when
+unfinished, why and with which budget; :class:`Writer` writes stage by stage). Sympy objects
+are stored as ``srepr`` text, rebuilt by a restricted reader (:mod:`._reader`, no ``eval``); a
+damaged or foreign entry is ignored with one ``CacheWarning``.
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """Numbers from a sympy expression in one pass over it, and the checks made with them.
 
-:func:`evaluate` walks the expression once, bottom up, each distinct sub-expression once
-(sympy shares equal sub-trees, so a 100,000-operation Gram determinant or a nested product of
-twelve transforms is a few thousand distinct nodes), with numpy arrays at the leaves: linear in
-the distinct nodes, no substitution (``subs`` of the lengths alone takes seconds on a 7-joint
-arm) and no generated code (``lambdify`` compiles a Python function as long as the
-expression). It serves the checks that must stay within a time budget: a cached derivation
-against the table, the families against the model, the command line's comparison with
-Pinocchio. :meth:`~hexapod_kin.symbolic.Derivation.function` (``lambdify``) stays the one way
-to get a reusable numpy function of ``q``. :func:`claims_hold` checks a cached derivation
-against its table before it is used.
+:func:`evaluate` walks the expression once, bottom up, each distinct sub-expression once, with
+numpy arrays at the leaves: no ``subs`` and no generated code (``lambdify``), so checks stay
+within a time budget. :func:`claims_hold` checks a cached derivation against its table.
 """
 
 from __future__ import annotations
@@ -118,18 +111,10 @@ def evaluate_matrix(
 def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
     """A cached derivation checked against what it claims, before use.
 
-    At three random configurations (fixed seed): every stored matrix that a derivation prints
-    (each ``^{j-1}T_j``, base and tool, the cumulative products, the tip, ``p``, the direct
-    and indirect Jacobians) against the table's own numbers
-    (:func:`~hexapod_kin._table_kin.table_transforms` and
-    :func:`~hexapod_kin._table_kin.table_position_jacobian`, plain numpy); a square J's
-    stored ``det`` and ``const · Π fᵐ`` against ``|det J|``; the stored Gram determinant
-    (``det(J Jᵀ)``, or ``det(Jᵀ J)`` for more rows than joints) against the stored J's own
-    rows; the tidied forms too. Each stored family's factor must
-    be, at the same configurations, ± one factor of the stored determinant. An edited entry
-    fails one of these. Evaluated in one pass over each expression
-    (:func:`evaluate`): a fraction of a second where
-    ``subs`` and ``lambdify`` take tens of seconds (a 7-joint arm's Gram determinant).
+    At three random configurations (fixed seed), as stored and with the tidied forms: every
+    printed matrix against the table's own numbers (:mod:`hexapod_kin._table_kin`); a square
+    J's ``det`` and ``const · Π fᵐ`` against ``|det J|``; the Gram determinant against the
+    stored J's rows; each family's factor ± one factor of the determinant.
     """
     kin = stages.get("kinematics")
     if kin is None:
@@ -172,13 +157,7 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[Any, Any]) -> bool:
-    """:func:`claims_hold` for an entry with kinematics (numpy warnings silenced).
-
-    Every matrix a derivation prints is held to the table's own numbers: each ``^{j-1}T_j``,
-    the base and tool poses, each cumulative product, the tip, ``p``, both Jacobians; then
-    the determinant stage (square J: ``|det|`` and ``|const · Π fᵐ|`` against the numeric
-    ``|det J|``; the Gram determinant against the stored J's rows) and the families.
-    """
+    """:func:`claims_hold` for one form of an entry with kinematics."""
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     rng = np.random.default_rng(20251202)

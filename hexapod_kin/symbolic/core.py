@@ -1,29 +1,19 @@
 """The sympy work behind :func:`hexapod_kin.symbolic.derive`, in stages (no caching, no budget).
 
-Speed comes from structure, not from ``simplify``:
-
-* each cumulative product ``^0T_j`` is simplified step by step with a cheap rule set
-  (``expand`` then Fu's ``TR10i``, which folds ``c2 c3 − s2 s3`` into ``cos(q2 + q3)``);
-* ``det J`` of the position rows or of the full 6×6 is computed in a *middle* joint frame
-  ``m`` (the determinant is invariant under a rotation of both rows blocks and, for the 6×6,
-  under a change of reference point), which keeps every entry short; with a spherical wrist
-  the reference point is the wrist centre, the Jacobian is block-triangular and
-  ``det J = det J11 · det J22``;
-* the determinant is factored as a polynomial in ``s_i = sin q_i``, ``c_i = cos q_i``
-  *before* reducing modulo ``s_i² + c_i² = 1`` (reducing first can glue families together,
-  e.g. PUMA's elbow and shoulder), then each factor is reduced, factored again and turned
-  back into compact trigonometry. A few frames ``m`` are tried; the finest split wins;
-* that polynomial is computed entry by entry in a polynomial ring
-  (:func:`~._trigpoly.ring_det`: the same polynomial as expanding ``det J``, in
-  milliseconds instead of seconds), and a frame that gives a polynomial already factored is
-  not factored again (its split is the same).
+Speed comes from structure, not from ``simplify``: cumulative products are expanded step by
+step; ``det J`` is taken in a middle joint frame (invariant under a rotation of both row
+blocks; for the 6×6 under a change of reference point too: at a wrist centre ``J`` is
+block-triangular, ``det J = det J11 · det J22``); the determinant is computed as a polynomial in
+``s_i = sin q_i``, ``c_i = cos q_i`` (:func:`~._trigpoly.ring_det`) and factored *before*
+reducing modulo ``s_i² + c_i² = 1`` (reducing first can glue families together), then each
+factor is reduced and factored again. A few frames are tried; the finest split wins.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -222,8 +212,7 @@ def kinematics(
     tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]
     # Direct method, column by column in its own joint frame: z_j x (p - o_j) = R_0j (z x ^jp),
-    # with ^jp (the tip seen from frame j) built backwards from the tool. Each term then holds
-    # sin/cos of distinct joints only: no sin^2 + cos^2 left to fold (see module docstring).
+    # with ^jp (the tip seen from frame j) built backwards from the tool.
     tip_in = [sp.zeros(3, 1)] * len(transforms)
     vec = tool_t[:3, 3]
     for j in range(len(transforms) - 1, -1, -1):
@@ -262,10 +251,8 @@ def cols_lin(cols: Sequence[sp.Matrix]) -> sp.Matrix:
 def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp.Matrix:
     """``∂p/∂q`` (the indirect method), as polynomials when ``p`` is one.
 
-    When every ``sin``/``cos`` in ``p`` has a single joint as argument, ``p`` is a polynomial
-    in ``s_k = sin q_k``, ``c_k = cos q_k`` (and the prismatic ``q_k``), and
-    ``∂/∂q_k = c_k ∂/∂s_k − s_k ∂/∂c_k`` is applied to it as a polynomial (sympy's ``diff``
-    on a 7-joint arm's tip takes seconds; this takes a tenth of one). Otherwise ``diff``.
+    When every ``sin``/``cos`` in ``p`` has a single joint as argument, ``∂/∂q_k = c_k ∂/∂s_k −
+    s_k ∂/∂c_k`` is applied to ``p`` as a polynomial in ``s_k``, ``c_k``; otherwise ``diff``.
     """
     s, c = _trig_symbols(q)
     fwd: dict[Any, Any] = {}
@@ -343,11 +330,9 @@ def _candidates(
 ) -> list[tuple[int, str, sp.Matrix, bool]]:
     """Jacobians in a few joint frames and reference points, simplest first.
 
-    Position rows, or all six rows of a non-square J: the reference point is the tip (a
-    rotation of both row blocks keeps det(J Jᵀ); moving the point does not). All six rows
-    of a 6×6 J: any point gives the same determinant, so origins of the last joints' frames
-    are tried (the wrist centre when
-    there is one, which makes J block-triangular).
+    The reference point is the tip, except for all six rows of a 6×6 J (any point gives the
+    same determinant): the origins of the last joints' frames (a wrist centre makes J
+    block-triangular).
     """
     joints = chain.joint_rows
     n = len(joints)
@@ -438,13 +423,6 @@ def _factor_poly(poly: Any, q: Sequence[sp.Symbol]) -> tuple[Any, list[tuple[Any
     return sp.factor(const), out
 
 
-def _const(jac: sp.Matrix) -> Callable[[], sp.Matrix]:
-    def make() -> sp.Matrix:
-        return jac
-
-    return make
-
-
 def _split_score(factors: Sequence[tuple[Any, int]]) -> tuple[int, int]:
     return (len(factors), -sum(sp.count_ops(f) for f, _ in factors))
 
@@ -470,15 +448,15 @@ def factored_determinant(
     sigmas = chain.sigmas
     invariant = tuple(sel) in ((0, 1, 2), (0, 1, 2, 3, 4, 5))
     jd = stage1["J_direct"]
-    candidates: list[tuple[str, Callable[[], sp.Matrix]]] = []
     if invariant:
-        for m, label, jac, _ in _candidates(chain, stage1, sel, deadline):
-            candidates.append((f"frame {m}, point: {label}", _const(jac)))
+        candidates = [
+            (f"frame {m}, point: {label}", jac)
+            for m, label, jac, _ in _candidates(chain, stage1, sel, deadline)
+        ]
     else:
-        candidates.append(("base frame", lambda: jd.extract(sel, list(range(n)))))
+        candidates = [("base frame", jd.extract(sel, list(range(n))))]
     if len(sel) != n:
-        label, make = candidates[0]
-        mat = make()
+        label, mat = candidates[0]
         end = deadline if minors_deadline is None else minors_deadline
         out = rank_deficiency(mat, q, sigmas, end)
         out["how"] = f"{label}, {out['how']}"
@@ -486,10 +464,10 @@ def factored_determinant(
     best: dict[str, Any] | None = None
     seen: list[Any] = []  # the polynomials factored: another frame often gives the same one
     memo: dict[Any, Any] = {}  # entries' polynomials (the frames' points share the w rows)
-    for label, make in candidates:
+    for label, mat in candidates:
         if best is not None and time.process_time() > deadline:
             break
-        mat, how = make(), label
+        how = label
         split = mat.shape == (6, 6) and all(mat[r, c] == 0 for r in range(3) for c in range(3, 6))
         if split:
             how = f"{label} (wrist centre), det J11 * det J22"
@@ -514,11 +492,7 @@ def factored_determinant(
 
 
 def _plain_det(m: sp.Matrix) -> Any:
-    """``det m`` by cofactors along the first row, left unexpanded (no simplification step).
-
-    sympy's ``det`` methods simplify between steps, which on a Gram matrix of long entries
-    takes minutes; this is the plain sum of products (``n!`` of them at most).
-    """
+    """``det m`` by cofactors along the first row, left unexpanded (sympy's ``det`` simplifies)."""
     if m.rows == 1:
         return m[0, 0]
     terms = []
@@ -670,12 +644,9 @@ def _collect_trig(expr: Any) -> Any:
 def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 400) -> Any:
     """``expr`` shorter for printing, exactly equal: ``sin² + cos² = 1`` folded, terms grouped.
 
-    Powers of ``sin``/``cos`` are reduced modulo ``s² + c² = 1`` (:func:`_reduce`; so
-    ``-d3 sin²(q1) cos(q2) - d3 cos²(q1) cos(q2)`` prints ``-d3 cos(q2)``); then terms with
-    the same trigonometric part are grouped, their coefficients factored
-    (``r5 cos(q4) + r6 cos(q4)`` → ``(r5 + r6) cos(q4)``) and common factors taken out.
-    The shortest form (``count_ops``) wins; expressions over ``ops`` operations are left
-    as they are (the cost grows faster than their length).
+    Powers of ``sin``/``cos`` are reduced modulo ``s² + c² = 1``, then terms with the same
+    trigonometric part grouped with their coefficients factored. The shortest form
+    (``count_ops``) wins; expressions over ``ops`` operations are left as they are.
     """
     if not isinstance(expr, sp.Expr) or not expr.args or sp.count_ops(expr) > ops:
         return expr

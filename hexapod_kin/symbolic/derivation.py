@@ -1,40 +1,18 @@
 """The same Khalil–Kleinfinger table, derived with sympy: transforms, Jacobians, det J, factored.
 
-:func:`derive` builds, from a chain's table and with *symbolic* lengths,
+:func:`derive` builds, with symbolic lengths, every ``^{j-1}T_j`` and ``^0T_j`` (base and tool
+included), the tip position ``p(q)``, the Jacobian by the direct method (``z_j × (p − o_j)``,
+``z_j``; rows ``vx vy vz wx wy wz``, base axes) and by the indirect one (``∂p/∂q``), ``det J``
+of a square row selection factored into irreducible factors (else the Gram determinant
+``det(J Jᵀ)``; a redundant chain's families are the factors common to its maximal minors), and
+the singular families, one per factor depending on ``q`` (solved for the joint when the factor
+has one), each checked against the numeric σ_min. For ``hexabot_leg``: ``det J =
+l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
 
-* every ``^{j-1}T_j`` and ``^0T_j`` (4×4 sympy matrices), with the chain's base and tool poses,
-* the tip position ``p(q)`` in the base frame (:attr:`Derivation.reference` names it),
-* the Jacobian by the **direct** method (columns ``z_j × (p − o_j)`` and ``z_j``; 6×n, rows
-  ``vx vy vz wx wy wz``, axes of the base frame) and by the **indirect** method (``∂p/∂q``),
-* ``det J`` of a square row selection (the position rows for a 3-DOF leg; ``x, y, z, wz`` for
-  the SCARA; all six for a 6-DOF arm), factored into irreducible factors, or the Gram
-  determinant ``det(J Jᵀ)`` (manipulability²) otherwise,
-* the singular *families*: one per factor that depends on ``q``, solved for the joint value
-  when the factor involves a single joint (``sin q3 = 0`` gives ``q3 = 0`` and ``q3 = π``;
-  PUMA's elbow ``r4 cos q3 + d4 sin q3 = 0`` gives two numeric values), else kept as the
-  equation ``factor = 0``; each family is checked against the numeric Jacobian's σ_min
-  (:attr:`SingularFamily.verified`).
-
-For the 3-DOF leg (``hexabot_leg``) the factored determinant is
-``l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
-
-For a redundant chain (more joints than rows, e.g. a 5-DOF leg's position rows) there is no
-square determinant: the families are where ``J`` loses rank, the factors common to all its
-maximal minors (:func:`~hexapod_kin.symbolic.core.rank_deficiency`).
-
-**Never hangs**: ``derive(..., budget=5.0)`` stops after ``budget`` seconds of CPU time (the
-same answer on a busy machine) and returns what it has; :attr:`Derivation.incomplete` says
-what it could not do. **Cached**: derivations are stored on disk keyed by a hash of the table
-(see :mod:`hexapod_kin.symbolic.cache`), so a second process gets them in milliseconds; an
-unfinished one is kept with its budget and what it reached (a call with at most that budget
-gets it back, a larger one carries on). How the determinant is kept fast (per-joint
-simplification, a middle joint frame, the wrist centre) is in :mod:`hexapod_kin.symbolic.core`.
-
-Lengths are symbols (``l1, l2, ...`` when every length of the table is a ``d``, as for the legs;
-else Khalil's own names ``d2, r1, ...``; a tool offset gets ``tx, ty, tz``);
-:meth:`Derivation.numeric` substitutes the chain's numbers, :meth:`Derivation.function`
-returns a vectorised numpy function of ``q``; the families as numbers for scans are
-:mod:`hexapod_kin.singularity.families`.
+It never hangs (``budget`` in CPU seconds; :attr:`Derivation.incomplete` says what is
+missing) and is cached on disk by a hash of the table (:mod:`.cache`), unfinished runs
+included. Lengths are ``l1, l2, ...`` when every length is a ``d``, else Khalil's names
+(``d2, r1``; tool ``tx, ty, tz``).
 """
 
 from __future__ import annotations
@@ -180,11 +158,7 @@ class Derivation:
 
     @property
     def methods_agree(self) -> bool:
-        """True when the direct and indirect position Jacobians are the same trig polynomial.
-
-        Both are reduced to polynomials in ``sin q_i``, ``cos q_i`` modulo ``sin² + cos² = 1``
-        and compared exactly (the derivation's own result when it made it in time).
-        """
+        """True when the direct and indirect position Jacobians are the same trig polynomial."""
         if self.agree is not None:
             return self.agree
         return _agree({"J_direct": self.J_direct, "J_indirect": self.J_indirect}, self.q,
@@ -238,12 +212,7 @@ class Derivation:
         return [line for h in head for line in wrap(h, indent=4)]
 
     def text(self) -> str:
-        """The derivation as plain text, one formula a line (see :mod:`.printing`).
-
-        Matrices print as matrices when they fit in 100 columns, else entry by entry
-        (``[row,column] = …``, from 1). Linear in the expressions' size: no simplification
-        or comparison is made here (what the derivation did not reach says ``NOT DONE``).
-        """
+        """The derivation as plain text, one formula a line (see :mod:`.printing`)."""
         return "\n".join(self.text_parts())
 
     def text_parts(self) -> Iterator[str]:
@@ -354,15 +323,10 @@ def _stages(
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """The derivation's stages in order, skipping those in ``have`` (a cached partial run).
 
-    ``families_only``: the last stage is ``"checks"`` (the families checked; no ``"agree"``,
-    ``"tidy"`` nor ``"seconds"``).
-
-    ``budget`` (CPU seconds from ``start``, :func:`time.process_time`; ``None``: none) paces
-    the optional work: extra determinant frames are tried during its first 15 %, maximal
-    minors factored during the first 70 %, the printed forms tidied (last, after the families)
-    until 80 % or for 20 % of it, never past 90 %; the caller stops the work at the budget
-    itself. With no budget the required
-    stages run to the end and the optional work is paced as for :data:`UNBOUNDED_PACE`.
+    ``families_only``: the last stage is ``"checks"``. ``budget`` (CPU seconds from ``start``;
+    ``None``: :data:`UNBOUNDED_PACE`) paces the optional work: extra determinant frames during
+    its first 15 %, maximal minors during the first 70 %, the tidied printed forms until 80 %
+    or for 20 % of it, never past 90 %; the caller stops the work at the budget.
     """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
@@ -415,11 +379,10 @@ def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
 
 
 def _numeric_default_rows(chain: Chain) -> tuple[str, ...]:
-    """The default rows, from the numeric Jacobian (rows not zero at three random q).
+    """The default rows from the numeric Jacobian (not zero at three random q).
 
-    A row of ``J`` that is identically zero is zero at every ``q``, and one that is not is
-    non-zero at random ``q`` (almost surely): the same selection as the symbolic one, known
-    before any sympy work, so that ``rows=None`` and its rows spelled out share one key.
+    Almost surely the symbolic selection, known before any sympy work: ``rows=None`` and its
+    rows spelled out share one key.
     """
     rng = np.random.default_rng(20260101)
     qs = rng.uniform(-math.pi, math.pi, (3, chain.nq))
@@ -444,25 +407,6 @@ def _cache_key(chain: Chain, rows: Any, lengths: Any) -> str:
             "limits": [[lim.lower, lim.upper] for lim in chain.limits or ()],
         }
     )
-
-
-def _alias(chain: Chain, rows: Any, lengths: Any, stages: Mapping[str, Any]) -> str | None:
-    """The other key of the same derivation: the default rows spelled out, or ``None``.
-
-    The stages depend on ``rows`` only through the row names they resolve to, so the
-    derivation with ``rows=None`` is the one with its default rows named (and back): in one
-    process, a scan that names the rows and the report that does not share one derivation
-    (:data:`_MEMO`; the disk keeps one file, under the key asked for).
-    """
-    names = stages.get("rows")
-    kin = stages.get("kinematics")
-    if names is None or kin is None:
-        return None
-    if rows is None:
-        return _cache_key(chain, tuple(names), lengths)
-    if _default_rows(kin, chain.nq) != tuple(names):
-        return None
-    return _cache_key(chain, None, lengths)
 
 
 #: Derivations of this process, complete or not, by cache key (in front of the disk cache).
@@ -531,11 +475,9 @@ def _job(
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """What a derivation does within its budget (in its child process, or inline).
 
-    With ``read``: the disk cache's entry ``digest``, checked against the table
-    (:func:`~.checks.claims_hold`), is yielded first as ``"__found__"`` (its warnings reach
-    the caller's process). Unless it answers the call, the stages follow, each
-    written to the disk cache (``write``) before it is yielded, marked unfinished until the
-    last one.
+    With ``read``: the checked disk entry is yielded first as ``"__found__"``. Unless it
+    answers the call, the stages follow, each written to the disk cache (``write``) before it
+    is yielded, marked unfinished until the last one.
     """
     start = time.process_time()
     if read:
@@ -583,22 +525,16 @@ def derive(
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
-        budget: Budget in [s] of CPU time of the work (``None``: no limit), never wall-clock
-            time: the work runs in one child process (:func:`hexapod_kin._budget.run`), its
-            start-up not counted. At the budget the work stops and the result says in
-            :attr:`Derivation.incomplete` what is missing.
-        cache: Read and write the on-disk cache. An unfinished derivation is kept too,
-            with the budget it had: a later call with at most that budget gets it back at
-            once (its :attr:`~Derivation.incomplete` unchanged), a larger budget (or
-            ``None``) carries on from the stages it reached.
-        within: CPU seconds this call may spend, whatever ``budget`` allows (the command
-            line keeps part of its ``--budget`` for printing). ``budget`` still decides the
-            cache reuse and is the one named when the work stops.
-        families_only: Stop once the singular families are derived and checked (what a scan
-            needs): the exact comparison of the direct and indirect Jacobians and the tidied
-            printed forms are left out (:attr:`Derivation.incomplete` says so;
-            :attr:`Derivation.families_done` is True). It is kept like a run stopped at a
-            budget: a later call without ``families_only`` carries on from there.
+        budget: CPU budget in [s] (``None``: no limit) of the work, run in one child process
+            (:func:`hexapod_kin._budget.run`); at the budget it stops and
+            :attr:`Derivation.incomplete` says what is missing.
+        cache: Read and write the on-disk cache. An unfinished derivation is kept with its
+            budget: a later call with at most that budget gets it back, a larger one (or
+            ``None``) carries on.
+        within: CPU seconds this call may spend, whatever ``budget`` allows (``budget`` still
+            decides the cache reuse).
+        families_only: Stop once the families are derived and checked (what a scan needs);
+            kept like a run stopped at a budget.
 
     Returns:
         The :class:`Derivation`.
@@ -664,9 +600,6 @@ def derive(
         if len(_MEMO) > 64:
             _MEMO.clear()
         _MEMO[digest] = stages
-        alias = _alias(chain, rows, lengths, stages)
-        if alias is not None and (alias not in _MEMO or ATTEMPT in _MEMO[alias]):
-            _MEMO[alias] = stages
     return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
 
 

@@ -1,13 +1,8 @@
 """The budget's fallback kinematics: products left as unevaluated sums, built in milliseconds.
 
-When not even stage 1 (expanded products) finishes within the budget,
-:func:`~hexapod_kin.symbolic.core.kinematics` with ``simplify=False`` builds the transforms'
-products with these helpers instead of sympy's matrix product, which converts the entries to
-a polynomial ring and, through sympy's evaluation, asks the assumptions of every long factor:
-a second on a 12-joint chain, past the budget. The sums and products here are built with
-``evaluate=False`` (zeros dropped, ones skipped): equal in value, shared sub-expressions kept,
-numbers by :func:`~hexapod_kin.symbolic.checks.evaluate` or ``lambdify``; they are never
-printed (:attr:`~hexapod_kin.symbolic.Derivation.formed` is False).
+When not even stage 1 finishes within the budget, :func:`~hexapod_kin.symbolic.core.kinematics`
+with ``simplify=False`` builds the products with these helpers (``evaluate=False``: zeros
+dropped, ones skipped), equal in value, never printed.
 """
 
 from __future__ import annotations

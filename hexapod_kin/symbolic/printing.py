@@ -1,10 +1,8 @@
 """Plain-text layout of a :class:`~hexapod_kin.symbolic.Derivation`: one line per formula.
 
-Expressions print on one line (``-d4·sin(q1)·cos²(q3)``: ``·`` for products, superscripts
-for small powers); a matrix whose rows fit in :data:`WIDTH` columns prints as a matrix,
-any other one entry by entry (``[2,3] = …``), long entries wrapped at a ``+``/``-`` between
-terms. Printing is linear in the expression's size (no 2-D layout): a 7-joint arm's
-Jacobian prints in a fraction of a second.
+Expressions print on one line (``-d4·sin(q1)·cos²(q3)``); a matrix whose rows fit in
+:data:`WIDTH` columns prints as a matrix, any other entry by entry (``[2,3] = …``), long
+entries wrapped between terms. Linear in the expression's size.
 """
 
 from __future__ import annotations

@@ -46,15 +46,19 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
         ZMQWebSocketBridge,
     )
 
+    def refused(handler: Any) -> bool:
+        """Answer 403 to a request whose Host is not this server's own (True: refused)."""
+        if local(handler.request.headers.get("Host")):
+            return False
+        handler.set_status(403)
+        handler.finish(FORBIDDEN)
+        return True
+
     class LoopbackStatic(StaticFileHandlerNoCache):
         """The viewer's files, for a request whose Host names this server's own port."""
 
         def prepare(self) -> Any:
-            if not local(self.request.headers.get("Host")):
-                self.set_status(403)
-                self.finish(FORBIDDEN)
-                return None
-            return super().prepare()
+            return None if refused(self) else super().prepare()
 
     allowed_hosts: set[str] = set()  # "127.0.0.1:PORT", "localhost:PORT", "[::1]:PORT"
 
@@ -76,11 +80,7 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
             return local(origin) and local(self.request.headers.get("Host"))
 
         def prepare(self) -> Any:
-            if not local(self.request.headers.get("Host")):
-                self.set_status(403)
-                self.finish(FORBIDDEN)
-                return None
-            return super().prepare()
+            return None if refused(self) else super().prepare()
 
     class LoopbackBridge(ZMQWebSocketBridge):
         COMMANDS = frozenset(("set_object", "set_transform", "set_property", "set_animation",

@@ -1,18 +1,10 @@
 """Mesh geometry for the viewer: a loaded mesh as a compact indexed three.js geometry.
 
-The mesh is taken as Pinocchio loaded it (the BVH of the geometry object: its vertices in
-[m], mesh scale applied, and triangles), not re-read from its file, so every format
-Pinocchio reads (STL, DAE, OBJ, ...) is drawn the same way. Positions are quantised to
-int16 on the mesh's bounding box (a step of at most 1/65534 of its largest side, e.g.
-3 µm on a 0.2 m link), the dequantisation being the object's matrix; triangle indices are
-uint16 when fewer than 65,536 vertices, else uint32. Normals are optional: the offline page
-recomputes them in the browser (``computeVertexNormals``), the live viewer sends them.
-Compared with embedding the file (meshcat's ``_meshfile_geometry``), a Franka Panda's
-meshes shrink from about 14 MB of COLLADA text to about 1.2 MB before compression.
-
-A robot whose meshes are missing (copied without its ``meshes/`` folder) would draw nothing:
-:func:`add_sticks` gives every joint without geometry a stick figure instead (a thin cylinder
-from the joint to each child joint and to each of its link frames).
+The mesh as Pinocchio loaded it (its BVH: vertices in [m], scale applied), so every format
+Pinocchio reads draws the same. Positions are quantised to int16 on the bounding box (the
+dequantisation is the object's matrix); indices are uint16 below 65,536 vertices, else
+uint32; normals are optional (the offline page computes them).
+A robot whose meshes are missing gets a stick figure instead (:func:`add_sticks`).
 """
 
 from __future__ import annotations

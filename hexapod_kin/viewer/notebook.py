@@ -1,20 +1,9 @@
 """The viewer inside Jupyter: the self-contained page shown inline, no server.
 
 :func:`show` (a model, a pose or a trajectory) and :func:`show_walk` (a
-:class:`~hexapod_kin.gait.walk.GaitRun`) return a :class:`NotebookView`, whose
-``_repr_html_`` is an ``<iframe srcdoc="...">`` holding the page that
-:func:`~hexapod_kin.viewer.render_html` builds (meshcat's bundle and the scene inlined; the
-page's Content-Security-Policy forbids every fetch). The last expression of a cell displays
-it; the notebook file keeps it, so a saved notebook replays offline (nbviewer, a static
-site) with no kernel. The frame is sandboxed (``allow-scripts`` only): the page cannot reach
-the notebook.
-
-Example::
-
-    import hexapod_kin as hk
-    from hexapod_kin.viewer.notebook import show_walk
-
-    show_walk(hk.gait.walk(pattern="tripod", duration=4))
+:class:`~hexapod_kin.gait.walk.GaitRun`) return a :class:`NotebookView` whose
+``_repr_html_`` is a sandboxed ``<iframe srcdoc="...">`` (``allow-scripts`` only) holding the
+page of :func:`~hexapod_kin.viewer.render_html`: a saved notebook replays offline.
 """
 
 from __future__ import annotations

@@ -93,6 +93,12 @@ def column_major(T: np.ndarray) -> list[float]:
     return [float(v) for v in np.asarray(T, dtype=float).T.ravel()]
 
 
+def trace_rgba(k: int) -> list[float]:
+    """The RGBA in [0, 1] of trace colour ``k`` (cycling through :data:`TRACE_COLORS`)."""
+    col = TRACE_COLORS[k % len(TRACE_COLORS)]
+    return [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
+
+
 def _hex_color(rgb: Sequence[float]) -> int:
     """The 0xRRGGBB integer of an RGB(A) colour in [0, 1]."""
     r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgb[:3])

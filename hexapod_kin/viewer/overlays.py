@@ -13,7 +13,6 @@ import numpy as np
 
 from ..exceptions import ConfigurationError
 from .objects import (
-    TRACE_COLORS,
     ObjectJSON,
     cylinder,
     f32,
@@ -21,6 +20,7 @@ from .objects import (
     set_property,
     set_transform,
     sphere,
+    trace_rgba,
 )
 from .trajectory import clip
 
@@ -69,8 +69,7 @@ def overlay_parts(
     clips: list[dict[str, Any]] = []
     r = max(size * 0.005, 1e-4)
     for k, (name, arr) in enumerate(overlays.items()):
-        col = TRACE_COLORS[(k + 3) % len(TRACE_COLORS)]
-        rgb = [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
+        rgb = trace_rgba(k + 3)
         pieces = [(0, 0)] if arr.shape[1] == 1 else [(j, j + 1) for j in range(arr.shape[1] - 1)]
         for j, (a, b) in enumerate(pieces):
             path = f"/meshcat/overlays/{name}/{j}"

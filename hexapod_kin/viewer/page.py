@@ -1,11 +1,8 @@
 """The self-contained offline page: :func:`render_html`, :func:`export_html`, :func:`iframe`.
 
-The page inlines meshcat's JavaScript bundle and the scene as meshcat commands (msgpack;
-meshes as int16 vertices without normals), both gzipped and base64, unpacked by the page
-itself (``DecompressionStream``, no fetch; the bundle runs from a ``blob:`` URL the page
-makes, the only script source its policy adds; normals computed in the browser), so it
-opens from disk (``file://``) with no server and no network: its Content-Security-Policy
-forbids every fetch.
+The page inlines meshcat's bundle and the scene (msgpack commands, meshes without normals),
+gzipped and base64, unpacked by the page itself (no fetch; the bundle runs from a ``blob:``
+URL), so it opens from disk with no network: its Content-Security-Policy forbids every fetch.
 """
 
 from __future__ import annotations
@@ -36,136 +33,12 @@ _CSP = (
     "default-src 'none'; script-src 'unsafe-inline' blob:; style-src 'unsafe-inline'; "
     "img-src data: blob:; worker-src blob:"
 )
-#: The page's style sheet.
-_STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
-#meshcat-pane { width: 100vw; height: 100vh; overflow: hidden; }
-#hk-panel { position: absolute; left: 8px; top: 8px; padding: 6px 10px; border-radius: 6px;
-  background: rgba(255,255,255,0.82); color: #222; font-size: 13px; line-height: 1.5; }
-#hk-panel b { font-size: 14px; }
-#hk-panel button, #hk-panel select { font-size: 12px; }
-#hk-help { color: #555; font-size: 11px; }"""
 
-#: The page's body: the meshcat pane, the panel (``$help``), the script (``$data``).
-_BODY = """<div id="meshcat-pane"></div>
-<div id="hk-panel"><b id="hk-title"></b><br>
-<span id="hk-controls"><button id="hk-play">pause</button>
-<label><input type="checkbox" id="hk-loop"> loop</label>
-speed <select id="hk-speed"><option>0.25</option><option>0.5</option><option>1</option>
-<option>2</option><option>4</option></select>
-t = <span id="hk-time">0.000</span> s</span><br>
-<span id="hk-help">$help</span></div>
-<script>
-(function () {
-  "use strict";
-  var DATA = $data;
-  var help = document.getElementById("hk-help");
-  function bytes(b64) {
-    var s = atob(b64), out = new Uint8Array(s.length);
-    for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
-    return out;
-  }
-  // The scene: meshcat commands (msgpack), each after its uint32 length, gzipped together.
-  function inflate(b64) {
-    var stream = new Blob([bytes(b64)]).stream().pipeThrough(new DecompressionStream("gzip"));
-    return new Response(stream).arrayBuffer();
-  }
-  function split(buf) {
-    var view = new DataView(buf), out = [], at = 0;
-    while (at + 4 <= buf.byteLength) {
-      var n = view.getUint32(at, true);
-      out.push(new Uint8Array(buf.slice(at + 4, at + 4 + n)));
-      at += 4 + n;
-    }
-    return out;
-  }
-  if (typeof DecompressionStream === "undefined") {
-    help.textContent = "this browser cannot unpack the scene (no DecompressionStream): " +
-      "open the page in Chrome 80+, Firefox 113+ or Safari 16.4+";
-    return;
-  }
-  // meshcat's bundle, gzipped too, runs from a blob: URL made here (script-src blob:).
-  Promise.all([inflate(DATA.bundle), inflate(DATA.scene)]).then(function (parts) {
-    var url = URL.createObjectURL(new Blob([parts[0]], { type: "text/javascript" }));
-    var tag = document.createElement("script");
-    tag.onload = function () { URL.revokeObjectURL(url); start(split(parts[1])); };
-    tag.onerror = function () { help.textContent = "could not run meshcat's bundle"; };
-    tag.src = url;
-    document.head.appendChild(tag);
-  }).catch(function (err) {
-    help.textContent = "could not unpack the scene: " + err;
-  });
-  function start(cmds) {
-  var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));
-  var anim = DATA.animation ? cmds.pop() : null;
-  cmds.forEach(function (c) { viewer.handle_command_bytearray(c); });
-  viewer.scene.traverse(function (o) {  // meshes come without normals: computed here
-    var g = o.geometry;
-    if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
-      g.computeVertexNormals();
-    }
-  });
-  var animator = viewer.animator;
-  if (anim) {
-    viewer.handle_command_bytearray(anim);
-    animator.mixer.timeScale = DATA.speed;
-  }
-  document.getElementById("hk-title").textContent = DATA.title;
-  var playBtn = document.getElementById("hk-play"), loopBox = document.getElementById("hk-loop");
-  var speedSel = document.getElementById("hk-speed"), timeEl = document.getElementById("hk-time");
-  if (!DATA.animation) { document.getElementById("hk-controls").style.display = "none"; }
-  loopBox.checked = DATA.loop;
-  speedSel.value = String(DATA.speed);
-  function setLoop(on) {
-    animator.actions.forEach(function (a) { a.repetitions = on ? Infinity : 1; });
-  }
-  function play() {
-    if (animator.actions.length && animator.actions.every(function (a) { return a.paused; })) {
-      animator.reset();
-    }
-    animator.play(); playBtn.textContent = "pause";
-  }
-  function pause() { animator.pause(); playBtn.textContent = "play"; }
-  function seek(t) {
-    animator.actions.forEach(function (a) { a.enabled = true; a.paused = false; a.play(); });
-    animator.pause(); playBtn.textContent = "play";
-    animator.seek(t - DATA.t0); animator.display_progress(t - DATA.t0);
-    viewer.render();
-  }
-  playBtn.onclick = function () { if (animator.playing) { pause(); } else { play(); } };
-  loopBox.onchange = function () { setLoop(loopBox.checked); };
-  speedSel.onchange = function () { animator.mixer.timeScale = parseFloat(speedSel.value); };
-  if (!DATA.play) { playBtn.textContent = "play"; }
-  (function tick() {
-    timeEl.textContent = (DATA.t0 + (animator.time || 0)).toFixed(3);
-    if (DATA.animation && !animator.playing) { playBtn.textContent = "play"; }
-    if (window.parent !== window) {  // a host page may keep other animations in step
-      window.parent.postMessage({hk: "time", t: animator.time || 0, on: !!animator.playing}, "*");
-    }
-    requestAnimationFrame(tick);
-  })();
-  window.addEventListener("message", function (e) {  // {hk: "follow"}: take the host's time
-    var m = e.data;
-    if (!m || m.hk !== "follow" || !DATA.animation) { return; }
-    var off = Math.abs((animator.time || 0) - m.t) > 0.1;
-    if (off) { seek(DATA.t0 + m.t); }
-    if (m.on && (off || !animator.playing)) { animator.play(); playBtn.textContent = "pause"; }
-    if (!m.on && animator.playing) { pause(); }
-  });
-  window.hexapodKin = {
-    viewer: viewer, duration: DATA.duration, t0: DATA.t0, parts: DATA.parts,
-    play: play, pause: pause, seek: seek, setLoop: setLoop,
-    setSpeed: function (s) { animator.mixer.timeScale = s; speedSel.value = String(s); },
-    setVisible: function (part, on) {
-      viewer.set_property(["meshcat", part], "visible", !!on); viewer.render();
-    },
-    render: function () { viewer.render(); },
-    ready: true
-  };
-  viewer.render();
-  }
-})();
-</script>
-"""
+
+@functools.lru_cache(maxsize=2)
+def _template(name: str) -> str:
+    """``page.css`` or ``page.html`` (holes ``$help``, ``$data``), beside this module."""
+    return (Path(__file__).parent / name).read_text(encoding="utf-8")
 
 
 @functools.lru_cache(maxsize=1)
@@ -175,11 +48,7 @@ def _bundle_gz() -> str:
 
 
 def _scene_blob(static: list[dict[str, Any]], animation: dict[str, Any] | None) -> bytes:
-    """The page's scene: every command (msgpack) after its uint32 LE length, gzipped.
-
-    The animation, if any, is the last command. Deterministic (no time stamp in the gzip
-    header), so the same inputs give the same page.
-    """
+    """The page's scene: each command (msgpack) after its uint32 LE length, gzipped, no mtime."""
     cmds = static + ([animation] if animation is not None else [])
     parts = []
     for cmd in cmds:
@@ -206,12 +75,9 @@ def render_html(
 ) -> str:
     """The self-contained animated HTML page of a trajectory (opens from disk, no network).
 
-    The page inlines meshcat's JavaScript bundle and the scene as meshcat commands; it works
-    from ``file://``, in an iframe (Colab, Binder, Jupyter) and offline. Controls: drag to
-    orbit, right-drag to pan, wheel to zoom; a panel with play/pause, loop, speed and the time;
-    meshcat's "Open Controls" menu (scene tree visibility, animation scrubber). For scripts and
-    tests the page exposes ``window.hexapodKin`` (``seek(t)``, ``play()``, ``pause()``,
-    ``setVisible(part, on)``, ``setLoop(on)``, ``setSpeed(s)``).
+    A panel with play/pause, loop, speed and the time; for scripts the page exposes
+    ``window.hexapodKin`` (``seek(t)``, ``play()``, ``pause()``, ``setVisible(part, on)``,
+    ``setLoop(on)``, ``setSpeed(s)``).
 
     Args:
         model: A loaded model (``hexapod_kin.load(...)``).
@@ -233,10 +99,8 @@ def render_html(
         speed: Playback speed factor (> 0).
         play: Start playing when the page opens.
         overlays: Optional mapping ``name -> (N, M, 3)`` array: a polyline of M world points
-            [m] per sample, drawn as thin tubes and moved with the animation (close a polygon
-            by repeating its first point; repeated points make hidden segments; M = 1 draws
-            a moving sphere), under ``/meshcat/overlays/<name>`` (e.g. a walk's support
-            polygon and projected centre of mass).
+            [m] per sample, drawn as thin tubes (M = 1: a moving sphere) under
+            ``/meshcat/overlays/<name>``.
 
     Returns:
         The page (:func:`export_html` writes it to a file).
@@ -284,8 +148,8 @@ def render_html(
         help_text += " · triads x/y/z = red/green/blue, label = Khalil frame index"
     if built.static and singular_mask is not None and np.any(singular_mask):
         help_text += " · red spheres: near-singular samples"
-    body = fill(_BODY, help=help_text, data=script_json(data))
-    return page(label, body, style=_STYLE, policy=_CSP)
+    body = fill(_template("page.html"), help=help_text, data=script_json(data))
+    return page(label, body, style=_template("page.css").removesuffix("\n"), policy=_CSP)
 
 
 def export_html(
@@ -302,10 +166,6 @@ def export_html(
 
 def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
     """An ``<iframe srcdoc=...>`` embedding an exported page (Jupyter, Colab, Binder).
-
-    ``IPython.display.HTML(viewer.iframe("step.html"))`` shows the animation inline; the page
-    stays isolated in its frame (ids, scripts, its Content-Security-Policy), so several can be
-    shown in one notebook.
 
     Args:
         html: Path of a file written by :func:`export_html`.

@@ -1,23 +1,11 @@
 """The model's scene: its visual geometry as meshcat objects, and every command of a trajectory.
 
-:class:`Scene` turns a model's visual geometry into meshcat objects and places them along
-q; :func:`build` makes all commands of one model and trajectory (view, ground, robot, foot
-traces, near-singular markers, overlays, labelled Khalil triads, the animation);
-:func:`scene_commands` is its public face, shared by the offline page and the live viewer.
-
-Scene layout (meshcat paths, all under ``/meshcat``, which is shifted so that the centre of
-the scene sits at the origin, the orbit camera's target)::
-
-    /meshcat/robot/<geometry>   visual geometry of the URDF (boxes, cylinders, spheres, meshes)
-    /meshcat/trace              the path of the traced frame(s) (feet), drawn as thin tubes
-    /meshcat/frames/<k>         triads of the Khalil frames (x red, y green, z blue), each
-                                labelled with its index j (frame 0 = base of the chain)
-    /meshcat/singular           red spheres where the trajectory is near-singular
-    /meshcat/overlays/<name>    per-frame polylines given by the caller
-    /meshcat/ground             a grid at the lowest point of the scene
-
-Poses are Pinocchio's ``oMx`` (pose of x in the world frame of the model), 4×4 arrays; with
-``base_poses`` the whole model is moved by ``worldMroot`` (a floating body).
+:class:`Scene` turns a model's visual geometry into meshcat objects placed along q;
+:func:`build` makes every command of one trajectory; :func:`scene_commands` is its public face.
+Layout, under ``/meshcat`` (shifted so that the scene's centre is the camera target):
+``robot/<geometry>``, ``trace`` (traced frames' paths), ``frames/<k>`` (Khalil triads, x red,
+y green, z blue), ``singular`` (red spheres), ``overlays/<name>``, ``ground``. Poses are
+Pinocchio's ``oMx`` (4×4); ``base_poses`` moves the whole model by ``worldMroot``.
 """
 
 from __future__ import annotations
@@ -34,7 +22,6 @@ from ..exceptions import ParameterError, ViewerError
 from ..gait.stand import frame_poses
 from .meshes import add_sticks, mesh_geometry
 from .objects import (
-    TRACE_COLORS,
     ObjectJSON,
     cylinder,
     grid,
@@ -44,6 +31,7 @@ from .objects import (
     set_property,
     set_transform,
     sphere,
+    trace_rgba,
     translation,
     tube,
 )
@@ -75,13 +63,10 @@ LINK_RADIUS_FRACTION = 0.02
 def thickening(model: Model, objects: Sequence[Any]) -> tuple[float, float]:
     """Factor for thin primitives so that links stay visible at the robot's scale.
 
-    The rods of a generated URDF have the chain's ``link_radius`` (0.01 m by default),
-    invisible on a 1 m arm. The rod radius is the largest cylinder radius of the model's
-    primitives; the drawn radius is at least :data:`LINK_RADIUS_FRACTION` of the chain's length
-    scale (``Σ‖tᵢ‖`` of its link offsets, :func:`hexapod_kin._numerics.chain_length`). Cylinders
-    and capsules of the rod radius or thinner, spheres up to 3 rod radii (joints, feet) and
-    boxes up to 6 rod radii wide (the base plate) grow by the same factor (1 to 20); meshes and
-    larger primitives (a hexapod's body) are drawn as they are.
+    The rod radius is the largest cylinder radius of the model's primitives; the drawn radius
+    is at least :data:`LINK_RADIUS_FRACTION` of the chain's length scale. Cylinders and
+    capsules of the rod radius or thinner, spheres up to 3 and boxes up to 6 rod radii grow by
+    the same factor (1 to 20); meshes and larger primitives are drawn as they are.
 
     Returns:
         ``(factor, rod radius [m])``; ``(1.0, 0.0)`` when the model has no cylinder.
@@ -247,13 +232,8 @@ def _resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
         return ()
     if trace_frame is None or trace_frame is True:
         params = model.params
-        if isinstance(params, Hexapod):
-            return tuple(params.foot_frames)
-        return (model.tip,)
-    names = (trace_frame,) if isinstance(trace_frame, str) else tuple(trace_frame)
-    for name in names:
-        model.frame_id(name)
-    return names
+        return tuple(params.foot_frames) if isinstance(params, Hexapod) else (model.tip,)
+    return _frame_names(model, trace_frame)
 
 
 def resolve_triad_frames(model: Model, frame_triads: Any) -> tuple[str, ...]:
@@ -262,7 +242,12 @@ def resolve_triad_frames(model: Model, frame_triads: Any) -> tuple[str, ...]:
         return ()
     if frame_triads is True:
         return khalil_frames(model)
-    names = (frame_triads,) if isinstance(frame_triads, str) else tuple(frame_triads)
+    return _frame_names(model, frame_triads)
+
+
+def _frame_names(model: Model, frames: str | Sequence[str]) -> tuple[str, ...]:
+    """``frames`` (one name or several) as a tuple, each checked (``FrameNotFoundError``)."""
+    names = (frames,) if isinstance(frames, str) else tuple(frames)
     for name in names:
         model.frame_id(name)
     return names
@@ -347,11 +332,8 @@ def build(
             geom = tube(fposes[:, tracked.index(name), :3, 3], tube_r)
             if geom is None:
                 continue
-            col = TRACE_COLORS[k % len(TRACE_COLORS)]
-            rgb = [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
-            kids.append(
-                t.node("Mesh", geometry=t.geometry(geom), material=t.material(rgb), name=name)
-            )
+            gid = t.geometry(geom)  # before the material: the UUIDs count in order
+            kids.append(t.node("Mesh", geometry=gid, material=t.material(trace_rgba(k)), name=name))
         if kids:
             cmds.append(set_object("/meshcat/trace", t.lower(t.node("Group", children=kids))))
     # -- singular markers (on the first traced frame, or the tip)

@@ -1,12 +1,8 @@
 """The live meshcat server of the viewer: a loopback-only subprocess and its client.
 
-:class:`MeshcatServer` starts ``python -m hexapod_kin.viewer.bridge --serve``, a meshcat
-websocket bridge whose web server and ZeroMQ socket listen on 127.0.0.1 only (meshcat 0.3.2's
-own server binds the web server to all interfaces; ours binds explicitly), with free ports,
-stopped with its process group on exit, on error and at interpreter exit. :class:`Client`
-is a ZeroMQ client with timeouts so that no call hangs when the server is gone
-(:class:`~hexapod_kin.exceptions.ViewerError`). The public names are re-exported by
-:mod:`hexapod_kin.viewer`.
+:class:`MeshcatServer` runs :mod:`.bridge` (web server and ZeroMQ socket on 127.0.0.1 only,
+free ports, stopped with its process group); :class:`Client` is a ZeroMQ client with
+timeouts (:class:`~hexapod_kin.exceptions.ViewerError`).
 """
 
 from __future__ import annotations

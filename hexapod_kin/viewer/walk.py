@@ -1,11 +1,9 @@
 """A walk in the browser: the self-contained page and the live viewer, with its overlays.
 
-:func:`walk_page` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with
-:func:`~hexapod_kin.viewer.page.render_html`: the body and legs, the foot traces, and at every
-frame the support polygon (the convex hull of the stance feet, drawn on the ground under them)
-and the centre of mass projected on it (:func:`hexapod_kin.gait.show.support_polygons`, the
-page's ``overlays``); :func:`walk_html` writes it; :func:`walk_live` plays the same in the live
-viewer. The viewer imports the gait, never the other way round.
+:func:`walk_page` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with the support polygon
+and the projected centre of mass at every frame (:func:`hexapod_kin.gait.show.support_polygons`);
+:func:`walk_html` writes it; :func:`walk_live` plays it live. The viewer imports the gait,
+never the other way round.
 """
 
 from __future__ import annotations
