@@ -1,0 +1,73 @@
+"""The cockpit's frame rate and key → robot latency in headless Chromium (issue 33).
+
+Run: ``python tools/bench_drive.py [ROBOT]``. Prints frames per second (the scene re-rendered
+every frame, 640×480, software GL) and the median over 20 presses of W of the time from the key
+to the command and to the robot moving, with the load average: figures, not assertions (tests
+never assert wall-clock times). Targets: ≥ 30 frames/s and ≤ 100 ms.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+
+def measure(robot: str = "hexapod", presses: int = 20) -> dict[str, float]:
+    """Frames per second and the median key → command / key → moving latencies [ms]."""
+    from headless import launch_chromium
+    from playwright.sync_api import sync_playwright
+
+    from hexapod_kin.drive import drive
+
+    path = shutil.which("chromium")
+    if path is None:
+        raise SystemExit("chromium is not installed (apt-get install chromium)")
+    with sync_playwright() as p, drive(robot, families=False) as s:
+        b = launch_chromium(p, path)
+        page = b.new_page(viewport={"width": 640, "height": 480})
+        page.goto(s.url)
+
+        def wait(expr: str) -> None:
+            page.wait_for_function(f"() => ({expr})", timeout=60000)
+
+        wait("window.hexapodKin && hexapodKin.ready && hexapodKin.state")
+        page.evaluate("hexapodKin.setContinuous(true)")
+        time.sleep(3.0)
+        fps = page.evaluate("hexapodKin.fps(2000)")
+        page.evaluate("hexapodKin.setContinuous(false)")
+        for _ in range(presses):
+            page.keyboard.down("w")
+            wait("hexapodKin.state.readout.status === 'walking'")
+            time.sleep(0.1)
+            page.keyboard.up("w")
+            wait("hexapodKin.state.readout.status === 'standing'")
+        ack = page.evaluate("hexapodKin.latencies")
+        moved = page.evaluate("hexapodKin.motion")
+        b.close()
+    return {
+        "fps": float(fps),
+        "key_to_command_ms": statistics.median(ack),
+        "key_to_moving_ms": statistics.median(moved),
+        "presses": float(len(moved)),
+        "load": os.getloadavg()[0],
+    }
+
+
+def main() -> None:
+    robot = sys.argv[1] if len(sys.argv) > 1 else "hexapod"
+    r = measure(robot)
+    print(
+        f"drive {robot}: {r['fps']:.1f} frames/s (target >= 30); key -> command "
+        f"{r['key_to_command_ms']:.1f} ms, key -> robot moving {r['key_to_moving_ms']:.1f} ms "
+        f"median of {int(r['presses'])} (target <= 100 ms); load average {r['load']:.1f}"
+    )
+
+
+if __name__ == "__main__":
+    main()
