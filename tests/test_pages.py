@@ -187,7 +187,10 @@ def test_simulation_page_with_a_hostile_pattern_name(tmp_path: Path) -> None:
     title = f"hexapod_kin: {HOSTILE} plan and MuJoCo replay"
     assert seen.title == title and title in seen.text
     assert f"pattern {HOSTILE}, terrain flat, 0.5 s at 100 Hz" in seen.text
-    assert not seen.scripts and not seen.comments
+    # one script only, the fixed one keeping the two animations in step: nothing of the robot's
+    from hexapod_kin.simulate.page import _SYNC
+
+    assert seen.scripts == [_SYNC] and not seen.comments
     plan, replay = (_data(str(f["srcdoc"])) for f in seen.frames)
     assert plan["title"] == "plan" and replay["title"] == "MuJoCo"
     assert plan["bundle"] == replay["bundle"] and plan["scene"] != replay["scene"]
