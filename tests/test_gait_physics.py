@@ -115,6 +115,55 @@ def test_patterns_for_four_six_and_eight_legs(quad, octo):
         phase_table("wave", 4, np.zeros((3, 2)))
 
 
+def _ring_layout(exact: bool) -> np.ndarray:
+    """Six mounts at 0°, 60°, ... 300° on a 0.125 m circle (the RARL hexapod-sim's layout)."""
+    ang = np.deg2rad(60.0 * np.arange(6))
+    xy = 0.125 * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    if exact:
+        xy[[0, 3], 1] = 0.0  # the two legs on the x axis, without the 1e-17 residue
+    return xy
+
+
+def test_legs_on_the_axis_make_three_a_side_and_ripple():
+    """RARL's ring: the legs at 0° and 180° are on the axis, not split by a round-off residue."""
+    ring, exact = _ring_layout(False), _ring_layout(True)
+    assert abs(ring[3, 1]) > 0  # the residue the old sign test split the legs by
+    assert pattern_names(6, ring) == ("ripple", "tripod", "wave") == pattern_names(6, exact)
+    ripple = phase_table("ripple", 6, ring)
+    counts = _stance_counts(ripple)
+    assert ripple.duty_factor == pytest.approx(2 / 3) and counts.min() == 4  # one leg a side up
+    # the front axis leg joins the left side, the rear one the right: as the preset's ring
+    lift = {k: (ripple.duty_factor - o) % 1.0 for k, o in enumerate(ripple.offsets)}
+    assert [lift[k] for k in (2, 1, 0)] == pytest.approx([0.0, 1 / 3, 2 / 3])  # left, rear first
+    assert [lift[k] for k in (3, 4, 5)] == pytest.approx([0.5, 5 / 6, 1 / 6])
+    tripod = phase_table("tripod", 6, ring)
+    assert tripod.offsets[0] == tripod.offsets[2] == tripod.offsets[4] != tripod.offsets[1]
+
+
+@pytest.mark.parametrize("n", [4, 6, 8])
+def test_offered_patterns_unchanged_when_a_mount_moves_1e_12(n, quad, octo):
+    layouts = {4: quad.mounts[:, :2, 3], 6: _ring_layout(True), 8: octo.mounts[:, :2, 3]}
+    base = np.array(layouts[n])
+    names = pattern_names(n, base)
+    ref = {p: phase_table(p, n, base).offsets for p in names}
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        moved = base + rng.choice([-1e-12, 0.0, 1e-12], size=base.shape)
+        assert pattern_names(n, moved) == names
+        for p in names:
+            assert phase_table(p, n, moved).offsets == ref[p]
+
+
+def test_a_refused_pattern_says_why_in_the_robots_terms():
+    xy = np.array([[0.2, 0.1], [0.0, 0.1], [-0.2, 0.1], [0.2, -0.1], [-0.2, -0.1], [0.0, 0.3]])
+    legs = ("lf", "lm", "lr", "rf", "rr", "top")
+    with pytest.raises(ParameterError, match=r"4 on the left \(lr, lm, top, lf\) and 2 on the right \(rr, rf\)") as err:
+        phase_table("ripple", 6, xy, legs)
+    assert "ripple" not in err.value.allowed
+    with pytest.raises(ParameterError, match="needs 6 legs; this robot has 4"):
+        phase_table("tripod", 4, xy[:4])
+
+
 def test_patterns_follow_the_legs_not_their_order(quad):
     """Permuting the legs permutes the offsets (the pattern is built from where legs are)."""
     pos = quad.mounts[:, :2, 3]

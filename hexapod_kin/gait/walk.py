@@ -474,7 +474,9 @@ def walk(
 
     """
     wb = as_whole_body(robot)
-    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3]).with_duty_factor(duty_factor)
+    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3], wb.leg_names).with_duty_factor(
+        duty_factor
+    )
     beta = table.duty_factor
     T = _num("period", period, hi=1e3)
     H = _num("step_height", step_height, zero=True, hi=1.0)
