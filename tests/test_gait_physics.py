@@ -157,7 +157,9 @@ def test_offered_patterns_unchanged_when_a_mount_moves_1e_12(n, quad, octo):
 def test_a_refused_pattern_says_why_in_the_robots_terms():
     xy = np.array([[0.2, 0.1], [0.0, 0.1], [-0.2, 0.1], [0.2, -0.1], [-0.2, -0.1], [0.0, 0.3]])
     legs = ("lf", "lm", "lr", "rf", "rr", "top")
-    with pytest.raises(ParameterError, match=r"4 on the left \(lr, lm, top, lf\) and 2 on the right \(rr, rf\)") as err:
+    with pytest.raises(
+        ParameterError, match=r"4 on the left \(lr, lm, top, lf\) and 2 on the right \(rr, rf\)"
+    ) as err:
         phase_table("ripple", 6, xy, legs)
     assert "ripple" not in err.value.allowed
     with pytest.raises(ParameterError, match="needs 6 legs; this robot has 4"):

@@ -839,3 +839,38 @@ def test_gait_torques_default_to_the_robot_that_walked():
     assert loads.joint_names == four.kinematic.joint_names and loads.forces.shape[1] == 4
     W = four.mass * G
     assert np.abs(loads.forces.sum(axis=1)[:, 2] - W).max() <= 1e-9 * W
+
+
+def _belly_urdf(tmp_path: Path, dz: float = 0.2) -> tuple[Path, Path]:
+    """The built-in hexapod's URDF, and the same robot whose root frame is ``dz`` below its body.
+
+    Kraby's base frame is at its belly's level, below the legs' mounts (body height < 0).
+    """
+    from hexapod_kin import load
+
+    text = load("hexapod").urdf
+    i = text.index('<link name="body"')
+    root = (
+        '<link name="belly"/>\n  <joint name="belly_to_body" type="fixed"><parent link="belly"/>'
+        f'<child link="body"/><origin xyz="0 0 {dz}" rpy="0 0 0"/></joint>\n  '
+    )
+    plain, belly = tmp_path / "plain.urdf", tmp_path / "belly.urdf"
+    plain.write_text(text)
+    belly.write_text(text[:i] + root + text[i:])
+    return plain, belly
+
+
+def test_a_base_frame_below_the_mounts_stands_and_walks(tmp_path, capsys):
+    """Kraby-like: the body frame 0.2 m under the body; the same joints, the base 0.2 m lower."""
+    from hexapod_kin.cli import main
+
+    plain, belly = _belly_urdf(tmp_path)
+    a, b = standing_pose(str(plain)), standing_pose(str(belly))
+    assert b.height < 0 and b.height == pytest.approx(a.height - 0.2, abs=1e-12)
+    assert np.array_equal(a.q, b.q)
+    assert np.allclose(a.base[:3, 3] - b.base[:3, 3], [0.0, 0.0, 0.2], atol=1e-12)
+    ra, rb = walk(str(plain), duration=2.0), walk(str(belly), duration=2.0)
+    assert np.allclose(ra.q, rb.q, atol=1e-12) and rb.min_margin == pytest.approx(ra.min_margin)
+    assert main(["stand", str(belly)]) == 0
+    with pytest.raises(ParameterError, match="mount at or below the ground"):
+        standing_pose(str(belly), height=-0.2)

@@ -75,7 +75,9 @@ def standing_pose(
 
     Args:
         robot: Any robot :func:`~.robot.as_whole_body` takes (default the built-in hexapod).
-        height: Body origin above the ground [m] (default the robot's ``body_height``).
+        height: Body origin above the ground [m] (default the robot's ``body_height``;
+            negative for a base frame below the ground, e.g. Kraby's at its belly's level);
+            every leg's mount must be above the ground.
         reach: Mount-to-foot horizontal distance [m] (default the robot's own).
         shift: Body shift (dx, dy) over the feet [m].
         feet: Foot spec for a URDF without foot links (see :func:`~.legs.parse_feet`).
@@ -89,12 +91,15 @@ def standing_pose(
     """
     wb = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
     h = wb.body_height if height is None else float(height)
-    if not (math.isfinite(h) and h > 0):
+    low = -float(np.min(wb.mounts[:, 2, 3]))  # the body frame may sit below its legs' mounts
+    if not (math.isfinite(h) and h > low):
         raise ParameterError(
-            f"height={height!r} is not allowed; give a height > 0 m",
+            f"height={h!r} m puts a leg's mount at or below the ground; give a height > "
+            f"{low:.4g} m (the body frame's origin above the ground: the lowest mount is "
+            f"{-low:.4g} m above it)",
             parameter="height",
-            value=height,
-            allowed="> 0",
+            value=h,
+            allowed=f"> {low:.4g}",
         )
     try:
         sh = np.asarray(shift, dtype=float).reshape(-1)
