@@ -17,6 +17,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -874,3 +875,48 @@ def test_a_base_frame_below_the_mounts_stands_and_walks(tmp_path, capsys):
     assert main(["stand", str(belly)]) == 0
     with pytest.raises(ParameterError, match="mount at or below the ground"):
         standing_pose(str(belly), height=-0.2)
+
+
+def _knee_sides(path: Path, pose: Any) -> np.ndarray:
+    """Per leg, the knee's height over the femur→foot line at its point, by raw Pinocchio."""
+    model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    data = model.createData()
+    q = pose.robot.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.framesForwardKinematics(model, data, q)
+    out = []
+    for k in range(1, 7):
+        hip = data.oMi[model.getJointId(f"leg{k}_knee")].translation
+        knee = data.oMi[model.getJointId(f"leg{k}_ankle")].translation
+        foot = data.oMf[model.getFrameId(f"leg{k}_foot")].translation
+        u = (foot - hip) / np.linalg.norm(foot - hip)
+        off = (knee - hip) - np.dot(knee - hip, u) * u
+        out.append(off[2])
+    return np.array(out)
+
+
+def test_the_knee_branch_is_asked_reported_and_kept_inside_the_limits(tmp_path):
+    """--knee picks the branch (checked by raw Pinocchio); limits that allow only one win."""
+    from hexapod_kin.gait.knee import knee_directions
+
+    plain, _ = _belly_urdf(tmp_path)
+    up, down = standing_pose(str(plain), knee="up"), standing_pose(str(plain), knee="down")
+    assert np.all(_knee_sides(plain, up) > 0.01) and np.all(_knee_sides(plain, down) < -0.01)
+    assert knee_directions(up.robot, up.q) == ("up",) * 6
+    assert knee_directions(down.robot, down.q) == ("down",) * 6
+    # ankles limited to [-3, -0.2] rad: only the knee-down branch fits; taken by default
+    text = plain.read_text()
+    for k in range(1, 7):
+        head = f'<joint name="leg{k}_ankle"'
+        i = text.index(head)
+        j = text.index("<limit ", i)
+        e = text.index("/>", j)
+        text = text[:j] + '<limit lower="-3.0" upper="-0.2" effort="10" velocity="10"' + text[e:]
+    tight = tmp_path / "tight.urdf"
+    tight.write_text(text)
+    st = standing_pose(str(tight))
+    assert np.allclose(st.q, down.q, atol=1e-9) and np.all(_knee_sides(tight, st) < -0.01)
+    assert knee_directions(st.robot, standing_pose(str(tight), knee="up").q) == ("down",) * 6
+    run = walk(str(tight), duration=1.0)
+    assert run.settings["knees"] == ("down",) * 6 and run.min_limit_margin > 0
+    with pytest.raises(ParameterError, match="knee='sideways' is not allowed"):
+        standing_pose(str(plain), knee="sideways")

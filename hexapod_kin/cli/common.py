@@ -34,6 +34,7 @@ __all__ = [
     "robot_of",
     "seed",
     "set_params",
+    "knee_arg",
     "walk_args",
     "walk_options",
 ]
@@ -502,6 +503,17 @@ def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
         rate, dest="walk_rate", metavar="HZ", type=float, default=100.0, help="the walk's rate [Hz]"
     )
     p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    knee_arg(p)
+
+
+def knee_arg(p: argparse.ArgumentParser) -> None:
+    """``--knee``: where the closed-form legs' knees point (the IK branch)."""
+    p.add_argument(
+        "--knee",
+        choices=("up", "down", "forward", "backward", "out", "in"),
+        help="the IK branch: where the legs' knees point (default: the branch inside the "
+        "joint limits nearest the robot's neutral pose; the one taken is reported)",
+    )
 
 
 def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
@@ -542,6 +554,7 @@ def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
         "terrain": args.terrain,
         "rate": args.walk_rate,
         "duration": args.duration,
+        "knee": args.knee,
     }
 
 

@@ -14,6 +14,7 @@ from .common import (
     check_outputs,
     emit_json,
     html_page,
+    knee_arg,
     load_source,
     not_achieved,
     q_args,
@@ -275,6 +276,7 @@ def _add_stand(sub: Any) -> None:
         default=[0.0, 0.0],
         help="body shifted over the feet [m]",
     )
+    knee_arg(p)
     p.add_argument("--legs", nargs="+", help="stance legs (names or 1-based numbers); all")
     p.add_argument(
         "--method",
@@ -316,6 +318,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         mu=args.mu,
         feet=robot.feet,
         foot_radius=robot.foot_radius,
+        knee=args.knee,
     )
     name = hexa.name if hexa is not None else robot.source
     out = {"source": name, **st.to_dict()}

@@ -108,6 +108,7 @@ def _print(out: dict[str, Any]) -> None:
     print(f"max stance slip        {out['max_slip']:.3g} m")
     print(f"min joint-limit margin {out['min_limit_margin']:.6g} rad")
     print(f"min leg clearance      {out['min_clearance']:.6g} m")
+    print(f"knees point            {', '.join(out['knees'])} (the IK branch; --knee)")
     for key in ("plot", "html"):
         if key in out:
             print(f"wrote {out[key]}", file=sys.stderr)

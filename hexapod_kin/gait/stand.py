@@ -22,6 +22,7 @@ import numpy as np
 from .._tree import robot_size
 from ..exceptions import HexapodKinError, ParameterError, positive
 from ..params import Hexapod
+from .knee import knee_seed
 from .legs import OFFSET_FACTOR
 from .robot import WholeBody, as_whole_body, body_pose
 
@@ -70,6 +71,7 @@ def standing_pose(
     shift: Any = (0.0, 0.0),
     feet: Any = None,
     foot_radius: Any = None,
+    knee: str | None = None,
 ) -> StandingPose:
     """Stand any legged robot level on flat ground (see the module doc for the rule).
 
@@ -82,6 +84,8 @@ def standing_pose(
         shift: Body shift (dx, dy) over the feet [m].
         feet: Foot spec for a URDF without foot links (see :func:`~.legs.parse_feet`).
         foot_radius: Contact radius of the feet [m].
+        knee: Where the closed-form legs' knees point (:data:`~.knee.KNEES`; default: the
+            branch inside the joint limits nearest the robot's neutral q).
 
     Raises:
         ParameterError: Bad numbers; ``height``, ``reach`` or a ``shift`` component larger
@@ -124,7 +128,8 @@ def standing_pose(
     pts = wb.neutral_feet(r)
     pts[:, :2] -= sh
     pts[:, 2] = wb.foot_radius
-    ik = wb.body_ik(base, pts, strict=True)
+    q_prev = None if knee is None else knee_seed(wb, knee, base, pts)
+    ik = wb.body_ik(base, pts, q_prev=q_prev, strict=True)
     q = np.array(ik.q[0])
     contacts = pts.copy()
     contacts[:, 2] = 0.0

@@ -50,6 +50,7 @@ import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError
 from ..motion import read_only
+from .knee import knee_directions, knee_seed
 from .paths import (
     rolling_ik,
     se2_pose,
@@ -423,6 +424,7 @@ def walk(
     foot_radius: float | None = None,
     sway: float | None = None,
     accel_limit: Any = None,
+    knee: str | None = None,
 ) -> GaitRun:
     """Walk the robot and check every sample.
 
@@ -458,6 +460,10 @@ def walk(
             legs, else 0): see the module docstring.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
+        knee: Where the knees of the closed-form legs point at the first sample (one of
+            :data:`~.knee.KNEES`: ``up``, ``down``, ``forward``, ``backward``, ``out``,
+            ``in``; default: the branch inside the joint limits nearest ``q0``). The
+            directions taken are reported (``settings["knees"]``).
 
     Returns:
         A :class:`GaitRun`.
@@ -636,6 +642,8 @@ def walk(
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
     base[:, 2, 3] = gz.mean(axis=1) + bh
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
+    if knee is not None:
+        q0 = knee_seed(wb, knee, base[0], plan[0], q0)
     if gain > 0.0:
         base = sway_poses(wb, table, T, vel, nb, gain, base, plan, t, q0)
     args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
@@ -712,6 +720,7 @@ def walk(
         "rate": hz,
         "foot_radius": rad,
         "sway": gain,
+        "knees": knee_directions(wb, q[0]) if n else (),
         "rolling_passes": passes,
         "rolling_residual": residual,
         "margin_tol": tol,
