@@ -9,6 +9,7 @@ a hand rule for the rolled distance.
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -89,7 +90,7 @@ def _stance_counts(table: PhaseTable) -> np.ndarray:
 
 
 def test_patterns_for_four_six_and_eight_legs(quad, octo):
-    assert pattern_names(4) == ("crawl", "pace", "trot", "wave")
+    assert pattern_names(4) == ("crawl", "pace", "trot")  # a four-legged wave is the crawl
     assert pattern_names(6) == ("ripple", "tripod", "wave")
     assert pattern_names(8) == ("ripple", "wave")
     pos4 = quad.mounts[:, :2, 3]
@@ -110,7 +111,9 @@ def test_patterns_for_four_six_and_eight_legs(quad, octo):
     assert np.all(_stance_counts(phase_table("wave", 5, default_positions(5))) == 4)
     with pytest.raises(ParameterError, match="crawl") as err:
         phase_table("tripod", 4, pos4)
-    assert err.value.allowed == ["crawl", "pace", "trot", "wave"]
+    assert err.value.allowed == ["crawl", "pace", "trot"]
+    with pytest.raises(ParameterError, match="wave on four legs is the crawl"):
+        phase_table("wave", 4, pos4)
     with pytest.raises(ParameterError, match="positions"):
         phase_table("wave", 4, np.zeros((3, 2)))
 
@@ -170,7 +173,7 @@ def test_patterns_follow_the_legs_not_their_order(quad):
     """Permuting the legs permutes the offsets (the pattern is built from where legs are)."""
     pos = quad.mounts[:, :2, 3]
     perm = [2, 0, 3, 1]
-    for name in ("crawl", "trot", "pace", "wave"):
+    for name in ("crawl", "trot", "pace"):
         a, b = phase_table(name, 4, pos), phase_table(name, 4, pos[perm])
         assert np.allclose(np.asarray(a.offsets)[perm], b.offsets, atol=1e-12)
 
@@ -200,7 +203,10 @@ def test_margin_within_rounding_of_zero_is_not_a_failure(quad):
 
 def test_trot_and_pace_walk_but_are_reported_not_statically_stable(quad):
     for name in ("trot", "pace"):
-        run = walk(quad, pattern=name, duration=2.0)  # strict: no margin failure raised
+        with pytest.raises(GaitError, match="needs a balance controller") as err:
+            walk(quad, pattern=name, duration=2.0)  # the open-loop planner refuses them
+        assert err.value.check == "statically unstable" and "or walk crawl)" in str(err.value)
+        run = walk(quad, pattern=name, duration=2.0, open_loop=False)  # for a controller
         assert run.min_margin < 0 and run.ok and not run.statically_stable
         d = run.to_dict()
         assert d["statically_stable"] is False and d["pattern"]["statically_stable"] is False
@@ -276,11 +282,11 @@ def test_rolling_offsets_of_a_wheel():
 def test_joint_speed_is_checked_against_the_urdf_limit(wb):
     assert np.all(wb.velocity_limit == 10.0)
     with pytest.raises(GaitError) as err:
-        walk(pattern="wave", terrain="slope", duration=2.0)
+        walk(pattern="wave", terrain="slope", duration=2.0, period=1.0)  # a period asked
     e = err.value
     assert e.check == "joint speed" and e.amount > 0 and e.time is not None
     assert e.parameter in wb.joint_names and e.allowed == 10.0
-    run = walk(pattern="wave", terrain="slope", duration=2.0, strict=False)
+    run = walk(pattern="wave", terrain="slope", duration=2.0, strict=False, period=1.0)
     assert not run.ok and not run.speed_ok
     j = wb.joint_names.index(e.parameter)
     assert run.max_joint_speed[j] == pytest.approx(10.0 + e.amount)
@@ -289,12 +295,31 @@ def test_joint_speed_is_checked_against_the_urdf_limit(wb):
     json.dumps(d, allow_nan=False)
 
 
+def test_the_default_period_keeps_the_joints_within_their_limits(wb):
+    """No period given: the joints' speed (and acceleration) limits set it; time scaling."""
+    from hexapod_kin.gait.limits import PERIOD_STEP
+
+    fast = walk(pattern="wave", terrain="slope", duration=1.0, period=1.0, strict=False)
+    ratio = float(np.max(fast.max_joint_speed / wb.velocity_limit))
+    assert ratio > 1  # the 1-s wave on the slope asks too much of a joint
+    run = walk(pattern="wave", terrain="slope", duration=4.0)
+    T = run.settings["period"]
+    assert run.ok and run.speed_ok and T > 1.0
+    assert T / PERIOD_STEP == pytest.approx(round(T / PERIOD_STEP), abs=1e-9)
+    assert ratio * 0.9 < T < ratio * 1.2  # speeds scale as 1/T (the same path, slower)
+    acc = walk(pattern="tripod", duration=2.0, accel_limit=20.0)  # acceleration scales as 1/T²
+    ref = walk(pattern="tripod", duration=1.0, period=1.0, strict=False)
+    need = math.sqrt(float(ref.max_joint_accel.max()) / 20.0)
+    assert acc.speed_ok and acc.settings["period"] == pytest.approx(need, rel=0.2)
+    assert walk(duration=1.0).settings["period"] == 1.0  # within the limits: unchanged
+
+
 def test_joint_acceleration_by_finite_differences_and_its_optional_limit():
     run = walk(pattern="tripod", duration=1.0, rate=400.0)
     assert np.allclose(run.qddot[1:-1], np.diff(run.q, 2, axis=0) * 400.0**2, atol=1e-9)
     assert run.max_joint_accel == pytest.approx(np.abs(run.qddot).max(axis=0))
     with pytest.raises(GaitError) as err:
-        walk(pattern="tripod", duration=1.0, rate=400.0, accel_limit=1.0)
+        walk(pattern="tripod", duration=1.0, rate=400.0, accel_limit=1.0, period=1.0)
     assert err.value.check == "joint acceleration"
     with pytest.raises(ParameterError, match="accel_limit"):
         walk(duration=1.0, accel_limit=-1.0)

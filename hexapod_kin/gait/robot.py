@@ -13,6 +13,7 @@ forward, z up).
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
@@ -647,10 +648,15 @@ def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
         for i, name in enumerate(wb.joint_names):
             q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
         return np.clip(q, wb.lower, wb.upper)
-    for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity
+    for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity, inside limits
         for k, j in enumerate(cols):
-            q[j] = 0.3 if k >= 1 else 0.0
-    q = np.clip(q, wb.lower, wb.upper)
+            lo, hi = float(wb.lower[j]), float(wb.upper[j])
+            for v in (0.3, -0.3) if k >= 1 else (0.0,):
+                if lo < v < hi:
+                    q[j] = v
+                    break
+            else:
+                q[j] = 0.5 * (lo + hi) if math.isfinite(lo + hi) else float(np.clip(0.0, lo, hi))
     base = body_pose([0.0, 0.0, wb.body_height])
     feet = wb.neutral_feet(None) + base[:3, 3]
     ik = wb.body_ik(base, feet, q_prev=q, strict=False)

@@ -9,13 +9,15 @@ middle-right, leg6 front-right).
 The built-in patterns are defined from where the legs are (``positions``: each leg's xy in
 the body frame, x forward, y left; the walk passes the leg mounts), for any order of legs:
 
-* ``wave`` (any N ≥ 4): one leg at a time in the *lateral sequence* — the left legs rear to
-  front, then the right legs rear to front — lift-offs 1/N cycle apart,
+* ``wave`` (any N ≥ 5; on four legs it is the ``crawl``): one leg at a time in the *lateral
+  sequence* — the left legs rear to front, then the right legs rear to front — lift-offs 1/N
+  cycle apart,
   ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
   swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
   diagonal, margin 0).
 * ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
-  sways the body over each support triangle (:mod:`.walk`).
+  sways the body over each support triangle (:mod:`.walk`). (A four-legged ``wave`` would be
+  the same gait: the name is not offered for four legs.)
 * ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
 * ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
   2/N cycle apart, the right side half a cycle after the left, ``β = 1 − 2/N``.
@@ -264,11 +266,18 @@ def _offer(n: int, xy: np.ndarray, names: Any = None) -> tuple[dict[str, Any], d
         out["ripple"] = _ripple
     else:
         why["ripple"] = f"needs an even number >= 6 of legs, as many a side; this robot has {sides}"
-    if n >= 4:
+    if n >= 5:
         out["wave"] = _wave
+    elif n == 4:
+        why["wave"] = "on four legs is the crawl (the same lateral sequence, with body sway)"
     else:
-        why["wave"] = f"needs 4 legs or more; this robot has {n}"
+        why["wave"] = f"needs 5 legs or more; this robot has {n}"
     return out, why
+
+
+def default_pattern(n_legs: int) -> str:
+    """The pattern a walk takes when none is named: tripod (6 legs), crawl (4), else wave."""
+    return {6: "tripod", 4: "crawl"}.get(int(n_legs), "wave")
 
 
 def pattern_names(n_legs: int = 6, positions: Any = None) -> tuple[str, ...]:
@@ -303,7 +312,7 @@ def phase_table(
     """A built-in pattern by name, made for the robot's legs, or a user's table.
 
     Args:
-        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 4, ``crawl``, ``trot``,
+        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 5, ``crawl``, ``trot``,
             ``pace`` for four legs, ``tripod`` for six, ``ripple`` for an even N ≥ 6) or a
             :class:`PhaseTable` with one offset per leg.
         n_legs: Number of legs.
