@@ -920,3 +920,21 @@ def test_the_knee_branch_is_asked_reported_and_kept_inside_the_limits(tmp_path):
     assert run.settings["knees"] == ("down",) * 6 and run.min_limit_margin > 0
     with pytest.raises(ParameterError, match="knee='sideways' is not allowed"):
         standing_pose(str(plain), knee="sideways")
+
+
+def test_gait_torques_of_any_legged_robot_equal_the_hexapod_rule(tmp_path):
+    """The floating-base path (any robot) against the Hexapod's fixed-base path, one run."""
+    from hexapod_kin import load
+    from hexapod_kin.dynamics.gait_loads import gait_torques
+
+    plain, belly = _belly_urdf(tmp_path)
+    run = walk(str(plain), pattern="wave", duration=1.0)
+    any_robot, hexa = gait_torques(run), gait_torques(run, load("hexapod"))
+    cols = [any_robot.joint_names.index(n) for n in hexa.joint_names]
+    assert np.allclose(any_robot.torque[:, cols], hexa.torque, atol=1e-12)
+    assert np.allclose(any_robot.forces, hexa.forces, atol=1e-12)
+    assert any_robot.force_residual < 1e-9 and any_robot.torque_full.shape == run.q.shape
+    low = gait_torques(walk(str(belly), pattern="wave", duration=1.0))  # a base frame lower
+    assert np.allclose(low.torque, any_robot.torque, atol=1e-9)
+    with pytest.raises(ParameterError, match="not the robot that walked"):
+        gait_torques(run, load(str(belly)))
