@@ -451,6 +451,9 @@ def test_cli_stand_and_gait_take_any_source(capsys):
     assert out["ok"] is True and out["max_slip"] <= 1e-9
     assert main(["gait", "--foot-reach", "0.17", "--duration", "1", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["foot_reach"] == 0.17
+    assert main(["stand", "erd:solo12", "--gait", "crawl", "--gait-duration", "1", "--json"]) == 0
+    loads = json.loads(capsys.readouterr().out)["gait"]  # walking loads of a quadruped
+    assert len(loads["peak_torque_full"]) == 12 and loads["walk"]["pattern"]["name"] == "crawl"
     for argv in (
         ["stand", str(PHX)],
         ["gait", str(PHX), "--foot", "tibia_lf:1,2"],
