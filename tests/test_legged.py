@@ -941,3 +941,24 @@ def test_gait_torques_of_any_legged_robot_equal_the_hexapod_rule(tmp_path):
     assert np.allclose(low.torque, any_robot.torque, atol=1e-9)
     with pytest.raises(ParameterError, match="not the robot that walked"):
         gait_torques(run, load(str(belly)))
+
+
+def test_a_walk_page_traces_every_foot(monkeypatch):
+    """The page of a quadruped's walk traces its four feet (not one tip): Pinocchio's feet."""
+    pytest.importorskip("meshcat")
+    import hexapod_kin.viewer.walk as vw
+
+    run = walk("erd:solo12", duration=1.0)
+    seen: dict = {}
+    monkeypatch.setattr(vw, "render_html", lambda mdl, t, q, **kw: seen.update(kw) or "page")
+    assert vw.walk_page(run) == "page"
+    frames = seen["trace_frame"]
+    assert len(frames) == 4
+    wb = run.robot
+    model = pin.Model(wb.model)
+    data = model.createData()
+    qp = run.pinocchio_q()
+    for i in (0, 17, 49):
+        pin.framesForwardKinematics(model, data, qp[i])
+        traced = np.array([data.oMf[model.getFrameId(f)].translation for f in frames])
+        assert np.allclose(traced, run.feet[i], atol=1e-9)  # leaf feet: the frames are feet
