@@ -614,3 +614,31 @@ def test_zmp_margin_against_pinocchio_centroidal_dynamics():
     gap = np.abs(full - run.zmp_margin[idx])  # two finite-difference stencils: 0.54 mm worst
     assert gap.max() <= 1e-3 and np.median(gap) <= 5e-5
     assert full.min() > -3e-3
+
+
+@pytest.mark.parametrize("pattern", ["tripod", "wave", "ripple"])
+def test_swings_clear_the_step_corner_by_the_promised_margin(pattern):
+    """The 2 cm step: every swing foot sphere stays SWING_MARGIN from the step's corner line
+    (closed form: the distance from the sphere centre to the edge x = 0.25 m, z = 0.02 m, or
+    to the face below it); the plan reports its own figure."""
+    from hexapod_kin.gait.walk import EDGE_SLACK, SWING_MARGIN
+
+    run = walk(pattern=pattern, terrain="step", duration=10.0)
+    c, r = np.asarray(run.feet), run.settings["foot_radius"]
+    before = ~run.support & (c[..., 0] < 0.25)
+    dx, dz = 0.25 - c[..., 0], c[..., 2] - 0.02
+    corner = np.where(dz > 0, np.hypot(dx, dz), dx) - r
+    assert corner[before].min() >= SWING_MARGIN - EDGE_SLACK - 2e-4  # sampling of the plan
+    assert run.settings["min_edge_clearance"] >= SWING_MARGIN - EDGE_SLACK
+
+
+def test_a_swing_short_of_the_edge_margin_is_refused():
+    import importlib
+
+    w = importlib.import_module("hexapod_kin.gait.walk")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(w, "FOOTHOLD_MARGIN", 0.0)  # touch-downs right at the step's face
+        mp.setattr(w, "EDGE_PASSES", 0)  # and no raise of the swings
+        with pytest.raises(GaitError, match="swing clearance") as err:
+            w.walk(pattern="tripod", terrain="step", duration=10.0)
+    assert err.value.check == "swing clearance" and err.value.amount > 0

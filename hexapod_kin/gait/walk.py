@@ -61,6 +61,7 @@ from .robot import GaitError, WholeBody, as_whole_body
 from .run import GaitRun
 from .stability import (
     accel_limit_of,
+    edge_clearance,
     leg_terrain_clearance,
     raise_checks,
     segment_clearance,
@@ -69,7 +70,7 @@ from .stability import (
 )
 from .sway import sway_poses
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
-from .terrain import Terrain, off_edges, raise_profile, swing_raise
+from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
 from .zmp import second_difference, zmp_points
 
@@ -98,10 +99,15 @@ DEFAULT_STEP_HEIGHT = 0.03
 MARGIN_TOL = 1e-9
 
 #: Footholds keep a flat disc of radius ``foot_radius`` + this [m] (terrain.off_edges).
-FOOTHOLD_MARGIN = 0.007
+FOOTHOLD_MARGIN = 0.02
 
 #: Swings over an edge clear the terrain by this [m] (terrain.swing_raise).
 SWING_MARGIN = 0.005
+
+#: Passes that raise the swings found short of SWING_MARGIN over an edge; the slack [m] the
+#: sampled clearance may fall short of it by (the disc sampling's resolution).
+EDGE_PASSES = 3
+EDGE_SLACK = 1e-4
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
@@ -314,7 +320,7 @@ def walk(
     )
     if period is None and velocity is None:
 
-        def plan(T: float) -> GaitRun:
+        def plan(T: float, whole: bool = False) -> GaitRun:
             return walk(
                 wb,
                 pattern=table,
@@ -325,7 +331,7 @@ def walk(
                 foot_reach=foot_reach,
                 terrain=terrain,
                 rate=rate,
-                duration=T,
+                duration=duration if whole else T,
                 q0=q0,
                 strict=False,
                 foot_radius=foot_radius,
@@ -335,7 +341,9 @@ def walk(
                 open_loop=open_loop,
             )
 
-        period = fit_period(plan)
+        period = fit_period(plan)  # one cycle: the whole walk on flat ground (periodic)
+        if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
+            period = fit_period(lambda T: plan(T, True), period)
     T = _num("period", 1.0 if period is None else period, hi=1e3)
     bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
     reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
@@ -512,7 +520,39 @@ def walk(
             extra += more
             plan[..., 2] += np.where(swing, more[row, legs] * lift2, 0.0)
             feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
+    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
+    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
+    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
+    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
+    # the swing clearance promised over edges (SWING_MARGIN), measured on the feet as solved:
+    # a swing short of it is raised by the deficit over its raise profile, and solved again
+    # (over the ground above the plane of the swing's lift-off in its first half, of its
+    # touch-down in its second: the edge it climbs, not the ground it leaves or lands on)
+    edge_gap = np.full(swing.shape, np.inf)
+    if ok_tab and ground.relief > 0:
+        first = (swing & (blend < 0.5))[..., None]
+        n_own = np.where(first, n_tab[row - 1, legs], n_nxt)
+        own = np.concatenate(
+            [n_own, np.einsum("nli,nli->nl", n_own, np.where(first, prev, nxt))[..., None]],
+            axis=-1,
+        )
+        for _ in range(EDGE_PASSES + 1):
+            edge_gap = np.full(swing.shape, np.inf)
+            edge_gap[swing] = edge_distance(ground, feet[swing], rad, SWING_MARGIN, own[swing])
+            short = swing & (edge_gap < SWING_MARGIN - EDGE_SLACK) & (lift2 > 0.05)
+            if not short.any() or _ == EDGE_PASSES:
+                break
+            need = np.zeros(tab.shape[:2])
+            at = (row[short], np.broadcast_to(legs, short.shape)[short])
+            np.maximum.at(need, at, (SWING_MARGIN - edge_gap[short]) / lift2[short])
+            need = np.minimum(need, np.maximum(H - extra, 0.0))  # the raise stays <= H
+            if not need.any():
+                break
+            extra += need
+            plan[..., 2] += np.where(swing, need[row, legs] * lift2, 0.0)
+            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
     foot_gap = terrain_clearance(ground, feet, swing, rad, t, names, H, strict)
+    edge_clearance(edge_gap, swing, SWING_MARGIN - EDGE_SLACK, t, names, H, strict)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     if T_last is None:
@@ -530,10 +570,6 @@ def walk(
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
-    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
-    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
-    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
-    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
     leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, rad, plane, t, names, strict)
     if n > 3:
         qdot = np.gradient(q, t, axis=0, edge_order=2)
@@ -581,6 +617,9 @@ def walk(
         "foothold_shift_max": float(np.abs(np.where(used, moved, 0.0)).max()),
         "swings_raised": int(np.count_nonzero(used[1:] & (extra[1:] > 0))),
         "swing_raise_max": float(np.where(used, extra, 0.0).max()),
+        "min_edge_clearance": (
+            float(edge_gap.min()) if edge_gap.size and np.isfinite(edge_gap.min()) else None
+        ),
     }
     ik_ok = np.asarray(ik.ok)
     read_only(ik_ok, vlim, acc_lim, n_nxt, foot_gap, leg_gap)
