@@ -320,7 +320,7 @@ def walk(
     )
     if period is None and velocity is None:
 
-        def plan(T: float, whole: bool = False) -> GaitRun:
+        def planned(T: float, whole: bool = False) -> GaitRun:
             return walk(
                 wb,
                 pattern=table,
@@ -341,9 +341,9 @@ def walk(
                 open_loop=open_loop,
             )
 
-        period = fit_period(plan)  # one cycle: the whole walk on flat ground (periodic)
+        period = fit_period(planned)  # one cycle: the whole walk on flat ground (periodic)
         if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
-            period = fit_period(lambda T: plan(T, True), period)
+            period = fit_period(lambda T: planned(T, True), period)
     T = _num("period", 1.0 if period is None else period, hi=1e3)
     bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
     reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
