@@ -158,10 +158,10 @@ ANGLES = 16
 EDGE_TOL = 1e-3
 
 
-#: :func:`sphere_gap` with ``fine=True`` (a swing next to an edge): rings every r/64 (the
-#: outermost every r/256, where the cap changes fastest) and 128 directions.
-FINE_RINGS = tuple(np.r_[np.arange(1, 60) / 64.0, 1.0 - np.arange(20, -1, -1) / 256.0])
-FINE_ANGLES = 128
+#: :func:`disc_offsets` with ``fine=True`` (:func:`edge_distance`): rings every 1/32 of the
+#: radius (the outermost every 1/256) and 96 directions.
+FINE_RINGS = tuple(np.r_[np.arange(1, 29) / 32.0, 1.0 - np.arange(32, -1, -1) / 256.0])
+FINE_ANGLES = 96
 
 
 def disc_offsets(radius: float, fine: bool = False) -> np.ndarray:
@@ -230,22 +230,27 @@ def edge_distance(
     height ``h = h(c_xy + d)`` more than :data:`EDGE_TOL` above its point's plane ``below``
     (..., 4) (a leg's own ground, ignored) is at ``√(|d|² + (c_z − h)²) − r`` from the
     sphere, or ``|d| − r`` when ``h ≥ c_z`` (the step face beside the sphere); the smallest.
-    Exact to the sampling for a height field with vertical steps (a step's corner).
+    Exact to the sampling for a height field with vertical steps (a step's corner). Spheres
+    more than ``reach`` above the terrain's :attr:`Terrain.relief` are not sampled (``inf``).
     """
     c = np.asarray(centres, dtype=float)
     out = np.full(c.shape[:-1], np.inf)
-    if c.size == 0:
+    # only where the terrain may come within ``reach`` (Terrain.relief bounds it)
+    near = ~(c[..., 2] - ground(c[..., 0], c[..., 1]) - radius - ground.relief > reach)
+    if not near.any():
         return out
+    c = c[near]
     d = disc_offsets(radius + reach, fine=True)
-    x, y = c[..., 0, None] + d[:, 0], c[..., 1, None] + d[:, 1]
+    x, y = c[:, 0, None] + d[:, 0], c[:, 1, None] + d[:, 1]
     h = ground(x, y)
-    pl = np.asarray(below, dtype=float)
+    pl = np.asarray(below, dtype=float)[near]
     plane = (pl[..., 3:4] - pl[..., 0:1] * x - pl[..., 1:2] * y) / pl[..., 2:3]
-    dz = c[..., 2, None] - h
+    dz = c[:, 2, None] - h
     flat = np.hypot(d[:, 0], d[:, 1])
     dist = np.where(dz > 0, np.hypot(flat, dz), flat) - radius
     dist = np.where((h > plane + EDGE_TOL) & np.isfinite(h), dist, np.inf)
-    return np.asarray(dist.min(axis=-1))
+    out[near] = dist.min(axis=-1)
+    return out
 
 
 def disc_residual(ground: Terrain, points: Any, radius: float) -> np.ndarray:

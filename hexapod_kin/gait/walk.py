@@ -109,6 +109,9 @@ SWING_MARGIN = 0.005
 EDGE_PASSES = 3
 EDGE_SLACK = 1e-4
 
+#: A swing found short of SWING_MARGIN is raised to clear it by this much more [m].
+EDGE_HEADROOM = 5e-4
+
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
 ROLLING_TOL = 1e-13
@@ -544,7 +547,8 @@ def walk(
                 break
             need = np.zeros(tab.shape[:2])
             at = (row[short], np.broadcast_to(legs, short.shape)[short])
-            np.maximum.at(need, at, (SWING_MARGIN - edge_gap[short]) / lift2[short])
+            aim = SWING_MARGIN + EDGE_HEADROOM  # the sampled distance errs by a fraction of it
+            np.maximum.at(need, at, (aim - edge_gap[short]) / lift2[short])
             need = np.minimum(need, np.maximum(H - extra, 0.0))  # the raise stays <= H
             if not need.any():
                 break
