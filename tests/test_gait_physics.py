@@ -642,3 +642,23 @@ def test_a_swing_short_of_the_edge_margin_is_refused():
         with pytest.raises(GaitError, match="swing clearance") as err:
             w.walk(pattern="tripod", terrain="step", duration=10.0)
     assert err.value.check == "swing clearance" and err.value.amount > 0
+
+
+def test_asking_too_much_shows_the_patterns_top_speed_for_this_robot(capsys):
+    """The top speed printed is walkable: its stride and period keep reach and speed limits."""
+    import re
+
+    from hexapod_kin.cli import main
+    from hexapod_kin.gait.walk import highest_speed
+
+    assert main(["gait", "--velocity", "0.6", "0", "0", "--duration", "1"]) == 1
+    err = capsys.readouterr().err
+    m = re.search(r"speed of tripod for this robot is ([\d.]+) m/s \(--stride ([\d.]+) --period", err)
+    assert m is not None, err
+    v, stride, period = highest_speed(pattern="tripod")
+    assert float(m.group(1)) == pytest.approx(v, rel=1e-2) and v > 0.1
+    run = walk(pattern="tripod", stride=stride, period=period * 1.001, duration=2.0, strict=False)
+    assert np.all(run.ik_ok) and run.speed_ok and run.min_limit_margin >= 0
+    assert run.to_dict()["velocity"][0] == pytest.approx(v / 1.001, rel=1e-9)
+    assert main(["gait", "erd:solo12", "--pattern", "trot", "--duration", "1"]) == 1
+    assert "needs a balance controller" in capsys.readouterr().err
