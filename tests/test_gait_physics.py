@@ -158,15 +158,35 @@ def test_offered_patterns_unchanged_when_a_mount_moves_1e_12(n, quad, octo):
 
 
 def test_a_refused_pattern_says_why_in_the_robots_terms():
-    xy = np.array([[0.2, 0.1], [0.0, 0.1], [-0.2, 0.1], [0.2, -0.1], [-0.2, -0.1], [0.0, 0.3]])
-    legs = ("lf", "lm", "lr", "rf", "rr", "top")
+    xy = np.array([[0.2, 0.1], [0.0, 0.1], [-0.2, 0.1], [0.2, -0.1], [-0.2, -0.1]])
+    legs = ("lf", "lm", "lr", "rf", "rr")
     with pytest.raises(
-        ParameterError, match=r"4 on the left \(lr, lm, top, lf\) and 2 on the right \(rr, rf\)"
+        ParameterError, match=r"3 on the left \(lr, lm, lf\) and 2 on the right"
     ) as err:
-        phase_table("ripple", 6, xy, legs)
-    assert "ripple" not in err.value.allowed
+        phase_table("ripple", 5, xy, legs)
+    assert "ripple" not in err.value.allowed and "an even number" in str(err.value)
     with pytest.raises(ParameterError, match="needs 6 legs; this robot has 4"):
         phase_table("tripod", 4, xy[:4])
+
+
+def test_legs_near_the_axis_balance_the_sides():
+    """Kraby: legs 0.011 m left of the axis at front and rear; the rear one goes right."""
+    xy = np.array(
+        [
+            [0.0922, 0.011],
+            [0.0574, 0.073],
+            [-0.0574, 0.073],
+            [-0.0922, 0.011],
+            [-0.073, -0.0574],
+            [0.073, -0.0574],
+        ]
+    )
+    assert pattern_names(6, xy) == ("ripple", "tripod", "wave")
+    ripple = phase_table("ripple", 6, xy)
+    lift = {k: (ripple.duty_factor - o) % 1.0 for k, o in enumerate(ripple.offsets)}
+    assert [lift[k] for k in (2, 1, 0)] == pytest.approx([0.0, 1 / 3, 2 / 3])  # left, rear first
+    assert [lift[k] for k in (3, 4, 5)] == pytest.approx([0.5, 5 / 6, 1 / 6])  # right
+    assert _stance_counts(ripple).min() == 4
 
 
 def test_patterns_follow_the_legs_not_their_order(quad):

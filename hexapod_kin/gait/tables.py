@@ -172,7 +172,10 @@ def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
     A leg is left for ``y > tol``, right for ``y < −tol`` (``tol``: :data:`LAYOUT_TOL` × the
     layout's size); a leg on the x axis goes to the side with fewer legs, the front one
     first, the left side on a tie (so the RARL hexapod's legs at 0° and 180° make three a
-    side, as a ring counter-clockwise from the front-left leg).
+    side, as a ring counter-clockwise from the front-left leg). With an even number of legs
+    the sides are then balanced: while one has two more, its leg nearest the axis (smallest
+    ``|y|``; the rear one leaving the left, the front one leaving the right) changes side
+    (Kraby's legs at ±3 mm of the axis).
     """
     tol = _tol(xy)
     xr = _rank(xy[:, 0], tol)
@@ -181,6 +184,16 @@ def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
     axis = sorted((k for k in range(len(xy)) if abs(xy[k, 1]) <= tol), key=lambda k: (-xr[k], k))
     for k in axis:
         (left if len(left) <= len(right) else right).append(k)
+    if len(xy) % 2 == 0:  # as many a side: the legs nearest the axis change side
+        yr = _rank(np.abs(xy[:, 1]), tol)
+        while len(left) > len(right) + 1:  # the rear one of the nearest first
+            k = min(left, key=lambda k: (yr[k], xr[k], k))
+            left.remove(k)
+            right.append(k)
+        while len(right) > len(left) + 1:  # the front one of the nearest first
+            k = min(right, key=lambda k: (yr[k], -xr[k], k))
+            right.remove(k)
+            left.append(k)
     return (
         sorted(left, key=lambda k: (xr[k], k)),
         sorted(right, key=lambda k: (xr[k], k)),
