@@ -962,3 +962,27 @@ def test_a_walk_page_traces_every_foot(monkeypatch):
         pin.framesForwardKinematics(model, data, qp[i])
         traced = np.array([data.oMf[model.getFrameId(f)].translation for f in frames])
         assert np.allclose(traced, run.feet[i], atol=1e-9)  # leaf feet: the frames are feet
+
+
+def test_absurd_inertias_keep_the_com_sway_and_fail_the_zmp_check(tmp_path, capsys):
+    """Link inertias 1e5 times too large (SpotMicroAI's kind): the ZMP cannot be followed by
+    the body's sway; the plan keeps the centre of mass's sway (every foot reached, the static
+    margin positive) and its ZMP margin fails: not achieved, exit status 1."""
+    import re
+
+    from hexapod_kin.cli import main
+
+    four = as_whole_body(robots.hexapod(mount_yaw_deg=(45, 135, -135, -45)))
+    heavy = re.sub(
+        r'i(xx|yy|zz)="([0-9.eE+-]+)"',
+        lambda m: f'i{m.group(1)}="{float(m.group(2)) * 1e5 + 100:.6g}"',
+        four.kinematic.urdf,
+    )
+    path = tmp_path / "heavy.urdf"
+    path.write_text(heavy)
+    run = walk(str(path), duration=2.0, strict=False)
+    assert bool(np.all(run.ik_ok)) and run.min_margin > 0 and run.min_zmp_margin < -1.0
+    sway = run.base_poses[:, 1, 3]  # straight along x: the sway is the body's y
+    assert np.abs(sway).max() <= run.robot.leg_span
+    assert main(["gait", str(path), "--duration", "2"]) == 1
+    assert "needs a balance controller" in capsys.readouterr().err
