@@ -9,6 +9,7 @@ a hand rule for the rolled distance.
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -89,7 +90,7 @@ def _stance_counts(table: PhaseTable) -> np.ndarray:
 
 
 def test_patterns_for_four_six_and_eight_legs(quad, octo):
-    assert pattern_names(4) == ("crawl", "pace", "trot", "wave")
+    assert pattern_names(4) == ("crawl", "pace", "trot")  # a four-legged wave is the crawl
     assert pattern_names(6) == ("ripple", "tripod", "wave")
     assert pattern_names(8) == ("ripple", "wave")
     pos4 = quad.mounts[:, :2, 3]
@@ -110,16 +111,89 @@ def test_patterns_for_four_six_and_eight_legs(quad, octo):
     assert np.all(_stance_counts(phase_table("wave", 5, default_positions(5))) == 4)
     with pytest.raises(ParameterError, match="crawl") as err:
         phase_table("tripod", 4, pos4)
-    assert err.value.allowed == ["crawl", "pace", "trot", "wave"]
+    assert err.value.allowed == ["crawl", "pace", "trot"]
+    with pytest.raises(ParameterError, match="wave on four legs is the crawl"):
+        phase_table("wave", 4, pos4)
     with pytest.raises(ParameterError, match="positions"):
         phase_table("wave", 4, np.zeros((3, 2)))
+
+
+def _ring_layout(exact: bool) -> np.ndarray:
+    """Six mounts at 0°, 60°, ... 300° on a 0.125 m circle (the RARL hexapod-sim's layout)."""
+    ang = np.deg2rad(60.0 * np.arange(6))
+    xy = 0.125 * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    if exact:
+        xy[[0, 3], 1] = 0.0  # the two legs on the x axis, without the 1e-17 residue
+    return xy
+
+
+def test_legs_on_the_axis_make_three_a_side_and_ripple():
+    """RARL's ring: the legs at 0° and 180° are on the axis, not split by a round-off residue."""
+    ring, exact = _ring_layout(False), _ring_layout(True)
+    assert abs(ring[3, 1]) > 0  # the residue the old sign test split the legs by
+    assert pattern_names(6, ring) == ("ripple", "tripod", "wave") == pattern_names(6, exact)
+    ripple = phase_table("ripple", 6, ring)
+    counts = _stance_counts(ripple)
+    assert ripple.duty_factor == pytest.approx(2 / 3) and counts.min() == 4  # one leg a side up
+    # the front axis leg joins the left side, the rear one the right: as the preset's ring
+    lift = {k: (ripple.duty_factor - o) % 1.0 for k, o in enumerate(ripple.offsets)}
+    assert [lift[k] for k in (2, 1, 0)] == pytest.approx([0.0, 1 / 3, 2 / 3])  # left, rear first
+    assert [lift[k] for k in (3, 4, 5)] == pytest.approx([0.5, 5 / 6, 1 / 6])
+    tripod = phase_table("tripod", 6, ring)
+    assert tripod.offsets[0] == tripod.offsets[2] == tripod.offsets[4] != tripod.offsets[1]
+
+
+@pytest.mark.parametrize("n", [4, 6, 8])
+def test_offered_patterns_unchanged_when_a_mount_moves_1e_12(n, quad, octo):
+    layouts = {4: quad.mounts[:, :2, 3], 6: _ring_layout(True), 8: octo.mounts[:, :2, 3]}
+    base = np.array(layouts[n])
+    names = pattern_names(n, base)
+    ref = {p: phase_table(p, n, base).offsets for p in names}
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        moved = base + rng.choice([-1e-12, 0.0, 1e-12], size=base.shape)
+        assert pattern_names(n, moved) == names
+        for p in names:
+            assert phase_table(p, n, moved).offsets == ref[p]
+
+
+def test_a_refused_pattern_says_why_in_the_robots_terms():
+    xy = np.array([[0.2, 0.1], [0.0, 0.1], [-0.2, 0.1], [0.2, -0.1], [-0.2, -0.1]])
+    legs = ("lf", "lm", "lr", "rf", "rr")
+    with pytest.raises(
+        ParameterError, match=r"3 on the left \(lr, lm, lf\) and 2 on the right"
+    ) as err:
+        phase_table("ripple", 5, xy, legs)
+    assert "ripple" not in err.value.allowed and "an even number" in str(err.value)
+    with pytest.raises(ParameterError, match="needs 6 legs; this robot has 4"):
+        phase_table("tripod", 4, xy[:4])
+
+
+def test_legs_near_the_axis_balance_the_sides():
+    """Kraby: legs 0.011 m left of the axis at front and rear; the rear one goes right."""
+    xy = np.array(
+        [
+            [0.0922, 0.011],
+            [0.0574, 0.073],
+            [-0.0574, 0.073],
+            [-0.0922, 0.011],
+            [-0.073, -0.0574],
+            [0.073, -0.0574],
+        ]
+    )
+    assert pattern_names(6, xy) == ("ripple", "tripod", "wave")
+    ripple = phase_table("ripple", 6, xy)
+    lift = {k: (ripple.duty_factor - o) % 1.0 for k, o in enumerate(ripple.offsets)}
+    assert [lift[k] for k in (2, 1, 0)] == pytest.approx([0.0, 1 / 3, 2 / 3])  # left, rear first
+    assert [lift[k] for k in (3, 4, 5)] == pytest.approx([0.5, 5 / 6, 1 / 6])  # right
+    assert _stance_counts(ripple).min() == 4
 
 
 def test_patterns_follow_the_legs_not_their_order(quad):
     """Permuting the legs permutes the offsets (the pattern is built from where legs are)."""
     pos = quad.mounts[:, :2, 3]
     perm = [2, 0, 3, 1]
-    for name in ("crawl", "trot", "pace", "wave"):
+    for name in ("crawl", "trot", "pace"):
         a, b = phase_table(name, 4, pos), phase_table(name, 4, pos[perm])
         assert np.allclose(np.asarray(a.offsets)[perm], b.offsets, atol=1e-12)
 
@@ -149,7 +223,10 @@ def test_margin_within_rounding_of_zero_is_not_a_failure(quad):
 
 def test_trot_and_pace_walk_but_are_reported_not_statically_stable(quad):
     for name in ("trot", "pace"):
-        run = walk(quad, pattern=name, duration=2.0)  # strict: no margin failure raised
+        with pytest.raises(GaitError, match="needs a balance controller") as err:
+            walk(quad, pattern=name, duration=2.0)  # the open-loop planner refuses them
+        assert err.value.check == "statically unstable" and "or walk crawl)" in str(err.value)
+        run = walk(quad, pattern=name, duration=2.0, open_loop=False)  # for a controller
         assert run.min_margin < 0 and run.ok and not run.statically_stable
         d = run.to_dict()
         assert d["statically_stable"] is False and d["pattern"]["statically_stable"] is False
@@ -225,11 +302,11 @@ def test_rolling_offsets_of_a_wheel():
 def test_joint_speed_is_checked_against_the_urdf_limit(wb):
     assert np.all(wb.velocity_limit == 10.0)
     with pytest.raises(GaitError) as err:
-        walk(pattern="wave", terrain="slope", duration=2.0)
+        walk(pattern="wave", terrain="slope", duration=2.0, period=1.0)  # a period asked
     e = err.value
     assert e.check == "joint speed" and e.amount > 0 and e.time is not None
     assert e.parameter in wb.joint_names and e.allowed == 10.0
-    run = walk(pattern="wave", terrain="slope", duration=2.0, strict=False)
+    run = walk(pattern="wave", terrain="slope", duration=2.0, strict=False, period=1.0)
     assert not run.ok and not run.speed_ok
     j = wb.joint_names.index(e.parameter)
     assert run.max_joint_speed[j] == pytest.approx(10.0 + e.amount)
@@ -238,12 +315,31 @@ def test_joint_speed_is_checked_against_the_urdf_limit(wb):
     json.dumps(d, allow_nan=False)
 
 
+def test_the_default_period_keeps_the_joints_within_their_limits(wb):
+    """No period given: the joints' speed (and acceleration) limits set it; time scaling."""
+    from hexapod_kin.gait.limits import PERIOD_STEP
+
+    fast = walk(pattern="wave", terrain="slope", duration=1.0, period=1.0, strict=False)
+    ratio = float(np.max(fast.max_joint_speed / wb.velocity_limit))
+    assert ratio > 1  # the 1-s wave on the slope asks too much of a joint
+    run = walk(pattern="wave", terrain="slope", duration=4.0)
+    T = run.settings["period"]
+    assert run.ok and run.speed_ok and T > 1.0
+    assert T / PERIOD_STEP == pytest.approx(round(T / PERIOD_STEP), abs=1e-9)
+    assert ratio * 0.9 < T < ratio * 1.2  # speeds scale as 1/T (the same path, slower)
+    acc = walk(pattern="tripod", duration=2.0, accel_limit=20.0)  # acceleration scales as 1/T²
+    ref = walk(pattern="tripod", duration=1.0, period=1.0, strict=False)
+    need = math.sqrt(float(ref.max_joint_accel.max()) / 20.0)
+    assert acc.speed_ok and acc.settings["period"] == pytest.approx(need, rel=0.2)
+    assert walk(duration=1.0).settings["period"] == 1.0  # within the limits: unchanged
+
+
 def test_joint_acceleration_by_finite_differences_and_its_optional_limit():
     run = walk(pattern="tripod", duration=1.0, rate=400.0)
     assert np.allclose(run.qddot[1:-1], np.diff(run.q, 2, axis=0) * 400.0**2, atol=1e-9)
     assert run.max_joint_accel == pytest.approx(np.abs(run.qddot).max(axis=0))
     with pytest.raises(GaitError) as err:
-        walk(pattern="tripod", duration=1.0, rate=400.0, accel_limit=1.0)
+        walk(pattern="tripod", duration=1.0, rate=400.0, accel_limit=1.0, period=1.0)
     assert err.value.check == "joint acceleration"
     with pytest.raises(ParameterError, match="accel_limit"):
         walk(duration=1.0, accel_limit=-1.0)
@@ -538,3 +634,51 @@ def test_zmp_margin_against_pinocchio_centroidal_dynamics():
     gap = np.abs(full - run.zmp_margin[idx])  # two finite-difference stencils: 0.54 mm worst
     assert gap.max() <= 1e-3 and np.median(gap) <= 5e-5
     assert full.min() > -3e-3
+
+
+@pytest.mark.parametrize("pattern", ["tripod", "wave", "ripple"])
+def test_swings_clear_the_step_corner_by_the_promised_margin(pattern):
+    """The 2 cm step: every swing foot sphere stays SWING_MARGIN from the step's corner line
+    (closed form: the distance from the sphere centre to the edge x = 0.25 m, z = 0.02 m, or
+    to the face below it); the plan reports its own figure."""
+    from hexapod_kin.gait.walk import EDGE_SLACK, SWING_MARGIN
+
+    run = walk(pattern=pattern, terrain="step", duration=10.0)
+    c, r = np.asarray(run.feet), run.settings["foot_radius"]
+    before = ~run.support & (c[..., 0] < 0.25)
+    dx, dz = 0.25 - c[..., 0], c[..., 2] - 0.02
+    corner = np.where(dz > 0, np.hypot(dx, dz), dx) - r
+    assert corner[before].min() >= SWING_MARGIN  # the promise, by the closed form
+    assert run.settings["min_edge_clearance"] >= SWING_MARGIN - EDGE_SLACK
+
+
+def test_a_swing_short_of_the_edge_margin_is_refused():
+    import importlib
+
+    w = importlib.import_module("hexapod_kin.gait.walk")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(w, "FOOTHOLD_MARGIN", 0.0)  # touch-downs right at the step's face
+        mp.setattr(w, "EDGE_PASSES", 0)  # and no raise of the swings
+        with pytest.raises(GaitError, match="swing clearance") as err:
+            w.walk(pattern="tripod", terrain="step", duration=10.0)
+    assert err.value.check == "swing clearance" and err.value.amount > 0
+
+
+def test_asking_too_much_shows_the_patterns_top_speed_for_this_robot(capsys):
+    """The top speed printed is walkable: its stride and period keep reach and speed limits."""
+    import re
+
+    from hexapod_kin.cli import main
+    from hexapod_kin.gait.walk import highest_speed
+
+    assert main(["gait", "--velocity", "0.6", "0", "0", "--duration", "1"]) == 1
+    err = capsys.readouterr().err
+    m = re.search(r"of tripod for this robot is ([\d.]+) m/s \(--stride ([\d.]+)", err)
+    assert m is not None, err
+    v, stride, period = highest_speed(pattern="tripod")
+    assert float(m.group(1)) == pytest.approx(v, rel=1e-2) and v > 0.1
+    run = walk(pattern="tripod", stride=stride, period=period * 1.001, duration=2.0, strict=False)
+    assert np.all(run.ik_ok) and run.speed_ok and run.min_limit_margin >= 0
+    assert run.to_dict()["velocity"][0] == pytest.approx(v / 1.001, rel=1e-9)
+    assert main(["gait", "erd:solo12", "--pattern", "trot", "--duration", "1"]) == 1
+    assert "needs a balance controller" in capsys.readouterr().err

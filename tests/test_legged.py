@@ -17,6 +17,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -450,6 +451,9 @@ def test_cli_stand_and_gait_take_any_source(capsys):
     assert out["ok"] is True and out["max_slip"] <= 1e-9
     assert main(["gait", "--foot-reach", "0.17", "--duration", "1", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["foot_reach"] == 0.17
+    assert main(["stand", "erd:solo12", "--gait", "crawl", "--gait-duration", "1", "--json"]) == 0
+    loads = json.loads(capsys.readouterr().out)["gait"]  # walking loads of a quadruped
+    assert len(loads["peak_torque_full"]) == 12 and loads["walk"]["pattern"]["name"] == "crawl"
     for argv in (
         ["stand", str(PHX)],
         ["gait", str(PHX), "--foot", "tibia_lf:1,2"],
@@ -839,3 +843,146 @@ def test_gait_torques_default_to_the_robot_that_walked():
     assert loads.joint_names == four.kinematic.joint_names and loads.forces.shape[1] == 4
     W = four.mass * G
     assert np.abs(loads.forces.sum(axis=1)[:, 2] - W).max() <= 1e-9 * W
+
+
+def _belly_urdf(tmp_path: Path, dz: float = 0.2) -> tuple[Path, Path]:
+    """The built-in hexapod's URDF, and the same robot whose root frame is ``dz`` below its body.
+
+    Kraby's base frame is at its belly's level, below the legs' mounts (body height < 0).
+    """
+    from hexapod_kin import load
+
+    text = load("hexapod").urdf
+    i = text.index('<link name="body"')
+    root = (
+        '<link name="belly"/>\n  <joint name="belly_to_body" type="fixed"><parent link="belly"/>'
+        f'<child link="body"/><origin xyz="0 0 {dz}" rpy="0 0 0"/></joint>\n  '
+    )
+    plain, belly = tmp_path / "plain.urdf", tmp_path / "belly.urdf"
+    plain.write_text(text)
+    belly.write_text(text[:i] + root + text[i:])
+    return plain, belly
+
+
+def test_a_base_frame_below_the_mounts_stands_and_walks(tmp_path, capsys):
+    """Kraby-like: the body frame 0.2 m under the body; the same joints, the base 0.2 m lower."""
+    from hexapod_kin.cli import main
+
+    plain, belly = _belly_urdf(tmp_path)
+    a, b = standing_pose(str(plain)), standing_pose(str(belly))
+    assert b.height < 0 and b.height == pytest.approx(a.height - 0.2, abs=1e-12)
+    assert np.array_equal(a.q, b.q)
+    assert np.allclose(a.base[:3, 3] - b.base[:3, 3], [0.0, 0.0, 0.2], atol=1e-12)
+    ra, rb = walk(str(plain), duration=2.0), walk(str(belly), duration=2.0)
+    assert np.allclose(ra.q, rb.q, atol=1e-12) and rb.min_margin == pytest.approx(ra.min_margin)
+    assert main(["stand", str(belly)]) == 0
+    with pytest.raises(ParameterError, match="mount at or below the ground"):
+        standing_pose(str(belly), height=-0.2)
+
+
+def _knee_sides(path: Path, pose: Any) -> np.ndarray:
+    """Per leg, the knee's height over the femur→foot line at its point, by raw Pinocchio."""
+    model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    data = model.createData()
+    q = pose.robot.pinocchio_q(pose.q[None], pose.base[None])[0]
+    pin.framesForwardKinematics(model, data, q)
+    out = []
+    for k in range(1, 7):
+        hip = data.oMi[model.getJointId(f"leg{k}_knee")].translation
+        knee = data.oMi[model.getJointId(f"leg{k}_ankle")].translation
+        foot = data.oMf[model.getFrameId(f"leg{k}_foot")].translation
+        u = (foot - hip) / np.linalg.norm(foot - hip)
+        off = (knee - hip) - np.dot(knee - hip, u) * u
+        out.append(off[2])
+    return np.array(out)
+
+
+def test_the_knee_branch_is_asked_reported_and_kept_inside_the_limits(tmp_path):
+    """--knee picks the branch (checked by raw Pinocchio); limits that allow only one win."""
+    from hexapod_kin.gait.knee import knee_directions
+
+    plain, _ = _belly_urdf(tmp_path)
+    up, down = standing_pose(str(plain), knee="up"), standing_pose(str(plain), knee="down")
+    assert np.all(_knee_sides(plain, up) > 0.01) and np.all(_knee_sides(plain, down) < -0.01)
+    assert knee_directions(up.robot, up.q) == ("up",) * 6
+    assert knee_directions(down.robot, down.q) == ("down",) * 6
+    # ankles limited to [-3, -0.2] rad: only the knee-down branch fits; taken by default
+    text = plain.read_text()
+    for k in range(1, 7):
+        head = f'<joint name="leg{k}_ankle"'
+        i = text.index(head)
+        j = text.index("<limit ", i)
+        e = text.index("/>", j)
+        text = text[:j] + '<limit lower="-3.0" upper="-0.2" effort="10" velocity="10"' + text[e:]
+    tight = tmp_path / "tight.urdf"
+    tight.write_text(text)
+    st = standing_pose(str(tight))
+    assert np.allclose(st.q, down.q, atol=1e-9) and np.all(_knee_sides(tight, st) < -0.01)
+    assert knee_directions(st.robot, standing_pose(str(tight), knee="up").q) == ("down",) * 6
+    run = walk(str(tight), duration=1.0)
+    assert run.settings["knees"] == ("down",) * 6 and run.min_limit_margin > 0
+    with pytest.raises(ParameterError, match="knee='sideways' is not allowed"):
+        standing_pose(str(plain), knee="sideways")
+
+
+def test_gait_torques_of_any_legged_robot_equal_the_hexapod_rule(tmp_path):
+    """The floating-base path (any robot) against the Hexapod's fixed-base path, one run."""
+    from hexapod_kin import load
+    from hexapod_kin.dynamics.gait_loads import gait_torques
+
+    plain, belly = _belly_urdf(tmp_path)
+    run = walk(str(plain), pattern="wave", duration=1.0)
+    any_robot, hexa = gait_torques(run), gait_torques(run, load("hexapod"))
+    cols = [any_robot.joint_names.index(n) for n in hexa.joint_names]
+    assert np.allclose(any_robot.torque[:, cols], hexa.torque, atol=1e-12)
+    assert np.allclose(any_robot.forces, hexa.forces, atol=1e-12)
+    assert any_robot.force_residual < 1e-9 and any_robot.torque_full.shape == run.q.shape
+    low = gait_torques(walk(str(belly), pattern="wave", duration=1.0))  # a base frame lower
+    assert np.allclose(low.torque, any_robot.torque, atol=1e-9)
+    with pytest.raises(ParameterError, match="not the robot that walked"):
+        gait_torques(run, load(str(belly)))
+
+
+def test_a_walk_page_traces_every_foot(monkeypatch):
+    """The page of a quadruped's walk traces its four feet (not one tip): Pinocchio's feet."""
+    pytest.importorskip("meshcat")
+    import hexapod_kin.viewer.walk as vw
+
+    run = walk("erd:solo12", duration=1.0)
+    seen: dict = {}
+    monkeypatch.setattr(vw, "render_html", lambda mdl, t, q, **kw: seen.update(kw) or "page")
+    assert vw.walk_page(run) == "page"
+    frames = seen["trace_frame"]
+    assert len(frames) == 4
+    wb = run.robot
+    model = pin.Model(wb.model)
+    data = model.createData()
+    qp = run.pinocchio_q()
+    for i in (0, 17, 49):
+        pin.framesForwardKinematics(model, data, qp[i])
+        traced = np.array([data.oMf[model.getFrameId(f)].translation for f in frames])
+        assert np.allclose(traced, run.feet[i], atol=1e-9)  # leaf feet: the frames are feet
+
+
+def test_absurd_inertias_keep_the_com_sway_and_fail_the_zmp_check(tmp_path, capsys):
+    """Link inertias 1e5 times too large (SpotMicroAI's kind): the ZMP cannot be followed by
+    the body's sway; the plan keeps the centre of mass's sway (every foot reached, the static
+    margin positive) and its ZMP margin fails: not achieved, exit status 1."""
+    import re
+
+    from hexapod_kin.cli import main
+
+    four = as_whole_body(robots.hexapod(mount_yaw_deg=(45, 135, -135, -45)))
+    heavy = re.sub(
+        r'i(xx|yy|zz)="([0-9.eE+-]+)"',
+        lambda m: f'i{m.group(1)}="{float(m.group(2)) * 1e5 + 100:.6g}"',
+        four.kinematic.urdf,
+    )
+    path = tmp_path / "heavy.urdf"
+    path.write_text(heavy)
+    run = walk(str(path), duration=2.0, strict=False)
+    assert bool(np.all(run.ik_ok)) and run.min_margin > 0 and run.min_zmp_margin < -1.0
+    sway = run.base_poses[:, 1, 3]  # straight along x: the sway is the body's y
+    assert np.abs(sway).max() <= run.robot.leg_span
+    assert main(["gait", str(path), "--duration", "2"]) == 1
+    assert "needs a balance controller" in capsys.readouterr().err

@@ -15,8 +15,12 @@ import hexapod_kin as hk
 leg = hk.load("hexabot_leg")
 qs = leg.random_q(4000, seed=1)
 feet = leg.fk_batch(qs)[:, :3, 3]
-sigma = np.array([np.linalg.svd(leg.jacobian(q, "local_world_aligned")[:3],
-                                compute_uv=False).min() for q in qs[:800]])
+sigma = np.array(
+    [
+        np.linalg.svd(leg.jacobian(q, "local_world_aligned")[:3], compute_uv=False).min()
+        for q in qs[:800]
+    ]
+)
 
 fig, (side, top) = plt.subplots(1, 2, figsize=(9, 4))
 side.scatter(np.hypot(feet[:800, 0], feet[:800, 1]), feet[:800, 2], c=sigma, s=4)

@@ -14,8 +14,12 @@ import hexapod_kin as hk
 
 leg = hk.load("hexabot_leg")
 q2, q3 = np.meshgrid(np.linspace(-np.pi, np.pi, 121), np.linspace(-np.pi, np.pi, 121))
-det = np.array([np.linalg.det(leg.jacobian([0.0, a, b], "local_world_aligned")[:3])
-                for a, b in zip(q2.ravel(), q3.ravel())]).reshape(q2.shape)
+det = np.array(
+    [
+        np.linalg.det(leg.jacobian([0.0, a, b], "local_world_aligned")[:3])
+        for a, b in zip(q2.ravel(), q3.ravel())
+    ]
+).reshape(q2.shape)
 
 l1, l2, l3 = 0.05, 0.10, 0.10
 fig, ax = plt.subplots(figsize=(6, 5))

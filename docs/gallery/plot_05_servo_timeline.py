@@ -17,9 +17,17 @@ import hexapod_kin as hk
 from hexapod_kin.export.timeline import Calibration, read_timeline, timeline
 
 run = hk.gait.walk(pattern="tripod", duration=4.0)
-cal = Calibration.from_dict({"defaults": {"units": "ticks", "ticks_per_revolution": 1228.8,
-                                          "centre": 512, "limits": [0, 1023],
-                                          "velocity_limit": 11.9}})
+cal = Calibration.from_dict(
+    {
+        "defaults": {
+            "units": "ticks",
+            "ticks_per_revolution": 1228.8,
+            "centre": 512,
+            "limits": [0, 1023],
+            "velocity_limit": 11.9,
+        }
+    }
+)
 tl = timeline(run, rate=50, calibration=cal)
 back = read_timeline(tl.write(Path(tempfile.mkdtemp()) / "walk.json"))
 plan = np.column_stack([np.interp(tl.t, run.t, run.q[:, j]) for j in range(run.q.shape[1])])

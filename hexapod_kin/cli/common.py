@@ -36,6 +36,7 @@ __all__ = [
     "robot_of",
     "seed",
     "set_params",
+    "knee_arg",
     "walk_args",
     "walk_options",
 ]
@@ -461,16 +462,26 @@ def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
     """
     p.add_argument(
         "--pattern",
-        help="phase table: tripod, wave, ripple (6 legs); crawl, wave, trot, pace (4 legs); "
-        "wave, ripple (8 legs) (default: tripod for six legs, else wave)",
+        help="phase table: tripod, wave, ripple (6 legs); crawl (4 legs); wave, ripple "
+        "(8 legs) (default: tripod for six legs, crawl for four, else wave); trot and pace "
+        "(4 legs) are not statically stable: refused open loop (exit 1), they need a balance "
+        "controller",
     )
     p.add_argument(
         "--stride",
         type=float,
         help="foot stroke in stance [m] for a straight walk (default 0.05; not with --velocity)",
     )
-    p.add_argument("--height", type=float, default=0.03, help="step height [m]")
-    p.add_argument("--period", type=float, default=1.0, help="cycle time [s]")
+    p.add_argument(
+        "--height",
+        type=float,
+        help="step height [m] (default 0.03, or 0.15 x the leg span of a short leg)",
+    )
+    p.add_argument(
+        "--period",
+        type=float,
+        help="cycle time [s] (default 1, or longer when a joint would exceed its speed limit)",
+    )
     p.add_argument(
         "--duty-factor", type=float, help="stance fraction in (0, 1) (default: the pattern's)"
     )
@@ -501,6 +512,17 @@ def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
         rate, dest="walk_rate", metavar="HZ", type=float, default=100.0, help="the walk's rate [Hz]"
     )
     p.add_argument("--duration", type=float, default=10.0, help="length of the walk [s]")
+    knee_arg(p)
+
+
+def knee_arg(p: argparse.ArgumentParser) -> None:
+    """``--knee``: where the closed-form legs' knees point (the IK branch)."""
+    p.add_argument(
+        "--knee",
+        choices=("up", "down", "forward", "backward", "out", "in"),
+        help="the IK branch: where the legs' knees point (default: the branch inside the "
+        "joint limits nearest the robot's neutral pose; the one taken is reported)",
+    )
 
 
 def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
@@ -525,10 +547,13 @@ def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
 def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
     """The keywords of :func:`hexapod_kin.gait.walk.walk` the options of :func:`walk_args` give.
 
-    ``--pattern`` defaults to the robot's legs (``wb``): tripod for six, else wave.
+    ``--pattern`` defaults to the robot's legs (``wb``): tripod for six, crawl for four, else
+    wave (:func:`hexapod_kin.gait.tables.default_pattern`).
     """
+    from ..gait.tables import default_pattern
+
     return {
-        "pattern": args.pattern or ("tripod" if wb.n_legs == 6 else "wave"),
+        "pattern": args.pattern or default_pattern(wb.n_legs),
         "stride": args.stride,
         "step_height": args.height,
         "period": args.period,
@@ -539,6 +564,7 @@ def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
         "terrain": args.terrain,
         "rate": args.walk_rate,
         "duration": args.duration,
+        "knee": args.knee,
     }
 
 
@@ -555,7 +581,10 @@ def margin_failures(run: Any) -> list[str]:
     ):
         value = float(getattr(run, attr))
         if value < 0:
-            why.append(f"min {what} margin {value:.6g} m < 0 (the {point} leaves the support)")
+            why.append(
+                f"min {what} margin {value:.6g} m < 0 (the {point} leaves the support: the "
+                "plan needs a balance controller, or a longer --period or shorter --stride)"
+            )
     return why
 
 

@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any, cast
+from typing import Any
 
 from ..exceptions import ParameterError
 from .common import (
     check_outputs,
     emit_json,
     html_page,
+    knee_arg,
     load_source,
     not_achieved,
     numbers,
@@ -241,6 +242,7 @@ def _add_stand(sub: Any) -> None:
         "--reach", type=float, help="mount to foot, horizontal [m] (default: l1 + l2 / own)"
     )
     numbers(p, "--shift", "DX DY", default=[0.0, 0.0], help="body shifted over the feet [m]")
+    knee_arg(p)
     p.add_argument("--legs", nargs="+", help="stance legs (names or 1-based numbers); all")
     p.add_argument(
         "--method",
@@ -252,7 +254,7 @@ def _add_stand(sub: Any) -> None:
     p.add_argument(
         "--gait",
         metavar="PATTERN",
-        help="also walk with this gait (tripod, wave, ripple): peak torque per joint (Hexapod)",
+        help="also walk with this gait (tripod, wave, ripple, crawl...): peak torque per joint",
     )
     p.add_argument("--gait-duration", type=float, default=4.0, help="--gait: walk length [s]")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -282,26 +284,23 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         mu=args.mu,
         feet=robot.feet,
         foot_radius=robot.foot_radius,
+        knee=args.knee,
     )
     name = hexa.name if hexa is not None else robot.source
     out = {"source": name, **st.to_dict()}
     gt = None
     if args.gait:
-        if hexa is None:
-            msg = (
-                "--gait (walking loads) needs a Hexapod preset; walk other robots with "
-                f"'hexapod-kin gait {robot.source}'"
-            )
-            raise ParameterError(msg, parameter="gait", value=args.gait)
         from ..dynamics import gait_torques
-        from ..gait import walk, whole_body
+        from ..gait import as_whole_body, walk
 
         kw: dict[str, Any] = {"body_height": st.height}
         if args.reach is not None:
             kw["foot_reach"] = args.reach
-        run = walk(
-            whole_body(cast(Any, hexa.params)), pattern=args.gait, duration=args.gait_duration, **kw
+        wb = as_whole_body(
+            hexa.params if hexa is not None else model,
+            **({} if hexa is not None else {"feet": robot.feet, "foot_radius": robot.foot_radius}),
         )
+        run = walk(wb, pattern=args.gait, duration=args.gait_duration, knee=args.knee, **kw)
         gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}
     why = [] if st.feasible else ["standing: a foot pulls or slides (feasible False)"]

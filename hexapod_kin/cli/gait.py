@@ -6,11 +6,11 @@ import argparse
 import sys
 from typing import Any
 
-from ..exceptions import ParameterError
+from ..exceptions import HexapodKinError, ParameterError
 from .common import robot_args, robot_of, walk_args, walk_options
 from .view import wait_args
 
-__all__ = ["register"]
+__all__ = ["SPEED_CHECKS", "planned_walk", "register"]
 
 
 def register(sub: Any) -> None:
@@ -53,7 +53,6 @@ def register(sub: Any) -> None:
 
 def _cmd_gait(args: argparse.Namespace) -> int:
     from ..gait.robot import as_whole_body
-    from ..gait.walk import walk
     from .common import PLOT_SUFFIXES, emit_json, margin_failures, not_achieved, output_path
 
     plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
@@ -66,7 +65,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     model = robot.load()
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     # a check that fails raises GaitError: one line, exit status 1 (cli.main)
-    run = walk(wb, **walk_options(args, wb))
+    run = planned_walk(wb, walk_options(args, wb))
     out = run.to_dict()
     if plot is not None:
         from ..gait.plots import plot_gait
@@ -86,6 +85,52 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     return status
 
 
+#: The checks a slower or shorter walk would pass: their message shows the top speed.
+SPEED_CHECKS = ("joint speed", "joint acceleration", "reach")
+
+
+def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
+    """:func:`~hexapod_kin.gait.walk.walk` with the options of :func:`.common.walk_options`.
+
+    A walk that asks more than the robot can (a joint too fast, a foot out of reach) fails
+    with the highest straight speed of its pattern for this robot added to the message
+    (:func:`~hexapod_kin.gait.walk.highest_speed`); ``simulate`` and ``timeline gait`` plan
+    through it too.
+
+    Raises:
+        GaitError: A check fails (exit status 1).
+
+    """
+    from ..gait.legs import GaitError
+    from ..gait.walk import highest_speed, walk
+
+    try:
+        return walk(wb, **options)
+    except GaitError as exc:
+        if exc.check not in SPEED_CHECKS:
+            raise
+        try:
+            v, stride, period = highest_speed(wb, **options)
+        except HexapodKinError:  # pragma: no cover - the search plans what walk planned
+            raise exc from None
+        top = (
+            f"the highest straight speed of {options.get('pattern')!s} for this robot is "
+            f"{v:.3g} m/s (--stride {stride:.3g} --period {period:.3g})"
+            if v > 0
+            else f"no stride of {options.get('pattern')!s} is within this robot's reach"
+        )
+        raise GaitError(
+            f"{exc}; {top}",
+            check=exc.check,
+            leg=exc.leg,
+            time=exc.time,
+            amount=exc.amount,
+            parameter=exc.parameter,
+            value=exc.value,
+            allowed=exc.allowed,
+        ) from None
+
+
 def _view(run: Any, args: argparse.Namespace) -> int:
     from .. import load
     from ..viewer import Viewer, walk_live
@@ -101,13 +146,14 @@ def _print(out: dict[str, Any]) -> None:
     print(
         f"{out['pattern']['name']} gait on {out['terrain']} terrain, {out['samples']} samples "
         f"over {out['duration']:g} s (v = {vx:.4g}, {vy:.4g} m/s, wz = {wz:.4g} rad/s, "
-        f"stride {out['stride']:.4g} m)"
+        f"stride {out['stride']:.4g} m, period {out['period']:.4g} s)"
     )
     print(f"min stability margin   {out['min_margin']:.6g} m")
     print(f"min ZMP margin         {out['min_zmp_margin']:.6g} m (dynamic)")
     print(f"max stance slip        {out['max_slip']:.3g} m")
     print(f"min joint-limit margin {out['min_limit_margin']:.6g} rad")
     print(f"min leg clearance      {out['min_clearance']:.6g} m")
+    print(f"knees point            {', '.join(out['knees'])} (the IK branch; --knee)")
     for key in ("plot", "html"):
         if key in out:
             print(f"wrote {out[key]}", file=sys.stderr)

@@ -104,8 +104,8 @@ def register(sub: Any) -> None:
 
 def _cmd_gait(args: argparse.Namespace) -> int:
     from ..gait.robot import as_whole_body
-    from ..gait.walk import walk
     from ..params import Hexapod
+    from .gait import planned_walk
 
     out = output_path(args.output, "-o", _SUFFIXES)
     robot = robot_of(args)
@@ -114,7 +114,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     options = walk_options(args, wb)
     if options["body_height"] is None and isinstance(model.params, Hexapod):
         options["body_height"] = 0.08  # the timelines' walk of the hexapod
-    run = walk(wb, **options)
+    run = planned_walk(wb, options)
     return max(_write(run, args, out, None), not_achieved(margin_failures(run)))
 
 

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ConfigurationError, ParameterError
+from ..params import Hexapod
 from ._common import as_model, check_inertials, read_only
 from .standing import ContactMethod, _friction_qp, _hexapod, contact_forces, robot_mass_com
 
@@ -142,9 +143,21 @@ def gait_torques(
         ConfigurationError: A sample whose stance feet cannot hold the robot (names the time).
 
     """
+    wb = getattr(run, "robot", None)
     if model is None:  # the robot that walked, as loaded
-        model = getattr(getattr(run, "robot", None), "kinematic", None) or "hexapod"
+        model = getattr(wb, "kinematic", None) or "hexapod"
     mdl = as_model(model)
+    if not isinstance(getattr(mdl, "params", None), Hexapod) and wb is not None:
+        if wb.kinematic is not mdl:
+            raise ParameterError(
+                f"model {mdl.name!r} is not the robot that walked ({wb.source!r}); leave "
+                "model=None for a legged robot other than a Hexapod",
+                parameter="model",
+                value=mdl.name,
+                allowed=wb.source,
+            )
+        check_inertials(mdl)
+        return _legged_loads(run, wb, method, mu)
     params = _hexapod(mdl)
     check_inertials(mdl)
     names = tuple(run.joint_names)
@@ -234,6 +247,84 @@ def gait_torques(
         str(method),
         mu,
         **extra,
+    )
+
+
+def _legged_loads(run: Any, wb: Any, method: ContactMethod, mu: float | None) -> GaitTorques:
+    """:func:`gait_torques` of any legged robot, on its floating-base model (``run.robot``).
+
+    The same quasi-static rule in world axes: ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` with
+    ``g`` the floating-base gravity vector (its joint rows are the fixed-base gravity torques
+    under the rotated gravity) and ``J_i`` the contact frames' world-aligned Jacobians.
+    """
+    pm = wb.model
+    data = pm.createData()
+    fids = [pm.getFrameId(f) for f in wb.foot_frames]
+    qp = run.pinocchio_q()
+    ts = np.asarray(run.t, dtype=float)
+    support = np.asarray(run.support, dtype=bool)
+    n, nl, nj = len(ts), wb.n_legs, wb.nq
+    g_world = np.array(pm.gravity.linear, dtype=float)
+    mass = float(pin.computeTotalMass(pm))
+    weight = mass * float(np.linalg.norm(g_world))
+    forces = np.zeros((n, nl, 3))
+    torque = np.empty((n, nj))
+    fmin = np.empty(n)
+    f_res = m_res = 0.0
+    for i in range(n):
+        q = qp[i]
+        com = np.array(pin.centerOfMass(pm, data, q))
+        pin.computeJointJacobians(pm, data, q)
+        pin.updateFramePlacements(pm, data)
+        stance = np.nonzero(support[i])[0]
+        feet_w = np.array([data.oMf[fids[k]].translation for k in stance])
+        try:
+            sol = contact_forces(feet_w, com, weight, method=method, mu=mu)
+        except ConfigurationError as exc:
+            raise ConfigurationError(
+                f"at t = {ts[i]:.6g} s (stance legs {[wb.leg_names[k] for k in stance]}): {exc}",
+                parameter=exc.parameter,
+                value=exc.value,
+                allowed=exc.allowed,
+            ) from None
+        f_res, m_res = max(f_res, sol.force_residual), max(m_res, sol.moment_residual)
+        tau = np.array(pin.computeGeneralizedGravity(pm, data, q))[6:]
+        for k, f in zip(stance, sol.forces):
+            jac = pin.getFrameJacobian(pm, data, fids[k], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            tau -= jac[:3, 6:].T @ f
+            forces[i, k] = f
+        torque[i] = tau
+        fmin[i] = float(sol.forces[:, 2].min())
+    idx = np.argmax(np.abs(torque), axis=0)
+    tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
+    jf = np.argmax(np.abs(tau_f), axis=0)
+    cols = np.arange(nj)
+    peak, peak_time = np.abs(torque[idx, cols]), ts[idx]
+    peak_f, peak_ft = np.abs(tau_f[jf, cols]), ts[jf]
+    diff = np.abs(tau_f - torque).max(axis=0)
+    read_only(ts, support, forces, torque, fmin, tau_f, f_full, peak, peak_time, peak_f, peak_ft)
+    read_only(diff)
+    return GaitTorques(
+        ts,
+        tuple(wb.joint_names),
+        tuple(wb.leg_names),
+        support,
+        forces,
+        torque,
+        peak,
+        peak_time,
+        f_res,
+        m_res,
+        fmin,
+        mass,
+        str(method),
+        mu,
+        torque_full=tau_f,
+        forces_full=f_full,
+        peak_full=peak_f,
+        peak_full_time=peak_ft,
+        peak_difference=diff,
+        base_residual=base_res,
     )
 
 

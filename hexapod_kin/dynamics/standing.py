@@ -480,6 +480,7 @@ def stand(
     mu: float | None = None,
     feet: Any = None,
     foot_radius: float | None = None,
+    knee: str | None = None,
 ) -> Stance:
     """A legged robot standing level at ``height``: pose, contact forces and joint torques.
 
@@ -498,12 +499,14 @@ def stand(
         feet: Feet as frame plus offset, for a URDF without foot links (``"tibia_lf:0,0.16,
             0.029 ..."``, a mapping or a file; see :func:`hexapod_kin.gait.legs.parse_feet`).
         foot_radius: Contact radius of the feet [m] (default: the robot's).
+        knee: Where the legs' knees point (:data:`hexapod_kin.gait.knee.KNEES`; default:
+            the branch inside the joint limits nearest the robot's neutral q).
 
     Raises:
         ParameterError, ConfigurationError: Bad values; unreachable pose; no balance.
 
     """
-    if feet is None and foot_radius is None:
+    if feet is None and foot_radius is None and knee is None:
         mdl = hexapod_model(model)
         if mdl is not None:
             h = 0.10 if height is None else height
@@ -512,7 +515,13 @@ def stand(
     from ..gait.stand import standing_pose
 
     pose = standing_pose(
-        model, height=height, reach=reach, shift=shift, feet=feet, foot_radius=foot_radius
+        model,
+        height=height,
+        reach=reach,
+        shift=shift,
+        feet=feet,
+        foot_radius=foot_radius,
+        knee=knee,
     )
     return _legged_stance(pose, legs, method, mu)
 

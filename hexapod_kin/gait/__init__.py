@@ -6,7 +6,9 @@
 * :mod:`.tables` — phase tables (tripod, wave, ripple, custom).
 * :mod:`.terrain` — the ground as a height function (flat, slope, a step, user callables).
 * :mod:`.stability` — support-polygon margin and leg clearance.
-* :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`).
+* :mod:`.walk` — the walk and its checks (:func:`walk` → :class:`GaitRun`, in :mod:`.run`).
+* :mod:`.limits` — the default period from the joints' limits; each pattern's top speed.
+* :mod:`.knee` — which way the knees point: the IK branch asked (``knee=``) and reported.
 * :mod:`.plots` — gait diagram, margin over time, foot paths from above (matplotlib).
 * :mod:`.show` — what a drawing of a walk needs: support polygons, projected CoM, the robot's
   model (the pages are :mod:`hexapod_kin.viewer.walk`).

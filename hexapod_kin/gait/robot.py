@@ -13,6 +13,7 @@ forward, z up).
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
@@ -446,6 +447,7 @@ class WholeBody:
                 ) from None
             qk = batch.q.reshape(len(legs), n, *batch.q.shape[1:])
             vk = batch.valid.reshape(len(legs), n, -1)
+            vk = self._within_limits(qk, vk, cols)
             picked, ok = pick_branch(qk, vk, q0[cols])
             for g, leg in enumerate(legs):
                 q[:, cols[g]] = picked[g]
@@ -460,6 +462,21 @@ class WholeBody:
         for a in (q, reached, excess, margin):
             a.setflags(write=False)
         return BodyIK(q, reached, excess, margin, self.leg_names)
+
+    def _within_limits(self, qk: np.ndarray, valid: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """``valid`` (G, N, K) narrowed to the branches inside the joint limits (modulo 2π).
+
+        A sample where no valid branch is inside keeps every valid one (the limit check then
+        names the joint).
+        """
+        lo, hi = self.lower[cols], self.upper[cols]  # (G, m)
+        mid = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), 0.0)[:, None, None]
+        qq = mid + np.remainder(qk - mid + np.pi, 2.0 * np.pi) - np.pi
+        tol = 1e-9
+        inside = np.all((qq >= lo[:, None, None] - tol) & (qq <= hi[:, None, None] + tol), axis=-1)
+        narrowed = valid & inside
+        keep = narrowed.any(axis=-1, keepdims=True)
+        return np.asarray(np.where(keep, narrowed, valid))
 
     def leg_of_joint(self, j: int) -> str:
         """The name of the leg joint ``j`` (a column of q) belongs to."""
@@ -631,10 +648,15 @@ def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
         for i, name in enumerate(wb.joint_names):
             q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
         return np.clip(q, wb.lower, wb.upper)
-    for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity
+    for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity, inside limits
         for k, j in enumerate(cols):
-            q[j] = 0.3 if k >= 1 else 0.0
-    q = np.clip(q, wb.lower, wb.upper)
+            lo, hi = float(wb.lower[j]), float(wb.upper[j])
+            for v in (0.3, -0.3) if k >= 1 else (0.0,):
+                if lo < v < hi:
+                    q[j] = v
+                    break
+            else:
+                q[j] = 0.5 * (lo + hi) if math.isfinite(lo + hi) else float(np.clip(0.0, lo, hi))
     base = body_pose([0.0, 0.0, wb.body_height])
     feet = wb.neutral_feet(None) + base[:3, 3]
     ik = wb.body_ik(base, feet, q_prev=q, strict=False)

@@ -310,6 +310,43 @@ def terrain_clearance(
     return gap
 
 
+def edge_clearance(
+    gap: np.ndarray,
+    swing: np.ndarray,
+    promised: float,
+    t: np.ndarray,
+    names: tuple[str, ...],
+    H: float,
+    strict: bool = True,
+) -> None:
+    """The swing feet over terrain edges: each clears the edges by ``promised`` [m].
+
+    ``gap`` (N, L): each swing foot sphere's clearance to the terrain above its own ground
+    plane (:func:`~.terrain.sphere_gap` with ``below``; ``inf`` where none is near).
+
+    Raises:
+        GaitError: (``strict``) check ``"swing clearance"``: a swing passes an edge closer
+            than ``promised`` (the leg, the time, by how much).
+
+    """
+    short = swing & (gap < promised)
+    if strict and short.any():
+        i, leg = np.unravel_index(int(np.argmin(np.where(short, gap, np.inf))), gap.shape)
+        d = float(promised - gap[i, leg])
+        raise GaitError(
+            f"leg {names[leg]}: the swing passes a terrain edge {1e3 * gap[i, leg]:.3g} mm away "
+            f"at t={t[i]:.4g} s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised "
+            f"(check 'swing clearance'; raise step_height={H:g} m or move the footholds)",
+            check="swing clearance",
+            leg=names[leg],
+            time=float(t[i]),
+            amount=d,
+            parameter="step_height",
+            value=H,
+            allowed=f"swings clear of edges by {promised:g} m",
+        )
+
+
 #: Ball spacing along a leg segment in :func:`leg_terrain_clearance`, in link radii.
 SEGMENT_SPACING = 0.5
 

@@ -22,6 +22,7 @@ import numpy as np
 from .._tree import robot_size
 from ..exceptions import HexapodKinError, ParameterError, positive
 from ..params import Hexapod
+from .knee import knee_seed
 from .legs import OFFSET_FACTOR
 from .robot import WholeBody, as_whole_body, body_pose
 
@@ -70,16 +71,21 @@ def standing_pose(
     shift: Any = (0.0, 0.0),
     feet: Any = None,
     foot_radius: Any = None,
+    knee: str | None = None,
 ) -> StandingPose:
     """Stand any legged robot level on flat ground (see the module doc for the rule).
 
     Args:
         robot: Any robot :func:`~.robot.as_whole_body` takes (default the built-in hexapod).
-        height: Body origin above the ground [m] (default the robot's ``body_height``).
+        height: Body origin above the ground [m] (default the robot's ``body_height``;
+            negative for a base frame below the ground, e.g. Kraby's at its belly's level);
+            every leg's mount must be above the ground.
         reach: Mount-to-foot horizontal distance [m] (default the robot's own).
         shift: Body shift (dx, dy) over the feet [m].
         feet: Foot spec for a URDF without foot links (see :func:`~.legs.parse_feet`).
         foot_radius: Contact radius of the feet [m].
+        knee: Where the closed-form legs' knees point (:data:`~.knee.KNEES`; default: the
+            branch inside the joint limits nearest the robot's neutral q).
 
     Raises:
         ParameterError: Bad numbers; ``height``, ``reach`` or a ``shift`` component larger
@@ -89,12 +95,15 @@ def standing_pose(
     """
     wb = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
     h = wb.body_height if height is None else float(height)
-    if not (math.isfinite(h) and h > 0):
+    low = -float(np.min(wb.mounts[:, 2, 3]))  # the body frame may sit below its legs' mounts
+    if not (math.isfinite(h) and h > low):
         raise ParameterError(
-            f"height={height!r} is not allowed; give a height > 0 m",
+            f"height={h!r} m puts a leg's mount at or below the ground; give a height > "
+            f"{low:.4g} m (the body frame's origin above the ground: the lowest mount is "
+            f"{-low:.4g} m above it)",
             parameter="height",
-            value=height,
-            allowed="> 0",
+            value=h,
+            allowed=f"> {low:.4g}",
         )
     try:
         sh = np.asarray(shift, dtype=float).reshape(-1)
@@ -119,7 +128,8 @@ def standing_pose(
     pts = wb.neutral_feet(r)
     pts[:, :2] -= sh
     pts[:, 2] = wb.foot_radius
-    ik = wb.body_ik(base, pts, strict=True)
+    q_prev = None if knee is None else knee_seed(wb, knee, base, pts)
+    ik = wb.body_ik(base, pts, q_prev=q_prev, strict=True)
     q = np.array(ik.q[0])
     contacts = pts.copy()
     contacts[:, 2] = 0.0

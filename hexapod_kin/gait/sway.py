@@ -110,5 +110,8 @@ def sway_poses(
         for k, m in enumerate(near):
             if m.any():
                 err[k] = targets[k] - zmp_b[m].mean(axis=0)
-        values += np.linalg.solve(zmp_of, err)
+        step = np.linalg.solve(zmp_of, err)
+        if not np.abs(values + step).max() <= wb.leg_span:  # a ZMP no sway of the body can
+            break  # follow (absurd inertias): the centre of mass's sway is kept
+        values += step
     return out

@@ -9,13 +9,15 @@ middle-right, leg6 front-right).
 The built-in patterns are defined from where the legs are (``positions``: each leg's xy in
 the body frame, x forward, y left; the walk passes the leg mounts), for any order of legs:
 
-* ``wave`` (any N ≥ 4): one leg at a time in the *lateral sequence* — the left legs rear to
-  front, then the right legs rear to front — lift-offs 1/N cycle apart,
+* ``wave`` (any N ≥ 5; on four legs it is the ``crawl``): one leg at a time in the *lateral
+  sequence* — the left legs rear to front, then the right legs rear to front — lift-offs 1/N
+  cycle apart,
   ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
   swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
   diagonal, margin 0).
 * ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
-  sways the body over each support triangle (:mod:`.walk`).
+  sways the body over each support triangle (:mod:`.walk`). (A four-legged ``wave`` would be
+  the same gait: the name is not offered for four legs.)
 * ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
 * ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
   2/N cycle apart, the right side half a cycle after the left, ``β = 1 − 2/N``.
@@ -34,7 +36,14 @@ import numpy as np
 
 from ..exceptions import ParameterError, choices
 
-__all__ = ["PATTERNS", "PhaseTable", "default_positions", "pattern_names", "phase_table"]
+__all__ = [
+    "LAYOUT_TOL",
+    "PATTERNS",
+    "PhaseTable",
+    "default_positions",
+    "pattern_names",
+    "phase_table",
+]
 
 
 @dataclass(frozen=True)
@@ -135,14 +144,71 @@ def default_positions(n_legs: int) -> np.ndarray:
     return out
 
 
+#: Layout tolerance, relative to the layout's size (the largest |xy|): a leg whose |y| is
+#: within it is *on the axis*, and coordinates within it of each other are equal. Offered
+#: patterns do not change when a mount moves by less than it (round-off of a URDF's angles).
+LAYOUT_TOL = 1e-6
+
+
+def _tol(xy: np.ndarray) -> float:
+    return LAYOUT_TOL * max(float(np.abs(xy).max(initial=0.0)), 1e-3)
+
+
+def _rank(values: np.ndarray, tol: float) -> np.ndarray:
+    """Ranks of ``values`` with values within ``tol`` of their neighbour sharing a rank."""
+    order = np.argsort(values, kind="stable")
+    rank = np.empty(len(values), dtype=int)
+    r = 0
+    for i, k in enumerate(order):
+        if i and values[k] - values[order[i - 1]] > tol:
+            r += 1
+        rank[k] = r
+    return rank
+
+
 def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
-    """Left (y > 0) and right legs, each sorted rear to front (by x; ties by index)."""
-    left = [k for k in range(len(xy)) if xy[k, 1] > 0.0]
-    right = [k for k in range(len(xy)) if xy[k, 1] <= 0.0]
+    """Left and right legs, each sorted rear to front (by x within the tolerance; ties by index).
+
+    A leg is left for ``y > tol``, right for ``y < −tol`` (``tol``: :data:`LAYOUT_TOL` × the
+    layout's size); a leg on the x axis goes to the side with fewer legs, the front one
+    first, the left side on a tie (so the RARL hexapod's legs at 0° and 180° make three a
+    side, as a ring counter-clockwise from the front-left leg). With an even number of legs
+    the sides are then balanced: while one has two more, its leg nearest the axis (smallest
+    ``|y|``; the rear one leaving the left, the front one leaving the right) changes side
+    (Kraby's legs at ±3 mm of the axis).
+    """
+    tol = _tol(xy)
+    xr = _rank(xy[:, 0], tol)
+    left = [k for k in range(len(xy)) if xy[k, 1] > tol]
+    right = [k for k in range(len(xy)) if xy[k, 1] < -tol]
+    axis = sorted((k for k in range(len(xy)) if abs(xy[k, 1]) <= tol), key=lambda k: (-xr[k], k))
+    for k in axis:
+        (left if len(left) <= len(right) else right).append(k)
+    if len(xy) % 2 == 0:  # as many a side: the legs nearest the axis change side
+        yr = _rank(np.abs(xy[:, 1]), tol)
+        while len(left) > len(right) + 1:  # the rear one of the nearest first
+            k = min(left, key=lambda k: (yr[k], xr[k], k))
+            left.remove(k)
+            right.append(k)
+        while len(right) > len(left) + 1:  # the front one of the nearest first
+            k = min(right, key=lambda k: (yr[k], -xr[k], k))
+            right.remove(k)
+            left.append(k)
     return (
-        sorted(left, key=lambda k: (xy[k, 0], k)),
-        sorted(right, key=lambda k: (xy[k, 0], k)),
+        sorted(left, key=lambda k: (xr[k], k)),
+        sorted(right, key=lambda k: (xr[k], k)),
     )
+
+
+def _ring(xy: np.ndarray) -> list[int]:
+    """Legs counter-clockwise from the front (angle in (−π, π], within the tolerance)."""
+    tol = _tol(xy)
+    y = np.where(np.abs(xy[:, 1]) <= tol, 0.0, xy[:, 1])
+    x = np.where(np.abs(xy[:, 0]) <= tol, 0.0, xy[:, 0])
+    ang = np.arctan2(y, x)
+    ang[ang <= -np.pi + 1e-12] = np.pi
+    rank = _rank(ang, tol / max(float(np.abs(xy).max(initial=0.0)), 1e-3))
+    return sorted(range(len(xy)), key=lambda k: (rank[k], k))
 
 
 def _wave(xy: np.ndarray) -> PhaseTable:
@@ -160,7 +226,7 @@ def _crawl(xy: np.ndarray) -> PhaseTable:
 def _tripod(xy: np.ndarray) -> PhaseTable:
     # alternate legs around the body (by the angle of their position); the front-left leg's
     # set lifts at t = 0, the other half a cycle later
-    ring = [int(k) for k in np.argsort(np.arctan2(xy[:, 1], xy[:, 0]), kind="stable")]
+    ring = _ring(xy)
     left, right = _sides(xy)
     first = left[-1] if left else ring[0]
     parity = ring.index(first) % 2
@@ -187,26 +253,50 @@ def _pairs(xy: np.ndarray, name: str) -> PhaseTable:
     return PhaseTable(name, _offsets(lift, 0.5, 4), 0.5, statically_stable=False)
 
 
-def _allowed(n: int, xy: np.ndarray) -> dict[str, Any]:
+def _offer(n: int, xy: np.ndarray, names: Any = None) -> tuple[dict[str, Any], dict[str, str]]:
+    """The makers of the patterns offered for this layout, and why each other one is not."""
     left, right = _sides(xy)
+    label = list(names) if names is not None and len(names) == n else [str(k) for k in range(n)]
+
+    def legs(ks: list[int]) -> str:
+        return ", ".join(label[k] for k in ks) or "none"
+
     out: dict[str, Any] = {}
+    why: dict[str, str] = {}
+    sides = f"{len(left)} on the left ({legs(left)}) and {len(right)} on the right ({legs(right)})"
     if n == 4 and len(left) == 2 and len(right) == 2:
         out["crawl"] = _crawl
         out["pace"] = lambda p: _pairs(p, "pace")
         out["trot"] = lambda p: _pairs(p, "trot")
+    else:
+        reason = f"needs 4 legs, 2 a side; this robot has {n}: {sides}"
+        why.update(dict.fromkeys(("crawl", "pace", "trot"), reason))
     if n == 6:
         out["tripod"] = _tripod
+    else:
+        why["tripod"] = f"needs 6 legs; this robot has {n}"
     if n >= 6 and n % 2 == 0 and len(left) == len(right):
         out["ripple"] = _ripple
-    if n >= 4:
+    else:
+        why["ripple"] = f"needs an even number >= 6 of legs, as many a side; this robot has {sides}"
+    if n >= 5:
         out["wave"] = _wave
-    return out
+    elif n == 4:
+        why["wave"] = "on four legs is the crawl (the same lateral sequence, with body sway)"
+    else:
+        why["wave"] = f"needs 5 legs or more; this robot has {n}"
+    return out, why
+
+
+def default_pattern(n_legs: int) -> str:
+    """The pattern a walk takes when none is named: tripod (6 legs), crawl (4), else wave."""
+    return {6: "tripod", 4: "crawl"}.get(int(n_legs), "wave")
 
 
 def pattern_names(n_legs: int = 6, positions: Any = None) -> tuple[str, ...]:
     """The built-in patterns for ``n_legs`` legs laid out at ``positions`` (sorted)."""
     xy = _layout(int(n_legs), positions)
-    return tuple(sorted(_allowed(int(n_legs), xy)))
+    return tuple(sorted(_offer(int(n_legs), xy)[0]))
 
 
 def _layout(n: int, positions: Any) -> np.ndarray:
@@ -229,16 +319,20 @@ PATTERNS: dict[str, PhaseTable] = {
 }
 
 
-def phase_table(pattern: str | PhaseTable, n_legs: int = 6, positions: Any = None) -> PhaseTable:
+def phase_table(
+    pattern: str | PhaseTable, n_legs: int = 6, positions: Any = None, names: Any = None
+) -> PhaseTable:
     """A built-in pattern by name, made for the robot's legs, or a user's table.
 
     Args:
-        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 4, ``crawl``, ``trot``,
+        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 5, ``crawl``, ``trot``,
             ``pace`` for four legs, ``tripod`` for six, ``ripple`` for an even N ≥ 6) or a
             :class:`PhaseTable` with one offset per leg.
         n_legs: Number of legs.
         positions: (N, 2) the legs' xy in the body frame (x forward, y left), e.g. the mounts;
-            default :func:`default_positions` (the built-in hexapod's order).
+            default :func:`default_positions` (the built-in hexapod's order). Sides are
+            decided within :data:`LAYOUT_TOL` (see :func:`_sides`).
+        names: The legs' names, for the message of a refused pattern.
 
     Raises:
         ParameterError: Unknown name for this number of legs (the message lists the allowed
@@ -250,10 +344,11 @@ def phase_table(pattern: str | PhaseTable, n_legs: int = 6, positions: Any = Non
         table = pattern
     else:
         xy = _layout(n, positions)
-        makers = _allowed(n, xy)
+        makers, why = _offer(n, xy, names)
         if not (isinstance(pattern, str) and pattern in makers):
+            because = f" ({pattern} {why[pattern]})" if pattern in why else ""
             raise ParameterError(
-                f"pattern={pattern!r} is not allowed for {n} legs; use one of "
+                f"pattern={pattern!r} is not allowed for {n} legs{because}; use one of "
                 f"{choices(makers) if makers else '(none built in)'} or a PhaseTable",
                 parameter="pattern",
                 value=repr(pattern),

@@ -23,6 +23,7 @@ __all__ = [
     "TERRAINS",
     "Terrain",
     "disc_offsets",
+    "edge_distance",
     "disc_residual",
     "flat",
     "off_edges",
@@ -157,11 +158,22 @@ ANGLES = 16
 EDGE_TOL = 1e-3
 
 
-def disc_offsets(radius: float) -> np.ndarray:
-    """(S, 2) horizontal sample offsets [m] of a disc: centre, :data:`RINGS` × :data:`ANGLES`."""
+#: :func:`disc_offsets` with ``fine=True`` (:func:`edge_distance`): rings every 1/32 of the
+#: radius (the outermost every 1/256) and 96 directions.
+FINE_RINGS = tuple(np.r_[np.arange(1, 29) / 32.0, 1.0 - np.arange(32, -1, -1) / 256.0])
+FINE_ANGLES = 96
+
+
+def disc_offsets(radius: float, fine: bool = False) -> np.ndarray:
+    """(S, 2) horizontal sample offsets [m] of a disc: centre, :data:`RINGS` × :data:`ANGLES`.
+
+    ``fine``: :data:`FINE_RINGS` × :data:`FINE_ANGLES` (an edge's clearance to a fraction of
+    a millimetre).
+    """
+    rings, angles = (FINE_RINGS, FINE_ANGLES) if fine else (RINGS, ANGLES)
     rows = [np.zeros((1, 2))]
-    for k, f in enumerate(RINGS):
-        a = (np.arange(ANGLES) + 0.5 * (k % 2)) * (2.0 * np.pi / ANGLES)
+    for k, f in enumerate(rings):
+        a = (np.arange(angles) + 0.5 * (k % 2)) * (2.0 * np.pi / angles)
         rows.append(f * radius * np.stack([np.cos(a), np.sin(a)], axis=1))
     return np.concatenate(rows)
 
@@ -206,6 +218,39 @@ def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) 
         gap = np.array(gap, dtype=float)
         gap[near] = (cn[:, None, 2] - h - cap).min(axis=-1)
     return np.asarray(np.where(np.isnan(gap), -np.inf, gap))
+
+
+def edge_distance(
+    ground: Terrain, centres: Any, radius: float, reach: float, below: Any
+) -> np.ndarray:
+    """3-D distance [m] from spheres to the terrain above given planes (``inf``: none near).
+
+    The terrain is sampled around each centre ``c`` (..., 3) in a disc of radius
+    ``radius + reach`` (:func:`disc_offsets`, fine); a sample at horizontal offset d with
+    height ``h = h(c_xy + d)`` more than :data:`EDGE_TOL` above its point's plane ``below``
+    (..., 4) (a leg's own ground, ignored) is at ``√(|d|² + (c_z − h)²) − r`` from the
+    sphere, or ``|d| − r`` when ``h ≥ c_z`` (the step face beside the sphere); the smallest.
+    Exact to the sampling for a height field with vertical steps (a step's corner). Spheres
+    more than ``reach`` above the terrain's :attr:`Terrain.relief` are not sampled (``inf``).
+    """
+    c = np.asarray(centres, dtype=float)
+    out = np.full(c.shape[:-1], np.inf)
+    # only where the terrain may come within ``reach`` (Terrain.relief bounds it)
+    near = ~(c[..., 2] - ground(c[..., 0], c[..., 1]) - radius - ground.relief > reach)
+    if not near.any():
+        return out
+    c = c[near]
+    d = disc_offsets(radius + reach, fine=True)
+    x, y = c[:, 0, None] + d[:, 0], c[:, 1, None] + d[:, 1]
+    h = ground(x, y)
+    pl = np.asarray(below, dtype=float)[near]
+    plane = (pl[..., 3:4] - pl[..., 0:1] * x - pl[..., 1:2] * y) / pl[..., 2:3]
+    dz = c[:, 2, None] - h
+    flat = np.hypot(d[:, 0], d[:, 1])
+    dist = np.where(dz > 0, np.hypot(flat, dz), flat) - radius
+    dist = np.where((h > plane + EDGE_TOL) & np.isfinite(h), dist, np.inf)
+    out[near] = dist.min(axis=-1)
+    return out
 
 
 def disc_residual(ground: Terrain, points: Any, radius: float) -> np.ndarray:

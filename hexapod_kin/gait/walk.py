@@ -43,13 +43,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError
+from ..exceptions import ParameterError
 from ..motion import read_only
+from .knee import knee_directions, knee_seed
+from .limits import fit_period, top_speed
 from .paths import (
     rolling_ik,
     se2_pose,
@@ -57,8 +58,10 @@ from .paths import (
     terrain_normals,
 )
 from .robot import GaitError, WholeBody, as_whole_body
+from .run import GaitRun
 from .stability import (
     accel_limit_of,
+    edge_clearance,
     leg_terrain_clearance,
     raise_checks,
     segment_clearance,
@@ -66,12 +69,20 @@ from .stability import (
     terrain_clearance,
 )
 from .sway import sway_poses
-from .tables import PhaseTable, phase_table
-from .terrain import Terrain, off_edges, raise_profile, swing_raise
+from .tables import PhaseTable, default_pattern, pattern_names, phase_table
+from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
 from .zmp import second_difference, zmp_points
 
-__all__ = ["GaitRun", "se2_pose", "swing_profile", "walk"]
+__all__ = [
+    "GaitRun",
+    "default_step_height",
+    "default_stride",
+    "highest_speed",
+    "se2_pose",
+    "swing_profile",
+    "walk",
+]
 
 #: The longest foot stroke during one stance [m] a velocity may ask (the stride's own cap).
 MAX_STROKE = 10.0
@@ -80,15 +91,26 @@ MAX_TURN = 2.0 * math.pi
 #: Default foot stroke during stance [m] when no velocity is given.
 DEFAULT_STRIDE = 0.05
 
+#: The default step height of a robot whose legs are long enough [m].
+DEFAULT_STEP_HEIGHT = 0.03
+
 #: Rounding tolerance of the checks, relative to the robot's size (the largest mount-to-centre
 #: distance plus the foot reach) [m/m]: a margin above ``−MARGIN_TOL·size`` is not a failure.
 MARGIN_TOL = 1e-9
 
 #: Footholds keep a flat disc of radius ``foot_radius`` + this [m] (terrain.off_edges).
-FOOTHOLD_MARGIN = 0.007
+FOOTHOLD_MARGIN = 0.02
 
 #: Swings over an edge clear the terrain by this [m] (terrain.swing_raise).
 SWING_MARGIN = 0.005
+
+#: Passes that raise the swings found short of SWING_MARGIN over an edge; the slack [m] the
+#: sampled clearance may fall short of it by (the disc sampling's resolution).
+EDGE_PASSES = 3
+EDGE_SLACK = 1e-4
+
+#: A swing found short of SWING_MARGIN is raised to clear it by this much more [m].
+EDGE_HEADROOM = 5e-4
 
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
@@ -114,6 +136,40 @@ def _num(
     return v
 
 
+def default_stride(wb: WholeBody) -> float:
+    """The default stride [m]: :data:`DEFAULT_STRIDE`, or a quarter of a short leg's span."""
+    return min(DEFAULT_STRIDE, 0.25 * wb.leg_span)
+
+
+def default_step_height(wb: WholeBody) -> float:
+    """The default step height [m]: :data:`DEFAULT_STEP_HEIGHT`, or 0.15 × a short leg's span."""
+    return min(DEFAULT_STEP_HEIGHT, 0.15 * wb.leg_span)
+
+
+def highest_speed(robot: Any = None, **options: Any) -> tuple[float, float, float]:
+    """The highest straight speed of a walk for this robot: :func:`~.limits.top_speed`.
+
+    Args:
+        robot: Any robot :func:`walk` takes.
+        **options: Keywords of :func:`walk` (``pattern``, ``step_height``...); ``stride``,
+            ``velocity``, ``period``, ``duration`` and ``strict`` are the search's own.
+
+    Returns:
+        ``(v, stride, period)`` [m/s, m, s].
+
+    """
+    wb = as_whole_body(robot)
+    kw = {k: v for k, v in options.items() if k not in _SEARCHED}
+
+    def plan(L: float, T: float) -> GaitRun:
+        return walk(wb, **kw, stride=L, period=T, duration=T, strict=False)
+
+    return top_speed(plan, default_stride(wb))
+
+
+_SEARCHED = ("stride", "velocity", "period", "duration", "strict")
+
+
 def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 64 s³(1 − s)³)`` at ``s ∈ [0, 1]``.
 
@@ -126,255 +182,6 @@ def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     s = np.asarray(s, dtype=float)
     u = s * (1.0 - s)
     return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 64.0 * u * u * u
-
-
-@dataclass(frozen=True)
-class GaitRun:
-    """A walk of the whole robot sampled in time (arrays read-only, SI units).
-
-    Attributes:
-        t: (N,) times [s].
-        base_poses: (N, 4, 4) body poses ``worldMbody`` (the free-flyer's placement).
-        feet: (N, L, 3) feet (foot-sphere centres) in the world by forward kinematics of ``q``
-            [m].
-        feet_planned: (N, L, 3) planned feet [m].
-        q: (N, nq) joint angles [rad] (in ``joint_names`` order).
-        qdot: (N, nq) joint rates [rad/s] (second-order finite differences).
-        support: (N, L) True for the stance feet (the support set).
-        phase: (N, L) gait phase in cycles [0, 1) (stance below the duty factor).
-        com: (N, 3) whole-body centre of mass in the world [m].
-        slip: (N, L) how far the material point of each stance foot in contact with the ground
-            has slid since the stance's first sample [m] (0 in swing): ``‖c − c_s − D‖``,
-            c the sphere's centre by FK and D its rolling (:func:`.paths.rolling_offsets`)
-            from the FK rotations (for point feet, the distance from the first stance sample).
-        margin: (N,) static stability margin [m] (negative: CoM outside the support polygon
-            of the contact points).
-        limit_margin: (N, nq) distance of each joint to its nearest limit [rad].
-        ik_ok: (N, L) True where the leg's IK reached its foot inside the joint limits.
-        reach_excess: (N, L) distance a foot is out of its leg's reach [m] (0 if reached).
-        clearance: (N, P) surface gap between the links of each neighbouring pair [m].
-        pairs: The neighbouring pairs, by leg index.
-        leg_names: The legs.
-        joint_names: The joints.
-        table: The phase table used (``table.statically_stable``: False for trot and pace,
-            whose margin is reported but not a check).
-        settings: The walk's parameters (stride [m], step_height [m], period [s],
-            duty_factor, velocity (vx [m/s], vy [m/s], wz [rad/s]), body_height [m],
-            foot_reach [m], terrain, duration [s], rate [Hz], foot_radius [m], sway,
-            rolling_passes, rolling_residual [m], margin_tol [m]).
-        mass: Total mass [kg].
-        qddot: (N, nq) joint accelerations [rad/s²] (second differences).
-        velocity_limit: (nq,) the joints' velocity limits [rad/s] (inf: none).
-        accel_limit: (nq,) the acceleration limits checked [rad/s²] (inf: none given).
-        robot: The whole-robot model that walked (for viewers and simulators).
-        normals: (N, L, 3) the ground's unit normal at each foot's current (stance) or next
-            (swing) contact; the contact point is ``feet − foot_radius · normals``.
-        foot_gap: (N, L) how far each foot sphere clears the terrain [m] (sampled,
-            :func:`.stability.terrain_clearance`; 0 in stance, negative: into it).
-        leg_gap: (N, L) how far each leg's links clear the terrain above its foot's ground
-            [m] (:func:`.stability.leg_terrain_clearance`).
-        zmp_margin: (N,) the zero-moment point's signed distance to the support polygon's
-            edge [m] (:func:`.zmp.zmp_points`: the whole robot's centroidal dynamics, the
-            legs' momentum included, on the stance contacts' mean height). Reported, not a
-            check.
-
-    """
-
-    t: np.ndarray
-    base_poses: np.ndarray
-    feet: np.ndarray
-    feet_planned: np.ndarray
-    q: np.ndarray
-    qdot: np.ndarray
-    support: np.ndarray
-    phase: np.ndarray
-    com: np.ndarray
-    slip: np.ndarray
-    margin: np.ndarray
-    limit_margin: np.ndarray
-    ik_ok: np.ndarray
-    reach_excess: np.ndarray
-    clearance: np.ndarray
-    pairs: tuple[tuple[int, int], ...]
-    leg_names: tuple[str, ...]
-    joint_names: tuple[str, ...]
-    table: PhaseTable
-    settings: dict[str, Any] = field(default_factory=dict)
-    mass: float = 0.0
-    qddot: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    velocity_limit: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    accel_limit: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    robot: WholeBody | None = field(default=None, repr=False)
-    normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
-    foot_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    leg_gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
-    zmp_margin: np.ndarray = field(default_factory=lambda: np.zeros(0))
-
-    @property
-    def min_zmp_margin(self) -> float:
-        """Smallest dynamic (zero-moment point) stability margin over the run [m] (nan: none)."""
-        return float(self.zmp_margin.min()) if self.zmp_margin.size else math.nan
-
-    @property
-    def min_margin(self) -> float:
-        """Smallest stability margin over the run [m]."""
-        return float(self.margin.min())
-
-    @property
-    def max_slip(self) -> float:
-        """Largest stance-foot slip over the run [m]."""
-        return float(self.slip.max())
-
-    @property
-    def min_limit_margin(self) -> float:
-        """Smallest joint-limit margin over the run [rad]."""
-        return float(self.limit_margin.min())
-
-    @property
-    def min_clearance(self) -> float:
-        """Smallest gap between the links of neighbouring legs over the run [m]."""
-        return float(self.clearance.min()) if self.clearance.size else math.inf
-
-    @property
-    def max_foot_error(self) -> float:
-        """Largest distance between the feet by FK and the planned feet [m]."""
-        return float(np.linalg.norm(self.feet - self.feet_planned, axis=-1).max())
-
-    @property
-    def statically_stable(self) -> bool:
-        """False for patterns that are not statically stable (trot, pace): margin not checked."""
-        return self.table.statically_stable
-
-    @property
-    def margin_ok(self) -> bool:
-        """The margin check: ``min_margin > −margin_tol`` (always True if not statically stable)."""
-        tol = float(self.settings.get("margin_tol", 0.0))
-        return (not self.statically_stable) or self.min_margin > -tol
-
-    @property
-    def max_joint_speed(self) -> np.ndarray:
-        """(nq,) largest |q̇| of each joint over the run [rad/s]."""
-        return np.abs(self.qdot).max(axis=0) if self.qdot.size else np.zeros(self.q.shape[1])
-
-    @property
-    def max_joint_accel(self) -> np.ndarray:
-        """(nq,) largest |q̈| of each joint over the run [rad/s²]."""
-        return np.abs(self.qddot).max(axis=0) if self.qddot.size else np.zeros(self.q.shape[1])
-
-    @property
-    def speed_ok(self) -> bool:
-        """Every joint within its velocity limit (and acceleration limit, if given)."""
-        lim = self.velocity_limit if self.velocity_limit.size else np.inf
-        acc = self.accel_limit if self.accel_limit.size else np.inf
-        return bool(
-            np.all(self.max_joint_speed <= lim * (1 + 1e-9))
-            and np.all(self.max_joint_accel <= acc * (1 + 1e-9))
-        )
-
-    @property
-    def ok(self) -> bool:
-        """True when every check passes at every sample (margin only if statically stable)."""
-        return bool(
-            self.ik_ok.all()
-            and self.margin_ok
-            and self.min_limit_margin >= 0
-            and self.min_clearance > 0
-            and self.max_slip <= 1e-9
-            and self.speed_ok
-            and (not self.foot_gap.size or self.foot_gap.min() >= -1e-9)
-            and (not self.leg_gap.size or self.leg_gap.min() >= -1e-9)
-        )
-
-    def pinocchio_q(self) -> np.ndarray:
-        """Pinocchio free-flyer configurations (N, nq): xyz, quaternion (x, y, z, w), joints.
-
-        Raises:
-            ConfigurationError: A run without its robot (``robot=None``).
-
-        """
-        if self.robot is None:
-            raise ConfigurationError(
-                "this run carries no robot (robot=None): its Pinocchio configurations are "
-                "the robot's (WholeBody.pinocchio_q)",
-                parameter="robot",
-            )
-        return self.robot.pinocchio_q(self.q, self.base_poses)
-
-    def _base_rates(self) -> tuple[np.ndarray, np.ndarray]:
-        n = len(self.t)
-        p = self.base_poses[:, :3, 3]
-        yaw = np.unwrap(np.arctan2(self.base_poses[:, 1, 0], self.base_poses[:, 0, 0]))
-        x = np.concatenate([p, yaw[:, None]], axis=1)
-        if n < 4:
-            return np.zeros_like(x), np.zeros_like(x)
-        return np.gradient(x, self.t, axis=0, edge_order=2), second_difference(x, self.t)
-
-    def base_velocity(self) -> np.ndarray:
-        """Body twist (N, 6) in the body frame: linear [m/s], angular [rad/s].
-
-        The free-flyer's velocity in Pinocchio's convention (``v[:6] = (Rᵀ ṗ, ω)``); by
-        second-order finite differences of :attr:`base_poses` (the body stays level:
-        ω = (0, 0, ψ̇)).
-        """
-        rate, _ = self._base_rates()
-        out = np.zeros((len(self.t), 6))
-        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], rate[:, :3])
-        out[:, 5] = rate[:, 3]
-        return out
-
-    def base_acceleration(self) -> np.ndarray:
-        """The free-flyer's acceleration (N, 6), Pinocchio's ``a[:6] = d/dt v[:6]``.
-
-        ``(Rᵀ p̈ − ω × Rᵀ ṗ, ω̇)`` with p̈ and ψ̈ by second differences (the classical
-        acceleration of the body origin is ``p̈``).
-        """
-        rate, acc = self._base_rates()
-        v = self.base_velocity()
-        out = np.zeros((len(self.t), 6))
-        out[:, :3] = np.einsum("nji,nj->ni", self.base_poses[:, :3, :3], acc[:, :3])
-        out[:, :3] -= np.cross(v[:, 3:], v[:, :3])
-        out[:, 5] = acc[:, 3]
-        return out
-
-    def pinocchio_v(self) -> np.ndarray:
-        """Pinocchio free-flyer velocities (N, 6 + nq): :meth:`base_velocity` then ``qdot``."""
-        return np.concatenate([self.base_velocity(), self.qdot], axis=1)
-
-    def pinocchio_a(self) -> np.ndarray:
-        """Pinocchio free-flyer accelerations (N, 6 + nq): :meth:`base_acceleration`, ``qddot``."""
-        return np.concatenate([self.base_acceleration(), self.qddot], axis=1)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary of the checks and the settings.
-
-        Keys: min_margin [m], statically_stable, max_slip [m], min_limit_margin [rad],
-        min_clearance [m], max_foot_error [m], max_joint_rate [rad/s], max_joint_speed and
-        max_joint_accel per joint [rad/s], [rad/s²], velocity_limit [rad/s] (None: no
-        limit), speed_ok, samples, ok, pattern (the table), mass [kg], and the settings.
-        """
-
-        def finite(a: np.ndarray) -> list[float | None]:
-            return [float(x) if math.isfinite(x) else None for x in a]
-
-        return {
-            "min_margin": self.min_margin,
-            "min_zmp_margin": self.min_zmp_margin,
-            "statically_stable": self.statically_stable,
-            "max_slip": self.max_slip,
-            "min_limit_margin": self.min_limit_margin,
-            "min_clearance": self.min_clearance,
-            "max_foot_error": self.max_foot_error,
-            "max_joint_rate": float(np.abs(self.qdot).max()) if self.qdot.size else 0.0,
-            "max_joint_speed": dict(zip(self.joint_names, finite(self.max_joint_speed))),
-            "max_joint_accel": dict(zip(self.joint_names, finite(self.max_joint_accel))),
-            "velocity_limit": dict(zip(self.joint_names, finite(self.velocity_limit))),
-            "speed_ok": self.speed_ok,
-            "samples": int(len(self.t)),
-            "ok": self.ok,
-            "pattern": self.table.to_dict(),
-            "mass": self.mass,
-            **{k: (list(v) if isinstance(v, tuple) else v) for k, v in self.settings.items()},
-        }
 
 
 def _zmp_margin(
@@ -407,10 +214,10 @@ def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
 def walk(
     robot: Any = None,
     *,
-    pattern: str | PhaseTable = "tripod",
+    pattern: str | PhaseTable | None = None,
     stride: float | None = None,
-    step_height: float = 0.03,
-    period: float = 1.0,
+    step_height: float | None = None,
+    period: float | None = None,
     duty_factor: float | None = None,
     velocity: Any = None,
     body_height: float | None = None,
@@ -423,6 +230,8 @@ def walk(
     foot_radius: float | None = None,
     sway: float | None = None,
     accel_limit: Any = None,
+    knee: str | None = None,
+    open_loop: bool = True,
 ) -> GaitRun:
     """Walk the robot and check every sample.
 
@@ -431,13 +240,17 @@ def walk(
             :func:`~.robot.as_whole_body` takes (a URDF path, ``erd:NAME``, a loaded model);
             default the built-in hexapod.
         pattern: A name of :func:`~.tables.pattern_names` for the robot's legs (``tripod``,
-            ``wave``, ``ripple`` for six; ``crawl``, ``wave``, ``trot``, ``pace`` for four;
-            ``wave``, ``ripple`` for eight) or a :class:`~.tables.PhaseTable`.
+            ``wave``, ``ripple`` for six; ``crawl``, ``trot``, ``pace`` for four; ``wave``,
+            ``ripple`` for eight) or a :class:`~.tables.PhaseTable` (default
+            :func:`~.tables.default_pattern`: tripod, crawl for four legs, else wave).
         stride: Foot stroke during stance [m] for a straight forward walk (sets
-            ``vx = stride / (duty_factor · period)``); default 0.05 m when ``velocity`` is
-            not given. Give ``stride`` or ``velocity``, not both.
-        step_height: Swing lift above the straight line between contacts [m].
-        period: Cycle time T [s].
+            ``vx = stride / (duty_factor · period)``); default :func:`default_stride` when
+            ``velocity`` is not given. Give ``stride`` or ``velocity``, not both.
+        step_height: Swing lift above the straight line between contacts [m] (default
+            :func:`default_step_height`).
+        period: Cycle time T [s]. Default 1 s, or for a straight walk (no ``velocity``) the
+            shortest multiple of :data:`~.limits.PERIOD_STEP` that keeps every joint within
+            its URDF velocity limit (and ``accel_limit``): :func:`~.limits.fit_period`.
         duty_factor: Stance fraction β in (0, 1) (default the pattern's).
         velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame (curves with
             vx and wz, turning in place with only wz).
@@ -458,6 +271,14 @@ def walk(
             legs, else 0): see the module docstring.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
+        knee: Where the knees of the closed-form legs point at the first sample (one of
+            :data:`~.knee.KNEES`: ``up``, ``down``, ``forward``, ``backward``, ``out``,
+            ``in``; default: the branch inside the joint limits nearest ``q0``). The
+            directions taken are reported (``settings["knees"]``).
+        open_loop: True (default): the plan is played as it is, so a pattern that is not
+            statically stable (trot, pace: two feet on the ground) is refused with a
+            :class:`GaitError` (check ``"statically unstable"``). False: planned anyway,
+            for a balance controller to track (its static margin reported, not checked).
 
     Returns:
         A :class:`GaitRun`.
@@ -474,10 +295,59 @@ def walk(
 
     """
     wb = as_whole_body(robot)
-    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3]).with_duty_factor(duty_factor)
+    pattern = default_pattern(wb.n_legs) if pattern is None else pattern
+    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3], wb.leg_names).with_duty_factor(
+        duty_factor
+    )
+    if open_loop and not table.statically_stable:
+        offered = pattern_names(wb.n_legs, wb.mounts[:, :2, 3])
+        stable = [
+            p for p in offered if phase_table(p, wb.n_legs, wb.mounts[:, :2, 3]).statically_stable
+        ]
+        raise GaitError(
+            f"pattern {table.name!r} keeps two feet on the ground: it is not statically stable "
+            "and needs a balance controller, so the open-loop planner refuses it (check "
+            "'statically unstable'; plan it for a controller with walk(..., open_loop=False), "
+            f"or walk {', '.join(stable)})",
+            check="statically unstable",
+            parameter="pattern",
+            value=table.name,
+            allowed="a statically stable pattern",
+        )
     beta = table.duty_factor
-    T = _num("period", period, hi=1e3)
-    H = _num("step_height", step_height, zero=True, hi=1.0)
+    H = _num(
+        "step_height",
+        default_step_height(wb) if step_height is None else step_height,
+        zero=True,
+        hi=1.0,
+    )
+    if period is None and velocity is None:
+
+        def planned(T: float, whole: bool = False) -> GaitRun:
+            return walk(
+                wb,
+                pattern=table,
+                stride=stride,
+                step_height=H,
+                period=T,
+                body_height=body_height,
+                foot_reach=foot_reach,
+                terrain=terrain,
+                rate=rate,
+                duration=duration if whole else T,
+                q0=q0,
+                strict=False,
+                foot_radius=foot_radius,
+                sway=sway,
+                accel_limit=accel_limit,
+                knee=knee,
+                open_loop=open_loop,
+            )
+
+        period = fit_period(planned)  # one cycle: the whole walk on flat ground (periodic)
+        if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
+            period = fit_period(lambda T: planned(T, True), period)
+    T = _num("period", 1.0 if period is None else period, hi=1e3)
     bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
     reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
     dur = _num("duration", duration, zero=True, hi=1e5)
@@ -504,7 +374,9 @@ def walk(
             allowed="stride or velocity",
         )
     if velocity is None:
-        L = _num("stride", DEFAULT_STRIDE if stride is None else stride, zero=True, hi=MAX_STROKE)
+        L = _num(
+            "stride", default_stride(wb) if stride is None else stride, zero=True, hi=MAX_STROKE
+        )
         vel = (L / (beta * T), 0.0, 0.0)
     else:
         try:
@@ -634,6 +506,8 @@ def walk(
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
     base[:, 2, 3] = gz.mean(axis=1) + bh
     # --- joints: sway (optional), then IK <-> rolling to a fixed point
+    if knee is not None:
+        q0 = knee_seed(wb, knee, base[0], plan[0], q0)
     if gain > 0.0:
         base = sway_poses(wb, table, T, vel, nb, gain, base, plan, t, q0)
     args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
@@ -649,7 +523,40 @@ def walk(
             extra += more
             plan[..., 2] += np.where(swing, more[row, legs] * lift2, 0.0)
             feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
+    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
+    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
+    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
+    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
+    # the swing clearance promised over edges (SWING_MARGIN), measured on the feet as solved:
+    # a swing short of it is raised by the deficit over its raise profile, and solved again
+    # (over the ground above the plane of the swing's lift-off in its first half, of its
+    # touch-down in its second: the edge it climbs, not the ground it leaves or lands on)
+    edge_gap = np.full(swing.shape, np.inf)
+    if ok_tab and ground.relief > 0:
+        first = (swing & (blend < 0.5))[..., None]
+        n_own = np.where(first, n_tab[row - 1, legs], n_nxt)
+        own = np.concatenate(
+            [n_own, np.einsum("nli,nli->nl", n_own, np.where(first, prev, nxt))[..., None]],
+            axis=-1,
+        )
+        for _ in range(EDGE_PASSES + 1):
+            edge_gap = np.full(swing.shape, np.inf)
+            edge_gap[swing] = edge_distance(ground, feet[swing], rad, SWING_MARGIN, own[swing])
+            short = swing & (edge_gap < SWING_MARGIN - EDGE_SLACK) & (lift2 > 0.05)
+            if not short.any() or _ == EDGE_PASSES:
+                break
+            need = np.zeros(tab.shape[:2])
+            at = (row[short], np.broadcast_to(legs, short.shape)[short])
+            aim = SWING_MARGIN + EDGE_HEADROOM  # the sampled distance errs by a fraction of it
+            np.maximum.at(need, at, (aim - edge_gap[short]) / lift2[short])
+            need = np.minimum(need, np.maximum(H - extra, 0.0))  # the raise stays <= H
+            if not need.any():
+                break
+            extra += need
+            plan[..., 2] += np.where(swing, need[row, legs] * lift2, 0.0)
+            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
     foot_gap = terrain_clearance(ground, feet, swing, rad, t, names, H, strict)
+    edge_clearance(edge_gap, swing, SWING_MARGIN - EDGE_SLACK, t, names, H, strict)
     if strict and not np.asarray(ik.ok).all():
         wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     if T_last is None:
@@ -667,10 +574,6 @@ def walk(
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
-    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
-    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
-    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
-    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
     leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, rad, plane, t, names, strict)
     if n > 3:
         qdot = np.gradient(q, t, axis=0, edge_order=2)
@@ -710,6 +613,7 @@ def walk(
         "rate": hz,
         "foot_radius": rad,
         "sway": gain,
+        "knees": knee_directions(wb, q[0]) if n else (),
         "rolling_passes": passes,
         "rolling_residual": residual,
         "margin_tol": tol,
@@ -717,6 +621,9 @@ def walk(
         "foothold_shift_max": float(np.abs(np.where(used, moved, 0.0)).max()),
         "swings_raised": int(np.count_nonzero(used[1:] & (extra[1:] > 0))),
         "swing_raise_max": float(np.where(used, extra, 0.0).max()),
+        "min_edge_clearance": (
+            float(edge_gap.min()) if edge_gap.size and np.isfinite(edge_gap.min()) else None
+        ),
     }
     ik_ok = np.asarray(ik.ok)
     read_only(ik_ok, vlim, acc_lim, n_nxt, foot_gap, leg_gap)

@@ -1,9 +1,9 @@
 """A walk in the browser: the self-contained page and the live viewer, with its overlays.
 
-:func:`walk_page` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with the support polygon
-and the projected centre of mass at every frame (:func:`hexapod_kin.gait.show.support_polygons`);
-:func:`walk_html` writes it; :func:`walk_live` plays it live. The viewer imports the gait,
-never the other way round.
+:func:`walk_page` animates a :class:`~hexapod_kin.gait.walk.GaitRun` with a trace per foot, the
+support polygon and the projected centre of mass at every frame
+(:func:`hexapod_kin.gait.show.support_polygons`); :func:`walk_html` writes it;
+:func:`walk_live` plays it live. The viewer imports the gait, never the other way round.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write
-from ..exceptions import ConfigurationError
+from ..exceptions import ConfigurationError, FrameNotFoundError
 from ..gait.show import run_model, support_polygons
 from .page import render_html
 
@@ -29,6 +29,28 @@ def _joint_columns(run: Any, mdl: Any) -> list[int]:
             f"model joints {list(mdl.joint_names)} are not the run's {list(run.joint_names)}",
             parameter="model",
         ) from None
+
+
+def _foot_frames(run: Any, mdl: Any) -> Any:
+    """The frame each foot of the run's robot is on, in the loaded model ``mdl`` (one per leg).
+
+    A foot given as a frame plus an offset is traced at its frame's origin. ``None`` (the
+    page's default) when the run carries no robot or ``mdl`` lacks one of the frames.
+    """
+    wb = getattr(run, "robot", None)
+    if wb is None:
+        return None
+    model = wb.model
+    names = []
+    for contact in wb.foot_frames:
+        parent = model.frames[model.getFrameId(contact)].parentFrame
+        names.append(str(model.frames[parent].name))
+    try:
+        for name in names:
+            mdl.frame_id(name)
+    except FrameNotFoundError:  # a model without these frames: the page's default
+        return None
+    return tuple(dict.fromkeys(names))
 
 
 def walk_live(run: Any, viewer: Any, **options: Any) -> None:
@@ -72,6 +94,8 @@ def walk_page(run: Any, *, model: Any = None, title: str | None = None, **option
     """
     mdl = run_model(run) if model is None else model
     cols = _joint_columns(run, mdl)
+    if options.get("trace_frame") is None:  # a trace per foot
+        options["trace_frame"] = _foot_frames(run, mdl)
     poly, com = support_polygons(run)
     label = title or (
         f"hexapod_kin: {run.table.name} gait on {run.settings.get('terrain', '?')} terrain "
