@@ -168,6 +168,9 @@ class Controller:
             )
             self.cols.append(np.flatnonzero(np.abs(J[:3, 6:]).sum(axis=0) > 1e-12))
             feet0.append(self.data.oMf[fid].translation.copy())
+        self.leg_of_col = np.zeros(self.nq, dtype=int)
+        for i, c in enumerate(self.cols):
+            self.leg_of_col[c] = i
         #: (L, 3) the feet at rest in the body frame [m]
         self.feet_body = np.array(feet0)
         pin.ccrba(self.model, self.data, qp, np.zeros(self.model.nv))
@@ -234,6 +237,10 @@ class Controller:
         self.phase = 0.0
         self.walking = False
         self.in_swing = np.zeros(L, dtype=bool)
+        self.touched = np.ones(L, dtype=bool)
+        self.footholds = np.zeros((L, 3))
+        self.stand_at = np.zeros((L, 3))
+        self.v_filt = np.zeros(3)
         self.lift_off = np.zeros((L, 3))
         self.swing_s = np.zeros(L)
         self.path_xy = np.zeros(2)
@@ -251,6 +258,7 @@ class Controller:
         self.path_xy = st["ref_point"][:2].copy()
         self.path_yaw = _yaw(st["R"])
         self.ground_z = float(st["feet"][:, 2].mean())
+        self.stand_at = np.array(st["feet"])
         self.height_ref = float(st["ref_point"][2] - self.ground_z)
         self.stand_height = self.height_ref
         self.q_cmd = np.array(m.q, dtype=float)
@@ -323,27 +331,35 @@ class Controller:
         return ph < beta
 
     def _swing_targets(
-        self, st: dict[str, Any], legs: np.ndarray, m: Measurement
+        self, st: dict[str, Any], legs: np.ndarray, progress: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """World targets and velocities (L, 3) of the swing feet ``legs`` (bool mask)."""
+        """World targets and velocities (L, 3) of the swing feet ``legs`` (bool mask).
+
+        ``progress`` (L,) is each leg's swing fraction (1: due down, not touching yet).
+        """
         tab, cmd, T = self._table, self.command, self.period
         beta = tab.duty_factor
         t_st, t_sw = beta * T, (1.0 - beta) * T
         Rz = _rz(self.path_yaw)
         v_ref = Rz @ np.array([cmd.vx, cmd.vy, 0.0]) if cmd.mode == "walk" else np.zeros(3)
-        v = np.array(st["ref_vel"], dtype=float)
-        v[2] = 0.0
+        v = np.array(self.v_filt)
         k_v = math.sqrt(self.height_ref / _G)
         p_out = np.zeros((self.n_legs, 3))
         v_out = np.zeros((self.n_legs, 3))
         ref = np.array([*self.path_xy, 0.0])
         for i in np.flatnonzero(legs):
-            s = float(self.swing_s[i])
+            s = float(progress[i])
+            if s > 0.7:  # the foothold frozen for the last 30 % of the swing
+                target = self.footholds[i]
+            else:
+                target = None
             t_left = (1.0 - s) * t_sw
             # the hip where the body will be at touch-down (on the path, yawed by then)
             yaw_td = self.path_yaw + (cmd.wz if cmd.mode == "walk" else 0.0) * (t_left + t_st / 2)
             hip = ref + v_ref * t_left + _rz(yaw_td) @ np.array([*self.feet_body[i, :2], 0.0])
-            target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
+            if target is None:
+                target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
+                self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 0.5 * self.span
             n = np.linalg.norm(step[:2])
@@ -354,11 +370,14 @@ class Controller:
             dsm = (6 * s - 6 * s * s) / t_sw
             h = self.swing_height
             p = self.lift_off[i] + np.array([step[0] * sm, step[1] * sm, 0.0])
-            p[2] = z0 + h * math.sin(math.pi * s)
-            vel = np.array([step[0] * dsm, step[1] * dsm, h * math.pi / t_sw * math.cos(math.pi * s)])
-            if s >= 1.0:  # late: keep going down
-                p[2] = min(z0, st["feet"][i, 2]) - 0.2 * h
-                vel[2] = -h / t_sw
+            dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
+            p[2] = z0 - dz * sm + h * math.sin(math.pi * s)
+            vz = -dz * dsm + h * math.pi / t_sw * math.cos(math.pi * s)
+            vel = np.array([step[0] * dsm, step[1] * dsm, vz])
+            if s >= 1.0:  # scheduled down but not touching: keep going down
+                p = np.array(st["feet"][i])
+                p[2] -= dz
+                vel = np.array([0.0, 0.0, -h / t_sw])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
 
@@ -373,6 +392,8 @@ class Controller:
         if not self.ready:
             self.reset(m)
         st = self._state(m)
+        a = min(1.0, self.dt / (0.25 * self.period))  # velocity low-passed over 1/4 cycle
+        self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
         sched = self._advance(m)
         stance = self._contacts(sched, m)
         # lift-off bookkeeping
@@ -384,10 +405,18 @@ class Controller:
                 self.in_swing[i] = False
             elif stance[i] and self.in_swing[i]:
                 self.in_swing[i] = False  # early touch-down
+        touch = np.asarray(m.contacts, dtype=bool)
+        new = touch & stance & ~self.touched
+        self.touched = (self.touched | touch) & stance
+        if not self.walking:
+            self.touched[:] = True
+        for i in np.flatnonzero(new):  # touch-down: where the foot stands, the ground
+            self.stand_at[i] = st["feet"][i]
+            self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
+        stance = stance & self.touched  # a foot still coming down is swung down
         swing = ~stance
-        if stance.any():
-            self.ground_z = 0.9 * self.ground_z + 0.1 * float(st["feet"][stance, 2].mean())
-        p_sw, v_sw = self._swing_targets(st, swing, m)
+        s_eff = np.where(sched, 1.0, self.swing_s)
+        p_sw, v_sw = self._swing_targets(st, swing, s_eff)
         if self.kind == "torque":
             return self._torques(st, stance, swing, p_sw, v_sw)
         return self._servo(st, stance, swing, p_sw, m)
@@ -471,23 +500,9 @@ class Controller:
         Bc = np.eye(4)
         Bc[:3, 3] = pos + corr[:3]
         Bc[:3, :3] = _rot(corr[3:6]) @ R
-        targets = np.where(stance[:, None], st["feet"], p_sw)
-        Binv_R, Binv_p = Bc[:3, :3].T, -Bc[:3, :3].T @ Bc[:3, 3]
-        local = targets @ Binv_R.T + Binv_p
-        # leg IK on the commanded joints: two damped Newton steps
-        q = self.q_cmd
-        for _ in range(2):
-            qp = self.wb.pinocchio_q(q[None], np.eye(4)[None])[0]
-            pin.computeJointJacobians(model, data, qp)
-            pin.updateFramePlacements(model, data)
-            q = q.copy()
-            for i, fid in enumerate(self.feet_ids):
-                c = self.cols[i]
-                J = pin.getFrameJacobian(model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-                J = J[:3, 6 + c]
-                err = local[i] - data.oMf[fid].translation
-                lam = 1e-3 * self.span**2
-                q[c] += J.T @ np.linalg.solve(J @ J.T + lam * np.eye(3), err)
+        targets = np.where(stance[:, None], self.stand_at, p_sw)
+        ik = self.wb.body_ik(Bc, targets, q_prev=self.q_cmd, strict=False)
+        q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
         q = np.clip(q, self.wb.lower, self.wb.upper)
         self.q_cmd = q
         return np.array(q)
