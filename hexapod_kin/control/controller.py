@@ -361,7 +361,7 @@ class Controller:
                 target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
                 self.footholds[i] = target
             step = target - self.lift_off[i]
-            lim = 0.5 * self.span
+            lim = 1.0 * self.span
             n = np.linalg.norm(step[:2])
             if n > lim:
                 step[:2] *= lim / n
@@ -414,6 +414,8 @@ class Controller:
             self.stand_at[i] = st["feet"][i]
             self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
         stance = stance & self.touched  # a foot still coming down is swung down
+        slid = np.linalg.norm(st["feet"] - self.stand_at, axis=1) > 0.02 * self.span
+        self.stand_at[slid] = st["feet"][slid]  # a stance foot that slid stands where it is
         swing = ~stance
         s_eff = np.where(sched, 1.0, self.swing_s)
         p_sw, v_sw = self._swing_targets(st, swing, s_eff)
