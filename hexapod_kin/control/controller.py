@@ -346,7 +346,12 @@ class Controller:
         k_v = math.sqrt(self.height_ref / _G)
         p_out = np.zeros((self.n_legs, 3))
         v_out = np.zeros((self.n_legs, 3))
-        ref = np.array([*self.path_xy, 0.0])
+        if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
+            ref = np.array([*st["B"][:2, 3], 0.0])
+            err = np.array([*(self.path_xy - st["ref_point"][:2]), 0.0])
+            v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
+        else:  # servo posing: about the hips of the body on its path
+            ref = np.array([*self.path_xy, 0.0])
         for i in np.flatnonzero(legs):
             s = float(progress[i])
             if s > 0.7:  # the foothold frozen for the last 30 % of the swing
@@ -392,7 +397,7 @@ class Controller:
         if not self.ready:
             self.reset(m)
         st = self._state(m)
-        a = min(1.0, self.dt / (0.25 * self.period))  # velocity low-passed over 1/4 cycle
+        a = min(1.0, self.dt / (0.05 * self.period))  # velocity low-passed over 1/20 cycle
         self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
         sched = self._advance(m)
         stance = self._contacts(sched, m)
