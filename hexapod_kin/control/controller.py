@@ -397,7 +397,9 @@ class Controller:
         if not self.ready:
             self.reset(m)
         st = self._state(m)
-        a = min(1.0, self.dt / (0.05 * self.period))  # velocity low-passed over 1/20 cycle
+        # the velocity low-passed over 1/20 cycle (torque) or 1/4 cycle (servos: the body
+        # rocks on its compliant servos)
+        a = min(1.0, self.dt / ((0.05 if self.kind == "torque" else 0.25) * self.period))
         self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
         sched = self._advance(m)
         stance = self._contacts(sched, m)
@@ -419,8 +421,6 @@ class Controller:
             self.stand_at[i] = st["feet"][i]
             self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
         stance = stance & self.touched  # a foot still coming down is swung down
-        slid = np.linalg.norm(st["feet"] - self.stand_at, axis=1) > 0.02 * self.span
-        self.stand_at[slid] = st["feet"][slid]  # a stance foot that slid stands where it is
         swing = ~stance
         s_eff = np.where(sched, 1.0, self.swing_s)
         p_sw, v_sw = self._swing_targets(st, swing, s_eff)

@@ -361,6 +361,7 @@ def run(
     others: dict[tuple[str, str], float] = {}
     strikes: dict[str, float] = {}
     fell = False
+    was_down = np.ones(len(foot_geom), dtype=bool)
     cpu0 = time.process_time()
     for k in range(n_settle + n_walk):
         t = (k - n_settle) / ctl.rate
@@ -392,15 +393,18 @@ def run(
         height = float(data.qpos[2]) - ctl.ground_z
         if height < 0.4 * ctl.stand_height or abs(roll) > 1.05 or abs(pitch) > 1.05:
             fell = True
+        down = np.zeros(len(foot_geom), dtype=bool)
         for c in data.contact[: data.ncon]:
             g1, g2 = int(c.geom1), int(c.geom2)
             if (leg_of[g1] >= 0 and ground[g2]) or (leg_of[g2] >= 0 and ground[g1]):
-                leg = int(max(leg_of[g1], leg_of[g2]))
-                if ctl.in_swing[leg] and ctl.swing_s[leg] < 0.5 and ctl.swing_s[leg] > 0.0:
-                    strikes.setdefault(wb.leg_names[leg], t)
+                down[int(max(leg_of[g1], leg_of[g2]))] = True
                 continue
             a, b = sorted((label(g1), label(g2)))
             others.setdefault((a, b), t)
+        # a strike: a foot that was off the ground touching in the first half of its swing
+        for leg in np.flatnonzero(down & ~was_down & ctl.in_swing & (ctl.swing_s < 0.5)):
+            strikes.setdefault(wb.leg_names[leg], t)
+        was_down = down
     cpu = time.process_time() - cpu0
     T = np.array(ts)
     P = np.array(pos)
