@@ -36,6 +36,7 @@ MODULES: tuple[str, ...] = (
     "sweep",
     "gait",
     "simulate",
+    "control",
     "report",
     "timeline",
     "precompile",
