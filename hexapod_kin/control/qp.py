@@ -17,10 +17,25 @@ torque limits through each leg's 3 × m foot Jacobian). Solved by proxsuite's de
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 __all__ = ["ForceQP", "wrench_matrix"]
+
+
+def _proxsuite() -> Any:
+    try:
+        import proxsuite
+    except ImportError:
+        from ..exceptions import OptionalDependencyError
+
+        raise OptionalDependencyError(
+            "proxsuite is not installed; `pip install 'hexapod-kin[control]'` installs it",
+            parameter="module",
+            value="proxsuite",
+        ) from None
+    return proxsuite
 
 
 def wrench_matrix(r: np.ndarray) -> np.ndarray:
@@ -67,8 +82,7 @@ class ForceQP:
         (all None: no torque rows). Falls back to the unconstrained least-squares
         solution clipped to the cones when the solver does not converge.
         """
-        import proxsuite
-
+        proxsuite = _proxsuite()
         n = len(r)
         if n == 0:
             return np.zeros((0, 3))
