@@ -24,7 +24,9 @@ CASES: tuple[tuple[str, Any, str, tuple[float, float, float]], ...] = (
 )
 
 
-def measure(robot: Any, pattern: str, velocity: tuple[float, float, float], duration: float) -> dict[str, Any]:
+def measure(
+    robot: Any, pattern: str, velocity: tuple[float, float, float], duration: float
+) -> dict[str, Any]:
     """One closed-loop walk's costs (CPU time)."""
     from hexapod_kin.control import run
 

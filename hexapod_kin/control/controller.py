@@ -149,7 +149,9 @@ class Controller:
         self.model = pin.Model(wb.model)
         self.data = self.model.createData()
         self.n_legs, self.nq = wb.n_legs, wb.nq
-        self.rate = positive("rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0))
+        self.rate = positive(
+            "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
+        )
         self.dt = 1.0 / self.rate
         self.mu = positive("mu", mu)
         self.feet_ids = [self.model.getFrameId(f"{leg}_contact") for leg in wb.leg_names]
@@ -417,7 +419,7 @@ class Controller:
         self.touched = (self.touched | touch) & stance
         if not self.walking:
             self.touched[:] = True
-        for i in np.flatnonzero(new):  # touch-down: where the foot stands, the ground
+        for i in np.flatnonzero(new).tolist():  # touch-down: where the foot stands, the ground
             self.stand_at[i] = st["feet"][i]
             self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
         stance = stance & self.touched  # a foot still coming down is swung down
@@ -494,7 +496,6 @@ class Controller:
         p_sw: np.ndarray,
         m: Measurement,
     ) -> np.ndarray:
-        pin, model, data = self.pin, self.model, self.data
         R, pos = st["R"], np.asarray(m.position, dtype=float)
         # the body's reference pose and its error (position, rotation vector)
         Rd = self._desired_rotation()

@@ -1,13 +1,13 @@
-"""Stance force distribution: a body wrench shared among the stance feet by a small QP.
+r"""Stance force distribution: a body wrench shared among the stance feet by a small QP.
 
 Given the desired wrench ``w = (F, M)`` about the centre of mass (world axes) and the stance
 feet at ``r_i`` from it, the forces ``f_i`` the ground applies to the feet solve
 
 .. math::
 
-    \\min_f \\; \\|A f - w\\|^2_S + \\alpha \\|f\\|^2 \\quad \\text{s.t.}\\quad
-    f_{z,i} \\in [f_{\\min}, f_{\\max}],\\; |f_{x,i}|, |f_{y,i}| \\le \\mu f_{z,i},\\;
-    |\\tau_{\\text{bias},i} - J_i^\\top f_i| \\le \\tau_{\\max}
+    \min_f \; \|A f - w\|^2_S + \alpha \|f\|^2 \quad \text{s.t.}\quad
+    f_{z,i} \in [f_{\min}, f_{\max}],\; |f_{x,i}|, |f_{y,i}| \le \mu f_{z,i},\;
+    |\tau_{\text{bias},i} - J_i^\top f_i| \le \tau_{\max}
 
 with ``A = [I … I; [r_1]× … [r_n]×]`` (the friction cone as its inscribed pyramid; the joint
 torque limits through each leg's 3 × m foot Jacobian). Solved by proxsuite's dense ProxQP
@@ -110,7 +110,7 @@ class ForceQP:
             lo.append(self.f_min)
             hi.append(self.f_max)
             if jac is not None and bias is not None and tau_max is not None:
-                # -tau_max <= bias - J^T f <= tau_max  <=>  bias - tau_max <= J^T f <= bias + tau_max
+                # |bias - J^T f| <= tau_max  <=>  bias - tau_max <= J^T f <= bias + tau_max
                 for j in range(jac[i].shape[1]):
                     if not np.isfinite(tau_max[i][j]):
                         continue

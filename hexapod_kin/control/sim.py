@@ -37,7 +37,7 @@ BUMP_HALF = (8.0, 4.0)
 
 @dataclass(frozen=True)
 class Push:
-    """A push: ``force`` [N] along the path's left normal from ``start`` [s] for ``duration`` [s]."""
+    """A push: ``force`` [N] along the path's left normal from ``start`` for ``duration`` [s]."""
 
     force: float
     start: float
@@ -190,7 +190,11 @@ def _scene_xml(scene: Any, kind: str, bumps: float, seed: int) -> str:
         ground.set("pos", f"0 0 {-bumps - 0.001}")
         ground.addnext(
             etree.Element(
-                "geom", name="bumps", type="hfield", hfield="bumps", pos=f"0 0 {-bumps}",
+                "geom",
+                name="bumps",
+                type="hfield",
+                hfield="bumps",
+                pos=f"0 0 {-bumps}",
                 rgba="0.7 0.7 0.75 1",
             )
         )
@@ -301,14 +305,13 @@ def run(
     data = mj.MjData(model)
     jq = _joint_qpos(mj, model, scene.joint_names)
     jv = np.array(
-        [int(model.jnt_dofadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n)]) for n in scene.joint_names]
+        [
+            int(model.jnt_dofadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n)])
+            for n in scene.joint_names
+        ]
     )
-    act = np.array(
-        [mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
-    )
-    foot_geom = np.array(
-        [mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, g) for g in scene.foot_geoms]
-    )
+    act = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators])
+    foot_geom = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, g) for g in scene.foot_geoms])
     leg_of = np.full(model.ngeom, -1)
     leg_of[foot_geom] = np.arange(len(foot_geom))
     ground = np.zeros(model.ngeom, dtype=bool)
@@ -410,7 +413,7 @@ def run(
     P = np.array(pos)
     PA = np.array(path)
     RPY = np.array(rpys)
-    yaw = np.unwrap(RPY[:, 2])
+    yaws = np.unwrap(RPY[:, 2])
     d = P[:, :2] - PA[:, :2]
     normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
     cross = np.abs((d * normal).sum(axis=1))
@@ -434,7 +437,7 @@ def run(
             recovery.append(None)
         else:
             recovery.append(float(T[bad[-1] + 1] - end))
-    vel_err = _velocity_errors(timeline, T, P, yaw, PA, ctl.period, duration)
+    vel_err = _velocity_errors(timeline, T, P, yaws, PA, ctl.period, duration)
     tick = np.array(ticks)
     return ControlRun(
         t=T,
@@ -443,7 +446,7 @@ def run(
         rpy=RPY,
         travel=travel,
         travel_planned=planned,
-        heading_error=float(np.abs(yaw - yaw[0] - (PA[:, 2] - PA[0, 2])).max()),
+        heading_error=float(np.abs(yaws - yaws[0] - (PA[:, 2] - PA[0, 2])).max()),
         max_roll=float(np.abs(RPY[:, 0]).max()),
         max_pitch=float(np.abs(RPY[:, 1]).max()),
         max_path_error=float(cross.max()),
