@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from .._pose import rpy_to_matrix
 from ..exceptions import ParameterError, one_of
 from .commands import Command
 from .qp import ForceQP
@@ -76,29 +77,22 @@ class Measurement:
 
 
 def _quat_mat(q: np.ndarray) -> np.ndarray:
+    """The rotation of the unit quaternion ``q = (w, x, y, z)``."""
+    import pinocchio as pin
+
     w, x, y, z = (float(v) for v in q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    return np.array(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix())
 
 
 def _rz(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rpy_to_matrix(0.0, 0.0, a)
 
 
 def _log3(R: np.ndarray) -> np.ndarray:
-    """The rotation vector of ``R`` [rad]."""
-    c = max(-1.0, min(1.0, (np.trace(R) - 1.0) / 2.0))
-    a = math.acos(c)
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    if a < 1e-9:
-        return 0.5 * w
-    return a / (2.0 * math.sin(a)) * w
+    """The rotation vector of ``R`` [rad] (Pinocchio's ``log3``)."""
+    import pinocchio as pin
+
+    return np.array(pin.log3(R))
 
 
 def _yaw(R: np.ndarray) -> float:
@@ -354,6 +348,8 @@ class Controller:
             v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
+        lift = np.sin(np.pi * np.asarray(progress))  # the lift profile and its rate
+        lift_rate = np.cos(np.pi * np.asarray(progress))
         for i in np.flatnonzero(legs):
             s = float(progress[i])
             if s > 0.7:  # the foothold frozen for the last 30 % of the swing
@@ -378,8 +374,8 @@ class Controller:
             h = self.swing_height
             p = self.lift_off[i] + np.array([step[0] * sm, step[1] * sm, 0.0])
             dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
-            p[2] = z0 - dz * sm + h * math.sin(math.pi * s)
-            vz = -dz * dsm + h * math.pi / t_sw * math.cos(math.pi * s)
+            p[2] = z0 - dz * sm + h * lift[i]
+            vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
             vel = np.array([step[0] * dsm, step[1] * dsm, vz])
             if s >= 1.0:  # scheduled down but not touching: keep going down
                 p = np.array(st["feet"][i])
@@ -517,13 +513,10 @@ class Controller:
 
 
 def _rot(w: np.ndarray) -> np.ndarray:
-    """The rotation of rotation vector ``w`` [rad] (Rodrigues)."""
-    a = float(np.linalg.norm(w))
-    if a < 1e-12:
-        return np.eye(3)
-    k = w / a
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(a) * K + (1 - math.cos(a)) * K @ K
+    """The rotation of rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
+    import pinocchio as pin
+
+    return np.array(pin.exp3(np.asarray(w, dtype=float)))
 
 
 def check_kind(kind: str) -> str:

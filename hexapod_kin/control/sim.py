@@ -283,7 +283,7 @@ def run(
 
     """
     from ..gait import as_whole_body
-    from ..simulate.scene import _joint_qpos, _mujoco, check_steps, scene_mjcf
+    from ..simulate.scene import check_steps, scene_mjcf
 
     wb = as_whole_body(robot)
     if kind is None:
@@ -299,17 +299,14 @@ def run(
     timeline = _timeline(command)
     ctl = Controller(robot, kind=kind, pattern=pattern, rate=rate, period=period)
     scene = scene_mjcf(robot, friction=friction, timestep=dt_phys)
-    mj = _mujoco()
+    import mujoco as mj  # scene_mjcf has said how to install it when it is missing
+
     model = mj.MjModel.from_xml_string(_scene_xml(scene, kind, bumps, seed))
     _fill_bumps(mj, model, seed)
     data = mj.MjData(model)
-    jq = _joint_qpos(mj, model, scene.joint_names)
-    jv = np.array(
-        [
-            int(model.jnt_dofadr[mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n)])
-            for n in scene.joint_names
-        ]
-    )
+    joints = [mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n) for n in scene.joint_names]
+    jq = np.array([int(model.jnt_qposadr[j]) for j in joints])
+    jv = np.array([int(model.jnt_dofadr[j]) for j in joints])
     act = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators])
     foot_geom = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, g) for g in scene.foot_geoms])
     leg_of = np.full(model.ngeom, -1)
