@@ -49,6 +49,9 @@ KINDS = ("torque", "servo")
 
 _G = 9.81
 
+#: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
+ACCEL = (1.0, 2.0)
+
 
 @dataclass(frozen=True)
 class Measurement:
@@ -241,6 +244,7 @@ class Controller:
         self.swing_s = np.zeros(L)
         self.path_xy = np.zeros(2)
         self.path_yaw = 0.0
+        self.twist = np.zeros(3)
         self.height_ref = self.height0
         self.ground_z = 0.0
         self.q_cmd = np.array(self.q_neutral)
@@ -293,10 +297,13 @@ class Controller:
         """Advance the path and the gait clock by one tick; the scheduled stance (L,)."""
         cmd, dt = self.command, self.dt
         walk = cmd.mode == "walk"
-        if walk:
-            Rz = _rz(self.path_yaw)[:2, :2]
-            self.path_xy = self.path_xy + Rz @ np.array([cmd.vx, cmd.vy]) * dt
-            self.path_yaw += cmd.wz * dt
+        # the twist ramps to the command at ACCEL (m/s², rad/s²): no step in the reference
+        goal = np.array([cmd.vx, cmd.vy, cmd.wz]) if walk else np.zeros(3)
+        step = np.array([ACCEL[0], ACCEL[0], ACCEL[1]]) * dt
+        self.twist = self.twist + np.clip(goal - self.twist, -step, step)
+        Rz = _rz(self.path_yaw)[:2, :2]
+        self.path_xy = self.path_xy + Rz @ self.twist[:2] * dt
+        self.path_yaw += float(self.twist[2]) * dt
         target = self.stand_height * (cmd.height if cmd.mode == "sit" else 1.0)
         rate = 0.25 * self.stand_height * dt  # a quarter of the height per second
         self.height_ref += float(np.clip(target - self.height_ref, -rate, rate))
@@ -333,11 +340,11 @@ class Controller:
 
         ``progress`` (L,) is each leg's swing fraction (1: due down, not touching yet).
         """
-        tab, cmd, T = self._table, self.command, self.period
+        tab, T = self._table, self.period
         beta = tab.duty_factor
         t_st, t_sw = beta * T, (1.0 - beta) * T
         Rz = _rz(self.path_yaw)
-        v_ref = Rz @ np.array([cmd.vx, cmd.vy, 0.0]) if cmd.mode == "walk" else np.zeros(3)
+        v_ref = Rz @ np.array([*self.twist[:2], 0.0])
         v = np.array(self.v_filt)
         k_v = math.sqrt(self.height_ref / _G)
         p_out = np.zeros((self.n_legs, 3))
@@ -358,7 +365,7 @@ class Controller:
                 target = None
             t_left = (1.0 - s) * t_sw
             # the hip where the body will be at touch-down (on the path, yawed by then)
-            yaw_td = self.path_yaw + (cmd.wz if cmd.mode == "walk" else 0.0) * (t_left + t_st / 2)
+            yaw_td = self.path_yaw + float(self.twist[2]) * (t_left + t_st / 2)
             hip = ref + v_ref * t_left + _rz(yaw_td) @ np.array([*self.feet_body[i, :2], 0.0])
             if target is None:
                 target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
@@ -439,7 +446,7 @@ class Controller:
     ) -> np.ndarray:
         import time
 
-        cmd, R = self.command, st["R"]
+        R = st["R"]
         tau = np.zeros(self.nq)
         v = st["v"]
         bias = st["bias"]
@@ -456,7 +463,7 @@ class Controller:
         if len(legs):
             com, vcom = st["com"], st["vcom"]
             Rz = _rz(self.path_yaw)
-            v_ref = Rz @ np.array([cmd.vx, cmd.vy, 0.0]) if cmd.mode == "walk" else np.zeros(3)
+            v_ref = Rz @ np.array([*self.twist[:2], 0.0])
             p_ref = np.array([*self.path_xy, self.ground_z + self.height_ref])
             wp, wz_, wr = 2 * math.pi * 1.2, 2 * math.pi * 2.0, 2 * math.pi * 3.0
             kp = np.array([wp**2, wp**2, wz_**2])
@@ -465,7 +472,7 @@ class Controller:
             F = self.mass * acc
             Rd = self._desired_rotation()
             omega = R @ st["v"][3:6]
-            omega_ref = np.array([0.0, 0.0, cmd.wz if cmd.mode == "walk" else 0.0])
+            omega_ref = np.array([0.0, 0.0, float(self.twist[2])])
             Iw = R @ self.inertia_body @ R.T
             M = Iw @ (wr**2 * _log3(Rd @ R.T) + 2 * 0.9 * wr * (omega_ref - omega))
             r = st["feet"][legs] - com
