@@ -385,8 +385,7 @@ class Controller:
             vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
             vel = np.array([step[0] * dsm, step[1] * dsm, vz])
             if s >= 1.0:  # scheduled down but not touching: keep going down
-                p = np.array(st["feet"][i])
-                p[2] -= dz
+                p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
                 vel = np.array([0.0, 0.0, -h / t_sw])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
