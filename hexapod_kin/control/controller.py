@@ -245,6 +245,8 @@ class Controller:
         self.path_xy = np.zeros(2)
         self.path_yaw = 0.0
         self.twist = np.zeros(3)
+        self.late = np.zeros(L, dtype=bool)
+        self.late_time = np.zeros(L)
         self.height_ref = self.height0
         self.ground_z = 0.0
         self.q_cmd = np.array(self.q_neutral)
@@ -313,7 +315,11 @@ class Controller:
         if walk:
             self.walking = True
         if self.walking:
-            new = self.phase + dt / self.period
+            # the clock holds while a foot due down has not touched (no lift-off before it)
+            # (a quarter of a swing at most)
+            limit = 0.25 * (1.0 - self._table.duty_factor) * self.period
+            hold = bool(np.any(self.late & (self.late_time < limit)))
+            new = self.phase + (0.0 if hold else dt / self.period)
             if new >= 1.0:
                 new -= 1.0
                 if self._pending is not None:
@@ -425,6 +431,8 @@ class Controller:
             self.stand_at[i] = st["feet"][i]
             self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
         stance = stance & self.touched  # a foot still coming down is swung down
+        self.late = sched & ~stance
+        self.late_time = np.where(self.late, self.late_time + self.dt, 0.0)
         swing = ~stance
         s_eff = np.where(sched, 1.0, self.swing_s)
         p_sw, v_sw = self._swing_targets(st, swing, s_eff)
