@@ -375,6 +375,12 @@ class Controller:
             hip = ref + v_ref * t_left + _rz(yaw_td) @ np.array([*self.feet_body[i, :2], 0.0])
             if target is None:
                 target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
+                # within reach: at most 0.35 span from the neutral foot under the body now
+                home = st["B"][:3, 3] + st["R"] @ self.feet_body[i]
+                off = target[:2] - home[:2]
+                n = float(np.linalg.norm(off))
+                if n > 0.35 * self.span:
+                    target[:2] = home[:2] + off * (0.35 * self.span / n)
                 self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 1.0 * self.span
