@@ -228,3 +228,50 @@ def _walk_ok(res, travel: float, heading: float | None, tilt: float) -> None:
 def test_hexapod_tripod_over_bumps(seed: int) -> None:
     res = run(None, command=(0.2, 0.0, 0.0), bumps=0.01, seed=seed, duration=10.0)
     _walk_ok(res, 0.02, 2.0, 3.0)
+
+
+@pytest.mark.slow
+def test_hexapod_tracks_a_command_timeline_and_switches_gait() -> None:
+    """Forward 0.3 m/s, turn 0.5 rad/s, stop, sideways 0.1 m/s, tripod → wave: ≤ 10 % error."""
+    tl = Timeline(
+        (
+            (0.0, Command(0.3)),
+            (3.0, Command(0.0, 0.0, 0.5)),
+            (6.0, Command(mode="stand")),
+            (8.0, Command(0.0, 0.1, 0.0)),
+            (11.0, Command(0.0, 0.1, 0.0, pattern="wave")),
+        )
+    )
+    res = run(None, command=tl, duration=15.0)
+    assert not res.fell and not res.non_foot_contacts
+    assert res.pattern == "wave"
+    errors = [e for e in res.velocity_error if e is not None]
+    assert len(errors) == 4 and max(errors) <= 0.10, res.velocity_error
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", [None, "erd:anymal"])
+def test_sit_down_and_stand_up(robot) -> None:
+    tl = Timeline(
+        (
+            (0.0, Command(mode="stand")),
+            (1.0, Command(mode="sit", height=0.6)),
+            (4.0, Command(mode="stand")),
+        )
+    )
+    res = run(robot, command=tl, duration=7.0)
+    assert not res.fell and not res.non_foot_contacts
+    from hexapod_kin.gait import as_whole_body
+
+    z = res.position[:, 2]
+    feet = as_whole_body(robot).foot_radius  # the feet's centres above the flat ground
+    height = z[0] - feet
+    assert z.min() - feet == pytest.approx(0.6 * height, rel=0.05)  # down to 60 %
+    assert z[-1] == pytest.approx(z[0], abs=0.003)  # and back up
+
+
+@pytest.mark.slow
+def test_anymal_trots_at_half_a_metre_per_second() -> None:
+    res = run("erd:anymal", pattern="trot", command=(0.5, 0.0, 0.0), duration=10.0)
+    _walk_ok(res, 0.02, None, 5.0)
+    assert not res.non_foot_contacts
