@@ -275,3 +275,39 @@ def test_anymal_trots_at_half_a_metre_per_second() -> None:
     res = run("erd:anymal", pattern="trot", command=(0.5, 0.0, 0.0), duration=10.0)
     _walk_ok(res, 0.02, None, 5.0)
     assert not res.non_foot_contacts
+
+
+@pytest.mark.slow
+def test_hexapod_comes_back_to_its_path_after_a_20_newton_push() -> None:
+    res = run(None, command=(0.2, 0.0, 0.0), pushes=[Push(20.0, 2.0, 0.2)], duration=10.0)
+    assert not res.fell
+    assert res.recovery_time[0] is not None and res.recovery_time[0] <= 1.5, res.to_dict()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("share", [0.5, 1.0])
+def test_anymal_pushed_sideways(share: float) -> None:
+    """0.5× its weight for 0.2 s: back on its path in 1.5 s; 1×: it does not fall."""
+    weight = 30.475 * 9.81
+    res = run(
+        "erd:anymal",
+        pattern="trot",
+        command=(0.5, 0.0, 0.0),
+        pushes=[Push(share * weight, 2.0, 0.2)],
+        duration=10.0,
+    )
+    assert not res.fell, res.to_dict()
+    if share == 0.5:
+        assert res.recovery_time[0] is not None and res.recovery_time[0] <= 1.5, res.to_dict()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", ["erd:solo12", "erd:go1"])
+@pytest.mark.parametrize("pattern", ["crawl", "trot"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_quadrupeds_over_bumps(robot: str, pattern: str, seed: int) -> None:
+    speed = 0.1 if pattern == "crawl" else 0.3
+    res = run(robot, pattern=pattern, command=(speed, 0.0, 0.0), bumps=0.005, seed=seed)
+    assert not res.fell
+    assert abs(res.travel_error) <= 0.02, res.to_dict()
+    assert res.heading_error <= math.radians(3.0), res.to_dict()
