@@ -114,8 +114,8 @@ class Controller:
         rate: Control rate [Hz] (default 500 for torque, 100 for servo).
         period: Gait cycle [s] (default: 0.5 s for trot/pace, 1 s otherwise, scaled by
             ``sqrt(leg span / 0.5 m)``).
-        swing_height: Foot lift [m] (default 18 % of the standing height for torque
-            control, 12 % for servos).
+        swing_height: Foot lift [m] (default 12 % of the standing height, plus the foot
+            radius for torque control).
         mu: Friction coefficient the force distribution assumes.
 
     Raises:
@@ -191,7 +191,7 @@ class Controller:
         self.swing_height = (
             positive("swing_height", swing_height)
             if swing_height is not None
-            else (0.18 if kind == "torque" else 0.12) * self.height0
+            else 0.12 * self.height0 + (float(wb.foot_radius) if kind == "torque" else 0.0)
         )
         self.force_qp = ForceQP(
             mu=self.mu,
