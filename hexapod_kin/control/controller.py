@@ -385,7 +385,7 @@ class Controller:
                 self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 1.0 * self.span
-            n = np.linalg.norm(step[:2])
+            n = float(np.linalg.norm(step[:2]))
             if n > lim:
                 step[:2] *= lim / n
             z0 = self.lift_off[i, 2]
