@@ -100,6 +100,11 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         (["erd:anymal", "--pattern", "crawl", "--duration", "2"], 1),  # ZMP margin < 0
         (["--terrain", "mud"], 2),
     ],
+    "control": [
+        (["--duration", "1"], 0),
+        (["--duration", "1.5", "--push", "60@0.2,0.5"], 1),  # 3x its weight: it falls
+        (["--push", "20@x"], 2),
+    ],
     "reproduce": [(["--out", "/proc/no/such"], 2)],  # a full run takes minutes: test_report
     "precompile": [(["--only", "bogus"], 2)],  # compiling takes minutes: test_precompile
     "timeline gait": [
@@ -230,6 +235,7 @@ CHEAP = {
     "mjcf": ["mjcf", "{src}"],
     "gait": ["gait", "{src}", "--duration", "0.5", "--json"],
     "simulate": ["simulate", "{src}", "--duration", "0.5", "--no-stand", "--json"],
+    "control": ["control", "{src}", "--duration", "0.5", "--json"],
     "timeline gait": ["timeline", "gait", "{src}", "--duration", "0.5", "-o", "{tmp}/t.csv"],
     "timeline step": ["timeline", "step", "{src}", "--duration", "0.05", "-o", "{tmp}/t.csv"],
     "timeline path": ["timeline", "path", "{tmp}/path.csv", "{src}", "-o", "{tmp}/t.csv"],
@@ -260,7 +266,7 @@ CASES = [
     (cmd, src)
     for cmd in sorted(CHEAP)
     for src in KIND_EXAMPLES[_source_kind(cmd) or "any"]
-    if not (cmd == "simulate" and src != "hexapod")  # MuJoCo replays: one kind is enough
+    if not (cmd in ("simulate", "control") and src != "hexapod")  # MuJoCo: one kind is enough
 ]
 
 
@@ -269,7 +275,7 @@ def test_help_offers_nothing_that_is_refused(
     folder: Path, cmd: str, src: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Each source kind ``--help`` names is taken: the answer comes (status 0 or 1)."""
-    if cmd == "simulate":
+    if cmd in ("simulate", "control"):
         pytest.importorskip("mujoco")
     argv = [a.replace("{src}", src).replace("{tmp}", str(folder)) for a in CHEAP[cmd]]
     if cmd == "timeline path":  # a plan for this robot: its own joints, at rest

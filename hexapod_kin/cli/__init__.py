@@ -33,6 +33,7 @@ MODULES: tuple[str, ...] = (
     "sweep",
     "gait",
     "simulate",
+    "control",
     "report",
     "timeline",
     "precompile",

@@ -1,0 +1,32 @@
+"""Closed-loop walking: a controller for any legged robot of the model, run in MuJoCo.
+
+* :class:`Controller` (:mod:`.controller`): measured state in (IMU, joints, foot contacts,
+  a base estimate), joint torques or servo targets out, at a fixed rate; stance forces by a
+  QP (:mod:`.qp`, proxsuite), Raibert / capture-point foot placement, body posing for servos.
+* :class:`Command`, :class:`Timeline` (:mod:`.commands`): velocity, gait and mode over time.
+* :func:`run` (:mod:`.sim`): the closed loop in MuJoCo with pushes and bumps, and its figures
+  (:class:`ControlRun`); :func:`hardware_loop`: the same controller through user callbacks.
+
+Needs the optional extras ``export`` (MuJoCo) and ``control`` (proxsuite).
+"""
+
+from __future__ import annotations
+
+from .commands import MODES, Command, Timeline, read_timeline, timeline_of
+from .controller import KINDS, Controller, Measurement
+from .sim import ControlRun, Push, hardware_loop, run
+
+__all__ = [
+    "KINDS",
+    "MODES",
+    "Command",
+    "ControlRun",
+    "Controller",
+    "Measurement",
+    "Push",
+    "Timeline",
+    "hardware_loop",
+    "read_timeline",
+    "run",
+    "timeline_of",
+]

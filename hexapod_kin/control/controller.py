@@ -1,0 +1,549 @@
+"""The walking controller: measured state in, joint torques or servo targets out.
+
+One :class:`Controller` for any legged robot of the model (a view of the one Pinocchio
+model: :func:`hexapod_kin.gait.as_whole_body`), at a fixed rate. Each :meth:`Controller.tick`
+takes a :class:`Measurement` (what the robot can sense: IMU attitude and rates, joint
+positions and velocities, foot contacts, and a base position/velocity estimate) and returns
+one value per leg joint.
+
+* **Schedule**: a phase table (:func:`hexapod_kin.gait.tables.phase_table`): leg *i* is in
+  stance while ``(φ + offset_i) mod 1 < β``; a pattern change waits for the cycle boundary.
+  A swing foot that touches down after 60 % of its swing joins the stance early.
+* **Reference**: the commanded twist integrated from the start (the *path*: position and
+  yaw); the body height the standing height measured at :meth:`Controller.reset` (lowered
+  in ``sit``).
+* **Swing** (both kinds): the foothold re-targeted every tick, Raibert's rule with the
+  capture-point correction: ``p = hip(t_td) + v_ref T_st / 2 + k_v (v − v_ref)`` (Raibert
+  1986; Pratt et al. 2006) with ``k_v = sqrt(h / g)``; the foot moves from its lift-off
+  point along a smooth step (``3s² − 2s³``) with a ``sin(π s)`` lift of ``swing_height``, and
+  keeps descending past ``s = 1`` until it touches.
+* **Torque kind** (quadrupeds' motors): the body wrench from PD laws on the CoM path and
+  height and on the attitude, ``F = m (K_p e_p + K_d e_v + g)``, ``M = I (K_R log(R_d Rᵀ) +
+  K_ω (ω_d − ω))``, shared among the stance feet by :class:`~.qp.ForceQP` (friction
+  pyramids, normal force bounds, joint torque limits), then ``τ = h − Jᵀ f`` per stance leg
+  (``h`` Pinocchio's non-linear effects) and ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+* **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
+  (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
+  height above the stance feet) plus an integral of its error; the stance feet are held
+  where they are measured, the swing feet on their paths; leg IK (two damped Newton steps
+  per tick from the previous command, Pinocchio's foot Jacobians) turns them into targets.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._pose import rpy_to_matrix
+from ..exceptions import ParameterError, one_of
+from .commands import Command
+from .qp import ForceQP
+
+__all__ = ["KINDS", "Controller", "Measurement"]
+
+#: Actuator kinds: joint torques, or joint position targets for servos.
+KINDS = ("torque", "servo")
+
+_G = 9.81
+
+#: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
+ACCEL = (1.0, 2.0)
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What the robot senses at one tick (SI units, world z up).
+
+    Attributes:
+        t: Time [s].
+        quat: (4,) body attitude ``w, x, y, z`` (IMU).
+        gyro: (3,) body angular velocity in the body frame [rad/s] (IMU).
+        q: (nq,) leg joint positions [rad] (the model's joint order).
+        qd: (nq,) joint velocities [rad/s].
+        contacts: (L,) True where a foot touches (foot switches / force sensing).
+        position: (3,) base position estimate in the world [m].
+        velocity: (3,) base linear velocity estimate in the world [m/s].
+
+    """
+
+    t: float
+    quat: np.ndarray
+    gyro: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    contacts: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+
+
+def _quat_mat(q: np.ndarray) -> np.ndarray:
+    """The rotation of the unit quaternion ``q = (w, x, y, z)``."""
+    import pinocchio as pin
+
+    w, x, y, z = (float(v) for v in q)
+    return np.array(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix())
+
+
+def _rz(a: float) -> np.ndarray:
+    return rpy_to_matrix(0.0, 0.0, a)
+
+
+def _log3(R: np.ndarray) -> np.ndarray:
+    """The rotation vector of ``R`` [rad] (Pinocchio's ``log3``)."""
+    import pinocchio as pin
+
+    return np.array(pin.log3(R))
+
+
+def _yaw(R: np.ndarray) -> float:
+    return math.atan2(R[1, 0], R[0, 0])
+
+
+class Controller:
+    """A walking controller for one robot (see the module docstring).
+
+    Args:
+        robot: The robot (what :func:`hexapod_kin.gait.as_whole_body` takes; None: the
+            built-in hexapod).
+        kind: ``torque`` (outputs joint torques [N·m]) or ``servo`` (joint targets [rad]).
+        pattern: The starting gait pattern (a name of :func:`~hexapod_kin.gait.tables.
+            pattern_names` for the robot's legs).
+        rate: Control rate [Hz] (default 500 for torque, 100 for servo).
+        period: Gait cycle [s] (default: 0.5 s for trot/pace, 1 s otherwise, scaled by
+            ``sqrt(leg span / 0.5 m)``).
+        swing_height: Foot lift [m] (default 12 % of the standing height, plus the foot
+            radius for torque control).
+        mu: Friction coefficient the force distribution assumes.
+
+    Raises:
+        ParameterError: A bad kind, pattern or value.
+
+    """
+
+    def __init__(
+        self,
+        robot: Any = None,
+        *,
+        kind: str = "torque",
+        pattern: str = "trot",
+        rate: float | None = None,
+        period: float | None = None,
+        swing_height: float | None = None,
+        mu: float = 0.6,
+    ) -> None:
+        import pinocchio as pin
+
+        from ..exceptions import positive
+        from ..gait import as_whole_body
+
+        one_of("kind", kind, list(KINDS))
+        self.kind = kind
+        self.wb = wb = as_whole_body(robot)
+        wb.require_mass()
+        self.pin = pin
+        self.model = pin.Model(wb.model)
+        self.data = self.model.createData()
+        self.n_legs, self.nq = wb.n_legs, wb.nq
+        self.rate = positive(
+            "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
+        )
+        self.dt = 1.0 / self.rate
+        self.mu = positive("mu", mu)
+        self.feet_ids = [self.model.getFrameId(f"{leg}_contact") for leg in wb.leg_names]
+        self.mass = float(wb.mass)
+        # the legs' columns of v[6:] (the joints moving each foot), from the Jacobian at rest
+        q0 = wb.neutral_q()
+        self.q_neutral = q0
+        qp = wb.pinocchio_q(q0[None], np.eye(4)[None])[0]
+        pin.computeJointJacobians(self.model, self.data, qp)
+        pin.framesForwardKinematics(self.model, self.data, qp)
+        self.cols: list[np.ndarray] = []
+        feet0 = []
+        for fid in self.feet_ids:
+            J = pin.getFrameJacobian(
+                self.model, self.data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            )
+            self.cols.append(np.flatnonzero(np.abs(J[:3, 6:]).sum(axis=0) > 1e-12))
+            feet0.append(self.data.oMf[fid].translation.copy())
+        self.leg_of_col = np.zeros(self.nq, dtype=int)
+        for i, c in enumerate(self.cols):
+            self.leg_of_col[c] = i
+        #: (L, 3) the feet at rest in the body frame [m]
+        self.feet_body = np.array(feet0)
+        pin.ccrba(self.model, self.data, qp, np.zeros(self.model.nv))
+        self.inertia_body = np.array(self.data.Ig.inertia)
+        self.com_body = np.array(self.data.com[0])
+        self.height0 = float(-self.feet_body[:, 2].mean())
+        self.span = float(wb.leg_span)
+        self.effort = np.asarray(wb.effort_limit, dtype=float)
+        positions = self.feet_body[:, :2]
+        self.positions = positions
+        self._pattern = ""
+        self._table: Any = None
+        self.set_pattern(pattern)
+        self.period_given = period
+        scale = math.sqrt(max(self.span, 1e-3) / 0.5)
+        self._scale = scale
+        self.period = positive("period", period) if period is not None else self._period(pattern)
+        self.swing_height = (
+            positive("swing_height", swing_height)
+            if swing_height is not None
+            else 0.12 * self.height0 + (float(wb.foot_radius) if kind == "torque" else 0.0)
+        )
+        self.force_qp = ForceQP(
+            mu=self.mu,
+            f_min=0.02 * self.mass * _G / self.n_legs,
+            f_max=3.0 * self.mass * _G,
+            weights=np.array([1.0, 1.0, 1.0, 10.0, 10.0, 10.0]),
+        )
+        self.command = Command()
+        self._pending: str | None = None
+        self.qp_time = 0.0
+        self.reset_state()
+
+    # ------------------------------------------------------------------ configuration
+    def _period(self, pattern: str) -> float:
+        base = 0.5 if pattern in ("trot", "pace") else 1.0
+        return float(base * self._scale)
+
+    def set_pattern(self, pattern: str) -> None:
+        """Switch the gait pattern now (see :meth:`set_command` for the switch at a boundary)."""
+        from ..gait.tables import phase_table
+
+        self._table = phase_table(pattern, self.n_legs, self.positions)
+        self._pattern = pattern
+
+    @property
+    def pattern(self) -> str:
+        """The gait pattern in use."""
+        return self._pattern
+
+    def set_command(self, command: Command) -> None:
+        """Take a new command; a pattern change waits for the next cycle boundary."""
+        if command.pattern is not None and command.pattern != self._pattern:
+            from ..gait.tables import phase_table
+
+            phase_table(command.pattern, self.n_legs, self.positions)  # refuse it now
+            self._pending = command.pattern
+        self.command = command
+
+    # ------------------------------------------------------------------ state
+    def reset_state(self) -> None:
+        """Forget the path and the schedule (call :meth:`reset` with a measurement)."""
+        L = self.n_legs
+        self.phase = 0.0
+        self.walking = False
+        self.in_swing = np.zeros(L, dtype=bool)
+        self.touched = np.ones(L, dtype=bool)
+        self.footholds = np.zeros((L, 3))
+        self.stand_at = np.zeros((L, 3))
+        self.v_filt = np.zeros(3)
+        self.lift_off = np.zeros((L, 3))
+        self.swing_s = np.zeros(L)
+        self.path_xy = np.zeros(2)
+        self.path_yaw = 0.0
+        self.twist = np.zeros(3)
+        self.late = np.zeros(L, dtype=bool)
+        self.late_time = np.zeros(L)
+        self.height_ref = self.height0
+        self.ground_z = 0.0
+        self.q_cmd = np.array(self.q_neutral)
+        self.integral = np.zeros(6)
+        self.ready = False
+
+    def reset(self, m: Measurement) -> None:
+        """Start from a measured standing robot: the path starts where it is."""
+        self.reset_state()
+        st = self._state(m)
+        self.path_xy = st["ref_point"][:2].copy()
+        self.path_yaw = _yaw(st["R"])
+        self.ground_z = float(st["feet"][:, 2].mean())
+        self.stand_at = np.array(st["feet"])
+        self.height_ref = float(st["ref_point"][2] - self.ground_z)
+        self.stand_height = self.height_ref
+        self.q_cmd = np.array(m.q, dtype=float)
+        self.ready = True
+
+    def _state(self, m: Measurement) -> dict[str, Any]:
+        """Kinematics of the measured state with Pinocchio (feet, Jacobians, CoM, bias)."""
+        pin, model, data = self.pin, self.model, self.data
+        R = _quat_mat(np.asarray(m.quat, dtype=float))
+        B = np.eye(4)
+        B[:3, :3], B[:3, 3] = R, m.position
+        qp = self.wb.pinocchio_q(np.asarray(m.q, dtype=float)[None], B[None])[0]
+        v = np.concatenate([R.T @ np.asarray(m.velocity, float), m.gyro, m.qd])
+        pin.forwardKinematics(model, data, qp, v)
+        pin.computeJointJacobians(model, data, qp)
+        pin.updateFramePlacements(model, data)
+        feet = np.array([data.oMf[f].translation for f in self.feet_ids])
+        jac = [
+            pin.getFrameJacobian(model, data, f, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)[:3]
+            for f in self.feet_ids
+        ]
+        out: dict[str, Any] = {"R": R, "B": B, "qp": qp, "v": v, "feet": feet, "jac": jac}
+        if self.kind == "torque":
+            out["com"] = np.array(pin.centerOfMass(model, data, qp, v))
+            out["vcom"] = np.array(data.vcom[0])
+            out["bias"] = np.array(pin.nonLinearEffects(model, data, qp, v))[6:]
+            out["ref_point"] = out["com"]
+            out["ref_vel"] = out["vcom"]
+        else:
+            out["ref_point"] = np.array(m.position, dtype=float)
+            out["ref_vel"] = np.array(m.velocity, dtype=float)
+        return out
+
+    # ------------------------------------------------------------------ schedule
+    def _advance(self, m: Measurement) -> np.ndarray:
+        """Advance the path and the gait clock by one tick; the scheduled stance (L,)."""
+        cmd, dt = self.command, self.dt
+        walk = cmd.mode == "walk"
+        # the twist ramps to the command at ACCEL (m/s², rad/s²): no step in the reference
+        goal = np.array([cmd.vx, cmd.vy, cmd.wz]) if walk else np.zeros(3)
+        step = np.array([ACCEL[0], ACCEL[0], ACCEL[1]]) * dt
+        self.twist = self.twist + np.clip(goal - self.twist, -step, step)
+        Rz = _rz(self.path_yaw)[:2, :2]
+        self.path_xy = self.path_xy + Rz @ self.twist[:2] * dt
+        self.path_yaw += float(self.twist[2]) * dt
+        target = self.stand_height * (cmd.height if cmd.mode == "sit" else 1.0)
+        rate = 0.25 * self.stand_height * dt  # a quarter of the height per second
+        self.height_ref += float(np.clip(target - self.height_ref, -rate, rate))
+        if not walk and not self.in_swing.any():
+            self.walking = False
+            self.phase = 0.0
+        if walk:
+            self.walking = True
+        if self.walking:
+            # the clock holds while a foot due down has not touched (no lift-off before it)
+            # (a quarter of a swing at most)
+            limit = 0.25 * (1.0 - self._table.duty_factor) * self.period
+            hold = bool(np.any(self.late & (self.late_time < limit)))
+            new = self.phase + (0.0 if hold else dt / self.period)
+            if new >= 1.0:
+                new -= 1.0
+                if self._pending is not None:
+                    self.set_pattern(self._pending)
+                    self._pending = None
+                    if self.period_given is None:
+                        self.period = self._period(self._pattern)
+                if not walk:
+                    self.walking = False
+                    new = 0.0
+            self.phase = new
+        if not self.walking:
+            return np.ones(self.n_legs, dtype=bool)
+        tab = self._table
+        beta = tab.duty_factor
+        ph = (self.phase + np.asarray(tab.offsets)) % 1.0
+        self.swing_s = np.clip((ph - beta) / (1.0 - beta), 0.0, 1.0)
+        return ph < beta
+
+    def _swing_targets(
+        self, st: dict[str, Any], legs: np.ndarray, progress: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """World targets and velocities (L, 3) of the swing feet ``legs`` (bool mask).
+
+        ``progress`` (L,) is each leg's swing fraction (1: due down, not touching yet).
+        """
+        tab, T = self._table, self.period
+        beta = tab.duty_factor
+        t_st, t_sw = beta * T, (1.0 - beta) * T
+        Rz = _rz(self.path_yaw)
+        v_ref = Rz @ np.array([*self.twist[:2], 0.0])
+        v = np.array(self.v_filt)
+        k_v = math.sqrt(self.height_ref / _G)
+        p_out = np.zeros((self.n_legs, 3))
+        v_out = np.zeros((self.n_legs, 3))
+        if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
+            ref = np.array([*st["B"][:2, 3], 0.0])
+            err = np.array([*(self.path_xy - st["ref_point"][:2]), 0.0])
+            v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
+        else:  # servo posing: about the hips of the body on its path
+            ref = np.array([*self.path_xy, 0.0])
+        lift = np.sin(np.pi * np.asarray(progress))  # the lift profile and its rate
+        lift_rate = np.cos(np.pi * np.asarray(progress))
+        for i in np.flatnonzero(legs):
+            s = float(progress[i])
+            if s > 0.7:  # the foothold frozen for the last 30 % of the swing
+                target = self.footholds[i]
+            else:
+                target = None
+            t_left = (1.0 - s) * t_sw
+            # the hip where the body will be at touch-down (on the path, yawed by then)
+            yaw_td = self.path_yaw + float(self.twist[2]) * (t_left + t_st / 2)
+            hip = ref + v_ref * t_left + _rz(yaw_td) @ np.array([*self.feet_body[i, :2], 0.0])
+            if target is None:
+                target = hip + v_ref * t_st / 2 + k_v * (v - v_ref)
+                # within reach: at most 0.35 span from the neutral foot under the body now
+                home = st["B"][:3, 3] + st["R"] @ self.feet_body[i]
+                off = target[:2] - home[:2]
+                n = float(np.linalg.norm(off))
+                if n > 0.35 * self.span:
+                    target[:2] = home[:2] + off * (0.35 * self.span / n)
+                self.footholds[i] = target
+            step = target - self.lift_off[i]
+            lim = 1.0 * self.span
+            n = float(np.linalg.norm(step[:2]))
+            if n > lim:
+                step[:2] *= lim / n
+            z0 = self.lift_off[i, 2]
+            sm = 3 * s * s - 2 * s**3
+            dsm = (6 * s - 6 * s * s) / t_sw
+            h = self.swing_height
+            p = self.lift_off[i] + np.array([step[0] * sm, step[1] * sm, 0.0])
+            dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
+            p[2] = z0 - dz * sm + h * lift[i]
+            vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
+            vel = np.array([step[0] * dsm, step[1] * dsm, vz])
+            if s >= 1.0:  # scheduled down but not touching: keep going down
+                p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
+                vel = np.array([0.0, 0.0, -h / t_sw])
+            p_out[i], v_out[i] = p, vel
+        return p_out, v_out
+
+    def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
+        """Stance legs: scheduled, or touching after 60 % of their swing."""
+        touch = np.asarray(m.contacts, dtype=bool)
+        return sched | (touch & (self.swing_s > 0.6) & self.in_swing)
+
+    # ------------------------------------------------------------------ the tick
+    def tick(self, m: Measurement) -> np.ndarray:
+        """One control step: joint torques [N·m] (torque kind) or joint targets [rad]."""
+        if not self.ready:
+            self.reset(m)
+        st = self._state(m)
+        # the velocity low-passed over 1/20 cycle (torque) or 1/4 cycle (servos: the body
+        # rocks on its compliant servos)
+        a = min(1.0, self.dt / ((0.05 if self.kind == "torque" else 0.25) * self.period))
+        self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
+        sched = self._advance(m)
+        stance = self._contacts(sched, m)
+        # lift-off bookkeeping
+        for i in range(self.n_legs):
+            if not stance[i] and not self.in_swing[i]:
+                self.in_swing[i] = True
+                self.lift_off[i] = st["feet"][i]
+            elif stance[i] and self.in_swing[i] and sched[i]:
+                self.in_swing[i] = False
+            elif stance[i] and self.in_swing[i]:
+                self.in_swing[i] = False  # early touch-down
+        touch = np.asarray(m.contacts, dtype=bool)
+        new = touch & stance & ~self.touched
+        self.touched = (self.touched | touch) & stance
+        if not self.walking:
+            self.touched[:] = True
+        for i in np.flatnonzero(new).tolist():  # touch-down: where the foot stands, the ground
+            self.stand_at[i] = st["feet"][i]
+            self.ground_z = 0.8 * self.ground_z + 0.2 * float(st["feet"][i, 2])
+        stance = stance & self.touched  # a foot still coming down is swung down
+        self.late = sched & ~stance
+        self.late_time = np.where(self.late, self.late_time + self.dt, 0.0)
+        swing = ~stance
+        s_eff = np.where(sched, 1.0, self.swing_s)
+        p_sw, v_sw = self._swing_targets(st, swing, s_eff)
+        if self.kind == "torque":
+            return self._torques(st, stance, swing, p_sw, v_sw)
+        return self._servo(st, stance, swing, p_sw, m)
+
+    def _desired_rotation(self) -> np.ndarray:
+        return _rz(self.path_yaw)
+
+    def _torques(
+        self,
+        st: dict[str, Any],
+        stance: np.ndarray,
+        swing: np.ndarray,
+        p_sw: np.ndarray,
+        v_sw: np.ndarray,
+    ) -> np.ndarray:
+        import time
+
+        R = st["R"]
+        tau = np.zeros(self.nq)
+        v = st["v"]
+        bias = st["bias"]
+        # swing legs: Cartesian PD through J^T plus the bias
+        w_sw = 2.0 * math.pi * 8.0
+        ks, ds = self._leg_mass() * w_sw**2, 2.0 * 0.7 * self._leg_mass() * w_sw
+        for i in np.flatnonzero(swing):
+            c = self.cols[i]
+            J = st["jac"][i]
+            pd = J @ v
+            f = ks * (p_sw[i] - st["feet"][i]) + ds * (v_sw[i] - pd)
+            tau[c] = J[:, 6 + c].T @ f + bias[c]
+        legs = np.flatnonzero(stance)
+        if len(legs):
+            com, vcom = st["com"], st["vcom"]
+            Rz = _rz(self.path_yaw)
+            v_ref = Rz @ np.array([*self.twist[:2], 0.0])
+            p_ref = np.array([*self.path_xy, self.ground_z + self.height_ref])
+            wp, wz_, wr = 2 * math.pi * 1.2, 2 * math.pi * 2.0, 2 * math.pi * 3.0
+            kp = np.array([wp**2, wp**2, wz_**2])
+            kd = np.array([2 * 0.9 * wp, 2 * 0.9 * wp, 2 * 0.9 * wz_])
+            acc = kp * (p_ref - com) + kd * (v_ref - vcom) + np.array([0.0, 0.0, _G])
+            F = self.mass * acc
+            Rd = self._desired_rotation()
+            omega = R @ st["v"][3:6]
+            omega_ref = np.array([0.0, 0.0, float(self.twist[2])])
+            Iw = R @ self.inertia_body @ R.T
+            M = Iw @ (wr**2 * _log3(Rd @ R.T) + 2 * 0.9 * wr * (omega_ref - omega))
+            r = st["feet"][legs] - com
+            jac = [st["jac"][i][:, 6 + self.cols[i]] for i in legs]
+            biases = [bias[self.cols[i]] for i in legs]
+            lims = [self.effort[self.cols[i]] for i in legs]
+            t0 = time.process_time()
+            f = self.force_qp.solve(np.concatenate([F, M]), r, jac, biases, lims)
+            self.qp_time += time.process_time() - t0
+            for k, i in enumerate(legs):
+                c = self.cols[i]
+                tau[c] = bias[c] - jac[k].T @ f[k]
+        return np.clip(tau, -self.effort, self.effort)
+
+    def _leg_mass(self) -> float:
+        """The mass the swing gains are scaled to: the robot's, shared among its legs, /4."""
+        return 0.25 * self.mass / self.n_legs
+
+    def _servo(
+        self,
+        st: dict[str, Any],
+        stance: np.ndarray,
+        swing: np.ndarray,
+        p_sw: np.ndarray,
+        m: Measurement,
+    ) -> np.ndarray:
+        R, pos = st["R"], np.asarray(m.position, dtype=float)
+        # the body's reference pose and its error (position, rotation vector)
+        Rd = self._desired_rotation()
+        p_ref = np.array([*self.path_xy, self.ground_z + self.height_ref])
+        e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
+        lim = 0.08 * self.span
+        e[:3] = np.clip(e[:3], -lim, lim)
+        self.integral = np.clip(self.integral + 2.0 * self.dt * e, -lim, lim)
+        corr = e + self.integral
+        Bc = np.eye(4)
+        Bc[:3, 3] = pos + corr[:3]
+        Bc[:3, :3] = _rot(corr[3:6]) @ R
+        targets = np.where(stance[:, None], self.stand_at, p_sw)
+        ik = self.wb.body_ik(Bc, targets, q_prev=self.q_cmd, strict=False)
+        q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
+        q = np.clip(q, self.wb.lower, self.wb.upper)
+        self.q_cmd = q
+        return np.array(q)
+
+
+def _rot(w: np.ndarray) -> np.ndarray:
+    """The rotation of rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
+    import pinocchio as pin
+
+    return np.array(pin.exp3(np.asarray(w, dtype=float)))
+
+
+def check_kind(kind: str) -> str:
+    """``kind`` when it is one of :data:`KINDS` (else a :class:`ParameterError`)."""
+    if kind not in KINDS:
+        raise ParameterError(
+            f"kind={kind!r}: one of {list(KINDS)}", parameter="kind", value=kind, allowed=KINDS
+        )
+    return kind

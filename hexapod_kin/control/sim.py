@@ -1,0 +1,537 @@
+"""Closed-loop walking in MuJoCo: the controller in the loop, disturbances, terrain, figures.
+
+:func:`run` builds the scene of :func:`hexapod_kin.simulate.scene_mjcf` (the robot, foot
+spheres, Coulomb friction, elliptic cones), then for the ``torque`` kind replaces each
+position servo with a torque motor limited to the joint's effort, adds height-field bumps
+(uniform heights in ``±bumps`` on a 50 mm grid, from ``seed``) and runs the
+:class:`~.controller.Controller` at its rate, the physics at the scene's time step.
+The controller is fed what the robot senses (IMU attitude and body rates, joint positions
+and velocities, foot contacts) and, as a state estimator would, the base position and
+velocity (here the simulator's: the estimator is not modelled).
+
+Pushes ``(force [N], start [s], duration [s])`` act at the body's centre of mass along the
+path's left normal (a negative force pushes right), from the end of settling.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._fields import fields_dict
+from ..exceptions import ParameterError, positive
+from .commands import Command, Timeline
+from .controller import Controller, Measurement
+
+__all__ = ["ControlRun", "Push", "hardware_loop", "run"]
+
+#: Bump grid spacing [m] and the extent of the bumpy field (half sizes x, y) [m].
+BUMP_CELL = 0.05
+BUMP_HALF = (8.0, 4.0)
+
+
+@dataclass(frozen=True)
+class Push:
+    """A push: ``force`` [N] along the path's left normal from ``start`` for ``duration`` [s]."""
+
+    force: float
+    start: float
+    duration: float
+
+    @classmethod
+    def parse(cls, text: str) -> Push:
+        """``FORCE@START,DURATION`` (e.g. ``20@2,0.2``)."""
+        try:
+            f, rest = text.split("@")
+            s, d = rest.split(",")
+            out = cls(float(f), float(s), float(d))
+        except ValueError:
+            raise ParameterError(
+                f"push {text!r}: FORCE@START,DURATION in N, s, s (e.g. 20@2,0.2)",
+                parameter="push",
+                value=text,
+                allowed="FORCE@START,DURATION",
+            ) from None
+        for name, v in (("force", out.force), ("start", out.start), ("duration", out.duration)):
+            if not math.isfinite(v) or (name != "force" and v < 0):
+                raise ParameterError(
+                    f"push {text!r}: {name} must be finite (times >= 0)",
+                    parameter="push",
+                    value=text,
+                )
+        return out
+
+
+@dataclass(frozen=True)
+class ControlRun:
+    """A closed-loop walk and its figures (SI units; times from the end of settling).
+
+    Attributes:
+        t: (N,) control tick times [s].
+        position: (N, 3) the tracked point (CoM for torque control, base for servos) [m].
+        path: (N, 3) the reference path: x, y [m], yaw [rad].
+        rpy: (N, 3) body roll, pitch, yaw [rad].
+        travel: Horizontal distance walked [m].
+        travel_planned: Length of the commanded path [m].
+        heading_error: Max |yaw − path yaw| [rad].
+        max_roll: Max |roll| [rad].
+        max_pitch: Max |pitch| [rad].
+        max_path_error: Max cross-track distance to the path [m].
+        fell: The body fell (height below 40 % of standing, or tilted past 60°).
+        non_foot_contacts: ``(geom, geom, first time)`` of each pair in contact that is not
+            a foot on the ground.
+        swing_strikes: ``(leg, time)`` of each swing foot touching in the first half of its
+            swing.
+        recovery_time: Per push, the time after it ends until the cross-track error stays
+            under ``recovery_tolerance`` [s] (None: never).
+        recovery_tolerance: [m].
+        velocity_error: Per command segment, the mean velocity error relative to the
+            command (None for a zero command).
+        kind: ``torque`` or ``servo``.
+        pattern: The final gait pattern.
+        tick_cpu: Median CPU time of a controller tick [s].
+        qp_cpu: Mean CPU time of the force QP per tick [s].
+        cpu_time: CPU time of the whole run [s].
+        simulated: Simulated time [s].
+
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    path: np.ndarray
+    rpy: np.ndarray
+    travel: float
+    travel_planned: float
+    heading_error: float
+    max_roll: float
+    max_pitch: float
+    max_path_error: float
+    fell: bool
+    non_foot_contacts: tuple[tuple[str, str, float], ...]
+    swing_strikes: tuple[tuple[str, float], ...]
+    recovery_time: tuple[float | None, ...]
+    recovery_tolerance: float
+    velocity_error: tuple[float | None, ...]
+    kind: str
+    pattern: str
+    tick_cpu: float
+    qp_cpu: float
+    cpu_time: float
+    simulated: float
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def travel_error(self) -> float | None:
+        """(travel − planned) / planned (None when the path does not translate)."""
+        if self.travel_planned < 1e-6:
+            return None
+        return (self.travel - self.travel_planned) / self.travel_planned
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (no time series)."""
+        names = (
+            "travel",
+            "travel_planned",
+            "travel_error",
+            "heading_error",
+            "max_roll",
+            "max_pitch",
+            "max_path_error",
+            "fell",
+            "non_foot_contacts",
+            "swing_strikes",
+            "recovery_time",
+            "recovery_tolerance",
+            "velocity_error",
+            "kind",
+            "pattern",
+            "tick_cpu",
+            "qp_cpu",
+            "cpu_time",
+            "simulated",
+            "settings",
+        )
+        return fields_dict(self, *names)
+
+
+def _scene_xml(scene: Any, kind: str, bumps: float, seed: int) -> str:
+    """The scene's MJCF with torque motors (torque kind) and a height field of bumps."""
+    from lxml import etree
+
+    root = etree.fromstring(scene.xml.encode("utf-8"))
+    if kind == "torque":
+        act = root.find("actuator")
+        for el in list(act):
+            attrs = {"name": el.get("name"), "joint": el.get("joint")}
+            if el.get("forcerange"):
+                attrs.update(ctrlrange=el.get("forcerange"), ctrllimited="true")
+            act.replace(el, etree.Element("motor", **attrs))
+    if bumps > 0:
+        nx, ny = (int(round(2 * h / BUMP_CELL)) + 1 for h in BUMP_HALF)
+        asset = root.find("asset")
+        if asset is None:
+            asset = etree.Element("asset")
+            root.find("worldbody").addprevious(asset)
+        etree.SubElement(
+            asset,
+            "hfield",
+            name="bumps",
+            nrow=str(ny),
+            ncol=str(nx),
+            size=f"{BUMP_HALF[0]} {BUMP_HALF[1]} {2 * bumps} 0.05",
+        )
+        world = root.find("worldbody")
+        ground = world.find("geom[@name='ground']")
+        ground.set("pos", f"0 0 {-bumps - 0.001}")
+        ground.addnext(
+            etree.Element(
+                "geom",
+                name="bumps",
+                type="hfield",
+                hfield="bumps",
+                pos=f"0 0 {-bumps}",
+                rgba="0.7 0.7 0.75 1",
+            )
+        )
+    return etree.tostring(root, encoding="unicode")
+
+
+def _fill_bumps(mj: Any, model: Any, seed: int) -> None:
+    hid = mj.mj_name2id(model, mj.mjtObj.mjOBJ_HFIELD, "bumps")
+    if hid < 0:
+        return
+    rng = np.random.default_rng(seed)
+    n = int(model.hfield_nrow[hid]) * int(model.hfield_ncol[hid])
+    h = rng.uniform(0.0, 1.0, n)
+    nr, nc = int(model.hfield_nrow[hid]), int(model.hfield_ncol[hid])
+    grid = h.reshape(nr, nc)
+    # the start area flat at the middle height (the robot is placed there)
+    cy, cx = nr // 2, nc // 2
+    k = int(round(0.3 / BUMP_CELL))
+    grid[cy - k : cy + k + 1, cx - k : cx + k + 1] = 0.5
+    adr = int(model.hfield_adr[hid])
+    model.hfield_data[adr : adr + n] = grid.reshape(-1)
+
+
+def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+def _timeline(command: Any) -> Timeline:
+    if isinstance(command, Timeline):
+        return command
+    if isinstance(command, Command):
+        return Timeline.constant(command)
+    if command is None:
+        return Timeline.constant(Command())
+    try:
+        vx, vy, wz = (float(v) for v in command)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"command={command!r}: a Command, a Timeline or (vx, vy, wz)",
+            parameter="command",
+            value=repr(command),
+        ) from None
+    return Timeline.constant(Command(vx, vy, wz))
+
+
+def run(
+    robot: Any = None,
+    *,
+    pattern: str | None = None,
+    command: Any = (0.2, 0.0, 0.0),
+    duration: float = 10.0,
+    kind: str | None = None,
+    pushes: Sequence[Push] = (),
+    bumps: float = 0.0,
+    friction: float = 1.0,
+    seed: int = 0,
+    settle: float = 0.5,
+    rate: float | None = None,
+    period: float | None = None,
+    recovery_tolerance: float = 0.03,
+) -> ControlRun:
+    """Walk ``robot`` under the controller in MuJoCo for ``duration`` [s] after ``settle``.
+
+    Args:
+        robot: The robot (None: the built-in hexapod).
+        pattern: Starting gait (default ``tripod`` on six legs, ``trot`` on four, else
+            ``wave``).
+        command: A :class:`Command`, a :class:`Timeline` or ``(vx, vy, wz)`` [m/s, rad/s].
+        duration: Walking time [s].
+        kind: ``servo`` or ``torque`` (default: servo for a Hexapod preset, torque else).
+        pushes: :class:`Push` disturbances.
+        bumps: Height-field bump amplitude [m] (heights uniform in ``±bumps``; 0: flat).
+        friction: Ground friction coefficient.
+        seed: The bumps' random seed.
+        settle: Standing time before the walk [s].
+        rate: Control rate [Hz] (default the controller's).
+        period: Gait cycle [s] (default the controller's).
+        recovery_tolerance: Cross-track distance counted as back on the path [m].
+
+    Returns:
+        A :class:`ControlRun`.
+
+    Raises:
+        ParameterError: A bad value.
+
+    """
+    from ..gait import as_whole_body
+    from ..simulate.scene import check_steps, scene_mjcf
+
+    wb = as_whole_body(robot)
+    if kind is None:
+        kind = "servo" if wb.params is not None else "torque"
+    if pattern is None:
+        pattern = {6: "tripod", 4: "trot"}.get(wb.n_legs, "wave")
+    if not (math.isfinite(bumps) and 0 <= bumps <= 0.05):
+        raise ParameterError(
+            f"bumps={bumps!r}: an amplitude from 0 to 0.05 m", parameter="bumps", value=bumps
+        )
+    duration = positive("duration", duration)
+    dt_phys = check_steps(1e-3, {"settle": settle, "duration": duration})
+    timeline = _timeline(command)
+    ctl = Controller(robot, kind=kind, pattern=pattern, rate=rate, period=period)
+    scene = scene_mjcf(robot, friction=friction, timestep=dt_phys)
+    import mujoco as mj  # scene_mjcf has said how to install it when it is missing
+
+    model = mj.MjModel.from_xml_string(_scene_xml(scene, kind, bumps, seed))
+    _fill_bumps(mj, model, seed)
+    data = mj.MjData(model)
+    joints = [mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n) for n in scene.joint_names]
+    jq = np.array([int(model.jnt_qposadr[j]) for j in joints])
+    jv = np.array([int(model.jnt_dofadr[j]) for j in joints])
+    act = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators])
+    foot_geom = np.array([mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, g) for g in scene.foot_geoms])
+    leg_of = np.full(model.ngeom, -1)
+    leg_of[foot_geom] = np.arange(len(foot_geom))
+    ground = np.zeros(model.ngeom, dtype=bool)
+    for name in ("ground", "bumps"):
+        g = mj.mj_name2id(model, mj.mjtObj.mjOBJ_GEOM, name)
+        if g >= 0:
+            ground[g] = True
+    base = int(model.jnt_bodyid[0])
+    # start: neutral pose, feet on the ground
+    q0 = np.asarray(wb.neutral_q(), dtype=float)
+    feet0 = wb.feet(q0[None], np.eye(4)[None])[0]
+    data.qpos[2] = -float(feet0[:, 2].min()) + scene.foot_radius + 1e-4
+    data.qpos[3] = 1.0
+    data.qpos[jq] = q0
+    if kind == "servo":
+        data.ctrl[act] = q0
+    mj.mj_forward(model, data)
+    sub = max(1, int(round(1.0 / (ctl.rate * model.opt.timestep))))
+    n_settle = int(round(settle * ctl.rate))
+    n_walk = int(round(duration * ctl.rate))
+    ctl.set_command(Command(mode="stand"))
+
+    def measure(t: float) -> Measurement:
+        contacts = np.zeros(len(foot_geom), dtype=bool)
+        for c in data.contact[: data.ncon]:
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if leg_of[g1] >= 0 and ground[g2]:
+                contacts[leg_of[g1]] = True
+            elif leg_of[g2] >= 0 and ground[g1]:
+                contacts[leg_of[g2]] = True
+        return Measurement(
+            t=t,
+            quat=np.array(data.qpos[3:7]),
+            gyro=np.array(data.qvel[3:6]),
+            q=np.array(data.qpos[jq]),
+            qd=np.array(data.qvel[jv]),
+            contacts=contacts,
+            position=np.array(data.qpos[:3]),
+            velocity=np.array(data.qvel[:3]),
+        )
+
+    def label(g: int) -> str:
+        name = mj.mj_id2name(model, mj.mjtObj.mjOBJ_GEOM, g)
+        if name:
+            return str(name)
+        b = int(model.geom_bodyid[g])
+        return f"{mj.mj_id2name(model, mj.mjtObj.mjOBJ_BODY, b)}/{g - int(model.body_geomadr[b])}"
+
+    ts, pos, path, rpys, ticks = [], [], [], [], []
+    others: dict[tuple[str, str], float] = {}
+    strikes: dict[str, float] = {}
+    fell = False
+    was_down = np.ones(len(foot_geom), dtype=bool)
+    cpu0 = time.process_time()
+    for k in range(n_settle + n_walk):
+        t = (k - n_settle) / ctl.rate
+        if k >= n_settle:
+            cmd = timeline.at(t)
+            if cmd != ctl.command:
+                ctl.set_command(cmd)
+        m = measure(t)
+        c0 = time.process_time()
+        u = ctl.tick(m)
+        ticks.append(time.process_time() - c0)
+        data.ctrl[act] = u
+        R = np.array(data.xmat[base]).reshape(3, 3)
+        data.xfrc_applied[base] = 0.0
+        for p in pushes:
+            if p.start <= t < p.start + p.duration:
+                n = _rz_col(ctl.path_yaw)
+                data.xfrc_applied[base, :3] += p.force * n
+        for _ in range(sub):
+            mj.mj_step(model, data)
+        if k < n_settle:
+            continue
+        st_point = np.array(data.subtree_com[base]) if kind == "torque" else np.array(data.qpos[:3])
+        ts.append(t)
+        pos.append(st_point)
+        path.append([*ctl.path_xy, ctl.path_yaw])
+        roll, pitch, yaw = _rpy(R)
+        rpys.append((roll, pitch, yaw))
+        height = float(data.qpos[2]) - ctl.ground_z
+        if height < 0.4 * ctl.stand_height or abs(roll) > 1.05 or abs(pitch) > 1.05:
+            fell = True
+        down = np.zeros(len(foot_geom), dtype=bool)
+        for c in data.contact[: data.ncon]:
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if (leg_of[g1] >= 0 and ground[g2]) or (leg_of[g2] >= 0 and ground[g1]):
+                down[int(max(leg_of[g1], leg_of[g2]))] = True
+                continue
+            a, b = sorted((label(g1), label(g2)))
+            others.setdefault((a, b), t)
+        # a strike: a foot that was off the ground touching in the first half of its swing
+        for leg in np.flatnonzero(down & ~was_down & ctl.in_swing & (ctl.swing_s < 0.5)):
+            strikes.setdefault(wb.leg_names[leg], t)
+        was_down = down
+    cpu = time.process_time() - cpu0
+    T = np.array(ts)
+    P = np.array(pos)
+    PA = np.array(path)
+    RPY = np.array(rpys)
+    yaws = np.unwrap(RPY[:, 2])
+    d = P[:, :2] - PA[:, :2]
+    normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
+    cross = np.abs((d * normal).sum(axis=1))
+    start = P[0, :2]
+    travel = float(np.linalg.norm(P[-1, :2] - start))
+    seg = np.diff(PA[:, :2], axis=0)
+    planned = float(np.linalg.norm(PA[-1, :2] - PA[0, :2]))
+    if abs(PA[-1, 2] - PA[0, 2]) > 1e-6:  # a turning path: its length
+        planned = float(np.linalg.norm(seg, axis=1).sum())
+        travel = float(np.linalg.norm(np.diff(P[:, :2], axis=0), axis=1).sum())
+    recovery: list[float | None] = []
+    for p in pushes:
+        end = p.start + p.duration
+        after = T >= end
+        bad = np.flatnonzero(after & (cross > recovery_tolerance))
+        if not after.any():
+            recovery.append(None)
+        elif len(bad) == 0:
+            recovery.append(0.0)
+        elif bad[-1] == len(T) - 1:
+            recovery.append(None)
+        else:
+            recovery.append(float(T[bad[-1] + 1] - end))
+    vel_err = _velocity_errors(timeline, T, P, yaws, PA, ctl.period, duration)
+    tick = np.array(ticks)
+    return ControlRun(
+        t=T,
+        position=P,
+        path=PA,
+        rpy=RPY,
+        travel=travel,
+        travel_planned=planned,
+        heading_error=float(np.abs(yaws - yaws[0] - (PA[:, 2] - PA[0, 2])).max()),
+        max_roll=float(np.abs(RPY[:, 0]).max()),
+        max_pitch=float(np.abs(RPY[:, 1]).max()),
+        max_path_error=float(cross.max()),
+        fell=fell,
+        non_foot_contacts=tuple((a, b, t) for (a, b), t in others.items()),
+        swing_strikes=tuple(strikes.items()),
+        recovery_time=tuple(recovery),
+        recovery_tolerance=recovery_tolerance,
+        velocity_error=tuple(vel_err),
+        kind=kind,
+        pattern=ctl.pattern,
+        tick_cpu=float(np.median(tick)),
+        qp_cpu=ctl.qp_time / max(1, len(tick)),
+        cpu_time=cpu,
+        simulated=settle + duration,
+        settings={
+            "robot": str(wb.source),
+            "rate": ctl.rate,
+            "period": ctl.period,
+            "bumps": bumps,
+            "seed": seed,
+            "friction": friction,
+            "pushes": [fields_dict(p, "force", "start", "duration") for p in pushes],
+            **timeline.to_dict(),
+        },
+    )
+
+
+def _rz_col(yaw: float) -> np.ndarray:
+    return np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+
+
+def _velocity_errors(
+    timeline: Timeline,
+    T: np.ndarray,
+    P: np.ndarray,
+    yaw: np.ndarray,
+    path: np.ndarray,
+    period: float,
+    duration: float,
+) -> list[float | None]:
+    """Per command segment (its first cycle left out): |mean twist − command| / |command|.
+
+    The twist is (vx, vy) in the heading frame and wz; a turn's size counts ``wz`` times the
+    robot's ... radius-free: the error and the command are compared as (vx, vy, wz) vectors.
+    """
+    out: list[float | None] = []
+    times = [t for t, _ in timeline.entries] + [duration]
+    for (t0, cmd), t1 in zip(timeline.entries, times[1:]):
+        a, b = t0 + period, t1
+        sel = np.flatnonzero((T >= a) & (T <= b))
+        ref = np.array([cmd.vx, cmd.vy, cmd.wz]) if cmd.mode == "walk" else np.zeros(3)
+        if len(sel) < 2 or not np.linalg.norm(ref) > 0:
+            out.append(None)
+            continue
+        i, j = sel[0], sel[-1]
+        h = T[j] - T[i]
+        dyaw = (yaw[j] - yaw[i]) / h
+        mid = 0.5 * (path[i, 2] + path[j, 2])
+        c, s = math.cos(mid), math.sin(mid)
+        dx, dy = (P[j, :2] - P[i, :2]) / h
+        meas = np.array([c * dx + s * dy, -s * dx + c * dy, dyaw])
+        out.append(float(np.linalg.norm(meas - ref) / np.linalg.norm(ref)))
+    return out
+
+
+def hardware_loop(
+    controller: Controller,
+    sense: Callable[[], Measurement],
+    act: Callable[[np.ndarray], None],
+    ticks: int,
+    timeline: Timeline | None = None,
+    wait: Callable[[float], None] | None = None,
+) -> int:
+    """Run ``controller`` on hardware: ``ticks`` times sense → tick → act.
+
+    ``sense()`` returns the robot's :class:`Measurement`, ``act(u)`` sends the torques or
+    servo targets; ``wait(dt)`` (e.g. a rate keeper) is called after each tick with the
+    control period [s]. The commands follow ``timeline`` by the measurement's time.
+    Returns the number of ticks run.
+    """
+    for _ in range(int(ticks)):
+        m = sense()
+        if timeline is not None:
+            cmd = timeline.at(m.t)
+            if cmd != controller.command:
+                controller.set_command(cmd)
+        act(controller.tick(m))
+        if wait is not None:
+            wait(controller.dt)
+    return int(ticks)
