@@ -193,7 +193,7 @@ class KinematicModel(Model):
         """``qs`` as C-contiguous float64 (N, nq), shape checked.
 
         A C-contiguous float64 (N, nq) array passes as it is: the batch kernel checks its
-        values on the way and :meth:`_batch_check` raises the message of ``check_q_batch``.
+        values on the way and :meth:`_batch` raises the message of ``check_q_batch``.
         """
         if (
             isinstance(qs, np.ndarray)
@@ -205,14 +205,28 @@ class KinematicModel(Model):
             return qs
         return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
 
-    def _batch_check(self, qs: np.ndarray) -> Any:
-        """Raises :meth:`check_q_batch`'s error for ``qs`` (called when the kernel flags it)."""
-        return lambda: self.check_q_batch(qs, "Q")
-
-    def _batch_chain(self) -> Any:
+    def _batch(
+        self,
+        qs: Any,
+        pose: bool,
+        reference: str | None,
+        out_pose: np.ndarray | None = None,
+        out_jacobian: np.ndarray | None = None,
+    ) -> tuple[Any, Any]:
+        """The batch kernel's poses and/or Jacobians (``reference`` None: no Jacobian)."""
         from ._chain import aligned_chain
+        from ._kernels import pose_jacobian_batch
 
-        return self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
+        key = None
+        if reference is not None:
+            key = reference.lower() if isinstance(reference, str) else None
+            _reference(reference)
+        q = self._batch_q(qs)
+        chain = self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
+        return pose_jacobian_batch(
+            chain, q, pose=pose, jacobian=key, out_pose=out_pose, out_jacobian=out_jacobian,
+            check=lambda: self.check_q_batch(q, "Q"),
+        )  # fmt: skip
 
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
@@ -233,14 +247,7 @@ class KinematicModel(Model):
             ParameterError: ``out`` of the wrong shape, dtype or layout.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        q = self._batch_q(qs)
-        poses, _ = pose_jacobian_batch(
-            self._batch_chain(), q, pose=True, jacobian=None, out_pose=out,
-            check=self._batch_check(q),
-        )  # fmt: skip
-        assert poses is not None
+        poses: np.ndarray = self._batch(qs, True, None, out_pose=out)[0]
         return poses
 
     def jacobian_batch(
@@ -262,16 +269,7 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        key = reference.lower() if isinstance(reference, str) else None
-        _reference(reference)
-        q = self._batch_q(qs)
-        _, jac = pose_jacobian_batch(
-            self._batch_chain(), q, pose=False, jacobian=key, out_jacobian=out,
-            check=self._batch_check(q),
-        )  # fmt: skip
-        assert jac is not None
+        jac: np.ndarray = self._batch(qs, False, reference, out_jacobian=out)[1]
         return jac
 
     def fk_jacobian_batch(
@@ -292,16 +290,7 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        key = reference.lower() if isinstance(reference, str) else None
-        _reference(reference)
-        q = self._batch_q(qs)
-        poses, jac = pose_jacobian_batch(
-            self._batch_chain(), q, pose=True, jacobian=key, check=self._batch_check(q)
-        )
-        assert poses is not None and jac is not None
-        return poses, jac
+        return self._batch(qs, True, reference)
 
     def position_jacobian(self, q: Any, frame: str | None = None) -> np.ndarray:
         """3×nq Jacobian of the tip position in the base frame, ``∂p/∂q``."""

@@ -234,15 +234,9 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
 def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
 
-    Legs (``coxa_tibia``, ``leg3``) are recognised through what does not change the closed
-    form: a base pose and a first row with any ``α1``, ``d1`` (folded into
-    :attr:`LegFamily.mount`), joint offsets ``θ``, offsets ``r2``, ``r3`` along the knee axis,
-    fixed rows after the last joint and a **tool offset** (the foot a fixed point ``p`` in the
-    last joint's frame: it becomes the effective last length ``√(p_x² + p_y²)``, an angle
-    offset ``atan2(p_y, p_x)`` on the last joint and a lateral offset along the knee axis),
-    an ankle axis anti-parallel to the knee's (``α3 = π``), and twists within ``angle_tol`` of
-    the pattern (``α2 = ±π/2``, ``α3 ∈ {0, π}``; then the solutions are finished on the
-    exact table by the one IK loop: :func:`analytic_batch`).
+    Legs are recognised through what leaves their closed form unchanged (see the module
+    docstring); a first row's ``α1``, ``d1`` and the base pose fold into
+    :attr:`LegFamily.mount`.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -456,12 +450,10 @@ def analytic_batch(
     ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid. With a
     lateral offset ``e`` "toward" is the branch ``u + l1 = +√(x² + y² − e²)``.
 
-    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0, within
-    :data:`FAMILY_TOL`) is solved by the exact pattern's closed form, then each solution is
-    finished on the table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`); a slot
-    stays valid when its foot lands within ``tol`` × the length scale of the target (2 DOF:
-    the target that close to the table's surface) and, with ``within_limits``, inside the
-    limits. The slots keep their meaning.
+    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0) is solved by the
+    exact pattern's closed form, each solution then finished on the table by the one IK loop
+    (:mod:`hexapod_kin.ik._table_finish`): a slot stays valid when its foot lands within
+    ``tol`` × the length scale of the target and, with ``within_limits``, inside the limits.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -498,30 +490,21 @@ def analytic_batch(
                 q[..., j] = v
                 valid &= ok & (v >= lo[j]) & (v <= hi[j])
         q[~valid] = np.nan
-    elif fam.deviation == 0.0:
-        q, valid = leg_solutions(
-            x,
-            fam.lengths,
-            height=fam.height,
-            sign=fam.sign,
-            offsets=fam.offsets,
-            tol=tol_abs,
-            limits=limits,
-            lateral=fam.lateral,
-            joint_signs=fam.joint_signs,
-        )
     else:  # twists near the pattern: solve the exact pattern, finish on the table itself
+        exact = fam.deviation == 0.0
         q, valid = leg_solutions(
             x,
             fam.lengths,
             height=fam.height,
             sign=fam.sign,
             offsets=fam.offsets,
-            tol=tol_abs + 4.0 * fam.deviation * fam.scale,
+            tol=tol_abs if exact else tol_abs + 4.0 * fam.deviation * fam.scale,
+            limits=limits if exact else None,
             lateral=fam.lateral,
             joint_signs=fam.joint_signs,
         )
-        q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
+        if not exact:
+            q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)

@@ -413,7 +413,7 @@ def lm_loop(
                 if tries > 40:
                     code = 1
                     break
-        if cost < best_cost or s == 0:
+        if code == 0 or cost < best_cost or s == 0:
             best_cost = cost
             best_steps = accepted
             best_code = code
@@ -424,15 +424,6 @@ def lm_loop(
             for i in range(accepted + 1):
                 hist_out[i] = hist[i]
         if code == 0:
-            best_cost = cost
-            best_steps = accepted
-            best_code = code
-            for i in range(n):
-                q_out[i] = q[i]
-                for row in range(6):
-                    jac_out[row, i] = jac[row, i]
-            for i in range(accepted + 1):
-                hist_out[i] = hist[i]
             break
     return attempts, best_steps, best_code
 
