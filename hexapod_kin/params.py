@@ -43,7 +43,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ._pose import Pose, matrix_to_rpy, rpy_to_matrix
-from .exceptions import ParameterError, choices, finite
+from .exceptions import ParameterError, choices, finite, positive
 
 __all__ = [
     "KhalilRow",
@@ -266,10 +266,7 @@ class Inertial:
     inertia: tuple[float, float, float, float, float, float] = (1e-6, 1e-6, 1e-6, 0, 0, 0)
 
     def __post_init__(self) -> None:
-        m = finite("Inertial.mass", self.mass)
-        if m <= 0:
-            raise ParameterError(f"Inertial.mass={m} is not allowed; mass must be > 0 kg")
-        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "mass", positive("Inertial.mass", self.mass))
         if len(tuple(self.com)) != 3:
             raise ParameterError(f"Inertial.com={self.com!r}: three numbers (x, y, z) required")
         object.__setattr__(
@@ -466,12 +463,8 @@ class Chain:
             raise ParameterError(f"Chain link names must be unique, got {all_names}")
         if len(set(names)) != len(names):
             raise ParameterError(f"Chain.joint_names must be unique, got {names}")
-        lm = finite("Chain.link_mass", self.link_mass)
-        if lm <= 0:
-            raise ParameterError(f"Chain.link_mass={lm} is not allowed; must be > 0 kg")
-        lr = finite("Chain.link_radius", self.link_radius)
-        if lr <= 0:
-            raise ParameterError(f"Chain.link_radius={lr} is not allowed; must be > 0 m")
+        positive("Chain.link_mass", self.link_mass)
+        positive("Chain.link_radius", self.link_radius)
         if self.inertials is not None:
             inn = tuple(self.inertials)
             if len(inn) != len(rows) or not all(x is None or isinstance(x, Inertial) for x in inn):
@@ -698,10 +691,7 @@ class Hexapod:
         if len(size) != 3 or min(size) <= 0:
             raise ParameterError(f"Hexapod.body_size={self.body_size!r}: three lengths > 0 m")
         object.__setattr__(self, "body_size", size)
-        m = finite("Hexapod.body_mass", self.body_mass)
-        if m <= 0:
-            raise ParameterError(f"Hexapod.body_mass={m}: must be > 0 kg")
-        object.__setattr__(self, "body_mass", m)
+        object.__setattr__(self, "body_mass", positive("Hexapod.body_mass", self.body_mass))
 
     @property
     def nq(self) -> int:

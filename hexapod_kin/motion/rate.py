@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from .._fields import fields_dict, read_only
-from ..exceptions import ConfigurationError, ParameterError, positive
+from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 from ..kinematics import KinematicModel, load
 from ._law import integrate
 
@@ -387,20 +387,8 @@ def resolved_rate(
     dt = positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)
-    if method not in ("rk4", "euler"):
-        raise ParameterError(
-            f"method={method!r} is not allowed; use 'rk4' or 'euler'",
-            parameter="method",
-            value=method,
-            allowed="'rk4', 'euler'",
-        )
-    if frame not in FRAMES:
-        raise ParameterError(
-            f"frame={frame!r} is not allowed; use 'base' or 'tip'",
-            parameter="frame",
-            value=frame,
-            allowed="'base', 'tip'",
-        )
+    one_of("method", method, ("rk4", "euler"))
+    one_of("frame", frame, FRAMES)
     steps = int(round(duration / dt))
     if steps < 1 or steps > 50_000_000:
         raise ParameterError(
