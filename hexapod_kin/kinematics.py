@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from .exceptions import ParameterError, choices
 from .frames import joint_kind
-from .model import Model, build, fast_q_ok
+from .model import Model, build
 
 # The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
 _F64 = np.dtype(np.float64)
@@ -300,23 +300,9 @@ class KinematicModel(Model):
         self, q: Any, reference: str = "local_world_aligned"
     ) -> tuple[np.ndarray, np.ndarray]:
         """Tip pose and Jacobian in one pass (cheaper than calling both)."""
-        ref = _reference(reference)
-        if not fast_q_ok(q, self._shape):
-            q = self.pinocchio_q(q)
-        d = self.data
-        jac = _compute_frame_jacobian(self.model, d, q, self.tip_id, ref)
-        if jac.ndim == 1:
-            jac = jac.reshape(6, 1)
-        omf = pin.updateFramePlacement(self.model, d, self.tip_id)
-        if self._base_is_root:
-            return omf.homogeneous, jac
-        pose = (self.baseMo * omf).homogeneous
-        if ref == pin.ReferenceFrame.LOCAL:
-            return pose, jac
-        if ref == pin.ReferenceFrame.WORLD:
-            return pose, self.baseMo.action @ jac
-        r = self._rot_base
-        return pose, np.vstack([r @ jac[:3], r @ jac[3:]])
+        jac = self.jacobian(q, reference)  # its joint placements are the pose's too
+        omf = _update_frame_placement(self.model, self.data, self.tip_id)
+        return (omf if self._base_is_root else self.baseMo * omf).homogeneous, jac
 
 
 def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
