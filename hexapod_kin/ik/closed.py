@@ -33,11 +33,9 @@ Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are all
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
 
-:func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
-gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
-:class:`AnalyticBatch`. The legs' closed form is written once, vectorised in numpy over
-arrays of targets (:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the
-gait's body IK call it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+The legs' closed form is written once, vectorised in numpy over arrays of targets
+(:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the gait's body IK call
+it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
