@@ -118,30 +118,8 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY_SUBMODULES) | set(_LAZY_NAMES))
 
 
-__all__ = [
-    "__version__",
-    "Chain",
-    "ConfigurationError",
-    "DHRow",
-    "FrameNotFoundError",
-    "Hexapod",
-    "HexapodKinError",
-    "Inertial",
-    "JointLimits",
-    "KhalilRow",
-    "LegMount",
-    "ParameterError",
-    "Pose",
-    "SourceError",
-    "TableRecovery",
-    "UrdfError",
-    "UrdfWarning",
-    "chain_from_urdf",
-    "load",
-    "recover_chain",
-    "robots",
-    "table_fk",
-    "table_transforms",
-    "to_urdf",
-    "write_urdf",
-]
+__all__ = ["__version__", "Chain", "ConfigurationError", "DHRow", "FrameNotFoundError",
+           "Hexapod", "HexapodKinError", "Inertial", "JointLimits", "KhalilRow",
+           "LegMount", "ParameterError", "Pose", "SourceError", "TableRecovery",
+           "UrdfError", "UrdfWarning", "chain_from_urdf", "load", "recover_chain",
+           "robots", "table_fk", "table_transforms", "to_urdf", "write_urdf"]  # fmt: skip

@@ -61,32 +61,11 @@ from ._kmath import (
 )
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
-__all__ = [
-    "BLOCK",
-    "POLY_TRIG_MAX",
-    "Q_MAX",
-    "REF_CODES",
-    "AlignedChain",
-    "ChainArrays",
-    "aligned_chain",
-    "det_lu",
-    "det_small",
-    "dls_into",
-    "eig2_sym",
-    "eig3_sym",
-    "fk_jac_block",
-    "fk_jac_into",
-    "jacobi_eig",
-    "mark_compiled",
-    "njit",
-    "pose_jacobian_batch",
-    "pose_jacobian_kernel",
-    "run_blocks",
-    "silence_notice",
-    "sincos",
-    "solve_spd",
-    "wrap_angle",
-]
+__all__ = ["BLOCK", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
+           "ChainArrays", "aligned_chain", "det_lu", "det_small", "dls_into",
+           "eig2_sym", "eig3_sym", "fk_jac_block", "fk_jac_into", "jacobi_eig",
+           "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
+           "run_blocks", "silence_notice", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
 #: Reference frame name → kernel code.
 REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}

@@ -12,24 +12,10 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = [
-    "HexapodKinError",
-    "ParameterError",
-    "ConfigurationError",
-    "LimitError",
-    "FrameNotFoundError",
-    "UrdfError",
-    "SourceError",
-    "IKError",
-    "ViewerError",
-    "OptionalDependencyError",
-    "UrdfWarning",
-    "choices",
-    "one_of",
-    "did_you_mean",
-    "finite",
-    "positive",
-]
+__all__ = ["HexapodKinError", "ParameterError", "ConfigurationError", "LimitError",
+           "FrameNotFoundError", "UrdfError", "SourceError", "IKError", "ViewerError",
+           "OptionalDependencyError", "UrdfWarning", "choices", "one_of",
+           "did_you_mean", "finite", "positive"]  # fmt: skip
 
 
 class HexapodKinError(ValueError):

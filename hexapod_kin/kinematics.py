@@ -34,13 +34,8 @@ _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
 _compute_frame_jacobian = pin.computeFrameJacobian
 
-__all__ = [
-    "REFERENCES",
-    "KinematicModel",
-    "load",
-    "direct_jacobian",
-    "indirect_jacobian",
-]
+__all__ = ["REFERENCES", "KinematicModel", "load", "direct_jacobian",
+           "indirect_jacobian"]  # fmt: skip
 
 REFERENCES: dict[str, pin.ReferenceFrame] = {
     "local": pin.ReferenceFrame.LOCAL,

@@ -45,22 +45,9 @@ import numpy as np
 from ._pose import Pose, matrix_to_rpy, rpy_to_matrix
 from .exceptions import ParameterError, choices, finite, positive
 
-__all__ = [
-    "KhalilRow",
-    "DHRow",
-    "JointLimits",
-    "Inertial",
-    "Chain",
-    "LegMount",
-    "Hexapod",
-    "khalil_transform",
-    "dh_transform",
-    "rod_inertial",
-    "chain_from_rows",
-    "Pose",
-    "rpy_to_matrix",
-    "matrix_to_rpy",
-]
+__all__ = ["KhalilRow", "DHRow", "JointLimits", "Inertial", "Chain", "LegMount",
+           "Hexapod", "khalil_transform", "dh_transform", "rod_inertial",
+           "chain_from_rows", "Pose", "rpy_to_matrix", "matrix_to_rpy"]  # fmt: skip
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
 _SIGMA: dict[Any, SigmaName] = {

@@ -15,19 +15,9 @@ from typing import Any
 from ._io import atomic_write
 from .exceptions import OptionalDependencyError
 
-__all__ = [
-    "FORMATS",
-    "decimate",
-    "fit_limits",
-    "plot_motion",
-    "plot_singularity_map",
-    "plot_step",
-    "plot_still",
-    "plot_workspace",
-    "pyplot",
-    "save_figure",
-    "singularity_map_figure",
-]
+__all__ = ["FORMATS", "decimate", "fit_limits", "plot_motion", "plot_singularity_map",
+           "plot_step", "plot_still", "plot_workspace", "pyplot", "save_figure",
+           "singularity_map_figure"]  # fmt: skip
 
 
 def pyplot() -> Any:

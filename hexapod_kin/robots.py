@@ -17,16 +17,8 @@ from typing import Any
 from .exceptions import HexapodKinError, ParameterError, choices, positive
 from .params import Chain, Hexapod, Inertial, JointLimits, KhalilRow, LegMount
 
-__all__ = [
-    "PRESETS",
-    "coxa_tibia_leg",
-    "get",
-    "hexabot_leg",
-    "hexapod",
-    "names",
-    "pendulum",
-    "scara",
-]
+__all__ = ["PRESETS", "coxa_tibia_leg", "get", "hexabot_leg", "hexapod", "names",
+           "pendulum", "scara"]  # fmt: skip
 
 
 def hexabot_leg(

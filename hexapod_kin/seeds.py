@@ -23,15 +23,8 @@ from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, 
 if TYPE_CHECKING:
     from .dynamics import StepTorques
 
-__all__ = [
-    "SEED_Q0",
-    "SeedRun",
-    "euler_baseline",
-    "seed002_schedule",
-    "seed_baseline",
-    "seed_experiment",
-    "step_torques",
-]
+__all__ = ["SEED_Q0", "SeedRun", "euler_baseline", "seed002_schedule", "seed_baseline",
+           "seed_experiment", "step_torques"]  # fmt: skip
 
 
 @dataclass(frozen=True)

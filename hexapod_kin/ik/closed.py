@@ -53,17 +53,8 @@ from ..params import Chain, Hexapod, Pose, khalil_transform
 from ._table_finish import finish_on_table
 from ._table_finish import fit_angles as _fit
 
-__all__ = [
-    "FAMILIES",
-    "FAMILY_TOL",
-    "AnalyticBatch",
-    "LegFamily",
-    "analytic",
-    "analytic_batch",
-    "detect_family",
-    "leg_reachable",
-    "leg_solutions",
-]
+__all__ = ["FAMILIES", "FAMILY_TOL", "AnalyticBatch", "LegFamily", "analytic",
+           "analytic_batch", "detect_family", "leg_reachable", "leg_solutions"]  # fmt: skip
 
 FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 

@@ -25,14 +25,7 @@ import numpy as np
 
 from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
-__all__ = [
-    "lm_batch",
-    "lm_loop",
-    "log3",
-    "sigma_min3",
-    "step_into",
-    "task_into",
-]
+__all__ = ["lm_batch", "lm_loop", "log3", "sigma_min3", "step_into", "task_into"]  # fmt: skip
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)

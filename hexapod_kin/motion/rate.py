@@ -33,15 +33,8 @@ from ._law import integrate
 if TYPE_CHECKING:
     from ..ik.prepare import ModelLike
 
-__all__ = [
-    "FRAMES",
-    "ClosestApproach",
-    "Trajectory",
-    "constant_twist_pose",
-    "default_stance",
-    "read_only",
-    "resolved_rate",
-]
+__all__ = ["FRAMES", "ClosestApproach", "Trajectory", "constant_twist_pose",
+           "default_stance", "read_only", "resolved_rate"]  # fmt: skip
 
 Method = Literal["euler", "rk4"]
 Frame = Literal["base", "tip"]
