@@ -51,16 +51,10 @@ __all__ = ["KhalilRow", "DHRow", "JointLimits", "Inertial", "Chain", "LegMount",
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
 _SIGMA: dict[Any, SigmaName] = {
-    0: "revolute",
-    1: "prismatic",
-    2: "fixed",
-    "revolute": "revolute",
-    "prismatic": "prismatic",
-    "fixed": "fixed",
-    "r": "revolute",
-    "p": "prismatic",
-    "f": "fixed",
-}
+    0: "revolute", 1: "prismatic", 2: "fixed",
+    "revolute": "revolute", "prismatic": "prismatic", "fixed": "fixed",
+    "r": "revolute", "p": "prismatic", "f": "fixed",
+}  # fmt: skip
 
 _NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
 
