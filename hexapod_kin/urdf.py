@@ -107,13 +107,13 @@ def _material(name: str) -> str:
     return f'<material name="{name}"><color rgba="{COLORS[name]}"/></material>'
 
 
-def _inertial_xml(chain: Chain, j: int, indent: str) -> list[str]:
-    inn = chain.link_inertial(j)
-    ixx, iyy, izz, ixy, ixz, iyz = inn.inertia
+def _inertial_xml(indent: str, mass: float, com: Any, inertia: Any) -> list[str]:
+    """The lines of an ``<inertial>`` (``inertia``: ixx, iyy, izz, ixy, ixz, iyz)."""
+    ixx, iyy, izz, ixy, ixz, iyz = inertia
     return [
         f"{indent}<inertial>",
-        f'{indent}  <origin xyz="{vec(inn.com)}" rpy="0 0 0"/>',
-        f'{indent}  <mass value="{num(inn.mass)}"/>',
+        f'{indent}  <origin xyz="{vec(com)}" rpy="0 0 0"/>',
+        f'{indent}  <mass value="{num(mass)}"/>',
         f'{indent}  <inertia ixx="{num(ixx)}" ixy="{num(ixy)}" ixz="{num(ixz)}" '
         f'iyy="{num(iyy)}" iyz="{num(iyz)}" izz="{num(izz)}"/>',
         f"{indent}</inertial>",
@@ -191,7 +191,8 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         else:
             lines += fixed_joint(indent, f"{child}_fixed", prev, child, _origin(t0))
         lines.append(f'{indent}<link name="{child}">')
-        lines += _inertial_xml(chain, j, indent + "  ")
+        inn = chain.link_inertial(j)
+        lines += _inertial_xml(indent + "  ", inn.mass, inn.com, inn.inertia)
         lines += _visuals(chain, j, indent + "  ")
         lines.append(f"{indent}</link>")
         prev = child
@@ -248,12 +249,7 @@ def _body_link(robot: Hexapod) -> list[str]:
     )
     return [
         f'  <link name="{robot.body}">',
-        "    <inertial>",
-        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <mass value="{num(m)}"/>',
-        f'      <inertia ixx="{num(ixx)}" ixy="0" ixz="0" iyy="{num(iyy)}" iyz="0" '
-        f'izz="{num(izz)}"/>',
-        "    </inertial>",
+        *_inertial_xml("    ", m, (0.0, 0.0, 0.0), (ixx, iyy, izz, 0.0, 0.0, 0.0)),
         *_visual("    ", f'<box size="{vec(robot.body_size)}"/>', "body"),
         "  </link>",
     ]
