@@ -479,12 +479,7 @@ def recover_chain(
     limits = []
     for k in range(n):
         lo, hi = float(km.lower[k]), float(km.upper[k])
-        if (
-            not (math.isfinite(lo) and math.isfinite(hi))
-            or lo > hi
-            or abs(lo) > 1e6
-            or abs(hi) > 1e6
-        ):
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi and max(-lo, hi) <= 1e6):
             lo, hi = (-math.pi, math.pi) if sigmas[k] == "revolute" else (-0.1, 0.1)
         vel = float(km.velocity_limit[k]) if math.isfinite(km.velocity_limit[k]) else 10.0
         eff = float(km.effort_limit[k]) if math.isfinite(km.effort_limit[k]) else 10.0

@@ -226,15 +226,12 @@ class KinematicModel(Model):
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
 
-        Equal to :meth:`fk` of each row to rounding (≈1e-15), without a Python loop: the
-        compiled block kernel of :mod:`hexapod_kin._kernels` on every core (compiled on first
-        use, or ahead by ``hexapod-kin precompile``); the same bits whatever the process or
-        thread count.
+        Equal to :meth:`fk` of each row to rounding (≈1e-15): the compiled block kernel of
+        :mod:`hexapod_kin._kernels` on every core; the same bits whatever the thread count.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
-            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return (reuse it
-                across calls to skip allocating and the page faults of a fresh array).
+            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return.
 
         Raises:
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150`` (``out``
@@ -272,17 +269,8 @@ class KinematicModel(Model):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Poses (N, 4, 4) and Jacobians (N, 6, nq) of many configurations in one pass.
 
-        The results of :meth:`fk_batch` and :meth:`jacobian_batch` (same kernel, each chain
-        walked once).
-
-        Args:
-            qs: Configurations (N, nq) in [rad] / [m].
-            reference: Frame of the Jacobians: ``"local"``, ``"world"`` or
-                ``"local_world_aligned"``.
-
-        Raises:
-            ParameterError: Unknown ``reference``.
-            ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
+        The results of :meth:`fk_batch` and :meth:`jacobian_batch` (each chain walked once);
+        arguments and errors as :meth:`jacobian_batch`.
 
         """
         return self._batch(qs, True, reference)

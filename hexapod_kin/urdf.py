@@ -391,10 +391,8 @@ def to_urdf(
         SourceError: A table file that cannot be read.
 
     """
-    source = table_of(source)
+    source = table_of(source, leg)
     if isinstance(source, Chain):
-        if leg is not None:
-            raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
         text = _chain_urdf(source, header)
     else:
         text = _robot_urdf(source, leg, header)
