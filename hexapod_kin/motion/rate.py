@@ -177,25 +177,31 @@ class Trajectory:
 
 
 # ============================================================================ sampling
+def _call(fn: Any, times: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``fn(times)`` if it returns (M, *shape) (or a (width, M) transpose), else ``fn`` per time."""
+    try:
+        out = np.asarray(fn(times), dtype=float)
+        if len(shape) == 1 and out.shape == (shape[0], times.size):
+            out = out.T
+        if out.shape == (times.size, *shape):
+            return out
+    except (ValueError, TypeError, IndexError):
+        pass
+    return np.array([np.asarray(fn(float(t)), dtype=float) for t in times])
+
+
 def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.ndarray:
     """Evaluate a constant or callable ``fn(t)`` at ``times`` → (M, width) finite values."""
     if callable(fn):
-        try:
-            out = np.asarray(fn(times), dtype=float)
-            if out.shape == (width, times.size):
-                out = out.T
-            if out.shape != (times.size, width):
-                raise ValueError
-        except (ValueError, TypeError, IndexError):
-            out = np.array([np.asarray(fn(float(t)), dtype=float) for t in times])
-            if out.shape != (times.size, width):
-                raise ConfigurationError(
-                    f"{name}(t) returned shape {out.shape[1:]}; {what} (or (M, {width}) for an "
-                    "array of times) is needed",
-                    parameter=name,
-                    value=out.shape[1:],
-                    allowed=f"({width},)",
-                ) from None
+        out = _call(fn, times, (width,))
+        if out.shape != (times.size, width):
+            raise ConfigurationError(
+                f"{name}(t) returned shape {out.shape[1:]}; {what} (or (M, {width}) for an "
+                "array of times) is needed",
+                parameter=name,
+                value=out.shape[1:],
+                allowed=f"({width},)",
+            )
     else:
         try:
             v = np.asarray(fn, dtype=float)
@@ -483,12 +489,7 @@ def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:
             value=type(path).__name__,
             allowed="callable t -> (M, 4, 4)",
         )
-    try:
-        out = np.asarray(path(times), dtype=float)
-        if out.shape != (times.size, 4, 4):
-            raise ValueError
-    except (ValueError, TypeError, IndexError):
-        out = np.array([np.asarray(path(float(t)), dtype=float) for t in times])
+    out = _call(path, times, (4, 4))
     if out.shape != (times.size, 4, 4) or not np.all(np.isfinite(out)):
         raise ConfigurationError(
             f"path(t) returned shape {out.shape[1:]}; finite poses (4, 4) are needed",
