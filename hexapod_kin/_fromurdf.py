@@ -229,11 +229,7 @@ def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _snap(
-    points: list[np.ndarray],
-    axes: list[np.ndarray],
-    tip: np.ndarray,
-    names: list[str],
-    tol: float,
+    points: list[np.ndarray], axes: list[np.ndarray], tip: np.ndarray, names: list[str], tol: float
 ) -> list[Snap]:
     """Turn near-parallel / near-perpendicular axes exact, in place (``tip``: 4×4 pose)."""
     snaps: list[Snap] = []

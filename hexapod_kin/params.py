@@ -534,12 +534,7 @@ class Chain:
     # ----------------------------------------------------------------- constructors
     @classmethod
     def from_dh(
-        cls,
-        dh_rows: Sequence[DHRow],
-        *,
-        base: Any = None,
-        tool: Any = None,
-        **kwargs: Any,
+        cls, dh_rows: Sequence[DHRow], *, base: Any = None, tool: Any = None, **kwargs: Any
     ) -> Chain:
         """Build a chain from a standard-DH table, exactly.
 

@@ -390,10 +390,7 @@ def singularity_map_figure(
 
 
 def plot_singularity_map(
-    result: Any,
-    path: str | os.PathLike[str],
-    measure: str | None = None,
-    title: str | None = None,
+    result: Any, path: str | os.PathLike[str], measure: str | None = None, title: str | None = None
 ) -> Path:
     """Heat map of a measure over two scanned joints, with the singular families drawn.
 

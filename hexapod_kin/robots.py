@@ -186,11 +186,7 @@ def scara(
 
 
 def pendulum(
-    length: float = 0.5,
-    mass: float = 1.0,
-    damping: float = 0.01,
-    *,
-    name: str = "pendulum",
+    length: float = 0.5, mass: float = 1.0, damping: float = 0.01, *, name: str = "pendulum"
 ) -> Chain:
     """Simple pendulum of seed 001 §1: a point mass on a massless-like rod.
 

@@ -201,8 +201,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
     rows_in = data.get("row")
     if not isinstance(rows_in, list) or not rows_in:
         raise ParameterError(
-            "table: at least one [[row]] is required (one per row of the table)",
-            parameter="row",
+            "table: at least one [[row]] is required (one per row of the table)", parameter="row"
         )
     if len(rows_in) > MAX_ROWS:
         raise ParameterError(

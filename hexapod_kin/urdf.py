@@ -359,9 +359,7 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
     if leg is not None:
         if isinstance(source, Chain):
             raise ParameterError(
-                f"leg={leg!r} only applies to a Hexapod, not to a Chain",
-                parameter="leg",
-                value=leg,
+                f"leg={leg!r} only applies to a Hexapod, not to a Chain", parameter="leg", value=leg
             )
         source.leg(leg)  # raises with the list of legs
     return source

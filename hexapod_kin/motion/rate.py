@@ -435,23 +435,9 @@ def resolved_rate(
             allowed="within the joint limits (or within_limits=False)",
         )
     vlim = np.asarray(mdl.velocity_limit, dtype=float)
-    out = integrate(
-        mdl,
-        start,
-        vel,
-        ref_p,
-        ref_r,
-        dt,
-        method == "rk4",
-        frame == "tip",
-        gain,
-        eps,
-        lam2max,
-        lo,
-        hi,
-        within_limits,
-        np.where(velocity_limits & (vlim > 0), vlim, np.inf),
-    )
+    vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
+    out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
+                    lam2max, lo, hi, within_limits, vmax)  # fmt: skip
     pose = out["pose"]
     arrays = {
         "t": np.arange(steps + 1) * dt,
