@@ -718,19 +718,8 @@ def analytic(
     array, N targets (N, 3) a list of N. Coincident solutions (e.g. the two knee branches of a
     stretched leg) are returned once; an unreachable target gives a (0, n) array.
 
-    Args:
-        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one (the family is
-            recognised from the table; see the module docstring).
-        target: Foot position (3,) in [m] in the base frame, or (N, 3); SCARA: (3,) or
-            (4,) = (x, y, z, yaw [rad]), or (N, 3) / (N, 4).
-        tol: Relative reachability tolerance (see :func:`analytic_batch`).
-        within_limits: Keep only solutions inside the joint limits.
-
-    Returns:
-        A list of (k, n) arrays in [rad]/[m], one per target.
-
-    Raises:
-        IKError: No closed form for this chain; bad or non-finite target.
+    The arguments and errors are those of :func:`analytic_batch` (``target``: its
+    ``targets``); the arrays are in [rad]/[m].
 
     Example:
         >>> from hexapod_kin import robots, ik
