@@ -78,6 +78,14 @@ def _name(value: Any, where: str) -> str:
     return value
 
 
+def _names(names: tuple[str, ...], count: int, field: str, what: str) -> tuple[str, ...]:
+    if len(names) != count:
+        raise ParameterError(f"Chain.{field} has {len(names)} names; the table has {count} {what}")
+    for i, n in enumerate(names):
+        _name(n, f"Chain.{field}[{i}]")
+    return names
+
+
 def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
     """Return ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` as a 4×4 array (closed form).
 
@@ -403,13 +411,7 @@ class Chain:
             if self.joint_names is None
             else tuple(self.joint_names)
         )
-        if len(names) != nj:
-            raise ParameterError(
-                f"Chain.joint_names has {len(names)} names; the table has {nj} joint rows"
-            )
-        for i, n in enumerate(names):
-            _name(n, f"Chain.joint_names[{i}]")
-        object.__setattr__(self, "joint_names", names)
+        object.__setattr__(self, "joint_names", _names(names, nj, "joint_names", "joint rows"))
         limits = (
             tuple(_default_limits(str(r.sigma)) for r in joint_rows)
             if self.limits is None
@@ -428,13 +430,7 @@ class Chain:
             links = tuple(f"link{j}" for j in range(1, len(rows) + 1))
         else:
             links = tuple(f"link{j}" for j in range(1, len(rows))) + (self.tip,)
-        if len(links) != len(rows):
-            raise ParameterError(
-                f"Chain.link_names has {len(links)} names; the table has {len(rows)} rows"
-            )
-        for i, n in enumerate(links):
-            _name(n, f"Chain.link_names[{i}]")
-        object.__setattr__(self, "link_names", links)
+        object.__setattr__(self, "link_names", _names(links, len(rows), "link_names", "rows"))
         all_names: tuple[str, ...] = (self.base, *links)
         if self.base_pose is not None:
             all_names += (self.frame0_link,)
