@@ -38,6 +38,8 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
 #: Names of the package imported from their module on first access (PEP 562), so that
 #: ``import hexapod_kin`` imports no numpy: a Ctrl-C while a command starts is then caught
 #: by the command line's own handler (one line, status 130), not by Python's traceback.
+_PARAMS_NAMES = ("Chain", "DHRow", "Hexapod", "Inertial", "JointLimits", "KhalilRow", "LegMount",
+                 "Pose")  # fmt: skip
 _LAZY_NAMES = {
     "load": "kinematics",
     "chain_from_urdf": "_fromurdf",
@@ -47,47 +49,16 @@ _LAZY_NAMES = {
     "table_transforms": "_table_kin",
     "to_urdf": "urdf",
     "write_urdf": "urdf",
-    **{
-        name: "params"
-        for name in (
-            "Chain",
-            "DHRow",
-            "Hexapod",
-            "Inertial",
-            "JointLimits",
-            "KhalilRow",
-            "LegMount",
-            "Pose",
-        )
-    },  # fmt: skip
+    **dict.fromkeys(_PARAMS_NAMES, "params"),
 }
 
 #: Submodules reachable as attributes (``hk.singularity``) without importing them up front
 #: (PEP 562): ``import hexapod_kin`` stays light (no Pinocchio, sympy or numba).
 _LAZY_SUBMODULES = (
-    "dynamics",
-    "export",
-    "frames",
-    "gait",
-    "ik",
-    "kinematics",
-    "model",
-    "motion",
-    "params",
-    "plots",
-    "report",
-    "robots",
-    "seeds",
-    "simulate",
-    "singularity",
-    "sources",
-    "sweep",
-    "symbolic",
-    "tables",
-    "urdf",
-    "viewer",
-    "workspace",
-)
+    "dynamics", "export", "frames", "gait", "ik", "kinematics", "model", "motion", "params",
+    "plots", "report", "robots", "seeds", "simulate", "singularity", "sources", "sweep",
+    "symbolic", "tables", "urdf", "viewer", "workspace",
+)  # fmt: skip
 
 
 def __getattr__(name: str) -> Any:
@@ -118,30 +89,8 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY_SUBMODULES) | set(_LAZY_NAMES))
 
 
-__all__ = [
-    "__version__",
-    "Chain",
-    "ConfigurationError",
-    "DHRow",
-    "FrameNotFoundError",
-    "Hexapod",
-    "HexapodKinError",
-    "Inertial",
-    "JointLimits",
-    "KhalilRow",
-    "LegMount",
-    "ParameterError",
-    "Pose",
-    "SourceError",
-    "TableRecovery",
-    "UrdfError",
-    "UrdfWarning",
-    "chain_from_urdf",
-    "load",
-    "recover_chain",
-    "robots",
-    "table_fk",
-    "table_transforms",
-    "to_urdf",
-    "write_urdf",
-]
+__all__ = ["__version__", "Chain", "ConfigurationError", "DHRow", "FrameNotFoundError",
+           "Hexapod", "HexapodKinError", "Inertial", "JointLimits", "KhalilRow",
+           "LegMount", "ParameterError", "Pose", "SourceError", "TableRecovery",
+           "UrdfError", "UrdfWarning", "chain_from_urdf", "load", "recover_chain",
+           "robots", "table_fk", "table_transforms", "to_urdf", "write_urdf"]  # fmt: skip

@@ -229,11 +229,7 @@ def _rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _snap(
-    points: list[np.ndarray],
-    axes: list[np.ndarray],
-    tip: np.ndarray,
-    names: list[str],
-    tol: float,
+    points: list[np.ndarray], axes: list[np.ndarray], tip: np.ndarray, names: list[str], tol: float
 ) -> list[Snap]:
     """Turn near-parallel / near-perpendicular axes exact, in place (``tip``: 4×4 pose)."""
     snaps: list[Snap] = []
@@ -296,30 +292,9 @@ def chain_from_urdf(
 ) -> Chain:
     """Recover the Khalil table (and base/tool poses) of a serial URDF chain.
 
-    The chain of :func:`recover_chain` (which also reports the snaps); see the module
-    docstring for the construction, the snapping and the checks.
-
-    Args:
-        source: Anything :func:`hexapod_kin.load` takes (URDF path or text, ``erd:NAME``,
-            preset, or an already loaded model).
-        base: Base frame name (default: the source's default base).
-        tip: Tip frame name (default: the source's default tip).
-        angle_tol: Axes within this angle [rad] of parallel or perpendicular to the previous
-            joint's axis are snapped (0 turns snapping off).
-        **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
-
-    Returns:
-        A :class:`~hexapod_kin.params.Chain` whose :func:`~hexapod_kin.table_fk`
-        equals the URDF's ``T_base_tip`` (1e-9 relative; 1e-12 m in practice) when nothing
-        was snapped, else within the snaps' bound (``Chain.description`` lists the snaps).
-
-    Raises:
-        ConfigurationError: A joint the table cannot express (named), a branch between
-            ``base`` and ``tip`` (not serial), a recovered length larger than the chain
-            (near-parallel axes beyond ``angle_tol``), or a failed check.
-        ParameterError: ``angle_tol`` not a finite angle in [0, 0.1] rad.
-        HexapodKinError: Whatever :func:`hexapod_kin.load` raises for the source.
-
+    ``recover_chain(...).chain``: the same arguments and errors as :func:`recover_chain`. Its
+    :func:`~hexapod_kin.table_fk` equals the URDF's ``T_base_tip`` (1e-9 relative) when
+    nothing was snapped, else within the snaps' bound (``Chain.description`` lists them).
     """
     return recover_chain(source, base, tip, angle_tol=angle_tol, **load_kwargs).chain
 
@@ -334,19 +309,26 @@ def recover_chain(
 ) -> TableRecovery:
     """Recover the Khalil table of a serial URDF chain, with the snaps and the FK difference.
 
+    See the module docstring for the construction, the snapping and the checks.
+
     Args:
-        source: Anything :func:`hexapod_kin.load` takes.
+        source: Anything :func:`hexapod_kin.load` takes (URDF path or text, ``erd:NAME``,
+            preset, or an already loaded model).
         base: Base frame name (default: the source's default base).
         tip: Tip frame name (default: the source's default tip).
-        angle_tol: Snapping tolerance [rad] (default :data:`SNAP_TOL`; 0 = never snap).
-        **load_kwargs: Passed to :func:`hexapod_kin.load`.
+        angle_tol: Axes within this angle [rad] of parallel or perpendicular to the previous
+            joint's axis are snapped (default :data:`SNAP_TOL`; 0 = never snap).
+        **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
 
     Returns:
         A :class:`TableRecovery`.
 
     Raises:
-        ConfigurationError: As :func:`chain_from_urdf`.
+        ConfigurationError: A joint the table cannot express (named), a branch between
+            ``base`` and ``tip`` (not serial), a recovered length larger than the chain
+            (near-parallel axes beyond ``angle_tol``), or a failed check.
         ParameterError: ``angle_tol`` not a finite angle in [0, 0.1] rad.
+        HexapodKinError: Whatever :func:`hexapod_kin.load` raises for the source.
 
     """
     from .kinematics import KinematicModel, load
@@ -493,12 +475,7 @@ def recover_chain(
     limits = []
     for k in range(n):
         lo, hi = float(km.lower[k]), float(km.upper[k])
-        if (
-            not (math.isfinite(lo) and math.isfinite(hi))
-            or lo > hi
-            or abs(lo) > 1e6
-            or abs(hi) > 1e6
-        ):
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi and max(-lo, hi) <= 1e6):
             lo, hi = (-math.pi, math.pi) if sigmas[k] == "revolute" else (-0.1, 0.1)
         vel = float(km.velocity_limit[k]) if math.isfinite(km.velocity_limit[k]) else 10.0
         eff = float(km.effort_limit[k]) if math.isfinite(km.effort_limit[k]) else 10.0

@@ -16,15 +16,12 @@ once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
 input only (never on its neighbours in a block, the block size or the thread that runs it),
 so a result is the same in any process, warm or cold, and from any number of threads.
 
-**When it compiles**: only batch APIs import this module (the size rule: per-call work runs
-on Pinocchio and numpy). Kernels are ``cache=True``, numba's disk cache used as numba
-documents it: ``NUMBA_CACHE_DIR`` when set, else ``__pycache__`` beside the sources when
-writable, else numba's user-wide cache folder (a read-only install works); where no folder is
-writable, compiled in memory (:func:`hexapod_kin._kmath.njit`, one warning). Nothing reads
-numba's files. ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel
-call of an area in a process, :func:`run_blocks` prints one notice on stderr unless a stamp
-file in numba's chosen folder says that area is compiled there (:func:`mark_compiled`).
-A cache that cannot be loaded or written is never fatal (:func:`_first_call`).
+**When it compiles**: only batch APIs import this module (per-call work runs on Pinocchio
+and numpy). Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`); nothing reads
+numba's files; ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel
+call of an area in a process, :func:`run_blocks` prints one notice on stderr unless the
+area's stamp (:func:`mark_compiled`) says it is compiled; a cache that cannot be loaded or
+written is never fatal (:func:`_first_call`).
 
 Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: rows
 ``[v; ω]``.
@@ -64,32 +61,11 @@ from ._kmath import (
 )
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
-__all__ = [
-    "BLOCK",
-    "POLY_TRIG_MAX",
-    "Q_MAX",
-    "REF_CODES",
-    "AlignedChain",
-    "ChainArrays",
-    "aligned_chain",
-    "det_lu",
-    "det_small",
-    "dls_into",
-    "eig2_sym",
-    "eig3_sym",
-    "fk_jac_block",
-    "fk_jac_into",
-    "jacobi_eig",
-    "mark_compiled",
-    "njit",
-    "pose_jacobian_batch",
-    "pose_jacobian_kernel",
-    "run_blocks",
-    "silence_notice",
-    "sincos",
-    "solve_spd",
-    "wrap_angle",
-]
+__all__ = ["BLOCK", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
+           "ChainArrays", "aligned_chain", "det_lu", "det_small", "dls_into",
+           "eig2_sym", "eig3_sym", "fk_jac_block", "fk_jac_into", "jacobi_eig",
+           "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
+           "run_blocks", "silence_notice", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
 #: Reference frame name → kernel code.
 REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
@@ -638,14 +614,11 @@ def run_blocks(
 ) -> list[Any]:
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
-    ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``): the first call in a
-    process loads them with no blocks first (:func:`_first_call`: the compile notice, a
-    cache that cannot be read or written never fatal, the stamp written). Then up to
-    ``numba.get_num_threads()`` plain
-    threads (the kernels release the GIL), each taking the next chunk of blocks from a shared
-    counter when done with one, so that a thread sharing its core with another process does
-    less of the work. Which thread runs a block never changes its numbers (see the module
-    docstring).
+    ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``), loaded first with no
+    blocks (:func:`_first_call`). Then up to ``numba.get_num_threads()`` plain threads (the
+    kernels release the GIL) each take the next chunk of blocks from a shared counter, so that
+    a thread sharing its core does less of the work; which thread runs a block never changes
+    its numbers.
     """
     results = [_first_call(area, run)]
     nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))

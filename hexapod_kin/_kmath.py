@@ -24,20 +24,8 @@ import numpy as np
 
 from .exceptions import CacheWarning
 
-__all__ = [
-    "POLY_TRIG_MAX",
-    "njit",
-    "sincos",
-    "eig2_sym",
-    "eig3_sym",
-    "jacobi_eig",
-    "det3",
-    "det_lu",
-    "det_small",
-    "solve_spd",
-    "dls_into",
-    "wrap_angle",
-]
+__all__ = ["POLY_TRIG_MAX", "njit", "sincos", "eig2_sym", "eig3_sym", "jacobi_eig",
+           "det3", "det_lu", "det_small", "solve_spd", "dls_into", "wrap_angle"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
 

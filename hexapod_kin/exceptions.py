@@ -12,24 +12,10 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-__all__ = [
-    "HexapodKinError",
-    "ParameterError",
-    "ConfigurationError",
-    "LimitError",
-    "FrameNotFoundError",
-    "UrdfError",
-    "SourceError",
-    "IKError",
-    "ViewerError",
-    "OptionalDependencyError",
-    "UrdfWarning",
-    "choices",
-    "one_of",
-    "did_you_mean",
-    "finite",
-    "positive",
-]
+__all__ = ["HexapodKinError", "ParameterError", "ConfigurationError", "LimitError",
+           "FrameNotFoundError", "UrdfError", "SourceError", "IKError", "ViewerError",
+           "OptionalDependencyError", "UrdfWarning", "choices", "one_of",
+           "did_you_mean", "finite", "positive"]  # fmt: skip
 
 
 class HexapodKinError(ValueError):
@@ -216,27 +202,25 @@ def finite(name: str, value: Any, need: str = "") -> float:
         ParameterError: Not a number or not finite.
 
     """
-    allowed = f"finite {need}".rstrip()
-    what = f"a finite value {need}".rstrip()
     try:
         if isinstance(value, bool):
             raise TypeError
         v = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(
-            f"{name}={value!r} is not a number; {what} is needed",
-            parameter=name,
-            value=value,
-            allowed=allowed,
-        ) from None
+        raise _needed(name, value, need, "is not a number") from None
     if not math.isfinite(v):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; {what} is needed",
-            parameter=name,
-            value=value,
-            allowed=allowed,
-        )
+        raise _needed(name, value, need)
     return v
+
+
+def _needed(name: str, value: Any, need: str, problem: str = "is not allowed") -> ParameterError:
+    """The error of :func:`finite` / :func:`positive`: a finite value (``need``) is needed."""
+    return ParameterError(
+        f"{name}={value!r} {problem}; {f'a finite value {need}'.rstrip()} is needed",
+        parameter=name,
+        value=value,
+        allowed=f"finite {need}".rstrip(),
+    )
 
 
 def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
@@ -250,10 +234,5 @@ def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
     need = ">= 0" if allow_zero else "> 0"
     v = finite(name, value, need)
     if v < 0 or (v == 0 and not allow_zero):
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; a finite value {need} is needed",
-            parameter=name,
-            value=value,
-            allowed=f"finite {need}",
-        )
+        raise _needed(name, value, need)
     return v

@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from .exceptions import ParameterError, choices
 from .frames import joint_kind
-from .model import Model, build, fast_q_ok
+from .model import Model, build
 
 # The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
 _F64 = np.dtype(np.float64)
@@ -34,13 +34,8 @@ _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
 _compute_frame_jacobian = pin.computeFrameJacobian
 
-__all__ = [
-    "REFERENCES",
-    "KinematicModel",
-    "load",
-    "direct_jacobian",
-    "indirect_jacobian",
-]
+__all__ = ["REFERENCES", "KinematicModel", "load", "direct_jacobian",
+           "indirect_jacobian"]  # fmt: skip
 
 REFERENCES: dict[str, pin.ReferenceFrame] = {
     "local": pin.ReferenceFrame.LOCAL,
@@ -193,7 +188,7 @@ class KinematicModel(Model):
         """``qs`` as C-contiguous float64 (N, nq), shape checked.
 
         A C-contiguous float64 (N, nq) array passes as it is: the batch kernel checks its
-        values on the way and :meth:`_batch_check` raises the message of ``check_q_batch``.
+        values on the way and :meth:`_batch` raises the message of ``check_q_batch``.
         """
         if (
             isinstance(qs, np.ndarray)
@@ -205,27 +200,38 @@ class KinematicModel(Model):
             return qs
         return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
 
-    def _batch_check(self, qs: np.ndarray) -> Any:
-        """Raises :meth:`check_q_batch`'s error for ``qs`` (called when the kernel flags it)."""
-        return lambda: self.check_q_batch(qs, "Q")
-
-    def _batch_chain(self) -> Any:
+    def _batch(
+        self,
+        qs: Any,
+        pose: bool,
+        reference: str | None,
+        out_pose: np.ndarray | None = None,
+        out_jacobian: np.ndarray | None = None,
+    ) -> tuple[Any, Any]:
+        """The batch kernel's poses and/or Jacobians (``reference`` None: no Jacobian)."""
         from ._chain import aligned_chain
+        from ._kernels import pose_jacobian_batch
 
-        return self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
+        key = None
+        if reference is not None:
+            key = reference.lower() if isinstance(reference, str) else None
+            _reference(reference)
+        q = self._batch_q(qs)
+        chain = self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
+        return pose_jacobian_batch(
+            chain, q, pose=pose, jacobian=key, out_pose=out_pose, out_jacobian=out_jacobian,
+            check=lambda: self.check_q_batch(q, "Q"),
+        )  # fmt: skip
 
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
 
-        Equal to :meth:`fk` of each row to rounding (≈1e-15), without a Python loop: the
-        compiled block kernel of :mod:`hexapod_kin._kernels` on every core (compiled on first
-        use, or ahead by ``hexapod-kin precompile``); the same bits whatever the process or
-        thread count.
+        Equal to :meth:`fk` of each row to rounding (≈1e-15): the compiled block kernel of
+        :mod:`hexapod_kin._kernels` on every core; the same bits whatever the thread count.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
-            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return (reuse it
-                across calls to skip allocating and the page faults of a fresh array).
+            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return.
 
         Raises:
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150`` (``out``
@@ -233,14 +239,7 @@ class KinematicModel(Model):
             ParameterError: ``out`` of the wrong shape, dtype or layout.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        q = self._batch_q(qs)
-        poses, _ = pose_jacobian_batch(
-            self._batch_chain(), q, pose=True, jacobian=None, out_pose=out,
-            check=self._batch_check(q),
-        )  # fmt: skip
-        assert poses is not None
+        poses: np.ndarray = self._batch(qs, True, None, out_pose=out)[0]
         return poses
 
     def jacobian_batch(
@@ -262,16 +261,7 @@ class KinematicModel(Model):
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        key = reference.lower() if isinstance(reference, str) else None
-        _reference(reference)
-        q = self._batch_q(qs)
-        _, jac = pose_jacobian_batch(
-            self._batch_chain(), q, pose=False, jacobian=key, out_jacobian=out,
-            check=self._batch_check(q),
-        )  # fmt: skip
-        assert jac is not None
+        jac: np.ndarray = self._batch(qs, False, reference, out_jacobian=out)[1]
         return jac
 
     def fk_jacobian_batch(
@@ -279,29 +269,11 @@ class KinematicModel(Model):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Poses (N, 4, 4) and Jacobians (N, 6, nq) of many configurations in one pass.
 
-        The results of :meth:`fk_batch` and :meth:`jacobian_batch` (same kernel, each chain
-        walked once).
-
-        Args:
-            qs: Configurations (N, nq) in [rad] / [m].
-            reference: Frame of the Jacobians: ``"local"``, ``"world"`` or
-                ``"local_world_aligned"``.
-
-        Raises:
-            ParameterError: Unknown ``reference``.
-            ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
+        The results of :meth:`fk_batch` and :meth:`jacobian_batch` (each chain walked once);
+        arguments and errors as :meth:`jacobian_batch`.
 
         """
-        from ._kernels import pose_jacobian_batch
-
-        key = reference.lower() if isinstance(reference, str) else None
-        _reference(reference)
-        q = self._batch_q(qs)
-        poses, jac = pose_jacobian_batch(
-            self._batch_chain(), q, pose=True, jacobian=key, check=self._batch_check(q)
-        )
-        assert poses is not None and jac is not None
-        return poses, jac
+        return self._batch(qs, True, reference)
 
     def position_jacobian(self, q: Any, frame: str | None = None) -> np.ndarray:
         """3×nq Jacobian of the tip position in the base frame, ``∂p/∂q``."""
@@ -311,23 +283,9 @@ class KinematicModel(Model):
         self, q: Any, reference: str = "local_world_aligned"
     ) -> tuple[np.ndarray, np.ndarray]:
         """Tip pose and Jacobian in one pass (cheaper than calling both)."""
-        ref = _reference(reference)
-        if not fast_q_ok(q, self._shape):
-            q = self.pinocchio_q(q)
-        d = self.data
-        jac = _compute_frame_jacobian(self.model, d, q, self.tip_id, ref)
-        if jac.ndim == 1:
-            jac = jac.reshape(6, 1)
-        omf = pin.updateFramePlacement(self.model, d, self.tip_id)
-        if self._base_is_root:
-            return omf.homogeneous, jac
-        pose = (self.baseMo * omf).homogeneous
-        if ref == pin.ReferenceFrame.LOCAL:
-            return pose, jac
-        if ref == pin.ReferenceFrame.WORLD:
-            return pose, self.baseMo.action @ jac
-        r = self._rot_base
-        return pose, np.vstack([r @ jac[:3], r @ jac[3:]])
+        jac = self.jacobian(q, reference)  # its joint placements are the pose's too
+        omf = _update_frame_placement(self.model, self.data, self.tip_id)
+        return (omf if self._base_is_root else self.baseMo * omf).homogeneous, jac
 
 
 def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:

@@ -43,37 +43,18 @@ from typing import Any, Literal
 import numpy as np
 
 from ._pose import Pose, matrix_to_rpy, rpy_to_matrix
-from .exceptions import ParameterError, choices, finite
+from .exceptions import ParameterError, choices, finite, positive
 
-__all__ = [
-    "KhalilRow",
-    "DHRow",
-    "JointLimits",
-    "Inertial",
-    "Chain",
-    "LegMount",
-    "Hexapod",
-    "khalil_transform",
-    "dh_transform",
-    "rod_inertial",
-    "chain_from_rows",
-    "Pose",
-    "rpy_to_matrix",
-    "matrix_to_rpy",
-]
+__all__ = ["KhalilRow", "DHRow", "JointLimits", "Inertial", "Chain", "LegMount",
+           "Hexapod", "khalil_transform", "dh_transform", "rod_inertial",
+           "chain_from_rows", "Pose", "rpy_to_matrix", "matrix_to_rpy"]  # fmt: skip
 
 SigmaName = Literal["revolute", "prismatic", "fixed"]
 _SIGMA: dict[Any, SigmaName] = {
-    0: "revolute",
-    1: "prismatic",
-    2: "fixed",
-    "revolute": "revolute",
-    "prismatic": "prismatic",
-    "fixed": "fixed",
-    "r": "revolute",
-    "p": "prismatic",
-    "f": "fixed",
-}
+    0: "revolute", 1: "prismatic", 2: "fixed",
+    "revolute": "revolute", "prismatic": "prismatic", "fixed": "fixed",
+    "r": "revolute", "p": "prismatic", "f": "fixed",
+}  # fmt: skip
 
 _NAME_OK = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
 
@@ -95,6 +76,14 @@ def _name(value: Any, where: str) -> str:
             "'_', '-' or '.'"
         )
     return value
+
+
+def _names(names: tuple[str, ...], count: int, field: str, what: str) -> tuple[str, ...]:
+    if len(names) != count:
+        raise ParameterError(f"Chain.{field} has {len(names)} names; the table has {count} {what}")
+    for i, n in enumerate(names):
+        _name(n, f"Chain.{field}[{i}]")
+    return names
 
 
 def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
@@ -266,10 +255,7 @@ class Inertial:
     inertia: tuple[float, float, float, float, float, float] = (1e-6, 1e-6, 1e-6, 0, 0, 0)
 
     def __post_init__(self) -> None:
-        m = finite("Inertial.mass", self.mass)
-        if m <= 0:
-            raise ParameterError(f"Inertial.mass={m} is not allowed; mass must be > 0 kg")
-        object.__setattr__(self, "mass", m)
+        object.__setattr__(self, "mass", positive("Inertial.mass", self.mass))
         if len(tuple(self.com)) != 3:
             raise ParameterError(f"Inertial.com={self.com!r}: three numbers (x, y, z) required")
         object.__setattr__(
@@ -425,13 +411,7 @@ class Chain:
             if self.joint_names is None
             else tuple(self.joint_names)
         )
-        if len(names) != nj:
-            raise ParameterError(
-                f"Chain.joint_names has {len(names)} names; the table has {nj} joint rows"
-            )
-        for i, n in enumerate(names):
-            _name(n, f"Chain.joint_names[{i}]")
-        object.__setattr__(self, "joint_names", names)
+        object.__setattr__(self, "joint_names", _names(names, nj, "joint_names", "joint rows"))
         limits = (
             tuple(_default_limits(str(r.sigma)) for r in joint_rows)
             if self.limits is None
@@ -450,13 +430,7 @@ class Chain:
             links = tuple(f"link{j}" for j in range(1, len(rows) + 1))
         else:
             links = tuple(f"link{j}" for j in range(1, len(rows))) + (self.tip,)
-        if len(links) != len(rows):
-            raise ParameterError(
-                f"Chain.link_names has {len(links)} names; the table has {len(rows)} rows"
-            )
-        for i, n in enumerate(links):
-            _name(n, f"Chain.link_names[{i}]")
-        object.__setattr__(self, "link_names", links)
+        object.__setattr__(self, "link_names", _names(links, len(rows), "link_names", "rows"))
         all_names: tuple[str, ...] = (self.base, *links)
         if self.base_pose is not None:
             all_names += (self.frame0_link,)
@@ -466,12 +440,8 @@ class Chain:
             raise ParameterError(f"Chain link names must be unique, got {all_names}")
         if len(set(names)) != len(names):
             raise ParameterError(f"Chain.joint_names must be unique, got {names}")
-        lm = finite("Chain.link_mass", self.link_mass)
-        if lm <= 0:
-            raise ParameterError(f"Chain.link_mass={lm} is not allowed; must be > 0 kg")
-        lr = finite("Chain.link_radius", self.link_radius)
-        if lr <= 0:
-            raise ParameterError(f"Chain.link_radius={lr} is not allowed; must be > 0 m")
+        positive("Chain.link_mass", self.link_mass)
+        positive("Chain.link_radius", self.link_radius)
         if self.inertials is not None:
             inn = tuple(self.inertials)
             if len(inn) != len(rows) or not all(x is None or isinstance(x, Inertial) for x in inn):
@@ -560,12 +530,7 @@ class Chain:
     # ----------------------------------------------------------------- constructors
     @classmethod
     def from_dh(
-        cls,
-        dh_rows: Sequence[DHRow],
-        *,
-        base: Any = None,
-        tool: Any = None,
-        **kwargs: Any,
+        cls, dh_rows: Sequence[DHRow], *, base: Any = None, tool: Any = None, **kwargs: Any
     ) -> Chain:
         """Build a chain from a standard-DH table, exactly.
 
@@ -698,10 +663,7 @@ class Hexapod:
         if len(size) != 3 or min(size) <= 0:
             raise ParameterError(f"Hexapod.body_size={self.body_size!r}: three lengths > 0 m")
         object.__setattr__(self, "body_size", size)
-        m = finite("Hexapod.body_mass", self.body_mass)
-        if m <= 0:
-            raise ParameterError(f"Hexapod.body_mass={m}: must be > 0 kg")
-        object.__setattr__(self, "body_mass", m)
+        object.__setattr__(self, "body_mass", positive("Hexapod.body_mass", self.body_mass))
 
     @property
     def nq(self) -> int:

@@ -15,19 +15,9 @@ from typing import Any
 from ._io import atomic_write
 from .exceptions import OptionalDependencyError
 
-__all__ = [
-    "FORMATS",
-    "decimate",
-    "fit_limits",
-    "plot_motion",
-    "plot_singularity_map",
-    "plot_step",
-    "plot_still",
-    "plot_workspace",
-    "pyplot",
-    "save_figure",
-    "singularity_map_figure",
-]
+__all__ = ["FORMATS", "decimate", "fit_limits", "plot_motion", "plot_singularity_map",
+           "plot_step", "plot_still", "plot_workspace", "pyplot", "save_figure",
+           "singularity_map_figure"]  # fmt: skip
 
 
 def pyplot() -> Any:
@@ -247,19 +237,10 @@ _MEASURE_LABELS = {
 
 
 def _joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
-    """Values of ``joint`` for an axis, and the axis label with its unit.
+    """``(values, "name (qk) [unit]")`` of ``joint`` of a scan for an axis.
 
     Revolute joints in degrees; prismatic joints in metres, or millimetres when their range is
     under 0.1 m.
-
-    Args:
-        result: A :class:`~hexapod_kin.singularity.ScanResult`.
-        joint: Joint index.
-        values: Joint values in [rad] or [m].
-
-    Returns:
-        ``(converted values, "name (qk) [unit]")``.
-
     """
     import numpy as np
 
@@ -347,14 +328,9 @@ def singularity_map_figure(
             for v in vals:
                 if lo - 1e-9 <= v <= hi + 1e-9:
                     drawn = True
-                    if fam.joint == ja:
-                        ax.axvline(
-                            float(_joint_axis(result, ja, v)[0]), color=colour, ls=style, lw=2.2
-                        )
-                    else:
-                        ax.axhline(
-                            float(_joint_axis(result, jb, v)[0]), color=colour, ls=style, lw=2.2
-                        )
+                    line = ax.axvline if fam.joint == ja else ax.axhline
+                    at = float(_joint_axis(result, fam.joint, v)[0])
+                    line(at, color=colour, ls=style, lw=2.2)
             if not drawn:
                 continue
         elif fam.joint is None:
@@ -383,17 +359,8 @@ def singularity_map_figure(
         ax.contourf(
             xa, xb, flagged.T.astype(float), levels=[0.5, 1.5], colors="none", hatches=["////"]
         )
-        handles.append(
-            Line2D(
-                [],
-                [],
-                color="black",
-                lw=0,
-                marker="s",
-                mfc="none",
-                label=f"sigma_min < {result.threshold:.3g}",
-            )
-        )
+        label = f"sigma_min < {result.threshold:.3g}"
+        handles.append(Line2D([], [], color="black", lw=0, marker="s", mfc="none", label=label))
     if handles:  # below the axes: never over the data
         ax.legend(
             handles=handles,
@@ -423,10 +390,7 @@ def singularity_map_figure(
 
 
 def plot_singularity_map(
-    result: Any,
-    path: str | os.PathLike[str],
-    measure: str | None = None,
-    title: str | None = None,
+    result: Any, path: str | os.PathLike[str], measure: str | None = None, title: str | None = None
 ) -> Path:
     """Heat map of a measure over two scanned joints, with the singular families drawn.
 

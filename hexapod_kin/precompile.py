@@ -60,11 +60,7 @@ def _singularity() -> None:
 
 
 #: Area name → the calls that compile its kernels.
-AREAS: dict[str, Callable[[], None]] = {
-    "batch": _batch,
-    "ik": _ik,
-    "singularity": _singularity,
-}
+AREAS: dict[str, Callable[[], None]] = {"batch": _batch, "ik": _ik, "singularity": _singularity}
 
 
 #: What a child process of :func:`precompile` runs: one area, its seconds as JSON on stdout.

@@ -4,20 +4,8 @@ Every preset is a function returning a frozen, validated :class:`~hexapod_kin.pa
 (or :class:`~hexapod_kin.params.Hexapod`); every argument is a dimension in SI units.
 :data:`PRESETS` maps names to those functions (kept sorted; a test checks it).
 
-Sources (lab reports shipped in ``hexapod_kin/report/seeds/``):
-
-* ``hexabot_leg`` — seed 001 Table 1 (also seeds 000 and 003): hip/knee/ankle, L1 = 50 mm,
-  L2 = L3 = 100 mm. Foot position
-  ``Rz(q1)·[l1 + l2 cos q2 + l3 cos(q2+q3), 0, −(l2 sin q2 + l3 sin(q2+q3))]``.
-* ``coxa_tibia_leg`` — seed 002: 2-DOF coxa/tibia leg, l1 = 10, l2 = 5 (units of the paper;
-  here metres, scale as you like). Its convention: a *negative* tibia angle lowers the foot,
-  ``P = Rz(θ1)·[l1 + l2 cos θ2, 0, l2 sin θ2]``.
-* ``scara`` — seed 003 Experiment 1: r1 = 452.4 mm, d2 = 220 mm, d3 = 240 mm and a prismatic
-  last joint with α = π (the tool points down).
-* ``pendulum`` — seed 001 §1: one revolute joint about a horizontal axis, gravity along −z,
-  initial angle 30°, joint damping 0.01.
-* ``hexapod`` — the six-legged robot those legs belong to: a body with six ``hexabot_leg``
-  legs on fixed mounts.
+Sources: the lab reports shipped in ``hexapod_kin/report/seeds/``; each preset's docstring
+names its seed and gives its table.
 """
 
 from __future__ import annotations
@@ -29,16 +17,8 @@ from typing import Any
 from .exceptions import HexapodKinError, ParameterError, choices, positive
 from .params import Chain, Hexapod, Inertial, JointLimits, KhalilRow, LegMount
 
-__all__ = [
-    "PRESETS",
-    "coxa_tibia_leg",
-    "get",
-    "hexabot_leg",
-    "hexapod",
-    "names",
-    "pendulum",
-    "scara",
-]
+__all__ = ["PRESETS", "coxa_tibia_leg", "get", "hexabot_leg", "hexapod", "names",
+           "pendulum", "scara"]  # fmt: skip
 
 
 def hexabot_leg(
@@ -206,11 +186,7 @@ def scara(
 
 
 def pendulum(
-    length: float = 0.5,
-    mass: float = 1.0,
-    damping: float = 0.01,
-    *,
-    name: str = "pendulum",
+    length: float = 0.5, mass: float = 1.0, damping: float = 0.01, *, name: str = "pendulum"
 ) -> Chain:
     """Simple pendulum of seed 001 §1: a point mass on a massless-like rod.
 

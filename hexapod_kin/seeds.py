@@ -23,15 +23,8 @@ from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, 
 if TYPE_CHECKING:
     from .dynamics import StepTorques
 
-__all__ = [
-    "SEED_Q0",
-    "SeedRun",
-    "euler_baseline",
-    "seed002_schedule",
-    "seed_baseline",
-    "seed_experiment",
-    "step_torques",
-]
+__all__ = ["SEED_Q0", "SeedRun", "euler_baseline", "seed002_schedule", "seed_baseline",
+           "seed_experiment", "step_torques"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -240,14 +233,7 @@ def seed_baseline(
 ) -> tuple[dict[str, float], np.ndarray | None, str | None]:
     """The baseline of :func:`seed_experiment` alone: the seeds' plain Euler + solve loop.
 
-    Args:
-        model: A loaded 3-joint model.
-        amplitude: A in [m/s].
-        period: T in [s].
-        dt: Step in [s].
-        duration: In [s].
-        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
-            :func:`default_stance`).
+    The arguments are those of :func:`seed_experiment` (``model``: a loaded 3-joint model).
 
     Returns:
         ``(figures, deviation, failure)``: the drift figures in [m] (``drift_y``,

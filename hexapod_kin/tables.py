@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ._reader import clip, read_data
-from .exceptions import ParameterError, did_you_mean
+from .exceptions import ParameterError, did_you_mean, one_of
 from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
 
 __all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
@@ -195,28 +195,13 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
 
     """
     _check_keys(data, TOP_KEYS, "table")
-    convention = str(data.get("convention", "khalil")).lower()
-    if convention not in _GEOMETRY:
-        raise ParameterError(
-            f"convention={data.get('convention')!r} is not allowed; use 'khalil' or 'dh'",
-            parameter="convention",
-            value=data.get("convention"),
-            allowed=["khalil", "dh"],
-        )
-    angles = str(data.get("angles", "rad")).lower()
-    if angles not in ("rad", "deg"):
-        raise ParameterError(
-            f"angles={data.get('angles')!r} is not allowed; use 'rad' or 'deg'",
-            parameter="angles",
-            value=data.get("angles"),
-            allowed=["rad", "deg"],
-        )
+    convention = one_of("convention", str(data.get("convention", "khalil")).lower(), _GEOMETRY)
+    angles = one_of("angles", str(data.get("angles", "rad")).lower(), ("rad", "deg"))
     scale = math.pi / 180.0 if angles == "deg" else 1.0
     rows_in = data.get("row")
     if not isinstance(rows_in, list) or not rows_in:
         raise ParameterError(
-            "table: at least one [[row]] is required (one per row of the table)",
-            parameter="row",
+            "table: at least one [[row]] is required (one per row of the table)", parameter="row"
         )
     if len(rows_in) > MAX_ROWS:
         raise ParameterError(

@@ -94,17 +94,26 @@ def comment(text: str) -> str:
     return f"<!-- {clean} -->"
 
 
+_ORIGIN0 = '<origin xyz="0 0 0" rpy="0 0 0"/>'
+
+
+def _visual(pad: str, geometry: str, material: str, origin: str = _ORIGIN0) -> list[str]:
+    """The lines of a ``<visual>`` (``geometry``: the element inside ``<geometry>``)."""
+    return [f"{pad}<visual>", f"{pad}  {origin}", f"{pad}  <geometry>{geometry}</geometry>",
+            f'{pad}  <material name="{material}"/>', f"{pad}</visual>"]  # fmt: skip
+
+
 def _material(name: str) -> str:
     return f'<material name="{name}"><color rgba="{COLORS[name]}"/></material>'
 
 
-def _inertial_xml(chain: Chain, j: int, indent: str) -> list[str]:
-    inn = chain.link_inertial(j)
-    ixx, iyy, izz, ixy, ixz, iyz = inn.inertia
+def _inertial_xml(indent: str, mass: float, com: Any, inertia: Any) -> list[str]:
+    """The lines of an ``<inertial>`` (``inertia``: ixx, iyy, izz, ixy, ixz, iyz)."""
+    ixx, iyy, izz, ixy, ixz, iyz = inertia
     return [
         f"{indent}<inertial>",
-        f'{indent}  <origin xyz="{vec(inn.com)}" rpy="0 0 0"/>',
-        f'{indent}  <mass value="{num(inn.mass)}"/>',
+        f'{indent}  <origin xyz="{vec(com)}" rpy="0 0 0"/>',
+        f'{indent}  <mass value="{num(mass)}"/>',
         f'{indent}  <inertia ixx="{num(ixx)}" ixy="{num(ixy)}" ixz="{num(ixz)}" '
         f'iyy="{num(iyy)}" iyz="{num(iyz)}" izz="{num(izz)}"/>',
         f"{indent}</inertial>",
@@ -117,41 +126,17 @@ def _visuals(chain: Chain, j: int, indent: str) -> list[str]:
     rad = chain.link_radius
     is_tip = j + 1 == len(chain.rows)
     if is_tip:
-        out += [
-            f"{indent}<visual>",
-            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><sphere radius="{num(1.5 * rad)}"/></geometry>',
-            f'{indent}  <material name="foot"/>',
-            f"{indent}</visual>",
-        ]
-        return out
-    if row.is_joint:
-        # A sphere at the joint and a short cylinder along its axis (z_j).
-        out += [
-            f"{indent}<visual>",
-            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><sphere radius="{num(1.4 * rad)}"/></geometry>',
-            f'{indent}  <material name="joint"/>',
-            f"{indent}</visual>",
-            f"{indent}<visual>",
-            f'{indent}  <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}  <geometry><cylinder radius="{num(0.8 * rad)}" '
-            f'length="{num(4.0 * rad)}"/></geometry>',
-            f'{indent}  <material name="joint"/>',
-            f"{indent}</visual>",
-        ]
+        return _visual(indent, f'<sphere radius="{num(1.5 * rad)}"/>', "foot")
+    if row.is_joint:  # a sphere at the joint and a short cylinder along its axis (z_j)
+        out += _visual(indent, f'<sphere radius="{num(1.4 * rad)}"/>', "joint")
+        cylinder = f'<cylinder radius="{num(0.8 * rad)}" length="{num(4.0 * rad)}"/>'
+        out += _visual(indent, cylinder, "joint")
     nxt = chain.rows[j + 1].transform(0.0)[:3, 3]
     length = float(np.linalg.norm(nxt))
     if length > 1e-9:
-        mid = 0.5 * nxt
-        out += [
-            f"{indent}<visual>",
-            f'{indent}  <origin xyz="{vec(mid)}" rpy="{vec(_z_to(nxt))}"/>',
-            f'{indent}  <geometry><cylinder radius="{num(rad)}" length="{num(length)}"/>'
-            "</geometry>",
-            f'{indent}  <material name="link"/>',
-            f"{indent}</visual>",
-        ]
+        origin = f'<origin xyz="{vec(0.5 * nxt)}" rpy="{vec(_z_to(nxt))}"/>'
+        cylinder = f'<cylinder radius="{num(rad)}" length="{num(length)}"/>'
+        out += _visual(indent, cylinder, "link", origin)
     return out
 
 
@@ -206,7 +191,8 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
         else:
             lines += fixed_joint(indent, f"{child}_fixed", prev, child, _origin(t0))
         lines.append(f'{indent}<link name="{child}">')
-        lines += _inertial_xml(chain, j, indent + "  ")
+        inn = chain.link_inertial(j)
+        lines += _inertial_xml(indent + "  ", inn.mass, inn.com, inn.inertia)
         lines += _visuals(chain, j, indent + "  ")
         lines.append(f"{indent}</link>")
         prev = child
@@ -217,23 +203,14 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
             indent + comment(f"tool frame T_{len(chain.rows)}_tool"),
             *fixed_joint(indent, f"{tool}_fixed", prev, tool, _origin(t_tool)),
             f'{indent}<link name="{tool}">',
-            f"{indent}  <visual>",
-            f'{indent}    <origin xyz="0 0 0" rpy="0 0 0"/>',
-            f'{indent}    <geometry><sphere radius="{num(1.2 * chain.link_radius)}"/></geometry>',
-            f'{indent}    <material name="foot"/>',
-            f"{indent}  </visual>",
+            *_visual(indent + "  ", f'<sphere radius="{num(1.2 * chain.link_radius)}"/>', "foot"),
         ]
         back = -t_tool[:3, :3].T @ t_tool[:3, 3]
         length = float(np.linalg.norm(back))
         if length > 1e-9:
-            lines += [
-                f"{indent}  <visual>",
-                f'{indent}    <origin xyz="{vec(0.5 * back)}" rpy="{vec(_z_to(back))}"/>',
-                f'{indent}    <geometry><cylinder radius="{num(0.6 * chain.link_radius)}" '
-                f'length="{num(length)}"/></geometry>',
-                f'{indent}    <material name="link"/>',
-                f"{indent}  </visual>",
-            ]
+            origin = f'<origin xyz="{vec(0.5 * back)}" rpy="{vec(_z_to(back))}"/>'
+            cylinder = f'<cylinder radius="{num(0.6 * chain.link_radius)}" length="{num(length)}"/>'
+            lines += _visual(indent + "  ", cylinder, "link", origin)
         lines.append(f"{indent}</link>")
     return lines
 
@@ -254,11 +231,7 @@ def _chain_urdf(chain: Chain, header: str | None) -> str:
     rad = chain.link_radius
     lines += [
         f'  <link name="{chain.base}">',
-        "    <visual>",
-        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <geometry><box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/></geometry>',
-        '      <material name="base"/>',
-        "    </visual>",
+        *_visual("    ", f'<box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/>', "base"),
         "  </link>",
     ]
     lines += _chain_body(chain, "", chain.base)
@@ -276,17 +249,8 @@ def _body_link(robot: Hexapod) -> list[str]:
     )
     return [
         f'  <link name="{robot.body}">',
-        "    <inertial>",
-        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <mass value="{num(m)}"/>',
-        f'      <inertia ixx="{num(ixx)}" ixy="0" ixz="0" iyy="{num(iyy)}" iyz="0" '
-        f'izz="{num(izz)}"/>',
-        "    </inertial>",
-        "    <visual>",
-        '      <origin xyz="0 0 0" rpy="0 0 0"/>',
-        f'      <geometry><box size="{vec(robot.body_size)}"/></geometry>',
-        '      <material name="body"/>',
-        "    </visual>",
+        *_inertial_xml("    ", m, (0.0, 0.0, 0.0), (ixx, iyy, izz, 0.0, 0.0, 0.0)),
+        *_visual("    ", f'<box size="{vec(robot.body_size)}"/>', "body"),
         "  </link>",
     ]
 
@@ -395,9 +359,7 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
     if leg is not None:
         if isinstance(source, Chain):
             raise ParameterError(
-                f"leg={leg!r} only applies to a Hexapod, not to a Chain",
-                parameter="leg",
-                value=leg,
+                f"leg={leg!r} only applies to a Hexapod, not to a Chain", parameter="leg", value=leg
             )
         source.leg(leg)  # raises with the list of legs
     return source
@@ -427,10 +389,8 @@ def to_urdf(
         SourceError: A table file that cannot be read.
 
     """
-    source = table_of(source)
+    source = table_of(source, leg)
     if isinstance(source, Chain):
-        if leg is not None:
-            raise ParameterError(f"leg={leg!r} only applies to a Hexapod, not to a Chain")
         text = _chain_urdf(source, header)
     else:
         text = _robot_urdf(source, leg, header)

@@ -95,10 +95,7 @@ def _voxel_counts(points: np.ndarray, h: float) -> tuple[int, int]:
 
 
 def workspace(
-    model: Any,
-    samples: int = 2_000_000,
-    voxel: float | None = None,
-    seed: int | None = 0,
+    model: Any, samples: int = 2_000_000, voxel: float | None = None, seed: int | None = 0
 ) -> WorkspaceResult:
     """Reachable tip points of random configurations and a reachable-volume estimate.
 

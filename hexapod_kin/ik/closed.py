@@ -33,11 +33,9 @@ Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are all
 results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
 limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
 
-:func:`analytic` always returns a list (one (k, n) array per target row; a single (3,) target
-gives a list of one); :func:`analytic_batch` returns fixed-shape arrays in an
-:class:`AnalyticBatch`. The legs' closed form is written once, vectorised in numpy over
-arrays of targets (:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the
-gait's body IK call it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+The legs' closed form is written once, vectorised in numpy over arrays of targets
+(:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the gait's body IK call
+it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -55,17 +53,8 @@ from ..params import Chain, Hexapod, Pose, khalil_transform
 from ._table_finish import finish_on_table
 from ._table_finish import fit_angles as _fit
 
-__all__ = [
-    "FAMILIES",
-    "FAMILY_TOL",
-    "AnalyticBatch",
-    "LegFamily",
-    "analytic",
-    "analytic_batch",
-    "detect_family",
-    "leg_reachable",
-    "leg_solutions",
-]
+__all__ = ["FAMILIES", "FAMILY_TOL", "AnalyticBatch", "LegFamily", "analytic",
+           "analytic_batch", "detect_family", "leg_reachable", "leg_solutions"]  # fmt: skip
 
 FAMILIES: tuple[str, ...] = ("coxa_tibia", "leg3", "scara")
 
@@ -234,15 +223,9 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
 def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
 
-    Legs (``coxa_tibia``, ``leg3``) are recognised through what does not change the closed
-    form: a base pose and a first row with any ``α1``, ``d1`` (folded into
-    :attr:`LegFamily.mount`), joint offsets ``θ``, offsets ``r2``, ``r3`` along the knee axis,
-    fixed rows after the last joint and a **tool offset** (the foot a fixed point ``p`` in the
-    last joint's frame: it becomes the effective last length ``√(p_x² + p_y²)``, an angle
-    offset ``atan2(p_y, p_x)`` on the last joint and a lateral offset along the knee axis),
-    an ankle axis anti-parallel to the knee's (``α3 = π``), and twists within ``angle_tol`` of
-    the pattern (``α2 = ±π/2``, ``α3 ∈ {0, π}``; then the solutions are finished on the
-    exact table by the one IK loop: :func:`analytic_batch`).
+    Legs are recognised through what leaves their closed form unchanged (see the module
+    docstring); a first row's ``α1``, ``d1`` and the base pose fold into
+    :attr:`LegFamily.mount`.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -456,12 +439,10 @@ def analytic_batch(
     ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid. With a
     lateral offset ``e`` "toward" is the branch ``u + l1 = +√(x² + y² − e²)``.
 
-    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0, within
-    :data:`FAMILY_TOL`) is solved by the exact pattern's closed form, then each solution is
-    finished on the table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`); a slot
-    stays valid when its foot lands within ``tol`` × the length scale of the target (2 DOF:
-    the target that close to the table's surface) and, with ``within_limits``, inside the
-    limits. The slots keep their meaning.
+    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0) is solved by the
+    exact pattern's closed form, each solution then finished on the table by the one IK loop
+    (:mod:`hexapod_kin.ik._table_finish`): a slot stays valid when its foot lands within
+    ``tol`` × the length scale of the target and, with ``within_limits``, inside the limits.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
@@ -498,30 +479,21 @@ def analytic_batch(
                 q[..., j] = v
                 valid &= ok & (v >= lo[j]) & (v <= hi[j])
         q[~valid] = np.nan
-    elif fam.deviation == 0.0:
-        q, valid = leg_solutions(
-            x,
-            fam.lengths,
-            height=fam.height,
-            sign=fam.sign,
-            offsets=fam.offsets,
-            tol=tol_abs,
-            limits=limits,
-            lateral=fam.lateral,
-            joint_signs=fam.joint_signs,
-        )
     else:  # twists near the pattern: solve the exact pattern, finish on the table itself
+        exact = fam.deviation == 0.0
         q, valid = leg_solutions(
             x,
             fam.lengths,
             height=fam.height,
             sign=fam.sign,
             offsets=fam.offsets,
-            tol=tol_abs + 4.0 * fam.deviation * fam.scale,
+            tol=tol_abs if exact else tol_abs + 4.0 * fam.deviation * fam.scale,
+            limits=limits if exact else None,
             lateral=fam.lateral,
             joint_signs=fam.joint_signs,
         )
-        q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
+        if not exact:
+            q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
     q.setflags(write=False)
     valid.setflags(write=False)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
@@ -746,19 +718,8 @@ def analytic(
     array, N targets (N, 3) a list of N. Coincident solutions (e.g. the two knee branches of a
     stretched leg) are returned once; an unreachable target gives a (0, n) array.
 
-    Args:
-        chain: A :class:`~hexapod_kin.params.Chain` or a model loaded from one (the family is
-            recognised from the table; see the module docstring).
-        target: Foot position (3,) in [m] in the base frame, or (N, 3); SCARA: (3,) or
-            (4,) = (x, y, z, yaw [rad]), or (N, 3) / (N, 4).
-        tol: Relative reachability tolerance (see :func:`analytic_batch`).
-        within_limits: Keep only solutions inside the joint limits.
-
-    Returns:
-        A list of (k, n) arrays in [rad]/[m], one per target.
-
-    Raises:
-        IKError: No closed form for this chain; bad or non-finite target.
+    The arguments and errors are those of :func:`analytic_batch` (``target``: its
+    ``targets``); the arrays are in [rad]/[m].
 
     Example:
         >>> from hexapod_kin import robots, ik

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 import numpy as np
 
@@ -39,13 +39,7 @@ __all__ = ["MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve", "solve_chai
 MAX_ITER = 100_000
 
 Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
-STATUSES: tuple[str, ...] = (
-    "converged",
-    "unreachable",
-    "joint_limits",
-    "singular",
-    "not_converged",
-)
+STATUSES: tuple[str, ...] = get_args(Status)
 
 _MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
 
@@ -271,17 +265,7 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     posture, use = prep.middle, opts.posture is not None and opts.posture is not False
     if use and not isinstance(opts.posture, str):
         posture = mdl.check_q(opts.posture, "posture")
-    par = np.array(
-        [
-            float(opts.tol),
-            float(opts.rot_tol),
-            1e-8 * prep.scale**2,
-            _MU0,
-            float(opts.posture_gain),
-            0.0,
-            1e-6 * prep.scale,
-        ]
-    )
+    par = _par(opts, prep.scale)
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
     chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
@@ -290,6 +274,12 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     one = (par[None], starts[None])
     text = f"{tols[0]:g}, {tols[1]:g}"
     return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, text, one)
+
+
+def _par(opts: IKOptions, scale: float) -> np.ndarray:
+    """The loop's float parameters (``step.P_*``): tolerances, w̄, μ0, posture gain, yaw, floor."""
+    tol, rot_tol, gain = float(opts.tol), float(opts.rot_tol), float(opts.posture_gain)
+    return np.array([tol, rot_tol, 1e-8 * scale**2, _MU0, gain, 0.0, 1e-6 * scale])
 
 
 #: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
@@ -309,12 +299,10 @@ def _run(
     """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
     ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture; ``tgts``
-    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the
-    same bits alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter
-    + 1), measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
-
-    Every caller passes the same array types (C-contiguous float64 / int64 / bool; targets
-    and weights read-only, the rest writeable): one compiled specialisation.
+    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every
+    caller (one compiled specialisation). Each target's numbers are its own: the same bits
+    alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter + 1),
+    measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
     """
     n_t, n = len(tgts), starts.shape[2]
     q = np.empty((n_t, n))
@@ -440,11 +428,10 @@ def _report(
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
-    """The frozen :class:`IKResult` of ``fields`` (built without ``__init__``: the per-call path).
+    """``IKResult(**fields)``, built without ``__init__`` (the per-call path).
 
     ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0 and the
-    target). The object equals ``IKResult(**fields)``; a frozen dataclass's ``__init__`` sets
-    15 fields one ``object.__setattr__`` at a time, several µs per solve.
+    target).
     """
     fields["status"], fields["reason"] = status, reason
     fields["distance"] = fields["error"] if far else 0.0
@@ -646,15 +633,7 @@ def solve_chain(
     cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
     scale = chain_scale(chain.trans)
     lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
-    par = [
-        opts.tol,
-        opts.rot_tol,
-        1e-8 * scale**2,
-        _MU0,
-        opts.posture_gain,
-        0.0,
-        1e-6 * scale,
-    ]
+    par = _par(opts, scale)
     tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
     tgts[:, :3, 3] = t
     head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))

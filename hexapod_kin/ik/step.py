@@ -25,14 +25,7 @@ import numpy as np
 
 from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
-__all__ = [
-    "lm_batch",
-    "lm_loop",
-    "log3",
-    "sigma_min3",
-    "step_into",
-    "task_into",
-]
+__all__ = ["lm_batch", "lm_loop", "log3", "sigma_min3", "step_into", "task_into"]  # fmt: skip
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
@@ -40,9 +33,7 @@ I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
 
 
 @njit(cache=True, nogil=True)
-def log3(
-    m: np.ndarray,
-) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
     """``log(M)`` (rotation vector, [rad]) of a rotation matrix and its angle: ``(x, y, z, θ)``.
 
     ``θ = atan2(‖v‖, (tr M − 1)/2)`` with ``v = vee(M − Mᵀ)/2 = sin θ·a`` (accurate at small
@@ -217,11 +208,7 @@ def step_into(
 
 @njit(cache=True, nogil=True)
 def _limit_into(
-    q: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    cont: np.ndarray,
-    use_limits: bool,
+    q: np.ndarray, lower: np.ndarray, upper: np.ndarray, cont: np.ndarray, use_limits: bool
 ) -> None:  # pragma: no cover - compiled
     """Wrap continuous joints into their range; clamp the others (when ``use_limits``)."""
     for i in range(q.shape[0]):
@@ -363,20 +350,7 @@ def lm_loop(
                 for i in range(n):
                     qn[i] = q[i] + scale * dq[i]
                 _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(
-                    rot,
-                    trans,
-                    axis,
-                    kind,
-                    col,
-                    qn,
-                    p,
-                    jac_n,
-                    scratch,
-                    n >= 0,
-                    tip_rot,
-                    r,
-                )
+                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r)
                 m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
                 cost_n = 0.0
                 for i in range(m_n):
@@ -413,7 +387,7 @@ def lm_loop(
                 if tries > 40:
                     code = 1
                     break
-        if cost < best_cost or s == 0:
+        if code == 0 or cost < best_cost or s == 0:
             best_cost = cost
             best_steps = accepted
             best_code = code
@@ -424,15 +398,6 @@ def lm_loop(
             for i in range(accepted + 1):
                 hist_out[i] = hist[i]
         if code == 0:
-            best_cost = cost
-            best_steps = accepted
-            best_code = code
-            for i in range(n):
-                q_out[i] = q[i]
-                for row in range(6):
-                    jac_out[row, i] = jac[row, i]
-            for i in range(accepted + 1):
-                hist_out[i] = hist[i]
             break
     return attempts, best_steps, best_code
 
@@ -523,25 +488,8 @@ def lm_batch(
     et = np.empty(6)
     jt = np.empty((6, n))
     for i in range(tgts.shape[0]):
-        a, it, c = lm_loop(
-            rot,
-            trans,
-            axis,
-            kind,
-            col,
-            tip_rot,
-            tgts[i],
-            w6,
-            pars[i],
-            ipar,
-            starts[i],
-            lim,
-            cont,
-            posture,
-            q_out[i],
-            hist_out[i],
-            jac,
-        )
+        a, it, c = lm_loop(rot, trans, axis, kind, col, tip_rot, tgts[i], w6, pars[i], ipar,
+                           starts[i], lim, cont, posture, q_out[i], hist_out[i], jac)  # fmt: skip
         res_out[i, 0] = a
         res_out[i, 1] = it
         res_out[i, 2] = c

@@ -29,19 +29,6 @@ from .schedules import JointSchedule, PosePath, Tracked, follow_pose_path, track
 #: written here so that a run from it does not import the IK package).
 SEED_Q0 = (0.0, 0.3, 1.2)
 
-__all__ = [
-    "FRAMES",
-    "SEED_Q0",
-    "ClosestApproach",
-    "JointSchedule",
-    "Method",
-    "PosePath",
-    "Tracked",
-    "Trajectory",
-    "constant_twist_pose",
-    "default_stance",
-    "follow_pose_path",
-    "read_only",
-    "resolved_rate",
-    "track",
-]
+__all__ = ["FRAMES", "SEED_Q0", "ClosestApproach", "JointSchedule", "Method",
+           "PosePath", "Tracked", "Trajectory", "constant_twist_pose",
+           "default_stance", "follow_pose_path", "read_only", "resolved_rate", "track"]  # fmt: skip

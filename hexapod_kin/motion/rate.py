@@ -26,22 +26,15 @@ import numpy as np
 import pinocchio as pin
 
 from .._fields import fields_dict, read_only
-from ..exceptions import ConfigurationError, ParameterError, positive
+from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 from ..kinematics import KinematicModel, load
 from ._law import integrate
 
 if TYPE_CHECKING:
     from ..ik.prepare import ModelLike
 
-__all__ = [
-    "FRAMES",
-    "ClosestApproach",
-    "Trajectory",
-    "constant_twist_pose",
-    "default_stance",
-    "read_only",
-    "resolved_rate",
-]
+__all__ = ["FRAMES", "ClosestApproach", "Trajectory", "constant_twist_pose",
+           "default_stance", "read_only", "resolved_rate"]  # fmt: skip
 
 Method = Literal["euler", "rk4"]
 Frame = Literal["base", "tip"]
@@ -184,25 +177,31 @@ class Trajectory:
 
 
 # ============================================================================ sampling
+def _call(fn: Any, times: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``fn(times)`` if it returns (M, *shape) (or a (width, M) transpose), else ``fn`` per time."""
+    try:
+        out = np.asarray(fn(times), dtype=float)
+        if len(shape) == 1 and out.shape == (shape[0], times.size):
+            out = out.T
+        if out.shape == (times.size, *shape):
+            return out
+    except (ValueError, TypeError, IndexError):
+        pass
+    return np.array([np.asarray(fn(float(t)), dtype=float) for t in times])
+
+
 def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.ndarray:
     """Evaluate a constant or callable ``fn(t)`` at ``times`` → (M, width) finite values."""
     if callable(fn):
-        try:
-            out = np.asarray(fn(times), dtype=float)
-            if out.shape == (width, times.size):
-                out = out.T
-            if out.shape != (times.size, width):
-                raise ValueError
-        except (ValueError, TypeError, IndexError):
-            out = np.array([np.asarray(fn(float(t)), dtype=float) for t in times])
-            if out.shape != (times.size, width):
-                raise ConfigurationError(
-                    f"{name}(t) returned shape {out.shape[1:]}; {what} (or (M, {width}) for an "
-                    "array of times) is needed",
-                    parameter=name,
-                    value=out.shape[1:],
-                    allowed=f"({width},)",
-                ) from None
+        out = _call(fn, times, (width,))
+        if out.shape != (times.size, width):
+            raise ConfigurationError(
+                f"{name}(t) returned shape {out.shape[1:]}; {what} (or (M, {width}) for an "
+                "array of times) is needed",
+                parameter=name,
+                value=out.shape[1:],
+                allowed=f"({width},)",
+            )
     else:
         try:
             v = np.asarray(fn, dtype=float)
@@ -387,20 +386,8 @@ def resolved_rate(
     dt = positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)
-    if method not in ("rk4", "euler"):
-        raise ParameterError(
-            f"method={method!r} is not allowed; use 'rk4' or 'euler'",
-            parameter="method",
-            value=method,
-            allowed="'rk4', 'euler'",
-        )
-    if frame not in FRAMES:
-        raise ParameterError(
-            f"frame={frame!r} is not allowed; use 'base' or 'tip'",
-            parameter="frame",
-            value=frame,
-            allowed="'base', 'tip'",
-        )
+    one_of("method", method, ("rk4", "euler"))
+    one_of("frame", frame, FRAMES)
     steps = int(round(duration / dt))
     if steps < 1 or steps > 50_000_000:
         raise ParameterError(
@@ -448,23 +435,9 @@ def resolved_rate(
             allowed="within the joint limits (or within_limits=False)",
         )
     vlim = np.asarray(mdl.velocity_limit, dtype=float)
-    out = integrate(
-        mdl,
-        start,
-        vel,
-        ref_p,
-        ref_r,
-        dt,
-        method == "rk4",
-        frame == "tip",
-        gain,
-        eps,
-        lam2max,
-        lo,
-        hi,
-        within_limits,
-        np.where(velocity_limits & (vlim > 0), vlim, np.inf),
-    )
+    vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
+    out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
+                    lam2max, lo, hi, within_limits, vmax)  # fmt: skip
     pose = out["pose"]
     arrays = {
         "t": np.arange(steps + 1) * dt,
@@ -502,12 +475,7 @@ def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:
             value=type(path).__name__,
             allowed="callable t -> (M, 4, 4)",
         )
-    try:
-        out = np.asarray(path(times), dtype=float)
-        if out.shape != (times.size, 4, 4):
-            raise ValueError
-    except (ValueError, TypeError, IndexError):
-        out = np.array([np.asarray(path(float(t)), dtype=float) for t in times])
+    out = _call(path, times, (4, 4))
     if out.shape != (times.size, 4, 4) or not np.all(np.isfinite(out)):
         raise ConfigurationError(
             f"path(t) returned shape {out.shape[1:]}; finite poses (4, 4) are needed",
