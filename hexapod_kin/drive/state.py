@@ -28,7 +28,7 @@ import numpy as np
 from ..exceptions import ConfigurationError, FrameNotFoundError, ParameterError, choices
 from ..gait.robot import as_whole_body, body_pose
 from ..gait.stability import support_margin
-from ..gait.tables import pattern_names
+from ..gait.tables import pattern_names, phase_table
 from .reach import Limb
 from .walking import Walker
 
@@ -108,7 +108,13 @@ class Cockpit:
                     parameter="model",
                 ) from None
             self.limbs = [Limb(None, wb, i) for i in range(wb.n_legs)]
-            self.patterns = pattern_names(wb.n_legs)
+            # kinematic mode walks the open-loop planner: its statically stable patterns only
+            xy = wb.mounts[:, :2, 3]
+            self.patterns = tuple(
+                p
+                for p in pattern_names(wb.n_legs, xy)
+                if phase_table(p, wb.n_legs, xy).statically_stable
+            )
             self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
             self.walker = Walker(wb)
         self.limb = 0
