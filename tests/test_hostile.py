@@ -333,10 +333,10 @@ def _child(args: list[str], cwd: Path) -> tuple[int, str, float, int]:
     Reaped with ``os.wait4`` (the child's own CPU time and peak); killed after 60 s.
     """
     env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_KIN_DEBUG"}
-    err_path = cwd / ".stderr"
+    err_path, peak_path = cwd / ".stderr", cwd / ".peak"
     with open(err_path, "wb") as err:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "hexapod_kin", *args],
+            [sys.executable, "-c", _PEAK, str(peak_path), *args],
             cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
         )  # fmt: skip
     killer = threading.Timer(60.0, proc.kill)
@@ -348,7 +348,28 @@ def _child(args: list[str], cwd: Path) -> tuple[int, str, float, int]:
     proc.returncode = os.waitstatus_to_exitcode(status)
     rss_unit = 1 if sys.platform == "darwin" else 1024
     cpu = usage.ru_utime + usage.ru_stime
-    return proc.returncode, err_path.read_text(errors="replace"), cpu, usage.ru_maxrss * rss_unit
+    # ru_maxrss keeps the high-water mark of the process that spawned the child (Linux carries
+    # it across fork/vfork + exec): a big pytest worker would be charged to the command. The
+    # child's own VmHWM (its address space after exec) is its real peak where /proc exists.
+    peak = usage.ru_maxrss * rss_unit
+    if peak_path.is_file() and peak_path.read_text().strip():
+        peak = int(peak_path.read_text()) * 1024
+    return proc.returncode, err_path.read_text(errors="replace"), cpu, peak
+
+
+#: ``python -m hexapod_kin ARGS`` that writes its own peak RSS (VmHWM, kB) to a file at exit.
+_PEAK = """import atexit, runpy, sys
+def _peak(path=sys.argv.pop(1)):
+    try:
+        status = open("/proc/self/status").read().split("VmHWM:")
+    except OSError:
+        return
+    if len(status) > 1:
+        open(path, "w").write(status[1].split()[0])
+atexit.register(_peak)
+sys.argv[0] = "hexapod-kin"
+runpy.run_module("hexapod_kin", run_name="__main__", alter_sys=True)
+"""
 
 
 @pytest.mark.parametrize(("command", "case"), CHILD_CASES, ids=[f"{c}-{k}" for c, k in CHILD_CASES])

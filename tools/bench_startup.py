@@ -81,7 +81,7 @@ COMMANDS: dict[str, list[str]] = {
 }
 #: Not timed: ``view`` and ``drive`` serve a page until interrupted (no start-to-exit time);
 #: ``precompile`` exists to pay every compile at once.
-UNTIMED = ("view", "drive", "precompile")  # precompile compiles every kernel on purpose
+UNTIMED = ("view", "drive", "control", "precompile")  # precompile compiles every kernel on purpose
 #: The commands of ``--quick`` (a smoke test of the section: one of each kind of cost).
 QUICK = ("list", "fk", "scan")
 
