@@ -68,10 +68,7 @@ PENDING = {
         # the CPU, slip 1e-15 → 5e-14 m. Kept; the one loop would need a moving-target task.
         "gait.paths.rolling_ik",
     },
-    "rotation": {
-        "gait.walk.walk",  # Rz(ψ) of the SE(2) body path (→ _pose)
-        "motion.rate.constant_twist_pose",  # exp of a constant twist (→ Pinocchio's exp6)
-    },
+    "rotation": set(),
 }
 
 #: Matches of the patterns that are something else (reviewed by hand).
