@@ -59,15 +59,7 @@ ALLOWED_ROTATIONS = {
 #: fails when one disappears (then delete its entry) as when a new one appears.
 PENDING = {
     "fk": set(),
-    "ik": {
-        # Gauss–Newton on rolling contact: the targets move with q (the feet roll) and the
-        # samples are coupled through the stance; not a fixed-target problem of lm_loop. Its
-        # fixed-target alternative (targets = plan + rolling(q), re-solved by body_ik: closed
-        # forms and solve_chain) converges linearly: 9-12 passes (the cap) to 4-7e-14 m where
-        # this Newton takes 4 to 4e-16 m (anymal, solo12, hexapod with round feet), 1.1-1.8×
-        # the CPU, slip 1e-15 → 5e-14 m. Kept; the one loop would need a moving-target task.
-        "gait.paths.rolling_ik",
-    },
+    "ik": set(),
     "rotation": set(),
 }
 
