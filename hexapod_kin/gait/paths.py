@@ -313,7 +313,6 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return out
 
 
-
 def rolling_ik(
     wb: Any,
     base: np.ndarray,
