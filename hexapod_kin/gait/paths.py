@@ -332,10 +332,12 @@ def rolling_ik(
     Each pass solves the feet's targets by ``wb.body_ik`` (closed forms, else the package's
     one IK loop, :func:`hexapod_kin.ik.step.lm_loop`), the first pass the plan itself. The
     rolling ``D(q)`` of the solution (:func:`rolling_offsets` of its foot frames' rotations)
-    then gives the next targets: ``plan + D`` in stance, ``plan + D_lift-off·(1 − blend)`` in
-    swing — until ``max|targets − feet(q)| ≤ tol`` [m] (the planned contact points' slip) or
-    ``max_passes``. The map contracts by about ``r·|∂φ/∂c|`` per pass (r the foot radius, φ
-    the foot's rotation, c its centre), so the convergence is linear.
+    gives the next targets: ``plan + D`` in stance, ``plan + D_lift-off·(1 − blend)`` in
+    swing — until ``max|targets − feet(q)| ≤ tol`` [m] (the planned contact points' slip),
+    ``max_passes``, or a pass leaves a foot out of reach (a plan that cannot be walked is
+    refined no further). A pass contracts the error by about ``r·|∂φ/∂c|`` (r the foot
+    radius, φ the foot's rotation, c its centre); Anderson(1) mixing of the targets, per
+    foot and sample, speeds the fixed point up (2-3× fewer passes).
 
     Returns:
         ``(feet, q, ik, passes, residual [m], joint poses of q or None, D)``: the targets
@@ -356,7 +358,7 @@ def rolling_ik(
         D = rolling_offsets(T[:, wb._foot_joint, :3, :3], sup, normals, rad)
         feet = plan + np.where(np.asarray(swing)[..., None], last_stance_value(D, sup) * keep, D)
         residual = float(np.abs(feet - wb.feet_of(T)).max())
-        if residual <= tol or passes >= max_passes or len(sup) < 2:
+        if residual <= tol or passes >= max_passes or len(sup) < 2 or not ik.reached.all():
             break
         f = feet - x
         nxt = feet
