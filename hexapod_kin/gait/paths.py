@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ParameterError, positive
 from ..motion import default_stance, read_only, track
 
@@ -128,11 +129,7 @@ class FootStep:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (arrays as nested lists, SI units)."""
-        return {
-            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
-            for f in fields(self)
-            for v in (getattr(self, f.name),)
-        }
+        return fields_dict(self, *(f.name for f in fields(self)))
 
     @property
     def max_error(self) -> float:
