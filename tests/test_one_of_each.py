@@ -40,7 +40,8 @@ ALLOWED_FK = {
 }
 
 #: One IK loop: the compiled Levenberg–Marquardt loop of ik.solve / solve_many / solve_chain
-#: (gait's numerical leg IK runs it through solve_chain).
+#: (gait's numerical leg IK runs it through solve_chain; gait.paths.rolling_ik iterates
+#: body_ik's solves on the rolling targets, a fixed point on targets, not a loop of its own).
 ALLOWED_IK_LOOPS = {
     "ik.step.lm_loop",
 }
