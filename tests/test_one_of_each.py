@@ -40,7 +40,8 @@ ALLOWED_FK = {
 }
 
 #: One IK loop: the compiled Levenberg–Marquardt loop of ik.solve / solve_many / solve_chain
-#: (gait's numerical leg IK runs it through solve_chain).
+#: (gait's numerical leg IK runs it through solve_chain; gait.paths.rolling_ik iterates
+#: body_ik's solves on the rolling targets, a fixed point on targets, not a loop of its own).
 ALLOWED_IK_LOOPS = {
     "ik.step.lm_loop",
 }
@@ -59,19 +60,8 @@ ALLOWED_ROTATIONS = {
 #: fails when one disappears (then delete its entry) as when a new one appears.
 PENDING = {
     "fk": set(),
-    "ik": {
-        # Gauss–Newton on rolling contact: the targets move with q (the feet roll) and the
-        # samples are coupled through the stance; not a fixed-target problem of lm_loop. Its
-        # fixed-target alternative (targets = plan + rolling(q), re-solved by body_ik: closed
-        # forms and solve_chain) converges linearly: 9-12 passes (the cap) to 4-7e-14 m where
-        # this Newton takes 4 to 4e-16 m (anymal, solo12, hexapod with round feet), 1.1-1.8×
-        # the CPU, slip 1e-15 → 5e-14 m. Kept; the one loop would need a moving-target task.
-        "gait.paths.rolling_ik",
-    },
-    "rotation": {
-        "gait.walk.walk",  # Rz(ψ) of the SE(2) body path (→ _pose)
-        "motion.rate.constant_twist_pose",  # exp of a constant twist (→ Pinocchio's exp6)
-    },
+    "ik": set(),
+    "rotation": set(),
 }
 
 #: Matches of the patterns that are something else (reviewed by hand).

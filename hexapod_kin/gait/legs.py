@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from .._reader import FORMATS, read_data
 from .._tree import leg_fk, robot_size
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
@@ -104,11 +105,7 @@ class BodyIK:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (arrays as nested lists, SI units)."""
-        return {
-            f.name: (v.tolist() if isinstance(v, np.ndarray) else v)
-            for f in fields(self)
-            for v in (getattr(self, f.name),)
-        }
+        return fields_dict(self, *(f.name for f in fields(self)))
 
     @property
     def ok(self) -> np.ndarray:

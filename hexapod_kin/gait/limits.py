@@ -58,12 +58,16 @@ def fit_period(plan: Callable[[float], Any], period: float = 1.0, passes: int = 
     Returns:
         ``period``, or the multiple of :data:`PERIOD_STEP` at the speed ratio's scale that
         the last plan found within the limits (the last one tried when none is; a plan that
-        cannot be made returns ``period``: the walk itself then reports why).
+        cannot be made, or whose feet are out of reach, returns ``period``: the walk itself
+        then reports why).
 
     """
     T = float(period)
     try:
-        ratio = speed_ratio(plan(T))
+        first = plan(T)
+        if np.any(np.asarray(first.reach_excess) > 0.0):  # feet out of reach: not a plan
+            return T
+        ratio = speed_ratio(first)
         for _ in range(passes):
             if ratio <= 1.0:
                 return T

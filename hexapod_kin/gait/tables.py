@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ParameterError, choices
 
 __all__ = [
@@ -107,12 +108,7 @@ class PhaseTable:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: name, offsets [cycles], duty_factor, statically_stable."""
-        return {
-            "name": self.name,
-            "offsets": list(self.offsets),
-            "duty_factor": self.duty_factor,
-            "statically_stable": self.statically_stable,
-        }
+        return fields_dict(self, "name", "offsets", "duty_factor", "statically_stable")
 
 
 def _snap(x: float) -> float:

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from .._pose import rpy_to_matrix
 from ..exceptions import ParameterError
 from ..motion import read_only
 from .knee import knee_directions, knee_seed
@@ -500,8 +501,9 @@ def walk(
     # --- body
     pose = se2_pose(t, vel)
     base = np.zeros((n, 4, 4))
-    c, sn = np.cos(pose[:, 2]), np.sin(pose[:, 2])
-    base[:, 0, 0], base[:, 0, 1], base[:, 1, 0], base[:, 1, 1] = c, -sn, sn, c
+    rz = np.array([rpy_to_matrix(0.0, 0.0, psi)[:2, :2] for psi in pose[:, 2]])  # Rz(ψ)
+    base[:, :2, :2] = rz
+    base[:, 0, 1] = -rz[:, 1, 0]  # −sin ψ (rpy_to_matrix's 0 − sin ψ is +0.0 at ψ = 0)
     base[:, 2, 2] = base[:, 3, 3] = 1.0
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
     base[:, 2, 3] = gz.mean(axis=1) + bh

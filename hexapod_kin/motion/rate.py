@@ -283,30 +283,14 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
     t0 = np.asarray(pose0, dtype=float)
     xi = np.asarray(twist, dtype=float)
     times = np.atleast_1d(np.asarray(t, dtype=float))
-    v, w = xi[:3], xi[3:]
-    speed = float(np.linalg.norm(w))
-    theta = speed * times
-    # exp of the twist, vectorised (Rodrigues; translation V(θ) v t of SE(3)'s exp)
-    k = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-    if speed > 1e-9:
-        a = np.sin(theta) / speed
-        b = (1.0 - np.cos(theta)) / speed**2
-        c = (theta - np.sin(theta)) / speed**3
-    else:  # series: exact to rounding for tiny rotations
-        a = times * (1.0 - theta**2 / 6.0)
-        b = times**2 / 2.0 * (1.0 - theta**2 / 12.0)
-        c = times**3 / 6.0 * (1.0 - theta**2 / 20.0)
-    k2 = k @ k
-    rot = np.eye(3) + a[:, None, None] * k + b[:, None, None] * k2
-    out = np.zeros((times.size, 4, 4))
-    out[:, 3, 3] = 1.0
-    if frame == "tip":
-        trans = times[:, None] * v + b[:, None] * (k @ v) + c[:, None] * (k2 @ v)
-        out[:, :3, :3] = t0[:3, :3] @ rot
-        out[:, :3, 3] = t0[:3, 3] + trans @ t0[:3, :3].T
-    else:
-        out[:, :3, :3] = rot @ t0[:3, :3]
-        out[:, :3, 3] = t0[:3, 3] + times[:, None] * v
+    out = np.empty((times.size, 4, 4))
+    for k, dt in enumerate(times):  # Pinocchio's exp of SE(3) / SO(3)
+        if frame == "tip":
+            out[k] = t0 @ pin.exp6(pin.Motion(xi[:3] * dt, xi[3:] * dt)).homogeneous
+        else:
+            out[k] = np.eye(4)
+            out[k, :3, :3] = pin.exp3(xi[3:] * dt) @ t0[:3, :3]
+            out[k, :3, 3] = t0[:3, 3] + dt * xi[:3]
     return out
 
 
