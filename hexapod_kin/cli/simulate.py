@@ -63,8 +63,10 @@ def register(sub: Any) -> None:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .._io import atomic_write
     from ..simulate import simulate, simulation_html
+    from ..simulate.scene import check_friction
     from .common import emit_json, output_path
 
+    check_friction(args.friction)  # before the robot is loaded and the walk planned
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)

@@ -1,8 +1,4 @@
-"""The MuJoCo scene of a walk: the robot's MJCF, foot spheres, terrain, servos; the engine.
-
-:func:`scene_mjcf` builds the MJCF (see :mod:`hexapod_kin.simulate`); :class:`_Engine` holds
-the compiled model and reads contacts, foot forces and contact-point slip.
-"""
+"""The MuJoCo scene of a walk (:func:`scene_mjcf`) and the engine reading its contacts."""
 
 from __future__ import annotations
 
@@ -15,7 +11,8 @@ import numpy as np
 from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
 
-__all__ = ["MAX_FRICTION", "SCENE_TERRAINS", "SimScene", "check_steps", "scene_mjcf"]
+__all__ = ["MAX_FRICTION", "SCENE_TERRAINS", "SimScene", "check_friction", "check_steps",
+           "scene_mjcf"]  # fmt: skip
 
 #: The largest sliding friction coefficient a scene takes (a coefficient of 100 is glue).
 MAX_FRICTION = 100.0
@@ -255,6 +252,16 @@ def servo_defaults(robot: Any) -> tuple[float, float, float]:
     return kp, float(f"{0.01 * kp:.3g}"), arm
 
 
+def check_friction(friction: float) -> float:
+    """``friction`` if in (0, :data:`MAX_FRICTION`] (beyond, MuJoCo's solver crawls)."""
+    if (mu := positive("friction", friction)) > MAX_FRICTION:
+        msg = f"friction={friction!r} is not allowed; a coefficient from 0 to {MAX_FRICTION:g}"
+        raise ParameterError(
+            msg, parameter="friction", value=friction, allowed=f"(0, {MAX_FRICTION:g}]"
+        )
+    return mu
+
+
 def scene_mjcf(
     robot: Any = None,
     *,
@@ -332,13 +339,7 @@ def scene_mjcf(
             ("contact_time", contact_time),
         )
     )
-    if mu > MAX_FRICTION:  # beyond it MuJoCo's solver crawls (1e308: 15 s per simulated 0.5 s)
-        raise ParameterError(
-            f"friction={friction!r} is not allowed; a coefficient from 0 to {MAX_FRICTION:g}",
-            parameter="friction",
-            value=friction,
-            allowed=f"(0, {MAX_FRICTION:g}]",
-        )
+    check_friction(mu)
     arm = 0.0 if armature == 0 else positive("armature", armature)
     if tc < 2 * dt:
         raise ParameterError(
