@@ -103,6 +103,9 @@ def test_page_runs(page: Path, tmp_path: Path) -> None:
                 continue
             argv = shlex.split(line, comments=True)
             assert argv[0] == "hexapod-kin", f"{page.name}: a command the test cannot run: {line}"
+            if argv[1] in SERVERS:
+                _serves_until_ctrl_c(page, line, [sys.executable, "-m", "hexapod_kin", *argv[1:]])
+                continue
             done = subprocess.run(
                 [sys.executable, "-m", "hexapod_kin", *argv[1:]],
                 cwd=tmp_path,
@@ -111,3 +114,25 @@ def test_page_runs(page: Path, tmp_path: Path) -> None:
                 timeout=TIMEOUT,
             )
             assert done.returncode == 0, f"{page.name}: `{line}`: {done.stderr[-1500:]}"
+
+
+#: Commands that serve until Ctrl-C: they must come up (address printed) and end with 130.
+SERVERS = ("view", "drive")
+
+
+def _serves_until_ctrl_c(page: Path, line: str, argv: list[str]) -> None:
+    import signal
+    import time
+
+    env = {**__import__("os").environ, "BROWSER": "true"}  # no browser opened by the test
+    proc = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    deadline = time.monotonic() + TIMEOUT  # guards a hang only (never a speed)
+    out = ""
+    while time.monotonic() < deadline and "127.0.0.1" not in out and proc.poll() is None:
+        out += proc.stdout.readline()  # type: ignore[union-attr]
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=TIMEOUT)
+    assert "127.0.0.1" in out, f"{page.name}: `{line}`: {out} {err}"
+    assert proc.returncode in (130, -signal.SIGINT), f"{page.name}: `{line}`: {err}"

@@ -203,7 +203,7 @@ def test_every_key_press_reaches_the_robot(browser):
     sys.path.insert(0, str(Path(__file__).parents[1] / "tools"))
     import bench_drive
 
-    r = bench_drive.measure("hexapod")
+    r = bench_drive.measure("hexapod", browser=browser)
     print(f"\n{r}")
     assert r["presses"] == 20
     assert r["fps"] > 0 and r["key_to_moving_ms"] > 0

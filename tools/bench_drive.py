@@ -14,23 +14,33 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
 
-def measure(robot: str = "hexapod", presses: int = 20) -> dict[str, float]:
-    """Frames per second and the median key → command / key → moving latencies [ms]."""
-    from headless import launch_chromium
-    from playwright.sync_api import sync_playwright
+def measure(robot: str = "hexapod", presses: int = 20, browser: Any = None) -> dict[str, float]:
+    """Frames per second and the median key → command / key → moving latencies [ms].
 
+    ``browser``: a running Playwright browser (else one is launched here).
+    """
+    if browser is None:
+        from headless import launch_chromium
+        from playwright.sync_api import sync_playwright
+
+        path = shutil.which("chromium")
+        if path is None:
+            raise SystemExit("chromium is not installed (apt-get install chromium)")
+        with sync_playwright() as p:
+            b = launch_chromium(p, path)
+            try:
+                return measure(robot, presses, b)
+            finally:
+                b.close()
     from hexapod_kin.drive import drive
 
-    path = shutil.which("chromium")
-    if path is None:
-        raise SystemExit("chromium is not installed (apt-get install chromium)")
-    with sync_playwright() as p, drive(robot, families=False) as s:
-        b = launch_chromium(p, path)
-        page = b.new_page(viewport={"width": 640, "height": 480})
+    with drive(robot, families=False) as s:
+        page = browser.new_page(viewport={"width": 640, "height": 480})
         page.goto(s.url)
 
         def wait(expr: str) -> None:
@@ -49,7 +59,7 @@ def measure(robot: str = "hexapod", presses: int = 20) -> dict[str, float]:
             wait("hexapodKin.state.readout.status === 'standing'")
         ack = page.evaluate("hexapodKin.latencies")
         moved = page.evaluate("hexapodKin.motion")
-        b.close()
+        page.close()
     return {
         "fps": float(fps),
         "key_to_command_ms": statistics.median(ack),
