@@ -307,15 +307,7 @@ def test_anymal_pushed_sideways(share: float) -> None:
 
 
 QUADRUPED_CASES = [
-    pytest.param(robot, pattern, seed, marks=KNOWN)
-    if (robot, pattern, seed)
-    in {
-        ("erd:solo12", "trot", 1),
-        ("erd:solo12", "trot", 2),
-        ("erd:go1", "crawl", 1),
-        ("erd:go1", "crawl", 2),
-    }
-    else (robot, pattern, seed)
+    (robot, pattern, seed)
     for robot in ("erd:solo12", "erd:go1")
     for pattern in ("crawl", "trot")
     for seed in (1, 2, 3)
