@@ -23,8 +23,9 @@ one value per leg joint.
   height (with a bounded integral of the horizontal error, which removes the steady lag of
   slow gaits) and on the attitude, ``F = m (K_p e_p + K_I ∫e_p + K_d e_v + g)``,
   ``M = I (K_R log(R_d Rᵀ) + K_ω (ω_d − ω))``, shared among the stance feet by
-  :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits), then ``τ = h − Jᵀ f`` per stance leg
-  (``h`` Pinocchio's non-linear effects) and ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
+  then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
+  ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
