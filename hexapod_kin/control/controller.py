@@ -20,8 +20,8 @@ one value per leg joint.
   with a ``sin(π s)`` lift of ``swing_height``, and keeps descending past ``s = 1`` until it
   touches.
 * **Torque kind** (quadrupeds' motors): the body wrench from PD laws on the CoM path and
-  height (with a bounded integral of the horizontal error, which removes the steady lag of
-  slow gaits) and on the attitude, ``F = m (K_p e_p + K_I ∫e_p + K_d e_v + g)``,
+  height (with a bounded integral of the error along the path, which removes the steady
+  lag of slow gaits) and on the attitude, ``F = m (K_p e_p + K_I ∫e_p + K_d e_v + g)``,
   ``M = I (K_R log(R_d Rᵀ) + K_ω (ω_d − ω))``, shared among the stance feet by
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
@@ -60,7 +60,7 @@ ACCEL = (1.0, 2.0)
 #: servos lag their targets; arriving early lands the foot where it was placed).
 ARRIVE = 0.8
 
-#: Torque kind: the CoM's horizontal integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
+#: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
 ACC_I = 1.5
@@ -501,12 +501,15 @@ class Controller:
             kp = np.array([wp**2, wp**2, wz_**2])
             kd = np.array([2 * 0.9 * wp, 2 * 0.9 * wp, 2 * 0.9 * wz_])
             e_p = p_ref - com
-            # an integral on the horizontal error (a steady lag: swing reactions, slips)
+            # an integral of the CoM's lag (a steady lag: swing reactions, slips),
+            # along the path's heading only (a lateral integral makes a trot sway)
             ki = wp**3 * KI_FRAC
             cap = ACC_I / max(ki, 1e-9)
-            self.integral[:2] = np.clip(self.integral[:2] + e_p[:2] * self.dt, -cap, cap)
+            ahead = Rz[:2, 0]
+            e_along = float(ahead @ e_p[:2])
+            self.integral[0] = float(np.clip(self.integral[0] + e_along * self.dt, -cap, cap))
             acc = kp * e_p + kd * (v_ref - vcom) + np.array([0.0, 0.0, _G])
-            acc[:2] += ki * self.integral[:2]
+            acc[:2] += ki * self.integral[0] * ahead
             F = self.mass * acc
             Rd = self._desired_rotation()
             omega = R @ st["v"][3:6]
