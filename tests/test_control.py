@@ -229,7 +229,7 @@ KNOWN = pytest.mark.xfail(strict=False, reason="issue 32: measured short of the 
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [pytest.param(1, marks=KNOWN), pytest.param(2, marks=KNOWN), 3])
+@pytest.mark.parametrize("seed", [1, 2, 3])
 def test_hexapod_tripod_over_bumps(seed: int) -> None:
     res = run(None, command=(0.2, 0.0, 0.0), bumps=0.01, seed=seed, duration=10.0)
     _walk_ok(res, 0.02, 2.0, 3.0)
@@ -307,15 +307,7 @@ def test_anymal_pushed_sideways(share: float) -> None:
 
 
 QUADRUPED_CASES = [
-    pytest.param(robot, pattern, seed, marks=KNOWN)
-    if (robot, pattern, seed)
-    in {
-        ("erd:solo12", "trot", 1),
-        ("erd:solo12", "trot", 2),
-        ("erd:go1", "crawl", 1),
-        ("erd:go1", "crawl", 2),
-    }
-    else (robot, pattern, seed)
+    (robot, pattern, seed)
     for robot in ("erd:solo12", "erd:go1")
     for pattern in ("crawl", "trot")
     for seed in (1, 2, 3)

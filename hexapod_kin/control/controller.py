@@ -15,13 +15,17 @@ one value per leg joint.
 * **Swing** (both kinds): the foothold re-targeted every tick, Raibert's rule with the
   capture-point correction: ``p = hip(t_td) + v_ref T_st / 2 + k_v (v − v_ref)`` (Raibert
   1986; Pratt et al. 2006) with ``k_v = sqrt(h / g)``; the foot moves from its lift-off
-  point along a smooth step (``3s² − 2s³``) with a ``sin(π s)`` lift of ``swing_height``, and
-  keeps descending past ``s = 1`` until it touches.
+  point along a smooth step (``3u² − 2u³``, ``u = min(1, s / a)``; ``a = 1`` for torque,
+  ``ARRIVE`` for servos, whose lag would otherwise land the foot short of its foothold)
+  with a ``sin(π s)`` lift of ``swing_height``, and keeps descending past ``s = 1`` until it
+  touches.
 * **Torque kind** (quadrupeds' motors): the body wrench from PD laws on the CoM path and
-  height and on the attitude, ``F = m (K_p e_p + K_d e_v + g)``, ``M = I (K_R log(R_d Rᵀ) +
-  K_ω (ω_d − ω))``, shared among the stance feet by :class:`~.qp.ForceQP` (friction
-  pyramids, normal force bounds, joint torque limits), then ``τ = h − Jᵀ f`` per stance leg
-  (``h`` Pinocchio's non-linear effects) and ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  height (with a bounded integral of the error along the path, which removes the steady
+  lag of slow gaits) and on the attitude, ``F = m (K_p e_p + K_I ∫e_p + K_d e_v + g)``,
+  ``M = I (K_R log(R_d Rᵀ) + K_ω (ω_d − ω))``, shared among the stance feet by
+  :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
+  then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
+  ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
@@ -51,6 +55,15 @@ _G = 9.81
 
 #: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
 ACCEL = (1.0, 2.0)
+
+#: Servo kind: the fraction of the swing by which the foot reaches its foothold's x, y (the
+#: servos lag their targets; arriving early lands the foot where it was placed).
+ARRIVE = 0.8
+
+#: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
+#: loop's natural frequency) and the most acceleration it may add [m/s²].
+KI_FRAC = 0.3
+ACC_I = 1.5
 
 
 @dataclass(frozen=True)
@@ -389,14 +402,19 @@ class Controller:
             if n > lim:
                 step[:2] *= lim / n
             z0 = self.lift_off[i, 2]
+            h = self.swing_height
+            # servos lag their targets: the foot is above its foothold at s = ARRIVE
+            a = ARRIVE if self.kind == "servo" else 1.0
+            u = min(1.0, s / a)
+            sh = 3 * u * u - 2 * u**3
+            dsh = (6 * u - 6 * u * u) / (a * t_sw) if u < 1.0 else 0.0
+            p = self.lift_off[i] + np.array([step[0] * sh, step[1] * sh, 0.0])
             sm = 3 * s * s - 2 * s**3
             dsm = (6 * s - 6 * s * s) / t_sw
-            h = self.swing_height
-            p = self.lift_off[i] + np.array([step[0] * sm, step[1] * sm, 0.0])
             dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
             p[2] = z0 - dz * sm + h * lift[i]
             vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
-            vel = np.array([step[0] * dsm, step[1] * dsm, vz])
+            vel = np.array([step[0] * dsh, step[1] * dsh, vz])
             if s >= 1.0:  # scheduled down but not touching: keep going down
                 p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
                 vel = np.array([0.0, 0.0, -h / t_sw])
@@ -482,7 +500,16 @@ class Controller:
             wp, wz_, wr = 2 * math.pi * 1.2, 2 * math.pi * 2.0, 2 * math.pi * 3.0
             kp = np.array([wp**2, wp**2, wz_**2])
             kd = np.array([2 * 0.9 * wp, 2 * 0.9 * wp, 2 * 0.9 * wz_])
-            acc = kp * (p_ref - com) + kd * (v_ref - vcom) + np.array([0.0, 0.0, _G])
+            e_p = p_ref - com
+            # an integral of the CoM's lag (a steady lag: swing reactions, slips),
+            # along the path's heading only (a lateral integral makes a trot sway)
+            ki = wp**3 * KI_FRAC
+            cap = ACC_I / max(ki, 1e-9)
+            ahead = Rz[:2, 0]
+            e_along = float(ahead @ e_p[:2])
+            self.integral[0] = float(np.clip(self.integral[0] + e_along * self.dt, -cap, cap))
+            acc = kp * e_p + kd * (v_ref - vcom) + np.array([0.0, 0.0, _G])
+            acc[:2] += ki * self.integral[0] * ahead
             F = self.mass * acc
             Rd = self._desired_rotation()
             omega = R @ st["v"][3:6]
