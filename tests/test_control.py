@@ -283,6 +283,11 @@ def test_anymal_trots_at_half_a_metre_per_second() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=False,
+    reason="issue 32: passes with 0.02 s to spare; 3 of 10 variants of the push (start 1.8-2.5 s, "
+    "either side) flip the robot (femur-body contacts): not robust yet",
+)
 def test_hexapod_comes_back_to_its_path_after_a_20_newton_push() -> None:
     res = run(None, command=(0.2, 0.0, 0.0), pushes=[Push(20.0, 2.0, 0.2)], duration=10.0)
     assert not res.fell
