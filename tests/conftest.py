@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -48,3 +50,34 @@ def drawn(monkeypatch):
 
     monkeypatch.setattr(plots, "save_figure", keep)
     return figs
+
+
+def _need(what: str) -> None:
+    """Skip a browser test without ``what``; under CI (which installs it) fail instead."""
+    if os.environ.get("CI"):
+        pytest.fail(f"CI is set but {what} is missing (.ci/run installs it)")
+    pytest.skip(f"{what} is missing (apt-get install chromium; pip install playwright); skipped")
+
+
+@pytest.fixture(scope="module")
+def playwright_api():
+    """``(playwright, chromium path)``: Debian's Chromium driven by Playwright (one per module)."""
+    path = shutil.which("chromium")
+    if path is None:
+        _need("`chromium` on PATH")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _need("playwright (python)")
+    with sync_playwright() as p:
+        yield p, path
+
+
+@pytest.fixture(scope="module")
+def browser(playwright_api):
+    """A headless Chromium (``tools/headless.launch_chromium``) for a whole test module."""
+    from headless import launch_chromium
+
+    b = launch_chromium(*playwright_api)
+    yield b
+    b.close()

@@ -9,8 +9,6 @@ The timing figures (frames per second, key → robot) are printed by tools/bench
 from __future__ import annotations
 
 import math
-import os
-import shutil
 import time
 
 import numpy as np
@@ -20,25 +18,6 @@ from hexapod_kin.drive import drive
 
 ROBOTS = ("hexabot_leg", "hexapod", "erd:solo12")
 LEGGED = ROBOTS[1:]
-
-
-@pytest.fixture(scope="module")
-def browser():
-    path = shutil.which("chromium")
-    if path is None:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set but `chromium` is not on PATH")
-        pytest.skip("Chromium is not installed (apt-get install chromium); browser tests skipped")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        pytest.skip("playwright (python) is not installed; browser tests skipped")
-    from headless import launch_chromium
-
-    with sync_playwright() as p:
-        b = launch_chromium(p, path)
-        yield b
-        b.close()
 
 
 @pytest.fixture(scope="module", params=ROBOTS)

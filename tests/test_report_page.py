@@ -10,9 +10,7 @@ nothing from the network.
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
 from pathlib import Path
 
 import pytest
@@ -34,28 +32,10 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
     return out / "report.html", json.loads((out / "verdicts.json").read_text())
 
 
-@pytest.fixture(scope="module")
-def playwright_api():
-    path = shutil.which("chromium")
-    if path is None:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set but `chromium` is not on PATH (.ci/run installs Debian's)")
-        pytest.skip("Chromium is not installed (apt-get install chromium); browser tests skipped")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set but playwright (python) is not installed")
-        pytest.skip("playwright (python) is not installed; browser tests skipped")
-    with sync_playwright() as p:
-        yield p, path
-
-
 def _open(playwright_api, page_path: Path, extra: tuple[str, ...] = ()):
-    from headless import CHROMIUM_ARGS
+    from headless import launch_chromium
 
-    p, exe = playwright_api
-    browser = p.chromium.launch(executable_path=exe, args=[*CHROMIUM_ARGS, *extra])
+    browser = launch_chromium(*playwright_api, extra)
     page = browser.new_page(viewport={"width": 1200, "height": 900})
     requests: list[str] = []
     page.on("request", lambda r: requests.append(r.url))

@@ -24,7 +24,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from headless import launch_chromium
 
 from hexapod_kin import gait, load, robots, table_fk, viewer
 from hexapod_kin.exceptions import (
@@ -151,30 +150,6 @@ def _port(url: str) -> int:
 
 
 # ====================================================================== browser fixtures
-@pytest.fixture(scope="module")
-def chromium() -> str:
-    path = shutil.which("chromium")
-    if path is None:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set but `chromium` is not on PATH (.ci/run installs Debian's)")
-        pytest.skip("Chromium is not installed (apt-get install chromium); browser tests skipped")
-    return path
-
-
-@pytest.fixture(scope="module")
-def browser(chromium):
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set but playwright (python) is not installed")
-        pytest.skip("playwright (python) is not installed; browser tests skipped")
-    with sync_playwright() as p:
-        b = launch_chromium(p, chromium)
-        yield b
-        b.close()
-
-
 class _Page:
     """A page whose every request outside ``allow`` is blocked and recorded."""
 

@@ -9,7 +9,6 @@ never assert wall-clock times). Targets: ≥ 30 frames/s and ≤ 100 ms.
 from __future__ import annotations
 
 import os
-import shutil
 import statistics
 import sys
 import time
@@ -25,18 +24,10 @@ def measure(robot: str = "hexapod", presses: int = 20, browser: Any = None) -> d
     ``browser``: a running Playwright browser (else one is launched here).
     """
     if browser is None:
-        from headless import launch_chromium
-        from playwright.sync_api import sync_playwright
+        from headless import chromium
 
-        path = shutil.which("chromium")
-        if path is None:
-            raise SystemExit("chromium is not installed (apt-get install chromium)")
-        with sync_playwright() as p:
-            b = launch_chromium(p, path)
-            try:
-                return measure(robot, presses, b)
-            finally:
-                b.close()
+        with chromium() as b:
+            return measure(robot, presses, b)
     from hexapod_kin.drive import drive
 
     with drive(robot, families=False) as s:

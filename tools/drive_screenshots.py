@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from headless import launch_chromium  # noqa: E402
+from headless import chromium  # noqa: E402
 
 from hexapod_kin.drive import drive  # noqa: E402
 
@@ -36,12 +36,9 @@ def _wait(page: Any, expr: str) -> None:
 
 def shoot(out: Path) -> list[Path]:
     """Write the four screenshots to ``out``; return their paths."""
-    from playwright.sync_api import sync_playwright
-
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
+    with chromium() as browser:
         with drive("hexabot_leg") as s:  # joints, then a target the leg stops short of
             page = _open(browser, s.url)
             page.evaluate(
@@ -78,7 +75,6 @@ def shoot(out: Path) -> list[Path]:
             page.screenshot(path=str(paths[-1]))
             page.keyboard.up("w")
             page.keyboard.up("q")
-        browser.close()
     return paths
 
 

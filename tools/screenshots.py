@@ -11,7 +11,6 @@ the page as a PNG.
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -22,7 +21,7 @@ import numpy as np
 from hexapod_kin import gait, load, viewer
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from headless import launch_chromium  # noqa: E402
+from headless import chromium  # noqa: E402
 
 from hexapod_kin._io import atomic_write
 
@@ -72,17 +71,8 @@ def shoot(
     ``browser``: a Playwright browser to reuse (default: launch Debian's ``chromium``).
     """
     if browser is None:
-        from playwright.sync_api import sync_playwright
-
-        chromium = shutil.which("chromium")
-        if chromium is None:
-            raise SystemExit("screenshots: `chromium` is not on PATH (apt-get install chromium)")
-        with sync_playwright() as p:
-            own = launch_chromium(p, chromium)
-            try:
-                return shoot(html, png, t, size, own)
-            finally:
-                own.close()
+        with chromium() as own:
+            return shoot(html, png, t, size, own)
     blocked: list[str] = []
     page = browser.new_page(viewport={"width": size[0], "height": size[1]})
     try:

@@ -200,14 +200,15 @@ def robot_args(
     frames: bool = False,
     tool: bool = False,
     inertia: bool = False,
+    feet: bool = False,
 ) -> None:
     """Declare the one robot argument of a command: every command that takes a robot calls this.
 
     ``SOURCE`` (optional with a ``default`` or not ``required``), ``-s/--set NAME=VALUE``
     (repeatable), ``--package-dir DIR`` (repeatable; not for ``kinds="table"``); with ``frames``
     ``--base``/``--tip``; with ``tool`` ``--tool X Y Z ROLL PITCH YAW``; for
-    ``kinds="legged"`` ``--foot`` (repeatable, appended) and ``--foot-radius``; with
-    ``inertia`` ``--inertia``. :func:`robot_of` reads them back, once.
+    ``kinds="legged"`` ``--foot`` (repeatable, appended; with ``feet`` for any robot) and
+    ``--foot-radius``; with ``inertia`` ``--inertia``. :func:`robot_of` reads them back, once.
     """
     help_ = SOURCE_KINDS[kinds] + ("" if default is None else f" (default {default})")
     if default is None and required:
@@ -245,7 +246,7 @@ def robot_args(
             help="rigid offset of the tip frame: xyz [m] and URDF rpy [rad] (deg with --deg), "
             "e.g. a foot point on a tibia link: --tip tibia_lf --tool 0.00155 0.1535 0.0288 0 0 0",
         )
-    if kinds == "legged":
+    if kinds == "legged" or feet:
         p.add_argument(
             "--foot",
             action="append",
@@ -254,6 +255,7 @@ def robot_args(
             "several space-separated, or a .yaml/.toml/.json file), for a URDF without foot "
             "links; e.g. --foot tibia_lf:0,0.16,0.029",
         )
+    if kinds == "legged":
         p.add_argument(
             "--foot-radius",
             type=float,

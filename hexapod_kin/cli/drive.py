@@ -11,6 +11,7 @@ import sys
 from typing import Any
 
 from .common import robot_args, robot_of
+from .view import serve_end
 
 __all__ = ["register"]
 
@@ -22,14 +23,7 @@ def register(sub: Any) -> None:
         help="drive, pose and probe a robot live in the browser (127.0.0.1 only)",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    robot_args(p, frames=True)
-    p.add_argument(
-        "--foot",
-        action="append",
-        metavar="FRAME:X,Y,Z",
-        help="a foot as a frame plus an offset in it [m], once per leg, for a legged URDF "
-        "without foot links; e.g. --foot tibia_lf:0,0.16,0.029",
-    )
+    robot_args(p, frames=True, feet=True)
     p.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (0: a free one)")
     p.add_argument("--no-open", action="store_true", help="do not open a browser")
     p.add_argument(
@@ -50,13 +44,6 @@ def _cmd_drive(args: argparse.Namespace) -> int:
     from ..drive import drive
     from ..exceptions import ParameterError
 
-    if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
-        raise ParameterError(
-            f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]",
-            parameter="--serve-for",
-            value=args.serve_for,
-            allowed="seconds in [0, 1e7]",
-        )
     if not 0 <= args.port <= 65535:
         raise ParameterError(
             f"--port {args.port!r} is not allowed; give 0 (a free port) or 1..65535",
@@ -64,13 +51,13 @@ def _cmd_drive(args: argparse.Namespace) -> int:
             value=args.port,
             allowed="0..65535",
         )
+    end = serve_end(args)
     robot = robot_of(args)
     with drive(robot.load(), feet=robot.feet, port=args.port) as session:
         print(f"hexapod-kin drive {session.cockpit.model.name}: {session.url}", flush=True)
         print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
         if not args.no_open:
             webbrowser.open(session.url)
-        end = None if args.serve_for is None else time.monotonic() + args.serve_for
         server = session.server
         while end is None or time.monotonic() < end:
             if not session.running:

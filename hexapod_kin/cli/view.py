@@ -12,7 +12,7 @@ from typing import Any
 
 from .common import emit_json, load_source, output_path, q_args, q_from_args, robot_args
 
-__all__ = ["register", "serve_until", "wait_args"]
+__all__ = ["register", "serve_end", "serve_until", "wait_args"]
 
 
 def wait_args(p: argparse.ArgumentParser) -> None:
@@ -31,22 +31,36 @@ def wait_args(p: argparse.ArgumentParser) -> None:
     )
 
 
-def serve_until(viewer: Any, args: argparse.Namespace) -> int:
-    """Print the viewer's URL and serve until Ctrl-C, ``--serve-for`` seconds or not at all."""
+def serve_end(args: argparse.Namespace) -> float | None:
+    """When to stop serving (:func:`time.monotonic` [s]; None: at Ctrl-C): ``--serve-for``.
+
+    Raises:
+        ParameterError: ``--serve-for`` outside [0, 1e7] s.
+
+    """
     import time
 
-    from ..exceptions import ParameterError, ViewerError
+    from ..exceptions import ParameterError
 
     if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
         msg = f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]"
         raise ParameterError(
             msg, parameter="--serve-for", value=args.serve_for, allowed="seconds in [0, 1e7]"
         )
+    return None if args.serve_for is None else time.monotonic() + args.serve_for
+
+
+def serve_until(viewer: Any, args: argparse.Namespace) -> int:
+    """Print the viewer's URL and serve until Ctrl-C, ``--serve-for`` seconds or not at all."""
+    import time
+
+    from ..exceptions import ViewerError
+
+    end = serve_end(args)
     print(f"meshcat viewer of {viewer.model.name}: {viewer.url}", flush=True)
     if args.no_wait:
         return 0
     print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
-    end = None if args.serve_for is None else time.monotonic() + args.serve_for
     while end is None or time.monotonic() < end:  # Ctrl-C: the one line of main, status 130
         if not viewer.server.running:
             raise ViewerError(f"the meshcat server (pid {viewer.pid}) stopped")
