@@ -376,21 +376,11 @@ def to_mjcf(
     return MjcfExport(xml=text + "\n", assets=dict(sorted(assets.items())))
 
 
-def write_mjcf(
-    source: Any,
-    path: str | os.PathLike[str],
-    *,
-    meshes: bool = False,
-    header: str | None = None,
-    floor: bool = True,
-    floor_z: float | None = None,
-    timestep: float | None = None,
-    integrator: str | None = None,
-    floating: bool = False,
-) -> MjcfExport:
+def write_mjcf(source: Any, path: str | os.PathLike[str], **options: Any) -> MjcfExport:
     """Write :func:`to_mjcf` to ``path`` (meshes into ``<stem>_meshes/`` beside it), atomically.
 
-    Meshes first, the MJCF last; a write stopped between two files removes what it created.
+    ``options``: the keywords of :func:`to_mjcf` but ``mesh_prefix``. Meshes first, the MJCF
+    last; a write stopped between two files removes what it created.
 
     Raises:
         ParameterError: As :func:`to_mjcf`, or when the directory does not exist.
@@ -403,17 +393,7 @@ def write_mjcf(
             f"path={str(dest)!r}: directory {str(parent)!r} does not exist", parameter="path"
         )
     stem = dest.name.split(".")[0] or "model"
-    out = to_mjcf(
-        source,
-        meshes=meshes,
-        mesh_prefix=f"{stem}_meshes/",
-        header=header,
-        floor=floor,
-        floor_z=floor_z,
-        timestep=timestep,
-        integrator=integrator,
-        floating=floating,
-    )
+    out = to_mjcf(source, mesh_prefix=f"{stem}_meshes/", **options)
     made: list[Path] = []  # files and folders this call creates: removed if it is stopped
     try:
         for rel, data in out.assets.items():

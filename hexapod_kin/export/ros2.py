@@ -107,7 +107,15 @@ def package_files(
 ) -> tuple[str, dict[str, bytes]]:
     """The package name and its files (path relative to the package → bytes, sorted).
 
-    Arguments as :func:`export_package`.
+    Args:
+        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
+            a preset name or a table file (any source with a parameter table).
+        name: ROS package name (REP 144); default ``<robot>_description``.
+        meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
+        header: Header line recorded in every file (the command that made it).
+        maintainer: Maintainer name.
+        email: Maintainer e-mail (package format 3 requires one).
+        license: License identifier.
 
     Raises:
         ParameterError: For an invalid name, e-mail or source.
@@ -178,30 +186,16 @@ def package_files(
 
 
 def export_package(
-    source: Any,
-    out: str | os.PathLike[str],
-    *,
-    name: str | None = None,
-    meshes: bool = False,
-    header: str | None = None,
-    force: bool = False,
-    maintainer: str = "hexapod_kin user",
-    email: str = "user@example.com",
-    license: str = "BSD-3-Clause",  # noqa: A002
+    source: Any, out: str | os.PathLike[str], *, force: bool = False, **options: Any
 ) -> PackageExport:
     """Write the ROS 2 description package of ``source`` into the folder ``out``, atomically.
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
+        source: A source with a parameter table (as :func:`package_files`).
         out: The package folder to create (its parent must exist).
-        name: ROS package name (REP 144); default ``<robot>_description``.
-        meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
-        header: Header line recorded in every file (the command that made it).
         force: Replace ``out`` if it exists and is not empty.
-        maintainer: Maintainer name.
-        email: Maintainer e-mail (package format 3 requires one).
-        license: License identifier.
+        **options: The keywords of :func:`package_files` (``name``, ``meshes``, ``header``,
+            ``maintainer``, ``email``, ``license``).
 
     Returns:
         A :class:`PackageExport`.
@@ -214,15 +208,7 @@ def export_package(
     """
     dest = Path(out)
     _check_out(dest, force)
-    pkg, files = package_files(
-        source,
-        name=name,
-        meshes=meshes,
-        header=header,
-        maintainer=maintainer,
-        email=email,
-        license=license,
-    )
+    pkg, files = package_files(source, **options)
     parent = dest.parent if str(dest.parent) else Path(".")
     tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".tmp", dir=parent))
     old: Path | None = None

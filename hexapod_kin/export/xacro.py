@@ -264,26 +264,30 @@ def _families(chains: list[Chain]) -> list[_Family]:
     return fams
 
 
-def _materials() -> list[str]:
-    return [
+def _document(
+    name: str, description: str, header: str | None, props: list[str], body: list[str]
+) -> str:
+    """The xacro document: header, materials, the properties, the helper macros, ``body``."""
+    intro = (
+        "Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j. Expand with "
+        "`xacro FILE > robot.urdf`: same kinematics and inertials as hexapod-kin urdf."
+    )
+    lines = [*header_lines("xacro", description, header), comment(intro)]
+    lines.append(f'<robot name="{name}" xmlns:xacro="{_NS}">')
+    lines += [
         f'  <material name="{m}"><color rgba="{COLORS[m]}"/></material>'
         for m in ("base", "body", "link", "joint", "foot")
     ]
+    lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
+    lines += props + _HELPERS.read_text(encoding="utf-8").splitlines() + body
+    return "\n".join([*lines, "</robot>"]) + "\n"
 
 
 def _chain_doc(chain: Chain, header: str | None) -> str:
     fam = _families([chain])[0]
-    lines = header_lines("xacro", chain.description or chain.name, header)
-    lines += _intro()
-    lines.append(f'<robot name="{chain.name}" xmlns:xacro="{_NS}">')
-    lines += _materials()
-    lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
-    lines += _properties(fam.params, notes=fam.notes)
-    lines += _HELPERS.read_text(encoding="utf-8").splitlines()
-    lines += _macro_lines(fam, forward=True)
-    lines.append(f'  <xacro:{fam.macro} prefix="" parent=""/>')
-    lines.append("</robot>")
-    return "\n".join(lines) + "\n"
+    body = [*_macro_lines(fam, forward=True), f'  <xacro:{fam.macro} prefix="" parent=""/>']
+    props = _properties(fam.params, notes=fam.notes)
+    return _document(chain.name, chain.description or chain.name, header, props, body)
 
 
 def _mount_props(legs: tuple[Any, ...]) -> tuple[list[str], dict[str, str]]:
@@ -320,13 +324,8 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
     name = robot.name if leg is None else f"{robot.name}_{leg}"
     fams = _families([m.chain for m in legs])
     forward = len(fams) == 1
-    lines = header_lines("xacro", robot.description or robot.name, header)
-    lines += _intro()
-    lines.append(f'<robot name="{name}" xmlns:xacro="{_NS}">')
-    lines += _materials()
-    lines.append("  " + comment("dimensions (SI: m, rad, kg, N, N m, s); edit one number here"))
     lx, ly, lz = robot.body_size
-    lines += _properties(
+    lines = _properties(
         {
             "body_length": num(lx),
             "body_width": num(ly),
@@ -340,10 +339,8 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
         if not forward:
             lines.append("  " + comment(f"leg family {fam.macro}"))
         lines += _properties(fam.params, "" if forward else f"{fam.macro}_", fam.notes)
-    lines += _HELPERS.read_text(encoding="utf-8").splitlines()
-    for fam in fams:
-        lines += _macro_lines(fam, forward=forward)
-    lines += [
+    body = [line for fam in fams for line in _macro_lines(fam, forward=forward)]
+    body += [
         f'  <link name="{robot.body}">',
         "    <inertial>",
         '      <origin xyz="0 0 0" rpy="0 0 0"/>',
@@ -360,21 +357,11 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
         fam = next(f for f in fams if f.chain == mount.chain)
         lid = ident(mount.name)
         extra = "" if forward else " " + " ".join(f'{k}="${{{fam.macro}_{k}}}"' for k in fam.params)
-        lines.append(
+        body.append(
             f'  <xacro:{fam.macro} prefix="{mount.name}_" parent="{robot.body}" '
             f'xyz="{mount_xyz[mount.name]}" rpy="0 0 ${{{lid}_yaw}}"{extra}/>'
         )
-    lines.append("</robot>")
-    return "\n".join(lines) + "\n"
-
-
-def _intro() -> list[str]:
-    return [
-        comment(
-            "Units: SI (m, rad, kg). Link j is Khalil-Kleinfinger frame j. Expand with "
-            "`xacro FILE > robot.urdf`: same kinematics and inertials as hexapod-kin urdf."
-        )
-    ]
+    return _document(name, robot.description or robot.name, header, lines, body)
 
 
 def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) -> str:
