@@ -6,8 +6,6 @@ Caches (each filled once per module, then copied per case):
   ``derive``; the entry damaged is the 2-DOF leg's, the other entry the 3-DOF leg's.
 * ``families`` — the singular families kept as numbers (``singularity/families.py``); the
   command is ``families_for(derive=True)``; two entries: two row selections of one model.
-* ``text`` — the printed derivation of ``hexapod-kin derive`` (``report/cache.py``); the
-  command is ``derivation_text``; two entries: two derivations.
 * ``replay`` — a seed-report replay entry (``report/replay.py``: manifest + files); the command
   is ``reproduce``, its build replaced by a stand-in that writes the report the entry holds
   (a real build takes ~20 s; what is tested is that a damaged entry is never replayed).
@@ -25,7 +23,7 @@ any checksum left as it was), ``plant`` (code where data is read: a ``srepr`` (s
 factor text (families), a script as a figure or
 listed under a path that leaves the report folder (replay); where a reader parses the data
 (symbolic, families, replay, figures) the seal is recomputed, so what refuses is the reader
-itself; a printed text (``text``) is never run, only its seal guards it). ``X-resealed``: the
+itself). ``X-resealed``: the
 damage with the seal recomputed, for caches that check what an entry claims beyond its seal
 (a derivation against the table, a family ``q_k = value`` against the model's rank, a
 manifest's verdicts against ``report.md``, a figure against the copy ``report.html`` inlines
@@ -57,7 +55,7 @@ import hexapod_kin as hk
 from hexapod_kin.exceptions import CacheWarning
 
 DAMAGES = ("truncate", "empty", "random", "swap", "edit", "plant")
-CACHES = ("symbolic", "families", "text", "replay", "figures", "numba")
+CACHES = ("symbolic", "families", "replay", "figures", "numba")
 #: Damages also made with the seal recomputed, where a check beyond the seal catches them.
 RESEALED = (
     ("symbolic", "edit"),
@@ -72,9 +70,8 @@ RESEALED = (
 NUMBA_DAMAGES = ("truncate", "empty", "random")
 CASES = [(c, d) for c in CACHES for d in DAMAGES if c != "numba" or d in NUMBA_DAMAGES]
 CASES += [(c, f"{d}-resealed") for c, d in RESEALED]
-#: An edit resealed by someone without the per-user secret (the keyed seal catches it; the
-#: printed text has no other check).
-CASES += [(c, "forged") for c in ("symbolic", "families", "text")]
+#: An edit resealed by someone without the per-user secret (the keyed seal catches it).
+CASES += [(c, "forged") for c in ("symbolic", "families")]
 
 
 def _cut(path: Path) -> None:
@@ -223,41 +220,6 @@ class Families:
         else:  # plant: code as a factor text
             body["families"][0]["factor"] = _planted(marker)
         _reseal("families", data, how)
-        path.write_text(json.dumps(data))
-
-
-# ---------------------------------------------------------------------------- text
-class Text:
-    """The printed derivation of the 2-DOF leg (file ``a``), of the 3-DOF leg (``b``)."""
-
-    def _text(self, chain: Any) -> str:
-        from hexapod_kin.report.cache import derivation_text
-        from hexapod_kin.symbolic import derive
-
-        return derivation_text(derive(chain, budget=None))
-
-    def fill(self, root: Path) -> None:
-        self._text(hk.robots.coxa_tibia_leg())
-        (self.a,) = [p.name for p in (root / "report").glob("text-*.json")]
-        self._text(hk.robots.hexabot_leg())
-        (self.b,) = [p.name for p in (root / "report").glob("text-*.json") if p.name != self.a]
-
-    def run(self, root: Path) -> str:
-        return self._text(hk.robots.coxa_tibia_leg())
-
-    def damage(self, root: Path, how: str, marker: Path) -> None:
-        path = root / "report" / self.a
-        if _raw(path, how):
-            return
-        if how == "swap":
-            return _swap(path, root / "report" / self.b)
-        data = json.loads(path.read_text())
-        if how in ("edit", "forged"):  # one printed length changed
-            assert "l2" in data["body"]
-            data["body"] = data["body"].replace("l2", "l3", 1)
-        else:  # plant: code as the text (a text is only ever printed)
-            data["body"] = _planted(marker)
-        _reseal("report", data, how if how != "plant" else "edit")
         path.write_text(json.dumps(data))
 
 
@@ -460,7 +422,6 @@ class Numba:
 HARNESS: dict[str, Any] = {
     "symbolic": Symbolic,
     "families": Families,
-    "text": Text,
     "replay": Replay,
     "figures": Figures,
     "numba": Numba,

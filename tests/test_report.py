@@ -13,14 +13,12 @@ import os
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import sympy as sp
 
 from hexapod_kin.cli import main
-from hexapod_kin.report import cache as report_cache
 from hexapod_kin.report import load_claims, replay
 from hexapod_kin.report.checks import Context, evaluate
 from hexapod_kin.report.compare import SYMS, equal, matrix_diff, parse, parse_matrix, screen
@@ -261,19 +259,6 @@ def test_sample_points_are_the_same_in_every_process() -> None:
 
 
 # ---------------------------------------------------------------------- disk cache
-def test_derivation_text_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path))
-    d = Context(quick=True).derivation("scara")
-    text = d.text()
-    assert report_cache.derivation_text(d, cache=False) == text
-    assert not (tmp_path / "report").exists()
-    assert report_cache.derivation_text(d) == text
-    (path,) = tmp_path.glob("report/text-*.json")
-    assert json.loads(path.read_text())["body"] == text  # the _cache envelope
-    path.write_text("[]")  # foreign content
-    assert report_cache.derivation_text(d) == text
-
-
 def test_seed_ik_vectorised_equals_sympy_per_foot():
     """Seed 002's IK formulas at every schedule foot: numpy at once = sympy one foot at a time."""
     import sympy as sp

@@ -146,7 +146,7 @@ def test_zero_decides_as_simplify_on_random_trig_polynomials(count: int) -> None
 # ---------------------------------------------------------------------- det J factored
 def test_factored_det_equals_factor_of_simplify():
     claims, _ = load_claims()
-    ctx = Context(claims=claims, cache=False)
+    ctx = Context(claims=claims)
     dets = [c for c in claims if c.kind == "det"]
     assert dets
     for c in dets:

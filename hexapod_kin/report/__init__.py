@@ -2,8 +2,8 @@
 
 ``seeds/`` (the texts, package data) and ``claims.toml`` (their claims as data) feed
 :mod:`.data` (claims, verdicts), :mod:`.compare` (the rules), :mod:`.checks` (one check per
-kind), :mod:`.figures`, :mod:`.html` and :mod:`.build` (:func:`reproduce`); :mod:`.replay` and
-:mod:`.cache` are its caches. Importing it is light. Command line: ``hexapod-kin reproduce``.
+kind), :mod:`.figures`, :mod:`.html` and :mod:`.build` (:func:`reproduce`); :mod:`.replay` is its
+cache. Importing it is light. Command line: ``hexapod-kin reproduce``.
 """
 
 from __future__ import annotations

@@ -170,7 +170,7 @@ def reproduce(
             rep = _replayed(entry, out, start)
             if rep is not None:
                 return rep
-    rep, written = _build(out, quick=quick, animations=animations, cache=cache, start=start)
+    rep, written = _build(out, quick=quick, animations=animations, start=start)
     if parts is not None and key is not None and _storable(rep, parts):
         record = {
             "summary": rep.summary(),
@@ -216,9 +216,7 @@ def _replayed(entry: Any, out: Path, start: float) -> Report | None:
     return rep
 
 
-def _build(
-    out: Path, *, quick: bool, animations: bool, cache: bool, start: float
-) -> tuple[Report, list[Path]]:
+def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[Report, list[Path]]:
     """Compute everything and write the report.
 
     Returns:
@@ -235,7 +233,7 @@ def _build(
     stills: dict[str, tuple[Path, str]] = {}
     facts: dict[str, Any] = {}
     claims, seeds = load_claims()
-    ctx = Context(quick=quick, claims=claims, cache=cache)
+    ctx = Context(quick=quick, claims=claims)
     # the derivations first: the heat maps label their samples with the families derived here
     derivations = {k: ctx.printed(k) for k in _PRINTED}
     verdicts = tuple(evaluate(claims, ctx))

@@ -56,15 +56,11 @@ class Context:
     Args:
         quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
         claims: All claims (a matrix check looks up the seed's own factors).
-        cache: Read and write the disk cache of the printed derivations (:mod:`.cache`).
 
     """
 
-    def __init__(
-        self, quick: bool = False, claims: list[Claim] | None = None, cache: bool = True
-    ) -> None:
+    def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
         self.quick = quick
-        self.cache = cache
         self.claims = {c.id: c for c in claims or []}
         self.pendulum_duration = 12.0 if quick else 20.0
         self._derived: dict[str, Any] = {}
@@ -95,15 +91,9 @@ class Context:
             self._models[key] = load(self.chain(key))
         return self._models[key]
 
-    def text(self, key: str) -> str:
-        """The printed derivation of the model (:func:`.cache.derivation_text`)."""
-        from .cache import derivation_text
-
-        return derivation_text(self.derivation(key), self.cache)
-
     def printed(self, key: str) -> dict[str, Any]:
-        """The derivation laid out for the report (:func:`.cache.derivation_layout`)."""
-        from .cache import derivation_layout
+        """The derivation laid out for the report (:func:`.html.derivation_layout`)."""
+        from .html import derivation_layout
 
         return derivation_layout(self.derivation(key))
 

@@ -18,6 +18,7 @@ __all__ = [
     "SCRIPT",
     "animation",
     "derivation_html",
+    "derivation_layout",
     "image",
     "inline",
     "line_anchor",
@@ -70,6 +71,14 @@ def inline(text: str) -> str:
 _POW = {"2": "²", "3": "³", "4": "⁴"}
 _SUP = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 _SUB = str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉")
+
+
+def _sup(n: int) -> str:
+    return str(n).translate(_SUP)
+
+
+def _sub(n: int) -> str:
+    return str(n).translate(_SUB)
 
 
 def seed_notation(text: str) -> str:
@@ -160,6 +169,63 @@ def verdict_html(text: str, status: str) -> str:
         f"<div class='{status}'><b>verdict: {e(head)} entries differ:</b>"
         f"<ul>{''.join(li)}</ul></div>{tail}"
     )
+
+
+def derivation_layout(d: Any) -> dict[str, Any]:
+    """A derivation laid out for the report: matrices as rows of entry texts (no pretty-printing).
+
+    Returns:
+        ``{"header": [lines], "items": [{"label", "rows"} or {"label", "value"}],
+        "footer": [lines]}``; entries are :func:`~.compare.fmt` text of the expressions.
+
+    """
+    import sympy as sp
+
+    from .compare import fmt  # the comparison's text of an expression (not needed by derive)
+
+    joints = ", ".join(f"{fmt(s)} ({n})" for s, n in zip(d.q, d.joint_names))
+    lens = ", ".join(
+        f"{fmt(s)} = {v:g} m (table {d.length_sources[s]})" for s, v in d.lengths.items()
+    )
+    header = [
+        f"{d.chain.name}: Khalil-Kleinfinger table, T = Rx(α) Tx(d) Rz(θ) Tz(r)",
+        f"joints: {joints}",
+        f"lengths: {lens or '(none)'}",
+        f"p and J in the axes of '{d.reference}', tip '{d.tip}'",
+    ]
+    mats: list[tuple[str, Any]] = []
+    if d.base_transform != sp.eye(4):
+        mats.append((f"T({d.reference} → 0)", d.base_transform))
+    n = len(d.transforms)
+    mats += [(f"{_sup(j)}T{_sub(j + 1)}", d.transforms[j]) for j in range(n)]
+    if d.tool_transform != sp.eye(4):
+        mats.append((f"{_sup(n)}T(tool)", d.tool_transform))
+    mats += [(f"⁰T{_sub(j + 1)}", d.cumulative[j]) for j in range(1, n)]
+    mats += [
+        ("p(q)", d.p),
+        ("J (indirect, ∂p/∂q)", d.J_indirect),
+        ("J (direct, [v; ω])", d.J_direct),
+    ]
+    items: list[dict[str, Any]] = [
+        {"label": label, "rows": [[fmt(x) for x in m.row(i)] for i in range(m.rows)]}
+        for label, m in mats
+    ]
+    if d.det is not None:
+        items.append({"label": f"det J[{','.join(d.rows)}]", "value": fmt(d.det)})
+    elif d.gram is not None:
+        items.append({"label": f"det(J Jᵀ) [{','.join(d.rows)}]", "value": fmt(d.gram)})
+    footer = [f"direct and indirect Jacobians agree: {d.methods_agree}"]
+    if d.method:
+        footer.append(f"determinant: {d.method}")
+    for fam in d.families:
+        mark = {True: "checked", False: "CHECK FAILED", None: "not checked"}[fam.verified]
+        footer.append(
+            f"singular family: {fam.name} [{mark}: {fam.check}]"
+            if fam.check
+            else f"singular family: {fam.name}"
+        )
+    footer += [f"NOT DONE: {what}" for what in d.incomplete]
+    return {"header": header, "items": items, "footer": footer}
 
 
 def derivation_html(title: str, printed: dict[str, Any]) -> str:

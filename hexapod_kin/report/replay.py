@@ -24,7 +24,6 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime, timezone
-from functools import lru_cache
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -39,7 +38,6 @@ __all__ = [
     "Entry",
     "key_parts",
     "lookup",
-    "package_digest",
     "prune",
     "restore",
     "run_key",
@@ -80,12 +78,6 @@ def _digest(root: Path, files: Any) -> str:
     return h.hexdigest()
 
 
-@lru_cache(maxsize=1)
-def package_digest() -> str:
-    """:func:`source_digest`, read once per process: part of every report cache key."""
-    return source_digest()
-
-
 def versions() -> dict[str, str]:
     """Installed versions of Python, hexapod_kin and :data:`DISTRIBUTIONS` (none imported)."""
     from importlib.metadata import PackageNotFoundError, version
@@ -104,8 +96,10 @@ def versions() -> dict[str, str]:
     return out
 
 
-def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> dict[str, Any]:
-    """Everything a report of these options depends on, JSON-ready (``digest``: the source's).
+def key_parts(*, quick: bool, animations: bool, digest: str) -> dict[str, Any]:
+    """Everything a report of these options depends on, JSON-ready.
+
+    ``digest``: the package source's (:func:`source_digest`, read when the build starts).
 
     Raises:
         OSError: The package's source or ``claims.toml`` cannot be read.
@@ -113,7 +107,7 @@ def key_parts(*, quick: bool, animations: bool, digest: str | None = None) -> di
     """
     return {
         "format": FORMAT,
-        "code": digest if digest is not None else package_digest(),
+        "code": digest,
         "claims": hashlib.sha256(CLAIMS_FILE.read_bytes()).hexdigest(),
         "seeds": _digest(SEEDS_DIR, SEEDS_DIR.glob("*.txt")),
         "options": {"quick": bool(quick), "animations": bool(animations)},
