@@ -24,7 +24,7 @@ from .common import (
     robot_of,
 )
 
-__all__ = ["plot_pendulum", "register"]
+__all__ = ["register"]
 
 
 # ------------------------------------------------------------------------ pendulum
@@ -64,13 +64,6 @@ def _add_pendulum(sub: Any) -> None:
     p.set_defaults(func=_cmd_pendulum)
 
 
-def plot_pendulum(experiment: Any, path: Any) -> Any:
-    """Seed 001's figures (one home: :func:`hexapod_kin.report.figures.plot_pendulum`)."""
-    from ..report.figures import plot_pendulum as plot
-
-    return plot(experiment, path)
-
-
 def _cmd_pendulum(args: argparse.Namespace) -> int:
     check_outputs(args)
     for name in ("theta0_deg", "decay_theta0_deg"):
@@ -96,6 +89,8 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
     )
     written = []
     if args.plot:
+        from ..report.figures import plot_pendulum
+
         written.append(str(plot_pendulum(exp, args.plot)))
     if args.html:
         written.append(_pendulum_html(exp, args))
