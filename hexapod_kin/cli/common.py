@@ -37,6 +37,7 @@ __all__ = [
     "seed",
     "set_params",
     "knee_arg",
+    "velocity",
     "walk_args",
     "walk_options",
 ]
@@ -527,7 +528,7 @@ def knee_arg(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
+def velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
     """``--velocity``: three finite numbers, given apart or as ``vx,vy,wz``."""
     import math
 
@@ -560,7 +561,7 @@ def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
         "step_height": args.height,
         "period": args.period,
         "duty_factor": args.duty_factor,
-        "velocity": _velocity(args.velocity),
+        "velocity": velocity(args.velocity),
         "body_height": args.body_height,
         "foot_reach": args.foot_reach,
         "terrain": args.terrain,

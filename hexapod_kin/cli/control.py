@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from .common import not_achieved, robot_args, robot_of
+from .common import not_achieved, robot_args, robot_of, seed, velocity
 
 __all__ = ["register"]
 
@@ -30,11 +30,10 @@ def register(sub: Any) -> None:
     p.add_argument("--pattern", help="starting gait (default tripod on 6 legs, trot on 4)")
     p.add_argument(
         "--velocity",
-        nargs=3,
-        type=float,
-        default=(0.2, 0.0, 0.0),
-        metavar=("VX", "VY", "WZ"),
-        help="commanded twist in the heading frame [m/s, m/s, rad/s]",
+        nargs="+",
+        metavar="V",
+        help="commanded twist in the heading frame: forward, sideways [m/s], yaw rate [rad/s] "
+        "as three numbers or vx,vy,wz (default 0.2,0,0)",
     )
     p.add_argument("--command", metavar="FILE", help="a command timeline (JSON or YAML)")
     p.add_argument("--duration", type=float, default=10.0, help="walking time [s]")
@@ -46,7 +45,7 @@ def register(sub: Any) -> None:
         help="a lateral push of F newtons at T s for D s (repeatable; negative: rightward)",
     )
     p.add_argument("--bumps", type=float, default=0.0, help="bump amplitude [m] (0: flat)")
-    p.add_argument("--seed", type=int, default=0, help="the bumps' random seed")
+    p.add_argument("--seed", type=seed, default=0, help="the bumps' random seed")
     p.add_argument("--friction", type=float, default=1.0, help="ground friction coefficient")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_control)
@@ -57,7 +56,11 @@ def _cmd_control(args: argparse.Namespace) -> int:
     from .common import emit_json
 
     pushes = [Push.parse(s) for s in (args.push or [])]
-    command: Any = read_timeline(args.command) if args.command else Command(*args.velocity)
+    command: Any = (
+        read_timeline(args.command)
+        if args.command
+        else Command(*(velocity(args.velocity) or (0.2, 0.0, 0.0)))
+    )
     robot = robot_of(args)
     res = run(
         robot.load(),
