@@ -179,7 +179,7 @@ def test_any_key_part_changed_rebuilds(
     else:
         with pytest.raises(Built):
             reproduce(tmp_path / "out", **options)
-        assert calls == [{**options, "cache": True, "start": calls[0]["start"]}]
+        assert calls == [{**options, "start": calls[0]["start"]}]
 
 
 def test_no_cache_neither_reads_nor_replays(
