@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import sys
 from typing import Any
 
-from .common import PLOT_SUFFIXES, output_path, seed
+from .common import PLOT_SUFFIXES, emit_json, output_path, seed
 
 __all__ = ["register"]
 
@@ -130,7 +128,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.plot:
         res.files["plot"] = str(plot_sweep(res, args.plot))
     if args.json:
-        sys.stdout.write(json.dumps(res.to_dict(), allow_nan=False) + "\n")
+        emit_json(res.to_dict())
         return 0
     s = res.summary
     print(
