@@ -290,13 +290,11 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
     claimed = _raw(c.data["value"]) + _with(c)
     computed = fmt_matrix(truth.applyfunc(tidy))
     if seed.shape != truth.shape:
-        return _verdict(
-            c, claimed, computed, "wrong", f"shape {seed.shape} vs {truth.shape}", _SYMBOLIC
-        )
+        return _judged(c, claimed, computed, [f"shape {seed.shape} vs {truth.shape}"], _SYMBOLIC)
     diffs = matrix_diff(seed, truth, c.id)
     cells = _cells(c.data["value"], truth, diffs, _with(c).strip())
     if not diffs:
-        return _verdict(c, claimed, computed, "agrees", "", _SYMBOLIC, cells)
+        return _judged(c, claimed, computed, [], _SYMBOLIC, cells)
     notes = [f"{len(diffs)} of {truth.rows * truth.cols} entries differ: " + "; ".join(diffs)]
     if key in _OTHER:
         other, label = _OTHER[key]
@@ -313,8 +311,7 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
             if not own
             else "nor is it the derivative of the seed's own p: " + "; ".join(own)
         )
-    reason = " — ".join(n for n in notes if n)
-    return _verdict(c, claimed, computed, "wrong", reason, _SYMBOLIC, cells)
+    return _judged(c, claimed, computed, [" — ".join(n for n in notes if n)], _SYMBOLIC, cells)
 
 
 def _own_factors(c: Claim, ctx: Context) -> list[Claim]:
@@ -412,10 +409,8 @@ def _check_table(c: Claim, ctx: Context) -> Verdict:
         "differ": differ,
         "note": f"seed lengths × {unit:g} m" if unit != 1.0 else "",
     }
-    if problems:
-        return _verdict(c, claimed, computed, "wrong", "; ".join(problems), method, cells)
-    if not alpha_rows:
-        return _verdict(c, claimed, computed, "agrees", "", method, cells)
+    if problems or not alpha_rows:
+        return _judged(c, claimed, computed, problems, method, cells)
     (i, seed_a, ours_a), *_ = alpha_rows
     p_minus, p_plus = ctx.item("leg", "p"), ctx.item("leg+", "p")
     mirror = all(equal(p_plus[k], s * p_minus[k], c.id) for k, s in enumerate((1, 1, -1)))
@@ -446,15 +441,10 @@ def _check_generic(c: Claim, ctx: Context) -> Verdict:
 def _check_methods(c: Claim, ctx: Context) -> Verdict:
     """``methods_equal``: direct and indirect Jacobians equal."""
     agree = bool(ctx.derivation(c.data["model"]).methods_agree)
-    ok = agree == bool(c.data["value"])
-    return _verdict(
-        c,
-        f"J_indirect − J_direct = 0: {c.data['value']}",
-        f"Derivation.methods_agree = {agree}",
-        "agrees" if ok else "wrong",
-        "" if ok else f"hexapod_kin finds methods_agree = {agree}",
-        "exact: trig polynomials reduced modulo sin² + cos² = 1",
-    )
+    wrong = [] if agree == bool(c.data["value"]) else [f"hexapod_kin finds methods_agree = {agree}"]
+    claimed = f"J_indirect − J_direct = 0: {c.data['value']}"
+    method = "exact: trig polynomials reduced modulo sin² + cos² = 1"
+    return _judged(c, claimed, f"Derivation.methods_agree = {agree}", wrong, method)
 
 
 def _det_truth(c: Claim, ctx: Context) -> sp.Expr:
@@ -473,9 +463,9 @@ def _check_det(c: Claim, ctx: Context) -> Verdict:
     claimed, computed = str(c.data["value"]) + _with(c), fmt(truth)
     method = "symbolic: random points (rel. tol 1e-9), then simplify(a - b) == 0"
     if equal(seed, truth, c.id):
-        return _verdict(c, claimed, computed, "agrees", "", method)
+        return _judged(c, claimed, computed, [], method)
     why = "opposite sign" if equal(seed, -truth, c.id) else f"differs from {computed}"
-    return _verdict(c, claimed, computed, "wrong", why, method)
+    return _judged(c, claimed, computed, [why], method)
 
 
 def _check_families(c: Claim, ctx: Context) -> Verdict:
@@ -589,7 +579,7 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
     if ours_err > tol or not same:
         return _verdict(c, claimed, computed, "error", "hexapod_kin's own replay failed", method)
     if n_bad == 0:
-        return _verdict(c, claimed, computed, "agrees", "", method)
+        return _judged(c, claimed, computed, [], method)
     t, j = float(s["t"][worst[0]]), int(worst[1])
     why = (
         f"the seed's IK (Eqs. 9-12) returns the wrong angle at {n_bad} of {len(s['t'])} samples: "
@@ -645,7 +635,7 @@ def _check_bound(c: Claim, ctx: Context) -> Verdict:
     computed = f"{val:.4g} {unit}"
     method = f"numeric, |measured − claimed| ≤ {tol:g} {unit}"
     if abs(val - target) <= tol:
-        return _verdict(c, claimed, computed, "agrees", "", method)
+        return _judged(c, claimed, computed, [], method)
     why = _admissible(c, ctx, val)
     if why is not None:
         return _verdict(c, claimed, computed, "underdetermined", why, method)
