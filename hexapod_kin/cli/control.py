@@ -56,11 +56,8 @@ def _cmd_control(args: argparse.Namespace) -> int:
     from .common import emit_json
 
     pushes = [Push.parse(s) for s in (args.push or [])]
-    command: Any = (
-        read_timeline(args.command)
-        if args.command
-        else Command(*(velocity(args.velocity) or (0.2, 0.0, 0.0)))
-    )
+    vx, vy, wz = velocity(args.velocity) or (0.2, 0.0, 0.0)
+    command: Any = read_timeline(args.command) if args.command else Command(vx, vy, wz)
     robot = robot_of(args)
     res = run(
         robot.load(),
