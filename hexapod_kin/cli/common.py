@@ -633,11 +633,9 @@ def numbers(p: Any, flag: str, names: str, kind: type = float, **kw: Any) -> Non
     p.add_argument(flag, nargs=len(metavar), type=kind, metavar=metavar, **kw)
 
 
-def q_args(p: argparse.ArgumentParser) -> None:
-    """``--q`` (rad for revolute, m for prismatic joints) and ``--deg``."""
-    p.add_argument(
-        "--q", nargs="+", type=float, help="joint values (rad for revolute, m for prismatic)"
-    )
+def q_args(p: argparse.ArgumentParser, what: str = "joint values") -> None:
+    """``--q`` (``what``: rad for revolute, m for prismatic joints) and ``--deg``."""
+    p.add_argument("--q", nargs="+", type=float, help=f"{what} (rad for revolute, m for prismatic)")
     p.add_argument(
         "--deg", action="store_true", help="revolute --q values in degrees (prismatic stay in m)"
     )

@@ -422,8 +422,7 @@ def _add_scan(sub: Any) -> None:
         help="joints to scan, or 'all' (default: the two that change sigma_min most)",
     )
     p.add_argument("--rows", nargs="+", help="rows of J (x y z wx wy wz; default auto)")
-    p.add_argument("--q", nargs="+", type=float, help="values of the joints not scanned")
-    p.add_argument("--deg", action="store_true", help="--q revolute values in degrees")
+    q_args(p, "values of the joints not scanned")
     p.add_argument("--threshold", type=float, help="sigma_min threshold (default 1%% of reach)")
     p.add_argument("--seed", type=seed, help="seed of --samples (default: scan()'s, 0)")
     p.add_argument(
