@@ -4,10 +4,11 @@
   link) to a foot. A foot is either the deepest frame of a branch (a leaf link such as
   solo12's ``FL_FOOT``) or a point given by the user on a frame (``frame:x,y,z``, the offset
   in that frame, in [m]) when the URDF has no foot link (:func:`parse_feet`).
-* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
-  Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
-  and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
-  solved numerically (:func:`~.leg_ik.solve_legs`).
+* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, a
+  view of the loaded robot; or a Hexapod's leg table on its mount) is used where
+  :mod:`hexapod_kin.ik.closed` recognises it and its solutions reproduce the leg's own
+  kinematics (:func:`closed_leg`); other legs are solved numerically
+  (:func:`~.leg_ik.solve_legs`).
 """
 
 from __future__ import annotations
@@ -618,17 +619,16 @@ def leg_layout(
     lower: np.ndarray,
     upper: np.ndarray,
     params: Any,
-    chain_source: Any,
+    robot: Any,
 ) -> dict[str, Any]:
     """The legs' spans, mounts, default stance geometry and closed forms.
 
     Returns a dict: ``consts`` (per leg: placements, axes, prismatic flags, foot), ``span``
     (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2), ``reach`` (L,) [m],
     ``body_height`` [m] (the rules of :meth:`~.robot.WholeBody.neutral_feet`) and ``closed``
-    (per leg ``(table, T_body_frame0)`` or ``None``).
+    (per leg ``(table, T_body_frame0)`` or ``None``), the tables recovered from views of the
+    loaded ``robot`` (:meth:`~hexapod_kin.model.Model.view`: its parse, not a second one).
     """
-    import warnings
-
     from .._fromurdf import chain_from_urdf
     from ..params import Pose
 
@@ -678,9 +678,7 @@ def leg_layout(
                 T0 = mounts[i] @ ch.base_matrix
                 table = ch if ch.base_pose is None else replace(ch, base_pose=None)
             else:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    ch = chain_from_urdf(chain_source, tip=leg.foot_frame)
+                ch = chain_from_urdf(robot.view(tip=leg.foot_frame))  # a view: no parse
                 off = np.eye(4)
                 off[:3, 3] = offset_of(model, leg)
                 if np.any(off[:3, 3] != 0):

@@ -577,7 +577,7 @@ def _build_model(
     foot = np.array([leg.foot_placement for leg in legs])
     foot_joint = np.array([leg.foot_joint for leg in legs])
     q_zero = np.clip(np.zeros(nq), lower, upper)
-    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, text)
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, km)
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
@@ -640,14 +640,9 @@ def _build_model(
 
 def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
     """:meth:`WholeBody.neutral_q` (see there)."""
-    from ..ik import LEG_HOME
-
-    q = np.zeros(wb.nq)
     if params is not None:
-        home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
-        for i, name in enumerate(wb.joint_names):
-            q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
-        return np.clip(q, wb.lower, wb.upper)
+        return leg_home(wb.joint_names, wb.lower, wb.upper)
+    q = np.zeros(wb.nq)
     for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity, inside limits
         for k, j in enumerate(cols):
             lo, hi = float(wb.lower[j]), float(wb.upper[j])
@@ -661,6 +656,15 @@ def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
     feet = wb.neutral_feet(None) + base[:3, 3]
     ik = wb.body_ik(base, feet, q_prev=q, strict=False)
     return np.array(ik.q[0]) if bool(ik.reached.all()) else q
+
+
+def leg_home(joint_names: tuple[str, ...], lower: Any, upper: Any) -> np.ndarray:
+    """A Hexapod's joints (nq,) at :data:`hexapod_kin.ik.LEG_HOME` (hip, knee, ankle), clipped."""
+    from ..ik import LEG_HOME
+
+    home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
+    q = np.array([home.get(name.rsplit("_", 1)[-1], 0.0) for name in joint_names])
+    return np.clip(q, np.asarray(lower), np.asarray(upper))
 
 
 @lru_cache(maxsize=8)
