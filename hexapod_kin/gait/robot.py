@@ -17,12 +17,13 @@ import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 import numpy as np
 
-from .._tree import Tree, mat_vec, tree_frames, tree_poses
+from .._chain import ChainArrays
+from .._tree import Tree, mat_vec, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
 from ..params import Hexapod, rpy_to_matrix
 from .leg_ik import leg_chain, solve_legs
@@ -138,6 +139,15 @@ class WholeBody:
     _q_index: np.ndarray = field(repr=False)  # (nq,) each leg joint's first index in model q
     _bounded: np.ndarray = field(repr=False)  # (nq,) False for continuous joints (cos, sin)
 
+    @cached_property
+    def _chains(self) -> tuple[ChainArrays, ...]:
+        """Each leg as a chain view (body → foot, its joints alone: :func:`~.leg_ik.leg_chain`)."""
+        tr = self._tree
+        return tuple(
+            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], foot[:3, 3])
+            for c, foot in zip(map(list, self._leg_cols), self._foot)
+        )
+
     @property
     def n_legs(self) -> int:
         """Number of legs."""
@@ -158,10 +168,6 @@ class WholeBody:
 
         """
         return tree_poses(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
-
-    def joint_frames(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`joint_poses` components first: rotations (3, 3, nq, N), origins (3, nq, N)."""
-        return tree_frames(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
 
     def leg_points(self, q: Any, base: Any) -> np.ndarray:
         """World positions (N, L, K, 3) of each leg's joints (hip first) and foot, in [m]."""
@@ -184,11 +190,6 @@ class WholeBody:
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
         return self.feet_of(self.joint_poses(q, base))
-
-    def foot_poses(self, q: Any, base: Any) -> np.ndarray:
-        """World poses (N, L, 4, 4) of the feet (rotation: the frame the foot is on)."""
-        Ta = self.joint_poses(q, base)[:, self._foot_joint]
-        return np.asarray(np.matmul(Ta, self._foot[None]))
 
     def com(self, q: Any, base: Any) -> np.ndarray:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
@@ -326,15 +327,8 @@ class WholeBody:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Numerical IK of ``legs`` (same joint count) at body-frame targets (N, G, 3)."""
         cols = np.array([self._leg_cols[k] for k in legs])  # (G, m)
-        if np.any(self._foot_joint[legs] != cols[:, -1]):  # pragma: no cover - by construction
-            raise ConfigurationError("a foot is not on its leg's last joint")
-        tr = self._tree
-        chains = [
-            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], self._foot[k][:3, 3])
-            for k, c in zip(legs, cols)
-        ]
         return solve_legs(
-            chains,
+            [self._chains[k] for k in legs],
             self.lower[cols],
             self.upper[cols],
             p_body,
@@ -669,10 +663,6 @@ def leg_home(joint_names: tuple[str, ...], lower: Any, upper: Any) -> np.ndarray
 
 @lru_cache(maxsize=8)
 def _cached(params: Hexapod) -> WholeBody:
-    return _build(params)
-
-
-def _build(params: Hexapod) -> WholeBody:
     from ..kinematics import load
 
     return _build_model(load(params), params=params)
@@ -708,7 +698,7 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
             return _default()
         return _cached(params)
     except TypeError:  # unhashable parameters
-        return _build(params)
+        return _cached.__wrapped__(params)
 
 
 _SOURCES: dict[Any, WholeBody] = {}
