@@ -107,6 +107,15 @@ class Model:
 
     """
 
+    #: The inertia repair applied (``inertia="collision"|"point"``), or ``None``.
+    inertia_repair: InertiaRepair | None
+    #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
+    missing_meshes: tuple[tuple[str, str], ...]
+    #: ``uri -> real path`` of the mesh and texture files the gate resolved and checked.
+    mesh_files: dict[str, str]
+    #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
+    inertia_defects: tuple[tuple[str, str], ...]
+
     def __init__(
         self,
         resolved: ResolvedSource,
@@ -251,8 +260,7 @@ class Model:
             mesh_root=resolved.mesh_root,
             lenient=True,
         )
-        #: The inertia repair applied (``inertia="collision"|"point"``), or ``None``.
-        self.inertia_repair: InertiaRepair | None = None
+        self.inertia_repair = None
         if inertia != "urdf":
             repaired = repair_inertials(
                 resolved.text if gate.text is None else gate.text,
@@ -270,12 +278,9 @@ class Model:
             if gate.text is None:
                 gate = dataclasses.replace(gate, text=repaired.text)
             _warn(f"{resolved.name!r}: {repaired.summary()}")
-        #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
-        self.missing_meshes: tuple[tuple[str, str], ...] = gate.missing_meshes
-        #: ``uri -> real path`` of the mesh and texture files the gate resolved and checked.
-        self.mesh_files: dict[str, str] = {uri: str(path) for uri, path in gate.meshes}
-        #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
-        self.inertia_defects: tuple[tuple[str, str], ...] = gate.inertia_defects
+        self.missing_meshes = gate.missing_meshes
+        self.mesh_files = {uri: str(path) for uri, path in gate.meshes}
+        self.inertia_defects = gate.inertia_defects
         if strict_inertia:
             _raise_inertia_defects(resolved.name, gate.inertia_defects)
         _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)

@@ -296,6 +296,7 @@ def walk(
             the time and by how much.
 
     """
+    args = dict(locals())  # this walk's arguments (a period is fitted by walking again)
     wb = as_whole_body(robot)
     table = _phase_table(wb, pattern, duty_factor, open_loop)
     H = _num(
@@ -305,27 +306,12 @@ def walk(
         hi=1.0,
     )
     if period is None and velocity is None:
+        refit = ("robot", "pattern", "step_height", "period", "duration", "strict")
+        same = {k: v for k, v in args.items() if k not in refit} | {"strict": False}
 
         def planned(T: float, whole: bool = False) -> GaitRun:
-            return walk(
-                wb,
-                pattern=table,
-                stride=stride,
-                step_height=H,
-                period=T,
-                body_height=body_height,
-                foot_reach=foot_reach,
-                terrain=terrain,
-                rate=rate,
-                duration=duration if whole else T,
-                q0=q0,
-                strict=False,
-                foot_radius=foot_radius,
-                sway=sway,
-                accel_limit=accel_limit,
-                knee=knee,
-                open_loop=open_loop,
-            )
+            length = duration if whole else T
+            return walk(wb, **same, pattern=table, step_height=H, period=T, duration=length)
 
         period = fit_period(planned)  # one cycle: the whole walk on flat ground (periodic)
         if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
