@@ -25,6 +25,7 @@ import numpy as np
 from .._chain import ChainArrays
 from .._tree import Tree, mat_vec, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
+from ..frames import reduced_model
 from ..params import Hexapod, rpy_to_matrix
 from .leg_ik import leg_chain, solve_legs
 from .legs import (
@@ -538,7 +539,7 @@ def _build_model(
             FootSpec(leg.foot_frame, tuple(float(v) for v in offset_of(full, leg)))  # type: ignore[arg-type]
             for leg in legs
         )
-        model = pin.buildReducedModel(full, list(others), pin.neutral(full))
+        model = reduced_model(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
     nq = model.njoints - 2
     tree = Tree.of_model(model, first=2, label=label)
