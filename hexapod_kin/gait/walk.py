@@ -63,7 +63,6 @@ from .robot import GaitError, WholeBody, as_whole_body
 from .run import GaitRun
 from .stability import (
     accel_limit_of,
-    edge_clearance,
     leg_terrain_clearance,
     raise_checks,
     segment_clearance,
@@ -684,8 +683,10 @@ def _checked(
     support = ~swing
     n, nl = swing.shape
     n_nxt = sw.after(sw.n_tab)
-    foot_gap = terrain_clearance(st.ground, sol.feet, swing, rad, t, names, st.H, strict)
-    edge_clearance(sol.edge_gap, swing, SWING_MARGIN - EDGE_SLACK, t, names, st.H, strict)
+    promised = SWING_MARGIN - EDGE_SLACK
+    foot_gap = terrain_clearance(
+        st.ground, sol.feet, swing, rad, t, names, st.H, strict, sol.edge_gap, promised
+    )
     if strict and not np.asarray(sol.ik.ok).all():
         wb.body_ik(base, sol.feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
     T_all = wb.joint_poses(q, base) if sol.T is None else sol.T
