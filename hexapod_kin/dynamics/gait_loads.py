@@ -331,10 +331,7 @@ def full_dynamics(
         for m, k in enumerate(stance):
             J = pin.getFrameJacobian(model, data, fids[k], lwa)
             arm = feet[i, k] - rad * nrm[i, k] - data.oMf[fids[k]].translation
-            skew = np.array(
-                [[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]]
-            )
-            jac[m] = J[:3] - skew @ J[3:]  # the contact point, fixed on the foot
+            jac[m] = J[:3] - pin.skew(arm) @ J[3:]  # the contact point, fixed on the foot
         a_base = jac[:, :, :6].transpose(2, 0, 1).reshape(6, -1)  # (6, 3k): Σ J_baseᵀ f
         if len(stance):
             pinv = np.linalg.pinv(a_base, rcond=1e-12)
