@@ -9,8 +9,6 @@ reference in the tests.
 
 * :class:`Tree` and :func:`tree_frames` — every joint frame of a floating-base tree for N
   samples (one vector operation per depth of the tree and axis kind).
-* :func:`leg_fk` — one serial leg (its joint origins and foot), the same path on the leg
-  as a chain-shaped tree.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ import numpy as np
 
 __all__ = [
     "Tree",
-    "leg_fk",
     "mat_vec",
     "poses_of",
     "robot_size",
@@ -233,34 +230,6 @@ def mat_vec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
         + A[..., :, 1] * v[..., 1, None]
         + A[..., :, 2] * v[..., 2, None]
     )
-
-
-def leg_fk(
-    placements: np.ndarray, axes: np.ndarray, prismatic: np.ndarray, foot: np.ndarray, q: Any
-) -> tuple[np.ndarray, np.ndarray]:
-    """Body-frame kinematics of one serial leg (m joints) at N configurations.
-
-    The leg as a chain-shaped :class:`Tree` through :func:`tree_frames` (the one batch FK).
-
-    Args:
-        placements: (m, 4, 4) each joint's placement in the previous joint's frame (the
-            first in the body frame).
-        axes: (m, 3) unit axes.
-        prismatic: (m,) True for prismatic joints.
-        foot: (3,) the foot in the last joint's frame [m].
-        q: (N, m) joint values.
-
-    Returns:
-        ``(origins, feet)``: (N, m, 3) joint origins and (N, 3) feet in the body frame [m].
-
-    """
-    q = np.asarray(q, dtype=float)
-    m = len(placements)
-    leg = Tree(np.arange(m) - 1, np.asarray(placements), np.asarray(axes), np.asarray(prismatic))
-    R, p = tree_frames(leg, q, np.broadcast_to(np.eye(4), (len(q), 4, 4)))
-    f = np.asarray(foot, dtype=float)
-    feet = R[:, 0, -1] * f[0] + R[:, 1, -1] * f[1] + R[:, 2, -1] * f[2] + p[:, -1]
-    return np.ascontiguousarray(p.transpose(2, 1, 0)), np.ascontiguousarray(feet.T)
 
 
 def robot_size(model: Any) -> float:

@@ -24,6 +24,7 @@ __all__ = [
     "last_body_frame",
     "path_frames",
     "reduce_model",
+    "reduced_model",
     "root_link_frame",
 ]
 
@@ -228,10 +229,10 @@ def reduce_model(
         )
     if not lock:
         return full, (), ref
-    return _reduced(full, lock, ref), tuple(lock), ref
+    return reduced_model(full, lock, ref), tuple(lock), ref
 
 
-def _reduced(full: pin.Model, lock: list[int], ref: np.ndarray) -> pin.Model:
+def reduced_model(full: pin.Model, lock: list[int], ref: np.ndarray) -> pin.Model:
     """``pin.buildReducedModel``, also for URDFs that name a link and a joint alike.
 
     Pinocchio looks frames up by name alone while reducing and raises on such a pair

@@ -107,6 +107,15 @@ class Model:
 
     """
 
+    #: The inertia repair applied (``inertia="collision"|"point"``), or ``None``.
+    inertia_repair: InertiaRepair | None
+    #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
+    missing_meshes: tuple[tuple[str, str], ...]
+    #: ``uri -> real path`` of the mesh and texture files the gate resolved and checked.
+    mesh_files: dict[str, str]
+    #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
+    inertia_defects: tuple[tuple[str, str], ...]
+
     def __init__(
         self,
         resolved: ResolvedSource,
@@ -118,53 +127,18 @@ class Model:
         tool: Any = None,
         strict_inertia: bool = False,
         inertia: str = "urdf",
+        parsed: Model | None = None,
     ) -> None:
         self._cache: dict[str, Any] = {}
         self._cache_lock = threading.RLock()
-        check_mode(inertia)
-        gate = check_urdf(
-            resolved.text,
-            package_dirs=resolved.package_dirs,
-            mesh_root=resolved.mesh_root,
-            lenient=True,
-        )
-        #: The inertia repair applied (``inertia="collision"|"point"``), or ``None``.
-        self.inertia_repair: InertiaRepair | None = None
-        if inertia != "urdf":
-            repaired = repair_inertials(
-                resolved.text if gate.text is None else gate.text,
-                inertia,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-            )
-            self.inertia_repair = repaired
-            gate = check_urdf(
-                repaired.text,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-                lenient=True,
-            )
-            if gate.text is None:
-                gate = dataclasses.replace(gate, text=repaired.text)
-            _warn(f"{resolved.name!r}: {repaired.summary()}")
-        #: ``(uri, reason)`` of meshes that could not be found (their visuals are dropped).
-        self.missing_meshes: tuple[tuple[str, str], ...] = gate.missing_meshes
-        #: ``uri -> real path`` of the mesh and texture files the gate resolved and checked.
-        self.mesh_files: dict[str, str] = {uri: str(path) for uri, path in gate.meshes}
-        #: ``(link, defect)`` of physically implausible inertials (kinematics ignores them).
-        self.inertia_defects: tuple[tuple[str, str], ...] = gate.inertia_defects
-        if strict_inertia:
-            _raise_inertia_defects(resolved.name, gate.inertia_defects)
-        _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
-        for repair in gate.repairs:
-            _warn(f"{resolved.name!r}: {repair}")
-        text = resolved.text if gate.text is None else gate.text
-        try:
-            full = pin.buildModelFromXML(text)
-        except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
-            raise UrdfError(
-                f"{resolved.name!r}: passed the loader gate but Pinocchio refused it: {exc}"
-            ) from None
+        if parsed is None:
+            full, text = self._parse(resolved, strict_inertia, inertia)
+        else:  # a view of a loaded robot: its gate verdict and its parse, shared
+            self.inertia_repair = parsed.inertia_repair
+            self.missing_meshes = parsed.missing_meshes
+            self.mesh_files = parsed.mesh_files
+            self.inertia_defects = parsed.inertia_defects
+            full, text = parsed.full_model, parsed.urdf
         self.full_model: pin.Model = full
         self.urdf: str = text
         self.source = resolved
@@ -274,6 +248,64 @@ class Model:
         # What the per-call hot paths need, one tuple per thread (see kinematics.fk): each
         # thread gets its own pinocchio.Data, so concurrent calls never share scratch space.
         self._local = _PerThread(self, data)
+
+    def _parse(
+        self, resolved: ResolvedSource, strict_inertia: bool, inertia: str
+    ) -> tuple[pin.Model, str]:
+        """The loader gate (and the inertia repair), then Pinocchio: ``(full model, URDF text)``."""
+        check_mode(inertia)
+        gate = check_urdf(
+            resolved.text,
+            package_dirs=resolved.package_dirs,
+            mesh_root=resolved.mesh_root,
+            lenient=True,
+        )
+        self.inertia_repair = None
+        if inertia != "urdf":
+            repaired = repair_inertials(
+                resolved.text if gate.text is None else gate.text,
+                inertia,
+                package_dirs=resolved.package_dirs,
+                mesh_root=resolved.mesh_root,
+            )
+            self.inertia_repair = repaired
+            gate = check_urdf(
+                repaired.text,
+                package_dirs=resolved.package_dirs,
+                mesh_root=resolved.mesh_root,
+                lenient=True,
+            )
+            if gate.text is None:
+                gate = dataclasses.replace(gate, text=repaired.text)
+            _warn(f"{resolved.name!r}: {repaired.summary()}")
+        self.missing_meshes = gate.missing_meshes
+        self.mesh_files = {uri: str(path) for uri, path in gate.meshes}
+        self.inertia_defects = gate.inertia_defects
+        if strict_inertia:
+            _raise_inertia_defects(resolved.name, gate.inertia_defects)
+        _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
+        for repair in gate.repairs:
+            _warn(f"{resolved.name!r}: {repair}")
+        text = resolved.text if gate.text is None else gate.text
+        try:
+            full = pin.buildModelFromXML(text)
+        except (RuntimeError, ValueError) as exc:  # the gate should have caught it; say so
+            raise UrdfError(
+                f"{resolved.name!r}: passed the loader gate but Pinocchio refused it: {exc}"
+            ) from None
+        return full, text
+
+    def view(self, base: str | None = None, tip: str | None = None) -> Model:
+        """The chain ``base`` → ``tip`` of this robot, as a model of its own (cached).
+
+        The same as :func:`hexapod_kin.load` of the source with ``base``/``tip`` (the other
+        joints locked at neutral), built from this robot's parse: no second gate, no second
+        parse, no warning repeated.
+        """
+        return self.cached(
+            f"model.view {base!r} {tip!r}",
+            lambda: type(self)(self.source, base, tip, parsed=self),
+        )
 
     def _limits_v(self, m: pin.Model) -> tuple[np.ndarray, np.ndarray]:
         """Position limits per velocity index ((nv,) each); continuous joints get [-π, π]."""

@@ -5,8 +5,8 @@ named by ``joint_names``) and ``support`` (stance feet), as in ``hexapod_kin.gai
 
 * **Quasi-static** (``torque``): at every sample the robot's weight is distributed over the
   stance feet exactly as :func:`~hexapod_kin.dynamics.standing.contact_forces` does (minimum
-  norm, or inside friction cones), then ``τ = g(q) − Σ J_iᵀ f_i`` with gravity expressed in the
-  body's axes. The body's and the legs' accelerations are left out.
+  norm, or inside friction cones), then ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` on the
+  floating-base model (world axes). The body's and the legs' accelerations are left out.
 * **Full inverse dynamics** (``torque_full``, when the run carries its floating-base robot,
   ``run.robot``): the recursive Newton–Euler algorithm (Pinocchio ``rnea``) with the base and
   legs' velocities and accelerations of the plan (``run.pinocchio_v()``, ``pinocchio_a()``:
@@ -30,7 +30,7 @@ import pinocchio as pin
 from ..exceptions import ConfigurationError, ParameterError
 from ..params import Hexapod
 from ._common import as_model, check_inertials, read_only
-from .standing import ContactMethod, _friction_qp, _hexapod, contact_forces, robot_mass_com
+from .standing import ContactMethod, _friction_qp, _hexapod, contact_forces
 
 __all__ = ["GaitTorques", "full_dynamics", "gait_torques"]
 
@@ -128,6 +128,13 @@ def gait_torques(
 ) -> GaitTorques:
     """Contact forces and joint torques at every sample of a gait run.
 
+    Both loads are computed on a floating-base model in world axes: the run's own robot
+    (``run.robot.model``), or the floating-base twin of a Hexapod's table model
+    (:attr:`~hexapod_kin.model.Model.floating_model`) when ``model`` is one that did not walk
+    the run. Quasi-static: ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` with ``g`` the floating-base
+    gravity vector (its joint rows are the fixed-base gravity torques under the gravity
+    rotated into the body's axes) and ``J_i`` the feet's world-aligned Jacobians.
+
     Args:
         run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
             ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L);
@@ -147,7 +154,8 @@ def gait_torques(
     if model is None:  # the robot that walked, as loaded
         model = getattr(wb, "kinematic", None) or "hexapod"
     mdl = as_model(model)
-    if not isinstance(getattr(mdl, "params", None), Hexapod) and wb is not None:
+    ts = np.asarray(run.t, dtype=float)
+    if wb is not None and (wb.kinematic is mdl or not isinstance(mdl.params, Hexapod)):
         if wb.kinematic is not mdl:
             raise ParameterError(
                 f"model {mdl.name!r} is not the robot that walked ({wb.source!r}); leave "
@@ -156,85 +164,52 @@ def gait_torques(
                 value=mdl.name,
                 allowed=wb.source,
             )
-        check_inertials(mdl)
-        return _legged_loads(run, wb, method, mu)
-    params = _hexapod(mdl)
+        pm, feet, legs, names = wb.model, wb.foot_frames, wb.leg_names, tuple(wb.joint_names)
+        qp = run.pinocchio_q()
+    else:  # a Hexapod's table model: its floating-base twin, the run's joints by name
+        params = _hexapod(mdl)
+        names = tuple(mdl.joint_names)
+        if sorted(run.joint_names) != sorted(names):
+            raise ParameterError(
+                f"the run's joints {list(run.joint_names)} are not the model's {list(names)}",
+                parameter="run",
+                value=list(run.joint_names),
+                allowed=list(names),
+            )
+        pm, feet = mdl.floating_model, params.foot_frames
+        legs = tuple(leg.name for leg in params.legs)
+        cols = [tuple(run.joint_names).index(n) for n in names]
+        poses = np.asarray(run.base_poses, dtype=float)
+        qp = np.empty((len(ts), pm.nq))
+        qp[:, :3] = poses[:, :3, 3]
+        qp[:, 3:7] = [pin.Quaternion(p[:3, :3]).coeffs() for p in poses]
+        qp[:, 7:] = np.asarray(run.q, dtype=float)[:, cols]
     check_inertials(mdl)
-    names = tuple(run.joint_names)
-    if sorted(names) != sorted(mdl.joint_names):
-        raise ParameterError(
-            f"the run's joints {list(names)} are not the model's {list(mdl.joint_names)}",
-            parameter="run",
-            value=list(names),
-            allowed=list(mdl.joint_names),
-        )
-    cols = np.array([names.index(n) for n in mdl.joint_names])
-    ts = np.asarray(run.t, dtype=float)
-    qs = np.asarray(run.q, dtype=float)[:, cols]
-    poses = np.asarray(run.base_poses, dtype=float)
     support = np.asarray(run.support, dtype=bool)
-    n_legs = len(params.legs)
-    pm = pin.Model(mdl.model)  # private copy: its gravity is set per sample (body axes)
-    data = pm.createData()
-    fids = [mdl.frame_id(f) for f in params.foot_frames]
-    g_world = np.array(mdl.model.gravity.linear, dtype=float)
-    mass = robot_mass_com(mdl, qs[0], data)[0]
-    weight = mass * float(np.linalg.norm(g_world))
-    n = len(ts)
-    forces = np.zeros((n, n_legs, 3))
-    torque = np.empty((n, mdl.nq))
-    fmin = np.empty(n)
-    f_res = m_res = 0.0
-    for i in range(n):
-        rot, pos = poses[i, :3, :3], poses[i, :3, 3]
-        q = qs[i]
-        pm.gravity = pin.Motion(rot.T @ g_world, np.zeros(3))
-        com_b = robot_mass_com(mdl, q, data)[1]
-        pin.computeJointJacobians(pm, data, q)
-        pin.updateFramePlacements(pm, data)
-        stance = np.nonzero(support[i])[0]
-        feet_w = np.array([rot @ data.oMf[fids[k]].translation + pos for k in stance])
-        try:
-            sol = contact_forces(feet_w, rot @ com_b + pos, weight, method=method, mu=mu)
-        except ConfigurationError as exc:
-            raise ConfigurationError(
-                f"at t = {ts[i]:.6g} s (stance legs {[params.legs[k].name for k in stance]}): "
-                f"{exc}",
-                parameter=exc.parameter,
-                value=exc.value,
-                allowed=exc.allowed,
-            ) from None
-        f_res, m_res = max(f_res, sol.force_residual), max(m_res, sol.moment_residual)
-        tau = np.array(pin.computeGeneralizedGravity(pm, data, q))
-        for k, f in zip(stance, sol.forces):
-            jac = pin.getFrameJacobian(pm, data, fids[k], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-            tau -= jac[:3].T @ (rot.T @ f)
-            forces[i, k] = f
-        torque[i] = tau
-        fmin[i] = float(sol.forces[:, 2].min())
-    idx = np.argmax(np.abs(torque), axis=0)
-    peak = np.abs(torque[idx, np.arange(mdl.nq)])
-    peak_time = ts[idx]
+    fids = [pm.getFrameId(f) for f in feet]
+    forces, torque, fmin, f_res, m_res, mass = _quasi_static(
+        pm, fids, qp, ts, support, legs, method, mu
+    )
+    peak, peak_time = _peaks(torque, ts)
     read_only(ts, support, forces, torque, peak, peak_time, fmin)
     extra: dict[str, Any] = {}
-    if getattr(run, "robot", None) is not None and hasattr(run, "pinocchio_a"):
+    if wb is not None and hasattr(run, "pinocchio_a"):
         tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
-        wb_names = tuple(run.robot.joint_names)
-        tau_f = tau_f[:, [wb_names.index(nm) for nm in mdl.joint_names]]
-        jf = np.argmax(np.abs(tau_f), axis=0)
+        tau_f = tau_f[:, [tuple(wb.joint_names).index(nm) for nm in names]]
+        peak_f, peak_ft = _peaks(tau_f, ts)
         extra = {
             "torque_full": tau_f,
             "forces_full": f_full,
-            "peak_full": np.abs(tau_f[jf, np.arange(mdl.nq)]),
-            "peak_full_time": ts[jf],
+            "peak_full": peak_f,
+            "peak_full_time": peak_ft,
             "peak_difference": np.abs(tau_f - torque).max(axis=0),
             "base_residual": base_res,
         }
         read_only(*(v for v in extra.values() if isinstance(v, np.ndarray)))
     return GaitTorques(
         ts,
-        tuple(mdl.joint_names),
-        tuple(leg.name for leg in params.legs),
+        names,
+        legs,
         support,
         forces,
         torque,
@@ -250,27 +225,39 @@ def gait_torques(
     )
 
 
-def _legged_loads(run: Any, wb: Any, method: ContactMethod, mu: float | None) -> GaitTorques:
-    """:func:`gait_torques` of any legged robot, on its floating-base model (``run.robot``).
+def _peaks(torque: np.ndarray, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``max_t |torque|`` per joint (nq,) [N·m] and the time of each [s]."""
+    idx = np.argmax(np.abs(torque), axis=0)
+    return np.abs(torque[idx, np.arange(torque.shape[1])]), ts[idx]
 
-    The same quasi-static rule in world axes: ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` with
-    ``g`` the floating-base gravity vector (its joint rows are the fixed-base gravity torques
-    under the rotated gravity) and ``J_i`` the contact frames' world-aligned Jacobians.
+
+def _quasi_static(
+    pm: Any,
+    fids: list[int],
+    qp: np.ndarray,
+    ts: np.ndarray,
+    support: np.ndarray,
+    legs: tuple[str, ...],
+    method: ContactMethod,
+    mu: float | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:
+    """The quasi-static loads of :func:`gait_torques` on the floating-base model ``pm``.
+
+    Returns:
+        ``(forces (N, L, 3) [N], torque (N, nq) [N·m], min_normal_force (N,) [N],
+        force_residual [N], moment_residual [N·m], mass [kg])``.
+
     """
-    pm = wb.model
     data = pm.createData()
-    fids = [pm.getFrameId(f) for f in wb.foot_frames]
-    qp = run.pinocchio_q()
-    ts = np.asarray(run.t, dtype=float)
-    support = np.asarray(run.support, dtype=bool)
-    n, nl, nj = len(ts), wb.n_legs, wb.nq
     g_world = np.array(pm.gravity.linear, dtype=float)
     mass = float(pin.computeTotalMass(pm))
     weight = mass * float(np.linalg.norm(g_world))
-    forces = np.zeros((n, nl, 3))
-    torque = np.empty((n, nj))
+    n = len(ts)
+    forces = np.zeros((n, len(fids), 3))
+    torque = np.empty((n, pm.nv - 6))
     fmin = np.empty(n)
     f_res = m_res = 0.0
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     for i in range(n):
         q = qp[i]
         com = np.array(pin.centerOfMass(pm, data, q))
@@ -282,7 +269,7 @@ def _legged_loads(run: Any, wb: Any, method: ContactMethod, mu: float | None) ->
             sol = contact_forces(feet_w, com, weight, method=method, mu=mu)
         except ConfigurationError as exc:
             raise ConfigurationError(
-                f"at t = {ts[i]:.6g} s (stance legs {[wb.leg_names[k] for k in stance]}): {exc}",
+                f"at t = {ts[i]:.6g} s (stance legs {[legs[k] for k in stance]}): {exc}",
                 parameter=exc.parameter,
                 value=exc.value,
                 allowed=exc.allowed,
@@ -290,49 +277,11 @@ def _legged_loads(run: Any, wb: Any, method: ContactMethod, mu: float | None) ->
         f_res, m_res = max(f_res, sol.force_residual), max(m_res, sol.moment_residual)
         tau = np.array(pin.computeGeneralizedGravity(pm, data, q))[6:]
         for k, f in zip(stance, sol.forces):
-            jac = pin.getFrameJacobian(pm, data, fids[k], pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-            tau -= jac[:3, 6:].T @ f
+            tau -= pin.getFrameJacobian(pm, data, fids[k], lwa)[:3, 6:].T @ f
             forces[i, k] = f
         torque[i] = tau
         fmin[i] = float(sol.forces[:, 2].min())
-    idx = np.argmax(np.abs(torque), axis=0)
-    tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
-    jf = np.argmax(np.abs(tau_f), axis=0)
-    cols = np.arange(nj)
-    peak, peak_time = np.abs(torque[idx, cols]), ts[idx]
-    peak_f, peak_ft = np.abs(tau_f[jf, cols]), ts[jf]
-    diff = np.abs(tau_f - torque).max(axis=0)
-    read_only(ts, support, forces, torque, fmin, tau_f, f_full, peak, peak_time, peak_f, peak_ft)
-    read_only(diff)
-    return GaitTorques(
-        ts,
-        tuple(wb.joint_names),
-        tuple(wb.leg_names),
-        support,
-        forces,
-        torque,
-        peak,
-        peak_time,
-        f_res,
-        m_res,
-        fmin,
-        mass,
-        str(method),
-        mu,
-        torque_full=tau_f,
-        forces_full=f_full,
-        peak_full=peak_f,
-        peak_full_time=peak_ft,
-        peak_difference=diff,
-        base_residual=base_res,
-    )
-
-
-def _contact_frames(model: Any, data: Any, q_pin: np.ndarray, feet: np.ndarray) -> list[int]:
-    """Per leg, the model frame nearest to its foot at ``q_pin`` (the foot's own frame)."""
-    pin.framesForwardKinematics(model, data, q_pin)
-    pos = np.array([data.oMf[k].translation for k in range(model.nframes)])
-    return [int(np.argmin(np.linalg.norm(pos - f, axis=1))) for f in feet]
+    return forces, torque, fmin, f_res, m_res, mass
 
 
 def full_dynamics(
@@ -367,7 +316,7 @@ def full_dynamics(
         if normals is None or not np.size(normals)
         else np.asarray(normals, dtype=float)
     )
-    fids = _contact_frames(model, data, Q[0], feet[0])
+    fids = [model.getFrameId(f) for f in wb.foot_frames]
     weight = float(run.mass) * 9.81
     tau = np.zeros((n, model.nv - 6))
     forces = np.zeros((n, nl, 3))
@@ -382,10 +331,7 @@ def full_dynamics(
         for m, k in enumerate(stance):
             J = pin.getFrameJacobian(model, data, fids[k], lwa)
             arm = feet[i, k] - rad * nrm[i, k] - data.oMf[fids[k]].translation
-            skew = np.array(
-                [[0.0, -arm[2], arm[1]], [arm[2], 0.0, -arm[0]], [-arm[1], arm[0], 0.0]]
-            )
-            jac[m] = J[:3] - skew @ J[3:]  # the contact point, fixed on the foot
+            jac[m] = J[:3] - pin.skew(arm) @ J[3:]  # the contact point, fixed on the foot
         a_base = jac[:, :, :6].transpose(2, 0, 1).reshape(6, -1)  # (6, 3k): Σ J_baseᵀ f
         if len(stance):
             pinv = np.linalg.pinv(a_base, rcond=1e-12)

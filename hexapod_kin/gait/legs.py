@@ -4,18 +4,20 @@
   link) to a foot. A foot is either the deepest frame of a branch (a leaf link such as
   solo12's ``FL_FOOT``) or a point given by the user on a frame (``frame:x,y,z``, the offset
   in that frame, in [m]) when the URDF has no foot link (:func:`parse_feet`).
-* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, or a
-  Hexapod's leg table on its mount) is used where :mod:`hexapod_kin.ik.closed` recognises it
-  and its solutions reproduce the leg's own kinematics (:func:`closed_leg`); other legs are
-  solved numerically (:func:`~.leg_ik.solve_legs`).
+* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, a
+  view of the loaded robot; or a Hexapod's leg table on its mount) is used where
+  :mod:`hexapod_kin.ik.closed` recognises it and its solutions reproduce the leg's own
+  kinematics (:func:`closed_leg`); other legs are solved numerically
+  (:func:`~.leg_ik.solve_legs`).
 """
 
 from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +25,7 @@ import numpy as np
 
 from .._fields import fields_dict
 from .._reader import FORMATS, read_data
-from .._tree import leg_fk, robot_size
+from .._tree import robot_size, tree_frames
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 
 __all__ = [
@@ -461,26 +463,30 @@ def sphere_radius(text: str, link: str) -> float | None:
 
 
 def closed_leg(
-    table: Any, T0: np.ndarray, consts: tuple[np.ndarray, ...], lower: Any, upper: Any, span: float
+    table: Any,
+    T0: np.ndarray,
+    feet_of: Callable[[np.ndarray], np.ndarray],
+    lower: Any,
+    upper: Any,
+    span: float,
 ) -> bool:
     """True when the closed form of ``table`` (frame 0 at ``T0`` in the body) solves the leg.
 
     Checked at 6 seeded random configurations inside the limits: a valid slot must put the
-    foot (by the leg's own vectorised FK) on the target within 1e-9 of the span (max(span,
-    1 m)). A table that only approximates the leg (axes snapped by
-    :func:`hexapod_kin.chain_from_urdf`, a miss of ~1e-7 m on PhantomX) is not used: the
-    numerical solve on the leg's own kinematics is exact and, batched, faster than the closed
-    form followed by Newton steps (tools/bench_legs.py).
+    foot (``feet_of``: (N, m) joints → (N, 3) body-frame feet, the leg's own FK) on the
+    target within 1e-9 of the span (max(span, 1 m)). A table that only approximates the leg
+    (axes snapped by :func:`hexapod_kin.chain_from_urdf`, a miss of ~1e-7 m on PhantomX) is
+    not used: the numerical solve on the leg's own kinematics is exact and, batched, faster
+    than the closed form followed by Newton steps (tools/bench_legs.py).
     """
     from ..ik import analytic_batch
 
-    P, A, pr, foot = consts
     lo = np.where(np.isfinite(lower), lower, -np.pi)
     hi = np.where(np.isfinite(upper), upper, np.pi)
     rng = np.random.default_rng(7)
     qs = lo + (hi - lo) * rng.uniform(0.05, 0.95, size=(6, len(lo)))
     e = len(qs)
-    _o, p = leg_fk(P, A, pr, foot, qs)
+    p = feet_of(qs)
     p0 = (p - T0[:3, 3]) @ T0[:3, :3]
     try:
         batch = analytic_batch(table, p0)
@@ -490,7 +496,7 @@ def closed_leg(
     cand = np.nan_to_num(np.asarray(batch.q).reshape(e * k, -1))
     if cand.shape[1] != len(lo):
         return False
-    _o, pk = leg_fk(P, A, pr, foot, cand)
+    pk = feet_of(cand)
     err = np.linalg.norm(pk.reshape(e, k, 3) - p[:, None, :], axis=2)
     err = np.where(np.asarray(batch.valid), err, np.inf)
     return bool(np.all(err.min(axis=1) <= 1e-9 * max(span, 1.0)))
@@ -618,31 +624,40 @@ def leg_layout(
     lower: np.ndarray,
     upper: np.ndarray,
     params: Any,
-    chain_source: Any,
+    robot: Any,
 ) -> dict[str, Any]:
     """The legs' spans, mounts, default stance geometry and closed forms.
 
-    Returns a dict: ``consts`` (per leg: placements, axes, prismatic flags, foot), ``span``
-    (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2), ``reach`` (L,) [m],
-    ``body_height`` [m] (the rules of :meth:`~.robot.WholeBody.neutral_feet`) and ``closed``
-    (per leg ``(table, T_body_frame0)`` or ``None``).
+    Returns a dict: ``span`` (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2),
+    ``reach`` (L,) [m], ``body_height`` [m] (the rules of
+    :meth:`~.robot.WholeBody.neutral_feet`) and ``closed`` (per leg ``(table,
+    T_body_frame0)`` or ``None``), the tables recovered from views of the loaded ``robot``
+    (:meth:`~hexapod_kin.model.Model.view`: its parse, not a second one).
     """
-    import warnings
-
     from .._fromurdf import chain_from_urdf
     from ..params import Pose
 
     hexa = params is not None
-    # per-leg constants and the geometry at q = 0 (clipped into the limits)
-    consts, spans, origins, feet0 = [], [], [], []
-    for c, leg in zip(cols, legs):
-        cc = list(c)
-        k = (tree.placements[cc], tree.axes[cc], tree.prismatic[cc], leg.foot_placement[:3, 3])
-        consts.append(k)
-        o, p = leg_fk(*k, q_zero[cc][None])
+
+    def leg_fk(leg: int, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg ``leg``'s joint origins (N, m, 3) and feet (N, 3), body frame, at its q (N, m).
+
+        The whole tree through the one batch FK (the other joints at ``q_zero``).
+        """
+        c, foot = list(cols[leg]), legs[leg].foot_placement[:3, 3]
+        Q = np.tile(q_zero, (len(q), 1))
+        Q[:, c] = q
+        R, p = tree_frames(tree, Q, np.broadcast_to(np.eye(4), (len(Q), 4, 4)))
+        j = c[-1]
+        feet = R[:, 0, j] * foot[0] + R[:, 1, j] * foot[1] + R[:, 2, j] * foot[2] + p[:, j]
+        return p[:, c].transpose(2, 1, 0), feet.T
+
+    # the geometry at q = 0 (clipped into the limits)
+    spans, feet0 = [], []
+    for i, c in enumerate(cols):
+        o, p = leg_fk(i, q_zero[list(c)][None])
         pts = np.vstack([o[0], p])
         spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
-        origins.append(o[0, 0])
         feet0.append(p[0])
     span = np.array(spans)
     if hexa:
@@ -678,9 +693,7 @@ def leg_layout(
                 T0 = mounts[i] @ ch.base_matrix
                 table = ch if ch.base_pose is None else replace(ch, base_pose=None)
             else:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    ch = chain_from_urdf(chain_source, tip=leg.foot_frame)
+                ch = chain_from_urdf(robot.view(tip=leg.foot_frame))  # a view: no parse
                 off = np.eye(4)
                 off[:3, 3] = offset_of(model, leg)
                 if np.any(off[:3, 3] != 0):
@@ -688,7 +701,8 @@ def leg_layout(
                 T0 = ch.base_matrix
                 table = replace(ch, base_pose=None)
             sel = list(cols[i])
-            if closed_leg(table, T0, consts[i], lower[sel], upper[sel], float(span[i])):
+            feet_of = partial(lambda leg, q: leg_fk(leg, q)[1], i)  # leg i's feet
+            if closed_leg(table, T0, feet_of, lower[sel], upper[sel], float(span[i])):
                 cand = (table, T0)
         except HexapodKinError:
             cand = None
@@ -700,7 +714,6 @@ def leg_layout(
                 shared = by_id.setdefault(id(params.legs[i].chain), found[0])
                 closed[i] = (shared, found[1])
     return {
-        "consts": consts,
         "span": span,
         "mounts": mounts,
         "direction": direction,

@@ -71,8 +71,6 @@ def _centre_reached(wb: Any, heights: np.ndarray, reaches: np.ndarray) -> np.nda
     The same first solve :meth:`~.robot.WholeBody.body_ik` runs for the box's centre (its
     first sample), for all K stances in one batch: a miss there makes :func:`room` −1.
     """
-    from .leg_ik import leg_chain, solve_legs
-
     k = len(heights)
     ok = np.ones(k, dtype=bool)
     groups: dict[int, list[int]] = {}
@@ -82,28 +80,15 @@ def _centre_reached(wb: Any, heights: np.ndarray, reaches: np.ndarray) -> np.nda
     if not groups or not k:
         return ok
     seed = wb.neutral_q()
-    tr = wb._tree
     for legs in groups.values():
-        cols = np.array([wb._leg_cols[j] for j in legs])  # (G, m)
         g = len(legs)
         tgt = np.empty((k, g, 3))
         tgt[:, :, :2] = wb.mounts[legs, None, :2, 3].transpose(1, 0, 2) + (
             reaches[:, None, None] * wb._reach_dir[legs][None]
         )
         tgt[:, :, 2] = (wb.foot_radius - heights)[:, None]
-        tile = (k,) + (1,) * (cols.ndim - 1)
-        chains = [
-            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], wb._foot[j][:3, 3])
-            for j, c in zip(legs, cols)
-        ]
-        _q, _res, reached = solve_legs(
-            chains * k,  # stance-major, as the targets below
-            np.tile(wb.lower[cols], tile),
-            np.tile(wb.upper[cols], tile),
-            tgt.reshape(1, k * g, 3),
-            np.tile(seed[cols], tile),
-            span=float(wb._span[legs].max()),
-        )
+        # every stance's legs in one solve (stance-major, as the targets)
+        _q, _res, reached = wb._numeric(legs * k, tgt.reshape(1, k * g, 3), seed)
         ok &= reached.reshape(k, g).all(axis=1)
     return ok
 

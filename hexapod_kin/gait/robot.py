@@ -17,13 +17,15 @@ import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 import numpy as np
 
-from .._tree import Tree, mat_vec, tree_frames, tree_poses
+from .._chain import ChainArrays
+from .._tree import Tree, mat_vec, tree_poses
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError, positive
+from ..frames import reduced_model
 from ..params import Hexapod, rpy_to_matrix
 from .leg_ik import leg_chain, solve_legs
 from .legs import (
@@ -138,6 +140,15 @@ class WholeBody:
     _q_index: np.ndarray = field(repr=False)  # (nq,) each leg joint's first index in model q
     _bounded: np.ndarray = field(repr=False)  # (nq,) False for continuous joints (cos, sin)
 
+    @cached_property
+    def _chains(self) -> tuple[ChainArrays, ...]:
+        """Each leg as a chain view (body → foot, its joints alone: :func:`~.leg_ik.leg_chain`)."""
+        tr = self._tree
+        return tuple(
+            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], foot[:3, 3])
+            for c, foot in zip(map(list, self._leg_cols), self._foot)
+        )
+
     @property
     def n_legs(self) -> int:
         """Number of legs."""
@@ -158,10 +169,6 @@ class WholeBody:
 
         """
         return tree_poses(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
-
-    def joint_frames(self, q: Any, base: Any) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`joint_poses` components first: rotations (3, 3, nq, N), origins (3, nq, N)."""
-        return tree_frames(self._tree, np.asarray(q, dtype=float), np.asarray(base, dtype=float))
 
     def leg_points(self, q: Any, base: Any) -> np.ndarray:
         """World positions (N, L, K, 3) of each leg's joints (hip first) and foot, in [m]."""
@@ -184,11 +191,6 @@ class WholeBody:
     def feet(self, q: Any, base: Any) -> np.ndarray:
         """World foot positions (N, L, 3) in [m] (the contact spheres' centres)."""
         return self.feet_of(self.joint_poses(q, base))
-
-    def foot_poses(self, q: Any, base: Any) -> np.ndarray:
-        """World poses (N, L, 4, 4) of the feet (rotation: the frame the foot is on)."""
-        Ta = self.joint_poses(q, base)[:, self._foot_joint]
-        return np.asarray(np.matmul(Ta, self._foot[None]))
 
     def com(self, q: Any, base: Any) -> np.ndarray:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
@@ -326,15 +328,8 @@ class WholeBody:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Numerical IK of ``legs`` (same joint count) at body-frame targets (N, G, 3)."""
         cols = np.array([self._leg_cols[k] for k in legs])  # (G, m)
-        if np.any(self._foot_joint[legs] != cols[:, -1]):  # pragma: no cover - by construction
-            raise ConfigurationError("a foot is not on its leg's last joint")
-        tr = self._tree
-        chains = [
-            leg_chain(tr.placements[c], tr.axes[c], tr.prismatic[c], self._foot[k][:3, 3])
-            for k, c in zip(legs, cols)
-        ]
         return solve_legs(
-            chains,
+            [self._chains[k] for k in legs],
             self.lower[cols],
             self.upper[cols],
             p_body,
@@ -544,7 +539,7 @@ def _build_model(
             FootSpec(leg.foot_frame, tuple(float(v) for v in offset_of(full, leg)))  # type: ignore[arg-type]
             for leg in legs
         )
-        model = pin.buildReducedModel(full, list(others), pin.neutral(full))
+        model = reduced_model(full, list(others), pin.neutral(full))
         legs, _ = find_legs(model, specs, ccw=False)
     nq = model.njoints - 2
     tree = Tree.of_model(model, first=2, label=label)
@@ -577,7 +572,7 @@ def _build_model(
     foot = np.array([leg.foot_placement for leg in legs])
     foot_joint = np.array([leg.foot_joint for leg in legs])
     q_zero = np.clip(np.zeros(nq), lower, upper)
-    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, text)
+    lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, km)
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
@@ -640,14 +635,9 @@ def _build_model(
 
 def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
     """:meth:`WholeBody.neutral_q` (see there)."""
-    from ..ik import LEG_HOME
-
-    q = np.zeros(wb.nq)
     if params is not None:
-        home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
-        for i, name in enumerate(wb.joint_names):
-            q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
-        return np.clip(q, wb.lower, wb.upper)
+        return leg_home(wb.joint_names, wb.lower, wb.upper)
+    q = np.zeros(wb.nq)
     for cols in wb._leg_cols:  # knees nudged off the stretched-leg singularity, inside limits
         for k, j in enumerate(cols):
             lo, hi = float(wb.lower[j]), float(wb.upper[j])
@@ -663,12 +653,17 @@ def _standing_seed(wb: WholeBody, params: Hexapod | None) -> np.ndarray:
     return np.array(ik.q[0]) if bool(ik.reached.all()) else q
 
 
+def leg_home(joint_names: tuple[str, ...], lower: Any, upper: Any) -> np.ndarray:
+    """A Hexapod's joints (nq,) at :data:`hexapod_kin.ik.LEG_HOME` (hip, knee, ankle), clipped."""
+    from ..ik import LEG_HOME
+
+    home = dict(zip(("hip", "knee", "ankle"), LEG_HOME))
+    q = np.array([home.get(name.rsplit("_", 1)[-1], 0.0) for name in joint_names])
+    return np.clip(q, np.asarray(lower), np.asarray(upper))
+
+
 @lru_cache(maxsize=8)
 def _cached(params: Hexapod) -> WholeBody:
-    return _build(params)
-
-
-def _build(params: Hexapod) -> WholeBody:
     from ..kinematics import load
 
     return _build_model(load(params), params=params)
@@ -704,7 +699,7 @@ def whole_body(params: Hexapod | None = None) -> WholeBody:
             return _default()
         return _cached(params)
     except TypeError:  # unhashable parameters
-        return _build(params)
+        return _cached.__wrapped__(params)
 
 
 _SOURCES: dict[Any, WholeBody] = {}

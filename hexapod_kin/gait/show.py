@@ -68,30 +68,12 @@ def support_polygons(run: Any, lift: float = 0.002) -> tuple[np.ndarray, np.ndar
 def run_model(run: Any) -> Any:
     """The loaded model (:func:`hexapod_kin.load`) of the robot that walks ``run``.
 
-    The run's own robot (``run.robot``, a whole-body model) when it has one: its Hexapod
-    table, else its source or URDF text; otherwise the built-in ``hexapod``.
-
-    Raises:
-        ConfigurationError: The run's robot cannot be loaded as a model.
-
+    The run's own robot as loaded (``run.robot.kinematic``: the one model its description is
+    a view of) when it has one; otherwise the built-in ``hexapod``.
     """
-    from .. import load
-    from ..exceptions import ConfigurationError
-    from ..params import Hexapod
-
     robot = getattr(run, "robot", None)
     if robot is None:
+        from .. import load
+
         return load("hexapod")
-    params = getattr(robot, "params", None)
-    if isinstance(params, Hexapod):
-        return load(params)
-    if getattr(robot, "kinematic", None) is not None:  # the robot that walked, as loaded
-        return robot.kinematic
-    for attr in ("urdf", "source"):
-        src = getattr(robot, attr, None)
-        if src is not None:
-            return load(src)
-    raise ConfigurationError(
-        f"the run's robot {robot!r} has no table, source or URDF to draw; pass model=",
-        parameter="model",
-    )
+    return robot.kinematic

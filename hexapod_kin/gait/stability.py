@@ -278,16 +278,22 @@ def terrain_clearance(
     names: tuple[str, ...],
     H: float,
     strict: bool = True,
+    edge_gap: np.ndarray | None = None,
+    promised: float = 0.0,
 ) -> np.ndarray:
     """The foot spheres against the terrain: (N, L) gaps [m] (:func:`~.terrain.sphere_gap`).
 
     Every foot, swing and stance (a stance sphere touches its ground: gap 0): the sphere of
     radius ``rad`` at each centre ``feet`` (N, L, 3) must not enter the terrain (sampled in
-    a disc of radius ``rad``, ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``).
+    a disc of radius ``rad``, ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``). With ``edge_gap``
+    (N, L), each swing foot sphere's clearance to the terrain above its own ground plane
+    (:func:`~.terrain.edge_distance`; ``inf`` where none is near), every swing must also
+    clear the terrain's edges by ``promised`` [m].
 
     Raises:
         GaitError: (``strict``) check ``"terrain clearance"``: a sphere more than 1e-9 m
-            into the ground (the leg, the time, the depth).
+            into the ground (the leg, the time, the depth); check ``"swing clearance"``: a
+            swing passes an edge closer than ``promised`` (the leg, the time, by how much).
 
     """
     gap = sphere_gap(ground, feet, rad)
@@ -307,34 +313,13 @@ def terrain_clearance(
             value=H,
             allowed="foot spheres clear of the terrain",
         )
-    return gap
-
-
-def edge_clearance(
-    gap: np.ndarray,
-    swing: np.ndarray,
-    promised: float,
-    t: np.ndarray,
-    names: tuple[str, ...],
-    H: float,
-    strict: bool = True,
-) -> None:
-    """The swing feet over terrain edges: each clears the edges by ``promised`` [m].
-
-    ``gap`` (N, L): each swing foot sphere's clearance to the terrain above its own ground
-    plane (:func:`~.terrain.sphere_gap` with ``below``; ``inf`` where none is near).
-
-    Raises:
-        GaitError: (``strict``) check ``"swing clearance"``: a swing passes an edge closer
-            than ``promised`` (the leg, the time, by how much).
-
-    """
-    short = swing & (gap < promised)
+    gap_e = np.full(gap.shape, np.inf) if edge_gap is None else np.asarray(edge_gap)
+    short = swing & (gap_e < promised)
     if strict and short.any():
-        i, leg = np.unravel_index(int(np.argmin(np.where(short, gap, np.inf))), gap.shape)
-        d = float(promised - gap[i, leg])
+        i, leg = np.unravel_index(int(np.argmin(np.where(short, gap_e, np.inf))), gap.shape)
+        d = float(promised - gap_e[i, leg])
         raise GaitError(
-            f"leg {names[leg]}: the swing passes a terrain edge {1e3 * gap[i, leg]:.3g} mm away "
+            f"leg {names[leg]}: the swing passes a terrain edge {1e3 * gap_e[i, leg]:.3g} mm away "
             f"at t={t[i]:.4g} s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised "
             f"(check 'swing clearance'; raise step_height={H:g} m or move the footholds)",
             check="swing clearance",
@@ -345,6 +330,7 @@ def edge_clearance(
             value=H,
             allowed=f"swings clear of edges by {promised:g} m",
         )
+    return gap
 
 
 #: Ball spacing along a leg segment in :func:`leg_terrain_clearance`, in link radii.

@@ -20,11 +20,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._tree import robot_size
-from ..exceptions import HexapodKinError, ParameterError, positive
+from ..exceptions import ParameterError, positive
 from ..params import Hexapod
 from .knee import knee_seed
 from .legs import OFFSET_FACTOR
-from .robot import WholeBody, as_whole_body, body_pose
+from .robot import WholeBody, as_whole_body, body_pose, leg_home
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
@@ -171,11 +171,7 @@ def default_configuration(model: Model) -> np.ndarray:
     if not isinstance(model.params, Hexapod):
         home_of: Any = ik.home  # takes any loaded model
         return np.asarray(home_of(model), dtype=float)
-    q = np.zeros(model.nq)
-    home = dict(zip(("hip", "knee", "ankle"), ik.LEG_HOME))
-    for i, name in enumerate(model.joint_names):
-        q[i] = home.get(name.rsplit("_", 1)[-1], 0.0)
-    return np.clip(q, np.asarray(model.lower), np.asarray(model.upper))
+    return leg_home(model.joint_names, model.lower, model.upper)
 
 
 def standing_base(model: Model, q: np.ndarray) -> np.ndarray:
@@ -231,13 +227,12 @@ def hexapod_sway(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hexapod sways its body (heave, roll, pitch, yaw) with its feet fixed in the world.
 
-    Returns ``(times, qs, base_poses)``; each leg follows by its closed-form IK, the branch
-    nearest to the previous sample.
+    Returns ``(times, qs, base_poses)``; the legs follow by body-pose IK on the robot's legs
+    (:meth:`~.robot.WholeBody.body_ik`: closed form per leg, the branch nearest to the
+    previous sample; a sample out of reach keeps the previous one).
     """
     import pinocchio as pin
 
-    params = model.params
-    assert isinstance(params, Hexapod)
     stand = standing_base(model, q0)
     h = float(stand[2, 3])
     base = np.empty((len(times), 4, 4))
@@ -246,28 +241,10 @@ def hexapod_sway(
         R = pin.rpy.rpyToMatrix(0.08 * math.sin(ph), 0.08 * math.cos(ph), 0.1 * math.sin(ph))
         T[:3, :3] = R
         base[i] = T
-    qs = np.tile(q0, (len(times), 1))
-    try:
-        from .. import ik
-    except ImportError:  # pragma: no cover - ik not available: legs held still
-        return times, qs, base
-    # feet fixed in the world where the standing pose puts them
-    data = model.model.createData()
-    feet = params.foot_frames
-    feet_world = frame_poses(model, data, q0[None, :], stand[None], feet)[0, :, :3, 3]
-    for leg_index, mount in enumerate(params.legs):
-        cols = [model.joint_index(f"{mount.name}_{j}") for j in mount.chain.joint_names or ()]
-        mount_T = mount.transform()
-        foot_h = np.append(feet_world[leg_index], 1.0)
-        targets = np.array([np.linalg.solve(b @ mount_T, foot_h)[:3] for b in base])
-        try:
-            solutions = ik.analytic(mount.chain, targets)
-        except HexapodKinError:  # no closed form for this leg: held still
-            continue
-        prev = q0[cols]
-        for i, sols in enumerate(solutions):
-            if len(sols):  # the branch nearest to the previous sample (angles wrapped)
-                step = np.angle(np.exp(1j * (np.asarray(sols) - prev[None, :])))
-                prev = prev + step[int(np.argmin(np.abs(step).sum(axis=1)))]
-            qs[i, cols] = prev
+    wb = as_whole_body(model)  # the legs of the same robot
+    cols = [wb.joint_names.index(name) for name in model.joint_names]
+    q_wb = np.empty(wb.nq)
+    q_wb[cols] = q0
+    feet = wb.feet(q_wb[None], stand[None])[0]  # fixed in the world where the stance puts them
+    qs = np.asarray(wb.body_ik(base, feet, q_prev=q_wb, strict=False).q)[:, cols]
     return times, np.clip(qs, model.lower, model.upper), base

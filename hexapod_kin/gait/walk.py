@@ -43,6 +43,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -62,7 +63,6 @@ from .robot import GaitError, WholeBody, as_whole_body
 from .run import GaitRun
 from .stability import (
     accel_limit_of,
-    edge_clearance,
     leg_terrain_clearance,
     raise_checks,
     segment_clearance,
@@ -295,27 +295,9 @@ def walk(
             the time and by how much.
 
     """
+    args = dict(locals())  # this walk's arguments (a period is fitted by walking again)
     wb = as_whole_body(robot)
-    pattern = default_pattern(wb.n_legs) if pattern is None else pattern
-    table = phase_table(pattern, wb.n_legs, wb.mounts[:, :2, 3], wb.leg_names).with_duty_factor(
-        duty_factor
-    )
-    if open_loop and not table.statically_stable:
-        offered = pattern_names(wb.n_legs, wb.mounts[:, :2, 3])
-        stable = [
-            p for p in offered if phase_table(p, wb.n_legs, wb.mounts[:, :2, 3]).statically_stable
-        ]
-        raise GaitError(
-            f"pattern {table.name!r} keeps two feet on the ground: it is not statically stable "
-            "and needs a balance controller, so the open-loop planner refuses it (check "
-            "'statically unstable'; plan it for a controller with walk(..., open_loop=False), "
-            f"or walk {', '.join(stable)})",
-            check="statically unstable",
-            parameter="pattern",
-            value=table.name,
-            allowed="a statically stable pattern",
-        )
-    beta = table.duty_factor
+    table = _phase_table(wb, pattern, duty_factor, open_loop)
     H = _num(
         "step_height",
         default_step_height(wb) if step_height is None else step_height,
@@ -323,31 +305,17 @@ def walk(
         hi=1.0,
     )
     if period is None and velocity is None:
+        refit = ("robot", "pattern", "step_height", "period", "duration", "strict")
+        same = {k: v for k, v in args.items() if k not in refit} | {"strict": False}
 
         def planned(T: float, whole: bool = False) -> GaitRun:
-            return walk(
-                wb,
-                pattern=table,
-                stride=stride,
-                step_height=H,
-                period=T,
-                body_height=body_height,
-                foot_reach=foot_reach,
-                terrain=terrain,
-                rate=rate,
-                duration=duration if whole else T,
-                q0=q0,
-                strict=False,
-                foot_radius=foot_radius,
-                sway=sway,
-                accel_limit=accel_limit,
-                knee=knee,
-                open_loop=open_loop,
-            )
+            length = duration if whole else T
+            return walk(wb, **same, pattern=table, step_height=H, period=T, duration=length)
 
         period = fit_period(planned)  # one cycle: the whole walk on flat ground (periodic)
         if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
             period = fit_period(lambda T: planned(T, True), period)
+    beta = table.duty_factor
     T = _num("period", 1.0 if period is None else period, hi=1e3)
     bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
     reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
@@ -393,13 +361,8 @@ def walk(
             )
         vel = (float(v[0]), float(v[1]), float(v[2]))
     ground: Terrain = make_terrain(terrain)
-    t = np.arange(n) / hz
-    names = wb.leg_names
-    nl = wb.n_legs
-    # neutral foot points in the body frame (xy)
     nb = wb.neutral_feet(reach)[:, :2]  # (L, 2)
     size = float(np.hypot(wb.mounts[:, 0, 3], wb.mounts[:, 1, 3]).max()) + reach
-    tol = MARGIN_TOL * size
     vx, vy, w = vel
     with np.errstate(over="ignore", invalid="ignore"):
         strokes = np.hypot(vx - w * nb[:, 1], vy + w * nb[:, 0]) * beta * T
@@ -412,171 +375,334 @@ def walk(
             value=velocity,
             allowed=f"strokes <= {MAX_STROKE:g} m, turns <= {MAX_TURN:g} rad per stance",
         )
-    # --- contacts and swings, per sample and leg
-    offs = np.asarray(table.offsets)
-    tsw = (1.0 - beta) * T
-    m = np.floor(t[:, None] / T + offs[None, :] - beta)  # latest lift-off index
-    t_lo = (m + beta - offs[None, :]) * T
-    s = (t[:, None] - t_lo) / tsw
-    swing = s < 1.0 - 1e-9  # a touch-down instant is stance, whatever the rounding of t
-    support = ~swing
-    t_td = t_lo + tsw
-    # one contact per swing (m, leg): a table over the swings the run touches, m0 - 1 first
-    m0 = int(m.min()) - 1
-    mm = np.arange(m0, int(m.max()) + 1, dtype=float)[:, None]
-    td_tab = (mm + beta - offs[None, :]) * T + tsw  # (M, L) touch-down times
-    legs = np.arange(nl)[None, :]
-    row = (m - m0).astype(np.int64)
-    gb = np.stack([vx - w * nb[:, 1], vy + w * nb[:, 0]], axis=1)  # feet's travel, body frame
-    gb[np.hypot(gb[:, 0], gb[:, 1]) == 0.0] = (1.0, 0.0)
-    gb /= np.hypot(gb[:, 0], gb[:, 1])[:, None]
+    t = np.arange(n) / hz
+    st = _Setup(
+        table,
+        H,
+        T,
+        beta,
+        vel,
+        bh,
+        reach,
+        dur,
+        hz,
+        rad,
+        gain,
+        acc_lim,
+        ground,
+        t,
+        nb,
+        strokes,
+        size,
+        MARGIN_TOL * size,
+    )
+    sw = _Swings.of(wb, st)
+    plan = sw.planned_feet(st)
+    base = _body_poses(st, sw)
+    if knee is not None:
+        q0 = knee_seed(wb, knee, base[0], plan[0], q0)
+    if st.sway > 0.0:
+        base = sway_poses(wb, table, st.T, st.vel, st.nb, st.sway, base, plan, st.t, q0)
+    sol = _Solution(wb, st, sw, base, plan, q0)
+    sol.clear_edges()
+    return _checked(wb, st, sw, sol, q0, strict)
 
-    def contact(t_touch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        pose = se2_pose(t_touch + 0.5 * beta * T, vel)  # body at mid-stance
+
+def _phase_table(wb: WholeBody, pattern: Any, duty_factor: Any, open_loop: bool) -> PhaseTable:
+    """The walk's phase table; a pattern that is not statically stable refused when open loop."""
+    pattern = default_pattern(wb.n_legs) if pattern is None else pattern
+    xy = wb.mounts[:, :2, 3]
+    table = phase_table(pattern, wb.n_legs, xy, wb.leg_names).with_duty_factor(duty_factor)
+    if open_loop and not table.statically_stable:
+        offered = pattern_names(wb.n_legs, xy)
+        stable = [p for p in offered if phase_table(p, wb.n_legs, xy).statically_stable]
+        raise GaitError(
+            f"pattern {table.name!r} keeps two feet on the ground: it is not statically stable "
+            "and needs a balance controller, so the open-loop planner refuses it (check "
+            "'statically unstable'; plan it for a controller with walk(..., open_loop=False), "
+            f"or walk {', '.join(stable)})",
+            check="statically unstable",
+            parameter="pattern",
+            value=table.name,
+            allowed="a statically stable pattern",
+        )
+    return table
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """A walk's checked settings (SI units) and its sample times."""
+
+    table: PhaseTable
+    H: float  # step height [m]
+    T: float  # period [s]
+    beta: float  # duty factor
+    vel: tuple[float, float, float]  # body twist (vx, vy, wz)
+    body_height: float
+    reach: float
+    duration: float
+    rate: float
+    rad: float  # foot radius [m]
+    sway: float
+    acc_lim: np.ndarray
+    ground: Terrain
+    t: np.ndarray
+    nb: np.ndarray  # (L, 2) neutral feet in the body frame
+    strokes: np.ndarray  # (L,) each foot's stroke during a stance [m]
+    size: float  # the robot's size [m] (the checks' rounding scale)
+    tol: float  # margin tolerance [m]
+
+
+@dataclass
+class _Swings:
+    """Every swing of the run and, per sample and leg, where it stands in them.
+
+    Each leg's contacts form a table over the swings the run touches (``m0 − 1`` first): row
+    ``m`` is the touch-down after swing ``m``, fixed when the swing is planned (the leg's
+    neutral foot point under the body at the middle of the next stance, moved off terrain
+    edges). Per sample, ``row`` is the latest swing (lift-off index), ``s`` its progress.
+    """
+
+    row: np.ndarray  # (N, L) the latest swing's row in the contact table
+    legs: np.ndarray  # (1, L) leg indices (for fancy indexing)
+    swing: np.ndarray  # (N, L) True in swing
+    sc: np.ndarray  # (N, L) swing progress clipped into [0, 1]
+    blend: np.ndarray  # (N, L) the horizontal profile of :func:`swing_profile`
+    tab: np.ndarray  # (M, L, 3) the contacts
+    n_tab: np.ndarray  # (M, L, 3) the terrain normals at them
+    moved: np.ndarray  # (M, L) each contact's move off an edge along its travel [m]
+    used: np.ndarray  # (M, L) the contacts the run touches
+    extra: np.ndarray  # (M, L) each swing's raise over edges [m]
+
+    @classmethod
+    def of(cls, wb: WholeBody, st: _Setup) -> _Swings:
+        """The contacts and the swings of the run (raises check ``"terrain"``)."""
+        offs = np.asarray(st.table.offsets)
+        beta, T, t, nb, ground, rad = st.beta, st.T, st.t, st.nb, st.ground, st.rad
+        tsw = (1.0 - beta) * T
+        m = np.floor(t[:, None] / T + offs[None, :] - beta)  # latest lift-off index
+        t_lo = (m + beta - offs[None, :]) * T
+        s = (t[:, None] - t_lo) / tsw
+        swing = s < 1.0 - 1e-9  # a touch-down instant is stance, whatever the rounding of t
+        t_td = t_lo + tsw
+        m0 = int(m.min()) - 1
+        mm = np.arange(m0, int(m.max()) + 1, dtype=float)[:, None]
+        td_tab = (mm + beta - offs[None, :]) * T + tsw  # (M, L) touch-down times
+        legs = np.arange(wb.n_legs)[None, :]
+        row = (m - m0).astype(np.int64)
+        vx, vy, w = st.vel
+        gb = np.stack([vx - w * nb[:, 1], vy + w * nb[:, 0]], axis=1)  # feet's travel (body)
+        gb[np.hypot(gb[:, 0], gb[:, 1]) == 0.0] = (1.0, 0.0)
+        gb /= np.hypot(gb[:, 0], gb[:, 1])[:, None]
+        pose = se2_pose(td_tab + 0.5 * beta * T, st.vel)  # body at mid-stance
         c, sn = np.cos(pose[..., 2]), np.sin(pose[..., 2])
         x = pose[..., 0] + c * nb[:, 0] - sn * nb[:, 1]
         y = pose[..., 1] + sn * nb[:, 0] + c * nb[:, 1]
-        u = np.stack([c * gb[:, 0] - sn * gb[:, 1], sn * gb[:, 0] + c * gb[:, 1]], axis=-1)
-        return np.stack([x, y, ground(x, y)], axis=-1), u
+        along = np.stack([c * gb[:, 0] - sn * gb[:, 1], sn * gb[:, 0] + c * gb[:, 1]], axis=-1)
+        tab = np.stack([x, y, ground(x, y)], axis=-1)
+        moved = np.zeros(tab.shape[:2])
+        if FOOTHOLD_MARGIN >= 0 and np.isfinite(tab[..., 2]).all():
+            disc = rad + FOOTHOLD_MARGIN
+            xy, shift = off_edges(ground, tab.reshape(-1, 3), along.reshape(-1, 2), disc, 4 * disc)
+            moved = shift.reshape(moved.shape)
+            if moved.any():
+                z = ground(xy[:, 0], xy[:, 1])[:, None]
+                tab = np.concatenate([xy, z], axis=1).reshape(tab.shape)
+        used = np.zeros(tab.shape[:2], dtype=bool)
+        used[row, legs] = True
+        used[(row - 1)[swing], np.broadcast_to(legs, row.shape)[swing]] = True
+        nxt = tab[row, legs]
+        for pts, when in ((nxt, t_td), (tab[row - 1, legs], td_tab[row - 1, legs])):
+            bad = ~np.isfinite(pts[..., 2]) & (swing | (pts is nxt))
+            if bad.any():
+                i, leg = np.argwhere(bad)[0]
+                p, name, at = pts[i, leg], wb.leg_names[leg], float(max(when[i, leg], 0.0))
+                raise GaitError(
+                    f"leg {name}: touch-down point ({p[0]:.4g}, {p[1]:.4g}) m at "
+                    f"t={at:.4g} s is off the terrain {ground.name!r} (check 'terrain')",
+                    check="terrain",
+                    leg=name,
+                    time=at,
+                    parameter="terrain",
+                    value=[float(p[0]), float(p[1])],
+                    allowed="feet where h(x, y) is defined",
+                )
+        sc = np.clip(s, 0.0, 1.0)
+        n_tab = terrain_normals(ground, tab[..., 0], tab[..., 1])
+        extra = np.zeros(tab.shape[:2])
+        return cls(row, legs, swing, sc, swing_profile(sc)[0], tab, n_tab, moved, used, extra)
 
-    tab, along = contact(td_tab)
-    moved = np.zeros(tab.shape[:2])
-    if FOOTHOLD_MARGIN >= 0 and np.isfinite(tab[..., 2]).all():
-        xy, moved_flat = off_edges(
-            ground,
-            tab.reshape(-1, 3),
-            along.reshape(-1, 2),
-            rad + FOOTHOLD_MARGIN,
-            4.0 * (rad + FOOTHOLD_MARGIN),
-        )
-        moved = moved_flat.reshape(moved.shape)
-        if moved.any():
-            tab = np.concatenate([xy, ground(xy[:, 0], xy[:, 1])[:, None]], axis=1).reshape(
-                tab.shape
-            )
-    nxt = tab[row, legs]  # TD_m: the contact after swing m
-    prev = tab[row - 1, legs]  # TD_{m-1}: the contact before it
-    used = np.zeros(tab.shape[:2], dtype=bool)
-    used[row, legs] = True
-    used[(row - 1)[swing], np.broadcast_to(legs, row.shape)[swing]] = True
-    for pts, when in ((nxt, t_td), (prev, td_tab[row - 1, legs])):
-        bad = ~np.isfinite(pts[..., 2]) & (swing | (pts is nxt))
-        if bad.any():
-            i, leg = np.argwhere(bad)[0]
-            p = pts[i, leg]
-            raise GaitError(
-                f"leg {names[leg]}: touch-down point ({p[0]:.4g}, {p[1]:.4g}) m at "
-                f"t={max(when[i, leg], 0.0):.4g} s is off the terrain {ground.name!r} "
-                "(check 'terrain')",
-                check="terrain",
-                leg=names[leg],
-                time=float(max(when[i, leg], 0.0)),
-                parameter="terrain",
-                value=[float(p[0]), float(p[1])],
-                allowed="feet where h(x, y) is defined",
-            )
-    sc = np.clip(s, 0.0, 1.0)
-    blend, lift = swing_profile(sc)
-    n_tab = terrain_normals(ground, tab[..., 0], tab[..., 1])
-    c_tab = tab + rad * n_tab  # sphere centres on the contacts
-    n_nxt = n_tab[row, legs]
-    c_nxt, c_prev = c_tab[row, legs], c_tab[row - 1, legs]
-    plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * blend[..., None], c_nxt)
-    plan[..., 2] += np.where(swing, H * lift, 0.0)
-    # swings over an edge: raised to clear it (terrain.swing_raise); sized again from the
-    # lift-off's rolling once the IK knows it (a swing's height does not change its stance)
-    lift2 = raise_profile(sc)
-    ok_tab = bool(np.isfinite(tab[..., 2]).all())
+    def after(self, values: np.ndarray) -> np.ndarray:
+        """(N, L, ...) per-contact ``values`` (M, L, ...) at each sample's next contact."""
+        return np.asarray(values[self.row, self.legs])
 
-    def raised(lo: np.ndarray) -> np.ndarray:
-        out = np.zeros(tab.shape[:2])
-        if ok_tab:
-            c0, c1 = (c_tab[:-1] + lo[1:]).reshape(-1, 3), c_tab[1:].reshape(-1, 3)
-            out[1:] = swing_raise(ground, c0, c1, H, rad, SWING_MARGIN).reshape(-1, nl)
+    def before(self, values: np.ndarray) -> np.ndarray:
+        """(N, L, ...) per-contact ``values`` at each sample's contact before its swing."""
+        return np.asarray(values[self.row - 1, self.legs])
+
+    @property
+    def raise_profile(self) -> np.ndarray:
+        """(N, L) the swing raise's profile (:func:`~.terrain.raise_profile`)."""
+        return raise_profile(self.sc)
+
+    def planned_feet(self, st: _Setup) -> np.ndarray:
+        """(N, L, 3) the foot spheres' centres: on the contacts in stance, the swing between.
+
+        Swings over an edge are raised to clear it (:func:`~.terrain.swing_raise`).
+        """
+        c_tab = self.tab + st.rad * self.n_tab  # sphere centres on the contacts
+        c_nxt, c_prev = self.after(c_tab), self.before(c_tab)
+        swing = self.swing
+        plan = np.where(swing[..., None], c_prev + (c_nxt - c_prev) * self.blend[..., None], c_nxt)
+        plan[..., 2] += np.where(swing, st.H * swing_profile(self.sc)[1], 0.0)
+        self.raise_swings(plan, self.raised(st, np.zeros(self.tab.shape)))
+        return plan
+
+    def raised(self, st: _Setup, lift_off: np.ndarray) -> np.ndarray:
+        """(M, L) each swing's raise over edges, from its lift-off's rolling ``lift_off``."""
+        out = np.zeros(self.tab.shape[:2])
+        if np.isfinite(self.tab[..., 2]).all():
+            c_tab = self.tab + st.rad * self.n_tab
+            c0, c1 = (c_tab[:-1] + lift_off[1:]).reshape(-1, 3), c_tab[1:].reshape(-1, 3)
+            raise_ = swing_raise(st.ground, c0, c1, st.H, st.rad, SWING_MARGIN)
+            out[1:] = raise_.reshape(-1, self.tab.shape[1])
         return out
 
-    extra = raised(np.zeros(tab.shape))
-    plan[..., 2] += np.where(swing, extra[row, legs] * lift2, 0.0)
-    gz = np.where(swing, prev[..., 2] + (nxt[..., 2] - prev[..., 2]) * blend, nxt[..., 2])
-    # --- body
-    pose = se2_pose(t, vel)
+    def raise_swings(self, plan: np.ndarray, more: np.ndarray) -> None:
+        """Raise the swings by ``more`` (M, L) [m] over their raise profile, in ``plan``."""
+        self.extra += more
+        plan[..., 2] += np.where(self.swing, self.after(more) * self.raise_profile, 0.0)
+
+    def ground_heights(self) -> np.ndarray:
+        """(N, L) each foot's ground height: its contact's, blended through the swing."""
+        z1, z0 = self.after(self.tab[..., 2]), self.before(self.tab[..., 2])
+        return np.asarray(np.where(self.swing, z0 + (z1 - z0) * self.blend, z1))
+
+    def planes(self, first_half: np.ndarray | None = None) -> np.ndarray:
+        """(N, L, 4) each leg's ground plane ``n·x = k``: its contact's (stance).
+
+        In swing, the lower of its two contacts' planes, or with ``first_half`` (N, L) the
+        lift-off's where True and the touch-down's elsewhere.
+        """
+        prev, nxt = self.before(self.tab), self.after(self.tab)
+        if first_half is None:
+            first_half = self.swing & (prev[..., 2] < nxt[..., 2])
+        which = first_half[..., None]
+        n = np.where(which, self.before(self.n_tab), self.after(self.n_tab))
+        k = np.einsum("nli,nli->nl", n, np.where(which, prev, nxt))
+        return np.concatenate([n, k[..., None]], axis=-1)
+
+
+def _body_poses(st: _Setup, sw: _Swings) -> np.ndarray:
+    """(N, 4, 4) level body poses on the SE(2) path, ``body_height`` above the feet's ground."""
+    n = len(st.t)
+    pose = se2_pose(st.t, st.vel)
     base = np.zeros((n, 4, 4))
     rz = np.array([rpy_to_matrix(0.0, 0.0, psi)[:2, :2] for psi in pose[:, 2]])  # Rz(ψ)
     base[:, :2, :2] = rz
     base[:, 0, 1] = -rz[:, 1, 0]  # −sin ψ (rpy_to_matrix's 0 − sin ψ is +0.0 at ψ = 0)
     base[:, 2, 2] = base[:, 3, 3] = 1.0
     base[:, 0, 3], base[:, 1, 3] = pose[:, 0], pose[:, 1]
-    base[:, 2, 3] = gz.mean(axis=1) + bh
-    # --- joints: sway (optional), then IK <-> rolling to a fixed point
-    if knee is not None:
-        q0 = knee_seed(wb, knee, base[0], plan[0], q0)
-    if gain > 0.0:
-        base = sway_poses(wb, table, T, vel, nb, gain, base, plan, t, q0)
-    args = (support, swing, blend, n_nxt, rad, t, q0, ROLLING_TOL * size, ROLLING_PASSES)
-    feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
-    if extra.any():
-        lo = np.zeros(tab.shape)  # each swing's lift-off rolling: feet − plan = lo·(1 − b)
-        sw = swing & (blend < 0.5)
-        lo[row[sw], np.broadcast_to(legs, sw.shape)[sw]] = (
-            ((feet - plan)[sw]) / (1.0 - blend[sw])[:, None]
+    base[:, 2, 3] = sw.ground_heights().mean(axis=1) + st.body_height
+    return base
+
+
+class _Solution:
+    """The joints of the planned feet: IK and rolling to a fixed point (:func:`rolling_ik`)."""
+
+    def __init__(
+        self, wb: WholeBody, st: _Setup, sw: _Swings, base: np.ndarray, plan: np.ndarray, q0: Any
+    ) -> None:
+        self.wb, self.st, self.sw, self.base, self.plan = wb, st, sw, base, plan
+        self.args = (
+            ~sw.swing,
+            sw.swing,
+            sw.blend,
+            sw.after(sw.n_tab),
+            st.rad,
+            st.t,
+            q0,
+            ROLLING_TOL * st.size,
+            ROLLING_PASSES,
         )
-        more = np.maximum(raised(lo) - extra, 0.0)
-        if more.any():
-            extra += more
-            plan[..., 2] += np.where(swing, more[row, legs] * lift2, 0.0)
-            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
-    # each leg's own ground: its contact's plane (in swing the lower of the two contacts')
-    low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], prev, nxt)
-    n_low = np.where((swing & (prev[..., 2] < nxt[..., 2]))[..., None], n_tab[row - 1, legs], n_nxt)
-    plane = np.concatenate([n_low, np.einsum("nli,nli->nl", n_low, low)[..., None]], axis=-1)
-    # the swing clearance promised over edges (SWING_MARGIN), measured on the feet as solved:
-    # a swing short of it is raised by the deficit over its raise profile, and solved again
-    # (over the ground above the plane of the swing's lift-off in its first half, of its
-    # touch-down in its second: the edge it climbs, not the ground it leaves or lands on)
-    edge_gap = np.full(swing.shape, np.inf)
-    if ok_tab and ground.relief > 0:
-        first = (swing & (blend < 0.5))[..., None]
-        n_own = np.where(first, n_tab[row - 1, legs], n_nxt)
-        own = np.concatenate(
-            [n_own, np.einsum("nli,nli->nl", n_own, np.where(first, prev, nxt))[..., None]],
-            axis=-1,
-        )
-        for _ in range(EDGE_PASSES + 1):
-            edge_gap = np.full(swing.shape, np.inf)
-            edge_gap[swing] = edge_distance(ground, feet[swing], rad, SWING_MARGIN, own[swing])
-            short = swing & (edge_gap < SWING_MARGIN - EDGE_SLACK) & (lift2 > 0.05)
-            if not short.any() or _ == EDGE_PASSES:
-                break
-            need = np.zeros(tab.shape[:2])
-            at = (row[short], np.broadcast_to(legs, short.shape)[short])
+        self.edge_gap = np.full(sw.swing.shape, np.inf)
+        self.solve()
+        if sw.extra.any():  # sized again from each swing's lift-off rolling, now known
+            lo = np.zeros(sw.tab.shape)  # feet − plan = lo·(1 − b) in the swing's first half
+            sel = sw.swing & (sw.blend < 0.5)
+            lo[sw.row[sel], np.broadcast_to(sw.legs, sel.shape)[sel]] = (self.feet - plan)[sel] / (
+                1.0 - sw.blend[sel]
+            )[:, None]
+            more = np.maximum(sw.raised(st, lo) - sw.extra, 0.0)
+            if more.any():
+                sw.raise_swings(plan, more)
+                self.solve()
+
+    def solve(self) -> None:
+        """IK ↔ rolling of the current plan."""
+        out = rolling_ik(self.wb, self.base, self.plan, *self.args)
+        self.feet, self.q, self.ik, self.passes, self.residual, self.T, self.rolled = out
+
+    def clear_edges(self) -> None:
+        """Raise the swings short of :data:`SWING_MARGIN` over an edge, and solve again.
+
+        The clearance is measured on the feet as solved, over the ground above the plane of
+        the swing's lift-off in its first half, of its touch-down in its second (the edge it
+        climbs, not the ground it leaves or lands on); a swing short of it is raised by the
+        deficit over its raise profile (at most to twice the step height).
+        """
+        sw, st = self.sw, self.st
+        if not (np.isfinite(sw.tab[..., 2]).all() and st.ground.relief > 0):
+            return
+        own = sw.planes(sw.swing & (sw.blend < 0.5))
+        lift2 = sw.raise_profile
+        for k in range(EDGE_PASSES + 1):
+            self.edge_gap = gap = np.full(sw.swing.shape, np.inf)
+            gap[sw.swing] = edge_distance(
+                st.ground, self.feet[sw.swing], st.rad, SWING_MARGIN, own[sw.swing]
+            )
+            short = sw.swing & (gap < SWING_MARGIN - EDGE_SLACK) & (lift2 > 0.05)
+            if not short.any() or k == EDGE_PASSES:
+                return
+            need = np.zeros(sw.tab.shape[:2])
+            at = (sw.row[short], np.broadcast_to(sw.legs, short.shape)[short])
             aim = SWING_MARGIN + EDGE_HEADROOM  # the sampled distance errs by a fraction of it
-            np.maximum.at(need, at, (aim - edge_gap[short]) / lift2[short])
-            need = np.minimum(need, np.maximum(H - extra, 0.0))  # the raise stays <= H
+            np.maximum.at(need, at, (aim - gap[short]) / lift2[short])
+            need = np.minimum(need, np.maximum(st.H - sw.extra, 0.0))  # the raise stays <= H
             if not need.any():
-                break
-            extra += need
-            plan[..., 2] += np.where(swing, need[row, legs] * lift2, 0.0)
-            feet, q, ik, passes, residual, T_last, rolled = rolling_ik(wb, base, plan, *args)
-    foot_gap = terrain_clearance(ground, feet, swing, rad, t, names, H, strict)
-    edge_clearance(edge_gap, swing, SWING_MARGIN - EDGE_SLACK, t, names, H, strict)
-    if strict and not np.asarray(ik.ok).all():
-        wb.body_ik(base, feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
-    if T_last is None:
-        pts, com = wb.points_and_com(q, base)
-    else:
-        pts = wb.points_of(T_last)
-        com = wb.com_of(T_last, base) if hasattr(wb, "com_of") else wb.com(q, base)
+                return
+            sw.raise_swings(self.plan, need)
+            self.solve()
+
+
+def _checked(
+    wb: WholeBody, st: _Setup, sw: _Swings, sol: _Solution, q0: Any, strict: bool
+) -> GaitRun:
+    """Every check of the solved walk (``strict``: the first failure raised), as a run."""
+    t, names, rad, q, base, swing = st.t, wb.leg_names, st.rad, sol.q, sol.base, sw.swing
+    support = ~swing
+    n, nl = swing.shape
+    n_nxt = sw.after(sw.n_tab)
+    promised = SWING_MARGIN - EDGE_SLACK
+    foot_gap = terrain_clearance(
+        st.ground, sol.feet, swing, rad, t, names, st.H, strict, sol.edge_gap, promised
+    )
+    if strict and not np.asarray(sol.ik.ok).all():
+        wb.body_ik(base, sol.feet, q_prev=q0, times=t, strict=True)  # raises, naming the check
+    T_all = wb.joint_poses(q, base) if sol.T is None else sol.T
+    pts, com = wb.points_of(T_all), wb.com_of(T_all, base)
     actual = np.ascontiguousarray(pts[:, :, -1])
     ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
-    slip = np.where(support, np.linalg.norm(actual - ref - rolled, axis=-1), 0.0)
+    slip = np.where(support, np.linalg.norm(actual - ref - sol.rolled, axis=-1), 0.0)
     margin = support_margin(actual - rad * n_nxt, support, com)
-    T_all = wb.joint_poses(q, base) if T_last is None else T_last
     zmp_margin = _zmp_margin(wb, T_all, base, actual - rad * n_nxt, support, t)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
-    leg_gap = leg_terrain_clearance(ground, pts, wb.link_radius, rad, plane, t, names, strict)
+    leg_gap = leg_terrain_clearance(
+        st.ground, pts, wb.link_radius, rad, sw.planes(), t, names, strict
+    )
     if n > 3:
         qdot = np.gradient(q, t, axis=0, edge_order=2)
         qddot = second_difference(q, t)
@@ -586,54 +712,53 @@ def walk(
     if strict:
         raise_checks(
             wb.joint_names,
-            table,
+            st.table,
             names,
             pairs,
             t,
             clear,
             margin,
-            tol,
-            strokes,
+            st.tol,
+            st.strokes,
             qdot,
             qddot,
             vlim,
-            acc_lim,
+            st.acc_lim,
             support,
         )
-    phase = table.phase(t, T)
-    read_only(t, base, actual, feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
+    phase = st.table.phase(t, st.T)
+    read_only(t, base, actual, sol.feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
+    used, gap = sw.used, sol.edge_gap
     settings = {
-        "stride": float(strokes.max()),
-        "step_height": H,
-        "period": T,
-        "duty_factor": beta,
-        "velocity": vel,
-        "body_height": bh,
-        "foot_reach": reach,
-        "terrain": ground.name,
-        "duration": dur,
-        "rate": hz,
+        "stride": float(st.strokes.max()),
+        "step_height": st.H,
+        "period": st.T,
+        "duty_factor": st.beta,
+        "velocity": st.vel,
+        "body_height": st.body_height,
+        "foot_reach": st.reach,
+        "terrain": st.ground.name,
+        "duration": st.duration,
+        "rate": st.rate,
         "foot_radius": rad,
-        "sway": gain,
+        "sway": st.sway,
         "knees": knee_directions(wb, q[0]) if n else (),
-        "rolling_passes": passes,
-        "rolling_residual": residual,
-        "margin_tol": tol,
-        "footholds_moved": int(np.count_nonzero(used & (moved != 0))),
-        "foothold_shift_max": float(np.abs(np.where(used, moved, 0.0)).max()),
-        "swings_raised": int(np.count_nonzero(used[1:] & (extra[1:] > 0))),
-        "swing_raise_max": float(np.where(used, extra, 0.0).max()),
-        "min_edge_clearance": (
-            float(edge_gap.min()) if edge_gap.size and np.isfinite(edge_gap.min()) else None
-        ),
+        "rolling_passes": sol.passes,
+        "rolling_residual": sol.residual,
+        "margin_tol": st.tol,
+        "footholds_moved": int(np.count_nonzero(used & (sw.moved != 0))),
+        "foothold_shift_max": float(np.abs(np.where(used, sw.moved, 0.0)).max()),
+        "swings_raised": int(np.count_nonzero(used[1:] & (sw.extra[1:] > 0))),
+        "swing_raise_max": float(np.where(used, sw.extra, 0.0).max()),
+        "min_edge_clearance": float(gap.min()) if gap.size and np.isfinite(gap.min()) else None,
     }
-    ik_ok = np.asarray(ik.ok)
-    read_only(ik_ok, vlim, acc_lim, n_nxt, foot_gap, leg_gap)
+    ik_ok = np.asarray(sol.ik.ok)
+    read_only(ik_ok, vlim, st.acc_lim, n_nxt, foot_gap, leg_gap)
     return GaitRun(
         t=t,
         base_poses=base,
         feet=actual,
-        feet_planned=feet,
+        feet_planned=sol.feet,
         q=q,
         qdot=qdot,
         support=support,
@@ -642,19 +767,19 @@ def walk(
         slip=slip,
         margin=margin,
         zmp_margin=zmp_margin,
-        limit_margin=ik.limit_margin,
+        limit_margin=sol.ik.limit_margin,
         ik_ok=ik_ok,
-        reach_excess=ik.excess,
+        reach_excess=sol.ik.excess,
         clearance=clear,
         pairs=pairs,
         leg_names=names,
         joint_names=wb.joint_names,
-        table=table,
+        table=st.table,
         settings=settings,
         mass=wb.mass,
         qddot=qddot,
         velocity_limit=vlim,
-        accel_limit=acc_lim,
+        accel_limit=st.acc_lim,
         robot=wb,
         normals=n_nxt,
         foot_gap=foot_gap,
