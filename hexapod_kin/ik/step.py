@@ -30,6 +30,8 @@ __all__ = ["lm_batch", "lm_loop", "log3", "sigma_min3", "step_into", "task_into"
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
+# one row of :func:`lm_batch`'s output: these scalars, then q, p, R and the residual history
+O_ATTEMPTS, O_STEPS, O_CODE, O_ERROR, O_ROT_ERROR, O_SIGMA_MIN, O_Q = range(7)
 
 
 @njit(cache=True, nogil=True)
@@ -238,15 +240,14 @@ def lm_loop(
     starts: np.ndarray,
     lim: np.ndarray,
     cont: np.ndarray,
-    posture: np.ndarray,
     q_out: np.ndarray,
     hist_out: np.ndarray,
     jac_out: np.ndarray,
 ) -> tuple[int, int, int]:  # pragma: no cover - compiled
     """Levenberg–Marquardt loop from each start in turn until one converges.
 
-    ``lim`` rows: lower, upper, step cap. A step is kept only if it lowers ``‖W e‖`` (so the
-    history decreases strictly); λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a
+    ``lim`` rows: lower, upper, step cap, posture. A step is kept only if it lowers ``‖W e‖``
+    (so the history decreases strictly); λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a
     refused one. Joints at a limit with the gradient pointing outward are frozen. With
     ``ipar[I_POSTURE]`` and more joints than task rows, each step first tries the null-space
     motion toward ``posture`` (gain ``par[P_POST_GAIN]``), kept only if the task error at
@@ -271,6 +272,7 @@ def lm_loop(
     lower = lim[0]
     upper = lim[1]
     cap = lim[2]
+    posture = lim[3]
     scratch = np.empty((6, max(rot.shape[0], 1)))
     p = np.empty(3)
     r = np.empty((3, 3))
@@ -465,41 +467,42 @@ def lm_batch(
     starts: np.ndarray,
     lim: np.ndarray,
     cont: np.ndarray,
-    posture: np.ndarray,
-    q_out: np.ndarray,
-    hist_out: np.ndarray,
-    meas_out: np.ndarray,
-    res_out: np.ndarray,
+    out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     """:func:`lm_loop` for N targets in one compiled call, each result measured.
 
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
-    steps, code); ``meas_out[i]`` (15,) at the returned q: the tip position (3) [m] and
-    rotation (9, row-major), the error over the kept position rows [m], over the kept
-    rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0) and
-    the smallest singular value of the position Jacobian (:func:`sigma_min3`).
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``lim`` (4, n): lower and
+    upper limits, step caps and the posture. ``out[i]`` (``O_Q + n + 12 + max_iter + 1``
+    values), at the returned q: ``O_ATTEMPTS``, ``O_STEPS``, ``O_CODE`` (exact small
+    integers), the error over the kept position rows [m], over the kept rotation rows [rad]
+    (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0), the smallest singular value
+    of the position Jacobian (:func:`sigma_min3`), then q (n), the tip position (3) [m] and
+    rotation (9, row-major), and the residual history (``max_iter + 1``, the first
+    ``steps + 1`` written).
     """
     n = starts.shape[2]
     jac = np.empty((6, n))
     scratch = np.empty((6, max(rot.shape[0], 1)))
-    p = np.empty(3)
     r = np.empty((3, 3))
     w3 = np.empty((3, 3))
     et = np.empty(6)
     jt = np.empty((6, n))
+    o_p = O_Q + n
+    o_h = o_p + 12
     for i in range(tgts.shape[0]):
+        row = out[i]
+        q = row[O_Q:o_p]
         a, it, c = lm_loop(rot, trans, axis, kind, col, tip_rot, tgts[i], w6, pars[i], ipar,
-                           starts[i], lim, cont, posture, q_out[i], hist_out[i], jac)  # fmt: skip
-        res_out[i, 0] = a
-        res_out[i, 1] = it
-        res_out[i, 2] = c
-        fk_jac_into(rot, trans, axis, kind, col, q_out[i], p, jac, scratch, n >= 0, tip_rot, r)
+                           starts[i], lim, cont, q, row[o_h:], jac)  # fmt: skip
+        p = row[o_p : o_p + 3]
+        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0, tip_rot, r)
         _, pos2, rot2 = task_into(ipar[I_MODE], tgts[i], w6, pars[i, P_YAW], p, r, jac, w3, et, jt)
-        out = meas_out[i]
         for k in range(3):
-            out[k] = p[k]
             for j in range(3):
-                out[3 + 3 * k + j] = r[k, j]
-        out[12] = math.sqrt(pos2)
-        out[13] = math.sqrt(rot2)
-        out[14] = sigma_min3(jac)
+                row[o_p + 3 + 3 * k + j] = r[k, j]
+        row[O_ATTEMPTS] = a
+        row[O_STEPS] = it
+        row[O_CODE] = c
+        row[O_ERROR] = math.sqrt(pos2)
+        row[O_ROT_ERROR] = math.sqrt(rot2)
+        row[O_SIGMA_MIN] = sigma_min3(jac)
