@@ -230,8 +230,8 @@ class _Setup:
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
-    chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
-    tail: tuple[np.ndarray, np.ndarray]  # lower/upper/step caps/posture (4, n), continuous
+    fplan: np.ndarray  # the chain and the limits, step caps and posture (:func:`_plans`)
+    iplan: np.ndarray  # ipar, then the chain's joint kinds, columns, continuous flags
     tols: tuple[float, float]  # tol, rot_tol as Python floats
     tols_text: str  # "{tol:g}, {rot_tol:g}" (the converged reason's tail)
     one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
@@ -274,14 +274,28 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     par = _par(opts, prep.scale)
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
-    chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
-    tail = (_arg(np.vstack([prep.lim, posture])), _arg(prep.cont))
+    fplan, iplan = _plans(mdl.arrays, np.vstack([prep.lim, posture]), prep.cont, ipar)
     tols = (float(opts.tol), float(opts.rot_tol))
     one = (par[None], starts[None])
     text = f"{tols[0]:g}, {tols[1]:g}"
     n = mdl.nq
     width = _O_Q + n + 12 + opts.max_iter + 1
-    return _Setup(prep, par, ipar, starts, chain, tail, tols, text, one, width, n)
+    return _Setup(prep, par, ipar, starts, fplan, iplan, tols, text, one, width, n)
+
+
+def _plans(
+    chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_batch``).
+
+    A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
+    (n,) and ``ipar`` (4,), in two private C-contiguous arrays (float64, int64).
+    """
+    rot, trans, axis, kind, col = chain.packed
+    fplan = np.concatenate([np.ravel(a) for a in (rot, trans, axis, chain.tip_rot, lim)])
+    head = np.array([*(int(v) for v in ipar), len(kind), len(cont)])
+    iplan = np.concatenate([head, kind, col, cont]).astype(np.int64)
+    return np.ascontiguousarray(fplan, dtype=np.float64), iplan
 
 
 def _par(opts: IKOptions, scale: float) -> np.ndarray:
@@ -296,31 +310,30 @@ _LOADED: list[Any] = []
 
 
 def _run(
-    chain: tuple[np.ndarray, ...],
-    tail: tuple[np.ndarray, np.ndarray],
+    fplan: np.ndarray,
+    iplan: np.ndarray,
     tgts: np.ndarray,
     w6: np.ndarray,
     pars: np.ndarray,
-    ipar: np.ndarray,
     starts: np.ndarray,
 ) -> np.ndarray:
     """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
 
-    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim (4, n), cont; ``tgts``
-    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every
-    caller (one compiled specialisation). Each target's numbers are its own: the same bits
-    alone, in a batch or on any thread. Returns the output rows (N, width) (see ``lm_batch``).
+    ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
+    ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
+    compiled specialisation). Each target's numbers are its own: the same bits alone, in a
+    batch or on any thread. Returns the output rows (N, width) (see ``lm_batch``).
     """
     n_t, n = len(tgts), starts.shape[2]
-    out = np.empty((n_t, _O_Q + n + 12 + int(ipar[1]) + 1))
+    out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
     if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
-        _LOADED[0](*chain, tgts, w6, pars, ipar, starts, *tail, out)
+        _LOADED[0](fplan, iplan, tgts, w6, pars, starts, out)
         return out
     from .._kernels import run_blocks
     from .step import lm_batch
 
     def run(a: int, b: int) -> None:  # targets a..b-1
-        lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, out[a:b])
+        lm_batch(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
     _LOADED[:] = [lm_batch]
@@ -332,10 +345,11 @@ def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
     k = len(qs)
     par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
     tgts = _frozen(np.broadcast_to(task.pose, (k, 4, 4)))
-    ipar = np.array([s.ipar[0], 0, 0, 0], np.int64)
+    iplan = np.array(s.iplan)
+    iplan[1:4] = 0  # no steps, no limits, no posture
     starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
     pars = _arg(np.tile(par, (k, 1)))
-    out = _run(s.chain, s.tail, tgts, task.weights, pars, ipar, starts)
+    out = _run(s.fplan, iplan, tgts, task.weights, pars, starts)
     return out[:, _O_Q + s.n + 12]
 
 
@@ -386,9 +400,9 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         pars = _with_yaw(pars, [task.yaw])
     if _LOADED:  # the per-call path: straight into the loaded loop
         out = np.empty((1, s.width))
-        _LOADED[0](*s.chain, task.pose[None], task.weights, pars, s.ipar, starts, *s.tail, out)
+        _LOADED[0](s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, out)
     else:
-        out = _run(s.chain, s.tail, task.pose[None], task.weights, pars, s.ipar, starts)
+        out = _run(s.fplan, s.iplan, task.pose[None], task.weights, pars, starts)
     return _report(mdl, s, task, out[0])
 
 
@@ -460,10 +474,11 @@ def _diagnose(
     blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
         # the same loop without limits, 200 steps, from q and 8 seeded starts
-        free_ipar = np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64)
+        iplan = np.array(s.iplan)
+        iplan[1:3] = 200, 0  # 200 steps, no limits
         starts = np.vstack([q, prep.starts[:8]])[None]
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-        free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
+        free = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts)
         if free[0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             why = (
@@ -577,7 +592,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         pars = _with_yaw(pars, [task.yaw for task in tasks])
     pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
-    out = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
+    out = _run(s.fplan, s.iplan, tgts, tasks[0].weights, pars, starts)
     return [_report(mdl, s, task, row) for task, row in zip(tasks, out)]
 
 
@@ -637,13 +652,11 @@ def solve_chain(
     par = _par(opts, scale)
     tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
     tgts[:, :3, 3] = t
-    head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))
-    tail = (_arg(np.vstack([lim, np.zeros(n)])), _arg(cont))
     pars = np.tile(par, (len(t), 1))
-    ipar = np.array([0, opts.max_iter, 1, 0], np.int64)
+    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0])
     w6 = _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
     starts = _arg(q0[:, None, :])
-    out = _run(head, tail, _frozen(tgts), w6, pars, ipar, starts)
+    out = _run(fplan, iplan, _frozen(tgts), w6, pars, starts)
     steps = out[:, 1].astype(np.intp)
     residual = out[np.arange(len(t)), _O_Q + n + 12 + steps]
     return np.array(out[:, _O_Q : _O_Q + n]), residual, out[:, 2] == 0

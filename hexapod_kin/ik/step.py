@@ -30,6 +30,8 @@ __all__ = ["lm_batch", "lm_loop", "log3", "sigma_min3", "step_into", "task_into"
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
+# the rest of :func:`lm_batch`'s int plan: links m, joints n, then kind, col, continuous
+I_LINKS, I_JOINTS, I_CHAIN = 4, 5, 6
 # one row of :func:`lm_batch`'s output: these scalars, then q, p, R and the residual history
 O_ATTEMPTS, O_STEPS, O_CODE, O_ERROR, O_ROT_ERROR, O_SIGMA_MIN, O_Q = range(7)
 
@@ -454,33 +456,43 @@ def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True)
 def lm_batch(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
+    fplan: np.ndarray,
+    iplan: np.ndarray,
     tgts: np.ndarray,
     w6: np.ndarray,
     pars: np.ndarray,
-    ipar: np.ndarray,
     starts: np.ndarray,
-    lim: np.ndarray,
-    cont: np.ndarray,
     out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
     """:func:`lm_loop` for N targets in one compiled call, each result measured.
 
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``lim`` (4, n): lower and
-    upper limits, step caps and the posture. ``out[i]`` (``O_Q + n + 12 + max_iter + 1``
-    values), at the returned q: ``O_ATTEMPTS``, ``O_STEPS``, ``O_CODE`` (exact small
-    integers), the error over the kept position rows [m], over the kept rotation rows [rad]
-    (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0), the smallest singular value
-    of the position Jacobian (:func:`sigma_min3`), then q (n), the tip position (3) [m] and
-    rotation (9, row-major), and the residual history (``max_iter + 1``, the first
-    ``steps + 1`` written).
+    The chain and the loop's settings come packed in two arrays (few arguments: a short call):
+    ``iplan`` = ``ipar`` (``I_*``), the number of links m and joints n, then the chain's
+    ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
+    (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
+    lower and upper limits, step caps and the posture, all flattened (``solver._plans``).
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). ``out[i]``
+    (``O_Q + n + 12 + max_iter + 1`` values), at the returned q: ``O_ATTEMPTS``, ``O_STEPS``,
+    ``O_CODE`` (exact small integers), the error over the kept position rows [m], over the
+    kept rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0),
+    the smallest singular value of the position Jacobian (:func:`sigma_min3`), then q (n),
+    the tip position (3) [m] and rotation (9, row-major), and the residual history
+    (``max_iter + 1``, the first ``steps + 1`` written).
     """
-    n = starts.shape[2]
+    m = iplan[I_LINKS]
+    n = iplan[I_JOINTS]
+    ipar = iplan[:I_LINKS]
+    kind = iplan[I_CHAIN : I_CHAIN + m]
+    col = iplan[I_CHAIN + m : I_CHAIN + 2 * m]
+    cont = iplan[I_CHAIN + 2 * m : I_CHAIN + 2 * m + n]
+    rot = fplan[: 9 * m].reshape((m, 3, 3))
+    o = 9 * m
+    trans = fplan[o : o + 3 * m + 3].reshape((m + 1, 3))
+    o += 3 * m + 3
+    axis = fplan[o : o + 3 * m].reshape((m, 3))
+    o += 3 * m
+    tip_rot = fplan[o : o + 9].reshape((3, 3))
+    lim = fplan[o + 9 : o + 9 + 4 * n].reshape((4, n))
     jac = np.empty((6, n))
     scratch = np.empty((6, max(rot.shape[0], 1)))
     r = np.empty((3, 3))
