@@ -11,7 +11,7 @@ each step first tries ``z = g·(q_posture − q)`` projected on the task's null 
 ``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
 the posture task for that attempt).
 
-One loop, compiled (:func:`~hexapod_kin.ik.step.lm_batch`): :func:`solve` runs it for one
+One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
 :func:`solve_chain` for a chain view (a leg) with a seed per target. The result is measured
 in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
@@ -213,7 +213,7 @@ class IKResult:
 
 
 # ============================================================================ the loop's setup
-#: Where a result's values sit in a row of the loop's output (see ``step.lm_batch``).
+#: Where a result's values sit in a row of the loop's output (see ``step.lm_loop``).
 _O_Q = 6
 
 
@@ -223,7 +223,7 @@ class _Setup:
 
     Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
     them); the targets and weights are the tasks' read-only arrays. The same types for one
-    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`.
+    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_loop`.
     """
 
     prep: Prepared
@@ -286,7 +286,7 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
 def _plans(
     chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_batch``).
+    """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_loop``).
 
     A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
     (n,) and ``ipar`` (4,), in two private C-contiguous arrays (float64, int64).
@@ -317,12 +317,12 @@ def _run(
     pars: np.ndarray,
     starts: np.ndarray,
 ) -> np.ndarray:
-    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
+    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
 
     ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
     ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
     compiled specialisation). Each target's numbers are its own: the same bits alone, in a
-    batch or on any thread. Returns the output rows (N, width) (see ``lm_batch``).
+    batch or on any thread. Returns the output rows (N, width) (see ``lm_loop``).
     """
     n_t, n = len(tgts), starts.shape[2]
     out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
@@ -330,13 +330,13 @@ def _run(
         _LOADED[0](fplan, iplan, tgts, w6, pars, starts, out)
         return out
     from .._kernels import run_blocks
-    from .step import lm_batch
+    from .step import lm_loop
 
     def run(a: int, b: int) -> None:  # targets a..b-1
-        lm_batch(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
+        lm_loop(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    _LOADED[:] = [lm_batch]
+    _LOADED[:] = [lm_loop]
     return out
 
 
