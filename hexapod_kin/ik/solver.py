@@ -414,15 +414,8 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKRe
     it = int(it)
     q, hist = row[_O_Q:n], row[n + 12 : n + 13 + it]
     position, rotation, target = row[n : n + 3], row[n + 3 : n + 12].reshape(3, 3), task.pose[:3, 3]
-    if code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1]):  # the per-call path: no dict
-        out = object.__new__(IKResult)
-        out.__dict__.update(
-            q=q, status="converged", error=err, rotation_error=rot, iterations=it,
-            history=hist, position=position, rotation=rotation, target=target, task=task,
-            attempts=int(attempts), reason=f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}",
-            distance=0.0, nearest=target, sigma_min=smin,
-        )  # fmt: skip
-        return out
+    converged = code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1])
+    why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}" if converged else ""
     fields = {
         "q": q,
         "status": "converged",
@@ -435,11 +428,15 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKRe
         "target": target,
         "task": task,
         "attempts": int(attempts),
-        "reason": "",
+        "reason": why,
         "distance": 0.0,
-        "nearest": None,
+        "nearest": target,
         "sigma_min": smin,
     }
+    if converged:  # the per-call path: the fields as they are
+        out = object.__new__(IKResult)
+        out.__dict__.update(fields)
+        return out
     if code == 2.0:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
         return _result(fields, "not_converged", why, False)
