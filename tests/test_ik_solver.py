@@ -458,7 +458,7 @@ def test_every_path_uses_the_one_compiled_loop(arms):
     ik.solve_many(ur5, np.array([target, target]))
     q = leg.random_q(3, seed=1)
     ik.solve_chain(leg.arrays, [leg.position(x) for x in q], q, leg.lower, leg.upper)
-    assert len(step.lm_batch.signatures) == 1
+    assert len(step.lm_loop.signatures) == 1
     res = ik.solve(ur5, target)
     built = ik.IKResult(**{f.name: getattr(res, f.name) for f in fields(ik.IKResult)})
     assert built == res and repr(built) == repr(res)

@@ -11,7 +11,8 @@ processes: min / median / max), then
 (mean µs per pose and success) and ``ik.solve`` (median µs per pose); ``ik.solve`` per call
 on 1,000 random reachable targets (UR5 and Panda poses, the leg's positions: median µs and
 success checked with Pinocchio) beside Robotics Toolbox's ``ik_LM`` (C++) on its own models,
-the two called in turn, target by target;
+the two called in turn, target by target, and whether those results are byte-identical to the
+same targets' batch (``solve_many``) and to the first 100 solved in a fresh process;
 with the ratio to a peer measured in the same run where one exists (a Pinocchio loop, numpy's
 SVD, Pinocchio's IK example loop). A row that fails prints its error and the run goes on.
 
@@ -186,12 +187,55 @@ def rtb_robot(name):
     return rtb.DHRobot(links, tool=SE3.Tx(0.1), name="hexabot_leg")
 
 
+DIGEST = '''
+import hashlib
+
+def digest(results):
+    # every field of every result as to_dict gives it, and the arrays' bytes
+    h = hashlib.sha256()
+    for r in results:
+        for k, v in sorted(r.to_dict().items()):
+            h.update(k.encode() + repr(v).encode())
+        for a in (r.q, r.history, r.position, r.rotation):
+            h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+'''
+exec(DIGEST)
+
+#: The first targets of a per-call row solved one by one in a fresh process (its first calls
+#: load the compiled loop): their digest on stdout.
+FRESH = '''
+import json, sys
+import numpy as np
+import hexapod_kin as hk
+from hexapod_kin import ik
+''' + DIGEST + '''
+src, kw, position = sys.argv[1], json.loads(sys.argv[2]), sys.argv[3] == "1"
+n, k = int(sys.argv[4]), int(sys.argv[5])
+model = hk.load(src, **kw)
+poses = [model.fk(q) for q in model.random_q(n, seed=21)]
+targets = [p[:3, 3].copy() for p in poses] if position else poses
+print(digest([ik.solve(model, t) for t in targets[:k]]))
+'''
+
+
+def per_call_targets(src, kw, position, n):
+    model = hk.load(src, **kw)
+    poses = [model.fk(q) for q in model.random_q(n, seed=21)]  # reachable, within the limits
+    return model, poses, ([p[:3, 3].copy() for p in poses] if position else poses)
+
+
+def fresh_digest(src, kw, position, n, k):
+    import subprocess
+    res = subprocess.run([sys.executable, "-c", FRESH, src, json.dumps(kw), str(int(position)),
+                          str(n), str(k)], capture_output=True, text=True, check=False)
+    return res.stdout.strip().splitlines()[-1] if res.returncode == 0 else "failed"
+
+
 def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
     # ik.solve and RTB's ik_LM one target at a time, in turn (both see the same load)
-    model = hk.load(src, **kw)
     n = 200 if QUICK else 1000
-    poses = [model.fk(q) for q in model.random_q(n, seed=21)]  # reachable, within the limits
-    targets = [p[:3, 3].copy() for p in poses] if position else poses
+    model, poses, targets = per_call_targets(src, kw, position, n)
     try:
         robot = rtb_robot(rtb_name)
     except ImportError:
@@ -201,11 +245,12 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         qs = np.random.default_rng(21).uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
         teps = [ets.eval(q) for q in qs]
     ik.solve(model, targets[0])
-    times, ok, ptimes, pok = [], 0, [], 0
+    times, ok, ptimes, pok, results = [], 0, [], 0, []
     for i in range(n):
         t0 = time.perf_counter()
         r = ik.solve(model, targets[i])
         times.append(time.perf_counter() - t0)
+        results.append(r)
         got, p = model.fk(r.q), poses[i]  # checked with Pinocchio's FK and log map
         rot = 0.0 if position else np.linalg.norm(pin.log3(p[:3, :3] @ got[:3, :3].T))
         ok += bool(r.converged and np.linalg.norm(got[:3, 3] - p[:3, 3]) <= 1e-9 and rot <= 1e-9)
@@ -219,8 +264,14 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         rot = 0.0 if position else np.linalg.norm(pin.log3(tep[:3, :3] @ got[:3, :3].T))
         pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
     ours = float(np.median(times)) * 1e6
+    # the same bits: these per-call results (warm), the batch of the same targets, and the
+    # first 100 targets solved one by one in a fresh process
+    warm = digest(results)
+    batch = digest(ik.solve_many(model, np.array(targets)))
+    fresh = fresh_digest(src, kw, position, n, 100)
     out = {"n": n, "median_us": round(ours, 1), "target_us": target_us,
            "success": round(ok / n, 4), "target_success": target_ok,
+           "same_bits_batch": warm == batch, "same_bits_fresh": fresh == digest(results[:100]),
            "load_1min": round(os.getloadavg()[0], 1)}
     if robot is None:
         return out | {"peer_rtb": "not installed (pip install hexapod-kin[bench])"}

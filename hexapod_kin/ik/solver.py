@@ -11,7 +11,7 @@ each step first tries ``z = g·(q_posture − q)`` projected on the task's null 
 ``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
 the posture task for that attempt).
 
-One loop, compiled (:func:`~hexapod_kin.ik.step.lm_batch`): :func:`solve` runs it for one
+One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
 :func:`solve_chain` for a chain view (a leg) with a seed per target. The result is measured
 in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
@@ -213,24 +213,30 @@ class IKResult:
 
 
 # ============================================================================ the loop's setup
+#: Where a result's values sit in a row of the loop's output (see ``step.lm_loop``).
+_O_Q = 6
+
+
 @dataclass(frozen=True)
 class _Setup:
     """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
 
     Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
     them); the targets and weights are the tasks' read-only arrays. The same types for one
-    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_batch`.
+    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_loop`.
     """
 
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
-    chain: tuple[np.ndarray, ...]  # rot, trans, axis, kind, col, tip_rot
-    tail: tuple[np.ndarray, np.ndarray, np.ndarray]  # lower/upper/step caps, continuous, posture
+    fplan: np.ndarray  # the chain and the limits, step caps and posture (:func:`_plans`)
+    iplan: np.ndarray  # ipar, then the chain's joint kinds, columns, continuous flags
     tols: tuple[float, float]  # tol, rot_tol as Python floats
     tols_text: str  # "{tol:g}, {rot_tol:g}" (the converged reason's tail)
     one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
+    width: int  # values per target in the loop's output
+    n: int  # joints
 
 
 def _arg(a: Any) -> np.ndarray:
@@ -268,12 +274,28 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     par = _par(opts, prep.scale)
     ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
-    chain = tuple(_arg(a) for a in (*mdl.arrays.packed, mdl.arrays.tip_rot))
-    lim, cont, posture = _arg(prep.lim), _arg(prep.cont), _arg(posture)
+    fplan, iplan = _plans(mdl.arrays, np.vstack([prep.lim, posture]), prep.cont, ipar)
     tols = (float(opts.tol), float(opts.rot_tol))
     one = (par[None], starts[None])
     text = f"{tols[0]:g}, {tols[1]:g}"
-    return _Setup(prep, par, ipar, starts, chain, (lim, cont, posture), tols, text, one)
+    n = mdl.nq
+    width = _O_Q + n + 12 + opts.max_iter + 1
+    return _Setup(prep, par, ipar, starts, fplan, iplan, tols, text, one, width, n)
+
+
+def _plans(
+    chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_loop``).
+
+    A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
+    (n,) and ``ipar`` (4,), in two private C-contiguous arrays (float64, int64).
+    """
+    rot, trans, axis, kind, col = chain.packed
+    fplan = np.concatenate([np.ravel(a) for a in (rot, trans, axis, chain.tip_rot, lim)])
+    head = np.array([*(int(v) for v in ipar), len(kind), len(cont)])
+    iplan = np.concatenate([head, kind, col, cont]).astype(np.int64)
+    return np.ascontiguousarray(fplan, dtype=np.float64), iplan
 
 
 def _par(opts: IKOptions, scale: float) -> np.ndarray:
@@ -288,41 +310,34 @@ _LOADED: list[Any] = []
 
 
 def _run(
-    chain: tuple[np.ndarray, ...],
-    tail: tuple[np.ndarray, np.ndarray, np.ndarray],
+    fplan: np.ndarray,
+    iplan: np.ndarray,
     tgts: np.ndarray,
     w6: np.ndarray,
     pars: np.ndarray,
-    ipar: np.ndarray,
     starts: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_batch`) for N targets.
+) -> np.ndarray:
+    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
 
-    ``chain``: rot, trans, axis, kind, col, tip_rot; ``tail``: lim, cont, posture; ``tgts``
-    (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every
-    caller (one compiled specialisation). Each target's numbers are its own: the same bits
-    alone, in a batch or on any thread. Returns ``(q (N, n), history (N, max_iter + 1),
-    measures (N, 15) (see ``lm_batch``), (attempts, steps, code) (N, 3))``.
+    ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
+    ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
+    compiled specialisation). Each target's numbers are its own: the same bits alone, in a
+    batch or on any thread. Returns the output rows (N, width) (see ``lm_loop``).
     """
     n_t, n = len(tgts), starts.shape[2]
-    q = np.empty((n_t, n))
-    hist = np.empty((n_t, int(ipar[1]) + 1))
-    meas = np.empty((n_t, 15))
-    res = np.empty((n_t, 3), dtype=np.int64)
-    args = (*chain, tgts, w6, pars, ipar, starts, *tail, q, hist, meas, res)
+    out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
     if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
-        _LOADED[0](*args)
-        return q, hist, meas, res
+        _LOADED[0](fplan, iplan, tgts, w6, pars, starts, out)
+        return out
     from .._kernels import run_blocks
-    from .step import lm_batch
+    from .step import lm_loop
 
     def run(a: int, b: int) -> None:  # targets a..b-1
-        lm_batch(*chain, tgts[a:b], w6, pars[a:b], ipar, starts[a:b], *tail, q[a:b],
-                 hist[a:b], meas[a:b], res[a:b])  # fmt: skip
+        lm_loop(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    _LOADED[:] = [lm_batch]
-    return q, hist, meas, res
+    _LOADED[:] = [lm_loop]
+    return out
 
 
 def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
@@ -330,10 +345,12 @@ def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
     k = len(qs)
     par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
     tgts = _frozen(np.broadcast_to(task.pose, (k, 4, 4)))
-    ipar = np.array([s.ipar[0], 0, 0, 0], np.int64)
+    iplan = np.array(s.iplan)
+    iplan[1:4] = 0  # no steps, no limits, no posture
     starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
     pars = _arg(np.tile(par, (k, 1)))
-    return _run(s.chain, s.tail, tgts, task.weights, pars, ipar, starts)[1][:, 0]
+    out = _run(s.fplan, iplan, tgts, task.weights, pars, starts)
+    return out[:, _O_Q + s.n + 12]
 
 
 def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
@@ -381,26 +398,24 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         starts[0, 0] = mdl.check_q(q0, "q0")
     if task.code == 1:
         pars = _with_yaw(pars, [task.yaw])
-    q, hist, meas, res = _run(s.chain, s.tail, task.pose[None], task.weights, pars, s.ipar, starts)
-    attempts, it, code = res[0].tolist()
-    return _report(mdl, s, task, q[0], hist[0, : it + 1], meas[0], attempts, it, code)
+    if _LOADED:  # the per-call path: straight into the loaded loop
+        out = np.empty((1, s.width))
+        _LOADED[0](s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, out)
+    else:
+        out = _run(s.fplan, s.iplan, task.pose[None], task.weights, pars, starts)
+    return _report(mdl, s, task, out[0])
 
 
-def _report(
-    mdl: KinematicModel,
-    s: _Setup,
-    task: Task,
-    q: np.ndarray,
-    hist: np.ndarray,
-    meas: np.ndarray,
-    attempts: int,
-    it: int,
-    code: int,
-) -> IKResult:
-    for a in (meas, q, hist):
-        a.setflags(write=False)
-    err, rot, smin = meas[12:].tolist()
-    tol, rot_tol = s.tols
+def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKResult:
+    """The result of one output row of the loop (made read-only)."""
+    row.setflags(write=False)
+    attempts, it, code, err, rot, smin = row[:_O_Q].tolist()
+    n = _O_Q + s.n
+    it = int(it)
+    q, hist = row[_O_Q:n], row[n + 12 : n + 13 + it]
+    position, rotation, target = row[n : n + 3], row[n + 3 : n + 12].reshape(3, 3), task.pose[:3, 3]
+    converged = code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1])
+    why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}" if converged else ""
     fields = {
         "q": q,
         "status": "converged",
@@ -408,20 +423,21 @@ def _report(
         "rotation_error": rot,
         "iterations": it,
         "history": hist,
-        "position": meas[:3],
-        "rotation": meas[3:12].reshape(3, 3),
-        "target": task.pose[:3, 3],
+        "position": position,
+        "rotation": rotation,
+        "target": target,
         "task": task,
-        "attempts": attempts,
-        "reason": "",
+        "attempts": int(attempts),
+        "reason": why,
         "distance": 0.0,
-        "nearest": None,
+        "nearest": target,
         "sigma_min": smin,
     }
-    if code == 0 or (err <= tol and rot <= rot_tol):
-        why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}"
-        return _result(fields, "converged", why, False)
-    if code == 2:
+    if converged:  # the per-call path: the fields as they are
+        out = object.__new__(IKResult)
+        out.__dict__.update(fields)
+        return out
+    if code == 2.0:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
         return _result(fields, "not_converged", why, False)
     return _diagnose(mdl, s, task, q, hist, fields)
@@ -455,11 +471,12 @@ def _diagnose(
     blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
         # the same loop without limits, 200 steps, from q and 8 seeded starts
-        free_ipar = np.array([s.ipar[0], 200, 0, s.ipar[3]], np.int64)
+        iplan = np.array(s.iplan)
+        iplan[1:3] = 200, 0  # 200 steps, no limits
         starts = np.vstack([q, prep.starts[:8]])[None]
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-        free = _run(s.chain, s.tail, task.pose[None], task.weights, pars, free_ipar, starts)
-        if free[3][0, 2] == 0:
+        free = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts)
+        if free[0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             why = (
                 f"reachable only beyond the limits of {names}; the nearest point within the "
@@ -572,12 +589,8 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         pars = _with_yaw(pars, [task.yaw for task in tasks])
     pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
-    q, hist, meas, res = _run(s.chain, s.tail, tgts, tasks[0].weights, pars, s.ipar, starts)
-    out = []
-    for i, task in enumerate(tasks):
-        a, it, c = res[i].tolist()
-        out.append(_report(mdl, s, task, q[i], hist[i, : it + 1], meas[i], a, it, c))
-    return out
+    out = _run(s.fplan, s.iplan, tgts, tasks[0].weights, pars, starts)
+    return [_report(mdl, s, task, row) for task, row in zip(tasks, out)]
 
 
 def solve_chain(
@@ -636,12 +649,11 @@ def solve_chain(
     par = _par(opts, scale)
     tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
     tgts[:, :3, 3] = t
-    head = tuple(_arg(a) for a in (*chain.packed, chain.tip_rot))
-    tail = (_arg(lim), _arg(cont), np.zeros(n))
     pars = np.tile(par, (len(t), 1))
-    ipar = np.array([0, opts.max_iter, 1, 0], np.int64)
+    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0])
     w6 = _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
     starts = _arg(q0[:, None, :])
-    q, hist, _, res = _run(head, tail, _frozen(tgts), w6, pars, ipar, starts)
-    residual = hist[np.arange(len(t)), res[:, 1]]
-    return q, residual, res[:, 2] == 0
+    out = _run(fplan, iplan, _frozen(tgts), w6, pars, starts)
+    steps = out[:, 1].astype(np.intp)
+    residual = out[np.arange(len(t)), _O_Q + n + 12 + steps]
+    return np.array(out[:, _O_Q : _O_Q + n]), residual, out[:, 2] == 0

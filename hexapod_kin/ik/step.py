@@ -25,11 +25,15 @@ import numpy as np
 
 from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
-__all__ = ["lm_batch", "lm_loop", "log3", "sigma_min3", "step_into", "task_into"]  # fmt: skip
+__all__ = ["lm_loop", "log3", "sigma_min3", "step_into", "task_into"]  # fmt: skip
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
 I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
+# the rest of :func:`lm_loop`'s int plan: links m, joints n, then kind, col, continuous
+I_LINKS, I_JOINTS, I_CHAIN = 4, 5, 6
+# one row of :func:`lm_loop`'s output: these scalars, then q, p, R and the residual history
+O_ATTEMPTS, O_STEPS, O_CODE, O_ERROR, O_ROT_ERROR, O_SIGMA_MIN, O_Q = range(7)
 
 
 @njit(cache=True, nogil=True)
@@ -224,185 +228,6 @@ def _limit_into(
 
 
 @njit(cache=True, nogil=True)
-def lm_loop(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
-    tgt: np.ndarray,
-    w6: np.ndarray,
-    par: np.ndarray,
-    ipar: np.ndarray,
-    starts: np.ndarray,
-    lim: np.ndarray,
-    cont: np.ndarray,
-    posture: np.ndarray,
-    q_out: np.ndarray,
-    hist_out: np.ndarray,
-    jac_out: np.ndarray,
-) -> tuple[int, int, int]:  # pragma: no cover - compiled
-    """Levenberg–Marquardt loop from each start in turn until one converges.
-
-    ``lim`` rows: lower, upper, step cap. A step is kept only if it lowers ``‖W e‖`` (so the
-    history decreases strictly); λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a
-    refused one. Joints at a limit with the gradient pointing outward are frozen. With
-    ``ipar[I_POSTURE]`` and more joints than task rows, each step first tries the null-space
-    motion toward ``posture`` (gain ``par[P_POST_GAIN]``), kept only if the task error at
-    least quarters the squared error (the first refusal ends it for that attempt), while the
-    error is above ``par[P_POST_FLOOR]``.
-
-    Returns:
-        ``(attempts, accepted steps of the best attempt, code)``: code 0 converged, 1 stalled,
-        2 iteration cap. The best attempt's q, residual history (``hist_out[:steps + 1]``) and
-        its (6, n) LWA Jacobian are written to the outputs.
-
-    """
-    n = starts.shape[1]
-    mode = ipar[I_MODE]
-    max_iter = ipar[I_MAX_ITER]
-    use_limits = ipar[I_LIMITS] != 0
-    tol2 = par[P_TOL] * par[P_TOL]
-    rtol2 = par[P_ROT_TOL] * par[P_ROT_TOL]
-    yaw = par[P_YAW]
-    wbar = par[P_WBAR]
-    floor2 = par[P_POST_FLOOR] * par[P_POST_FLOOR]
-    lower = lim[0]
-    upper = lim[1]
-    cap = lim[2]
-    scratch = np.empty((6, max(rot.shape[0], 1)))
-    p = np.empty(3)
-    r = np.empty((3, 3))
-    jac = np.empty((6, n))
-    jac_n = np.empty((6, n))
-    w3 = np.empty((3, 3))
-    et = np.empty(6)
-    jt = np.empty((6, n))
-    et_n = np.empty(6)
-    jt_n = np.empty((6, n))
-    e2 = np.empty(6)
-    q = np.empty(n)
-    qn = np.empty(n)
-    dq = np.empty(n)
-    z = np.empty(n)
-    free = np.empty(n, dtype=np.bool_)
-    k = max(n, 6)
-    work = np.empty((k, k))
-    rhs = np.empty(k)
-    sol = np.empty(k)
-    hist = np.empty(hist_out.shape[0])
-    best_cost = np.inf
-    best_steps = 0
-    best_code = 1
-    attempts = 0
-    for s in range(starts.shape[0]):
-        attempts += 1
-        for i in range(n):
-            q[i] = starts[s, i]
-        _limit_into(q, lower, upper, cont, use_limits)
-        fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0, tip_rot, r)
-        m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
-        cost = 0.0
-        for i in range(m):
-            cost += et[i] * et[i]
-        hist[0] = math.sqrt(cost)
-        use_post = ipar[I_POSTURE] != 0 and n > m
-        mu = par[P_MU0]
-        accepted = 0
-        tries = 0
-        slow = 0
-        code = 1
-        while True:
-            if pos2 <= tol2 and rot2 <= rtol2:
-                code = 0
-                break
-            if accepted >= max_iter:
-                code = 2
-                break
-            for i in range(n):
-                free[i] = True
-                if use_limits and not cont[i]:
-                    g = 0.0
-                    for row in range(m):
-                        g += jt[row, i] * et[row]
-                    if (q[i] <= lower[i] and g < 0.0) or (q[i] >= upper[i] and g > 0.0):
-                        free[i] = False
-            lam2 = mu * (cost + wbar)
-            with_z = use_post and cost > floor2
-            if with_z:
-                for i in range(n):
-                    d = posture[i] - q[i]
-                    if cont[i]:
-                        d = wrap_angle(d)
-                    z[i] = par[P_POST_GAIN] * d if free[i] else 0.0
-            kept = False
-            stalled = False
-            for _attempt in range(2):
-                ok = step_into(jt, et, m, lam2, free, z, with_z, dq, e2, work, rhs, sol)
-                if not ok:
-                    break
-                scale = 1.0
-                for i in range(n):
-                    a = abs(dq[i])
-                    if a * scale > cap[i]:
-                        scale = cap[i] / a
-                for i in range(n):
-                    qn[i] = q[i] + scale * dq[i]
-                _limit_into(qn, lower, upper, cont, use_limits)
-                fk_jac_into(rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r)
-                m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
-                cost_n = 0.0
-                for i in range(m_n):
-                    cost_n += et_n[i] * et_n[i]
-                good = cost_n < (0.25 * cost if with_z else cost)
-                if good:
-                    if cost_n > cost * (1.0 - 1e-10):
-                        slow += 1
-                    else:
-                        slow = 0
-                    q, qn = qn, q  # the trial becomes the iterate (buffers swapped)
-                    jac, jac_n = jac_n, jac
-                    jt, jt_n = jt_n, jt
-                    et, et_n = et_n, et
-                    m, pos2, rot2, cost = m_n, pos2_n, rot2_n, cost_n
-                    accepted += 1
-                    hist[accepted] = math.sqrt(cost)
-                    mu = max(mu * 0.25, 1e-12)
-                    tries = 0
-                    kept = True
-                    if slow >= 8:
-                        stalled = True
-                    break
-                if not with_z:
-                    break
-                with_z = False  # retry the plain step; no more posture in this attempt
-                use_post = False
-            if stalled:
-                code = 1
-                break
-            if not kept:
-                mu *= 8.0
-                tries += 1
-                if tries > 40:
-                    code = 1
-                    break
-        if code == 0 or cost < best_cost or s == 0:
-            best_cost = cost
-            best_steps = accepted
-            best_code = code
-            for i in range(n):
-                q_out[i] = q[i]
-                for row in range(6):
-                    jac_out[row, i] = jac[row, i]
-            for i in range(accepted + 1):
-                hist_out[i] = hist[i]
-        if code == 0:
-            break
-    return attempts, best_steps, best_code
-
-
-@njit(cache=True, nogil=True)
 def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
     """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
 
@@ -451,55 +276,218 @@ def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def lm_batch(
-    rot: np.ndarray,
-    trans: np.ndarray,
-    axis: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    tip_rot: np.ndarray,
+def lm_loop(
+    fplan: np.ndarray,
+    iplan: np.ndarray,
     tgts: np.ndarray,
     w6: np.ndarray,
     pars: np.ndarray,
-    ipar: np.ndarray,
     starts: np.ndarray,
-    lim: np.ndarray,
-    cont: np.ndarray,
-    posture: np.ndarray,
-    q_out: np.ndarray,
-    hist_out: np.ndarray,
-    meas_out: np.ndarray,
-    res_out: np.ndarray,
+    out: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """:func:`lm_loop` for N targets in one compiled call, each result measured.
+    """Levenberg–Marquardt loop for N targets, each from its starts in turn until one converges.
 
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n); ``res_out[i]`` = (attempts,
-    steps, code); ``meas_out[i]`` (15,) at the returned q: the tip position (3) [m] and
-    rotation (9, row-major), the error over the kept position rows [m], over the kept
-    rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0) and
-    the smallest singular value of the position Jacobian (:func:`sigma_min3`).
+    A step is kept only if it lowers ``‖W e‖`` (so the history decreases strictly);
+    λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a refused one. Joints at a limit with
+    the gradient pointing outward are frozen. With ``ipar[I_POSTURE]`` and more joints than
+    task rows, each step first tries the null-space motion toward ``posture`` (gain
+    ``par[P_POST_GAIN]``), kept only if the task error at least quarters the squared error
+    (the first refusal ends it for that attempt), while the error is above
+    ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
+    batch); the buffers are allocated once per call.
+
+    The chain and the loop's settings come packed in two arrays (few arguments: a short call):
+    ``iplan`` = ``ipar`` (``I_*``), the number of links m and joints n, then the chain's
+    ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
+    (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
+    lower and upper limits, step caps and the posture, all flattened (``solver._plans``).
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n).
+
+    ``out[i]`` (``O_Q + n + 12 + max_iter + 1`` values), at the returned q (the best attempt):
+    ``O_ATTEMPTS``, ``O_STEPS`` (accepted steps), ``O_CODE`` (0 converged, 1 stalled, 2
+    iteration cap; exact small integers), the error over the kept position rows [m], over the
+    kept rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0), the
+    smallest singular value of the position Jacobian (:func:`sigma_min3`), then q (n), the
+    tip position (3) [m] and rotation (9, row-major), and the residual history
+    (``max_iter + 1``, the first ``steps + 1`` written).
     """
-    n = starts.shape[2]
-    jac = np.empty((6, n))
-    scratch = np.empty((6, max(rot.shape[0], 1)))
+    links = iplan[I_LINKS]
+    n = iplan[I_JOINTS]
+    ipar = iplan[:I_LINKS]
+    kind = iplan[I_CHAIN : I_CHAIN + links]
+    col = iplan[I_CHAIN + links : I_CHAIN + 2 * links]
+    cont = iplan[I_CHAIN + 2 * links : I_CHAIN + 2 * links + n]
+    rot = fplan[: 9 * links].reshape((links, 3, 3))
+    o = 9 * links
+    trans = fplan[o : o + 3 * links + 3].reshape((links + 1, 3))
+    o += 3 * links + 3
+    axis = fplan[o : o + 3 * links].reshape((links, 3))
+    o += 3 * links
+    tip_rot = fplan[o : o + 9].reshape((3, 3))
+    lim = fplan[o + 9 : o + 9 + 4 * n].reshape((4, n))
+    mode = ipar[I_MODE]
+    max_iter = ipar[I_MAX_ITER]
+    use_limits = ipar[I_LIMITS] != 0
+    lower = lim[0]
+    upper = lim[1]
+    cap = lim[2]
+    posture = lim[3]
+    scratch = np.empty((6, max(links, 1)))
     p = np.empty(3)
     r = np.empty((3, 3))
+    jac = np.empty((6, n))
+    jac_n = np.empty((6, n))
+    jac_best = np.empty((6, n))
     w3 = np.empty((3, 3))
     et = np.empty(6)
     jt = np.empty((6, n))
-    for i in range(tgts.shape[0]):
-        a, it, c = lm_loop(rot, trans, axis, kind, col, tip_rot, tgts[i], w6, pars[i], ipar,
-                           starts[i], lim, cont, posture, q_out[i], hist_out[i], jac)  # fmt: skip
-        res_out[i, 0] = a
-        res_out[i, 1] = it
-        res_out[i, 2] = c
-        fk_jac_into(rot, trans, axis, kind, col, q_out[i], p, jac, scratch, n >= 0, tip_rot, r)
-        _, pos2, rot2 = task_into(ipar[I_MODE], tgts[i], w6, pars[i, P_YAW], p, r, jac, w3, et, jt)
-        out = meas_out[i]
-        for k in range(3):
-            out[k] = p[k]
-            for j in range(3):
-                out[3 + 3 * k + j] = r[k, j]
-        out[12] = math.sqrt(pos2)
-        out[13] = math.sqrt(rot2)
-        out[14] = sigma_min3(jac)
+    et_n = np.empty(6)
+    jt_n = np.empty((6, n))
+    e2 = np.empty(6)
+    q = np.empty(n)
+    qn = np.empty(n)
+    dq = np.empty(n)
+    z = np.empty(n)
+    free = np.empty(n, dtype=np.bool_)
+    k = max(n, 6)
+    work = np.empty((k, k))
+    rhs = np.empty(k)
+    sol = np.empty(k)
+    hist = np.empty(max_iter + 1)
+    o_p = O_Q + n
+    o_h = o_p + 12
+    for t in range(tgts.shape[0]):
+        tgt = tgts[t]
+        par = pars[t]
+        res = out[t]
+        q_out = res[O_Q:o_p]
+        hist_out = res[o_h:]
+        tol2 = par[P_TOL] * par[P_TOL]
+        rtol2 = par[P_ROT_TOL] * par[P_ROT_TOL]
+        yaw = par[P_YAW]
+        wbar = par[P_WBAR]
+        floor2 = par[P_POST_FLOOR] * par[P_POST_FLOOR]
+        best_cost = np.inf
+        best_steps = 0
+        best_code = 1
+        attempts = 0
+        for s in range(starts.shape[1]):
+            attempts += 1
+            for i in range(n):
+                q[i] = starts[t, s, i]
+            _limit_into(q, lower, upper, cont, use_limits)
+            fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0, tip_rot, r)
+            m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
+            cost = 0.0
+            for i in range(m):
+                cost += et[i] * et[i]
+            hist[0] = math.sqrt(cost)
+            use_post = ipar[I_POSTURE] != 0 and n > m
+            mu = par[P_MU0]
+            accepted = 0
+            tries = 0
+            slow = 0
+            code = 1
+            while True:
+                if pos2 <= tol2 and rot2 <= rtol2:
+                    code = 0
+                    break
+                if accepted >= max_iter:
+                    code = 2
+                    break
+                for i in range(n):
+                    free[i] = True
+                    if use_limits and not cont[i]:
+                        g = 0.0
+                        for row in range(m):
+                            g += jt[row, i] * et[row]
+                        if (q[i] <= lower[i] and g < 0.0) or (q[i] >= upper[i] and g > 0.0):
+                            free[i] = False
+                lam2 = mu * (cost + wbar)
+                with_z = use_post and cost > floor2
+                if with_z:
+                    for i in range(n):
+                        d = posture[i] - q[i]
+                        if cont[i]:
+                            d = wrap_angle(d)
+                        z[i] = par[P_POST_GAIN] * d if free[i] else 0.0
+                kept = False
+                stalled = False
+                for _attempt in range(2):
+                    ok = step_into(jt, et, m, lam2, free, z, with_z, dq, e2, work, rhs, sol)
+                    if not ok:
+                        break
+                    scale = 1.0
+                    for i in range(n):
+                        a = abs(dq[i])
+                        if a * scale > cap[i]:
+                            scale = cap[i] / a
+                    for i in range(n):
+                        qn[i] = q[i] + scale * dq[i]
+                    _limit_into(qn, lower, upper, cont, use_limits)
+                    fk_jac_into(
+                        rot, trans, axis, kind, col, qn, p, jac_n, scratch, n >= 0, tip_rot, r
+                    )
+                    m_n, pos2_n, rot2_n = task_into(mode, tgt, w6, yaw, p, r, jac_n, w3, et_n, jt_n)
+                    cost_n = 0.0
+                    for i in range(m_n):
+                        cost_n += et_n[i] * et_n[i]
+                    good = cost_n < (0.25 * cost if with_z else cost)
+                    if good:
+                        if cost_n > cost * (1.0 - 1e-10):
+                            slow += 1
+                        else:
+                            slow = 0
+                        q, qn = qn, q  # the trial becomes the iterate (buffers swapped)
+                        jac, jac_n = jac_n, jac
+                        jt, jt_n = jt_n, jt
+                        et, et_n = et_n, et
+                        m, pos2, rot2, cost = m_n, pos2_n, rot2_n, cost_n
+                        accepted += 1
+                        hist[accepted] = math.sqrt(cost)
+                        mu = max(mu * 0.25, 1e-12)
+                        tries = 0
+                        kept = True
+                        if slow >= 8:
+                            stalled = True
+                        break
+                    if not with_z:
+                        break
+                    with_z = False  # retry the plain step; no more posture in this attempt
+                    use_post = False
+                if stalled:
+                    code = 1
+                    break
+                if not kept:
+                    mu *= 8.0
+                    tries += 1
+                    if tries > 40:
+                        code = 1
+                        break
+            if code == 0 or cost < best_cost or s == 0:
+                best_cost = cost
+                best_steps = accepted
+                best_code = code
+                for i in range(n):
+                    q_out[i] = q[i]
+                    for row in range(6):
+                        jac_best[row, i] = jac[row, i]
+                for i in range(accepted + 1):
+                    hist_out[i] = hist[i]
+            if code == 0:
+                break
+        # the result, measured at the returned q
+        p_out = res[o_p : o_p + 3]
+        fk_jac_into(
+            rot, trans, axis, kind, col, q_out, p_out, jac_best, scratch, n >= 0, tip_rot, r
+        )
+        _, pos2, rot2 = task_into(mode, tgt, w6, yaw, p_out, r, jac_best, w3, et, jt)
+        for u in range(3):
+            for v in range(3):
+                res[o_p + 3 + 3 * u + v] = r[u, v]
+        res[O_ATTEMPTS] = attempts
+        res[O_STEPS] = best_steps
+        res[O_CODE] = best_code
+        res[O_ERROR] = math.sqrt(pos2)
+        res[O_ROT_ERROR] = math.sqrt(rot2)
+        res[O_SIGMA_MIN] = sigma_min3(jac_best)

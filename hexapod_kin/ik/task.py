@@ -146,16 +146,16 @@ def _fast(t: np.ndarray) -> Task | None:
     (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
     if last != [0.0, 0.0, 0.0, 1.0] or not math.isfinite(x + y + z):
         return None
-    # columns orthonormal and det +1 (third column = first × second), to 1e-9
-    checks = (
-        a * a + d * d + g * g - 1.0,
-        b * b + e * e + h * h - 1.0,
-        a * b + d * e + g * h,
-        d * h - g * e - c,
-        g * b - a * h - f,
-        a * e - d * b - i,
-    )
-    if not all(abs(v) <= 1e-9 for v in checks):  # also False for NaN
+    # columns orthonormal and det +1 (third column = first × second), to 1e-9 (False for NaN)
+    tol = 1e-9
+    if not (
+        -tol <= a * a + d * d + g * g - 1.0 <= tol
+        and -tol <= b * b + e * e + h * h - 1.0 <= tol
+        and -tol <= a * b + d * e + g * h <= tol
+        and -tol <= d * h - g * e - c <= tol
+        and -tol <= g * b - a * h - f <= tol
+        and -tol <= a * e - d * b - i <= tol
+    ):
         return None
     pose = t.copy()
     pose.setflags(write=False)
