@@ -17,7 +17,6 @@ from .exceptions import ConfigurationError, FrameNotFoundError
 
 __all__ = [
     "add_tool_frame",
-    "drop_missing_meshes",
     "floating_model",
     "frame_index",
     "joint_kind",
@@ -89,23 +88,6 @@ def frame_index(model: pin.Model, name: str) -> int:
             if model.frames[i].type == kind:
                 return i
     return hits[0]
-
-
-def drop_missing_meshes(text: str, missing: tuple[tuple[str, str], ...]) -> str:
-    """``text`` without the visual/collision elements whose mesh file was not found."""
-    if not missing:
-        return text
-    from ._gate import parse_urdf
-
-    uris = {uri for uri, _ in missing}
-    root = parse_urdf(text)
-    for link in root.findall("link"):
-        for part in [*link.findall("visual"), *link.findall("collision")]:
-            if any(m.get("filename") in uris for m in part.iter("mesh", "texture")):
-                link.remove(part)
-    from lxml import etree
-
-    return str(etree.tostring(root, encoding="unicode"))
 
 
 def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:

@@ -34,7 +34,7 @@ _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
 _compute_frame_jacobian = pin.computeFrameJacobian
 
-__all__ = ["REFERENCES", "KinematicModel", "load", "direct_jacobian",
+__all__ = ["REFERENCES", "KinematicModel", "as_model", "load", "direct_jacobian",
            "indirect_jacobian"]  # fmt: skip
 
 REFERENCES: dict[str, pin.ReferenceFrame] = {
@@ -414,3 +414,10 @@ def load(
 
     """
     return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]
+
+
+def as_model(model: Any, **params: Any) -> KinematicModel:
+    """``model`` itself when it is a loaded model, else :func:`load` ``(model, **params)``."""
+    if isinstance(model, Model) and not params:
+        return model  # type: ignore[return-value]
+    return load(model, **params)

@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from .._fields import fields_dict, read_only
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
-from ..kinematics import KinematicModel, load
+from ..kinematics import as_model
 from ._law import integrate
 
 if TYPE_CHECKING:
@@ -46,10 +46,6 @@ def default_stance(model: ModelLike) -> np.ndarray:
     from ..ik.prepare import home
 
     return home(model)
-
-
-def _as_model(model: ModelLike) -> KinematicModel:
-    return model if isinstance(model, KinematicModel) else load(model)
 
 
 # ============================================================================ results
@@ -366,7 +362,7 @@ def resolved_rate(
         ConfigurationError: Bad ``q0``, velocity or path.
 
     """
-    mdl = _as_model(model)
+    mdl = as_model(model)
     dt = positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)
