@@ -20,7 +20,6 @@ __all__ = [
     "floating_model",
     "frame_index",
     "joint_kind",
-    "last_body_frame",
     "path_frames",
     "reduce_model",
     "root_link_frame",
@@ -166,14 +165,6 @@ def root_link_frame(model: pin.Model) -> str:
     return str(model.frames[0].name)
 
 
-def last_body_frame(model: pin.Model) -> str:
-    """Name of the last BODY frame (the default tip of a URDF), else of the last frame."""
-    for frame in reversed(model.frames):
-        if frame.type == pin.FrameType.BODY:
-            return str(frame.name)
-    return str(model.frames[-1].name)
-
-
 def reduce_model(
     full: pin.Model, base: str, tip: str, do_reduce: bool, q_ref: Any
 ) -> tuple[pin.Model, tuple[int, ...], np.ndarray]:
@@ -302,8 +293,9 @@ def default_tips(model: pin.Model) -> DefaultTips:
         path = list(model.supports[f.parentJoint])[1:]  # joints from the root, root excluded
         if not has_child[i] and f.type in kinds and path:
             ends.append((i, str(f.name), path))
-    if not ends:
-        return DefaultTips("chain", (last_body_frame(model),))
+    if not ends:  # nothing hangs from a joint: the last BODY frame, else the last frame
+        bodies = [f for f in frames if f.type == pin.FrameType.BODY]
+        return DefaultTips("chain", (str((bodies or frames)[-1].name),))
     limbs: dict[int, list[tuple[int, str, list[int]]]] = {}
     for end in ends:
         limbs.setdefault(end[2][0], []).append(end)
