@@ -309,8 +309,9 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     cols = []
     for i in range(1, m.njoints):
         omj = model.baseMo * d.oMi[i]
-        axis_local = _joint_axis(m, i)
-        z = omj.rotation @ axis_local
+        kind = joint_kind(m.joints[i])
+        assert kind is not None  # the loader admits one-variable joints only
+        z = omj.rotation @ kind[1]
         if model.is_prismatic[i - 1]:
             cols.append(z)
         else:
@@ -373,12 +374,6 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
             suffix = suffix @ m
         jac[:, arrays.col[k]] += (prefix @ gens[k] @ suffix)[:3, 3]
     return jac
-
-
-def _joint_axis(model: pin.Model, i: int) -> np.ndarray:
-    kind = joint_kind(model.joints[i])
-    assert kind is not None  # the loader admits one-variable joints only
-    return kind[1]
 
 
 def load(

@@ -284,9 +284,7 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
         if frame == "tip":
             out[k] = t0 @ pin.exp6(pin.Motion(xi[:3] * dt, xi[3:] * dt)).homogeneous
         else:
-            out[k] = np.eye(4)
-            out[k, :3, :3] = pin.exp3(xi[3:] * dt) @ t0[:3, :3]
-            out[k, :3, 3] = t0[:3, 3] + dt * xi[:3]
+            out[k] = _advance(t0, xi * dt, "base")
     return out
 
 
