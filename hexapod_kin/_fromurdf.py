@@ -60,27 +60,7 @@ __all__ = ["SNAP_TOL", "Snap", "TableRecovery", "chain_from_urdf", "recover_chai
 #: parallel, anti-parallel or perpendicular (:func:`recover_chain`).
 SNAP_TOL = 1e-4
 
-_REVOLUTE = (
-    "JointModelRX",
-    "JointModelRY",
-    "JointModelRZ",
-    "JointModelRevoluteUnaligned",
-    "JointModelRUBX",
-    "JointModelRUBY",
-    "JointModelRUBZ",
-    "JointModelRevoluteUnboundedUnaligned",
-)
-_PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
 _EPS = 1e-10
-
-
-def _axis(joint: Any) -> np.ndarray:
-    from .frames import joint_kind  # the one place joint kinds (and their axes) are told apart
-
-    kind = joint_kind(joint)
-    if kind is None:
-        raise ParameterError(f"joint {joint.shortname()} has no single axis", parameter="joint")
-    return kind[1] / np.linalg.norm(kind[1])
 
 
 def _clean(name: str) -> str:
@@ -331,6 +311,7 @@ def recover_chain(
         HexapodKinError: Whatever :func:`hexapod_kin.load` raises for the source.
 
     """
+    from .frames import joint_kind  # the one place joint kinds (and their axes) are told apart
     from .kinematics import KinematicModel, load
 
     try:
@@ -358,12 +339,12 @@ def recover_chain(
             ) from None
     m = km.model
     names = [str(m.names[i]) for i in range(m.njoints)]
-    for i in range(1, m.njoints):
-        kind = m.joints[i].shortname()
-        if kind not in _REVOLUTE + _PRISMATIC:
+    kinds = {i: joint_kind(m.joints[i]) for i in range(1, m.njoints)}  # (kind, axis) or None
+    for i, kind in kinds.items():
+        if kind is None:
             raise ConfigurationError(
-                f"joint {names[i]!r} is a {kind}; a Khalil table expresses revolute, continuous, "
-                "prismatic and fixed joints only"
+                f"joint {names[i]!r} is a {m.joints[i].shortname()}; a Khalil table expresses "
+                "revolute, continuous, prismatic and fixed joints only"
             )
     tip_id = km.tip_id
     frame = m.frames[tip_id]
@@ -393,8 +374,9 @@ def recover_chain(
     for i in path:
         t = inv_base @ o_m_i[i]
         points.append(t[:3, 3])
-        axes.append(t[:3, :3] @ _axis(m.joints[i]))
-        sigmas.append("prismatic" if m.joints[i].shortname() in _PRISMATIC else "revolute")
+        jkind, axis = kinds[i]  # type: ignore[misc]
+        axes.append(t[:3, :3] @ (axis / np.linalg.norm(axis)))
+        sigmas.append("prismatic" if jkind == "prismatic" else "revolute")
     path_names = [names[i] for i in path]
     snaps = _snap(points, axes, t_base_tip, path_names, tol)
     snapped_rows = {path_names.index(s.joints[1]) for s in snaps}

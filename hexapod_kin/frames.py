@@ -17,11 +17,9 @@ from .exceptions import ConfigurationError, FrameNotFoundError
 
 __all__ = [
     "add_tool_frame",
-    "drop_missing_meshes",
     "floating_model",
     "frame_index",
     "joint_kind",
-    "last_body_frame",
     "path_frames",
     "reduce_model",
     "reduced_model",
@@ -90,23 +88,6 @@ def frame_index(model: pin.Model, name: str) -> int:
             if model.frames[i].type == kind:
                 return i
     return hits[0]
-
-
-def drop_missing_meshes(text: str, missing: tuple[tuple[str, str], ...]) -> str:
-    """``text`` without the visual/collision elements whose mesh file was not found."""
-    if not missing:
-        return text
-    from ._gate import parse_urdf
-
-    uris = {uri for uri, _ in missing}
-    root = parse_urdf(text)
-    for link in root.findall("link"):
-        for part in [*link.findall("visual"), *link.findall("collision")]:
-            if any(m.get("filename") in uris for m in part.iter("mesh", "texture")):
-                link.remove(part)
-    from lxml import etree
-
-    return str(etree.tostring(root, encoding="unicode"))
 
 
 def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Model, str]:
@@ -183,14 +164,6 @@ def root_link_frame(model: pin.Model) -> str:
         ):
             return str(frame.name)
     return str(model.frames[0].name)
-
-
-def last_body_frame(model: pin.Model) -> str:
-    """Name of the last BODY frame (the default tip of a URDF), else of the last frame."""
-    for frame in reversed(model.frames):
-        if frame.type == pin.FrameType.BODY:
-            return str(frame.name)
-    return str(model.frames[-1].name)
 
 
 def reduce_model(
@@ -321,8 +294,9 @@ def default_tips(model: pin.Model) -> DefaultTips:
         path = list(model.supports[f.parentJoint])[1:]  # joints from the root, root excluded
         if not has_child[i] and f.type in kinds and path:
             ends.append((i, str(f.name), path))
-    if not ends:
-        return DefaultTips("chain", (last_body_frame(model),))
+    if not ends:  # nothing hangs from a joint: the last BODY frame, else the last frame
+        bodies = [f for f in frames if f.type == pin.FrameType.BODY]
+        return DefaultTips("chain", (str((bodies or frames)[-1].name),))
     limbs: dict[int, list[tuple[int, str, list[int]]]] = {}
     for end in ends:
         limbs.setdefault(end[2][0], []).append(end)

@@ -34,7 +34,7 @@ _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
 _compute_frame_jacobian = pin.computeFrameJacobian
 
-__all__ = ["REFERENCES", "KinematicModel", "load", "direct_jacobian",
+__all__ = ["REFERENCES", "KinematicModel", "as_model", "load", "direct_jacobian",
            "indirect_jacobian"]  # fmt: skip
 
 REFERENCES: dict[str, pin.ReferenceFrame] = {
@@ -309,8 +309,9 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     cols = []
     for i in range(1, m.njoints):
         omj = model.baseMo * d.oMi[i]
-        axis_local = _joint_axis(m, i)
-        z = omj.rotation @ axis_local
+        kind = joint_kind(m.joints[i])
+        assert kind is not None  # the loader admits one-variable joints only
+        z = omj.rotation @ kind[1]
         if model.is_prismatic[i - 1]:
             cols.append(z)
         else:
@@ -375,12 +376,6 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     return jac
 
 
-def _joint_axis(model: pin.Model, i: int) -> np.ndarray:
-    kind = joint_kind(model.joints[i])
-    assert kind is not None  # the loader admits one-variable joints only
-    return kind[1]
-
-
 def load(
     source: Any, base: str | None = None, tip: str | None = None, **kwargs: Any
 ) -> KinematicModel:
@@ -414,3 +409,10 @@ def load(
 
     """
     return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]
+
+
+def as_model(model: Any, **params: Any) -> KinematicModel:
+    """``model`` itself when it is a loaded model, else :func:`load` ``(model, **params)``."""
+    if isinstance(model, Model) and not params:
+        return model  # type: ignore[return-value]
+    return load(model, **params)

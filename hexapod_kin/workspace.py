@@ -10,6 +10,7 @@ import numpy as np
 
 from ._numerics import chain_length
 from .exceptions import ParameterError, choices
+from .kinematics import as_model
 
 __all__ = ["WorkspaceResult", "workspace", "cross_section"]
 
@@ -18,12 +19,6 @@ def _ro(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.setflags(write=False)
     return arr
-
-
-def _as_model(model: Any) -> Any:
-    from .kinematics import KinematicModel, load
-
-    return model if isinstance(model, KinematicModel) else load(model)
 
 
 @dataclass(frozen=True)
@@ -113,7 +108,7 @@ def workspace(
         ParameterError: ``samples`` out of range or ``voxel`` not > 0.
 
     """
-    mdl = _as_model(model)
+    mdl = as_model(model)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
         raise ParameterError(f"samples={samples!r}: an integer in 1..50,000,000 is required")
     h = float(chain_length(mdl.arrays.trans)) / 25.0 if voxel is None else float(voxel)

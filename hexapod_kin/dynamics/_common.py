@@ -10,6 +10,7 @@ import pinocchio as pin
 
 from .._fields import read_only
 from ..exceptions import ParameterError
+from ..kinematics import as_model
 from ..model import check_inertials as loader_check_inertials
 
 __all__ = [
@@ -23,15 +24,6 @@ __all__ = [
 
 #: Relative tolerance on the principal moments of inertia (a moment <= tol * largest is zero).
 INERTIA_RTOL = 1e-12
-
-
-def as_model(model: Any, **params: Any) -> Any:
-    """A loaded model: ``model`` itself, or ``hexapod_kin.load(model, **params)`` for a source."""
-    if hasattr(model, "model") and hasattr(model, "data") and hasattr(model, "nq"):
-        return model
-    from ..kinematics import load
-
-    return load(model, **params)
 
 
 def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -> np.ndarray:

@@ -36,11 +36,7 @@ def external_force(
     omi = data.oMi[joint]
     p = data.oMf[frame_id].translation
     rot_t = omi.rotation.T
-    r = p - omi.translation
-    f = force_world
-    moment = np.array(
-        [r[1] * f[2] - r[2] * f[1], r[2] * f[0] - r[0] * f[2], r[0] * f[1] - r[1] * f[0]]
-    )  # r × f
+    moment = np.cross(p - omi.translation, force_world)
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     fext[joint] = pin.Force(rot_t @ force_world, rot_t @ moment)
     return fext

@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from .._fields import fields_dict, read_only
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
-from ..kinematics import KinematicModel, load
+from ..kinematics import as_model
 from ._law import integrate
 
 if TYPE_CHECKING:
@@ -46,10 +46,6 @@ def default_stance(model: ModelLike) -> np.ndarray:
     from ..ik.prepare import home
 
     return home(model)
-
-
-def _as_model(model: ModelLike) -> KinematicModel:
-    return model if isinstance(model, KinematicModel) else load(model)
 
 
 # ============================================================================ results
@@ -288,9 +284,7 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
         if frame == "tip":
             out[k] = t0 @ pin.exp6(pin.Motion(xi[:3] * dt, xi[3:] * dt)).homogeneous
         else:
-            out[k] = np.eye(4)
-            out[k, :3, :3] = pin.exp3(xi[3:] * dt) @ t0[:3, :3]
-            out[k, :3, 3] = t0[:3, 3] + dt * xi[:3]
+            out[k] = _advance(t0, xi * dt, "base")
     return out
 
 
@@ -366,7 +360,7 @@ def resolved_rate(
         ConfigurationError: Bad ``q0``, velocity or path.
 
     """
-    mdl = _as_model(model)
+    mdl = as_model(model)
     dt = positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)

@@ -19,7 +19,8 @@ import pinocchio as pin
 
 from .._fields import fields_dict
 from ..exceptions import IKError, ParameterError, positive
-from .rate import Method, Trajectory, _as_model, read_only, resolved_rate
+from ..kinematics import as_model
+from .rate import Method, Trajectory, read_only, resolved_rate
 
 if TYPE_CHECKING:
     from ..ik.prepare import ModelLike
@@ -202,7 +203,7 @@ def follow_pose_path(
         IKError: The first pose cannot be reached (when ``q0`` is None).
 
     """
-    mdl = _as_model(model)
+    mdl = as_model(model)
     if q0 is None:
         from .. import ik
 
@@ -271,7 +272,7 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
     """
     from .. import ik
 
-    mdl = _as_model(model)
+    mdl = as_model(model)
     pts = np.asarray(positions, dtype=float)
     poses = pts.ndim == 3
     if not ((pts.ndim == 2 and pts.shape[1] == 3) or (poses and pts.shape[1:] == (4, 4))):

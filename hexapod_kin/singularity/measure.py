@@ -20,6 +20,7 @@ import numpy as np
 from .._numerics import chain_length
 from ..exceptions import ConfigurationError
 from ..jacobian_rows import ROW_NAMES, choose_rows, row_names
+from ..kinematics import as_model
 
 __all__ = ["Measures", "MeasuresBatch", "default_rows", "measures", "measures_batch", "reach"]
 
@@ -105,15 +106,6 @@ def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
     with np.errstate(divide="ignore", invalid="ignore"):  # 0/0 where sigma_max is 0 too
         cond = np.where(sv[:, -1] > 0, sv[:, 0] / sv[:, -1], np.inf)
     return det, manip, cond, sv[:, -1], sv
-
-
-def as_model(model: Any) -> Any:
-    """``model`` if it is a loaded model, else ``hexapod_kin.load(model)`` (any source)."""
-    from ..kinematics import KinematicModel, load
-
-    if isinstance(model, KinematicModel):
-        return model
-    return load(model)
 
 
 def default_rows(model: Any) -> tuple[str, ...]:

@@ -95,12 +95,7 @@ def _rotation(rot: np.ndarray) -> sp.Matrix:
     from ..params import matrix_to_rpy
 
     roll, pitch, yaw = (exact_angle(a) for a in matrix_to_rpy(rot))
-    rx = sp.Matrix([[1, 0, 0], [0, sp.cos(roll), -sp.sin(roll)], [0, sp.sin(roll), sp.cos(roll)]])
-    ry = sp.Matrix(
-        [[sp.cos(pitch), 0, sp.sin(pitch)], [0, 1, 0], [-sp.sin(pitch), 0, sp.cos(pitch)]]
-    )
-    rz = sp.Matrix([[sp.cos(yaw), -sp.sin(yaw), 0], [sp.sin(yaw), sp.cos(yaw), 0], [0, 0, 1]])
-    out = rz * ry * rx
+    out = sp.rot_ccw_axis3(yaw) * sp.rot_ccw_axis2(pitch) * sp.rot_ccw_axis1(roll)
     if float(np.abs(np.array(out.evalf(), dtype=float) - rot).max()) > 1e-9:
         return sp.Matrix(rot.tolist()).applyfunc(sp.Float)
     return out
@@ -239,13 +234,12 @@ def kinematics(
         "J_direct": sp.Matrix.hstack(*cols),
         # without simplification (the caller's fallback at a budget too small even for
         # stage 1) no derivative is taken: differentiating the nested products takes seconds
-        "J_indirect": _indirect(p, q, chain.sigmas) if simplify else cols_lin(cols),
+        "J_indirect": (
+            _indirect(p, q, chain.sigmas)
+            if simplify
+            else sp.Matrix.hstack(*[c[:3, :] for c in cols])  # the direct one's linear rows
+        ),
     }
-
-
-def cols_lin(cols: Sequence[sp.Matrix]) -> sp.Matrix:
-    """The linear rows of the direct Jacobian's columns (3×n)."""
-    return sp.Matrix.hstack(*[c[:3, :] for c in cols])
 
 
 def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp.Matrix:
