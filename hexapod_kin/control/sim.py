@@ -6,8 +6,9 @@ position servo with a torque motor limited to the joint's effort, adds height-fi
 (uniform heights in ``±bumps`` on a 50 mm grid, from ``seed``) and runs the
 :class:`~.controller.Controller` at its rate, the physics at the scene's time step.
 The controller is fed what the robot senses (IMU attitude and body rates, joint positions
-and velocities, foot contacts) and, as a state estimator would, the base position and
-velocity (here the simulator's: the estimator is not modelled).
+and velocities, foot contacts) and the base position and velocity: the simulator's, or
+with ``estimate=True`` those of :class:`~.estimator.StateEstimator` (a contact-aided
+Kalman filter on the accelerometer, the attitude and the legs' kinematics).
 
 Pushes ``(force [N], start [s], duration [s])`` act at the body's centre of mass along the
 path's left normal (a negative force pushes right), from the end of settling.
@@ -18,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,7 @@ from .._fields import fields_dict
 from ..exceptions import ParameterError, positive
 from .commands import Command, Timeline
 from .controller import Controller, Measurement
+from .estimator import StateEstimator
 
 __all__ = ["ControlRun", "Push", "hardware_loop", "run"]
 
@@ -98,6 +100,11 @@ class ControlRun:
         qp_cpu: Mean CPU time of the force QP per tick [s].
         cpu_time: CPU time of the whole run [s].
         simulated: Simulated time [s].
+        settings: The run's arguments.
+        estimate_error: With ``estimate``: the state estimate's errors against the
+            simulator's state, from the end of settling: ``horizontal_final`` and
+            ``horizontal_max`` [m] (the drift of the unobservable x, y), ``height_max`` [m],
+            ``velocity_rms`` and ``velocity_max`` [m/s]; else None.
 
     """
 
@@ -124,6 +131,7 @@ class ControlRun:
     cpu_time: float
     simulated: float
     settings: dict[str, Any] = field(default_factory=dict)
+    estimate_error: dict[str, float] | None = None
 
     @property
     def travel_error(self) -> float | None:
@@ -155,6 +163,7 @@ class ControlRun:
             "cpu_time",
             "simulated",
             "settings",
+            "estimate_error",
         )
         return fields_dict(self, *names)
 
@@ -256,6 +265,7 @@ def run(
     rate: float | None = None,
     period: float | None = None,
     recovery_tolerance: float = 0.03,
+    estimate: bool = False,
 ) -> ControlRun:
     """Walk ``robot`` under the controller in MuJoCo for ``duration`` [s] after ``settle``.
 
@@ -274,6 +284,10 @@ def run(
         rate: Control rate [Hz] (default the controller's).
         period: Gait cycle [s] (default the controller's).
         recovery_tolerance: Cross-track distance counted as back on the path [m].
+        estimate: Feed the controller the base position and velocity of a
+            :class:`~.estimator.StateEstimator` (IMU accelerometer and attitude, joints,
+            foot contacts) instead of the simulator's; its errors go to
+            :attr:`ControlRun.estimate_error`.
 
     Returns:
         A :class:`ControlRun`.
@@ -331,6 +345,9 @@ def run(
     n_walk = int(round(duration * ctl.rate))
     ctl.set_command(Command(mode="stand"))
 
+    est = StateEstimator(ctl) if estimate else None
+    est_err: list[tuple[float, float, float]] = []
+
     def measure(t: float) -> Measurement:
         contacts = np.zeros(len(foot_geom), dtype=bool)
         for c in data.contact[: data.ncon]:
@@ -370,6 +387,21 @@ def run(
             if cmd != ctl.command:
                 ctl.set_command(cmd)
         m = measure(t)
+        if est is not None:  # the controller sees the estimate, not the simulator's state
+            if not est.ready:
+                est.reset(m.position, m.velocity, m)
+            R_b = np.array(data.xmat[base]).reshape(3, 3)
+            f_spec = R_b.T @ (np.array(data.qacc[:3]) + np.array([0.0, 0.0, 9.81]))
+            p_est, v_est = est.update(m, f_spec)
+            if k >= n_settle:
+                est_err.append(
+                    (
+                        float(np.linalg.norm(p_est[:2] - m.position[:2])),
+                        abs(float(p_est[2] - m.position[2])),
+                        float(np.linalg.norm(v_est - m.velocity)),
+                    )
+                )
+            m = replace(m, position=p_est, velocity=v_est)
         c0 = time.process_time()
         u = ctl.tick(m)
         ticks.append(time.process_time() - c0)
@@ -436,6 +468,7 @@ def run(
             recovery.append(float(T[bad[-1] + 1] - end))
     vel_err = _velocity_errors(timeline, T, P, yaws, PA, ctl.period, duration)
     tick = np.array(ticks)
+    errs = np.array(est_err).reshape(-1, 3)
     return ControlRun(
         t=T,
         position=P,
@@ -467,7 +500,17 @@ def run(
             "seed": seed,
             "friction": friction,
             "pushes": [fields_dict(p, "force", "start", "duration") for p in pushes],
+            "estimate": estimate,
             **timeline.to_dict(),
+        },
+        estimate_error=None
+        if est is None
+        else {
+            "horizontal_final": float(errs[-1, 0]),
+            "horizontal_max": float(errs[:, 0].max()),
+            "height_max": float(errs[:, 1].max()),
+            "velocity_rms": float(np.sqrt((errs[:, 2] ** 2).mean())),
+            "velocity_max": float(errs[:, 2].max()),
         },
     )
 
