@@ -15,7 +15,7 @@ base velocity it implies when the foot's contact point stands still,
 ``v = −(ω × R r_i + R J_i(q) q̇ + ω_i × (−ρ ẑ))`` (``ρ`` the foot sphere's radius, ``ω_i``
 its angular velocity: the sphere rolls; all from the joint encoders and Pinocchio's
 kinematics), and its height ``p_i,z = z_ground + r_foot`` (flat ground assumed). A foot in
-swing is not trusted: its process and measurement noises are multiplied by ``SUSPECT``,
+swing (not touching, or not in the controller's stance) is not trusted: its process and measurement noises are multiplied by ``SUSPECT``,
 so the filter follows the feet that touch. The horizontal position is not observable (it
 drifts as odometry does); height and velocity are.
 """
@@ -115,7 +115,8 @@ class StateEstimator:
         A[:3, 3:6] = dt * np.eye(3)
         x = A @ self.x
         x[3:6] += a * dt
-        touch = np.asarray(m.contacts, dtype=bool)
+        # standing: touching and in the controller's stance (a light robot's feet bounce)
+        touch = np.asarray(m.contacts, dtype=bool) & ~self.ctl.in_swing
         trust = np.where(touch, 1.0, SUSPECT)
         Q = np.zeros(n)
         Q[:3] = (qa * dt * dt) ** 2

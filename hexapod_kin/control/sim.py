@@ -347,6 +347,7 @@ def run(
 
     est = StateEstimator(ctl) if estimate else None
     est_err: list[tuple[float, float, float]] = []
+    v_prev: np.ndarray | None = None
 
     def measure(t: float) -> Measurement:
         contacts = np.zeros(len(foot_geom), dtype=bool)
@@ -390,8 +391,12 @@ def run(
         if est is not None:  # the controller sees the estimate, not the simulator's state
             if not est.ready:
                 est.reset(m.position, m.velocity, m)
+            # the accelerometer's specific force, averaged over the control period (as an
+            # IMU's delta-velocity output is)
             R_b = np.array(data.xmat[base]).reshape(3, 3)
-            f_spec = R_b.T @ (np.array(data.qacc[:3]) + np.array([0.0, 0.0, 9.81]))
+            acc = (m.velocity - (m.velocity if v_prev is None else v_prev)) * ctl.rate
+            f_spec = R_b.T @ (acc + np.array([0.0, 0.0, 9.81]))
+            v_prev = m.velocity
             p_est, v_est = est.update(m, f_spec)
             if k >= n_settle:
                 est_err.append(
