@@ -48,6 +48,11 @@ def register(sub: Any) -> None:
     p.add_argument("--bumps", type=float, default=0.0, help="bump amplitude [m] (0: flat)")
     p.add_argument("--seed", type=int, default=0, help="the bumps' random seed")
     p.add_argument("--friction", type=float, default=1.0, help="ground friction coefficient")
+    p.add_argument(
+        "--estimate",
+        action="store_true",
+        help="run on the state estimator's base position/velocity (IMU + legs), not MuJoCo's",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_control)
 
@@ -69,6 +74,7 @@ def _cmd_control(args: argparse.Namespace) -> int:
         bumps=args.bumps,
         friction=args.friction,
         seed=args.seed,
+        estimate=args.estimate,
     )
     out = res.to_dict()
     if args.json:

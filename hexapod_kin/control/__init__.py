@@ -4,6 +4,8 @@
   a base estimate), joint torques or servo targets out, at a fixed rate; stance forces by a
   QP (:mod:`.qp`, proxsuite), Raibert / capture-point foot placement, body posing for servos.
 * :class:`Command`, :class:`Timeline` (:mod:`.commands`): velocity, gait and mode over time.
+* :class:`StateEstimator` (:mod:`.estimator`): the base position and velocity from the
+  IMU and the legs (a contact-aided linear Kalman filter).
 * :func:`run` (:mod:`.sim`): the closed loop in MuJoCo with pushes and bumps, and its figures
   (:class:`ControlRun`); :func:`hardware_loop`: the same controller through user callbacks.
 
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 from .commands import MODES, Command, Timeline, read_timeline, timeline_of
 from .controller import KINDS, Controller, Measurement
+from .estimator import StateEstimator
 from .sim import ControlRun, Push, hardware_loop, run
 
 __all__ = [
@@ -24,6 +27,7 @@ __all__ = [
     "Controller",
     "Measurement",
     "Push",
+    "StateEstimator",
     "Timeline",
     "hardware_loop",
     "read_timeline",

@@ -15,9 +15,10 @@ base velocity it implies when the foot's contact point stands still,
 ``v = −(ω × R r_i + R J_i(q) q̇ + ω_i × (−ρ ẑ))`` (``ρ`` the foot sphere's radius, ``ω_i``
 its angular velocity: the sphere rolls; all from the joint encoders and Pinocchio's
 kinematics), and its height ``p_i,z = z_ground + r_foot`` (flat ground assumed). A foot in
-swing (not touching, or not in the controller's stance) is not trusted: its process and measurement noises are multiplied by ``SUSPECT``,
-so the filter follows the feet that touch. The horizontal position is not observable (it
-drifts as odometry does); height and velocity are.
+swing (not touching, or not in the controller's stance) is not trusted: its process and
+measurement noises are multiplied by ``SUSPECT``, so the filter follows the standing feet.
+The horizontal position is not observable (it drifts as odometry does); height and velocity
+are.
 """
 
 from __future__ import annotations
@@ -100,9 +101,16 @@ class StateEstimator:
         self.ready = True
 
     def update(self, m: Any, accel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """One tick: ``m`` a :class:`~.controller.Measurement` (its ``position`` and
-        ``velocity`` ignored), ``accel`` (3,) the accelerometer's specific force in the body
-        frame [m/s²]. Returns the estimated base position [m] and velocity [m/s] (world).
+        """One tick of the filter: the base position [m] and velocity [m/s] (world).
+
+        Args:
+            m: The tick's :class:`~.controller.Measurement` (its ``position`` and
+                ``velocity`` ignored).
+            accel: (3,) the accelerometer's specific force in the body frame [m/s²].
+
+        Returns:
+            The estimated base position and velocity.
+
         """
         from .controller import _quat_mat
 
