@@ -217,6 +217,20 @@ def test_state_estimate_follows_the_simulator() -> None:
     assert run("erd:solo12", command=Command(mode="stand"), duration=0.2).estimate_error is None
 
 
+@pytest.mark.parametrize(("robot", "body"), [(None, "body/"), ("erd:anymal", "base/")])
+def test_stand_up_from_lying(robot, body: str) -> None:
+    """From the body on the ground to the standing height of a robot started standing."""
+    stand = Command(mode="stand")
+    res = run(robot, command=stand, duration=5.0, lying=True, settle=0.02)
+    ref = run(robot, command=stand, duration=0.5)
+    assert not res.fell
+    assert res.position[0, 2] < 0.5 * ref.position[0, 2]  # it started low
+    assert res.position[-1, 2] == pytest.approx(ref.position[-1, 2], abs=0.003)
+    for a, b, _t in res.non_foot_contacts:  # only the intended ones: its body on the ground
+        assert {a.split("/")[0] + "/", b} == {body, "ground"}, res.non_foot_contacts
+    assert abs(res.max_roll) < math.radians(1.0) and abs(res.max_pitch) < math.radians(1.0)
+
+
 def test_cli_control_json(capsys) -> None:
     from hexapod_kin.cli import main
 

@@ -53,6 +53,9 @@ def register(sub: Any) -> None:
         action="store_true",
         help="run on the state estimator's base position/velocity (IMU + legs), not MuJoCo's",
     )
+    p.add_argument(
+        "--lying", action="store_true", help="start lying on the body (it stands up first)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_control)
 
@@ -75,6 +78,7 @@ def _cmd_control(args: argparse.Namespace) -> int:
         friction=args.friction,
         seed=args.seed,
         estimate=args.estimate,
+        lying=args.lying,
     )
     out = res.to_dict()
     if args.json:

@@ -266,6 +266,7 @@ def run(
     period: float | None = None,
     recovery_tolerance: float = 0.03,
     estimate: bool = False,
+    lying: bool = False,
 ) -> ControlRun:
     """Walk ``robot`` under the controller in MuJoCo for ``duration`` [s] after ``settle``.
 
@@ -288,6 +289,11 @@ def run(
             :class:`~.estimator.StateEstimator` (IMU accelerometer and attitude, joints,
             foot contacts) instead of the simulator's; its errors go to
             :attr:`ControlRun.estimate_error`.
+        lying: Start lying: the body resting on the ground (its lowest collision point
+            1 mm above it), the feet on the ground under their neutral places; the
+            controller raises the body to its standing height (its contacts with the ground
+            while it rises are counted among ``non_foot_contacts``; a fall by height is
+            counted once it has risen to 90 % of it).
 
     Returns:
         A :class:`ControlRun`.
@@ -337,6 +343,13 @@ def run(
     data.qpos[2] = -float(feet0[:, 2].min()) + scene.foot_radius + 1e-4
     data.qpos[3] = 1.0
     data.qpos[jq] = q0
+    mj.mj_forward(model, data)
+    stand_z = float(data.qpos[2])
+    stand_height = None
+    if lying:
+        q0 = _lie_down(mj, model, data, wb, jq, base, scene.foot_radius)
+        # the height the controller holds: its tracked point's above the foot centres
+        stand_height = ctl.height0 + (float(ctl.com_body[2]) if kind == "torque" else 0.0)
     if kind == "servo":
         data.ctrl[act] = q0
     mj.mj_forward(model, data)
@@ -344,6 +357,7 @@ def run(
     n_settle = int(round(settle * ctl.rate))
     n_walk = int(round(duration * ctl.rate))
     ctl.set_command(Command(mode="stand"))
+    risen = not lying
 
     est = StateEstimator(ctl) if estimate else None
     est_err: list[tuple[float, float, float]] = []
@@ -388,6 +402,8 @@ def run(
             if cmd != ctl.command:
                 ctl.set_command(cmd)
         m = measure(t)
+        if not ctl.ready:
+            ctl.reset(m, stand_height=stand_height)
         if est is not None:  # the controller sees the estimate, not the simulator's state
             if not est.ready:
                 est.reset(m.position, m.velocity, m)
@@ -428,7 +444,8 @@ def run(
         roll, pitch, yaw = _rpy(R)
         rpys.append((roll, pitch, yaw))
         height = float(data.qpos[2]) - ctl.ground_z
-        if height < 0.4 * ctl.stand_height or abs(roll) > 1.05 or abs(pitch) > 1.05:
+        risen = risen or height > 0.9 * (stand_z - scene.foot_radius)
+        if (risen and height < 0.4 * ctl.stand_height) or abs(roll) > 1.05 or abs(pitch) > 1.05:
             fell = True
         down = np.zeros(len(foot_geom), dtype=bool)
         for c in data.contact[: data.ncon]:
@@ -518,6 +535,36 @@ def run(
             "velocity_max": float(errs[:, 2].max()),
         },
     )
+
+
+def _lie_down(
+    mj: Any, model: Any, data: Any, wb: Any, jq: np.ndarray, base: int, foot_radius: float
+) -> np.ndarray:
+    """Put the robot lying; its joints [rad].
+
+    The body's lowest point 1 mm above z = 0, the feet on the ground under their neutral
+    places (the legs by the whole body's ``body_ik``).
+    """
+    q0 = np.asarray(wb.neutral_q(), dtype=float)
+    lowest = np.inf
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    for g in range(model.ngeom):
+        if int(model.geom_bodyid[g]) != base:
+            continue
+        c, h = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        R = np.array(data.geom_xmat[g]).reshape(3, 3)
+        corners = data.geom_xpos[g] + (c + h * signs) @ R.T
+        lowest = min(lowest, float(corners[:, 2].min()))
+    z = float(data.qpos[2]) - lowest + 1e-3
+    B = np.eye(4)
+    B[2, 3] = z
+    feet = wb.feet(q0[None], np.eye(4)[None])[0]
+    feet[:, 2] = foot_radius + 1e-4
+    ik = wb.body_ik(B, feet, q_prev=q0, strict=False)
+    q = np.asarray(ik.q[0], dtype=float)
+    data.qpos[2] = z
+    data.qpos[jq] = q
+    return q
 
 
 def _rz_col(yaw: float) -> np.ndarray:
