@@ -231,6 +231,29 @@ def test_stand_up_from_lying(robot, body: str) -> None:
     assert abs(res.max_roll) < math.radians(1.0) and abs(res.max_pitch) < math.radians(1.0)
 
 
+def test_open_loop_beside_closed_loop(tmp_path, capsys) -> None:
+    """simulate --control: the plan replayed and walked under the controller, one page."""
+    from hexapod_kin.cli import main
+    from hexapod_kin.control.compare import compare, comparison_html
+
+    cmp = compare(None, duration=2.0, pushes=[Push(20.0, 0.5, 0.2)])
+    o, c = cmp.open_loop, cmp.closed_loop
+    assert c.settings["pushes"] and list(o.plan["velocity"]) == [
+        c.settings["commands"][0][k] for k in ("vx", "vy", "wz")
+    ]
+    rows = {name: (a, b) for name, a, b in cmp.rows()}
+    assert rows["max roll [rad]"] == (o.max_roll, c.max_roll)
+    assert rows["travel error"][1] == c.travel_error
+    assert not c.fell and c.recovery_time[0] is not None  # the push is answered
+    text = comparison_html(cmp, tmp_path / "cmp.html").read_text()
+    assert text.count("<polyline") == 3 and "closed loop (controller)" in text
+    page = tmp_path / "cli.html"
+    argv = ["simulate", "--duration", "1", "--control", "--json", "--html", str(page)]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {"open_loop", "closed_loop", "html"} and page.exists()
+
+
 def test_cli_control_json(capsys) -> None:
     from hexapod_kin.cli import main
 

@@ -93,6 +93,32 @@ def _cmd_control(args: argparse.Namespace) -> int:
     return not_achieved(why)
 
 
+def simulate_control(
+    args: argparse.Namespace, model: Any, options: dict[str, Any], html: Any
+) -> int:
+    """``simulate --control``: the plan open-loop and closed-loop, printed or as a page."""
+    import sys
+
+    from ..control.compare import compare, comparison_html
+    from .common import emit_json
+
+    opts = {k: v for k, v in options.items() if k not in ("stand",)}
+    cmp = compare(model, friction=args.friction, **opts)
+    out = cmp.to_dict()
+    if html is not None:
+        out["html"] = str(comparison_html(cmp, html))
+    if args.json:
+        emit_json(out)
+    else:
+        for name, a, b in cmp.rows():
+            fa, fb = ("-" if v is None else f"{v:.4g}" for v in (a, b))
+            print(f"{name:24s} open loop {fa:>10}   closed loop {fb:>10}")
+        if "html" in out:
+            print(f"wrote {out['html']}", file=sys.stderr)
+    res = cmp.closed_loop
+    return not_achieved(["the robot fell under the controller"] if res.fell else [])
+
+
 def _print(out: dict[str, Any]) -> None:
     err = out["travel_error"]
     print(
