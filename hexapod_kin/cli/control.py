@@ -47,6 +47,14 @@ def register(sub: Any) -> None:
     p.add_argument("--bumps", type=float, default=0.0, help="bump amplitude [m] (0: flat)")
     p.add_argument("--seed", type=seed, default=0, help="the bumps' random seed")
     p.add_argument("--friction", type=float, default=1.0, help="ground friction coefficient")
+    p.add_argument(
+        "--estimate",
+        action="store_true",
+        help="run on the state estimator's base position/velocity (IMU + legs), not MuJoCo's",
+    )
+    p.add_argument(
+        "--lying", action="store_true", help="start lying on the body (it stands up first)"
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_control)
 
@@ -69,6 +77,8 @@ def _cmd_control(args: argparse.Namespace) -> int:
         bumps=args.bumps,
         friction=args.friction,
         seed=args.seed,
+        estimate=args.estimate,
+        lying=args.lying,
     )
     out = res.to_dict()
     if args.json:
@@ -81,6 +91,32 @@ def _cmd_control(args: argparse.Namespace) -> int:
     if res.non_foot_contacts:
         why.append(f"{len(res.non_foot_contacts)} non-foot contact pair(s)")
     return not_achieved(why)
+
+
+def simulate_control(
+    args: argparse.Namespace, model: Any, options: dict[str, Any], html: Any
+) -> int:
+    """``simulate --control``: the plan open-loop and closed-loop, printed or as a page."""
+    import sys
+
+    from ..control.compare import compare, comparison_html
+    from .common import emit_json
+
+    opts = {k: v for k, v in options.items() if k not in ("stand",)}
+    cmp = compare(model, friction=args.friction, **opts)
+    out = cmp.to_dict()
+    if html is not None:
+        out["html"] = str(comparison_html(cmp, html))
+    if args.json:
+        emit_json(out)
+    else:
+        for name, a, b in cmp.rows():
+            fa, fb = ("-" if v is None else f"{v:.4g}" for v in (a, b))
+            print(f"{name:24s} open loop {fa:>10}   closed loop {fb:>10}")
+        if "html" in out:
+            print(f"wrote {out['html']}", file=sys.stderr)
+    res = cmp.closed_loop
+    return not_achieved(["the robot fell under the controller"] if res.fell else [])
 
 
 def _print(out: dict[str, Any]) -> None:

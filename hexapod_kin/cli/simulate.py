@@ -57,6 +57,12 @@ def register(sub: Any) -> None:
         "--html", metavar="FILE.html", help="plan and simulation side by side (self-contained)"
     )
     p.add_argument("--mjcf", metavar="FILE.xml", help="also write the simulated scene's MJCF")
+    p.add_argument(
+        "--control",
+        action="store_true",
+        help="also walk the plan's twist closed-loop (hexapod_kin.control) and compare; "
+        "--html writes the two side by side; exit 1 when the closed loop falls",
+    )
     p.set_defaults(func=_cmd_simulate)
 
 
@@ -77,6 +83,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         stand=not args.no_stand,
         **walk_options(args, robot.legged() if args.pattern is None else None),
     )
+    if args.control:  # open loop beside closed loop (hexapod_kin.control)
+        from .control import simulate_control
+
+        return simulate_control(args, model, options, html)
     ensemble = None
     if args.robust:
         from ..robust import simulate_robust

@@ -267,8 +267,17 @@ class Controller:
         self.integral = np.zeros(6)
         self.ready = False
 
-    def reset(self, m: Measurement) -> None:
-        """Start from a measured standing robot: the path starts where it is."""
+    def reset(self, m: Measurement, stand_height: float | None = None) -> None:
+        """Start from measurement ``m``: the path starts where the robot is.
+
+        Args:
+            m: The first measurement.
+            stand_height: The height [m] of the tracked point (CoM for torque, base for
+                servos) above the feet's centres that ``stand`` and ``walk`` hold (default:
+                the measured one). A robot lying down rises to it at a quarter of it per
+                second.
+
+        """
         self.reset_state()
         st = self._state(m)
         self.path_xy = st["ref_point"][:2].copy()
@@ -276,7 +285,7 @@ class Controller:
         self.ground_z = float(st["feet"][:, 2].mean())
         self.stand_at = np.array(st["feet"])
         self.height_ref = float(st["ref_point"][2] - self.ground_z)
-        self.stand_height = self.height_ref
+        self.stand_height = self.height_ref if stand_height is None else stand_height
         self.q_cmd = np.array(m.q, dtype=float)
         self.ready = True
 

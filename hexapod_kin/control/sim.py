@@ -6,8 +6,9 @@ position servo with a torque motor limited to the joint's effort, adds height-fi
 (uniform heights in ``±bumps`` on a 50 mm grid, from ``seed``) and runs the
 :class:`~.controller.Controller` at its rate, the physics at the scene's time step.
 The controller is fed what the robot senses (IMU attitude and body rates, joint positions
-and velocities, foot contacts) and, as a state estimator would, the base position and
-velocity (here the simulator's: the estimator is not modelled).
+and velocities, foot contacts) and the base position and velocity: the simulator's, or
+with ``estimate=True`` those of :class:`~.estimator.StateEstimator` (a contact-aided
+Kalman filter on the accelerometer, the attitude and the legs' kinematics).
 
 Pushes ``(force [N], start [s], duration [s])`` act at the body's centre of mass along the
 path's left normal (a negative force pushes right), from the end of settling.
@@ -18,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,7 @@ from .._fields import fields_dict
 from ..exceptions import ParameterError, positive
 from .commands import Command, Timeline
 from .controller import Controller, Measurement
+from .estimator import StateEstimator
 
 __all__ = ["ControlRun", "Push", "hardware_loop", "run"]
 
@@ -98,6 +100,11 @@ class ControlRun:
         qp_cpu: Mean CPU time of the force QP per tick [s].
         cpu_time: CPU time of the whole run [s].
         simulated: Simulated time [s].
+        settings: The run's arguments.
+        estimate_error: With ``estimate``: the state estimate's errors against the
+            simulator's state, from the end of settling: ``horizontal_final`` and
+            ``horizontal_max`` [m] (the drift of the unobservable x, y), ``height_max`` [m],
+            ``velocity_rms`` and ``velocity_max`` [m/s]; else None.
 
     """
 
@@ -124,6 +131,7 @@ class ControlRun:
     cpu_time: float
     simulated: float
     settings: dict[str, Any] = field(default_factory=dict)
+    estimate_error: dict[str, float] | None = None
 
     @property
     def travel_error(self) -> float | None:
@@ -155,6 +163,7 @@ class ControlRun:
             "cpu_time",
             "simulated",
             "settings",
+            "estimate_error",
         )
         return fields_dict(self, *names)
 
@@ -256,6 +265,8 @@ def run(
     rate: float | None = None,
     period: float | None = None,
     recovery_tolerance: float = 0.03,
+    estimate: bool = False,
+    lying: bool = False,
 ) -> ControlRun:
     """Walk ``robot`` under the controller in MuJoCo for ``duration`` [s] after ``settle``.
 
@@ -274,6 +285,15 @@ def run(
         rate: Control rate [Hz] (default the controller's).
         period: Gait cycle [s] (default the controller's).
         recovery_tolerance: Cross-track distance counted as back on the path [m].
+        estimate: Feed the controller the base position and velocity of a
+            :class:`~.estimator.StateEstimator` (IMU accelerometer and attitude, joints,
+            foot contacts) instead of the simulator's; its errors go to
+            :attr:`ControlRun.estimate_error`.
+        lying: Start lying: the body resting on the ground (its lowest collision point
+            1 mm above it), the feet on the ground under their neutral places; the
+            controller raises the body to its standing height (its contacts with the ground
+            while it rises are counted among ``non_foot_contacts``; a fall by height is
+            counted once it has risen to 90 % of it).
 
     Returns:
         A :class:`ControlRun`.
@@ -323,6 +343,13 @@ def run(
     data.qpos[2] = -float(feet0[:, 2].min()) + scene.foot_radius + 1e-4
     data.qpos[3] = 1.0
     data.qpos[jq] = q0
+    mj.mj_forward(model, data)
+    stand_z = float(data.qpos[2])
+    stand_height = None
+    if lying:
+        q0 = _lie_down(mj, model, data, wb, jq, base, scene.foot_radius)
+        # the height the controller holds: its tracked point's above the foot centres
+        stand_height = ctl.height0 + (float(ctl.com_body[2]) if kind == "torque" else 0.0)
     if kind == "servo":
         data.ctrl[act] = q0
     mj.mj_forward(model, data)
@@ -330,6 +357,11 @@ def run(
     n_settle = int(round(settle * ctl.rate))
     n_walk = int(round(duration * ctl.rate))
     ctl.set_command(Command(mode="stand"))
+    risen = not lying
+
+    est = StateEstimator(ctl) if estimate else None
+    est_err: list[tuple[float, float, float]] = []
+    v_prev: np.ndarray | None = None
 
     def measure(t: float) -> Measurement:
         contacts = np.zeros(len(foot_geom), dtype=bool)
@@ -370,6 +402,27 @@ def run(
             if cmd != ctl.command:
                 ctl.set_command(cmd)
         m = measure(t)
+        if not ctl.ready:
+            ctl.reset(m, stand_height=stand_height)
+        if est is not None:  # the controller sees the estimate, not the simulator's state
+            if not est.ready:
+                est.reset(m.position, m.velocity, m)
+            # the accelerometer's specific force, averaged over the control period (as an
+            # IMU's delta-velocity output is)
+            R_b = np.array(data.xmat[base]).reshape(3, 3)
+            acc = (m.velocity - (m.velocity if v_prev is None else v_prev)) * ctl.rate
+            f_spec = R_b.T @ (acc + np.array([0.0, 0.0, 9.81]))
+            v_prev = m.velocity
+            p_est, v_est = est.update(m, f_spec)
+            if k >= n_settle:
+                est_err.append(
+                    (
+                        float(np.linalg.norm(p_est[:2] - m.position[:2])),
+                        abs(float(p_est[2] - m.position[2])),
+                        float(np.linalg.norm(v_est - m.velocity)),
+                    )
+                )
+            m = replace(m, position=p_est, velocity=v_est)
         c0 = time.process_time()
         u = ctl.tick(m)
         ticks.append(time.process_time() - c0)
@@ -391,7 +444,8 @@ def run(
         roll, pitch, yaw = _rpy(R)
         rpys.append((roll, pitch, yaw))
         height = float(data.qpos[2]) - ctl.ground_z
-        if height < 0.4 * ctl.stand_height or abs(roll) > 1.05 or abs(pitch) > 1.05:
+        risen = risen or height > 0.9 * (stand_z - scene.foot_radius)
+        if (risen and height < 0.4 * ctl.stand_height) or abs(roll) > 1.05 or abs(pitch) > 1.05:
             fell = True
         down = np.zeros(len(foot_geom), dtype=bool)
         for c in data.contact[: data.ncon]:
@@ -436,6 +490,7 @@ def run(
             recovery.append(float(T[bad[-1] + 1] - end))
     vel_err = _velocity_errors(timeline, T, P, yaws, PA, ctl.period, duration)
     tick = np.array(ticks)
+    errs = np.array(est_err).reshape(-1, 3)
     return ControlRun(
         t=T,
         position=P,
@@ -467,9 +522,49 @@ def run(
             "seed": seed,
             "friction": friction,
             "pushes": [fields_dict(p, "force", "start", "duration") for p in pushes],
+            "estimate": estimate,
             **timeline.to_dict(),
         },
+        estimate_error=None
+        if est is None
+        else {
+            "horizontal_final": float(errs[-1, 0]),
+            "horizontal_max": float(errs[:, 0].max()),
+            "height_max": float(errs[:, 1].max()),
+            "velocity_rms": float(np.sqrt((errs[:, 2] ** 2).mean())),
+            "velocity_max": float(errs[:, 2].max()),
+        },
     )
+
+
+def _lie_down(
+    mj: Any, model: Any, data: Any, wb: Any, jq: np.ndarray, base: int, foot_radius: float
+) -> np.ndarray:
+    """Put the robot lying; its joints [rad].
+
+    The body's lowest point 1 mm above z = 0, the feet on the ground under their neutral
+    places (the legs by the whole body's ``body_ik``).
+    """
+    q0 = np.asarray(wb.neutral_q(), dtype=float)
+    lowest = np.inf
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    for g in range(model.ngeom):
+        if int(model.geom_bodyid[g]) != base:
+            continue
+        c, h = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        R = np.array(data.geom_xmat[g]).reshape(3, 3)
+        corners = data.geom_xpos[g] + (c + h * signs) @ R.T
+        lowest = min(lowest, float(corners[:, 2].min()))
+    z = float(data.qpos[2]) - lowest + 1e-3
+    B = np.eye(4)
+    B[2, 3] = z
+    feet = wb.feet(q0[None], np.eye(4)[None])[0]
+    feet[:, 2] = foot_radius + 1e-4
+    ik = wb.body_ik(B, feet, q_prev=q0, strict=False)
+    q = np.asarray(ik.q[0], dtype=float)
+    data.qpos[2] = z
+    data.qpos[jq] = q
+    return q
 
 
 def _rz_col(yaw: float) -> np.ndarray:
