@@ -99,6 +99,8 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         (["--stride", "0.4", "--duration", "1"], 1),  # the plan fails, as gait's
         (["erd:anymal", "--pattern", "crawl", "--duration", "2"], 1),  # ZMP margin < 0
         (["--terrain", "mud"], 2),
+        (["--control", "--robust"], 2),  # one verdict per run
+        (["--control", "--mjcf", "x.xml"], 2),
     ],
     "control": [
         (["--duration", "1"], 0),

@@ -73,6 +73,16 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .common import emit_json, output_path
 
     check_friction(args.friction)  # before the robot is loaded and the walk planned
+    if args.control and (args.robust or args.mjcf):
+        from ..exceptions import ParameterError
+
+        other = "--robust" if args.robust else "--mjcf"
+        raise ParameterError(
+            f"--control cannot be combined with {other}",
+            parameter="--control",
+            value=other,
+            allowed="--control alone, or with --html",
+        )
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
