@@ -377,7 +377,7 @@ def timeline(
     speed = np.empty_like(vs)
     q_sent = np.empty_like(qs)
     for j, s in enumerate(servos):
-        exact = s.zero + s.direction * s.scale * (qs[:, j] - s.offset)
+        exact = s.command_exact(qs[:, j])
         command[:, j] = s.command(qs[:, j])
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
