@@ -180,3 +180,34 @@ def test_page_of_the_robot_given_not_of_a_namesake(tmp_path: Path) -> None:
         pages.append((cwd / "p.html").read_bytes())
     assert pages[0] == pages[1]
     assert b"tibia_lf" not in pages[0] and len(SIDES35) == 6
+
+
+# ------------------------------------------------------------ Ctrl-C ignored by its starter
+def test_a_command_started_with_ctrl_c_ignored_keeps_ignoring_it(tmp_path: Path) -> None:
+    """A script's ``cmd &`` starts it with SIGINT ignored: a Ctrl-C meant for the script
+    must not stop it half-way (the command line used to install its own handler over it)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from test_hostile_cli import _PEAK, _cap, _env, _finish
+
+    def ignoring() -> None:  # pragma: no cover - runs in the child
+        _cap()
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    argv = [sys.executable, "-c", _PEAK, str(tmp_path / ".peak"), "urdf", "hexapod", "-o", "h.urdf"]
+    out, err = tmp_path / ".stdout", tmp_path / ".stderr"
+    with open(out, "wb") as o, open(err, "wb") as e:
+        t0 = time.monotonic()
+        proc = subprocess.Popen(
+            argv, cwd=tmp_path, stdout=o, stderr=e, env=_env(), preexec_fn=ignoring
+        )
+        for _ in range(20):  # Ctrl-C after Ctrl-C, through its start and its work (a
+            time.sleep(0.05)  # finished child is a zombie until _finish reaps it)
+            os.kill(proc.pid, signal.SIGINT)
+        run = _finish(proc, t0, 120.0, out, err)
+    assert run.status == 0 and "interrupted" not in run.stderr, (run.status, run.stderr)
+    assert (tmp_path / "h.urdf").stat().st_size > 1000
