@@ -116,11 +116,12 @@ class Timeline:
     def to_csv(self) -> str:
         """CSV text: header lines, then ``t [s]``, the commands and the speeds."""
         units = [s.units for s in self.servos]
+        cal = self.calibration.to_dict()
         lines = [
             f"# format: {FORMAT} 1",
             f"# rate: {self.rate!r}",
             f"# interpolation: {self.interpolation}",
-            f"# calibration: {json.dumps(self.calibration.to_dict(), sort_keys=True)}",
+            "# calibration: " + json.dumps(cal, sort_keys=True, allow_nan=False),
             ",".join(
                 ["t [s]"]
                 + [f"{j} [{u}]" for j, u in zip(self.joint_names, units)]
@@ -167,7 +168,7 @@ class Timeline:
         if kind == "csv":
             text = self.to_csv()
         elif kind == "json":
-            text = json.dumps(self.to_dict(), indent=None, separators=(",", ":")) + "\n"
+            text = json.dumps(self.to_dict(), separators=(",", ":"), allow_nan=False) + "\n"
         else:
             text = self.to_ros2_yaml()
         return atomic_write(path, text)
