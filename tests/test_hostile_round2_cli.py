@@ -84,6 +84,30 @@ def test_calibration_speed_limit_of_1e_320_refused(tmp_path: Path) -> None:
     assert not (tmp_path / "o.csv").exists()
 
 
+@pytest.mark.parametrize(
+    "entry, phrase",
+    [
+        # scale 5e-324 / 2 pi = 0: a ZeroDivisionError, the catch-all's "(a bug ...)"
+        ("{units: ticks, ticks_per_revolution: 5e-324}", "need ticks_per_revolution >= 1"),
+        ("{units: us, us_per_rad: 1e-300, centre: 1500}", "need us_per_rad >= 1"),
+    ],
+    ids=["ticks-5e-324", "us-1e-300"],
+)
+def test_calibration_scale_of_nothing_refused(tmp_path: Path, entry: str, phrase: str) -> None:
+    (tmp_path / "plan.csv").write_text(PLAN)
+    (tmp_path / "cal.yaml").write_text(f"defaults: {entry}\n")
+    args = ("timeline", "path", "plan.csv", "--calibration", "cal.yaml", "-o", "o.csv")
+    fast_refusal(cli(*args, cwd=tmp_path), phrase)
+
+
+def test_path_of_1e300_rad_is_no_servo_command(tmp_path: Path) -> None:
+    """No robot, no calibration (rad, unlimited): a finite 1e300 rad is still not sent."""
+    (tmp_path / "plan.csv").write_text("t,j1\n0,0\n1,1e300\n")
+    run = cli("timeline", "path", "plan.csv", "-o", "o.json", cwd=tmp_path)
+    fast_refusal(run, "beyond ±1e+09 (no servo's)")
+    assert not (tmp_path / "o.json").exists()
+
+
 @pytest.mark.parametrize("out", ["o.json", "o.csv", "o.yaml"])
 def test_path_with_a_1e308_sample_writes_nothing(tmp_path: Path, out: str) -> None:
     (tmp_path / "plan.csv").write_text("t,j1\n0,0\n0.5,1e308\n1,0\n")

@@ -74,9 +74,12 @@ def _case(draw: st.DrawFn) -> tuple[dict[str, object], np.ndarray, np.ndarray, o
     steps = draw(st.lists(st.floats(1e-3, 0.5), min_size=n - 1, max_size=n - 1))
     t = np.concatenate([[0.0], np.cumsum(steps)])
     scale = draw(st.sampled_from([0.1, 1.0, 10.0, 1e300]))
-    q = np.array(
-        draw(st.lists(st.floats(-1.0, 1.0), min_size=n * n_joints, max_size=n * n_joints))
-    ).reshape(n, n_joints) * scale
+    q = (
+        np.array(
+            draw(st.lists(st.floats(-1.0, 1.0), min_size=n * n_joints, max_size=n * n_joints))
+        ).reshape(n, n_joints)
+        * scale
+    )
     limits = None
     if draw(st.booleans()):
         half = draw(st.sampled_from([0.5, 1.0, 2.6, 1e300]))
@@ -121,7 +124,7 @@ def test_every_timeline_is_finite_and_within_every_range(case, tmp_path_factory)
     except (LimitError, ConfigurationError) as exc:  # a sample refused: joint and time named
         message = str(exc)
         event(f"refused: {type(exc).__name__}")
-        if isinstance(exc, LimitError) or "not finite" in message:
+        if isinstance(exc, LimitError) or "not finite" in message or "±1e+09" in message:
             assert re.match(r"joint j\d at t=-?\d+\.\d{4} s: ", message), message
             assert exc.parameter in names, exc.parameter
         else:  # a plan of more samples than allowed
@@ -142,6 +145,7 @@ def test_every_timeline_is_finite_and_within_every_range(case, tmp_path_factory)
     event("written")
     for arr in (tl.t, tl.q, tl.qdot, tl.command, tl.speed):
         assert np.all(np.isfinite(arr))
+    assert np.abs(tl.command).max() <= 1e9 and np.abs(tl.speed).max() <= 1e9  # plausible
     qs = np.column_stack([np.interp(tl.t, t, q[:, j]) for j in range(q.shape[1])])
     assert np.array_equal(tl.command, _expected_commands(cal, names, qs))
     for j, servo in enumerate(tl.servos):
@@ -149,7 +153,8 @@ def test_every_timeline_is_finite_and_within_every_range(case, tmp_path_factory)
             assert servo.limits[0] <= tl.command[:, j].min()
             assert tl.command[:, j].max() <= servo.limits[1]
         if limits is not None:
-            assert np.all(qs[:, j] >= limits[0][j] - 1e-9) and np.all(qs[:, j] <= limits[1][j] + 1e-9)
+            assert np.all(qs[:, j] >= limits[0][j] - 1e-9)
+            assert np.all(qs[:, j] <= limits[1][j] + 1e-9)
         if servo.velocity_limit is not None:
             assert np.all(np.abs(tl.qdot[:, j]) <= servo.velocity_limit)
     folder = tmp_path_factory.mktemp("tl")

@@ -97,17 +97,17 @@ class Servo:
             need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
         tpr, upr = self.ticks_per_revolution, self.us_per_rad
         need(
-            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr > 0),
+            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr >= 1),
             "ticks_per_revolution",
-            "units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 ticks over "
+            "units 'ticks' need ticks_per_revolution >= 1 (e.g. 1228.8 for 1024 ticks over "
             f"300°), got {tpr!r}",
-            "> 0",
+            ">= 1",
         )
         need(
-            self.units != "us" or (upr is not None and math.isfinite(upr) and upr > 0),
+            self.units != "us" or (upr is not None and math.isfinite(upr) and upr >= 1),
             "us_per_rad",
-            f"units 'us' need us_per_rad > 0, got {upr!r}",
-            "> 0",
+            f"units 'us' need us_per_rad >= 1 (a PWM servo: some 500 to 650), got {upr!r}",
+            ">= 1",
         )
         if self.limits is not None:
             lo, hi = self.limits

@@ -17,8 +17,9 @@ joint to its servo through a :class:`Calibration`:
     \end{cases}
 
 with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction,
-rounded to the servo's resolution. Every sample is checked (finite; the joint's limits; the
-servo's limits; the speed limit [rad/s]); the first one beyond is refused naming the joint,
+rounded to the servo's resolution. Every sample is checked (finite, commands and speeds per
+second within ±1e9 servo units; the joint's limits; the servo's limits; the speed limit
+[rad/s]); the first one beyond is refused naming the joint,
 the time and the value. Interpolation: ``"linear"`` (velocities the plan's own or its
 second-order finite difference) or ``"cubic"`` (a not-a-knot spline and its derivative).
 Files: CSV (``# key: value`` header, ``t [s]``, commands and speeds in servo units), JSON (the
@@ -40,7 +41,7 @@ import numpy as np
 from .._io import atomic_write
 from .._reader import parse_data, read_text
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
-from .servos import UNITS, Calibration, Servo, _bad, read_calibration
+from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [
     "UNITS",
@@ -289,6 +290,31 @@ def _beyond(joint: str, t: float, what: str, value: Any, allowed: Any) -> LimitE
     )
 
 
+def _refuse_implausible(
+    s: Servo,
+    j: int,
+    ts: np.ndarray,
+    qs: np.ndarray,
+    command: np.ndarray,
+    speed: np.ndarray,
+    ok: np.ndarray,
+) -> None:
+    """Refuse the first sample of column ``j`` not ``ok`` (not finite, or beyond ±1e9)."""
+    k = _first(~ok)
+    if k is None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
+        return
+    u, v = float(command[k, j]), float(speed[k, j])
+    finite = math.isfinite(u) and math.isfinite(v)
+    why = f"beyond ±{MAX_COMMAND:g} (no servo's)" if finite else "not finite"
+    text = (
+        f"joint {s.joint} at t={ts[k]:.4f} s: command {u:g} {s.units}, speed {v:g} "
+        f"{s.units}/s (q = {qs[k, j]:.6g} rad): {why}; check the calibration's scale and "
+        "resolution and the plan"
+    )
+    allowed = f"finite commands and speeds within ±{MAX_COMMAND:g}"
+    raise _malformed(text, s.joint, u, allowed)
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # non-finite results refused
 def timeline(
     plan: Any,
@@ -383,14 +409,7 @@ def timeline(
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
         finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
-        k = _first(~finite)
-        if k is not None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
-            text = (
-                f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
-                f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
-                "check the calibration's scale and resolution and the plan"
-            )
-            raise _malformed(text, s.joint, float(command[k, j]), "finite commands and speeds")
+        _refuse_implausible(s, j, ts, qs, command, speed, finite)
         k = _first((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
         if k is not None:
             lo, hi = float(plim[0, j]), float(plim[1, j])
@@ -405,6 +424,9 @@ def timeline(
                     f"limits [{lo:g}, {hi:g}] {s.units}"
                 )
                 raise _beyond(s.joint, ts[k], what, exact[k], (lo, hi))
+        # plausible: no servo takes a command (or a speed per second) beyond ±MAX_COMMAND
+        sane = (np.abs(command[:, j]) <= MAX_COMMAND) & (np.abs(speed[:, j]) <= MAX_COMMAND)
+        _refuse_implausible(s, j, ts, qs, command, speed, sane)
         lim = s.velocity_limit if s.velocity_limit is not None else float(vlim[j])
         k = _first(np.abs(vs[:, j]) > lim)
         if k is not None:
