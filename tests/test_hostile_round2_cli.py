@@ -9,7 +9,9 @@ same command that stops before any work) and 1 GB, with no catch-all nor traceba
 * Servo calibrations whose map leaves the joint's range outside the servo's: refused before
   the walk is planned (was 9 s of CPU), naming the key (``limits``, ``resolution``); a speed
   limit of 1e-320 rad/s refused.
-* Path files with a 1e308 rad sample: no JSON/CSV/ROS 2 file is written.
+* Path files with a 1e308 rad sample: no JSON/CSV/ROS 2 file is written; a 1e300 rad path
+  (finite) is no servo's command either; a JSON plan's numbers written as texts or booleans,
+  names that are numbers and unknown keys are refused (they were converted or ignored).
 * Feet files: a number written as text or a boolean, an entry with a misspelt key (its offset
   silently 0), a frame that is not a text; ``control --foot`` honoured (it was ignored).
 * Command timelines of ``control``: numbers only, a pattern that is a text, the file named.
@@ -114,6 +116,26 @@ def test_path_with_a_1e308_sample_writes_nothing(tmp_path: Path, out: str) -> No
     run = cli("timeline", "path", "plan.csv", "-o", out, cwd=tmp_path)
     fast_refusal(run, "joint j1 at t=0.0000 s: ")
     assert not (tmp_path / out).exists()
+
+
+PLAN_FILES = {
+    "text-number": ('{"t": [0, 1], "q": [[0], ["0.5"]]}', "q holds '0.5', not a number"),
+    "boolean": ('{"t": [0, true], "q": [[0], [0.5]]}', "t holds True, not a number"),
+    "name-number": (
+        '{"t": [0, 1], "q": [[0], [0.5]], "joint_names": [5]}',
+        "joint_names must be a list of names (texts), got 5",
+    ),
+    "unknown-key": ('{"t": [0, 1], "q": [[0], [0.5]], "qq": 1}', "unknown key 'qq'"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(PLAN_FILES))
+def test_plan_file_values_are_checked(tmp_path: Path, case: str) -> None:
+    text, phrase = PLAN_FILES[case]
+    (tmp_path / "p.json").write_text(text)
+    line = fast_refusal(cli("timeline", "path", "p.json", "-o", "o.csv", cwd=tmp_path), phrase)
+    assert "plan='p.json'" in line, line
+    assert not (tmp_path / "o.csv").exists()
 
 
 # ------------------------------------------------------------------------------ feet files

@@ -39,7 +39,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .._io import atomic_write
-from .._reader import parse_data, read_text
+from .._reader import clip, parse_data, read_text
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
@@ -459,6 +459,36 @@ def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
     return SourceError(f"{kind}={str(p)!r}: not {what} ({why})", parameter=kind, value=str(p))
 
 
+def _numbers(value: Any, p: Path, kind: str, key: str) -> np.ndarray:
+    """A file's nested lists of numbers as an array; a text or a boolean refused by name."""
+    stack = [value]
+    while stack:
+        v = stack.pop()
+        if isinstance(v, list):
+            stack.extend(v)
+        elif isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise SourceError(
+                f"{kind}={str(p)!r}: {key} holds {clip(v)}, not a number",
+                parameter=kind,
+                value=clip(v),
+                allowed="numbers",
+            )
+    return np.asarray(value, dtype=float)
+
+
+def _texts(value: Any, p: Path, kind: str, key: str) -> None:
+    """Refuse names that are not a list of texts (``5`` or ``true`` would become '5', 'True')."""
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        listed = isinstance(value, list)
+        bad = next((v for v in value if not isinstance(v, str)), value) if listed else value
+        raise SourceError(
+            f"{kind}={str(p)!r}: {key} must be a list of names (texts), got {clip(bad)}",
+            parameter=kind,
+            value=clip(bad),
+            allowed="texts",
+        )
+
+
 def _from_commands(
     t: np.ndarray,
     names: tuple[str, ...],
@@ -496,11 +526,12 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
             if d.get("format") != FORMAT:
                 raise KeyError("format")
             cal = Calibration.from_dict(d["calibration"], p.name)
+            _texts(d["joint_names"], p, "timeline", "joint_names")
             return _from_commands(
-                np.asarray(d["t"], dtype=float),
+                _numbers(d["t"], p, "timeline", "t"),
                 tuple(d["joint_names"]),
-                np.asarray(d["command"], dtype=float).reshape(len(d["t"]), -1),
-                np.asarray(d["speed"], dtype=float).reshape(len(d["t"]), -1),
+                _numbers(d["command"], p, "timeline", "command").reshape(len(d["t"]), -1),
+                _numbers(d["speed"], p, "timeline", "speed").reshape(len(d["t"]), -1),
                 cal,
                 float(d["rate"]),
                 str(d["interpolation"]),
@@ -577,10 +608,18 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
     try:
         if p.suffix.lower() == ".json":
             d = parse_data(text, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
-            t = np.asarray(d["t"], dtype=float)
-            q = np.asarray(d["q"], dtype=float)
+            extra = sorted(set(d) - {"t", "q", "joint_names"}) if isinstance(d, dict) else []
+            if extra:
+                raise SourceError(
+                    f"plan={str(p)!r}: unknown key {extra[0]!r}; allowed: t, q, joint_names",
+                    parameter="plan",
+                    value=extra[0],
+                    allowed=("t", "q", "joint_names"),
+                )
+            t, q = _numbers(d["t"], p, "plan", "t"), _numbers(d["q"], p, "plan", "q")
             names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
-            return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
+            _texts(names, p, "plan", "joint_names")
+            return t, q.reshape(len(t), -1), tuple(names)
         _, columns, data = _csv(text)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except _MALFORMED as exc:
