@@ -11,11 +11,10 @@ from __future__ import annotations
 import math
 import os
 import subprocess
-import sys
-import threading
 from pathlib import Path
 
 import pytest
+from test_hostile_cli import cli
 
 import hexapod_kin as hk
 from hexapod_kin.cli import main
@@ -327,58 +326,14 @@ COMMANDS = {
 CHILD_CASES = [(cmd, case) for cmd, (cases, _, _) in COMMANDS.items() for case in cases]
 
 
-def _child(args: list[str], cwd: Path) -> tuple[int, str, float, int]:
-    """``python -m hexapod_kin ARGS``: exit status, stderr, CPU time [s], peak RSS [bytes].
-
-    Reaped with ``os.wait4`` (the child's own CPU time and peak); killed after 60 s.
-    """
-    env = {k: v for k, v in os.environ.items() if k != "HEXAPOD_KIN_DEBUG"}
-    err_path, peak_path = cwd / ".stderr", cwd / ".peak"
-    with open(err_path, "wb") as err:
-        proc = subprocess.Popen(
-            [sys.executable, "-c", _PEAK, str(peak_path), *args],
-            cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=err, env=env,
-        )  # fmt: skip
-    killer = threading.Timer(60.0, proc.kill)
-    killer.start()
-    try:
-        _, status, usage = os.wait4(proc.pid, 0)
-    finally:
-        killer.cancel()
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    rss_unit = 1 if sys.platform == "darwin" else 1024
-    cpu = usage.ru_utime + usage.ru_stime
-    # ru_maxrss keeps the high-water mark of the process that spawned the child (Linux carries
-    # it across fork/vfork + exec): a big pytest worker would be charged to the command. The
-    # child's own VmHWM (its address space after exec) is its real peak where /proc exists.
-    peak = usage.ru_maxrss * rss_unit
-    if peak_path.is_file() and peak_path.read_text().strip():
-        peak = int(peak_path.read_text()) * 1024
-    return proc.returncode, err_path.read_text(errors="replace"), cpu, peak
-
-
-#: ``python -m hexapod_kin ARGS`` that writes its own peak RSS (VmHWM, kB) to a file at exit.
-_PEAK = """import atexit, runpy, sys
-def _peak(path=sys.argv.pop(1)):
-    try:
-        status = open("/proc/self/status").read().split("VmHWM:")
-    except OSError:
-        return
-    if len(status) > 1:
-        open(path, "w").write(status[1].split()[0])
-atexit.register(_peak)
-sys.argv[0] = "hexapod-kin"
-runpy.run_module("hexapod_kin", run_name="__main__", alter_sys=True)
-"""
-
-
 @pytest.mark.parametrize(("command", "case"), CHILD_CASES, ids=[f"{c}-{k}" for c, k in CHILD_CASES])
 def test_hostile_user_file_on_the_command_line(tmp_path: Path, command: str, case: str) -> None:
     """One line, exit 2, within 1 s of CPU and 1 GB (the probe: 23.6 s and 2.3 GB for a bomb)."""
     _, suffix, argv = COMMANDS[command]
     (tmp_path / "plan.csv").write_text("t,j1\n0,0\n1,0.1\n")
     path = _make(tmp_path, case, suffix)
-    status, err, cpu, peak = _child([a.format(f=path.name) for a in argv], tmp_path)
+    run = cli(*[a.format(f=path.name) for a in argv], cwd=tmp_path, timeout=60.0)
+    status, err, cpu, peak = run.status, run.stderr, run.cpu, run.peak
     lines = err.strip().splitlines()
     assert status == 2 and len(lines) == 1, err
     assert lines[0].startswith("hexapod-kin: error: ") and PHRASES[case] in lines[0], lines[0]

@@ -146,6 +146,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Ctrl-C is recorded as well as raised, so a library that swallows the
     ``KeyboardInterrupt`` cannot turn it into a success (a swallowed one is delivered again).
+    A command started with Ctrl-C ignored (``nohup``, a script's ``cmd &``) keeps ignoring it.
     """
     interrupted: list[int] = []
     active = [True]  # False once the command is done: a late signal is only recorded
@@ -178,8 +179,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             timer.daemon = True
             timer.start()
 
-    try:
-        previous = signal.signal(signal.SIGINT, on_sigint)
+    try:  # started with Ctrl-C ignored (nohup, a script's `cmd &`): it stays ignored
+        ignored = signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        previous = None if ignored else signal.signal(signal.SIGINT, on_sigint)
     except ValueError:  # not the main thread: leave signals alone
         previous = None
     hook, sys.unraisablehook = sys.unraisablehook, unraisable

@@ -67,8 +67,13 @@ def _cmd_control(args: argparse.Namespace) -> int:
     vx, vy, wz = velocity(args.velocity) or (0.2, 0.0, 0.0)
     command: Any = read_timeline(args.command) if args.command else Command(vx, vy, wz)
     robot = robot_of(args)
+    model: Any = robot.load()
+    if robot.feet is not None or robot.foot_radius is not None:  # --foot, --foot-radius
+        from ..gait import as_whole_body
+
+        model = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     res = run(
-        robot.load(),
+        model,
         pattern=args.pattern,
         command=command,
         duration=args.duration,

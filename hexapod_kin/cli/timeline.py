@@ -110,6 +110,7 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     out = output_path(args.output, "-o", _SUFFIXES)
     robot = robot_of(args)
     model = robot.load()
+    args.calibration = _calibration(args, model)
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     options = walk_options(args, wb)
     if options["body_height"] is None and isinstance(model.params, Hexapod):
@@ -123,6 +124,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
 
     out = output_path(args.output, "-o", _SUFFIXES)
     model = load_source(args)
+    args.calibration = _calibration(args, model)
     run = seed_experiment(
         model,
         amplitude=args.amplitude,
@@ -146,6 +148,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
     vlim = plim = None
     if args.source:  # the plan is for this robot: its joints by name, their limits checked
         model = load_source(args)
+        args.calibration = _calibration(args, model)
         unknown = [n for n in names if n not in model.joint_names]
         if unknown:
             raise ParameterError(
@@ -159,6 +162,13 @@ def _cmd_path(args: argparse.Namespace) -> int:
         vlim = [float(model.velocity_limit[i]) for i in idx]
         plim = ([float(model.lower[i]) for i in idx], [float(model.upper[i]) for i in idx])
     return _write((t, q), args, out, vlim, names, plim)
+
+
+def _calibration(args: argparse.Namespace, model: Any) -> Any:
+    """``--calibration`` read and held to ``model``'s joints and limits, before any planning."""
+    from ..export.timeline import read_calibration
+
+    return None if args.calibration is None else read_calibration(args.calibration, model)
 
 
 def _write(

@@ -11,8 +11,11 @@ from a JSON or YAML file through the package's reader.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from .._fields import fields_dict
 from ..exceptions import ParameterError, one_of
@@ -24,10 +27,9 @@ MODES = ("walk", "stand", "sit")
 
 
 def _finite(name: str, value: Any) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = math.nan
+    """A finite number (an int or a float: never a text nor a boolean, as '0.3' or true)."""
+    real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+    x = float(value) if real else math.nan
     if not math.isfinite(x):
         raise ParameterError(
             f"{name}={value!r}: a finite number", parameter=name, value=value, allowed="finite"
@@ -60,6 +62,13 @@ class Command:
         for name in ("vx", "vy", "wz"):
             object.__setattr__(self, name, _finite(name, getattr(self, name)))
         one_of("mode", self.mode, list(MODES))
+        if self.pattern is not None and not isinstance(self.pattern, str):
+            raise ParameterError(
+                f"pattern={self.pattern!r}: a pattern's name (a text)",
+                parameter="pattern",
+                value=self.pattern,
+                allowed="a text",
+            )
         h = _finite("height", self.height)
         if not 0.3 <= h <= 1.0:
             raise ParameterError(
@@ -147,4 +156,13 @@ def read_timeline(path: Any) -> Timeline:
     """Read a command timeline file (JSON or YAML, through :mod:`hexapod_kin._reader`)."""
     from .._reader import read_data
 
-    return timeline_of(read_data(path, "command timeline", mapping="commands"))
+    data = read_data(path, "command timeline", mapping="commands")
+    try:
+        return timeline_of(data)
+    except ParameterError as exc:  # name the file
+        raise ParameterError(
+            f"command timeline={str(path)!r}: {exc}",
+            parameter=exc.parameter,
+            value=exc.value,
+            allowed=exc.allowed,
+        ) from None

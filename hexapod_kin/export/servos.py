@@ -29,6 +29,8 @@ __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
 UNITS: tuple[str, ...] = ("rad", "deg", "ticks", "us")
 #: Largest magnitude of a servo command in its units (any real servo is far inside).
 MAX_COMMAND = 1e9
+#: Slowest plausible speed limit of a servo [rad/s] (a turn in some 70 days).
+MIN_SPEED = 1e-6
 _SERVO_KEYS = (
     "units",
     "offset",
@@ -95,17 +97,17 @@ class Servo:
             need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
         tpr, upr = self.ticks_per_revolution, self.us_per_rad
         need(
-            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr > 0),
+            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr >= 1),
             "ticks_per_revolution",
-            "units 'ticks' need ticks_per_revolution > 0 (e.g. 1228.8 for 1024 ticks over "
+            "units 'ticks' need ticks_per_revolution >= 1 (e.g. 1228.8 for 1024 ticks over "
             f"300°), got {tpr!r}",
-            "> 0",
+            ">= 1",
         )
         need(
-            self.units != "us" or (upr is not None and math.isfinite(upr) and upr > 0),
+            self.units != "us" or (upr is not None and math.isfinite(upr) and upr >= 1),
             "us_per_rad",
-            f"units 'us' need us_per_rad > 0, got {upr!r}",
-            "> 0",
+            f"units 'us' need us_per_rad >= 1 (a PWM servo: some 500 to 650), got {upr!r}",
+            ">= 1",
         )
         if self.limits is not None:
             lo, hi = self.limits
@@ -117,10 +119,10 @@ class Servo:
             )
         vel, res = self.velocity_limit, self.resolution
         need(
-            vel is None or vel > 0,
+            vel is None or vel >= MIN_SPEED,
             "velocity_limit",
-            f"velocity_limit {vel!r} must be > 0 [rad/s]",
-            "> 0",
+            f"velocity_limit {vel!r} rad/s is not a servo's speed; allowed: >= {MIN_SPEED:g} rad/s",
+            f">= {MIN_SPEED:g}",
         )
         need(
             res is None or (math.isfinite(res) and res >= 0),
@@ -179,9 +181,13 @@ class Servo:
         """The command at the centre (0 for rad and deg)."""
         return self.centre if self.units in ("ticks", "us") else 0.0
 
+    def command_exact(self, q: Any) -> np.ndarray:
+        """Servo commands for joint angles ``q`` [rad], not rounded."""
+        return self.zero + self.direction * self.scale * (np.asarray(q, dtype=float) - self.offset)
+
     def command(self, q: Any) -> np.ndarray:
         """Servo commands for joint angles ``q`` [rad], rounded to the resolution."""
-        u = self.zero + self.direction * self.scale * (np.asarray(q, dtype=float) - self.offset)
+        u = self.command_exact(q)
         s = self.step
         return np.round(u / s) * s if s > 0 else u
 
@@ -193,12 +199,14 @@ class Servo:
     def check_range(self, lower: float, upper: float) -> None:
         """Refuse a servo that cannot drive a joint of limits [lower, upper] [rad or m].
 
-        The centre (``offset``) must lie within a turn (2π) of the joint's range, and the angles
-        the servo's own ``limits`` reach must overlap it. Infinite limits check nothing.
+        The centre (``offset``) must lie within a turn (2π) of the joint's range, the angles
+        the servo's own ``limits`` reach must overlap it, and a step of the ``resolution`` must
+        lie within that overlap. Infinite limits check nothing.
 
         Raises:
-            ParameterError: Naming the joint, the key (``offset`` or ``limits``), the value and
-                the allowed range.
+            ParameterError: Naming the joint, the key (``offset``, ``limits``, or
+                ``resolution`` when no step of it lies within both ranges), the value and the
+                allowed range.
 
         """
         lo, hi = float(lower), float(upper)
@@ -215,15 +223,31 @@ class Servo:
         if self.limits is not None:
             a, b = sorted(float(x) for x in self.angle(self.limits))
             if b < lo or a > hi:
-                u = sorted(
-                    self.zero + self.direction * self.scale * (x - self.offset) for x in (lo, hi)
-                )
+                u = sorted(float(x) for x in self.command_exact([lo, hi]))
                 msg = (
                     f"{where}: limits {list(self.limits)} {self.units} reach the joint only at "
-                    f"[{a:.6g}, {b:.6g}], outside its limits [{lo:.6g}, {hi:.6g}]; allowed: "
+                    f"[{a:.6g}, {b:.6g}] (centre {self.zero:g} {self.units}, offset "
+                    f"{self.offset:g} rad, {self.scale:g} {self.units}/rad), outside its limits "
+                    f"[{lo:.6g}, {hi:.6g}]; allowed: "
                     f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}"
                 )
                 raise _bad(msg, "limits", list(self.limits), (u[0], u[1]))
+            self._check_steps(lo, hi)
+
+    def _check_steps(self, lower: float, upper: float) -> None:
+        """Refuse a resolution with no step inside both the servo's limits and the joint's."""
+        s = self.step
+        if self.limits is None or not s > 0:
+            return
+        u = sorted(float(x) for x in self.command_exact([lower, upper]))
+        a, b = max(u[0], self.limits[0]), min(u[1], self.limits[1])
+        if math.ceil(a / s - 1e-9) * s > b + 1e-9 * s:
+            msg = (
+                f"calibration of {self.joint}: resolution {s:g} {self.units} has no step within "
+                f"[{a:.6g}, {b:.6g}] {self.units} (the servo's limits {list(self.limits)} on the "
+                f"joint's limits [{lower:.6g}, {upper:.6g}]); allowed: at most {b - a:.6g}"
+            )
+            raise _bad(msg, "resolution", s, f"<= {b - a:.6g}")
 
     def to_dict(self) -> dict[str, Any]:
         """The servo as a calibration-file entry (only the keys that matter for its units)."""

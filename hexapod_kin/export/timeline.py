@@ -17,8 +17,9 @@ joint to its servo through a :class:`Calibration`:
     \end{cases}
 
 with ``q0`` the joint angle at the servo's centre (``offset``) and ``d = ±1`` the direction,
-rounded to the servo's resolution. Every sample is checked (finite; the joint's limits; the
-servo's limits; the speed limit [rad/s]); the first one beyond is refused naming the joint,
+rounded to the servo's resolution. Every sample is checked (finite, commands and speeds per
+second within ±1e9 servo units; the joint's limits; the servo's limits; the speed limit
+[rad/s]); the first one beyond is refused naming the joint,
 the time and the value. Interpolation: ``"linear"`` (velocities the plan's own or its
 second-order finite difference) or ``"cubic"`` (a not-a-knot spline and its derivative).
 Files: CSV (``# key: value`` header, ``t [s]``, commands and speeds in servo units), JSON (the
@@ -38,9 +39,9 @@ from typing import Any, Literal
 import numpy as np
 
 from .._io import atomic_write
-from .._reader import parse_data, read_text
+from .._reader import clip, parse_data, read_text
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
-from .servos import UNITS, Calibration, Servo, _bad, read_calibration
+from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
 __all__ = [
     "UNITS",
@@ -116,11 +117,12 @@ class Timeline:
     def to_csv(self) -> str:
         """CSV text: header lines, then ``t [s]``, the commands and the speeds."""
         units = [s.units for s in self.servos]
+        cal = self.calibration.to_dict()
         lines = [
             f"# format: {FORMAT} 1",
             f"# rate: {self.rate!r}",
             f"# interpolation: {self.interpolation}",
-            f"# calibration: {json.dumps(self.calibration.to_dict(), sort_keys=True)}",
+            "# calibration: " + json.dumps(cal, sort_keys=True, allow_nan=False),
             ",".join(
                 ["t [s]"]
                 + [f"{j} [{u}]" for j, u in zip(self.joint_names, units)]
@@ -167,7 +169,7 @@ class Timeline:
         if kind == "csv":
             text = self.to_csv()
         elif kind == "json":
-            text = json.dumps(self.to_dict(), indent=None, separators=(",", ":")) + "\n"
+            text = json.dumps(self.to_dict(), separators=(",", ":"), allow_nan=False) + "\n"
         else:
             text = self.to_ros2_yaml()
         return atomic_write(path, text)
@@ -288,6 +290,31 @@ def _beyond(joint: str, t: float, what: str, value: Any, allowed: Any) -> LimitE
     )
 
 
+def _refuse_implausible(
+    s: Servo,
+    j: int,
+    ts: np.ndarray,
+    qs: np.ndarray,
+    command: np.ndarray,
+    speed: np.ndarray,
+    ok: np.ndarray,
+) -> None:
+    """Refuse the first sample of column ``j`` not ``ok`` (not finite, or beyond ±1e9)."""
+    k = _first(~ok)
+    if k is None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
+        return
+    u, v = float(command[k, j]), float(speed[k, j])
+    finite = math.isfinite(u) and math.isfinite(v)
+    why = f"beyond ±{MAX_COMMAND:g} (no servo's)" if finite else "not finite"
+    text = (
+        f"joint {s.joint} at t={ts[k]:.4f} s: command {u:g} {s.units}, speed {v:g} "
+        f"{s.units}/s (q = {qs[k, j]:.6g} rad): {why}; check the calibration's scale and "
+        "resolution and the plan"
+    )
+    allowed = f"finite commands and speeds within ±{MAX_COMMAND:g}"
+    raise _malformed(text, s.joint, u, allowed)
+
+
 @np.errstate(over="ignore", invalid="ignore", divide="ignore")  # non-finite results refused
 def timeline(
     plan: Any,
@@ -377,19 +404,12 @@ def timeline(
     speed = np.empty_like(vs)
     q_sent = np.empty_like(qs)
     for j, s in enumerate(servos):
-        exact = s.zero + s.direction * s.scale * (qs[:, j] - s.offset)
+        exact = s.command_exact(qs[:, j])
         command[:, j] = s.command(qs[:, j])
         speed[:, j] = s.direction * s.scale * vs[:, j]
         q_sent[:, j] = s.angle(command[:, j])
         finite = np.isfinite(command[:, j]) & np.isfinite(speed[:, j]) & np.isfinite(q_sent[:, j])
-        k = _first(~finite)
-        if k is not None:  # e.g. a scale of 1e308 µs/rad, a resolution of 1e-320, a 1e308 rad plan
-            text = (
-                f"joint {s.joint} at t={ts[k]:.4f} s: command {command[k, j]:g} {s.units}, "
-                f"speed {speed[k, j]:g} {s.units}/s (q = {qs[k, j]:.6g} rad): not finite; "
-                "check the calibration's scale and resolution and the plan"
-            )
-            raise _malformed(text, s.joint, float(command[k, j]), "finite commands and speeds")
+        _refuse_implausible(s, j, ts, qs, command, speed, finite)
         k = _first((qs[:, j] < plim[0, j] - 1e-9) | (qs[:, j] > plim[1, j] + 1e-9))
         if k is not None:
             lo, hi = float(plim[0, j]), float(plim[1, j])
@@ -404,6 +424,9 @@ def timeline(
                     f"limits [{lo:g}, {hi:g}] {s.units}"
                 )
                 raise _beyond(s.joint, ts[k], what, exact[k], (lo, hi))
+        # plausible: no servo takes a command (or a speed per second) beyond ±MAX_COMMAND
+        sane = (np.abs(command[:, j]) <= MAX_COMMAND) & (np.abs(speed[:, j]) <= MAX_COMMAND)
+        _refuse_implausible(s, j, ts, qs, command, speed, sane)
         lim = s.velocity_limit if s.velocity_limit is not None else float(vlim[j])
         k = _first(np.abs(vs[:, j]) > lim)
         if k is not None:
@@ -434,6 +457,36 @@ def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
         return exc
     why = f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}"
     return SourceError(f"{kind}={str(p)!r}: not {what} ({why})", parameter=kind, value=str(p))
+
+
+def _numbers(value: Any, p: Path, kind: str, key: str) -> np.ndarray:
+    """A file's nested lists of numbers as an array; a text or a boolean refused by name."""
+    stack = [value]
+    while stack:
+        v = stack.pop()
+        if isinstance(v, list):
+            stack.extend(v)
+        elif isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise SourceError(
+                f"{kind}={str(p)!r}: {key} holds {clip(v)}, not a number",
+                parameter=kind,
+                value=clip(v),
+                allowed="numbers",
+            )
+    return np.asarray(value, dtype=float)
+
+
+def _texts(value: Any, p: Path, kind: str, key: str) -> None:
+    """Refuse names that are not a list of texts (``5`` or ``true`` would become '5', 'True')."""
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        listed = isinstance(value, list)
+        bad = next((v for v in value if not isinstance(v, str)), value) if listed else value
+        raise SourceError(
+            f"{kind}={str(p)!r}: {key} must be a list of names (texts), got {clip(bad)}",
+            parameter=kind,
+            value=clip(bad),
+            allowed="texts",
+        )
 
 
 def _from_commands(
@@ -473,11 +526,12 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
             if d.get("format") != FORMAT:
                 raise KeyError("format")
             cal = Calibration.from_dict(d["calibration"], p.name)
+            _texts(d["joint_names"], p, "timeline", "joint_names")
             return _from_commands(
-                np.asarray(d["t"], dtype=float),
+                _numbers(d["t"], p, "timeline", "t"),
                 tuple(d["joint_names"]),
-                np.asarray(d["command"], dtype=float).reshape(len(d["t"]), -1),
-                np.asarray(d["speed"], dtype=float).reshape(len(d["t"]), -1),
+                _numbers(d["command"], p, "timeline", "command").reshape(len(d["t"]), -1),
+                _numbers(d["speed"], p, "timeline", "speed").reshape(len(d["t"]), -1),
                 cal,
                 float(d["rate"]),
                 str(d["interpolation"]),
@@ -554,10 +608,18 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
     try:
         if p.suffix.lower() == ".json":
             d = parse_data(text, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
-            t = np.asarray(d["t"], dtype=float)
-            q = np.asarray(d["q"], dtype=float)
+            extra = sorted(set(d) - {"t", "q", "joint_names"}) if isinstance(d, dict) else []
+            if extra:
+                raise SourceError(
+                    f"plan={str(p)!r}: unknown key {extra[0]!r}; allowed: t, q, joint_names",
+                    parameter="plan",
+                    value=extra[0],
+                    allowed=("t", "q", "joint_names"),
+                )
+            t, q = _numbers(d["t"], p, "plan", "t"), _numbers(d["q"], p, "plan", "q")
             names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
-            return t, q.reshape(len(t), -1), tuple(str(n) for n in names)
+            _texts(names, p, "plan", "joint_names")
+            return t, q.reshape(len(t), -1), tuple(names)
         _, columns, data = _csv(text)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except _MALFORMED as exc:

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
@@ -127,8 +128,12 @@ class FootSpec:
 
 
 def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
+    """Three finite numbers from ``"x,y,z"`` or a sequence of numbers (never texts, booleans)."""
     try:
-        vals = [float(v) for v in (text.split(",") if isinstance(text, str) else text)]
+        if isinstance(text, str):
+            vals = [float(v) for v in text.split(",")]
+        else:  # a file's or a caller's list: numbers only ('0' or true are typos, not 0 or 1)
+            vals = [float(v) if _is_number(v) else math.nan for v in text]
     except (TypeError, ValueError):
         vals = []
     if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
@@ -139,6 +144,10 @@ def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
             allowed="frame:x,y,z (metres, in the frame)",
         )
     return (vals[0], vals[1], vals[2])
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
 def _split_specs(text: str) -> list[str]:
@@ -215,8 +224,12 @@ def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
         data = read_data(spec, "feet")
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
-        # a text is a spec, not a file
-        return parse_feet([data] if isinstance(data, str) else data, model)
+        try:  # a text is a spec, not a file
+            return parse_feet([data] if isinstance(data, str) else data, model)
+        except ParameterError as exc:  # name the file
+            raise ParameterError(
+                f"feet={str(spec)!r}: {exc}", parameter="feet", value=exc.value, allowed=exc.allowed
+            ) from None
     out: list[FootSpec] = []
     if isinstance(spec, str):
         items: list[Any] = _split_specs(spec)
@@ -233,7 +246,16 @@ def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
         if isinstance(item, FootSpec):
             out.append(item)
         elif isinstance(item, Mapping) and "frame" in item:
-            out.append(FootSpec(str(item["frame"]), _numbers3(item.get("offset", (0, 0, 0)), "")))
+            extra = sorted(str(k) for k in item if k not in ("frame", "offset"))
+            if extra or not isinstance(item["frame"], str):
+                why = f"unknown key {extra[0]!r}" if extra else f"frame {item['frame']!r}"
+                raise ParameterError(
+                    f"foot {why}; allowed: frame (a text), offset [x, y, z] [m]",
+                    parameter="feet",
+                    value=extra[0] if extra else repr(item["frame"]),
+                    allowed=("frame", "offset"),
+                )
+            out.append(FootSpec(item["frame"], _numbers3(item.get("offset", (0, 0, 0)), "")))
         elif isinstance(item, str):
             for piece in _split_specs(item):
                 m = _SPEC.match(piece)

@@ -184,6 +184,10 @@ def standing_base(model: Model, q: np.ndarray) -> np.ndarray:
     return body_pose([0.0, 0.0, -float(feet[:, 2].min()) + 0.01])
 
 
+#: Most samples of a demo motion (bounded work: a page of 1e5 frames is already some MB).
+MAX_DEMO_SAMPLES = 100_000
+
+
 def demo_trajectory(
     model: Model, duration: float = 4.0, samples: int = 121
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -197,7 +201,7 @@ def demo_trajectory(
     Args:
         model: A loaded model.
         duration: Length in [s] (> 0).
-        samples: Number of samples (≥ 2).
+        samples: Number of samples (2 to :data:`MAX_DEMO_SAMPLES`).
 
     Raises:
         ParameterError: Bad ``duration`` or ``samples``.
@@ -205,8 +209,13 @@ def demo_trajectory(
     """
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration={duration!r} is not allowed; give a positive time in s")
-    if not isinstance(samples, int) or samples < 2:
-        raise ParameterError(f"samples={samples!r} is not allowed; give an integer >= 2")
+    if not isinstance(samples, int) or not 2 <= samples <= MAX_DEMO_SAMPLES:
+        raise ParameterError(
+            f"samples={samples!r} is not allowed; give an integer from 2 to {MAX_DEMO_SAMPLES}",
+            parameter="samples",
+            value=samples,
+            allowed=(2, MAX_DEMO_SAMPLES),
+        )
 
     times = np.linspace(0.0, float(duration), samples)
     phase = 2 * np.pi * times / duration
