@@ -88,6 +88,9 @@ def test_timeline_holds_each_command_from_its_time(tmp_path) -> None:
         {"commands": [{"t": 0, "speed": 1}]},
         {"commands": [{"t": 1}, {"t": 0}]},
         {"commands": [{"t": 0, "mode": "fly"}]},
+        {"commands": [{"t": 0, "vx": 10.000001}]},  # MAX_SPEED
+        {"commands": [{"t": 0, "vy": -1e308}]},
+        {"commands": [{"t": 0, "wz": 10.5}]},  # MAX_YAW_RATE
         {"rows": []},
     ],
 )

@@ -175,6 +175,8 @@ COMMANDS = {
     "text-time": ('{"commands": [{"t": "0", "vx": 0.1}]}', "t='0': a finite number"),
     "pattern-number": ('{"commands": [{"t": 0, "pattern": 5}]}', "pattern=5: a pattern's name"),
     "infinite": ('{"commands": [{"t": 0, "vx": Infinity}]}', "vx=inf: a finite number"),
+    "huge-speed": ('{"commands": [{"t": 0, "vx": 1e308}]}', "vx=1e+308 m/s: at most 10 m/s"),
+    "huge-yaw": ('{"commands": [{"t": 0, "wz": -11}]}', "wz=-11 rad/s: at most 10 rad/s"),
 }
 
 

@@ -25,6 +25,11 @@ __all__ = ["MODES", "Command", "Timeline", "read_timeline", "timeline_of"]
 #: The modes of a command.
 MODES = ("walk", "stand", "sit")
 
+#: Largest commanded speed [m/s] and yaw rate [rad/s]: beyond any legged robot (MIT Cheetah runs
+#: at 3.7 m/s); a larger number is a typing slip, refused at once instead of ramped towards.
+MAX_SPEED = 10.0
+MAX_YAW_RATE = 10.0
+
 
 def _finite(name: str, value: Any) -> float:
     """A finite number (an int or a float: never a text nor a boolean, as '0.3' or true)."""
@@ -59,8 +64,17 @@ class Command:
     height: float = 0.6
 
     def __post_init__(self) -> None:
-        for name in ("vx", "vy", "wz"):
-            object.__setattr__(self, name, _finite(name, getattr(self, name)))
+        for name, cap in (("vx", MAX_SPEED), ("vy", MAX_SPEED), ("wz", MAX_YAW_RATE)):
+            x = _finite(name, getattr(self, name))
+            if abs(x) > cap:
+                unit = "rad/s" if name == "wz" else "m/s"
+                raise ParameterError(
+                    f"{name}={x:.6g} {unit}: at most {cap:g} {unit} either way",
+                    parameter=name,
+                    value=x,
+                    allowed=[-cap, cap],
+                )
+            object.__setattr__(self, name, x)
         one_of("mode", self.mode, list(MODES))
         if self.pattern is not None and not isinstance(self.pattern, str):
             raise ParameterError(
