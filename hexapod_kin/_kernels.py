@@ -6,8 +6,8 @@ once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
 * :func:`fk_jac_into` — one configuration (tip position, rotation, LWA Jacobian), for the
   compiled loops that step one configuration at a time (IK, resolved rate);
 * :func:`fk_jac_block` — a structure-of-arrays block of configurations on the chain with z
-  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), ``inline="always"`` into every batch
-  kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
+  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), compiled once and called by every
+  batch kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
   singularity measures (:mod:`hexapod_kin.singularity._kernel`). Its per-joint loops run over
   the block and vectorise (SIMD): sin / cos by the libm-free polynomial :func:`sincos`,
   libm for the elements beyond :data:`POLY_TRIG_MAX`, element by element.
@@ -416,7 +416,7 @@ def fk_jac_into(
 
 
 # ------------------------------------------------------------------------ blocks of configurations
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def fk_jac_block(
     prot: np.ndarray,
     ptr: np.ndarray,
