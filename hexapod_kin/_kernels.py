@@ -61,7 +61,7 @@ from ._kmath import (
 )
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
-__all__ = ["BLOCK", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
+__all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
            "ChainArrays", "aligned_chain", "det_lu", "det_small", "dls_into",
            "eig2_sym", "eig3_sym", "fk_jac_block", "fk_jac_into", "jacobi_eig",
            "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
@@ -79,6 +79,9 @@ CHUNKS_PER_THREAD = 8
 MIN_CHUNK_BLOCKS = 64
 #: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
 Q_MAX = 1e150
+#: Seconds of CPU each area's kernels take to compile from nothing (2-core machine, idle):
+#: what the first-use notice and ``precompile`` announce, and how ``precompile`` shares them.
+COMPILE_SECONDS = {"batch": 3.0, "ik": 9.0, "singularity": 12.0}
 
 
 # ------------------------------------------------------------------------ first use
@@ -144,8 +147,9 @@ def _notice(area: str) -> bool:
     path = _stamp(area)
     if _NOTICE[0] and (path is None or not path.exists()):
         print(
-            f"hexapod-kin: compiling {area} kernels for this machine "
-            "(once; 'hexapod-kin precompile' does it ahead) ",
+            f"hexapod-kin: compiling {area} kernels for this machine, about "
+            f"{COMPILE_SECONDS.get(area, 10.0):.0f} s (once; 'hexapod-kin precompile' does it "
+            "ahead) ",
             end="",
             file=sys.stderr,
             flush=True,
