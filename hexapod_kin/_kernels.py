@@ -46,24 +46,11 @@ import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
-from ._kmath import (
-    POLY_TRIG_MAX,
-    det_lu,
-    det_small,
-    dls_into,
-    eig2_sym,
-    eig3_sym,
-    jacobi_eig,
-    njit,
-    sincos,
-    solve_spd,
-    wrap_angle,
-)
+from ._kmath import POLY_TRIG_MAX, dls_into, eig3_sym, njit, sincos, solve_spd, wrap_angle
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
 __all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
-           "ChainArrays", "aligned_chain", "det_lu", "det_small", "dls_into",
-           "eig2_sym", "eig3_sym", "fk_jac_block", "fk_jac_into", "jacobi_eig",
+           "ChainArrays", "aligned_chain", "dls_into", "eig3_sym", "fk_jac_block", "fk_jac_into",
            "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
            "run_blocks", "silence_notice", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
