@@ -13,6 +13,7 @@ shared disk cache; the calling process loads the children's from there on first 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import subprocess
 import sys
@@ -122,17 +123,20 @@ def precompile(
             if done is not None:
                 done(name, dt)
 
-    children = [_Child(share, finished) for share in shares[1:]]
+    children = [_start(share, finished) for share in shares[1:]]
+    here = False
     try:
         for name in shares[0]:
             t0 = time.perf_counter()
             AREAS[name]()
             finished(name, time.perf_counter() - t0)
-        for child in children:
-            child.wait()
-    finally:
-        for child in children:
-            child.stop()
+        here = True
+    finally:  # the children's areas reported, or compiled here below; none left running
+        for proc, thread in children:
+            if not here:  # interrupted, or an area failed here
+                proc.kill()
+            proc.wait()
+            thread.join()
     for name in names:  # a failed child's areas: here (an error is raised)
         if name not in seconds:
             t0 = time.perf_counter()
@@ -156,32 +160,20 @@ def _shares(names: list[str], processes: int, cost: dict[str, float]) -> list[li
     return shares
 
 
-class _Child:
-    """A child process compiling some areas; a thread reports each as the child says it done."""
+def _start(
+    names: list[str], finished: Callable[[str, float], None]
+) -> tuple[subprocess.Popen[str], threading.Thread]:
+    """A child process compiling ``names``; a thread reports each area as the child ends it."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CHILD, *names], stdout=subprocess.PIPE, text=True
+    )
 
-    def __init__(self, names: list[str], finished: Callable[[str, float], None]) -> None:
-        cmd = [sys.executable, "-c", _CHILD, *names]
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
-        self.thread = threading.Thread(target=self._read, args=(finished,), daemon=True)
-        self.thread.start()
-
-    def _read(self, finished: Callable[[str, float], None]) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            try:
+    def read() -> None:
+        for line in proc.stdout or ():
+            with contextlib.suppress(ValueError, TypeError, AttributeError):
                 [(name, dt)] = json.loads(line).items()
                 finished(str(name), float(dt))
-            except (ValueError, TypeError, AttributeError):
-                pass
 
-    def wait(self) -> None:
-        """Until the child ends (its areas reported, or not: compiled here later)."""
-        self.proc.wait()
-        self.thread.join()
-
-    def stop(self) -> None:
-        """End the child if it still runs (this process interrupted)."""
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
-        self.thread.join()
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    return proc, thread
