@@ -437,7 +437,8 @@ def fk_jac_block(
     caller zeroes them once). ``skip0``: joint 0 stays at q = 0 (its column is still
     computed). ``trig`` is (2, B) scratch. Each element's arithmetic depends on its own ``q``
     only: sin / cos by :func:`sincos` over the block, then libm for the elements with
-    ``|q| > POLY_TRIG_MAX``.
+    ``|q| > POLY_TRIG_MAX``. Callers pass the flags as runtime values, never literal
+    ``True``/``False``: one compiled copy serves every caller.
     """
     nq = qb.shape[0]
     m = kind.shape[0]
@@ -560,6 +561,7 @@ def pose_jacobian_kernel(
         jb[:, :] = 0.0
     tip_rot = want_pose or (want_jac and ref == 2)
     keep = 0.0 if ref == 1 else 1.0
+    skip0 = nconf < 0  # False as a runtime value: one fk_jac_block for every caller
     ok = True
     for blk in range(first_block, last_block):
         start = blk * bsz
@@ -570,7 +572,7 @@ def pose_jacobian_kernel(
                 qb[c, i] = qv
                 ok &= abs(qv) < Q_MAX  # False for NaN too
         fk_jac_block(
-            prot, ptr, flags, kind, col, qb, nb, False, tip_rot, want_jac, keep, rr, pp, trig, jb
+            prot, ptr, flags, kind, col, qb, nb, skip0, tip_rot, want_jac, keep, rr, pp, trig, jb
         )
         if want_pose:
             for i in range(nb):

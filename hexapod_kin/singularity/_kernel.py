@@ -298,7 +298,7 @@ def measures_kernel(
             for c in range(nq):
                 qb[c, i] = qs[start + i, c]
         fk_jac_block(
-            prot, ptr, flags, kind, col, qb, nb, skip0, False, nb > 0, 1.0, rr, pp, trig, jfull
+            prot, ptr, flags, kind, col, qb, nb, skip0, nb < 0, nb > 0, 1.0, rr, pp, trig, jfull
         )
         for a in range(k):  # the selected rows
             r = sel[a] * nq
