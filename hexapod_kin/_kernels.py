@@ -6,8 +6,8 @@ once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
 * :func:`fk_jac_into` — one configuration (tip position, rotation, LWA Jacobian), for the
   compiled loops that step one configuration at a time (IK, resolved rate);
 * :func:`fk_jac_block` — a structure-of-arrays block of configurations on the chain with z
-  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), ``inline="always"`` into every batch
-  kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
+  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), compiled once and called by every
+  batch kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
   singularity measures (:mod:`hexapod_kin.singularity._kernel`). Its per-joint loops run over
   the block and vectorise (SIMD): sin / cos by the libm-free polynomial :func:`sincos`,
   libm for the elements beyond :data:`POLY_TRIG_MAX`, element by element.
@@ -46,24 +46,11 @@ import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
-from ._kmath import (
-    POLY_TRIG_MAX,
-    det_lu,
-    det_small,
-    dls_into,
-    eig2_sym,
-    eig3_sym,
-    jacobi_eig,
-    njit,
-    sincos,
-    solve_spd,
-    wrap_angle,
-)
+from ._kmath import POLY_TRIG_MAX, dls_into, eig3_sym, njit, sincos, solve_spd, wrap_angle
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
-__all__ = ["BLOCK", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
-           "ChainArrays", "aligned_chain", "det_lu", "det_small", "dls_into",
-           "eig2_sym", "eig3_sym", "fk_jac_block", "fk_jac_into", "jacobi_eig",
+__all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
+           "ChainArrays", "aligned_chain", "dls_into", "eig3_sym", "fk_jac_block", "fk_jac_into",
            "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
            "run_blocks", "silence_notice", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
@@ -79,6 +66,9 @@ CHUNKS_PER_THREAD = 8
 MIN_CHUNK_BLOCKS = 64
 #: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
 Q_MAX = 1e150
+#: Seconds of CPU each area's kernels take to compile from nothing (2-core machine, idle):
+#: what the first-use notice and ``precompile`` announce, and how ``precompile`` shares them.
+COMPILE_SECONDS = {"batch": 3.0, "ik": 9.0, "singularity": 12.0}
 
 
 # ------------------------------------------------------------------------ first use
@@ -144,8 +134,9 @@ def _notice(area: str) -> bool:
     path = _stamp(area)
     if _NOTICE[0] and (path is None or not path.exists()):
         print(
-            f"hexapod-kin: compiling {area} kernels for this machine "
-            "(once; 'hexapod-kin precompile' does it ahead) ",
+            f"hexapod-kin: compiling {area} kernels for this machine, about "
+            f"{COMPILE_SECONDS.get(area, 10.0):.0f} s (once; 'hexapod-kin precompile' does it "
+            "ahead) ",
             end="",
             file=sys.stderr,
             flush=True,
@@ -416,7 +407,7 @@ def fk_jac_into(
 
 
 # ------------------------------------------------------------------------ blocks of configurations
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def fk_jac_block(
     prot: np.ndarray,
     ptr: np.ndarray,
@@ -446,7 +437,8 @@ def fk_jac_block(
     caller zeroes them once). ``skip0``: joint 0 stays at q = 0 (its column is still
     computed). ``trig`` is (2, B) scratch. Each element's arithmetic depends on its own ``q``
     only: sin / cos by :func:`sincos` over the block, then libm for the elements with
-    ``|q| > POLY_TRIG_MAX``.
+    ``|q| > POLY_TRIG_MAX``. Callers pass the flags as runtime values, never literal
+    ``True``/``False``: one compiled copy serves every caller.
     """
     nq = qb.shape[0]
     m = kind.shape[0]
@@ -569,6 +561,7 @@ def pose_jacobian_kernel(
         jb[:, :] = 0.0
     tip_rot = want_pose or (want_jac and ref == 2)
     keep = 0.0 if ref == 1 else 1.0
+    skip0 = nconf < 0  # False as a runtime value: one fk_jac_block for every caller
     ok = True
     for blk in range(first_block, last_block):
         start = blk * bsz
@@ -579,7 +572,7 @@ def pose_jacobian_kernel(
                 qb[c, i] = qv
                 ok &= abs(qv) < Q_MAX  # False for NaN too
         fk_jac_block(
-            prot, ptr, flags, kind, col, qb, nb, False, tip_rot, want_jac, keep, rr, pp, trig, jb
+            prot, ptr, flags, kind, col, qb, nb, skip0, tip_rot, want_jac, keep, rr, pp, trig, jb
         )
         if want_pose:
             for i in range(nb):

@@ -5,11 +5,10 @@ Re-exported by :mod:`hexapod_kin._kernels` (import them from there). Every funct
 pass ``float64`` C-contiguous arrays (one specialisation each). No ``fastmath``: the same
 inputs give the same bits in every process and thread.
 
-Contents: symmetric eigenvalues (:func:`eig2_sym`, :func:`eig3_sym` closed forms, descending;
-:func:`jacobi_eig` any small size); determinants (:func:`det3`, :func:`det_lu`,
-:func:`det_small`); :func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least
-squares, frozen joints); :func:`wrap_angle`
-(scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp for ``|x| ≤ POLY_TRIG_MAX``).
+Contents: :func:`eig3_sym` (symmetric 3×3 eigenvalues, closed form, descending);
+:func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least squares, frozen
+joints); :func:`wrap_angle` (scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp
+for ``|x| ≤ POLY_TRIG_MAX``). Only what a kernel calls lives here.
 Angles in [rad].
 """
 
@@ -24,8 +23,7 @@ import numpy as np
 
 from .exceptions import CacheWarning
 
-__all__ = ["POLY_TRIG_MAX", "njit", "sincos", "eig2_sym", "eig3_sym", "jacobi_eig",
-           "det3", "det_lu", "det_small", "solve_spd", "dls_into", "wrap_angle"]  # fmt: skip
+__all__ = ["POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "sincos", "solve_spd", "wrap_angle"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -71,21 +69,6 @@ _IN_MEMORY: list[bool] = []
 
 # ------------------------------------------------------------------------ eigenvalues
 @njit(cache=True, nogil=True)
-def eig2_sym(a: float, b: float, d: float) -> tuple[float, float]:  # pragma: no cover - compiled
-    """Eigenvalues (descending) of the symmetric PSD ``[[a, b], [b, d]]``.
-
-    The smaller one is ``det / λmax`` (no cancellation near a singularity).
-    """
-    half = 0.5 * (a + d)
-    diff = 0.5 * (a - d)
-    rad = math.sqrt(diff * diff + b * b)
-    lmax = half + rad
-    det = a * d - b * b
-    lmin = det / lmax if lmax > 0.0 else 0.0
-    return lmax, lmin
-
-
-@njit(cache=True, nogil=True)
 def eig3_sym(
     a00: float, a11: float, a22: float, a01: float, a02: float, a12: float
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
@@ -128,101 +111,6 @@ def eig3_sym(
     l3 = qm + 2.0 * p * math.cos(phi + _TWO_PI / 3.0)
     l2 = 3.0 * qm - l1 - l3
     return l1, l2, l3
-
-
-@njit(cache=True, nogil=True)
-def jacobi_eig(g: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Eigenvalues of the symmetric ``g`` (destroyed) by cyclic Jacobi, into ``out`` (desc)."""
-    m = g.shape[0]
-    for _sweep in range(60):
-        off = 0.0
-        diag = 0.0
-        for i in range(m):
-            diag += g[i, i] * g[i, i]
-            for j in range(i + 1, m):
-                off += g[i, j] * g[i, j]
-        if off <= 1e-34 * diag or off == 0.0:
-            break
-        for p in range(m - 1):
-            for q in range(p + 1, m):
-                apq = g[p, q]
-                if apq == 0.0:
-                    continue
-                theta = (g[q, q] - g[p, p]) / (2.0 * apq)
-                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for k in range(m):
-                    gkp, gkq = g[k, p], g[k, q]
-                    g[k, p] = c * gkp - s * gkq
-                    g[k, q] = s * gkp + c * gkq
-                for k in range(m):
-                    gpk, gqk = g[p, k], g[q, k]
-                    g[p, k] = c * gpk - s * gqk
-                    g[q, k] = s * gpk + c * gqk
-    for i in range(m):
-        out[i] = g[i, i]
-    for i in range(1, m):  # insertion sort, descending
-        v = out[i]
-        j = i - 1
-        while j >= 0 and out[j] < v:
-            out[j + 1] = out[j]
-            j -= 1
-        out[j + 1] = v
-
-
-# ------------------------------------------------------------------------ determinants
-@njit(cache=True, nogil=True, inline="always")
-def det3(a: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the leading 3×3 block of ``a`` (cofactor expansion)."""
-    return (
-        a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
-        - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-        + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
-    )
-
-
-@njit(cache=True, nogil=True)
-def det_lu(a: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the square ``a`` (destroyed) by LU with partial pivoting."""
-    n = a.shape[0]
-    det = 1.0
-    for k in range(n):
-        piv = k
-        best = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > best:
-                best = abs(a[i, k])
-                piv = i
-        if best == 0.0:
-            return 0.0
-        if piv != k:
-            for j in range(n):
-                a[k, j], a[piv, j] = a[piv, j], a[k, j]
-            det = -det
-        det *= a[k, k]
-        for i in range(k + 1, n):
-            f = a[i, k] / a[k, k]
-            for j in range(k + 1, n):
-                a[i, j] -= f * a[k, j]
-    return det
-
-
-@njit(cache=True, nogil=True)
-def det_small(a: np.ndarray, n: int, work: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Determinant of the leading n×n block of ``a``: closed forms up to 3, else LU in ``work``."""
-    if n == 0:
-        return 1.0
-    if n == 1:
-        return a[0, 0]
-    if n == 2:
-        return a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    if n == 3:
-        return det3(a)
-    for i in range(n):
-        for j in range(n):
-            work[i, j] = a[i, j]
-    return det_lu(work[:n, :n])
 
 
 # ------------------------------------------------------------------------ linear solve

@@ -6,16 +6,18 @@ else ``__pycache__`` beside the sources); every later process loads it. The area
 (:func:`hexapod_kin._kernels.mark_compiled`) then silences the first-use notice.
 
 numba compiles holding the GIL, one function at a time: areas compile in parallel only in
-separate processes (``processes > 1``, what ``hexapod-kin precompile`` does), each writing
-its kernels to the shared disk cache; the calling process then loads them from there on
-first use.
+separate processes (``processes > 1``, what ``hexapod-kin precompile`` does): this process
+compiles its share while child processes compile the rest, each writing its kernels to the
+shared disk cache; the calling process loads the children's from there on first use.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 
@@ -63,22 +65,31 @@ def _singularity() -> None:
 AREAS: dict[str, Callable[[], None]] = {"batch": _batch, "ik": _ik, "singularity": _singularity}
 
 
-#: What a child process of :func:`precompile` runs: one area, its seconds as JSON on stdout.
+#: What a child process of :func:`precompile` runs: its areas one by one, a JSON line each.
 _CHILD = (
     "import json, sys\n"
     "from hexapod_kin.precompile import precompile\n"
-    "print(json.dumps(precompile(sys.argv[1:])))\n"
+    "for name in sys.argv[1:]:\n"
+    "    print(json.dumps(precompile([name])), flush=True)\n"
 )
 
 
-def precompile(areas: Sequence[str] | None = None, *, processes: int = 1) -> dict[str, float]:
+def precompile(
+    areas: Sequence[str] | None = None,
+    *,
+    processes: int = 1,
+    done: Callable[[str, float], object] | None = None,
+) -> dict[str, float]:
     """Compile (or load from numba's disk cache) the kernels of ``areas``.
 
     Args:
         areas: Names from :data:`AREAS` (default: all of them).
-        processes: Areas compiled at once, each in its own child process (numba compiles
-            holding the GIL); 1: in this process, one after the other (the kernels are then
-            also loaded here). An area whose child fails is compiled here (its error raised).
+        processes: Areas compiled at once (numba compiles holding the GIL): this process and
+            ``processes - 1`` child processes, the areas shared by their expected seconds
+            (:data:`hexapod_kin._kernels.COMPILE_SECONDS`, a child's start-up counted). 1: all
+            here, one after the other. An area whose child fails is compiled here (its error
+            raised).
+        done: Called with each area's name and seconds as it finishes (progress).
 
     Returns:
         Seconds per area, in order (a second call, or a later process, takes milliseconds:
@@ -88,7 +99,7 @@ def precompile(areas: Sequence[str] | None = None, *, processes: int = 1) -> dic
         ParameterError: An unknown area name or ``processes`` < 1.
 
     """
-    from ._kernels import mark_compiled, silence_notice
+    from ._kernels import COMPILE_SECONDS, mark_compiled, silence_notice
 
     names = list(AREAS) if areas is None else list(areas)
     for name in names:
@@ -101,48 +112,68 @@ def precompile(areas: Sequence[str] | None = None, *, processes: int = 1) -> dic
             allowed="an int >= 1",
         )
     silence_notice()
+    shares = _shares(names, processes, COMPILE_SECONDS)
     seconds: dict[str, float] = {}
-    if processes > 1 and len(names) > 1:
-        seconds = _in_children(names, processes)
-    for name in names:
-        if name in seconds:
+    lock = threading.Lock()
+
+    def finished(name: str, dt: float) -> None:
+        with lock:
+            seconds[name] = dt
             mark_compiled(name)
-            continue
-        t0 = time.perf_counter()
-        AREAS[name]()
-        seconds[name] = time.perf_counter() - t0
-        mark_compiled(name)
+            if done is not None:
+                done(name, dt)
+
+    children = [_start(share, finished) for share in shares[1:]]
+    here = False
+    try:
+        for name in shares[0]:
+            t0 = time.perf_counter()
+            AREAS[name]()
+            finished(name, time.perf_counter() - t0)
+        here = True
+    finally:  # the children's areas reported, or compiled here below; none left running
+        for proc, thread in children:
+            if not here:  # interrupted, or an area failed here
+                proc.kill()
+            proc.wait()
+            thread.join()
+    for name in names:  # a failed child's areas: here (an error is raised)
+        if name not in seconds:
+            t0 = time.perf_counter()
+            AREAS[name]()
+            finished(name, time.perf_counter() - t0)
     return {name: seconds[name] for name in names}
 
 
-def _in_children(names: list[str], processes: int) -> dict[str, float]:
-    """Each area in a child process, ``processes`` at a time, the costliest first.
-
-    Returns the seconds of the areas whose child succeeded (measured in the child). The
-    children are ended if this process is interrupted.
-    """
-    todo = sorted(names, key=lambda n: -_COST[n])
-    running: list[tuple[str, subprocess.Popen[str]]] = []
-    done: dict[str, float] = {}
-    try:
-        while todo or running:
-            while todo and len(running) < processes:
-                name = todo.pop(0)
-                cmd = [sys.executable, "-c", _CHILD, name]
-                running.append((name, subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)))
-            name, proc = running.pop(0)
-            out, _ = proc.communicate()
-            if proc.returncode == 0:
-                try:
-                    done.update({name: float(json.loads(out.splitlines()[-1])[name])})
-                except (ValueError, KeyError, IndexError):
-                    pass
-    finally:
-        for _, proc in running:
-            proc.kill()
-            proc.wait()
-    return done
+#: Seconds a child process takes to start (Python, the package, Pinocchio, numba).
+_CHILD_START = 1.0
 
 
-#: Relative compile cost of each area (the order children start in).
-_COST: dict[str, int] = {"singularity": 4, "ik": 3, "batch": 1}
+def _shares(names: list[str], processes: int, cost: dict[str, float]) -> list[list[str]]:
+    """The areas of each worker (this process first), the costliest first to the least busy."""
+    loads = [0.0] + [_CHILD_START] * (min(processes, len(names)) - 1)
+    shares: list[list[str]] = [[] for _ in loads]
+    for name in sorted(names, key=lambda n: -cost[n]):
+        w = loads.index(min(loads))
+        shares[w].append(name)
+        loads[w] += cost[name]
+    return shares
+
+
+def _start(
+    names: list[str], finished: Callable[[str, float], None]
+) -> tuple[subprocess.Popen[str], threading.Thread]:
+    """A child process compiling ``names``; a thread reports each area as the child ends it."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CHILD, *names], stdout=subprocess.PIPE, text=True
+    )
+
+    def read() -> None:
+        for line in proc.stdout or ():
+            with contextlib.suppress(ValueError, TypeError, AttributeError):
+                [(name, dt)] = json.loads(line).items()
+                finished(str(name), float(dt))
+
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    return proc, thread

@@ -366,3 +366,26 @@ def test_precompile_in_child_processes(monkeypatch: pytest.MonkeyPatch):
         pc.precompile(["batch"], processes=0)
     with pytest.raises(ParameterError):
         pc.precompile(["nope"])
+
+
+def test_precompile_shares_and_progress(monkeypatch: pytest.MonkeyPatch, capsys):
+    """The costliest area to the least busy worker (a child starts 1 s late), each area
+    reported as it ends, and the first-use notice saying about how long it takes."""
+    from hexapod_kin import _kernels
+    from hexapod_kin import precompile as pc
+
+    cost = {"a": 12.0, "b": 9.0, "c": 3.0}
+    assert pc._shares(["c", "b", "a"], 2, cost) == [["a"], ["b", "c"]]  # 12 vs 1 + 9 + 3
+    assert pc._shares(["c", "b", "a"], 1, cost) == [["a", "b", "c"]]
+    assert pc._shares(["c"], 4, cost) == [["c"]]
+    ran: list[str] = []
+    monkeypatch.setitem(pc.AREAS, "batch", lambda: ran.append("batch"))
+    monkeypatch.setitem(pc.AREAS, "ik", lambda: ran.append("ik"))
+    said: list[str] = []
+    pc.precompile(["batch", "ik"], done=lambda name, dt: said.append(name))
+    assert said == ran == ["ik", "batch"]  # the costliest first
+    monkeypatch.setattr(_kernels, "_stamp", lambda area: None)
+    monkeypatch.setattr(_kernels, "_NOTICE", [True])
+    assert _kernels._notice("singularity")
+    err = capsys.readouterr().err
+    assert f"about {_kernels.COMPILE_SECONDS['singularity']:.0f} s" in err

@@ -27,30 +27,6 @@ def test_eig3_sym_equals_lapack_including_diagonal_and_degenerate() -> None:
         assert np.allclose(got, ref, atol=1e-12 * max(1.0, abs(ref).max()))
 
 
-def test_eig2_and_jacobi_equal_lapack() -> None:
-    for n in (2, 4, 6):
-        for _ in range(50):
-            g = _sym(n)
-            ref = np.sort(np.linalg.eigvalsh(g))[::-1]
-            if n == 2:
-                got = np.array(K.eig2_sym(g[0, 0], g[0, 1], g[1, 1]))
-            else:
-                got = np.empty(n)
-                K.jacobi_eig(g.copy(), got)
-            assert np.allclose(got, ref, rtol=1e-10, atol=1e-12)
-
-
-def test_determinants_equal_numpy() -> None:
-    for n in range(1, 7):
-        work = np.empty((6, 6))
-        for _ in range(30):
-            a = RNG.normal(size=(n, n))
-            assert K.det_small(np.ascontiguousarray(a), n, work) == pytest.approx(
-                np.linalg.det(a), rel=1e-10, abs=1e-12
-            )
-    assert K.det_lu(np.zeros((4, 4))) == 0.0
-
-
 def test_solve_spd_and_non_spd() -> None:
     a = _sym(5) + 0.1 * np.eye(5)
     b = RNG.normal(size=5)

@@ -33,13 +33,25 @@ def register(sub: Any) -> None:
 def _run(args: argparse.Namespace) -> int:
     import os
 
+    from .._kernels import COMPILE_SECONDS
     from ..precompile import AREAS, precompile
 
     areas = args.only or list(AREAS)
     jobs = max(1, min(len(areas), os.cpu_count() or 1))
+    total = sum(COMPILE_SECONDS[a] for a in areas)
+    about = max(total / jobs, max(COMPILE_SECONDS[a] for a in areas)) + (jobs > 1)  # + start
+
+    def done(name: str, dt: float) -> None:
+        print(f"  {name} done ({dt:.1f} s)", file=sys.stderr, flush=True)
+
     if not args.json:
-        print(f"compiling {', '.join(areas)} in {jobs} process(es)", file=sys.stderr, flush=True)
-    seconds = precompile(areas, processes=jobs)
+        print(
+            f"compiling {', '.join(areas)} in {jobs} process(es): about {about:.0f} s "
+            "(less if numba's cache holds some)",
+            file=sys.stderr,
+            flush=True,
+        )
+    seconds = precompile(areas, processes=jobs, done=None if args.json else done)
     if args.json:
         emit_json({"seconds": {k: round(v, 3) for k, v in seconds.items()}})
         return 0

@@ -22,7 +22,7 @@ JACOBI_MAX_SWEEPS = 12
 JACOBI_MIN_SWEEPS_BIG = 4
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _rot_cs(
     app: float, aqq: float, apq: float
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
@@ -49,7 +49,7 @@ def _rot_cs(
     return app - t * apq, aqq + t * apq, c, s
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _jacobi_rot(
     app: float, aqq: float, apq: float, arp: float, arq: float
 ) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
@@ -103,7 +103,7 @@ def _jacobi_sweep4(gb: np.ndarray, i: int) -> None:  # pragma: no cover - compil
     gb[7, i], gb[8, i], gb[9, i] = a22, 0.0, a33
 
 
-@njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def _jacobi_open(gb: np.ndarray, i: int, m: int) -> bool:  # pragma: no cover - compiled
     """Whether matrix ``i`` (packed m×m, diagonal ``d``, off-diagonal ``E``) needs sweeps.
 

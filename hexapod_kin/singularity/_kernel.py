@@ -176,12 +176,12 @@ def _reduce_block(
         for i in range(nb):
             flag[i] = mnr[i] < 0.0
             nbad += flag[i]
-    if split and nbad < nb:  # each diagonal block apart
-        _eigenvalues(gb, hb, wb, ev, idx, nb, mm, pack, perm, csize, True, use_jacobi)
-    if not split or nbad > 0:  # G whole, for the configurations where the split fails
-        whole = ev2 if split and nbad < nb else ev
-        _eigenvalues(gb, hb, wb, whole, idx, nb, mm, pack, perm, csize, False, use_jacobi)
-        if split and nbad < nb:
+    apart = split and nbad < nb  # each diagonal block apart, then G whole where that fails
+    last = 1 if not split or nbad > 0 else 0
+    for whole in range(0 if apart else 1, last + 1):  # one inlined copy: compiles once
+        dest = ev2 if whole and apart else ev
+        _eigenvalues(gb, hb, wb, dest, idx, nb, mm, pack, perm, csize, whole == 0, use_jacobi)
+        if whole and apart:
             for i in range(nb):
                 if flag[i]:
                     for a in range(mm):
@@ -298,7 +298,7 @@ def measures_kernel(
             for c in range(nq):
                 qb[c, i] = qs[start + i, c]
         fk_jac_block(
-            prot, ptr, flags, kind, col, qb, nb, skip0, False, nb > 0, 1.0, rr, pp, trig, jfull
+            prot, ptr, flags, kind, col, qb, nb, skip0, nb < 0, nb > 0, 1.0, rr, pp, trig, jfull
         )
         for a in range(k):  # the selected rows
             r = sel[a] * nq
