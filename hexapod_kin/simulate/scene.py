@@ -616,6 +616,12 @@ class _Engine:
         self.model = m = mujoco.MjModel.from_xml_string(scene.xml)
         self.data = mujoco.MjData(m)
         self.jq = _joint_qpos(mujoco, m, scene.joint_names)
+        self.jdof = np.array(
+            [
+                m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)]
+                for j in scene.joint_names
+            ]
+        )
         self.act = np.array(
             [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
         )
