@@ -221,20 +221,22 @@ def _linear(v: np.ndarray, sub: int) -> np.ndarray:
 
 
 def _plan_torques(run: Any, joint_names: Any) -> np.ndarray:
-    """(N, nq) the plan's quasi-static joint torques [N·m], columns ``joint_names``.
+    """(N, nq) the plan's joint torques [N·m], columns ``joint_names``.
 
-    :func:`hexapod_kin.dynamics.gait_torques`: at every sample the weight shared by the
-    stance feet (minimum norm), ``τ = g(q) − Σ J_iᵀ f_i``. The servos add it to their PD law
-    so that they hold the planned angles under the planned load: without it a position
-    servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to leg over
-    a cycle the feet, pinned by friction, carry the body back (erd:b1 −2.2 % of its travel
-    in a 4 s crawl, erd:go1 −1.4 %; with it +0.15 % and −0.08 %).
+    :func:`hexapod_kin.dynamics.gait_torques`: the full inverse dynamics of the plan (RNEA,
+    the stance feet's forces of minimum norm holding the floating base) when the run carries
+    its robot, else the quasi-static ``τ = g(q) − Σ J_iᵀ f_i``. The servos add it to their
+    PD law so that they hold the planned angles under the planned load: without it a
+    position servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to
+    leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
+    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %).
     """
     from ..dynamics.gait_loads import gait_torques
 
     loads = gait_torques(run)
     names = list(loads.joint_names)
-    return np.asarray(loads.torque)[:, [names.index(j) for j in joint_names]]
+    tau = loads.torque_full if loads.torque_full.size else loads.torque
+    return np.asarray(tau)[:, [names.index(j) for j in joint_names]]
 
 
 def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
