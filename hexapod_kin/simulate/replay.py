@@ -248,7 +248,7 @@ def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
     first half cycle, 2.2 % of a 4 s crawl). MuJoCo's free joint takes the linear velocity
     in the world and the angular one in the body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
     """
-    mj, m, d = eng.mj, eng.model, eng.data
+    d = eng.data
     twist = np.asarray(run.base_velocity(), dtype=float)[0]
     d.qvel[:3] = eng.base_pose()[:3, :3] @ twist[:3]
     d.qvel[3:6] = twist[3:]

@@ -30,7 +30,7 @@ STABLE_OMEGA_DT = 0.4
 MAX_SPLIT = 10
 
 #: The largest bump amplitude [m] of a scene's ground.
-MAX_BUMPS = 0.01
+MAX_BUMPS = 0.05
 
 #: Cell size [m] of the bumps' height field, and its extent from the origin [m].
 _BUMP_CELL, _BUMP_EXTENT = 0.05, 5.0
@@ -170,6 +170,8 @@ class SimScene:
         contact_time: Contact ``solref`` time constant [s].
         bumps: Amplitude of the ground's random bumps [m] (0: none).
         seed: The bumps' random seed.
+        flat_start: Half-width [m] of the flat square (height 0) the bumps leave around the
+            origin.
 
     """
 
@@ -188,13 +190,14 @@ class SimScene:
     contact_time: float = 0.02
     bumps: float = 0.0
     seed: int = 0
+    flat_start: float = 0.0
 
     def ground(self, x: Any, y: Any) -> np.ndarray:
         """Ground height [m] at ``x``, ``y`` [m] with the bumps (:meth:`height` without)."""
         h = self.height(x, y)
         if not self.bumps:
             return h
-        field = _bump_field(self.bumps, self.seed)
+        field = _bump_field(self.bumps, self.seed, self.flat_start)
         n = field.shape[0]
         # MuJoCo's height field: row i at y = extent − i·cell, column j at x (bilinear here,
         # two triangles per cell there: equal at the nodes, within the bumps' slope between)
@@ -224,7 +227,7 @@ class SimScene:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (SI units)."""
         names = ("terrain", "foot_radius", "kp", "kv", "friction", "timestep", "armature")
-        return fields_dict(self, *names, "contact_time", "bumps", "seed")
+        return fields_dict(self, *names, "contact_time", "bumps", "seed", "flat_start")
 
 
 #: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
@@ -277,6 +280,7 @@ def scene_mjcf(
     timestep: float | None = None,
     bumps: float = 0.0,
     seed: int = 0,
+    flat_start: float = 0.0,
 ) -> SimScene:
     """The robot on a terrain, with foot spheres and position actuators, as MJCF.
 
@@ -306,9 +310,12 @@ def scene_mjcf(
             gain scaled to the whole robot is otherwise integrated near its stability limit
             (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
             ``MAX_TIMESTEP / MAX_SPLIT``.
-        bumps: Amplitude [m] of random bumps on flat ground (0: none; at most 0.01): a
-            height field of 5 cm cells, heights uniform in ``[-bumps, bumps]`` (seeded).
+        bumps: Amplitude [m] of random bumps on flat ground (0: none; at most
+            :data:`MAX_BUMPS`): a height field of 5 cm cells, 10 m square, heights uniform in
+            ``[-bumps, bumps]`` (seeded).
         seed: The bumps' random seed.
+        flat_start: Half-width [m] (>= 0) of a flat square at height 0 around the origin
+            amid the bumps, where a robot can be set down at rest.
 
     Returns:
         A :class:`SimScene`.
@@ -321,7 +328,7 @@ def scene_mjcf(
     from lxml import etree
 
     from ..export._common import num, vec
-    from .collision import add_hulls
+    from .collision import add_hulls, mjcf_asset
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
     wb = _robot(robot, feet)
@@ -432,15 +439,12 @@ def scene_mjcf(
                 pos=f"{num(_STEP_AT + half)} 0 {num(_STEP_RISE / 2)}",
             )
         )
-    field = _bump_field(bump, seed)
+    flat = 0.0 if not flat_start else positive("flat_start", flat_start)
     if bump:
+        field = _bump_field(bump, seed, flat)
         n = field.shape[0]
-        asset = root.find("asset")
-        if asset is None:
-            asset = etree.Element("asset")
-            root.find("compiler").addnext(asset)
         etree.SubElement(
-            asset,
+            mjcf_asset(root),
             "hfield",
             name="bumps",
             nrow=str(n),
@@ -485,6 +489,7 @@ def scene_mjcf(
         contact_time=tc,
         bumps=bump,
         seed=int(seed),
+        flat_start=flat,
     )
 
 
@@ -509,19 +514,23 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
     return MAX_TIMESTEP / min(MAX_SPLIT, max(1, k))
 
 
-def _bump_field(bump: float, seed: int) -> np.ndarray:
+def _bump_field(bump: float, seed: int, flat: float = 0.0) -> np.ndarray:
     """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps).
 
     Row ``i`` at ``y = extent − i·cell``, column ``j`` at ``x = −extent + j·cell`` (MuJoCo's
     height field order); spanning exactly ``[−bump, bump]`` (MuJoCo rescales the elevation
-    data to its range).
+    data to its range) outside the square ``|x|, |y| <= flat`` [m], which is 0.
     """
     n = int(round(2 * _BUMP_EXTENT / _BUMP_CELL)) + 1
     if not bump:
         return np.zeros((n, n))
     raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
-    lo, hi = raw.min(), raw.max()
-    return bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
+    axis = np.abs(np.linspace(-_BUMP_EXTENT, _BUMP_EXTENT, n)) <= flat + 1e-9
+    patch = axis[:, None] & axis[None, :]  # symmetric: rows (y) and columns (x) alike
+    lo, hi = raw[~patch].min(), raw[~patch].max()
+    field = bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
+    field[patch] = 0.0
+    return field
 
 
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
