@@ -89,6 +89,9 @@ class SimRun:
         scene: The scene simulated.
         wall_time: Wall time of the replay (settling included) [s].
         plan: The plan's own summary (:meth:`GaitRun.to_dict`).
+        run: The plan replayed.
+        feedforward: The servos carried the plan's joint torques (False: a bare PD law,
+            asked for or for a plan whose stance cannot hold the robot).
 
     """
 
@@ -116,6 +119,7 @@ class SimRun:
     wall_time: float
     plan: dict[str, Any] = field(default_factory=dict)
     run: Any = field(default=None, repr=False, compare=False)
+    feedforward: bool = False
 
     @property
     def distance_along(self) -> float:
@@ -209,6 +213,7 @@ class SimRun:
             "stumbled": self.stumbled,
             "ok": self.ok,
             "wall_time": self.wall_time,
+            "feedforward": self.feedforward,
             "scene": self.scene.to_dict(),
             "plan": self.plan,
         }
@@ -220,8 +225,8 @@ def _linear(v: np.ndarray, sub: int) -> np.ndarray:
     return np.asarray(v[:-1, None] * (1.0 - s) + v[1:, None] * s)
 
 
-def _plan_torques(run: Any, joint_names: Any) -> np.ndarray:
-    """(N, nq) the plan's joint torques [N·m], columns ``joint_names``.
+def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
+    """(N, nq) the plan's joint torques [N·m], columns ``joint_names`` (None: none exist).
 
     :func:`hexapod_kin.dynamics.gait_torques`: the full inverse dynamics of the plan (RNEA,
     the stance feet's forces of minimum norm holding the floating base) when the run carries
@@ -229,11 +234,16 @@ def _plan_torques(run: Any, joint_names: Any) -> np.ndarray:
     PD law so that they hold the planned angles under the planned load: without it a
     position servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to
     leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
-    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %).
+    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %). A plan whose stance
+    feet cannot hold the robot at some sample (fewer than three, or in a line: a plan that
+    is not statically stable) has no such torques: None, and it is replayed without them.
     """
     from ..dynamics.gait_loads import gait_torques
 
-    loads = gait_torques(run)
+    try:
+        loads = gait_torques(run)
+    except ConfigurationError:
+        return None
     names = list(loads.joint_names)
     tau = loads.torque_full if loads.torque_full.size else loads.torque
     return np.asarray(tau)[:, [names.index(j) for j in joint_names]]
@@ -444,7 +454,9 @@ def simulate(
     max_slip = max_speed = 0.0
     seen: dict[tuple[str, str], float] = {}
     start = time.perf_counter()
-    tau = _plan_torques(run, sc.joint_names) if feedforward else np.zeros(q_plan.shape)
+    tau = _plan_torques(run, sc.joint_names) if feedforward else None
+    fed = tau is not None
+    tau = np.zeros(q_plan.shape) if tau is None else tau
     eng.place(planned[0], q_plan[0])
     d.ctrl[eng.act] = q_plan[0] + tau[0] / sc.kp  # the first sample's load, held
     for _ in range(int(round(wait / sc.timestep))):
@@ -527,7 +539,7 @@ def simulate(
             timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
-    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)
+    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall, fed)
     return _summary(run, sc, t, base, planned, qs, forces, *figures)
 
 
@@ -546,6 +558,7 @@ def _summary(
     seen: dict[tuple[str, str], float],
     stand: StandForces | None,
     wall: float,
+    fed: bool,
 ) -> SimRun:
     dp = planned[-1, :2, 3] - planned[0, :2, 3]
     ds = base[-1, :2, 3] - base[0, :2, 3]
@@ -584,4 +597,5 @@ def _summary(
         wall_time=wall,
         plan=run.to_dict(),
         run=run,
+        feedforward=fed,
     )
