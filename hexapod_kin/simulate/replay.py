@@ -15,7 +15,6 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
-    _hermite,
     _mujoco,
     _robot,
     check_steps,
@@ -258,11 +257,12 @@ def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
     first half cycle, 2.2 % of a 4 s crawl). MuJoCo's free joint takes the linear velocity
     in the world and the angular one in the body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
     """
-    d = eng.data
+    mj, m, d = eng.mj, eng.model, eng.data
     twist = np.asarray(run.base_velocity(), dtype=float)[0]
     d.qvel[:3] = eng.base_pose()[:3, :3] @ twist[:3]
     d.qvel[3:6] = twist[3:]
-    d.qvel[eng.jdof] = qd
+    for j, rate in zip(eng.scene.joint_names, qd):
+        d.qvel[m.jnt_dofadr[mj.mj_name2id(m, mj.mjtObj.mjOBJ_JOINT, j)]] = rate
 
 
 def _lift(run: Any, scene: SimScene) -> float:
@@ -599,3 +599,15 @@ def _summary(
         run=run,
         feedforward=fed,
     )
+
+
+def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic Hermite values and rates (N−1, sub, nq) at ``s = k / sub`` of every interval."""
+    s = (np.arange(sub) / sub)[None, :, None]
+    s2, s3 = s * s, s * s * s
+    q0, q1, d0, d1 = q[:-1, None], q[1:, None], h * qd[:-1, None], h * qd[1:, None]
+    val = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * q1
+    val = val + (s3 - s2) * d1
+    rate = (6 * s2 - 6 * s) * q0 + (3 * s2 - 4 * s + 1) * d0 + (-6 * s2 + 6 * s) * q1
+    rate = (rate + (3 * s2 - 2 * s) * d1) / h
+    return val, rate

@@ -20,13 +20,10 @@ MAX_FRICTION = 100.0
 #: The default (and largest automatic) physics step [s].
 MAX_TIMESTEP = 1e-3
 
-#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows.
-#: At 1 ms the scaled servos with their scaled armature are at 0.21 to 0.32 on the
-#: example-robot-data quadrupeds (0.37 on the built-in hexapod), those without armature at
-#: 0.9 to 1.3. Stable is not converged: a 4 s crawl of erd:anymal without armature on
-#: MuJoCo's default contact travels +3.2 % at ω dt 0.4, +2.0, +1.1, +0.8 % at 0.2, 0.1,
-#: 0.05 ms; erd:go1's stance-foot slip halves with each halving of the step. 0.2 halves the
-#: step of the scaled servos (twice the work) and keeps the verdict off the step's edge.
+#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows:
+#: below the scaled servos' 0.21 to 0.37 at 1 ms (so half that step), far below 0.9 to 1.3
+#: without armature. Accuracy, not only stability: the replay's travel and slip converge
+#: as the step shrinks, and at the stability limit (0.4) they are off by up to 2 %.
 STABLE_OMEGA_DT = 0.2
 
 #: The automatic timestep is at least ``MAX_TIMESTEP / MAX_SPLIT`` (bounded work).
@@ -628,12 +625,6 @@ class _Engine:
         self.model = m = mujoco.MjModel.from_xml_string(scene.xml)
         self.data = mujoco.MjData(m)
         self.jq = _joint_qpos(mujoco, m, scene.joint_names)
-        self.jdof = np.array(
-            [
-                m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)]
-                for j in scene.joint_names
-            ]
-        )
         self.act = np.array(
             [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
         )
@@ -803,15 +794,3 @@ def check_steps(timestep: Any, spans: dict[str, float], default_timestep: float 
         value=value,
         allowed=f"(simulated time) / timestep <= {MAX_STEPS}",
     )
-
-
-def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
-    """Cubic Hermite values and rates (N−1, sub, nq) at ``s = k / sub`` of every interval."""
-    s = (np.arange(sub) / sub)[None, :, None]
-    s2, s3 = s * s, s * s * s
-    q0, q1, d0, d1 = q[:-1, None], q[1:, None], h * qd[:-1, None], h * qd[1:, None]
-    val = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * q1
-    val = val + (s3 - s2) * d1
-    rate = (6 * s2 - 6 * s) * q0 + (3 * s2 - 4 * s + 1) * d0 + (-6 * s2 + 6 * s) * q1
-    rate = (rate + (3 * s2 - 2 * s) * d1) / h
-    return val, rate
