@@ -32,8 +32,8 @@ MAX_SPLIT = 10
 #: The largest bump amplitude [m] of a scene's ground.
 MAX_BUMPS = 0.05
 
-#: Cell size [m] of the bumps' height field, and its extent from the origin [m].
-_BUMP_CELL, _BUMP_EXTENT = 0.05, 5.0
+#: Cell size [m] of the bumps' height field, and its half-sizes along x and y [m].
+_BUMP_CELL, _BUMP_HALF = 0.05, (8.0, 4.0)
 
 #: Terrains the scene can build (the named ones of :mod:`hexapod_kin.gait.terrain`).
 SCENE_TERRAINS = ("flat", "slope", "step")
@@ -197,12 +197,12 @@ class SimScene:
         h = self.height(x, y)
         if not self.bumps:
             return h
-        field = _bump_field(self.bumps, self.seed, self.flat_start)
-        n = field.shape[0]
-        # MuJoCo's height field: row i at y = extent − i·cell, column j at x (bilinear here,
+        field = self.bumps * (2.0 * _bump_field(self.seed, self.flat_start) - 1.0)
+        ny, nx = field.shape
+        # MuJoCo's height field: row i at y = −half_y + i·cell, column j at x (bilinear here,
         # two triangles per cell there: equal at the nodes, within the bumps' slope between)
-        u = np.clip((np.asarray(x) + _BUMP_EXTENT) / _BUMP_CELL, 0, n - 1.000001)
-        v = np.clip((_BUMP_EXTENT - np.asarray(y)) / _BUMP_CELL, 0, n - 1.000001)
+        u = np.clip((np.asarray(x) + _BUMP_HALF[0]) / _BUMP_CELL, 0, nx - 1.000001)
+        v = np.clip((np.asarray(y) + _BUMP_HALF[1]) / _BUMP_CELL, 0, ny - 1.000001)
         j, i = np.floor(u).astype(int), np.floor(v).astype(int)
         fu, fv = u - j, v - i
         z = (field[i, j] * (1 - fu) * (1 - fv) + field[i, j + 1] * fu * (1 - fv)) + (
@@ -311,7 +311,7 @@ def scene_mjcf(
             (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
             ``MAX_TIMESTEP / MAX_SPLIT``.
         bumps: Amplitude [m] of random bumps on flat ground (0: none; at most
-            :data:`MAX_BUMPS`): a height field of 5 cm cells, 10 m square, heights uniform in
+            :data:`MAX_BUMPS`): a height field of 5 cm cells, 16 m × 8 m, heights uniform in
             ``[-bumps, bumps]`` (seeded).
         seed: The bumps' random seed.
         flat_start: Half-width [m] (>= 0) of a flat square at height 0 around the origin
@@ -441,16 +441,15 @@ def scene_mjcf(
         )
     flat = 0.0 if not flat_start else positive("flat_start", flat_start)
     if bump:
-        field = _bump_field(bump, seed, flat)
-        n = field.shape[0]
+        field = _bump_field(seed, flat)
         etree.SubElement(
             mjcf_asset(root),
             "hfield",
             name="bumps",
-            nrow=str(n),
-            ncol=str(n),
-            size=f"{num(_BUMP_EXTENT)} {num(_BUMP_EXTENT)} {num(2 * bump)} {num(0.05)}",
-            elevation=" ".join(num(v) for v in ((field + bump) / (2 * bump)).ravel()),
+            nrow=str(field.shape[0]),
+            ncol=str(field.shape[1]),
+            size=f"{num(_BUMP_HALF[0])} {num(_BUMP_HALF[1])} {num(2 * bump)} {num(0.05)}",
+            elevation=" ".join(num(v) for v in field[::-1].ravel()),  # MJCF: the top row first
         )
         grounds = [dict(name="ground", type="hfield", hfield="bumps", pos=f"0 0 {num(-bump)}")]
     for k, spec in enumerate(grounds):
@@ -514,23 +513,21 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
     return MAX_TIMESTEP / min(MAX_SPLIT, max(1, k))
 
 
-def _bump_field(bump: float, seed: int, flat: float = 0.0) -> np.ndarray:
-    """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps).
+def _bump_field(seed: int, flat: float = 0.0) -> np.ndarray:
+    """(ny, nx) the bumps' elevations in [0, 1] on the grid of :data:`_BUMP_CELL`.
 
-    Row ``i`` at ``y = extent − i·cell``, column ``j`` at ``x = −extent + j·cell`` (MuJoCo's
-    height field order); spanning exactly ``[−bump, bump]`` (MuJoCo rescales the elevation
-    data to its range) outside the square ``|x|, |y| <= flat`` [m], which is 0.
+    Row ``i`` at ``y = −half_y + i·cell``, column ``j`` at ``x = −half_x + j·cell`` (MuJoCo's
+    ``hfield_data`` order), uniform (seeded); 0.5 (the height 0) on the square
+    ``|x|, |y| <= flat`` [m] when ``flat > 0``. Its far corners are exactly 0 and 1 (MuJoCo
+    rescales an MJCF's elevations to [0, 1]: these are kept as they are).
     """
-    n = int(round(2 * _BUMP_EXTENT / _BUMP_CELL)) + 1
-    if not bump:
-        return np.zeros((n, n))
-    raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
-    axis = np.abs(np.linspace(-_BUMP_EXTENT, _BUMP_EXTENT, n)) <= flat + 1e-9
-    patch = axis[:, None] & axis[None, :]  # symmetric: rows (y) and columns (x) alike
-    lo, hi = raw[~patch].min(), raw[~patch].max()
-    field = bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
-    field[patch] = 0.0
-    return field
+    nx, ny = (int(round(2 * h / _BUMP_CELL)) + 1 for h in _BUMP_HALF)
+    grid = np.random.default_rng(seed).uniform(0.0, 1.0, ny * nx).reshape(ny, nx)
+    if flat > 0:
+        k, cy, cx = int(round(flat / _BUMP_CELL)), ny // 2, nx // 2
+        grid[cy - k : cy + k + 1, cx - k : cx + k + 1] = 0.5
+    grid[0, 0], grid[-1, -1] = 0.0, 1.0
+    return grid
 
 
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
