@@ -25,7 +25,9 @@ plan's joint angles:
 * **Start**: the free base at the plan's first pose, raised so that the stance feet's
   spheres touch the ground (the vertical shift ``lift`` [m], 0 when the plan already
   puts the sphere centres one radius above the ground); the joints held at the first
-  sample for ``settle`` [s]; then the plan, from its first sample.
+  sample (and its torques) for ``settle`` [s]; then the plan, from its first sample and
+  at its first velocities (the body's twist, the joints' rates: the plan walks from t = 0,
+  its stance feet at rest; a robot let go at rest is jerked to speed and slides).
 * **The robot's own body** (:mod:`.collision`): feet of the radius the foot links'
   collision shapes give when the robot names none (planned and simulated alike), mesh
   collisions of body and legs as convex hulls; the servo armature of
