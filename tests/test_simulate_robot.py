@@ -265,3 +265,23 @@ def test_replay_starts_at_the_plans_velocity() -> None:
         )
         speed = np.linalg.norm(vel[3:] + np.cross(vel[:3], down))
         assert speed < 1e-3 * np.linalg.norm(v_plan), (leg, speed)
+
+
+ERD_QUADRUPEDS = ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ERD_QUADRUPEDS)
+def test_erd_quadrupeds_crawl_as_planned_on_flat_ground(name: str) -> None:
+    """Each example-robot-data quadruped's default crawl (10 s), replayed with the project's
+    contact, armature as given and zero, friction 1 and 0.6: every check passes, travel
+    within 1 % of the plan (before the feed-forward and the start at the plan's velocity:
+    b1 -2.2 %, go1 -1.4 %, laikago -2.0 %, go2 -1.3 %, hyq -1.0 % of a 4 s crawl).
+    MuJoCo's default contact without armature and the bumpy floors are not asserted here
+    (see the ensemble's known failures in test_robot_table and the issue's report)."""
+    members = tuple(m for m in ENSEMBLE if m.contact_time == 0.005 and not m.bumps)
+    rr = simulate_robust(f"erd:{name}", pattern="crawl", members=members, stand=False)
+    assert len(rr.runs) == 4
+    for m, r in zip(rr.members, rr.runs):
+        assert abs(r.distance_error) < 0.01, (m.name, r.distance_error)
+        assert r.ok, (m.name, {k: v for k, v in r.checks().items() if not v["ok"]})
