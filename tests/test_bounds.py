@@ -170,7 +170,7 @@ def test_simulate_step_cap_at_its_edge() -> None:
 
 
 def test_servo_targets_in_chunks_are_the_same_bits() -> None:
-    from hexapod_kin.simulate.scene import _hermite
+    from hexapod_kin.simulate.replay import _hermite
 
     rng = np.random.default_rng(5)
     q, qd = rng.normal(size=(50, 7)), rng.normal(size=(50, 7))

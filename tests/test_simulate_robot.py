@@ -93,7 +93,7 @@ def test_bumps_are_the_height_field_mujoco_collides() -> None:
 
 
 def test_timestep_keeps_every_servo_stable() -> None:
-    for arm, split in ((None, 1), (0.0, None)):
+    for arm, split in ((None, 1), (0.0, None)):  # go1: ω·1 ms 0.32 with armature, 1.2 without
         sc = scene_mjcf("erd:go1", armature=arm)
         m = mujoco.MjModel.from_xml_string(sc.xml)
         d = mujoco.MjData(m)
@@ -107,10 +107,10 @@ def test_timestep_keeps_every_servo_stable() -> None:
         omega = np.sqrt(sc.kp * np.diag(np.linalg.inv(full))[dofs]).max()
         assert omega * sc.timestep <= STABLE_OMEGA_DT
         assert m.opt.timestep == sc.timestep
-        if split:
-            assert sc.timestep == MAX_TIMESTEP  # the scaled armature: the 1 ms default kept
-        else:
-            assert omega * 2 * sc.timestep > STABLE_OMEGA_DT  # the largest step that holds
+        k = round(MAX_TIMESTEP / sc.timestep)  # the largest step 1 ms / k that holds
+        assert sc.timestep == pytest.approx(MAX_TIMESTEP / k)
+        assert omega * MAX_TIMESTEP / (k - 1) > STABLE_OMEGA_DT
+        assert (k == 2) == bool(split)  # the scaled armature: half the 1 ms default
 
 
 def test_travel_is_measured_along_the_plan() -> None:
@@ -215,3 +215,73 @@ def test_page_plays_the_two_animations_in_step(tmp_path) -> None:
             timeout=90000,
         )
         b.close()
+
+
+def test_servos_carry_the_plans_load_so_a_crawl_keeps_its_travel() -> None:
+    """The 1-2 % drift of the quadrupeds' crawl was the position servos giving way under the
+    load (``τ / kp``) as it passes from leg to leg: replayed with the plan's joint torques fed
+    forward, erd:go1's 4 s crawl travels within 1 % of the plan; with a bare PD law it does
+    not. The torques are the plan's full inverse dynamics, in the scene's joint order."""
+    from hexapod_kin.dynamics import gait_torques
+    from hexapod_kin.simulate.replay import _plan_torques
+
+    sim = simulate("erd:go1", pattern="crawl", duration=4.0, stand=False)
+    bare = simulate(sim.run, stand=False, feedforward=False)
+    assert sim.feedforward and not bare.feedforward
+    assert abs(sim.distance_error) < 0.01, sim.distance_error
+    assert bare.distance_error < -0.01, bare.distance_error
+    assert sim.max_slip < bare.max_slip
+    # the torques fed forward: the plan's, by joint name, at the first sample
+    loads = gait_torques(sim.run)
+    tau = _plan_torques(sim.run, sim.scene.joint_names)
+    cols = [list(loads.joint_names).index(j) for j in sim.scene.joint_names]
+    np.testing.assert_array_equal(tau, np.asarray(loads.torque_full)[:, cols])
+
+
+def test_replay_starts_at_the_plans_velocity() -> None:
+    """The settled robot is given the plan's first velocities: MuJoCo's body velocity is the
+    plan's (finite differences of its poses) and the stance feet's contact points are at rest
+    (their material point's velocity by mj_objectVelocity)."""
+    from hexapod_kin.gait import walk
+    from hexapod_kin.simulate.replay import _start_moving
+    from hexapod_kin.simulate.scene import _Engine
+
+    run = walk("erd:go1", pattern="crawl", duration=1.0, foot_radius=scene_foot_radius("erd:go1"))
+    sc = scene_mjcf("erd:go1")
+    eng = _Engine(sc)
+    cols = [list(run.joint_names).index(j) for j in sc.joint_names]
+    eng.place(np.asarray(run.base_poses[0]), np.asarray(run.q)[0, cols])
+    _start_moving(eng, run, np.asarray(run.qdot)[0, cols])
+    mujoco.mj_forward(eng.model, eng.data)
+    h = float(run.t[1] - run.t[0])
+    p = np.asarray(run.base_poses)[:3, :3, 3]
+    v_plan = (-3 * p[0] + 4 * p[1] - p[2]) / (2 * h)  # second-order one-sided difference
+    np.testing.assert_allclose(eng.data.qvel[:3], v_plan, atol=1e-6)
+    vel = np.zeros(6)
+    down = np.array([0.0, 0.0, -sc.foot_radius])
+    for leg in np.flatnonzero(run.support[0]):
+        mujoco.mj_objectVelocity(
+            eng.model, eng.data, mujoco.mjtObj.mjOBJ_GEOM, int(eng.feet[leg]), vel, 0
+        )
+        speed = np.linalg.norm(vel[3:] + np.cross(vel[:3], down))
+        assert speed < 1e-3 * np.linalg.norm(v_plan), (leg, speed)
+
+
+ERD_QUADRUPEDS = ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ERD_QUADRUPEDS)
+def test_erd_quadrupeds_crawl_as_planned_on_flat_ground(name: str) -> None:
+    """Each example-robot-data quadruped's default crawl (10 s), replayed with the project's
+    contact, armature as given and zero, friction 1 and 0.6: every check passes, travel
+    within 1 % of the plan (before the feed-forward and the start at the plan's velocity:
+    b1 -2.2 %, go1 -1.4 %, laikago -2.0 %, go2 -1.3 %, hyq -1.0 % of a 4 s crawl).
+    MuJoCo's default contact without armature and the bumpy floors are not asserted here
+    (see the ensemble's known failures in test_robot_table and the issue's report)."""
+    members = tuple(m for m in ENSEMBLE if m.contact_time == 0.005 and not m.bumps)
+    rr = simulate_robust(f"erd:{name}", pattern="crawl", members=members, stand=False)
+    assert len(rr.runs) == 4
+    for m, r in zip(rr.members, rr.runs):
+        assert abs(r.distance_error) < 0.01, (m.name, r.distance_error)
+        assert r.ok, (m.name, {k: v for k, v in r.checks().items() if not v["ok"]})

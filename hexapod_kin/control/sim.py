@@ -2,8 +2,9 @@
 
 :func:`run` builds the scene of :func:`hexapod_kin.simulate.scene_mjcf` (the robot, foot
 spheres, Coulomb friction, elliptic cones), then for the ``torque`` kind replaces each
-position servo with a torque motor limited to the joint's effort, adds height-field bumps
-(uniform heights in ``±bumps`` on a 50 mm grid, from ``seed``) and runs the
+position servo with a torque motor limited to the joint's effort (the scene's height-field
+bumps: heights uniform in ``±bumps`` on a 50 mm grid, from ``seed``, flat within
+:data:`FLAT_START` of the start) and runs the
 :class:`~.controller.Controller` at its rate, the physics at the scene's time step.
 The controller is fed what the robot senses (IMU attitude and body rates, joint positions
 and velocities, foot contacts) and the base position and velocity: the simulator's, or
@@ -32,9 +33,8 @@ from .estimator import StateEstimator
 
 __all__ = ["ControlRun", "Push", "hardware_loop", "run"]
 
-#: Bump grid spacing [m] and the extent of the bumpy field (half sizes x, y) [m].
-BUMP_CELL = 0.05
-BUMP_HALF = (8.0, 4.0)
+#: Half-width [m] of the flat square around the start amid the bumps (the robot set down there).
+FLAT_START = 0.3
 
 
 @dataclass(frozen=True)
@@ -168,8 +168,8 @@ class ControlRun:
         return fields_dict(self, *names)
 
 
-def _scene_xml(scene: Any, kind: str, bumps: float, seed: int) -> str:
-    """The scene's MJCF with torque motors (torque kind) and a height field of bumps."""
+def _scene_xml(scene: Any, kind: str) -> str:
+    """The scene's MJCF, with torque motors for the torque kind."""
     from lxml import etree
 
     root = etree.fromstring(scene.xml.encode("utf-8"))
@@ -180,51 +180,7 @@ def _scene_xml(scene: Any, kind: str, bumps: float, seed: int) -> str:
             if el.get("forcerange"):
                 attrs.update(ctrlrange=el.get("forcerange"), ctrllimited="true")
             act.replace(el, etree.Element("motor", **attrs))
-    if bumps > 0:
-        nx, ny = (int(round(2 * h / BUMP_CELL)) + 1 for h in BUMP_HALF)
-        asset = root.find("asset")
-        if asset is None:
-            asset = etree.Element("asset")
-            root.find("worldbody").addprevious(asset)
-        etree.SubElement(
-            asset,
-            "hfield",
-            name="bumps",
-            nrow=str(ny),
-            ncol=str(nx),
-            size=f"{BUMP_HALF[0]} {BUMP_HALF[1]} {2 * bumps} 0.05",
-        )
-        world = root.find("worldbody")
-        ground = world.find("geom[@name='ground']")
-        ground.set("pos", f"0 0 {-bumps - 0.001}")
-        ground.addnext(
-            etree.Element(
-                "geom",
-                name="bumps",
-                type="hfield",
-                hfield="bumps",
-                pos=f"0 0 {-bumps}",
-                rgba="0.7 0.7 0.75 1",
-            )
-        )
     return etree.tostring(root, encoding="unicode")
-
-
-def _fill_bumps(mj: Any, model: Any, seed: int) -> None:
-    hid = mj.mj_name2id(model, mj.mjtObj.mjOBJ_HFIELD, "bumps")
-    if hid < 0:
-        return
-    rng = np.random.default_rng(seed)
-    n = int(model.hfield_nrow[hid]) * int(model.hfield_ncol[hid])
-    h = rng.uniform(0.0, 1.0, n)
-    nr, nc = int(model.hfield_nrow[hid]), int(model.hfield_ncol[hid])
-    grid = h.reshape(nr, nc)
-    # the start area flat at the middle height (the robot is placed there)
-    cy, cx = nr // 2, nc // 2
-    k = int(round(0.3 / BUMP_CELL))
-    grid[cy - k : cy + k + 1, cx - k : cx + k + 1] = 0.5
-    adr = int(model.hfield_adr[hid])
-    model.hfield_data[adr : adr + n] = grid.reshape(-1)
 
 
 def _rpy(R: np.ndarray) -> tuple[float, float, float]:
@@ -318,11 +274,12 @@ def run(
     dt_phys = check_steps(1e-3, {"settle": settle, "duration": duration})
     timeline = _timeline(command)
     ctl = Controller(robot, kind=kind, pattern=pattern, rate=rate, period=period)
-    scene = scene_mjcf(robot, friction=friction, timestep=dt_phys)
+    scene = scene_mjcf(
+        robot, friction=friction, timestep=dt_phys, bumps=bumps, seed=seed, flat_start=FLAT_START
+    )
     import mujoco as mj  # scene_mjcf has said how to install it when it is missing
 
-    model = mj.MjModel.from_xml_string(_scene_xml(scene, kind, bumps, seed))
-    _fill_bumps(mj, model, seed)
+    model = mj.MjModel.from_xml_string(_scene_xml(scene, kind))
     data = mj.MjData(model)
     joints = [mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n) for n in scene.joint_names]
     jq = np.array([int(model.jnt_qposadr[j]) for j in joints])

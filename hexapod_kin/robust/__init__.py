@@ -203,4 +203,6 @@ def simulate_robust(
 
 
 #: The keywords of :func:`~hexapod_kin.simulate.simulate` that concern the replay, not the plan.
-_REPLAY_KEYS = frozenset(("foot_radius", "kp", "kv", "armature", "timestep", "settle", "terrain"))
+_REPLAY_KEYS = frozenset(
+    ("foot_radius", "kp", "kv", "armature", "timestep", "settle", "terrain", "feedforward")
+)

@@ -11,8 +11,13 @@ plan's joint angles:
   x = 0.25 m — the geometry of :mod:`hexapod_kin.gait.terrain`), Coulomb friction ``friction``
   on every geom (no rolling or torsional friction: a round foot rolls), and a position
   actuator per leg joint: ``τ = kp (u − q) − kv q̇`` clamped to the joint's effort limit.
-  The control is ``u = q_ref + (kv / kp) q̇_ref``, so the actuator is the PD law
-  ``kp (q_ref − q) + kv (q̇_ref − q̇)`` on the plan (cubic Hermite between its samples).
+  The control is ``u = q_ref + (kv / kp) q̇_ref + τ_ref / kp``, so the actuator is the PD
+  law with a feed-forward torque ``kp (q_ref − q) + kv (q̇_ref − q̇) + τ_ref`` on the plan
+  (cubic Hermite between its samples; ``τ_ref`` linear): ``τ_ref`` the plan's quasi-static
+  joint torques (:func:`hexapod_kin.dynamics.gait_torques`: the weight shared by the
+  stance feet), so that the servos hold the planned angles under the planned load — a bare
+  PD servo gives way by ``τ / kp``, and the load passing from leg to leg then walks the
+  body back by 1-2 % of its travel (``feedforward=False`` replays without it).
   Integrator ``implicitfast`` (the damping implicit), time step ``timestep``; elliptic
   friction cones with ``impratio = 10`` (MuJoCo's soft friction otherwise lets a loaded
   foot creep: 1.9 % lost up the 8° slope with pyramidal cones), joint ``armature`` for the
@@ -20,7 +25,9 @@ plan's joint angles:
 * **Start**: the free base at the plan's first pose, raised so that the stance feet's
   spheres touch the ground (the vertical shift ``lift`` [m], 0 when the plan already
   puts the sphere centres one radius above the ground); the joints held at the first
-  sample for ``settle`` [s]; then the plan, from its first sample.
+  sample (and its torques) for ``settle`` [s]; then the plan, from its first sample and
+  at its first velocities (the body's twist, the joints' rates: the plan walks from t = 0,
+  its stance feet at rest; a robot let go at rest is jerked to speed and slides).
 * **The robot's own body** (:mod:`.collision`): feet of the radius the foot links'
   collision shapes give when the robot names none (planned and simulated alike), mesh
   collisions of body and legs as convex hulls; the servo armature of

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MeshHull", "add_hulls", "collision_hulls", "foot_radius_of"]
+__all__ = ["MeshHull", "add_hulls", "collision_hulls", "foot_radius_of", "mjcf_asset"]
 
 
 @dataclass(frozen=True)
@@ -171,10 +171,7 @@ def add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
     hulls = [h for h in collision_hulls(wb, r) if h.link in bodies]
     if not hulls:
         return
-    asset = root.find("asset")
-    if asset is None:
-        asset = etree.Element("asset")
-        root.find("compiler").addnext(asset)
+    asset = mjcf_asset(root)
     for k, hull in enumerate(hulls):
         name = f"hk_hull_{k}"
         verts = " ".join(num(float(v)) for v in hull.vertices.ravel())
@@ -188,3 +185,14 @@ def add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
             mass="0",
             rgba="0.5 0.5 0.6 1",
         )
+
+
+def mjcf_asset(root: Any) -> Any:
+    """The ``<asset>`` element of an MJCF tree (made after ``<compiler>`` if it has none)."""
+    from lxml import etree
+
+    asset = root.find("asset")
+    if asset is None:
+        asset = etree.Element("asset")
+        root.find("compiler").addnext(asset)
+    return asset

@@ -15,7 +15,6 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
-    _hermite,
     _mujoco,
     _robot,
     check_steps,
@@ -89,6 +88,9 @@ class SimRun:
         scene: The scene simulated.
         wall_time: Wall time of the replay (settling included) [s].
         plan: The plan's own summary (:meth:`GaitRun.to_dict`).
+        run: The plan replayed.
+        feedforward: The servos carried the plan's joint torques (False: a bare PD law,
+            asked for or for a plan whose stance cannot hold the robot).
 
     """
 
@@ -116,6 +118,7 @@ class SimRun:
     wall_time: float
     plan: dict[str, Any] = field(default_factory=dict)
     run: Any = field(default=None, repr=False, compare=False)
+    feedforward: bool = False
 
     @property
     def distance_along(self) -> float:
@@ -209,9 +212,57 @@ class SimRun:
             "stumbled": self.stumbled,
             "ok": self.ok,
             "wall_time": self.wall_time,
+            "feedforward": self.feedforward,
             "scene": self.scene.to_dict(),
             "plan": self.plan,
         }
+
+
+def _linear(v: np.ndarray, sub: int) -> np.ndarray:
+    """Linear interpolation (N−1, sub, ...) of samples ``v`` (N, ...) at ``s = k / sub``."""
+    s = (np.arange(sub) / sub).reshape((1, sub) + (1,) * (v.ndim - 1))
+    return np.asarray(v[:-1, None] * (1.0 - s) + v[1:, None] * s)
+
+
+def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
+    """(N, nq) the plan's joint torques [N·m], columns ``joint_names`` (None: none exist).
+
+    :func:`hexapod_kin.dynamics.gait_torques`: the full inverse dynamics of the plan (RNEA,
+    the stance feet's forces of minimum norm holding the floating base) when the run carries
+    its robot, else the quasi-static ``τ = g(q) − Σ J_iᵀ f_i``. The servos add it to their
+    PD law so that they hold the planned angles under the planned load: without it a
+    position servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to
+    leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
+    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %). A plan whose stance
+    feet cannot hold the robot at some sample (fewer than three, or in a line: a plan that
+    is not statically stable) has no such torques: None, and it is replayed without them.
+    """
+    from ..dynamics.gait_loads import gait_torques
+
+    try:
+        loads = gait_torques(run)
+    except ConfigurationError:
+        return None
+    names = list(loads.joint_names)
+    tau = loads.torque_full if loads.torque_full.size else loads.torque
+    return np.asarray(tau)[:, [names.index(j) for j in joint_names]]
+
+
+def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
+    """Give the settled robot the plan's first velocities: the body's twist, the joints' rates.
+
+    A plan walks from its first sample at its walking speed (the body already moving, the
+    stance feet at rest); a robot let go at rest from there is jerked to that speed by its
+    servos, and the jerk slides its feet (erd:go1 without armature: 5.8 mm lost in the
+    first half cycle, 2.2 % of a 4 s crawl). MuJoCo's free joint takes the linear velocity
+    in the world and the angular one in the body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
+    """
+    mj, m, d = eng.mj, eng.model, eng.data
+    twist = np.asarray(run.base_velocity(), dtype=float)[0]
+    d.qvel[:3] = eng.base_pose()[:3, :3] @ twist[:3]
+    d.qvel[3:6] = twist[3:]
+    for j, rate in zip(eng.scene.joint_names, qd):
+        d.qvel[m.jnt_dofadr[mj.mj_name2id(m, mj.mjtObj.mjOBJ_JOINT, j)]] = rate
 
 
 def _lift(run: Any, scene: SimScene) -> float:
@@ -249,6 +300,7 @@ def simulate(
     stand: bool = True,
     bumps: float = 0.0,
     seed: int = 0,
+    feedforward: bool = True,
     **walk_options: Any,
 ) -> SimRun:
     """Replay a walk open-loop in MuJoCo and measure how far the physics departs from it.
@@ -282,6 +334,8 @@ def simulate(
         bumps: Random bumps of this amplitude [m] on flat ground (see :func:`scene_mjcf`);
             the plan stays the flat one.
         seed: The bumps' seed.
+        feedforward: The servos carry the plan's quasi-static joint torques
+            (``τ_ref``, see the module's docstring); False: a bare PD law on the angles.
         **walk_options: More keywords of :func:`~hexapod_kin.gait.walk.walk` (when planning).
 
     Returns:
@@ -400,9 +454,14 @@ def simulate(
     max_slip = max_speed = 0.0
     seen: dict[tuple[str, str], float] = {}
     start = time.perf_counter()
+    tau = _plan_torques(run, sc.joint_names) if feedforward else None
+    fed = tau is not None
+    tau = np.zeros(q_plan.shape) if tau is None else tau
     eng.place(planned[0], q_plan[0])
+    d.ctrl[eng.act] = q_plan[0] + tau[0] / sc.kp  # the first sample's load, held
     for _ in range(int(round(wait / sc.timestep))):
         mj.mj_step(m, d)
+    _start_moving(eng, run, qd_plan[0])
 
     def record(i: int) -> None:
         base[i] = eng.base_pose()
@@ -433,7 +492,7 @@ def simulate(
     for i in range(n - 1):
         if i % chunk == 0:
             ref, rate = _hermite(q_plan[i : i + chunk + 1], qd_plan[i : i + chunk + 1], h, sub)
-            ctrl = ref + (sc.kv / sc.kp) * rate
+            ctrl = ref + (sc.kv / sc.kp) * rate + _linear(tau[i : i + chunk + 1], sub) / sc.kp
         stance = support[i].tolist()
         for k in range(sub):
             if in_order:
@@ -480,7 +539,7 @@ def simulate(
             timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
-    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall)
+    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall, fed)
     return _summary(run, sc, t, base, planned, qs, forces, *figures)
 
 
@@ -499,6 +558,7 @@ def _summary(
     seen: dict[tuple[str, str], float],
     stand: StandForces | None,
     wall: float,
+    fed: bool,
 ) -> SimRun:
     dp = planned[-1, :2, 3] - planned[0, :2, 3]
     ds = base[-1, :2, 3] - base[0, :2, 3]
@@ -537,4 +597,17 @@ def _summary(
         wall_time=wall,
         plan=run.to_dict(),
         run=run,
+        feedforward=fed,
     )
+
+
+def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cubic Hermite values and rates (N−1, sub, nq) at ``s = k / sub`` of every interval."""
+    s = (np.arange(sub) / sub)[None, :, None]
+    s2, s3 = s * s, s * s * s
+    q0, q1, d0, d1 = q[:-1, None], q[1:, None], h * qd[:-1, None], h * qd[1:, None]
+    val = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * q1
+    val = val + (s3 - s2) * d1
+    rate = (6 * s2 - 6 * s) * q0 + (3 * s2 - 4 * s + 1) * d0 + (-6 * s2 + 6 * s) * q1
+    rate = (rate + (3 * s2 - 2 * s) * d1) / h
+    return val, rate

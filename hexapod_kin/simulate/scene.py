@@ -21,19 +21,19 @@ MAX_FRICTION = 100.0
 MAX_TIMESTEP = 1e-3
 
 #: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows:
-#: above the values of the scaled servos with their scaled armature at 1 ms (0.21 to 0.32 on
-#: the example-robot-data quadrupeds, 0.37 on the built-in hexapod), far below those without
-#: armature (0.9 to 1.3).
-STABLE_OMEGA_DT = 0.4
+#: below the scaled servos' 0.21 to 0.37 at 1 ms (so half that step), far below 0.9 to 1.3
+#: without armature. Accuracy, not only stability: the replay's travel and slip converge
+#: as the step shrinks, and at the stability limit (0.4) they are off by up to 2 %.
+STABLE_OMEGA_DT = 0.2
 
 #: The automatic timestep is at least ``MAX_TIMESTEP / MAX_SPLIT`` (bounded work).
 MAX_SPLIT = 10
 
 #: The largest bump amplitude [m] of a scene's ground.
-MAX_BUMPS = 0.01
+MAX_BUMPS = 0.05
 
-#: Cell size [m] of the bumps' height field, and its extent from the origin [m].
-_BUMP_CELL, _BUMP_EXTENT = 0.05, 5.0
+#: Cell size [m] of the bumps' height field, and its half-sizes along x and y [m].
+_BUMP_CELL, _BUMP_HALF = 0.05, (8.0, 4.0)
 
 #: Terrains the scene can build (the named ones of :mod:`hexapod_kin.gait.terrain`).
 SCENE_TERRAINS = ("flat", "slope", "step")
@@ -170,6 +170,8 @@ class SimScene:
         contact_time: Contact ``solref`` time constant [s].
         bumps: Amplitude of the ground's random bumps [m] (0: none).
         seed: The bumps' random seed.
+        flat_start: Half-width [m] of the flat square (height 0) the bumps leave around the
+            origin.
 
     """
 
@@ -188,18 +190,19 @@ class SimScene:
     contact_time: float = 0.02
     bumps: float = 0.0
     seed: int = 0
+    flat_start: float = 0.0
 
     def ground(self, x: Any, y: Any) -> np.ndarray:
         """Ground height [m] at ``x``, ``y`` [m] with the bumps (:meth:`height` without)."""
         h = self.height(x, y)
         if not self.bumps:
             return h
-        field = _bump_field(self.bumps, self.seed)
-        n = field.shape[0]
-        # MuJoCo's height field: row i at y = extent − i·cell, column j at x (bilinear here,
+        field = self.bumps * (2.0 * _bump_field(self.seed, self.flat_start) - 1.0)
+        ny, nx = field.shape
+        # MuJoCo's height field: row i at y = −half_y + i·cell, column j at x (bilinear here,
         # two triangles per cell there: equal at the nodes, within the bumps' slope between)
-        u = np.clip((np.asarray(x) + _BUMP_EXTENT) / _BUMP_CELL, 0, n - 1.000001)
-        v = np.clip((_BUMP_EXTENT - np.asarray(y)) / _BUMP_CELL, 0, n - 1.000001)
+        u = np.clip((np.asarray(x) + _BUMP_HALF[0]) / _BUMP_CELL, 0, nx - 1.000001)
+        v = np.clip((np.asarray(y) + _BUMP_HALF[1]) / _BUMP_CELL, 0, ny - 1.000001)
         j, i = np.floor(u).astype(int), np.floor(v).astype(int)
         fu, fv = u - j, v - i
         z = (field[i, j] * (1 - fu) * (1 - fv) + field[i, j + 1] * fu * (1 - fv)) + (
@@ -224,7 +227,7 @@ class SimScene:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (SI units)."""
         names = ("terrain", "foot_radius", "kp", "kv", "friction", "timestep", "armature")
-        return fields_dict(self, *names, "contact_time", "bumps", "seed")
+        return fields_dict(self, *names, "contact_time", "bumps", "seed", "flat_start")
 
 
 #: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
@@ -277,6 +280,7 @@ def scene_mjcf(
     timestep: float | None = None,
     bumps: float = 0.0,
     seed: int = 0,
+    flat_start: float = 0.0,
 ) -> SimScene:
     """The robot on a terrain, with foot spheres and position actuators, as MJCF.
 
@@ -306,9 +310,12 @@ def scene_mjcf(
             gain scaled to the whole robot is otherwise integrated near its stability limit
             (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
             ``MAX_TIMESTEP / MAX_SPLIT``.
-        bumps: Amplitude [m] of random bumps on flat ground (0: none; at most 0.01): a
-            height field of 5 cm cells, heights uniform in ``[-bumps, bumps]`` (seeded).
+        bumps: Amplitude [m] of random bumps on flat ground (0: none; at most
+            :data:`MAX_BUMPS`): a height field of 5 cm cells, 16 m × 8 m, heights uniform in
+            ``[-bumps, bumps]`` (seeded).
         seed: The bumps' random seed.
+        flat_start: Half-width [m] (>= 0) of a flat square at height 0 around the origin
+            amid the bumps, where a robot can be set down at rest.
 
     Returns:
         A :class:`SimScene`.
@@ -321,7 +328,7 @@ def scene_mjcf(
     from lxml import etree
 
     from ..export._common import num, vec
-    from .collision import add_hulls
+    from .collision import add_hulls, mjcf_asset
 
     one_of("terrain", terrain, list(SCENE_TERRAINS))
     wb = _robot(robot, feet)
@@ -432,21 +439,17 @@ def scene_mjcf(
                 pos=f"{num(_STEP_AT + half)} 0 {num(_STEP_RISE / 2)}",
             )
         )
-    field = _bump_field(bump, seed)
+    flat = 0.0 if not flat_start else positive("flat_start", flat_start)
     if bump:
-        n = field.shape[0]
-        asset = root.find("asset")
-        if asset is None:
-            asset = etree.Element("asset")
-            root.find("compiler").addnext(asset)
+        field = _bump_field(seed, flat)
         etree.SubElement(
-            asset,
+            mjcf_asset(root),
             "hfield",
             name="bumps",
-            nrow=str(n),
-            ncol=str(n),
-            size=f"{num(_BUMP_EXTENT)} {num(_BUMP_EXTENT)} {num(2 * bump)} {num(0.05)}",
-            elevation=" ".join(num(v) for v in ((field + bump) / (2 * bump)).ravel()),
+            nrow=str(field.shape[0]),
+            ncol=str(field.shape[1]),
+            size=f"{num(_BUMP_HALF[0])} {num(_BUMP_HALF[1])} {num(2 * bump)} {num(0.05)}",
+            elevation=" ".join(num(v) for v in field[::-1].ravel()),  # MJCF: the top row first
         )
         grounds = [dict(name="ground", type="hfield", hfield="bumps", pos=f"0 0 {num(-bump)}")]
     for k, spec in enumerate(grounds):
@@ -485,6 +488,7 @@ def scene_mjcf(
         contact_time=tc,
         bumps=bump,
         seed=int(seed),
+        flat_start=flat,
     )
 
 
@@ -509,19 +513,21 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
     return MAX_TIMESTEP / min(MAX_SPLIT, max(1, k))
 
 
-def _bump_field(bump: float, seed: int) -> np.ndarray:
-    """(n, n) bump heights [m] on the grid of :data:`_BUMP_CELL` (zeros without bumps).
+def _bump_field(seed: int, flat: float = 0.0) -> np.ndarray:
+    """(ny, nx) the bumps' elevations in [0, 1] on the grid of :data:`_BUMP_CELL`.
 
-    Row ``i`` at ``y = extent − i·cell``, column ``j`` at ``x = −extent + j·cell`` (MuJoCo's
-    height field order); spanning exactly ``[−bump, bump]`` (MuJoCo rescales the elevation
-    data to its range).
+    Row ``i`` at ``y = −half_y + i·cell``, column ``j`` at ``x = −half_x + j·cell`` (MuJoCo's
+    ``hfield_data`` order), uniform (seeded); 0.5 (the height 0) on the square
+    ``|x|, |y| <= flat`` [m] when ``flat > 0``. Its far corners are exactly 0 and 1 (MuJoCo
+    rescales an MJCF's elevations to [0, 1]: these are kept as they are).
     """
-    n = int(round(2 * _BUMP_EXTENT / _BUMP_CELL)) + 1
-    if not bump:
-        return np.zeros((n, n))
-    raw = np.random.default_rng(seed).uniform(-1.0, 1.0, size=(n, n))
-    lo, hi = raw.min(), raw.max()
-    return bump * (2.0 * (raw - lo) / (hi - lo) - 1.0)
+    nx, ny = (int(round(2 * h / _BUMP_CELL)) + 1 for h in _BUMP_HALF)
+    grid = np.random.default_rng(seed).uniform(0.0, 1.0, ny * nx).reshape(ny, nx)
+    if flat > 0:
+        k, cy, cx = int(round(flat / _BUMP_CELL)), ny // 2, nx // 2
+        grid[cy - k : cy + k + 1, cx - k : cx + k + 1] = 0.5
+    grid[0, 0], grid[-1, -1] = 0.0, 1.0
+    return grid
 
 
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
@@ -785,15 +791,3 @@ def check_steps(timestep: Any, spans: dict[str, float], default_timestep: float 
         value=value,
         allowed=f"(simulated time) / timestep <= {MAX_STEPS}",
     )
-
-
-def _hermite(q: np.ndarray, qd: np.ndarray, h: float, sub: int) -> tuple[np.ndarray, np.ndarray]:
-    """Cubic Hermite values and rates (N−1, sub, nq) at ``s = k / sub`` of every interval."""
-    s = (np.arange(sub) / sub)[None, :, None]
-    s2, s3 = s * s, s * s * s
-    q0, q1, d0, d1 = q[:-1, None], q[1:, None], h * qd[:-1, None], h * qd[1:, None]
-    val = (2 * s3 - 3 * s2 + 1) * q0 + (s3 - 2 * s2 + s) * d0 + (-2 * s3 + 3 * s2) * q1
-    val = val + (s3 - s2) * d1
-    rate = (6 * s2 - 6 * s) * q0 + (3 * s2 - 4 * s + 1) * d0 + (-6 * s2 + 6 * s) * q1
-    rate = (rate + (3 * s2 - 2 * s) * d1) / h
-    return val, rate
