@@ -70,7 +70,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
 · CoM <span id="hk-com"></span></div>
 <button id="hk-reset">reset</button>
 <button id="hk-json">download session (JSON)</button>
-<button id="hk-csv">download timeline (CSV)</button>
+<button id="hk-csv">download servo timeline (CSV)</button>
 </div>
 <script src="/meshcat.js"></script>
 <script>
@@ -367,7 +367,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       if (wantDownload === "json") {
         download("session.json", JSON.stringify(m.session), "application/json");
       }
-      else { download("timeline.csv", m.csv, "text/csv"); }
+      else if (m.timeline) { download("timeline.csv", m.timeline, "text/csv"); }
+      else { el("hk-msg").textContent = m.refused; }
       wantDownload = null;
     }
     api.replies.push(m); if (api.replies.length > 50) { api.replies.shift(); }

@@ -68,7 +68,7 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
     elif kind == "reset":
         cockpit.reset()
     elif kind == "session":
-        return {"type": "session", "session": cockpit.session(), "csv": cockpit.timeline_csv()}
+        return session_reply(cockpit)
     elif kind == "ping":
         return {"type": "pong", "t": msg.get("t")}
     else:
@@ -77,6 +77,16 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
             "'stance', 'drive', 'pattern', 'reset', 'session', 'ping'"
         )
     return None
+
+
+def session_reply(cockpit: Cockpit) -> dict[str, Any]:
+    """The downloads: the session (JSON) and its servo timeline (CSV) or why it is refused."""
+    csv, refused = None, None
+    try:
+        csv = cockpit.timeline().to_csv()
+    except HexapodKinError as exc:  # a limit (LimitError), too short a session
+        refused = f"timeline refused: {exc}"
+    return {"type": "session", "session": cockpit.session(), "timeline": csv, "refused": refused}
 
 
 class DriveServer:

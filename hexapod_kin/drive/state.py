@@ -38,6 +38,8 @@ __all__ = ["MODES", "Cockpit"]
 MODES = ("joints", "target", "body", "walk")
 #: Body-pose slider ranges: translation as a fraction of the leg span, angles [rad].
 BODY_SHIFT, BODY_ANGLE = 0.3, 0.4
+#: Time over which the joints blend into a new cycle (from standstill, a new pattern) [s].
+BLEND = 0.3
 #: Recorded samples kept (a session of about 30 min at 50 Hz).
 MAX_RECORD = 90_000
 
@@ -66,15 +68,26 @@ class Cockpit:
             :func:`~hexapod_kin.gait.robot.as_whole_body`).
         families: The chain's singular families (:class:`~hexapod_kin.singularity.Families`)
             or ``None``; may be given later (:attr:`families`).
+        calibration: The servos of the downloaded timeline (a
+            :class:`~hexapod_kin.export.timeline.Calibration` or a calibration file; None:
+            every joint in rad, unlimited).
 
     Raises:
-        ParameterError, ConfigurationError: Bad ``feet``.
+        ParameterError, ConfigurationError: Bad ``feet``; a bad calibration file.
+        SourceError: The calibration file cannot be read.
 
     """
 
-    def __init__(self, model: Any, *, feet: Any = None, families: Any = None) -> None:
+    def __init__(
+        self, model: Any, *, feet: Any = None, families: Any = None, calibration: Any = None
+    ) -> None:
         self.model = model
         self.families = families
+        if calibration is not None and not hasattr(calibration, "servo"):
+            from ..export.servos import read_calibration
+
+            calibration = read_calibration(calibration)
+        self.calibration = calibration
         self.lock = threading.RLock()
         self.body: Any = None
         self.not_legged = ""
@@ -94,6 +107,7 @@ class Cockpit:
         self.min_margin = math.inf
         self.margins: list[float] = []
         self._actual = np.zeros(3)
+        self._blend: tuple[Any, Any, float] = (None, None, 0.0)
         if self.body is None:
             self.limbs = [Limb(model)]
             self.patterns: tuple[str, ...] = ()
@@ -451,7 +465,12 @@ class Cockpit:
 
     def _apply_walk_sample(self) -> None:
         q, base, k = self.walker.sample()
-        self._set_limb_q(np.asarray(q, dtype=float))
+        q = np.asarray(q, dtype=float)
+        cycle = self.walker.cycle
+        if cycle is not self._blend[0]:  # a new cycle: blend the joints from where they are
+            self._blend = (cycle, self.qb - q, self.walker.time)
+        s = min(max((self.walker.time - self._blend[2]) / BLEND, 0.0), 1.0)
+        self._set_limb_q(q + (1.0 - s * s * (3.0 - 2.0 * s)) * self._blend[1])
         self.base = base
         run = self.walker.cycle.run  # type: ignore[union-attr]
         self.margins.append(float(run.margin[k]))
@@ -574,16 +593,41 @@ class Cockpit:
                 "events": list(self.events),
             }
 
-    def timeline_csv(self) -> str:
-        """The session's joints as a plan CSV (``t,<joint>...``; ``hexapod-kin timeline``)."""
+    def timeline(self, rate: float = 50.0) -> Any:
+        """The session's joints as a calibrated servo timeline (``hexapod-kin timeline``'s checks).
+
+        The recorded samples (commands at one time keep the last) are resampled at ``rate``
+        [Hz] and mapped through :attr:`calibration` (None: every joint in rad, unlimited) by
+        :func:`hexapod_kin.export.timeline.timeline`, checked against the joints' limits and
+        speed limits and the servos' limits.
+
+        Returns:
+            The :class:`~hexapod_kin.export.timeline.Timeline` (``to_csv()``, ``to_dict()``).
+
+        Raises:
+            LimitError: A sample beyond a servo's or a joint's limits or its speed limit (e.g.
+                a slider moved faster than the servo turns), naming the joint and the time.
+            ConfigurationError: Fewer than two recorded times.
+
+        """
+        from ..export.timeline import timeline
+
         with self.lock:
             rec = list(self.record)
-        lines = ["t," + ",".join(self.model.joint_names)]
-        last = -1.0
-        for t, q, _ in rec:
-            if t <= last:  # a plan's times increase strictly: commands at one time keep the last
-                lines[-1] = f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q)
+        t: list[float] = []
+        q: list[list[float]] = []
+        for ti, qi, _ in rec:
+            if t and ti <= t[-1]:  # a plan's times increase strictly: keep the last command
+                q[-1] = qi
                 continue
-            lines.append(f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q))
-            last = t
-        return "\n".join(lines) + "\n"
+            t.append(ti)
+            q.append(qi)
+        m = self.model
+        return timeline(
+            (np.asarray(t), np.asarray(q)),
+            rate=rate,
+            calibration=self.calibration,
+            joint_names=list(m.joint_names),
+            velocity_limit=np.asarray(m.velocity_limit, dtype=float),
+            position_limit=(np.asarray(m.lower, dtype=float), np.asarray(m.upper, dtype=float)),
+        )
