@@ -40,7 +40,8 @@ _STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
 #hk-panel input[type=range] { width: 170px; vertical-align: middle; }
 .hk-tab { display: none; } .hk-tab.on { display: block; }
 #hk-modes button.on { font-weight: bold; background: #cde; }
-#hk-msg { color: #a00; min-height: 1em; } #hk-margin.lost { color: #d00; font-weight: bold; }
+#hk-msg { color: #a00; min-height: 1em; }
+#hk-margin.lost, #hk-zmp.lost { color: #d00; font-weight: bold; }
 .hk-num { width: 64px; }
 #hk-stick { position: relative; width: 90px; height: 90px; border-radius: 45px;
   background: #dde; touch-action: none; margin: 4px 0; }
@@ -109,6 +110,13 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   target.visible = false;
   var footDot = dot(0x22aa22, DATA.scale * 0.022);  // red when near a singularity
   group.add(footDot);
+  var zmpDot = dot(0x8844cc, DATA.scale * 0.03);  // the ZMP on the ground, red when outside
+  group.add(zmpDot); zmpDot.visible = false;
+  // the chain on the nearest singular family (its frames' origins), drawn when near
+  var ghostGeom = new THREE.BufferGeometry();
+  ghostGeom.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * 64), 3));
+  var ghost = new THREE.Line(ghostGeom, new THREE.LineBasicMaterial({ color: 0xdd00dd }));
+  ghost.visible = false; group.add(ghost);
   viewer.scene_tree.find(["meshcat", "drive"]).set_object(group);
   var renders = [], origRender = viewer.render.bind(viewer), continuous = false;
   viewer.render = function () {
@@ -121,7 +129,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   })();
   el("hk-title").textContent = DATA.title;
   var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
-              replies: [], ready: false };
+              replies: [], ready: false,
+              overlays: { zmp: zmpDot, ghost: ghost, com: com, polygon: poly } };
   window.hexapodKin = api;
   var ws = new WebSocket("ws://" + location.host + "/ws");
   var nextId = 1;
@@ -308,7 +317,17 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       return row.map(function (x) { return x.toFixed(12); }).join(" ");
     }).join("\\n");
     var fam = r.family ? ("nearest singular family " + r.family.name + ": " +
-      r.family.distance.toFixed(4) + " rad") : "singular families: " + DATA.families;
+      r.family.distance.toFixed(4) + " rad" + (r.family.near && r.family.ghost ?
+      " (drawn: the chain on it, magenta)" : "")) : "singular families: " + DATA.families;
+    ghost.visible = !!(r.family && r.family.near && r.family.ghost);
+    if (ghost.visible) {
+      var g = r.family.ghost, ga = ghostGeom.attributes.position.array;
+      for (var gi = 0; gi < g.length && gi < 64; gi++) {
+        ga[3 * gi] = g[gi][0]; ga[3 * gi + 1] = g[gi][1]; ga[3 * gi + 2] = g[gi][2];
+      }
+      ghostGeom.setDrawRange(0, Math.min(g.length, 64));
+      ghostGeom.attributes.position.needsUpdate = true; ghostGeom.computeBoundingSphere();
+    }
     el("hk-status").textContent = r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
       r.sigma_min.toExponential(3) + " m · manipulability " + r.manipulability.toExponential(3) +
       "\\n" + fam + "\\nstatus: " + r.status;
@@ -345,8 +364,13 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
       el("hk-margin").className = lost ? "lost" : "";
       el("hk-com").textContent = fmt(s.com, 3) + " m";
-      el("hk-zmp").textContent =
-        s.zmp_margin === null ? "-" : (1000 * s.zmp_margin).toFixed(1) + " mm";
+      var zlost = s.zmp_margin !== null && s.zmp_margin < 0;
+      el("hk-zmp").textContent = s.zmp_margin === null ? "-" :
+        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : "");
+      el("hk-zmp").className = zlost ? "lost" : "";
+      zmpDot.visible = !!s.zmp;
+      if (s.zmp) { zmpDot.position.set(s.zmp[0], s.zmp[1], s.zmp[2]); }
+      zmpDot.material.color.setHex(zlost ? 0xff0000 : 0x8844cc);
       el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-act").textContent = fmt(r.actual, 3);
       el("hk-minm").textContent =

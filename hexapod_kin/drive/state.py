@@ -40,6 +40,8 @@ MODES = ("joints", "target", "body", "walk")
 BODY_SHIFT, BODY_ANGLE = 0.3, 0.4
 #: Time over which the joints blend into a new cycle (from standstill, a new pattern) [s].
 BLEND = 0.3
+#: Distance to a singular family [rad or m] below which the page draws the chain on it.
+FAMILY_NEAR = 0.25
 #: Recorded samples kept (a session of about 30 min at 50 Hz).
 MAX_RECORD = 90_000
 
@@ -57,6 +59,22 @@ def _finite(name: str, value: Any, size: int) -> np.ndarray:
             allowed=f"{size} finite numbers",
         )
     return arr
+
+
+def singular_configuration(family: Any, q: np.ndarray) -> np.ndarray | None:
+    """A configuration of ``family`` near ``q`` (see :meth:`Cockpit._family`), or None."""
+    from ..singularity._zeroset import project
+
+    out = np.array(q, dtype=float)
+    if family.joint is not None and family.value is not None:
+        out[family.joint] -= float(family.residual(out))
+        return out
+    cols = list(family.variables)
+    point = project(family._jet, out[cols][None])[0]
+    if point is None:
+        return None
+    out[cols] = point
+    return out
 
 
 class Cockpit:
@@ -515,29 +533,37 @@ class Cockpit:
 
     # ------------------------------------------------------------------ readouts
     def support(self) -> dict[str, Any]:
-        """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots).
+        """Support polygon (stance feet, world [m]), CoM, ZMP, static and ZMP margins [m] (legs).
 
-        While walking, also the planner's ZMP margin [m] of the sample (``zmp_margin``; None
-        when standing: a still robot's ZMP is its CoM's projection).
+        While walking, the ZMP is the planner's of the sample (:func:`.walking.run_zmp`, placed
+        in the world) and ``zmp_margin`` its margin in the support polygon
+        (:attr:`~hexapod_kin.gait.walk.GaitRun.zmp_margin`); standing still, the ZMP is the
+        CoM's projection on the ground and its margin the static one.
         """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
         stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
-        zmp = None
-        if self.mode == "walk" and self.walker.cycle is not None:
-            run = self.walker.cycle.run
+        com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
+        zmp = zmp_margin = None
+        cycle = self.walker.cycle if self.mode == "walk" else None
+        if cycle is not None:
+            run = cycle.run
             k = self.walker.sample()[2]
             stance = np.asarray(run.support[k])
+            zmp = cycle.anchor[:3, :3] @ cycle.zmp[k] + cycle.anchor[:3, 3]
             if len(run.zmp_margin) > k:
-                zmp = float(run.zmp_margin[k])
-        com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
+                zmp_margin = float(run.zmp_margin[k])
         margin = float(support_margin(feet, stance, com))
+        if zmp is None:
+            ground = float(np.mean(feet[stance, 2])) - wb.foot_radius if stance.any() else 0.0
+            zmp, zmp_margin = np.array([com[0], com[1], ground]), margin
         return {
             "feet": feet.tolist(),
             "stance": stance.tolist(),
             "com": com.tolist(),
             "margin": margin,
-            "zmp_margin": zmp,
+            "zmp": np.asarray(zmp).tolist(),
+            "zmp_margin": zmp_margin,
         }
 
     def readout(self) -> dict[str, Any]:
@@ -571,6 +597,14 @@ class Cockpit:
             return out
 
     def _family(self) -> dict[str, Any] | None:
+        """The nearest singular family: name, distance, and the chain on it (the ghost).
+
+        ``q`` is a configuration of the family near the current one: the closest one for a
+        family ``q_k = v`` (``q_k`` moved by the distance), a Gauss–Newton projection onto the
+        family for an implicit one (None when it does not converge); ``ghost`` the origins of
+        the chain's frames (``model.frame_placements``, base frame [m]) at ``q``; ``near``
+        whether the distance is below :data:`FAMILY_NEAR` (the page draws the ghost then).
+        """
         fams = self.families
         if self.body is not None or fams is None or not fams.families:
             return None
@@ -578,7 +612,17 @@ class Cockpit:
         if idx[0] < 0:
             return None
         fam = fams.families[int(idx[0])]
-        return {"name": str(getattr(fam, "name", idx[0])), "distance": float(dist[0])}
+        q = singular_configuration(fam, self.q)
+        ghost = None
+        if q is not None:
+            ghost = [t[:3, 3].tolist() for t in self.model.frame_placements(q)]
+        return {
+            "name": str(getattr(fam, "name", idx[0])),
+            "distance": float(dist[0]),
+            "near": bool(dist[0] < FAMILY_NEAR),
+            "q": None if q is None else q.tolist(),
+            "ghost": ghost,
+        }
 
     def session(self) -> dict[str, Any]:
         """The recorded session: times [s], q (model order), body poses, events (JSON-ready)."""
