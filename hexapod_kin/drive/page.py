@@ -84,8 +84,20 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
     return out;
   }
-  var viewer = new MeshCat.Viewer(el("meshcat-pane"));
+  // meshcat's renderer without multisampling or shadow maps (their fill costs most of a frame
+  // in software GL); the resolution adapts to keep >= 30 frames/s (adapt() below)
+  var renderer = new MeshCat.THREE.WebGLRenderer({ antialias: false, alpha: true });
+  el("meshcat-pane").appendChild(renderer.domElement);
+  var viewer = new MeshCat.Viewer(el("meshcat-pane"), true, renderer);
   DATA.scene.forEach(function (c) { viewer.handle_command_bytearray(bytes(c)); });
+  // lighting: the ambient and the directional light only (each light is per-pixel work for
+  // every Phong surface in software GL; the spot and point lights cost a third of a frame)
+  viewer.scene.traverse(function (o) {
+    if (o.isLight && o.type !== "AmbientLight" && o.type !== "DirectionalLight") {
+      o.visible = false;
+    }
+    if (o.isLight && o.type === "DirectionalLight") { o.intensity *= 1.6; }
+  });
   viewer.scene.traverse(function (o) {
     var g = o.geometry;
     if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
@@ -123,8 +135,31 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     renders.push(performance.now()); if (renders.length > 600) { renders.shift(); }
     origRender();
   };
+  var states = [], fullRatio = window.devicePixelRatio || 1, ratio = fullRatio, adaptAt = 0;
+  var good = 0;
+  function count(times, now) {
+    var n = 0;
+    for (var i = times.length - 1; i >= 0 && times[i] > now - 1000; i--) { n++; }
+    return n;
+  }
+  function adapt(now) {  // each second: the resolution for >= 30 frames/s while moving
+    if (now - adaptAt < 1000) { return; }
+    adaptAt = now;
+    var drawn = count(renders, now), wanted = continuous ? 60 : Math.min(count(states, now), 60);
+    if (wanted < 30) { return; }  // a still scene: nothing to keep up with
+    if (drawn < 32 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
+      ratio = Math.max(0.25, ratio * Math.max(0.5, Math.min(0.9, Math.sqrt(drawn / 40))));
+    }
+    else if (drawn >= Math.min(wanted, 50) && ratio < fullRatio && ++good >= 3) {
+      ratio = Math.min(fullRatio, ratio / 0.85);  // after 3 s with room to spare
+    }
+    else { if (drawn < Math.min(wanted, 50)) { good = 0; } return; }
+    good = 0;
+    renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
+  }
   (function spin() {
     if (continuous) { viewer.set_dirty(); }
+    adapt(performance.now());
     requestAnimationFrame(spin);
   })();
   el("hk-title").textContent = DATA.title;
@@ -148,6 +183,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     return n * 1000 / span;
   };
   api.setContinuous = function (on) { continuous = !!on; };
+  api.resolution = function () { return ratio; };  // the adapted pixel ratio
   // modes
   var modes = DATA.legged ? ["joints", "target", "body", "walk"] : ["joints", "target"];
   modes.forEach(function (m) {
@@ -301,10 +337,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     return false;
   }
   function onState(st) {
-    api.state = st; api.seq = st.seq;
+    st.readout.time = st.time; api.state = st; api.seq = st.seq;
     var r = st.readout, now = performance.now();
-    for (var k = 0; k < paths.length; k++) {
-      viewer.set_transform(paths[k], st.poses.slice(16 * k, 16 * k + 16));
+    states.push(now); if (states.length > 120) { states.shift(); }
+    var P = st.poses;  // each visual's 3×4 [R | p], column-major: 12 numbers
+    for (var k = 0, o = 0; k < paths.length; k++, o += 12) {
+      viewer.set_transform(paths[k], [P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
+                                      P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10],
+                                      P[o + 11], 1]);
     }
     if (pressAt !== null && JSON.stringify(r.command) !== cmdBefore) {
       api.latencies.push(now - pressAt); cmdBefore = "seen";
@@ -458,10 +498,10 @@ def _clean(value: Any) -> Any:
 
 
 def state_frame(cockpit: Cockpit, scene: Scene, seq: int) -> dict[str, Any]:
-    """The state message of one tick: the visuals' poses (column-major) and the readout."""
+    """The state message of one tick: the visuals' poses (3×4, column-major) and the readout."""
     with cockpit.lock:
         q, base = cockpit.q.copy(), cockpit.base.copy()
         readout = cockpit.readout()
-    poses = scene.placements(q[None], base[None])[0]
-    flat = np.round(np.transpose(poses, (0, 2, 1)).reshape(-1), 7)
+    poses = scene.placements(q[None], base[None])[0]  # the last rows are 0 0 0 1: not sent
+    flat = np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7)
     return {"type": "state", "seq": seq, "poses": flat.tolist(), "readout": _clean(readout)}
