@@ -65,6 +65,8 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
         cockpit.set_drive(msg["axes"])
     elif kind == "pattern":
         cockpit.set_pattern(str(msg["pattern"]))
+    elif kind == "push":
+        cockpit.push(msg["force"])
     elif kind == "reset":
         cockpit.reset()
     elif kind == "session":
@@ -74,7 +76,7 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
     else:
         raise KeyError(
             f"type={kind!r}: use one of 'joint', 'q', 'mode', 'foot', 'target', 'body', "
-            "'stance', 'drive', 'pattern', 'reset', 'session', 'ping'"
+            "'stance', 'drive', 'pattern', 'push', 'reset', 'session', 'ping'"
         )
     return None
 

@@ -35,7 +35,7 @@ from .walking import Walker
 __all__ = ["MODES", "Cockpit"]
 
 #: The page's modes.
-MODES = ("joints", "target", "body", "walk")
+MODES = ("joints", "target", "body", "walk", "physics")
 #: Body-pose slider ranges: translation as a fraction of the leg span, angles [rad].
 BODY_SHIFT, BODY_ANGLE = 0.3, 0.4
 #: Time over which the joints blend into a new cycle (from standstill, a new pattern) [s].
@@ -149,6 +149,7 @@ class Cockpit:
             )
             self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
             self.walker = Walker(wb)
+        self.physics: Any = None
         self.limb = 0
         self.speed = (0.05, 0.05, 0.3) if self.body is not None else (0.0, 0.0, 0.0)
         self.reset()
@@ -211,10 +212,15 @@ class Cockpit:
 
     # ------------------------------------------------------------------ commands
     def set_mode(self, mode: str) -> None:
-        """Switch the page's mode (one of :data:`MODES`; body and walk need legs).
+        """Switch the page's mode (one of :data:`MODES`; body, walk and physics need legs).
+
+        ``physics`` starts a new simulation (:class:`~.physics.Physics`) from the neutral
+        pose at the origin; leaving it resets the robot (standing at the origin).
 
         Raises:
             ParameterError: Unknown mode, or a legged mode for a robot without legs.
+            HexapodKinError: The controller cannot drive the robot (physics mode).
+            OptionalDependencyError: MuJoCo or proxsuite is missing (physics mode).
 
         """
         allowed = MODES if self.legged else MODES[:2]
@@ -227,7 +233,15 @@ class Cockpit:
                 allowed=allowed,
             )
         with self.lock:
-            if self.legged and mode != "walk":
+            if self.mode == "physics" and mode != "physics":
+                self.reset()
+            if mode == "physics":
+                from .physics import Physics
+
+                self.physics = Physics(self.body, self.pattern)
+                self.walker.cycle, self.drive = None, (0.0, 0.0, 0.0)
+                self.status, self.message = "physics", ""
+            if self.legged and mode not in ("walk", "physics"):
                 self.drive = (0.0, 0.0, 0.0)
             if self.legged and mode == "body" and self.mode != "body":
                 self._hold_feet()
@@ -443,11 +457,13 @@ class Cockpit:
             )
         cmd = tuple(float(x * s) for x, s in zip(a, self.speed))
         with self.lock:
-            if self.mode != "walk":
+            if self.mode not in ("walk", "physics"):
                 self.mode = "walk"
                 self.target = None
             self.drive = cmd  # type: ignore[assignment]
             self._event("drive", command=list(cmd))
+            if self.mode == "physics":
+                return
             if any(cmd) and self.walker.cycle is None:
                 self._start_cycle()
 
@@ -468,6 +484,24 @@ class Cockpit:
         with self.lock:
             self.pattern = name
             self._event("pattern", pattern=name)
+
+    def push(self, force: Any) -> None:
+        """Push the simulated robot's base with a horizontal force (fx, fy) [N] (physics mode).
+
+        Raises:
+            ParameterError: Not in physics mode, or not two finite numbers.
+
+        """
+        with self.lock:
+            if self.mode != "physics":
+                raise ParameterError(
+                    f"push: mode={self.mode!r}; a push needs the physics mode",
+                    parameter="mode",
+                    value=self.mode,
+                    allowed="physics",
+                )
+            self.physics.push(force)
+            self._event("push", force=[float(f) for f in np.reshape(force, -1)])
 
     def _start_cycle(self) -> None:
         from ..exceptions import HexapodKinError
@@ -509,6 +543,11 @@ class Cockpit:
                 if res.status != "moving":
                     self.status, self.message = res.status, res.reason
                     self._event("target stop", status=res.status, reason=res.reason)
+            elif self.mode == "physics":
+                self.physics.set_command(self.drive, self.pattern)
+                self.physics.advance(dt)
+                q, self.base, _ = self.physics.state()
+                self._set_limb_q(q)
             elif self.legged and self.mode == "walk" and self.walker.cycle is not None:
                 why = self.walker.advance(dt, self.pattern, self.drive)
                 if self.walker.cycle is not None:
