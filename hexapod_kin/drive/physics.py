@@ -101,7 +101,8 @@ class Physics:
     def set_command(self, twist: tuple[float, float, float], pattern: str) -> None:
         """Walk at ``twist`` (vx, vy [m/s], wz [rad/s]; all zero: stand) with ``pattern``."""
         mode = "walk" if any(twist) else "stand"
-        cmd = self.Command(*(float(v) for v in twist), pattern=pattern, mode=mode)
+        vx, vy, wz = (float(v) for v in twist)
+        cmd = self.Command(vx=vx, vy=vy, wz=wz, pattern=pattern, mode=mode)
         if cmd != self.ctl.command:
             self.ctl.set_command(cmd)
 
