@@ -340,3 +340,50 @@ def test_singular_family_drawn_when_near(browser):
         )
         _wait(page, "!hexapodKin.overlays.ghost.visible")  # far from every family: not drawn
         page.close()
+
+
+def test_physics_mode_walks_and_a_click_pushes(browser):
+    """Physics mode (MuJoCo, closed-loop controller): holding W walks the base forward; a
+    click on the scene pushes the robot: its base velocity changes along the view."""
+    pytest.importorskip("mujoco")
+    pytest.importorskip("proxsuite")
+    from hexapod_kin.drive.physics import PUSH_TIME
+
+    with drive("hexapod", families=False) as s:
+        c = s.cockpit
+        page = _open(browser, s)
+        page.click("#hk-mode-physics")
+        _wait(page, "hexapodKin.state.readout.mode === 'physics'", 60000)
+        time.sleep(0.5)
+        x0 = np.array(_readout(page)["base"])[:3, 3]
+        t0 = time.monotonic()
+        page.keyboard.down("w")
+        time.sleep(2.0)
+        page.keyboard.up("w")
+        held = time.monotonic() - t0
+        time.sleep(0.3)
+        r = _readout(page)
+        assert r["mode"] == "physics" and r["command"] == [0.0, 0.0, 0.0]
+        walked = np.array(r["base"])[:3, 3] - x0
+        assert walked[0] >= 0.5 * c.speed[0] * held, (walked, held)
+        time.sleep(0.5)
+        with c.lock:
+            v0 = c.physics.state()[2]
+        page.mouse.click(600, 300)  # a click, not a drag: a push
+        _wait(page, "hexapodKin.pushes.length === 1")
+        v1 = None
+        for _ in range(500):  # the velocity at the push's end (simulated time)
+            with c.lock:
+                if c.physics.push_until > 0 and c.physics.time >= c.physics.push_until:
+                    v1 = c.physics.state()[2]
+                    break
+            time.sleep(0.002)
+        assert v1 is not None
+        push = [e for e in c.session()["events"] if e["type"] == "push"]
+        assert len(push) == 1
+        f = np.array(push[0]["force"])
+        assert np.linalg.norm(f) == pytest.approx(c.physics.push_force, rel=1e-9)
+        dv = (v1 - v0)[:2] @ (f / np.linalg.norm(f))
+        assert dv >= 0.25 * np.linalg.norm(f) * PUSH_TIME / c.physics.mass, (v0, v1, f)
+        assert not page.errors  # type: ignore[attr-defined]
+        page.close()

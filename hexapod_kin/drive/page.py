@@ -20,6 +20,7 @@ from .._page import fill, page, script_json
 from ..viewer import scene_commands
 from ..viewer.objects import pack
 from ..viewer.scene import Scene
+from .physics import PUSH_WEIGHTS
 from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
@@ -64,6 +65,10 @@ command <span id="hk-cmd"></span><br>actual <span id="hk-act"></span><br>
 min margin while walking <span id="hk-minm"></span><br>
 <div id="hk-stick"><div id="hk-knob"></div></div>
 <span class="hk-help">drag: up/down forward, left/right turn</span></div>
+<div class="hk-tab" id="hk-tab-physics">MuJoCo under the closed-loop controller:
+W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot (twice its
+weight for 0.1 s, horizontally along the view)<br>command <span id="hk-pcmd"></span><br>
+actual <span id="hk-pact"></span></div>
 <div id="hk-msg"></div>
 <pre id="hk-status"></pre>
 FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
@@ -164,7 +169,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   })();
   el("hk-title").textContent = DATA.title;
   var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
-              replies: [], ready: false,
+              replies: [], ready: false, pushes: [],
               overlays: { zmp: zmpDot, ghost: ghost, com: com, polygon: poly } };
   window.hexapodKin = api;
   var ws = new WebSocket("ws://" + location.host + "/ws");
@@ -185,7 +190,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   api.setContinuous = function (on) { continuous = !!on; };
   api.resolution = function () { return ratio; };  // the adapted pixel ratio
   // modes
-  var modes = DATA.legged ? ["joints", "target", "body", "walk"] : ["joints", "target"];
+  var modes = DATA.legged ? ["joints", "target", "body", "walk", "physics"] :
+    ["joints", "target"];
   modes.forEach(function (m) {
     var b = document.createElement("button"); b.textContent = m; b.id = "hk-mode-" + m;
     b.onclick = function () { send({ type: "mode", mode: m }); showMode(m); };
@@ -232,7 +238,26 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   };
   // shift+click: a target on the horizontal plane through the current foot point
   var ray = new THREE.Raycaster();
+  var downAt = null;
+  window.addEventListener("pointerup", function (ev) {  // the view's controls capture it
+    // physics mode: a click (not a drag of the view) pushes the robot along the view
+    if (!downAt || shown !== "physics" ||
+        Math.hypot(ev.clientX - downAt[0], ev.clientY - downAt[1]) > 4) {
+      downAt = null; return;
+    }
+    downAt = null;
+    var d = new THREE.Vector3();
+    viewer.camera.getWorldDirection(d);
+    var root = viewer.scene_tree.find(["meshcat"]).object;
+    root.updateMatrixWorld();
+    var inv = new THREE.Matrix3().setFromMatrix4(root.matrixWorld).invert();
+    d.applyMatrix3(inv);
+    var n = Math.hypot(d.x, d.y);
+    if (n < 1e-9) { return; }
+    api.pushes.push(send({ type: "push", force: [DATA.push * d.x / n, DATA.push * d.y / n] }));
+  });
   viewer.renderer.domElement.addEventListener("pointerdown", function (ev) {
+    downAt = [ev.clientX, ev.clientY];
     if (!ev.shiftKey || !api.state) { return; }
     var rect = ev.target.getBoundingClientRect();
     var ndc = new THREE.Vector2((ev.clientX - rect.left) / rect.width * 2 - 1,
@@ -295,7 +320,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       cmdBefore = api.state ? JSON.stringify(api.state.readout.command) : null;
       baseBefore = api.state ? api.state.readout.base : null;
     }
-    send({ type: "drive", axes: axes() }); showMode("walk");
+    send({ type: "drive", axes: axes() });
+    if (shown !== "physics") { showMode("walk"); }
   }
   // on-screen joystick: up/down = forward/back, left/right = turn (Q/E)
   var stick = el("hk-stick"), knob = el("hk-knob"), sticking = false, lastSent = "";
@@ -413,6 +439,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       zmpDot.material.color.setHex(zlost ? 0xff0000 : 0x8844cc);
       el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-act").textContent = fmt(r.actual, 3);
+      el("hk-pcmd").textContent = el("hk-cmd").textContent;
+      el("hk-pact").textContent = fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-minm").textContent =
         r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
       if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
@@ -477,6 +505,7 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "body_angle": BODY_ANGLE,
         "scale": span,
         "sigma_eps": SIGMA_EPS,
+        "push": PUSH_WEIGHTS * float(cockpit.body.mass) * 9.81 if cockpit.legged else 0.0,
         "families": "per leg: not derived (legged robot)"
         if cockpit.legged
         else (fams.reason or "none")

@@ -86,7 +86,8 @@ class Physics:
         self.time = 0.0
         self._due = 0.0
         self._push = np.zeros(3)
-        self._push_end = -1.0
+        #: The end of the last push, in simulated time [s].
+        self.push_until = -1.0
 
     @property
     def mass(self) -> float:
@@ -121,7 +122,7 @@ class Physics:
                 value=repr(force)[:80],
             )
         self._push = np.array([f[0], f[1], 0.0])
-        self._push_end = self.time + PUSH_TIME
+        self.push_until = self.time + PUSH_TIME
 
     def _measure(self) -> Any:
         from ..control import Measurement
@@ -154,7 +155,7 @@ class Physics:
             u = self.ctl.tick(self._measure())
             self.data.ctrl[self.act] = u
             self.data.xfrc_applied[self.base_body] = 0.0
-            if self.time < self._push_end:
+            if self.time < self.push_until:
                 self.data.xfrc_applied[self.base_body, :3] = self._push
             for _ in range(self.sub):
                 self.mj.mj_step(self.model, self.data)
