@@ -141,14 +141,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     origRender();
   };
   var states = [], fullRatio = window.devicePixelRatio || 1, ratio = fullRatio, adaptAt = 0;
-  var good = 0;
+  var good = 0, fixed = false;
   function count(times, now) {
     var n = 0;
     for (var i = times.length - 1; i >= 0 && times[i] > now - 1000; i--) { n++; }
     return n;
   }
   function adapt(now) {  // each second: the resolution for >= 30 frames/s while moving
-    if (now - adaptAt < 1000) { return; }
+    if (fixed || now - adaptAt < 1000) { return; }
     adaptAt = now;
     var drawn = count(renders, now), wanted = continuous ? 60 : Math.min(count(states, now), 60);
     if (wanted < 30) { return; }  // a still scene: nothing to keep up with
@@ -189,6 +189,11 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   };
   api.setContinuous = function (on) { continuous = !!on; };
   api.resolution = function () { return ratio; };  // the adapted pixel ratio
+  api.fixResolution = function (r) {  // a fixed pixel ratio (screenshots); null: adapt again
+    fixed = r !== null && r !== undefined;
+    ratio = fixed ? r : fullRatio;
+    renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
+  };
   // modes
   var modes = DATA.legged ? ["joints", "target", "body", "walk", "physics"] :
     ["joints", "target"];
