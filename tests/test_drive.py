@@ -423,3 +423,5 @@ def test_physics_mode_walks_and_a_push_moves_the_base():
     c.set_mode("walk")  # leaving physics: standing again
     with pytest.raises(ParameterError, match="physics"):
         c.push(force)
+    with pytest.raises(ParameterError, match="servo kind"):
+        Cockpit(hk.load("erd:solo12")).set_mode("physics")  # (it fell in the servo kind)

@@ -195,8 +195,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
   };
   // modes
-  var modes = DATA.legged ? ["joints", "target", "body", "walk", "physics"] :
-    ["joints", "target"];
+  var modes = !DATA.legged ? ["joints", "target"] : DATA.physics ?
+    ["joints", "target", "body", "walk", "physics"] : ["joints", "target", "body", "walk"];
   modes.forEach(function (m) {
     var b = document.createElement("button"); b.textContent = m; b.id = "hk-mode-" + m;
     b.onclick = function () { send({ type: "mode", mode: m }); showMode(m); };
@@ -505,6 +505,7 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "joints": joints,
         "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
         "legged": cockpit.legged,
+        "physics": cockpit.legged and getattr(cockpit.body, "params", None) is not None,
         "patterns": list(cockpit.patterns),
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,

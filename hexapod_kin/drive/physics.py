@@ -46,11 +46,21 @@ class Physics:
 
     Raises:
         OptionalDependencyError: MuJoCo or proxsuite is missing.
-        ParameterError, ConfigurationError: A robot the controller cannot drive.
+        ParameterError: A robot other than the built-in hexapod (servo kind only).
+        ConfigurationError: A robot the controller cannot drive.
 
     """
 
     def __init__(self, body: Any, pattern: str) -> None:
+        if getattr(body, "params", None) is None:  # as control.run chooses the kind
+            raise ParameterError(
+                f"mode='physics' is not allowed for {body.source}: the cockpit runs the "
+                "controller's servo kind, which control.run uses for the built-in hexapod "
+                "only (other robots need its torque kind, not wired in the cockpit yet)",
+                parameter="mode",
+                value="physics",
+                allowed="the built-in hexapod",
+            )
         import mujoco as mj
 
         from ..control import Command, Controller
