@@ -156,21 +156,63 @@ def test_walk_forward_and_switch_pattern(src):
     assert ro["command"] == [0.0, 0.0, 0.0] and ro["pattern"] == other
 
 
-def test_session_and_timeline_read_back(tmp_path):
-    from hexapod_kin.export.timeline import read_plan
+#: PWM servos for the timelines: 1500 µs at the centre, 450 µs/rad, 500..2500 µs (±2.22 rad).
+SERVOS = {"defaults": {"units": "us", "centre": 1500, "us_per_rad": 450.0, "limits": [500, 2500]}}
 
-    c = Cockpit(hk.load("hexapod"))
-    c.set_drive((1.0, 0.0, 0.0))
-    for _ in range(30):
+
+def test_session_downloads_a_calibrated_servo_timeline(tmp_path):
+    """The download is `timeline`'s: read back by its reader, every command in the servo range."""
+    from hexapod_kin.drive.server import session_reply
+    from hexapod_kin.export.servos import Calibration
+    from hexapod_kin.export.timeline import read_timeline
+
+    c = Cockpit(hk.load("hexapod"), calibration=Calibration.from_dict(SERVOS))
+    c.set_drive((1.0, 0.0, 0.0))  # from standing: the joints blend into the walk
+    for i in range(150):
+        if i == 30:
+            c.set_pattern(next(p for p in c.patterns if p != c.pattern))  # blended at 1 s
         c.advance(0.02)
     s = c.session()
-    assert len(s["t"]) == len(s["q"]) == len(s["base_poses"]) == 31
-    path = tmp_path / "timeline.csv"
-    path.write_text(c.timeline_csv())
-    t, q, names = read_plan(path)
-    assert names == tuple(c.model.joint_names)
-    np.testing.assert_allclose(q[-1], c.q, atol=1e-8)
+    assert len(s["t"]) == len(s["q"]) == len(s["base_poses"]) == 151
+    step = np.abs(np.diff(np.asarray(s["q"]), axis=0)).max()
+    assert step < 0.1  # the swing's own fastest: 0.065 rad per tick; unblended: 0.30
     json.dumps(s)  # JSON-ready
+    reply = session_reply(c)
+    assert reply["refused"] is None
+    path = tmp_path / "timeline.csv"
+    path.write_text(reply["timeline"])
+    tl = read_timeline(path)
+    assert tl.joint_names == tuple(c.model.joint_names)
+    assert np.all((tl.command >= 500) & (tl.command <= 2500))
+    assert tl.t[-1] == pytest.approx(3.0, abs=1e-9)
+    # the commands are the recorded angles through the calibration, to half a µs
+    rec_q = np.asarray(s["q"])
+    np.testing.assert_allclose(tl.command[-1], np.round(1500 + 450.0 * rec_q[-1]), atol=0.5)
+    np.testing.assert_allclose(tl.q[-1], rec_q[-1], atol=0.5 / 450.0 + 1e-12)
+
+
+def test_timeline_refuses_what_a_servo_cannot_do():
+    """A slider jump faster than the joint's speed limit, a servo range: refused by name."""
+    from hexapod_kin.drive.server import session_reply
+    from hexapod_kin.exceptions import LimitError
+    from hexapod_kin.export.servos import Calibration
+
+    m = hk.load("hexabot_leg")
+    c = Cockpit(m)
+    c.advance(0.02)
+    j = m.nq - 1
+    c.set_joint(m.joint_names[j], float(m.lower[j]))  # a jump within one 20 ms tick
+    c.advance(0.02)
+    assert abs(c.q[j] - c._home()[j]) / 0.02 > m.velocity_limit[j]  # the case tested
+    with pytest.raises(LimitError, match=f"{m.joint_names[j]}.*speed"):
+        c.timeline()
+    assert m.joint_names[j] in session_reply(c)["refused"]
+    narrow = {"defaults": {**SERVOS["defaults"], "limits": [1499, 1501]}}  # ±1/450 rad
+    c2 = Cockpit(m, calibration=Calibration.from_dict(narrow))
+    c2.advance(0.02)
+    assert np.any(np.abs(c2.q) * 450 > 1.5)  # home is beyond it
+    with pytest.raises(LimitError, match="servo's limits"):
+        c2.timeline()
 
 
 def test_handle_refuses_bad_messages():
@@ -344,3 +386,42 @@ def test_nearest_family_and_sigma_min_at_a_singular_pose():
     assert r["family"]["name"].startswith("q3 = 0") and r["family"]["distance"] < 1e-12
     c.set_joint("ankle", 0.3)
     assert c.readout()["family"]["distance"] == pytest.approx(0.3, abs=1e-9)
+
+
+def test_physics_mode_walks_and_a_push_moves_the_base():
+    """MuJoCo under the closed-loop controller: W walks the base forward (≥ half the commanded
+    distance; the controller's own tests hold its accuracy), and a push's impulse changes the
+    base velocity along it (at least a quarter of F·Δt/m: the feet's friction takes the rest)."""
+    from hexapod_kin.drive.physics import PUSH_TIME
+
+    pytest.importorskip("mujoco")
+    pytest.importorskip("proxsuite")
+    c = Cockpit(hk.load("hexapod"))
+    c.set_mode("physics")
+    for _ in range(25):  # settle 0.5 s
+        c.advance(0.02)
+    x0 = c.base[:3, 3].copy()
+    c.set_drive((1.0, 0.0, 0.0))
+    assert c.readout()["mode"] == "physics"
+    for _ in range(150):  # 3 s at 0.05 m/s
+        c.advance(0.02)
+    moved = c.base[:3, 3] - x0
+    assert moved[0] >= 0.5 * 0.05 * 3.0 and abs(moved[1]) < 0.3 * moved[0], moved
+    c.set_drive((0.0, 0.0, 0.0))
+    for _ in range(50):
+        c.advance(0.02)
+    v0 = c.physics.state()[2]
+    force = (0.0, c.physics.push_force)  # the page's: twice the weight
+    c.push(force)
+    for _ in range(5):  # the push's 0.1 s
+        c.advance(0.02)
+    dv = c.physics.state()[2] - v0
+    assert dv[1] >= 0.25 * force[1] * PUSH_TIME / c.physics.mass, dv
+    assert any(e["type"] == "push" for e in c.session()["events"])
+    with pytest.raises(ParameterError, match="force"):
+        c.push((1.0, float("nan")))
+    c.set_mode("walk")  # leaving physics: standing again
+    with pytest.raises(ParameterError, match="physics"):
+        c.push(force)
+    with pytest.raises(ParameterError, match="servo kind"):
+        Cockpit(hk.load("erd:solo12")).set_mode("physics")  # (it fell in the servo kind)

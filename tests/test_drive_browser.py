@@ -217,3 +217,173 @@ def test_notebook_iframe_shows_the_page(browser, session):
     frame.wait_for_function("() => window.hexapodKin && hexapodKin.ready && hexapodKin.state")
     assert frame.evaluate("hexapodKin.state.readout.q.length") == session.cockpit.model.nq
     page.close()
+
+
+def test_download_is_a_servo_timeline(browser, tmp_path):
+    """The page's download reads back with export.timeline's reader, in the servos' range."""
+    from hexapod_kin.export.servos import Calibration
+    from hexapod_kin.export.timeline import read_timeline
+
+    servos = {
+        "defaults": {"units": "us", "centre": 1500, "us_per_rad": 450.0, "limits": [500, 2500]}
+    }
+    with drive("hexapod", families=False, calibration=Calibration.from_dict(servos)) as s:
+        page = _open(browser, s)
+        s.set_drive((1.0, 0.0, 0.0))
+        time.sleep(1.0)
+        s.set_drive((0.0, 0.0, 0.0))
+        _wait(page, "hexapodKin.state.readout.status === 'standing'")
+        with page.expect_download() as info:
+            page.click("#hk-csv")
+        path = tmp_path / "timeline.csv"
+        info.value.save_as(path)
+        tl = read_timeline(path)
+        assert tl.joint_names == tuple(s.cockpit.model.joint_names)
+        assert tl.t[-1] > 1.0 and np.all((tl.command >= 500) & (tl.command <= 2500))
+        np.testing.assert_allclose(tl.q[-1], s.cockpit.q, atol=0.5 / 450 + 1e-12)  # standing
+        with page.expect_download() as info:
+            page.click("#hk-json")
+        info.value.save_as(tmp_path / "session.json")
+        import json
+
+        data = json.loads((tmp_path / "session.json").read_text())
+        assert data["joint_names"] == list(s.cockpit.model.joint_names) and data["t"]
+        page.close()
+
+
+def test_zmp_overlay_equals_the_library(browser, session):
+    """Walking, the page's ZMP is the planner's sample's: zmp_points, and its margin is
+    GaitRun.zmp_margin (to 1e-9); standing, it is the CoM's ground projection."""
+    from hexapod_kin.gait.stability import support_margin
+    from hexapod_kin.gait.zmp import zmp_points
+
+    _legged(session)
+    _reset(session)
+    page = _open(browser, session)
+    c = session.cockpit
+    r = _readout(page)["support"]
+    np.testing.assert_allclose(r["zmp"][:2], r["com"][:2], atol=1e-12)
+    assert r["zmp_margin"] == r["margin"]
+    page.click("#meshcat-pane")
+    page.keyboard.down("w")
+    _wait(page, "hexapodKin.state.readout.status === 'walking'")
+    time.sleep(0.5)
+    for _ in range(20):  # read the page's state and the cycle it came from
+        cycle = c.walker.cycle
+        st = page.evaluate(
+            "() => [hexapodKin.state.readout.support,"
+            " hexapodKin.overlays.zmp.position.toArray(), hexapodKin.overlays.zmp.visible]"
+        )
+        if cycle is c.walker.cycle:
+            break
+    page.keyboard.up("w")
+    sup, dot, visible = st
+    run, wb = cycle.run, c.body
+    base = np.asarray(run.base_poses)
+    T = wb.joint_poses(np.asarray(run.q), base)
+    contacts = wb.feet_of(T)
+    contacts[..., 2] -= wb.foot_radius
+    stance = np.asarray(run.support)
+    h = (contacts[..., 2] * stance).sum(axis=1) / np.maximum(stance.sum(axis=1), 1)
+    ref = zmp_points(wb, T, base, np.asarray(run.t), h)
+    world = ref @ cycle.anchor[:3, :3].T + cycle.anchor[:3, 3]
+    k = int(np.argmin(np.linalg.norm(world - np.asarray(sup["zmp"]), axis=1)))
+    np.testing.assert_allclose(sup["zmp"], world[k], atol=1e-9, rtol=0)
+    assert sup["zmp_margin"] == pytest.approx(float(run.zmp_margin[k]), abs=1e-9)
+    assert sup["zmp_margin"] == pytest.approx(
+        float(support_margin(contacts[k : k + 1], stance[k : k + 1], ref[k : k + 1])[0]), abs=1e-9
+    )
+    assert visible and np.allclose(dot, sup["zmp"], atol=1e-6)  # the dot drawn there (float32)
+    lost = sup["zmp_margin"] < 0
+    assert ("LOST" in page.inner_text("#hk-zmp")) == lost
+    _wait(page, "hexapodKin.state.readout.status === 'standing'")
+    page.close()
+
+
+def test_singular_family_drawn_when_near(browser):
+    """ankle = 0.1 rad: the nearest family is q3 = 0 at 0.1 rad, and the page draws the leg on
+    it: the frames' origins of model.frame_placements at ankle = 0 (1e-9; the line, float32)."""
+    from hexapod_kin.singularity import default_rows, families_for
+
+    with drive("hexabot_leg") as s:
+        m = s.cockpit.model
+        if not families_for(m, default_rows(m), derive=False).families:
+            pytest.skip("the leg's families are not derived on this machine (hexapod-kin derive)")
+        page = _open(browser, s)
+        _wait(page, "hexapodKin.state.readout.family !== null", 60000)
+        j = m.joint_names.index("ankle")
+        page.evaluate(
+            "([j]) => { const s = document.getElementById('hk-joint-' + j); s.value = 0.1;"
+            " s.dispatchEvent(new Event('input')); }",
+            [j],
+        )
+        _wait(page, "hexapodKin.state.readout.q[2] === 0.1 && hexapodKin.overlays.ghost.visible")
+        fam = _readout(page)["family"]
+        assert fam["name"].startswith("q3 = 0") and fam["near"]
+        assert fam["distance"] == pytest.approx(0.1, abs=1e-12)
+        q = np.array(_readout(page)["q"])
+        q[j] = 0.0
+        ref = np.array([t[:3, 3] for t in m.frame_placements(q)])
+        np.testing.assert_allclose(fam["q"], q, atol=1e-12)
+        np.testing.assert_allclose(fam["ghost"], ref, atol=1e-9, rtol=0)
+        drawn = page.evaluate(
+            "n => Array.from(hexapodKin.overlays.ghost.geometry.attributes.position.array)"
+            ".slice(0, 3 * n)",
+            len(ref),
+        )
+        np.testing.assert_allclose(np.reshape(drawn, (-1, 3)), ref, atol=1e-6)
+        assert "drawn" in page.inner_text("#hk-status")
+        page.evaluate(
+            "([j]) => { const s = document.getElementById('hk-joint-' + j); s.value = 1.2;"
+            " s.dispatchEvent(new Event('input')); }",
+            [j],
+        )
+        _wait(page, "!hexapodKin.overlays.ghost.visible")  # far from every family: not drawn
+        page.close()
+
+
+def test_physics_mode_walks_and_a_click_pushes(browser):
+    """Physics mode (MuJoCo, closed-loop controller): holding W walks the base forward; a
+    click on the scene pushes the robot: its base velocity changes along the view."""
+    pytest.importorskip("mujoco")
+    pytest.importorskip("proxsuite")
+    from hexapod_kin.drive.physics import PUSH_TIME
+
+    with drive("hexapod", families=False) as s:
+        c = s.cockpit
+        page = _open(browser, s)
+        page.click("#hk-mode-physics")
+        _wait(page, "hexapodKin.state.readout.mode === 'physics'", 60000)
+        time.sleep(0.5)
+        x0 = np.array(_readout(page)["base"])[:3, 3]
+        t0 = time.monotonic()
+        page.keyboard.down("w")
+        time.sleep(2.0)
+        page.keyboard.up("w")
+        held = time.monotonic() - t0
+        time.sleep(0.3)
+        r = _readout(page)
+        assert r["mode"] == "physics" and r["command"] == [0.0, 0.0, 0.0]
+        walked = np.array(r["base"])[:3, 3] - x0
+        assert walked[0] >= 0.5 * c.speed[0] * held, (walked, held)
+        time.sleep(0.5)
+        with c.lock:
+            v0 = c.physics.state()[2]
+        page.mouse.click(600, 300)  # a click, not a drag: a push
+        _wait(page, "hexapodKin.pushes.length === 1")
+        v1 = None
+        for _ in range(500):  # the velocity at the push's end (simulated time)
+            with c.lock:
+                if c.physics.push_until > 0 and c.physics.time >= c.physics.push_until:
+                    v1 = c.physics.state()[2]
+                    break
+            time.sleep(0.002)
+        assert v1 is not None
+        push = [e for e in c.session()["events"] if e["type"] == "push"]
+        assert len(push) == 1
+        f = np.array(push[0]["force"])
+        assert np.linalg.norm(f) == pytest.approx(c.physics.push_force, rel=1e-9)
+        dv = (v1 - v0)[:2] @ (f / np.linalg.norm(f))
+        assert dv >= 0.25 * np.linalg.norm(f) * PUSH_TIME / c.physics.mass, (v0, v1, f)
+        assert not page.errors  # type: ignore[attr-defined]
+        page.close()

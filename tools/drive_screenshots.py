@@ -3,7 +3,7 @@
 Serves :func:`hexapod_kin.drive.drive` on 127.0.0.1, opens the page in headless Debian
 Chromium (Playwright, software GL), drives each mode through the page and saves a PNG:
 
-    python tools/drive_screenshots.py               # docs/img/drive_{joints,target,body,walk}.png
+    python tools/drive_screenshots.py      # docs/img/drive_{joints,target,body,walk,physics}.png
     python tools/drive_screenshots.py --out /tmp/img
 """
 
@@ -27,6 +27,7 @@ def _open(browser: Any, url: str) -> Any:
     page = browser.new_page(viewport={"width": 1100, "height": 680})
     page.goto(url)
     page.wait_for_function("() => window.hexapodKin && hexapodKin.ready && hexapodKin.state")
+    page.evaluate("hexapodKin.fixResolution(1)")  # full resolution, not the adapted one
     return page
 
 
@@ -35,16 +36,19 @@ def _wait(page: Any, expr: str) -> None:
 
 
 def shoot(out: Path) -> list[Path]:
-    """Write the four screenshots to ``out``; return their paths."""
+    """Write the five screenshots to ``out``; return their paths."""
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     with chromium() as browser:
         with drive("hexabot_leg") as s:  # joints, then a target the leg stops short of
             page = _open(browser, s.url)
-            page.evaluate(
-                "() => { const k = document.getElementById('hk-joint-1'); k.value = 0.7;"
-                " k.dispatchEvent(new Event('input')); }"
-            )
+            _wait(page, "hexapodKin.state.readout.family !== null")
+            for j, v in ((1, 0.7), (2, 0.15)):  # the ankle near q3 = 0: the family drawn
+                page.evaluate(
+                    "([j, v]) => { const k = document.getElementById('hk-joint-' + j);"
+                    " k.value = v; k.dispatchEvent(new Event('input')); }",
+                    [j, v],
+                )
             time.sleep(1.5)
             paths.append(out / "drive_joints.png")
             page.screenshot(path=str(paths[-1]))
@@ -75,6 +79,17 @@ def shoot(out: Path) -> list[Path]:
             page.screenshot(path=str(paths[-1]))
             page.keyboard.up("w")
             page.keyboard.up("q")
+        with drive("hexapod") as s:  # physics: walking in MuJoCo, pushed by a click
+            page = _open(browser, s.url)
+            page.click("#hk-mode-physics")
+            _wait(page, "hexapodKin.state.readout.mode === 'physics'")
+            page.keyboard.down("w")
+            time.sleep(1.5)
+            page.mouse.click(700, 300)
+            time.sleep(0.3)
+            paths.append(out / "drive_physics.png")
+            page.screenshot(path=str(paths[-1]))
+            page.keyboard.up("w")
     return paths
 
 

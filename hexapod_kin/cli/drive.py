@@ -34,6 +34,11 @@ def register(sub: Any) -> None:
         action="store_true",
         help="stop 2 s after the last page closes (once one has connected)",
     )
+    p.add_argument(
+        "--calibration",
+        metavar="FILE",
+        help="servo calibration of the downloaded timeline (as `timeline --calibration`)",
+    )
     p.set_defaults(func=_cmd_drive)
 
 
@@ -53,7 +58,9 @@ def _cmd_drive(args: argparse.Namespace) -> int:
         )
     end = serve_end(args)
     robot = robot_of(args)
-    with drive(robot.load(), feet=robot.feet, port=args.port) as session:
+    with drive(
+        robot.load(), feet=robot.feet, port=args.port, calibration=args.calibration
+    ) as session:
         print(f"hexapod-kin drive {session.cockpit.model.name}: {session.url}", flush=True)
         print("serving on 127.0.0.1 only; press Ctrl-C to stop", file=sys.stderr, flush=True)
         if not args.no_open:

@@ -91,6 +91,10 @@ class DriveSession:
         """The recorded session (see :meth:`Cockpit.session`)."""
         return self.cockpit.session()
 
+    def timeline(self, rate: float = 50.0) -> Any:
+        """The session as a calibrated servo timeline (see :meth:`Cockpit.timeline`)."""
+        return self.cockpit.timeline(rate)
+
     def close(self) -> None:
         """Stop the server (idempotent); the pages show "disconnected"."""
         self.server.close()
@@ -119,6 +123,7 @@ def drive(
     port: int = 0,
     families: bool = True,
     title: str | None = None,
+    calibration: Any = None,
 ) -> DriveSession:
     """Serve the cockpit of ``robot`` on 127.0.0.1 and return its running session.
 
@@ -131,6 +136,9 @@ def drive(
             are already derived (``hexapod-kin derive SOURCE``; looked up in the background,
             never derived here: no child process).
         title: The page's title.
+        calibration: The servos of the downloaded timeline (a
+            :class:`~hexapod_kin.export.timeline.Calibration` or a calibration file; None:
+            every joint in rad, unlimited).
 
     Returns:
         The :class:`DriveSession` (open :attr:`DriveSession.url`; ``close()`` when done).
@@ -155,7 +163,7 @@ def drive(
             allowed="0..65535",
         )
     model = robot if isinstance(robot, KinematicModel) else load(robot)
-    cockpit = Cockpit(model, feet=feet)
+    cockpit = Cockpit(model, feet=feet, calibration=calibration)
     scene = Scene(model)
     html = drive_page(cockpit, scene, title=title)
     seq = [0]

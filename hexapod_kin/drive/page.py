@@ -20,6 +20,7 @@ from .._page import fill, page, script_json
 from ..viewer import scene_commands
 from ..viewer.objects import pack
 from ..viewer.scene import Scene
+from .physics import PUSH_WEIGHTS
 from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
@@ -40,7 +41,8 @@ _STYLE = """body { margin: 0; overflow: hidden; font-family: sans-serif; }
 #hk-panel input[type=range] { width: 170px; vertical-align: middle; }
 .hk-tab { display: none; } .hk-tab.on { display: block; }
 #hk-modes button.on { font-weight: bold; background: #cde; }
-#hk-msg { color: #a00; min-height: 1em; } #hk-margin.lost { color: #d00; font-weight: bold; }
+#hk-msg { color: #a00; min-height: 1em; }
+#hk-margin.lost, #hk-zmp.lost { color: #d00; font-weight: bold; }
 .hk-num { width: 64px; }
 #hk-stick { position: relative; width: 90px; height: 90px; border-radius: 45px;
   background: #dde; touch-action: none; margin: 4px 0; }
@@ -63,6 +65,10 @@ command <span id="hk-cmd"></span><br>actual <span id="hk-act"></span><br>
 min margin while walking <span id="hk-minm"></span><br>
 <div id="hk-stick"><div id="hk-knob"></div></div>
 <span class="hk-help">drag: up/down forward, left/right turn</span></div>
+<div class="hk-tab" id="hk-tab-physics">MuJoCo under the closed-loop controller:
+W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot (twice its
+weight for 0.1 s, horizontally along the view)<br>command <span id="hk-pcmd"></span><br>
+actual <span id="hk-pact"></span></div>
 <div id="hk-msg"></div>
 <pre id="hk-status"></pre>
 FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
@@ -70,7 +76,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
 · CoM <span id="hk-com"></span></div>
 <button id="hk-reset">reset</button>
 <button id="hk-json">download session (JSON)</button>
-<button id="hk-csv">download timeline (CSV)</button>
+<button id="hk-csv">download servo timeline (CSV)</button>
 </div>
 <script src="/meshcat.js"></script>
 <script>
@@ -83,8 +89,20 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     for (var i = 0; i < s.length; i++) { out[i] = s.charCodeAt(i); }
     return out;
   }
-  var viewer = new MeshCat.Viewer(el("meshcat-pane"));
+  // meshcat's renderer without multisampling or shadow maps (their fill costs most of a frame
+  // in software GL); the resolution adapts to keep >= 30 frames/s (adapt() below)
+  var renderer = new MeshCat.THREE.WebGLRenderer({ antialias: false, alpha: true });
+  el("meshcat-pane").appendChild(renderer.domElement);
+  var viewer = new MeshCat.Viewer(el("meshcat-pane"), true, renderer);
   DATA.scene.forEach(function (c) { viewer.handle_command_bytearray(bytes(c)); });
+  // lighting: the ambient and the directional light only (each light is per-pixel work for
+  // every Phong surface in software GL; the spot and point lights cost a third of a frame)
+  viewer.scene.traverse(function (o) {
+    if (o.isLight && o.type !== "AmbientLight" && o.type !== "DirectionalLight") {
+      o.visible = false;
+    }
+    if (o.isLight && o.type === "DirectionalLight") { o.intensity *= 1.6; }
+  });
   viewer.scene.traverse(function (o) {
     var g = o.geometry;
     if (o.isMesh && g && g.isBufferGeometry && g.index && !g.getAttribute("normal")) {
@@ -109,19 +127,50 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   target.visible = false;
   var footDot = dot(0x22aa22, DATA.scale * 0.022);  // red when near a singularity
   group.add(footDot);
+  var zmpDot = dot(0x8844cc, DATA.scale * 0.03);  // the ZMP on the ground, red when outside
+  group.add(zmpDot); zmpDot.visible = false;
+  // the chain on the nearest singular family (its frames' origins), drawn when near
+  var ghostGeom = new THREE.BufferGeometry();
+  ghostGeom.setAttribute("position", new THREE.BufferAttribute(new Float32Array(3 * 64), 3));
+  var ghost = new THREE.Line(ghostGeom, new THREE.LineBasicMaterial({ color: 0xdd00dd }));
+  ghost.visible = false; group.add(ghost);
   viewer.scene_tree.find(["meshcat", "drive"]).set_object(group);
   var renders = [], origRender = viewer.render.bind(viewer), continuous = false;
   viewer.render = function () {
     renders.push(performance.now()); if (renders.length > 600) { renders.shift(); }
     origRender();
   };
+  var states = [], fullRatio = window.devicePixelRatio || 1, ratio = fullRatio, adaptAt = 0;
+  var good = 0, fixed = false;
+  function count(times, now) {
+    var n = 0;
+    for (var i = times.length - 1; i >= 0 && times[i] > now - 1000; i--) { n++; }
+    return n;
+  }
+  function adapt(now) {  // each second: the resolution for >= 30 frames/s while moving
+    if (fixed || now - adaptAt < 1000) { return; }
+    adaptAt = now;
+    var drawn = count(renders, now), wanted = continuous ? 60 : Math.min(count(states, now), 60);
+    if (wanted < 30) { return; }  // a still scene: nothing to keep up with
+    if (drawn < 32 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
+      ratio = Math.max(0.25, ratio * Math.max(0.5, Math.min(0.9, Math.sqrt(drawn / 40))));
+    }
+    else if (drawn >= Math.min(wanted, 50) && ratio < fullRatio && ++good >= 3) {
+      ratio = Math.min(fullRatio, ratio / 0.85);  // after 3 s with room to spare
+    }
+    else { if (drawn < Math.min(wanted, 50)) { good = 0; } return; }
+    good = 0;
+    renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
+  }
   (function spin() {
     if (continuous) { viewer.set_dirty(); }
+    adapt(performance.now());
     requestAnimationFrame(spin);
   })();
   el("hk-title").textContent = DATA.title;
   var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
-              replies: [], ready: false };
+              replies: [], ready: false, pushes: [],
+              overlays: { zmp: zmpDot, ghost: ghost, com: com, polygon: poly } };
   window.hexapodKin = api;
   var ws = new WebSocket("ws://" + location.host + "/ws");
   var nextId = 1;
@@ -139,8 +188,15 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     return n * 1000 / span;
   };
   api.setContinuous = function (on) { continuous = !!on; };
+  api.resolution = function () { return ratio; };  // the adapted pixel ratio
+  api.fixResolution = function (r) {  // a fixed pixel ratio (screenshots); null: adapt again
+    fixed = r !== null && r !== undefined;
+    ratio = fixed ? r : fullRatio;
+    renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
+  };
   // modes
-  var modes = DATA.legged ? ["joints", "target", "body", "walk"] : ["joints", "target"];
+  var modes = !DATA.legged ? ["joints", "target"] : DATA.physics ?
+    ["joints", "target", "body", "walk", "physics"] : ["joints", "target", "body", "walk"];
   modes.forEach(function (m) {
     var b = document.createElement("button"); b.textContent = m; b.id = "hk-mode-" + m;
     b.onclick = function () { send({ type: "mode", mode: m }); showMode(m); };
@@ -187,7 +243,26 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   };
   // shift+click: a target on the horizontal plane through the current foot point
   var ray = new THREE.Raycaster();
+  var downAt = null;
+  window.addEventListener("pointerup", function (ev) {  // the view's controls capture it
+    // physics mode: a click (not a drag of the view) pushes the robot along the view
+    if (!downAt || shown !== "physics" ||
+        Math.hypot(ev.clientX - downAt[0], ev.clientY - downAt[1]) > 4) {
+      downAt = null; return;
+    }
+    downAt = null;
+    var d = new THREE.Vector3();
+    viewer.camera.getWorldDirection(d);
+    var root = viewer.scene_tree.find(["meshcat"]).object;
+    root.updateMatrixWorld();
+    var inv = new THREE.Matrix3().setFromMatrix4(root.matrixWorld).invert();
+    d.applyMatrix3(inv);
+    var n = Math.hypot(d.x, d.y);
+    if (n < 1e-9) { return; }
+    api.pushes.push(send({ type: "push", force: [DATA.push * d.x / n, DATA.push * d.y / n] }));
+  });
   viewer.renderer.domElement.addEventListener("pointerdown", function (ev) {
+    downAt = [ev.clientX, ev.clientY];
     if (!ev.shiftKey || !api.state) { return; }
     var rect = ev.target.getBoundingClientRect();
     var ndc = new THREE.Vector2((ev.clientX - rect.left) / rect.width * 2 - 1,
@@ -250,7 +325,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       cmdBefore = api.state ? JSON.stringify(api.state.readout.command) : null;
       baseBefore = api.state ? api.state.readout.base : null;
     }
-    send({ type: "drive", axes: axes() }); showMode("walk");
+    send({ type: "drive", axes: axes() });
+    if (shown !== "physics") { showMode("walk"); }
   }
   // on-screen joystick: up/down = forward/back, left/right = turn (Q/E)
   var stick = el("hk-stick"), knob = el("hk-knob"), sticking = false, lastSent = "";
@@ -292,10 +368,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     return false;
   }
   function onState(st) {
-    api.state = st; api.seq = st.seq;
+    st.readout.time = st.time; api.state = st; api.seq = st.seq;
     var r = st.readout, now = performance.now();
-    for (var k = 0; k < paths.length; k++) {
-      viewer.set_transform(paths[k], st.poses.slice(16 * k, 16 * k + 16));
+    states.push(now); if (states.length > 120) { states.shift(); }
+    var P = st.poses;  // each visual's 3×4 [R | p], column-major: 12 numbers
+    for (var k = 0, o = 0; k < paths.length; k++, o += 12) {
+      viewer.set_transform(paths[k], [P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
+                                      P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10],
+                                      P[o + 11], 1]);
     }
     if (pressAt !== null && JSON.stringify(r.command) !== cmdBefore) {
       api.latencies.push(now - pressAt); cmdBefore = "seen";
@@ -308,7 +388,17 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       return row.map(function (x) { return x.toFixed(12); }).join(" ");
     }).join("\\n");
     var fam = r.family ? ("nearest singular family " + r.family.name + ": " +
-      r.family.distance.toFixed(4) + " rad") : "singular families: " + DATA.families;
+      r.family.distance.toFixed(4) + " rad" + (r.family.near && r.family.ghost ?
+      " (drawn: the chain on it, magenta)" : "")) : "singular families: " + DATA.families;
+    ghost.visible = !!(r.family && r.family.near && r.family.ghost);
+    if (ghost.visible) {
+      var g = r.family.ghost, ga = ghostGeom.attributes.position.array;
+      for (var gi = 0; gi < g.length && gi < 64; gi++) {
+        ga[3 * gi] = g[gi][0]; ga[3 * gi + 1] = g[gi][1]; ga[3 * gi + 2] = g[gi][2];
+      }
+      ghostGeom.setDrawRange(0, Math.min(g.length, 64));
+      ghostGeom.attributes.position.needsUpdate = true; ghostGeom.computeBoundingSphere();
+    }
     el("hk-status").textContent = r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
       r.sigma_min.toExponential(3) + " m · manipulability " + r.manipulability.toExponential(3) +
       "\\n" + fam + "\\nstatus: " + r.status;
@@ -345,10 +435,17 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
       el("hk-margin").className = lost ? "lost" : "";
       el("hk-com").textContent = fmt(s.com, 3) + " m";
-      el("hk-zmp").textContent =
-        s.zmp_margin === null ? "-" : (1000 * s.zmp_margin).toFixed(1) + " mm";
+      var zlost = s.zmp_margin !== null && s.zmp_margin < 0;
+      el("hk-zmp").textContent = s.zmp_margin === null ? "-" :
+        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : "");
+      el("hk-zmp").className = zlost ? "lost" : "";
+      zmpDot.visible = !!s.zmp;
+      if (s.zmp) { zmpDot.position.set(s.zmp[0], s.zmp[1], s.zmp[2]); }
+      zmpDot.material.color.setHex(zlost ? 0xff0000 : 0x8844cc);
       el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-act").textContent = fmt(r.actual, 3);
+      el("hk-pcmd").textContent = el("hk-cmd").textContent;
+      el("hk-pact").textContent = fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])";
       el("hk-minm").textContent =
         r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
       if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
@@ -367,7 +464,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       if (wantDownload === "json") {
         download("session.json", JSON.stringify(m.session), "application/json");
       }
-      else { download("timeline.csv", m.csv, "text/csv"); }
+      else if (m.timeline) { download("timeline.csv", m.timeline, "text/csv"); }
+      else { el("hk-msg").textContent = m.refused; }
       wantDownload = null;
     }
     api.replies.push(m); if (api.replies.length > 50) { api.replies.shift(); }
@@ -407,11 +505,13 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "joints": joints,
         "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
         "legged": cockpit.legged,
+        "physics": cockpit.legged and getattr(cockpit.body, "params", None) is not None,
         "patterns": list(cockpit.patterns),
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,
         "scale": span,
         "sigma_eps": SIGMA_EPS,
+        "push": PUSH_WEIGHTS * float(cockpit.body.mass) * 9.81 if cockpit.legged else 0.0,
         "families": "per leg: not derived (legged robot)"
         if cockpit.legged
         else (fams.reason or "none")
@@ -433,10 +533,10 @@ def _clean(value: Any) -> Any:
 
 
 def state_frame(cockpit: Cockpit, scene: Scene, seq: int) -> dict[str, Any]:
-    """The state message of one tick: the visuals' poses (column-major) and the readout."""
+    """The state message of one tick: the visuals' poses (3×4, column-major) and the readout."""
     with cockpit.lock:
         q, base = cockpit.q.copy(), cockpit.base.copy()
         readout = cockpit.readout()
-    poses = scene.placements(q[None], base[None])[0]
-    flat = np.round(np.transpose(poses, (0, 2, 1)).reshape(-1), 7)
+    poses = scene.placements(q[None], base[None])[0]  # the last rows are 0 0 0 1: not sent
+    flat = np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7)
     return {"type": "state", "seq": seq, "poses": flat.tolist(), "readout": _clean(readout)}

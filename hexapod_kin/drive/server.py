@@ -65,18 +65,30 @@ def handle(cockpit: Cockpit, msg: Any) -> dict[str, Any] | None:
         cockpit.set_drive(msg["axes"])
     elif kind == "pattern":
         cockpit.set_pattern(str(msg["pattern"]))
+    elif kind == "push":
+        cockpit.push(msg["force"])
     elif kind == "reset":
         cockpit.reset()
     elif kind == "session":
-        return {"type": "session", "session": cockpit.session(), "csv": cockpit.timeline_csv()}
+        return session_reply(cockpit)
     elif kind == "ping":
         return {"type": "pong", "t": msg.get("t")}
     else:
         raise KeyError(
             f"type={kind!r}: use one of 'joint', 'q', 'mode', 'foot', 'target', 'body', "
-            "'stance', 'drive', 'pattern', 'reset', 'session', 'ping'"
+            "'stance', 'drive', 'pattern', 'push', 'reset', 'session', 'ping'"
         )
     return None
+
+
+def session_reply(cockpit: Cockpit) -> dict[str, Any]:
+    """The downloads: the session (JSON) and its servo timeline (CSV) or why it is refused."""
+    csv, refused = None, None
+    try:
+        csv = cockpit.timeline().to_csv()
+    except HexapodKinError as exc:  # a limit (LimitError), too short a session
+        refused = f"timeline refused: {exc}"
+    return {"type": "session", "session": cockpit.session(), "timeline": csv, "refused": refused}
 
 
 class DriveServer:
@@ -264,29 +276,23 @@ class DriveServer:
         self._push()  # a command is shown at once, not at the next tick
 
     def _push(self) -> None:
-        """Send the state to every page when it changed since the last one sent."""
+        """Send the state to every page when it changed since the last one sent (one dump)."""
         frame = self._frame()
-        key = json.dumps(
-            [
-                frame.get("poses"),
-                {k: v for k, v in frame.get("readout", {}).items() if k != "time"},
-            ],
-            default=_plain,
-        )
-        if key == self._last or not self._sockets:
+        readout = frame.get("readout", {})
+        stamp = frame.pop("seq", None), readout.pop("time", None)
+        text = json.dumps(frame, default=_plain)  # the state without its clock
+        if text == self._last or not self._sockets:
             return
-        self._last = key
-        self._broadcast(frame)
+        self._last = text
+        clock = json.dumps({"seq": stamp[0], "time": stamp[1]})
+        text = text[:-1] + ", " + clock[1:]  # {..., "seq": n, "time": t}
+        for sock in list(self._sockets):
+            with contextlib.suppress(Exception):
+                sock.write_message(text)
 
     def _send(self, sock: Any, msg: dict[str, Any]) -> None:
         with contextlib.suppress(Exception):
             sock.write_message(json.dumps(msg, default=_plain))
-
-    def _broadcast(self, msg: dict[str, Any]) -> None:
-        text = json.dumps(msg, default=_plain)
-        for sock in list(self._sockets):
-            with contextlib.suppress(Exception):
-                sock.write_message(text)
 
     def close(self) -> None:
         """Stop serving and join the thread (idempotent)."""

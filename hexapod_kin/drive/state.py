@@ -35,9 +35,13 @@ from .walking import Walker
 __all__ = ["MODES", "Cockpit"]
 
 #: The page's modes.
-MODES = ("joints", "target", "body", "walk")
+MODES = ("joints", "target", "body", "walk", "physics")
 #: Body-pose slider ranges: translation as a fraction of the leg span, angles [rad].
 BODY_SHIFT, BODY_ANGLE = 0.3, 0.4
+#: Time over which the joints blend into a new cycle (from standstill, a new pattern) [s].
+BLEND = 0.3
+#: Distance to a singular family [rad or m] below which the page draws the chain on it.
+FAMILY_NEAR = 0.25
 #: Recorded samples kept (a session of about 30 min at 50 Hz).
 MAX_RECORD = 90_000
 
@@ -57,6 +61,22 @@ def _finite(name: str, value: Any, size: int) -> np.ndarray:
     return arr
 
 
+def singular_configuration(family: Any, q: np.ndarray) -> np.ndarray | None:
+    """A configuration of ``family`` near ``q`` (see :meth:`Cockpit._family`), or None."""
+    from ..singularity._zeroset import project
+
+    out = np.array(q, dtype=float)
+    if family.joint is not None and family.value is not None:
+        out[family.joint] -= float(family.residual(out))
+        return out
+    cols = list(family.variables)
+    point = project(family._jet, out[cols][None])[0]
+    if point is None:
+        return None
+    out[cols] = point
+    return out
+
+
 class Cockpit:
     """A robot driven live: state, commands and readouts (thread-safe).
 
@@ -66,15 +86,26 @@ class Cockpit:
             :func:`~hexapod_kin.gait.robot.as_whole_body`).
         families: The chain's singular families (:class:`~hexapod_kin.singularity.Families`)
             or ``None``; may be given later (:attr:`families`).
+        calibration: The servos of the downloaded timeline (a
+            :class:`~hexapod_kin.export.timeline.Calibration` or a calibration file; None:
+            every joint in rad, unlimited).
 
     Raises:
-        ParameterError, ConfigurationError: Bad ``feet``.
+        ParameterError, ConfigurationError: Bad ``feet``; a bad calibration file.
+        SourceError: The calibration file cannot be read.
 
     """
 
-    def __init__(self, model: Any, *, feet: Any = None, families: Any = None) -> None:
+    def __init__(
+        self, model: Any, *, feet: Any = None, families: Any = None, calibration: Any = None
+    ) -> None:
         self.model = model
         self.families = families
+        if calibration is not None and not hasattr(calibration, "servo"):
+            from ..export.servos import read_calibration
+
+            calibration = read_calibration(calibration)
+        self.calibration = calibration
         self.lock = threading.RLock()
         self.body: Any = None
         self.not_legged = ""
@@ -94,6 +125,7 @@ class Cockpit:
         self.min_margin = math.inf
         self.margins: list[float] = []
         self._actual = np.zeros(3)
+        self._blend: tuple[Any, Any, float] = (None, None, 0.0)
         if self.body is None:
             self.limbs = [Limb(model)]
             self.patterns: tuple[str, ...] = ()
@@ -117,6 +149,7 @@ class Cockpit:
             )
             self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
             self.walker = Walker(wb)
+        self.physics: Any = None
         self.limb = 0
         self.speed = (0.05, 0.05, 0.3) if self.body is not None else (0.0, 0.0, 0.0)
         self.reset()
@@ -179,10 +212,15 @@ class Cockpit:
 
     # ------------------------------------------------------------------ commands
     def set_mode(self, mode: str) -> None:
-        """Switch the page's mode (one of :data:`MODES`; body and walk need legs).
+        """Switch the page's mode (one of :data:`MODES`; body, walk and physics need legs).
+
+        ``physics`` starts a new simulation (:class:`~.physics.Physics`) from the neutral
+        pose at the origin; leaving it resets the robot (standing at the origin).
 
         Raises:
             ParameterError: Unknown mode, or a legged mode for a robot without legs.
+            HexapodKinError: The controller cannot drive the robot (physics mode).
+            OptionalDependencyError: MuJoCo or proxsuite is missing (physics mode).
 
         """
         allowed = MODES if self.legged else MODES[:2]
@@ -195,7 +233,15 @@ class Cockpit:
                 allowed=allowed,
             )
         with self.lock:
-            if self.legged and mode != "walk":
+            if self.mode == "physics" and mode != "physics":
+                self.reset()
+            if mode == "physics":
+                from .physics import Physics
+
+                self.physics = Physics(self.body, self.pattern)
+                self.walker.cycle, self.drive = None, (0.0, 0.0, 0.0)
+                self.status, self.message = "physics", ""
+            if self.legged and mode not in ("walk", "physics"):
                 self.drive = (0.0, 0.0, 0.0)
             if self.legged and mode == "body" and self.mode != "body":
                 self._hold_feet()
@@ -411,11 +457,13 @@ class Cockpit:
             )
         cmd = tuple(float(x * s) for x, s in zip(a, self.speed))
         with self.lock:
-            if self.mode != "walk":
+            if self.mode not in ("walk", "physics"):
                 self.mode = "walk"
                 self.target = None
             self.drive = cmd  # type: ignore[assignment]
             self._event("drive", command=list(cmd))
+            if self.mode == "physics":
+                return
             if any(cmd) and self.walker.cycle is None:
                 self._start_cycle()
 
@@ -437,6 +485,24 @@ class Cockpit:
             self.pattern = name
             self._event("pattern", pattern=name)
 
+    def push(self, force: Any) -> None:
+        """Push the simulated robot's base with a horizontal force (fx, fy) [N] (physics mode).
+
+        Raises:
+            ParameterError: Not in physics mode, or not two finite numbers.
+
+        """
+        with self.lock:
+            if self.mode != "physics":
+                raise ParameterError(
+                    f"push: mode={self.mode!r}; a push needs the physics mode",
+                    parameter="mode",
+                    value=self.mode,
+                    allowed="physics",
+                )
+            self.physics.push(force)
+            self._event("push", force=[float(f) for f in np.reshape(force, -1)])
+
     def _start_cycle(self) -> None:
         from ..exceptions import HexapodKinError
 
@@ -451,7 +517,12 @@ class Cockpit:
 
     def _apply_walk_sample(self) -> None:
         q, base, k = self.walker.sample()
-        self._set_limb_q(np.asarray(q, dtype=float))
+        q = np.asarray(q, dtype=float)
+        cycle = self.walker.cycle
+        if cycle is not self._blend[0]:  # a new cycle: blend the joints from where they are
+            self._blend = (cycle, self.qb - q, self.walker.time)
+        s = min(max((self.walker.time - self._blend[2]) / BLEND, 0.0), 1.0)
+        self._set_limb_q(q + (1.0 - s * s * (3.0 - 2.0 * s)) * self._blend[1])
         self.base = base
         run = self.walker.cycle.run  # type: ignore[union-attr]
         self.margins.append(float(run.margin[k]))
@@ -472,6 +543,11 @@ class Cockpit:
                 if res.status != "moving":
                     self.status, self.message = res.status, res.reason
                     self._event("target stop", status=res.status, reason=res.reason)
+            elif self.mode == "physics":
+                self.physics.set_command(self.drive, self.pattern)
+                self.physics.advance(dt)
+                q, self.base, _ = self.physics.state()
+                self._set_limb_q(q)
             elif self.legged and self.mode == "walk" and self.walker.cycle is not None:
                 why = self.walker.advance(dt, self.pattern, self.drive)
                 if self.walker.cycle is not None:
@@ -496,29 +572,37 @@ class Cockpit:
 
     # ------------------------------------------------------------------ readouts
     def support(self) -> dict[str, Any]:
-        """Support polygon (stance feet, world [m]), CoM, static margin [m] (legged robots).
+        """Support polygon (stance feet, world [m]), CoM, ZMP, static and ZMP margins [m] (legs).
 
-        While walking, also the planner's ZMP margin [m] of the sample (``zmp_margin``; None
-        when standing: a still robot's ZMP is its CoM's projection).
+        While walking, the ZMP is the planner's of the sample (:func:`.walking.run_zmp`, placed
+        in the world) and ``zmp_margin`` its margin in the support polygon
+        (:attr:`~hexapod_kin.gait.walk.GaitRun.zmp_margin`); standing still, the ZMP is the
+        CoM's projection on the ground and its margin the static one.
         """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
         stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
-        zmp = None
-        if self.mode == "walk" and self.walker.cycle is not None:
-            run = self.walker.cycle.run
+        com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
+        zmp = zmp_margin = None
+        cycle = self.walker.cycle if self.mode == "walk" else None
+        if cycle is not None:
+            run = cycle.run
             k = self.walker.sample()[2]
             stance = np.asarray(run.support[k])
+            zmp = cycle.anchor[:3, :3] @ cycle.zmp[k] + cycle.anchor[:3, 3]
             if len(run.zmp_margin) > k:
-                zmp = float(run.zmp_margin[k])
-        com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
+                zmp_margin = float(run.zmp_margin[k])
         margin = float(support_margin(feet, stance, com))
+        if zmp is None:
+            ground = float(np.mean(feet[stance, 2])) - wb.foot_radius if stance.any() else 0.0
+            zmp, zmp_margin = np.array([com[0], com[1], ground]), margin
         return {
             "feet": feet.tolist(),
             "stance": stance.tolist(),
             "com": com.tolist(),
             "margin": margin,
-            "zmp_margin": zmp,
+            "zmp": np.asarray(zmp).tolist(),
+            "zmp_margin": zmp_margin,
         }
 
     def readout(self) -> dict[str, Any]:
@@ -552,6 +636,14 @@ class Cockpit:
             return out
 
     def _family(self) -> dict[str, Any] | None:
+        """The nearest singular family: name, distance, and the chain on it (the ghost).
+
+        ``q`` is a configuration of the family near the current one: the closest one for a
+        family ``q_k = v`` (``q_k`` moved by the distance), a Gauss–Newton projection onto the
+        family for an implicit one (None when it does not converge); ``ghost`` the origins of
+        the chain's frames (``model.frame_placements``, base frame [m]) at ``q``; ``near``
+        whether the distance is below :data:`FAMILY_NEAR` (the page draws the ghost then).
+        """
         fams = self.families
         if self.body is not None or fams is None or not fams.families:
             return None
@@ -559,7 +651,17 @@ class Cockpit:
         if idx[0] < 0:
             return None
         fam = fams.families[int(idx[0])]
-        return {"name": str(getattr(fam, "name", idx[0])), "distance": float(dist[0])}
+        q = singular_configuration(fam, self.q)
+        ghost = None
+        if q is not None:
+            ghost = [t[:3, 3].tolist() for t in self.model.frame_placements(q)]
+        return {
+            "name": str(getattr(fam, "name", idx[0])),
+            "distance": float(dist[0]),
+            "near": bool(dist[0] < FAMILY_NEAR),
+            "q": None if q is None else q.tolist(),
+            "ghost": ghost,
+        }
 
     def session(self) -> dict[str, Any]:
         """The recorded session: times [s], q (model order), body poses, events (JSON-ready)."""
@@ -574,16 +676,41 @@ class Cockpit:
                 "events": list(self.events),
             }
 
-    def timeline_csv(self) -> str:
-        """The session's joints as a plan CSV (``t,<joint>...``; ``hexapod-kin timeline``)."""
+    def timeline(self, rate: float = 50.0) -> Any:
+        """The session's joints as a calibrated servo timeline (``hexapod-kin timeline``'s checks).
+
+        The recorded samples (commands at one time keep the last) are resampled at ``rate``
+        [Hz] and mapped through :attr:`calibration` (None: every joint in rad, unlimited) by
+        :func:`hexapod_kin.export.timeline.timeline`, checked against the joints' limits and
+        speed limits and the servos' limits.
+
+        Returns:
+            The :class:`~hexapod_kin.export.timeline.Timeline` (``to_csv()``, ``to_dict()``).
+
+        Raises:
+            LimitError: A sample beyond a servo's or a joint's limits or its speed limit (e.g.
+                a slider moved faster than the servo turns), naming the joint and the time.
+            ConfigurationError: Fewer than two recorded times.
+
+        """
+        from ..export.timeline import timeline
+
         with self.lock:
             rec = list(self.record)
-        lines = ["t," + ",".join(self.model.joint_names)]
-        last = -1.0
-        for t, q, _ in rec:
-            if t <= last:  # a plan's times increase strictly: commands at one time keep the last
-                lines[-1] = f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q)
+        t: list[float] = []
+        q: list[list[float]] = []
+        for ti, qi, _ in rec:
+            if t and ti <= t[-1]:  # a plan's times increase strictly: keep the last command
+                q[-1] = qi
                 continue
-            lines.append(f"{t:.6f}," + ",".join(f"{v:.9g}" for v in q))
-            last = t
-        return "\n".join(lines) + "\n"
+            t.append(ti)
+            q.append(qi)
+        m = self.model
+        return timeline(
+            (np.asarray(t), np.asarray(q)),
+            rate=rate,
+            calibration=self.calibration,
+            joint_names=list(m.joint_names),
+            velocity_limit=np.asarray(m.velocity_limit, dtype=float),
+            position_limit=(np.asarray(m.lower, dtype=float), np.asarray(m.upper, dtype=float)),
+        )

@@ -18,8 +18,9 @@ import numpy as np
 from ..exceptions import HexapodKinError
 from ..gait.robot import body_pose
 from ..gait.walk import walk
+from ..gait.zmp import zmp_points
 
-__all__ = ["Cycle", "Walker"]
+__all__ = ["Cycle", "Walker", "run_zmp"]
 
 #: Sample rate of the planned cycles [Hz].
 RATE = 100.0
@@ -34,6 +35,7 @@ class Cycle:
         anchor: ``worldMrun`` (4, 4): the run's frame placed in the world.
         command: The body twist (vx [m/s], vy [m/s], wz [rad/s]).
         pattern: The phase pattern's name.
+        zmp: (N, 3) the run's ZMP per sample, in the run's frame [m] (:func:`run_zmp`).
 
     """
 
@@ -41,6 +43,26 @@ class Cycle:
     anchor: np.ndarray
     command: tuple[float, float, float]
     pattern: str
+    zmp: np.ndarray
+
+
+def run_zmp(body: Any, run: Any) -> np.ndarray:
+    """(N, 3) ZMP of each sample of ``run`` [m] (flat ground: the stance feet's contact height).
+
+    :func:`hexapod_kin.gait.zmp.zmp_points` of the run's joint poses, on the plane of the
+    supporting contacts (the foot points ``foot_radius`` below the foot frames), as the planner
+    checks it for :attr:`~hexapod_kin.gait.walk.GaitRun.zmp_margin`. Without a mass or with
+    fewer than 4 samples: the CoM's ground projection.
+    """
+    q, base, t = np.asarray(run.q), np.asarray(run.base_poses), np.asarray(run.t)
+    T = body.joint_poses(q, base)
+    contacts = body.feet_of(T)
+    sup = np.asarray(run.support)[..., None]
+    h = ((contacts[..., 2:3] - body.foot_radius) * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1)
+    if len(t) < 4 or not body.mass > 0:
+        com = np.asarray(body.com(q, base))
+        return np.column_stack([com[:, :2], h[:, 0]])
+    return np.asarray(zmp_points(body, T, base, t, np.ascontiguousarray(h[:, 0])))
 
 
 class Walker:
@@ -55,7 +77,7 @@ class Walker:
     def __init__(self, body: Any, period: float = 1.0) -> None:
         self.body = body
         self.period = float(period)
-        self._runs: dict[tuple[str, tuple[float, float, float]], Any] = {}
+        self._runs: dict[tuple[str, tuple[float, float, float]], tuple[Any, np.ndarray]] = {}
         self.cycle: Cycle | None = None
         self.time = 0.0  # in the current cycle [s]
 
@@ -66,12 +88,15 @@ class Walker:
             HexapodKinError: The planner refuses it (its reason: reach, joint limit, margin).
 
         """
+        return self._plan(pattern, command)[0]
+
+    def _plan(self, pattern: str, command: tuple[float, float, float]) -> tuple[Any, np.ndarray]:
         vx, vy, wz = (round(float(c), 6) for c in command)
         key = (pattern, (vx, vy, wz))
         if key not in self._runs:
             if len(self._runs) > 64:
                 self._runs.pop(next(iter(self._runs)))
-            self._runs[key] = walk(
+            run = walk(
                 self.body,
                 pattern=pattern,
                 velocity=key[1],
@@ -79,6 +104,7 @@ class Walker:
                 duration=self.period,
                 rate=RATE,
             )
+            self._runs[key] = (run, run_zmp(self.body, run))
         return self._runs[key]
 
     def start(self, pattern: str, command: tuple[float, float, float], base: np.ndarray) -> Cycle:
@@ -88,12 +114,12 @@ class Walker:
             HexapodKinError: The planner refuses the cycle.
 
         """
-        run = self.plan(pattern, command)
+        run, zmp = self._plan(pattern, command)
         start = np.asarray(run.base_poses[0])
         yaw = float(np.arctan2(base[1, 0], base[0, 0]))
         place = body_pose((0.0, 0.0, 0.0), (0.0, 0.0, yaw))  # the run turned to the heading
         place[:2, 3] = base[:2, 3] - place[:2, :2] @ start[:2, 3]
-        self.cycle = Cycle(run, place, tuple(command), pattern)  # type: ignore[arg-type]
+        self.cycle = Cycle(run, place, tuple(command), pattern, zmp)  # type: ignore[arg-type]
         self.time = 0.0
         return self.cycle
 

@@ -1,0 +1,180 @@
+"""Physics mode: the robot in MuJoCo under the closed-loop controller, stepped live.
+
+The scene is :func:`hexapod_kin.simulate.scene.scene_mjcf` (flat ground, foot spheres,
+position servos), the controller :class:`hexapod_kin.control.Controller` of the servo kind
+(joint targets), run through its public API as :func:`hexapod_kin.control.run` runs it: the
+robot starts in its neutral pose with the feet on the ground, each control tick senses
+(:class:`~hexapod_kin.control.Measurement`: attitude, joints, foot contacts, base position and
+velocity), ticks the controller and steps MuJoCo for one control period. A push is a
+horizontal force on the base for :data:`PUSH_TIME` seconds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import ParameterError
+
+__all__ = ["PUSH_TIME", "PUSH_WEIGHTS", "Physics"]
+
+#: Duration of a push [s].
+PUSH_TIME = 0.1
+#: The page's push, in the robot's weights (its feet's friction holds about one).
+PUSH_WEIGHTS = 2.0
+#: MuJoCo's time step [s].
+TIMESTEP = 1e-3
+
+
+def _quat_matrix(w: float, x: float, y: float, z: float) -> np.ndarray:
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+class Physics:
+    """One legged robot in MuJoCo under the servo controller (see the module doc).
+
+    Args:
+        body: The :class:`~hexapod_kin.gait.robot.WholeBody` (with masses).
+        pattern: The controller's starting gait pattern.
+
+    Raises:
+        OptionalDependencyError: MuJoCo or proxsuite is missing.
+        ParameterError: A robot other than the built-in hexapod (servo kind only).
+        ConfigurationError: A robot the controller cannot drive.
+
+    """
+
+    def __init__(self, body: Any, pattern: str) -> None:
+        if getattr(body, "params", None) is None:  # as control.run chooses the kind
+            raise ParameterError(
+                f"mode='physics' is not allowed for {body.source}: the cockpit runs the "
+                "controller's servo kind, which control.run uses for the built-in hexapod "
+                "only (other robots need its torque kind, not wired in the cockpit yet)",
+                parameter="mode",
+                value="physics",
+                allowed="the built-in hexapod",
+            )
+        import mujoco as mj
+
+        from ..control import Command, Controller
+        from ..simulate.scene import scene_mjcf
+
+        self.mj, self.body = mj, body
+        self.Command = Command
+        self.ctl = Controller(body, kind="servo", pattern=pattern)
+        scene = scene_mjcf(body, timestep=TIMESTEP)
+        self.model = mj.MjModel.from_xml_string(scene.xml)
+        self.data = mj.MjData(self.model)
+        m, name2id, obj = self.model, mj.mj_name2id, mj.mjtObj
+        joints = [name2id(m, obj.mjOBJ_JOINT, n) for n in scene.joint_names]
+        self.jq = np.array([int(m.jnt_qposadr[j]) for j in joints])
+        self.jv = np.array([int(m.jnt_dofadr[j]) for j in joints])
+        self.act = np.array([name2id(m, obj.mjOBJ_ACTUATOR, a) for a in scene.actuators])
+        feet = np.array([name2id(m, obj.mjOBJ_GEOM, g) for g in scene.foot_geoms])
+        self.leg_of = np.full(m.ngeom, -1)
+        self.leg_of[feet] = np.arange(len(feet))
+        self.ground = np.zeros(m.ngeom, dtype=bool)
+        self.ground[name2id(m, obj.mjOBJ_GEOM, "ground")] = True
+        self.base_body = int(m.jnt_bodyid[0])
+        self.sub = max(1, int(round(1.0 / (self.ctl.rate * TIMESTEP))))
+        q0 = np.asarray(body.neutral_q(), dtype=float)
+        feet0 = body.feet(q0[None], np.eye(4)[None])[0]
+        d = self.data
+        d.qpos[2] = -float(feet0[:, 2].min()) + scene.foot_radius + 1e-4
+        d.qpos[3] = 1.0
+        d.qpos[self.jq] = q0
+        d.ctrl[self.act] = q0
+        mj.mj_forward(self.model, d)
+        self.ctl.set_command(Command(mode="stand"))
+        self.time = 0.0
+        self._due = 0.0
+        self._push = np.zeros(3)
+        #: The end of the last push, in simulated time [s].
+        self.push_until = -1.0
+
+    @property
+    def mass(self) -> float:
+        """The robot's mass in the simulation [kg]."""
+        return float(self.model.body_subtreemass[self.base_body])
+
+    @property
+    def push_force(self) -> float:
+        """The page's push [N]: :data:`PUSH_WEIGHTS` × the robot's weight."""
+        return PUSH_WEIGHTS * self.mass * float(-self.model.opt.gravity[2])
+
+    def set_command(self, twist: tuple[float, float, float], pattern: str) -> None:
+        """Walk at ``twist`` (vx, vy [m/s], wz [rad/s]; all zero: stand) with ``pattern``."""
+        mode = "walk" if any(twist) else "stand"
+        vx, vy, wz = (float(v) for v in twist)
+        cmd = self.Command(vx=vx, vy=vy, wz=wz, pattern=pattern, mode=mode)
+        if cmd != self.ctl.command:
+            self.ctl.set_command(cmd)
+
+    def push(self, force: Any) -> None:
+        """Push the base with the horizontal ``force`` (fx, fy) [N] for :data:`PUSH_TIME`.
+
+        Raises:
+            ParameterError: Not two finite numbers.
+
+        """
+        f = np.asarray(force, dtype=float).reshape(-1)
+        if f.shape != (2,) or not np.all(np.isfinite(f)):
+            raise ParameterError(
+                f"force={force!r} is not allowed; give (fx, fy) [N], two finite numbers",
+                parameter="force",
+                value=repr(force)[:80],
+            )
+        self._push = np.array([f[0], f[1], 0.0])
+        self.push_until = self.time + PUSH_TIME
+
+    def _measure(self) -> Any:
+        from ..control import Measurement
+
+        d = self.data
+        contacts = np.zeros(len(self.body.leg_names), dtype=bool)
+        for c in d.contact[: d.ncon]:
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if self.leg_of[g1] >= 0 and self.ground[g2]:
+                contacts[self.leg_of[g1]] = True
+            elif self.leg_of[g2] >= 0 and self.ground[g1]:
+                contacts[self.leg_of[g2]] = True
+        return Measurement(
+            t=self.time,
+            quat=np.array(d.qpos[3:7]),
+            gyro=np.array(d.qvel[3:6]),
+            q=np.array(d.qpos[self.jq]),
+            qd=np.array(d.qvel[self.jv]),
+            contacts=contacts,
+            position=np.array(d.qpos[:3]),
+            velocity=np.array(d.qvel[:3]),
+        )
+
+    def advance(self, dt: float) -> None:
+        """Run the closed loop for ``dt`` [s] (whole control periods; the rest carried over)."""
+        self._due += dt
+        period = 1.0 / self.ctl.rate
+        while self._due >= period - 1e-12:
+            self._due -= period
+            u = self.ctl.tick(self._measure())
+            self.data.ctrl[self.act] = u
+            self.data.xfrc_applied[self.base_body] = 0.0
+            if self.time < self.push_until:
+                self.data.xfrc_applied[self.base_body, :3] = self._push
+            for _ in range(self.sub):
+                self.mj.mj_step(self.model, self.data)
+            self.time += period
+
+    def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q (nq,) the legs' joints [rad], worldMbody (4, 4), base velocity (3,) [m/s])."""
+        d = self.data
+        base = np.eye(4)
+        base[:3, :3] = _quat_matrix(*(float(v) for v in d.qpos[3:7]))
+        base[:3, 3] = d.qpos[:3]
+        return np.array(d.qpos[self.jq]), base, np.array(d.qvel[:3])
