@@ -104,7 +104,7 @@ def sway_poses(
         if it == 2 or not any(m.any() for m in near) or len(t) < 5:
             break
         q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
-        zmp = zmp_points(wb, wb.joint_poses(q, out), out, t, np.full(len(t), ground))
+        zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
         zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
         err = np.zeros_like(targets)
         for k, m in enumerate(near):
