@@ -592,48 +592,54 @@ def test_legs_against_the_terrain_by_hand():
     assert leg_terrain_clearance(ground, pts2, rho, 0.0, own, t, ("a",)).min() > 0
 
 
-def test_zmp_margin_against_pinocchio_centroidal_dynamics():
-    """The run's ZMP margin (CoM by FK, c̈ by second differences, the legs' momentum about the
-    CoM neglected) against the ZMP of Pinocchio's centroidal dynamics (ḣ_G with the angular
-    part, from q, v, a of the whole robot by finite differences on the configuration
-    manifold): the margins agree within 1 mm (median 20 µm) on a Solo12 crawl. The ZMP-aware
-    sway keeps the ZMP within 2.5 mm of the support (4 % of the samples outside, during the
-    swings' momentum peaks; MuJoCo's roll 0.7°, with the CoM-only sway 1.3°)."""
-    import pinocchio as pin
-
+def test_zmp_equals_pinocchio_centroidal_dynamics_and_rnea():
+    """The run's ZMP against its own evaluation here, to 1e-9: v and a by the manifold
+    stencils written out per sample (``pin.difference`` both ways inside, the one-sided
+    second-order ones at the ends), ``ḣ_G`` from Pinocchio's ``dccrba`` path
+    (``computeCentroidalMomentumTimeVariation``) and again from the RNEA without gravity (the
+    free-flyer's wrench is the robot's rate of momentum; ``L̇_G = L̇_O − c × ṗ``), put in the
+    closed form ``c − (c_z − h) c̈ / (g + c̈_z) − L̇ / (m (g + c̈_z))``. The ZMP-aware sway keeps
+    a Solo12 crawl's ZMP within 3 mm of the support."""
     from hexapod_kin.gait import as_whole_body, walk
     from hexapod_kin.gait.stability import support_margin
+    from hexapod_kin.gait.zmp import zmp_points
 
     wb = as_whole_body("erd:solo12")
     assert walk(wb, pattern="crawl", duration=3.0).min_zmp_margin > -3e-3
-    run = walk(wb, pattern="crawl", duration=1.0, rate=400.0)  # finite differences: O(dt²)
+    run = walk(wb, pattern="crawl", duration=1.0, rate=400.0)
     m = wb.model
     d = m.createData()
+    free = m.copy()
+    free.gravity = pin.Motion.Zero()
+    dfree = free.createData()
     Q = wb.pinocchio_q(run.q, run.base_poses)
-    dt = float(run.t[1] - run.t[0])
-    g = 9.81
+    n, dt, g = len(Q), float(run.t[1] - run.t[0]), 9.81
     mass = float(pin.computeTotalMass(m))
-    idx = np.arange(2, len(Q) - 2)
-    zmp = np.empty((len(idx), 3))
-    for k, i in enumerate(idx):
-        v = pin.difference(m, Q[i - 1], Q[i + 1]) / (2 * dt)
-        a = (pin.difference(m, Q[i], Q[i + 1]) - pin.difference(m, Q[i - 1], Q[i])) / dt**2
-        pin.computeCentroidalMomentumTimeVariation(m, d, Q[i], v, a)
-        c = d.com[0]
-        lin, ang = d.dhg.linear / mass, d.dhg.angular / mass
-        contacts = run.feet[i] - wb.foot_radius * run.normals[i]
-        h = contacts[run.support[i], 2].mean()
-        den = g + lin[2]
-        zmp[k] = [
-            c[0] - (c[2] - h) * lin[0] / den - ang[1] / den,
-            c[1] - (c[2] - h) * lin[1] / den + ang[0] / den,
-            c[2],
-        ]
-    contacts = run.feet[idx] - wb.foot_radius * run.normals[idx]
-    full = support_margin(contacts, run.support[idx], zmp)
-    gap = np.abs(full - run.zmp_margin[idx])  # two finite-difference stencils: 0.54 mm worst
-    assert gap.max() <= 1e-3 and np.median(gap) <= 5e-5
-    assert full.min() > -3e-3
+    contacts = run.feet - wb.foot_radius * run.normals
+    h = np.array([contacts[i, run.support[i], 2].mean() for i in range(n)])
+    got = zmp_points(wb, run.q, run.base_poses, run.t, h)
+    ref = np.empty((n, 2, 3))
+    for i in range(n):
+        if 0 < i < n - 1:
+            fwd, back = pin.difference(m, Q[i], Q[i + 1]), pin.difference(m, Q[i], Q[i - 1])
+            v, a = (fwd - back) / (2 * dt), (fwd + back) / dt**2
+        else:
+            s = 1 if i == 0 else -1
+            e1, e2, e3 = (pin.difference(m, Q[i], Q[i + s * k]) for k in (1, 2, 3))
+            v, a = s * (4 * e1 - e2) / (2 * dt), (-5 * e1 + 4 * e2 - e3) / dt**2
+        dhg = pin.computeCentroidalMomentumTimeVariation(m, d, Q[i], v, a)
+        c = pin.centerOfMass(m, d, Q[i])
+        wrench = d.oMi[1].act(pin.Force(pin.rnea(free, dfree, Q[i], v, a)[:6]))
+        by_rnea = (wrench.linear, wrench.angular - np.cross(c, wrench.linear))
+        for k, (lin, ang) in enumerate([(dhg.linear, dhg.angular), by_rnea]):
+            den = mass * (g + lin[2] / mass)
+            lever = (c[2] - h[i]) / den
+            ref[i, k] = [c[0] - lever * lin[0] - ang[1] / den,
+                         c[1] - lever * lin[1] + ang[0] / den, h[i]]  # fmt: skip
+    assert np.abs(got - ref[:, 0]).max() <= 1e-9
+    assert np.abs(got - ref[:, 1]).max() <= 1e-9
+    zmp_margin = support_margin(contacts, run.support, got)
+    assert np.abs(zmp_margin - run.zmp_margin).max() <= 1e-12 and zmp_margin.min() > -3e-3
 
 
 @pytest.mark.parametrize("pattern", ["tripod", "wave", "ripple"])

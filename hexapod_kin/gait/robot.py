@@ -127,7 +127,6 @@ class WholeBody:
     _tree: Tree = field(repr=False)
     _masses: np.ndarray = field(repr=False)
     _levers: np.ndarray = field(repr=False)
-    _rot_inertia: np.ndarray = field(repr=False)
     _foot: np.ndarray = field(repr=False)  # (L, 4, 4) foot frame in its joint's frame
     _foot_joint: np.ndarray = field(repr=False)
     _leg_joints: np.ndarray = field(repr=False)  # (L, M) padded at the front
@@ -195,16 +194,6 @@ class WholeBody:
     def com(self, q: Any, base: Any) -> np.ndarray:
         """Centre of mass (N, 3) in the world in [m] (body and every link's inertial)."""
         return self.com_of(self.joint_poses(q, base), base)
-
-    def link_inertias(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The body's then every joint's link inertia, in their joint frames.
-
-        Returns:
-            Masses (1+nq,) [kg], CoM levers (1+nq, 3) [m], rotational inertias about the CoM
-            (1+nq, 3, 3) [kg·m²].
-
-        """
-        return self._masses, self._levers, self._rot_inertia
 
     def require_mass(self) -> None:
         """Raise a :class:`ConfigurationError` when the robot has no mass (CoM undefined)."""
@@ -609,7 +598,6 @@ def _build_model(
         _tree=tree,
         _masses=np.array([x.mass for x in inertias]),
         _levers=np.array([x.lever for x in inertias]),
-        _rot_inertia=np.array([x.inertia for x in inertias]),
         _foot=foot,
         _foot_joint=foot_joint,
         _leg_joints=padded,

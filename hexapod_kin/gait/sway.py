@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from .paths import se2_pose
 from .stability import periodic_spline
@@ -29,18 +30,19 @@ __all__ = ["sway_poses"]
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
-    """(K, K) map from knot values to the ZMP offsets at the knots: ``s − (h/g) s̈``."""
+    """(K, K) map from knot values to the ZMP offsets at the knots: ``s − (h/g) s̈``.
+
+    ``s̈`` at the knots: the periodic cubic spline's (:func:`.stability.periodic_spline`, the
+    same spline as :class:`scipy.interpolate.CubicSpline` with ``bc_type="periodic"``) of
+    each unit knot vector. ``knots`` sorted, in [0, 1) cycles.
+    """
     k = len(knots)
-    delta = 1e-4 * T
-    times = np.concatenate([knots * T - delta, knots * T, knots * T + delta])
-    out = np.empty((k, k))
-    for j in range(k):
-        unit = np.zeros((k, 1))
-        unit[j, 0] = 1.0
-        s = periodic_spline(knots * T, unit, T, times)[:, 0].reshape(3, k)
-        acc = (s[0] - 2.0 * s[1] + s[2]) / delta**2
-        out[:, j] = s[1] - height / GRAVITY * acc
-    return out
+    if k == 1:  # a constant sway
+        return np.eye(1)
+    unit = np.eye(k)
+    spline = CubicSpline(np.append(knots, knots[0] + 1.0) * T, np.vstack([unit, unit[:1]]),
+                         bc_type="periodic")  # fmt: skip
+    return np.asarray(unit - height / GRAVITY * spline(knots * T, 2))
 
 
 def sway_poses(
@@ -104,7 +106,7 @@ def sway_poses(
         if it == 2 or not any(m.any() for m in near) or len(t) < 5:
             break
         q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
-        zmp = zmp_points(wb, wb.joint_poses(q, out), out, t, np.full(len(t), ground))
+        zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
         zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
         err = np.zeros_like(targets)
         for k, m in enumerate(near):

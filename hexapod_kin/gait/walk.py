@@ -187,7 +187,7 @@ def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def _zmp_margin(
     wb: WholeBody,
-    T: np.ndarray,
+    q: np.ndarray,
     base: np.ndarray,
     contacts: np.ndarray,
     support: np.ndarray,
@@ -198,7 +198,7 @@ def _zmp_margin(
         return np.zeros(0)
     sup = support[..., None]
     h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
-    zmp = np.ascontiguousarray(zmp_points(wb, T, base, t, h))
+    zmp = np.ascontiguousarray(zmp_points(wb, q, base, t, h))
     return np.asarray(support_margin(contacts, support, zmp))
 
 
@@ -696,7 +696,7 @@ def _checked(
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
     slip = np.where(support, np.linalg.norm(actual - ref - sol.rolled, axis=-1), 0.0)
     margin = support_margin(actual - rad * n_nxt, support, com)
-    zmp_margin = _zmp_margin(wb, T_all, base, actual - rad * n_nxt, support, t)
+    zmp_margin = _zmp_margin(wb, q, base, actual - rad * n_nxt, support, t)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius

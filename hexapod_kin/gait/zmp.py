@@ -1,16 +1,15 @@
-"""The zero-moment point of a planned walk, from the whole robot's centroidal dynamics.
+"""The zero-moment point of a planned walk, from Pinocchio's centroidal dynamics.
 
 On flat ground at height ``h`` (the stance contacts' mean), with gravity ``g`` along −z:
 
     x_z = c_x − (c_z − h) c̈_x / (g + c̈_z) − L̇_y / (m (g + c̈_z))
     y_z = c_y − (c_z − h) c̈_y / (g + c̈_z) + L̇_x / (m (g + c̈_z))
 
-``c`` the centre of mass, ``L`` the angular momentum about it, ``m`` the mass. ``L`` sums over
-the body and every link, ``m_j (x_j − c) × ẋ_j + R_j I_j R_jᵀ ω_j``, from the links' poses by
-forward kinematics (vectorised over the samples); velocities and ``L̇``, ``c̈`` by finite
-differences on the uniform samples. A swinging leg's momentum shifts a Solo12's ZMP by up to
-2 cm; ``tests/test_gait_physics.py`` checks the whole against Pinocchio's
-``computeCentroidalMomentumTimeVariation``.
+``c`` the centre of mass, ``L`` the angular momentum about it, ``m`` the mass: ``c`` and
+``ḣ_G = (m c̈, L̇)`` from :func:`pinocchio.computeCentroidalMomentumTimeVariation` at each
+planned configuration, with ``v`` and ``a`` by second-order finite differences on the
+configuration manifold (:func:`manifold_derivatives`). A swinging leg's momentum shifts a
+Solo12's ZMP by up to 2 cm.
 """
 
 from __future__ import annotations
@@ -19,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GRAVITY", "angular_momentum", "second_difference", "zmp_points"]
+__all__ = ["GRAVITY", "manifold_derivatives", "second_difference", "zmp_points"]
 
 #: Gravity [m/s²].
 GRAVITY = 9.81
@@ -39,67 +38,57 @@ def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.asarray(out / (dt * dt))
 
 
-def angular_momentum(
-    masses: np.ndarray,
-    rot_inertia: np.ndarray,
-    R: np.ndarray,
-    x: np.ndarray,
-    c: np.ndarray,
-    xd: np.ndarray,
-    w: np.ndarray,
-) -> np.ndarray:
-    """Angular momentum about the centre of mass (N, 3) [kg·m²/s], world axes.
+def manifold_derivatives(model: Any, Q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities and accelerations (N, nv) of configurations ``Q`` (N, nq) sampled every ``dt``.
 
-    ``L = Σ_j m_j (x_j − c) × ẋ_j + R_j I_j R_jᵀ ω_j`` (Pinocchio's centroidal momentum
-    ``h_G``, angular part).
-
-    Args:
-        masses: (K,) link masses [kg].
-        rot_inertia: (K, 3, 3) rotational inertias about each link's CoM, link axes [kg·m²].
-        R: (N, K, 3, 3) link rotations in the world.
-        x: (N, K, 3) link CoMs in the world [m].
-        c: (N, 3) the centre of mass [m].
-        xd: (N, K, 3) link CoM velocities [m/s].
-        w: (N, K, 3) link angular velocities, world axes [rad/s].
-
+    The stencils of :func:`numpy.gradient` (``edge_order=2``) and :func:`second_difference`,
+    on the manifold: with ``d_i = pin.difference(Q_i, Q_{i+1})`` (and ``difference(Q_i,
+    Q_{i−1}) = −d_{i−1}``), ``v_i = (d_{i−1} + d_i) / 2dt`` and ``a_i = (d_i − d_{i−1}) / dt²``
+    inside; at an end, ``e_k = difference(Q_end, Q_{end±k})`` gives ``v = ±(4e₁ − e₂) / 2dt``
+    and ``a = (−5e₁ + 4e₂ − e₃) / dt²``. N ≥ 4.
     """
-    local = np.swapaxes(R, -1, -2) @ w[..., None]  # ω in each link's frame
-    spin = (R @ (rot_inertia[None] @ local))[..., 0]  # R I Rᵀ ω
-    return np.asarray(masses @ np.cross(x - c[:, None], xd) + spin.sum(axis=1))
+    import pinocchio as pin
+
+    n = len(Q)
+    step = np.array([pin.difference(model, Q[i], Q[i + 1]) for i in range(n - 1)])
+    v, a = np.empty((n, model.nv)), np.empty((n, model.nv))
+    v[1:-1] = (step[:-1] + step[1:]) / (2.0 * dt)
+    a[1:-1] = (step[1:] - step[:-1]) / (dt * dt)
+    for end, sign in ((0, 1), (n - 1, -1)):
+        e1, e2, e3 = (pin.difference(model, Q[end], Q[end + sign * k]) for k in (1, 2, 3))
+        v[end] = sign * (4.0 * e1 - e2) / (2.0 * dt)
+        a[end] = (-5.0 * e1 + 4.0 * e2 - e3) / (dt * dt)
+    return v, a
 
 
 def zmp_points(
-    wb: Any, joint_poses: np.ndarray, base: np.ndarray, t: np.ndarray, ground: np.ndarray
+    wb: Any, q: np.ndarray, base: np.ndarray, t: np.ndarray, ground: np.ndarray
 ) -> np.ndarray:
     """ZMP (N, 3) on the ground plane of each sample (z = ``ground``) [m] (N ≥ 4 samples).
 
     Args:
         wb: The robot (:class:`~.robot.WholeBody`).
-        joint_poses: (N, nq, 4, 4) every joint's pose in the world (``wb.joint_poses``).
+        q: (N, nq) leg joints [rad] / [m].
         base: (N, 4, 4) body poses.
         t: (N,) uniform sample times [s].
         ground: (N,) ground height under the robot [m].
 
     """
-    masses, levers, rot_i = wb.link_inertias()
-    R = np.concatenate([base[:, None, :3, :3], joint_poses[:, :, :3, :3]], axis=1)
-    p = np.concatenate([base[:, None, :3, 3], joint_poses[:, :, :3, 3]], axis=1)
-    x = (R @ levers[None, :, :, None])[..., 0] + p  # (N, K, 3) link CoMs
-    mass = float(masses.sum())
-    c = (masses @ x) / mass
-    dt = float(t[1] - t[0])
-    xd = np.gradient(x, dt, axis=0, edge_order=2)
-    Rd = np.gradient(R, dt, axis=0, edge_order=2)
-    W = Rd @ np.swapaxes(R, -1, -2)  # Ṙ Rᵀ = [ω]×
-    w = 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0],
-                        W[..., 1, 0] - W[..., 0, 1]], axis=-1)  # fmt: skip
-    L = angular_momentum(masses, rot_i, R, x, c, xd, w)
-    Ld = np.gradient(L, dt, axis=0, edge_order=2)
-    cdd = second_difference(c, t)
-    den = GRAVITY + cdd[:, 2]
-    out = np.empty_like(c)
+    import pinocchio as pin
+
+    model = wb.model
+    data = model.createData()
+    Q = wb.pinocchio_q(q, base)
+    v, a = manifold_derivatives(model, Q, float(t[1] - t[0]))
+    c, dh = np.empty((len(Q), 3)), np.empty((len(Q), 6))
+    for i in range(len(Q)):
+        dh[i] = pin.computeCentroidalMomentumTimeVariation(model, data, Q[i], v[i], a[i]).vector
+        c[i] = data.com[0]
+    mass = float(data.mass[0])
+    den = mass * GRAVITY + dh[:, 2]  # m (g + c̈_z)
     lever = (c[:, 2] - ground) / den
-    out[:, 0] = c[:, 0] - lever * cdd[:, 0] - Ld[:, 1] / (mass * den)
-    out[:, 1] = c[:, 1] - lever * cdd[:, 1] + Ld[:, 0] / (mass * den)
+    out = np.empty_like(c)
+    out[:, 0] = c[:, 0] - lever * dh[:, 0] - dh[:, 4] / den
+    out[:, 1] = c[:, 1] - lever * dh[:, 1] + dh[:, 3] / den
     out[:, 2] = ground
     return out
