@@ -61,22 +61,6 @@ def _finite(name: str, value: Any, size: int) -> np.ndarray:
     return arr
 
 
-def singular_configuration(family: Any, q: np.ndarray) -> np.ndarray | None:
-    """A configuration of ``family`` near ``q`` (see :meth:`Cockpit._family`), or None."""
-    from ..singularity._zeroset import project
-
-    out = np.array(q, dtype=float)
-    if family.joint is not None and family.value is not None:
-        out[family.joint] -= float(family.residual(out))
-        return out
-    cols = list(family.variables)
-    point = project(family._jet, out[cols][None])[0]
-    if point is None:
-        return None
-    out[cols] = point
-    return out
-
-
 class Cockpit:
     """A robot driven live: state, commands and readouts (thread-safe).
 
@@ -651,7 +635,7 @@ class Cockpit:
         if idx[0] < 0:
             return None
         fam = fams.families[int(idx[0])]
-        q = singular_configuration(fam, self.q)
+        q = fam.project(self.q)
         ghost = None
         if q is not None:
             ghost = [t[:3, 3].tolist() for t in self.model.frame_placements(q)]
