@@ -342,14 +342,16 @@ def test_singular_family_drawn_when_near(browser):
         page.close()
 
 
-def test_physics_mode_walks_and_a_click_pushes(browser):
-    """Physics mode (MuJoCo, closed-loop controller): holding W walks the base forward; a
+@pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
+def test_physics_mode_walks_and_a_click_pushes(browser, source):
+    """Physics mode (MuJoCo, closed-loop controller; servo kind for the hexapod, torque kind
+    for the quadruped): holding W walks the base forward (≥ half the commanded distance); a
     click on the scene pushes the robot: its base velocity changes along the view."""
     pytest.importorskip("mujoco")
     pytest.importorskip("proxsuite")
     from hexapod_kin.drive.physics import PUSH_TIME
 
-    with drive("hexapod", families=False) as s:
+    with drive(source, families=False) as s:
         c = s.cockpit
         page = _open(browser, s)
         page.click("#hk-mode-physics")
