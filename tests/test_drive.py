@@ -388,6 +388,23 @@ def test_nearest_family_and_sigma_min_at_a_singular_pose():
     assert c.readout()["family"]["distance"] == pytest.approx(0.3, abs=1e-9)
 
 
+def test_family_project_lands_on_the_family():
+    """Family.project (the drawn chain on a family): ``q_k = v`` moves ``q_k`` onto ``v``
+    (wrapped: the nearest copy), the rest kept; an implicit family's projection has a zero
+    factor (closed form, 1e-12) and is no nearer than the family's closest distance."""
+    from hexapod_kin.singularity import Family
+
+    q = np.array([0.3, 0.4, 6.0])
+    fixed = Family("q3 = 0", "Eq(q3, 0)", (2,), 2, 0.0, True, "q3")
+    np.testing.assert_array_equal(fixed.project(q)[:2], q[:2])
+    assert fixed.project(q)[2] == pytest.approx(2 * math.pi, abs=1e-12)
+    knee = Family("knee", "knee", (1, 2), None, None, False, "0.16*cos(q2) + 0.16*cos(q2 + q3)")
+    p = knee.project(q)
+    assert p[0] == q[0]
+    assert 0.16 * math.cos(p[1]) + 0.16 * math.cos(p[1] + p[2]) == pytest.approx(0, abs=1e-12)
+    assert float(np.linalg.norm(p - q)) >= float(knee.distance(q)) - 1e-12
+
+
 @pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
 def test_physics_mode_walks_and_a_push_moves_the_base(source):
     """MuJoCo under the closed-loop controller (servo kind for the hexapod, torque kind for the
