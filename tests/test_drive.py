@@ -421,6 +421,9 @@ def test_physics_mode_walks_and_a_push_moves_the_base(source):
     assert c.physics.kind == ("servo" if source == "hexapod" else "torque")
     for _ in range(25):  # settle 0.5 s
         c.advance(0.02)
+    sup = c.support()  # standing: every foot in MuJoCo's contact, the CoM inside
+    assert sup["stance"] == c.physics.contacts().tolist() == [True] * c.body.n_legs, sup
+    assert sup["margin"] > 0.05, sup
     x0 = c.base[:3, 3].copy()
     c.set_drive((1.0, 0.0, 0.0))
     assert c.readout()["mode"] == "physics"

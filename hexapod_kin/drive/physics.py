@@ -90,6 +90,8 @@ class Physics:
         self.ground = np.zeros(m.ngeom, dtype=bool)
         self.ground[name2id(m, obj.mjOBJ_GEOM, "ground")] = True
         self.base_body = int(m.jnt_bodyid[0])
+        #: The scene's foot sphere radius [m] (the robot's, or its foot links' shapes').
+        self.foot_radius = float(scene.foot_radius)
         self.sub = max(1, int(round(1.0 / (self.ctl.rate * TIMESTEP))))
         q0 = np.asarray(body.neutral_q(), dtype=float)
         feet0 = body.feet(q0[None], np.eye(4)[None])[0]
@@ -142,9 +144,8 @@ class Physics:
         self._push = np.array([f[0], f[1], 0.0])
         self.push_until = self.time + PUSH_TIME
 
-    def _measure(self) -> Any:
-        from ..control import Measurement
-
+    def contacts(self) -> np.ndarray:
+        """(n_legs,) bool: the feet touching the ground in the simulation."""
         d = self.data
         contacts = np.zeros(len(self.body.leg_names), dtype=bool)
         for c in d.contact[: d.ncon]:
@@ -153,6 +154,13 @@ class Physics:
                 contacts[self.leg_of[g1]] = True
             elif self.leg_of[g2] >= 0 and self.ground[g1]:
                 contacts[self.leg_of[g2]] = True
+        return contacts
+
+    def _measure(self) -> Any:
+        from ..control import Measurement
+
+        d = self.data
+        contacts = self.contacts()
         return Measurement(
             t=self.time,
             quat=np.array(d.qpos[3:7]),

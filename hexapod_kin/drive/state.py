@@ -565,7 +565,12 @@ class Cockpit:
         """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
-        stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
+        physics = self.physics if self.mode == "physics" else None
+        radius = wb.foot_radius if physics is None else physics.foot_radius
+        if physics is None:
+            stance = np.abs(feet[:, 2] - radius) < 2e-3  # on the ground z = 0
+        else:  # the feet MuJoCo has on the ground
+            stance = physics.contacts()
         com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
         zmp = zmp_margin = None
         cycle = self.walker.cycle if self.mode == "walk" else None
@@ -578,7 +583,7 @@ class Cockpit:
                 zmp_margin = float(run.zmp_margin[k])
         margin = float(support_margin(feet, stance, com))
         if zmp is None:
-            ground = float(np.mean(feet[stance, 2])) - wb.foot_radius if stance.any() else 0.0
+            ground = float(np.mean(feet[stance, 2])) - radius if stance.any() else 0.0
             zmp, zmp_margin = np.array([com[0], com[1], ground]), margin
         return {
             "feet": feet.tolist(),
