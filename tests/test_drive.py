@@ -388,40 +388,73 @@ def test_nearest_family_and_sigma_min_at_a_singular_pose():
     assert c.readout()["family"]["distance"] == pytest.approx(0.3, abs=1e-9)
 
 
-def test_physics_mode_walks_and_a_push_moves_the_base():
-    """MuJoCo under the closed-loop controller: W walks the base forward (≥ half the commanded
-    distance; the controller's own tests hold its accuracy), and a push's impulse changes the
-    base velocity along it (at least a quarter of F·Δt/m: the feet's friction takes the rest)."""
+def test_family_project_lands_on_the_family():
+    """Family.project (the drawn chain on a family): ``q_k = v`` moves ``q_k`` onto ``v``
+    (wrapped: the nearest copy), the rest kept; an implicit family's projection has a zero
+    factor (closed form, 1e-12) and is no nearer than the family's closest distance."""
+    from hexapod_kin.singularity import Family
+
+    q = np.array([0.3, 0.4, 6.0])
+    fixed = Family("q3 = 0", "Eq(q3, 0)", (2,), 2, 0.0, True, "q3")
+    np.testing.assert_array_equal(fixed.project(q)[:2], q[:2])
+    assert fixed.project(q)[2] == pytest.approx(2 * math.pi, abs=1e-12)
+    knee = Family("knee", "knee", (1, 2), None, None, False, "0.16*cos(q2) + 0.16*cos(q2 + q3)")
+    p = knee.project(q)
+    assert p[0] == q[0]
+    assert 0.16 * math.cos(p[1]) + 0.16 * math.cos(p[1] + p[2]) == pytest.approx(0, abs=1e-12)
+    assert float(np.linalg.norm(p - q)) >= float(knee.distance(q)) - 1e-12
+
+
+@pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
+def test_physics_mode_walks_and_a_push_moves_the_base(source):
+    """MuJoCo under the closed-loop controller (servo kind for the hexapod, torque kind for the
+    quadruped): W walks the base forward (≥ half the commanded distance; the controller's own
+    tests hold its accuracy), the readout's actual velocity is the base's (its displacement
+    over the last second), and a push's impulse changes the base velocity along it (at least
+    a quarter of F·Δt/m: the feet's friction takes the rest)."""
     from hexapod_kin.drive.physics import PUSH_TIME
 
     pytest.importorskip("mujoco")
     pytest.importorskip("proxsuite")
-    c = Cockpit(hk.load("hexapod"))
+    c = Cockpit(hk.load(source))
     c.set_mode("physics")
+    assert c.physics.kind == ("servo" if source == "hexapod" else "torque")
     for _ in range(25):  # settle 0.5 s
         c.advance(0.02)
+    sup = c.support()  # standing: every foot in MuJoCo's contact, the CoM inside
+    assert sup["stance"] == c.physics.contacts().tolist() == [True] * c.body.n_legs, sup
+    assert sup["margin"] > 0.05, sup
     x0 = c.base[:3, 3].copy()
     c.set_drive((1.0, 0.0, 0.0))
     assert c.readout()["mode"] == "physics"
-    for _ in range(150):  # 3 s at 0.05 m/s
+    for _ in range(100):  # 3 s at 0.05 m/s
+        c.advance(0.02)
+    x2 = c.base[:3, 3].copy()
+    for _ in range(50):
         c.advance(0.02)
     moved = c.base[:3, 3] - x0
     assert moved[0] >= 0.5 * 0.05 * 3.0 and abs(moved[1]) < 0.3 * moved[0], moved
+    r = c.readout()
+    assert r["command"] == pytest.approx([0.05, 0.0, 0.0], abs=1e-15)
+    v_last = (c.base[:3, 3] - x2)[0] / 1.0  # heading ≈ +x (|y| small, above)
+    assert r["actual"][0] == pytest.approx(v_last, abs=0.3 * 0.05), (r["actual"], v_last)
     c.set_drive((0.0, 0.0, 0.0))
     for _ in range(50):
         c.advance(0.02)
     v0 = c.physics.state()[2]
-    force = (0.0, c.physics.push_force)  # the page's: twice the weight
+    force = (0.0, c.physics.push_force)  # the page's push
     c.push(force)
     for _ in range(5):  # the push's 0.1 s
         c.advance(0.02)
     dv = c.physics.state()[2] - v0
     assert dv[1] >= 0.25 * force[1] * PUSH_TIME / c.physics.mass, dv
+    assert abs(dv[0]) < 0.2 * dv[1], dv  # along the push
+    for _ in range(50):  # it stays up (the push's size per kind)
+        c.advance(0.02)
+    assert c.base[2, 2] > 0.9 and c.base[2, 3] > 0.8 * x0[2], c.base
     assert any(e["type"] == "push" for e in c.session()["events"])
     with pytest.raises(ParameterError, match="force"):
         c.push((1.0, float("nan")))
     c.set_mode("walk")  # leaving physics: standing again
     with pytest.raises(ParameterError, match="physics"):
         c.push(force)
-    with pytest.raises(ParameterError, match="servo kind"):
-        Cockpit(hk.load("erd:solo12")).set_mode("physics")  # (it fell in the servo kind)

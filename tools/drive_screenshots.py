@@ -3,7 +3,8 @@
 Serves :func:`hexapod_kin.drive.drive` on 127.0.0.1, opens the page in headless Debian
 Chromium (Playwright, software GL), drives each mode through the page and saves a PNG:
 
-    python tools/drive_screenshots.py      # docs/img/drive_{joints,target,body,walk,physics}.png
+    python tools/drive_screenshots.py      # docs/img/drive_{joints,...,physics}.png and
+                                           # docs/img/drive_physics_solo12.png
     python tools/drive_screenshots.py --out /tmp/img
 """
 
@@ -36,7 +37,7 @@ def _wait(page: Any, expr: str) -> None:
 
 
 def shoot(out: Path) -> list[Path]:
-    """Write the five screenshots to ``out``; return their paths."""
+    """Write the six screenshots to ``out``; return their paths."""
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     with chromium() as browser:
@@ -79,17 +80,18 @@ def shoot(out: Path) -> list[Path]:
             page.screenshot(path=str(paths[-1]))
             page.keyboard.up("w")
             page.keyboard.up("q")
-        with drive("hexapod") as s:  # physics: walking in MuJoCo, pushed by a click
-            page = _open(browser, s.url)
-            page.click("#hk-mode-physics")
-            _wait(page, "hexapodKin.state.readout.mode === 'physics'")
-            page.keyboard.down("w")
-            time.sleep(1.5)
-            page.mouse.click(700, 300)
-            time.sleep(0.3)
-            paths.append(out / "drive_physics.png")
-            page.screenshot(path=str(paths[-1]))
-            page.keyboard.up("w")
+        for robot, name in (("hexapod", "drive_physics"), ("erd:solo12", "drive_physics_solo12")):
+            with drive(robot) as s:  # physics: walking in MuJoCo, pushed by a click
+                page = _open(browser, s.url)
+                page.click("#hk-mode-physics")
+                _wait(page, "hexapodKin.state.readout.mode === 'physics'")
+                page.keyboard.down("w")
+                time.sleep(1.5)
+                page.mouse.click(700, 300)
+                time.sleep(0.3)
+                paths.append(out / f"{name}.png")
+                page.screenshot(path=str(paths[-1]))
+                page.keyboard.up("w")
     return paths
 
 

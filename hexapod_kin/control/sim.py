@@ -31,7 +31,7 @@ from .commands import Command, Timeline
 from .controller import Controller, Measurement
 from .estimator import StateEstimator
 
-__all__ = ["ControlRun", "Push", "hardware_loop", "run"]
+__all__ = ["ControlRun", "Push", "hardware_loop", "run", "scene_xml"]
 
 #: Half-width [m] of the flat square around the start amid the bumps (the robot set down there).
 FLAT_START = 0.3
@@ -168,8 +168,12 @@ class ControlRun:
         return fields_dict(self, *names)
 
 
-def _scene_xml(scene: Any, kind: str) -> str:
-    """The scene's MJCF, with torque motors for the torque kind."""
+def scene_xml(scene: Any, kind: str) -> str:
+    """The MJCF of ``scene`` (:func:`~hexapod_kin.simulate.scene.scene_mjcf`) for ``kind``.
+
+    The torque kind replaces each position servo with a torque motor limited to the joint's
+    effort; the servo kind keeps the scene as it is.
+    """
     from lxml import etree
 
     root = etree.fromstring(scene.xml.encode("utf-8"))
@@ -279,7 +283,7 @@ def run(
     )
     import mujoco as mj  # scene_mjcf has said how to install it when it is missing
 
-    model = mj.MjModel.from_xml_string(_scene_xml(scene, kind))
+    model = mj.MjModel.from_xml_string(scene_xml(scene, kind))
     data = mj.MjData(model)
     joints = [mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n) for n in scene.joint_names]
     jq = np.array([int(model.jnt_qposadr[j]) for j in joints])

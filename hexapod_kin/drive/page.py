@@ -20,7 +20,7 @@ from .._page import fill, page, script_json
 from ..viewer import scene_commands
 from ..viewer.objects import pack
 from ..viewer.scene import Scene
-from .physics import PUSH_WEIGHTS
+from .physics import PUSH_WEIGHTS, kind_of
 from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
@@ -66,8 +66,9 @@ min margin while walking <span id="hk-minm"></span><br>
 <div id="hk-stick"><div id="hk-knob"></div></div>
 <span class="hk-help">drag: up/down forward, left/right turn</span></div>
 <div class="hk-tab" id="hk-tab-physics">MuJoCo under the closed-loop controller:
-W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot (twice its
-weight for 0.1 s, horizontally along the view)<br>command <span id="hk-pcmd"></span><br>
+W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot
+(<span id="hk-pushn"></span> for 0.1 s, horizontally along the view)<br>
+command <span id="hk-pcmd"></span><br>
 actual <span id="hk-pact"></span></div>
 <div id="hk-msg"></div>
 <pre id="hk-status"></pre>
@@ -168,6 +169,7 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     requestAnimationFrame(spin);
   })();
   el("hk-title").textContent = DATA.title;
+  el("hk-pushn").textContent = DATA.push.toFixed(1) + " N";
   var api = { viewer: viewer, state: null, seq: 0, latencies: [], motion: [], errors: [],
               replies: [], ready: false, pushes: [],
               overlays: { zmp: zmpDot, ghost: ghost, com: com, polygon: poly } };
@@ -505,13 +507,15 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "joints": joints,
         "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
         "legged": cockpit.legged,
-        "physics": cockpit.legged and getattr(cockpit.body, "params", None) is not None,
+        "physics": cockpit.legged,
         "patterns": list(cockpit.patterns),
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,
         "scale": span,
         "sigma_eps": SIGMA_EPS,
-        "push": PUSH_WEIGHTS * float(cockpit.body.mass) * 9.81 if cockpit.legged else 0.0,
+        "push": PUSH_WEIGHTS[kind_of(cockpit.body)] * float(cockpit.body.mass) * 9.81
+        if cockpit.legged
+        else 0.0,
         "families": "per leg: not derived (legged robot)"
         if cockpit.legged
         else (fams.reason or "none")

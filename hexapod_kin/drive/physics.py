@@ -1,8 +1,11 @@
 """Physics mode: the robot in MuJoCo under the closed-loop controller, stepped live.
 
-The scene is :func:`hexapod_kin.simulate.scene.scene_mjcf` (flat ground, foot spheres,
-position servos), the controller :class:`hexapod_kin.control.Controller` of the servo kind
-(joint targets), run through its public API as :func:`hexapod_kin.control.run` runs it: the
+The scene is :func:`hexapod_kin.simulate.scene.scene_mjcf` (flat ground, foot spheres) in the
+controller's kind (:func:`hexapod_kin.control.sim.scene_xml`), the controller
+:class:`hexapod_kin.control.Controller` of the kind :func:`hexapod_kin.control.run` chooses
+(``servo``, joint targets to position servos, for the built-in hexapod; ``torque``, joint
+torques to motors limited to the joints' efforts, for any other legged robot, e.g.
+``erd:solo12``), run through its public API as :func:`~hexapod_kin.control.run` runs it: the
 robot starts in its neutral pose with the feet on the ground, each control tick senses
 (:class:`~hexapod_kin.control.Measurement`: attitude, joints, foot contacts, base position and
 velocity), ticks the controller and steps MuJoCo for one control period. A push is a
@@ -17,12 +20,14 @@ import numpy as np
 
 from ..exceptions import ParameterError
 
-__all__ = ["PUSH_TIME", "PUSH_WEIGHTS", "Physics"]
+__all__ = ["PUSH_TIME", "PUSH_WEIGHTS", "Physics", "kind_of"]
 
 #: Duration of a push [s].
 PUSH_TIME = 0.1
-#: The page's push, in the robot's weights (its feet's friction holds about one).
-PUSH_WEIGHTS = 2.0
+#: The page's push, in the robot's weights, per controller kind: the hexapod's feet's friction
+#: holds about one weight (two make it slide); the torque kind's quadrupeds (erd:solo12,
+#: erd:anymal) recover from one, and two thrown at them while walking make them fall.
+PUSH_WEIGHTS = {"servo": 2.0, "torque": 1.0}
 #: MuJoCo's time step [s].
 TIMESTEP = 1e-3
 
@@ -37,8 +42,17 @@ def _quat_matrix(w: float, x: float, y: float, z: float) -> np.ndarray:
     )
 
 
+def kind_of(body: Any) -> str:
+    """The controller's kind for ``body`` as :func:`~hexapod_kin.control.run` chooses it.
+
+    ``servo`` for the built-in hexapod (a whole body with hexapod parameters), ``torque``
+    for any other legged robot.
+    """
+    return "servo" if getattr(body, "params", None) is not None else "torque"
+
+
 class Physics:
-    """One legged robot in MuJoCo under the servo controller (see the module doc).
+    """One legged robot in MuJoCo under the closed-loop controller (see the module doc).
 
     Args:
         body: The :class:`~hexapod_kin.gait.robot.WholeBody` (with masses).
@@ -46,31 +60,24 @@ class Physics:
 
     Raises:
         OptionalDependencyError: MuJoCo or proxsuite is missing.
-        ParameterError: A robot other than the built-in hexapod (servo kind only).
         ConfigurationError: A robot the controller cannot drive.
 
     """
 
     def __init__(self, body: Any, pattern: str) -> None:
-        if getattr(body, "params", None) is None:  # as control.run chooses the kind
-            raise ParameterError(
-                f"mode='physics' is not allowed for {body.source}: the cockpit runs the "
-                "controller's servo kind, which control.run uses for the built-in hexapod "
-                "only (other robots need its torque kind, not wired in the cockpit yet)",
-                parameter="mode",
-                value="physics",
-                allowed="the built-in hexapod",
-            )
         import mujoco as mj
 
         from ..control import Command, Controller
+        from ..control.sim import scene_xml
         from ..simulate.scene import scene_mjcf
 
         self.mj, self.body = mj, body
         self.Command = Command
-        self.ctl = Controller(body, kind="servo", pattern=pattern)
+        #: The controller's kind, as :func:`~hexapod_kin.control.run` chooses it.
+        self.kind = kind_of(body)
+        self.ctl = Controller(body, kind=self.kind, pattern=pattern)
         scene = scene_mjcf(body, timestep=TIMESTEP)
-        self.model = mj.MjModel.from_xml_string(scene.xml)
+        self.model = mj.MjModel.from_xml_string(scene_xml(scene, self.kind))
         self.data = mj.MjData(self.model)
         m, name2id, obj = self.model, mj.mj_name2id, mj.mjtObj
         joints = [name2id(m, obj.mjOBJ_JOINT, n) for n in scene.joint_names]
@@ -83,6 +90,8 @@ class Physics:
         self.ground = np.zeros(m.ngeom, dtype=bool)
         self.ground[name2id(m, obj.mjOBJ_GEOM, "ground")] = True
         self.base_body = int(m.jnt_bodyid[0])
+        #: The scene's foot sphere radius [m] (the robot's, or its foot links' shapes').
+        self.foot_radius = float(scene.foot_radius)
         self.sub = max(1, int(round(1.0 / (self.ctl.rate * TIMESTEP))))
         q0 = np.asarray(body.neutral_q(), dtype=float)
         feet0 = body.feet(q0[None], np.eye(4)[None])[0]
@@ -90,7 +99,8 @@ class Physics:
         d.qpos[2] = -float(feet0[:, 2].min()) + scene.foot_radius + 1e-4
         d.qpos[3] = 1.0
         d.qpos[self.jq] = q0
-        d.ctrl[self.act] = q0
+        if self.kind == "servo":
+            d.ctrl[self.act] = q0
         mj.mj_forward(self.model, d)
         self.ctl.set_command(Command(mode="stand"))
         self.time = 0.0
@@ -106,8 +116,8 @@ class Physics:
 
     @property
     def push_force(self) -> float:
-        """The page's push [N]: :data:`PUSH_WEIGHTS` × the robot's weight."""
-        return PUSH_WEIGHTS * self.mass * float(-self.model.opt.gravity[2])
+        """The page's push [N]: :data:`PUSH_WEIGHTS` of its kind × the robot's weight."""
+        return PUSH_WEIGHTS[self.kind] * self.mass * float(-self.model.opt.gravity[2])
 
     def set_command(self, twist: tuple[float, float, float], pattern: str) -> None:
         """Walk at ``twist`` (vx, vy [m/s], wz [rad/s]; all zero: stand) with ``pattern``."""
@@ -134,9 +144,8 @@ class Physics:
         self._push = np.array([f[0], f[1], 0.0])
         self.push_until = self.time + PUSH_TIME
 
-    def _measure(self) -> Any:
-        from ..control import Measurement
-
+    def contacts(self) -> np.ndarray:
+        """(n_legs,) bool: the feet touching the ground in the simulation."""
         d = self.data
         contacts = np.zeros(len(self.body.leg_names), dtype=bool)
         for c in d.contact[: d.ncon]:
@@ -145,6 +154,13 @@ class Physics:
                 contacts[self.leg_of[g1]] = True
             elif self.leg_of[g2] >= 0 and self.ground[g1]:
                 contacts[self.leg_of[g2]] = True
+        return contacts
+
+    def _measure(self) -> Any:
+        from ..control import Measurement
+
+        d = self.data
+        contacts = self.contacts()
         return Measurement(
             t=self.time,
             quat=np.array(d.qpos[3:7]),

@@ -61,22 +61,6 @@ def _finite(name: str, value: Any, size: int) -> np.ndarray:
     return arr
 
 
-def singular_configuration(family: Any, q: np.ndarray) -> np.ndarray | None:
-    """A configuration of ``family`` near ``q`` (see :meth:`Cockpit._family`), or None."""
-    from ..singularity._zeroset import project
-
-    out = np.array(q, dtype=float)
-    if family.joint is not None and family.value is not None:
-        out[family.joint] -= float(family.residual(out))
-        return out
-    cols = list(family.variables)
-    point = project(family._jet, out[cols][None])[0]
-    if point is None:
-        return None
-    out[cols] = point
-    return out
-
-
 class Cockpit:
     """A robot driven live: state, commands and readouts (thread-safe).
 
@@ -581,7 +565,12 @@ class Cockpit:
         """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
-        stance = np.abs(feet[:, 2] - wb.foot_radius) < 2e-3  # on the ground z = 0
+        physics = self.physics if self.mode == "physics" else None
+        radius = wb.foot_radius if physics is None else physics.foot_radius
+        if physics is None:
+            stance = np.abs(feet[:, 2] - radius) < 2e-3  # on the ground z = 0
+        else:  # the feet MuJoCo has on the ground
+            stance = physics.contacts()
         com = np.asarray(wb.com(self.qb[None], self.base[None])[0])
         zmp = zmp_margin = None
         cycle = self.walker.cycle if self.mode == "walk" else None
@@ -594,7 +583,7 @@ class Cockpit:
                 zmp_margin = float(run.zmp_margin[k])
         margin = float(support_margin(feet, stance, com))
         if zmp is None:
-            ground = float(np.mean(feet[stance, 2])) - wb.foot_radius if stance.any() else 0.0
+            ground = float(np.mean(feet[stance, 2])) - radius if stance.any() else 0.0
             zmp, zmp_margin = np.array([com[0], com[1], ground]), margin
         return {
             "feet": feet.tolist(),
@@ -651,7 +640,7 @@ class Cockpit:
         if idx[0] < 0:
             return None
         fam = fams.families[int(idx[0])]
-        q = singular_configuration(fam, self.q)
+        q = fam.project(self.q)
         ghost = None
         if q is not None:
             ghost = [t[:3, 3].tolist() for t in self.model.frame_placements(q)]

@@ -62,7 +62,7 @@ def run_zmp(body: Any, run: Any) -> np.ndarray:
     if len(t) < 4 or not body.mass > 0:
         com = np.asarray(body.com(q, base))
         return np.column_stack([com[:, :2], h[:, 0]])
-    return np.asarray(zmp_points(body, T, base, t, np.ascontiguousarray(h[:, 0])))
+    return np.asarray(zmp_points(body, q, base, t, np.ascontiguousarray(h[:, 0])))
 
 
 class Walker:

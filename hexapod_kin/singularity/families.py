@@ -20,7 +20,7 @@ from .. import _cache as _disk
 from .._fields import fields_dict
 from .._numerics import wrap_angles
 from ..exceptions import HexapodKinError, ParameterError, positive
-from ._zeroset import closest_distance, compile_factor
+from ._zeroset import closest_distance, compile_factor, project
 
 __all__ = ["Family", "Families", "families_for", "cache_dir"]
 
@@ -87,6 +87,24 @@ class Family:
             return np.abs(self.residual(qa))
         p = np.ascontiguousarray(qa[..., list(self.variables)].reshape(-1, len(self.variables)))
         return closest_distance(self._jet, p).reshape(qa.shape[:-1])
+
+    def project(self, q: Any) -> np.ndarray | None:
+        """A configuration on the family near ``q`` (nq,), or None when none is found.
+
+        ``q_k = value``: ``q`` with ``q_k`` moved onto the value (the closest point);
+        implicit families: the Gauss–Newton projection of ``q``'s variables onto ``f = 0``
+        (:func:`~._zeroset.project`; None when it does not converge).
+        """
+        out = np.array(q, dtype=float)
+        if self.joint is not None and self.value is not None:
+            out[self.joint] -= float(self.residual(out))
+            return out
+        cols = list(self.variables)
+        point = project(self._jet, out[cols][None])[0]
+        if point is None:
+            return None
+        out[cols] = point
+        return out
 
     def to_dict(self, joint_names: tuple[str, ...] | None = None) -> dict[str, Any]:
         """JSON-ready dict (joint by name when ``joint_names`` is given)."""
@@ -208,7 +226,6 @@ def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
             configuration of the model that no family explains (an edited entry).
 
     """
-    from ._zeroset import project
     from .measure import measures
 
     qs = model.random_q(3, seed=20251202)
