@@ -68,7 +68,6 @@ PENDING = {
 REVIEWED = {
     "fk": set(),
     "ik": {
-        "gait.sway.sway_poses",  # the body sway's ZMP fixed point (solves for sway knots)
         "seeds.euler_baseline",  # the seed report's open-loop Euler + solve, kept on purpose
     },
     "rotation": {

@@ -20,7 +20,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .paths import se2_pose
 from .stability import periodic_spline
@@ -40,6 +39,8 @@ def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
     if k == 1:  # a constant sway
         return np.eye(1)
     unit = np.eye(k)
+    from scipy.interpolate import CubicSpline  # 0.3 s of import: only when a sway is fitted
+
     spline = CubicSpline(np.append(knots, knots[0] + 1.0) * T, np.vstack([unit, unit[:1]]),
                          bc_type="periodic")  # fmt: skip
     return np.asarray(unit - height / GRAVITY * spline(knots * T, 2))
