@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError, one_of
+from ..exceptions import ConfigurationError, ParameterError, UrdfError, one_of
 from .scene import (
     POINT_FOOT,
     SCENE_TERRAINS,
@@ -235,13 +235,15 @@ def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
     leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
     −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %). A plan whose stance
     feet cannot hold the robot at some sample (fewer than three, or in a line: a plan that
-    is not statically stable) has no such torques: None, and it is replayed without them.
+    is not statically stable) has no such torques: None, and it is replayed without them; so
+    has a robot whose inertials are physically implausible (dynamics refuses to answer with
+    them, :meth:`~hexapod_kin.model.Model.check_inertials`).
     """
     from ..dynamics.gait_loads import gait_torques
 
     try:
         loads = gait_torques(run)
-    except ConfigurationError:
+    except (ConfigurationError, UrdfError):
         return None
     names = list(loads.joint_names)
     tau = loads.torque_full if loads.torque_full.size else loads.torque
