@@ -15,8 +15,13 @@ the body frame, x forward, y left; the walk passes the leg mounts), for any orde
   ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
   swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
   diagonal, margin 0).
-* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
-  sways the body over each support triangle (:mod:`.walk`). (A four-legged ``wave`` would be
+* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF) at
+  :data:`CRAWL_DUTY` = 0.85; the walk sways the body over each support triangle
+  (:mod:`.walk`). The four-foot phases between swings (0.1 cycle each, 0.05 at β = 0.8) let
+  the body cross from one triangle to the next at a lower acceleration, so that the
+  zero-moment point, not only the centre of mass, stays well inside: ~1 cm static and ZMP
+  margins on the example-robot-data quadrupeds at a 1 s period (0.8: 1.5–2.7 mm static, down
+  to −2 mm ZMP). (A four-legged ``wave`` would be
   the same gait: the name is not offered for four legs.)
 * ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
 * ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
@@ -38,6 +43,7 @@ from .._fields import fields_dict
 from ..exceptions import ParameterError, choices
 
 __all__ = [
+    "CRAWL_DUTY",
     "LAYOUT_TOL",
     "PATTERNS",
     "PhaseTable",
@@ -145,6 +151,9 @@ def default_positions(n_legs: int) -> np.ndarray:
 #: patterns do not change when a mount moves by less than it (round-off of a URDF's angles).
 LAYOUT_TOL = 1e-6
 
+#: The four-legged crawl's duty factor (see the module docstring).
+CRAWL_DUTY = 0.85
+
 
 def _tol(xy: np.ndarray) -> float:
     return LAYOUT_TOL * max(float(np.abs(xy).max(initial=0.0)), 1e-3)
@@ -216,7 +225,7 @@ def _wave(xy: np.ndarray) -> PhaseTable:
 
 
 def _crawl(xy: np.ndarray) -> PhaseTable:
-    return PhaseTable("crawl", _wave(xy).offsets, 0.8)
+    return PhaseTable("crawl", _wave(xy).offsets, CRAWL_DUTY)
 
 
 def _tripod(xy: np.ndarray) -> PhaseTable:
