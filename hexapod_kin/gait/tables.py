@@ -216,16 +216,16 @@ def _ring(xy: np.ndarray) -> list[int]:
     return sorted(range(len(xy)), key=lambda k: (rank[k], k))
 
 
-def _wave(xy: np.ndarray) -> PhaseTable:
+def _wave(xy: np.ndarray, name: str = "wave", beta: float | None = None) -> PhaseTable:
     n = len(xy)
     left, right = _sides(xy)
-    beta = max((n - 1.0) / n, 0.8)
+    beta = max((n - 1.0) / n, 0.8) if beta is None else beta
     lift = {leg: k / n for k, leg in enumerate(left + right)}
-    return PhaseTable("wave", _offsets(lift, beta, n), beta)
+    return PhaseTable(name, _offsets(lift, beta, n), beta)
 
 
 def _crawl(xy: np.ndarray) -> PhaseTable:
-    return PhaseTable("crawl", _wave(xy).offsets, CRAWL_DUTY)
+    return _wave(xy, "crawl", CRAWL_DUTY)
 
 
 def _tripod(xy: np.ndarray) -> PhaseTable:
