@@ -688,3 +688,20 @@ def test_asking_too_much_shows_the_patterns_top_speed_for_this_robot(capsys):
     assert run.to_dict()["velocity"][0] == pytest.approx(v / 1.001, rel=1e-9)
     assert main(["gait", "erd:solo12", "--pattern", "trot", "--duration", "1"]) == 1
     assert "needs a balance controller" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12"))
+def test_default_crawl_keeps_both_margins_clear_of_the_support_edges(name):
+    """Issue 31: each example-robot-data quadruped's default crawl (β = 0.85, full sway) keeps
+    the projected centre of mass and the zero-moment point (Pinocchio's centroidal dynamics)
+    over 5 mm inside the support; at β = 0.8 with half sway (the former default) the static
+    margin was 1.3-2.7 mm and anymal's and solo12's ZMP left the support (-1.9, -2.6 mm)."""
+    run = walk(f"erd:{name}", duration=2.0)
+    assert run.table.name == "crawl" and run.table.duty_factor == 0.85
+    assert run.settings["sway"] == 1.0 and run.statically_stable
+    assert run.min_margin > 0.005 and run.min_zmp_margin > 0.005, (
+        run.min_margin,
+        run.min_zmp_margin,
+    )
+    old = walk(f"erd:{name}", duration=2.0, duty_factor=0.8, sway=0.5, strict=False)
+    assert old.min_margin < 0.003 < run.min_margin - 0.003
