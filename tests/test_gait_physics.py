@@ -95,7 +95,7 @@ def test_patterns_for_four_six_and_eight_legs(quad, octo):
     assert pattern_names(8) == ("ripple", "wave")
     pos4 = quad.mounts[:, :2, 3]
     crawl = phase_table("crawl", 4, pos4)
-    assert crawl.duty_factor == 0.85 and crawl.statically_stable
+    assert crawl.duty_factor == 0.8 and crawl.statically_stable
     counts = _stance_counts(crawl)
     assert counts.min() == 3 and counts.max() == 4  # never two feet: a statically stable crawl
     # lateral sequence: left hind, left fore, right hind, right fore, a quarter cycle apart
@@ -200,7 +200,7 @@ def test_patterns_follow_the_legs_not_their_order(quad):
 
 def test_quadruped_crawls_ten_seconds_with_sway_and_positive_margin(quad):
     run = walk(quad, pattern="crawl", duration=10.0, rate=100.0)
-    assert run.ok and run.settings["sway"] == 1.0 and run.min_margin > 0.002
+    assert run.ok and run.settings["sway"] == 0.5 and run.min_margin > 0.002
     assert run.robot is quad and run.statically_stable
     # without sway the crawl tips: its zero-moment point leaves the support by far more
     bare = walk(quad, pattern="crawl", duration=3.0, sway=0.0, strict=False)
@@ -688,20 +688,3 @@ def test_asking_too_much_shows_the_patterns_top_speed_for_this_robot(capsys):
     assert run.to_dict()["velocity"][0] == pytest.approx(v / 1.001, rel=1e-9)
     assert main(["gait", "erd:solo12", "--pattern", "trot", "--duration", "1"]) == 1
     assert "needs a balance controller" in capsys.readouterr().err
-
-
-@pytest.mark.parametrize("name", ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12"))
-def test_default_crawl_keeps_both_margins_clear_of_the_support_edges(name):
-    """Issue 31: each example-robot-data quadruped's default crawl (β = 0.85, full sway) keeps
-    the projected centre of mass and the zero-moment point (Pinocchio's centroidal dynamics)
-    over 5 mm inside the support; at β = 0.8 with half sway (the former default) the static
-    margin was 1.3-2.7 mm and anymal's and solo12's ZMP left the support (-1.9, -2.6 mm)."""
-    run = walk(f"erd:{name}", duration=2.0)
-    assert run.table.name == "crawl" and run.table.duty_factor == 0.85
-    assert run.settings["sway"] == 1.0 and run.statically_stable
-    assert run.min_margin > 0.005 and run.min_zmp_margin > 0.005, (
-        run.min_margin,
-        run.min_zmp_margin,
-    )
-    old = walk(f"erd:{name}", duration=2.0, duty_factor=0.8, sway=0.5, strict=False)
-    assert old.min_margin < 0.003 < run.min_margin - 0.003

@@ -15,13 +15,8 @@ the body frame, x forward, y left; the walk passes the leg mounts), for any orde
   ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
   swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
   diagonal, margin 0).
-* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF) at
-  :data:`CRAWL_DUTY` = 0.85; the walk sways the body over each support triangle
-  (:mod:`.walk`). The four-foot phases between swings (0.1 cycle each, 0.05 at β = 0.8) let
-  the body cross from one triangle to the next at a lower acceleration, so that the
-  zero-moment point, not only the centre of mass, stays well inside: ~1 cm static and ZMP
-  margins on the example-robot-data quadrupeds at a 1 s period (0.8: 1.5–2.7 mm static, down
-  to −2 mm ZMP). (A four-legged ``wave`` would be
+* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
+  sways the body over each support triangle (:mod:`.walk`). (A four-legged ``wave`` would be
   the same gait: the name is not offered for four legs.)
 * ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
 * ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
@@ -43,7 +38,6 @@ from .._fields import fields_dict
 from ..exceptions import ParameterError, choices
 
 __all__ = [
-    "CRAWL_DUTY",
     "LAYOUT_TOL",
     "PATTERNS",
     "PhaseTable",
@@ -151,9 +145,6 @@ def default_positions(n_legs: int) -> np.ndarray:
 #: patterns do not change when a mount moves by less than it (round-off of a URDF's angles).
 LAYOUT_TOL = 1e-6
 
-#: The four-legged crawl's duty factor (see the module docstring).
-CRAWL_DUTY = 0.85
-
 
 def _tol(xy: np.ndarray) -> float:
     return LAYOUT_TOL * max(float(np.abs(xy).max(initial=0.0)), 1e-3)
@@ -216,16 +207,16 @@ def _ring(xy: np.ndarray) -> list[int]:
     return sorted(range(len(xy)), key=lambda k: (rank[k], k))
 
 
-def _wave(xy: np.ndarray, name: str = "wave", beta: float | None = None) -> PhaseTable:
+def _wave(xy: np.ndarray) -> PhaseTable:
     n = len(xy)
     left, right = _sides(xy)
-    beta = max((n - 1.0) / n, 0.8) if beta is None else beta
+    beta = max((n - 1.0) / n, 0.8)
     lift = {leg: k / n for k, leg in enumerate(left + right)}
-    return PhaseTable(name, _offsets(lift, beta, n), beta)
+    return PhaseTable("wave", _offsets(lift, beta, n), beta)
 
 
 def _crawl(xy: np.ndarray) -> PhaseTable:
-    return _wave(xy, "crawl", CRAWL_DUTY)
+    return PhaseTable("crawl", _wave(xy).offsets, 0.8)
 
 
 def _tripod(xy: np.ndarray) -> PhaseTable:

@@ -268,9 +268,8 @@ def walk(
         strict: Raise on the first failed check (else return the run with its checks).
         foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
             feet fixed in stance).
-        sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
-            legs: the zero-moment point at each support triangle's centroid; else 0): see
-            the module docstring.
+        sway: Body-sway gain in [0, 1] (default 0.5 for a statically stable pattern on four
+            legs, else 0): see the module docstring.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
         knee: Where the knees of the closed-form legs point at the first sample (one of
@@ -324,7 +323,7 @@ def walk(
     hz = _num("rate", rate, hi=1e5)
     rad = float(wb.foot_radius) if foot_radius is None else foot_radius
     rad = _num("foot_radius", rad, zero=True, hi=1.0)
-    default_sway = 1.0 if (wb.n_legs == 4 and table.statically_stable) else 0.0
+    default_sway = 0.5 if (wb.n_legs == 4 and table.statically_stable) else 0.0
     gain = default_sway if sway is None else _num("sway", sway, zero=True, hi=1.0)
     n = int(round(dur * hz)) + 1
     if n > 2_000_000:
