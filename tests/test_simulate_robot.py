@@ -285,3 +285,13 @@ def test_erd_quadrupeds_crawl_as_planned_on_flat_ground(name: str) -> None:
     for m, r in zip(rr.members, rr.runs):
         assert abs(r.distance_error) < 0.01, (m.name, r.distance_error)
         assert r.ok, (m.name, {k: v for k, v in r.checks().items() if not v["ok"]})
+
+
+def test_simulate_plans_a_quadrupeds_own_default_pattern() -> None:
+    """simulate(robot) and simulate_robust(robot) without a pattern plan the robot's default
+    (the crawl for four legs), as ``walk`` and the CLI do; the API used to ask every robot
+    for a tripod and refused the quadrupeds."""
+    sim = simulate("erd:go1", duration=0.5, stand=False)
+    assert sim.run.table.name == "crawl" and sim.run.robot.n_legs == 4
+    rr = simulate_robust("erd:go1", duration=0.5, stand=False, members=ENSEMBLE[:1])
+    assert rr.nominal.run.table.name == "crawl"

@@ -286,7 +286,7 @@ def _lift(run: Any, scene: SimScene) -> float:
 def simulate(
     run_or_robot: Any = None,
     *,
-    pattern: Any = "tripod",
+    pattern: Any = None,
     velocity: Any = None,
     terrain: Any = None,
     duration: float = 10.0,
@@ -311,7 +311,8 @@ def simulate(
         run_or_robot: A :class:`~hexapod_kin.gait.walk.GaitRun` (its robot: ``run.robot``, or
             the built-in hexapod), or a robot (what :func:`~hexapod_kin.gait.walk.walk`
             takes; None: the built-in hexapod) to plan with the keywords below.
-        pattern: The walk's pattern (when planning).
+        pattern: The walk's pattern (when planning; default the robot's
+            :func:`~hexapod_kin.gait.tables.default_pattern`: tripod for six legs, crawl for four).
         velocity: The walk's body twist ``(vx, vy, wz)`` (when planning).
         terrain: ``flat`` (default), ``slope`` or ``step``: planned on and simulated on; with a
             run, its own terrain unless given (a plan replayed on other ground: its first
