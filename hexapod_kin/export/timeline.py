@@ -39,7 +39,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .._io import atomic_write
-from .._reader import check_keys, named, number, numbers, parse_data, read_text, texts
+from .._reader import check_keys, named, number, numbers, parse_data, read_text, text, texts
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
@@ -489,20 +489,20 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
     """
     p = Path(path)
     kind = _format(p, fmt)
-    text = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
+    raw = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
     try:
         with named(p, "timeline", SourceError):
             if kind == "json":
-                return _read_json(text, p)
+                return _read_json(raw, p)
             if kind == "csv":
-                return _read_csv(text, p)
-            return _read_ros2(text, p)
+                return _read_csv(raw, p)
+            return _read_ros2(raw, p)
     except _MALFORMED as exc:
         raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
 
 
-def _read_json(text: str, p: Path) -> Timeline:
-    d = parse_data(text, str(p), "json", "timeline", _MAX_TIMELINE_VALUES)
+def _read_json(raw: str, p: Path) -> Timeline:
+    d = parse_data(raw, str(p), "json", "timeline", _MAX_TIMELINE_VALUES)
     if d.get("format") != FORMAT:
         raise KeyError("format")
     t = np.asarray(numbers(d["t"], "t"), dtype=float)
@@ -579,10 +579,10 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
 
     """
     p = Path(path)
-    text = read_text(p, "plan", _MAX_TIMELINE_BYTES)
+    raw = read_text(p, "plan", _MAX_TIMELINE_BYTES)
     try:
         if p.suffix.lower() == ".json":
-            d = parse_data(text, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
+            d = parse_data(raw, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
             with named(p, "plan", SourceError):
                 if not isinstance(d, dict):
                     raise TypeError(f"a JSON object is needed, not a {type(d).__name__}")
@@ -591,7 +591,7 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
                 q = np.asarray(numbers(d["q"], "q"), dtype=float)
                 names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
                 return t, q.reshape(len(t), -1), texts(names, "joint_names")
-        _, columns, data = _csv(text)
+        _, columns, data = _csv(raw)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except _MALFORMED as exc:
         what = "a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, joint_names)"
