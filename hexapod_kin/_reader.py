@@ -322,21 +322,24 @@ def _check_structure(data: Any, name: str, what: str, max_values: int) -> None:
 
 
 # ---------------------------------------------------------------- the values of a file
-def number(
-    value: Any,
-    where: str,
-    *,
-    parameter: str | None = None,
-    error: type[HexapodKinError] = ParameterError,
-) -> float:
+def _wrong(where: str, value: Any, problem: str, allowed: str, parameter: str | None) -> Exception:
+    return ParameterError(
+        f"{where}={clip(value)}{problem}",
+        parameter=parameter or where,
+        value=clip(value),
+        allowed=allowed,
+    )
+
+
+def number(value: Any, where: str, *, parameter: str | None = None) -> float:
     """``value`` as a finite float: an int or a float of a file, never a text nor a boolean.
 
     ``'0.3'`` and ``true`` are typos in a file, not 0.3 and 1; an integer too large for a
     float is not finite.
 
     Raises:
-        ParameterError: (or ``error``) ``"<where>=<value> is not a finite number"``;
-            ``parameter`` defaults to ``where``.
+        ParameterError: ``"<where>=<value> is not a finite number"``; ``parameter``
+            defaults to ``where``.
 
     """
     if isinstance(value, Real) and not isinstance(value, bool):  # numpy's bool_ is not Real
@@ -346,22 +349,10 @@ def number(
             x = math.inf
         if math.isfinite(x):
             return x
-    raise error(
-        f"{where}={clip(value)} is not a finite number",
-        parameter=parameter or where,
-        value=clip(value),
-        allowed="a finite number (not a text or a boolean)",
-    )
+    raise _wrong(where, value, " is not a finite number", "a finite number", parameter)
 
 
-def numbers(
-    value: Any,
-    where: str,
-    n: int | None = None,
-    *,
-    parameter: str | None = None,
-    error: type[HexapodKinError] = ParameterError,
-) -> list[Any]:
+def numbers(value: Any, where: str, n: int | None = None, *, parameter: str | None = None) -> Any:
     """Nested lists of finite numbers (each as :func:`number`, its index named), as floats.
 
     Args:
@@ -369,97 +360,62 @@ def numbers(
         where: The key, named in errors with the index (``q[3][1]``).
         n: When given, ``value`` must be a flat list of ``n`` numbers.
         parameter: The error's ``parameter`` (default: ``where``).
-        error: The error class.
 
     Raises:
-        ParameterError: (or ``error``) Not a list (of ``n``), or a value that is not a
-            finite number.
+        ParameterError: Not a list (of ``n``), or a value that is not a finite number.
 
     """
     if not isinstance(value, list | tuple) or (n is not None and len(value) != n):
         shape = f"a list of {n} numbers" if n is not None else "a list of numbers"
-        raise error(
-            f"{where}={clip(value)}: {shape} is required",
-            parameter=parameter or where,
-            value=clip(value),
-            allowed=shape,
-        )
-
-    def walk(v: Any, at: str) -> Any:
-        if isinstance(v, list | tuple) and n is None:
-            return [walk(x, f"{at}[{i}]") for i, x in enumerate(v)]
-        return number(v, at, parameter=parameter or where, error=error)
-
-    return [walk(x, f"{where}[{i}]") for i, x in enumerate(value)]
+        raise _wrong(where, value, f": {shape} is required", shape, parameter)
+    return [
+        numbers(v, f"{where}[{i}]", parameter=parameter or where)
+        if isinstance(v, list | tuple) and n is None
+        else number(v, f"{where}[{i}]", parameter=parameter or where)
+        for i, v in enumerate(value)
+    ]
 
 
-def text(
-    value: Any,
-    where: str,
-    *,
-    parameter: str | None = None,
-    error: type[HexapodKinError] = ParameterError,
-) -> str:
+def text(value: Any, where: str, *, parameter: str | None = None) -> str:
     """A name or a text of a file: a string, never a number or a boolean made into one.
 
     Raises:
-        ParameterError: (or ``error``) ``"<where>=<value> must be a string (quote it)"``.
+        ParameterError: ``"<where>=<value> must be a string (quote it)"``.
 
     """
     if not isinstance(value, str):
-        raise error(
-            f"{where}={clip(value)} must be a string (quote it)",
-            parameter=parameter or where,
-            value=clip(value),
-            allowed="a string",
-        )
+        raise _wrong(where, value, " must be a string (quote it)", "a string", parameter)
     return value
 
 
-def texts(
-    value: Any,
-    where: str,
-    *,
-    parameter: str | None = None,
-    error: type[HexapodKinError] = ParameterError,
-) -> tuple[str, ...]:
+def texts(value: Any, where: str, *, parameter: str | None = None) -> tuple[str, ...]:
     """A list of names, each a string (:func:`text`, its index named).
 
     Raises:
-        ParameterError: (or ``error``) Not a list, or an item that is not a string.
+        ParameterError: Not a list, or an item that is not a string.
 
     """
     if not isinstance(value, list | tuple):
-        raise error(
-            f"{where}={clip(value)}: a list of names (strings) is required",
-            parameter=parameter or where,
-            value=clip(value),
-            allowed="a list of strings",
-        )
+        problem = ": a list of names (strings) is required"
+        raise _wrong(where, value, problem, "a list of strings", parameter)
     return tuple(
-        text(v, f"{where}[{i}]", parameter=parameter or where, error=error)
-        for i, v in enumerate(value)
+        text(v, f"{where}[{i}]", parameter=parameter or where) for i, v in enumerate(value)
     )
 
 
 def check_keys(
-    got: Iterable[Any],
-    allowed: Sequence[str],
-    where: str,
-    *,
-    parameter: str | None = None,
-    error: type[HexapodKinError] = ParameterError,
+    got: Iterable[Any], allowed: Sequence[str], where: str, *, parameter: str | None = None
 ) -> None:
     """Refuse a key not in ``allowed`` (a typo never passes silently).
 
     Raises:
-        ParameterError: (or ``error``) ``"<where>: unknown key 'x' (did you mean ...);
-            allowed: [...]"``; ``parameter`` defaults to the key.
+        ParameterError: ``"<where>: unknown key 'x' (did you mean ...); allowed: [...]"``;
+            ``parameter`` defaults to the key.
 
     """
     for key in got:
         if key not in allowed:
-            raise error(
+            raise ParameterError(
                 f"{where}: unknown key {clip(key)}{did_you_mean(str(key), allowed)}; "
                 f"allowed: {list(allowed)}",
                 parameter=parameter or str(key),
