@@ -494,6 +494,7 @@ VALUES: dict[str, tuple[Callable[[Path], Any], str, dict[str, tuple[str, str]]]]
         "text-number": ('{"commands": [{"t": 0, "vx": "1"}]}', "vx='1' is not a finite number"),
         "boolean": ('{"commands": [{"t": true}]}', "t=True is not a finite number"),
         "unknown-key": ('{"commands": [{"t": 0, "speed": 1}]}', "unknown key 'speed'"),
+        "name": ('{"commands": [{"t": 0, "pattern": 5}]}', "pattern=5 must be a string"),
     }),
     "claims": (_claims, ".toml", {
         "unknown-key": ("claimz = 1\n", "unknown key 'claimz'"),

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .._fields import fields_dict
-from .._reader import check_keys, clip, named, number, read_data
+from .._reader import check_keys, clip, named, number, read_data, text
 from ..exceptions import ParameterError, one_of
 
 __all__ = ["MODES", "Command", "Timeline", "read_timeline", "timeline_of"]
@@ -63,13 +63,8 @@ class Command:
                 )
             object.__setattr__(self, name, x)
         one_of("mode", self.mode, list(MODES))
-        if self.pattern is not None and not isinstance(self.pattern, str):
-            raise ParameterError(
-                f"pattern={self.pattern!r}: a pattern's name (a text)",
-                parameter="pattern",
-                value=self.pattern,
-                allowed="a text",
-            )
+        if self.pattern is not None:
+            text(self.pattern, "pattern")  # a pattern's name
         h = number(self.height, "height")
         if not 0.3 <= h <= 1.0:
             raise ParameterError(
