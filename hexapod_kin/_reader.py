@@ -18,21 +18,39 @@ TOML is read with ``tomllib`` (Python ≥ 3.11) or ``tomli`` (3.10); YAML with P
 Every refusal is a :class:`~.exceptions.SourceError` whose ``parameter`` is the kind of file
 (``what``: ``"source"``, ``"feet"``, ``"calibration"``, ...) and whose message is one line
 naming the file.
+
+The readers of each kind of file then check the values with the same few functions, so that
+one mistake gets one message whatever the file: :func:`number` / :func:`numbers` (a finite
+int or float, never a text such as ``'0.3'`` nor a boolean), :func:`text` / :func:`texts`
+(names that are strings, never ``5`` or ``true`` made into one), :func:`check_keys` (an
+unknown key refused with a "did you mean") and :func:`named` (the file named in front of a
+value's error).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from numbers import Real
 from pathlib import Path
 from typing import Any
 
 from ._io import read_regular
-from .exceptions import HexapodKinError, OptionalDependencyError, SourceError
+from .exceptions import (
+    HexapodKinError,
+    OptionalDependencyError,
+    ParameterError,
+    SourceError,
+    did_you_mean,
+)
 
 __all__ = ["FORMATS", "MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_STRING", "MAX_VALUES",
-           "clip", "parse_data", "read_data", "read_text"]  # fmt: skip
+           "check_keys", "clip", "named", "number", "numbers", "parse_data", "read_data",
+           "read_text", "text", "texts"]  # fmt: skip
 
 #: Formats of :func:`read_data`, by file suffix.
 FORMATS = {".json": "json", ".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
@@ -301,3 +319,127 @@ def _check_structure(data: Any, name: str, what: str, max_values: int) -> None:
         elif not isinstance(value, float):
             raise _refuse(name, what, f"{where}: a value of type {type(value).__name__}",
                           "numbers, strings, lists and mappings")  # fmt: skip
+
+
+# ---------------------------------------------------------------- the values of a file
+def _wrong(where: str, value: Any, problem: str, allowed: str, parameter: str | None) -> Exception:
+    return ParameterError(
+        f"{where}={clip(value)}{problem}",
+        parameter=parameter or where,
+        value=clip(value),
+        allowed=allowed,
+    )
+
+
+def number(value: Any, where: str, *, parameter: str | None = None) -> float:
+    """``value`` as a finite float: an int or a float of a file, never a text nor a boolean.
+
+    ``'0.3'`` and ``true`` are typos in a file, not 0.3 and 1; an integer too large for a
+    float is not finite.
+
+    Raises:
+        ParameterError: ``"<where>=<value> is not a finite number"``; ``parameter``
+            defaults to ``where``.
+
+    """
+    if isinstance(value, Real) and not isinstance(value, bool):  # numpy's bool_ is not Real
+        try:
+            x = float(value)
+        except OverflowError:
+            x = math.inf
+        if math.isfinite(x):
+            return x
+    raise _wrong(where, value, " is not a finite number", "a finite number", parameter)
+
+
+def numbers(value: Any, where: str, n: int | None = None, *, parameter: str | None = None) -> Any:
+    """Nested lists of finite numbers (each as :func:`number`, its index named), as floats.
+
+    Args:
+        value: A list (of lists ...) of numbers.
+        where: The key, named in errors with the index (``q[3][1]``).
+        n: When given, ``value`` must be a flat list of ``n`` numbers.
+        parameter: The error's ``parameter`` (default: ``where``).
+
+    Raises:
+        ParameterError: Not a list (of ``n``), or a value that is not a finite number.
+
+    """
+    if not isinstance(value, list | tuple) or (n is not None and len(value) != n):
+        shape = f"a list of {n} numbers" if n is not None else "a list of numbers"
+        raise _wrong(where, value, f": {shape} is required", shape, parameter)
+    return [
+        numbers(v, f"{where}[{i}]", parameter=parameter or where)
+        if isinstance(v, list | tuple) and n is None
+        else number(v, f"{where}[{i}]", parameter=parameter or where)
+        for i, v in enumerate(value)
+    ]
+
+
+def text(value: Any, where: str, *, parameter: str | None = None) -> str:
+    """A name or a text of a file: a string, never a number or a boolean made into one.
+
+    Raises:
+        ParameterError: ``"<where>=<value> must be a string (quote it)"``.
+
+    """
+    if not isinstance(value, str):
+        raise _wrong(where, value, " must be a string (quote it)", "a string", parameter)
+    return value
+
+
+def texts(value: Any, where: str, *, parameter: str | None = None) -> tuple[str, ...]:
+    """A list of names, each a string (:func:`text`, its index named).
+
+    Raises:
+        ParameterError: Not a list, or an item that is not a string.
+
+    """
+    if not isinstance(value, list | tuple):
+        problem = ": a list of names (strings) is required"
+        raise _wrong(where, value, problem, "a list of strings", parameter)
+    return tuple(
+        text(v, f"{where}[{i}]", parameter=parameter or where) for i, v in enumerate(value)
+    )
+
+
+def check_keys(
+    got: Iterable[Any], allowed: Sequence[str], where: str, *, parameter: str | None = None
+) -> None:
+    """Refuse a key not in ``allowed`` (a typo never passes silently).
+
+    Raises:
+        ParameterError: ``"<where>: unknown key 'x' (did you mean ...); allowed: [...]"``;
+            ``parameter`` defaults to the key.
+
+    """
+    for key in got:
+        if key not in allowed:
+            raise ParameterError(
+                f"{where}: unknown key {clip(key)}{did_you_mean(str(key), allowed)}; "
+                f"allowed: {list(allowed)}",
+                parameter=parameter or str(key),
+                value=clip(key),
+                allowed=list(allowed),
+            )
+
+
+@contextmanager
+def named(
+    path: str | os.PathLike[str], what: str, error: type[HexapodKinError] | None = None
+) -> Iterator[None]:
+    """Name the file in front of a value's error raised inside: ``what='path': <error>``.
+
+    A :class:`~.exceptions.ParameterError` raised inside is raised again with the file named
+    (as ``error`` when given, e.g. :class:`SourceError` for a file that is not what it
+    should be); the reader's own refusals (:class:`SourceError`) already name it and pass.
+    """
+    try:
+        yield
+    except ParameterError as exc:
+        raise (error or type(exc))(
+            f"{what}={str(path)!r}: {exc}",
+            parameter=exc.parameter,
+            value=exc.value,
+            allowed=exc.allowed,
+        ) from None

@@ -44,8 +44,8 @@ from typing import Any
 
 import numpy as np
 
-from ._reader import clip, read_data
-from .exceptions import ParameterError, did_you_mean, one_of
+from ._reader import check_keys, clip, named, number, numbers, read_data, text
+from .exceptions import ParameterError, one_of
 from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
 
 __all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
@@ -94,34 +94,13 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
     """
     path = Path(path)
     data = read_data(path, "source", mapping="name, convention, row, ...")
-    unknown = sorted(set(overrides) - set(TOP_KEYS))
-    if unknown:
-        raise ParameterError(
-            f"{path.name}: parameters {unknown} are not table keys; allowed: {list(TOP_KEYS)}",
-            parameter=unknown[0],
-            allowed=list(TOP_KEYS),
-        )
-    data = {**data, **overrides}
-    data.setdefault("name", path.stem)
-    try:
-        return chain_from_table(data)
-    except ParameterError as exc:
-        raise ParameterError(
-            f"{path.name}: {exc}", parameter=exc.parameter, value=exc.value, allowed=exc.allowed
-        ) from None
+    with named(path, "source"):
+        check_keys(overrides, TOP_KEYS, "overrides")
+        return chain_from_table({"name": path.stem, **data, **overrides})
 
 
 def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.0) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f"{where}={value!r} is not a number", parameter=where, value=value)
-    try:
-        out = float(value)
-    except OverflowError:
-        out = math.inf
-    if not math.isfinite(out):
-        raise ParameterError(
-            f"{where}={clip(value)} is not finite", parameter=where, value=clip(value)
-        )
+    out = number(value, where)
     if abs(out) > limit:
         raise ParameterError(
             f"{where}={out:g} is out of range; allowed |{where.rsplit('.', 1)[-1]}| <= {limit:g}",
@@ -142,36 +121,7 @@ def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.
 
 
 def _numbers(value: Any, n: int, where: str, limit: float = MAX_NUMBER) -> tuple[float, ...]:
-    if not isinstance(value, (list, tuple)) or len(value) != n:
-        raise ParameterError(
-            f"{where}={clip(value)}: a list of {n} numbers is required",
-            parameter=where,
-            value=clip(value),
-        )
-    return tuple(_number(v, f"{where}[{i}]", limit) for i, v in enumerate(value))
-
-
-def _text(value: Any, where: str) -> str:
-    """A name or a text of the table: a string, never a number or a boolean made into one."""
-    if not isinstance(value, str):
-        raise ParameterError(
-            f"{where}={clip(value)} must be a string (quote it)",
-            parameter=where,
-            value=clip(value),
-            allowed="a string",
-        )
-    return value
-
-
-def _check_keys(got: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
-    for key in got:
-        if key not in allowed:
-            raise ParameterError(
-                f"{where}: unknown key {key!r}{did_you_mean(str(key), allowed)}; allowed: "
-                f"{list(allowed)}",
-                parameter=str(key),
-                allowed=list(allowed),
-            )
+    return tuple(_number(v, f"{where}[{i}]", limit) for i, v in enumerate(numbers(value, where, n)))
 
 
 def _pose(value: Any, scale: float, where: str) -> Pose:
@@ -181,7 +131,7 @@ def _pose(value: Any, scale: float, where: str) -> Pose:
             parameter=where,
             value=value,
         )
-    _check_keys(value, ("xyz", "rpy"), where)
+    check_keys(value, ("xyz", "rpy"), where)
     xyz = _numbers(value.get("xyz", [0, 0, 0]), 3, f"{where}.xyz", MAX_LENGTH)
     rpy = _numbers(value.get("rpy", [0, 0, 0]), 3, f"{where}.rpy")
     return Pose.of((xyz, tuple(a * scale for a in rpy)), where)
@@ -194,7 +144,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         ParameterError: A bad key or value (the message names the row and the key).
 
     """
-    _check_keys(data, TOP_KEYS, "table")
+    check_keys(data, TOP_KEYS, "table")
     convention = one_of("convention", str(data.get("convention", "khalil")).lower(), _GEOMETRY)
     angles = one_of("angles", str(data.get("angles", "rad")).lower(), ("rad", "deg"))
     scale = math.pi / 180.0 if angles == "deg" else 1.0
@@ -221,7 +171,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         where = f"row {j}"
         if not isinstance(row, dict):
             raise ParameterError(f"{where}={row!r}: a table of keys is required", parameter="row")
-        _check_keys(row, allowed, where)
+        check_keys(row, allowed, where)
         if "type" in row and "sigma" in row:
             raise ParameterError(f"{where}: give type or sigma, not both", parameter="type")
         sigma: Any = row["type"] if "type" in row else row.get("sigma", "revolute")
@@ -251,7 +201,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             raise ParameterError(f"{where}: {exc}", parameter="type", value=sigma) from None
         rows.append(built)
         if built.sigma != "fixed":
-            joint_names.append(_text(row.get("name", f"q{len(joint_names) + 1}"), f"{where}.name"))
+            joint_names.append(text(row.get("name", f"q{len(joint_names) + 1}"), f"{where}.name"))
             lim_scale = scale if built.sigma == "revolute" else 1.0
             default = (
                 JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
@@ -269,7 +219,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
                         f"{where}: {key!r} is for joint rows; this row is fixed", parameter=key
                     )
         if "link" in row:
-            links.append(_text(row["link"], f"{where}.link"))
+            links.append(text(row["link"], f"{where}.link"))
         if "mass" in row:
             mass = _number(row["mass"], f"{where}.mass")
             com = _numbers(row["com"], 3, f"{where}.com", MAX_LENGTH) if "com" in row else None
@@ -300,7 +250,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
     kwargs: dict[str, Any] = {"joint_names": tuple(joint_names), "limits": tuple(limits)}
     for key in ("name", "description", "base", "tip"):
         if key in data:
-            kwargs[key] = _text(data[key], key)
+            kwargs[key] = text(data[key], key)
     for key in ("link_mass", "link_radius"):
         if key in data:
             kwargs[key] = _number(data[key], key)

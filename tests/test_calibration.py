@@ -29,7 +29,7 @@ def write(tmp_path, text):
 def test_unknown_joint_named_with_the_joints_allowed(tmp_path):
     path = write(tmp_path, AX12 + "joints:\n  c: {offset: 0.1}\n")
     read_calibration(path)  # without a robot nothing to hold it to
-    with pytest.raises(ParameterError, match=r"cal.yaml: .*'c' is not in 'two'.*'a', 'b'") as exc:
+    with pytest.raises(ParameterError, match=r"cal.yaml': .*'c' is not in 'two'.*'a', 'b'") as exc:
         read_calibration(path, robot=ROBOT)
     assert exc.value.value == "c" and exc.value.allowed == ["a", "b"]
 

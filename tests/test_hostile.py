@@ -289,7 +289,7 @@ PHRASES = {
     "bomb": "more than 64 YAML aliases",
     "duplicate-foot": "key 'tibia_lf' given twice",
     "duplicate-offset": "key 'offset' given twice",
-    "offset-text": "offset = '0.3' is not a finite number",
+    "offset-text": "offset='0.3' is not a finite number",
     "duplicate-json": "key 't' given twice",
     "us-per-rad-1e308": "us_per_rad 1e+308 maps two turns to inf us",
     "resolution-1e-320": "resolution 1e-320 is too fine",

@@ -72,7 +72,7 @@ def test_calibration_refused_before_the_walk(tmp_path: Path, key: str) -> None:
     start = _start_cpu([*args, "--pattern", "no-such-pattern"], tmp_path)
     run = cli(*args, "--calibration", "cal.yaml", cwd=tmp_path)
     line = fast_refusal(run, phrase, start)
-    assert "cal.yaml: calibration of j_c1_lf: " in line, line
+    assert "cal.yaml': calibration of j_c1_lf: " in line, line
     assert not (tmp_path / "out.csv").exists()
 
 
@@ -119,11 +119,11 @@ def test_path_with_a_1e308_sample_writes_nothing(tmp_path: Path, out: str) -> No
 
 
 PLAN_FILES = {
-    "text-number": ('{"t": [0, 1], "q": [[0], ["0.5"]]}', "q holds '0.5', not a number"),
-    "boolean": ('{"t": [0, true], "q": [[0], [0.5]]}', "t holds True, not a number"),
+    "text-number": ('{"t": [0, 1], "q": [[0], ["0.5"]]}', "q[1][0]='0.5' is not a finite number"),
+    "boolean": ('{"t": [0, true], "q": [[0], [0.5]]}', "t[1]=True is not a finite number"),
     "name-number": (
         '{"t": [0, 1], "q": [[0], [0.5]], "joint_names": [5]}',
-        "joint_names must be a list of names (texts), got 5",
+        "joint_names[0]=5 must be a string",
     ),
     "unknown-key": ('{"t": [0, 1], "q": [[0], [0.5]], "qq": 1}', "unknown key 'qq'"),
 }
@@ -140,13 +140,13 @@ def test_plan_file_values_are_checked(tmp_path: Path, case: str) -> None:
 
 # ------------------------------------------------------------------------------ feet files
 FEET_FILES = {
-    "text-number": ("tibia_lf: ['0', 0, 0]\n", "offset ['0', 0, 0] is not three finite numbers"),
-    "boolean": ("tibia_lf: [true, 0, 0]\n", "offset [True, 0, 0] is not three finite numbers"),
+    "text-number": ("tibia_lf: ['0', 0, 0]\n", "offset[0]='0' is not a finite number"),
+    "boolean": ("tibia_lf: [true, 0, 0]\n", "offset[0]=True is not a finite number"),
     "misspelt-key": (
         "feet: [{frame: tibia_lf, offst: [0, 0.16, 0.029]}]\n",
         "unknown key 'offst'",
     ),
-    "frame-not-text": ("feet: [{frame: 5, offset: [0, 0, 0]}]\n", "frame 5"),
+    "frame-not-text": ("feet: [{frame: 5, offset: [0, 0, 0]}]\n", "frame=5 must be a string"),
 }
 
 
@@ -170,11 +170,11 @@ def test_control_honours_the_feet(tmp_path: Path) -> None:
 
 # ---------------------------------------------------------------- control command timelines
 COMMANDS = {
-    "text-number": ('{"commands": [{"t": 0, "vx": "0.1"}]}', "vx='0.1': a finite number"),
-    "boolean": ('{"commands": [{"t": 0, "vx": true}]}', "vx=True: a finite number"),
-    "text-time": ('{"commands": [{"t": "0", "vx": 0.1}]}', "t='0': a finite number"),
-    "pattern-number": ('{"commands": [{"t": 0, "pattern": 5}]}', "pattern=5: a pattern's name"),
-    "infinite": ('{"commands": [{"t": 0, "vx": Infinity}]}', "vx=inf: a finite number"),
+    "text-number": ('{"commands": [{"t": 0, "vx": "0.1"}]}', "vx='0.1' is not a finite number"),
+    "boolean": ('{"commands": [{"t": 0, "vx": true}]}', "vx=True is not a finite number"),
+    "text-time": ('{"commands": [{"t": "0", "vx": 0.1}]}', "t='0' is not a finite number"),
+    "pattern-number": ('{"commands": [{"t": 0, "pattern": 5}]}', "pattern=5 must be a string"),
+    "infinite": ('{"commands": [{"t": 0, "vx": Infinity}]}', "vx=inf is not a finite number"),
     "huge-speed": ('{"commands": [{"t": 0, "vx": 1e308}]}', "vx=1e+308 m/s: at most 10 m/s"),
     "huge-yaw": ('{"commands": [{"t": 0, "wz": -11}]}', "wz=-11 rad/s: at most 10 rad/s"),
 }

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import resource
 import sys
 from collections.abc import Callable
@@ -19,7 +20,12 @@ import pytest
 
 import hexapod_kin as hk
 from hexapod_kin import _reader
-from hexapod_kin.exceptions import OptionalDependencyError, ParameterError, SourceError
+from hexapod_kin.exceptions import (
+    HexapodKinError,
+    OptionalDependencyError,
+    ParameterError,
+    SourceError,
+)
 
 
 def _cpu() -> float:
@@ -265,12 +271,12 @@ def test_calibration_key_twice_is_refused_not_the_last(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("entry", "phrase"),
     [
-        ("{offset: '0.5'}", "offset = '0.5' is not a finite number"),
-        ("{direction: true}", "direction = True is not a finite number"),
-        ("{offset: .inf}", "offset = inf is not a finite number"),
-        ("{units: 5}", "units = 5 is not a string"),
-        ("{limits: 5}", "limits = 5 is not a number pair"),
-        ("{limits: [0, .nan]}", "limits = nan is not a finite number"),
+        ("{offset: '0.5'}", "offset='0.5' is not a finite number"),
+        ("{direction: true}", "direction=True is not a finite number"),
+        ("{offset: .inf}", "offset=inf is not a finite number"),
+        ("{units: 5}", "units=5 must be a string"),
+        ("{limits: 5}", "limits=5: a list of 2 numbers is required"),
+        ("{limits: [0, .nan]}", "limits[1]=nan is not a finite number"),
     ],
 )
 def test_calibration_values_are_numbers(tmp_path: Path, entry: str, phrase: str) -> None:
@@ -278,7 +284,7 @@ def test_calibration_values_are_numbers(tmp_path: Path, entry: str, phrase: str)
 
     path = tmp_path / "cal.yaml"
     path.write_text(f"joints:\n  knee: {entry}\n")
-    with pytest.raises(ParameterError, match=phrase.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(ParameterError, match=re.escape(phrase)):
         read_calibration(path)
 
 
@@ -438,3 +444,76 @@ def test_every_timeline_is_finite_within_range_or_refused_by_name() -> None:
 
     check()
     assert seen == {"refused", "written"}  # both outcomes drawn: the test can fail
+
+
+def _command_timeline(path: Path) -> Any:
+    from hexapod_kin.control.commands import read_timeline
+
+    return read_timeline(path)
+
+
+_TL = (
+    '{"format": "hexapod-kin timeline", "calibration": {"defaults": {"units": "rad"}}, '
+    '"joint_names": ["j"], "t": [0, 0.1], "command": [[0], [0]], "speed": [[0], [0]], '
+    '"rate": 10, "interpolation": "linear"}'
+)
+#: kind -> (reader, suffix, {case: (file text, the shared phrase)}): every reader's values go
+#: through _reader's number/numbers, text/texts and check_keys, with the file named (named).
+VALUES: dict[str, tuple[Callable[[Path], Any], str, dict[str, tuple[str, str]]]] = {
+    "table": (_table, ".yaml", {
+        "text-number": ("row:\n  - {d: '0.1'}\n", "row 1.d='0.1' is not a finite number"),
+        "boolean": ("row:\n  - {d: true}\n", "row 1.d=True is not a finite number"),
+        "unknown-key": ("row:\n  - {dd: 0.1}\n", "unknown key 'dd' (did you mean 'd'?)"),
+        "name": ("row:\n  - {name: 5}\n", "row 1.name=5 must be a string"),
+    }),
+    "feet": (_feet, ".yaml", {
+        "text-number": ("a: ['0', 0, 0]\n", "foot a: offset[0]='0' is not a finite number"),
+        "boolean": ("a: [0, true, 0]\n", "foot a: offset[1]=True is not a finite number"),
+        "unknown-key": ("feet: [{frame: a, offst: [0, 0, 0]}]\n", "unknown key 'offst'"),
+        "name": ("feet: [{frame: 5}]\n", "foot frame=5 must be a string"),
+    }),
+    "calibration": (_calibration, ".yaml", {
+        "text-number": ("joints: {k: {offset: '0.5'}}\n", "offset='0.5' is not a finite number"),
+        "boolean": ("joints: {k: {direction: true}}\n", "direction=True is not a finite number"),
+        "unknown-key": ("joints: {k: {ofset: 0}}\n", "unknown key 'ofset'"),
+        "name": ("joints: {k: {units: 5}}\n", "units=5 must be a string"),
+    }),
+    "plan": (_plan, ".json", {
+        "text-number": ('{"t": ["0"], "q": [[0]]}', "t[0]='0' is not a finite number"),
+        "boolean": ('{"t": [0], "q": [[false]]}', "q[0][0]=False is not a finite number"),
+        "unknown-key": ('{"t": [0], "q": [[0]], "qq": 1}', "unknown key 'qq'"),
+        "name": ('{"t": [0], "q": [[0]], "joint_names": [5]}', "joint_names[0]=5 must be a string"),
+    }),
+    "timeline": (_timeline, ".json", {
+        "text-number": (_TL.replace("[0, 0.1]", '[0, "0.1"]'), "t[1]='0.1' is not a finite number"),
+        "boolean": (_TL.replace('"rate": 10', '"rate": true'), "rate=True is not a finite number"),
+        "unknown-key": (_TL.replace('"units"', '"unit"'), "unknown key 'unit'"),
+        "name": (_TL.replace('["j"]', "[5]"), "joint_names[0]=5 must be a string"),
+    }),
+    "command timeline": (_command_timeline, ".json", {
+        "text-number": ('{"commands": [{"t": 0, "vx": "1"}]}', "vx='1' is not a finite number"),
+        "boolean": ('{"commands": [{"t": true}]}', "t=True is not a finite number"),
+        "unknown-key": ('{"commands": [{"t": 0, "speed": 1}]}', "unknown key 'speed'"),
+        "name": ('{"commands": [{"t": 0, "pattern": 5}]}', "pattern=5 must be a string"),
+    }),
+    "claims": (_claims, ".toml", {
+        "unknown-key": ("claimz = 1\n", "unknown key 'claimz'"),
+        "name": ('[[claim]]\nid = 5\nseed = "0"\nwhere = "x"\nkind = "y"\n', "claim id=5 must"),
+    }),
+}  # fmt: skip
+VALUE_CASES = [(kind, case) for kind, (_, _, cases) in VALUES.items() for case in cases]
+
+
+@pytest.mark.parametrize(("kind", "case"), VALUE_CASES, ids=[f"{k}-{c}" for k, c in VALUE_CASES])
+def test_every_reader_checks_values_with_the_same_words(tmp_path: Path, kind: str, case: str):
+    """A text for a number, a boolean, a misspelt key, a number for a name: one message each
+    whatever the file, the file named in front (``kind='path': ...``)."""
+    read, suffix, cases = VALUES[kind]
+    text, phrase = cases[case]
+    path = tmp_path / f"f{suffix}"
+    path.write_text(text)
+    with pytest.raises(HexapodKinError) as info:
+        read(path)
+    message = str(info.value)
+    assert phrase in message, message
+    assert f"={str(path)!r}: " in message and message.count("\n") == 0, message

@@ -11,13 +11,11 @@ from a JSON or YAML file through the package's reader.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from .._fields import fields_dict
+from .._reader import check_keys, clip, named, number, read_data, text
 from ..exceptions import ParameterError, one_of
 
 __all__ = ["MODES", "Command", "Timeline", "read_timeline", "timeline_of"]
@@ -29,17 +27,6 @@ MODES = ("walk", "stand", "sit")
 #: at 3.7 m/s); a larger number is a typing slip, refused at once instead of ramped towards.
 MAX_SPEED = 10.0
 MAX_YAW_RATE = 10.0
-
-
-def _finite(name: str, value: Any) -> float:
-    """A finite number (an int or a float: never a text nor a boolean, as '0.3' or true)."""
-    real = isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
-    x = float(value) if real else math.nan
-    if not math.isfinite(x):
-        raise ParameterError(
-            f"{name}={value!r}: a finite number", parameter=name, value=value, allowed="finite"
-        )
-    return x
 
 
 @dataclass(frozen=True)
@@ -65,7 +52,7 @@ class Command:
 
     def __post_init__(self) -> None:
         for name, cap in (("vx", MAX_SPEED), ("vy", MAX_SPEED), ("wz", MAX_YAW_RATE)):
-            x = _finite(name, getattr(self, name))
+            x = number(getattr(self, name), name)
             if abs(x) > cap:
                 unit = "rad/s" if name == "wz" else "m/s"
                 raise ParameterError(
@@ -76,14 +63,9 @@ class Command:
                 )
             object.__setattr__(self, name, x)
         one_of("mode", self.mode, list(MODES))
-        if self.pattern is not None and not isinstance(self.pattern, str):
-            raise ParameterError(
-                f"pattern={self.pattern!r}: a pattern's name (a text)",
-                parameter="pattern",
-                value=self.pattern,
-                allowed="a text",
-            )
-        h = _finite("height", self.height)
+        if self.pattern is not None:
+            text(self.pattern, "pattern")  # a pattern's name
+        h = number(self.height, "height")
         if not 0.3 <= h <= 1.0:
             raise ParameterError(
                 f"height={self.height!r}: a fraction of the standing height from 0.3 to 1",
@@ -135,7 +117,7 @@ class Timeline:
         return {"commands": [{"t": t, **c.to_dict()} for t, c in self.entries]}
 
 
-_KEYS = {"t", "vx", "vy", "wz", "pattern", "mode", "height"}
+_KEYS = ("t", "vx", "vy", "wz", "pattern", "mode", "height")
 
 
 def timeline_of(data: Any) -> Timeline:
@@ -153,30 +135,22 @@ def timeline_of(data: Any) -> Timeline:
             value=type(rows).__name__,
         )
     out = []
-    for row in rows:
-        if not isinstance(row, dict) or not set(row) <= _KEYS or "t" not in row:
+    for i, row in enumerate(rows, start=1):
+        if not isinstance(row, dict) or "t" not in row:
             raise ParameterError(
-                f"command {row!r}: a mapping with 't' and keys among {sorted(_KEYS)}",
+                f"command {i}={clip(row)}: a mapping with 't' and keys among {list(_KEYS)}",
                 parameter="commands",
-                value=repr(row)[:80],
-                allowed=sorted(_KEYS),
+                value=clip(row),
+                allowed=list(_KEYS),
             )
+        check_keys(row, _KEYS, f"command {i}", parameter="commands")
         kw = {k: v for k, v in row.items() if k != "t"}
-        out.append((_finite("t", row["t"]), Command(**kw)))
+        out.append((number(row["t"], "t"), Command(**kw)))
     return Timeline(tuple(out))
 
 
 def read_timeline(path: Any) -> Timeline:
     """Read a command timeline file (JSON or YAML, through :mod:`hexapod_kin._reader`)."""
-    from .._reader import read_data
-
     data = read_data(path, "command timeline", mapping="commands")
-    try:
+    with named(path, "command timeline"):
         return timeline_of(data)
-    except ParameterError as exc:  # name the file
-        raise ParameterError(
-            f"command timeline={str(path)!r}: {exc}",
-            parameter=exc.parameter,
-            value=exc.value,
-            allowed=exc.allowed,
-        ) from None

@@ -14,13 +14,13 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._reader import clip, read_data
+from .._reader import check_keys, named, number, numbers, read_data, text
 from ..exceptions import ParameterError, choices
 
 __all__ = ["UNITS", "Calibration", "Servo", "read_calibration"]
@@ -324,68 +324,51 @@ class Calibration:
         return out
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any], name: str = "calibration") -> Calibration:
-        """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc)."""
+    def from_dict(cls, data: Mapping[str, Any], name: str | None = None) -> Calibration:
+        """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc).
+
+        Args:
+            data: The file's values.
+            name: The file, named in errors (None: none named).
+
+        """
 
         def refuse(why: str, value: Any, allowed: Any) -> ParameterError:
-            return _bad(f"{name}: {why}", "calibration", value, allowed)
+            return _bad(why, "calibration", value, allowed)
 
-        if not isinstance(data, Mapping):
-            raise refuse("must be a mapping", type(data).__name__, "mapping")
-        unknown = [k for k in data if k not in ("defaults", "joints")]
-        if unknown:
-            why = f"unknown key {unknown[0]!r}; allowed: defaults, joints"
-            raise refuse(why, unknown[0], ("defaults", "joints"))
-        base = data.get("defaults") or {}
-        joints = data.get("joints") or {}
-        if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
-            raise refuse("'defaults' and 'joints' must be tables", None, "tables")
-        default = _servo("*", base, name) if "defaults" in data else None
-        servos = {}
-        for joint, entry in joints.items():
-            if not isinstance(entry, Mapping):
-                why = f"joint {joint!r} must be a table of servo settings"
-                raise refuse(why, joint, _SERVO_KEYS)
-            servos[str(joint)] = _servo(str(joint), {**base, **entry}, name)
-        return cls(servos=servos, default=default)
+        with named(name, "calibration") if name is not None else nullcontext():
+            if not isinstance(data, Mapping):
+                raise refuse("must be a mapping", type(data).__name__, "mapping")
+            check_keys(data, ("defaults", "joints"), "calibration", parameter="calibration")
+            base = data.get("defaults") or {}
+            joints = data.get("joints") or {}
+            if not isinstance(base, Mapping) or not isinstance(joints, Mapping):
+                raise refuse("'defaults' and 'joints' must be tables", None, "tables")
+            default = _servo("*", base) if "defaults" in data else None
+            servos = {}
+            for joint, entry in joints.items():
+                if not isinstance(entry, Mapping):
+                    why = f"joint {joint!r} must be a table of servo settings"
+                    raise refuse(why, joint, _SERVO_KEYS)
+                servos[str(joint)] = _servo(str(joint), {**base, **entry})
+            return cls(servos=servos, default=default)
 
 
-def _servo(joint: str, entry: Mapping[str, Any], name: str) -> Servo:
-    def refuse(key: str, value: Any, why: str, allowed: Any) -> ParameterError:
-        return _bad(f"{name}: joint {joint!r}: {why}", key, value, allowed)
-
+def _servo(joint: str, entry: Mapping[str, Any]) -> Servo:
+    where = f"joint {joint!r}"
+    check_keys(entry, _SERVO_KEYS, where, parameter="calibration")
     kw: dict[str, Any] = {}
     for key, value in entry.items():
-        if key not in _SERVO_KEYS:
-            why = f"unknown key {key!r}; {choices(_SERVO_KEYS)}"
-            raise refuse("calibration", key, why, _SERVO_KEYS)
         if key == "units":
-            if not isinstance(value, str):
-                why = f"units = {clip(value)} is not a string; {choices(UNITS)}"
-                raise refuse(key, clip(value), why, UNITS)
-            kw[key] = value
+            kw[key] = text(value, f"{where}: units", parameter=key)
         elif key == "limits":
-            if not isinstance(value, (list, tuple)) or len(value) != 2:
-                why = f"limits = {clip(value)} is not a number pair [lowest, highest]"
-                raise refuse(key, clip(value), why, "[lowest, highest]")
-            kw[key] = (_number(value[0], key, joint, name), _number(value[1], key, joint, name))
+            pair = numbers(value, f"{where}: limits", 2, parameter=key)
+            kw[key] = (pair[0], pair[1])
         else:
-            kw[key] = _number(value, key, joint, name)
+            kw[key] = number(value, f"{where}: {key}", parameter=key)
     if "direction" in kw and kw["direction"] in (1.0, -1.0):
         kw["direction"] = int(kw["direction"])
-    try:
-        return Servo(joint=joint, **kw)
-    except ParameterError as exc:  # name the file
-        key = exc.parameter or "calibration"
-        raise _bad(f"{name}: {exc}", key, exc.value, exc.allowed) from None
-
-
-def _number(value: Any, key: str, joint: str, name: str) -> float:
-    """A calibration number: an int or a float (never a text or a boolean), finite."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        why = f"{name}: joint {joint!r}: {key} = {clip(value)} is not a finite number"
-        raise _bad(why, key, clip(value), "finite numbers")
-    return float(value)
+    return Servo(joint=joint, **kw)
 
 
 def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibration:
@@ -410,13 +393,8 @@ def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibra
             joint or a servo that does not fit its joint's limits.
 
     """
-    name = Path(path).name
-    cal = Calibration.from_dict(read_data(path, "calibration"), name)
+    cal = Calibration.from_dict(read_data(path, "calibration"), str(path))
     if robot is not None:
-        try:
+        with named(path, "calibration"):
             cal.check_joints(robot.joint_names, robot.lower, robot.upper, of=repr(robot.name))
-        except ParameterError as exc:
-            raise _bad(
-                f"{name}: {exc}", exc.parameter or "calibration", exc.value, exc.allowed
-            ) from None
     return cal

@@ -39,7 +39,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .._io import atomic_write
-from .._reader import clip, parse_data, read_text
+from .._reader import check_keys, named, number, numbers, parse_data, read_text, text, texts
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
@@ -459,36 +459,6 @@ def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
     return SourceError(f"{kind}={str(p)!r}: not {what} ({why})", parameter=kind, value=str(p))
 
 
-def _numbers(value: Any, p: Path, kind: str, key: str) -> np.ndarray:
-    """A file's nested lists of numbers as an array; a text or a boolean refused by name."""
-    stack = [value]
-    while stack:
-        v = stack.pop()
-        if isinstance(v, list):
-            stack.extend(v)
-        elif isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise SourceError(
-                f"{kind}={str(p)!r}: {key} holds {clip(v)}, not a number",
-                parameter=kind,
-                value=clip(v),
-                allowed="numbers",
-            )
-    return np.asarray(value, dtype=float)
-
-
-def _texts(value: Any, p: Path, kind: str, key: str) -> None:
-    """Refuse names that are not a list of texts (``5`` or ``true`` would become '5', 'True')."""
-    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-        listed = isinstance(value, list)
-        bad = next((v for v in value if not isinstance(v, str)), value) if listed else value
-        raise SourceError(
-            f"{kind}={str(p)!r}: {key} must be a list of names (texts), got {clip(bad)}",
-            parameter=kind,
-            value=clip(bad),
-            allowed="texts",
-        )
-
-
 def _from_commands(
     t: np.ndarray,
     names: tuple[str, ...],
@@ -519,28 +489,32 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
     """
     p = Path(path)
     kind = _format(p, fmt)
-    text = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
+    raw = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
     try:
-        if kind == "json":
-            d = parse_data(text, str(p), "json", "timeline", _MAX_TIMELINE_VALUES)
-            if d.get("format") != FORMAT:
-                raise KeyError("format")
-            cal = Calibration.from_dict(d["calibration"], p.name)
-            _texts(d["joint_names"], p, "timeline", "joint_names")
-            return _from_commands(
-                _numbers(d["t"], p, "timeline", "t"),
-                tuple(d["joint_names"]),
-                _numbers(d["command"], p, "timeline", "command").reshape(len(d["t"]), -1),
-                _numbers(d["speed"], p, "timeline", "speed").reshape(len(d["t"]), -1),
-                cal,
-                float(d["rate"]),
-                str(d["interpolation"]),
-            )
-        if kind == "csv":
-            return _read_csv(text, p)
-        return _read_ros2(text, p)
+        with named(p, "timeline", SourceError):
+            if kind == "json":
+                return _read_json(raw, p)
+            if kind == "csv":
+                return _read_csv(raw, p)
+            return _read_ros2(raw, p)
     except _MALFORMED as exc:
         raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
+
+
+def _read_json(raw: str, p: Path) -> Timeline:
+    d = parse_data(raw, str(p), "json", "timeline", _MAX_TIMELINE_VALUES)
+    if d.get("format") != FORMAT:
+        raise KeyError("format")
+    t = np.asarray(numbers(d["t"], "t"), dtype=float)
+    return _from_commands(
+        t,
+        texts(d["joint_names"], "joint_names"),
+        np.asarray(numbers(d["command"], "command"), dtype=float).reshape(len(t), -1),
+        np.asarray(numbers(d["speed"], "speed"), dtype=float).reshape(len(t), -1),
+        Calibration.from_dict(d["calibration"]),
+        number(d["rate"], "rate"),
+        text(d["interpolation"], "interpolation"),
+    )
 
 
 def _csv(text: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
@@ -565,8 +539,7 @@ def _read_csv(text: str, p: Path) -> Timeline:
         raise KeyError("format")
     n = (len(columns) - 1) // 2
     names = columns[1 : 1 + n]
-    cal_data = parse_data(meta["calibration"], str(p), "json", "timeline")
-    cal = Calibration.from_dict(cal_data, p.name)
+    cal = Calibration.from_dict(parse_data(meta["calibration"], str(p), "json", "timeline"))
     return _from_commands(
         data[:, 0].copy(),
         names,
@@ -580,12 +553,14 @@ def _read_csv(text: str, p: Path) -> Timeline:
 
 def _read_ros2(text: str, p: Path) -> Timeline:
     d = parse_data(text, str(p), "yaml", "timeline", _MAX_TIMELINE_VALUES)
-    names = tuple(str(j) for j in d["joint_names"])
+    names = texts(d["joint_names"], "joint_names")
     pts = d["points"]
-    t = np.array([pt["time_from_start"]["sec"] + pt["time_from_start"]["nanosec"] * 1e-9
-                  for pt in pts], dtype=float)  # fmt: skip
-    q = np.array([pt["positions"] for pt in pts], dtype=float).reshape(len(pts), len(names))
-    v = np.array([pt["velocities"] for pt in pts], dtype=float).reshape(len(pts), len(names))
+    stamps = [[pt["time_from_start"]["sec"], pt["time_from_start"]["nanosec"]] for pt in pts]
+    sec = np.asarray(numbers(stamps, "time_from_start"), dtype=float).reshape(-1, 2)
+    t = sec[:, 0] + sec[:, 1] * 1e-9
+    q = np.asarray(numbers([pt["positions"] for pt in pts], "positions"), dtype=float)
+    v = np.asarray(numbers([pt["velocities"] for pt in pts], "velocities"), dtype=float)
+    q, v = q.reshape(len(pts), len(names)), v.reshape(len(pts), len(names))
     rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     head = text.splitlines()[0] if text else ""
     interp = "cubic" if "cubic" in head else "linear"
@@ -604,23 +579,19 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
 
     """
     p = Path(path)
-    text = read_text(p, "plan", _MAX_TIMELINE_BYTES)
+    raw = read_text(p, "plan", _MAX_TIMELINE_BYTES)
     try:
         if p.suffix.lower() == ".json":
-            d = parse_data(text, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
-            extra = sorted(set(d) - {"t", "q", "joint_names"}) if isinstance(d, dict) else []
-            if extra:
-                raise SourceError(
-                    f"plan={str(p)!r}: unknown key {extra[0]!r}; allowed: t, q, joint_names",
-                    parameter="plan",
-                    value=extra[0],
-                    allowed=("t", "q", "joint_names"),
-                )
-            t, q = _numbers(d["t"], p, "plan", "t"), _numbers(d["q"], p, "plan", "q")
-            names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
-            _texts(names, p, "plan", "joint_names")
-            return t, q.reshape(len(t), -1), tuple(names)
-        _, columns, data = _csv(text)
+            d = parse_data(raw, str(p), "json", "plan", _MAX_TIMELINE_VALUES)
+            with named(p, "plan", SourceError):
+                if not isinstance(d, dict):
+                    raise TypeError(f"a JSON object is needed, not a {type(d).__name__}")
+                check_keys(d, ("t", "q", "joint_names"), "plan")
+                t = np.asarray(numbers(d["t"], "t"), dtype=float)
+                q = np.asarray(numbers(d["q"], "q"), dtype=float)
+                names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
+                return t, q.reshape(len(t), -1), texts(names, "joint_names")
+        _, columns, data = _csv(raw)
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except _MALFORMED as exc:
         what = "a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, joint_names)"

@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
@@ -25,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .._fields import fields_dict
-from .._reader import FORMATS, read_data
+from .._reader import FORMATS, check_keys, named, numbers, read_data, text
 from .._tree import robot_size, tree_frames
 from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 
@@ -129,12 +128,16 @@ class FootSpec:
 
 def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
     """Three finite numbers from ``"x,y,z"`` or a sequence of numbers (never texts, booleans)."""
+    if not isinstance(text, str):  # a file's or a caller's list: '0' or true are typos
+        try:
+            text = list(text)
+        except TypeError:
+            pass
+        x, y, z = numbers(text, f"foot {where}: offset", 3, parameter="feet")
+        return (x, y, z)
     try:
-        if isinstance(text, str):
-            vals = [float(v) for v in text.split(",")]
-        else:  # a file's or a caller's list: numbers only ('0' or true are typos, not 0 or 1)
-            vals = [float(v) if _is_number(v) else math.nan for v in text]
-    except (TypeError, ValueError):
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
         vals = []
     if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
         raise ParameterError(
@@ -144,10 +147,6 @@ def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
             allowed="frame:x,y,z (metres, in the frame)",
         )
     return (vals[0], vals[1], vals[2])
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
 def _split_specs(text: str) -> list[str]:
@@ -224,12 +223,8 @@ def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
         data = read_data(spec, "feet")
         if isinstance(data, Mapping) and "feet" in data:
             data = data["feet"]
-        try:  # a text is a spec, not a file
+        with named(spec, "feet"):  # a text is a spec, not a file
             return parse_feet([data] if isinstance(data, str) else data, model)
-        except ParameterError as exc:  # name the file
-            raise ParameterError(
-                f"feet={str(spec)!r}: {exc}", parameter="feet", value=exc.value, allowed=exc.allowed
-            ) from None
     out: list[FootSpec] = []
     if isinstance(spec, str):
         items: list[Any] = _split_specs(spec)
@@ -246,16 +241,9 @@ def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:
         if isinstance(item, FootSpec):
             out.append(item)
         elif isinstance(item, Mapping) and "frame" in item:
-            extra = sorted(str(k) for k in item if k not in ("frame", "offset"))
-            if extra or not isinstance(item["frame"], str):
-                why = f"unknown key {extra[0]!r}" if extra else f"frame {item['frame']!r}"
-                raise ParameterError(
-                    f"foot {why}; allowed: frame (a text), offset [x, y, z] [m]",
-                    parameter="feet",
-                    value=extra[0] if extra else repr(item["frame"]),
-                    allowed=("frame", "offset"),
-                )
-            out.append(FootSpec(item["frame"], _numbers3(item.get("offset", (0, 0, 0)), "")))
+            check_keys(item, ("frame", "offset"), "foot", parameter="feet")
+            frame = text(item["frame"], "foot frame", parameter="feet")
+            out.append(FootSpec(frame, _numbers3(item.get("offset", (0, 0, 0)), frame)))
         elif isinstance(item, str):
             for piece in _split_specs(item):
                 m = _SPEC.match(piece)

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from .._reader import read_data
+from .._reader import check_keys, named, read_data, text
 from ..exceptions import ConfigurationError
 
 __all__ = ["CLAIMS_FILE", "SEEDS_DIR", "STATUSES", "Claim", "Verdict", "load_claims", "seed_file"]
@@ -130,18 +130,24 @@ def load_claims(path: str | Path | None = None) -> tuple[list[Claim], dict[str, 
             duplicated id.
 
     """
-    raw = read_data(path or CLAIMS_FILE, "claims", fmt="toml", mapping="claim, seeds")
+    path = path or CLAIMS_FILE
+    raw = read_data(path, "claims", fmt="toml", mapping="claim, seeds")
     out: list[Claim] = []
     seen: set[str] = set()
-    for item in raw.get("claim", []):
-        missing = [k for k in ("id", "seed", "where", "kind") if k not in item]
-        if missing or item.get("id") in seen:
-            raise ConfigurationError(
-                f"claims file {path or CLAIMS_FILE}: claim {item.get('id')!r} "
-                f"{'lacks ' + ', '.join(missing) if missing else 'is duplicated'}"
+    with named(path, "claims", ConfigurationError):
+        check_keys(raw, ("claim", "seeds"), "claims file")
+        for item in raw.get("claim", []):
+            missing = [k for k in ("id", "seed", "where", "kind") if k not in item]
+            if missing or item.get("id") in seen:
+                raise ConfigurationError(
+                    f"claims file {path}: claim {item.get('id')!r} "
+                    f"{'lacks ' + ', '.join(missing) if missing else 'is duplicated'}"
+                )
+            ident, seed, where, kind = (
+                text(item[k], f"claim {k}") for k in ("id", "seed", "where", "kind")
             )
-        seen.add(item["id"])
-        out.append(Claim(item["id"], item["seed"], item["where"], item["kind"], item))
+            seen.add(ident)
+            out.append(Claim(ident, seed, where, kind, item))
     return out, dict(raw.get("seeds", {}))
 
 
