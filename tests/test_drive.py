@@ -446,8 +446,11 @@ def test_physics_mode_walks_and_a_push_moves_the_base(source):
     c.push(force)
     for _ in range(5):  # the push's 0.1 s
         c.advance(0.02)
-    dv = c.physics.state()[2] - v0
+    v1 = c.physics.state()[2]
+    dv = v1 - v0
     assert dv[1] >= 0.25 * force[1] * PUSH_TIME / c.physics.mass, dv
+    pv = c.physics.push_velocities  # recorded in simulated time at the push's start and end
+    assert pv is not None and np.array_equal(pv[0], v0) and np.array_equal(pv[1], v1), pv
     assert abs(dv[0]) < 0.2 * dv[1], dv  # along the push
     for _ in range(50):  # it stays up (the push's size per kind)
         c.advance(0.02)

@@ -108,6 +108,9 @@ class Physics:
         self._push = np.zeros(3)
         #: The end of the last push, in simulated time [s].
         self.push_until = -1.0
+        #: The base velocity (3,) [m/s] when the last push began and when it ended (simulated
+        #: time: what a loaded machine's clock does not change); None until then.
+        self.push_velocities: tuple[np.ndarray, np.ndarray | None] | None = None
 
     @property
     def mass(self) -> float:
@@ -143,6 +146,7 @@ class Physics:
             )
         self._push = np.array([f[0], f[1], 0.0])
         self.push_until = self.time + PUSH_TIME
+        self.push_velocities = (np.array(self.data.qvel[:3]), None)
 
     def contacts(self) -> np.ndarray:
         """(n_legs,) bool: the feet touching the ground in the simulation."""
@@ -186,6 +190,9 @@ class Physics:
             for _ in range(self.sub):
                 self.mj.mj_step(self.model, self.data)
             self.time += period
+            pv = self.push_velocities
+            if pv is not None and pv[1] is None and self.time >= self.push_until - 1e-12:
+                self.push_velocities = (pv[0], np.array(self.data.qvel[:3]))
 
     def state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q (nq,) the legs' joints [rad], worldMbody (4, 4), base velocity (3,) [m/s])."""
