@@ -18,6 +18,7 @@ time, peak RSS < 1 GB, no catch-all nor traceback, at most two stderr lines.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -94,9 +95,12 @@ def test_numba_cache_on_a_full_disk_compiles_in_memory(
     assert want.status == 0, want.stderr
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(full_disk / "numba"))
     pre = cli("precompile", "--only", "batch", cwd=tmp_path, timeout=600)
-    bounded(pre, cpu=300.0, lines=2)  # the areas being compiled, then the one warning
+    # the estimate for the areas being compiled, the one warning, one progress line per area
+    bounded(pre, cpu=300.0, lines=3)
     assert pre.status == 0, pre.stderr
+    assert pre.lines[0].startswith("compiling batch in 1 process(es): about "), pre.stderr
     assert "cannot be written" in pre.stderr and "compiling in memory" in pre.stderr
+    assert re.fullmatch(r"  batch done \([0-9.]+ s\)", pre.lines[-1]), pre.stderr
     got = _python(FK_BATCH, tmp_path)
     bounded(got, cpu=300.0, lines=2, cli=False)  # Python's warning: its line and source
     assert got.status == 0, got.stderr
