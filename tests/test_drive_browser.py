@@ -361,7 +361,8 @@ def test_physics_mode_walks_and_a_click_pushes(browser, source):
         page.keyboard.down("w")
         time.sleep(2.0)
         page.keyboard.up("w")
-        time.sleep(0.3)
+        # the key's release reaches the readout (not a fixed wait: a loaded machine is slower)
+        _wait(page, "hexapodKin.state.readout.command.every(v => v === 0)")
         r = _readout(page)
         assert r["mode"] == "physics" and r["command"] == [0.0, 0.0, 0.0]
         walked = np.array(r["base"])[:3, 3] - x0
