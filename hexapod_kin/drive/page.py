@@ -24,7 +24,7 @@ from .physics import PUSH_WEIGHTS, kind_of
 from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
-__all__ = ["drive_page", "state_frame"]
+__all__ = ["drive_page", "state_frame", "visual_groups"]
 
 _CSP = (
     "default-src 'none'; script-src 'self' 'unsafe-inline'; style-src 'unsafe-inline'; "
@@ -111,7 +111,86 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     }
   });
   var THREE = MeshCat.THREE;
-  var paths = DATA.paths.map(function (p) { return p.split("/").filter(Boolean); });
+  var split = function (p) { return p.split("/").filter(Boolean); };
+  var paths = DATA.groups.map(function (g) { return split(DATA.visuals[g[0]]); });
+  function place(node, P, o) {  // a 3×4 [R | p], column-major (12 numbers from o)
+    node.set_transform([P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
+                        P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10], P[o + 11], 1]);
+  }
+  // per frame, software GL pays per pixel and per draw call: every visual of one group (rigid
+  // on one joint) moves with the group's first one and its opaque untextured meshes are
+  // merged into one (vertex colours), lit per vertex by one light from the viewer's side
+  // (ambient 0.35 + 0.75 |n·l|): a fragment costs what an unlit one does
+  var shaded = new THREE.ShaderMaterial({ vertexColors: true, side: THREE.DoubleSide,
+    uniforms: { lightDir: { value: new THREE.Vector3(0.3, 0.6, 1.0).normalize() } },
+    vertexShader: "uniform vec3 lightDir; varying vec3 vColor; void main() {" +
+      " vec3 n = normalize(normalMatrix * normal);" +
+      " vColor = color * (0.35 + 0.75 * abs(dot(n, lightDir)));" +
+      " gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }",
+    fragmentShader: "varying vec3 vColor;" +
+      " void main() { gl_FragColor = linearToOutputTexel(vec4(vColor, 1.0)); }" });
+  var nodes = paths.map(function (p) { return viewer.scene_tree.find(p); });
+  DATA.visuals.forEach(function (v, k) {
+    place(viewer.scene_tree.find(split(v)), DATA.init, 12 * k);
+  });
+  viewer.scene.updateMatrixWorld(true);
+  var lambert = function (m, colors) {
+    return new THREE.MeshLambertMaterial({ color: colors ? 0xffffff : m.color,
+      vertexColors: colors, transparent: m.transparent, opacity: m.opacity, side: m.side });
+  };
+  DATA.groups.forEach(function (g, gi) {
+    var anchor = nodes[gi].object, solid = [];
+    g.forEach(function (k) {
+      var meshes = [];
+      viewer.scene_tree.find(split(DATA.visuals[k])).object.traverse(function (o) {
+        if (o.isMesh) { meshes.push(o); }
+      });
+      meshes.forEach(function (m) {
+        anchor.attach(m);  // its pose kept, now relative to the group's node
+        var mat = m.material;
+        if (mat && mat.isMaterial && !mat.map && !mat.transparent &&
+            m.geometry.getAttribute("position") && m.geometry.getAttribute("normal")) {
+          solid.push(m);
+        }
+        else if (mat && mat.type === "MeshPhongMaterial" && !mat.map) {
+          m.material = lambert(mat, false);
+        }
+      });
+    });
+    var nv = 0, ni = 0;
+    solid.forEach(function (m) {
+      var n = m.geometry.attributes.position.count;
+      nv += n; ni += m.geometry.index ? m.geometry.index.count : n;
+    });
+    if (!solid.length) { return; }
+    var pos = new Float32Array(3 * nv), nor = new Float32Array(3 * nv);
+    var col = new Float32Array(3 * nv), idx = new Uint32Array(ni), ov = 0, oi = 0;
+    solid.forEach(function (m) {
+      m.updateMatrix();
+      var geo = m.geometry.clone(); geo.applyMatrix4(m.matrix);  // normals too
+      var n = geo.attributes.position.count, c = m.material.color;
+      var vc = m.material.vertexColors && geo.getAttribute("color");
+      for (var i = 0; i < n; i++) {
+        var j = 3 * (ov + i);
+        pos[j] = geo.attributes.position.getX(i); pos[j + 1] = geo.attributes.position.getY(i);
+        pos[j + 2] = geo.attributes.position.getZ(i);
+        nor[j] = geo.attributes.normal.getX(i); nor[j + 1] = geo.attributes.normal.getY(i);
+        nor[j + 2] = geo.attributes.normal.getZ(i);
+        col[j] = vc ? vc.getX(i) : c.r; col[j + 1] = vc ? vc.getY(i) : c.g;
+        col[j + 2] = vc ? vc.getZ(i) : c.b;
+      }
+      var ix = geo.index, cnt = ix ? ix.count : n;
+      for (var t = 0; t < cnt; t++) { idx[oi + t] = ov + (ix ? ix.getX(t) : t); }
+      ov += n; oi += cnt; geo.dispose(); m.parent.remove(m);
+    });
+    var merged = new THREE.BufferGeometry();
+    merged.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+    merged.setAttribute("normal", new THREE.BufferAttribute(nor, 3));
+    merged.setAttribute("color", new THREE.BufferAttribute(col, 3));
+    merged.setIndex(new THREE.BufferAttribute(idx, 1));
+    var one = new THREE.Mesh(merged, shaded);
+    one.name = "merged"; anchor.add(one);
+  });
   // overlays: support polygon, CoM, target
   var group = new THREE.Group();
   var polyGeom = new THREE.BufferGeometry();
@@ -369,16 +448,16 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     for (var i = 0; i < 3; i++) { if (Math.abs(b0[i][3] - b1[i][3]) > 1e-9) { return true; } }
     return false;
   }
+  var shownText = {};
+  function put(id, text) {  // the panel's text changed only when it changed (no relayout)
+    if (shownText[id] !== text) { shownText[id] = text; el(id).textContent = text; }
+  }
   function onState(st) {
     st.readout.time = st.time; api.state = st; api.seq = st.seq;
     var r = st.readout, now = performance.now();
     states.push(now); if (states.length > 120) { states.shift(); }
-    var P = st.poses;  // each visual's 3×4 [R | p], column-major: 12 numbers
-    for (var k = 0, o = 0; k < paths.length; k++, o += 12) {
-      viewer.set_transform(paths[k], [P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
-                                      P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10],
-                                      P[o + 11], 1]);
-    }
+    var P = st.poses;  // each group's 3×4 [R | p], column-major: 12 numbers
+    for (var k = 0; k < nodes.length; k++) { place(nodes[k], P, 12 * k); }
     if (pressAt !== null && JSON.stringify(r.command) !== cmdBefore) {
       api.latencies.push(now - pressAt); cmdBefore = "seen";
     }
@@ -386,9 +465,9 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       api.motion.push(now - pressAt); pressAt = null;
     }
     showMode(r.mode);
-    el("hk-fk").textContent = r.fk.map(function (row) {
+    put("hk-fk", r.fk.map(function (row) {
       return row.map(function (x) { return x.toFixed(12); }).join(" ");
-    }).join("\\n");
+    }).join("\\n"));
     var fam = r.family ? ("nearest singular family " + r.family.name + ": " +
       r.family.distance.toFixed(4) + " rad" + (r.family.near && r.family.ghost ?
       " (drawn: the chain on it, magenta)" : "")) : "singular families: " + DATA.families;
@@ -401,13 +480,13 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       ghostGeom.setDrawRange(0, Math.min(g.length, 64));
       ghostGeom.attributes.position.needsUpdate = true; ghostGeom.computeBoundingSphere();
     }
-    el("hk-status").textContent = r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
+    put("hk-status", r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
       r.sigma_min.toExponential(3) + " m · manipulability " + r.manipulability.toExponential(3) +
-      "\\n" + fam + "\\nstatus: " + r.status;
-    el("hk-msg").textContent = r.message || "";
+      "\\n" + fam + "\\nstatus: " + r.status);
+    put("hk-msg", r.message || "");
     DATA.joints.forEach(function (j, i) {
       if (document.activeElement !== sliders[i][0]) { sliders[i][0].value = r.q[i]; }
-      sliders[i][1].textContent = " " + r.q[i].toFixed(3);
+      put("hk-jv-" + i, " " + r.q[i].toFixed(3));
     });
     var near = r.sigma_min < DATA.sigma_eps || (r.family && r.family.distance < 0.05);
     footDot.position.set(r.point[0], r.point[1], r.point[2]);
@@ -434,22 +513,21 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       polyMat.color.setHex(lost ? 0xff0000 : 0x2288ff);
       com.position.set(s.com[0], s.com[1], s.com[2]);
       comGround.position.set(s.com[0], s.com[1], zmin);
-      el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
+      put("hk-margin", (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : ""));
       el("hk-margin").className = lost ? "lost" : "";
-      el("hk-com").textContent = fmt(s.com, 3) + " m";
+      put("hk-com", fmt(s.com, 3) + " m");
       var zlost = s.zmp_margin !== null && s.zmp_margin < 0;
-      el("hk-zmp").textContent = s.zmp_margin === null ? "-" :
-        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : "");
+      put("hk-zmp", s.zmp_margin === null ? "-" :
+        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : ""));
       el("hk-zmp").className = zlost ? "lost" : "";
       zmpDot.visible = !!s.zmp;
       if (s.zmp) { zmpDot.position.set(s.zmp[0], s.zmp[1], s.zmp[2]); }
       zmpDot.material.color.setHex(zlost ? 0xff0000 : 0x8844cc);
-      el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
-      el("hk-act").textContent = fmt(r.actual, 3);
-      el("hk-pcmd").textContent = el("hk-cmd").textContent;
-      el("hk-pact").textContent = fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])";
-      el("hk-minm").textContent =
-        r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
+      put("hk-cmd", fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])");
+      put("hk-act", fmt(r.actual, 3));
+      put("hk-pcmd", el("hk-cmd").textContent);
+      put("hk-pact", fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])");
+      put("hk-minm", r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm");
       if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
     }
     viewer.set_dirty();
@@ -499,11 +577,14 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         lo, hi = _limits(float(model.lower[i]), float(model.upper[i]))
         joints.append({"name": name, "lower": lo, "upper": hi, "value": float(cockpit.q[i])})
     fams = cockpit.families
+    groups = visual_groups(scene)
     label = title or f"hexapod_kin drive: {model.name}"
     data = {
         "title": label,
         "scene": [base64.b64encode(pack(c)).decode("ascii") for c in cmds],
-        "paths": [v.path for v in scene.visuals],
+        "visuals": [v.path for v in scene.visuals],
+        "groups": groups,
+        "init": _flat(scene.placements(cockpit.q[None], cockpit.base[None])[0]),
         "joints": joints,
         "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
         "legged": cockpit.legged,
@@ -525,6 +606,24 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
     return page(label, fill(_BODY, data=script_json(data)), style=_STYLE, policy=_CSP)
 
 
+def visual_groups(scene: Scene) -> list[list[int]]:
+    """The scene's visuals (indices) grouped by the joint that carries them, in order.
+
+    The visuals of one group are rigid together: the page places a group by its first one's
+    pose (:func:`state_frame` sends one pose per group) and merges its meshes into one.
+    """
+    joint_of = [int(scene.geom.geometryObjects[k].parentJoint) for k in scene.kept]
+    first: dict[int, list[int]] = {}
+    for i, j in enumerate(joint_of):
+        first.setdefault(j, []).append(i)
+    return list(first.values())
+
+
+def _flat(poses: np.ndarray) -> list[float]:
+    """(G, 4, 4) poses as 12 numbers each (3×4 [R | p], column-major; rows 0 0 0 1 not sent)."""
+    return np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7).tolist()  # type: ignore[no-any-return]
+
+
 def _clean(value: Any) -> Any:
     """JSON-safe: non-finite numbers become None (JSON has no inf or NaN)."""
     if isinstance(value, float):
@@ -537,10 +636,13 @@ def _clean(value: Any) -> Any:
 
 
 def state_frame(cockpit: Cockpit, scene: Scene, seq: int) -> dict[str, Any]:
-    """The state message of one tick: the visuals' poses (3×4, column-major) and the readout."""
+    """The state message of one tick: the visual groups' poses and the readout.
+
+    Each group's pose (:func:`visual_groups`) is its first visual's, 3×4 column-major.
+    """
     with cockpit.lock:
         q, base = cockpit.q.copy(), cockpit.base.copy()
         readout = cockpit.readout()
-    poses = scene.placements(q[None], base[None])[0]  # the last rows are 0 0 0 1: not sent
-    flat = np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7)
-    return {"type": "state", "seq": seq, "poses": flat.tolist(), "readout": _clean(readout)}
+    poses = scene.placements(q[None], base[None])[0]
+    anchors = [g[0] for g in visual_groups(scene)]
+    return {"type": "state", "seq": seq, "poses": _flat(poses[anchors]), "readout": _clean(readout)}
