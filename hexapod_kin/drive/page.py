@@ -68,6 +68,7 @@ min margin while walking <span id="hk-minm"></span><br>
 <div class="hk-tab" id="hk-tab-physics">MuJoCo under the closed-loop controller:
 W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot
 (<span id="hk-pushn"></span> for 0.1 s, horizontally along the view)<br>
+pattern <select id="hk-ppattern"></select> (the controller's; switched at its next cycle)<br>
 command <span id="hk-pcmd"></span><br>
 actual <span id="hk-pact"></span></div>
 <div id="hk-msg"></div>
@@ -387,8 +388,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   DATA.patterns.forEach(function (p) {
     var o = document.createElement("option"); o.textContent = p; el("hk-pattern").appendChild(o);
   });
+  DATA.physics_patterns.forEach(function (p) {
+    var o = document.createElement("option"); o.textContent = p; el("hk-ppattern").appendChild(o);
+  });
   el("hk-pattern").onchange = function () {
     send({ type: "pattern", pattern: el("hk-pattern").value });
+  };
+  el("hk-ppattern").onchange = function () {
+    send({ type: "pattern", pattern: el("hk-ppattern").value });
   };
   var keys = {}, pressAt = null, cmdBefore = null, baseBefore = null;
   function axes() {
@@ -528,7 +535,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       put("hk-pcmd", el("hk-cmd").textContent);
       put("hk-pact", fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])");
       put("hk-minm", r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm");
-      if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
+      var pick = r.mode === "physics" ? "hk-ppattern" : "hk-pattern";
+      if (document.activeElement !== el(pick)) { el(pick).value = r.pattern; }
     }
     viewer.set_dirty();
   }
@@ -590,6 +598,7 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "legged": cockpit.legged,
         "physics": cockpit.legged,
         "patterns": list(cockpit.patterns),
+        "physics_patterns": list(cockpit.physics_patterns),
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,
         "scale": span,
@@ -597,7 +606,7 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "push": PUSH_WEIGHTS[kind_of(cockpit.body)] * float(cockpit.body.mass) * 9.81
         if cockpit.legged
         else 0.0,
-        "families": "per leg: not derived (legged robot)"
+        "families": "per leg: the leg being moved (joints mode), once derived"
         if cockpit.legged
         else (fams.reason or "none")
         if fams is not None
