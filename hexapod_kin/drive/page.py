@@ -131,6 +131,8 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     fragmentShader: "varying vec3 vColor;" +
       " void main() { gl_FragColor = linearToOutputTexel(vec4(vColor, 1.0)); }" });
   var nodes = paths.map(function (p) { return viewer.scene_tree.find(p); });
+  // a flat background (meshcat's gradient is one more full-screen textured pass per frame)
+  viewer.scene.background = new THREE.Color(0xd2d8e2);
   DATA.visuals.forEach(function (v, k) {
     place(viewer.scene_tree.find(split(v)), DATA.init, 12 * k);
   });
@@ -159,6 +161,17 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       });
     });
     var nv = 0, ni = 0;
+    solid.forEach(function (m) {  // spheres and cylinders: 16 segments around (a joint's
+      var g = m.geometry, p = g.parameters || {};  // ball is a few pixels wide)
+      if (g.type === "SphereGeometry" && p.widthSegments > 16) {
+        m.geometry = new THREE.SphereGeometry(p.radius, 16, 10, p.phiStart, p.phiLength,
+                                              p.thetaStart, p.thetaLength);
+      }
+      else if (g.type === "CylinderGeometry" && p.radialSegments > 16) {
+        m.geometry = new THREE.CylinderGeometry(p.radiusTop, p.radiusBottom, p.height, 16,
+          p.heightSegments, p.openEnded, p.thetaStart, p.thetaLength);
+      }
+    });
     solid.forEach(function (m) {
       var n = m.geometry.attributes.position.count;
       nv += n; ni += m.geometry.index ? m.geometry.index.count : n;
@@ -166,23 +179,33 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     if (!solid.length) { return; }
     var pos = new Float32Array(3 * nv), nor = new Float32Array(3 * nv);
     var col = new Float32Array(3 * nv), idx = new Uint32Array(ni), ov = 0, oi = 0;
+    // positions may be quantised (Int16, scaled by the mesh's matrix): read as numbers,
+    // written as float32 in the group's frame
+    var unit = function (attr) {
+      if (!attr.normalized) { return 1; }
+      var a = attr.array;
+      return a instanceof Int8Array ? 1 / 127 : a instanceof Uint8Array ? 1 / 255 :
+        a instanceof Int16Array ? 1 / 32767 : a instanceof Uint16Array ? 1 / 65535 : 1;
+    };
+    var v3 = new THREE.Vector3(), n3 = new THREE.Matrix3();
     solid.forEach(function (m) {
-      m.updateMatrix();
-      var geo = m.geometry.clone(); geo.applyMatrix4(m.matrix);  // normals too
-      var n = geo.attributes.position.count, c = m.material.color;
+      m.updateMatrix(); n3.getNormalMatrix(m.matrix);
+      var geo = m.geometry, P = geo.attributes.position, N = geo.attributes.normal;
+      var n = P.count, c = m.material.color, up = unit(P), un = unit(N);
       var vc = m.material.vertexColors && geo.getAttribute("color");
+      var uc = vc ? unit(vc) : 1;
       for (var i = 0; i < n; i++) {
         var j = 3 * (ov + i);
-        pos[j] = geo.attributes.position.getX(i); pos[j + 1] = geo.attributes.position.getY(i);
-        pos[j + 2] = geo.attributes.position.getZ(i);
-        nor[j] = geo.attributes.normal.getX(i); nor[j + 1] = geo.attributes.normal.getY(i);
-        nor[j + 2] = geo.attributes.normal.getZ(i);
-        col[j] = vc ? vc.getX(i) : c.r; col[j + 1] = vc ? vc.getY(i) : c.g;
-        col[j + 2] = vc ? vc.getZ(i) : c.b;
+        v3.set(P.getX(i) * up, P.getY(i) * up, P.getZ(i) * up).applyMatrix4(m.matrix);
+        pos[j] = v3.x; pos[j + 1] = v3.y; pos[j + 2] = v3.z;
+        v3.set(N.getX(i) * un, N.getY(i) * un, N.getZ(i) * un).applyMatrix3(n3).normalize();
+        nor[j] = v3.x; nor[j + 1] = v3.y; nor[j + 2] = v3.z;
+        col[j] = vc ? vc.getX(i) * uc : c.r; col[j + 1] = vc ? vc.getY(i) * uc : c.g;
+        col[j + 2] = vc ? vc.getZ(i) * uc : c.b;
       }
       var ix = geo.index, cnt = ix ? ix.count : n;
       for (var t = 0; t < cnt; t++) { idx[oi + t] = ov + (ix ? ix.getX(t) : t); }
-      ov += n; oi += cnt; geo.dispose(); m.parent.remove(m);
+      ov += n; oi += cnt; m.parent.remove(m);
     });
     var merged = new THREE.BufferGeometry();
     merged.setAttribute("position", new THREE.BufferAttribute(pos, 3));
