@@ -653,7 +653,7 @@ def visual_groups(scene: Scene) -> list[list[int]]:
 
 def _flat(poses: np.ndarray) -> list[float]:
     """(G, 4, 4) poses as 12 numbers each (3×4 [R | p], column-major; rows 0 0 0 1 not sent)."""
-    return np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7).tolist()  # type: ignore[no-any-return]
+    return np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7).tolist()
 
 
 def _clean(value: Any) -> Any:
