@@ -131,6 +131,38 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     fragmentShader: "varying vec3 vColor;" +
       " void main() { gl_FragColor = linearToOutputTexel(vec4(vColor, 1.0)); }" });
   var nodes = paths.map(function (p) { return viewer.scene_tree.find(p); });
+  // mesh files (not primitives) simplified by vertex clustering: the vertices in one cube of
+  // CELL × the robot's size become one (mean position, colour and normal) and the triangles
+  // that collapse are dropped; a CAD mesh's triangles far below a pixel cost the most
+  var CELL = 0.006;
+  function cluster(pos, nor, col, idx, fine, cell) {
+    var n = fine.length, of = new Int32Array(n), keys = new Map(), m = 0, sums = [];
+    for (var i = 0; i < n; i++) {
+      var key = fine[i] ? Math.round(pos[3 * i] / cell) + "," + Math.round(pos[3 * i + 1] / cell) +
+        "," + Math.round(pos[3 * i + 2] / cell) : "v" + i;
+      var k = keys.get(key);
+      if (k === undefined) { k = m++; keys.set(key, k); sums.push(new Float64Array(10)); }
+      of[i] = k;
+      var s = sums[k];
+      for (var c = 0; c < 3; c++) {
+        s[c] += pos[3 * i + c]; s[3 + c] += nor[3 * i + c]; s[6 + c] += col[3 * i + c];
+      }
+      s[9] += 1;
+    }
+    var P = new Float32Array(3 * m), N = new Float32Array(3 * m), C = new Float32Array(3 * m);
+    for (var k = 0; k < m; k++) {
+      var s = sums[k], l = Math.hypot(s[3], s[4], s[5]) || 1;
+      for (var c = 0; c < 3; c++) {
+        P[3 * k + c] = s[c] / s[9]; N[3 * k + c] = s[3 + c] / l; C[3 * k + c] = s[6 + c] / s[9];
+      }
+    }
+    var out = [];
+    for (var t = 0; t < idx.length; t += 3) {
+      var a = of[idx[t]], b = of[idx[t + 1]], c = of[idx[t + 2]];
+      if (a !== b && b !== c && a !== c) { out.push(a, b, c); }
+    }
+    return [P, N, C, new Uint32Array(out)];
+  }
   // a flat background (meshcat's gradient is one more full-screen textured pass per frame)
   viewer.scene.background = new THREE.Color(0xd2d8e2);
   DATA.visuals.forEach(function (v, k) {
@@ -187,9 +219,11 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       return a instanceof Int8Array ? 1 / 127 : a instanceof Uint8Array ? 1 / 255 :
         a instanceof Int16Array ? 1 / 32767 : a instanceof Uint16Array ? 1 / 65535 : 1;
     };
-    var v3 = new THREE.Vector3(), n3 = new THREE.Matrix3();
+    var v3 = new THREE.Vector3(), n3 = new THREE.Matrix3(), fine = new Uint8Array(nv);
     solid.forEach(function (m) {
       m.updateMatrix(); n3.getNormalMatrix(m.matrix);
+      fine.fill(m.geometry.type === "BufferGeometry" ? 1 : 0, ov,
+                ov + m.geometry.attributes.position.count);
       var geo = m.geometry, P = geo.attributes.position, N = geo.attributes.normal;
       var n = P.count, c = m.material.color, up = unit(P), un = unit(N);
       var vc = m.material.vertexColors && geo.getAttribute("color");
@@ -207,11 +241,12 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       for (var t = 0; t < cnt; t++) { idx[oi + t] = ov + (ix ? ix.getX(t) : t); }
       ov += n; oi += cnt; m.parent.remove(m);
     });
+    var cut = cluster(pos, nor, col, idx, fine, DATA.scale * CELL);
     var merged = new THREE.BufferGeometry();
-    merged.setAttribute("position", new THREE.BufferAttribute(pos, 3));
-    merged.setAttribute("normal", new THREE.BufferAttribute(nor, 3));
-    merged.setAttribute("color", new THREE.BufferAttribute(col, 3));
-    merged.setIndex(new THREE.BufferAttribute(idx, 1));
+    merged.setAttribute("position", new THREE.BufferAttribute(cut[0], 3));
+    merged.setAttribute("normal", new THREE.BufferAttribute(cut[1], 3));
+    merged.setAttribute("color", new THREE.BufferAttribute(cut[2], 3));
+    merged.setIndex(new THREE.BufferAttribute(cut[3], 1));
     var one = new THREE.Mesh(merged, shaded);
     one.name = "merged"; anchor.add(one);
   });
