@@ -281,23 +281,25 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   };
   var states = [], fullRatio = window.devicePixelRatio || 1, ratio = fullRatio, adaptAt = 0;
   var good = 0, fixed = false;
-  function count(times, now) {
+  function count(times, now, span) {  // per second, over the last span [ms]
     var n = 0;
-    for (var i = times.length - 1; i >= 0 && times[i] > now - 1000; i--) { n++; }
-    return n;
+    for (var i = times.length - 1; i >= 0 && times[i] > now - span; i--) { n++; }
+    return n * 1000 / span;
   }
   function adapt(now) {  // each second: the resolution for >= 30 frames/s while moving
     if (fixed || now - adaptAt < 1000) { return; }
     adaptAt = now;
-    var drawn = count(renders, now), wanted = continuous ? 60 : Math.min(count(states, now), 60);
+    // rates over 2 s: one stall of a loaded machine is not a slow page
+    var drawn = count(renders, now, 2000);
+    var wanted = continuous ? 60 : Math.min(count(states, now, 2000), 60);
     if (wanted < 30) { return; }  // a still scene: nothing to keep up with
-    if (drawn < 32 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
+    if (drawn < 28 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
       ratio = Math.max(0.25, ratio * Math.max(0.5, Math.min(0.9, Math.sqrt(drawn / 40))));
     }
-    else if (drawn >= Math.min(wanted, 50) && ratio < fullRatio && ++good >= 3) {
-      ratio = Math.min(fullRatio, ratio / 0.85);  // after 3 s with room to spare
+    else if (drawn >= 0.9 * Math.min(wanted, 50) && ratio < fullRatio && ++good >= 2) {
+      ratio = Math.min(fullRatio, ratio / 0.85);  // after 2 s with room to spare
     }
-    else { if (drawn < Math.min(wanted, 50)) { good = 0; } return; }
+    else { if (drawn < 0.9 * Math.min(wanted, 50)) { good = 0; } return; }
     good = 0;
     renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
   }
