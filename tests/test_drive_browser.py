@@ -446,3 +446,38 @@ def test_merged_scene_is_where_the_library_puts_the_robot(browser, session):
     assert 1 <= merged <= n_groups and calls <= n_groups + 16, (merged, calls, n_groups)
     assert not page.errors  # type: ignore[attr-defined]
     page.close()
+
+
+def test_legged_leg_family_drawn_when_near(browser):
+    """The hexapod's joints mode: leg2's ankle at 0.1 rad puts leg2's chain 0.1 rad from its
+    family q3 = 0 and the page draws that chain (the readout's ghost, float32) in the world."""
+    import hexapod_kin as hk
+    from hexapod_kin.drive import Cockpit
+    from hexapod_kin.singularity import default_rows, families_for
+
+    m = hk.load("hexapod")
+    fams = [families_for(v, default_rows(v), derive=True) for v in Cockpit(m).leg_views]
+    if not all(f.families for f in fams):
+        pytest.skip("the legs' families could not be derived here")
+    with drive(m) as s:  # looked up in the background: found (derived above)
+        page = _open(browser, s)
+        j = m.joint_names.index("leg2_ankle")
+        page.evaluate(
+            "([j]) => { const s = document.getElementById('hk-joint-' + j); s.value = 0.1;"
+            " s.dispatchEvent(new Event('input')); }",
+            [j],
+        )
+        _wait(page, "hexapodKin.overlays.ghost.visible", 60000)
+        r = _readout(page)
+        assert r["foot"] == "foot of leg2" and r["family"]["name"].startswith("q3 = 0")
+        assert r["family"]["distance"] == pytest.approx(0.1, abs=1e-12)
+        ghost = np.array(r["family"]["ghost"])
+        drawn = page.evaluate(
+            "n => Array.from(hexapodKin.overlays.ghost.geometry.attributes.position.array)"
+            ".slice(0, 3 * n)",
+            len(ghost),
+        )
+        np.testing.assert_allclose(np.reshape(drawn, (-1, 3)), ghost, atol=1e-6)
+        assert "drawn" in page.inner_text("#hk-status")
+        assert not page.errors  # type: ignore[attr-defined]
+        page.close()
