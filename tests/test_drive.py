@@ -461,3 +461,146 @@ def test_physics_mode_walks_and_a_push_moves_the_base(source):
     c.set_mode("walk")  # leaving physics: standing again
     with pytest.raises(ParameterError, match="physics"):
         c.push(force)
+
+
+def _centroidal_cop(phys, period):
+    """Advance ``phys`` one control period; return (its CoP, the CoP from the momentum balance).
+
+    The balance uses no contact force: over the period T, the ground's vertical impulse is
+    Δ(m ċ_z) + m g T and its moment about the world origin ΔL_O − ∫ c × m g dt (L_O, c, ċ
+    from MuJoCo's subtree momenta, ∫ c dt by the trapezoid), so on the plane z = 0
+    x = −M_y / F_z and y = M_x / F_z (Newton–Euler of the whole robot).
+    """
+    import mujoco as mj
+
+    def momentum():
+        m, d = phys.model, phys.data
+        mj.mj_kinematics(m, d)
+        mj.mj_comPos(m, d)
+        mj.mj_comVel(m, d)
+        mj.mj_subtreeVel(m, d)
+        b = phys.base_body
+        c, v = np.array(d.subtree_com[b]), np.array(d.subtree_linvel[b])
+        return c, v, np.array(d.subtree_angmom[b]) + np.cross(c, phys.mass * v)
+
+    c0, v0, L0 = momentum()
+    phys.advance(period)
+    c1, v1, L1 = momentum()
+    m, g = phys.mass, -float(phys.model.opt.gravity[2])
+    fz = m * (v1[2] - v0[2]) + m * g * period
+    my = (L1[1] - L0[1]) - m * g * period * (c0[0] + c1[0]) / 2
+    mx = (L1[0] - L0[0]) + m * g * period * (c0[1] + c1[1]) / 2
+    return phys.zmp(), np.array([-my / fz, mx / fz]), c1
+
+
+def test_physics_zmp_is_the_centre_of_pressure():
+    """Physics mode's ZMP is the centre of pressure of MuJoCo's contact forces: equal, period
+    by period, to the one of the whole robot's momentum balance (no contact force in it) within
+    0.5 mm (the trapezoid over a 2 ms period and the joints' armature, measured < 0.1 mm), while
+    it is several mm away from the CoM's projection (what the page drew before); the readout's
+    ZMP and ZMP margin are it and its margin in the contact feet's polygon."""
+    pytest.importorskip("mujoco")
+    pytest.importorskip("proxsuite")
+    from hexapod_kin.gait.stability import support_margin
+
+    c = Cockpit(hk.load("erd:solo12"))
+    c.set_mode("physics")
+    c.set_drive((1.0, 0.0, 0.0))
+    for _ in range(50):  # 1 s of the trot
+        c.advance(0.02)
+    phys = c.physics
+    period = 1.0 / phys.ctl.rate
+    off = []
+    for _ in range(30):
+        cop, ref, com = _centroidal_cop(phys, period)
+        assert cop is not None and cop[2] == phys.ground_z == 0.0
+        np.testing.assert_allclose(cop[:2], ref, atol=5e-4, rtol=0)
+        off.append(float(np.linalg.norm(cop[:2] - com[:2])))
+    assert max(off) > 3e-3, off  # not the CoM's projection
+    q, base, _ = phys.state()
+    c._set_limb_q(q)
+    c.base = base
+    sup = c.support()
+    np.testing.assert_array_equal(sup["zmp"], phys.zmp())
+    feet = np.asarray(c.body.feet(c.qb[None], c.base[None])[0])
+    margin = support_margin(feet, phys.contacts(), phys.zmp())
+    assert sup["zmp_margin"] == pytest.approx(float(margin), abs=1e-12)
+
+
+def test_physics_offers_every_pattern_control_walks():
+    """A quadruped's physics mode offers the controller's patterns (trot included, which the
+    kinematic walk does not: not statically stable), starts in ``hexapod-kin control``'s trot,
+    walks ≥ 0.8 of the commanded distance without falling, and switches pattern while
+    walking (the controller takes it at its next cycle) still walking upright."""
+    pytest.importorskip("mujoco")
+    pytest.importorskip("proxsuite")
+    from hexapod_kin.gait.tables import pattern_names
+
+    c = Cockpit(hk.load("erd:solo12"))
+    xy = c.body.mounts[:, :2, 3]
+    assert c.patterns == ("crawl",)
+    assert c.physics_patterns == pattern_names(4, xy) and "trot" in c.physics_patterns
+    with pytest.raises(ParameterError, match="walk mode|joints mode"):
+        c.set_pattern("trot")  # the kinematic walk: statically stable patterns only
+    c.set_mode("physics")
+    assert c.pattern == "trot" and c.physics.ctl.pattern == "trot"
+    z0 = c.base[2, 3]
+    x0 = c.base[:3, 3].copy()
+    c.set_drive((1.0, 0.0, 0.0))
+    for _ in range(150):  # 3 s at 0.05 m/s
+        c.advance(0.02)
+    walked = c.base[:3, 3] - x0
+    assert walked[0] >= 0.8 * 0.05 * 3.0 and abs(walked[1]) < 0.2 * walked[0], walked
+    assert c.base[2, 2] > 0.95 and c.base[2, 3] > 0.8 * z0, c.base
+    c.set_pattern("crawl")
+    x1 = c.base[:3, 3].copy()
+    for _ in range(100):
+        c.advance(0.02)
+    assert c.physics.ctl.pattern == "crawl" and c.readout()["pattern"] == "crawl"
+    assert (c.base[:3, 3] - x1)[0] > 0.5 * 0.05 * 2.0
+    assert c.base[2, 2] > 0.95 and c.base[2, 3] > 0.8 * z0, c.base
+    with pytest.raises(ParameterError, match="physics mode"):
+        c.set_pattern("tripod")
+    c.set_mode("joints")  # back to the kinematic walk's patterns
+    assert c.pattern in c.patterns
+
+
+@pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
+def test_legged_joints_mode_shows_the_moved_legs_family(source):
+    """A legged robot's joints mode: the moved leg's chain (``Model.view(root, foot)``) and its
+    families; the knee-straight family q3 = 0 at the distance of the ankle/knee angle, and the
+    ghost drawn in the world equals the full robot's frames (Pinocchio on the whole model, not
+    the view) at that angle to 1e-9."""
+    import pinocchio as pin
+
+    from hexapod_kin.singularity import default_rows, families_for
+
+    m = hk.load(source)
+    probe = Cockpit(m)
+    fams = tuple(families_for(v, default_rows(v), derive=True) for v in probe.leg_views)
+    if not all(f.families for f in fams):
+        pytest.skip("the legs' families could not be derived here")
+    c = Cockpit(m, families=fams)
+    leg = 1
+    view = c.leg_views[leg]
+    assert view.nq == 3 and view.joint_names[0] in m.joint_names
+    j = m.joint_names.index(view.joint_names[2])  # the knee/ankle: q3 of the view
+    lo, hi = float(m.lower[j]), float(m.upper[j])
+    v = 0.1 if lo <= 0.1 <= hi else -0.1
+    c.set_joint(view.joint_names[2], v)
+    r = c.readout()
+    assert r["foot"] == f"foot of {c.body.leg_names[leg]}"
+    fam = r["family"]
+    assert fam["name"].startswith("q3 = 0") and fam["near"]
+    assert fam["distance"] == pytest.approx(abs(v), abs=1e-12)
+    q = np.array(r["q"])
+    q[j] = 0.0
+    d = m.model.createData()
+    pin.framesForwardKinematics(m.model, d, m.pinocchio_q(q))
+    ref = [
+        (c.base @ (m.baseMo * d.oMf[m.model.getFrameId(f)]).homogeneous)[:3, 3]
+        for f in view.path_frames
+    ]
+    np.testing.assert_allclose(fam["ghost"], ref, atol=1e-9, rtol=0)
+    c.set_mode("walk")
+    assert c.readout()["family"] is None  # joints mode only

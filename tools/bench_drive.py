@@ -1,10 +1,11 @@
 """The cockpit's frame rate and key → robot latency in headless Chromium (issue 33).
 
 Run: ``python tools/bench_drive.py [ROBOT]``. Prints frames per second (the scene re-rendered
-every frame, 640×480, software GL; the page lowers its pixel ratio until it keeps 30 frames/s,
-printed too) and the median over 20 presses of W of the time from the key
-to the command and to the robot moving, with the load average: figures, not assertions (tests
-never assert wall-clock times). Targets: ≥ 30 frames/s and ≤ 100 ms.
+every frame, 640×480, software GL) at pixel ratio 1 and as the page adapts it (it lowers its
+pixel ratio until it keeps 30 frames/s; the ratio is printed too) and the median over 20
+presses of W of the time from the key to the command and to the robot moving, with the load
+average: figures, not assertions (tests never assert wall-clock times). Targets: ≥ 30
+frames/s and ≤ 100 ms.
 """
 
 from __future__ import annotations
@@ -40,6 +41,14 @@ def measure(robot: str = "hexapod", presses: int = 20, browser: Any = None) -> d
 
         wait("window.hexapodKin && hexapodKin.ready && hexapodKin.state")
         page.evaluate("hexapodKin.setContinuous(true)")
+        page.evaluate("hexapodKin.fixResolution(1)")
+        time.sleep(1.0)
+        windows = []
+        for _ in range(3):  # the median of three 2-s windows (a loaded machine stalls)
+            time.sleep(2.0)
+            windows.append(page.evaluate("hexapodKin.fps(2000)"))
+        fps_full = statistics.median(windows)
+        page.evaluate("hexapodKin.fixResolution(null)")
         time.sleep(6.0)  # the page adapts its resolution once a second
         fps = page.evaluate("hexapodKin.fps(2000)")
         ratio = page.evaluate("hexapodKin.resolution()")
@@ -55,6 +64,7 @@ def measure(robot: str = "hexapod", presses: int = 20, browser: Any = None) -> d
         page.close()
     return {
         "fps": float(fps),
+        "fps_pixel_ratio_1": float(fps_full),
         "key_to_command_ms": statistics.median(ack),
         "key_to_moving_ms": statistics.median(moved),
         "presses": float(len(moved)),
@@ -67,7 +77,8 @@ def main() -> None:
     robot = sys.argv[1] if len(sys.argv) > 1 else "hexapod"
     r = measure(robot)
     print(
-        f"drive {robot}: {r['fps']:.1f} frames/s (target >= 30) at a pixel ratio of "
+        f"drive {robot}: {r['fps_pixel_ratio_1']:.1f} frames/s at pixel ratio 1, "
+        f"{r['fps']:.1f} frames/s (target >= 30) at the adapted pixel ratio of "
         f"{r['pixel_ratio']:.2f} (640x480 CSS px); key -> command "
         f"{r['key_to_command_ms']:.1f} ms, key -> robot moving {r['key_to_moving_ms']:.1f} ms "
         f"median of {int(r['presses'])} (target <= 100 ms); load average {r['load']:.1f}"

@@ -3,8 +3,8 @@
 Serves :func:`hexapod_kin.drive.drive` on 127.0.0.1, opens the page in headless Debian
 Chromium (Playwright, software GL), drives each mode through the page and saves a PNG:
 
-    python tools/drive_screenshots.py      # docs/img/drive_{joints,...,physics}.png and
-                                           # docs/img/drive_physics_solo12.png
+    python tools/drive_screenshots.py      # docs/img/drive_{joints,...,physics}.png,
+                                           # drive_joints_legged.png, drive_physics_solo12.png
     python tools/drive_screenshots.py --out /tmp/img
 """
 
@@ -36,8 +36,20 @@ def _wait(page: Any, expr: str) -> None:
     page.wait_for_function(f"() => ({expr})", timeout=60000)
 
 
+def _legged_with_families(source: str) -> Any:
+    """The robot loaded, its legs' singular families derived (the cockpit only looks up)."""
+    from hexapod_kin import load
+    from hexapod_kin.drive import Cockpit
+    from hexapod_kin.singularity import default_rows, families_for
+
+    model = load(source)
+    for view in Cockpit(model).leg_views:
+        families_for(view, default_rows(view), derive=True)
+    return model
+
+
 def shoot(out: Path) -> list[Path]:
-    """Write the six screenshots to ``out``; return their paths."""
+    """Write the seven screenshots to ``out``; return their paths."""
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     with chromium() as browser:
@@ -70,6 +82,19 @@ def shoot(out: Path) -> list[Path]:
                 )
             time.sleep(1.5)
             paths.append(out / "drive_body.png")
+            page.screenshot(path=str(paths[-1]))
+        legged = _legged_with_families("hexapod")
+        with drive(legged) as s:  # a leg's knee/ankle near straight: its family drawn
+            page = _open(browser, s.url)
+            j = legged.joint_names.index("leg2_ankle")
+            page.evaluate(
+                "([j]) => { const k = document.getElementById('hk-joint-' + j);"
+                " k.value = 0.12; k.dispatchEvent(new Event('input')); }",
+                [j],
+            )
+            _wait(page, "hexapodKin.overlays.ghost.visible")
+            time.sleep(1.0)
+            paths.append(out / "drive_joints_legged.png")
             page.screenshot(path=str(paths[-1]))
         with drive("hexapod") as s:  # walking forward and turning
             page = _open(browser, s.url)

@@ -132,9 +132,10 @@ def drive(
             ``hexabot_leg`` or ``hexapod``, a URDF, ``erd:NAME``).
         feet: Feet of a legged URDF without foot links (``"FRAME:X,Y,Z ..."``).
         port: Port on 127.0.0.1 (0: a free one).
-        families: Show the distance to the chain's nearest singular family when its families
-            are already derived (``hexapod-kin derive SOURCE``; looked up in the background,
-            never derived here: no child process).
+        families: Show the distance to the chain's (a legged robot: the moved leg's chain)
+            nearest singular family when its families are already derived
+            (``hexapod-kin derive SOURCE``; looked up in the background, never derived here:
+            no child process).
         title: The page's title.
         calibration: The servos of the downloaded timeline (a
             :class:`~hexapod_kin.export.timeline.Calibration` or a calibration file; None:
@@ -173,14 +174,21 @@ def drive(
         return state_frame(cockpit, scene, seq[0])
 
     server = DriveServer(cockpit, html, frame, port=port)
-    if families and not cockpit.legged:
+    if families:
         threading.Thread(target=_families, args=(cockpit,), daemon=True).start()
     return DriveSession(cockpit, server)
 
 
 def _families(cockpit: Cockpit) -> None:
-    """Find the chain's singular families (a background thread; a failure leaves none)."""
+    """Find the chain's (each leg's) singular families (a background thread; a failure: none)."""
     from ..singularity import default_rows, families_for
 
     with contextlib.suppress(Exception):
-        cockpit.families = families_for(cockpit.model, default_rows(cockpit.model), derive=False)
+        if cockpit.legged:
+            cockpit.families = tuple(
+                families_for(v, default_rows(v), derive=False) for v in cockpit.leg_views
+            )
+        else:
+            cockpit.families = families_for(
+                cockpit.model, default_rows(cockpit.model), derive=False
+            )

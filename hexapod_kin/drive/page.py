@@ -24,7 +24,7 @@ from .physics import PUSH_WEIGHTS, kind_of
 from .reach import SIGMA_EPS
 from .state import BODY_ANGLE, BODY_SHIFT, Cockpit
 
-__all__ = ["drive_page", "state_frame"]
+__all__ = ["drive_page", "state_frame", "visual_groups"]
 
 _CSP = (
     "default-src 'none'; script-src 'self' 'unsafe-inline'; style-src 'unsafe-inline'; "
@@ -68,6 +68,7 @@ min margin while walking <span id="hk-minm"></span><br>
 <div class="hk-tab" id="hk-tab-physics">MuJoCo under the closed-loop controller:
 W/S, A/D, Q/E (hold) set its velocity; <b>click</b> the scene to push the robot
 (<span id="hk-pushn"></span> for 0.1 s, horizontally along the view)<br>
+pattern <select id="hk-ppattern"></select> (the controller's; switched at its next cycle)<br>
 command <span id="hk-pcmd"></span><br>
 actual <span id="hk-pact"></span></div>
 <div id="hk-msg"></div>
@@ -111,7 +112,144 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     }
   });
   var THREE = MeshCat.THREE;
-  var paths = DATA.paths.map(function (p) { return p.split("/").filter(Boolean); });
+  var split = function (p) { return p.split("/").filter(Boolean); };
+  var paths = DATA.groups.map(function (g) { return split(DATA.visuals[g[0]]); });
+  function place(node, P, o) {  // a 3×4 [R | p], column-major (12 numbers from o)
+    node.set_transform([P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
+                        P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10], P[o + 11], 1]);
+  }
+  // per frame, software GL pays per pixel and per draw call: every visual of one group (rigid
+  // on one joint) moves with the group's first one and its opaque untextured meshes are
+  // merged into one (vertex colours), lit per vertex by one light from the viewer's side
+  // (ambient 0.35 + 0.75 |n·l|): a fragment costs what an unlit one does
+  var shaded = new THREE.ShaderMaterial({ vertexColors: true, side: THREE.DoubleSide,
+    uniforms: { lightDir: { value: new THREE.Vector3(0.3, 0.6, 1.0).normalize() } },
+    vertexShader: "uniform vec3 lightDir; varying vec3 vColor; void main() {" +
+      " vec3 n = normalize(normalMatrix * normal);" +
+      " vColor = color * (0.35 + 0.75 * abs(dot(n, lightDir)));" +
+      " gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }",
+    fragmentShader: "varying vec3 vColor;" +
+      " void main() { gl_FragColor = linearToOutputTexel(vec4(vColor, 1.0)); }" });
+  var nodes = paths.map(function (p) { return viewer.scene_tree.find(p); });
+  // mesh files (not primitives) simplified by vertex clustering: the vertices in one cube of
+  // CELL × the robot's size become one (mean position, colour and normal) and the triangles
+  // that collapse are dropped; a CAD mesh's triangles far below a pixel cost the most
+  var CELL = 0.006;
+  function cluster(pos, nor, col, idx, fine, cell) {
+    var n = fine.length, of = new Int32Array(n), keys = new Map(), m = 0, sums = [];
+    for (var i = 0; i < n; i++) {
+      var key = fine[i] ? Math.round(pos[3 * i] / cell) + "," + Math.round(pos[3 * i + 1] / cell) +
+        "," + Math.round(pos[3 * i + 2] / cell) : "v" + i;
+      var k = keys.get(key);
+      if (k === undefined) { k = m++; keys.set(key, k); sums.push(new Float64Array(10)); }
+      of[i] = k;
+      var s = sums[k];
+      for (var c = 0; c < 3; c++) {
+        s[c] += pos[3 * i + c]; s[3 + c] += nor[3 * i + c]; s[6 + c] += col[3 * i + c];
+      }
+      s[9] += 1;
+    }
+    var P = new Float32Array(3 * m), N = new Float32Array(3 * m), C = new Float32Array(3 * m);
+    for (var k = 0; k < m; k++) {
+      var s = sums[k], l = Math.hypot(s[3], s[4], s[5]) || 1;
+      for (var c = 0; c < 3; c++) {
+        P[3 * k + c] = s[c] / s[9]; N[3 * k + c] = s[3 + c] / l; C[3 * k + c] = s[6 + c] / s[9];
+      }
+    }
+    var out = [];
+    for (var t = 0; t < idx.length; t += 3) {
+      var a = of[idx[t]], b = of[idx[t + 1]], c = of[idx[t + 2]];
+      if (a !== b && b !== c && a !== c) { out.push(a, b, c); }
+    }
+    return [P, N, C, new Uint32Array(out)];
+  }
+  // a flat background (meshcat's gradient is one more full-screen textured pass per frame)
+  viewer.scene.background = new THREE.Color(0xd2d8e2);
+  DATA.visuals.forEach(function (v, k) {
+    place(viewer.scene_tree.find(split(v)), DATA.init, 12 * k);
+  });
+  viewer.scene.updateMatrixWorld(true);
+  var lambert = function (m, colors) {
+    return new THREE.MeshLambertMaterial({ color: colors ? 0xffffff : m.color,
+      vertexColors: colors, transparent: m.transparent, opacity: m.opacity, side: m.side });
+  };
+  DATA.groups.forEach(function (g, gi) {
+    var anchor = nodes[gi].object, solid = [];
+    g.forEach(function (k) {
+      var meshes = [];
+      viewer.scene_tree.find(split(DATA.visuals[k])).object.traverse(function (o) {
+        if (o.isMesh) { meshes.push(o); }
+      });
+      meshes.forEach(function (m) {
+        anchor.attach(m);  // its pose kept, now relative to the group's node
+        var mat = m.material;
+        if (mat && mat.isMaterial && !mat.map && !mat.transparent &&
+            m.geometry.getAttribute("position") && m.geometry.getAttribute("normal")) {
+          solid.push(m);
+        }
+        else if (mat && mat.type === "MeshPhongMaterial" && !mat.map) {
+          m.material = lambert(mat, false);
+        }
+      });
+    });
+    var nv = 0, ni = 0;
+    solid.forEach(function (m) {  // spheres and cylinders: 16 segments around (a joint's
+      var g = m.geometry, p = g.parameters || {};  // ball is a few pixels wide)
+      if (g.type === "SphereGeometry" && p.widthSegments > 16) {
+        m.geometry = new THREE.SphereGeometry(p.radius, 16, 10, p.phiStart, p.phiLength,
+                                              p.thetaStart, p.thetaLength);
+      }
+      else if (g.type === "CylinderGeometry" && p.radialSegments > 16) {
+        m.geometry = new THREE.CylinderGeometry(p.radiusTop, p.radiusBottom, p.height, 16,
+          p.heightSegments, p.openEnded, p.thetaStart, p.thetaLength);
+      }
+    });
+    solid.forEach(function (m) {
+      var n = m.geometry.attributes.position.count;
+      nv += n; ni += m.geometry.index ? m.geometry.index.count : n;
+    });
+    if (!solid.length) { return; }
+    var pos = new Float32Array(3 * nv), nor = new Float32Array(3 * nv);
+    var col = new Float32Array(3 * nv), idx = new Uint32Array(ni), ov = 0, oi = 0;
+    // positions may be quantised (Int16, scaled by the mesh's matrix): read as numbers,
+    // written as float32 in the group's frame
+    var unit = function (attr) {
+      if (!attr.normalized) { return 1; }
+      var a = attr.array;
+      return a instanceof Int8Array ? 1 / 127 : a instanceof Uint8Array ? 1 / 255 :
+        a instanceof Int16Array ? 1 / 32767 : a instanceof Uint16Array ? 1 / 65535 : 1;
+    };
+    var v3 = new THREE.Vector3(), n3 = new THREE.Matrix3(), fine = new Uint8Array(nv);
+    solid.forEach(function (m) {
+      m.updateMatrix(); n3.getNormalMatrix(m.matrix);
+      fine.fill(m.geometry.type === "BufferGeometry" ? 1 : 0, ov,
+                ov + m.geometry.attributes.position.count);
+      var geo = m.geometry, P = geo.attributes.position, N = geo.attributes.normal;
+      var n = P.count, c = m.material.color, up = unit(P), un = unit(N);
+      var vc = m.material.vertexColors && geo.getAttribute("color");
+      var uc = vc ? unit(vc) : 1;
+      for (var i = 0; i < n; i++) {
+        var j = 3 * (ov + i);
+        v3.set(P.getX(i) * up, P.getY(i) * up, P.getZ(i) * up).applyMatrix4(m.matrix);
+        pos[j] = v3.x; pos[j + 1] = v3.y; pos[j + 2] = v3.z;
+        v3.set(N.getX(i) * un, N.getY(i) * un, N.getZ(i) * un).applyMatrix3(n3).normalize();
+        nor[j] = v3.x; nor[j + 1] = v3.y; nor[j + 2] = v3.z;
+        col[j] = vc ? vc.getX(i) * uc : c.r; col[j + 1] = vc ? vc.getY(i) * uc : c.g;
+        col[j + 2] = vc ? vc.getZ(i) * uc : c.b;
+      }
+      var ix = geo.index, cnt = ix ? ix.count : n;
+      for (var t = 0; t < cnt; t++) { idx[oi + t] = ov + (ix ? ix.getX(t) : t); }
+      ov += n; oi += cnt; m.parent.remove(m);
+    });
+    var cut = cluster(pos, nor, col, idx, fine, DATA.scale * CELL);
+    var merged = new THREE.BufferGeometry();
+    merged.setAttribute("position", new THREE.BufferAttribute(cut[0], 3));
+    merged.setAttribute("normal", new THREE.BufferAttribute(cut[1], 3));
+    merged.setAttribute("color", new THREE.BufferAttribute(cut[2], 3));
+    merged.setIndex(new THREE.BufferAttribute(cut[3], 1));
+    var one = new THREE.Mesh(merged, shaded);
+    one.name = "merged"; anchor.add(one);
+  });
   // overlays: support polygon, CoM, target
   var group = new THREE.Group();
   var polyGeom = new THREE.BufferGeometry();
@@ -143,23 +281,25 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   };
   var states = [], fullRatio = window.devicePixelRatio || 1, ratio = fullRatio, adaptAt = 0;
   var good = 0, fixed = false;
-  function count(times, now) {
+  function count(times, now, span) {  // per second, over the last span [ms]
     var n = 0;
-    for (var i = times.length - 1; i >= 0 && times[i] > now - 1000; i--) { n++; }
-    return n;
+    for (var i = times.length - 1; i >= 0 && times[i] > now - span; i--) { n++; }
+    return n * 1000 / span;
   }
   function adapt(now) {  // each second: the resolution for >= 30 frames/s while moving
     if (fixed || now - adaptAt < 1000) { return; }
     adaptAt = now;
-    var drawn = count(renders, now), wanted = continuous ? 60 : Math.min(count(states, now), 60);
+    // rates over 2 s: one stall of a loaded machine is not a slow page
+    var drawn = count(renders, now, 2000);
+    var wanted = continuous ? 60 : Math.min(count(states, now, 2000), 60);
     if (wanted < 30) { return; }  // a still scene: nothing to keep up with
-    if (drawn < 32 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
+    if (drawn < 28 && ratio > 0.25) {  // a frame's cost goes with its pixels: ratio²
       ratio = Math.max(0.25, ratio * Math.max(0.5, Math.min(0.9, Math.sqrt(drawn / 40))));
     }
-    else if (drawn >= Math.min(wanted, 50) && ratio < fullRatio && ++good >= 3) {
-      ratio = Math.min(fullRatio, ratio / 0.85);  // after 3 s with room to spare
+    else if (drawn >= 0.9 * Math.min(wanted, 50) && ratio < fullRatio && ++good >= 2) {
+      ratio = Math.min(fullRatio, ratio / 0.85);  // after 2 s with room to spare
     }
-    else { if (drawn < Math.min(wanted, 50)) { good = 0; } return; }
+    else { if (drawn < 0.9 * Math.min(wanted, 50)) { good = 0; } return; }
     good = 0;
     renderer.setPixelRatio(ratio); viewer.set_3d_pane_size(); viewer.set_dirty();
   }
@@ -308,8 +448,14 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
   DATA.patterns.forEach(function (p) {
     var o = document.createElement("option"); o.textContent = p; el("hk-pattern").appendChild(o);
   });
+  DATA.physics_patterns.forEach(function (p) {
+    var o = document.createElement("option"); o.textContent = p; el("hk-ppattern").appendChild(o);
+  });
   el("hk-pattern").onchange = function () {
     send({ type: "pattern", pattern: el("hk-pattern").value });
+  };
+  el("hk-ppattern").onchange = function () {
+    send({ type: "pattern", pattern: el("hk-ppattern").value });
   };
   var keys = {}, pressAt = null, cmdBefore = null, baseBefore = null;
   function axes() {
@@ -369,16 +515,16 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
     for (var i = 0; i < 3; i++) { if (Math.abs(b0[i][3] - b1[i][3]) > 1e-9) { return true; } }
     return false;
   }
+  var shownText = {};
+  function put(id, text) {  // the panel's text changed only when it changed (no relayout)
+    if (shownText[id] !== text) { shownText[id] = text; el(id).textContent = text; }
+  }
   function onState(st) {
     st.readout.time = st.time; api.state = st; api.seq = st.seq;
     var r = st.readout, now = performance.now();
     states.push(now); if (states.length > 120) { states.shift(); }
-    var P = st.poses;  // each visual's 3×4 [R | p], column-major: 12 numbers
-    for (var k = 0, o = 0; k < paths.length; k++, o += 12) {
-      viewer.set_transform(paths[k], [P[o], P[o + 1], P[o + 2], 0, P[o + 3], P[o + 4], P[o + 5], 0,
-                                      P[o + 6], P[o + 7], P[o + 8], 0, P[o + 9], P[o + 10],
-                                      P[o + 11], 1]);
-    }
+    var P = st.poses;  // each group's 3×4 [R | p], column-major: 12 numbers
+    for (var k = 0; k < nodes.length; k++) { place(nodes[k], P, 12 * k); }
     if (pressAt !== null && JSON.stringify(r.command) !== cmdBefore) {
       api.latencies.push(now - pressAt); cmdBefore = "seen";
     }
@@ -386,9 +532,9 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       api.motion.push(now - pressAt); pressAt = null;
     }
     showMode(r.mode);
-    el("hk-fk").textContent = r.fk.map(function (row) {
+    put("hk-fk", r.fk.map(function (row) {
       return row.map(function (x) { return x.toFixed(12); }).join(" ");
-    }).join("\\n");
+    }).join("\\n"));
     var fam = r.family ? ("nearest singular family " + r.family.name + ": " +
       r.family.distance.toFixed(4) + " rad" + (r.family.near && r.family.ghost ?
       " (drawn: the chain on it, magenta)" : "")) : "singular families: " + DATA.families;
@@ -401,13 +547,13 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       ghostGeom.setDrawRange(0, Math.min(g.length, 64));
       ghostGeom.attributes.position.needsUpdate = true; ghostGeom.computeBoundingSphere();
     }
-    el("hk-status").textContent = r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
+    put("hk-status", r.foot + " at " + fmt(r.point, 4) + " m\\nσ_min " +
       r.sigma_min.toExponential(3) + " m · manipulability " + r.manipulability.toExponential(3) +
-      "\\n" + fam + "\\nstatus: " + r.status;
-    el("hk-msg").textContent = r.message || "";
+      "\\n" + fam + "\\nstatus: " + r.status);
+    put("hk-msg", r.message || "");
     DATA.joints.forEach(function (j, i) {
       if (document.activeElement !== sliders[i][0]) { sliders[i][0].value = r.q[i]; }
-      sliders[i][1].textContent = " " + r.q[i].toFixed(3);
+      put("hk-jv-" + i, " " + r.q[i].toFixed(3));
     });
     var near = r.sigma_min < DATA.sigma_eps || (r.family && r.family.distance < 0.05);
     footDot.position.set(r.point[0], r.point[1], r.point[2]);
@@ -434,23 +580,23 @@ FK (<code>fk()</code>, base frame):<pre id="hk-fk"></pre>
       polyMat.color.setHex(lost ? 0xff0000 : 0x2288ff);
       com.position.set(s.com[0], s.com[1], s.com[2]);
       comGround.position.set(s.com[0], s.com[1], zmin);
-      el("hk-margin").textContent = (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : "");
+      put("hk-margin", (1000 * s.margin).toFixed(1) + " mm" + (lost ? " LOST" : ""));
       el("hk-margin").className = lost ? "lost" : "";
-      el("hk-com").textContent = fmt(s.com, 3) + " m";
+      put("hk-com", fmt(s.com, 3) + " m");
       var zlost = s.zmp_margin !== null && s.zmp_margin < 0;
-      el("hk-zmp").textContent = s.zmp_margin === null ? "-" :
-        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : "");
+      put("hk-zmp", s.zmp_margin === null ? "-" :
+        (1000 * s.zmp_margin).toFixed(1) + " mm" + (zlost ? " LOST" : ""));
       el("hk-zmp").className = zlost ? "lost" : "";
       zmpDot.visible = !!s.zmp;
       if (s.zmp) { zmpDot.position.set(s.zmp[0], s.zmp[1], s.zmp[2]); }
       zmpDot.material.color.setHex(zlost ? 0xff0000 : 0x8844cc);
-      el("hk-cmd").textContent = fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])";
-      el("hk-act").textContent = fmt(r.actual, 3);
-      el("hk-pcmd").textContent = el("hk-cmd").textContent;
-      el("hk-pact").textContent = fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])";
-      el("hk-minm").textContent =
-        r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm";
-      if (document.activeElement !== el("hk-pattern")) { el("hk-pattern").value = r.pattern; }
+      put("hk-cmd", fmt(r.command, 3) + " (vx, vy [m/s], wz [rad/s])");
+      put("hk-act", fmt(r.actual, 3));
+      put("hk-pcmd", el("hk-cmd").textContent);
+      put("hk-pact", fmt(r.actual, 3) + " (vx, vy [m/s], wz [rad/s])");
+      put("hk-minm", r.min_margin === null ? "-" : (1000 * r.min_margin).toFixed(1) + " mm");
+      var pick = r.mode === "physics" ? "hk-ppattern" : "hk-pattern";
+      if (document.activeElement !== el(pick)) { el(pick).value = r.pattern; }
     }
     viewer.set_dirty();
   }
@@ -499,16 +645,20 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         lo, hi = _limits(float(model.lower[i]), float(model.upper[i]))
         joints.append({"name": name, "lower": lo, "upper": hi, "value": float(cockpit.q[i])})
     fams = cockpit.families
+    groups = visual_groups(scene)
     label = title or f"hexapod_kin drive: {model.name}"
     data = {
         "title": label,
         "scene": [base64.b64encode(pack(c)).decode("ascii") for c in cmds],
-        "paths": [v.path for v in scene.visuals],
+        "visuals": [v.path for v in scene.visuals],
+        "groups": groups,
+        "init": _flat(scene.placements(cockpit.q[None], cockpit.base[None])[0]),
         "joints": joints,
         "feet": list(cockpit.body.leg_names) if cockpit.legged else [str(model.tip)],
         "legged": cockpit.legged,
         "physics": cockpit.legged,
         "patterns": list(cockpit.patterns),
+        "physics_patterns": list(cockpit.physics_patterns),
         "body_shift": BODY_SHIFT * span,
         "body_angle": BODY_ANGLE,
         "scale": span,
@@ -516,13 +666,31 @@ def drive_page(cockpit: Cockpit, scene: Scene, *, title: str | None = None) -> s
         "push": PUSH_WEIGHTS[kind_of(cockpit.body)] * float(cockpit.body.mass) * 9.81
         if cockpit.legged
         else 0.0,
-        "families": "per leg: not derived (legged robot)"
+        "families": "per leg: the leg being moved (joints mode), once derived"
         if cockpit.legged
         else (fams.reason or "none")
         if fams is not None
         else "deriving…",
     }
     return page(label, fill(_BODY, data=script_json(data)), style=_STYLE, policy=_CSP)
+
+
+def visual_groups(scene: Scene) -> list[list[int]]:
+    """The scene's visuals (indices) grouped by the joint that carries them, in order.
+
+    The visuals of one group are rigid together: the page places a group by its first one's
+    pose (:func:`state_frame` sends one pose per group) and merges its meshes into one.
+    """
+    joint_of = [int(scene.geom.geometryObjects[k].parentJoint) for k in scene.kept]
+    first: dict[int, list[int]] = {}
+    for i, j in enumerate(joint_of):
+        first.setdefault(j, []).append(i)
+    return list(first.values())
+
+
+def _flat(poses: np.ndarray) -> list[float]:
+    """(G, 4, 4) poses as 12 numbers each (3×4 [R | p], column-major; rows 0 0 0 1 not sent)."""
+    return np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7).tolist()
 
 
 def _clean(value: Any) -> Any:
@@ -537,10 +705,13 @@ def _clean(value: Any) -> Any:
 
 
 def state_frame(cockpit: Cockpit, scene: Scene, seq: int) -> dict[str, Any]:
-    """The state message of one tick: the visuals' poses (3×4, column-major) and the readout."""
+    """The state message of one tick: the visual groups' poses and the readout.
+
+    Each group's pose (:func:`visual_groups`) is its first visual's, 3×4 column-major.
+    """
     with cockpit.lock:
         q, base = cockpit.q.copy(), cockpit.base.copy()
         readout = cockpit.readout()
-    poses = scene.placements(q[None], base[None])[0]  # the last rows are 0 0 0 1: not sent
-    flat = np.round(np.transpose(poses[:, :3, :], (0, 2, 1)).reshape(-1), 7)
-    return {"type": "state", "seq": seq, "poses": flat.tolist(), "readout": _clean(readout)}
+    poses = scene.placements(q[None], base[None])[0]
+    anchors = [g[0] for g in visual_groups(scene)]
+    return {"type": "state", "seq": seq, "poses": _flat(poses[anchors]), "readout": _clean(readout)}

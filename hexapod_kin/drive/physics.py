@@ -9,7 +9,9 @@ torques to motors limited to the joints' efforts, for any other legged robot, e.
 robot starts in its neutral pose with the feet on the ground, each control tick senses
 (:class:`~hexapod_kin.control.Measurement`: attitude, joints, foot contacts, base position and
 velocity), ticks the controller and steps MuJoCo for one control period. A push is a
-horizontal force on the base for :data:`PUSH_TIME` seconds.
+horizontal force on the base for :data:`PUSH_TIME` seconds. The ZMP drawn is the centre of
+pressure of the ground's reaction on the robot (:meth:`Physics.zmp`, from MuJoCo's contact
+forces).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import numpy as np
 
 from ..exceptions import ParameterError
 
-__all__ = ["PUSH_TIME", "PUSH_WEIGHTS", "Physics", "kind_of"]
+__all__ = ["PUSH_TIME", "PUSH_WEIGHTS", "Physics", "default_pattern", "kind_of"]
 
 #: Duration of a push [s].
 PUSH_TIME = 0.1
@@ -49,6 +51,18 @@ def kind_of(body: Any) -> str:
     for any other legged robot.
     """
     return "servo" if getattr(body, "params", None) is not None else "torque"
+
+
+def default_pattern(body: Any) -> str:
+    """The gait ``hexapod-kin control`` starts ``body`` with: tripod on six legs, trot on four.
+
+    (:func:`hexapod_kin.control.run`'s default; else the first of the legs' patterns.)
+    """
+    from ..gait.tables import pattern_names
+
+    names = pattern_names(body.n_legs, np.asarray(body.mounts)[:, :2, 3])
+    best = {6: "tripod", 4: "trot"}.get(body.n_legs, "wave")
+    return best if best in names else names[0]
 
 
 class Physics:
@@ -89,6 +103,10 @@ class Physics:
         self.leg_of[feet] = np.arange(len(feet))
         self.ground = np.zeros(m.ngeom, dtype=bool)
         self.ground[name2id(m, obj.mjOBJ_GEOM, "ground")] = True
+        #: The ground plane's height [m] (the scene's plane geom).
+        self.ground_z = float(m.geom_pos[name2id(m, obj.mjOBJ_GEOM, "ground"), 2])
+        self._cop = np.zeros(3)  # over the last control period: Σ x·Fz − (z−h)·Fx, Σ y…, Σ Fz
+        self._f6 = np.zeros(6)
         self.base_body = int(m.jnt_bodyid[0])
         #: The scene's foot sphere radius [m] (the robot's, or its foot links' shapes').
         self.foot_radius = float(scene.foot_radius)
@@ -160,6 +178,41 @@ class Physics:
                 contacts[self.leg_of[g2]] = True
         return contacts
 
+    def ground_reaction(self) -> tuple[np.ndarray, np.ndarray]:
+        """The ground's contact forces on the robot now: points (K, 3) and forces (K, 3) [m, N].
+
+        MuJoCo's contacts with the ground geom (``mj_contactForce``, the contact frame's rows
+        in the world), each force turned to act on the robot (the geom that is not the ground).
+        """
+        mj, m, d = self.mj, self.model, self.data
+        pts, forces = [], []
+        for i in range(d.ncon):
+            c = d.contact[i]
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if not (self.ground[g1] or self.ground[g2]):
+                continue
+            mj.mj_contactForce(m, d, i, self._f6)
+            f = np.asarray(c.frame).reshape(3, 3).T @ self._f6[:3]  # on geom2, from geom1
+            forces.append(f if self.ground[g1] else -f)
+            pts.append(np.array(c.pos))
+        if not pts:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return np.array(pts), np.array(forces)
+
+    def zmp(self) -> np.ndarray | None:
+        """The centre of pressure of the ground reaction over the last control period [m].
+
+        On the ground plane ``z = h`` (:attr:`ground_z`), from the contact points ``p_i`` and
+        forces ``F_i`` of every MuJoCo step of the period (:meth:`ground_reaction`):
+        ``x = Σ(x_i F_zi − (z_i − h) F_xi) / Σ F_zi`` and the same for ``y`` — the point
+        about which the reaction's moment has no horizontal part, i.e. the ZMP on flat ground.
+        None while nothing pushes on the ground (before the first step, or airborne).
+        """
+        sx, sy, fz = self._cop
+        if not fz > 1e-9:
+            return None
+        return np.array([sx / fz, sy / fz, self.ground_z])
+
     def _measure(self) -> Any:
         from ..control import Measurement
 
@@ -187,8 +240,19 @@ class Physics:
             self.data.xfrc_applied[self.base_body] = 0.0
             if self.time < self.push_until:
                 self.data.xfrc_applied[self.base_body, :3] = self._push
+            cop = np.zeros(3)
             for _ in range(self.sub):
                 self.mj.mj_step(self.model, self.data)
+                # the step's contact forces (its state before the integration)
+                p, f = self.ground_reaction()
+                if len(p):
+                    h = p[:, 2] - self.ground_z
+                    cop += (
+                        float(np.sum(p[:, 0] * f[:, 2] - h * f[:, 0])),
+                        float(np.sum(p[:, 1] * f[:, 2] - h * f[:, 1])),
+                        float(np.sum(f[:, 2])),
+                    )
+            self._cop = cop
             self.time += period
             pv = self.push_velocities
             if pv is not None and pv[1] is None and self.time >= self.push_until - 1e-12:

@@ -61,6 +61,14 @@ def _finite(name: str, value: Any, size: int) -> np.ndarray:
     return arr
 
 
+def _leg_view(model: Any, body: Any, leg: int) -> Any:
+    """Leg ``leg``'s chain as a model: the root → the last frame carried by its last joint."""
+    cols = [j for j in range(body.nq) if body.leg_of_joint(j) == body.leg_names[leg]]
+    joint = model.model.getJointId(body.joint_names[cols[-1]])
+    tip = [f.name for f in model.model.frames if f.parentJoint == joint][-1]
+    return model.view(None, tip)
+
+
 class Cockpit:
     """A robot driven live: state, commands and readouts (thread-safe).
 
@@ -69,7 +77,8 @@ class Cockpit:
         feet: Feet of a legged URDF without foot links (see
             :func:`~hexapod_kin.gait.robot.as_whole_body`).
         families: The chain's singular families (:class:`~hexapod_kin.singularity.Families`)
-            or ``None``; may be given later (:attr:`families`).
+            or ``None``; a legged robot's: one per leg (:attr:`leg_views`' order, ``None``
+            for a leg without); may be given later (:attr:`families`).
         calibration: The servos of the downloaded timeline (a
             :class:`~hexapod_kin.export.timeline.Calibration` or a calibration file; None:
             every joint in rad, unlimited).
@@ -113,6 +122,8 @@ class Cockpit:
         if self.body is None:
             self.limbs = [Limb(model)]
             self.patterns: tuple[str, ...] = ()
+            self.physics_patterns: tuple[str, ...] = ()
+            self.leg_views: tuple[Any, ...] = ()
             self.pattern = ""
         else:
             wb = self.body
@@ -132,7 +143,11 @@ class Cockpit:
                 if phase_table(p, wb.n_legs, xy).statically_stable
             )
             self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
+            #: Physics mode's patterns: every one the closed-loop controller walks.
+            self.physics_patterns = tuple(pattern_names(wb.n_legs, xy))
             self.walker = Walker(wb)
+            #: Each leg's chain, body → foot, as a model of its own (``Model.view``).
+            self.leg_views = tuple(_leg_view(model, wb, i) for i in range(wb.n_legs))
         self.physics: Any = None
         self.limb = 0
         self.speed = (0.05, 0.05, 0.3) if self.body is not None else (0.0, 0.0, 0.0)
@@ -199,7 +214,9 @@ class Cockpit:
         """Switch the page's mode (one of :data:`MODES`; body, walk and physics need legs).
 
         ``physics`` starts a new simulation (:class:`~.physics.Physics`) from the neutral
-        pose at the origin; leaving it resets the robot (standing at the origin).
+        pose at the origin, in the pattern ``hexapod-kin control`` starts with
+        (:func:`~.physics.default_pattern`); leaving it resets the robot (standing at the
+        origin, in a pattern of the kinematic walk).
 
         Raises:
             ParameterError: Unknown mode, or a legged mode for a robot without legs.
@@ -219,9 +236,12 @@ class Cockpit:
         with self.lock:
             if self.mode == "physics" and mode != "physics":
                 self.reset()
+                if self.pattern not in self.patterns:
+                    self.pattern = "tripod" if "tripod" in self.patterns else self.patterns[0]
             if mode == "physics":
-                from .physics import Physics
+                from .physics import Physics, default_pattern
 
+                self.pattern = default_pattern(self.body)
                 self.physics = Physics(self.body, self.pattern)
                 self.walker.cycle, self.drive = None, (0.0, 0.0, 0.0)
                 self.status, self.message = "physics", ""
@@ -272,6 +292,10 @@ class Cockpit:
             self.q[j] = v
             if self.body is not None:
                 self.qb = self.q[self._cols].copy()
+                col = np.flatnonzero(self._cols == j)
+                if col.size:  # the readout follows the leg being moved
+                    leg = self.body.leg_of_joint(int(col[0]))
+                    self.limb = list(self.body.leg_names).index(leg)
             self.status, self.message = "idle", ""
             self._record()
 
@@ -452,18 +476,23 @@ class Cockpit:
                 self._start_cycle()
 
     def set_pattern(self, name: str) -> None:
-        """The walk's phase pattern (one of :attr:`patterns`; from the next cycle on).
+        """The walk's phase pattern, from the next cycle on.
+
+        One of :attr:`patterns` (the kinematic walk), or in physics mode one of
+        :attr:`physics_patterns` (the controller switches at its next cycle boundary).
 
         Raises:
-            ParameterError: Unknown pattern.
+            ParameterError: Unknown pattern (for the current mode).
 
         """
-        if name not in self.patterns:
+        allowed = self.physics_patterns if self.mode == "physics" else self.patterns
+        if name not in allowed:
             raise ParameterError(
-                f"pattern={name!r} is not allowed; use one of {choices(self.patterns)}",
+                f"pattern={name!r} is not allowed in {self.mode} mode; use one of "
+                f"{choices(allowed)}",
                 parameter="pattern",
                 value=name,
-                allowed=self.patterns,
+                allowed=allowed,
             )
         with self.lock:
             self.pattern = name
@@ -560,8 +589,11 @@ class Cockpit:
 
         While walking, the ZMP is the planner's of the sample (:func:`.walking.run_zmp`, placed
         in the world) and ``zmp_margin`` its margin in the support polygon
-        (:attr:`~hexapod_kin.gait.walk.GaitRun.zmp_margin`); standing still, the ZMP is the
-        CoM's projection on the ground and its margin the static one.
+        (:attr:`~hexapod_kin.gait.walk.GaitRun.zmp_margin`); in physics mode it is the centre
+        of pressure of MuJoCo's ground reaction over the last control period
+        (:meth:`~.physics.Physics.zmp`) and its margin in the polygon of the feet in contact;
+        standing still, the ZMP is the CoM's projection on the ground and its margin the
+        static one.
         """
         wb = self.body
         feet = np.asarray(wb.feet(self.qb[None], self.base[None])[0])
@@ -582,6 +614,9 @@ class Cockpit:
             if len(run.zmp_margin) > k:
                 zmp_margin = float(run.zmp_margin[k])
         margin = float(support_margin(feet, stance, com))
+        cop = physics.zmp() if physics is not None else None
+        if cop is not None:
+            zmp, zmp_margin = cop, float(support_margin(feet, stance, cop))
         if zmp is None:
             ground = float(np.mean(feet[stance, 2])) - radius if stance.any() else 0.0
             zmp, zmp_margin = np.array([com[0], com[1], ground]), margin
@@ -632,18 +667,26 @@ class Cockpit:
         family for an implicit one (None when it does not converge); ``ghost`` the origins of
         the chain's frames (``model.frame_placements``, base frame [m]) at ``q``; ``near``
         whether the distance is below :data:`FAMILY_NEAR` (the page draws the ghost then).
+        A legged robot, in joints mode: the chain of the leg being moved (:attr:`leg_views`,
+        ``q`` its joints), the ghost in the world.
         """
-        fams = self.families
-        if self.body is not None or fams is None or not fams.families:
+        fams, model, q_now, to_world = self.families, self.model, self.q, np.eye(4)
+        if self.body is not None:  # the leg being moved: its chain's families
+            if fams is None or self.limb >= len(fams) or self.mode != "joints":
+                return None
+            fams, model = fams[self.limb], self.leg_views[self.limb]
+            q_now = self.q[[self.model.joint_names.index(n) for n in model.joint_names]]
+            to_world = self.base
+        if fams is None or not fams.families:
             return None
-        idx, dist, _, _ = fams.nearest(self.q[None])
+        idx, dist, _, _ = fams.nearest(q_now[None])
         if idx[0] < 0:
             return None
         fam = fams.families[int(idx[0])]
-        q = fam.project(self.q)
+        q = fam.project(q_now)
         ghost = None
         if q is not None:
-            ghost = [t[:3, 3].tolist() for t in self.model.frame_placements(q)]
+            ghost = [(to_world @ t)[:3, 3].tolist() for t in model.frame_placements(q)]
         return {
             "name": str(getattr(fam, "name", idx[0])),
             "distance": float(dist[0]),
