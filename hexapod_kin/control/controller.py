@@ -60,6 +60,16 @@ ACCEL = (1.0, 2.0)
 #: servos lag their targets; arriving early lands the foot where it was placed).
 ARRIVE = 0.8
 
+#: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
+RETURN_SPEED = 0.6
+
+#: Servo kind: damped Newton steps of the leg IK per tick, and their damping [m²].
+IK_STEPS = 2
+IK_DAMPING = 1e-4
+
+#: Servo kind: a leg farther than this from its target after the IK steps is out of reach [m].
+IK_TOLERANCE = 0.002
+
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
@@ -159,6 +169,7 @@ class Controller:
         self.pin = pin
         self.model = pin.Model(wb.model)
         self.data = self.model.createData()
+        self.ik_data = self.model.createData()
         self.n_legs, self.nq = wb.n_legs, wb.nq
         self.rate = positive(
             "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
@@ -265,6 +276,7 @@ class Controller:
         self.ground_z = 0.0
         self.q_cmd = np.array(self.q_neutral)
         self.integral = np.zeros(6)
+        self.return_offset = np.zeros(2)
         self.ready = False
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
@@ -552,9 +564,16 @@ class Controller:
         R, pos = st["R"], np.asarray(m.position, dtype=float)
         # the body's reference pose and its error (position, rotation vector)
         Rd = self._desired_rotation()
-        p_ref = np.array([*self.path_xy, self.ground_z + self.height_ref])
-        e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
         lim = 0.08 * self.span
+        # the body's goal: the path, returned to at RETURN_SPEED when the body is off it (a
+        # push), never more than ``lim`` from the body (the steps carry it back)
+        off = pos[:2] - self.path_xy
+        d = self.return_offset
+        n = float(np.linalg.norm(d))
+        d = d * max(0.0, 1.0 - RETURN_SPEED * self.span * self.dt / n) if n > 0 else d
+        self.return_offset = d = np.clip(d, off - lim, off + lim)
+        p_ref = np.array([*(self.path_xy + d), self.ground_z + self.height_ref])
+        e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
         e[:3] = np.clip(e[:3], -lim, lim)
         self.integral = np.clip(self.integral + 2.0 * self.dt * e, -lim, lim)
         corr = e + self.integral
@@ -567,6 +586,37 @@ class Controller:
         q = np.clip(q, self.wb.lower, self.wb.upper)
         self.q_cmd = q
         return np.array(q)
+
+    def _leg_ik(self, B: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        r"""Joints [rad] that put the feet at ``targets`` (L, 3) under body pose ``B``.
+
+        :data:`IK_STEPS` damped Newton steps per leg from the previous command,
+        :math:`\Delta q = (J^T J + \lambda I)^{-1} J^T e` with ``J`` the foot's 3 × n
+        Jacobian (Pinocchio, world-aligned) and :math:`\lambda` = :data:`IK_DAMPING`, each
+        joint's step at most 0.5 rad, then the joint limits.
+        """
+        pin, model, data = self.pin, self.model, self.ik_data
+        q = np.array(self.q_cmd, dtype=float)
+        frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        J = np.zeros((3 * self.n_legs, self.nq))  # the legs' blocks: one solve for all
+        e = np.empty(3 * self.n_legs)
+        damping = IK_DAMPING * np.eye(self.nq)
+        for _ in range(IK_STEPS):
+            qp = self.wb.pinocchio_q(q[None], B[None])[0]
+            pin.computeJointJacobians(model, data, qp)
+            pin.updateFramePlacements(model, data)
+            for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
+                J[3 * i : 3 * i + 3, c] = pin.getFrameJacobian(model, data, f, frame)[:3, 6 + c]
+                e[3 * i : 3 * i + 3] = targets[i] - data.oMf[f].translation
+            q += np.clip(np.linalg.solve(J.T @ J + damping, J.T @ e), -0.5, 0.5)
+        q = np.clip(q, self.wb.lower, self.wb.upper)
+        # a leg whose target is out of reach (or beyond its limits) keeps its last command
+        qp = self.wb.pinocchio_q(q[None], B[None])[0]
+        pin.framesForwardKinematics(model, data, qp)
+        for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
+            if np.linalg.norm(targets[i] - data.oMf[f].translation) > IK_TOLERANCE:
+                q[c] = self.q_cmd[c]
+        return q
 
 
 def _rot(w: np.ndarray) -> np.ndarray:
