@@ -61,14 +61,15 @@ ACCEL = (1.0, 2.0)
 ARRIVE = 0.8
 
 #: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
-RETURN_SPEED = 0.6
+RETURN_SPEED = 0.7
 
 #: Servo kind: damped Newton steps of the leg IK per tick, and their damping [m²].
 IK_STEPS = 2
 IK_DAMPING = 1e-4
 
-#: Servo kind: a leg farther than this from its target after the IK steps is out of reach [m].
-IK_TOLERANCE = 0.002
+#: Servo kind: a leg farther than this from its target after the Newton steps is solved in
+#: closed form [m].
+IK_TOLERANCE = 1e-4
 
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
@@ -581,9 +582,7 @@ class Controller:
         Bc[:3, 3] = pos + corr[:3]
         Bc[:3, :3] = _rot(corr[3:6]) @ R
         targets = np.where(stance[:, None], self.stand_at, p_sw)
-        ik = self.wb.body_ik(Bc, targets, q_prev=self.q_cmd, strict=False)
-        q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
-        q = np.clip(q, self.wb.lower, self.wb.upper)
+        q = self._leg_ik(Bc, targets)
         self.q_cmd = q
         return np.array(q)
 
@@ -593,7 +592,11 @@ class Controller:
         :data:`IK_STEPS` damped Newton steps per leg from the previous command,
         :math:`\Delta q = (J^T J + \lambda I)^{-1} J^T e` with ``J`` the foot's 3 × n
         Jacobian (Pinocchio, world-aligned) and :math:`\lambda` = :data:`IK_DAMPING`, each
-        joint's step at most 0.5 rad, then the joint limits.
+        joint's step at most 0.5 rad, within the joint limits. A leg left farther than
+        :data:`IK_TOLERANCE` from its target (a jump of the target, or out of reach) is
+        solved by the whole body's :meth:`~hexapod_kin.gait.robot.WholeBody.body_ik` (closed
+        form, the branch nearest the last command), and keeps its last command when that
+        finds it out of reach.
         """
         pin, model, data = self.pin, self.model, self.ik_data
         q = np.array(self.q_cmd, dtype=float)
@@ -610,12 +613,18 @@ class Controller:
                 e[3 * i : 3 * i + 3] = targets[i] - data.oMf[f].translation
             q += np.clip(np.linalg.solve(J.T @ J + damping, J.T @ e), -0.5, 0.5)
         q = np.clip(q, self.wb.lower, self.wb.upper)
-        # a leg whose target is out of reach (or beyond its limits) keeps its last command
         qp = self.wb.pinocchio_q(q[None], B[None])[0]
         pin.framesForwardKinematics(model, data, qp)
-        for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
-            if np.linalg.norm(targets[i] - data.oMf[f].translation) > IK_TOLERANCE:
-                q[c] = self.q_cmd[c]
+        far = [
+            np.linalg.norm(targets[i] - data.oMf[f].translation) > IK_TOLERANCE
+            for i, f in enumerate(self.feet_ids)
+        ]
+        if any(far):
+            ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
+            for i in np.flatnonzero(far):
+                c = self.cols[i]
+                q[c] = ik.q[0][c] if ik.reached[0][i] else self.q_cmd[c]
+            q = np.clip(q, self.wb.lower, self.wb.upper)
         return q
 
 
