@@ -72,9 +72,7 @@ def register(sub: Any) -> None:
         help="with --control: random ground bumps of this amplitude [m] (0 to 0.05, flat "
         "terrain) under both the replay and the closed loop",
     )
-    p.add_argument(
-        "--seed", type=seed, default=0, help="with --control: the bumps' random seed"
-    )
+    p.add_argument("--seed", type=seed, default=0, help="with --control: the bumps' random seed")
     p.add_argument(
         "--push",
         action="append",

@@ -621,9 +621,9 @@ class Controller:
         ]
         if any(far):
             ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
-            for i in np.flatnonzero(far):
-                c = self.cols[i]
-                q[c] = ik.q[0][c] if ik.reached[0][i] else self.q_cmd[c]
+            for leg in np.flatnonzero(far).tolist():
+                c = self.cols[leg]
+                q[c] = ik.q[0][c] if ik.reached[0][leg] else self.q_cmd[c]
             q = np.clip(q, self.wb.lower, self.wb.upper)
         return q
 
