@@ -30,7 +30,11 @@ one value per leg joint.
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
   where they are measured, the swing feet on their paths; leg IK (two damped Newton steps
-  per tick from the previous command, Pinocchio's foot Jacobians) turns them into targets.
+  per tick from the previous command, Pinocchio's foot Jacobians; the closed form where
+  they fall short) turns them into targets. A body pushed off its path is not dragged back
+  by the posing (its stance feet would leave their reach): the reference stays within
+  ``0.08`` leg span of the body and returns to the path at :data:`RETURN_SPEED`, while the
+  swing feet step towards the path.
 """
 
 from __future__ import annotations
