@@ -176,6 +176,7 @@ class Controller:
         self.data = self.model.createData()
         self.ik_data = self.model.createData()
         self.n_legs, self.nq = wb.n_legs, wb.nq
+        self._ik_damping = IK_DAMPING * np.eye(self.nq)
         self.rate = positive(
             "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
         )
@@ -607,23 +608,27 @@ class Controller:
         frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         J = np.zeros((3 * self.n_legs, self.nq))  # the legs' blocks: one solve for all
         e = np.empty(3 * self.n_legs)
-        damping = IK_DAMPING * np.eye(self.nq)
+        qp = self.wb.pinocchio_q(q[None], B[None])[0]
+        plain = qp.shape[0] == 7 + self.nq  # no continuous joint: the joints are qp[7:]
+
+        def config(q: np.ndarray) -> np.ndarray:
+            if not plain:
+                return np.asarray(self.wb.pinocchio_q(q[None], B[None])[0])
+            qp[7:] = q
+            return qp
+
         for _ in range(IK_STEPS):
-            qp = self.wb.pinocchio_q(q[None], B[None])[0]
-            pin.computeJointJacobians(model, data, qp)
+            pin.computeJointJacobians(model, data, config(q))
             pin.updateFramePlacements(model, data)
             for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
                 J[3 * i : 3 * i + 3, c] = pin.getFrameJacobian(model, data, f, frame)[:3, 6 + c]
                 e[3 * i : 3 * i + 3] = targets[i] - data.oMf[f].translation
-            q += np.clip(np.linalg.solve(J.T @ J + damping, J.T @ e), -0.5, 0.5)
+            q += np.clip(np.linalg.solve(J.T @ J + self._ik_damping, J.T @ e), -0.5, 0.5)
         q = np.clip(q, self.wb.lower, self.wb.upper)
-        qp = self.wb.pinocchio_q(q[None], B[None])[0]
-        pin.framesForwardKinematics(model, data, qp)
-        far = [
-            np.linalg.norm(targets[i] - data.oMf[f].translation) > IK_TOLERANCE
-            for i, f in enumerate(self.feet_ids)
-        ]
-        if any(far):
+        pin.framesForwardKinematics(model, data, config(q))
+        feet = np.array([data.oMf[f].translation for f in self.feet_ids])
+        far = np.linalg.norm(targets - feet, axis=1) > IK_TOLERANCE
+        if far.any():
             ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
             for leg in np.flatnonzero(far).tolist():
                 c = self.cols[leg]
