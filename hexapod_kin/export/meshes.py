@@ -53,7 +53,10 @@ def _material(visual: Any) -> str:
 def add_collisions(urdf_text: str) -> str:
     """``urdf_text`` with a primitive ``<collision>`` per colliding visual (deterministic).
 
-    Links that already have collision elements are left as they are.
+    Links that already have collision elements are left as they are. A robot body's box
+    (material ``body``) that holds leg mounts (its child joints' origins) collides as the
+    box trimmed to leave them outside (:func:`_clip_box`): the legs start at their mounts and
+    would otherwise touch the body they hang from.
 
     Raises:
         UrdfError: If the text is not XML.
@@ -83,7 +86,7 @@ def add_collisions(urdf_text: str) -> str:
                 coll.append(copy.deepcopy(origin))
             coll.append(copy.deepcopy(geom))
             box = coll.find("geometry/box")
-            if box is not None and mounts:
+            if box is not None and mounts and _material(visual) == "body":
                 inv = np.linalg.inv(_origin_matrix(visual))
                 local = [inv[:3, :3] @ p + inv[:3, 3] for p in mounts]
                 trimmed = _clip_box(_floats(box.get("size"), 3), local)
