@@ -101,6 +101,12 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         (["--terrain", "mud"], 2),
         (["--control", "--robust"], 2),  # one verdict per run
         (["--control", "--mjcf", "x.xml"], 2),
+        # the closed loop's disturbances: on both grounds (bumps), on the closed loop (push)
+        (["--control", "--duration", "1", "--bumps", "0.005", "--push", "5@0.2,0.1"], 0),
+        (["--bumps", "0.01"], 2),  # bumps and pushes need --control
+        (["--push", "20@1,0.2"], 2),
+        (["--control", "--push", "20@x"], 2),
+        (["--control", "--bumps", "0.1"], 2),  # at most 0.05 m
     ],
     "control": [
         (["--duration", "1"], 0),

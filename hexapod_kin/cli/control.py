@@ -108,7 +108,14 @@ def simulate_control(
     from .common import emit_json
 
     opts = {k: v for k, v in options.items() if k not in ("stand",)}
-    cmp = compare(model, friction=args.friction, **opts)
+    cmp = compare(
+        model,
+        friction=args.friction,
+        bumps=args.bumps,
+        seed=args.seed,
+        pushes=args.push or (),
+        **opts,
+    )
     out = cmp.to_dict()
     if html is not None:
         out["html"] = str(comparison_html(cmp, html))
@@ -118,6 +125,8 @@ def simulate_control(
         for name, a, b in cmp.rows():
             fa, fb = ("-" if v is None else f"{v:.4g}" for v in (a, b))
             print(f"{name:24s} open loop {fa:>10}   closed loop {fb:>10}")
+        for k, r in enumerate(cmp.closed_loop.recovery_time):
+            print(f"push {k + 1} (closed loop): back on the path in " + _seconds(r))
         if "html" in out:
             print(f"wrote {out['html']}", file=sys.stderr)
     res = cmp.closed_loop
@@ -142,8 +151,12 @@ def _print(out: dict[str, Any]) -> None:
         + (", ".join(f"{a}-{b} at {t:.2f} s" for a, b, t in contacts[:5]) if contacts else "none")
     )
     for k, r in enumerate(out["recovery_time"]):
-        print(f"push {k + 1}: back on the path in {'never' if r is None else f'{r:.2f} s'}")
+        print(f"push {k + 1}: back on the path in " + _seconds(r))
     print(
         f"tick {1e6 * out['tick_cpu']:.0f} us median (QP {1e6 * out['qp_cpu']:.0f} us mean); "
         f"{out['simulated']:g} s simulated in {out['cpu_time']:.2f} s CPU"
     )
+
+
+def _seconds(r: float | None) -> str:
+    return "never" if r is None else f"{r:.2f} s"

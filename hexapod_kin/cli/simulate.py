@@ -12,6 +12,7 @@ from .common import (
     not_achieved,
     robot_args,
     robot_of,
+    seed,
     walk_args,
     walk_options,
 )
@@ -61,7 +62,23 @@ def register(sub: Any) -> None:
         "--control",
         action="store_true",
         help="also walk the plan's twist closed-loop (hexapod_kin.control) and compare; "
-        "--html writes the two side by side; exit 1 when the closed loop falls",
+        "--html writes the two side by side; exit 1 when the closed loop falls (not with "
+        "--robust or --mjcf)",
+    )
+    p.add_argument(
+        "--bumps",
+        type=float,
+        default=0.0,
+        help="with --control: random ground bumps of this amplitude [m] (0 to 0.05, flat "
+        "terrain) under both the replay and the closed loop",
+    )
+    p.add_argument("--seed", type=seed, default=0, help="with --control: the bumps' random seed")
+    p.add_argument(
+        "--push",
+        action="append",
+        metavar="F@T,D",
+        help="with --control: a lateral push on the closed loop of F newtons at T s for D s "
+        "(repeatable; negative: rightward)",
     )
     p.set_defaults(func=_cmd_simulate)
 
@@ -73,16 +90,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .common import emit_json, output_path
 
     check_friction(args.friction)  # before the robot is loaded and the walk planned
-    if args.control and (args.robust or args.mjcf):
-        from ..exceptions import ParameterError
-
-        other = "--robust" if args.robust else "--mjcf"
-        raise ParameterError(
-            f"--control cannot be combined with {other}",
-            parameter="--control",
-            value=other,
-            allowed="--control alone, or with --html",
-        )
+    _check_control_options(args)
     html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
@@ -134,6 +142,56 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return not_achieved(
         why + ([f"the physics check(s) {', '.join(failed)} fail"] if failed else [])
     )
+
+
+def _check_control_options(args: argparse.Namespace) -> None:
+    """Refuse ``--control`` with a second verdict, and its own options without it."""
+    from ..exceptions import ParameterError
+
+    if args.control and (args.robust or args.mjcf):
+        other = "--robust" if args.robust else "--mjcf"
+        raise ParameterError(
+            f"--control cannot be combined with {other}",
+            parameter="--control",
+            value=other,
+            allowed="--control alone, or with --html",
+        )
+    given = [
+        name
+        for name, on in (
+            ("--bumps", args.bumps != 0.0),
+            ("--seed", args.seed != 0),
+            ("--push", bool(args.push)),
+        )
+        if on
+    ]
+    if given and not args.control:
+        raise ParameterError(
+            f"{given[0]} needs --control (the open-loop replay alone takes neither bumps nor "
+            "pushes here)",
+            parameter=given[0],
+            value=given[0],
+            allowed="with --control",
+        )
+    if args.control:
+        from ..control import Push
+        from ..simulate.scene import MAX_BUMPS
+
+        if not (math.isfinite(args.bumps) and 0.0 <= args.bumps <= MAX_BUMPS):
+            raise ParameterError(
+                f"--bumps {args.bumps!r}: an amplitude from 0 to {MAX_BUMPS:g} m",
+                parameter="--bumps",
+                value=args.bumps,
+                allowed=f"[0, {MAX_BUMPS:g}]",
+            )
+        args.push = [Push.parse(text) for text in args.push or []]
+        if args.bumps and args.terrain not in (None, "flat"):
+            raise ParameterError(
+                f"--bumps {args.bumps!r} on --terrain {args.terrain}: bumps on flat ground only",
+                parameter="--bumps",
+                value=args.bumps,
+                allowed="--terrain flat",
+            )
 
 
 def _print_members(rob: dict[str, Any]) -> None:

@@ -30,7 +30,11 @@ one value per leg joint.
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
   where they are measured, the swing feet on their paths; leg IK (two damped Newton steps
-  per tick from the previous command, Pinocchio's foot Jacobians) turns them into targets.
+  per tick from the previous command, Pinocchio's foot Jacobians; the closed form where
+  they fall short) turns them into targets. A body pushed off its path is not dragged back
+  by the posing (its stance feet would leave their reach): the reference stays within
+  ``0.08`` leg span of the body and returns to the path at :data:`RETURN_SPEED`, while the
+  swing feet step towards the path.
 """
 
 from __future__ import annotations
@@ -59,6 +63,17 @@ ACCEL = (1.0, 2.0)
 #: Servo kind: the fraction of the swing by which the foot reaches its foothold's x, y (the
 #: servos lag their targets; arriving early lands the foot where it was placed).
 ARRIVE = 0.8
+
+#: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
+RETURN_SPEED = 0.7
+
+#: Servo kind: damped Newton steps of the leg IK per tick, and their damping [m²].
+IK_STEPS = 2
+IK_DAMPING = 1e-4
+
+#: Servo kind: a leg farther than this from its target after the Newton steps is solved in
+#: closed form [m].
+IK_TOLERANCE = 1e-4
 
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
@@ -159,7 +174,9 @@ class Controller:
         self.pin = pin
         self.model = pin.Model(wb.model)
         self.data = self.model.createData()
+        self.ik_data = self.model.createData()
         self.n_legs, self.nq = wb.n_legs, wb.nq
+        self._ik_damping = IK_DAMPING * np.eye(self.nq)
         self.rate = positive(
             "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
         )
@@ -265,6 +282,7 @@ class Controller:
         self.ground_z = 0.0
         self.q_cmd = np.array(self.q_neutral)
         self.integral = np.zeros(6)
+        self.return_offset = np.zeros(2)
         self.ready = False
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
@@ -552,9 +570,16 @@ class Controller:
         R, pos = st["R"], np.asarray(m.position, dtype=float)
         # the body's reference pose and its error (position, rotation vector)
         Rd = self._desired_rotation()
-        p_ref = np.array([*self.path_xy, self.ground_z + self.height_ref])
-        e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
         lim = 0.08 * self.span
+        # the body's goal: the path, returned to at RETURN_SPEED when the body is off it (a
+        # push), never more than ``lim`` from the body (the steps carry it back)
+        off = pos[:2] - self.path_xy
+        d = self.return_offset
+        n = float(np.linalg.norm(d))
+        d = d * max(0.0, 1.0 - RETURN_SPEED * self.span * self.dt / n) if n > 0 else d
+        self.return_offset = d = np.clip(d, off - lim, off + lim)
+        p_ref = np.array([*(self.path_xy + d), self.ground_z + self.height_ref])
+        e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
         e[:3] = np.clip(e[:3], -lim, lim)
         self.integral = np.clip(self.integral + 2.0 * self.dt * e, -lim, lim)
         corr = e + self.integral
@@ -562,11 +587,54 @@ class Controller:
         Bc[:3, 3] = pos + corr[:3]
         Bc[:3, :3] = _rot(corr[3:6]) @ R
         targets = np.where(stance[:, None], self.stand_at, p_sw)
-        ik = self.wb.body_ik(Bc, targets, q_prev=self.q_cmd, strict=False)
-        q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
-        q = np.clip(q, self.wb.lower, self.wb.upper)
+        q = self._leg_ik(Bc, targets)
         self.q_cmd = q
         return np.array(q)
+
+    def _leg_ik(self, B: np.ndarray, targets: np.ndarray) -> np.ndarray:
+        r"""Joints [rad] that put the feet at ``targets`` (L, 3) under body pose ``B``.
+
+        :data:`IK_STEPS` damped Newton steps per leg from the previous command,
+        :math:`\Delta q = (J^T J + \lambda I)^{-1} J^T e` with ``J`` the foot's 3 × n
+        Jacobian (Pinocchio, world-aligned) and :math:`\lambda` = :data:`IK_DAMPING`, each
+        joint's step at most 0.5 rad, within the joint limits. A leg left farther than
+        :data:`IK_TOLERANCE` from its target (a jump of the target, or out of reach) is
+        solved by the whole body's :meth:`~hexapod_kin.gait.robot.WholeBody.body_ik` (closed
+        form, the branch nearest the last command), and keeps its last command when that
+        finds it out of reach.
+        """
+        pin, model, data = self.pin, self.model, self.ik_data
+        q = np.array(self.q_cmd, dtype=float)
+        frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        J = np.zeros((3 * self.n_legs, self.nq))  # the legs' blocks: one solve for all
+        e = np.empty(3 * self.n_legs)
+        qp = self.wb.pinocchio_q(q[None], B[None])[0]
+        plain = qp.shape[0] == 7 + self.nq  # no continuous joint: the joints are qp[7:]
+
+        def config(q: np.ndarray) -> np.ndarray:
+            if not plain:
+                return np.asarray(self.wb.pinocchio_q(q[None], B[None])[0])
+            qp[7:] = q
+            return qp
+
+        for _ in range(IK_STEPS):
+            pin.computeJointJacobians(model, data, config(q))
+            pin.updateFramePlacements(model, data)
+            for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
+                J[3 * i : 3 * i + 3, c] = pin.getFrameJacobian(model, data, f, frame)[:3, 6 + c]
+                e[3 * i : 3 * i + 3] = targets[i] - data.oMf[f].translation
+            q += np.clip(np.linalg.solve(J.T @ J + self._ik_damping, J.T @ e), -0.5, 0.5)
+        q = np.clip(q, self.wb.lower, self.wb.upper)
+        pin.framesForwardKinematics(model, data, config(q))
+        feet = np.array([data.oMf[f].translation for f in self.feet_ids])
+        far = np.linalg.norm(targets - feet, axis=1) > IK_TOLERANCE
+        if far.any():
+            ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
+            for leg in np.flatnonzero(far).tolist():
+                c = self.cols[leg]
+                q[c] = ik.q[0][c] if ik.reached[0][leg] else self.q_cmd[c]
+            q = np.clip(q, self.wb.lower, self.wb.upper)
+        return q
 
 
 def _rot(w: np.ndarray) -> np.ndarray:
