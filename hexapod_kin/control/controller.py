@@ -29,9 +29,9 @@ one value per leg joint.
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
-  where they are measured, the swing feet on their paths; leg IK (two damped Newton steps
-  per tick from the previous command, Pinocchio's foot Jacobians; the closed form where
-  they fall short) turns them into targets. A body pushed off its path is not dragged back
+  where they are measured, the swing feet on their paths; leg IK (the package's one
+  numerical loop, warm-started from the previous command; the closed form where it falls
+  short) turns them into targets. A body pushed off its path is not dragged back
   by the posing (its stance feet would leave their reach): the reference stays within
   ``0.08`` leg span of the body and returns to the path at :data:`RETURN_SPEED`, while the
   swing feet step towards the path.
@@ -66,14 +66,6 @@ ARRIVE = 0.8
 
 #: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
 RETURN_SPEED = 0.7
-
-#: Servo kind: damped Newton steps of the leg IK per tick, and their damping [m²].
-IK_STEPS = 2
-IK_DAMPING = 1e-4
-
-#: Servo kind: a leg farther than this from its target after the Newton steps is solved in
-#: closed form [m].
-IK_TOLERANCE = 1e-4
 
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
@@ -174,9 +166,12 @@ class Controller:
         self.pin = pin
         self.model = pin.Model(wb.model)
         self.data = self.model.createData()
-        self.ik_data = self.model.createData()
         self.n_legs, self.nq = wb.n_legs, wb.nq
-        self._ik_damping = IK_DAMPING * np.eye(self.nq)
+        # each leg's IK: its chain (body → foot), joint columns, limits and tolerance
+        self._leg_iks = [
+            (wb._chains[k], c, wb.lower[c], wb.upper[c], 1e-13 * float(wb._span[k]))
+            for k, c in enumerate(map(list, wb._leg_cols))
+        ]
         self.rate = positive(
             "rate", rate if rate is not None else (500.0 if kind == "torque" else 100.0)
         )
@@ -592,49 +587,34 @@ class Controller:
         return np.array(q)
 
     def _leg_ik(self, B: np.ndarray, targets: np.ndarray) -> np.ndarray:
-        r"""Joints [rad] that put the feet at ``targets`` (L, 3) under body pose ``B``.
+        """Joints [rad] that put the feet at ``targets`` (L, 3) under body pose ``B``.
 
-        :data:`IK_STEPS` damped Newton steps per leg from the previous command,
-        :math:`\Delta q = (J^T J + \lambda I)^{-1} J^T e` with ``J`` the foot's 3 × n
-        Jacobian (Pinocchio, world-aligned) and :math:`\lambda` = :data:`IK_DAMPING`, each
-        joint's step at most 0.5 rad, within the joint limits. A leg left farther than
-        :data:`IK_TOLERANCE` from its target (a jump of the target, or out of reach) is
-        solved by the whole body's :meth:`~hexapod_kin.gait.robot.WholeBody.body_ik` (closed
-        form, the branch nearest the last command), and keeps its last command when that
-        finds it out of reach.
+        The package's one numerical IK loop (:func:`~hexapod_kin.ik.solver.solve_chain` on each
+        leg's chain, warm-started from the previous command, within the joint limits).
+        A leg it leaves short of its target (a jump of the target, or out of reach) is solved
+        by :meth:`~hexapod_kin.gait.robot.WholeBody.body_ik` (closed form where the leg has
+        one, the branch nearest the last command), and keeps its last command when that finds
+        it out of reach.
         """
-        pin, model, data = self.pin, self.model, self.ik_data
+        from ..gait.leg_ik import REACH_TOL
+        from ..ik.solver import solve_chain
+
+        wb = self.wb
         q = np.array(self.q_cmd, dtype=float)
-        frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        J = np.zeros((3 * self.n_legs, self.nq))  # the legs' blocks: one solve for all
-        e = np.empty(3 * self.n_legs)
-        qp = self.wb.pinocchio_q(q[None], B[None])[0]
-        plain = qp.shape[0] == 7 + self.nq  # no continuous joint: the joints are qp[7:]
-
-        def config(q: np.ndarray) -> np.ndarray:
-            if not plain:
-                return np.asarray(self.wb.pinocchio_q(q[None], B[None])[0])
-            qp[7:] = q
-            return qp
-
-        for _ in range(IK_STEPS):
-            pin.computeJointJacobians(model, data, config(q))
-            pin.updateFramePlacements(model, data)
-            for i, (f, c) in enumerate(zip(self.feet_ids, self.cols)):
-                J[3 * i : 3 * i + 3, c] = pin.getFrameJacobian(model, data, f, frame)[:3, 6 + c]
-                e[3 * i : 3 * i + 3] = targets[i] - data.oMf[f].translation
-            q += np.clip(np.linalg.solve(J.T @ J + self._ik_damping, J.T @ e), -0.5, 0.5)
-        q = np.clip(q, self.wb.lower, self.wb.upper)
-        pin.framesForwardKinematics(model, data, config(q))
-        feet = np.array([data.oMf[f].translation for f in self.feet_ids])
-        far = np.linalg.norm(targets - feet, axis=1) > IK_TOLERANCE
-        if far.any():
-            ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
-            for leg in np.flatnonzero(far).tolist():
-                c = self.cols[leg]
+        p_body = (np.asarray(targets, dtype=float) - B[:3, 3]) @ B[:3, :3]
+        short: list[int] = []
+        for leg, (chain, c, lo, hi, tol) in enumerate(self._leg_iks):
+            qn, res, _ok = solve_chain(chain, p_body[leg : leg + 1], q[c][None], lo, hi, tol=tol)
+            if res[0] <= REACH_TOL:
+                q[c] = qn[0]
+            else:
+                short.append(leg)
+        if short:
+            ik = wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
+            for leg in short:
+                c = list(wb._leg_cols[leg])
                 q[c] = ik.q[0][c] if ik.reached[0][leg] else self.q_cmd[c]
-            q = np.clip(q, self.wb.lower, self.wb.upper)
-        return q
+        return np.clip(q, wb.lower, wb.upper)
 
 
 def _rot(w: np.ndarray) -> np.ndarray:

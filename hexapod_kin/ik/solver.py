@@ -593,6 +593,35 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     return [_report(mdl, s, task, row) for task, row in zip(tasks, out)]
 
 
+#: :func:`solve_chain`'s prepared inputs per chain and settings (a chain is an immutable
+#: view: an entry is reused only for the very same object; never written by the loop).
+_CHAIN_SETUPS: dict[tuple[Any, ...], tuple[Any, ...]] = {}
+
+
+def _chain_setup(
+    chain: ChainArrays, lower: Any, upper: Any, tol: float, max_iter: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(fplan, iplan, par, w6)`` of the compiled loop for a chain view (cached)."""
+    n = int(chain.nq)
+    lo = np.broadcast_to(np.asarray(lower, dtype=float), (n,))
+    hi = np.broadcast_to(np.asarray(upper, dtype=float), (n,))
+    key = (id(chain), lo.tobytes(), hi.tobytes(), repr(tol), repr(max_iter))
+    hit = _CHAIN_SETUPS.get(key)
+    if hit is not None and hit[0] is chain:
+        return hit[1:]  # type: ignore[return-value]
+    opts = IKOptions(tol=tol, rot_tol=tol, max_iter=max_iter)
+    prism = np.asarray(chain.kind, dtype=bool)
+    cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
+    scale = chain_scale(chain.trans)
+    lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
+    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0])
+    setup = (fplan, iplan, _par(opts, scale), _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))
+    if len(_CHAIN_SETUPS) >= 256:
+        _CHAIN_SETUPS.clear()
+    _CHAIN_SETUPS[key] = (chain, *setup)
+    return setup
+
+
 def solve_chain(
     chain: ChainArrays,
     targets: Any,
@@ -627,8 +656,8 @@ def solve_chain(
         ParameterError: ``tol`` or ``max_iter`` out of range.
 
     """
-    opts = IKOptions(tol=tol, rot_tol=tol, max_iter=max_iter)
     n = int(chain.nq)
+    fplan, iplan, par, w6 = _chain_setup(chain, lower, upper, tol, max_iter)
     t = np.asarray(targets, dtype=float)
     q0 = np.asarray(seeds, dtype=float)
     if t.ndim != 2 or t.shape[1] != 3 or q0.shape != (len(t), n):
@@ -640,18 +669,10 @@ def solve_chain(
         )
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q0))):
         raise IKError("targets and seeds must be finite", parameter="targets", value=t.tolist())
-    lo = np.broadcast_to(np.asarray(lower, dtype=float), (n,))
-    hi = np.broadcast_to(np.asarray(upper, dtype=float), (n,))
-    prism = np.asarray(chain.kind, dtype=bool)
-    cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
-    scale = chain_scale(chain.trans)
-    lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
-    par = _par(opts, scale)
-    tgts = np.broadcast_to(np.eye(4), (len(t), 4, 4)).copy()
+    tgts = np.zeros((len(t), 4, 4))
+    tgts[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
     tgts[:, :3, 3] = t
     pars = np.tile(par, (len(t), 1))
-    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0])
-    w6 = _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
     starts = _arg(q0[:, None, :])
     out = _run(fplan, iplan, _frozen(tgts), w6, pars, starts)
     steps = out[:, 1].astype(np.intp)
