@@ -228,10 +228,8 @@ def _limit_into(
 
 
 @njit(cache=True, nogil=True)
-def sigma_min3(jac: np.ndarray, a: np.ndarray) -> float:  # pragma: no cover - compiled
+def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
     """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
-
-    ``a`` is a (3, n) scratch array (overwritten).
 
     One-sided Jacobi (Hestenes): plane rotations make the three rows mutually orthogonal
     (to ``|aᵢ·aⱼ| ≤ 1e-15 ‖aᵢ‖‖aⱼ‖``); the singular values are then the rows' norms, with
@@ -240,6 +238,7 @@ def sigma_min3(jac: np.ndarray, a: np.ndarray) -> float:  # pragma: no cover - c
     n = jac.shape[1]
     if n < 3:
         return 0.0
+    a = np.empty((3, n))
     for r in range(3):
         for k in range(n):
             a[r, k] = jac[r, k]
@@ -333,39 +332,27 @@ def lm_loop(
     upper = lim[1]
     cap = lim[2]
     posture = lim[3]
-    # every buffer carved from one allocation (views; nothing else is allocated per call)
-    k = max(n, 6)
-    lk = max(links, 1)
-    buf = np.empty(6 * lk + 3 + 9 + 4 * 6 * n + 9 + 6 + 6 + 6 + 4 * n + k * k + 2 * k + 3 * n)
-    o = 0
-    scratch = buf[o : o + 6 * lk].reshape((6, lk))
-    o += 6 * lk
-    p = buf[o : o + 3]
-    o += 3
-    r = buf[o : o + 9].reshape((3, 3))
-    o += 9
-    jac = buf[o : o + 6 * n].reshape((6, n))
-    jac_n = buf[o + 6 * n : o + 12 * n].reshape((6, n))
-    jt = buf[o + 12 * n : o + 18 * n].reshape((6, n))
-    jt_n = buf[o + 18 * n : o + 24 * n].reshape((6, n))
-    o += 24 * n
-    w3 = buf[o : o + 9].reshape((3, 3))
-    et = buf[o + 9 : o + 15]
-    et_n = buf[o + 15 : o + 21]
-    e2 = buf[o + 21 : o + 27]
-    o += 27
-    q = buf[o : o + n]
-    qn = buf[o + n : o + 2 * n]
-    dq = buf[o + 2 * n : o + 3 * n]
-    z = buf[o + 3 * n : o + 4 * n]
-    o += 4 * n
-    work = buf[o : o + k * k].reshape((k, k))
-    rhs = buf[o + k * k : o + k * k + k]
-    sol = buf[o + k * k + k : o + k * k + 2 * k]
-    o += k * k + 2 * k
-    sv_work = buf[o : o + 3 * n].reshape((3, n))
-    free = np.empty(n, dtype=np.bool_)
+    scratch = np.empty((6, max(links, 1)))
+    p = np.empty(3)
+    r = np.empty((3, 3))
+    jac = np.empty((6, n))
+    jac_n = np.empty((6, n))
     jac_best = np.empty((6, n))
+    w3 = np.empty((3, 3))
+    et = np.empty(6)
+    jt = np.empty((6, n))
+    et_n = np.empty(6)
+    jt_n = np.empty((6, n))
+    e2 = np.empty(6)
+    q = np.empty(n)
+    qn = np.empty(n)
+    dq = np.empty(n)
+    z = np.empty(n)
+    free = np.empty(n, dtype=np.bool_)
+    k = max(n, 6)
+    work = np.empty((k, k))
+    rhs = np.empty(k)
+    sol = np.empty(k)
     hist = np.empty(max_iter + 1)
     o_p = O_Q + n
     o_h = o_p + 12
@@ -508,4 +495,4 @@ def lm_loop(
         res[O_CODE] = best_code
         res[O_ERROR] = math.sqrt(pos2)
         res[O_ROT_ERROR] = math.sqrt(rot2)
-        res[O_SIGMA_MIN] = sigma_min3(jac_best, sv_work)
+        res[O_SIGMA_MIN] = sigma_min3(jac_best)
