@@ -11,7 +11,8 @@ processes: min / median / max), then
 (mean µs per pose and success) and ``ik.solve`` (median µs per pose); ``ik.solve`` per call
 on 1,000 random reachable targets (UR5 and Panda poses, the leg's positions: median µs and
 success checked with Pinocchio) beside Robotics Toolbox's ``ik_LM`` (C++) on its own models,
-the two called in turn, target by target, and whether those results are byte-identical to the
+the two called in turn, target by target, then ours back to back (``tight_loop_median_us``;
+``steps_median``: accepted LM steps), and whether those results are byte-identical to the
 same targets' batch (``solve_many``) and to the first 100 solved in a fresh process;
 with the ratio to a peer measured in the same run where one exists (a Pinocchio loop, numpy's
 SVD, Pinocchio's IK example loop). A row that fails prints its error and the run goes on.
@@ -264,12 +265,19 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         rot = 0.0 if position else np.linalg.norm(pin.log3(tep[:3, :3] @ got[:3, :3].T))
         pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
     ours = float(np.median(times)) * 1e6
+    tight = []  # the same calls back to back (nothing else between them: caches stay warm)
+    for t in targets:
+        t0 = time.perf_counter()
+        ik.solve(model, t)
+        tight.append(time.perf_counter() - t0)
     # the same bits: these per-call results (warm), the batch of the same targets, and the
     # first 100 targets solved one by one in a fresh process
     warm = digest(results)
     batch = digest(ik.solve_many(model, np.array(targets)))
     fresh = fresh_digest(src, kw, position, n, 100)
     out = {"n": n, "median_us": round(ours, 1), "target_us": target_us,
+           "tight_loop_median_us": round(float(np.median(tight)) * 1e6, 1),
+           "steps_median": float(np.median([r.iterations for r in results])),
            "success": round(ok / n, 4), "target_success": target_ok,
            "same_bits_batch": warm == batch, "same_bits_fresh": fresh == digest(results[:100]),
            "load_1min": round(os.getloadavg()[0], 1)}

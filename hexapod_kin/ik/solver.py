@@ -31,7 +31,7 @@ from .._numerics import chain_scale
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .task import Task, build_task, build_tasks
+from .task import MODES, Task, build_task, build_tasks
 
 __all__ = ["MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
 
@@ -42,6 +42,7 @@ Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_co
 STATUSES: tuple[str, ...] = get_args(Status)
 
 _MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
+_CODES = {mode: i for i, mode in enumerate(MODES)}  # task mode → the loop's mode number
 
 
 # ============================================================================ options
@@ -233,7 +234,7 @@ class _Setup:
     fplan: np.ndarray  # the chain and the limits, step caps and posture (:func:`_plans`)
     iplan: np.ndarray  # ipar, then the chain's joint kinds, columns, continuous flags
     tols: tuple[float, float]  # tol, rot_tol as Python floats
-    tols_text: str  # "{tol:g}, {rot_tol:g}" (the converged reason's tail)
+    why: str  # the converged reason, "%"-formatted with the two errors
     one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
     width: int  # values per target in the loop's output
     n: int  # joints
@@ -277,10 +278,10 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     fplan, iplan = _plans(mdl.arrays, np.vstack([prep.lim, posture]), prep.cont, ipar)
     tols = (float(opts.tol), float(opts.rot_tol))
     one = (par[None], starts[None])
-    text = f"{tols[0]:g}, {tols[1]:g}"
+    why = f"‖e‖ = %.3g m, %.3g rad <= tol {tols[0]:g}, {tols[1]:g}"
     n = mdl.nq
     width = _O_Q + n + 12 + opts.max_iter + 1
-    return _Setup(prep, par, ipar, starts, fplan, iplan, tols, text, one, width, n)
+    return _Setup(prep, par, ipar, starts, fplan, iplan, tols, why, one, width, n)
 
 
 def _plans(
@@ -389,14 +390,18 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
-    opts = IKOptions.of(options) if options else _DEFAULT
-    task = build_task(target, mask=opts.mask, weights=opts.weights)
-    s = _setup(mdl, opts, task.code)
+    if options:
+        opts = IKOptions.of(options)
+        task = build_task(target, mask=opts.mask, weights=opts.weights)
+    else:
+        opts, task = _DEFAULT, build_task(target)
+    code = _CODES[task.mode]
+    s = _setup(mdl, opts, code)
     pars, starts = s.one
     if q0 is not None:
         starts = np.array(starts)
         starts[0, 0] = mdl.check_q(q0, "q0")
-    if task.code == 1:
+    if code == 1:
         pars = _with_yaw(pars, [task.yaw])
     if _LOADED:  # the per-call path: straight into the loaded loop
         out = np.empty((1, s.width))
@@ -412,31 +417,30 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKRe
     attempts, it, code, err, rot, smin = row[:_O_Q].tolist()
     n = _O_Q + s.n
     it = int(it)
-    q, hist = row[_O_Q:n], row[n + 12 : n + 13 + it]
-    position, rotation, target = row[n : n + 3], row[n + 3 : n + 12].reshape(3, 3), task.pose[:3, 3]
+    target = task.pose[:3, 3]
     converged = code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1])
-    why = f"‖e‖ = {err:.3g} m, {rot:.3g} rad <= tol {s.tols_text}" if converged else ""
     fields = {
-        "q": q,
+        "q": row[_O_Q:n],
         "status": "converged",
         "error": err,
         "rotation_error": rot,
         "iterations": it,
-        "history": hist,
-        "position": position,
-        "rotation": rotation,
+        "history": row[n + 12 : n + 13 + it],
+        "position": row[n : n + 3],
+        "rotation": row[n + 3 : n + 12].reshape(3, 3),
         "target": target,
         "task": task,
         "attempts": int(attempts),
-        "reason": why,
+        "reason": s.why % (err, rot) if converged else "",
         "distance": 0.0,
         "nearest": target,
         "sigma_min": smin,
     }
-    if converged:  # the per-call path: the fields as they are
+    if converged:  # the per-call path: the fields as they are, the dict is the result's own
         out = object.__new__(IKResult)
-        out.__dict__.update(fields)
+        object.__setattr__(out, "__dict__", fields)
         return out
+    q, hist = fields["q"], fields["history"]
     if code == 2.0:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
         return _result(fields, "not_converged", why, False)
@@ -453,7 +457,7 @@ def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> I
     fields["distance"] = fields["error"] if far else 0.0
     fields["nearest"] = fields["position"] if far else fields["target"]
     out = object.__new__(IKResult)
-    out.__dict__.update(fields)
+    object.__setattr__(out, "__dict__", fields)
     return out
 
 

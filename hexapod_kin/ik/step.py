@@ -476,12 +476,17 @@ def lm_loop(
                     hist_out[i] = hist[i]
             if code == 0:
                 break
-        # the result, measured at the returned q
+        # the result, measured at the returned q: a converged attempt is the last one, whose
+        # FK and errors at q are the latest computed (the same bits a new evaluation gives)
         p_out = res[o_p : o_p + 3]
-        fk_jac_into(
-            rot, trans, axis, kind, col, q_out, p_out, jac_best, scratch, n >= 0, tip_rot, r
-        )
-        _, pos2, rot2 = task_into(mode, tgt, w6, yaw, p_out, r, jac_best, w3, et, jt)
+        if best_code == 0:
+            for u in range(3):
+                p_out[u] = p[u]
+        else:
+            fk_jac_into(
+                rot, trans, axis, kind, col, q_out, p_out, jac_best, scratch, n >= 0, tip_rot, r
+            )
+            _, pos2, rot2 = task_into(mode, tgt, w6, yaw, p_out, r, jac_best, w3, et, jt)
         for u in range(3):
             for v in range(3):
                 res[o_p + 3 + 3 * u + v] = r[u, v]

@@ -69,9 +69,12 @@ def _task(mode: Mode, pose: np.ndarray, yaw: float, weights: np.ndarray) -> Task
     Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field);
     the object equals the one ``__init__`` builds.
     """
-    out = object.__new__(Task)
-    out.__dict__.update(mode=mode, pose=pose, yaw=yaw, weights=weights)
+    out = _NEW(Task)
+    _SET(out, "__dict__", {"mode": mode, "pose": pose, "yaw": yaw, "weights": weights})
     return out
+
+
+_NEW, _SET = object.__new__, object.__setattr__
 
 
 def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
@@ -127,18 +130,21 @@ _POSE_WEIGHTS.setflags(write=False)
 _POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 _POSITION_WEIGHTS.setflags(write=False)
 _EYE4 = np.eye(4)
+_F64 = np.dtype(np.float64)
 
 
 def _fast(t: np.ndarray) -> Task | None:
     """The common cases (float64 position or pose, no mask) checked in plain floats."""
-    if t.dtype != np.float64:
+    if t.dtype is not _F64:  # float64's one dtype object (any other: the general path)
         return None
     if t.shape == (3,):
         x, y, z = t.tolist()
         if not math.isfinite(x + y + z):
             return None
         pose = _EYE4.copy()
-        pose[0, 3], pose[1, 3], pose[2, 3] = x, y, z
+        pose[0, 3] = x
+        pose[1, 3] = y
+        pose[2, 3] = z
         pose.setflags(write=False)
         return _task("position", pose, 0.0, _POSITION_WEIGHTS)
     if t.shape != (4, 4):
