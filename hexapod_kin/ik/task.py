@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..exceptions import IKError
+from ..exceptions import HexapodKinError, IKError
 
 __all__ = ["AXES", "TARGET_FACTOR", "Task", "build_task", "build_tasks", "check_within"]
 
@@ -275,7 +275,7 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
 
 
 def check_within(
-    model: Any, positions: Any, parameter: str = "target", kind: type[Exception] = IKError
+    model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
 ) -> None:
     """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
 
