@@ -46,7 +46,16 @@ import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
-from ._kmath import POLY_TRIG_MAX, dls_into, eig3_sym, njit, sincos, solve_spd, wrap_angle
+from ._kmath import (
+    POLY_TRIG_MAX,
+    dls_into,
+    eig3_sym,
+    njit,
+    seal_compiled,
+    sincos,
+    solve_spd,
+    wrap_angle,
+)
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
 __all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
@@ -114,9 +123,14 @@ def _stamp(area: str) -> Path | None:
 
 
 def mark_compiled(area: str) -> None:
-    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort)."""
+    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort).
+
+    The cache folders are sealed first (:func:`hexapod_kin._kmath.seal_compiled`): what
+    numba wrote is then this user's sealed cache, loaded by later processes.
+    """
     with _SEEN_LOCK:
         _SEEN.add(area)
+    seal_compiled()
     path = _stamp(area)
     if path is not None:
         try:
