@@ -93,33 +93,45 @@ def sealed_folder(folder: str | None) -> bool:
     (so before numba could load anything from it): every ``.nbi``/``.nbc`` file must carry
     the keyed MAC of its name and bytes in the folder's seal
     (:func:`hexapod_kin._cache.check_folder`; numba's files are never parsed). An edited,
-    swapped, foreign or unsealed file: one :class:`~hexapod_kin.exceptions.CacheWarning`,
-    the files that fail are removed (the next process rebuilds and reseals them) and this
-    process compiles the folder's kernels in memory. :func:`seal_compiled` writes the seal
-    after the kernels are written.
+    swapped, foreign or unsealed file: one :class:`~hexapod_kin.exceptions.CacheWarning` and
+    the files that fail are removed, so numba compiles those kernels afresh (and
+    :func:`seal_compiled` reseals the folder once they are written). Where they cannot be
+    removed (or no per-user secret can check them), the folder's kernels are compiled in
+    memory in this process, never loaded from it.
     """
     if folder is None:
         return True
     with _FOLDERS_LOCK:
-        if folder in _FOLDERS:
-            return _FOLDERS[folder]
-        bad = _cache.check_folder(folder, NUMBA_FILES)
-        _FOLDERS[folder] = not bad
-    if bad:
-        name, why = next(iter(sorted(bad.items())))
-        more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
-        if "no secret" not in bad.values():
-            for file in bad:
-                with contextlib.suppress(OSError):
-                    os.unlink(os.path.join(folder, file))
-        warnings.warn(
-            f"numba's compiled-code cache in {folder} is not this user's sealed cache ({name}: "
-            f"{why}{more}); the kernels are compiled in memory, never loaded from it (the "
-            "next run rebuilds it)",
-            CacheWarning,
-            stacklevel=4,
-        )
-    return not bad
+        if folder not in _FOLDERS:
+            _FOLDERS[folder] = _check(folder)
+        return _FOLDERS[folder]
+
+
+def _check(folder: str) -> bool:
+    """The check of :func:`sealed_folder` (its one warning included)."""
+    bad = _cache.check_folder(folder, NUMBA_FILES)
+    if not bad:
+        return True
+    name, why = sorted(bad.items())[0]
+    usable = False
+    if "no secret" not in bad.values():
+        for file in bad:
+            with contextlib.suppress(OSError):
+                os.unlink(os.path.join(folder, file))
+        usable = not _cache.check_folder(folder, NUMBA_FILES)
+    more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
+    then = (
+        "removed: those kernels are compiled afresh"
+        if usable
+        else "the kernels are compiled in memory, never loaded from it"
+    )
+    warnings.warn(
+        f"numba's compiled-code cache in {folder} holds files not sealed by this user "
+        f"({name}: {why}{more}); {then}",
+        CacheWarning,
+        stacklevel=5,
+    )
+    return usable
 
 
 def seal_compiled() -> None:

@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -270,3 +272,100 @@ def test_sweep_table_csv_numbers_are_strict(tmp_path: Path) -> None:
     assert run.stdout.startswith("path='t.csv': line 3, column 2 ('score'): 'nan' is not"), (
         run.stdout + run.stderr
     )
+
+
+# ------------------------------------------------------------------- numba's cache sealed
+#: A child computing 100 tip poses by the batch kernels (numba) and by Pinocchio per call;
+#: a warning is one line ``warning: ...`` (the command line prints the package's warnings so).
+_FK_BATCH = (
+    "import sys, warnings, numpy as np\n"
+    "warnings.showwarning = lambda m, c, *a: print('warning:', m, file=sys.stderr)\n"
+    "import hexapod_kin as hk\n"
+    "m = hk.load('hexabot_leg')\n"
+    "qs = m.random_q(100, seed=0)\n"
+    "ref = np.array([m.fk(q) for q in qs])\n"
+    "print(float(np.max(np.abs(m.fk_batch(qs) - ref))))\n"
+)
+
+
+def _fk_batch(cache: Path, cwd: Path) -> tuple[float, list[str], float]:
+    """(largest difference to Pinocchio, stderr lines, CPU [s]) with ``NUMBA_CACHE_DIR=cache``."""
+    code = f"import os\nos.environ['NUMBA_CACHE_DIR'] = {str(cache)!r}\n" + _FK_BATCH
+    run = py(code, cwd=cwd)
+    assert run.status == 0, run.stderr
+    assert "Traceback" not in run.stderr and "a bug" not in run.stderr, run.stderr
+    assert run.peak < 1 << 30
+    return float(run.stdout.split()[-1]), run.lines, run.cpu
+
+
+def _folder(cache: Path) -> Path:
+    """The numba cache folder of the package's top-level kernels (the one with a seal)."""
+    [seal] = [p for p in cache.rglob("hexapod_kin.seal") if list(p.parent.glob("_kernels.*"))]
+    return seal.parent
+
+
+@pytest.fixture(scope="module")
+def sealed_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A numba cache holding the batch kernels, written and sealed by a first process."""
+    cache = tmp_path_factory.mktemp("numba") / "cache"
+    diff, lines, _ = _fk_batch(cache, cache.parent)
+    assert diff < 1e-12 and not [ln for ln in lines if "warning" in ln], lines
+    return cache
+
+
+def _flip(folder: Path) -> str:
+    target = sorted(folder.glob("*.nbc"))[0]
+    data = bytearray(target.read_bytes())
+    data[len(data) // 2] ^= 0x01
+    target.write_bytes(bytes(data))
+    return target.name
+
+
+def _swap(folder: Path) -> str:
+    a, b = sorted(folder.glob("*.nbc"))[:2]
+    da, db = a.read_bytes(), b.read_bytes()
+    a.write_bytes(db)
+    b.write_bytes(da)
+    return a.name
+
+
+def _foreign(folder: Path) -> str:
+    target = folder / "_kernels.evil-1.py311.1.nbc"
+    target.write_bytes(sorted(folder.glob("*.nbc"))[0].read_bytes())  # a copy, another name
+    return target.name
+
+
+def _unsealed(folder: Path) -> str:
+    (folder / "hexapod_kin.seal").unlink()
+    return sorted(folder.glob("*.nb?"))[0].name
+
+
+@pytest.mark.parametrize("damage", [_flip, _swap, _foreign, _unsealed],
+                         ids=["flipped-byte", "swapped", "foreign-file", "unsealed"])  # fmt: skip
+def test_numba_cache_not_sealed_is_never_loaded(
+    sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]
+) -> None:
+    """One warning naming the file, the right answer (Pinocchio's), the file removed; the next
+    process rebuilds and reseals the folder (no warning, loaded)."""
+    cache = tmp_path / "cache"
+    shutil.copytree(sealed_cache, cache)
+    folder = _folder(cache)
+    name = damage(folder)
+    damaged = (folder / name).read_bytes()
+    diff, lines, _ = _fk_batch(cache, tmp_path)
+    assert diff < 1e-12, diff
+    warned = [ln for ln in lines if ln.startswith("warning:")]
+    assert len(warned) == 1 and len(lines) <= 2, lines
+    assert "not sealed by this user" in warned[0] and name in warned[0], warned
+    if damage is not _unsealed:  # the damaged bytes are gone (removed, or rewritten afresh)
+        assert not (folder / name).exists() or (folder / name).read_bytes() != damaged
+    diff, lines, _ = _fk_batch(cache, tmp_path)  # rebuilt and resealed by the run above
+    assert diff < 1e-12 and not [ln for ln in lines if "warning" in ln], lines
+
+
+def test_numba_cache_sealed_is_loaded_quietly(sealed_cache: Path, tmp_path: Path) -> None:
+    """The sealed cache is loaded with no warning, and its seal names every numba file."""
+    diff, lines, _ = _fk_batch(sealed_cache, tmp_path)
+    assert diff < 1e-12 and lines == [], lines
+    seal = (_folder(sealed_cache) / "hexapod_kin.seal").read_text()
+    assert all(p.name in seal for p in _folder(sealed_cache).glob("*.nb?"))
