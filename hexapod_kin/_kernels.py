@@ -225,7 +225,11 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     if area in _SEEN:
         return run(0, 0)
     with _progress(_notice(area)):
-        return _first_run(area, run)
+        try:
+            return _first_run(area, run)
+        finally:
+            if area not in _SEEN:  # interrupted or failed: what numba wrote is sealed too
+                seal_compiled()
 
 
 def _first_run(area: str, run: Callable[[int, int], Any]) -> Any:
