@@ -86,7 +86,7 @@ def _group_gone(pgid: int) -> bool:
     ids=["fk", "gait"],
 )
 def test_ctrl_c_at_any_time_is_one_line_never_a_traceback(tmp_path: Path, args: list[str]) -> None:
-    """SIGINT 0 to 400 ms after the console script starts: one line or none, no traceback.
+    """SIGINT 0 to 400 ms (and later) after the console script starts: one line, no traceback.
 
     Before the interpreter installs Python's handler the default action ends the process
     (status -2, nothing printed); in the interpreter's own start-up (``site``, before the
@@ -99,7 +99,10 @@ def test_ctrl_c_at_any_time_is_one_line_never_a_traceback(tmp_path: Path, args: 
     (tmp_path / "hexapod-kin").write_text(SCRIPT)
     argv = [sys.executable, str(tmp_path / "hexapod-kin"), *args]
     ours = 0
-    for delay_ms in range(0, 401, 20):
+    # every 20 ms to 400 ms, then later (a loaded machine's start-up can outlast 400 ms)
+    for delay_ms in [*range(0, 401, 20), 600, 800, 1200, 1600, 2400]:
+        if delay_ms > 400 and ours >= 3:
+            break
         status, err, pgid = _spawn(argv, tmp_path, delay_ms / 1000)
         assert _group_gone(pgid), f"a process left at {delay_ms} ms"
         if "Traceback" in err and _before_handler(err):
