@@ -14,8 +14,6 @@ Quick start::
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
 from ._version import __version__
 from .exceptions import (
     ConfigurationError,
@@ -27,7 +25,12 @@ from .exceptions import (
     UrdfWarning,
 )
 
+#: ``typing.TYPE_CHECKING`` without importing ``typing`` (mypy reads the name so): the console
+#: entry's Ctrl-C handler comes after this module, which should take as little time as it can.
+TYPE_CHECKING = False
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
+    from typing import Any
+
     from . import robots
     from ._fromurdf import TableRecovery, chain_from_urdf, recover_chain
     from ._table_kin import table_fk, table_transforms

@@ -12,6 +12,11 @@ report replays, sweep chunks) goes through this module:
   against accidents only: anyone can recompute it after an edit. A seal needs the secret, so
   an edited entry resealed by someone without it is detected. Without a readable or
   writable secret (a read-only or unusable cache root) nothing is cached.
+* :func:`seal_folder` / :func:`check_folder` — a folder of another program's files (numba's
+  compiled code), sealed as opaque bytes: one seal file holding the keyed MAC of each file's
+  name and bytes, written after the files; checked before the files may be used. Its secret
+  is the user's own (:func:`user_secret`: the default cache root's, whatever
+  ``HEXAPOD_KIN_CACHE_DIR`` says, since such a folder is shared by every cache root).
 * :func:`store` / :func:`load` — one JSON envelope per entry (``format``, ``key``, ``body``,
   ``seal``), written atomically (:func:`hexapod_kin._io.atomic_write`: no temporary file left
   on any failure). A missing entry, or one of another format, is no entry (quietly);
@@ -25,6 +30,7 @@ is not used when it is wrong.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import hmac
 import json
@@ -33,13 +39,15 @@ import re
 import secrets
 import threading
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from ._io import atomic_write
 from .exceptions import CacheWarning, HexapodKinError
 
-__all__ = ["damaged", "folder", "key", "load", "mac", "seal", "store"]
+__all__ = ["FOLDER_SEAL", "check_folder", "damaged", "folder", "key", "load", "mac", "seal",
+           "seal_folder", "store", "user_secret"]  # fmt: skip
 
 _SECRET_BYTES = 32
 _SECRETS: dict[str, bytes | None] = {}
@@ -49,8 +57,11 @@ _LOCK = threading.Lock()
 def root() -> Path:
     """The cache root (not created here); see the module docstring."""
     env = os.environ.get("HEXAPOD_KIN_CACHE_DIR")
-    if env:
-        return Path(env)
+    return Path(env) if env else _default_root()
+
+
+def _default_root() -> Path:
+    """The user's own cache root (``HEXAPOD_KIN_CACHE_DIR`` aside)."""
     try:
         import platformdirs
 
@@ -74,15 +85,18 @@ def key(parts: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _secret() -> bytes | None:
+def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
     """The per-user secret of the seals, created once; ``None`` when the root is unusable.
+
+    ``base``: the cache root whose ``seal.key`` it is (default: :func:`root`); ``quiet``: no
+    warning for a root that is a regular file.
 
     Created race-free: a private temporary file is hard-linked to the name, so of concurrent
     first runs one wins and the others read its secret. A secret of the wrong length is
     replaced (entries sealed with the old one are then recomputed). A cache root that is a
     regular file is said once (one :class:`CacheWarning`).
     """
-    base = root()
+    base = root() if base is None else base
     with _LOCK:
         if str(base) in _SECRETS:
             return _SECRETS[str(base)]
@@ -110,7 +124,8 @@ def _secret() -> bytes | None:
                 except FileExistsError:
                     pass  # another process made it first: read its secret
             except OSError as exc:
-                if base.exists() and not base.is_dir() or isinstance(exc, NotADirectoryError):
+                file = base.exists() and not base.is_dir() or isinstance(exc, NotADirectoryError)
+                if file and not quiet:
                     warnings.warn(
                         f"cache folder {str(base)!r} is not a folder (a regular file?); "
                         "nothing is cached",
@@ -215,3 +230,121 @@ def load(kind: str, digest: str, fmt: int, then: str) -> Any | None:
     except Exception as exc:  # noqa: BLE001 - any damage means "no entry"
         damaged(kind, digest, exc, then)
         return None
+
+
+# ------------------------------------------------------------ folders of opaque files
+#: The seal file of a folder sealed by :func:`seal_folder`.
+FOLDER_SEAL = "hexapod_kin.seal"
+_FOLDER_FORMAT = 1
+
+
+def user_secret() -> bytes | None:
+    """The secret sealing folders shared beyond one cache root (numba's compiled code).
+
+    The default cache root's secret (the user's own, whatever ``HEXAPOD_KIN_CACHE_DIR``
+    says: a folder of numba's is shared by every cache root); when that root is unusable,
+    :func:`root`'s; ``None`` when neither is usable.
+    """
+    return _secret(_default_root(), quiet=True) or _secret()
+
+
+def _file_mac(secret: bytes, name: str, data: bytes) -> str:
+    h = hmac.new(secret, digestmod=hashlib.sha256)
+    for chunk in (b"folder-file", name.encode(), data):
+        h.update(len(chunk).to_bytes(8, "big"))
+        h.update(chunk)
+    return h.hexdigest()
+
+
+def _sealed_files(folder: Path, suffixes: tuple[str, ...]) -> list[Path]:
+    try:
+        return sorted(p for p in folder.iterdir() if p.suffix in suffixes and p.is_file())
+    except OSError:
+        return []
+
+
+@contextlib.contextmanager
+def _folder_lock(folder: Path) -> Iterator[None]:
+    """An exclusive lock on ``folder`` (``flock`` of the folder itself; none where refused)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        yield
+        return
+    try:
+        try:
+            import fcntl
+
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except (ImportError, OSError):  # no flock here: the seal is then last-writer-wins
+            pass
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+def seal_folder(folder: str | os.PathLike[str], suffixes: tuple[str, ...]) -> bool:
+    """Seal the files of ``folder`` ending in ``suffixes`` (call it after writing them).
+
+    The seal (:data:`FOLDER_SEAL`) holds the keyed MAC of each file's name and bytes (the
+    files are opaque: never parsed). Written atomically under a lock of the folder, reading
+    the files inside the lock, so that of two processes writing files at once the last seal
+    covers both. Returns whether it was written (no secret, a read-only folder or a full
+    disk: not, and never an error).
+    """
+    path = Path(folder)
+    secret = user_secret()
+    if secret is None:
+        return False
+    try:
+        with _folder_lock(path):
+            macs = {}
+            for p in _sealed_files(path, suffixes):
+                try:
+                    macs[p.name] = _file_mac(secret, p.name, p.read_bytes())
+                except FileNotFoundError:  # removed meanwhile: nothing to seal
+                    continue
+            text = json.dumps({"format": _FOLDER_FORMAT, "files": macs}, sort_keys=True)
+            atomic_write(path / FOLDER_SEAL, text, sync=False)
+        return True
+    except (OSError, HexapodKinError):
+        return False
+
+
+def check_folder(folder: str | os.PathLike[str], suffixes: tuple[str, ...]) -> dict[str, str]:
+    """The files of ``folder`` ending in ``suffixes`` that its seal does not vouch for.
+
+    Returns:
+        File name → what is wrong (``"not sealed"``: a foreign file or one written after
+        the seal; ``"edited or swapped"``: its bytes are not the sealed ones; ``"no seal"``;
+        ``"no secret"``: no usable cache root to check with). Empty: every file is sealed
+        (or there is none: nothing to load).
+
+    """
+    path = Path(folder)
+    files = _sealed_files(path, suffixes)
+    if not files:
+        return {}
+    secret = user_secret()
+    if secret is None:
+        return dict.fromkeys((p.name for p in files), "no secret")
+    try:
+        data = json.loads((path / FOLDER_SEAL).read_text(encoding="utf-8"))
+        sealed = data["files"] if data.get("format") == _FOLDER_FORMAT else {}
+        if not isinstance(sealed, dict):
+            sealed = {}
+    except (OSError, ValueError, TypeError, AttributeError, KeyError):
+        return dict.fromkeys((p.name for p in files), "no seal")
+    bad = {}
+    for p in files:
+        expected = sealed.get(p.name)
+        if not isinstance(expected, str):
+            bad[p.name] = "not sealed"
+            continue
+        try:
+            ok = hmac.compare_digest(expected, _file_mac(secret, p.name, p.read_bytes()))
+        except OSError:
+            continue  # removed meanwhile: not there to be loaded
+        if not ok:
+            bad[p.name] = "edited or swapped"
+    return bad

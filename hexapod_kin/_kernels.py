@@ -17,9 +17,10 @@ input only (never on its neighbours in a block, the block size or the thread tha
 so a result is the same in any process, warm or cold, and from any number of threads.
 
 **When it compiles**: only batch APIs import this module (per-call work runs on Pinocchio
-and numpy). Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`); nothing reads
-numba's files; ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel
-call of an area in a process, :func:`run_blocks` prints one notice on stderr unless the
+and numpy). Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`); numba's files are
+never parsed, only sealed as bytes (:func:`hexapod_kin._kmath.sealed_folder`);
+``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area in
+a process, :func:`run_blocks` prints one notice on stderr unless the
 area's stamp (:func:`mark_compiled`) says it is compiled; a cache that cannot be loaded or
 written is never fatal (:func:`_first_call`).
 
@@ -46,7 +47,16 @@ import numba
 import numpy as np
 
 from ._chain import AlignedChain, ChainArrays, aligned_chain
-from ._kmath import POLY_TRIG_MAX, dls_into, eig3_sym, njit, sincos, solve_spd, wrap_angle
+from ._kmath import (
+    POLY_TRIG_MAX,
+    dls_into,
+    eig3_sym,
+    njit,
+    seal_compiled,
+    sincos,
+    solve_spd,
+    wrap_angle,
+)
 from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
 __all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
@@ -106,17 +116,22 @@ def _stamp(area: str) -> Path | None:
 
     That folder is numba's public ``Dispatcher.stats.cache_path`` (``NUMBA_CACHE_DIR``, else
     ``__pycache__`` beside the sources when writable, else numba's user-wide cache folder);
-    ``None`` when numba caches nothing. Only the stamp is written there: numba's own files
-    are never read.
+    ``None`` when numba caches nothing. The stamp (and the seal, :func:`mark_compiled`) are
+    written there; numba's own files are never parsed.
     """
     folder = pose_jacobian_kernel.stats.cache_path
     return None if folder is None else Path(folder) / f"hexapod_kin-{area}-{_stamp_key()}.stamp"
 
 
 def mark_compiled(area: str) -> None:
-    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort)."""
+    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort).
+
+    The cache folders are sealed first (:func:`hexapod_kin._kmath.seal_compiled`): what
+    numba wrote is then this user's sealed cache, loaded by later processes.
+    """
     with _SEEN_LOCK:
         _SEEN.add(area)
+    seal_compiled()
     path = _stamp(area)
     if path is not None:
         try:
@@ -198,7 +213,7 @@ def _unwritable(exc: BaseException) -> bool:
 def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     """``run(0, 0)`` (no blocks: loads or compiles the kernel), never failing on the cache.
 
-    numba's cache is used as numba documents it (``cache=True``): nothing here reads its
+    numba's cache is used as numba documents it (``cache=True``): nothing here parses its
     files. A cache that cannot be written (a full disk, a folder made read-only) costs one
     :class:`~hexapod_kin.exceptions.CacheWarning`: numba adds each kernel to memory before
     saving it, so calling again compiles the rest in memory. A cache that cannot be loaded
@@ -210,7 +225,11 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     if area in _SEEN:
         return run(0, 0)
     with _progress(_notice(area)):
-        return _first_run(area, run)
+        try:
+            return _first_run(area, run)
+        finally:
+            if area not in _SEEN:  # interrupted or failed: what numba wrote is sealed too
+                seal_compiled()
 
 
 def _first_run(area: str, run: Callable[[int, int], Any]) -> Any:

@@ -14,16 +14,21 @@ Angles in [rad].
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
+import threading
 import warnings
 from typing import Any
 
 import numba
 import numpy as np
 
+from . import _cache
 from .exceptions import CacheWarning
 
-__all__ = ["POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "sincos", "solve_spd", "wrap_angle"]
+__all__ = ["NUMBA_FILES", "POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "seal_compiled",
+           "sealed_folder", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
 
@@ -39,6 +44,11 @@ def njit(*args: Any, **options: Any) -> Any:
     ``NUMBA_CACHE_DIR``, ``__pycache__`` beside the sources, the user-wide cache folder),
     ``cache=True`` would fail at import: the kernels are compiled in memory instead, with one
     :class:`~hexapod_kin.exceptions.CacheWarning` per process.
+
+    **numba's cache is sealed** (:func:`sealed_folder`): before numba may load anything from
+    a cache folder, every numba file in it must carry the per-user keyed seal; otherwise the
+    kernels of that folder are compiled in memory in this process (one warning), never
+    loaded from it.
     """
     if options.get("fastmath"):
         raise ValueError("hexapod_kin kernels never use fastmath (the same bits every time)")
@@ -46,7 +56,7 @@ def njit(*args: Any, **options: Any) -> Any:
 
     def decorate(func: Any) -> Any:
         try:
-            return numba.njit(**options)(func)
+            compiled = numba.njit(**options)(func)
         except RuntimeError as exc:
             if not options["cache"] or "cannot cache" not in str(exc):
                 raise
@@ -60,11 +70,76 @@ def njit(*args: Any, **options: Any) -> Any:
                     stacklevel=3,
                 )
             return numba.njit(**{**options, "cache": False})(func)
+        if options["cache"] and not sealed_folder(compiled.stats.cache_path):
+            return numba.njit(**{**options, "cache": False})(func)
+        return compiled
 
     return decorate(args[0]) if args and callable(args[0]) else decorate
 
 
 _IN_MEMORY: list[bool] = []
+
+#: numba's cache files (its index and its machine code): what the seal covers, as bytes.
+NUMBA_FILES = (".nbi", ".nbc")
+#: numba cache folder → whether numba may load from it in this process (checked once).
+_FOLDERS: dict[str, bool] = {}
+_FOLDERS_LOCK = threading.Lock()
+
+
+def sealed_folder(folder: str | None) -> bool:
+    """Whether numba may use its cache ``folder``: every numba file in it carries the seal.
+
+    Checked once per folder and process, before the first kernel of the folder is made
+    (so before numba could load anything from it): every ``.nbi``/``.nbc`` file must carry
+    the keyed MAC of its name and bytes in the folder's seal
+    (:func:`hexapod_kin._cache.check_folder`; numba's files are never parsed). An edited,
+    swapped, foreign or unsealed file: one :class:`~hexapod_kin.exceptions.CacheWarning` and
+    the files that fail are removed, so numba compiles those kernels afresh (and
+    :func:`seal_compiled` reseals the folder once they are written). Where they cannot be
+    removed (or no per-user secret can check them), the folder's kernels are compiled in
+    memory in this process, never loaded from it.
+    """
+    if folder is None:
+        return True
+    with _FOLDERS_LOCK:
+        if folder not in _FOLDERS:
+            _FOLDERS[folder] = _check(folder)
+        return _FOLDERS[folder]
+
+
+def _check(folder: str) -> bool:
+    """The check of :func:`sealed_folder` (its one warning included)."""
+    bad = _cache.check_folder(folder, NUMBA_FILES)
+    if not bad:
+        return True
+    name, why = sorted(bad.items())[0]
+    usable = False
+    if "no secret" not in bad.values():
+        for file in bad:
+            with contextlib.suppress(OSError):
+                os.unlink(os.path.join(folder, file))
+        usable = not _cache.check_folder(folder, NUMBA_FILES)
+    more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
+    then = (
+        "removed: those kernels are compiled afresh"
+        if usable
+        else "the kernels are compiled in memory, never loaded from it"
+    )
+    warnings.warn(
+        f"numba's compiled-code cache in {folder} holds files not sealed by this user "
+        f"({name}: {why}{more}); {then}",
+        CacheWarning,
+        stacklevel=5,
+    )
+    return usable
+
+
+def seal_compiled() -> None:
+    """Seal every cache folder numba writes this process's kernels to (after they are written)."""
+    with _FOLDERS_LOCK:
+        folders = [f for f, ok in _FOLDERS.items() if ok]
+    for folder in folders:
+        _cache.seal_folder(folder, NUMBA_FILES)
 
 
 # ------------------------------------------------------------------------ eigenvalues

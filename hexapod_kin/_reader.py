@@ -24,7 +24,8 @@ one mistake gets one message whatever the file: :func:`number` / :func:`numbers`
 int or float, never a text such as ``'0.3'`` nor a boolean), :func:`text` / :func:`texts`
 (names that are strings, never ``5`` or ``true`` made into one), :func:`check_keys` (an
 unknown key refused with a "did you mean") and :func:`named` (the file named in front of a
-value's error).
+value's error). A CSV's numbers go through :func:`csv_table` (decimal numbers only: never
+``inf``, ``nan``, ``1_000`` nor a number padded with spaces; the line, column and value named).
 """
 
 from __future__ import annotations
@@ -49,8 +50,8 @@ from .exceptions import (
 )
 
 __all__ = ["FORMATS", "MAX_ALIASES", "MAX_BYTES", "MAX_DEPTH", "MAX_STRING", "MAX_VALUES",
-           "check_keys", "clip", "named", "number", "numbers", "parse_data", "read_data",
-           "read_text", "text", "texts"]  # fmt: skip
+           "check_keys", "clip", "csv_table", "named", "number", "numbers", "parse_data",
+           "read_data", "read_text", "text", "texts"]  # fmt: skip
 
 #: Formats of :func:`read_data`, by file suffix.
 FORMATS = {".json": "json", ".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
@@ -65,6 +66,7 @@ MAX_ALIASES = 64
 #: Most characters of one string.
 MAX_STRING = 10_000
 _MAX_INT = 2**53
+_DECIMAL = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
 _EXPONENT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$")
 
 
@@ -443,3 +445,59 @@ def named(
             value=exc.value,
             allowed=exc.allowed,
         ) from None
+
+
+# ---------------------------------------------------------------- CSV
+def csv_table(
+    text: str, name: str, what: str
+) -> tuple[dict[str, str], list[str], list[list[float]]]:
+    """A CSV's ``# key: value`` lines, its header's cells and its rows of numbers.
+
+    Blank lines are skipped; the first other line that does not start with ``#`` is the
+    header (cells stripped); every later line is a row of exactly as many numbers. A number
+    is a plain decimal (``-1.5``, ``.25``, ``3e-4``) and finite: ``float()``'s extras
+    (``inf``, ``nan``, ``1_000``, `` 1e3 `` with spaces) are typos in a table, refused.
+
+    Args:
+        text: The file's text (from :func:`read_text`).
+        name: The file, named in errors.
+        what: The kind of file (the error's ``parameter``).
+
+    Raises:
+        SourceError: No header, a row of another width, or a cell that is not a finite
+            decimal number (``"<file>: line L, column C (<name>): '<value>' ..."``).
+
+    """
+    meta: dict[str, str] = {}
+    header: list[str] | None = None
+    rows: list[list[float]] = []
+    for lineno, line in enumerate(text.splitlines(), 1):
+        if line.startswith("#"):
+            key, _, value = line[1:].partition(":")
+            meta[key.strip()] = value.strip()
+            continue
+        if not line.strip():
+            continue
+        cells = line.split(",")
+        if header is None:
+            header = [c.strip() for c in cells]
+            continue
+        if len(cells) != len(header):
+            raise _refuse(name, what, f"line {lineno} has {len(cells)} values",
+                          f"{len(header)} values per row, as the header")  # fmt: skip
+        row = []
+        for col, cell in enumerate(cells, 1):
+            x = float(cell) if _DECIMAL.fullmatch(cell.strip(" \t")) else math.nan
+            if not math.isfinite(x):
+                raise _refuse(
+                    name,
+                    what,
+                    f"line {lineno}, column {col} ({clip(header[col - 1])}): {clip(cell)} "
+                    "is not a finite decimal number",
+                    "decimal numbers such as 0.25 or -1.5e-3 (no inf, nan or _)",
+                )
+            row.append(x)
+        rows.append(row)
+    if header is None:
+        raise _refuse(name, what, "no header line", "a header line, then rows of numbers")
+    return meta, header, rows

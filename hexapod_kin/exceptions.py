@@ -7,10 +7,13 @@ is a list), so that a user can fix the call without reading the source.
 
 from __future__ import annotations
 
-import difflib
 import math
-from collections.abc import Iterable
-from typing import Any
+
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (mypy reads it so)
+
+if TYPE_CHECKING:  # annotations only: the command line's start-up imports this module
+    from collections.abc import Iterable
+    from typing import Any
 
 __all__ = ["HexapodKinError", "ParameterError", "ConfigurationError", "LimitError",
            "FrameNotFoundError", "UrdfError", "SourceError", "IKError", "ViewerError",
@@ -181,6 +184,8 @@ def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.
     pool = [str(x) for x in names]
     if not isinstance(name, str) or not pool:
         return ""
+    import difflib  # on first use: the command line's start-up imports this module
+
     close = difflib.get_close_matches(name, pool, n=n, cutoff=cutoff)
     low = name.lower()
     prefixed = [x for x in pool if low and x.lower().startswith(low) and x not in close]

@@ -99,30 +99,6 @@ def _target(args: argparse.Namespace) -> Any:
     return t if args.yaw is None else np.append(t, _angle(args, args.yaw))
 
 
-#: A target farther than this many robot sizes from the base is refused (not "unreachable").
-TARGET_FACTOR = 100.0
-
-
-def _within_reason(target: Any, model: Any) -> None:
-    """Refuse a target position beyond :data:`TARGET_FACTOR` × the robot's size, at once."""
-    import numpy as np
-
-    from .._tree import robot_size
-
-    xyz = np.asarray(target, dtype=float)
-    xyz = xyz[:3, 3] if xyz.shape == (4, 4) else xyz[:3]
-    limit = TARGET_FACTOR * robot_size(model.model)
-    far = float(np.max(np.abs(xyz))) if np.all(np.isfinite(xyz)) else math.inf
-    if not far <= limit:
-        raise ParameterError(
-            f"target {', '.join(f'{v:.6g}' for v in xyz)} m is larger than the robot; allowed "
-            f"|x|, |y|, |z| <= {limit:.4g} m ({TARGET_FACTOR:g} x the robot's size)",
-            parameter="target",
-            value=xyz.tolist(),
-            allowed=[-limit, limit],
-        )
-
-
 def _cmd_ik(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -131,7 +107,8 @@ def _cmd_ik(args: argparse.Namespace) -> int:
 
     model = load_source(args)
     target = _target(args)
-    _within_reason(target, model)
+    xyz = target[:3, 3] if target.shape == (4, 4) else target[:3]
+    ik.check_within(model, xyz)  # the API's own check: a typo refused at once
     closed: list[list[float]] | None = None
     inside = 0  # closed-form solutions within the joint limits
     family = None

@@ -39,7 +39,17 @@ from typing import Any, Literal
 import numpy as np
 
 from .._io import atomic_write
-from .._reader import check_keys, named, number, numbers, parse_data, read_text, text, texts
+from .._reader import (
+    check_keys,
+    csv_table,
+    named,
+    number,
+    numbers,
+    parse_data,
+    read_text,
+    text,
+    texts,
+)
 from ..exceptions import ConfigurationError, HexapodKinError, LimitError, SourceError, choices
 from .servos import MAX_COMMAND, UNITS, Calibration, Servo, _bad, read_calibration
 
@@ -517,24 +527,18 @@ def _read_json(raw: str, p: Path) -> Timeline:
     )
 
 
-def _csv(text: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
-    """``# key: value`` lines, the column names (units dropped) and the (N, columns) numbers."""
-    meta: dict[str, str] = {}
-    rows: list[str] = []
-    for line in text.splitlines():
-        if line.startswith("#"):
-            key, _, value = line[1:].partition(":")
-            meta[key.strip()] = value.strip()
-        elif line.strip():
-            rows.append(line)
-    header = [h.strip() for h in rows[0].split(",")]
-    data = np.array([[float(x) for x in r.split(",")] for r in rows[1:]], dtype=float)
+def _csv(text: str, name: str, what: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
+    """``# key: value`` lines, the column names (units dropped) and the (N, columns) numbers.
+
+    The numbers pass the strict reader's (:func:`hexapod_kin._reader.csv_table`).
+    """
+    meta, header, rows = csv_table(text, name, what)
     names = tuple(h.rsplit(" [", 1)[0] for h in header)
-    return meta, names, data.reshape(len(rows) - 1, len(header))
+    return meta, names, np.array(rows, dtype=float).reshape(len(rows), len(header))
 
 
 def _read_csv(text: str, p: Path) -> Timeline:
-    meta, columns, data = _csv(text)
+    meta, columns, data = _csv(text, str(p), "timeline")
     if not meta.get("format", "").startswith(FORMAT):
         raise KeyError("format")
     n = (len(columns) - 1) // 2
@@ -591,7 +595,7 @@ def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tup
                 q = np.asarray(numbers(d["q"], "q"), dtype=float)
                 names = d.get("joint_names") or [f"joint{i + 1}" for i in range(q.shape[-1])]
                 return t, q.reshape(len(t), -1), texts(names, "joint_names")
-        _, columns, data = _csv(raw)
+        _, columns, data = _csv(raw, str(p), "plan")
         return data[:, 0].copy(), data[:, 1:].copy(), columns[1:]
     except _MALFORMED as exc:
         what = "a plan (CSV: a header t,<joint>,... then rows; JSON: t, q, joint_names)"

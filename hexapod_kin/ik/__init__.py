@@ -28,10 +28,10 @@ from .closed import (
 )
 from .prepare import LEG_HOME, Prepared, home, prepared
 from .solver import STATUSES, IKOptions, IKResult, solve, solve_chain, solve_many
-from .task import AXES, Task, build_task, build_tasks
+from .task import AXES, TARGET_FACTOR, Task, build_task, build_tasks, check_within
 
-__all__ = ["AXES", "FAMILIES", "FAMILY_TOL", "LEG_HOME", "STATUSES", "AnalyticBatch",
-           "IKOptions", "IKResult", "LegFamily", "Prepared", "Task", "analytic",
-           "analytic_batch", "build_task", "build_tasks", "detect_family", "home",
+__all__ = ["AXES", "FAMILIES", "FAMILY_TOL", "LEG_HOME", "STATUSES", "TARGET_FACTOR",
+           "AnalyticBatch", "IKOptions", "IKResult", "LegFamily", "Prepared", "Task", "analytic",
+           "analytic_batch", "build_task", "build_tasks", "check_within", "detect_family", "home",
            "leg_reachable", "leg_solutions", "prepared", "solve", "solve_chain",
            "solve_many"]  # fmt: skip

@@ -31,7 +31,7 @@ from .._numerics import chain_scale
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .task import MODES, Task, build_task, build_tasks
+from .task import MODES, Task, build_task, build_tasks, check_within
 
 __all__ = ["MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
 
@@ -384,7 +384,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         ``"not_converged"``: iteration cap.
 
     Raises:
-        IKError: Non-finite or wrongly shaped target, or bad mask/weights.
+        IKError: Non-finite or wrongly shaped target, a target beyond a hundred robot sizes
+            (:func:`~hexapod_kin.ik.check_within`), or bad mask/weights.
         ConfigurationError: Bad ``q0`` or ``posture``.
         ParameterError: Unknown or bad options.
 
@@ -395,6 +396,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         task = build_task(target, mask=opts.mask, weights=opts.weights)
     else:
         opts, task = _DEFAULT, build_task(target)
+    check_within(mdl, task.pose[:3, 3])
     code = _CODES[task.mode]
     s = _setup(mdl, opts, code)
     pars, starts = s.one
@@ -551,7 +553,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         One :class:`IKResult` per target, the same bits as :func:`solve` of that target.
 
     Raises:
-        IKError: Bad targets. ConfigurationError: ``q0`` rows do not match.
+        IKError: Bad targets (as :func:`solve`). ConfigurationError: ``q0`` rows do not match.
         ParameterError: Unknown or bad options.
 
     """
@@ -572,6 +574,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     tasks = build_tasks(t, mask=opts.mask, weights=opts.weights)
     if not tasks:
         return []
+    check_within(mdl, t[..., :3, 3] if t.ndim == 3 else t[:, :3], "targets")
     n_t = len(tasks)
     s = _setup(mdl, opts, tasks[0].code)
     starts = np.empty((n_t, *s.starts.shape))

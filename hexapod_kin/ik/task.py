@@ -13,12 +13,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..exceptions import IKError
+from ..exceptions import HexapodKinError, IKError
 
-__all__ = ["AXES", "Task", "build_task", "build_tasks"]
+__all__ = ["AXES", "TARGET_FACTOR", "Task", "build_task", "build_tasks", "check_within"]
 
 #: Names of the six task rows (position [m], orientation [rad]; base axes).
 AXES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
+
+#: A target farther than this many robot sizes from the base is refused (not "unreachable").
+TARGET_FACTOR = 100.0
 
 Mode = Literal["position", "position_yaw", "pose"]
 MODES: tuple[str, ...] = ("position", "position_yaw", "pose")
@@ -275,3 +278,45 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
                 poses.setflags(write=False)
                 return [_task("pose", p, 0.0, _POSE_WEIGHTS) for p in poses]
     return [build_task(ti, mask=mask, weights=weights) for ti in t]
+
+
+def check_within(
+    model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
+) -> None:
+    """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
+
+    The one range check of targets (the API's :func:`~hexapod_kin.ik.solve`,
+    :func:`~hexapod_kin.ik.solve_many` and the command line): a target a hundred robots away
+    is a typo or a unit error, not a question for the solver (whose loop would run its full
+    budget on numbers like 1e308).
+
+    Args:
+        model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
+        positions: (3,) or (N, 3) positions [m] in the base frame.
+        parameter: The name of the argument in the error.
+        kind: The error's class (one of the package's, taking ``parameter``, ``value`` and
+            ``allowed``).
+
+    Raises:
+        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit,
+            named with the limit.
+
+    """
+    xyz = np.asarray(positions, dtype=float).reshape(-1, 3)
+    far = float(np.max(np.abs(xyz))) if xyz.size else 0.0
+    if far <= 1e-3 * TARGET_FACTOR:  # within the smallest robot's limit: no size needed
+        return
+    from .._tree import robot_size
+
+    limit = TARGET_FACTOR * model.cached("robot_size", lambda: robot_size(model.model))
+    if far <= limit:
+        return
+    row = xyz[int(np.argmax(np.max(np.abs(xyz), axis=1)))]
+    where = "" if len(xyz) == 1 else f" (row {int(np.argmax(np.max(np.abs(xyz), axis=1)))})"
+    raise kind(
+        f"{parameter}{where} {', '.join(f'{v:.6g}' for v in row)} m is larger than the robot; "
+        f"allowed |x|, |y|, |z| <= {limit:.4g} m ({TARGET_FACTOR:g} x the robot's size)",
+        parameter=parameter,
+        value=row.tolist(),
+        allowed=[-limit, limit],
+    )

@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from .._fields import fields_dict, read_only
 from ..exceptions import ConfigurationError, ParameterError, one_of, positive
+from ..ik.task import check_within
 from ..kinematics import as_model
 from ._law import integrate
 
@@ -356,7 +357,9 @@ def resolved_rate(
         A :class:`Trajectory` with ``round(duration/dt) + 1`` samples.
 
     Raises:
-        ParameterError: Bad ``dt``, ``duration``, ``method``, ``frame``, ``gain`` or thresholds.
+        ParameterError: Bad ``dt``, ``duration``, ``method``, ``frame``, ``gain`` or thresholds;
+            a velocity × duration or a path beyond a hundred robot sizes
+            (:func:`hexapod_kin.ik.check_within`).
         ConfigurationError: Bad ``q0``, velocity or path.
 
     """
@@ -380,6 +383,8 @@ def resolved_rate(
     times_half = np.arange(2 * steps + 1) * (0.5 * dt)
     what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
     vel = _sample(velocity, times_half, width, "velocity", what)
+    with np.errstate(over="ignore"):  # a distance beyond a hundred robots is refused at once
+        check_within(mdl, vel[:, :3] * duration, "velocity x duration", ParameterError)
     pose0 = np.array(mdl.fk(start))
     ref_r = None
     if rows6:
@@ -395,6 +400,7 @@ def resolved_rate(
         ref_p = _integrate_position(pose0[:3, 3], vel, dt)
     else:
         ref_p = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
+    check_within(mdl, ref_p, "path", ParameterError)
     jac0 = mdl.jacobian(start)
     sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
     eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)

@@ -284,6 +284,7 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         )
     if not np.all(np.isfinite(pts)):
         raise IKError("positions contains non-finite values", parameter="positions")
+    ik.check_within(mdl, pts[:, :3, 3] if poses else pts, "positions")
     tol = positive("tol", tol)
     prev = ik.home(mdl) if q0 is None else mdl.check_q(q0, "q0")
     out = np.empty((pts.shape[0], mdl.nq))

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write
+from ..exceptions import ParameterError
 from . import replay
 from .data import Verdict, load_claims, seed_file
 from .html import LEGEND
@@ -152,11 +153,60 @@ def reproduce(
     compute again (and store). The :class:`Report` says whether it was replayed.
 
     Raises:
-        ParameterError: A file of ``out`` cannot be written.
+        ParameterError: A file of ``out`` cannot be written (a full disk or a read-only
+            folder is found before the build; the folders this call made are removed).
 
     """
     start = time.perf_counter()
     out = Path(out)
+    made = _new_folders(out)
+    try:
+        _probe(out)  # a full disk or a read-only folder refused at once, not after the build
+        return _reproduce(out, quick=quick, animations=animations, cache=cache, start=start)
+    except BaseException:
+        for folder in made:  # deepest first; only the folders this call made, when empty
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        raise
+
+
+def _new_folders(out: Path) -> list[Path]:
+    """The folders a build makes that do not exist yet (``out``'s parents too), deepest first."""
+    new = [d for d in (out / "figures", out / "seeds") if not d.exists()]
+    d = out
+    while not d.exists() and d != d.parent:
+        new.append(d)
+        d = d.parent
+    return new
+
+
+def _probe(out: Path) -> None:
+    """Make ``out`` and write one byte in it (then remove it): a write that will fail, fails now."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(
+            f"out={str(out)!r}: cannot make the folder ({exc.strerror or exc})",
+            parameter="out",
+            value=str(out),
+            allowed="a folder that can be written",
+        ) from None
+    try:
+        atomic_write(out / ".hexapod-kin-write-probe", b"\n", sync=False).unlink()
+    except (OSError, ParameterError) as exc:
+        why = str(exc).split("cannot write it (")[-1].split(")")[0]
+        raise ParameterError(
+            f"out={str(out)!r}: cannot write in it ({why}); nothing was written",
+            parameter="out",
+            value=str(out),
+            allowed="a folder that can be written",
+        ) from None
+
+
+def _reproduce(out: Path, *, quick: bool, animations: bool, cache: bool, start: float) -> Report:
+    """The body of :func:`reproduce` (``out`` made and writable)."""
     try:
         parts: dict[str, Any] | None = replay.key_parts(
             quick=quick, animations=animations, digest=replay.source_digest()

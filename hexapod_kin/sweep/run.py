@@ -27,7 +27,7 @@ import numpy as np
 
 from .._fields import read_only
 from .._io import atomic_write, read_regular
-from .._reader import parse_data, read_text
+from .._reader import csv_table, parse_data, read_text
 from ..exceptions import (
     ConfigurationError,
     HexapodKinError,
@@ -540,10 +540,8 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
         if p.suffix == ".json":
             cols = parse_data(text, str(p), "json", "path", _MAX_TABLE_BYTES)["table"]
             return {str(c): np.asarray(v, dtype=float) for c, v in cols.items()}
-        lines = text.splitlines()
-        names = lines[0].split(",")
-        data = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]], dtype=float)
-        data = data.reshape(-1, len(names))
+        _, names, rows = csv_table(text, str(p), "path")  # strict numbers, line and column named
+        data = np.array(rows, dtype=float).reshape(len(rows), len(names))
         return {c: data[:, j] for j, c in enumerate(names)}
     except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
         if isinstance(exc, HexapodKinError):
