@@ -133,7 +133,7 @@ def test_servo_targets_of_a_standing_robot_are_its_joints() -> None:
 
 
 def test_servo_leg_ik_puts_the_feet_on_their_targets_as_the_closed_form_does() -> None:
-    """The IK loop warm-started from the last command lands where the closed form does."""
+    """Two steps of the IK loop from the last command land where the closed form does."""
     ctl = Controller(None, kind="servo", pattern="tripod")
     wb = ctl.wb
     rng = np.random.default_rng(3)
@@ -146,10 +146,10 @@ def test_servo_leg_ik_puts_the_feet_on_their_targets_as_the_closed_form_does() -
         start = np.linalg.norm(wb.feet(ctl.q_cmd[None], B[None])[0] - targets, axis=1).max()
         q = ctl._leg_ik(B, targets)
         miss = np.linalg.norm(wb.feet(q[None], B[None])[0] - targets, axis=1).max()
-        assert miss < min(1e-9, 1e-2 * start)  # converged (the loop stops at 1e-13 span)
+        assert miss < min(2e-5, 1e-2 * start)  # converged, within the closed form's switch
         closed = wb.body_ik(B, targets, q_prev=ctl.q_cmd, strict=False)
         assert closed.reached[0].all()
-        assert np.abs(q - closed.q[0]).max() < 1e-7  # [rad]: the same branch
+        assert np.abs(q - closed.q[0]).max() < 5e-4  # [rad]: the same branch
     ctl.q_cmd = q0  # a target out of reach: the leg keeps its last command
     far = wb.feet(q0[None], B[None])[0]
     far[0, :2] += 0.5

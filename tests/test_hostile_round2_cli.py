@@ -60,6 +60,11 @@ ROBOT_CALIBRATIONS = {
         "resolution: 3000}\n",
         "resolution 3000 us has no step within [1000, 2000] us",
     ),
+    # 1e6 us/rad (per degree?): the servo's [500, 2500] sweeps 0.002 rad of the joint's 5.2
+    "us_per_rad": (
+        "defaults: {units: us, us_per_rad: 1e6, centre: 1500, limits: [500, 2500]}\n",
+        "us_per_rad 1000000.0 lets the servo's limits [500.0, 2500.0] us sweep only 0.002 of",
+    ),
 }
 
 

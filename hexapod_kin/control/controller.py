@@ -67,6 +67,11 @@ ARRIVE = 0.8
 #: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
 RETURN_SPEED = 0.7
 
+#: Servo kind: the leg IK's steps per tick (the one IK loop, warm-started from the last
+#: command), and the distance [m] beyond which a leg left short is solved in closed form.
+IK_STEPS = 2
+IK_TOLERANCE = 1e-4
+
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
@@ -589,14 +594,14 @@ class Controller:
     def _leg_ik(self, B: np.ndarray, targets: np.ndarray) -> np.ndarray:
         """Joints [rad] that put the feet at ``targets`` (L, 3) under body pose ``B``.
 
-        The package's one numerical IK loop (:func:`~hexapod_kin.ik.solver.solve_chain` on each
-        leg's chain, warm-started from the previous command, within the joint limits).
-        A leg it leaves short of its target (a jump of the target, or out of reach) is solved
+        :data:`IK_STEPS` steps of the package's one numerical IK loop
+        (:func:`~hexapod_kin.ik.solver.solve_chain` on each leg's chain, warm-started from the
+        previous command, within the joint limits). A leg left farther than
+        :data:`IK_TOLERANCE` from its target (a jump of the target, or out of reach) is solved
         by :meth:`~hexapod_kin.gait.robot.WholeBody.body_ik` (closed form where the leg has
         one, the branch nearest the last command), and keeps its last command when that finds
         it out of reach.
         """
-        from ..gait.leg_ik import REACH_TOL
         from ..ik.solver import solve_chain
 
         wb = self.wb
@@ -604,8 +609,10 @@ class Controller:
         p_body = (np.asarray(targets, dtype=float) - B[:3, 3]) @ B[:3, :3]
         short: list[int] = []
         for leg, (chain, c, lo, hi, tol) in enumerate(self._leg_iks):
-            qn, res, _ok = solve_chain(chain, p_body[leg : leg + 1], q[c][None], lo, hi, tol=tol)
-            if res[0] <= REACH_TOL:
+            qn, res, _ok = solve_chain(
+                chain, p_body[leg : leg + 1], q[c][None], lo, hi, tol=tol, max_iter=IK_STEPS
+            )
+            if res[0] <= IK_TOLERANCE:
                 q[c] = qn[0]
             else:
                 short.append(leg)

@@ -44,6 +44,10 @@ _SERVO_KEYS = (
 )
 
 
+#: The least fraction of a joint's range [lower, upper] its servo's limits must sweep.
+MIN_COVER = 0.1
+
+
 def _bad(message: str, parameter: str, value: Any, allowed: Any) -> ParameterError:
     return ParameterError(message, parameter=parameter, value=value, allowed=allowed)
 
@@ -232,7 +236,29 @@ class Servo:
                     f"servo limits overlapping [{u[0]:.6g}, {u[1]:.6g}] {self.units}"
                 )
                 raise _bad(msg, "limits", list(self.limits), (u[0], u[1]))
+            self._check_cover(lo, hi, b - a)
             self._check_steps(lo, hi)
+
+    def _check_cover(self, lower: float, upper: float, reach: float) -> None:
+        """Refuse a scale whose servo limits sweep less than :data:`MIN_COVER` of the joint.
+
+        ``reach``: the joint angles [rad or m] the servo's limits span. A servo that moves a
+        joint of 3 rad by 0.002 rad end to end is a unit slip in the scale (µs per degree
+        given per radian, ticks per degree...), refused before any walk is planned.
+        """
+        span = upper - lower
+        if not (span > 0 and reach < MIN_COVER * span) or self.limits is None:
+            return
+        key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "limits")
+        width = float(self.limits[1] - self.limits[0])
+        most = width / (MIN_COVER * span) * (2.0 * math.pi if self.units == "ticks" else 1.0)
+        allowed = f"<= {most:.6g}" if key != "limits" else f"a width >= {MIN_COVER * span:.6g}"
+        msg = (
+            f"calibration of {self.joint}: {key} {getattr(self, key)!r} lets the servo's limits "
+            f"{list(self.limits)} {self.units} sweep only {reach:.6g} of the joint's range "
+            f"[{lower:.6g}, {upper:.6g}] (less than {MIN_COVER:g} of it); allowed: {allowed}"
+        )
+        raise _bad(msg, key, getattr(self, key), allowed)
 
     def _check_steps(self, lower: float, upper: float) -> None:
         """Refuse a resolution with no step inside both the servo's limits and the joint's."""

@@ -280,6 +280,12 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
     return [build_task(ti, mask=mask, weights=weights) for ti in t]
 
 
+def _robot_size(model: Any) -> float:
+    from .._tree import robot_size
+
+    return float(robot_size(model))
+
+
 def check_within(
     model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
 ) -> None:
@@ -302,14 +308,16 @@ def check_within(
             named with the limit.
 
     """
+    if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs
+        total = sum(map(abs, positions.tolist()))  # ≥ the largest; NaN stays NaN
+        if total <= 1e-3 * TARGET_FACTOR:
+            return
     xyz = np.asarray(positions, dtype=float).reshape(-1, 3)
     far = float(np.max(np.abs(xyz))) if xyz.size else 0.0
     if far <= 1e-3 * TARGET_FACTOR:  # within the smallest robot's limit: no size needed
         return
-    from .._tree import robot_size
-
-    limit = TARGET_FACTOR * model.cached("robot_size", lambda: robot_size(model.model))
-    if far <= limit:
+    limit = TARGET_FACTOR * model.cached("robot_size", lambda: _robot_size(model.model))
+    if far <= limit:  # NaN is not: refused below
         return
     row = xyz[int(np.argmax(np.max(np.abs(xyz), axis=1)))]
     where = "" if len(xyz) == 1 else f" (row {int(np.argmax(np.max(np.abs(xyz), axis=1)))})"
