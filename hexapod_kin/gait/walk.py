@@ -22,9 +22,10 @@
   ``r = 0`` the feet are points fixed in the world during stance.
 * **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
   periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
-  one knot per swing group at mid-swing; each knot moves the centre of mass to the centroid of
-  that swing's support polygon (the stance contacts at that instant), times the gain
-  ``sway`` (two correction passes with the centre of mass by FK).
+  one knot per swing group at mid-swing; each knot moves the zero-moment point to the centroid
+  of that swing's support polygon (the stance contacts at that instant), times the gain
+  ``sway`` (:mod:`.sway`; default 1: the ZMP at the centroid, so that the plan's ZMP margin
+  stays positive between the knots too).
 * The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
@@ -268,7 +269,7 @@ def walk(
         strict: Raise on the first failed check (else return the run with its checks).
         foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
             feet fixed in stance).
-        sway: Body-sway gain in [0, 1] (default 0.5 for a statically stable pattern on four
+        sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
             legs, else 0): see the module docstring.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
@@ -323,7 +324,7 @@ def walk(
     hz = _num("rate", rate, hi=1e5)
     rad = float(wb.foot_radius) if foot_radius is None else foot_radius
     rad = _num("foot_radius", rad, zero=True, hi=1.0)
-    default_sway = 0.5 if (wb.n_legs == 4 and table.statically_stable) else 0.0
+    default_sway = 1.0 if (wb.n_legs == 4 and table.statically_stable) else 0.0
     gain = default_sway if sway is None else _num("sway", sway, zero=True, hi=1.0)
     n = int(round(dur * hz)) + 1
     if n > 2_000_000:
