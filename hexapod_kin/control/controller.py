@@ -65,6 +65,11 @@ MPC_EVERY = 5
 MPC_KI = 2.0
 MPC_INT = 0.05
 
+#: MPC's footholds: the least lateral offset from the body's centre line, as a fraction of the
+#: foot's neutral one, and the least distance from a standing foot, as a fraction of the span.
+SIDE = 0.3
+CLEAR = 0.2
+
 _G = 9.81
 
 #: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
@@ -442,6 +447,8 @@ class Controller:
                 n = float(np.linalg.norm(off))
                 if n > 0.35 * self.span:
                     target[:2] = home[:2] + off * (0.35 * self.span / n)
+                if self.kind == "torque" and self.balance == "mpc":
+                    target = self._clear_of_stance(st, legs, i, target)
                 self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 1.0 * self.span
@@ -467,6 +474,29 @@ class Controller:
                 vel = np.array([0.0, 0.0, -h / t_sw])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
+
+    def _clear_of_stance(
+        self, st: dict[str, Any], swing: np.ndarray, i: int, target: np.ndarray
+    ) -> np.ndarray:
+        """Foothold ``target`` of swing leg ``i`` kept on its own side of the body (at least
+        :data:`SIDE` of its neutral lateral offset) and :data:`CLEAR` of the leg span away
+        from every standing foot."""
+        out = np.array(target, dtype=float)
+        base = st["B"][:3, 3]
+        Rz = _rz(self.path_yaw)
+        local = Rz.T @ (out - base)
+        side = math.copysign(1.0, float(self.feet_body[i, 1]))
+        y_min = SIDE * abs(float(self.feet_body[i, 1]))
+        if side * local[1] < y_min:
+            local[1] = side * y_min
+            out[:2] = (base + Rz @ local)[:2]
+        d_min = CLEAR * self.span
+        for j in np.flatnonzero(~swing):
+            d = out[:2] - st["feet"][j, :2]
+            n = float(np.linalg.norm(d))
+            if n < d_min:
+                out[:2] = st["feet"][j, :2] + (d / n if n > 1e-9 else local[:2] * 0) * d_min
+        return out
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
         """Stance legs: scheduled, or touching after 60 % of their swing."""
