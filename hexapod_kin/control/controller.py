@@ -448,7 +448,7 @@ class Controller:
                 if n > 0.35 * self.span:
                     target[:2] = home[:2] + off * (0.35 * self.span / n)
                 if self.kind == "torque" and self.balance == "mpc":
-                    target = self._clear_of_stance(st, legs, i, target)
+                    target = self._clear_of_stance(st, legs, int(i), target)
                 self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 1.0 * self.span
@@ -478,9 +478,12 @@ class Controller:
     def _clear_of_stance(
         self, st: dict[str, Any], swing: np.ndarray, i: int, target: np.ndarray
     ) -> np.ndarray:
-        """Foothold ``target`` of swing leg ``i`` kept on its own side of the body (at least
-        :data:`SIDE` of its neutral lateral offset) and :data:`CLEAR` of the leg span away
-        from every standing foot."""
+        """Foothold ``target`` of swing leg ``i``, kept clear of the other legs.
+
+        On its own side of the body (at least :data:`SIDE` of its neutral lateral offset from
+        the body's centre line) and at least :data:`CLEAR` of the leg span from every
+        standing foot (pushed away from it, or outwards when on it).
+        """
         out = np.array(target, dtype=float)
         base = st["B"][:3, 3]
         Rz = _rz(self.path_yaw)
@@ -495,7 +498,8 @@ class Controller:
             d = out[:2] - st["feet"][j, :2]
             n = float(np.linalg.norm(d))
             if n < d_min:
-                out[:2] = st["feet"][j, :2] + (d / n if n > 1e-9 else local[:2] * 0) * d_min
+                u = d / n if n > 1e-9 else side * Rz[:2, 1]
+                out[:2] = st["feet"][j, :2] + u * d_min
         return out
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
@@ -611,8 +615,12 @@ class Controller:
     def _mpc_forces(
         self, st: dict[str, Any], stance: np.ndarray, v_ref: np.ndarray, p_ref: np.ndarray
     ) -> np.ndarray:
-        """The stance forces (L, 3) [N] of :class:`~.mpc.ConvexMPC`, solved every
-        :data:`MPC_EVERY` ticks and whenever the stance set changes (held in between)."""
+        """The stance forces (L, 3) [N] of :class:`~.mpc.ConvexMPC`.
+
+        Solved every :data:`MPC_EVERY` ticks and whenever the stance set changes (held in
+        between), from the trunk's state, the path ahead, the gait's contact schedule and
+        the feet's footholds.
+        """
         self._mpc_age += 1
         if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
             return self._mpc_f

@@ -20,10 +20,11 @@ condensed QP
 
 .. math::
 
-    \min_U\; \|A_{qp} x_0 + B_{qp} U - X_{ref}\|^2_L + \alpha \|U\|^2 \quad\text{s.t.}\quad
+    \min_U\; \|A_{qp} x_0 + B_{qp} U - X_{ref}\|^2_L + \alpha \|U - U_g\|^2 \quad\text{s.t.}\quad
     f_{z} \in [f_{\min}, f_{\max}],\; |f_x|, |f_y| \le \mu f_z
 
-(only the standing feet's forces are variables; the cone as its inscribed pyramid), solved by
+(only the standing feet's forces are variables; ``U_g`` the weight shared equally among the
+feet standing at each step; the cone as its inscribed pyramid), solved by
 proxsuite's dense ProxQP (Bambade et al., RSS 2022). The first step's forces are applied.
 """
 
@@ -61,6 +62,8 @@ class ConvexMPC:
         horizon: Number of steps ``N``.
         weights: (12,) state weights (see :data:`MPC_WEIGHTS`).
         alpha: Force regularisation [1/N²].
+        status: 1 when the last :meth:`solve` converged, else 0 (its forces are then the
+            solver's last iterate, clipped to the cones).
 
     """
 
@@ -72,10 +75,9 @@ class ConvexMPC:
     horizon: int = 10
     weights: np.ndarray = field(default_factory=lambda: np.array(MPC_WEIGHTS))
     alpha: float = 1e-5
+    status: int = field(default=1, init=False)
 
-    def dynamics(
-        self, yaw: float, levers: np.ndarray, dt: float
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def dynamics(self, yaw: float, levers: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The discrete ``A`` (13, 13) and ``B`` (13, 3n) for levers ``levers`` (n, 3) [m]."""
         c, s = math.cos(yaw), math.sin(yaw)
         Rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
@@ -135,7 +137,12 @@ class ConvexMPC:
         ref = np.hstack([x_ref, np.full((N, 1), -9.81)]).ravel()
         BtL = Bqp.T * (w / self.alpha)  # the cost divided by alpha: well scaled for the solver
         H = BtL @ Bqp + np.eye(nv)
-        g = BtL @ (Aqp @ xa - ref)
+        # the regularisation pulls towards the weight shared among the standing feet
+        u_nom = np.zeros(nv)
+        for k in range(N):
+            n_k = int(contact[k].sum())
+            u_nom[start[k] + 2 : start[k + 1] : 3] = self.mass * 9.81 / max(n_k, 1)
+        g = BtL @ (Aqp @ xa - ref) - u_nom
         nf = len(idx)
         C = np.zeros((5 * nf, nv))
         lo = np.zeros(5 * nf)
@@ -150,9 +157,7 @@ class ConvexMPC:
                 lo[r0 + 2 * k + 1], hi[r0 + 2 * k + 1] = 0.0, 1e20
             C[r0 + 4, c0 + 2] = 1.0
             lo[r0 + 4], hi[r0 + 4] = self.f_min, self.f_max
-        res = proxsuite.proxqp.dense.solve(
-            H, g, None, None, C, lo, hi, eps_abs=1e-6, max_iter=300
-        )
+        res = proxsuite.proxqp.dense.solve(H, g, None, None, C, lo, hi, eps_abs=1e-6, max_iter=300)
         self.status = int(res.info.status == proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED)
         u = np.asarray(res.x)
         f = np.zeros((L, 3))
@@ -161,6 +166,9 @@ class ConvexMPC:
 
         legs = np.flatnonzero(contact[0])
         f[legs] = u[: 3 * len(legs)].reshape(-1, 3)
+        f[legs, 2] = np.clip(f[legs, 2], self.f_min, self.f_max)
+        lim = mu * f[legs, 2:3]
+        f[legs, :2] = np.clip(f[legs, :2], -lim, lim)
         return f
 
 
@@ -175,9 +183,7 @@ def rpy_zyx(R: np.ndarray) -> np.ndarray:
     )
 
 
-def schedule(
-    phase: float, offsets: np.ndarray, duty: float, step: float, steps: int
-) -> np.ndarray:
+def schedule(phase: float, offsets: np.ndarray, duty: float, step: float, steps: int) -> np.ndarray:
     """(steps, L) True where leg ``l`` stands at the middle of step ``k`` (1..``steps``).
 
     ``phase`` is the gait clock now, ``offsets`` (L,) the legs' phase offsets, ``duty`` the
