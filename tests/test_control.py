@@ -370,9 +370,13 @@ def test_hexapod_comes_back_to_its_path_after_a_20_newton_push() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("share", [pytest.param(0.5, marks=KNOWN), pytest.param(1.0, marks=KNOWN)])
+@pytest.mark.parametrize("share", [0.5, pytest.param(1.0, marks=KNOWN)])
 def test_anymal_pushed_sideways(share: float) -> None:
-    """0.5× its weight for 0.2 s: back on its path in 1.5 s; 1×: it does not fall."""
+    """0.5× its weight for 0.2 s: back on its path in 1.5 s; 1×: it does not fall.
+
+    Under the convex MPC (the torque kind's default). Measured: 0.5× back within 3 cm in
+    0.63 s, no fall; 1× (2 m/s sideways) falls at 2.4 s (a thigh on the ground).
+    """
     weight = 30.475 * 9.81
     res = run(
         "erd:anymal",

@@ -62,7 +62,7 @@ MPC_EVERY = 5
 
 #: MPC: the integral gain [1/s] moving the reference by the integral of the height error and of
 #: the lag along the path, and the integral's bound [m·s].
-MPC_KI = 2.0
+MPC_KI = 0.5
 MPC_INT = 0.05
 
 #: MPC's footholds: the least lateral offset from the body's centre line, as a fraction of the
