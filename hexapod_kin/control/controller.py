@@ -629,18 +629,19 @@ class Controller:
         N = MPC_STEPS
         tab, T = self._table, self.period
         dt = T / MPC_DIV
-        # the rigid body's state: the trunk carrying the CoM of the neutral pose (the swing
-        # legs' motion is not the body's)
+        # the rigid body's state: the robot's CoM, moving with the trunk (the swing legs'
+        # motion is not the body's)
         R = st["R"]
         omega = R @ st["v"][3:6]
         arm = R @ self.com_body
-        com = st["B"][:3, 3] + arm
+        com = st["com"]
         vcom = R @ st["v"][:3] + np.cross(omega, arm)
         # an integral of the height error and of the lag along the path (the swing legs'
         # reactions and touch-downs are not in the model) moves the reference
+        # (while walking only: standing, sitting and rising track their heights without it)
         ahead = _rz(self.path_yaw)[:, 0]
         e = p_ref - com
-        step = self.dt * self._mpc_age_ticks
+        step = self.dt * self._mpc_age_ticks * float(self.walking)
         self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
         self._mpc_int[1] = np.clip(self._mpc_int[1] + float(e[2]) * step, -MPC_INT, MPC_INT)
         p_ref = p_ref + MPC_KI * (self._mpc_int[0] * ahead + np.array([0, 0, self._mpc_int[1]]))
