@@ -8,6 +8,11 @@ control.run`), timed in CPU time (the process's, a shared machine's honest clock
 median tick (QP included), the mean QP solve per tick, and the CPU seconds per simulated
 second (below 1: faster than real time, whatever else runs on the machine).
 
+The torque kind's stance forces come from the convex MPC (:mod:`hexapod_kin.control.mpc`),
+solved every ``MPC_EVERY`` ticks (and when the stance changes): the median tick is a tick
+without a solve; the MPC's own cost is measured apart, one solve of erd:anymal's trot problem
+(10 steps, a diagonal pair standing) repeated, median CPU time per solve.
+
 Usage: ``python tools/bench_control.py [--duration S] [--json]``.
 """
 
@@ -39,12 +44,46 @@ def measure(
     }
 
 
+def mpc_solve_us(repeats: int = 200) -> float:
+    """The median CPU time [µs] of one MPC solve on erd:anymal's mid-trot problem."""
+    import time
+
+    import numpy as np
+
+    from hexapod_kin.control import Controller
+    from hexapod_kin.control.controller import MPC_DIV
+    from hexapod_kin.control.mpc import schedule
+
+    ctl = Controller("erd:anymal")
+    mpc, tab = ctl.mpc, ctl._table
+    N, dt = mpc.horizon, ctl.period / MPC_DIV
+    x0 = np.zeros(12)
+    x0[5] = ctl.height0
+    x0[9] = 0.5
+    ref = np.tile(x0, (N, 1))
+    ref[:, 3] = 0.5 * dt * np.arange(1, N + 1)
+    contact = schedule(0.1, np.asarray(tab.offsets), tab.duty_factor, dt / ctl.period, N)
+    feet = ctl.feet_body - [0.0, 0.0, ctl.feet_body[0, 2]]
+    levers = np.broadcast_to(feet - x0[3:6], (N, ctl.n_legs, 3))
+    times = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        mpc.solve(x0, ref, contact, levers, dt)
+        times.append(time.process_time() - t0)
+    return 1e6 * float(np.median(times))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the cases; print a table or JSON rows."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=3.0, help="simulated walk [s]")
     ap.add_argument("--json", action="store_true", help="one JSON row per case")
     args = ap.parse_args(argv)
+    solve = mpc_solve_us()
+    if args.json:
+        print(json.dumps({"case": "erd:anymal MPC solve", "mpc_solve_median_us": solve}))
+    else:
+        print(f"{'erd:anymal MPC solve (10 steps)':36s} {solve:7.0f} us median per solve")
     for name, robot, pattern, vel in CASES:
         row = {"case": name, **measure(robot, pattern, vel, args.duration)}
         if args.json:

@@ -2,7 +2,8 @@
 
 * :class:`Controller` (:mod:`.controller`): measured state in (IMU, joints, foot contacts,
   a base estimate), joint torques or servo targets out, at a fixed rate; stance forces by a
-  QP (:mod:`.qp`, proxsuite), Raibert / capture-point foot placement, body posing for servos.
+  convex model-predictive controller (:mod:`.mpc`) or a wrench QP (:mod:`.qp`), both solved
+  by proxsuite; Raibert / capture-point foot placement, body posing for servos.
 * :class:`Command`, :class:`Timeline` (:mod:`.commands`): velocity, gait and mode over time.
 * :class:`StateEstimator` (:mod:`.estimator`): the base position and velocity from the
   IMU and the legs (a contact-aided linear Kalman filter).
@@ -18,11 +19,12 @@ from __future__ import annotations
 
 from .commands import MODES, Command, Timeline, read_timeline, timeline_of
 from .compare import Comparison, compare, comparison_html
-from .controller import KINDS, Controller, Measurement
+from .controller import BALANCES, KINDS, Controller, Measurement
 from .estimator import StateEstimator
 from .sim import ControlRun, Push, hardware_loop, run
 
 __all__ = [
+    "BALANCES",
     "KINDS",
     "MODES",
     "Command",

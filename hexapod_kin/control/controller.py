@@ -48,12 +48,31 @@ import numpy as np
 from .._pose import rpy_to_matrix
 from ..exceptions import ParameterError, one_of
 from .commands import Command
+from .mpc import ConvexMPC, rpy_zyx, schedule
 from .qp import ForceQP
 
-__all__ = ["KINDS", "Controller", "Measurement"]
+__all__ = ["BALANCES", "KINDS", "Controller", "Measurement"]
 
 #: Actuator kinds: joint torques, or joint position targets for servos.
 KINDS = ("torque", "servo")
+
+#: Torque kind's stance-force methods: model-predictive, or one wrench's QP.
+BALANCES = ("mpc", "qp")
+
+#: MPC: the horizon's steps, the steps per gait cycle, and control ticks between two solves.
+MPC_STEPS = 10
+MPC_DIV = 20
+MPC_EVERY = 5
+
+#: MPC: the integral gain [1/s] moving the reference by the integral of the height error and of
+#: the lag along the path, and the integral's bound [m·s].
+MPC_KI = 0.5
+MPC_INT = 0.05
+
+#: MPC's footholds: the least lateral offset from the body's centre line, as a fraction of the
+#: foot's neutral one, and the least distance from a standing foot, as a fraction of the span.
+SIDE = 0.3
+CLEAR = 0.2
 
 _G = 9.81
 
@@ -142,6 +161,9 @@ class Controller:
         swing_height: Foot lift [m] (default 12 % of the standing height, plus the foot
             radius for torque control).
         mu: Friction coefficient the force distribution assumes.
+        balance: Torque kind: how the stance forces are found, one of :data:`BALANCES`:
+            ``mpc`` (:class:`~.mpc.ConvexMPC` over one gait cycle) or ``qp`` (the body
+            wrench of the PD laws shared by :class:`~.qp.ForceQP`).
 
     Raises:
         ParameterError: A bad kind, pattern or value.
@@ -158,6 +180,7 @@ class Controller:
         period: float | None = None,
         swing_height: float | None = None,
         mu: float = 0.6,
+        balance: str = "mpc",
     ) -> None:
         import pinocchio as pin
 
@@ -229,6 +252,16 @@ class Controller:
             f_max=3.0 * self.mass * _G,
             weights=np.array([1.0, 1.0, 1.0, 10.0, 10.0, 10.0]),
         )
+        one_of("balance", balance, list(BALANCES))
+        self.balance = balance
+        self.mpc = ConvexMPC(
+            mass=self.mass,
+            inertia=self.inertia_body,
+            mu=self.mu,
+            f_min=0.02 * self.mass * _G / self.n_legs,
+            f_max=3.0 * self.mass * _G,
+            horizon=MPC_STEPS,
+        )
         self.command = Command()
         self._pending: str | None = None
         self.qp_time = 0.0
@@ -284,6 +317,11 @@ class Controller:
         self.integral = np.zeros(6)
         self.return_offset = np.zeros(2)
         self.ready = False
+        self._mpc_f = np.zeros((L, 3))
+        self._mpc_age = MPC_EVERY
+        self._mpc_stance = np.zeros(L, dtype=bool)
+        self._mpc_int = np.zeros(2)
+        self._mpc_age_ticks = 0
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
         """Start from measurement ``m``: the path starts where the robot is.
@@ -402,8 +440,13 @@ class Controller:
             v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
-        lift = np.sin(np.pi * np.asarray(progress))  # the lift profile and its rate
-        lift_rate = np.cos(np.pi * np.asarray(progress))
+        if self.kind == "torque" and self.balance == "mpc":
+            # sin²(π s): the foot comes down at rest (no impact kicking the body)
+            lift = np.sin(np.pi * np.asarray(progress)) ** 2
+            lift_rate = np.sin(2 * np.pi * np.asarray(progress))
+        else:  # sin(π s) and its rate
+            lift = np.sin(np.pi * np.asarray(progress))
+            lift_rate = np.cos(np.pi * np.asarray(progress))
         for i in np.flatnonzero(legs):
             s = float(progress[i])
             if s > 0.7:  # the foothold frozen for the last 30 % of the swing
@@ -422,6 +465,8 @@ class Controller:
                 n = float(np.linalg.norm(off))
                 if n > 0.35 * self.span:
                     target[:2] = home[:2] + off * (0.35 * self.span / n)
+                if self.kind == "torque" and self.balance == "mpc":
+                    target = self._clear_of_stance(st, legs, int(i), target)
                 self.footholds[i] = target
             step = target - self.lift_off[i]
             lim = 1.0 * self.span
@@ -447,6 +492,33 @@ class Controller:
                 vel = np.array([0.0, 0.0, -h / t_sw])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
+
+    def _clear_of_stance(
+        self, st: dict[str, Any], swing: np.ndarray, i: int, target: np.ndarray
+    ) -> np.ndarray:
+        """Foothold ``target`` of swing leg ``i``, kept clear of the other legs.
+
+        On its own side of the body (at least :data:`SIDE` of its neutral lateral offset from
+        the body's centre line) and at least :data:`CLEAR` of the leg span from every
+        standing foot (pushed away from it, or outwards when on it).
+        """
+        out = np.array(target, dtype=float)
+        base = st["B"][:3, 3]
+        Rz = _rz(self.path_yaw)
+        local = Rz.T @ (out - base)
+        side = math.copysign(1.0, float(self.feet_body[i, 1]))
+        y_min = SIDE * abs(float(self.feet_body[i, 1]))
+        if side * local[1] < y_min:
+            local[1] = side * y_min
+            out[:2] = (base + Rz @ local)[:2]
+        d_min = CLEAR * self.span
+        for j in np.flatnonzero(~swing):
+            d = out[:2] - st["feet"][j, :2]
+            n = float(np.linalg.norm(d))
+            if n < d_min:
+                u = d / n if n > 1e-9 else side * Rz[:2, 1]
+                out[:2] = st["feet"][j, :2] + u * d_min
+        return out
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
         """Stance legs: scheduled, or touching after 60 % of their swing."""
@@ -548,12 +620,79 @@ class Controller:
             biases = [bias[self.cols[i]] for i in legs]
             lims = [self.effort[self.cols[i]] for i in legs]
             t0 = time.process_time()
-            f = self.force_qp.solve(np.concatenate([F, M]), r, jac, biases, lims)
+            if self.balance == "mpc":
+                f = self._mpc_forces(st, stance, v_ref, p_ref)[legs]
+            else:
+                f = self.force_qp.solve(np.concatenate([F, M]), r, jac, biases, lims)
             self.qp_time += time.process_time() - t0
             for k, i in enumerate(legs):
                 c = self.cols[i]
                 tau[c] = bias[c] - jac[k].T @ f[k]
         return np.clip(tau, -self.effort, self.effort)
+
+    def _mpc_forces(
+        self, st: dict[str, Any], stance: np.ndarray, v_ref: np.ndarray, p_ref: np.ndarray
+    ) -> np.ndarray:
+        """The stance forces (L, 3) [N] of :class:`~.mpc.ConvexMPC`.
+
+        Solved every :data:`MPC_EVERY` ticks and whenever the stance set changes (held in
+        between), from the trunk's state, the path ahead, the gait's contact schedule and
+        the feet's footholds.
+        """
+        self._mpc_age += 1
+        if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
+            return self._mpc_f
+        self._mpc_age_ticks = self._mpc_age
+        self._mpc_age, self._mpc_stance = 0, stance.copy()
+        N = MPC_STEPS
+        tab, T = self._table, self.period
+        dt = T / MPC_DIV
+        # the rigid body's state: the robot's CoM, moving with the trunk (the swing legs'
+        # motion is not the body's)
+        R = st["R"]
+        omega = R @ st["v"][3:6]
+        arm = R @ self.com_body
+        com = st["com"]
+        vcom = R @ st["v"][:3] + np.cross(omega, arm)
+        # an integral of the height error and of the lag along the path (the swing legs'
+        # reactions and touch-downs are not in the model) moves the reference
+        # (while walking only: standing, sitting and rising track their heights without it)
+        ahead = _rz(self.path_yaw)[:, 0]
+        e = p_ref - com
+        step = self.dt * self._mpc_age_ticks * float(self.walking)
+        self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
+        self._mpc_int[1] = np.clip(self._mpc_int[1] + float(e[2]) * step, -MPC_INT, MPC_INT)
+        p_ref = p_ref + MPC_KI * (self._mpc_int[0] * ahead + np.array([0, 0, self._mpc_int[1]]))
+        th = rpy_zyx(R)
+        th[2] = self.path_yaw + math.remainder(th[2] - self.path_yaw, 2 * math.pi)
+        x0 = np.concatenate([th, com, omega, vcom])
+        t = dt * np.arange(1, N + 1)
+        wz = float(self.twist[2])
+        ref = np.zeros((N, 12))
+        ref[:, 2] = self.path_yaw + wz * t
+        ref[:, 3:6] = p_ref + t[:, None] * v_ref
+        ref[:, 8] = wz
+        ref[:, 9:12] = v_ref
+        if self.walking:
+            contact = schedule(self.phase, tab.offsets, tab.duty_factor, dt / T, N)
+        else:
+            contact = np.ones((N, self.n_legs), dtype=bool)
+        contact[0] = stance
+        # where each foot stands during the horizon: the standing ones where they are, the
+        # others at their footholds (a nominal one when the swing has not planned it yet)
+        t_st = tab.duty_factor * T
+        feet = np.array(st["feet"])
+        for i in np.flatnonzero(~stance):
+            feet[i] = self.footholds[i]
+        levers = np.zeros((N, self.n_legs, 3))
+        for k in range(N):
+            if k > 0:  # a foot landing again in the horizon: under its hip, Raibert's rule
+                for i in np.flatnonzero(contact[k] & ~contact[k - 1] & stance):
+                    hip = com + t[k] * v_ref + _rz(ref[k, 2]) @ self.feet_body[i]
+                    feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
+            levers[k] = feet - (com + t[k] * v_ref)
+        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt)
+        return self._mpc_f
 
     def _leg_mass(self) -> float:
         """The mass the swing gains are scaled to: the robot's, shared among its legs, /4."""

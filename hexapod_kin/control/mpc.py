@@ -1,0 +1,193 @@
+r"""Convex model-predictive control of the stance forces (MIT Cheetah 3 style).
+
+The body is one rigid body of mass ``m`` and inertia ``I`` (the robot's, at its neutral
+pose); its state is ``x = (Θ, p, ω, v, g)`` (roll-pitch-yaw [rad], CoM position [m],
+angular velocity in world axes [rad/s], CoM velocity [m/s], and gravity as a constant
+state) and its inputs the stance feet's ground forces ``f_i`` [N] applied at ``r_i`` from the
+CoM. With roll and pitch small the dynamics are linear in yaw ``ψ`` (Di Carlo et al., "Dynamic
+locomotion in the MIT Cheetah 3 through convex model-predictive control", IROS 2018):
+
+.. math::
+
+    \dot Θ = R_z(ψ)^\top ω,\quad \dot p = v,\quad
+    \dot ω = I_w^{-1} \sum_i r_i \times f_i,\quad \dot v = \frac{1}{m}\sum_i f_i + g,
+
+with ``I_w = R_z(ψ) I R_z(ψ)^\top``. Discretised by forward Euler at the gait's step ``dt``
+over ``N`` steps, with the contact schedule (which feet stand at each step, from the gait's
+phase table) and the levers of the feet that will stand (where they stand, or their planned
+footholds), the predicted states are ``X = A_{qp} x_0 + B_{qp} U``; the forces solve the
+condensed QP
+
+.. math::
+
+    \min_U\; \|A_{qp} x_0 + B_{qp} U - X_{ref}\|^2_L + \alpha \|U - U_g\|^2 \quad\text{s.t.}\quad
+    f_{z} \in [f_{\min}, f_{\max}],\; |f_x|, |f_y| \le \mu f_z
+
+(only the standing feet's forces are variables; ``U_g`` the weight shared equally among the
+feet standing at each step; the cone as its inscribed pyramid), solved by
+proxsuite's dense ProxQP (Bambade et al., RSS 2022). The first step's forces are applied.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .qp import _proxsuite
+
+__all__ = ["MPC_WEIGHTS", "ConvexMPC"]
+
+#: State weights of ``(Θ, p, ω, v)`` (12,): roll, pitch, yaw, x, y, z, ω_x, ω_y, ω_z,
+#: v_x, v_y, v_z (MIT Cheetah 3's, in proportion).
+MPC_WEIGHTS = (25.0, 25.0, 10.0, 100.0, 100.0, 100.0, 0.5, 0.5, 0.3, 3.0, 3.0, 1.0)
+
+
+def _skew(r: np.ndarray) -> np.ndarray:
+    x, y, z = (float(c) for c in r)
+    return np.array(((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0)))
+
+
+@dataclass
+class ConvexMPC:
+    """The stance-force MPC's constants (see the module docstring).
+
+    Attributes:
+        mass: Body mass [kg].
+        inertia: (3, 3) inertia about the CoM in the body frame [kg·m²].
+        mu: Friction coefficient assumed.
+        f_min: Least normal force of a standing foot [N].
+        f_max: Largest normal force of a foot [N].
+        horizon: Number of steps ``N``.
+        weights: (12,) state weights (see :data:`MPC_WEIGHTS`).
+        alpha: Force regularisation [1/N²].
+        status: 1 when the last :meth:`solve` converged, else 0 (its forces are then the
+            solver's last iterate, clipped to the cones).
+
+    """
+
+    mass: float
+    inertia: np.ndarray
+    mu: float
+    f_min: float
+    f_max: float
+    horizon: int = 10
+    weights: np.ndarray = field(default_factory=lambda: np.array(MPC_WEIGHTS))
+    alpha: float = 1e-5
+    status: int = field(default=1, init=False)
+
+    def dynamics(self, yaw: float, levers: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The discrete ``A`` (13, 13) and ``B`` (13, 3n) for levers ``levers`` (n, 3) [m]."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        Rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+        A = np.eye(13)
+        A[0:3, 6:9] = Rz.T * dt
+        A[3:6, 9:12] = np.eye(3) * dt
+        A[11, 12] = dt  # v_z' = ... + g (the 13th state is g = -9.81)
+        Iw_inv = np.linalg.inv(Rz @ self.inertia @ Rz.T)
+        n = len(levers)
+        B = np.zeros((13, 3 * n))
+        for i, r in enumerate(levers):
+            B[6:9, 3 * i : 3 * i + 3] = Iw_inv @ _skew(r) * dt
+            B[9:12, 3 * i : 3 * i + 3] = np.eye(3) * (dt / self.mass)
+        return A, B
+
+    def solve(
+        self,
+        x0: np.ndarray,
+        x_ref: np.ndarray,
+        contact: np.ndarray,
+        levers: np.ndarray,
+        dt: float,
+    ) -> np.ndarray:
+        """The first step's ground forces (L, 3) [N] (zero for a foot not standing).
+
+        Args:
+            x0: (12,) the measured state ``(Θ, p, ω, v)``.
+            x_ref: (N, 12) the reference of steps 1..N.
+            contact: (N, L) True where foot ``l`` stands during step ``k``.
+            levers: (N, L, 3) each foot's position from the CoM at step ``k`` [m].
+            dt: The step [s].
+
+        """
+        proxsuite = _proxsuite()
+        N, L = contact.shape
+        yaw = float(np.mean(x_ref[:, 2]))
+        A, _ = self.dynamics(yaw, np.zeros((0, 3)), dt)
+        # the variables: (step, foot) pairs in contact
+        idx = [(k, i) for k in range(N) for i in range(L) if contact[k, i]]
+        nv = 3 * len(idx)
+        if nv == 0:
+            return np.zeros((L, 3))
+        start = np.zeros(N + 1, dtype=int)
+        for k in range(N):
+            start[k + 1] = start[k] + 3 * int(contact[k].sum())
+        Bs = [self.dynamics(yaw, levers[k][contact[k]], dt)[1] for k in range(N)]
+        powers = [np.eye(13)]
+        for _ in range(N):
+            powers.append(A @ powers[-1])
+        xa = np.array([*x0, -9.81])
+        Aqp = np.vstack([powers[k + 1] for k in range(N)])  # (13N, 13)
+        Bqp = np.zeros((13 * N, nv))
+        for k in range(N):  # row block k: state after step k
+            for j in range(k + 1):
+                Bqp[13 * k : 13 * k + 13, start[j] : start[j + 1]] = powers[k - j] @ Bs[j]
+        w = np.tile(np.array([*self.weights, 0.0]), N)
+        ref = np.hstack([x_ref, np.full((N, 1), -9.81)]).ravel()
+        BtL = Bqp.T * (w / self.alpha)  # the cost divided by alpha: well scaled for the solver
+        H = BtL @ Bqp + np.eye(nv)
+        # the regularisation pulls towards the weight shared among the standing feet
+        u_nom = np.zeros(nv)
+        for k in range(N):
+            n_k = int(contact[k].sum())
+            u_nom[start[k] + 2 : start[k + 1] : 3] = self.mass * 9.81 / max(n_k, 1)
+        g = BtL @ (Aqp @ xa - ref) - u_nom
+        nf = len(idx)
+        C = np.zeros((5 * nf, nv))
+        lo = np.zeros(5 * nf)
+        hi = np.zeros(5 * nf)
+        mu = self.mu
+        for n in range(nf):
+            c0, r0 = 3 * n, 5 * n
+            for k in (0, 1):
+                C[r0 + 2 * k, c0 + k], C[r0 + 2 * k, c0 + 2] = 1.0, -mu  # f_k - mu f_z <= 0
+                lo[r0 + 2 * k], hi[r0 + 2 * k] = -1e20, 0.0
+                C[r0 + 2 * k + 1, c0 + k], C[r0 + 2 * k + 1, c0 + 2] = 1.0, mu  # >= 0
+                lo[r0 + 2 * k + 1], hi[r0 + 2 * k + 1] = 0.0, 1e20
+            C[r0 + 4, c0 + 2] = 1.0
+            lo[r0 + 4], hi[r0 + 4] = self.f_min, self.f_max
+        res = proxsuite.proxqp.dense.solve(H, g, None, None, C, lo, hi, eps_abs=1e-6, max_iter=300)
+        self.status = int(res.info.status == proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED)
+        u = np.asarray(res.x)
+        f = np.zeros((L, 3))
+        if not np.all(np.isfinite(u)):
+            return f
+
+        legs = np.flatnonzero(contact[0])
+        f[legs] = u[: 3 * len(legs)].reshape(-1, 3)
+        f[legs, 2] = np.clip(f[legs, 2], self.f_min, self.f_max)
+        lim = mu * f[legs, 2:3]
+        f[legs, :2] = np.clip(f[legs, :2], -lim, lim)
+        return f
+
+
+def rpy_zyx(R: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw [rad] of rotation ``R = R_z(yaw) R_y(pitch) R_x(roll)``."""
+    return np.array(
+        [
+            math.atan2(R[2, 1], R[2, 2]),
+            -math.asin(max(-1.0, min(1.0, float(R[2, 0])))),
+            math.atan2(R[1, 0], R[0, 0]),
+        ]
+    )
+
+
+def schedule(phase: float, offsets: np.ndarray, duty: float, step: float, steps: int) -> np.ndarray:
+    """(steps, L) True where leg ``l`` stands at the middle of step ``k`` (1..``steps``).
+
+    ``phase`` is the gait clock now, ``offsets`` (L,) the legs' phase offsets, ``duty`` the
+    stance fraction and ``step`` the clock's advance per step (all in cycles).
+    """
+    ph = phase + step * (np.arange(steps)[:, None] + 0.5) + np.asarray(offsets)[None, :]
+    return np.asarray(ph % 1.0 < duty)
