@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._pose import rpy_to_matrix
 from .qp import _proxsuite
 
 __all__ = ["MPC_WEIGHTS", "ConvexMPC"]
@@ -79,8 +80,7 @@ class ConvexMPC:
 
     def dynamics(self, yaw: float, levers: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The discrete ``A`` (13, 13) and ``B`` (13, 3n) for levers ``levers`` (n, 3) [m]."""
-        c, s = math.cos(yaw), math.sin(yaw)
-        Rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+        Rz = rpy_to_matrix(0.0, 0.0, yaw)
         A = np.eye(13)
         A[0:3, 6:9] = Rz.T * dt
         A[3:6, 9:12] = np.eye(3) * dt
