@@ -240,19 +240,19 @@ class Servo:
             self._check_steps(lo, hi)
 
     def _check_cover(self, lower: float, upper: float, reach: float) -> None:
-        """Refuse a scale whose servo limits sweep less than :data:`MIN_COVER` of the joint.
+        """Refuse a µs or ticks scale whose servo limits sweep < :data:`MIN_COVER` of the joint.
 
         ``reach``: the joint angles [rad or m] the servo's limits span. A servo that moves a
         joint of 3 rad by 0.002 rad end to end is a unit slip in the scale (µs per degree
         given per radian, ticks per degree...), refused before any walk is planned.
         """
         span = upper - lower
-        if not (span > 0 and reach < MIN_COVER * span) or self.limits is None:
-            return
-        key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "limits")
+        key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units)
+        if key is None or self.limits is None or not (span > 0 and reach < MIN_COVER * span):
+            return  # limits in rad or deg are the servo's own words: a narrow one is allowed
         width = float(self.limits[1] - self.limits[0])
         most = width / (MIN_COVER * span) * (2.0 * math.pi if self.units == "ticks" else 1.0)
-        allowed = f"<= {most:.6g}" if key != "limits" else f"a width >= {MIN_COVER * span:.6g}"
+        allowed = f"<= {most:.6g}"
         msg = (
             f"calibration of {self.joint}: {key} {getattr(self, key)!r} lets the servo's limits "
             f"{list(self.limits)} {self.units} sweep only {reach:.6g} of the joint's range "
