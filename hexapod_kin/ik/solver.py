@@ -615,7 +615,7 @@ def _chain_setup(
     key = (id(chain), lo.tobytes(), hi.tobytes(), repr(tol), repr(max_iter))
     hit = _CHAIN_SETUPS.get(key)
     if hit is not None and hit[0] is chain:
-        return hit[1:]  # type: ignore[return-value]
+        return hit[1:]
     opts = IKOptions(tol=tol, rot_tol=tol, max_iter=max_iter)
     prism = np.asarray(chain.kind, dtype=bool)
     cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
