@@ -21,8 +21,6 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 
-import numpy as np
-
 from .exceptions import ParameterError, one_of
 
 __all__ = ["AREAS", "precompile"]
@@ -41,6 +39,8 @@ def _batch() -> None:
 
 
 def _ik() -> None:
+    import numpy as np  # here: the command line's parser reads AREAS without numpy
+
     from .ik import solve_many
     from .kinematics import load
 

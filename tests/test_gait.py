@@ -747,17 +747,32 @@ def test_checks_against_shapely_and_a_minimiser_on_random_and_degenerate_support
     chains = rng.normal(size=(30, 2, 4, 3))
     chains[:5, 0, 1] = chains[:5, 0, 0]  # a zero-length segment
     clear = segment_clearance(chains, np.array([[0, 1]]))[:, 0]
+    grid = np.linspace(0.0, 1.0, 21)
+    s_grid, t_grid = (g.ravel() for g in np.meshgrid(grid, grid, indexing="ij"))
     for i in range(30):
         best = np.inf
         for u in range(3):
             for v in range(3):
                 a0, a1 = chains[i, 0, u], chains[i, 0, u + 1]
                 b0, b1 = chains[i, 1, v], chains[i, 1, v + 1]
+                # |r(s, t)|, r = a0 + s (a1 - a0) - b0 - t (b1 - b0), is convex on the box: the
+                # minimiser starts from the best point of a 21 x 21 grid (and its gradient
+                # r^T [a1 - a0, b0 - b1] / |r| is given, so no finite differences)
+                edges = np.stack([a1 - a0, b0 - b1], axis=1)  # 3x2: dr/d(s, t)
 
-                def dist(st, a0=a0, a1=a1, b0=b0, b1=b1):
-                    return np.linalg.norm(a0 + st[0] * (a1 - a0) - b0 - st[1] * (b1 - b0))
+                def dist(st, a0=a0, b0=b0, edges=edges):
+                    r = a0 - b0 + edges @ st
+                    norm = float(np.linalg.norm(r))
+                    return norm, (r @ edges) / max(norm, 1e-300)
 
-                for start in ((0.5, 0.5), (0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)):
-                    res = minimize(dist, start, bounds=[(0, 1), (0, 1)], method="L-BFGS-B")
-                    best = min(best, res.fun)
+                on_grid = np.linalg.norm(
+                    (a0 - b0)[None, :]
+                    + np.outer(s_grid, edges[:, 0])
+                    + np.outer(t_grid, edges[:, 1]),
+                    axis=1,
+                )
+                k = int(np.argmin(on_grid))
+                start = (s_grid[k], t_grid[k])
+                res = minimize(dist, start, jac=True, bounds=[(0, 1), (0, 1)], method="L-BFGS-B")
+                best = min(best, float(on_grid[k]), float(res.fun))
         assert clear[i] <= best + 1e-12 and clear[i] >= best - 1e-6

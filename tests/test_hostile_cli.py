@@ -868,6 +868,44 @@ def test_forge_matches_the_package_seal(tmp_path: Path, monkeypatch) -> None:
     assert _cache.load("symbolic", "ab" * 32, 6, "recomputing it") == {"x": "l2"}
 
 
+def _first_run(tmp_path_factory, *args: str) -> tuple[Path, Run]:
+    """``args`` run once with a fresh cache folder: (that folder, the run).
+
+    The cases below each edit a copy of the folder the first run filled (its entry and its
+    per-user secret), so the first run, the same for every case, is not repeated per case.
+    """
+    work = tmp_path_factory.mktemp("first")
+    cache = work / "cache"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(cache))
+        first = cli(*args, cwd=work, timeout=120)
+    bounded_fault(first)
+    assert first.status == 0 and first.stderr == "", first.stderr
+    return cache, first
+
+
+@pytest.fixture(scope="module")
+def derived(tmp_path_factory) -> tuple[Path, Run]:
+    """``derive hexabot_leg`` with a fresh cache: the folder it filled and the run."""
+    cache, first = _first_run(tmp_path_factory, "derive", "hexabot_leg")
+    assert "^1T_2 =" in first.stdout
+    return cache, first
+
+
+SCAN_FAMILIES = ("scan", "hexabot_leg", "--families", "derive", "--json")
+
+
+@pytest.fixture(scope="module")
+def scanned(tmp_path_factory) -> tuple[Path, Run]:
+    """``scan hexabot_leg --families derive`` with a fresh cache: the folder and the run."""
+    cache, first = _first_run(tmp_path_factory, *SCAN_FAMILIES)
+    want = json.loads(first.stdout)
+    assert want["n_unexplained"] == 0 and len(want["families"]) == 3
+    factor = _families_factor(cache)
+    assert factor == "0.1*cos(q2) + 0.1*cos(q2 + q3) + 0.05", factor  # l1 = 0.05, l2 = l3 = 0.1
+    return cache, first
+
+
 @pytest.mark.parametrize("secret", [True, False], ids=["with-secret", "without-secret"])
 @pytest.mark.parametrize(
     "old,new",
@@ -879,14 +917,12 @@ def test_forge_matches_the_package_seal(tmp_path: Path, monkeypatch) -> None:
     ids=["T12-l1-l2", "T34-l3-l1", "T01-cos-sin"],
 )
 def test_resealed_derivation_is_not_printed(
-    tmp_path: Path, monkeypatch, secret: bool, old: str, new: str, record_property
+    tmp_path: Path, monkeypatch, secret: bool, old: str, new: str, record_property, derived
 ) -> None:
     cache = tmp_path / "cache"
+    template, first = derived
+    shutil.copytree(template, cache)  # the entry and its per-user secret, as the first run left
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(cache))
-    first = cli("derive", "hexabot_leg", cwd=tmp_path, timeout=120)
-    bounded_fault(first)
-    assert first.status == 0 and first.stderr == "", first.stderr
-    assert "^1T_2 =" in first.stdout
     forge(cache, "symbolic", old, new, secret=secret)
     run = cli("derive", "hexabot_leg", cwd=tmp_path, timeout=120)
     _record(record_property, run)
@@ -906,18 +942,14 @@ def _families_factor(cache: Path) -> str:
 @pytest.mark.parametrize("secret", [True, False], ids=["with-secret", "without-secret"])
 @pytest.mark.parametrize("edit", ["constant", "coefficient", "explicit-value"])
 def test_resealed_families_do_not_change_the_scan(
-    tmp_path: Path, monkeypatch, secret: bool, edit: str, record_property
+    tmp_path: Path, monkeypatch, secret: bool, edit: str, record_property, scanned
 ) -> None:
     cache = tmp_path / "cache"
+    template, first = scanned
+    shutil.copytree(template, cache)  # the entry and its per-user secret, as the first run left
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(cache))
-    args = ("scan", "hexabot_leg", "--families", "derive", "--json")
-    first = cli(*args, cwd=tmp_path, timeout=120)
-    bounded_fault(first)
-    assert first.status == 0 and first.stderr == "", first.stderr
+    args = SCAN_FAMILIES
     want = json.loads(first.stdout)
-    assert want["n_unexplained"] == 0 and len(want["families"]) == 3
-    factor = _families_factor(cache)
-    assert factor == "0.1*cos(q2) + 0.1*cos(q2 + q3) + 0.05", factor  # l1 = 0.05, l2 = l3 = 0.1
     old, new = {
         "constant": ("+ 0.05", "+ 0.1"),  # l1 -> l2 in the implicit family
         "coefficient": ("0.1*cos(q2) +", "0.05*cos(q2) +"),  # l2 -> l1

@@ -347,15 +347,15 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     import json
     import math
 
-    import numpy as np
+    if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
+        msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
+        raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
+    import numpy as np  # after the checks: a refusal imports no sympy
 
     from .._budget import run
     from ..symbolic import DEFAULT_BUDGET, derive
     from ..symbolic.sources import chain_of
 
-    if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
-        msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
-        raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
     budget = DEFAULT_BUDGET if args.budget is None else float(args.budget)
     model = load_source(args)
     chain, reference, tip = chain_of(model, None, None)

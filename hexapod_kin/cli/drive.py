@@ -46,7 +46,6 @@ def _cmd_drive(args: argparse.Namespace) -> int:
     import time
     import webbrowser
 
-    from ..drive import drive
     from ..exceptions import ParameterError
 
     if not 0 <= args.port <= 65535:
@@ -57,6 +56,8 @@ def _cmd_drive(args: argparse.Namespace) -> int:
             allowed="0..65535",
         )
     end = serve_end(args)
+    from ..drive import drive  # after the checks: a refusal imports no server
+
     robot = robot_of(args)
     with drive(
         robot.load(), feet=robot.feet, port=args.port, calibration=args.calibration

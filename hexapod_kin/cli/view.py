@@ -79,6 +79,7 @@ def _add_view(sub: Any) -> None:
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
+    serve_end(args)  # a bad --serve-for is refused before the robot loads and the server starts
     import numpy as np
 
     from ..gait import default_configuration
@@ -126,6 +127,8 @@ def _add_animate(sub: Any) -> None:
 def _cmd_animate(args: argparse.Namespace) -> int:
     if args.html:
         output_path(args.html, "--html", (".html", ".htm"))
+    else:
+        serve_end(args)  # refused before the robot loads and the server starts
     import numpy as np
 
     from ..gait import demo_trajectory
