@@ -487,10 +487,11 @@ def test_damaged_cache(
 def test_numba_cache_is_rebuilt_when_loading_fails(
     filled: dict[str, Any], tmp_path_factory: pytest.TempPathFactory, tmp_path: Path
 ) -> None:
-    """The kernel's data file swapped with ``sincos``'s: numba loads ``sincos``'s code as the
-    kernel and the call fails (``TypeError: sincos expected 1 argument``). The failure is
-    caught: one warning, what the attempt loaded reset (numba's ``recompile``), the kernel
-    compiled again: the same bits, and the next run is quiet."""
+    """The kernel's data file swapped with ``sincos``'s: the folder's keyed seal no longer
+    matches (issue 35), so the swapped files are removed before numba may load them (had they
+    been loaded, numba would run ``sincos``'s code as the kernel; that failure is caught too:
+    "could not be loaded"). One warning, the kernel compiled again: the same bits, and the
+    next run is quiet."""
     h, pristine, base = _prepare(filled, "numba", tmp_path_factory.getbasetemp())
     root = tmp_path / "cache"
     shutil.copytree(pristine, root)
@@ -498,7 +499,8 @@ def test_numba_cache_is_rebuilt_when_loading_fails(
     _swap(kernel, h.file(root, "sincos", ".1.nbc"))
     again, said = h.run(root)
     assert again == base
-    assert len(said) == 1 and "could not be loaded" in said[0], said
+    assert len(said) == 1, said
+    assert "edited or swapped" in said[0] and "compiled afresh" in said[0], said
     third, quiet = h.run(root)
     assert third == base and not quiet, quiet
 

@@ -132,8 +132,8 @@ def test_servo_targets_of_a_standing_robot_are_its_joints() -> None:
     assert np.allclose(u, m.q, atol=1e-6)
 
 
-def test_servo_leg_ik_puts_the_feet_on_their_targets_as_the_closed_form_does() -> None:
-    """Two steps of the IK loop from the last command land where the closed form does."""
+def test_servo_leg_ik_puts_the_feet_on_their_targets() -> None:
+    """The feet land on their targets (the tree's own FK) on the branch of the last command."""
     ctl = Controller(None, kind="servo", pattern="tripod")
     wb = ctl.wb
     rng = np.random.default_rng(3)
@@ -146,10 +146,8 @@ def test_servo_leg_ik_puts_the_feet_on_their_targets_as_the_closed_form_does() -
         start = np.linalg.norm(wb.feet(ctl.q_cmd[None], B[None])[0] - targets, axis=1).max()
         q = ctl._leg_ik(B, targets)
         miss = np.linalg.norm(wb.feet(q[None], B[None])[0] - targets, axis=1).max()
-        assert miss < min(2e-5, 1e-2 * start)  # converged, within the closed form's switch
-        closed = wb.body_ik(B, targets, q_prev=ctl.q_cmd, strict=False)
-        assert closed.reached[0].all()
-        assert np.abs(q - closed.q[0]).max() < 5e-4  # [rad]: the same branch
+        assert miss < min(1e-9, 1e-6 * start)  # exact
+        assert np.abs(q - ctl.q_cmd).max() < 0.2  # [rad]: the branch of the last command
     ctl.q_cmd = q0  # a target out of reach: the leg keeps its last command
     far = wb.feet(q0[None], B[None])[0]
     far[0, :2] += 0.5
@@ -389,8 +387,8 @@ def test_hexapod_comes_back_to_its_path_after_a_20_newton_push(start: float, for
     """20 N (about its weight) for 0.2 s, at 5 phases of the gait, either side: back within
     3 cm of the path within 1.5 s, no fall, nothing but feet touching.
 
-    Measured (servo IK by the one IK loop, RETURN_SPEED 0.7): 9 of 10; at 2.5 s, +20 N it is
-    back in 1.7 s. RETURN_SPEED 0.6/0.8/0.9/1.0 give 9/9/6/8 of 10 (falls among them): the
+    Measured (RETURN_SPEED 0.7): 9 of 10; at 2.3 s, −20 N it is back in 4.2 s. Other return
+    speeds and a leg IK by steps of the IK loop also gave 6–9 of 10 (falls among them): the
     posing controller is not robust to a push at every phase (issue 32)."""
     res = run(None, command=(0.2, 0.0, 0.0), pushes=[Push(force, start, 0.2)], duration=10.0)
     assert not res.fell and not res.non_foot_contacts, res.to_dict()
