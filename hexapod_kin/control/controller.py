@@ -45,10 +45,10 @@ from typing import Any
 
 import numpy as np
 
-from .._pose import rpy_to_matrix
+from .._pose import matrix_to_rpy, rpy_to_matrix
 from ..exceptions import ParameterError, one_of
 from .commands import Command
-from .mpc import ConvexMPC, rpy_zyx, schedule
+from .mpc import ConvexMPC, schedule
 from .qp import ForceQP
 
 __all__ = ["BALANCES", "KINDS", "Controller", "Measurement"]
@@ -653,7 +653,7 @@ class Controller:
         self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
         self._mpc_int[1] = np.clip(self._mpc_int[1] + float(e[2]) * step, -MPC_INT, MPC_INT)
         p_ref = p_ref + MPC_KI * (self._mpc_int[0] * ahead + np.array([0, 0, self._mpc_int[1]]))
-        th = rpy_zyx(R)
+        th = np.array(matrix_to_rpy(R))
         th[2] = self.path_yaw + math.remainder(th[2] - self.path_yaw, 2 * math.pi)
         x0 = np.concatenate([th, com, omega, vcom])
         t = dt * np.arange(1, N + 1)

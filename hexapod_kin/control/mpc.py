@@ -30,7 +30,6 @@ proxsuite's dense ProxQP (Bambade et al., RSS 2022). The first step's forces are
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -170,17 +169,6 @@ class ConvexMPC:
         lim = mu * f[legs, 2:3]
         f[legs, :2] = np.clip(f[legs, :2], -lim, lim)
         return f
-
-
-def rpy_zyx(R: np.ndarray) -> np.ndarray:
-    """Roll, pitch, yaw [rad] of rotation ``R = R_z(yaw) R_y(pitch) R_x(roll)``."""
-    return np.array(
-        [
-            math.atan2(R[2, 1], R[2, 2]),
-            -math.asin(max(-1.0, min(1.0, float(R[2, 0])))),
-            math.atan2(R[1, 0], R[0, 0]),
-        ]
-    )
 
 
 def schedule(phase: float, offsets: np.ndarray, duty: float, step: float, steps: int) -> np.ndarray:

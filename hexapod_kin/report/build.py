@@ -184,25 +184,24 @@ def _new_folders(out: Path) -> list[Path]:
 
 def _probe(out: Path) -> None:
     """Make ``out`` and write one byte in it (then remove it): a write that will fail, fails now."""
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ParameterError(
-            f"out={str(out)!r}: cannot make the folder ({exc.strerror or exc})",
+
+    def refuse(why: str) -> ParameterError:
+        return ParameterError(
+            f"out={str(out)!r}: {why}",
             parameter="out",
             value=str(out),
             allowed="a folder that can be written",
-        ) from None
+        )
+
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise refuse(f"cannot make the folder ({exc.strerror or exc})") from None
     try:
         atomic_write(out / ".hexapod-kin-write-probe", b"\n", sync=False).unlink()
     except (OSError, ParameterError) as exc:
         why = str(exc).split("cannot write it (")[-1].split(")")[0]
-        raise ParameterError(
-            f"out={str(out)!r}: cannot write in it ({why}); nothing was written",
-            parameter="out",
-            value=str(out),
-            allowed="a folder that can be written",
-        ) from None
+        raise refuse(f"cannot write in it ({why}); nothing was written") from None
 
 
 def _reproduce(out: Path, *, quick: bool, animations: bool, cache: bool, start: float) -> Report:
