@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .._pose import matrix_to_rpy, rpy_to_matrix
-from ..exceptions import ParameterError, one_of
+from ..exceptions import one_of
 from .commands import Command
 from .mpc import ConvexMPC, schedule
 from .qp import ForceQP
@@ -729,14 +729,9 @@ class Controller:
         IK loop per tick: the same pushes recovered (9 of 10), but over ±10 mm bumps the
         heading stays within 1.4° where the steps let it turn 2.5–5.3°.
         """
-        wb = self.wb
-        ik = wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
-        q = np.array(self.q_cmd, dtype=float)
-        for leg in range(self.n_legs):
-            if ik.reached[0][leg]:
-                c = list(wb._leg_cols[leg])
-                q[c] = ik.q[0][c]
-        return np.clip(q, wb.lower, wb.upper)
+        ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
+        q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
+        return np.clip(q, self.wb.lower, self.wb.upper)
 
 
 def _rot(w: np.ndarray) -> np.ndarray:
@@ -744,12 +739,3 @@ def _rot(w: np.ndarray) -> np.ndarray:
     import pinocchio as pin
 
     return np.array(pin.exp3(np.asarray(w, dtype=float)))
-
-
-def check_kind(kind: str) -> str:
-    """``kind`` when it is one of :data:`KINDS` (else a :class:`ParameterError`)."""
-    if kind not in KINDS:
-        raise ParameterError(
-            f"kind={kind!r}: one of {list(KINDS)}", parameter="kind", value=kind, allowed=KINDS
-        )
-    return kind
