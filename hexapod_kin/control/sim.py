@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from .._fields import fields_dict
+from .._pose import matrix_to_rpy
 from ..exceptions import ParameterError, positive
 from .commands import Command, Timeline
 from .controller import Controller, Measurement
@@ -185,11 +186,6 @@ def scene_xml(scene: Any, kind: str) -> str:
                 attrs.update(ctrlrange=el.get("forcerange"), ctrllimited="true")
             act.replace(el, etree.Element("motor", **attrs))
     return etree.tostring(root, encoding="unicode")
-
-
-def _rpy(R: np.ndarray) -> tuple[float, float, float]:
-    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
 
 
 def _timeline(command: Any) -> Timeline:
@@ -402,7 +398,7 @@ def run(
         ts.append(t)
         pos.append(st_point)
         path.append([*ctl.path_xy, ctl.path_yaw])
-        roll, pitch, yaw = _rpy(R)
+        roll, pitch, yaw = matrix_to_rpy(R)
         rpys.append((roll, pitch, yaw))
         height = float(data.qpos[2]) - ctl.ground_z
         risen = risen or height > 0.9 * (stand_z - scene.foot_radius)
