@@ -18,6 +18,7 @@ import contextlib
 import math
 import os
 import threading
+import types
 import warnings
 from typing import Any
 
@@ -28,7 +29,7 @@ from . import _cache
 from .exceptions import CacheWarning
 
 __all__ = ["NUMBA_FILES", "POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "seal_compiled",
-           "sealed_folder", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
+           "python_twin", "sealed_folder", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
 
@@ -78,6 +79,30 @@ def njit(*args: Any, **options: Any) -> Any:
 
 
 _IN_MEMORY: list[bool] = []
+
+
+def python_twin(kernel: Any, _memo: dict[int, Any] | None = None) -> Any:
+    """``kernel``'s own Python function, calling the Python twins of the kernels it calls.
+
+    The same code objects run by the interpreter instead of numba's machine code: the same
+    IEEE operations in the same order (no ``fastmath``, no contraction into fused multiply-add),
+    so the same bits on the same inputs (``tests/test_ik_solver.py`` holds them equal), with
+    nothing to compile. Each function gets a copy of its module's globals in which every
+    compiled function it names is replaced by that one's twin (built once per call of this).
+    """
+    memo: dict[int, Any] = {} if _memo is None else _memo
+    found = memo.get(id(kernel))
+    if found is not None:
+        return found
+    py = kernel.py_func
+    names = dict(py.__globals__)
+    twin = types.FunctionType(py.__code__, names, py.__name__, py.__defaults__, py.__closure__)
+    memo[id(kernel)] = twin
+    for name in py.__code__.co_names:
+        obj = names.get(name)
+        if isinstance(obj, numba.core.dispatcher.Dispatcher):
+            names[name] = python_twin(obj, memo)
+    return twin
 
 #: numba's cache files (its index and its machine code): what the seal covers, as bytes.
 NUMBA_FILES = (".nbi", ".nbc")

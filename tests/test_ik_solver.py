@@ -465,3 +465,63 @@ def test_every_path_uses_the_one_compiled_loop(arms):
     assert vars(built).keys() == vars(res).keys()
     task = ik.build_task(target)
     assert ik.Task(task.mode, task.pose, task.yaw, task.weights) == task
+
+
+def _bits(results):
+    """Every field of every result, as ``to_dict`` gives it, and the arrays' bytes."""
+    return [
+        (sorted(r.to_dict().items()), *(np.asarray(a).tobytes() for a in (r.q, r.history)))
+        for r in results
+    ]
+
+
+def test_the_loop_run_by_python_gives_the_compiled_bits(monkeypatch):
+    """A process's first solves run the loop's own functions in Python (nothing to compile):
+    the same bits as the compiled loop, statuses and their diagnosis included."""
+    from hexapod_kin.ik import solver
+
+    leg, ur5, panda = hk.load("hexabot_leg"), hk.load("erd:ur5_robot"), hk.load("erd:panda")
+    scara = hk.load("scara")
+    narrow = hk.load(robots.hexabot_leg(limits=tuple(JointLimits(-0.5, 0.5) for _ in range(3))))
+    pos = np.array([leg.position(q) for q in leg.random_q(10, seed=5)])
+    pos[::5] *= 3.0  # unreachable: the local-minimum check runs the loop too
+    poses = np.array([ur5.fk(q) for q in ur5.random_q(6, seed=5)])
+    seven = np.array([panda.fk(q) for q in panda.random_q(4, seed=5)])  # posture task
+    yaw = np.array([np.append(scara.position(q), 0.3) for q in scara.random_q(4, seed=5)])
+    cases = [
+        (leg, pos, {}),
+        (narrow, leg.position([0.0, 1.2, 1.0])[None], {}),  # joint_limits
+        (ur5, poses, {}),
+        (ur5, poses[:2], {"mask": [1, 1, 1, 0, 0, 1], "max_iter": 3}),
+        (panda, seven, {}),
+        (scara, yaw, {}),
+    ]
+    statuses = set()
+    for model, targets, kw in cases:
+        monkeypatch.setattr(solver, "_LOADED", [])
+        monkeypatch.setattr(solver, "_LEFT", [len(targets)])
+        python = [ik.solve(model, t, **kw) for t in targets]
+        assert solver._LEFT == [0] and not solver._LOADED  # nothing loaded or compiled
+        compiled = ik.solve_many(model, targets, **kw)
+        assert solver._LOADED
+        assert _bits(python) == _bits(compiled)
+        statuses |= {r.status for r in python}
+    assert {"converged", "unreachable", "not_converged", "joint_limits"} <= statuses
+
+
+def test_a_command_solving_one_target_compiles_nothing(tmp_path):
+    """`ik` on fresh caches: no compile notice, the answer of the compiled loop (issue 34)."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "n"), HEXAPOD_KIN_CACHE_DIR=str(tmp_path))
+    argv = [sys.executable, "-m", "hexapod_kin", "ik", "hexabot_leg", "--json", "--target"]
+    res = subprocess.run([*argv, "0.25", "0.05", "-0.1"], capture_output=True, text=True, env=env)
+    assert res.returncode == 1 and "compiling" not in res.stderr, res.stderr
+    got = json.loads(res.stdout)["numerical"]
+    assert not any(tmp_path.joinpath("n").rglob("*.nbc"))  # no machine code written
+    leg = hk.load("hexabot_leg")
+    want = ik.solve_many(leg, np.array([[0.25, 0.05, -0.1]]))[0].to_dict()
+    assert got["status"] == "unreachable" and got == json.loads(json.dumps(want))

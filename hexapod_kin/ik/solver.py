@@ -13,7 +13,10 @@ the posture task for that attempt).
 
 One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
-:func:`solve_chain` for a chain view (a leg) with a seed per target. The result is measured
+:func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
+:data:`INTERPRETED_CALLS` calls of :func:`solve` run the loop's own functions in Python
+(:func:`~hexapod_kin._kmath.python_twin`: the same operations, the same bits), so that a
+command solving one target neither compiles nor loads machine code. The result is measured
 in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
 position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
@@ -33,7 +36,8 @@ from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
 from .task import MODES, Task, build_task, build_tasks, check_within
 
-__all__ = ["MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve", "solve_chain", "solve_many"]
+__all__ = ["INTERPRETED_CALLS", "MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve",
+           "solve_chain", "solve_many"]  # fmt: skip
 
 #: Cap on ``max_iter`` (the residual history holds max_iter + 1 values per target).
 MAX_ITER = 100_000
@@ -308,6 +312,14 @@ def _par(opts: IKOptions, scale: float) -> np.ndarray:
 #: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
 #: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
+#: How many of a process's first :func:`solve` calls run the loop in Python (with their
+#: diagnosis): the same functions, the same bits, nothing to load or compile (a command's
+#: one solve costs milliseconds where loading the machine code costs ~0.35 s of CPU and
+#: compiling it ~9 s). The next call loads (or compiles) the machine code, as batches do.
+INTERPRETED_CALLS = 16
+_LEFT = [INTERPRETED_CALLS]
+#: :func:`~hexapod_kin._kmath.python_twin` of the loop, once built.
+_PYTHON: list[Any] = []
 
 
 def _run(
@@ -317,21 +329,31 @@ def _run(
     w6: np.ndarray,
     pars: np.ndarray,
     starts: np.ndarray,
+    python: bool = False,
 ) -> np.ndarray:
-    """The compiled loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
+    """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
 
     ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
     ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
     compiled specialisation). Each target's numbers are its own: the same bits alone, in a
-    batch or on any thread. Returns the output rows (N, width) (see ``lm_loop``).
+    batch, on any thread, compiled or (``python``) run by the interpreter. Returns the output
+    rows (N, width) (see ``lm_loop``).
     """
     n_t, n = len(tgts), starts.shape[2]
     out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
     if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
         _LOADED[0](fplan, iplan, tgts, w6, pars, starts, out)
         return out
-    from .._kernels import run_blocks
     from .step import lm_loop
+
+    if python and not _LOADED:
+        if not _PYTHON:
+            from .._kmath import python_twin
+
+            _PYTHON[:] = [python_twin(lm_loop)]
+        _PYTHON[0](fplan, iplan, tgts, w6, pars, starts, out)
+        return out
+    from .._kernels import run_blocks
 
     def run(a: int, b: int) -> None:  # targets a..b-1
         lm_loop(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
@@ -341,7 +363,7 @@ def _run(
     return out
 
 
-def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
+def _residuals(s: _Setup, task: Task, qs: np.ndarray, python: bool) -> np.ndarray:
     """‖W e‖ of the task at K configurations ``qs`` (K, n): the loop for 0 steps, no limits."""
     k = len(qs)
     par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
@@ -350,7 +372,7 @@ def _residuals(s: _Setup, task: Task, qs: np.ndarray) -> np.ndarray:
     iplan[1:4] = 0  # no steps, no limits, no posture
     starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
     pars = _arg(np.tile(par, (k, 1)))
-    out = _run(s.fplan, iplan, tgts, task.weights, pars, starts)
+    out = _run(s.fplan, iplan, tgts, task.weights, pars, starts, python)
     return out[:, _O_Q + s.n + 12]
 
 
@@ -408,13 +430,17 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     if _LOADED:  # the per-call path: straight into the loaded loop
         out = np.empty((1, s.width))
         _LOADED[0](s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, out)
-    else:
-        out = _run(s.fplan, s.iplan, task.pose[None], task.weights, pars, starts)
-    return _report(mdl, s, task, out[0])
+        return _report(mdl, s, task, out[0], False)
+    python = _LEFT[0] > 0
+    _LEFT[0] -= python
+    out = _run(s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, python)
+    return _report(mdl, s, task, out[0], python)
 
 
-def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKResult:
-    """The result of one output row of the loop (made read-only)."""
+def _report(
+    mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python: bool
+) -> IKResult:
+    """The result of one output row of the loop (made read-only; ``python``: see :func:`_run`)."""
     row.setflags(write=False)
     attempts, it, code, err, rot, smin = row[:_O_Q].tolist()
     n = _O_Q + s.n
@@ -446,7 +472,7 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray) -> IKRe
     if code == 2.0:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
         return _result(fields, "not_converged", why, False)
-    return _diagnose(mdl, s, task, q, hist, fields)
+    return _diagnose(mdl, s, task, q, hist, fields, python)
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
@@ -470,18 +496,19 @@ def _diagnose(
     q: np.ndarray,
     hist: np.ndarray,
     fields: dict[str, Any],
+    python: bool,
 ) -> IKResult:
     """The status of a stalled attempt: joint limits, unreachable, singular or not converged."""
     prep = s.prep
     err, rot, smin = fields["error"], fields["rotation_error"], fields["sigma_min"]
-    blocked = _blocked(s, task, q) if s.ipar[2] else np.empty(0, dtype=int)
+    blocked = _blocked(s, task, q, python) if s.ipar[2] else np.empty(0, dtype=int)
     if blocked.size:
         # the same loop without limits, 200 steps, from q and 8 seeded starts
         iplan = np.array(s.iplan)
         iplan[1:3] = 200, 0  # 200 steps, no limits
         starts = np.vstack([q, prep.starts[:8]])[None]
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
-        free = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts)
+        free = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
         if free[0, 2] == 0:
             names = [mdl.joint_names[i] for i in blocked]
             why = (
@@ -489,7 +516,7 @@ def _diagnose(
                 f"limits is {err:.3g} m, {rot:.3g} rad away"
             )
             return _result(fields, "joint_limits", why, True)
-    if _is_local_min(mdl, s, task, q, float(hist[-1])):
+    if _is_local_min(mdl, s, task, q, float(hist[-1]), python):
         why = (
             f"outside the workspace: every start ends at a local minimum of the error, "
             f"{err:.6g} m, {rot:.6g} rad from the target"
@@ -505,7 +532,7 @@ def _diagnose(
     return _result(fields, "not_converged", why, False)
 
 
-def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:
+def _blocked(s: _Setup, task: Task, q: np.ndarray, python: bool) -> np.ndarray:
     """Joints at a limit where the task error decreases outward (1e-7 rad/m beyond it)."""
     lower, upper, cont = s.prep.lim[0], s.prep.lim[1], s.prep.cont
     at_lo = (~cont) & (q <= lower + 1e-12)
@@ -514,12 +541,12 @@ def _blocked(s: _Setup, task: Task, q: np.ndarray) -> np.ndarray:
         return idx
     trial = np.repeat(q[None], len(idx) + 1, axis=0)
     trial[np.arange(1, len(idx) + 1), idx] += np.where(at_lo[idx], -1e-7, 1e-7)
-    res = _residuals(s, task, trial)
+    res = _residuals(s, task, trial, python)
     return idx[res[1:] < res[0]]
 
 
 def _is_local_min(
-    mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, cost_root: float
+    mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, cost_root: float, python: bool
 ) -> bool:
     """True if no small perturbation of q (±1e-3, ±3e-2 rad) lowers the task error."""
     prep = s.prep
@@ -536,7 +563,7 @@ def _is_local_min(
     if s.ipar[2]:
         trial = np.where(prep.cont, trial, np.clip(trial, prep.lim[0], prep.lim[1]))
     floor = cost_root - 1e-9 * prep.scale
-    return not bool(np.any(_residuals(s, task, trial) < floor))
+    return not bool(np.any(_residuals(s, task, trial, python) < floor))
 
 
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
@@ -597,7 +624,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
     out = _run(s.fplan, s.iplan, tgts, tasks[0].weights, pars, starts)
-    return [_report(mdl, s, task, row) for task, row in zip(tasks, out)]
+    return [_report(mdl, s, task, row, False) for task, row in zip(tasks, out)]
 
 
 #: :func:`solve_chain`'s prepared inputs per chain and settings (a chain is an immutable
