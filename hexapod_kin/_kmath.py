@@ -104,6 +104,7 @@ def python_twin(kernel: Any, _memo: dict[int, Any] | None = None) -> Any:
             names[name] = python_twin(obj, memo)
     return twin
 
+
 #: numba's cache files (its index and its machine code): what the seal covers, as bytes.
 NUMBA_FILES = (".nbi", ".nbc")
 #: numba cache folder → whether numba may load from it in this process (checked once).

@@ -437,9 +437,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     return _report(mdl, s, task, out[0], python)
 
 
-def _report(
-    mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python: bool
-) -> IKResult:
+def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python: bool) -> IKResult:
     """The result of one output row of the loop (made read-only; ``python``: see :func:`_run`)."""
     row.setflags(write=False)
     attempts, it, code, err, rot, smin = row[:_O_Q].tolist()

@@ -286,6 +286,11 @@ def _robot_size(model: Any) -> float:
     return float(robot_size(model))
 
 
+def _limit(model: Any) -> float:
+    """:data:`TARGET_FACTOR` × the robot's size [m] (the size cached in the model)."""
+    return TARGET_FACTOR * model.cached("robot_size", lambda: _robot_size(model.model))
+
+
 def check_within(
     model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
 ) -> None:
@@ -310,13 +315,13 @@ def check_within(
     """
     if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs
         total = sum(map(abs, positions.tolist()))  # ≥ the largest; NaN stays NaN
-        if total <= 1e-3 * TARGET_FACTOR:
+        if total <= 1e-3 * TARGET_FACTOR or total <= _limit(model):
             return
     xyz = np.asarray(positions, dtype=float).reshape(-1, 3)
     far = float(np.max(np.abs(xyz))) if xyz.size else 0.0
     if far <= 1e-3 * TARGET_FACTOR:  # within the smallest robot's limit: no size needed
         return
-    limit = TARGET_FACTOR * model.cached("robot_size", lambda: _robot_size(model.model))
+    limit = _limit(model)
     if far <= limit:  # NaN is not: refused below
         return
     row = xyz[int(np.argmax(np.max(np.abs(xyz), axis=1)))]
