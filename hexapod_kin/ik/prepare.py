@@ -17,7 +17,8 @@ from .._numerics import chain_scale
 from ..kinematics import KinematicModel
 from ..params import Chain, Hexapod
 
-__all__ = ["LEG_HOME", "N_STARTS", "ModelLike", "Prepared", "as_model", "home", "prepared"]
+__all__ = ["LEG_HOME", "N_NEAR", "N_STARTS", "ModelLike", "Prepared", "as_model", "home",
+           "prepared"]  # fmt: skip
 
 #: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
 ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
@@ -28,6 +29,8 @@ LEG_HOME = (0.0, 0.3, 1.2)
 
 #: Seeded restart configurations kept per model (the most :func:`~hexapod_kin.ik.solve` tries).
 N_STARTS = 32
+#: Candidate first starts kept per model: :func:`home` and seeded samples (see :class:`Prepared`).
+N_NEAR = 64
 
 
 def as_model(model: ModelLike) -> KinematicModel:
@@ -50,6 +53,10 @@ class Prepared:
         home: The default start (see :func:`home`).
         starts: (32, n) seeded random restart configurations within the limits.
         middle: (n,) middle of each joint's range (continuous joints: 0).
+        near: (:data:`N_NEAR`, n) the candidate first starts of a solve without ``q0``:
+            ``home``, then seeded random configurations within the limits.
+        near_poses: (:data:`N_NEAR`, 12) their tip positions [m] and rotations (row-major),
+            Pinocchio's FK: the solver starts from the one nearest the target.
         model: The model (not compared).
 
     """
@@ -60,6 +67,8 @@ class Prepared:
     home: np.ndarray
     starts: np.ndarray
     middle: np.ndarray
+    near: np.ndarray
+    near_poses: np.ndarray
     model: Any = field(repr=False, compare=False)
 
 
@@ -76,9 +85,14 @@ def _build_prepared(model: KinematicModel) -> Prepared:
     starts = np.random.default_rng(12345).uniform(lo, hi, size=(N_STARTS, model.nq))
     middle = np.where(cont, 0.0, 0.5 * (lower + upper))
     q_home = _dexterous_home(model, lower, upper, cont)
-    for a in (lim, cont, starts, middle, q_home):
+    mid, half = 0.5 * (lo + hi), 0.25 * (hi - lo)  # the middle half of each range
+    samples = np.random.default_rng(54321).uniform(mid - half, mid + half, (N_NEAR - 1, model.nq))
+    near = np.vstack([q_home, samples])
+    poses = np.array([model.fk(q) for q in near])
+    near_poses = np.hstack([poses[:, :3, 3], poses[:, :3, :3].reshape(-1, 9)])
+    for a in (lim, cont, starts, middle, q_home, near, near_poses):
         a.setflags(write=False)
-    return Prepared(lim, cont, scale, q_home, starts, middle, model)
+    return Prepared(lim, cont, scale, q_home, starts, middle, near, near_poses, model)
 
 
 def _dexterous_home(

@@ -233,10 +233,11 @@ class _Setup:
 
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
-    ipar: np.ndarray  # mode, max_iter, limits on, posture on
+    ipar: np.ndarray  # mode, max_iter, limits on, posture on, candidate first starts
     starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
-    fplan: np.ndarray  # the chain and the limits, step caps and posture (:func:`_plans`)
+    fplan: np.ndarray  # the chain, limits, step caps, posture, first starts (:func:`_plans`)
     iplan: np.ndarray  # ipar, then the chain's joint kinds, columns, continuous flags
+    iplan_q0: np.ndarray  # the same without the candidate first starts (a given q0)
     tols: tuple[float, float]  # tol, rot_tol as Python floats
     why: str  # the converged reason, "%"-formatted with the two errors
     one: tuple[np.ndarray, np.ndarray]  # par (1, 7) and starts (1, S, n): one target's rows
@@ -277,27 +278,38 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     if use and not isinstance(opts.posture, str):
         posture = mdl.check_q(opts.posture, "posture")
     par = _par(opts, prep.scale)
-    ipar = np.array([mode, opts.max_iter, int(bool(opts.within_limits)), int(use)], np.int64)
+    limits = int(bool(opts.within_limits))
+    ipar = np.array([mode, opts.max_iter, limits, int(use), len(prep.near)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
-    fplan, iplan = _plans(mdl.arrays, np.vstack([prep.lim, posture]), prep.cont, ipar)
+    lim = np.vstack([prep.lim, posture])
+    fplan, iplan = _plans(mdl.arrays, lim, prep.cont, ipar, prep.near, prep.near_poses)
+    iplan_q0 = np.array(iplan)
+    iplan_q0[4] = 0
     tols = (float(opts.tol), float(opts.rot_tol))
     one = (par[None], starts[None])
     why = f"‖e‖ = %.3g m, %.3g rad <= tol {tols[0]:g}, {tols[1]:g}"
     n = mdl.nq
     width = _O_Q + n + 12 + opts.max_iter + 1
-    return _Setup(prep, par, ipar, starts, fplan, iplan, tols, why, one, width, n)
+    return _Setup(prep, par, ipar, starts, fplan, iplan, iplan_q0, tols, why, one, width, n)
 
 
 def _plans(
-    chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any
+    chain: Any,
+    lim: np.ndarray,
+    cont: np.ndarray,
+    ipar: Any,
+    near: Any = (),
+    near_poses: Any = (),
 ) -> tuple[np.ndarray, np.ndarray]:
     """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_loop``).
 
     A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
-    (n,) and ``ipar`` (4,), in two private C-contiguous arrays (float64, int64).
+    (n,), ``ipar`` (5,) and the candidate first starts (K, n) with their tip poses (K, 12),
+    in two private C-contiguous arrays (float64, int64).
     """
     rot, trans, axis, kind, col = chain.packed
-    fplan = np.concatenate([np.ravel(a) for a in (rot, trans, axis, chain.tip_rot, lim)])
+    parts = (rot, trans, axis, chain.tip_rot, lim, near, near_poses)
+    fplan = np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in parts])
     head = np.array([*(int(v) for v in ipar), len(kind), len(cont)])
     iplan = np.concatenate([head, kind, col, cont]).astype(np.int64)
     return np.ascontiguousarray(fplan, dtype=np.float64), iplan
@@ -369,7 +381,7 @@ def _residuals(s: _Setup, task: Task, qs: np.ndarray, python: bool) -> np.ndarra
     par = s.par if task.code != 1 else _with_yaw(s.par[None], [task.yaw])[0]
     tgts = _frozen(np.broadcast_to(task.pose, (k, 4, 4)))
     iplan = np.array(s.iplan)
-    iplan[1:4] = 0  # no steps, no limits, no posture
+    iplan[1:5] = 0  # no steps, no limits, no posture, the given start
     starts = _arg(np.asarray(qs, dtype=float)[:, None, :])
     pars = _arg(np.tile(par, (k, 1)))
     out = _run(s.fplan, iplan, tgts, task.weights, pars, starts, python)
@@ -422,18 +434,20 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     code = _CODES[task.mode]
     s = _setup(mdl, opts, code)
     pars, starts = s.one
+    iplan = s.iplan
     if q0 is not None:
         starts = np.array(starts)
         starts[0, 0] = mdl.check_q(q0, "q0")
+        iplan = s.iplan_q0
     if code == 1:
         pars = _with_yaw(pars, [task.yaw])
     if _LOADED:  # the per-call path: straight into the loaded loop
         out = np.empty((1, s.width))
-        _LOADED[0](s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, out)
+        _LOADED[0](s.fplan, iplan, task.pose[None], task.weights, pars, starts, out)
         return _report(mdl, s, task, out[0], False)
     python = _LEFT[0] > 0
     _LEFT[0] -= python
-    out = _run(s.fplan, s.iplan, task.pose[None], task.weights, pars, starts, python)
+    out = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
     return _report(mdl, s, task, out[0], python)
 
 
@@ -504,6 +518,7 @@ def _diagnose(
         # the same loop without limits, 200 steps, from q and 8 seeded starts
         iplan = np.array(s.iplan)
         iplan[1:3] = 200, 0  # 200 steps, no limits
+        iplan[4] = 0  # from q
         starts = np.vstack([q, prep.starts[:8]])[None]
         pars = s.par[None] if task.code != 1 else _with_yaw(s.par[None], [task.yaw])
         free = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
@@ -604,6 +619,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     s = _setup(mdl, opts, tasks[0].code)
     starts = np.empty((n_t, *s.starts.shape))
     starts[:] = s.starts
+    iplan = s.iplan if q0 is None else s.iplan_q0
     if q0 is not None and np.ndim(q0) == 1:
         starts[:, 0] = mdl.check_q(q0, "q0")
     elif q0 is not None:
@@ -621,7 +637,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         pars = _with_yaw(pars, [task.yaw for task in tasks])
     pars = _arg(pars)
     tgts = _frozen(np.array([task.pose for task in tasks]).reshape(n_t, 4, 4))
-    out = _run(s.fplan, s.iplan, tgts, tasks[0].weights, pars, starts)
+    out = _run(s.fplan, iplan, tgts, tasks[0].weights, pars, starts)
     return [_report(mdl, s, task, row, False) for task, row in zip(tasks, out)]
 
 
@@ -646,7 +662,7 @@ def _chain_setup(
     cont = (~prism) & (hi - lo >= 2 * np.pi - 1e-9)
     scale = chain_scale(chain.trans)
     lim = np.vstack([lo, hi, np.where(prism, 0.25 * scale, 0.5)])
-    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0])
+    fplan, iplan = _plans(chain, np.vstack([lim, np.zeros(n)]), cont, [0, opts.max_iter, 1, 0, 0])
     setup = (fplan, iplan, _par(opts, scale), _frozen([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))
     if len(_CHAIN_SETUPS) >= 256:
         _CHAIN_SETUPS.clear()

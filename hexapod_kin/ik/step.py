@@ -25,13 +25,13 @@ import numpy as np
 
 from .._kernels import dls_into, fk_jac_into, njit, wrap_angle
 
-__all__ = ["lm_loop", "log3", "sigma_min3", "step_into", "task_into"]  # fmt: skip
+__all__ = ["lm_loop", "log3", "nearest", "sigma_min3", "step_into", "task_into"]  # fmt: skip
 
 # indices into the float parameters ``par`` and the int parameters ``ipar`` of the loop
 P_TOL, P_ROT_TOL, P_WBAR, P_MU0, P_POST_GAIN, P_YAW, P_POST_FLOOR = range(7)
-I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE = range(4)
+I_MODE, I_MAX_ITER, I_LIMITS, I_POSTURE, I_NEAR = range(5)
 # the rest of :func:`lm_loop`'s int plan: links m, joints n, then kind, col, continuous
-I_LINKS, I_JOINTS, I_CHAIN = 4, 5, 6
+I_LINKS, I_JOINTS, I_CHAIN = 5, 6, 7
 # one row of :func:`lm_loop`'s output: these scalars, then q, p, R and the residual history
 O_ATTEMPTS, O_STEPS, O_CODE, O_ERROR, O_ROT_ERROR, O_SIGMA_MIN, O_Q = range(7)
 
@@ -276,6 +276,36 @@ def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def nearest(
+    mode: int, tgt: np.ndarray, w6: np.ndarray, poses: np.ndarray
+) -> int:  # pragma: no cover - compiled
+    """The index of the pose nearest to the target among ``poses`` (K, 12): p (3), R (9).
+
+    Distance: ``Σ w²(p* − p)²`` over the position rows, plus in mode 2 (pose)
+    ``Σ_k w²_{3+k} ‖R*_{:,k} − R_{:,k}‖²`` over the rotation rows (the chord of each axis:
+    ``2(1 − cos)`` of its angle). The first of equal ones (index 0 wins ties).
+    """
+    best = 0
+    best_d = np.inf
+    for k in range(poses.shape[0]):
+        d = 0.0
+        for a in range(3):
+            e = w6[a] * (tgt[a, 3] - poses[k, a])
+            d += e * e
+        if mode == 2:
+            for c in range(3):
+                wc = w6[3 + c] * w6[3 + c]
+                if wc != 0.0:
+                    for a in range(3):
+                        e = tgt[a, c] - poses[k, 3 + 3 * a + c]
+                        d += wc * e * e
+        if d < best_d:
+            best_d = d
+            best = k
+    return best
+
+
+@njit(cache=True, nogil=True)
 def lm_loop(
     fplan: np.ndarray,
     iplan: np.ndarray,
@@ -300,8 +330,12 @@ def lm_loop(
     ``iplan`` = ``ipar`` (``I_*``), the number of links m and joints n, then the chain's
     ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
     (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
-    lower and upper limits, step caps and the posture, all flattened (``solver._plans``).
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n).
+    lower and upper limits, step caps and the posture, then ``K = ipar[I_NEAR]`` start
+    configurations (K, n) and their tip poses (K, 12), all flattened (``solver._plans``).
+    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). With ``K > 0`` the first
+    attempt starts from the configuration whose pose is :func:`nearest` the target, then
+    (unless that was the first candidate, ``starts[t, 0]`` itself) from ``starts[t, 0]``, then
+    the rest.
 
     ``out[i]`` (``O_Q + n + 12 + max_iter + 1`` values), at the returned q (the best attempt):
     ``O_ATTEMPTS``, ``O_STEPS`` (accepted steps), ``O_CODE`` (0 converged, 1 stalled, 2
@@ -325,6 +359,10 @@ def lm_loop(
     o += 3 * links
     tip_rot = fplan[o : o + 9].reshape((3, 3))
     lim = fplan[o + 9 : o + 9 + 4 * n].reshape((4, n))
+    o += 9 + 4 * n
+    near = ipar[I_NEAR]
+    near_q = fplan[o : o + near * n].reshape((near, n))
+    near_pose = fplan[o + near * n : o + near * (n + 12)].reshape((near, 12))
     mode = ipar[I_MODE]
     max_iter = ipar[I_MAX_ITER]
     use_limits = ipar[I_LIMITS] != 0
@@ -371,10 +409,18 @@ def lm_loop(
         best_steps = 0
         best_code = 1
         attempts = 0
-        for s in range(starts.shape[1]):
+        first = -1 if near > 0 else 0
+        k = nearest(mode, tgt, w6, near_pose) if near > 0 else 0
+        for s in range(first, starts.shape[1]):
+            if s == 0 and k == 0 and first < 0:  # the nearest was the given start itself
+                continue
             attempts += 1
-            for i in range(n):
-                q[i] = starts[t, s, i]
+            if s < 0:
+                for i in range(n):
+                    q[i] = near_q[k, i]
+            else:
+                for i in range(n):
+                    q[i] = starts[t, s, i]
             _limit_into(q, lower, upper, cont, use_limits)
             fk_jac_into(rot, trans, axis, kind, col, q, p, jac, scratch, n >= 0, tip_rot, r)
             m, pos2, rot2 = task_into(mode, tgt, w6, yaw, p, r, jac, w3, et, jt)
@@ -464,7 +510,7 @@ def lm_loop(
                     if tries > 40:
                         code = 1
                         break
-            if code == 0 or cost < best_cost or s == 0:
+            if code == 0 or cost < best_cost or s == first:
                 best_cost = cost
                 best_steps = accepted
                 best_code = code
