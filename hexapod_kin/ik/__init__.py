@@ -7,7 +7,7 @@
 * :mod:`.task` — the problem: a position, position + yaw, or a 6-D pose target with per-row
   weights (:func:`build_task`).
 * :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
-  and the package's one home pose :func:`home` (IK start, resolved-rate start).
+  and the package's one home pose :func:`home` (IK's first candidate start, resolved-rate start).
 * :mod:`.solver` — the one numerical loop (compiled, :mod:`.step`, imported on first use)
   for one target (:func:`solve`), many (:func:`solve_many`) or a chain view such as a leg
   (:func:`solve_chain`); :class:`IKOptions`, :class:`IKResult`.

@@ -2,7 +2,7 @@
 
 Built once per model and kept in its cache (:meth:`~hexapod_kin.model.Model.cached`); read-only,
 so one model can be solved from many threads. :func:`home` is the package's one home pose (the
-default IK start and the default start of resolved-rate runs).
+IK's first candidate start and the default start of resolved-rate runs).
 """
 
 from __future__ import annotations
@@ -50,11 +50,12 @@ class Prepared:
         lim: (3, n) lower limits, upper limits and step caps ([rad]/[m]).
         cont: (n,) True for continuous revolute joints (range ≥ 2π: they wrap).
         scale: The chain's length scale in [m] (sum of the link offsets).
-        home: The default start (see :func:`home`).
+        home: The home pose (see :func:`home`).
         starts: (32, n) seeded random restart configurations within the limits.
         middle: (n,) middle of each joint's range (continuous joints: 0).
         near: (:data:`N_NEAR`, n) the candidate first starts of a solve without ``q0``:
-            ``home``, then seeded random configurations within the limits.
+            ``home``, then seeded random configurations in the middle half of each range
+            (ranges clipped to ±π).
         near_poses: (:data:`N_NEAR`, 12) their tip positions [m] and rotations (row-major),
             Pinocchio's FK: the solver starts from the one nearest the target.
         model: The model (not compared).
@@ -120,7 +121,7 @@ def prepared(model: ModelLike) -> Prepared:
 
 
 def home(model: ModelLike) -> np.ndarray:
-    """The package's one home pose: the default IK start and resolved-rate start (a copy).
+    """The package's one home pose: the IK's first candidate start and resolved-rate start.
 
     ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
     otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
@@ -132,7 +133,7 @@ def home(model: ModelLike) -> np.ndarray:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
 
     Returns:
-        (nq,) joint values in [rad]/[m].
+        (nq,) joint values in [rad]/[m] (a copy).
 
     """
     return np.array(prepared(model).home)

@@ -234,7 +234,7 @@ class _Setup:
     prep: Prepared
     par: np.ndarray  # tol, rot_tol, w̄, μ0, posture gain, yaw (per target), posture floor
     ipar: np.ndarray  # mode, max_iter, limits on, posture on, candidate first starts
-    starts: np.ndarray  # (1 + restarts, n): home, then the seeded restarts
+    starts: np.ndarray  # (1 + restarts, n): home (or q0), then the seeded restarts
     fplan: np.ndarray  # the chain, limits, step caps, posture, first starts (:func:`_plans`)
     iplan: np.ndarray  # ipar, then the chain's joint kinds, columns, continuous flags
     iplan_q0: np.ndarray  # the same without the candidate first starts (a given q0)
@@ -405,7 +405,12 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
         target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
             axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
-        q0: Start configuration (nq,); default :func:`~hexapod_kin.ik.home`.
+        q0: Start configuration (nq,). Default: the candidate of
+            :attr:`~hexapod_kin.ik.Prepared.near` (:func:`~hexapod_kin.ik.home` and 63 seeded
+            configurations in the middle half of each joint's range) whose tip pose is nearest
+            the target (``Σ w²(p* − p)²`` over the position rows, plus for a pose the weighted
+            ``‖R*_{:,k} − R_{:,k}‖²`` of each rotation row; ties to ``home``), then ``home``,
+            then the seeded restarts; the same start alone or in :func:`solve_many`.
         **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
             ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
             ``posture_gain``).
@@ -585,7 +590,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
         targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
-        q0: None (:func:`~hexapod_kin.ik.home` for all), one start (nq,) for all, or (N, nq)
+        q0: None (the default start of :func:`solve`), one start (nq,) for all, or (N, nq)
             starts.
         **options: As in :func:`solve` (one set for all targets).
 

@@ -189,7 +189,8 @@ def follow_pose_path(
         model: A loaded model or anything :func:`hexapod_kin.load` takes (6-D tip motion needs
             at least 6 joints for exact tracking; fewer give the damped best fit).
         path: The pose path.
-        q0: Start (nq,); default: 6-D IK of the first pose from :func:`hexapod_kin.ik.home`.
+        q0: Start (nq,); default: 6-D IK of the first pose (:func:`hexapod_kin.ik.solve`'s
+            default start).
         dt: Step in [s].
         gain: Closed-loop gain on the pose error ``[p_ref − p; log(R_ref Rᵀ)]`` in [1/s].
         method: ``"rk4"`` or ``"euler"``.
