@@ -14,9 +14,9 @@ the posture task for that attempt).
 One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
 :func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
-:data:`INTERPRETED_CALLS` calls of :func:`solve` run the loop's own functions in Python
-(:func:`~hexapod_kin._kmath.python_twin`: the same operations, the same bits), so that a
-command solving one target neither compiles nor loads machine code. The result is measured
+:data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
+own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
+same bits), so that a command solving one target neither compiles nor loads machine code. The result is measured
 in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
 position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
@@ -325,11 +325,15 @@ def _par(opts: IKOptions, scale: float) -> np.ndarray:
 #: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
 #: How many of a process's first :func:`solve` calls run the loop in Python (with their
-#: diagnosis): the same functions, the same bits, nothing to load or compile (a command's
-#: one solve costs milliseconds where loading the machine code costs ~0.35 s of CPU and
-#: compiling it ~9 s). The next call loads (or compiles) the machine code, as batches do.
+#: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same functions, the
+#: same bits, nothing to load or compile (a command's one solve costs milliseconds where
+#: loading the machine code costs ~0.35 s of CPU and compiling it ~9 s). The next call loads
+#: (or compiles) the machine code, as batches do.
 INTERPRETED_CALLS = 16
 _LEFT = [INTERPRETED_CALLS]
+#: The most accepted steps a call run in Python may take (``max_iter`` × attempts): the
+#: defaults with every restart (100 × 33); a larger budget runs compiled from the first call.
+_PYTHON_STEPS = 3_300
 #: :func:`~hexapod_kin._kmath.python_twin` of the loop, once built.
 _PYTHON: list[Any] = []
 
@@ -450,7 +454,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         out = np.empty((1, s.width))
         _LOADED[0](s.fplan, iplan, task.pose[None], task.weights, pars, starts, out)
         return _report(mdl, s, task, out[0], False)
-    python = _LEFT[0] > 0
+    python = _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
     _LEFT[0] -= python
     out = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
     return _report(mdl, s, task, out[0], python)
