@@ -16,9 +16,9 @@ target (its row of a batch, bit for bit), :func:`solve_many` for N targets on ev
 :func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
 :data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
 own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
-same bits), so that a command solving one target neither compiles nor loads machine code. The result is measured
-in the same compiled call (the one FK core, equal to Pinocchio's to rounding; tests hold
-position, rotation, errors and σ_min against Pinocchio and the SVD).
+same bits), so that a command solving one target neither compiles nor loads machine code.
+The result is measured in the same call (the one FK core, equal to Pinocchio's to rounding;
+tests hold position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
@@ -158,7 +158,7 @@ class IKResult:
         rotation: R(q) (3, 3), the tip's rotation in the base frame.
         target: The target position in [m].
         task: The task solved (mode, target pose, yaw, weights).
-        attempts: How many starts were tried (1 + restarts used).
+        attempts: How many starts were tried (the nearest candidate, home, restarts used).
         reason: One sentence explaining the status.
         distance: For ``"unreachable"`` / ``"joint_limits"``: the position error in [m] of the
             best configuration found; else 0.

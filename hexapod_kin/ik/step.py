@@ -410,14 +410,14 @@ def lm_loop(
         best_code = 1
         attempts = 0
         first = -1 if near > 0 else 0
-        k = nearest(mode, tgt, w6, near_pose) if near > 0 else 0
+        pick = nearest(mode, tgt, w6, near_pose) if near > 0 else 0
         for s in range(first, starts.shape[1]):
-            if s == 0 and k == 0 and first < 0:  # the nearest was the given start itself
+            if s == 0 and pick == 0 and first < 0:  # the nearest was home, starts[t, 0]: tried
                 continue
             attempts += 1
             if s < 0:
                 for i in range(n):
-                    q[i] = near_q[k, i]
+                    q[i] = near_q[pick, i]
             else:
                 for i in range(n):
                     q[i] = starts[t, s, i]
