@@ -11,7 +11,8 @@ installed (``pip install hexapod-kin[bench]``), the seeds' Euler + ``np.linalg.s
 Targets: 1,000,000 closed-form targets <= 0.3 s; numerical IK: 100 % (legs) / >= 99.5 %
 (UR5, Panda poses: 2,000 random reachable poses, error <= 1e-9 m and rad) with median
 <= 50 µs per pose in the batch API (``solve_many``, compiled, after ``precompile``);
-``ik.solve`` (one target: numpy over Pinocchio, nothing compiled) is timed beside it;
+``ik.solve`` (one target: the same loop; a process's first 16 calls run it in Python) is
+timed beside it;
 resolved-rate <= 10 µs per step. ``solve_many`` runs three passes and keeps the best
 (``timeit``'s convention on a shared VM); ``ik.solve`` and the peer loop time every target in
 those passes and keep each target's best.
