@@ -525,3 +525,30 @@ def test_a_command_solving_one_target_compiles_nothing(tmp_path):
     leg = hk.load("hexabot_leg")
     want = ik.solve_many(leg, np.array([[0.25, 0.05, -0.1]]))[0].to_dict()
     assert got["status"] == "unreachable" and got == json.loads(json.dumps(want))
+
+
+@pytest.mark.parametrize("name", ["hexabot_leg", "erd:ur5_robot"])
+def test_the_default_start_is_the_nearest_candidate(name):
+    """Without q0 the first attempt starts from the candidate (home, then seeded samples) whose
+    tip pose is nearest the target: its residual, from Pinocchio's FK and log map, is the
+    result's first history value whenever that attempt converged."""
+    model = hk.load(name)
+    prep = ik.prepared(model)
+    assert prep.near.shape == (ik.prepare.N_NEAR, model.nq)
+    np.testing.assert_array_equal(prep.near[0], ik.home(model))
+    poses = np.array([model.fk(q) for q in model.random_q(40, seed=9)])
+    position = model.nq == 3
+    first = 0
+    for pose, r in zip(poses, ik.solve_many(model, poses[:, :3, 3] if position else poses)):
+        reached = np.array([model.fk(q) for q in prep.near])
+        d = np.sum((pose[:3, 3] - reached[:, :3, 3]) ** 2, axis=1)
+        if not position:
+            d = d + np.sum((pose[:3, :3] - reached[:, :3, :3]) ** 2, axis=(1, 2))
+        k = int(np.argmin(d))
+        e = np.linalg.norm(pose[:3, 3] - reached[k, :3, 3])
+        if not position:
+            e = math.hypot(e, np.linalg.norm(pin.log3(pose[:3, :3] @ reached[k, :3, :3].T)))
+        if r.attempts == 1 and r.converged:
+            first += 1
+            assert r.history[0] == pytest.approx(e, rel=1e-9, abs=1e-15)
+    assert first >= 30
