@@ -16,9 +16,11 @@ once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
 input only (never on its neighbours in a block, the block size or the thread that runs it),
 so a result is the same in any process, warm or cold, and from any number of threads.
 
-**When it compiles**: only batch APIs import this module (per-call work runs on Pinocchio
-and numpy). Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`); numba's files are
-never parsed, only sealed as bytes (:func:`hexapod_kin._kmath.sealed_folder`);
+**When it compiles**: batch APIs and the IK loop import this module (other per-call work
+runs on Pinocchio and numpy; a process's first few ``ik.solve`` calls run the loop's Python
+twin, :func:`hexapod_kin._kmath.python_twin`). Kernels are ``cache=True``
+(:func:`hexapod_kin._kmath.njit`); numba's files are never parsed, only sealed as bytes
+(:func:`hexapod_kin._kmath.sealed_folder`);
 ``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area in
 a process, :func:`run_blocks` prints one notice on stderr unless the
 area's stamp (:func:`mark_compiled`) says it is compiled; a cache that cannot be loaded or
