@@ -493,6 +493,7 @@ def test_the_loop_run_by_python_gives_the_compiled_bits(monkeypatch):
         (narrow, leg.position([0.0, 1.2, 1.0])[None], {}),  # joint_limits
         (ur5, poses, {}),
         (ur5, poses[:2], {"mask": [1, 1, 1, 0, 0, 1], "max_iter": 3}),
+        (ur5, poses[2:4], {"q0": np.full(6, 0.3)}),
         (panda, seven, {}),
         (scara, yaw, {}),
     ]
