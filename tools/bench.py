@@ -203,8 +203,8 @@ def digest(results):
 '''
 exec(DIGEST)
 
-#: The first targets of a per-call row solved one by one in a fresh process (its first calls
-#: load the compiled loop): their digest on stdout.
+#: The first targets of a per-call row solved one by one in a fresh process (its first 16
+#: calls run the loop in Python, the next loads the compiled loop): their digest on stdout.
 FRESH = '''
 import json, sys
 import numpy as np
