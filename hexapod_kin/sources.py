@@ -13,7 +13,6 @@ example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second en
 
 from __future__ import annotations
 
-import importlib.metadata
 import io
 import os
 import re
@@ -46,6 +45,8 @@ def erd_share() -> Path:
         SourceError: If example-robot-data is not installed.
 
     """
+    import importlib.metadata  # here: ~30 ms that the other sources do not need
+
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:

@@ -304,7 +304,8 @@ def _derive_job(
     deriv = derive(chain, rows=rows, budget=budget, within=budget - _AFTER)
     # as a budgeted derive() returns it: through pickle (sympy rebuilds -(a + b) as -a - b)
     deriv = pickle.loads(pickle.dumps(dataclasses.replace(deriv, reference=reference, tip=tip)))
-    yield "derivation", deriv
+    # what the parent needs of it, without sympy objects (the parent imports no sympy)
+    yield "derivation", (deriv.incomplete, deriv.chain.description, deriv.reference)
     ran_out = "the budget ran out"
     if fmt == "json":
         made, whole = _phase(end - _AFTER / 2, lambda: iter([json.dumps(deriv.to_dict())]))
@@ -353,7 +354,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     import numpy as np  # after the checks: a refusal imports no sympy
 
     from .._budget import run
-    from ..symbolic import DEFAULT_BUDGET, derive
+    from ..symbolic import DEFAULT_BUDGET  # no sympy in this process unless the child fails
     from ..symbolic.sources import chain_of
 
     budget = DEFAULT_BUDGET if args.budget is None else float(args.budget)
@@ -368,8 +369,11 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         if reason is None or not reason.startswith("budget of"):
             raise RuntimeError(f"derive: the derivation process failed: {reason}")
         # the budget ran out before anything came back: the plain products, nothing printed
+        from ..symbolic import derive
+
         deriv = derive(chain, rows=args.rows, budget=budget, within=0.0, cache=False)
         deriv = dataclasses.replace(deriv, reference=reference, tip=tip)
+        summary = (deriv.incomplete, deriv.chain.description, deriv.reference)
         lines = [f"NOT DONE: {what}" for what in deriv.incomplete]
         done["text"] = (
             json.dumps(deriv.to_dict())
@@ -378,27 +382,28 @@ def _cmd_derive(args: argparse.Namespace) -> int:
             "the budget ran out",
         )
     else:
-        deriv = done["derivation"]
+        summary = done["derivation"]
+    incomplete, description, reference = summary
     text, cut = done.get("text", ("", "the budget ran out"))
     check, why = done.get("check", ({}, "the budget ran out"))
-    recovered = deriv.chain.description.startswith("Khalil table recovered")
-    status = 1 if deriv.incomplete or why or cut else 0  # answered, not all of it
+    recovered = description.startswith("Khalil table recovered")
+    status = 1 if incomplete or why or cut else 0  # answered, not all of it
     if args.json:
         out = {**json.loads(text), "check_vs_pinocchio_100_random_q": check}
         if why:
             out["check_incomplete"] = why
         if recovered:
-            out["table_from_urdf"] = deriv.chain.description
+            out["table_from_urdf"] = description
         emit_json(out)
         return status
     print(text)
     if args.latex:
         return status
     if recovered:  # the URDF's table: what was snapped, one line
-        print(f"table: {deriv.chain.description}")
+        print(f"table: {description}")
     if check:
         print(
-            f"check vs Pinocchio at 100 random q (reference {deriv.reference}): "
+            f"check vs Pinocchio at 100 random q (reference {reference}): "
             + ", ".join(f"{_CHECK_LABELS[k]} = {v:.2e}" for k, v in check.items())
         )
     if why:

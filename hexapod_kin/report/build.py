@@ -273,6 +273,7 @@ def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[R
 
     """
     from . import figures
+    from ._worker import NumericHalf
     from .checks import Context, evaluate
 
     fdir = out / "figures"
@@ -283,27 +284,34 @@ def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[R
     facts: dict[str, Any] = {}
     claims, seeds = load_claims()
     ctx = Context(quick=quick, claims=claims)
-    # the derivations first: the heat maps label their samples with the families derived here
-    derivations = {k: ctx.printed(k) for k in _PRINTED}
-    verdicts = tuple(evaluate(claims, ctx))
-    figs["step"].append(figures.step_figure(ctx, fdir))
-    step = ctx.step
-    facts["step"] = step.to_dict()
+    # two halves at once: the experiments and their figures in a child process (no sympy)
+    # while the derivations and the checks run here
+    half = NumericHalf(ctx, fdir, out, animations, 1.5 if quick else 3.0)
+    try:
+        # the derivations first: the heat maps label their samples with the families derived
+        derivations = {k: ctx.printed(k) for k in _PRINTED}
+        half.experiments()  # the checks compare claims with the step and the pendulum
+        verdicts = tuple(evaluate(claims, ctx))
+        maps, counts = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        leg2 = figures.leg2_figure(ctx, fdir)
+        drawn = half.figures()
+    finally:
+        half.close()
+    figs["step"].append(drawn["step"])
+    facts["step"] = ctx.step.to_dict()
     if animations:
-        stills["step"] = figures.step_still(ctx, fdir)
-        try:
-            anims["step"].append(figures.step_animation(ctx, out))
-        except Exception as exc:
-            facts["step_animation"] = f"not written: {exc}"
-    maps, facts["scan_family_counts"] = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        stills["step"] = drawn["step_still"]
+        if isinstance(drawn["step_animation"], str):
+            facts["step_animation"] = drawn["step_animation"]
+        else:
+            anims["step"].append(drawn["step_animation"])
+    facts["scan_family_counts"] = counts
     figs["jacobian"] += maps
-    figs["leg2"].append(figures.leg2_figure(ctx, fdir))
-    walk_paths, facts["hexapod"], walk_still = figures.walk_figures(
-        fdir, 1.5 if quick else 3.0, animations, html_dir=out
-    )
+    figs["leg2"].append(leg2)
+    walk_paths, facts["hexapod"], walk_still = drawn["walk"]
     if walk_still is not None:
         stills["walk"] = walk_still
-    figs["pendulum"].append(figures.pendulum_figure(ctx, fdir))
+    figs["pendulum"].append(drawn["pendulum"])
     facts["pendulum"] = {k: v for k, v in ctx.pendulum.to_dict().items() if not isinstance(v, dict)}
     figs["beyond"] += [p for p in walk_paths if p.suffix == ".png"]
     anims["beyond"] += [p for p in walk_paths if p.suffix == ".html"]

@@ -35,23 +35,20 @@ from .compare import (
     vanishes,
 )
 from .data import Claim, Verdict
+from .experiments import MODELS, Experiments
 
 __all__ = ["CHECKS", "MODELS", "Context", "evaluate"]
 
-#: Claim ``model`` → the hexapod_kin preset and its parameters.
-MODELS: dict[str, tuple[str, dict[str, float]]] = {
-    "leg": ("hexabot_leg", {"alpha2": -math.pi / 2}),
-    "leg+": ("hexabot_leg", {"alpha2": math.pi / 2}),
-    "scara": ("scara", {}),
-    "coxa": ("coxa_tibia_leg", {}),
-}
 _OTHER = {"leg": ("leg+", "+90°"), "leg+": ("leg", "−90°")}
 _SIGMA = {"0": "revolute", "1": "prismatic", "fixed": "fixed"}
 _COLUMN = {"σ": 0, "d": 1, "r": 3, "θ": 4}
 
 
-class Context:
+class Context(Experiments):
     """hexapod_kin's side of every comparison, computed on first use and kept.
+
+    The models and the experiments are :class:`~.experiments.Experiments`'; the derivations
+    and the replayed schedule are added here.
 
     Args:
         quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
@@ -60,21 +57,12 @@ class Context:
     """
 
     def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
-        self.quick = quick
+        super().__init__(quick)
         self.claims = {c.id: c for c in claims or []}
-        self.pendulum_duration = 12.0 if quick else 20.0
         self._derived: dict[str, Any] = {}
-        self._models: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
     # ------------------------------------------------------------------ models
-    def chain(self, key: str) -> Any:
-        """The preset chain of a claim's ``model``."""
-        from .. import robots
-
-        name, params = MODELS[key]
-        return robots.get(name, **params)
-
     def derivation(self, key: str) -> Any:
         """:func:`hexapod_kin.symbolic.derive` of the model, kept (no budget: small tables)."""
         from ..symbolic import derive
@@ -82,14 +70,6 @@ class Context:
         if key not in self._derived:
             self._derived[key] = derive(self.chain(key), budget=None)
         return self._derived[key]
-
-    def model(self, key: str) -> Any:
-        """The loaded (Pinocchio) model of a claim's ``model`` (loaded once)."""
-        from .. import load
-
-        if key not in self._models:
-            self._models[key] = load(self.chain(key))
-        return self._models[key]
 
     def printed(self, key: str) -> dict[str, Any]:
         """The derivation laid out for the report (:func:`.html.derivation_layout`)."""
@@ -128,20 +108,6 @@ class Context:
         return sp.Matrix(plain(sp.Matrix(out)))
 
     # ------------------------------------------------------------------ experiments
-    @cached_property
-    def step(self) -> Any:
-        """The seeds' x-only step (:func:`hexapod_kin.seeds.seed_experiment`)."""
-        from ..seeds import seed_experiment
-
-        return seed_experiment(duration=4.0 if self.quick else 10.0)
-
-    @cached_property
-    def pendulum(self) -> Any:
-        """Seed 001's pendulum, undamped and damped (:func:`pendulum_experiment`)."""
-        from ..dynamics import pendulum_experiment
-
-        return pendulum_experiment(duration=self.pendulum_duration)
-
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:
         """Seed 002 Table I replayed: q(t), FK, the seed's IK and :func:`ik.analytic`."""

@@ -124,8 +124,6 @@ def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
     ``foot_radius`` [m] sets the region around each foot point whose vertices are left to
     the foot sphere (within ``2 × foot_radius``, at least 5 mm).
     """
-    from scipy.spatial import ConvexHull, QhullError
-
     found = _collision_model(wb)
     if found is None:
         return []
@@ -149,6 +147,8 @@ def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
         v = _act(frame.placement.inverse(), v)  # in the link's frame
         if len(v) < 4:
             continue
+        from scipy.spatial import ConvexHull, QhullError  # here: robots without meshes skip it
+
         try:
             hull = ConvexHull(v)
         except QhullError:  # flat or degenerate: no volume to collide

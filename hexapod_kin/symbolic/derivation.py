@@ -33,6 +33,7 @@ from ..jacobian_rows import choose_rows, row_indices
 from ..params import Chain
 from . import cache as _cache
 from . import core as _core
+from ._limits import DEFAULT_BUDGET
 from .core import ROW_NAMES, khalil_matrix
 from .families import SingularFamily, check_families, families_of
 from .printing import expr_text, matrix_lines, wrap
@@ -47,9 +48,6 @@ __all__ = [
     "khalil_matrix",
     "row_indices",
 ]
-
-#: Default time budget of :func:`derive` in [s].
-DEFAULT_BUDGET = 5.0
 
 #: A Gram determinant (redundant chain) longer than this is described, not printed.
 _GRAM_OPS = 300
