@@ -86,6 +86,10 @@ ARRIVE = 0.8
 #: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
 RETURN_SPEED = 0.7
 
+#: Servo kind: the farthest [leg spans] a standing foot is held from where it is measured (a
+#: foot that slipped further is held nearer).
+SLIP = 0.06
+
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
@@ -715,6 +719,14 @@ class Controller:
         Bc = np.eye(4)
         Bc[:3, 3] = pos + corr[:3]
         Bc[:3, :3] = _rot(corr[3:6]) @ R
+        # a standing foot that slipped (a push) is held where it is, within ``slip`` of it: held
+        # where it was, the legs would carry the body on in the push's direction
+        slip = SLIP * self.span
+        d = self.stand_at[:, :2] - st["feet"][:, :2]
+        n = np.linalg.norm(d, axis=1)
+        far = stance & np.asarray(m.contacts, dtype=bool) & (n > slip)
+        if far.any():
+            self.stand_at[far, :2] = st["feet"][far, :2] + d[far] * (slip / n[far])[:, None]
         targets = np.where(stance[:, None], self.stand_at, p_sw)
         q = self._leg_ik(Bc, targets)
         self.q_cmd = q
