@@ -727,11 +727,11 @@ class Controller:
         # a standing foot that slipped (a push) is held where it is, within ``slip`` of it: held
         # where it was, the legs would carry the body on in the push's direction
         slip = SLIP * self.span
-        d = self.stand_at[:, :2] - st["feet"][:, :2]
-        n = np.linalg.norm(d, axis=1)
-        far = stance & np.asarray(m.contacts, dtype=bool) & (n > slip)
+        gap = self.stand_at[:, :2] - st["feet"][:, :2]
+        dist = np.linalg.norm(gap, axis=1)
+        far = stance & np.asarray(m.contacts, dtype=bool) & (dist > slip)
         if far.any():
-            self.stand_at[far, :2] = st["feet"][far, :2] + d[far] * (slip / n[far])[:, None]
+            self.stand_at[far, :2] = st["feet"][far, :2] + gap[far] * (slip / dist[far])[:, None]
         targets = np.where(stance[:, None], self.stand_at, p_sw)
         q = self._leg_ik(Bc, targets)
         self.q_cmd = q

@@ -22,10 +22,9 @@ are.
 
 The leg-odometry velocity is trusted per actuator kind (:data:`VEL_NOISE`): a torque-controlled
 leg lets its foot sphere roll as the model says, but position servos hold the foot sphere's
-centre where the controller put it, so its contact point slides instead of rolling (on the
-built-in hexapod's flat walk the standing contact points move at -7.9 mm/s on average, their
-centres at +1.9 mm/s) and the feet bounce; trusted as much as a torque robot's, that velocity
-made the hexapod walk 6 % too far. Its feet's positions carry the same information unbiased.
+centre where the controller put it, so its contact point slides instead of rolling, and a
+light robot's feet bounce: that velocity is biased, and the feet's positions, which carry
+the same information, are trusted instead.
 """
 
 from __future__ import annotations
