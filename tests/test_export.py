@@ -282,6 +282,27 @@ def test_a_source_string_means_the_same_to_every_exporter(tmp_path):
         to_mjcf("hexabot_le")
 
 
+def test_body_collision_box_leaves_the_leg_mounts_outside():
+    """The body's collision box is the visual box trimmed so no leg mount lies inside it.
+
+    ``hexapod()``'s box (2.2 x 1.6 x the mount radius) holds the front and rear mounts; the
+    legs' first links start there and would collide with the body they hang from.
+    """
+    src = robots.hexapod()
+    root = etree.fromstring(add_collisions(hk.to_urdf(src)).encode())
+    body = next(link for link in root.iter("link") if link.get("name") == src.body)
+    visual = [float(v) for v in body.find("visual/geometry/box").get("size").split()]
+    coll = [float(v) for v in body.find("collision/geometry/box").get("size").split()]
+    assert visual == pytest.approx(src.body_size)  # the drawing and the inertia keep it
+    half = 0.5 * np.array(coll)
+    mounts = np.array([m.xyz for m in src.legs])
+    assert not np.any(np.all(np.abs(mounts) < half - 1e-9, axis=1))  # none inside
+    assert np.any(np.all(np.abs(mounts) <= half + 1e-6, axis=1))  # some on its faces
+    assert sum(np.all(np.abs(mounts) < 0.5 * np.array(visual), axis=1)) == 4  # the old box
+    assert coll[1:] == pytest.approx(visual[1:])  # trimmed along x only: it keeps more
+    assert coll[0] == pytest.approx(2 * abs(mounts[0, 0]), rel=1e-5)
+
+
 # ------------------------------------------------------------------------ check_urdf
 @pytest.mark.parametrize("name", PRESETS)
 def test_check_urdf_accepts_every_exported_urdf(name, tmp_path):

@@ -34,7 +34,10 @@ one value per leg joint.
   targets. A body pushed off its path is not dragged back
   by the posing (its stance feet would leave their reach): the reference stays within
   ``0.08`` leg span of the body and returns to the path at :data:`RETURN_SPEED`, while the
-  swing feet step towards the path.
+  swing feet step towards the path (standing, it stays where the push left the body). A
+  standing foot that slid (a push beyond the feet's friction) is held within :data:`SLIP`
+  of where it is measured: the reference is relative to the measured body, so a foot held
+  ``δ`` from where it stands would move the body on by ``δ`` each tick.
 """
 
 from __future__ import annotations
@@ -85,6 +88,10 @@ ARRIVE = 0.8
 
 #: Servo kind: the speed [leg spans/s] at which the body's goal returns to the path.
 RETURN_SPEED = 0.7
+
+#: Servo kind: the farthest [leg spans] a standing foot is held from where it is measured (a
+#: foot that slipped further is held nearer).
+SLIP = 0.06
 
 #: Torque kind: the CoM's along-path integral gain as ``KI_FRAC · ω_p³`` (ω_p the position
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
@@ -701,11 +708,13 @@ class Controller:
         Rd = self._desired_rotation()
         lim = 0.08 * self.span
         # the body's goal: the path, returned to at RETURN_SPEED when the body is off it (a
-        # push), never more than ``lim`` from the body (the steps carry it back)
+        # push), never more than ``lim`` from the body (the steps carry it back; standing,
+        # with no steps, it stays where the push left the body: the feet would be dragged)
         off = pos[:2] - self.path_xy
         d = self.return_offset
         n = float(np.linalg.norm(d))
-        d = d * max(0.0, 1.0 - RETURN_SPEED * self.span * self.dt / n) if n > 0 else d
+        speed = RETURN_SPEED * self.span * float(self.walking)
+        d = d * max(0.0, 1.0 - speed * self.dt / n) if n > 0 else d
         self.return_offset = d = np.clip(d, off - lim, off + lim)
         p_ref = np.array([*(self.path_xy + d), self.ground_z + self.height_ref])
         e = np.concatenate([p_ref - pos, _log3(Rd @ R.T)])
@@ -715,6 +724,14 @@ class Controller:
         Bc = np.eye(4)
         Bc[:3, 3] = pos + corr[:3]
         Bc[:3, :3] = _rot(corr[3:6]) @ R
+        # a standing foot that slipped (a push) is held where it is, within ``slip`` of it: held
+        # where it was, the legs would carry the body on in the push's direction
+        slip = SLIP * self.span
+        gap = self.stand_at[:, :2] - st["feet"][:, :2]
+        dist = np.linalg.norm(gap, axis=1)
+        far = stance & np.asarray(m.contacts, dtype=bool) & (dist > slip)
+        if far.any():
+            self.stand_at[far, :2] = st["feet"][far, :2] + gap[far] * (slip / dist[far])[:, None]
         targets = np.where(stance[:, None], self.stand_at, p_sw)
         q = self._leg_ik(Bc, targets)
         self.q_cmd = q

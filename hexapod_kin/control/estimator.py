@@ -19,6 +19,12 @@ swing (not touching, or not in the controller's stance) is not trusted: its proc
 measurement noises are multiplied by ``SUSPECT``, so the filter follows the standing feet.
 The horizontal position is not observable (it drifts as odometry does); height and velocity
 are.
+
+The leg-odometry velocity is trusted per actuator kind (:data:`VEL_NOISE`): a torque-controlled
+leg lets its foot sphere roll as the model says, but position servos hold the foot sphere's
+centre where the controller put it, so its contact point slides instead of rolling, and a
+light robot's feet bounce: that velocity is biased, and the feet's positions, which carry
+the same information, are trusted instead.
 """
 
 from __future__ import annotations
@@ -32,6 +38,10 @@ __all__ = ["StateEstimator"]
 #: The noise multiplier of a foot in swing (its measurements are not trusted).
 SUSPECT = 100.0
 
+#: The default measurement noise [m/s] of the leg-odometry velocity per controller kind
+#: (see the module docstring).
+VEL_NOISE = {"torque": 0.1, "servo": 1.0}
+
 
 class StateEstimator:
     """The base position and velocity from IMU, joints and contacts (see the module).
@@ -43,7 +53,8 @@ class StateEstimator:
         accel_noise: Process noise density of the base velocity [m/s²] (per √tick).
         foot_noise: Process noise of a standing foot's position [m] (per tick).
         kin_noise: Measurement noise of a foot's relative position [m].
-        vel_noise: Measurement noise of the leg-odometry velocity [m/s].
+        vel_noise: Measurement noise of the leg-odometry velocity [m/s] (default:
+            :data:`VEL_NOISE` of the controller's kind).
         height_noise: Measurement noise of a standing foot's height [m].
 
     """
@@ -56,7 +67,7 @@ class StateEstimator:
         accel_noise: float = 0.2,
         foot_noise: float = 0.002,
         kin_noise: float = 0.002,
-        vel_noise: float = 0.1,
+        vel_noise: float | None = None,
         height_noise: float = 0.005,
     ) -> None:
         self.ctl = controller
@@ -64,6 +75,8 @@ class StateEstimator:
         self.dt = controller.dt
         self.radius = float(controller.wb.foot_radius)
         self.foot_z = float(ground) + self.radius
+        if vel_noise is None:
+            vel_noise = VEL_NOISE[controller.kind]
         self.noise = (accel_noise, foot_noise, kin_noise, vel_noise, height_noise)
         n = 6 + 3 * self.L
         self.x = np.zeros(n)

@@ -53,7 +53,10 @@ def _material(visual: Any) -> str:
 def add_collisions(urdf_text: str) -> str:
     """``urdf_text`` with a primitive ``<collision>`` per colliding visual (deterministic).
 
-    Links that already have collision elements are left as they are.
+    Links that already have collision elements are left as they are. A robot body's box
+    (material ``body``) that holds leg mounts (its child joints' origins) collides as the
+    box trimmed to leave them outside (:func:`_clip_box`): the legs start at their mounts and
+    would otherwise touch the body they hang from.
 
     Raises:
         UrdfError: If the text is not XML.
@@ -62,9 +65,15 @@ def add_collisions(urdf_text: str) -> str:
     from lxml import etree
 
     tree = _parse(urdf_text)
-    for link in tree.getroot().iter("link"):
+    root = tree.getroot()
+    for link in root.iter("link"):
         if link.find("collision") is not None:
             continue
+        mounts = [
+            _origin_matrix(j)[:3, 3]
+            for j in root.iter("joint")
+            if j.find("parent") is not None and j.find("parent").get("link") == link.get("name")
+        ]
         for visual in link.findall("visual"):
             geom = visual.find("geometry")
             if geom is None or _material(visual) not in COLLIDING_MATERIALS:
@@ -76,9 +85,38 @@ def add_collisions(urdf_text: str) -> str:
             if origin is not None:
                 coll.append(copy.deepcopy(origin))
             coll.append(copy.deepcopy(geom))
+            box = coll.find("geometry/box")
+            if box is not None and mounts and _material(visual) == "body":
+                inv = np.linalg.inv(_origin_matrix(visual))
+                local = [inv[:3, :3] @ p + inv[:3, 3] for p in mounts]
+                trimmed = _clip_box(_floats(box.get("size"), 3), local)
+                if trimmed is not None:
+                    box.set("size", trimmed)
             coll.tail = visual.tail
             link.append(coll)
     return _serialize(tree)
+
+
+def _clip_box(size: np.ndarray, points: list[np.ndarray]) -> str | None:
+    """The box ``size`` trimmed so that none of ``points`` is strictly inside (None: none is).
+
+    The largest box trimmed along one horizontal axis (x or y, whichever keeps more of it).
+    A body box drawn around its legs' mounts would otherwise collide with the legs it
+    carries (their first links start inside it).
+    """
+    half = 0.5 * np.asarray(size, dtype=float)
+    inside = [p for p in points if np.all(np.abs(p) < half - 1e-12)]
+    if not inside:
+        return None
+    best = half
+    for axis in (0, 1):
+        trimmed = half.copy()
+        trimmed[axis] = min(abs(float(p[axis])) for p in inside)
+        if trimmed[axis] > 0 and (best is half or np.prod(trimmed) > np.prod(best)):
+            best = trimmed
+    if best is half:
+        return None
+    return " ".join(f"{v:.6g}" for v in 2.0 * best)
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> np.ndarray:
