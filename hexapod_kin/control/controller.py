@@ -74,6 +74,23 @@ MPC_INT = 0.05
 SIDE = 0.3
 CLEAR = 0.2
 
+#: MPC's catching step: a walk whose capture-point offset ``sqrt(h/g) |v − v_ref|`` exceeds
+#: ``CATCH`` of the feet's lateral half-width (a push) stops its gait clock and puts every
+#: foot down at its capture-point foothold; it walks on when the offset is below
+#: ``CATCH_EXIT`` of that and every foot stands. ``CATCH_DROP``: the swing feet's descent
+#: [standing heights/s].
+CATCH = 0.3
+CATCH_EXIT = 0.15
+CATCH_DROP = 2.0
+CATCH_FREEZE = 0.0
+CATCH_SIDE = -1.0
+CATCH_CLOCK = 1.0
+
+#: MPC's push observer: the time constant [s] of the filtered horizontal external
+#: acceleration (measured minus the model's), and the least one [m/s²] passed to the MPC.
+EXT_TAU = 0.02
+EXT_MIN = 3.0
+
 _G = 9.81
 
 #: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
@@ -312,6 +329,9 @@ class Controller:
         self._mpc_stance = np.zeros(L, dtype=bool)
         self._mpc_int = np.zeros(2)
         self._mpc_age_ticks = 0
+        self.catching = False
+        self._ext = np.zeros(3)
+        self._vcom_prev: np.ndarray | None = None
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
         """Start from measurement ``m``: the path starts where the robot is.
@@ -383,12 +403,13 @@ class Controller:
             self.phase = 0.0
         if walk:
             self.walking = True
-        if self.walking:
+        if self.walking and not (self.catching and CATCH_FREEZE):
             # the clock holds while a foot due down has not touched (no lift-off before it)
             # (a quarter of a swing at most)
             limit = 0.25 * (1.0 - self._table.duty_factor) * self.period
             hold = bool(np.any(self.late & (self.late_time < limit)))
-            new = self.phase + (0.0 if hold else dt / self.period)
+            rate = CATCH_CLOCK if self.catching else 1.0
+            new = self.phase + (0.0 if hold else rate * dt / self.period)
             if new >= 1.0:
                 new -= 1.0
                 if self._pending is not None:
@@ -400,7 +421,7 @@ class Controller:
                     self.walking = False
                     new = 0.0
             self.phase = new
-        if not self.walking:
+        if not self.walking or (self.catching and CATCH_FREEZE):
             return np.ones(self.n_legs, dtype=bool)
         tab = self._table
         beta = tab.duty_factor
@@ -439,7 +460,7 @@ class Controller:
             lift_rate = np.cos(np.pi * np.asarray(progress))
         for i in np.flatnonzero(legs):
             s = float(progress[i])
-            if s > 0.7:  # the foothold frozen for the last 30 % of the swing
+            if s > 0.7 and not (self.catching and CATCH_FREEZE):  # frozen for the last 30 %
                 target = self.footholds[i]
             else:
                 target = None
@@ -478,8 +499,9 @@ class Controller:
             vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
             vel = np.array([step[0] * dsh, step[1] * dsh, vz])
             if s >= 1.0:  # scheduled down but not touching: keep going down
+                drop = CATCH_DROP * self.height_ref if self.catching and CATCH_FREEZE else h / t_sw
                 p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
-                vel = np.array([0.0, 0.0, -h / t_sw])
+                vel = np.array([0.0, 0.0, -drop])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
 
@@ -497,7 +519,7 @@ class Controller:
         Rz = _rz(self.path_yaw)
         local = Rz.T @ (out - base)
         side = math.copysign(1.0, float(self.feet_body[i, 1]))
-        y_min = SIDE * abs(float(self.feet_body[i, 1]))
+        y_min = (CATCH_SIDE if self.catching else SIDE) * abs(float(self.feet_body[i, 1]))
         if side * local[1] < y_min:
             local[1] = side * y_min
             out[:2] = (base + Rz @ local)[:2]
@@ -509,6 +531,16 @@ class Controller:
                 u = d / n if n > 1e-9 else side * Rz[:2, 1]
                 out[:2] = st["feet"][j, :2] + u * d_min
         return out
+
+    def _catch(self) -> None:
+        """Start or end a catching step (see :data:`CATCH`) from the filtered velocity."""
+        v_ref = _rz(self.path_yaw) @ np.array([*self.twist[:2], 0.0])
+        offset = math.sqrt(self.height_ref / _G) * float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
+        width = float(np.abs(self.feet_body[:, 1]).mean())
+        if not self.catching:
+            self.catching = self.walking and offset > CATCH * width
+        elif offset < CATCH_EXIT * width and (self.touched.all() or not CATCH_FREEZE):
+            self.catching = False
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
         """Stance legs: scheduled, or touching after 60 % of their swing."""
@@ -525,6 +557,8 @@ class Controller:
         # rocks on its compliant servos)
         a = min(1.0, self.dt / ((0.05 if self.kind == "torque" else 0.25) * self.period))
         self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
+        if self.kind == "torque" and self.balance == "mpc":
+            self._catch()
         sched = self._advance(m)
         stance = self._contacts(sched, m)
         # lift-off bookkeeping
@@ -629,6 +663,15 @@ class Controller:
         between), from the trunk's state, the path ahead, the gait's contact schedule and
         the feet's footholds.
         """
+        R = st["R"]
+        omega = R @ st["v"][3:6]
+        arm = R @ self.com_body
+        vcom = R @ st["v"][:3] + np.cross(omega, arm)
+        if self._vcom_prev is not None:  # the push observer (see EXT_TAU)
+            acc = (vcom - self._vcom_prev) / self.dt - self._mpc_f[stance].sum(axis=0) / self.mass
+            acc[2] = 0.0
+            self._ext += min(1.0, self.dt / EXT_TAU) * (acc - self._ext)
+        self._vcom_prev = vcom
         self._mpc_age += 1
         if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
             return self._mpc_f
@@ -639,11 +682,7 @@ class Controller:
         dt = T / MPC_DIV
         # the rigid body's state: the robot's CoM, moving with the trunk (the swing legs'
         # motion is not the body's)
-        R = st["R"]
-        omega = R @ st["v"][3:6]
-        arm = R @ self.com_body
         com = st["com"]
-        vcom = R @ st["v"][:3] + np.cross(omega, arm)
         # an integral of the height error and of the lag along the path (the swing legs'
         # reactions and touch-downs are not in the model) moves the reference
         # (while walking only: standing, sitting and rising track their heights without it)
@@ -663,7 +702,7 @@ class Controller:
         ref[:, 3:6] = p_ref + t[:, None] * v_ref
         ref[:, 8] = wz
         ref[:, 9:12] = v_ref
-        if self.walking:
+        if self.walking and not (self.catching and CATCH_FREEZE):
             contact = schedule(self.phase, tab.offsets, tab.duty_factor, dt / T, N)
         else:
             contact = np.ones((N, self.n_legs), dtype=bool)
@@ -681,7 +720,8 @@ class Controller:
                     hip = com + t[k] * v_ref + _rz(ref[k, 2]) @ self.feet_body[i]
                     feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
             levers[k] = feet - (com + t[k] * v_ref)
-        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt)
+        push = self._ext if np.linalg.norm(self._ext[:2]) > EXT_MIN else None
+        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, push)
         return self._mpc_f
 
     def _leg_mass(self) -> float:

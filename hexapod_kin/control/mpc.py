@@ -99,6 +99,7 @@ class ConvexMPC:
         contact: np.ndarray,
         levers: np.ndarray,
         dt: float,
+        accel: np.ndarray | None = None,
     ) -> np.ndarray:
         """The first step's ground forces (L, 3) [N] (zero for a foot not standing).
 
@@ -108,12 +109,16 @@ class ConvexMPC:
             contact: (N, L) True where foot ``l`` stands during step ``k``.
             levers: (N, L, 3) each foot's position from the CoM at step ``k`` [m].
             dt: The step [s].
+            accel: (3,) an external acceleration of the CoM [m/s²] (a push's), held over
+                the horizon (None: none).
 
         """
         proxsuite = _proxsuite()
         N, L = contact.shape
         yaw = float(np.mean(x_ref[:, 2]))
         A, _ = self.dynamics(yaw, np.zeros((0, 3)), dt)
+        if accel is not None:  # v' = ... + a: through the constant state g = -9.81
+            A[9:12, 12] += np.asarray(accel, dtype=float) * (dt / -9.81)
         # the variables: (step, foot) pairs in contact
         idx = [(k, i) for k in range(N) for i in range(L) if contact[k, i]]
         nv = 3 * len(idx)
