@@ -85,6 +85,7 @@ CATCH_DROP = 2.0
 CATCH_FREEZE = 0.0
 CATCH_SIDE = -1.0
 CATCH_CLOCK = 1.0
+CATCH_RETURN = 0.3
 
 #: MPC's push observer: the time constant [s] of the filtered horizontal external
 #: acceleration (measured minus the model's), and the least one [m/s²] passed to the MPC.
@@ -332,6 +333,8 @@ class Controller:
         self.catching = False
         self._ext = np.zeros(3)
         self._vcom_prev: np.ndarray | None = None
+        self._ret = np.zeros(2)
+        self._caught = False
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
         """Start from measurement ``m``: the path starts where the robot is.
@@ -447,7 +450,7 @@ class Controller:
         v_out = np.zeros((self.n_legs, 3))
         if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
             ref = np.array([*st["B"][:2, 3], 0.0])
-            err = np.array([*(self.path_xy - st["ref_point"][:2]), 0.0])
+            err = np.array([*(self.path_xy + self._ret - st["ref_point"][:2]), 0.0])
             v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
@@ -672,6 +675,16 @@ class Controller:
             acc[2] = 0.0
             self._ext += min(1.0, self.dt / EXT_TAU) * (acc - self._ext)
         self._vcom_prev = vcom
+        # a caught push: the goal follows the body, then returns to the path (CATCH_RETURN)
+        if self.catching:
+            self._caught = True
+        elif self._caught:  # the velocity caught: the goal where the body is
+            self._caught = False
+            self._ret = st["com"][:2] - self.path_xy
+        else:
+            n = float(np.linalg.norm(self._ret))
+            if n > 0:
+                self._ret *= max(0.0, 1.0 - CATCH_RETURN * self.span * self.dt / n)
         self._mpc_age += 1
         if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
             return self._mpc_f
@@ -687,6 +700,7 @@ class Controller:
         # reactions and touch-downs are not in the model) moves the reference
         # (while walking only: standing, sitting and rising track their heights without it)
         ahead = _rz(self.path_yaw)[:, 0]
+        p_ref = p_ref + np.array([*self._ret, 0.0])
         e = p_ref - com
         step = self.dt * self._mpc_age_ticks * float(self.walking)
         self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
