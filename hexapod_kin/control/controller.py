@@ -86,6 +86,10 @@ CATCH_FREEZE = 0.0
 CATCH_SIDE = -1.0
 CATCH_CLOCK = 1.0
 CATCH_RETURN = 0.3
+MPC_FMAX = 3.0
+CATCH_WXY = 1.0
+CATCH_WRP = 1.0
+CATCH_WZ = 1.0
 
 #: MPC's push observer: the time constant [s] of the filtered horizontal external
 #: acceleration (measured minus the model's), and the least one [m/s²] passed to the MPC.
@@ -267,7 +271,7 @@ class Controller:
             inertia=self.inertia_body,
             mu=self.mu,
             f_min=0.02 * self.mass * _G / self.n_legs,
-            f_max=3.0 * self.mass * _G,
+            f_max=MPC_FMAX * self.mass * _G,
             horizon=MPC_STEPS,
         )
         self.command = Command()
@@ -735,7 +739,13 @@ class Controller:
                     feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
             levers[k] = feet - (com + t[k] * v_ref)
         push = self._ext if np.linalg.norm(self._ext[:2]) > EXT_MIN else None
-        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, push)
+        w = None
+        if self.catching:
+            w = np.array(self.mpc.weights, dtype=float)
+            w[[0, 1]] *= CATCH_WRP
+            w[[3, 4]] *= CATCH_WXY
+            w[5] *= CATCH_WZ
+        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, push, w)
         return self._mpc_f
 
     def _leg_mass(self) -> float:

@@ -100,6 +100,7 @@ class ConvexMPC:
         levers: np.ndarray,
         dt: float,
         accel: np.ndarray | None = None,
+        weights: np.ndarray | None = None,
     ) -> np.ndarray:
         """The first step's ground forces (L, 3) [N] (zero for a foot not standing).
 
@@ -111,6 +112,7 @@ class ConvexMPC:
             dt: The step [s].
             accel: (3,) an external acceleration of the CoM [m/s²] (a push's), held over
                 the horizon (None: none).
+            weights: (12,) state weights for this solve (None: :attr:`weights`).
 
         """
         proxsuite = _proxsuite()
@@ -137,7 +139,7 @@ class ConvexMPC:
         for k in range(N):  # row block k: state after step k
             for j in range(k + 1):
                 Bqp[13 * k : 13 * k + 13, start[j] : start[j + 1]] = powers[k - j] @ Bs[j]
-        w = np.tile(np.array([*self.weights, 0.0]), N)
+        w = np.tile(np.array([*(self.weights if weights is None else weights), 0.0]), N)
         ref = np.hstack([x_ref, np.full((N, 1), -9.81)]).ravel()
         BtL = Bqp.T * (w / self.alpha)  # the cost divided by alpha: well scaled for the solver
         H = BtL @ Bqp + np.eye(nv)
