@@ -74,25 +74,23 @@ MPC_INT = 0.05
 SIDE = 0.3
 CLEAR = 0.2
 
-#: MPC's catching step: a walk whose capture-point offset ``sqrt(h/g) |v − v_ref|`` exceeds
-#: ``CATCH`` of the feet's lateral half-width (a push) stops its gait clock and puts every
-#: foot down at its capture-point foothold; it walks on when the offset is below
-#: ``CATCH_EXIT`` of that and every foot stands. ``CATCH_DROP``: the swing feet's descent
-#: [standing heights/s].
+#: MPC's catching mode (a push): entered when the capture-point offset of the velocity error,
+#: ``sqrt(h/g) |v − v_ref|``, exceeds ``CATCH`` of the feet's lateral half-width, left when it
+#: is below ``CATCH_EXIT`` of it. While catching, the MPC's position weights are scaled by
+#: ``CATCH_WXY`` (the velocity is caught first, the body goes with the push); once caught,
+#: the goal starts where the body is and returns to the path at ``CATCH_RETURN`` [leg
+#: spans/s].
 CATCH = 0.3
 CATCH_EXIT = 0.15
-CATCH_DROP = 2.0
-CATCH_FREEZE = 0.0
-CATCH_SIDE = -1.0
-CATCH_CLOCK = 1.0
+CATCH_WXY = 0.1
 CATCH_RETURN = 0.3
-MPC_FMAX = 3.0
-CATCH_WXY = 1.0
-CATCH_WRP = 1.0
-CATCH_WZ = 1.0
+
+#: MPC's largest normal force of a foot, as a multiple of the robot's weight.
+MPC_FMAX = 1.5
 
 #: MPC's push observer: the time constant [s] of the filtered horizontal external
-#: acceleration (measured minus the model's), and the least one [m/s²] passed to the MPC.
+#: acceleration (measured minus the model's forces' one), and the least one [m/s²] passed
+#: to the MPC (smaller ones are the model's own errors).
 EXT_TAU = 0.02
 EXT_MIN = 3.0
 
@@ -410,13 +408,12 @@ class Controller:
             self.phase = 0.0
         if walk:
             self.walking = True
-        if self.walking and not (self.catching and CATCH_FREEZE):
+        if self.walking:
             # the clock holds while a foot due down has not touched (no lift-off before it)
             # (a quarter of a swing at most)
             limit = 0.25 * (1.0 - self._table.duty_factor) * self.period
             hold = bool(np.any(self.late & (self.late_time < limit)))
-            rate = CATCH_CLOCK if self.catching else 1.0
-            new = self.phase + (0.0 if hold else rate * dt / self.period)
+            new = self.phase + (0.0 if hold else dt / self.period)
             if new >= 1.0:
                 new -= 1.0
                 if self._pending is not None:
@@ -428,7 +425,7 @@ class Controller:
                     self.walking = False
                     new = 0.0
             self.phase = new
-        if not self.walking or (self.catching and CATCH_FREEZE):
+        if not self.walking:
             return np.ones(self.n_legs, dtype=bool)
         tab = self._table
         beta = tab.duty_factor
@@ -467,7 +464,7 @@ class Controller:
             lift_rate = np.cos(np.pi * np.asarray(progress))
         for i in np.flatnonzero(legs):
             s = float(progress[i])
-            if s > 0.7 and not (self.catching and CATCH_FREEZE):  # frozen for the last 30 %
+            if s > 0.7:  # the foothold frozen for the last 30 % of the swing
                 target = self.footholds[i]
             else:
                 target = None
@@ -506,9 +503,8 @@ class Controller:
             vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
             vel = np.array([step[0] * dsh, step[1] * dsh, vz])
             if s >= 1.0:  # scheduled down but not touching: keep going down
-                drop = CATCH_DROP * self.height_ref if self.catching and CATCH_FREEZE else h / t_sw
                 p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
-                vel = np.array([0.0, 0.0, -drop])
+                vel = np.array([0.0, 0.0, -h / t_sw])
             p_out[i], v_out[i] = p, vel
         return p_out, v_out
 
@@ -526,7 +522,7 @@ class Controller:
         Rz = _rz(self.path_yaw)
         local = Rz.T @ (out - base)
         side = math.copysign(1.0, float(self.feet_body[i, 1]))
-        y_min = (CATCH_SIDE if self.catching else SIDE) * abs(float(self.feet_body[i, 1]))
+        y_min = SIDE * abs(float(self.feet_body[i, 1]))
         if side * local[1] < y_min:
             local[1] = side * y_min
             out[:2] = (base + Rz @ local)[:2]
@@ -540,13 +536,14 @@ class Controller:
         return out
 
     def _catch(self) -> None:
-        """Start or end a catching step (see :data:`CATCH`) from the filtered velocity."""
+        """Enter or leave the MPC's catching mode (see :data:`CATCH`)."""
         v_ref = _rz(self.path_yaw) @ np.array([*self.twist[:2], 0.0])
-        offset = math.sqrt(self.height_ref / _G) * float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
+        error = float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
+        offset = math.sqrt(self.height_ref / _G) * error
         width = float(np.abs(self.feet_body[:, 1]).mean())
         if not self.catching:
             self.catching = self.walking and offset > CATCH * width
-        elif offset < CATCH_EXIT * width and (self.touched.all() or not CATCH_FREEZE):
+        elif offset < CATCH_EXIT * width:
             self.catching = False
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
@@ -675,14 +672,15 @@ class Controller:
         arm = R @ self.com_body
         vcom = R @ st["v"][:3] + np.cross(omega, arm)
         if self._vcom_prev is not None:  # the push observer (see EXT_TAU)
-            acc = (vcom - self._vcom_prev) / self.dt - self._mpc_f[stance].sum(axis=0) / self.mass
+            f = self._mpc_f[stance].sum(axis=0)
+            acc = (vcom - self._vcom_prev) / self.dt - f / self.mass
             acc[2] = 0.0
             self._ext += min(1.0, self.dt / EXT_TAU) * (acc - self._ext)
         self._vcom_prev = vcom
-        # a caught push: the goal follows the body, then returns to the path (CATCH_RETURN)
+        # a push caught: the goal starts where the body is, then returns to the path
         if self.catching:
             self._caught = True
-        elif self._caught:  # the velocity caught: the goal where the body is
+        elif self._caught:
             self._caught = False
             self._ret = st["com"][:2] - self.path_xy
         else:
@@ -720,7 +718,7 @@ class Controller:
         ref[:, 3:6] = p_ref + t[:, None] * v_ref
         ref[:, 8] = wz
         ref[:, 9:12] = v_ref
-        if self.walking and not (self.catching and CATCH_FREEZE):
+        if self.walking:
             contact = schedule(self.phase, tab.offsets, tab.duty_factor, dt / T, N)
         else:
             contact = np.ones((N, self.n_legs), dtype=bool)
@@ -740,11 +738,9 @@ class Controller:
             levers[k] = feet - (com + t[k] * v_ref)
         push = self._ext if np.linalg.norm(self._ext[:2]) > EXT_MIN else None
         w = None
-        if self.catching:
+        if self.catching:  # the velocity first, the body going with the push
             w = np.array(self.mpc.weights, dtype=float)
-            w[[0, 1]] *= CATCH_WRP
             w[[3, 4]] *= CATCH_WXY
-            w[5] *= CATCH_WZ
         self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, push, w)
         return self._mpc_f
 
