@@ -80,7 +80,7 @@ CLEAR = 0.2
 #: ``CATCH_WXY`` (the velocity is caught first, the body goes with the push); once caught,
 #: the goal starts where the body is and returns to the path at ``CATCH_RETURN`` [leg
 #: spans/s].
-CATCH = 0.3
+CATCH = 0.6
 CATCH_EXIT = 0.15
 CATCH_WXY = 0.1
 CATCH_RETURN = 0.3
