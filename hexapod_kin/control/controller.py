@@ -26,6 +26,12 @@ one value per leg joint.
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
   ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  Under the MPC, a push (the capture-point offset of the velocity error beyond
+  :data:`CATCH` of the feet's half-width) puts the controller in its catching mode: the
+  position weights drop (:data:`CATCH_WXY`; the velocity is caught first), the push as
+  observed (the measured acceleration less the MPC forces' own) enters the MPC's
+  prediction, and once caught the goal starts where the body is and returns to the path at
+  :data:`CATCH_RETURN`.
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
