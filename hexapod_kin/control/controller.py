@@ -26,12 +26,7 @@ one value per leg joint.
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
   ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
-  Under the MPC, a push (the capture-point offset of the velocity error beyond
-  :data:`CATCH` of the feet's half-width) puts the controller in its catching mode: the
-  position weights drop (:data:`CATCH_WXY`; the velocity is caught first), the push as
-  observed (the measured acceleration less the MPC forces' own) enters the MPC's
-  prediction, and once caught the goal starts where the body is and returns to the path at
-  :data:`CATCH_RETURN`.
+  Under the MPC, a push puts the controller in its catching mode (:class:`~.mpc.Catch`).
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
@@ -54,7 +49,7 @@ import numpy as np
 from .._pose import matrix_to_rpy, rpy_to_matrix
 from ..exceptions import one_of
 from .commands import Command
-from .mpc import ConvexMPC, schedule
+from .mpc import CATCH_RETURN, Catch, ConvexMPC, schedule
 from .qp import ForceQP
 
 __all__ = ["BALANCES", "KINDS", "Controller", "Measurement"]
@@ -80,25 +75,8 @@ MPC_INT = 0.05
 SIDE = 0.3
 CLEAR = 0.2
 
-#: MPC's catching mode (a push): entered when the capture-point offset of the velocity error,
-#: ``sqrt(h/g) |v − v_ref|``, exceeds ``CATCH`` of the feet's lateral half-width, left when it
-#: is below ``CATCH_EXIT`` of it. While catching, the MPC's position weights are scaled by
-#: ``CATCH_WXY`` (the velocity is caught first, the body goes with the push); once caught,
-#: the goal starts where the body is and returns to the path at ``CATCH_RETURN`` [leg
-#: spans/s].
-CATCH = 0.6
-CATCH_EXIT = 0.15
-CATCH_WXY = 0.1
-CATCH_RETURN = 0.3
-
 #: MPC's largest normal force of a foot, as a multiple of the robot's weight.
 MPC_FMAX = 1.5
-
-#: MPC's push observer: the time constant [s] of the filtered horizontal external
-#: acceleration (measured minus the model's forces' one), and the least one [m/s²] passed
-#: to the MPC (smaller ones are the model's own errors).
-EXT_TAU = 0.02
-EXT_MIN = 3.0
 
 _G = 9.81
 
@@ -338,11 +316,8 @@ class Controller:
         self._mpc_stance = np.zeros(L, dtype=bool)
         self._mpc_int = np.zeros(2)
         self._mpc_age_ticks = 0
-        self.catching = False
-        self._ext = np.zeros(3)
-        self._vcom_prev: np.ndarray | None = None
-        self._ret = np.zeros(2)
-        self._caught = False
+        width = float(np.abs(self.feet_body[:, 1]).mean())
+        self.catch = Catch(self.mass, self.dt, width, CATCH_RETURN * self.span)
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
         """Start from measurement ``m``: the path starts where the robot is.
@@ -457,7 +432,7 @@ class Controller:
         v_out = np.zeros((self.n_legs, 3))
         if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
             ref = np.array([*st["B"][:2, 3], 0.0])
-            err = np.array([*(self.path_xy + self._ret - st["ref_point"][:2]), 0.0])
+            err = np.array([*(self.path_xy + self.catch.ret - st["ref_point"][:2]), 0.0])
             v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
@@ -541,17 +516,6 @@ class Controller:
                 out[:2] = st["feet"][j, :2] + u * d_min
         return out
 
-    def _catch(self) -> None:
-        """Enter or leave the MPC's catching mode (see :data:`CATCH`)."""
-        v_ref = _rz(self.path_yaw) @ np.array([*self.twist[:2], 0.0])
-        error = float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
-        offset = math.sqrt(self.height_ref / _G) * error
-        width = float(np.abs(self.feet_body[:, 1]).mean())
-        if not self.catching:
-            self.catching = self.walking and offset > CATCH * width
-        elif offset < CATCH_EXIT * width:
-            self.catching = False
-
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
         """Stance legs: scheduled, or touching after 60 % of their swing."""
         touch = np.asarray(m.contacts, dtype=bool)
@@ -567,8 +531,10 @@ class Controller:
         # rocks on its compliant servos)
         a = min(1.0, self.dt / ((0.05 if self.kind == "torque" else 0.25) * self.period))
         self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
-        if self.kind == "torque" and self.balance == "mpc":
-            self._catch()
+        if self.kind == "torque" and self.balance == "mpc":  # a push: the MPC's catching mode
+            v_ref = _rz(self.path_yaw) @ np.array([*self.twist[:2], 0.0])
+            error = float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
+            self.catch.mode(math.sqrt(self.height_ref / _G) * error, self.walking)
         sched = self._advance(m)
         stance = self._contacts(sched, m)
         # lift-off bookkeeping
@@ -677,22 +643,8 @@ class Controller:
         omega = R @ st["v"][3:6]
         arm = R @ self.com_body
         vcom = R @ st["v"][:3] + np.cross(omega, arm)
-        if self._vcom_prev is not None:  # the push observer (see EXT_TAU)
-            f = self._mpc_f[stance].sum(axis=0)
-            acc = (vcom - self._vcom_prev) / self.dt - f / self.mass
-            acc[2] = 0.0
-            self._ext += min(1.0, self.dt / EXT_TAU) * (acc - self._ext)
-        self._vcom_prev = vcom
-        # a push caught: the goal starts where the body is, then returns to the path
-        if self.catching:
-            self._caught = True
-        elif self._caught:
-            self._caught = False
-            self._ret = st["com"][:2] - self.path_xy
-        else:
-            n = float(np.linalg.norm(self._ret))
-            if n > 0:
-                self._ret *= max(0.0, 1.0 - CATCH_RETURN * self.span * self.dt / n)
+        off = st["com"][:2] - self.path_xy
+        self.catch.observe(vcom, self._mpc_f[stance].sum(axis=0), off)
         self._mpc_age += 1
         if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
             return self._mpc_f
@@ -708,7 +660,7 @@ class Controller:
         # reactions and touch-downs are not in the model) moves the reference
         # (while walking only: standing, sitting and rising track their heights without it)
         ahead = _rz(self.path_yaw)[:, 0]
-        p_ref = p_ref + np.array([*self._ret, 0.0])
+        p_ref = p_ref + np.array([*self.catch.ret, 0.0])
         e = p_ref - com
         step = self.dt * self._mpc_age_ticks * float(self.walking)
         self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
@@ -742,12 +694,8 @@ class Controller:
                     hip = com + t[k] * v_ref + _rz(ref[k, 2]) @ self.feet_body[i]
                     feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
             levers[k] = feet - (com + t[k] * v_ref)
-        push = self._ext if np.linalg.norm(self._ext[:2]) > EXT_MIN else None
-        w = None
-        if self.catching:  # the velocity first, the body going with the push
-            w = np.array(self.mpc.weights, dtype=float)
-            w[[3, 4]] *= CATCH_WXY
-        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, push, w)
+        w = self.catch.weights(self.mpc.weights)
+        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, self.catch.accel(), w)
         return self._mpc_f
 
     def _leg_mass(self) -> float:
