@@ -397,19 +397,24 @@ def test_hexapod_comes_back_to_its_path_after_a_20_newton_push(start: float, for
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("share", [0.5, pytest.param(1.0, marks=KNOWN)])
-def test_anymal_pushed_sideways(share: float) -> None:
+@pytest.mark.parametrize(
+    ("share", "start", "side"),
+    [(0.5, 2.0, 1.0), (1.0, 2.0, 1.0), (1.0, 2.25, 1.0), (1.0, 2.15, -1.0)],
+)
+def test_anymal_pushed_sideways(share: float, start: float, side: float) -> None:
     """0.5× its weight for 0.2 s: back on its path in 1.5 s; 1×: it does not fall.
 
-    Under the convex MPC (the torque kind's default). Measured: 0.5× back within 3 cm in
-    0.63 s, no fall; 1× (2 m/s sideways) falls at 2.4 s (a thigh on the ground).
+    Under the convex MPC (the torque kind's default; 1× enters its catching mode).
+    Measured: 0.5× back within 3 cm in 0.68 s; 1× at six push times and sides, no fall,
+    roll 3.8–18.6° (at 2.0 s a thigh touches the ground at 2.8 s; not asserted: the issue
+    asks only that it does not fall).
     """
     weight = 30.475 * 9.81
     res = run(
         "erd:anymal",
         pattern="trot",
         command=(0.5, 0.0, 0.0),
-        pushes=[Push(share * weight, 2.0, 0.2)],
+        pushes=[Push(side * share * weight, start, 0.2)],
         duration=10.0,
     )
     assert not res.fell, res.to_dict()

@@ -26,6 +26,7 @@ one value per leg joint.
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
   ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  Under the MPC, a push puts the controller in its catching mode (:class:`~.mpc.Catch`).
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
   height above the stance feet) plus an integral of its error; the stance feet are held
@@ -51,7 +52,7 @@ import numpy as np
 from .._pose import matrix_to_rpy, rpy_to_matrix
 from ..exceptions import one_of
 from .commands import Command
-from .mpc import ConvexMPC, schedule
+from .mpc import CATCH_RETURN, Catch, ConvexMPC, schedule
 from .qp import ForceQP
 
 __all__ = ["BALANCES", "KINDS", "Controller", "Measurement"]
@@ -76,6 +77,9 @@ MPC_INT = 0.05
 #: foot's neutral one, and the least distance from a standing foot, as a fraction of the span.
 SIDE = 0.3
 CLEAR = 0.2
+
+#: MPC's largest normal force of a foot, as a multiple of the robot's weight.
+MPC_FMAX = 1.5
 
 _G = 9.81
 
@@ -256,7 +260,7 @@ class Controller:
             inertia=self.inertia_body,
             mu=self.mu,
             f_min=0.02 * self.mass * _G / self.n_legs,
-            f_max=3.0 * self.mass * _G,
+            f_max=MPC_FMAX * self.mass * _G,
             horizon=MPC_STEPS,
         )
         self.command = Command()
@@ -319,6 +323,8 @@ class Controller:
         self._mpc_stance = np.zeros(L, dtype=bool)
         self._mpc_int = np.zeros(2)
         self._mpc_age_ticks = 0
+        width = float(np.abs(self.feet_body[:, 1]).mean())
+        self.catch = Catch(self.mass, self.dt, width, CATCH_RETURN * self.span)
 
     def reset(self, m: Measurement, stand_height: float | None = None) -> None:
         """Start from measurement ``m``: the path starts where the robot is.
@@ -433,7 +439,7 @@ class Controller:
         v_out = np.zeros((self.n_legs, 3))
         if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
             ref = np.array([*st["B"][:2, 3], 0.0])
-            err = np.array([*(self.path_xy - st["ref_point"][:2]), 0.0])
+            err = np.array([*(self.path_xy + self.catch.ret - st["ref_point"][:2]), 0.0])
             v_ref = v_ref + np.clip(1.0 * err, -0.3, 0.3)
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
@@ -532,6 +538,10 @@ class Controller:
         # rocks on its compliant servos)
         a = min(1.0, self.dt / ((0.05 if self.kind == "torque" else 0.25) * self.period))
         self.v_filt = (1 - a) * self.v_filt + a * np.array([*st["ref_vel"][:2], 0.0])
+        if self.kind == "torque" and self.balance == "mpc":  # a push: the MPC's catching mode
+            v_ref = _rz(self.path_yaw) @ np.array([*self.twist[:2], 0.0])
+            error = float(np.linalg.norm(self.v_filt[:2] - v_ref[:2]))
+            self.catch.mode(math.sqrt(self.height_ref / _G) * error, self.walking)
         sched = self._advance(m)
         stance = self._contacts(sched, m)
         # lift-off bookkeeping
@@ -636,6 +646,12 @@ class Controller:
         between), from the trunk's state, the path ahead, the gait's contact schedule and
         the feet's footholds.
         """
+        R = st["R"]
+        omega = R @ st["v"][3:6]
+        arm = R @ self.com_body
+        vcom = R @ st["v"][:3] + np.cross(omega, arm)
+        off = st["com"][:2] - self.path_xy
+        self.catch.observe(vcom, self._mpc_f[stance].sum(axis=0), off)
         self._mpc_age += 1
         if self._mpc_age < MPC_EVERY and np.array_equal(stance, self._mpc_stance):
             return self._mpc_f
@@ -646,15 +662,12 @@ class Controller:
         dt = T / MPC_DIV
         # the rigid body's state: the robot's CoM, moving with the trunk (the swing legs'
         # motion is not the body's)
-        R = st["R"]
-        omega = R @ st["v"][3:6]
-        arm = R @ self.com_body
         com = st["com"]
-        vcom = R @ st["v"][:3] + np.cross(omega, arm)
         # an integral of the height error and of the lag along the path (the swing legs'
         # reactions and touch-downs are not in the model) moves the reference
         # (while walking only: standing, sitting and rising track their heights without it)
         ahead = _rz(self.path_yaw)[:, 0]
+        p_ref = p_ref + np.array([*self.catch.ret, 0.0])
         e = p_ref - com
         step = self.dt * self._mpc_age_ticks * float(self.walking)
         self._mpc_int[0] = np.clip(self._mpc_int[0] + float(ahead @ e) * step, -MPC_INT, MPC_INT)
@@ -688,7 +701,8 @@ class Controller:
                     hip = com + t[k] * v_ref + _rz(ref[k, 2]) @ self.feet_body[i]
                     feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
             levers[k] = feet - (com + t[k] * v_ref)
-        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt)
+        w = self.catch.weights(self.mpc.weights)
+        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, self.catch.accel(), w)
         return self._mpc_f
 
     def _leg_mass(self) -> float:

@@ -37,11 +37,27 @@ import numpy as np
 from .._pose import rpy_to_matrix
 from .qp import _proxsuite
 
-__all__ = ["MPC_WEIGHTS", "ConvexMPC"]
+__all__ = ["MPC_WEIGHTS", "Catch", "ConvexMPC"]
 
 #: State weights of ``(Θ, p, ω, v)`` (12,): roll, pitch, yaw, x, y, z, ω_x, ω_y, ω_z,
 #: v_x, v_y, v_z (MIT Cheetah 3's, in proportion).
 MPC_WEIGHTS = (25.0, 25.0, 10.0, 100.0, 100.0, 100.0, 0.5, 0.5, 0.3, 3.0, 3.0, 1.0)
+
+
+#: Catching mode (:class:`Catch`): entered when the capture-point offset of the velocity error,
+#: ``sqrt(h/g) |v − v_ref|``, exceeds ``CATCH`` of the feet's lateral half-width, left below
+#: ``CATCH_EXIT`` of it; while catching the position weights are scaled by ``CATCH_WXY``;
+#: once caught the goal returns to the path at ``CATCH_RETURN`` [leg spans/s].
+CATCH = 0.6
+CATCH_EXIT = 0.15
+CATCH_WXY = 0.1
+CATCH_RETURN = 0.3
+
+#: Push observer: the time constant [s] of the filtered horizontal external acceleration
+#: (measured less the MPC forces' own), and the least one [m/s²] passed to the MPC (smaller
+#: ones are the model's own errors).
+EXT_TAU = 0.02
+EXT_MIN = 3.0
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
@@ -99,6 +115,8 @@ class ConvexMPC:
         contact: np.ndarray,
         levers: np.ndarray,
         dt: float,
+        accel: np.ndarray | None = None,
+        weights: np.ndarray | None = None,
     ) -> np.ndarray:
         """The first step's ground forces (L, 3) [N] (zero for a foot not standing).
 
@@ -108,12 +126,17 @@ class ConvexMPC:
             contact: (N, L) True where foot ``l`` stands during step ``k``.
             levers: (N, L, 3) each foot's position from the CoM at step ``k`` [m].
             dt: The step [s].
+            accel: (3,) an external acceleration of the CoM [m/s²] (a push's), held over
+                the horizon (None: none).
+            weights: (12,) state weights for this solve (None: :attr:`weights`).
 
         """
         proxsuite = _proxsuite()
         N, L = contact.shape
         yaw = float(np.mean(x_ref[:, 2]))
         A, _ = self.dynamics(yaw, np.zeros((0, 3)), dt)
+        if accel is not None:  # v' = ... + a: through the constant state g = -9.81
+            A[9:12, 12] += np.asarray(accel, dtype=float) * (dt / -9.81)
         # the variables: (step, foot) pairs in contact
         idx = [(k, i) for k in range(N) for i in range(L) if contact[k, i]]
         nv = 3 * len(idx)
@@ -132,7 +155,7 @@ class ConvexMPC:
         for k in range(N):  # row block k: state after step k
             for j in range(k + 1):
                 Bqp[13 * k : 13 * k + 13, start[j] : start[j + 1]] = powers[k - j] @ Bs[j]
-        w = np.tile(np.array([*self.weights, 0.0]), N)
+        w = np.tile(np.array([*(self.weights if weights is None else weights), 0.0]), N)
         ref = np.hstack([x_ref, np.full((N, 1), -9.81)]).ravel()
         BtL = Bqp.T * (w / self.alpha)  # the cost divided by alpha: well scaled for the solver
         H = BtL @ Bqp + np.eye(nv)
@@ -169,6 +192,79 @@ class ConvexMPC:
         lim = mu * f[legs, 2:3]
         f[legs, :2] = np.clip(f[legs, :2], -lim, lim)
         return f
+
+
+@dataclass
+class Catch:
+    """The MPC's catching mode for pushes, and its push observer.
+
+    A push (see :data:`CATCH`) is caught velocity first: the position weights drop to
+    :data:`CATCH_WXY` of theirs, so the body goes with the push while the MPC stops it; the
+    push as observed (the CoM's measured acceleration less the MPC forces' own, low-passed
+    over :data:`EXT_TAU`) enters the MPC's prediction (:meth:`accel`). Once caught, the goal
+    starts where the body is (:attr:`ret`, from the path) and returns to the path at
+    ``speed``.
+
+    Attributes:
+        mass: Body mass [kg].
+        dt: Control period [s].
+        width: The feet's lateral half-width [m].
+        speed: The goal's return speed [m/s].
+        catching: In the catching mode.
+        ext: (3,) the observed external acceleration [m/s²] (horizontal).
+        ret: (2,) the goal's offset from the path [m].
+
+    """
+
+    mass: float
+    dt: float
+    width: float
+    speed: float
+    catching: bool = False
+    ext: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    ret: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    _caught: bool = False
+    _v_prev: np.ndarray | None = None
+
+    def mode(self, offset: float, walking: bool) -> None:
+        """Enter or leave the mode from the capture-point offset [m] of the velocity error."""
+        if not self.catching:
+            self.catching = walking and offset > CATCH * self.width
+        elif offset < CATCH_EXIT * self.width:
+            self.catching = False
+
+    def observe(self, vcom: np.ndarray, force: np.ndarray, off: np.ndarray) -> None:
+        """One tick of the observer and of the goal's offset.
+
+        ``vcom`` (3,) the CoM velocity [m/s], ``force`` (3,) the stance forces' sum applied
+        since the last tick [N], ``off`` (2,) the CoM's offset from the path [m].
+        """
+        if self._v_prev is not None:
+            acc = (vcom - self._v_prev) / self.dt - force / self.mass
+            acc[2] = 0.0
+            self.ext += min(1.0, self.dt / EXT_TAU) * (acc - self.ext)
+        self._v_prev = vcom
+        if self.catching:
+            self._caught = True
+        elif self._caught:
+            self._caught = False
+            self.ret = np.array(off, dtype=float)
+        else:
+            n = float(np.linalg.norm(self.ret))
+            if n > 0:
+                self.ret *= max(0.0, 1.0 - self.speed * self.dt / n)
+
+    def accel(self) -> np.ndarray | None:
+        """The external acceleration for the MPC (None below :data:`EXT_MIN`)."""
+        return self.ext if np.linalg.norm(self.ext[:2]) > EXT_MIN else None
+
+    def weights(self, weights: np.ndarray) -> np.ndarray | None:
+        """The MPC's state weights while catching (None: ``weights`` unchanged)."""
+        if not self.catching:
+            return None
+        w = np.array(weights, dtype=float)
+        w[[3, 4]] *= CATCH_WXY
+        return w
 
 
 def schedule(phase: float, offsets: np.ndarray, duty: float, step: float, steps: int) -> np.ndarray:
