@@ -70,6 +70,49 @@ def test_qp_respects_joint_torque_limits() -> None:
 
 
 # ----------------------------------------------------------------------------- commands
+def test_payload_is_welded_to_the_body_with_its_mass_and_centre() -> None:
+    """MuJoCo's body carries the payload: mass m_b + m, CoM the mass-weighted mean."""
+    mj = pytest.importorskip("mujoco")
+    from hexapod_kin.control import Payload
+    from hexapod_kin.control.sim import scene_xml
+    from hexapod_kin.robots import hexapod
+    from hexapod_kin.simulate.scene import scene_mjcf
+
+    xml = scene_xml(scene_mjcf(hexapod()), "servo")
+    at = np.array([0.05, -0.02, 0.03])
+    models = [mj.MjModel.from_xml_string(x) for x in (xml, Payload(0.7, tuple(at)).add_to(xml))]
+    (mb, cb), (m1, c1) = [
+        (m.body_subtreemass[1], _subtree_com(mj, m)) for m in models
+    ]  # body 1: the floating base
+    assert m1 == pytest.approx(mb + 0.7, abs=1e-12)
+    np.testing.assert_allclose(c1, (mb * cb + 0.7 * at) / (mb + 0.7), atol=1e-12)
+
+
+def _subtree_com(mj, model) -> np.ndarray:
+    data = mj.MjData(model)
+    mj.mj_forward(model, data)  # the base at the origin, unrotated: world = base frame
+    return np.array(data.subtree_com[1])
+
+
+@pytest.mark.parametrize("text", ["x", "1@2", "-1", "nan", "1@0,0", "1@0,0,5", "inf"])
+def test_payload_parse_refuses(text: str) -> None:
+    from hexapod_kin.control import Payload
+
+    with pytest.raises(ParameterError, match="payload"):
+        Payload.parse(text)
+
+
+def test_hexapod_carries_half_its_weight_off_centre() -> None:
+    """Not told of the load (0.98 kg at 5 cm forward, 2 cm up), the posing still walks it."""
+    from hexapod_kin.control import Payload
+
+    res = run(None, duration=3.0, payload=Payload(0.98, (0.05, 0.0, 0.02)))
+    assert not res.fell and not res.non_foot_contacts
+    assert abs(res.travel_error) <= 0.02, res.to_dict()
+    assert max(res.max_roll, res.max_pitch) <= math.radians(3), res.to_dict()
+    assert res.to_dict()["settings"]["payload"] == {"mass": 0.98, "at": [0.05, 0.0, 0.02]}
+
+
 def test_timeline_holds_each_command_from_its_time(tmp_path) -> None:
     path = tmp_path / "cmd.json"
     path.write_text(

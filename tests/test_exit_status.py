@@ -107,11 +107,15 @@ TABLE_ROWS: dict[str, list[tuple[list[str], int]]] = {
         (["--push", "20@1,0.2"], 2),
         (["--control", "--push", "20@x"], 2),
         (["--control", "--bumps", "0.1"], 2),  # at most 0.05 m
+        (["--payload", "1"], 2),  # a payload needs --control
+        (["--control", "--payload", "-1"], 2),
     ],
     "control": [
         (["--duration", "1"], 0),
         (["--duration", "1.5", "--push", "60@0.2,0.5"], 1),  # 3x its weight: it falls
         (["--push", "20@x"], 2),
+        (["--duration", "1", "--payload", "1@0.05,0,0.02"], 0),  # half its weight, off centre
+        (["--payload", "1@0,0"], 2),
     ],
     "reproduce": [(["--out", "/proc/no/such"], 2)],  # a full run takes minutes: test_report
     "precompile": [(["--only", "bogus"], 2)],  # compiling takes minutes: test_precompile

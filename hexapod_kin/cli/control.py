@@ -48,6 +48,12 @@ def register(sub: Any) -> None:
     p.add_argument("--seed", type=seed, default=0, help="the bumps' random seed")
     p.add_argument("--friction", type=float, default=1.0, help="ground friction coefficient")
     p.add_argument(
+        "--payload",
+        metavar="KG[@X,Y,Z]",
+        help="a load of KG kilograms fixed to the body at X,Y,Z [m] in the base frame "
+        "(default its origin); the controller is not told of it",
+    )
+    p.add_argument(
         "--estimate",
         action="store_true",
         help="run on the state estimator's base position/velocity (IMU + legs), not MuJoCo's",
@@ -60,10 +66,11 @@ def register(sub: Any) -> None:
 
 
 def _cmd_control(args: argparse.Namespace) -> int:
-    from ..control import Command, Push, read_timeline, run
+    from ..control import Command, Payload, Push, read_timeline, run
     from .common import emit_json
 
     pushes = [Push.parse(s) for s in (args.push or [])]
+    payload = Payload.parse(args.payload) if args.payload is not None else None
     vx, vy, wz = velocity(args.velocity) or (0.2, 0.0, 0.0)
     command: Any = read_timeline(args.command) if args.command else Command(vx, vy, wz)
     robot = robot_of(args)
@@ -82,6 +89,7 @@ def _cmd_control(args: argparse.Namespace) -> int:
         bumps=args.bumps,
         friction=args.friction,
         seed=args.seed,
+        payload=payload,
         estimate=args.estimate,
         lying=args.lying,
     )
@@ -114,6 +122,7 @@ def simulate_control(
         bumps=args.bumps,
         seed=args.seed,
         pushes=args.push or (),
+        payload=args.payload,
         **opts,
     )
     out = cmp.to_dict()

@@ -80,6 +80,12 @@ def register(sub: Any) -> None:
         help="with --control: a lateral push on the closed loop of F newtons at T s for D s "
         "(repeatable; negative: rightward)",
     )
+    p.add_argument(
+        "--payload",
+        metavar="KG[@X,Y,Z]",
+        help="with --control: a load of KG kilograms fixed to the body at X,Y,Z [m] in the "
+        "base frame (default its origin); the controller is not told of it",
+    )
     p.set_defaults(func=_cmd_simulate)
 
 
@@ -162,6 +168,7 @@ def _check_control_options(args: argparse.Namespace) -> None:
             ("--bumps", args.bumps != 0.0),
             ("--seed", args.seed != 0),
             ("--push", bool(args.push)),
+            ("--payload", args.payload is not None),
         )
         if on
     ]
@@ -174,7 +181,7 @@ def _check_control_options(args: argparse.Namespace) -> None:
             allowed="with --control",
         )
     if args.control:
-        from ..control import Push
+        from ..control import Payload, Push
         from ..simulate.scene import MAX_BUMPS
 
         if not (math.isfinite(args.bumps) and 0.0 <= args.bumps <= MAX_BUMPS):
@@ -185,6 +192,8 @@ def _check_control_options(args: argparse.Namespace) -> None:
                 allowed=f"[0, {MAX_BUMPS:g}]",
             )
         args.push = [Push.parse(text) for text in args.push or []]
+        if args.payload is not None:
+            args.payload = Payload.parse(args.payload)
         if args.bumps and args.terrain not in (None, "flat"):
             raise ParameterError(
                 f"--bumps {args.bumps!r} on --terrain {args.terrain}: bumps on flat ground only",

@@ -21,7 +21,7 @@ from .commands import MODES, Command, Timeline, read_timeline, timeline_of
 from .compare import Comparison, compare, comparison_html
 from .controller import BALANCES, KINDS, Controller, Measurement
 from .estimator import StateEstimator
-from .sim import ControlRun, Push, hardware_loop, run
+from .sim import ControlRun, Payload, Push, hardware_loop, run
 
 __all__ = [
     "BALANCES",
@@ -32,6 +32,7 @@ __all__ = [
     "ControlRun",
     "Controller",
     "Measurement",
+    "Payload",
     "Push",
     "StateEstimator",
     "Timeline",

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .sim import ControlRun, Push, run
+from .sim import ControlRun, Payload, Push, run
 
 __all__ = ["Comparison", "compare", "comparison_html"]
 
@@ -76,6 +76,7 @@ def compare(
     bumps: float = 0.0,
     seed: int = 0,
     pushes: Sequence[Push] = (),
+    payload: Payload | None = None,
     **walk_options: Any,
 ) -> Comparison:
     """Replay the plan open-loop and walk it closed-loop (see the module docstring).
@@ -90,6 +91,7 @@ def compare(
         bumps: Bump amplitude [m] of both grounds (0: flat).
         seed: The bumps' seed.
         pushes: Pushes on the closed loop (the open-loop replay has none).
+        payload: A load fixed to the body of the closed loop (the replay has none).
         **walk_options: More keywords of the plan (:func:`hexapod_kin.simulate.simulate`).
 
     Returns:
@@ -122,6 +124,7 @@ def compare(
         bumps=bumps,
         seed=seed,
         pushes=pushes,
+        payload=payload,
     )
     return Comparison(opened, closed)
 

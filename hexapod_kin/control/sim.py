@@ -32,7 +32,7 @@ from .commands import Command, Timeline
 from .controller import Controller, Measurement
 from .estimator import StateEstimator
 
-__all__ = ["ControlRun", "Push", "hardware_loop", "run", "scene_xml"]
+__all__ = ["ControlRun", "Payload", "Push", "hardware_loop", "run", "scene_xml"]
 
 #: Half-width [m] of the flat square around the start amid the bumps (the robot set down there).
 FLAT_START = 0.3
@@ -68,6 +68,75 @@ class Push:
                     value=text,
                 )
         return out
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A load fixed to the body: ``mass`` [kg] at ``at`` (x, y, z) [m] in the base frame.
+
+    MuJoCo carries it as a welded body (a solid 0.1 m cube's inertia about its centre); the
+    controller is not told of it: its weight, and its moments when ``at`` is off the centre,
+    are a disturbance the feedback must hold.
+    """
+
+    mass: float
+    at: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    @classmethod
+    def parse(cls, text: str) -> Payload:
+        """``MASS`` or ``MASS@X,Y,Z`` (kg; m in the base frame; e.g. ``1.5@0.05,0,0.03``)."""
+        try:
+            m, _, rest = text.partition("@")
+            at = tuple(float(v) for v in rest.split(",")) if rest else (0.0, 0.0, 0.0)
+            if len(at) != 3:
+                raise ValueError
+            out = cls(float(m), (at[0], at[1], at[2]))
+        except ValueError:
+            raise ParameterError(
+                f"payload {text!r}: MASS or MASS@X,Y,Z in kg and m (e.g. 1.5@0.05,0,0.03)",
+                parameter="payload",
+                value=text,
+                allowed="MASS[@X,Y,Z]",
+            ) from None
+        out.check()
+        return out
+
+    def check(self) -> None:
+        """Raise :class:`ParameterError` unless mass >= 0 is finite and ``at`` within 1 m."""
+        at = tuple(self.at)
+        if not (math.isfinite(self.mass) and self.mass >= 0):
+            raise ParameterError(
+                f"payload mass={self.mass!r}: a finite mass >= 0 kg",
+                parameter="payload",
+                value=self.mass,
+            )
+        if len(at) != 3 or not all(math.isfinite(v) and abs(v) <= 1.0 for v in at):
+            raise ParameterError(
+                f"payload at={self.at!r}: three finite coordinates within 1 m of the base",
+                parameter="payload",
+                value=self.at,
+            )
+
+    def add_to(self, xml: str) -> str:
+        """``xml`` (a scene's MJCF) with the payload welded to its floating base body."""
+        if self.mass == 0:
+            return xml
+        from lxml import etree
+
+        root = etree.fromstring(xml.encode("utf-8"))
+        base = next(b for b in root.iter("body") if b.find("freejoint") is not None)
+        body = etree.SubElement(
+            base, "body", name="payload", pos=" ".join(repr(float(v)) for v in self.at)
+        )
+        inertia = self.mass * 0.1**2 / 6  # a solid 0.1 m cube about its centre
+        etree.SubElement(
+            body,
+            "inertial",
+            pos="0 0 0",
+            mass=repr(float(self.mass)),
+            diaginertia=f"{inertia!r} {inertia!r} {inertia!r}",
+        )
+        return etree.tostring(root, encoding="unicode")
 
 
 @dataclass(frozen=True)
@@ -217,6 +286,7 @@ def run(
     bumps: float = 0.0,
     friction: float = 1.0,
     seed: int = 0,
+    payload: Payload | None = None,
     settle: float = 0.5,
     rate: float | None = None,
     period: float | None = None,
@@ -237,6 +307,7 @@ def run(
         bumps: Height-field bump amplitude [m] (heights uniform in ``±bumps``; 0: flat).
         friction: Ground friction coefficient.
         seed: The bumps' random seed.
+        payload: A :class:`Payload` fixed to the body (not told to the controller).
         settle: Standing time before the walk [s].
         rate: Control rate [Hz] (default the controller's).
         period: Gait cycle [s] (default the controller's).
@@ -279,7 +350,10 @@ def run(
     )
     import mujoco as mj  # scene_mjcf has said how to install it when it is missing
 
-    model = mj.MjModel.from_xml_string(scene_xml(scene, kind))
+    if payload is not None:
+        payload.check()
+    xml = scene_xml(scene, kind)
+    model = mj.MjModel.from_xml_string(xml if payload is None else payload.add_to(xml))
     data = mj.MjData(model)
     joints = [mj.mj_name2id(model, mj.mjtObj.mjOBJ_JOINT, n) for n in scene.joint_names]
     jq = np.array([int(model.jnt_qposadr[j]) for j in joints])
@@ -478,6 +552,7 @@ def run(
             "bumps": bumps,
             "seed": seed,
             "friction": friction,
+            "payload": None if payload is None else fields_dict(payload, "mass", "at"),
             "pushes": [fields_dict(p, "force", "start", "duration") for p in pushes],
             "estimate": estimate,
             **timeline.to_dict(),
