@@ -113,6 +113,19 @@ def test_hexapod_carries_half_its_weight_off_centre() -> None:
     assert res.to_dict()["settings"]["payload"] == {"mass": 0.98, "at": [0.05, 0.0, 0.02]}
 
 
+@pytest.mark.parametrize("pattern", ["wave", "ripple"])
+def test_eight_legged_robot_walks_under_the_controller(pattern: str) -> None:
+    """The controller is not a hexapod's: eight legs at 45° steps walk straight, 3 s in MuJoCo."""
+    from hexapod_kin.robots import hexapod
+
+    yaw = (22.5, 67.5, 112.5, 157.5, -157.5, -112.5, -67.5, -22.5)
+    octo = hexapod(mount_yaw_deg=yaw, name="octo", body_radius=0.15)
+    res = run(octo, pattern=pattern, duration=3.0)
+    assert not res.fell and not res.non_foot_contacts
+    assert abs(res.travel_error) <= 0.02 and res.heading_error <= math.radians(2), res.to_dict()
+    assert max(res.max_roll, res.max_pitch) <= math.radians(3), res.to_dict()
+
+
 def test_timeline_holds_each_command_from_its_time(tmp_path) -> None:
     path = tmp_path / "cmd.json"
     path.write_text(
