@@ -406,7 +406,9 @@ def test_family_project_lands_on_the_family():
     assert float(np.linalg.norm(p - q)) >= float(knee.distance(q)) - 1e-12
 
 
-@pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
+#: solo12 (the torque kind) in the slow step: test_drive_browser's physics test asserts the
+#: same walk and push figures on it in the default run.
+@pytest.mark.parametrize("source", ["hexapod", pytest.param("erd:solo12", marks=pytest.mark.slow)])
 def test_physics_mode_walks_and_a_push_moves_the_base(source):
     """MuJoCo under the closed-loop controller (servo kind for the hexapod, torque kind for the
     quadruped): W walks the base forward (≥ half the commanded distance; the controller's own

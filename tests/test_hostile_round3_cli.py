@@ -355,7 +355,10 @@ def _unsealed(folder: Path) -> str:
     return sorted(folder.glob("*.nb?"))[0].name
 
 
-@pytest.mark.parametrize("damage", [_flip, _swap, _foreign, _unsealed],
+#: Each case recompiles a kernel (~5 s of CPU): the swap (valid files, the wrong names) runs in
+#: the slow step; a flipped byte, a foreign file and a missing seal in the default run.
+@pytest.mark.parametrize("damage", [_flip, pytest.param(_swap, marks=pytest.mark.slow),
+                                    _foreign, _unsealed],
                          ids=["flipped-byte", "swapped", "foreign-file", "unsealed"])  # fmt: skip
 def test_numba_cache_not_sealed_is_never_loaded(
     sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]
