@@ -176,6 +176,11 @@ def test_the_entry_keeps_an_ignored_ctrl_c_ignored(tmp_path: Path) -> None:
             os.kill(proc.pid, signal.SIGINT)
         run = _finish(proc, t0, 120.0, out, err)
     assert run.status == 0 and "interrupted" not in run.stderr, (run.status, run.stderr)
+    # the whole answer, as the same command writes it undisturbed (in this process)
+    from hexapod_kin.cli import main
+
+    assert main(["urdf", "hexapod", "-o", str(tmp_path / "ref.urdf")]) == 0
+    assert (tmp_path / "h.urdf").read_bytes() == (tmp_path / "ref.urdf").read_bytes()
 
 
 # ------------------------------------------------------------------ targets beyond reason
