@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import os
 import shutil
 import signal
@@ -20,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "hexapod_kin"
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Compile the package's bytecode (and its kernels, :func:`_precompile`) once, first.
+    """Compile the package's bytecode once, before any test starts a command as a child.
 
     Hundreds of tests run ``hexapod-kin`` as a child process. Where Python writes no bytecode
     (``PYTHONDONTWRITEBYTECODE``, common in containers and CI images) each child would compile
@@ -38,38 +37,11 @@ def pytest_configure(config: pytest.Config) -> None:
     """
     if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
-    if hasattr(config, "workerinput"):
+    if not sys.dont_write_bytecode or hasattr(config, "workerinput"):
         return
-    if sys.dont_write_bytecode:
-        import compileall
+    import compileall
 
-        compileall.compile_dir(PACKAGE, quiet=2)
-    if getattr(config.option, "numprocesses", None):
-        _precompile()
-
-
-def _precompile() -> None:
-    """Fill numba's cache once, in parallel, before xdist's workers start (a distributed run).
-
-    In a fresh clone the package's kernels are not in numba's disk cache yet: each process
-    that needs one before a first process has written it (both workers, and the commands the
-    tests start as children, at the same time) compiles it again, 5-15 s of CPU each time.
-    ``hexapod-kin precompile`` compiles each area once, on every core; on a warm cache it
-    takes about 2 s of CPU. What a test proves does not change: a second run of the suite
-    always finds the cache warm. Tests of compiling use caches of their own
-    (``NUMBA_CACHE_DIR``). A failure here (a read-only install) is left to the tests that
-    meet it.
-    """
-    import subprocess
-
-    with contextlib.suppress(subprocess.TimeoutExpired):
-        subprocess.run(
-            [sys.executable, "-m", "hexapod_kin", "precompile", "--json"],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            timeout=900,
-            check=False,
-        )
+    compileall.compile_dir(PACKAGE, quiet=2)
 
 
 @pytest.fixture(scope="session")
