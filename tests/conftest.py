@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import sys
 from pathlib import Path
 
@@ -28,7 +29,14 @@ def pytest_configure(config: pytest.Config) -> None:
     a changed source is still recompiled, its timestamp no longer matching). Run once, by
     xdist's controller (or the only process); without the setting, the first import writes
     them.
+
+    A run started with Ctrl-C ignored (``nohup pytest &`` from a shell without job control:
+    the shell sets SIGINT to "ignore", and every child inherits that) would leave the tests that
+    send a command Ctrl-C waiting for a child that cannot hear it; the run gets Python's default
+    handler back, so that its children start with the default disposition, as from a terminal.
     """
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     if not sys.dont_write_bytecode or hasattr(config, "workerinput"):
         return
     import compileall

@@ -176,6 +176,11 @@ def test_the_entry_keeps_an_ignored_ctrl_c_ignored(tmp_path: Path) -> None:
             os.kill(proc.pid, signal.SIGINT)
         run = _finish(proc, t0, 120.0, out, err)
     assert run.status == 0 and "interrupted" not in run.stderr, (run.status, run.stderr)
+    # the whole answer, as the same command writes it undisturbed (in this process)
+    from hexapod_kin.cli import main
+
+    assert main(["urdf", "hexapod", "-o", str(tmp_path / "ref.urdf")]) == 0
+    assert (tmp_path / "h.urdf").read_bytes() == (tmp_path / "ref.urdf").read_bytes()
 
 
 # ------------------------------------------------------------------ targets beyond reason
@@ -355,7 +360,10 @@ def _unsealed(folder: Path) -> str:
     return sorted(folder.glob("*.nb?"))[0].name
 
 
-@pytest.mark.parametrize("damage", [_flip, _swap, _foreign, _unsealed],
+#: Each case recompiles a kernel (~5 s of CPU): the swap (valid files, the wrong names) runs in
+#: the slow step; a flipped byte, a foreign file and a missing seal in the default run.
+@pytest.mark.parametrize("damage", [_flip, pytest.param(_swap, marks=pytest.mark.slow),
+                                    _foreign, _unsealed],
                          ids=["flipped-byte", "swapped", "foreign-file", "unsealed"])  # fmt: skip
 def test_numba_cache_not_sealed_is_never_loaded(
     sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]

@@ -78,7 +78,13 @@ def _assert_follows_plan(sim, run) -> None:
     assert not sim.stumbled and sim.ok
 
 
-@pytest.mark.parametrize("name", ["tripod", "wave", "ripple", "turn", "slope", "step"])
+#: Each walk runs in the default run with one kind of feet (small: tripod, wave, turn; the
+#: robot's: ripple, slope, step); the other kind in the slow step.
+@pytest.mark.parametrize(
+    "name",
+    ["tripod", "wave", *(pytest.param(n, marks=pytest.mark.slow) for n in ("ripple", "slope")),
+     "turn", pytest.param("step", marks=pytest.mark.slow)],
+)  # fmt: skip
 def test_small_feet_walk_as_planned(name: str) -> None:
     kw = dict(WALKS[name])
     if name == "step":
@@ -117,7 +123,11 @@ def _into_the_step(run) -> float:
     return float(max(0.0, r - gap.min()))
 
 
-@pytest.mark.parametrize("name", list(WALKS))
+@pytest.mark.parametrize(
+    "name",
+    [n if n in ("ripple", "slope", "step") else pytest.param(n, marks=pytest.mark.slow)
+     for n in WALKS],
+)  # fmt: skip
 def test_robot_feet_walk_as_planned(name: str) -> None:
     run = walk(**WALKS[name])
     if not _plan_rolls(run):
