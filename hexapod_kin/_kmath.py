@@ -14,6 +14,7 @@ Angles in [rad].
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import math
 import os
@@ -24,12 +25,14 @@ from typing import Any
 
 import numba
 import numpy as np
+from numba.core import event as _event
 
 from . import _cache
 from .exceptions import CacheWarning
 
-__all__ = ["NUMBA_FILES", "POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "seal_compiled",
-           "python_twin", "sealed_folder", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
+__all__ = ["NUMBA_FILES", "POLY_TRIG_MAX", "dls_into", "eig3_sym", "njit", "python_twin",
+           "reseal_if_compiled", "seal_compiled", "sealed_folder", "sincos", "solve_spd",
+           "wrap_angle"]  # fmt: skip
 
 _TWO_PI = 2.0 * math.pi
 
@@ -162,10 +165,44 @@ def _check(folder: str) -> bool:
 
 def seal_compiled() -> None:
     """Seal every cache folder numba writes this process's kernels to (after they are written)."""
+    _DIRTY.clear()
     with _FOLDERS_LOCK:
         folders = [f for f, ok in _FOLDERS.items() if ok]
     for folder in folders:
         _cache.seal_folder(folder, NUMBA_FILES)
+
+
+def reseal_if_compiled() -> None:
+    """:func:`seal_compiled` when a kernel of the package was compiled since the last seal.
+
+    numba saves a new specialisation (a kernel called with new argument types) after its
+    compile, at any call: left unsealed, the next process to start would take numba's files
+    for foreign ones (one warning, the files removed). The seal is renewed at the start of
+    the next compile (the previous one is saved by then), after each batch
+    (:func:`hexapod_kin._kernels.run_blocks`) and when the process exits.
+    """
+    if _DIRTY:
+        seal_compiled()
+
+
+#: Set when numba compiled a kernel of the package since the last seal.
+_DIRTY: list[bool] = []
+
+
+class _CompileWatch(_event.Listener):
+    """numba's public event API (kind ``"numba:compile"``): marks the package's compiles."""
+
+    def on_start(self, ev: Any) -> None:
+        reseal_if_compiled()  # what earlier compiles saved
+
+    def on_end(self, ev: Any) -> None:
+        func = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
+        if getattr(func, "__module__", "").startswith("hexapod_kin"):
+            _DIRTY[:] = [True]
+
+
+_event.register("numba:compile", _CompileWatch())
+atexit.register(reseal_if_compiled)
 
 
 # ------------------------------------------------------------------------ eigenvalues

@@ -386,6 +386,34 @@ def test_numba_cache_not_sealed_is_never_loaded(
     assert diff < 1e-12 and not [ln for ln in lines if "warning" in ln], lines
 
 
+def test_a_new_specialisation_is_sealed_for_the_next_process(
+    sealed_cache: Path, tmp_path: Path
+) -> None:
+    """A kernel called with new argument types (numba compiles and saves a second
+    specialisation, rewriting the kernel's index) is resealed by the process that compiled it:
+    the next process loads the folder quietly (it once took them for foreign files)."""
+    cache = tmp_path / "cache"
+    shutil.copytree(sealed_cache, cache)
+    folder = _folder(cache)
+    before = {p.name for p in folder.glob("*.nb?")}
+    code = (
+        f"import os\nos.environ['NUMBA_CACHE_DIR'] = {str(cache)!r}\n"
+        "import hexapod_kin as hk\n"
+        "hk.load('hexabot_leg').fk_batch(hk.load('hexabot_leg').random_q(10, seed=0))\n"
+        "from hexapod_kin._kmath import eig3_sym\n"
+        "print(eig3_sym(1, 2, 3, 0, 0, 0))\n"  # integers: a new specialisation
+    )
+    run = py(code, cwd=tmp_path)
+    assert run.status == 0 and run.stdout.split() == ["(3.0,", "2.0,", "1.0)"], run.stderr
+    assert not [ln for ln in run.lines if "warning" in ln.lower()], run.lines
+    new = {p.name for p in folder.glob("*.nb?")} - before
+    assert any(n.startswith("_kmath.eig3_sym") for n in new), new  # numba saved it there
+    seal = (folder / "hexapod_kin.seal").read_text()
+    assert all(p.name in seal for p in folder.glob("*.nb?"))
+    diff, lines, _ = _fk_batch(cache, tmp_path)
+    assert diff < 1e-12 and lines == [], lines
+
+
 def test_numba_cache_sealed_is_loaded_quietly(sealed_cache: Path, tmp_path: Path) -> None:
     """The sealed cache is loaded with no warning, and its seal names every numba file."""
     diff, lines, _ = _fk_batch(sealed_cache, tmp_path)
