@@ -10,42 +10,25 @@ imported from their module on first access (PEP 562). Command line: ``hexapod-ki
 
 from __future__ import annotations
 
+from .._lazy import lazy_names
+
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
-    from typing import Any
-
     from .build import Report, reproduce
     from .data import CLAIMS_FILE, Claim, Verdict, load_claims
 
 #: Name → the submodule that defines it (imported on first access).
 _LAZY_NAMES = {
-    "Report": "build",
-    "reproduce": "build",
-    "CLAIMS_FILE": "data",
-    "Claim": "data",
-    "Verdict": "data",
-    "load_claims": "data",
+    "Report": ".build",
+    "reproduce": ".build",
+    "CLAIMS_FILE": ".data",
+    "Claim": ".data",
+    "Verdict": ".data",
+    "load_claims": ".data",
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Import ``name`` from its submodule on first access (PEP 562).
-
-    Raises:
-        AttributeError: If ``name`` is none of the package's names.
-
-    """
-    if name not in _LAZY_NAMES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(f"{__name__}.{_LAZY_NAMES[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY_NAMES))
+__getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals())
 
 
 __all__ = ["CLAIMS_FILE", "Claim", "Report", "Verdict", "load_claims", "reproduce"]

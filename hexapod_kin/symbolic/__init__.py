@@ -9,47 +9,29 @@ its sympy-free :mod:`.sources`) imports no sympy; the first of those names does.
 
 from __future__ import annotations
 
+from .._lazy import lazy_names
 from ._limits import DEFAULT_BUDGET
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
-    from typing import Any
-
     from .core import ROW_NAMES, khalil_matrix
     from .derivation import Derivation, cached, clear_memory, derive, row_indices
     from .families import SingularFamily
 
 #: Name → the submodule that defines it (imported on first access).
 _LAZY_NAMES = {
-    "ROW_NAMES": "core",
-    "khalil_matrix": "core",
-    "Derivation": "derivation",
-    "cached": "derivation",
-    "clear_memory": "derivation",
-    "derive": "derivation",
-    "row_indices": "derivation",
-    "SingularFamily": "families",
+    "ROW_NAMES": ".core",
+    "khalil_matrix": ".core",
+    "Derivation": ".derivation",
+    "cached": ".derivation",
+    "clear_memory": ".derivation",
+    "derive": ".derivation",
+    "row_indices": ".derivation",
+    "SingularFamily": ".families",
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Import ``name`` from its submodule on first access (PEP 562).
-
-    Raises:
-        AttributeError: If ``name`` is none of the package's names.
-
-    """
-    if name not in _LAZY_NAMES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(f"{__name__}.{_LAZY_NAMES[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY_NAMES))
+__getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals())
 
 
 __all__ = [
