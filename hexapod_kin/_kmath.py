@@ -177,9 +177,10 @@ def reseal_if_compiled() -> None:
 
     numba saves a new specialisation (a kernel called with new argument types) after its
     compile, at any call: left unsealed, the next process to start would take numba's files
-    for foreign ones (one warning, the files removed). The seal is renewed at the start of
-    the next compile (the previous one is saved by then), after each batch
-    (:func:`hexapod_kin._kernels.run_blocks`) and when the process exits.
+    for foreign ones (one warning, the files removed). numba's public event API renews the
+    seal as soon as they are saved: a compile (kind ``"numba:compile"``) of a package kernel
+    marks the folders, and the compiler lock's next release (kind ``"numba:compiler_lock"``,
+    released by numba after it saved what it compiled) reseals them; and at exit.
     """
     if _DIRTY:
         seal_compiled()
@@ -190,10 +191,10 @@ _DIRTY: list[bool] = []
 
 
 class _CompileWatch(_event.Listener):
-    """numba's public event API (kind ``"numba:compile"``): marks the package's compiles."""
+    """Marks the package's compiles (``"numba:compile"``, ended before numba saves)."""
 
     def on_start(self, ev: Any) -> None:
-        reseal_if_compiled()  # what earlier compiles saved
+        pass
 
     def on_end(self, ev: Any) -> None:
         func = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
@@ -201,7 +202,18 @@ class _CompileWatch(_event.Listener):
             _DIRTY[:] = [True]
 
 
+class _LockWatch(_event.Listener):
+    """Reseals after numba's compiler lock is released (``"numba:compiler_lock"``)."""
+
+    def on_start(self, ev: Any) -> None:
+        pass
+
+    def on_end(self, ev: Any) -> None:
+        reseal_if_compiled()
+
+
 _event.register("numba:compile", _CompileWatch())
+_event.register("numba:compiler_lock", _LockWatch())
 atexit.register(reseal_if_compiled)
 
 

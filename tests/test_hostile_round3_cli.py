@@ -402,9 +402,13 @@ def test_a_new_specialisation_is_sealed_for_the_next_process(
         "hk.load('hexabot_leg').fk_batch(hk.load('hexabot_leg').random_q(10, seed=0))\n"
         "from hexapod_kin._kmath import eig3_sym\n"
         "print(eig3_sym(1, 2, 3, 0, 0, 0))\n"  # integers: a new specialisation
+        "from hexapod_kin._cache import check_folder\n"  # sealed before the process ends:
+        "from hexapod_kin._kmath import NUMBA_FILES\n"
+        f"print(check_folder({str(folder)!r}, NUMBA_FILES))\n"
     )
     run = py(code, cwd=tmp_path)
-    assert run.status == 0 and run.stdout.split() == ["(3.0,", "2.0,", "1.0)"], run.stderr
+    out = run.stdout.splitlines()
+    assert run.status == 0 and out == ["(3.0, 2.0, 1.0)", "{}"], run.stdout + run.stderr
     assert not [ln for ln in run.lines if "warning" in ln.lower()], run.lines
     new = {p.name for p in folder.glob("*.nb?")} - before
     assert any(n.startswith("_kmath.eig3_sym") for n in new), new  # numba saved it there
