@@ -54,7 +54,6 @@ from ._kmath import (
     dls_into,
     eig3_sym,
     njit,
-    reseal_if_compiled,
     seal_compiled,
     sincos,
     solve_spd,
@@ -638,9 +637,7 @@ def run_blocks(
     results = [_first_call(area, run)]
     nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))
     if nwork == 1:
-        results.append(run(0, nblocks))
-        reseal_if_compiled()
-        return results
+        return [*results, run(0, nblocks)]
     per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))
     chunks = itertools.count()  # next() is atomic under the GIL
 
@@ -659,7 +656,6 @@ def run_blocks(
     finally:
         for t in workers:
             t.join()
-        reseal_if_compiled()
     return results
 
 

@@ -322,8 +322,7 @@ def _par(opts: IKOptions, scale: float) -> np.ndarray:
 
 
 #: The compiled loop once loaded in this process (the first call goes through ``run_blocks``:
-#: the cache check, the compile notice, the stamp), and the seal's renewal after a call
-#: (:func:`~hexapod_kin._kmath.reseal_if_compiled`: new argument types compile and save).
+#: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
 #: How many of a process's first :func:`solve` calls run the loop in Python (with their
 #: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same functions, the
@@ -360,7 +359,6 @@ def _run(
     out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
     if n_t == 1 and _LOADED:  # one target: straight in (a few µs of call overhead)
         _LOADED[0](fplan, iplan, tgts, w6, pars, starts, out)
-        _LOADED[1]()  # reseal_if_compiled: new argument types compiled are sealed now
         return out
     from .step import lm_loop
 
@@ -377,9 +375,7 @@ def _run(
         lm_loop(fplan, iplan, tgts[a:b], w6, pars[a:b], starts[a:b], out[a:b])
 
     run_blocks("ik", run, n_t, 1, _PER_THREAD)
-    from .._kmath import reseal_if_compiled
-
-    _LOADED[:] = [lm_loop, reseal_if_compiled]
+    _LOADED[:] = [lm_loop]
     return out
 
 
@@ -457,7 +453,6 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     if _LOADED:  # the per-call path: straight into the loaded loop
         out = np.empty((1, s.width))
         _LOADED[0](s.fplan, iplan, task.pose[None], task.weights, pars, starts, out)
-        _LOADED[1]()
         return _report(mdl, s, task, out[0], False)
     python = _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
     _LEFT[0] -= python
