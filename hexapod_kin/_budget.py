@@ -37,7 +37,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["BudgetReached", "cpu_limit", "run"]
+__all__ = ["BudgetReached", "Child", "cpu_limit", "run"]
 
 Job = Callable[..., Iterator[tuple[str, Any]]]
 
@@ -140,56 +140,90 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
         return {}, f"budget of {budget:g} s reached"
     if _ENDS or not hasattr(signal, "setitimer"):
         return _inline(job, args, budget)
-    read, write = os.pipe()
     try:
-        proc = subprocess.Popen(  # noqa: S603 - this interpreter, our own bootstrap
-            [sys.executable, "-c", _BOOT, str(write)],
-            stdin=subprocess.PIPE,
-            pass_fds=(write,),
-            close_fds=True,
-        )
+        child = Child(job, args, budget)
     except OSError:
-        os.close(read)
-        os.close(write)
         return _inline(job, args, budget)
-    os.close(write)
-    done: dict[str, Any] = {}
-    reason: str | None = "the budgeted process ended unexpectedly"
-    with os.fdopen(read, "rb") as items:
+    try:
+        done = dict(child.items())
+    except KeyboardInterrupt:  # the child ignores Ctrl-C: told once, it cleans up as after one
+        child.close()
+        raise
+    finally:
+        child.close(wait=0.0)
+    return done, child.reason
+
+
+class Child:
+    """``job(*args)`` started in a fresh interpreter, its items read as they come.
+
+    The child of :func:`run` (see the module docstring), also for work that runs beside the
+    caller's own (``budget`` None: no CPU limit). Raises :class:`OSError` when no child can
+    be started.
+    """
+
+    def __init__(self, job: Job, args: tuple[Any, ...], budget: float | None) -> None:
+        self._budget = budget
+        #: Why the job stopped early (None: it finished; see :func:`run`).
+        self.reason: str | None = "the budgeted process ended unexpectedly"
+        read, write = os.pipe()
         try:
-            assert proc.stdin is not None
-            with proc.stdin:
-                pickle.dump(list(sys.path), proc.stdin)
-                pickle.dump((job, args, budget), proc.stdin)
-            while True:
-                try:
-                    name, value = pickle.load(items)
-                except (EOFError, OSError, pickle.UnpicklingError):
-                    break
-                if name == "__done__":
-                    reason = None
-                    break
-                if name == "__warning__":  # said in the child: said here, once
-                    warnings.warn(value[1], value[0], stacklevel=2)
-                    continue
-                if name in ("__budget__", "__error__"):
-                    reason = f"budget of {budget:g} s reached" if name == "__budget__" else value
-                    break
-                done[name] = value
-        except BrokenPipeError:
-            pass
-        except KeyboardInterrupt:  # the child ignores Ctrl-C: told once, it cleans up as after one
-            proc.send_signal(signal.SIGTERM)
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                proc.wait(_CLEANUP)
+            self._proc: subprocess.Popen[bytes] | None = subprocess.Popen(  # noqa: S603
+                [sys.executable, "-c", _BOOT, str(write)],  # this interpreter, our bootstrap
+                stdin=subprocess.PIPE,
+                pass_fds=(write,),
+                close_fds=True,
+            )
+        except OSError:
+            os.close(read)
+            os.close(write)
             raise
-        finally:
+        os.close(write)
+        self._items: Any = os.fdopen(read, "rb")
+        try:
+            assert self._proc.stdin is not None
+            with self._proc.stdin:
+                pickle.dump(list(sys.path), self._proc.stdin)
+                pickle.dump((job, args, budget), self._proc.stdin)
+        except OSError:  # gone already: no items
+            self.close(wait=0.0)
+
+    def items(self) -> Iterator[tuple[str, Any]]:
+        """The job's ``(name, value)`` items until it ends (its warnings said here, once)."""
+        while self._items is not None:
+            try:
+                name, value = pickle.load(self._items)
+            except (EOFError, OSError, pickle.UnpicklingError):
+                return
+            if name == "__done__":
+                self.reason = None
+                return
+            if name == "__warning__":  # said in the child: said here, once
+                warnings.warn(value[1], value[0], stacklevel=3)
+                continue
+            if name in ("__budget__", "__error__"):
+                spent = f"budget of {self._budget:g} s reached"
+                self.reason = spent if name == "__budget__" else value
+                return
+            yield name, value
+
+    def close(self, wait: float = _CLEANUP) -> None:
+        """End the child: told once (``SIGTERM``), killed after ``wait`` s; idempotent."""
+        proc, self._proc = self._proc, None
+        items, self._items = self._items, None
+        if proc is not None:
+            if proc.poll() is None and wait > 0:
+                with contextlib.suppress(OSError):
+                    proc.send_signal(signal.SIGTERM)
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    proc.wait(wait)
             if proc.poll() is None:
                 proc.kill()
             proc.wait()
-    if proc.returncode == -getattr(signal, "SIGXCPU", -1):
-        reason = f"budget of {budget:g} s reached"
-    return done, reason
+            if proc.returncode == -getattr(signal, "SIGXCPU", -1):
+                self.reason = f"budget of {self._budget:g} s reached"
+        if items is not None:
+            items.close()
 
 
 def _interrupted(signum: int, frame: Any) -> None:  # pragma: no cover - in the child
@@ -205,10 +239,10 @@ def _serve() -> None:  # pragma: no cover - runs in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches it once, from the parent:
     signal.signal(signal.SIGTERM, _interrupted)  # as a KeyboardInterrupt in the job
     job, args, budget = pickle.load(sys.stdin.buffer)
-    used = time.process_time()
-    hard = math.ceil(used + budget + _HARD_SLACK)
-    with contextlib.suppress(ValueError, OSError):
-        resource.setrlimit(resource.RLIMIT_CPU, (hard, hard + 1))
+    if budget is not None:
+        hard = math.ceil(time.process_time() + budget + _HARD_SLACK)
+        with contextlib.suppress(ValueError, OSError):
+            resource.setrlimit(resource.RLIMIT_CPU, (hard, hard + 1))
     prof = {signal.SIGPROF}
 
     def send(item: tuple[str, Any]) -> None:
@@ -225,7 +259,7 @@ def _serve() -> None:  # pragma: no cover - runs in the child
     warnings.showwarning = forward
     try:
         try:
-            with cpu_limit(budget):
+            with contextlib.nullcontext() if budget is None else cpu_limit(budget):
                 for item in job(*args):
                     send(item)
             send(("__done__", None))

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hexapod_kin import _budget
 from hexapod_kin.report import _worker
 from hexapod_kin.report.experiments import Experiments
 
@@ -32,7 +33,7 @@ def test_child_and_calling_process_give_the_same_experiments_and_figures(
     child_ctx, child_drawn, child_dir, sent = _half(tmp_path / "child")
     assert sent
     with monkeypatch.context() as mp:  # a child that fails at once: all of it done here
-        mp.setattr(_worker, "_BOOT", "import sys; sys.exit(3)")
+        mp.setattr(_budget, "_BOOT", "import sys; sys.exit(3)")
         here_ctx, here_drawn, here_dir, sent = _half(tmp_path / "here")
     assert not sent
     a, b = child_ctx.step.trajectory, here_ctx.step.trajectory
