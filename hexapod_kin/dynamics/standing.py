@@ -125,24 +125,16 @@ def standing_configuration(
 
     """
     from .. import ik
-    from .._tree import robot_size
+    from ..gait.legs import check_size
 
     params = _hexapod(model)
     h = positive("height", height)
     sh = finite_vector("shift", shift, 2)
-    size = robot_size(model.model)
     big = [("height", h), ("shift", float(np.abs(sh).max()))]
     if reach is not None:
         big.append(("reach", positive("reach", reach)))
     for name, v in big:  # a foot point many robot sizes away: refused before any IK
-        if v > 2 * size:
-            raise ParameterError(
-                f"{name}={v!r} m is larger than the robot; allowed up to {2 * size:.4g} m "
-                f"(2 x the robot's size {size:.4g} m)",
-                parameter=name,
-                value=v,
-                allowed=[0.0, 2 * size],
-            )
+        check_size(v, model.model, name)
     q = np.zeros(model.nq)
     for leg in params.legs:
         chain = leg.chain

@@ -31,7 +31,7 @@ from ..exceptions import ConfigurationError, HexapodKinError, ParameterError
 __all__ = [
     "BodyIK",
     "check_offsets",
-    "check_radius",
+    "check_size",
     "FootSpec",
     "GaitError",
     "LegTree",
@@ -182,24 +182,24 @@ def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
             )
 
 
-def check_radius(radius: float, model: Any) -> float:
-    """``radius`` [m], refused when over :data:`OFFSET_FACTOR` × the robot's size.
+def check_size(value: float, model: Any, name: str = "foot_radius") -> float:
+    """``value`` [m], refused when ``|value|`` is over :data:`OFFSET_FACTOR` × the robot's size.
 
     Raises:
-        ParameterError: A foot radius larger than the robot.
+        ParameterError: A length (a foot radius, a height, a reach) larger than the robot.
 
     """
     size = robot_size(model)
     limit = OFFSET_FACTOR * size
-    if radius > limit:
+    if abs(value) > limit:
         raise ParameterError(
-            f"foot_radius={radius!r} m is larger than the robot; allowed 0 to {limit:.4g} m "
+            f"{name}={value!r} m is larger than the robot; allowed up to {limit:.4g} m "
             f"({OFFSET_FACTOR:g} x the robot's size {size:.4g} m)",
-            parameter="foot_radius",
-            value=radius,
+            parameter=name,
+            value=value,
             allowed=[0.0, limit],
         )
-    return radius
+    return value
 
 
 def parse_feet(spec: Any, model: Any = None) -> tuple[FootSpec, ...] | None:

@@ -32,7 +32,7 @@ from .legs import (
     BodyIK,
     FootSpec,
     GaitError,
-    check_radius,
+    check_size,
     find_legs,
     finite_or_inf,
     leg_layout,
@@ -565,7 +565,7 @@ def _build_model(
     span, mounts = lay["span"], lay["mounts"]
     # contact radius and link radius
     if foot_radius is not None:
-        rad = check_radius(positive("foot_radius", foot_radius, allow_zero=True), model)
+        rad = check_size(foot_radius, model)  # as_whole_body checked it is a number >= 0
     elif hexa:
         rad = 1.5 * float(params.legs[0].chain.link_radius)  # type: ignore[union-attr]
     elif feet is None:  # leaf feet: their links' sphere collisions, if every foot has one
@@ -738,7 +738,7 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
                 value=repr(feet),
             )
         wb = whole_body(params)
-        return wb if rad is None else replace(wb, foot_radius=check_radius(rad, wb.model))
+        return wb if rad is None else replace(wb, foot_radius=check_size(rad, wb.model))
     key: Any = None
     if isinstance(robot, (str, os.PathLike)):
         text = os.fspath(robot)

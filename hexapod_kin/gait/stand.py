@@ -19,11 +19,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._tree import robot_size
 from ..exceptions import ParameterError, positive
 from ..params import Hexapod
 from .knee import knee_seed
-from .legs import OFFSET_FACTOR
+from .legs import check_size
 from .robot import WholeBody, as_whole_body, body_pose, leg_home
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -114,16 +113,9 @@ def standing_pose(
             f"shift={shift!r}: two finite numbers dx, dy [m]", parameter="shift", value=shift
         )
     r = None if reach is None else positive("reach", reach, allow_zero=True)
-    limit = OFFSET_FACTOR * robot_size(wb.model)
     for name, v in (("height", h), ("reach", r), ("shift", float(np.abs(sh).max()))):
-        if v is not None and abs(v) > limit:  # refused before any IK (no overflow)
-            raise ParameterError(
-                f"{name}={v!r} m is larger than the robot; allowed up to {limit:.4g} m "
-                f"({OFFSET_FACTOR:g} x the robot's size)",
-                parameter=name,
-                value=v,
-                allowed=[0.0, limit],
-            )
+        if v is not None:  # refused before any IK (no overflow)
+            check_size(v, wb.model, name)
     base = body_pose([0.0, 0.0, h])
     pts = wb.neutral_feet(r)
     pts[:, :2] -= sh
