@@ -14,7 +14,7 @@ import numpy as np
 from ..exceptions import ConfigurationError
 from .robot import WholeBody
 from .tables import PhaseTable
-from .zmp import second_difference
+from .zmp import rates
 
 __all__ = ["GaitRun"]
 
@@ -192,13 +192,9 @@ class GaitRun:
         return self.robot.pinocchio_q(self.q, self.base_poses)
 
     def _base_rates(self) -> tuple[np.ndarray, np.ndarray]:
-        n = len(self.t)
         p = self.base_poses[:, :3, 3]
         yaw = np.unwrap(np.arctan2(self.base_poses[:, 1, 0], self.base_poses[:, 0, 0]))
-        x = np.concatenate([p, yaw[:, None]], axis=1)
-        if n < 4:
-            return np.zeros_like(x), np.zeros_like(x)
-        return np.gradient(x, self.t, axis=0, edge_order=2), second_difference(x, self.t)
+        return rates(np.concatenate([p, yaw[:, None]], axis=1), self.t)
 
     def base_velocity(self) -> np.ndarray:
         """Body twist (N, 6) in the body frame: linear [m/s], angular [rad/s].

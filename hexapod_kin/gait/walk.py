@@ -74,7 +74,7 @@ from .sway import sway_poses
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
 from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_raise
 from .terrain import terrain as make_terrain
-from .zmp import second_difference, zmp_points
+from .zmp import rates, zmp_points
 
 __all__ = [
     "GaitRun",
@@ -704,11 +704,7 @@ def _checked(
     leg_gap = leg_terrain_clearance(
         st.ground, pts, wb.link_radius, rad, sw.planes(), t, names, strict
     )
-    if n > 3:
-        qdot = np.gradient(q, t, axis=0, edge_order=2)
-        qddot = second_difference(q, t)
-    else:
-        qdot, qddot = np.zeros_like(q), np.zeros_like(q)
+    qdot, qddot = rates(q, t)
     vlim = np.asarray(wb.velocity_limit, dtype=float).reshape(-1)
     if strict:
         raise_checks(

@@ -18,31 +18,34 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GRAVITY", "manifold_derivatives", "second_difference", "zmp_points"]
+__all__ = ["GRAVITY", "manifold_derivatives", "rates", "zmp_points"]
 
 #: Gravity [m/s²].
 GRAVITY = 9.81
 
 
-def second_difference(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """d²x/dt² (N, ...) on uniform samples (N ≥ 4).
+def rates(x: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """dx/dt and d²x/dt² (N, ...) on uniform samples (zeros below 4 samples).
 
+    The first by :func:`numpy.gradient` (``edge_order=2``); the second
     ``(x_{i+1} − 2x_i + x_{i−1}) / dt²`` inside, the second-order one-sided
     ``(2x₀ − 5x₁ + 4x₂ − x₃) / dt²`` at the ends.
     """
+    if len(x) < 4:
+        return np.zeros_like(x), np.zeros_like(x)
     dt = float(t[1] - t[0])
     out = np.empty_like(x)
     out[1:-1] = x[2:] - 2.0 * x[1:-1] + x[:-2]
     out[0] = 2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]
     out[-1] = 2.0 * x[-1] - 5.0 * x[-2] + 4.0 * x[-3] - x[-4]
-    return np.asarray(out / (dt * dt))
+    return np.gradient(x, t, axis=0, edge_order=2), np.asarray(out / (dt * dt))
 
 
 def manifold_derivatives(model: Any, Q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Velocities and accelerations (N, nv) of configurations ``Q`` (N, nq) sampled every ``dt``.
 
-    The stencils of :func:`numpy.gradient` (``edge_order=2``) and :func:`second_difference`,
-    on the manifold: with ``d_i = pin.difference(Q_i, Q_{i+1})`` (and ``difference(Q_i,
+    The stencils of :func:`rates` (:func:`numpy.gradient`, ``edge_order=2``; the second
+    difference) on the manifold: with ``d_i = pin.difference(Q_i, Q_{i+1})`` (and ``difference(Q_i,
     Q_{i−1}) = −d_{i−1}``), ``v_i = (d_{i−1} + d_i) / 2dt`` and ``a_i = (d_i − d_{i−1}) / dt²``
     inside; at an end, ``e_k = difference(Q_end, Q_{end±k})`` gives ``v = ±(4e₁ − e₂) / 2dt``
     and ``a = (−5e₁ + 4e₂ − e₃) / dt²``. N ≥ 4.
