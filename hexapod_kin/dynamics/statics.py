@@ -93,7 +93,6 @@ class _LegStatics:
     """Per-model state of the torque computations (own Data, zero-gravity copy, frame)."""
 
     def __init__(self, model: Any, frame: str | None) -> None:
-        check_inertials(model)
         self.mdl = model
         self.frame = model.tip if frame is None else frame
         self.fid = model.frame_id(self.frame)
@@ -121,10 +120,7 @@ def _statics(model: Any, frame: str | None) -> _LegStatics:
     check_inertials(model)
     if not hasattr(model, "cached"):
         return _LegStatics(model, frame)
-    local = model.cached("dynamics.statics", threading.local)
-    table = getattr(local, "by_frame", None)
-    if table is None:
-        table = local.by_frame = {}
+    table = vars(model.cached("dynamics.statics", threading.local)).setdefault("by_frame", {})
     if frame not in table:
         table[frame] = _LegStatics(model, frame)
     return table[frame]
