@@ -231,6 +231,13 @@ def _peaks(torque: np.ndarray, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(torque[idx, np.arange(torque.shape[1])]), ts[idx]
 
 
+def _at(exc: ConfigurationError, where: str) -> ConfigurationError:
+    """``exc`` told where it happened: ``"{where}: {exc}"``, its fields kept."""
+    return ConfigurationError(
+        f"{where}: {exc}", parameter=exc.parameter, value=exc.value, allowed=exc.allowed
+    )
+
+
 def _quasi_static(
     pm: Any,
     fids: list[int],
@@ -268,12 +275,8 @@ def _quasi_static(
         try:
             sol = contact_forces(feet_w, com, weight, method=method, mu=mu)
         except ConfigurationError as exc:
-            raise ConfigurationError(
-                f"at t = {ts[i]:.6g} s (stance legs {[legs[k] for k in stance]}): {exc}",
-                parameter=exc.parameter,
-                value=exc.value,
-                allowed=exc.allowed,
-            ) from None
+            where = f"at t = {ts[i]:.6g} s (stance legs {[legs[k] for k in stance]})"
+            raise _at(exc, where) from None
         f_res, m_res = max(f_res, sol.force_residual), max(m_res, sol.moment_residual)
         tau = np.array(pin.computeGeneralizedGravity(pm, data, q))[6:]
         for k, f in zip(stance, sol.forces):
@@ -340,12 +343,7 @@ def full_dynamics(
                 try:
                     f = _friction_qp(a_base, b[:6], f, pinv, float(mu or 0.0), weight)
                 except ConfigurationError as exc:
-                    raise ConfigurationError(
-                        f"at t = {float(run.t[i]):.6g} s (full dynamics): {exc}",
-                        parameter=exc.parameter,
-                        value=exc.value,
-                        allowed=exc.allowed,
-                    ) from None
+                    raise _at(exc, f"at t = {float(run.t[i]):.6g} s (full dynamics)") from None
         else:
             f = np.zeros(0)
         fk = f.reshape(-1, 3)
