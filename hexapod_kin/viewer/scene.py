@@ -144,15 +144,11 @@ class Scene:
             )
             radius = float(np.linalg.norm(size) / 2)
             intrinsic = np.eye(4)
-        elif kind == "Cylinder":
+        elif kind in ("Cylinder", "Capsule"):  # a capsule drawn as a cylinder over its caps
             r = g.radius * (grow if g.radius <= rod else 1.0)
-            gid = obj.geometry(cylinder(r, 2.0 * g.halfLength))
-            radius = float(math.hypot(r, g.halfLength))
-            intrinsic = rotation("x", math.pi / 2)
-        elif kind == "Capsule":
-            r = g.radius * (grow if g.radius <= rod else 1.0)
-            gid = obj.geometry(cylinder(r, 2.0 * g.halfLength + 2.0 * r))
-            radius = float(g.halfLength + r)
+            cap = r if kind == "Capsule" else 0.0
+            gid = obj.geometry(cylinder(r, 2.0 * g.halfLength + 2.0 * cap))
+            radius = float(g.halfLength + r) if cap else float(math.hypot(r, g.halfLength))
             intrinsic = rotation("x", math.pi / 2)
         elif kind == "Sphere":
             r = g.radius * (grow if g.radius <= 3.0 * rod else 1.0)
