@@ -228,8 +228,10 @@ def _needed(name: str, value: Any, need: str, problem: str = "is not allowed") -
     )
 
 
-def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
-    """``value`` as a finite float > 0 (>= 0 with ``allow_zero``): the package's one such check.
+def positive(
+    name: str, value: Any, *, allow_zero: bool = False, at_most: float = math.inf
+) -> float:
+    """``value`` as a finite float > 0 (>= 0 with ``allow_zero``; <= ``at_most``): the one check.
 
     Raises:
         ParameterError: Not a number (a bool is not one), not finite or out of range; the
@@ -237,7 +239,9 @@ def positive(name: str, value: Any, *, allow_zero: bool = False) -> float:
 
     """
     need = ">= 0" if allow_zero else "> 0"
+    if at_most < math.inf:
+        need += f" and <= {at_most:g}"
     v = finite(name, value, need)
-    if v < 0 or (v == 0 and not allow_zero):
+    if v < 0 or (v == 0 and not allow_zero) or v > at_most:
         raise _needed(name, value, need)
     return v

@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from .._pose import rpy_to_matrix
-from ..exceptions import ParameterError
+from ..exceptions import ParameterError, positive
 from ..motion import read_only
 from .knee import knee_directions, knee_seed
 from .limits import fit_period, top_speed
@@ -117,25 +117,6 @@ EDGE_HEADROOM = 5e-4
 #: Most IK ↔ rolling passes, and the residual [m] (times the robot's size) that ends them.
 ROLLING_PASSES = 12
 ROLLING_TOL = 1e-13
-
-
-def _num(
-    name: str, value: Any, *, lo: float = 0.0, zero: bool = False, hi: float = math.inf
-) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        v = math.nan
-    ok = math.isfinite(v) and (v >= lo if zero else v > lo) and v <= hi
-    if not ok:
-        rng = f"{'>=' if zero else '>'} {lo:g}" + (f" and <= {hi:g}" if math.isfinite(hi) else "")
-        raise ParameterError(
-            f"{name}={value!r} is not allowed; give a finite number {rng} (SI units)",
-            parameter=name,
-            value=value,
-            allowed=rng,
-        )
-    return v
 
 
 def default_stride(wb: WholeBody) -> float:
@@ -299,11 +280,11 @@ def walk(
     args = dict(locals())  # this walk's arguments (a period is fitted by walking again)
     wb = as_whole_body(robot)
     table = _phase_table(wb, pattern, duty_factor, open_loop)
-    H = _num(
+    H = positive(
         "step_height",
         default_step_height(wb) if step_height is None else step_height,
-        zero=True,
-        hi=1.0,
+        allow_zero=True,
+        at_most=1.0,
     )
     if period is None and velocity is None:
         refit = ("robot", "pattern", "step_height", "period", "duration", "strict")
@@ -317,15 +298,18 @@ def walk(
         if make_terrain(terrain).relief > 0:  # not periodic: the whole walk
             period = fit_period(lambda T: planned(T, True), period)
     beta = table.duty_factor
-    T = _num("period", 1.0 if period is None else period, hi=1e3)
-    bh = wb.body_height if body_height is None else _num("body_height", body_height, hi=10.0)
-    reach = wb.foot_reach if foot_reach is None else _num("foot_reach", foot_reach, hi=10.0)
-    dur = _num("duration", duration, zero=True, hi=1e5)
-    hz = _num("rate", rate, hi=1e5)
+    T = positive("period", 1.0 if period is None else period, at_most=1e3)
+    bh, reach = wb.body_height, wb.foot_reach
+    if body_height is not None:
+        bh = positive("body_height", body_height, at_most=10.0)
+    if foot_reach is not None:
+        reach = positive("foot_reach", foot_reach, at_most=10.0)
+    dur = positive("duration", duration, allow_zero=True, at_most=1e5)
+    hz = positive("rate", rate, at_most=1e5)
     rad = float(wb.foot_radius) if foot_radius is None else foot_radius
-    rad = _num("foot_radius", rad, zero=True, hi=1.0)
+    rad = positive("foot_radius", rad, allow_zero=True, at_most=1.0)
     default_sway = 1.0 if (wb.n_legs == 4 and table.statically_stable) else 0.0
-    gain = default_sway if sway is None else _num("sway", sway, zero=True, hi=1.0)
+    gain = default_sway if sway is None else positive("sway", sway, allow_zero=True, at_most=1.0)
     n = int(round(dur * hz)) + 1
     if n > 2_000_000:
         raise ParameterError(
@@ -344,8 +328,11 @@ def walk(
             allowed="stride or velocity",
         )
     if velocity is None:
-        L = _num(
-            "stride", default_stride(wb) if stride is None else stride, zero=True, hi=MAX_STROKE
+        L = positive(
+            "stride",
+            default_stride(wb) if stride is None else stride,
+            allow_zero=True,
+            at_most=MAX_STROKE,
         )
         vel = (L / (beta * T), 0.0, 0.0)
     else:
