@@ -199,8 +199,7 @@ def demo_trajectory(
         ParameterError: Bad ``duration`` or ``samples``.
 
     """
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ParameterError(f"duration={duration!r} is not allowed; give a positive time in s")
+    duration = positive("duration", duration)  # [s]
     if not isinstance(samples, int) or not 2 <= samples <= MAX_DEMO_SAMPLES:
         raise ParameterError(
             f"samples={samples!r} is not allowed; give an integer from 2 to {MAX_DEMO_SAMPLES}",

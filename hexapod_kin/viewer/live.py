@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..exceptions import ParameterError, ViewerError, choices
+from ..exceptions import ParameterError, ViewerError, choices, positive
 from ..gait.stand import default_configuration, standing_base
 from .objects import delete, set_property, set_transform
 from .scene import PARTS, Scene, build_for, resolve_triad_frames
@@ -57,8 +57,7 @@ class Viewer:
         timeout: float = 5.0,
         start_timeout: float = 30.0,
     ) -> None:
-        if not (isinstance(timeout, (int, float)) and 0 < timeout <= 3600):
-            raise ParameterError(f"timeout={timeout!r} is not allowed; give seconds in (0, 3600]")
+        timeout = positive("timeout", timeout, at_most=3600.0)  # seconds
         self.model = model
         self._server = MeshcatServer(start_timeout)
         self._client: Client | None = None

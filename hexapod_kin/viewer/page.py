@@ -10,7 +10,6 @@ from __future__ import annotations
 import base64
 import functools
 import gzip
-import math
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,7 +18,7 @@ import numpy as np
 
 from .._io import atomic_write
 from .._page import fill, frame, page, script_json
-from ..exceptions import ParameterError
+from ..exceptions import ParameterError, positive
 from .objects import bundle, pack
 from .scene import PARTS, Scene, build_for, resolve_triad_frames
 
@@ -113,8 +112,7 @@ def render_html(
         ViewerError: The visual geometry cannot be built.
 
     """
-    if not (isinstance(speed, (int, float)) and math.isfinite(speed) and 0 < speed <= 100):
-        raise ParameterError(f"speed={speed!r} is not allowed; give a factor in (0, 100]")
+    speed = positive("speed", speed, at_most=100.0)
     script = _bundle_gz()  # first: no work without meshcat
     built = build_for(
         model,

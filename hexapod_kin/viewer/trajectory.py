@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..exceptions import ConfigurationError, ParameterError
+from ..exceptions import ConfigurationError, positive
 from .objects import f32
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -93,8 +93,7 @@ def resample(motion: Motion, fps: float | None) -> Motion:
         if n <= MAX_SAMPLES:
             return motion
         fps = 60.0
-    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and 0 < fps <= 1000):
-        raise ParameterError(f"fps={fps!r} is not allowed; give a number in (0, 1000] frames/s")
+    fps = positive("fps", fps, at_most=1000.0)  # frames/s
     t0, t1 = float(motion.times[0]), float(motion.times[-1])
     if n < 2 or t1 <= t0:
         return motion
