@@ -318,5 +318,9 @@ def test_finite_and_positive_return_floats():
     assert positive("x", 0, allow_zero=True) == 0.0
     with pytest.raises(ParameterError, match=r"> 0"):
         positive("x", 0)
+    assert positive("x", 2, at_most=2.0) == 2.0
+    with pytest.raises(ParameterError, match=r"^x=2\.5 .*> 0 and <= 2 ") as err:
+        positive("x", 2.5, at_most=2.0)
+    assert err.value.allowed == "finite > 0 and <= 2"
     with pytest.raises(ParameterError, match="not a number"):
         KhalilRow("revolute", True)
