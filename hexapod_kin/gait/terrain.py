@@ -31,6 +31,7 @@ __all__ = [
     "slope",
     "sphere_gap",
     "step_terrain",
+    "swing_profile",
     "swing_raise",
     "terrain",
 ]
@@ -317,6 +318,20 @@ RAMP = 0.25
 RAISE_FROM = 0.05
 
 
+def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 64 s³(1 − s)³)`` at ``s ∈ [0, 1]``.
+
+    The first blends the horizontal position (and the ground height) from lift-off to
+    touch-down, the second scales the step height (1 at s = ½); both have zero first **and
+    second** derivatives at s = 0 and 1 (``30s²(1 − s)²`` and ``60s(1 − s)(1 − 2s)``;
+    ``192 s²(1 − s)²(1 − 2s)`` and ``384 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
+    with zero velocity and zero acceleration.
+    """
+    s = np.asarray(s, dtype=float)
+    u = s * (1.0 - s)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 64.0 * u * u * u
+
+
 def raise_profile(s: Any) -> np.ndarray:
     """The swing raise's shape at ``s ∈ [0, 1]``: a plateau with quintic ramps, C².
 
@@ -328,7 +343,7 @@ def raise_profile(s: Any) -> np.ndarray:
     u = np.clip(
         np.minimum(np.asarray(s, dtype=float), 1.0 - np.asarray(s, dtype=float)) / RAMP, 0, 1
     )
-    return np.asarray(u**3 * (10.0 - 15.0 * u + 6.0 * u * u))
+    return swing_profile(u)[0]
 
 
 def swing_raise(
@@ -343,7 +358,7 @@ def swing_raise(
     """The extra height [m] each swing needs to clear the terrain (0 where it passes no edge).
 
     A swing's sphere centre (radius r) goes from ``start`` to ``end`` (M, 3) as
-    ``c(s) = start + (end − start)·b(s) + height·ℓ(s)·ẑ`` (:func:`~.walk.swing_profile`'s
+    ``c(s) = start + (end − start)·b(s) + height·ℓ(s)·ẑ`` (:func:`swing_profile`'s
     b, ℓ) on ``samples + 1`` values of s. A swing whose path passes over a terrain edge (a disc
     of radius ``r + margin`` around a point of its path is not flat, :func:`disc_residual`)
     is raised by ``ΔH·p(s)`` (p = :func:`raise_profile`) with the smallest ΔH ≥ 0 for which
@@ -357,8 +372,7 @@ def swing_raise(
     """
     c0, c1 = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     s = np.linspace(0.0, 1.0, samples + 1)
-    b = s**3 * (10.0 - 15.0 * s + 6.0 * s * s)
-    lift = 64.0 * (s * (1.0 - s)) ** 3
+    b, lift = swing_profile(s)
     path = c0[:, None] + (c1 - c0)[:, None] * b[:, None] + (height * lift)[:, None] * [0, 0, 1]
     out = np.zeros(len(c0))
     if ground.relief == 0.0:  # level ground: no edge

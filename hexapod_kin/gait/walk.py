@@ -72,7 +72,7 @@ from .stability import (
 )
 from .sway import sway_poses
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
-from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_raise
+from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_profile, swing_raise
 from .terrain import terrain as make_terrain
 from .zmp import rates, zmp_points
 
@@ -151,20 +151,6 @@ def highest_speed(robot: Any = None, **options: Any) -> tuple[float, float, floa
 
 
 _SEARCHED = ("stride", "velocity", "period", "duration", "strict")
-
-
-def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 64 s³(1 − s)³)`` at ``s ∈ [0, 1]``.
-
-    The first blends the horizontal position (and the ground height) from lift-off to
-    touch-down, the second scales the step height (1 at s = ½); both have zero first **and
-    second** derivatives at s = 0 and 1 (``30s²(1 − s)²`` and ``60s(1 − s)(1 − 2s)``;
-    ``192 s²(1 − s)²(1 − 2s)`` and ``384 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
-    with zero velocity and zero acceleration.
-    """
-    s = np.asarray(s, dtype=float)
-    u = s * (1.0 - s)
-    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s), 64.0 * u * u * u
 
 
 def _zmp_margin(
