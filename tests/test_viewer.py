@@ -333,7 +333,8 @@ def test_demo_trajectories_respect_limits_and_keep_hexapod_feet_down():
     hexa = load("hexapod")
     times, qs, base = gait.demo_trajectory(hexa, 2.0, 21)
     assert base.shape == (21, 4, 4) and np.ptp(base[:, 2, 3]) > 0  # the body moves
-    feet = Scene(hexa).frame_poses(qs, base, hexa.params.foot_frames)[:, :, :3, 3]
+    feet = gait.frame_poses(hexa, hexa.model.createData(), qs, base, hexa.params.foot_frames)
+    feet = feet[:, :, :3, 3]
     np.testing.assert_allclose(feet, np.broadcast_to(feet[0], feet.shape), atol=1e-9)
     assert feet[0, :, 2].min() > -1e-9  # standing on z = 0
 

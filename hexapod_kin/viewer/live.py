@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..exceptions import ParameterError, ViewerError, choices, positive
-from ..gait.stand import default_configuration, standing_base
+from ..gait.stand import default_configuration, frame_poses, standing_base
 from .objects import delete, set_property, set_transform
 from .scene import PARTS, Scene, build_for, resolve_triad_frames
 from .server import Client, MeshcatServer
@@ -145,7 +145,7 @@ class Viewer:
         for j, vis in enumerate(self._scene.visuals):
             self.send(set_transform(vis.path, poses[0, j]))
         if self._triads:
-            frames = self._scene.frame_poses(qv[None, :], base, self._triads)
+            frames = frame_poses(self.model, self._scene.data, qv[None, :], base, self._triads)
             for k in range(len(self._triads)):
                 self.send(set_transform(f"/meshcat/frames/{k}", frames[0, k]))
 

@@ -194,12 +194,6 @@ class Scene:
             out = np.einsum("nab,ngbc->ngac", base_poses, out)
         return out
 
-    def frame_poses(
-        self, qs: np.ndarray, base_poses: np.ndarray | None, frames: Sequence[str]
-    ) -> np.ndarray:
-        """World poses (N, F, 4, 4) of named frames."""
-        return frame_poses(self.model, self.data, qs, base_poses, frames)
-
 
 def khalil_frames(model: Model) -> tuple[str, ...]:
     """The Khalil frames 0..n of the model's chain (base → tip), by name.
@@ -276,7 +270,9 @@ def build(
     poses = scene.placements(motion.qs, motion.base_poses)  # (N, G, 4, 4)
     radii = np.array([v.radius for v in scene.visuals])
     tracked = tuple(dict.fromkeys(trace_frames + triad_frames))
-    fposes = scene.frame_poses(motion.qs, motion.base_poses, tracked) if tracked else None
+    fposes = None
+    if tracked:
+        fposes = frame_poses(scene.model, scene.data, motion.qs, motion.base_poses, tracked)
     # -- extent of the scene over the whole motion
     pts = poses[:, :, :3, 3].reshape(-1, 3) if len(radii) else np.zeros((1, 3))
     rad = np.tile(radii, len(poses)) if len(radii) else np.zeros(1)
@@ -337,7 +333,9 @@ def build(
         if trace_frames and fposes is not None:
             where = fposes[singular_mask, tracked.index(trace_frames[0]), :3, 3]
         else:
-            where = scene.frame_poses(
+            where = frame_poses(
+                scene.model,
+                scene.data,
                 motion.qs[singular_mask],
                 None if motion.base_poses is None else motion.base_poses[singular_mask],
                 (scene.model.tip,),
