@@ -670,12 +670,13 @@ def leg_layout(
         spans.append(float(np.linalg.norm(np.diff(pts, axis=0), axis=1).sum()))
         feet0.append(p[0])
     span = np.array(spans)
+    mounts = np.array(
+        [x.transform() for x in params.legs] if hexa else [tree.placements[c[0]] for c in cols]
+    )
+    d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
     if hexa:
-        mounts = np.array([x.transform() for x in params.legs])
         direction = mounts[:, :2, 0].copy()
     else:
-        mounts = np.array([tree.placements[c[0]] for c in cols])
-        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
         # an offset every foot shares (Unitree's knees, clipped into their range at q = 0,
         # put every foot 0.16 m forward of its hip) is a joint-zero convention, not a stance
         d0 -= d0.mean(axis=0)
@@ -686,8 +687,6 @@ def leg_layout(
                 if np.linalg.norm(v) > 1e-6 * span[i]:
                     direction[i] = v / np.linalg.norm(v)
                     break
-    if hexa:
-        d0 = np.array(feet0)[:, :2] - mounts[:, :2, 3]
     d_horiz = np.einsum("li,li->l", d0, direction)
     reach = np.minimum(np.maximum(d_horiz, 0.0), 0.64 * span)
     rho = span * math.hypot(0.64, 0.32)
