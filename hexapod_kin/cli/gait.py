@@ -27,7 +27,6 @@ def register(sub: Any) -> None:
             "polygon) stops with one line naming the leg, the time and the check, exit status "
             "1; so does a walk whose minimum static or ZMP margin is negative."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
