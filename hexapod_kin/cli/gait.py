@@ -118,16 +118,9 @@ def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
             if v > 0
             else f"no stride of {options.get('pattern')!s} is within this robot's reach"
         )
-        raise GaitError(
-            f"{exc}; {top}",
-            check=exc.check,
-            leg=exc.leg,
-            time=exc.time,
-            amount=exc.amount,
-            parameter=exc.parameter,
-            value=exc.value,
-            allowed=exc.allowed,
-        ) from None
+        exc.message = f"{exc}; {top}"  # the same error (check, leg, time...), told more
+        exc.args = (exc.message,)
+        raise exc from None
 
 
 def _view(run: Any, args: argparse.Namespace) -> int:
