@@ -23,7 +23,6 @@ import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from datetime import datetime, timezone
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -294,11 +293,6 @@ def restore(entry: Entry, out: Path) -> list[Path]:
     return written
 
 
-def _utc_now() -> str:
-    """The current UTC time, ``YYYY-MM-DDTHH:MM:SSZ``."""
-    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
 def save(
     key: str,
     parts: Mapping[str, Any],
@@ -334,7 +328,7 @@ def save(
             "format": FORMAT,
             "key": key,
             "parts": dict(parts),
-            "built": _utc_now(),
+            "built": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "files": listed,
         }
         manifest["seal"] = seal(manifest)
