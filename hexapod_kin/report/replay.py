@@ -28,7 +28,7 @@ from typing import Any
 
 from .. import _cache as _disk
 from .._io import atomic_write
-from .data import CLAIMS_FILE, SEEDS_DIR, Verdict
+from .data import CLAIMS_FILE, LABELS, SEEDS_DIR, Verdict
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -251,10 +251,6 @@ def _shown(html: bytes, stem: str, png: bytes) -> bool:
     return any(n.encode() in tag for n in names)
 
 
-#: The word a verdict's status starts with in the report's table.
-_LABEL = {"wrong": "seed is wrong"}
-
-
 def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -> bool:
     """Whether each claim's row of ``report.md`` starts its verdict with the manifest's status."""
     md = files.get("report.md")
@@ -269,7 +265,7 @@ def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -
         line = text[i : text.find("\n", i) if "\n" in text[i:] else len(text)]
         cols = line.split(" | ")
         status = str(v["status"])
-        if len(cols) < 4 or not cols[3].startswith(_LABEL.get(status, status)[:6]):
+        if len(cols) < 4 or not cols[3].startswith(LABELS.get(status, status)[:6]):
             return False
     return True
 
