@@ -24,7 +24,6 @@ def register(sub: Any) -> None:
             "fall and nothing but feet touched, 1 otherwise, 2 on bad input. Needs MuJoCo "
             "and proxsuite (pip install 'hexapod-kin[export,control]')."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod")
     p.add_argument("--pattern", help="starting gait (default tripod on 6 legs, trot on 4)")

@@ -120,9 +120,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         f"({', '.join(model.joint_names)})"
     )
     for name, T in ends.items():  # a tree robot: every limb's end, not one leaf
-        print(f"T  ({model.base} -> {name}):")
-        print(matrix_text(T))
-        print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
+        _placement(f"T  ({model.base} -> {name}):", T)
     if ends:
         return 0
     n = len(rel)
@@ -132,10 +130,15 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         if 1 < j < n:  # ^0T_1 = ^0T_1 above; ^0T_n is the tip, printed last
             print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):")
             print(matrix_text(c))
-    print(f"^0T_{n} = T tip  ({model.base} -> {model.tip}):")
-    print(matrix_text(tip))
-    print("position [m]: " + " ".join(f"{v:.6f}" for v in tip[:3, 3]))
+    _placement(f"^0T_{n} = T tip  ({model.base} -> {model.tip}):", tip)
     return 0
+
+
+def _placement(title: str, T: Any) -> None:
+    """A placement printed: its title, the 4x4 matrix, the position [m]."""
+    print(title)
+    print(matrix_text(T))
+    print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
 
 
 # ------------------------------------------------------------------------ jacobian

@@ -256,12 +256,6 @@ def _add_stand(sub: Any) -> None:
     p.set_defaults(func=_cmd_stand)
 
 
-def _legs_arg(values: Any) -> Any:
-    if values is None:
-        return None
-    return [int(v) if v.isdigit() else v for v in values]
-
-
 def _cmd_stand(args: argparse.Namespace) -> int:
     from ..dynamics import stand
     from ..dynamics.standing import hexapod_model
@@ -274,7 +268,7 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         height=args.height,
         reach=args.reach,
         shift=args.shift,
-        legs=_legs_arg(args.legs),
+        legs=None if args.legs is None else [int(v) if v.isdigit() else v for v in args.legs],
         method=args.method,
         mu=args.mu,
         feet=robot.feet,

@@ -27,7 +27,6 @@ def register(sub: Any) -> None:
             "polygon) stops with one line naming the leg, the time and the check, exit status "
             "1; so does a walk whose minimum static or ZMP margin is negative."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
@@ -53,10 +52,9 @@ def register(sub: Any) -> None:
 
 def _cmd_gait(args: argparse.Namespace) -> int:
     from ..gait.robot import as_whole_body
-    from .common import PLOT_SUFFIXES, emit_json, margin_failures, not_achieved, output_path
+    from .common import check_outputs, emit_json, margin_failures, not_achieved
 
-    plot = output_path(args.plot, "--plot", PLOT_SUFFIXES) if args.plot else None
-    html = output_path(args.html, "--html", (".html", ".htm")) if args.html else None
+    check_outputs(args)
     robot = robot_of(args)
     if args.view and (args.source != "hexapod" or robot.params):
         raise ParameterError(
@@ -67,14 +65,14 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     # a check that fails raises GaitError: one line, exit status 1 (cli.main)
     run = planned_walk(wb, walk_options(args, wb))
     out = run.to_dict()
-    if plot is not None:
+    if args.plot:
         from ..gait.plots import plot_gait
 
-        out["plot"] = str(plot_gait(run, plot))
-    if html is not None:
+        out["plot"] = str(plot_gait(run, args.plot))
+    if args.html:
         from ..viewer import walk_html
 
-        out["html"] = str(walk_html(run, html, model=model))  # the robot as loaded here
+        out["html"] = str(walk_html(run, args.html, model=model))  # the robot as loaded here
     if args.json:
         emit_json(out)
     else:
@@ -119,16 +117,9 @@ def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
             if v > 0
             else f"no stride of {options.get('pattern')!s} is within this robot's reach"
         )
-        raise GaitError(
-            f"{exc}; {top}",
-            check=exc.check,
-            leg=exc.leg,
-            time=exc.time,
-            amount=exc.amount,
-            parameter=exc.parameter,
-            value=exc.value,
-            allowed=exc.allowed,
-        ) from None
+        exc.message = f"{exc}; {top}"  # the same error (check, leg, time...), told more
+        exc.args = (exc.message,)
+        raise exc from None
 
 
 def _view(run: Any, args: argparse.Namespace) -> int:

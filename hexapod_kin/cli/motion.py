@@ -88,13 +88,9 @@ def _target(args: argparse.Namespace) -> Any:
             raise ParameterError(
                 msg, parameter="--yaw", value=args.yaw, allowed="only with --target"
             )
-        from ..params import rpy_to_matrix
+        from .._pose import Pose
 
-        pose = np.eye(4)
-        roll, pitch, yaw = (_angle(args, v) for v in args.pose[3:])
-        pose[:3, :3] = rpy_to_matrix(roll, pitch, yaw)
-        pose[:3, 3] = args.pose[:3]
-        return pose
+        return Pose.of([*args.pose[:3], *(_angle(args, v) for v in args.pose[3:])], "--pose").matrix
     t = np.array(args.target, dtype=float)
     return t if args.yaw is None else np.append(t, _angle(args, args.yaw))
 

@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from .common import PLOT_SUFFIXES, emit_json, output_path, seed
+from .common import check_outputs, emit_json, seed
 
 __all__ = ["register"]
 
@@ -108,8 +108,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             scale = math.pi / 180 if (args.deg and name in ANGLES) else 1.0
             values[name] = parse_range("--" + name.replace("_", "-"), text, scale)
     space = DesignSpace(values, total=args.total)
-    if args.plot:  # checked before any work, not after the sweep
-        output_path(args.plot, "--plot", PLOT_SUFFIXES)
+    check_outputs(args)  # --plot checked before any work, not after the sweep
     if args.scheduler:  # a lost scheduler is one line (our error), not distributed's tracebacks
         _quiet_distributed()
     res = sweep(

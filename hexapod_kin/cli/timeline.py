@@ -67,13 +67,11 @@ def register(sub: Any) -> None:
         "timeline",
         help="export a planned motion as a servo timeline (CSV, JSON, ROS 2 YAML)",
         description=__doc__.split("\n\n", 1)[1].strip() if __doc__ else None,
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     kinds = p.add_subparsers(dest="plan", required=True, metavar="PLAN")
     g = kinds.add_parser(
         "gait",
         help="a walk of a legged robot (default the hexapod preset)",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(g, kinds="legged", default="hexapod", inertia=True)
     walk_args(g, rate="--plan-rate")
@@ -82,7 +80,6 @@ def register(sub: Any) -> None:
     st = kinds.add_parser(
         "step",
         help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(st, default="hexabot_leg", frames=True, tool=True)
     st.add_argument("--amplitude", type=float, default=0.05, help="A [m/s]")
@@ -94,7 +91,6 @@ def register(sub: Any) -> None:
     f = kinds.add_parser(
         "path",
         help="a joint path from a file (IK path, a step): CSV t,<joint>,... or JSON",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     f.add_argument("file", help="plan file: CSV (header t,<joint>,...; [s], [rad]) or JSON")
     robot_args(f, required=False)

@@ -296,13 +296,8 @@ def to_mjcf(
         one_of("integrator", integrator, INTEGRATORS)
     if floor_z is not None:
         finite("floor_z", floor_z)
-    params: Chain | Hexapod | None = None
-    resolved = None
-    if isinstance(source, (Chain, Hexapod)):
-        params = source
-    else:
-        resolved = resolve_source(source)
-        params = resolved.params
+    resolved = resolve_source(source)  # a chain or robot comes back as itself
+    params = resolved.params
     if floating and isinstance(params, Chain):
         msg = (
             "floating=True needs a robot (a Hexapod or a legged robot's URDF) whose root body "
@@ -310,7 +305,6 @@ def to_mjcf(
         )
         raise ParameterError(msg, parameter="floating", value=floating)
     if params is None:
-        assert resolved is not None
         urdf, default_floor, desc = _without_meshes(resolved.text), -1.0, resolved.name
         if meshes:
             raise ParameterError(

@@ -14,6 +14,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from xml.sax.saxutils import escape
 
 from .. import __version__
 from .._io import atomic_write
@@ -70,10 +71,6 @@ def package_name_for(robot_name: str) -> str:
     if not base or not base[0].isalpha():
         base = "robot_" + base
     return f"{base}_description"
-
-
-def _xml_text(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
 def _template(file: str, **fields: str) -> str:
@@ -154,10 +151,10 @@ def package_files(
     files["package.xml"] = _template(
         "package.xml",
         name=pkg,
-        description=_xml_text(f"Robot description of {src.name}: {description}"),
-        maintainer=_xml_text(maintainer),
-        email=_xml_text(email),
-        license=_xml_text(license),
+        description=escape(f"Robot description of {src.name}: {description}"),
+        maintainer=escape(maintainer),
+        email=escape(email),
+        license=escape(license),
         comment=comment(made),
         deps=deps,
     )

@@ -15,7 +15,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from contextlib import nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -31,17 +31,6 @@ UNITS: tuple[str, ...] = ("rad", "deg", "ticks", "us")
 MAX_COMMAND = 1e9
 #: Slowest plausible speed limit of a servo [rad/s] (a turn in some 70 days).
 MIN_SPEED = 1e-6
-_SERVO_KEYS = (
-    "units",
-    "offset",
-    "direction",
-    "ticks_per_revolution",
-    "centre",
-    "us_per_rad",
-    "limits",
-    "velocity_limit",
-    "resolution",
-)
 
 
 #: The least fraction of a joint's range [lower, upper] its servo's limits must sweep.
@@ -286,6 +275,10 @@ class Servo:
         if self.limits is not None:
             d["limits"] = list(self.limits)
         return d
+
+
+#: The keys of a servo's entry in a calibration file: its fields but ``joint``.
+_SERVO_KEYS = tuple(f.name for f in fields(Servo) if f.name != "joint")
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._fields import read_only
 from .._io import atomic_write
 from .._reader import (
     check_keys,
@@ -442,8 +443,7 @@ def timeline(
         if k is not None:
             what = f"speed {vs[k, j]:.6g} rad/s is beyond its limit {lim:g} rad/s"
             raise _beyond(s.joint, ts[k], what, vs[k, j], (-lim, lim))
-    for arr in (ts, q_sent, vs, command, speed):
-        arr.setflags(write=False)
+    read_only(ts, q_sent, vs, command, speed)
     return Timeline(
         t=ts,
         joint_names=names,
@@ -481,8 +481,7 @@ def _from_commands(
     servos = [cal.servo(j) for j in names]
     q = np.column_stack([s.angle(command[:, j]) for j, s in enumerate(servos)])
     qdot = np.column_stack([speed[:, j] / (s.direction * s.scale) for j, s in enumerate(servos)])
-    for arr in (t, q, qdot, command, speed):
-        arr.setflags(write=False)
+    read_only(t, q, qdot, command, speed)
     return Timeline(t, names, q, qdot, command, speed, cal, rate, interpolation)
 
 

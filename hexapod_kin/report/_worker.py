@@ -32,18 +32,24 @@ def _share(
     ctx: Any, fdir: Path, out: Path, animations: bool, walk_s: float
 ) -> Iterator[tuple[str, Any]]:
     """The numeric half: ``("experiments", (step, pendulum))``, then ``("figures", {...})``."""
+    from ..plots import plot_motion
     from . import figures
 
     yield "experiments", (ctx.step, ctx.pendulum)
-    drawn: dict[str, Any] = {"step": figures.step_figure(ctx, fdir)}
+    title = "x-only step: v = [A sin(2πt/T), 0, 0] (seeds 000, 001, 003)"
+    drawn: dict[str, Any] = {"step": plot_motion(ctx.step, fdir / "step.png", title=title)}
     if animations:
         drawn["step_still"] = figures.step_still(ctx, fdir)
-        try:
-            drawn["step_animation"] = figures.step_animation(ctx, out)
+        try:  # the step, animated (self-contained HTML)
+            from ..viewer import export_html
+
+            tr, title = ctx.step.trajectory, "hexabot_leg: the seeds' x-only step"
+            html = export_html(ctx.model("leg"), tr.t, tr.q, out / "step.html", fps=30, title=title)
+            drawn["step_animation"] = html
         except Exception as exc:  # the viewer extra missing: said in the report
             drawn["step_animation"] = f"not written: {exc}"
     drawn["walk"] = figures.walk_figures(fdir, walk_s, animations, html_dir=out)
-    drawn["pendulum"] = figures.pendulum_figure(ctx, fdir)
+    drawn["pendulum"] = figures.plot_pendulum(ctx.pendulum, fdir / "pendulum.png")
     yield "figures", drawn
 
 

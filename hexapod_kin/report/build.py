@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,8 +18,7 @@ from typing import Any
 from .._io import atomic_write
 from ..exceptions import ParameterError
 from . import replay
-from .data import Verdict, load_claims, seed_file
-from .html import LEGEND
+from .data import LABELS, LEGEND, STATUSES, Verdict, load_claims, seed_file
 
 __all__ = ["SECTIONS", "Report", "reproduce"]
 
@@ -112,10 +112,8 @@ class Report:
     @property
     def counts(self) -> dict[str, int]:
         """Number of verdicts per status."""
-        out = {"agrees": 0, "wrong": 0, "underdetermined": 0, "differs": 0, "error": 0}
-        for v in self.verdicts:
-            out[v.status] = out.get(v.status, 0) + 1
-        return out
+        counted = Counter(v.status for v in self.verdicts)
+        return {**dict.fromkeys(STATUSES, 0), **counted}
 
     def summary(self) -> str:
         """One line: how many claims agree, are wrong, underdetermined, differ, failed."""
@@ -342,7 +340,6 @@ def _copy_seeds(seeds: dict[str, str], out: Path) -> list[Path]:
 _PRINTED = ("leg", "leg+", "scara")
 
 
-_LABEL = {status: label for status, label, _ in LEGEND}
 _DERIV = {
     "leg": "hexabot_leg (α2 = −90°, seeds 000/001)",
     "leg+": "hexabot_leg(alpha2=+π/2) (seed 003)",
@@ -573,7 +570,7 @@ def _html(
             where = f"<a href='#{H.line_anchor(v.seed, int(a))}'>{where}</a>"
         h.append(
             f"<tr><td><a href='#{e(v.claim)}'>{e(v.claim)}</a></td><td>{e(v.seed)}</td>"
-            f"<td>{where}</td><td class='{v.status}'>{e(_LABEL[v.status])}</td></tr>"
+            f"<td>{where}</td><td class='{v.status}'>{e(LABELS[v.status])}</td></tr>"
         )
     h.append("</table>")
     for key, title, intro in SECTIONS:

@@ -42,6 +42,14 @@ __all__ = ["CHECKS", "MODELS", "Context", "evaluate"]
 _OTHER = {"leg": ("leg+", "+90°"), "leg+": ("leg", "−90°")}
 _SIGMA = {"0": "revolute", "1": "prismatic", "fixed": "fixed"}
 _COLUMN = {"σ": 0, "d": 1, "r": 3, "θ": 4}
+#: The named items of a derivation (besides ``"T j"`` and ``"0T j"``).
+_ITEMS: dict[str, Callable[[Any], Any]] = {
+    "p": lambda d: d.p,
+    "p - o2": lambda d: d.p - d.cumulative[1][:3, 3],
+    "J": lambda d: d.J,
+    "J_indirect": lambda d: d.J_indirect,
+    "J x,y,wz": lambda d: d.J_direct.extract([0, 1, 5], [0, 1, 2]),
+}
 
 
 class Context(Experiments):
@@ -89,20 +97,11 @@ class Context(Experiments):
 
     def _item(self, key: str, item: str) -> sp.Matrix:
         d = self.derivation(key)
-        if item.startswith("T "):
-            out = d.transforms[int(item[2:]) - 1]
-        elif item.startswith("0T "):
-            out = d.cumulative[int(item[3:]) - 1]
-        elif item == "p":
-            out = d.p
-        elif item == "p - o2":
-            out = d.p - d.cumulative[1][:3, 3]
-        elif item == "J":
-            out = d.J
-        elif item == "J_indirect":
-            out = d.J_indirect
-        elif item == "J x,y,wz":
-            out = d.J_direct.extract([0, 1, 5], [0, 1, 2])
+        kind, _, k = item.partition(" ")
+        if kind in ("T", "0T") and k.isdigit():
+            out = (d.transforms if kind == "T" else d.cumulative)[int(k) - 1]
+        elif item in _ITEMS:
+            out = _ITEMS[item](d)
         else:
             raise KeyError(f"unknown item {item!r}")
         return sp.Matrix(plain(sp.Matrix(out)))

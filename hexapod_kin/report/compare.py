@@ -7,10 +7,8 @@ and ``a − b`` is exactly 0, cheapest proof first (:func:`_zero`).
 from __future__ import annotations
 
 import builtins
-import functools
 import hashlib
 import math
-import operator
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
 from types import BuiltinFunctionType
@@ -22,7 +20,7 @@ from sympy.core.rules import Transform
 from sympy.parsing.sympy_parser import parse_expr
 from sympy.simplify.radsimp import collect_abs
 
-from ..symbolic.checks import NUMPY_FUNCTIONS
+from ..symbolic.checks import evaluate_matrix
 
 __all__ = [
     "POINTS",
@@ -120,59 +118,21 @@ def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
     return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
-class _Unsupported(Exception):
-    """An expression :func:`_evaluate` has no numpy rule for."""
-
-
-_NUMPY = NUMPY_FUNCTIONS  # one table of sympy → numpy functions
-
-
 def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:
     """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
 
-    Each distinct sub-expression once, no code generated, for numbers, symbols, ``+ * **`` and
-    :data:`NUMPY_FUNCTIONS`; anything else by ``sympy.lambdify``.
+    The package's one walk (:func:`~hexapod_kin.symbolic.checks.evaluate_matrix`: each
+    distinct sub-expression once, no code generated); what it cannot evaluate (a function
+    outside :data:`~hexapod_kin.symbolic.checks.NUMPY_FUNCTIONS`, a complex number) by
+    ``sympy.lambdify``.
     """
-    memo: dict[Any, Any] = {}
     points = len(next(iter(env.values()))) if env else POINTS
-
-    def ev(e: Any) -> Any:
-        hit = memo.get(e)
-        if hit is not None:
-            return hit
-        v: Any
-        if e.is_Symbol:
-            if e not in env:
-                raise _Unsupported(e)
-            v = env[e]
-        elif (e.is_Number or e.is_NumberSymbol) and e.is_extended_real:
-            v = float(e)
-        elif e.is_Add or e.is_Mul:  # left to right, as written
-            v = functools.reduce(operator.add if e.is_Add else operator.mul, map(ev, e.args))
-        elif e.is_Pow:
-            base, exp = ev(e.base), e.exp
-            if exp.is_Integer:
-                v = np.power(np.asarray(base, dtype=float), int(exp))
-            elif exp == sp.S.Half:
-                v = np.sqrt(base)
-            else:
-                v = np.power(np.asarray(base, dtype=float), ev(exp))
-        elif e.func in _NUMPY:
-            v = _NUMPY[e.func](*[ev(x) for x in e.args])
-        else:
-            raise _Unsupported(e)
-        memo[e] = v
-        return v
-
-    out = np.empty((len(exprs), points), dtype=complex)
     try:
-        for k, e in enumerate(exprs):
-            out[k] = np.broadcast_to(np.asarray(ev(e), dtype=float), (points,))
-    except _Unsupported:  # sympy.lambdify for what the rules above do not know
+        return evaluate_matrix([list(exprs)], env, points)[:, 0, :].T.astype(complex)
+    except (ValueError, TypeError):  # sympy.lambdify for what the walk does not know
         syms = sorted(env, key=str)
         raw = sp.lambdify(syms, list(exprs), modules="numpy")(*[env[s] for s in syms])
         return np.array([np.broadcast_to(np.asarray(v, dtype=complex), (points,)) for v in raw])
-    return out
 
 
 def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarray, np.ndarray]:

@@ -15,8 +15,33 @@ __all__ = ["CLAIMS_FILE", "SEEDS_DIR", "STATUSES", "Claim", "Verdict", "load_cla
 
 #: The claims shipped with the package.
 CLAIMS_FILE = Path(__file__).with_name("claims.toml")
-#: The statuses of a computed verdict (their meaning: :data:`~.html.LEGEND`).
-STATUSES = ("agrees", "wrong", "underdetermined", "differs", "error")
+#: What each verdict category means (the legend; also in the Markdown).
+LEGEND: tuple[tuple[str, str, str], ...] = (
+    ("agrees", "agrees", "hexapod_kin computes the same (rule and tolerance under 'compared')."),
+    (
+        "wrong",
+        "seed is wrong",
+        "false for every value the seed leaves open: the seed's own data contradict it.",
+    ),
+    (
+        "underdetermined",
+        "underdetermined",
+        "false with hexapod_kin's stand-in values, but the seed does not give a value that "
+        "decides it (named in the verdict) and an admissible value makes it true: neither "
+        "confirmed nor refuted.",
+    ),
+    (
+        "differs",
+        "differs",
+        "a different but consistent convention (e.g. the sign of α2); what it changes is computed.",
+    ),
+    ("error", "NOT COMPUTED", "the comparison failed to run (a bug in hexapod_kin)."),
+)
+
+#: The statuses of a computed verdict (their meaning: :data:`LEGEND`).
+STATUSES = tuple(status for status, _, _ in LEGEND)
+#: Each status's label in the report.
+LABELS = {status: label for status, label, _ in LEGEND}
 #: Where the seeds' texts are shipped (package data: a wheel has them).
 SEEDS_DIR = Path(__file__).with_name("seeds")
 
@@ -83,12 +108,7 @@ class Verdict:
         """The verdict as a sentence: ``agrees`` or ``<label>: <reason>``."""
         if self.status == "agrees":
             return "agrees"
-        label = {
-            "wrong": "seed is wrong",
-            "differs": "differs",
-            "underdetermined": "underdetermined",
-        }
-        return f"{label.get(self.status, 'not computed')}: {self.reason}"
+        return f"{LABELS.get(self.status, 'not computed').lower()}: {self.reason}"
 
     def fields(self) -> dict[str, str]:
         """Every field by name (what :meth:`from_fields` reads back)."""

@@ -16,10 +16,7 @@ import numpy as np
 __all__ = [
     "heat_maps",
     "leg2_figure",
-    "pendulum_figure",
     "plot_pendulum",
-    "step_animation",
-    "step_figure",
     "step_still",
     "walk_figures",
 ]
@@ -40,29 +37,6 @@ def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any
         title = f"{name}: singularity map, families of det J"
         paths.append(plot_singularity_map(res, out / f"singularity_{name}.png", title=title))
     return paths, counts
-
-
-def step_figure(ctx: Any, out: Path) -> Path:
-    """Seeds 000/001/003 Figs.: foot position, velocity, joint angles vs time, drift."""
-    from ..plots import plot_motion
-
-    title = "x-only step: v = [A sin(2πt/T), 0, 0] (seeds 000, 001, 003)"
-    return plot_motion(ctx.step, out / "step.png", title=title)
-
-
-def step_animation(ctx: Any, out: Path) -> Path:
-    """The step, animated (self-contained HTML)."""
-    from ..viewer import export_html
-
-    tr = ctx.step.trajectory
-    return export_html(
-        ctx.model("leg"),
-        tr.t,
-        tr.q,
-        out / "step.html",
-        fps=30,
-        title="hexabot_leg: the seeds' x-only step",
-    )
 
 
 def step_still(ctx: Any, out: Path) -> tuple[Path, str]:
@@ -118,11 +92,6 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
         # beside the axes, never over a curve
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     return save_figure(fig, out / "leg2.png", crop=False)
-
-
-def pendulum_figure(ctx: Any, out: Path) -> Path:
-    """Seed 001 Figs. 5-8 of the report's pendulum (:func:`plot_pendulum`)."""
-    return plot_pendulum(ctx.pendulum, out / "pendulum.png")
 
 
 def plot_pendulum(experiment: Any, path: Any) -> Path:

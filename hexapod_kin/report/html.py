@@ -14,7 +14,6 @@ from .._page import frame
 
 __all__ = [
     "CSS",
-    "LEGEND",
     "SCRIPT",
     "animation",
     "derivation_html",
@@ -28,29 +27,6 @@ __all__ = [
     "seed_texts",
     "verdict_html",
 ]
-
-#: What each verdict category means (the legend; also in the Markdown).
-LEGEND: tuple[tuple[str, str, str], ...] = (
-    ("agrees", "agrees", "hexapod_kin computes the same (rule and tolerance under 'compared')."),
-    (
-        "wrong",
-        "seed is wrong",
-        "false for every value the seed leaves open: the seed's own data contradict it.",
-    ),
-    (
-        "underdetermined",
-        "underdetermined",
-        "false with hexapod_kin's stand-in values, but the seed does not give a value that "
-        "decides it (named in the verdict) and an admissible value makes it true: neither "
-        "confirmed nor refuted.",
-    ),
-    (
-        "differs",
-        "differs",
-        "a different but consistent convention (e.g. the sign of α2); what it changes is computed.",
-    ),
-    ("error", "NOT COMPUTED", "the comparison failed to run (a bug in hexapod_kin)."),
-)
 
 #: The page's style and script (package data): the script opens the ``<details>`` around a
 #: linked seed line and flags animations when WebGL is missing.

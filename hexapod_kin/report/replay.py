@@ -23,13 +23,12 @@ import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from datetime import datetime, timezone
 from pathlib import Path, PurePosixPath
 from typing import Any
 
 from .. import _cache as _disk
 from .._io import atomic_write
-from .data import CLAIMS_FILE, SEEDS_DIR, Verdict
+from .data import CLAIMS_FILE, LABELS, SEEDS_DIR, Verdict
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -252,10 +251,6 @@ def _shown(html: bytes, stem: str, png: bytes) -> bool:
     return any(n.encode() in tag for n in names)
 
 
-#: The word a verdict's status starts with in the report's table.
-_LABEL = {"wrong": "seed is wrong"}
-
-
 def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -> bool:
     """Whether each claim's row of ``report.md`` starts its verdict with the manifest's status."""
     md = files.get("report.md")
@@ -270,7 +265,7 @@ def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -
         line = text[i : text.find("\n", i) if "\n" in text[i:] else len(text)]
         cols = line.split(" | ")
         status = str(v["status"])
-        if len(cols) < 4 or not cols[3].startswith(_LABEL.get(status, status)[:6]):
+        if len(cols) < 4 or not cols[3].startswith(LABELS.get(status, status)[:6]):
             return False
     return True
 
@@ -292,11 +287,6 @@ def restore(entry: Entry, out: Path) -> list[Path]:
     except OSError:
         pass
     return written
-
-
-def _utc_now() -> str:
-    """The current UTC time, ``YYYY-MM-DDTHH:MM:SSZ``."""
-    return datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 def save(
@@ -334,7 +324,7 @@ def save(
             "format": FORMAT,
             "key": key,
             "parts": dict(parts),
-            "built": _utc_now(),
+            "built": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "files": listed,
         }
         manifest["seal"] = seal(manifest)

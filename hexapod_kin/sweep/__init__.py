@@ -11,7 +11,7 @@ from .designs import DEFAULTS, METHODS, PARAMETERS, DesignSpace, Range, design_c
 from .pareto import OBJECTIVES, best_index, pareto_front
 from .plot import plot_sweep
 from .run import SweepResult, read_results, sweep, table_paths
-from .scores import SCORES, jacobian_position, reachable, score_designs, volume_closed_form
+from .scores import SCORES, reachable, score_designs, volume_closed_form
 
 __all__ = [
     "DEFAULTS",
@@ -24,7 +24,6 @@ __all__ = [
     "SweepResult",
     "best_index",
     "design_chain",
-    "jacobian_position",
     "pareto_front",
     "parse_range",
     "plot_sweep",

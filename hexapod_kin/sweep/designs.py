@@ -31,39 +31,25 @@ __all__ = [
     "parse_range",
 ]
 
-#: Design parameters, in table column order. Lengths in [m], angles in [rad].
-PARAMETERS: tuple[str, ...] = (
-    "l1",  # coxa (hip → knee) [m]
-    "l2",  # femur [m]
-    "l3",  # tibia [m]
-    "height",  # body height: the ground is the plane z = −height in the hip frame [m]
-    "mount_radius",  # distance of the hip axis from the body centre [m]
-    "mount_yaw",  # yaw of the hip frame on the body [rad]; walking direction is body x
-    "q1_lower",
-    "q1_upper",
-    "q2_lower",
-    "q2_upper",
-    "q3_lower",
-    "q3_upper",  # joint limits [rad]
-    "neutral",  # neutral foot: fraction of the ground's radial reach interval (0 inner, 1 outer)
-)
-
 #: Defaults: the seed leg (seed 001, Table 1) as the middle leg of ``robots.hexapod``.
 DEFAULTS: dict[str, float] = {
-    "l1": 0.05,
-    "l2": 0.10,
-    "l3": 0.10,
-    "height": 0.10,
-    "mount_radius": 0.12,
-    "mount_yaw": math.pi / 2,
+    "l1": 0.05,  # coxa (hip → knee) [m]
+    "l2": 0.10,  # femur [m]
+    "l3": 0.10,  # tibia [m]
+    "height": 0.10,  # body height: the ground is the plane z = −height in the hip frame [m]
+    "mount_radius": 0.12,  # distance of the hip axis from the body centre [m]
+    "mount_yaw": math.pi / 2,  # yaw of the hip frame on the body [rad]; walking is body x
     "q1_lower": -math.pi,
     "q1_upper": math.pi,
     "q2_lower": -math.pi,
     "q2_upper": math.pi,
     "q3_lower": -math.pi,
-    "q3_upper": math.pi,
-    "neutral": 0.5,
+    "q3_upper": math.pi,  # joint limits [rad]
+    "neutral": 0.5,  # neutral foot: fraction of the ground's radial reach (0 inner, 1 outer)
 }
+
+#: Design parameters, in table column order. Lengths in [m], angles in [rad].
+PARAMETERS: tuple[str, ...] = tuple(DEFAULTS)
 
 #: Parameters that are angles (the CLI's ``--deg`` converts them).
 ANGLES: frozenset[str] = frozenset(p for p in PARAMETERS if p.startswith("q") or "yaw" in p)

@@ -31,7 +31,6 @@ from .designs import PARAMETERS
 
 __all__ = [
     "SCORES",
-    "jacobian_position",
     "reachable",
     "score_designs",
     "sigmas",
@@ -303,30 +302,6 @@ def reachable(designs_row: Any, points: Any) -> np.ndarray:
     row = np.asarray(designs_row, dtype=float)
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
     return _member(np.broadcast_to(row, (len(pts), row.size)), pts)
-
-
-def jacobian_position(l1: float, l2: float, l3: float, q: Any) -> np.ndarray:
-    """Closed-form 3×3 position Jacobian of the leg (hip frame), used for the σ scores.
-
-    Args:
-        l1: Coxa length [m].
-        l2: Femur length [m].
-        l3: Tibia length [m].
-        q: (3,) joint values [rad].
-
-    Returns:
-        ``∂p/∂q`` (3, 3) in [m/rad].
-
-    """
-    q1, q2, q3 = (float(v) for v in q)
-    c1, s1 = math.cos(q1), math.sin(q1)
-    rho = l1 + l2 * math.cos(q2) + l3 * math.cos(q2 + q3)
-    dr2 = -(l2 * math.sin(q2) + l3 * math.sin(q2 + q3))
-    dz2 = -(l2 * math.cos(q2) + l3 * math.cos(q2 + q3))
-    dr3, dz3 = -l3 * math.sin(q2 + q3), -l3 * math.cos(q2 + q3)
-    return np.array(
-        [[-rho * s1, c1 * dr2, c1 * dr3], [rho * c1, s1 * dr2, s1 * dr3], [0.0, dz2, dz3]]
-    )
 
 
 def sigmas(l1: float, l2: float, l3: float, q: Any) -> tuple[float, float]:
