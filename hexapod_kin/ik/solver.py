@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, Literal, get_args
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 
@@ -34,7 +34,20 @@ from .._numerics import chain_scale
 from ..exceptions import ConfigurationError, IKError, ParameterError
 from ..kinematics import KinematicModel
 from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .task import MODES, Task, build_task, build_tasks, check_within
+from .task import (
+    _F64,
+    _POSE_WEIGHTS,
+    _POSITION_WEIGHTS,
+    MODES,
+    TARGET_FACTOR,
+    Task,
+    _fast_pose,
+    _limit,
+    _task,
+    build_task,
+    build_tasks,
+    check_within,
+)
 
 __all__ = ["INTERPRETED_CALLS", "MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve",
            "solve_chain", "solve_many"]  # fmt: skip
@@ -182,6 +195,23 @@ class IKResult:
     distance: float
     nearest: np.ndarray
     sigma_min: float
+
+    if not TYPE_CHECKING:  # (hidden from mypy: the fields keep their types)
+
+        def __getattr__(self, name: str) -> Any:
+            """A field of a converged per-call result, filled on first use (see :func:`solve`)."""
+            d = object.__getattribute__(self, "__dict__")
+            lazy = d.get("_lazy")
+            if lazy is not None:
+                d.update(_converged_fields(*lazy))
+                d.pop("_lazy", None)
+            if name in d and name[0] != "_":
+                return d[name]
+            raise AttributeError(f"'IKResult' object has no attribute {name!r}")
+
+    def __getstate__(self) -> dict[str, Any]:
+        """The fields (a lazy result filled first)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
 
     @property
     def converged(self) -> bool:
@@ -434,6 +464,10 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
+    if _LOADED and not options and q0 is None and target.__class__ is np.ndarray:
+        quick = _quick(mdl, target)
+        if quick is not None:
+            return quick
     if options:
         opts = IKOptions.of(options)
         task = build_task(target, mask=opts.mask, weights=opts.weights)
@@ -460,15 +494,77 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     return _report(mdl, s, task, out[0], python)
 
 
+def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
+    """:func:`solve` of a float64 position or pose, no options, once the loop is loaded.
+
+    The same loop, arguments and bits as the general path, in fewer Python steps: the task
+    and the fields of a converged result are built when first read. None: any other case
+    (the general path checks it and names what is wrong).
+    """
+    if t.dtype is not _F64:
+        return None
+    if t.shape == (3,):
+        x, y, z = t.tolist()
+        mode, w6 = "position", _POSITION_WEIGHTS
+        tg = _EYE1.copy()
+        tg[0, :3, 3] = t
+    elif t.shape == (4, 4) and _fast_pose(t):
+        x, y, z = t[:3, 3].tolist()
+        mode, w6 = "pose", _POSE_WEIGHTS
+        tg = t[None].copy()
+    else:
+        return None
+    s, limit = mdl.cached(_QUICK[mode], lambda: _quick_setup(mdl, mode))
+    if not abs(x) + abs(y) + abs(z) <= limit:  # farther, or NaN: the general path's check
+        return None
+    tg.setflags(write=False)
+    out = np.empty((1, s.width))
+    _LOADED[0](s.fplan, s.iplan, tg, w6, s.one[0], s.one[1], out)
+    row = out[0]
+    row.setflags(write=False)
+    if row[2] != 0.0:
+        return _report(mdl, s, _task(mode, tg[0], 0.0, w6), row, False)
+    res = _NEW(IKResult)
+    _SET(res, "__dict__", {"_lazy": (row, s, (mode, tg, w6))})
+    return res
+
+
+def _quick_setup(mdl: KinematicModel, mode: str) -> tuple[_Setup, float]:
+    """:func:`_quick`'s setup of ``mode`` and the farthest target ``|x| + |y| + |z|`` it takes."""
+    return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
+
+
+_QUICK = {"position": "ik.quick.position", "pose": "ik.quick.pose"}
+_EYE1 = np.eye(4)[None]
+_NEW, _SET = object.__new__, object.__setattr__
+
+
 def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python: bool) -> IKResult:
     """The result of one output row of the loop (made read-only; ``python``: see :func:`_run`)."""
     row.setflags(write=False)
-    attempts, it, code, err, rot, smin = row[:_O_Q].tolist()
+    err, rot = row[3:5].tolist()
+    fields = _converged_fields(row, s, task)
+    if row[2] == 0.0 or (err <= s.tols[0] and rot <= s.tols[1]):
+        return _result(fields, "converged", fields["reason"], False)
+    fields["reason"] = ""
+    if row[2] == 2.0:
+        why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
+        return _result(fields, "not_converged", why, False)
+    return _diagnose(mdl, s, task, fields["q"], fields["history"], fields, python)
+
+
+def _converged_fields(row: np.ndarray, s: _Setup, task: Any) -> dict[str, Any]:
+    """The fields of a result from its read-only output row, as if converged.
+
+    ``task``: the :class:`Task`, or ``(mode, pose (1, 4, 4), weights)`` of :func:`_quick`.
+    """
+    if not isinstance(task, Task):
+        task = _task(task[0], task[1][0], 0.0, task[2])
+    attempts, it, _, err, rot, smin = row[:_O_Q].tolist()
     n = _O_Q + s.n
     it = int(it)
     target = task.pose[:3, 3]
-    converged = code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1])
-    fields = {
+    return {
         "q": row[_O_Q:n],
         "status": "converged",
         "error": err,
@@ -480,20 +576,11 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python:
         "target": target,
         "task": task,
         "attempts": int(attempts),
-        "reason": s.why % (err, rot) if converged else "",
+        "reason": s.why % (err, rot),
         "distance": 0.0,
         "nearest": target,
         "sigma_min": smin,
     }
-    if converged:  # the per-call path: the fields as they are, the dict is the result's own
-        out = object.__new__(IKResult)
-        object.__setattr__(out, "__dict__", fields)
-        return out
-    q, hist = fields["q"], fields["history"]
-    if code == 2.0:
-        why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
-        return _result(fields, "not_converged", why, False)
-    return _diagnose(mdl, s, task, q, hist, fields, python)
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
