@@ -40,6 +40,7 @@ from .task import (
     _POSITION_WEIGHTS,
     MODES,
     TARGET_FACTOR,
+    Mode,
     Task,
     _fast_pose,
     _limit,
@@ -501,6 +502,7 @@ def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
     and the fields of a converged result are built when first read. None: any other case
     (the general path checks it and names what is wrong).
     """
+    mode: Mode
     if t.dtype is not _F64:
         return None
     if t.shape == (3,):
@@ -529,7 +531,7 @@ def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
     return res
 
 
-def _quick_setup(mdl: KinematicModel, mode: str) -> tuple[_Setup, float]:
+def _quick_setup(mdl: KinematicModel, mode: Mode) -> tuple[_Setup, float]:
     """:func:`_quick`'s setup of ``mode`` and the farthest target ``|x| + |y| + |z|`` it takes."""
     return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
 
