@@ -17,8 +17,10 @@ target (its row of a batch, bit for bit), :func:`solve_many` for N targets on ev
 :data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
 own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
 same bits), so that a command solving one target neither compiles nor loads machine code.
-The result is measured in the same call (the one FK core, equal to Pinocchio's to rounding;
-tests hold position, rotation, errors and σ_min against Pinocchio and the SVD).
+A float64 position or pose without options, once the loop is loaded, goes straight in (a
+few µs of Python around the loop; the fields of a converged result are filled when first
+read). The result is measured in the same call (the one FK core, equal to Pinocchio's to
+rounding; tests hold position, rotation, errors and σ_min against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
@@ -156,6 +158,9 @@ _PER_THREAD = 64
 @dataclass(frozen=True)
 class IKResult:
     """Result of :func:`solve` (arrays are read-only; SI units).
+
+    A converged result of a float64 position or pose solved without options holds its
+    output row until a field is first read, then its fields (the same values and types).
 
     Attributes:
         q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
