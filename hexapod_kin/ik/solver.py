@@ -514,9 +514,9 @@ def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
         x, y, z = t.tolist()
         mode, w6 = "position", _POSITION_WEIGHTS
         tg = _EYE1.copy()
-        tg[0, :3, 3] = t
-    elif t.shape == (4, 4) and _fast_pose(t):
-        x, y, z = t[:3, 3].tolist()
+        tg[0, 0, 3], tg[0, 1, 3], tg[0, 2, 3] = x, y, z
+    elif t.shape == (4, 4) and (xyz := _fast_pose(t)) is not None:
+        x, y, z = xyz
         mode, w6 = "pose", _POSE_WEIGHTS
         tg = t[None].copy()
     else:
@@ -527,12 +527,11 @@ def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
     tg.setflags(write=False)
     out = np.empty((1, s.width))
     _LOADED[0](s.fplan, s.iplan, tg, w6, s.one[0], s.one[1], out)
-    row = out[0]
-    row.setflags(write=False)
-    if row[2] != 0.0:
-        return _report(mdl, s, _task(mode, tg[0], 0.0, w6), row, False)
+    out.setflags(write=False)
+    if out[0, 2] != 0.0:
+        return _report(mdl, s, _task(mode, tg[0], 0.0, w6), out[0], False)
     res = _NEW(IKResult)
-    _SET(res, "__dict__", {"_lazy": (row, s, (mode, tg, w6))})
+    _SET(res, "__dict__", {"_lazy": (out, s, (mode, tg, w6))})
     return res
 
 
@@ -563,8 +562,11 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python:
 def _converged_fields(row: np.ndarray, s: _Setup, task: Any) -> dict[str, Any]:
     """The fields of a result from its read-only output row, as if converged.
 
-    ``task``: the :class:`Task`, or ``(mode, pose (1, 4, 4), weights)`` of :func:`_quick`.
+    ``row``: (width,), or :func:`_quick`'s (1, width) with ``task`` = ``(mode, pose (1, 4, 4),
+    weights)`` instead of the :class:`Task`.
     """
+    if row.ndim == 2:
+        row = row[0]
     if not isinstance(task, Task):
         task = _task(task[0], task[1][0], 0.0, task[2])
     attempts, it, _, err, rot, smin = row[:_O_Q].tolist()

@@ -152,21 +152,24 @@ def _fast(t: np.ndarray) -> Task | None:
         return _task("position", pose, 0.0, _POSITION_WEIGHTS)
     if t.shape != (4, 4):
         return None
-    if not _fast_pose(t):
+    if _fast_pose(t) is None:
         return None
     pose = t.copy()
     pose.setflags(write=False)
     return _task("pose", pose, 0.0, _POSE_WEIGHTS)
 
 
-def _fast_pose(t: np.ndarray) -> bool:
-    """A float64 (4, 4) rigid transform (to 1e-9), finite, with last row [0, 0, 0, 1]."""
+def _fast_pose(t: np.ndarray) -> tuple[float, float, float] | None:
+    """``(x, y, z)`` of a float64 rigid transform (4, 4), else None.
+
+    Rigid: rotation orthonormal to 1e-9 with det +1, finite, last row [0, 0, 0, 1].
+    """
     (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
     if last != [0.0, 0.0, 0.0, 1.0] or not math.isfinite(x + y + z):
-        return False
+        return None
     # columns orthonormal and det +1 (third column = first × second), to 1e-9 (False for NaN)
     tol = 1e-9
-    return (
+    rigid = (
         -tol <= a * a + d * d + g * g - 1.0 <= tol
         and -tol <= b * b + e * e + h * h - 1.0 <= tol
         and -tol <= a * b + d * e + g * h <= tol
@@ -174,6 +177,7 @@ def _fast_pose(t: np.ndarray) -> bool:
         and -tol <= g * b - a * h - f <= tol
         and -tol <= a * e - d * b - i <= tol
     )
+    return (x, y, z) if rigid else None
 
 
 def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
