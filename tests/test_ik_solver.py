@@ -581,6 +581,13 @@ def test_the_quick_per_call_path_gives_the_general_paths_results():
         optioned = [ik.solve(model, t, tol=1e-10) for t in targets]
         batch = ik.solve_many(model, targets)
         assert _bits(quick) == _bits(general) == _bits(optioned) == _bits(batch)
+        q0 = model.random_q(len(targets), seed=9)  # a given start: the same through both paths
+        warm = [ik.solve(model, t, q) for t, q in zip(targets, q0)]
+        assert ["_lazy" in vars(r) for r in warm] == [r.converged for r in warm]
+        given = [ik.solve(model, t, q, tol=1e-10) for t, q in zip(targets, q0)]
+        assert _bits(warm) == _bits(given) == _bits(ik.solve_many(model, targets, q0))
+        with pytest.raises(ConfigurationError, match="q0"):
+            ik.solve(model, targets[1], q0[0][:2])
         r = ik.solve(model, targets[1])
         for f in fields(ik.IKResult):
             a, b = getattr(r, f.name), getattr(general[1], f.name)

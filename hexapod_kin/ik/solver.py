@@ -17,10 +17,11 @@ target (its row of a batch, bit for bit), :func:`solve_many` for N targets on ev
 :data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
 own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
 same bits), so that a command solving one target neither compiles nor loads machine code.
-A float64 position or pose without options, once the loop is loaded, goes straight in (a
-few µs of Python around the loop; the fields of a converged result are filled when first
-read). The result is measured in the same call (the one FK core, equal to Pinocchio's to
-rounding; tests hold position, rotation, errors and σ_min against Pinocchio and the SVD).
+A float64 position or pose without options (with or without ``q0``), once the loop is
+loaded, goes straight in (a few µs of Python around the loop; the fields of a converged
+result are filled when first read). The result is measured in the same call (the one FK
+core, equal to Pinocchio's to rounding; tests hold position, rotation, errors and σ_min
+against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
@@ -287,8 +288,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
-    if _LOADED and not options and q0 is None and target.__class__ is np.ndarray:
-        quick = _quick(mdl, target)
+    if _LOADED and not options and target.__class__ is np.ndarray:
+        quick = _quick(mdl, target, q0)
         if quick is not None:
             return quick
     if options:
@@ -317,7 +318,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
     return _report(mdl, s, task, out[0], python)
 
 
-def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
+def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | None:
     """:func:`solve` of a float64 position or pose, no options, once the loop is loaded.
 
     The same loop, arguments and bits as the general path, in fewer Python steps: the task
@@ -342,8 +343,12 @@ def _quick(mdl: KinematicModel, t: np.ndarray) -> IKResult | None:
     if not abs(x) + abs(y) + abs(z) <= limit:  # farther, or NaN: the general path's check
         return None
     tg.setflags(write=False)
+    iplan, starts = s.iplan, s.one[1]
+    if q0 is not None:
+        iplan, starts = s.iplan_q0, starts.copy()
+        starts[0, 0] = mdl.check_q(q0, "q0")
     out = np.empty((1, s.width))
-    _LOADED[0](s.fplan, s.iplan, tg, w6, s.one[0], s.one[1], out)
+    _LOADED[0](s.fplan, iplan, tg, w6, s.one[0], starts, out)
     out.setflags(write=False)
     if out[0, 2] != 0.0:
         return _report(mdl, s, _task(mode, tg[0], 0.0, w6), out[0], False)
