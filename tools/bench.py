@@ -302,7 +302,7 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
     peer_us = float(np.median(pblocked)) * 1e6
     return out | {"peer_rtb_ik_LM_median_us": round(peer_us, 1),
-                  "peer_interleaved_median_us": us([t for _, t in inter]),
+                  "rtb_interleaved_median_us": us([t for _, t in inter]),
                   "peer_cpu_mean_us_blocked": round(pcpu / n * 1e6, 1),
                   "peer_success": round(pok / n, 4), "speedup": round(peer_us / ours_us, 2),
                   "speedup_interleaved": round(us([t for _, t in inter]) /
