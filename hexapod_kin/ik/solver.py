@@ -308,11 +308,7 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         iplan = s.iplan_q0
     if code == 1:
         pars = _with_yaw(pars, [task.yaw])
-    if _LOADED:  # the per-call path: straight into the loaded loop
-        out = np.empty((1, s.width))
-        _LOADED[0](s.fplan, iplan, task.pose[None], task.weights, pars, starts, out)
-        return _report(mdl, s, task, out[0], False)
-    python = _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
+    python = not _LOADED and _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
     _LEFT[0] -= python
     out = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
     return _report(mdl, s, task, out[0], python)
