@@ -47,14 +47,11 @@ from .result import (
     _result,
 )
 from .task import (
-    _F64,
-    _POSE_WEIGHTS,
-    _POSITION_WEIGHTS,
     MODES,
     TARGET_FACTOR,
     Mode,
     Task,
-    _fast_pose,
+    _fast,
     _limit,
     _task,
     build_task,
@@ -321,24 +318,13 @@ def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | Non
     and the fields of a converged result are built when first read. None: any other case
     (the general path checks it and names what is wrong).
     """
-    mode: Mode
-    if t.dtype is not _F64:
+    fast = _fast(t)
+    if fast is None:
         return None
-    if t.shape == (3,):
-        x, y, z = t.tolist()
-        mode, w6 = "position", _POSITION_WEIGHTS
-        tg = _EYE1.copy()
-        tg[0, 0, 3], tg[0, 1, 3], tg[0, 2, 3] = x, y, z
-    elif t.shape == (4, 4) and (xyz := _fast_pose(t)) is not None:
-        x, y, z = xyz
-        mode, w6 = "pose", _POSE_WEIGHTS
-        tg = t[None].copy()
-    else:
-        return None
+    mode, tg, w6, total = fast
     s, limit = mdl.cached(_QUICK[mode], lambda: _quick_setup(mdl, mode))
-    if not abs(x) + abs(y) + abs(z) <= limit:  # farther, or NaN: the general path's check
+    if not total <= limit:  # farther, or not finite: the general path's check
         return None
-    tg.setflags(write=False)
     iplan, starts = s.iplan, s.one[1]
     if q0 is not None:
         iplan, starts = s.iplan_q0, starts.copy()
@@ -359,7 +345,6 @@ def _quick_setup(mdl: KinematicModel, mode: Mode) -> tuple[_Setup, float]:
 
 
 _QUICK = {"position": "ik.quick.position", "pose": "ik.quick.pose"}
-_EYE1 = np.eye(4)[None]
 _NEW, _SET = object.__new__, object.__setattr__
 
 
