@@ -553,3 +553,53 @@ def test_the_default_start_is_the_nearest_candidate(name):
             first += 1
             assert r.history[0] == pytest.approx(e, rel=1e-9, abs=1e-15)
     assert first >= 30
+
+
+def test_the_quick_per_call_path_gives_the_general_paths_results():
+    """A float64 position or pose without options takes the quick path (its converged results
+    filled when first read): every field and array byte equals the general path's (a list, or
+    an option) and the batch's; a read field is the dataclass's; pickling and copying fill it;
+    a name that is no field raises AttributeError."""
+    import copy
+    import pickle
+    from dataclasses import fields
+
+    from hexapod_kin.ik import solver
+
+    leg, ur5 = hk.load("hexabot_leg"), hk.load("erd:ur5_robot")
+    pos = np.array([leg.position(q) for q in leg.random_q(12, seed=8)])
+    pos[::4] *= 3.0  # unreachable: the quick path hands it to the diagnosis
+    poses = np.array([ur5.fk(q) for q in ur5.random_q(8, seed=8)])
+    for model, targets in ((leg, pos), (ur5, poses)):
+        ik.solve_many(model, targets[:2])  # the loop loaded: the quick path is open
+        quick = [ik.solve(model, t) for t in targets]
+        lazy = ["_lazy" in vars(r) for r in quick]  # before any field is read
+        assert lazy == [r.converged for r in quick]
+        assert {r.status for r in quick} >= ({"converged", "unreachable"} if model is leg else
+                                             {"converged"})  # fmt: skip
+        general = [ik.solve(model, t.tolist()) for t in targets]
+        optioned = [ik.solve(model, t, tol=1e-10) for t in targets]
+        batch = ik.solve_many(model, targets)
+        assert _bits(quick) == _bits(general) == _bits(optioned) == _bits(batch)
+        q0 = model.random_q(len(targets), seed=9)  # a given start: the same through both paths
+        warm = [ik.solve(model, t, q) for t, q in zip(targets, q0)]
+        assert ["_lazy" in vars(r) for r in warm] == [r.converged for r in warm]
+        given = [ik.solve(model, t, q, tol=1e-10) for t, q in zip(targets, q0)]
+        assert _bits(warm) == _bits(given) == _bits(ik.solve_many(model, targets, q0))
+        with pytest.raises(ConfigurationError, match="q0"):
+            ik.solve(model, targets[1], q0[0][:2])
+        r = ik.solve(model, targets[1])
+        for f in fields(ik.IKResult):
+            a, b = getattr(r, f.name), getattr(general[1], f.name)
+            assert type(a) is type(b) and (np.array_equal(a, b) if f.name != "task" else
+                                            a.to_dict() == b.to_dict())  # fmt: skip
+        assert list(vars(r)) == [f.name for f in fields(ik.IKResult)]
+        assert not r.q.flags.writeable and not r.task.pose.flags.writeable
+        for fresh in (pickle.loads(pickle.dumps(ik.solve(model, targets[1]))),
+                      copy.copy(ik.solve(model, targets[1]))):  # fmt: skip
+            assert _bits([fresh]) == _bits([r]) and "_lazy" not in vars(fresh)
+        with pytest.raises(AttributeError, match="no_such_field"):
+            ik.solve(model, targets[1]).no_such_field  # noqa: B018
+        with pytest.raises(AttributeError):
+            ik.solve(model, targets[1]).q = np.zeros(model.nq)
+        assert solver._quick(model, targets[1].astype(np.float32)) is None

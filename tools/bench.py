@@ -11,9 +11,12 @@ processes: min / median / max), then
 (mean µs per pose and success) and ``ik.solve`` (median µs per pose); ``ik.solve`` per call
 on 1,000 random reachable targets (UR5 and Panda poses, the leg's positions: median µs and
 success checked with Pinocchio) beside Robotics Toolbox's ``ik_LM`` (C++) on its own models,
-the two called in turn, target by target, then ours back to back (``tight_loop_median_us``;
-``steps_median``: accepted LM steps), and whether those results are byte-identical to the
-same targets' batch (``solve_many``) and to the first 100 solved in a fresh process;
+timed in blocks of 100 targets (ours, then RTB's, alternated: ``median_us``, ``speedup``; the
+blocks' CPU time per call: ``cpu_mean_us_blocked``), in turn target by target
+(``interleaved_median_us``: each call finds the caches the other left), then ours back to
+back (``tight_loop_median_us``; ``steps_median``: accepted LM steps), and whether those
+results are byte-identical to the same targets' batch (``solve_many``) and to the first 100
+solved in a fresh process;
 with the ratio to a peer measured in the same run where one exists (a Pinocchio loop, numpy's
 SVD, Pinocchio's IK example loop). A row that fails prints its error and the run goes on.
 
@@ -234,7 +237,10 @@ def fresh_digest(src, kw, position, n, k):
 
 
 def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
-    # ik.solve and RTB's ik_LM one target at a time, in turn (both see the same load)
+    # ik.solve and RTB's ik_LM one target at a time (both see the same load), timed twice:
+    # interleaved (ours, RTB's, target by target: each call finds the caches the other left)
+    # and in blocks (100 targets ours, the same 100 RTB's, alternated: as a loop calls them);
+    # the blocks' CPU time (process_time) per call as well (a busy machine's waits left out)
     n = 200 if QUICK else 1000
     model, poses, targets = per_call_targets(src, kw, position, n)
     try:
@@ -246,46 +252,61 @@ def per_call_row(src, kw, rtb_name, position, target_us, target_ok):
         qs = np.random.default_rng(21).uniform(robot.qlim[0], robot.qlim[1], size=(n, robot.n))
         teps = [ets.eval(q) for q in qs]
     ik.solve(model, targets[0])
-    times, ok, ptimes, pok, results = [], 0, [], 0, []
-    for i in range(n):
-        t0 = time.perf_counter()
-        r = ik.solve(model, targets[i])
-        times.append(time.perf_counter() - t0)
-        results.append(r)
-        got, p = model.fk(r.q), poses[i]  # checked with Pinocchio's FK and log map
+    clock, results, sols = time.perf_counter, [None] * n, [None] * n
+
+    def ours(i):
+        t0 = clock()
+        results[i] = ik.solve(model, targets[i])
+        return clock() - t0
+
+    def peer(i):
+        t0 = clock()
+        sols[i] = ets.ik_LM(teps[i], tol=1e-18, ilimit=60, slimit=100, joint_limits=True,
+                            mask=mask)
+        return clock() - t0
+
+    inter = [(ours(i), peer(i) if robot is not None else 0.0) for i in range(n)]
+    blocked, pblocked, cpu, pcpu = [], [], 0.0, 0.0
+    for a in range(0, n, 100):
+        c0 = time.process_time()
+        blocked += [ours(i) for i in range(a, min(a + 100, n))]
+        c1 = time.process_time()
+        pblocked += [peer(i) for i in range(a, min(a + 100, n))] if robot is not None else []
+        cpu, pcpu = cpu + c1 - c0, pcpu + time.process_time() - c1
+    ok = pok = 0
+    for r, p in zip(results, poses):  # checked with Pinocchio's FK and log map
+        got = model.fk(r.q)
         rot = 0.0 if position else np.linalg.norm(pin.log3(p[:3, :3] @ got[:3, :3].T))
         ok += bool(r.converged and np.linalg.norm(got[:3, 3] - p[:3, 3]) <= 1e-9 and rot <= 1e-9)
-        if robot is None:
-            continue
-        tep = teps[i]
-        t0 = time.perf_counter()
-        sol = ets.ik_LM(tep, tol=1e-18, ilimit=60, slimit=100, joint_limits=True, mask=mask)
-        ptimes.append(time.perf_counter() - t0)
-        got = ets.eval(sol[0])
-        rot = 0.0 if position else np.linalg.norm(pin.log3(tep[:3, :3] @ got[:3, :3].T))
-        pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
-    ours = float(np.median(times)) * 1e6
-    tight = []  # the same calls back to back (nothing else between them: caches stay warm)
-    for t in targets:
-        t0 = time.perf_counter()
-        ik.solve(model, t)
-        tight.append(time.perf_counter() - t0)
+    ours_us = float(np.median(blocked)) * 1e6
+    us = lambda ts: round(float(np.median(ts)) * 1e6, 1)  # noqa: E731
+    tight = [ours(i) for i in range(n)]  # ours back to back (nothing else between them)
     # the same bits: these per-call results (warm), the batch of the same targets, and the
     # first 100 targets solved one by one in a fresh process
     warm = digest(results)
     batch = digest(ik.solve_many(model, np.array(targets)))
     fresh = fresh_digest(src, kw, position, n, 100)
-    out = {"n": n, "median_us": round(ours, 1), "target_us": target_us,
-           "tight_loop_median_us": round(float(np.median(tight)) * 1e6, 1),
+    out = {"n": n, "timing": "median_us: blocks of 100 (ours, then RTB's), alternated",
+           "median_us": round(ours_us, 1), "target_us": target_us,
+           "interleaved_median_us": us([t for t, _ in inter]),
+           "cpu_mean_us_blocked": round(cpu / n * 1e6, 1), "tight_loop_median_us": us(tight),
            "steps_median": float(np.median([r.iterations for r in results])),
            "success": round(ok / n, 4), "target_success": target_ok,
            "same_bits_batch": warm == batch, "same_bits_fresh": fresh == digest(results[:100]),
            "load_1min": round(os.getloadavg()[0], 1)}
     if robot is None:
         return out | {"peer_rtb": "not installed (pip install hexapod-kin[bench])"}
-    peer = float(np.median(ptimes)) * 1e6
-    return out | {"peer_rtb_ik_LM_median_us": round(peer, 1), "peer_success": round(pok / n, 4),
-                  "speedup": round(peer / ours, 2)}
+    for sol, tep in zip(sols, teps):
+        got = ets.eval(sol[0])
+        rot = 0.0 if position else np.linalg.norm(pin.log3(tep[:3, :3] @ got[:3, :3].T))
+        pok += bool(np.linalg.norm(got[:3, 3] - tep[:3, 3]) <= 1e-9 and rot <= 1e-9)
+    peer_us = float(np.median(pblocked)) * 1e6
+    return out | {"peer_rtb_ik_LM_median_us": round(peer_us, 1),
+                  "rtb_interleaved_median_us": us([t for _, t in inter]),
+                  "peer_cpu_mean_us_blocked": round(pcpu / n * 1e6, 1),
+                  "peer_success": round(pok / n, 4), "speedup": round(peer_us / ours_us, 2),
+                  "speedup_interleaved": round(us([t for _, t in inter]) /
+                                               us([t for t, _ in inter]), 2)}
 
 
 for name, src, kw, rtb_name, position, target_us, target_ok in (

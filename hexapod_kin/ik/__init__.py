@@ -10,7 +10,8 @@
   and the package's one home pose :func:`home` (IK's first candidate start, resolved-rate start).
 * :mod:`.solver` — the one numerical loop (compiled, :mod:`.step`, imported on first use)
   for one target (:func:`solve`), many (:func:`solve_many`) or a chain view such as a leg
-  (:func:`solve_chain`); :class:`IKOptions`, :class:`IKResult`.
+  (:func:`solve_chain`).
+* :mod:`.result` — its options and result (:class:`IKOptions`, :class:`IKResult`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ from .closed import (
     leg_solutions,
 )
 from .prepare import LEG_HOME, Prepared, home, prepared
-from .solver import STATUSES, IKOptions, IKResult, solve, solve_chain, solve_many
+from .result import STATUSES, IKOptions, IKResult
+from .solver import solve, solve_chain, solve_many
 from .task import AXES, TARGET_FACTOR, Task, build_task, build_tasks, check_within
 
 __all__ = ["AXES", "FAMILIES", "FAMILY_TOL", "LEG_HOME", "STATUSES", "TARGET_FACTOR",

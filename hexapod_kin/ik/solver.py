@@ -17,209 +17,60 @@ target (its row of a batch, bit for bit), :func:`solve_many` for N targets on ev
 :data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
 own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
 same bits), so that a command solving one target neither compiles nor loads machine code.
-The result is measured in the same call (the one FK core, equal to Pinocchio's to rounding;
-tests hold position, rotation, errors and σ_min against Pinocchio and the SVD).
+A float64 position or pose without options (with or without ``q0``), once the loop is
+loaded, goes straight in (a few µs of Python around the loop; the fields of a converged
+result are filled when first read). The result is measured in the same call (the one FK
+core, equal to Pinocchio's to rounding; tests hold position, rotation, errors and σ_min
+against Pinocchio and the SVD).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, fields
-from typing import Any, Literal, get_args
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .._chain import ChainArrays
 from .._numerics import chain_scale
-from ..exceptions import ConfigurationError, IKError, ParameterError
+from ..exceptions import ConfigurationError, IKError
 from ..kinematics import KinematicModel
-from .prepare import N_STARTS, ModelLike, Prepared, as_model, prepared
-from .task import MODES, Task, build_task, build_tasks, check_within
+from .prepare import ModelLike, Prepared, as_model, prepared
+from .result import (
+    _DEFAULT,
+    _O_Q,
+    MAX_ITER,
+    STATUSES,
+    IKOptions,
+    IKResult,
+    _converged_fields,
+    _result,
+)
+from .task import (
+    MODES,
+    TARGET_FACTOR,
+    Mode,
+    Task,
+    _fast,
+    _limit,
+    _task,
+    build_task,
+    build_tasks,
+    check_within,
+)
 
 __all__ = ["INTERPRETED_CALLS", "MAX_ITER", "STATUSES", "IKOptions", "IKResult", "solve",
            "solve_chain", "solve_many"]  # fmt: skip
-
-#: Cap on ``max_iter`` (the residual history holds max_iter + 1 values per target).
-MAX_ITER = 100_000
-
-Status = Literal["converged", "unreachable", "joint_limits", "singular", "not_converged"]
-STATUSES: tuple[str, ...] = get_args(Status)
 
 _MU0 = 0.1  # initial LM factor: λ² = μ (‖e‖² + w̄)
 _CODES = {mode: i for i, mode in enumerate(MODES)}  # task mode → the loop's mode number
 
 
-# ============================================================================ options
-def _bad(name: str, value: Any, allowed: str) -> ParameterError:
-    return ParameterError(
-        f"{name}={value!r} is not allowed; {allowed} is needed",
-        parameter=name,
-        value=value,
-        allowed=allowed,
-    )
-
-
-@dataclass(frozen=True)
-class IKOptions:
-    """The options of :func:`solve` and :func:`solve_many`, checked on construction.
-
-    Attributes:
-        mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
-        weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
-        tol: Convergence threshold on the position error in [m].
-        rot_tol: Convergence threshold on the orientation error in [rad].
-        max_iter: Accepted steps per attempt (1 to :data:`MAX_ITER`).
-        restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
-        within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
-        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
-            ranges), a preferred configuration (nq,), or None (off).
-        posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
-
-    Raises:
-        ParameterError: A value out of its range.
-
-    """
-
-    mask: Any = None
-    weights: Any = None
-    tol: float = 1e-10
-    rot_tol: float = 1e-10
-    max_iter: int = 100
-    restarts: int = 16
-    within_limits: bool = True
-    posture: Any = "middle"
-    posture_gain: float = 0.1
-
-    def __post_init__(self) -> None:
-        for name in ("tol", "rot_tol", "posture_gain"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < math.inf:
-                raise _bad(name, v, "a finite number > 0")
-        if self.posture_gain > 1:
-            raise _bad("posture_gain", self.posture_gain, "0 < gain <= 1")
-        for name, least in (("max_iter", 1), ("restarts", 0)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < least:
-                raise _bad(name, v, f"an int >= {least}")
-        if self.max_iter > MAX_ITER:
-            raise _bad("max_iter", self.max_iter, f"an int from 1 to {MAX_ITER}")
-        if self.restarts > N_STARTS:
-            raise _bad("restarts", self.restarts, f"at most {N_STARTS}")
-        if isinstance(self.posture, str) and self.posture != "middle":
-            raise _bad("posture", self.posture, "'middle', None or a (nq,) array")
-
-    @classmethod
-    def of(cls, options: dict[str, Any]) -> IKOptions:
-        """Options from keywords (unknown names raise :class:`ParameterError`)."""
-        names = [f.name for f in fields(cls)]
-        unknown = sorted(set(options) - set(names))
-        if unknown:
-            raise ParameterError(
-                f"unknown IK option(s) {unknown}; valid: {names}",
-                parameter=unknown[0],
-                value=options[unknown[0]],
-                allowed=names,
-            )
-        return cls(**options)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary."""
-        out = {f.name: getattr(self, f.name) for f in fields(self)}
-        for k in ("mask", "weights", "posture"):
-            if out[k] is not None and not isinstance(out[k], str):
-                out[k] = np.asarray(out[k], dtype=float).tolist()
-        return out
-
-
-#: The options of a call that gives none.
-_DEFAULT = IKOptions()
-
 #: Fewest targets per thread of :func:`solve_many` (the compiled loop releases the GIL).
 _PER_THREAD = 64
 
 
-# ============================================================================ result
-@dataclass(frozen=True)
-class IKResult:
-    """Result of :func:`solve` (arrays are read-only; SI units).
-
-    Attributes:
-        q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
-        status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
-            ``"not_converged"``.
-        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
-            at ``q``.
-        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
-            position + yaw: |ψ* − ψ|; position: 0), recomputed at ``q``.
-        iterations: Accepted steps of the returned attempt.
-        history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
-            (starts with the initial residual; strictly decreasing).
-        position: p(q) in [m].
-        rotation: R(q) (3, 3), the tip's rotation in the base frame.
-        target: The target position in [m].
-        task: The task solved (mode, target pose, yaw, weights).
-        attempts: How many starts were tried (the nearest candidate, home, restarts used).
-        reason: One sentence explaining the status.
-        distance: For ``"unreachable"`` / ``"joint_limits"``: the position error in [m] of the
-            best configuration found; else 0.
-        nearest: For ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
-        sigma_min: Smallest singular value of the position Jacobian at ``q`` [m/rad].
-
-    """
-
-    q: np.ndarray
-    status: Status
-    error: float
-    rotation_error: float
-    iterations: int
-    history: np.ndarray
-    position: np.ndarray
-    rotation: np.ndarray
-    target: np.ndarray
-    task: Task
-    attempts: int
-    reason: str
-    distance: float
-    nearest: np.ndarray
-    sigma_min: float
-
-    @property
-    def converged(self) -> bool:
-        """True when ``status == "converged"``."""
-        return self.status == "converged"
-
-    @property
-    def pose(self) -> np.ndarray:
-        """The reached pose ``baseMtip`` (4, 4)."""
-        out = np.eye(4)
-        out[:3, :3] = self.rotation
-        out[:3, 3] = self.position
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary ([rad]/[m])."""
-        return {
-            "status": self.status,
-            "q": [float(v) for v in self.q],
-            "error": float(self.error),
-            "rotation_error": float(self.rotation_error),
-            "iterations": int(self.iterations),
-            "attempts": int(self.attempts),
-            "position": [float(v) for v in self.position],
-            "rotation": self.rotation.tolist(),
-            "target": [float(v) for v in self.target],
-            "task": self.task.to_dict(),
-            "distance": float(self.distance),
-            "nearest": [float(v) for v in self.nearest],
-            "sigma_min": float(self.sigma_min),
-            "reason": self.reason,
-            "history": [float(v) for v in self.history],
-        }
-
-
 # ============================================================================ the loop's setup
-#: Where a result's values sit in a row of the loop's output (see ``step.lm_loop``).
-_O_Q = 6
 
 
 @dataclass(frozen=True)
@@ -434,6 +285,10 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
+    if _LOADED and not options and target.__class__ is np.ndarray:
+        quick = _quick(mdl, target, q0)
+        if quick is not None:
+            return quick
     if options:
         opts = IKOptions.of(options)
         task = build_task(target, mask=opts.mask, weights=opts.weights)
@@ -450,64 +305,61 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         iplan = s.iplan_q0
     if code == 1:
         pars = _with_yaw(pars, [task.yaw])
-    if _LOADED:  # the per-call path: straight into the loaded loop
-        out = np.empty((1, s.width))
-        _LOADED[0](s.fplan, iplan, task.pose[None], task.weights, pars, starts, out)
-        return _report(mdl, s, task, out[0], False)
-    python = _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
+    python = not _LOADED and _LEFT[0] > 0 and int(s.ipar[1]) * len(s.starts) <= _PYTHON_STEPS
     _LEFT[0] -= python
     out = _run(s.fplan, iplan, task.pose[None], task.weights, pars, starts, python)
     return _report(mdl, s, task, out[0], python)
 
 
+def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | None:
+    """:func:`solve` of a float64 position or pose, no options, once the loop is loaded.
+
+    The same loop, arguments and bits as the general path, in fewer Python steps: the task
+    and the fields of a converged result are built when first read. None: any other case
+    (the general path checks it and names what is wrong).
+    """
+    fast = _fast(t)
+    if fast is None:
+        return None
+    mode, tg, w6, total = fast
+    s, limit = mdl.cached(_QUICK[mode], lambda: _quick_setup(mdl, mode))
+    if not total <= limit:  # farther, or not finite: the general path's check
+        return None
+    iplan, starts = s.iplan, s.one[1]
+    if q0 is not None:
+        iplan, starts = s.iplan_q0, starts.copy()
+        starts[0, 0] = mdl.check_q(q0, "q0")
+    out = np.empty((1, s.width))
+    _LOADED[0](s.fplan, iplan, tg, w6, s.one[0], starts, out)
+    out.setflags(write=False)
+    if out[0, 2] != 0.0:
+        return _report(mdl, s, _task(mode, tg[0], 0.0, w6), out[0], False)
+    res = _NEW(IKResult)
+    _SET(res, "__dict__", {"_lazy": (out, s, (mode, tg, w6))})
+    return res
+
+
+def _quick_setup(mdl: KinematicModel, mode: Mode) -> tuple[_Setup, float]:
+    """:func:`_quick`'s setup of ``mode`` and the farthest target ``|x| + |y| + |z|`` it takes."""
+    return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
+
+
+_QUICK = {"position": "ik.quick.position", "pose": "ik.quick.pose"}
+_NEW, _SET = object.__new__, object.__setattr__
+
+
 def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python: bool) -> IKResult:
     """The result of one output row of the loop (made read-only; ``python``: see :func:`_run`)."""
     row.setflags(write=False)
-    attempts, it, code, err, rot, smin = row[:_O_Q].tolist()
-    n = _O_Q + s.n
-    it = int(it)
-    target = task.pose[:3, 3]
-    converged = code == 0.0 or (err <= s.tols[0] and rot <= s.tols[1])
-    fields = {
-        "q": row[_O_Q:n],
-        "status": "converged",
-        "error": err,
-        "rotation_error": rot,
-        "iterations": it,
-        "history": row[n + 12 : n + 13 + it],
-        "position": row[n : n + 3],
-        "rotation": row[n + 3 : n + 12].reshape(3, 3),
-        "target": target,
-        "task": task,
-        "attempts": int(attempts),
-        "reason": s.why % (err, rot) if converged else "",
-        "distance": 0.0,
-        "nearest": target,
-        "sigma_min": smin,
-    }
-    if converged:  # the per-call path: the fields as they are, the dict is the result's own
-        out = object.__new__(IKResult)
-        object.__setattr__(out, "__dict__", fields)
-        return out
-    q, hist = fields["q"], fields["history"]
-    if code == 2.0:
+    err, rot = row[3:5].tolist()
+    fields = _converged_fields(row, s, task)
+    if row[2] == 0.0 or (err <= s.tols[0] and rot <= s.tols[1]):
+        return _result(fields, "converged", fields["reason"], False)
+    fields["reason"] = ""
+    if row[2] == 2.0:
         why = f"{int(s.ipar[1])} steps taken, ‖e‖ = {err:.3g} m, {rot:.3g} rad, still decreasing"
         return _result(fields, "not_converged", why, False)
-    return _diagnose(mdl, s, task, q, hist, fields, python)
-
-
-def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
-    """``IKResult(**fields)``, built without ``__init__`` (the per-call path).
-
-    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0 and the
-    target).
-    """
-    fields["status"], fields["reason"] = status, reason
-    fields["distance"] = fields["error"] if far else 0.0
-    fields["nearest"] = fields["position"] if far else fields["target"]
-    out = object.__new__(IKResult)
-    object.__setattr__(out, "__dict__", fields)
-    return out
+    return _diagnose(mdl, s, task, fields["q"], fields["history"], fields, python)
 
 
 def _diagnose(

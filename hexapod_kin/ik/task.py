@@ -132,43 +132,46 @@ _POSE_WEIGHTS.setflags(write=False)
 
 _POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 _POSITION_WEIGHTS.setflags(write=False)
-_EYE4 = np.eye(4)
+_EYE1 = np.eye(4)[None]
 _F64 = np.dtype(np.float64)
 
 
-def _fast(t: np.ndarray) -> Task | None:
-    """The common cases (float64 position or pose, no mask) checked in plain floats."""
+def _fast(t: np.ndarray) -> tuple[Mode, np.ndarray, np.ndarray, float] | None:
+    """A float64 position or pose (no mask) checked in plain floats: the per-call case.
+
+    Returns ``(mode, pose (1, 4, 4) read-only, weights, |x| + |y| + |z|)`` (that sum NaN or
+    inf when the position is not finite), or None for anything else, e.g. a pose that is not
+    rigid (rotation orthonormal to 1e-9 with det +1, last row [0, 0, 0, 1]).
+    """
     if t.dtype is not _F64:  # float64's one dtype object (any other: the general path)
         return None
+    mode: Mode
     if t.shape == (3,):
         x, y, z = t.tolist()
-        if not math.isfinite(x + y + z):
+        mode, w = "position", _POSITION_WEIGHTS
+        pose = _EYE1.copy()
+        pose[0, 0, 3], pose[0, 1, 3], pose[0, 2, 3] = x, y, z
+    elif t.shape == (4, 4):
+        (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
+        # columns orthonormal and det +1 (third column = first × second), to 1e-9 (False
+        # for NaN)
+        tol = 1e-9
+        if not (
+            last == [0.0, 0.0, 0.0, 1.0]
+            and -tol <= a * a + d * d + g * g - 1.0 <= tol
+            and -tol <= b * b + e * e + h * h - 1.0 <= tol
+            and -tol <= a * b + d * e + g * h <= tol
+            and -tol <= d * h - g * e - c <= tol
+            and -tol <= g * b - a * h - f <= tol
+            and -tol <= a * e - d * b - i <= tol
+        ):
             return None
-        pose = _EYE4.copy()
-        pose[0, 3] = x
-        pose[1, 3] = y
-        pose[2, 3] = z
-        pose.setflags(write=False)
-        return _task("position", pose, 0.0, _POSITION_WEIGHTS)
-    if t.shape != (4, 4):
+        mode, w = "pose", _POSE_WEIGHTS
+        pose = t[None].copy()
+    else:
         return None
-    (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
-    if last != [0.0, 0.0, 0.0, 1.0] or not math.isfinite(x + y + z):
-        return None
-    # columns orthonormal and det +1 (third column = first × second), to 1e-9 (False for NaN)
-    tol = 1e-9
-    if not (
-        -tol <= a * a + d * d + g * g - 1.0 <= tol
-        and -tol <= b * b + e * e + h * h - 1.0 <= tol
-        and -tol <= a * b + d * e + g * h <= tol
-        and -tol <= d * h - g * e - c <= tol
-        and -tol <= g * b - a * h - f <= tol
-        and -tol <= a * e - d * b - i <= tol
-    ):
-        return None
-    pose = t.copy()
     pose.setflags(write=False)
-    return _task("pose", pose, 0.0, _POSE_WEIGHTS)
+    return mode, pose, w, abs(x) + abs(y) + abs(z)
 
 
 def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
@@ -190,8 +193,8 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
     """
     if target.__class__ is np.ndarray and mask is None and weights is None:
         fast = _fast(target)
-        if fast is not None:
-            return fast
+        if fast is not None and math.isfinite(fast[3]):
+            return _task(fast[0], fast[1][0], 0.0, fast[2])
     try:
         t = np.array(target, dtype=np.float64)
     except (TypeError, ValueError):
