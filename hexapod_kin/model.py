@@ -210,19 +210,10 @@ class Model:
         names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
-        self._unbounded = tuple(
-            (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
-            for i in range(1, m.njoints)
-            if names[i - 1] == "continuous"
-        )
-        self._plain_idx = np.array(
-            [
-                (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
-                for i in range(1, m.njoints)
-                if names[i - 1] != "continuous"
-            ],
-            dtype=np.int64,
-        ).reshape(-1, 2)
+        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in range(1, m.njoints)]
+        self._unbounded = tuple(p for p, kind in zip(idx, names) if kind == "continuous")
+        plain = [p for p, kind in zip(idx, names) if kind != "continuous"]
+        self._plain_idx = np.array(plain, dtype=np.int64).reshape(-1, 2)
         pin.framesForwardKinematics(m, data, pin.neutral(m))
         self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
             data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
@@ -254,27 +245,17 @@ class Model:
     ) -> tuple[pin.Model, str]:
         """The loader gate (and the inertia repair), then Pinocchio: ``(full model, URDF text)``."""
         check_mode(inertia)
-        gate = check_urdf(
-            resolved.text,
-            package_dirs=resolved.package_dirs,
-            mesh_root=resolved.mesh_root,
-            lenient=True,
-        )
+        where: dict[str, Any] = {
+            "package_dirs": resolved.package_dirs,
+            "mesh_root": resolved.mesh_root,
+        }
+        gate = check_urdf(resolved.text, lenient=True, **where)
         self.inertia_repair = None
         if inertia != "urdf":
-            repaired = repair_inertials(
-                resolved.text if gate.text is None else gate.text,
-                inertia,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-            )
+            text = resolved.text if gate.text is None else gate.text
+            repaired = repair_inertials(text, inertia, **where)
             self.inertia_repair = repaired
-            gate = check_urdf(
-                repaired.text,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-                lenient=True,
-            )
+            gate = check_urdf(repaired.text, lenient=True, **where)
             if gate.text is None:
                 gate = dataclasses.replace(gate, text=repaired.text)
             _warn(f"{resolved.name!r}: {repaired.summary()}")

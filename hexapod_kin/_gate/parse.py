@@ -127,10 +127,6 @@ def parse_urdf(text: str | bytes) -> etree._Element:
         UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
 
     """
-    return parse_strict(text)
-
-
-def parse_strict(text: str | bytes) -> etree._Element:
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if len(data) > MAX_URDF_BYTES:
         raise UrdfError(f"URDF size {len(data)} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")

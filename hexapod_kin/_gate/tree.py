@@ -31,7 +31,7 @@ from .parse import (
     number_of,
     numbers_of,
     origin_of,
-    parse_strict,
+    parse_urdf,
     single,
 )
 
@@ -151,7 +151,7 @@ def _check(
     lenient: bool = False,
 ) -> GateResult:
     defects: list[tuple[str, str]] | None = [] if lenient else None
-    root = parse_strict(text)
+    root = parse_urdf(text)
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
     repairs: list[str] = []
