@@ -36,6 +36,7 @@ from .exceptions import (
     UrdfError,
     UrdfWarning,
     choices,
+    one_of,
 )
 from .frames import (
     DefaultTips,
@@ -492,11 +493,8 @@ class Model:
             source's package directories).
 
         """
-        from .exceptions import ParameterError
-
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
-        if kind not in kinds:
-            raise ParameterError(f"kind={kind!r} is not allowed; use {choices(kinds)}")
+        one_of("kind", kind, kinds)
         dirs = list(self.source.package_dirs)
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ._numerics import chain_length
-from .exceptions import ParameterError, choices
+from .exceptions import ParameterError, one_of, positive
 from .kinematics import as_model
 
 __all__ = ["WorkspaceResult", "workspace", "cross_section"]
@@ -111,9 +110,7 @@ def workspace(
     mdl = as_model(model)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
         raise ParameterError(f"samples={samples!r}: an integer in 1..50,000,000 is required")
-    h = float(chain_length(mdl.arrays.trans)) / 25.0 if voxel is None else float(voxel)
-    if not math.isfinite(h) or h <= 0:
-        raise ParameterError(f"voxel={voxel!r}: a finite edge > 0 m is required")
+    h = positive("voxel", float(chain_length(mdl.arrays.trans)) / 25.0 if voxel is None else voxel)
     q = mdl.random_q(int(samples), seed=seed)
     pts = np.empty((len(q), 3))
     for i in range(0, len(q), 1_000_000):  # the batch kernel, in chunks: (n, 4, 4) is 128 B a row
@@ -155,13 +152,10 @@ def cross_section(
 
     """
     planes = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}
-    if plane not in planes:
-        raise ParameterError(f"plane={plane!r} is not allowed; use one of {choices(planes)}")
-    a, b, c = planes[plane]
+    a, b, c = planes[one_of("plane", plane, planes)]
     pts = np.asarray(points, float)
     if thickness is None:
         thickness = 0.01 * float(np.ptp(pts, axis=0).max() or 1.0)
-    if not math.isfinite(thickness) or thickness <= 0:
-        raise ParameterError(f"thickness={thickness!r}: a finite value > 0 m is required")
+    positive("thickness", thickness)
     keep = np.abs(pts[:, c] - offset) <= thickness / 2
     return pts[keep][:, [a, b]].copy()

@@ -170,6 +170,19 @@ def element_name(el: etree._Element, what: str) -> str:
     return name
 
 
+def unique(seen: dict[str, etree._Element], el: etree._Element, name: str, what: str) -> None:
+    """Record ``el`` as ``seen[name]``; a second ``<what>`` of the same name is refused."""
+    if name in seen:
+        raise error_at(
+            el,
+            "name",
+            name,
+            f"duplicate {what} name (first at line "
+            f"{seen[name].sourceline}); {what} names must be unique",
+        )
+    seen[name] = el
+
+
 def single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:
     found = el.findall(tag)
     if len(found) > 1:

@@ -33,6 +33,7 @@ from .parse import (
     origin_of,
     parse_urdf,
     single,
+    unique,
 )
 
 
@@ -181,31 +182,14 @@ def _check(
 
     link_el: dict[str, etree._Element] = {}
     for link in links:
-        name = element_name(link, "link")
-        if name in link_el:
-            raise error_at(
-                link,
-                "name",
-                name,
-                f"duplicate link name (first at line "
-                f"{link_el[name].sourceline}); link names must be unique",
-            )
-        link_el[name] = link
+        unique(link_el, link, element_name(link, "link"), "link")
 
     joint_el: dict[str, etree._Element] = {}
     parent_of: dict[str, str] = {}  # child link -> joint name
     children: dict[str, list[str]] = {n: [] for n in link_el}
     for joint in root.findall("joint"):
         name = element_name(joint, "joint")
-        if name in joint_el:
-            raise error_at(
-                joint,
-                "name",
-                name,
-                f"duplicate joint name (first at line "
-                f"{joint_el[name].sourceline}); joint names must be unique",
-            )
-        joint_el[name] = joint
+        unique(joint_el, joint, name, "joint")
         jtype = joint.get("type")
         if jtype not in JOINT_TYPES:
             raise error_at(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
