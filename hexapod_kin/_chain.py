@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ._fields import read_only
 from .exceptions import SourceError
 from .frames import joint_kind
 
@@ -77,8 +78,7 @@ class ChainArrays:
             col=np.array(col, dtype=np.int64),
             nq=int(nq),
         )
-        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-            arr.setflags(write=False)
+        read_only(arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col)
         return arrays
 
     @classmethod

@@ -7,17 +7,12 @@ from typing import Any
 
 import numpy as np
 
+from ._fields import read_only
 from ._numerics import chain_length
 from .exceptions import ParameterError, one_of, positive
 from .kinematics import as_model
 
 __all__ = ["WorkspaceResult", "workspace", "cross_section"]
-
-
-def _ro(arr: np.ndarray) -> np.ndarray:
-    arr = np.ascontiguousarray(arr)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -119,16 +114,18 @@ def workspace(
     if span / h > 2000:
         raise ParameterError(f"voxel={h!r} m is too small for a workspace {span:.3g} m wide")
     n_in, n_b = _voxel_counts(pts, h)
+    lower, upper = pts.min(axis=0), pts.max(axis=0)
+    read_only(q, pts, lower, upper)
     return WorkspaceResult(
-        q=_ro(q),
-        points=_ro(pts),
+        q=q,
+        points=pts,
         voxel=h,
         volume_occupied=(n_in + n_b) * h**3,
         volume=(n_in + 0.5 * n_b) * h**3,
         interior=n_in,
         boundary=n_b,
-        lower=_ro(pts.min(axis=0)),
-        upper=_ro(pts.max(axis=0)),
+        lower=lower,
+        upper=upper,
         source=mdl.name,
     )
 
