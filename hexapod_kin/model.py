@@ -50,11 +50,11 @@ from .frames import (
     root_link_frame,
 )
 from .params import Chain, Hexapod, Pose
-from .sources import ResolvedSource, resolve_source, yourdfpy_load
+from .sources import ResolvedSource, yourdfpy_load
 
 _T = TypeVar("_T")
 
-__all__ = ["INERTIA_MODES", "Model", "build", "check_inertials"]
+__all__ = ["INERTIA_MODES", "Model", "check_inertials"]
 
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
@@ -645,37 +645,3 @@ def check_inertials(model: Model) -> None:
 
     """
     _raise_inertia_defects(model.name, model.inertia_defects)
-
-
-def build(
-    source: Any,
-    base: str | None = None,
-    tip: str | None = None,
-    *,
-    cls: type[Model] = Model,
-    reduce: bool | None = None,
-    q_ref: Any = None,
-    package_dirs: Any = (),
-    tool: Any = None,
-    strict_inertia: bool = False,
-    inertia: str = "urdf",
-    **params: Any,
-) -> Model:
-    """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``).
-
-    ``inertia`` is one of :data:`INERTIA_MODES`: ``"urdf"`` (the file's inertias),
-    ``"collision"`` (recomputed from each link's collision shapes) or ``"point"`` (point
-    masses); the repairs keep every mass and centre of mass (:mod:`hexapod_kin._gate.repair`).
-    """
-    check_mode(inertia)
-    resolved = resolve_source(source, package_dirs=package_dirs, **params)
-    return cls(
-        resolved,
-        base,
-        tip,
-        reduce=reduce,
-        q_ref=q_ref,
-        tool=tool,
-        strict_inertia=strict_inertia,
-        inertia=inertia,
-    )

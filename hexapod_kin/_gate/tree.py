@@ -95,7 +95,6 @@ def check_urdf(
     *,
     package_dirs: Iterable[str | os.PathLike[str]] = (),
     mesh_root: str | os.PathLike[str] | None = None,
-    check_meshes: bool = True,
     lenient: bool = False,
 ) -> GateResult:
     """Check a URDF document; raise :class:`UrdfError` on the first problem.
@@ -107,8 +106,6 @@ def check_urdf(
         package_dirs: Directories ``package://pkg/...`` meshes may resolve into.
         mesh_root: Directory relative mesh paths resolve against (``None`` for URDF text:
             relative mesh paths are then refused).
-        check_meshes: Whether to resolve and check mesh/texture files (keep ``True``; only
-            tools that never touch geometry may turn it off).
         lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
             and a physically implausible inertial (indefinite, massless moving link, zero
             inertia, triangle inequality) are recorded in ``missing_meshes`` /
@@ -129,14 +126,9 @@ def check_urdf(
         cached = _CACHE.get(key)
         if cached is not None:
             return cached
-    result = _check(text, tuple(package_dirs), mesh_root, check_meshes, lenient)
-    if (
-        isinstance(text, str)
-        and len(text) <= _CACHE_MAX_CHARS
-        and not result.meshes
-        and (not result.missing_meshes)
-        and (check_meshes or not any(True for _ in result.root.iter("mesh", "texture")))
-    ):
+    result = _check(text, tuple(package_dirs), mesh_root, lenient)
+    no_files = not result.meshes and not result.missing_meshes
+    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS and no_files:
         # Without file references the verdict depends on the text alone: remember it.
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
@@ -148,7 +140,6 @@ def _check(
     text: str | bytes,
     package_dirs: tuple[str | os.PathLike[str], ...],
     mesh_root: str | os.PathLike[str] | None,
-    check_meshes: bool,
     lenient: bool = False,
 ) -> GateResult:
     defects: list[tuple[str, str]] | None = [] if lenient else None
@@ -287,23 +278,21 @@ def _check(
 
     meshes: list[tuple[str, Path]] = []
     missing: list[tuple[str, str]] = []
-    if check_meshes:
-        dirs = package_dirs
-        for node in root.iter("mesh", "texture"):
-            uri = node.get("filename")
-            if node.tag == "texture" and uri is None:
-                continue
-            try:
-                path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
-            except (MeshMissing, MeshOutside, MeshEmpty) as exc:
-                if not lenient:
-                    raise error_at(node, "filename", uri, str(exc)) from None
-                # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
-                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
-                continue
-            except UrdfError as exc:
+    for node in root.iter("mesh", "texture"):
+        uri = node.get("filename")
+        if node.tag == "texture" and uri is None:
+            continue
+        try:
+            path = resolve_mesh(uri or "", package_dirs=package_dirs, mesh_root=mesh_root)
+        except (MeshMissing, MeshOutside, MeshEmpty) as exc:
+            if not lenient:
                 raise error_at(node, "filename", uri, str(exc)) from None
-            meshes.append((uri or "", path))
+            # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
+            missing.append((uri or "", f"line {node.sourceline}: {exc}"))
+            continue
+        except UrdfError as exc:
+            raise error_at(node, "filename", uri, str(exc)) from None
+        meshes.append((uri or "", path))
     return GateResult(
         root=root,
         links=tuple(link_el),
