@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ._fields import read_only
+from ._fields import fields_dict, read_only
 from ._numerics import chain_length
 from .exceptions import ParameterError, one_of, positive
 from .kinematics import as_model
@@ -54,18 +54,9 @@ class WorkspaceResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (points and configurations as nested lists)."""
-        return {
-            "source": self.source,
-            "voxel": self.voxel,
-            "volume": self.volume,
-            "volume_occupied": self.volume_occupied,
-            "interior": self.interior,
-            "boundary": self.boundary,
-            "lower": self.lower.tolist(),
-            "upper": self.upper.tolist(),
-            "q": self.q.tolist(),
-            "points": self.points.tolist(),
-        }
+        names = ("source", "voxel", "volume", "volume_occupied", "interior", "boundary", "lower",
+                 "upper", "q", "points")  # fmt: skip
+        return fields_dict(self, *names)
 
 
 def _voxel_counts(points: np.ndarray, h: float) -> tuple[int, int]:
