@@ -14,6 +14,7 @@ from typing import Any
 
 from lxml import etree
 
+from .._fields import fields_dict
 from ..exceptions import UrdfError
 from .inertials import check_gyration, check_moving_body, link_inertial, robot_size
 from .limits import JOINT_CHILDREN, JOINT_DOF, JOINT_TYPES, MAX_DOF, MAX_LINKS, URDF_VERSION
@@ -72,13 +73,11 @@ class GateResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready fields (the parsed element and the mended text left out)."""
         return {
-            "links": list(self.links),
-            "joints": list(self.joints),
-            "root_link": self.root_link,
+            **fields_dict(self, "links", "joints", "root_link"),
             "meshes": [[uri, str(path)] for uri, path in self.meshes],
             "missing_meshes": [list(m) for m in self.missing_meshes],
             "inertia_defects": [list(d) for d in self.inertia_defects],
-            "repairs": list(self.repairs),
+            **fields_dict(self, "repairs"),
         }
 
 
