@@ -39,7 +39,7 @@ import re
 import secrets
 import threading
 import warnings
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -145,8 +145,11 @@ def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
 def mac(*chunks: bytes) -> str | None:
     """HMAC-SHA256 (hex) of ``chunks`` (each length-prefixed) with the secret; ``None``: none."""
     secret = _secret()
-    if secret is None:
-        return None
+    return None if secret is None else _hmac(secret, chunks)
+
+
+def _hmac(secret: bytes, chunks: Iterable[bytes]) -> str:
+    """HMAC-SHA256 (hex) of ``chunks``, each prefixed by its length (8 bytes, big-endian)."""
     h = hmac.new(secret, digestmod=hashlib.sha256)
     for chunk in chunks:
         h.update(len(chunk).to_bytes(8, "big"))
@@ -249,11 +252,7 @@ def user_secret() -> bytes | None:
 
 
 def _file_mac(secret: bytes, name: str, data: bytes) -> str:
-    h = hmac.new(secret, digestmod=hashlib.sha256)
-    for chunk in (b"folder-file", name.encode(), data):
-        h.update(len(chunk).to_bytes(8, "big"))
-        h.update(chunk)
-    return h.hexdigest()
+    return _hmac(secret, (b"folder-file", name.encode(), data))
 
 
 def _sealed_files(folder: Path, suffixes: tuple[str, ...]) -> list[Path]:

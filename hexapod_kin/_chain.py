@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ._fields import read_only
 from .exceptions import SourceError
 from .frames import joint_kind
 
@@ -59,17 +60,25 @@ class ChainArrays:
 
         """
         m = len(rot)
-        arrays = cls(
-            rot=np.ascontiguousarray(rot, dtype=float).reshape(m, 3, 3),
-            trans=np.ascontiguousarray(trans, dtype=float).reshape(m + 1, 3),
-            tip_rot=np.ascontiguousarray(np.eye(3) if tip_rot is None else tip_rot, dtype=float),
-            axis=np.ascontiguousarray(axis, dtype=float),
-            kind=np.asarray(kind, dtype=np.int64),
-            col=np.arange(m, dtype=np.int64),
-            nq=m,
+        return cls._frozen(
+            rot, trans, np.eye(3) if tip_rot is None else tip_rot, axis, kind, np.arange(m), m
         )
-        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-            arr.setflags(write=False)
+
+    @classmethod
+    def _frozen(
+        cls, rot: Any, trans: Any, tip_rot: Any, axis: Any, kind: Any, col: Any, nq: int
+    ) -> ChainArrays:
+        """The arrays as C-contiguous float64 (int64 ``kind``, ``col``), made read-only."""
+        arrays = cls(
+            rot=np.ascontiguousarray(np.array(rot, dtype=float).reshape(-1, 3, 3)),
+            trans=np.ascontiguousarray(np.array(trans, dtype=float).reshape(-1, 3)),
+            tip_rot=np.ascontiguousarray(np.array(tip_rot, dtype=float)),
+            axis=np.ascontiguousarray(np.array(axis, dtype=float).reshape(-1, 3)),
+            kind=np.array(kind, dtype=np.int64),
+            col=np.array(col, dtype=np.int64),
+            nq=int(nq),
+        )
+        read_only(arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col)
         return arrays
 
     @classmethod
@@ -104,18 +113,7 @@ class ChainArrays:
             cols.append(int(m.joints[i].idx_v))
         tip_pl = fr.placement if path else model.baseMo * fr.placement
         trans.append(np.array(tip_pl.translation))
-        arrays = cls(
-            rot=np.ascontiguousarray(np.array(rots, dtype=float).reshape(-1, 3, 3)),
-            trans=np.ascontiguousarray(np.array(trans, dtype=float).reshape(-1, 3)),
-            tip_rot=np.ascontiguousarray(np.array(tip_pl.rotation, dtype=float)),
-            axis=np.ascontiguousarray(np.array(axes, dtype=float).reshape(-1, 3)),
-            kind=np.array(kinds, dtype=np.int64),
-            col=np.array(cols, dtype=np.int64),
-            nq=int(m.nv),
-        )
-        for arr in (arrays.rot, arrays.trans, arrays.tip_rot, arrays.axis, arrays.kind, arrays.col):
-            arr.setflags(write=False)
-        return arrays
+        return cls._frozen(rots, trans, tip_pl.rotation, axes, kinds, cols, m.nv)
 
     def scratch(self) -> np.ndarray:
         """A fresh (6, m) work array for :func:`hexapod_kin._kernels.fk_jac_into`."""

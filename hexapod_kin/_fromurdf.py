@@ -423,23 +423,18 @@ def recover_chain(
                 x = nh if abs(dist) <= _EPS * scale else (nh if dist > 0 else -nh)
         frames.append((o, x, z))
         prev = frames[-1]
-    rows = []
-    if base_ok:
-        prev0 = (o_b, x_b, z_b)
-        base_pose = None
-    else:
-        prev0 = frames[0]
-        base_pose = _frame(*frames[0])
+    base_pose = None if base_ok else _frame(*frames[0])
+    if base_pose is not None:  # frame 1 at q = 0 is frame 0: the offset is the base pose
         inv0 = np.linalg.inv(base_pose)
         frames = [
             (inv0[:3, :3] @ o + inv0[:3, 3], inv0[:3, :3] @ x, inv0[:3, :3] @ z)
             for o, x, z in frames
         ]
-        prev0 = frames[0]
-    prev_f = prev0
-    for k, fr in enumerate(frames):
-        rows.append(_row(prev_f, fr, sigmas[k], f"joint {names[path[k]]!r}", scale))
-        prev_f = fr
+    prevs = [(o_b, x_b, z_b) if base_ok else frames[0], *frames]
+    rows = [
+        _row(prevs[k], fr, sigmas[k], f"joint {names[path[k]]!r}", scale)
+        for k, fr in enumerate(frames)
+    ]
     rows = _exact_twists(rows, snapped_rows)
     last = _frame(*frames[-1])
     if base_pose is not None:

@@ -117,7 +117,6 @@ def read_data(
     *,
     fmt: str | None = None,
     max_bytes: int = MAX_BYTES,
-    max_values: int = MAX_VALUES,
     mapping: str | None = None,
 ) -> Any:
     """The values of a JSON, TOML or YAML file, read strictly (see the module docstring).
@@ -127,7 +126,6 @@ def read_data(
         what: The kind of file, named in errors (``parameter``).
         fmt: ``"json"``, ``"toml"`` or ``"yaml"``; default: by the suffix, else YAML.
         max_bytes: Byte cap.
-        max_values: Most values after alias expansion.
         mapping: When given, the file must hold a mapping; the text names what it holds
             (e.g. ``"name, convention, row, ..."``).
 
@@ -137,7 +135,7 @@ def read_data(
 
     """
     fmt = fmt or FORMATS.get(Path(path).suffix.lower(), "yaml")
-    data = parse_data(read_text(path, what, max_bytes), str(path), fmt, what, max_values)
+    data = parse_data(read_text(path, what, max_bytes), str(path), fmt, what)
     if mapping is not None and not isinstance(data, dict):
         problem = f"the file must hold a mapping ({mapping}), not a {type(data).__name__}"
         raise _refuse(str(path), what, problem, "a mapping")

@@ -22,7 +22,6 @@ import numpy as np
 __all__ = [
     "Tree",
     "mat_vec",
-    "poses_of",
     "robot_size",
     "tree_frames",
     "tree_poses",
@@ -208,19 +207,15 @@ def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray
     return R, p
 
 
-def poses_of(R: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """(N, n, 4, 4) homogeneous poses from :func:`tree_frames`' (3, 3, n, N) and (3, n, N)."""
+def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
+    R, p = tree_frames(tree, q, base)
     out = np.empty((R.shape[-1], R.shape[2], 4, 4))
     out[..., :3, :3] = R.transpose(3, 2, 0, 1)
     out[..., :3, 3] = p.transpose(2, 1, 0)
     out[..., 3, :3] = 0.0
     out[..., 3, 3] = 1.0
     return out
-
-
-def tree_poses(tree: Tree, q: np.ndarray, base: np.ndarray) -> np.ndarray:
-    """World poses (N, n, 4, 4) of the joints' frames at joints ``q`` (N, n), bodies ``base``."""
-    return poses_of(*tree_frames(tree, q, base))
 
 
 def mat_vec(A: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -20,9 +20,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ._gate.repair import check_mode
 from .exceptions import ParameterError, choices
 from .frames import joint_kind
-from .model import Model, build
+from .model import Model
+from .sources import resolve_source
 
 # The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
 _F64 = np.dtype(np.float64)
@@ -393,7 +395,9 @@ def load(
             the tip of fk/jacobian/batch calls); ``package_dirs`` (where ``package://``
             meshes resolve, before ``ROS_PACKAGE_PATH`` and the folders above the file);
             ``strict_inertia`` (refuse physically implausible inertials instead of warning);
-            or preset parameters (with a preset name).
+            ``inertia`` (:data:`~hexapod_kin.model.INERTIA_MODES`: ``"urdf"``, the file's, or
+            the stated repair ``"collision"`` or ``"point"``, keeping every mass and centre of
+            mass: :mod:`hexapod_kin._gate.repair`); or preset parameters (with a preset name).
 
     Returns:
         A :class:`KinematicModel`.
@@ -408,7 +412,13 @@ def load(
             physically implausible inertials (kinematics does not use them).
 
     """
-    return build(source, base, tip, cls=KinematicModel, **kwargs)  # type: ignore[return-value]
+    options = {key: kwargs.pop(key) for key in _MODEL_OPTIONS if key in kwargs}
+    check_mode(options.get("inertia", "urdf"))  # before the source (its errors come first)
+    return KinematicModel(resolve_source(source, **kwargs), base, tip, **options)
+
+
+#: The keywords of :func:`load` that go to the model (the others resolve the source).
+_MODEL_OPTIONS = ("reduce", "q_ref", "tool", "strict_inertia", "inertia")
 
 
 def as_model(model: Any, **params: Any) -> KinematicModel:

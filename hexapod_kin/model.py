@@ -36,6 +36,7 @@ from .exceptions import (
     UrdfError,
     UrdfWarning,
     choices,
+    one_of,
 )
 from .frames import (
     DefaultTips,
@@ -49,11 +50,11 @@ from .frames import (
     root_link_frame,
 )
 from .params import Chain, Hexapod, Pose
-from .sources import ResolvedSource, resolve_source, yourdfpy_load
+from .sources import ResolvedSource, yourdfpy_load
 
 _T = TypeVar("_T")
 
-__all__ = ["INERTIA_MODES", "Model", "build", "check_inertials"]
+__all__ = ["INERTIA_MODES", "Model", "check_inertials"]
 
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
@@ -210,19 +211,10 @@ class Model:
         names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
-        self._unbounded = tuple(
-            (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
-            for i in range(1, m.njoints)
-            if names[i - 1] == "continuous"
-        )
-        self._plain_idx = np.array(
-            [
-                (int(m.joints[i].idx_q), int(m.joints[i].idx_v))
-                for i in range(1, m.njoints)
-                if names[i - 1] != "continuous"
-            ],
-            dtype=np.int64,
-        ).reshape(-1, 2)
+        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in range(1, m.njoints)]
+        self._unbounded = tuple(p for p, kind in zip(idx, names) if kind == "continuous")
+        plain = [p for p, kind in zip(idx, names) if kind != "continuous"]
+        self._plain_idx = np.array(plain, dtype=np.int64).reshape(-1, 2)
         pin.framesForwardKinematics(m, data, pin.neutral(m))
         self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
             data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
@@ -254,27 +246,17 @@ class Model:
     ) -> tuple[pin.Model, str]:
         """The loader gate (and the inertia repair), then Pinocchio: ``(full model, URDF text)``."""
         check_mode(inertia)
-        gate = check_urdf(
-            resolved.text,
-            package_dirs=resolved.package_dirs,
-            mesh_root=resolved.mesh_root,
-            lenient=True,
-        )
+        where: dict[str, Any] = {
+            "package_dirs": resolved.package_dirs,
+            "mesh_root": resolved.mesh_root,
+        }
+        gate = check_urdf(resolved.text, lenient=True, **where)
         self.inertia_repair = None
         if inertia != "urdf":
-            repaired = repair_inertials(
-                resolved.text if gate.text is None else gate.text,
-                inertia,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-            )
+            text = resolved.text if gate.text is None else gate.text
+            repaired = repair_inertials(text, inertia, **where)
             self.inertia_repair = repaired
-            gate = check_urdf(
-                repaired.text,
-                package_dirs=resolved.package_dirs,
-                mesh_root=resolved.mesh_root,
-                lenient=True,
-            )
+            gate = check_urdf(repaired.text, lenient=True, **where)
             if gate.text is None:
                 gate = dataclasses.replace(gate, text=repaired.text)
             _warn(f"{resolved.name!r}: {repaired.summary()}")
@@ -511,11 +493,8 @@ class Model:
             source's package directories).
 
         """
-        from .exceptions import ParameterError
-
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
-        if kind not in kinds:
-            raise ParameterError(f"kind={kind!r} is not allowed; use {choices(kinds)}")
+        one_of("kind", kind, kinds)
         dirs = list(self.source.package_dirs)
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
@@ -666,37 +645,3 @@ def check_inertials(model: Model) -> None:
 
     """
     _raise_inertia_defects(model.name, model.inertia_defects)
-
-
-def build(
-    source: Any,
-    base: str | None = None,
-    tip: str | None = None,
-    *,
-    cls: type[Model] = Model,
-    reduce: bool | None = None,
-    q_ref: Any = None,
-    package_dirs: Any = (),
-    tool: Any = None,
-    strict_inertia: bool = False,
-    inertia: str = "urdf",
-    **params: Any,
-) -> Model:
-    """Resolve ``source`` and build a ``cls`` instance (see ``kinematics.load``).
-
-    ``inertia`` is one of :data:`INERTIA_MODES`: ``"urdf"`` (the file's inertias),
-    ``"collision"`` (recomputed from each link's collision shapes) or ``"point"`` (point
-    masses); the repairs keep every mass and centre of mass (:mod:`hexapod_kin._gate.repair`).
-    """
-    check_mode(inertia)
-    resolved = resolve_source(source, package_dirs=package_dirs, **params)
-    return cls(
-        resolved,
-        base,
-        tip,
-        reduce=reduce,
-        q_ref=q_ref,
-        tool=tool,
-        strict_inertia=strict_inertia,
-        inertia=inertia,
-    )

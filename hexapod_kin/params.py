@@ -168,11 +168,9 @@ class KhalilRow:
 
     def transform(self, q: float = 0.0) -> np.ndarray:
         """Return ``^{j-1}T_j`` at joint value ``q`` ([rad] or [m]; ignored when fixed)."""
-        if self.sigma == "revolute":
-            return khalil_transform(self.alpha, self.d, self.theta + q, self.r)
-        if self.sigma == "prismatic":
-            return khalil_transform(self.alpha, self.d, self.theta, self.r + q)
-        return khalil_transform(self.alpha, self.d, self.theta, self.r)
+        theta = self.theta + q if self.sigma == "revolute" else self.theta
+        r = self.r + q if self.sigma == "prismatic" else self.r
+        return khalil_transform(self.alpha, self.d, theta, r)
 
 
 @dataclass(frozen=True)
@@ -201,11 +199,9 @@ class DHRow:
 
     def transform(self, q: float = 0.0) -> np.ndarray:
         """Return ``^{i-1}T_i`` at joint value ``q``."""
-        if self.sigma == "revolute":
-            return dh_transform(self.theta + q, self.d, self.a, self.alpha)
-        if self.sigma == "prismatic":
-            return dh_transform(self.theta, self.d + q, self.a, self.alpha)
-        return dh_transform(self.theta, self.d, self.a, self.alpha)
+        theta = self.theta + q if self.sigma == "revolute" else self.theta
+        d = self.d + q if self.sigma == "prismatic" else self.d
+        return dh_transform(theta, d, self.a, self.alpha)
 
 
 @dataclass(frozen=True)

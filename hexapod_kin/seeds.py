@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._fields import fields_dict
 from .exceptions import ConfigurationError, ParameterError, finite, positive
 from .motion import SEED_Q0, JointSchedule, Method, Trajectory, default_stance, resolved_rate
 
@@ -66,9 +67,7 @@ class SeedRun:
             "amplitude": self.amplitude,
             "period": self.period,
             "q0": [float(v) for v in tr.q[0]],
-            "drift_y": self.drift_y,
-            "drift_z": self.drift_z,
-            "error_x": self.error_x,
+            **fields_dict(self, "drift_y", "drift_z", "error_x"),
             "baseline_euler_solve": self.baseline,
             "baseline_failure": self.baseline_failure,
             "closest_approach": tr.closest_approach.to_dict(),

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from . import robots
+from ._fields import fields_dict
 from .exceptions import SourceError, UrdfError, choices, did_you_mean
 from .params import Chain, Hexapod
 from .urdf import TABLE_SUFFIXES, to_urdf
@@ -209,13 +210,9 @@ class ResolvedSource:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready fields (the URDF text left out; ``params`` as its name)."""
-        return {
-            "name": self.name,
-            "package_dirs": list(self.package_dirs),
-            "mesh_root": self.mesh_root,
-            "params": None if self.params is None else self.params.name,
-            "path": self.path,
-        }
+        params = None if self.params is None else self.params.name
+        return {**fields_dict(self, "name", "package_dirs", "mesh_root"), "params": params,
+                "path": self.path}  # fmt: skip
 
 
 def _read_text(path: Path) -> str:

@@ -38,6 +38,7 @@ YAML with PyYAML (``pip install hexapod-kin[tables]``).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -248,12 +249,9 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
             parameter="link",
         )
     kwargs: dict[str, Any] = {"joint_names": tuple(joint_names), "limits": tuple(limits)}
-    for key in ("name", "description", "base", "tip"):
-        if key in data:
-            kwargs[key] = text(data[key], key)
-    for key in ("link_mass", "link_radius"):
-        if key in data:
-            kwargs[key] = _number(data[key], key)
+    readers: dict[str, Callable[[Any, str], Any]] = {"name": text, "description": text,
+        "base": text, "tip": text, "link_mass": _number, "link_radius": _number}  # fmt: skip
+    kwargs.update({key: read(data[key], key) for key, read in readers.items() if key in data})
     for key in ("damping", "friction"):
         if key in data:
             value = data[key]

@@ -2,23 +2,17 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ._fields import fields_dict, read_only
 from ._numerics import chain_length
-from .exceptions import ParameterError, choices
+from .exceptions import ParameterError, one_of, positive
 from .kinematics import as_model
 
 __all__ = ["WorkspaceResult", "workspace", "cross_section"]
-
-
-def _ro(arr: np.ndarray) -> np.ndarray:
-    arr = np.ascontiguousarray(arr)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -60,18 +54,9 @@ class WorkspaceResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (points and configurations as nested lists)."""
-        return {
-            "source": self.source,
-            "voxel": self.voxel,
-            "volume": self.volume,
-            "volume_occupied": self.volume_occupied,
-            "interior": self.interior,
-            "boundary": self.boundary,
-            "lower": self.lower.tolist(),
-            "upper": self.upper.tolist(),
-            "q": self.q.tolist(),
-            "points": self.points.tolist(),
-        }
+        names = ("source", "voxel", "volume", "volume_occupied", "interior", "boundary", "lower",
+                 "upper", "q", "points")  # fmt: skip
+        return fields_dict(self, *names)
 
 
 def _voxel_counts(points: np.ndarray, h: float) -> tuple[int, int]:
@@ -111,9 +96,7 @@ def workspace(
     mdl = as_model(model)
     if isinstance(samples, bool) or int(samples) != samples or not 1 <= samples <= 50_000_000:
         raise ParameterError(f"samples={samples!r}: an integer in 1..50,000,000 is required")
-    h = float(chain_length(mdl.arrays.trans)) / 25.0 if voxel is None else float(voxel)
-    if not math.isfinite(h) or h <= 0:
-        raise ParameterError(f"voxel={voxel!r}: a finite edge > 0 m is required")
+    h = positive("voxel", float(chain_length(mdl.arrays.trans)) / 25.0 if voxel is None else voxel)
     q = mdl.random_q(int(samples), seed=seed)
     pts = np.empty((len(q), 3))
     for i in range(0, len(q), 1_000_000):  # the batch kernel, in chunks: (n, 4, 4) is 128 B a row
@@ -122,16 +105,18 @@ def workspace(
     if span / h > 2000:
         raise ParameterError(f"voxel={h!r} m is too small for a workspace {span:.3g} m wide")
     n_in, n_b = _voxel_counts(pts, h)
+    lower, upper = pts.min(axis=0), pts.max(axis=0)
+    read_only(q, pts, lower, upper)
     return WorkspaceResult(
-        q=_ro(q),
-        points=_ro(pts),
+        q=q,
+        points=pts,
         voxel=h,
         volume_occupied=(n_in + n_b) * h**3,
         volume=(n_in + 0.5 * n_b) * h**3,
         interior=n_in,
         boundary=n_b,
-        lower=_ro(pts.min(axis=0)),
-        upper=_ro(pts.max(axis=0)),
+        lower=lower,
+        upper=upper,
         source=mdl.name,
     )
 
@@ -155,13 +140,10 @@ def cross_section(
 
     """
     planes = {"xz": (0, 2, 1), "yz": (1, 2, 0), "xy": (0, 1, 2)}
-    if plane not in planes:
-        raise ParameterError(f"plane={plane!r} is not allowed; use one of {choices(planes)}")
-    a, b, c = planes[plane]
+    a, b, c = planes[one_of("plane", plane, planes)]
     pts = np.asarray(points, float)
     if thickness is None:
         thickness = 0.01 * float(np.ptp(pts, axis=0).max() or 1.0)
-    if not math.isfinite(thickness) or thickness <= 0:
-        raise ParameterError(f"thickness={thickness!r}: a finite value > 0 m is required")
+    positive("thickness", thickness)
     keep = np.abs(pts[:, c] - offset) <= thickness / 2
     return pts[keep][:, [a, b]].copy()

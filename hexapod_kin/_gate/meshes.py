@@ -15,7 +15,7 @@ from lxml import etree
 
 from ..exceptions import UrdfError
 from .limits import MAX_MESH_BYTES, SCHEME, SHAPES
-from .parse import error_at, numbers_of, single
+from .parse import error_at, numbers_of, single, unique
 
 
 class MeshMissing(UrdfError):
@@ -171,15 +171,7 @@ def check_materials_and_geometry(root: etree._Element) -> None:
         name = mat.get("name")
         if name is None or not name.strip():
             raise error_at(mat, "name", name, "every <material> needs a non-empty name")
-        if name in defined:
-            raise error_at(
-                mat,
-                "name",
-                name,
-                f"duplicate material name (first at line "
-                f"{defined[name].sourceline}); material names must be unique",
-            )
-        defined[name] = mat
+        unique(defined, mat, name, "material")
         color = single(mat, "color", required=False)
         if color is not None:
             _check_rgba(color)

@@ -127,10 +127,6 @@ def parse_urdf(text: str | bytes) -> etree._Element:
         UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
 
     """
-    return parse_strict(text)
-
-
-def parse_strict(text: str | bytes) -> etree._Element:
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if len(data) > MAX_URDF_BYTES:
         raise UrdfError(f"URDF size {len(data)} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")
@@ -172,6 +168,19 @@ def element_name(el: etree._Element, what: str) -> str:
     if name in RESERVED:
         raise error_at(el, "name", name, "the name 'universe' is reserved by Pinocchio")
     return name
+
+
+def unique(seen: dict[str, etree._Element], el: etree._Element, name: str, what: str) -> None:
+    """Record ``el`` as ``seen[name]``; a second ``<what>`` of the same name is refused."""
+    if name in seen:
+        raise error_at(
+            el,
+            "name",
+            name,
+            f"duplicate {what} name (first at line "
+            f"{seen[name].sourceline}); {what} names must be unique",
+        )
+    seen[name] = el
 
 
 def single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:

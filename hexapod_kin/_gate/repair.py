@@ -33,6 +33,7 @@ from lxml import etree
 
 from ..exceptions import ParameterError, UrdfError
 from .meshes import resolve_mesh
+from .messages import first_names
 from .parse import numbers_of, origin_of, parse_urdf
 
 #: The ``inertia=`` choices: the file's own inertias, or one of the two repairs.
@@ -60,18 +61,13 @@ class InertiaRepair:
         if self.from_collision:
             parts.append(
                 f"{len(self.from_collision)} link(s) from their collision geometry "
-                f"({_names(self.from_collision)})"
+                f"({first_names(self.from_collision)})"
             )
         if self.as_point:
             what = "point masses" if self.mode == "point" else "point masses (no usable collision)"
-            parts.append(f"{len(self.as_point)} link(s) as {what} ({_names(self.as_point)})")
+            parts.append(f"{len(self.as_point)} link(s) as {what} ({first_names(self.as_point)})")
         body = "; ".join(parts) if parts else "no link has mass"
         return f"inertia={self.mode!r}: masses and centres of mass kept; {body}"
-
-
-def _names(names: Sequence[str], limit: int = 3) -> str:
-    shown = ", ".join(names[:limit])
-    return shown + (", …" if len(names) > limit else "")
 
 
 def check_mode(mode: object) -> str:

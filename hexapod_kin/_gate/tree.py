@@ -14,6 +14,7 @@ from typing import Any
 
 from lxml import etree
 
+from .._fields import fields_dict
 from ..exceptions import UrdfError
 from .inertials import check_gyration, check_moving_body, link_inertial, robot_size
 from .limits import JOINT_CHILDREN, JOINT_DOF, JOINT_TYPES, MAX_DOF, MAX_LINKS, URDF_VERSION
@@ -31,8 +32,9 @@ from .parse import (
     number_of,
     numbers_of,
     origin_of,
-    parse_strict,
+    parse_urdf,
     single,
+    unique,
 )
 
 
@@ -71,13 +73,11 @@ class GateResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready fields (the parsed element and the mended text left out)."""
         return {
-            "links": list(self.links),
-            "joints": list(self.joints),
-            "root_link": self.root_link,
+            **fields_dict(self, "links", "joints", "root_link"),
             "meshes": [[uri, str(path)] for uri, path in self.meshes],
             "missing_meshes": [list(m) for m in self.missing_meshes],
             "inertia_defects": [list(d) for d in self.inertia_defects],
-            "repairs": list(self.repairs),
+            **fields_dict(self, "repairs"),
         }
 
 
@@ -94,7 +94,6 @@ def check_urdf(
     *,
     package_dirs: Iterable[str | os.PathLike[str]] = (),
     mesh_root: str | os.PathLike[str] | None = None,
-    check_meshes: bool = True,
     lenient: bool = False,
 ) -> GateResult:
     """Check a URDF document; raise :class:`UrdfError` on the first problem.
@@ -106,8 +105,6 @@ def check_urdf(
         package_dirs: Directories ``package://pkg/...`` meshes may resolve into.
         mesh_root: Directory relative mesh paths resolve against (``None`` for URDF text:
             relative mesh paths are then refused).
-        check_meshes: Whether to resolve and check mesh/texture files (keep ``True``; only
-            tools that never touch geometry may turn it off).
         lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
             and a physically implausible inertial (indefinite, massless moving link, zero
             inertia, triangle inequality) are recorded in ``missing_meshes`` /
@@ -128,14 +125,9 @@ def check_urdf(
         cached = _CACHE.get(key)
         if cached is not None:
             return cached
-    result = _check(text, tuple(package_dirs), mesh_root, check_meshes, lenient)
-    if (
-        isinstance(text, str)
-        and len(text) <= _CACHE_MAX_CHARS
-        and not result.meshes
-        and (not result.missing_meshes)
-        and (check_meshes or not any(True for _ in result.root.iter("mesh", "texture")))
-    ):
+    result = _check(text, tuple(package_dirs), mesh_root, lenient)
+    no_files = not result.meshes and not result.missing_meshes
+    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS and no_files:
         # Without file references the verdict depends on the text alone: remember it.
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
@@ -147,11 +139,10 @@ def _check(
     text: str | bytes,
     package_dirs: tuple[str | os.PathLike[str], ...],
     mesh_root: str | os.PathLike[str] | None,
-    check_meshes: bool,
     lenient: bool = False,
 ) -> GateResult:
     defects: list[tuple[str, str]] | None = [] if lenient else None
-    root = parse_strict(text)
+    root = parse_urdf(text)
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
     repairs: list[str] = []
@@ -181,31 +172,14 @@ def _check(
 
     link_el: dict[str, etree._Element] = {}
     for link in links:
-        name = element_name(link, "link")
-        if name in link_el:
-            raise error_at(
-                link,
-                "name",
-                name,
-                f"duplicate link name (first at line "
-                f"{link_el[name].sourceline}); link names must be unique",
-            )
-        link_el[name] = link
+        unique(link_el, link, element_name(link, "link"), "link")
 
     joint_el: dict[str, etree._Element] = {}
     parent_of: dict[str, str] = {}  # child link -> joint name
     children: dict[str, list[str]] = {n: [] for n in link_el}
     for joint in root.findall("joint"):
         name = element_name(joint, "joint")
-        if name in joint_el:
-            raise error_at(
-                joint,
-                "name",
-                name,
-                f"duplicate joint name (first at line "
-                f"{joint_el[name].sourceline}); joint names must be unique",
-            )
-        joint_el[name] = joint
+        unique(joint_el, joint, name, "joint")
         jtype = joint.get("type")
         if jtype not in JOINT_TYPES:
             raise error_at(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
@@ -303,23 +277,21 @@ def _check(
 
     meshes: list[tuple[str, Path]] = []
     missing: list[tuple[str, str]] = []
-    if check_meshes:
-        dirs = package_dirs
-        for node in root.iter("mesh", "texture"):
-            uri = node.get("filename")
-            if node.tag == "texture" and uri is None:
-                continue
-            try:
-                path = resolve_mesh(uri or "", package_dirs=dirs, mesh_root=mesh_root)
-            except (MeshMissing, MeshOutside, MeshEmpty) as exc:
-                if not lenient:
-                    raise error_at(node, "filename", uri, str(exc)) from None
-                # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
-                missing.append((uri or "", f"line {node.sourceline}: {exc}"))
-                continue
-            except UrdfError as exc:
+    for node in root.iter("mesh", "texture"):
+        uri = node.get("filename")
+        if node.tag == "texture" and uri is None:
+            continue
+        try:
+            path = resolve_mesh(uri or "", package_dirs=package_dirs, mesh_root=mesh_root)
+        except (MeshMissing, MeshOutside, MeshEmpty) as exc:
+            if not lenient:
                 raise error_at(node, "filename", uri, str(exc)) from None
-            meshes.append((uri or "", path))
+            # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
+            missing.append((uri or "", f"line {node.sourceline}: {exc}"))
+            continue
+        except UrdfError as exc:
+            raise error_at(node, "filename", uri, str(exc)) from None
+        meshes.append((uri or "", path))
     return GateResult(
         root=root,
         links=tuple(link_el),

@@ -562,31 +562,22 @@ def rank_deficiency(
     gram_raw = _plain_det(mat * mat.T if k < n else mat.T * mat)
     what = f"{small}x{small} minors"
     if common is None:  # every maximal minor is zero: rank < min(k, n) everywhere
-        return {
-            "factors": (), "const": sp.Integer(0), "det": None, "gram": sp.Integer(0),
-            "how": f"every maximal minor ({what}) is zero: J never has full rank",
-            "unconfirmed": (),
-        }  # fmt: skip
+        how = f"every maximal minor ({what}) is zero: J never has full rank"
+        return _deficiency((), sp.Integer(0), sp.Integer(0), how)
     if not common:
-        return {
-            "factors": (), "const": sp.Integer(1), "det": None, "gram": gram_raw,
-            "how": (
-                f"rank deficiency: the maximal minors ({what}) share no factor ({len(minors)} "
-                f"of {total} non-zero minors factored): rank J drops only on sets of "
-                "codimension >= 2, no family"
-            ),
-            "unconfirmed": (),
-        }  # fmt: skip
+        how = (
+            f"rank deficiency: the maximal minors ({what}) share no factor ({len(minors)} "
+            f"of {total} non-zero minors factored): rank J drops only on sets of "
+            "codimension >= 2, no family"
+        )
+        return _deficiency((), sp.Integer(1), gram_raw, how)
     if stopped:
-        return {
-            "factors": tuple(common), "const": sp.Integer(1), "det": None, "gram": gram_raw,
-            "how": (
-                f"rank deficiency: factors common to {len(minors)} of the {total} non-zero "
-                f"maximal minors ({what}; time ran out for the others): candidates, kept "
-                "only where the numeric J loses rank on them (sigma_min)"
-            ),
-            "unconfirmed": tuple(range(len(common))),
-        }  # fmt: skip
+        how = (
+            f"rank deficiency: factors common to {len(minors)} of the {total} non-zero "
+            f"maximal minors ({what}; time ran out for the others): candidates, kept "
+            "only where the numeric J loses rank on them (sigma_min)"
+        )
+        return _deficiency(common, sp.Integer(1), gram_raw, how, tuple(range(len(common))))
     consts = [c for c, _ in minors]
     base = consts[0] if all(sp.expand(c**2 - consts[0] ** 2) == 0 for c in consts) else 1
     rest_terms = []
@@ -602,14 +593,20 @@ def rank_deficiency(
         if not _depends(reduced, q):
             rest = sp.factor(reduced)
     gram = base**2 * sp.Mul(*[f ** (2 * m) for f, m in common]) * rest
-    return {
-        "factors": tuple(common), "const": base, "det": None, "gram": gram,
-        "how": (
-            f"rank deficiency: common factors of all {total} non-zero maximal minors ({what}); "
-            "det(J Jt) = Cauchy-Binet sum of their squares"
-        ),
-        "unconfirmed": (),
-    }  # fmt: skip
+    how = (
+        f"rank deficiency: common factors of all {total} non-zero maximal minors ({what}); "
+        "det(J Jt) = Cauchy-Binet sum of their squares"
+    )
+    return _deficiency(common, base, gram, how)
+
+
+def _deficiency(
+    factors: Sequence[tuple[Any, int]], const: Any, gram: Any, how: str,
+    unconfirmed: tuple[int, ...] = (),
+) -> dict[str, Any]:  # fmt: skip
+    """:func:`rank_deficiency`'s answer (no ``det``: J is not square)."""
+    return {"factors": tuple(factors), "const": const, "det": None, "gram": gram, "how": how,
+            "unconfirmed": unconfirmed}  # fmt: skip
 
 
 # ---------------------------------------------------------------------- printing

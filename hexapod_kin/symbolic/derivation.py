@@ -28,6 +28,7 @@ import numpy as np
 import sympy as sp
 
 from .. import _budget
+from .._fields import fields_dict
 from ..exceptions import CacheWarning, ParameterError
 from ..jacobian_rows import choose_rows, row_indices
 from ..params import Chain
@@ -261,18 +262,15 @@ class Derivation:
         """JSON-ready summary: det, families (with checks), reference, incomplete, seconds."""
         return {
             "chain": self.chain.name,
-            "reference": self.reference,
-            "tip": self.tip,
+            **fields_dict(self, "reference", "tip"),
             "joints": list(self.joint_names),
             "lengths_m": {str(k): v for k, v in self.lengths.items()},
-            "rows": list(self.rows),
+            **fields_dict(self, "rows"),
             "det": None if self.det is None else str(self.det),
             "gram": None if self.gram is None else str(self.gram),
             "method": self.method,
             "families": [f.to_dict(self.joint_names) for f in self.families],
-            "incomplete": list(self.incomplete),
-            "seconds": self.seconds,
-            "cached": self.cached,
+            **fields_dict(self, "incomplete", "seconds", "cached"),
         }
 
     def __str__(self) -> str:

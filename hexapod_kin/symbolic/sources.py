@@ -16,26 +16,20 @@ from ..params import Chain, Hexapod
 __all__ = ["chain_of"]
 
 
+def _leg(robot: Hexapod, tip: str) -> Any:
+    """The leg mount whose foot frame is ``tip`` (``None``: no such leg)."""
+    return next((leg for leg in robot.legs if tip == f"{leg.name}_{leg.chain.tip}"), None)
+
+
 def _mounted(robot: Hexapod, tip: str, base: str) -> tuple[Chain, str] | None:
-    for leg in robot.legs:
-        if tip == f"{leg.name}_{leg.chain.tip}":
-            chain = leg.chain
-            if base == f"{leg.name}_{chain.base}":
-                return chain, base
-            if base == robot.body:
-                pose = leg.transform() @ chain.base_matrix
-                moved = chain.replace(
-                    base=robot.body, base_pose=pose, name=f"{robot.name}_{leg.name}"
-                )
-                return moved, base
+    leg = _leg(robot, tip)
+    if leg is not None and base == f"{leg.name}_{leg.chain.base}":
+        return leg.chain, base
+    if leg is not None and base == robot.body:
+        pose = leg.transform() @ leg.chain.base_matrix
+        moved = leg.chain.replace(base=robot.body, base_pose=pose, name=f"{robot.name}_{leg.name}")
+        return moved, base
     return None
-
-
-def _leg_nq(robot: Hexapod, tip: str) -> int:
-    for leg in robot.legs:
-        if tip == f"{leg.name}_{leg.chain.tip}":
-            return leg.chain.nq
-    return -1
 
 
 def chain_of(
@@ -72,7 +66,8 @@ def chain_of(
     m_base, m_tip = getattr(source, "base", None), getattr(source, "tip", None)
     if isinstance(m_base, str) and isinstance(m_tip, str) and base is None and tip is None:
         nq = getattr(source, "nq", None)
-        if isinstance(params, Hexapod) and nq != _leg_nq(params, m_tip):
+        leg = _leg(params, m_tip) if isinstance(params, Hexapod) else None
+        if isinstance(params, Hexapod) and (leg is None or nq != leg.chain.nq):
             raise ParameterError(
                 f"derive: the model {getattr(source, 'name', '?')!r} moves {nq} joints (the whole "
                 f"robot); pick one leg with tip= (feet {choices(params.foot_frames)})"
