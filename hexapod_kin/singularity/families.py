@@ -392,10 +392,8 @@ def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -
     its budget, in a child of its own: :func:`hexapod_kin.symbolic.derive`).
 
     Returns:
-        ``(incomplete, kind, values, families)``, or ``("failed", message)``.
-
-    Raises:
-        RuntimeError: The child ended with an unexpected error (a bug).
+        ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
+        child ended without an answer: its error, or its budget, as for a derivation's child).
 
     """
     from .. import _budget
@@ -406,7 +404,7 @@ def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -
     else:  # its start-up is not counted: the derivation keeps its own budget inside
         done, reason = _budget.run(_derive_job, args, float(budget) + _CHECK_BUDGET)
         if not done:
-            raise RuntimeError(f"the family derivation ended: {reason}")
+            return ("failed", str(reason))
     if "failed" in done:
         return ("failed", done["failed"])
     return tuple(done["derived"])
