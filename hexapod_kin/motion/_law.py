@@ -18,9 +18,7 @@ One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
 A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
 3×3 Gram matrix and the step's unrolled Cholesky (:func:`~hexapod_kin._numerics.dls_step3`);
 larger tasks on numpy: :func:`_dls` is :func:`~hexapod_kin._numerics.dls_step`'s arithmetic
-(the same BLAS and LAPACK calls, so the same bits) with ``λ² I`` formed once per step and
-LAPACK called through numpy's own gufuncs, without ``np.linalg``'s per-call checks (a 6-joint
-arm's step runs 4 × 10⁴ of them in 10 s at dt = 1 ms).
+(the same BLAS and LAPACK calls, so the same bits) with ``λ² I`` formed once per step.
 """
 
 from __future__ import annotations
@@ -37,15 +35,7 @@ from .._numerics import dls_step, dls_step3
 __all__ = ["integrate"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-dot = np.dot
-
-try:  # the gufuncs np.linalg.solve / svd call (numpy ≥ 2); else np.linalg itself
-    from numpy.linalg import _umath_linalg
-
-    _SOLVE1: Any = _umath_linalg.solve1
-    _SVD: Any = _umath_linalg.svd
-except (ImportError, AttributeError):  # pragma: no cover - numpy 1.x
-    _SOLVE1 = _SVD = None
+dot, solve, svd = np.dot, np.linalg.solve, np.linalg.svd
 
 
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
@@ -84,40 +74,29 @@ def _sigma3(j: list[list[float]]) -> tuple[float, float]:
 
 
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
-    """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value.
-
-    LAPACK's SVD as ``np.linalg.svd(rows, compute_uv=False)`` calls it; a non-finite answer
-    (no convergence) goes through ``np.linalg.svd`` again, which raises.
-    """
+    """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value."""
     if rows.shape[1] == 0:
         return 0.0, 0.0
-    if _SVD is not None:
-        s = _SVD(rows, signature="d->d").tolist()
-        if math.isfinite(s[0] + s[-1]):
-            return s[-1], s[0]
-    s = np.linalg.svd(rows, compute_uv=False).tolist()
+    s = svd(rows, compute_uv=False).tolist()
     return s[-1], s[0]
 
 
-def _dls(rows: np.ndarray, xd: list[float], lam2: float, lam_eye: np.ndarray) -> list[float]:
-    """:func:`~hexapod_kin._numerics.dls_step` ``(rows, xd, lam2)``; ``lam_eye = lam2 I``.
+def _dls(rows: np.ndarray, xd: list[float], lam_eye: np.ndarray) -> list[float]:
+    """:func:`~hexapod_kin._numerics.dls_step` ``(rows, xd, λ²)`` given ``lam_eye = λ² I``.
 
     The same products in the same order, ``(JᵀJ + λ²I)⁻¹ Jᵀ ẋ`` when n ≤ m, else
-    ``Jᵀ(JJᵀ + λ²I)⁻¹ ẋ`` (``np.dot`` and ``@`` make the same BLAS calls), and the LAPACK
-    solve that ``np.linalg.solve`` makes. A singular system (non-finite answer) goes
-    through :func:`~hexapod_kin._numerics.dls_step` itself (zeros).
+    ``Jᵀ(JJᵀ + λ²I)⁻¹ ẋ`` (``np.dot`` and ``@`` make the same BLAS calls); zeros when the
+    system is singular.
     """
     m, n = rows.shape
     jt = rows.T
     e = np.asarray(xd, dtype=float)
-    if _SOLVE1 is not None:
+    try:
         if n <= m:
-            out = _SOLVE1(dot(jt, rows) + lam_eye, dot(jt, e), signature="dd->d").tolist()
-        else:
-            out = dot(jt, _SOLVE1(dot(rows, jt) + lam_eye, e, signature="dd->d")).tolist()
-        if math.isfinite(sum(out)):
-            return out
-    return dls_step(rows, e, lam2).tolist()
+            return solve(dot(jt, rows) + lam_eye, dot(jt, e)).tolist()
+        return dot(jt, solve(dot(rows, jt) + lam_eye, e)).tolist()
+    except np.linalg.LinAlgError:
+        return [0.0] * n
 
 
 def integrate(
@@ -212,7 +191,7 @@ def integrate(
         if j3 is not None:
             qd = dls_step3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
         else:
-            qd = _dls(rows, xd, lam_use, lam_eye)
+            qd = _dls(rows, xd, lam_eye)
         limited = False
         if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
             free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
@@ -232,32 +211,29 @@ def integrate(
     qs, qds, poses, jacs, sig, lams, lims = [], [], [], [], [], [], []
     q = q0.tolist()
     half, sixth = 0.5 * dt, dt / 6.0
-    # LAPACK failures come back non-finite and are redone through np.linalg (see _dls)
-    with np.errstate(all="ignore"):
-        for k in range(steps + 1):
-            h = 2 * k
-            k1, pose, jac, smin, smax, lam2, held, lim = law(q, h, None)
-            qs.append(q)
-            qds.append(k1)
-            poses.append(pose)
-            jacs.append(jac)
-            sig.append((smin, smax))
-            lams.append(lam2)
-            lims.append(lim)
-            if k == steps:
-                break
-            if rk4:
-                k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, held)[0]
-                k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, held)[0]
-                k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, held)[0]
-                q = [
-                    a + sixth * (b + 2.0 * c + 2.0 * d + e)
-                    for a, b, c, d, e in zip(q, k1, k2, k3, k4)
-                ]
-            else:
-                q = [a + dt * b for a, b in zip(q, k1)]
-            if use_limits:
-                q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
+    for k in range(steps + 1):
+        h = 2 * k
+        k1, pose, jac, smin, smax, lam2, held, lim = law(q, h, None)
+        qs.append(q)
+        qds.append(k1)
+        poses.append(pose)
+        jacs.append(jac)
+        sig.append((smin, smax))
+        lams.append(lam2)
+        lims.append(lim)
+        if k == steps:
+            break
+        if rk4:
+            k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, held)[0]
+            k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, held)[0]
+            k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, held)[0]
+            q = [
+                a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in zip(q, k1, k2, k3, k4)
+            ]
+        else:
+            q = [a + dt * b for a, b in zip(q, k1)]
+        if use_limits:
+            q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
     qdot = np.array(qds)
     return {
         "q": np.array(qs),
