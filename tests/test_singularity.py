@@ -329,6 +329,33 @@ def test_families_only_when_asked_then_from_disk_without_sympy(fresh_cache):
     assert out.stdout.split() == ["3", "False"]
 
 
+def test_families_derived_in_a_child_leave_the_caller_without_sympy(tmp_path):
+    """A process that derives families (sympy, in a child) never imports sympy itself, and
+    gets the same families as a process holding sympy (the derivation in a child of its own)."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, json; {pre}from hexapod_kin import load; "
+        "from hexapod_kin.singularity import scan; "
+        "r = scan(load('hexabot_leg'), grid=9, joints=('knee', 'ankle'), families=True); "
+        "print(json.dumps([[f.to_dict() for f in r.families], r.family_reason, "
+        "r.family.tolist(), 'sympy' in sys.modules]))"
+    )
+    answers = []
+    for k, pre in enumerate(("", "import sympy; ")):
+        env = {**os.environ, "HEXAPOD_KIN_CACHE_DIR": str(tmp_path / str(k))}
+        out = subprocess.run(
+            [sys.executable, "-c", code.format(pre=pre)],
+            capture_output=True, text=True, check=True, env=env,
+        )  # fmt: skip
+        answers.append(json.loads(out.stdout))
+    assert answers[0][3] is False and answers[1][3] is True
+    assert len(answers[0][0]) == 3 and answers[0][1] == ""
+    assert answers[0][:3] == answers[1][:3]
+
+
 def test_derivation_failures_are_recorded_and_bugs_propagate(fresh_cache, monkeypatch):
     from hexapod_kin import symbolic
 

@@ -17,7 +17,8 @@ One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
 
 A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
 3×3 Gram matrix and the step's unrolled Cholesky (:func:`~hexapod_kin._numerics.dls_step3`);
-larger tasks on numpy (:func:`~hexapod_kin._numerics.dls_step`).
+larger tasks on numpy: :func:`_dls` is :func:`~hexapod_kin._numerics.dls_step`'s arithmetic
+(the same BLAS and LAPACK calls, so the same bits) with ``λ² I`` formed once per step.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from .._numerics import dls_step, dls_step3
 __all__ = ["integrate"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+dot, solve, svd = np.dot, np.linalg.solve, np.linalg.svd
 
 
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
@@ -75,8 +77,26 @@ def _sigma(rows: np.ndarray) -> tuple[float, float]:
     """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value."""
     if rows.shape[1] == 0:
         return 0.0, 0.0
-    s = np.linalg.svd(rows, compute_uv=False)
-    return float(s[-1]), float(s[0])
+    s = svd(rows, compute_uv=False).tolist()
+    return s[-1], s[0]
+
+
+def _dls(rows: np.ndarray, xd: list[float], lam_eye: np.ndarray) -> list[float]:
+    """:func:`~hexapod_kin._numerics.dls_step` ``(rows, xd, λ²)`` given ``lam_eye = λ² I``.
+
+    The same products in the same order, ``(JᵀJ + λ²I)⁻¹ Jᵀ ẋ`` when n ≤ m, else
+    ``Jᵀ(JJᵀ + λ²I)⁻¹ ẋ`` (``np.dot`` and ``@`` make the same BLAS calls); zeros when the
+    system is singular.
+    """
+    m, n = rows.shape
+    jt = rows.T
+    e = np.asarray(xd, dtype=float)
+    try:
+        if n <= m:
+            return solve(dot(jt, rows) + lam_eye, dot(jt, e)).tolist()
+        return dot(jt, solve(dot(rows, jt) + lam_eye, e)).tolist()
+    except np.linalg.LinAlgError:
+        return [0.0] * n
 
 
 def integrate(
@@ -124,11 +144,13 @@ def integrate(
         pin.log3,
     )
     array = np.array
+    eye = np.eye(min(n, 6 if rows6 else 3))
 
-    def law(q: list[float], h: int, lam_use: float) -> tuple[Any, ...]:
-        """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², λ² used, limited).
+    def law(q: list[float], h: int, held: Any) -> tuple[Any, ...]:
+        """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², held, limited).
 
-        ``lam_use`` < 0: σ and λ² from this evaluation (a step's start), else held.
+        ``held`` None: σ and λ² from this evaluation (a step's start), else the step's
+        ``(λ² used, λ² I)``, returned as ``held``.
         """
         jac = frame_jacobian(pm, data, array(q) if convert is None else convert(q), fid, _LWA)
         omf = frame_placement(pm, data, fid)
@@ -149,7 +171,7 @@ def integrate(
         if rows6:
             wx, wy, wz = v[3], v[4], v[5]
             if gain != 0.0:
-                ex, ey, ez = log3(ref_r[h] @ pose[:3, :3].T).tolist()  # type: ignore[index]
+                ex, ey, ez = log3(dot(ref_r[h], pose[:3, :3].T)).tolist()  # type: ignore[index]
                 wx, wy, wz = wx + gain * ex, wy + gain * ey, wz + gain * ez
             xd += [wx, wy, wz]
             rows = jac
@@ -157,17 +179,19 @@ def integrate(
             rows = jac[:3]
         j3 = rows.tolist() if fast else None
         smin = smax = lam2 = math.nan
-        if lam_use < 0.0:
+        if held is None:
             smin, smax = _sigma3(j3) if j3 is not None else _sigma(rows)
             lam2 = 0.0
             if smin < eps:
                 ratio = smin / eps
                 lam2 = lam2max * (1.0 - ratio * ratio)
             lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
+            held = (lam_use, lam_use * eye)  # λ² I as dls_step forms it
+        lam_use, lam_eye = held
         if j3 is not None:
             qd = dls_step3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
         else:
-            qd = dls_step(rows, xd, lam_use).tolist()
+            qd = _dls(rows, xd, lam_eye)
         limited = False
         if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
             free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
@@ -181,7 +205,7 @@ def integrate(
             if ratio > 1.0:
                 qd = [x / ratio for x in qd]
                 limited = True
-        return qd, pose, jac, smin, smax, lam2, lam_use, limited
+        return qd, pose, jac, smin, smax, lam2, held, limited
 
     steps = (vel.shape[0] - 1) // 2
     qs, qds, poses, jacs, sig, lams, lims = [], [], [], [], [], [], []
@@ -189,7 +213,7 @@ def integrate(
     half, sixth = 0.5 * dt, dt / 6.0
     for k in range(steps + 1):
         h = 2 * k
-        k1, pose, jac, smin, smax, lam2, lam_use, lim = law(q, h, -1.0)
+        k1, pose, jac, smin, smax, lam2, held, lim = law(q, h, None)
         qs.append(q)
         qds.append(k1)
         poses.append(pose)
@@ -200,9 +224,9 @@ def integrate(
         if k == steps:
             break
         if rk4:
-            k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, lam_use)[0]
-            k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, lam_use)[0]
-            k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, lam_use)[0]
+            k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, held)[0]
+            k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, held)[0]
+            k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, held)[0]
             q = [
                 a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in zip(q, k1, k2, k3, k4)
             ]

@@ -280,12 +280,15 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
     t0 = np.asarray(pose0, dtype=float)
     xi = np.asarray(twist, dtype=float)
     times = np.atleast_1d(np.asarray(t, dtype=float))
-    out = np.empty((times.size, 4, 4))
-    for k, dt in enumerate(times):  # Pinocchio's exp of SE(3) / SO(3)
-        if frame == "tip":
-            out[k] = t0 @ pin.exp6(pin.Motion(xi[:3] * dt, xi[3:] * dt)).homogeneous
-        else:
-            out[k] = _advance(t0, xi * dt, "base")
+    inc = times[:, None] * xi  # the increments t ξ, one row per time
+    exp3, exp6, motion = pin.exp3, pin.exp6, pin.Motion  # Pinocchio's exp of SO(3) / SE(3)
+    if frame == "tip":
+        steps = np.array([exp6(motion(v, w)).homogeneous for v, w in zip(inc[:, :3], inc[:, 3:])])
+        return np.asarray(t0 @ steps)  # one 4×4 product per time, T0 exp(t ξ)
+    out = np.zeros((times.size, 4, 4))
+    out[:, :3, :3] = np.array([exp3(w) for w in inc[:, 3:]]) @ t0[:3, :3]
+    out[:, :3, 3] = t0[:3, 3] + inc[:, :3]
+    out[:, 3, 3] = 1.0
     return out
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import json
 import math
+import sys
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,6 +30,9 @@ _VERSION = 5
 _THEN = "not used"
 #: Largest relative difference between symbolic and numeric ``det`` accepted as equal.
 _MATCH_RTOL = 1e-6
+#: CPU seconds of a family derivation's process beyond the derivation's own budget: sympy's
+#: import and the check's evaluation of the determinant.
+_CHECK_BUDGET = 10.0
 
 
 # ------------------------------------------------------------------------ one family
@@ -342,20 +347,86 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
     )
 
 
-def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Family, ...]:
-    """Check ``deriv`` against the model's Jacobian and turn its families into text forms."""
+def _derive_job(
+    chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray
+) -> Iterator[tuple[str, Any]]:
+    """The derivation's side of :func:`families_for`, in the derivation's own process.
+
+    Derives the families (:func:`hexapod_kin.symbolic.derive`, ``families_only``) and yields
+    plain values only, so the caller never imports sympy: ``("derived", (incomplete, kind,
+    values, families))`` with ``kind`` ``"det"`` (``|det J|`` at ``qs``), ``"gram"``
+    (``|det(J Jᵀ)|``) or ``None`` (neither derived), and each family's fields with its factor
+    as text (lengths substituted); or ``("failed", "Error: message")`` when the derivation
+    ended with one of its expected errors. Anything else is a bug and propagates.
+    """
+    from .. import symbolic
     from ..symbolic.checks import evaluate
+
+    try:
+        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
+        incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
+        if incomplete and not deriv.families:
+            yield "derived", (incomplete, None, None, ())
+            return
+        # one pass over the expression (lambdify of a 7-joint Gram determinant takes seconds)
+        at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
+        kind, expr = ("det", deriv.det) if deriv.det is not None else ("gram", deriv.gram)
+        values = None
+        if expr is not None:
+            values = np.abs(np.broadcast_to(evaluate(expr, at), (len(qs),)))
+        fields = ("name", "equation", "variables", "joint", "value", "periodic")
+        fams = tuple(
+            _family({**{k: getattr(f, k) for k in fields}, "factor": deriv.numeric(f.factor)})
+            for f in deriv.families
+        )
+        yield "derived", (incomplete, kind if expr is not None else None, values, fams)
+    except _derive_errors() as err:
+        yield "failed", f"{type(err).__name__}: {err}"
+
+
+def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -> tuple[Any, ...]:
+    """:func:`_derive_job`'s answer, from a process of its own unless sympy is loaded here.
+
+    The child keeps this process clear of sympy (its import and the unpickling of sympy
+    objects); with sympy already loaded the job runs here (its derivation still runs within
+    its budget, in a child of its own: :func:`hexapod_kin.symbolic.derive`).
+
+    Returns:
+        ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
+        child ended without an answer: its error, or its budget, as for a derivation's child).
+
+    """
+    from .. import _budget
+
+    args = (chain, rows, float(budget), qs)
+    if "sympy" in sys.modules:
+        done = dict(_derive_job(*args))
+    else:  # its start-up is not counted: the derivation keeps its own budget inside
+        done, reason = _budget.run(_derive_job, args, float(budget) + _CHECK_BUDGET)
+        if not done:
+            return ("failed", str(reason))
+    if "failed" in done:
+        return ("failed", done["failed"])
+    return tuple(done["derived"])
+
+
+def _numeric_families(
+    kind: str | None, sym: Any, qs: np.ndarray, model: Any, rows: tuple[str, ...]
+) -> None:
+    """Check the derivation's ``|det|`` (``kind`` ``"det"``) or ``|det(J Jᵀ)|`` (``"gram"``).
+
+    ``sym`` holds its values at ``qs``, compared with the model's Jacobian there.
+
+    Raises:
+        ParameterError: No determinant derived, or they differ (other frames or rows).
+
+    """
     from .measure import measures
 
-    qs = model.random_q(16, seed=4242)
     res = [measures(model, q, rows) for q in qs]
-    # one pass over the expression (lambdify of a 7-joint Gram determinant takes seconds)
-    at = {**deriv.lengths, **{s: qs[:, k] for k, s in enumerate(deriv.q)}}
-    if deriv.det is not None:
-        sym = np.abs(np.broadcast_to(evaluate(deriv.det, at), (len(qs),)))
+    if kind == "det":
         num = np.abs([m.det for m in res])
-    elif deriv.gram is not None:
-        sym = np.abs(np.broadcast_to(evaluate(deriv.gram, at), (len(qs),)))
+    elif kind == "gram":
         num = np.array([m.manipulability for m in res]) ** 2
     else:
         raise ParameterError("the derivation has no determinant to check the families against")
@@ -367,11 +438,6 @@ def _numeric_families(deriv: Any, model: Any, rows: tuple[str, ...]) -> tuple[Fa
             parameter="rows",
             value=rows,
         )
-    fields = ("name", "equation", "variables", "joint", "value", "periodic")
-    return tuple(
-        _family({**{k: getattr(fam, k) for k in fields}, "factor": deriv.numeric(fam.factor)})
-        for fam in deriv.families
-    )
 
 
 def families_for(
@@ -430,19 +496,21 @@ def families_for(
             "they are then kept on disk)",
             key,
         )
-    from .. import symbolic
-
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
+    qs = model.random_q(16, seed=4242)
+    got = _derived(chain, rows, budget, qs)
+    if got[0] == "failed":
+        return Families((), "none", f"derivation failed: {got[1]}", key)
+    incomplete, kind, sym, derived = got
+    if incomplete and not derived:
+        reason = f"derivation incomplete: {incomplete}"
+        _write_cache(key, model.nq, (), reason, tried)
+        return Families((), "none", reason, key)
     try:
-        deriv = symbolic.derive(chain, rows=rows, budget=float(budget), families_only=True)
-        incomplete = "" if deriv.families_done else "; ".join(deriv.incomplete)
-        if incomplete and not deriv.families:
-            reason = f"derivation incomplete: {incomplete}"
-            _write_cache(key, model.nq, (), reason, tried)
-            return Families((), "none", reason, key)
-        fams = _numeric_families(deriv, model, rows)
-    except _derive_errors() as err:
+        _numeric_families(kind, sym, qs, model, rows)
+    except HexapodKinError as err:
         return Families((), "none", f"derivation failed: {type(err).__name__}: {err}", key)
+    fams = tuple(derived)
     if incomplete:  # partial families: used and kept with the budget they had
         reason = f"derivation incomplete: {incomplete}"
         _write_cache(key, model.nq, fams, reason, tried)
