@@ -179,6 +179,24 @@ def here(*args: str, cwd: Path) -> Run:
     return Run(status, out.getvalue(), err.getvalue(), seconds, peak, cpu)
 
 
+def py_here(code: str, *, cwd: Path) -> Run:
+    """Run ``code`` as :func:`py` would (``python -c``), but in this process, measured as
+    :func:`here` measures a command (a fresh namespace; ``sys.exit(n)`` is status ``n``)."""
+    from contextlib import redirect_stderr, redirect_stdout
+    from io import StringIO
+
+    out, err = StringIO(), StringIO()
+    cpu0, t0 = _cpu(), time.monotonic()
+    with pytest.MonkeyPatch.context() as mp, redirect_stdout(out), redirect_stderr(err):
+        mp.chdir(cwd)
+        try:
+            exec(compile(code, "<py_here>", "exec"), {"__name__": "__main__"})
+            status = 0
+        except SystemExit as exc:
+            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    return Run(status, out.getvalue(), err.getvalue(), time.monotonic() - t0, 0, _cpu() - cpu0)
+
+
 def _status_kb(field: str) -> int:
     """``field`` of ``/proc/self/status`` in kB (0 where there is none)."""
     try:
