@@ -785,7 +785,9 @@ def test_feet_within_the_robot_still_stand(tmp_path: Path, record_property) -> N
     run = here("stand", str(urdf), *_feet_args(), "--json", cwd=tmp_path)
     _record(record_property, run)
     within_limits(run)
-    assert run.status == 0 and run.stderr == "", run.stderr
+    # the first use of the IK kernels in a fresh clone says it compiles them (a line)
+    err = re.sub(r"hexapod-kin: compiling \w+ kernels for this machine, [^\n]*\n", "", run.stderr)
+    assert run.status == 0 and err == "", run.stderr
     assert len(json.loads(run.stdout)["forces"]) == 6
 
 
