@@ -136,6 +136,30 @@ def here(*args: str, cwd: Path) -> Run:
 
     For a refusal or a small answer, where a child would only add the interpreter's start;
     the cases about a process (caches it loads, Ctrl-C, its exit) stay children (:func:`cli`).
+    Measured by :func:`_measured`.
+    """
+    from hexapod_kin.cli import main
+
+    return _measured(lambda: main(list(args)), cwd)
+
+
+def py_here(code: str, *, cwd: Path) -> Run:
+    """Run ``code`` as :func:`py` would (``python -c``), but in this process, measured as
+    :func:`here` measures a command (a fresh namespace; ``sys.exit(n)`` is status ``n``)."""
+
+    def run() -> int:
+        try:
+            exec(compile(code, "<py_here>", "exec"), {"__name__": "__main__"})
+        except SystemExit as exc:
+            return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        return 0
+
+    return _measured(run, cwd)
+
+
+def _measured(call: Callable[[], int], cwd: Path) -> Run:
+    """``call()`` in ``cwd`` (``HEXAPOD_KIN_DEBUG`` unset), its output captured, measured.
+
     CPU is this process's (and its children's) during the call; the peak is the rise of the
     resident set over its size before the call (Linux resets the high-water mark through
     ``/proc/self/clear_refs``; elsewhere the rise of ``ru_maxrss``, a lower bound). The
@@ -143,8 +167,6 @@ def here(*args: str, cwd: Path) -> Run:
     """
     from contextlib import redirect_stderr, redirect_stdout
     from io import StringIO
-
-    from hexapod_kin.cli import main
 
     out, err = StringIO(), StringIO()
     rss0, size0 = _status_kb("VmRSS"), _status_kb("VmSize")
@@ -168,7 +190,7 @@ def here(*args: str, cwd: Path) -> Run:
         except (ValueError, OSError):  # not settable here: the asserted peak still holds
             pass
         try:
-            status = main(list(args))
+            status = call()
         finally:
             resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
     seconds, cpu = time.monotonic() - t0, _cpu() - cpu0
@@ -177,24 +199,6 @@ def here(*args: str, cwd: Path) -> Run:
     else:
         peak = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * RSS_UNIT // 1024 - rss0) * 1024
     return Run(status, out.getvalue(), err.getvalue(), seconds, peak, cpu)
-
-
-def py_here(code: str, *, cwd: Path) -> Run:
-    """Run ``code`` as :func:`py` would (``python -c``), but in this process, measured as
-    :func:`here` measures a command (a fresh namespace; ``sys.exit(n)`` is status ``n``)."""
-    from contextlib import redirect_stderr, redirect_stdout
-    from io import StringIO
-
-    out, err = StringIO(), StringIO()
-    cpu0, t0 = _cpu(), time.monotonic()
-    with pytest.MonkeyPatch.context() as mp, redirect_stdout(out), redirect_stderr(err):
-        mp.chdir(cwd)
-        try:
-            exec(compile(code, "<py_here>", "exec"), {"__name__": "__main__"})
-            status = 0
-        except SystemExit as exc:
-            status = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    return Run(status, out.getvalue(), err.getvalue(), time.monotonic() - t0, 0, _cpu() - cpu0)
 
 
 def _status_kb(field: str) -> int:
