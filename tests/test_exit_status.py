@@ -1,4 +1,7 @@
-"""One exit-status rule for every command, run as a user runs it (a child process each).
+"""One exit-status rule for every command, through the command line's entry ``main(argv)``.
+
+Every row runs in this process (``main`` returns the status); rows of each status also run
+as a user runs them, a child process each, whose exit status must be the same.
 
 0 achieved; 1 answered but not achieved (a check of the plan fails, infeasible, a limit
 reached: one ``hexapod-kin: not achieved: ...`` line or the answer's own words); 2 bad input
@@ -179,10 +182,8 @@ def _run(argv: list[str], cwd: Path, **kw: object) -> subprocess.CompletedProces
     )
 
 
-@pytest.mark.parametrize(("cmd", "argv", "status"), ROWS, ids=lambda v: str(v))
-def test_exit_status(folder: Path, cmd: str, argv: list[str], status: int) -> None:
-    args = [*cmd.split(), *(a.replace("{tmp}", str(folder)) for a in argv)]
-    done = _run(args, folder)
+def _check(args: list[str], status: int, done: subprocess.CompletedProcess[str]) -> None:
+    """``done`` ended with ``status``, and said so as the rule asks (one line, no traceback)."""
     said = done.stderr.strip().splitlines()
     assert done.returncode == status, (args, done.stderr[-2000:])
     assert "Traceback" not in done.stderr
@@ -194,6 +195,56 @@ def test_exit_status(folder: Path, cmd: str, argv: list[str], status: int) -> No
         assert any(w in text for w in ("not achieved", "unreachable", "not done")), text[-2000:]
     else:
         assert not [ln for ln in lines if "error" in ln or "not achieved" in ln], done.stderr
+
+
+def _args(cmd: str, argv: list[str], folder: Path) -> list[str]:
+    return [*cmd.split(), *(a.replace("{tmp}", str(folder)) for a in argv)]
+
+
+@pytest.mark.parametrize(("cmd", "argv", "status"), ROWS, ids=lambda v: str(v))
+def test_exit_status(
+    folder: Path,
+    cmd: str,
+    argv: list[str],
+    status: int,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Every row through the command line's own entry, ``main(argv)``, in this process.
+
+    :func:`test_exit_status_of_the_process` runs rows of each status as a child and checks
+    that the process ends with the status ``main`` returns.
+    """
+    args = _args(cmd, argv, folder)
+    monkeypatch.chdir(folder)
+    monkeypatch.delenv("HEXAPOD_KIN_DEBUG", raising=False)
+    code = main(args)
+    out, err = capsys.readouterr()
+    _check(args, status, subprocess.CompletedProcess(args, code, out, err))
+
+
+#: Rows also run as a user runs them, a child ``python -m hexapod_kin`` each: every status,
+#: a refusal by argparse and one by the package, a command that imports MuJoCo.
+PROCESS_ROWS = [
+    ("list", ["--bogus"], 2),
+    ("fk", ["hexabot_leg", "--q", "0", "0", "0"], 0),
+    ("fk", ["hexabot_leg", "--q", "0"], 2),
+    ("stand", ["--shift", "0.2", "0"], 1),
+    (
+        "timeline path",
+        ["{tmp}/path.csv", "--calibration", "{tmp}/cal1.yaml", "-o", "{tmp}/p.csv"],
+        1,
+    ),
+    ("simulate", ["--duration", "1", "--no-stand"], 0),
+    ("simulate", ["--terrain", "mud"], 2),
+]
+
+
+@pytest.mark.parametrize(("cmd", "argv", "status"), PROCESS_ROWS, ids=lambda v: str(v))
+def test_exit_status_of_the_process(folder: Path, cmd: str, argv: list[str], status: int) -> None:
+    assert (cmd, argv, status) in ROWS
+    args = _args(cmd, argv, folder)
+    _check(args, status, _run(args, folder))
 
 
 def test_interrupted_is_130(folder: Path) -> None:

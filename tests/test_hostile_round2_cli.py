@@ -1,7 +1,8 @@
-"""Issue 35, round 2 of the reliability probe: the cases still failing in session 4, as children.
+"""Issue 35, round 2 of the reliability probe: the cases still failing in session 4.
 
-Each case is one ``python -m hexapod_kin`` child (``test_hostile_cli.cli``: CPU time by
-``os.wait4``, the child's own peak RSS by ``VmHWM``). A refusal is exit 2 and one line
+Each case runs the command line's entry ``main(argv)`` in this process
+(``test_hostile_cli.here``: CPU time by ``getrusage``, peak memory by the rise of the resident
+set); the Ctrl-C case is a child. A refusal is exit 2 and one line
 ``hexapod-kin: error: ...`` naming the file or the parameter, within a second of CPU beyond
 the command's own start (its imports and the robot's load, measured by a refusal of the
 same command that stops before any work) and 1 GB, with no catch-all nor traceback.
@@ -27,7 +28,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-from test_hostile_cli import PHANTOMX, SIDES35, Run, _clean_phantomx, _feet_args, cli, refused
+from test_hostile_cli import PHANTOMX, SIDES35, Run, _clean_phantomx, _feet_args, here, refused
 
 #: CPU a refusal may take beyond the same command's start [s] (the issue's "under a second").
 REFUSAL_S = 1.0
@@ -36,7 +37,7 @@ PLAN = "t,j1,j2\n0,0,0\n0.5,0.2,0.1\n1,0.4,0.2\n"
 
 def _start_cpu(args: list[str], cwd: Path) -> float:
     """CPU [s] of ``args`` refused at once (an unknown pattern: after imports and the load)."""
-    run = cli(*args, cwd=cwd)
+    run = here(*args, cwd=cwd)
     assert run.status == 2, run.stderr
     return run.cpu
 
@@ -75,7 +76,7 @@ def test_calibration_refused_before_the_walk(tmp_path: Path, key: str) -> None:
     (tmp_path / "cal.yaml").write_text(text)
     args = ["timeline", "gait", str(urdf), *_feet_args(), "-o", "out.csv"]
     start = _start_cpu([*args, "--pattern", "no-such-pattern"], tmp_path)
-    run = cli(*args, "--calibration", "cal.yaml", cwd=tmp_path)
+    run = here(*args, "--calibration", "cal.yaml", cwd=tmp_path)
     line = fast_refusal(run, phrase, start)
     assert "cal.yaml': calibration of j_c1_lf: " in line, line
     assert not (tmp_path / "out.csv").exists()
@@ -84,7 +85,7 @@ def test_calibration_refused_before_the_walk(tmp_path: Path, key: str) -> None:
 def test_calibration_speed_limit_of_1e_320_refused(tmp_path: Path) -> None:
     (tmp_path / "plan.csv").write_text(PLAN)
     (tmp_path / "cal.yaml").write_text("defaults: {units: rad, velocity_limit: 1e-320}\n")
-    run = cli(
+    run = here(
         "timeline", "path", "plan.csv", "--calibration", "cal.yaml", "-o", "o.csv", cwd=tmp_path
     )
     fast_refusal(run, "velocity_limit 1e-320 rad/s is not a servo's speed")
@@ -104,13 +105,13 @@ def test_calibration_scale_of_nothing_refused(tmp_path: Path, entry: str, phrase
     (tmp_path / "plan.csv").write_text(PLAN)
     (tmp_path / "cal.yaml").write_text(f"defaults: {entry}\n")
     args = ("timeline", "path", "plan.csv", "--calibration", "cal.yaml", "-o", "o.csv")
-    fast_refusal(cli(*args, cwd=tmp_path), phrase)
+    fast_refusal(here(*args, cwd=tmp_path), phrase)
 
 
 def test_path_of_1e300_rad_is_no_servo_command(tmp_path: Path) -> None:
     """No robot, no calibration (rad, unlimited): a finite 1e300 rad is still not sent."""
     (tmp_path / "plan.csv").write_text("t,j1\n0,0\n1,1e300\n")
-    run = cli("timeline", "path", "plan.csv", "-o", "o.json", cwd=tmp_path)
+    run = here("timeline", "path", "plan.csv", "-o", "o.json", cwd=tmp_path)
     fast_refusal(run, "beyond ±1e+09 (no servo's)")
     assert not (tmp_path / "o.json").exists()
 
@@ -118,7 +119,7 @@ def test_path_of_1e300_rad_is_no_servo_command(tmp_path: Path) -> None:
 @pytest.mark.parametrize("out", ["o.json", "o.csv", "o.yaml"])
 def test_path_with_a_1e308_sample_writes_nothing(tmp_path: Path, out: str) -> None:
     (tmp_path / "plan.csv").write_text("t,j1\n0,0\n0.5,1e308\n1,0\n")
-    run = cli("timeline", "path", "plan.csv", "-o", out, cwd=tmp_path)
+    run = here("timeline", "path", "plan.csv", "-o", out, cwd=tmp_path)
     fast_refusal(run, "joint j1 at t=0.0000 s: ")
     assert not (tmp_path / out).exists()
 
@@ -138,7 +139,7 @@ PLAN_FILES = {
 def test_plan_file_values_are_checked(tmp_path: Path, case: str) -> None:
     text, phrase = PLAN_FILES[case]
     (tmp_path / "p.json").write_text(text)
-    line = fast_refusal(cli("timeline", "path", "p.json", "-o", "o.csv", cwd=tmp_path), phrase)
+    line = fast_refusal(here("timeline", "path", "p.json", "-o", "o.csv", cwd=tmp_path), phrase)
     assert "plan='p.json'" in line, line
     assert not (tmp_path / "o.csv").exists()
 
@@ -161,7 +162,7 @@ def test_feet_file_values_are_checked(tmp_path: Path, command: str, case: str) -
     text, phrase = FEET_FILES[case]
     urdf = _clean_phantomx(tmp_path)
     (tmp_path / "feet.yaml").write_text(text)
-    run = cli(command, str(urdf), "--foot", "feet.yaml", cwd=tmp_path)
+    run = here(command, str(urdf), "--foot", "feet.yaml", cwd=tmp_path)
     line = fast_refusal(run, phrase)
     assert "feet='feet.yaml'" in line, line
 
@@ -169,7 +170,7 @@ def test_feet_file_values_are_checked(tmp_path: Path, command: str, case: str) -
 def test_control_honours_the_feet(tmp_path: Path) -> None:
     """``control --foot`` was ignored ('no foot link'): a foot beyond the robot is refused."""
     urdf = _clean_phantomx(tmp_path)
-    run = cli("control", str(urdf), *_feet_args(lf="1000,0,0"), cwd=tmp_path)
+    run = here("control", str(urdf), *_feet_args(lf="1000,0,0"), cwd=tmp_path)
     fast_refusal(run, "foot tibia_lf: offset 1000,0,0 m is larger than the robot")
 
 
@@ -189,7 +190,7 @@ COMMANDS = {
 def test_command_timeline_values_are_checked(tmp_path: Path, case: str) -> None:
     text, phrase = COMMANDS[case]
     (tmp_path / "c.json").write_text(text)
-    run = cli("control", "--command", "c.json", "--duration", "0.5", cwd=tmp_path)
+    run = here("control", "--command", "c.json", "--duration", "0.5", cwd=tmp_path)
     if case == "infinite" and "Infinity" in run.stderr:  # the strict JSON reader's own words
         phrase = "Infinity"
     line = fast_refusal(run, phrase)
@@ -208,27 +209,27 @@ def test_command_timeline_values_are_checked(tmp_path: Path, case: str) -> None:
     ids=["animate-samples", "ik-1e308", "ik-1km", "ik-pose-1e300"],
 )
 def test_work_beyond_reason_refused_at_once(tmp_path: Path, args: list[str], phrase: str) -> None:
-    fast_refusal(cli(*args, cwd=tmp_path), phrase)
+    fast_refusal(here(*args, cwd=tmp_path), phrase)
 
 
 def test_an_unreachable_target_is_still_answered(tmp_path: Path) -> None:
     """1 m for a 25 cm leg: beyond its reach but not beyond reason (exit 1, nearest point)."""
-    run = cli("ik", "hexabot_leg", "--target", "1", "0", "0", cwd=tmp_path)
+    run = here("ik", "hexabot_leg", "--target", "1", "0", "0", cwd=tmp_path)
     assert run.status == 1 and run.stderr == "", run.stderr
     assert "nearest reachable point" in run.stdout
 
 
 # ------------------------------------------------------------------- the page of the robot given
 def test_page_of_the_robot_given_not_of_a_namesake(tmp_path: Path) -> None:
-    robots, here, there = tmp_path / "robots", tmp_path / "here", tmp_path / "there"
-    for folder in (robots, here, there):
+    robots, ours, there = tmp_path / "robots", tmp_path / "here", tmp_path / "there"
+    for folder in (robots, ours, there):
         folder.mkdir()
-    made = cli("urdf", "hexapod", "-o", str(robots / "hexapod.urdf"), cwd=tmp_path)
+    made = here("urdf", "hexapod", "-o", str(robots / "hexapod.urdf"), cwd=tmp_path)
     assert made.status == 0, made.stderr
-    shutil.copy(PHANTOMX, here / "hexapod.urdf")  # another robot of the same file name
+    shutil.copy(PHANTOMX, ours / "hexapod.urdf")  # another robot of the same file name
     pages = []
-    for cwd in (here, there):
-        run = cli("gait", "../robots/hexapod.urdf", "--duration", "1", "--html", "p.html", cwd=cwd)
+    for cwd in (ours, there):
+        run = here("gait", "../robots/hexapod.urdf", "--duration", "1", "--html", "p.html", cwd=cwd)
         assert run.status == 0 and run.lines == ["wrote p.html"], run.stderr
         pages.append((cwd / "p.html").read_bytes())
     assert pages[0] == pages[1]

@@ -1,7 +1,9 @@
-"""Issue 35, the gaps left after session 4, as real child processes.
+"""Issue 35, the gaps left after session 4.
 
-Each case is a child measured like :mod:`test_hostile_cli` (CPU by ``os.wait4``, peak RSS,
-no catch-all nor traceback, at most two stderr lines; refusals within a second of CPU):
+Each case about a process (Ctrl-C, a full disk, numba's cache) is a child measured like
+:mod:`test_hostile_cli` (CPU by ``os.wait4``, peak RSS, no catch-all nor traceback, at most
+two stderr lines; refusals within a second of CPU); the CSV refusals and the API's targets
+run in this process (``test_hostile_cli.here`` / ``py_here``), measured alike:
 
 * **Ctrl-C from the first statement**: the console entry (:mod:`hexapod_kin._entry`) installs
   its SIGINT handler before the command line is imported; a Ctrl-C at any time after it is
@@ -29,7 +31,7 @@ from pathlib import Path
 
 import pytest
 from test_faults import full_disk  # noqa: F401 - the fixture
-from test_hostile_cli import _cap, _env, _finish, bounded, cli, py, refused
+from test_hostile_cli import _cap, _env, _finish, bounded, cli, here, py, py_here, refused
 
 REFUSAL_S = 1.0
 
@@ -213,7 +215,7 @@ def test_api_target_of_1e308_refused_at_once(tmp_path: Path, case: str) -> None:
         "    print(type(exc).__name__, exc.parameter, '|', exc)\n"
         "print(time.process_time() - t0)\n"
     )
-    run = py(code, cwd=tmp_path)
+    run = py_here(code, cwd=tmp_path)
     bounded(run)
     assert run.stderr == "", run.stderr
     first, cpu = run.stdout.splitlines()
@@ -232,7 +234,7 @@ def test_api_target_within_reason_is_solved(tmp_path: Path) -> None:
         "r = ik.solve(m, p)\n"
         "print(r.status, float(np.linalg.norm(m.fk(r.q)[:3, 3] - p)))\n"
     )
-    run = py(code, cwd=tmp_path)
+    run = py_here(code, cwd=tmp_path)
     status, err = run.stdout.split()
     assert status == "converged" and float(err) < 1e-9, run.stdout + run.stderr
 
@@ -256,7 +258,7 @@ _CELLS = ["inf", "nan", "-Infinity", "1_000", "1 e3", "1e999", "0x10", "", " ", 
 @pytest.mark.parametrize("cell", _CELLS, ids=[repr(c) for c in _CELLS])
 def test_plan_csv_numbers_are_strict(tmp_path: Path, cell: str) -> None:
     (tmp_path / "plan.csv").write_text(f"t,j1\n0,0.1\n# a comment\n\n0.5,{cell}\n")
-    run = cli("timeline", "path", "plan.csv", "-o", "out.json", cwd=tmp_path)
+    run = here("timeline", "path", "plan.csv", "-o", "out.json", cwd=tmp_path)
     if cell == "1,5":  # one value too many
         line = refused(run, "plan='plan.csv': line 5 has 3 values; allowed: 2 values per row")
     else:
@@ -274,7 +276,7 @@ def test_plan_csv_plain_numbers_still_read(tmp_path: Path) -> None:
         "print(t.tolist(), q.ravel().tolist(), names)\n"
     )
     (tmp_path / "plan.csv").write_text("t, j1\n1,-2.5\n.25, 3.\n 1e-3 ,\t+4E+2\n")
-    run = py(code, cwd=tmp_path)
+    run = py_here(code, cwd=tmp_path)
     assert run.stdout.strip() == "[1.0, 0.25, 0.001] [-2.5, 3.0, 400.0] ('j1',)", run.stderr
 
 
@@ -288,7 +290,7 @@ def test_sweep_table_csv_numbers_are_strict(tmp_path: Path) -> None:
         "except SourceError as exc:\n"
         "    print(exc)\n"
     )
-    run = py(code, cwd=tmp_path)
+    run = py_here(code, cwd=tmp_path)
     assert run.stdout.startswith("path='t.csv': line 3, column 2 ('score'): 'nan' is not"), (
         run.stdout + run.stderr
     )

@@ -191,15 +191,24 @@ def test_readme_has_command_lines():
 @pytest.mark.parametrize(
     "line", COMMAND_LINES, ids=[ln.split()[1] + str(i) for i, ln in enumerate(COMMAND_LINES)]
 )
-def test_readme_command_line_runs(line, tmp_path):
+def test_readme_command_line_runs(
+    line: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     """Each command line of the README, as written, in a fresh folder: exit status 0.
 
-    ``view`` serves until interrupted: it must come up (its address printed) and end with
-    status 130 and one line on Ctrl-C.
+    The first line and ``view`` run as a user runs them (a child ``python -m hexapod_kin``);
+    the others through the same entry, ``main(argv)``, in this process. ``view`` serves
+    until interrupted: it must come up (its address printed) and end with status 130 and one
+    line on Ctrl-C.
     """
     import shlex
     import signal
     import time
+
+    from hexapod_kin.cli import main
 
     for name in ("examples", "tests"):
         os.symlink(ROOT / name, tmp_path / name)
@@ -219,8 +228,17 @@ def test_readme_command_line_runs(line, tmp_path):
         assert proc.returncode in (130, -signal.SIGINT), err  # a shell reports both as 130
         assert err.strip().splitlines()[-1] == "hexapod-kin: interrupted", err
         return
-    run = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env)
-    assert run.returncode == 0, (line, run.stdout[-1000:], run.stderr[-2000:])
+    if line == COMMAND_LINES[0]:
+        run = subprocess.run(
+            argv, cwd=tmp_path, capture_output=True, text=True, timeout=300, env=env
+        )
+        assert run.returncode == 0, (line, run.stdout[-1000:], run.stderr[-2000:])
+        return
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    status = main(argv[3:])
+    out, err = capsys.readouterr()
+    assert status == 0, (line, out[-1000:], err[-2000:])
 
 
 def test_readme_first_command_prints_what_the_readme_shows(tmp_path):
