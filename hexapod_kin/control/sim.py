@@ -148,7 +148,9 @@ class ControlRun:
         position: (N, 3) the tracked point (CoM for torque control, base for servos) [m].
         path: (N, 3) the reference path: x, y [m], yaw [rad].
         rpy: (N, 3) body roll, pitch, yaw [rad].
-        travel: Horizontal distance walked [m].
+        travel: Horizontal distance walked [m]: from the start to the end of the path plus
+            the tracked point's mean offset from the path over the last gait cycle (the
+            steps' surge and sway within a cycle left out); along the path when it turns.
         travel_planned: Length of the commanded path [m].
         heading_error: Max |yaw − path yaw| [rad].
         max_roll: Max |roll| [rad].
@@ -500,7 +502,11 @@ def run(
     normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
     cross = np.abs((d * normal).sum(axis=1))
     start = P[0, :2]
-    travel = float(np.linalg.norm(P[-1, :2] - start))
+    # the end: the path's end plus the tracked point's offset from the path averaged over the
+    # last gait cycle (a step's surge and sway, up to a centimetre, is not distance walked)
+    last = slice(max(0, len(P) - int(round(ctl.period * ctl.rate))), len(P))
+    end = PA[-1, :2] + (P[last, :2] - PA[last, :2]).mean(axis=0)
+    travel = float(np.linalg.norm(end - start))
     seg = np.diff(PA[:, :2], axis=0)
     planned = float(np.linalg.norm(PA[-1, :2] - PA[0, :2]))
     if abs(PA[-1, 2] - PA[0, 2]) > 1e-6:  # a turning path: its length
