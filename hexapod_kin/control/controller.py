@@ -302,7 +302,6 @@ class Controller:
         self.walking = False
         self.in_swing = np.zeros(L, dtype=bool)
         self.touched = np.ones(L, dtype=bool)
-        self.early = np.zeros(L, dtype=bool)
         self.footholds = np.zeros((L, 3))
         self.stand_at = np.zeros((L, 3))
         self.v_filt = np.zeros(3)
@@ -525,15 +524,9 @@ class Controller:
         return out
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
-        """Stance legs: scheduled, or touched down after 60 % of their swing.
-
-        An early touch-down holds until the scheduled stance begins (a foot that touched is
-        not swung again at the next tick: a foot alternating between stance and a swing
-        pressing it into the ground kicks the body).
-        """
+        """Stance legs: scheduled, or touching after 60 % of their swing."""
         touch = np.asarray(m.contacts, dtype=bool)
-        self.early = (self.early | (touch & (self.swing_s > 0.6) & self.in_swing)) & ~sched
-        return sched | self.early
+        return sched | (touch & (self.swing_s > 0.6) & self.in_swing)
 
     # ------------------------------------------------------------------ the tick
     def tick(self, m: Measurement) -> np.ndarray:
