@@ -502,11 +502,7 @@ def run(
     normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
     cross = np.abs((d * normal).sum(axis=1))
     start = P[0, :2]
-    # the end: the path's end plus the tracked point's offset from the path averaged over the
-    # last gait cycle (a step's surge and sway, up to a centimetre, is not distance walked)
-    last = slice(max(0, len(P) - int(round(ctl.period * ctl.rate))), len(P))
-    end = PA[-1, :2] + (P[last, :2] - PA[last, :2]).mean(axis=0)
-    travel = float(np.linalg.norm(end - start))
+    travel = float(np.linalg.norm(_end_point(P, PA, int(round(ctl.period * ctl.rate))) - start))
     seg = np.diff(PA[:, :2], axis=0)
     planned = float(np.linalg.norm(PA[-1, :2] - PA[0, :2]))
     if abs(PA[-1, 2] - PA[0, 2]) > 1e-6:  # a turning path: its length
@@ -603,6 +599,18 @@ def _lie_down(
     data.qpos[2] = z
     data.qpos[jq] = q
     return q
+
+
+def _end_point(position: np.ndarray, path: np.ndarray, cycle: int) -> np.ndarray:
+    """Where the tracked point ends (2,) [m], its steps' surge and sway left out.
+
+    The path's end plus the point's offset from the path averaged over the last ``cycle``
+    samples (one gait cycle). A step's surge and sway within a cycle (up to a centimetre
+    either way) is not distance walked; sampled at the last tick it would be, by the phase
+    at which the walk stops.
+    """
+    last = slice(max(0, len(position) - max(1, cycle)), len(position))
+    return np.asarray(path[-1, :2] + (position[last, :2] - path[last, :2]).mean(axis=0))
 
 
 def _rz_col(yaw: float) -> np.ndarray:
