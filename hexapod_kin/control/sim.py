@@ -156,7 +156,8 @@ class ControlRun:
         max_roll: Max |roll| [rad].
         max_pitch: Max |pitch| [rad].
         max_path_error: Max cross-track distance to the path [m].
-        fell: The body fell (height below 40 % of standing, or tilted past 60°).
+        fell: The body fell (the tracked point below 40 % of its standing height above the
+            feet, or tilted past 60°).
         non_foot_contacts: ``(geom, geom, first time)`` of each pair in contact that is not
             a foot on the ground.
         swing_strikes: ``(leg, time)`` of each swing foot touching in the first half of its
@@ -377,7 +378,6 @@ def run(
     data.qpos[3] = 1.0
     data.qpos[jq] = q0
     mj.mj_forward(model, data)
-    stand_z = float(data.qpos[2])
     stand_height = None
     if lying:
         q0 = _lie_down(mj, model, data, wb, jq, base, scene.foot_radius)
@@ -476,8 +476,10 @@ def run(
         path.append([*ctl.path_xy, ctl.path_yaw])
         roll, pitch, yaw = matrix_to_rpy(R)
         rpys.append((roll, pitch, yaw))
-        height = float(data.qpos[2]) - ctl.ground_z
-        risen = risen or height > 0.9 * (stand_z - scene.foot_radius)
+        # the tracked point's height, as the controller's standing height is (a base frame at
+        # ground level, as Kraby's, is not a fallen body)
+        height = float(st_point[2]) - ctl.ground_z
+        risen = risen or height > 0.9 * ctl.stand_height
         if (risen and height < 0.4 * ctl.stand_height) or abs(roll) > 1.05 or abs(pitch) > 1.05:
             fell = True
         down = np.zeros(len(foot_geom), dtype=bool)
