@@ -491,6 +491,21 @@ def test_quadrupeds_over_bumps(robot: str, pattern: str, seed: int) -> None:
     assert res.heading_error <= math.radians(3.0), res.to_dict()
 
 
+def test_travel_ends_at_the_mean_of_the_last_gait_cycle() -> None:
+    """A body surging ±9 mm about its path once a cycle ends where its path ends, whatever
+    the phase the walk stops at; a steady 4 mm lead is kept."""
+    from hexapod_kin.control.sim import _end_point
+
+    n = 100  # samples per cycle
+    t = np.arange(1037) / n  # stops mid-cycle
+    path = np.stack([0.1 * t, np.zeros_like(t), np.zeros_like(t)], axis=1)
+    surge = 0.009 * np.sin(2 * np.pi * t) + 0.004
+    body = path + np.stack([surge, 0.002 * np.cos(4 * np.pi * t), np.zeros_like(t)], axis=1)
+    end = _end_point(body, path, n)
+    assert end == pytest.approx([path[-1, 0] + 0.004, 0.0], abs=1e-12)
+    assert abs(body[-1, 0] - path[-1, 0] - 0.004) > 0.005  # the last sample alone is off
+
+
 # ----------------------------------------------------------------------------- the MPC
 def _mpc_case(legs: int = 4):
     from hexapod_kin.control.mpc import ConvexMPC

@@ -148,13 +148,16 @@ class ControlRun:
         position: (N, 3) the tracked point (CoM for torque control, base for servos) [m].
         path: (N, 3) the reference path: x, y [m], yaw [rad].
         rpy: (N, 3) body roll, pitch, yaw [rad].
-        travel: Horizontal distance walked [m].
+        travel: Horizontal distance walked [m]: from the start to the end of the path plus
+            the tracked point's mean offset from the path over the last gait cycle (the
+            steps' surge and sway within a cycle left out); along the path when it turns.
         travel_planned: Length of the commanded path [m].
         heading_error: Max |yaw − path yaw| [rad].
         max_roll: Max |roll| [rad].
         max_pitch: Max |pitch| [rad].
         max_path_error: Max cross-track distance to the path [m].
-        fell: The body fell (height below 40 % of standing, or tilted past 60°).
+        fell: The body fell (the tracked point below 40 % of its standing height above the
+            feet, or tilted past 60°).
         non_foot_contacts: ``(geom, geom, first time)`` of each pair in contact that is not
             a foot on the ground.
         swing_strikes: ``(leg, time)`` of each swing foot touching in the first half of its
@@ -375,7 +378,6 @@ def run(
     data.qpos[3] = 1.0
     data.qpos[jq] = q0
     mj.mj_forward(model, data)
-    stand_z = float(data.qpos[2])
     stand_height = None
     if lying:
         q0 = _lie_down(mj, model, data, wb, jq, base, scene.foot_radius)
@@ -474,8 +476,10 @@ def run(
         path.append([*ctl.path_xy, ctl.path_yaw])
         roll, pitch, yaw = matrix_to_rpy(R)
         rpys.append((roll, pitch, yaw))
-        height = float(data.qpos[2]) - ctl.ground_z
-        risen = risen or height > 0.9 * (stand_z - scene.foot_radius)
+        # the tracked point's height, as the controller's standing height is (a base frame at
+        # ground level, as Kraby's, is not a fallen body)
+        height = float(st_point[2]) - ctl.ground_z
+        risen = risen or height > 0.9 * ctl.stand_height
         if (risen and height < 0.4 * ctl.stand_height) or abs(roll) > 1.05 or abs(pitch) > 1.05:
             fell = True
         down = np.zeros(len(foot_geom), dtype=bool)
@@ -500,7 +504,7 @@ def run(
     normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
     cross = np.abs((d * normal).sum(axis=1))
     start = P[0, :2]
-    travel = float(np.linalg.norm(P[-1, :2] - start))
+    travel = float(np.linalg.norm(_end_point(P, PA, int(round(ctl.period * ctl.rate))) - start))
     seg = np.diff(PA[:, :2], axis=0)
     planned = float(np.linalg.norm(PA[-1, :2] - PA[0, :2]))
     if abs(PA[-1, 2] - PA[0, 2]) > 1e-6:  # a turning path: its length
@@ -597,6 +601,18 @@ def _lie_down(
     data.qpos[2] = z
     data.qpos[jq] = q
     return q
+
+
+def _end_point(position: np.ndarray, path: np.ndarray, cycle: int) -> np.ndarray:
+    """Where the tracked point ends (2,) [m], its steps' surge and sway left out.
+
+    The path's end plus the point's offset from the path averaged over the last ``cycle``
+    samples (one gait cycle). A step's surge and sway within a cycle (up to a centimetre
+    either way) is not distance walked; sampled at the last tick it would be, by the phase
+    at which the walk stops.
+    """
+    last = slice(max(0, len(position) - max(1, cycle)), len(position))
+    return np.asarray(path[-1, :2] + (position[last, :2] - path[last, :2]).mean(axis=0))
 
 
 def _rz_col(yaw: float) -> np.ndarray:
