@@ -116,7 +116,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         from ..robust import simulate_robust
 
         ensemble = simulate_robust(model, **options)
-        sim = ensemble.runs[ensemble.worst]
+        sim = ensemble.worst_replay  # the page, the scene and the full print
     else:
         sim = simulate(model, friction=args.friction, **options)
     out = sim.to_dict()
@@ -138,7 +138,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         bad = ensemble.failures
         if bad:
             worst = ensemble.members[ensemble.worst]
-            failed = [k for k, row in out["checks"].items() if not row["ok"]]
+            failed = out["robust"]["members"][ensemble.worst]["failed"]
             why.append(
                 f"{len(bad)} of {len(ensemble.members)} ensemble members fail the physics "
                 f"checks; worst {worst.name!r}: {', '.join(failed)}"
@@ -204,12 +204,30 @@ def _check_control_options(args: argparse.Namespace) -> None:
 
 
 def _print_members(rob: dict[str, Any]) -> None:
-    print("ensemble (travel along the plan, failed checks):")
+    print("ensemble (mode, travel along the plan, heading error, failed checks):")
     for k, row in enumerate(rob["members"]):
         mark = "worst " if k == rob["worst"] else "      "
         bad = ", ".join(row["failed"]) or "pass"
-        print(f"  {mark}{row['name']:<52} {_pct(row['distance_error']):>10}  {bad}")
-    print(f"worst member, in full: {rob['members'][rob['worst']]['name']}")
+        print(
+            f"  {mark}{row['name']:<52} {row['mode']:<10} {_pct(row['distance_error']):>10} "
+            f"{math.degrees(row['heading_error']):7.3f} deg  {bad}"
+        )
+    worst = rob["members"][rob["worst"]]
+    if worst["mode"] == "controlled":
+        c = worst["control"]
+        print(
+            f"worst member: {worst['name']}, walked under the controller ({c['kind']}, "
+            f"{c['pattern']}): {worst['distance_along']:.5f} m along the plan vs "
+            f"{worst['distance_planned']:.5f} m planned ({_pct(worst['distance_error'])}), "
+            f"direction {worst['direction']}, heading error "
+            f"{math.degrees(c['heading_error']):.3f} deg, max roll / pitch "
+            f"{math.degrees(c['max_roll']):.3f} / {math.degrees(c['max_pitch']):.3f} deg, "
+            f"fell: {c['fell']}, non-foot contacts {len(c['non_foot_contacts'])}, swing strikes "
+            f"{len(c['swing_strikes'])}"
+        )
+        print("worst replayed member, in full:")
+    else:
+        print(f"worst member, in full: {worst['name']}")
 
 
 def _pct(v: float | None) -> str:
