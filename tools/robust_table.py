@@ -12,7 +12,7 @@ foot carries 5 % of the robot's weight, looked for from 100 ms before it (negati
 met the ground early, on a bump) — the figure behind issue 31's bump diagnosis (a foot
 planned onto ``z = 0`` over a dip hovers until the next leg lifts and the body tips onto it).
 
-Usage: ``python tools/robust_table.py [ROBOT ...] [--duration S] [--bumps] [--detail]``
+Usage: ``python tools/robust_table.py [ROBOT ...] [--duration S] [--bumps|--flat] [--detail]``
 (default: the eight example-robot-data quadrupeds, 10 s). Each robot costs 8 MuJoCo
 replays and 3 closed-loop walks (about 40 s of CPU each for erd:go1's 10 s crawl).
 """
@@ -63,11 +63,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("robots", nargs="*", default=[f"erd:{n}" for n in QUADRUPEDS])
     p.add_argument("--duration", type=float, default=10.0, help="walk length [s]")
     p.add_argument("--bumps", action="store_true", help="the first member and the bumpy ones")
+    p.add_argument("--flat", action="store_true", help="the flat members only (the replays)")
     p.add_argument("--detail", action="store_true", help="per member: checks, slip, delays")
     args = p.parse_args(argv)
     members = ENSEMBLE
     if args.bumps:
         members = (ENSEMBLE[0],) + tuple(m for m in ENSEMBLE if m.bumps)
+    if args.flat:
+        members = tuple(m for m in ENSEMBLE if not m.bumps)
     print("robot", *(f"m{k}" for k in range(len(members))), "cpu_s", sep="\t")
     ok = True
     for robot in args.robots:
