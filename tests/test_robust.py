@@ -97,3 +97,22 @@ def test_every_member_controlled_is_refused() -> None:
     bumpy = Member("bumpy", 0.005, False, 0.8, 0.003, 0, True)
     with pytest.raises(ParameterError, match="at least one replays"):
         simulate_robust(pattern="tripod", duration=0.5, members=(bumpy,))
+
+
+ERD_QUADRUPEDS = ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ERD_QUADRUPEDS)
+def test_erd_quadrupeds_walk_their_crawl_over_bumps_under_the_controller(name: str) -> None:
+    """Each example-robot-data quadruped's default crawl (10 s), its twist walked under the
+    controller over one of the ensemble's ±3 mm floors (the seeds in turn): within 1 % of
+    the plan's distance along its direction, heading within 3°, no fall, feet only (every
+    replay of these floors failed its slip check: 5.5-25.5 mm in one stance)."""
+    k = ERD_QUADRUPEDS.index(name)
+    bumpy = [m for m in ENSEMBLE if m.controlled][k % 3]
+    rr = simulate_robust(f"erd:{name}", members=(ENSEMBLE[0], bumpy), stand=False)
+    walked = rr.runs[1]
+    assert isinstance(walked, ControlledRun) and rr.nominal.plan["pattern"]["name"] == "crawl"
+    assert abs(walked.distance_error) < 0.01, walked.to_dict()
+    assert walked.ok, {c: v for c, v in walked.checks().items() if not v["ok"]}
