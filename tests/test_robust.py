@@ -123,3 +123,19 @@ def test_erd_quadrupeds_walk_their_crawl_over_bumps_under_the_controller(name: s
     assert isinstance(walked, ControlledRun) and rr.nominal.plan["pattern"]["name"] == "crawl"
     assert abs(walked.distance_error) < 0.01, walked.to_dict()
     assert walked.ok, {c: v for c, v in walked.checks().items() if not v["ok"]}
+
+
+def test_a_blown_up_walk_is_still_json(mixed) -> None:
+    """A controlled walk whose figures are not finite (a robot through the floor) gives JSON
+    nulls, not NaN (the CLI's JSON refuses NaN)."""
+    import json
+
+    walked = mixed.runs[0]
+    nan = dataclasses.replace(
+        walked, control=dataclasses.replace(walked.control, heading_error=math.nan)
+    )
+    assert not nan.checks()["heading"]["ok"]
+    rr = dataclasses.replace(mixed, runs=(nan, mixed.runs[1]))
+    row = json.loads(json.dumps(rr.to_dict(), allow_nan=False))["members"][0]
+    assert row["heading_error"] is None and row["control"]["heading_error"] is None
+    assert "heading" in row["failed"]

@@ -215,24 +215,28 @@ def _print_members(rob: dict[str, Any]) -> None:
         bad = ", ".join(row["failed"]) or "pass"
         print(
             f"  {mark}{row['name']:<52} {row['mode']:<10} {_pct(row['distance_error']):>10} "
-            f"{math.degrees(row['heading_error']):7.3f} deg  {bad}"
+            f"{_deg(row['heading_error']):>7} deg  {bad}"
         )
     worst = rob["members"][rob["worst"]]
     if worst["mode"] == "controlled":
-        c = worst["control"]
+        c, along = worst["control"], worst["distance_along"]
         print(
             f"worst member: {worst['name']}, walked under the controller ({c['kind']}, "
-            f"{c['pattern']}): {worst['distance_along']:.5f} m along the plan vs "
+            f"{c['pattern']}): {'-' if along is None else f'{along:.5f}'} m along the plan vs "
             f"{worst['distance_planned']:.5f} m planned ({_pct(worst['distance_error'])}), "
             f"direction {worst['direction']}, heading error "
-            f"{math.degrees(c['heading_error']):.3f} deg, max roll / pitch "
-            f"{math.degrees(c['max_roll']):.3f} / {math.degrees(c['max_pitch']):.3f} deg, "
+            f"{_deg(c['heading_error'])} deg, max roll / pitch "
+            f"{_deg(c['max_roll'])} / {_deg(c['max_pitch'])} deg, "
             f"fell: {c['fell']}, non-foot contacts {len(c['non_foot_contacts'])}, swing strikes "
             f"{len(c['swing_strikes'])}"
         )
         print("worst replayed member, in full:")
     else:
         print(f"worst member, in full: {worst['name']}")
+
+
+def _deg(v: float | None) -> str:
+    return "-" if v is None else f"{math.degrees(v):.3f}"
 
 
 def _pct(v: float | None) -> str:

@@ -38,7 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from .controlled import CONTROL_LIMITS, ControlledRun
+from .controlled import CONTROL_LIMITS, ControlledRun, finite
 
 __all__ = [
     "CONTROL_LIMITS",
@@ -171,18 +171,17 @@ class RobustRun:
         rows = []
         for m, r in zip(self.members, self.runs):
             c = r.checks()
-            rows.append(
-                {
-                    **m.to_dict(),
-                    **(r.to_dict() if m.controlled else {}),
-                    "distance_error": r.distance_error,
-                    "heading_error": float(r.checks()["heading"]["value"]),
-                    "turn_error": r.turn_error,
-                    "direction": r.direction,
-                    "failed": [k for k, row in c.items() if not row["ok"]],
-                    "checks": c,
-                }
-            )
+            row = {
+                **m.to_dict(),
+                **(r.to_dict() if m.controlled else {}),
+                "distance_error": r.distance_error,
+                "heading_error": float(r.checks()["heading"]["value"]),
+                "turn_error": r.turn_error,
+                "direction": r.direction,
+                "failed": [k for k, check in c.items() if not check["ok"]],
+                "checks": c,
+            }
+            rows.append(finite(row) if m.controlled else row)
         return {"members": rows, "worst": self.worst, "ok": self.ok}
 
 

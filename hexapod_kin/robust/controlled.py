@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CONTROL_LIMITS", "ControlledRun", "controlled_run"]
+__all__ = ["CONTROL_LIMITS", "ControlledRun", "controlled_run", "finite"]
 
 #: The closed loop's limits: travel along the plan within 1 % of the plan's distance (the
 #: replay's :data:`~hexapod_kin.simulate.replay.LIMITS` ``travel``); the largest yaw error
@@ -140,6 +140,20 @@ class ControlledRun:
             "ok": self.ok,
             "control": self.control.to_dict(),
         }
+
+
+def finite(obj: Any) -> Any:
+    """``obj`` (dicts, lists, tuples of numbers) with NaN and infinities as None (JSON null).
+
+    A walk that blew up (a robot that fell through the ground) has non-finite figures.
+    """
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
 
 
 def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius: Any) -> Any:
