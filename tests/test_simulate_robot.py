@@ -148,6 +148,7 @@ def test_cli_robust_lists_every_member_and_exits_on_the_worst(
     out = json.loads(capsys.readouterr().out)
     rows = out["robust"]["members"]
     assert len(rows) == len(ENSEMBLE)
+    assert [r["mode"] for r in rows] == ["replay"] * 8 + ["controlled"] * 3
     assert status == (0 if all(not r["failed"] for r in rows) else 1)
     assert out["robust"]["ok"] == (status == 0)
 

@@ -4,16 +4,17 @@ For each robot, the default walk is planned once and replayed under every member
 :data:`hexapod_kin.robust.ENSEMBLE` (or the bumpy ones and the first, ``--bumps``). One row
 per robot: the travel error of each member in percent, ``*`` where the member fails a check;
 then, per member, its failing checks, the largest slip, tilt and the touch-down delays
-(``--detail``).
+(``--detail``). The bumpy members walk under the controller (``controlled``, see
+:mod:`hexapod_kin.robust`); the others replay the plan.
 
 A touch-down delay is the time from a planned touch-down to the first sample at which the
 foot carries 5 % of the robot's weight, looked for from 100 ms before it (negative: the foot
 met the ground early, on a bump) — the figure behind issue 31's bump diagnosis (a foot
 planned onto ``z = 0`` over a dip hovers until the next leg lifts and the body tips onto it).
 
-Usage: ``python tools/robust_table.py [ROBOT ...] [--duration S] [--bumps] [--detail]``
-(default: the eight example-robot-data quadrupeds, 10 s). Each robot costs 11 MuJoCo
-replays: about 70 s of CPU for erd:go1's 10 s crawl.
+Usage: ``python tools/robust_table.py [ROBOT ...] [--duration S] [--bumps|--flat] [--detail]``
+(default: the eight example-robot-data quadrupeds, 10 s). Each robot costs 8 MuJoCo
+replays and 3 closed-loop walks (about 40 s of CPU each for erd:go1's 10 s crawl).
 """
 
 from __future__ import annotations
@@ -62,11 +63,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("robots", nargs="*", default=[f"erd:{n}" for n in QUADRUPEDS])
     p.add_argument("--duration", type=float, default=10.0, help="walk length [s]")
     p.add_argument("--bumps", action="store_true", help="the first member and the bumpy ones")
+    p.add_argument("--flat", action="store_true", help="the flat members only (the replays)")
     p.add_argument("--detail", action="store_true", help="per member: checks, slip, delays")
     args = p.parse_args(argv)
     members = ENSEMBLE
     if args.bumps:
         members = (ENSEMBLE[0],) + tuple(m for m in ENSEMBLE if m.bumps)
+    if args.flat:
+        members = tuple(m for m in ENSEMBLE if not m.bumps)
     print("robot", *(f"m{k}" for k in range(len(members))), "cpu_s", sep="\t")
     ok = True
     for robot in args.robots:
@@ -81,6 +85,15 @@ def main(argv: list[str] | None = None) -> int:
         if args.detail:
             for k, (m, r) in enumerate(zip(rr.members, rr.runs)):
                 bad = [key for key, row in r.checks().items() if not row["ok"]]
+                if m.controlled:  # the closed loop: no plan to land on, no slip measured
+                    c = r.control
+                    tilt = math.degrees(max(c.max_roll, c.max_pitch))
+                    head = math.degrees(c.heading_error)
+                    print(
+                        f"  m{k} {m.name}: failed {bad or '-'}; heading {head:.2f} deg, "
+                        f"tilt {tilt:.2f} deg, strikes {len(c.swing_strikes)}"
+                    )
+                    continue
                 d = touchdown_delays(r) * 1e3
                 tilt = math.degrees(max(r.max_roll, r.max_pitch))
                 print(
@@ -89,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"max {np.nanmax(d):+.0f} ms"
                 )
     for k, m in enumerate(members):
-        print(f"m{k}: {m.name}")
+        print(f"m{k}: {m.name} ({m.mode})")
     return 0 if ok else 1
 
 

@@ -1,0 +1,199 @@
+"""An ensemble member walked under the closed-loop controller, judged against the plan.
+
+An open-loop replay cannot react to ground it was not told about: on ±3 mm bumps a stiff
+quadruped's planned touch-downs land early or late, the weight moves between legs and the
+stance feet slide, whatever the plan (issue 31's measurements: every bump replay of the
+eight example-robot-data quadrupeds slid 5.5–25.5 mm in one stance). A walking robot meets
+unknown bumps with feedback, so the bumpy members of :data:`~hexapod_kin.robust.ENSEMBLE`
+walk the plan's pattern and twist for the plan's duration under
+:func:`hexapod_kin.control.run` (the path of ``simulate --control --bumps A --seed K``) and
+:func:`controlled_run` judges that walk by the replay's kind of checks
+(:meth:`ControlledRun.checks`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["CONTROL_LIMITS", "ControlledRun", "controlled_run", "finite"]
+
+#: The closed loop's limits: travel along the plan within 1 % of the plan's distance (the
+#: replay's :data:`~hexapod_kin.simulate.replay.LIMITS` ``travel``); the largest yaw error
+#: against the controller's path within 3° (the controller's own must-show over bumps,
+#: ``tests/test_control.py``: a closed loop steers back, so its heading wanders where a replay's
+#: is the plan's). A fall or a non-foot contact fails. The controller measures no stance slip.
+CONTROL_LIMITS: dict[str, float] = {"travel": 0.01, "heading": math.radians(3.0)}
+
+
+@dataclass(frozen=True)
+class ControlledRun:
+    """A closed-loop walk of a plan's twist, with the figures a replay reports.
+
+    Attributes:
+        control: The walk (:class:`hexapod_kin.control.ControlRun`).
+        distance_planned: The plan's horizontal displacement [m].
+        direction_planned: The plan's direction of travel [rad] in the start frame.
+        turn_planned: The plan's yaw change [rad].
+
+    """
+
+    control: Any
+    distance_planned: float
+    direction_planned: float
+    turn_planned: float
+
+    mode = "controlled"
+
+    @property
+    def _moved(self) -> np.ndarray:
+        p = np.asarray(self.control.position)
+        return p[-1, :2] - p[0, :2]
+
+    @property
+    def distance(self) -> float:
+        """The walked horizontal displacement [m] (the controller's tracked point)."""
+        return float(np.hypot(*self._moved))
+
+    @property
+    def direction_error(self) -> float:
+        """Angle between the walked and the planned displacements [rad]."""
+        if self.distance < 1e-9:
+            return 0.0
+        yaw0 = float(np.asarray(self.control.rpy)[0, 2])  # the start frame's heading
+        d = math.atan2(self._moved[1], self._moved[0]) - yaw0 - self.direction_planned
+        return abs(math.atan2(math.sin(d), math.cos(d)))
+
+    @property
+    def distance_along(self) -> float:
+        """The walked displacement along the planned one [m] (< 0: went backwards)."""
+        return self.distance * math.cos(self.direction_error)
+
+    @property
+    def distance_error(self) -> float | None:
+        """(distance along the plan's direction − planned) / planned (None: no translation)."""
+        if self.distance_planned < 1e-6:
+            return None
+        return (self.distance_along - self.distance_planned) / self.distance_planned
+
+    @property
+    def turn(self) -> float:
+        """The walked yaw change [rad]."""
+        yaw = np.unwrap(np.asarray(self.control.rpy)[:, 2])
+        return float(yaw[-1] - yaw[0])
+
+    @property
+    def turn_error(self) -> float | None:
+        """(turn − planned) / planned (None when the plan does not turn)."""
+        if abs(self.turn_planned) < 1e-6:
+            return None
+        return (self.turn - self.turn_planned) / self.turn_planned
+
+    @property
+    def direction(self) -> str:
+        """Where the body went relative to the plan's direction, in words."""
+        if self.distance_planned < 1e-6 or self.distance < 1e-9:
+            return "-"
+        deg = math.degrees(self.direction_error)
+        if deg <= 10.0:
+            return f"as planned ({deg:.2f} deg off)"
+        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
+
+    def checks(self) -> dict[str, dict[str, Any]]:
+        """Each check: value, limit, pass (:data:`CONTROL_LIMITS`).
+
+        ``travel``: the larger of |distance_error| and |turn_error|; ``heading``: the
+        controller's largest yaw error; ``fell``: 1 when it fell; ``contacts``: the number of
+        non-foot contact pairs (both must be 0).
+        """
+        c = self.control
+        rel = [abs(e) for e in (self.distance_error, self.turn_error) if e is not None]
+        rows = {
+            "travel": (max(rel) if rel else 0.0, CONTROL_LIMITS["travel"]),
+            "heading": (float(c.heading_error), CONTROL_LIMITS["heading"]),
+            "fell": (float(bool(c.fell)), 0.0),
+            "contacts": (float(len(c.non_foot_contacts)), 0.0),
+        }
+        return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
+
+    @property
+    def ok(self) -> bool:
+        """Every check passes."""
+        return all(row["ok"] for row in self.checks().values())
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the figures, the checks and the closed loop's own summary."""
+        return {
+            "mode": self.mode,
+            "distance_planned": self.distance_planned,
+            "distance": self.distance,
+            "distance_along": self.distance_along,
+            "distance_error": self.distance_error,
+            "direction": self.direction,
+            "turn_planned": self.turn_planned,
+            "turn": self.turn,
+            "turn_error": self.turn_error,
+            "checks": self.checks(),
+            "ok": self.ok,
+            "control": self.control.to_dict(),
+        }
+
+
+def finite(obj: Any) -> Any:
+    """``obj`` (dicts, lists, tuples of numbers) with NaN and infinities as None (JSON null).
+
+    A walk that blew up (a robot that fell through the ground) has non-finite figures.
+    """
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius: Any) -> Any:
+    """Walk ``replay``'s plan under the controller on ``member``'s ground.
+
+    Args:
+        replay: A :class:`~hexapod_kin.simulate.SimRun` of the plan (its pattern, twist,
+            duration, planned displacement and turn).
+        robot: The robot as the plan was given it (a source, a model; a run's ``robot``).
+        member: The :class:`~hexapod_kin.robust.Member` (friction, bumps, seed).
+        feet: Feet of a URDF robot without foot links (as ``simulate`` takes them), or None.
+        foot_radius: Foot sphere radius [m], or None (the robot's).
+
+    Returns:
+        A :class:`ControlledRun`.
+
+    """
+    from ..control import run
+
+    if feet is not None or foot_radius is not None:  # as ``control`` on the command line
+        from ..gait import as_whole_body
+
+        robot = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
+    plan = replay.plan
+    vx, vy, wz = (float(v) for v in plan["velocity"])
+    walked = run(
+        robot,
+        pattern=str(plan["pattern"]["name"]),
+        command=(vx, vy, wz),
+        duration=float(plan["duration"]),
+        friction=member.friction,
+        bumps=member.bumps,
+        seed=member.seed,
+    )
+    poses = np.asarray(replay.planned)
+    d = poses[-1, :2, 3] - poses[0, :2, 3]
+    yaw0 = math.atan2(poses[0, 1, 0], poses[0, 0, 0])  # the plan's start heading
+    return ControlledRun(
+        control=walked,
+        distance_planned=float(replay.distance_planned),
+        direction_planned=math.atan2(d[1], d[0]) - yaw0 if np.hypot(*d) > 1e-9 else 0.0,
+        turn_planned=float(replay.turn_planned),
+    )
