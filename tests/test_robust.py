@@ -62,8 +62,12 @@ def test_a_controlled_members_travel_is_along_the_plan(mixed) -> None:
     walked, replay = mixed.runs
     planned = np.asarray(replay.planned)[[0, -1], :2, 3]
     u = (planned[1] - planned[0]) / np.linalg.norm(planned[1] - planned[0])
-    p = np.asarray(walked.control.position)
-    along = float((p[-1, :2] - p[0, :2]) @ u)  # the start heading is 0 in both
+    c = walked.control
+    p, path = np.asarray(c.position), np.asarray(c.path)
+    n = round(c.settings["period"] * c.settings["rate"])  # samples of the last gait cycle
+    end = path[-1, :2] + (p[-n:, :2] - path[-n:, :2]).mean(axis=0)  # surge and sway left out
+    assert np.asarray(c.end) == pytest.approx(end, abs=1e-12)
+    along = float((end - p[0, :2]) @ u)  # the start heading is 0 in both
     assert abs(float(np.asarray(walked.control.rpy)[0, 2])) < 0.01
     expect = (along - replay.distance_planned) / replay.distance_planned
     assert walked.distance_error == pytest.approx(expect, abs=1e-4)

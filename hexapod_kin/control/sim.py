@@ -148,6 +148,8 @@ class ControlRun:
         position: (N, 3) the tracked point (CoM for torque control, base for servos) [m].
         path: (N, 3) the reference path: x, y [m], yaw [rad].
         rpy: (N, 3) body roll, pitch, yaw [rad].
+        end: (2,) where the tracked point ends [m]: the path's end plus its mean offset from
+            the path over the last gait cycle (the steps' surge and sway left out).
         travel: Horizontal distance walked [m]: from the start to the end of the path plus
             the tracked point's mean offset from the path over the last gait cycle (the
             steps' surge and sway within a cycle left out); along the path when it turns.
@@ -185,6 +187,7 @@ class ControlRun:
     position: np.ndarray
     path: np.ndarray
     rpy: np.ndarray
+    end: np.ndarray
     travel: float
     travel_planned: float
     heading_error: float
@@ -504,7 +507,8 @@ def run(
     normal = np.stack([-np.sin(PA[:, 2]), np.cos(PA[:, 2])], axis=1)
     cross = np.abs((d * normal).sum(axis=1))
     start = P[0, :2]
-    travel = float(np.linalg.norm(_end_point(P, PA, int(round(ctl.period * ctl.rate))) - start))
+    end_xy = _end_point(P, PA, int(round(ctl.period * ctl.rate)))
+    travel = float(np.linalg.norm(end_xy - start))
     seg = np.diff(PA[:, :2], axis=0)
     planned = float(np.linalg.norm(PA[-1, :2] - PA[0, :2]))
     if abs(PA[-1, 2] - PA[0, 2]) > 1e-6:  # a turning path: its length
@@ -531,6 +535,7 @@ def run(
         position=P,
         path=PA,
         rpy=RPY,
+        end=end_xy,
         travel=travel,
         travel_planned=planned,
         heading_error=float(np.abs(yaws - yaws[0] - (PA[:, 2] - PA[0, 2])).max()),

@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from ..simulate.replay import Travel
+
 __all__ = ["CONTROL_LIMITS", "ControlledRun", "controlled_run", "finite"]
 
 #: The closed loop's limits: travel along the plan within 1 % of the plan's distance (the
@@ -30,7 +32,7 @@ CONTROL_LIMITS: dict[str, float] = {"travel": 0.01, "heading": math.radians(3.0)
 
 
 @dataclass(frozen=True)
-class ControlledRun:
+class ControlledRun(Travel):
     """A closed-loop walk of a plan's twist, with the figures a replay reports.
 
     Attributes:
@@ -50,12 +52,14 @@ class ControlledRun:
 
     @property
     def _moved(self) -> np.ndarray:
-        p = np.asarray(self.control.position)
-        return p[-1, :2] - p[0, :2]
+        return np.asarray(self.control.end) - np.asarray(self.control.position)[0, :2]
 
     @property
     def distance(self) -> float:
-        """The walked horizontal displacement [m] (the controller's tracked point)."""
+        """The walked horizontal displacement [m] (the controller's tracked point).
+
+        To :attr:`~hexapod_kin.control.ControlRun.end`: the steps' surge and sway left out.
+        """
         return float(np.hypot(*self._moved))
 
     @property
@@ -68,39 +72,10 @@ class ControlledRun:
         return abs(math.atan2(math.sin(d), math.cos(d)))
 
     @property
-    def distance_along(self) -> float:
-        """The walked displacement along the planned one [m] (< 0: went backwards)."""
-        return self.distance * math.cos(self.direction_error)
-
-    @property
-    def distance_error(self) -> float | None:
-        """(distance along the plan's direction − planned) / planned (None: no translation)."""
-        if self.distance_planned < 1e-6:
-            return None
-        return (self.distance_along - self.distance_planned) / self.distance_planned
-
-    @property
     def turn(self) -> float:
         """The walked yaw change [rad]."""
         yaw = np.unwrap(np.asarray(self.control.rpy)[:, 2])
         return float(yaw[-1] - yaw[0])
-
-    @property
-    def turn_error(self) -> float | None:
-        """(turn − planned) / planned (None when the plan does not turn)."""
-        if abs(self.turn_planned) < 1e-6:
-            return None
-        return (self.turn - self.turn_planned) / self.turn_planned
-
-    @property
-    def direction(self) -> str:
-        """Where the body went relative to the plan's direction, in words."""
-        if self.distance_planned < 1e-6 or self.distance < 1e-9:
-            return "-"
-        deg = math.degrees(self.direction_error)
-        if deg <= 10.0:
-            return f"as planned ({deg:.2f} deg off)"
-        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
 
     def checks(self) -> dict[str, dict[str, Any]]:
         """Each check: value, limit, pass (:data:`CONTROL_LIMITS`).
@@ -118,11 +93,6 @@ class ControlledRun:
             "contacts": (float(len(c.non_foot_contacts)), 0.0),
         }
         return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
-
-    @property
-    def ok(self) -> bool:
-        """Every check passes."""
-        return all(row["ok"] for row in self.checks().values())
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the figures, the checks and the closed loop's own summary."""

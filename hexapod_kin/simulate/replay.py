@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from .scene import (
 )
 from .standing import STAND_SETTLE, StandForces, stand_forces
 
-__all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "simulate"]
+__all__ = ["LIMITS", "STRIKE_CLEARANCE", "SimRun", "Travel", "simulate"]
 
 #: The check's limits: travel (relative), heading [rad], roll and pitch [rad], slip in one
 #: contact [m], body height error [m].
@@ -53,8 +53,68 @@ def _roll_pitch(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return roll, pitch
 
 
+class Travel:
+    """A walk's travel against its plan, in figures and words (a replay's, a controlled walk's).
+
+    From ``distance`` and ``distance_planned`` [m], ``direction_error`` [rad] (walked against
+    planned displacement), ``turn`` and ``turn_planned`` [rad] of the class using it.
+    """
+
+    if TYPE_CHECKING:  # given by the class using it (fields or properties)
+
+        @property
+        def distance(self) -> float: ...  # noqa: D102
+        @property
+        def distance_planned(self) -> float: ...  # noqa: D102
+        @property
+        def direction_error(self) -> float: ...  # noqa: D102
+        @property
+        def turn(self) -> float: ...  # noqa: D102
+        @property
+        def turn_planned(self) -> float: ...  # noqa: D102
+        def checks(self) -> dict[str, dict[str, Any]]: ...  # noqa: D102
+
+    @property
+    def distance_along(self) -> float:
+        """The simulated displacement along the planned one [m] (< 0: went backwards)."""
+        return self.distance * math.cos(self.direction_error)
+
+    @property
+    def direction(self) -> str:
+        """Where the body went relative to the plan's direction, in words."""
+        if self.distance_planned < 1e-6 or self.distance < 1e-9:
+            return "-"
+        deg = math.degrees(self.direction_error)
+        if deg <= 10.0:
+            return f"as planned ({deg:.2f} deg off)"
+        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
+
+    @property
+    def distance_error(self) -> float | None:
+        """(distance along the plan's direction − planned) / planned (None: no translation).
+
+        The displacement is projected on the planned one (:attr:`distance_along`), so a
+        robot that went sideways or backwards does not pass on its distance alone.
+        """
+        if self.distance_planned < 1e-6:
+            return None
+        return (self.distance_along - self.distance_planned) / self.distance_planned
+
+    @property
+    def turn_error(self) -> float | None:
+        """(turn − planned) / planned (None when the plan does not turn)."""
+        if abs(self.turn_planned) < 1e-6:
+            return None
+        return (self.turn - self.turn_planned) / self.turn_planned
+
+    @property
+    def ok(self) -> bool:
+        """Every check passes."""
+        return all(row["ok"] for row in self.checks().values())
+
+
 @dataclass(frozen=True)
-class SimRun:
+class SimRun(Travel):
     """A plan replayed in MuJoCo, and how far the physics departs from it (SI units).
 
     Attributes:
@@ -120,39 +180,6 @@ class SimRun:
     run: Any = field(default=None, repr=False, compare=False)
     feedforward: bool = False
 
-    @property
-    def distance_along(self) -> float:
-        """The simulated displacement along the planned one [m] (< 0: went backwards)."""
-        return self.distance * math.cos(self.direction_error)
-
-    @property
-    def direction(self) -> str:
-        """Where the body went relative to the plan's direction, in words."""
-        if self.distance_planned < 1e-6 or self.distance < 1e-9:
-            return "-"
-        deg = math.degrees(self.direction_error)
-        if deg <= 10.0:
-            return f"as planned ({deg:.2f} deg off)"
-        return f"{deg:.1f} deg off the planned direction" + (" (backwards)" if deg > 90 else "")
-
-    @property
-    def distance_error(self) -> float | None:
-        """(distance along the plan's direction − planned) / planned (None: no translation).
-
-        The displacement is projected on the planned one (:attr:`distance_along`), so a
-        robot that went sideways or backwards does not pass on its distance alone.
-        """
-        if self.distance_planned < 1e-6:
-            return None
-        return (self.distance_along - self.distance_planned) / self.distance_planned
-
-    @property
-    def turn_error(self) -> float | None:
-        """(turn − planned) / planned (None when the plan does not turn)."""
-        if abs(self.turn_planned) < 1e-6:
-            return None
-        return (self.turn - self.turn_planned) / self.turn_planned
-
     def checks(self, limits: dict[str, float] | None = None) -> dict[str, dict[str, Any]]:
         """Each check: its value, its limit and whether it passes (limits: :data:`LIMITS`).
 
@@ -180,11 +207,6 @@ class SimRun:
         """A stumble: a non-foot contact, a swing strike, roll, pitch or slip over its limit."""
         c = self.checks()
         return not all(c[k]["ok"] for k in ("contacts", "strikes", "roll", "pitch", "slip"))
-
-    @property
-    def ok(self) -> bool:
-        """Every check passes."""
-        return all(row["ok"] for row in self.checks().values())
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: the figures, the checks, the scene and the plan's summary."""
