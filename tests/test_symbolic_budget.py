@@ -208,6 +208,63 @@ def test_families_only_stops_after_the_families_and_a_full_call_carries_on(monke
     assert derive(chain, budget=None).cached and len(stages) == 2
 
 
+def test_an_entry_in_progress_answers_no_call_and_the_next_carries_on(monkeypatch):
+    """A derivation running beside this one (its entry on disk after each stage) is not a stop.
+
+    Four ``scan`` commands started together on one empty cache once read each other's
+    part-written entries as budget stops and answered "incomplete" (CI, session 7).
+    """
+    from dataclasses import replace
+
+    from hexapod_kin import _budget, robots
+    from hexapod_kin.symbolic import cache as scache
+    from hexapod_kin.symbolic import clear_memory
+    from hexapod_kin.symbolic.derivation import ATTEMPT, IN_PROGRESS, _cache_key
+
+    leg = robots.hexabot_leg()
+    rows = list(leg.rows)
+    rows[-1] = replace(rows[-1], d=0.109)  # a table of its own (the cache is keyed by it)
+    chain = leg.replace(rows=tuple(rows), name="leg_109")
+    marks: list[object] = []
+    add = scache.Writer.add
+
+    def marking(self, name, value, attempt, key):
+        marks.append(attempt)
+        return add(self, name, value, attempt, key)
+
+    monkeypatch.setattr(scache.Writer, "add", marking)
+    with _budget.cpu_limit(600.0):  # inside a budget: the worker runs here, its writes seen
+        full = derive(chain, budget=10.0)
+    assert full.complete and len(marks) == 8
+    assert marks[:-1] == [(IN_PROGRESS, None)] * 7 and marks[-1] is None
+    digest = _cache_key(chain, None, None)
+    kept = scache.load(digest)
+    assert kept is not None and ATTEMPT not in kept
+    # what the worker's file holds after its first stage, while it runs on
+    scache.store(digest, {"kinematics": kept["kinematics"], ATTEMPT: (IN_PROGRESS, None)})
+    clear_memory()
+    stages: list[list[str]] = []
+    real = _budget.run
+
+    def recording(job, args, budget):
+        done, reason = real(job, args, budget)
+        stages.append([k for k in done if k != "__found__"])
+        return done, reason
+
+    monkeypatch.setattr(_budget, "run", recording)
+    again = derive(chain, budget=10.0)  # a budget: the part-run's entry must not answer it
+    assert not again.cached and again.complete and again.families == full.families
+    assert stages == [["rows", "determinant", "families", "checks", "agree", "tidy", "seconds"]]
+    assert ATTEMPT not in scache.load(digest)  # the finished entry replaced it
+    # a budget stop is marked by the caller once the worker has stopped
+    rows[-1] = replace(rows[-1], d=0.111)
+    chain = leg.replace(rows=tuple(rows), name="leg_111")
+    part = derive(chain, budget=0.03)
+    stored = scache.load(_cache_key(chain, None, None))
+    if part.incomplete:
+        assert stored[ATTEMPT] == ("budget of 0.03 s reached", 0.03)
+
+
 CHAIN12 = str(Path(__file__).resolve().parent / "data" / "chain12.yaml")
 
 

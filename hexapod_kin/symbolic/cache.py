@@ -130,9 +130,8 @@ def snapshot(digest: str) -> bytes | None:
 def restore(digest: str, data: bytes | None) -> None:
     """Put the entry of ``digest`` back as :func:`snapshot` found it (after a Ctrl-C).
 
-    The worker writes each stage as it finishes, marked as a budget stop; an interrupted run
-    reached no budget, and that mark would keep every later run with the same budget from
-    carrying on.
+    The worker writes each stage as it finishes, marked as in progress; the entry the
+    interrupted call found is put back as it was.
     """
     path = cache_dir() / f"{digest}.json"
     try:

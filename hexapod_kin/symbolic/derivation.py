@@ -418,6 +418,9 @@ def clear_memory() -> None:
     _MEMO.clear()
 
 
+#: The mark of an entry while its derivation runs (or of one whose process died): it answers
+#: no call; a later call carries on from the stages it holds.
+IN_PROGRESS = "in progress (or its process ended) before the end"
 #: The reason kept by a run stopped after the families on purpose (``families_only``).
 FAMILIES_ONLY = "stopped after the families (families_only); a later call carries on"
 
@@ -482,11 +485,9 @@ def _job(
     if _usable(found, budget, families_only):
         return
     have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
-    stop = (  # what the file says until the last stage is written
-        (f"budget of {budget:g} s reached", _tried(found, budget))
-        if budget is not None
-        else ("stopped before the end", None)
-    )
+    # what the file says until the last stage is written: unfinished, answering no budget (a
+    # concurrent call carries on from its stages); the caller marks a budget stop
+    stop = (IN_PROGRESS, None)
     writer = _cache.Writer(digest, have) if write else None
     for name, value in _stages(chain, rows, lengths, start, budget, have, families_only):
         if writer is not None:  # on disk before the caller hears of it
@@ -559,7 +560,7 @@ def derive(
         args = (chain, rows, lengths, digest, budget, families_only, found, read, cache)
         try:
             done, reason = _budget.run(_job, args, None if run_for is None else max(run_for, 0.0))
-        except KeyboardInterrupt:  # the worker's stages are on disk as a budget stop
+        except KeyboardInterrupt:  # the entry as it was before (not the worker's part-run)
             if cache:
                 _cache.restore(digest, kept)
             raise
@@ -589,8 +590,8 @@ def derive(
             if budget is not None and reason.startswith("budget of"):
                 reason = f"budget of {budget:g} s reached"  # the call's budget, not the rest
             stages[ATTEMPT] = (reason, tried)
-            if write and ("kinematics" not in stages or not reason.startswith("budget of")):
-                _cache.store(digest, stages)  # nothing reached, or an error (not "budget")
+            if write:  # the worker's file says "in progress": now why it stopped
+                _cache.store(digest, stages)
         from_cache = False
     if cache:
         if len(_MEMO) > 64:
