@@ -20,6 +20,7 @@ import numpy as np
 __all__ = ["chain_length", "chain_scale", "dls_step", "dls_step3", "wrap_angles"]
 
 _TWO_PI = 2.0 * math.pi
+_dot, _solve = np.dot, np.linalg.solve
 
 
 def wrap_angles(a: Any) -> np.ndarray:
@@ -57,8 +58,9 @@ def chain_scale(trans: Any) -> float:
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
     """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (pure function).
 
-    The per-call twin of the compiled loop's step (:func:`hexapod_kin._kmath.dls_into`). The
-    smaller system is solved: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else
+    The per-call twin of the compiled loop's step (:func:`hexapod_kin._kmath.dls_into`) and
+    the one numpy DLS step of the package (the resolved-rate law, the driven limb). The
+    smaller system is solved (LAPACK's LU): ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else
     ``Jfᵀ(JfJfᵀ + λ²I)⁻¹ e`` (the same Δq). ``Jf`` is ``jac`` with the columns of frozen
     joints (``free`` False or 0) zeroed, so they get Δq = 0. A stack of tasks ((..., m, n)
     Jacobians, (..., m) errors) is solved at once (n ≤ m).
@@ -75,17 +77,35 @@ def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.n
 
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)
-    m, n = jf.shape[-2:]
     e = np.asarray(error, dtype=float)
     if jf.ndim > 2:
         jt = np.swapaxes(jf, -1, -2)
-        return np.linalg.solve(jt @ jf + lam2 * np.eye(n), jt @ e[..., None])[..., 0]
+        return np.linalg.solve(jt @ jf + lam2 * np.eye(jf.shape[-1]), jt @ e[..., None])[..., 0]
+    m, n = jf.shape
+    jt, k = jf.T, (n if n <= m else m)
+    held = _HELD[0]  # λ² I of the last positive λ² (an RK4 step's stages share it)
+    if held[0] == lam2 and held[1] == k and lam2 > 0.0:
+        damp = held[2]
+    else:
+        eye = _EYE.get(k)
+        if eye is None:
+            eye = _EYE.setdefault(k, np.eye(k))
+        damp = lam2 * eye
+        if lam2 > 0.0:
+            damp.setflags(write=False)
+            _HELD[0] = (lam2, k, damp)
     try:
         if n <= m:
-            return np.linalg.solve(jf.T @ jf + lam2 * np.eye(n), jf.T @ e)
-        return jf.T @ np.linalg.solve(jf @ jf.T + lam2 * np.eye(m), e)
+            return _solve(_dot(jt, jf) + damp, _dot(jt, e))
+        return _dot(jt, _solve(_dot(jf, jt) + damp, e))
     except np.linalg.LinAlgError:
         return np.zeros(n)
+
+
+#: ``(λ², k, λ² I)`` of :func:`dls_step`'s last positive ``λ²`` (read-only; replaced whole).
+_HELD: list[tuple[float, int, np.ndarray]] = [(0.0, 0, np.zeros((0, 0)))]
+#: Identity matrices by size (never written).
+_EYE: dict[int, np.ndarray] = {}
 
 
 def dls_step3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:

@@ -1,6 +1,6 @@
 """One of each: the package's numeric FK implementations, IK loops and rotation builders, by name.
 
-The package source is parsed (AST; nothing is imported) and three kinds of function are
+The package source is parsed (AST; nothing is imported) and four kinds of function are
 listed (issue 30, "one of each"):
 
 * **FK** — a numeric forward-kinematics implementation: a loop over joints that makes each
@@ -15,6 +15,10 @@ listed (issue 30, "one of each"):
 * **rotation** — a rotation matrix built from angles: numeric ``cos`` and ``sin`` of the same
   angle in a function that writes a matrix (a nested list literal, or an element store with
   two or more indices such as ``R[0, 1] = …``), or ``sincos``.
+* **DLS step** — a damped-least-squares step: a function named ``*dls*``, or one that solves
+  (``solve``, ``inv``, ``pinv``, ``lstsq``, ``cholesky``, ``cho_solve``, ``*solve_spd``) a
+  sum with a product in it, a damped normal matrix such as ``JᵀJ + λ²I`` (the resolved-rate
+  law kept a numpy copy, ``motion._law._dls``, until issue 34's session 8).
 
 Each list must equal the allowed one: a new implementation makes the test fail, and the
 second test proves it on a planted copy of the package.
@@ -56,12 +60,21 @@ ALLOWED_ROTATIONS = {
     "params.dh_transform",  # one standard-DH row's transform
 }
 
+#: One DLS step per engine: numpy (a task; a stack of tasks), its 3×3 form on Python floats
+#: (the same Cholesky as the compiled one) and the compiled one (the IK loop's).
+ALLOWED_DLS = {
+    "_numerics.dls_step",
+    "_numerics.dls_step3",
+    "_kmath.dls_into",
+}
+
 #: Still there, to be removed (issue 30): each named with what stands in the way. The test
 #: fails when one disappears (then delete its entry) as when a new one appears.
 PENDING = {
     "fk": set(),
     "ik": set(),
     "rotation": set(),
+    "dls": set(),
 }
 
 #: Matches of the patterns that are something else (reviewed by hand).
@@ -71,6 +84,7 @@ REVIEWED = {
         "seeds.euler_baseline",  # the seed report's open-loop Euler + solve, kept on purpose
     },
     "rotation": set(),
+    "dls": set(),
 }
 
 _TRIG = {"cos", "sin"}
@@ -87,6 +101,8 @@ _SOLVES = {
     "dls_into",
     "step_into",
 }
+#: Solvers of a damped normal system (the DLS kind).
+_DAMPED_SOLVES = {"solve", "inv", "pinv", "lstsq", "cholesky", "cho_solve"}
 _BUILDERS = {"transform", "khalil_transform", "dh_transform", "table_transforms"}
 _SYMBOLIC = {"sp", "sympy", "se", "symengine"}
 
@@ -275,13 +291,36 @@ def _is_rotation(fn: ast.AST) -> bool:
     return False
 
 
+def _has_product(node: ast.AST) -> bool:
+    for n in ast.walk(node):
+        if isinstance(n, ast.BinOp) and isinstance(n.op, (ast.Mult, ast.MatMult)):
+            return True
+        if isinstance(n, ast.Call) and _name(n) in {"dot", "matmul"}:
+            return True
+    return False
+
+
+def _is_dls(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> bool:
+    """Named ``*dls*``, or a solve of ``A + B`` where ``A`` or ``B`` holds a product."""
+    if "dls" in fn.name.lower():
+        return True
+    for c in _calls(fn):
+        name = _name(c)
+        if (name in _DAMPED_SOLVES or name.endswith("solve_spd")) and c.args:
+            a = c.args[0]
+            if isinstance(a, ast.BinOp) and isinstance(a.op, ast.Add):
+                if _has_product(a.left) or _has_product(a.right):
+                    return True
+    return False
+
+
 def scan(root: Path) -> dict[str, set[str]]:
-    """The FK implementations, IK loops and rotation builders under ``root``, by name.
+    """The FK implementations, IK loops, rotation builders and DLS steps under ``root``, by name.
 
     Names are ``module.function`` relative to the package (``_tree.tree_frames``), methods
     and nested functions with their dotted path.
     """
-    found: dict[str, set[str]] = {"fk": set(), "ik": set(), "rotation": set()}
+    found: dict[str, set[str]] = {"fk": set(), "ik": set(), "rotation": set(), "dls": set()}
     for path in sorted(root.rglob("*.py")):
         module = ".".join(path.relative_to(root).with_suffix("").parts)
         module = module.removesuffix(".__init__").removesuffix("__init__")
@@ -294,6 +333,8 @@ def scan(root: Path) -> dict[str, set[str]]:
                 found["ik"].add(full)
             if _is_rotation(fn):
                 found["rotation"].add(full)
+            if _is_dls(fn):
+                found["dls"].add(full)
     return found
 
 
@@ -302,6 +343,7 @@ def _check(found: dict[str, set[str]]) -> None:
         ("fk", ALLOWED_FK),
         ("ik", ALLOWED_IK_LOOPS),
         ("rotation", ALLOWED_ROTATIONS),
+        ("dls", ALLOWED_DLS),
     ):
         known = allowed | PENDING[kind] | REVIEWED[kind]
         extra, missing = sorted(found[kind] - known), sorted(known - found[kind])
@@ -311,7 +353,7 @@ def _check(found: dict[str, set[str]]) -> None:
         )
 
 
-def test_one_fk_per_engine_one_ik_loop_and_the_listed_rotations() -> None:
+def test_one_fk_per_engine_one_ik_loop_one_dls_step_and_the_listed_rotations() -> None:
     _check(scan(ROOT))
 
 
@@ -354,6 +396,11 @@ def my_compiled_fk(q, out):
     out[0] = r00
 
 
+def my_rate_step(jac, xd, lam_eye):
+    jt = jac.T
+    return np.linalg.solve(np.dot(jt, jac) + lam_eye, np.dot(jt, xd))
+
+
 def my_pinv_ik(model, data, target, q):
     while True:
         jac = pin.computeFrameJacobian(model, data, q, 3)
@@ -371,6 +418,8 @@ def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
     planted = {f"gait.planted.my_{n}" for n in ("fk", "table_fk", "compiled_fk")}
     assert new["fk"] - ALLOWED_FK == planted
     assert new["ik"] - ALLOWED_IK_LOOPS == {"gait.planted.my_ik", "gait.planted.my_pinv_ik"}
+    # my_ik solves JᵀJ + λ²I inline: a DLS step of its own as well as an IK loop
+    assert new["dls"] - ALLOWED_DLS == {"gait.planted.my_ik", "gait.planted.my_rate_step"}
     assert new["rotation"] - ALLOWED_ROTATIONS == {
         "gait.planted.my_fk",
         "gait.planted.my_rot",

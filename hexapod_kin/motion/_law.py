@@ -17,8 +17,8 @@ One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
 
 A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
 3×3 Gram matrix and the step's unrolled Cholesky (:func:`~hexapod_kin._numerics.dls_step3`);
-larger tasks on numpy: :func:`_dls` is :func:`~hexapod_kin._numerics.dls_step`'s arithmetic
-(the same BLAS and LAPACK calls, so the same bits) with ``λ² I`` formed once per step.
+larger tasks the package's one numpy DLS step, :func:`~hexapod_kin._numerics.dls_step` (its
+``λ² I`` kept over a step's RK4 stages).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from .._numerics import dls_step, dls_step3
 __all__ = ["integrate"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-dot, solve, svd = np.dot, np.linalg.solve, np.linalg.svd
+dot, svd = np.dot, np.linalg.svd
 
 
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
@@ -79,24 +79,6 @@ def _sigma(rows: np.ndarray) -> tuple[float, float]:
         return 0.0, 0.0
     s = svd(rows, compute_uv=False).tolist()
     return s[-1], s[0]
-
-
-def _dls(rows: np.ndarray, xd: list[float], lam_eye: np.ndarray) -> list[float]:
-    """:func:`~hexapod_kin._numerics.dls_step` ``(rows, xd, λ²)`` given ``lam_eye = λ² I``.
-
-    The same products in the same order, ``(JᵀJ + λ²I)⁻¹ Jᵀ ẋ`` when n ≤ m, else
-    ``Jᵀ(JJᵀ + λ²I)⁻¹ ẋ`` (``np.dot`` and ``@`` make the same BLAS calls); zeros when the
-    system is singular.
-    """
-    m, n = rows.shape
-    jt = rows.T
-    e = np.asarray(xd, dtype=float)
-    try:
-        if n <= m:
-            return solve(dot(jt, rows) + lam_eye, dot(jt, e)).tolist()
-        return dot(jt, solve(dot(rows, jt) + lam_eye, e)).tolist()
-    except np.linalg.LinAlgError:
-        return [0.0] * n
 
 
 def integrate(
@@ -144,13 +126,12 @@ def integrate(
         pin.log3,
     )
     array = np.array
-    eye = np.eye(min(n, 6 if rows6 else 3))
 
     def law(q: list[float], h: int, held: Any) -> tuple[Any, ...]:
         """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², held, limited).
 
-        ``held`` None: σ and λ² from this evaluation (a step's start), else the step's
-        ``(λ² used, λ² I)``, returned as ``held``.
+        ``held`` None: σ and λ² from this evaluation (a step's start), else the λ² the
+        step's start used (floored), returned as ``held``.
         """
         jac = frame_jacobian(pm, data, array(q) if convert is None else convert(q), fid, _LWA)
         omf = frame_placement(pm, data, fid)
@@ -185,13 +166,12 @@ def integrate(
             if smin < eps:
                 ratio = smin / eps
                 lam2 = lam2max * (1.0 - ratio * ratio)
-            lam_use = max(lam2, 1e-14 * (smax * smax + 1e-300))
-            held = (lam_use, lam_use * eye)  # λ² I as dls_step forms it
-        lam_use, lam_eye = held
+            held = max(lam2, 1e-14 * (smax * smax + 1e-300))
+        lam_use = held
         if j3 is not None:
             qd = dls_step3(j3, xd, lam_use) or [0.0, 0.0, 0.0]
         else:
-            qd = _dls(rows, xd, lam_eye)
+            qd = dls_step(rows, xd, lam_use).tolist()
         limited = False
         if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
             free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
