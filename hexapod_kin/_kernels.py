@@ -63,8 +63,8 @@ from .exceptions import CacheWarning, ConfigurationError, ParameterError
 
 __all__ = ["BLOCK", "COMPILE_SECONDS", "POLY_TRIG_MAX", "Q_MAX", "REF_CODES", "AlignedChain",
            "ChainArrays", "aligned_chain", "dls_into", "eig3_sym", "fk_jac_block", "fk_jac_into",
-           "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel",
-           "run_blocks", "silence_notice", "sincos", "solve_spd", "wrap_angle"]  # fmt: skip
+           "mark_compiled", "njit", "pose_jacobian_batch", "pose_jacobian_kernel", "run_blocks",
+           "silence_notice", "sincos", "solve_spd", "threads", "wrap_angle"]  # fmt: skip
 
 #: Reference frame name → kernel code.
 REF_CODES = {"local_world_aligned": 0, "world": 1, "local": 2}
@@ -623,19 +623,35 @@ def pose_jacobian_kernel(
     return not ok
 
 
+def threads() -> int:
+    """The threads a batch may use: ``numba.get_num_threads()``, without starting numba's pool.
+
+    The kernels run on plain Python threads, never on numba's threading layer; asking
+    ``numba.get_num_threads()`` starts that layer (tens of ms in a fresh process). So it is
+    asked only once the layer runs (``numba.threading_layer()`` answers, e.g. after a
+    ``numba.set_num_threads(n)``, which then holds); before, the count is numba's default,
+    ``NUMBA_NUM_THREADS``, which is what ``get_num_threads()`` would answer.
+    """
+    try:
+        numba.threading_layer()
+    except ValueError:  # not started: nothing set a count yet
+        return int(numba.config.NUMBA_NUM_THREADS)
+    return int(numba.get_num_threads())
+
+
 def run_blocks(
     area: str, run: Callable[[int, int], Any], nblocks: int, block: int, min_per_thread: int
 ) -> list[Any]:
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
     ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``), loaded first with no
-    blocks (:func:`_first_call`). Then up to ``numba.get_num_threads()`` plain threads (the
+    blocks (:func:`_first_call`). Then up to :func:`threads` plain threads (the
     kernels release the GIL) each take the next chunk of blocks from a shared counter, so that
     a thread sharing its core does less of the work; which thread runs a block never changes
     its numbers.
     """
     results = [_first_call(area, run)]
-    nwork = max(1, min(numba.get_num_threads(), nblocks * block // min_per_thread))
+    nwork = max(1, min(threads(), nblocks * block // min_per_thread))
     if nwork == 1:
         return [*results, run(0, nblocks)]
     per = max(MIN_CHUNK_BLOCKS, -(-nblocks // (nwork * CHUNKS_PER_THREAD)))

@@ -389,3 +389,30 @@ def test_precompile_shares_and_progress(monkeypatch: pytest.MonkeyPatch, capsys)
     assert _kernels._notice("singularity")
     err = capsys.readouterr().err
     assert f"about {_kernels.COMPILE_SECONDS['singularity']:.0f} s" in err
+
+
+_THREADS = """
+import numba
+from hexapod_kin import _kernels as K
+n = K.threads()
+try:
+    numba.threading_layer()
+    started = True
+except ValueError:
+    started = False
+numba.set_num_threads(1)
+print(n, int(numba.config.NUMBA_NUM_THREADS), started, K.threads())
+"""
+
+
+def test_the_thread_count_starts_no_numba_pool_and_follows_set_num_threads():
+    """``threads()`` is numba's count, without starting numba's threading layer (the
+    kernels run on Python threads); once ``numba.set_num_threads(1)`` is called, 1."""
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", _THREADS], capture_output=True, text=True, check=True
+    ).stdout.split()
+    assert out[0] == out[1] and int(out[0]) >= 1
+    assert out[2] == "False" and out[3] == "1"
