@@ -120,6 +120,9 @@ def integrate(
     vel_l, refp_l = vel.tolist(), ref_p.tolist()
     lo, hi, vm = lower.tolist(), upper.tolist(), vmax.tolist()
     speed = any(math.isfinite(v) for v in vm)
+    # no finite position limit (continuous joints): nothing to freeze or clamp
+    bounded = use_limits and any(math.isfinite(v) for v in lo + hi)
+    ref_l = None if ref_r is None else list(ref_r)  # the 3×3 references, one view per sample
     frame_jacobian, frame_placement, log3 = (
         pin.computeFrameJacobian,
         pin.updateFramePlacement,
@@ -152,7 +155,7 @@ def integrate(
         if rows6:
             wx, wy, wz = v[3], v[4], v[5]
             if gain != 0.0:
-                ex, ey, ez = log3(dot(ref_r[h], pose[:3, :3].T)).tolist()  # type: ignore[index]
+                ex, ey, ez = log3(dot(ref_l[h], pose[:3, :3].T)).tolist()  # type: ignore[index]
                 wx, wy, wz = wx + gain * ex, wy + gain * ey, wz + gain * ez
             xd += [wx, wy, wz]
             rows = jac
@@ -173,7 +176,7 @@ def integrate(
         else:
             qd = dls_step(rows, xd, lam_use).tolist()
         limited = False
-        if use_limits and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
+        if bounded and (any(map(le, q, lo)) or any(map(ge, q, hi))):  # a joint at a limit
             free = [not ((x <= a and v < 0.0) or (x >= b and v > 0.0))
                     for x, v, a, b in zip(q, qd, lo, hi)]  # fmt: skip
             if not all(free):  # freeze the joints pushed outward, solve for the others
@@ -212,7 +215,7 @@ def integrate(
             ]
         else:
             q = [a + dt * b for a, b in zip(q, k1)]
-        if use_limits:
+        if bounded:
             q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
     qdot = np.array(qds)
     return {
