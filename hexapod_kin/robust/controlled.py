@@ -5,8 +5,11 @@ quadruped's planned touch-downs land early or late, the weight moves between leg
 stance feet slide, whatever the plan (issue 31's measurements: every bump replay of the
 eight example-robot-data quadrupeds slid 5.5–25.5 mm in one stance). A walking robot meets
 unknown bumps with feedback, so the bumpy members of :data:`~hexapod_kin.robust.ENSEMBLE`
-walk the plan's pattern and twist for the plan's duration under
-:func:`hexapod_kin.control.run` (the path of ``simulate --control --bumps A --seed K``) and
+walk the plan's pattern for the plan's duration under
+:func:`hexapod_kin.control.run`, commanded the plan's mean twist (:func:`plan_command`: the
+path ends where the plan's body does, which the plan's nominal twist held for its duration
+need not: a crawl's surge and sway, a duration that is not a whole number of cycles; the
+path of ``simulate --control --bumps A --seed K``), and
 :func:`controlled_run` judges that walk by the replay's kind of checks
 (:meth:`ControlledRun.checks`).
 """
@@ -21,7 +24,17 @@ import numpy as np
 
 from ..simulate.replay import Travel
 
-__all__ = ["CONTROL_LIMITS", "ControlledRun", "controlled_run", "finite"]
+__all__ = [
+    "CONTROL_LIMITS",
+    "RAMP_STEP",
+    "ControlledRun",
+    "controlled_run",
+    "finite",
+    "mean_twist",
+    "plan_command",
+    "plan_motion",
+    "ramped_motion",
+]
 
 #: The closed loop's limits: travel along the plan within 1 % of the plan's distance (the
 #: replay's :data:`~hexapod_kin.simulate.replay.LIMITS` ``travel``); the largest yaw error
@@ -126,12 +139,106 @@ def finite(obj: Any) -> Any:
     return obj
 
 
+def plan_motion(planned: Any, turn: float) -> np.ndarray:
+    """The plan's body motion ``(x, y, yaw)`` [m, m, rad]: its end in its start frame.
+
+    Args:
+        planned: (N, 4, 4) the plan's body poses (a replay's ``planned``).
+        turn: The plan's yaw change [rad], unwrapped (a replay's ``turn_planned``).
+
+    Returns:
+        (3,) the horizontal displacement from the first pose to the last, in the frame of the
+        first pose's heading, and ``turn``.
+
+    """
+    poses = np.asarray(planned, dtype=float)
+    d = poses[-1, :2, 3] - poses[0, :2, 3]
+    yaw0 = math.atan2(poses[0, 1, 0], poses[0, 0, 0])
+    c, s = math.cos(yaw0), math.sin(yaw0)
+    return np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], float(turn)])
+
+
+def mean_twist(motion: Any, duration: float) -> np.ndarray:
+    """The constant body twist ``(vx, vy, wz)`` [m/s, rad/s] that makes ``motion`` in ``duration``.
+
+    The logarithm of SE(2) over the time: a body moving at the body-frame twist ``(v, w)``
+    for ``T`` turns by ``th = w T`` and moves by ``V(th) v T`` in its start frame, with
+    ``V(th) = [[sin th, cos th - 1], [1 - cos th, sin th]] / th`` (the identity at
+    ``th = 0``), so ``v = V^-1 d / T`` (least squares where ``V`` is singular: whole turns).
+
+    Args:
+        motion: ``(x, y, yaw)`` [m, m, rad] in the start frame (:func:`plan_motion`).
+        duration: [s].
+
+    Returns:
+        (3,) the twist.
+
+    """
+    x, y, th = (float(v) for v in motion)
+    if abs(th) < 1e-12:
+        return np.array([x, y, 0.0]) / duration
+    s, c = math.sin(th), math.cos(th)
+    V = np.array([[s, c - 1.0], [1.0 - c, s]]) / th
+    v = np.linalg.lstsq(V, np.array([x, y]), rcond=None)[0]
+    return np.array([v[0], v[1], th]) / duration
+
+
+#: Time step [s] of :func:`ramped_motion`'s integration of the controller's path.
+RAMP_STEP = 1e-3
+
+
+def ramped_motion(command: Any, duration: float, accel: tuple[float, float]) -> np.ndarray:
+    """The controller's path ``(x, y, yaw)`` after ``duration`` of the held ``command``.
+
+    The controller's reference twist ramps from rest to the command at ``accel`` (linear
+    [m/s²], yaw [rad/s²]; :data:`hexapod_kin.control.controller.ACCEL`), each component
+    clipped on its own, and the path integrates it in the path's heading frame (the
+    controller's ``_advance``), here at :data:`RAMP_STEP` (the controller's own rate changes
+    the ramp's shortfall by about ``|v| dt / 2``).
+    """
+    cmd = np.asarray(command, dtype=float)
+    n = max(1, int(round(duration / RAMP_STEP)))
+    k = np.arange(1, n + 1, dtype=float)[:, None]
+    step = np.array([accel[0], accel[0], accel[1]]) * RAMP_STEP
+    tw = np.sign(cmd) * np.minimum(k * step, np.abs(cmd))
+    yaw = np.concatenate([[0.0], np.cumsum(tw[:, 2]) * RAMP_STEP])
+    c, s = np.cos(yaw[:-1]), np.sin(yaw[:-1])
+    x = float(((c * tw[:, 0] - s * tw[:, 1]) * RAMP_STEP).sum())
+    y = float(((s * tw[:, 0] + c * tw[:, 1]) * RAMP_STEP).sum())
+    return np.array([x, y, float(yaw[-1])])
+
+
+def plan_command(motion: Any, duration: float) -> tuple[float, float, float]:
+    """The command ``(vx, vy, wz)`` whose controller path makes ``motion`` in ``duration``.
+
+    The plan's mean twist (:func:`mean_twist`), raised by the shortfall of the controller's
+    start from rest (:func:`ramped_motion`): ``c ← c + mean_twist(motion) −
+    mean_twist(ramped_motion(c))`` from ``c = mean_twist(motion)`` (a contraction by about
+    ``|v| / (a T)``), so the path ends where the plan does. A plan need not move at its
+    nominal twist for its whole duration (a crawl's surge and sway, a duration that is not
+    a whole number of cycles): the path and the replay are asked the same displacement.
+    """
+    from ..control.controller import ACCEL
+
+    goal = mean_twist(motion, duration)
+    cmd = goal.copy()
+    for _ in range(50):
+        miss = goal - mean_twist(ramped_motion(cmd, duration, ACCEL), duration)
+        cmd = cmd + miss
+        if float(np.abs(miss).max()) < 1e-15:
+            break
+    return float(cmd[0]), float(cmd[1]), float(cmd[2])
+
+
 def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius: Any) -> Any:
     """Walk ``replay``'s plan under the controller on ``member``'s ground.
 
+    The controller is commanded :func:`plan_command` of the plan's motion: its path ends
+    where the plan's body does (not the plan's nominal twist held for the duration).
+
     Args:
-        replay: A :class:`~hexapod_kin.simulate.SimRun` of the plan (its pattern, twist,
-            duration, planned displacement and turn).
+        replay: A :class:`~hexapod_kin.simulate.SimRun` of the plan (its pattern, duration,
+            planned body poses and turn).
         robot: The robot as the plan was given it (a source, a model; a run's ``robot``).
         member: The :class:`~hexapod_kin.robust.Member` (friction, bumps, seed).
         feet: Feet of a URDF robot without foot links (as ``simulate`` takes them), or None.
@@ -148,22 +255,21 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
 
         robot = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
     plan = replay.plan
-    vx, vy, wz = (float(v) for v in plan["velocity"])
+    duration = float(plan["duration"])
+    motion = plan_motion(replay.planned, replay.turn_planned)
     walked = run(
         robot,
         pattern=str(plan["pattern"]["name"]),
-        command=(vx, vy, wz),
-        duration=float(plan["duration"]),
+        command=plan_command(motion, duration),
+        duration=duration,
         friction=member.friction,
         bumps=member.bumps,
         seed=member.seed,
     )
-    poses = np.asarray(replay.planned)
-    d = poses[-1, :2, 3] - poses[0, :2, 3]
-    yaw0 = math.atan2(poses[0, 1, 0], poses[0, 0, 0])  # the plan's start heading
+    moved = float(np.hypot(motion[0], motion[1]))
     return ControlledRun(
         control=walked,
         distance_planned=float(replay.distance_planned),
-        direction_planned=math.atan2(d[1], d[0]) - yaw0 if np.hypot(*d) > 1e-9 else 0.0,
+        direction_planned=math.atan2(motion[1], motion[0]) if moved > 1e-9 else 0.0,
         turn_planned=float(replay.turn_planned),
     )
