@@ -166,9 +166,10 @@ _ROBUST_FAILS = {
     "CHAMP": _CONTROLLER + "falls on all three floors (travel -49 to -57 %); its replay with the "
     "CLI's default walk fails too (+33 % travel, roll, slip, height, contacts)",
     "MIT Mini Cheetah": _CONTROLLER + "its walk's figures are not finite (it blew up)",
-    "Mini Pupper": "its 10 s plan (period 7.3 s) moves the body 33.0 mm, while its twist "
-    "(5.39 mm/s) held for 10 s asks the controller for 55.4 mm: the controlled members walk "
-    "60.9 mm (+9.9 % of their own path, +77 % of the plan's distance; heading 1.7 deg, no fall)",
+    "Mini Pupper": "MuJoCo's default contact with zero armature, friction 1, fails its replay "
+    "(travel -1.52 %; the other seven replays -0.10 to -0.98 %); the controlled bump members, "
+    "commanded the plan's mean twist (session 8), pass (+0.93 %, heading 0.85 deg; the three "
+    "seeds alike: its 33 mm walk stays on the flat square around the start)",
     "SpotMicroAI": "not measured with the controlled bump members (fetched); the replay failed "
     "MuJoCo's default contact with zero armature (travel, strikes)",
     "RARL hexapod-sim": "not measured with the controlled bump members (fetched)",
