@@ -205,7 +205,8 @@ def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     """Mini Pupper's 3 s crawl is 0.41 of its 7.3 s cycle: its body surges and sways by
     +-25 mm, and at 3 s it stands 10 mm behind where it started, while its nominal twist
     held for 3 s asks 16 mm forwards. The controller's path (its own record) moves by the
-    plan's own body displacement (its first and last planned poses)."""
+    plan's own displacement of the point the controller tracks (torque control: the CoM; the
+    plan's first and last CoM), and the walk is judged against it."""
     data = Path(__file__).parent / "data" / "mini_pupper" / "mini_pupper_description"
     src = data / "urdf" / "mini_pupper" / "mini_pupper_description.urdf.xacro"
     with pytest.warns(UserWarning, match="meshes"):
@@ -216,9 +217,10 @@ def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     plan = replay.plan
     cycles = plan["duration"] / plan["period"]
     assert 0.1 < cycles % 1.0 < 0.9  # not a whole number of cycles
-    poses = np.asarray(replay.planned)
-    d = poses[-1, :2, 3] - poses[0, :2, 3]  # the plan's start heading is 0
+    poses, com = np.asarray(replay.planned), np.asarray(replay.run.com)
+    d = com[-1, :2] - com[0, :2]  # the plan's start heading is 0
     assert abs(math.atan2(poses[0, 1, 0], poses[0, 0, 0])) < 1e-9
+    assert walked.control.kind == "torque"
     nominal = np.asarray(plan["velocity"][:2]) * plan["duration"]
     assert np.linalg.norm(nominal - d) > 0.02  # the nominal twist asks another walk
     c = walked.control
@@ -230,3 +232,4 @@ def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     assert path[-1, :2] - path[0, :2] == pytest.approx(d, abs=tol)
     assert path[-1, 2] - path[0, 2] == pytest.approx(0.0, abs=1e-9)
     assert walked.distance_planned == pytest.approx(float(np.hypot(*d)), abs=1e-15)
+    assert walked.direction_planned == pytest.approx(math.atan2(d[1], d[0]), abs=1e-12)

@@ -50,8 +50,9 @@ class ControlledRun(Travel):
 
     Attributes:
         control: The walk (:class:`hexapod_kin.control.ControlRun`).
-        distance_planned: The plan's horizontal displacement [m].
-        direction_planned: The plan's direction of travel [rad] in the start frame.
+        distance_planned: The plan's horizontal displacement [m] of the point the
+            controller tracks (:func:`controlled_run`).
+        direction_planned: Its direction [rad] in the plan's start frame.
         turn_planned: The plan's yaw change [rad].
 
     """
@@ -139,20 +140,24 @@ def finite(obj: Any) -> Any:
     return obj
 
 
-def plan_motion(planned: Any, turn: float) -> np.ndarray:
+def plan_motion(planned: Any, turn: float, point: Any = None) -> np.ndarray:
     """The plan's body motion ``(x, y, yaw)`` [m, m, rad]: its end in its start frame.
 
     Args:
         planned: (N, 4, 4) the plan's body poses (a replay's ``planned``).
         turn: The plan's yaw change [rad], unwrapped (a replay's ``turn_planned``).
+        point: (N, 2 or 3) the planned positions of the point that moves [m] (the
+            controller's tracked point: the plan's ``com`` for torque control), or None (the
+            poses' origins).
 
     Returns:
-        (3,) the horizontal displacement from the first pose to the last, in the frame of the
-        first pose's heading, and ``turn``.
+        (3,) the point's horizontal displacement from the first sample to the last, in the
+        frame of the first pose's heading, and ``turn``.
 
     """
     poses = np.asarray(planned, dtype=float)
-    d = poses[-1, :2, 3] - poses[0, :2, 3]
+    xy = poses[:, :2, 3] if point is None else np.asarray(point, dtype=float)[:, :2]
+    d = xy[-1] - xy[0]
     yaw0 = math.atan2(poses[0, 1, 0], poses[0, 0, 0])
     c, s = math.cos(yaw0), math.sin(yaw0)
     return np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1], float(turn)])
@@ -233,8 +238,10 @@ def plan_command(motion: Any, duration: float) -> tuple[float, float, float]:
 def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius: Any) -> Any:
     """Walk ``replay``'s plan under the controller on ``member``'s ground.
 
-    The controller is commanded :func:`plan_command` of the plan's motion: its path ends
-    where the plan's body does (not the plan's nominal twist held for the duration).
+    The controller is commanded :func:`plan_command` of the plan's motion of the point it
+    tracks (the CoM for torque control, the base's origin for servos): its path ends where
+    that point of the plan does (not the plan's nominal twist held for the duration), and
+    the walk is judged against that motion.
 
     Args:
         replay: A :class:`~hexapod_kin.simulate.SimRun` of the plan (its pattern, duration,
@@ -249,19 +256,23 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
 
     """
     from ..control import run
+    from ..gait import as_whole_body
 
     if feet is not None or foot_radius is not None:  # as ``control`` on the command line
-        from ..gait import as_whole_body
-
         robot = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
+    # control.run's default kind: servos for a Hexapod preset, torque else; the point it
+    # tracks is the base's origin for servos, the CoM for torque
+    kind = "servo" if as_whole_body(robot).params is not None else "torque"
     plan = replay.plan
     duration = float(plan["duration"])
-    motion = plan_motion(replay.planned, replay.turn_planned)
+    com = np.asarray(replay.run.com) if kind == "torque" else None
+    motion = plan_motion(replay.planned, replay.turn_planned, com)
     walked = run(
         robot,
         pattern=str(plan["pattern"]["name"]),
         command=plan_command(motion, duration),
         duration=duration,
+        kind=kind,
         friction=member.friction,
         bumps=member.bumps,
         seed=member.seed,
@@ -269,7 +280,7 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
     moved = float(np.hypot(motion[0], motion[1]))
     return ControlledRun(
         control=walked,
-        distance_planned=float(replay.distance_planned),
+        distance_planned=moved,
         direction_planned=math.atan2(motion[1], motion[0]) if moved > 1e-9 else 0.0,
         turn_planned=float(replay.turn_planned),
     )
