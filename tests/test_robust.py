@@ -203,8 +203,8 @@ def test_the_command_makes_the_motion_from_rest() -> None:
 @pytest.mark.slow
 def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     """Mini Pupper's 3 s crawl is 0.41 of its 7.3 s cycle: its body surges and sways by
-    +-25 mm, and at 3 s it stands 10 mm behind where it started, while its nominal twist
-    held for 3 s asks 16 mm forwards. The controller's path (its own record) moves by the
+    +-25 mm, and at 3 s its CoM stands 4.7 mm behind and aside of where it started, while its
+    nominal twist held for 3 s asks 16.6 mm forwards. The controller's path (its own record) moves by the
     plan's own displacement of the point the controller tracks (torque control: the CoM; the
     plan's first and last CoM), and the walk is judged against it."""
     data = Path(__file__).parent / "data" / "mini_pupper" / "mini_pupper_description"
@@ -222,7 +222,7 @@ def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     assert abs(math.atan2(poses[0, 1, 0], poses[0, 0, 0])) < 1e-9
     assert walked.control.kind == "torque"
     nominal = np.asarray(plan["velocity"][:2]) * plan["duration"]
-    assert np.linalg.norm(nominal - d) > 0.02  # the nominal twist asks another walk
+    assert np.linalg.norm(nominal - d) > 0.015  # the nominal twist asks another walk
     c = walked.control
     path = np.asarray(c.path)
     v = float(np.hypot(*d)) / plan["duration"]
