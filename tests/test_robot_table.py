@@ -177,7 +177,6 @@ _ROBUST_FAILS = {
     "(the three seeds alike: the walk stays on the flat square around the start); the flat "
     "replay with the project's settings passes (+0.06 %); session 7's replay failed MuJoCo's "
     "default contact with zero armature (travel, strikes)",
-    "RARL hexapod-sim": "not measured with the controlled bump members (fetched)",
 }
 KNOWN: dict[tuple[str, str], str] = {(name, "simulate"): why for name, why in _ROBUST_FAILS.items()}
 
