@@ -203,10 +203,10 @@ def test_the_command_makes_the_motion_from_rest() -> None:
 @pytest.mark.slow
 def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     """Mini Pupper's 3 s crawl is 0.41 of its 7.3 s cycle: its body surges and sways by
-    +-25 mm, and at 3 s its CoM stands 4.7 mm behind and aside of where it started, while its
-    nominal twist held for 3 s asks 16.6 mm forwards. The controller's path (its own record) moves by the
-    plan's own displacement of the point the controller tracks (torque control: the CoM; the
-    plan's first and last CoM), and the walk is judged against it."""
+    +-25 mm, and at 3 s its CoM stands 4.7 mm behind and aside of where it started, while
+    its nominal twist held for 3 s asks 16.6 mm forwards. The controller's path (its own
+    record) moves by the plan's own displacement of the point the controller tracks (torque
+    control: the CoM; the plan's first and last CoM), and the walk is judged against it."""
     data = Path(__file__).parent / "data" / "mini_pupper" / "mini_pupper_description"
     src = data / "urdf" / "mini_pupper" / "mini_pupper_description.urdf.xacro"
     with pytest.warns(UserWarning, match="meshes"):
@@ -233,3 +233,33 @@ def test_a_controlled_member_is_asked_the_plans_displacement() -> None:
     assert path[-1, 2] - path[0, 2] == pytest.approx(0.0, abs=1e-9)
     assert walked.distance_planned == pytest.approx(float(np.hypot(*d)), abs=1e-15)
     assert walked.direction_planned == pytest.approx(math.atan2(d[1], d[0]), abs=1e-12)
+
+
+def test_a_turning_plan_is_asked_its_arc() -> None:
+    """The built-in hexapod's turning tripod (servos: the base is tracked): the controller's
+    path ends at the plan's own end pose in its start frame (its first and last planned
+    poses, the planned turn), and the walk is judged against that displacement. The ramp's
+    shortfall left uncorrected would miss by 1.25 mm and 0.0225 rad."""
+    rr = simulate_robust(
+        pattern="tripod",
+        velocity=(0.05, 0.0, 0.3),
+        duration=1.5,
+        members=(ENSEMBLE[0], ENSEMBLE[8]),
+        stand=False,
+    )
+    replay, walked = rr.runs
+    poses = np.asarray(replay.planned)
+    rel = np.linalg.inv(poses[0]) @ poses[-1]  # the plan's end in its start frame
+    c = walked.control
+    assert c.kind == "servo"
+    path = np.asarray(c.path)
+    y0 = path[0, 2]
+    d = path[-1, :2] - path[0, :2]
+    got = [math.cos(y0) * d[0] + math.sin(y0) * d[1], -math.sin(y0) * d[0] + math.cos(y0) * d[1]]
+    # the ramp integrated at RAMP_STEP, the controller's at its own tick (100 Hz here); the
+    # path's first record is after one tick
+    assert got == pytest.approx(rel[:2, 3], abs=2e-4)
+    assert path[-1, 2] - y0 == pytest.approx(replay.turn_planned, abs=2e-3)
+    assert replay.turn_planned == pytest.approx(math.atan2(rel[1, 0], rel[0, 0]), abs=1e-12)
+    assert walked.turn_error is not None and walked.turn_planned == replay.turn_planned
+    assert walked.distance_planned == pytest.approx(float(np.hypot(*rel[:2, 3])), abs=1e-12)
