@@ -17,8 +17,8 @@ The eight flat members replay the plan open-loop (mode ``replay``). The three bu
 example-robot-data quadruped's stance feet slid 5.5–25.5 mm, whatever the plan), and a walking
 robot meets unknown ground with feedback, so they walk the plan's pattern for its duration,
 commanded its mean twist (:func:`~.controlled.plan_command`: the controller's path ends where
-the plan's body does), under the closed-loop controller (:func:`hexapod_kin.control.run`, as
-``simulate --control --bumps 0.003 --seed K``), judged by
+the plan's tracked point does), under the closed-loop controller
+(:func:`hexapod_kin.control.run`, as ``simulate --control --bumps 0.003 --seed K``), judged by
 :meth:`~.controlled.ControlledRun.checks`: travel along the plan within 1 % of the plan's
 distance, heading, no fall, no non-foot contact (:data:`~.controlled.CONTROL_LIMITS`).
 

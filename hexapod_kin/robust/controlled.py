@@ -5,13 +5,12 @@ quadruped's planned touch-downs land early or late, the weight moves between leg
 stance feet slide, whatever the plan (issue 31's measurements: every bump replay of the
 eight example-robot-data quadrupeds slid 5.5–25.5 mm in one stance). A walking robot meets
 unknown bumps with feedback, so the bumpy members of :data:`~hexapod_kin.robust.ENSEMBLE`
-walk the plan's pattern for the plan's duration under
-:func:`hexapod_kin.control.run`, commanded the plan's mean twist (:func:`plan_command`: the
-path ends where the plan's body does, which the plan's nominal twist held for its duration
-need not: a crawl's surge and sway, a duration that is not a whole number of cycles; the
-path of ``simulate --control --bumps A --seed K``), and
-:func:`controlled_run` judges that walk by the replay's kind of checks
-(:meth:`ControlledRun.checks`).
+walk the plan's pattern for the plan's duration under :func:`hexapod_kin.control.run` (the
+path of ``simulate --control --bumps A --seed K``), commanded the plan's mean twist
+(:func:`plan_command`): the controller's path ends where the plan's tracked point does, which
+the plan's nominal twist held for its duration need not (a crawl's surge and sway, a duration
+that is not a whole number of cycles). :func:`controlled_run` judges that walk by the
+replay's kind of checks (:meth:`ControlledRun.checks`).
 """
 
 from __future__ import annotations
