@@ -15,9 +15,10 @@ plans the walk once and replays it under each member of :data:`ENSEMBLE`:
 The eight flat members replay the plan open-loop (mode ``replay``). The three bumpy ones are
 ``controlled``: an open-loop replay cannot react to bumps it was not told about (on them every
 example-robot-data quadruped's stance feet slid 5.5–25.5 mm, whatever the plan), and a walking
-robot meets unknown ground with feedback, so they walk the plan's pattern and twist for its
-duration under the closed-loop controller (:func:`hexapod_kin.control.run`, as
-``simulate --control --bumps 0.003 --seed K``), judged by
+robot meets unknown ground with feedback, so they walk the plan's pattern for its duration,
+commanded its mean twist (:func:`~.controlled.plan_command`: the controller's path ends where
+the plan's tracked point does), under the closed-loop controller
+(:func:`hexapod_kin.control.run`, as ``simulate --control --bumps 0.003 --seed K``), judged by
 :meth:`~.controlled.ControlledRun.checks`: travel along the plan within 1 % of the plan's
 distance, heading, no fall, no non-foot contact (:data:`~.controlled.CONTROL_LIMITS`).
 
@@ -195,7 +196,8 @@ def simulate_robust(
     """Plan a walk once, replay it under each member of the ensemble, walk the controlled ones.
 
     The replayed members run first (the first of them plans the walk); each controlled
-    member then walks the plan's pattern and twist for its duration under the controller
+    member then walks the plan's pattern for its duration, commanded the plan's mean twist,
+    under the controller
     (:func:`~.controlled.controlled_run`; the servo keywords below are the replay's only).
 
     Args:
