@@ -17,13 +17,13 @@ listed (issue 30, "one of each"):
   two or more indices such as ``R[0, 1] = …``), or ``sincos``.
 
 Each list must equal the allowed one: a new implementation makes the test fail, and the
-second test proves it on the package with a planted file (each file is scanned on its own).
+second test proves it on a planted copy of the package.
 """
 
 from __future__ import annotations
 
 import ast
-import functools
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -311,14 +311,8 @@ def _check(found: dict[str, set[str]]) -> None:
         )
 
 
-@functools.cache
-def _package() -> dict[str, frozenset[str]]:
-    """:func:`scan` of the package, once per module (both tests read it)."""
-    return {kind: frozenset(names) for kind, names in scan(ROOT).items()}
-
-
 def test_one_fk_per_engine_one_ik_loop_and_the_listed_rotations() -> None:
-    _check({kind: set(names) for kind, names in _package().items()})
+    _check(scan(ROOT))
 
 
 PLANTED = """
@@ -369,12 +363,10 @@ def my_pinv_ik(model, data, target, q):
 
 
 def test_a_planted_copy_lists_the_new_ones(tmp_path: Path) -> None:
-    # scan() reads each file on its own: the package with a planted file finds the package's
-    # names and the planted file's, which a package of that one file finds
-    alone = tmp_path / "hexapod_kin"
-    (alone / "gait").mkdir(parents=True)
-    (alone / "gait" / "planted.py").write_text(PLANTED, encoding="utf-8")
-    found = {kind: names | _package()[kind] for kind, names in scan(alone).items()}
+    copy = tmp_path / "hexapod_kin"
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    (copy / "gait" / "planted.py").write_text(PLANTED, encoding="utf-8")
+    found = scan(copy)
     new = {k: v - PENDING[k] - REVIEWED[k] for k, v in found.items()}
     planted = {f"gait.planted.my_{n}" for n in ("fk", "table_fk", "compiled_fk")}
     assert new["fk"] - ALLOWED_FK == planted
