@@ -14,7 +14,8 @@ Caches (each filled once per module, then copied per case):
   command computes ``fk_batch`` (its kernel loaded first, the cache checked then) and then
   calls the small compiled ``wrap_angle``, whose cache files are the ones damaged (so a
   rebuild is one small compile); only the damages that make numba fail to load
-  (``NUMBA_DAMAGES``): nothing reads numba's files.
+  (``NUMBA_DAMAGES``): nothing reads numba's files. These cases run in the slow step (the
+  default run's damaged numba caches are ``test_hostile_round3_cli``'s).
 
 Damages: ``truncate`` (a file cut to a third), ``empty``, ``random`` (random bytes), ``swap``
 (two entries' contents exchanged; for a replay entry two files exchanged *together with their
@@ -453,7 +454,20 @@ def _prepare(filled: dict[str, Any], name: str, tmp: Path) -> tuple[Any, Path, A
     return filled[name]
 
 
-@pytest.mark.parametrize(("cache", "damage"), CASES, ids=[f"{c}-{d}" for c, d in CASES])
+#: numba's cases (a child compiles the kernels into a fresh folder, then a child per case
+#: compiles one again) run in the slow step: the keyed seal that catches them is the default
+#: run's in ``test_hostile_round3_cli`` (a flipped byte, an emptied index, a foreign file, a
+#: missing seal).
+NUMBA_SLOW = {("numba", d) for d in NUMBA_DAMAGES}
+
+
+@pytest.mark.parametrize(
+    ("cache", "damage"),
+    [
+        pytest.param(c, d, id=f"{c}-{d}", marks=[pytest.mark.slow] if (c, d) in NUMBA_SLOW else [])
+        for c, d in CASES
+    ],
+)
 def test_damaged_cache(
     filled: dict[str, Any],
     tmp_path_factory: pytest.TempPathFactory,

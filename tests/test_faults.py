@@ -23,7 +23,7 @@ import shutil
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -81,6 +81,23 @@ def _python(code: str, cwd: Path, timeout: float = 600) -> Run:
     return py(code, cwd=cwd, timeout=timeout)
 
 
+@pytest.fixture(scope="module")
+def working(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., tuple[Path, Run]]:
+    """``working(*args)``: the command run with a fresh package cache, once per module (the
+    answer both tests below match): (the cache folder it filled, the run)."""
+    made: dict[tuple[str, ...], tuple[Path, Run]] = {}
+
+    def run(*args: str) -> tuple[Path, Run]:
+        if args not in made:
+            cwd = tmp_path_factory.mktemp("working")
+            with pytest.MonkeyPatch.context() as mp:
+                mp.setenv("HEXAPOD_KIN_CACHE_DIR", str(cwd / "cache"))
+                made[args] = (cwd / "cache", cli(*args, cwd=cwd, timeout=120))
+        return made[args]
+
+    return run
+
+
 def _no_tmp(root: Path) -> None:
     assert not [p for p in root.rglob("*") if ".tmp" in p.name], list(root.rglob("*"))
 
@@ -116,14 +133,17 @@ def test_numba_cache_on_a_full_disk_compiles_in_memory(
     ids=["derive", "scan"],
 )
 def test_package_cache_on_a_full_disk(
-    full_disk: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, args: tuple[str, ...]
+    full_disk: Path,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    working: Callable[..., tuple[Path, Run]],
+    args: tuple[str, ...],
 ) -> None:
     """Nothing can be cached: the same answer as with a working cache, no ``.tmp`` left."""
-    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "working"))
-    want = cli(*args, cwd=tmp_path, timeout=120)
+    cache, want = working(*args)
     assert want.status == 0, want.stderr
-    assert list((tmp_path / "working").rglob("*.json"))  # it does cache there
-    seal = (tmp_path / "working" / "seal.key").read_bytes()
+    assert list(cache.rglob("*.json"))  # it does cache there
+    seal = (cache / "seal.key").read_bytes()
     for secret in (False, True):  # no secret yet (none can be made), or one written before
         if secret:
             subprocess.run(["umount", "-l", str(full_disk)], check=True)
@@ -142,10 +162,13 @@ def test_package_cache_on_a_full_disk(
 
 @pytest.mark.parametrize("command", ["derive", "scan"])
 def test_cache_path_that_is_a_regular_file_says_so(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, command: str
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    working: Callable[..., tuple[Path, Run]],
+    command: str,
 ) -> None:
-    monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(tmp_path / "working"))
-    want = cli(command, "hexabot_leg", cwd=tmp_path, timeout=120)
+    _, want = working(command, "hexabot_leg")
+    assert want.status == 0, want.stderr
     plain = tmp_path / "a-file"
     plain.write_text("not a folder")
     monkeypatch.setenv("HEXAPOD_KIN_CACHE_DIR", str(plain))

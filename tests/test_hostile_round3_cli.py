@@ -357,16 +357,24 @@ def _foreign(folder: Path) -> str:
     return target.name
 
 
+def _emptied_index(folder: Path) -> str:
+    target = sorted(folder.glob("*.nbi"))[0]  # a kernel's index (numba's lookup table)
+    target.write_bytes(b"")
+    return target.name
+
+
 def _unsealed(folder: Path) -> str:
     (folder / "hexapod_kin.seal").unlink()
     return sorted(folder.glob("*.nb?"))[0].name
 
 
 #: Each case recompiles a kernel (~5 s of CPU): the swap (valid files, the wrong names) runs in
-#: the slow step; a flipped byte, a foreign file and a missing seal in the default run.
+#: the slow step; a flipped byte, an emptied index, a foreign file and a missing seal in the
+#: default run (``test_cache_matrix`` cuts, empties and overwrites files in the slow step).
 @pytest.mark.parametrize("damage", [_flip, pytest.param(_swap, marks=pytest.mark.slow),
-                                    _foreign, _unsealed],
-                         ids=["flipped-byte", "swapped", "foreign-file", "unsealed"])  # fmt: skip
+                                    _emptied_index, _foreign, _unsealed],
+                         ids=["flipped-byte", "swapped", "emptied-index", "foreign-file",
+                              "unsealed"])  # fmt: skip
 def test_numba_cache_not_sealed_is_never_loaded(
     sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]
 ) -> None:
