@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from .._pose import rpy_to_matrix
 from ..simulate.replay import Travel
 
 __all__ = [
@@ -206,10 +207,9 @@ def ramped_motion(command: Any, duration: float, accel: tuple[float, float]) -> 
     step = np.array([accel[0], accel[0], accel[1]]) * RAMP_STEP
     tw = np.sign(cmd) * np.minimum(k * step, np.abs(cmd))
     yaw = np.concatenate([[0.0], np.cumsum(tw[:, 2]) * RAMP_STEP])
-    c, s = np.cos(yaw[:-1]), np.sin(yaw[:-1])
-    x = float(((c * tw[:, 0] - s * tw[:, 1]) * RAMP_STEP).sum())
-    y = float(((s * tw[:, 0] + c * tw[:, 1]) * RAMP_STEP).sum())
-    return np.array([x, y, float(yaw[-1])])
+    rot = np.array([rpy_to_matrix(0.0, 0.0, a)[:2, :2] for a in yaw[:-1]])
+    x, y = np.einsum("kij,kj->i", rot, tw[:, :2]) * RAMP_STEP
+    return np.array([float(x), float(y), float(yaw[-1])])
 
 
 def plan_command(motion: Any, duration: float) -> tuple[float, float, float]:
