@@ -201,7 +201,7 @@ def test_patterns_follow_the_legs_not_their_order(quad):
 def test_quadruped_crawls_ten_seconds_with_sway_and_positive_margin(quad):
     run = walk(quad, pattern="crawl", duration=10.0, rate=100.0)
     assert run.ok and run.settings["sway"] == 1.0 and run.min_margin > 0.002
-    assert run.min_zmp_margin > 0.005  # the ZMP at the support's centroid at mid-swing
+    assert run.min_zmp_margin > 0.005  # the ZMP at the support's incentre at mid-swing
     assert run.robot is quad and run.statically_stable
     # without sway the crawl tips: its zero-moment point leaves the support by far more
     bare = walk(quad, pattern="crawl", duration=3.0, sway=0.0, strict=False)
