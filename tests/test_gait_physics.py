@@ -208,9 +208,12 @@ def test_quadruped_crawls_ten_seconds_with_sway_and_positive_margin(quad):
     assert bare.min_margin < 0.3 * run.min_margin
     assert bare.min_zmp_margin < run.min_zmp_margin - 0.005
     # the sway is C² and periodic: the body's lateral offset repeats every period and its
-    # second difference has no jumps bigger than a smooth curve's
+    # second difference has no jumps bigger than a smooth curve's (the incentre's sway asks
+    # more speed of the joints than 1 s allows: the fitted period is longer)
     y = run.base_poses[:, 1, 3]
-    assert np.allclose(y[:100], y[100:200], atol=1e-12)
+    n = round(run.settings["period"] * 100)
+    assert run.settings["period"] == pytest.approx(1.05) and n == 105
+    assert np.allclose(y[:n], y[n : 2 * n], atol=1e-12)
     acc = np.diff(y, 2) * 100**2
     assert np.abs(np.diff(acc)).max() < 0.1 * np.abs(acc).max()
 

@@ -10,10 +10,12 @@ several centimetres for a 0.25 m tall body, larger than the triangle's inscribed
 The sway is a periodic cubic spline (C², period T) in the body frame, one knot per swing
 group at mid-swing. The knot values are solved so that the ZMP, not the CoM, sits at
 ``gain`` × the safest point of that swing's support (:func:`support_centre`: the centre of the
-largest circle inside a support triangle, else the stance feet's mean): the spline, its
-second derivative and so the ZMP at the knots are linear in the knot values (one small linear
-solve), then two correction passes with the ZMP of the whole robot (:func:`.zmp.zmp_points`:
-the planned joints by IK, the legs' momentum included).
+largest circle inside a support triangle, else the stance feet's mean; the feet's mean too
+when the legs cannot follow the incentre's larger sway: a foot out of reach, a joint past its
+position or speed limit): the spline, its second derivative and so the ZMP at the knots are
+linear in the knot values (one small linear solve), then two correction passes with the ZMP
+of the whole robot (:func:`.zmp.zmp_points`: the planned joints by IK, the legs' momentum
+included).
 
 Why the incentre and not the centroid: it is the point of the largest static margin, and it
 leans towards the stance foot diagonal to the swinging one, so that foot carries more of the
@@ -37,7 +39,7 @@ import numpy as np
 
 from .paths import se2_pose
 from .stability import periodic_spline
-from .zmp import GRAVITY, zmp_points
+from .zmp import GRAVITY, rates, zmp_points
 
 __all__ = ["support_centre", "sway_poses"]
 
@@ -112,7 +114,7 @@ def sway_poses(
     beta = table.duty_factor
     mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
     knots = np.unique(np.round(mid, 12))
-    targets = np.empty((len(knots), 2))
+    safest, centroid = np.zeros((len(knots), 2)), np.zeros((len(knots), 2))
     for k, tau in enumerate(knots):
         phi = np.remainder(tau + offs, 1.0)
         stance = phi < beta
@@ -120,36 +122,51 @@ def sway_poses(
         c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
         px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
         py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
-        targets[k] = support_centre(np.stack([px[stance], py[stance]], axis=1))
-    targets *= gain
+        if stance.any():
+            safest[k] = support_centre(np.stack([px[stance], py[stance]], axis=1))
+            centroid[k] = [px[stance].mean(), py[stance].mean()]
     nominal = base
     rot2 = nominal[:, :2, :2]
     ground = float(np.mean(plan[0, :, 2]))
     height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
     zmp_of = _zmp_matrix(knots, T, height)
-    values = np.linalg.solve(zmp_of, targets)
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
     near = [
         np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
         for tau in knots
     ]
-    out = nominal
-    for it in range(3):
-        off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
-        out = nominal.copy()
-        out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
-        if it == 2 or not any(m.any() for m in near) or len(t) < 5:
-            break
-        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
-        zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
-        zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
-        err = np.zeros_like(targets)
-        for k, m in enumerate(near):
-            if m.any():
-                err[k] = targets[k] - zmp_b[m].mean(axis=0)
-        step = np.linalg.solve(zmp_of, err)
-        if not np.abs(values + step).max() <= wb.leg_span:  # a ZMP no sway of the body can
-            break  # follow (absurd inertias): the centre of mass's sway is kept
-        values += step
-    return out
+
+    def fit(targets: np.ndarray) -> np.ndarray:
+        values = np.linalg.solve(zmp_of, targets)
+        out = nominal
+        for it in range(3):
+            off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
+            out = nominal.copy()
+            out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
+            if it == 2 or not any(m.any() for m in near) or len(t) < 5:
+                break
+            q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+            zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
+            zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
+            err = np.zeros_like(targets)
+            for k, m in enumerate(near):
+                if m.any():
+                    err[k] = targets[k] - zmp_b[m].mean(axis=0)
+            step = np.linalg.solve(zmp_of, err)
+            if not np.abs(values + step).max() <= wb.leg_span:  # a ZMP no sway of the body can
+                break  # follow (absurd inertias): the centre of mass's sway is kept
+            values += step
+        return out
+
+    out = fit(safest * gain)
+    if np.array_equal(safest, centroid):
+        return out
+    # the largest margin where the legs follow it (reached, within their position and speed
+    # limits), else the centroid's smaller sway
+    ik = wb.body_ik(out, plan, q_prev=q0, times=t, strict=False)
+    speed = np.abs(rates(np.asarray(ik.q), t)[0])
+    vlim = np.broadcast_to(np.asarray(wb.velocity_limit, dtype=float).reshape(-1), speed.shape)
+    if np.asarray(ik.ok).all() and not np.any(speed > np.where(vlim > 0, vlim, np.inf)):
+        return out
+    return fit(centroid * gain)
