@@ -17,18 +17,12 @@ linear in the knot values (one small linear solve), then two correction passes w
 of the whole robot (:func:`.zmp.zmp_points`: the planned joints by IK, the legs' momentum
 included).
 
-Why the incentre and not the centroid: it is the point of the largest static margin, and it
-leans towards the stance foot diagonal to the swinging one, so that foot carries more of the
-weight. On compliant ground (soft contacts, rubber feet) each stance foot sinks in proportion
-to its load, and the swing foot's corner of the body drops by the plane through the sunk
-stance feet evaluated there: for a rectangle of feet, ``s_a + s_b − s_d`` (two adjacent
-stance feet ``a``, ``b``, the diagonal one ``d``). With the ZMP at the centroid that is the sink
-under a third of the weight (``s_a + s_b − s_d ∝ 1 − 2/3``); at a right isosceles
-triangle's incentre the diagonal foot carries ``√2 − 1`` ≈ 0.41 of it and the drop is about
-half (``∝ 3 − 2√2`` ≈ 0.17). erd:go2's 4 s crawl on MuJoCo's default contact
-without armature: the rear swing feet dropped 2.4 mm more than the settled body (they struck
-the ground before touch-down), 1.5 mm with the incentre; its smallest ZMP margin at a
-lift-off went from 13.6 to 16.7 mm.
+Why the incentre: besides the largest static margin, it leans towards the stance foot
+diagonal to the swinging one. On compliant ground each stance foot sinks in proportion to its
+load, and the swinging foot's corner of the body drops by the plane through the sunk feet:
+``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
+one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
+incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
 """
 
 from __future__ import annotations
