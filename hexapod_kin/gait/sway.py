@@ -9,10 +9,20 @@ several centimetres for a 0.25 m tall body, larger than the triangle's inscribed
 
 The sway is a periodic cubic spline (C², period T) in the body frame, one knot per swing
 group at mid-swing. The knot values are solved so that the ZMP, not the CoM, sits at
-``gain`` × the centroid of that swing's support polygon: the spline, its second derivative and
-so the ZMP at the knots are linear in the knot values (one small linear solve), then two
-correction passes with the ZMP of the whole robot (:func:`.zmp.zmp_points`: the planned
-joints by IK, the legs' momentum included).
+``gain`` × the safest point of that swing's support (:func:`support_centre`: the centre of the
+largest circle inside a support triangle, else the stance feet's mean; the feet's mean too
+when the legs cannot follow the incentre's larger sway: a foot out of reach, a joint past its
+position or speed limit): the spline, its second derivative and so the ZMP at the knots are
+linear in the knot values (one small linear solve), then two correction passes with the ZMP
+of the whole robot (:func:`.zmp.zmp_points`: the planned joints by IK, the legs' momentum
+included).
+
+Why the incentre: besides the largest static margin, it leans towards the stance foot
+diagonal to the swinging one. On compliant ground each stance foot sinks in proportion to its
+load, and the swinging foot's corner of the body drops by the plane through the sunk feet:
+``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
+one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
+incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
 """
 
 from __future__ import annotations
@@ -23,9 +33,9 @@ import numpy as np
 
 from .paths import se2_pose
 from .stability import periodic_spline
-from .zmp import GRAVITY, zmp_points
+from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["sway_poses"]
+__all__ = ["support_centre", "sway_poses"]
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
@@ -44,6 +54,27 @@ def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
     spline = CubicSpline(np.append(knots, knots[0] + 1.0) * T, np.vstack([unit, unit[:1]]),
                          bc_type="periodic")  # fmt: skip
     return np.asarray(unit - height / GRAVITY * spline(knots * T, 2))
+
+
+def support_centre(points: np.ndarray) -> np.ndarray:
+    """The point (2,) of a support the farthest inside it [m]: where a sway puts the ZMP.
+
+    Three feet: the triangle's incentre ``(a·A + b·B + c·C) / (a + b + c)`` (each foot
+    weighted by the length of the side opposite it), the centre of the largest circle inside
+    the triangle, so the largest static stability margin. Other supports (and a triangle
+    whose feet coincide): the feet's mean; none: the origin.
+
+    Args:
+        points: (K, 2) stance feet [m].
+
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    if not len(p):
+        return np.zeros(2)
+    side = np.linalg.norm(np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0), axis=1)
+    if len(p) != 3 or not side.sum() > 0.0:
+        return np.asarray(p.mean(axis=0))
+    return np.asarray(side @ p / side.sum())
 
 
 def sway_poses(
@@ -77,7 +108,7 @@ def sway_poses(
     beta = table.duty_factor
     mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
     knots = np.unique(np.round(mid, 12))
-    targets = np.empty((len(knots), 2))
+    safest, centroid = np.zeros((len(knots), 2)), np.zeros((len(knots), 2))
     for k, tau in enumerate(knots):
         phi = np.remainder(tau + offs, 1.0)
         stance = phi < beta
@@ -85,36 +116,51 @@ def sway_poses(
         c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
         px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
         py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
-        targets[k] = [px[stance].mean(), py[stance].mean()] if stance.any() else 0.0
-    targets *= gain
+        if stance.any():
+            safest[k] = support_centre(np.stack([px[stance], py[stance]], axis=1))
+            centroid[k] = [px[stance].mean(), py[stance].mean()]
     nominal = base
     rot2 = nominal[:, :2, :2]
     ground = float(np.mean(plan[0, :, 2]))
     height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
     zmp_of = _zmp_matrix(knots, T, height)
-    values = np.linalg.solve(zmp_of, targets)
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
     near = [
         np.abs(np.remainder(phase_t - tau * T + 0.5 * T, T) - 0.5 * T) <= 0.5 * dt + 1e-12
         for tau in knots
     ]
-    out = nominal
-    for it in range(3):
-        off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
-        out = nominal.copy()
-        out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
-        if it == 2 or not any(m.any() for m in near) or len(t) < 5:
-            break
-        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
-        zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
-        zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
-        err = np.zeros_like(targets)
-        for k, m in enumerate(near):
-            if m.any():
-                err[k] = targets[k] - zmp_b[m].mean(axis=0)
-        step = np.linalg.solve(zmp_of, err)
-        if not np.abs(values + step).max() <= wb.leg_span:  # a ZMP no sway of the body can
-            break  # follow (absurd inertias): the centre of mass's sway is kept
-        values += step
-    return out
+
+    def fit(targets: np.ndarray) -> np.ndarray:
+        values = np.linalg.solve(zmp_of, targets)
+        out = nominal
+        for it in range(3):
+            off = periodic_spline(knots * T, values, T, t)  # (N, 2) body frame
+            out = nominal.copy()
+            out[:, :2, 3] += np.einsum("nij,nj->ni", rot2, off)
+            if it == 2 or not any(m.any() for m in near) or len(t) < 5:
+                break
+            q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+            zmp = zmp_points(wb, q, out, t, np.full(len(t), ground))
+            zmp_b = np.einsum("nji,nj->ni", rot2, zmp[:, :2] - nominal[:, :2, 3])
+            err = np.zeros_like(targets)
+            for k, m in enumerate(near):
+                if m.any():
+                    err[k] = targets[k] - zmp_b[m].mean(axis=0)
+            step = np.linalg.solve(zmp_of, err)
+            if not np.abs(values + step).max() <= wb.leg_span:  # a ZMP no sway of the body can
+                break  # follow (absurd inertias): the centre of mass's sway is kept
+            values += step
+        return out
+
+    out = fit(safest * gain)
+    if np.array_equal(safest, centroid):
+        return out
+    # the largest margin where the legs follow it (reached, within their position and speed
+    # limits), else the centroid's smaller sway
+    ik = wb.body_ik(out, plan, q_prev=q0, times=t, strict=False)
+    speed = np.abs(rates(np.asarray(ik.q), t)[0])
+    vlim = np.broadcast_to(np.asarray(wb.velocity_limit, dtype=float).reshape(-1), speed.shape)
+    if np.asarray(ik.ok).all() and not np.any(speed > np.where(vlim > 0, vlim, np.inf)):
+        return out
+    return fit(centroid * gain)

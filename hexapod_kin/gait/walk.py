@@ -22,10 +22,10 @@
   ``r = 0`` the feet are points fixed in the world during stance.
 * **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
   periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
-  one knot per swing group at mid-swing; each knot moves the zero-moment point to the centroid
-  of that swing's support polygon (the stance contacts at that instant), times the gain
-  ``sway`` (:mod:`.sway`; default 1: the ZMP at the centroid, so that the plan's ZMP margin
-  stays positive between the knots too).
+  one knot per swing group at mid-swing; each knot moves the zero-moment point to the
+  support's safest point (the stance contacts at that instant; three of them: the incentre,
+  :func:`.sway.support_centre`), times the gain ``sway`` (:mod:`.sway`; default 1, so that the
+  plan's ZMP margin stays positive between the knots too).
 * The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
