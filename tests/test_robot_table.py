@@ -179,15 +179,8 @@ _ROBUST_FAILS = {
     "ends 38 mm forward and 50 mm aside (the sway); commanded that mean twist (session 8) the "
     "controlled members walk -6.59 % of it with a 4.29 deg heading error and a swing strike "
     "(the three seeds alike: the walk stays on the flat square around the start); the flat "
-    "replay with the project's settings passes (+0.06 %); session 7's replay failed MuJoCo's "
-    "default contact with zero armature (travel, strikes)",
-    "Mini Pupper": "its 10 s plan (period 7.3 s) moves the body 33.0 mm, while its twist "
-    "(5.39 mm/s) held for 10 s asks the controller for 55.4 mm: the controlled members walk "
-    "60.9 mm (+9.9 % of their own path, +77 % of the plan's distance; heading 1.7 deg, no fall)",
-    "SpotMicroAI": "not measured with the controlled bump members (fetched); its eight "
-    "replayed members pass (session 8, --inertia point, 10 s crawl: worst travel +0.85 %, no "
-    "strike)",
-    "RARL hexapod-sim": "not measured with the controlled bump members (fetched)",
+    "replay with the project's settings passes (+0.06 %), and so do its eight replayed members "
+    "(session 8, --inertia point: worst +0.85 %, no strike)",
 }
 KNOWN: dict[tuple[str, str], str] = {(name, "simulate"): why for name, why in _ROBUST_FAILS.items()}
 
