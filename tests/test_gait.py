@@ -400,8 +400,8 @@ def test_stride_too_long_names_the_leg_time_and_check():
 
 def test_step_too_low_for_the_terrain_names_the_leg_and_time():
     with pytest.raises(GaitError) as err:
-        walk(terrain="step", step_height=0.004)
-    assert err.value.check == "terrain clearance" and err.value.leg and err.value.time > 0
+        walk(terrain="step", step_height=0.004, duration=5.0)  # the first leg to meet the step
+    assert err.value.check == "terrain clearance" and err.value.leg and 0 < err.value.time < 5
 
 
 def test_foot_off_the_terrain():
