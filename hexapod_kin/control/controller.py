@@ -459,10 +459,13 @@ class Controller:
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
         if self.kind == "torque" and self.balance == "mpc":
-            # sin²(π s): the foot comes down at rest (no impact kicking the body)
-            lift = np.sin(np.pi * np.asarray(progress)) ** 2
-            lift_rate = np.sin(2 * np.pi * np.asarray(progress))
-            lift_acc = 2 * np.cos(2 * np.pi * np.asarray(progress))
+            # up as sin(π s), down as sin²(π s) (the same height and rate at s = 1/2): the
+            # foot leaves the ground at once and comes down at rest (no impact kicking the body)
+            sp = np.asarray(progress)
+            up = sp < 0.5
+            lift = np.where(up, np.sin(np.pi * sp), np.sin(np.pi * sp) ** 2)
+            lift_rate = np.where(up, np.cos(np.pi * sp), np.sin(2 * np.pi * sp))
+            lift_acc = np.where(up, -np.sin(np.pi * sp), 2 * np.cos(2 * np.pi * sp))
         else:  # sin(π s) and its rates
             lift = np.sin(np.pi * np.asarray(progress))
             lift_rate = np.cos(np.pi * np.asarray(progress))
@@ -503,11 +506,15 @@ class Controller:
             ddsh = (6 - 12 * u) / (a * t_sw) ** 2 if u < 1.0 else 0.0
             p = self.lift_off[i] + np.array([step[0] * sh, step[1] * sh, 0.0])
             if self.kind == "torque":
-                # down to the lift-off height at the landing speed: z0 + h lift − v s⁴ T_sw / 4
+                # at s = 1 at the lift-off height, coming down at the landing speed v:
+                # z0 + h lift + v T_sw (1 − s) s⁴
                 v_land = LAND * h / t_sw
-                p[2] = z0 + h * lift[i] - v_land * t_sw * s**4 / 4
-                vz = h * math.pi / t_sw * lift_rate[i] - v_land * s**3
-                az = h * (math.pi / t_sw) ** 2 * lift_acc[i] - 3 * v_land * s * s / t_sw
+                p[2] = z0 + h * lift[i] + v_land * t_sw * (1 - s) * s**4
+                vz = h * math.pi / t_sw * lift_rate[i] + v_land * (4 * s**3 - 5 * s**4)
+                az = (
+                    h * (math.pi / t_sw) ** 2 * lift_acc[i]
+                    + v_land * (12 * s * s - 20 * s**3) / t_sw
+                )
                 acc = np.array([step[0] * ddsh, step[1] * ddsh, az])
                 if s >= 1.0:  # scheduled down but not touching: on down at the landing speed
                     p = np.array([*self.footholds[i, :2], st["feet"][i, 2]])
