@@ -8,7 +8,8 @@ one value per leg joint.
 
 * **Schedule**: a phase table (:func:`hexapod_kin.gait.tables.phase_table`): leg *i* is in
   stance while ``(φ + offset_i) mod 1 < β``; a pattern change waits for the cycle boundary.
-  A swing foot that touches down after 60 % of its swing joins the stance early.
+  A swing foot that touches down after 60 % of its swing joins the stance early (torque
+  kind: and stays in it until its scheduled stance, however it bounces).
 * **Reference**: the commanded twist integrated from the start (the *path*: position and
   yaw); the body height the standing height measured at :meth:`Controller.reset` (lowered
   in ``sit``).
@@ -18,6 +19,9 @@ one value per leg joint.
   point along a smooth step (``3u² − 2u³``, ``u = min(1, s / a)``; ``a = 1`` for torque,
   ``ARRIVE`` for servos, whose lag would otherwise land the foot short of its foothold)
   with a ``sin(π s)`` lift of ``swing_height``, and keeps descending past ``s = 1`` until it
+  touches. Torque kind: the lift (under the MPC rising as ``sin(π s)``, coming down as
+  ``sin²(π s)``) plus ``v T_sw (1 − s) s⁴``: at ``s = 1`` the foot is at its lift-off height
+  coming down at the landing speed ``v`` (:data:`LAND`), and goes on down at ``v`` until it
   touches.
 * **Torque kind** (quadrupeds' motors): the body wrench from PD laws on the CoM path and
   height (with a bounded integral of the error along the path, which removes the steady
@@ -25,7 +29,10 @@ one value per leg joint.
   ``M = I (K_R log(R_d Rᵀ) + K_ω (ω_d − ω))``, shared among the stance feet by
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
-  ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  ``τ = Jᵀ Λ (a + ω² e + 2 ζ ω ė) + h`` per swing leg (``Λ = (J M⁻¹ Jᵀ)⁻¹`` the foot's
+  operational-space inertia, ``M`` the leg's joint-space inertia plus its rotors'
+  ``armature``; ``a`` the path's acceleration; ``ω = 2π`` :data:`SWING_HZ`, ``ζ = 0.7``).
+  The MPC keeps each standing leg's forces within its joint torque limits.
   Under the MPC, a push puts the controller in its catching mode (:class:`~.mpc.Catch`).
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
