@@ -188,16 +188,16 @@ class ConvexMPC:
             C[r0 + 4, c0 + 2] = 1.0
             lo[r0 + 4], hi[r0 + 4] = self.f_min, self.f_max
         rows, r_lo, r_hi = [], [], []
-        for n, (_, i) in enumerate(idx):  # |bias - J^T f| <= limit, as MIT's leg torque box
+        for n, (_, i) in enumerate(idx):  # |bias - J^T f| <= limit
             if torque is None or i not in torque:
                 continue
             J, bias, limit = torque[i]
-            for j in np.flatnonzero(np.isfinite(limit)):
+            for col in np.flatnonzero(np.isfinite(limit)).tolist():
                 row = np.zeros(nv)
-                row[3 * n : 3 * n + 3] = J[:, j]
+                row[3 * n : 3 * n + 3] = J[:, col]
                 rows.append(row)
-                r_lo.append(bias[j] - limit[j])
-                r_hi.append(bias[j] + limit[j])
+                r_lo.append(bias[col] - limit[col])
+                r_hi.append(bias[col] + limit[col])
         if rows:
             C = np.vstack([C, np.array(rows)])
             lo, hi = np.concatenate([lo, r_lo]), np.concatenate([hi, r_hi])
