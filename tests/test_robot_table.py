@@ -163,9 +163,17 @@ _ROBUST_FAILS = {
     "judged by the CoM (session 7), its cell not re-measured since",
     "hexaross": _CONTROLLER + "falls on all three floors (travel -57 to -82 %, 21-30 non-foot "
     "contact pairs)",
-    "CHAMP": _CONTROLLER + "falls on all three floors (travel -49 to -57 %); its replay with the "
-    "CLI's default walk fails too (+33 % travel, roll, slip, height, contacts)",
-    "MIT Mini Cheetah": _CONTROLLER + "its walk's figures are not finite (it blew up)",
+    "CHAMP": "its feet are the rounded ends of its lower-leg meshes: the URDF's foot point is "
+    "the mesh's lowest point along the shin, but the end is 30 mm wide, so with the shin at 33 "
+    "deg (standing) its edge is 4.9 mm below the 1 mm point foot's centre and the lower-leg "
+    "hulls stand 3.8 mm in the ground from t = 0 (every member; session 8). Walked with a "
+    "15 mm foot sphere the controller passes its bump member (seed 0: -0.03 %, no non-foot "
+    "contact): the scene's foot (hexapod_kin.simulate.collision) must be the mesh's end, not "
+    "a point; its replay with the CLI's default walk failed too (+33 % travel, session 7)",
+    "MIT Mini Cheetah": "(session 8, controller alone, not the whole cell) its bump members "
+    "seeds 0 and 1 pass (-0.07 / +0.08 %, tilt <= 1.5 deg); seed 2 falls at 8.5 s: the MPC's "
+    "catching mode starts at 8.24 s and the body sinks 0.29 m to the ground in 0.35 s with "
+    "its standing feet off the ground (no joint torque limits in its URDF)",
     "Mini Pupper": "its 10 s plan (period 7.3 s) moves the body 33.0 mm, while its twist "
     "(5.39 mm/s) held for 10 s asks the controller for 55.4 mm: the controlled members walk "
     "60.9 mm (+9.9 % of their own path, +77 % of the plan's distance; heading 1.7 deg, no fall)",
