@@ -155,14 +155,11 @@ def _cells(robot: Robot) -> list[str]:
 #: ``--robust`` ensemble walks its three ±3 mm bump members under the closed-loop controller
 #: (hexapod_kin.robust); the figures below are session 7's (10 s walks; the plan's flat replay
 #: with the project's settings passes for each, within 0.15 %).
-_CONTROLLER = "the controller (hexapod_kin.control) does not walk it over the ensemble's bumps: "
 _ROBUST_FAILS = {
     "Kraby": "MuJoCo's default contact with zero armature fails its replay (travel, strikes); "
     "its controlled bump members were counted as fallen (travel -0.50 to -0.68 %, heading "
     "within 1 deg) by the base frame's height, which sits at ground level: the fall is now "
     "judged by the CoM (session 7), its cell not re-measured since",
-    "hexaross": _CONTROLLER + "falls on all three floors (travel -57 to -82 %, 21-30 non-foot "
-    "contact pairs)",
     "CHAMP": "its feet are the rounded ends of its lower-leg meshes: the URDF's foot point is "
     "the mesh's lowest point along the shin, but the end is 30 mm wide, so with the shin at 33 "
     "deg (standing) its edge is 4.9 mm below the 1 mm point foot's centre and the lower-leg "
