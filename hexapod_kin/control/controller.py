@@ -98,7 +98,7 @@ SWING_HZ = 8.0
 
 #: Torque kind: a swing foot's landing speed [m/s] as ``LAND · swing_height / T_sw`` (it comes
 #: down to its lift-off height at that speed, and on down until it touches).
-LAND = 0.25
+LAND = 1.0
 
 #: Servo kind: the fraction of the swing by which the foot reaches its foothold's x, y (the
 #: servos lag their targets; arriving early lands the foot where it was placed).
