@@ -51,14 +51,14 @@ one value per leg joint.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .._pose import matrix_to_rpy, rpy_to_matrix
+from .._pose import matrix_to_rpy
 from ..exceptions import one_of
 from .commands import Command
+from .measurement import Measurement, _log3, _quat_mat, _rot, _rz, _yaw
 from .mpc import CATCH_RETURN, Catch, ConvexMPC, schedule
 from .qp import ForceQP
 
@@ -115,55 +115,6 @@ SLIP = 0.06
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
 ACC_I = 1.5
-
-
-@dataclass(frozen=True)
-class Measurement:
-    """What the robot senses at one tick (SI units, world z up).
-
-    Attributes:
-        t: Time [s].
-        quat: (4,) body attitude ``w, x, y, z`` (IMU).
-        gyro: (3,) body angular velocity in the body frame [rad/s] (IMU).
-        q: (nq,) leg joint positions [rad] (the model's joint order).
-        qd: (nq,) joint velocities [rad/s].
-        contacts: (L,) True where a foot touches (foot switches / force sensing).
-        position: (3,) base position estimate in the world [m].
-        velocity: (3,) base linear velocity estimate in the world [m/s].
-
-    """
-
-    t: float
-    quat: np.ndarray
-    gyro: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    contacts: np.ndarray
-    position: np.ndarray
-    velocity: np.ndarray
-
-
-def _quat_mat(q: np.ndarray) -> np.ndarray:
-    """The rotation of the unit quaternion ``q = (w, x, y, z)``."""
-    import pinocchio as pin
-
-    w, x, y, z = (float(v) for v in q)
-    return np.array(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix())
-
-
-def _rz(a: float) -> np.ndarray:
-    return rpy_to_matrix(0.0, 0.0, a)
-
-
-def _log3(R: np.ndarray) -> np.ndarray:
-    """The rotation vector of ``R`` [rad] (Pinocchio's ``log3``)."""
-    import pinocchio as pin
-
-    return np.array(pin.log3(R))
-
-
-def _yaw(R: np.ndarray) -> float:
-    return math.atan2(R[1, 0], R[0, 0])
 
 
 class Controller:
@@ -827,10 +778,3 @@ class Controller:
         ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
         q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
         return np.clip(q, self.wb.lower, self.wb.upper)
-
-
-def _rot(w: np.ndarray) -> np.ndarray:
-    """The rotation of rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
-    import pinocchio as pin
-
-    return np.array(pin.exp3(np.asarray(w, dtype=float)))
