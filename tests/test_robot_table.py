@@ -167,10 +167,10 @@ _ROBUST_FAILS = {
     "15 mm foot sphere the controller passes its bump member (seed 0: -0.03 %, no non-foot "
     "contact): the scene's foot (hexapod_kin.simulate.collision) must be the mesh's end, not "
     "a point; its replay with the CLI's default walk failed too (+33 % travel, session 7)",
-    "MIT Mini Cheetah": "(session 8, controller alone, not the whole cell) its bump members "
-    "seeds 0 and 1 pass (-0.07 / +0.08 %, tilt <= 1.5 deg); seed 2 falls at 8.5 s: the MPC's "
-    "catching mode starts at 8.24 s and the body sinks 0.29 m to the ground in 0.35 s with "
-    "its standing feet off the ground (no joint torque limits in its URDF)",
+    "MIT Mini Cheetah": "(session 8) its three bump members pass under the controller "
+    "(-0.28 / -0.30 / -0.25 %, heading <= 0.33 deg, no fall); two flat replays fail, MuJoCo's "
+    "default contact with zero armature (friction 1 and 0.6): a swing strike (hl at 0.158 s); "
+    "exit 1",
     "Mini Pupper": "its 10 s plan (period 7.3 s) moves the body 33.0 mm, while its twist "
     "(5.39 mm/s) held for 10 s asks the controller for 55.4 mm: the controlled members walk "
     "60.9 mm (+9.9 % of their own path, +77 % of the plan's distance; heading 1.7 deg, no fall)",
