@@ -590,3 +590,52 @@ def test_mpc_brings_a_rolled_rigid_body_back() -> None:
 def test_controller_refuses_an_unknown_balance() -> None:
     with pytest.raises(ParameterError, match="balance"):
         Controller("erd:solo12", balance="lqr")
+
+
+def test_mpc_keeps_standing_legs_within_their_joint_torque_limits() -> None:
+    """A leg whose joints cannot carry its quarter of m g (J = I, zero bias: τ = −f): its
+    normal force stays within the limit, the other feet carry the rest (statics: Σ f_z ≈ m g
+    over the horizon's first step); unconstrained it takes its quarter."""
+    mpc, feet, x0 = _mpc_case()
+    N = mpc.horizon
+    ref = np.tile(x0, (N, 1))
+    levers = np.broadcast_to(feet - x0[3:6], (N, 4, 3))
+    contact = np.ones((N, 4), dtype=bool)
+    free = mpc.solve(x0, ref, contact, levers, 0.03)
+    limit = np.array([100.0, 100.0, 40.0])  # N·m; the quarter weight is 73.6 N
+    torque = {0: (np.eye(3), np.zeros(3), limit)}
+    f = mpc.solve(x0, ref, contact, levers, 0.03, torque=torque)
+    assert free[0, 2] > 70.0
+    assert np.all(np.abs(np.zeros(3) - f[0]) <= limit + 1e-3), f[0]
+    assert f[0, 2] == pytest.approx(40.0, abs=1.0)  # at its limit, not below it
+    assert f[:, 2].sum() == pytest.approx(30.0 * 9.81, rel=0.05)
+
+
+def test_torque_swing_lands_at_its_lift_off_height_at_the_landing_speed() -> None:
+    """The swing foot's target at s = 1 is its lift-off point's height, coming down at
+    ``LAND · swing_height / T_sw``; the target's velocity and acceleration are the position's
+    derivatives (central finite differences in s)."""
+    from hexapod_kin.control import controller as ctl_mod
+
+    ctl = Controller("erd:solo12", pattern="crawl")
+    tab = ctl._table
+    t_sw = (1.0 - tab.duty_factor) * ctl.period
+    legs = np.zeros(ctl.n_legs, dtype=bool)
+    legs[0] = True
+    ctl.lift_off[0] = [0.2, 0.1, 0.017]
+    st = {"B": np.eye(4), "R": np.eye(3), "ref_point": np.zeros(3), "feet": ctl.feet_body}
+
+    def target(s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        ctl.footholds[0] = [0.25, 0.1, 0.0]
+        p, v, a = ctl._swing_targets(st, legs, np.full(ctl.n_legs, s))
+        return p[0], v[0], a[0]
+
+    h = 1e-5
+    for s in (0.2, 0.6, 0.8, 0.95):
+        p0, v0, a0 = target(s)
+        (pm, vm, _), (pp, vp, _) = target(s - h), target(s + h)
+        assert v0[2] == pytest.approx((pp[2] - pm[2]) / (2 * h * t_sw), rel=1e-4, abs=1e-6)
+        assert a0[2] == pytest.approx((vp[2] - vm[2]) / (2 * h * t_sw), rel=1e-4, abs=1e-4)
+    p1, v1, _ = target(1.0 - 1e-9)
+    assert p1[2] == pytest.approx(0.017, abs=1e-6)
+    assert v1[2] == pytest.approx(-ctl_mod.LAND * ctl.swing_height / t_sw, rel=1e-5)

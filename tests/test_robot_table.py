@@ -165,11 +165,17 @@ _ROBUST_FAILS = {
     "allowed); with the sway to the support's incentre (sway=1, not the default on six legs) "
     "1.6 mm and no strike. Its other 9 members pass (session 8; the controlled bump members "
     "-0.56 / -0.36 / -0.63 %, now that a fall is judged by the CoM)",
-    "hexaross": _CONTROLLER + "falls on all three floors (travel -57 to -82 %, 21-30 non-foot "
-    "contact pairs)",
-    "CHAMP": _CONTROLLER + "falls on all three floors (travel -49 to -57 %); its replay with the "
-    "CLI's default walk fails too (+33 % travel, roll, slip, height, contacts)",
-    "MIT Mini Cheetah": _CONTROLLER + "its walk's figures are not finite (it blew up)",
+    "CHAMP": "its feet are the rounded ends of its lower-leg meshes: the URDF's foot point is "
+    "the mesh's lowest point along the shin, but the end is 30 mm wide, so with the shin at 33 "
+    "deg (standing) its edge is 4.9 mm below the 1 mm point foot's centre and the lower-leg "
+    "hulls stand 3.8 mm in the ground from t = 0 (every member; session 8). Walked with a "
+    "15 mm foot sphere the controller passes its bump member (seed 0: -0.03 %, no non-foot "
+    "contact): the scene's foot (hexapod_kin.simulate.collision) must be the mesh's end, not "
+    "a point; its replay with the CLI's default walk failed too (+33 % travel, session 7)",
+    "MIT Mini Cheetah": "(session 8) its three bump members pass under the controller "
+    "(-0.28 / -0.30 / -0.25 %, heading <= 0.33 deg, no fall); two flat replays fail, MuJoCo's "
+    "default contact with zero armature (friction 1 and 0.6): a swing strike (hl at 0.158 s); "
+    "exit 1",
     "Mini Pupper": "MuJoCo's default contact with zero armature, friction 1, fails its replay "
     "(travel -1.52 %; the other seven replays -0.10 to -0.98 %); the controlled bump members, "
     "commanded the plan's mean twist of its CoM (session 8: 37.2 mm in 10 s where the nominal "

@@ -117,16 +117,9 @@ def test_every_member_controlled_is_refused() -> None:
 
 ERD_QUADRUPEDS = ("a1", "anymal", "b1", "go1", "go2", "hyq", "laikago", "solo12")
 
-#: The controller (hexapod_kin.control, not this package) does not yet walk erd:b1's crawl
-#: over the ±3 mm floors: measured (10 s) travel +2.05 / +29.99 / -6.75 %, heading error
-#: 9.8 / 65.1 / 11.7°, a fall on seed 1, non-foot contacts on all three (issue 31).
-_B1 = pytest.mark.xfail(strict=False, reason="the controller falls or veers with erd:b1")
-
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "name", [pytest.param(n, marks=_B1) if n == "b1" else n for n in ERD_QUADRUPEDS]
-)
+@pytest.mark.parametrize("name", ERD_QUADRUPEDS)
 def test_erd_quadrupeds_walk_their_crawl_over_bumps_under_the_controller(name: str) -> None:
     """Each example-robot-data quadruped's default crawl (10 s), its twist walked under the
     controller over one of the ensemble's ±3 mm floors (the seeds in turn): within 1 % of

@@ -8,7 +8,8 @@ one value per leg joint.
 
 * **Schedule**: a phase table (:func:`hexapod_kin.gait.tables.phase_table`): leg *i* is in
   stance while ``(φ + offset_i) mod 1 < β``; a pattern change waits for the cycle boundary.
-  A swing foot that touches down after 60 % of its swing joins the stance early.
+  A swing foot that touches down after 60 % of its swing joins the stance early (torque
+  kind: and stays in it until its scheduled stance, however it bounces).
 * **Reference**: the commanded twist integrated from the start (the *path*: position and
   yaw); the body height the standing height measured at :meth:`Controller.reset` (lowered
   in ``sit``).
@@ -18,6 +19,9 @@ one value per leg joint.
   point along a smooth step (``3u² − 2u³``, ``u = min(1, s / a)``; ``a = 1`` for torque,
   ``ARRIVE`` for servos, whose lag would otherwise land the foot short of its foothold)
   with a ``sin(π s)`` lift of ``swing_height``, and keeps descending past ``s = 1`` until it
+  touches. Torque kind: the lift (under the MPC rising as ``sin(π s)``, coming down as
+  ``sin²(π s)``) plus ``v T_sw (1 − s) s⁴``: at ``s = 1`` the foot is at its lift-off height
+  coming down at the landing speed ``v`` (:data:`LAND`), and goes on down at ``v`` until it
   touches.
 * **Torque kind** (quadrupeds' motors): the body wrench from PD laws on the CoM path and
   height (with a bounded integral of the error along the path, which removes the steady
@@ -25,7 +29,10 @@ one value per leg joint.
   ``M = I (K_R log(R_d Rᵀ) + K_ω (ω_d − ω))``, shared among the stance feet by
   :class:`~.qp.ForceQP` (friction pyramids, normal force bounds, joint torque limits),
   then ``τ = h − Jᵀ f`` per stance leg (``h`` Pinocchio's non-linear effects) and
-  ``τ = Jᵀ (K_s e + D_s ė) + h`` per swing leg.
+  ``τ = Jᵀ Λ (a + ω² e + 2 ζ ω ė) + h`` per swing leg (``Λ = (J M⁻¹ Jᵀ)⁻¹`` the foot's
+  operational-space inertia, ``M`` the leg's joint-space inertia plus its rotors'
+  ``armature``; ``a`` the path's acceleration; ``ω = 2π`` :data:`SWING_HZ`, ``ζ = 0.7``).
+  The MPC keeps each standing leg's forces within its joint torque limits.
   Under the MPC, a push puts the controller in its catching mode (:class:`~.mpc.Catch`).
 * **Servo kind** (position servos, hobby hexapods): the body pose is the feedback
   (OpenSHC's posing): the commanded body is the reference pose (level, on the path, at its
@@ -44,14 +51,14 @@ one value per leg joint.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .._pose import matrix_to_rpy, rpy_to_matrix
+from .._pose import matrix_to_rpy
 from ..exceptions import one_of
 from .commands import Command
+from .measurement import Measurement, _log3, _quat_mat, _rot, _rz, _yaw
 from .mpc import CATCH_RETURN, Catch, ConvexMPC, schedule
 from .qp import ForceQP
 
@@ -86,6 +93,13 @@ _G = 9.81
 #: The commanded twist's largest rate of change: linear [m/s²], yaw [rad/s²].
 ACCEL = (1.0, 2.0)
 
+#: Torque kind: the swing feet's position loop's natural frequency [Hz] (damping ratio 0.7).
+SWING_HZ = 8.0
+
+#: Torque kind: a swing foot's landing speed [m/s] as ``LAND · swing_height / T_sw`` (it comes
+#: down to its lift-off height at that speed, and on down until it touches).
+LAND = 1.0
+
 #: Servo kind: the fraction of the swing by which the foot reaches its foothold's x, y (the
 #: servos lag their targets; arriving early lands the foot where it was placed).
 ARRIVE = 0.8
@@ -101,55 +115,6 @@ SLIP = 0.06
 #: loop's natural frequency) and the most acceleration it may add [m/s²].
 KI_FRAC = 0.3
 ACC_I = 1.5
-
-
-@dataclass(frozen=True)
-class Measurement:
-    """What the robot senses at one tick (SI units, world z up).
-
-    Attributes:
-        t: Time [s].
-        quat: (4,) body attitude ``w, x, y, z`` (IMU).
-        gyro: (3,) body angular velocity in the body frame [rad/s] (IMU).
-        q: (nq,) leg joint positions [rad] (the model's joint order).
-        qd: (nq,) joint velocities [rad/s].
-        contacts: (L,) True where a foot touches (foot switches / force sensing).
-        position: (3,) base position estimate in the world [m].
-        velocity: (3,) base linear velocity estimate in the world [m/s].
-
-    """
-
-    t: float
-    quat: np.ndarray
-    gyro: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    contacts: np.ndarray
-    position: np.ndarray
-    velocity: np.ndarray
-
-
-def _quat_mat(q: np.ndarray) -> np.ndarray:
-    """The rotation of the unit quaternion ``q = (w, x, y, z)``."""
-    import pinocchio as pin
-
-    w, x, y, z = (float(v) for v in q)
-    return np.array(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix())
-
-
-def _rz(a: float) -> np.ndarray:
-    return rpy_to_matrix(0.0, 0.0, a)
-
-
-def _log3(R: np.ndarray) -> np.ndarray:
-    """The rotation vector of ``R`` [rad] (Pinocchio's ``log3``)."""
-    import pinocchio as pin
-
-    return np.array(pin.log3(R))
-
-
-def _yaw(R: np.ndarray) -> float:
-    return math.atan2(R[1, 0], R[0, 0])
 
 
 class Controller:
@@ -170,6 +135,8 @@ class Controller:
         balance: Torque kind: how the stance forces are found, one of :data:`BALANCES`:
             ``mpc`` (:class:`~.mpc.ConvexMPC` over one gait cycle) or ``qp`` (the body
             wrench of the PD laws shared by :class:`~.qp.ForceQP`).
+        armature: Rotor inertia of each leg joint [kg·m²] (the motors' reflected inertia,
+            as MuJoCo's ``armature``): the torque kind's swing legs move with it.
 
     Raises:
         ParameterError: A bad kind, pattern or value.
@@ -187,6 +154,7 @@ class Controller:
         swing_height: float | None = None,
         mu: float = 0.6,
         balance: str = "mpc",
+        armature: float = 0.0,
     ) -> None:
         import pinocchio as pin
 
@@ -206,6 +174,7 @@ class Controller:
         )
         self.dt = 1.0 / self.rate
         self.mu = positive("mu", mu)
+        self.armature = 0.0 if armature == 0 else positive("armature", armature)
         self.feet_ids = [self.model.getFrameId(f"{leg}_contact") for leg in wb.leg_names]
         self.mass = float(wb.mass)
         # the legs' columns of v[6:] (the joints moving each foot), from the Jacobian at rest
@@ -311,6 +280,7 @@ class Controller:
         self.path_yaw = 0.0
         self.twist = np.zeros(3)
         self.late = np.zeros(L, dtype=bool)
+        self.landed = np.zeros(L, dtype=bool)
         self.late_time = np.zeros(L)
         self.height_ref = self.height0
         self.ground_z = 0.0
@@ -369,6 +339,8 @@ class Controller:
             out["com"] = np.array(pin.centerOfMass(model, data, qp, v))
             out["vcom"] = np.array(data.vcom[0])
             out["bias"] = np.array(pin.nonLinearEffects(model, data, qp, v))[6:]
+            M = np.array(pin.crba(model, data, qp))
+            out["M"] = np.triu(M) + np.triu(M, 1).T  # crba fills the upper triangle
             out["ref_point"] = out["com"]
             out["ref_vel"] = out["vcom"]
         else:
@@ -423,8 +395,8 @@ class Controller:
 
     def _swing_targets(
         self, st: dict[str, Any], legs: np.ndarray, progress: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """World targets and velocities (L, 3) of the swing feet ``legs`` (bool mask).
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World targets, velocities and accelerations (L, 3) of the swing feet ``legs``.
 
         ``progress`` (L,) is each leg's swing fraction (1: due down, not touching yet).
         """
@@ -437,6 +409,7 @@ class Controller:
         k_v = math.sqrt(self.height_ref / _G)
         p_out = np.zeros((self.n_legs, 3))
         v_out = np.zeros((self.n_legs, 3))
+        a_out = np.zeros((self.n_legs, 3))
         if self.kind == "torque":  # Raibert: about the measured hips, the path as a speed
             ref = np.array([*st["B"][:2, 3], 0.0])
             err = np.array([*(self.path_xy + self.catch.ret - st["ref_point"][:2]), 0.0])
@@ -444,12 +417,17 @@ class Controller:
         else:  # servo posing: about the hips of the body on its path
             ref = np.array([*self.path_xy, 0.0])
         if self.kind == "torque" and self.balance == "mpc":
-            # sin²(π s): the foot comes down at rest (no impact kicking the body)
-            lift = np.sin(np.pi * np.asarray(progress)) ** 2
-            lift_rate = np.sin(2 * np.pi * np.asarray(progress))
-        else:  # sin(π s) and its rate
+            # up as sin(π s), down as sin²(π s) (the same height and rate at s = 1/2): the
+            # foot leaves the ground at once and comes down at rest (no impact kicking the body)
+            sp = np.asarray(progress)
+            up = sp < 0.5
+            lift = np.where(up, np.sin(np.pi * sp), np.sin(np.pi * sp) ** 2)
+            lift_rate = np.where(up, np.cos(np.pi * sp), np.sin(2 * np.pi * sp))
+            lift_acc = np.where(up, -np.sin(np.pi * sp), 2 * np.cos(2 * np.pi * sp))
+        else:  # sin(π s) and its rates
             lift = np.sin(np.pi * np.asarray(progress))
             lift_rate = np.cos(np.pi * np.asarray(progress))
+            lift_acc = -lift
         for i in np.flatnonzero(legs):
             s = float(progress[i])
             if s > 0.7:  # the foothold frozen for the last 30 % of the swing
@@ -483,18 +461,37 @@ class Controller:
             u = min(1.0, s / a)
             sh = 3 * u * u - 2 * u**3
             dsh = (6 * u - 6 * u * u) / (a * t_sw) if u < 1.0 else 0.0
+            ddsh = (6 - 12 * u) / (a * t_sw) ** 2 if u < 1.0 else 0.0
             p = self.lift_off[i] + np.array([step[0] * sh, step[1] * sh, 0.0])
-            sm = 3 * s * s - 2 * s**3
-            dsm = (6 * s - 6 * s * s) / t_sw
-            dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
-            p[2] = z0 - dz * sm + h * lift[i]
-            vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
+            if self.kind == "torque":
+                # at s = 1 at the lift-off height, coming down at the landing speed v:
+                # z0 + h lift + v T_sw (1 − s) s⁴
+                v_land = LAND * h / t_sw
+                p[2] = z0 + h * lift[i] + v_land * t_sw * (1 - s) * s**4
+                vz = h * math.pi / t_sw * lift_rate[i] + v_land * (4 * s**3 - 5 * s**4)
+                az = (
+                    h * (math.pi / t_sw) ** 2 * lift_acc[i]
+                    + v_land * (12 * s * s - 20 * s**3) / t_sw
+                )
+                acc = np.array([step[0] * ddsh, step[1] * ddsh, az])
+                if s >= 1.0:  # scheduled down but not touching: on down at the landing speed
+                    p = np.array([*self.footholds[i, :2], st["feet"][i, 2]])
+                    vz, acc = -v_land, np.zeros(3)
+            else:
+                sm = 3 * s * s - 2 * s**3
+                dsm = (6 * s - 6 * s * s) / t_sw
+                dz = 0.25 * h  # aim below the lift-off height: the touch stops the foot
+                p[2] = z0 - dz * sm + h * lift[i]
+                vz = -dz * dsm + h * math.pi / t_sw * lift_rate[i]
+                acc = np.zeros(3)
+                if s >= 1.0:  # scheduled down but not touching: keep going down
+                    p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
+                    vz = -h / t_sw
             vel = np.array([step[0] * dsh, step[1] * dsh, vz])
-            if s >= 1.0:  # scheduled down but not touching: keep going down
-                p = np.array([*self.footholds[i, :2], st["feet"][i, 2] - dz])
-                vel = np.array([0.0, 0.0, -h / t_sw])
-            p_out[i], v_out[i] = p, vel
-        return p_out, v_out
+            if s >= 1.0:
+                vel[:2] = 0.0
+            p_out[i], v_out[i], a_out[i] = p, vel, acc
+        return p_out, v_out, a_out
 
     def _clear_of_stance(
         self, st: dict[str, Any], swing: np.ndarray, i: int, target: np.ndarray
@@ -524,9 +521,17 @@ class Controller:
         return out
 
     def _contacts(self, sched: np.ndarray, m: Measurement) -> np.ndarray:
-        """Stance legs: scheduled, or touching after 60 % of their swing."""
+        """Stance legs: scheduled, or touched down after 60 % of their swing.
+
+        Torque kind: an early touch-down holds the leg in stance until its scheduled stance
+        begins (a foot bouncing off the ground is not swung again).
+        """
         touch = np.asarray(m.contacts, dtype=bool)
-        return sched | (touch & (self.swing_s > 0.6) & self.in_swing)
+        early = touch & (self.swing_s > 0.6) & self.in_swing
+        if self.kind == "servo":  # an early touch counts while it lasts
+            return sched | early
+        self.landed = (self.landed | early) & ~sched & self.walking
+        return sched | self.landed
 
     # ------------------------------------------------------------------ the tick
     def tick(self, m: Measurement) -> np.ndarray:
@@ -566,9 +571,9 @@ class Controller:
         self.late_time = np.where(self.late, self.late_time + self.dt, 0.0)
         swing = ~stance
         s_eff = np.where(sched, 1.0, self.swing_s)
-        p_sw, v_sw = self._swing_targets(st, swing, s_eff)
+        p_sw, v_sw, a_sw = self._swing_targets(st, swing, s_eff)
         if self.kind == "torque":
-            return self._torques(st, stance, swing, p_sw, v_sw)
+            return self._torques(st, stance, swing, p_sw, v_sw, a_sw)
         return self._servo(st, stance, swing, p_sw, m)
 
     def _desired_rotation(self) -> np.ndarray:
@@ -581,6 +586,7 @@ class Controller:
         swing: np.ndarray,
         p_sw: np.ndarray,
         v_sw: np.ndarray,
+        a_sw: np.ndarray,
     ) -> np.ndarray:
         import time
 
@@ -588,15 +594,19 @@ class Controller:
         tau = np.zeros(self.nq)
         v = st["v"]
         bias = st["bias"]
-        # swing legs: Cartesian PD through J^T plus the bias
-        w_sw = 2.0 * math.pi * 8.0
-        ks, ds = self._leg_mass() * w_sw**2, 2.0 * 0.7 * self._leg_mass() * w_sw
+        # swing legs: the foot's PD and its path's acceleration through the leg's
+        # operational-space inertia (its joints' mass matrix, rotors included), plus the bias
+        w_sw = 2.0 * math.pi * SWING_HZ
+        M = st["M"]
         for i in np.flatnonzero(swing):
             c = self.cols[i]
             J = st["jac"][i]
-            pd = J @ v
-            f = ks * (p_sw[i] - st["feet"][i]) + ds * (v_sw[i] - pd)
-            tau[c] = J[:, 6 + c].T @ f + bias[c]
+            Jc = J[:, 6 + c]
+            M_leg = M[np.ix_(6 + c, 6 + c)] + self.armature * np.eye(len(c))
+            lam = np.linalg.pinv(Jc @ np.linalg.solve(M_leg, Jc.T), rcond=1e-6)
+            e, ed = p_sw[i] - st["feet"][i], v_sw[i] - J @ v
+            f = lam @ (w_sw**2 * e + 2.0 * 0.7 * w_sw * ed + a_sw[i])
+            tau[c] = Jc.T @ f + bias[c]
         legs = np.flatnonzero(stance)
         if len(legs):
             com, vcom = st["com"], st["vcom"]
@@ -628,7 +638,8 @@ class Controller:
             lims = [self.effort[self.cols[i]] for i in legs]
             t0 = time.process_time()
             if self.balance == "mpc":
-                f = self._mpc_forces(st, stance, v_ref, p_ref)[legs]
+                torque = {int(i): (jac[k], biases[k], lims[k]) for k, i in enumerate(legs)}
+                f = self._mpc_forces(st, stance, v_ref, p_ref, torque)[legs]
             else:
                 f = self.force_qp.solve(np.concatenate([F, M]), r, jac, biases, lims)
             self.qp_time += time.process_time() - t0
@@ -638,13 +649,19 @@ class Controller:
         return np.clip(tau, -self.effort, self.effort)
 
     def _mpc_forces(
-        self, st: dict[str, Any], stance: np.ndarray, v_ref: np.ndarray, p_ref: np.ndarray
+        self,
+        st: dict[str, Any],
+        stance: np.ndarray,
+        v_ref: np.ndarray,
+        p_ref: np.ndarray,
+        torque: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]],
     ) -> np.ndarray:
         """The stance forces (L, 3) [N] of :class:`~.mpc.ConvexMPC`.
 
         Solved every :data:`MPC_EVERY` ticks and whenever the stance set changes (held in
         between), from the trunk's state, the path ahead, the gait's contact schedule and
-        the feet's footholds.
+        the feet's footholds; the standing legs' forces within their joint torque limits
+        (``torque``: leg → its foot Jacobian over its joints, bias torques, limits).
         """
         R = st["R"]
         omega = R @ st["v"][3:6]
@@ -702,12 +719,10 @@ class Controller:
                     feet[i] = [*(hip[:2] + v_ref[:2] * t_st / 2), self.ground_z]
             levers[k] = feet - (com + t[k] * v_ref)
         w = self.catch.weights(self.mpc.weights)
-        self._mpc_f = self.mpc.solve(x0, ref, contact, levers, dt, self.catch.accel(), w)
+        self._mpc_f = self.mpc.solve(
+            x0, ref, contact, levers, dt, self.catch.accel(), w, torque=torque
+        )
         return self._mpc_f
-
-    def _leg_mass(self) -> float:
-        """The mass the swing gains are scaled to: the robot's, shared among its legs, /4."""
-        return 0.25 * self.mass / self.n_legs
 
     def _servo(
         self,
@@ -763,10 +778,3 @@ class Controller:
         ik = self.wb.body_ik(B, targets, q_prev=self.q_cmd, strict=False)
         q = np.where(ik.reached[0][self.leg_of_col], ik.q[0], self.q_cmd)
         return np.clip(q, self.wb.lower, self.wb.upper)
-
-
-def _rot(w: np.ndarray) -> np.ndarray:
-    """The rotation of rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
-    import pinocchio as pin
-
-    return np.array(pin.exp3(np.asarray(w, dtype=float)))

@@ -21,10 +21,12 @@ condensed QP
 .. math::
 
     \min_U\; \|A_{qp} x_0 + B_{qp} U - X_{ref}\|^2_L + \alpha \|U - U_g\|^2 \quad\text{s.t.}\quad
-    f_{z} \in [f_{\min}, f_{\max}],\; |f_x|, |f_y| \le \mu f_z
+    f_{z} \in [f_{\min}, f_{\max}],\; |f_x|, |f_y| \le \mu f_z,\;
+    |\tau_{\text{bias},i} - J_i^\top f_i| \le \tau_{\max}
 
 (only the standing feet's forces are variables; ``U_g`` the weight shared equally among the
-feet standing at each step; the cone as its inscribed pyramid), solved by
+feet standing at each step; the cone as its inscribed pyramid; the joint torque limits of the
+legs standing now through their foot Jacobians, for every step they stand), solved by
 proxsuite's dense ProxQP (Bambade et al., RSS 2022). The first step's forces are applied.
 """
 
@@ -117,6 +119,7 @@ class ConvexMPC:
         dt: float,
         accel: np.ndarray | None = None,
         weights: np.ndarray | None = None,
+        torque: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None,
     ) -> np.ndarray:
         """The first step's ground forces (L, 3) [N] (zero for a foot not standing).
 
@@ -129,6 +132,11 @@ class ConvexMPC:
             accel: (3,) an external acceleration of the CoM [m/s²] (a push's), held over
                 the horizon (None: none).
             weights: (12,) state weights for this solve (None: :attr:`weights`).
+            torque: Joint torque limits of feet ``l``: ``{l: (J, bias, limit)}``, ``J``
+                (3, m) the foot's Jacobian over its leg's joints (world axes), ``bias``
+                (m,) the joint torques at zero force, ``limit`` (m,) [N·m]: every force of
+                foot ``l`` in the horizon keeps ``|bias − Jᵀ f| ≤ limit`` (the Jacobian of
+                now; None: no torque rows).
 
         """
         proxsuite = _proxsuite()
@@ -179,6 +187,20 @@ class ConvexMPC:
                 lo[r0 + 2 * k + 1], hi[r0 + 2 * k + 1] = 0.0, 1e20
             C[r0 + 4, c0 + 2] = 1.0
             lo[r0 + 4], hi[r0 + 4] = self.f_min, self.f_max
+        rows, r_lo, r_hi = [], [], []
+        for n, (_, i) in enumerate(idx):  # |bias - J^T f| <= limit
+            if torque is None or i not in torque:
+                continue
+            J, bias, limit = torque[i]
+            for col in np.flatnonzero(np.isfinite(limit)).tolist():
+                row = np.zeros(nv)
+                row[3 * n : 3 * n + 3] = J[:, col]
+                rows.append(row)
+                r_lo.append(bias[col] - limit[col])
+                r_hi.append(bias[col] + limit[col])
+        if rows:
+            C = np.vstack([C, np.array(rows)])
+            lo, hi = np.concatenate([lo, r_lo]), np.concatenate([hi, r_hi])
         res = proxsuite.proxqp.dense.solve(H, g, None, None, C, lo, hi, eps_abs=1e-6, max_iter=300)
         self.status = int(res.info.status == proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED)
         u = np.asarray(res.x)

@@ -350,9 +350,11 @@ def run(
     duration = positive("duration", duration)
     dt_phys = check_steps(1e-3, {"settle": settle, "duration": duration})
     timeline = _timeline(command)
-    ctl = Controller(robot, kind=kind, pattern=pattern, rate=rate, period=period)
     scene = scene_mjcf(
         robot, friction=friction, timestep=dt_phys, bumps=bumps, seed=seed, flat_start=FLAT_START
+    )
+    ctl = Controller(
+        robot, kind=kind, pattern=pattern, rate=rate, period=period, armature=scene.armature
     )
     import mujoco as mj  # scene_mjcf has said how to install it when it is missing
 
