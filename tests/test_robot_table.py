@@ -172,10 +172,6 @@ _ROBUST_FAILS = {
     "15 mm foot sphere the controller passes its bump member (seed 0: -0.03 %, no non-foot "
     "contact): the scene's foot (hexapod_kin.simulate.collision) must be the mesh's end, not "
     "a point; its replay with the CLI's default walk failed too (+33 % travel, session 7)",
-    "MIT Mini Cheetah": "(session 8) its three bump members pass under the controller "
-    "(-0.28 / -0.30 / -0.25 %, heading <= 0.33 deg, no fall); two flat replays fail, MuJoCo's "
-    "default contact with zero armature (friction 1 and 0.6): a swing strike (hl at 0.158 s); "
-    "exit 1",
     "Mini Pupper": "MuJoCo's default contact with zero armature, friction 1, fails its replay "
     "(travel -1.52 %; the other seven replays -0.10 to -0.98 %); the controlled bump members, "
     "commanded the plan's mean twist of its CoM (session 8: 37.2 mm in 10 s where the nominal "
