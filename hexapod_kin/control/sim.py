@@ -281,6 +281,15 @@ def _timeline(command: Any) -> Timeline:
     return Timeline.constant(Command(vx, vy, wz))
 
 
+def default_kind(wb: Any) -> str:
+    """:func:`run`'s default kind for the whole-body robot ``wb``.
+
+    ``servo`` for a Hexapod preset (it has a table; the point tracked: the base's origin),
+    ``torque`` else (the CoM).
+    """
+    return "servo" if wb.params is not None else "torque"
+
+
 def run(
     robot: Any = None,
     *,
@@ -340,7 +349,7 @@ def run(
 
     wb = as_whole_body(robot)
     if kind is None:
-        kind = "servo" if wb.params is not None else "torque"
+        kind = default_kind(wb)
     if pattern is None:
         pattern = {6: "tripod", 4: "trot"}.get(wb.n_legs, "wave")
     if not (math.isfinite(bumps) and 0 <= bumps <= 0.05):

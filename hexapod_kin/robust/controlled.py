@@ -106,7 +106,7 @@ class ControlledRun(Travel):
             "fell": (float(bool(c.fell)), 0.0),
             "contacts": (float(len(c.non_foot_contacts)), 0.0),
         }
-        return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
+        return Travel.judged(rows)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the figures, the checks and the closed loop's own summary."""
@@ -255,13 +255,12 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
 
     """
     from ..control import run
+    from ..control.sim import default_kind
     from ..gait import as_whole_body
 
     if feet is not None or foot_radius is not None:  # as ``control`` on the command line
         robot = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
-    # control.run's default kind: servos for a Hexapod preset, torque else; the point it
-    # tracks is the base's origin for servos, the CoM for torque
-    kind = "servo" if as_whole_body(robot).params is not None else "torque"
+    kind = default_kind(as_whole_body(robot))  # tracks the base's origin (servo), the CoM
     plan = replay.plan
     duration = float(plan["duration"])
     com = np.asarray(replay.run.com) if kind == "torque" else None

@@ -74,6 +74,11 @@ class Travel:
         def turn_planned(self) -> float: ...  # noqa: D102
         def checks(self) -> dict[str, dict[str, Any]]: ...  # noqa: D102
 
+    @staticmethod
+    def judged(rows: dict[str, tuple[float, float]]) -> dict[str, dict[str, Any]]:
+        """``{check: (value, limit)}`` as checks: ``{check: {value, limit, ok}}`` (ok: ≤)."""
+        return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
+
     @property
     def distance_along(self) -> float:
         """The simulated displacement along the planned one [m] (< 0: went backwards)."""
@@ -200,7 +205,7 @@ class SimRun(Travel):
             "contacts": (float(len(self.non_foot_contacts)), 0.0),
             "strikes": (float(len(self.swing_strikes)), 0.0),
         }
-        return {k: {"value": v, "limit": li, "ok": bool(v <= li)} for k, (v, li) in rows.items()}
+        return Travel.judged(rows)
 
     @property
     def stumbled(self) -> bool:
