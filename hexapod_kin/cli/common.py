@@ -30,6 +30,7 @@ __all__ = [
     "not_achieved",
     "numbers",
     "output_path",
+    "pick",
     "q_args",
     "q_from_args",
     "robot_args",
@@ -319,12 +320,8 @@ class Robot:
                 f"SOURCE {self.source!r} is a URDF without a parameter table; this command "
                 f"exports what hexapod_kin builds: {SOURCE_KINDS['table'].split(':')[0]}"
             )
-            raise ParameterError(
-                msg,
-                parameter="SOURCE",
-                value=self.source,
-                allowed="a preset name or a .toml/.yaml table",
-            )
+            allowed = "a preset name or a .toml/.yaml table"
+            raise ParameterError(msg, parameter="SOURCE", value=self.source, allowed=allowed)
         return resolved.params
 
     def legged(self) -> Any:
@@ -344,10 +341,8 @@ def robot_of(args: argparse.Namespace) -> Robot:
     import math
 
     source = args.source
-    options: dict[str, Any] = {}
-    for key in ("base", "tip", "inertia"):
-        if getattr(args, key, None) is not None:
-            options[key] = getattr(args, key)
+    keys = ("base", "tip", "inertia")
+    options = {k: getattr(args, k) for k in keys if getattr(args, k, None) is not None}
     tool = getattr(args, "tool", None)
     if tool is not None:
         rpy = [math.radians(v) if getattr(args, "deg", False) else v for v in tool[3:]]
@@ -556,19 +551,18 @@ def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
     from ..gait.tables import default_pattern
 
     return {
+        **pick(args, "stride", "period", "duty_factor", "body_height", "foot_reach", "terrain"),
+        **pick(args, "duration", "knee"),
         "pattern": args.pattern or default_pattern(wb.n_legs),
-        "stride": args.stride,
         "step_height": args.height,
-        "period": args.period,
-        "duty_factor": args.duty_factor,
         "velocity": velocity(args.velocity),
-        "body_height": args.body_height,
-        "foot_reach": args.foot_reach,
-        "terrain": args.terrain,
         "rate": args.walk_rate,
-        "duration": args.duration,
-        "knee": args.knee,
     }
+
+
+def pick(args: argparse.Namespace, *names: str) -> dict[str, Any]:
+    """The options ``names`` of the command line, by name: keywords of the call they go to."""
+    return {name: getattr(args, name) for name in names}
 
 
 def margin_failures(run: Any) -> list[str]:

@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from .common import not_achieved, robot_args, robot_of, seed, velocity
+from .common import not_achieved, pick, robot_args, robot_of, seed, velocity
 
 __all__ = ["register"]
 
@@ -78,20 +78,8 @@ def _cmd_control(args: argparse.Namespace) -> int:
         from ..gait import as_whole_body
 
         model = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
-    res = run(
-        model,
-        pattern=args.pattern,
-        command=command,
-        duration=args.duration,
-        kind=args.kind,
-        pushes=pushes,
-        bumps=args.bumps,
-        friction=args.friction,
-        seed=args.seed,
-        payload=payload,
-        estimate=args.estimate,
-        lying=args.lying,
-    )
+    names = ("pattern", "duration", "kind", "bumps", "friction", "seed", "estimate", "lying")
+    res = run(model, command=command, pushes=pushes, payload=payload, **pick(args, *names))
     out = res.to_dict()
     if args.json:
         emit_json(out)
@@ -114,16 +102,9 @@ def simulate_control(
     from ..control.compare import compare, comparison_html
     from .common import emit_json
 
-    opts = {k: v for k, v in options.items() if k not in ("stand",)}
-    cmp = compare(
-        model,
-        friction=args.friction,
-        bumps=args.bumps,
-        seed=args.seed,
-        pushes=args.push or (),
-        payload=args.payload,
-        **opts,
-    )
+    opts = {k: v for k, v in options.items() if k != "stand"}
+    kw = pick(args, "friction", "bumps", "seed", "payload")
+    cmp = compare(model, pushes=args.push or (), **kw, **opts)
     out = cmp.to_dict()
     if html is not None:
         out["html"] = str(comparison_html(cmp, html))

@@ -18,6 +18,7 @@ from .common import (
     made_by,
     matrix_text,
     output_path,
+    pick,
     q_args,
     q_from_args,
     robot_args,
@@ -213,9 +214,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         msg = f"--out {args.out!r}: cannot create the directory ({exc.strerror})"
-        raise ParameterError(
-            msg, parameter="--out", value=args.out, allowed="a writable directory"
-        ) from None
+        allowed = "a writable directory"
+        raise ParameterError(msg, parameter="--out", value=args.out, allowed=allowed) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
     print(f"wrote {path}")
@@ -459,15 +459,10 @@ def _cmd_scan(args: argparse.Namespace) -> int:
     elif joints:
         joints = [int(j) if str(j).isdigit() else j for j in joints]
     given = {  # only what was given: every default is scan()'s own
-        "grid": args.grid,
-        "samples": args.samples,
+        **pick(args, "grid", "samples", "rows", "threshold", "seed", "family_budget"),
         "joints": joints,
-        "rows": args.rows,
         "q_fixed": q_from_args(args, model) if args.q is not None else None,
-        "threshold": args.threshold,
-        "seed": args.seed,
         "families": None if args.families is None else _FAMILIES[args.families],
-        "family_budget": args.family_budget,
         "progress": False if args.json else None,
     }
     result = scan(model, **{k: v for k, v in given.items() if v is not None})

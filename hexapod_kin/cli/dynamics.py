@@ -18,6 +18,7 @@ from .common import (
     load_source,
     not_achieved,
     numbers,
+    pick,
     q_args,
     q_from_args,
     robot_args,
@@ -80,12 +81,8 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
     exp = pendulum_experiment(
         math.radians(args.theta0_deg),
         args.damping,
-        dt=args.dt,
-        duration=args.duration,
-        method=args.method,
         decay_theta0=math.radians(args.decay_theta0_deg),
-        length=args.length,
-        mass=args.mass,
+        **pick(args, "dt", "duration", "method", "length", "mass"),
     )
     written = []
     if args.plot:
@@ -179,9 +176,7 @@ def _cmd_torques(args: argparse.Namespace) -> int:
         from ..seeds import step_torques
 
         q0 = None if args.q is None else q_from_args(args, model)
-        res = step_torques(
-            model, args.force, frame=args.frame, q0=q0, dt=args.dt, duration=args.duration
-        )
+        res = step_torques(model, args.force, q0=q0, **pick(args, "frame", "dt", "duration"))
         out = {"source": model.name, **res.to_dict()}
         if args.json:
             emit_json(out)
@@ -265,15 +260,10 @@ def _cmd_stand(args: argparse.Namespace) -> int:
     hexa = hexapod_model(model)
     st = stand(
         model,
-        height=args.height,
-        reach=args.reach,
-        shift=args.shift,
         legs=None if args.legs is None else [int(v) if v.isdigit() else v for v in args.legs],
-        method=args.method,
-        mu=args.mu,
         feet=robot.feet,
         foot_radius=robot.foot_radius,
-        knee=args.knee,
+        **pick(args, "height", "reach", "shift", "method", "mu", "knee"),
     )
     name = hexa.name if hexa is not None else robot.source
     out = {"source": name, **st.to_dict()}

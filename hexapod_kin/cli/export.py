@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ..exceptions import ParameterError
-from .common import emit_json, made_by, output_path, robot_args, robot_of
+from .common import emit_json, made_by, output_path, pick, robot_args, robot_of
 
 __all__ = ["register"]
 
@@ -72,17 +72,8 @@ def _cmd_package(args: argparse.Namespace) -> int:
 
     src = robot_of(args).table()
     extra = ([f"-n {args.name}"] if args.name else []) + (["-m"] if args.meshes else [])
-    result = export_package(
-        src,
-        args.out,
-        name=args.name,
-        meshes=args.meshes,
-        header=made_by(args, extra),
-        force=args.force,
-        maintainer=args.maintainer,
-        email=args.email,
-        license=args.license,
-    )
+    kw = pick(args, "name", "meshes", "force", "maintainer", "email", "license")
+    result = export_package(src, args.out, header=made_by(args, extra), **kw)
     if args.json:
         emit_json(result.to_dict())
     else:
@@ -125,15 +116,8 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
     for label in ("floor_z", "timestep", "integrator"):
         if getattr(args, label) is not None:
             extra.append(f"({label.replace('_', '-')} {getattr(args, label)})")
-    kwargs: dict[str, Any] = {
-        "meshes": args.meshes,
-        "header": made_by(args, extra),
-        "floor": not args.no_floor,
-        "floor_z": args.floor_z,
-        "timestep": args.timestep,
-        "integrator": args.integrator,
-        "floating": args.floating,
-    }
+    kwargs = pick(args, "meshes", "floor_z", "timestep", "integrator", "floating")
+    kwargs.update(header=made_by(args, extra), floor=not args.no_floor)
     if args.output:
         write_mjcf(src, args.output, **kwargs)
         print(f"wrote {args.output}", file=sys.stderr)

@@ -19,6 +19,7 @@ from .common import (
     load_source,
     not_achieved,
     numbers,
+    pick,
     q_args,
     q_from_args,
     robot_args,
@@ -118,25 +119,12 @@ def _cmd_ik(args: argparse.Namespace) -> int:
         inside = len(ik.analytic(model, target, within_limits=True)[0]) if closed else 0
     q0 = None if args.q0 is None else q_from_args(args, model, "q0")
     # The closed form answers first; the numerical solver runs only when needed or asked for.
-    numerical = (
-        not inside
-        or args.numerical
-        or args.json
-        or q0 is not None
-        or args.mask is not None
-        or args.weights is not None
-    )
+    asked = any(v is not None for v in (q0, args.mask, args.weights))
+    numerical = not inside or args.numerical or args.json or asked
     res = None
     if numerical:
         res = ik.solve(
-            model,
-            target,
-            q0,
-            mask=args.mask,
-            weights=args.weights,
-            tol=args.tol,
-            rot_tol=args.rot_tol,
-            restarts=args.restarts,
+            model, target, q0, **pick(args, "mask", "weights", "tol", "rot_tol", "restarts")
         )
     # the exit rule (cli docs): 0 the target is reached within the limits; 1 answered but not
     # achieved (unreachable: the nearest point is printed; or only beyond the joint limits)
@@ -237,17 +225,8 @@ def _cmd_step(args: argparse.Namespace) -> int:
         return _constant(args, model, q0)
     from .. import seeds
 
-    run = seeds.seed_experiment(
-        model,
-        amplitude=args.amplitude,
-        period=args.period,
-        dt=args.dt,
-        duration=args.duration,
-        q0=q0,
-        method=args.method,
-        gain=args.gain,
-        baseline=not args.no_baseline,
-    )
+    kw = pick(args, "amplitude", "period", "dt", "duration", "method", "gain")
+    run = seeds.seed_experiment(model, q0=q0, baseline=not args.no_baseline, **kw)
     tr = run.trajectory
     written = []
     if args.plot:
@@ -310,19 +289,11 @@ def _limited(tr: Any) -> int:
 
 
 def plot_constant(tr: Any, drift: Any, rot_drift: Any, path: str, title: str, model: Any) -> str:
-    """A constant velocity/twist run in one PNG (2×2): joint angles, joint rates, σ_min, drift.
+    """Draw a constant velocity/twist run (2×2: q, q̇, σ_min, drift) to ``path``; return it.
 
-    Args:
-        tr: The :class:`~hexapod_kin.motion.Trajectory`.
-        drift: (N,) distance [m] of the tip from the exact constant-twist motion.
-        rot_drift: (N,) rotation [rad] from the exact motion (6-D runs), or None.
-        path: Destination (``.png``, ``.svg``, ``.pdf``, ``.jpg``; written atomically).
-        title: Figure title.
-        model: The model (joint names, units).
-
-    Returns:
-        The path written.
-
+    ``tr`` is the :class:`~hexapod_kin.motion.Trajectory`, ``drift`` (N,) the tip's distance [m]
+    from the exact constant-twist motion, ``rot_drift`` (N,) its rotation [rad] (6-D runs) or
+    None; ``model`` gives the joint names.
     """
     import numpy as np
 
@@ -377,17 +348,16 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
 
     from .. import motion
 
-    if args.twist is not None:
-        vel = np.array(args.twist, dtype=float)
-        if args.deg:
-            vel[3:] = np.radians(vel[3:])
-        label = f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
-    else:
-        vel = np.array(args.velocity, dtype=float)
-        label = f"velocity {vel.tolist()} m/s (base axes)"
-    tr = motion.resolved_rate(
-        model, vel, q0, args.dt, args.duration, frame=args.frame, method=args.method, gain=args.gain
+    vel = np.array(args.velocity if args.twist is None else args.twist, dtype=float)
+    if args.twist is not None and args.deg:
+        vel[3:] = np.radians(vel[3:])
+    label = (
+        f"velocity {vel.tolist()} m/s (base axes)"
+        if args.twist is None
+        else f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
     )
+    kw = pick(args, "frame", "method", "gain")
+    tr = motion.resolved_rate(model, vel, q0, args.dt, args.duration, **kw)
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))
     frame: Literal["base", "tip"] = "tip" if vel.size == 6 and args.frame == "tip" else "base"
     exact = motion.constant_twist_pose(model.fk(tr.q[0]), twist, tr.t, frame)

@@ -106,12 +106,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
     model = robot.load()
-    options = dict(
-        feet=robot.feet,
-        foot_radius=robot.foot_radius,
-        stand=not args.no_stand,
-        **walk_options(args, robot.legged() if args.pattern is None else None),
-    )
+    walk = walk_options(args, robot.legged() if args.pattern is None else None)
+    options = dict(feet=robot.feet, foot_radius=robot.foot_radius, stand=not args.no_stand, **walk)
     if args.control:  # open loop beside closed loop (hexapod_kin.control)
         from .control import simulate_control
 
@@ -159,53 +155,31 @@ def _check_control_options(args: argparse.Namespace) -> None:
     """Refuse ``--control`` with a second verdict, and its own options without it."""
     from ..exceptions import ParameterError
 
+    def refuse(msg: str, option: str, value: Any, allowed: str) -> ParameterError:
+        return ParameterError(msg, parameter=option, value=value, allowed=allowed)
+
     if args.control and (args.robust or args.mjcf):
         other = "--robust" if args.robust else "--mjcf"
-        raise ParameterError(
-            f"--control cannot be combined with {other}",
-            parameter="--control",
-            value=other,
-            allowed="--control alone, or with --html",
-        )
-    given = [
-        name
-        for name, on in (
-            ("--bumps", args.bumps != 0.0),
-            ("--seed", args.seed != 0),
-            ("--push", bool(args.push)),
-            ("--payload", args.payload is not None),
-        )
-        if on
-    ]
+        msg = f"--control cannot be combined with {other}"
+        raise refuse(msg, "--control", other, "--control alone, or with --html")
+    extra = (args.bumps != 0.0, args.seed != 0, bool(args.push), args.payload is not None)
+    given = [name for name, on in zip(("--bumps", "--seed", "--push", "--payload"), extra) if on]
     if given and not args.control:
-        raise ParameterError(
-            f"{given[0]} needs --control (the open-loop replay alone takes neither bumps nor "
-            "pushes here)",
-            parameter=given[0],
-            value=given[0],
-            allowed="with --control",
-        )
+        msg = "needs --control (the open-loop replay alone takes neither bumps nor pushes here)"
+        raise refuse(f"{given[0]} {msg}", given[0], given[0], "with --control")
     if args.control:
         from ..control import Payload, Push
         from ..simulate.scene import MAX_BUMPS
 
         if not (math.isfinite(args.bumps) and 0.0 <= args.bumps <= MAX_BUMPS):
-            raise ParameterError(
-                f"--bumps {args.bumps!r}: an amplitude from 0 to {MAX_BUMPS:g} m",
-                parameter="--bumps",
-                value=args.bumps,
-                allowed=f"[0, {MAX_BUMPS:g}]",
-            )
+            msg = f"--bumps {args.bumps!r}: an amplitude from 0 to {MAX_BUMPS:g} m"
+            raise refuse(msg, "--bumps", args.bumps, f"[0, {MAX_BUMPS:g}]")
         args.push = [Push.parse(text) for text in args.push or []]
         if args.payload is not None:
             args.payload = Payload.parse(args.payload)
         if args.bumps and args.terrain not in (None, "flat"):
-            raise ParameterError(
-                f"--bumps {args.bumps!r} on --terrain {args.terrain}: bumps on flat ground only",
-                parameter="--bumps",
-                value=args.bumps,
-                allowed="--terrain flat",
-            )
+            msg = f"--bumps {args.bumps!r} on --terrain {args.terrain}: bumps on flat ground only"
+            raise refuse(msg, "--bumps", args.bumps, "--terrain flat")
 
 
 def _print_members(rob: dict[str, Any]) -> None:

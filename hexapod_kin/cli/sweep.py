@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from .common import check_outputs, emit_json, seed
+from .common import check_outputs, emit_json, pick, seed
 
 __all__ = ["register"]
 
@@ -111,19 +111,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     check_outputs(args)  # --plot checked before any work, not after the sweep
     if args.scheduler:  # a lost scheduler is one line (our error), not distributed's tracebacks
         _quiet_distributed()
-    res = sweep(
-        space,
-        method=args.method,
-        samples=args.samples,
-        seed=args.seed,
-        mc_samples=args.mc_samples,
-        out=args.out,
-        chunk_size=args.chunk_size,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        progress=False if args.no_progress else None,
-        allow_large=args.yes,
-    )
+    names = ("method", "samples", "seed", "mc_samples", "out", "chunk_size", "workers")
+    progress = False if args.no_progress else None
+    kw = pick(args, *names, "scheduler")
+    res = sweep(space, progress=progress, allow_large=args.yes, **kw)
     if args.plot:
         res.files["plot"] = str(plot_sweep(res, args.plot))
     if args.json:

@@ -26,6 +26,7 @@ from .common import (
     margin_failures,
     not_achieved,
     output_path,
+    pick,
     robot_args,
     robot_of,
     walk_args,
@@ -122,12 +123,7 @@ def _cmd_step(args: argparse.Namespace) -> int:
     model = load_source(args)
     args.calibration = _calibration(args, model)
     run = seed_experiment(
-        model,
-        amplitude=args.amplitude,
-        period=args.period,
-        dt=args.dt,
-        duration=args.duration,
-        baseline=False,
+        model, baseline=False, **pick(args, "amplitude", "period", "dt", "duration")
     )
     traj = run.trajectory
     limits = (model.lower, model.upper)
@@ -147,13 +143,12 @@ def _cmd_path(args: argparse.Namespace) -> int:
         args.calibration = _calibration(args, model)
         unknown = [n for n in names if n not in model.joint_names]
         if unknown:
-            raise ParameterError(
+            msg = (
                 f"plan {args.file!r}: joint(s) {', '.join(map(repr, unknown))} not in "
-                f"{model.name!r}; its joints: {', '.join(model.joint_names)}",
-                parameter="file",
-                value=unknown[0],
-                allowed=tuple(model.joint_names),
+                f"{model.name!r}; its joints: {', '.join(model.joint_names)}"
             )
+            allowed = tuple(model.joint_names)
+            raise ParameterError(msg, parameter="file", value=unknown[0], allowed=allowed)
         idx = [model.joint_names.index(n) for n in names]
         vlim = [float(model.velocity_limit[i]) for i in idx]
         plim = ([float(model.lower[i]) for i in idx], [float(model.upper[i]) for i in idx])
@@ -168,24 +163,12 @@ def _calibration(args: argparse.Namespace, model: Any) -> Any:
 
 
 def _write(
-    plan: Any,
-    args: argparse.Namespace,
-    out: Any,
-    vlim: Any,
-    names: Any = None,
-    plim: Any = None,
+    plan: Any, args: argparse.Namespace, out: Any, vlim: Any, names: Any = None, plim: Any = None
 ) -> int:
     from ..export.timeline import timeline
 
-    tl = timeline(
-        plan,
-        rate=args.rate,
-        interpolation=args.interpolation,
-        calibration=args.calibration,
-        joint_names=names,
-        velocity_limit=vlim,
-        position_limit=plim,
-    )
+    kw = pick(args, "rate", "interpolation", "calibration")
+    tl = timeline(plan, joint_names=names, velocity_limit=vlim, position_limit=plim, **kw)
     path = tl.write(out)
     summary = {
         "path": str(path),

@@ -10,7 +10,7 @@ import argparse
 import sys
 from typing import Any
 
-from .common import emit_json, load_source, output_path, q_args, q_from_args, robot_args
+from .common import check_outputs, emit_json, load_source, q_args, q_from_args, robot_args
 
 __all__ = ["register", "serve_end", "serve_until", "wait_args"]
 
@@ -126,7 +126,7 @@ def _add_animate(sub: Any) -> None:
 
 def _cmd_animate(args: argparse.Namespace) -> int:
     if args.html:
-        output_path(args.html, "--html", (".html", ".htm"))
+        check_outputs(args)
     else:
         serve_end(args)  # refused before the robot loads and the server starts
     import numpy as np
@@ -140,13 +140,8 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     if args.sigma_min is not None:
         sv = np.array([np.linalg.svd(model.position_jacobian(q), compute_uv=False)[-1] for q in qs])
         mask = sv < args.sigma_min
-    common = dict(
-        base_poses=base,
-        frame_triads=args.triads,
-        singular_mask=mask,
-        fps=args.fps,
-        loop=not args.no_loop,
-    )
+    common = dict(base_poses=base, frame_triads=args.triads, singular_mask=mask, fps=args.fps)
+    common["loop"] = not args.no_loop
     if args.html:
         path = export_html(
             model, times, qs, args.html, title=args.title, speed=args.speed, **common

@@ -53,8 +53,7 @@ class MjcfExport:
 
 
 def _chain_reach(chain: Chain) -> float:
-    total = 0.0
-    k = 0
+    total, k = 0.0, 0
     for row in chain.rows:
         total += abs(row.d) + abs(row.r)
         if row.sigma == "prismatic":
@@ -109,18 +108,14 @@ def _lift_degenerate(root: Any) -> None:
     A clearly negative moment is a defect left for MuJoCo to refuse.
     """
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    at = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
     for inertia in root.iterfind("link/inertial/inertia"):
+        tensor = np.zeros((3, 3))
         try:
-            v = dict(zip(keys, (float(inertia.get(k, "0")) for k in keys)))
+            for k, (i, j) in zip(keys, at):
+                tensor[i, j] = tensor[j, i] = float(inertia.get(k, "0"))
         except ValueError:
             continue  # the gate reports unreadable numbers
-        tensor = np.array(
-            [
-                [v["ixx"], v["ixy"], v["ixz"]],
-                [v["ixy"], v["iyy"], v["iyz"]],
-                [v["ixz"], v["iyz"], v["izz"]],
-            ]
-        )
         if not np.all(np.isfinite(tensor)):
             continue
         lam, vecs = np.linalg.eigh(tensor)
@@ -128,7 +123,7 @@ def _lift_degenerate(root: Any) -> None:
         if lam[0] >= floor or lam[0] < -_FLOOR_REL * max(float(lam[-1]), _FLOOR_ABS):
             continue
         fixed = (vecs * np.maximum(lam, floor)) @ vecs.T
-        for k, (i, j) in zip(keys, ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+        for k, (i, j) in zip(keys, at):
             inertia.set(k, repr(float(fixed[i, j])))
 
 
@@ -335,10 +330,9 @@ def to_mjcf(
             inertial.addnext(free)
         else:
             top.insert(0, free)
-    if meshes:
-        for geom in root.iter("geom"):
-            if geom.get("type") != "mesh":
-                geom.set("group", "3")
+    for geom in root.iter("geom") if meshes else ():
+        if geom.get("type") != "mesh":
+            geom.set("group", "3")
     if timestep is not None or integrator is not None:
         option = etree.Element("option")
         if timestep is not None:
@@ -349,19 +343,11 @@ def to_mjcf(
     if floor:
         world = root.find("worldbody")
         z = default_floor if floor_z is None else float(floor_z)
-        light = etree.Element(
-            "light", name="hk_light", pos=f"0 0 {num(z + 3.0)}", dir="0 0 -1", directional="true"
-        )
-        plane = etree.Element(
-            "geom",
-            name="floor",
-            type="plane",
-            size="0 0 0.05",
-            pos=f"0 0 {num(z)}",
-            rgba="0.8 0.8 0.8 1",
-        )
-        world.insert(0, plane)
-        world.insert(0, light)
+        pos = f"0 0 {num(z)}"
+        plane = dict(name="floor", type="plane", size="0 0 0.05", pos=pos, rgba="0.8 0.8 0.8 1")
+        light = dict(name="hk_light", pos=f"0 0 {num(z + 3.0)}", dir="0 0 -1", directional="true")
+        world.insert(0, etree.Element("geom", **plane))
+        world.insert(0, etree.Element("light", **light))
     root.insert(0, etree.Comment(" " + comment(f"MJCF of {desc}")[5:-4] + " "))
     if header:
         root.insert(1, etree.Comment(" " + comment(header)[5:-4] + " "))
@@ -383,9 +369,8 @@ def write_mjcf(source: Any, path: str | os.PathLike[str], **options: Any) -> Mjc
     dest = Path(path)
     parent = dest.parent if str(dest.parent) else Path(".")
     if not parent.is_dir():
-        raise ParameterError(
-            f"path={str(dest)!r}: directory {str(parent)!r} does not exist", parameter="path"
-        )
+        msg = f"path={str(dest)!r}: directory {str(parent)!r} does not exist"
+        raise ParameterError(msg, parameter="path")
     stem = dest.name.split(".")[0] or "model"
     out = to_mjcf(source, mesh_prefix=f"{stem}_meshes/", **options)
     made: list[Path] = []  # files and folders this call creates: removed if it is stopped

@@ -34,14 +34,9 @@ _EMAIL_RE = re.compile(r"^[^@\s<>\"]+@[^@\s<>\"]+\.[A-Za-z]{2,}$")
 _TEMPLATES = Path(__file__).with_name("templates")
 
 #: exec_depend of package.xml: everything the launch file imports or runs.
-EXEC_DEPENDS = (
-    "launch",
-    "launch_ros",
-    "robot_state_publisher",
-    "joint_state_publisher",
-    "joint_state_publisher_gui",
-    "rviz2",
-    "xacro",
+EXEC_DEPENDS = tuple(
+    "launch launch_ros robot_state_publisher joint_state_publisher joint_state_publisher_gui "
+    "rviz2 xacro".split()
 )
 
 
@@ -139,8 +134,7 @@ def package_files(
     if meshes:
         meshed = mesh_visuals(urdf, f"package://{pkg}/meshes/")
         files[f"urdf/{src.name}.urdf"] = meshed.urdf
-        for fname, data in meshed.files.items():
-            files[f"meshes/{fname}"] = data
+        files.update({f"meshes/{fname}": data for fname, data in meshed.files.items()})
     else:
         files[f"urdf/{src.name}.urdf"] = add_collisions(urdf)
         files["meshes/README.md"] = (
@@ -159,9 +153,8 @@ def package_files(
         deps=deps,
     )
     files["CMakeLists.txt"] = _template("CMakeLists.txt", name=pkg, header=made)
-    files["launch/display.launch.py"] = _template(
-        "display.launch.py", name=pkg, robot=src.name, header=made
-    )
+    launch = _template("display.launch.py", name=pkg, robot=src.name, header=made)
+    files["launch/display.launch.py"] = launch
     root = src.base if isinstance(src, Chain) else src.body
     files["rviz/display.rviz"] = _template("display.rviz", fixed_frame=root, header=made)
     visuals = (
@@ -229,4 +222,4 @@ def export_package(
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
-    return PackageExport(path=dest, name=pkg, files=tuple(files))
+    return PackageExport(dest, pkg, tuple(files))

@@ -80,12 +80,8 @@ class Servo:
                 raise _bad(f"{where}: {text}", key, shown, allowed)
 
         need(self.units in UNITS, "units", f"units {self.units!r} unknown; {choices(UNITS)}", UNITS)
-        need(
-            self.direction in (1, -1),
-            "direction",
-            f"direction {self.direction!r}; allowed: 1 or -1",
-            (1, -1),
-        )
+        sign = self.direction
+        need(sign in (1, -1), "direction", f"direction {sign!r}; allowed: 1 or -1", (1, -1))
         for name in ("offset", "centre"):
             need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
         tpr, upr = self.ticks_per_revolution, self.us_per_rad
@@ -104,25 +100,16 @@ class Servo:
         )
         if self.limits is not None:
             lo, hi = self.limits
-            need(
-                math.isfinite(lo) and math.isfinite(hi) and lo < hi,
-                "limits",
-                f"limits {list(self.limits)} must be finite with lowest < highest",
-                "[lowest, highest]",
-            )
+            text = f"limits {list(self.limits)} must be finite with lowest < highest"
+            ok = math.isfinite(lo) and math.isfinite(hi) and lo < hi
+            need(ok, "limits", text, "[lowest, highest]")
         vel, res = self.velocity_limit, self.resolution
-        need(
-            vel is None or vel >= MIN_SPEED,
-            "velocity_limit",
-            f"velocity_limit {vel!r} rad/s is not a servo's speed; allowed: >= {MIN_SPEED:g} rad/s",
-            f">= {MIN_SPEED:g}",
+        text = (
+            f"velocity_limit {vel!r} rad/s is not a servo's speed; allowed: >= {MIN_SPEED:g} rad/s"
         )
-        need(
-            res is None or (math.isfinite(res) and res >= 0),
-            "resolution",
-            f"resolution {res!r} must be >= 0",
-            ">= 0",
-        )
+        need(vel is None or vel >= MIN_SPEED, "velocity_limit", text, f">= {MIN_SPEED:g}")
+        ok = res is None or (math.isfinite(res) and res >= 0)
+        need(ok, "resolution", f"resolution {res!r} must be >= 0", ">= 0")
         # plausible: two turns either side of the centre stay within MAX_COMMAND, in whole steps
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units, "centre")
         key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
@@ -154,13 +141,11 @@ class Servo:
     @property
     def scale(self) -> float:
         """Servo units per radian of servo angle."""
-        if self.units == "deg":
-            return 180.0 / math.pi
         if self.units == "ticks":
             return float(self.ticks_per_revolution) / (2.0 * math.pi)  # type: ignore[arg-type]
         if self.units == "us":
             return float(self.us_per_rad)  # type: ignore[arg-type]
-        return 1.0
+        return 180.0 / math.pi if self.units == "deg" else 1.0
 
     @property
     def step(self) -> float:
@@ -300,13 +285,9 @@ class Calibration:
         if joint in self.servos:
             return self.servos[joint]
         if self.default is None:
-            msg = (
-                f"calibration: no servo for joint {joint!r} and no 'defaults'; listed: "
-                f"{sorted(self.servos)}"
-            )
-            raise ParameterError(
-                msg, parameter="calibration", value=joint, allowed=sorted(self.servos)
-            )
+            listed = sorted(self.servos)
+            msg = f"calibration: no servo for joint {joint!r} and no 'defaults'; listed: {listed}"
+            raise _bad(msg, "calibration", joint, listed)
         return Servo(**{**self.default.__dict__, "joint": joint})
 
     def check_joints(
@@ -325,9 +306,7 @@ class Calibration:
         extra = [j for j in self.servos if j not in joint_names]
         if extra:
             msg = f"calibration: joint {extra[0]!r} is not in {of}; {choices(joint_names)}"
-            raise ParameterError(
-                msg, parameter="calibration", value=extra[0], allowed=list(joint_names)
-            )
+            raise _bad(msg, "calibration", extra[0], list(joint_names))
         if lower is None or upper is None:
             return
         for joint, lo, hi in zip(joint_names, lower, upper):
@@ -336,11 +315,8 @@ class Calibration:
 
     def to_dict(self) -> dict[str, Any]:
         """The calibration as a file's data: ``{"defaults": {...}, "joints": {...}}``."""
-        out: dict[str, Any] = {}
-        if self.default is not None:
-            out["defaults"] = self.default.to_dict()
-        out["joints"] = {k: s.to_dict() for k, s in self.servos.items()}
-        return out
+        out = {} if self.default is None else {"defaults": self.default.to_dict()}
+        return {**out, "joints": {k: s.to_dict() for k, s in self.servos.items()}}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], name: str | None = None) -> Calibration:

@@ -78,6 +78,11 @@ _MAX_TIMELINE_VALUES = _MAX_TIMELINE_BYTES
 Interpolation = Literal["linear", "cubic"]
 
 
+def _identity() -> Calibration:
+    """Every joint in rad, unlimited (a plan without calibration; a ROS 2 file read back)."""
+    return Calibration(default=Servo(joint="*"))
+
+
 @dataclass(frozen=True)
 class Timeline:
     """A plan resampled for servos (arrays read-only).
@@ -177,13 +182,10 @@ class Timeline:
 
         """
         kind = _format(Path(path), fmt)
-        if kind == "csv":
-            text = self.to_csv()
-        elif kind == "json":
+        if kind == "json":
             text = json.dumps(self.to_dict(), separators=(",", ":"), allow_nan=False) + "\n"
-        else:
-            text = self.to_ros2_yaml()
-        return atomic_write(path, text)
+            return atomic_write(path, text)
+        return atomic_write(path, self.to_csv() if kind == "csv" else self.to_ros2_yaml())
 
 
 def _num(v: float) -> str:
@@ -293,22 +295,12 @@ def _first(bad: np.ndarray) -> int | None:
 
 def _beyond(joint: str, t: float, what: str, value: Any, allowed: Any) -> LimitError:
     """The refusal of a sample beyond a limit, naming the joint and the time [s]."""
-    return LimitError(
-        f"joint {joint} at t={t:.4f} s: {what}",
-        parameter=joint,
-        value=float(value),
-        allowed=allowed,
-    )
+    text = f"joint {joint} at t={t:.4f} s: {what}"
+    return LimitError(text, parameter=joint, value=float(value), allowed=allowed)
 
 
 def _refuse_implausible(
-    s: Servo,
-    j: int,
-    ts: np.ndarray,
-    qs: np.ndarray,
-    command: np.ndarray,
-    speed: np.ndarray,
-    ok: np.ndarray,
+    s: Servo, j: int, ts: Any, qs: Any, command: Any, speed: Any, ok: Any
 ) -> None:
     """Refuse the first sample of column ``j`` not ``ok`` (not finite, or beyond ±1e9)."""
     k = _first(~ok)
@@ -374,12 +366,10 @@ def timeline(
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
     t, q, qdot, names = _plan_arrays(plan, times, joint_names)
-    if calibration is None:
-        cal = Calibration(default=Servo(joint="*"))
-    elif isinstance(calibration, Calibration):
+    if isinstance(calibration, Calibration):
         cal = calibration
     else:
-        cal = read_calibration(calibration)
+        cal = _identity() if calibration is None else read_calibration(calibration)
     plim = _model_position_limits(plan, position_limit, len(names))
     cal.check_joints(names, plim[0], plim[1])
     servos = [cal.servo(j) for j in names]
@@ -401,12 +391,10 @@ def timeline(
         qs = spline(ts)
         vs = spline(ts, 1)
     else:
-        if qdot is not None:
-            qd = qdot
-        elif len(t) > 2:
-            qd = np.gradient(q, t, axis=0, edge_order=2)
-        else:  # second order needs three samples
-            qd = np.gradient(q, t, axis=0, edge_order=1)
+        # the plan's own rates, else a second-order difference (first order for two samples)
+        qd = qdot
+        if qd is None:
+            qd = np.gradient(q, t, axis=0, edge_order=2 if len(t) > 2 else 1)
         qs = np.column_stack([np.interp(ts, t, q[:, j]) for j in range(q.shape[1])])
         vs = np.column_stack([np.interp(ts, t, qd[:, j]) for j in range(q.shape[1])])
 
@@ -444,17 +432,7 @@ def timeline(
             what = f"speed {vs[k, j]:.6g} rad/s is beyond its limit {lim:g} rad/s"
             raise _beyond(s.joint, ts[k], what, vs[k, j], (-lim, lim))
     read_only(ts, q_sent, vs, command, speed)
-    return Timeline(
-        t=ts,
-        joint_names=names,
-        q=q_sent,
-        qdot=vs,
-        command=command,
-        speed=speed,
-        calibration=cal,
-        rate=float(rate),
-        interpolation=interpolation,
-    )
+    return Timeline(ts, names, q_sent, vs, command, speed, cal, float(rate), interpolation)
 
 
 #: What a malformed file's content raises while it is read (the package's own errors pass).
@@ -470,19 +448,14 @@ def _not_a(exc: Exception, kind: str, p: Path, what: str) -> Exception:
 
 
 def _from_commands(
-    t: np.ndarray,
-    names: tuple[str, ...],
-    command: np.ndarray,
-    speed: np.ndarray,
-    cal: Calibration,
-    rate: float,
-    interpolation: str,
+    t: Any, names: Any, command: Any, speed: Any, cal: Any, rate: float, how: str
 ) -> Timeline:
+    """The timeline of servo ``command`` and ``speed`` columns mapped back through ``cal``."""
     servos = [cal.servo(j) for j in names]
     q = np.column_stack([s.angle(command[:, j]) for j, s in enumerate(servos)])
     qdot = np.column_stack([speed[:, j] / (s.direction * s.scale) for j, s in enumerate(servos)])
     read_only(t, q, qdot, command, speed)
-    return Timeline(t, names, q, qdot, command, speed, cal, rate, interpolation)
+    return Timeline(t, names, q, qdot, command, speed, cal, rate, how)
 
 
 def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timeline:
@@ -567,7 +540,7 @@ def _read_ros2(text: str, p: Path) -> Timeline:
     rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     head = text.splitlines()[0] if text else ""
     interp = "cubic" if "cubic" in head else "linear"
-    return _from_commands(t, names, q, v, Calibration(default=Servo(joint="*")), rate, interp)
+    return _from_commands(t, names, q, v, _identity(), rate, interp)
 
 
 def read_plan(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:

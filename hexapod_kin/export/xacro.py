@@ -72,32 +72,27 @@ def _family(chain: Chain, macro: str) -> _Family:
             f"row {j} ({row.sigma}): frame {j} = link {links[j - 1]}; alpha about x{j - 1}, "
             f"d along x{j - 1} (length of {prev}), theta about z{j}, r along z{j}"
         )
-        p[f"alpha{j}"] = num(row.alpha)
-        p[f"d{j}"] = num(row.d)
-        p[f"theta{j}"] = num(row.theta)
-        p[f"r{j}"] = num(row.r)
+        for key, value in (("alpha", row.alpha), ("d", row.d), ("theta", row.theta), ("r", row.r)):
+            p[f"{key}{j}"] = num(value)
     damping, friction = chain.joint_damping(), chain.joint_friction()
     for k, (jid, lim) in enumerate(zip(fam.joint_ids, chain.limits or ())):
         fam.notes[f"{jid}_lower"] = (
             f"joint {(chain.joint_names or ())[k]}: limits [rad or m], velocity, effort, "
             "damping, friction"
         )
-        p[f"{jid}_lower"] = num(lim.lower)
-        p[f"{jid}_upper"] = num(lim.upper)
-        p[f"{jid}_velocity"] = num(lim.velocity)
-        p[f"{jid}_effort"] = num(lim.effort)
-        p[f"{jid}_damping"] = num(damping[k])
-        p[f"{jid}_friction"] = num(friction[k])
+        values = (lim.lower, lim.upper, lim.velocity, lim.effort, damping[k], friction[k])
+        for key, value in zip(
+            ("lower", "upper", "velocity", "effort", "damping", "friction"), values
+        ):
+            p[f"{jid}_{key}"] = num(value)
     for j, lid in enumerate(fam.link_ids):
         if j == 0:
             fam.notes[f"{lid}_mass"] = "link masses [kg] (default links: rods of link_radius)"
         inn = chain.link_inertial(j)
         p[f"{lid}_mass"] = num(inn.mass)
+        keys = ("cx", "cy", "cz", "ixx", "iyy", "izz", "ixy", "ixz", "iyz")
         if not _default_inertial(chain, j):
-            for key, value in zip(("cx", "cy", "cz"), inn.com):
-                p[f"{lid}_{key}"] = num(value)
-            for key, value in zip(("ixx", "iyy", "izz", "ixy", "ixz", "iyz"), inn.inertia):
-                p[f"{lid}_{key}"] = num(value)
+            p.update({f"{lid}_{key}": num(v) for key, v in zip(keys, (*inn.com, *inn.inertia))})
     p["link_radius"] = num(chain.link_radius)
     if chain.base_pose is not None:
         p.update(_pose_params("base", chain.base_pose.matrix))
@@ -324,15 +319,8 @@ def _robot_doc(robot: Hexapod, leg: str | None, header: str | None) -> str:
     name = robot.name if leg is None else f"{robot.name}_{leg}"
     fams = _families([m.chain for m in legs])
     forward = len(fams) == 1
-    lx, ly, lz = robot.body_size
-    lines = _properties(
-        {
-            "body_length": num(lx),
-            "body_width": num(ly),
-            "body_height": num(lz),
-            "body_mass": num(robot.body_mass),
-        }
-    )
+    keys = ("body_length", "body_width", "body_height", "body_mass")
+    lines = _properties({k: num(v) for k, v in zip(keys, (*robot.body_size, robot.body_mass))})
     mount_props, mount_xyz = _mount_props(legs)
     lines += mount_props
     for fam in fams:

@@ -1,20 +1,11 @@
 """The numeric half of a report build, run in a second process beside the symbolic half.
 
-:func:`hexapod_kin.report.reproduce` derives and checks the seeds' formulas (sympy, pure
-Python: one core) while a child process runs the experiments that need no sympy: the seeds'
-x-only step and the pendulum, sent back as soon as they are done (the checks compare
-claims with them), then their figures, the step's still frame and animation, and the
-hexapod standing and walking. Each result is computed once, by the same calls as in one
-process; the experiments come back pickled (numpy arrays exactly), so the report has the
-same bytes either way.
-
-The child is a fresh interpreter (``subprocess``: never a ``fork`` of a process holding
-Pinocchio or threads), told its work on stdin, answering on a pipe of its own. A child that
-cannot start or fails: its share is done in the calling process, one part after the other
-(an error is then raised there, as in one process). The child is
-:class:`hexapod_kin._budget.Child` with no budget: a Ctrl-C reaches it once, from the parent
-(``SIGTERM``, raised in the child as a ``KeyboardInterrupt``, so that its atomic writes clean
-up); nothing outlives the build.
+While :func:`hexapod_kin.report.reproduce` derives and checks the formulas (sympy, one
+core), a child (:class:`hexapod_kin._budget.Child`: a fresh interpreter, no budget) runs the
+step and the pendulum (sent back pickled as soon as done: the same bytes as in one process),
+then the figures, the animations and the hexapod standing and walking. A child that cannot
+start or fails: its share is done in the calling process. A Ctrl-C reaches the child once;
+nothing outlives the build.
 """
 
 from __future__ import annotations

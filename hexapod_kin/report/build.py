@@ -184,11 +184,9 @@ def _probe(out: Path) -> None:
     """Make ``out`` and write one byte in it (then remove it): a write that will fail, fails now."""
 
     def refuse(why: str) -> ParameterError:
+        allowed = "a folder that can be written"
         return ParameterError(
-            f"out={str(out)!r}: {why}",
-            parameter="out",
-            value=str(out),
-            allowed="a folder that can be written",
+            f"out={str(out)!r}: {why}", parameter="out", value=str(out), allowed=allowed
         )
 
     try:
@@ -236,11 +234,8 @@ def _storable(rep: Report, parts: dict[str, Any]) -> bool:
     if rep.counts["error"] or unwritten:
         return False
     try:
-        return replay.key_parts(
-            quick=parts["options"]["quick"],
-            animations=parts["options"]["animations"],
-            digest=replay.source_digest(),
-        ) == json.loads(json.dumps(parts))
+        now = replay.key_parts(**parts["options"], digest=replay.source_digest())
+        return now == json.loads(json.dumps(parts))
     except Exception:  # noqa: BLE001 - cannot tell: do not keep
         return False
 

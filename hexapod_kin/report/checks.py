@@ -281,21 +281,12 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
 
 def _own_factors(c: Claim, ctx: Context) -> list[Claim]:
     """The seed's own ``^{k-1}T_k`` claims (k = 1 … j) whose product a ``^0T_j`` claim is."""
-    j = int(c.data["item"][3:])
-    out = []
-    for k in range(1, j + 1):
-        f = [
-            x
-            for x in ctx.claims.values()
-            if x.seed == c.seed
-            and x.kind == "matrix"
-            and x.data.get("model") == c.data["model"]
-            and x.data.get("item") == f"T {k}"
-        ]
-        if not f:
-            return []
-        out.append(f[0])
-    return out
+    own: dict[Any, Claim] = {}
+    for x in ctx.claims.values():
+        if (x.seed, x.kind, x.data.get("model")) == (c.seed, "matrix", c.data["model"]):
+            own.setdefault(x.data.get("item"), x)
+    found = [own.get(f"T {k}") for k in range(1, int(c.data["item"][3:]) + 1)]
+    return [] if None in found else [f for f in found if f is not None]
 
 
 def _own_product(c: Claim, ctx: Context, seed: sp.Matrix, subs: dict) -> str:

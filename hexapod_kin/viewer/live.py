@@ -68,13 +68,8 @@ class Viewer:
             self._scene = Scene(model)
             q0 = default_configuration(model) if q is None else model.check_q(q)
             pose = standing_base(model, q0) if base_pose is None else base_pose
-            self._show(
-                np.zeros(1),
-                np.asarray(q0)[None, :],
-                animate=False,
-                base_poses=pose,
-                trace_frame=False,
-            )
+            q0 = np.asarray(q0)[None, :]
+            self._show(np.zeros(1), q0, animate=False, base_poses=pose, trace_frame=False)
         except BaseException:
             self.close()
             raise

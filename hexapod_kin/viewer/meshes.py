@@ -55,9 +55,8 @@ def _mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
     try:
         verts = np.asarray(geometry.vertices(), dtype=np.float64).reshape(-1, 3)
         count = int(geometry.num_tris)
-        tris = np.array(
-            [_corners(geometry.tri_indices(i)) for i in range(count)], dtype=np.int64
-        ).reshape(-1, 3)
+        corners = [_corners(geometry.tri_indices(i)) for i in range(count)]
+        tris = np.array(corners, dtype=np.int64).reshape(-1, 3)
     except (AttributeError, RuntimeError, TypeError, ValueError):
         return None
     if not len(verts) or not len(tris) or not np.all(np.isfinite(verts)):
@@ -103,14 +102,10 @@ def mesh_geometry(geometry: Any, *, normals: bool) -> MeshGeometry | None:
     index = tris.astype(np.uint16 if len(verts) <= 65536 else np.uint32)
     attributes: dict[str, Any] = {"position": attribute(q, 3)}
     if normals:  # of the quantised mesh: what the browser would compute
-        attributes["normal"] = attribute(
-            _vertex_normals(q.astype(np.float64), tris).astype(np.float32), 3
-        )
-    data = {
-        "type": "BufferGeometry",
-        "data": {"attributes": attributes, "index": attribute(index, 1)},
-    }
-    return MeshGeometry(data, matrix, len(verts), len(tris))
+        normal = _vertex_normals(q.astype(np.float64), tris).astype(np.float32)
+        attributes["normal"] = attribute(normal, 3)
+    data = {"attributes": attributes, "index": attribute(index, 1)}
+    return MeshGeometry({"type": "BufferGeometry", "data": data}, matrix, len(verts), len(tris))
 
 
 def add_sticks(model: Any, geom: Any) -> int:

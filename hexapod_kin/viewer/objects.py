@@ -145,14 +145,8 @@ class ObjectJSON:
         """Add a material of colour ``rgba``; return its UUID."""
         mid = self._id("material")
         alpha = float(rgba[3]) if len(rgba) > 3 else 1.0
-        data: dict[str, Any] = {
-            "uuid": mid,
-            "type": kind,
-            "color": _hex_color(rgba),
-            "side": 2,
-            "transparent": alpha < 1.0,
-            "opacity": alpha,
-        }
+        data: dict[str, Any] = dict(uuid=mid, type=kind, color=_hex_color(rgba), side=2)
+        data.update(transparent=alpha < 1.0, opacity=alpha)
         if kind == "MeshPhongMaterial":
             data.update(reflectivity=0.5, shininess=40)
         data.update(extra)
@@ -163,15 +157,8 @@ class ObjectJSON:
         """Add a texture with ``text`` drawn by the page; return its UUID."""
         tid = self._id("texture")
         # meshcat's "_text" texture: the text drawn on a 256×256 canvas by the page itself.
-        self.textures.append(
-            {
-                "uuid": tid,
-                "type": "_text",
-                "text": text,
-                "font_size": 110,
-                "font_face": "sans-serif",
-            }
-        )
+        face = dict(font_size=110, font_face="sans-serif")
+        self.textures.append({"uuid": tid, "type": "_text", "text": text, **face})
         return tid
 
     def node(
@@ -222,12 +209,7 @@ def cylinder(radius: float, length: float, segments: int = 32) -> dict[str, Any]
 
 def sphere(radius: float) -> dict[str, Any]:
     """A three.js sphere of ``radius`` [m]."""
-    return {
-        "type": "SphereGeometry",
-        "radius": float(radius),
-        "widthSegments": 24,
-        "heightSegments": 16,
-    }
+    return dict(type="SphereGeometry", radius=float(radius), widthSegments=24, heightSegments=16)
 
 
 def tube(points: np.ndarray, radius: float, sides: int = 10) -> dict[str, Any] | None:

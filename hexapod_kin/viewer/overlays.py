@@ -15,14 +15,13 @@ from ..exceptions import ConfigurationError
 from .objects import (
     ObjectJSON,
     cylinder,
-    f32,
     set_object,
     set_property,
     set_transform,
     sphere,
     trace_rgba,
 )
-from .trajectory import clip
+from .trajectory import clip, track
 
 
 # ====================================================================== per-frame overlays
@@ -31,9 +30,8 @@ def check_overlays(overlays: Any, n: int) -> dict[str, np.ndarray]:
     if overlays is None:
         return {}
     if not hasattr(overlays, "items"):
-        raise ConfigurationError(
-            f"overlays={type(overlays).__name__}: expected a mapping name -> (N, M, 3) array"
-        )
+        msg = f"overlays={type(overlays).__name__}: expected a mapping name -> (N, M, 3) array"
+        raise ConfigurationError(msg)
     out: dict[str, np.ndarray] = {}
     for name, value in overlays.items():
         try:
@@ -75,12 +73,8 @@ def overlay_parts(
             path = f"/meshcat/overlays/{name}/{j}"
             o = ObjectJSON(path)
             geom = sphere(3 * r) if a == b else cylinder(r, 1.0, 8)
-            cmds.append(
-                set_object(
-                    path,
-                    o.lower(o.node("Mesh", geometry=o.geometry(geom), material=o.material(rgb))),
-                )
-            )
+            mesh = o.node("Mesh", geometry=o.geometry(geom), material=o.material(rgb))
+            cmds.append(set_object(path, o.lower(mesh)))
             pa, pb = arr[:, a], arr[:, b]
             d = pb - pa
             length = np.linalg.norm(d, axis=1)
@@ -96,10 +90,8 @@ def overlay_parts(
             cmds.append(set_transform(path, T[0]))
             cmds.append(set_property(path, "scale", [float(v) for v in scale[0]]))
             if len(times) > 1:
-                track = clip(path, times, T)
-                track["clip"]["tracks"][1]["values"] = f32(_y_to(unit))
-                track["clip"]["tracks"].append(
-                    {"name": ".scale", "type": "vector3", "times": f32(times), "values": f32(scale)}
-                )
-                clips.append(track)
+                turned = clip(path, times, T)
+                turned["clip"]["tracks"][1] = track("quaternion", "quaternion", times, _y_to(unit))
+                turned["clip"]["tracks"].append(track("scale", "vector3", times, scale))
+                clips.append(turned)
     return cmds, clips

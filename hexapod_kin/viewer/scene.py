@@ -284,13 +284,14 @@ def build(
     center = (lo + hi) / 2
     radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
     size = radius
-    cmds: list[dict[str, Any]] = []
     # -- view: light background, no default grid/axes (metres-scale), camera framing the scene
-    cmds.append(set_property("/Background", "top_color", [0.97, 0.97, 0.99]))
-    cmds.append(set_property("/Background", "bottom_color", [0.72, 0.76, 0.82]))
-    cmds.append(set_property("/Grid", "visible", False))
-    cmds.append(set_property("/Axes", "visible", False))
-    cmds.append(set_transform("/meshcat", translation(list(-center))))
+    cmds = [
+        set_property("/Background", "top_color", [0.97, 0.97, 0.99]),
+        set_property("/Background", "bottom_color", [0.72, 0.76, 0.82]),
+        set_property("/Grid", "visible", False),
+        set_property("/Axes", "visible", False),
+        set_transform("/meshcat", translation(list(-center))),
+    ]
     # Camera: three.js y-up inside /Cameras/default/rotated; world offset (dx, dy, dz) is the
     # local position (dx, dz, -dy).
     d = _camera_offset(pts - center, rad, fov_deg=40.0, min_aspect=4 / 3)
@@ -333,13 +334,9 @@ def build(
         if trace_frames and fposes is not None:
             where = fposes[singular_mask, tracked.index(trace_frames[0]), :3, 3]
         else:
-            where = frame_poses(
-                scene.model,
-                scene.data,
-                motion.qs[singular_mask],
-                None if motion.base_poses is None else motion.base_poses[singular_mask],
-                (scene.model.tip,),
-            )[:, 0, :3, 3]
+            base = None if motion.base_poses is None else motion.base_poses[singular_mask]
+            qs, tip = motion.qs[singular_mask], (scene.model.tip,)
+            where = frame_poses(scene.model, scene.data, qs, base, tip)[:, 0, :3, 3]
         s = ObjectJSON("/meshcat/singular")
         sg = s.geometry(sphere(max(size * 0.02, 1e-4)))
         sm = s.material([0.9, 0.05, 0.35, 1.0])
@@ -364,9 +361,7 @@ def build(
     duration = float(motion.times[-1] - motion.times[0])
     if len(motion.times) > 1:
         times = motion.times - motion.times[0]
-        clips = []
-        for j, vis in enumerate(scene.visuals):
-            clips.append(clip(vis.path, times, poses[:, j]))
+        clips = [clip(vis.path, times, poses[:, j]) for j, vis in enumerate(scene.visuals)]
         for k, name in enumerate(triad_frames):
             assert fposes is not None
             clips.append(clip(f"/meshcat/frames/{k}", times, fposes[:, tracked.index(name)]))
@@ -403,10 +398,10 @@ def _camera_offset(
     tan_v = math.tan(math.radians(fov_deg) / 2) * margin
     tan_h = tan_v * min_aspect
     depth = points @ direction + radii
-    need = (
-        np.maximum((np.abs(points @ up) + radii) / tan_v, (np.abs(points @ right) + radii) / tan_h)
-        + depth
+    fit = np.maximum(
+        (np.abs(points @ up) + radii) / tan_v, (np.abs(points @ right) + radii) / tan_h
     )
+    need = fit + depth
     extent = float(np.max(np.linalg.norm(points, axis=1) + radii))
     dist = max(float(need.max()), 1.2 * extent, 1e-3)
     return dist * direction
@@ -425,22 +420,13 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
     for i, (_axis, rgba, rot) in enumerate(axes):
         offset = np.zeros(3)
         offset[i] = length / 2
-        kids.append(
-            o.node(
-                "Mesh", geometry=cyl, material=o.material(rgba), matrix=translation(offset) @ rot
-            )
-        )
+        at = translation(offset) @ rot
+        kids.append(o.node("Mesh", geometry=cyl, material=o.material(rgba), matrix=at))
     tex = o.text_texture(label)
     mat = o.material([1, 1, 1, 1], "SpriteMaterial", map=tex, depthTest=False, transparent=True)
     scale = np.diag([length * 0.75, length * 0.75, length * 0.75, 1.0])
-    kids.append(
-        o.node(
-            "Sprite",
-            material=mat,
-            matrix=translation([length * 0.25, length * 0.25, length * (0.55 + 0.5 * stack)])
-            @ scale,
-        )
-    )
+    at = translation([length * 0.25, length * 0.25, length * (0.55 + 0.5 * stack)]) @ scale
+    kids.append(o.node("Sprite", material=mat, matrix=at))
     return o.lower(o.node("Group", children=kids))
 
 

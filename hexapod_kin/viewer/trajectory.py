@@ -46,10 +46,8 @@ def check_base_poses(poses: Any, n: int) -> np.ndarray | None:
     if arr.shape == (4, 4):
         arr = np.broadcast_to(arr, (n, 4, 4)).copy()
     if arr.shape != (n, 4, 4):
-        raise ConfigurationError(
-            f"base_poses has shape {arr.shape}; expected ({n}, 4, 4) (one pose per sample) or "
-            "(4, 4)"
-        )
+        msg = f"base_poses has shape {arr.shape}; expected ({n}, 4, 4) (one pose per sample)"
+        raise ConfigurationError(msg + " or (4, 4)")
     if not np.all(np.isfinite(arr)):
         raise ConfigurationError("base_poses contains non-finite values")
     rot = arr[:, :3, :3]
@@ -73,16 +71,14 @@ def check_motion(model: Model, times: Any, qs: Any, base_poses: Any) -> Motion:
     if t.ndim == 0:
         t = t[None]
     if t.ndim != 1 or len(t) != len(q):
-        raise ConfigurationError(
-            f"times has shape {t.shape}; expected ({len(q)},), one time per row of qs"
-        )
+        msg = f"times has shape {t.shape}; expected ({len(q)},), one time per row of qs"
+        raise ConfigurationError(msg)
     if not np.all(np.isfinite(t)):
         raise ConfigurationError("times contains non-finite values")
     if len(t) > 1 and np.any(np.diff(t) <= 0):
         bad = int(np.argmax(np.diff(t) <= 0))
-        raise ConfigurationError(
-            f"times must increase strictly; times[{bad}]={t[bad]} >= times[{bad + 1}]={t[bad + 1]}"
-        )
+        msg = f"times must increase strictly; times[{bad}]={t[bad]} >= times[{bad + 1}]="
+        raise ConfigurationError(f"{msg}{t[bad + 1]}")
     return Motion(t, q, check_base_poses(base_poses, len(q)))
 
 
@@ -134,32 +130,19 @@ def check_mask(mask: Any, n: int) -> np.ndarray | None:
         return None
     arr = np.asarray(mask)
     if arr.shape != (n,) or arr.dtype.kind not in "bi":
-        raise ConfigurationError(
-            f"singular_mask has shape {arr.shape} and dtype {arr.dtype}; expected ({n},) booleans"
-        )
+        msg = f"singular_mask has shape {arr.shape} and dtype {arr.dtype}"
+        raise ConfigurationError(f"{msg}; expected ({n},) booleans")
     return arr.astype(bool)
+
+
+def track(prop: str, kind: str, times: np.ndarray, values: Any) -> dict[str, Any]:
+    """One keyframe track of property ``prop`` (``"vector3"`` or ``"quaternion"``), times [s]."""
+    return {"name": f".{prop}", "type": kind, "times": f32(times), "values": f32(values)}
 
 
 def clip(path: str, times: np.ndarray, T: np.ndarray) -> dict[str, Any]:
     """The animation clip (position and quaternion tracks, times [s]) of poses ``T`` (N, 4, 4)."""
-    return {
-        "path": path,
-        "clip": {
-            "fps": 1.0,  # key times are in seconds
-            "name": "default",
-            "tracks": [
-                {
-                    "name": ".position",
-                    "type": "vector3",
-                    "times": f32(times),
-                    "values": f32(T[:, :3, 3]),
-                },
-                {
-                    "name": ".quaternion",
-                    "type": "quaternion",
-                    "times": f32(times),
-                    "values": f32(quaternions(T)),
-                },
-            ],
-        },
-    }
+    tracks = [track("position", "vector3", times, T[:, :3, 3])]
+    tracks.append(track("quaternion", "quaternion", times, quaternions(T)))
+    # key times are in seconds
+    return {"path": path, "clip": {"fps": 1.0, "name": "default", "tracks": tracks}}
