@@ -24,20 +24,9 @@ from .common import OneLineParser
 __all__ = ["build_parser", "main", "run"]
 
 #: Modules of this package whose ``register(sub)`` adds subcommands, in help order.
-MODULES: tuple[str, ...] = (
-    "core",
-    "view",
-    "drive",
-    "motion",
-    "dynamics",
-    "export",
-    "sweep",
-    "gait",
-    "simulate",
-    "control",
-    "report",
-    "timeline",
-    "precompile",
+MODULES: tuple[str, ...] = tuple(
+    "core view drive motion dynamics export sweep gait simulate control report timeline "
+    "precompile".split()
 )
 
 
@@ -63,8 +52,7 @@ def _refuse_non_finite(args: argparse.Namespace) -> None:
     import math
 
     for dest, value in vars(args).items():
-        values = value if isinstance(value, (list, tuple)) else [value]
-        for v in values:
+        for v in value if isinstance(value, (list, tuple)) else [value]:
             if isinstance(v, float) and not math.isfinite(v):
                 option = "--" + dest.replace("_", "-")
                 msg = f"{option} {v}: not a finite number; give a finite value"

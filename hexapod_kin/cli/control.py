@@ -85,9 +85,7 @@ def _cmd_control(args: argparse.Namespace) -> int:
         emit_json(out)
     else:
         _print(out)
-    why = []
-    if res.fell:
-        why.append("the robot fell")
+    why = ["the robot fell"] if res.fell else []
     if res.non_foot_contacts:
         why.append(f"{len(res.non_foot_contacts)} non-foot contact pair(s)")
     return not_achieved(why)

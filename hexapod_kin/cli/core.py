@@ -39,10 +39,8 @@ def _add_list(sub: Any) -> None:
 def _cmd_list(args: argparse.Namespace) -> int:
     from .. import robots
 
-    rows = []
-    for name in robots.names():
-        doc = (robots.PRESETS[name].__doc__ or "").strip().splitlines()[0]
-        rows.append({"name": name, "summary": doc.replace("``", "")})
+    docs = {n: (robots.PRESETS[n].__doc__ or "").strip().splitlines()[0] for n in robots.names()}
+    rows = [{"name": name, "summary": doc.replace("``", "")} for name, doc in docs.items()]
     out: dict[str, Any] = {"presets": rows}
     if args.erd:
         from ..sources import erd_names

@@ -19,8 +19,7 @@ __all__ = ["register"]
 def register(sub: Any) -> None:
     """Declare ``drive``."""
     p = sub.add_parser(
-        "drive",
-        help="drive, pose and probe a robot live in the browser (127.0.0.1 only)",
+        "drive", help="drive, pose and probe a robot live in the browser (127.0.0.1 only)"
     )
     robot_args(p, frames=True, feet=True)
     p.add_argument("--port", type=int, default=0, help="port on 127.0.0.1 (0: a free one)")

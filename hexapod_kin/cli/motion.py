@@ -234,16 +234,8 @@ def _cmd_step(args: argparse.Namespace) -> int:
 
         written.append(str(plot_motion(run, args.plot)))
     if args.html:
-        written.append(
-            html_page(
-                model,
-                tr.t,
-                tr.q,
-                args.html,
-                f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)",
-                0.02,
-            )
-        )
+        title = f"{model.name}: resolved-rate step (A={run.amplitude} m/s, T={run.period} s)"
+        written.append(html_page(model, tr.t, tr.q, args.html, title, 0.02))
     status = _limited(tr)
     if args.json:
         emit_json({"source": model.name, **run.to_dict(), "written": written})

@@ -70,17 +70,13 @@ def register(sub: Any) -> None:
         description=__doc__.split("\n\n", 1)[1].strip() if __doc__ else None,
     )
     kinds = p.add_subparsers(dest="plan", required=True, metavar="PLAN")
-    g = kinds.add_parser(
-        "gait",
-        help="a walk of a legged robot (default the hexapod preset)",
-    )
+    g = kinds.add_parser("gait", help="a walk of a legged robot (default the hexapod preset)")
     robot_args(g, kinds="legged", default="hexapod", inertia=True)
     walk_args(g, rate="--plan-rate")
     _common(g)
     g.set_defaults(func=_cmd_gait)
     st = kinds.add_parser(
-        "step",
-        help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg",
+        "step", help="the seeds' resolved-rate step v = [A sin(2 pi t/T), 0, 0] of a 3-joint leg"
     )
     robot_args(st, default="hexabot_leg", frames=True, tool=True)
     st.add_argument("--amplitude", type=float, default=0.05, help="A [m/s]")
@@ -90,8 +86,7 @@ def register(sub: Any) -> None:
     _common(st)
     st.set_defaults(func=_cmd_step)
     f = kinds.add_parser(
-        "path",
-        help="a joint path from a file (IK path, a step): CSV t,<joint>,... or JSON",
+        "path", help="a joint path from a file (IK path, a step): CSV t,<joint>,... or JSON"
     )
     f.add_argument("file", help="plan file: CSV (header t,<joint>,...; [s], [rad]) or JSON")
     robot_args(f, required=False)

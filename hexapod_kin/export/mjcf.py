@@ -273,9 +273,6 @@ def to_mjcf(
             break the triangle inequality ``A + B >= C`` (``balanceinertia``). Off: such a
             URDF is refused, and the MJCF's inertias are the URDF's.
 
-    Returns:
-        An :class:`MjcfExport`.
-
     Raises:
         ParameterError: Invalid timestep, integrator, floor height or source; ``floating``
             for a chain (its base link has no mass).

@@ -187,9 +187,6 @@ def export_package(
         **options: The keywords of :func:`package_files` (``name``, ``meshes``, ``header``,
             ``maintainer``, ``email``, ``license``).
 
-    Returns:
-        A :class:`PackageExport`.
-
     Raises:
         ParameterError: Invalid name/e-mail/source, missing parent folder, or ``out`` exists
             and is not empty without ``force``.

@@ -348,9 +348,6 @@ def timeline(
             (default: the plan's robot's ``lower``/``upper``, else none): every resampled
             sample must lie within them (1e-9 of slack).
 
-    Returns:
-        The :class:`Timeline`.
-
     Raises:
         LimitError: A sample beyond a servo's limits, a joint's limits or its speed limit
             (the message names the joint, the time [s] and the value; ``parameter`` is the

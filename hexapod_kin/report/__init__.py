@@ -18,14 +18,8 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
     from .data import CLAIMS_FILE, Claim, Verdict, load_claims
 
 #: Name → the submodule that defines it (imported on first access).
-_LAZY_NAMES = {
-    "Report": ".build",
-    "reproduce": ".build",
-    "CLAIMS_FILE": ".data",
-    "Claim": ".data",
-    "Verdict": ".data",
-    "load_claims": ".data",
-}
+_LAZY_NAMES = dict.fromkeys(("Report", "reproduce"), ".build")
+_LAZY_NAMES.update(dict.fromkeys(("CLAIMS_FILE", "Claim", "Verdict", "load_claims"), ".data"))
 
 
 __getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals())

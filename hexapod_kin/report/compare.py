@@ -104,13 +104,10 @@ def _rng(key: str) -> np.random.Generator:
 
 
 def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
-    out = {}
-    for s in symbols:
-        if s.name.startswith("q") or s.name in ("theta", "alpha"):
-            out[s] = float(rng.uniform(-math.pi, math.pi))
-        else:
-            out[s] = float(rng.uniform(0.5, 2.0))
-    return out
+    """Angles (``q…``, ``theta``, ``alpha``) uniform in [−π, π], other symbols in [0.5, 2]."""
+    angle = [s.name.startswith("q") or s.name in ("theta", "alpha") for s in symbols]
+    spans = [(-math.pi, math.pi) if a else (0.5, 2.0) for a in angle]
+    return {s: float(rng.uniform(*span)) for s, span in zip(symbols, spans)}
 
 
 def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
@@ -143,10 +140,7 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     Returns two boolean arrays of ``len(a)``.
     """
     ea, eb = [plain(x) for x in a], [plain(x) for x in b]
-    syms: set[sp.Symbol] = set()
-    for e in ea + eb:
-        syms |= e.free_symbols
-    ordered = sorted(syms, key=str)
+    ordered = sorted(set().union(*(e.free_symbols for e in ea + eb)), key=str)
     rng = _rng(key)
     pts = [_point(ordered, rng) for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
@@ -167,13 +161,9 @@ def simplified(expr: Any) -> Any:
 
 
 def _hollow(x: Any) -> bool:
-    return bool(
-        x.is_Mul
-        and len(x.args) == 2
-        and x.args[0].is_Number
-        and x.args[1].is_Add
-        and x.is_commutative
-    )
+    """A number times a sum (``2*(a + b)``), which :data:`_HOLLOW` multiplies out."""
+    pair = x.is_Mul and len(x.args) == 2
+    return bool(pair and x.args[0].is_Number and x.args[1].is_Add and x.is_commutative)
 
 
 _HOLLOW = Transform(lambda x: sp.Mul(*x.args), _hollow)

@@ -13,13 +13,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "heat_maps",
-    "leg2_figure",
-    "plot_pendulum",
-    "step_still",
-    "walk_figures",
-]
+__all__ = ["heat_maps", "leg2_figure", "plot_pendulum", "step_still", "walk_figures"]
 
 
 def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any]]:

@@ -62,16 +62,8 @@ def seed_notation(text: str) -> str:
 
     ``^0_1T`` → ``⁰₁T``, ``T_0^1`` → ``T₀¹``; other text unchanged (and not escaped).
     """
-    text = re.sub(
-        r"\^(\d)_(\d)T",
-        lambda m: m.group(1).translate(_SUP) + m.group(2).translate(_SUB) + "T",
-        text,
-    )
-    return re.sub(
-        r"T_(\d)\^(\d)",
-        lambda m: "T" + m.group(1).translate(_SUB) + m.group(2).translate(_SUP),
-        text,
-    )
+    text = re.sub(r"\^(\d)_(\d)T", lambda m: _sup(int(m[1])) + _sub(int(m[2])) + "T", text)
+    return re.sub(r"T_(\d)\^(\d)", lambda m: "T" + _sub(int(m[1])) + _sup(int(m[2])), text)
 
 
 def pretty_entry(text: str) -> str:
@@ -85,11 +77,9 @@ def _table(rows: Sequence[Sequence[str]], differ: set[tuple[int, int]], header: 
     if header:
         h.append("<tr>" + "".join(f"<th>{e(str(x))}</th>" for x in header) + "</tr>")
     for i, row in enumerate(rows):
-        cells = []
-        for j, v in enumerate(row):
-            cls = " class='diff'" if (i, j) in differ else ""
-            cells.append(f"<td{cls}>{e(pretty_entry(str(v)))}</td>")
-        h.append("<tr>" + "".join(cells) + "</tr>")
+        marked = [(" class='diff'" if (i, j) in differ else "", v) for j, v in enumerate(row)]
+        tds = "".join(f"<td{c}>{e(pretty_entry(str(v)))}</td>" for c, v in marked)
+        h.append(f"<tr>{tds}</tr>")
     h.append("</table>")
     return "".join(h)
 

@@ -116,13 +116,8 @@ def add_sticks(model: Any, geom: Any) -> int:
     and not at its origin; a last link with neither, to its centre of mass. ``geom`` is
     changed in place (a fresh ``GeometryModel``).
 
-    Args:
-        model: The Pinocchio model.
-        geom: Its visual ``pinocchio.GeometryModel``.
-
-    Returns:
-        The number of sticks added.
-
+    ``model`` is the Pinocchio model, ``geom`` its visual ``pinocchio.GeometryModel``; returns
+    the number of sticks added.
     """
     import coal
     import pinocchio as pin

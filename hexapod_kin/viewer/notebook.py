@@ -49,14 +49,9 @@ class NotebookView:
 
 
 def show(
-    model: Any,
-    times: Any = None,
-    qs: Any = None,
-    *,
-    height: int = 480,
-    **options: Any,
+    model: Any, times: Any = None, qs: Any = None, *, height: int = 480, **options: Any
 ) -> NotebookView:
-    """A model, a pose or a trajectory, inline in a notebook.
+    """A model, a pose or a trajectory, inline in a notebook (its ``_repr_html_``).
 
     Args:
         model: A loaded model, or anything :func:`hexapod_kin.load` takes (a preset name, a
@@ -66,9 +61,6 @@ def show(
         height: Frame height [px].
         **options: Passed to :func:`~hexapod_kin.viewer.render_html` (``trace_frame``,
             ``frame_triads``, ``fps``, ``speed``, ``title``...).
-
-    Returns:
-        The :class:`NotebookView` (its ``_repr_html_`` shows the page).
 
     Raises:
         OptionalDependencyError: meshcat (the ``viewer`` extra) is missing.
@@ -97,9 +89,6 @@ def show_walk(run: Any, *, model: Any = None, height: int = 480, **options: Any)
         model: The loaded robot (default: the hexapod preset).
         height: Frame height [px].
         **options: Passed to :func:`~hexapod_kin.viewer.render_html` (``fps``, ``speed``...).
-
-    Returns:
-        The :class:`NotebookView`.
 
     Raises:
         OptionalDependencyError: meshcat (the ``viewer`` extra) is missing.

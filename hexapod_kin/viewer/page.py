@@ -101,9 +101,6 @@ def render_html(
             [m] per sample, drawn as thin tubes (M = 1: a moving sphere) under
             ``/meshcat/overlays/<name>``.
 
-    Returns:
-        The page (:func:`export_html` writes it to a file).
-
     Raises:
         ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``/``overlays``.
         FrameNotFoundError: A frame name does not exist.
@@ -168,9 +165,6 @@ def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
     Args:
         html: Path of a file written by :func:`export_html`.
         height: Frame height in [px] (100..4000).
-
-    Returns:
-        The HTML snippet.
 
     Raises:
         ParameterError: Bad ``height`` or not a file.

@@ -40,11 +40,8 @@ def _foot_frames(run: Any, mdl: Any) -> Any:
     wb = getattr(run, "robot", None)
     if wb is None:
         return None
-    model = wb.model
-    names = []
-    for contact in wb.foot_frames:
-        parent = model.frames[model.getFrameId(contact)].parentFrame
-        names.append(str(model.frames[parent].name))
+    frames = wb.model.frames
+    names = [str(frames[frames[wb.model.getFrameId(c)].parentFrame].name) for c in wb.foot_frames]
     try:
         for name in names:
             mdl.frame_id(name)
@@ -83,9 +80,6 @@ def walk_page(run: Any, *, model: Any = None, title: str | None = None, **option
         title: Page title (default: pattern, terrain and the minimum margin).
         **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``,
             ``speed``...).
-
-    Returns:
-        The page.
 
     Raises:
         OptionalDependencyError: The viewer extra (meshcat) is missing.
