@@ -441,12 +441,10 @@ def _md_cells(cells: str) -> list[str]:
     differ = {(int(i), int(j)) for i, j in data.get("differ", [])}
     out = []
     for name, rows in (("seed", data["seed"]), ("hexapod_kin", data["ours"])):
+        shown = [[pretty_entry(str(v)) for v in row] for row in rows]
         body = [
-            [
-                f"**{pretty_entry(str(v))}**" if (i, j) in differ else pretty_entry(str(v))
-                for j, v in enumerate(row)
-            ]
-            for i, row in enumerate(rows)
+            [f"**{x}**" if (i, j) in differ else x for j, x in enumerate(r)]
+            for i, r in enumerate(shown)
         ]
         header = data.get("header") or [f"col {j + 1}" for j in range(len(rows[0]) if rows else 0)]
         out += ["", f"{name} (differing entries in bold):", ""] + _md_table(header, body)
@@ -458,9 +456,14 @@ def _passage_md(v: Verdict, seeds: dict[str, str]) -> str:
     if not v.lines or v.seed not in seeds:
         return ""
     name = seed_file(seeds[v.seed]).name
-    first, _, last = v.lines.partition("-")
-    span = f"line {first}" if first == last else f"lines {first}–{last}"
+    first, span = _span(v.lines)
     return f"[{name}, {span}](seeds/{name}#L{first})"
+
+
+def _span(lines: str) -> tuple[str, str]:
+    """The first line of a passage ``"first-last"`` and ``"line a"`` or ``"lines a–b"``."""
+    first, _, last = lines.partition("-")
+    return first, f"line {first}" if first == last else f"lines {first}–{last}"
 
 
 def _markdown(
@@ -543,8 +546,7 @@ def _html(
     def passage(v: Verdict) -> str:
         if not v.lines:
             return ""
-        a, _, b = v.lines.partition("-")
-        span = f"line {a}" if a == b else f"lines {a}–{b}"
+        a, span = _span(v.lines)
         return f" (<a href='#{H.line_anchor(v.seed, int(a))}'>{span} of seed {e(v.seed)}</a>)"
 
     h = [

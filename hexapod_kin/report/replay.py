@@ -14,6 +14,7 @@ the report folder. Only complete builds are stored; :data:`KEEP` entries are kep
 from __future__ import annotations
 
 import base64
+import contextlib
 import hashlib
 import json
 import os
@@ -83,10 +84,8 @@ def versions() -> dict[str, str]:
 
     from .. import __version__
 
-    out = {
-        "python": f"{platform.python_implementation()} {platform.python_version()}",
-        "hexapod_kin": __version__,
-    }
+    out = {"python": f"{platform.python_implementation()} {platform.python_version()}"}
+    out["hexapod_kin"] = __version__
     for name in DISTRIBUTIONS:
         try:
             out[name] = version(name)
@@ -207,14 +206,9 @@ def _checked(key: str, folder: Path, text: str) -> Entry:
     if record.get("seal") != seal(record) or record.get("seal") is None:
         raise _Damaged("its manifest does not match its seal")
     listed = record.get("files")
-    if not (
-        isinstance(record.get("built"), str)
-        and isinstance(record.get("seconds"), (int, float))
-        and isinstance(record.get("verdicts"), list)
-        and isinstance(record.get("facts"), dict)
-        and isinstance(listed, dict)
-        and listed
-    ):
+    kinds: dict[str, Any] = dict(built=str, seconds=(int, float), verdicts=list, facts=dict)
+    complete = all(isinstance(record.get(k), t) for k, t in kinds.items())
+    if not (complete and isinstance(listed, dict) and listed):
         raise _Damaged("an incomplete manifest")
     for v in record["verdicts"]:
         if not isinstance(v, dict) or Verdict.from_fields(v).status == "error":
@@ -282,10 +276,8 @@ def restore(entry: Entry, out: Path) -> list[Path]:
         dest = out.joinpath(*PurePosixPath(rel).parts)
         dest.parent.mkdir(parents=True, exist_ok=True)
         written.append(atomic_write(dest, data))
-    try:
+    with contextlib.suppress(OSError):
         os.utime(entry.folder / MANIFEST)  # last use: what prune keeps
-    except OSError:
-        pass
     return written
 
 
@@ -353,12 +345,10 @@ def prune(keep: int = KEEP) -> list[Path]:
         try:
             complete.append(((d / MANIFEST).stat().st_mtime, d))
         except OSError:
-            try:
+            with contextlib.suppress(OSError):
                 if now - d.stat().st_mtime > _STALE:
                     shutil.rmtree(d, ignore_errors=True)
                     removed.append(d)
-            except OSError:
-                pass
     complete.sort(key=lambda t: (t[0], t[1].name), reverse=True)
     for _, d in complete[max(keep, 0) :]:
         shutil.rmtree(d, ignore_errors=True)

@@ -74,11 +74,8 @@ def thickening(model: Model, objects: Sequence[Any]) -> tuple[float, float]:
     """
     from .._numerics import chain_length
 
-    rods = [
-        float(go.geometry.radius)
-        for go in objects
-        if type(go.geometry).__name__ in ("Cylinder", "Capsule")
-    ]
+    kinds = ("Cylinder", "Capsule")
+    rods = [float(go.geometry.radius) for go in objects if type(go.geometry).__name__ in kinds]
     if not rods or max(rods) <= 0:
         return 1.0, 0.0
     rod = max(rods)
