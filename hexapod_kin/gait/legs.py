@@ -81,10 +81,7 @@ class GaitError(ConfigurationError):
         allowed: Any = None,
     ) -> None:
         super().__init__(message, parameter=parameter, value=value, allowed=allowed)
-        self.check = check
-        self.leg = leg
-        self.time = time
-        self.amount = amount
+        self.check, self.leg, self.time, self.amount = check, leg, time, amount
 
 
 @dataclass(frozen=True)

@@ -117,8 +117,7 @@ def standing_pose(
     pts[:, :2] -= sh
     pts[:, 2] = wb.foot_radius
     q_prev = None if knee is None else knee_seed(wb, knee, base, pts)
-    ik = wb.body_ik(base, pts, q_prev=q_prev, strict=True)
-    q = np.array(ik.q[0])
+    q = np.array(wb.body_ik(base, pts, q_prev=q_prev, strict=True).q[0])
     contacts = pts.copy()
     contacts[:, 2] = 0.0
     for a in (q, base, pts, contacts):
