@@ -8,9 +8,6 @@ start from the seed; a sample whose solution is far from its predecessor's (a br
 order. A foot is *reached* when the residual is at most :data:`REACH_TOL`; otherwise the
 residual is the distance of the best reachable point found to the target (the leg's
 ``excess``).
-
-:func:`solve_legs` is the one entry point (called from one place,
-:meth:`~hexapod_kin.gait.robot.WholeBody.body_ik`).
 """
 
 from __future__ import annotations

@@ -13,11 +13,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields, replace
 from functools import partial
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -78,10 +81,7 @@ class GaitError(ConfigurationError):
         allowed: Any = None,
     ) -> None:
         super().__init__(message, parameter=parameter, value=value, allowed=allowed)
-        self.check = check
-        self.leg = leg
-        self.time = time
-        self.amount = amount
+        self.check, self.leg, self.time, self.amount = check, leg, time, amount
 
 
 @dataclass(frozen=True)
@@ -129,10 +129,8 @@ class FootSpec:
 def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
     """Three finite numbers from ``"x,y,z"`` or a sequence of numbers (never texts, booleans)."""
     if not isinstance(text, str):  # a file's or a caller's list: '0' or true are typos
-        try:
+        with contextlib.suppress(TypeError):
             text = list(text)
-        except TypeError:
-            pass
         x, y, z = numbers(text, f"foot {where}: offset", 3, parameter="feet")
         return (x, y, z)
     try:
@@ -150,14 +148,12 @@ def _numbers3(text: Any, where: str) -> tuple[float, float, float]:
 
 
 def _split_specs(text: str) -> list[str]:
-    """``a:1,2,3,b:4,5,6`` or ``a:1,2,3 b:...`` → one item per foot."""
-    items: list[str] = []
-    for part in re.split(r"[\s;]+", text.strip()):
-        if not part:
-            continue
-        # a comma before a name with a colon starts a new foot
-        items += [p for p in re.split(r",(?=[^,:\s]+:)", part) if p]
-    return items
+    """``a:1,2,3,b:4,5,6`` or ``a:1,2,3 b:...`` → one item per foot.
+
+    A comma before a name with a colon starts a new foot.
+    """
+    parts = re.split(r"[\s;]+", text.strip())
+    return [p for part in parts for p in re.split(r",(?=[^,:\s]+:)", part) if p]
 
 
 def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
@@ -167,8 +163,7 @@ def check_offsets(feet: tuple[FootSpec, ...], model: Any) -> None:
         ParameterError: The first such foot, its offset and the allowed range.
 
     """
-    size = robot_size(model)
-    limit = OFFSET_FACTOR * size
+    limit = OFFSET_FACTOR * (size := robot_size(model))
     for f in feet:
         big = max(abs(v) for v in f.offset)
         if big > limit:
@@ -189,8 +184,7 @@ def check_size(value: float, model: Any, name: str = "foot_radius") -> float:
         ParameterError: A length (a foot radius, a height, a reach) larger than the robot.
 
     """
-    size = robot_size(model)
-    limit = OFFSET_FACTOR * size
+    limit = OFFSET_FACTOR * (size := robot_size(model))
     if abs(value) > limit:
         raise ParameterError(
             f"{name}={value!r} m is larger than the robot; allowed up to {limit:.4g} m "
@@ -297,28 +291,24 @@ def _strip_common(names: list[str]) -> list[str]:
     """Names with a common prefix/suffix (ending/starting at ``_``/``-``) removed, if unique."""
     if len(names) < 2:
         return names
-    pre = 0
-    while all(len(n) > pre and n[pre] == names[0][pre] for n in names):
-        pre += 1
-    pre = max((i + 1 for i in range(pre) if names[0][i] in "_-"), default=0)
-    suf = 0
-    while all(len(n) > suf and n[-1 - suf] == names[0][-1 - suf] for n in names):
-        suf += 1
-    suf = max((i + 1 for i in range(suf) if names[0][-1 - i] in "_-"), default=0)
+    pre, suf = (
+        max((i + 1 for i, ch in enumerate(os.path.commonprefix(s)) if ch in "_-"), default=0)
+        for s in (names, [n[::-1] for n in names])
+    )
     out = [n[pre : len(n) - suf] for n in names]
     return out if all(out) and len(set(out)) == len(out) else names
 
 
 def _frame_depth(model: Any, fid: int) -> int:
     depth = 0
-    f = model.frames[fid]
-    parent = f.parentFrame
-    while fid != 0 and parent != fid and depth < 10_000:
-        depth += 1
-        fid = int(parent)
-        f = model.frames[fid]
-        parent = f.parentFrame
+    while fid != 0 and (parent := model.frames[fid].parentFrame) != fid and depth < 10_000:
+        depth, fid = depth + 1, int(parent)
     return depth
+
+
+def _frame_key(model: Any, i: int) -> tuple[int, float]:
+    """The deepest frame first, then the farthest from its joint."""
+    return (_frame_depth(model, i), float(np.linalg.norm(model.frames[i].placement.translation)))
 
 
 def find_legs(
@@ -346,9 +336,7 @@ def find_legs(
     import pinocchio as pin
 
     nj = model.njoints
-    children: dict[int, list[int]] = {j: [] for j in range(nj)}
-    for j in range(2, nj):
-        children[int(model.parents[j])].append(j)
+    parents = {int(model.parents[j]) for j in range(2, nj)}
     data = model.createData()
     pin.framesForwardKinematics(model, data, pin.neutral(model))
     found: list[tuple[str, int, np.ndarray]] = []  # (frame name, joint id, foot in joint)
@@ -371,20 +359,12 @@ def find_legs(
             found.append((spec.frame, int(fr.parentJoint), fr.placement.homogeneous @ off))
     else:
         for j in range(2, nj):
-            if children[j]:
+            if j in parents:
                 continue
             cands = [i for i, f in enumerate(model.frames) if int(f.parentJoint) == j]
             if not cands:
                 continue
-
-            def key(i: int) -> tuple[int, float]:
-                return (
-                    _frame_depth(model, i),
-                    float(np.linalg.norm(model.frames[i].placement.translation)),
-                )
-
-            best = max(cands, key=key)
-            fr = model.frames[best]
+            fr = model.frames[max(cands, key=partial(_frame_key, model))]
             if np.linalg.norm(fr.placement.translation) <= 1e-9:
                 raise ConfigurationError(
                     f"the branch ending at joint {model.names[j]!r} has no foot link (its "
@@ -411,10 +391,8 @@ def find_legs(
             k = int(model.parents[k])
         path.reverse()
         foot_w = data.oMi[j].homogeneous @ place
-        span = 0.0
         pts = [data.oMi[p].translation for p in path] + [foot_w[:3, 3]]
-        for a, b in zip(pts[:-1], pts[1:]):
-            span += float(np.linalg.norm(np.asarray(b) - np.asarray(a)))
+        span = sum(float(np.linalg.norm(np.asarray(b) - np.asarray(a))) for a, b in pairwise(pts))
         legs_raw.append((frame, path, place, span, np.asarray(data.oMi[path[0]].translation)))
     if feet is None and legs_raw:
         longest = max(r[3] for r in legs_raw)
@@ -436,9 +414,7 @@ def find_legs(
                 )
             used[p] = frame
     if ccw:
-        yaw = [math.atan2(r[4][1], r[4][0]) % (2 * math.pi) for r in legs_raw]
-        order = sorted(range(len(legs_raw)), key=lambda i: (round(yaw[i], 9), legs_raw[i][0]))
-        legs_raw = [legs_raw[i] for i in order]
+        legs_raw.sort(key=lambda r: (round(math.atan2(r[4][1], r[4][0]) % (2 * math.pi), 9), r[0]))
     names = _strip_common([r[0] for r in legs_raw])
     legs = [
         LegTree(name, tuple(p - 2 for p in path), frame, path[-1] - 2, place)
@@ -484,10 +460,8 @@ def closed_leg(
 
     Checked at 6 seeded random configurations inside the limits: a valid slot must put the
     foot (``feet_of``: (N, m) joints → (N, 3) body-frame feet, the leg's own FK) on the
-    target within 1e-9 of the span (max(span, 1 m)). A table that only approximates the leg
-    (axes snapped by :func:`hexapod_kin.chain_from_urdf`, a miss of ~1e-7 m on PhantomX) is
-    not used: the numerical solve on the leg's own kinematics is exact and, batched, faster
-    than the closed form followed by Newton steps (tools/bench_legs.py).
+    target within 1e-9 of the span (max(span, 1 m)); a table that only approximates the leg
+    (axes snapped by :func:`hexapod_kin.chain_from_urdf`) is not used.
     """
     from ..ik import analytic_batch
 

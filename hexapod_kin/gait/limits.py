@@ -6,11 +6,9 @@ accelerations as ``1/T²``. With ``ρ`` the largest ratio of a joint's speed to 
 velocity limit (or the square root of its acceleration to an acceleration limit, when given),
 a plan at ``T₀`` fits the limits at ``T = ρ·T₀``.
 
-* :func:`fit_period` — the default period: 1 s, or the shortest multiple of
-  :data:`PERIOD_STEP` that keeps every joint within its limits (checked by planning again).
-* :func:`top_speed` — the highest straight speed of a pattern for this robot: over strides
-  the legs can reach (the plan's IK reaches every foot within the joint ranges), the fastest
-  ``v = L / (β · ρ(L) · T₀)``.
+* :func:`fit_period` — the default period (a multiple of :data:`PERIOD_STEP` within them).
+* :func:`top_speed` — each pattern's highest straight speed ``v = L / (β · ρ(L) · T₀)``
+  over the strides the legs can reach.
 """
 
 from __future__ import annotations

@@ -58,6 +58,14 @@ def max_reach(wb: Any) -> np.ndarray:
     return out
 
 
+def _stance_feet(wb: Any, heights: np.ndarray, reaches: np.ndarray) -> np.ndarray:
+    """(K, L, 3) body-frame neutral feet of K stances (body heights, reaches) [m]."""
+    feet = np.empty((len(heights), wb.n_legs, 3))
+    feet[:, :, :2] = wb.mounts[None, :, :2, 3] + reaches[:, None, None] * wb._reach_dir[None]
+    feet[:, :, 2] = (wb.foot_radius - heights)[:, None]
+    return feet
+
+
 def _beyond_reach(wb: Any, targets_body: np.ndarray) -> np.ndarray:
     """(..., ) True where a body-frame target (..., L, 3) is out of its leg's reach by geometry."""
     first = np.array([wb._tree.placements[c[0]][:3, 3] for c in wb._leg_cols])
@@ -82,11 +90,7 @@ def _centre_reached(wb: Any, heights: np.ndarray, reaches: np.ndarray) -> np.nda
     seed = wb.neutral_q()
     for legs in groups.values():
         g = len(legs)
-        tgt = np.empty((k, g, 3))
-        tgt[:, :, :2] = wb.mounts[legs, None, :2, 3].transpose(1, 0, 2) + (
-            reaches[:, None, None] * wb._reach_dir[legs][None]
-        )
-        tgt[:, :, 2] = (wb.foot_radius - heights)[:, None]
+        tgt = _stance_feet(wb, heights, reaches)[:, legs]
         # every stance's legs in one solve (stance-major, as the targets)
         _q, _res, reached = wb._numeric(legs * k, tgt.reshape(1, k * g, 3), seed)
         ok &= reached.reshape(k, g).all(axis=1)
@@ -146,9 +150,7 @@ def roomiest_stance(wb: Any) -> tuple[float, float] | None:
     if not grid:
         return None
     heights, reaches = np.array(grid).T
-    feet = np.empty((len(grid), wb.n_legs, 3))
-    feet[:, :, :2] = wb.mounts[None, :, :2, 3] + reaches[:, None, None] * wb._reach_dir[None]
-    feet[:, :, 2] = (wb.foot_radius - heights)[:, None]
+    feet = _stance_feet(wb, heights, reaches)
     box = _box(_STRIDE, _LIFT)
     far = _beyond_reach(wb, feet[:, None] + box[None, :, None, :]).any(axis=1)
     live = np.flatnonzero(~far)

@@ -229,8 +229,8 @@ class WholeBody:
         q = np.asarray(q, dtype=float)
         base = np.asarray(base, dtype=float)
         out = np.empty((len(q), int(self.model.nq)))
+        out[:, :3] = base[:, :3, 3]
         for i in range(len(q)):
-            out[i, :3] = base[i, :3, 3]
             out[i, 3:7] = pin.Quaternion(base[i, :3, :3]).coeffs()
         if self._bounded.all():
             out[:, 7:] = q
@@ -264,21 +264,21 @@ class WholeBody:
         from the leg's mount to its foot at q = 0 (clipped into the joint ranges), less the
         offset every leg shares (a joint-zero convention such as Unitree's bent knees; a
         Hexapod: the mount's x axis; a leg hanging straight down: outward from the body
-        centre), ``r_i = foot_reach``, or by
-        default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that horizontal distance at q = 0 and
-        ``ℓ_i`` the leg's span (the lengths from mount to foot through every joint, at
-        q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
+        centre), ``r_i = foot_reach``, or by default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that
+        horizontal distance at q = 0 and ``ℓ_i`` the leg's span (mount to foot through every
+        joint, at q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
         ``−``:attr:`body_height`): the default height puts every neutral foot at most
-        ``ℓ·√(0.64² + 0.32²)`` from its mount (the built-in hexapod: r = 0.16 m, 0.08 m).
+        ``ℓ·√(0.64² + 0.32²)`` from its mount.
 
         Raises:
             ParameterError: ``foot_reach`` not a number >= 0.
 
         """
-        if foot_reach is None:
-            r = self._reach
-        else:
-            r = np.full(self.n_legs, positive("foot_reach", foot_reach, allow_zero=True))
+        r = (
+            self._reach
+            if foot_reach is None
+            else np.full(self.n_legs, positive("foot_reach", foot_reach, allow_zero=True))
+        )
         out = np.empty((self.n_legs, 3))
         out[:, :2] = self.mounts[:, :2, 3] + r[:, None] * self._reach_dir
         out[:, 2] = -self.body_height + self.foot_radius
@@ -521,7 +521,6 @@ def _build_model(
     if hexa:
         feet = tuple(FootSpec(f) for f in params.foot_frames)  # type: ignore[union-attr]
     legs, others = find_legs(full, feet, ccw=not hexa)
-    locked = tuple(str(full.names[j]) for j in others)
     model = full
     if others:
         specs = tuple(
@@ -537,16 +536,9 @@ def _build_model(
     for leg, name in zip(legs, names):
         fname = f"{name}_contact"
         if not model.existFrame(fname):
-            parent = model.getFrameId(leg.foot_frame)
-            model.addFrame(
-                pin.Frame(
-                    fname,
-                    leg.foot_joint + 2,
-                    parent,
-                    pin.SE3(leg.foot_placement),
-                    pin.FrameType.OP_FRAME,
-                )
-            )
+            parent, place = model.getFrameId(leg.foot_frame), pin.SE3(leg.foot_placement)
+            frame = pin.Frame(fname, leg.foot_joint + 2, parent, place, pin.FrameType.OP_FRAME)
+            model.addFrame(frame)
         foot_names.append(fname)
     iq = np.array([model.joints[j].idx_q for j in range(2, model.njoints)], dtype=int)
     bounded = np.array([model.joints[j].nq == 1 for j in range(2, model.njoints)])
@@ -559,7 +551,6 @@ def _build_model(
     width = max(len(c) for c in cols)
     padded = np.array([(c[0],) * (width - len(c)) + tuple(c) for c in cols])
     foot = np.array([leg.foot_placement for leg in legs])
-    foot_joint = np.array([leg.foot_joint for leg in legs])
     q_zero = np.clip(np.zeros(nq), lower, upper)
     lay = leg_layout(model, tree, legs, cols, q_zero, lower, upper, params, km)
     span, mounts = lay["span"], lay["mounts"]
@@ -593,13 +584,13 @@ def _build_model(
         body_height=lay["body_height"],
         foot_frames=tuple(foot_names),
         foot_offsets=np.array([offset_of(model, leg) for leg in legs]),
-        locked_joints=locked,
+        locked_joints=tuple(str(full.names[j]) for j in others),
         ik_kind=tuple("closed" if c is not None else "numerical" for c in lay["closed"]),
         _tree=tree,
         _masses=np.array([x.mass for x in inertias]),
         _levers=np.array([x.lever for x in inertias]),
         _foot=foot,
-        _foot_joint=foot_joint,
+        _foot_joint=np.array([leg.foot_joint for leg in legs]),
         _leg_joints=padded,
         _leg_cols=cols,
         _closed=tuple(lay["closed"]),
@@ -765,11 +756,8 @@ def _from_source(robot: Any, spec: tuple[FootSpec, ...] | None, rad: float | Non
     km = robot if isinstance(robot, KinematicModel) else load(robot)
     params = km.params
     if isinstance(params, Hexapod):
-        return (
-            as_whole_body(params, foot_radius=rad)
-            if spec is None
-            else as_whole_body(params, feet=spec)
-        )
+        return as_whole_body(params, feet=spec, foot_radius=rad)
+
     if params is not None:
         raise ParameterError(
             f"{km.name!r} is one serial chain, not a legged robot (a floating body with legs); "

@@ -15,6 +15,11 @@ import numpy as np
 __all__ = ["run_model", "support_polygons"]
 
 
+def _turn(o: tuple[float, ...], a: tuple[float, ...], p: tuple[float, ...]) -> float:
+    """The cross product ``(a − o) × (p − o)`` (> 0: ``p`` on the left of ``o → a``)."""
+    return (a[0] - o[0]) * (p[1] - o[1]) - (a[1] - o[1]) * (p[0] - o[0])
+
+
 def _hull(points: np.ndarray) -> np.ndarray:
     """Counter-clockwise convex hull (K, 2) of 2-D points (Andrew's monotone chain)."""
     pts = sorted(map(tuple, points))
@@ -24,14 +29,7 @@ def _hull(points: np.ndarray) -> np.ndarray:
     def half(seq: list[tuple[float, ...]]) -> list[tuple[float, ...]]:
         out: list[tuple[float, ...]] = []
         for p in seq:
-            while (
-                len(out) >= 2
-                and (
-                    (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                    - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
-                )
-                <= 0
-            ):
+            while len(out) >= 2 and _turn(out[-2], out[-1], p) <= 0:
                 out.pop()
             out.append(p)
         return out

@@ -39,6 +39,11 @@ __all__ = [
 CHUNK = 20_000
 
 
+def _chunks(n: int) -> list[slice]:
+    """Slices of :data:`CHUNK` samples covering ``n`` (one, empty, when ``n`` is 0)."""
+    return [slice(i, i + CHUNK) for i in range(0, max(n, 1), CHUNK)]
+
+
 def _seg_point(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Distance from points ``p`` to segments ``ab`` (2-D, broadcast over leading axes)."""
     d = b - a
@@ -157,13 +162,7 @@ def support_margin(feet: Any, stance: Any, com: Any) -> np.ndarray:
             value=list(np.shape(feet)),
             allowed="(N, L, 2|3)",
         )
-    xy, st, cxy = p[..., :2], s, c[:, :2]
-    out = np.concatenate(
-        [
-            _margin_numpy(xy[i : i + CHUNK], st[i : i + CHUNK], cxy[i : i + CHUNK])
-            for i in range(0, max(len(p), 1), CHUNK)
-        ]
-    )
+    out = np.concatenate([_margin_numpy(p[k, :, :2], s[k], c[k, :2]) for k in _chunks(len(p))])
     return np.asarray(out[0]) if single else out
 
 
@@ -192,9 +191,7 @@ def segment_clearance(points: Any, pairs: Any) -> np.ndarray:
         )
     if pr.size and (pr.min() < 0 or pr.max() >= p.shape[1]):
         raise ParameterError(f"pairs index legs 0..{p.shape[1] - 1}", parameter="pairs")
-    return np.concatenate(
-        [_clearance_numpy(p[i : i + CHUNK], pr) for i in range(0, max(len(p), 1), CHUNK)]
-    )
+    return np.concatenate([_clearance_numpy(p[k], pr) for k in _chunks(len(p))])
 
 
 def periodic_spline(knots: Any, values: Any, period: float, t: Any) -> np.ndarray:

@@ -4,10 +4,6 @@
 takes) level on flat ground: the body at ``height`` (default the robot's
 :attr:`~.robot.WholeBody.body_height`), every foot's contact sphere on the ground under its
 neutral point (:meth:`~.robot.WholeBody.neutral_feet`), legs by body-pose IK.
-:func:`default_configuration` is a pose that reads well (legs standing, other joints at
-mid-range); :func:`standing_base` lifts a hexapod so that its lowest foot touches the ground;
-:func:`demo_trajectory` is the demo motion of any model (the hexapod sways its body with its
-feet fixed in the world, by closed-form leg IK).
 """
 
 from __future__ import annotations
@@ -121,8 +117,7 @@ def standing_pose(
     pts[:, :2] -= sh
     pts[:, 2] = wb.foot_radius
     q_prev = None if knee is None else knee_seed(wb, knee, base, pts)
-    ik = wb.body_ik(base, pts, q_prev=q_prev, strict=True)
-    q = np.array(ik.q[0])
+    q = np.array(wb.body_ik(base, pts, q_prev=q_prev, strict=True).q[0])
     contacts = pts.copy()
     contacts[:, 2] = 0.0
     for a in (q, base, pts, contacts):

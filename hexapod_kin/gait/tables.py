@@ -182,14 +182,11 @@ def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
         (left if len(left) <= len(right) else right).append(k)
     if len(xy) % 2 == 0:  # as many a side: the legs nearest the axis change side
         yr = _rank(np.abs(xy[:, 1]), tol)
-        while len(left) > len(right) + 1:  # the rear one of the nearest first
-            k = min(left, key=lambda k: (yr[k], xr[k], k))
-            left.remove(k)
-            right.append(k)
-        while len(right) > len(left) + 1:  # the front one of the nearest first
-            k = min(right, key=lambda k: (yr[k], -xr[k], k))
-            right.remove(k)
-            left.append(k)
+        for big, small, s in ((left, right, 1), (right, left, -1)):  # rear leaves left first
+            while len(big) > len(small) + 1:
+                k = min(big, key=lambda k: (yr[k], s * xr[k], k))
+                big.remove(k)
+                small.append(k)
     return (
         sorted(left, key=lambda k: (xr[k], k)),
         sorted(right, key=lambda k: (xr[k], k)),
@@ -241,9 +238,7 @@ def _ripple(xy: np.ndarray) -> PhaseTable:
 
 
 def _pairs(xy: np.ndarray, name: str) -> PhaseTable:
-    left, right = _sides(xy)  # rear, front each
-    lh, lf = left
-    rh, rf = right
+    (lh, lf), (rh, rf) = _sides(xy)  # rear, front each
     first = (lf, rh) if name == "trot" else (lf, lh)
     lift = {leg: (0.0 if leg in first else 0.5) for leg in (lh, lf, rh, rf)}
     return PhaseTable(name, _offsets(lift, 0.5, 4), 0.5, statically_stable=False)
@@ -321,9 +316,8 @@ def phase_table(
     """A built-in pattern by name, made for the robot's legs, or a user's table.
 
     Args:
-        pattern: A name (:func:`pattern_names`: ``wave`` for any N ≥ 5, ``crawl``, ``trot``,
-            ``pace`` for four legs, ``tripod`` for six, ``ripple`` for an even N ≥ 6) or a
-            :class:`PhaseTable` with one offset per leg.
+        pattern: A name (:func:`pattern_names`, the module doc) or a :class:`PhaseTable`
+            with one offset per leg.
         n_legs: Number of legs.
         positions: (N, 2) the legs' xy in the body frame (x forward, y left), e.g. the mounts;
             default :func:`default_positions` (the built-in hexapod's order). Sides are

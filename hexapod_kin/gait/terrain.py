@@ -179,6 +179,11 @@ def disc_offsets(radius: float, fine: bool = False) -> np.ndarray:
     return np.concatenate(rows)
 
 
+def _plane_height(pl: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Heights z of the planes ``pl`` (n, 4) ``n·x = k`` (n_z > 0) at ``x``, ``y`` (n, S)."""
+    return np.asarray((pl[:, 3:4] - pl[:, 0:1] * x - pl[:, 1:2] * y) / pl[:, 2:3])
+
+
 def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) -> np.ndarray:
     """How far spheres clear the terrain [m], sampled: negative = depth into it.
 
@@ -208,13 +213,10 @@ def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) 
         cn = c[near]
         d = disc_offsets(radius)
         cap = np.sqrt(np.maximum(radius * radius - np.einsum("si,si->s", d, d), 0.0))
-        h = ground(cn[:, None, 0] + d[:, 0], cn[:, None, 1] + d[:, 1])
+        x, y = cn[:, None, 0] + d[:, 0], cn[:, None, 1] + d[:, 1]
+        h = ground(x, y)
         if below is not None:  # the ground at or under each point's plane is ignored
-            pl = np.asarray(below, dtype=float)[near]  # (n, 4): n_xyz, offset
-            plane = (pl[:, 3:4] - pl[:, 0:1] * (cn[:, None, 0] + d[:, 0])) - pl[:, 1:2] * (
-                cn[:, None, 1] + d[:, 1]
-            )
-            plane = plane / pl[:, 2:3]
+            plane = _plane_height(np.asarray(below, dtype=float)[near], x, y)
             h = np.where(h > plane + EDGE_TOL, h, -np.inf)
         gap = np.array(gap, dtype=float)
         gap[near] = (cn[:, None, 2] - h - cap).min(axis=-1)
@@ -244,8 +246,7 @@ def edge_distance(
     d = disc_offsets(radius + reach, fine=True)
     x, y = c[:, 0, None] + d[:, 0], c[:, 1, None] + d[:, 1]
     h = ground(x, y)
-    pl = np.asarray(below, dtype=float)[near]
-    plane = (pl[..., 3:4] - pl[..., 0:1] * x - pl[..., 1:2] * y) / pl[..., 2:3]
+    plane = _plane_height(np.asarray(below, dtype=float)[near], x, y)
     dz = c[:, 2, None] - h
     flat = np.hypot(d[:, 0], d[:, 1])
     dist = np.where(dz > 0, np.hypot(flat, dz), flat) - radius

@@ -8,8 +8,7 @@ On flat ground at height ``h`` (the stance contacts' mean), with gravity ``g`` a
 ``c`` the centre of mass, ``L`` the angular momentum about it, ``m`` the mass: ``c`` and
 ``ḣ_G = (m c̈, L̇)`` from :func:`pinocchio.computeCentroidalMomentumTimeVariation` at each
 planned configuration, with ``v`` and ``a`` by second-order finite differences on the
-configuration manifold (:func:`manifold_derivatives`). A swinging leg's momentum shifts a
-Solo12's ZMP by up to 2 cm.
+configuration manifold (:func:`manifold_derivatives`).
 """
 
 from __future__ import annotations

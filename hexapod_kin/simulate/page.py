@@ -77,8 +77,7 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     right = render_html(
         mdl, sim.t, sim.q[:, cols], base_poses=sim.base_poses, title="MuJoCo", **options
     )
-    err = d["distance_error"]
-    turn = d["turn_error"]
+    err, turn = d["distance_error"], d["turn_error"]
     plan_lines = [
         f"pattern {run.table.name}, terrain {d['scene']['terrain']}, "
         f"{run.t[-1]:.4g} s at {run.settings.get('rate', float('nan')):.4g} Hz",

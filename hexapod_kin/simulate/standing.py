@@ -53,18 +53,6 @@ class StandForces:
         return fields_dict(self, *names, "height")
 
 
-def _stance(wb: Any) -> Any:
-    from ..dynamics import stand
-    from ..params import Hexapod
-
-    params = getattr(wb, "params", None)
-    if isinstance(params, Hexapod):
-        from ..kinematics import load
-
-        return stand(load(params))
-    return stand(wb)
-
-
 def stand_forces(
     robot: Any = None,
     *,
@@ -84,8 +72,7 @@ def stand_forces(
     the load spreads over the feet as the stance's shares (a statically indeterminate
     stance under stiff servos keeps the internal forces friction locks in at touch-down),
     then the gain ramps to the robot's over a quarter of ``settle`` and holds. The servos
-    have no armature here unless asked (it moves MuJoCo's load shares, which follow each
-    constraint's regularisation, by about 0.004 N on the built-in hexapod).
+    have no armature here unless asked.
 
     Args:
         robot: As :func:`scene_mjcf`.
@@ -99,7 +86,12 @@ def stand_forces(
         OptionalDependencyError: MuJoCo is not installed.
 
     """
+    from ..dynamics import stand
+    from ..kinematics import load
+    from ..params import Hexapod
+
     dur = positive("settle", settle)
+
     check_steps(
         scene_options.get("timestep") or 1e-3 if scene is None else scene.timestep, {"settle": dur}
     )
@@ -113,11 +105,9 @@ def stand_forces(
         raise ParameterError(
             f"stand_forces needs a flat scene, not {sc.terrain!r}", parameter="scene"
         )
-    st = _stance(wb)
+    st = stand(load(wb.params) if isinstance(wb.params, Hexapod) else wb)
     eng = _Engine(sc)
-    q = np.zeros(len(sc.joint_names))
-    cols = [list(st.joint_names).index(j) for j in sc.joint_names]
-    q[:] = np.asarray(st.q)[cols]
+    q = np.asarray(st.q, dtype=float)[[list(st.joint_names).index(j) for j in sc.joint_names]]
     pose = np.eye(4)
     pose[2, 3] = st.height
     eng.place(pose, q)
@@ -137,14 +127,6 @@ def stand_forces(
         eng.mj.mj_step(m, eng.data)
         if k >= steps - tail:
             acc += eng.contact_forces()
-    forces = acc / tail
-    idx = [list(sc.leg_names).index(n) for n in st.stance_legs]
-    mine, expected = forces[idx], np.asarray(st.forces, dtype=float).copy()
+    mine, expected = (acc / tail)[stance], np.asarray(st.forces, dtype=float).copy()
     read_only(mine, expected)
-    return StandForces(
-        legs=tuple(st.stance_legs),
-        forces=mine,
-        expected=expected,
-        weight=float(st.weight),
-        height=float(st.height),
-    )
+    return StandForces(tuple(st.stance_legs), mine, expected, float(st.weight), float(st.height))
