@@ -6,8 +6,7 @@
   is centred on the foot point (within a quarter of its size). The smallest over the legs.
 * :func:`collision_hulls`: every mesh collision of the body and the legs as the vertices of
   its convex hull, in its link's frame (MuJoCo collides the convex hull of a mesh geom; the
-  hull's vertices are what it keeps); a concave mesh as the hulls of its convex pieces
-  (:mod:`.pieces`: CHAMP's H-shaped base). The foot link's own shapes are left out (the scene's
+  hull's vertices are what it keeps). The foot link's own shapes are left out (the scene's
   foot sphere stands for them), and so are the mesh vertices within two foot radii of a
   foot point (a lower leg's mesh that models the foot too).
 * :func:`foot_spheres`: for a robot whose foot links have no shape centred on the foot
@@ -269,44 +268,21 @@ def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
         v = _vertices(obj.geometry)
         if v is None:
             continue
-        parts = _pieces_of(obj) or [v]
-        for k, part in enumerate(parts):
-            part = _act(obj.placement, part)  # in the joint's frame
-            for _, fjoint, point in feet:
-                if fjoint == joint:
-                    part = part[np.linalg.norm(part - point, axis=1) > keep_out]
-            part = _act(frame.placement.inverse(), part)  # in the link's frame
-            if len(part) < 4:
-                continue
-            from scipy.spatial import ConvexHull, QhullError  # here: robots without meshes skip
+        v = _act(obj.placement, v)  # in the joint's frame
+        for _, fjoint, point in feet:
+            if fjoint == joint:
+                v = v[np.linalg.norm(v - point, axis=1) > keep_out]
+        v = _act(frame.placement.inverse(), v)  # in the link's frame
+        if len(v) < 4:
+            continue
+        from scipy.spatial import ConvexHull, QhullError  # here: robots without meshes skip it
 
-            try:
-                hull = ConvexHull(part)
-            except QhullError:  # flat or degenerate: no volume to collide
-                continue
-            name = str(obj.name) if len(parts) == 1 else f"{obj.name}_piece{k}"
-            out.append(MeshHull(link=link, name=name, vertices=part[hull.vertices]))
+        try:
+            hull = ConvexHull(v)
+        except QhullError:  # flat or degenerate: no volume to collide
+            continue
+        out.append(MeshHull(link=link, name=str(obj.name), vertices=v[hull.vertices]))
     return out
-
-
-_PIECES: dict[tuple[str, tuple[float, ...], int], list[np.ndarray] | None] = {}
-
-
-def _pieces_of(obj: Any) -> list[np.ndarray] | None:
-    """:func:`.pieces.convex_pieces` of a geometry object's mesh (its frame), cached per file."""
-    from .pieces import convex_pieces, triangles
-
-    path = str(getattr(obj, "meshPath", "") or "")
-    scale = tuple(float(x) for x in np.asarray(getattr(obj, "meshScale", np.ones(3))).ravel())
-    shape = obj.geometry
-    key = (path, scale, int(getattr(shape, "num_tris", 0) or 0))
-    if not path or key not in _PIECES:
-        tris = triangles(shape)
-        found = None if tris is None else convex_pieces(tris)
-        if not path:
-            return found
-        _PIECES[key] = found
-    return _PIECES[key]
 
 
 def add_hulls(root: Any, bodies: dict[str, Any], wb: Any, r: float) -> None:
