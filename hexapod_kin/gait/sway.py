@@ -28,8 +28,9 @@ The default gain (:func:`default_gain`): 1 for a statically stable pattern on fo
 more legs (their supports hold the body with a wider margin) 1 only when a support of the
 pattern is a triangle that the body's centre of mass, standing still, leaves with less than
 :data:`SWAY_SHARE` of the triangle's largest margin (its inradius): a tripod on a long narrow
-body. The two triangles of a tripod on legs around a circle (the built-in hexapod's) have
-their incentre at the centre of mass: no sway.
+body; and only when the legs follow the incentre's sway (within reach and their limits),
+else the walk does not sway (settings' ``sway`` 0). The two triangles of a tripod on legs
+around a circle (the built-in hexapod's) have their incentre at the centre of mass: no sway.
 """
 
 from __future__ import annotations
@@ -145,7 +146,8 @@ def sway_poses(
     plan: np.ndarray,
     t: np.ndarray,
     q0: Any,
-) -> np.ndarray:
+    needed: bool = True,
+) -> np.ndarray | None:
     """The body poses (N, 4, 4) with the periodic sway added (see the module docstring).
 
     Args:
@@ -159,6 +161,9 @@ def sway_poses(
         plan: (N, L, 3) planned foot points in the world [m].
         t: (N,) sample times [s].
         q0: Joints the first sample's IK branch is nearest to.
+        needed: When the legs cannot follow the incentre's sway, sway to the centroid (the
+            walk needs a sway: four legs, or asked for); False: return None (no sway, the
+            default on more legs, :func:`default_gain`).
 
     """
     offs = np.asarray(table.offsets)
@@ -211,7 +216,7 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
-    if np.array_equal(safest, centroid):
+    if needed and np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed
     # limits), else the centroid's smaller sway
@@ -220,4 +225,4 @@ def sway_poses(
     vlim = np.broadcast_to(np.asarray(wb.velocity_limit, dtype=float).reshape(-1), speed.shape)
     if np.asarray(ik.ok).all() and not np.any(speed > np.where(vlim > 0, vlim, np.inf)):
         return out
-    return fit(centroid * gain)
+    return fit(centroid * gain) if needed else None

@@ -45,7 +45,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -380,7 +380,12 @@ def walk(
     if knee is not None:
         q0 = knee_seed(wb, knee, base[0], plan[0], q0)
     if st.sway > 0.0:
-        base = sway_poses(wb, table, st.T, st.vel, st.nb, st.sway, base, plan, st.t, q0)
+        needed = sway is not None or wb.n_legs == 4  # else a default the legs may not follow
+        swayed = sway_poses(wb, table, st.T, st.vel, st.nb, st.sway, base, plan, st.t, q0, needed)
+        if swayed is None:
+            st = replace(st, sway=0.0)
+        else:
+            base = swayed
     sol = _Solution(wb, st, sw, base, plan, q0)
     sol.clear_edges()
     return _checked(wb, st, sw, sol, q0, strict)
