@@ -165,13 +165,15 @@ _ROBUST_FAILS = {
     "allowed); with the sway to the support's incentre (sway=1, not the default on six legs) "
     "1.6 mm and no strike. Its other 9 members pass (session 8; the controlled bump members "
     "-0.56 / -0.36 / -0.63 %, now that a fall is judged by the CoM)",
-    "CHAMP": "its feet are the rounded ends of its lower-leg meshes: the URDF's foot point is "
-    "the mesh's lowest point along the shin, but the end is 30 mm wide, so with the shin at 33 "
-    "deg (standing) its edge is 4.9 mm below the 1 mm point foot's centre and the lower-leg "
-    "hulls stand 3.8 mm in the ground from t = 0 (every member; session 8). Walked with a "
-    "15 mm foot sphere the controller passes its bump member (seed 0: -0.03 %, no non-foot "
-    "contact): the scene's foot (hexapod_kin.simulate.collision) must be the mesh's end, not "
-    "a point; its replay with the CLI's default walk failed too (+33 % travel, session 7)",
+    "CHAMP": "its feet are now the round ends of its lower-leg meshes (17.5 mm spheres fitted "
+    "to the STL's end, planned and simulated: no lower leg in the ground, session 9); what "
+    "fails is its thighs meeting its base: the base mesh is an H (plates 290 mm wide at the "
+    "ends and the middle, a 30 mm spine where the hips sit), MuJoCo collides its convex hull "
+    "(a 290 x 500 mm box) which the thighs clear by 1.7-2.8 mm at rest, and the crawl's sway "
+    "rolls the hips by 12 deg (0.087 to 0.30 rad): a thigh is in it from 0.16 s, up to 7.5 mm "
+    "(the CLI's plain simulate: +17.4 % travel, 88 mm slip, four base-thigh contacts). Cut "
+    "into convex slabs (commit 78af3cb, reverted) the rear thighs, pitched back beside the "
+    "rear plates 1.7 mm off, still meet them: the plan needs the body's collision shapes",
     "Mini Pupper": "MuJoCo's default contact with zero armature, friction 1, fails its replay "
     "(travel -1.52 %; the other seven replays -0.10 to -0.98 %); the controlled bump members, "
     "commanded the plan's mean twist of its CoM (session 8: 37.2 mm in 10 s where the nominal "

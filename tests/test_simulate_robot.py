@@ -369,4 +369,3 @@ def test_champ_stands_on_its_feet_not_on_its_shins() -> None:
     assert sim.scene.foot_radius == pytest.approx(0.0175, abs=1e-6)
     assert sim.run.settings["foot_radius"] == sim.scene.foot_radius
     assert not [c for c in sim.non_foot_contacts if "ground" in c[:2]], sim.non_foot_contacts
-    assert not sim.swing_strikes
