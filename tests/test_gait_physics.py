@@ -218,33 +218,6 @@ def test_quadruped_crawls_ten_seconds_with_sway_and_positive_margin(quad):
     assert np.abs(np.diff(acc)).max() < 0.1 * np.abs(acc).max()
 
 
-def test_a_tripod_sways_by_default_only_on_a_body_its_triangles_hold_narrowly(wb):
-    """Kraby's tripod: the CoM 63.6 mm inside a triangle whose inradius is 86.7 mm sways."""
-    from pathlib import Path
-
-    from hexapod_kin.gait import as_whole_body
-    from hexapod_kin.gait.stability import support_margin
-    from hexapod_kin.gait.sway import SWAY_SHARE
-
-    kraby = as_whole_body(str(Path(__file__).parent / "data/kraby/hexapod.urdf"))
-    share = {}
-    for name, robot in (("kraby", kraby), ("hexapod", wb)):
-        q = robot.neutral_q()
-        feet = robot.neutral_feet(robot.foot_reach)[[0, 2, 4], :2]
-        com = robot.com(q[None], np.eye(4)[None])[0, :2]
-        a, b, c = (np.linalg.norm(feet[i] - feet[i - 1]) for i in range(3))
-        half = (a + b + c) / 2  # the inradius by Heron: area / semi-perimeter
-        inradius = math.sqrt(half * (half - a) * (half - b) * (half - c)) / half
-        share[name] = support_margin(feet, np.ones(3, bool), com) / inradius
-    assert share["kraby"] == pytest.approx(0.734, abs=0.005)
-    assert share["kraby"] < SWAY_SHARE
-    assert share["hexapod"] == pytest.approx(1.0, abs=1e-6)
-    assert walk(kraby, duration=1.0).settings["sway"] == 1.0  # the tripod, by default
-    assert walk(kraby, pattern="wave", duration=1.0).settings["sway"] == 0.0  # five feet
-    assert walk(wb, duration=1.0).settings["sway"] == 0.0
-    assert walk(kraby, duration=1.0, sway=0.0).settings["sway"] == 0.0  # asked for: kept
-
-
 def test_margin_within_rounding_of_zero_is_not_a_failure(quad):
     """A β = 0.75 crawl without sway hands over on the diagonal: margin ≈ −1e-16 m."""
     run = walk(quad, pattern="crawl", duty_factor=0.75, sway=0.0, foot_radius=0.0, stride=0.05)

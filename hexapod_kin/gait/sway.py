@@ -23,14 +23,6 @@ load, and the swinging foot's corner of the body drops by the plane through the 
 ``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
 one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
 incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
-
-The default gain (:func:`default_gain`): 1 for a statically stable pattern on four legs; on
-more legs (their supports hold the body with a wider margin) 1 only when a support of the
-pattern is a triangle that the body's centre of mass, standing still, leaves with less than
-:data:`SWAY_SHARE` of the triangle's largest margin (its inradius): a tripod on a long narrow
-body; and only when the legs follow the incentre's sway (within reach and their limits),
-else the walk does not sway (settings' ``sway`` 0). The two triangles of a tripod on legs
-around a circle (the built-in hexapod's) have their incentre at the centre of mass: no sway.
 """
 
 from __future__ import annotations
@@ -43,15 +35,7 @@ from .paths import se2_pose
 from .stability import periodic_spline
 from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["SWAY_SHARE", "default_gain", "support_centre", "sway_poses"]
-
-#: A walk on more than four legs sways by default when the centre of mass leaves one of its
-#: triangular supports less than this share of the triangle's inradius (the margin at the
-#: incentre): the incentre then gives more than 1/0.8 = 1.25 times the margin.
-#: Kraby's tripod: 63.6 mm of 86.7 mm (0.73; without the sway, MuJoCo's soft contact tilts
-#: its body towards the swing corner and a swing foot lands 2.2 mm early); hexaross 0.86,
-#: olli-io's hexa 0.96, the built-in hexapod and the RARL hexapod 1.
-SWAY_SHARE = 0.8
+__all__ = ["support_centre", "sway_poses"]
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
@@ -93,48 +77,6 @@ def support_centre(points: np.ndarray) -> np.ndarray:
     return np.asarray(side @ p / side.sum())
 
 
-def _triangle_margin(p: np.ndarray, c: np.ndarray) -> float:
-    """The distance [m] from ``c`` (2,) to the nearest side of the triangle ``p`` (3, 2)."""
-    edge = np.roll(p, -1, axis=0) - p
-    normal = np.stack([-edge[:, 1], edge[:, 0]], axis=1) / np.linalg.norm(edge, axis=1)[:, None]
-    return float(np.abs(np.einsum("ij,ij->i", c - p, normal)).min())
-
-
-def default_gain(wb: Any, table: Any, nb: np.ndarray) -> float:
-    """The body-sway gain a walk gets by default (see the module's docstring).
-
-    Args:
-        wb: The robot (:class:`~.robot.WholeBody`; its centre of mass at its neutral pose).
-        table: The phase table (its supports at the swing groups' mid-swing).
-        nb: (L, 2) neutral feet in the body frame [m].
-
-    Returns:
-        1.0 or 0.0.
-
-    """
-    if not table.statically_stable:
-        return 0.0
-    if wb.n_legs == 4:
-        return 1.0
-    if not wb.mass > 0:  # no centre of mass to place
-        return 0.0
-    offs = np.asarray(table.offsets)
-    beta = table.duty_factor
-    com = None
-    for tau in np.unique(np.round(np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0), 12)):
-        stance = np.remainder(tau + offs, 1.0) < beta
-        if stance.sum() != 3:
-            continue
-        tri = np.asarray(nb, dtype=float)[stance]
-        inradius = _triangle_margin(tri, support_centre(tri))
-        if com is None:
-            q = wb.neutral_q()
-            com = np.asarray(wb.com(q[None], np.eye(4)[None]), dtype=float).reshape(-1)[:2]
-        if inradius > 0 and _triangle_margin(tri, com) < SWAY_SHARE * inradius:
-            return 1.0
-    return 0.0
-
-
 def sway_poses(
     wb: Any,
     table: Any,
@@ -146,8 +88,7 @@ def sway_poses(
     plan: np.ndarray,
     t: np.ndarray,
     q0: Any,
-    needed: bool = True,
-) -> np.ndarray | None:
+) -> np.ndarray:
     """The body poses (N, 4, 4) with the periodic sway added (see the module docstring).
 
     Args:
@@ -161,9 +102,6 @@ def sway_poses(
         plan: (N, L, 3) planned foot points in the world [m].
         t: (N,) sample times [s].
         q0: Joints the first sample's IK branch is nearest to.
-        needed: When the legs cannot follow the incentre's sway, sway to the centroid (the
-            walk needs a sway: four legs, or asked for); False: return None (no sway, the
-            default on more legs, :func:`default_gain`).
 
     """
     offs = np.asarray(table.offsets)
@@ -216,7 +154,7 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
-    if needed and np.array_equal(safest, centroid):
+    if np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed
     # limits), else the centroid's smaller sway
@@ -225,4 +163,4 @@ def sway_poses(
     vlim = np.broadcast_to(np.asarray(wb.velocity_limit, dtype=float).reshape(-1), speed.shape)
     if np.asarray(ik.ok).all() and not np.any(speed > np.where(vlim > 0, vlim, np.inf)):
         return out
-    return fit(centroid * gain) if needed else None
+    return fit(centroid * gain)

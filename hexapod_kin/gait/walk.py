@@ -20,8 +20,7 @@
   stays put and the body moves over the ground as planned. ω depends on the joint angles, so
   IK and rolling are iterated to a fixed point (``settings["rolling_residual"]``). With
   ``r = 0`` the feet are points fixed in the world during stance.
-* **Body sway** (``sway``; on by default for four legs, and for a tripod on a narrow body,
-  :func:`.sway.default_gain`): the body's horizontal position gets a
+* **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
   periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
   one knot per swing group at mid-swing; each knot moves the zero-moment point to the
   support's safest point (the stance contacts at that instant; three of them: the incentre,
@@ -45,7 +44,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -71,7 +70,7 @@ from .stability import (
     support_margin,
     terrain_clearance,
 )
-from .sway import default_gain, sway_poses
+from .sway import sway_poses
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
 from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_profile, swing_raise
 from .terrain import terrain as make_terrain
@@ -237,10 +236,8 @@ def walk(
         strict: Raise on the first failed check (else return the run with its checks).
         foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
             feet fixed in stance).
-        sway: Body-sway gain in [0, 1] (default :func:`.sway.default_gain`: 1 for a
-            statically stable pattern on four legs, or on more legs with a triangular support
-            whose inradius is well beyond the body's margin in it; else 0): see the module
-            docstring.
+        sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
+            legs, else 0): see the module docstring.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
         knee: Where the knees of the closed-form legs point at the first sample (one of
@@ -297,7 +294,8 @@ def walk(
     hz = positive("rate", rate, at_most=1e5)
     rad = float(wb.foot_radius) if foot_radius is None else foot_radius
     rad = positive("foot_radius", rad, allow_zero=True, at_most=1.0)
-    gain = None if sway is None else positive("sway", sway, allow_zero=True, at_most=1.0)
+    default_sway = 1.0 if (wb.n_legs == 4 and table.statically_stable) else 0.0
+    gain = default_sway if sway is None else positive("sway", sway, allow_zero=True, at_most=1.0)
     n = int(round(dur * hz)) + 1
     if n > 2_000_000:
         raise ParameterError(
@@ -338,8 +336,6 @@ def walk(
         vel = (float(v[0]), float(v[1]), float(v[2]))
     ground: Terrain = make_terrain(terrain)
     nb = wb.neutral_feet(reach)[:, :2]  # (L, 2)
-    if gain is None:
-        gain = default_gain(wb, table, nb)
     size = float(np.hypot(wb.mounts[:, 0, 3], wb.mounts[:, 1, 3]).max()) + reach
     vx, vy, w = vel
     with np.errstate(over="ignore", invalid="ignore"):
@@ -380,12 +376,7 @@ def walk(
     if knee is not None:
         q0 = knee_seed(wb, knee, base[0], plan[0], q0)
     if st.sway > 0.0:
-        needed = sway is not None or wb.n_legs == 4  # else a default the legs may not follow
-        swayed = sway_poses(wb, table, st.T, st.vel, st.nb, st.sway, base, plan, st.t, q0, needed)
-        if swayed is None:
-            st = replace(st, sway=0.0)
-        else:
-            base = swayed
+        base = sway_poses(wb, table, st.T, st.vel, st.nb, st.sway, base, plan, st.t, q0)
     sol = _Solution(wb, st, sw, base, plan, q0)
     sol.clear_edges()
     return _checked(wb, st, sw, sol, q0, strict)
