@@ -165,8 +165,9 @@ _ROBUST_FAILS = {
     "allowed). The sway to the support's incentre (sway=1; its CoM stands at 0.73 of the "
     "tripod triangles' inradius) removes the strikes but not the failure (session 9, the "
     "whole ensemble): heading 0.54 / 0.78 deg with MuJoCo's contact (friction 1; limit 0.5), "
-    "travel +1.07 % (zero armature, friction 0.6); the controlled bump members, torque kind "
-    "since the one default_kind rule, walk -41 / -79 / -23 % with non-foot contacts",
+    "travel +1.07 % (zero armature, friction 0.6). The controlled bump members (torque kind "
+    "since the one default_kind rule) fail with or without the sway: -41 / -79 / -23 % with "
+    "it; without it (b240a52) seed 1 falls, 33 non-foot contacts, heading 118 deg",
     "CHAMP": "its feet are now the round ends of its lower-leg meshes (17.5 mm spheres fitted "
     "to the STL's end, planned and simulated: no lower leg in the ground, session 9); what "
     "fails is its thighs meeting its base: the base mesh is an H (plates 290 mm wide at the "
