@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,7 +22,12 @@ from hexapod_kin.exceptions import ParameterError  # noqa: E402
 from hexapod_kin.gait import as_whole_body  # noqa: E402
 from hexapod_kin.robust import ENSEMBLE, ROBUST_TIMESTEP, Member, simulate_robust  # noqa: E402
 from hexapod_kin.simulate import scene_mjcf, simulate  # noqa: E402
-from hexapod_kin.simulate.collision import collision_hulls, foot_radius_of  # noqa: E402
+from hexapod_kin.simulate.collision import (  # noqa: E402
+    collision_hulls,
+    foot_radius_of,
+    foot_spheres,
+    scene_robot,
+)
 from hexapod_kin.simulate.scene import (  # noqa: E402
     MAX_TIMESTEP,
     STABLE_OMEGA_DT,
@@ -320,3 +326,46 @@ def test_simulate_plans_a_quadrupeds_own_default_pattern() -> None:
     assert sim.run.table.name == "crawl" and sim.run.robot.n_legs == 4
     rr = simulate_robust("erd:go1", duration=0.5, stand=False, members=ENSEMBLE[:1])
     assert rr.nominal.run.table.name == "crawl"
+
+
+CHAMP = Path(__file__).resolve().parent / "data/champ/champ_description/urdf/champ.urdf"
+
+
+def _stl_vertices(path: Path) -> np.ndarray:
+    """The vertices of a binary STL file [its units], read with numpy alone."""
+    raw = path.read_bytes()
+    n = int(np.frombuffer(raw, dtype="<u4", count=1, offset=80)[0])
+    rec = np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    return np.unique(np.frombuffer(raw, dtype=rec, count=n, offset=84)["v"].reshape(-1, 3), axis=0)
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_champs_feet_are_the_round_ends_of_its_lower_leg_meshes() -> None:
+    wb = as_whole_body(str(CHAMP))
+    assert wb.foot_radius == 0.0 and foot_radius_of(wb) is None  # its foot links are empty
+    ends, r = foot_spheres(wb)
+    # the shin's end in the STL itself (mm, the URDF scales it by 0.001 at the link origin):
+    # the vertices below the foot point's height + 1 cm all lie on one sphere of that radius
+    v = _stl_vertices(CHAMP.parents[1] / "meshes/lower_leg.stl") * 1e-3
+    end = v[v[:, 2] <= v[:, 2].min() + 0.01]
+    assert v[:, 2].min() == pytest.approx(-0.141, abs=1e-6)  # the URDF's foot point's depth
+    centre = np.array([ends[0][1][0], ends[0][1][1], ends[0][1][2] - 0.141])
+    assert np.abs(np.linalg.norm(end - centre, axis=1) - r).max() < 1e-5
+    assert r == pytest.approx(0.0175, abs=1e-6)
+    assert {frame for frame, _ in ends} == {f"{leg}_foot_link" for leg in ("lf", "lh", "rf", "rh")}
+    # the simulated robot plans with those spheres: its feet are their centres
+    moved = scene_robot(str(CHAMP))
+    assert moved.foot_radius == r
+    assert np.allclose(moved.foot_offsets, [offset for _, offset in ends])
+    assert scene_robot("erd:solo12") is as_whole_body("erd:solo12")  # centred feet: as it was
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_champ_stands_on_its_feet_not_on_its_shins() -> None:
+    # with 1 mm point feet at the URDF's foot points, the lower-leg hulls stood 3.8 mm in the
+    # ground from t = 0: a non-foot contact in every replay (the thighs' contacts with the
+    # base's plates, 1.7 mm away at rest, are the sway's: see tests/test_robot_table.py)
+    sim = simulate(str(CHAMP), duration=1.0, stand=False)
+    assert sim.scene.foot_radius == pytest.approx(0.0175, abs=1e-6)
+    assert sim.run.settings["foot_radius"] == sim.scene.foot_radius
+    assert not [c for c in sim.non_foot_contacts if "ground" in c[:2]], sim.non_foot_contacts

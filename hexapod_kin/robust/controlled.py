@@ -248,7 +248,9 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
         robot: The robot as the plan was given it (a source, a model; a run's ``robot``).
         member: The :class:`~hexapod_kin.robust.Member` (friction, bumps, seed).
         feet: Feet of a URDF robot without foot links (as ``simulate`` takes them), or None.
-        foot_radius: Foot sphere radius [m], or None (the robot's).
+        foot_radius: Foot sphere radius [m], or None (the robot's: as the replay's scene,
+            feet that are round ends of the legs' meshes are those spheres,
+            :func:`~hexapod_kin.simulate.collision.scene_robot`).
 
     Returns:
         A :class:`ControlledRun`.
@@ -257,9 +259,13 @@ def controlled_run(replay: Any, robot: Any, member: Any, feet: Any, foot_radius:
     from ..control import run
     from ..control.sim import default_kind
     from ..gait import as_whole_body
+    from ..simulate.collision import scene_robot
 
     if feet is not None or foot_radius is not None:  # as ``control`` on the command line
         robot = as_whole_body(robot, feet=feet, foot_radius=foot_radius)
+    if foot_radius is None:  # the feet the replay's scene has (its meshes' round ends)
+        moved = scene_robot(robot)
+        robot = moved if moved is not as_whole_body(robot) else robot
     kind = default_kind(as_whole_body(robot))  # tracks the base's origin (servo), the CoM
     plan = replay.plan
     duration = float(plan["duration"])

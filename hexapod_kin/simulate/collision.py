@@ -9,6 +9,11 @@
   hull's vertices are what it keeps). The foot link's own shapes are left out (the scene's
   foot sphere stands for them), and so are the mesh vertices within two foot radii of a
   foot point (a lower leg's mesh that models the foot too).
+* :func:`foot_spheres`: for a robot whose foot links have no shape centred on the foot
+  point, the round end of the mesh that carries the foot (a lower leg whose end is the foot):
+  the sphere fitted to that mesh's vertices near its end, when they fit one and the foot point
+  lies on it. Its centre and radius are the scene's foot (the foot point the URDF names is a
+  point of that end's surface, not its centre).
 
 Both take the geometry Pinocchio built from the URDF
 (:meth:`hexapod_kin.model.KinematicModel.geometry_model`), so meshes resolve with the
@@ -22,7 +27,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MeshHull", "add_hulls", "collision_hulls", "foot_radius_of", "mjcf_asset"]
+__all__ = [
+    "MeshHull",
+    "add_hulls",
+    "collision_hulls",
+    "foot_radius_of",
+    "foot_spheres",
+    "scene_robot",
+    "mjcf_asset",
+]
 
 
 @dataclass(frozen=True)
@@ -116,6 +129,121 @@ def foot_radius_of(wb: Any) -> float | None:
             return None
         radii.append(best)
     return min(radii) if radii else None
+
+
+#: A sphere fitted to a mesh's end is the foot when its vertices are within this fraction of
+#: the radius of it (or :data:`FIT_TOLERANCE`, the larger) and the foot point is as close.
+FIT_RELATIVE = 0.05
+FIT_TOLERANCE = 5e-4
+#: The depths of the mesh's end tried for the fit, as fractions of the foot point's distance
+#: from its joint (the deepest that fits a sphere is taken).
+_CAP_DEPTHS = (0.1, 0.05, 0.025)
+
+
+def _fit_sphere(v: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """Least-squares sphere through points ``v`` (V, 3): ``(centre, radius, worst residual)``.
+
+    Kåsa's algebraic fit: ``|x|² = 2 c·x + k`` is linear in the centre ``c`` and
+    ``k = r² − |c|²``; the residual is the largest ``| |x − c| − r |``.
+    """
+    a = np.c_[2.0 * v, np.ones(len(v))]
+    sol, *_ = np.linalg.lstsq(a, (v * v).sum(axis=1), rcond=None)
+    centre = sol[:3]
+    r = float(np.sqrt(max(float(sol[3] + centre @ centre), 0.0)))
+    return centre, r, float(np.abs(np.linalg.norm(v - centre, axis=1) - r).max())
+
+
+def _end_sphere(v: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """The sphere of a mesh's round end at the foot point (joint frame), else None.
+
+    ``v`` the mesh's vertices and ``point`` the foot point, both in the frame of the joint
+    moving them; the end is the vertices deepest along the joint-to-foot direction ``d``
+    (within a depth of :data:`_CAP_DEPTHS` × ``|point|`` of the deepest). Found when they lie
+    on a sphere and the foot point does too (:data:`FIT_RELATIVE`, :data:`FIT_TOLERANCE`).
+    """
+    reach = float(np.linalg.norm(point))
+    if reach <= 0 or len(v) < 4:
+        return None
+    depth = v @ (point / reach)
+    for frac in _CAP_DEPTHS:
+        cap = v[depth >= depth.max() - frac * reach]
+        if len(cap) < 10:
+            continue
+        centre, r, worst = _fit_sphere(cap)
+        tol = max(FIT_RELATIVE * r, FIT_TOLERANCE)
+        on = abs(float(np.linalg.norm(point - centre)) - r)
+        if 0 < r < 0.5 * reach and worst <= tol and on <= tol:
+            return centre, r
+    return None
+
+
+#: Per leg, a frame and a point in it [m] (a foot as ``as_whole_body(feet=...)`` takes it).
+FootEnds = tuple[tuple[str, tuple[float, float, float]], ...]
+
+
+def foot_spheres(wb: Any) -> tuple[FootEnds, float] | None:
+    """The feet as the round ends of the meshes that carry them (see the module's docstring).
+
+    For a robot without a foot radius of its own (``wb.foot_radius == 0``) whose foot links
+    have no shape centred on the foot point (:func:`foot_radius_of` finds none): per leg, the
+    sphere of the round end of a mesh moved by the foot's joint that ends at the foot point
+    (:func:`_end_sphere`). Every leg must have one; their radius is the smallest (a larger end's
+    centre moves along the leg by the difference, so that its lowest point stays).
+
+    Returns:
+        ``(feet, radius)``: per leg (in ``wb``'s order) the foot frame's parent frame and the
+        sphere's centre in it [m], as :func:`hexapod_kin.gait.as_whole_body` takes ``feet``;
+        the radius [m]. None when the robot has a foot radius, a centred foot shape, or a leg
+        without such an end.
+
+    """
+    if float(wb.foot_radius) > 0 or foot_radius_of(wb) is not None:
+        return None
+    found = _collision_model(wb)
+    if found is None:
+        return None
+    full, geom = found
+    model = wb.model
+    ends = []
+    for fname, (_, joint, point) in zip(wb.foot_frames, _foot_links(wb)):
+        best = None
+        for obj in geom.geometryObjects:
+            if str(full.names[obj.parentJoint]) != joint:
+                continue
+            v = _vertices(obj.geometry)
+            fit = None if v is None else _end_sphere(_act(obj.placement, v), point)
+            if fit is not None and (best is None or fit[1] < best[1]):
+                best = fit
+        if best is None:
+            return None
+        frame = model.frames[model.getFrameId(fname)]
+        ends.append((model.frames[frame.parentFrame], point, best))
+    radius = min(r for _, _, (_, r) in ends)
+    feet = []
+    for parent, point, (centre, r) in ends:
+        centre = centre + (r - radius) * point / np.linalg.norm(point)
+        local = parent.placement.actInv(centre)
+        feet.append((str(parent.name), (float(local[0]), float(local[1]), float(local[2]))))
+    return tuple(feet), radius
+
+
+def scene_robot(robot: Any, feet: Any = None) -> Any:
+    """The robot as the simulation plans and builds it: feet at its meshes' round ends.
+
+    :func:`hexapod_kin.gait.as_whole_body` of ``robot`` (and ``feet``), rebuilt with the
+    feet and radius of :func:`foot_spheres` when it finds them (the plan then rolls the
+    same spheres the scene collides); else that robot unchanged.
+    """
+    from ..gait import as_whole_body
+    from ..gait.legs import FootSpec
+
+    wb = as_whole_body(robot, feet=feet)
+    found = foot_spheres(wb)
+    if found is None:
+        return wb
+    ends, radius = found
+    specs = tuple(FootSpec(frame, offset) for frame, offset in ends)
+    return as_whole_body(wb.kinematic, feet=specs, foot_radius=radius)
 
 
 def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:

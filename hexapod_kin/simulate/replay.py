@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..exceptions import ConfigurationError, ParameterError, UrdfError, one_of
+from .collision import scene_robot
 from .scene import (
     POINT_FOOT,
     SCENE_TERRAINS,
@@ -348,7 +349,9 @@ def simulate(
         feet: The feet of a URDF robot without foot links (``"frame:x,y,z ..."``, as
             :func:`~hexapod_kin.gait.robot.as_whole_body` takes them; when planning).
         foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
-            else the robot's); when planning, the plan's feet too.
+            else the robot's); when planning, the plan's feet too. When planning without
+            it, feet that are the round ends of the legs' meshes are planned and simulated
+            as those spheres (:func:`~.collision.scene_robot`).
         friction: Sliding friction coefficient.
         kp: Servo position gain [N·m/rad] (default: scaled to the robot,
             :func:`~.scene.servo_defaults`; 300 for the built-in hexapod).
@@ -423,6 +426,7 @@ def simulate(
         one_of("terrain", ground, list(SCENE_TERRAINS))
         wb = _robot(run_or_robot, feet)
         if foot_radius is None:  # the robot's feet, from its collision shapes if need be
+            wb = scene_robot(wb)  # a mesh's round end: the foot's centre moves there
             foot_radius = scene_foot_radius(wb)
         if "foot_radius" in inspect.signature(walk).parameters:
             walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
