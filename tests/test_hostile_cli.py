@@ -1126,9 +1126,13 @@ def _before_the_command(run: Run) -> bool:
     Python's own traceback then ends in ``KeyboardInterrupt`` with no frame of the command
     line (``hexapod_kin/cli``): no package code has run that could catch it (interpreter
     start-up and ``site`` take some 60 ms idle, the package's first imports some 25 ms).
+    Inside ``site`` (its ``.pth`` files: the editable install's finder) Python ends with its
+    own ``Fatal Python error: init_import_site`` and status 1 (seen at load 20).
     """
     tail = run.lines[-1:] == ["KeyboardInterrupt"]
-    return tail and run.status in (130, -signal.SIGINT) and "hexapod_kin/cli" not in run.stderr
+    in_site = run.status == 1 and run.stderr.startswith("Fatal Python error: init_import_site")
+    status = run.status in (130, -signal.SIGINT) or in_site
+    return tail and status and "hexapod_kin/cli" not in run.stderr
 
 
 def interrupted_cli(*args: str, cwd: Path, delay: float, timeout: float = 120) -> Run:
