@@ -617,6 +617,7 @@ def test_walk_html_scene_has_the_overlays():
         scene_commands(model, run.t, run.q, overlays={"x": np.zeros((3, 2, 3))})
 
 
+@pytest.mark.slow  # a benchmark (21 walks of 10 s); test_tools runs its section too
 def test_tools_bench_gait_runs():
     import subprocess
     import sys
