@@ -373,11 +373,13 @@ def _unsealed(folder: Path) -> str:
     return sorted(folder.glob("*.nb?"))[0].name
 
 
-#: Each case recompiles a kernel (~5 s of CPU): the swap (valid files, the wrong names) runs in
-#: the slow step; a flipped byte, an emptied index, a foreign file and a missing seal in the
-#: default run (``test_cache_matrix`` cuts, empties and overwrites files in the slow step).
+#: Each case recompiles a kernel (~5 s of CPU, a fresh compile): a flipped byte and a missing
+#: seal in the default run; the swap (valid files, the wrong names), an emptied index and a
+#: foreign file in the slow step (``test_cache_matrix`` cuts, empties and overwrites files
+#: there too).
 @pytest.mark.parametrize("damage", [_flip, pytest.param(_swap, marks=pytest.mark.slow),
-                                    _emptied_index, _foreign, _unsealed],
+                                    pytest.param(_emptied_index, marks=pytest.mark.slow),
+                                    pytest.param(_foreign, marks=pytest.mark.slow), _unsealed],
                          ids=["flipped-byte", "swapped", "emptied-index", "foreign-file",
                               "unsealed"])  # fmt: skip
 def test_numba_cache_not_sealed_is_never_loaded(
