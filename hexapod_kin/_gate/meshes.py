@@ -159,9 +159,9 @@ def resolve_mesh(
 def _check_rgba(color: etree._Element) -> None:
     rgba = numbers_of(color, "rgba", 4, None)
     if not rgba:
-        raise error_at(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
+        raise error_at(color, "<color> needs rgba (four numbers in [0, 1])", "rgba")
     if not all(0.0 <= c <= 1.0 for c in rgba):
-        raise error_at(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
+        raise error_at(color, "colour components must be in [0, 1]", "rgba", color.get("rgba"))
 
 
 def check_materials_and_geometry(root: etree._Element) -> None:
@@ -170,7 +170,7 @@ def check_materials_and_geometry(root: etree._Element) -> None:
     for mat in root.findall("material"):
         name = mat.get("name")
         if name is None or not name.strip():
-            raise error_at(mat, "name", name, "every <material> needs a non-empty name")
+            raise error_at(mat, "every <material> needs a non-empty name", "name", name)
         unique(defined, mat, name, "material")
         color = single(mat, "color", required=False)
         if color is not None:
@@ -185,27 +185,22 @@ def check_materials_and_geometry(root: etree._Element) -> None:
                 if len(shapes) != 1:
                     raise error_at(
                         geometry,
-                        None,
-                        None,
                         f"<geometry> must hold exactly one shape "
                         f"({', '.join(SHAPES)}), found {len(shapes)}",
                     )
                 shape = shapes[0]
                 if shape.tag not in SHAPES:
                     raise error_at(
-                        shape,
-                        None,
-                        None,
-                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(SHAPES)}",
+                        shape, f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(SHAPES)}"
                     )
                 for attr in SHAPES[shape.tag]:
                     if shape.get(attr) is None:
-                        raise error_at(shape, attr, None, f"<{shape.tag} {attr}> is required")
+                        raise error_at(shape, f"<{shape.tag} {attr}> is required", attr)
                 mat = single(el, "material", required=False) if part == "visual" else None
                 if mat is None:
                     continue
                 if mat.get("name") is None:  # urdfdom drops the visual; "" is accepted
-                    raise error_at(mat, "name", None, "a visual <material> needs a name attribute")
+                    raise error_at(mat, "a visual <material> needs a name attribute", "name")
                 color = single(mat, "color", required=False)
                 if color is not None:
                     _check_rgba(color)
