@@ -64,8 +64,7 @@ _EPS = 1e-10
 
 
 def _clean(name: str) -> str:
-    out = re.sub(r"[^A-Za-z0-9_.-]", "_", str(name))
-    return out or "x"
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", str(name)) or "x"
 
 
 def _angle(a: np.ndarray, b: np.ndarray, about: np.ndarray) -> float:
@@ -85,13 +84,10 @@ def _meet(o: np.ndarray, x: np.ndarray, p: np.ndarray, u: np.ndarray, scale: flo
     nn = float(np.dot(n, n))
     if nn < 1e-18:
         return None
-    t = float(np.dot(np.cross(p - o, u), n)) / nn
-    point = o + t * x
+    point = o + float(np.dot(np.cross(p - o, u), n)) / nn * x
     off = point - p
     miss = off - np.dot(off, u) * u
-    if float(np.linalg.norm(miss)) > _EPS * scale:
-        return None
-    return point
+    return None if float(np.linalg.norm(miss)) > _EPS * scale else point
 
 
 def _row(
@@ -245,18 +241,6 @@ def _snap(
     return snaps
 
 
-def _exact_twists(rows: list[KhalilRow], snapped: set[int]) -> list[KhalilRow]:
-    """Snapped rows' α as exact multiples of π/2 (they are within rounding of one)."""
-    out = []
-    for k, row in enumerate(rows):
-        if k in snapped:
-            m = round(row.alpha / _HALF_PI)
-            if abs(row.alpha - m * _HALF_PI) < 1e-9:
-                row = replace(row, alpha=0.0 if m == 0 else m * _HALF_PI)
-        out.append(row)
-    return out
-
-
 _HALF_PI = 0.5 * math.pi
 _LEN_TOL = 1e-9
 _ROUNDING = 1e-13  # [rad]: axis relations this close are exact already (never snapped)
@@ -346,8 +330,7 @@ def recover_chain(
                 f"joint {names[i]!r} is a {m.joints[i].shortname()}; a Khalil table expresses "
                 "revolute, continuous, prismatic and fixed joints only"
             )
-    tip_id = km.tip_id
-    frame = m.frames[tip_id]
+    frame = m.frames[km.tip_id]
     path = []
     j = int(frame.parentJoint)
     while j != 0:
@@ -435,16 +418,18 @@ def recover_chain(
         _row(prevs[k], fr, sigmas[k], f"joint {names[path[k]]!r}", scale)
         for k, fr in enumerate(frames)
     ]
-    rows = _exact_twists(rows, snapped_rows)
+    for k in snapped_rows:  # snapped twists: exact multiples of π/2 (within rounding of one)
+        m = round(rows[k].alpha / _HALF_PI)
+        if abs(rows[k].alpha - m * _HALF_PI) < 1e-9:
+            rows[k] = replace(rows[k], alpha=0.0 if m == 0 else m * _HALF_PI)
     last = _frame(*frames[-1])
-    if base_pose is not None:
-        tool = np.linalg.inv(last) @ np.linalg.inv(base_pose) @ t_base_tip
-    else:
-        tool = np.linalg.inv(last) @ t_base_tip
+    tool = np.linalg.inv(last)
+    tool = tool @ t_base_tip if base_pose is None else tool @ inv0 @ t_base_tip
     tool[3] = (0.0, 0.0, 0.0, 1.0)
     u, _, vt = np.linalg.svd(tool[:3, :3])
     tool[:3, :3] = u @ vt
-    size = _size(points, t_base_tip[:3, 3])
+    joints = [np.zeros(3), *points, t_base_tip[:3, 3]]  # size: twice the path's length [m]
+    size = 2.0 * sum(float(np.linalg.norm(b - a)) for a, b in zip(joints[:-1], joints[1:])) + 1e-9
     _check_lengths(rows, tool, size, path_names, km, axes, tol)
     zeroed: list[tuple[str, float]] = []
     if tol > 0:  # lengths within rounding of the URDF's constants: clean zeros
@@ -509,13 +494,6 @@ def _zero_lengths(
     return out, tool, zeroed
 
 
-def _size(points: list[np.ndarray], tip: np.ndarray) -> float:
-    """Twice the path length base origin → joint origins → tip [m]."""
-    path = [np.zeros(3), *points, tip]
-    length = sum(float(np.linalg.norm(b - a)) for a, b in zip(path[:-1], path[1:]))
-    return 2.0 * length + 1e-9
-
-
 def _check_lengths(
     rows: list[KhalilRow],
     tool: np.ndarray,
@@ -558,8 +536,7 @@ def _check(chain: Chain, km: Any, bound: float = 0.0, turn: float = 0.0) -> floa
     lo = np.where(np.isfinite(km.lower), km.lower, -math.pi)
     hi = np.where(np.isfinite(km.upper), km.upper, math.pi)
     qs = [np.zeros(km.nq)] + [rng.uniform(lo, hi) for _ in range(8)]
-    worst = worst_pos = 0.0
-    worst_rot = 0.0
+    worst = worst_pos = worst_rot = 0.0
     for q in qs:
         a, b = table_fk(chain, q), km.fk(q)
         worst = max(worst, float(np.abs(a - b).max()))

@@ -41,6 +41,7 @@ import numpy as np
 from ._chain import AlignedChain, ChainArrays, aligned_chain
 from ._kmath import (
     POLY_TRIG_MAX,
+    OnEnd,
     dls_into,
     eig3_sym,
     njit,
@@ -146,16 +147,10 @@ def _progress(said: bool) -> Iterator[None]:
         return
     from numba.core import event
 
-    class _Dots(event.Listener):
-        def on_start(self, ev: Any) -> None:
-            pass
-
-        def on_end(self, ev: Any) -> None:
-            print(".", end="", file=sys.stderr, flush=True)
-
+    dots = OnEnd(lambda ev: print(".", end="", file=sys.stderr, flush=True))
     t0 = time.perf_counter()
     try:
-        with event.install_listener("numba:compile", _Dots()):
+        with event.install_listener("numba:compile", dots):
             yield
     finally:
         print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
