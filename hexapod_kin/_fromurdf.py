@@ -1,9 +1,8 @@
 """Recover a Khalil–Kleinfinger table from a serial URDF chain (:func:`chain_from_urdf`).
 
-The model is loaded with :func:`hexapod_kin.load` (the loader gate, then Pinocchio; a sub-chain
-is picked with ``base=`` / ``tip=``); the joint placements and axes are read from the Pinocchio
-model at ``q = 0``, which gives one line in space per joint (a point and the unit axis, in the
-base frame). Khalil frames are then placed on those lines:
+The model is loaded with :func:`hexapod_kin.load` (``base=`` / ``tip=`` pick a sub-chain); its
+joint placements and axes at ``q = 0`` give one line in space per joint (in the base frame).
+Khalil frames are then placed on those lines:
 
 * ``z_j`` is joint ``j``'s axis, with the URDF's direction (so ``q`` keeps its sign);
 * ``x_j`` is the common normal from line ``j`` to line ``j + 1`` and frame ``j``'s origin is
@@ -19,24 +18,19 @@ base frame). Khalil frames are then placed on those lines:
 Each row ``(α_j, d_j, θ_j, r_j)`` is read off consecutive frames; fixed URDF joints need no
 rows (Pinocchio folds them into the placements).
 
-**Snapping.** Real files write rotations with rounded constants (``3.14159``, ``1.5704``), so
-axes meant to be parallel miss by a few µrad and their common normal lands kilometres away.
-Before the frames are placed, each joint axis is compared with the previous one: when it is
-within ``angle_tol`` (default :data:`SNAP_TOL` = 1e-4 rad) of parallel, anti-parallel or
-perpendicular, the rest of the chain (that joint, the joints after it and the tip) is turned
-rigidly about that joint's origin by the small rotation that makes the relation exact (the
-correction of the rounded constant in the placement before the joint). Each snap is reported
-(:class:`Snap`, :attr:`TableRecovery.snaps`, and one clause of ``Chain.description``); snapped
-twists are exact multiples of π/2. A snap of ``ε`` rad moves the tip by at most
-``ε × (path length from that joint through the later joints to the tip)`` in every
-configuration: :attr:`TableRecovery.fk_bound` sums these.
+**Snapping.** Real files round their rotations (``3.14159``, ``1.5704``), so axes meant to be
+parallel miss by a few µrad and their common normal lands kilometres away. An axis within
+``angle_tol`` (default :data:`SNAP_TOL`) of parallel, anti-parallel or perpendicular to the
+previous one is made exact by turning the rest of the chain rigidly about that joint's origin;
+each snap is reported (:class:`Snap`, ``Chain.description``), snapped twists are exact
+multiples of π/2, and a snap of ``ε`` rad moves the tip by at most ``ε ×`` the path length
+from that joint to the tip (:attr:`TableRecovery.fk_bound` sums these).
 
 **Checks.** No recovered length (``|d|``, ``|r|``, the tool offset) may exceed the chain's size
-(:attr:`TableRecovery.size`: twice the path length from the base origin through the joint
-origins to the tip) — else :class:`~hexapod_kin.exceptions.ConfigurationError` naming the
-joints and the ``angle_tol`` that would snap them. The table's forward kinematics must equal
-Pinocchio's at ``q = 0`` and at random configurations: to 1e-9 relative (1e-12 m in practice)
-when nothing was snapped, else within ``fk_bound`` (plus that rounding).
+(:attr:`TableRecovery.size`, twice the path length base → joints → tip), else a
+:class:`~hexapod_kin.exceptions.ConfigurationError` names the joints and the ``angle_tol``
+that would snap them. The table's FK must equal Pinocchio's at ``q = 0`` and random
+configurations, to 1e-9 relative without snaps, else within ``fk_bound``.
 """
 
 from __future__ import annotations

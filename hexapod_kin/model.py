@@ -173,23 +173,18 @@ class Model:
             reduced, tip_name = add_tool_frame(reduced, tip_name, tool_m)
             tool_m.setflags(write=False)
             self.tool = tool_m
-        self.model = reduced
-        data = self.model.createData()
-        self.base = base_name
-        self.tip = tip_name
-        self.base_id = frame_index(self.model, base_name)
-        self.tip_id = frame_index(self.model, tip_name)
-        m = self.model
-        self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
+        self.model = m = reduced
+        data = m.createData()
+        self.base, self.tip = base_name, tip_name
+        self.base_id, self.tip_id = frame_index(m, base_name), frame_index(m, tip_name)
+        joints = range(1, m.njoints)
+        self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in joints)
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
-        kinds = [joint_kind(m.joints[i]) for i in range(1, m.njoints)]
-        if not all(k is not None for k in kinds):
-            bad = [
-                f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
-                for i in range(1, m.njoints)
-                if kinds[i - 1] is None
-            ]
+        kinds = [joint_kind(m.joints[i]) for i in joints]
+        if None in kinds:
+            bad = [f"joint {m.names[i]!r} is a {m.joints[i].shortname()}" for i in joints
+                   if kinds[i - 1] is None]  # fmt: skip
             raise SourceError(
                 f"{resolved.name!r}: joints of kind other than 1-DOF revolute/prismatic between "
                 f"{base_name!r} and {tip_name!r} ({'; '.join(bad)}); pick a sub-chain with "
@@ -199,12 +194,12 @@ class Model:
         names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
-        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in range(1, m.njoints)]
+        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in joints]
         self._unbounded = tuple(p for p, kind in zip(idx, names) if kind == "continuous")
         plain = [p for p, kind in zip(idx, names) if kind != "continuous"]
         self._plain_idx = np.array(plain, dtype=np.int64).reshape(-1, 2)
         pin.framesForwardKinematics(m, data, pin.neutral(m))
-        self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
+        self._base_is_root = m.frames[self.base_id].parentJoint == 0 and np.allclose(
             data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
         )
         # The base is fixed (no kept joint between the root and it), so its pose is constant.

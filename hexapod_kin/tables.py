@@ -81,12 +81,7 @@ MAX_JOINTS = 128
 def read_table(path: Path | str, **overrides: Any) -> Chain:
     """Read a TOML/YAML table file into a :class:`Chain` (see the module docstring).
 
-    Args:
-        path: The file (``.toml``, ``.yaml`` or ``.yml``).
-        **overrides: Top-level keys replacing the file's (e.g. ``name="leg4b"``).
-
-    Returns:
-        The chain.
+    ``overrides`` are top-level keys replacing the file's (e.g. ``name="leg4b"``).
 
     Raises:
         SourceError: Unreadable file or invalid TOML/YAML.
@@ -185,15 +180,11 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
                 value=clip(sigma),
                 allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
             )
-        geo = {
-            k: (
-                _number(row.get(k, 0.0), f"{where}.{k}")
-                if k in _ANGLE_KEYS
-                else _number(row.get(k, 0.0), f"{where}.{k}", MAX_LENGTH, MIN_LENGTH)
-            )
-            * (scale if k in _ANGLE_KEYS else 1.0)
-            for k in geometry
-        }
+        geo = {}
+        for k in geometry:  # angles in the file's unit, lengths within [MIN_, MAX_LENGTH]
+            angle = k in _ANGLE_KEYS
+            bounds = () if angle else (MAX_LENGTH, MIN_LENGTH)
+            geo[k] = _number(row.get(k, 0.0), f"{where}.{k}", *bounds) * (scale if angle else 1.0)
         try:
             built: KhalilRow | DHRow = (
                 KhalilRow(sigma, **geo) if convention == "khalil" else DHRow(sigma=sigma, **geo)
@@ -297,11 +288,8 @@ def _inertials(
         where = f"row {j + 1}"
         try:
             if com is None or inertia is None:
-                nxt = (
-                    chain.rows[j + 1].transform(0.0)[:3, 3]
-                    if j + 1 < len(chain.rows)
-                    else np.zeros(3)
-                )
+                last = j + 1 == len(chain.rows)
+                nxt = np.zeros(3) if last else chain.rows[j + 1].transform(0.0)[:3, 3]
                 out.append(rod_inertial(np.zeros(3), nxt, mass, chain.link_radius))
             else:
                 out.append(Inertial(mass=mass, com=com, inertia=inertia))  # type: ignore[arg-type]

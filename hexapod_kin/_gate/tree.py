@@ -96,25 +96,14 @@ def check_urdf(
     mesh_root: str | os.PathLike[str] | None = None,
     lenient: bool = False,
 ) -> GateResult:
-    """Check a URDF document; raise :class:`UrdfError` on the first problem.
+    """Check a URDF document (str, or UTF-8 bytes); raise :class:`UrdfError` on the first problem.
 
-    See the module docstring for the full list of checks.
-
-    Args:
-        text: The URDF document (str, or bytes in UTF-8).
-        package_dirs: Directories ``package://pkg/...`` meshes may resolve into.
-        mesh_root: Directory relative mesh paths resolve against (``None`` for URDF text:
-            relative mesh paths are then refused).
-        lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
-            and a physically implausible inertial (indefinite, massless moving link, zero
-            inertia, triangle inequality) are recorded in ``missing_meshes`` /
-            ``inertia_defects`` instead of raised. Refused meshes (schemes, absolute paths,
-            escapes, non-regular or huge files) and nonsense (negative mass, NaN, missing
-            entries, malformed XML ...) are refused in both modes.
+    The checks and the ``lenient`` mode are those of :mod:`hexapod_kin._gate`; ``mesh_root``
+    ``None`` (URDF text) refuses relative mesh paths.
 
     Returns:
         A :class:`GateResult` (shared between calls with the same text when the document
-        references no files: the generated URDFs are loaded often; do not modify ``root``).
+        references no files: do not modify ``root``).
 
     Raises:
         UrdfError: Naming the element, attribute, value and line of the problem.
