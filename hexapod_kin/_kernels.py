@@ -521,14 +521,8 @@ def pose_jacobian_kernel(
     """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
 
     Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq), through
-    :func:`fk_jac_block`. ``ref``: 0 local world aligned, 1 world (velocity of the point at
-    the base origin), 2 local (tip axes).
-
-    Returns:
-        Whether a value of ``q`` in these blocks is non-finite or ``|q| >= Q_MAX`` (the
-        caller raises; the outputs of such rows are meaningless but no memory outside them is
-        written).
-
+    :func:`fk_jac_block`; ``ref`` a value of :data:`REF_CODES`. Returns whether a ``q`` in
+    them is non-finite or ``|q| >= Q_MAX`` (the caller raises; only those rows are garbage).
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -664,19 +658,10 @@ def pose_jacobian_batch(
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of configurations ``qs`` (N, nq).
 
-    Args:
-        chain: The chain with z joint axes (:func:`~hexapod_kin._chain.aligned_chain`).
-        qs: C-contiguous float64 (N, nq). Its values are checked by the kernel on the way
-            (finite, ``|q| < Q_MAX``); when one is not, ``check()`` is called to raise.
-        pose: Whether to compute the poses.
-        jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
-        out_pose: Optional (N, 4, 4) float64 array to write the poses into.
-        out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
-        check: Raises the caller's error for ``qs`` (e.g. ``Model.check_q_batch``); called
-            only when a value is out of range.
-
-    Returns:
-        ``(poses or None, jacobians or None)``.
+    ``qs`` is C-contiguous float64, its values checked by the kernel on the way (finite,
+    ``|q| < Q_MAX``; else ``check()`` raises the caller's error); ``jacobian`` a key of
+    :data:`REF_CODES` or ``None``; ``out_*`` optional arrays to write into. Returns
+    ``(poses or None, jacobians or None)``.
 
     Raises:
         ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.

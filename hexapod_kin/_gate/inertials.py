@@ -180,13 +180,9 @@ def _check_body(
     parts = [n for n, _ in members if inertials[n].present]
     total = math.fsum(inertials[n].mass for n in parts)
     if total <= 0.0:
-        raise error_at(
-            link_el[child],
-            f"the link moved by joint {jname!r} has no mass (nor do links fixed to it); a "
-            "moving link needs <inertial> with mass > 0",
-            "name",
-            child,
-        )
+        why = f"the link moved by joint {jname!r} has no mass (nor do links fixed to it)"
+        raise error_at(link_el[child], f"{why}; a moving link needs <inertial> with mass > 0",
+                       "name", child)  # fmt: skip
     if len(parts) == 1:
         eig = inertials[parts[0]].eig  # rotation-invariant
     elif any(inertials[n].definite for n in parts) and all(inertials[n].triangle for n in parts):

@@ -76,12 +76,8 @@ def numbers_of(
             raise error_at(el, "numbers must be finite", attr, raw)
         cap = MAX_ABS_LIMIT if el.tag in LIMIT_TAGS else MAX_ABS
         if abs(x) > cap:
-            raise error_at(
-                el,
-                f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); numbers are SI values of a robot",
-                attr,
-                raw,
-            )
+            why = f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>)"
+            raise error_at(el, f"{why}; numbers are SI values of a robot", attr, raw)
         if minimum is not None and x < minimum:
             raise error_at(el, f"must be >= {minimum:g}", attr, raw)
         out.append(x)
@@ -176,13 +172,8 @@ def element_name(el: etree._Element, what: str) -> str:
 def unique(seen: dict[str, etree._Element], el: etree._Element, name: str, what: str) -> None:
     """Record ``el`` as ``seen[name]``; a second ``<what>`` of the same name is refused."""
     if name in seen:
-        raise error_at(
-            el,
-            f"duplicate {what} name (first at line "
-            f"{seen[name].sourceline}); {what} names must be unique",
-            "name",
-            name,
-        )
+        why = f"duplicate {what} name (first at line {seen[name].sourceline})"
+        raise error_at(el, f"{why}; {what} names must be unique", "name", name)
     seen[name] = el
 
 

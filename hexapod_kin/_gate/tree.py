@@ -291,12 +291,8 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
     if axis is not None and jtype not in ("fixed", "floating"):
         xyz = numbers_of(axis, "xyz", 3, None)
         if xyz and math.fsum(v * v for v in xyz) <= 1e-24:
-            raise error_at(
-                axis,
-                "joint axis has zero length; a non-zero vector is required",
-                "xyz",
-                axis.get("xyz"),
-            )
+            why = "joint axis has zero length; a non-zero vector is required"
+            raise error_at(axis, why, "xyz", axis.get("xyz"))
     limit = joint.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
@@ -310,12 +306,8 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
         lower = number_of(limit, "lower", 0.0)
         upper = number_of(limit, "upper", 0.0)
         if jtype in ("revolute", "prismatic") and lower > upper:
-            raise error_at(
-                limit,
-                f"lower > upper={limit.get('upper')!r}; lower <= upper required",
-                "lower",
-                limit.get("lower"),
-            )
+            why = f"lower > upper={limit.get('upper')!r}; lower <= upper required"
+            raise error_at(limit, why, "lower", limit.get("lower"))
     safety = joint.find("safety_controller")
     if safety is not None and safety.get("k_velocity") is None:
         raise error_at(safety, "<safety_controller k_velocity> is required", "k_velocity")
