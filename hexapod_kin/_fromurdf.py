@@ -413,9 +413,9 @@ def recover_chain(
         for k, fr in enumerate(frames)
     ]
     for k in snapped_rows:  # snapped twists: exact multiples of π/2 (within rounding of one)
-        m = round(rows[k].alpha / _HALF_PI)
-        if abs(rows[k].alpha - m * _HALF_PI) < 1e-9:
-            rows[k] = replace(rows[k], alpha=0.0 if m == 0 else m * _HALF_PI)
+        turns = round(rows[k].alpha / _HALF_PI)
+        if abs(rows[k].alpha - turns * _HALF_PI) < 1e-9:
+            rows[k] = replace(rows[k], alpha=0.0 if turns == 0 else turns * _HALF_PI)
     last = _frame(*frames[-1])
     tool = np.linalg.inv(last)
     tool = tool @ t_base_tip if base_pose is None else tool @ inv0 @ t_base_tip
