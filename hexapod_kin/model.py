@@ -447,15 +447,9 @@ class Model:
         return tuple(self.full_model.names[i] for i in self._locked)
 
     def geometry_model(self, kind: str = "visual") -> Any:
-        """Pinocchio ``GeometryModel`` of the (reduced) model, built from the same URDF text.
+        """Pinocchio ``GeometryModel`` (``kind`` ``"visual"`` or ``"collision"``) of :attr:`model`.
 
-        Args:
-            kind: ``"visual"`` or ``"collision"``.
-
-        Returns:
-            A ``pinocchio.GeometryModel`` matching :attr:`model` (meshes are resolved with the
-            source's package directories).
-
+        Built from the same URDF text, meshes resolved with the source's package directories.
         """
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
         one_of("kind", kind, kinds)
@@ -463,10 +457,13 @@ class Model:
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
         drop = {uri for uri, _ in self.missing_meshes}
+
+        def build(dropped: set[str]) -> Any:
+            text = self._geometry_text(dropped)
+            return pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
+
         try:
-            geom = pin.buildGeomFromUrdfString(
-                self.full_model, self._geometry_text(drop), kinds[kind], None, dirs
-            )
+            geom = build(drop)
         except (RuntimeError, ValueError):  # a mesh the loader cannot read: find and drop it
             bad = _unreadable_meshes(self.mesh_files)
             if not bad:
@@ -475,9 +472,7 @@ class Model:
                 f"{self.name!r}: meshes: {len(bad)} file(s) unreadable by the mesh loader, "
                 f"dropped with their visual/collision elements ({first_names(sorted(bad))})"
             )
-            geom = pin.buildGeomFromUrdfString(
-                self.full_model, self._geometry_text(drop | bad), kinds[kind], None, dirs
-            )
+            geom = build(drop | bad)
         if self._locked:
             _, geoms = pin.buildReducedModel(
                 self.full_model, [geom], list(self._locked), self._q_ref

@@ -296,7 +296,8 @@ def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float)
     )
 
 
-def _default_limits(sigma: str) -> JointLimits:
+def default_limits(sigma: str) -> JointLimits:
+    """The limits a joint row gets when none are given: ±π rad, or ±0.1 m when prismatic."""
     if sigma == "prismatic":
         return JointLimits(lower=-0.1, upper=0.1, velocity=0.5, effort=100.0)
     return JointLimits()
@@ -380,17 +381,11 @@ class Chain:
         nj = len(joint_rows)
         if nj == 0:
             raise ParameterError("Chain.rows has no revolute or prismatic row; nothing moves")
-        names = (
-            tuple(f"q{i}" for i in range(1, nj + 1))
-            if self.joint_names is None
-            else tuple(self.joint_names)
-        )
+        default_names = tuple(f"q{i}" for i in range(1, nj + 1))
+        names = default_names if self.joint_names is None else tuple(self.joint_names)
         object.__setattr__(self, "joint_names", _names(names, nj, "joint_names", "joint rows"))
-        limits = (
-            tuple(_default_limits(str(r.sigma)) for r in joint_rows)
-            if self.limits is None
-            else tuple(self.limits)
-        )
+        defaults = tuple(default_limits(str(r.sigma)) for r in joint_rows)
+        limits = defaults if self.limits is None else tuple(self.limits)
         if len(limits) != nj or not all(isinstance(x, JointLimits) for x in limits):
             raise ParameterError(
                 f"Chain.limits: {nj} JointLimits required (one per joint row), got {len(limits)}"

@@ -11,13 +11,13 @@ and the second engine (:func:`yourdfpy_load`). Never imports Pinocchio.
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import re
 import threading
 from collections import Counter
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +54,7 @@ def erd_share() -> Path:
     return share
 
 
-@lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=1)
 def _erd_index() -> dict[str, Path]:
     robots_dir = erd_share() / "example-robot-data" / "robots"
     index: dict[str, Path] = {}
@@ -278,13 +278,7 @@ def _expand(path: Path, text: str, dirs: tuple[str, ...], named: dict[str, str])
             "`pip install -e '.[export]'` in a clone)",
             parameter="source",
         ) from None
-    found: dict[str, str] = {}
-
-    def find(pkg: str) -> str:
-        if pkg not in found:
-            found[pkg] = _find_package(pkg, path, dirs, named)
-        return found[pkg]
-
+    find = functools.cache(lambda pkg: _find_package(pkg, path, dirs, named))
     for pkg in _FIND.findall(text):  # a missing package: one clear error before xacro runs
         find(pkg)
     with _XACRO_LOCK:

@@ -47,7 +47,16 @@ import numpy as np
 
 from ._reader import check_keys, clip, named, number, numbers, read_data, text
 from .exceptions import ParameterError, one_of
-from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
+from .params import (
+    Chain,
+    DHRow,
+    Inertial,
+    JointLimits,
+    KhalilRow,
+    Pose,
+    default_limits,
+    rod_inertial,
+)
 
 __all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
 
@@ -195,9 +204,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         if built.sigma != "fixed":
             joint_names.append(text(row.get("name", f"q{len(joint_names) + 1}"), f"{where}.name"))
             lim_scale = scale if built.sigma == "revolute" else 1.0
-            default = (
-                JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
-            )
+            default = default_limits(str(built.sigma))
             units = {"lower": lim_scale, "upper": lim_scale, "velocity": lim_scale, "effort": 1.0}
             try:
                 given = {k: _number(row[k], f"{where}.{k}") * units[k] for k in units if k in row}
