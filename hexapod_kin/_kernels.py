@@ -240,10 +240,8 @@ def _first_run(area: str, run: Callable[[int, int], Any]) -> Any:
                 if not full:
                     for obj in _dispatchers():
                         if not obj.overloads or len(obj.overloads) != before.get(id(obj), 0):
-                            try:
+                            with contextlib.suppress(Exception):  # left empty: compiled on call
                                 obj.recompile()
-                            except Exception:  # noqa: BLE001, S110 - left empty: compiled on call
-                                pass
                 elif not progress:
                     raise
         else:  # pragma: no cover - more kernels than attempts

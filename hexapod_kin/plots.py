@@ -305,15 +305,12 @@ def singularity_map_figure(
         if fam.joint is not None and fam.joint in (ja, jb) and fam.value is not None:
             lo, hi = (qa.min(), qa.max()) if fam.joint == ja else (qb.min(), qb.max())
             vals = [fam.value + k * 2 * np.pi for k in (-1, 0, 1)] if fam.periodic else [fam.value]
-            drawn = False
-            for v in vals:
-                if lo - 1e-9 <= v <= hi + 1e-9:
-                    drawn = True
-                    line = ax.axvline if fam.joint == ja else ax.axhline
-                    at = float(_joint_axis(result, fam.joint, v)[0])
-                    line(at, color=colour, ls=style, lw=2.2)
-            if not drawn:
+            inside = [v for v in vals if lo - 1e-9 <= v <= hi + 1e-9]
+            if not inside:
                 continue
+            line = ax.axvline if fam.joint == ja else ax.axhline
+            for v in inside:
+                line(float(_joint_axis(result, fam.joint, v)[0]), color=colour, ls=style, lw=2.2)
         elif fam.joint is None:
             qq = np.empty(ga.shape + (len(result.joint_names),))
             qq[:] = result.q_fixed

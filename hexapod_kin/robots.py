@@ -170,12 +170,8 @@ def scara(
             KhalilRow("fixed", 0.0, 0.0, 0.0, 0.0),
         ),
         joint_names=("theta1", "theta2", "theta3", "q4"),
-        limits=(
-            JointLimits(-math.pi, math.pi, 3.0, 50.0),
-            JointLimits(-math.pi, math.pi, 3.0, 50.0),
-            JointLimits(-math.pi, math.pi, 5.0, 10.0),
-            JointLimits(0.0, stroke, 0.5, 200.0),
-        ),
+        limits=(JointLimits(-math.pi, math.pi, 3.0, 50.0),) * 2
+        + (JointLimits(-math.pi, math.pi, 5.0, 10.0), JointLimits(0.0, stroke, 0.5, 200.0)),
         link_names=("shoulder", "forearm", "wrist", "quill", "tool"),
         name=name,
         tip="tool",

@@ -106,15 +106,15 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
 
 def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.0) -> float:
     out = number(value, where)
+    key = where.rsplit(".", 1)[-1]
     if abs(out) > limit:
         raise ParameterError(
-            f"{where}={out:g} is out of range; allowed |{where.rsplit('.', 1)[-1]}| <= {limit:g}",
+            f"{where}={out:g} is out of range; allowed |{key}| <= {limit:g}",
             parameter=where,
             value=out,
             allowed=f"|value| <= {limit:g}",
         )
     if 0.0 < abs(out) < floor:
-        key = where.rsplit(".", 1)[-1]
         raise ParameterError(
             f"{where}={out:g} is below the smallest length {floor:g} m; allowed 0 or "
             f"{floor:g} <= |{key}| <= {limit:g}",
