@@ -4,17 +4,13 @@
 within a budget of **CPU time of the work**, never wall-clock time, so an answer does not
 depend on what else runs on the machine:
 
-* In a process of its own: a fresh interpreter (``subprocess``, like multiprocessing's
-  ``spawn``: never a ``fork`` of a process holding Pinocchio, numba or threads; the user's
-  ``__main__`` is not run again). The job, its arguments and the parent's ``sys.path`` go
-  down its stdin, each finished item comes back on a pipe of its own as it is yielded. The
-  child's start-up (the interpreter, the imports the job needs) is the floor: it is not
-  counted; the budget starts with the job.
-* The budget is kept inside the child by the kernel's CPU-time timer of the process
-  (``ITIMER_PROF``): at the budget, :class:`BudgetReached` is raised in the job between two
-  bytecodes (sympy is pure Python), the job may catch it to finish a phase (:func:`cpu_limit`
-  nests), and the items sent so far are the answer. ``RLIMIT_CPU`` a few seconds later ends a
-  child stuck in C code. Nothing outlives the call.
+* In a fresh interpreter (``subprocess``, never a ``fork``; ``__main__`` not run again): the
+  job, its arguments and ``sys.path`` go down its stdin, each item comes back on a pipe as it
+  is yielded. The budget starts with the job (the child's start-up is not counted).
+* The child's CPU-time timer (``ITIMER_PROF``) raises :class:`BudgetReached` in the job
+  between two bytecodes; the job may catch it to finish a phase (:func:`cpu_limit` nests);
+  the items sent so far are the answer. ``RLIMIT_CPU`` a few seconds later ends a child stuck
+  in C code. Nothing outlives the call.
 * Inside a budgeted child (a job calling a budgeted function), or where no child can be
   started, the job runs inline under a nested :func:`cpu_limit`.
 * A Ctrl-C reaches the child once, from the parent (``SIGTERM``, raised in the job as a

@@ -8,24 +8,18 @@ report replays, sweep chunks) goes through this module:
   ``~/.cache/hexapod_kin/<kind>``.
 * :func:`key` — SHA-256 of the canonical JSON of what an entry depends on.
 * :func:`mac` / :func:`seal` — HMAC-SHA256 keyed by a per-user secret (32 random bytes in
-  ``seal.key`` of the cache root, mode 0600, created once, race-free). A plain hash guards
-  against accidents only: anyone can recompute it after an edit. A seal needs the secret, so
-  an edited entry resealed by someone without it is detected. Without a readable or
-  writable secret (a read-only or unusable cache root) nothing is cached.
+  ``seal.key`` of the cache root, mode 0600, created once, race-free), so that an edited
+  entry resealed without the secret is detected. Without a usable secret nothing is cached.
 * :func:`seal_folder` / :func:`check_folder` — a folder of another program's files (numba's
-  compiled code), sealed as opaque bytes: one seal file holding the keyed MAC of each file's
-  name and bytes, written after the files; checked before the files may be used. Its secret
-  is the user's own (:func:`user_secret`: the default cache root's, whatever
-  ``HEXAPOD_KIN_CACHE_DIR`` says, since such a folder is shared by every cache root).
+  compiled code) sealed as opaque bytes (one seal file of each file's keyed MAC), with the
+  user's own secret (:func:`user_secret`).
 * :func:`store` / :func:`load` — one JSON envelope per entry (``format``, ``key``, ``body``,
-  ``seal``), written atomically (:func:`hexapod_kin._io.atomic_write`: no temporary file left
-  on any failure). A missing entry, or one of another format, is no entry (quietly);
-  anything else that is not the sealed entry of its key is no entry with one
-  :class:`~hexapod_kin.exceptions.CacheWarning` (:func:`damaged`, the one text).
+  ``seal``), written atomically. A missing entry, or one of another format, is no entry
+  (quietly); any other entry that is not the sealed one of its key is no entry with one
+  :class:`~hexapod_kin.exceptions.CacheWarning` (:func:`damaged`).
 
-The seal is not what protects the answers: every cache also checks what an entry claims
-against the robot (its caller's content checks), so even an entry sealed with a stolen secret
-is not used when it is wrong.
+Every cache also checks what an entry claims against the robot, so even an entry sealed with
+a stolen secret is not used when it is wrong.
 """
 
 from __future__ import annotations
@@ -76,25 +70,21 @@ def folder(kind: str) -> Path:
 
 
 def _canonical(obj: Any) -> bytes:
-    return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=True).encode()
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=repr).encode()
 
 
 def key(parts: Any) -> str:
     """SHA-256 (hex) of the canonical JSON of ``parts`` (anything else by ``repr``)."""
-    text = json.dumps(parts, sort_keys=True, separators=(",", ":"), default=repr)
-    return hashlib.sha256(text.encode()).hexdigest()
+    return hashlib.sha256(_canonical(parts)).hexdigest()
 
 
 def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
     """The per-user secret of the seals, created once; ``None`` when the root is unusable.
 
-    ``base``: the cache root whose ``seal.key`` it is (default: :func:`root`); ``quiet``: no
-    warning for a root that is a regular file.
-
-    Created race-free: a private temporary file is hard-linked to the name, so of concurrent
-    first runs one wins and the others read its secret. A secret of the wrong length is
-    replaced (entries sealed with the old one are then recomputed). A cache root that is a
-    regular file is said once (one :class:`CacheWarning`).
+    ``base``: the cache root whose ``seal.key`` it is (default: :func:`root`). Created
+    race-free (a private temporary file hard-linked to the name: one concurrent first run
+    wins); a secret of the wrong length is replaced. A root that is a regular file is said
+    once (one :class:`CacheWarning`) unless ``quiet``.
     """
     base = root() if base is None else base
     with _LOCK:
@@ -103,26 +93,19 @@ def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
         path = base / "seal.key"
         found: bytes | None = None
         for _ in range(2):
-            try:
-                data = path.read_bytes()
-                if len(data) == _SECRET_BYTES:
-                    found = data
-                    break
-            except OSError:
-                pass
+            with contextlib.suppress(OSError):
+                found = path.read_bytes()
+            if found is not None and len(found) == _SECRET_BYTES:
+                break
+            found = None
             tmp = base / f".seal.key.{secrets.token_hex(8)}.tmp"
             try:
                 base.mkdir(parents=True, exist_ok=True)
                 fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
                 with os.fdopen(fd, "wb") as fh:
                     fh.write(secrets.token_bytes(_SECRET_BYTES))
-                try:
-                    if path.exists():
-                        os.replace(tmp, path)
-                    else:
-                        os.link(tmp, path)
-                except FileExistsError:
-                    pass  # another process made it first: read its secret
+                with contextlib.suppress(FileExistsError):  # another process made it first
+                    os.replace(tmp, path) if path.exists() else os.link(tmp, path)
             except OSError as exc:
                 file = base.exists() and not base.is_dir() or isinstance(exc, NotADirectoryError)
                 if file and not quiet:
@@ -134,10 +117,8 @@ def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
                     )
                 break
             finally:
-                try:
+                with contextlib.suppress(OSError):
                     tmp.unlink()
-                except OSError:
-                    pass
         _SECRETS[str(base)] = found
         return found
 
@@ -165,12 +146,9 @@ def seal(kind: str, digest: str, body: Any) -> str | None:
 def damaged(kind: str, name: str, why: BaseException | str, then: str, stacklevel: int = 3) -> None:
     """The one warning of a cache entry that is not what it claims (see the module docstring).
 
-    Args:
-        kind: The cache (``"symbolic"``, ``"families"``, ...).
-        name: The entry (a key, shown by its first 12 characters, or file names).
-        why: What is wrong (an exception: its type and message).
-        then: What happens instead (``"recomputing it"``).
-        stacklevel: As for :func:`warnings.warn`, from the caller's caller.
+    ``name`` is the entry (a key is shown by its first 12 characters), ``why`` what is wrong
+    (an exception: its type and message), ``then`` what happens instead ("recomputing it");
+    ``stacklevel`` as for :func:`warnings.warn`, from the caller's caller.
 
     """
     short = name[:12] if re.fullmatch(r"[0-9a-f]{16,}", name) else name
@@ -242,11 +220,10 @@ _FOLDER_FORMAT = 1
 
 
 def user_secret() -> bytes | None:
-    """The secret sealing folders shared beyond one cache root (numba's compiled code).
+    """The secret sealing folders shared by every cache root (numba's compiled code).
 
-    The default cache root's secret (the user's own, whatever ``HEXAPOD_KIN_CACHE_DIR``
-    says: a folder of numba's is shared by every cache root); when that root is unusable,
-    :func:`root`'s; ``None`` when neither is usable.
+    The default root's (whatever ``HEXAPOD_KIN_CACHE_DIR`` says), else :func:`root`'s, else
+    ``None``.
     """
     return _secret(_default_root(), quiet=True) or _secret()
 
@@ -271,12 +248,10 @@ def _folder_lock(folder: Path) -> Iterator[None]:
         yield
         return
     try:
-        try:
+        with contextlib.suppress(ImportError, OSError):  # no flock: the last writer wins
             import fcntl
 
             fcntl.flock(fd, fcntl.LOCK_EX)
-        except (ImportError, OSError):  # no flock here: the seal is then last-writer-wins
-            pass
         yield
     finally:
         os.close(fd)  # releases the lock
@@ -285,11 +260,9 @@ def _folder_lock(folder: Path) -> Iterator[None]:
 def seal_folder(folder: str | os.PathLike[str], suffixes: tuple[str, ...]) -> bool:
     """Seal the files of ``folder`` ending in ``suffixes`` (call it after writing them).
 
-    The seal (:data:`FOLDER_SEAL`) holds the keyed MAC of each file's name and bytes (the
-    files are opaque: never parsed). Written atomically under a lock of the folder, reading
-    the files inside the lock, so that of two processes writing files at once the last seal
-    covers both. Returns whether it was written (no secret, a read-only folder or a full
-    disk: not, and never an error).
+    The seal (:data:`FOLDER_SEAL`) holds the keyed MAC of each file's name and bytes, written
+    atomically under a lock of the folder (the last of two concurrent seals covers both).
+    Returns whether it was written (never an error).
     """
     path = Path(folder)
     secret = user_secret()

@@ -50,14 +50,8 @@ class ChainArrays:
     def serial(cls, rot: Any, trans: Any, axis: Any, kind: Any, tip_rot: Any = None) -> ChainArrays:
         """A chain of its own joints alone (``col = 0..m-1``, ``nq = m``), read-only arrays.
 
-        Args:
-            rot: (m, 3, 3) each joint frame's rotation in the previous one's.
-            trans: (m + 1, 3) each joint frame's origin in the previous one's, then the tip's
-                in the last joint's frame [m].
-            axis: (m, 3) unit joint axes in their joint frames.
-            kind: (m,) 1 for a prismatic joint, else 0.
-            tip_rot: (3, 3) the tip's rotation in the last joint's frame (default identity).
-
+        Arguments as the attributes of the same names (each joint frame in the previous one's;
+        ``tip_rot`` default identity).
         """
         m = len(rot)
         return cls._frozen(
@@ -85,10 +79,6 @@ class ChainArrays:
     def from_model(cls, model: Any, frame: str | None = None) -> ChainArrays:
         """Extract the chain from root to ``frame`` (default: the tip) of a loaded model.
 
-        Args:
-            model: A :class:`~hexapod_kin.model.Model` (1-DOF revolute/prismatic joints).
-            frame: Tip frame name (checked).
-
         Raises:
             SourceError: If a joint on the path is not a 1-DOF revolute/prismatic joint.
 
@@ -106,10 +96,9 @@ class ChainArrays:
                     f"joint {m.names[i]!r} of kind {m.joints[i].shortname()} is not 1-DOF rev/prism"
                 )
             kinds.append(1 if kind[0] == "prismatic" else 0)
-            ax = kind[1] / np.linalg.norm(kind[1])
             rots.append(np.array(placement.rotation))
             trans.append(np.array(placement.translation))
-            axes.append(ax)
+            axes.append(kind[1] / np.linalg.norm(kind[1]))
             cols.append(int(m.joints[i].idx_v))
         tip_pl = fr.placement if path else model.baseMo * fr.placement
         trans.append(np.array(tip_pl.translation))

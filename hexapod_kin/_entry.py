@@ -1,16 +1,10 @@
 """The ``hexapod-kin`` console entry point: Ctrl-C is the program's from its first statement.
 
-The console script (``[project.scripts]``) calls :func:`run`. Its first statement installs a
-SIGINT handler, before the command line and its imports (argparse, numpy, Pinocchio: a few
-hundred milliseconds) are loaded: a Ctrl-C in that time prints ``hexapod-kin: interrupted``
-and ends the process by its own SIGINT (the shell sees 130), never Python's traceback. The
-command line's :func:`hexapod_kin.cli.main` then replaces the handler with its own.
-
-Only the program does this: importing :mod:`hexapod_kin` (a library user) leaves SIGINT as
-it is. This module imports nothing but ``os``, ``signal`` and ``sys`` (loaded by the
-interpreter already), so that the handler comes as early as a package module can: what
-remains before it is the interpreter's own start-up and the package's ``__init__`` (its
-version and exceptions).
+The console script calls :func:`run`, whose first statement installs a SIGINT handler before
+the command line's imports load: a Ctrl-C then prints ``hexapod-kin: interrupted`` and ends
+the process by its own SIGINT (status 130), never a traceback; :func:`hexapod_kin.cli.main`
+later installs its own. Importing :mod:`hexapod_kin` leaves SIGINT as it is. This module
+imports only what the interpreter has loaded already.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """Recover a Khalil–Kleinfinger table from a serial URDF chain (:func:`chain_from_urdf`).
 
-The model is loaded with :func:`hexapod_kin.load` (the loader gate, then Pinocchio; a sub-chain
-is picked with ``base=`` / ``tip=``); the joint placements and axes are read from the Pinocchio
-model at ``q = 0``, which gives one line in space per joint (a point and the unit axis, in the
-base frame). Khalil frames are then placed on those lines:
+The model is loaded with :func:`hexapod_kin.load` (``base=`` / ``tip=`` pick a sub-chain); its
+joint placements and axes at ``q = 0`` give one line in space per joint (in the base frame).
+Khalil frames are then placed on those lines:
 
 * ``z_j`` is joint ``j``'s axis, with the URDF's direction (so ``q`` keeps its sign);
 * ``x_j`` is the common normal from line ``j`` to line ``j + 1`` and frame ``j``'s origin is
@@ -19,24 +18,19 @@ base frame). Khalil frames are then placed on those lines:
 Each row ``(α_j, d_j, θ_j, r_j)`` is read off consecutive frames; fixed URDF joints need no
 rows (Pinocchio folds them into the placements).
 
-**Snapping.** Real files write rotations with rounded constants (``3.14159``, ``1.5704``), so
-axes meant to be parallel miss by a few µrad and their common normal lands kilometres away.
-Before the frames are placed, each joint axis is compared with the previous one: when it is
-within ``angle_tol`` (default :data:`SNAP_TOL` = 1e-4 rad) of parallel, anti-parallel or
-perpendicular, the rest of the chain (that joint, the joints after it and the tip) is turned
-rigidly about that joint's origin by the small rotation that makes the relation exact (the
-correction of the rounded constant in the placement before the joint). Each snap is reported
-(:class:`Snap`, :attr:`TableRecovery.snaps`, and one clause of ``Chain.description``); snapped
-twists are exact multiples of π/2. A snap of ``ε`` rad moves the tip by at most
-``ε × (path length from that joint through the later joints to the tip)`` in every
-configuration: :attr:`TableRecovery.fk_bound` sums these.
+**Snapping.** Real files round their rotations (``3.14159``, ``1.5704``), so axes meant to be
+parallel miss by a few µrad and their common normal lands kilometres away. An axis within
+``angle_tol`` (default :data:`SNAP_TOL`) of parallel, anti-parallel or perpendicular to the
+previous one is made exact by turning the rest of the chain rigidly about that joint's origin;
+each snap is reported (:class:`Snap`, ``Chain.description``), snapped twists are exact
+multiples of π/2, and a snap of ``ε`` rad moves the tip by at most ``ε ×`` the path length
+from that joint to the tip (:attr:`TableRecovery.fk_bound` sums these).
 
 **Checks.** No recovered length (``|d|``, ``|r|``, the tool offset) may exceed the chain's size
-(:attr:`TableRecovery.size`: twice the path length from the base origin through the joint
-origins to the tip) — else :class:`~hexapod_kin.exceptions.ConfigurationError` naming the
-joints and the ``angle_tol`` that would snap them. The table's forward kinematics must equal
-Pinocchio's at ``q = 0`` and at random configurations: to 1e-9 relative (1e-12 m in practice)
-when nothing was snapped, else within ``fk_bound`` (plus that rounding).
+(:attr:`TableRecovery.size`, twice the path length base → joints → tip), else a
+:class:`~hexapod_kin.exceptions.ConfigurationError` names the joints and the ``angle_tol``
+that would snap them. The table's FK must equal Pinocchio's at ``q = 0`` and random
+configurations, to 1e-9 relative without snaps, else within ``fk_bound``.
 """
 
 from __future__ import annotations
@@ -64,8 +58,7 @@ _EPS = 1e-10
 
 
 def _clean(name: str) -> str:
-    out = re.sub(r"[^A-Za-z0-9_.-]", "_", str(name))
-    return out or "x"
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", str(name)) or "x"
 
 
 def _angle(a: np.ndarray, b: np.ndarray, about: np.ndarray) -> float:
@@ -85,13 +78,10 @@ def _meet(o: np.ndarray, x: np.ndarray, p: np.ndarray, u: np.ndarray, scale: flo
     nn = float(np.dot(n, n))
     if nn < 1e-18:
         return None
-    t = float(np.dot(np.cross(p - o, u), n)) / nn
-    point = o + t * x
+    point = o + float(np.dot(np.cross(p - o, u), n)) / nn * x
     off = point - p
     miss = off - np.dot(off, u) * u
-    if float(np.linalg.norm(miss)) > _EPS * scale:
-        return None
-    return point
+    return None if float(np.linalg.norm(miss)) > _EPS * scale else point
 
 
 def _row(
@@ -245,18 +235,6 @@ def _snap(
     return snaps
 
 
-def _exact_twists(rows: list[KhalilRow], snapped: set[int]) -> list[KhalilRow]:
-    """Snapped rows' α as exact multiples of π/2 (they are within rounding of one)."""
-    out = []
-    for k, row in enumerate(rows):
-        if k in snapped:
-            m = round(row.alpha / _HALF_PI)
-            if abs(row.alpha - m * _HALF_PI) < 1e-9:
-                row = replace(row, alpha=0.0 if m == 0 else m * _HALF_PI)
-        out.append(row)
-    return out
-
-
 _HALF_PI = 0.5 * math.pi
 _LEN_TOL = 1e-9
 _ROUNDING = 1e-13  # [rad]: axis relations this close are exact already (never snapped)
@@ -346,8 +324,7 @@ def recover_chain(
                 f"joint {names[i]!r} is a {m.joints[i].shortname()}; a Khalil table expresses "
                 "revolute, continuous, prismatic and fixed joints only"
             )
-    tip_id = km.tip_id
-    frame = m.frames[tip_id]
+    frame = m.frames[km.tip_id]
     path = []
     j = int(frame.parentJoint)
     while j != 0:
@@ -435,16 +412,18 @@ def recover_chain(
         _row(prevs[k], fr, sigmas[k], f"joint {names[path[k]]!r}", scale)
         for k, fr in enumerate(frames)
     ]
-    rows = _exact_twists(rows, snapped_rows)
+    for k in snapped_rows:  # snapped twists: exact multiples of π/2 (within rounding of one)
+        turns = round(rows[k].alpha / _HALF_PI)
+        if abs(rows[k].alpha - turns * _HALF_PI) < 1e-9:
+            rows[k] = replace(rows[k], alpha=0.0 if turns == 0 else turns * _HALF_PI)
     last = _frame(*frames[-1])
-    if base_pose is not None:
-        tool = np.linalg.inv(last) @ np.linalg.inv(base_pose) @ t_base_tip
-    else:
-        tool = np.linalg.inv(last) @ t_base_tip
+    tool = np.linalg.inv(last)
+    tool = tool @ t_base_tip if base_pose is None else tool @ inv0 @ t_base_tip
     tool[3] = (0.0, 0.0, 0.0, 1.0)
     u, _, vt = np.linalg.svd(tool[:3, :3])
     tool[:3, :3] = u @ vt
-    size = _size(points, t_base_tip[:3, 3])
+    joints = [np.zeros(3), *points, t_base_tip[:3, 3]]  # size: twice the path's length [m]
+    size = 2.0 * sum(float(np.linalg.norm(b - a)) for a, b in zip(joints[:-1], joints[1:])) + 1e-9
     _check_lengths(rows, tool, size, path_names, km, axes, tol)
     zeroed: list[tuple[str, float]] = []
     if tol > 0:  # lengths within rounding of the URDF's constants: clean zeros
@@ -509,13 +488,6 @@ def _zero_lengths(
     return out, tool, zeroed
 
 
-def _size(points: list[np.ndarray], tip: np.ndarray) -> float:
-    """Twice the path length base origin → joint origins → tip [m]."""
-    path = [np.zeros(3), *points, tip]
-    length = sum(float(np.linalg.norm(b - a)) for a, b in zip(path[:-1], path[1:]))
-    return 2.0 * length + 1e-9
-
-
 def _check_lengths(
     rows: list[KhalilRow],
     tool: np.ndarray,
@@ -558,8 +530,7 @@ def _check(chain: Chain, km: Any, bound: float = 0.0, turn: float = 0.0) -> floa
     lo = np.where(np.isfinite(km.lower), km.lower, -math.pi)
     hi = np.where(np.isfinite(km.upper), km.upper, math.pi)
     qs = [np.zeros(km.nq)] + [rng.uniform(lo, hi) for _ in range(8)]
-    worst = worst_pos = 0.0
-    worst_rot = 0.0
+    worst = worst_pos = worst_rot = 0.0
     for q in qs:
         a, b = table_fk(chain, q), km.fk(q)
         worst = max(worst, float(np.abs(a - b).max()))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import stat
@@ -15,19 +16,10 @@ __all__ = ["atomic_write", "read_regular"]
 def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool = True) -> Path:
     """Write ``data`` to ``path`` atomically.
 
-    The data goes to a temporary file in the same directory, is flushed and fsync'ed, then
-    renamed over ``path`` with :func:`os.replace`. If anything fails before the rename (an
-    exception, ``KeyboardInterrupt``), the temporary file is removed and the previous content
-    of ``path``, if any, is left untouched.
-
-    Args:
-        path: Destination file.
-        data: Text (written as UTF-8) or bytes.
-        sync: ``fsync`` the file and its folder (False: a cache entry, where a torn file
-            after a crash only reads as "not cached").
-
-    Returns:
-        The destination as a :class:`~pathlib.Path`.
+    A temporary file in the same directory, flushed and fsync'ed (and the folder, unless not
+    ``sync``: a cache entry), renamed over ``path``; on any failure before the rename (even
+    ``KeyboardInterrupt``) it is removed and ``path`` is untouched. ``data``: text (UTF-8) or
+    bytes. Returns the destination as a :class:`~pathlib.Path`.
 
     Raises:
         ParameterError: If the destination directory does not exist or ``path`` is a directory.
@@ -49,20 +41,15 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool 
             if sync:
                 fh.flush()
                 os.fsync(fh.fileno())
-        if dest.exists():
-            try:
-                os.chmod(tmp, dest.stat().st_mode & 0o777)
-            except OSError:
-                pass
-        else:
+        if not dest.exists():
             os.chmod(tmp, 0o644)
+        with contextlib.suppress(OSError):  # the mode of the file replaced, when there is one
+            os.chmod(tmp, dest.stat().st_mode & 0o777)
         os.replace(tmp, dest)
     except BaseException as exc:
-        try:
+        with contextlib.suppress(FileNotFoundError):
             if not isinstance(exc, FileExistsError):  # else the name was another's: keep it
                 os.unlink(tmp)
-        except FileNotFoundError:
-            pass
         if isinstance(exc, OSError):
             raise _cannot_write(dest, exc) from None
         raise
@@ -84,16 +71,12 @@ def _cannot_write(dest: Path, exc: OSError) -> ParameterError:
 
 def _fsync_dir(directory: Path) -> None:
     """Make the rename durable (best effort: some file systems refuse directory fsync)."""
-    try:
+    with contextlib.suppress(OSError):
         fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
 
 def read_regular(

@@ -1,33 +1,23 @@
 """The one compiled layer (numba): the FK + Jacobian core and the batch kernels of chains.
 
-Two forms of the same maths, both on :class:`~hexapod_kin._chain.ChainArrays` (extracted
-once per model, ``Model.arrays``) and equal to Pinocchio to rounding:
-
-* :func:`fk_jac_into` — one configuration (tip position, rotation, LWA Jacobian), for the
-  compiled loops that step one configuration at a time (IK, resolved rate);
-* :func:`fk_jac_block` — a structure-of-arrays block of configurations on the chain with z
-  joint axes (:class:`~hexapod_kin._chain.AlignedChain`), compiled once and called by every
-  batch kernel: :func:`pose_jacobian_kernel` (``Model.fk_batch`` / ``jacobian_batch``) and the
-  singularity measures (:mod:`hexapod_kin.singularity._kernel`). Its per-joint loops run over
-  the block and vectorise (SIMD): sin / cos by the libm-free polynomial :func:`sincos`,
-  libm for the elements beyond :data:`POLY_TRIG_MAX`, element by element.
+Two forms of the same maths on :class:`~hexapod_kin._chain.ChainArrays` (``Model.arrays``),
+equal to Pinocchio to rounding: :func:`fk_jac_into`, one configuration (for the compiled IK
+and resolved-rate loops), and :func:`fk_jac_block`, a structure-of-arrays block on the chain
+with z joint axes (:class:`~hexapod_kin._chain.AlignedChain`), called by every batch kernel
+(:func:`pose_jacobian_kernel`, :mod:`hexapod_kin.singularity._kernel`); its per-joint loops
+vectorise, sin / cos by the polynomial :func:`sincos` (libm beyond :data:`POLY_TRIG_MAX`).
 
 **The same bits every time**: no ``fastmath``; each element's arithmetic depends on its own
-input only (never on its neighbours in a block, the block size or the thread that runs it),
-so a result is the same in any process, warm or cold, and from any number of threads.
+input only (never on the block, its size or the thread), whatever ran before.
 
-**When it compiles**: batch APIs and the IK loop import this module (other per-call work
-runs on Pinocchio and numpy; a process's first few ``ik.solve`` calls run the loop's Python
-twin, :func:`hexapod_kin._kmath.python_twin`). Kernels are ``cache=True``
-(:func:`hexapod_kin._kmath.njit`); numba's files are never parsed, only sealed as bytes
-(:func:`hexapod_kin._kmath.sealed_folder`);
-``hexapod-kin precompile`` compiles them all ahead. Before the first kernel call of an area in
-a process, :func:`run_blocks` prints one notice on stderr unless the
-area's stamp (:func:`mark_compiled`) says it is compiled; a cache that cannot be loaded or
-written is never fatal (:func:`_first_call`).
+**When it compiles**: kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`), numba's
+files sealed, never parsed (:func:`hexapod_kin._kmath.sealed_folder`); ``hexapod-kin
+precompile`` compiles them ahead. Before an area's first kernel call in a process,
+:func:`run_blocks` prints one notice on stderr unless the area's stamp (:func:`mark_compiled`)
+says it is compiled; a cache that cannot be loaded or written is never fatal
+(:func:`_first_call`).
 
-Jacobians here are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: rows
-``[v; ω]``.
+Jacobians are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: ``[v; ω]``.
 """
 
 from __future__ import annotations
@@ -51,6 +41,7 @@ import numpy as np
 from ._chain import AlignedChain, ChainArrays, aligned_chain
 from ._kmath import (
     POLY_TRIG_MAX,
+    OnEnd,
     dls_into,
     eig3_sym,
     njit,
@@ -78,8 +69,7 @@ CHUNKS_PER_THREAD = 8
 MIN_CHUNK_BLOCKS = 64
 #: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
 Q_MAX = 1e150
-#: Seconds of CPU each area's kernels take to compile from nothing (2-core machine, idle):
-#: what the first-use notice and ``precompile`` announce, and how ``precompile`` shares them.
+#: Seconds of CPU each area's kernels take to compile from nothing (the notice's estimate).
 COMPILE_SECONDS = {"batch": 3.0, "ik": 9.0, "singularity": 12.0}
 
 
@@ -114,40 +104,27 @@ def _stamp_key() -> str:
 
 
 def _stamp(area: str) -> Path | None:
-    """The stamp file of ``area``, in the folder numba chose for this module's cache.
+    """The stamp file of ``area`` in numba's cache folder (``Dispatcher.stats.cache_path``).
 
-    That folder is numba's public ``Dispatcher.stats.cache_path`` (``NUMBA_CACHE_DIR``, else
-    ``__pycache__`` beside the sources when writable, else numba's user-wide cache folder);
-    ``None`` when numba caches nothing. The stamp (and the seal, :func:`mark_compiled`) are
-    written there; numba's own files are never parsed.
+    ``None`` when numba caches nothing.
     """
     folder = pose_jacobian_kernel.stats.cache_path
     return None if folder is None else Path(folder) / f"hexapod_kin-{area}-{_stamp_key()}.stamp"
 
 
 def mark_compiled(area: str) -> None:
-    """Record that numba's cache holds ``area``'s kernels (its stamp file; best effort).
-
-    The cache folders are sealed first (:func:`hexapod_kin._kmath.seal_compiled`): what
-    numba wrote is then this user's sealed cache, loaded by later processes.
-    """
+    """Record that numba's cache holds ``area``'s kernels (sealed first; stamp best effort)."""
     with _SEEN_LOCK:
         _SEEN.add(area)
     seal_compiled()
     path = _stamp(area)
     if path is not None:
-        try:
+        with contextlib.suppress(OSError):
             path.touch()
-        except OSError:
-            pass
 
 
 def _notice(area: str) -> bool:
-    """The first time in a process, one line if no stamp says the disk cache holds ``area``.
-
-    The line is left open: :func:`_progress` adds a dot per function numba compiles and the
-    seconds it took. Returns whether it was said.
-    """
+    """Whether the first-use line was said (left open for :func:`_progress`'s dots)."""
     path = _stamp(area)
     if _NOTICE[0] and (path is None or not path.exists()):
         print(
@@ -164,26 +141,16 @@ def _notice(area: str) -> bool:
 
 @contextlib.contextmanager
 def _progress(said: bool) -> Iterator[None]:
-    """While numba compiles: a dot on stderr per function compiled, then the seconds taken.
-
-    numba's public event API (``numba.core.event``, kind ``"numba:compile"``), the listener
-    installed for this block only; nothing when the notice was not said.
-    """
+    """While numba compiles: a dot on stderr per function compiled, then the seconds taken."""
     if not said:
         yield
         return
     from numba.core import event
 
-    class _Dots(event.Listener):
-        def on_start(self, ev: Any) -> None:
-            pass
-
-        def on_end(self, ev: Any) -> None:
-            print(".", end="", file=sys.stderr, flush=True)
-
+    dots = OnEnd(lambda ev: print(".", end="", file=sys.stderr, flush=True))
     t0 = time.perf_counter()
     try:
-        with event.install_listener("numba:compile", _Dots()):
+        with event.install_listener("numba:compile", dots):
             yield
     finally:
         print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
@@ -191,14 +158,13 @@ def _progress(said: bool) -> Iterator[None]:
 
 def _dispatchers() -> list[Any]:
     """The package's compiled functions loaded in this process (numba dispatchers)."""
-    out = []
-    for name, module in list(sys.modules.items()):
-        if not name.startswith("hexapod_kin") or module is None:
-            continue
-        for obj in list(vars(module).values()):
-            if callable(getattr(obj, "recompile", None)) and hasattr(obj, "py_func"):
-                out.append(obj)
-    return out
+    return [
+        obj
+        for name, module in list(sys.modules.items())
+        if name.startswith("hexapod_kin") and module is not None
+        for obj in list(vars(module).values())
+        if callable(getattr(obj, "recompile", None)) and hasattr(obj, "py_func")
+    ]
 
 
 def _unwritable(exc: BaseException) -> bool:
@@ -215,14 +181,11 @@ def _unwritable(exc: BaseException) -> bool:
 def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     """``run(0, 0)`` (no blocks: loads or compiles the kernel), never failing on the cache.
 
-    numba's cache is used as numba documents it (``cache=True``): nothing here parses its
-    files. A cache that cannot be written (a full disk, a folder made read-only) costs one
-    :class:`~hexapod_kin.exceptions.CacheWarning`: numba adds each kernel to memory before
-    saving it, so calling again compiles the rest in memory. A cache that cannot be loaded
-    (numba raises while reading it) costs one warning too: every kernel with nothing loaded
-    is reset by numba's public ``Dispatcher.recompile()`` (its cache index emptied) and
-    compiled again. A Ctrl-C that numba's compile callback swallowed (reported as
-    unraisable) and that made the compile fail is raised as the ``KeyboardInterrupt`` it was.
+    A cache that cannot be written (full disk, read-only folder) costs one
+    :class:`~hexapod_kin.exceptions.CacheWarning` and the rest compiles in memory; one that
+    cannot be loaded costs one warning and its kernels are reset (numba's public
+    ``Dispatcher.recompile()``) and compiled again. A Ctrl-C swallowed by numba's compile
+    callback is raised as the ``KeyboardInterrupt`` it was.
     """
     if area in _SEEN:
         return run(0, 0)
@@ -277,10 +240,8 @@ def _first_run(area: str, run: Callable[[int, int], Any]) -> Any:
                 if not full:
                     for obj in _dispatchers():
                         if not obj.overloads or len(obj.overloads) != before.get(id(obj), 0):
-                            try:
+                            with contextlib.suppress(Exception):  # left empty: compiled on call
                                 obj.recompile()
-                            except Exception:  # noqa: BLE001, S110 - left empty: compiled on call
-                                pass
                 elif not progress:
                     raise
         else:  # pragma: no cover - more kernels than attempts
@@ -310,11 +271,9 @@ def fk_jac_into(
 ) -> None:  # pragma: no cover - compiled
     """Tip position into ``out_p`` (3,), LWA Jacobian into ``out_j`` (3 or 6, nq), rotation.
 
-    The per-configuration FK + Jacobian core. ``scratch`` is a (6, m) work array (joint
-    origins and axes); nothing is allocated. ``tip_rot`` is the chain's ``tip_rot``; the tip
-    frame's rotation in the base frame goes to ``out_r`` (3, 3). Callers in compiled code pass
-    ``want_jac`` as a runtime value (``n >= 0``, an argument), never a literal
-    ``True``/``False``: numba would compile one copy per literal.
+    ``scratch`` is a (6, m) work array (nothing is allocated); the tip frame's rotation (the
+    chain's ``tip_rot`` applied) goes to ``out_r`` (3, 3). Compiled callers pass ``want_jac``
+    as a runtime value, never a literal (numba would compile one copy per literal).
     """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
@@ -560,14 +519,8 @@ def pose_jacobian_kernel(
     """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
 
     Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq), through
-    :func:`fk_jac_block`. ``ref``: 0 local world aligned, 1 world (velocity of the point at
-    the base origin), 2 local (tip axes).
-
-    Returns:
-        Whether a value of ``q`` in these blocks is non-finite or ``|q| >= Q_MAX`` (the
-        caller raises; the outputs of such rows are meaningless but no memory outside them is
-        written).
-
+    :func:`fk_jac_block`; ``ref`` a value of :data:`REF_CODES`. Returns whether a ``q`` in
+    them is non-finite or ``|q| >= Q_MAX`` (the caller raises; only those rows are garbage).
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]
@@ -626,11 +579,8 @@ def pose_jacobian_kernel(
 def threads() -> int:
     """The threads a batch may use: ``numba.get_num_threads()``, without starting numba's pool.
 
-    The kernels run on plain Python threads, never on numba's threading layer; asking
-    ``numba.get_num_threads()`` starts that layer (tens of ms in a fresh process). So it is
-    asked only once the layer runs (``numba.threading_layer()`` answers, e.g. after a
-    ``numba.set_num_threads(n)``, which then holds); before, the count is numba's default,
-    ``NUMBA_NUM_THREADS``, which is what ``get_num_threads()`` would answer.
+    Before numba's threading layer runs, its default ``NUMBA_NUM_THREADS`` (asking would
+    start the layer, tens of ms; the kernels run on plain Python threads).
     """
     try:
         numba.threading_layer()
@@ -645,10 +595,8 @@ def run_blocks(
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
     ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``), loaded first with no
-    blocks (:func:`_first_call`). Then up to :func:`threads` plain threads (the
-    kernels release the GIL) each take the next chunk of blocks from a shared counter, so that
-    a thread sharing its core does less of the work; which thread runs a block never changes
-    its numbers.
+    blocks (:func:`_first_call`). Then up to :func:`threads` plain threads (the kernels release
+    the GIL) take chunks of blocks from a shared counter; the thread never changes the numbers.
     """
     results = [_first_call(area, run)]
     nwork = max(1, min(threads(), nblocks * block // min_per_thread))
@@ -708,19 +656,10 @@ def pose_jacobian_batch(
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of configurations ``qs`` (N, nq).
 
-    Args:
-        chain: The chain with z joint axes (:func:`~hexapod_kin._chain.aligned_chain`).
-        qs: C-contiguous float64 (N, nq). Its values are checked by the kernel on the way
-            (finite, ``|q| < Q_MAX``); when one is not, ``check()`` is called to raise.
-        pose: Whether to compute the poses.
-        jacobian: A key of :data:`REF_CODES`, or ``None`` for no Jacobian.
-        out_pose: Optional (N, 4, 4) float64 array to write the poses into.
-        out_jacobian: Optional (N, 6, nq) float64 array for the Jacobians.
-        check: Raises the caller's error for ``qs`` (e.g. ``Model.check_q_batch``); called
-            only when a value is out of range.
-
-    Returns:
-        ``(poses or None, jacobians or None)``.
+    ``qs`` is C-contiguous float64, its values checked by the kernel on the way (finite,
+    ``|q| < Q_MAX``; else ``check()`` raises the caller's error); ``jacobian`` a key of
+    :data:`REF_CODES` or ``None``; ``out_*`` optional arrays to write into. Returns
+    ``(poses or None, jacobians or None)``.
 
     Raises:
         ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.

@@ -40,19 +40,9 @@ _TWO_PI = 2.0 * math.pi
 def njit(*args: Any, **options: Any) -> Any:
     """``numba.njit`` with ``cache=True`` by default; ``fastmath`` is refused.
 
-    ``fastmath`` lets the compiler reassociate and contract arithmetic differently in the
-    vectorised body and the scalar remainder of a loop, so a value would depend on its
-    position in a batch (see "the same bits" in ``docs/ARCHITECTURE.md``).
-
-    Where numba finds no writable cache folder at all (its documented locators: the
-    ``NUMBA_CACHE_DIR``, ``__pycache__`` beside the sources, the user-wide cache folder),
-    ``cache=True`` would fail at import: the kernels are compiled in memory instead, with one
-    :class:`~hexapod_kin.exceptions.CacheWarning` per process.
-
-    **numba's cache is sealed** (:func:`sealed_folder`): before numba may load anything from
-    a cache folder, every numba file in it must carry the per-user keyed seal; otherwise the
-    kernels of that folder are compiled in memory in this process (one warning), never
-    loaded from it.
+    (``fastmath`` would make a value depend on its position in a batch.) Without a writable
+    cache folder, or one whose files are not all sealed (:func:`sealed_folder`), the kernels
+    are compiled in memory, with one :class:`~hexapod_kin.exceptions.CacheWarning`.
     """
     if options.get("fastmath"):
         raise ValueError("hexapod_kin kernels never use fastmath (the same bits every time)")
@@ -87,11 +77,9 @@ _IN_MEMORY: list[bool] = []
 def python_twin(kernel: Any, _memo: dict[int, Any] | None = None) -> Any:
     """``kernel``'s own Python function, calling the Python twins of the kernels it calls.
 
-    The same code objects run by the interpreter instead of numba's machine code: the same
-    IEEE operations in the same order (no ``fastmath``, no contraction into fused multiply-add),
-    so the same bits on the same inputs (``tests/test_ik_solver.py`` holds them equal), with
-    nothing to compile. Each function gets a copy of its module's globals in which every
-    compiled function it names is replaced by that one's twin (built once per call of this).
+    The same IEEE operations in the same order as the machine code (no ``fastmath``), so the
+    same bits, with nothing to compile: each function gets a copy of its module's globals with
+    every compiled function it names replaced by that one's twin.
     """
     memo: dict[int, Any] = {} if _memo is None else _memo
     found = memo.get(id(kernel))
@@ -118,15 +106,11 @@ _FOLDERS_LOCK = threading.Lock()
 def sealed_folder(folder: str | None) -> bool:
     """Whether numba may use its cache ``folder``: every numba file in it carries the seal.
 
-    Checked once per folder and process, before the first kernel of the folder is made
-    (so before numba could load anything from it): every ``.nbi``/``.nbc`` file must carry
-    the keyed MAC of its name and bytes in the folder's seal
-    (:func:`hexapod_kin._cache.check_folder`; numba's files are never parsed). An edited,
-    swapped, foreign or unsealed file: one :class:`~hexapod_kin.exceptions.CacheWarning` and
-    the files that fail are removed, so numba compiles those kernels afresh (and
-    :func:`seal_compiled` reseals the folder once they are written). Where they cannot be
-    removed (or no per-user secret can check them), the folder's kernels are compiled in
-    memory in this process, never loaded from it.
+    Checked once per folder and process, before numba could load from it
+    (:func:`hexapod_kin._cache.check_folder`). A file that fails: one
+    :class:`~hexapod_kin.exceptions.CacheWarning` and the failing files are removed (compiled
+    afresh, resealed by :func:`seal_compiled`); where they cannot be (or no secret can check
+    them), the folder's kernels are compiled in memory, never loaded from it.
     """
     if folder is None:
         return True
@@ -175,12 +159,8 @@ def seal_compiled() -> None:
 def reseal_if_compiled() -> None:
     """:func:`seal_compiled` when a kernel of the package was compiled since the last seal.
 
-    numba saves a new specialisation (a kernel called with new argument types) after its
-    compile, at any call: left unsealed, the next process to start would take numba's files
-    for foreign ones (one warning, the files removed). numba's public event API renews the
-    seal as soon as they are saved: a compile (kind ``"numba:compile"``) of a package kernel
-    marks the folders, and the compiler lock's next release (kind ``"numba:compiler_lock"``,
-    released by numba after it saved what it compiled) reseals them; and at exit.
+    Called when numba releases its compiler lock (after saving what it compiled) and at exit,
+    so that a new specialisation saved at any call is sealed before the next process starts.
     """
     if _DIRTY:
         seal_compiled()
@@ -190,30 +170,28 @@ def reseal_if_compiled() -> None:
 _DIRTY: list[bool] = []
 
 
-class _CompileWatch(_event.Listener):
-    """Marks the package's compiles (``"numba:compile"``, ended before numba saves)."""
+class OnEnd(_event.Listener):
+    """A numba event listener calling ``callback(event)`` at each event's end."""
+
+    def __init__(self, callback: Any) -> None:
+        self.callback = callback
 
     def on_start(self, ev: Any) -> None:
         pass
 
     def on_end(self, ev: Any) -> None:
-        func = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
-        if getattr(func, "__module__", "").startswith("hexapod_kin"):
-            _DIRTY[:] = [True]
+        self.callback(ev)
 
 
-class _LockWatch(_event.Listener):
-    """Reseals after numba's compiler lock is released (``"numba:compiler_lock"``)."""
-
-    def on_start(self, ev: Any) -> None:
-        pass
-
-    def on_end(self, ev: Any) -> None:
-        reseal_if_compiled()
+def _compiled(ev: Any) -> None:
+    """Mark a compile of the package's (``"numba:compile"``, ended before numba saves)."""
+    func = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
+    if getattr(func, "__module__", "").startswith("hexapod_kin"):
+        _DIRTY[:] = [True]
 
 
-_event.register("numba:compile", _CompileWatch())
-_event.register("numba:compiler_lock", _LockWatch())
+_event.register("numba:compile", OnEnd(_compiled))
+_event.register("numba:compiler_lock", OnEnd(lambda ev: reseal_if_compiled()))
 atexit.register(reseal_if_compiled)
 
 

@@ -1,11 +1,9 @@
 """Small per-call maths in plain numpy (never imports numba).
 
 One home each: angle wrapping (:func:`wrap_angles`), the chain's length scale
-(:func:`chain_length` / :func:`chain_scale`, ONE formula) and the damped-least-squares step
-(:func:`dls_step`, :func:`dls_step3`: the resolved-rate law, the legs' closed forms finished on
-the table; the compiled loop's twin). The compiled counterparts used
-inside kernels (``wrap_angle``, ``dls_into``, eigenvalues, determinants...)
-live in :mod:`hexapod_kin._kmath`, re-exported by :mod:`hexapod_kin._kernels`.
+(:func:`chain_length` / :func:`chain_scale`) and the damped-least-squares step
+(:func:`dls_step`, :func:`dls_step3`). Their compiled counterparts live in
+:mod:`hexapod_kin._kmath`.
 
 Angles in [rad], lengths in [m].
 """
@@ -42,15 +40,7 @@ def chain_length(trans: Any) -> float:
 
 
 def chain_scale(trans: Any) -> float:
-    """The chain's length scale in [m] for tolerances: :func:`chain_length`, or 1.0 if zero.
-
-    Args:
-        trans: (m, 3) link translations in [m].
-
-    Returns:
-        ``Σ‖tᵢ‖`` if positive, else 1.0.
-
-    """
+    """The chain's length scale in [m] for tolerances: :func:`chain_length`, or 1.0 if zero."""
     s = chain_length(trans)
     return s if s > 0.0 else 1.0
 
@@ -58,12 +48,10 @@ def chain_scale(trans: Any) -> float:
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
     """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (pure function).
 
-    The per-call twin of the compiled loop's step (:func:`hexapod_kin._kmath.dls_into`) and
-    the one numpy DLS step of the package (the resolved-rate law, the driven limb). The
-    smaller system is solved (LAPACK's LU): ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else
-    ``Jfᵀ(JfJfᵀ + λ²I)⁻¹ e`` (the same Δq). ``Jf`` is ``jac`` with the columns of frozen
-    joints (``free`` False or 0) zeroed, so they get Δq = 0. A stack of tasks ((..., m, n)
-    Jacobians, (..., m) errors) is solved at once (n ≤ m).
+    The package's one numpy DLS step (twin of :func:`hexapod_kin._kmath.dls_into`). The
+    smaller system is solved: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ(JfJfᵀ +
+    λ²I)⁻¹ e``. ``Jf`` is ``jac`` with the columns of frozen joints (``free`` False or 0)
+    zeroed. A stack of tasks (n ≤ m) is solved at once.
 
     Args:
         jac: Task Jacobian (m, n), or a stack (..., m, n).

@@ -73,12 +73,8 @@ $body
 def page(title: str, body: Html, *, style: str = "", policy: str | None = None) -> str:
     """A whole document: :data:`SKELETON` filled once.
 
-    Args:
-        title: The page title (text).
-        body: The body's markup.
-        style: The page's CSS (the package's own, inserted as it is).
-        policy: Its Content-Security-Policy (the package's own; ``None``: none).
-
+    ``title`` is text; ``style`` (CSS) and ``policy`` (a Content-Security-Policy, ``None``:
+    none) are the package's own, inserted as they are.
     """
     csp = (
         ""
@@ -104,12 +100,9 @@ def check_height(height: Any) -> int:
 def frame(doc: str, *, height: int | None = None, title: str | None = None) -> Html:
     """A whole page in a sandboxed ``<iframe srcdoc>`` (``allow-scripts``: cannot reach its host).
 
-    Args:
-        doc: The page (text in the attribute, even one built here).
-        height: Frame height in [px] (:func:`check_height`; full width, no border), or ``None``
-            to leave the size to the host's style sheet.
-        title: The frame's accessible title, if any.
-
+    ``doc`` is text in the attribute (even one built here); ``height`` in [px]
+    (:func:`check_height`; full width, no border), ``None`` leaves the size to the host's
+    style sheet; ``title`` is the frame's accessible title.
     """
     named = Html("") if title is None else fill('title="$t" ', t=title)
     sized = (

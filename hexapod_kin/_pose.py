@@ -25,9 +25,7 @@ def rotation_angle(r_a: Any, r_b: Any) -> np.ndarray:
     full relative precision for tiny angles (where ``arccos`` of the trace loses half the
     digits), the cosine part for angles near π.
     """
-    a = np.asarray(r_a, dtype=float)
-    b = np.asarray(r_b, dtype=float)
-    m = a @ np.swapaxes(b, -1, -2)
+    m = np.asarray(r_a, dtype=float) @ np.swapaxes(np.asarray(r_b, dtype=float), -1, -2)
     skew = np.stack(
         [m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]],
         axis=-1,
@@ -58,14 +56,9 @@ def rpy_to_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 
 def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
-    """URDF roll-pitch-yaw of a rotation matrix, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
+    """URDF ``(roll, pitch, yaw)`` [rad] of a 3×3 rotation ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
 
-    Args:
-        rot: 3×3 rotation matrix.
-
-    Returns:
-        ``(roll, pitch, yaw)`` in [rad]; at gimbal lock (``|pitch| = π/2``) yaw is 0.
-
+    At gimbal lock (``|pitch| = π/2``) yaw is 0.
     """
     r = np.asarray(rot, float)
     pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
@@ -133,12 +126,8 @@ class Pose:
         allowed = "a 4x4 homogeneous matrix, (xyz, rpy), a 6-vector xyz+rpy or {'xyz':…, 'rpy':…}"
 
         def bad(why: str) -> ParameterError:
-            return ParameterError(
-                f"{where}={value!r}: {why}; give {allowed}",
-                parameter=where,
-                value=value,
-                allowed=allowed,
-            )
+            message = f"{where}={value!r}: {why}; give {allowed}"
+            return ParameterError(message, parameter=where, value=value, allowed=allowed)
 
         if isinstance(value, dict):
             if set(value) - {"xyz", "rpy"}:

@@ -19,13 +19,11 @@ Every refusal is a :class:`~.exceptions.SourceError` whose ``parameter`` is the 
 (``what``: ``"source"``, ``"feet"``, ``"calibration"``, ...) and whose message is one line
 naming the file.
 
-The readers of each kind of file then check the values with the same few functions, so that
-one mistake gets one message whatever the file: :func:`number` / :func:`numbers` (a finite
-int or float, never a text such as ``'0.3'`` nor a boolean), :func:`text` / :func:`texts`
-(names that are strings, never ``5`` or ``true`` made into one), :func:`check_keys` (an
-unknown key refused with a "did you mean") and :func:`named` (the file named in front of a
-value's error). A CSV's numbers go through :func:`csv_table` (decimal numbers only: never
-``inf``, ``nan``, ``1_000`` nor a number padded with spaces; the line, column and value named).
+The values are then checked by the same few functions, one message per mistake whatever the
+file: :func:`number` / :func:`numbers` (a finite int or float, never ``'0.3'`` nor a
+boolean), :func:`text` / :func:`texts` (strings, never ``5`` or ``true`` made into one),
+:func:`check_keys` (unknown keys, with a "did you mean"), :func:`named` (the file named in
+front of a value's error) and :func:`csv_table` (plain decimal numbers only).
 """
 
 from __future__ import annotations
@@ -71,12 +69,8 @@ _EXPONENT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?
 
 
 def _refuse(name: str, what: str, problem: str, allowed: str) -> SourceError:
-    return SourceError(
-        f"{what}={name!r}: {problem}; allowed: {allowed}",
-        parameter=what,
-        value=name,
-        allowed=allowed,
-    )
+    message = f"{what}={name!r}: {problem}; allowed: {allowed}"
+    return SourceError(message, parameter=what, value=name, allowed=allowed)
 
 
 def _short(exc: BaseException) -> str:
@@ -121,13 +115,9 @@ def read_data(
 ) -> Any:
     """The values of a JSON, TOML or YAML file, read strictly (see the module docstring).
 
-    Args:
-        path: The file.
-        what: The kind of file, named in errors (``parameter``).
-        fmt: ``"json"``, ``"toml"`` or ``"yaml"``; default: by the suffix, else YAML.
-        max_bytes: Byte cap.
-        mapping: When given, the file must hold a mapping; the text names what it holds
-            (e.g. ``"name, convention, row, ..."``).
+    ``what`` is the kind of file, named in errors (``parameter``); ``fmt`` ``"json"``,
+    ``"toml"`` or ``"yaml"`` (default: by the suffix, else YAML); with ``mapping`` (what the
+    mapping holds, e.g. ``"name, convention, row, ..."``) the file must hold a mapping.
 
     Raises:
         SourceError: Any refusal of the module docstring, or a syntax error.
@@ -323,12 +313,9 @@ def _check_structure(data: Any, name: str, what: str, max_values: int) -> None:
 
 # ---------------------------------------------------------------- the values of a file
 def _wrong(where: str, value: Any, problem: str, allowed: str, parameter: str | None) -> Exception:
-    return ParameterError(
-        f"{where}={clip(value)}{problem}",
-        parameter=parameter or where,
-        value=clip(value),
-        allowed=allowed,
-    )
+    shown = clip(value)
+    return ParameterError(f"{where}={shown}{problem}", parameter=parameter or where, value=shown,
+                          allowed=allowed)  # fmt: skip
 
 
 def number(value: Any, where: str, *, parameter: str | None = None) -> float:
@@ -355,11 +342,8 @@ def number(value: Any, where: str, *, parameter: str | None = None) -> float:
 def numbers(value: Any, where: str, n: int | None = None, *, parameter: str | None = None) -> Any:
     """Nested lists of finite numbers (each as :func:`number`, its index named), as floats.
 
-    Args:
-        value: A list (of lists ...) of numbers.
-        where: The key, named in errors with the index (``q[3][1]``).
-        n: When given, ``value`` must be a flat list of ``n`` numbers.
-        parameter: The error's ``parameter`` (default: ``where``).
+    ``where`` is the key, named in errors with the index (``q[3][1]``); with ``n``, ``value``
+    must be a flat list of ``n`` numbers.
 
     Raises:
         ParameterError: Not a list (of ``n``), or a value that is not a finite number.
@@ -456,10 +440,7 @@ def csv_table(
     is a plain decimal (``-1.5``, ``.25``, ``3e-4``) and finite: ``float()``'s extras
     (``inf``, ``nan``, ``1_000``, `` 1e3 `` with spaces) are typos in a table, refused.
 
-    Args:
-        text: The file's text (from :func:`read_text`).
-        name: The file, named in errors.
-        what: The kind of file (the error's ``parameter``).
+    ``name`` is the file, named in errors; ``what`` the kind of file (``parameter``).
 
     Raises:
         SourceError: No header, a row of another width, or a cell that is not a finite
@@ -487,13 +468,10 @@ def csv_table(
         for col, cell in enumerate(cells, 1):
             x = float(cell) if _DECIMAL.fullmatch(cell.strip(" \t")) else math.nan
             if not math.isfinite(x):
-                raise _refuse(
-                    name,
-                    what,
-                    f"line {lineno}, column {col} ({clip(header[col - 1])}): {clip(cell)} "
-                    "is not a finite decimal number",
-                    "decimal numbers such as 0.25 or -1.5e-3 (no inf, nan or _)",
-                )
+                where = f"line {lineno}, column {col} ({clip(header[col - 1])})"
+                problem = f"{where}: {clip(cell)} is not a finite decimal number"
+                allowed = "decimal numbers such as 0.25 or -1.5e-3 (no inf, nan or _)"
+                raise _refuse(name, what, problem, allowed)
             row.append(x)
         rows.append(row)
     if header is None:

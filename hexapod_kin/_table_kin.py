@@ -19,7 +19,8 @@ def _as_q(chain: Chain, q: Any) -> np.ndarray:
     """``q`` as a finite (nq,) float array for ``chain`` (the table layer: no model needed)."""
     from .exceptions import ConfigurationError
 
-    allowed = f"{chain.nq} finite numbers (joints {list(chain.joint_names or ())})"
+    names = list(chain.joint_names or ())
+    allowed = f"{chain.nq} finite numbers (joints {names})"
     try:
         arr = np.asarray(q, dtype=float).reshape(-1)
     except (TypeError, ValueError):
@@ -27,54 +28,25 @@ def _as_q(chain: Chain, q: Any) -> np.ndarray:
             f"q={q!r} is not a sequence of numbers", parameter="q", value=q, allowed=allowed
         ) from None
     if arr.shape != (chain.nq,):
-        raise ConfigurationError(
-            f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints "
-            f"{list(chain.joint_names or ())}",
-            parameter="q",
-            value=arr.tolist(),
-            allowed=allowed,
-        )
-    if not np.all(np.isfinite(arr)):
-        raise ConfigurationError(
-            f"q={arr.tolist()} contains non-finite values",
-            parameter="q",
-            value=arr.tolist(),
-            allowed=allowed,
-        )
-    return arr
+        problem = f"q has {arr.size} values; chain {chain.name!r} has {chain.nq} joints {names}"
+    elif not np.all(np.isfinite(arr)):
+        problem = f"q={arr.tolist()} contains non-finite values"
+    else:
+        return arr
+    raise ConfigurationError(problem, parameter="q", value=arr.tolist(), allowed=allowed)
 
 
 def table_transforms(chain: Chain, q: Any) -> list[np.ndarray]:
-    """Multiply nothing: return every ``^{j-1}T_j`` of the table at ``q`` (pure numpy).
-
-    Args:
-        chain: The chain.
-        q: Joint values (n,) in [rad] / [m].
-
-    Returns:
-        One 4×4 array per row, in table order.
-
-    """
-    qv = _as_q(chain, q)
-    out = []
-    k = 0
-    for row in chain.rows:
-        if row.is_joint:
-            out.append(row.transform(float(qv[k])))
-            k += 1
-        else:
-            out.append(row.transform())
-    return out
+    """Every ``^{j-1}T_j`` of the table at ``q`` ((n,) in [rad] / [m]), 4×4 each, in order."""
+    values = iter(_as_q(chain, q).tolist())
+    return [row.transform(next(values)) if row.is_joint else row.transform() for row in chain.rows]
 
 
 def table_fk(chain: Chain, q: Any) -> np.ndarray:
     """Forward kinematics by multiplying the Khalil transforms directly (pure numpy).
 
-    This is the independent reference every Pinocchio result is checked against.
-
-    Args:
-        chain: The chain.
-        q: Joint values (n,) in [rad] / [m].
+    The independent reference every Pinocchio result is checked against; ``q`` (n,) in
+    [rad] / [m].
 
     Returns:
         ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool`` (4×4): the chain's base and
@@ -100,10 +72,6 @@ def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
     ``∂(T_1···T_n)/∂q_j = (T_1···T_j)·G_j·(T_{j+1}···T_n)`` with ``G_j`` the generator of
     ``Rz`` (revolute) or ``Tz`` (prismatic) — no finite differences, exact to rounding.
 
-    Args:
-        chain: The chain.
-        q: Joint values (n,).
-
     Returns:
         The 3×n position Jacobian of the tip (tool included) in the base frame (base
         pose included).
@@ -112,16 +80,11 @@ def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
     ts = table_transforms(chain, q)
     ts[0] = chain.base_matrix @ ts[0]
     ts.append(chain.tool_matrix)  # after the last row: the generators act before it
-    n_rows = len(ts)
     prefix = [np.eye(4)]
     for t in ts:
         prefix.append(prefix[-1] @ t)
-    suffix = [np.eye(4)] * (n_rows + 1)
-    for j in range(n_rows - 1, -1, -1):
+    suffix = [np.eye(4)] * (len(ts) + 1)
+    for j in range(len(ts) - 1, -1, -1):
         suffix[j] = ts[j] @ suffix[j + 1]
-    cols = []
-    for j in chain.joint_rows:
-        gen = _GZ if chain.rows[j].sigma == "revolute" else _GT
-        d = prefix[j + 1] @ gen @ suffix[j + 1]
-        cols.append(d[:3, 3])
-    return np.column_stack(cols)
+    gens = {j: _GZ if chain.rows[j].sigma == "revolute" else _GT for j in chain.joint_rows}
+    return np.column_stack([(prefix[j + 1] @ g @ suffix[j + 1])[:3, 3] for j, g in gens.items()])

@@ -19,13 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = [
-    "Tree",
-    "mat_vec",
-    "robot_size",
-    "tree_frames",
-    "tree_poses",
-]
+__all__ = ["Tree", "mat_vec", "robot_size", "tree_frames", "tree_poses"]
 
 
 @dataclass(frozen=True)
@@ -75,17 +69,11 @@ class Tree:
                 )
             axes[j - first] = kind[1] / np.linalg.norm(kind[1])
             prismatic[j - first] = kind[0] == "prismatic"
-        parents = np.array([int(model.parents[j]) - first for j in range(first, model.njoints)])
+        joints = range(first, model.njoints)
+        parents = np.array([int(model.parents[j]) - first for j in joints]).reshape(n)
         parents[parents < 0] = -1
-        placements = np.array(
-            [model.jointPlacements[j].homogeneous for j in range(first, model.njoints)]
-        )
-        return cls(
-            parents=parents.reshape(n),
-            placements=placements.reshape(n, 4, 4),
-            axes=axes,
-            prismatic=prismatic,
-        )
+        placements = np.array([model.jointPlacements[j].homogeneous for j in joints])
+        return cls(parents, placements.reshape(n, 4, 4), axes, prismatic)
 
     @cached_property
     def levels(self) -> tuple[tuple[np.ndarray, np.ndarray | None], ...]:
@@ -163,16 +151,10 @@ class Tree:
 def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The joints' world frames, components first: rotations (3, 3, n, N), origins (3, n, N).
 
-    Args:
-        tree: The tree.
-        q: (N, n) joint values.
-        base: (N, 4, 4) body poses.
-
-    One product per depth of the tree and axis kind (:attr:`Tree.groups`): for a joint about
-    ``±x, ±y, ±z`` the parent's rotation times the placement, then two columns mixed by
-    ``cos q, ±sin q``; other joints by Rodrigues (:attr:`Tree.soa_terms`). The samples are
-    the last (contiguous) axis, so every step is a long vector operation.
-
+    ``q`` (N, n) are the joint values, ``base`` (N, 4, 4) the body poses. One product per
+    depth of the tree and axis kind (:attr:`Tree.groups`): for a joint about ``±x, ±y, ±z``
+    the parent's rotation times the placement, then two columns mixed by ``cos q, ±sin q``;
+    other joints by Rodrigues (:attr:`Tree.soa_terms`). The samples are the last axis.
     """
     qt = np.ascontiguousarray(np.asarray(q, dtype=float).T)  # (n, N)
     nj, n = qt.shape

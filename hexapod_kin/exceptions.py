@@ -30,10 +30,7 @@ class HexapodKinError(ValueError):
         value: The value that was given, if known.
         allowed: What is allowed (a list of names, a range, a description), if known.
 
-    Attributes:
-        parameter: As given (``None`` when the raise site did not say).
-        value: As given.
-        allowed: As given.
+    The three keywords are kept as attributes of the same names (``None`` when not said).
 
     """
 
@@ -127,16 +124,7 @@ class UrdfWarning(HexapodKinWarning):
 
 
 def choices(names: Iterable[str], limit: int = 40) -> str:
-    """Format a list of valid names for an error message.
-
-    Args:
-        names: The valid names.
-        limit: How many to show before eliding.
-
-    Returns:
-        A string such as ``"'a', 'b', 'c'"`` (with ``... (N more)`` past ``limit``).
-
-    """
+    """Valid names for an error message: ``"'a', 'b', 'c'"`` (``... (N more)`` past ``limit``)."""
     items = [repr(n) for n in names]
     if len(items) > limit:
         return ", ".join(items[:limit]) + f", ... ({len(items) - limit} more)"
@@ -168,17 +156,14 @@ def one_of(parameter: str, value: Any, allowed: Iterable[Any], also: str = "") -
 
 
 def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.6) -> str:
-    """A "did you mean" hint for an unknown ``name`` among ``names`` (difflib).
+    """A "did you mean" hint for an unknown ``name`` among ``names``.
 
-    Args:
-        name: What the user typed.
-        names: The valid names.
-        n: At most this many suggestions.
-        cutoff: Similarity threshold in [0, 1] (``difflib.get_close_matches``).
+    At most ``n`` suggestions, ``cutoff`` the similarity threshold in [0, 1] of
+    ``difflib.get_close_matches``; names that start with ``name`` (``ur5`` → ``ur5_robot``)
+    count as close.
 
     Returns:
-        ``" (did you mean 'a' or 'b'?)"``, or ``""`` when nothing is close. Names that start
-        with ``name`` (e.g. ``ur5`` → ``ur5_robot``) count as close.
+        ``" (did you mean 'a' or 'b'?)"``, or ``""`` when nothing is close.
 
     """
     pool = [str(x) for x in names]
@@ -198,13 +183,10 @@ def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.
 def finite(name: str, value: Any, need: str = "") -> float:
     """``value`` as a finite float: the package's one such check (a bool is not a number).
 
-    Args:
-        name: The parameter's name (in the message and the error's fields).
-        value: What was given.
-        need: A range also required, for the message (e.g. ``"> 0"``).
+    ``need`` is a range also required, said in the message (e.g. ``"> 0"``).
 
     Raises:
-        ParameterError: Not a number or not finite.
+        ParameterError: Not a number or not finite (naming ``name``).
 
     """
     try:

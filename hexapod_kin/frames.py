@@ -15,25 +15,11 @@ import pinocchio as pin
 
 from .exceptions import ConfigurationError, FrameNotFoundError
 
-__all__ = [
-    "add_tool_frame",
-    "floating_model",
-    "frame_index",
-    "joint_kind",
-    "path_frames",
-    "reduce_model",
-    "reduced_model",
-    "root_link_frame",
-]
+__all__ = ["add_tool_frame", "floating_model", "frame_index", "joint_kind", "path_frames",
+           "reduce_model", "reduced_model", "root_link_frame"]  # fmt: skip
 
-
-_FRAME_PREFERENCE = (
-    pin.FrameType.BODY,
-    pin.FrameType.OP_FRAME,
-    pin.FrameType.JOINT,
-    pin.FrameType.FIXED_JOINT,
-    pin.FrameType.SENSOR,
-)
+_T = pin.FrameType
+_FRAME_PREFERENCE = (_T.BODY, _T.OP_FRAME, _T.JOINT, _T.FIXED_JOINT, _T.SENSOR)
 
 
 #: The one-variable joints Pinocchio builds from a URDF, by kind (``shortname()`` prefixes).
@@ -108,13 +94,10 @@ def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Mo
 def floating_model(fixed: pin.Model) -> pin.Model:
     """``fixed`` (a URDF's fixed-base model) with a free-flyer ``root_joint`` at its root.
 
-    The same model as ``pinocchio.buildModelFromXML(text, JointModelFreeFlyer())`` of the
-    same URDF (``==`` holds; the tests check it on URDFs of every kind), built from the loaded
-    model instead of a second parse: every joint moves one index up under ``root_joint``
-    (q grows by 7, v by 6), the root link's inertia (Pinocchio keeps it on ``universe`` in a
-    fixed-base model) moves onto ``root_joint``, and every frame keeps its name, type,
-    placement and inertia (the root link's body frame gives its inertia to the joint, as
-    Pinocchio's parser does).
+    Equal (``==``) to ``pinocchio.buildModelFromXML(text, JointModelFreeFlyer())`` of the same
+    URDF, without a second parse: every joint moves one index up under ``root_joint``, the
+    root link's inertia moves from ``universe`` onto it, every frame keeps its name, type,
+    placement and inertia.
     """
     out = pin.Model()
     out.name = fixed.name
@@ -234,18 +217,13 @@ def path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
     """Body frames from base to tip (one per link on the path), by walking parents."""
     names: list[str] = []
     fid = tip_id
-    seen = 0
-    while True:
+    for _ in range(len(model.frames) + 2):
         frame = model.frames[fid]
         if frame.type == pin.FrameType.BODY or fid in (base_id, tip_id):
             names.append(frame.name)
-        if fid == base_id or seen > len(model.frames):
+        if fid == base_id or frame.parentFrame == fid:
             break
-        parent = frame.parentFrame
-        if parent == fid:
-            break
-        fid = parent
-        seen += 1
+        fid = frame.parentFrame
     if names[-1] != model.frames[base_id].name:
         return (model.frames[base_id].name, model.frames[tip_id].name)
     names.reverse()

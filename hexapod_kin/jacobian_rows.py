@@ -21,14 +21,10 @@ ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
 
 
 def row_indices(rows: str | Sequence[str] | None) -> tuple[int, ...]:
-    """Turn a row selection into indices of ``[vx vy vz wx wy wz]``.
+    """The indices (0..5, in the given order) of a row selection of ``[vx vy vz wx wy wz]``.
 
-    Args:
-        rows: ``None`` or ``"position"`` (x, y, z), ``"all"`` (the six rows), a comma-separated
-            string or a sequence of names from :data:`ROW_NAMES` (e.g. ``("x", "y", "z", "wz")``).
-
-    Returns:
-        The row indices (0..5), in the given order.
+    ``rows``: ``None`` or ``"position"`` (x, y, z), ``"all"``, a comma-separated string or a
+    sequence of names from :data:`ROW_NAMES` (e.g. ``("x", "y", "z", "wz")``).
 
     Raises:
         ParameterError: Unknown or repeated row names, or an empty selection.
@@ -61,16 +57,8 @@ def row_names(rows: str | Sequence[str] | None) -> tuple[str, ...]:
 def choose_rows(nonzero: Sequence[bool], nq: int) -> tuple[str, ...]:
     """The default selection: position rows, plus the angular rows that are not zero if square.
 
-    When ``x, y, z`` plus the angular rows that are not identically zero make exactly ``nq``
-    rows (and ``nq > 3``), those are used (SCARA: ``x, y, z, wz``); otherwise ``x, y, z``.
-
-    Args:
-        nonzero: Six flags, "row i of J is not identically zero".
-        nq: Number of joints.
-
-    Returns:
-        Row names.
-
+    When ``x, y, z`` plus the angular rows that are not identically zero (``nonzero``: six
+    flags) make exactly ``nq > 3`` rows, those (SCARA: ``x, y, z, wz``); else ``x, y, z``.
     """
     chosen = [0, 1, 2] + [i for i in (3, 4, 5) if nonzero[i]]
     if len(chosen) == nq and nq > 3:

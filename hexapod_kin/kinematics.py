@@ -26,12 +26,8 @@ from .frames import joint_kind
 from .model import Model
 from .sources import resolve_source
 
-# The inlined fast q check of the hot paths (same test as model.fast_q_ok), bound locally.
-_F64 = np.dtype(np.float64)
-_ND = np.ndarray
-_hypot = math.hypot
-
-# Bound once: module attribute lookups cost on the per-call hot path.
+# Bound once for the hot paths (their inlined model.fast_q_ok, Pinocchio's calls).
+_F64, _ND, _hypot = np.dtype(np.float64), np.ndarray, math.hypot
 _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
 _compute_frame_jacobian = pin.computeFrameJacobian
@@ -100,35 +96,20 @@ class KinematicModel(Model):
 
     def placement(self, q: Any, frame: str) -> np.ndarray:
         """Pose of any frame in the base frame, ``baseMframe`` (4×4)."""
-        fid = self.frame_id(frame)
-        qv = self.pinocchio_q(q)
-        d = self.data
-        pin.forwardKinematics(self.model, d, qv)
-        omf = pin.updateFramePlacement(self.model, d, fid)
-        return (self.baseMo * omf).homogeneous
+        fid, d = self.frame_id(frame), self.data
+        pin.forwardKinematics(self.model, d, self.pinocchio_q(q))
+        return (self.baseMo * pin.updateFramePlacement(self.model, d, fid)).homogeneous
 
     def frame_placements(self, q: Any) -> list[np.ndarray]:
         """``^0T_j`` for every frame on the base → tip path (``path_frames``), 4×4 each."""
-        qv = self.pinocchio_q(q)
         d = self.data
-        pin.framesForwardKinematics(self.model, d, qv)
-        out = []
-        for name in self.path_frames:
-            fid = self.frame_id(name)
-            out.append((self.baseMo * d.oMf[fid]).homogeneous)
-        return out
+        pin.framesForwardKinematics(self.model, d, self.pinocchio_q(q))
+        return [(self.baseMo * d.oMf[self.frame_id(name)]).homogeneous for name in self.path_frames]
 
     def transforms(self, q: Any) -> list[np.ndarray]:
-        """Every intermediate transform ``^{j-1}T_j`` along the path, numbered as the table.
+        """Every intermediate transform ``^{j-1}T_j`` along the path (4×4 each; product: fk).
 
         For a chain built from a Khalil table, entry ``j-1`` is the table's row ``j``.
-
-        Args:
-            q: Joint values (nq,).
-
-        Returns:
-            A list of 4×4 arrays; their product is :meth:`fk`.
-
         """
         world = self.frame_placements(q)
         return [np.linalg.solve(world[j - 1], world[j]) for j in range(1, len(world))]
@@ -186,22 +167,6 @@ class KinematicModel(Model):
         return out
 
     # -------------------------------------------------------------- batch calls
-    def _batch_q(self, qs: Any) -> np.ndarray:
-        """``qs`` as C-contiguous float64 (N, nq), shape checked.
-
-        A C-contiguous float64 (N, nq) array passes as it is: the batch kernel checks its
-        values on the way and :meth:`_batch` raises the message of ``check_q_batch``.
-        """
-        if (
-            isinstance(qs, np.ndarray)
-            and qs.dtype == np.float64
-            and qs.ndim == 2
-            and qs.shape[1] == self.nq
-            and qs.flags.c_contiguous
-        ):
-            return qs
-        return np.ascontiguousarray(self.check_q_batch(qs, "Q"))
-
     def _batch(
         self,
         qs: Any,
@@ -210,15 +175,26 @@ class KinematicModel(Model):
         out_pose: np.ndarray | None = None,
         out_jacobian: np.ndarray | None = None,
     ) -> tuple[Any, Any]:
-        """The batch kernel's poses and/or Jacobians (``reference`` None: no Jacobian)."""
+        """The batch kernel's poses and/or Jacobians (``reference`` None: no Jacobian).
+
+        A C-contiguous float64 (N, nq) ``qs`` passes as it is: the kernel checks its values on
+        the way (then ``check_q_batch`` raises); anything else is checked first.
+        """
         from ._chain import aligned_chain
         from ._kernels import pose_jacobian_batch
 
-        key = None
         if reference is not None:
-            key = reference.lower() if isinstance(reference, str) else None
             _reference(reference)
-        q = self._batch_q(qs)
+        key = None if reference is None else reference.lower()
+        q = qs
+        if not (
+            isinstance(q, np.ndarray)
+            and q.dtype == np.float64
+            and q.ndim == 2
+            and q.shape[1] == self.nq
+            and q.flags.c_contiguous
+        ):
+            q = np.ascontiguousarray(self.check_q_batch(qs, "Q"))
         chain = self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
         return pose_jacobian_batch(
             chain, q, pose=pose, jacobian=key, out_pose=out_pose, out_jacobian=out_jacobian,
@@ -293,31 +269,21 @@ class KinematicModel(Model):
 def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     """The textbook *direct* method: columns ``z_j × (O_E − O_j)`` (``z_j`` if prismatic).
 
-    Computed from the joint frames' placements alone (no Jacobian routine), in the base frame.
-
-    Args:
-        model: A loaded model.
-        q: Joint values (nq,).
-
-    Returns:
-        The 3×nq position Jacobian.
-
+    The 3×nq position Jacobian in the base frame, from the joint frames' placements alone (no
+    Jacobian routine).
     """
     qv = model.pinocchio_q(q)
     m, d = model.model, model.data
     pin.forwardKinematics(m, d, qv)
     pose = model.baseMo * pin.updateFramePlacement(m, d, model.tip_id)
-    o_e = pose.translation
     cols = []
     for i in range(1, m.njoints):
         omj = model.baseMo * d.oMi[i]
         kind = joint_kind(m.joints[i])
         assert kind is not None  # the loader admits one-variable joints only
         z = omj.rotation @ kind[1]
-        if model.is_prismatic[i - 1]:
-            cols.append(z)
-        else:
-            cols.append(np.cross(z, o_e - omj.translation))
+        prismatic = model.is_prismatic[i - 1]
+        cols.append(z if prismatic else np.cross(z, pose.translation - omj.translation))
     return np.column_stack(cols)
 
 
@@ -329,10 +295,6 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     ``G_j`` the joint's generator). For a model built from a Khalil table the table itself is
     differentiated (:func:`~hexapod_kin.params.table_position_jacobian`); otherwise the
     Pinocchio joint placements and axes are. No Jacobian routine of Pinocchio is used.
-
-    Args:
-        model: A loaded model.
-        q: Joint values (nq,).
 
     Returns:
         The 3×nq position Jacobian in the base frame.
@@ -346,8 +308,7 @@ def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
     if isinstance(chain, Chain) and model.base == chain.base and model.tip == chain.tip:
         return table_position_jacobian(chain, qv)
     arrays = model.arrays
-    mats = []
-    gens = []
+    mats, gens = [], []
     for k in range(arrays.rot.shape[0]):
         place = np.eye(4)
         place[:3, :3] = arrays.rot[k]

@@ -1,15 +1,12 @@
 """The loader: a resolved source (:mod:`hexapod_kin.sources`) passes the gate, then Pinocchio.
 
-A :class:`Model` keeps the Pinocchio ``Model`` with one ``Data`` per thread (users never pair
-them by hand), the URDF text it was built from, the names of the sub-chain (base → tip) that
-the user picked, an optional tool frame, and one per-model cache (:meth:`Model.cached`) for
-what other modules derive from it. Names are checked here before any id reaches Pinocchio
-(whose ``getFrameId`` returns an out-of-range id for unknown names and then crashes). What a
-URDF may contain that kinematics does not need (unusable meshes, implausible inertials) loads
-with a :class:`~hexapod_kin.exceptions.UrdfWarning` of one short line per kind, attributed to
-the caller's line; :func:`check_inertials` is the strict check dynamics calls, and
-``inertia="collision"`` or ``"point"`` a stated repair (:mod:`hexapod_kin._gate.repair`) that
-keeps every mass and centre of mass.
+A :class:`Model` keeps the Pinocchio ``Model`` with one ``Data`` per thread, the URDF text,
+the sub-chain (base → tip) picked, an optional tool frame and one per-model cache
+(:meth:`Model.cached`). Names are checked before any id reaches Pinocchio. What kinematics
+does not need (unusable meshes, implausible inertials) loads with one
+:class:`~hexapod_kin.exceptions.UrdfWarning` line per kind, at the caller's line;
+:func:`check_inertials` is the strict check of dynamics, ``inertia="collision"`` or
+``"point"`` a stated repair (:mod:`hexapod_kin._gate.repair`).
 """
 
 from __future__ import annotations
@@ -56,17 +53,14 @@ _T = TypeVar("_T")
 
 __all__ = ["INERTIA_MODES", "Model", "check_inertials"]
 
-_F64 = np.dtype(np.float64)
-_ND = np.ndarray
-_hypot = math.hypot
+_F64, _ND, _hypot = np.dtype(np.float64), np.ndarray, math.hypot
 
 
 def fast_q_ok(q: Any, shape: tuple[int, ...]) -> bool:
-    """True when ``q`` is already a float64 array of ``shape`` with finite, small values.
+    """True when ``q`` is already a float64 array of ``shape`` with finite values < 1e150.
 
-    The cheap test of the hot path: ``hypot`` of the values is NaN/inf for any NaN/inf and
-    bounds every ``|q_i|``, so one comparison ``< 1e150`` covers both. Anything else goes
-    through the full :meth:`Model.check_q`.
+    One comparison: ``hypot`` of the values is NaN/inf for any NaN/inf and bounds every
+    ``|q_i|``. Anything else goes through :meth:`Model.check_q`.
     """
     return (
         q.__class__ is _ND and q.dtype is _F64 and q.shape == shape and _hypot(*q.tolist()) < 1e150
@@ -145,26 +139,20 @@ class Model:
         self.source = resolved
         full_frames = [f.name for f in full.frames]
         params = resolved.params
-        default_base = (
-            params.base
-            if isinstance(params, Chain)
-            else params.body
-            if isinstance(params, Hexapod)
-            else root_link_frame(full)
-        )
-        #: the default tip(s) of a URDF given without ``tip`` (every limb's end, a gripper's
-        #: TCP with its fingers locked, a chain's last frame: :func:`frames.default_tips`)
+        #: the default tip(s) of a URDF given without ``tip`` (:func:`frames.default_tips`)
         self.default_tips: DefaultTips | None = None
-        if tip is None:
-            if isinstance(params, Chain):
-                tip_name = params.tip
-            elif isinstance(params, Hexapod):
-                tip_name = params.foot_frames[0]
-            else:
-                self.default_tips = default_tips(full)
-                tip_name = self.default_tips.tips[0]
+        default_tip: str | None = None
+        if isinstance(params, Chain):
+            default_base, default_tip = params.base, params.tip
+        elif isinstance(params, Hexapod):
+            default_base, default_tip = params.body, params.foot_frames[0]
         else:
-            tip_name = tip
+            default_base = root_link_frame(full)
+        if tip is None and default_tip is None:
+            self.default_tips = default_tips(full)
+            default_tip = self.default_tips.tips[0]
+        tip_name = default_tip if tip is None else tip
+        assert tip_name is not None  # every source has a default tip
         base_name = default_base if base is None else base
         for label, name in (("base", base_name), ("tip", tip_name)):
             if not isinstance(name, str) or not full.existFrame(name):
@@ -185,23 +173,18 @@ class Model:
             reduced, tip_name = add_tool_frame(reduced, tip_name, tool_m)
             tool_m.setflags(write=False)
             self.tool = tool_m
-        self.model = reduced
-        data = self.model.createData()
-        self.base = base_name
-        self.tip = tip_name
-        self.base_id = frame_index(self.model, base_name)
-        self.tip_id = frame_index(self.model, tip_name)
-        m = self.model
-        self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in range(1, m.njoints))
+        self.model = m = reduced
+        data = m.createData()
+        self.base, self.tip = base_name, tip_name
+        self.base_id, self.tip_id = frame_index(m, base_name), frame_index(m, tip_name)
+        joints = range(1, m.njoints)
+        self.joint_names: tuple[str, ...] = tuple(m.names[i] for i in joints)
         self.nq: int = int(m.nv)
         self._pin_nq: int = int(m.nq)
-        kinds = [joint_kind(m.joints[i]) for i in range(1, m.njoints)]
-        if not all(k is not None for k in kinds):
-            bad = [
-                f"joint {m.names[i]!r} is a {m.joints[i].shortname()}"
-                for i in range(1, m.njoints)
-                if kinds[i - 1] is None
-            ]
+        kinds = [joint_kind(m.joints[i]) for i in joints]
+        if None in kinds:
+            bad = [f"joint {m.names[i]!r} is a {m.joints[i].shortname()}" for i in joints
+                   if kinds[i - 1] is None]  # fmt: skip
             raise SourceError(
                 f"{resolved.name!r}: joints of kind other than 1-DOF revolute/prismatic between "
                 f"{base_name!r} and {tip_name!r} ({'; '.join(bad)}); pick a sub-chain with "
@@ -211,12 +194,12 @@ class Model:
         names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
         # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
         # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
-        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in range(1, m.njoints)]
+        idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in joints]
         self._unbounded = tuple(p for p, kind in zip(idx, names) if kind == "continuous")
         plain = [p for p, kind in zip(idx, names) if kind != "continuous"]
         self._plain_idx = np.array(plain, dtype=np.int64).reshape(-1, 2)
         pin.framesForwardKinematics(m, data, pin.neutral(m))
-        self._base_is_root = self.model.frames[self.base_id].parentJoint == 0 and np.allclose(
+        self._base_is_root = m.frames[self.base_id].parentJoint == 0 and np.allclose(
             data.oMf[self.base_id].homogeneous, np.eye(4), atol=0.0
         )
         # The base is fixed (no kept joint between the root and it), so its pose is constant.
@@ -230,7 +213,12 @@ class Model:
         self.oMbase = pin.SE3(data.oMf[self.base_id])
         self.baseMo = self.oMbase.inverse()
         self._rot_base = np.ascontiguousarray(self.baseMo.rotation)
-        self.lower, self.upper = self._limits_v(m)
+        self.lower, self.upper = np.empty(self.nq), np.empty(self.nq)  # per velocity index
+        lower, upper = np.asarray(m.lowerPositionLimit), np.asarray(m.upperPositionLimit)
+        for iq, iv in self._plain_idx:
+            self.lower[iv], self.upper[iv] = lower[iq], upper[iq]
+        for _, iv in self._unbounded:  # continuous joints
+            self.lower[iv], self.upper[iv] = -math.pi, math.pi
         self.velocity_limit = np.array(m.velocityLimit, dtype=float)
         self.effort_limit = np.array(m.effortLimit, dtype=float)
         self.is_prismatic = np.array([kind == "prismatic" for kind in names], dtype=bool)
@@ -265,7 +253,9 @@ class Model:
         self.inertia_defects = gate.inertia_defects
         if strict_inertia:
             _raise_inertia_defects(resolved.name, gate.inertia_defects)
-        _warn_defects(resolved.name, gate.missing_meshes, gate.inertia_defects)
+        for lines in (mesh_lines(gate.missing_meshes), defect_lines(gate.inertia_defects)):
+            if lines:  # one warning for the meshes, one for the inertials
+                _warn("\n".join(f"{resolved.name!r}: {line}" for line in lines))
         for repair in gate.repairs:
             _warn(f"{resolved.name!r}: {repair}")
         text = resolved.text if gate.text is None else gate.text
@@ -288,17 +278,6 @@ class Model:
             f"model.view {base!r} {tip!r}",
             lambda: type(self)(self.source, base, tip, parsed=self),
         )
-
-    def _limits_v(self, m: pin.Model) -> tuple[np.ndarray, np.ndarray]:
-        """Position limits per velocity index ((nv,) each); continuous joints get [-π, π]."""
-        lo = np.empty(self.nq)
-        hi = np.empty(self.nq)
-        lower, upper = np.asarray(m.lowerPositionLimit), np.asarray(m.upperPositionLimit)
-        for iq, iv in self._plain_idx:
-            lo[iv], hi[iv] = lower[iq], upper[iq]
-        for _, iv in self._unbounded:
-            lo[iv], hi[iv] = -math.pi, math.pi
-        return lo, hi
 
     def pinocchio_q(self, q: Any) -> np.ndarray:
         """``q`` checked (:meth:`check_q`) in Pinocchio's layout, for ``pinocchio`` calls.
@@ -326,11 +305,7 @@ class Model:
 
     @property
     def data(self) -> pin.Data:
-        """The calling thread's ``pinocchio.Data`` of :attr:`model` (one per thread).
-
-        Pinocchio writes every result into its ``Data``; one ``Data`` shared by threads gives
-        wrong numbers. Each thread that uses the model gets its own, created on first use.
-        """
+        """The calling thread's ``pinocchio.Data`` of :attr:`model` (created on first use)."""
         return self._local.hot[1]
 
     def __setattr__(self, key: str, value: Any) -> None:
@@ -349,19 +324,10 @@ class Model:
     def cached(self, key: str, factory: Callable[[], _T]) -> _T:
         """The value stored under ``key`` for this model, built once by ``factory()``.
 
-        The one cache of derived per-model data (chain arrays, scan plans, IK preparations):
-        thread-safe (the first caller builds, concurrent callers wait for it; a factory may
-        itself call :meth:`cached` for another key), lives and dies with the model. Keys are
-        namespaced by the caller, e.g. ``"singularity.gram_plans"``.
-
-        Args:
-            key: A name for the value.
-            factory: Builds the value (called at most once per key and model, unless it raises;
-                an exception propagates and nothing is stored).
-
-        Returns:
-            The cached value (shared: treat it as read-only).
-
+        The one cache of derived per-model data, thread-safe (concurrent callers wait for the
+        first; a factory may call :meth:`cached` for another key), living with the model. Keys
+        are namespaced by the caller (``"singularity.gram_plans"``); a factory that raises
+        stores nothing. The value is shared: treat it as read-only.
         """
         cache = self._cache
         try:
@@ -375,11 +341,9 @@ class Model:
 
     @property
     def floating_model(self) -> pin.Model:
-        """:attr:`full_model` with a free-flyer root (a legged robot's floating base), shared.
+        """:attr:`full_model` with a free-flyer root (:func:`~hexapod_kin.frames.floating_model`).
 
-        Built once from the loaded model (:func:`~hexapod_kin.frames.floating_model`), never
-        by parsing the URDF again; treat it as read-only (copy it with ``pinocchio.Model(m)``
-        to add frames).
+        Built once, shared: treat it as read-only (copy it with ``pinocchio.Model(m)``).
         """
         return self.cached("model.floating", lambda: floating_model(self.full_model))
 
@@ -483,15 +447,9 @@ class Model:
         return tuple(self.full_model.names[i] for i in self._locked)
 
     def geometry_model(self, kind: str = "visual") -> Any:
-        """Pinocchio ``GeometryModel`` of the (reduced) model, built from the same URDF text.
+        """Pinocchio ``GeometryModel`` (``kind`` ``"visual"`` or ``"collision"``) of :attr:`model`.
 
-        Args:
-            kind: ``"visual"`` or ``"collision"``.
-
-        Returns:
-            A ``pinocchio.GeometryModel`` matching :attr:`model` (meshes are resolved with the
-            source's package directories).
-
+        Built from the same URDF text, meshes resolved with the source's package directories.
         """
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
         one_of("kind", kind, kinds)
@@ -499,10 +457,13 @@ class Model:
         if self.source.mesh_root:
             dirs.append(self.source.mesh_root)
         drop = {uri for uri, _ in self.missing_meshes}
+
+        def build(dropped: set[str]) -> Any:
+            text = self._geometry_text(dropped)
+            return pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
+
         try:
-            geom = pin.buildGeomFromUrdfString(
-                self.full_model, self._geometry_text(drop), kinds[kind], None, dirs
-            )
+            geom = build(drop)
         except (RuntimeError, ValueError):  # a mesh the loader cannot read: find and drop it
             bad = _unreadable_meshes(self.mesh_files)
             if not bad:
@@ -511,9 +472,7 @@ class Model:
                 f"{self.name!r}: meshes: {len(bad)} file(s) unreadable by the mesh loader, "
                 f"dropped with their visual/collision elements ({first_names(sorted(bad))})"
             )
-            geom = pin.buildGeomFromUrdfString(
-                self.full_model, self._geometry_text(drop | bad), kinds[kind], None, dirs
-            )
+            geom = build(drop | bad)
         if self._locked:
             _, geoms = pin.buildReducedModel(
                 self.full_model, [geom], list(self._locked), self._q_ref
@@ -522,11 +481,7 @@ class Model:
         return geom
 
     def _geometry_text(self, drop: set[str]) -> str:
-        """The URDF without the visuals/collisions of ``drop``, every mesh by its real path.
-
-        (The gate resolved and checked each file; Pinocchio then reads exactly those, also
-        for ``file://`` and absolute paths, which it would otherwise resolve its own way.)
-        """
+        """The URDF without the visuals/collisions of ``drop``, every mesh by the gate's path."""
         from lxml import etree
 
         from ._gate import parse_urdf
@@ -560,9 +515,7 @@ class Model:
 class _PerThread(threading.local):
     """Per-thread hot tuple ``(model, data, tip_id, nq, base_is_root)`` of one Model.
 
-    ``threading.local`` calls ``__init__`` again (with the same arguments) in every new thread
-    that touches the object; ``data`` (the one made at load) is kept for the loading thread
-    only, other threads create their own.
+    ``__init__`` runs again in every thread; the load's ``data`` stays the loading thread's.
     """
 
     def __init__(self, owner: Model, data: Any = None) -> None:
@@ -572,8 +525,7 @@ class _PerThread(threading.local):
             object.__setattr__(owner, "_owner_thread", mine)
         if data is None or (first is not None and first != mine):
             data = owner.model.createData()
-        # nq = -1 for models with continuous joints: their q always takes the slow path
-        # (Model.pinocchio_q), which converts it to Pinocchio's (cos, sin) layout.
+        # nq = -1 with continuous joints: their q always takes Model.pinocchio_q
         nq = -1 if owner._unbounded else owner.nq
         self.hot = (owner.model, data, owner.tip_id, nq, owner._base_is_root)
 
@@ -582,25 +534,11 @@ _PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
 
 
 def _warn(message: str) -> None:
-    """One :class:`UrdfWarning` attributed to the first caller outside hexapod_kin.
-
-    (Python 3.12's ``skip_file_prefixes``, by hand: the warning points at the user's own
-    ``load(...)`` line, never at a line of this package. From the command line no frame is
-    outside the package but the interpreter's entry point, which has no source line.)
-    """
+    """One :class:`UrdfWarning` attributed to the first caller outside hexapod_kin."""
     level, frame = 2, sys._getframe(1)
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
         level, frame = level + 1, frame.f_back  # type: ignore[assignment]
     warnings.warn(message, UrdfWarning, stacklevel=level)
-
-
-def _warn_defects(
-    name: str, missing: tuple[tuple[str, str], ...], defects: tuple[tuple[str, str], ...]
-) -> None:
-    """One :class:`UrdfWarning` for the meshes, one for the inertials: a short line per kind."""
-    for lines in (mesh_lines(missing), defect_lines(defects)):
-        if lines:
-            _warn("\n".join(f"{name!r}: {line}" for line in lines))
 
 
 def _unreadable_meshes(files: dict[str, str]) -> set[str]:
@@ -632,13 +570,7 @@ def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> N
 
 
 def check_inertials(model: Model) -> None:
-    """Refuse a model whose inertials are physically implausible (what dynamics needs).
-
-    Kinematics loads such models with a warning; dynamics (ABA/RNEA, torques) must call this
-    first, as MuJoCo's compiler refuses them.
-
-    Args:
-        model: A loaded model.
+    """Refuse a model whose inertials are physically implausible (dynamics calls this first).
 
     Raises:
         UrdfError: Naming the first link with a defect (and how many more there are).

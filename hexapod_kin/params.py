@@ -78,6 +78,21 @@ def _name(value: Any, where: str) -> str:
     return value
 
 
+def _check_row(row: Any, fields: tuple[str, ...]) -> None:
+    """Validate a table row in place: its ``sigma`` and finite ``fields``."""
+    where = type(row).__name__
+    object.__setattr__(row, "sigma", _sigma(row.sigma, where))
+    for f in fields:
+        object.__setattr__(row, f, finite(f"{where}.{f}", getattr(row, f)))
+
+
+def _xyz(values: Any, where: str, named: str = "") -> tuple[float, ...]:
+    """Three finite numbers, checked (``where`` names them in messages)."""
+    if len(tuple(values)) != 3:
+        raise ParameterError(f"{where}={values!r}: three numbers{named} required")
+    return tuple(finite(f"{where}[{i}]", v) for i, v in enumerate(values))
+
+
 def _names(names: tuple[str, ...], count: int, field: str, what: str) -> tuple[str, ...]:
     if len(names) != count:
         raise ParameterError(f"Chain.{field} has {len(names)} names; the table has {count} {what}")
@@ -87,18 +102,7 @@ def _names(names: tuple[str, ...], count: int, field: str, what: str) -> tuple[s
 
 
 def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
-    """Return ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` as a 4×4 array (closed form).
-
-    Args:
-        alpha: Twist about ``x_{j-1}`` in [rad].
-        d: Distance along ``x_{j-1}`` in [m].
-        theta: Angle about ``z_j`` in [rad].
-        r: Distance along ``z_j`` in [m].
-
-    Returns:
-        The homogeneous transform ``^{j-1}T_j``.
-
-    """
+    """``^{j-1}T_j = Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)`` (4×4, closed form; [rad], [m])."""
     ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
     return np.array(
         [
@@ -111,18 +115,7 @@ def khalil_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarr
 
 
 def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
-    """Return the standard-DH transform ``Rz(theta)·Tz(d)·Tx(a)·Rx(alpha)`` (4×4).
-
-    Args:
-        theta: Angle about ``z_{i-1}`` in [rad].
-        d: Offset along ``z_{i-1}`` in [m].
-        a: Length along ``x_i`` in [m].
-        alpha: Twist about ``x_i`` in [rad].
-
-    Returns:
-        The homogeneous transform ``^{i-1}T_i``.
-
-    """
+    """The standard-DH ``^{i-1}T_i = Rz(theta)·Tz(d)·Tx(a)·Rx(alpha)`` (4×4; [rad], [m])."""
     ca, sa, ct, st = math.cos(alpha), math.sin(alpha), math.cos(theta), math.sin(theta)
     return np.array(
         [
@@ -157,9 +150,7 @@ class KhalilRow:
     r: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "sigma", _sigma(self.sigma, "KhalilRow"))
-        for f in ("alpha", "d", "theta", "r"):
-            object.__setattr__(self, f, finite(f"KhalilRow.{f}", getattr(self, f)))
+        _check_row(self, ("alpha", "d", "theta", "r"))
 
     @property
     def is_joint(self) -> bool:
@@ -193,9 +184,7 @@ class DHRow:
     sigma: SigmaName | int | str = "revolute"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "sigma", _sigma(self.sigma, "DHRow"))
-        for f in ("theta", "d", "a", "alpha"):
-            object.__setattr__(self, f, finite(f"DHRow.{f}", getattr(self, f)))
+        _check_row(self, ("theta", "d", "a", "alpha"))
 
     def transform(self, q: float = 0.0) -> np.ndarray:
         """Return ``^{i-1}T_i`` at joint value ``q``."""
@@ -252,11 +241,7 @@ class Inertial:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mass", positive("Inertial.mass", self.mass))
-        if len(tuple(self.com)) != 3:
-            raise ParameterError(f"Inertial.com={self.com!r}: three numbers (x, y, z) required")
-        object.__setattr__(
-            self, "com", tuple(finite(f"Inertial.com[{i}]", v) for i, v in enumerate(self.com))
-        )
+        object.__setattr__(self, "com", _xyz(self.com, "Inertial.com", " (x, y, z)"))
         if len(tuple(self.inertia)) != 6:
             raise ParameterError(
                 f"Inertial.inertia={self.inertia!r}: six numbers (ixx, iyy, izz, ixy, ixz, iyz)"
@@ -288,24 +273,17 @@ def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float)
 
     A point-like segment (zero length) gets the inertia of a solid sphere of ``radius``.
 
-    Args:
-        start: Rod start in [m].
-        end: Rod end in [m].
-        mass: Mass in [kg].
-        radius: Rod radius in [m].
-
     Returns:
-        The :class:`Inertial` with the centre of mass at the rod midpoint.
+        The :class:`Inertial` (``mass`` in [kg], ``radius`` in [m]), its centre of mass at the
+        rod midpoint.
 
     """
-    start = np.asarray(start, float)
-    end = np.asarray(end, float)
+    start, end = np.asarray(start, float), np.asarray(end, float)
     vec = end - start
     length = float(np.linalg.norm(vec))
     com = 0.5 * (start + end)
     if length < 1e-9:
-        i = 0.4 * mass * radius**2
-        mat = np.eye(3) * i
+        mat = np.eye(3) * (0.4 * mass * radius**2)
     else:
         u = vec / length
         axial = 0.5 * mass * radius**2
@@ -318,7 +296,8 @@ def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float)
     )
 
 
-def _default_limits(sigma: str) -> JointLimits:
+def default_limits(sigma: str) -> JointLimits:
+    """The limits a joint row gets when none are given: ±π rad, or ±0.1 m when prismatic."""
     if sigma == "prismatic":
         return JointLimits(lower=-0.1, upper=0.1, velocity=0.5, effort=100.0)
     return JointLimits()
@@ -402,17 +381,11 @@ class Chain:
         nj = len(joint_rows)
         if nj == 0:
             raise ParameterError("Chain.rows has no revolute or prismatic row; nothing moves")
-        names = (
-            tuple(f"q{i}" for i in range(1, nj + 1))
-            if self.joint_names is None
-            else tuple(self.joint_names)
-        )
+        default_names = tuple(f"q{i}" for i in range(1, nj + 1))
+        names = default_names if self.joint_names is None else tuple(self.joint_names)
         object.__setattr__(self, "joint_names", _names(names, nj, "joint_names", "joint rows"))
-        limits = (
-            tuple(_default_limits(str(r.sigma)) for r in joint_rows)
-            if self.limits is None
-            else tuple(self.limits)
-        )
+        defaults = tuple(default_limits(str(r.sigma)) for r in joint_rows)
+        limits = defaults if self.limits is None else tuple(self.limits)
         if len(limits) != nj or not all(isinstance(x, JointLimits) for x in limits):
             raise ParameterError(
                 f"Chain.limits: {nj} JointLimits required (one per joint row), got {len(limits)}"
@@ -486,15 +459,16 @@ class Chain:
         """Joint types of the joint rows, in order."""
         return tuple(str(self.rows[i].sigma) for i in self.joint_rows)
 
+    def _per_joint(self, v: float | tuple[float, ...]) -> tuple[float, ...]:
+        return (float(v),) * self.nq if isinstance(v, (int, float)) else tuple(v)
+
     def joint_damping(self) -> tuple[float, ...]:
         """Damping per joint."""
-        d = self.damping
-        return (float(d),) * self.nq if isinstance(d, (int, float)) else tuple(d)
+        return self._per_joint(self.damping)
 
     def joint_friction(self) -> tuple[float, ...]:
         """Dry friction per joint."""
-        f = self.friction
-        return (float(f),) * self.nq if isinstance(f, (int, float)) else tuple(f)
+        return self._per_joint(self.friction)
 
     def lower(self) -> np.ndarray:
         """Lower joint bounds (n,)."""
@@ -506,15 +480,13 @@ class Chain:
 
     def link_inertial(self, j: int) -> Inertial:
         """Inertial of the link of row ``j`` (0-based), the given one or the default rod."""
-        if self.inertials is not None and self.inertials[j] is not None:
-            inertial = self.inertials[j]
-            assert inertial is not None
+        inertial = None if self.inertials is None else self.inertials[j]
+        if inertial is not None:
             return inertial
         if j + 1 < len(self.rows):
-            nxt = self.rows[j + 1].transform(0.0)[:3, 3]
+            nxt, mass = self.rows[j + 1].transform(0.0)[:3, 3], self.link_mass
         else:
-            nxt = np.zeros(3)
-        mass = self.link_mass if j + 1 < len(self.rows) else 0.2 * self.link_mass
+            nxt, mass = np.zeros(3), 0.2 * self.link_mass
         return rod_inertial(np.zeros(3), nxt, mass, self.link_radius)
 
     def replace(self, **changes: Any) -> Chain:
@@ -550,10 +522,7 @@ class Chain:
             ParameterError: Empty table, a non-DHRow entry, or invalid chain fields.
 
         """
-        if base is not None:
-            kwargs["base"] = base
-        if tool is not None:
-            kwargs["tool"] = tool
+        kwargs |= {k: v for k, v in (("base", base), ("tool", tool)) if v is not None}
         dh = list(dh_rows)
         if not dh or not all(isinstance(r, DHRow) for r in dh):
             raise ParameterError("Chain.from_dh: a non-empty sequence of DHRow is required")
@@ -610,11 +579,7 @@ class LegMount:
         _name(self.name, "LegMount.name")
         if not isinstance(self.chain, Chain):
             raise ParameterError(f"LegMount.chain={self.chain!r} is not a Chain")
-        if len(tuple(self.xyz)) != 3:
-            raise ParameterError(f"LegMount.xyz={self.xyz!r}: three numbers required")
-        object.__setattr__(
-            self, "xyz", tuple(finite(f"LegMount.xyz[{i}]", v) for i, v in enumerate(self.xyz))
-        )
+        object.__setattr__(self, "xyz", _xyz(self.xyz, "LegMount.xyz"))
         object.__setattr__(self, "yaw", finite("LegMount.yaw", self.yaw))
 
     def transform(self) -> np.ndarray:

@@ -67,18 +67,8 @@ def _figure_format(path: str | os.PathLike[str]) -> str:
 def decimate(x: Any, y: Any, max_points: int = 3000) -> tuple[Any, Any]:
     """``(x, y)`` thinned for drawing a line: each bucket keeps its smallest and largest sample.
 
-    A 10,001-sample series drawn 1,400 pixels wide puts several samples on every pixel
-    column; keeping each bucket's extremes (in their order, plus the last samples) draws the
-    same picture — every peak and dip, NaN gaps included — at a fraction of the cost.
-    At most ``max_points + 3`` points are kept.
-
-    Args:
-        x: Abscissae (N,).
-        y: Ordinates (N,).
-        max_points: About how many points to keep (≥ 4); series this short pass unchanged.
-
-    Returns:
-        The kept ``(x, y)`` (views of the input when nothing is dropped).
+    The same picture (every peak and dip, NaN gaps included) with at most ``max_points + 3``
+    of the (N,) samples; a series this short passes unchanged (views of the input).
 
     """
     import numpy as np
@@ -133,12 +123,8 @@ def fit_limits(ax: Any, x: Any, y: Any, margin: float = 0.06, equal: bool = True
     With ``equal`` the axes keep one scale for x and y by shrinking the box
     (``adjustable="box"``), never by widening the limits past the data.
 
-    Args:
-        ax: A matplotlib 2-D axes.
-        x: Every x value drawn (any shape; NaN ignored).
-        y: Every y value drawn.
-        margin: Fraction of the larger span added on each side.
-        equal: Equal scale on both axes.
+    ``x``, ``y``: every value drawn (any shape; NaN ignored); ``margin``: a fraction of the
+    larger span.
 
     """
     import numpy as np
@@ -187,24 +173,19 @@ def plot_still(
     fig = plt.figure(figsize=size)
     ax = fig.add_subplot(projection="3d")
     pts = []
-    for tr in traces:
-        tr = np.asarray(tr, dtype=float)
-        ax.plot(tr[:, 0], tr[:, 1], tr[:, 2], lw=0.8, color="0.55")
-        pts.append(tr)
-    for poly in outlines:
-        poly = np.asarray(poly, dtype=float)
-        loop = np.vstack([poly, poly[:1]])
-        ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], lw=1.6, color="tab:green")
-        pts.append(poly)
-    for ch in chains:
-        ch = np.asarray(ch, dtype=float)
-        ax.plot(ch[:, 0], ch[:, 1], ch[:, 2], "-o", lw=3.0, ms=4, color="tab:blue")
-        ax.plot(*ch[-1:].T, "o", ms=6, color="crimson")
-        pts.append(ch)
-    for ch in ghosts:
-        ch = np.asarray(ch, dtype=float)
-        ax.plot(ch[:, 0], ch[:, 1], ch[:, 2], "-o", lw=2.0, ms=3, color="0.75")
-        pts.append(ch)
+    for group, closed, fmt, style in (
+        (traces, False, "-", {"lw": 0.8, "color": "0.55"}),
+        (outlines, True, "-", {"lw": 1.6, "color": "tab:green"}),
+        (chains, False, "-o", {"lw": 3.0, "ms": 4, "color": "tab:blue"}),
+        (ghosts, False, "-o", {"lw": 2.0, "ms": 3, "color": "0.75"}),
+    ):
+        for line in group:
+            line = np.asarray(line, dtype=float)
+            drawn = np.vstack([line, line[:1]]) if closed else line
+            ax.plot(drawn[:, 0], drawn[:, 1], drawn[:, 2], fmt, **style)
+            if group is chains:
+                ax.plot(*line[-1:].T, "o", ms=6, color="crimson")
+            pts.append(line)
     allp = np.vstack(pts)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     # one scale on every axis; a flat scene keeps a box at least a third as tall as wide
@@ -324,15 +305,12 @@ def singularity_map_figure(
         if fam.joint is not None and fam.joint in (ja, jb) and fam.value is not None:
             lo, hi = (qa.min(), qa.max()) if fam.joint == ja else (qb.min(), qb.max())
             vals = [fam.value + k * 2 * np.pi for k in (-1, 0, 1)] if fam.periodic else [fam.value]
-            drawn = False
-            for v in vals:
-                if lo - 1e-9 <= v <= hi + 1e-9:
-                    drawn = True
-                    line = ax.axvline if fam.joint == ja else ax.axhline
-                    at = float(_joint_axis(result, fam.joint, v)[0])
-                    line(at, color=colour, ls=style, lw=2.2)
-            if not drawn:
+            inside = [v for v in vals if lo - 1e-9 <= v <= hi + 1e-9]
+            if not inside:
                 continue
+            line = ax.axvline if fam.joint == ja else ax.axhline
+            for v in inside:
+                line(float(_joint_axis(result, fam.joint, v)[0]), color=colour, ls=style, lw=2.2)
         elif fam.joint is None:
             qq = np.empty(ga.shape + (len(result.joint_names),))
             qq[:] = result.q_fixed
@@ -373,14 +351,13 @@ def singularity_map_figure(
             frameon=False,
         )
     ax.set(xlabel=label_a, ylabel=label_b)
-    others = []
-    for j in range(len(result.joint_names)):
-        if j in (ja, jb):
-            continue
-        if result.prismatic[j]:
-            others.append(f"{result.joint_names[j]} = {result.q_fixed[j]:.3g} m")
-        else:
-            others.append(f"{result.joint_names[j]} = {np.degrees(result.q_fixed[j]):.0f} deg")
+    others = [
+        f"{name} = {result.q_fixed[j]:.3g} m"
+        if result.prismatic[j]
+        else f"{name} = {np.degrees(result.q_fixed[j]):.0f} deg"
+        for j, name in enumerate(result.joint_names)
+        if j not in (ja, jb)
+    ]
     ax.set_title(
         title
         or f"{result.source}: {_MEASURE_LABELS[measure]} (rows {', '.join(result.rows)})"
@@ -426,15 +403,9 @@ def plot_workspace(
 ) -> Path:
     """Workspace cross-section: reachable tip points in a slab around a coordinate plane.
 
-    Args:
-        ws: A :class:`~hexapod_kin.workspace.WorkspaceResult`.
-        path: Output PNG path.
-        plane: ``"xz"``, ``"yz"`` or ``"xy"``.
-        singular_points: Optional (M, 3) tip positions of singular configurations to overlay.
-        title: Figure title.
-
-    Returns:
-        The written path.
+    ``ws`` is a :class:`~hexapod_kin.workspace.WorkspaceResult`, ``plane`` ``"xz"``, ``"yz"``
+    or ``"xy"``, ``singular_points`` optional (M, 3) tip positions of singular configurations
+    to overlay. Returns the written path.
 
     """
     import numpy as np
@@ -544,13 +515,7 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
 def plot_step(step: Any, path: str | os.PathLike[str], title: str | None = None) -> Path:
     """A foot step: the path seen from the side (along travel vs height) and the joints vs time.
 
-    Args:
-        step: A :class:`~hexapod_kin.gait.FootStep`.
-        path: Destination PNG.
-        title: Figure title.
-
-    Returns:
-        The path written.
+    ``step`` is a :class:`~hexapod_kin.gait.FootStep`. Returns the written path.
 
     """
     import numpy as np

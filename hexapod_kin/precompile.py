@@ -1,14 +1,10 @@
 """Compile every kernel ahead of use: ``hexapod_kin.precompile()`` / ``hexapod-kin precompile``.
 
-Each area calls its batch APIs once with tiny inputs, so numba compiles every kernel of the
-package and writes the machine code to its disk cache (``cache=True``; ``NUMBA_CACHE_DIR``,
-else ``__pycache__`` beside the sources); every later process loads it. The area's stamp
-(:func:`hexapod_kin._kernels.mark_compiled`) then silences the first-use notice.
-
-numba compiles holding the GIL, one function at a time: areas compile in parallel only in
-separate processes (``processes > 1``, what ``hexapod-kin precompile`` does): this process
-compiles its share while child processes compile the rest, each writing its kernels to the
-shared disk cache; the calling process loads the children's from there on first use.
+Each area calls its batch APIs once with tiny inputs, so numba compiles every kernel and
+writes it to its disk cache, which every later process loads; the area's stamp
+(:func:`hexapod_kin._kernels.mark_compiled`) silences the first-use notice. numba compiles
+holding the GIL: areas compile in parallel only in child processes (``processes > 1``), which
+write to the same disk cache.
 """
 
 from __future__ import annotations
@@ -123,13 +119,16 @@ def precompile(
             if done is not None:
                 done(name, dt)
 
+    def compile_here(name: str) -> None:
+        t0 = time.perf_counter()
+        AREAS[name]()
+        finished(name, time.perf_counter() - t0)
+
     children = [_start(share, finished) for share in shares[1:]]
     here = False
     try:
         for name in shares[0]:
-            t0 = time.perf_counter()
-            AREAS[name]()
-            finished(name, time.perf_counter() - t0)
+            compile_here(name)
         here = True
     finally:  # the children's areas reported, or compiled here below; none left running
         for proc, thread in children:
@@ -139,9 +138,7 @@ def precompile(
             thread.join()
     for name in names:  # a failed child's areas: here (an error is raised)
         if name not in seconds:
-            t0 = time.perf_counter()
-            AREAS[name]()
-            finished(name, time.perf_counter() - t0)
+            compile_here(name)
     return {name: seconds[name] for name in names}
 
 

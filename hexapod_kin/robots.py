@@ -170,12 +170,8 @@ def scara(
             KhalilRow("fixed", 0.0, 0.0, 0.0, 0.0),
         ),
         joint_names=("theta1", "theta2", "theta3", "q4"),
-        limits=(
-            JointLimits(-math.pi, math.pi, 3.0, 50.0),
-            JointLimits(-math.pi, math.pi, 3.0, 50.0),
-            JointLimits(-math.pi, math.pi, 5.0, 10.0),
-            JointLimits(0.0, stroke, 0.5, 200.0),
-        ),
+        limits=(JointLimits(-math.pi, math.pi, 3.0, 50.0),) * 2
+        + (JointLimits(-math.pi, math.pi, 5.0, 10.0), JointLimits(0.0, stroke, 0.5, 200.0)),
         link_names=("shoulder", "forearm", "wrist", "quill", "tool"),
         name=name,
         tip="tool",
@@ -207,12 +203,9 @@ def pendulum(
     """
     length, mass = positive("length", length), positive("mass", mass)
     damping = positive("damping", damping, allow_zero=True)
-    rod_r = 0.01 * length
-    bob_r = 0.05 * length
+    rod_r, bob_r, rod_m = 0.01 * length, 0.05 * length, 1e-3 * mass
     bob = Inertial(mass=mass, inertia=(0.4 * mass * bob_r**2,) * 3 + (0.0, 0.0, 0.0))
-    rod_m = 1e-3 * mass
-    i_t = rod_m * (3 * rod_r**2 + length**2) / 12.0
-    i_a = 0.5 * rod_m * rod_r**2
+    i_t, i_a = rod_m * (3 * rod_r**2 + length**2) / 12.0, 0.5 * rod_m * rod_r**2
     rod = Inertial(mass=rod_m, com=(length / 2, 0.0, 0.0), inertia=(i_a, i_t, i_t, 0, 0, 0))
     return Chain(
         rows=(
@@ -274,17 +267,8 @@ def hexapod(
         raise ParameterError("mount_yaw_deg=() is empty; one yaw per leg is required")
     leg = hexabot_leg(l1, l2, l3)
     legs = tuple(
-        LegMount(
-            name=f"leg{i + 1}",
-            chain=leg,
-            xyz=(
-                body_radius * math.cos(math.radians(y)),
-                body_radius * math.sin(math.radians(y)),
-                0.0,
-            ),
-            yaw=math.radians(y),
-        )
-        for i, y in enumerate(yaws)
+        LegMount(f"leg{i + 1}", leg, (body_radius * math.cos(a), body_radius * math.sin(a), 0.0), a)
+        for i, a in enumerate(math.radians(y) for y in yaws)
     )
     return Hexapod(
         legs=legs,
@@ -326,12 +310,11 @@ def get(name: str, /, **params: Any) -> Chain | Hexapod:
     import inspect
 
     func = PRESETS[name]
-    sig = inspect.signature(func)
+    known = inspect.signature(func).parameters
     for key in params:
-        if key not in sig.parameters:
+        if key not in known:
             raise ParameterError(
-                f"{name}: parameter {key!r} does not exist; parameters are "
-                f"{choices(sig.parameters)}"
+                f"{name}: parameter {key!r} does not exist; parameters are {choices(known)}"
             )
     for key, value in params.items():
         for v in value if isinstance(value, (list, tuple)) else (value,):

@@ -5,20 +5,19 @@ its meshes resolve, and the parameter table when there is one). A source is a
 :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a path, or a string read in this order:
 URDF text (it starts with ``<``), a preset name, ``erd:NAME`` (example-robot-data), a file
 path (``.urdf``/``.xml``, a ROS ``.xacro`` expanded without ROS, or a table file
-``.toml``/``.yaml``). This module also holds the
-example-robot-data index (:func:`erd_names`, :func:`erd_path`) and the second engine
-(:func:`yourdfpy_load`). It never imports Pinocchio: building the model is
-:mod:`hexapod_kin.model`'s job.
+``.toml``/``.yaml``). Also the example-robot-data index (:func:`erd_names`, :func:`erd_path`)
+and the second engine (:func:`yourdfpy_load`). Never imports Pinocchio.
 """
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import re
 import threading
+from collections import Counter
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -28,14 +27,8 @@ from .exceptions import SourceError, UrdfError, choices, did_you_mean
 from .params import Chain, Hexapod
 from .urdf import TABLE_SUFFIXES, to_urdf
 
-__all__ = [
-    "ResolvedSource",
-    "erd_names",
-    "erd_path",
-    "erd_share",
-    "resolve_source",
-    "yourdfpy_load",
-]
+__all__ = ["ResolvedSource", "erd_names", "erd_path", "erd_share", "resolve_source",
+           "yourdfpy_load"]  # fmt: skip
 
 
 # ------------------------------------------------------------------------ example-robot-data
@@ -61,14 +54,12 @@ def erd_share() -> Path:
     return share
 
 
-@lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=1)
 def _erd_index() -> dict[str, Path]:
     robots_dir = erd_share() / "example-robot-data" / "robots"
     index: dict[str, Path] = {}
     files = sorted(robots_dir.rglob("*.urdf"))
-    stems: dict[str, int] = {}
-    for path in files:
-        stems[path.stem] = stems.get(path.stem, 0) + 1
+    stems = Counter(path.stem for path in files)
     for path in files:
         index.setdefault(path.stem, path)
         if stems[path.stem] > 1:  # e.g. anymal: also "<description folder>/<stem>"
@@ -116,11 +107,6 @@ def erd_path(name: str) -> Path:
 
 
 # ------------------------------------------------------------------------ package://
-def _ros_package_path() -> list[str]:
-    value = os.environ.get("ROS_PACKAGE_PATH", "")
-    return [p for p in value.split(os.pathsep) if p]
-
-
 _PACKAGE_URI = re.compile(r"package:///?([^/\s\"'<>]+)/")
 
 
@@ -139,20 +125,11 @@ def _package_name(folder: Path) -> str | None:
 def _package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
     """Directories where the ``package://PKG/...`` URIs of a URDF resolve (``<dir>/PKG/...``).
 
-    As ROS tools do, for each package named in ``text``, in this order: ``extra`` (the
-    user's ``package_dirs=``, used as given), the entries of ``ROS_PACKAGE_PATH`` (an entry
-    holding ``PKG``, an entry that is ``PKG`` itself, or a ``PKG`` folder with a
-    ``package.xml`` at most three levels below an entry), then the folders above the URDF
-    file: one named ``PKG``, or one whose ``package.xml`` names ``PKG`` and whose folder name
-    is ``PKG``. The gate still checks each mesh stays inside the directory it resolved in.
-
-    Args:
-        path: The URDF file (``None`` for URDF text: no folders above).
-        text: The URDF document (scanned for ``package://`` names).
-        extra: Directories given by the user, tried first.
-
-    Returns:
-        Directory paths, de-duplicated, in priority order.
+    As ROS tools do, for each package named in ``text``, de-duplicated, in this order:
+    ``extra`` (the user's ``package_dirs=``, as given), the entries of ``ROS_PACKAGE_PATH``
+    (one holding ``PKG``, one that is ``PKG``, or a ``PKG`` folder with a ``package.xml`` at
+    most three levels below), then the folders above the URDF file ``path`` (``None`` for
+    text) named ``PKG``. The gate still checks each mesh stays inside its directory.
 
     """
     out: list[str] = []
@@ -167,7 +144,7 @@ def _package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ())
     packages = sorted(set(_PACKAGE_URI.findall(text)))
     if not packages:
         return tuple(out)
-    for entry in _ros_package_path():
+    for entry in filter(None, os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)):
         root = Path(entry)
         for pkg in packages:
             if (root / pkg).is_dir():
@@ -301,13 +278,7 @@ def _expand(path: Path, text: str, dirs: tuple[str, ...], named: dict[str, str])
             "`pip install -e '.[export]'` in a clone)",
             parameter="source",
         ) from None
-    found: dict[str, str] = {}
-
-    def find(pkg: str) -> str:
-        if pkg not in found:
-            found[pkg] = _find_package(pkg, path, dirs, named)
-        return found[pkg]
-
+    find = functools.cache(lambda pkg: _find_package(pkg, path, dirs, named))
     for pkg in _FIND.findall(text):  # a missing package: one clear error before xacro runs
         find(pkg)
     with _XACRO_LOCK:
@@ -400,13 +371,14 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
             allowed=_ACCEPTED,
         )
     text = source.strip()
+    names = robots.names()
     if not text:
         raise SourceError(
-            f"source={source!r} is empty; give a preset name ({choices(robots.names())}), a URDF "
+            f"source={source!r} is empty; give a preset name ({choices(names)}), a URDF "
             "path, URDF text, a table file or 'erd:NAME'",
             parameter="source",
             value=source,
-            allowed=robots.names(),
+            allowed=names,
         )
     if text.startswith("<"):
         _no_params(params, "URDF text")
@@ -419,24 +391,17 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
     if text.startswith("erd:"):
         _no_params(params, repr(text))
         path = erd_path(text[4:])
-        share = erd_share()
-        return ResolvedSource(
-            _read_text(path),
-            f"erd:{path.stem}",
-            package_dirs=(*extra, str(share)),
-            mesh_root=str(path.parent),
-            path=str(path),
-        )
+        return ResolvedSource(_read_text(path), f"erd:{path.stem}", (*extra, str(erd_share())),
+                              str(path.parent), path=str(path))  # fmt: skip
     path = Path(text).expanduser()
     if path.suffix.lower() in (".urdf", ".xml", ".xacro", *TABLE_SUFFIXES) or path.exists():
         return _from_file(path, extra, **params)
-    hint = _hint(text)
     raise SourceError(
-        f"source={text!r} is not a preset, a file or 'erd:NAME'{hint}; presets are "
-        f"{choices(robots.names())}",
+        f"source={text!r} is not a preset, a file or 'erd:NAME'{_hint(text)}; presets are "
+        f"{choices(names)}",
         parameter="source",
         value=text,
-        allowed=robots.names(),
+        allowed=names,
     )
 
 

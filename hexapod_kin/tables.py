@@ -47,7 +47,16 @@ import numpy as np
 
 from ._reader import check_keys, clip, named, number, numbers, read_data, text
 from .exceptions import ParameterError, one_of
-from .params import Chain, DHRow, Inertial, JointLimits, KhalilRow, Pose, rod_inertial
+from .params import (
+    Chain,
+    DHRow,
+    Inertial,
+    JointLimits,
+    KhalilRow,
+    Pose,
+    default_limits,
+    rod_inertial,
+)
 
 __all__ = ["read_table", "chain_from_table", "TOP_KEYS", "ROW_KEYS"]
 
@@ -81,12 +90,7 @@ MAX_JOINTS = 128
 def read_table(path: Path | str, **overrides: Any) -> Chain:
     """Read a TOML/YAML table file into a :class:`Chain` (see the module docstring).
 
-    Args:
-        path: The file (``.toml``, ``.yaml`` or ``.yml``).
-        **overrides: Top-level keys replacing the file's (e.g. ``name="leg4b"``).
-
-    Returns:
-        The chain.
+    ``overrides`` are top-level keys replacing the file's (e.g. ``name="leg4b"``).
 
     Raises:
         SourceError: Unreadable file or invalid TOML/YAML.
@@ -102,15 +106,15 @@ def read_table(path: Path | str, **overrides: Any) -> Chain:
 
 def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.0) -> float:
     out = number(value, where)
+    key = where.rsplit(".", 1)[-1]
     if abs(out) > limit:
         raise ParameterError(
-            f"{where}={out:g} is out of range; allowed |{where.rsplit('.', 1)[-1]}| <= {limit:g}",
+            f"{where}={out:g} is out of range; allowed |{key}| <= {limit:g}",
             parameter=where,
             value=out,
             allowed=f"|value| <= {limit:g}",
         )
     if 0.0 < abs(out) < floor:
-        key = where.rsplit(".", 1)[-1]
         raise ParameterError(
             f"{where}={out:g} is below the smallest length {floor:g} m; allowed 0 or "
             f"{floor:g} <= |{key}| <= {limit:g}",
@@ -185,15 +189,11 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
                 value=clip(sigma),
                 allowed=["revolute", "prismatic", "fixed", 0, 1, 2],
             )
-        geo = {
-            k: (
-                _number(row.get(k, 0.0), f"{where}.{k}")
-                if k in _ANGLE_KEYS
-                else _number(row.get(k, 0.0), f"{where}.{k}", MAX_LENGTH, MIN_LENGTH)
-            )
-            * (scale if k in _ANGLE_KEYS else 1.0)
-            for k in geometry
-        }
+        geo = {}
+        for k in geometry:  # angles in the file's unit, lengths within [MIN_, MAX_LENGTH]
+            angle = k in _ANGLE_KEYS
+            bounds = () if angle else (MAX_LENGTH, MIN_LENGTH)
+            geo[k] = _number(row.get(k, 0.0), f"{where}.{k}", *bounds) * (scale if angle else 1.0)
         try:
             built: KhalilRow | DHRow = (
                 KhalilRow(sigma, **geo) if convention == "khalil" else DHRow(sigma=sigma, **geo)
@@ -204,9 +204,7 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         if built.sigma != "fixed":
             joint_names.append(text(row.get("name", f"q{len(joint_names) + 1}"), f"{where}.name"))
             lim_scale = scale if built.sigma == "revolute" else 1.0
-            default = (
-                JointLimits(-0.1, 0.1, 0.5, 100.0) if built.sigma == "prismatic" else JointLimits()
-            )
+            default = default_limits(str(built.sigma))
             units = {"lower": lim_scale, "upper": lim_scale, "velocity": lim_scale, "effort": 1.0}
             try:
                 given = {k: _number(row[k], f"{where}.{k}") * units[k] for k in units if k in row}
@@ -297,11 +295,8 @@ def _inertials(
         where = f"row {j + 1}"
         try:
             if com is None or inertia is None:
-                nxt = (
-                    chain.rows[j + 1].transform(0.0)[:3, 3]
-                    if j + 1 < len(chain.rows)
-                    else np.zeros(3)
-                )
+                last = j + 1 == len(chain.rows)
+                nxt = np.zeros(3) if last else chain.rows[j + 1].transform(0.0)[:3, 3]
                 out.append(rod_inertial(np.zeros(3), nxt, mass, chain.link_radius))
             else:
                 out.append(Inertial(mass=mass, com=com, inertia=inertia))  # type: ignore[arg-type]

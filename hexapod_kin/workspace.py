@@ -107,18 +107,8 @@ def workspace(
     n_in, n_b = _voxel_counts(pts, h)
     lower, upper = pts.min(axis=0), pts.max(axis=0)
     read_only(q, pts, lower, upper)
-    return WorkspaceResult(
-        q=q,
-        points=pts,
-        voxel=h,
-        volume_occupied=(n_in + n_b) * h**3,
-        volume=(n_in + 0.5 * n_b) * h**3,
-        interior=n_in,
-        boundary=n_b,
-        lower=lower,
-        upper=upper,
-        source=mdl.name,
-    )
+    volumes = (n_in + n_b) * h**3, (n_in + 0.5 * n_b) * h**3  # occupied, boundary-corrected
+    return WorkspaceResult(q, pts, h, *volumes, n_in, n_b, lower, upper, mdl.name)
 
 
 def cross_section(

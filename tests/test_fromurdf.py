@@ -323,3 +323,9 @@ def test_phantomx_derive_and_scan_from_the_cli(capsys, tmp_path, monkeypatch):
     for q, w in list(zip(scan["q"], scan["manipulability"]))[::10]:
         jac = model.jacobian(np.array(q))[:3]
         assert w == pytest.approx(math.sqrt(np.linalg.det(jac @ jac.T)), rel=1e-9, abs=1e-15)
+
+
+@pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
+def test_snapped_recovery_keeps_the_robot_name():
+    rec = hk.recover_chain(PHANTOMX, base="base_link", tip="tibia_lf", tool=PHANTOMX_FOOT)
+    assert rec.snaps and rec.chain.name == hk.load(PHANTOMX).model.name != "chain"

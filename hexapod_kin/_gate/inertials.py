@@ -22,23 +22,22 @@ from .parse import error_at, number_of, origin_of, single
 def principal_moments(
     ixx: float, iyy: float, izz: float, ixy: float, ixz: float, iyz: float
 ) -> tuple[float, float, float]:
-    """Eigenvalues of the symmetric inertia ``[[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]``.
-
-    Args:
-        ixx: Diagonal entry [kg m^2] (likewise ``iyy``, ``izz``).
-        iyy: Diagonal entry [kg m^2].
-        izz: Diagonal entry [kg m^2].
-        ixy: Off-diagonal entry [kg m^2] (likewise ``ixz``, ``iyz``).
-        ixz: Off-diagonal entry [kg m^2].
-        iyz: Off-diagonal entry [kg m^2].
-
-    Returns:
-        The three principal moments [kg m^2], ascending.
-
-    """
-    mat = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
-    e = np.linalg.eigvalsh(mat)
+    """The principal moments [kg m^2], ascending, of the inertia with these entries [kg m^2]."""
+    e = np.linalg.eigvalsh(_matrix((ixx, iyy, izz, ixy, ixz, iyz)))
     return (float(e[0]), float(e[1]), float(e[2]))
+
+
+def _matrix(values: Sequence[float]) -> np.ndarray:
+    """The symmetric 3×3 inertia of ``(ixx, iyy, izz, ixy, ixz, iyz)``."""
+    ixx, iyy, izz, ixy, ixz, iyz = values
+    return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+
+
+def _record(err: UrdfError, name: str, defects: list[tuple[str, str]] | None) -> None:
+    """Raise ``err``, or (lenient mode: ``defects`` given) record it as ``(name, message)``."""
+    if defects is None:
+        raise err
+    defects.append((name, str(err)))
 
 
 @dataclass
@@ -65,9 +64,7 @@ class _Inertial:
     def in_link(self) -> tuple[np.ndarray, np.ndarray]:
         """Centre of mass [m] and inertia about it [kg m^2], in link axes."""
         rot, com = origin_of(self.element)
-        ixx, iyy, izz, ixy, ixz, iyz = self.values
-        mat = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
-        return com, rot @ mat @ rot.T
+        return com, rot @ _matrix(self.values) @ rot.T
 
 
 _NO_INERTIAL = _Inertial(0.0, (0.0,) * 6, (0.0, 0.0, 0.0), None)
@@ -104,16 +101,11 @@ def link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = 
     scale = max(abs(ixx), abs(iyy), abs(izz), abs(ixy), abs(ixz), abs(iyz))
     if eig[0] < -(1e-9 * scale + INERTIA_FLOOR):
         values = " ".join(f"{k}={inertia_el.get(k)}" for k in keys)
+        why = f"inertia is indefinite (principal moments {_eig_text(eig)})"
         err = error_at(
-            inertia_el,
-            None,
-            None,
-            f"{values}: inertia is indefinite (principal moments {_eig_text(eig)}); an inertia "
-            "tensor must be positive semi-definite",
+            inertia_el, f"{values}: {why}; an inertia tensor must be positive semi-definite"
         )
-        if defects is None:
-            raise err
-        defects.append((str(link.get("name")), str(err)))
+        _record(err, str(link.get("name")), defects)
     return _Inertial(mass, (ixx, iyy, izz, ixy, ixz, iyz), eig, inertial)
 
 
@@ -143,16 +135,12 @@ def check_gyration(
         return
     err = error_at(
         inertial.element.find("inertia"),
-        None,
-        None,
         f"link {name!r} has a radius of gyration sqrt(I_max / m) = {radius:.4g} m (largest "
         f"principal moment {inertial.eig[2]:.6g} kg m^2, mass {inertial.mass:g} kg), more than "
         f"{GYRATION_FACTOR:g} times the robot's size ({size:.4g} m, the sum of its joint "
         f"offsets) and {GYRATION_MAX:g} m: no link of this robot can have it (units?)",
     )
-    if defects is None:
-        raise err
-    defects.append((name, str(err)))
+    _record(err, name, defects)
 
 
 def check_moving_body(
@@ -172,9 +160,7 @@ def check_moving_body(
     try:
         _check_body(jname, child, link_el, inertials, fixed_children)
     except UrdfError as err:
-        if defects is None:
-            raise
-        defects.append((child, str(err)))
+        _record(err, child, defects)
 
 
 def _check_body(
@@ -194,13 +180,9 @@ def _check_body(
     parts = [n for n, _ in members if inertials[n].present]
     total = math.fsum(inertials[n].mass for n in parts)
     if total <= 0.0:
-        raise error_at(
-            link_el[child],
-            "name",
-            child,
-            f"the link moved by joint {jname!r} has no mass (nor do links fixed to it); a "
-            "moving link needs <inertial> with mass > 0",
-        )
+        why = f"the link moved by joint {jname!r} has no mass (nor do links fixed to it)"
+        raise error_at(link_el[child], f"{why}; a moving link needs <inertial> with mass > 0",
+                       "name", child)  # fmt: skip
     if len(parts) == 1:
         eig = inertials[parts[0]].eig  # rotation-invariant
     elif any(inertials[n].definite for n in parts) and all(inertials[n].triangle for n in parts):
@@ -236,8 +218,6 @@ def _check_body(
     if not _definite(eig):
         raise error_at(
             where,
-            None,
-            None,
             f"the body moved by joint {jname!r}{merged} has an inertia that is not positive "
             f"definite (principal moments {_eig_text(eig)} kg m^2, mass {total:g} kg); a moving "
             "link needs a positive-definite inertia",
@@ -245,8 +225,6 @@ def _check_body(
     if not _triangle(eig):
         raise error_at(
             where,
-            None,
-            None,
             f"the body moved by joint {jname!r}{merged} has principal moments {_eig_text(eig)} "
             "kg m^2 that violate the triangle inequality I1 + I2 >= I3 (no real body has them)",
         )

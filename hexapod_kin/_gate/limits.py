@@ -9,45 +9,32 @@ import re
 
 #: Largest URDF text accepted, in bytes (20 MiB; the largest example-robot-data file is < 1 MiB).
 MAX_URDF_BYTES = 20 * 1024 * 1024
-#: Most links accepted. Pinocchio 4.1 segfaults (recursion) on chains of about 4,000 links;
-#: 1,000 leaves a wide margin and still covers every robot of example-robot-data. Since a tree
-#: of N links has depth at most N, this is also the depth cap.
+#: Most links accepted (also the depth cap): Pinocchio 4.1 segfaults on chains of about 4,000
+#: links; every robot of example-robot-data has fewer than 1,000.
 MAX_LINKS = 1000
-#: Largest magnitude of any number (SI units). Finite but huge values overflow inside
-#: Pinocchio (an inertial origin of 1e308 m makes the merged inertia infinite), so the gate
-#: caps them; 1e9 (m, kg, N, rad/s ...) is far beyond any robot.
+#: Largest magnitude of any number (SI units): huge values overflow inside Pinocchio; 1e9 is
+#: far beyond any robot.
 MAX_ABS = 1e9
 #: The same for ``<limit>``, ``<safety_controller>``, ``<dynamics>``, ``<calibration>`` and
 #: ``<mimic>``, where values such as ±1e16 are a common way to write "unbounded".
 MAX_ABS_LIMIT = 1e20
 LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
-#: Most degrees of freedom accepted. Pinocchio's ``Data`` grows as about 64·nv³ bytes
-#: (measured with pin 4.1: 0.2 GB at nv = 129, 4 GB at nv = 400; a 1,000-DoF chain exhausts
-#: memory and gets killed), so 128 DoF keeps a model under about 0.2 GB. The largest robot of
-#: example-robot-data (tiago_dual) has 101; a hexapod has 18.
+#: Most degrees of freedom accepted: Pinocchio's ``Data`` grows as about 64·nv³ bytes (0.2 GB
+#: at nv = 128); the largest robot of example-robot-data (tiago_dual) has 101.
 MAX_DOF = 128
 #: DoFs (nv) of each URDF joint type.
-JOINT_DOF = {
-    "revolute": 1,
-    "continuous": 1,
-    "prismatic": 1,
-    "fixed": 0,
-    "floating": 6,
-    "planar": 3,
-}
+JOINT_DOF = {"revolute": 1, "continuous": 1, "prismatic": 1, "fixed": 0, "floating": 6, "planar": 3}
 #: Largest mesh or texture file accepted, in bytes (200 MiB).
 MAX_MESH_BYTES = 200 * 1024 * 1024
 #: Relative tolerance of the triangle inequality ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)``
 #: (CAD exports round their inertias; 1e-6 accepts that rounding, not a wrong tensor).
 TRIANGLE_RTOL = 1e-6
 #: A link's radius of gyration ``sqrt(I_max / m)`` beyond ``GYRATION_FACTOR`` times the robot's
-#: size (the sum of its joint offsets, an upper bound on any distance inside it) and beyond
-#: ``GYRATION_MAX`` [m] cannot belong to the link: no part of a body is farther from its centre
-#: of mass than the body's own size. (A CAD export in g·mm² read as kg·m² gives 1e6 too much.)
+#: size (the sum of its joint offsets) and beyond ``GYRATION_MAX`` [m] cannot be the link's.
 GYRATION_FACTOR = 10.0
 GYRATION_MAX = 1.0
 #: Joint types of the URDF spec.
-JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+JOINT_TYPES = tuple(JOINT_DOF)
 
 _NUM = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 NUMBER = re.compile(f"^{_NUM}$")
@@ -58,12 +45,8 @@ PATTERNS[1] = re.compile(f"{_NUM}$")
 CHECKED_TOP = ("link", "joint", "material")
 URDF_VERSION = re.compile(r"^1\.[0-2]$")
 #: URDF shapes and their required attributes.
-SHAPES = {
-    "box": ("size",),
-    "cylinder": ("radius", "length"),
-    "sphere": ("radius",),
-    "mesh": ("filename",),
-}
+SHAPES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",),
+          "mesh": ("filename",)}  # fmt: skip
 BIG_NUMBER = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digits: maybe too big
 NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
 SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
@@ -95,12 +78,4 @@ NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "mesh": {"scale": (3, None)},
     "color": {"rgba": (4, None)},
 }
-JOINT_CHILDREN = (
-    "origin",
-    "axis",
-    "limit",
-    "dynamics",
-    "safety_controller",
-    "calibration",
-    "mimic",
-)
+JOINT_CHILDREN = ("origin", "axis", *LIMIT_TAGS)

@@ -25,12 +25,8 @@ class MeshMissing(UrdfError):
 class MeshOutside(UrdfError):
     """A refused file name (another URI scheme, ``~``, an absolute path that may not be read).
 
-    Absolute and ``file://`` paths are read only for a URDF loaded from its file and only for
-    mesh files (:data:`MESH_SUFFIXES`).
-
-    It is never read (nor fetched). Strict checking refuses the document; lenient loading drops
-    the element's visual/collision with a warning that says "refused". An escape out of the
-    root through ``..`` or a symbolic link is hostile and always an error.
+    Never read: lenient loading drops its element with a warning that says "refused". (An
+    escape out of the root through ``..`` or a link is always an error.)
     """
 
 
@@ -38,9 +34,8 @@ class MeshEmpty(UrdfError):
     """A mesh file of 0 bytes (mesh loaders fail on it): dropped like a missing one."""
 
 
-#: Mesh formats read from an absolute or ``file://`` path (what xacro's ``$(find pkg)``
-#: produces) when the URDF was loaded from its file. Nothing else is read from outside the
-#: URDF's folder and the package directories.
+#: Mesh formats read from an absolute or ``file://`` path (xacro's ``$(find pkg)``) when the
+#: URDF was loaded from its file: nothing else is read from outside its roots.
 MESH_SUFFIXES = (".stl", ".dae", ".obj", ".ply")
 
 
@@ -74,13 +69,8 @@ def resolve_mesh(
 ) -> Path:
     """Resolve a mesh/texture ``filename`` to a regular file inside an allowed root.
 
-    Args:
-        uri: The ``filename`` attribute (``package://pkg/path`` or a relative path).
-        package_dirs: Directories ``package://`` URIs resolve in (``<dir>/pkg/path``).
-        mesh_root: Directory relative paths resolve against (the URDF's directory).
-
-    Returns:
-        The real path of the file.
+    ``uri`` (a ``filename`` attribute) resolves as :mod:`hexapod_kin._gate` rule 7 says.
+    Returns the real path of the file.
 
     Raises:
         UrdfError: Refused scheme or absolute path, an escape out of the root, a missing,
@@ -156,12 +146,16 @@ def resolve_mesh(
     raise last
 
 
-def _check_rgba(color: etree._Element) -> None:
+def _check_color(material: etree._Element) -> None:
+    """The ``<color rgba>`` of a material, when it has one: four numbers in [0, 1]."""
+    color = single(material, "color", required=False)
+    if color is None:
+        return
     rgba = numbers_of(color, "rgba", 4, None)
     if not rgba:
-        raise error_at(color, "rgba", None, "<color> needs rgba (four numbers in [0, 1])")
+        raise error_at(color, "<color> needs rgba (four numbers in [0, 1])", "rgba")
     if not all(0.0 <= c <= 1.0 for c in rgba):
-        raise error_at(color, "rgba", color.get("rgba"), "colour components must be in [0, 1]")
+        raise error_at(color, "colour components must be in [0, 1]", "rgba", color.get("rgba"))
 
 
 def check_materials_and_geometry(root: etree._Element) -> None:
@@ -170,11 +164,9 @@ def check_materials_and_geometry(root: etree._Element) -> None:
     for mat in root.findall("material"):
         name = mat.get("name")
         if name is None or not name.strip():
-            raise error_at(mat, "name", name, "every <material> needs a non-empty name")
+            raise error_at(mat, "every <material> needs a non-empty name", "name", name)
         unique(defined, mat, name, "material")
-        color = single(mat, "color", required=False)
-        if color is not None:
-            _check_rgba(color)
+        _check_color(mat)
     for link in root.findall("link"):
         for part in ("visual", "collision"):
             for el in link.findall(part):
@@ -183,29 +175,19 @@ def check_materials_and_geometry(root: etree._Element) -> None:
                 assert geometry is not None
                 shapes = [c for c in geometry if isinstance(c.tag, str)]
                 if len(shapes) != 1:
-                    raise error_at(
-                        geometry,
-                        None,
-                        None,
-                        f"<geometry> must hold exactly one shape "
-                        f"({', '.join(SHAPES)}), found {len(shapes)}",
-                    )
+                    one = f"exactly one shape ({', '.join(SHAPES)})"
+                    raise error_at(geometry, f"<geometry> must hold {one}, found {len(shapes)}")
                 shape = shapes[0]
                 if shape.tag not in SHAPES:
                     raise error_at(
-                        shape,
-                        None,
-                        None,
-                        f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(SHAPES)}",
+                        shape, f"unknown shape <{shape.tag}>; URDF shapes are {', '.join(SHAPES)}"
                     )
                 for attr in SHAPES[shape.tag]:
                     if shape.get(attr) is None:
-                        raise error_at(shape, attr, None, f"<{shape.tag} {attr}> is required")
+                        raise error_at(shape, f"<{shape.tag} {attr}> is required", attr)
                 mat = single(el, "material", required=False) if part == "visual" else None
                 if mat is None:
                     continue
                 if mat.get("name") is None:  # urdfdom drops the visual; "" is accepted
-                    raise error_at(mat, "name", None, "a visual <material> needs a name attribute")
-                color = single(mat, "color", required=False)
-                if color is not None:
-                    _check_rgba(color)
+                    raise error_at(mat, "a visual <material> needs a name attribute", "name")
+                _check_color(mat)

@@ -46,7 +46,10 @@ def _where(el: etree._Element) -> str:
     return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
 
 
-def error_at(el: etree._Element, attr: str | None, value: object, problem: str) -> UrdfError:
+def error_at(
+    el: etree._Element, problem: str, attr: str | None = None, value: object = None
+) -> UrdfError:
+    """The :class:`UrdfError` of ``problem`` at ``el`` (and ``attr=value``), with its line."""
     attr_part = f" {attr}={value!r}" if attr is not None else ""
     return UrdfError(f"URDF {_where(el)}{attr_part}: {problem}")
 
@@ -60,27 +63,23 @@ def numbers_of(
     if raw is None:
         return ()
     if count == 1 and raw != raw.strip():
-        raise error_at(el, attr, raw, "a single number without surrounding spaces is required")
+        raise error_at(el, "a single number without surrounding spaces is required", attr, raw)
     parts = re.split(r"[ \t\r\n]+", raw.strip(" \t\r\n"))
     if len(parts) != count:
-        raise error_at(el, attr, raw, f"{count} number(s) required, found {len(parts)}")
+        raise error_at(el, f"{count} number(s) required, found {len(parts)}", attr, raw)
     out = []
     for p in parts:
         if not NUMBER.match(p):
-            raise error_at(el, attr, raw, f"{p!r} is not a decimal number")
+            raise error_at(el, f"{p!r} is not a decimal number", attr, raw)
         x = float(p)
         if not math.isfinite(x):
-            raise error_at(el, attr, raw, "numbers must be finite")
+            raise error_at(el, "numbers must be finite", attr, raw)
         cap = MAX_ABS_LIMIT if el.tag in LIMIT_TAGS else MAX_ABS
         if abs(x) > cap:
-            raise error_at(
-                el,
-                attr,
-                raw,
-                f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>); numbers are SI values of a robot",
-            )
+            why = f"|{p}| exceeds {cap:g} (the cap for <{el.tag}>)"
+            raise error_at(el, f"{why}; numbers are SI values of a robot", attr, raw)
         if minimum is not None and x < minimum:
-            raise error_at(el, attr, raw, f"must be >= {minimum:g}")
+            raise error_at(el, f"must be >= {minimum:g}", attr, raw)
         out.append(x)
     return tuple(out)
 
@@ -114,7 +113,7 @@ def number_of(el: etree._Element, attr: str, default: float | None = None) -> fl
     raw = el.get(attr)
     if raw is None:
         if default is None:
-            raise error_at(el, attr, None, "attribute is required")
+            raise error_at(el, "attribute is required", attr)
         return default
     return float(raw)
 
@@ -164,31 +163,26 @@ def parse_urdf(text: str | bytes) -> etree._Element:
 def element_name(el: etree._Element, what: str) -> str:
     name = el.get("name")
     if name is None or not name.strip():
-        raise error_at(el, "name", name, f"every <{what}> needs a non-empty name")
+        raise error_at(el, f"every <{what}> needs a non-empty name", "name", name)
     if name in RESERVED:
-        raise error_at(el, "name", name, "the name 'universe' is reserved by Pinocchio")
+        raise error_at(el, "the name 'universe' is reserved by Pinocchio", "name", name)
     return name
 
 
 def unique(seen: dict[str, etree._Element], el: etree._Element, name: str, what: str) -> None:
     """Record ``el`` as ``seen[name]``; a second ``<what>`` of the same name is refused."""
     if name in seen:
-        raise error_at(
-            el,
-            "name",
-            name,
-            f"duplicate {what} name (first at line "
-            f"{seen[name].sourceline}); {what} names must be unique",
-        )
+        why = f"duplicate {what} name (first at line {seen[name].sourceline})"
+        raise error_at(el, f"{why}; {what} names must be unique", "name", name)
     seen[name] = el
 
 
 def single(el: etree._Element, tag: str, required: bool) -> etree._Element | None:
     found = el.findall(tag)
     if len(found) > 1:
-        raise error_at(found[1], None, None, f"<{tag}> given {len(found)} times; at most once")
+        raise error_at(found[1], f"<{tag}> given {len(found)} times; at most once")
     if required and not found:
-        raise error_at(el, None, None, f"<{tag}> is required")
+        raise error_at(el, f"<{tag}> is required")
     return found[0] if found else None
 
 

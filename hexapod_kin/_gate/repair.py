@@ -1,9 +1,8 @@
 """The stated inertia repairs: ``load(..., inertia="collision" | "point")``.
 
-Part of :mod:`hexapod_kin._gate`. Real robot files often carry inertias no body can have
-(the PhantomX's break ``I1 + I2 >= I3`` on every link); kinematics ignores them and dynamics
-refuses them. A repair rewrites every ``<inertial>`` of the document and keeps what the file
-states with most confidence, each link's **mass** and **centre of mass** (the inertial origin):
+Real robot files often carry inertias no body can have (the PhantomX's break ``I1 + I2 >= I3``
+on every link). A repair rewrites every ``<inertial>`` and keeps what the file states with most
+confidence, each link's **mass** and **centre of mass** (the inertial origin):
 
 * ``"collision"``: the link's collision shapes, filled uniformly (the URDF mass shared in
   proportion to their volumes): a box ``m (b² + c²) / 12`` about each axis, a cylinder
@@ -14,10 +13,9 @@ states with most confidence, each link's **mass** and **centre of mass** (the in
 * ``"point"``: a point mass at the centre of mass with the tiny isotropic inertia of a solid
   sphere of radius :data:`POINT_RADIUS` (``2 m r² / 5``).
 
-Both produce physical tensors (sums of ``tr(S)·E − S`` with ``S >= 0``), so the repaired
-model satisfies the triangle inequality on every link and on every merged moving body.
-Links of mass 0 get a zero inertia. A massless moving body stays a defect (mass is not
-invented). Pure numpy and lxml.
+Both give physical tensors (sums of ``tr(S)·E − S``, ``S >= 0``): the triangle inequality
+holds on every link and merged moving body. Massless links get a zero inertia; a massless
+moving body stays a defect (mass is not invented).
 """
 
 from __future__ import annotations
@@ -104,9 +102,7 @@ def _obj_vertices(data: bytes) -> np.ndarray:
 
 
 def mesh_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned bounds ``(lo, hi)`` [mesh units] of a mesh file.
-
-    STL and OBJ are read here; other formats through ``trimesh`` when it is installed.
+    """Axis-aligned bounds ``(lo, hi)`` [mesh units] of a mesh file (STL, OBJ; else trimesh).
 
     Raises:
         UrdfError: Unreadable, empty or too large mesh, or a format without a reader.
@@ -209,14 +205,9 @@ def repair_inertials(
 ) -> InertiaRepair:
     """Rewrite every ``<inertial>`` of a URDF by ``mode`` (see the module docstring).
 
-    Args:
-        text: URDF text (it must pass the gate; call this after :func:`check_urdf`).
-        mode: ``"collision"`` or ``"point"``.
-        package_dirs: Where ``package://`` collision meshes resolve.
-        mesh_root: The URDF's directory (relative mesh paths).
-
-    Returns:
-        An :class:`InertiaRepair` (its ``text`` keeps every line where it was).
+    ``text`` must have passed the gate; ``package_dirs`` and ``mesh_root`` resolve collision
+    meshes as the gate does. Returns an :class:`InertiaRepair` (its ``text`` keeps every line
+    where it was).
 
     """
     check_mode(mode)

@@ -96,25 +96,14 @@ def check_urdf(
     mesh_root: str | os.PathLike[str] | None = None,
     lenient: bool = False,
 ) -> GateResult:
-    """Check a URDF document; raise :class:`UrdfError` on the first problem.
+    """Check a URDF document (str, or UTF-8 bytes); raise :class:`UrdfError` on the first problem.
 
-    See the module docstring for the full list of checks.
-
-    Args:
-        text: The URDF document (str, or bytes in UTF-8).
-        package_dirs: Directories ``package://pkg/...`` meshes may resolve into.
-        mesh_root: Directory relative mesh paths resolve against (``None`` for URDF text:
-            relative mesh paths are then refused).
-        lenient: Kinematics mode: a mesh that cannot be found (missing file, unknown package)
-            and a physically implausible inertial (indefinite, massless moving link, zero
-            inertia, triangle inequality) are recorded in ``missing_meshes`` /
-            ``inertia_defects`` instead of raised. Refused meshes (schemes, absolute paths,
-            escapes, non-regular or huge files) and nonsense (negative mass, NaN, missing
-            entries, malformed XML ...) are refused in both modes.
+    The checks and the ``lenient`` mode are those of :mod:`hexapod_kin._gate`; ``mesh_root``
+    ``None`` (URDF text) refuses relative mesh paths.
 
     Returns:
         A :class:`GateResult` (shared between calls with the same text when the document
-        references no files: the generated URDFs are loaded often; do not modify ``root``).
+        references no files: do not modify ``root``).
 
     Raises:
         UrdfError: Naming the element, attribute, value and line of the problem.
@@ -150,9 +139,9 @@ def _check(
     if robot_name is None or not robot_name.strip():
         problem = "<robot> needs a non-empty name"
         if not lenient:
-            raise error_at(root, "name", robot_name, problem)
+            raise error_at(root, problem, "name", robot_name)
         root.set("name", "robot")
-        repairs.append(str(error_at(root, "name", robot_name, problem + ": named 'robot'")))
+        repairs.append(str(error_at(root, problem + ": named 'robot'", "name", robot_name)))
     links = root.findall("link")
     if not links:
         hint = ""
@@ -166,7 +155,7 @@ def _check(
         )
     version = root.get("version")
     if version is not None and not URDF_VERSION.match(version):
-        raise error_at(root, "version", version, "URDF version must be 1.0, 1.1 or 1.2")
+        raise error_at(root, "URDF version must be 1.0, 1.1 or 1.2", "version", version)
     check_numbers(root)
     check_materials_and_geometry(root)
 
@@ -182,25 +171,22 @@ def _check(
         unique(joint_el, joint, name, "joint")
         jtype = joint.get("type")
         if jtype not in JOINT_TYPES:
-            raise error_at(joint, "type", jtype, f"joint type must be one of {list(JOINT_TYPES)}")
+            raise error_at(joint, f"joint type must be one of {list(JOINT_TYPES)}", "type", jtype)
         ends = []
         for tag in ("parent", "child"):
             el = single(joint, tag, required=True)
             assert el is not None
             lname = el.get("link")
             if lname not in link_el:
-                raise error_at(el, "link", lname, f"{tag} link does not exist")
+                raise error_at(el, f"{tag} link does not exist", "link", lname)
             ends.append(lname)
         parent, child = ends
         if parent == child:
-            raise error_at(joint, "name", name, f"parent and child are the same link {child!r}")
+            raise error_at(joint, f"parent and child are the same link {child!r}", "name", name)
         if child in parent_of:
+            why = f"link {child!r} is already the child of joint {parent_of[child]!r}"
             raise error_at(
-                joint,
-                "name",
-                name,
-                f"link {child!r} is already the child of joint "
-                f"{parent_of[child]!r}; a link has at most one parent joint (tree)",
+                joint, f"{why}; a link has at most one parent joint (tree)", "name", name
             )
         parent_of[child] = name
         children[parent].append(child)
@@ -219,18 +205,11 @@ def _check(
             if target not in joint_el or target == joint.get("name"):
                 problem = "mimic must name another existing joint"
                 if not lenient:
-                    raise error_at(mimic, "joint", target, problem)
-                repairs.append(
-                    str(
-                        error_at(
-                            mimic,
-                            "joint",
-                            target,
-                            problem + ": <mimic> dropped, the "
-                            f"joint {joint.get('name')!r} moves on its own",
-                        )
-                    )
+                    raise error_at(mimic, problem, "joint", target)
+                why = (
+                    f"{problem}: <mimic> dropped, the joint {joint.get('name')!r} moves on its own"
                 )
+                repairs.append(str(error_at(mimic, why, "joint", target)))
                 joint.remove(mimic)
 
     roots = [n for n in link_el if n not in parent_of]
@@ -253,12 +232,8 @@ def _check(
                 stack.append(c)
     if len(seen) != len(link_el):
         lost = [n for n in link_el if n not in seen]
-        raise error_at(
-            link_el[lost[0]],
-            "name",
-            lost[0],
-            f"link not reachable from the root {roots[0]!r}: joints form a cycle",
-        )
+        why = f"link not reachable from the root {roots[0]!r}: joints form a cycle"
+        raise error_at(link_el[lost[0]], why, "name", lost[0])
 
     # Masses: each link's inertial, then each moving body (child of a non-fixed joint plus
     # its fixed-joint descendants, as Pinocchio merges them) must carry mass and inertia.
@@ -285,12 +260,12 @@ def _check(
             path = resolve_mesh(uri or "", package_dirs=package_dirs, mesh_root=mesh_root)
         except (MeshMissing, MeshOutside, MeshEmpty) as exc:
             if not lenient:
-                raise error_at(node, "filename", uri, str(exc)) from None
+                raise error_at(node, str(exc), "filename", uri) from None
             # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
             missing.append((uri or "", f"line {node.sourceline}: {exc}"))
             continue
         except UrdfError as exc:
-            raise error_at(node, "filename", uri, str(exc)) from None
+            raise error_at(node, str(exc), "filename", uri) from None
         meshes.append((uri or "", path))
     return GateResult(
         root=root,
@@ -310,37 +285,29 @@ def _check_joint(joint: etree._Element, jtype: str) -> None:
     for sub in joint:
         tag = sub.tag
         if tag in seen and tag in JOINT_CHILDREN:
-            raise error_at(sub, None, None, f"<{tag}> given more than once; at most once")
+            raise error_at(sub, f"<{tag}> given more than once; at most once")
         seen.add(tag)
     axis = joint.find("axis")
     if axis is not None and jtype not in ("fixed", "floating"):
         xyz = numbers_of(axis, "xyz", 3, None)
         if xyz and math.fsum(v * v for v in xyz) <= 1e-24:
-            raise error_at(
-                axis,
-                "xyz",
-                axis.get("xyz"),
-                "joint axis has zero length; a non-zero vector is required",
-            )
+            why = "joint axis has zero length; a non-zero vector is required"
+            raise error_at(axis, why, "xyz", axis.get("xyz"))
     limit = joint.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
             raise error_at(
-                joint, "type", jtype, "a revolute or prismatic joint needs <limit> (URDF spec)"
+                joint, "a revolute or prismatic joint needs <limit> (URDF spec)", "type", jtype
             )
         for attr in ("effort", "velocity"):
             if limit.get(attr) is None:
-                raise error_at(limit, attr, None, f"<limit {attr}> is required for {jtype} joints")
+                raise error_at(limit, f"<limit {attr}> is required for {jtype} joints", attr)
     if limit is not None:
         lower = number_of(limit, "lower", 0.0)
         upper = number_of(limit, "upper", 0.0)
         if jtype in ("revolute", "prismatic") and lower > upper:
-            raise error_at(
-                limit,
-                "lower",
-                limit.get("lower"),
-                f"lower > upper={limit.get('upper')!r}; lower <= upper required",
-            )
+            why = f"lower > upper={limit.get('upper')!r}; lower <= upper required"
+            raise error_at(limit, why, "lower", limit.get("lower"))
     safety = joint.find("safety_controller")
     if safety is not None and safety.get("k_velocity") is None:
-        raise error_at(safety, "k_velocity", None, "<safety_controller k_velocity> is required")
+        raise error_at(safety, "<safety_controller k_velocity> is required", "k_velocity")
