@@ -19,23 +19,16 @@ Khalil table (the pattern of σ, α, d, r), never from a preset name:
     solutions use ``θ3 = 0`` (joint value). Up to 2 solutions (both elbow branches); the
     prismatic value follows from z.
 
-The legs are recognised through what leaves their closed form unchanged (:func:`detect_family`):
-a base pose and any ``α1``, ``d1`` (the *mount*), offsets ``r2``, ``r3`` along the knee axis,
-fixed rows after the last joint and a **tool offset** — the foot a fixed point ``p`` in the
-last joint's frame is an effective last length ``√(p_x² + p_y²)``, an angle offset
-``atan2(p_y, p_x)`` on the last joint and a lateral offset ``e`` along the knee axis (the hip
-then turns by ``atan2(−σe, ±√(x² + y² − e²))``) — an ankle axis anti-parallel to the knee's
-(``α3 = π``: that joint enters negated), and twists within ``angle_tol`` (default
-:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished on the
-table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`).
-
-Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
-results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
-limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
-
-The legs' closed form is written once, vectorised in numpy over arrays of targets
-(:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the gait's body IK call
-it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+Legs are also recognised (:func:`detect_family`) through a base pose and any ``α1``, ``d1``
+(the *mount*), offsets ``r2``, ``r3`` along the knee axis, fixed rows and a tool offset after
+the last joint (a foot point ``p``: last length ``√(p_x² + p_y²)``, angle offset
+``atan2(p_y, p_x)``, lateral offset ``e`` along the knee axis), an ankle axis anti-parallel to
+the knee's (``α3 = π``: that joint enters negated), and twists within ``angle_tol`` of the
+pattern (finished on the table by :mod:`hexapod_kin.ik._table_finish`). Joint offsets (``θ``)
+and ``r1`` are allowed. Revolute results are wrapped to ``(−π, π]``; with
+``within_limits=True`` each is shifted by 2π if that brings it inside the limits, else dropped.
+The legs' closed form is written once, vectorised (:func:`leg_solutions`,
+:func:`leg_reachable`); the numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -46,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
@@ -62,10 +56,8 @@ _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
 _ANG_TOL = 1e-12
 
-#: Default tolerance [rad] of :func:`detect_family` on a leg's twists (α2 = ±π/2,
-#: α3 ∈ {0, π}): wider than the URDF snapping tolerance (``hexapod_kin.SNAP_TOL``), so legs
-#: whose rounded constants were not snapped (e.g. ``1.5704`` for π/2: 4e-4 rad) are still
-#: recognised; their solutions are finished on the exact table.
+#: Default tolerance [rad] of :func:`detect_family` on a leg's twists: covers unsnapped URDF
+#: constants (``1.5704`` for π/2); such solutions are finished on the exact table.
 FAMILY_TOL = 1e-3
 
 
@@ -73,8 +65,13 @@ def _is(value: float, target: float, tol: float = _ANG_TOL) -> bool:
     return abs(value - target) <= tol
 
 
+def _twist_off(alpha: float, target: float) -> float:
+    """|alpha − target| modulo 2π [rad]."""
+    return abs(math.remainder(alpha - target, _TWO_PI))
+
+
 def _angle_is(value: float, target: float) -> bool:
-    return abs(math.remainder(value - target, 2 * math.pi)) <= _ANG_TOL
+    return _twist_off(value, target) <= _ANG_TOL
 
 
 # ============================================================================ family detection
@@ -125,18 +122,9 @@ class LegFamily:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
-        return {
-            "family": self.family,
-            "chain": self.chain.name,
-            "lengths": list(self.lengths),
-            "height": self.height,
-            "sign": self.sign,
-            "offsets": list(self.offsets),
-            "yaw_offset": self.yaw_offset,
-            "lateral": self.lateral,
-            "joint_signs": list(self.joint_signs),
-            "deviation": self.deviation,
-        }
+        names = ("lengths", "height", "sign", "offsets", "yaw_offset", "lateral", "joint_signs")
+        out = {"family": self.family, "chain": self.chain.name} | fields_dict(self, *names)
+        return out | {"deviation": self.deviation}
 
     @property
     def target_size(self) -> tuple[int, ...]:
@@ -266,31 +254,14 @@ def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) 
             allowed="no tool translation",
         )
     if sig == ("R", "R", "R", "P", "F") and base_ok:
-        b, c, p, f = rows[1], rows[2], rows[3], rows[4]
-        flip = _angle_is(p.alpha, math.pi)
-        f_flip = _angle_is(f.alpha, math.pi)
-        if (
-            _is(b.alpha, 0.0)
-            and _is(c.alpha, 0.0)
-            and (flip or _angle_is(p.alpha, 0.0))
-            and _is(p.d, 0.0)
-            and _is(f.d, 0.0)
-            and _is(f.r, 0.0)
-            and (f_flip or _angle_is(f.alpha, 0.0))
-            and abs(b.d) > 0
-            and abs(c.d) > 0
-        ):
-            c4 = -1.0 if flip else 1.0
-            c5 = -1.0 if f_flip else 1.0
-            return LegFamily(
-                "scara",
-                ch,
-                (b.d, c.d),
-                r1.r + b.r + c.r,
-                c4,
-                offsets,
-                yaw_offset=c4 * (p.theta + c5 * f.theta),
-            )
+        b, c, p, f = rows[1:]
+        flip, f_flip = _angle_is(p.alpha, math.pi), _angle_is(f.alpha, math.pi)
+        zeros = all(_is(v, 0.0) for v in (b.alpha, c.alpha, p.d, f.d, f.r))
+        twists = (flip or _angle_is(p.alpha, 0.0)) and (f_flip or _angle_is(f.alpha, 0.0))
+        if zeros and twists and abs(b.d) > 0 and abs(c.d) > 0:
+            c4, c5 = (-1.0 if flip else 1.0), (-1.0 if f_flip else 1.0)
+            height, yaw = r1.r + b.r + c.r, c4 * (p.theta + c5 * f.theta)
+            return LegFamily("scara", ch, (b.d, c.d), height, c4, offsets, yaw_offset=yaw)
     pattern = " ".join(f"{s}(α={r.alpha:.4g}, d={r.d:.4g}, r={r.r:.4g})" for s, r in zip(sig, rows))
     raise IKError(
         f"chain {ch.name!r} has no closed-form IK: its table {pattern} matches none of the "
@@ -299,11 +270,6 @@ def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) 
         f"angle_tol={float(angle_tol):.3g} rad; scara: R(0,0,r1) R(0,d2) R(0,d3) "
         "P(α∈{0,π},d=0) F(d=0,r=0)); use hexapod_kin.ik.solve(model, target)"
     )
-
-
-def _twist_off(alpha: float, target: float) -> float:
-    """|alpha − target| modulo 2π [rad]."""
-    return abs(math.remainder(alpha - target, _TWO_PI))
 
 
 def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
@@ -332,34 +298,20 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         last, delta = math.hypot(px, py), math.atan2(py, px)
     if last == 0.0 or (nq == 3 and rows[2].d == 0.0):
         return None  # a foot on the last axis, or no thigh: not these closed forms
-    lengths = (a.d, last) if nq == 2 else (a.d, rows[2].d, last)
-    offs: tuple[float, ...]
-    signs: tuple[float, ...]
     if nq == 2:
-        lateral = a.r + pz
-        offs = (r1.theta, a.theta + delta)
-        signs = (1.0, 1.0)
+        lengths, lateral, offs = (a.d, last), a.r + pz, (r1.theta, a.theta + delta)
     else:
-        lateral = a.r + kappa * (rows[2].r + pz)
-        offs = (r1.theta, a.theta, rows[2].theta + delta)
-        signs = (1.0, 1.0, kappa)
+        b = rows[2]
+        lengths, lateral = (a.d, b.d, last), a.r + kappa * (b.r + pz)
+        offs = (r1.theta, a.theta, b.theta + delta)
     if abs(lateral) < 1e-15 * (abs(a.d) + abs(last)):
         lateral = 0.0
     mount = ch.base_pose  # α1 = d1 = 0: the base pose as it is (same bits as before)
     if not (r1.alpha == 0.0 and r1.d == 0.0):
         mount = Pose.of(ch.base_matrix @ khalil_transform(r1.alpha, r1.d, 0.0, 0.0))
-    return LegFamily(
-        "coxa_tibia" if nq == 2 else "leg3",
-        ch,
-        lengths,
-        r1.r,
-        sigma,
-        tuple(float(v) for v in offs),
-        lateral=float(lateral),
-        joint_signs=signs,
-        mount=mount,
-        deviation=0.0 if dev <= _ANG_TOL else dev,
-    )
+    name, signs = ("coxa_tibia" if nq == 2 else "leg3"), (1.0, 1.0, kappa)[:nq]
+    offs, dev = tuple(float(v) for v in offs), (0.0 if dev <= _ANG_TOL else dev)
+    return LegFamily(name, ch, lengths, r1.r, sigma, offs, 0.0, float(lateral), signs, mount, dev)
 
 
 # ============================================================================ closed forms
@@ -387,11 +339,10 @@ class AnalyticBatch:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (NaN slots as None)."""
-        q = np.where(self.valid[..., None], self.q, 0.0).tolist()
-        for qi, vi in zip(q, self.valid.tolist()):
-            for k, ok in enumerate(vi):
-                if not ok:
-                    qi[k] = None
+        q = [
+            [s if ok else None for s, ok in zip(qi, vi)]
+            for qi, vi in zip(self.q.tolist(), self.valid.tolist())
+        ]
         return {"family": self.family, "q": q, "valid": self.valid.tolist()}
 
 
