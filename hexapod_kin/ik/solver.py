@@ -14,14 +14,9 @@ the posture task for that attempt).
 One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
 target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
 :func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
-:data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
-own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
-same bits), so that a command solving one target neither compiles nor loads machine code.
-A float64 position or pose without options (with or without ``q0``), once the loop is
-loaded, goes straight in (a few µs of Python around the loop; the fields of a converged
-result are filled when first read). The result is measured in the same call (the one FK
-core, equal to Pinocchio's to rounding; tests hold position, rotation, errors and σ_min
-against Pinocchio and the SVD).
+:data:`INTERPRETED_CALLS` small calls of :func:`solve` run the loop's own functions in Python
+(:func:`~hexapod_kin._kmath.python_twin`: the same bits), so one solve needs no machine code.
+The result is measured in the same call (the one FK core).
 """
 
 from __future__ import annotations
@@ -176,10 +171,8 @@ def _par(opts: IKOptions, scale: float) -> np.ndarray:
 #: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
 #: How many of a process's first :func:`solve` calls run the loop in Python (with their
-#: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same functions, the
-#: same bits, nothing to load or compile (a command's one solve costs milliseconds where
-#: loading the machine code costs ~0.35 s of CPU and compiling it ~9 s). The next call loads
-#: (or compiles) the machine code, as batches do.
+#: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same bits, nothing
+#: to load or compile. The next call loads (or compiles) the machine code, as batches do.
 INTERPRETED_CALLS = 16
 _LEFT = [INTERPRETED_CALLS]
 #: The most accepted steps a call run in Python may take (``max_iter`` × attempts): the
@@ -198,13 +191,11 @@ def _run(
     starts: np.ndarray,
     python: bool = False,
 ) -> np.ndarray:
-    """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
+    """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets: output rows (N, width).
 
     ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
-    ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
-    compiled specialisation). Each target's numbers are its own: the same bits alone, in a
-    batch, on any thread, compiled or (``python``) run by the interpreter. Returns the output
-    rows (N, width) (see ``lm_loop``).
+    ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the same bits
+    alone, in a batch, on any thread, compiled or (``python``) interpreted.
     """
     n_t, n = len(tgts), starts.shape[2]
     out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
@@ -314,9 +305,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | None:
     """:func:`solve` of a float64 position or pose, no options, once the loop is loaded.
 
-    The same loop, arguments and bits as the general path, in fewer Python steps: the task
-    and the fields of a converged result are built when first read. None: any other case
-    (the general path checks it and names what is wrong).
+    The same bits as the general path; a converged result's fields are built when first read.
+    None: any other case (the general path checks it).
     """
     fast = _fast(t)
     if fast is None:
@@ -461,11 +451,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     mdl = as_model(model)
     opts = IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
-    if (
-        t.ndim not in (2, 3)
-        or (t.ndim == 2 and t.shape[1] not in (3, 4))
-        or (t.ndim == 3 and t.shape[1:] != (4, 4))
-    ):
+    if not ((t.ndim == 2 and t.shape[1] in (3, 4)) or (t.ndim == 3 and t.shape[1:] == (4, 4))):
         raise IKError(
             f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed",
             parameter="targets",

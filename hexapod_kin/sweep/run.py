@@ -80,12 +80,8 @@ class SweepResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the summary plus files, scored count and elapsed time [s]."""
-        return {
-            **self.summary,
-            "files": dict(self.files),
-            "scored": self.scored,
-            "elapsed_s": self.elapsed,
-        }
+        out = {**self.summary, "files": dict(self.files)}
+        return out | {"scored": self.scored, "elapsed_s": self.elapsed}
 
 
 #: Table formats of ``out``, by extension.
@@ -289,13 +285,8 @@ def sweep(
 
     """
     t0 = time.perf_counter()
-    options = {
-        "mc_samples": int(mc_samples),
-        "seed": int(seed),
-        "line_points": int(line_points),
-        "stride_points": int(stride_points),
-        "stride_use": float(stride_use),
-    }
+    options = dict(mc_samples=int(mc_samples), seed=int(seed), line_points=int(line_points))
+    options |= dict(stride_points=int(stride_points), stride_use=float(stride_use))
     paths = _check_out(out)
     if not allow_large:
         _refuse_large(space, method, samples, options, workers, client, scheduler)
@@ -310,15 +301,8 @@ def sweep(
             value=chunk_size,
         )
     chunk_size = int(chunk_size)
-    spec = {
-        "format": _FORMAT,
-        "space": space.to_dict(),
-        "method": method,
-        "samples": int(samples),
-        "n_designs": n,
-        "chunk_size": chunk_size,
-        **options,
-    }
+    spec = dict(format=_FORMAT, space=space.to_dict(), method=method, samples=int(samples))
+    spec |= dict(n_designs=n, chunk_size=chunk_size, **options)
     h = hashlib.sha256(json.dumps(spec, sort_keys=True).encode())
     h.update(designs.tobytes())
     key = h.hexdigest()
@@ -419,28 +403,19 @@ def sweep(
         bar.close()
 
     scores = np.concatenate([results[k] for k in range(len(bounds))], axis=0)
-    table: dict[str, np.ndarray] = {"index": np.arange(n, dtype=float)}
-    for j, p in enumerate(PARAMETERS):
-        table[p] = np.array(designs[:, j])
-    for j, s in enumerate(SCORES):
-        table[s] = scores[:, j]
+    table = {"index": np.arange(n, dtype=float)}
+    table |= {p: np.array(designs[:, j]) for j, p in enumerate(PARAMETERS)}
+    table |= {s: scores[:, j] for j, s in enumerate(SCORES)}
     table["pareto"] = pareto_front(table).astype(float)
     read_only(*table.values())
     summary = _summary(table, spec, key)
-    files: dict[str, str] = {}
-    if paths is not None:
-        files = _write_tables(table, summary, paths)
-    return SweepResult(
-        table=table, summary=summary, files=files, scored=scored, elapsed=time.perf_counter() - t0
-    )
+    files = {} if paths is None else _write_tables(table, summary, paths)
+    return SweepResult(table, summary, files, scored, time.perf_counter() - t0)
 
 
 def _design_dict(table: Mapping[str, np.ndarray], i: int) -> dict[str, Any]:
-    d: dict[str, Any] = {"index": i}
-    d.update({p: float(table[p][i]) for p in PARAMETERS})
-    for s in SCORES:
-        if s.endswith("_se"):
-            continue
+    d: dict[str, Any] = {"index": i, **{p: float(table[p][i]) for p in PARAMETERS}}
+    for s in (s for s in SCORES if not s.endswith("_se")):
         d[s] = float(table[s][i])
         if s in _UNCERTAIN:
             d[s + "_se"] = float(table[_UNCERTAIN[s]][i])
@@ -472,14 +447,10 @@ def _csv_text(table: Mapping[str, np.ndarray]) -> str:
     names = list(table)
     cols = [np.asarray(table[c]) for c in names]
     ints = {"index", "feasible", "volume_exact", "pareto"}
-    lines = [",".join(names)]
-    for i in range(cols[0].shape[0]):
-        lines.append(
-            ",".join(
-                str(int(c[i])) if nm in ints else repr(float(c[i])) for nm, c in zip(names, cols)
-            )
-        )
-    return "\n".join(lines) + "\n"
+    cells = [
+        [str(int(v)) if nm in ints else repr(float(v)) for v in c] for nm, c in zip(names, cols)
+    ]
+    return "\n".join([",".join(names), *(",".join(row) for row in zip(*cells))]) + "\n"
 
 
 def _write_tables(
@@ -500,9 +471,8 @@ def _write_tables(
         atomic_write(path, buf.getvalue())
     else:
         columns = {k: np.asarray(v).tolist() for k, v in table.items()}
-        atomic_write(
-            path, json.dumps({**summary, "table": columns}, indent=1, allow_nan=False) + "\n"
-        )
+        text = json.dumps({**summary, "table": columns}, indent=1, allow_nan=False)
+        atomic_write(path, text + "\n")
     shutil.rmtree(paths["parts"], ignore_errors=True)
     return {kind: str(path)}
 
