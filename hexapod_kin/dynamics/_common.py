@@ -13,14 +13,8 @@ from ..exceptions import ParameterError
 from ..kinematics import as_model
 from ..model import check_inertials as loader_check_inertials
 
-__all__ = [
-    "as_model",
-    "check_inertials",
-    "check_state",
-    "finite_vector",
-    "read_only",
-    "zero_gravity_model",
-]
+__all__ = ["as_model", "check_inertials", "check_state", "finite_vector", "read_only",
+           "zero_gravity_model"]  # fmt: skip
 
 #: Relative tolerance on the principal moments of inertia (a moment <= tol * largest is zero).
 INERTIA_RTOL = 1e-12
@@ -130,8 +124,7 @@ def check_inertials(model: Any) -> None:
 
 def check_state(model: Any, value: Any, name: str) -> np.ndarray:
     """A (nq,) joint vector checked by the model (``ConfigurationError`` otherwise)."""
-    arr = model.check_q(value, name)
-    return np.array(arr, dtype=float)
+    return np.array(model.check_q(value, name), dtype=float)
 
 
 def zero_gravity_model(model: Any) -> pin.Model:

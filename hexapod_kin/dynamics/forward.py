@@ -224,14 +224,8 @@ def simulate(
     check_inertials(mdl)
     one_of("method", method, METHODS)
     n, h = _steps(dt, duration)
-    passive = passive_joints(
-        mdl,
-        damping=damping,
-        friction=friction,
-        friction_velocity=friction_velocity,
-        stiffness=stiffness,
-        q_rest=q_rest,
-    )
+    passive = passive_joints(mdl, damping=damping, friction=friction, stiffness=stiffness,
+                             friction_velocity=friction_velocity, q_rest=q_rest)  # fmt: skip
     nq = mdl.nq
     q = check_state(mdl, q0, "q0")
     v = np.zeros(nq) if v0 is None else check_state(mdl, v0, "v0")
@@ -268,9 +262,8 @@ def simulate(
     pot = pot + passive.spring_energy(qs)
     total = kin + pot
     read_only(ts, qs, vs, accs, kin, pot, total)
-    return Simulation(
-        ts, qs, vs, accs, kin, pot, total, str(method), h, passive, tuple(mdl.joint_names)
-    )
+    names = tuple(mdl.joint_names)
+    return Simulation(ts, qs, vs, accs, kin, pot, total, str(method), h, passive, names)
 
 
 def _run(
@@ -280,9 +273,8 @@ def _run(
 
     The state is (nq,) arrays, or Python floats for one joint (the same operations).
     """
-    qs, vs, accs = [q], [v], []
     a = acc(0.0, q, v)
-    accs.append(a)
+    qs, vs, accs = [q], [v], [a]
     half, sixth = 0.5 * h, h / 6.0
     n = len(ts) - 1
     for k in range(n):

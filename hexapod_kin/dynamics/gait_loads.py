@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError
 from ..params import Hexapod
 from ._common import as_model, check_inertials, read_only
@@ -91,32 +92,21 @@ class GaitTorques:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready peaks per joint (quasi-static, full, their difference), residuals."""
-        full = {}
+        out: dict[str, Any] = {}
         if self.peak_full.size:
-            full = {
-                "peak_torque_full": self.peak_full.tolist(),
-                "peak_torque_full_time": self.peak_full_time.tolist(),
-                "peak_torque_full_max": float(self.peak_full.max()),
-                "peak_difference": self.peak_difference.tolist(),
-                "peak_difference_max": float(self.peak_difference.max()),
-                "base_residual": self.base_residual,
-            }
-        return {
-            **full,
-            "samples": int(len(self.t)),
-            "duration": float(self.t[-1] - self.t[0]),
-            "method": self.method,
-            "mu": self.mu,
-            "mass": self.mass,
-            "joint_names": list(self.joint_names),
-            "peak_torque": self.peak.tolist(),
-            "peak_time": self.peak_time.tolist(),
-            "peak_torque_max": float(self.peak.max()),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-            "min_normal_force": float(self.min_normal_force.min()),
-            "feasible": self.feasible,
-        }
+            out["peak_torque_full"] = self.peak_full.tolist()
+            out["peak_torque_full_time"] = self.peak_full_time.tolist()
+            out["peak_torque_full_max"] = float(self.peak_full.max())
+            out["peak_difference"] = self.peak_difference.tolist()
+            out["peak_difference_max"] = float(self.peak_difference.max())
+            out["base_residual"] = self.base_residual
+        out |= {"samples": int(len(self.t)), "duration": float(self.t[-1] - self.t[0])}
+        out |= fields_dict(self, "method", "mu", "mass", "joint_names")
+        out |= {"peak_torque": self.peak.tolist(), "peak_time": self.peak_time.tolist()}
+        out |= {"peak_torque_max": float(self.peak.max())}
+        out |= fields_dict(self, "force_residual", "moment_residual")
+        out["min_normal_force"] = float(self.min_normal_force.min())
+        return out | {"feasible": self.feasible}
 
 
 def gait_torques(
@@ -197,32 +187,12 @@ def gait_torques(
         tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
         tau_f = tau_f[:, [tuple(wb.joint_names).index(nm) for nm in names]]
         peak_f, peak_ft = _peaks(tau_f, ts)
-        extra = {
-            "torque_full": tau_f,
-            "forces_full": f_full,
-            "peak_full": peak_f,
-            "peak_full_time": peak_ft,
-            "peak_difference": np.abs(tau_f - torque).max(axis=0),
-            "base_residual": base_res,
-        }
+        diff = np.abs(tau_f - torque).max(axis=0)
+        extra = dict(torque_full=tau_f, forces_full=f_full, peak_full=peak_f)
+        extra |= dict(peak_full_time=peak_ft, peak_difference=diff, base_residual=base_res)
         read_only(*(v for v in extra.values() if isinstance(v, np.ndarray)))
-    return GaitTorques(
-        ts,
-        names,
-        legs,
-        support,
-        forces,
-        torque,
-        peak,
-        peak_time,
-        f_res,
-        m_res,
-        fmin,
-        mass,
-        str(method),
-        mu,
-        **extra,
-    )
+    return GaitTorques(ts, names, legs, support, forces, torque, peak, peak_time, f_res, m_res,
+                       fmin, mass, str(method), mu, **extra)  # fmt: skip
 
 
 def _peaks(torque: np.ndarray, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -239,15 +209,9 @@ def _at(exc: ConfigurationError, where: str) -> ConfigurationError:
 
 
 def _quasi_static(
-    pm: Any,
-    fids: list[int],
-    qp: np.ndarray,
-    ts: np.ndarray,
-    support: np.ndarray,
-    legs: tuple[str, ...],
-    method: ContactMethod,
-    mu: float | None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:
+    pm: Any, fids: list[int], qp: np.ndarray, ts: np.ndarray, support: np.ndarray,
+    legs: tuple[str, ...], method: ContactMethod, mu: float | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:  # fmt: skip
     """The quasi-static loads of :func:`gait_torques` on the floating-base model ``pm``.
 
     Returns:
@@ -314,11 +278,9 @@ def full_dynamics(
     n, nl = support.shape
     rad = float(getattr(run, "settings", {}).get("foot_radius", 0.0))
     normals = getattr(run, "normals", None)
-    nrm = (
-        np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
-        if normals is None or not np.size(normals)
-        else np.asarray(normals, dtype=float)
-    )
+    nrm = np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
+    if normals is not None and np.size(normals):
+        nrm = np.asarray(normals, dtype=float)
     fids = [model.getFrameId(f) for f in wb.foot_frames]
     weight = float(run.mass) * 9.81
     tau = np.zeros((n, model.nv - 6))

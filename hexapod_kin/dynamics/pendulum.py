@@ -28,17 +28,9 @@ from ..exceptions import ParameterError, positive
 from ._common import as_model, check_inertials, read_only
 from .forward import Method, Simulation, simulate
 
-__all__ = [
-    "PendulumExperiment",
-    "PendulumRun",
-    "PhysicalPendulum",
-    "decay_rate",
-    "exact_period",
-    "hermite_crossings",
-    "pendulum_experiment",
-    "pendulum_run",
-    "physical_pendulum",
-]
+__all__ = ["PendulumExperiment", "PendulumRun", "PhysicalPendulum", "decay_rate",
+           "exact_period", "hermite_crossings", "pendulum_experiment", "pendulum_run",
+           "physical_pendulum"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -298,11 +290,8 @@ def pendulum_run(
     else:
         mdl = as_model(model)
     pend = physical_pendulum(mdl)
-    b = (
-        float(mdl.model.damping[0])
-        if damping is None
-        else positive("damping", damping, allow_zero=True)
-    )
+    b = positive("damping", damping, allow_zero=True) if damping is not None else None
+    b = float(mdl.model.damping[0]) if b is None else b
     sim = simulate(mdl, [pend.q_hanging + th0], dt=dt, duration=duration, method=method, damping=b)
     theta = np.asarray(sim.q[:, 0] - pend.q_hanging)
     omega = np.asarray(sim.v[:, 0])
@@ -312,28 +301,14 @@ def pendulum_run(
     drift = float(np.max(np.abs(energy - e0)) / e0)
     max_inc = float(np.max(np.diff(energy)) / e0) if len(energy) > 1 else 0.0
     crossings = hermite_crossings(sim.t, omega, alpha, direction=-1)
-    period = (
-        float((crossings[-1] - crossings[0]) / (len(crossings) - 1))
-        if len(crossings) >= 2
-        else None
-    )
+    period = None
+    if len(crossings) >= 2:
+        period = float((crossings[-1] - crossings[0]) / (len(crossings) - 1))
     rate = decay_rate(sim.t, theta, omega, alpha)
     read_only(theta, omega, energy)
-    return PendulumRun(
-        th0,
-        b,
-        pend,
-        sim,
-        theta,
-        omega,
-        energy,
-        period,
-        exact_period(pend, th0),
-        drift,
-        max_inc,
-        rate,
-        b / (2.0 * pend.inertia),
-    )
+    exact, gamma = exact_period(pend, th0), b / (2.0 * pend.inertia)
+    return PendulumRun(th0, b, pend, sim, theta, omega, energy, period, exact, drift, max_inc,
+                       rate, gamma)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -354,31 +329,25 @@ class PendulumExperiment:
     def to_dict(self) -> dict[str, Any]:
         """The figures of ``hexapod-kin pendulum --json`` (SI units, angles in rad)."""
         u, d, s = self.undamped, self.damped, self.small
-        return {
+        us, ud, sd = u.simulation, u.to_dict(), s.to_dict()
+        out: dict[str, Any] = {
             "theta0": u.theta0,
             "theta0_deg": math.degrees(u.theta0),
-            "dt": u.simulation.dt,
-            "duration": float(u.simulation.t[-1]),
-            "method": u.simulation.method,
-            "pendulum": u.pendulum.to_dict(),
-            "period": u.period,
-            "period_exact": u.period_exact,
-            "period_error": u.to_dict()["period_error"],
-            "energy_drift": u.energy_drift,
-            "damping": d.damping,
-            "damped_energy_monotone": d.energy_monotone,
-            "damped_energy_max_increase": d.energy_max_increase,
+            "dt": us.dt,
+        }
+        out |= {"duration": float(us.t[-1]), "method": us.method, "pendulum": u.pendulum.to_dict()}
+        out |= fields_dict(u, "period", "period_exact") | {"period_error": ud["period_error"]}
+        out |= {"energy_drift": u.energy_drift, "damping": d.damping}
+        out |= {"damped_energy_monotone": d.energy_monotone}
+        out |= {"damped_energy_max_increase": d.energy_max_increase}
+        out |= {
             "damped_energy_loss": float(1.0 - d.energy[-1] / d.energy[0]),
             "damped_period": d.period,
-            "decay_rate": s.decay_rate,
-            "decay_rate_exact": s.decay_rate_exact,
-            "decay_rate_error": s.to_dict()["decay_rate_error"],
-            "decay_theta0": s.theta0,
-            "decay_rate_at_theta0": d.decay_rate,
-            "undamped": u.to_dict(),
-            "damped": d.to_dict(),
-            "small_amplitude": s.to_dict(),
         }
+        out |= fields_dict(s, "decay_rate", "decay_rate_exact")
+        out |= {"decay_rate_error": sd["decay_rate_error"], "decay_theta0": s.theta0}
+        out |= {"decay_rate_at_theta0": d.decay_rate, "undamped": ud, "damped": d.to_dict()}
+        return out | {"small_amplitude": sd}
 
 
 def pendulum_experiment(

@@ -156,19 +156,10 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
     total = grav + tau_f
     limit = np.array(mdl.effort_limit, dtype=float)
     read_only(qv, f, grav, tau_f, tau_rnea, total, limit)
-    return LegTorques(
-        qv,
-        f,
-        st.frame,
-        grav,
-        tau_f,
-        total,
-        tau_rnea,
-        float(np.max(np.abs(tau_f - tau_rnea), initial=0.0)),
-        float(np.max(np.abs(grav - grav_rnea), initial=0.0)),
-        tuple(mdl.joint_names),
-        limit,
-    )
+    err_f = float(np.max(np.abs(tau_f - tau_rnea), initial=0.0))
+    err_g = float(np.max(np.abs(grav - grav_rnea), initial=0.0))
+    names = tuple(mdl.joint_names)
+    return LegTorques(qv, f, st.frame, grav, tau_f, total, tau_rnea, err_f, err_g, names, limit)
 
 
 @dataclass(frozen=True)
@@ -205,16 +196,11 @@ class StepTorques:
 
     def to_dict(self, samples: bool = False) -> dict[str, Any]:
         """JSON-ready peaks and cross-check (the time series too with ``samples=True``)."""
-        out: dict[str, Any] = {
-            "joint_names": list(self.joint_names),
-            "force": self.force.tolist(),
-            "duration": float(self.t[-1]),
-            "samples": int(len(self.t)),
-            "peak": self.peak.tolist(),
-            "peak_gravity": self.peak_gravity.tolist(),
-            "peak_inertial": np.max(np.abs(self.inertial), axis=0).tolist(),
-            "crosscheck_error": self.crosscheck_error,
-        }
+        out = fields_dict(self, "joint_names", "force")
+        out |= {"duration": float(self.t[-1]), "samples": int(len(self.t))}
+        out |= fields_dict(self, "peak", "peak_gravity")
+        out["peak_inertial"] = np.max(np.abs(self.inertial), axis=0).tolist()
+        out["crosscheck_error"] = self.crosscheck_error
         if samples:
             out.update(fields_dict(self, "t", "q", "total", "gravity", "force_torque"))
         return out
@@ -278,6 +264,5 @@ def torques_along(
     peak = np.max(np.abs(total), axis=0)
     peak_g = np.max(np.abs(grav), axis=0)
     read_only(ts, qs, f, grav, tau_f, inert, total, peak, peak_g)
-    return StepTorques(
-        ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, tuple(mdl.joint_names)
-    )
+    names = tuple(mdl.joint_names)
+    return StepTorques(ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, names)

@@ -298,6 +298,8 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         last, delta = math.hypot(px, py), math.atan2(py, px)
     if last == 0.0 or (nq == 3 and rows[2].d == 0.0):
         return None  # a foot on the last axis, or no thigh: not these closed forms
+    lengths: tuple[float, ...]
+    offs: tuple[float, ...]
     if nq == 2:
         lengths, lateral, offs = (a.d, last), a.r + pz, (r1.theta, a.theta + delta)
     else:

@@ -74,15 +74,13 @@ class Prepared:
 
 
 def _build_prepared(model: KinematicModel) -> Prepared:
-    lower = np.asarray(model.lower, dtype=float)
-    upper = np.asarray(model.upper, dtype=float)
+    lower, upper = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
     prism = np.asarray(model.is_prismatic, dtype=bool)
     cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
     scale = chain_scale(model.arrays.trans)
     cap = np.where(prism, 0.25 * scale, 0.5)
     lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
-    lo = np.where(cont, -np.pi, lower)
-    hi = np.where(cont, np.pi, upper)
+    lo, hi = np.where(cont, -np.pi, lower), np.where(cont, np.pi, upper)
     starts = np.random.default_rng(12345).uniform(lo, hi, size=(N_STARTS, model.nq))
     middle = np.where(cont, 0.0, 0.5 * (lower + upper))
     q_home = _dexterous_home(model, lower, upper, cont)
@@ -103,10 +101,8 @@ def _dexterous_home(
         q = np.array(LEG_HOME)
         if np.all(q >= lower) and np.all(q <= upper):
             return q
-    lo = np.maximum(lower, -np.pi)
-    hi = np.minimum(upper, np.pi)
-    mid = 0.5 * (lo + hi)
-    half = 0.25 * (hi - lo)
+    lo, hi = np.maximum(lower, -np.pi), np.minimum(upper, np.pi)
+    mid, half = 0.5 * (lo + hi), 0.25 * (hi - lo)
     rng = np.random.default_rng(0)
     cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
     jacs = np.array([model.jacobian(q)[:3] for q in cands])

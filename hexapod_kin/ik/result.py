@@ -191,23 +191,14 @@ class IKResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ([rad]/[m])."""
-        return {
-            "status": self.status,
-            "q": [float(v) for v in self.q],
-            "error": float(self.error),
-            "rotation_error": float(self.rotation_error),
-            "iterations": int(self.iterations),
-            "attempts": int(self.attempts),
-            "position": [float(v) for v in self.position],
-            "rotation": self.rotation.tolist(),
-            "target": [float(v) for v in self.target],
-            "task": self.task.to_dict(),
-            "distance": float(self.distance),
-            "nearest": [float(v) for v in self.nearest],
-            "sigma_min": float(self.sigma_min),
-            "reason": self.reason,
-            "history": [float(v) for v in self.history],
-        }
+        out: dict[str, Any] = {"status": self.status, "q": [float(v) for v in self.q]}
+        out |= {k: float(getattr(self, k)) for k in ("error", "rotation_error")}
+        out |= {"iterations": int(self.iterations), "attempts": int(self.attempts)}
+        out |= {"position": [float(v) for v in self.position], "rotation": self.rotation.tolist()}
+        out |= {"target": [float(v) for v in self.target], "task": self.task.to_dict()}
+        out |= {"distance": float(self.distance), "nearest": [float(v) for v in self.nearest]}
+        out |= {"sigma_min": float(self.sigma_min), "reason": self.reason}
+        return out | {"history": [float(v) for v in self.history]}
 
 
 #: Where a result's values sit in a row of the loop's output (see ``step.lm_loop``).
@@ -228,23 +219,12 @@ def _converged_fields(row: np.ndarray, s: Any, task: Any) -> dict[str, Any]:
     n = _O_Q + s.n
     it = int(it)
     target = task.pose[:3, 3]
-    return {
-        "q": row[_O_Q:n],
-        "status": "converged",
-        "error": err,
-        "rotation_error": rot,
-        "iterations": it,
-        "history": row[n + 12 : n + 13 + it],
-        "position": row[n : n + 3],
-        "rotation": row[n + 3 : n + 12].reshape(3, 3),
-        "target": target,
-        "task": task,
-        "attempts": int(attempts),
-        "reason": s.why % (err, rot),
-        "distance": 0.0,
-        "nearest": target,
-        "sigma_min": smin,
-    }
+    rotation = row[n + 3 : n + 12].reshape(3, 3)
+    return {"q": row[_O_Q:n], "status": "converged", "error": err, "rotation_error": rot,
+            "iterations": it, "history": row[n + 12 : n + 13 + it], "position": row[n : n + 3],
+            "rotation": rotation, "target": target, "task": task, "attempts": int(attempts),
+            "reason": s.why % (err, rot), "distance": 0.0, "nearest": target,
+            "sigma_min": smin}  # fmt: skip
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:

@@ -77,17 +77,9 @@ def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cove
 
 @njit(cache=True, nogil=True)
 def task_into(
-    mode: int,
-    tgt: np.ndarray,
-    w6: np.ndarray,
-    yaw: float,
-    p: np.ndarray,
-    r: np.ndarray,
-    jac: np.ndarray,
-    work3: np.ndarray,
-    e_out: np.ndarray,
-    j_out: np.ndarray,
-) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    mode: int, tgt: np.ndarray, w6: np.ndarray, yaw: float, p: np.ndarray, r: np.ndarray,
+    jac: np.ndarray, work3: np.ndarray, e_out: np.ndarray, j_out: np.ndarray,
+) -> tuple[int, float, float]:  # pragma: no cover - compiled  # fmt: skip
     """Weighted task rows at one configuration (the problem, built from FK and J).
 
     Args:
@@ -174,19 +166,10 @@ def task_into(
 
 @njit(cache=True, nogil=True)
 def step_into(
-    jt: np.ndarray,
-    et: np.ndarray,
-    m: int,
-    lam2: float,
-    free: np.ndarray,
-    z: np.ndarray,
-    use_z: bool,
-    dq: np.ndarray,
-    e2: np.ndarray,
-    work: np.ndarray,
-    rhs: np.ndarray,
+    jt: np.ndarray, et: np.ndarray, m: int, lam2: float, free: np.ndarray, z: np.ndarray,
+    use_z: bool, dq: np.ndarray, e2: np.ndarray, work: np.ndarray, rhs: np.ndarray,
     sol: np.ndarray,
-) -> bool:  # pragma: no cover - compiled
+) -> bool:  # pragma: no cover - compiled  # fmt: skip
     """One damped step (pure: writes only ``dq`` and the scratch arrays).
 
     ``Δq = z + J⁺_λ (e − J z)`` with ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints: the DLS step
@@ -307,14 +290,9 @@ def nearest(
 
 @njit(cache=True, nogil=True)
 def lm_loop(
-    fplan: np.ndarray,
-    iplan: np.ndarray,
-    tgts: np.ndarray,
-    w6: np.ndarray,
-    pars: np.ndarray,
-    starts: np.ndarray,
-    out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
+    fplan: np.ndarray, iplan: np.ndarray, tgts: np.ndarray, w6: np.ndarray, pars: np.ndarray,
+    starts: np.ndarray, out: np.ndarray,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Levenberg–Marquardt loop for N targets, each from its starts in turn until one converges.
 
     A step is kept only if it lowers ``‖W e‖`` (so the history decreases strictly);
@@ -363,52 +341,27 @@ def lm_loop(
     near = ipar[I_NEAR]
     near_q = fplan[o : o + near * n].reshape((near, n))
     near_pose = fplan[o + near * n : o + near * (n + 12)].reshape((near, 12))
-    mode = ipar[I_MODE]
-    max_iter = ipar[I_MAX_ITER]
-    use_limits = ipar[I_LIMITS] != 0
-    lower = lim[0]
-    upper = lim[1]
-    cap = lim[2]
-    posture = lim[3]
-    scratch = np.empty((6, max(links, 1)))
-    p = np.empty(3)
-    r = np.empty((3, 3))
-    jac = np.empty((6, n))
-    jac_n = np.empty((6, n))
-    jac_best = np.empty((6, n))
-    w3 = np.empty((3, 3))
-    et = np.empty(6)
-    jt = np.empty((6, n))
-    et_n = np.empty(6)
-    jt_n = np.empty((6, n))
-    e2 = np.empty(6)
-    q = np.empty(n)
-    qn = np.empty(n)
-    dq = np.empty(n)
-    z = np.empty(n)
+    mode, max_iter, use_limits = ipar[I_MODE], ipar[I_MAX_ITER], ipar[I_LIMITS] != 0
+    lower, upper, cap, posture = lim[0], lim[1], lim[2], lim[3]
+    scratch, p = np.empty((6, max(links, 1))), np.empty(3)
+    r, w3 = np.empty((3, 3)), np.empty((3, 3))
+    jac, jac_n, jac_best = np.empty((6, n)), np.empty((6, n)), np.empty((6, n))
+    jt, jt_n = np.empty((6, n)), np.empty((6, n))
+    et, et_n, e2 = np.empty(6), np.empty(6), np.empty(6)
+    q, qn, dq, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     free = np.empty(n, dtype=np.bool_)
     k = max(n, 6)
-    work = np.empty((k, k))
-    rhs = np.empty(k)
-    sol = np.empty(k)
-    hist = np.empty(max_iter + 1)
+    work, rhs, sol, hist = np.empty((k, k)), np.empty(k), np.empty(k), np.empty(max_iter + 1)
     o_p = O_Q + n
     o_h = o_p + 12
     for t in range(tgts.shape[0]):
-        tgt = tgts[t]
-        par = pars[t]
-        res = out[t]
-        q_out = res[O_Q:o_p]
-        hist_out = res[o_h:]
+        tgt, par, res = tgts[t], pars[t], out[t]
+        q_out, hist_out = res[O_Q:o_p], res[o_h:]
         tol2 = par[P_TOL] * par[P_TOL]
         rtol2 = par[P_ROT_TOL] * par[P_ROT_TOL]
-        yaw = par[P_YAW]
-        wbar = par[P_WBAR]
+        yaw, wbar = par[P_YAW], par[P_WBAR]
         floor2 = par[P_POST_FLOOR] * par[P_POST_FLOOR]
-        best_cost = np.inf
-        best_steps = 0
-        best_code = 1
-        attempts = 0
+        best_cost, best_steps, best_code, attempts = np.inf, 0, 1, 0
         first = -1 if near > 0 else 0
         pick = nearest(mode, tgt, w6, near_pose) if near > 0 else 0
         for s in range(first, starts.shape[1]):
@@ -430,10 +383,7 @@ def lm_loop(
             hist[0] = math.sqrt(cost)
             use_post = ipar[I_POSTURE] != 0 and n > m
             mu = par[P_MU0]
-            accepted = 0
-            tries = 0
-            slow = 0
-            code = 1
+            accepted, tries, slow, code = 0, 0, 0, 1
             while True:
                 if pos2 <= tol2 and rot2 <= rtol2:
                     code = 0
@@ -457,8 +407,7 @@ def lm_loop(
                         if cont[i]:
                             d = wrap_angle(d)
                         z[i] = par[P_POST_GAIN] * d if free[i] else 0.0
-                kept = False
-                stalled = False
+                kept = stalled = False
                 for _attempt in range(2):
                     ok = step_into(jt, et, m, lam2, free, z, with_z, dq, e2, work, rhs, sol)
                     if not ok:
@@ -511,9 +460,7 @@ def lm_loop(
                         code = 1
                         break
             if code == 0 or cost < best_cost or s == first:
-                best_cost = cost
-                best_steps = accepted
-                best_code = code
+                best_cost, best_steps, best_code = cost, accepted, code
                 for i in range(n):
                     q_out[i] = q[i]
                     for row in range(6):

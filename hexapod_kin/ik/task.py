@@ -58,12 +58,8 @@ class Task:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (pose as nested lists, [m] and [rad])."""
-        return {
-            "mode": self.mode,
-            "pose": self.pose.tolist(),
-            "yaw": float(self.yaw),
-            "weights": self.weights.tolist(),
-        }
+        out = {"mode": self.mode, "pose": self.pose.tolist(), "yaw": float(self.yaw)}
+        return out | {"weights": self.weights.tolist()}
 
 
 def _task(mode: Mode, pose: np.ndarray, yaw: float, weights: np.ndarray) -> Task:
@@ -299,10 +295,8 @@ def check_within(
 ) -> None:
     """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
 
-    The one range check of targets (the API's :func:`~hexapod_kin.ik.solve`,
-    :func:`~hexapod_kin.ik.solve_many` and the command line): a target a hundred robots away
-    is a typo or a unit error, not a question for the solver (whose loop would run its full
-    budget on numbers like 1e308).
+    The one range check of targets (the API and the command line): a target a hundred
+    robots away is a typo or a unit error, not a question for the solver.
 
     Args:
         model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
@@ -327,8 +321,8 @@ def check_within(
     limit = _limit(model)
     if far <= limit:  # NaN is not: refused below
         return
-    row = xyz[int(np.argmax(np.max(np.abs(xyz), axis=1)))]
-    where = "" if len(xyz) == 1 else f" (row {int(np.argmax(np.max(np.abs(xyz), axis=1)))})"
+    k = int(np.argmax(np.max(np.abs(xyz), axis=1)))
+    row, where = xyz[k], ("" if len(xyz) == 1 else f" (row {k})")
     raise kind(
         f"{parameter}{where} {', '.join(f'{v:.6g}' for v in row)} m is larger than the robot; "
         f"allowed |x|, |y|, |z| <= {limit:.4g} m ({TARGET_FACTOR:g} x the robot's size)",

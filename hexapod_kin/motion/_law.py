@@ -82,22 +82,10 @@ def _sigma(rows: np.ndarray) -> tuple[float, float]:
 
 
 def integrate(
-    model: Any,
-    q0: np.ndarray,
-    vel: np.ndarray,
-    ref_p: np.ndarray,
-    ref_r: np.ndarray | None,
-    dt: float,
-    rk4: bool,
-    tip_frame: bool,
-    gain: float,
-    eps: float,
-    lam2max: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    use_limits: bool,
-    vmax: np.ndarray,
-) -> dict[str, np.ndarray]:
+    model: Any, q0: np.ndarray, vel: np.ndarray, ref_p: np.ndarray, ref_r: np.ndarray | None,
+    dt: float, rk4: bool, tip_frame: bool, gain: float, eps: float, lam2max: float,
+    lower: np.ndarray, upper: np.ndarray, use_limits: bool, vmax: np.ndarray,
+) -> dict[str, np.ndarray]:  # fmt: skip
     """Integrate the law from ``q0`` (Euler or RK4); ``(len(vel) − 1) / 2`` steps.
 
     ``vel`` (2K+1, 3 or 6) and ``ref_p`` (2K+1, 3), ``ref_r`` (2K+1, 3, 3) (None for a 3-row
@@ -123,12 +111,8 @@ def integrate(
     # no finite position limit (continuous joints): nothing to freeze or clamp
     bounded = use_limits and any(math.isfinite(v) for v in lo + hi)
     ref_l = None if ref_r is None else list(ref_r)  # the 3×3 references, one view per sample
-    frame_jacobian, frame_placement, log3 = (
-        pin.computeFrameJacobian,
-        pin.updateFramePlacement,
-        pin.log3,
-    )
-    array = np.array
+    frame_jacobian, frame_placement = pin.computeFrameJacobian, pin.updateFramePlacement
+    log3, array = pin.log3, np.array
 
     def law(q: list[float], h: int, held: Any) -> tuple[Any, ...]:
         """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², held, limited).
@@ -191,39 +175,29 @@ def integrate(
         return qd, pose, jac, smin, smax, lam2, held, limited
 
     steps = (vel.shape[0] - 1) // 2
-    qs, qds, poses, jacs, sig, lams, lims = [], [], [], [], [], [], []
+    rows: tuple[list[Any], ...] = ([], [], [], [], [], [], [])
+    qs, qds, poses, jacs, sig, lams, lims = rows
     q = q0.tolist()
     half, sixth = 0.5 * dt, dt / 6.0
     for k in range(steps + 1):
         h = 2 * k
         k1, pose, jac, smin, smax, lam2, held, lim = law(q, h, None)
-        qs.append(q)
-        qds.append(k1)
-        poses.append(pose)
-        jacs.append(jac)
-        sig.append((smin, smax))
-        lams.append(lam2)
-        lims.append(lim)
+        for col, value in zip(rows, (q, k1, pose, jac, (smin, smax), lam2, lim)):
+            col.append(value)
         if k == steps:
             break
         if rk4:
             k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, held)[0]
             k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, held)[0]
             k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, held)[0]
-            q = [
-                a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in zip(q, k1, k2, k3, k4)
-            ]
+            ks = zip(q, k1, k2, k3, k4)
+            q = [a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in ks]
         else:
             q = [a + dt * b for a, b in zip(q, k1)]
         if bounded:
             q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
     qdot = np.array(qds)
-    return {
-        "q": np.array(qs),
-        "qdot": qdot,
-        "pose": np.array(poses),
-        "twist": np.einsum("kij,kj->ki", np.array(jacs), qdot),
-        "sigma": np.array(sig),
-        "damping": np.array(lams),
-        "limited": np.array(lims, dtype=bool),
-    }
+    twist = np.einsum("kij,kj->ki", np.array(jacs), qdot)
+    out = {"q": np.array(qs), "qdot": qdot, "pose": np.array(poses), "twist": twist}
+    out["sigma"], out["damping"] = np.array(sig), np.array(lams)
+    return out | {"limited": np.array(lims, dtype=bool)}

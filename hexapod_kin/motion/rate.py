@@ -126,11 +126,7 @@ class Trajectory:
     @property
     def poses(self) -> np.ndarray:
         """(N, 4, 4) tip poses ``baseMtip``."""
-        out = np.zeros((self.t.size, 4, 4))
-        out[:, :3, :3] = self.rotation
-        out[:, :3, 3] = self.foot
-        out[:, 3, 3] = 1.0
-        return out
+        return _poses(self.rotation, self.foot)
 
     @property
     def condition(self) -> np.ndarray:
@@ -142,13 +138,8 @@ class Trajectory:
     def closest_approach(self) -> ClosestApproach:
         """The sample with the smallest σ_min."""
         i = int(np.argmin(self.sigma_min))
-        return ClosestApproach(
-            index=i,
-            t=float(self.t[i]),
-            sigma_min=float(self.sigma_min[i]),
-            condition=float(self.condition[i]),
-            q=tuple(float(v) for v in self.q[i]),
-        )
+        smin, cond, q = float(self.sigma_min[i]), float(self.condition[i]), self.q[i]
+        return ClosestApproach(i, float(self.t[i]), smin, cond, tuple(float(v) for v in q))
 
     @property
     def tracking_error(self) -> np.ndarray:
@@ -171,6 +162,13 @@ class Trajectory:
             out[name] = v.tolist() if isinstance(v, np.ndarray) else v
         out["closest_approach"] = self.closest_approach.to_dict()
         return out
+
+
+def _poses(rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """(M, 4, 4) homogeneous transforms of rotations (M, 3, 3) and positions (M, 3)."""
+    out = np.zeros((len(pos), 4, 4))
+    out[:, :3, :3], out[:, :3, 3], out[:, 3, 3] = rot, pos, 1.0
+    return out
 
 
 # ============================================================================ sampling
@@ -285,11 +283,7 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
     if frame == "tip":
         steps = np.array([exp6(motion(v, w)).homogeneous for v, w in zip(inc[:, :3], inc[:, 3:])])
         return np.asarray(t0 @ steps)  # one 4×4 product per time, T0 exp(t ξ)
-    out = np.zeros((times.size, 4, 4))
-    out[:, :3, :3] = np.array([exp3(w) for w in inc[:, 3:]]) @ t0[:3, :3]
-    out[:, :3, 3] = t0[:3, 3] + inc[:, :3]
-    out[:, 3, 3] = 1.0
-    return out
+    return _poses(np.array([exp3(w) for w in inc[:, 3:]]) @ t0[:3, :3], t0[:3, 3] + inc[:, :3])
 
 
 def _integrate_pose(pose0: np.ndarray, vel: np.ndarray, dt: float, frame: str) -> np.ndarray:
@@ -308,10 +302,7 @@ def _integrate_pose(pose0: np.ndarray, vel: np.ndarray, dt: float, frame: str) -
 def _advance(pose: np.ndarray, inc: np.ndarray, frame: str) -> np.ndarray:
     if frame == "tip":
         return (pin.SE3(pose) * pin.exp6(pin.Motion(inc))).homogeneous
-    out = np.eye(4)
-    out[:3, :3] = pin.exp3(inc[3:]) @ pose[:3, :3]
-    out[:3, 3] = pose[:3, 3] + inc[:3]
-    return out
+    return _poses(pin.exp3(inc[3:]) @ pose[:3, :3], (pose[:3, 3] + inc[:3])[None])[0]
 
 
 # ============================================================================ resolved rate
@@ -407,9 +398,9 @@ def resolved_rate(
     jac0 = mdl.jacobian(start)
     sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
     eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)
-    lam2max = (
-        eps * eps if max_damping is None else positive("max_damping", max_damping, allow_zero=True)
-    )
+    lam2max = eps * eps
+    if max_damping is not None:
+        lam2max = positive("max_damping", max_damping, allow_zero=True)
     lower, upper = np.asarray(mdl.lower, dtype=float), np.asarray(mdl.upper, dtype=float)
     # continuous joints (revolute, range >= 2π) wrap: no position limit for them
     cont = ~np.asarray(mdl.is_prismatic, dtype=bool) & (upper - lower >= 2 * np.pi - 1e-9)
@@ -425,32 +416,16 @@ def resolved_rate(
     vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
     out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
                     lam2max, lo, hi, within_limits, vmax)  # fmt: skip
-    pose = out["pose"]
-    arrays = {
-        "t": np.arange(steps + 1) * dt,
-        "q": out["q"],
-        "qdot": out["qdot"],
-        "foot": np.ascontiguousarray(pose[:, :3, 3]),
-        "foot_velocity": np.ascontiguousarray(out["twist"][:, :3]),
-        "rotation": np.ascontiguousarray(pose[:, :3, :3]),
-        "angular_velocity": np.ascontiguousarray(out["twist"][:, 3:]),
-        "command": np.ascontiguousarray(vel[::2]),
-        "reference": np.ascontiguousarray(ref_p[::2]),
-        "sigma_min": np.ascontiguousarray(out["sigma"][:, 0]),
-        "sigma_max": np.ascontiguousarray(out["sigma"][:, 1]),
-        "damping": out["damping"],
-        "limited": out["limited"],
-    }
-    ref_rot = None if ref_r is None else np.ascontiguousarray(ref_r[::2])
-    read_only(*arrays.values(), *(() if ref_rot is None else (ref_rot,)))
-    return Trajectory(
-        **arrays,
-        reference_rotation=ref_rot,
-        method=method,
-        dt=dt,
-        gain=gain,
-        frame=frame if rows6 else "base",
-    )
+    c, pose, tw, sg = np.ascontiguousarray, out["pose"], out["twist"], out["sigma"]
+    t, q, qdot = np.arange(steps + 1) * dt, out["q"], out["qdot"]
+    damping, limited, frame = out["damping"], out["limited"], frame if rows6 else "base"
+    foot, foot_v, rot, ang_v = c(pose[:, :3, 3]), c(tw[:, :3]), c(pose[:, :3, :3]), c(tw[:, 3:])
+    command, reference, smin, smax = c(vel[::2]), c(ref_p[::2]), c(sg[:, 0]), c(sg[:, 1])
+    ref_rot = None if ref_r is None else c(ref_r[::2])
+    read_only(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, smin, smax, damping,
+              limited, *(() if ref_rot is None else (ref_rot,)))  # fmt: skip
+    return Trajectory(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, ref_rot, smin,
+                      smax, damping, limited, method, dt, gain, frame)  # fmt: skip
 
 
 def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:

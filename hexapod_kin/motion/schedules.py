@@ -147,12 +147,9 @@ class PosePath:
         flat = np.atleast_1d(tt)
         k, s = self._segment(flat)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
-        out = np.array(
-            [
-                (pin.SE3(self.poses[ki]) * pin.exp6(pin.Motion(si * xi[ki]))).homogeneous
-                for ki, si in zip(k, s)
-            ]
-        )
+        se3, exp6, motion = pin.SE3, pin.exp6, pin.Motion
+        out = np.array([(se3(self.poses[ki]) * exp6(motion(si * xi[ki]))).homogeneous
+                        for ki, si in zip(k, s)])  # fmt: skip
         return out[0] if tt.ndim == 0 else out
 
     def twist(self, t: Any) -> np.ndarray:
@@ -170,7 +167,7 @@ class PosePath:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ([s], poses as nested lists)."""
-        return {"times": self.times.tolist(), "poses": self.poses.tolist()}
+        return fields_dict(self, "times", "poses")
 
 
 def follow_pose_path(
@@ -217,18 +214,8 @@ def follow_pose_path(
                 allowed="a reachable pose (or give q0)",
             )
         q0 = res.q
-    return resolved_rate(
-        mdl,
-        path.twist,
-        q0,
-        dt,
-        path.duration,
-        frame="tip",
-        method=method,
-        gain=gain,
-        path=path.sample,
-        within_limits=within_limits,
-    )
+    return resolved_rate(mdl, path.twist, q0, dt, path.duration, frame="tip", method=method,
+                         gain=gain, path=path.sample, within_limits=within_limits)  # fmt: skip
 
 
 # ============================================================================ tracking by IK
@@ -247,7 +234,7 @@ class Tracked:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
-        return {"q": self.q.tolist(), "reached": self.reached.tolist()}
+        return fields_dict(self, "q", "reached")
 
 
 def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-10) -> Tracked:
@@ -295,7 +282,7 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         try:
             batch = ik.analytic_batch(mdl, pts, within_limits=True)
         except IKError:
-            batch = None
+            pass
     rev = ~np.asarray(mdl.is_prismatic)
     for i, p in enumerate(pts):
         if batch is not None and batch.valid[i].any():
@@ -303,17 +290,14 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
             d = cands - prev
             d[:, rev] = np.remainder(d[:, rev] + np.pi, 2 * np.pi) - np.pi
             idx = int(np.argmin(np.sum(d * d, axis=1)))
-            best = cands[idx]
             # keep revolute joints continuous (no 2π jumps) when that stays inside the limits
-            unwrapped = prev + d[idx]
-            if np.all(unwrapped >= mdl.lower) and np.all(unwrapped <= mdl.upper):
-                best = unwrapped
-            out[i] = best
-            ok[i] = True
+            best = prev + d[idx]
+            if not (np.all(best >= mdl.lower) and np.all(best <= mdl.upper)):
+                best = cands[idx]
+            out[i], ok[i] = best, True
         else:
             res = ik.solve(mdl, p, prev, tol=tol, restarts=2)
-            out[i] = res.q
-            ok[i] = res.converged
+            out[i], ok[i] = res.q, res.converged
         prev = out[i]
     read_only(out, ok)
     return Tracked(q=out, reached=ok)

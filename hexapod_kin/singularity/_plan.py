@@ -19,16 +19,8 @@ from .._kernels import AlignedChain, aligned_chain, run_blocks
 from .._pose import rodrigues
 from ._kernel import measures_kernel
 
-__all__ = [
-    "GramPlan",
-    "BLOCK",
-    "aligned",
-    "block_plan",
-    "gram_plan",
-    "first_joint_invariant",
-    "output_arrays",
-    "compute",
-]
+__all__ = ["GramPlan", "BLOCK", "aligned", "block_plan", "gram_plan", "first_joint_invariant",
+           "output_arrays", "compute"]  # fmt: skip
 
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
@@ -122,9 +114,8 @@ def gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
     configurations (the first joint at 0 when ``skip0``) are taken as structural zeros; the
     kernel re-checks them per configuration. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}``.
     """
-    return model.cached(
-        f"singularity.gram_plan.{sel}.{skip0}", lambda: _build_gram_plan(model, sel, skip0)
-    )
+    key = f"singularity.gram_plan.{sel}.{skip0}"
+    return model.cached(key, lambda: _build_gram_plan(model, sel, skip0))
 
 
 def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
@@ -145,22 +136,16 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
             score = (max(len(c) for c in comps), -len(comps))
             if best is None or score < best[:2]:
                 best = (*score, gram_t, comps, zero)
-    if best is None:
-        gram_t, comps = k > n, [list(range(m))]
-    else:
-        gram_t, comps = best[2], best[3]
+    gram_t, comps = (k > n, [list(range(m))]) if best is None else (best[2], best[3])
     perm = np.array([a for c in comps for a in c] or [0], dtype=np.int64)
     csize = np.array([len(c) for c in comps] or [1], dtype=np.int64)
     where = {a: ci for ci, c in enumerate(comps) for a in c}
-    drop = np.array(
-        sorted(int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]),
-        dtype=np.int64,
-    )
+    between = [int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]]
+    drop = np.array(sorted(between), dtype=np.int64)
     if len(comps) == 1:
         perm = np.arange(max(m, 1), dtype=np.int64)
-    return GramPlan(
-        use_block, gram_t, perm, csize, drop, (pack, rsub, csub, gram_t, perm, csize, drop)
-    )
+    arrays = (pack, rsub, csub, gram_t, perm, csize, drop)
+    return GramPlan(use_block, gram_t, perm, csize, drop, arrays)
 
 
 def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
@@ -180,12 +165,9 @@ def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
     for angle in (0.7, 2.3):
         rot = rodrigues(u, math.sin(angle), math.cos(angle))
         b = np.zeros((6, 6))
-        b[:3, :3] = rot
-        b[3:, 3:] = rot
+        b[:3, :3] = b[3:, 3:] = rot
         qmat = rows @ b @ rows.T
-        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12:
-            return False
-        if np.linalg.det(qmat) <= 0:
+        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12 or np.linalg.det(qmat) <= 0:
             return False
     return True
 

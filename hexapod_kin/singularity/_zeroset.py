@@ -75,11 +75,8 @@ def _sum(a: Jet, b: Jet) -> Jet:
 
 
 def _power(c: float) -> tuple[Callable[..., Any], ...]:
-    return (
-        lambda x: x**c,
-        lambda x: c * x ** (c - 1.0),
-        lambda x: c * (c - 1.0) * x ** (c - 2.0),
-    )
+    return (lambda x: x**c, lambda x: c * x ** (c - 1.0),
+            lambda x: c * (c - 1.0) * x ** (c - 2.0))  # fmt: skip
 
 
 _UNARY: dict[str, tuple[Callable[..., Any], ...]] = {
@@ -95,13 +92,9 @@ Node = Callable[[list[Any], bool], Jet]  # (variables' columns, with Hessian) ->
 Eval = Callable[[np.ndarray, bool], Jet]  # (x (M, v), with Hessian) -> jet
 
 
-_FOLD: dict[type, Callable[[float, float], float]] = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-    ast.Pow: operator.pow,
-}
+_FOLD: dict[type, Callable[[float, float], float]] = {ast.Add: operator.add,
+    ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+    ast.Pow: operator.pow}  # fmt: skip
 
 
 def _number(node: ast.AST) -> float | None:
@@ -173,19 +166,13 @@ def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
         if isinstance(node.op, ast.Mult):
             return lambda env, hess: _mul(left(env, hess), right(env, hess), hess)
         if isinstance(node.op, ast.Div):
-            return lambda env, hess: _mul(
-                left(env, hess), _chain(_RECIPROCAL, right(env, hess), hess), hess
-            )
+            inv: Node = lambda env, hess: _chain(_RECIPROCAL, right(env, hess), hess)  # noqa: E731
+            return lambda env, hess: _mul(left(env, hess), inv(env, hess), hess)
         raise _refuse(text, type(node.op).__name__)
-    if (
-        isinstance(node, ast.Call)
-        and isinstance(node.func, ast.Name)
-        and node.func.id in _UNARY
-        and len(node.args) == 1
-        and not node.keywords
-    ):
+    fname = node.func.id if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) else ""
+    if isinstance(node, ast.Call) and fname in _UNARY and len(node.args) == 1 and not node.keywords:
         arg = _build(node.args[0], text, pos)
-        fn = _UNARY[node.func.id]
+        fn = _UNARY[fname]
         return lambda env, hess: _chain(fn, arg(env, hess), hess)
     raise _refuse(text, type(node).__name__)
 
@@ -326,9 +313,8 @@ def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
     its own (the same bits whatever the other rows).
     """
     rows, back = np.unique(p, axis=0, return_inverse=True)
-    out = np.concatenate(
-        [_closest(jet, rows[i : i + _CHUNK]) for i in range(0, len(rows), _CHUNK)] or [np.zeros(0)]
-    )
+    parts = [_closest(jet, rows[i : i + _CHUNK]) for i in range(0, len(rows), _CHUNK)]
+    out = np.concatenate(parts or [np.zeros(0)])
     out[jet(rows, False)[0] == 0.0] = 0.0
     return out[back.reshape(-1)]
 

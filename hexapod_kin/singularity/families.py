@@ -193,28 +193,18 @@ def _table(model: Any) -> tuple[Any, str]:
 
 def _key(chain: Any, rows: tuple[str, ...]) -> str:
     table = [(r.sigma, repr(r.alpha), repr(r.d), repr(r.theta), repr(r.r)) for r in chain.rows]
-    return _disk.key(
-        {
-            "v": _VERSION,
-            "rows": list(rows),
-            "table": table,
-            "base": repr(getattr(chain, "base_pose", None)),
-            "tool": repr(getattr(chain, "tool", None)),
-        }
-    )[:32]
+    base, tool = repr(getattr(chain, "base_pose", None)), repr(getattr(chain, "tool", None))
+    entry = {"v": _VERSION, "rows": list(rows), "table": table, "base": base, "tool": tool}
+    return _disk.key(entry)[:32]
 
 
 def _family(f: Any) -> Family:
     """A :class:`Family` from a mapping of its fields (JSON, or a derivation's family)."""
-    return Family(
-        name=str(f["name"]),
-        equation=str(f["equation"]),
-        variables=tuple(int(v) for v in f["variables"]),
-        joint=None if f["joint"] is None else int(f["joint"]),
-        value=None if f["value"] is None else float(f["value"]),
-        periodic=bool(f["periodic"]),
-        factor=str(f["factor"]),
-    )
+    joint = None if f["joint"] is None else int(f["joint"])
+    value = None if f["value"] is None else float(f["value"])
+    variables = tuple(int(v) for v in f["variables"])
+    name, equation, factor = str(f["name"]), str(f["equation"]), str(f["factor"])
+    return Family(name, equation, variables, joint, value, bool(f["periodic"]), factor)
 
 
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
@@ -337,27 +327,19 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
     """Errors a derivation may end with; anything else is a bug and propagates."""
     import sympy
 
-    return (
-        HexapodKinError,
-        TimeoutError,
-        NotImplementedError,
-        RecursionError,
-        sympy.PolynomialError,
-        sympy.polys.polyerrors.PolificationFailed,
-    )
+    failed = sympy.polys.polyerrors.PolificationFailed
+    return (HexapodKinError, TimeoutError, NotImplementedError, RecursionError,
+            sympy.PolynomialError, failed)  # fmt: skip
 
 
 def _derive_job(
     chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray
 ) -> Iterator[tuple[str, Any]]:
-    """The derivation's side of :func:`families_for`, in the derivation's own process.
+    """The derivation's side of :func:`families_for`, yielding plain values only (no sympy).
 
-    Derives the families (:func:`hexapod_kin.symbolic.derive`, ``families_only``) and yields
-    plain values only, so the caller never imports sympy: ``("derived", (incomplete, kind,
-    values, families))`` with ``kind`` ``"det"`` (``|det J|`` at ``qs``), ``"gram"``
-    (``|det(J Jᵀ)|``) or ``None`` (neither derived), and each family's fields with its factor
-    as text (lengths substituted); or ``("failed", "Error: message")`` when the derivation
-    ended with one of its expected errors. Anything else is a bug and propagates.
+    ``("derived", (incomplete, kind, values, families))`` with ``kind`` ``"det"`` (``|det J|``
+    at ``qs``), ``"gram"`` (``|det(J Jᵀ)|``) or ``None``, the families' factors as text
+    (lengths substituted); or ``("failed", "Error: message")`` on an expected error.
     """
     from .. import symbolic
     from ..symbolic.checks import evaluate
@@ -387,13 +369,9 @@ def _derive_job(
 def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -> tuple[Any, ...]:
     """:func:`_derive_job`'s answer, from a process of its own unless sympy is loaded here.
 
-    The child keeps this process clear of sympy (its import and the unpickling of sympy
-    objects); with sympy already loaded the job runs here (its derivation still runs within
-    its budget, in a child of its own: :func:`hexapod_kin.symbolic.derive`).
-
     Returns:
         ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
-        child ended without an answer: its error, or its budget, as for a derivation's child).
+        child ended without an answer).
 
     """
     from .. import _budget
@@ -489,13 +467,8 @@ def families_for(
             partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key
         )
     if not derive:
-        return Families(
-            (),
-            "none",
-            "families not derived yet (pass families=True, or run `hexapod-kin derive`; "
-            "they are then kept on disk)",
-            key,
-        )
+        why = "families not derived yet (pass families=True, or run `hexapod-kin derive`; "
+        return Families((), "none", why + "they are then kept on disk)", key)
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
     qs = model.random_q(16, seed=4242)
     got = _derived(chain, rows, budget, qs)

@@ -169,12 +169,9 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
 
 
 def measures_batch(
-    model: Any,
-    qs: Any,
-    rows: str | Sequence[str] | None = None,
-    *,
+    model: Any, qs: Any, rows: str | Sequence[str] | None = None, *,
     out: tuple[np.ndarray, ...] | None = None,
-) -> MeasuresBatch:
+) -> MeasuresBatch:  # fmt: skip
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
     Chains whose Jacobian has more than 70 maximal minors (9 joints and more) are measured
@@ -202,12 +199,11 @@ def measures_batch(
     q = np.ascontiguousarray(mdl.check_q_batch(qs, "qs"))
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
     n = q.shape[0]
-    if out is not None and (
-        len(out) != 4
-        or any(
-            not isinstance(o, np.ndarray) or o.shape != (n,) or o.dtype != np.float64 for o in out
-        )
-    ):
+
+    def good(o: Any) -> bool:
+        return isinstance(o, np.ndarray) and o.shape == (n,) and o.dtype == np.float64
+
+    if out is not None and (len(out) != 4 or not all(map(good, out))):
         raise ConfigurationError(
             f"out: four float64 arrays of shape ({n},) are required",
             parameter="out",

@@ -22,14 +22,8 @@ from ..tables import MIN_LENGTH as MIN_REACH  # a table's smallest length: the s
 from .families import Families, Family, families_for
 from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
-__all__ = [
-    "DEFAULT_GRID",
-    "SMALL_SCAN",
-    "ScanResult",
-    "scan",
-    "default_joints",
-    "default_q_fixed",
-]
+__all__ = ["DEFAULT_GRID", "SMALL_SCAN", "ScanResult", "scan", "default_joints",
+           "default_q_fixed"]  # fmt: skip
 
 #: Largest number of configurations of one scan (memory: ~80 bytes each plus q).
 MAX_CONFIGURATIONS = 50_000_000
@@ -73,6 +67,11 @@ _PER_SAMPLE = (
 def _listed(arr: np.ndarray) -> list[Any]:
     """A float array as a list with NaN / inf as ``None``; any other as its list."""
     return _clean(arr) if arr.dtype.kind == "f" else arr.tolist()
+
+
+def _count(v: Any, lo: int, hi: float = math.inf) -> bool:
+    """``v`` is an integer (not a bool) in ``lo..hi``."""
+    return not isinstance(v, bool) and isinstance(v, (int, np.integer)) and lo <= int(v) <= hi
 
 
 def _ro(arr: np.ndarray) -> np.ndarray:
@@ -368,7 +367,7 @@ def _grid_points(
         )
     shape = []
     for c in counts:
-        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or int(c) < 2:
+        if not _count(c, 2):
             raise ParameterError(
                 f"grid={grid!r}: counts must be integers >= 2",
                 parameter="grid",
@@ -397,11 +396,7 @@ def _grid_points(
 def _sample_points(
     model: Any, joints: tuple[int, ...], samples: Any, q_fixed: np.ndarray, seed: int | None
 ) -> np.ndarray:
-    if (
-        isinstance(samples, bool)
-        or not isinstance(samples, (int, np.integer))
-        or not 1 <= int(samples) <= MAX_CONFIGURATIONS
-    ):
+    if not _count(samples, 1, MAX_CONFIGURATIONS):
         raise ParameterError(
             f"samples={samples!r}: an integer in 1..{MAX_CONFIGURATIONS:,} is required",
             parameter="samples",
@@ -479,7 +474,7 @@ def scan(
     else:
         jidx = _joint_indices(mdl, joints)
     one_of("families", families, (True, False, "cached"))
-    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
+    if not _count(chunk, 1):
         raise ParameterError(
             f"chunk={chunk!r}: an integer >= 1 is required",
             parameter="chunk",
@@ -509,8 +504,7 @@ def scan(
         )
     thr = positive("threshold", rtol * length if threshold is None else threshold, allow_zero=True)
     if samples is not None:
-        q = _sample_points(mdl, jidx, samples, qf, seed)
-        shape = None
+        q, shape = _sample_points(mdl, jidx, samples, qf, seed), None
     else:
         q, shape = _grid_points(mdl, jidx, DEFAULT_GRID if grid is None else grid, qf)
     n = q.shape[0]
@@ -519,21 +513,16 @@ def scan(
     else:
         det, manip, cond, smin = _kernel_scan(mdl, q, names, progress, int(chunk))
     singular = (smin < thr) | (smin <= 0.0)  # a zero sigma_min is singular at any threshold
-    family = np.full(n, -1, dtype=np.int64)
-    distance = np.full(n, np.nan)
-    second = np.full(n, -1, dtype=np.int64)
-    distance2 = np.full(n, np.nan)
+    family, second = np.full(n, -1, dtype=np.int64), np.full(n, -1, dtype=np.int64)
+    distance, distance2 = np.full(n, np.nan), np.full(n, np.nan)
     if families is False:
         fams = Families((), "none", "families=False")
     else:
         fams = families_for(mdl, names, derive=families is True, budget=family_budget)
     idx = np.flatnonzero(singular)
     if fams.families and idx.size:
-        best, dist, nxt, dist2 = fams.nearest(q[idx])
-        family[idx] = best
-        distance[idx] = dist
-        second[idx] = nxt
-        distance2[idx] = np.where(nxt >= 0, dist2, np.nan)
+        family[idx], distance[idx], second[idx], dist2 = fams.nearest(q[idx])
+        distance2[idx] = np.where(second[idx] >= 0, dist2, np.nan)
     tol = 15.0 * rtol if family_tol is None else float(family_tol)
     if not tol >= 0:
         raise ConfigurationError(
@@ -547,27 +536,11 @@ def scan(
         mine = (family == f) & (distance > 0) & (distance <= tol)
         lever = float(np.quantile(smin[mine] / distance[mine], 0.25)) if mine.sum() >= 8 else np.inf
         tols.append(min(max(tol, 1.5 * thr / lever), 4.0 * tol) if lever > 0 else 4.0 * tol)
+    arrays = (q, det, manip, cond, smin, singular, family, distance, second, distance2)
+    q, det, manip, cond, smin, singular, family, distance, second, distance2 = map(_ro, arrays)
+    prismatic = tuple(bool(p) for p in mdl.is_prismatic)
     return ScanResult(
-        q=_ro(q),
-        det=_ro(det),
-        manipulability=_ro(manip),
-        condition=_ro(cond),
-        sigma_min=_ro(smin),
-        singular=_ro(singular),
-        family=_ro(family),
-        family_distance=_ro(distance),
-        second_family=_ro(second),
-        second_distance=_ro(distance2),
-        families=fams.families,
-        family_reason=fams.reason,
-        family_tol=tol,
-        family_tols=tuple(tols),
-        joint_names=tuple(mdl.joint_names),
-        prismatic=tuple(bool(p) for p in mdl.is_prismatic),
-        joints=jidx,
-        rows=names,
-        threshold=thr,
-        grid_shape=shape,
-        q_fixed=_ro(qf),
-        source=mdl.name,
-    )
+        q, det, manip, cond, smin, singular, family, distance, second, distance2, fams.families,
+        fams.reason, tol, tuple(tols), tuple(mdl.joint_names), prismatic, jidx, names, thr,
+        shape, _ro(qf), mdl.name,
+    )  # fmt: skip

@@ -72,12 +72,9 @@ class ChunkStore:
         return self.parts / f"chunk_{k:05d}.npz"
 
     def resume(
-        self,
-        bounds: Sequence[tuple[int, int]],
-        designs: np.ndarray,
-        rescore: Callable[[np.ndarray], np.ndarray],
-        out: str,
-    ) -> dict[int, np.ndarray]:
+        self, bounds: Sequence[tuple[int, int]], designs: np.ndarray,
+        rescore: Callable[[np.ndarray], np.ndarray], out: str,
+    ) -> dict[int, np.ndarray]:  # fmt: skip
         """The stored chunks that pass every check, by number (the others: one warning).
 
         Raises:
@@ -116,9 +113,8 @@ class ChunkStore:
             verb = "it does not hold what it claims"
             if len(bad) > 1:
                 verb = "they do not hold what they claim"
-            _disk.damaged(
-                "sweep", f"{names} in {self.parts.name}", f"{verb}", "scoring again", stacklevel=3
-            )
+            where = f"{names} in {self.parts.name}"
+            _disk.damaged("sweep", where, verb, "scoring again", stacklevel=3)
         return results
 
     def _load(
@@ -156,11 +152,7 @@ class ChunkStore:
             atomic_write(self.parts / "manifest.json", self.manifest)
             self._ready = True
         buf = io.BytesIO()
-        np.savez(
-            buf,
-            key=np.array(self.key),
-            chunk=np.array(k),
-            scores=np.ascontiguousarray(scores, dtype=float),
-            digest=np.array(self._digest(k, scores)),
-        )
+        arrays: dict[str, Any] = dict(key=np.array(self.key), chunk=np.array(k))
+        arrays |= dict(scores=np.ascontiguousarray(scores, dtype=float))
+        np.savez(buf, **arrays, digest=np.array(self._digest(k, scores)))
         atomic_write(self.path(k), buf.getvalue())

@@ -20,16 +20,8 @@ import numpy as np
 
 from ..exceptions import ParameterError, finite, one_of, positive
 
-__all__ = [
-    "ANGLES",
-    "DEFAULTS",
-    "METHODS",
-    "PARAMETERS",
-    "DesignSpace",
-    "Range",
-    "design_chain",
-    "parse_range",
-]
+__all__ = ["ANGLES", "DEFAULTS", "METHODS", "PARAMETERS", "DesignSpace", "Range", "design_chain",
+           "parse_range"]  # fmt: skip
 
 #: Defaults: the seed leg (seed 001, Table 1) as the middle leg of ``robots.hexapod``.
 DEFAULTS: dict[str, float] = {
@@ -39,12 +31,8 @@ DEFAULTS: dict[str, float] = {
     "height": 0.10,  # body height: the ground is the plane z = −height in the hip frame [m]
     "mount_radius": 0.12,  # distance of the hip axis from the body centre [m]
     "mount_yaw": math.pi / 2,  # yaw of the hip frame on the body [rad]; walking is body x
-    "q1_lower": -math.pi,
-    "q1_upper": math.pi,
-    "q2_lower": -math.pi,
-    "q2_upper": math.pi,
-    "q3_lower": -math.pi,
-    "q3_upper": math.pi,  # joint limits [rad]
+    # joint limits [rad]: q1_lower, q1_upper, ..., q3_upper
+    **{f"q{j}_{end}": s * math.pi for j in (1, 2, 3) for end, s in (("lower", -1), ("upper", 1))},
     "neutral": 0.5,  # neutral foot: fraction of the ground's radial reach (0 inner, 1 outer)
 }
 
@@ -155,10 +143,7 @@ class DesignSpace:
                     parameter=k,
                     allowed=list(PARAMETERS),
                 )
-            if isinstance(v, Range):
-                vals[k] = v
-            else:
-                vals[k] = finite(k, v)
+            vals[k] = v if isinstance(v, Range) else finite(k, v)
         if self.total is not None:
             if "l3" in vals:
                 raise ParameterError(
@@ -189,11 +174,9 @@ class DesignSpace:
         """How many designs :meth:`designs` draws at most, without drawing them."""
         one_of("method", method, METHODS)
         if method == "grid" or not self.swept:
-            n = 1
-            for p in PARAMETERS:
-                v = self._value(p)
-                n *= v.n if isinstance(v, Range) else 1
-            return n
+            return math.prod(
+                v.n if isinstance(v, Range) else 1 for v in map(self._value, PARAMETERS)
+            )
         return int(samples)
 
     def designs(
@@ -236,9 +219,8 @@ class DesignSpace:
             if method == "lhs":
                 from scipy.stats import qmc
 
-                unit = qmc.LatinHypercube(d=len(swept), seed=np.random.default_rng(seed)).random(
-                    int(samples)
-                )
+                lhs = qmc.LatinHypercube(d=len(swept), seed=np.random.default_rng(seed))
+                unit = lhs.random(int(samples))
             else:
                 unit = np.random.default_rng(seed).random((int(samples), len(swept)))
             table = np.empty((int(samples), len(PARAMETERS)))
@@ -279,19 +261,16 @@ class DesignSpace:
         checks += [
             (np.abs(col[p]) <= ang, p, f"|{p}| <= {ang:g} [rad]") for p in PARAMETERS if p in ANGLES
         ]
-        for j in (1, 2, 3):
-            checks.append(
-                (col[f"q{j}_lower"] <= col[f"q{j}_upper"], f"q{j}_lower", f"<= q{j}_upper")
-            )
+        checks += [(col[f"q{j}_lower"] <= col[f"q{j}_upper"], f"q{j}_lower", f"<= q{j}_upper")
+                   for j in (1, 2, 3)]  # fmt: skip
         for ok, name, allowed in checks:
             bad = np.flatnonzero(~ok)
             if bad.size:
-                row = table[bad[0]]
+                value = float(table[bad[0], PARAMETERS.index(name)])
                 raise ParameterError(
-                    f"design parameter {name}={float(row[PARAMETERS.index(name)])!r} (design "
-                    f"{int(bad[0])}): must be {allowed}",
+                    f"design parameter {name}={value!r} (design {int(bad[0])}): must be {allowed}",
                     parameter=name,
-                    value=float(row[PARAMETERS.index(name)]),
+                    value=value,
                     allowed=allowed,
                 )
         if table.shape[0] == 0 and not empty_ok:

@@ -53,16 +53,9 @@ def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVE
     order = idx[np.lexsort(tuple(-f[idx, k] for k in reversed(range(f.shape[1]))))]
     front: list[int] = []
     for i in order:
-        if front:
-            g = f[front]
-            geq = np.all(g >= f[i], axis=1)
-            gt = np.any(g > f[i], axis=1)
-            if np.any(geq & gt):
-                continue
-            if np.any(np.all(g == f[i], axis=1)):
-                front.append(int(i))  # duplicates of a front point stay on it
-                continue
-        front.append(int(i))
+        g = f[front]  # duplicates of a front point stay on it
+        if not front or not np.any(np.all(g >= f[i], axis=1) & np.any(g > f[i], axis=1)):
+            front.append(int(i))
     mask = np.zeros(n, dtype=bool)
     mask[front] = True
     return mask

@@ -22,9 +22,7 @@ def _axis(values: np.ndarray) -> np.ndarray:
 
 
 def plot_sweep(
-    result: Any,
-    path: str | os.PathLike[str],
-    params: Sequence[str] | None = None,
+    result: Any, path: str | os.PathLike[str], params: Sequence[str] | None = None
 ) -> Path:
     """Score maps (stride, volume, σ_min) over two parameters and the Pareto front, one PNG.
 
@@ -85,21 +83,11 @@ def plot_sweep(
         ax.set_title(title, fontsize=9)
     ax = axes[3]
     front = np.asarray(table["pareto"]) > 0
-    s = ax.scatter(
-        np.asarray(table["stride"])[feas],
-        np.asarray(table["volume"])[feas],
-        c=np.asarray(table["sigma_min"])[feas],
-        s=10,
-        cmap="viridis",
-    )
-    ax.scatter(
-        np.asarray(table["stride"])[front],
-        np.asarray(table["volume"])[front],
-        facecolors="none",
-        edgecolors="red",
-        s=40,
-        label="Pareto front",
-    )
+    stride, volume = np.asarray(table["stride"]), np.asarray(table["volume"])
+    s = ax.scatter(stride[feas], volume[feas], c=np.asarray(table["sigma_min"])[feas], s=10,
+                   cmap="viridis")  # fmt: skip
+    ax.scatter(stride[front], volume[front], facecolors="none", edgecolors="red", s=40,
+               label="Pareto front")  # fmt: skip
     fig.colorbar(s, ax=ax, label="min σ_min [m/rad]")
     ax.set(xlabel="stride [m]", ylabel="volume [m³]")
     ax.legend(loc="best", fontsize=8)

@@ -285,7 +285,9 @@ def sweep(
 
     """
     t0 = time.perf_counter()
-    options = dict(mc_samples=int(mc_samples), seed=int(seed), line_points=int(line_points))
+    options: dict[str, Any] = dict(
+        mc_samples=int(mc_samples), seed=int(seed), line_points=int(line_points)
+    )
     options |= dict(stride_points=int(stride_points), stride_use=float(stride_use))
     paths = _check_out(out)
     if not allow_large:

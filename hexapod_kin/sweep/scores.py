@@ -29,14 +29,8 @@ from ..exceptions import ParameterError
 from ..ik.closed import leg_reachable, leg_solutions
 from .designs import PARAMETERS
 
-__all__ = [
-    "SCORES",
-    "reachable",
-    "score_designs",
-    "sigmas",
-    "unit_samples",
-    "volume_closed_form",
-]
+__all__ = ["SCORES", "reachable", "score_designs", "sigmas", "unit_samples",
+           "volume_closed_form"]  # fmt: skip
 
 #: Score columns of :func:`score_designs`, in order, with units.
 SCORES: dict[str, str] = {
@@ -112,14 +106,8 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     per = max(1, _BLOCK // m)
     for a in range(0, nd, per):
         blk = slice(a, a + per)
-        pts = np.stack(
-            [
-                big[blk, None] * c_u,
-                big[blk, None] * s_u,
-                reach[blk, None] * z_u,
-            ],
-            axis=-1,
-        ).reshape(-1, 3)
+        bb = big[blk, None]
+        pts = np.stack([bb * c_u, bb * s_u, reach[blk, None] * z_u], axis=-1).reshape(-1, 3)
         ok = _member(np.repeat(d[blk], m, axis=0), pts)
         hits[blk] = ok.reshape(-1, m).sum(axis=1)
     p = hits / m
@@ -174,11 +162,8 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     # ---- along the central part of the stride: the within-limits branch of largest σ_min
     centre, half = 0.5 * (ends[0] - ends[1]), 0.5 * use * (ends[0] + ends[1])
     k = np.arange(points)[None, :]
-    ts = (
-        centre[:, None]
-        - half[:, None]
-        + (2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None])
-    )  # (n, points)
+    step = 2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None]
+    ts = centre[:, None] - half[:, None] + step  # (n, points)
     pts = p0[:, None, :] + ts[..., None] * direction[:, None, :]
     q, valid = _solve(np.repeat(d, points, axis=0), pts.reshape(-1, 3))
     rep = (np.repeat(v, points)[:, None] for v in (l1, l2, l3))
@@ -272,13 +257,8 @@ def score_designs(
         )
     out = np.zeros((d.shape[0], len(SCORES)))
     if d.shape[0]:
-        out = _score(
-            d,
-            unit_samples(seed, mc_samples),
-            int(line_points),
-            int(stride_points),
-            float(stride_use),
-        )
+        unit = unit_samples(seed, mc_samples)
+        out = _score(d, unit, int(line_points), int(stride_points), float(stride_use))
     cols = {name: out[:, j].copy() for j, name in enumerate(SCORES)}
     exact = np.array([volume_closed_form(*row[:3], *row[6:12]) for row in d])
     has = np.isfinite(exact)
@@ -315,27 +295,18 @@ def _cos_bounds(lo: float, hi: float) -> tuple[float, float]:
     """(min, max) of cos q over [lo, hi]."""
     if hi - lo >= 2 * math.pi:
         return -1.0, 1.0
-    cmax = (
-        1.0
-        if 2 * math.pi * math.ceil(lo / (2 * math.pi)) <= hi
-        else max(math.cos(lo), math.cos(hi))
-    )
+    top = 2 * math.pi * math.ceil(lo / (2 * math.pi)) <= hi
+    cmax = 1.0 if top else max(math.cos(lo), math.cos(hi))
     k = math.ceil((lo - math.pi) / (2 * math.pi))
     cmin = -1.0 if math.pi + 2 * math.pi * k <= hi else min(math.cos(lo), math.cos(hi))
     return cmin, cmax
 
 
 def volume_closed_form(
-    l1: float,
-    l2: float,
-    l3: float,
-    q1_lower: float = -math.pi,
-    q1_upper: float = math.pi,
-    q2_lower: float = -math.pi,
-    q2_upper: float = math.pi,
-    q3_lower: float = -math.pi,
+    l1: float, l2: float, l3: float, q1_lower: float = -math.pi, q1_upper: float = math.pi,
+    q2_lower: float = -math.pi, q2_upper: float = math.pi, q3_lower: float = -math.pi,
     q3_upper: float = math.pi,
-) -> float:
+) -> float:  # fmt: skip
     """Exact reachable volume of the leg where the knee (q2) is unlimited, else NaN.
 
     With q2 free, the (u, w) reach region of the femur/tibia pair is the annulus
@@ -386,10 +357,7 @@ def volume_closed_form(
         so = s_of(r_out, z)
         if z < r_in:
             si = s_of(r_in, z)
-            raw = [
-                (l1 - so, (-1, 1), l1 - si, (-1, 0)),
-                (l1 + si, (1, 0), l1 + so, (1, 1)),
-            ]
+            raw = [(l1 - so, (-1, 1), l1 - si, (-1, 0)), (l1 + si, (1, 0), l1 + so, (1, 1))]
         else:
             raw = [(l1 - so, (-1, 1), l1 + so, (1, 1))]
         pos: list[Any] = []

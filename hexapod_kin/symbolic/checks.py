@@ -7,7 +7,9 @@ within a time budget. :func:`claims_hold` checks a cached derivation against its
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 from collections.abc import Mapping
 from typing import Any
 
@@ -21,17 +23,10 @@ __all__ = ["NUMPY_FUNCTIONS", "claims_hold", "evaluate", "evaluate_matrix"]
 
 #: sympy functions and their numpy twins (also the seed report's numeric comparison).
 NUMPY_FUNCTIONS: dict[Any, Any] = {
-    sp.sin: np.sin,
-    sp.cos: np.cos,
-    sp.tan: np.tan,
-    sp.exp: np.exp,
-    sp.log: np.log,
-    sp.Abs: np.abs,
-    sp.atan2: np.arctan2,
-    sp.asin: np.arcsin,
-    sp.acos: np.arccos,
+    sp.sin: np.sin, sp.cos: np.cos, sp.tan: np.tan, sp.exp: np.exp, sp.log: np.log,
+    sp.Abs: np.abs, sp.atan2: np.arctan2, sp.asin: np.arcsin, sp.acos: np.arccos,
     sp.atan: np.arctan,
-}
+}  # fmt: skip
 
 
 def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
@@ -72,14 +67,8 @@ def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
                 stack.extend((a, False) for a in node.args if a not in memo)
             continue
         args = [memo[a] for a in node.args]
-        if node.is_Add:
-            out = args[0]
-            for v in args[1:]:
-                out = out + v
-        elif node.is_Mul:
-            out = args[0]
-            for v in args[1:]:
-                out = out * v
+        if node.is_Add or node.is_Mul:
+            out = functools.reduce(operator.add if node.is_Add else operator.mul, args)
         elif node.is_Pow:
             out = np.power(args[0], args[1])
         elif node.func in NUMPY_FUNCTIONS:
@@ -145,14 +134,10 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
     out["tip"] = acc @ tool
     out["p"] = out["tip"][:3, 3:4]
     lin = table_position_jacobian(chain, qv)
-    ang = np.column_stack(
-        [
-            out[f"cumulative.{j}"][:3, 2] if chain.rows[j].sigma == "revolute" else np.zeros(3)
-            for j in chain.joint_rows
-        ]
-    )
-    out["J_indirect"] = lin
-    out["J_direct"] = np.vstack([lin, ang])
+    revolute = [chain.rows[j].sigma == "revolute" for j in chain.joint_rows]
+    z = [out[f"cumulative.{j}"][:3, 2] for j in chain.joint_rows]
+    ang = np.column_stack([zj if r else np.zeros(3) for zj, r in zip(z, revolute)])
+    out["J_indirect"], out["J_direct"] = lin, np.vstack([lin, ang])
     return out
 
 
@@ -164,10 +149,8 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
     qs = rng.uniform(-math.pi, math.pi, (3, n))
     scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
     at = {**{s: float(v) for s, v in values.items()}, **{s: qs[:, k] for k, s in enumerate(q)}}
-    mats: dict[str, Any] = {}
-    for name in ("base", "tool", "tip", "p", "J_indirect", "J_direct"):
-        if name in kin:
-            mats[name] = kin[name]
+    names = ("base", "tool", "tip", "p", "J_indirect", "J_direct")
+    mats: dict[str, Any] = {name: kin[name] for name in names if name in kin}
     for name in ("transforms", "cumulative"):
         mats.update({f"{name}.{j}": m for j, m in enumerate(kin.get(name) or ())})
     if "p" not in mats or "J_direct" not in mats:
@@ -205,9 +188,8 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
                 sel = jac[k][sel_rows]
                 gram_k = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
                 want_g = float(np.linalg.det(gram_k))
-                if gram_v is not None and abs(float(gram_v[k]) - want_g) > tol * max(
-                    1.0, abs(want_g)
-                ):
+                off = abs(float(gram_v[k]) - want_g) if gram_v is not None else 0.0
+                if off > tol * max(1.0, abs(want_g)):
                     return False
                 if square:
                     size = abs(float(np.linalg.det(sel)))

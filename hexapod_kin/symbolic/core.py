@@ -103,8 +103,7 @@ def _rotation(rot: np.ndarray) -> sp.Matrix:
 
 def _homogeneous(rot: sp.Matrix, xyz: Sequence[Any]) -> sp.Matrix:
     t = sp.eye(4)
-    t[:3, :3] = rot
-    t[:3, 3] = sp.Matrix(list(xyz))
+    t[:3, :3], t[:3, 3] = rot, sp.Matrix(list(xyz))
     return t
 
 
@@ -188,15 +187,13 @@ def kinematics(
             r = r + q[k]
             k += 1
         transforms.append(khalil_matrix(alpha, d, theta, r))
+    base, tool = chain.base_pose, chain.tool
     base_t = sp.eye(4)
-    if chain.base_pose is not None:
-        base_t = _homogeneous(
-            _rotation(np.array(chain.base_pose.rotation)),
-            [_number(x) for x in chain.base_pose.xyz],
-        )
+    if base is not None:
+        base_t = _homogeneous(_rotation(np.array(base.rotation)), [_number(x) for x in base.xyz])
     tool_t = sp.eye(4)
-    if chain.tool is not None:
-        tool_t = _homogeneous(_rotation(np.array(chain.tool.rotation)), syms["tool"])
+    if tool is not None:
+        tool_t = _homogeneous(_rotation(np.array(tool.rotation)), syms["tool"])
     cumulative = []
     acc = base_t
     for t in transforms:
@@ -224,21 +221,16 @@ def kinematics(
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
-    return {
-        "transforms": tuple(transforms),
-        "base": base_t,
-        "tool": tool_t,
+    jd = sp.Matrix.hstack(*cols)
+    # without simplification (the fallback) no derivative: the direct one's linear rows
+    ji = _indirect(p, q, chain.sigmas) if simplify else jd[:3, :]
+    out = {"transforms": tuple(transforms), "base": base_t, "tool": tool_t}
+    return out | {
         "cumulative": tuple(cumulative),
         "tip": tip,
         "p": p,
-        "J_direct": sp.Matrix.hstack(*cols),
-        # without simplification (the caller's fallback at a budget too small even for
-        # stage 1) no derivative is taken: differentiating the nested products takes seconds
-        "J_indirect": (
-            _indirect(p, q, chain.sigmas)
-            if simplify
-            else sp.Matrix.hstack(*[c[:3, :] for c in cols])  # the direct one's linear rows
-        ),
+        "J_direct": jd,
+        "J_indirect": ji,
     }
 
 
@@ -278,10 +270,7 @@ def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp
 
 def _inverse(t: sp.Matrix) -> sp.Matrix:
     rot, pos = t[:3, :3], t[:3, 3]
-    out = sp.eye(4)
-    out[:3, :3] = rot.T
-    out[:3, 3] = -rot.T * pos
-    return out
+    return _homogeneous(rot.T, -rot.T * pos)
 
 
 def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
@@ -359,10 +348,7 @@ def _candidates(
 # ---------------------------------------------------------------------- factoring
 def _to_trig(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     s, c = _trig_symbols(q)
-    sub = {}
-    for k, qk in enumerate(q):
-        sub[s[k]] = sp.sin(qk)
-        sub[c[k]] = sp.cos(qk)
+    sub = {x: fn(qk) for k, qk in enumerate(q) for x, fn in ((s[k], sp.sin), (c[k], sp.cos))}
     return cheap(poly.xreplace(sub))
 
 
@@ -474,15 +460,11 @@ def factored_determinant(
         if best is None or _split_score(factors) > _split_score(best["factors"]):
             best = cand
     assert best is not None
-    product = best["const"] * sp.Mul(*[f**m for f, m in best["factors"]])
-    return {
-        "how": best["how"],
-        "factors": tuple(best["factors"]),
-        "const": best["const"],
-        "det": product,
-        "gram": best["const"] ** 2 * sp.Mul(*[f ** (2 * m) for f, m in best["factors"]]),
-        "unconfirmed": (),
-    }
+    const, fs = best["const"], tuple(best["factors"])
+    det = const * sp.Mul(*[f**m for f, m in fs])
+    gram = const**2 * sp.Mul(*[f ** (2 * m) for f, m in fs])
+    return {"how": best["how"], "factors": fs, "const": const, "det": det, "gram": gram,
+            "unconfirmed": ()}  # fmt: skip
 
 
 def _plain_det(m: sp.Matrix) -> Any:
@@ -642,14 +624,10 @@ def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 40
     if not isinstance(expr, sp.Expr) or not expr.args or sp.count_ops(expr) > ops:
         return expr
     best, size = expr, sp.count_ops(expr)
-    forms = []
     try:
-        e = expr
-        if _trig_power(e):
-            e = _reduce(_to_poly(e, q, sigmas), q)
+        e = _reduce(_to_poly(expr, q, sigmas), q) if _trig_power(expr) else expr
         e = _to_trig(e, q) if e is not expr else cheap(e)  # folds angle sums
-        forms.append(e)
-        forms.append(_collect_trig(e))
+        forms = (e, _collect_trig(e))
     except (sp.PolynomialError, TypeError, ValueError):  # an entry outside the trig ring
         return expr
     for form in forms:

@@ -40,15 +40,8 @@ from .families import SingularFamily, check_families, families_of
 from .printing import expr_text, matrix_lines, wrap
 from .sources import chain_of as _chain_of
 
-__all__ = [
-    "ROW_NAMES",
-    "Derivation",
-    "SingularFamily",
-    "derive",
-    "cached",
-    "khalil_matrix",
-    "row_indices",
-]
+__all__ = ["ROW_NAMES", "Derivation", "SingularFamily", "derive", "cached", "khalil_matrix",
+           "row_indices"]  # fmt: skip
 
 #: A Gram determinant (redundant chain) longer than this is described, not printed.
 _GRAM_OPS = 300
@@ -59,7 +52,7 @@ class Derivation:
     """Symbolic kinematics of one chain (all sympy objects; lengths symbolic).
 
     Attributes:
-        chain: The chain it was derived from (base and tool poses included).
+        chain: The chain it was derived from.
         q: The joint symbols ``q1..qn``.
         joint_names: The chain's joint names, in the same order.
         lengths: Length symbol → value in [m] (what :meth:`numeric` substitutes).
@@ -291,12 +284,8 @@ def _tidied(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[s
                 out[i, j] = _core.tidy(mat[i, j], q, sigmas)
         return out
 
-    return {
-        "p": one(kin["p"]),
-        "J_indirect": one(kin["J_indirect"]),
-        "J_direct": one(kin["J_direct"]),
-        "cumulative": tuple(one(t) for t in kin["cumulative"]),
-    }
+    out = {k: one(kin[k]) for k in ("p", "J_indirect", "J_direct")}
+    return out | {"cumulative": tuple(one(t) for t in kin["cumulative"])}
 
 
 def _agree(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[str]) -> bool:
@@ -335,10 +324,7 @@ def _stages(
         yield "kinematics", kin
     row_names = have.get("rows")
     if row_names is None:
-        if rows is None:
-            row_names = _default_rows(kin, n)
-        else:
-            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
+        row_names = _row_names(rows, kin, n)
         yield "rows", row_names
     det = have.get("determinant")
     if det is None:
@@ -368,8 +354,10 @@ def _stages(
 
 
 # ---------------------------------------------------------------------- derive
-def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
-    """The default row selection (:func:`~hexapod_kin.jacobian_rows.choose_rows`)."""
+def _row_names(rows: Any, kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
+    """The names of ``rows``; None: the default (:func:`~hexapod_kin.jacobian_rows.choose_rows`)."""
+    if rows is not None:
+        return tuple(ROW_NAMES[i] for i in row_indices(rows))
     jd = kin["J_direct"]
     return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
@@ -616,21 +604,16 @@ def _assemble(
         )
     kin = {**kin, **(stages.get("tidy") or {})}  # the tidied forms are equal, shorter
     row_names = stages.get("rows")
-    if row_names is None:
-        if rows is not None:
-            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
-        elif "kinematics" in stages:
-            row_names = _default_rows(kin, n)
-        else:  # the fallback's sums are unevaluated: the rows from numbers
-            row_names = _numeric_default_rows(chain)
+    if row_names is None and rows is None and "kinematics" not in stages:
+        row_names = _numeric_default_rows(chain)  # the fallback's sums are unevaluated
+    elif row_names is None:
+        row_names = _row_names(rows, kin, n)
     sel = [ROW_NAMES.index(r) for r in row_names]
     det_stage = stages.get("determinant")
-    det = gram = None
-    method = ""
+    det, gram, method = (None, None, "") if det_stage is None else (
+        det_stage["det"], det_stage["gram"], det_stage["how"])  # fmt: skip
     if det_stage is None:
         incomplete.append(f"det J factored and singular families ({reason})")
-    else:
-        det, gram, method = det_stage["det"], det_stage["gram"], det_stage["how"]
     fams = stages.get("checks")
     if fams is None:
         fams = stages.get("families")
@@ -641,51 +624,22 @@ def _assemble(
     agree = stages.get("agree")
     if agree is None and det_stage is not None and fams is not None:
         incomplete.append(f"direct = indirect Jacobian, exactly ({reason})")
+    jd = kin["J_direct"]
     return Derivation(
-        chain=chain,
-        q=q,
-        joint_names=tuple(chain.joint_names or ()),
-        lengths=dict(syms["values"]),
-        length_sources=dict(syms["sources"]),
-        transforms=tuple(kin["transforms"]),
-        cumulative=tuple(kin["cumulative"]),
-        p=kin["p"],
-        J_direct=kin["J_direct"],
-        J_indirect=kin["J_indirect"],
-        J=kin["J_indirect"],
-        rows=tuple(row_names),
-        J_rows=kin["J_direct"].extract(sel, list(range(n))),
-        det=det,
-        gram=gram,
-        families=tuple(fams or ()),
-        reference=reference,
-        tip=tip,
-        base_transform=kin["base"],
-        tool_transform=kin["tool"],
-        method=method,
-        incomplete=tuple(incomplete),
-        seconds=0.0 if from_cache else float(stages.get("seconds", 0.0)),
-        cached=from_cache,
-        agree=agree,
-        families_done=det_stage is not None and stages.get("checks") is not None,
-        formed="kinematics" in stages,
-    )
+        chain, q, tuple(chain.joint_names or ()), dict(syms["values"]), dict(syms["sources"]),
+        tuple(kin["transforms"]), tuple(kin["cumulative"]), kin["p"], jd, kin["J_indirect"],
+        kin["J_indirect"], tuple(row_names), jd.extract(sel, list(range(n))), det, gram,
+        tuple(fams or ()), reference, tip, kin["base"], kin["tool"], method, tuple(incomplete),
+        0.0 if from_cache else float(stages.get("seconds", 0.0)), from_cache, agree,
+        det_stage is not None and stages.get("checks") is not None, "kinematics" in stages,
+    )  # fmt: skip
 
 
 def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation | None:
     """The derivation of ``source`` if this process or the disk cache has it, else ``None``.
 
-    Never runs sympy's derivation (reading a cached one takes milliseconds).
-
-    Args:
-        source: As for :func:`derive`.
-        rows: As for :func:`derive`.
-
-    Returns:
-        The cached :class:`Derivation` or ``None``.
-
-    Raises:
-        ParameterError: As for :func:`derive`.
+    Never runs sympy's derivation; ``source``, ``rows`` and the errors
+    (:class:`~hexapod_kin.exceptions.ParameterError`) are those of :func:`derive`.
 
     """
     chain, reference, tip_name = _chain_of(source, None, None)

@@ -88,7 +88,8 @@ def families_of(
                     found = None
                 if isinstance(found, sp.FiniteSet) and all(s.is_number for s in found):
                     sols = [(s, float(s)) for s in sorted(found, key=lambda s: float(s))]
-            if not sols:
+            mod, numeric = (" (mod 2*pi)" if revolute else ""), not sols
+            if numeric:
                 lo, hi = (-math.pi, math.pi) if revolute else _prismatic_range(chain, k)
                 func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
                 roots = _core.single_joint_roots(_vectorised(func), lo, hi)
@@ -97,29 +98,13 @@ def families_of(
 
                     roots = sorted({round(float(r), 15) for r in wrap_angles(roots)})
                 sols = [(sp.Float(r, 12), r) for r in roots]
-                if sols:
-                    text = ", ".join(f"{r:.6g}" for _, r in sols)
-                    for sol, r in sols:
-                        fams.append(SingularFamily(
-                            name=f"{q[k]} = {r:.6g}" + (" (mod 2*pi)" if revolute else "")
-                            + f", from {sp.sstr(fac)} = 0 (roots {text})",
-                            factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
-                            value=r, periodic=revolute,
-                        ))  # fmt: skip
-                    continue
-            else:
-                for sol, r in sols:
-                    fams.append(SingularFamily(
-                        name=f"{q[k]} = {sp.sstr(sol)}" + (" (mod 2*pi)" if revolute else ""),
-                        factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
-                        value=r, periodic=revolute,
-                    ))  # fmt: skip
+                mod += f", from {sp.sstr(fac)} = 0 (roots {', '.join(f'{r:.6g}' for r in roots)})"
+            for sol, r in sols:
+                name = f"{q[k]} = {f'{r:.6g}' if numeric else sp.sstr(sol)}{mod}"
+                fams.append(SingularFamily(name, fac, sp.Eq(q[k], sol), vars_, k, r, revolute))
+            if sols:
                 continue
-        fams.append(
-            SingularFamily(
-                name=f"{sp.sstr(fac)} = 0", factor=fac, equation=sp.Eq(fac, 0), variables=vars_
-            )
-        )
+        fams.append(SingularFamily(f"{sp.sstr(fac)} = 0", fac, sp.Eq(fac, 0), vars_))
     return tuple(fams)
 
 
