@@ -41,20 +41,12 @@ def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):
-        raise ParameterError(
-            f"{name} has shape {arr.shape}; expected ({n},) or a scalar",
-            parameter=name,
-            value=value,
-            allowed=f"{n} finite numbers",
-        )
+        msg = f"{name} has shape {arr.shape}; expected ({n},) or a scalar"
+        raise ParameterError(msg, parameter=name, value=value, allowed=f"{n} finite numbers")
     if not np.all(np.isfinite(arr)) or (nonnegative and np.any(arr < 0)):
         need = "finite values >= 0" if nonnegative else "finite values"
-        raise ParameterError(
-            f"{name}={arr.tolist()} is not allowed; {need} are needed",
-            parameter=name,
-            value=arr.tolist(),
-            allowed=need,
-        )
+        msg = f"{name}={arr.tolist()} is not allowed; {need} are needed"
+        raise ParameterError(msg, parameter=name, value=arr.tolist(), allowed=need)
     return arr
 
 

@@ -1,12 +1,9 @@
 """Leg solutions finished on the table itself (:func:`finish_on_table`).
 
-A leg whose twists are within ``angle_tol`` of the closed-form pattern (``α2 = ±π/2``,
-``α3 ∈ {0, π}``; e.g. a URDF's rounded constants) is first solved by the exact pattern's
-closed form (:mod:`hexapod_kin.ik.closed`); each solution is then finished on the table's own
-kinematics by the package's one numerical loop (:func:`hexapod_kin.ik.solve_chain`: the
-table as a chain view, :func:`table_chain`). From a start ``O(deviation)`` away the
-Levenberg–Marquardt steps are Gauss–Newton steps to rounding (λ² ≪ JᵀJ) and converge
-quadratically.
+A leg whose twists are within ``angle_tol`` of the closed-form pattern is solved by the exact
+pattern's closed form (:mod:`hexapod_kin.ik.closed`), each solution then finished on the
+table's own kinematics by the one numerical loop (:func:`hexapod_kin.ik.solve_chain` on
+:func:`table_chain`): from ``O(deviation)`` away it converges quadratically.
 """
 
 from __future__ import annotations
@@ -74,8 +71,7 @@ def finish_on_table(
 
     """
     n_t, k, n = q.shape
-    q = q.copy()
-    idx = np.argwhere(valid)
+    q, idx = q.copy(), np.argwhere(valid)
     if len(idx):
         qa, xa, free = q[idx[:, 0], idx[:, 1]], x[idx[:, 0], :3], np.full(n, np.inf)
         chain = table_chain(ch, n)

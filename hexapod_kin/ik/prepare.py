@@ -23,8 +23,7 @@ __all__ = ["LEG_HOME", "N_NEAR", "N_STARTS", "ModelLike", "Prepared", "as_model"
 #: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
 ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
 
-#: Standing pose of the 3-DOF legs [rad] (the seeds' start): foot at (0.1526, 0, −0.1293) m on
-#: the hexabot leg, well away from the singularities (q3 = 0, π; foot over the hip axis).
+#: Standing pose of the 3-DOF legs [rad] (the seeds' start), away from the singularities.
 LEG_HOME = (0.0, 0.3, 1.2)
 
 #: Seeded restart configurations kept per model (the most :func:`~hexapod_kin.ik.solve` tries).
@@ -119,11 +118,9 @@ def prepared(model: ModelLike) -> Prepared:
 def home(model: ModelLike) -> np.ndarray:
     """The package's one home pose: the IK's first candidate start and resolved-rate start.
 
-    ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
-    otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
-    the middle half of each range (ranges clipped to ±π): the one with the largest smallest
-    (3rd) singular value of the position Jacobian — far from the singular manifolds and from
-    the limits. Computed once per model.
+    ``LEG_HOME`` for 3-joint chains inside its limits; otherwise the most dexterous (largest
+    3rd singular value of the position Jacobian) of the ranges' middle and 256 seeded samples
+    in the middle half of each range (clipped to ±π). Computed once per model.
 
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.

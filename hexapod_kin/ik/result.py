@@ -116,9 +116,6 @@ _DEFAULT = IKOptions()
 class IKResult:
     """Result of :func:`~hexapod_kin.ik.solve` (arrays are read-only; SI units).
 
-    A converged result of a float64 position or pose solved without options holds its
-    output row until a field is first read, then its fields (the same values and types).
-
     Attributes:
         q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
         status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
@@ -206,18 +203,16 @@ _O_Q = 6
 
 
 def _converged_fields(row: np.ndarray, s: Any, task: Any) -> dict[str, Any]:
-    """The fields of a result from its read-only output row, as if converged.
+    """The fields of a result from its read-only output row (width,) or (1, width), converged.
 
-    ``row``: (width,), or ``solver._quick``'s (1, width) with ``task`` = ``(mode, pose (1, 4, 4),
-    weights)`` instead of the :class:`Task`.
+    ``task``: the :class:`Task`, or ``(mode, pose (1, 4, 4), weights)``.
     """
     if row.ndim == 2:
         row = row[0]
     if not isinstance(task, Task):
         task = _task(task[0], task[1][0], 0.0, task[2])
     attempts, it, _, err, rot, smin = row[:_O_Q].tolist()
-    n = _O_Q + s.n
-    it = int(it)
+    n, it = _O_Q + s.n, int(it)
     target = task.pose[:3, 3]
     rotation = row[n + 3 : n + 12].reshape(3, 3)
     return {"q": row[_O_Q:n], "status": "converged", "error": err, "rotation_error": rot,
@@ -228,10 +223,9 @@ def _converged_fields(row: np.ndarray, s: Any, task: Any) -> dict[str, Any]:
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
-    """``IKResult(**fields)``, built without ``__init__`` (the per-call path).
+    """``IKResult(**fields)`` without ``__init__``.
 
-    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0 and the
-    target).
+    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0, target).
     """
     fields["status"], fields["reason"] = status, reason
     fields["distance"] = fields["error"] if far else 0.0

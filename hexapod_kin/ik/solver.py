@@ -72,9 +72,8 @@ _PER_THREAD = 64
 class _Setup:
     """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
 
-    Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
-    them); the targets and weights are the tasks' read-only arrays. The same types for one
-    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_loop`.
+    Private C-contiguous arrays, the same types for one target and for many (one compiled
+    specialisation of :func:`~hexapod_kin.ik.step.lm_loop`).
     """
 
     prep: Prepared
@@ -123,8 +122,7 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     posture, use = prep.middle, opts.posture is not None and opts.posture is not False
     if use and not isinstance(opts.posture, str):
         posture = mdl.check_q(opts.posture, "posture")
-    par = _par(opts, prep.scale)
-    limits = int(bool(opts.within_limits))
+    par, limits = _par(opts, prep.scale), int(bool(opts.within_limits))
     ipar = np.array([mode, opts.max_iter, limits, int(use), len(prep.near)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
     lim = np.vstack([prep.lim, posture])
@@ -140,18 +138,12 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
 
 
 def _plans(
-    chain: Any,
-    lim: np.ndarray,
-    cont: np.ndarray,
-    ipar: Any,
-    near: Any = (),
-    near_poses: Any = (),
-) -> tuple[np.ndarray, np.ndarray]:
+    chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any, near: Any = (), near_poses: Any = (),
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_loop``).
 
-    A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
-    (n,), ``ipar`` (5,) and the candidate first starts (K, n) with their tip poses (K, 12),
-    in two private C-contiguous arrays (float64, int64).
+    Of a chain, ``lim`` (4, n), the continuous flags, ``ipar`` and the candidate first starts
+    (K, n) with their tip poses (K, 12).
     """
     rot, trans, axis, kind, col = chain.packed
     parts = (rot, trans, axis, chain.tip_rot, lim, near, near_poses)
@@ -183,14 +175,9 @@ _PYTHON: list[Any] = []
 
 
 def _run(
-    fplan: np.ndarray,
-    iplan: np.ndarray,
-    tgts: np.ndarray,
-    w6: np.ndarray,
-    pars: np.ndarray,
-    starts: np.ndarray,
-    python: bool = False,
-) -> np.ndarray:
+    fplan: np.ndarray, iplan: np.ndarray, tgts: np.ndarray, w6: np.ndarray, pars: np.ndarray,
+    starts: np.ndarray, python: bool = False,
+) -> np.ndarray:  # fmt: skip
     """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets: output rows (N, width).
 
     ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
@@ -244,29 +231,21 @@ def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
-    The compiled loop of :func:`solve_many` for one target (the same bits as its row of a
-    batch), measured in the same compiled call.
-
     Args:
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
         target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
             axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
         q0: Start configuration (nq,). Default: the candidate of
-            :attr:`~hexapod_kin.ik.Prepared.near` (:func:`~hexapod_kin.ik.home` and 63 seeded
-            configurations in the middle half of each joint's range) whose tip pose is nearest
-            the target (``Σ w²(p* − p)²`` over the position rows, plus for a pose the weighted
-            ``‖R*_{:,k} − R_{:,k}‖²`` of each rotation row; ties to ``home``), then ``home``,
-            then the seeded restarts; the same start alone or in :func:`solve_many`.
+            :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
+            :func:`~hexapod_kin.ik.home`, then the seeded restarts.
         **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
             ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
             ``posture_gain``).
 
     Returns:
-        An :class:`IKResult`. ``"unreachable"``: every attempt ended at a local minimum of the
-        task error (no direction lowers it), also without limits; ``nearest`` / ``distance``
-        give the best point found. ``"joint_limits"``: reachable only outside the limits.
-        ``"singular"``: stuck at a singular configuration that is not a minimum.
-        ``"not_converged"``: iteration cap.
+        An :class:`IKResult`: ``"unreachable"`` (every attempt ended at a local minimum of the
+        error; ``nearest`` / ``distance`` give the best point), ``"joint_limits"`` (reachable
+        only outside the limits), ``"singular"`` or ``"not_converged"`` (iteration cap).
 
     Raises:
         IKError: Non-finite or wrongly shaped target, a target beyond a hundred robot sizes
@@ -353,14 +332,9 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python:
 
 
 def _diagnose(
-    mdl: KinematicModel,
-    s: _Setup,
-    task: Task,
-    q: np.ndarray,
-    hist: np.ndarray,
-    fields: dict[str, Any],
-    python: bool,
-) -> IKResult:
+    mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, hist: np.ndarray,
+    fields: dict[str, Any], python: bool,
+) -> IKResult:  # fmt: skip
     """The status of a stalled attempt: joint limits, unreachable, singular or not converged."""
     prep = s.prep
     err, rot, smin = fields["error"], fields["rotation_error"], fields["sigma_min"]
@@ -413,10 +387,8 @@ def _is_local_min(
     mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, cost_root: float, python: bool
 ) -> bool:
     """True if no small perturbation of q (±1e-3, ±3e-2 rad) lowers the task error."""
-    prep = s.prep
-    rng = np.random.default_rng(7)
-    jac = mdl.jacobian(q)
-    rows = task.weights != 0
+    prep, rng = s.prep, np.random.default_rng(7)
+    jac, rows = mdl.jacobian(q), task.weights != 0
     _, sv, vt = np.linalg.svd(jac[rows] * task.weights[rows, None])
     sv_full = np.zeros(mdl.nq)
     sv_full[: sv.size] = sv
@@ -448,16 +420,11 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         ParameterError: Unknown or bad options.
 
     """
-    mdl = as_model(model)
-    opts = IKOptions.of(options)
+    mdl, opts = as_model(model), IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
     if not ((t.ndim == 2 and t.shape[1] in (3, 4)) or (t.ndim == 3 and t.shape[1:] == (4, 4))):
-        raise IKError(
-            f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed",
-            parameter="targets",
-            value=t.shape,
-            allowed="(N, 3), (N, 4), (N, 4, 4)",
-        )
+        msg = f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed"
+        raise IKError(msg, parameter="targets", value=t.shape, allowed="(N, 3), (N, 4), (N, 4, 4)")
     tasks = build_tasks(t, mask=opts.mask, weights=opts.weights)
     if not tasks:
         return []
@@ -472,12 +439,8 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     elif q0 is not None:
         rows = mdl.check_q_batch(q0, "q0")
         if len(rows) != n_t:
-            raise ConfigurationError(
-                f"q0 has {len(rows)} rows; targets has {n_t}",
-                parameter="q0",
-                value=len(rows),
-                allowed=f"{n_t} rows",
-            )
+            msg = f"q0 has {len(rows)} rows; targets has {n_t}"
+            raise ConfigurationError(msg, parameter="q0", value=len(rows), allowed=f"{n_t} rows")
         starts[:, 0] = rows
     pars = np.broadcast_to(s.par, (n_t, len(s.par)))
     if tasks[0].code == 1:
@@ -529,9 +492,8 @@ def solve_chain(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position IK of a chain view for N targets, each from its own seed (the one loop).
 
-    The compiled loop of :func:`solve_many` on a chain given as arrays (a leg: mount → foot,
-    :class:`~hexapod_kin._chain.ChainArrays`), position rows only, no restarts and no
-    posture task; limited joints are clamped, continuous ones (range ≥ 2π) wrap.
+    On a :class:`~hexapod_kin._chain.ChainArrays` (a leg: mount → foot), position rows only,
+    no restarts, no posture; limited joints are clamped, continuous ones wrap.
 
     Args:
         chain: The chain's placements, axes and tip (its frame: the targets' frame).
@@ -567,8 +529,7 @@ def solve_chain(
     tgts = np.zeros((len(t), 4, 4))
     tgts[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
     tgts[:, :3, 3] = t
-    pars = np.tile(par, (len(t), 1))
-    starts = _arg(q0[:, None, :])
+    pars, starts = np.tile(par, (len(t), 1)), _arg(q0[:, None, :])
     out = _run(fplan, iplan, _frozen(tgts), w6, pars, starts)
     steps = out[:, 1].astype(np.intp)
     residual = out[np.arange(len(t)), _O_Q + n + 12 + steps]

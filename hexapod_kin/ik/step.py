@@ -295,17 +295,12 @@ def lm_loop(
 ) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Levenberg–Marquardt loop for N targets, each from its starts in turn until one converges.
 
-    A step is kept only if it lowers ``‖W e‖`` (so the history decreases strictly);
-    λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a refused one. Joints at a limit with
-    the gradient pointing outward are frozen. With ``ipar[I_POSTURE]`` and more joints than
-    task rows, each step first tries the null-space motion toward ``posture`` (gain
-    ``par[P_POST_GAIN]``), kept only if the task error at least quarters the squared error
-    (the first refusal ends it for that attempt), while the error is above
-    ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
-    batch); the buffers are allocated once per call.
+    The solver's module doc gives the step rules; the posture task runs while the error is
+    above ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
+    batch).
 
-    The chain and the loop's settings come packed in two arrays (few arguments: a short call):
-    ``iplan`` = ``ipar`` (``I_*``), the number of links m and joints n, then the chain's
+    The chain and the settings come packed in two arrays: ``iplan`` = ``ipar`` (``I_*``), the
+    number of links m and joints n, then the chain's
     ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
     (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
     lower and upper limits, step caps and the posture, then ``K = ipar[I_NEAR]`` start

@@ -4,9 +4,7 @@
 * :class:`PosePath` interpolates poses on SE(3) (``T_i exp(s log(T_i⁻¹ T_{i+1}))``: a constant
   body twist per segment) and :func:`follow_pose_path` tracks it by resolved rate, closed loop
   on the pose error (log map).
-* :func:`track` turns tip positions (or poses) back into joint trajectories by IK (closed form
-  with branch continuity when the chain has one, else damped least squares warm-started from
-  the previous sample).
+* :func:`track` turns tip positions (or poses) back into joint trajectories by IK.
 """
 
 from __future__ import annotations
@@ -50,12 +48,8 @@ class JointSchedule:
         if v.ndim == 1:
             v = v[:, None]
         if t.size < 1 or v.shape[0] != t.size:
-            raise ParameterError(
-                f"JointSchedule: {t.size} times and {v.shape[0]} value rows; one row per knot",
-                parameter="values",
-                value=v.shape,
-                allowed=f"({t.size}, n)",
-            )
+            msg = f"JointSchedule: {t.size} times and {v.shape[0]} value rows; one row per knot"
+            raise ParameterError(msg, parameter="values", value=v.shape, allowed=f"({t.size}, n)")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
             raise ParameterError("JointSchedule: times and values must be finite")
         if np.any(np.diff(t) < 0):
@@ -80,9 +74,8 @@ class JointSchedule:
 class PosePath:
     """Poses at knot times, interpolated on SE(3) (arrays read-only).
 
-    Between knots ``i`` and ``i+1`` the pose is ``T_i exp(s ξ_i)`` with
-    ``ξ_i = log(T_i⁻¹ T_{i+1})`` and ``s ∈ [0, 1]`` linear in time: a constant body twist
-    ``ξ_i / Δt_i`` (a screw motion, the geodesic of SE(3)); held at the last pose afterwards.
+    Between knots ``i`` and ``i+1``: ``T_i exp(s ξ_i)``, ``ξ_i = log(T_i⁻¹ T_{i+1})``, ``s``
+    linear in time (a screw motion); held at the last pose afterwards.
 
     Attributes:
         times: (K,) knot times in [s], strictly increasing, starting at 0.
@@ -97,13 +90,11 @@ class PosePath:
         t = np.asarray(self.times, dtype=float).reshape(-1)
         p = np.asarray(self.poses, dtype=float)
         if p.shape != (t.size, 4, 4) or t.size < 2:
-            raise ParameterError(
+            msg = (
                 f"PosePath: {t.size} times and poses of shape {p.shape}; K >= 2 times and "
-                "(K, 4, 4) poses are needed",
-                parameter="poses",
-                value=p.shape,
-                allowed=f"({t.size}, 4, 4)",
+                "(K, 4, 4) poses are needed"
             )
+            raise ParameterError(msg, parameter="poses", value=p.shape, allowed=f"({t.size}, 4, 4)")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
             raise ParameterError("PosePath: times and poses must be finite")
         if t[0] != 0.0 or np.any(np.diff(t) <= 0):
@@ -183,19 +174,16 @@ def follow_pose_path(
     """Track a :class:`PosePath` by resolved rate: feed-forward body twist + pose feedback.
 
     Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes (6-D tip motion needs
-            at least 6 joints for exact tracking; fewer give the damped best fit).
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
         path: The pose path.
-        q0: Start (nq,); default: 6-D IK of the first pose (:func:`hexapod_kin.ik.solve`'s
-            default start).
+        q0: Start (nq,); default: 6-D IK of the first pose.
         dt: Step in [s].
         gain: Closed-loop gain on the pose error ``[p_ref − p; log(R_ref Rᵀ)]`` in [1/s].
         method: ``"rk4"`` or ``"euler"``.
         within_limits: Respect the joint position limits.
 
     Returns:
-        The :class:`Trajectory` (``frame="tip"``; ``reference``/``reference_rotation`` are
-        the path).
+        The :class:`Trajectory` (``frame="tip"``; its reference is the path).
 
     Raises:
         IKError: The first pose cannot be reached (when ``q0`` is None).
@@ -240,8 +228,7 @@ class Tracked:
 def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-10) -> Tracked:
     """Joint trajectory reaching a sequence of tip positions (or poses), continuously.
 
-    Uses the closed form when the model comes from a chain with one (each sample takes the
-    solution nearest to the previous sample's joints, so no branch jumps), else
+    The closed form when the chain has one (the solution nearest the previous sample), else
     :func:`hexapod_kin.ik.solve` warm-started from the previous sample.
 
     Args:
@@ -250,9 +237,6 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         q0: Joints near the first sample (branch choice / warm start); default
             :func:`hexapod_kin.ik.home`.
         tol: Position tolerance [m] of the numerical fallback.
-
-    Returns:
-        A :class:`Tracked`.
 
     Raises:
         IKError: Bad positions.
@@ -264,12 +248,8 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
     pts = np.asarray(positions, dtype=float)
     poses = pts.ndim == 3
     if not ((pts.ndim == 2 and pts.shape[1] == 3) or (poses and pts.shape[1:] == (4, 4))):
-        raise IKError(
-            f"positions has shape {pts.shape}; (M, 3) in [m] or (M, 4, 4) poses are needed",
-            parameter="positions",
-            value=pts.shape,
-            allowed="(M, 3) or (M, 4, 4)",
-        )
+        msg = f"positions has shape {pts.shape}; (M, 3) in [m] or (M, 4, 4) poses are needed"
+        raise IKError(msg, parameter="positions", value=pts.shape, allowed="(M, 3) or (M, 4, 4)")
     if not np.all(np.isfinite(pts)):
         raise IKError("positions contains non-finite values", parameter="positions")
     ik.check_within(mdl, pts[:, :3, 3] if poses else pts, "positions")

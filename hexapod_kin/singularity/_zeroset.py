@@ -139,8 +139,7 @@ def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
         k = int(node.id[1:]) - 1 if node.id[:1] == "q" and node.id[1:].isdigit() else -1
         if k not in pos:
             raise _refuse(text, f"the name {node.id!r}")
-        i = pos[k]
-        unit = np.zeros(len(pos))
+        i, unit = pos[k], np.zeros(len(pos))
         unit[i] = 1.0
         return lambda env, hess: (env[i], unit, None)
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
@@ -276,16 +275,14 @@ def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
     same bits whatever the other rows).
     """
     m, v = x.shape
-    out = np.full(m, np.inf)
-    rows = np.arange(m)
+    out, rows = np.full(m, np.inf), np.arange(m)
     eye = np.eye(v)
     with np.errstate(all="ignore"):
         f, g, h = jet(x, True)
         lam = np.sum((p - x) * g, axis=1) / np.sum(g * g, axis=1)
         lam = np.where(np.isfinite(lam), lam, 0.0)
         for _ in range(_NEWTON):
-            r1 = x - p[rows] + lam[:, None] * g
-            gn = np.sqrt(np.sum(g * g, axis=1))
+            r1, gn = x - p[rows] + lam[:, None] * g, np.sqrt(np.sum(g * g, axis=1))
             ok = (np.abs(f) <= _TOL * gn) & (np.linalg.norm(r1, axis=1) <= _TOL)
             out[rows[ok]] = np.linalg.norm(x[ok] - p[rows[ok]], axis=1)
             keep = ~ok
@@ -331,8 +328,7 @@ def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
     """
     m, v = p.shape
     x0 = _project(jet, p.copy(), 6)
-    best = _newton(jet, p, x0)
-    u = _directions(v)
+    best, u = _newton(jet, p, x0), _directions(v)
     moved = np.linalg.norm(x0 - p, axis=1)  # 0 where ∇f(p) = 0: no first step at all
     radius = np.where(np.isfinite(best), best, np.where(moved > 0, moved, _STEP_MAX))
     shell = _SHELLS[:, None, None, None] * radius[None, None, :, None]

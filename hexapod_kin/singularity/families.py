@@ -82,10 +82,8 @@ class Family:
     def distance(self, q: Any) -> np.ndarray:
         """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m].
 
-        ``q_k = value``: ``|q_k − value|`` (wrapped for a revolute joint); implicit families:
-        ``min ‖x − q‖`` over ``f(x) = 0`` in the family's variables, to 1e-12
-        (:func:`~._zeroset.closest_distance`; ``f`` is 2π-periodic, so angles wrap by
-        themselves).
+        ``q_k = value``: ``|q_k − value|`` (wrapped); implicit families: ``min ‖x − q‖`` over
+        ``f(x) = 0`` (:func:`~._zeroset.closest_distance`).
         """
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -96,9 +94,7 @@ class Family:
     def project(self, q: Any) -> np.ndarray | None:
         """A configuration on the family near ``q`` (nq,), or None when none is found.
 
-        ``q_k = value``: ``q`` with ``q_k`` moved onto the value (the closest point);
-        implicit families: the Gauss–Newton projection of ``q``'s variables onto ``f = 0``
-        (:func:`~._zeroset.project`; None when it does not converge).
+        ``q_k`` moved onto the value, or the projection onto ``f = 0`` (:func:`~._zeroset.project`).
         """
         out = np.array(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -151,8 +147,7 @@ class Families:
         dist = np.stack([fam.distance(q) for fam in self.families], axis=1)
         dist = np.where(np.isnan(dist), np.inf, dist)
         order = np.argsort(dist, axis=1, kind="stable")
-        rows = np.arange(m)
-        best = order[:, 0].astype(np.int64)
+        rows, best = np.arange(m), order[:, 0].astype(np.int64)
         if dist.shape[1] < 2:
             return best, dist[rows, best], none[0].copy(), none[1].copy()
         second = order[:, 1].astype(np.int64)
@@ -210,11 +205,9 @@ def _family(f: Any) -> Family:
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
     """Families read from disk checked against the model before use, both ways.
 
-    * every zero is singular: from three random configurations each factor is projected onto
-      its zero set (:func:`~._zeroset.project`); there ``σ_min ≤ 1e-7 σ_max`` (``q_k =
-      value`` families: ``1e-9``);
-    * every singularity is a family's (square ``J``): the sign changes of ``det J`` along four
-      random lines (:func:`_singular_points`) lie within 1e-6 of a family.
+    Every zero is singular (``σ_min ≤ 1e-7 σ_max`` at projections of three random
+    configurations), and every sign change of a square ``det J`` along four random lines
+    (:func:`_singular_points`) lies within 1e-6 of a family.
 
     Raises:
         ValueError: A family where the model's ``J`` keeps its rank, or a singular
@@ -282,8 +275,7 @@ def _read_cache(
     """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
 
     ``None`` when missing; ``None`` with one ``CacheWarning`` when damaged, of another key, or
-    when a finished entry fails ``check(families)`` (:func:`_holds`). The factors are parsed
-    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated.
+    failing ``check(families)``. Factors are parsed by a whitelist, never evaluated.
     """
     data = _disk.load("families", key, _VERSION, _THEN)
     if data is None:
@@ -410,12 +402,11 @@ def _numeric_families(
         raise ParameterError("the derivation has no determinant to check the families against")
     err = float(np.max(np.abs(sym - num))) / max(float(np.max(num)), 1e-300)
     if not err <= _MATCH_RTOL:
-        raise ParameterError(
+        msg = (
             f"the symbolic det of the table differs from the model's (relative {err:.1e}): "
-            "the table's frames do not match the model's Jacobian rows",
-            parameter="rows",
-            value=rows,
+            "the table's frames do not match the model's Jacobian rows"
         )
+        raise ParameterError(msg, parameter="rows", value=rows)
 
 
 def families_for(
@@ -426,12 +417,10 @@ def families_for(
     Args:
         model: A loaded model.
         rows: Row names (see :mod:`hexapod_kin.jacobian_rows`).
-        derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
-            Without it, only families already derived (this process or the disk cache) are
-            returned, so the call never waits on sympy.
-        budget: CPU budget in [s] of the derivation (:func:`hexapod_kin.symbolic.derive`). A
-            derivation stopped at its budget is kept on disk with that budget: later calls
-            with at most that budget get it back, a larger one carries on.
+        derive: Derive them with sympy (within ``budget``) when they are not on disk yet;
+            without it, only families already derived (the call never waits on sympy).
+        budget: CPU budget in [s] of the derivation (a stopped one is kept with its budget; a
+            larger one carries on).
 
     Returns:
         The :class:`Families` (empty with a reason when none are available).

@@ -111,8 +111,7 @@ def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
 def default_rows(model: Any) -> tuple[str, ...]:
     """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
 
-    A row is zero when below 1e-12 at 8 random configurations. SCARA → ``("x", "y", "z",
-    "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+    A row is zero when below 1e-12 at 8 random configurations (SCARA: ``x y z wz``).
 
     Args:
         model: A loaded model (or a source for :func:`hexapod_kin.load`).
@@ -150,9 +149,6 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
         q: Joint values (nq,) in [rad] / [m].
         rows: Row selection (see module doc); default :func:`default_rows`.
 
-    Returns:
-        The :class:`Measures`.
-
     Raises:
         ConfigurationError: Bad ``q``.
         ParameterError: Bad ``rows``.
@@ -174,18 +170,12 @@ def measures_batch(
 ) -> MeasuresBatch:  # fmt: skip
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
-    Chains whose Jacobian has more than 70 maximal minors (9 joints and more) are measured
-    with Pinocchio and numpy instead.
-
     Args:
         model: A loaded model (or a source).
         qs: Configurations (N, nq) in [rad] / [m].
         rows: Row selection; default :func:`default_rows`.
         out: Optional four preallocated float64 arrays of shape (N,) to fill (det,
             manipulability, condition, sigma_min); the result's arrays are then these.
-
-    Returns:
-        The :class:`MeasuresBatch` (iterable as the four arrays).
 
     Raises:
         ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
 from ..tables import MIN_LENGTH as MIN_REACH  # a table's smallest length: the smallest reach
 from .families import Families, Family, families_for
@@ -102,10 +103,8 @@ class ScanResult:
             see :attr:`family_reason`).
         family_reason: Why :attr:`families` is empty ("" when it is not).
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
-        family_tols: Per family, the tolerance actually used: ``family_tol``, widened to
-            ``1.5 × threshold / s`` where the family's measured lever arm ``s`` (first quartile of
-            ``σmin / distance`` over its flagged samples within ``family_tol``) is small —
-            flagged points then lie farther from it (at most ``4 × family_tol``).
+        family_tols: Per family, the tolerance used: ``family_tol`` widened to ``1.5 ×
+            threshold / s`` (``s`` the family's measured lever arm), at most ``4 × family_tol``.
         joint_names: Names of the n joints.
         prismatic: (n,) True for prismatic joints (values in [m]), False for revolute ([rad]).
         joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
@@ -144,9 +143,7 @@ class ScanResult:
     def explained(self) -> np.ndarray:
         """(N,) flagged configurations on a known family.
 
-        Within :attr:`family_tols` of the nearest family, or within twice that of two families
-        (near their meeting ``σmin`` falls faster than along either alone, so flagged
-        points reach farther out).
+        Within :attr:`family_tols` of the nearest family, or within twice that of two families.
         """
         tols = np.asarray((*self.family_tols, np.nan))[self.family]  # -1: NaN (no family)
         tols2 = np.asarray((*self.family_tols, np.nan))[self.second_family]
@@ -200,28 +197,18 @@ class ScanResult:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        counts = self.family_counts
-        return {
-            "source": self.source,
-            "joint_names": list(self.joint_names),
-            "prismatic": list(self.prismatic),
-            "joints": [self.joint_names[j] for j in self.joints],
-            "rows": list(self.rows),
-            "threshold": self.threshold,
-            "grid_shape": list(self.grid_shape) if self.grid_shape else None,
-            "q_fixed": self.q_fixed.tolist(),
-            "q": self.q.tolist(),
-            **{k: _listed(getattr(self, k)) for k in _PER_SAMPLE},
-            "family_tol": self.family_tol,
-            "family_tols": list(self.family_tols),
-            "family_reason": self.family_reason,
-            "families": [
-                {**fam.to_dict(self.joint_names), "count": counts[fam.name]}
-                for fam in self.families
-            ],
-            "n_singular": int(np.count_nonzero(self.singular)),
-            "n_unexplained": int(np.count_nonzero(self.unexplained)),
-        }
+        counts, names = self.family_counts, self.joint_names
+        out = fields_dict(self, "source", "joint_names", "prismatic")
+        out["joints"] = [names[j] for j in self.joints]
+        out |= fields_dict(self, "rows", "threshold")
+        out["grid_shape"] = list(self.grid_shape) if self.grid_shape else None
+        out |= fields_dict(self, "q_fixed", "q")
+        out |= {k: _listed(getattr(self, k)) for k in _PER_SAMPLE}
+        out |= fields_dict(self, "family_tol", "family_tols", "family_reason")
+        fams = [fam.to_dict(names) | {"count": counts[fam.name]} for fam in self.families]
+        out["families"] = fams
+        out["n_singular"] = int(np.count_nonzero(self.singular))
+        return out | {"n_unexplained": int(np.count_nonzero(self.unexplained))}
 
 
 # ------------------------------------------------------------------------ defaults
@@ -245,12 +232,8 @@ def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
         else:
             out.append(model.joint_index(str(j)))
     if len(set(out)) != len(out) or not out:
-        raise ParameterError(
-            f"joints={joints!r}: give distinct joint names or indices",
-            parameter="joints",
-            value=joints,
-            allowed=list(model.joint_names),
-        )
+        msg = f"joints={joints!r}: give distinct joint names or indices"
+        raise ParameterError(msg, parameter="joints", value=joints, allowed=list(model.joint_names))
     return tuple(out)
 
 
@@ -271,11 +254,8 @@ def default_q_fixed(
     Args:
         model: A loaded model (or a source).
         rows: Row selection (default :func:`~.measure.default_rows`).
-        joints: Indices of the scanned joints (their values in the result do not matter).
+        joints: Indices of the scanned joints.
         seed: Seed of the candidates.
-
-    Returns:
-        (nq,) configuration.
 
     """
     mdl = as_model(model)
@@ -309,9 +289,8 @@ def default_q_fixed(
 def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, ...]:
     """The ``count`` joints that change ``sigma_min`` most: the ones a heat map should show.
 
-    Each joint that moves the tip is swept over its range (17 points) at 32 seeded random
-    configurations of the others; its score is the mean spread of ``log σmin``. Ties go to
-    revolute joints, then to later joints.
+    Each joint that moves the tip is swept over its range at 32 seeded configurations of the
+    others; its score is the mean spread of ``log σmin`` (ties: revolute, then later joints).
 
     Args:
         model: A loaded model (or a source).
@@ -327,18 +306,13 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     """
     mdl = as_model(model)
     if mdl.nq < count:
-        raise ParameterError(
-            f"default_joints: {mdl.name!r} has {mdl.nq} joint(s); {count} are needed",
-            parameter="count",
-            value=count,
-            allowed=f"<= {mdl.nq}",
-        )
+        msg = f"default_joints: {mdl.name!r} has {mdl.nq} joint(s); {count} are needed"
+        raise ParameterError(msg, parameter="count", value=count, allowed=f"<= {mdl.nq}")
     names = selected_rows(mdl, rows)
 
     def build() -> tuple[int, ...]:
         cands = _moving(mdl) if len(_moving(mdl)) >= count else list(range(mdl.nq))
-        base = mdl.random_q(32, seed=11)
-        score = np.zeros(mdl.nq)
+        base, score = mdl.random_q(32, seed=11), np.zeros(mdl.nq)
         floor = 1e-12 * max(reach(mdl), 1e-12)
         for j in cands:
             sweep = np.linspace(mdl.lower[j], mdl.upper[j], 17)
@@ -368,12 +342,8 @@ def _grid_points(
     shape = []
     for c in counts:
         if not _count(c, 2):
-            raise ParameterError(
-                f"grid={grid!r}: counts must be integers >= 2",
-                parameter="grid",
-                value=grid,
-                allowed="integers >= 2",
-            )
+            msg = f"grid={grid!r}: counts must be integers >= 2"
+            raise ParameterError(msg, parameter="grid", value=grid, allowed="integers >= 2")
         shape.append(int(c))
     total = math.prod(shape)
     if total > MAX_CONFIGURATIONS:
@@ -437,8 +407,7 @@ def scan(
             given either.
         samples: Number of uniform random configurations within the limits (instead of a grid).
         joints: Joints to scan (names or indices, or ``"all"``); default
-            :func:`default_joints` (the two that change ``sigma_min`` most; all of a chain of
-            at most two joints). The others stay at ``q_fixed``.
+            :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
             default :func:`~.measure.default_rows`.
         q_fixed: Values of the joints not scanned, in [rad]/[m]; default
@@ -447,19 +416,14 @@ def scan(
             ``rtol × reach(model)``.
         rtol: Relative threshold (see ``threshold``).
         family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
-            counts as lying on its nearest family; default ``15 × rtol`` (near a family
-            ``σmin ≈ s·d``, ``s`` a lever arm: the default allows ``s ≥ reach/15``).
-        families: ``True`` (default): derive them when needed (sympy, within
-            ``family_budget``; then kept on disk); ``"cached"``: only families already derived;
-            ``False``: none.
+            counts as on its nearest family; default ``15 × rtol``.
+        families: ``True``: derive them when needed (sympy, within ``family_budget``);
+            ``"cached"``: only families already derived; ``False``: none.
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
         chunk: Configurations per kernel call (progress granularity; scans above
             :data:`SMALL_SCAN`).
-
-    Returns:
-        The :class:`ScanResult`.
 
     Raises:
         ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows, bad
@@ -475,19 +439,11 @@ def scan(
         jidx = _joint_indices(mdl, joints)
     one_of("families", families, (True, False, "cached"))
     if not _count(chunk, 1):
-        raise ParameterError(
-            f"chunk={chunk!r}: an integer >= 1 is required",
-            parameter="chunk",
-            value=chunk,
-            allowed=">= 1",
-        )
+        msg = f"chunk={chunk!r}: an integer >= 1 is required"
+        raise ParameterError(msg, parameter="chunk", value=chunk, allowed=">= 1")
     if grid is not None and samples is not None:
-        raise ParameterError(
-            "scan: give grid= or samples=, not both",
-            parameter="samples",
-            value=samples,
-            allowed="grid= or samples=",
-        )
+        msg = "scan: give grid= or samples=, not both"
+        raise ParameterError(msg, parameter="samples", value=samples, allowed="grid= or samples=")
     if q_fixed is None:
         qf = default_q_fixed(mdl, names, jidx) if len(jidx) < mdl.nq else mdl.neutral()
     else:
@@ -525,12 +481,8 @@ def scan(
         distance2[idx] = np.where(second[idx] >= 0, dist2, np.nan)
     tol = 15.0 * rtol if family_tol is None else float(family_tol)
     if not tol >= 0:
-        raise ConfigurationError(
-            f"family_tol={family_tol!r}: a value >= 0 is required",
-            parameter="family_tol",
-            value=family_tol,
-            allowed=">= 0",
-        )
+        msg = f"family_tol={family_tol!r}: a value >= 0 is required"
+        raise ConfigurationError(msg, parameter="family_tol", value=family_tol, allowed=">= 0")
     tols = []
     for f in range(len(fams.families)):
         mine = (family == f) & (distance > 0) & (distance <= tol)

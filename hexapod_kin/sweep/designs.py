@@ -1,12 +1,8 @@
 """Design spaces of the 3-DOF hexabot leg on a body mount: grids, random and LHS samples.
 
-A design is one row of :data:`PARAMETERS` (SI units). Each parameter of a
-:class:`DesignSpace` is either fixed (a number) or a :class:`Range` ``lo:hi:n``; a grid takes
-the cartesian product of the ranges (``n`` points each), ``random`` draws uniform samples,
-``lhs`` a Latin hypercube (:class:`scipy.stats.qmc.LatinHypercube`), both seeded.
-
-With ``total`` set, ``l3 = total − l1 − l2`` (the seed leg's total length is 0.25 m); designs
-with ``l3 <= 0`` are dropped before the designs are numbered, so indices are stable.
+A design is one row of :data:`PARAMETERS` (SI units), each fixed or a :class:`Range`
+``lo:hi:n``: a grid of the ranges, or seeded ``random`` / ``lhs`` samples. With ``total`` set,
+``l3 = total − l1 − l2``; designs with ``l3 <= 0`` are dropped before they are numbered.
 """
 
 from __future__ import annotations
@@ -42,8 +38,7 @@ PARAMETERS: tuple[str, ...] = tuple(DEFAULTS)
 #: Parameters that are angles (the CLI's ``--deg`` converts them).
 ANGLES: frozenset[str] = frozenset(p for p in PARAMETERS if p.startswith("q") or "yaw" in p)
 
-#: Largest design length or height [m] and largest magnitude of an angle [rad]: far beyond any
-#: leg, small enough that the closed forms stay finite (a 1e300 m femur overflows to NaN).
+#: Largest design length or height [m] and angle magnitude [rad] (the closed forms stay finite).
 MAX_LENGTH = 1e3
 MAX_ANGLE = 1e3
 
@@ -76,9 +71,8 @@ class Range:
                 allowed="lo <= hi, finite",
             )
         if int(self.n) != self.n or self.n < 1:
-            raise ParameterError(
-                f"range n={self.n!r}: expected an integer >= 1", parameter="n", value=self.n
-            )
+            msg = f"range n={self.n!r}: expected an integer >= 1"
+            raise ParameterError(msg, parameter="n", value=self.n)
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
         object.__setattr__(self, "n", int(self.n))
@@ -112,12 +106,8 @@ def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
             return Range(float(parts[0]) * scale, float(parts[1]) * scale, n)
     except ValueError:
         pass
-    raise ParameterError(
-        f"{name}={text!r}: expected VALUE, A:B or A:B:N (e.g. 0.04:0.08:5)",
-        parameter=name,
-        value=text,
-        allowed="VALUE | A:B | A:B:N",
-    )
+    msg = f"{name}={text!r}: expected VALUE, A:B or A:B:N (e.g. 0.04:0.08:5)"
+    raise ParameterError(msg, parameter=name, value=text, allowed="VALUE | A:B | A:B:N")
 
 
 @dataclass(frozen=True)
@@ -138,19 +128,13 @@ class DesignSpace:
         vals: dict[str, float | Range] = {}
         for k, v in dict(self.values).items():
             if k not in PARAMETERS:
-                raise ParameterError(
-                    f"design parameter {k!r} unknown; valid: {', '.join(PARAMETERS)}",
-                    parameter=k,
-                    allowed=list(PARAMETERS),
-                )
+                msg = f"design parameter {k!r} unknown; valid: {', '.join(PARAMETERS)}"
+                raise ParameterError(msg, parameter=k, allowed=list(PARAMETERS))
             vals[k] = v if isinstance(v, Range) else finite(k, v)
         if self.total is not None:
             if "l3" in vals:
-                raise ParameterError(
-                    "total and l3 both given; with total set, l3 = total − l1 − l2",
-                    parameter="l3",
-                    value=vals["l3"],
-                )
+                msg = "total and l3 both given; with total set, l3 = total − l1 − l2"
+                raise ParameterError(msg, parameter="l3", value=vals["l3"])
             object.__setattr__(self, "total", positive("total", self.total))
         object.__setattr__(self, "values", vals)
 
@@ -189,15 +173,13 @@ class DesignSpace:
                 ``"lhs"`` (Latin hypercube).
             samples: Number of designs drawn by ``random``/``lhs``.
             seed: Seed of ``random``/``lhs``.
-            first: Only the grid's first ``first`` points (before ``total`` drops rows; may
-                then be empty), built without the rest: a probe of a huge grid.
+            first: Only the grid's first ``first`` points (a probe of a huge grid).
 
         Returns:
             A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
 
         Raises:
-            ParameterError: Unknown method, ``samples < 1``, invalid designs (non-positive
-                lengths, lower > upper limits, ``neutral`` outside [0, 1], negative height).
+            ParameterError: Unknown method, ``samples < 1``, or invalid designs.
 
         """
         one_of("method", method, METHODS)
@@ -213,9 +195,8 @@ class DesignSpace:
             table = np.stack([a[i] for a, i in zip(axes, index)], axis=1)
         else:
             if int(samples) != samples or samples < 1:
-                raise ParameterError(
-                    f"samples={samples!r}: expected an integer >= 1", parameter="samples"
-                )
+                msg = f"samples={samples!r}: expected an integer >= 1"
+                raise ParameterError(msg, parameter="samples")
             if method == "lhs":
                 from scipy.stats import qmc
 
@@ -267,17 +248,11 @@ class DesignSpace:
             bad = np.flatnonzero(~ok)
             if bad.size:
                 value = float(table[bad[0], PARAMETERS.index(name)])
-                raise ParameterError(
-                    f"design parameter {name}={value!r} (design {int(bad[0])}): must be {allowed}",
-                    parameter=name,
-                    value=value,
-                    allowed=allowed,
-                )
+                msg = f"design parameter {name}={value!r} (design {int(bad[0])}): must be {allowed}"
+                raise ParameterError(msg, parameter=name, value=value, allowed=allowed)
         if table.shape[0] == 0 and not empty_ok:
-            raise ParameterError(
-                "the design space is empty (with total, every design had l3 <= 0)",
-                parameter="total",
-            )
+            msg = "the design space is empty (with total, every design had l3 <= 0)"
+            raise ParameterError(msg, parameter="total")
 
 
 def design_chain(design: Any) -> Any:
@@ -302,9 +277,7 @@ def design_chain(design: Any) -> Any:
     else:
         vals = [float(v) for v in np.asarray(design, dtype=float).ravel()]
     if len(vals) != len(PARAMETERS):
-        raise ParameterError(
-            f"design has {len(vals)} values; expected {len(PARAMETERS)}: {', '.join(PARAMETERS)}",
-            parameter="design",
-        )
+        msg = f"design has {len(vals)} values; expected {len(PARAMETERS)}: {', '.join(PARAMETERS)}"
+        raise ParameterError(msg, parameter="design")
     limits = tuple(JointLimits(vals[6 + 2 * j], vals[7 + 2 * j]) for j in range(3))
     return hexabot_leg(vals[0], vals[1], vals[2], limits=limits)

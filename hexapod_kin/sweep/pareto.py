@@ -18,20 +18,16 @@ OBJECTIVES: tuple[str, ...] = ("stride", "volume", "sigma_min")
 def _columns(table: Mapping[str, Any], names: Sequence[str]) -> np.ndarray:
     missing = [n for n in names if n not in table]
     if missing:
-        raise ParameterError(
-            f"objectives {missing} not in the table; columns: {', '.join(table)}",
-            parameter="objectives",
-            value=missing,
-            allowed=list(table),
-        )
+        msg = f"objectives {missing} not in the table; columns: {', '.join(table)}"
+        raise ParameterError(msg, parameter="objectives", value=missing, allowed=list(table))
     return np.stack([np.asarray(table[n], dtype=float) for n in names], axis=1)
 
 
 def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVES) -> np.ndarray:
     """Non-dominated feasible designs, all objectives maximised.
 
-    A design is dominated when another one is at least as good in every objective and better
-    in one. Infeasible designs (``feasible == 0``) are never on the front.
+    Dominated: another one at least as good in every objective, better in one; infeasible
+    designs are never on the front.
 
     Args:
         table: Column name → (N,) array (a sweep table).

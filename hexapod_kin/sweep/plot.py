@@ -26,9 +26,8 @@ def plot_sweep(
 ) -> Path:
     """Score maps (stride, volume, σ_min) over two parameters and the Pareto front, one PNG.
 
-    Each map cell shows the best (maximum) score over the other parameters at that pair of
-    values; a random/LHS sweep is drawn as a scatter coloured by the score. The front panel
-    plots stride against volume, coloured by min σ_min, the front highlighted.
+    Each map cell shows the best score over the other parameters (random/LHS: a scatter); the
+    front panel plots stride against volume, coloured by min σ_min.
 
     Args:
         result: A :class:`~hexapod_kin.sweep.run.SweepResult` (or its ``table`` dict).
@@ -52,12 +51,8 @@ def plot_sweep(
         varied = sorted(PARAMETERS, key=lambda p: -len(_axis(np.asarray(table[p]))))
         params = (swept + [p for p in varied if p not in swept])[:2]
     if len(params) != 2 or any(p not in PARAMETERS for p in params):
-        raise ParameterError(
-            f"params={list(params)!r}: expected two of {', '.join(PARAMETERS)}",
-            parameter="params",
-            value=list(params),
-            allowed=list(PARAMETERS),
-        )
+        msg = f"params={list(params)!r}: expected two of {', '.join(PARAMETERS)}"
+        raise ParameterError(msg, parameter="params", value=list(params), allowed=list(PARAMETERS))
     px, py = params
     x, y = np.asarray(table[px]), np.asarray(table[py])
     feas = np.asarray(table["feasible"]) > 0

@@ -35,8 +35,7 @@ def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
     Args:
         expr: A sympy expression built of numbers, symbols, ``+``, ``*``, powers and
             the functions ``sin cos tan exp log Abs atan2 asin acos atan``.
-        values: A value for every symbol of ``expr``: floats, or numpy arrays that
-            broadcast together (one value per point).
+        values: A float or an array (broadcasting together) for every symbol of ``expr``.
 
     Returns:
         A float or an array (the broadcast shape of the values used).
@@ -100,10 +99,9 @@ def evaluate_matrix(
 def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
     """A cached derivation checked against what it claims, before use.
 
-    At three random configurations (fixed seed), as stored and with the tidied forms: every
-    printed matrix against the table's own numbers (:mod:`hexapod_kin._table_kin`); a square
-    J's ``det`` and ``const · Π fᵐ`` against ``|det J|``; the Gram determinant against the
-    stored J's rows; each family's factor ± one factor of the determinant.
+    At three seeded configurations, as stored and tidied: every matrix against the table's own
+    numbers, ``det`` and ``const · Π fᵐ`` against ``|det J|``, the Gram determinant, and each
+    family's factor against the determinant's factors.
     """
     kin = stages.get("kinematics")
     if kin is None:
@@ -125,8 +123,7 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
 
     ts = table_transforms(chain, qv)
     base, tool = chain.base_matrix, chain.tool_matrix
-    out = {"base": base, "tool": tool}
-    acc = base
+    out, acc = {"base": base, "tool": tool}, base
     for j, t in enumerate(ts):
         out[f"transforms.{j}"] = t
         acc = acc @ t
@@ -168,13 +165,11 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
                 return False
             if not np.allclose(vals[k], want[name], atol=1e-9 * scale, rtol=0.0):
                 return False
-    det = stages.get("determinant")
-    rows = stages.get("rows")
+    det, rows = stages.get("determinant"), stages.get("rows")
     try:
         sel_rows = [ROW_NAMES.index(r) for r in rows] if rows is not None else None
         if det is not None and sel_rows is not None:
-            square = len(sel_rows) == n
-            tol = 1e-8 * scale**4
+            square, tol = len(sel_rows) == n, 1e-8 * scale**4
             gram = det.get("gram")
             gram_v = None if gram is None else np.broadcast_to(evaluate(gram, at), (3,))
             dets = [np.broadcast_to(evaluate(det["det"], at), (3,))] if square else []

@@ -32,9 +32,8 @@ class SingularFamily:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
-        verified: ``True`` when the numeric Jacobian is singular on the family (``σ_min /
-            max(1, σ_max) ≤ 1e-9`` at up to 3 points on it) and not 1e-3 off it; ``False``
-            when that failed; ``None`` when not checked or no real point was found.
+        verified: ``True`` when the numeric Jacobian is singular on the family and not 1e-3
+            off it; ``False`` when that failed; ``None`` when not checked.
         check: What the check measured, in words.
 
     """
