@@ -16,16 +16,11 @@ Khalil table (the pattern of σ, α, d, r), never from a preset name:
     ``(x, y, z)`` or ``(x, y, z, yaw)`` (``yaw`` [rad]: the tool x axis in the base xy-plane;
     without it ``θ3 = 0``). Up to 2 solutions (both elbow branches).
 
-Legs are also recognised (:func:`detect_family`) through a base pose and any ``α1``, ``d1``
-(the *mount*), offsets ``r2``, ``r3`` along the knee axis, fixed rows and a tool offset after
-the last joint (a foot point ``p``: last length ``√(p_x² + p_y²)``, angle offset
-``atan2(p_y, p_x)``, lateral offset ``e`` along the knee axis), an ankle axis anti-parallel to
-the knee's (``α3 = π``: that joint enters negated), and twists within ``angle_tol`` of the
-pattern (finished on the table by :mod:`hexapod_kin.ik._table_finish`). Joint offsets (``θ``)
-and ``r1`` are allowed. Revolute results are wrapped to ``(−π, π]``; with
-``within_limits=True`` each is shifted by 2π if that brings it inside the limits, else dropped.
-The legs' closed form is written once, vectorised (:func:`leg_solutions`,
-:func:`leg_reachable`); the numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+Legs are also recognised (:func:`detect_family`, :class:`LegFamily`) on a mount (base pose,
+``α1``, ``d1``), with offsets along the knee axis, a foot point after the last joint, an ankle
+anti-parallel to the knee and twists within ``angle_tol`` of the pattern. Revolute results are
+wrapped to ``(−π, π]``. The legs' closed form is written once, vectorised
+(:func:`leg_solutions`); the numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -83,8 +78,7 @@ class LegFamily:
             (a leg's last one to its foot point, ``√(p_x² + p_y²)``).
         height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
         sign: ``sin α2`` (±1) of the legs; ``cos α4`` (±1) of the SCARA's prismatic row.
-        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint; a leg's
-            last one includes the foot point's angle ``atan2(p_y, p_x)``.
+        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
         yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
         lateral: Legs: the foot's offset ``e`` along the knee axis [m] (``r2 + κ(r3 + p_z)``).
         joint_signs: Legs: ``+1`` per joint, ``−1`` for an ankle anti-parallel to the knee.
@@ -298,9 +292,8 @@ class AnalyticBatch:
     """Closed-form solutions of many targets, in fixed-shape arrays (read-only).
 
     Attributes:
-        q: (N, K, n) joint values; slot ``k`` of target ``i`` is meaningful where
-            ``valid[i, k]`` (elsewhere NaN). K is 2 (coxa_tibia, scara) or 4 (leg3); slots
-            keep a fixed branch meaning (see :func:`analytic_batch`).
+        q: (N, K, n) joint values, NaN where not ``valid``; K is 2 (coxa_tibia, scara) or 4
+            (leg3), slots of fixed branch meaning (see :func:`analytic_batch`).
         valid: (N, K) True where the slot holds a solution.
         family: The detected family name.
 
@@ -372,12 +365,10 @@ def analytic_batch(
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
             :func:`hexapod_kin.load` takes (a preset name, a table file).
-        targets: (N, 3) foot positions in [m] in the base frame (SCARA: (N, 3) or (N, 4) with
-            yaw [rad]); a single (3,) target is accepted as N = 1.
-        tol: Relative tolerance (× the chain's length scale) of the reachability tests; a
-            target this close outside the workspace is solved on its boundary.
-        within_limits: If True, invalidate solutions outside the joint limits (revolute
-            values are first shifted by ±2π when that brings them inside).
+        targets: (N, 3) foot positions in [m] in the base frame (SCARA: or (N, 4) with yaw
+            [rad]); a single (3,) target is N = 1.
+        tol: Relative tolerance (× the chain's length scale) of the reachability tests.
+        within_limits: If True, invalidate solutions outside the joint limits (after ±2π).
 
     Raises:
         IKError: No closed form for this chain; bad or non-finite targets.
@@ -564,19 +555,14 @@ def leg_solutions(
         offsets: The joints' θ offsets [rad] (removed from the result); default 0.
         tol: Absolute reachability tolerance [m].
         limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
-            (by more than 1e-12) are invalid; values are first shifted by ±2π when that brings
-            them inside.
-        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): the foot
-            is ``Rz(φ1)·[l1 + ρ', −σe, σw] + [0, 0, h]``, so ``u = ±√(x² + y² − e²) − l1``
-            and ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``; no solution where
-            ``√(x² + y²) < |e|``. Default 0 (the formulas above).
-        joint_signs: ±1 per joint: a joint with −1 enters the planar leg negated (an ankle
-            axis anti-parallel to the knee's, ``α3 = π``). Default all +1.
+            (after ±2π shifts) are invalid.
+        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): then
+            ``u = ±√(x² + y² − e²) − l1``, ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``.
+        joint_signs: ±1 per joint (−1: enters the planar leg negated). Default all +1.
 
     Returns:
-        ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
-        (N, K) validity; K = 2 (slots: hip toward, reversed) or 4 (toward/ankle +,
-        toward/ankle −, reversed/ankle +, reversed/ankle −).
+        ``(q, valid)``: (N, K, n) joint values (NaN where invalid) and (N, K) validity, the
+        slots of :func:`analytic_batch`.
 
     """
     n = len(np.asarray(targets).reshape(-1, 3))

@@ -47,8 +47,7 @@ class IKOptions:
         max_iter: Accepted steps per attempt (1 to :data:`MAX_ITER`).
         restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
         within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
-        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
-            ranges), a preferred configuration (nq,), or None (off).
+        posture: Secondary task of redundant chains: ``"middle"``, a configuration, or None.
         posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
 
     Raises:
@@ -120,22 +119,19 @@ class IKResult:
         q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
         status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
             ``"not_converged"``.
-        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
-            at ``q``.
-        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
-            position + yaw: |ψ* − ψ|; position: 0), recomputed at ``q``.
+        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows.
+        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw:
+            |ψ* − ψ|; position: 0).
         iterations: Accepted steps of the returned attempt.
-        history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
-            (starts with the initial residual; strictly decreasing).
+        history: Weighted residual ‖W e‖ from the start, after each accepted step.
         position: p(q) in [m].
         rotation: R(q) (3, 3), the tip's rotation in the base frame.
         target: The target position in [m].
         task: The task solved (mode, target pose, yaw, weights).
-        attempts: How many starts were tried (the nearest candidate, home, restarts used).
+        attempts: How many starts were tried.
         reason: One sentence explaining the status.
-        distance: For ``"unreachable"`` / ``"joint_limits"``: the position error in [m] of the
-            best configuration found; else 0.
-        nearest: For ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
+        distance: ``"unreachable"`` / ``"joint_limits"``: the best position error [m]; else 0.
+        nearest: ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
         sigma_min: Smallest singular value of the position Jacobian at ``q`` [m/rad].
 
     """

@@ -1,22 +1,16 @@
 """Numerical IK for any loaded chain: position, position + yaw, or a full 6-D pose.
 
-Levenberg–Marquardt on the weighted task rows of :mod:`hexapod_kin.ik.task`: damping
-``λ² = μ(‖We‖² + w̄)``, μ ÷4 after a kept step and ×8 after a refused one; a step is kept only if
-it lowers ``‖We‖`` (the residual history decreases strictly); each step is scaled to the
-joints' step caps; continuous joints (range ≥ 2π) wrap, the others are clamped and a joint at
-a limit whose gradient points outward is frozen; 8 nearly flat steps in a row, or 40 refusals,
-end an attempt (stall); seeded restarts follow until one converges. Orientation errors are
-``log(R* Rᵀ)`` on SO(3), never Euler angles. On a redundant chain (more joints than task rows)
-each step first tries ``z = g·(q_posture − q)`` projected on the task's null space:
-``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
-the posture task for that attempt).
+Levenberg–Marquardt on the weighted task rows of :mod:`hexapod_kin.ik.task`: ``λ² = μ(‖We‖² +
+w̄)``, μ ÷4 after a kept step, ×8 after a refused one; a step is kept only if it lowers ``‖We‖``;
+steps are capped per joint; continuous joints wrap, the others are clamped (a joint at a limit
+pushed outward is frozen); 8 flat steps or 40 refusals end an attempt; seeded restarts follow.
+On a redundant chain each step first tries the posture motion ``z`` on the task's null space,
+``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error.
 
-One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
-target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
-:func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
-:data:`INTERPRETED_CALLS` small calls of :func:`solve` run the loop's own functions in Python
-(:func:`~hexapod_kin._kmath.python_twin`: the same bits), so one solve needs no machine code.
-The result is measured in the same call (the one FK core).
+One compiled loop (:func:`~hexapod_kin.ik.step.lm_loop`) for :func:`solve` (one target, its row
+of a batch bit for bit), :func:`solve_many` and :func:`solve_chain` (a chain view, a seed per
+target); the first :data:`INTERPRETED_CALLS` small calls of :func:`solve` run it in Python
+(:func:`~hexapod_kin._kmath.python_twin`, the same bits).
 """
 
 from __future__ import annotations
@@ -44,7 +38,6 @@ from .result import (
 from .task import (
     MODES,
     TARGET_FACTOR,
-    Mode,
     Task,
     _fast,
     _limit,
@@ -291,7 +284,11 @@ def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | Non
     if fast is None:
         return None
     mode, tg, w6, total = fast
-    s, limit = mdl.cached(_QUICK[mode], lambda: _quick_setup(mdl, mode))
+
+    def setup() -> tuple[_Setup, float]:  # the setup, the farthest target |x| + |y| + |z|
+        return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
+
+    s, limit = mdl.cached(_QUICK[mode], setup)
     if not total <= limit:  # farther, or not finite: the general path's check
         return None
     iplan, starts = s.iplan, s.one[1]
@@ -306,11 +303,6 @@ def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | Non
     res = _NEW(IKResult)
     _SET(res, "__dict__", {"_lazy": (out, s, (mode, tg, w6))})
     return res
-
-
-def _quick_setup(mdl: KinematicModel, mode: Mode) -> tuple[_Setup, float]:
-    """:func:`_quick`'s setup of ``mode`` and the farthest target ``|x| + |y| + |z|`` it takes."""
-    return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
 
 
 _QUICK = {"position": "ik.quick.position", "pose": "ik.quick.pose"}

@@ -1,9 +1,7 @@
 """The compiled numerical IK: the task error, the damped least-squares step, the loop.
 
-Split as mink's ``build_ik`` / ``solve_ik``: :func:`task_into` turns a configuration into the
-weighted task rows (error and Jacobian) — the problem; :func:`step_into` computes one step
-from those rows — a pure function of its inputs; :func:`lm_loop` is the small loop around them
-(Levenberg–Marquardt damping, step cap, limits, restarts).
+:func:`task_into` builds the weighted task rows (the problem), :func:`step_into` one step from
+them (a pure function), :func:`lm_loop` the small loop around them.
 
 Task modes (``ipar[0]``):
 
@@ -13,8 +11,7 @@ Task modes (``ipar[0]``):
 * ``2`` pose: plus the orientation error on SO(3), ``e_ω = log(R* Rᵀ)`` (base axes, [rad]) —
   never Euler angles — with the rotation rows of the LOCAL_WORLD_ALIGNED Jacobian.
 
-Each row is multiplied by its weight (0 drops the row). Every buffer is allocated per call
-(thread-safe; ``nogil``).
+Each row is multiplied by its weight (0 drops the row); buffers are per call (``nogil``).
 """
 
 from __future__ import annotations
@@ -172,10 +169,8 @@ def step_into(
 ) -> bool:  # pragma: no cover - compiled  # fmt: skip
     """One damped step (pure: writes only ``dq`` and the scratch arrays).
 
-    ``Δq = z + J⁺_λ (e − J z)`` with ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints: the DLS step
-    of the task plus ``z`` (a secondary motion, e.g. toward a preferred posture) projected on
-    the task's (damped) null space. Without ``use_z`` it is the plain DLS step.
-    Returns False if the damped system is not positive definite.
+    ``Δq = z + J⁺_λ (e − J z)``, ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints (``z``: a secondary
+    motion, only with ``use_z``). False if the damped system is not positive definite.
     """
     n = jt.shape[1]
     for r in range(m):
@@ -214,9 +209,8 @@ def _limit_into(
 def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
     """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
 
-    One-sided Jacobi (Hestenes): plane rotations make the three rows mutually orthogonal
-    (to ``|aᵢ·aⱼ| ≤ 1e-15 ‖aᵢ‖‖aⱼ‖``); the singular values are then the rows' norms, with
-    high relative accuracy (Demmel & Veselić 1992), also at a singularity.
+    One-sided Jacobi (Hestenes): the rows made orthogonal, their norms are the singular values,
+    with high relative accuracy also at a singularity (Demmel & Veselić 1992).
     """
     n = jac.shape[1]
     if n < 3:
@@ -265,8 +259,7 @@ def nearest(
     """The index of the pose nearest to the target among ``poses`` (K, 12): p (3), R (9).
 
     Distance: ``Σ w²(p* − p)²`` over the position rows, plus in mode 2 (pose)
-    ``Σ_k w²_{3+k} ‖R*_{:,k} − R_{:,k}‖²`` over the rotation rows (the chord of each axis:
-    ``2(1 − cos)`` of its angle). The first of equal ones (index 0 wins ties).
+    ``Σ_k w²_{3+k} ‖R*_{:,k} − R_{:,k}‖²`` over the rotation rows; index 0 wins ties.
     """
     best = 0
     best_d = np.inf
@@ -299,24 +292,17 @@ def lm_loop(
     above ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
     batch).
 
-    The chain and the settings come packed in two arrays: ``iplan`` = ``ipar`` (``I_*``), the
-    number of links m and joints n, then the chain's
-    ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
-    (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
-    lower and upper limits, step caps and the posture, then ``K = ipar[I_NEAR]`` start
-    configurations (K, n) and their tip poses (K, 12), all flattened (``solver._plans``).
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). With ``K > 0`` the first
-    attempt starts from the configuration whose pose is :func:`nearest` the target, then
-    (unless that was the first candidate, ``starts[t, 0]`` itself) from ``starts[t, 0]``, then
-    the rest.
+    ``iplan`` = ``ipar`` (``I_*``), links m, joints n, the chain's ``kind`` (m), ``col`` (m),
+    the continuous flags (n); ``fplan`` = ``rot`` (m, 3, 3), ``trans`` (m + 1, 3), ``axis``
+    (m, 3), ``tip_rot`` (3, 3), ``lim`` (4, n: limits, step caps, posture), then ``K =
+    ipar[I_NEAR]`` start configurations (K, n) and their tip poses (K, 12), flattened
+    (``solver._plans``). ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). With ``K >
+    0`` the first attempt starts from the one :func:`nearest` the target.
 
-    ``out[i]`` (``O_Q + n + 12 + max_iter + 1`` values), at the returned q (the best attempt):
-    ``O_ATTEMPTS``, ``O_STEPS`` (accepted steps), ``O_CODE`` (0 converged, 1 stalled, 2
-    iteration cap; exact small integers), the error over the kept position rows [m], over the
-    kept rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0), the
-    smallest singular value of the position Jacobian (:func:`sigma_min3`), then q (n), the
-    tip position (3) [m] and rotation (9, row-major), and the residual history
-    (``max_iter + 1``, the first ``steps + 1`` written).
+    ``out[i]`` at the returned q: ``O_ATTEMPTS``, ``O_STEPS``, ``O_CODE`` (0 converged, 1
+    stalled, 2 iteration cap), the position [m] and rotation [rad] errors, σ_min
+    (:func:`sigma_min3`), q (n), the tip position (3) and rotation (9, row-major), and the
+    residual history (``max_iter + 1``, the first ``steps + 1`` written).
     """
     links = iplan[I_LINKS]
     n = iplan[I_JOINTS]

@@ -1,8 +1,7 @@
 """Build an IK task from a target: position, position + yaw, or a full pose with weights.
 
-The task is the *problem* (mink's ``build_ik``): what the rows of the error are and how much
-each counts. :mod:`hexapod_kin.ik.step` solves it. Rows are ``x y z wx wy wz``: position error
-``p* − p`` in [m] and orientation error ``log(R* Rᵀ)`` in [rad], both in the base axes.
+The task is the *problem*: rows ``x y z wx wy wz`` (position error ``p* − p`` [m], orientation
+error ``log(R* Rᵀ)`` [rad], base axes) and their weights; :mod:`hexapod_kin.ik.step` solves it.
 """
 
 from __future__ import annotations
@@ -32,12 +31,10 @@ class Task:
     """A target and the weight of each task row (arrays read-only).
 
     Attributes:
-        mode: ``"position"`` (3 rows), ``"position_yaw"`` (x y z and the yaw ψ of the tool's
-            x axis in the base xy-plane) or ``"pose"`` (6 rows).
+        mode: ``"position"``, ``"position_yaw"`` (x y z and the tool's yaw ψ) or ``"pose"``.
         pose: Target pose ``baseMtarget`` (4, 4); rotation = identity unless ``mode="pose"``.
         yaw: Target yaw [rad] (``"position_yaw"``), else 0.
-        weights: (6,) weights of rows x y z wx wy wz (0 drops a row; ``"position_yaw"`` keeps
-            the yaw row's weight in ``wz``).
+        weights: (6,) weights of rows x y z wx wy wz (the yaw row's in ``wz``).
 
     """
 
@@ -277,19 +274,14 @@ def check_within(
 ) -> None:
     """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
 
-    The one range check of targets (the API and the command line): a target a hundred
-    robots away is a typo or a unit error, not a question for the solver.
-
     Args:
         model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
         positions: (3,) or (N, 3) positions [m] in the base frame.
         parameter: The name of the argument in the error.
-        kind: The error's class (one of the package's, taking ``parameter``, ``value`` and
-            ``allowed``).
+        kind: The error's class (one of the package's).
 
     Raises:
-        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit,
-            named with the limit.
+        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
 
     """
     if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs

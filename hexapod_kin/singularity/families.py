@@ -1,9 +1,8 @@
 """Singular families as numbers: residuals, exact distances, labels — without waiting on sympy.
 
 A family is the zero set of one factor of ``det J`` (or ``det(J Jᵀ)``) derived by
-:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table, only when asked; it is
-checked against the model's Jacobian, kept on disk as text (lengths substituted) and compiled
-into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
+:func:`hexapod_kin.symbolic.derive` when asked, checked against the model's Jacobian, kept on
+disk as text and compiled into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
 """
 
 from __future__ import annotations
@@ -47,8 +46,7 @@ class Family:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
-        factor: The factor with the lengths substituted (text, in ``q1..qn`` of
-            :attr:`variables` only), zero on the family.
+        factor: The factor (text, lengths substituted), zero on the family.
 
     """
 
@@ -421,9 +419,6 @@ def families_for(
             without it, only families already derived (the call never waits on sympy).
         budget: CPU budget in [s] of the derivation (a stopped one is kept with its budget; a
             larger one carries on).
-
-    Returns:
-        The :class:`Families` (empty with a reason when none are available).
 
     Raises:
         ParameterError: ``budget`` not a finite value > 0.

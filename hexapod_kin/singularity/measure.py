@@ -1,11 +1,9 @@
 """Singularity measures of one configuration or of many.
 
-Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian ``[v; ω]`` over n joints,
-with singular values ``σ1 ≥ … ≥ σm``, ``m = min(k, n)``: ``det`` (``det J``, NaN unless
-square), ``manipulability`` (Yoshikawa's ``sqrt(det(J Jᵀ))``, the product of the σ),
-``condition`` (``σ1 / σm``, ``inf`` when singular) and ``sigma_min`` (``σm``, in [m] for
-position rows of revolute joints). Default rows: :func:`default_rows`.
-:func:`measures` uses Pinocchio and numpy's SVD; :func:`measures_batch` the compiled kernel.
+Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian over n joints (singular
+values ``σ1 ≥ … ≥ σm``): ``det`` (NaN unless square), ``manipulability`` (Yoshikawa's
+``sqrt(det(J Jᵀ))``), ``condition`` (``σ1 / σm``) and ``sigma_min`` (``σm``). :func:`measures`
+uses Pinocchio and numpy's SVD, :func:`measures_batch` the compiled kernel.
 """
 
 from __future__ import annotations
@@ -65,8 +63,8 @@ class Measures:
 class MeasuresBatch:
     """Singularity measures of N configurations (see :func:`measures_batch`).
 
-    Iterating (or indexing 0..3) gives ``det, manipulability, condition, sigma_min`` in that
-    order, so ``det, manip, cond, smin = measures_batch(model, qs)`` works.
+    Iterating gives ``det, manipulability, condition, sigma_min``: ``det, manip, cond, smin =
+    measures_batch(model, qs)`` works.
 
     Attributes:
         det: (N,) ``det J`` (NaN where J is not square).

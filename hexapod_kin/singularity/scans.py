@@ -1,10 +1,9 @@
 """Scans of joint space: measures on a grid or random samples, flags, family labels.
 
-A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
-reach``) or ``sigma_min = 0``; each flagged sample is labelled with its nearest singular family
-(:mod:`.families`) and its joint-space distance to it. A scan of at most :data:`SMALL_SCAN`
-configurations runs on Pinocchio + numpy (no numba import), a larger one on the compiled
-:func:`~.measure.measures_batch` kernel.
+A configuration is flagged ``singular`` when ``sigma_min < threshold`` or ``sigma_min = 0``;
+each flagged sample is labelled with its nearest singular family (:mod:`.families`). Scans of
+at most :data:`SMALL_SCAN` configurations run on Pinocchio + numpy, larger ones on the
+compiled :func:`~.measure.measures_batch` kernel.
 """
 
 from __future__ import annotations
@@ -93,21 +92,18 @@ class ScanResult:
         sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
         singular: (N,) boolean mask ``sigma_min < threshold`` or ``sigma_min = 0``.
         family: (N,) index into :attr:`families` of the nearest family of each flagged
-            configuration, −1 where not flagged or when no family is known.
-        family_distance: (N,) joint-space distance in [rad]/[m] from each flagged
-            configuration to that family (NaN where not flagged or no family).
-        second_family: (N,) the second-nearest family of each flagged configuration (−1 where
-            none): near the meeting of two families both are named.
-        second_distance: (N,) the distance to it in [rad]/[m] (NaN where none).
-        families: The singular families (:class:`~.families.Family`; empty when not derived,
-            see :attr:`family_reason`).
+            configuration (−1: none).
+        family_distance: (N,) joint-space distance to it in [rad]/[m] (NaN: none).
+        second_family: (N,) the second-nearest family (−1: none).
+        second_distance: (N,) the distance to it in [rad]/[m] (NaN: none).
+        families: The singular families (:class:`~.families.Family`).
         family_reason: Why :attr:`families` is empty ("" when it is not).
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
         family_tols: Per family, the tolerance used: ``family_tol`` widened to ``1.5 ×
             threshold / s`` (``s`` the family's measured lever arm), at most ``4 × family_tol``.
         joint_names: Names of the n joints.
-        prismatic: (n,) True for prismatic joints (values in [m]), False for revolute ([rad]).
-        joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
+        prismatic: (n,) True for prismatic joints.
+        joints: Indices of the scanned joints.
         rows: Row names of ``J``.
         threshold: The ``sigma_min`` threshold used.
         grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
@@ -402,16 +398,14 @@ def scan(
 
     Args:
         model: A loaded model or any source for :func:`hexapod_kin.load`.
-        grid: Points per scanned joint (one count, or one per joint), spanning the joint
-            limits (ends included). Default :data:`DEFAULT_GRID` when ``samples`` is not
-            given either.
-        samples: Number of uniform random configurations within the limits (instead of a grid).
+        grid: Points per scanned joint (one count, or one per joint) over the joint limits;
+            default :data:`DEFAULT_GRID`.
+        samples: Number of uniform random configurations (instead of a grid).
         joints: Joints to scan (names or indices, or ``"all"``); default
             :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
             default :func:`~.measure.default_rows`.
-        q_fixed: Values of the joints not scanned, in [rad]/[m]; default
-            :func:`default_q_fixed` (a dexterous configuration).
+        q_fixed: Values of the joints not scanned; default :func:`default_q_fixed`.
         threshold: ``sigma_min`` below which a configuration is flagged singular; default
             ``rtol × reach(model)``.
         rtol: Relative threshold (see ``threshold``).
@@ -422,12 +416,11 @@ def scan(
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
-        chunk: Configurations per kernel call (progress granularity; scans above
-            :data:`SMALL_SCAN`).
+        chunk: Configurations per kernel call (scans above :data:`SMALL_SCAN`).
 
     Raises:
-        ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows, bad
-            ``threshold``, ``families`` or ``chunk``.
+        ParameterError: Bad ``grid``/``samples``, joints, rows, ``threshold``, ``families``
+            or ``chunk``.
         ConfigurationError: Bad ``q_fixed``.
 
     """

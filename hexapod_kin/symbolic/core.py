@@ -70,10 +70,6 @@ def cheap(expr: Any) -> Any:
 _MAX_TERMS = 600
 
 
-def _terms(mat: sp.Matrix) -> int:
-    return sum(len(sp.Add.make_args(e)) for e in mat)
-
-
 def _expand(expr: Any) -> Any:
     if isinstance(expr, sp.MatrixBase):
         return expr.applyfunc(sp.expand)
@@ -188,7 +184,7 @@ def kinematics(
     for t in transforms:
         acc = cheap_(acc * t) if simplify else product(acc, t)
         cumulative.append(acc)
-        if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
+        if cheap_ is not _same and sum(len(sp.Add.make_args(e)) for e in acc) > _MAX_TERMS:
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
     tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]

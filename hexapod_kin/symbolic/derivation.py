@@ -66,8 +66,8 @@ class Derivation:
         families: The singular families read off :attr:`det` (or :attr:`gram`).
         reference: Name of the frame whose axes ``p`` and ``J`` are expressed in (the base).
         tip: Name of the tip frame.
-        base_transform: ``T_base_0`` (4×4 sympy; identity without a base pose).
-        tool_transform: ``T_n_tip`` (4×4 sympy; identity without a tool).
+        base_transform: ``T_base_0`` (4×4; identity without a base pose).
+        tool_transform: ``T_n_tip`` (4×4; identity without a tool).
         method: How the determinant was computed (frame, wrist-centre split, Gram).
         incomplete: What could not be done, and why (empty when complete).
         seconds: CPU time of the derivation in [s] (0 when read from the cache).
@@ -484,9 +484,8 @@ def derive(
         source: A :class:`~hexapod_kin.params.Chain`, a preset name, a URDF (path, text,
             ``erd:NAME``; :func:`~hexapod_kin.chain_from_urdf`), a :class:`Hexapod` with
             ``tip=``, or a loaded model (its own base and tip frames).
-        rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default
-            (:func:`~hexapod_kin.jacobian_rows.choose_rows`), ``"position"``, ``"all"`` or
-            names such as ``("x", "y", "z", "wz")``.
+        rows: Rows of ``J_direct`` whose determinant is taken (default
+            :func:`~hexapod_kin.jacobian_rows.choose_rows`; ``"position"``, ``"all"``, names).
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).

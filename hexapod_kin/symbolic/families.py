@@ -7,7 +7,7 @@ form for scans (residuals, distances) is :mod:`hexapod_kin.singularity.families`
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -57,13 +57,6 @@ class SingularFamily:
         return out
 
 
-def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
-    def f(x: np.ndarray) -> np.ndarray:
-        return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
-
-    return f
-
-
 def families_of(
     factors: Sequence[tuple[Any, int]], q: tuple[sp.Symbol, ...], chain: Chain,
     values: Mapping[sp.Symbol, float],
@@ -91,7 +84,11 @@ def families_of(
             if numeric:
                 lo, hi = (-math.pi, math.pi) if revolute else _prismatic_range(chain, k)
                 func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
-                roots = _core.single_joint_roots(_vectorised(func), lo, hi)
+
+                def one(x: np.ndarray, func: Any = func) -> np.ndarray:
+                    return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
+
+                roots = _core.single_joint_roots(one, lo, hi)
                 if revolute:
                     from .._numerics import wrap_angles  # the one angle wrapping
 
