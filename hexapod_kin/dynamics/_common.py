@@ -13,14 +13,8 @@ from ..exceptions import ParameterError
 from ..kinematics import as_model
 from ..model import check_inertials as loader_check_inertials
 
-__all__ = [
-    "as_model",
-    "check_inertials",
-    "check_state",
-    "finite_vector",
-    "read_only",
-    "zero_gravity_model",
-]
+__all__ = ["as_model", "check_inertials", "check_state", "finite_vector", "read_only",
+           "zero_gravity_model"]  # fmt: skip
 
 #: Relative tolerance on the principal moments of inertia (a moment <= tol * largest is zero).
 INERTIA_RTOL = 1e-12
@@ -47,20 +41,12 @@ def finite_vector(name: str, value: Any, n: int, *, nonnegative: bool = False) -
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,):
-        raise ParameterError(
-            f"{name} has shape {arr.shape}; expected ({n},) or a scalar",
-            parameter=name,
-            value=value,
-            allowed=f"{n} finite numbers",
-        )
+        msg = f"{name} has shape {arr.shape}; expected ({n},) or a scalar"
+        raise ParameterError(msg, parameter=name, value=value, allowed=f"{n} finite numbers")
     if not np.all(np.isfinite(arr)) or (nonnegative and np.any(arr < 0)):
         need = "finite values >= 0" if nonnegative else "finite values"
-        raise ParameterError(
-            f"{name}={arr.tolist()} is not allowed; {need} are needed",
-            parameter=name,
-            value=arr.tolist(),
-            allowed=need,
-        )
+        msg = f"{name}={arr.tolist()} is not allowed; {need} are needed"
+        raise ParameterError(msg, parameter=name, value=arr.tolist(), allowed=need)
     return arr
 
 
@@ -130,8 +116,7 @@ def check_inertials(model: Any) -> None:
 
 def check_state(model: Any, value: Any, name: str) -> np.ndarray:
     """A (nq,) joint vector checked by the model (``ConfigurationError`` otherwise)."""
-    arr = model.check_q(value, name)
-    return np.array(arr, dtype=float)
+    return np.array(model.check_q(value, name), dtype=float)
 
 
 def zero_gravity_model(model: Any) -> pin.Model:

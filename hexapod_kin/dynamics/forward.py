@@ -9,12 +9,9 @@ solved for ``q̈`` by ``pin.aba``. ``b`` is the URDF's viscous damping, ``F`` it
 friction smoothed by ``tanh(q̇/v_F)`` (Lipschitz for a fixed step; no stiction), ``K`` and
 ``q_rest`` an optional spring. Joint limits are not enforced.
 
-Integrators (fixed step ``dt``): ``"rk4"`` (default; global error O(dt⁴), not symplectic) and
-``"symplectic_euler"`` (``q̇ₖ₊₁ = q̇ₖ + dt q̈(qₖ, q̇ₖ)``, ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``; first order,
-bounded energy error without damping).
-
-Energies: kinetic ``½ q̇ᵀ M q̇``, potential ``−Σ mᵢ g·cᵢ`` (Pinocchio's, zero at the world
-origin) plus the springs' ``½ K (q − q_rest)²``.
+Integrators (fixed step ``dt``): ``"rk4"`` (default; O(dt⁴)) and ``"symplectic_euler"``
+(``q̇ₖ₊₁ = q̇ₖ + dt q̈ₖ``, ``qₖ₊₁ = qₖ + dt q̇ₖ₊₁``). Energies: kinetic ``½ q̇ᵀ M q̇``, potential
+``−Σ mᵢ g·cᵢ`` (Pinocchio's) plus the springs' ``½ K (q − q_rest)²``.
 """
 
 from __future__ import annotations
@@ -89,10 +86,8 @@ def passive_joints(
 
     Args:
         model: A loaded model.
-        damping: Viscous damping per joint (scalar or (nq,)) in [N·m·s/rad]; default the
-            URDF's ``<dynamics damping>`` (``model.model.damping``).
-        friction: Coulomb friction per joint in [N·m]; default the URDF's
-            ``<dynamics friction>`` (``model.model.friction``).
+        damping: Viscous damping per joint (scalar or (nq,)) in [N·m·s/rad]; default the URDF's.
+        friction: Coulomb friction per joint in [N·m]; default the URDF's.
         friction_velocity: ``v_F`` in [rad/s] (> 0), the tanh smoothing of the friction.
         stiffness: Joint spring stiffness (scalar or (nq,)) in [N·m/rad]; default none.
         q_rest: Spring rest position (nq,); default zeros.
@@ -101,8 +96,7 @@ def passive_joints(
         ParameterError: A negative, non-finite or wrongly shaped value (named).
 
     """
-    n = model.nq
-    m = model.model
+    n, m = model.nq, model.model
     b = finite_vector("damping", m.damping if damping is None else damping, n, nonnegative=True)
     f = finite_vector("friction", m.friction if friction is None else friction, n, nonnegative=True)
     k = finite_vector("stiffness", stiffness, n, nonnegative=True)
@@ -122,8 +116,7 @@ class Simulation:
         v: (N, nq) joint velocities q̇ in [rad/s]/[m/s].
         a: (N, nq) joint accelerations q̈ (ABA at each sample) in [rad/s²]/[m/s²].
         kinetic: (N,) kinetic energy in [J].
-        potential: (N,) potential energy in [J] (gravity, zero at the world origin, plus
-            springs).
+        potential: (N,) potential energy in [J] (gravity plus springs).
         total: (N,) kinetic + potential in [J].
         method: ``"rk4"`` or ``"symplectic_euler"``.
         dt: Step in [s].
@@ -157,24 +150,17 @@ class Simulation:
 
 
 def _steps(dt: Any, duration: Any) -> tuple[int, float]:
-    h = positive("dt", dt)
-    span = positive("duration", duration)
+    h, span = positive("dt", dt), positive("duration", duration)
     n = int(round(span / h))
     if n < 1:
-        raise ParameterError(
-            f"duration={duration!r} is shorter than one step dt={dt!r}",
-            parameter="duration",
-            value=duration,
-            allowed=f">= dt = {h} s",
-        )
+        msg = f"duration={duration!r} is shorter than one step dt={dt!r}"
+        raise ParameterError(msg, parameter="duration", value=duration, allowed=f">= dt = {h} s")
     if n > MAX_STEPS:
-        raise ParameterError(
+        msg = (
             f"duration/dt = {span}/{h} = {n} steps exceeds the cap of {MAX_STEPS}; use a larger "
-            "dt or a shorter duration",
-            parameter="dt",
-            value=dt,
-            allowed=f">= duration / {MAX_STEPS}",
+            "dt or a shorter duration"
         )
+        raise ParameterError(msg, parameter="dt", value=dt, allowed=f">= duration / {MAX_STEPS}")
     return n, h
 
 
@@ -210,33 +196,20 @@ def simulate(
         tau: Applied joint torques: None (zero), a constant (nq,) or a function
             ``tau(t, q, v) -> (nq,)`` in [N·m]/[N].
 
-    Returns:
-        A :class:`Simulation`.
-
     Raises:
-        ParameterError: Bad ``dt``, ``duration``, ``method`` or passive parameters; a model
-            with implausible inertials (names the link).
-        ConfigurationError: Bad ``q0``/``v0``/``tau``, or the state became non-finite (the run
-            diverged: reduce ``dt``).
+        ParameterError: Bad ``dt``, ``duration``, ``method``, passive parameters or inertials.
+        ConfigurationError: Bad ``q0``/``v0``/``tau``, or the run diverged (reduce ``dt``).
 
     """
     mdl = as_model(model)
     check_inertials(mdl)
     one_of("method", method, METHODS)
     n, h = _steps(dt, duration)
-    passive = passive_joints(
-        mdl,
-        damping=damping,
-        friction=friction,
-        friction_velocity=friction_velocity,
-        stiffness=stiffness,
-        q_rest=q_rest,
-    )
-    nq = mdl.nq
-    q = check_state(mdl, q0, "q0")
+    passive = passive_joints(mdl, damping=damping, friction=friction, stiffness=stiffness,
+                             friction_velocity=friction_velocity, q_rest=q_rest)  # fmt: skip
+    nq, q = mdl.nq, check_state(mdl, q0, "q0")
     v = np.zeros(nq) if v0 is None else check_state(mdl, v0, "v0")
-    applied = _applied(tau, nq)
-    pm = mdl.model
+    applied, pm = _applied(tau, nq), mdl.model
     data = pm.createData()
     aba, arr = pin.aba, np.array
     acc: Callable[[float, Any, Any], Any]
@@ -268,21 +241,16 @@ def simulate(
     pot = pot + passive.spring_energy(qs)
     total = kin + pot
     read_only(ts, qs, vs, accs, kin, pot, total)
-    return Simulation(
-        ts, qs, vs, accs, kin, pot, total, str(method), h, passive, tuple(mdl.joint_names)
-    )
+    names = tuple(mdl.joint_names)
+    return Simulation(ts, qs, vs, accs, kin, pot, total, str(method), h, passive, names)
 
 
 def _run(
     acc: Callable[[float, Any, Any], Any], q: Any, v: Any, ts: np.ndarray, h: float, method: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """RK4 or symplectic Euler from (q, v): positions, velocities, accelerations.
-
-    The state is (nq,) arrays, or Python floats for one joint (the same operations).
-    """
-    qs, vs, accs = [q], [v], []
+    """RK4 or symplectic Euler from (q, v) ((nq,) arrays, or floats for one joint)."""
     a = acc(0.0, q, v)
-    accs.append(a)
+    qs, vs, accs = [q], [v], [a]
     half, sixth = 0.5 * h, h / 6.0
     n = len(ts) - 1
     for k in range(n):
@@ -310,13 +278,11 @@ def _run(
 
 def _finite_or_raise(q: Any, v: Any, a: Any, t: float, h: float) -> None:
     if not math.isfinite(float(np.sum(q) + np.sum(v) + np.sum(a))):
-        raise ConfigurationError(
+        msg = (
             f"the simulation diverged by t = {t:.6g} s (non-finite state); reduce dt={h!r} or "
-            "check the model and torques",
-            parameter="dt",
-            value=h,
-            allowed="a smaller step",
+            "check the model and torques"
         )
+        raise ConfigurationError(msg, parameter="dt", value=h, allowed="a smaller step")
 
 
 def _applied(tau: Any, nq: int) -> Callable[[float, np.ndarray, np.ndarray], np.ndarray]:

@@ -1,21 +1,16 @@
 """Contact forces and joint torques along a gait run: quasi-static and full inverse dynamics.
 
-Takes a walk's samples as data — ``t``, ``base_poses`` (``worldMbody``), ``q`` (leg joints,
-named by ``joint_names``) and ``support`` (stance feet), as in ``hexapod_kin.gait.GaitRun``.
+Takes a walk's samples (``t``, ``base_poses``, ``q``, ``joint_names``, ``support``), as in
+``hexapod_kin.gait.GaitRun``.
 
-* **Quasi-static** (``torque``): at every sample the robot's weight is distributed over the
-  stance feet exactly as :func:`~hexapod_kin.dynamics.standing.contact_forces` does (minimum
-  norm, or inside friction cones), then ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` on the
-  floating-base model (world axes). The body's and the legs' accelerations are left out.
-* **Full inverse dynamics** (``torque_full``, when the run carries its floating-base robot,
-  ``run.robot``): the recursive Newton–Euler algorithm (Pinocchio ``rnea``) with the base and
-  legs' velocities and accelerations of the plan (``run.pinocchio_v()``, ``pinocchio_a()``:
-  consistent second-order finite differences), ``b = M(q) a + h(q, v)``. The stance feet's
-  contact forces (applied at the contact points, ``centre − r n``) are solved so that the
-  floating base's six rows hold, ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or least
-  ‖f‖² inside the friction cones), then ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``.
-  ``base_residual`` is the largest ``‖b_base − Σ J_{i,base}ᵀ f_i‖`` (zero up to rounding when
-  the stance feet can produce any wrench: three or more not on one line).
+* **Quasi-static** (``torque``): the weight distributed over the stance feet as
+  :func:`~hexapod_kin.dynamics.standing.contact_forces` does, then ``τ = g(q)[6:] − Σ
+  J_i[:3, 6:]ᵀ f_i`` on the floating-base model (world axes); accelerations left out.
+* **Full inverse dynamics** (``torque_full``, with ``run.robot``): ``b = M(q) a + h(q, v)`` by
+  Pinocchio's ``rnea`` with the plan's velocities and accelerations; the contact forces (at
+  ``centre − r n``) solve the base rows ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or in
+  the friction cones), then ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``; ``base_residual`` is the
+  largest ``‖b_base − Σ J_{i,base}ᵀ f_i‖``.
 """
 
 from __future__ import annotations
@@ -27,6 +22,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError
 from ..params import Hexapod
 from ._common import as_model, check_inertials, read_only
@@ -91,55 +87,35 @@ class GaitTorques:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready peaks per joint (quasi-static, full, their difference), residuals."""
-        full = {}
+        out: dict[str, Any] = {}
         if self.peak_full.size:
-            full = {
-                "peak_torque_full": self.peak_full.tolist(),
-                "peak_torque_full_time": self.peak_full_time.tolist(),
-                "peak_torque_full_max": float(self.peak_full.max()),
-                "peak_difference": self.peak_difference.tolist(),
-                "peak_difference_max": float(self.peak_difference.max()),
-                "base_residual": self.base_residual,
-            }
-        return {
-            **full,
-            "samples": int(len(self.t)),
-            "duration": float(self.t[-1] - self.t[0]),
-            "method": self.method,
-            "mu": self.mu,
-            "mass": self.mass,
-            "joint_names": list(self.joint_names),
-            "peak_torque": self.peak.tolist(),
-            "peak_time": self.peak_time.tolist(),
-            "peak_torque_max": float(self.peak.max()),
-            "force_residual": self.force_residual,
-            "moment_residual": self.moment_residual,
-            "min_normal_force": float(self.min_normal_force.min()),
-            "feasible": self.feasible,
-        }
+            out["peak_torque_full"] = self.peak_full.tolist()
+            out["peak_torque_full_time"] = self.peak_full_time.tolist()
+            out["peak_torque_full_max"] = float(self.peak_full.max())
+            out["peak_difference"] = self.peak_difference.tolist()
+            out["peak_difference_max"] = float(self.peak_difference.max())
+            out["base_residual"] = self.base_residual
+        out |= {"samples": int(len(self.t)), "duration": float(self.t[-1] - self.t[0])}
+        out |= fields_dict(self, "method", "mu", "mass", "joint_names")
+        out |= {"peak_torque": self.peak.tolist(), "peak_time": self.peak_time.tolist()}
+        out |= {"peak_torque_max": float(self.peak.max())}
+        out |= fields_dict(self, "force_residual", "moment_residual")
+        out["min_normal_force"] = float(self.min_normal_force.min())
+        return out | {"feasible": self.feasible}
 
 
 def gait_torques(
-    run: Any,
-    model: Any = None,
-    *,
-    method: ContactMethod = "min_norm",
-    mu: float | None = None,
+    run: Any, model: Any = None, *, method: ContactMethod = "min_norm", mu: float | None = None
 ) -> GaitTorques:
     """Contact forces and joint torques at every sample of a gait run.
 
-    Both loads are computed on a floating-base model in world axes: the run's own robot
-    (``run.robot.model``), or the floating-base twin of a Hexapod's table model
-    (:attr:`~hexapod_kin.model.Model.floating_model`) when ``model`` is one that did not walk
-    the run. Quasi-static: ``τ = g(q)[6:] − Σ J_i[:3, 6:]ᵀ f_i`` with ``g`` the floating-base
-    gravity vector (its joint rows are the fixed-base gravity torques under the gravity
-    rotated into the body's axes) and ``J_i`` the feet's world-aligned Jacobians.
+    Both loads on a floating-base model in world axes: the run's own robot, or the
+    floating-base twin of a Hexapod's table model (see the module doc).
 
     Args:
         run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
-            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L);
-            with ``robot`` (its floating-base WholeBody), ``pinocchio_q/v/a()`` and ``feet``
-            the full inverse dynamics too.
+            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L)
+            (with ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too).
         model: The fixed-base whole robot the run walks (default: the run's own robot,
             ``run.robot.kinematic``, else ``load("hexapod")``).
         method: ``"min_norm"`` or ``"friction"``.
@@ -153,22 +129,18 @@ def gait_torques(
     wb = getattr(run, "robot", None)
     if model is None:  # the robot that walked, as loaded
         model = getattr(wb, "kinematic", None) or "hexapod"
-    mdl = as_model(model)
-    ts = np.asarray(run.t, dtype=float)
+    mdl, ts = as_model(model), np.asarray(run.t, dtype=float)
     if wb is not None and (wb.kinematic is mdl or not isinstance(mdl.params, Hexapod)):
         if wb.kinematic is not mdl:
-            raise ParameterError(
+            msg = (
                 f"model {mdl.name!r} is not the robot that walked ({wb.source!r}); leave "
-                "model=None for a legged robot other than a Hexapod",
-                parameter="model",
-                value=mdl.name,
-                allowed=wb.source,
+                "model=None for a legged robot other than a Hexapod"
             )
+            raise ParameterError(msg, parameter="model", value=mdl.name, allowed=wb.source)
         pm, feet, legs, names = wb.model, wb.foot_frames, wb.leg_names, tuple(wb.joint_names)
         qp = run.pinocchio_q()
     else:  # a Hexapod's table model: its floating-base twin, the run's joints by name
-        params = _hexapod(mdl)
-        names = tuple(mdl.joint_names)
+        params, names = _hexapod(mdl), tuple(mdl.joint_names)
         if sorted(run.joint_names) != sorted(names):
             raise ParameterError(
                 f"the run's joints {list(run.joint_names)} are not the model's {list(names)}",
@@ -197,32 +169,12 @@ def gait_torques(
         tau_f, f_full, base_res = full_dynamics(run, method=method, mu=mu)
         tau_f = tau_f[:, [tuple(wb.joint_names).index(nm) for nm in names]]
         peak_f, peak_ft = _peaks(tau_f, ts)
-        extra = {
-            "torque_full": tau_f,
-            "forces_full": f_full,
-            "peak_full": peak_f,
-            "peak_full_time": peak_ft,
-            "peak_difference": np.abs(tau_f - torque).max(axis=0),
-            "base_residual": base_res,
-        }
+        diff = np.abs(tau_f - torque).max(axis=0)
+        extra = dict(torque_full=tau_f, forces_full=f_full, peak_full=peak_f)
+        extra |= dict(peak_full_time=peak_ft, peak_difference=diff, base_residual=base_res)
         read_only(*(v for v in extra.values() if isinstance(v, np.ndarray)))
-    return GaitTorques(
-        ts,
-        names,
-        legs,
-        support,
-        forces,
-        torque,
-        peak,
-        peak_time,
-        f_res,
-        m_res,
-        fmin,
-        mass,
-        str(method),
-        mu,
-        **extra,
-    )
+    return GaitTorques(ts, names, legs, support, forces, torque, peak, peak_time, f_res, m_res,
+                       fmin, mass, str(method), mu, **extra)  # fmt: skip
 
 
 def _peaks(torque: np.ndarray, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -239,15 +191,9 @@ def _at(exc: ConfigurationError, where: str) -> ConfigurationError:
 
 
 def _quasi_static(
-    pm: Any,
-    fids: list[int],
-    qp: np.ndarray,
-    ts: np.ndarray,
-    support: np.ndarray,
-    legs: tuple[str, ...],
-    method: ContactMethod,
-    mu: float | None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:
+    pm: Any, fids: list[int], qp: np.ndarray, ts: np.ndarray, support: np.ndarray,
+    legs: tuple[str, ...], method: ContactMethod, mu: float | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float]:  # fmt: skip
     """The quasi-static loads of :func:`gait_torques` on the floating-base model ``pm``.
 
     Returns:
@@ -260,8 +206,7 @@ def _quasi_static(
     mass = float(pin.computeTotalMass(pm))
     weight = mass * float(np.linalg.norm(g_world))
     n = len(ts)
-    forces = np.zeros((n, len(fids), 3))
-    torque = np.empty((n, pm.nv - 6))
+    forces, torque = np.zeros((n, len(fids), 3)), np.empty((n, pm.nv - 6))
     fmin = np.empty(n)
     f_res = m_res = 0.0
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -314,16 +259,12 @@ def full_dynamics(
     n, nl = support.shape
     rad = float(getattr(run, "settings", {}).get("foot_radius", 0.0))
     normals = getattr(run, "normals", None)
-    nrm = (
-        np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
-        if normals is None or not np.size(normals)
-        else np.asarray(normals, dtype=float)
-    )
+    nrm = np.broadcast_to([0.0, 0.0, 1.0], feet.shape)
+    if normals is not None and np.size(normals):
+        nrm = np.asarray(normals, dtype=float)
     fids = [model.getFrameId(f) for f in wb.foot_frames]
-    weight = float(run.mass) * 9.81
-    tau = np.zeros((n, model.nv - 6))
-    forces = np.zeros((n, nl, 3))
-    worst = 0.0
+    weight, tau = float(run.mass) * 9.81, np.zeros((n, model.nv - 6))
+    forces, worst = np.zeros((n, nl, 3)), 0.0
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     for i in range(n):
         b = np.array(pin.rnea(model, data, Q[i], V[i], A[i]))

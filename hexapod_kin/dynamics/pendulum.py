@@ -8,10 +8,9 @@ about the axis, ``l_c`` axis to centre of mass, ``b`` viscous damping)::
     undamped period   T = 4 sqrt(I / (m g l_c)) K(k),  k = sin(θ0/2)
     small amplitude   θ ≈ A e^{−γt} cos(ω_d t + φ),     γ = b / (2 I)
 
-``K`` is ``scipy.special.ellipk(k**2)``. Turning points are zero crossings of ``θ̇`` located
-by its cubic Hermite interpolant (slope ``θ̈``; local error O(dt⁴)); the period is the mean
-spacing of same-direction crossings; the decay rate is minus the least-squares slope of ``ln
-θ_peak`` against time (exact for the linear oscillator, hence the small-amplitude run).
+``K`` is ``scipy.special.ellipk(k**2)``. Turning points are zero crossings of ``θ̇`` (cubic
+Hermite interpolant, slope ``θ̈``); the period is the mean spacing of same-direction crossings;
+the decay rate is minus the least-squares slope of ``ln θ_peak`` against time.
 """
 
 from __future__ import annotations
@@ -28,17 +27,9 @@ from ..exceptions import ParameterError, positive
 from ._common import as_model, check_inertials, read_only
 from .forward import Method, Simulation, simulate
 
-__all__ = [
-    "PendulumExperiment",
-    "PendulumRun",
-    "PhysicalPendulum",
-    "decay_rate",
-    "exact_period",
-    "hermite_crossings",
-    "pendulum_experiment",
-    "pendulum_run",
-    "physical_pendulum",
-]
+__all__ = ["PendulumExperiment", "PendulumRun", "PhysicalPendulum", "decay_rate",
+           "exact_period", "hermite_crossings", "pendulum_experiment", "pendulum_run",
+           "physical_pendulum"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -70,24 +61,20 @@ class PhysicalPendulum:
 def physical_pendulum(model: Any) -> PhysicalPendulum:
     """``I``, ``m``, ``l_c`` and the hanging equilibrium of a one-revolute-joint model.
 
-    The potential of a body turning about a fixed axis is ``V(q) = c + A cos q + B sin q``;
-    three evaluations (q = 0, π/2, π) give ``A``, ``B``; the minimum is at
+    ``V(q) = c + A cos q + B sin q`` at q = 0, π/2, π gives ``A``, ``B``: the minimum is at
     ``atan2(−B, −A)`` and ``m g l_c = sqrt(A² + B²)``.
 
     Raises:
-        ParameterError: Not one revolute joint, implausible inertials, or an axis along
-            gravity (no restoring torque: not a pendulum).
+        ParameterError: Not one revolute joint, implausible inertials, or no restoring torque.
 
     """
     mdl = as_model(model)
     if mdl.nq != 1 or bool(mdl.is_prismatic[0]):
-        raise ParameterError(
+        msg = (
             f"model {mdl.name!r} has joints {list(mdl.joint_names)}; a pendulum needs exactly "
-            "one revolute joint",
-            parameter="model",
-            value=mdl.name,
-            allowed="one revolute joint",
+            "one revolute joint"
         )
+        raise ParameterError(msg, parameter="model", value=mdl.name, allowed="one revolute joint")
     check_inertials(mdl)
     pm = mdl.model
     data = pm.createData()
@@ -95,8 +82,7 @@ def physical_pendulum(model: Any) -> PhysicalPendulum:
         float(pin.computePotentialEnergy(pm, data, np.array([x])))
         for x in (0, math.pi / 2, math.pi)
     ]
-    a = 0.5 * (v[0] - v[2])
-    b = v[1] - 0.5 * (v[0] + v[2])
+    a, b = 0.5 * (v[0] - v[2]), v[1] - 0.5 * (v[0] + v[2])
     mass = float(pin.computeTotalMass(pm))
     g = float(np.linalg.norm(pm.gravity.linear))
     mgl = math.hypot(a, b)
@@ -118,8 +104,7 @@ def exact_period(pendulum: PhysicalPendulum, theta0: float) -> float:
     """``T = 4 sqrt(I/(m g l_c)) K(sin(θ0/2))`` in [s], the exact undamped period."""
     from scipy.special import ellipk  # scipy on use: the other dynamics commands skip it
 
-    p = pendulum
-    k = math.sin(0.5 * theta0)
+    p, k = pendulum, math.sin(0.5 * theta0)
     return float(4.0 * math.sqrt(p.inertia / (p.mass * p.gravity * p.com_distance)) * ellipk(k * k))
 
 
@@ -203,13 +188,10 @@ class PendulumRun:
         theta: (N,) angle from the hanging equilibrium in [rad].
         omega: (N,) angular velocity in [rad/s].
         energy: (N,) total energy in [J], zero at rest in the hanging equilibrium.
-        period: Measured period in [s] (mean spacing of same-direction turning points; the
-            damped period when damped), or None with fewer than two.
+        period: Measured (damped) period in [s], or None with fewer than two turning points.
         period_exact: The exact undamped period for ``theta0`` in [s].
-        energy_drift: ``max |E(t) − E(0)| / E(0)`` (relative to the initial oscillation energy
-            ``m g l_c (1 − cos θ0)``).
-        energy_max_increase: Largest step-to-step increase of E, relative to ``E(0)`` (≤ 0
-            when E never increases).
+        energy_drift: ``max |E(t) − E(0)| / E(0)``.
+        energy_max_increase: Largest step-to-step increase of E, relative to ``E(0)``.
         decay_rate: Measured envelope decay rate in [1/s] (None with fewer than 3 maxima).
         decay_rate_exact: ``b / (2 I)`` in [1/s] (the small-amplitude value).
 
@@ -256,13 +238,11 @@ class PendulumRun:
 def _theta0(theta0: Any) -> float:
     th = positive("theta0", theta0)
     if not th < math.pi:
-        raise ParameterError(
+        msg = (
             f"theta0={theta0!r} rad is not allowed; the initial angle from the hanging "
-            "equilibrium must lie in (0, pi) (pi is the unstable upright equilibrium)",
-            parameter="theta0",
-            value=theta0,
-            allowed="0 < theta0 < pi",
+            "equilibrium must lie in (0, pi) (pi is the unstable upright equilibrium)"
         )
+        raise ParameterError(msg, parameter="theta0", value=theta0, allowed="0 < theta0 < pi")
     return th
 
 
@@ -278,11 +258,9 @@ def pendulum_run(
     """Release a one-joint pendulum from ``theta0`` (rest) and measure period, energy, decay.
 
     Args:
-        model: A loaded one-revolute-joint model or source; default the ``pendulum`` preset
-            with ``damping`` written into its URDF.
+        model: A one-revolute-joint model or source; default the ``pendulum`` preset.
         theta0: Initial angle from the hanging equilibrium in [rad], in (0, π).
-        damping: Joint damping in [N·m·s/rad]; default: the model's URDF damping (for the
-            default preset: 0.01, the seed's value).
+        damping: Joint damping in [N·m·s/rad]; default the URDF's (the preset: 0.01).
         dt: Step in [s].
         duration: In [s].
         method: Integrator (``"rk4"`` default).
@@ -298,42 +276,24 @@ def pendulum_run(
     else:
         mdl = as_model(model)
     pend = physical_pendulum(mdl)
-    b = (
-        float(mdl.model.damping[0])
-        if damping is None
-        else positive("damping", damping, allow_zero=True)
-    )
+    b = positive("damping", damping, allow_zero=True) if damping is not None else None
+    b = float(mdl.model.damping[0]) if b is None else b
     sim = simulate(mdl, [pend.q_hanging + th0], dt=dt, duration=duration, method=method, damping=b)
     theta = np.asarray(sim.q[:, 0] - pend.q_hanging)
-    omega = np.asarray(sim.v[:, 0])
-    alpha = np.asarray(sim.a[:, 0])
+    omega, alpha = np.asarray(sim.v[:, 0]), np.asarray(sim.a[:, 0])
     energy = np.asarray(sim.total - pend.potential_min)
     e0 = float(energy[0])
     drift = float(np.max(np.abs(energy - e0)) / e0)
     max_inc = float(np.max(np.diff(energy)) / e0) if len(energy) > 1 else 0.0
     crossings = hermite_crossings(sim.t, omega, alpha, direction=-1)
-    period = (
-        float((crossings[-1] - crossings[0]) / (len(crossings) - 1))
-        if len(crossings) >= 2
-        else None
-    )
+    period = None
+    if len(crossings) >= 2:
+        period = float((crossings[-1] - crossings[0]) / (len(crossings) - 1))
     rate = decay_rate(sim.t, theta, omega, alpha)
     read_only(theta, omega, energy)
-    return PendulumRun(
-        th0,
-        b,
-        pend,
-        sim,
-        theta,
-        omega,
-        energy,
-        period,
-        exact_period(pend, th0),
-        drift,
-        max_inc,
-        rate,
-        b / (2.0 * pend.inertia),
-    )
+    exact, gamma = exact_period(pend, th0), b / (2.0 * pend.inertia)
+    return PendulumRun(th0, b, pend, sim, theta, omega, energy, period, exact, drift, max_inc,
+                       rate, gamma)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -354,31 +314,25 @@ class PendulumExperiment:
     def to_dict(self) -> dict[str, Any]:
         """The figures of ``hexapod-kin pendulum --json`` (SI units, angles in rad)."""
         u, d, s = self.undamped, self.damped, self.small
-        return {
+        us, ud, sd = u.simulation, u.to_dict(), s.to_dict()
+        out: dict[str, Any] = {
             "theta0": u.theta0,
             "theta0_deg": math.degrees(u.theta0),
-            "dt": u.simulation.dt,
-            "duration": float(u.simulation.t[-1]),
-            "method": u.simulation.method,
-            "pendulum": u.pendulum.to_dict(),
-            "period": u.period,
-            "period_exact": u.period_exact,
-            "period_error": u.to_dict()["period_error"],
-            "energy_drift": u.energy_drift,
-            "damping": d.damping,
-            "damped_energy_monotone": d.energy_monotone,
-            "damped_energy_max_increase": d.energy_max_increase,
+            "dt": us.dt,
+        }
+        out |= {"duration": float(us.t[-1]), "method": us.method, "pendulum": u.pendulum.to_dict()}
+        out |= fields_dict(u, "period", "period_exact") | {"period_error": ud["period_error"]}
+        out |= {"energy_drift": u.energy_drift, "damping": d.damping}
+        out |= {"damped_energy_monotone": d.energy_monotone}
+        out |= {"damped_energy_max_increase": d.energy_max_increase}
+        out |= {
             "damped_energy_loss": float(1.0 - d.energy[-1] / d.energy[0]),
             "damped_period": d.period,
-            "decay_rate": s.decay_rate,
-            "decay_rate_exact": s.decay_rate_exact,
-            "decay_rate_error": s.to_dict()["decay_rate_error"],
-            "decay_theta0": s.theta0,
-            "decay_rate_at_theta0": d.decay_rate,
-            "undamped": u.to_dict(),
-            "damped": d.to_dict(),
-            "small_amplitude": s.to_dict(),
         }
+        out |= fields_dict(s, "decay_rate", "decay_rate_exact")
+        out |= {"decay_rate_error": sd["decay_rate_error"], "decay_theta0": s.theta0}
+        out |= {"decay_rate_at_theta0": d.decay_rate, "undamped": ud, "damped": d.to_dict()}
+        return out | {"small_amplitude": sd}
 
 
 def pendulum_experiment(
@@ -396,8 +350,7 @@ def pendulum_experiment(
 
     Args:
         theta0: Initial angle from the hanging equilibrium in [rad] (seed: 30°).
-        damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01), written into
-            the preset's URDF.
+        damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01).
         dt: Step in [s].
         duration: In [s].
         method: Integrator.

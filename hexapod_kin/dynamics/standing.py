@@ -13,9 +13,9 @@ Contact forces ``f_i`` (ground on foot i, world axes, point contacts) balance gr
 minimum-norm point, projected back onto the equations). Joint torques (static):
 ``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i.
 
-Any other legged robot (URDF, ``erd:NAME``, a ``WholeBody``; ``feet=`` for a URDF without foot
-links) stands by :func:`hexapod_kin.gait.stand.standing_pose` on its floating-base model, the
-forces at the foot spheres' lowest points (``J_i = J_v − [c_i − p_i]× J_ω``).
+Any other legged robot stands by :func:`hexapod_kin.gait.stand.standing_pose` on its
+floating-base model, the forces at the foot spheres' lowest points (``J_i = J_v − [c_i − p_i]×
+J_ω``).
 """
 
 from __future__ import annotations
@@ -28,14 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from .._fields import fields_dict
-from ..exceptions import (
-    ConfigurationError,
-    LimitError,
-    ParameterError,
-    choices,
-    one_of,
-    positive,
-)
+from ..exceptions import ConfigurationError, LimitError, ParameterError, choices, one_of, positive
 from ..params import Hexapod
 from ._common import as_model, check_inertials, finite_vector, read_only
 
@@ -65,22 +58,18 @@ def _hexapod(model: Any) -> Hexapod:
             allowed="a Hexapod preset",
         )
     if model.nq != len(params.joint_names):
-        raise ParameterError(
+        msg = (
             f"model {model.name!r} is a sub-chain ({model.nq} joints); load the whole robot "
-            "(no base=/tip=)",
-            parameter="model",
-            value=model.name,
-            allowed="the whole robot",
+            "(no base=/tip=)"
         )
+        raise ParameterError(msg, parameter="model", value=model.name, allowed="the whole robot")
     return params
 
 
 def robot_mass_com(model: Any, q: Any, data: Any = None) -> tuple[float, np.ndarray]:
-    """Total mass [kg] and centre of mass [m] (model's world frame) of the whole robot at ``q``.
+    """Total mass [kg] and centre of mass [m] (world frame) of the whole robot at ``q``.
 
-    Includes the bodies fixed to the world (``model.inertias[0]``, the body link of a
-    fixed-base robot), which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out.
-    ``data``: a Pinocchio ``Data`` of ``model.model`` to reuse (sample loops).
+    Bodies fixed to the world included; ``data``: a ``Data`` of ``model.model`` to reuse.
     """
     pm = model.model
     data = pm.createData() if data is None else data
@@ -106,16 +95,13 @@ def standing_configuration(
 ) -> np.ndarray:
     """Joint values standing the robot's body level at ``height`` above the ground.
 
-    Foot i is placed at horizontal distance ``reach`` from its hip axis along the leg's mount
-    direction, ``height`` below the body origin, then every foot is moved by ``−shift`` (the
-    body shifted by ``shift`` over fixed feet). Each leg is solved by the closed-form IK
-    (``hexapod_kin.ik.analytic``), hip nearest 0, knee up.
+    Foot i is ``reach`` from its hip axis along the leg's mount direction, ``height`` below the
+    body origin, moved by ``−shift``; each leg by the closed-form IK, hip nearest 0, knee up.
 
     Args:
         model: The whole robot (from a Hexapod, e.g. ``load("hexapod")``).
         height: Body origin above the ground in [m] (> 0).
-        reach: Hip axis to foot, horizontal, in [m]; default ``l1 + l2`` of the leg (the
-            femur horizontal and, when ``height = l3``, the tibia vertical).
+        reach: Hip axis to foot, horizontal, in [m]; default ``l1 + l2`` of the leg.
         shift: Body shift (dx, dy) over the feet in [m].
 
     Raises:
@@ -127,8 +113,7 @@ def standing_configuration(
     from .. import ik
     from ..gait.legs import check_size
 
-    params = _hexapod(model)
-    h = positive("height", height)
+    params, h = _hexapod(model), positive("height", height)
     sh = finite_vector("shift", shift, 2)
     big = [("height", h), ("shift", float(np.abs(sh).max()))]
     if reach is not None:
@@ -204,24 +189,16 @@ def contact_forces(
         method: ``"min_norm"`` or ``"friction"`` (see the module doc).
         mu: Friction coefficient (> 0); needed by ``"friction"``.
 
-    Returns:
-        (k, 3) ground-on-foot forces [N] with the residuals ``‖Σf − W ẑ‖`` [N] and
-        ``‖Σ(p − c) × f‖`` [N·m].
-
     Raises:
         ParameterError: Bad method or ``mu``.
         ConfigurationError: The feet cannot balance the weight (collinear/too few feet).
-        LimitError: No friction-cone solution (a ``ConfigurationError``): the CoM outside the
-            support polygon or ``mu`` too small.
+        LimitError: No friction-cone solution (CoM outside the support polygon, small ``mu``).
 
     """
     one_of("method", method, CONTACT_METHODS)
-    p = np.asarray(feet, dtype=float)
-    c = np.asarray(com, dtype=float)
-    w = positive("weight", weight)
-    k = len(p)
-    r = p - c
-    a = np.zeros((6, 3 * k))
+    p, c = np.asarray(feet, dtype=float), np.asarray(com, dtype=float)
+    w, k = positive("weight", weight), len(p)
+    r, a = p - c, np.zeros((6, 3 * k))
     for i in range(k):
         a[0:3, 3 * i : 3 * i + 3] = np.eye(3)
         a[3:6, 3 * i : 3 * i + 3] = pin.skew(r[i])
@@ -243,12 +220,8 @@ def contact_forces(
         )
     if method == "friction":
         if mu is None:
-            raise ParameterError(
-                "method='friction' needs a friction coefficient mu > 0",
-                parameter="mu",
-                value=mu,
-                allowed="> 0",
-            )
+            msg = "method='friction' needs a friction coefficient mu > 0"
+            raise ParameterError(msg, parameter="mu", value=mu, allowed="> 0")
         f = _friction_qp(a, b, f, pinv, positive("mu", mu), w)
     fr, mr = residuals(f)
     forces = f.reshape(k, 3)
@@ -260,8 +233,7 @@ def _friction_qp(
     a: np.ndarray, b: np.ndarray, f0: np.ndarray, pinv: np.ndarray, mu: float, w: float
 ) -> np.ndarray:
     """Least ‖f‖² with ``A f = b``, ``f_z ≥ 0`` and ``‖f_t‖ ≤ μ f_z`` (SLSQP, then projected)."""
-    k = len(f0) // 3
-    tol = 1e-9 * w
+    k, tol = len(f0) // 3, 1e-9 * w
 
     def cone(f: np.ndarray) -> np.ndarray:
         ff = f.reshape(k, 3)
@@ -380,13 +352,11 @@ def _stance_of(names: list[str], legs: Any) -> tuple[int, ...]:
         ):
             out.append(int(item) - 1)
         else:
-            raise ParameterError(
+            msg = (
                 f"stance leg {item!r} does not exist; use leg names {choices(names)} or "
-                f"numbers 1..{len(names)}",
-                parameter="legs",
-                value=item,
-                allowed=names,
+                f"numbers 1..{len(names)}"
             )
+            raise ParameterError(msg, parameter="legs", value=item, allowed=names)
     return tuple(sorted(set(out)))
 
 
@@ -403,13 +373,11 @@ def stance_at(
 
     Args:
         model: The whole robot (from a Hexapod).
-        q: (nq,) joint values; the stance feet should be at ``−height`` in the body frame
-            (the forces hold the weight wherever the feet are; ``feet`` reports them).
+        q: (nq,) joint values; the stance feet should be at ``−height`` in the body frame.
         height: Body origin above the ground in [m].
         legs: Stance legs (names or 1-based numbers); default all.
         method: ``"min_norm"`` or ``"friction"``.
-        mu: Friction coefficient (needed by ``"friction"``; with ``"min_norm"`` it only sets
-            what ``feasible`` checks).
+        mu: Friction coefficient (``"friction"``; with ``"min_norm"``: what ``feasible`` checks).
 
     Raises:
         ParameterError, ConfigurationError: As :func:`contact_forces`; bad legs or q.
@@ -440,9 +408,8 @@ def _stance(
 ) -> Stance:  # fmt: skip
     """The :class:`Stance` of forces at ``contacts`` holding ``mass`` at ``com``.
 
-    ``data`` holds the joint Jacobians and frame placements at ``qp``. The torques are ``g(q) −
-    Σ J_iᵀ f_i`` from joint ``base`` on, ``J_i`` the linear Jacobian of the point ``offsets[i]``
-    (world axes) from frame ``fids[i]``: ``J_v − [d]× J_ω`` (``J_v`` when ``offsets`` is None).
+    ``data`` holds the Jacobians and placements at ``qp``; torques from joint ``base`` on, at the
+    points ``offsets[i]`` (world axes) from frames ``fids[i]`` (None: the frames' origins).
     """
     weight = mass * float(np.linalg.norm(pm.gravity.linear))
     mu_v = None if mu is None else positive("mu", mu)
@@ -477,22 +444,20 @@ def stand(
     """A legged robot standing level at ``height``: pose, contact forces and joint torques.
 
     Args:
-        model: The robot: a Hexapod's model or preset (default ``load("hexapod")``), or any
-            legged robot :func:`hexapod_kin.gait.as_whole_body` takes (a URDF path,
-            ``erd:NAME``, a loaded model, a ``WholeBody``).
+        model: A Hexapod's model or preset (default ``load("hexapod")``), or any legged robot
+            :func:`hexapod_kin.gait.as_whole_body` takes.
         height: Body origin above the ground in [m] (default: a Hexapod 0.10 m; another
-            robot its ``body_height``, see :meth:`~hexapod_kin.gait.WholeBody.neutral_feet`).
-        reach: Hip axis to foot, horizontal, in [m] (default: a Hexapod ``l1 + l2``; another
-            robot its own).
+            robot its ``body_height``).
+        reach: Hip axis to foot, horizontal, in [m] (default: the robot's own).
         shift: Body shift (dx, dy) over the feet in [m].
         legs: Stance legs (names or 1-based numbers); default all.
         method: ``"min_norm"`` or ``"friction"`` (see the module doc).
         mu: Friction coefficient.
-        feet: Feet as frame plus offset, for a URDF without foot links (``"tibia_lf:0,0.16,
-            0.029 ..."``, a mapping or a file; see :func:`hexapod_kin.gait.legs.parse_feet`).
+        feet: Feet as frame plus offset, for a URDF without foot links
+            (:func:`hexapod_kin.gait.legs.parse_feet`).
         foot_radius: Contact radius of the feet [m] (default: the robot's).
-        knee: Where the legs' knees point (:data:`hexapod_kin.gait.knee.KNEES`; default:
-            the branch inside the joint limits nearest the robot's neutral q).
+        knee: Where the knees point (:data:`hexapod_kin.gait.knee.KNEES`; default: inside the
+            limits nearest the neutral q).
 
     Raises:
         ParameterError, ConfigurationError: Bad values; unreachable pose; no balance.

@@ -27,14 +27,12 @@ def external_force(
 ) -> list[pin.Force]:
     """``fext`` for ``pin.rnea``/``pin.aba``: ``force_world`` [N] applied at frame ``frame_id``.
 
-    The force acts at the frame's origin (world axes) on the body of the frame's parent joint;
-    it is returned in that joint's local frame (linear part ``Rᵀ f``, moment about the joint
-    origin ``Rᵀ ((p − o) × f)``); every other joint gets zero. Needs ``data`` after forward
-    kinematics with frames (``pin.framesForwardKinematics``).
+    The force acts at the frame's origin on the parent joint's body, returned in that joint's
+    frame (``Rᵀ f``, moment ``Rᵀ ((p − o) × f)``); needs ``data`` after
+    ``pin.framesForwardKinematics``.
     """
     joint = model.frames[frame_id].parentJoint
-    omi = data.oMi[joint]
-    p = data.oMf[frame_id].translation
+    omi, p = data.oMi[joint], data.oMf[frame_id].translation
     rot_t = omi.rotation.T
     moment = np.cross(p - omi.translation, force_world)
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
@@ -139,9 +137,6 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
         force: Force of the foot on its environment (3,) in [N], base axes; default zero.
         frame: Frame where the force acts (default: the tip).
 
-    Returns:
-        A :class:`LegTorques` (with both cross-check errors).
-
     Raises:
         ConfigurationError: Bad ``q``.
         ParameterError: Bad ``force``; implausible inertials (names the link).
@@ -156,19 +151,10 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
     total = grav + tau_f
     limit = np.array(mdl.effort_limit, dtype=float)
     read_only(qv, f, grav, tau_f, tau_rnea, total, limit)
-    return LegTorques(
-        qv,
-        f,
-        st.frame,
-        grav,
-        tau_f,
-        total,
-        tau_rnea,
-        float(np.max(np.abs(tau_f - tau_rnea), initial=0.0)),
-        float(np.max(np.abs(grav - grav_rnea), initial=0.0)),
-        tuple(mdl.joint_names),
-        limit,
-    )
+    err_f = float(np.max(np.abs(tau_f - tau_rnea), initial=0.0))
+    err_g = float(np.max(np.abs(grav - grav_rnea), initial=0.0))
+    names = tuple(mdl.joint_names)
+    return LegTorques(qv, f, st.frame, grav, tau_f, total, tau_rnea, err_f, err_g, names, limit)
 
 
 @dataclass(frozen=True)
@@ -181,8 +167,7 @@ class StepTorques:
         force: (3,) constant foot force on the environment in [N], base axes.
         gravity: (N, nq) ``g(q)`` in [N·m].
         force_torque: (N, nq) ``Jᵀ F`` in [N·m].
-        inertial: (N, nq) ``M q̈ + C q̇`` (``rnea(q, q̇, q̈) − g``; q̈ by central differences of
-            the trajectory's q̇) in [N·m].
+        inertial: (N, nq) ``M q̈ + C q̇`` (q̈ by central differences) in [N·m].
         total: (N, nq) ``gravity + force_torque + inertial`` in [N·m].
         peak: (nq,) ``max_t |total|`` per joint in [N·m].
         peak_gravity: (nq,) ``max_t |gravity|`` in [N·m].
@@ -205,29 +190,18 @@ class StepTorques:
 
     def to_dict(self, samples: bool = False) -> dict[str, Any]:
         """JSON-ready peaks and cross-check (the time series too with ``samples=True``)."""
-        out: dict[str, Any] = {
-            "joint_names": list(self.joint_names),
-            "force": self.force.tolist(),
-            "duration": float(self.t[-1]),
-            "samples": int(len(self.t)),
-            "peak": self.peak.tolist(),
-            "peak_gravity": self.peak_gravity.tolist(),
-            "peak_inertial": np.max(np.abs(self.inertial), axis=0).tolist(),
-            "crosscheck_error": self.crosscheck_error,
-        }
+        out = fields_dict(self, "joint_names", "force")
+        out |= {"duration": float(self.t[-1]), "samples": int(len(self.t))}
+        out |= fields_dict(self, "peak", "peak_gravity")
+        out["peak_inertial"] = np.max(np.abs(self.inertial), axis=0).tolist()
+        out["crosscheck_error"] = self.crosscheck_error
         if samples:
             out.update(fields_dict(self, "t", "q", "total", "gravity", "force_torque"))
         return out
 
 
 def torques_along(
-    model: Any,
-    t: Any,
-    q: Any,
-    qdot: Any = None,
-    force: Any = None,
-    *,
-    frame: str | None = None,
+    model: Any, t: Any, q: Any, qdot: Any = None, force: Any = None, *, frame: str | None = None
 ) -> StepTorques:
     """Joint torques along a sampled trajectory ``q(t)`` (see :class:`StepTorques`).
 
@@ -245,26 +219,16 @@ def torques_along(
 
     """
     mdl = as_model(model)
-    st = _statics(mdl, frame)
-    qs = mdl.check_q_batch(q, "q")
+    st, qs = _statics(mdl, frame), mdl.check_q_batch(q, "q")
     ts = np.asarray(t, dtype=float)
     if ts.shape != (len(qs),) or len(ts) < 2 or not np.all(np.diff(ts) > 0):
-        raise ParameterError(
-            f"t has shape {ts.shape}; {len(qs)} strictly increasing times are needed",
-            parameter="t",
-            value=ts.shape,
-            allowed=f"({len(qs)},) increasing",
-        )
+        msg = f"t has shape {ts.shape}; {len(qs)} strictly increasing times are needed"
+        raise ParameterError(msg, parameter="t", value=ts.shape, allowed=f"({len(qs)},) increasing")
     qd = np.gradient(qs, ts, axis=0) if qdot is None else mdl.check_q_batch(qdot, "qdot")
     if qd.shape != qs.shape:
-        raise ParameterError(
-            f"qdot has shape {qd.shape}; expected {qs.shape}",
-            parameter="qdot",
-            value=qd.shape,
-            allowed=qs.shape,
-        )
-    qdd = np.gradient(qd, ts, axis=0)
-    f = _force(force)
+        msg = f"qdot has shape {qd.shape}; expected {qs.shape}"
+        raise ParameterError(msg, parameter="qdot", value=qd.shape, allowed=qs.shape)
+    qdd, f = np.gradient(qd, ts, axis=0), _force(force)
     n = len(ts)
     grav, tau_f, inert = (np.empty_like(qs) for _ in range(3))
     err = 0.0
@@ -275,9 +239,7 @@ def torques_along(
         err = max(err, float(np.max(np.abs(tf - tr))))
         inert[i] = np.asarray(pin.rnea(pm, d, qs[i], qd[i], qdd[i])) - g
     total = grav + tau_f + inert
-    peak = np.max(np.abs(total), axis=0)
-    peak_g = np.max(np.abs(grav), axis=0)
+    peak, peak_g = np.max(np.abs(total), axis=0), np.max(np.abs(grav), axis=0)
     read_only(ts, qs, f, grav, tau_f, inert, total, peak, peak_g)
-    return StepTorques(
-        ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, tuple(mdl.joint_names)
-    )
+    names = tuple(mdl.joint_names)
+    return StepTorques(ts, qs, f, grav, tau_f, inert, total, peak, peak_g, err, names)

@@ -1,17 +1,12 @@
 """Inverse kinematics: closed forms for the leg families, damped least squares for any chain.
 
 * :mod:`.closed` — closed forms chosen from the Khalil table's pattern (:func:`detect_family`,
-  :func:`analytic`, :func:`analytic_batch`); the legs' one closed form, vectorised
-  (:func:`leg_solutions`, :func:`leg_reachable`); legs with a tool offset or twists within
-  :data:`FAMILY_TOL` of the pattern (finished on the table by :mod:`._table_finish`).
-* :mod:`.task` — the problem: a position, position + yaw, or a 6-D pose target with per-row
-  weights (:func:`build_task`).
-* :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`, in the model's cache)
-  and the package's one home pose :func:`home` (IK's first candidate start, resolved-rate start).
-* :mod:`.solver` — the one numerical loop (compiled, :mod:`.step`, imported on first use)
-  for one target (:func:`solve`), many (:func:`solve_many`) or a chain view such as a leg
-  (:func:`solve_chain`).
-* :mod:`.result` — its options and result (:class:`IKOptions`, :class:`IKResult`).
+  :func:`analytic`, :func:`analytic_batch`, :func:`leg_solutions`, :func:`leg_reachable`).
+* :mod:`.task` — the problem: a position, position + yaw or 6-D pose target with row weights.
+* :mod:`.prepare` — what the solver keeps per model (:class:`Prepared`) and :func:`home`.
+* :mod:`.solver` — the one numerical loop (compiled, :mod:`.step`): :func:`solve`,
+  :func:`solve_many`, :func:`solve_chain`; :mod:`.result` — :class:`IKOptions`,
+  :class:`IKResult`.
 """
 
 from __future__ import annotations

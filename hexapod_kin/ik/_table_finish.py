@@ -1,12 +1,9 @@
 """Leg solutions finished on the table itself (:func:`finish_on_table`).
 
-A leg whose twists are within ``angle_tol`` of the closed-form pattern (``α2 = ±π/2``,
-``α3 ∈ {0, π}``; e.g. a URDF's rounded constants) is first solved by the exact pattern's
-closed form (:mod:`hexapod_kin.ik.closed`); each solution is then finished on the table's own
-kinematics by the package's one numerical loop (:func:`hexapod_kin.ik.solve_chain`: the
-table as a chain view, :func:`table_chain`). From a start ``O(deviation)`` away the
-Levenberg–Marquardt steps are Gauss–Newton steps to rounding (λ² ≪ JᵀJ) and converge
-quadratically.
+A leg whose twists are within ``angle_tol`` of the closed-form pattern is solved by the exact
+pattern's closed form (:mod:`hexapod_kin.ik.closed`), each solution then finished on the
+table's own kinematics by the one numerical loop (:func:`hexapod_kin.ik.solve_chain` on
+:func:`table_chain`): from ``O(deviation)`` away it converges quadratically.
 """
 
 from __future__ import annotations
@@ -41,11 +38,9 @@ def table_chain(ch: Chain, n: int) -> ChainArrays:
     mount and left out. The tip is the product of the remaining rows and the tool.
     """
     rows = ch.rows
-    rots, trans = [], []
-    for j, row in enumerate(rows[:n]):
-        t = row.transform() if j else khalil_transform(0.0, 0.0, row.theta, row.r)
-        rots.append(t[:3, :3])
-        trans.append(t[:3, 3])
+    ts = [row.transform() if j else khalil_transform(0.0, 0.0, row.theta, row.r)
+          for j, row in enumerate(rows[:n])]  # fmt: skip
+    rots, trans = [t[:3, :3] for t in ts], [t[:3, 3] for t in ts]
     tip = np.eye(4)
     for row in rows[n:]:
         tip = tip @ row.transform()
@@ -56,14 +51,9 @@ def table_chain(ch: Chain, n: int) -> ChainArrays:
 
 
 def finish_on_table(
-    ch: Chain,
-    x: np.ndarray,
-    q: np.ndarray,
-    valid: np.ndarray,
-    tol_abs: float,
-    scale: float,
+    ch: Chain, x: np.ndarray, q: np.ndarray, valid: np.ndarray, tol_abs: float, scale: float,
     limits: tuple[np.ndarray, np.ndarray] | None,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Finish leg solutions on the table's own kinematics (the one loop, no limits).
 
     Args:
@@ -81,15 +71,11 @@ def finish_on_table(
 
     """
     n_t, k, n = q.shape
-    q = q.copy()
-    idx = np.argwhere(valid)
+    q, idx = q.copy(), np.argwhere(valid)
     if len(idx):
-        qa = q[idx[:, 0], idx[:, 1]]
-        xa = x[idx[:, 0], :3]
-        free = np.full(n, np.inf)
-        qa, miss, _ok = solve_chain(
-            table_chain(ch, n), xa, qa, -free, free, tol=1e-15 * scale, max_iter=12
-        )
+        qa, xa, free = q[idx[:, 0], idx[:, 1]], x[idx[:, 0], :3], np.full(n, np.inf)
+        chain = table_chain(ch, n)
+        qa, miss, _ok = solve_chain(chain, xa, qa, -free, free, tol=1e-15 * scale, max_iter=12)
         qa = wrap_angles(qa)
         ok = miss <= max(tol_abs, 1e-12 * scale)
         if limits is not None:

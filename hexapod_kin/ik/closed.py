@@ -4,38 +4,23 @@ Closed forms (:func:`analytic`, :func:`analytic_batch`) are chosen from the *str
 Khalil table (the pattern of σ, α, d, r), never from a preset name:
 ``"coxa_tibia"`` (2 DOF, seed 002)
     ``R(α=0, d=0, r=r1) · R(α=±π/2, d=l1, r=0) · F(d=l2, r=0)``; foot
-    ``Rz(φ1)·[l1 + l2 cos φ2, 0, ±l2 sin φ2] + [0, 0, r1]``. A 2-DOF leg reaches a *surface*:
-    a target off it (farther than ``tol`` from it) has no solution. The tibia angle comes from
-    ``atan2`` of both coordinates, so its sign is right (the seed's ``θ2 = 180° − β`` loses it:
-    ``(0°, −30°)`` and ``(0°, +30°)`` give the same ``β``). Up to 2 solutions (hip ± π).
+    ``Rz(φ1)·[l1 + l2 cos φ2, 0, ±l2 sin φ2] + [0, 0, r1]``. A 2-DOF leg reaches a *surface*
+    (a target farther than ``tol`` from it has no solution); the tibia angle is ``atan2`` of
+    both coordinates (its sign kept). Up to 2 solutions (hip ± π).
 ``"leg3"`` (3 DOF hip/knee/ankle, seeds 000/001/003)
     ``R(0, 0, r1) · R(±π/2, l1, 0) · R(0, l2, 0) · F(d=l3, r=0)``. Up to 4 solutions: hip
     ``atan2(y, x)`` or that ``+ π`` (the leg reaching back over the hip axis), each with both
     knee branches (ankle ``±acos``).
 ``"scara"`` (seed 003)
     ``R(0, 0, r1) · R(0, d2, r2) · R(0, d3, r3) · P(α ∈ {0, π}, d=0) · F(d=0, r=0)``. Target
-    ``(x, y, z)`` or ``(x, y, z, yaw)``: ``yaw`` [rad] is the angle of the tool frame's x axis
-    in the base xy-plane. A position alone leaves θ3 free (it only turns the tool); then the
-    solutions use ``θ3 = 0`` (joint value). Up to 2 solutions (both elbow branches); the
-    prismatic value follows from z.
+    ``(x, y, z)`` or ``(x, y, z, yaw)`` (``yaw`` [rad]: the tool x axis in the base xy-plane;
+    without it ``θ3 = 0``). Up to 2 solutions (both elbow branches).
 
-The legs are recognised through what leaves their closed form unchanged (:func:`detect_family`):
-a base pose and any ``α1``, ``d1`` (the *mount*), offsets ``r2``, ``r3`` along the knee axis,
-fixed rows after the last joint and a **tool offset** — the foot a fixed point ``p`` in the
-last joint's frame is an effective last length ``√(p_x² + p_y²)``, an angle offset
-``atan2(p_y, p_x)`` on the last joint and a lateral offset ``e`` along the knee axis (the hip
-then turns by ``atan2(−σe, ±√(x² + y² − e²))``) — an ankle axis anti-parallel to the knee's
-(``α3 = π``: that joint enters negated), and twists within ``angle_tol`` (default
-:data:`FAMILY_TOL`) of ``α2 = ±π/2``, ``α3 ∈ {0, π}``, whose solutions are finished on the
-table itself by the one IK loop (:mod:`hexapod_kin.ik._table_finish`).
-
-Joint angle offsets (``θ`` of revolute rows) and the base height ``r1`` are allowed. Revolute
-results are wrapped to ``(−π, π]``; they are returned whether or not they are inside the joint
-limits unless ``within_limits=True`` (then each is shifted by 2π if that helps, else dropped).
-
-The legs' closed form is written once, vectorised in numpy over arrays of targets
-(:func:`leg_solutions`, :func:`leg_reachable`); the sweep scores and the gait's body IK call
-it too. The numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
+Legs are also recognised (:func:`detect_family`, :class:`LegFamily`) on a mount (base pose,
+``α1``, ``d1``), with offsets along the knee axis, a foot point after the last joint, an ankle
+anti-parallel to the knee and twists within ``angle_tol`` of the pattern. Revolute results are
+wrapped to ``(−π, π]``. The legs' closed form is written once, vectorised
+(:func:`leg_solutions`); the numerical solver for any chain is :mod:`hexapod_kin.ik.solver`.
 """
 
 from __future__ import annotations
@@ -46,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
@@ -62,10 +48,8 @@ _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
 _ANG_TOL = 1e-12
 
-#: Default tolerance [rad] of :func:`detect_family` on a leg's twists (α2 = ±π/2,
-#: α3 ∈ {0, π}): wider than the URDF snapping tolerance (``hexapod_kin.SNAP_TOL``), so legs
-#: whose rounded constants were not snapped (e.g. ``1.5704`` for π/2: 4e-4 rad) are still
-#: recognised; their solutions are finished on the exact table.
+#: Default tolerance [rad] of :func:`detect_family` on a leg's twists: covers unsnapped URDF
+#: constants (``1.5704`` for π/2); such solutions are finished on the exact table.
 FAMILY_TOL = 1e-3
 
 
@@ -73,8 +57,13 @@ def _is(value: float, target: float, tol: float = _ANG_TOL) -> bool:
     return abs(value - target) <= tol
 
 
+def _twist_off(alpha: float, target: float) -> float:
+    """|alpha − target| modulo 2π [rad]."""
+    return abs(math.remainder(alpha - target, _TWO_PI))
+
+
 def _angle_is(value: float, target: float) -> bool:
-    return abs(math.remainder(value - target, 2 * math.pi)) <= _ANG_TOL
+    return _twist_off(value, target) <= _ANG_TOL
 
 
 # ============================================================================ family detection
@@ -85,24 +74,17 @@ class LegFamily:
     Attributes:
         family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"``.
         chain: The chain.
-        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``;
-            a leg's last length is the one to its foot point, ``√(p_x² + p_y²)`` (``d`` of
-            the fixed row for the catalogue legs).
+        lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``
+            (a leg's last one to its foot point, ``√(p_x² + p_y²)``).
         height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
         sign: ``sin α2`` (±1) of the legs; ``cos α4`` (±1) of the SCARA's prismatic row.
-        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint; a leg's
-            last one includes the foot point's angle ``atan2(p_y, p_x)``.
+        offsets: The joints' θ (revolute) or r (prismatic) constants, one per joint.
         yaw_offset: SCARA only: tool yaw added by the constant rows, in [rad].
-        lateral: Legs: the foot's offset ``e`` along the knee axis [m] (``r2 + κ(r3 + p_z)``;
-            0 for the catalogue legs). The hip then turns by ``atan2(−σe, ±√(h² − e²))``.
-        joint_signs: Legs: ``+1`` per joint, ``−1`` for an ankle whose axis is anti-parallel
-            to the knee's (``α3 = π``): that joint's angle enters the planar leg negated.
-        mount: Legs: ``T_base_frame0'`` = ``base_pose · Rx(α1) · Tx(d1)`` when not identity
-            (targets are mapped through it), else None.
-        deviation: Legs: how far [rad] the table's twists are from the exact pattern
-            (``|α2 ∓ π/2|``, ``α3`` from 0 or π); 0 for an exact table. Above 1e-12 the
-            closed form solves the exact pattern and the one IK loop finishes each
-            solution on the table itself (see :func:`analytic_batch`).
+        lateral: Legs: the foot's offset ``e`` along the knee axis [m] (``r2 + κ(r3 + p_z)``).
+        joint_signs: Legs: ``+1`` per joint, ``−1`` for an ankle anti-parallel to the knee.
+        mount: Legs: ``base_pose · Rx(α1) · Tx(d1)`` when not identity, else None.
+        deviation: Legs: how far [rad] the twists are from the exact pattern (0: exact; else
+            the solutions are finished on the table, see :func:`analytic_batch`).
 
     """
 
@@ -125,18 +107,9 @@ class LegFamily:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (the chain by name; lengths in [m], angles in [rad])."""
-        return {
-            "family": self.family,
-            "chain": self.chain.name,
-            "lengths": list(self.lengths),
-            "height": self.height,
-            "sign": self.sign,
-            "offsets": list(self.offsets),
-            "yaw_offset": self.yaw_offset,
-            "lateral": self.lateral,
-            "joint_signs": list(self.joint_signs),
-            "deviation": self.deviation,
-        }
+        names = ("lengths", "height", "sign", "offsets", "yaw_offset", "lateral", "joint_signs")
+        out = {"family": self.family, "chain": self.chain.name} | fields_dict(self, *names)
+        return out | {"deviation": self.deviation}
 
     @property
     def target_size(self) -> tuple[int, ...]:
@@ -146,10 +119,8 @@ class LegFamily:
     def reach_excess(self, targets: Any) -> np.ndarray:
         """Distance (N,) [m] by which targets lie outside the leg's reach (0 inside).
 
-        Targets (N, 3) in the chain's base frame, as :func:`analytic_batch` takes them. The
-        distance is that of the exact pattern's workspace (joint limits ignored): the
-        planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]`` (2 DOF: ``|l2|``) over
-        both hip branches, and ``|e| − √(x² + y²)`` for a lateral offset ``e``.
+        Targets (N, 3) in the chain's base frame; the exact pattern's workspace, joint limits
+        ignored (planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]``, both hip branches).
 
         Raises:
             IKError: The family is ``scara`` (no such distance) or bad targets.
@@ -204,13 +175,11 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
         for mount, foot in zip(params.legs, params.foot_frames):
             if tip == foot and base == params.body:
                 return replace(mount.chain, base_pose=Pose.of(mount.transform()))
-        raise IKError(
+        msg = (
             f"chain: the hexapod's sub-chain {base!r} -> {tip!r} is not one leg from the body "
-            f"{params.body!r}; closed forms take base={params.body!r} and a foot as tip",
-            parameter="tip",
-            value=tip,
-            allowed=list(params.foot_frames),
+            f"{params.body!r}; closed forms take base={params.body!r} and a foot as tip"
         )
+        raise IKError(msg, parameter="tip", value=tip, allowed=list(params.foot_frames))
     raise IKError(
         f"chain={chain!r}: closed-form IK needs a Khalil table (a Chain, or a model loaded from "
         "one); this source has none (URDF) — use hexapod_kin.ik.solve(model, target)",
@@ -223,22 +192,13 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
 def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
 
-    Legs are recognised through what leaves their closed form unchanged (see the module
-    docstring); a first row's ``α1``, ``d1`` and the base pose fold into
-    :attr:`LegFamily.mount`.
-
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
             :func:`hexapod_kin.load` takes (a preset name, a table file).
-        angle_tol: How far [rad] a leg's twists may be from the exact pattern (default
-            :data:`FAMILY_TOL` = 1e-3 rad: covers URDF constants such as ``1.5704`` for π/2).
-
-    Returns:
-        The :class:`LegFamily`.
+        angle_tol: How far [rad] a leg's twists may be from the exact pattern.
 
     Raises:
-        IKError: If the table matches no family (the message shows the pattern and the
-            families), or the model has no table.
+        IKError: The table matches no family, or the model has no table.
 
     """
     ch = _chain_of(chain)
@@ -258,39 +218,20 @@ def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) 
             return leg
     tool_xyz = ch.tool_matrix[:3, 3]
     if not np.allclose(tool_xyz, 0.0, atol=1e-15) and not legs_ok:
-        raise IKError(
+        msg = (
             f"chain {ch.name!r} has a tool offset {tool_xyz.tolist()} m: the SCARA closed form "
-            "places the table's last frame; use hexapod_kin.ik.solve(model, target)",
-            parameter="tool",
-            value=tool_xyz.tolist(),
-            allowed="no tool translation",
+            "places the table's last frame; use hexapod_kin.ik.solve(model, target)"
         )
+        raise IKError(msg, parameter="tool", value=tool_xyz.tolist(), allowed="no tool translation")
     if sig == ("R", "R", "R", "P", "F") and base_ok:
-        b, c, p, f = rows[1], rows[2], rows[3], rows[4]
-        flip = _angle_is(p.alpha, math.pi)
-        f_flip = _angle_is(f.alpha, math.pi)
-        if (
-            _is(b.alpha, 0.0)
-            and _is(c.alpha, 0.0)
-            and (flip or _angle_is(p.alpha, 0.0))
-            and _is(p.d, 0.0)
-            and _is(f.d, 0.0)
-            and _is(f.r, 0.0)
-            and (f_flip or _angle_is(f.alpha, 0.0))
-            and abs(b.d) > 0
-            and abs(c.d) > 0
-        ):
-            c4 = -1.0 if flip else 1.0
-            c5 = -1.0 if f_flip else 1.0
-            return LegFamily(
-                "scara",
-                ch,
-                (b.d, c.d),
-                r1.r + b.r + c.r,
-                c4,
-                offsets,
-                yaw_offset=c4 * (p.theta + c5 * f.theta),
-            )
+        b, c, p, f = rows[1:]
+        flip, f_flip = _angle_is(p.alpha, math.pi), _angle_is(f.alpha, math.pi)
+        zeros = all(_is(v, 0.0) for v in (b.alpha, c.alpha, p.d, f.d, f.r))
+        twists = (flip or _angle_is(p.alpha, 0.0)) and (f_flip or _angle_is(f.alpha, 0.0))
+        if zeros and twists and abs(b.d) > 0 and abs(c.d) > 0:
+            c4, c5 = (-1.0 if flip else 1.0), (-1.0 if f_flip else 1.0)
+            height, yaw = r1.r + b.r + c.r, c4 * (p.theta + c5 * f.theta)
+            return LegFamily("scara", ch, (b.d, c.d), height, c4, offsets, yaw_offset=yaw)
     pattern = " ".join(f"{s}(α={r.alpha:.4g}, d={r.d:.4g}, r={r.r:.4g})" for s, r in zip(sig, rows))
     raise IKError(
         f"chain {ch.name!r} has no closed-form IK: its table {pattern} matches none of the "
@@ -299,11 +240,6 @@ def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) 
         f"angle_tol={float(angle_tol):.3g} rad; scara: R(0,0,r1) R(0,d2) R(0,d3) "
         "P(α∈{0,π},d=0) F(d=0,r=0)); use hexapod_kin.ik.solve(model, target)"
     )
-
-
-def _twist_off(alpha: float, target: float) -> float:
-    """|alpha − target| modulo 2π [rad]."""
-    return abs(math.remainder(alpha - target, _TWO_PI))
 
 
 def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
@@ -332,34 +268,22 @@ def _leg_family(ch: Chain, angle_tol: float) -> LegFamily | None:
         last, delta = math.hypot(px, py), math.atan2(py, px)
     if last == 0.0 or (nq == 3 and rows[2].d == 0.0):
         return None  # a foot on the last axis, or no thigh: not these closed forms
-    lengths = (a.d, last) if nq == 2 else (a.d, rows[2].d, last)
+    lengths: tuple[float, ...]
     offs: tuple[float, ...]
-    signs: tuple[float, ...]
     if nq == 2:
-        lateral = a.r + pz
-        offs = (r1.theta, a.theta + delta)
-        signs = (1.0, 1.0)
+        lengths, lateral, offs = (a.d, last), a.r + pz, (r1.theta, a.theta + delta)
     else:
-        lateral = a.r + kappa * (rows[2].r + pz)
-        offs = (r1.theta, a.theta, rows[2].theta + delta)
-        signs = (1.0, 1.0, kappa)
+        b = rows[2]
+        lengths, lateral = (a.d, b.d, last), a.r + kappa * (b.r + pz)
+        offs = (r1.theta, a.theta, b.theta + delta)
     if abs(lateral) < 1e-15 * (abs(a.d) + abs(last)):
         lateral = 0.0
     mount = ch.base_pose  # α1 = d1 = 0: the base pose as it is (same bits as before)
     if not (r1.alpha == 0.0 and r1.d == 0.0):
         mount = Pose.of(ch.base_matrix @ khalil_transform(r1.alpha, r1.d, 0.0, 0.0))
-    return LegFamily(
-        "coxa_tibia" if nq == 2 else "leg3",
-        ch,
-        lengths,
-        r1.r,
-        sigma,
-        tuple(float(v) for v in offs),
-        lateral=float(lateral),
-        joint_signs=signs,
-        mount=mount,
-        deviation=0.0 if dev <= _ANG_TOL else dev,
-    )
+    name, signs = ("coxa_tibia" if nq == 2 else "leg3"), (1.0, 1.0, kappa)[:nq]
+    offs, dev = tuple(float(v) for v in offs), (0.0 if dev <= _ANG_TOL else dev)
+    return LegFamily(name, ch, lengths, r1.r, sigma, offs, 0.0, float(lateral), signs, mount, dev)
 
 
 # ============================================================================ closed forms
@@ -368,9 +292,8 @@ class AnalyticBatch:
     """Closed-form solutions of many targets, in fixed-shape arrays (read-only).
 
     Attributes:
-        q: (N, K, n) joint values; slot ``k`` of target ``i`` is meaningful where
-            ``valid[i, k]`` (elsewhere NaN). K is 2 (coxa_tibia, scara) or 4 (leg3); slots
-            keep a fixed branch meaning (see :func:`analytic_batch`).
+        q: (N, K, n) joint values, NaN where not ``valid``; K is 2 (coxa_tibia, scara) or 4
+            (leg3), slots of fixed branch meaning (see :func:`analytic_batch`).
         valid: (N, K) True where the slot holds a solution.
         family: The detected family name.
 
@@ -387,11 +310,10 @@ class AnalyticBatch:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (NaN slots as None)."""
-        q = np.where(self.valid[..., None], self.q, 0.0).tolist()
-        for qi, vi in zip(q, self.valid.tolist()):
-            for k, ok in enumerate(vi):
-                if not ok:
-                    qi[k] = None
+        q = [
+            [s if ok else None for s, ok in zip(qi, vi)]
+            for qi, vi in zip(self.q.tolist(), self.valid.tolist())
+        ]
         return {"family": self.family, "q": q, "valid": self.valid.tolist()}
 
 
@@ -434,28 +356,19 @@ def analytic_batch(
 ) -> AnalyticBatch:
     """All closed-form solutions of N targets as fixed-shape arrays plus a validity mask.
 
-    Slot meanings: coxa_tibia ``[hip toward the target, hip reversed (φ1 + π)]``; leg3
+    Slots: coxa_tibia ``[hip toward the target, hip reversed (φ1 + π)]``; leg3
     ``[toward/ankle +, toward/ankle −, reversed/ankle +, reversed/ankle −]``; scara
-    ``[elbow +, elbow −]``. Coincident branches (at a boundary) both stay valid. With a
-    lateral offset ``e`` "toward" is the branch ``u + l1 = +√(x² + y² − e²)``.
-
-    A leg whose twists are off the pattern (``LegFamily.deviation`` > 0) is solved by the
-    exact pattern's closed form, each solution then finished on the table by the one IK loop
-    (:mod:`hexapod_kin.ik._table_finish`): a slot stays valid when its foot lands within
-    ``tol`` × the length scale of the target and, with ``within_limits``, inside the limits.
+    ``[elbow +, elbow −]``; coincident branches both stay valid. A leg off the pattern is
+    finished on the table (:mod:`hexapod_kin.ik._table_finish`): a slot stays valid when its
+    foot lands within ``tol`` × the length scale of the target.
 
     Args:
         chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
             :func:`hexapod_kin.load` takes (a preset name, a table file).
-        targets: (N, 3) foot positions in [m] in the base frame (SCARA: (N, 3) or (N, 4) with
-            yaw [rad]); a single (3,) target is accepted as N = 1.
-        tol: Relative tolerance (× the chain's length scale) of the reachability tests; a
-            target this close outside the workspace is solved on its boundary.
-        within_limits: If True, invalidate solutions outside the joint limits (revolute
-            values are first shifted by ±2π when that brings them inside).
-
-    Returns:
-        An :class:`AnalyticBatch`.
+        targets: (N, 3) foot positions in [m] in the base frame (SCARA: or (N, 4) with yaw
+            [rad]); a single (3,) target is N = 1.
+        tol: Relative tolerance (× the chain's length scale) of the reachability tests.
+        within_limits: If True, invalidate solutions outside the joint limits (after ±2π).
 
     Raises:
         IKError: No closed form for this chain; bad or non-finite targets.
@@ -463,8 +376,7 @@ def analytic_batch(
     """
     fam = detect_family(chain)
     x, _ = _targets(fam, targets)
-    tol_abs = float(tol) * fam.scale
-    limits = None
+    tol_abs, limits = float(tol) * fam.scale, None
     if within_limits:
         limits = (np.asarray(fam.chain.lower(), float), np.asarray(fam.chain.upper(), float))
     if fam.family == "scara":
@@ -501,16 +413,12 @@ def analytic_batch(
 
 def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     d2, d3 = fam.lengths
-    n = x.shape[0]
-    rr = x[:, 0] ** 2 + x[:, 1] ** 2
+    n, rr = x.shape[0], x[:, 0] ** 2 + x[:, 1] ** 2
     c2 = (rr - d2 * d2 - d3 * d3) / (2.0 * d2 * d3)
     eps = 1e-9 * (abs(d2) + abs(d3)) ** 2 / abs(d2 * d3)
-    ok = np.abs(c2) <= 1.0 + eps
-    c2 = np.clip(c2, -1.0, 1.0)
-    s2 = np.sqrt(1.0 - c2 * c2)
-    base = np.arctan2(x[:, 1], x[:, 0])
-    q = np.empty((n, 2, 4))
-    valid = np.empty((n, 2), dtype=bool)
+    ok, c2 = np.abs(c2) <= 1.0 + eps, np.clip(c2, -1.0, 1.0)
+    s2, base = np.sqrt(1.0 - c2 * c2), np.arctan2(x[:, 1], x[:, 0])
+    q, valid = np.empty((n, 2, 4)), np.empty((n, 2), dtype=bool)
     c4 = fam.sign
     prism = (x[:, 2] - fam.height) * c4  # = r4 + q4 along ±z
     for b, sgn in enumerate((1.0, -1.0)):
@@ -530,16 +438,9 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _leg_slots(
-    targets: Any,
-    lengths: tuple[Any, ...],
-    height: float,
-    sign: float,
-    offsets: Any,
-    tol: float,
-    limits: tuple[Any, Any] | None,
-    lateral: Any = 0.0,
-    joint_signs: Any = None,
-) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:
+    targets: Any, lengths: tuple[Any, ...], height: float, sign: float, offsets: Any, tol: float,
+    limits: tuple[Any, Any] | None, lateral: Any = 0.0, joint_signs: Any = None,
+) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:  # fmt: skip
     """The leg closed form as columns on the targets a branch reaches.
 
     Returns ``(sub, cols, oks)``: the indices of those targets (None: all), their joint values
@@ -556,8 +457,7 @@ def _leg_slots(
         # joint j's bounds lo[j], hi[j]: scalars or contiguous (N,)
         lo, hi = np.ascontiguousarray(lo.T - 1e-12), np.ascontiguousarray(hi.T + 1e-12)
     flip = [] if joint_signs is None else [j for j, s in enumerate(joint_signs) if s < 0]
-    n = len(x)
-    h = np.hypot(x[:, 0], x[:, 1])
+    n, h = len(x), np.hypot(x[:, 0], x[:, 1])
     w = (x[:, 2] - height) * sign
     l1, l2 = lengths[0], lengths[1]
     l3 = lengths[2] if nq == 3 else 0.0
@@ -618,8 +518,7 @@ def _leg_slots(
                 slot(reach[k], hip, np.arctan2(w / l2, u / l2))
                 continue
             c3 = np.clip(take(c3s[k]), -1.0, 1.0)
-            s3 = np.sqrt(1.0 - c3 * c3)
-            base = np.arctan2(w, u)
+            s3, base = np.sqrt(1.0 - c3 * c3), np.arctan2(w, u)
             a2 = np.arctan2(l3 * s3, l2 + l3 * c3)
             a3 = np.arctan2(s3, c3)
             slot(reach[k], hip, base - a2, a3)
@@ -656,19 +555,14 @@ def leg_solutions(
         offsets: The joints' θ offsets [rad] (removed from the result); default 0.
         tol: Absolute reachability tolerance [m].
         limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
-            (by more than 1e-12) are invalid; values are first shifted by ±2π when that brings
-            them inside.
-        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): the foot
-            is ``Rz(φ1)·[l1 + ρ', −σe, σw] + [0, 0, h]``, so ``u = ±√(x² + y² − e²) − l1``
-            and ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``; no solution where
-            ``√(x² + y²) < |e|``. Default 0 (the formulas above).
-        joint_signs: ±1 per joint: a joint with −1 enters the planar leg negated (an ankle
-            axis anti-parallel to the knee's, ``α3 = π``). Default all +1.
+            (after ±2π shifts) are invalid.
+        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): then
+            ``u = ±√(x² + y² − e²) − l1``, ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``.
+        joint_signs: ±1 per joint (−1: enters the planar leg negated). Default all +1.
 
     Returns:
-        ``(q, valid)``: (N, K, n) joint values wrapped to (−π, π] (NaN where invalid) and
-        (N, K) validity; K = 2 (slots: hip toward, reversed) or 4 (toward/ankle +,
-        toward/ankle −, reversed/ankle +, reversed/ankle −).
+        ``(q, valid)``: (N, K, n) joint values (NaN where invalid) and (N, K) validity, the
+        slots of :func:`analytic_batch`.
 
     """
     n = len(np.asarray(targets).reshape(-1, 3))
@@ -714,12 +608,8 @@ def analytic(
 ) -> list[np.ndarray]:
     """All closed-form solutions, as a list with one (k, n) array per target (k ≥ 0).
 
-    The return type does not depend on the input: a single target (3,) gives a list of one
-    array, N targets (N, 3) a list of N. Coincident solutions (e.g. the two knee branches of a
-    stretched leg) are returned once; an unreachable target gives a (0, n) array.
-
-    The arguments and errors are those of :func:`analytic_batch` (``target``: its
-    ``targets``); the arrays are in [rad]/[m].
+    A single target (3,) gives a list of one array; coincident solutions are returned once; an
+    unreachable target gives a (0, n) array. Arguments and errors: :func:`analytic_batch`'s.
 
     Example:
         >>> from hexapod_kin import robots, ik

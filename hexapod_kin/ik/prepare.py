@@ -23,8 +23,7 @@ __all__ = ["LEG_HOME", "N_NEAR", "N_STARTS", "ModelLike", "Prepared", "as_model"
 #: A model argument: a loaded model, or anything :func:`hexapod_kin.load` takes.
 ModelLike = Union[KinematicModel, Chain, Hexapod, str, "os.PathLike[str]"]
 
-#: Standing pose of the 3-DOF legs [rad] (the seeds' start): foot at (0.1526, 0, −0.1293) m on
-#: the hexabot leg, well away from the singularities (q3 = 0, π; foot over the hip axis).
+#: Standing pose of the 3-DOF legs [rad] (the seeds' start), away from the singularities.
 LEG_HOME = (0.0, 0.3, 1.2)
 
 #: Seeded restart configurations kept per model (the most :func:`~hexapod_kin.ik.solve` tries).
@@ -74,15 +73,13 @@ class Prepared:
 
 
 def _build_prepared(model: KinematicModel) -> Prepared:
-    lower = np.asarray(model.lower, dtype=float)
-    upper = np.asarray(model.upper, dtype=float)
+    lower, upper = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
     prism = np.asarray(model.is_prismatic, dtype=bool)
     cont = (~prism) & (upper - lower >= 2 * np.pi - 1e-9)
     scale = chain_scale(model.arrays.trans)
     cap = np.where(prism, 0.25 * scale, 0.5)
     lim = np.ascontiguousarray(np.vstack([lower, upper, cap]))
-    lo = np.where(cont, -np.pi, lower)
-    hi = np.where(cont, np.pi, upper)
+    lo, hi = np.where(cont, -np.pi, lower), np.where(cont, np.pi, upper)
     starts = np.random.default_rng(12345).uniform(lo, hi, size=(N_STARTS, model.nq))
     middle = np.where(cont, 0.0, 0.5 * (lower + upper))
     q_home = _dexterous_home(model, lower, upper, cont)
@@ -103,10 +100,8 @@ def _dexterous_home(
         q = np.array(LEG_HOME)
         if np.all(q >= lower) and np.all(q <= upper):
             return q
-    lo = np.maximum(lower, -np.pi)
-    hi = np.minimum(upper, np.pi)
-    mid = 0.5 * (lo + hi)
-    half = 0.25 * (hi - lo)
+    lo, hi = np.maximum(lower, -np.pi), np.minimum(upper, np.pi)
+    mid, half = 0.5 * (lo + hi), 0.25 * (hi - lo)
     rng = np.random.default_rng(0)
     cands = np.vstack([mid, rng.uniform(mid - half, mid + half, size=(256, model.nq))])
     jacs = np.array([model.jacobian(q)[:3] for q in cands])
@@ -123,11 +118,9 @@ def prepared(model: ModelLike) -> Prepared:
 def home(model: ModelLike) -> np.ndarray:
     """The package's one home pose: the IK's first candidate start and resolved-rate start.
 
-    ``LEG_HOME`` for 3-joint chains when it is inside the limits (the seeds' leg standing);
-    otherwise the most dexterous of the middle of the joint ranges and 256 seeded samples in
-    the middle half of each range (ranges clipped to ±π): the one with the largest smallest
-    (3rd) singular value of the position Jacobian — far from the singular manifolds and from
-    the limits. Computed once per model.
+    ``LEG_HOME`` for 3-joint chains inside its limits; otherwise the most dexterous (largest
+    3rd singular value of the position Jacobian) of the ranges' middle and 256 seeded samples
+    in the middle half of each range (clipped to ±π). Computed once per model.
 
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.

@@ -47,8 +47,7 @@ class IKOptions:
         max_iter: Accepted steps per attempt (1 to :data:`MAX_ITER`).
         restarts: Extra attempts from seeded random configurations if the first fails (≤ 32).
         within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
-        posture: Secondary task of redundant chains: ``"middle"`` (middle of the joint
-            ranges), a preferred configuration (nq,), or None (off).
+        posture: Secondary task of redundant chains: ``"middle"``, a configuration, or None.
         posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
 
     Raises:
@@ -116,29 +115,23 @@ _DEFAULT = IKOptions()
 class IKResult:
     """Result of :func:`~hexapod_kin.ik.solve` (arrays are read-only; SI units).
 
-    A converged result of a float64 position or pose solved without options holds its
-    output row until a field is first read, then its fields (the same values and types).
-
     Attributes:
         q: Joint values (nq,) in [rad]/[m] — the solution, or the best configuration found.
         status: ``"converged"``, ``"unreachable"``, ``"joint_limits"``, ``"singular"`` or
             ``"not_converged"``.
-        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows, recomputed
-            at ``q``.
-        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖ over the weighted rows;
-            position + yaw: |ψ* − ψ|; position: 0), recomputed at ``q``.
+        error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows.
+        rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw:
+            |ψ* − ψ|; position: 0).
         iterations: Accepted steps of the returned attempt.
-        history: Weighted residual ‖W e‖ after each accepted step of the returned attempt
-            (starts with the initial residual; strictly decreasing).
+        history: Weighted residual ‖W e‖ from the start, after each accepted step.
         position: p(q) in [m].
         rotation: R(q) (3, 3), the tip's rotation in the base frame.
         target: The target position in [m].
         task: The task solved (mode, target pose, yaw, weights).
-        attempts: How many starts were tried (the nearest candidate, home, restarts used).
+        attempts: How many starts were tried.
         reason: One sentence explaining the status.
-        distance: For ``"unreachable"`` / ``"joint_limits"``: the position error in [m] of the
-            best configuration found; else 0.
-        nearest: For ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
+        distance: ``"unreachable"`` / ``"joint_limits"``: the best position error [m]; else 0.
+        nearest: ``"unreachable"`` / ``"joint_limits"``: that point (3,); else the target.
         sigma_min: Smallest singular value of the position Jacobian at ``q`` [m/rad].
 
     """
@@ -191,23 +184,14 @@ class IKResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ([rad]/[m])."""
-        return {
-            "status": self.status,
-            "q": [float(v) for v in self.q],
-            "error": float(self.error),
-            "rotation_error": float(self.rotation_error),
-            "iterations": int(self.iterations),
-            "attempts": int(self.attempts),
-            "position": [float(v) for v in self.position],
-            "rotation": self.rotation.tolist(),
-            "target": [float(v) for v in self.target],
-            "task": self.task.to_dict(),
-            "distance": float(self.distance),
-            "nearest": [float(v) for v in self.nearest],
-            "sigma_min": float(self.sigma_min),
-            "reason": self.reason,
-            "history": [float(v) for v in self.history],
-        }
+        out: dict[str, Any] = {"status": self.status, "q": [float(v) for v in self.q]}
+        out |= {k: float(getattr(self, k)) for k in ("error", "rotation_error")}
+        out |= {"iterations": int(self.iterations), "attempts": int(self.attempts)}
+        out |= {"position": [float(v) for v in self.position], "rotation": self.rotation.tolist()}
+        out |= {"target": [float(v) for v in self.target], "task": self.task.to_dict()}
+        out |= {"distance": float(self.distance), "nearest": [float(v) for v in self.nearest]}
+        out |= {"sigma_min": float(self.sigma_min), "reason": self.reason}
+        return out | {"history": [float(v) for v in self.history]}
 
 
 #: Where a result's values sit in a row of the loop's output (see ``step.lm_loop``).
@@ -215,43 +199,29 @@ _O_Q = 6
 
 
 def _converged_fields(row: np.ndarray, s: Any, task: Any) -> dict[str, Any]:
-    """The fields of a result from its read-only output row, as if converged.
+    """The fields of a result from its read-only output row (width,) or (1, width), converged.
 
-    ``row``: (width,), or ``solver._quick``'s (1, width) with ``task`` = ``(mode, pose (1, 4, 4),
-    weights)`` instead of the :class:`Task`.
+    ``task``: the :class:`Task`, or ``(mode, pose (1, 4, 4), weights)``.
     """
     if row.ndim == 2:
         row = row[0]
     if not isinstance(task, Task):
         task = _task(task[0], task[1][0], 0.0, task[2])
     attempts, it, _, err, rot, smin = row[:_O_Q].tolist()
-    n = _O_Q + s.n
-    it = int(it)
+    n, it = _O_Q + s.n, int(it)
     target = task.pose[:3, 3]
-    return {
-        "q": row[_O_Q:n],
-        "status": "converged",
-        "error": err,
-        "rotation_error": rot,
-        "iterations": it,
-        "history": row[n + 12 : n + 13 + it],
-        "position": row[n : n + 3],
-        "rotation": row[n + 3 : n + 12].reshape(3, 3),
-        "target": target,
-        "task": task,
-        "attempts": int(attempts),
-        "reason": s.why % (err, rot),
-        "distance": 0.0,
-        "nearest": target,
-        "sigma_min": smin,
-    }
+    rotation = row[n + 3 : n + 12].reshape(3, 3)
+    return {"q": row[_O_Q:n], "status": "converged", "error": err, "rotation_error": rot,
+            "iterations": it, "history": row[n + 12 : n + 13 + it], "position": row[n : n + 3],
+            "rotation": rotation, "target": target, "task": task, "attempts": int(attempts),
+            "reason": s.why % (err, rot), "distance": 0.0, "nearest": target,
+            "sigma_min": smin}  # fmt: skip
 
 
 def _result(fields: dict[str, Any], status: Status, reason: str, far: bool) -> IKResult:
-    """``IKResult(**fields)``, built without ``__init__`` (the per-call path).
+    """``IKResult(**fields)`` without ``__init__``.
 
-    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0 and the
-    target).
+    ``far``: ``distance`` and ``nearest`` are the error and the reached point (else 0, target).
     """
     fields["status"], fields["reason"] = status, reason
     fields["distance"] = fields["error"] if far else 0.0

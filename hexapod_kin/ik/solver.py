@@ -1,27 +1,16 @@
 """Numerical IK for any loaded chain: position, position + yaw, or a full 6-D pose.
 
-Levenberg–Marquardt on the weighted task rows of :mod:`hexapod_kin.ik.task`: damping
-``λ² = μ(‖We‖² + w̄)``, μ ÷4 after a kept step and ×8 after a refused one; a step is kept only if
-it lowers ``‖We‖`` (the residual history decreases strictly); each step is scaled to the
-joints' step caps; continuous joints (range ≥ 2π) wrap, the others are clamped and a joint at
-a limit whose gradient points outward is frozen; 8 nearly flat steps in a row, or 40 refusals,
-end an attempt (stall); seeded restarts follow until one converges. Orientation errors are
-``log(R* Rᵀ)`` on SO(3), never Euler angles. On a redundant chain (more joints than task rows)
-each step first tries ``z = g·(q_posture − q)`` projected on the task's null space:
-``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error (the first refusal ends
-the posture task for that attempt).
+Levenberg–Marquardt on the weighted task rows of :mod:`hexapod_kin.ik.task`: ``λ² = μ(‖We‖² +
+w̄)``, μ ÷4 after a kept step, ×8 after a refused one; a step is kept only if it lowers ``‖We‖``;
+steps are capped per joint; continuous joints wrap, the others are clamped (a joint at a limit
+pushed outward is frozen); 8 flat steps or 40 refusals end an attempt; seeded restarts follow.
+On a redundant chain each step first tries the posture motion ``z`` on the task's null space,
+``Δq = z + J⁺_λ(e − Jz)``, kept only if it quarters the squared error.
 
-One loop, compiled (:func:`~hexapod_kin.ik.step.lm_loop`): :func:`solve` runs it for one
-target (its row of a batch, bit for bit), :func:`solve_many` for N targets on every core,
-:func:`solve_chain` for a chain view (a leg) with a seed per target. A process's first
-:data:`INTERPRETED_CALLS` calls of :func:`solve` (of at most 100 × 33 steps) run the loop's
-own functions in Python (:func:`~hexapod_kin._kmath.python_twin`: the same operations, the
-same bits), so that a command solving one target neither compiles nor loads machine code.
-A float64 position or pose without options (with or without ``q0``), once the loop is
-loaded, goes straight in (a few µs of Python around the loop; the fields of a converged
-result are filled when first read). The result is measured in the same call (the one FK
-core, equal to Pinocchio's to rounding; tests hold position, rotation, errors and σ_min
-against Pinocchio and the SVD).
+One compiled loop (:func:`~hexapod_kin.ik.step.lm_loop`) for :func:`solve` (one target, its row
+of a batch bit for bit), :func:`solve_many` and :func:`solve_chain` (a chain view, a seed per
+target); the first :data:`INTERPRETED_CALLS` small calls of :func:`solve` run it in Python
+(:func:`~hexapod_kin._kmath.python_twin`, the same bits).
 """
 
 from __future__ import annotations
@@ -49,7 +38,6 @@ from .result import (
 from .task import (
     MODES,
     TARGET_FACTOR,
-    Mode,
     Task,
     _fast,
     _limit,
@@ -77,9 +65,8 @@ _PER_THREAD = 64
 class _Setup:
     """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
 
-    Private C-contiguous arrays (writeable: numba types them faster; the loop never writes
-    them); the targets and weights are the tasks' read-only arrays. The same types for one
-    target and for many: one compiled specialisation of :func:`~hexapod_kin.ik.step.lm_loop`.
+    Private C-contiguous arrays, the same types for one target and for many (one compiled
+    specialisation of :func:`~hexapod_kin.ik.step.lm_loop`).
     """
 
     prep: Prepared
@@ -128,8 +115,7 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
     posture, use = prep.middle, opts.posture is not None and opts.posture is not False
     if use and not isinstance(opts.posture, str):
         posture = mdl.check_q(opts.posture, "posture")
-    par = _par(opts, prep.scale)
-    limits = int(bool(opts.within_limits))
+    par, limits = _par(opts, prep.scale), int(bool(opts.within_limits))
     ipar = np.array([mode, opts.max_iter, limits, int(use), len(prep.near)], np.int64)
     starts = np.vstack([prep.home, prep.starts[: opts.restarts]])
     lim = np.vstack([prep.lim, posture])
@@ -145,18 +131,12 @@ def _build_setup(mdl: KinematicModel, opts: IKOptions, mode: int) -> _Setup:
 
 
 def _plans(
-    chain: Any,
-    lim: np.ndarray,
-    cont: np.ndarray,
-    ipar: Any,
-    near: Any = (),
-    near_poses: Any = (),
-) -> tuple[np.ndarray, np.ndarray]:
+    chain: Any, lim: np.ndarray, cont: np.ndarray, ipar: Any, near: Any = (), near_poses: Any = (),
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The compiled loop's two packed inputs ``(fplan, iplan)`` (see ``step.lm_loop``).
 
-    A chain (:class:`~hexapod_kin._chain.ChainArrays`), ``lim`` (4, n), the continuous flags
-    (n,), ``ipar`` (5,) and the candidate first starts (K, n) with their tip poses (K, 12),
-    in two private C-contiguous arrays (float64, int64).
+    Of a chain, ``lim`` (4, n), the continuous flags, ``ipar`` and the candidate first starts
+    (K, n) with their tip poses (K, 12).
     """
     rot, trans, axis, kind, col = chain.packed
     parts = (rot, trans, axis, chain.tip_rot, lim, near, near_poses)
@@ -176,10 +156,8 @@ def _par(opts: IKOptions, scale: float) -> np.ndarray:
 #: the cache check, the compile notice, the stamp).
 _LOADED: list[Any] = []
 #: How many of a process's first :func:`solve` calls run the loop in Python (with their
-#: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same functions, the
-#: same bits, nothing to load or compile (a command's one solve costs milliseconds where
-#: loading the machine code costs ~0.35 s of CPU and compiling it ~9 s). The next call loads
-#: (or compiles) the machine code, as batches do.
+#: diagnosis) when their step budget is small (:data:`_PYTHON_STEPS`): the same bits, nothing
+#: to load or compile. The next call loads (or compiles) the machine code, as batches do.
 INTERPRETED_CALLS = 16
 _LEFT = [INTERPRETED_CALLS]
 #: The most accepted steps a call run in Python may take (``max_iter`` × attempts): the
@@ -190,21 +168,14 @@ _PYTHON: list[Any] = []
 
 
 def _run(
-    fplan: np.ndarray,
-    iplan: np.ndarray,
-    tgts: np.ndarray,
-    w6: np.ndarray,
-    pars: np.ndarray,
-    starts: np.ndarray,
-    python: bool = False,
-) -> np.ndarray:
-    """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets.
+    fplan: np.ndarray, iplan: np.ndarray, tgts: np.ndarray, w6: np.ndarray, pars: np.ndarray,
+    starts: np.ndarray, python: bool = False,
+) -> np.ndarray:  # fmt: skip
+    """The loop (:func:`~hexapod_kin.ik.step.lm_loop`) for N targets: output rows (N, width).
 
     ``fplan``, ``iplan``: the chain and the settings (:func:`_plans`); ``tgts`` (N, 4, 4),
-    ``pars`` (N, 7), ``starts`` (N, S, n), of the same array types from every caller (one
-    compiled specialisation). Each target's numbers are its own: the same bits alone, in a
-    batch, on any thread, compiled or (``python``) run by the interpreter. Returns the output
-    rows (N, width) (see ``lm_loop``).
+    ``pars`` (N, 7), ``starts`` (N, S, n). Each target's numbers are its own: the same bits
+    alone, in a batch, on any thread, compiled or (``python``) interpreted.
     """
     n_t, n = len(tgts), starts.shape[2]
     out = np.empty((n_t, _O_Q + n + 12 + int(iplan[1]) + 1))
@@ -253,29 +224,21 @@ def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
-    The compiled loop of :func:`solve_many` for one target (the same bits as its row of a
-    batch), measured in the same compiled call.
-
     Args:
         model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
         target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
             axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
         q0: Start configuration (nq,). Default: the candidate of
-            :attr:`~hexapod_kin.ik.Prepared.near` (:func:`~hexapod_kin.ik.home` and 63 seeded
-            configurations in the middle half of each joint's range) whose tip pose is nearest
-            the target (``Σ w²(p* − p)²`` over the position rows, plus for a pose the weighted
-            ``‖R*_{:,k} − R_{:,k}‖²`` of each rotation row; ties to ``home``), then ``home``,
-            then the seeded restarts; the same start alone or in :func:`solve_many`.
+            :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
+            :func:`~hexapod_kin.ik.home`, then the seeded restarts.
         **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
             ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
             ``posture_gain``).
 
     Returns:
-        An :class:`IKResult`. ``"unreachable"``: every attempt ended at a local minimum of the
-        task error (no direction lowers it), also without limits; ``nearest`` / ``distance``
-        give the best point found. ``"joint_limits"``: reachable only outside the limits.
-        ``"singular"``: stuck at a singular configuration that is not a minimum.
-        ``"not_converged"``: iteration cap.
+        An :class:`IKResult`: ``"unreachable"`` (every attempt ended at a local minimum of the
+        error; ``nearest`` / ``distance`` give the best point), ``"joint_limits"`` (reachable
+        only outside the limits), ``"singular"`` or ``"not_converged"`` (iteration cap).
 
     Raises:
         IKError: Non-finite or wrongly shaped target, a target beyond a hundred robot sizes
@@ -314,15 +277,18 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
 def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | None:
     """:func:`solve` of a float64 position or pose, no options, once the loop is loaded.
 
-    The same loop, arguments and bits as the general path, in fewer Python steps: the task
-    and the fields of a converged result are built when first read. None: any other case
-    (the general path checks it and names what is wrong).
+    The same bits as the general path; a converged result's fields are built when first read.
+    None: any other case (the general path checks it).
     """
     fast = _fast(t)
     if fast is None:
         return None
     mode, tg, w6, total = fast
-    s, limit = mdl.cached(_QUICK[mode], lambda: _quick_setup(mdl, mode))
+
+    def setup() -> tuple[_Setup, float]:  # the setup, the farthest target |x| + |y| + |z|
+        return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
+
+    s, limit = mdl.cached(_QUICK[mode], setup)
     if not total <= limit:  # farther, or not finite: the general path's check
         return None
     iplan, starts = s.iplan, s.one[1]
@@ -337,11 +303,6 @@ def _quick(mdl: KinematicModel, t: np.ndarray, q0: Any = None) -> IKResult | Non
     res = _NEW(IKResult)
     _SET(res, "__dict__", {"_lazy": (out, s, (mode, tg, w6))})
     return res
-
-
-def _quick_setup(mdl: KinematicModel, mode: Mode) -> tuple[_Setup, float]:
-    """:func:`_quick`'s setup of ``mode`` and the farthest target ``|x| + |y| + |z|`` it takes."""
-    return _setup(mdl, _DEFAULT, _CODES[mode]), max(1e-3 * TARGET_FACTOR, _limit(mdl))
 
 
 _QUICK = {"position": "ik.quick.position", "pose": "ik.quick.pose"}
@@ -363,14 +324,9 @@ def _report(mdl: KinematicModel, s: _Setup, task: Task, row: np.ndarray, python:
 
 
 def _diagnose(
-    mdl: KinematicModel,
-    s: _Setup,
-    task: Task,
-    q: np.ndarray,
-    hist: np.ndarray,
-    fields: dict[str, Any],
-    python: bool,
-) -> IKResult:
+    mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, hist: np.ndarray,
+    fields: dict[str, Any], python: bool,
+) -> IKResult:  # fmt: skip
     """The status of a stalled attempt: joint limits, unreachable, singular or not converged."""
     prep = s.prep
     err, rot, smin = fields["error"], fields["rotation_error"], fields["sigma_min"]
@@ -423,10 +379,8 @@ def _is_local_min(
     mdl: KinematicModel, s: _Setup, task: Task, q: np.ndarray, cost_root: float, python: bool
 ) -> bool:
     """True if no small perturbation of q (±1e-3, ±3e-2 rad) lowers the task error."""
-    prep = s.prep
-    rng = np.random.default_rng(7)
-    jac = mdl.jacobian(q)
-    rows = task.weights != 0
+    prep, rng = s.prep, np.random.default_rng(7)
+    jac, rows = mdl.jacobian(q), task.weights != 0
     _, sv, vt = np.linalg.svd(jac[rows] * task.weights[rows, None])
     sv_full = np.zeros(mdl.nq)
     sv_full[: sv.size] = sv
@@ -458,20 +412,11 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
         ParameterError: Unknown or bad options.
 
     """
-    mdl = as_model(model)
-    opts = IKOptions.of(options)
+    mdl, opts = as_model(model), IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
-    if (
-        t.ndim not in (2, 3)
-        or (t.ndim == 2 and t.shape[1] not in (3, 4))
-        or (t.ndim == 3 and t.shape[1:] != (4, 4))
-    ):
-        raise IKError(
-            f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed",
-            parameter="targets",
-            value=t.shape,
-            allowed="(N, 3), (N, 4), (N, 4, 4)",
-        )
+    if not ((t.ndim == 2 and t.shape[1] in (3, 4)) or (t.ndim == 3 and t.shape[1:] == (4, 4))):
+        msg = f"targets has shape {t.shape}; (N, 3), (N, 4) or (N, 4, 4) is needed"
+        raise IKError(msg, parameter="targets", value=t.shape, allowed="(N, 3), (N, 4), (N, 4, 4)")
     tasks = build_tasks(t, mask=opts.mask, weights=opts.weights)
     if not tasks:
         return []
@@ -486,12 +431,8 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     elif q0 is not None:
         rows = mdl.check_q_batch(q0, "q0")
         if len(rows) != n_t:
-            raise ConfigurationError(
-                f"q0 has {len(rows)} rows; targets has {n_t}",
-                parameter="q0",
-                value=len(rows),
-                allowed=f"{n_t} rows",
-            )
+            msg = f"q0 has {len(rows)} rows; targets has {n_t}"
+            raise ConfigurationError(msg, parameter="q0", value=len(rows), allowed=f"{n_t} rows")
         starts[:, 0] = rows
     pars = np.broadcast_to(s.par, (n_t, len(s.par)))
     if tasks[0].code == 1:
@@ -543,9 +484,8 @@ def solve_chain(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position IK of a chain view for N targets, each from its own seed (the one loop).
 
-    The compiled loop of :func:`solve_many` on a chain given as arrays (a leg: mount → foot,
-    :class:`~hexapod_kin._chain.ChainArrays`), position rows only, no restarts and no
-    posture task; limited joints are clamped, continuous ones (range ≥ 2π) wrap.
+    On a :class:`~hexapod_kin._chain.ChainArrays` (a leg: mount → foot), position rows only,
+    no restarts, no posture; limited joints are clamped, continuous ones wrap.
 
     Args:
         chain: The chain's placements, axes and tip (its frame: the targets' frame).
@@ -581,8 +521,7 @@ def solve_chain(
     tgts = np.zeros((len(t), 4, 4))
     tgts[:, [0, 1, 2, 3], [0, 1, 2, 3]] = 1.0
     tgts[:, :3, 3] = t
-    pars = np.tile(par, (len(t), 1))
-    starts = _arg(q0[:, None, :])
+    pars, starts = np.tile(par, (len(t), 1)), _arg(q0[:, None, :])
     out = _run(fplan, iplan, _frozen(tgts), w6, pars, starts)
     steps = out[:, 1].astype(np.intp)
     residual = out[np.arange(len(t)), _O_Q + n + 12 + steps]

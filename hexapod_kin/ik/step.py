@@ -1,9 +1,7 @@
 """The compiled numerical IK: the task error, the damped least-squares step, the loop.
 
-Split as mink's ``build_ik`` / ``solve_ik``: :func:`task_into` turns a configuration into the
-weighted task rows (error and Jacobian) — the problem; :func:`step_into` computes one step
-from those rows — a pure function of its inputs; :func:`lm_loop` is the small loop around them
-(Levenberg–Marquardt damping, step cap, limits, restarts).
+:func:`task_into` builds the weighted task rows (the problem), :func:`step_into` one step from
+them (a pure function), :func:`lm_loop` the small loop around them.
 
 Task modes (``ipar[0]``):
 
@@ -13,8 +11,7 @@ Task modes (``ipar[0]``):
 * ``2`` pose: plus the orientation error on SO(3), ``e_ω = log(R* Rᵀ)`` (base axes, [rad]) —
   never Euler angles — with the rotation rows of the LOCAL_WORLD_ALIGNED Jacobian.
 
-Each row is multiplied by its weight (0 drops the row). Every buffer is allocated per call
-(thread-safe; ``nogil``).
+Each row is multiplied by its weight (0 drops the row); buffers are per call (``nogil``).
 """
 
 from __future__ import annotations
@@ -77,17 +74,9 @@ def log3(m: np.ndarray) -> tuple[float, float, float, float]:  # pragma: no cove
 
 @njit(cache=True, nogil=True)
 def task_into(
-    mode: int,
-    tgt: np.ndarray,
-    w6: np.ndarray,
-    yaw: float,
-    p: np.ndarray,
-    r: np.ndarray,
-    jac: np.ndarray,
-    work3: np.ndarray,
-    e_out: np.ndarray,
-    j_out: np.ndarray,
-) -> tuple[int, float, float]:  # pragma: no cover - compiled
+    mode: int, tgt: np.ndarray, w6: np.ndarray, yaw: float, p: np.ndarray, r: np.ndarray,
+    jac: np.ndarray, work3: np.ndarray, e_out: np.ndarray, j_out: np.ndarray,
+) -> tuple[int, float, float]:  # pragma: no cover - compiled  # fmt: skip
     """Weighted task rows at one configuration (the problem, built from FK and J).
 
     Args:
@@ -174,25 +163,14 @@ def task_into(
 
 @njit(cache=True, nogil=True)
 def step_into(
-    jt: np.ndarray,
-    et: np.ndarray,
-    m: int,
-    lam2: float,
-    free: np.ndarray,
-    z: np.ndarray,
-    use_z: bool,
-    dq: np.ndarray,
-    e2: np.ndarray,
-    work: np.ndarray,
-    rhs: np.ndarray,
+    jt: np.ndarray, et: np.ndarray, m: int, lam2: float, free: np.ndarray, z: np.ndarray,
+    use_z: bool, dq: np.ndarray, e2: np.ndarray, work: np.ndarray, rhs: np.ndarray,
     sol: np.ndarray,
-) -> bool:  # pragma: no cover - compiled
+) -> bool:  # pragma: no cover - compiled  # fmt: skip
     """One damped step (pure: writes only ``dq`` and the scratch arrays).
 
-    ``Δq = z + J⁺_λ (e − J z)`` with ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints: the DLS step
-    of the task plus ``z`` (a secondary motion, e.g. toward a preferred posture) projected on
-    the task's (damped) null space. Without ``use_z`` it is the plain DLS step.
-    Returns False if the damped system is not positive definite.
+    ``Δq = z + J⁺_λ (e − J z)``, ``J⁺_λ = Jᵀ(JJᵀ + λ²I)⁻¹`` on the free joints (``z``: a secondary
+    motion, only with ``use_z``). False if the damped system is not positive definite.
     """
     n = jt.shape[1]
     for r in range(m):
@@ -231,9 +209,8 @@ def _limit_into(
 def sigma_min3(jac: np.ndarray) -> float:  # pragma: no cover - compiled
     """Smallest singular value of the position rows ``J[:3]`` (3, n); 0 for n < 3.
 
-    One-sided Jacobi (Hestenes): plane rotations make the three rows mutually orthogonal
-    (to ``|aᵢ·aⱼ| ≤ 1e-15 ‖aᵢ‖‖aⱼ‖``); the singular values are then the rows' norms, with
-    high relative accuracy (Demmel & Veselić 1992), also at a singularity.
+    One-sided Jacobi (Hestenes): the rows made orthogonal, their norms are the singular values,
+    with high relative accuracy also at a singularity (Demmel & Veselić 1992).
     """
     n = jac.shape[1]
     if n < 3:
@@ -282,8 +259,7 @@ def nearest(
     """The index of the pose nearest to the target among ``poses`` (K, 12): p (3), R (9).
 
     Distance: ``Σ w²(p* − p)²`` over the position rows, plus in mode 2 (pose)
-    ``Σ_k w²_{3+k} ‖R*_{:,k} − R_{:,k}‖²`` over the rotation rows (the chord of each axis:
-    ``2(1 − cos)`` of its angle). The first of equal ones (index 0 wins ties).
+    ``Σ_k w²_{3+k} ‖R*_{:,k} − R_{:,k}‖²`` over the rotation rows; index 0 wins ties.
     """
     best = 0
     best_d = np.inf
@@ -307,43 +283,26 @@ def nearest(
 
 @njit(cache=True, nogil=True)
 def lm_loop(
-    fplan: np.ndarray,
-    iplan: np.ndarray,
-    tgts: np.ndarray,
-    w6: np.ndarray,
-    pars: np.ndarray,
-    starts: np.ndarray,
-    out: np.ndarray,
-) -> None:  # pragma: no cover - compiled
+    fplan: np.ndarray, iplan: np.ndarray, tgts: np.ndarray, w6: np.ndarray, pars: np.ndarray,
+    starts: np.ndarray, out: np.ndarray,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Levenberg–Marquardt loop for N targets, each from its starts in turn until one converges.
 
-    A step is kept only if it lowers ``‖W e‖`` (so the history decreases strictly);
-    λ² = μ(‖W e‖² + w̄), μ ÷4 after a kept step, ×8 after a refused one. Joints at a limit with
-    the gradient pointing outward are frozen. With ``ipar[I_POSTURE]`` and more joints than
-    task rows, each step first tries the null-space motion toward ``posture`` (gain
-    ``par[P_POST_GAIN]``), kept only if the task error at least quarters the squared error
-    (the first refusal ends it for that attempt), while the error is above
-    ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
-    batch); the buffers are allocated once per call.
+    The solver's module doc gives the step rules; the posture task runs while the error is
+    above ``par[P_POST_FLOOR]``. Each target's numbers are its own (the same bits alone or in a
+    batch).
 
-    The chain and the loop's settings come packed in two arrays (few arguments: a short call):
-    ``iplan`` = ``ipar`` (``I_*``), the number of links m and joints n, then the chain's
-    ``kind`` (m), ``col`` (m) and the continuous flags (n); ``fplan`` = the chain's ``rot``
-    (m, 3, 3), ``trans`` (m + 1, 3), ``axis`` (m, 3), ``tip_rot`` (3, 3), then ``lim`` (4, n):
-    lower and upper limits, step caps and the posture, then ``K = ipar[I_NEAR]`` start
-    configurations (K, n) and their tip poses (K, 12), all flattened (``solver._plans``).
-    ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). With ``K > 0`` the first
-    attempt starts from the configuration whose pose is :func:`nearest` the target, then
-    (unless that was the first candidate, ``starts[t, 0]`` itself) from ``starts[t, 0]``, then
-    the rest.
+    ``iplan`` = ``ipar`` (``I_*``), links m, joints n, the chain's ``kind`` (m), ``col`` (m),
+    the continuous flags (n); ``fplan`` = ``rot`` (m, 3, 3), ``trans`` (m + 1, 3), ``axis``
+    (m, 3), ``tip_rot`` (3, 3), ``lim`` (4, n: limits, step caps, posture), then ``K =
+    ipar[I_NEAR]`` start configurations (K, n) and their tip poses (K, 12), flattened
+    (``solver._plans``). ``tgts`` (N, 4, 4), ``pars`` (N, 7), ``starts`` (N, S, n). With ``K >
+    0`` the first attempt starts from the one :func:`nearest` the target.
 
-    ``out[i]`` (``O_Q + n + 12 + max_iter + 1`` values), at the returned q (the best attempt):
-    ``O_ATTEMPTS``, ``O_STEPS`` (accepted steps), ``O_CODE`` (0 converged, 1 stalled, 2
-    iteration cap; exact small integers), the error over the kept position rows [m], over the
-    kept rotation rows [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw: |ψ* − ψ|; position: 0), the
-    smallest singular value of the position Jacobian (:func:`sigma_min3`), then q (n), the
-    tip position (3) [m] and rotation (9, row-major), and the residual history
-    (``max_iter + 1``, the first ``steps + 1`` written).
+    ``out[i]`` at the returned q: ``O_ATTEMPTS``, ``O_STEPS``, ``O_CODE`` (0 converged, 1
+    stalled, 2 iteration cap), the position [m] and rotation [rad] errors, σ_min
+    (:func:`sigma_min3`), q (n), the tip position (3) and rotation (9, row-major), and the
+    residual history (``max_iter + 1``, the first ``steps + 1`` written).
     """
     links = iplan[I_LINKS]
     n = iplan[I_JOINTS]
@@ -363,52 +322,27 @@ def lm_loop(
     near = ipar[I_NEAR]
     near_q = fplan[o : o + near * n].reshape((near, n))
     near_pose = fplan[o + near * n : o + near * (n + 12)].reshape((near, 12))
-    mode = ipar[I_MODE]
-    max_iter = ipar[I_MAX_ITER]
-    use_limits = ipar[I_LIMITS] != 0
-    lower = lim[0]
-    upper = lim[1]
-    cap = lim[2]
-    posture = lim[3]
-    scratch = np.empty((6, max(links, 1)))
-    p = np.empty(3)
-    r = np.empty((3, 3))
-    jac = np.empty((6, n))
-    jac_n = np.empty((6, n))
-    jac_best = np.empty((6, n))
-    w3 = np.empty((3, 3))
-    et = np.empty(6)
-    jt = np.empty((6, n))
-    et_n = np.empty(6)
-    jt_n = np.empty((6, n))
-    e2 = np.empty(6)
-    q = np.empty(n)
-    qn = np.empty(n)
-    dq = np.empty(n)
-    z = np.empty(n)
+    mode, max_iter, use_limits = ipar[I_MODE], ipar[I_MAX_ITER], ipar[I_LIMITS] != 0
+    lower, upper, cap, posture = lim[0], lim[1], lim[2], lim[3]
+    scratch, p = np.empty((6, max(links, 1))), np.empty(3)
+    r, w3 = np.empty((3, 3)), np.empty((3, 3))
+    jac, jac_n, jac_best = np.empty((6, n)), np.empty((6, n)), np.empty((6, n))
+    jt, jt_n = np.empty((6, n)), np.empty((6, n))
+    et, et_n, e2 = np.empty(6), np.empty(6), np.empty(6)
+    q, qn, dq, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     free = np.empty(n, dtype=np.bool_)
     k = max(n, 6)
-    work = np.empty((k, k))
-    rhs = np.empty(k)
-    sol = np.empty(k)
-    hist = np.empty(max_iter + 1)
+    work, rhs, sol, hist = np.empty((k, k)), np.empty(k), np.empty(k), np.empty(max_iter + 1)
     o_p = O_Q + n
     o_h = o_p + 12
     for t in range(tgts.shape[0]):
-        tgt = tgts[t]
-        par = pars[t]
-        res = out[t]
-        q_out = res[O_Q:o_p]
-        hist_out = res[o_h:]
+        tgt, par, res = tgts[t], pars[t], out[t]
+        q_out, hist_out = res[O_Q:o_p], res[o_h:]
         tol2 = par[P_TOL] * par[P_TOL]
         rtol2 = par[P_ROT_TOL] * par[P_ROT_TOL]
-        yaw = par[P_YAW]
-        wbar = par[P_WBAR]
+        yaw, wbar = par[P_YAW], par[P_WBAR]
         floor2 = par[P_POST_FLOOR] * par[P_POST_FLOOR]
-        best_cost = np.inf
-        best_steps = 0
-        best_code = 1
-        attempts = 0
+        best_cost, best_steps, best_code, attempts = np.inf, 0, 1, 0
         first = -1 if near > 0 else 0
         pick = nearest(mode, tgt, w6, near_pose) if near > 0 else 0
         for s in range(first, starts.shape[1]):
@@ -430,10 +364,7 @@ def lm_loop(
             hist[0] = math.sqrt(cost)
             use_post = ipar[I_POSTURE] != 0 and n > m
             mu = par[P_MU0]
-            accepted = 0
-            tries = 0
-            slow = 0
-            code = 1
+            accepted, tries, slow, code = 0, 0, 0, 1
             while True:
                 if pos2 <= tol2 and rot2 <= rtol2:
                     code = 0
@@ -457,8 +388,7 @@ def lm_loop(
                         if cont[i]:
                             d = wrap_angle(d)
                         z[i] = par[P_POST_GAIN] * d if free[i] else 0.0
-                kept = False
-                stalled = False
+                kept = stalled = False
                 for _attempt in range(2):
                     ok = step_into(jt, et, m, lam2, free, z, with_z, dq, e2, work, rhs, sol)
                     if not ok:
@@ -511,9 +441,7 @@ def lm_loop(
                         code = 1
                         break
             if code == 0 or cost < best_cost or s == first:
-                best_cost = cost
-                best_steps = accepted
-                best_code = code
+                best_cost, best_steps, best_code = cost, accepted, code
                 for i in range(n):
                     q_out[i] = q[i]
                     for row in range(6):

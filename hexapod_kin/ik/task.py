@@ -1,8 +1,7 @@
 """Build an IK task from a target: position, position + yaw, or a full pose with weights.
 
-The task is the *problem* (mink's ``build_ik``): what the rows of the error are and how much
-each counts. :mod:`hexapod_kin.ik.step` solves it. Rows are ``x y z wx wy wz``: position error
-``p* − p`` in [m] and orientation error ``log(R* Rᵀ)`` in [rad], both in the base axes.
+The task is the *problem*: rows ``x y z wx wy wz`` (position error ``p* − p`` [m], orientation
+error ``log(R* Rᵀ)`` [rad], base axes) and their weights; :mod:`hexapod_kin.ik.step` solves it.
 """
 
 from __future__ import annotations
@@ -32,12 +31,10 @@ class Task:
     """A target and the weight of each task row (arrays read-only).
 
     Attributes:
-        mode: ``"position"`` (3 rows), ``"position_yaw"`` (x y z and the yaw ψ of the tool's
-            x axis in the base xy-plane) or ``"pose"`` (6 rows).
+        mode: ``"position"``, ``"position_yaw"`` (x y z and the tool's yaw ψ) or ``"pose"``.
         pose: Target pose ``baseMtarget`` (4, 4); rotation = identity unless ``mode="pose"``.
         yaw: Target yaw [rad] (``"position_yaw"``), else 0.
-        weights: (6,) weights of rows x y z wx wy wz (0 drops a row; ``"position_yaw"`` keeps
-            the yaw row's weight in ``wz``).
+        weights: (6,) weights of rows x y z wx wy wz (the yaw row's in ``wz``).
 
     """
 
@@ -58,20 +55,12 @@ class Task:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (pose as nested lists, [m] and [rad])."""
-        return {
-            "mode": self.mode,
-            "pose": self.pose.tolist(),
-            "yaw": float(self.yaw),
-            "weights": self.weights.tolist(),
-        }
+        out = {"mode": self.mode, "pose": self.pose.tolist(), "yaw": float(self.yaw)}
+        return out | {"weights": self.weights.tolist()}
 
 
 def _task(mode: Mode, pose: np.ndarray, yaw: float, weights: np.ndarray) -> Task:
-    """``Task(mode, pose, yaw, weights)`` of checked values: the per-call path.
-
-    Built without the frozen dataclass's ``__init__`` (one ``object.__setattr__`` per field);
-    the object equals the one ``__init__`` builds.
-    """
+    """``Task(mode, pose, yaw, weights)`` of checked values, without the dataclass ``__init__``."""
     out = _NEW(Task)
     _SET(out, "__dict__", {"mode": mode, "pose": pose, "yaw": yaw, "weights": weights})
     return out
@@ -105,13 +94,11 @@ def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
             allowed="6 values for rows x y z wx wy wz",
         ) from None
     if arr.shape != (6,) or not np.all(np.isfinite(arr)) or np.any(arr < 0) or not arr.any():
-        raise IKError(
+        msg = (
             f"{name}={np.asarray(given).tolist()!r} is not allowed; 6 finite values >= 0 (rows "
-            "x y z wx wy wz [m], [rad]), at least one > 0",
-            parameter=name,
-            value=given,
-            allowed="6 finite values >= 0, not all 0",
+            "x y z wx wy wz [m], [rad]), at least one > 0"
         )
+        raise IKError(msg, parameter=name, value=given, allowed="6 finite values >= 0, not all 0")
     if mask is not None:
         arr = (arr != 0).astype(np.float64)
     unused = [AXES[k] for k in range(6) if k not in allowed and arr[k] != 0]
@@ -132,16 +119,13 @@ _POSE_WEIGHTS.setflags(write=False)
 
 _POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 _POSITION_WEIGHTS.setflags(write=False)
-_EYE1 = np.eye(4)[None]
-_F64 = np.dtype(np.float64)
+_EYE1, _F64 = np.eye(4)[None], np.dtype(np.float64)
 
 
 def _fast(t: np.ndarray) -> tuple[Mode, np.ndarray, np.ndarray, float] | None:
-    """A float64 position or pose (no mask) checked in plain floats: the per-call case.
+    """``(mode, pose (1, 4, 4) read-only, weights, |x| + |y| + |z|)`` of a float64 target.
 
-    Returns ``(mode, pose (1, 4, 4) read-only, weights, |x| + |y| + |z|)`` (that sum NaN or
-    inf when the position is not finite), or None for anything else, e.g. a pose that is not
-    rigid (rotation orthonormal to 1e-9 with det +1, last row [0, 0, 0, 1]).
+    None for anything else (e.g. a pose not rigid to 1e-9): the general path checks it.
     """
     if t.dtype is not _F64:  # float64's one dtype object (any other: the general path)
         return None
@@ -153,8 +137,7 @@ def _fast(t: np.ndarray) -> tuple[Mode, np.ndarray, np.ndarray, float] | None:
         pose[0, 0, 3], pose[0, 1, 3], pose[0, 2, 3] = x, y, z
     elif t.shape == (4, 4):
         (a, b, c, x), (d, e, f, y), (g, h, i, z), last = t.tolist()
-        # columns orthonormal and det +1 (third column = first × second), to 1e-9 (False
-        # for NaN)
+        # columns orthonormal and det +1 (third column = first × second), to 1e-9
         tol = 1e-9
         if not (
             last == [0.0, 0.0, 0.0, 1.0]
@@ -205,14 +188,9 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
             allowed="(3,) position [m], (4,) position + yaw [rad], or a (4, 4) pose",
         ) from None
     if not np.all(np.isfinite(t)):
-        raise IKError(
-            f"target={t.tolist()} contains non-finite values; finite [m]/[rad] required",
-            parameter="target",
-            value=t.tolist(),
-            allowed="finite numbers",
-        )
-    pose = np.eye(4)
-    yaw = 0.0
+        msg = f"target={t.tolist()} contains non-finite values; finite [m]/[rad] required"
+        raise IKError(msg, parameter="target", value=t.tolist(), allowed="finite numbers")
+    pose, yaw = np.eye(4), 0.0
     mode: Mode
     if t.shape == (3,):
         mode, pose[:3, 3] = "position", t
@@ -237,13 +215,11 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
         mode, pose = "pose", t
         w = _weights(mask, weights, (0, 1, 2, 3, 4, 5))
     else:
-        raise IKError(
+        msg = (
             f"target has shape {t.shape}; a position (3,) [m], position + yaw (4,) or a pose "
-            "(4, 4) is needed",
-            parameter="target",
-            value=t.shape,
-            allowed="(3,), (4,) or (4, 4)",
+            "(4, 4) is needed"
         )
+        raise IKError(msg, parameter="target", value=t.shape, allowed="(3,), (4,) or (4, 4)")
     pose = np.ascontiguousarray(pose)
     pose.setflags(write=False)
     w.setflags(write=False)
@@ -253,9 +229,8 @@ def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
 def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[Task]:
     """:func:`build_task` of each row of ``targets`` ((N, 3) positions or (N, 4, 4) poses).
 
-    Without ``mask`` or ``weights``, the rows are checked at once (finite; poses rigid to 1e-9
-    with det +1 and last row [0, 0, 0, 1]); any other case, or a row that fails, goes through
-    :func:`build_task` one by one (which names what is wrong).
+    Without ``mask`` or ``weights`` the rows are checked at once; any other case, or a row that
+    fails, goes through :func:`build_task` one by one.
 
     Raises:
         IKError: As :func:`build_task`.
@@ -299,21 +274,14 @@ def check_within(
 ) -> None:
     """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
 
-    The one range check of targets (the API's :func:`~hexapod_kin.ik.solve`,
-    :func:`~hexapod_kin.ik.solve_many` and the command line): a target a hundred robots away
-    is a typo or a unit error, not a question for the solver (whose loop would run its full
-    budget on numbers like 1e308).
-
     Args:
         model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
         positions: (3,) or (N, 3) positions [m] in the base frame.
         parameter: The name of the argument in the error.
-        kind: The error's class (one of the package's, taking ``parameter``, ``value`` and
-            ``allowed``).
+        kind: The error's class (one of the package's).
 
     Raises:
-        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit,
-            named with the limit.
+        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
 
     """
     if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs
@@ -327,12 +295,10 @@ def check_within(
     limit = _limit(model)
     if far <= limit:  # NaN is not: refused below
         return
-    row = xyz[int(np.argmax(np.max(np.abs(xyz), axis=1)))]
-    where = "" if len(xyz) == 1 else f" (row {int(np.argmax(np.max(np.abs(xyz), axis=1)))})"
-    raise kind(
+    k = int(np.argmax(np.max(np.abs(xyz), axis=1)))
+    row, where = xyz[k], ("" if len(xyz) == 1 else f" (row {k})")
+    msg = (
         f"{parameter}{where} {', '.join(f'{v:.6g}' for v in row)} m is larger than the robot; "
-        f"allowed |x|, |y|, |z| <= {limit:.4g} m ({TARGET_FACTOR:g} x the robot's size)",
-        parameter=parameter,
-        value=row.tolist(),
-        allowed=[-limit, limit],
+        f"allowed |x|, |y|, |z| <= {limit:.4g} m ({TARGET_FACTOR:g} x the robot's size)"
     )
+    raise kind(msg, parameter=parameter, value=row.tolist(), allowed=[-limit, limit])

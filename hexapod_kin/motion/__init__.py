@@ -1,14 +1,11 @@
 """Motion of the tip: resolved rate (linear velocity or 6-D twist), pose paths, schedules.
 
 * :mod:`.rate` — :func:`resolved_rate`, :class:`Trajectory`, :class:`ClosestApproach`,
-  :func:`constant_twist_pose` (exact poses of a constant twist);
-* :mod:`.schedules` — :class:`JointSchedule`, :class:`PosePath` + :func:`follow_pose_path`
-  (SE(3) interpolation, closed loop on the pose error), :func:`track` (IK along a path);
-* :mod:`._law` — the control law and its integration (Pinocchio + numpy).
+  :func:`constant_twist_pose`; :mod:`._law` — the control law and its integration;
+* :mod:`.schedules` — :class:`JointSchedule`, :class:`PosePath` + :func:`follow_pose_path`,
+  :func:`track` (IK along a path).
 
-The default start is the package's one home pose, :func:`hexapod_kin.ik.home`
-(:func:`default_stance` calls it). The seeds' experiments live in :mod:`hexapod_kin.seeds`;
-foot steps and gaits in :mod:`hexapod_kin.gait`.
+The default start is :func:`hexapod_kin.ik.home` (:func:`default_stance`).
 """
 
 from __future__ import annotations

@@ -2,23 +2,17 @@
 
 One evaluation at ``q`` and half-step index ``h`` (``t = h dt/2``):
 
-1. Pinocchio, one pass: the tip pose and its LOCAL_WORLD_ALIGNED Jacobian ``J`` (rows
-   ``[v; ω]``, base axes): ``computeFrameJacobian`` then ``updateFramePlacement``.
-2. The task velocity ``ẋ = ξ(t) + K e``: ``ξ`` the commanded linear velocity (3 rows) or twist
-   (6 rows; a twist in the tip frame is rotated into base axes — damped least squares is
-   invariant under that rotation, so one Jacobian serves both frames), ``e = [p_ref − p;
-   log(R_ref Rᵀ)]`` the pose error on SO(3).
-3. Damped least squares ``q̇ = (JᵀJ + λ² I)⁻¹ Jᵀ ẋ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ`` with the variable
-   damping ``λ² = λ²_max (1 − (σ_min/ε)²)`` for ``σ_min < ε``, else 0 (Nakamura; Chiaverini),
-   floored at ``1e-14 σ_max²`` in the solve. σ and λ² are computed at the start of each step
-   and held over its RK4 stages.
-4. Joint limits: a joint at a limit that ``q̇`` pushes outward is frozen (its column removed)
-   and the system solved again, once. Then ``q̇`` is scaled uniformly to the speed limits.
+1. Pinocchio: the tip pose and its LOCAL_WORLD_ALIGNED Jacobian ``J`` (rows ``[v; ω]``).
+2. The task velocity ``ẋ = ξ(t) + K e``, ``e = [p_ref − p; log(R_ref Rᵀ)]`` (a twist in the tip
+   frame rotated into base axes).
+3. Damped least squares ``q̇ = Jᵀ (J Jᵀ + λ² I)⁻¹ ẋ``, ``λ² = λ²_max (1 − (σ_min/ε)²)`` for
+   ``σ_min < ε``, else 0 (Nakamura; Chiaverini), floored at ``1e-14 σ_max²``; σ and λ² held
+   over a step's RK4 stages.
+4. A joint at a limit that ``q̇`` pushes outward is frozen and the system solved again, once;
+   then ``q̇`` is scaled uniformly to the speed limits.
 
-A 3×3 task (a 3-joint leg's foot position) runs on Python floats: closed-form σ bounds of the
-3×3 Gram matrix and the step's unrolled Cholesky (:func:`~hexapod_kin._numerics.dls_step3`);
-larger tasks the package's one numpy DLS step, :func:`~hexapod_kin._numerics.dls_step` (its
-``λ² I`` kept over a step's RK4 stages).
+A 3×3 task runs on Python floats (:func:`~hexapod_kin._numerics.dls_step3`), larger ones on
+:func:`~hexapod_kin._numerics.dls_step`.
 """
 
 from __future__ import annotations
@@ -41,9 +35,8 @@ dot, svd = np.dot, np.linalg.svd
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
     """(σ_min, σ_max) of a 3×3 matrix (rows ``j``), closed form.
 
-    σ_max² is the largest eigenvalue ``e1`` of ``G = J Jᵀ`` (trigonometric solution of the
-    characteristic cubic); ``e2 + e3 = tr G − e1`` and ``e2 e3 = det(J)²/e1`` give ``e2``;
-    ``σ_min = |det J| / sqrt(e1 e2)`` keeps its accuracy near a singularity.
+    σ_max² = ``e1`` the largest eigenvalue of ``J Jᵀ`` (trigonometric cubic solution); ``e2``
+    from ``tr`` and ``det``; ``σ_min = |det J| / sqrt(e1 e2)`` stays accurate when singular.
     """
     (a, b, c), (d, e, f), (g, h, i) = j
     m00, m11, m22 = a * a + b * b + c * c, d * d + e * e + f * f, g * g + h * h + i * i
@@ -82,27 +75,14 @@ def _sigma(rows: np.ndarray) -> tuple[float, float]:
 
 
 def integrate(
-    model: Any,
-    q0: np.ndarray,
-    vel: np.ndarray,
-    ref_p: np.ndarray,
-    ref_r: np.ndarray | None,
-    dt: float,
-    rk4: bool,
-    tip_frame: bool,
-    gain: float,
-    eps: float,
-    lam2max: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    use_limits: bool,
-    vmax: np.ndarray,
-) -> dict[str, np.ndarray]:
+    model: Any, q0: np.ndarray, vel: np.ndarray, ref_p: np.ndarray, ref_r: np.ndarray | None,
+    dt: float, rk4: bool, tip_frame: bool, gain: float, eps: float, lam2max: float,
+    lower: np.ndarray, upper: np.ndarray, use_limits: bool, vmax: np.ndarray,
+) -> dict[str, np.ndarray]:  # fmt: skip
     """Integrate the law from ``q0`` (Euler or RK4); ``(len(vel) − 1) / 2`` steps.
 
-    ``vel`` (2K+1, 3 or 6) and ``ref_p`` (2K+1, 3), ``ref_r`` (2K+1, 3, 3) (None for a 3-row
-    task) are sampled at half steps (index 2k = t_k, 2k+1 = t_k + dt/2). ``lower``/``upper``
-    are the position limits (±inf for none), ``vmax`` the speed limits (inf for none).
+    ``vel``, ``ref_p``, ``ref_r`` (None for a 3-row task) are sampled at half steps (index 2k =
+    t_k); limits ±inf where none.
 
     Returns:
         Per sample: ``q``, ``qdot``, ``pose`` (4×4), ``twist`` ``J q̇`` (6, base axes),
@@ -114,8 +94,7 @@ def integrate(
     rot_base = np.asarray(base.rotation)
     moved = not np.array_equal(base.homogeneous, np.eye(4))
     convert = model.pinocchio_q if pm.nq != model.nq else None
-    n = int(q0.shape[0])
-    rows6 = vel.shape[1] == 6
+    n, rows6 = int(q0.shape[0]), vel.shape[1] == 6
     fast = not rows6 and n == 3
     vel_l, refp_l = vel.tolist(), ref_p.tolist()
     lo, hi, vm = lower.tolist(), upper.tolist(), vmax.tolist()
@@ -123,19 +102,11 @@ def integrate(
     # no finite position limit (continuous joints): nothing to freeze or clamp
     bounded = use_limits and any(math.isfinite(v) for v in lo + hi)
     ref_l = None if ref_r is None else list(ref_r)  # the 3×3 references, one view per sample
-    frame_jacobian, frame_placement, log3 = (
-        pin.computeFrameJacobian,
-        pin.updateFramePlacement,
-        pin.log3,
-    )
-    array = np.array
+    frame_jacobian, frame_placement = pin.computeFrameJacobian, pin.updateFramePlacement
+    log3, array = pin.log3, np.array
 
     def law(q: list[float], h: int, held: Any) -> tuple[Any, ...]:
-        """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², held, limited).
-
-        ``held`` None: σ and λ² from this evaluation (a step's start), else the λ² the
-        step's start used (floored), returned as ``held``.
-        """
+        """q̇ at (q, t_h) → (q̇, pose, J, σ_min, σ_max, λ², held, limited) (``held``: a step's λ²)."""
         jac = frame_jacobian(pm, data, array(q) if convert is None else convert(q), fid, _LWA)
         omf = frame_placement(pm, data, fid)
         if jac.ndim == 1:  # one joint: Eigen's 6×1 comes back 1-D
@@ -186,44 +157,33 @@ def integrate(
         if speed:
             ratio = max(map(truediv, map(abs, qd), vm))  # largest |q̇_i| / q̇max_i
             if ratio > 1.0:
-                qd = [x / ratio for x in qd]
-                limited = True
+                qd, limited = [x / ratio for x in qd], True
         return qd, pose, jac, smin, smax, lam2, held, limited
 
     steps = (vel.shape[0] - 1) // 2
-    qs, qds, poses, jacs, sig, lams, lims = [], [], [], [], [], [], []
+    rows: tuple[list[Any], ...] = ([], [], [], [], [], [], [])
+    qs, qds, poses, jacs, sig, lams, lims = rows
     q = q0.tolist()
     half, sixth = 0.5 * dt, dt / 6.0
     for k in range(steps + 1):
         h = 2 * k
         k1, pose, jac, smin, smax, lam2, held, lim = law(q, h, None)
-        qs.append(q)
-        qds.append(k1)
-        poses.append(pose)
-        jacs.append(jac)
-        sig.append((smin, smax))
-        lams.append(lam2)
-        lims.append(lim)
+        for col, value in zip(rows, (q, k1, pose, jac, (smin, smax), lam2, lim)):
+            col.append(value)
         if k == steps:
             break
         if rk4:
             k2 = law([a + half * b for a, b in zip(q, k1)], h + 1, held)[0]
             k3 = law([a + half * b for a, b in zip(q, k2)], h + 1, held)[0]
             k4 = law([a + dt * b for a, b in zip(q, k3)], h + 2, held)[0]
-            q = [
-                a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in zip(q, k1, k2, k3, k4)
-            ]
+            ks = zip(q, k1, k2, k3, k4)
+            q = [a + sixth * (b + 2.0 * c + 2.0 * d + e) for a, b, c, d, e in ks]
         else:
             q = [a + dt * b for a, b in zip(q, k1)]
         if bounded:
             q = [lo[i] if x < lo[i] else hi[i] if x > hi[i] else x for i, x in enumerate(q)]
     qdot = np.array(qds)
-    return {
-        "q": np.array(qs),
-        "qdot": qdot,
-        "pose": np.array(poses),
-        "twist": np.einsum("kij,kj->ki", np.array(jacs), qdot),
-        "sigma": np.array(sig),
-        "damping": np.array(lams),
-        "limited": np.array(lims, dtype=bool),
-    }
+    twist = np.einsum("kij,kj->ki", np.array(jacs), qdot)
+    out = {"q": np.array(qs), "qdot": qdot, "pose": np.array(poses), "twist": twist}
+    out["sigma"], out["damping"] = np.array(sig), np.array(lams)
+    return out | {"limited": np.array(lims, dtype=bool)}

@@ -1,18 +1,11 @@
 """Resolved-rate motion: drive the tip with a linear velocity or a 6-D twist.
 
-:func:`resolved_rate` integrates ``q̇ = J⁺_λ (ξ(t) + K e(t))``: damped least squares whose
-damping grows as ``σ_min`` falls below a threshold (``λ² = λ²_max (1 − (σ_min/ε)²)`` for
-``σ_min < ε``, else 0), explicit Euler or classic RK4, an optional closed-loop term toward the
-reference path (gain ``K`` in [1/s]; the pose error is ``[p_ref − p; log(R_ref Rᵀ)]``), joint
-position limits (a joint at a limit moving outward is frozen) and joint velocity limits (q̇
-scaled uniformly, its direction kept). The law and the loop are :mod:`._law` (Pinocchio's
-kinematics, numpy); velocity and reference are sampled beforehand at the RK4 half steps.
-
-Velocities: a linear velocity (3,) [m/s] of the tip in the base axes (3 task rows), or a twist
-(6,) ``[v; ω]`` ([m/s], [rad/s]) in a named frame: ``frame="base"`` — the tip's linear and
-angular velocity in the base axes (so a constant twist moves ``p = p0 + v t``,
-``R = exp(ω t) R0``), or ``frame="tip"`` — the body twist in the tip frame (a constant twist
-moves ``T = T0 exp(t ξ)``, a screw motion).
+:func:`resolved_rate` integrates ``q̇ = J⁺_λ (ξ(t) + K e(t))`` (Euler or RK4): damped least
+squares with variable damping, an optional closed-loop term toward the reference path (gain
+``K`` in [1/s]), joint position and velocity limits (the law and the loop: :mod:`._law`).
+Velocities: a linear velocity (3,) [m/s] of the tip in base axes, or a twist (6,) ``[v; ω]``
+([m/s], [rad/s]) in base axes (``frame="base"``: ``p = p0 + v t``, ``R = exp(ω t) R0``) or in
+the tip frame (``frame="tip"``: ``T = T0 exp(t ξ)``, a screw motion).
 """
 
 from __future__ import annotations
@@ -96,7 +89,7 @@ class Trajectory:
         sigma_min: (N,) smallest singular value of the task Jacobian (3×n position, or 6×n).
         sigma_max: (N,) largest singular value.
         damping: (N,) DLS damping λ² used at each sample.
-        limited: (N,) True where a joint limit froze a joint or q̇ was scaled to the speed limits.
+        limited: (N,) True where a joint was frozen at a limit or q̇ scaled to the speed limits.
         method: ``"euler"`` or ``"rk4"``.
         dt: Step in [s].
         gain: Closed-loop gain K in [1/s] (0: open loop).
@@ -126,11 +119,7 @@ class Trajectory:
     @property
     def poses(self) -> np.ndarray:
         """(N, 4, 4) tip poses ``baseMtip``."""
-        out = np.zeros((self.t.size, 4, 4))
-        out[:, :3, :3] = self.rotation
-        out[:, :3, 3] = self.foot
-        out[:, 3, 3] = 1.0
-        return out
+        return _poses(self.rotation, self.foot)
 
     @property
     def condition(self) -> np.ndarray:
@@ -142,13 +131,8 @@ class Trajectory:
     def closest_approach(self) -> ClosestApproach:
         """The sample with the smallest σ_min."""
         i = int(np.argmin(self.sigma_min))
-        return ClosestApproach(
-            index=i,
-            t=float(self.t[i]),
-            sigma_min=float(self.sigma_min[i]),
-            condition=float(self.condition[i]),
-            q=tuple(float(v) for v in self.q[i]),
-        )
+        smin, cond, q = float(self.sigma_min[i]), float(self.condition[i]), self.q[i]
+        return ClosestApproach(i, float(self.t[i]), smin, cond, tuple(float(v) for v in q))
 
     @property
     def tracking_error(self) -> np.ndarray:
@@ -171,6 +155,13 @@ class Trajectory:
             out[name] = v.tolist() if isinstance(v, np.ndarray) else v
         out["closest_approach"] = self.closest_approach.to_dict()
         return out
+
+
+def _poses(rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """(M, 4, 4) homogeneous transforms of rotations (M, 3, 3) and positions (M, 3)."""
+    out = np.zeros((len(pos), 4, 4))
+    out[:, :3, :3], out[:, :3, 3], out[:, 3, 3] = rot, pos, 1.0
+    return out
 
 
 # ============================================================================ sampling
@@ -203,27 +194,15 @@ def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.
         try:
             v = np.asarray(fn, dtype=float)
         except (TypeError, ValueError):
-            raise ConfigurationError(
-                f"{name}={fn!r} is not numbers or a callable",
-                parameter=name,
-                value=fn,
-                allowed=what,
-            ) from None
+            msg = f"{name}={fn!r} is not numbers or a callable"
+            raise ConfigurationError(msg, parameter=name, value=fn, allowed=what) from None
         if v.shape != (width,):
-            raise ConfigurationError(
-                f"{name} has shape {v.shape}; {what} or a callable",
-                parameter=name,
-                value=v.shape,
-                allowed=what,
-            )
+            msg = f"{name} has shape {v.shape}; {what} or a callable"
+            raise ConfigurationError(msg, parameter=name, value=v.shape, allowed=what)
         out = np.broadcast_to(v, (times.size, width)).copy()
     if not np.all(np.isfinite(out)):
-        raise ConfigurationError(
-            f"{name} contains non-finite values",
-            parameter=name,
-            value="non-finite",
-            allowed="finite numbers",
-        )
+        msg = f"{name} contains non-finite values"
+        raise ConfigurationError(msg, parameter=name, value="non-finite", allowed="finite numbers")
     return np.ascontiguousarray(out)
 
 
@@ -235,13 +214,11 @@ def _width(velocity: Any) -> int:
     except (TypeError, ValueError):
         size = -1
     if size not in (3, 6):
-        raise ConfigurationError(
+        msg = (
             f"velocity has {size} values; a linear velocity (3,) [m/s] or a twist (6,) "
-            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed",
-            parameter="velocity",
-            value=size,
-            allowed="3 or 6 values",
+            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed"
         )
+        raise ConfigurationError(msg, parameter="velocity", value=size, allowed="3 or 6 values")
     return size
 
 
@@ -264,9 +241,6 @@ def _integrate_position(p0: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarra
 def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -> np.ndarray:
     """Exact poses reached by following a constant twist from ``pose0`` for times ``t``.
 
-    ``frame="tip"``: ``T(t) = T0 exp(t ξ)`` (body twist, a screw motion); ``frame="base"``:
-    ``p = p0 + v t``, ``R = exp(ω t) R0`` (linear and angular velocity in base axes).
-
     Args:
         pose0: Start pose (4, 4).
         twist: ``[v; ω]`` (6,) in [m/s], [rad/s].
@@ -277,26 +251,20 @@ def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -
         (M, 4, 4) poses.
 
     """
-    t0 = np.asarray(pose0, dtype=float)
-    xi = np.asarray(twist, dtype=float)
+    t0, xi = np.asarray(pose0, dtype=float), np.asarray(twist, dtype=float)
     times = np.atleast_1d(np.asarray(t, dtype=float))
     inc = times[:, None] * xi  # the increments t ξ, one row per time
     exp3, exp6, motion = pin.exp3, pin.exp6, pin.Motion  # Pinocchio's exp of SO(3) / SE(3)
     if frame == "tip":
         steps = np.array([exp6(motion(v, w)).homogeneous for v, w in zip(inc[:, :3], inc[:, 3:])])
         return np.asarray(t0 @ steps)  # one 4×4 product per time, T0 exp(t ξ)
-    out = np.zeros((times.size, 4, 4))
-    out[:, :3, :3] = np.array([exp3(w) for w in inc[:, 3:]]) @ t0[:3, :3]
-    out[:, :3, 3] = t0[:3, 3] + inc[:, :3]
-    out[:, 3, 3] = 1.0
-    return out
+    return _poses(np.array([exp3(w) for w in inc[:, 3:]]) @ t0[:3, :3], t0[:3, 3] + inc[:, :3])
 
 
 def _integrate_pose(pose0: np.ndarray, vel: np.ndarray, dt: float, frame: str) -> np.ndarray:
     """Reference poses at half steps from a sampled twist (exact for a constant twist)."""
     full, half = _simpson(vel, dt)
-    ref = np.empty((vel.shape[0], 4, 4))
-    cur = pose0.copy()
+    ref, cur = np.empty((vel.shape[0], 4, 4)), pose0.copy()
     ref[0] = cur
     for k in range(full.shape[0]):
         ref[2 * k + 1] = _advance(cur, half[k], frame)
@@ -308,10 +276,7 @@ def _integrate_pose(pose0: np.ndarray, vel: np.ndarray, dt: float, frame: str) -
 def _advance(pose: np.ndarray, inc: np.ndarray, frame: str) -> np.ndarray:
     if frame == "tip":
         return (pin.SE3(pose) * pin.exp6(pin.Motion(inc))).homogeneous
-    out = np.eye(4)
-    out[:3, :3] = pin.exp3(inc[3:]) @ pose[:3, :3]
-    out[:3, 3] = pose[:3, 3] + inc[:3]
-    return out
+    return _poses(pin.exp3(inc[3:]) @ pose[:3, :3], (pose[:3, 3] + inc[:3])[None])[0]
 
 
 # ============================================================================ resolved rate
@@ -336,21 +301,16 @@ def resolved_rate(
     Args:
         model: A loaded model or anything :func:`hexapod_kin.load` takes.
         velocity: A linear velocity (3,) [m/s] in base axes, or a twist (6,) ``[v; ω]``
-            ([m/s], [rad/s]) in ``frame``: constant, or a callable ``v(t)`` (t in [s]; called
-            with an array of times if it accepts one, returning (M, 3)/(M, 6), else per time).
+            ([m/s], [rad/s]) in ``frame``: constant, or a callable ``v(t)`` (t in [s]).
         q0: Start configuration (nq,); None: :func:`hexapod_kin.ik.home`.
         dt: Step in [s] (> 0).
         duration: Length of the run in [s] (> 0); ``round(duration/dt)`` steps.
-        frame: Axes of a twist: ``"base"`` (the tip's velocities in base axes) or ``"tip"``
-            (body twist). A linear velocity is always in base axes.
+        frame: Axes of a twist: ``"base"`` or ``"tip"`` (body twist).
         method: ``"rk4"`` (classic Runge–Kutta) or ``"euler"``.
-        gain: Closed-loop gain K in [1/s] pulling the tip toward the reference path
-            (0 = open loop). Keep ``K·dt`` well below 1.
-        path: Optional reference path, a callable of time: positions (M, 3)/(3,) in [m] for
-            a linear velocity, poses (M, 4, 4)/(4, 4) for a twist (e.g.
-            :meth:`hexapod_kin.motion.PosePath.sample`).
-            Default: the integral of the velocity from FK(q0) (Simpson's rule on the same
-            samples; exact for a constant twist).
+        gain: Closed-loop gain K in [1/s] toward the reference path (0 = open loop).
+        path: Optional reference path, a callable of time: positions (M, 3) in [m] for a
+            linear velocity, poses (M, 4, 4) for a twist; default the integral of the velocity
+            from FK(q0) (exact for a constant twist).
         sigma_threshold: ε: damping starts when σ_min < ε. Default 1 % of the largest σ at q0.
         max_damping: λ²_max reached at σ_min = 0. Default ε².
         within_limits: Freeze joints at their position limits (and clamp).
@@ -361,13 +321,11 @@ def resolved_rate(
 
     Raises:
         ParameterError: Bad ``dt``, ``duration``, ``method``, ``frame``, ``gain`` or thresholds;
-            a velocity × duration or a path beyond a hundred robot sizes
-            (:func:`hexapod_kin.ik.check_within`).
+            a motion beyond a hundred robot sizes (:func:`hexapod_kin.ik.check_within`).
         ConfigurationError: Bad ``q0``, velocity or path.
 
     """
-    mdl = as_model(model)
-    dt = positive("dt", dt)
+    mdl, dt = as_model(model), positive("dt", dt)
     duration = positive("duration", duration)
     gain = positive("gain", gain, allow_zero=True)
     one_of("method", method, ("rk4", "euler"))
@@ -388,8 +346,7 @@ def resolved_rate(
     vel = _sample(velocity, times_half, width, "velocity", what)
     with np.errstate(over="ignore"):  # a distance beyond a hundred robots is refused at once
         check_within(mdl, vel[:, :3] * duration, "velocity x duration", ParameterError)
-    pose0 = np.array(mdl.fk(start))
-    ref_r = None
+    pose0, ref_r = np.array(mdl.fk(start)), None
     if rows6:
         if path is not None:
             ref = _sample_poses(path, times_half)
@@ -407,9 +364,9 @@ def resolved_rate(
     jac0 = mdl.jacobian(start)
     sv = np.linalg.svd(jac0 if rows6 else jac0[:3], compute_uv=False)
     eps = 0.01 * sv[0] if sigma_threshold is None else positive("sigma_threshold", sigma_threshold)
-    lam2max = (
-        eps * eps if max_damping is None else positive("max_damping", max_damping, allow_zero=True)
-    )
+    lam2max = eps * eps
+    if max_damping is not None:
+        lam2max = positive("max_damping", max_damping, allow_zero=True)
     lower, upper = np.asarray(mdl.lower, dtype=float), np.asarray(mdl.upper, dtype=float)
     # continuous joints (revolute, range >= 2π) wrap: no position limit for them
     cont = ~np.asarray(mdl.is_prismatic, dtype=bool) & (upper - lower >= 2 * np.pi - 1e-9)
@@ -425,32 +382,16 @@ def resolved_rate(
     vmax = np.where(velocity_limits & (vlim > 0), vlim, np.inf)
     out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
                     lam2max, lo, hi, within_limits, vmax)  # fmt: skip
-    pose = out["pose"]
-    arrays = {
-        "t": np.arange(steps + 1) * dt,
-        "q": out["q"],
-        "qdot": out["qdot"],
-        "foot": np.ascontiguousarray(pose[:, :3, 3]),
-        "foot_velocity": np.ascontiguousarray(out["twist"][:, :3]),
-        "rotation": np.ascontiguousarray(pose[:, :3, :3]),
-        "angular_velocity": np.ascontiguousarray(out["twist"][:, 3:]),
-        "command": np.ascontiguousarray(vel[::2]),
-        "reference": np.ascontiguousarray(ref_p[::2]),
-        "sigma_min": np.ascontiguousarray(out["sigma"][:, 0]),
-        "sigma_max": np.ascontiguousarray(out["sigma"][:, 1]),
-        "damping": out["damping"],
-        "limited": out["limited"],
-    }
-    ref_rot = None if ref_r is None else np.ascontiguousarray(ref_r[::2])
-    read_only(*arrays.values(), *(() if ref_rot is None else (ref_rot,)))
-    return Trajectory(
-        **arrays,
-        reference_rotation=ref_rot,
-        method=method,
-        dt=dt,
-        gain=gain,
-        frame=frame if rows6 else "base",
-    )
+    c, pose, tw, sg = np.ascontiguousarray, out["pose"], out["twist"], out["sigma"]
+    t, q, qdot = np.arange(steps + 1) * dt, out["q"], out["qdot"]
+    damping, limited, frame = out["damping"], out["limited"], frame if rows6 else "base"
+    foot, foot_v, rot, ang_v = c(pose[:, :3, 3]), c(tw[:, :3]), c(pose[:, :3, :3]), c(tw[:, 3:])
+    command, reference, smin, smax = c(vel[::2]), c(ref_p[::2]), c(sg[:, 0]), c(sg[:, 1])
+    ref_rot = None if ref_r is None else c(ref_r[::2])
+    read_only(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, smin, smax, damping,
+              limited, *(() if ref_rot is None else (ref_rot,)))  # fmt: skip
+    return Trajectory(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, ref_rot, smin,
+                      smax, damping, limited, method, dt, gain, frame)  # fmt: skip
 
 
 def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:

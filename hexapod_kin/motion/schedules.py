@@ -4,9 +4,7 @@
 * :class:`PosePath` interpolates poses on SE(3) (``T_i exp(s log(T_i⁻¹ T_{i+1}))``: a constant
   body twist per segment) and :func:`follow_pose_path` tracks it by resolved rate, closed loop
   on the pose error (log map).
-* :func:`track` turns tip positions (or poses) back into joint trajectories by IK (closed form
-  with branch continuity when the chain has one, else damped least squares warm-started from
-  the previous sample).
+* :func:`track` turns tip positions (or poses) back into joint trajectories by IK.
 """
 
 from __future__ import annotations
@@ -50,12 +48,8 @@ class JointSchedule:
         if v.ndim == 1:
             v = v[:, None]
         if t.size < 1 or v.shape[0] != t.size:
-            raise ParameterError(
-                f"JointSchedule: {t.size} times and {v.shape[0]} value rows; one row per knot",
-                parameter="values",
-                value=v.shape,
-                allowed=f"({t.size}, n)",
-            )
+            msg = f"JointSchedule: {t.size} times and {v.shape[0]} value rows; one row per knot"
+            raise ParameterError(msg, parameter="values", value=v.shape, allowed=f"({t.size}, n)")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
             raise ParameterError("JointSchedule: times and values must be finite")
         if np.any(np.diff(t) < 0):
@@ -80,9 +74,8 @@ class JointSchedule:
 class PosePath:
     """Poses at knot times, interpolated on SE(3) (arrays read-only).
 
-    Between knots ``i`` and ``i+1`` the pose is ``T_i exp(s ξ_i)`` with
-    ``ξ_i = log(T_i⁻¹ T_{i+1})`` and ``s ∈ [0, 1]`` linear in time: a constant body twist
-    ``ξ_i / Δt_i`` (a screw motion, the geodesic of SE(3)); held at the last pose afterwards.
+    Between knots ``i`` and ``i+1``: ``T_i exp(s ξ_i)``, ``ξ_i = log(T_i⁻¹ T_{i+1})``, ``s``
+    linear in time (a screw motion); held at the last pose afterwards.
 
     Attributes:
         times: (K,) knot times in [s], strictly increasing, starting at 0.
@@ -97,13 +90,11 @@ class PosePath:
         t = np.asarray(self.times, dtype=float).reshape(-1)
         p = np.asarray(self.poses, dtype=float)
         if p.shape != (t.size, 4, 4) or t.size < 2:
-            raise ParameterError(
+            msg = (
                 f"PosePath: {t.size} times and poses of shape {p.shape}; K >= 2 times and "
-                "(K, 4, 4) poses are needed",
-                parameter="poses",
-                value=p.shape,
-                allowed=f"({t.size}, 4, 4)",
+                "(K, 4, 4) poses are needed"
             )
+            raise ParameterError(msg, parameter="poses", value=p.shape, allowed=f"({t.size}, 4, 4)")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(p))):
             raise ParameterError("PosePath: times and poses must be finite")
         if t[0] != 0.0 or np.any(np.diff(t) <= 0):
@@ -147,12 +138,9 @@ class PosePath:
         flat = np.atleast_1d(tt)
         k, s = self._segment(flat)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
-        out = np.array(
-            [
-                (pin.SE3(self.poses[ki]) * pin.exp6(pin.Motion(si * xi[ki]))).homogeneous
-                for ki, si in zip(k, s)
-            ]
-        )
+        se3, exp6, motion = pin.SE3, pin.exp6, pin.Motion
+        out = np.array([(se3(self.poses[ki]) * exp6(motion(si * xi[ki]))).homogeneous
+                        for ki, si in zip(k, s)])  # fmt: skip
         return out[0] if tt.ndim == 0 else out
 
     def twist(self, t: Any) -> np.ndarray:
@@ -170,7 +158,7 @@ class PosePath:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary ([s], poses as nested lists)."""
-        return {"times": self.times.tolist(), "poses": self.poses.tolist()}
+        return fields_dict(self, "times", "poses")
 
 
 def follow_pose_path(
@@ -186,19 +174,16 @@ def follow_pose_path(
     """Track a :class:`PosePath` by resolved rate: feed-forward body twist + pose feedback.
 
     Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes (6-D tip motion needs
-            at least 6 joints for exact tracking; fewer give the damped best fit).
+        model: A loaded model or anything :func:`hexapod_kin.load` takes.
         path: The pose path.
-        q0: Start (nq,); default: 6-D IK of the first pose (:func:`hexapod_kin.ik.solve`'s
-            default start).
+        q0: Start (nq,); default: 6-D IK of the first pose.
         dt: Step in [s].
         gain: Closed-loop gain on the pose error ``[p_ref − p; log(R_ref Rᵀ)]`` in [1/s].
         method: ``"rk4"`` or ``"euler"``.
         within_limits: Respect the joint position limits.
 
     Returns:
-        The :class:`Trajectory` (``frame="tip"``; ``reference``/``reference_rotation`` are
-        the path).
+        The :class:`Trajectory` (``frame="tip"``; its reference is the path).
 
     Raises:
         IKError: The first pose cannot be reached (when ``q0`` is None).
@@ -217,18 +202,8 @@ def follow_pose_path(
                 allowed="a reachable pose (or give q0)",
             )
         q0 = res.q
-    return resolved_rate(
-        mdl,
-        path.twist,
-        q0,
-        dt,
-        path.duration,
-        frame="tip",
-        method=method,
-        gain=gain,
-        path=path.sample,
-        within_limits=within_limits,
-    )
+    return resolved_rate(mdl, path.twist, q0, dt, path.duration, frame="tip", method=method,
+                         gain=gain, path=path.sample, within_limits=within_limits)  # fmt: skip
 
 
 # ============================================================================ tracking by IK
@@ -247,14 +222,13 @@ class Tracked:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary."""
-        return {"q": self.q.tolist(), "reached": self.reached.tolist()}
+        return fields_dict(self, "q", "reached")
 
 
 def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-10) -> Tracked:
     """Joint trajectory reaching a sequence of tip positions (or poses), continuously.
 
-    Uses the closed form when the model comes from a chain with one (each sample takes the
-    solution nearest to the previous sample's joints, so no branch jumps), else
+    The closed form when the chain has one (the solution nearest the previous sample), else
     :func:`hexapod_kin.ik.solve` warm-started from the previous sample.
 
     Args:
@@ -263,9 +237,6 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         q0: Joints near the first sample (branch choice / warm start); default
             :func:`hexapod_kin.ik.home`.
         tol: Position tolerance [m] of the numerical fallback.
-
-    Returns:
-        A :class:`Tracked`.
 
     Raises:
         IKError: Bad positions.
@@ -277,12 +248,8 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
     pts = np.asarray(positions, dtype=float)
     poses = pts.ndim == 3
     if not ((pts.ndim == 2 and pts.shape[1] == 3) or (poses and pts.shape[1:] == (4, 4))):
-        raise IKError(
-            f"positions has shape {pts.shape}; (M, 3) in [m] or (M, 4, 4) poses are needed",
-            parameter="positions",
-            value=pts.shape,
-            allowed="(M, 3) or (M, 4, 4)",
-        )
+        msg = f"positions has shape {pts.shape}; (M, 3) in [m] or (M, 4, 4) poses are needed"
+        raise IKError(msg, parameter="positions", value=pts.shape, allowed="(M, 3) or (M, 4, 4)")
     if not np.all(np.isfinite(pts)):
         raise IKError("positions contains non-finite values", parameter="positions")
     ik.check_within(mdl, pts[:, :3, 3] if poses else pts, "positions")
@@ -295,7 +262,7 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
         try:
             batch = ik.analytic_batch(mdl, pts, within_limits=True)
         except IKError:
-            batch = None
+            pass
     rev = ~np.asarray(mdl.is_prismatic)
     for i, p in enumerate(pts):
         if batch is not None and batch.valid[i].any():
@@ -303,17 +270,14 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
             d = cands - prev
             d[:, rev] = np.remainder(d[:, rev] + np.pi, 2 * np.pi) - np.pi
             idx = int(np.argmin(np.sum(d * d, axis=1)))
-            best = cands[idx]
             # keep revolute joints continuous (no 2π jumps) when that stays inside the limits
-            unwrapped = prev + d[idx]
-            if np.all(unwrapped >= mdl.lower) and np.all(unwrapped <= mdl.upper):
-                best = unwrapped
-            out[i] = best
-            ok[i] = True
+            best = prev + d[idx]
+            if not (np.all(best >= mdl.lower) and np.all(best <= mdl.upper)):
+                best = cands[idx]
+            out[i], ok[i] = best, True
         else:
             res = ik.solve(mdl, p, prev, tol=tol, restarts=2)
-            out[i] = res.q
-            ok[i] = res.converged
+            out[i], ok[i] = res.q, res.converged
         prev = out[i]
     read_only(out, ok)
     return Tracked(q=out, reached=ok)

@@ -22,27 +22,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .scans import ScanResult, default_joints, default_q_fixed, scan
 
 
-__all__ = [
-    "ROW_NAMES",
-    "Families",
-    "Family",
-    "Measures",
-    "MeasuresBatch",
-    "ScanResult",
-    "WorkspaceResult",
-    "cross_section",
-    "default_joints",
-    "default_q_fixed",
-    "default_rows",
-    "families_for",
-    "measures",
-    "measures_batch",
-    "reach",
-    "row_indices",
-    "row_names",
-    "scan",
-    "workspace",
-]
+__all__ = ["ROW_NAMES", "Families", "Family", "Measures", "MeasuresBatch", "ScanResult",
+           "WorkspaceResult", "cross_section", "default_joints", "default_q_fixed", "default_rows",
+           "families_for", "measures", "measures_batch", "reach", "row_indices", "row_names",
+           "scan", "workspace"]  # fmt: skip
 
 _WHERE = {
     name: where

@@ -298,14 +298,8 @@ def minor_block(
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def minor_big(
-    jb: np.ndarray,
-    r: np.ndarray,
-    c: np.ndarray,
-    m: int,
-    nb: int,
-    dst: np.ndarray,
-    tmp: np.ndarray,
-) -> None:  # pragma: no cover - compiled
+    jb: np.ndarray, r: np.ndarray, c: np.ndarray, m: int, nb: int, dst: np.ndarray, tmp: np.ndarray,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """:func:`minor_block` for any m ≤ 8: Laplace expansion along the first ``h = m // 2`` rows.
 
     ``det = Σ_S ε(S) det(J[top, S]) det(J[bottom, S̄])`` over the h-subsets ``S`` of the

@@ -21,32 +21,15 @@ import numpy as np
 from .._kernels import POLY_TRIG_MAX, eig3_sym, fk_jac_block, njit, sincos
 from ._blocks import JACOBI_TOL, eig_block, minor_big, minor_block
 
-__all__ = [
-    "JACOBI_TOL",
-    "POLY_TRIG_MAX",
-    "eig_block",
-    "measures_kernel",
-    "minor_big",
-    "minor_block",
-    "sincos",
-]
+__all__ = ["JACOBI_TOL", "POLY_TRIG_MAX", "eig_block", "measures_kernel", "minor_big",
+           "minor_block", "sincos"]  # fmt: skip
 
 
 @njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _eigenvalues(
-    gb: np.ndarray,
-    hb: np.ndarray,
-    wb: np.ndarray,
-    ev: np.ndarray,
-    idx: np.ndarray,
-    nb: int,
-    mm: int,
-    pack: np.ndarray,
-    perm: np.ndarray,
-    csize: np.ndarray,
-    split: bool,
-    use_jacobi: bool,
-) -> None:  # pragma: no cover - compiled
+    gb: np.ndarray, hb: np.ndarray, wb: np.ndarray, ev: np.ndarray, idx: np.ndarray, nb: int,
+    mm: int, pack: np.ndarray, perm: np.ndarray, csize: np.ndarray, split: bool, use_jacobi: bool,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Eigenvalues of the packed Gram matrices ``gb`` into ``ev[0:mm]`` (any order).
 
     ``split``: each diagonal block of the plan (``perm``, ``csize``) apart, else ``G`` whole.
@@ -95,26 +78,11 @@ def _eigenvalues(
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _reduce_block(
-    jb: np.ndarray,
-    nb: int,
-    plan: tuple[Any, ...],
-    gb: np.ndarray,
-    hb: np.ndarray,
-    wb: np.ndarray,
-    ev: np.ndarray,
-    ev2: np.ndarray,
-    flag: np.ndarray,
-    idx: np.ndarray,
-    dg: np.ndarray,
-    mnr: np.ndarray,
-    tmp: np.ndarray,
-    use_jacobi: bool,
-    start: int,
-    out_det: np.ndarray,
-    out_manip: np.ndarray,
-    out_cond: np.ndarray,
-    out_smin: np.ndarray,
-) -> None:  # pragma: no cover - compiled
+    jb: np.ndarray, nb: int, plan: tuple[Any, ...], gb: np.ndarray, hb: np.ndarray, wb: np.ndarray,
+    ev: np.ndarray, ev2: np.ndarray, flag: np.ndarray, idx: np.ndarray, dg: np.ndarray,
+    mnr: np.ndarray, tmp: np.ndarray, use_jacobi: bool, start: int, out_det: np.ndarray,
+    out_manip: np.ndarray, out_cond: np.ndarray, out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Measures of a block of ``nb`` k×n Jacobians ``jb`` (k, n, B), ``m = min(k, n) ≤ 6``.
 
     ``plan`` is :attr:`._plan.GramPlan.arrays`. Where the plan's ``drop`` entries of ``G``
@@ -241,25 +209,11 @@ def _reduce_block(
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def measures_kernel(
-    prot: np.ndarray,
-    ptr: np.ndarray,
-    flags: np.ndarray,
-    kind: np.ndarray,
-    col: np.ndarray,
-    qs: np.ndarray,
-    sel: np.ndarray,
-    plan: tuple[Any, ...],
-    use_jacobi: bool,
-    tmp: np.ndarray,
-    skip0: bool,
-    first_block: int,
-    last_block: int,
-    block: int,
-    out_det: np.ndarray,
-    out_manip: np.ndarray,
-    out_cond: np.ndarray,
-    out_smin: np.ndarray,
-) -> None:  # pragma: no cover - compiled
+    prot: np.ndarray, ptr: np.ndarray, flags: np.ndarray, kind: np.ndarray, col: np.ndarray,
+    qs: np.ndarray, sel: np.ndarray, plan: tuple[Any, ...], use_jacobi: bool, tmp: np.ndarray,
+    skip0: bool, first_block: int, last_block: int, block: int, out_det: np.ndarray,
+    out_manip: np.ndarray, out_cond: np.ndarray, out_smin: np.ndarray,
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """FK + selected-row Jacobian + measures for blocks ``first_block`` to ``last_block - 1``.
 
     The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot`` … ``col``); ``qs``
@@ -269,28 +223,17 @@ def measures_kernel(
     thread's (2, B) scratch of :func:`minor_big`. The flags are runtime values: one compiled
     signature serves every chain.
     """
-    nconf = qs.shape[0]
-    nq = qs.shape[1]
-    k = sel.shape[0]
+    nconf, nq, k, bsz = qs.shape[0], qs.shape[1], sel.shape[0], block
     mm = k if k <= nq else nq
     npk = mm * (mm + 1) // 2
-    nev = mm
-    bsz = block
-    rr = np.empty((9, bsz))
-    pp = np.empty((3, bsz))
-    trig = np.empty((2, bsz))
+    rr, pp, trig = np.empty((9, bsz)), np.empty((3, bsz)), np.empty((2, bsz))
     qb = np.empty((max(nq, 1), bsz))
     jfull = np.zeros((6 * max(nq, 1), bsz))  # off-path columns stay zero
     jb = np.empty((k, nq, bsz))
-    gb = np.empty((npk, bsz))
-    hb = np.empty((npk, bsz))
-    wb = np.empty((npk, bsz))
-    ev = np.empty((nev, bsz))
-    ev2 = np.empty((nev, bsz))
-    flag = np.zeros(bsz, dtype=np.int64)
-    open_idx = np.empty(bsz, dtype=np.int64)
-    dg = np.empty(bsz)
-    mnr = np.empty(bsz)
+    gb, hb, wb = np.empty((npk, bsz)), np.empty((npk, bsz)), np.empty((npk, bsz))
+    ev, ev2 = np.empty((mm, bsz)), np.empty((mm, bsz))
+    flag, open_idx = np.zeros(bsz, dtype=np.int64), np.empty(bsz, dtype=np.int64)
+    dg, mnr = np.empty(bsz), np.empty(bsz)
     for blk in range(first_block, last_block):
         start = blk * bsz
         nb = min(nconf, start + bsz) - start

@@ -19,16 +19,8 @@ from .._kernels import AlignedChain, aligned_chain, run_blocks
 from .._pose import rodrigues
 from ._kernel import measures_kernel
 
-__all__ = [
-    "GramPlan",
-    "BLOCK",
-    "aligned",
-    "block_plan",
-    "gram_plan",
-    "first_joint_invariant",
-    "output_arrays",
-    "compute",
-]
+__all__ = ["GramPlan", "BLOCK", "aligned", "block_plan", "gram_plan", "first_joint_invariant",
+           "output_arrays", "compute"]  # fmt: skip
 
 
 #: Configurations per structure-of-arrays block of :func:`measures_kernel`.
@@ -96,8 +88,7 @@ class GramPlan:
 def _components(zero: np.ndarray) -> list[list[int]]:
     """Connected components of the graph with an edge where ``zero[a, b]`` is false."""
     m = zero.shape[0]
-    seen = [False] * m
-    comps = []
+    seen, comps = [False] * m, []
     for a in range(m):
         if seen[a]:
             continue
@@ -117,14 +108,12 @@ def _components(zero: np.ndarray) -> list[list[int]]:
 def gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
     """Plan the block reduction for ``model``'s rows ``sel`` (kept in ``model.cached``).
 
-    ``G`` is ``J Jᵀ`` when k < n, ``Jᵀ J`` when k > n, and, when square, whichever splits
-    into smaller diagonal blocks: entries below ``1e-14 · max |G|`` at 16 random
-    configurations (the first joint at 0 when ``skip0``) are taken as structural zeros; the
-    kernel re-checks them per configuration. A 3-DOF leg's ``Jᵀ J`` is ``{q1} ⊕ {q2, q3}``.
+    ``G`` is ``J Jᵀ`` (k < n), ``Jᵀ J`` (k > n), or whichever splits into smaller diagonal blocks:
+    entries below ``1e-14 · max |G|`` at 16 random configurations are structural zeros (the
+    kernel re-checks them per configuration).
     """
-    return model.cached(
-        f"singularity.gram_plan.{sel}.{skip0}", lambda: _build_gram_plan(model, sel, skip0)
-    )
+    key = f"singularity.gram_plan.{sel}.{skip0}"
+    return model.cached(key, lambda: _build_gram_plan(model, sel, skip0))
 
 
 def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
@@ -145,47 +134,35 @@ def _build_gram_plan(model: Any, sel: tuple[int, ...], skip0: bool) -> GramPlan:
             score = (max(len(c) for c in comps), -len(comps))
             if best is None or score < best[:2]:
                 best = (*score, gram_t, comps, zero)
-    if best is None:
-        gram_t, comps = k > n, [list(range(m))]
-    else:
-        gram_t, comps = best[2], best[3]
+    gram_t, comps = (k > n, [list(range(m))]) if best is None else (best[2], best[3])
     perm = np.array([a for c in comps for a in c] or [0], dtype=np.int64)
     csize = np.array([len(c) for c in comps] or [1], dtype=np.int64)
     where = {a: ci for ci, c in enumerate(comps) for a in c}
-    drop = np.array(
-        sorted(int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]),
-        dtype=np.int64,
-    )
+    between = [int(pack[a, b]) for a in range(m) for b in range(a + 1, m) if where[a] != where[b]]
+    drop = np.array(sorted(between), dtype=np.int64)
     if len(comps) == 1:
         perm = np.arange(max(m, 1), dtype=np.int64)
-    return GramPlan(
-        use_block, gram_t, perm, csize, drop, (pack, rsub, csub, gram_t, perm, csize, drop)
-    )
+    arrays = (pack, rsub, csub, gram_t, perm, csize, drop)
+    return GramPlan(use_block, gram_t, perm, csize, drop, arrays)
 
 
 def first_joint_invariant(al: AlignedChain, sel: tuple[int, ...]) -> bool:
     """Whether the measures of the ``sel`` rows of ``J`` do not depend on the first joint.
 
-    Turning revolute joint 0 (axis ``u``) by ``θ`` gives ``J(q) = B J(q0 = 0)``, ``B =
-    blockdiag(R, R)``, ``R = Rot(u, θ)``. With ``S`` the row selection, ``S J(q) = Q S J(q0 =
-    0)``, ``Q = S B Sᵀ``, holds when ``Q`` is orthogonal; then the singular values and (``det Q
-    = +1``) ``det J`` are unchanged. Checked at two generic angles; ``q0`` must drive joint 0
-    only.
+    Turning revolute joint 0 by ``θ`` gives ``J(q) = B J(q0 = 0)``, ``B = blockdiag(R, R)``; the
+    measures are unchanged when ``Q = S B Sᵀ`` (``S`` the row selection) is orthogonal with
+    ``det Q = +1``. Checked at two generic angles.
     """
     if al.kind.shape[0] == 0 or al.kind[0] != 0 or np.count_nonzero(al.col == al.col[0]) != 1:
         return False
     u = al.prot[0].reshape(3, 3)[:, 2]
-    u = u / np.linalg.norm(u)
-    rows = np.eye(6)[list(sel)]
+    u, rows = u / np.linalg.norm(u), np.eye(6)[list(sel)]
     for angle in (0.7, 2.3):
         rot = rodrigues(u, math.sin(angle), math.cos(angle))
         b = np.zeros((6, 6))
-        b[:3, :3] = rot
-        b[3:, 3:] = rot
+        b[:3, :3] = b[3:, 3:] = rot
         qmat = rows @ b @ rows.T
-        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12:
-            return False
-        if np.linalg.det(qmat) <= 0:
+        if np.abs(qmat.T @ qmat - np.eye(len(sel))).max() > 1e-12 or np.linalg.det(qmat) <= 0:
             return False
     return True
 
@@ -198,8 +175,7 @@ _OUT_POOL_MAX_BYTES = 128 * 2**20
 def output_arrays(n: int) -> tuple[np.ndarray, ...]:
     """Four (n,) float64 arrays for :func:`measures_batch`: the rows of one (4, n) buffer.
 
-    The last buffer (up to ``_OUT_POOL_MAX_BYTES``; fresh memory is slow to touch) is handed
-    out again once nothing references it: the rows returned hold it through ``.base``.
+    The last buffer (up to ``_OUT_POOL_MAX_BYTES``) is reused once nothing references it.
     """
     with _OUT_LOCK:
         if _OUT_POOL:
@@ -224,25 +200,17 @@ def compute(
 ) -> tuple[np.ndarray, ...]:
     """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
 
-    Chunks of blocks on plain threads (:func:`hexapod_kin._kernels.run_blocks`; the kernel
-    releases the GIL and raises nothing).
-
     Args:
         model: A loaded model.
         q: (N, nq) float64 C-contiguous configurations, checked by the caller.
         sel: (k,) int64 row indices of ``[vx vy vz wx wy wz]``.
         out: Four (N,) float64 arrays.
 
-    Returns:
-        ``out``.
-
     """
-    n = q.shape[0]
-    al = aligned(model)
+    n, al = q.shape[0], aligned(model)
     key = tuple(int(r) for r in sel)
     skip0 = first_joint_invariant(al, key)
-    plan = gram_plan(model, key, skip0)
-    m = min(len(key), q.shape[1])
+    plan, m = gram_plan(model, key, skip0), min(len(key), q.shape[1])
     use_jacobi = not (m <= 3 and int(plan.csize.max()) <= 2)
     args = (*al.packed, q, sel, plan.arrays, use_jacobi)
 

@@ -75,11 +75,8 @@ def _sum(a: Jet, b: Jet) -> Jet:
 
 
 def _power(c: float) -> tuple[Callable[..., Any], ...]:
-    return (
-        lambda x: x**c,
-        lambda x: c * x ** (c - 1.0),
-        lambda x: c * (c - 1.0) * x ** (c - 2.0),
-    )
+    return (lambda x: x**c, lambda x: c * x ** (c - 1.0),
+            lambda x: c * (c - 1.0) * x ** (c - 2.0))  # fmt: skip
 
 
 _UNARY: dict[str, tuple[Callable[..., Any], ...]] = {
@@ -95,13 +92,9 @@ Node = Callable[[list[Any], bool], Jet]  # (variables' columns, with Hessian) ->
 Eval = Callable[[np.ndarray, bool], Jet]  # (x (M, v), with Hessian) -> jet
 
 
-_FOLD: dict[type, Callable[[float, float], float]] = {
-    ast.Add: operator.add,
-    ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
-    ast.Div: operator.truediv,
-    ast.Pow: operator.pow,
-}
+_FOLD: dict[type, Callable[[float, float], float]] = {ast.Add: operator.add,
+    ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+    ast.Pow: operator.pow}  # fmt: skip
 
 
 def _number(node: ast.AST) -> float | None:
@@ -146,8 +139,7 @@ def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
         k = int(node.id[1:]) - 1 if node.id[:1] == "q" and node.id[1:].isdigit() else -1
         if k not in pos:
             raise _refuse(text, f"the name {node.id!r}")
-        i = pos[k]
-        unit = np.zeros(len(pos))
+        i, unit = pos[k], np.zeros(len(pos))
         unit[i] = 1.0
         return lambda env, hess: (env[i], unit, None)
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
@@ -173,19 +165,13 @@ def _build(node: ast.AST, text: str, pos: dict[int, int]) -> Node:
         if isinstance(node.op, ast.Mult):
             return lambda env, hess: _mul(left(env, hess), right(env, hess), hess)
         if isinstance(node.op, ast.Div):
-            return lambda env, hess: _mul(
-                left(env, hess), _chain(_RECIPROCAL, right(env, hess), hess), hess
-            )
+            inv: Node = lambda env, hess: _chain(_RECIPROCAL, right(env, hess), hess)  # noqa: E731
+            return lambda env, hess: _mul(left(env, hess), inv(env, hess), hess)
         raise _refuse(text, type(node.op).__name__)
-    if (
-        isinstance(node, ast.Call)
-        and isinstance(node.func, ast.Name)
-        and node.func.id in _UNARY
-        and len(node.args) == 1
-        and not node.keywords
-    ):
+    fname = node.func.id if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) else ""
+    if isinstance(node, ast.Call) and fname in _UNARY and len(node.args) == 1 and not node.keywords:
         arg = _build(node.args[0], text, pos)
-        fn = _UNARY[node.func.id]
+        fn = _UNARY[fname]
         return lambda env, hess: _chain(fn, arg(env, hess), hess)
     raise _refuse(text, type(node).__name__)
 
@@ -289,16 +275,14 @@ def _newton(jet: Eval, p: np.ndarray, x: np.ndarray) -> np.ndarray:
     same bits whatever the other rows).
     """
     m, v = x.shape
-    out = np.full(m, np.inf)
-    rows = np.arange(m)
+    out, rows = np.full(m, np.inf), np.arange(m)
     eye = np.eye(v)
     with np.errstate(all="ignore"):
         f, g, h = jet(x, True)
         lam = np.sum((p - x) * g, axis=1) / np.sum(g * g, axis=1)
         lam = np.where(np.isfinite(lam), lam, 0.0)
         for _ in range(_NEWTON):
-            r1 = x - p[rows] + lam[:, None] * g
-            gn = np.sqrt(np.sum(g * g, axis=1))
+            r1, gn = x - p[rows] + lam[:, None] * g, np.sqrt(np.sum(g * g, axis=1))
             ok = (np.abs(f) <= _TOL * gn) & (np.linalg.norm(r1, axis=1) <= _TOL)
             out[rows[ok]] = np.linalg.norm(x[ok] - p[rows[ok]], axis=1)
             keep = ~ok
@@ -326,9 +310,8 @@ def closest_distance(jet: Eval, p: np.ndarray) -> np.ndarray:
     its own (the same bits whatever the other rows).
     """
     rows, back = np.unique(p, axis=0, return_inverse=True)
-    out = np.concatenate(
-        [_closest(jet, rows[i : i + _CHUNK]) for i in range(0, len(rows), _CHUNK)] or [np.zeros(0)]
-    )
+    parts = [_closest(jet, rows[i : i + _CHUNK]) for i in range(0, len(rows), _CHUNK)]
+    out = np.concatenate(parts or [np.zeros(0)])
     out[jet(rows, False)[0] == 0.0] = 0.0
     return out[back.reshape(-1)]
 
@@ -345,8 +328,7 @@ def _closest(jet: Eval, p: np.ndarray) -> np.ndarray:
     """
     m, v = p.shape
     x0 = _project(jet, p.copy(), 6)
-    best = _newton(jet, p, x0)
-    u = _directions(v)
+    best, u = _newton(jet, p, x0), _directions(v)
     moved = np.linalg.norm(x0 - p, axis=1)  # 0 where ∇f(p) = 0: no first step at all
     radius = np.where(np.isfinite(best), best, np.where(moved > 0, moved, _STEP_MAX))
     shell = _SHELLS[:, None, None, None] * radius[None, None, :, None]

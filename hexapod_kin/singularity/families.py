@@ -1,9 +1,8 @@
 """Singular families as numbers: residuals, exact distances, labels — without waiting on sympy.
 
 A family is the zero set of one factor of ``det J`` (or ``det(J Jᵀ)``) derived by
-:func:`hexapod_kin.symbolic.derive` from the chain's Khalil table, only when asked; it is
-checked against the model's Jacobian, kept on disk as text (lengths substituted) and compiled
-into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
+:func:`hexapod_kin.symbolic.derive` when asked, checked against the model's Jacobian, kept on
+disk as text and compiled into numpy evaluators (:mod:`._zeroset`), never ``eval``-ed.
 """
 
 from __future__ import annotations
@@ -47,8 +46,7 @@ class Family:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
-        factor: The factor with the lengths substituted (text, in ``q1..qn`` of
-            :attr:`variables` only), zero on the family.
+        factor: The factor (text, lengths substituted), zero on the family.
 
     """
 
@@ -82,10 +80,8 @@ class Family:
     def distance(self, q: Any) -> np.ndarray:
         """Joint-space distance (…,) from ``q`` to the family, in [rad]/[m].
 
-        ``q_k = value``: ``|q_k − value|`` (wrapped for a revolute joint); implicit families:
-        ``min ‖x − q‖`` over ``f(x) = 0`` in the family's variables, to 1e-12
-        (:func:`~._zeroset.closest_distance`; ``f`` is 2π-periodic, so angles wrap by
-        themselves).
+        ``q_k = value``: ``|q_k − value|`` (wrapped); implicit families: ``min ‖x − q‖`` over
+        ``f(x) = 0`` (:func:`~._zeroset.closest_distance`).
         """
         qa = np.asarray(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -96,9 +92,7 @@ class Family:
     def project(self, q: Any) -> np.ndarray | None:
         """A configuration on the family near ``q`` (nq,), or None when none is found.
 
-        ``q_k = value``: ``q`` with ``q_k`` moved onto the value (the closest point);
-        implicit families: the Gauss–Newton projection of ``q``'s variables onto ``f = 0``
-        (:func:`~._zeroset.project`; None when it does not converge).
+        ``q_k`` moved onto the value, or the projection onto ``f = 0`` (:func:`~._zeroset.project`).
         """
         out = np.array(q, dtype=float)
         if self.joint is not None and self.value is not None:
@@ -151,8 +145,7 @@ class Families:
         dist = np.stack([fam.distance(q) for fam in self.families], axis=1)
         dist = np.where(np.isnan(dist), np.inf, dist)
         order = np.argsort(dist, axis=1, kind="stable")
-        rows = np.arange(m)
-        best = order[:, 0].astype(np.int64)
+        rows, best = np.arange(m), order[:, 0].astype(np.int64)
         if dist.shape[1] < 2:
             return best, dist[rows, best], none[0].copy(), none[1].copy()
         second = order[:, 1].astype(np.int64)
@@ -193,38 +186,26 @@ def _table(model: Any) -> tuple[Any, str]:
 
 def _key(chain: Any, rows: tuple[str, ...]) -> str:
     table = [(r.sigma, repr(r.alpha), repr(r.d), repr(r.theta), repr(r.r)) for r in chain.rows]
-    return _disk.key(
-        {
-            "v": _VERSION,
-            "rows": list(rows),
-            "table": table,
-            "base": repr(getattr(chain, "base_pose", None)),
-            "tool": repr(getattr(chain, "tool", None)),
-        }
-    )[:32]
+    base, tool = repr(getattr(chain, "base_pose", None)), repr(getattr(chain, "tool", None))
+    entry = {"v": _VERSION, "rows": list(rows), "table": table, "base": base, "tool": tool}
+    return _disk.key(entry)[:32]
 
 
 def _family(f: Any) -> Family:
     """A :class:`Family` from a mapping of its fields (JSON, or a derivation's family)."""
-    return Family(
-        name=str(f["name"]),
-        equation=str(f["equation"]),
-        variables=tuple(int(v) for v in f["variables"]),
-        joint=None if f["joint"] is None else int(f["joint"]),
-        value=None if f["value"] is None else float(f["value"]),
-        periodic=bool(f["periodic"]),
-        factor=str(f["factor"]),
-    )
+    joint = None if f["joint"] is None else int(f["joint"])
+    value = None if f["value"] is None else float(f["value"])
+    variables = tuple(int(v) for v in f["variables"])
+    name, equation, factor = str(f["name"]), str(f["equation"]), str(f["factor"])
+    return Family(name, equation, variables, joint, value, bool(f["periodic"]), factor)
 
 
 def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
     """Families read from disk checked against the model before use, both ways.
 
-    * every zero is singular: from three random configurations each factor is projected onto
-      its zero set (:func:`~._zeroset.project`); there ``σ_min ≤ 1e-7 σ_max`` (``q_k =
-      value`` families: ``1e-9``);
-    * every singularity is a family's (square ``J``): the sign changes of ``det J`` along four
-      random lines (:func:`_singular_points`) lie within 1e-6 of a family.
+    Every zero is singular (``σ_min ≤ 1e-7 σ_max`` at projections of three random
+    configurations), and every sign change of a square ``det J`` along four random lines
+    (:func:`_singular_points`) lies within 1e-6 of a family.
 
     Raises:
         ValueError: A family where the model's ``J`` keeps its rank, or a singular
@@ -292,8 +273,7 @@ def _read_cache(
     """``(families, why unfinished ("" if finished), budget of that run [s])`` or ``None``.
 
     ``None`` when missing; ``None`` with one ``CacheWarning`` when damaged, of another key, or
-    when a finished entry fails ``check(families)`` (:func:`_holds`). The factors are parsed
-    by :func:`~._zeroset.compile_factor`'s whitelist, never evaluated.
+    failing ``check(families)``. Factors are parsed by a whitelist, never evaluated.
     """
     data = _disk.load("families", key, _VERSION, _THEN)
     if data is None:
@@ -337,27 +317,19 @@ def _derive_errors() -> tuple[type[BaseException], ...]:
     """Errors a derivation may end with; anything else is a bug and propagates."""
     import sympy
 
-    return (
-        HexapodKinError,
-        TimeoutError,
-        NotImplementedError,
-        RecursionError,
-        sympy.PolynomialError,
-        sympy.polys.polyerrors.PolificationFailed,
-    )
+    failed = sympy.polys.polyerrors.PolificationFailed
+    return (HexapodKinError, TimeoutError, NotImplementedError, RecursionError,
+            sympy.PolynomialError, failed)  # fmt: skip
 
 
 def _derive_job(
     chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray
 ) -> Iterator[tuple[str, Any]]:
-    """The derivation's side of :func:`families_for`, in the derivation's own process.
+    """The derivation's side of :func:`families_for`, yielding plain values only (no sympy).
 
-    Derives the families (:func:`hexapod_kin.symbolic.derive`, ``families_only``) and yields
-    plain values only, so the caller never imports sympy: ``("derived", (incomplete, kind,
-    values, families))`` with ``kind`` ``"det"`` (``|det J|`` at ``qs``), ``"gram"``
-    (``|det(J Jᵀ)|``) or ``None`` (neither derived), and each family's fields with its factor
-    as text (lengths substituted); or ``("failed", "Error: message")`` when the derivation
-    ended with one of its expected errors. Anything else is a bug and propagates.
+    ``("derived", (incomplete, kind, values, families))`` with ``kind`` ``"det"`` (``|det J|``
+    at ``qs``), ``"gram"`` (``|det(J Jᵀ)|``) or ``None``, the families' factors as text
+    (lengths substituted); or ``("failed", "Error: message")`` on an expected error.
     """
     from .. import symbolic
     from ..symbolic.checks import evaluate
@@ -387,13 +359,9 @@ def _derive_job(
 def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -> tuple[Any, ...]:
     """:func:`_derive_job`'s answer, from a process of its own unless sympy is loaded here.
 
-    The child keeps this process clear of sympy (its import and the unpickling of sympy
-    objects); with sympy already loaded the job runs here (its derivation still runs within
-    its budget, in a child of its own: :func:`hexapod_kin.symbolic.derive`).
-
     Returns:
         ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
-        child ended without an answer: its error, or its budget, as for a derivation's child).
+        child ended without an answer).
 
     """
     from .. import _budget
@@ -432,12 +400,11 @@ def _numeric_families(
         raise ParameterError("the derivation has no determinant to check the families against")
     err = float(np.max(np.abs(sym - num))) / max(float(np.max(num)), 1e-300)
     if not err <= _MATCH_RTOL:
-        raise ParameterError(
+        msg = (
             f"the symbolic det of the table differs from the model's (relative {err:.1e}): "
-            "the table's frames do not match the model's Jacobian rows",
-            parameter="rows",
-            value=rows,
+            "the table's frames do not match the model's Jacobian rows"
         )
+        raise ParameterError(msg, parameter="rows", value=rows)
 
 
 def families_for(
@@ -448,15 +415,10 @@ def families_for(
     Args:
         model: A loaded model.
         rows: Row names (see :mod:`hexapod_kin.jacobian_rows`).
-        derive: Derive them with sympy (within ``budget``) when they are not on disk yet.
-            Without it, only families already derived (this process or the disk cache) are
-            returned, so the call never waits on sympy.
-        budget: CPU budget in [s] of the derivation (:func:`hexapod_kin.symbolic.derive`). A
-            derivation stopped at its budget is kept on disk with that budget: later calls
-            with at most that budget get it back, a larger one carries on.
-
-    Returns:
-        The :class:`Families` (empty with a reason when none are available).
+        derive: Derive them with sympy (within ``budget``) when they are not on disk yet;
+            without it, only families already derived (the call never waits on sympy).
+        budget: CPU budget in [s] of the derivation (a stopped one is kept with its budget; a
+            larger one carries on).
 
     Raises:
         ParameterError: ``budget`` not a finite value > 0.
@@ -489,13 +451,8 @@ def families_for(
             partial[0], "cache", f"{partial[1]} (kept; a larger family budget tries again)", key
         )
     if not derive:
-        return Families(
-            (),
-            "none",
-            "families not derived yet (pass families=True, or run `hexapod-kin derive`; "
-            "they are then kept on disk)",
-            key,
-        )
+        why = "families not derived yet (pass families=True, or run `hexapod-kin derive`; "
+        return Families((), "none", why + "they are then kept on disk)", key)
     tried = max(float(budget), partial[2] if partial is not None else 0.0)
     qs = model.random_q(16, seed=4242)
     got = _derived(chain, rows, budget, qs)

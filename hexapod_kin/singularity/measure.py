@@ -1,11 +1,9 @@
 """Singularity measures of one configuration or of many.
 
-Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian ``[v; ω]`` over n joints,
-with singular values ``σ1 ≥ … ≥ σm``, ``m = min(k, n)``: ``det`` (``det J``, NaN unless
-square), ``manipulability`` (Yoshikawa's ``sqrt(det(J Jᵀ))``, the product of the σ),
-``condition`` (``σ1 / σm``, ``inf`` when singular) and ``sigma_min`` (``σm``, in [m] for
-position rows of revolute joints). Default rows: :func:`default_rows`.
-:func:`measures` uses Pinocchio and numpy's SVD; :func:`measures_batch` the compiled kernel.
+Of ``J``, k selected rows of the ``local_world_aligned`` tip Jacobian over n joints (singular
+values ``σ1 ≥ … ≥ σm``): ``det`` (NaN unless square), ``manipulability`` (Yoshikawa's
+``sqrt(det(J Jᵀ))``), ``condition`` (``σ1 / σm``) and ``sigma_min`` (``σm``). :func:`measures`
+uses Pinocchio and numpy's SVD, :func:`measures_batch` the compiled kernel.
 """
 
 from __future__ import annotations
@@ -65,8 +63,8 @@ class Measures:
 class MeasuresBatch:
     """Singularity measures of N configurations (see :func:`measures_batch`).
 
-    Iterating (or indexing 0..3) gives ``det, manipulability, condition, sigma_min`` in that
-    order, so ``det, manip, cond, smin = measures_batch(model, qs)`` works.
+    Iterating gives ``det, manipulability, condition, sigma_min``: ``det, manip, cond, smin =
+    measures_batch(model, qs)`` works.
 
     Attributes:
         det: (N,) ``det J`` (NaN where J is not square).
@@ -111,8 +109,7 @@ def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
 def default_rows(model: Any) -> tuple[str, ...]:
     """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
 
-    A row is zero when below 1e-12 at 8 random configurations. SCARA → ``("x", "y", "z",
-    "wz")``; 3-DOF leg → ``("x", "y", "z")``.
+    A row is zero when below 1e-12 at 8 random configurations (SCARA: ``x y z wz``).
 
     Args:
         model: A loaded model (or a source for :func:`hexapod_kin.load`).
@@ -150,9 +147,6 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
         q: Joint values (nq,) in [rad] / [m].
         rows: Row selection (see module doc); default :func:`default_rows`.
 
-    Returns:
-        The :class:`Measures`.
-
     Raises:
         ConfigurationError: Bad ``q``.
         ParameterError: Bad ``rows``.
@@ -169,16 +163,10 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
 
 
 def measures_batch(
-    model: Any,
-    qs: Any,
-    rows: str | Sequence[str] | None = None,
-    *,
+    model: Any, qs: Any, rows: str | Sequence[str] | None = None, *,
     out: tuple[np.ndarray, ...] | None = None,
-) -> MeasuresBatch:
+) -> MeasuresBatch:  # fmt: skip
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
-
-    Chains whose Jacobian has more than 70 maximal minors (9 joints and more) are measured
-    with Pinocchio and numpy instead.
 
     Args:
         model: A loaded model (or a source).
@@ -186,9 +174,6 @@ def measures_batch(
         rows: Row selection; default :func:`default_rows`.
         out: Optional four preallocated float64 arrays of shape (N,) to fill (det,
             manipulability, condition, sigma_min); the result's arrays are then these.
-
-    Returns:
-        The :class:`MeasuresBatch` (iterable as the four arrays).
 
     Raises:
         ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.
@@ -202,12 +187,11 @@ def measures_batch(
     q = np.ascontiguousarray(mdl.check_q_batch(qs, "qs"))
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
     n = q.shape[0]
-    if out is not None and (
-        len(out) != 4
-        or any(
-            not isinstance(o, np.ndarray) or o.shape != (n,) or o.dtype != np.float64 for o in out
-        )
-    ):
+
+    def good(o: Any) -> bool:
+        return isinstance(o, np.ndarray) and o.shape == (n,) and o.dtype == np.float64
+
+    if out is not None and (len(out) != 4 or not all(map(good, out))):
         raise ConfigurationError(
             f"out: four float64 arrays of shape ({n},) are required",
             parameter="out",

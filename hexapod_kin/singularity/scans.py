@@ -1,10 +1,9 @@
 """Scans of joint space: measures on a grid or random samples, flags, family labels.
 
-A configuration is flagged ``singular`` when ``sigma_min < threshold`` (default ``rtol ×
-reach``) or ``sigma_min = 0``; each flagged sample is labelled with its nearest singular family
-(:mod:`.families`) and its joint-space distance to it. A scan of at most :data:`SMALL_SCAN`
-configurations runs on Pinocchio + numpy (no numba import), a larger one on the compiled
-:func:`~.measure.measures_batch` kernel.
+A configuration is flagged ``singular`` when ``sigma_min < threshold`` or ``sigma_min = 0``;
+each flagged sample is labelled with its nearest singular family (:mod:`.families`). Scans of
+at most :data:`SMALL_SCAN` configurations run on Pinocchio + numpy, larger ones on the
+compiled :func:`~.measure.measures_batch` kernel.
 """
 
 from __future__ import annotations
@@ -17,19 +16,14 @@ from typing import Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, choices, one_of, positive
 from ..tables import MIN_LENGTH as MIN_REACH  # a table's smallest length: the smallest reach
 from .families import Families, Family, families_for
 from .measure import _clean, _measures_small, as_model, measures_batch, reach, selected_rows
 
-__all__ = [
-    "DEFAULT_GRID",
-    "SMALL_SCAN",
-    "ScanResult",
-    "scan",
-    "default_joints",
-    "default_q_fixed",
-]
+__all__ = ["DEFAULT_GRID", "SMALL_SCAN", "ScanResult", "scan", "default_joints",
+           "default_q_fixed"]  # fmt: skip
 
 #: Largest number of configurations of one scan (memory: ~80 bytes each plus q).
 MAX_CONFIGURATIONS = 50_000_000
@@ -75,6 +69,11 @@ def _listed(arr: np.ndarray) -> list[Any]:
     return _clean(arr) if arr.dtype.kind == "f" else arr.tolist()
 
 
+def _count(v: Any, lo: int, hi: float = math.inf) -> bool:
+    """``v`` is an integer (not a bool) in ``lo..hi``."""
+    return not isinstance(v, bool) and isinstance(v, (int, np.integer)) and lo <= int(v) <= hi
+
+
 def _ro(arr: np.ndarray) -> np.ndarray:
     arr = np.ascontiguousarray(arr)
     arr.setflags(write=False)
@@ -93,23 +92,18 @@ class ScanResult:
         sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
         singular: (N,) boolean mask ``sigma_min < threshold`` or ``sigma_min = 0``.
         family: (N,) index into :attr:`families` of the nearest family of each flagged
-            configuration, −1 where not flagged or when no family is known.
-        family_distance: (N,) joint-space distance in [rad]/[m] from each flagged
-            configuration to that family (NaN where not flagged or no family).
-        second_family: (N,) the second-nearest family of each flagged configuration (−1 where
-            none): near the meeting of two families both are named.
-        second_distance: (N,) the distance to it in [rad]/[m] (NaN where none).
-        families: The singular families (:class:`~.families.Family`; empty when not derived,
-            see :attr:`family_reason`).
+            configuration (−1: none).
+        family_distance: (N,) joint-space distance to it in [rad]/[m] (NaN: none).
+        second_family: (N,) the second-nearest family (−1: none).
+        second_distance: (N,) the distance to it in [rad]/[m] (NaN: none).
+        families: The singular families (:class:`~.families.Family`).
         family_reason: Why :attr:`families` is empty ("" when it is not).
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
-        family_tols: Per family, the tolerance actually used: ``family_tol``, widened to
-            ``1.5 × threshold / s`` where the family's measured lever arm ``s`` (first quartile of
-            ``σmin / distance`` over its flagged samples within ``family_tol``) is small —
-            flagged points then lie farther from it (at most ``4 × family_tol``).
+        family_tols: Per family, the tolerance used: ``family_tol`` widened to ``1.5 ×
+            threshold / s`` (``s`` the family's measured lever arm), at most ``4 × family_tol``.
         joint_names: Names of the n joints.
-        prismatic: (n,) True for prismatic joints (values in [m]), False for revolute ([rad]).
-        joints: Indices of the joints that were scanned (the others stay at ``q_fixed``).
+        prismatic: (n,) True for prismatic joints.
+        joints: Indices of the scanned joints.
         rows: Row names of ``J``.
         threshold: The ``sigma_min`` threshold used.
         grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
@@ -145,9 +139,7 @@ class ScanResult:
     def explained(self) -> np.ndarray:
         """(N,) flagged configurations on a known family.
 
-        Within :attr:`family_tols` of the nearest family, or within twice that of two families
-        (near their meeting ``σmin`` falls faster than along either alone, so flagged
-        points reach farther out).
+        Within :attr:`family_tols` of the nearest family, or within twice that of two families.
         """
         tols = np.asarray((*self.family_tols, np.nan))[self.family]  # -1: NaN (no family)
         tols2 = np.asarray((*self.family_tols, np.nan))[self.second_family]
@@ -201,28 +193,18 @@ class ScanResult:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dict with the same names (NaN / inf become ``None``)."""
-        counts = self.family_counts
-        return {
-            "source": self.source,
-            "joint_names": list(self.joint_names),
-            "prismatic": list(self.prismatic),
-            "joints": [self.joint_names[j] for j in self.joints],
-            "rows": list(self.rows),
-            "threshold": self.threshold,
-            "grid_shape": list(self.grid_shape) if self.grid_shape else None,
-            "q_fixed": self.q_fixed.tolist(),
-            "q": self.q.tolist(),
-            **{k: _listed(getattr(self, k)) for k in _PER_SAMPLE},
-            "family_tol": self.family_tol,
-            "family_tols": list(self.family_tols),
-            "family_reason": self.family_reason,
-            "families": [
-                {**fam.to_dict(self.joint_names), "count": counts[fam.name]}
-                for fam in self.families
-            ],
-            "n_singular": int(np.count_nonzero(self.singular)),
-            "n_unexplained": int(np.count_nonzero(self.unexplained)),
-        }
+        counts, names = self.family_counts, self.joint_names
+        out = fields_dict(self, "source", "joint_names", "prismatic")
+        out["joints"] = [names[j] for j in self.joints]
+        out |= fields_dict(self, "rows", "threshold")
+        out["grid_shape"] = list(self.grid_shape) if self.grid_shape else None
+        out |= fields_dict(self, "q_fixed", "q")
+        out |= {k: _listed(getattr(self, k)) for k in _PER_SAMPLE}
+        out |= fields_dict(self, "family_tol", "family_tols", "family_reason")
+        fams = [fam.to_dict(names) | {"count": counts[fam.name]} for fam in self.families]
+        out["families"] = fams
+        out["n_singular"] = int(np.count_nonzero(self.singular))
+        return out | {"n_unexplained": int(np.count_nonzero(self.unexplained))}
 
 
 # ------------------------------------------------------------------------ defaults
@@ -246,12 +228,8 @@ def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
         else:
             out.append(model.joint_index(str(j)))
     if len(set(out)) != len(out) or not out:
-        raise ParameterError(
-            f"joints={joints!r}: give distinct joint names or indices",
-            parameter="joints",
-            value=joints,
-            allowed=list(model.joint_names),
-        )
+        msg = f"joints={joints!r}: give distinct joint names or indices"
+        raise ParameterError(msg, parameter="joints", value=joints, allowed=list(model.joint_names))
     return tuple(out)
 
 
@@ -272,11 +250,8 @@ def default_q_fixed(
     Args:
         model: A loaded model (or a source).
         rows: Row selection (default :func:`~.measure.default_rows`).
-        joints: Indices of the scanned joints (their values in the result do not matter).
+        joints: Indices of the scanned joints.
         seed: Seed of the candidates.
-
-    Returns:
-        (nq,) configuration.
 
     """
     mdl = as_model(model)
@@ -310,9 +285,8 @@ def default_q_fixed(
 def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, ...]:
     """The ``count`` joints that change ``sigma_min`` most: the ones a heat map should show.
 
-    Each joint that moves the tip is swept over its range (17 points) at 32 seeded random
-    configurations of the others; its score is the mean spread of ``log σmin``. Ties go to
-    revolute joints, then to later joints.
+    Each joint that moves the tip is swept over its range at 32 seeded configurations of the
+    others; its score is the mean spread of ``log σmin`` (ties: revolute, then later joints).
 
     Args:
         model: A loaded model (or a source).
@@ -328,18 +302,13 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     """
     mdl = as_model(model)
     if mdl.nq < count:
-        raise ParameterError(
-            f"default_joints: {mdl.name!r} has {mdl.nq} joint(s); {count} are needed",
-            parameter="count",
-            value=count,
-            allowed=f"<= {mdl.nq}",
-        )
+        msg = f"default_joints: {mdl.name!r} has {mdl.nq} joint(s); {count} are needed"
+        raise ParameterError(msg, parameter="count", value=count, allowed=f"<= {mdl.nq}")
     names = selected_rows(mdl, rows)
 
     def build() -> tuple[int, ...]:
         cands = _moving(mdl) if len(_moving(mdl)) >= count else list(range(mdl.nq))
-        base = mdl.random_q(32, seed=11)
-        score = np.zeros(mdl.nq)
+        base, score = mdl.random_q(32, seed=11), np.zeros(mdl.nq)
         floor = 1e-12 * max(reach(mdl), 1e-12)
         for j in cands:
             sweep = np.linspace(mdl.lower[j], mdl.upper[j], 17)
@@ -368,13 +337,9 @@ def _grid_points(
         )
     shape = []
     for c in counts:
-        if isinstance(c, bool) or not isinstance(c, (int, np.integer)) or int(c) < 2:
-            raise ParameterError(
-                f"grid={grid!r}: counts must be integers >= 2",
-                parameter="grid",
-                value=grid,
-                allowed="integers >= 2",
-            )
+        if not _count(c, 2):
+            msg = f"grid={grid!r}: counts must be integers >= 2"
+            raise ParameterError(msg, parameter="grid", value=grid, allowed="integers >= 2")
         shape.append(int(c))
     total = math.prod(shape)
     if total > MAX_CONFIGURATIONS:
@@ -397,11 +362,7 @@ def _grid_points(
 def _sample_points(
     model: Any, joints: tuple[int, ...], samples: Any, q_fixed: np.ndarray, seed: int | None
 ) -> np.ndarray:
-    if (
-        isinstance(samples, bool)
-        or not isinstance(samples, (int, np.integer))
-        or not 1 <= int(samples) <= MAX_CONFIGURATIONS
-    ):
+    if not _count(samples, 1, MAX_CONFIGURATIONS):
         raise ParameterError(
             f"samples={samples!r}: an integer in 1..{MAX_CONFIGURATIONS:,} is required",
             parameter="samples",
@@ -437,38 +398,29 @@ def scan(
 
     Args:
         model: A loaded model or any source for :func:`hexapod_kin.load`.
-        grid: Points per scanned joint (one count, or one per joint), spanning the joint
-            limits (ends included). Default :data:`DEFAULT_GRID` when ``samples`` is not
-            given either.
-        samples: Number of uniform random configurations within the limits (instead of a grid).
+        grid: Points per scanned joint (one count, or one per joint) over the joint limits;
+            default :data:`DEFAULT_GRID`.
+        samples: Number of uniform random configurations (instead of a grid).
         joints: Joints to scan (names or indices, or ``"all"``); default
-            :func:`default_joints` (the two that change ``sigma_min`` most; all of a chain of
-            at most two joints). The others stay at ``q_fixed``.
+            :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
             default :func:`~.measure.default_rows`.
-        q_fixed: Values of the joints not scanned, in [rad]/[m]; default
-            :func:`default_q_fixed` (a dexterous configuration).
+        q_fixed: Values of the joints not scanned; default :func:`default_q_fixed`.
         threshold: ``sigma_min`` below which a configuration is flagged singular; default
             ``rtol × reach(model)``.
         rtol: Relative threshold (see ``threshold``).
         family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
-            counts as lying on its nearest family; default ``15 × rtol`` (near a family
-            ``σmin ≈ s·d``, ``s`` a lever arm: the default allows ``s ≥ reach/15``).
-        families: ``True`` (default): derive them when needed (sympy, within
-            ``family_budget``; then kept on disk); ``"cached"``: only families already derived;
-            ``False``: none.
+            counts as on its nearest family; default ``15 × rtol``.
+        families: ``True``: derive them when needed (sympy, within ``family_budget``);
+            ``"cached"``: only families already derived; ``False``: none.
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
         seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
-        chunk: Configurations per kernel call (progress granularity; scans above
-            :data:`SMALL_SCAN`).
-
-    Returns:
-        The :class:`ScanResult`.
+        chunk: Configurations per kernel call (scans above :data:`SMALL_SCAN`).
 
     Raises:
-        ParameterError: Both or invalid ``grid``/``samples``, unknown joints or rows, bad
-            ``threshold``, ``families`` or ``chunk``.
+        ParameterError: Bad ``grid``/``samples``, joints, rows, ``threshold``, ``families``
+            or ``chunk``.
         ConfigurationError: Bad ``q_fixed``.
 
     """
@@ -479,20 +431,12 @@ def scan(
     else:
         jidx = _joint_indices(mdl, joints)
     one_of("families", families, (True, False, "cached"))
-    if isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1:
-        raise ParameterError(
-            f"chunk={chunk!r}: an integer >= 1 is required",
-            parameter="chunk",
-            value=chunk,
-            allowed=">= 1",
-        )
+    if not _count(chunk, 1):
+        msg = f"chunk={chunk!r}: an integer >= 1 is required"
+        raise ParameterError(msg, parameter="chunk", value=chunk, allowed=">= 1")
     if grid is not None and samples is not None:
-        raise ParameterError(
-            "scan: give grid= or samples=, not both",
-            parameter="samples",
-            value=samples,
-            allowed="grid= or samples=",
-        )
+        msg = "scan: give grid= or samples=, not both"
+        raise ParameterError(msg, parameter="samples", value=samples, allowed="grid= or samples=")
     if q_fixed is None:
         qf = default_q_fixed(mdl, names, jidx) if len(jidx) < mdl.nq else mdl.neutral()
     else:
@@ -509,8 +453,7 @@ def scan(
         )
     thr = positive("threshold", rtol * length if threshold is None else threshold, allow_zero=True)
     if samples is not None:
-        q = _sample_points(mdl, jidx, samples, qf, seed)
-        shape = None
+        q, shape = _sample_points(mdl, jidx, samples, qf, seed), None
     else:
         q, shape = _grid_points(mdl, jidx, DEFAULT_GRID if grid is None else grid, qf)
     n = q.shape[0]
@@ -519,55 +462,30 @@ def scan(
     else:
         det, manip, cond, smin = _kernel_scan(mdl, q, names, progress, int(chunk))
     singular = (smin < thr) | (smin <= 0.0)  # a zero sigma_min is singular at any threshold
-    family = np.full(n, -1, dtype=np.int64)
-    distance = np.full(n, np.nan)
-    second = np.full(n, -1, dtype=np.int64)
-    distance2 = np.full(n, np.nan)
+    family, second = np.full(n, -1, dtype=np.int64), np.full(n, -1, dtype=np.int64)
+    distance, distance2 = np.full(n, np.nan), np.full(n, np.nan)
     if families is False:
         fams = Families((), "none", "families=False")
     else:
         fams = families_for(mdl, names, derive=families is True, budget=family_budget)
     idx = np.flatnonzero(singular)
     if fams.families and idx.size:
-        best, dist, nxt, dist2 = fams.nearest(q[idx])
-        family[idx] = best
-        distance[idx] = dist
-        second[idx] = nxt
-        distance2[idx] = np.where(nxt >= 0, dist2, np.nan)
+        family[idx], distance[idx], second[idx], dist2 = fams.nearest(q[idx])
+        distance2[idx] = np.where(second[idx] >= 0, dist2, np.nan)
     tol = 15.0 * rtol if family_tol is None else float(family_tol)
     if not tol >= 0:
-        raise ConfigurationError(
-            f"family_tol={family_tol!r}: a value >= 0 is required",
-            parameter="family_tol",
-            value=family_tol,
-            allowed=">= 0",
-        )
+        msg = f"family_tol={family_tol!r}: a value >= 0 is required"
+        raise ConfigurationError(msg, parameter="family_tol", value=family_tol, allowed=">= 0")
     tols = []
     for f in range(len(fams.families)):
         mine = (family == f) & (distance > 0) & (distance <= tol)
         lever = float(np.quantile(smin[mine] / distance[mine], 0.25)) if mine.sum() >= 8 else np.inf
         tols.append(min(max(tol, 1.5 * thr / lever), 4.0 * tol) if lever > 0 else 4.0 * tol)
+    arrays = (q, det, manip, cond, smin, singular, family, distance, second, distance2)
+    q, det, manip, cond, smin, singular, family, distance, second, distance2 = map(_ro, arrays)
+    prismatic = tuple(bool(p) for p in mdl.is_prismatic)
     return ScanResult(
-        q=_ro(q),
-        det=_ro(det),
-        manipulability=_ro(manip),
-        condition=_ro(cond),
-        sigma_min=_ro(smin),
-        singular=_ro(singular),
-        family=_ro(family),
-        family_distance=_ro(distance),
-        second_family=_ro(second),
-        second_distance=_ro(distance2),
-        families=fams.families,
-        family_reason=fams.reason,
-        family_tol=tol,
-        family_tols=tuple(tols),
-        joint_names=tuple(mdl.joint_names),
-        prismatic=tuple(bool(p) for p in mdl.is_prismatic),
-        joints=jidx,
-        rows=names,
-        threshold=thr,
-        grid_shape=shape,
-        q_fixed=_ro(qf),
-        source=mdl.name,
-    )
+        q, det, manip, cond, smin, singular, family, distance, second, distance2, fams.families,
+        fams.reason, tol, tuple(tols), tuple(mdl.joint_names), prismatic, jidx, names, thr,
+        shape, _ro(qf), mdl.name,
+    )  # fmt: skip

@@ -13,24 +13,7 @@ from .plot import plot_sweep
 from .run import SweepResult, read_results, sweep, table_paths
 from .scores import SCORES, reachable, score_designs, volume_closed_form
 
-__all__ = [
-    "DEFAULTS",
-    "METHODS",
-    "OBJECTIVES",
-    "PARAMETERS",
-    "SCORES",
-    "DesignSpace",
-    "Range",
-    "SweepResult",
-    "best_index",
-    "design_chain",
-    "pareto_front",
-    "parse_range",
-    "plot_sweep",
-    "read_results",
-    "reachable",
-    "score_designs",
-    "sweep",
-    "table_paths",
-    "volume_closed_form",
-]
+__all__ = ["DEFAULTS", "METHODS", "OBJECTIVES", "PARAMETERS", "SCORES", "DesignSpace", "Range",
+           "SweepResult", "best_index", "design_chain", "pareto_front", "parse_range", "plot_sweep",
+           "read_results", "reachable", "score_designs", "sweep", "table_paths",
+           "volume_closed_form"]  # fmt: skip

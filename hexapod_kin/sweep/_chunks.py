@@ -1,12 +1,10 @@
 """The resumable chunks of a sweep: written atomically, checked against what they claim.
 
 A sweep writing ``x.csv`` keeps each finished chunk in the hidden ``.x.csv.sweep-parts/``
-(``chunk_NNNNN.npz`` and a ``manifest.json`` naming the sweep's key), created with the first
-finished chunk. A stored chunk is used only when it is a bounded regular file holding a plain
-``.npz`` (never unpickled, inflated sizes checked first) that names this sweep's key and its
-own number, carries the keyed seal of its scores (:func:`hexapod_kin._cache.mac`), holds
-plausible scores, and one of its designs scored again gives the same bits; the others are
-discarded (one ``CacheWarning``) and scored again.
+(``chunk_NNNNN.npz`` and a ``manifest.json``). A stored chunk is used only when it is a bounded
+plain ``.npz`` (never unpickled) naming this sweep's key and its number, sealed
+(:func:`hexapod_kin._cache.mac`), with plausible scores, and one of its designs scored again
+gives the same bits; the others are scored again (one ``CacheWarning``).
 """
 
 from __future__ import annotations
@@ -72,12 +70,9 @@ class ChunkStore:
         return self.parts / f"chunk_{k:05d}.npz"
 
     def resume(
-        self,
-        bounds: Sequence[tuple[int, int]],
-        designs: np.ndarray,
-        rescore: Callable[[np.ndarray], np.ndarray],
-        out: str,
-    ) -> dict[int, np.ndarray]:
+        self, bounds: Sequence[tuple[int, int]], designs: np.ndarray,
+        rescore: Callable[[np.ndarray], np.ndarray], out: str,
+    ) -> dict[int, np.ndarray]:  # fmt: skip
         """The stored chunks that pass every check, by number (the others: one warning).
 
         Raises:
@@ -94,13 +89,12 @@ class ChunkStore:
         except (HexapodKinError, ValueError):
             old_key = None
         if old_key is not None and old_key != self.key and files:
-            raise ConfigurationError(
+            msg = (
                 f"out={out!r}: {str(self.parts)!r} holds chunks of a different sweep "
                 f"(key {str(old_key)[:12]} != {self.key[:12]}), interrupted; re-run that "
-                "sweep to finish it, use another --out, or remove that folder",
-                parameter="out",
-                value=out,
+                "sweep to finish it, use another --out, or remove that folder"
             )
+            raise ConfigurationError(msg, parameter="out", value=out)
         results: dict[int, np.ndarray] = {}
         bad: list[str] = []
         for k, (a, b) in enumerate(bounds):
@@ -116,9 +110,8 @@ class ChunkStore:
             verb = "it does not hold what it claims"
             if len(bad) > 1:
                 verb = "they do not hold what they claim"
-            _disk.damaged(
-                "sweep", f"{names} in {self.parts.name}", f"{verb}", "scoring again", stacklevel=3
-            )
+            where = f"{names} in {self.parts.name}"
+            _disk.damaged("sweep", where, verb, "scoring again", stacklevel=3)
         return results
 
     def _load(
@@ -156,11 +149,7 @@ class ChunkStore:
             atomic_write(self.parts / "manifest.json", self.manifest)
             self._ready = True
         buf = io.BytesIO()
-        np.savez(
-            buf,
-            key=np.array(self.key),
-            chunk=np.array(k),
-            scores=np.ascontiguousarray(scores, dtype=float),
-            digest=np.array(self._digest(k, scores)),
-        )
+        arrays: dict[str, Any] = dict(key=np.array(self.key), chunk=np.array(k))
+        arrays |= dict(scores=np.ascontiguousarray(scores, dtype=float))
+        np.savez(buf, **arrays, digest=np.array(self._digest(k, scores)))
         atomic_write(self.path(k), buf.getvalue())

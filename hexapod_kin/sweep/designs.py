@@ -1,12 +1,8 @@
 """Design spaces of the 3-DOF hexabot leg on a body mount: grids, random and LHS samples.
 
-A design is one row of :data:`PARAMETERS` (SI units). Each parameter of a
-:class:`DesignSpace` is either fixed (a number) or a :class:`Range` ``lo:hi:n``; a grid takes
-the cartesian product of the ranges (``n`` points each), ``random`` draws uniform samples,
-``lhs`` a Latin hypercube (:class:`scipy.stats.qmc.LatinHypercube`), both seeded.
-
-With ``total`` set, ``l3 = total − l1 − l2`` (the seed leg's total length is 0.25 m); designs
-with ``l3 <= 0`` are dropped before the designs are numbered, so indices are stable.
+A design is one row of :data:`PARAMETERS` (SI units), each fixed or a :class:`Range`
+``lo:hi:n``: a grid of the ranges, or seeded ``random`` / ``lhs`` samples. With ``total`` set,
+``l3 = total − l1 − l2``; designs with ``l3 <= 0`` are dropped before they are numbered.
 """
 
 from __future__ import annotations
@@ -20,16 +16,8 @@ import numpy as np
 
 from ..exceptions import ParameterError, finite, one_of, positive
 
-__all__ = [
-    "ANGLES",
-    "DEFAULTS",
-    "METHODS",
-    "PARAMETERS",
-    "DesignSpace",
-    "Range",
-    "design_chain",
-    "parse_range",
-]
+__all__ = ["ANGLES", "DEFAULTS", "METHODS", "PARAMETERS", "DesignSpace", "Range", "design_chain",
+           "parse_range"]  # fmt: skip
 
 #: Defaults: the seed leg (seed 001, Table 1) as the middle leg of ``robots.hexapod``.
 DEFAULTS: dict[str, float] = {
@@ -39,12 +27,8 @@ DEFAULTS: dict[str, float] = {
     "height": 0.10,  # body height: the ground is the plane z = −height in the hip frame [m]
     "mount_radius": 0.12,  # distance of the hip axis from the body centre [m]
     "mount_yaw": math.pi / 2,  # yaw of the hip frame on the body [rad]; walking is body x
-    "q1_lower": -math.pi,
-    "q1_upper": math.pi,
-    "q2_lower": -math.pi,
-    "q2_upper": math.pi,
-    "q3_lower": -math.pi,
-    "q3_upper": math.pi,  # joint limits [rad]
+    # joint limits [rad]: q1_lower, q1_upper, ..., q3_upper
+    **{f"q{j}_{end}": s * math.pi for j in (1, 2, 3) for end, s in (("lower", -1), ("upper", 1))},
     "neutral": 0.5,  # neutral foot: fraction of the ground's radial reach (0 inner, 1 outer)
 }
 
@@ -54,8 +38,7 @@ PARAMETERS: tuple[str, ...] = tuple(DEFAULTS)
 #: Parameters that are angles (the CLI's ``--deg`` converts them).
 ANGLES: frozenset[str] = frozenset(p for p in PARAMETERS if p.startswith("q") or "yaw" in p)
 
-#: Largest design length or height [m] and largest magnitude of an angle [rad]: far beyond any
-#: leg, small enough that the closed forms stay finite (a 1e300 m femur overflows to NaN).
+#: Largest design length or height [m] and angle magnitude [rad] (the closed forms stay finite).
 MAX_LENGTH = 1e3
 MAX_ANGLE = 1e3
 
@@ -88,9 +71,8 @@ class Range:
                 allowed="lo <= hi, finite",
             )
         if int(self.n) != self.n or self.n < 1:
-            raise ParameterError(
-                f"range n={self.n!r}: expected an integer >= 1", parameter="n", value=self.n
-            )
+            msg = f"range n={self.n!r}: expected an integer >= 1"
+            raise ParameterError(msg, parameter="n", value=self.n)
         object.__setattr__(self, "lo", lo)
         object.__setattr__(self, "hi", hi)
         object.__setattr__(self, "n", int(self.n))
@@ -124,12 +106,8 @@ def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
             return Range(float(parts[0]) * scale, float(parts[1]) * scale, n)
     except ValueError:
         pass
-    raise ParameterError(
-        f"{name}={text!r}: expected VALUE, A:B or A:B:N (e.g. 0.04:0.08:5)",
-        parameter=name,
-        value=text,
-        allowed="VALUE | A:B | A:B:N",
-    )
+    msg = f"{name}={text!r}: expected VALUE, A:B or A:B:N (e.g. 0.04:0.08:5)"
+    raise ParameterError(msg, parameter=name, value=text, allowed="VALUE | A:B | A:B:N")
 
 
 @dataclass(frozen=True)
@@ -150,22 +128,13 @@ class DesignSpace:
         vals: dict[str, float | Range] = {}
         for k, v in dict(self.values).items():
             if k not in PARAMETERS:
-                raise ParameterError(
-                    f"design parameter {k!r} unknown; valid: {', '.join(PARAMETERS)}",
-                    parameter=k,
-                    allowed=list(PARAMETERS),
-                )
-            if isinstance(v, Range):
-                vals[k] = v
-            else:
-                vals[k] = finite(k, v)
+                msg = f"design parameter {k!r} unknown; valid: {', '.join(PARAMETERS)}"
+                raise ParameterError(msg, parameter=k, allowed=list(PARAMETERS))
+            vals[k] = v if isinstance(v, Range) else finite(k, v)
         if self.total is not None:
             if "l3" in vals:
-                raise ParameterError(
-                    "total and l3 both given; with total set, l3 = total − l1 − l2",
-                    parameter="l3",
-                    value=vals["l3"],
-                )
+                msg = "total and l3 both given; with total set, l3 = total − l1 − l2"
+                raise ParameterError(msg, parameter="l3", value=vals["l3"])
             object.__setattr__(self, "total", positive("total", self.total))
         object.__setattr__(self, "values", vals)
 
@@ -189,11 +158,9 @@ class DesignSpace:
         """How many designs :meth:`designs` draws at most, without drawing them."""
         one_of("method", method, METHODS)
         if method == "grid" or not self.swept:
-            n = 1
-            for p in PARAMETERS:
-                v = self._value(p)
-                n *= v.n if isinstance(v, Range) else 1
-            return n
+            return math.prod(
+                v.n if isinstance(v, Range) else 1 for v in map(self._value, PARAMETERS)
+            )
         return int(samples)
 
     def designs(
@@ -206,15 +173,13 @@ class DesignSpace:
                 ``"lhs"`` (Latin hypercube).
             samples: Number of designs drawn by ``random``/``lhs``.
             seed: Seed of ``random``/``lhs``.
-            first: Only the grid's first ``first`` points (before ``total`` drops rows; may
-                then be empty), built without the rest: a probe of a huge grid.
+            first: Only the grid's first ``first`` points (a probe of a huge grid).
 
         Returns:
             A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
 
         Raises:
-            ParameterError: Unknown method, ``samples < 1``, invalid designs (non-positive
-                lengths, lower > upper limits, ``neutral`` outside [0, 1], negative height).
+            ParameterError: Unknown method, ``samples < 1``, or invalid designs.
 
         """
         one_of("method", method, METHODS)
@@ -230,15 +195,13 @@ class DesignSpace:
             table = np.stack([a[i] for a, i in zip(axes, index)], axis=1)
         else:
             if int(samples) != samples or samples < 1:
-                raise ParameterError(
-                    f"samples={samples!r}: expected an integer >= 1", parameter="samples"
-                )
+                msg = f"samples={samples!r}: expected an integer >= 1"
+                raise ParameterError(msg, parameter="samples")
             if method == "lhs":
                 from scipy.stats import qmc
 
-                unit = qmc.LatinHypercube(d=len(swept), seed=np.random.default_rng(seed)).random(
-                    int(samples)
-                )
+                lhs = qmc.LatinHypercube(d=len(swept), seed=np.random.default_rng(seed))
+                unit = lhs.random(int(samples))
             else:
                 unit = np.random.default_rng(seed).random((int(samples), len(swept)))
             table = np.empty((int(samples), len(PARAMETERS)))
@@ -279,26 +242,17 @@ class DesignSpace:
         checks += [
             (np.abs(col[p]) <= ang, p, f"|{p}| <= {ang:g} [rad]") for p in PARAMETERS if p in ANGLES
         ]
-        for j in (1, 2, 3):
-            checks.append(
-                (col[f"q{j}_lower"] <= col[f"q{j}_upper"], f"q{j}_lower", f"<= q{j}_upper")
-            )
+        checks += [(col[f"q{j}_lower"] <= col[f"q{j}_upper"], f"q{j}_lower", f"<= q{j}_upper")
+                   for j in (1, 2, 3)]  # fmt: skip
         for ok, name, allowed in checks:
             bad = np.flatnonzero(~ok)
             if bad.size:
-                row = table[bad[0]]
-                raise ParameterError(
-                    f"design parameter {name}={float(row[PARAMETERS.index(name)])!r} (design "
-                    f"{int(bad[0])}): must be {allowed}",
-                    parameter=name,
-                    value=float(row[PARAMETERS.index(name)]),
-                    allowed=allowed,
-                )
+                value = float(table[bad[0], PARAMETERS.index(name)])
+                msg = f"design parameter {name}={value!r} (design {int(bad[0])}): must be {allowed}"
+                raise ParameterError(msg, parameter=name, value=value, allowed=allowed)
         if table.shape[0] == 0 and not empty_ok:
-            raise ParameterError(
-                "the design space is empty (with total, every design had l3 <= 0)",
-                parameter="total",
-            )
+            msg = "the design space is empty (with total, every design had l3 <= 0)"
+            raise ParameterError(msg, parameter="total")
 
 
 def design_chain(design: Any) -> Any:
@@ -323,9 +277,7 @@ def design_chain(design: Any) -> Any:
     else:
         vals = [float(v) for v in np.asarray(design, dtype=float).ravel()]
     if len(vals) != len(PARAMETERS):
-        raise ParameterError(
-            f"design has {len(vals)} values; expected {len(PARAMETERS)}: {', '.join(PARAMETERS)}",
-            parameter="design",
-        )
+        msg = f"design has {len(vals)} values; expected {len(PARAMETERS)}: {', '.join(PARAMETERS)}"
+        raise ParameterError(msg, parameter="design")
     limits = tuple(JointLimits(vals[6 + 2 * j], vals[7 + 2 * j]) for j in range(3))
     return hexabot_leg(vals[0], vals[1], vals[2], limits=limits)

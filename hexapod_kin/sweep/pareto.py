@@ -18,20 +18,16 @@ OBJECTIVES: tuple[str, ...] = ("stride", "volume", "sigma_min")
 def _columns(table: Mapping[str, Any], names: Sequence[str]) -> np.ndarray:
     missing = [n for n in names if n not in table]
     if missing:
-        raise ParameterError(
-            f"objectives {missing} not in the table; columns: {', '.join(table)}",
-            parameter="objectives",
-            value=missing,
-            allowed=list(table),
-        )
+        msg = f"objectives {missing} not in the table; columns: {', '.join(table)}"
+        raise ParameterError(msg, parameter="objectives", value=missing, allowed=list(table))
     return np.stack([np.asarray(table[n], dtype=float) for n in names], axis=1)
 
 
 def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVES) -> np.ndarray:
     """Non-dominated feasible designs, all objectives maximised.
 
-    A design is dominated when another one is at least as good in every objective and better
-    in one. Infeasible designs (``feasible == 0``) are never on the front.
+    Dominated: another one at least as good in every objective, better in one; infeasible
+    designs are never on the front.
 
     Args:
         table: Column name → (N,) array (a sweep table).
@@ -53,16 +49,9 @@ def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVE
     order = idx[np.lexsort(tuple(-f[idx, k] for k in reversed(range(f.shape[1]))))]
     front: list[int] = []
     for i in order:
-        if front:
-            g = f[front]
-            geq = np.all(g >= f[i], axis=1)
-            gt = np.any(g > f[i], axis=1)
-            if np.any(geq & gt):
-                continue
-            if np.any(np.all(g == f[i], axis=1)):
-                front.append(int(i))  # duplicates of a front point stay on it
-                continue
-        front.append(int(i))
+        g = f[front]  # duplicates of a front point stay on it
+        if not front or not np.any(np.all(g >= f[i], axis=1) & np.any(g > f[i], axis=1)):
+            front.append(int(i))
     mask = np.zeros(n, dtype=bool)
     mask[front] = True
     return mask

@@ -22,15 +22,12 @@ def _axis(values: np.ndarray) -> np.ndarray:
 
 
 def plot_sweep(
-    result: Any,
-    path: str | os.PathLike[str],
-    params: Sequence[str] | None = None,
+    result: Any, path: str | os.PathLike[str], params: Sequence[str] | None = None
 ) -> Path:
     """Score maps (stride, volume, σ_min) over two parameters and the Pareto front, one PNG.
 
-    Each map cell shows the best (maximum) score over the other parameters at that pair of
-    values; a random/LHS sweep is drawn as a scatter coloured by the score. The front panel
-    plots stride against volume, coloured by min σ_min, the front highlighted.
+    Each map cell shows the best score over the other parameters (random/LHS: a scatter); the
+    front panel plots stride against volume, coloured by min σ_min.
 
     Args:
         result: A :class:`~hexapod_kin.sweep.run.SweepResult` (or its ``table`` dict).
@@ -54,12 +51,8 @@ def plot_sweep(
         varied = sorted(PARAMETERS, key=lambda p: -len(_axis(np.asarray(table[p]))))
         params = (swept + [p for p in varied if p not in swept])[:2]
     if len(params) != 2 or any(p not in PARAMETERS for p in params):
-        raise ParameterError(
-            f"params={list(params)!r}: expected two of {', '.join(PARAMETERS)}",
-            parameter="params",
-            value=list(params),
-            allowed=list(PARAMETERS),
-        )
+        msg = f"params={list(params)!r}: expected two of {', '.join(PARAMETERS)}"
+        raise ParameterError(msg, parameter="params", value=list(params), allowed=list(PARAMETERS))
     px, py = params
     x, y = np.asarray(table[px]), np.asarray(table[py])
     feas = np.asarray(table["feasible"]) > 0
@@ -85,21 +78,11 @@ def plot_sweep(
         ax.set_title(title, fontsize=9)
     ax = axes[3]
     front = np.asarray(table["pareto"]) > 0
-    s = ax.scatter(
-        np.asarray(table["stride"])[feas],
-        np.asarray(table["volume"])[feas],
-        c=np.asarray(table["sigma_min"])[feas],
-        s=10,
-        cmap="viridis",
-    )
-    ax.scatter(
-        np.asarray(table["stride"])[front],
-        np.asarray(table["volume"])[front],
-        facecolors="none",
-        edgecolors="red",
-        s=40,
-        label="Pareto front",
-    )
+    stride, volume = np.asarray(table["stride"]), np.asarray(table["volume"])
+    s = ax.scatter(stride[feas], volume[feas], c=np.asarray(table["sigma_min"])[feas], s=10,
+                   cmap="viridis")  # fmt: skip
+    ax.scatter(stride[front], volume[front], facecolors="none", edgecolors="red", s=40,
+               label="Pareto front")  # fmt: skip
     fig.colorbar(s, ax=ax, label="min σ_min [m/rad]")
     ax.set(xlabel="stride [m]", ylabel="volume [m³]")
     ax.legend(loc="best", fontsize=8)

@@ -1,12 +1,10 @@
 """Run a sweep: chunks scored on all local cores or on a Dask cluster, resumable output.
 
-Chunks of ``chunk_size`` consecutive designs depend only on their designs and the options (the
-Monte-Carlo samples come from the sweep's seed), so the table is the same on local threads
-(default) or Dask workers (``client=`` / ``scheduler=``). ``out`` is the one file written
-(``.csv``, ``.parquet`` or ``.json``); finished chunks are kept meanwhile in a hidden sidecar
-(:mod:`._chunks`), so a sweep run again after an interruption scores only the missing chunks.
-A sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB` is refused unless
-``allow_large``.
+A chunk's scores depend only on its designs and the options, so the table is the same on local
+threads or Dask workers. ``out`` is the one file written (``.csv``, ``.parquet`` or ``.json``);
+finished chunks are kept meanwhile in a hidden sidecar (:mod:`._chunks`), so a sweep run again
+scores only the missing chunks. A sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB`
+is refused unless ``allow_large``.
 """
 
 from __future__ import annotations
@@ -52,12 +50,10 @@ class SweepResult:
 
     Attributes:
         table: Column name → read-only (N,) array: ``index``, the design parameters
-            (:data:`~hexapod_kin.sweep.designs.PARAMETERS`, SI units), the scores
-            (:data:`~hexapod_kin.sweep.scores.SCORES`, units there) and ``pareto`` (1 on the
-            front of stride, volume, σ_min).
+            (:data:`~hexapod_kin.sweep.designs.PARAMETERS`), the scores
+            (:data:`~hexapod_kin.sweep.scores.SCORES`) and ``pareto`` (1 on the front).
         summary: JSON-ready summary (counts, best design with uncertainties, front, options).
-        files: The written table by its kind (``csv``, ``parquet`` or ``json``); empty without
-            ``out``.
+        files: The written table by its kind (empty without ``out``).
         scored: Number of designs scored by this call (the others were loaded from chunks).
         elapsed: Wall time of this call in [s].
 
@@ -80,12 +76,8 @@ class SweepResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the summary plus files, scored count and elapsed time [s]."""
-        return {
-            **self.summary,
-            "files": dict(self.files),
-            "scored": self.scored,
-            "elapsed_s": self.elapsed,
-        }
+        out = {**self.summary, "files": dict(self.files)}
+        return out | {"scored": self.scored, "elapsed_s": self.elapsed}
 
 
 #: Table formats of ``out``, by extension.
@@ -98,7 +90,7 @@ def table_paths(out: str | Path) -> dict[str, Path]:
     """The table and the resumable chunks' sidecar of ``out``.
 
     ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}`` (likewise ``.parquet``,
-    ``.json``); the sidecar is hidden, next to the table, and removed once the table is written.
+    ``.json``).
 
     Raises:
         ParameterError: ``out`` has another extension.
@@ -107,13 +99,11 @@ def table_paths(out: str | Path) -> dict[str, Path]:
     p = Path(out)
     kind = TABLE_FORMATS.get(p.suffix.lower())
     if kind is None:
-        raise ParameterError(
+        msg = (
             f"out={str(out)!r}: the table's format comes from its extension; use "
-            f"{', '.join(TABLE_FORMATS)}",
-            parameter="out",
-            value=str(out),
-            allowed=list(TABLE_FORMATS),
+            f"{', '.join(TABLE_FORMATS)}"
         )
+        raise ParameterError(msg, parameter="out", value=str(out), allowed=list(TABLE_FORMATS))
     return {kind: p, "parts": p.with_name(f".{p.name}.sweep-parts")}
 
 
@@ -132,14 +122,9 @@ MAX_GB = 4.0
 
 
 def _refuse_large(
-    space: Any,
-    method: str,
-    samples: int,
-    options: Mapping[str, Any],
-    workers: int | None,
-    client: Any,
-    scheduler: str | None,
-) -> None:
+    space: Any, method: str, samples: int, options: Mapping[str, Any], workers: int | None,
+    client: Any, scheduler: str | None,
+) -> None:  # fmt: skip
     """Refuse a sweep estimated beyond the limits (time from two designs scored here)."""
     n = space.count(method, samples)
     threads = 1 if (client is not None or scheduler is not None) else _check_workers(workers)
@@ -174,12 +159,8 @@ def _check_workers(workers: int | None) -> int:
     if workers is None:
         return top
     if int(workers) != workers or not 1 <= workers <= 4 * top:
-        raise ParameterError(
-            f"workers={workers!r}: expected an integer in [1, {4 * top}] (threads)",
-            parameter="workers",
-            value=workers,
-            allowed=f"1..{4 * top}",
-        )
+        msg = f"workers={workers!r}: expected an integer in [1, {4 * top}] (threads)"
+        raise ParameterError(msg, parameter="workers", value=workers, allowed=f"1..{4 * top}")
     return int(workers)
 
 
@@ -195,12 +176,11 @@ def _dask_client(client: Any, scheduler: str | None) -> tuple[Any, bool]:
     try:
         return Client(scheduler, timeout=CONNECT_TIMEOUT), True
     except (OSError, TimeoutError, ValueError) as exc:
-        raise ConfigurationError(
+        msg = (
             f"scheduler={scheduler!r}: cannot connect ({exc}); expected a running Dask "
-            "scheduler address such as tcp://HOST:8786",
-            parameter="scheduler",
-            value=scheduler,
-        ) from None
+            "scheduler address such as tcp://HOST:8786"
+        )
+        raise ConfigurationError(msg, parameter="scheduler", value=scheduler) from None
 
 
 def _check_out(out: str | Path | None) -> dict[str, Path] | None:
@@ -267,20 +247,14 @@ def sweep(
         line_points: Grid steps per side of the stride search.
         stride_points: Points along the stride for the σ/singularity/limit minima.
         stride_use: Central fraction of the stride for those minima.
-        out: The table to write (``x.csv``, ``x.parquet`` or ``x.json``); chunks go to the
-            hidden ``.x.csv.sweep-parts/`` meanwhile (removed at the end). None: nothing
-            written.
+        out: The table to write (``x.csv``, ``x.parquet`` or ``x.json``); None: nothing written.
         chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
         workers: Local threads scoring chunks (default: one per core). Ignored on Dask.
         client: A ``distributed.Client`` to run the chunks on.
         scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
         progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
         on_chunk: Called with the chunk number after each chunk is scored (and written).
-        allow_large: Run a sweep whose estimate (printed in the refusal) is beyond
-            :data:`MAX_HOURS` of scoring or :data:`MAX_GB` of memory (``--yes``).
-
-    Returns:
-        A :class:`SweepResult`.
+        allow_large: Run a sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB`.
 
     Raises:
         ParameterError: Bad options or design space.
@@ -289,13 +263,10 @@ def sweep(
 
     """
     t0 = time.perf_counter()
-    options = {
-        "mc_samples": int(mc_samples),
-        "seed": int(seed),
-        "line_points": int(line_points),
-        "stride_points": int(stride_points),
-        "stride_use": float(stride_use),
-    }
+    options: dict[str, Any] = dict(
+        mc_samples=int(mc_samples), seed=int(seed), line_points=int(line_points)
+    )
+    options |= dict(stride_points=int(stride_points), stride_use=float(stride_use))
     paths = _check_out(out)
     if not allow_large:
         _refuse_large(space, method, samples, options, workers, client, scheduler)
@@ -304,21 +275,11 @@ def sweep(
     if chunk_size is None:
         chunk_size = min(250, max(10, math.ceil(n / 20)))
     if int(chunk_size) != chunk_size or chunk_size < 1:
-        raise ParameterError(
-            f"chunk_size={chunk_size!r}: expected an integer >= 1",
-            parameter="chunk_size",
-            value=chunk_size,
-        )
+        msg = f"chunk_size={chunk_size!r}: expected an integer >= 1"
+        raise ParameterError(msg, parameter="chunk_size", value=chunk_size)
     chunk_size = int(chunk_size)
-    spec = {
-        "format": _FORMAT,
-        "space": space.to_dict(),
-        "method": method,
-        "samples": int(samples),
-        "n_designs": n,
-        "chunk_size": chunk_size,
-        **options,
-    }
+    spec = dict(format=_FORMAT, space=space.to_dict(), method=method, samples=int(samples))
+    spec |= dict(n_designs=n, chunk_size=chunk_size, **options)
     h = hashlib.sha256(json.dumps(spec, sort_keys=True).encode())
     h.update(designs.tobytes())
     key = h.hexdigest()
@@ -333,31 +294,22 @@ def sweep(
 
     from tqdm import tqdm
 
-    bar = tqdm(
-        total=n,
-        initial=n - scored,
-        unit="design",
-        desc="sweep",
-        file=sys.stderr,
-        disable=(not sys.stderr.isatty()) if progress is None else not progress,
-        dynamic_ncols=True,
-    )
+    off = (not sys.stderr.isatty()) if progress is None else not progress
+    bar = tqdm(total=n, initial=n - scored, unit="design", desc="sweep", file=sys.stderr,
+               disable=off, dynamic_ncols=True)  # fmt: skip
 
     def done(k: int, scores: Any) -> None:
         a, b = bounds[k]
         scores = np.asarray(scores)
-        why = (
-            check_scores(scores.astype(float))
-            if scores.dtype.kind in "fiub" and scores.shape == (b - a, len(SCORES))
-            else f"a {type(scores).__name__} of {scores.dtype} {scores.shape}"
-        )
+        why: str | None = f"a {type(scores).__name__} of {scores.dtype} {scores.shape}"
+        if scores.dtype.kind in "fiub" and scores.shape == (b - a, len(SCORES)):
+            why = check_scores(scores.astype(float))
         if why is not None:  # never stored: a later run must not trust it
-            raise ConfigurationError(
+            msg = (
                 f"sweep chunk {k} (designs {a}..{b - 1}) came back without valid "
-                f"scores ({why}); nothing of it is kept",
-                parameter="designs",
-                value=k,
+                f"scores ({why}); nothing of it is kept"
             )
+            raise ConfigurationError(msg, parameter="designs", value=k)
         scores = scores.astype(float)
         results[k] = scores
         if store is not None:
@@ -371,31 +323,19 @@ def sweep(
             cl, own = _dask_client(client, scheduler)
             from distributed import as_completed
 
-            futures = {
-                cl.submit(
-                    _score_chunk,
-                    np.array(designs[bounds[k][0] : bounds[k][1]]),
-                    options,
-                    key=f"hexapod-sweep-{key[:16]}-{k}",
-                    pure=False,
-                ): k
-                for k in missing
-            }
+            futures = {cl.submit(_score_chunk, np.array(designs[slice(*bounds[k])]), options,
+                                 key=f"hexapod-sweep-{key[:16]}-{k}", pure=False): k
+                       for k in missing}  # fmt: skip
             try:
                 for fut, res in as_completed(list(futures), with_results=True):
                     if fut.status != "finished" or isinstance(res, BaseException):
-                        raise ConfigurationError(
-                            f"the Dask cluster lost sweep chunk {futures[fut]} ({fut.status}: "
-                            f"{type(res).__name__}; was the scheduler stopped?); "
-                            + (
-                                "the finished chunks are kept: run the same sweep again to "
-                                "finish it"
-                                if store is not None
-                                else "nothing was written"
-                            ),
-                            parameter="scheduler",
-                            value=scheduler,
-                        )
+                        then = "nothing was written"
+                        if store is not None:
+                            then = "the finished chunks are kept: run the same sweep again to "
+                            then += "finish it"
+                        msg = f"the Dask cluster lost sweep chunk {futures[fut]} ({fut.status}: "
+                        msg += f"{type(res).__name__}; was the scheduler stopped?); {then}"
+                        raise ConfigurationError(msg, parameter="scheduler", value=scheduler)
                     done(futures[fut], res)
             finally:
                 for fut in futures:
@@ -407,10 +347,8 @@ def sweep(
 
             pool = ThreadPoolExecutor(min(_check_workers(workers), len(missing)))
             try:
-                chunks = {
-                    k: pool.submit(_score_chunk, designs[bounds[k][0] : bounds[k][1]], options)
-                    for k in missing
-                }
+                chunks = {k: pool.submit(_score_chunk, designs[slice(*bounds[k])], options)
+                          for k in missing}  # fmt: skip
                 for k, fut in chunks.items():  # written in order
                     done(k, fut.result())
             finally:  # on Ctrl-C: the running chunks end, the queued ones never start
@@ -419,28 +357,19 @@ def sweep(
         bar.close()
 
     scores = np.concatenate([results[k] for k in range(len(bounds))], axis=0)
-    table: dict[str, np.ndarray] = {"index": np.arange(n, dtype=float)}
-    for j, p in enumerate(PARAMETERS):
-        table[p] = np.array(designs[:, j])
-    for j, s in enumerate(SCORES):
-        table[s] = scores[:, j]
+    table = {"index": np.arange(n, dtype=float)}
+    table |= {p: np.array(designs[:, j]) for j, p in enumerate(PARAMETERS)}
+    table |= {s: scores[:, j] for j, s in enumerate(SCORES)}
     table["pareto"] = pareto_front(table).astype(float)
     read_only(*table.values())
     summary = _summary(table, spec, key)
-    files: dict[str, str] = {}
-    if paths is not None:
-        files = _write_tables(table, summary, paths)
-    return SweepResult(
-        table=table, summary=summary, files=files, scored=scored, elapsed=time.perf_counter() - t0
-    )
+    files = {} if paths is None else _write_tables(table, summary, paths)
+    return SweepResult(table, summary, files, scored, time.perf_counter() - t0)
 
 
 def _design_dict(table: Mapping[str, np.ndarray], i: int) -> dict[str, Any]:
-    d: dict[str, Any] = {"index": i}
-    d.update({p: float(table[p][i]) for p in PARAMETERS})
-    for s in SCORES:
-        if s.endswith("_se"):
-            continue
+    d: dict[str, Any] = {"index": i, **{p: float(table[p][i]) for p in PARAMETERS}}
+    for s in (s for s in SCORES if not s.endswith("_se")):
         d[s] = float(table[s][i])
         if s in _UNCERTAIN:
             d[s + "_se"] = float(table[_UNCERTAIN[s]][i])
@@ -472,14 +401,10 @@ def _csv_text(table: Mapping[str, np.ndarray]) -> str:
     names = list(table)
     cols = [np.asarray(table[c]) for c in names]
     ints = {"index", "feasible", "volume_exact", "pareto"}
-    lines = [",".join(names)]
-    for i in range(cols[0].shape[0]):
-        lines.append(
-            ",".join(
-                str(int(c[i])) if nm in ints else repr(float(c[i])) for nm, c in zip(names, cols)
-            )
-        )
-    return "\n".join(lines) + "\n"
+    cells = [
+        [str(int(v)) if nm in ints else repr(float(v)) for v in c] for nm, c in zip(names, cols)
+    ]
+    return "\n".join([",".join(names), *(",".join(row) for row in zip(*cells))]) + "\n"
 
 
 def _write_tables(
@@ -500,9 +425,8 @@ def _write_tables(
         atomic_write(path, buf.getvalue())
     else:
         columns = {k: np.asarray(v).tolist() for k, v in table.items()}
-        atomic_write(
-            path, json.dumps({**summary, "table": columns}, indent=1, allow_nan=False) + "\n"
-        )
+        text = json.dumps({**summary, "table": columns}, indent=1, allow_nan=False)
+        atomic_write(path, text + "\n")
     shutil.rmtree(paths["parts"], ignore_errors=True)
     return {kind: str(path)}
 
@@ -518,8 +442,7 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
 
     Raises:
         ParameterError: An unknown suffix.
-        SourceError: A missing file, one the strict reader refuses
-            (:mod:`hexapod_kin._reader`), or not a sweep table.
+        SourceError: A missing file, one the strict reader refuses, or not a sweep table.
 
     """
     p = Path(path)
@@ -529,12 +452,8 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
         t = pq.read_table(io.BytesIO(read_regular(p, _MAX_TABLE_BYTES, "path")))
         return {c: np.asarray(t.column(c).to_numpy(), dtype=float) for c in t.column_names}
     if p.suffix not in (".json", ".csv"):
-        raise ParameterError(
-            f"path={str(p)!r}: expected a .csv, .parquet or .json file",
-            parameter="path",
-            value=str(p),
-            allowed=list(TABLE_FORMATS),
-        )
+        msg = f"path={str(p)!r}: expected a .csv, .parquet or .json file"
+        raise ParameterError(msg, parameter="path", value=str(p), allowed=list(TABLE_FORMATS))
     text = read_text(p, "path", _MAX_TABLE_BYTES)  # the one strict reader of user files
     try:
         if p.suffix == ".json":
@@ -547,8 +466,5 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
         if isinstance(exc, HexapodKinError):
             raise
         why = " ".join(str(exc).split())[:120]
-        raise SourceError(
-            f"path={str(p)!r}: not a sweep table ({type(exc).__name__}: {why})",
-            parameter="path",
-            value=str(p),
-        ) from None
+        msg = f"path={str(p)!r}: not a sweep table ({type(exc).__name__}: {why})"
+        raise SourceError(msg, parameter="path", value=str(p)) from None

@@ -3,19 +3,14 @@
 A design is ``hexabot_leg(l1, l2, l3)`` (α2 = −π/2), foot ``Rz(q1)·[l1 + l2 c2 + l3 c23, 0,
 −(l2 s2 + l3 s23)]`` in the hip frame, with joint limits, on a body mount (radius, yaw).
 
-* ground: ``z = −height``; its reachable distances from the hip axis are ``ρ = l1 + u``, ``u
-  ∈ [b, a]``, ``a = √((l2+l3)² − h²)``, ``b = √(max((l2−l3)² − h², 0))``;
-* neutral foot ``p0 = ρ0·(cos q1m, sin q1m, 0) − h·z``, ``ρ0 = l1 + b + neutral·(a − b)``,
-  ``q1m`` the middle of the hip limits;
-* stride: the longest segment ``p0 + t·d``, ``d = (cos ψ, −sin ψ, 0)`` (body x), reachable
-  within the limits at every point (a grid of ``line_points`` steps per side, then bisection);
-* along its central ``stride_use`` fraction (``stride_points`` points, the within-limits IK
-  branch of largest σ_min): the minima of σ_min and manipulability of the 3×3 position
-  Jacobian, of ``|ρ|`` (family ``l1 + l2 c2 + l3 c23 = 0``), of q3's distance to {0, π} and
-  of the joint-limit margin;
-* volume: Monte-Carlo over ``mc_samples`` points in the bounding cylinder with the exact
-  membership test, the same unit samples for every design (common random numbers), binomial
-  standard error; :func:`volume_closed_form` where it exists (knee unlimited).
+* ground ``z = −height``, reached at ``ρ = l1 + u``, ``u ∈ [b, a]``, ``a = √((l2+l3)² − h²)``,
+  ``b = √(max((l2−l3)² − h², 0))``; neutral foot at ``ρ0 = l1 + b + neutral·(a − b)`` in the
+  middle of the hip limits;
+* stride: the longest segment through it along body x reachable within the limits (grid,
+  then bisection); along its central ``stride_use`` fraction the minima of σ_min,
+  manipulability, ``|ρ|``, q3's distance to {0, π} and the joint-limit margin;
+* volume: Monte-Carlo in the bounding cylinder (common random numbers, binomial standard
+  error); :func:`volume_closed_form` where it exists (knee unlimited).
 """
 
 from __future__ import annotations
@@ -29,14 +24,8 @@ from ..exceptions import ParameterError
 from ..ik.closed import leg_reachable, leg_solutions
 from .designs import PARAMETERS
 
-__all__ = [
-    "SCORES",
-    "reachable",
-    "score_designs",
-    "sigmas",
-    "unit_samples",
-    "volume_closed_form",
-]
+__all__ = ["SCORES", "reachable", "score_designs", "sigmas", "unit_samples",
+           "volume_closed_form"]  # fmt: skip
 
 #: Score columns of :func:`score_designs`, in order, with units.
 SCORES: dict[str, str] = {
@@ -82,16 +71,11 @@ def _member(d: np.ndarray, pts: np.ndarray) -> np.ndarray:
 def _sigma_rows(
     q2: np.ndarray, q3: np.ndarray, l1: Any, l2: Any, l3: Any
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(σ_min, manipulability, ρ) of the leg's 3×3 position Jacobian (closed form).
-
-    σ values are ``|ρ|`` and those of the planar 2×2 block (``det = l2 l3 sin q3``).
-    """
+    """(σ_min, manipulability, ρ) of the leg's 3×3 position Jacobian (closed form)."""
     c2, s2, c23, s23 = np.cos(q2), np.sin(q2), np.cos(q2 + q3), np.sin(q2 + q3)
-    rho = l1 + l2 * c2 + l3 * c23
-    u = l2 * c2 + l3 * c23
+    rho, u = l1 + l2 * c2 + l3 * c23, l2 * c2 + l3 * c23
     w = l2 * s2 + l3 * s23
-    fro = u * u + w * w + l3 * l3
-    det = l2 * l3 * np.abs(np.sin(q3))
+    fro, det = u * u + w * w + l3 * l3, l2 * l3 * np.abs(np.sin(q3))
     smax2 = 0.5 * (fro + np.sqrt(np.maximum(fro * fro - 4.0 * det * det, 0.0)))
     with np.errstate(invalid="ignore", divide="ignore"):
         s2min = np.where(smax2 > 0, det / np.sqrt(smax2), 0.0)
@@ -108,18 +92,11 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     # ---- volume: Monte-Carlo in the bounding cylinder, the same unit samples for all
     r_u, ph = np.sqrt(unit[:, 0]), _TWO_PI * unit[:, 1] - math.pi
     c_u, s_u, z_u = r_u * np.cos(ph), r_u * np.sin(ph), 2.0 * unit[:, 2] - 1.0
-    hits = np.empty(nd)
-    per = max(1, _BLOCK // m)
+    hits, per = np.empty(nd), max(1, _BLOCK // m)
     for a in range(0, nd, per):
         blk = slice(a, a + per)
-        pts = np.stack(
-            [
-                big[blk, None] * c_u,
-                big[blk, None] * s_u,
-                reach[blk, None] * z_u,
-            ],
-            axis=-1,
-        ).reshape(-1, 3)
+        bb = big[blk, None]
+        pts = np.stack([bb * c_u, bb * s_u, reach[blk, None] * z_u], axis=-1).reshape(-1, 3)
         ok = _member(np.repeat(d[blk], m, axis=0), pts)
         hits[blk] = ok.reshape(-1, m).sum(axis=1)
     p = hits / m
@@ -146,8 +123,7 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     out[live, _COL["feasible"]] = 1.0
     n = len(live)
     # ---- stride: grid of ``line`` steps per side, then bisection to rounding
-    tmax = 2.0 * big
-    ends = np.zeros((2, n))
+    tmax, ends = 2.0 * big, np.zeros((2, n))
     ks = np.arange(1, line + 1)
     for side, sg in enumerate((1.0, -1.0)):
         ts = (tmax / line)[:, None] * ks[None, :]  # (n, line)
@@ -174,11 +150,8 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     # ---- along the central part of the stride: the within-limits branch of largest σ_min
     centre, half = 0.5 * (ends[0] - ends[1]), 0.5 * use * (ends[0] + ends[1])
     k = np.arange(points)[None, :]
-    ts = (
-        centre[:, None]
-        - half[:, None]
-        + (2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None])
-    )  # (n, points)
+    step = 2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None]
+    ts = centre[:, None] - half[:, None] + step  # (n, points)
     pts = p0[:, None, :] + ts[..., None] * direction[:, None, :]
     q, valid = _solve(np.repeat(d, points, axis=0), pts.reshape(-1, 3))
     rep = (np.repeat(v, points)[:, None] for v in (l1, l2, l3))
@@ -212,9 +185,6 @@ def unit_samples(seed: int, n: int) -> np.ndarray:
         seed: The sweep's seed.
         n: Number of samples.
 
-    Returns:
-        A C-contiguous float array in [0, 1).
-
     """
     return np.random.Generator(np.random.PCG64([int(seed), 0x5EED])).random((int(n), 3))
 
@@ -239,8 +209,8 @@ def score_designs(
         stride_use: Central fraction of the stride over which those minima are taken.
 
     Returns:
-        Column name → (N,) float array, the names of :data:`SCORES`. Each design's scores
-        depend only on its parameters and the seed (not on batching or workers).
+        Column name → (N,) float array, the names of :data:`SCORES` (each design's scores
+        depend only on its parameters and the seed).
 
     Raises:
         ParameterError: Bad shapes or option values.
@@ -260,25 +230,15 @@ def score_designs(
             parameter="mc_samples",
         )
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= int(seed) < 2**63:
-        raise ParameterError(
-            f"seed={seed!r}: expected an integer in [0, 2**63)",
-            parameter="seed",
-            value=seed,
-            allowed="0 <= seed < 2**63",
-        )
+        msg = f"seed={seed!r}: expected an integer in [0, 2**63)"
+        raise ParameterError(msg, parameter="seed", value=seed, allowed="0 <= seed < 2**63")
     if not 0.0 < stride_use <= 1.0:
-        raise ParameterError(
-            f"stride_use={stride_use}: expected a fraction in (0, 1]", parameter="stride_use"
-        )
+        msg = f"stride_use={stride_use}: expected a fraction in (0, 1]"
+        raise ParameterError(msg, parameter="stride_use")
     out = np.zeros((d.shape[0], len(SCORES)))
     if d.shape[0]:
-        out = _score(
-            d,
-            unit_samples(seed, mc_samples),
-            int(line_points),
-            int(stride_points),
-            float(stride_use),
-        )
+        unit = unit_samples(seed, mc_samples)
+        out = _score(d, unit, int(line_points), int(stride_points), float(stride_use))
     cols = {name: out[:, j].copy() for j, name in enumerate(SCORES)}
     exact = np.array([volume_closed_form(*row[:3], *row[6:12]) for row in d])
     has = np.isfinite(exact)
@@ -315,39 +275,25 @@ def _cos_bounds(lo: float, hi: float) -> tuple[float, float]:
     """(min, max) of cos q over [lo, hi]."""
     if hi - lo >= 2 * math.pi:
         return -1.0, 1.0
-    cmax = (
-        1.0
-        if 2 * math.pi * math.ceil(lo / (2 * math.pi)) <= hi
-        else max(math.cos(lo), math.cos(hi))
-    )
+    top = 2 * math.pi * math.ceil(lo / (2 * math.pi)) <= hi
+    cmax = 1.0 if top else max(math.cos(lo), math.cos(hi))
     k = math.ceil((lo - math.pi) / (2 * math.pi))
     cmin = -1.0 if math.pi + 2 * math.pi * k <= hi else min(math.cos(lo), math.cos(hi))
     return cmin, cmax
 
 
 def volume_closed_form(
-    l1: float,
-    l2: float,
-    l3: float,
-    q1_lower: float = -math.pi,
-    q1_upper: float = math.pi,
-    q2_lower: float = -math.pi,
-    q2_upper: float = math.pi,
-    q3_lower: float = -math.pi,
+    l1: float, l2: float, l3: float, q1_lower: float = -math.pi, q1_upper: float = math.pi,
+    q2_lower: float = -math.pi, q2_upper: float = math.pi, q3_lower: float = -math.pi,
     q3_upper: float = math.pi,
-) -> float:
+) -> float:  # fmt: skip
     """Exact reachable volume of the leg where the knee (q2) is unlimited, else NaN.
 
-    With q2 free, the (u, w) reach region of the femur/tibia pair is the annulus
-    ``R_in <= |(u, w)| <= R_out`` (radii from the range of cos q3). At height z the hip-frame
-    section of points at signed distance ``x' = l1 + u`` is a set of intervals S_z; a point at
-    distance ρ and azimuth φ is reached with q1 = φ (needs ρ ∈ S_z) or q1 = φ + π (needs
-    −ρ ∈ S_z). Integrating the azimuth measure of a hip range Δ:
-    ``V = ∫ dz [Δ/2 (M(P) + M(N)) − max(Δ − π, 0) M(P ∩ N)]``, ``P = S_z ∩ (0, ∞)``,
-    ``N = (−S_z) ∩ (0, ∞)``, ``M(X) = Σ (hi² − lo²)`` over X's intervals (Pappus: ρ dρ dφ).
-    Between breakpoints each endpoint is ``±(l1 ± √(r² − z²))``, whose square integrates in
-    closed form (``∫√(r² − z²) dz = (z√(r² − z²) + r² asin(z/r))/2``). Full rotation, Δ = 2π,
-    of the seed leg's disk (l1 = 0.05, l2 = l3 = 0.1) gives 0.05637 m³.
+    With q2 free the (u, w) reach is the annulus ``R_in <= |(u, w)| <= R_out``; at height z the
+    section at signed distance ``l1 + u`` is a set of intervals S_z, reached with q1 = φ or
+    φ + π: ``V = ∫ dz [Δ/2 (M(P) + M(N)) − max(Δ − π, 0) M(P ∩ N)]``, ``P = S_z ∩ (0, ∞)``,
+    ``N = (−S_z) ∩ (0, ∞)``, ``M(X) = Σ (hi² − lo²)``, integrated in closed form between
+    breakpoints. The seed leg, full rotation: 0.05637 m³.
 
     Args:
         l1: Coxa length [m].
@@ -386,10 +332,7 @@ def volume_closed_form(
         so = s_of(r_out, z)
         if z < r_in:
             si = s_of(r_in, z)
-            raw = [
-                (l1 - so, (-1, 1), l1 - si, (-1, 0)),
-                (l1 + si, (1, 0), l1 + so, (1, 1)),
-            ]
+            raw = [(l1 - so, (-1, 1), l1 - si, (-1, 0)), (l1 + si, (1, 0), l1 + so, (1, 1))]
         else:
             raw = [(l1 - so, (-1, 1), l1 + so, (1, 1))]
         pos: list[Any] = []

@@ -19,29 +19,13 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
     from .families import SingularFamily
 
 #: Name → the submodule that defines it (imported on first access).
-_LAZY_NAMES = {
-    "ROW_NAMES": ".core",
-    "khalil_matrix": ".core",
-    "Derivation": ".derivation",
-    "cached": ".derivation",
-    "clear_memory": ".derivation",
-    "derive": ".derivation",
-    "row_indices": ".derivation",
-    "SingularFamily": ".families",
-}
+_LAZY_NAMES = dict.fromkeys(("ROW_NAMES", "khalil_matrix"), ".core")
+_LAZY_NAMES |= dict.fromkeys(("Derivation", "cached", "clear_memory", "derive"), ".derivation")
+_LAZY_NAMES |= {"row_indices": ".derivation", "SingularFamily": ".families"}
 
 
 __getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals())
 
 
-__all__ = [
-    "ROW_NAMES",
-    "DEFAULT_BUDGET",
-    "Derivation",
-    "SingularFamily",
-    "derive",
-    "cached",
-    "clear_memory",
-    "khalil_matrix",
-    "row_indices",
-]
+__all__ = ["ROW_NAMES", "DEFAULT_BUDGET", "Derivation", "SingularFamily", "derive", "cached",
+           "clear_memory", "khalil_matrix", "row_indices"]  # fmt: skip

@@ -17,8 +17,7 @@ from ..params import Chain
 
 def numeric_jacobian(chain: Chain, q: np.ndarray, sel: Sequence[int]) -> np.ndarray:
     """Independent numeric Jacobian (base frame, tool point) from the table, rows ``sel``."""
-    ts = table_transforms(chain, q)
-    acc = chain.base_matrix
+    ts, acc = table_transforms(chain, q), chain.base_matrix
     frames = []
     for t in ts:
         acc = acc @ t
@@ -44,9 +43,8 @@ def brent_root(f: Callable[[float], float], xa: float, xb: float, xtol: float,
                rtol: float = 4 * sys.float_info.epsilon, maxiter: int = 100) -> float:  # fmt: skip
     """A root of ``f`` in ``[xa, xb]`` (``f(xa)``, ``f(xb)`` of opposite signs or zero).
 
-    Brent's method in the same floating-point operations as :func:`scipy.optimize.brentq`
-    (its C ``brentq`` by C. Harris), hence the same root to the bit, without importing
-    ``scipy.optimize``; stops when half the bracket is below ``(xtol + rtol |x|) / 2``.
+    Brent's method in the same floating-point operations as :func:`scipy.optimize.brentq` (the
+    same root to the bit) without importing scipy; stops at ``(xtol + rtol |x|) / 2``.
     """
     x_prev, x_cur = float(xa), float(xb)
     f_prev, f_cur = float(f(x_prev)), float(f(x_cur))
@@ -62,8 +60,7 @@ def brent_root(f: Callable[[float], float], xa: float, xb: float, xtol: float,
         if abs(f_blk) < abs(f_cur):  # x_cur: the end with the smaller |f|
             x_prev, x_cur, x_blk = x_cur, x_blk, x_cur
             f_prev, f_cur, f_blk = f_cur, f_blk, f_cur
-        delta = (xtol + rtol * abs(x_cur)) / 2
-        s_bis = (x_blk - x_cur) / 2
+        delta, s_bis = (xtol + rtol * abs(x_cur)) / 2, (x_blk - x_cur) / 2
         if f_cur == 0.0 or abs(s_bis) < delta:
             return x_cur
         step = s_bis
@@ -102,9 +99,8 @@ def single_joint_roots(
         if a == 0.0:
             roots.append(float(grid[i]))
         elif a * b < 0:
-            roots.append(
-                brent_root(lambda x: float(func(np.array([x]))[0]), grid[i], grid[i + 1], 1e-15)
-            )
+            one = lambda x: float(func(np.array([x]))[0])  # noqa: E731
+            roots.append(brent_root(one, grid[i], grid[i + 1], 1e-15))
         elif abs(a) < 1e-12 * scale and i > 0 and (vals[i - 1] - a) * (b - a) > 0:
             roots.append(float(grid[i]))  # a tangency at a grid point
     if vals[-1] == 0.0:

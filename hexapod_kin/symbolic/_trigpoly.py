@@ -1,11 +1,9 @@
 """Trigonometric polynomials of the joints as polynomials in ``s_k = sin q_k``, ``c_k = cos q_k``.
 
 The change of variables (:func:`_to_poly`), the reduction modulo ``s_k² + c_k² = 1``
-(:func:`_reduce`), rounding noise of float tables (:func:`_chop`) and determinants
-(:func:`_det_poly`). :func:`ring_det` takes a determinant in a sparse polynomial ring over ℚ
-(cofactors, every minor kept): expanding is a ring homomorphism, so it is the same polynomial
-as sympy's ``Matrix.det`` then ``expand``, in milliseconds instead of seconds. Entries with a
-coefficient outside ℚ keep the expression route.
+(:func:`_reduce`), rounding noise (:func:`_chop`) and determinants (:func:`_det_poly`,
+:func:`ring_det`: in a sparse polynomial ring over ℚ, the same polynomial as ``Matrix.det``
+then ``expand``, much faster).
 """
 
 from __future__ import annotations
@@ -48,8 +46,7 @@ def ring_det(entries: Sequence[Any], n: int, gens: Sequence[sp.Symbol]) -> Any |
             return r.one
         if cols in memo:
             return memo[cols]
-        row = rows[n - len(cols)]
-        acc = r.zero
+        row, acc = rows[n - len(cols)], r.zero
         for k, j in enumerate(cols):
             if row[j]:
                 term = row[j] * minor(cols[:k] + cols[k + 1 :])
@@ -69,11 +66,8 @@ def _trig_symbols(q: Sequence[sp.Symbol]) -> tuple[tuple[sp.Symbol, ...], tuple[
 def _to_poly(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> Any:
     s, c = _trig_symbols(q)
     e = sp.expand(sp.expand_trig(expr))
-    sub = {}
-    for k, qk in enumerate(q):
-        if sigmas[k] == "revolute":
-            sub[sp.sin(qk)] = s[k]
-            sub[sp.cos(qk)] = c[k]
+    rev = [k for k in range(len(q)) if sigmas[k] == "revolute"]
+    sub = {fn(q[k]): x[k] for k in rev for fn, x in ((sp.sin, s), (sp.cos, c))}
     return sp.expand(e.xreplace(sub))
 
 
@@ -87,11 +81,7 @@ def _reduce(poly: Any, q: Sequence[sp.Symbol]) -> Any:
 
 
 def _chop(expr: Any, rel: float = 1e-12) -> Any:
-    """Float coefficients below ``rel`` × the largest one, set to 0.
-
-    They are rounding noise of tables with inexact angles (1e-17 terms from a URDF's table)
-    that would otherwise factor as real terms.
-    """
+    """Float coefficients below ``rel`` × the largest one (rounding noise), set to 0."""
     floats = expr.atoms(sp.Float)
     if not floats:
         return expr
@@ -104,10 +94,8 @@ def _det_poly(mat: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str],
               split: bool = False, memo: dict[Any, Any] | None = None) -> Any:  # fmt: skip
     """``_to_poly(det mat)`` (``split``: of ``det J11 · det J22``, block-triangular 6×6).
 
-    In a polynomial ring (:func:`ring_det`: the same polynomial, in milliseconds)
-    when every entry is a polynomial with rational coefficients, else by expanding the
-    expression (floats then round as ``expand`` rounds them). ``memo``: the entries'
-    polynomials by entry, shared by calls on matrices with entries in common.
+    By :func:`ring_det` when every entry is a polynomial over ℚ, else by expanding the
+    expression. ``memo``: the entries' polynomials, shared between calls.
     """
     s, c = _trig_symbols(q)
     gens = [g for k, qk in enumerate(q)

@@ -69,10 +69,9 @@ def _decode(obj: Any) -> Any:
 
 
 def load(digest: str) -> dict[str, Any] | None:
-    """Stages stored under ``digest``, or ``None`` (missing, or damaged: one warning).
+    """Stages stored under ``digest`` (rebuilt by the restricted reader), or ``None``.
 
-    The sealed envelope of :func:`hexapod_kin._cache.load`; its stages are then rebuilt by the
-    restricted reader (anything it refuses: damaged, one warning).
+    ``None`` when missing, or damaged or refused by the reader (one warning).
     """
     body = _disk.load(KIND, digest, FORMAT, THEN)
     if body is None:
@@ -97,12 +96,10 @@ def store(digest: str, stages: dict[str, Any]) -> Path | None:
 
 
 class Writer:
-    """Writes the stages of one derivation as they come, each encoded once.
+    """Writes the stages of one derivation as they come (atomic, no ``fsync``), each encoded once.
 
-    Used inside the derivation's (child) process: after every stage the file holds all the
-    stages reached so far and ``attempt`` (why it is unfinished, and with which budget), so a
-    run stopped at its budget has left on disk what it reached. Writes are atomic, without
-    ``fsync`` (a torn file after a crash reads as "not cached").
+    After every stage the file holds the stages reached so far and ``attempt`` (why it is
+    unfinished, and with which budget): a run stopped at its budget leaves what it reached.
     """
 
     def __init__(self, digest: str, have: dict[str, Any]) -> None:
@@ -128,11 +125,7 @@ def snapshot(digest: str) -> bytes | None:
 
 
 def restore(digest: str, data: bytes | None) -> None:
-    """Put the entry of ``digest`` back as :func:`snapshot` found it (after a Ctrl-C).
-
-    The worker writes each stage as it finishes, marked as in progress; the entry the
-    interrupted call found is put back as it was.
-    """
+    """Put the entry of ``digest`` back as :func:`snapshot` found it (after a Ctrl-C)."""
     path = cache_dir() / f"{digest}.json"
     try:
         if data is None:

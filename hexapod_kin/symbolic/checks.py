@@ -7,7 +7,9 @@ within a time budget. :func:`claims_hold` checks a cached derivation against its
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 from collections.abc import Mapping
 from typing import Any
 
@@ -21,17 +23,10 @@ __all__ = ["NUMPY_FUNCTIONS", "claims_hold", "evaluate", "evaluate_matrix"]
 
 #: sympy functions and their numpy twins (also the seed report's numeric comparison).
 NUMPY_FUNCTIONS: dict[Any, Any] = {
-    sp.sin: np.sin,
-    sp.cos: np.cos,
-    sp.tan: np.tan,
-    sp.exp: np.exp,
-    sp.log: np.log,
-    sp.Abs: np.abs,
-    sp.atan2: np.arctan2,
-    sp.asin: np.arcsin,
-    sp.acos: np.arccos,
+    sp.sin: np.sin, sp.cos: np.cos, sp.tan: np.tan, sp.exp: np.exp, sp.log: np.log,
+    sp.Abs: np.abs, sp.atan2: np.arctan2, sp.asin: np.arcsin, sp.acos: np.arccos,
     sp.atan: np.arctan,
-}
+}  # fmt: skip
 
 
 def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
@@ -40,8 +35,7 @@ def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
     Args:
         expr: A sympy expression built of numbers, symbols, ``+``, ``*``, powers and
             the functions ``sin cos tan exp log Abs atan2 asin acos atan``.
-        values: A value for every symbol of ``expr``: floats, or numpy arrays that
-            broadcast together (one value per point).
+        values: A float or an array (broadcasting together) for every symbol of ``expr``.
 
     Returns:
         A float or an array (the broadcast shape of the values used).
@@ -72,14 +66,8 @@ def _value(root: Any, values: Mapping[Any, Any], memo: dict[Any, Any]) -> Any:
                 stack.extend((a, False) for a in node.args if a not in memo)
             continue
         args = [memo[a] for a in node.args]
-        if node.is_Add:
-            out = args[0]
-            for v in args[1:]:
-                out = out + v
-        elif node.is_Mul:
-            out = args[0]
-            for v in args[1:]:
-                out = out * v
+        if node.is_Add or node.is_Mul:
+            out = functools.reduce(operator.add if node.is_Add else operator.mul, args)
         elif node.is_Pow:
             out = np.power(args[0], args[1])
         elif node.func in NUMPY_FUNCTIONS:
@@ -111,10 +99,9 @@ def evaluate_matrix(
 def claims_hold(stages: Mapping[str, Any], chain: Chain, values: Mapping[Any, Any]) -> bool:
     """A cached derivation checked against what it claims, before use.
 
-    At three random configurations (fixed seed), as stored and with the tidied forms: every
-    printed matrix against the table's own numbers (:mod:`hexapod_kin._table_kin`); a square
-    J's ``det`` and ``const · Π fᵐ`` against ``|det J|``; the Gram determinant against the
-    stored J's rows; each family's factor ± one factor of the determinant.
+    At three seeded configurations, as stored and tidied: every matrix against the table's own
+    numbers, ``det`` and ``const · Π fᵐ`` against ``|det J|``, the Gram determinant, and each
+    family's factor against the determinant's factors.
     """
     kin = stages.get("kinematics")
     if kin is None:
@@ -136,8 +123,7 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
 
     ts = table_transforms(chain, qv)
     base, tool = chain.base_matrix, chain.tool_matrix
-    out = {"base": base, "tool": tool}
-    acc = base
+    out, acc = {"base": base, "tool": tool}, base
     for j, t in enumerate(ts):
         out[f"transforms.{j}"] = t
         acc = acc @ t
@@ -145,14 +131,10 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
     out["tip"] = acc @ tool
     out["p"] = out["tip"][:3, 3:4]
     lin = table_position_jacobian(chain, qv)
-    ang = np.column_stack(
-        [
-            out[f"cumulative.{j}"][:3, 2] if chain.rows[j].sigma == "revolute" else np.zeros(3)
-            for j in chain.joint_rows
-        ]
-    )
-    out["J_indirect"] = lin
-    out["J_direct"] = np.vstack([lin, ang])
+    revolute = [chain.rows[j].sigma == "revolute" for j in chain.joint_rows]
+    z = [out[f"cumulative.{j}"][:3, 2] for j in chain.joint_rows]
+    ang = np.column_stack([zj if r else np.zeros(3) for zj, r in zip(z, revolute)])
+    out["J_indirect"], out["J_direct"] = lin, np.vstack([lin, ang])
     return out
 
 
@@ -164,10 +146,8 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
     qs = rng.uniform(-math.pi, math.pi, (3, n))
     scale = 1.0 + float(sum(abs(float(v)) for v in values.values()))
     at = {**{s: float(v) for s, v in values.items()}, **{s: qs[:, k] for k, s in enumerate(q)}}
-    mats: dict[str, Any] = {}
-    for name in ("base", "tool", "tip", "p", "J_indirect", "J_direct"):
-        if name in kin:
-            mats[name] = kin[name]
+    names = ("base", "tool", "tip", "p", "J_indirect", "J_direct")
+    mats: dict[str, Any] = {name: kin[name] for name in names if name in kin}
     for name in ("transforms", "cumulative"):
         mats.update({f"{name}.{j}": m for j, m in enumerate(kin.get(name) or ())})
     if "p" not in mats or "J_direct" not in mats:
@@ -185,13 +165,11 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
                 return False
             if not np.allclose(vals[k], want[name], atol=1e-9 * scale, rtol=0.0):
                 return False
-    det = stages.get("determinant")
-    rows = stages.get("rows")
+    det, rows = stages.get("determinant"), stages.get("rows")
     try:
         sel_rows = [ROW_NAMES.index(r) for r in rows] if rows is not None else None
         if det is not None and sel_rows is not None:
-            square = len(sel_rows) == n
-            tol = 1e-8 * scale**4
+            square, tol = len(sel_rows) == n, 1e-8 * scale**4
             gram = det.get("gram")
             gram_v = None if gram is None else np.broadcast_to(evaluate(gram, at), (3,))
             dets = [np.broadcast_to(evaluate(det["det"], at), (3,))] if square else []
@@ -205,9 +183,8 @@ def _claims(stages: Mapping[str, Any], kin: Any, chain: Chain, values: Mapping[A
                 sel = jac[k][sel_rows]
                 gram_k = sel @ sel.T if sel.shape[0] <= sel.shape[1] else sel.T @ sel
                 want_g = float(np.linalg.det(gram_k))
-                if gram_v is not None and abs(float(gram_v[k]) - want_g) > tol * max(
-                    1.0, abs(want_g)
-                ):
+                off = abs(float(gram_v[k]) - want_g) if gram_v is not None else 0.0
+                if off > tol * max(1.0, abs(want_g)):
                     return False
                 if square:
                     size = abs(float(np.linalg.det(sel)))

@@ -1,12 +1,10 @@
 """The sympy work behind :func:`hexapod_kin.symbolic.derive`, in stages (no caching, no budget).
 
-Speed comes from structure, not from ``simplify``: cumulative products are expanded step by
-step; ``det J`` is taken in a middle joint frame (invariant under a rotation of both row
-blocks; for the 6×6 under a change of reference point too: at a wrist centre ``J`` is
-block-triangular, ``det J = det J11 · det J22``); the determinant is computed as a polynomial in
-``s_i = sin q_i``, ``c_i = cos q_i`` (:func:`~._trigpoly.ring_det`) and factored *before*
-reducing modulo ``s_i² + c_i² = 1`` (reducing first can glue families together), then each
-factor is reduced and factored again. A few frames are tried; the finest split wins.
+Speed comes from structure, not ``simplify``: products expanded step by step; ``det J`` in a
+middle joint frame (a 6×6 at a wrist centre is block-triangular); the determinant as a
+polynomial in ``s_i``, ``c_i`` (:func:`~._trigpoly.ring_det`) factored *before* reducing
+modulo ``s_i² + c_i² = 1``, each factor then reduced and factored again; the finest split of a
+few frames wins.
 """
 
 from __future__ import annotations
@@ -45,11 +43,7 @@ def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
 
 
 def exact_angle(value: float) -> sp.Expr:
-    """An angle as an exact multiple of π when within 1e-9 rad of one (denominator ≤ 24).
-
-    URDFs round π/2 to 11 digits (``1.57079632679``); such angles are snapped, which moves
-    the kinematics by at most that rounding.
-    """
+    """An angle as an exact multiple of π when within 1e-9 rad of one (denominator ≤ 24)."""
     if value == 0.0:
         return sp.Integer(0)
     frac = Fraction(value / math.pi).limit_denominator(24)
@@ -76,10 +70,6 @@ def cheap(expr: Any) -> Any:
 _MAX_TERMS = 600
 
 
-def _terms(mat: sp.Matrix) -> int:
-    return sum(len(sp.Add.make_args(e)) for e in mat)
-
-
 def _expand(expr: Any) -> Any:
     if isinstance(expr, sp.MatrixBase):
         return expr.applyfunc(sp.expand)
@@ -103,8 +93,7 @@ def _rotation(rot: np.ndarray) -> sp.Matrix:
 
 def _homogeneous(rot: sp.Matrix, xyz: Sequence[Any]) -> sp.Matrix:
     t = sp.eye(4)
-    t[:3, :3] = rot
-    t[:3, 3] = sp.Matrix(list(xyz))
+    t[:3, :3], t[:3, 3] = rot, sp.Matrix(list(xyz))
     return t
 
 
@@ -133,8 +122,7 @@ def length_symbols(chain: Chain, names: Mapping[str, str] | None) -> dict[str, A
     for axis, value in zip("xyz", tool_xyz):
         if abs(value) > 1e-15:
             entries.append((f"tool_{axis}", value))
-    given = dict(names or {})
-    keys = [key for key, _ in entries]
+    given, keys = dict(names or {}), [key for key, _ in entries]
     unknown = [k for k in given if k not in keys]
     if unknown:
         raise ParameterError(
@@ -171,14 +159,11 @@ def kinematics(
 ) -> dict[str, Any]:
     """Stage 1: transforms, cumulative products, tip, both Jacobians (cheaply simplified).
 
-    With ``simplify=False`` the products are left as they come and ``J_indirect`` is *not*
-    derived (it is the direct method's linear rows): the fast fallback.
+    With ``simplify=False`` the products stay unexpanded and ``J_indirect`` is the direct
+    method's linear rows (the fast fallback). Angle sums are folded later (:func:`tidy`).
     """
-    # expanded products only: folding angle sums (TR10i) costs seconds here and is undone
-    # by the determinant's factoring; the printed forms are folded afterwards (:func:`tidy`)
     cheap_ = _expand if simplify else _same
-    transforms = []
-    k = 0
+    transforms, k = [], 0
     for row, (d, r) in zip(chain.rows, syms["per_row"]):
         alpha, theta = exact_angle(row.alpha), exact_angle(row.theta)
         if row.sigma == "revolute":
@@ -188,21 +173,18 @@ def kinematics(
             r = r + q[k]
             k += 1
         transforms.append(khalil_matrix(alpha, d, theta, r))
+    base, tool = chain.base_pose, chain.tool
     base_t = sp.eye(4)
-    if chain.base_pose is not None:
-        base_t = _homogeneous(
-            _rotation(np.array(chain.base_pose.rotation)),
-            [_number(x) for x in chain.base_pose.xyz],
-        )
+    if base is not None:
+        base_t = _homogeneous(_rotation(np.array(base.rotation)), [_number(x) for x in base.xyz])
     tool_t = sp.eye(4)
-    if chain.tool is not None:
-        tool_t = _homogeneous(_rotation(np.array(chain.tool.rotation)), syms["tool"])
-    cumulative = []
-    acc = base_t
+    if tool is not None:
+        tool_t = _homogeneous(_rotation(np.array(tool.rotation)), syms["tool"])
+    cumulative, acc = [], base_t
     for t in transforms:
         acc = cheap_(acc * t) if simplify else product(acc, t)
         cumulative.append(acc)
-        if cheap_ is not _same and _terms(acc) > _MAX_TERMS:
+        if cheap_ is not _same and sum(len(sp.Add.make_args(e)) for e in acc) > _MAX_TERMS:
             cheap_ = _same  # long chains without parallel axes: expanding only grows them
     tip = cheap_(acc * tool_t) if simplify else product(acc, tool_t)
     p = tip[:3, 3]
@@ -224,21 +206,16 @@ def kinematics(
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
-    return {
-        "transforms": tuple(transforms),
-        "base": base_t,
-        "tool": tool_t,
+    jd = sp.Matrix.hstack(*cols)
+    # without simplification (the fallback) no derivative: the direct one's linear rows
+    ji = _indirect(p, q, chain.sigmas) if simplify else jd[:3, :]
+    out = {"transforms": tuple(transforms), "base": base_t, "tool": tool_t}
+    return out | {
         "cumulative": tuple(cumulative),
         "tip": tip,
         "p": p,
-        "J_direct": sp.Matrix.hstack(*cols),
-        # without simplification (the caller's fallback at a budget too small even for
-        # stage 1) no derivative is taken: differentiating the nested products takes seconds
-        "J_indirect": (
-            _indirect(p, q, chain.sigmas)
-            if simplify
-            else sp.Matrix.hstack(*[c[:3, :] for c in cols])  # the direct one's linear rows
-        ),
+        "J_direct": jd,
+        "J_indirect": ji,
     }
 
 
@@ -261,8 +238,7 @@ def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp
     plain = all(f.args[0] in q for e in p for f in e.atoms(sp.sin, sp.cos) if e.has(*q))
     if not plain:
         return _expand(p.jacobian(sp.Matrix(q)))
-    back = {v: k for k, v in fwd.items()}
-    rows = []
+    back, rows = {v: k for k, v in fwd.items()}, []
     for e in p:
         poly = sp.Poly(e.xreplace(fwd), *gens)
         row = []
@@ -278,10 +254,7 @@ def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp
 
 def _inverse(t: sp.Matrix) -> sp.Matrix:
     rot, pos = t[:3, :3], t[:3, 3]
-    out = sp.eye(4)
-    out[:3, :3] = rot.T
-    out[:3, 3] = -rot.T * pos
-    return out
+    return _homogeneous(rot.T, -rot.T * pos)
 
 
 def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
@@ -329,8 +302,7 @@ def _candidates(
     block-triangular).
     """
     joints = chain.joint_rows
-    n = len(joints)
-    frame_of = [j + 1 for j in joints]
+    n, frame_of = len(joints), [j + 1 for j in joints]
     ms = [frame_of[k] for k in (n - 3, n - 2, n // 2, n - 4, 0) if 0 <= k < n]
     ms = list(dict.fromkeys(ms))
     if len(sel) != n:  # maximal minors: the frame only changes their length, one is enough
@@ -359,10 +331,7 @@ def _candidates(
 # ---------------------------------------------------------------------- factoring
 def _to_trig(poly: Any, q: Sequence[sp.Symbol]) -> Any:
     s, c = _trig_symbols(q)
-    sub = {}
-    for k, qk in enumerate(q):
-        sub[s[k]] = sp.sin(qk)
-        sub[c[k]] = sp.cos(qk)
+    sub = {x: fn(qk) for k, qk in enumerate(q) for x, fn in ((s[k], sp.sin), (c[k], sp.cos))}
     return cheap(poly.xreplace(sub))
 
 
@@ -431,11 +400,9 @@ def factored_determinant(
 ) -> dict[str, Any]:
     """Stage 2: det J (square) factored, or the rank-deficiency factors of a non-square J.
 
-    Square: ``det J`` factored; the finest split over a few frames. Non-square (a redundant
-    chain, or fewer joints than rows): the common factors of the maximal minors
-    (:func:`rank_deficiency`), in the simplest frame only (a rotation of both row blocks
-    changes no maximal minor); ``gram`` is then ``det(J Jᵀ)`` (or ``det(Jᵀ J)``). Extra
-    frames are tried until ``deadline``; minors are factored until ``minors_deadline``.
+    Square: ``det J`` factored, the finest split over frames tried until ``deadline``.
+    Non-square: the common factors of the maximal minors (:func:`rank_deficiency`, until
+    ``minors_deadline``); ``gram`` is then ``det(J Jᵀ)`` (or ``det(Jᵀ J)``).
     """
     n = len(q)
     sel = [ROW_NAMES.index(r) for r in row_names]
@@ -474,15 +441,11 @@ def factored_determinant(
         if best is None or _split_score(factors) > _split_score(best["factors"]):
             best = cand
     assert best is not None
-    product = best["const"] * sp.Mul(*[f**m for f, m in best["factors"]])
-    return {
-        "how": best["how"],
-        "factors": tuple(best["factors"]),
-        "const": best["const"],
-        "det": product,
-        "gram": best["const"] ** 2 * sp.Mul(*[f ** (2 * m) for f, m in best["factors"]]),
-        "unconfirmed": (),
-    }
+    const, fs = best["const"], tuple(best["factors"])
+    det = const * sp.Mul(*[f**m for f, m in fs])
+    gram = const**2 * sp.Mul(*[f ** (2 * m) for f, m in fs])
+    return {"how": best["how"], "factors": fs, "const": const, "det": det, "gram": gram,
+            "unconfirmed": ()}  # fmt: skip
 
 
 def _plain_det(m: sp.Matrix) -> Any:
@@ -506,14 +469,10 @@ def rank_deficiency(
 ) -> dict[str, Any]:
     """Where a k×n ``mat`` (k ≠ n) loses rank: the common factors of its maximal minors.
 
-    ``rank J < min(k, n)`` exactly where every maximal (``min(k, n)``-square) minor vanishes;
-    a factor common to all of them is a family of rank deficiency (a hypersurface of joint
-    space); where they share none, rank drops only on sets of codimension ≥ 2 (no family).
-    The minors are factored (:func:`trig_factor`) smallest first, keeping the factors common
-    to all so far; it stops as soon as none is left (then no factor is common, exactly). At
-    the deadline (with at least one minor factored) the remaining minors are not factored:
-    the factors kept are then *candidates*, listed in ``unconfirmed``, which the families'
-    σ_min check (rank of the numeric J on points of the family) keeps or drops.
+    ``rank J < min(k, n)`` exactly where every maximal minor vanishes: a factor common to all
+    is a family (none: rank drops only on sets of codimension ≥ 2). The minors are factored
+    smallest first, keeping the common factors; at the deadline the factors kept are
+    *candidates* (``unconfirmed``), which the families' σ_min check keeps or drops.
 
     Returns:
         ``{"factors", "const", "det": None, "gram", "how", "unconfirmed"}``: ``gram`` is
@@ -524,8 +483,7 @@ def rank_deficiency(
     from itertools import combinations
 
     k, n = mat.shape
-    small = min(k, n)
-    subsets = []
+    small, subsets = min(k, n), []
     for sub in combinations(range(max(k, n)), small):
         rows_, cols_ = (list(range(k)), list(sub)) if k < n else (list(sub), list(range(n)))
         m = mat.extract(rows_, cols_)
@@ -635,21 +593,16 @@ def _collect_trig(expr: Any) -> Any:
 def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 400) -> Any:
     """``expr`` shorter for printing, exactly equal: ``sin² + cos² = 1`` folded, terms grouped.
 
-    Powers of ``sin``/``cos`` are reduced modulo ``s² + c² = 1``, then terms with the same
-    trigonometric part grouped with their coefficients factored. The shortest form
-    (``count_ops``) wins; expressions over ``ops`` operations are left as they are.
+    The shortest (``count_ops``) of the reduced and the grouped forms; expressions over ``ops``
+    operations are left as they are.
     """
     if not isinstance(expr, sp.Expr) or not expr.args or sp.count_ops(expr) > ops:
         return expr
     best, size = expr, sp.count_ops(expr)
-    forms = []
     try:
-        e = expr
-        if _trig_power(e):
-            e = _reduce(_to_poly(e, q, sigmas), q)
+        e = _reduce(_to_poly(expr, q, sigmas), q) if _trig_power(expr) else expr
         e = _to_trig(e, q) if e is not expr else cheap(e)  # folds angle sums
-        forms.append(e)
-        forms.append(_collect_trig(e))
+        forms = (e, _collect_trig(e))
     except (sp.PolynomialError, TypeError, ValueError):  # an entry outside the trig ring
         return expr
     for form in forms:

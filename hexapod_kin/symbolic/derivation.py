@@ -1,18 +1,13 @@
 """The same Khalil–Kleinfinger table, derived with sympy: transforms, Jacobians, det J, factored.
 
-:func:`derive` builds, with symbolic lengths, every ``^{j-1}T_j`` and ``^0T_j`` (base and tool
-included), the tip position ``p(q)``, the Jacobian by the direct method (``z_j × (p − o_j)``,
-``z_j``; rows ``vx vy vz wx wy wz``, base axes) and by the indirect one (``∂p/∂q``), ``det J``
-of a square row selection factored into irreducible factors (else the Gram determinant
-``det(J Jᵀ)``; a redundant chain's families are the factors common to its maximal minors), and
-the singular families, one per factor depending on ``q`` (solved for the joint when the factor
-has one), each checked against the numeric σ_min. For ``hexabot_leg``: ``det J =
-l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``.
-
-It never hangs (``budget`` in CPU seconds; :attr:`Derivation.incomplete` says what is
-missing) and is cached on disk by a hash of the table (:mod:`.cache`), unfinished runs
-included. Lengths are ``l1, l2, ...`` when every length is a ``d``, else Khalil's names
-(``d2, r1``; tool ``tx, ty, tz``).
+:func:`derive` builds, with symbolic lengths, every ``^{j-1}T_j`` and ``^0T_j``, the tip
+position ``p(q)``, the Jacobian by the direct method (rows ``vx vy vz wx wy wz``, base axes) and
+by the indirect one (``∂p/∂q``), ``det J`` factored (else ``det(J Jᵀ)``; a redundant chain's
+families are the factors common to its maximal minors), and the singular families, one per
+factor depending on ``q``, each checked against the numeric σ_min. For ``hexabot_leg``:
+``det J = l2·l3·sin(q3)·(l1 + l2 cos q2 + l3 cos(q2 + q3))``. It runs within a CPU ``budget``
+and is cached on disk (:mod:`.cache`), unfinished runs included. Lengths are ``l1, l2, ...``
+when every length is a ``d``, else Khalil's names (``d2, r1``; tool ``tx, ty, tz``).
 """
 
 from __future__ import annotations
@@ -40,15 +35,8 @@ from .families import SingularFamily, check_families, families_of
 from .printing import expr_text, matrix_lines, wrap
 from .sources import chain_of as _chain_of
 
-__all__ = [
-    "ROW_NAMES",
-    "Derivation",
-    "SingularFamily",
-    "derive",
-    "cached",
-    "khalil_matrix",
-    "row_indices",
-]
+__all__ = ["ROW_NAMES", "Derivation", "SingularFamily", "derive", "cached", "khalil_matrix",
+           "row_indices"]  # fmt: skip
 
 #: A Gram determinant (redundant chain) longer than this is described, not printed.
 _GRAM_OPS = 300
@@ -59,7 +47,7 @@ class Derivation:
     """Symbolic kinematics of one chain (all sympy objects; lengths symbolic).
 
     Attributes:
-        chain: The chain it was derived from (base and tool poses included).
+        chain: The chain it was derived from.
         q: The joint symbols ``q1..qn``.
         joint_names: The chain's joint names, in the same order.
         lengths: Length symbol → value in [m] (what :meth:`numeric` substitutes).
@@ -73,24 +61,21 @@ class Derivation:
         rows: The row names of :attr:`J_rows` (the selection used for :attr:`det`).
         J_rows: The selected rows of ``J_direct`` (k×n).
         det: ``det J_rows`` factored (``None`` when k ≠ n or not finished).
-        gram: ``det(J_rows J_rowsᵀ)`` (k ≤ n) or ``det(J_rowsᵀ J_rows)`` (k > n), factored —
-            the squared Yoshikawa manipulability (``None`` when not finished).
+        gram: ``det(J_rows J_rowsᵀ)`` (or ``det(J_rowsᵀ J_rows)``), factored (``None``: not
+            finished).
         families: The singular families read off :attr:`det` (or :attr:`gram`).
         reference: Name of the frame whose axes ``p`` and ``J`` are expressed in (the base).
         tip: Name of the tip frame.
-        base_transform: ``T_base_0`` (4×4 sympy; identity without a base pose).
-        tool_transform: ``T_n_tip`` (4×4 sympy; identity without a tool).
+        base_transform: ``T_base_0`` (4×4; identity without a base pose).
+        tool_transform: ``T_n_tip`` (4×4; identity without a tool).
         method: How the determinant was computed (frame, wrist-centre split, Gram).
         incomplete: What could not be done, and why (empty when complete).
         seconds: CPU time of the derivation in [s] (0 when read from the cache).
         cached: True when read from the disk cache.
-        agree: The exact comparison of the direct and indirect position Jacobians, as made
-            within the budget (``None``: not made; :attr:`methods_agree` then makes it).
-        families_done: True when the determinant, the families and their σ_min checks were
-            all reached (:attr:`families` is then final, whatever else is missing).
-        formed: False when not even stage 1 (expanded products) was reached: then
-            :attr:`cumulative`, :attr:`p` and the Jacobians are unexpanded products,
-            :attr:`J_indirect` is the direct method's rows, and they are not printed.
+        agree: Whether the direct and indirect position Jacobians are equal (``None``: not
+            compared within the budget; :attr:`methods_agree` compares them).
+        families_done: True when the determinant, the families and their checks were reached.
+        formed: False when stage 1 was not reached (unexpanded products, not printed).
 
     """
 
@@ -134,8 +119,7 @@ class Derivation:
             expr: A sympy expression or matrix in the joint symbols.
 
         Returns:
-            ``f(Q)`` with ``Q`` of shape (n,) or (N, n); returns the expression's value(s)
-            (scalar expressions give shape () or (N,); matrices (…, rows, cols)).
+            ``f(Q)`` with ``Q`` (n,) or (N, n): shape () or (N,), matrices (…, rows, cols).
 
         """
         num = self.numeric(expr)
@@ -178,9 +162,8 @@ class Derivation:
         for j in range(n):
             items.append((f"^{j}T_{j + 1}", f"{{}}^{{{j}}}T_{{{j + 1}}}", self.transforms[j]))
         if self.tool_transform != sp.eye(4):
-            items.append(
-                (f"^{n}T_tool", f"{{}}^{{{n}}}T_{{\\mathrm{{tool}}}}", self.tool_transform)
-            )
+            tex = f"{{}}^{{{n}}}T_{{\\mathrm{{tool}}}}"
+            items.append((f"^{n}T_tool", tex, self.tool_transform))
         if not self.formed:
             return items
         for j in range(1, n):
@@ -291,12 +274,8 @@ def _tidied(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[s
                 out[i, j] = _core.tidy(mat[i, j], q, sigmas)
         return out
 
-    return {
-        "p": one(kin["p"]),
-        "J_indirect": one(kin["J_indirect"]),
-        "J_direct": one(kin["J_direct"]),
-        "cumulative": tuple(one(t) for t in kin["cumulative"]),
-    }
+    out = {k: one(kin[k]) for k in ("p", "J_indirect", "J_direct")}
+    return out | {"cumulative": tuple(one(t) for t in kin["cumulative"])}
 
 
 def _agree(kin: Mapping[str, Any], q: tuple[sp.Symbol, ...], sigmas: Sequence[str]) -> bool:
@@ -319,26 +298,20 @@ def _stages(
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """The derivation's stages in order, skipping those in ``have`` (a cached partial run).
 
-    ``families_only``: the last stage is ``"checks"``. ``budget`` (CPU seconds from ``start``;
-    ``None``: :data:`UNBOUNDED_PACE`) paces the optional work: extra determinant frames during
-    its first 15 %, maximal minors during the first 70 %, the tidied printed forms until 80 %
-    or for 20 % of it, never past 90 %; the caller stops the work at the budget.
+    ``budget`` (``None``: :data:`UNBOUNDED_PACE`) paces the optional work: extra determinant
+    frames in its first 15 %, maximal minors in 70 %, tidied forms until 80 % (never past 90 %).
     """
     n = chain.nq
     q = tuple(sp.Symbol(f"q{k}", real=True) for k in range(1, n + 1))
     syms = _core.length_symbols(chain, lengths)
     span = UNBOUNDED_PACE if budget is None else budget
-    t0 = time.process_time()
-    kin = have.get("kinematics")
+    t0, kin = time.process_time(), have.get("kinematics")
     if kin is None:
         kin = _core.kinematics(chain, q, syms)
         yield "kinematics", kin
     row_names = have.get("rows")
     if row_names is None:
-        if rows is None:
-            row_names = _default_rows(kin, n)
-        else:
-            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
+        row_names = _row_names(rows, kin, n)
         yield "rows", row_names
     det = have.get("determinant")
     if det is None:
@@ -368,18 +341,16 @@ def _stages(
 
 
 # ---------------------------------------------------------------------- derive
-def _default_rows(kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
-    """The default row selection (:func:`~hexapod_kin.jacobian_rows.choose_rows`)."""
+def _row_names(rows: Any, kin: Mapping[str, Any], n: int) -> tuple[str, ...]:
+    """The names of ``rows``; None: the default (:func:`~hexapod_kin.jacobian_rows.choose_rows`)."""
+    if rows is not None:
+        return tuple(ROW_NAMES[i] for i in row_indices(rows))
     jd = kin["J_direct"]
     return choose_rows([not all(e == 0 for e in jd.row(i)) for i in range(6)], n)
 
 
 def _numeric_default_rows(chain: Chain) -> tuple[str, ...]:
-    """The default rows from the numeric Jacobian (not zero at three random q).
-
-    Almost surely the symbolic selection, known before any sympy work: ``rows=None`` and its
-    rows spelled out share one key.
-    """
+    """The default rows from the numeric Jacobian (not zero at three random q), before sympy."""
     rng = np.random.default_rng(20260101)
     qs = rng.uniform(-math.pi, math.pi, (3, chain.nq))
     jac = np.array([_core.numeric_jacobian(chain, q, range(6)) for q in qs])
@@ -474,9 +445,8 @@ def _job(
 ) -> Iterator[tuple[str, Any]]:  # fmt: skip
     """What a derivation does within its budget (in its child process, or inline).
 
-    With ``read``: the checked disk entry is yielded first as ``"__found__"``. Unless it
-    answers the call, the stages follow, each written to the disk cache (``write``) before it
-    is yielded, marked unfinished until the last one.
+    With ``read``: the checked disk entry first (``"__found__"``); unless it answers, the
+    stages, each written to the cache (``write``) before it is yielded.
     """
     start = time.process_time()
     if read:
@@ -511,34 +481,23 @@ def derive(
     """Derive transforms, ``p``, Jacobians, ``det J`` factored and the singular families.
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a preset name (``"hexabot_leg"``), a
-            URDF (path, text, ``erd:NAME``; read back with
-            :func:`~hexapod_kin.chain_from_urdf`), a :class:`Hexapod` with ``tip=``,
-            or a loaded model (its own base and tip frames are used: ``load("hexapod",
-            tip="leg2_foot")`` derives leg 2 in the body frame).
-        rows: Rows of ``J_direct`` whose determinant is taken: ``None`` for the default
-            (:func:`~hexapod_kin.jacobian_rows.choose_rows`), ``"position"``, ``"all"`` or
-            names such as ``("x", "y", "z", "wz")``.
+        source: A :class:`~hexapod_kin.params.Chain`, a preset name, a URDF (path, text,
+            ``erd:NAME``; :func:`~hexapod_kin.chain_from_urdf`), a :class:`Hexapod` with
+            ``tip=``, or a loaded model (its own base and tip frames).
+        rows: Rows of ``J_direct`` whose determinant is taken (default
+            :func:`~hexapod_kin.jacobian_rows.choose_rows`; ``"position"``, ``"all"``, names).
         lengths: Names for the length symbols, keyed by table entry (``{"d2": "a"}``).
         base: Base frame (URDF sources, hexapods): the frame ``p`` and ``J`` are expressed in.
         tip: Tip frame (URDF sources; a hexapod's foot, e.g. ``"leg2_foot"``).
-        budget: CPU budget in [s] (``None``: no limit) of the work, run in one child process
-            (:func:`hexapod_kin._budget.run`); at the budget it stops and
-            :attr:`Derivation.incomplete` says what is missing.
-        cache: Read and write the on-disk cache. An unfinished derivation is kept with its
-            budget: a later call with at most that budget gets it back, a larger one (or
-            ``None``) carries on.
-        within: CPU seconds this call may spend, whatever ``budget`` allows (``budget`` still
-            decides the cache reuse).
-        families_only: Stop once the families are derived and checked (what a scan needs);
-            kept like a run stopped at a budget.
-
-    Returns:
-        The :class:`Derivation`.
+        budget: CPU budget in [s] (``None``: no limit), in one child process; at the budget
+            it stops and :attr:`Derivation.incomplete` says what is missing.
+        cache: Read and write the on-disk cache (an unfinished derivation is kept with its
+            budget: a larger one carries on).
+        within: CPU seconds this call may spend (``budget`` still decides the cache reuse).
+        families_only: Stop once the families are derived and checked.
 
     Raises:
-        ParameterError: The source has no table, or ``rows`` / ``lengths`` / ``budget`` are
-            invalid.
+        ParameterError: No table, or invalid ``rows`` / ``lengths`` / ``budget``.
         ConfigurationError: A URDF chain that a Khalil table cannot express.
 
     """
@@ -571,9 +530,8 @@ def derive(
     if _usable(found, budget, families_only):
         assert found is not None
         stages: dict[str, Any] = dict(found)
-        attempt = stages.get(ATTEMPT)
-        reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
-        if attempt is not None and attempt[0] == FAMILIES_ONLY:
+        reason = _kept_reason(stages)
+        if reason is not None and stages[ATTEMPT][0] == FAMILIES_ONLY:
             reason = FAMILIES_ONLY
         from_cache = True
     else:
@@ -616,21 +574,16 @@ def _assemble(
         )
     kin = {**kin, **(stages.get("tidy") or {})}  # the tidied forms are equal, shorter
     row_names = stages.get("rows")
-    if row_names is None:
-        if rows is not None:
-            row_names = tuple(ROW_NAMES[i] for i in row_indices(rows))
-        elif "kinematics" in stages:
-            row_names = _default_rows(kin, n)
-        else:  # the fallback's sums are unevaluated: the rows from numbers
-            row_names = _numeric_default_rows(chain)
+    if row_names is None and rows is None and "kinematics" not in stages:
+        row_names = _numeric_default_rows(chain)  # the fallback's sums are unevaluated
+    elif row_names is None:
+        row_names = _row_names(rows, kin, n)
     sel = [ROW_NAMES.index(r) for r in row_names]
     det_stage = stages.get("determinant")
-    det = gram = None
-    method = ""
+    det, gram, method = (None, None, "") if det_stage is None else (
+        det_stage["det"], det_stage["gram"], det_stage["how"])  # fmt: skip
     if det_stage is None:
         incomplete.append(f"det J factored and singular families ({reason})")
-    else:
-        det, gram, method = det_stage["det"], det_stage["gram"], det_stage["how"]
     fams = stages.get("checks")
     if fams is None:
         fams = stages.get("families")
@@ -641,51 +594,22 @@ def _assemble(
     agree = stages.get("agree")
     if agree is None and det_stage is not None and fams is not None:
         incomplete.append(f"direct = indirect Jacobian, exactly ({reason})")
+    jd = kin["J_direct"]
     return Derivation(
-        chain=chain,
-        q=q,
-        joint_names=tuple(chain.joint_names or ()),
-        lengths=dict(syms["values"]),
-        length_sources=dict(syms["sources"]),
-        transforms=tuple(kin["transforms"]),
-        cumulative=tuple(kin["cumulative"]),
-        p=kin["p"],
-        J_direct=kin["J_direct"],
-        J_indirect=kin["J_indirect"],
-        J=kin["J_indirect"],
-        rows=tuple(row_names),
-        J_rows=kin["J_direct"].extract(sel, list(range(n))),
-        det=det,
-        gram=gram,
-        families=tuple(fams or ()),
-        reference=reference,
-        tip=tip,
-        base_transform=kin["base"],
-        tool_transform=kin["tool"],
-        method=method,
-        incomplete=tuple(incomplete),
-        seconds=0.0 if from_cache else float(stages.get("seconds", 0.0)),
-        cached=from_cache,
-        agree=agree,
-        families_done=det_stage is not None and stages.get("checks") is not None,
-        formed="kinematics" in stages,
-    )
+        chain, q, tuple(chain.joint_names or ()), dict(syms["values"]), dict(syms["sources"]),
+        tuple(kin["transforms"]), tuple(kin["cumulative"]), kin["p"], jd, kin["J_indirect"],
+        kin["J_indirect"], tuple(row_names), jd.extract(sel, list(range(n))), det, gram,
+        tuple(fams or ()), reference, tip, kin["base"], kin["tool"], method, tuple(incomplete),
+        0.0 if from_cache else float(stages.get("seconds", 0.0)), from_cache, agree,
+        det_stage is not None and stages.get("checks") is not None, "kinematics" in stages,
+    )  # fmt: skip
 
 
 def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation | None:
     """The derivation of ``source`` if this process or the disk cache has it, else ``None``.
 
-    Never runs sympy's derivation (reading a cached one takes milliseconds).
-
-    Args:
-        source: As for :func:`derive`.
-        rows: As for :func:`derive`.
-
-    Returns:
-        The cached :class:`Derivation` or ``None``.
-
-    Raises:
-        ParameterError: As for :func:`derive`.
+    Never runs sympy's derivation; ``source``, ``rows`` and the errors
+    (:class:`~hexapod_kin.exceptions.ParameterError`) are those of :func:`derive`.
 
     """
     chain, reference, tip_name = _chain_of(source, None, None)
@@ -699,6 +623,10 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     if stages is None:
         return None
     _MEMO[digest] = stages
+    return _assemble(chain, reference, tip_name, syms, stages, _kept_reason(stages), True, rows)
+
+
+def _kept_reason(stages: Mapping[str, Any]) -> str | None:
+    """Why a kept entry is unfinished (None: complete)."""
     attempt = stages.get(ATTEMPT)
-    reason = None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"
-    return _assemble(chain, reference, tip_name, syms, stages, reason, True, rows)
+    return None if attempt is None else f"{attempt[0]}; kept, a larger budget carries on"

@@ -7,7 +7,7 @@ form for scans (residuals, distances) is :mod:`hexapod_kin.singularity.families`
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -32,9 +32,8 @@ class SingularFamily:
         joint: Index of the joint when the family is ``q_k = value``, else ``None``.
         value: That value in [rad] or [m] (``None`` for implicit families).
         periodic: True when ``value`` repeats every 2π (revolute joint).
-        verified: ``True`` when the numeric Jacobian is singular on the family (``σ_min /
-            max(1, σ_max) ≤ 1e-9`` at up to 3 points on it) and not 1e-3 off it; ``False``
-            when that failed; ``None`` when not checked or no real point was found.
+        verified: ``True`` when the numeric Jacobian is singular on the family and not 1e-3
+            off it; ``False`` when that failed; ``None`` when not checked.
         check: What the check measured, in words.
 
     """
@@ -56,13 +55,6 @@ class SingularFamily:
         if self.joint is not None and joint_names is not None:
             out["joint"] = joint_names[self.joint]
         return out
-
-
-def _vectorised(func: Any) -> Callable[[np.ndarray], np.ndarray]:
-    def f(x: np.ndarray) -> np.ndarray:
-        return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
-
-    return f
 
 
 def families_of(
@@ -88,38 +80,27 @@ def families_of(
                     found = None
                 if isinstance(found, sp.FiniteSet) and all(s.is_number for s in found):
                     sols = [(s, float(s)) for s in sorted(found, key=lambda s: float(s))]
-            if not sols:
+            mod, numeric = (" (mod 2*pi)" if revolute else ""), not sols
+            if numeric:
                 lo, hi = (-math.pi, math.pi) if revolute else _prismatic_range(chain, k)
                 func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
-                roots = _core.single_joint_roots(_vectorised(func), lo, hi)
+
+                def one(x: np.ndarray, func: Any = func) -> np.ndarray:
+                    return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
+
+                roots = _core.single_joint_roots(one, lo, hi)
                 if revolute:
                     from .._numerics import wrap_angles  # the one angle wrapping
 
                     roots = sorted({round(float(r), 15) for r in wrap_angles(roots)})
                 sols = [(sp.Float(r, 12), r) for r in roots]
-                if sols:
-                    text = ", ".join(f"{r:.6g}" for _, r in sols)
-                    for sol, r in sols:
-                        fams.append(SingularFamily(
-                            name=f"{q[k]} = {r:.6g}" + (" (mod 2*pi)" if revolute else "")
-                            + f", from {sp.sstr(fac)} = 0 (roots {text})",
-                            factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
-                            value=r, periodic=revolute,
-                        ))  # fmt: skip
-                    continue
-            else:
-                for sol, r in sols:
-                    fams.append(SingularFamily(
-                        name=f"{q[k]} = {sp.sstr(sol)}" + (" (mod 2*pi)" if revolute else ""),
-                        factor=fac, equation=sp.Eq(q[k], sol), variables=vars_, joint=k,
-                        value=r, periodic=revolute,
-                    ))  # fmt: skip
+                mod += f", from {sp.sstr(fac)} = 0 (roots {', '.join(f'{r:.6g}' for r in roots)})"
+            for sol, r in sols:
+                name = f"{q[k]} = {f'{r:.6g}' if numeric else sp.sstr(sol)}{mod}"
+                fams.append(SingularFamily(name, fac, sp.Eq(q[k], sol), vars_, k, r, revolute))
+            if sols:
                 continue
-        fams.append(
-            SingularFamily(
-                name=f"{sp.sstr(fac)} = 0", factor=fac, equation=sp.Eq(fac, 0), variables=vars_
-            )
-        )
+        fams.append(SingularFamily(f"{sp.sstr(fac)} = 0", fac, sp.Eq(fac, 0), vars_))
     return tuple(fams)
 
 

@@ -59,8 +59,7 @@ def wrap(text: str, width: int = WIDTH, indent: int = 8) -> list[str]:
 
         return textwrap.wrap(text, width, subsequent_indent=" " * indent, break_long_words=False)
     lines: list[str] = []
-    current = ""
-    pad = " " * indent
+    current, pad = "", " " * indent
     for piece in pieces:
         cand = f"{current} {piece}" if current else piece
         limit = width if not lines else width - indent
@@ -122,6 +121,5 @@ def matrix_lines(mat: Any, width: int = WIDTH, indent: str = "  ") -> list[str]:
     for i in range(rows):
         for j in range(cols):
             head = f"{indent}[{i + 1},{j + 1}] = "
-            lines = wrap(head + cells[i][j], width, indent=len(head))
-            out.extend(lines)
+            out.extend(wrap(head + cells[i][j], width, indent=len(head)))
     return out
