@@ -807,7 +807,9 @@ def test_a_stance_search_with_no_stance_fails_fast(tmp_path: Path, record_proper
     _record(record_property, run)
     # numerical legs load the compiled IK loop: its import and cache load are not the search's
     ready = py(_IK_READY, cwd=tmp_path).cpu
-    assert run.cpu < ready + CPU_LIMIT_S, f"{run.cpu:.2f} s CPU (ready {ready:.2f} s)"
+    # the search that ran every grid stance took ~12 s; CPU time itself grows on a loaded
+    # machine (1.97 s against a 1.96 s bound at load 20), so the floor is scaled, not added to
+    assert run.cpu < 1.5 * ready + CPU_LIMIT_S, f"{run.cpu:.2f} s CPU (ready {ready:.2f} s)"
     assert len(run.lines) <= 2 and CATCH_ALL not in run.stderr, run.stderr
     assert run.status == 1 and "out of reach" in run.lines[-1], run.stderr
 
