@@ -27,6 +27,7 @@ incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing l
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -35,7 +36,15 @@ from .paths import se2_pose
 from .stability import periodic_spline
 from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["support_centre", "sway_poses"]
+__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses"]
+
+#: The sway's friction budget: each support's ZMP target lies within ``SWAY_FRICTION · h`` of
+#: the body's nominal centre (``h`` the body's height above the ground), so that the body's
+#: horizontal acceleration ``(s − z) g / h`` stays near ``SWAY_FRICTION · g``, well inside the
+#: friction cone (the ensemble of ``simulate --robust`` goes down to 0.6). A long body's
+#: incentre is far ahead or behind: erd:hyq's at 0.33 m, 0.63 h, asked 0.63 g of a floor of
+#: friction 0.6 (its stance feet crept 0.7 mm a cycle, +1.2 % of travel).
+SWAY_FRICTION = 0.35
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
@@ -56,16 +65,20 @@ def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
     return np.asarray(unit - height / GRAVITY * spline(knots * T, 2))
 
 
-def support_centre(points: np.ndarray) -> np.ndarray:
+def support_centre(points: np.ndarray, reach: float = math.inf) -> np.ndarray:
     """The point (2,) of a support the farthest inside it [m]: where a sway puts the ZMP.
 
     Three feet: the triangle's incentre ``(a·A + b·B + c·C) / (a + b + c)`` (each foot
     weighted by the length of the side opposite it), the centre of the largest circle inside
-    the triangle, so the largest static stability margin. Other supports (and a triangle
+    the triangle, so the largest static stability margin; when it is farther than ``reach``
+    from the origin, the point of the disc ``|P| ≤ reach`` farthest inside the triangle
+    (the margin ``min_i d_i(P)`` is concave: its largest value on the disc's circle, at the
+    peak of one edge's distance or where two are equal). Other supports (and a triangle
     whose feet coincide): the feet's mean; none: the origin.
 
     Args:
         points: (K, 2) stance feet [m].
+        reach: The largest distance of the point from the origin [m] (> 0).
 
     """
     p = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -74,7 +87,27 @@ def support_centre(points: np.ndarray) -> np.ndarray:
     side = np.linalg.norm(np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0), axis=1)
     if len(p) != 3 or not side.sum() > 0.0:
         return np.asarray(p.mean(axis=0))
-    return np.asarray(side @ p / side.sum())
+    centre = np.asarray(side @ p / side.sum())
+    if not np.hypot(*centre) > reach:
+        return centre
+    edge = np.roll(p, -1, axis=0) - p  # edge i: p_i -> p_i+1
+    if not np.all(np.hypot(*edge.T) > 0.0):
+        return centre
+    n = np.stack([-edge[:, 1], edge[:, 0]], axis=1) / np.hypot(*edge.T)[:, None]
+    n *= np.sign(np.einsum("ij,ij->i", n, np.roll(p, -2, axis=0) - p))[:, None]  # inwards
+    c = -np.einsum("ij,ij->i", n, p)  # d_i(P) = n_i · P + c_i
+
+    cands = [reach * n[i] for i in range(3)]
+    for i in range(3):
+        for j in range(i + 1, 3):
+            w, k = n[i] - n[j], c[j] - c[i]
+            ww = float(w @ w)
+            if not ww > 0.0 or k * k > reach * reach * ww:
+                continue
+            foot = (k / ww) * w
+            off = math.sqrt(reach * reach - k * k / ww) / math.sqrt(ww)
+            cands += [foot + off * np.array([-w[1], w[0]]), foot - off * np.array([-w[1], w[0]])]
+    return np.asarray(max(cands, key=lambda q: float(np.min(n @ q + c))))
 
 
 def sway_poses(
@@ -108,6 +141,10 @@ def sway_poses(
     beta = table.duty_factor
     mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
     knots = np.unique(np.round(mid, 12))
+    nominal = base
+    rot2 = nominal[:, :2, :2]
+    ground = float(np.mean(plan[0, :, 2]))
+    height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
     safest, centroid = np.zeros((len(knots), 2)), np.zeros((len(knots), 2))
     for k, tau in enumerate(knots):
         phi = np.remainder(tau + offs, 1.0)
@@ -117,12 +154,9 @@ def sway_poses(
         px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
         py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
         if stance.any():
-            safest[k] = support_centre(np.stack([px[stance], py[stance]], axis=1))
+            feet = np.stack([px[stance], py[stance]], axis=1)
+            safest[k] = support_centre(feet, SWAY_FRICTION * height if height > 0 else math.inf)
             centroid[k] = [px[stance].mean(), py[stance].mean()]
-    nominal = base
-    rot2 = nominal[:, :2, :2]
-    ground = float(np.mean(plan[0, :, 2]))
-    height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
     zmp_of = _zmp_matrix(knots, T, height)
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
