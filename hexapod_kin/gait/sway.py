@@ -23,6 +23,15 @@ load, and the swinging foot's corner of the body drops by the plane through the 
 ``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
 one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
 incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
+
+Within the friction: the ground pushes the swaying body with ``m c̈``, a horizontal force of
+``|c − z| / h`` of its weight, so a ZMP far from the body asks for friction. A long body's
+incentres lie far ahead and behind, and the sway that reaches them accelerates at up to
+:data:`SWAY_FRICTION` g at most (at the knots); beyond it each target is the point farthest
+inside its support within a common distance of the body's nominal centre (:func:`support_centre`
+with ``reach``), the largest distance within the budget (bisected). When that sway's ZMP
+leaves the support somewhere (the legs' own momentum near lift-off and touch-down), the
+incentres are kept: a body that tips is worse than one that asks for more friction.
 """
 
 from __future__ import annotations
@@ -33,18 +42,19 @@ from typing import Any
 import numpy as np
 
 from .paths import se2_pose
-from .stability import periodic_spline
+from .stability import periodic_spline, support_margin
 from .zmp import GRAVITY, rates, zmp_points
 
 __all__ = ["SWAY_FRICTION", "support_centre", "sway_poses"]
 
-#: The sway's friction budget: each support's ZMP target lies within ``SWAY_FRICTION · h`` of
-#: the body's nominal centre (``h`` the body's height above the ground), so that the body's
-#: horizontal acceleration ``(s − z) g / h`` stays near ``SWAY_FRICTION · g``, well inside the
-#: friction cone (the ensemble of ``simulate --robust`` goes down to 0.6). A long body's
-#: incentre is far ahead or behind: erd:hyq's at 0.33 m, 0.63 h, asked 0.63 g of a floor of
-#: friction 0.6 (its stance feet crept 0.7 mm a cycle, +1.2 % of travel).
-SWAY_FRICTION = 0.35
+#: The sway's friction budget: the body's horizontal acceleration at the sway's knots,
+#: ``|s − z| g / h`` (``s`` the sway, ``z`` its ZMP target, ``h`` the body's height), at most
+#: this many ``g``: half the lowest floor friction of ``simulate --robust`` (0.6). Where the
+#: incentres ask more, each target is the point farthest inside its support within a common
+#: distance of the body's nominal centre, the largest distance within the budget. A long
+#: body's incentres lie far ahead and behind (erd:hyq's at ±0.33 m, 0.63 h: 0.63 g asked of
+#: a floor of friction 0.6; its stance feet crept 0.7 mm a cycle, +1.2 % of travel).
+SWAY_FRICTION = 0.3
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
@@ -110,6 +120,44 @@ def support_centre(points: np.ndarray, reach: float = math.inf) -> np.ndarray:
     return np.asarray(max(cands, key=lambda q: float(np.min(n @ q + c))))
 
 
+def _within_friction(
+    supports: list[np.ndarray], zmp_of: np.ndarray, height: float, gain: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ZMP targets (K, 2) at the knots within the friction budget, and the incentres.
+
+    Each support's :func:`support_centre` within a common ``reach`` of the origin, the largest
+    (bisected) whose sway ``s = M⁻¹ (gain · z)`` accelerates at most :data:`SWAY_FRICTION` g
+    at the knots, ``|s − gain · z| g / h``.
+    """
+
+    def targets(reach: float) -> np.ndarray:
+        return np.array([support_centre(f, reach) for f in supports]).reshape(-1, 2)
+
+    def accel(z: np.ndarray) -> float:  # in g
+        s = np.linalg.solve(zmp_of, gain * z)
+        return float(np.hypot(*(s - gain * z).T).max()) / height
+
+    full = targets(math.inf)
+    if not (height > 0.0 and gain > 0.0) or accel(full) <= SWAY_FRICTION:
+        return full, full
+    lo, hi = 0.0, float(np.hypot(*full.T).max())
+    for _ in range(40):  # 1e-12 of the incentres' distance
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if accel(targets(mid)) <= SWAY_FRICTION else (lo, mid)
+    return targets(lo), full
+
+
+def _zmp_margin(
+    wb: Any, poses: np.ndarray, plan: np.ndarray, t: np.ndarray, table: Any, T: float, q0: Any
+) -> float:
+    """The smallest margin [m] of the whole robot's ZMP in its stance feet's polygon."""
+    q = np.array(wb.body_ik(poses, plan, q_prev=q0, times=t, strict=False).q)
+    ground = float(np.mean(plan[0, :, 2]))
+    zmp = zmp_points(wb, q, poses, t, np.full(len(t), ground))
+    phase = np.remainder(np.asarray(t)[:, None] / T + np.asarray(table.offsets)[None, :], 1.0)
+    return float(np.min(support_margin(plan, phase < table.duty_factor, zmp)))
+
+
 def sway_poses(
     wb: Any,
     table: Any,
@@ -145,7 +193,8 @@ def sway_poses(
     rot2 = nominal[:, :2, :2]
     ground = float(np.mean(plan[0, :, 2]))
     height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
-    safest, centroid = np.zeros((len(knots), 2)), np.zeros((len(knots), 2))
+    supports: list[np.ndarray] = []
+    centroid = np.zeros((len(knots), 2))
     for k, tau in enumerate(knots):
         phi = np.remainder(tau + offs, 1.0)
         stance = phi < beta
@@ -153,11 +202,11 @@ def sway_poses(
         c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
         px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
         py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
+        supports.append(np.stack([px[stance], py[stance]], axis=1))
         if stance.any():
-            feet = np.stack([px[stance], py[stance]], axis=1)
-            safest[k] = support_centre(feet, SWAY_FRICTION * height if height > 0 else math.inf)
             centroid[k] = [px[stance].mean(), py[stance].mean()]
     zmp_of = _zmp_matrix(knots, T, height)
+    safest, incentres = _within_friction(supports, zmp_of, height, gain)
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
     near = [
@@ -188,6 +237,9 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
+    if not np.array_equal(safest, incentres) and _zmp_margin(wb, out, plan, t, table, T, q0) < 0.0:
+        safest = incentres  # a body that tips is worse than one that asks more friction
+        out = fit(safest * gain)
     if np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed
