@@ -88,7 +88,7 @@ def support_centre(points: np.ndarray, reach: float = math.inf) -> np.ndarray:
 
     Args:
         points: (K, 2) stance feet [m].
-        reach: The largest distance of the point from the origin [m] (> 0).
+        reach: The largest distance of the point from the origin [m] (≥ 0; default none).
 
     """
     p = np.asarray(points, dtype=float).reshape(-1, 2)
