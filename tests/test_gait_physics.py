@@ -738,3 +738,60 @@ def test_the_sway_puts_the_zmp_at_each_support_triangles_incentre():
             assert np.linalg.norm(zmp[i, :2] - p.mean(axis=0)) > 0.02
             checked += 1
     assert checked >= 6
+
+
+def test_the_support_centre_within_a_reach_is_the_discs_deepest_point():
+    """``support_centre(p, reach)``: the point of the disc ``|P| <= reach`` farthest inside
+    the triangle, against a dense polar grid of the disc (the margin, min of the three edge
+    distances, computed here from cross products); the incentre when it is within reach."""
+    from hexapod_kin.gait.sway import support_centre
+
+    def margin(p: np.ndarray, q: np.ndarray) -> np.ndarray:  # q (M, 2)
+        e = np.roll(p, -1, axis=0) - p
+        cross = e[None, :, 0] * (q[:, None, 1] - p[None, :, 1])
+        cross = cross - e[None, :, 1] * (q[:, None, 0] - p[None, :, 0])
+        sign = np.sign(e[0, 0] * e[1, 1] - e[0, 1] * e[1, 0])  # counter-clockwise: +
+        return np.min(sign * cross / np.linalg.norm(e, axis=1)[None, :], axis=1)
+
+    rng = np.random.default_rng(31)
+    ang = np.linspace(0.0, 2.0 * np.pi, 721)
+    rad = np.linspace(0.0, 1.0, 201)
+    grid = (rad[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], axis=1)[None]).reshape(-1, 2)
+    bound = 0
+    for _ in range(30):
+        p = rng.uniform(-1.0, 1.0, (3, 2))
+        full = support_centre(p)
+        reach = float(rng.uniform(0.05, 1.2) * np.hypot(*full))
+        c = support_centre(p, reach)
+        if reach >= np.hypot(*full):
+            assert np.array_equal(c, full)
+            continue
+        bound += 1
+        assert np.hypot(*c) <= reach * (1.0 + 1e-12)
+        best = margin(p, reach * grid).max()
+        assert margin(p, c[None])[0] >= best - 1e-12
+        assert margin(p, c[None])[0] <= best + 1e-2 * reach  # the grid: 0.5 deg, reach / 200
+    assert bound >= 10
+
+
+def test_a_long_bodys_sway_keeps_within_the_friction_budget(monkeypatch):
+    """erd:hyq's incentres lie 0.33 m ahead and behind its centre (0.63 of its height): the
+    sway that puts the ZMP there accelerates the body at 0.63 g (second differences of the
+    planned body positions), beyond a floor of friction 0.6. Within the budget: at most
+    about SWAY_FRICTION g, the ZMP still 1 cm inside the support."""
+    import hexapod_kin.gait.sway as sway
+    from hexapod_kin.gait import as_whole_body
+
+    wb = as_whole_body("erd:hyq")
+
+    def peak(run) -> float:
+        p = np.asarray(run.base_poses)[:, :2, 3]
+        a = np.diff(p, 2, axis=0) * run.settings["rate"] ** 2
+        return float(np.hypot(*a.T).max()) / 9.81
+
+    run = walk(wb, pattern="crawl", duration=2.0, period=1.0)
+    assert sway.SWAY_FRICTION == 0.3 and run.ok
+    assert 0.25 < peak(run) < 0.34 and run.min_zmp_margin > 0.01
+    monkeypatch.setattr(sway, "SWAY_FRICTION", math.inf)
+    bare = walk(wb, pattern="crawl", duration=2.0, period=1.0)
+    assert peak(bare) > 0.6

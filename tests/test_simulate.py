@@ -372,3 +372,38 @@ def test_anymal_crawls_in_mujoco_as_planned() -> None:
     f = res.stand.forces
     np.testing.assert_allclose(f[:, :2].sum(axis=0), 0.0, atol=0.05)
     assert (np.linalg.norm(f[:, :2], axis=1) < res.scene.friction * f[:, 2]).all()
+
+
+def test_no_link_cylinder_reaches_the_ground_before_its_foot() -> None:
+    """erd:hyq's shins are 20 mm cylinders that end at the centre of a 21.75 mm foot sphere:
+    their flat end's rim would be 1.75 mm inside the sphere, 3 mm above the ground at the
+    crawl's stance (MuJoCo's soft contact sinks the feet that far: two shin contacts). In the
+    scene each leg cylinder's lowest point (its end discs' rims, from MuJoCo's geom poses)
+    stands at least 5 mm above the lowest foot sphere's bottom, over the crawl's first cycle."""
+    from hexapod_kin.gait import as_whole_body
+
+    wb = as_whole_body("erd:hyq")
+    run = walk(wb, pattern="crawl", duration=1.0, foot_radius=0.02175)
+    sc = scene_mjcf(wb, source="erd:hyq", foot_radius=0.02175)
+    m = mujoco.MjModel.from_xml_string(sc.xml)
+    d = mujoco.MjData(m)
+    jq = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j)] for j in sc.joint_names]
+    cols = [list(run.joint_names).index(j) for j in sc.joint_names]
+    cyl = [g for g in range(m.ngeom) if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_CYLINDER]
+    feet = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in sc.foot_geoms]
+    assert len(cyl) >= 4
+    low = math.inf
+    for i in range(0, len(run.t), 5):
+        pose = np.asarray(run.base_poses)[i]
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, pose[:3, :3].reshape(-1))
+        d.qpos[:3], d.qpos[3:7], d.qpos[jq] = pose[:3, 3], quat, np.asarray(run.q)[i, cols]
+        mujoco.mj_kinematics(m, d)
+        bottom = float(np.min(d.geom_xpos[feet, 2])) - 0.02175
+        for g in cyl:
+            rho, half = m.geom_size[g, :2]
+            axis = d.geom_xmat[g].reshape(3, 3)[:, 2]
+            rim = rho * math.sqrt(max(0.0, 1.0 - axis[2] ** 2))
+            ends = d.geom_xpos[g, 2] + np.array([half, -half]) * axis[2]
+            low = min(low, float(ends.min() - rim) - bottom)
+    assert low > 0.005

@@ -23,19 +23,38 @@ load, and the swinging foot's corner of the body drops by the plane through the 
 ``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
 one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
 incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
+
+Within the friction: the ground pushes the swaying body with ``m c̈``, a horizontal force of
+``|c − z| / h`` of its weight, so a ZMP far from the body asks for friction. A long body's
+incentres lie far ahead and behind, and the sway that reaches them accelerates at up to
+:data:`SWAY_FRICTION` g at most (at the knots); beyond it each target is the point farthest
+inside its support within a common distance of the body's nominal centre (:func:`support_centre`
+with ``reach``), the largest distance within the budget (bisected). When that sway's ZMP
+leaves the support somewhere (the legs' own momentum near lift-off and touch-down), the
+incentres are kept: a body that tips is worse than one that asks for more friction.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from .paths import se2_pose
-from .stability import periodic_spline
+from .stability import periodic_spline, support_margin
 from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["support_centre", "sway_poses"]
+__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses"]
+
+#: The sway's friction budget: the body's horizontal acceleration at the sway's knots,
+#: ``|s − z| g / h`` (``s`` the sway, ``z`` its ZMP target, ``h`` the body's height), at most
+#: this many ``g``: half the lowest floor friction of ``simulate --robust`` (0.6). Where the
+#: incentres ask more, each target is the point farthest inside its support within a common
+#: distance of the body's nominal centre, the largest distance within the budget. A long
+#: body's incentres lie far ahead and behind (erd:hyq's at ±0.33 m, 0.63 h: 0.63 g asked of
+#: a floor of friction 0.6; its stance feet crept 0.7 mm a cycle, +1.2 % of travel).
+SWAY_FRICTION = 0.3
 
 
 def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
@@ -56,16 +75,20 @@ def _zmp_matrix(knots: np.ndarray, T: float, height: float) -> np.ndarray:
     return np.asarray(unit - height / GRAVITY * spline(knots * T, 2))
 
 
-def support_centre(points: np.ndarray) -> np.ndarray:
+def support_centre(points: np.ndarray, reach: float = math.inf) -> np.ndarray:
     """The point (2,) of a support the farthest inside it [m]: where a sway puts the ZMP.
 
     Three feet: the triangle's incentre ``(a·A + b·B + c·C) / (a + b + c)`` (each foot
     weighted by the length of the side opposite it), the centre of the largest circle inside
-    the triangle, so the largest static stability margin. Other supports (and a triangle
+    the triangle, so the largest static stability margin; when it is farther than ``reach``
+    from the origin, the point of the disc ``|P| ≤ reach`` farthest inside the triangle
+    (the margin ``min_i d_i(P)`` is concave: its largest value on the disc's circle, at the
+    peak of one edge's distance or where two are equal). Other supports (and a triangle
     whose feet coincide): the feet's mean; none: the origin.
 
     Args:
         points: (K, 2) stance feet [m].
+        reach: The largest distance of the point from the origin [m] (≥ 0; default none).
 
     """
     p = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -74,7 +97,65 @@ def support_centre(points: np.ndarray) -> np.ndarray:
     side = np.linalg.norm(np.roll(p, -1, axis=0) - np.roll(p, 1, axis=0), axis=1)
     if len(p) != 3 or not side.sum() > 0.0:
         return np.asarray(p.mean(axis=0))
-    return np.asarray(side @ p / side.sum())
+    centre = np.asarray(side @ p / side.sum())
+    if not np.hypot(*centre) > reach:
+        return centre
+    edge = np.roll(p, -1, axis=0) - p  # edge i: p_i -> p_i+1
+    if not np.all(np.hypot(*edge.T) > 0.0):
+        return centre
+    n = np.stack([-edge[:, 1], edge[:, 0]], axis=1) / np.hypot(*edge.T)[:, None]
+    n *= np.sign(np.einsum("ij,ij->i", n, np.roll(p, -2, axis=0) - p))[:, None]  # inwards
+    c = -np.einsum("ij,ij->i", n, p)  # d_i(P) = n_i · P + c_i
+
+    cands = [reach * n[i] for i in range(3)]
+    for i in range(3):
+        for j in range(i + 1, 3):
+            w, k = n[i] - n[j], c[j] - c[i]
+            ww = float(w @ w)
+            if not ww > 0.0 or k * k > reach * reach * ww:
+                continue
+            foot = (k / ww) * w
+            off = math.sqrt(reach * reach - k * k / ww) / math.sqrt(ww)
+            cands += [foot + off * np.array([-w[1], w[0]]), foot - off * np.array([-w[1], w[0]])]
+    return np.asarray(max(cands, key=lambda q: float(np.min(n @ q + c))))
+
+
+def _within_friction(
+    supports: list[np.ndarray], zmp_of: np.ndarray, height: float, gain: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ZMP targets (K, 2) at the knots within the friction budget, and the incentres.
+
+    Each support's :func:`support_centre` within a common ``reach`` of the origin, the largest
+    (bisected) whose sway ``s = M⁻¹ (gain · z)`` accelerates at most :data:`SWAY_FRICTION` g
+    at the knots, ``|s − gain · z| g / h``.
+    """
+
+    def targets(reach: float) -> np.ndarray:
+        return np.array([support_centre(f, reach) for f in supports]).reshape(-1, 2)
+
+    def accel(z: np.ndarray) -> float:  # in g
+        s = np.linalg.solve(zmp_of, gain * z)
+        return float(np.hypot(*(s - gain * z).T).max()) / height
+
+    full = targets(math.inf)
+    if not (height > 0.0 and gain > 0.0) or accel(full) <= SWAY_FRICTION:
+        return full, full
+    lo, hi = 0.0, float(np.hypot(*full.T).max())
+    for _ in range(40):  # 1e-12 of the incentres' distance
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if accel(targets(mid)) <= SWAY_FRICTION else (lo, mid)
+    return targets(lo), full
+
+
+def _zmp_margin(
+    wb: Any, poses: np.ndarray, plan: np.ndarray, t: np.ndarray, table: Any, T: float, q0: Any
+) -> float:
+    """The smallest margin [m] of the whole robot's ZMP in its stance feet's polygon."""
+    q = np.array(wb.body_ik(poses, plan, q_prev=q0, times=t, strict=False).q)
+    ground = float(np.mean(plan[0, :, 2]))
+    zmp = zmp_points(wb, q, poses, t, np.full(len(t), ground))
+    phase = np.remainder(np.asarray(t)[:, None] / T + np.asarray(table.offsets)[None, :], 1.0)
+    return float(np.min(support_margin(plan, phase < table.duty_factor, zmp)))
 
 
 def sway_poses(
@@ -108,7 +189,12 @@ def sway_poses(
     beta = table.duty_factor
     mid = np.remainder(beta - offs + 0.5 * (1.0 - beta), 1.0)  # mid-swing, in cycles
     knots = np.unique(np.round(mid, 12))
-    safest, centroid = np.zeros((len(knots), 2)), np.zeros((len(knots), 2))
+    nominal = base
+    rot2 = nominal[:, :2, :2]
+    ground = float(np.mean(plan[0, :, 2]))
+    height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
+    supports: list[np.ndarray] = []
+    centroid = np.zeros((len(knots), 2))
     for k, tau in enumerate(knots):
         phi = np.remainder(tau + offs, 1.0)
         stance = phi < beta
@@ -116,14 +202,11 @@ def sway_poses(
         c, sn = np.cos(rel[:, 2]), np.sin(rel[:, 2])
         px = rel[:, 0] + c * nb[:, 0] - sn * nb[:, 1]
         py = rel[:, 1] + sn * nb[:, 0] + c * nb[:, 1]
+        supports.append(np.stack([px[stance], py[stance]], axis=1))
         if stance.any():
-            safest[k] = support_centre(np.stack([px[stance], py[stance]], axis=1))
             centroid[k] = [px[stance].mean(), py[stance].mean()]
-    nominal = base
-    rot2 = nominal[:, :2, :2]
-    ground = float(np.mean(plan[0, :, 2]))
-    height = max(float(np.mean(nominal[:, 2, 3])) - ground, 0.0)
     zmp_of = _zmp_matrix(knots, T, height)
+    safest, incentres = _within_friction(supports, zmp_of, height, gain)
     phase_t = np.remainder(t, T)
     dt = float(t[1] - t[0]) if len(t) > 1 else T
     near = [
@@ -154,6 +237,9 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
+    if not np.array_equal(safest, incentres) and _zmp_margin(wb, out, plan, t, table, T, q0) < 0.0:
+        safest = incentres  # a body that tips is worse than one that asks more friction
+        out = fit(safest * gain)
     if np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed

@@ -24,8 +24,9 @@
   periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
   one knot per swing group at mid-swing; each knot moves the zero-moment point to the
   support's safest point (the stance contacts at that instant; three of them: the incentre,
-  :func:`.sway.support_centre`), times the gain ``sway`` (:mod:`.sway`; default 1, so that the
-  plan's ZMP margin stays positive between the knots too).
+  :func:`.sway.support_centre`, nearer the body's centre when the sway would accelerate
+  beyond :data:`.sway.SWAY_FRICTION` g), times the gain ``sway`` (:mod:`.sway`; default 1, so
+  that the plan's ZMP margin stays positive between the knots too).
 * The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
   is given by the same formula, before ``t = 0`` too), so no start-up transient.
 * **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
