@@ -163,6 +163,11 @@ class Child:
         #: Why the job stopped early (None: it finished; see :func:`run`).
         self.reason: str | None = "the budgeted process ended unexpectedly"
         read, write = os.pipe()
+        # The child starts with SIGINT blocked (a mask survives fork and exec): a Ctrl-C to
+        # the terminal's process group during its interpreter's start-up and imports stays
+        # pending until _serve ignores SIGINT, never a traceback of the child's. The
+        # caller's own Ctrl-C is only held for the fork: delivered when unblocked.
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             self._proc: subprocess.Popen[bytes] | None = subprocess.Popen(  # noqa: S603
                 [sys.executable, "-c", _BOOT, str(write)],  # this interpreter, our bootstrap
@@ -174,6 +179,8 @@ class Child:
             os.close(read)
             os.close(write)
             raise
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
         os.close(write)
         self._items: Any = os.fdopen(read, "rb")
         try:
@@ -234,7 +241,13 @@ def _serve() -> None:  # pragma: no cover - runs in the child
     out = os.fdopen(int(sys.argv[1]), "wb")
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches it once, from the parent:
     signal.signal(signal.SIGTERM, _interrupted)  # as a KeyboardInterrupt in the job
-    job, args, budget = pickle.load(sys.stdin.buffer)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # blocked by the parent
+    try:  # unpickling imports the job's modules: the parent may end the child meanwhile
+        job, args, budget = pickle.load(sys.stdin.buffer)
+    except BaseException:  # noqa: BLE001 - told to stop (or the parent is gone): quietly
+        with contextlib.suppress(OSError):
+            out.close()
+        return
     if budget is not None:
         hard = math.ceil(time.process_time() + budget + _HARD_SLACK)
         with contextlib.suppress(ValueError, OSError):

@@ -240,7 +240,7 @@ def _add_derive(sub: Any) -> None:
     p.add_argument(
         "--budget",
         type=float,
-        help="time budget [s] (default: derive()'s, 5 s): what is not done by then is "
+        help="time budget [s] (default: derive()'s, 10 s): what is not done by then is "
         "reported, never waited on",
     )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")

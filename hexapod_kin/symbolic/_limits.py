@@ -5,4 +5,4 @@ from __future__ import annotations
 __all__ = ["DEFAULT_BUDGET"]
 
 #: Default time budget of :func:`~hexapod_kin.symbolic.derive` in [s] of CPU time.
-DEFAULT_BUDGET = 5.0
+DEFAULT_BUDGET = 10.0
