@@ -540,6 +540,7 @@ def test_physics_zmp_is_the_centre_of_pressure():
     assert sup["zmp_margin"] == pytest.approx(float(margin), abs=1e-12)
 
 
+@pytest.mark.slow  # 250 simulated control ticks, ~10 s; physics mode walks in the default run too
 def test_physics_offers_every_pattern_control_walks():
     """A quadruped's physics mode offers the controller's patterns (trot included, which the
     kinematic walk does not: not statically stable), starts in ``hexapod-kin control``'s trot,

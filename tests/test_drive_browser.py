@@ -122,6 +122,7 @@ def test_body_pitch_slider(browser, session):
     page.close()
 
 
+@pytest.mark.slow  # ~9 s a robot (the key held 2 s, the walk's switch); the joystick walks here
 def test_hold_w_walks_and_switch_keeps_margins(browser, session):
     _legged(session)
     _reset(session)

@@ -377,13 +377,14 @@ def _unsealed(folder: Path) -> str:
     return sorted(folder.glob("*.nb?"))[0].name
 
 
-#: Each case recompiles a kernel (~5 s of CPU, a fresh compile): a flipped byte and a missing
-#: seal in the default run; the swap (valid files, the wrong names), an emptied index and a
+#: Each case recompiles a kernel (~5 s of CPU, a fresh compile): a flipped byte in the default
+#: run; the missing seal, the swap (valid files, the wrong names), an emptied index and a
 #: foreign file in the slow step (``test_cache_matrix`` cuts, empties and overwrites files
 #: there too).
 @pytest.mark.parametrize("damage", [_flip, pytest.param(_swap, marks=pytest.mark.slow),
                                     pytest.param(_emptied_index, marks=pytest.mark.slow),
-                                    pytest.param(_foreign, marks=pytest.mark.slow), _unsealed],
+                                    pytest.param(_foreign, marks=pytest.mark.slow),
+                                    pytest.param(_unsealed, marks=pytest.mark.slow)],
                          ids=["flipped-byte", "swapped", "emptied-index", "foreign-file",
                               "unsealed"])  # fmt: skip
 def test_numba_cache_not_sealed_is_never_loaded(

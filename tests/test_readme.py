@@ -241,6 +241,7 @@ def test_readme_command_line_runs(
     assert status == 0, (line, out[-1000:], err[-2000:])
 
 
+@pytest.mark.slow  # a fresh-cache reproduce, ~8 s; the same line runs (status 0) in the default run
 def test_readme_first_command_prints_what_the_readme_shows(tmp_path):
     """The first line's ``reproduce --out report`` prints the README's two lines: where the
     report is, and the verdict counts (58 claims: 35 agree, 20 seed is wrong, ...)."""
