@@ -125,7 +125,7 @@ def _into_the_step(run) -> float:
 
 @pytest.mark.parametrize(
     "name",
-    [n if n in ("ripple", "slope") else pytest.param(n, marks=pytest.mark.slow)
+    [n if n in ("ripple", "slope", "step") else pytest.param(n, marks=pytest.mark.slow)
      for n in WALKS],
 )  # fmt: skip
 def test_robot_feet_walk_as_planned(name: str) -> None:
