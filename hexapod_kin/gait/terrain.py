@@ -163,8 +163,8 @@ EDGE_TOL = 1e-3
 #: radius (the outermost every 1/256) and 96 directions.
 FINE_RINGS = tuple(np.r_[np.arange(1, 29) / 32.0, 1.0 - np.arange(32, -1, -1) / 256.0])
 FINE_ANGLES = 96
-#: Spheres sampled together by :func:`edge_distance` (its arrays stay a few MB).
-EDGE_CHUNK = 64
+#: Spheres sampled together by :func:`edge_distance` (its arrays stay within a CPU cache).
+EDGE_CHUNK = 16
 
 
 def disc_offsets(radius: float, fine: bool = False) -> np.ndarray:
@@ -252,12 +252,12 @@ def edge_distance(
         cc = c[a : a + EDGE_CHUNK]
         x, y = cc[:, 0, None] + d[:, 0], cc[:, 1, None] + d[:, 1]
         h = ground(x, y)
-        above = h > _plane_height(pl[a : a + EDGE_CHUNK], x, y) + EDGE_TOL
-        rows, cols = np.nonzero(above & np.isfinite(h))
-        if len(rows):  # the distances of the samples above the planes only
-            dz = cc[rows, 2] - h[rows, cols]
-            dist = np.where(dz > 0, np.hypot(flat[cols], dz), flat[cols]) - radius
-            np.minimum.at(best[a : a + EDGE_CHUNK], rows, dist)
+        keep = (h > _plane_height(pl[a : a + EDGE_CHUNK], x, y) + EDGE_TOL) & np.isfinite(h)
+        rows = np.flatnonzero(keep.any(axis=1))
+        if len(rows):  # the distances of the spheres with a sample above its plane only
+            dz = cc[rows, 2, None] - h[rows]
+            dist = np.where(dz > 0, np.hypot(flat, dz), flat) - radius
+            best[a + rows] = np.where(keep[rows], dist, np.inf).min(axis=1)
     out[near] = best
     return out
 
