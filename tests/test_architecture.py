@@ -8,6 +8,7 @@
   through different modules of each and inside functions (e.g. ``viewer`` may import ``gait``,
   then no module of ``gait`` imports ``viewer``);
 * no ``from X import _private`` across modules, except between modules of the same subpackage;
+* no private module or name of another package (a dependency), in any import form;
 * the core (everything left of viewer/plots/cli in the data flow) never imports the
   application layer (:data:`APP_LAYER`) at module level;
 * every subpackage and lazy submodule named by ``hexapod_kin`` exists.
@@ -149,6 +150,43 @@ def _private_imports() -> list[str]:
 def test_no_private_name_imported_across_modules() -> None:
     bad = _private_imports()
     assert not bad, "private names imported across modules:\n" + "\n".join(bad)
+
+
+def _dependency_privates(tree: ast.Module) -> list[tuple[int, str]]:
+    """Private modules or names of other packages imported in ``tree``, in any import form.
+
+    ``import a._b``, ``import a._b as c``, ``from a._b import c``, ``from a import _b``: a
+    leading underscore in any part of another package's dotted path (``__future__`` aside).
+    """
+    bad = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            paths = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            paths = [f"{node.module}.{a.name}" for a in node.names if a.name != "*"]
+        else:
+            continue
+        for dotted in paths:
+            parts = dotted.split(".")
+            if parts[0] not in ("hexapod_kin", "__future__") and any(
+                c.startswith("_") for c in parts
+            ):
+                bad.append((node.lineno, dotted))
+    return bad
+
+
+def test_no_private_module_or_name_of_a_dependency_is_imported() -> None:
+    """The standards: no private APIs of our dependencies (they change without notice)."""
+    planted = ast.parse(
+        "import numpy.linalg._umath_linalg as lap\n"
+        "from numpy.linalg import _umath_linalg\n"
+        "from numba.core._caching import x\n"
+        "import numpy as np\nfrom numpy.linalg import solve\nfrom __future__ import annotations\n"
+        "from . import _private\nimport hexapod_kin._budget\n"
+    )
+    assert [n for n, _ in _dependency_privates(planted)] == [1, 2, 3]
+    bad = [f"{_rel(p)}:{n}: {d}" for p in _modules() for n, d in _dependency_privates(_tree(p))]
+    assert not bad, "private APIs of dependencies imported:\n" + "\n".join(bad)
 
 
 def _layer(dotted: str) -> str:
