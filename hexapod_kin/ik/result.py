@@ -121,7 +121,7 @@ class IKResult:
             ``"not_converged"``.
         error: Position error ‖p* − p(q)‖ in [m] over the weighted position rows.
         rotation_error: Orientation error in [rad] (pose: ‖log(R* Rᵀ)‖; position + yaw:
-            |ψ* − ψ|; position: 0).
+            ``|ψ* − ψ|``; position: 0).
         iterations: Accepted steps of the returned attempt.
         history: Weighted residual ‖W e‖ from the start, after each accepted step.
         position: p(q) in [m].
