@@ -242,16 +242,6 @@ def _serve() -> None:  # pragma: no cover - runs in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches it once, from the parent:
     signal.signal(signal.SIGTERM, _interrupted)  # as a KeyboardInterrupt in the job
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # blocked by the parent
-    try:  # unpickling imports the job's modules: the parent may end the child meanwhile
-        job, args, budget = pickle.load(sys.stdin.buffer)
-    except BaseException:  # noqa: BLE001 - told to stop (or the parent is gone): quietly
-        with contextlib.suppress(OSError):
-            out.close()
-        return
-    if budget is not None:
-        hard = math.ceil(time.process_time() + budget + _HARD_SLACK)
-        with contextlib.suppress(ValueError, OSError):
-            resource.setrlimit(resource.RLIMIT_CPU, (hard, hard + 1))
     prof = {signal.SIGPROF}
 
     def send(item: tuple[str, Any]) -> None:
@@ -267,6 +257,12 @@ def _serve() -> None:  # pragma: no cover - runs in the child
 
     warnings.showwarning = forward
     try:
+        # unpickling imports the job's modules: told to stop meanwhile, the child ends quietly
+        job, args, budget = pickle.load(sys.stdin.buffer)
+        if budget is not None:
+            hard = math.ceil(time.process_time() + budget + _HARD_SLACK)
+            with contextlib.suppress(ValueError, OSError):
+                resource.setrlimit(resource.RLIMIT_CPU, (hard, hard + 1))
         try:
             with contextlib.nullcontext() if budget is None else cpu_limit(budget):
                 for item in job(*args):
@@ -276,7 +272,7 @@ def _serve() -> None:  # pragma: no cover - runs in the child
             send(("__budget__", None))
         except BaseException as exc:  # noqa: BLE001 - report, never hang the parent
             send(("__error__", f"{type(exc).__name__}: {exc}"))
-    except BaseException:  # noqa: BLE001, S110 - the parent is gone or the budget hit a send
+    except BaseException:  # noqa: BLE001, S110 - told to stop, the parent gone, a send cut
         pass
     finally:
         with contextlib.suppress(OSError):

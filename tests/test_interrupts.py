@@ -444,3 +444,31 @@ def test_interrupted_derivation_leaves_its_entry_as_it_was(
         derive(str(ROOT / "examples" / "leg5.yaml"))
     assert written, "the stages were not written as they finished"
     assert sorted(cache.cache_dir().glob("*.json")) == []
+
+
+_CHILD_SCRIPT = """
+import sys, time
+from hexapod_kin import _budget
+import slowjob  # the job pickles by reference: the child imports slowjob again to read it
+child = _budget.Child(slowjob.job, (), None)
+time.sleep(0.5)
+child.close()  # the caller ends the child (SIGTERM) while it imports the job (2 s)
+print("closed")
+"""
+
+
+def test_a_budget_child_stopped_while_it_reads_its_job_prints_nothing(tmp_path: Path) -> None:
+    """A budgeted job's child ended while unpickling its job (which imports the job's module:
+    a 2 s import planted here) ends without a word. Before the fix it printed its own
+    ``KeyboardInterrupt`` traceback (found by the Ctrl-C soak in ``derive``; this test fails
+    on that code)."""
+    (tmp_path / "slowjob.py").write_text(
+        "import time\ntime.sleep(2.0)\n\n\ndef job():\n    yield 'a', 1\n"
+    )
+    paths = [str(tmp_path), str(ROOT), os.environ.get("PYTHONPATH", "")]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in paths if p))
+    run = subprocess.run(
+        [sys.executable, "-c", _CHILD_SCRIPT], cwd=tmp_path, env=env, capture_output=True,
+        text=True, timeout=120,
+    )  # fmt: skip
+    assert (run.returncode, run.stdout.strip(), run.stderr) == (0, "closed", ""), run
