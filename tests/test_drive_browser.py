@@ -44,6 +44,20 @@ def _wait(page, expr: str, timeout: float = 60000):
     page.wait_for_function(f"() => ({expr})", timeout=timeout)  # a function: the CSP forbids eval
 
 
+def _hold_w(page) -> dict:
+    """Hold W 2 s and until 0.5 s of the cockpit's time passed; the readout before it.
+
+    A loaded machine's cockpit advances slower than the clock (beside 8 busy processes 2 s of
+    wall time were 0.2 s simulated; at load 7 the kinematic clock once stood still for 2 s).
+    """
+    first = _readout(page)
+    page.keyboard.down("w")
+    time.sleep(2.0)
+    _wait(page, f"hexapodKin.state.readout.time >= {first['time'] + 0.5}", 180000)
+    page.keyboard.up("w")
+    return first
+
+
 def _reset(session):
     session.reset()
 
@@ -128,15 +142,8 @@ def test_hold_w_walks_and_switch_keeps_margins(browser, session):
     _reset(session)
     page = _open(browser, session)
     c = session.cockpit
-    first = _readout(page)
-    x0 = first["base"][0][3]
     page.click("#meshcat-pane")  # focus on the scene, not a slider
-    page.keyboard.down("w")
-    time.sleep(2.0)
-    # held until 0.5 s of the cockpit's time passed (at load 7 its clock once stood still
-    # for the whole 2 s of wall time)
-    _wait(page, f"hexapodKin.state.readout.time >= {first['time'] + 0.5}", 180000)
-    page.keyboard.up("w")
+    x0 = _hold_w(page)["base"][0][3]
     _wait(page, "hexapodKin.state.readout.status === 'standing'")
     walked = _readout(page)["base"][0][3] - x0
     # the key held in the cockpit's time (a loaded machine's server advances slower than the
@@ -378,14 +385,7 @@ def test_physics_mode_walks_and_a_click_pushes(browser, source):
         np.testing.assert_allclose(dot, zmp, atol=1e-6)
         assert zmp[2] == c.physics.ground_z
         time.sleep(0.5)
-        first = _readout(page)
-        x0 = np.array(first["base"])[:3, 3]
-        page.keyboard.down("w")
-        time.sleep(2.0)
-        # held until 0.5 s of simulated time passed (a loaded machine simulates slower than
-        # the clock: 2 s of wall time were 0.2 s simulated beside 8 busy processes)
-        _wait(page, f"hexapodKin.state.readout.time >= {first['time'] + 0.5}", 180000)
-        page.keyboard.up("w")
+        x0 = np.array(_hold_w(page)["base"])[:3, 3]
         # the key's release reaches the readout (not a fixed wait: a loaded machine is slower)
         _wait(page, "hexapodKin.state.readout.command.every(v => v === 0)")
         r = _readout(page)
