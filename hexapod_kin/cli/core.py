@@ -237,11 +237,13 @@ def _add_derive(sub: Any) -> None:
     robot_args(p, frames=True, tool=True)
     p.add_argument("--rows", nargs="+", help="rows of J for det (x y z wx wy wz; default auto)")
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of text")
+    from ..symbolic import DEFAULT_BUDGET  # a constant: no sympy
+
     p.add_argument(
         "--budget",
         type=float,
-        help="time budget [s] (default: derive()'s, 10 s): what is not done by then is "
-        "reported, never waited on",
+        help=f"CPU time budget [s] (default: derive()'s, {DEFAULT_BUDGET:g} s): what is not "
+        "done by then is reported, never waited on",
     )
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
