@@ -157,19 +157,6 @@ def check_moving_body(
     principal moments satisfy the triangle inequality. With ``defects`` (lenient mode) a
     failure is recorded there as ``(child, message)`` instead of raised.
     """
-    try:
-        _check_body(jname, child, link_el, inertials, fixed_children)
-    except UrdfError as err:
-        _record(err, child, defects)
-
-
-def _check_body(
-    jname: str,
-    child: str,
-    link_el: dict[str, etree._Element],
-    inertials: dict[str, _Inertial],
-    fixed_children: dict[str, list[tuple[str, etree._Element]]],
-) -> None:
     # Members with their pose in the child frame (poses computed only if >1 carries mass).
     members: list[tuple[str, etree._Element | None]] = [(child, None)]
     stack = [child]
@@ -181,8 +168,9 @@ def _check_body(
     total = math.fsum(inertials[n].mass for n in parts)
     if total <= 0.0:
         why = f"the link moved by joint {jname!r} has no mass (nor do links fixed to it)"
-        raise error_at(link_el[child], f"{why}; a moving link needs <inertial> with mass > 0",
+        err = error_at(link_el[child], f"{why}; a moving link needs <inertial> with mass > 0",
                        "name", child)  # fmt: skip
+        return _record(err, child, defects)
     if len(parts) == 1:
         eig = inertials[parts[0]].eig  # rotation-invariant
     elif any(inertials[n].definite for n in parts) and all(inertials[n].triangle for n in parts):
@@ -216,15 +204,15 @@ def _check_body(
         "" if len(parts) == 1 else f" (merged with the links fixed to it: {len(parts)} inertials)"
     )
     if not _definite(eig):
-        raise error_at(
-            where,
-            f"the body moved by joint {jname!r}{merged} has an inertia that is not positive "
-            f"definite (principal moments {_eig_text(eig)} kg m^2, mass {total:g} kg); a moving "
-            "link needs a positive-definite inertia",
+        why = (
+            f"has an inertia that is not positive definite (principal moments {_eig_text(eig)} "
+            f"kg m^2, mass {total:g} kg); a moving link needs a positive-definite inertia"
         )
-    if not _triangle(eig):
-        raise error_at(
-            where,
-            f"the body moved by joint {jname!r}{merged} has principal moments {_eig_text(eig)} "
-            "kg m^2 that violate the triangle inequality I1 + I2 >= I3 (no real body has them)",
+    elif not _triangle(eig):
+        why = (
+            f"has principal moments {_eig_text(eig)} kg m^2 that violate the triangle "
+            "inequality I1 + I2 >= I3 (no real body has them)"
         )
+    else:
+        return
+    _record(error_at(where, f"the body moved by joint {jname!r}{merged} {why}"), child, defects)

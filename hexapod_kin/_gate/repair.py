@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from ..exceptions import ParameterError, UrdfError
+from ..exceptions import UrdfError, one_of
 from .meshes import resolve_mesh
 from .messages import first_names
 from .parse import numbers_of, origin_of, parse_urdf
@@ -70,14 +70,7 @@ class InertiaRepair:
 
 def check_mode(mode: object) -> str:
     """Return ``mode`` if it is one of :data:`INERTIA_MODES`, else raise ParameterError."""
-    if not isinstance(mode, str) or mode not in INERTIA_MODES:
-        raise ParameterError(
-            f"inertia={mode!r} is not allowed; use one of {', '.join(map(repr, INERTIA_MODES))}",
-            parameter="inertia",
-            value=mode,
-            allowed=list(INERTIA_MODES),
-        )
-    return mode
+    return str(one_of("inertia", mode, INERTIA_MODES))
 
 
 def _stl_vertices(data: bytes) -> np.ndarray:
