@@ -26,7 +26,7 @@ from .frames import joint_kind
 from .model import Model
 from .sources import resolve_source
 
-# Bound once for the hot paths (their inlined model.fast_q_ok, Pinocchio's calls).
+# Bound once for the hot paths (the fast path of Model.check_q inlined, Pinocchio's calls).
 _F64, _ND, _hypot = np.dtype(np.float64), np.ndarray, math.hypot
 _forward_kinematics = pin.forwardKinematics
 _update_frame_placement = pin.updateFramePlacement
@@ -61,18 +61,13 @@ class KinematicModel(Model):
 
     # -------------------------------------------------------------- forward kinematics
     def fk(self, q: Any) -> np.ndarray:
-        """Pose of the tip in the base frame, ``baseMtip`` (4×4).
-
-        Args:
-            q: Joint values (nq,) in [rad] / [m].
+        """Pose of the tip in the base frame, ``baseMtip`` (4×4), at ``q`` (nq,) in [rad] / [m].
 
         Raises:
             ConfigurationError: Wrong shape or non-finite values.
 
         """
-        # The hot call: one attribute lookup for what it needs, the check of
-        # model.fast_q_ok inlined (no extra function call).
-        m, d, fid, nq, root = self._local.hot
+        m, d, fid, nq, root = self._local.hot  # the hot call: one lookup, the q check inlined
         try:  # len + hypot of the flat list: a 0-d or 2-D array raises TypeError here
             ok = (
                 q.__class__ is _ND
@@ -177,8 +172,7 @@ class KinematicModel(Model):
     ) -> tuple[Any, Any]:
         """The batch kernel's poses and/or Jacobians (``reference`` None: no Jacobian).
 
-        A C-contiguous float64 (N, nq) ``qs`` passes as it is: the kernel checks its values on
-        the way (then ``check_q_batch`` raises); anything else is checked first.
+        A C-contiguous float64 (N, nq) ``qs`` is checked by the kernel on the way.
         """
         from ._chain import aligned_chain
         from ._kernels import pose_jacobian_batch
@@ -225,9 +219,8 @@ class KinematicModel(Model):
     ) -> np.ndarray:
         """Tip Jacobians of many configurations, (N, 6, nq), rows ``[v; ω]``, in one pass.
 
-        Equal to :meth:`jacobian` of each row (same ``reference``) to rounding; the same
-        kernel as :meth:`fk_batch`. Columns of variables off the base → tip path
-        are zero.
+        Equal to :meth:`jacobian` of each row to rounding (the kernel of :meth:`fk_batch`);
+        columns of variables off the base → tip path are zero.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m].
@@ -245,12 +238,7 @@ class KinematicModel(Model):
     def fk_jacobian_batch(
         self, qs: Any, reference: str = "local_world_aligned"
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Poses (N, 4, 4) and Jacobians (N, 6, nq) of many configurations in one pass.
-
-        The results of :meth:`fk_batch` and :meth:`jacobian_batch` (each chain walked once);
-        arguments and errors as :meth:`jacobian_batch`.
-
-        """
+        """:meth:`fk_batch` and :meth:`jacobian_batch` in one pass (arguments and errors alike)."""
         return self._batch(qs, True, reference)
 
     def position_jacobian(self, q: Any, frame: str | None = None) -> np.ndarray:
@@ -267,10 +255,9 @@ class KinematicModel(Model):
 
 
 def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
-    """The textbook *direct* method: columns ``z_j × (O_E − O_j)`` (``z_j`` if prismatic).
+    """The textbook *direct* 3×nq position Jacobian (base frame): ``z_j × (O_E − O_j)``.
 
-    The 3×nq position Jacobian in the base frame, from the joint frames' placements alone (no
-    Jacobian routine).
+    ``z_j`` for a prismatic joint; from the joint frames' placements alone (no Jacobian routine).
     """
     qv = model.pinocchio_q(q)
     m, d = model.model, model.data
@@ -288,17 +275,12 @@ def direct_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
 
 
 def indirect_jacobian(model: KinematicModel, q: Any) -> np.ndarray:
-    """The textbook *indirect* method ``∂p/∂q``, exact (no finite differences).
+    """The textbook *indirect* 3×nq position Jacobian ``∂p/∂q`` (base frame), exact.
 
-    The foot position is a product of transforms; its derivative with respect to ``q_j`` is
-    the same product with joint ``j``'s transform replaced by its derivative (``E_j·G_j``,
-    ``G_j`` the joint's generator). For a model built from a Khalil table the table itself is
-    differentiated (:func:`~hexapod_kin.params.table_position_jacobian`); otherwise the
-    Pinocchio joint placements and axes are. No Jacobian routine of Pinocchio is used.
-
-    Returns:
-        The 3×nq position Jacobian in the base frame.
-
+    ``∂p/∂q_j``: the product of transforms with joint ``j``'s replaced by its derivative
+    (``E_j·G_j``, ``G_j`` its generator), of the Khalil table when the model is one
+    (:func:`~hexapod_kin.params.table_position_jacobian`), else of Pinocchio's joint
+    placements and axes. No Jacobian routine, no finite differences.
     """
     from ._table_kin import table_position_jacobian
     from .params import Chain
@@ -352,16 +334,12 @@ def load(
             body frame). Giving ``base`` or ``tip`` keeps only the joints between them, the
             others locked at ``q_ref`` (default neutral), unless ``reduce=False``.
         **kwargs: ``reduce``, ``q_ref``; ``tool`` (a rigid offset of the tip: 4×4, ``(xyz,
-            rpy)`` or a 6-vector, in [m]/[rad]; adds the frame ``<tip>_tool``, which becomes
-            the tip of fk/jacobian/batch calls); ``package_dirs`` (where ``package://``
-            meshes resolve, before ``ROS_PACKAGE_PATH`` and the folders above the file);
-            ``strict_inertia`` (refuse physically implausible inertials instead of warning);
-            ``inertia`` (:data:`~hexapod_kin.model.INERTIA_MODES`: ``"urdf"``, the file's, or
-            the stated repair ``"collision"`` or ``"point"``, keeping every mass and centre of
-            mass: :mod:`hexapod_kin._gate.repair`); or preset parameters (with a preset name).
-
-    Returns:
-        A :class:`KinematicModel`.
+            rpy)`` or a 6-vector, in [m]/[rad]: the frame ``<tip>_tool``, the new tip);
+            ``package_dirs`` (where ``package://`` meshes resolve first); ``strict_inertia``
+            (refuse implausible inertials instead of warning); ``inertia``
+            (:data:`~hexapod_kin.model.INERTIA_MODES`: the file's ``"urdf"``, or the repair
+            ``"collision"`` or ``"point"``, :mod:`hexapod_kin._gate.repair`); or preset
+            parameters (with a preset name).
 
     Raises:
         SourceError: The source cannot be resolved.
@@ -369,8 +347,7 @@ def load(
         FrameNotFoundError: Unknown base/tip (the message lists the frames).
 
     Warns:
-        UrdfWarning: Mesh files that cannot be found (their visuals are dropped) and
-            physically implausible inertials (kinematics does not use them).
+        UrdfWarning: Meshes not found (their visuals dropped), implausible inertials.
 
     """
     options = {key: kwargs.pop(key) for key in _MODEL_OPTIONS if key in kwargs}

@@ -56,17 +56,6 @@ __all__ = ["INERTIA_MODES", "Model", "check_inertials"]
 _F64, _ND, _hypot = np.dtype(np.float64), np.ndarray, math.hypot
 
 
-def fast_q_ok(q: Any, shape: tuple[int, ...]) -> bool:
-    """True when ``q`` is already a float64 array of ``shape`` with finite values < 1e150.
-
-    One comparison: ``hypot`` of the values is NaN/inf for any NaN/inf and bounds every
-    ``|q_i|``. Anything else goes through :meth:`Model.check_q`.
-    """
-    return (
-        q.__class__ is _ND and q.dtype is _F64 and q.shape == shape and _hypot(*q.tolist()) < 1e150
-    )
-
-
 def _float_array(q: Any, message: str) -> np.ndarray:
     """``q`` as a float64 array; strings, booleans and non-numbers raise ``message``."""
     try:
@@ -400,8 +389,11 @@ class Model:
             ConfigurationError: Wrong length, not numbers, or non-finite values.
 
         """
-        if fast_q_ok(q, self._shape):
-            return q
+        # fast path, one comparison: hypot of the values is NaN/inf for any NaN/inf and
+        # bounds every |q_i|
+        if q.__class__ is _ND and q.dtype is _F64 and q.shape == self._shape:
+            if _hypot(*q.tolist()) < 1e150:
+                return q
         arr = _float_array(
             q,
             f"{name}={q!r} is not a sequence of {self.nq} numbers "

@@ -269,14 +269,9 @@ class Inertial:
 
 
 def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float) -> Inertial:
-    """Inertial of a solid cylinder (rod) from ``start`` to ``end`` (link frame, [m]).
+    """Inertial of a solid rod from ``start`` to ``end`` ([m], link frame), com at its middle.
 
-    A point-like segment (zero length) gets the inertia of a solid sphere of ``radius``.
-
-    Returns:
-        The :class:`Inertial` (``mass`` in [kg], ``radius`` in [m]), its centre of mass at the
-        rod midpoint.
-
+    ``mass`` in [kg], ``radius`` in [m]; a zero-length rod is a solid sphere of ``radius``.
     """
     start, end = np.asarray(start, float), np.asarray(end, float)
     vec = end - start
@@ -500,12 +495,10 @@ class Chain:
     def from_dh(
         cls, dh_rows: Sequence[DHRow], *, base: Any = None, tool: Any = None, **kwargs: Any
     ) -> Chain:
-        """Build a chain from a standard-DH table, exactly.
+        """Build a chain from a standard-DH table, exactly (the same FK to rounding).
 
-        The product ``Π Rz(θi)Tz(di)Tx(ai)Rx(αi)`` is regrouped, using that ``Tx`` and ``Rx``
-        commute, into Khalil rows ``(α_{i-1}, a_{i-1}, θ_i, d_i)`` plus a fixed last row
-        ``(α_n, a_n, 0, 0)`` that carries the tool/foot frame. Forward kinematics are
-        identical (to rounding).
+        ``Π Rz(θi)Tz(di)Tx(ai)Rx(αi)`` regrouped (``Tx`` and ``Rx`` commute) into Khalil rows
+        ``(α_{i-1}, a_{i-1}, θ_i, d_i)`` plus a fixed last row ``(α_n, a_n, 0, 0)``: the tip.
 
         Args:
             dh_rows: Standard-DH rows from the base.
@@ -514,9 +507,6 @@ class Chain:
             tool: ``T_n_tool`` in the last DH frame (pose), ``None`` for none.
             **kwargs: Other :class:`Chain` fields (names, limits, tip, ...). ``link_names``
                 and ``inertials``, if given, must have ``len(dh_rows) + 1`` entries.
-
-        Returns:
-            The equivalent Khalil :class:`Chain`.
 
         Raises:
             ParameterError: Empty table, a non-DHRow entry, or invalid chain fields.
@@ -538,10 +528,8 @@ class Chain:
 def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
     """Build a :class:`Chain` from plain tuples ``(sigma, alpha, d, theta, r)``, one per row.
 
-    Errors name the row number (1-based, as in the table) and the field.
-
     Raises:
-        ParameterError: For a malformed row or value.
+        ParameterError: A malformed row or value (naming the row, 1-based, and the field).
 
     """
     built = []

@@ -59,12 +59,7 @@ def hexabot_leg(
     """
     l1, l2, l3 = positive("l1", l1), positive("l2", l2), positive("l3", l3)
     return Chain(
-        rows=(
-            KhalilRow("revolute", 0.0, 0.0, 0.0, 0.0),
-            KhalilRow("revolute", alpha2, l1, 0.0, 0.0),
-            KhalilRow("revolute", 0.0, l2, 0.0, 0.0),
-            KhalilRow("fixed", 0.0, l3, 0.0, 0.0),
-        ),
+        rows=(KhalilRow(0), KhalilRow(0, alpha2, l1), KhalilRow(0, d=l2), KhalilRow(2, d=l3)),
         joint_names=("hip", "knee", "ankle"),
         limits=limits,
         link_names=("coxa", "femur", "tibia", "foot"),
@@ -109,11 +104,7 @@ def coxa_tibia_leg(
     l1, l2 = positive("l1", l1), positive("l2", l2)
     scale = max(l1, l2)
     return Chain(
-        rows=(
-            KhalilRow("revolute", 0.0, 0.0, 0.0, 0.0),
-            KhalilRow("revolute", math.pi / 2, l1, 0.0, 0.0),
-            KhalilRow("fixed", 0.0, l2, 0.0, 0.0),
-        ),
+        rows=(KhalilRow(0), KhalilRow(0, math.pi / 2, l1), KhalilRow(2, d=l2)),
         joint_names=("coxa", "tibia"),
         limits=limits,
         link_names=("coxa_link", "tibia_link", "foot"),
@@ -161,14 +152,9 @@ def scara(
     """
     r1 = positive("r1", r1)
     d2, d3, stroke = positive("d2", d2), positive("d3", d3), positive("stroke", stroke)
+    joints = (KhalilRow(0, r=r1), KhalilRow(0, d=d2), KhalilRow(0, d=d3), KhalilRow(1, math.pi))
     return Chain(
-        rows=(
-            KhalilRow("revolute", 0.0, 0.0, 0.0, r1),
-            KhalilRow("revolute", 0.0, d2, 0.0, 0.0),
-            KhalilRow("revolute", 0.0, d3, 0.0, 0.0),
-            KhalilRow("prismatic", math.pi, 0.0, 0.0, 0.0),
-            KhalilRow("fixed", 0.0, 0.0, 0.0, 0.0),
-        ),
+        rows=(*joints, KhalilRow(2)),
         joint_names=("theta1", "theta2", "theta3", "q4"),
         limits=(JointLimits(-math.pi, math.pi, 3.0, 50.0),) * 2
         + (JointLimits(-math.pi, math.pi, 5.0, 10.0), JointLimits(0.0, stroke, 0.5, 200.0)),
@@ -208,10 +194,7 @@ def pendulum(
     i_t, i_a = rod_m * (3 * rod_r**2 + length**2) / 12.0, 0.5 * rod_m * rod_r**2
     rod = Inertial(mass=rod_m, com=(length / 2, 0.0, 0.0), inertia=(i_a, i_t, i_t, 0, 0, 0))
     return Chain(
-        rows=(
-            KhalilRow("revolute", math.pi / 2, 0.0, 0.0, 0.0),
-            KhalilRow("fixed", 0.0, length, 0.0, 0.0),
-        ),
+        rows=(KhalilRow(0, math.pi / 2), KhalilRow(2, d=length)),
         joint_names=("swing",),
         limits=(JointLimits(-2 * math.pi, 2 * math.pi, 50.0, 10.0),),
         inertials=(rod, bob),
