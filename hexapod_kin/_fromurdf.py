@@ -1,36 +1,33 @@
 """Recover a Khalil–Kleinfinger table from a serial URDF chain (:func:`chain_from_urdf`).
 
 The model is loaded with :func:`hexapod_kin.load` (``base=`` / ``tip=`` pick a sub-chain); its
-joint placements and axes at ``q = 0`` give one line in space per joint (in the base frame).
-Khalil frames are then placed on those lines:
+joint placements and axes at ``q = 0`` give one line per joint (base frame), on which the
+Khalil frames are placed:
 
-* ``z_j`` is joint ``j``'s axis, with the URDF's direction (so ``q`` keeps its sign);
-* ``x_j`` is the common normal from line ``j`` to line ``j + 1`` and frame ``j``'s origin is
-  its foot on line ``j``. Intersecting axes: ``x_j = z_j × z_{j+1}`` at the intersection.
-  Parallel axes: the origin is where ``x_{j-1}`` meets line ``j`` (``r_j = 0``) and ``x_j``
-  points to line ``j + 1``; coincident axes keep ``x_j = x_{j-1}``. The last joint keeps
-  ``x_n = x_{n-1}`` (``θ_n = r_n = 0`` at ``q = 0``);
-* frame 0 is the base link's frame when it satisfies Khalil's rule for row 1 (``z_1 ⟂ x_0`` and
-  joint 1's axis meeting the ``x_0`` line — true for every URDF hexapod_kin writes), else it is
-  frame 1 at ``q = 0`` and the offset goes to ``Chain.base_pose``;
-* what remains to the tip frame is ``Chain.tool``.
+* ``z_j`` is joint ``j``'s axis, with the URDF's direction (``q`` keeps its sign);
+* ``x_j`` is the common normal from line ``j`` to line ``j + 1``, frame ``j``'s origin its foot
+  on line ``j``. Intersecting axes: ``x_j = z_j × z_{j+1}`` at the intersection. Parallel
+  axes: the origin where ``x_{j-1}`` meets line ``j`` (``r_j = 0``), ``x_j`` towards line
+  ``j + 1`` (coincident: ``x_j = x_{j-1}``). The last joint keeps ``x_n = x_{n-1}``;
+* frame 0 is the base link's frame when Khalil's rule for row 1 holds there (``z_1 ⟂ x_0``,
+  joint 1's axis meeting the ``x_0`` line: every URDF hexapod_kin writes), else frame 1 at
+  ``q = 0``, the offset going to ``Chain.base_pose``; what remains to the tip is ``Chain.tool``.
 
-Each row ``(α_j, d_j, θ_j, r_j)`` is read off consecutive frames; fixed URDF joints need no
-rows (Pinocchio folds them into the placements).
+Rows ``(α_j, d_j, θ_j, r_j)`` are read off consecutive frames; fixed joints need none.
 
-**Snapping.** Real files round their rotations (``3.14159``, ``1.5704``), so axes meant to be
-parallel miss by a few µrad and their common normal lands kilometres away. An axis within
-``angle_tol`` (default :data:`SNAP_TOL`) of parallel, anti-parallel or perpendicular to the
-previous one is made exact by turning the rest of the chain rigidly about that joint's origin;
-each snap is reported (:class:`Snap`, ``Chain.description``), snapped twists are exact
-multiples of π/2, and a snap of ``ε`` rad moves the tip by at most ``ε ×`` the path length
-from that joint to the tip (:attr:`TableRecovery.fk_bound` sums these).
+**Snapping.** Rounded rotations (``3.14159``) leave axes meant to be parallel a few µrad off,
+and their common normal lands kilometres away. An axis within ``angle_tol`` (default
+:data:`SNAP_TOL`) of parallel, anti-parallel or perpendicular to the previous one is made exact
+by turning the rest of the chain about that joint's origin; each snap is reported
+(:class:`Snap`, ``Chain.description``), snapped twists are multiples of π/2, and a snap of
+``ε`` rad moves the tip by at most ``ε ×`` the path length from that joint to the tip
+(:attr:`TableRecovery.fk_bound` sums them).
 
 **Checks.** No recovered length (``|d|``, ``|r|``, the tool offset) may exceed the chain's size
-(:attr:`TableRecovery.size`, twice the path length base → joints → tip), else a
-:class:`~hexapod_kin.exceptions.ConfigurationError` names the joints and the ``angle_tol``
-that would snap them. The table's FK must equal Pinocchio's at ``q = 0`` and random
-configurations, to 1e-9 relative without snaps, else within ``fk_bound``.
+(:attr:`TableRecovery.size`, twice the path length), else a
+:class:`~hexapod_kin.exceptions.ConfigurationError` names the joints and the ``angle_tol`` that
+would snap them. The table's FK equals Pinocchio's at ``q = 0`` and random configurations, to
+1e-9 relative without snaps, else within ``fk_bound``.
 """
 
 from __future__ import annotations
@@ -248,11 +245,9 @@ def chain_from_urdf(
     angle_tol: float = SNAP_TOL,
     **load_kwargs: Any,
 ) -> Chain:
-    """Recover the Khalil table (and base/tool poses) of a serial URDF chain.
+    """The Khalil table (base/tool poses included) of a serial URDF chain.
 
-    ``recover_chain(...).chain``: the same arguments and errors as :func:`recover_chain`. Its
-    :func:`~hexapod_kin.table_fk` equals the URDF's ``T_base_tip`` (1e-9 relative) when
-    nothing was snapped, else within the snaps' bound (``Chain.description`` lists them).
+    ``recover_chain(...).chain``: the same arguments and errors as :func:`recover_chain`.
     """
     return recover_chain(source, base, tip, angle_tol=angle_tol, **load_kwargs).chain
 
@@ -265,9 +260,7 @@ def recover_chain(
     angle_tol: float = SNAP_TOL,
     **load_kwargs: Any,
 ) -> TableRecovery:
-    """Recover the Khalil table of a serial URDF chain, with the snaps and the FK difference.
-
-    See the module docstring for the construction, the snapping and the checks.
+    """Recover the Khalil table of a serial URDF chain (see the module docstring).
 
     Args:
         source: Anything :func:`hexapod_kin.load` takes (URDF path or text, ``erd:NAME``,
@@ -279,7 +272,7 @@ def recover_chain(
         **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
 
     Returns:
-        A :class:`TableRecovery`.
+        A :class:`TableRecovery`: the chain, the snaps and the FK difference.
 
     Raises:
         ConfigurationError: A joint the table cannot express (named), a branch between

@@ -14,12 +14,10 @@ __all__ = ["atomic_write", "read_regular"]
 
 
 def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool = True) -> Path:
-    """Write ``data`` to ``path`` atomically.
+    """Write ``data`` (text as UTF-8, or bytes) to ``path`` atomically; return it as a Path.
 
-    A temporary file in the same directory, flushed and fsync'ed (and the folder, unless not
-    ``sync``: a cache entry), renamed over ``path``; on any failure before the rename (even
-    ``KeyboardInterrupt``) it is removed and ``path`` is untouched. ``data``: text (UTF-8) or
-    bytes. Returns the destination as a :class:`~pathlib.Path`.
+    A temporary file in the same directory, fsync'ed (and the folder, unless not ``sync``),
+    renamed over ``path``; any failure before (even ``KeyboardInterrupt``) removes it.
 
     Raises:
         ParameterError: If the destination directory does not exist or ``path`` is a directory.
@@ -85,12 +83,10 @@ def read_regular(
     what: str = "source",
     too_big: type[HexapodKinError] | None = None,
 ) -> bytes:
-    """The bytes of a regular file, refused beyond ``max_bytes`` while reading.
+    """The bytes of a regular file, refused beyond ``max_bytes`` (counted while reading).
 
-    Only regular files are read: a device (``/dev/zero``), a named pipe, a socket or a folder
-    is refused without reading (the file is opened non-blocking, so a pipe with no writer does
-    not hang, and checked with ``fstat`` on the open descriptor). The cap is enforced on the
-    bytes actually read, not on the size the file system reports.
+    A device (``/dev/zero``), named pipe, socket or folder is refused unread (opened
+    non-blocking: a pipe with no writer does not hang; ``fstat`` of the open descriptor).
 
     Raises:
         SourceError: Not a regular file, unreadable, or larger than ``max_bytes`` (one line
@@ -98,17 +94,9 @@ def read_regular(
             is the class raised for the size cap (e.g. :class:`~.exceptions.UrdfError`).
 
     """
-    name = str(path)
+    name, fd = str(path), -1
     try:
         fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
-    except OSError as exc:
-        raise SourceError(
-            f"{what}={name!r}: cannot read it ({exc.strerror or exc})",
-            parameter=what,
-            value=name,
-            allowed="a readable regular file",
-        ) from None
-    try:
         mode = os.fstat(fd).st_mode
         if not stat.S_ISREG(mode):
             kind = (
@@ -143,7 +131,11 @@ def read_regular(
         return b"".join(chunks)
     except OSError as exc:
         raise SourceError(
-            f"{what}={name!r}: cannot read it ({exc.strerror or exc})", parameter=what, value=name
+            f"{what}={name!r}: cannot read it ({exc.strerror or exc})",
+            parameter=what,
+            value=name,
+            allowed="a readable regular file",
         ) from None
     finally:
-        os.close(fd)
+        if fd >= 0:
+            os.close(fd)

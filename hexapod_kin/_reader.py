@@ -1,29 +1,23 @@
 """The one strict reader of every file a user gives: tables, calibrations, feet, plans, timelines.
 
-:func:`read_data` reads a JSON, TOML or YAML file; :func:`read_text` the text of any other
-(a CSV). Every such file passes the same checks, with the same messages:
+:func:`read_data` reads a JSON, TOML (``tomllib``, ``tomli`` on 3.10) or YAML (PyYAML) file,
+:func:`read_text` the text of any other (a CSV), with the same checks and messages:
 
-* **the file**: a regular file only (a folder, a device such as ``/dev/zero``, a named pipe
-  or a socket is refused without reading it, saying what it is), at most ``max_bytes``
-  counted while reading, strict UTF-8 (the offset of the first bad byte is named);
-* **the syntax**: duplicate keys refused in JSON, TOML and YAML (a key given twice never
-  silently takes the last value); only plain YAML (no tags such as ``!!python/object``);
-  ``Infinity``/``NaN`` are not JSON;
-* **the structure**: at most :data:`MAX_ALIASES` YAML aliases, nesting at most
-  :data:`MAX_DEPTH` levels, at most ``max_values`` values after alias expansion (a 400-byte
-  "billion laughs" is refused in milliseconds), keys that are strings, integers of at most
-  15 digits, strings of at most :data:`MAX_STRING` characters.
+* **the file**: a regular file only (a folder, device, pipe or socket is named and refused
+  unread), at most ``max_bytes`` counted while reading, strict UTF-8 (the bad byte named);
+* **the syntax**: duplicate keys refused (never the last value silently); plain YAML only (no
+  tags such as ``!!python/object``); ``Infinity``/``NaN`` are not JSON;
+* **the structure**: at most :data:`MAX_ALIASES` YAML aliases, :data:`MAX_DEPTH` levels and
+  ``max_values`` values after alias expansion (a 400-byte "billion laughs" refused in
+  milliseconds); string keys, integers of at most 15 digits, strings of at most
+  :data:`MAX_STRING` characters.
 
-TOML is read with ``tomllib`` (Python ≥ 3.11) or ``tomli`` (3.10); YAML with PyYAML.
-Every refusal is a :class:`~.exceptions.SourceError` whose ``parameter`` is the kind of file
-(``what``: ``"source"``, ``"feet"``, ``"calibration"``, ...) and whose message is one line
-naming the file.
-
-The values are then checked by the same few functions, one message per mistake whatever the
-file: :func:`number` / :func:`numbers` (a finite int or float, never ``'0.3'`` nor a
-boolean), :func:`text` / :func:`texts` (strings, never ``5`` or ``true`` made into one),
-:func:`check_keys` (unknown keys, with a "did you mean"), :func:`named` (the file named in
-front of a value's error) and :func:`csv_table` (plain decimal numbers only).
+Every refusal is one line naming the file, a :class:`~.exceptions.SourceError` whose
+``parameter`` is the kind of file (``what``: ``"source"``, ``"feet"``, ...). Values are then
+checked by :func:`number` / :func:`numbers` (finite int or float, never ``'0.3'`` nor a
+boolean), :func:`text` / :func:`texts` (strings, never ``5`` or ``true``), :func:`check_keys`
+(unknown keys, "did you mean"), :func:`named` (the file named in front of a value's error) and
+:func:`csv_table` (plain decimal numbers only).
 """
 
 from __future__ import annotations
@@ -115,9 +109,8 @@ def read_data(
 ) -> Any:
     """The values of a JSON, TOML or YAML file, read strictly (see the module docstring).
 
-    ``what`` is the kind of file, named in errors (``parameter``); ``fmt`` ``"json"``,
-    ``"toml"`` or ``"yaml"`` (default: by the suffix, else YAML); with ``mapping`` (what the
-    mapping holds, e.g. ``"name, convention, row, ..."``) the file must hold a mapping.
+    ``what``: the kind of file (``parameter``); ``fmt``: ``"json"``, ``"toml"`` or ``"yaml"``
+    (default by suffix, else YAML); ``mapping``: the file must hold a mapping of these keys.
 
     Raises:
         SourceError: Any refusal of the module docstring, or a syntax error.
@@ -319,10 +312,7 @@ def _wrong(where: str, value: Any, problem: str, allowed: str, parameter: str | 
 
 
 def number(value: Any, where: str, *, parameter: str | None = None) -> float:
-    """``value`` as a finite float: an int or a float of a file, never a text nor a boolean.
-
-    ``'0.3'`` and ``true`` are typos in a file, not 0.3 and 1; an integer too large for a
-    float is not finite.
+    """``value`` as a finite float: an int or float of a file (``'0.3'``, ``true``: typos).
 
     Raises:
         ParameterError: ``"<where>=<value> is not a finite number"``; ``parameter``
@@ -340,10 +330,9 @@ def number(value: Any, where: str, *, parameter: str | None = None) -> float:
 
 
 def numbers(value: Any, where: str, n: int | None = None, *, parameter: str | None = None) -> Any:
-    """Nested lists of finite numbers (each as :func:`number`, its index named), as floats.
+    """Nested lists of finite numbers (each as :func:`number`, named ``where[3][1]``), as floats.
 
-    ``where`` is the key, named in errors with the index (``q[3][1]``); with ``n``, ``value``
-    must be a flat list of ``n`` numbers.
+    With ``n``, ``value`` must be a flat list of ``n`` numbers.
 
     Raises:
         ParameterError: Not a list (of ``n``), or a value that is not a finite number.
@@ -412,11 +401,10 @@ def check_keys(
 def named(
     path: str | os.PathLike[str], what: str, error: type[HexapodKinError] | None = None
 ) -> Iterator[None]:
-    """Name the file in front of a value's error raised inside: ``what='path': <error>``.
+    """A :class:`~.exceptions.ParameterError` raised inside, again as ``what='path': <error>``.
 
-    A :class:`~.exceptions.ParameterError` raised inside is raised again with the file named
-    (as ``error`` when given, e.g. :class:`SourceError` for a file that is not what it
-    should be); the reader's own refusals (:class:`SourceError`) already name it and pass.
+    Raised as ``error`` when given (e.g. :class:`SourceError`); the reader's own refusals
+    (:class:`SourceError`) already name the file and pass.
     """
     try:
         yield
@@ -435,12 +423,10 @@ def csv_table(
 ) -> tuple[dict[str, str], list[str], list[list[float]]]:
     """A CSV's ``# key: value`` lines, its header's cells and its rows of numbers.
 
-    Blank lines are skipped; the first other line that does not start with ``#`` is the
-    header (cells stripped); every later line is a row of exactly as many numbers. A number
-    is a plain decimal (``-1.5``, ``.25``, ``3e-4``) and finite: ``float()``'s extras
-    (``inf``, ``nan``, ``1_000``, `` 1e3 `` with spaces) are typos in a table, refused.
-
-    ``name`` is the file, named in errors; ``what`` the kind of file (``parameter``).
+    Blank lines skipped; the first other line not starting with ``#`` is the header (cells
+    stripped); every later line a row of as many plain finite decimals (``-1.5``, ``.25``,
+    ``3e-4``; ``float()``'s ``inf``, ``nan``, ``1_000`` or spaces refused). ``name``: the
+    file; ``what``: the kind of file (``parameter``).
 
     Raises:
         SourceError: No header, a row of another width, or a cell that is not a finite

@@ -2,54 +2,45 @@
 
 Pinocchio segfaults on very long chains and accepts negative masses, indefinite inertias,
 ``lower > upper`` and a ``0 0 0`` axis; yourdfpy "repairs" malformed XML; both read meshes from
-anywhere on disk. :func:`check_urdf` refuses all of that with a
-:class:`~hexapod_kin.exceptions.UrdfError` naming the element, attribute, value and line.
-
-Checks, in order (the first failure is raised; the caps are in :mod:`.limits`):
+anywhere on disk. :func:`check_urdf` raises the first failure, a
+:class:`~hexapod_kin.exceptions.UrdfError` naming element, attribute, value and line, of:
 
 1. **Size**: at most :data:`MAX_URDF_BYTES` bytes.
-2. **Strict XML**: lxml without recovery, DTD loading, entity expansion or network; any
-   ``DOCTYPE`` or ``ENTITY`` is refused; UTF-8 (or ASCII) only; libxml2's nesting limit (256).
-3. **Structure**: root ``<robot name=...>`` (``version`` 1.0 to 1.2); 1 to :data:`MAX_LINKS`
-   links and at most :data:`MAX_DOF` degrees of freedom; non-empty, unique link and joint names
-   (``universe`` is reserved); each joint has a known ``type`` and one ``<parent link>`` and
-   ``<child link>`` naming existing, distinct links; each link has at most one parent joint;
-   exactly one root, every link reachable from it (no cycles); ``<mimic joint>`` names another
-   existing joint.
-4. **Numbers**: every numeric attribute of the URDF spec (:data:`.limits.NUMERIC`) has the
-   right count of plain decimal numbers (no ``nan``, ``inf``, hex or ``1_0``; a scalar without
-   surrounding spaces, which urdfdom reads as 0), finite and at most :data:`MAX_ABS`
-   (:data:`MAX_ABS_LIMIT` for limits) in magnitude; sizes, masses, ``effort``, ``velocity``,
-   ``damping`` and ``friction`` >= 0. Top-level materials named and unique; ``<color rgba>``
-   four numbers in [0, 1]; a visual's ``<material>`` has a ``name`` attribute; each
-   ``<visual>``/``<collision>`` has one ``<geometry>`` with exactly one URDF shape and its
-   required attributes (urdfdom silently drops the element otherwise).
-5. **Joints**: a non-zero axis; ``revolute`` and ``prismatic`` joints need ``<limit>`` with
-   ``effort`` and ``velocity`` (``lower``/``upper`` default to 0); ``lower <= upper``.
-6. **Mass**: every ``<inertial>`` has ``<mass value>`` >= 0 and all six ``<inertia>`` entries;
-   a link with mass > 0 has a positive-definite inertia obeying the triangle inequality
-   (``I1 + I2 >= I3``, relative tolerance :data:`TRIANGLE_RTOL`), a massless one a
-   positive-semi-definite inertia. Every *moving body* (the child link of a non-fixed joint
-   plus the links fixed to it, which Pinocchio merges) has mass > 0, else the joint-space
-   inertia matrix is singular.
-7. **Files** (``<mesh filename>``, ``<texture filename>``, always checked):
-   ``package://pkg/path`` resolves as ``<dir>/pkg/path`` in ``package_dirs``, a relative path
-   against ``mesh_root`` (the URDF's directory); the real path (links followed) must stay in
-   that root. Absolute and ``file://`` paths are read only for a URDF loaded from its file and
-   only for mesh files (``.stl``, ``.dae``, ``.obj``, ``.ply``); other schemes and ``~`` are
-   refused. Every file is a non-empty regular file of at most :data:`MAX_MESH_BYTES` bytes.
+2. **Strict XML**: no recovery, DTD, entity expansion or network; ``DOCTYPE``/``ENTITY``
+   refused; UTF-8 (or ASCII) only; libxml2's nesting limit (256).
+3. **Structure**: ``<robot name=...>`` (``version`` 1.0 to 1.2); 1 to :data:`MAX_LINKS` links,
+   at most :data:`MAX_DOF` degrees of freedom; unique non-empty link and joint names
+   (``universe`` reserved); each joint of a known ``type`` with one ``<parent link>`` and
+   ``<child link>``, existing and distinct; at most one parent joint per link; one root
+   reaching every link (no cycles); ``<mimic joint>`` names another joint.
+4. **Numbers**: every numeric attribute (:data:`.limits.NUMERIC`) holds the right count of
+   plain decimals (no ``nan``, ``inf``, hex, ``1_0``; a scalar without surrounding spaces,
+   which urdfdom reads as 0), at most :data:`MAX_ABS` (:data:`MAX_ABS_LIMIT` in limits);
+   sizes, masses, ``effort``, ``velocity``, ``damping``, ``friction`` >= 0. Top-level
+   materials named and unique, ``<color rgba>`` in [0, 1], a visual's ``<material>`` named;
+   each ``<visual>``/``<collision>`` one ``<geometry>`` of exactly one URDF shape with its
+   required attributes (urdfdom silently drops it otherwise).
+5. **Joints**: a non-zero axis; ``revolute``/``prismatic`` need ``<limit effort velocity>``
+   (``lower``/``upper`` default to 0) and ``lower <= upper``.
+6. **Mass**: every ``<inertial>`` has ``<mass value>`` >= 0 and six ``<inertia>`` entries; mass
+   > 0 needs a positive-definite inertia obeying ``I1 + I2 >= I3`` (:data:`TRIANGLE_RTOL`),
+   mass 0 a semi-definite one. Every *moving body* (a non-fixed joint's child link with the
+   links fixed to it, merged by Pinocchio) has mass > 0 (else the mass matrix is singular).
+7. **Files** (``<mesh>``/``<texture filename>``): ``package://pkg/path`` is
+   ``<dir>/pkg/path`` for a dir of ``package_dirs``, a relative path is under ``mesh_root``
+   (the URDF's folder); the real path stays in that root. Absolute and ``file://`` paths: only
+   mesh files (``.stl``, ``.dae``, ``.obj``, ``.ply``) of a URDF loaded from its file; other
+   schemes and ``~`` refused. A non-empty regular file of at most :data:`MAX_MESH_BYTES`.
 
-**Lenient mode** (``lenient=True``, what :class:`~hexapod_kin.model.Model` uses): a mesh
-*not found*, *refused* or *empty*, and the physical plausibility of inertials (rule 6 beyond
-``mass >= 0`` and six finite entries) are recorded (``missing_meshes`` as ``line N: 'uri':
-refused|not found|empty: why``, ``inertia_defects``) instead of raised; the loader warns and
-drops those visuals, dynamics refuses the inertials unless a repair is stated (:mod:`.repair`).
-Escapes out of a root, non-regular or huge files and every other rule stay errors.
+**Lenient mode** (``lenient=True``, the loader's): meshes *not found*, *refused* or *empty*
+(``missing_meshes``: ``line N: 'uri': refused|not found|empty: why``) and implausible
+inertials (rule 6 beyond ``mass >= 0`` and six finite entries: ``inertia_defects``) are
+recorded, not raised: the loader warns and drops those visuals; dynamics refuses the
+inertials unless a repair is stated (:mod:`.repair`). Everything else stays an error.
 
-Modules, in the order a document flows through them: :mod:`.limits` (caps, numeric
-attributes), :mod:`.parse` (strict XML, messages, numbers), :mod:`.meshes`, :mod:`.inertials`,
-:mod:`.tree` (structure, joints, the verdict and its cache), :mod:`.repair`. Pure numpy and
-lxml: importing the gate never imports numba, sympy or Pinocchio.
+Modules in the order a document flows: :mod:`.limits`, :mod:`.parse`, :mod:`.meshes`,
+:mod:`.inertials`, :mod:`.tree` (the verdict and its cache), :mod:`.repair`. Pure numpy and
+lxml: never imports numba, sympy or Pinocchio.
 """
 
 from __future__ import annotations
