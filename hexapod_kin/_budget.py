@@ -1,22 +1,17 @@
 """Budgets in CPU time: work that sympy cannot interrupt, run in one child and cut at its budget.
 
 :func:`run` runs a job (a module-level generator function yielding ``(name, value)`` pairs)
-within a budget of **CPU time of the work**, never wall-clock time, so an answer does not
-depend on what else runs on the machine:
+within a budget of **CPU time of the work**, never wall-clock time:
 
-* In a fresh interpreter (``subprocess``, never a ``fork``; ``__main__`` not run again): the
-  job, its arguments and ``sys.path`` go down its stdin, each item comes back on a pipe as it
-  is yielded. The budget starts with the job (the child's start-up is not counted).
-* The child's CPU-time timer (``ITIMER_PROF``) raises :class:`BudgetReached` in the job
-  between two bytecodes; the job may catch it to finish a phase (:func:`cpu_limit` nests);
-  the items sent so far are the answer. ``RLIMIT_CPU`` a few seconds later ends a child stuck
-  in C code. Nothing outlives the call.
-* Inside a budgeted child (a job calling a budgeted function), or where no child can be
-  started, the job runs inline under a nested :func:`cpu_limit`.
-* A Ctrl-C reaches the child once, from the parent (``SIGTERM``, raised in the job as a
-  ``KeyboardInterrupt``: its clean-up runs), whether it was sent to the parent or to the
-  whole process group.
-* A warning in the child is said in the parent (its category and text), as if raised there.
+* in a fresh interpreter (``subprocess``, no ``fork``, no ``__main__`` re-run): job, arguments
+  and ``sys.path`` go down its stdin, items come back on a pipe as yielded; the budget starts
+  with the job;
+* its ``ITIMER_PROF`` raises :class:`BudgetReached` in the job (which may catch it to finish a
+  phase; :func:`cpu_limit` nests): the items sent so far are the answer; ``RLIMIT_CPU`` a few
+  seconds later ends a child stuck in C code; nothing outlives the call;
+* inside a budgeted child, or where no child can start, the job runs inline;
+* a Ctrl-C reaches the child once, from the parent (``SIGTERM``, a ``KeyboardInterrupt`` in
+  the job); a warning in the child is said in the parent.
 """
 
 from __future__ import annotations
@@ -72,9 +67,8 @@ def _arm(end: float) -> None:
 def cpu_limit(seconds: float) -> Iterator[None]:
     """Raise :class:`BudgetReached` in the block after ``seconds`` of this process's CPU time.
 
-    Nested limits: the tightest end applies, and leaving an inner block re-arms the outer
-    one (which raises at once if it is spent too). Main thread only (signals); elsewhere the
-    block runs unbounded.
+    Nested: the tightest end applies; leaving an inner block re-arms the outer one. Main
+    thread only (signals); elsewhere the block runs unbounded.
     """
     import threading
 
@@ -151,11 +145,9 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
 
 
 class Child:
-    """``job(*args)`` started in a fresh interpreter, its items read as they come.
+    """``job(*args)`` in a fresh interpreter (:func:`run`'s child; ``budget`` None: no limit).
 
-    The child of :func:`run` (see the module docstring), also for work that runs beside the
-    caller's own (``budget`` None: no CPU limit). Raises :class:`OSError` when no child can
-    be started.
+    Raises :class:`OSError` when no child can be started.
     """
 
     def __init__(self, job: Job, args: tuple[Any, ...], budget: float | None) -> None:
@@ -163,10 +155,8 @@ class Child:
         #: Why the job stopped early (None: it finished; see :func:`run`).
         self.reason: str | None = "the budgeted process ended unexpectedly"
         read, write = os.pipe()
-        # The child starts with SIGINT blocked (a mask survives fork and exec): a Ctrl-C to
-        # the terminal's process group during its interpreter's start-up and imports stays
-        # pending until _serve ignores SIGINT, never a traceback of the child's. The
-        # caller's own Ctrl-C is only held for the fork: delivered when unblocked.
+        # SIGINT blocked for the child's start-up (the mask survives exec) until _serve
+        # ignores it: a Ctrl-C to the process group is never a traceback of the child's.
         held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             self._proc: subprocess.Popen[bytes] | None = subprocess.Popen(  # noqa: S603

@@ -1,25 +1,17 @@
-"""The package's disk caches: one folder, one key, one keyed seal, one warning.
+"""The package's disk caches (symbolic, families, report, sweep): one folder, one key, one seal.
 
-Every cache of the package (symbolic derivations, singular families, printed derivations,
-report replays, sweep chunks) goes through this module:
-
-* :func:`folder` — ``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else
-  ``platformdirs.user_cache_dir("hexapod_kin")/<kind>`` when platformdirs is installed, else
-  ``~/.cache/hexapod_kin/<kind>``.
-* :func:`key` — SHA-256 of the canonical JSON of what an entry depends on.
-* :func:`mac` / :func:`seal` — HMAC-SHA256 keyed by a per-user secret (32 random bytes in
-  ``seal.key`` of the cache root, mode 0600, created once, race-free), so that an edited
-  entry resealed without the secret is detected. Without a usable secret nothing is cached.
-* :func:`seal_folder` / :func:`check_folder` — a folder of another program's files (numba's
-  compiled code) sealed as opaque bytes (one seal file of each file's keyed MAC), with the
-  user's own secret (:func:`user_secret`).
-* :func:`store` / :func:`load` — one JSON envelope per entry (``format``, ``key``, ``body``,
-  ``seal``), written atomically. A missing entry, or one of another format, is no entry
-  (quietly); any other entry that is not the sealed one of its key is no entry with one
-  :class:`~hexapod_kin.exceptions.CacheWarning` (:func:`damaged`).
-
-Every cache also checks what an entry claims against the robot, so even an entry sealed with
-a stolen secret is not used when it is wrong.
+* :func:`folder`: ``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else platformdirs' user cache folder,
+  else ``~/.cache/hexapod_kin/<kind>``; :func:`key`: SHA-256 of the canonical JSON of what an
+  entry depends on.
+* :func:`mac` / :func:`seal`: HMAC-SHA256 keyed by a per-user secret (32 random bytes in the
+  root's ``seal.key``, mode 0600, created once, race-free): an entry edited and resealed
+  without it is detected; without a usable secret nothing is cached.
+* :func:`seal_folder` / :func:`check_folder`: another program's files (numba's) sealed as
+  opaque bytes with the user's secret (:func:`user_secret`).
+* :func:`store` / :func:`load`: one atomic JSON envelope per entry (``format``, ``key``,
+  ``body``, ``seal``). Missing or of another format: no entry, quietly; any other entry not
+  the sealed one of its key: no entry and one :class:`~hexapod_kin.exceptions.CacheWarning`
+  (:func:`damaged`). Each cache also checks an entry's claims against the robot.
 """
 
 from __future__ import annotations
@@ -79,12 +71,10 @@ def key(parts: Any) -> str:
 
 
 def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
-    """The per-user secret of the seals, created once; ``None`` when the root is unusable.
+    """The seals' secret in ``base`` (default :func:`root`), created once; None: unusable root.
 
-    ``base``: the cache root whose ``seal.key`` it is (default: :func:`root`). Created
-    race-free (a private temporary file hard-linked to the name: one concurrent first run
-    wins); a secret of the wrong length is replaced. A root that is a regular file is said
-    once (one :class:`CacheWarning`) unless ``quiet``.
+    Race-free (a private temporary file hard-linked to the name: the first run wins); one of
+    the wrong length is replaced; a root that is a file is said once unless ``quiet``.
     """
     base = root() if base is None else base
     with _LOCK:
@@ -144,12 +134,10 @@ def seal(kind: str, digest: str, body: Any) -> str | None:
 
 
 def damaged(kind: str, name: str, why: BaseException | str, then: str, stacklevel: int = 3) -> None:
-    """The one warning of a cache entry that is not what it claims (see the module docstring).
+    """The one warning of a cache entry ``name`` that is not what it claims.
 
-    ``name`` is the entry (a key is shown by its first 12 characters), ``why`` what is wrong
-    (an exception: its type and message), ``then`` what happens instead ("recomputing it");
-    ``stacklevel`` as for :func:`warnings.warn`, from the caller's caller.
-
+    ``why``: what is wrong (an exception: its type and message); ``then``: what happens
+    instead ("recomputing it"); ``stacklevel`` from the caller's caller.
     """
     short = name[:12] if re.fullmatch(r"[0-9a-f]{16,}", name) else name
     if isinstance(why, BaseException):
@@ -164,10 +152,7 @@ def damaged(kind: str, name: str, why: BaseException | str, then: str, stackleve
 def store(kind: str, digest: str, body: Any, fmt: int, *, sync: bool = True) -> Path | None:
     """Write ``body`` (JSON data) as the sealed entry ``digest`` of ``kind``, atomically.
 
-    Returns:
-        The file, or ``None`` when nothing is cached (no secret, unwritable, disk full: a
-        cache that cannot be written is only slower). No temporary file is left behind.
-
+    Returns the file, or ``None`` when nothing is cached (no secret, unwritable, disk full).
     """
     stamp = seal(kind, digest, body)
     if stamp is None:
@@ -184,9 +169,8 @@ def store(kind: str, digest: str, body: Any, fmt: int, *, sync: bool = True) -> 
 def load(kind: str, digest: str, fmt: int, then: str) -> Any | None:
     """The body of the sealed entry ``digest`` of ``kind``, or ``None``.
 
-    Missing, of another format, or no secret: ``None`` quietly. Unreadable, torn, edited
-    (seal broken), resealed without the secret, or another key's (a swapped or copied
-    file): ``None`` with one warning (:func:`damaged`, ``then`` saying what happens).
+    Quietly when missing, of another format or without a secret; else (unreadable, torn,
+    edited, another key's) with one warning (:func:`damaged`, ``then``: what happens).
     """
     if _secret() is None:
         return None
@@ -220,11 +204,7 @@ _FOLDER_FORMAT = 1
 
 
 def user_secret() -> bytes | None:
-    """The secret sealing folders shared by every cache root (numba's compiled code).
-
-    The default root's (whatever ``HEXAPOD_KIN_CACHE_DIR`` says), else :func:`root`'s, else
-    ``None``.
-    """
+    """The secret of shared folders (numba's): the default root's, else :func:`root`'s."""
     return _secret(_default_root(), quiet=True) or _secret()
 
 
@@ -258,11 +238,10 @@ def _folder_lock(folder: Path) -> Iterator[None]:
 
 
 def seal_folder(folder: str | os.PathLike[str], suffixes: tuple[str, ...]) -> bool:
-    """Seal the files of ``folder`` ending in ``suffixes`` (call it after writing them).
+    """Seal the files of ``folder`` ending in ``suffixes``; whether it was written (no error).
 
-    The seal (:data:`FOLDER_SEAL`) holds the keyed MAC of each file's name and bytes, written
-    atomically under a lock of the folder (the last of two concurrent seals covers both).
-    Returns whether it was written (never an error).
+    :data:`FOLDER_SEAL` holds the keyed MAC of each file's name and bytes, written atomically
+    under a lock of the folder (the last of two concurrent seals covers both).
     """
     path = Path(folder)
     secret = user_secret()
@@ -287,10 +266,8 @@ def check_folder(folder: str | os.PathLike[str], suffixes: tuple[str, ...]) -> d
     """The files of ``folder`` ending in ``suffixes`` that its seal does not vouch for.
 
     Returns:
-        File name → what is wrong (``"not sealed"``: a foreign file or one written after
-        the seal; ``"edited or swapped"``: its bytes are not the sealed ones; ``"no seal"``;
-        ``"no secret"``: no usable cache root to check with). Empty: every file is sealed
-        (or there is none: nothing to load).
+        File name → ``"not sealed"`` (foreign, or written after the seal), ``"edited or
+        swapped"``, ``"no seal"`` or ``"no secret"``; empty when every file is sealed.
 
     """
     path = Path(folder)

@@ -1,10 +1,8 @@
 """A serial chain as flat arrays, the input of the compiled layer (numpy only, no numba).
 
-:class:`ChainArrays` is extracted once per model from its *Pinocchio* model (``Model.arrays``):
-joint placements, axes and the tip offset, so the compiled kernels serve any chain of 1-DOF
-joints — presets and URDFs alike. :class:`AlignedChain` is the same chain re-expressed with
-every joint axis along its frame's z, the form of the block FK core
-(:func:`hexapod_kin._kernels.fk_jac_block`).
+:class:`ChainArrays`: joint placements, axes and tip offset of any chain of 1-DOF joints,
+extracted once per model (``Model.arrays``); :class:`AlignedChain`: the same with every joint
+axis along its frame's z (the block core :func:`hexapod_kin._kernels.fk_jac_block`).
 """
 
 from __future__ import annotations
@@ -48,11 +46,7 @@ class ChainArrays:
 
     @classmethod
     def serial(cls, rot: Any, trans: Any, axis: Any, kind: Any, tip_rot: Any = None) -> ChainArrays:
-        """A chain of its own joints alone (``col = 0..m-1``, ``nq = m``), read-only arrays.
-
-        Arguments as the attributes of the same names (each joint frame in the previous one's;
-        ``tip_rot`` default identity).
-        """
+        """A chain of its own joints alone (``col = 0..m-1``, ``nq = m``; ``tip_rot`` default I)."""
         m = len(rot)
         return cls._frozen(
             rot, trans, np.eye(3) if tip_rot is None else tip_rot, axis, kind, np.arange(m), m
@@ -146,11 +140,7 @@ class AlignedChain:
 
 
 def _z_to(u: np.ndarray) -> np.ndarray:
-    """A rotation ``A`` with ``A ez = u`` (unit ``u``); a signed permutation for ±x, ±y, ±z.
-
-    Exact for coordinate axes (no rounding enters the placements); otherwise the columns
-    ``(e1, e2, u)`` of an orthonormal frame completed by Gram–Schmidt.
-    """
+    """A rotation ``A`` with ``A ez = u``: exact for ±x, ±y, ±z, else Gram–Schmidt's."""
     u = np.asarray(u, dtype=float)
     for k in range(3):
         if abs(u[k]) == 1.0 and np.count_nonzero(u) == 1:

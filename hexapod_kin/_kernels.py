@@ -1,23 +1,16 @@
 """The one compiled layer (numba): the FK + Jacobian core and the batch kernels of chains.
 
-Two forms of the same maths on :class:`~hexapod_kin._chain.ChainArrays` (``Model.arrays``),
-equal to Pinocchio to rounding: :func:`fk_jac_into`, one configuration (for the compiled IK
-and resolved-rate loops), and :func:`fk_jac_block`, a structure-of-arrays block on the chain
-with z joint axes (:class:`~hexapod_kin._chain.AlignedChain`), called by every batch kernel
-(:func:`pose_jacobian_kernel`, :mod:`hexapod_kin.singularity._kernel`); its per-joint loops
-vectorise, sin / cos by the polynomial :func:`sincos` (libm beyond :data:`POLY_TRIG_MAX`).
+The same maths, equal to Pinocchio to rounding, in two forms: :func:`fk_jac_into`, one
+configuration of a :class:`~hexapod_kin._chain.ChainArrays` (the compiled IK and resolved-rate
+loops), and :func:`fk_jac_block`, a structure-of-arrays block of an
+:class:`~hexapod_kin._chain.AlignedChain` (every batch kernel), whose per-joint loops vectorise
+(sin / cos by :func:`sincos`, libm beyond :data:`POLY_TRIG_MAX`). **Same bits every time**:
+no ``fastmath``; each element's arithmetic depends on its own input only.
 
-**The same bits every time**: no ``fastmath``; each element's arithmetic depends on its own
-input only (never on the block, its size or the thread), whatever ran before.
-
-**When it compiles**: kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`), numba's
-files sealed, never parsed (:func:`hexapod_kin._kmath.sealed_folder`); ``hexapod-kin
-precompile`` compiles them ahead. Before an area's first kernel call in a process,
-:func:`run_blocks` prints one notice on stderr unless the area's stamp (:func:`mark_compiled`)
-says it is compiled; a cache that cannot be loaded or written is never fatal
-(:func:`_first_call`).
-
-Jacobians are LOCAL_WORLD_ALIGNED in the model's base frame unless said otherwise: ``[v; ω]``.
+Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`, numba's files sealed); before an
+area's first kernel call :func:`run_blocks` prints one notice unless the area's stamp
+(:func:`mark_compiled`) says it is compiled; a cache that cannot be loaded or written is never
+fatal (:func:`_first_call`). Jacobians ``[v; ω]`` are LOCAL_WORLD_ALIGNED, base frame.
 """
 
 from __future__ import annotations
@@ -104,10 +97,7 @@ def _stamp_key() -> str:
 
 
 def _stamp(area: str) -> Path | None:
-    """The stamp file of ``area`` in numba's cache folder (``Dispatcher.stats.cache_path``).
-
-    ``None`` when numba caches nothing.
-    """
+    """The stamp file of ``area`` in numba's cache folder (``None``: numba caches nothing)."""
     folder = pose_jacobian_kernel.stats.cache_path
     return None if folder is None else Path(folder) / f"hexapod_kin-{area}-{_stamp_key()}.stamp"
 
@@ -181,11 +171,10 @@ def _unwritable(exc: BaseException) -> bool:
 def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     """``run(0, 0)`` (no blocks: loads or compiles the kernel), never failing on the cache.
 
-    A cache that cannot be written (full disk, read-only folder) costs one
-    :class:`~hexapod_kin.exceptions.CacheWarning` and the rest compiles in memory; one that
-    cannot be loaded costs one warning and its kernels are reset (numba's public
-    ``Dispatcher.recompile()``) and compiled again. A Ctrl-C swallowed by numba's compile
-    callback is raised as the ``KeyboardInterrupt`` it was.
+    A cache that cannot be written costs one :class:`~hexapod_kin.exceptions.CacheWarning`
+    (the rest compiles in memory); one that cannot be loaded, one warning and its kernels
+    reset (``Dispatcher.recompile()``). A Ctrl-C swallowed by numba's compile callback is
+    raised as the ``KeyboardInterrupt`` it was.
     """
     if area in _SEEN:
         return run(0, 0)
@@ -577,11 +566,7 @@ def pose_jacobian_kernel(
 
 
 def threads() -> int:
-    """The threads a batch may use: ``numba.get_num_threads()``, without starting numba's pool.
-
-    Before numba's threading layer runs, its default ``NUMBA_NUM_THREADS`` (asking would
-    start the layer, tens of ms; the kernels run on plain Python threads).
-    """
+    """``numba.get_num_threads()``, or ``NUMBA_NUM_THREADS`` before numba's pool started."""
     try:
         numba.threading_layer()
     except ValueError:  # not started: nothing set a count yet
@@ -594,9 +579,8 @@ def run_blocks(
 ) -> list[Any]:
     """Run ``run(first_block, last_block)`` over ``nblocks`` blocks; return its results.
 
-    ``area`` names the kernels (``"batch"``, ``"ik"``, ``"singularity"``), loaded first with no
-    blocks (:func:`_first_call`). Then up to :func:`threads` plain threads (the kernels release
-    the GIL) take chunks of blocks from a shared counter; the thread never changes the numbers.
+    The ``area``'s kernels are loaded first (:func:`_first_call`); then up to :func:`threads`
+    plain threads (the kernels release the GIL) take chunks of blocks from a shared counter.
     """
     results = [_first_call(area, run)]
     nwork = max(1, min(threads(), nblocks * block // min_per_thread))
@@ -654,12 +638,10 @@ def pose_jacobian_batch(
     out_jacobian: np.ndarray | None = None,
     check: Callable[[], object] | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Poses (N, 4, 4) and/or Jacobians (N, 6, nq) of configurations ``qs`` (N, nq).
+    """``(poses (N, 4, 4) or None, Jacobians (N, 6, nq) or None)`` of ``qs`` (N, nq).
 
-    ``qs`` is C-contiguous float64, its values checked by the kernel on the way (finite,
-    ``|q| < Q_MAX``; else ``check()`` raises the caller's error); ``jacobian`` a key of
-    :data:`REF_CODES` or ``None``; ``out_*`` optional arrays to write into. Returns
-    ``(poses or None, jacobians or None)``.
+    ``qs``: C-contiguous float64, checked by the kernel (finite, ``|q| < Q_MAX``; else
+    ``check()`` raises the caller's error); ``jacobian``: a key of :data:`REF_CODES` or None.
 
     Raises:
         ParameterError: An ``out_*`` array of the wrong shape, dtype or layout.

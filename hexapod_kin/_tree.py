@@ -1,14 +1,9 @@
-"""The batch path of tree kinematics: N configurations at once, structure of arrays (numpy).
+"""Tree kinematics for N configurations at once, structure of arrays (numpy).
 
-Joint ``j``'s frame is ``parent · P_j · M_j(q_j)`` with ``P_j`` its placement at q = 0
-(Pinocchio's ``jointPlacements``) and ``M_j`` the rotation
-``R(a, q) = cos q I + sin q [a]× + (1 − cos q) a aᵀ`` (Rodrigues) about its unit axis ``a``,
-or the translation ``a q`` (prismatic); any axis, revolute, continuous (one angle) or
-prismatic (the kinds of :func:`hexapod_kin.frames.joint_kind`). Pinocchio's FK is the
-reference in the tests.
-
-* :class:`Tree` and :func:`tree_frames` — every joint frame of a floating-base tree for N
-  samples (one vector operation per depth of the tree and axis kind).
+Joint ``j``'s frame is ``parent · P_j · M_j(q_j)``: ``P_j`` its placement at q = 0, ``M_j`` the
+rotation ``R(a, q) = cos q I + sin q [a]× + (1 − cos q) a aᵀ`` about its unit axis ``a``, or
+the translation ``a q`` (the kinds of :func:`hexapod_kin.frames.joint_kind`). :func:`tree_frames`
+takes one vector operation per depth of the tree and axis kind.
 """
 
 from __future__ import annotations
@@ -43,8 +38,7 @@ class Tree:
     def of_model(cls, model: Any, first: int = 1, label: str = "") -> Tree:
         """The joints ``first``, ``first + 1``, … of a Pinocchio model (q: one per joint).
 
-        ``first = 2`` takes the joints below a free-flyer root (their parent is then the
-        floating body, −1). Axes are unit vectors (:func:`hexapod_kin.frames.joint_kind`).
+        ``first = 2``: the joints below a free-flyer root (parent −1: the floating body).
 
         Raises:
             ConfigurationError: A joint that is not revolute, continuous or prismatic (named,
@@ -77,10 +71,7 @@ class Tree:
 
     @cached_property
     def levels(self) -> tuple[tuple[np.ndarray, np.ndarray | None], ...]:
-        """The joints by depth: per level ``(joints, their parents)`` (parents ``None``: the body).
-
-        Pinocchio numbers a parent before its children, so one pass gives every depth.
-        """
+        """The joints by depth: ``(joints, their parents or None: the body)`` (one pass)."""
         par = np.asarray(self.parents)
         depth = np.zeros(len(par), dtype=int)
         for j, p in enumerate(par):
@@ -149,12 +140,10 @@ class Tree:
 
 
 def tree_frames(tree: Tree, q: np.ndarray, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The joints' world frames, components first: rotations (3, 3, n, N), origins (3, n, N).
+    """The joints' world frames: rotations (3, 3, n, N), origins (3, n, N), samples last.
 
-    ``q`` (N, n) are the joint values, ``base`` (N, 4, 4) the body poses. One product per
-    depth of the tree and axis kind (:attr:`Tree.groups`): for a joint about ``±x, ±y, ±z``
-    the parent's rotation times the placement, then two columns mixed by ``cos q, ±sin q``;
-    other joints by Rodrigues (:attr:`Tree.soa_terms`). The samples are the last axis.
+    ``q`` (N, n) joint values, ``base`` (N, 4, 4) body poses; a joint about ``±x, ±y, ±z``
+    mixes two columns by ``cos q, ±sin q``, any other by Rodrigues (:attr:`Tree.soa_terms`).
     """
     qt = np.ascontiguousarray(np.asarray(q, dtype=float).T)  # (n, N)
     nj, n = qt.shape
@@ -210,12 +199,7 @@ def mat_vec(A: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def robot_size(model: Any) -> float:
-    """A robot's size [m]: the diagonal of the bounding box of its frames' origins at q = 0.
-
-    ``model`` is a Pinocchio model (at its neutral configuration; every joint's frame is
-    one of its frames); at least 1e-3 m. The scale user numbers (foot offsets, foot radius,
-    a standing height) are checked against.
-    """
+    """A Pinocchio model's size [m] (>= 1e-3): its frames' bounding-box diagonal at neutral."""
     import pinocchio as pin
 
     data = model.createData()

@@ -1,10 +1,8 @@
 """Compile every kernel ahead of use: ``hexapod_kin.precompile()`` / ``hexapod-kin precompile``.
 
-Each area calls its batch APIs once with tiny inputs, so numba compiles every kernel and
-writes it to its disk cache, which every later process loads; the area's stamp
-(:func:`hexapod_kin._kernels.mark_compiled`) silences the first-use notice. numba compiles
-holding the GIL: areas compile in parallel only in child processes (``processes > 1``), which
-write to the same disk cache.
+Each area calls its batch APIs once with tiny inputs: numba compiles its kernels into the disk
+cache every later process loads, and the area's stamp
+(:func:`hexapod_kin._kernels.mark_compiled`) silences the first-use notice.
 """
 
 from __future__ import annotations
@@ -80,16 +78,14 @@ def precompile(
 
     Args:
         areas: Names from :data:`AREAS` (default: all of them).
-        processes: Areas compiled at once (numba compiles holding the GIL): this process and
-            ``processes - 1`` child processes, the areas shared by their expected seconds
-            (:data:`hexapod_kin._kernels.COMPILE_SECONDS`, a child's start-up counted). 1: all
-            here, one after the other. An area whose child fails is compiled here (its error
-            raised).
+        processes: Areas compiled at once (numba holds the GIL): here and in
+            ``processes - 1`` children, shared by expected seconds
+            (:data:`hexapod_kin._kernels.COMPILE_SECONDS`); a failed child's areas are
+            compiled here (its error raised).
         done: Called with each area's name and seconds as it finishes (progress).
 
     Returns:
-        Seconds per area, in order (a second call, or a later process, takes milliseconds:
-        the machine code comes from the disk cache).
+        Seconds per area, in order (milliseconds once the disk cache holds them).
 
     Raises:
         ParameterError: An unknown area name or ``processes`` < 1.
