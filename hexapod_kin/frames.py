@@ -1,9 +1,4 @@
-"""Pinocchio model surgery for :mod:`hexapod_kin.model`: frames, sub-chains, tool frames.
-
-Frame lookup that survives duplicate names, the reduction of a model to the joints between a
-base and a tip, the tool frame added at the tip, the path of body frames, and the URDF text
-without the visuals whose meshes are missing.
-"""
+"""Pinocchio model surgery for :mod:`hexapod_kin.model`: joint kinds, frames, sub-chains, tips."""
 
 from __future__ import annotations
 
@@ -35,15 +30,12 @@ _UNIT = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 
 
 def joint_kind(joint: Any) -> tuple[str, np.ndarray] | None:
-    """The kind and axis of a one-variable Pinocchio joint model; ``None`` for other joints.
+    """``(kind, axis in the joint's frame)`` of a one-variable Pinocchio joint, else ``None``.
 
-    The one place joint kinds are told apart: ``"revolute"`` (``JointModelRX/RY/RZ``,
-    ``RevoluteUnaligned``), ``"continuous"`` (the unbounded revolute ``JointModelRUBX/Y/Z``,
-    ``RevoluteUnboundedUnaligned``: two entries ``(cos q, sin q)`` in Pinocchio's ``q``, one
-    in ``v``) and ``"prismatic"`` (``JointModelPX/PY/PZ``, ``PrismaticUnaligned``). The axis
-    is in the joint's frame: exactly a unit vector for the X/Y/Z kinds, Pinocchio's stored
-    axis otherwise. Free-flyer, spherical, planar, translation, mimic and composite joints
-    give ``None``.
+    The one place joint kinds are told apart: ``"revolute"`` (``RX/RY/RZ``,
+    ``RevoluteUnaligned``), ``"continuous"`` (``RUBX/Y/Z``, ``RevoluteUnboundedUnaligned``:
+    ``(cos q, sin q)`` in Pinocchio's ``q``) and ``"prismatic"`` (``PX/PY/PZ``,
+    ``PrismaticUnaligned``); the X/Y/Z kinds' axes are exact unit vectors.
     """
     name = str(joint.shortname())
     for prefix, kind in _JOINT_KINDS:
@@ -61,10 +53,9 @@ def joint_kind(joint: Any) -> tuple[str, np.ndarray] | None:
 
 
 def frame_index(model: pin.Model, name: str) -> int:
-    """Index of the frame ``name`` in a Pinocchio model (which must have it).
+    """Index of the frame ``name`` (which must exist): BODY first, then OP, JOINT, FIXED.
 
-    URDFs may name a link and a joint alike (anymal: ``RH_HAA``); Pinocchio's ``getFrameId``
-    then raises. The link's (BODY) frame wins, then operational, joint, fixed-joint frames.
+    Unlike ``getFrameId``, for a link and a joint named alike (anymal's ``RH_HAA``).
     """
     hits = [i for i, f in enumerate(model.frames) if f.name == name]
     if len(hits) == 1:
@@ -92,12 +83,10 @@ def add_tool_frame(model: pin.Model, tip: str, tool: np.ndarray) -> tuple[pin.Mo
 
 
 def floating_model(fixed: pin.Model) -> pin.Model:
-    """``fixed`` (a URDF's fixed-base model) with a free-flyer ``root_joint`` at its root.
+    """``fixed`` (a URDF's model) with a free-flyer ``root_joint``, without a second parse.
 
-    Equal (``==``) to ``pinocchio.buildModelFromXML(text, JointModelFreeFlyer())`` of the same
-    URDF, without a second parse: every joint moves one index up under ``root_joint``, the
-    root link's inertia moves from ``universe`` onto it, every frame keeps its name, type,
-    placement and inertia.
+    Equal (``==``) to ``pinocchio.buildModelFromXML(text, JointModelFreeFlyer())``: joints one
+    index up, the root link's inertia on ``root_joint``, frames unchanged otherwise.
     """
     out = pin.Model()
     out.name = fixed.name
@@ -152,10 +141,9 @@ def root_link_frame(model: pin.Model) -> str:
 def reduce_model(
     full: pin.Model, base: str, tip: str, do_reduce: bool, q_ref: Any
 ) -> tuple[pin.Model, tuple[int, ...], np.ndarray]:
-    """Keep only the joints between ``base`` and ``tip``, the others locked at ``q_ref``.
+    """``(model, locked joint ids, q_ref)``: only the joints between ``base`` and ``tip`` kept.
 
-    Returns:
-        ``(model, locked joint ids, q_ref)`` (the full model when nothing is locked).
+    The others are locked at ``q_ref`` (the full model when nothing is locked).
 
     Raises:
         FrameNotFoundError: ``base`` is not an ancestor of ``tip``.
@@ -189,11 +177,9 @@ def reduce_model(
 
 
 def reduced_model(full: pin.Model, lock: list[int], ref: np.ndarray) -> pin.Model:
-    """``pin.buildReducedModel``, also for URDFs that name a link and a joint alike.
+    """``pin.buildReducedModel``, also for a link and a joint named alike (anymal_c's LF_HAA).
 
-    Pinocchio looks frames up by name alone while reducing and raises on such a pair
-    (anymal_c: link and joint ``LF_HAA``); the non-joint frames of a shared name are renamed
-    in a copy for the reduction and given their names back in the reduced model.
+    Pinocchio raises on such a pair: their non-joint frames are renamed for the reduction.
     """
     names = [f.name for f in full.frames]
     shared = {n for n in names if names.count(n) > 1}
@@ -253,13 +239,11 @@ class DefaultTips:
 def default_tips(model: pin.Model) -> DefaultTips:
     """The default tip(s) of a URDF model from its kinematic tree.
 
-    End frames (BODY or fixed-joint frames no other frame hangs from) carried by at least one
-    joint are grouped by the limb they belong to (the first joint from the root on their
-    path). Two or more limbs of two or more joints each: ``"limbs"``, the deepest end of each
-    (a legged robot's feet; sensor links on the body are not limbs). One limb: where its ends
-    part (the last joint they share), ends with at most two joints of their own are fingers
-    when one end needs none of them (a TCP or the hand itself): ``"gripper"``, the fingers
-    locked. Otherwise ``"chain"``: the last of the deepest ends in frame order.
+    End frames (BODY or fixed-joint frames nothing hangs from, moved by a joint) grouped by
+    limb (their first joint from the root). Two or more limbs of two or more joints:
+    ``"limbs"``, each one's deepest end (a legged robot's feet). One limb whose ends part with
+    at most two joints of their own, one end needing none (a TCP): ``"gripper"``, those
+    finger joints locked. Else ``"chain"``: the last of the deepest ends in frame order.
     """
     frames = list(model.frames)
     has_child = [False] * len(frames)

@@ -1,12 +1,10 @@
 """The loader: a resolved source (:mod:`hexapod_kin.sources`) passes the gate, then Pinocchio.
 
-A :class:`Model` keeps the Pinocchio ``Model`` with one ``Data`` per thread, the URDF text,
-the sub-chain (base → tip) picked, an optional tool frame and one per-model cache
-(:meth:`Model.cached`). Names are checked before any id reaches Pinocchio. What kinematics
-does not need (unusable meshes, implausible inertials) loads with one
-:class:`~hexapod_kin.exceptions.UrdfWarning` line per kind, at the caller's line;
-:func:`check_inertials` is the strict check of dynamics, ``inertia="collision"`` or
-``"point"`` a stated repair (:mod:`hexapod_kin._gate.repair`).
+A :class:`Model`: Pinocchio's ``Model``, one ``Data`` per thread, the URDF text, the base → tip
+sub-chain, a tool frame, one per-model cache (:meth:`Model.cached`). What kinematics does not
+need (unusable meshes, implausible inertials) loads with one
+:class:`~hexapod_kin.exceptions.UrdfWarning` per kind; :func:`check_inertials` is dynamics'
+strict check, ``inertia="collision"`` or ``"point"`` a stated repair.
 """
 
 from __future__ import annotations
@@ -214,8 +212,7 @@ class Model:
         for arr in (self.lower, self.upper, self.velocity_limit, self.effort_limit):
             arr.setflags(write=False)
         self.path_frames: tuple[str, ...] = path_frames(m, self.base_id, self.tip_id)
-        # What the per-call hot paths need, one tuple per thread (see kinematics.fk): each
-        # thread gets its own pinocchio.Data, so concurrent calls never share scratch space.
+        # what the hot paths need (kinematics.fk), with one pinocchio.Data per thread
         self._local = _PerThread(self, data)
 
     def _parse(
@@ -257,11 +254,9 @@ class Model:
         return full, text
 
     def view(self, base: str | None = None, tip: str | None = None) -> Model:
-        """The chain ``base`` → ``tip`` of this robot, as a model of its own (cached).
+        """The chain ``base`` → ``tip`` of this robot as a model of its own (cached).
 
-        The same as :func:`hexapod_kin.load` of the source with ``base``/``tip`` (the other
-        joints locked at neutral), built from this robot's parse: no second gate, no second
-        parse, no warning repeated.
+        :func:`hexapod_kin.load` of the source with ``base``/``tip``, from this robot's parse.
         """
         return self.cached(
             f"model.view {base!r} {tip!r}",
@@ -269,10 +264,7 @@ class Model:
         )
 
     def pinocchio_q(self, q: Any) -> np.ndarray:
-        """``q`` checked (:meth:`check_q`) in Pinocchio's layout, for ``pinocchio`` calls.
-
-        The same array for chains of revolute/prismatic joints; a continuous joint's angle
-        becomes its ``(cos, sin)`` pair (Pinocchio's unbounded revolute joint).
+        """``q`` checked (:meth:`check_q`) in Pinocchio's layout (continuous joints: cos, sin).
 
         Raises:
             ConfigurationError: Wrong shape or non-finite values.
@@ -298,8 +290,7 @@ class Model:
         return self._local.hot[1]
 
     def __setattr__(self, key: str, value: Any) -> None:
-        # Model and Data are created together here and never re-paired: once set, these
-        # attributes are read-only (reads stay plain attribute lookups on the hot path).
+        # Model and Data are created together, never re-paired: these are read-only once set
         if key in self._FROZEN and (key in self.__dict__ or key == "data"):
             from .exceptions import ParameterError
 
@@ -311,12 +302,10 @@ class Model:
 
     # -------------------------------------------------------------- the per-model cache
     def cached(self, key: str, factory: Callable[[], _T]) -> _T:
-        """The value stored under ``key`` for this model, built once by ``factory()``.
+        """The value under ``key`` (``"singularity.gram_plans"``), built once by ``factory()``.
 
-        The one cache of derived per-model data, thread-safe (concurrent callers wait for the
-        first; a factory may call :meth:`cached` for another key), living with the model. Keys
-        are namespaced by the caller (``"singularity.gram_plans"``); a factory that raises
-        stores nothing. The value is shared: treat it as read-only.
+        The one per-model cache, thread-safe (a factory may call :meth:`cached` for another
+        key; one that raises stores nothing). The value is shared: treat it as read-only.
         """
         cache = self._cache
         try:
@@ -330,10 +319,7 @@ class Model:
 
     @property
     def floating_model(self) -> pin.Model:
-        """:attr:`full_model` with a free-flyer root (:func:`~hexapod_kin.frames.floating_model`).
-
-        Built once, shared: treat it as read-only (copy it with ``pinocchio.Model(m)``).
-        """
+        """:attr:`full_model` with a free-flyer root, shared: treat it as read-only."""
         return self.cached("model.floating", lambda: floating_model(self.full_model))
 
     @property
@@ -439,10 +425,7 @@ class Model:
         return tuple(self.full_model.names[i] for i in self._locked)
 
     def geometry_model(self, kind: str = "visual") -> Any:
-        """Pinocchio ``GeometryModel`` (``kind`` ``"visual"`` or ``"collision"``) of :attr:`model`.
-
-        Built from the same URDF text, meshes resolved with the source's package directories.
-        """
+        """Pinocchio's ``GeometryModel`` of :attr:`model` (``kind``: visual or collision)."""
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
         one_of("kind", kind, kinds)
         dirs = list(self.source.package_dirs)
@@ -505,10 +488,7 @@ class Model:
 
 
 class _PerThread(threading.local):
-    """Per-thread hot tuple ``(model, data, tip_id, nq, base_is_root)`` of one Model.
-
-    ``__init__`` runs again in every thread; the load's ``data`` stays the loading thread's.
-    """
+    """Per-thread ``(model, data, tip_id, nq, base_is_root)`` (the load's data: its thread's)."""
 
     def __init__(self, owner: Model, data: Any = None) -> None:
         first = getattr(owner, "_owner_thread", None)
