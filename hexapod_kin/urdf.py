@@ -218,49 +218,37 @@ def _header(name: str, description: str, header: str | None) -> list[str]:
     ]
 
 
-def _chain_urdf(chain: Chain, header: str | None) -> str:
-    lines = _header(chain.name, chain.description, header)
+def _chain_urdf(chain: Chain) -> list[str]:
+    """The links and joints of a chain's document: its base link, then its rows."""
     rad = chain.link_radius
-    lines += [
+    return [
         f'  <link name="{chain.base}">',
         *_visual("    ", f'<box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/>', "base"),
         "  </link>",
+        *_chain_body(chain, "", chain.base),
     ]
-    lines += _chain_body(chain, "", chain.base)
-    lines.append("</robot>")
-    return "\n".join(lines) + "\n"
 
 
-def _body_link(robot: Hexapod) -> list[str]:
+def _robot_urdf(robot: Hexapod, legs: tuple[LegMount, ...]) -> list[str]:
+    """The links and joints of a robot's document: its body, then each leg on its mount."""
     lx, ly, lz = robot.body_size
     m = robot.body_mass
     inertia = (m * (ly**2 + lz**2) / 12.0, m * (lx**2 + lz**2) / 12.0, m * (lx**2 + ly**2) / 12.0)
-    return [
+    lines = [
         f'  <link name="{robot.body}">',
         *_inertial_xml("    ", m, (0.0, 0.0, 0.0), (*inertia, 0.0, 0.0, 0.0)),
         *_visual("    ", f'<box size="{vec(robot.body_size)}"/>', "body"),
         "  </link>",
     ]
-
-
-def _mount(robot: Hexapod, leg: LegMount) -> list[str]:
-    base = f"{leg.name}_{leg.chain.base}"
-    return [
-        "  " + comment(f"{leg.name}: mount xyz={vec(leg.xyz)} yaw={num(leg.yaw)} rad"),
-        *fixed_joint("  ", f"{leg.name}_mount", robot.body, base, _origin(leg.transform())),
-        f'  <link name="{base}"/>',
-    ] + _chain_body(leg.chain, f"{leg.name}_", base)
-
-
-def _robot_urdf(robot: Hexapod, leg: str | None, header: str | None) -> str:
-    legs = robot.legs if leg is None else (robot.leg(leg),)
-    name = robot.name if leg is None else f"{robot.name}_{leg}"
-    lines = _header(name, robot.description, header)
-    lines += _body_link(robot)
-    for mount in legs:
-        lines += _mount(robot, mount)
-    lines.append("</robot>")
-    return "\n".join(lines) + "\n"
+    for leg in legs:
+        base = f"{leg.name}_{leg.chain.base}"
+        lines += [
+            "  " + comment(f"{leg.name}: mount xyz={vec(leg.xyz)} yaw={num(leg.yaw)} rad"),
+            *fixed_joint("  ", f"{leg.name}_mount", robot.body, base, _origin(leg.transform())),
+            f'  <link name="{base}"/>',
+            *_chain_body(leg.chain, f"{leg.name}_", base),
+        ]
+    return lines
 
 
 #: Tags whose numbers may reach :data:`_MAX_LIMIT` (the loader's cap there: "unbounded" ±1e16).
@@ -378,11 +366,12 @@ def to_urdf(
 
     """
     source = table_of(source, leg)
-    text = (
-        _chain_urdf(source, header)
-        if isinstance(source, Chain)
-        else _robot_urdf(source, leg, header)
-    )
+    if isinstance(source, Chain):
+        name, body = source.name, _chain_urdf(source)
+    else:
+        legs = source.legs if leg is None else (source.leg(leg),)
+        name, body = source.name + ("" if leg is None else f"_{leg}"), _robot_urdf(source, legs)
+    text = "\n".join([*_header(name, source.description, header), *body, "</robot>"]) + "\n"
     _check_magnitudes(text, source.name)
     return text
 
