@@ -68,23 +68,15 @@ def _erd_index() -> dict[str, Path]:
 
 
 def erd_names() -> list[str]:
-    """Names of every example-robot-data URDF, sorted.
-
-    File stems, and for a stem that two files share (``anymal``) also
-    ``<description folder>/<stem>`` for each of them, so that every file has a name.
-    """
+    """Names of every example-robot-data URDF, sorted (``<folder>/<stem>`` too for ``anymal``)."""
     return sorted(_erd_index())
 
 
 def erd_path(name: str) -> Path:
-    """Path of the example-robot-data URDF ``name`` (e.g. ``"solo12"``).
-
-    A name that is a unique prefix of one robot's name (``"ur5"`` → ``"ur5_robot"``) or that
-    is that robot's name without ``_robot``/``_description`` resolves to it.
+    """Path of the example-robot-data URDF ``name`` (``"solo12"``; a unique prefix, ``"ur5"``).
 
     Raises:
-        SourceError: If there is no such robot (the message suggests close names and lists
-            those that exist).
+        SourceError: No such robot (close names suggested, those that exist listed).
 
     """
     index = _erd_index()
@@ -123,14 +115,11 @@ def _package_name(folder: Path) -> str | None:
 
 
 def _package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
-    """Directories where the ``package://PKG/...`` URIs of a URDF resolve (``<dir>/PKG/...``).
+    """Directories where the ``package://PKG/...`` URIs of ``text`` resolve, as ROS tools do.
 
-    As ROS tools do, for each package named in ``text``, de-duplicated, in this order:
-    ``extra`` (the user's ``package_dirs=``, as given), the entries of ``ROS_PACKAGE_PATH``
-    (one holding ``PKG``, one that is ``PKG``, or a ``PKG`` folder with a ``package.xml`` at
-    most three levels below), then the folders above the URDF file ``path`` (``None`` for
-    text) named ``PKG``. The gate still checks each mesh stays inside its directory.
-
+    In order, de-duplicated: ``extra`` (the user's), ``ROS_PACKAGE_PATH`` entries holding
+    ``PKG``, being ``PKG`` or with ``PKG/package.xml`` at most three levels below, then the
+    folders named ``PKG`` above the URDF file ``path`` (``None`` for text).
     """
     out: list[str] = []
 
@@ -254,13 +243,10 @@ def _find_package(pkg: str, path: Path, dirs: tuple[str, ...], named: dict[str, 
 
 
 def _expand(path: Path, text: str, dirs: tuple[str, ...], named: dict[str, str]) -> str:
-    """A ROS xacro file expanded by the ``xacro`` package without ROS.
+    """A ROS xacro file expanded by the ``xacro`` package without ROS (one at a time: a lock).
 
-    ``$(find PKG)`` resolves, in this order, to ``NAME=PATH`` entries of ``package_dirs``,
-    then a ``PKG`` folder in the plain ``package_dirs``, ``ROS_PACKAGE_PATH`` or the folders
-    above the file (:func:`_package_dirs_for`), in the file and in the files it includes.
-    ``xacro`` keeps its state in module globals, so expansions are serialised by a lock, and
-    its ``$(find)`` hook is swapped for the call only.
+    ``$(find PKG)``: a ``NAME=PATH`` entry of ``package_dirs``, else a ``PKG`` folder found as
+    :func:`_package_dirs_for` finds them (xacro's hook swapped for the call only).
 
     Raises:
         SourceError: A package that cannot be found.
@@ -424,9 +410,7 @@ def _hint(text: str) -> str:
 
 # ------------------------------------------------------------------------ second engine
 def yourdfpy_load(text: str) -> Any:
-    """The URDF text loaded by yourdfpy (a second engine; meshes not loaded).
-
-    Only call it on text that passed the loader gate (yourdfpy repairs malformed XML).
+    """The URDF text loaded by yourdfpy (meshes not loaded): only text that passed the gate.
 
     Raises:
         OptionalDependencyError: If yourdfpy is not installed.

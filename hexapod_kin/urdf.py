@@ -1,13 +1,9 @@
-"""Parameter tables → deterministic URDF text (the "xacro-like" generators).
+"""Parameter tables → deterministic URDF text, written atomically (no Pinocchio here).
 
-No Pinocchio here: this module only turns :class:`~hexapod_kin.params.Chain` and
-:class:`~hexapod_kin.params.Hexapod` objects into URDF strings and writes them atomically.
-
-Mapping, row by row: Khalil row ``j`` becomes a URDF joint whose ``<origin>`` is
-``^{j-1}T_j`` at ``q = 0`` (``Rx(α)·Tx(d)·Rz(θ)·Tz(r)``) and whose axis is ``0 0 1``
-(``z_j``), so the URDF link of row ``j`` *is* Khalil frame ``j``. A fixed row becomes a fixed
-joint. Visuals: a sphere at every joint and a cylinder from each frame's origin to the next
-one's; the tip gets a sphere (the foot). Inertials come from the chain (default: rods).
+Khalil row ``j`` becomes a URDF joint whose ``<origin>`` is ``^{j-1}T_j`` at ``q = 0`` and whose
+axis is ``0 0 1``: the URDF link of row ``j`` *is* Khalil frame ``j`` (a fixed row: a fixed
+joint). Visuals: a sphere at every joint, a cylinder from each frame's origin to the next, a
+sphere at the tip; inertials from the chain (default: rods).
 
 A chain's base pose (``Chain.base_pose``, ``T_base_0``) becomes the fixed joint
 ``<robot>_base_offset`` from the base link to the link ``<base>_frame0`` (Khalil frame 0); its
@@ -263,12 +259,10 @@ _ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
 
 
 def _check_magnitudes(text: str, name: str) -> None:
-    """Refuse to emit a number the package's own URDF loader would refuse (a round trip).
+    """Refuse a number beyond the loader's cap (1e9 SI, 1e20 in ``<limit>``-like tags).
 
-    The loader caps every number at |x| <= :data:`~hexapod_kin.tables.MAX_NUMBER` (1e9, SI
-    units; 1e20 in ``<limit>``-like tags): a chain whose lengths, masses or inertias go beyond
-    it (e.g. ``hexabot_leg(l1=1e12)``: a rod inertia of 1e23 kg m²) gets one clear error here,
-    not a file that ``fk`` then refuses.
+    E.g. ``hexabot_leg(l1=1e12)`` (a rod inertia of 1e23 kg m²): one clear error here, not a
+    file that ``fk`` then refuses.
     """
     for element in _ELEMENT.finditer(text):
         tag = element.group(1)
@@ -299,8 +293,7 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
     """The parameter table of a source, read as :func:`hexapod_kin.load` reads it.
 
     A Chain or Hexapod is itself; a preset name builds the preset; a ``.toml``/``.yaml`` path
-    reads the table file (:func:`~hexapod_kin.tables.read_table`). The exports of what
-    hexapod_kin builds (URDF, xacro, a ROS 2 package) take exactly these.
+    is read (:func:`~hexapod_kin.tables.read_table`): what the exports of tables take.
 
     Raises:
         ParameterError: A URDF (path, text or ``erd:NAME``: it has no table), another type,
@@ -355,13 +348,9 @@ def to_urdf(
         leg: For a :class:`Hexapod`, emit only this leg with its mount on the body.
         header: Extra line for the header comment (e.g. which command made the file).
 
-    Returns:
-        The URDF document as a string.
-
     Raises:
-        ParameterError: If ``source`` is of another kind (a URDF), ``leg`` is given for a
-            chain, or a number would be beyond what the package's URDF loader accepts
-            (|x| <= 1e9).
+        ParameterError: ``source`` of another kind (a URDF), ``leg`` for a chain, or a number
+            beyond what the package's URDF loader accepts (|x| <= 1e9).
         SourceError: A table file that cannot be read.
 
     """
