@@ -1,9 +1,4 @@
-"""Matplotlib figures (PNG). Imported lazily; never imported by the core.
-
-Every function takes computed results (no model building here), returns the written
-:class:`~pathlib.Path`, and writes the PNG atomically. Sections: singularity pictures
-(heat maps, workspace) and motion pictures (foot/joint time series).
-"""
+"""Matplotlib figures of computed results, written atomically; never imported by the core."""
 
 from __future__ import annotations
 
@@ -44,12 +39,7 @@ FORMATS = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".svg": "svg", ".pdf"
 
 
 def _figure_format(path: str | os.PathLike[str]) -> str:
-    """The image format of ``path`` from its suffix.
-
-    Raises:
-        ParameterError: An unknown suffix (the message lists the allowed ones).
-
-    """
+    """The image format of ``path``'s suffix (else ParameterError listing :data:`FORMATS`)."""
     from .exceptions import ParameterError, choices
 
     suffix = Path(path).suffix.lower()
@@ -65,11 +55,10 @@ def _figure_format(path: str | os.PathLike[str]) -> str:
 
 
 def decimate(x: Any, y: Any, max_points: int = 3000) -> tuple[Any, Any]:
-    """``(x, y)`` thinned for drawing a line: each bucket keeps its smallest and largest sample.
+    """``(x, y)`` thinned for a line plot: each bucket keeps its smallest and largest sample.
 
-    The same picture (every peak and dip, NaN gaps included) with at most ``max_points + 3``
-    of the (N,) samples; a series this short passes unchanged (views of the input).
-
+    The same picture (every peak, dip and NaN gap) from at most ``max_points + 3`` samples;
+    a shorter series passes unchanged (views of the input).
     """
     import numpy as np
 
@@ -96,12 +85,8 @@ def save_figure(
 ) -> Path:
     """Render ``fig`` in memory in the format of ``path``'s suffix, write it atomically, close it.
 
-    Args:
-        fig: A matplotlib figure.
-        path: Destination; its suffix picks the format.
-        dpi: Resolution of raster formats.
-        crop: Crop the page to what is drawn (``bbox_inches="tight"``: one more layout pass);
-            a figure already fitted by ``tight_layout`` passes False.
+    ``dpi``: resolution of raster formats; ``crop``: crop to what is drawn
+    (``bbox_inches="tight"``, one more layout pass; False for a figure already fitted).
 
     Raises:
         ParameterError: An unknown suffix (see :data:`FORMATS`).
@@ -118,14 +103,10 @@ def save_figure(
 
 
 def fit_limits(ax: Any, x: Any, y: Any, margin: float = 0.06, equal: bool = True) -> None:
-    """Set ``ax``'s limits to the data's extent plus ``margin`` of its span on each side.
+    """Set ``ax``'s limits to the extent of ``x``, ``y`` (NaN ignored) plus ``margin``.
 
-    With ``equal`` the axes keep one scale for x and y by shrinking the box
-    (``adjustable="box"``), never by widening the limits past the data.
-
-    ``x``, ``y``: every value drawn (any shape; NaN ignored); ``margin``: a fraction of the
-    larger span.
-
+    ``margin``: a fraction of the larger span; ``equal``: one scale for x and y by shrinking
+    the box, never by widening the limits.
     """
     import numpy as np
 
@@ -155,16 +136,13 @@ def plot_still(
 
     Args:
         chains: Point lists (K, 3) in [m], each drawn as links with joint markers (a leg).
-        path: Destination PNG (written atomically).
+        path: Destination PNG (written atomically; returned).
         title: Figure title (say which time the frame is).
         traces: Paths (N, 3) drawn as thin lines (e.g. the foot's path over the run).
         outlines: Closed polygons (M, 3) drawn as outlines (a body, a support polygon).
         ghosts: Point lists drawn faint behind ``chains`` (e.g. the pose at t = 0).
         view: Elevation and azimuth of the camera in [deg].
         size: Figure size in inches.
-
-    Returns:
-        The path written.
 
     """
     import numpy as np
@@ -218,11 +196,7 @@ _MEASURE_LABELS = {
 
 
 def _joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
-    """``(values, "name (qk) [unit]")`` of ``joint`` of a scan for an axis.
-
-    Revolute joints in degrees; prismatic joints in metres, or millimetres when their range is
-    under 0.1 m.
-    """
+    """``(values, "name (qk) [unit]")`` of a scan's ``joint``: [deg], [m] or [mm] (< 0.1 m)."""
     import numpy as np
 
     vals = np.asarray(values, dtype=float)
@@ -238,12 +212,7 @@ def _joint_axis(result: Any, joint: int, values: Any) -> tuple[Any, str]:
 def singularity_map_figure(
     result: Any, measure: str | None = None, title: str | None = None
 ) -> Any:
-    """The figure of :func:`plot_singularity_map` (not written; close it when done).
-
-    Raises:
-        ParameterError: Not a 2-joint grid scan, or an unknown measure.
-
-    """
+    """The figure of :func:`plot_singularity_map` (not written; close it when done)."""
     import numpy as np
 
     from .exceptions import ParameterError, choices
@@ -383,9 +352,6 @@ def plot_singularity_map(
             otherwise), ``"sigma_min"`` or ``"condition"``.
         title: Figure title (default: source, measure and the fixed joints).
 
-    Returns:
-        The written path.
-
     Raises:
         ParameterError: Not a 2-joint grid scan, an unknown measure or file suffix.
 
@@ -436,15 +402,8 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
     vs time; deviation from the reference path (|y − y0|, |z − z0|, |x − x_ref|, log scale),
     with the plain Euler baseline when the run has one.
 
-    Args:
-        run: A :class:`~hexapod_kin.seeds.SeedRun` or a
-            :class:`~hexapod_kin.motion.Trajectory`.
-        path: Destination PNG (written atomically).
-        title: Figure title.
-
-    Returns:
-        The path written.
-
+    ``run`` is a :class:`~hexapod_kin.seeds.SeedRun` or a
+    :class:`~hexapod_kin.motion.Trajectory`. Returns the written path.
     """
     import numpy as np
 
