@@ -1,11 +1,8 @@
-"""The lab reports' experiments, as functions (reports shipped in ``hexapod_kin/report/seeds/``).
+"""The lab reports' experiments (``hexapod_kin/report/seeds/``) as functions.
 
-* :func:`seed_experiment` is the seeds' run: the 3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``, with
-  the drift figures, and :func:`euler_baseline`, the plain Euler + ``np.linalg.solve`` loop the
-  seeds used.
-* :func:`step_torques`: the joint torques along the seeds' run (gravity, a foot force, inertia).
-* :func:`seed002_schedule` is seed 002's Table I (movement planning of the 2-DOF leg) as a
-  :class:`~hexapod_kin.motion.JointSchedule`.
+:func:`seed_experiment`, the seeds' run (3-DOF leg, ``v = [A sin(2πt/T), 0, 0]``) with its
+drift figures, and :func:`euler_baseline`, the seeds' plain Euler + ``np.linalg.solve`` loop;
+:func:`step_torques` along that run; :func:`seed002_schedule`, seed 002's Table I.
 """
 
 from __future__ import annotations
@@ -93,12 +90,7 @@ def _drift(
 def euler_baseline(
     model: Any, velocity: Callable[[Any], Any], q0: Any, dt: float, duration: float
 ) -> np.ndarray:
-    """The seeds' integration: ``q += dt · np.linalg.solve(J(q), v(t))`` (open loop, Pinocchio).
-
-    Returns:
-        (N, n) joint trajectory.
-
-    """
+    """The seeds' open loop ``q += dt · np.linalg.solve(J(q), v(t))``: the (N, n) trajectory."""
     q = model.check_q(q0, "q0").copy()
     steps = int(round(duration / dt))
     out = np.empty((steps + 1, model.nq))
@@ -132,11 +124,7 @@ def euler_baseline(
 
 
 def _start(model: Any, q0: Any) -> np.ndarray:
-    """``q0`` checked, else the seeds' start ``SEED_Q0`` where it fits, else the home pose.
-
-    ``SEED_Q0`` on a 3-joint chain within its limits is what :func:`default_stance` gives there,
-    without importing the IK package.
-    """
+    """``q0`` checked, else ``SEED_Q0`` where it fits (no IK import), else the home pose."""
     if q0 is not None:
         return np.array(model.check_q(q0, "q0"))
     seed = np.array(SEED_Q0)
@@ -172,8 +160,7 @@ def seed_experiment(
 ) -> SeedRun:
     """The seeds' experiment: foot velocity ``[A sin(2πt/T), 0, 0]`` on the 3-DOF leg.
 
-    The seeds give no amplitude or period; the defaults (A = 0.05 m/s, T = 2 s) move the foot
-    0 → 3.2 cm → 0 along x every period from ``SEED_Q0``.
+    The defaults (the seeds give none) move the foot 0 → 3.2 cm → 0 along x every period.
 
     Args:
         model: A loaded 3-joint model (default: ``hexabot_leg``).
@@ -186,9 +173,6 @@ def seed_experiment(
         method: Integration method.
         gain: Closed-loop gain [1/s] toward the exact reference ``x0 + A T/(2π)(1 − cos 2πt/T)``.
         baseline: Also run the plain Euler + ``np.linalg.solve`` loop (needs a square J).
-
-    Returns:
-        A :class:`SeedRun`.
 
     """
     from .kinematics import load
@@ -230,14 +214,12 @@ def seed_baseline(
     duration: float = 10.0,
     q0: Any = None,
 ) -> tuple[dict[str, float], np.ndarray | None, str | None]:
-    """The baseline of :func:`seed_experiment` alone: the seeds' plain Euler + solve loop.
-
-    The arguments are those of :func:`seed_experiment` (``model``: a loaded 3-joint model).
+    """The baseline of :func:`seed_experiment` (its arguments) alone: the Euler + solve loop.
 
     Returns:
-        ``(figures, deviation, failure)``: the drift figures in [m] (``drift_y``,
-        ``drift_z``, ``error_x``) and the (N, 3) read-only |foot − reference| (empty dict and
-        None when the loop met a singular J), and why it stopped (or None).
+        ``(figures, deviation, failure)``: ``drift_y``, ``drift_z``, ``error_x`` in [m], the
+        read-only (N, 3) |foot − reference| (``{}`` and None after a singular J), and why it
+        stopped (or None).
 
     """
     a = finite("amplitude", amplitude)
@@ -289,11 +271,10 @@ def step_torques(
 
 
 def seed002_schedule() -> JointSchedule:
-    """Seed 002 Table I (movement planning of the 2-DOF leg), in radians.
+    """Seed 002 Table I (movement planning of the 2-DOF leg), linear ramps in radians.
 
-    Knots (t [s]: θ1, θ2 [deg]): 0: (0, −90); 2: (0, −90) — no movement; 7: (0, −50) — tibia
-    +40°; 11: (20, −50) — coxa +20°; 15: (20, −50) — no movement; 20: (0, −90) — both back;
-    idle afterwards. Linear ramps (the paper's Signal Builder).
+    Knots (t [s]: θ1, θ2 [deg]): 0: (0, −90); 2: (0, −90); 7: (0, −50); 11: (20, −50);
+    15: (20, −50); 20: (0, −90); idle afterwards.
     """
     deg = np.array([(0, -90), (0, -90), (0, -50), (20, -50), (20, -50), (0, -90)], float)
     return JointSchedule(
