@@ -135,13 +135,17 @@ def _check(
     if root.tag != "robot":
         raise UrdfError(f"URDF line {root.sourceline}: root element <{root.tag}>; <robot> required")
     repairs: list[str] = []
+
+    def mend(el: etree._Element, problem: str, attr: str, value: Any, done: str) -> None:
+        """Lenient: say what is mended (the caller mends it); else the error."""
+        if not lenient:
+            raise error_at(el, problem, attr, value)
+        repairs.append(str(error_at(el, f"{problem}: {done}", attr, value)))
+
     robot_name = root.get("name")
     if robot_name is None or not robot_name.strip():
-        problem = "<robot> needs a non-empty name"
-        if not lenient:
-            raise error_at(root, problem, "name", robot_name)
+        mend(root, "<robot> needs a non-empty name", "name", robot_name, "named 'robot'")
         root.set("name", "robot")
-        repairs.append(str(error_at(root, problem + ": named 'robot'", "name", robot_name)))
     links = root.findall("link")
     if not links:
         hint = ""
@@ -203,21 +207,14 @@ def _check(
         if mimic is not None:
             target = mimic.get("joint")
             if target not in joint_el or target == joint.get("name"):
-                problem = "mimic must name another existing joint"
-                if not lenient:
-                    raise error_at(mimic, problem, "joint", target)
-                why = (
-                    f"{problem}: <mimic> dropped, the joint {joint.get('name')!r} moves on its own"
-                )
-                repairs.append(str(error_at(mimic, why, "joint", target)))
+                done = f"<mimic> dropped, the joint {joint.get('name')!r} moves on its own"
+                mend(mimic, "mimic must name another existing joint", "joint", target, done)
                 joint.remove(mimic)
 
     roots = [n for n in link_el if n not in parent_of]
-    if len(roots) != 1:
-        if not roots:
-            raise UrdfError(
-                "URDF has no root link (every link is a child): the joints form a cycle"
-            )
+    if not roots:
+        raise UrdfError("URDF has no root link (every link is a child): the joints form a cycle")
+    if len(roots) > 1:
         raise UrdfError(
             f"URDF has {len(roots)} root links {roots[:10]}; exactly one is required "
             "(connect them with joints)"
