@@ -1,8 +1,6 @@
 """Masses and inertias: each link's ``<inertial>``, and each moving body Pinocchio builds.
 
-Part of :mod:`hexapod_kin._gate`. Principal moments come from LAPACK
-(:func:`numpy.linalg.eigvalsh`): the gate stays pure numpy so that loading a model never
-imports numba (the compiled ``_numerics.eig3_sym`` serves the kernels).
+Principal moments by :func:`numpy.linalg.eigvalsh`: loading a model never imports numba.
 """
 
 from __future__ import annotations
@@ -85,7 +83,7 @@ def _eig_text(eig: Sequence[float]) -> str:
 def link_inertial(link: etree._Element, defects: list[tuple[str, str]] | None = None) -> _Inertial:
     """Check a link's ``<inertial>``: mass >= 0, six finite entries, not indefinite.
 
-    With ``defects`` (lenient mode) an indefinite inertia is recorded there instead of raised.
+    With ``defects`` (lenient mode) a defect is recorded there instead of raised.
     """
     inertial = single(link, "inertial", required=False)
     if inertial is None:
@@ -121,11 +119,9 @@ def check_gyration(
     size: float,
     defects: list[tuple[str, str]] | None = None,
 ) -> None:
-    """A link whose radius of gyration is far beyond the robot's size (:data:`GYRATION_FACTOR`).
+    """Refuse (or record in ``defects``) a radius of gyration beyond :data:`GYRATION_FACTOR`.
 
-    ``sqrt(I_max / m)`` is the distance at which the link's whole mass would give its largest
-    principal moment; a real link's is below its own size. With ``defects`` (lenient mode)
-    the defect is recorded there instead of raised.
+    ``sqrt(I_max / m)``: where the link's whole mass would give its largest moment.
     """
     if inertial.mass <= 0.0 or inertial.element is None:
         return
@@ -151,10 +147,9 @@ def check_moving_body(
     fixed_children: dict[str, list[tuple[str, etree._Element]]],
     defects: list[tuple[str, str]] | None = None,
 ) -> None:
-    """The body Pinocchio builds for joint ``jname``: ``child`` plus its fixed-joint subtree.
+    """The body of joint ``jname`` (``child`` and its fixed subtree): mass > 0, a physical inertia.
 
-    It must have mass > 0 and a positive-definite inertia (about its centre of mass) whose
-    principal moments satisfy the triangle inequality. With ``defects`` (lenient mode) a
+    Positive definite, obeying the triangle inequality; with ``defects`` (lenient mode) a
     failure is recorded there as ``(child, message)`` instead of raised.
     """
     # Members with their pose in the child frame (poses computed only if >1 carries mass).

@@ -7,30 +7,25 @@ from __future__ import annotations
 
 import re
 
-#: Largest URDF text accepted, in bytes (20 MiB; the largest example-robot-data file is < 1 MiB).
+#: Largest URDF text accepted, in bytes (example-robot-data's largest is < 1 MiB).
 MAX_URDF_BYTES = 20 * 1024 * 1024
-#: Most links accepted (also the depth cap): Pinocchio 4.1 segfaults on chains of about 4,000
-#: links; every robot of example-robot-data has fewer than 1,000.
+#: Most links (also the depth cap): Pinocchio 4.1 segfaults on chains of about 4,000.
 MAX_LINKS = 1000
-#: Largest magnitude of any number (SI units): huge values overflow inside Pinocchio; 1e9 is
-#: far beyond any robot.
+#: Largest magnitude of any number (SI units; huge values overflow inside Pinocchio).
 MAX_ABS = 1e9
-#: The same for ``<limit>``, ``<safety_controller>``, ``<dynamics>``, ``<calibration>`` and
-#: ``<mimic>``, where values such as ±1e16 are a common way to write "unbounded".
+#: The same in :data:`LIMIT_TAGS`, where ±1e16 is a common way to write "unbounded".
 MAX_ABS_LIMIT = 1e20
 LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
-#: Most degrees of freedom accepted: Pinocchio's ``Data`` grows as about 64·nv³ bytes (0.2 GB
-#: at nv = 128); the largest robot of example-robot-data (tiago_dual) has 101.
+#: Most degrees of freedom: Pinocchio's ``Data`` is about 64·nv³ bytes (tiago_dual has 101).
 MAX_DOF = 128
 #: DoFs (nv) of each URDF joint type.
 JOINT_DOF = {"revolute": 1, "continuous": 1, "prismatic": 1, "fixed": 0, "floating": 6, "planar": 3}
 #: Largest mesh or texture file accepted, in bytes (200 MiB).
 MAX_MESH_BYTES = 200 * 1024 * 1024
-#: Relative tolerance of the triangle inequality ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)``
-#: (CAD exports round their inertias; 1e-6 accepts that rounding, not a wrong tensor).
+#: Relative tolerance of ``I1 + I2 >= I3 * (1 - TRIANGLE_RTOL)`` (CAD exports round inertias).
 TRIANGLE_RTOL = 1e-6
-#: A link's radius of gyration ``sqrt(I_max / m)`` beyond ``GYRATION_FACTOR`` times the robot's
-#: size (the sum of its joint offsets) and beyond ``GYRATION_MAX`` [m] cannot be the link's.
+#: A radius of gyration ``sqrt(I_max / m)`` beyond ``GYRATION_FACTOR`` times the robot's size
+#: (the sum of its joint offsets) and beyond ``GYRATION_MAX`` [m] cannot be a link's.
 GYRATION_FACTOR = 10.0
 GYRATION_MAX = 1.0
 #: Joint types of the URDF spec.
@@ -51,12 +46,10 @@ BIG_NUMBER = re.compile(r"[eE]\+?0*[1-9]\d|\d{10}")  # exponent >= 10 or 10 digi
 NEGATIVE = re.compile(r"(?:^|[ \t\r\n])-")
 SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
 RESERVED = {"universe"}
-#: Absolute tolerance on principal moments in [kg m^2] (rounding noise in exported files; a
-#: 1 mg, 0.1 mm part has 1e-14).
+#: Absolute tolerance on principal moments [kg m^2] (a 1 mg, 0.1 mm part has 1e-14).
 INERTIA_FLOOR = 1e-18
 
-# (element tag, attribute) → (count of numbers, minimum or None). Attributes not listed are
-# not numeric. The tag is the element's own tag; context-dependent ones are handled in code.
+# element tag → attribute → (count of numbers, minimum or None); others are not numeric
 NUMERIC: dict[str, dict[str, tuple[int, float | None]]] = {
     "origin": {"xyz": (3, None), "rpy": (3, None)},
     "axis": {"xyz": (3, None)},

@@ -23,19 +23,14 @@ class MeshMissing(UrdfError):
 
 
 class MeshOutside(UrdfError):
-    """A refused file name (another URI scheme, ``~``, an absolute path that may not be read).
-
-    Never read: lenient loading drops its element with a warning that says "refused". (An
-    escape out of the root through ``..`` or a link is always an error.)
-    """
+    """A refused file name (a URI scheme, ``~``, a forbidden absolute path): dropped, unread."""
 
 
 class MeshEmpty(UrdfError):
     """A mesh file of 0 bytes (mesh loaders fail on it): dropped like a missing one."""
 
 
-#: Mesh formats read from an absolute or ``file://`` path (xacro's ``$(find pkg)``) when the
-#: URDF was loaded from its file: nothing else is read from outside its roots.
+#: Mesh formats read from an absolute or ``file://`` path of a URDF loaded from its file.
 MESH_SUFFIXES = (".stl", ".dae", ".obj", ".ply")
 
 
@@ -67,10 +62,7 @@ def resolve_mesh(
     package_dirs: Sequence[str | os.PathLike[str]] = (),
     mesh_root: str | os.PathLike[str] | None = None,
 ) -> Path:
-    """Resolve a mesh/texture ``filename`` to a regular file inside an allowed root.
-
-    ``uri`` (a ``filename`` attribute) resolves as :mod:`hexapod_kin._gate` rule 7 says.
-    Returns the real path of the file.
+    """The real path of a mesh/texture ``filename`` (rule 7 of :mod:`hexapod_kin._gate`).
 
     Raises:
         UrdfError: Refused scheme or absolute path, an escape out of the root, a missing,

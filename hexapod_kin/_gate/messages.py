@@ -1,9 +1,7 @@
-"""The loader's warnings about a gate result: one short line per kind of defect.
+"""The loader's warnings about a gate result: one line per kind of defect.
 
-Part of :mod:`hexapod_kin._gate`. A real robot file can have dozens of unusable meshes or
-implausible inertials; the loader says each kind once, with a count, the first few names and
-the first line, and what to do (the full list stays in ``missing_meshes`` /
-``inertia_defects``).
+Each kind once, with a count, the first few names, the first line and what to do (the full
+lists stay in ``missing_meshes`` / ``inertia_defects``).
 """
 
 from __future__ import annotations

@@ -52,11 +52,9 @@ class GateResult:
             ``(uri, reason)`` pairs; their visual/collision elements must be dropped.
         inertia_defects: Physically implausible inertials (lenient mode only), as
             ``(link, defect)`` pairs; harmless to kinematics, refused by dynamics.
-        repairs: Harmless defects of real robot files mended in lenient mode (a ``<robot>``
-            without a name gets ``name="robot"``; a ``<mimic>`` naming a joint that does not
-            exist is dropped, the joint then moves on its own), one message each.
-        text: The mended document when :attr:`repairs` is not empty (give it to Pinocchio),
-            else ``None``.
+        repairs: Harmless defects mended in lenient mode, one message each (a nameless
+            ``<robot>`` named ``"robot"``; a ``<mimic>`` of no joint dropped).
+        text: The mended document when there are :attr:`repairs` (for Pinocchio), else None.
 
     """
 
@@ -81,8 +79,7 @@ class GateResult:
         }
 
 
-#: Documents that passed and reference no files, by text (small LRU: generated URDFs are
-#: loaded again and again).
+#: Documents that passed and reference no files, by text (generated URDFs load again and again).
 _CACHE: dict[tuple[bool, str | bytes], GateResult] = {}
 _CACHE_SIZE = 32
 _CACHE_MAX_CHARS = 1_000_000
@@ -102,8 +99,7 @@ def check_urdf(
     ``None`` (URDF text) refuses relative mesh paths.
 
     Returns:
-        A :class:`GateResult` (shared between calls with the same text when the document
-        references no files: do not modify ``root``).
+        A :class:`GateResult`, shared by calls with the same text naming no files.
 
     Raises:
         UrdfError: Naming the element, attribute, value and line of the problem.
@@ -117,7 +113,6 @@ def check_urdf(
     result = _check(text, tuple(package_dirs), mesh_root, lenient)
     no_files = not result.meshes and not result.missing_meshes
     if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS and no_files:
-        # Without file references the verdict depends on the text alone: remember it.
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = result
@@ -232,8 +227,7 @@ def _check(
         why = f"link not reachable from the root {roots[0]!r}: joints form a cycle"
         raise error_at(link_el[lost[0]], why, "name", lost[0])
 
-    # Masses: each link's inertial, then each moving body (child of a non-fixed joint plus
-    # its fixed-joint descendants, as Pinocchio merges them) must carry mass and inertia.
+    # masses: each link's inertial, then each moving body as Pinocchio merges it
     inertials = {n: link_inertial(el, defects) for n, el in link_el.items()}
     fixed_children: dict[str, list[tuple[str, etree._Element]]] = {n: [] for n in link_el}
     for child, jname in parent_of.items():
@@ -258,7 +252,7 @@ def _check(
         except (MeshMissing, MeshOutside, MeshEmpty) as exc:
             if not lenient:
                 raise error_at(node, str(exc), "filename", uri) from None
-            # "line N: 'uri': refused|not found|empty: why" (model.py's warning parses it)
+            # "line N: 'uri': refused|not found|empty: why" (parsed by messages.mesh_lines)
             missing.append((uri or "", f"line {node.sourceline}: {exc}"))
             continue
         except UrdfError as exc:
