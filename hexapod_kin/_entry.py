@@ -1,10 +1,8 @@
 """The ``hexapod-kin`` console entry point: Ctrl-C is the program's from its first statement.
 
-The console script calls :func:`run`, whose first statement installs a SIGINT handler before
-the command line's imports load: a Ctrl-C then prints ``hexapod-kin: interrupted`` and ends
-the process by its own SIGINT (status 130), never a traceback; :func:`hexapod_kin.cli.main`
-later installs its own. Importing :mod:`hexapod_kin` leaves SIGINT as it is. This module
-imports only what the interpreter has loaded already.
+:func:`run` installs a SIGINT handler before the command line's imports load (then one line,
+``hexapod-kin: interrupted``, status 130, never a traceback). Importing :mod:`hexapod_kin`
+leaves SIGINT as it is; this module imports only what the interpreter has loaded already.
 """
 
 from __future__ import annotations

@@ -12,18 +12,10 @@ __all__ = ["lazy_names"]
 def lazy_names(
     package: str, where: dict[str, str], namespace: dict[str, Any]
 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
-    """The ``__getattr__`` and ``__dir__`` of ``package`` for its lazily imported names.
+    """``(__getattr__, __dir__)`` of ``package`` (its ``__name__``) for lazily imported names.
 
-    Args:
-        package: The package's ``__name__``.
-        where: Name → the module defining it, relative to ``package`` (``".build"``,
-            ``"..workspace"``).
-        namespace: The package's ``globals()``: a name is stored there once imported.
-
-    Returns:
-        ``(__getattr__, __dir__)``; ``__getattr__`` raises :class:`AttributeError` for a
-        name not in ``where``.
-
+    ``where``: name → its module relative to ``package`` (``".build"``, ``"..workspace"``);
+    ``namespace``: the package's ``globals()``, where a name is stored once imported.
     """
 
     def __getattr__(name: str) -> Any:

@@ -1,11 +1,6 @@
-"""Small per-call maths in plain numpy (never imports numba).
+"""Small per-call maths in plain numpy (never numba; twins in :mod:`hexapod_kin._kmath`).
 
-One home each: angle wrapping (:func:`wrap_angles`), the chain's length scale
-(:func:`chain_length` / :func:`chain_scale`) and the damped-least-squares step
-(:func:`dls_step`, :func:`dls_step3`). Their compiled counterparts live in
-:mod:`hexapod_kin._kmath`.
-
-Angles in [rad], lengths in [m].
+Angle wrapping, the chain's length scale and the damped-least-squares step. [rad], [m].
 """
 
 from __future__ import annotations
@@ -30,11 +25,7 @@ def wrap_angles(a: Any) -> np.ndarray:
 
 
 def chain_length(trans: Any) -> float:
-    """Sum of the link offsets' lengths ``Σ‖tᵢ‖`` in [m] of an (m, 3) translation array.
-
-    An upper bound of the base-to-tip distance (rows are the joint placements and the tip
-    offset, e.g. ``Model.arrays.trans``; a Khalil row contributes ``‖(d, 0, r)‖``).
-    """
+    """``Σ‖tᵢ‖`` [m] of (m, 3) offsets (``Model.arrays.trans``): bounds the base-to-tip distance."""
     t = np.asarray(trans, dtype=np.float64).reshape(-1, 3)
     return float(np.sum(np.sqrt(np.sum(t * t, axis=1))))
 
@@ -46,12 +37,10 @@ def chain_scale(trans: Any) -> float:
 
 
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
-    """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (pure function).
+    """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (twin of ``_kmath.dls_into``).
 
-    The package's one numpy DLS step (twin of :func:`hexapod_kin._kmath.dls_into`). The
-    smaller system is solved: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ(JfJfᵀ +
-    λ²I)⁻¹ e``. ``Jf`` is ``jac`` with the columns of frozen joints (``free`` False or 0)
-    zeroed. A stack of tasks (n ≤ m) is solved at once.
+    The smaller system: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m; ``Jf``: ``jac`` with the columns
+    of frozen joints (``free`` False or 0) zeroed. A stack of tasks (n ≤ m) at once.
 
     Args:
         jac: Task Jacobian (m, n), or a stack (..., m, n).
@@ -60,8 +49,7 @@ def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.n
         free: Optional (n,) booleans or 0/1 weights of the joints.
 
     Returns:
-        Δq (n,) (stack: (..., n)); zeros when the system is singular (``λ² = 0`` at a
-        singularity).
+        Δq (n,) (stack: (..., n)); zeros when singular (``λ² = 0`` at a singularity).
 
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)
@@ -97,11 +85,7 @@ _EYE: dict[int, np.ndarray] = {}
 
 
 def dls_step3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:
-    """:func:`dls_step` of a 3×3 ``J`` (rows ``j``) on Python floats; None if not SPD.
-
-    ``(JᵀJ + λ² I)⁻¹ Jᵀ x`` by Cholesky, the arithmetic of the compiled
-    :func:`~hexapod_kin._kmath.dls_into` unrolled (a 3-joint leg's step, a few µs).
-    """
+    """:func:`dls_step` of a 3×3 ``J`` on floats (``dls_into``'s Cholesky); None: not SPD."""
     (a, b, c), (d, e, f), (g, h, i) = j
     x0, x1, x2 = x
     r0, r1, r2 = a * x0 + d * x1 + g * x2, b * x0 + e * x1 + h * x2, c * x0 + f * x1 + i * x2

@@ -1,12 +1,9 @@
 """The one page builder: every HTML page of the package, and its one escaping rule.
 
-Every page (the seed report, the viewer's offline page, the walk and the simulation pages, the
-notebook frames) is :data:`SKELETON` filled by :func:`page`; every fragment with holes is a
-:class:`string.Template` filled by :func:`fill`. The rule: a value is text, escaped by
-:func:`html.escape` (``& < > " '``), unless it is :class:`Html` (markup built here or written
-in the package's source); a template is filled in one pass, so an inserted value is never
-read again (a title holding ``$data``, ``${x}`` or ``__DATA__`` stays that text). A leaf
-module (the standard library, ``exceptions`` and ``_version`` only).
+Every page is :data:`SKELETON` filled by :func:`page`, every fragment a
+:class:`string.Template` filled by :func:`fill`: a value is text, escaped (``& < > " '``),
+unless it is :class:`Html` (markup of the package's own); one pass, so an inserted value is
+never read again (a title holding ``$data`` stays that text).
 """
 
 from __future__ import annotations
@@ -43,11 +40,7 @@ def fill(template: str, **values: Any) -> Html:
 
 
 def script_json(obj: Any) -> Html:
-    r"""JSON for an inline ``<script>``, ``<``, ``>`` and ``&`` written as ``\u`` escapes.
-
-    No ``</script>`` or ``<!--`` inside a string can close or comment out the script; the
-    value the script reads is unchanged.
-    """
+    r"""JSON for an inline ``<script>``: ``<``, ``>``, ``&`` as ``\u`` escapes (same value)."""
     text = json.dumps(obj, allow_nan=False)
     return Html(text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026"))
 
@@ -71,11 +64,7 @@ $body
 
 
 def page(title: str, body: Html, *, style: str = "", policy: str | None = None) -> str:
-    """A whole document: :data:`SKELETON` filled once.
-
-    ``title`` is text; ``style`` (CSS) and ``policy`` (a Content-Security-Policy, ``None``:
-    none) are the package's own, inserted as they are.
-    """
+    """A whole document: :data:`SKELETON` filled once (``style`` CSS, ``policy`` a CSP: ours)."""
     csp = (
         ""
         if policy is None
@@ -100,9 +89,8 @@ def check_height(height: Any) -> int:
 def frame(doc: str, *, height: int | None = None, title: str | None = None) -> Html:
     """A whole page in a sandboxed ``<iframe srcdoc>`` (``allow-scripts``: cannot reach its host).
 
-    ``doc`` is text in the attribute (even one built here); ``height`` in [px]
-    (:func:`check_height`; full width, no border), ``None`` leaves the size to the host's
-    style sheet; ``title`` is the frame's accessible title.
+    ``height`` in [px] (:func:`check_height`; None: the host's style sheet decides);
+    ``title``: the frame's accessible title.
     """
     named = Html("") if title is None else fill('title="$t" ', t=title)
     sized = (
