@@ -14,6 +14,7 @@ Quick start::
 
 from __future__ import annotations
 
+from ._lazy import lazy_names
 from ._version import __version__
 from .exceptions import (
     ConfigurationError,
@@ -29,8 +30,6 @@ from .exceptions import (
 #: entry's Ctrl-C handler comes after this module, which should take as little time as it can.
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
-    from typing import Any
-
     from . import robots
     from ._fromurdf import TableRecovery, chain_from_urdf, recover_chain
     from ._table_kin import table_fk, table_transforms
@@ -44,15 +43,15 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
 _PARAMS_NAMES = ("Chain", "DHRow", "Hexapod", "Inertial", "JointLimits", "KhalilRow", "LegMount",
                  "Pose")  # fmt: skip
 _LAZY_NAMES = {
-    "load": "kinematics",
-    "chain_from_urdf": "_fromurdf",
-    "recover_chain": "_fromurdf",
-    "TableRecovery": "_fromurdf",
-    "table_fk": "_table_kin",
-    "table_transforms": "_table_kin",
-    "to_urdf": "urdf",
-    "write_urdf": "urdf",
-    **dict.fromkeys(_PARAMS_NAMES, "params"),
+    "load": ".kinematics",
+    "chain_from_urdf": "._fromurdf",
+    "recover_chain": "._fromurdf",
+    "TableRecovery": "._fromurdf",
+    "table_fk": "._table_kin",
+    "table_transforms": "._table_kin",
+    "to_urdf": ".urdf",
+    "write_urdf": ".urdf",
+    **dict.fromkeys(_PARAMS_NAMES, ".params"),
 }
 
 #: Submodules reachable as attributes (``hk.singularity``) without importing them up front
@@ -63,34 +62,7 @@ _LAZY_SUBMODULES = (
     "symbolic", "tables", "urdf", "viewer", "workspace",
 )  # fmt: skip
 
-
-def __getattr__(name: str) -> Any:
-    """Import the submodule ``name`` on first access (PEP 562); ``load`` is ``kinematics.load``.
-
-    Raises:
-        AttributeError: If ``name`` is neither a submodule of the list above that exists in
-            this installation nor another attribute of the package.
-
-    """
-    import importlib
-    import importlib.util
-
-    if name in _LAZY_NAMES:  # e.g. ``load``: the one loader, without Pinocchio up front
-        value = getattr(importlib.import_module(f"{__name__}.{_LAZY_NAMES[name]}"), name)
-        globals()[name] = value
-        return value
-    if name in _LAZY_SUBMODULES:
-        full = f"{__name__}.{name}"
-        if importlib.util.find_spec(full) is not None:
-            module = importlib.import_module(full)
-            globals()[name] = module
-            return module
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY_SUBMODULES) | set(_LAZY_NAMES))
-
+__getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals(), _LAZY_SUBMODULES)
 
 __all__ = ["__version__", "Chain", "ConfigurationError", "DHRow", "FrameNotFoundError",
            "Hexapod", "HexapodKinError", "Inertial", "JointLimits", "KhalilRow",
