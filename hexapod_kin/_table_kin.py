@@ -43,14 +43,10 @@ def table_transforms(chain: Chain, q: Any) -> list[np.ndarray]:
 
 
 def table_fk(chain: Chain, q: Any) -> np.ndarray:
-    """Forward kinematics by multiplying the Khalil transforms directly (pure numpy).
+    """``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool`` (4×4) at ``q`` (n,) in [rad] / [m].
 
-    The independent reference every Pinocchio result is checked against; ``q`` (n,) in
-    [rad] / [m].
-
-    Returns:
-        ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool`` (4×4): the chain's base and
-        tool poses are included.
+    The product of the Khalil transforms in plain numpy: the independent reference every
+    Pinocchio result is checked against.
 
     Raises:
         ConfigurationError: If ``q`` has the wrong length or non-finite values.
@@ -67,15 +63,10 @@ _GT = np.array([[0.0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1], [0, 0, 0, 0]])
 
 
 def table_position_jacobian(chain: Chain, q: Any) -> np.ndarray:
-    """The *indirect* method, exactly: ``∂p/∂q`` by differentiating the table's product.
+    """The tip's 3×n position Jacobian (base frame, base and tool included), exactly.
 
-    ``∂(T_1···T_n)/∂q_j = (T_1···T_j)·G_j·(T_{j+1}···T_n)`` with ``G_j`` the generator of
-    ``Rz`` (revolute) or ``Tz`` (prismatic) — no finite differences, exact to rounding.
-
-    Returns:
-        The 3×n position Jacobian of the tip (tool included) in the base frame (base
-        pose included).
-
+    ``∂(T_1···T_n)/∂q_j = (T_1···T_j)·G_j·(T_{j+1}···T_n)``, ``G_j`` the generator of ``Rz``
+    (revolute) or ``Tz`` (prismatic): the *indirect* method, no finite differences.
     """
     ts = table_transforms(chain, q)
     ts[0] = chain.base_matrix @ ts[0]

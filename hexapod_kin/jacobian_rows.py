@@ -1,11 +1,7 @@
-"""Names of the Jacobian rows and their selections (a leaf: no sympy, no numpy).
+"""Names of the rows of the tip Jacobian ``[v; ω]`` (local_world_aligned) and their selections.
 
-Shared by :mod:`hexapod_kin.singularity` (the measures) and :mod:`hexapod_kin.symbolic` (the
-derivations), so that neither imports the other for them.
-
-``J`` here is the tip Jacobian ``[v; ω]`` with rows ``x, y, z, wx, wy, wz`` (linear velocity
-of the tip in [m/s per joint unit], angular velocity in [rad/s per joint unit]), expressed
-``local_world_aligned`` (the tip's velocity, in the base frame's axes).
+A leaf (no sympy, no numpy) shared by :mod:`hexapod_kin.singularity` and
+:mod:`hexapod_kin.symbolic`.
 """
 
 from __future__ import annotations
@@ -21,10 +17,9 @@ ROW_NAMES: tuple[str, ...] = ("x", "y", "z", "wx", "wy", "wz")
 
 
 def row_indices(rows: str | Sequence[str] | None) -> tuple[int, ...]:
-    """The indices (0..5, in the given order) of a row selection of ``[vx vy vz wx wy wz]``.
+    """The indices (0..5, in the given order) of a row selection ``rows``.
 
-    ``rows``: ``None`` or ``"position"`` (x, y, z), ``"all"``, a comma-separated string or a
-    sequence of names from :data:`ROW_NAMES` (e.g. ``("x", "y", "z", "wz")``).
+    ``None`` or ``"position"`` (x, y, z), ``"all"``, or names of :data:`ROW_NAMES` (``"x,y,wz"``).
 
     Raises:
         ParameterError: Unknown or repeated row names, or an empty selection.
@@ -55,10 +50,9 @@ def row_names(rows: str | Sequence[str] | None) -> tuple[str, ...]:
 
 
 def choose_rows(nonzero: Sequence[bool], nq: int) -> tuple[str, ...]:
-    """The default selection: position rows, plus the angular rows that are not zero if square.
+    """``x, y, z`` plus the angular rows not identically zero when they make ``nq > 3`` rows.
 
-    When ``x, y, z`` plus the angular rows that are not identically zero (``nonzero``: six
-    flags) make exactly ``nq > 3`` rows, those (SCARA: ``x, y, z, wz``); else ``x, y, z``.
+    ``nonzero``: six flags (SCARA: ``x, y, z, wz``); else ``x, y, z``.
     """
     chosen = [0, 1, 2] + [i for i in (3, 4, 5) if nonzero[i]]
     if len(chosen) == nq and nq > 3:

@@ -19,13 +19,10 @@ __all__ = ["WorkspaceResult", "workspace", "cross_section"]
 class WorkspaceResult:
     """Reachable tip points and a reachable-volume estimate (arrays read-only).
 
-    The volume is a Monte Carlo voxel count: the tip positions of ``samples`` uniform random
-    configurations are binned into cubic voxels of edge ``voxel``. Occupied voxels with all
-    six face neighbours occupied count fully; boundary voxels (an empty neighbour) count
-    half, since the boundary surface cuts them on average through the middle:
-    ``volume = (interior + boundary / 2) · voxel³``; ``volume_occupied`` counts every occupied
-    voxel (an over-estimate). Meaningful for chains whose workspace is a solid (≥ 3 joints
-    acting on the position).
+    The tips of ``samples`` random configurations binned into cubic voxels of edge ``voxel``:
+    ``volume = (interior + boundary / 2) · voxel³`` (a boundary voxel, with an empty face
+    neighbour, is cut through its middle on average); ``volume_occupied`` counts every occupied
+    voxel (an over-estimate). For solid workspaces (≥ 3 joints acting on the position).
 
     Attributes:
         q: The sampled configurations (N, n).
@@ -85,9 +82,6 @@ def workspace(
         voxel: Voxel edge in [m]; default ``reach / 25`` (finer voxels need more samples:
             empty voxels inside the workspace bias the estimate low).
         seed: Random seed.
-
-    Returns:
-        The :class:`WorkspaceResult` (see its docstring for how the volume is estimated).
 
     Raises:
         ParameterError: ``samples`` out of range or ``voxel`` not > 0.
