@@ -2,33 +2,21 @@
 
 Conventions, defined once here and used everywhere:
 
-* **Khalil–Kleinfinger (modified DH)**, the convention of the lab reports: row ``j`` gives
-
-  ``^{j-1}T_j = Rx(alpha_j) · Tx(d_j) · Rz(theta_j) · Tz(r_j)``
-
-  and the joint variable ``q_j`` adds to ``theta_j`` (revolute, ``sigma = 0``) or to ``r_j``
-  (prismatic, ``sigma = 1``). A fixed row (``sigma = 2``) has no variable; it is how the foot or
-  tool frame is attached.
+* **Khalil–Kleinfinger (modified DH)**, the lab reports' convention: row ``j`` gives
+  ``^{j-1}T_j = Rx(alpha_j) · Tx(d_j) · Rz(theta_j) · Tz(r_j)``; ``q_j`` adds to ``theta_j``
+  (revolute, ``sigma = 0``) or ``r_j`` (prismatic, ``sigma = 1``); a fixed row (``sigma = 2``)
+  has none: it attaches the foot or tool frame.
 * **Standard (Denavit–Hartenberg 1955) DH**, columns ``(theta, d, a, alpha)``:
-
-  ``^{i-1}T_i = Rz(theta_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i)``
-
-  the joint variable adds to ``theta_i`` (revolute) or ``d_i`` (prismatic).
-
-Side by side, for the same link: Khalil's ``d`` is standard DH's ``a`` of the *previous* row and
-Khalil's ``alpha`` is standard DH's ``alpha`` of the *previous* row; Khalil's ``r`` is standard
-DH's ``d``. :meth:`Chain.from_dh` does this conversion exactly (adding a fixed last row).
-
-* **Poses** (one notation everywhere): a rigid transform ``T_a_b`` maps coordinates in frame
-  ``b`` to frame ``a`` (``p_a = T_a_b · p_b``); it is given either as a 4×4 homogeneous matrix
-  or as ``(xyz, rpy)``: ``xyz`` the origin of ``b`` in ``a`` in [m], ``rpy`` = (roll, pitch,
-  yaw) in [rad], *fixed-axis* X-Y-Z as in URDF ``<origin>``, i.e. ``R = Rz(yaw)·Ry(pitch)·
-  Rx(roll)``. :class:`Pose` holds one; :func:`rpy_to_matrix` / :func:`matrix_to_rpy` are the
-  package's only RPY conversions.
-* **Base and tool frames** of a :class:`Chain`: ``base`` (``T_world_0``, the chain's base link
-  to Khalil frame 0) and ``tool`` (``T_n_tool``, the last row's frame to the tool/tip frame).
-  The table's forward kinematics is ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool``
-  (:func:`hexapod_kin.table_fk`).
+  ``^{i-1}T_i = Rz(theta_i) · Tz(d_i) · Tx(a_i) · Rx(alpha_i)``; ``q`` adds to ``theta_i``
+  or ``d_i``. Khalil's ``d`` and ``alpha`` are standard DH's ``a`` and ``alpha`` of the
+  *previous* row, Khalil's ``r`` its ``d``: :meth:`Chain.from_dh` converts exactly.
+* **Poses**: ``T_a_b`` maps frame ``b`` coordinates to frame ``a`` (``p_a = T_a_b · p_b``), a 4×4
+  matrix or ``(xyz [m], rpy [rad])``, fixed-axis X-Y-Z as URDF's ``<origin>``:
+  ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``. :class:`Pose` holds one; :func:`rpy_to_matrix` /
+  :func:`matrix_to_rpy` are the only RPY conversions.
+* **Base and tool** of a :class:`Chain`: ``T_base_tip = base · ^0T_1 ··· ^{n-1}T_n · tool``
+  (:func:`hexapod_kin.table_fk`), ``base`` Khalil frame 0 in the base link, ``tool`` the tip
+  frame in the last row's.
 
 All lengths are in metres, angles in radians, masses in kg, inertias in kg·m².
 """
@@ -129,10 +117,7 @@ def dh_transform(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class KhalilRow:
-    """One row of a Khalil–Kleinfinger (modified DH) table.
-
-    ``^{j-1}T_j = Rx(alpha)·Tx(d)·Rz(theta + q)·Tz(r)`` for a revolute joint,
-    ``Rx(alpha)·Tx(d)·Rz(theta)·Tz(r + q)`` for a prismatic one, and with no ``q`` when fixed.
+    """One Khalil–Kleinfinger row: ``^{j-1}T_j = Rx(alpha)·Tx(d)·Rz(theta)·Tz(r)``, ``q`` added.
 
     Attributes:
         sigma: ``"revolute"`` (0), ``"prismatic"`` (1) or ``"fixed"`` (2).
@@ -225,13 +210,13 @@ class JointLimits:
 
 @dataclass(frozen=True)
 class Inertial:
-    """Mass properties of a link, expressed in the link's (Khalil) frame.
+    """Mass properties of a link, in the link's (Khalil) frame.
 
     Attributes:
         mass: Mass in [kg] (> 0).
-        com: Centre of mass ``(x, y, z)`` in [m], in the link frame.
-        inertia: ``(ixx, iyy, izz, ixy, ixz, iyz)`` about the centre of mass in [kg·m²];
-            must be positive definite and satisfy the triangle inequality.
+        com: Centre of mass ``(x, y, z)`` in [m].
+        inertia: ``(ixx, iyy, izz, ixy, ixz, iyz)`` about the centre of mass in [kg·m²],
+            positive definite, obeying the triangle inequality.
 
     """
 
@@ -300,10 +285,7 @@ def default_limits(sigma: str) -> JointLimits:
 
 @dataclass(frozen=True)
 class Chain:
-    """A serial chain described by a Khalil–Kleinfinger table.
-
-    Frames are numbered as in the table: frame 0 is the base, frame ``j`` is the frame of row
-    ``j`` (1-based). The last frame is the named tip (e.g. ``"foot"``).
+    """A serial chain by a Khalil–Kleinfinger table: frame 0 the base, ``j`` row ``j``'s frame.
 
     Attributes:
         rows: The Khalil rows, in order from the base.
@@ -318,18 +300,18 @@ class Chain:
             instead: it becomes :attr:`base_pose` and the link keeps the name ``"base"``.
         tip: Name of the tip frame: the last row's link, or the tool link when :attr:`tool`
             is set.
-        link_names: Names of the links of frames 1..n; default ``link1, ...`` with the last
-            one named ``tip`` (with a tool: ``link1 .. link<n>``, the tool link is ``tip``).
+        link_names: Names of the links of frames 1..n; default ``link1, ...``, the last one
+            ``tip`` (with a tool: ``link<n>``, the tool link is ``tip``).
         link_mass: Default link mass in [kg] when ``inertials`` is ``None``.
         link_radius: Radius in [m] of the visual cylinders and default rod inertia.
         damping: Joint viscous damping, one value or one per joint ([N·m·s/rad] or [N·s/m]).
         friction: Joint dry friction, one value or one per joint.
         description: Free text (source of the preset), written into the URDF header.
-        base_pose: ``T_base_0``: Khalil frame 0 in the base link, a :class:`Pose` (or
-            anything :meth:`Pose.of` takes); ``None`` = identity. Exported as the fixed joint
-            ``<name>_base_offset`` from the base link to the link ``<base>_frame0``.
-        tool: ``T_n_tool``: the tool frame in the last row's frame; ``None`` = no tool
-            link. Exported as the fixed joint ``<tip>_tool`` to the link ``tip``.
+        base_pose: ``T_base_0``: Khalil frame 0 in the base link (anything :meth:`Pose.of`
+            takes; ``None``: identity), the fixed joint ``<name>_base_offset`` to the link
+            ``<base>_frame0``.
+        tool: ``T_n_tool``: the tool frame in the last row's (``None``: no tool link), the
+            fixed joint ``<tip>_tool`` to the link ``tip``.
 
     """
 
