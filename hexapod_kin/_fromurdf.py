@@ -112,14 +112,14 @@ def _frame(o: np.ndarray, x: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Snap:
-    """One snap: a joint axis turned to be exactly parallel or perpendicular to the previous one.
+    """One snap: a joint axis turned exactly parallel or perpendicular to the previous one.
 
     Attributes:
         joints: The previous joint and the snapped joint (URDF names).
         kind: ``"parallel"``, ``"anti-parallel"`` or ``"perpendicular"``.
-        angle: The rotation applied to the snapped joint and everything after it [rad].
-        reach: Path length from the snapped joint's origin through the later joints to the
-            tip [m]; the tip moves by at most ``angle × reach`` in every configuration.
+        angle: The rotation of the snapped joint and everything after it [rad].
+        reach: Path length from the snapped joint to the tip [m] (the tip moves by at most
+            ``angle × reach``).
 
     """
 
@@ -145,13 +145,12 @@ class TableRecovery:
         snaps: The snaps applied, in chain order (empty for an exact URDF).
         angle_tol: The snapping tolerance used [rad].
         size: The bound on every recovered length [m] (see the module docstring).
-        fk_bound: ``Σ angle × reach`` over the snaps [m]: the most the table's tip position
-            can differ from the URDF's in any configuration (0 without snaps).
-        fk_error: The largest tip position difference table vs URDF (Pinocchio) measured at
-            ``q = 0`` and 8 random configurations [m].
-        zeroed: Lengths (``d<j>``, ``r<j>``, ``tool_<x|y|z>``) within rounding of the URDF's
-            constants (below 1e-9 × max(1 m, size)) set to exactly 0, with their values [m];
-            each moves the tip by its size (included in ``fk_bound``). Only when snapping.
+        fk_bound: ``Σ angle × reach`` over the snaps (and the zeroed lengths) [m]: the most the
+            table's tip can differ from the URDF's in any configuration.
+        fk_error: The largest tip position difference table vs URDF at ``q = 0`` and 8
+            random configurations [m].
+        zeroed: Lengths (``d<j>``, ``r<j>``, ``tool_<x|y|z>``) below 1e-9 × max(1 m, size)
+            set to exactly 0, with their values [m] (only when snapping).
 
     """
 

@@ -1,9 +1,4 @@
-"""Poses: the package's one rigid-transform notation and its one RPY convention.
-
-Re-exported by :mod:`hexapod_kin.params` (see its module docstring for the notation):
-``T_a_b`` as a 4×4 homogeneous matrix or ``(xyz [m], rpy [rad])`` with URDF's fixed-axis
-X-Y-Z roll-pitch-yaw, ``R = Rz(yaw)·Ry(pitch)·Rx(roll)``.
-"""
+"""Poses: one rigid-transform notation, one RPY convention (:mod:`hexapod_kin.params`)."""
 
 from __future__ import annotations
 
@@ -19,11 +14,10 @@ __all__ = ["Pose", "matrix_to_rpy", "rodrigues", "rotation_angle", "rpy_to_matri
 
 
 def rotation_angle(r_a: Any, r_b: Any) -> np.ndarray:
-    """Angles ‖log(R_a R_bᵀ)‖ in [rad] of stacks of rotations (…, 3, 3), in [0, π].
+    """Angles ‖log(R_a R_bᵀ)‖ in [0, π] [rad] of stacks of rotations (…, 3, 3).
 
-    ``atan2(‖vee(M − Mᵀ)‖ / 2, (tr M − 1) / 2)`` with ``M = R_a R_bᵀ``: the sine part keeps
-    full relative precision for tiny angles (where ``arccos`` of the trace loses half the
-    digits), the cosine part for angles near π.
+    ``atan2(‖vee(M − Mᵀ)‖ / 2, (tr M − 1) / 2)``, ``M = R_a R_bᵀ``: full precision for tiny
+    angles (where ``arccos`` of the trace loses half the digits) and near π.
     """
     m = np.asarray(r_a, dtype=float) @ np.swapaxes(np.asarray(r_b, dtype=float), -1, -2)
     skew = np.stack(
@@ -69,9 +63,7 @@ def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class Pose:
-    """A rigid transform ``T_a_b`` (see the module docstring for the notation).
-
-    Build one with :meth:`of` from a 4×4 matrix, ``(xyz, rpy)`` or another pose.
+    """A rigid transform ``T_a_b``; :meth:`of` builds one from a matrix, ``(xyz, rpy)``, a pose.
 
     Attributes:
         xyz: Origin of frame ``b`` in frame ``a`` in [m].
@@ -110,15 +102,13 @@ class Pose:
         """Return ``value`` as a :class:`Pose` (the package's one reader of poses).
 
         Args:
-            value: A :class:`Pose`; a 4×4 homogeneous matrix (rotation orthonormal with det +1
-                to 1e-9, last row ``0 0 0 1``) or an object with ``.homogeneous`` (``pin.SE3``);
-                ``(xyz, rpy)``; a 6-vector ``xyz + rpy``; or a mapping with keys ``xyz`` and/or
-                ``rpy``. ``xyz`` in [m], ``rpy`` in [rad] (URDF convention).
-            where: Parameter name used in error messages (and as ``error.parameter``).
+            value: A :class:`Pose`; a 4×4 homogeneous matrix (orthonormal, det +1 to 1e-9, last
+                row ``0 0 0 1``) or anything with ``.homogeneous`` (``pin.SE3``); ``(xyz, rpy)``,
+                a 6-vector ``xyz + rpy`` or a mapping of ``xyz`` and/or ``rpy`` ([m], [rad]).
+            where: The parameter named in errors (``error.parameter``).
 
         Raises:
-            ParameterError: For anything else, non-finite numbers or a matrix that is not
-                rigid, naming ``where``.
+            ParameterError: Anything else, non-finite numbers or a matrix that is not rigid.
 
         """
         if isinstance(value, Pose):
