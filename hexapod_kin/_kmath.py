@@ -1,15 +1,9 @@
-"""Small compiled maths of the compiled layer (numba): one home for each piece.
+"""Small compiled maths (numba) of the kernels, re-exported by :mod:`hexapod_kin._kernels`.
 
-Re-exported by :mod:`hexapod_kin._kernels` (import them from there). Every function is
-``@njit(cache=True, nogil=True)``, callable from Python and from other compiled code; callers
-pass ``float64`` C-contiguous arrays (one specialisation each). No ``fastmath``: the same
-inputs give the same bits in every process and thread.
-
-Contents: :func:`eig3_sym` (symmetric 3×3 eigenvalues, closed form, descending);
-:func:`solve_spd` (Cholesky, in place); :func:`dls_into` (damped least squares, frozen
-joints); :func:`wrap_angle` (scalar); :func:`sincos` (libm-free, vectorises; exact to 1 ulp
-for ``|x| ≤ POLY_TRIG_MAX``). Only what a kernel calls lives here.
-Angles in [rad].
+Every function is ``@njit(cache=True, nogil=True)`` on ``float64`` C-contiguous arrays, no
+``fastmath`` (the same bits in every process and thread): :func:`eig3_sym`,
+:func:`solve_spd`, :func:`dls_into`, :func:`wrap_angle`, :func:`sincos` (libm-free, within
+1 ulp for ``|x| ≤ POLY_TRIG_MAX``). Also numba's cache seal. Angles in [rad].
 """
 
 from __future__ import annotations
@@ -38,11 +32,10 @@ _TWO_PI = 2.0 * math.pi
 
 
 def njit(*args: Any, **options: Any) -> Any:
-    """``numba.njit`` with ``cache=True`` by default; ``fastmath`` is refused.
+    """``numba.njit`` with ``cache=True`` by default; ``fastmath`` (position-dependent) refused.
 
-    (``fastmath`` would make a value depend on its position in a batch.) Without a writable
-    cache folder, or one whose files are not all sealed (:func:`sealed_folder`), the kernels
-    are compiled in memory, with one :class:`~hexapod_kin.exceptions.CacheWarning`.
+    Without a writable, sealed cache folder (:func:`sealed_folder`) the kernels are compiled in
+    memory (one :class:`~hexapod_kin.exceptions.CacheWarning`).
     """
     if options.get("fastmath"):
         raise ValueError("hexapod_kin kernels never use fastmath (the same bits every time)")
@@ -75,11 +68,9 @@ _IN_MEMORY: list[bool] = []
 
 
 def python_twin(kernel: Any, _memo: dict[int, Any] | None = None) -> Any:
-    """``kernel``'s own Python function, calling the Python twins of the kernels it calls.
+    """``kernel``'s Python function calling the twins of the kernels it calls: the same bits.
 
-    The same IEEE operations in the same order as the machine code (no ``fastmath``), so the
-    same bits, with nothing to compile: each function gets a copy of its module's globals with
-    every compiled function it names replaced by that one's twin.
+    Each function gets a copy of its module's globals, compiled functions replaced by twins.
     """
     memo: dict[int, Any] = {} if _memo is None else _memo
     found = memo.get(id(kernel))
@@ -104,13 +95,10 @@ _FOLDERS_LOCK = threading.Lock()
 
 
 def sealed_folder(folder: str | None) -> bool:
-    """Whether numba may use its cache ``folder``: every numba file in it carries the seal.
+    """Whether numba may use its cache ``folder`` (every numba file sealed; once per process).
 
-    Checked once per folder and process, before numba could load from it
-    (:func:`hexapod_kin._cache.check_folder`). A file that fails: one
-    :class:`~hexapod_kin.exceptions.CacheWarning` and the failing files are removed (compiled
-    afresh, resealed by :func:`seal_compiled`); where they cannot be (or no secret can check
-    them), the folder's kernels are compiled in memory, never loaded from it.
+    Failing files cost one :class:`~hexapod_kin.exceptions.CacheWarning` and are removed
+    (compiled afresh); where they cannot be, the kernels are compiled in memory.
     """
     if folder is None:
         return True
@@ -157,11 +145,7 @@ def seal_compiled() -> None:
 
 
 def reseal_if_compiled() -> None:
-    """:func:`seal_compiled` when a kernel of the package was compiled since the last seal.
-
-    Called when numba releases its compiler lock (after saving what it compiled) and at exit,
-    so that a new specialisation saved at any call is sealed before the next process starts.
-    """
+    """:func:`seal_compiled` if a kernel was compiled since (numba's lock released; at exit)."""
     if _DIRTY:
         seal_compiled()
 
@@ -202,8 +186,7 @@ def eig3_sym(
 ) -> tuple[float, float, float]:  # pragma: no cover - compiled
     """Eigenvalues (descending) of the symmetric ``[[a00,a01,a02],[a01,a11,a12],[a02,a12,a22]]``.
 
-    Trigonometric closed form (Smith 1961); a diagonal matrix returns its sorted diagonal
-    exactly.
+    Smith's (1961) closed form; a diagonal matrix gives its sorted diagonal exactly.
     """
     p1 = a01 * a01 + a02 * a02 + a12 * a12
     if p1 == 0.0:
@@ -291,10 +274,8 @@ def dls_into(
 ) -> bool:  # pragma: no cover - compiled
     """Damped least squares of the first ``m`` rows of a task; frozen joints (``~free``) get 0.
 
-    ``Δq = (JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m, else ``Jfᵀ (JfJfᵀ + λ²I)⁻¹ e`` (the smaller
-    system), by Cholesky on the lower triangle (the only part formed). ``work`` is at least
-    (max(m, n), max(m, n)); ``rhs``/``sol`` at least max(m, n). Returns False if the system
-    is not SPD (λ² = 0 at a singularity). Its numpy twin: :func:`hexapod_kin._numerics.dls_step`.
+    :func:`hexapod_kin._numerics.dls_step`'s system, by Cholesky on the lower triangle;
+    ``work`` at least k×k, ``rhs``/``sol`` k, k = max(m, n). False if not SPD.
     """
     n = jac.shape[1]
     if n <= m:
