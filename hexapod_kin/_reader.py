@@ -84,11 +84,10 @@ def read_text(
     max_bytes: int = MAX_BYTES,
     too_big: type[HexapodKinError] | None = None,
 ) -> str:
-    """The UTF-8 text of the regular file ``path``, at most ``max_bytes`` long.
+    """The UTF-8 text of the regular file ``path`` (at most ``max_bytes``; else ``too_big``).
 
     Raises:
-        SourceError: Not a regular file, unreadable, larger than ``max_bytes`` (``too_big``
-            when given) or not UTF-8; ``parameter`` is ``what``.
+        SourceError: Not a regular file, unreadable, too large or not UTF-8.
 
     """
     data = read_regular(path, max_bytes, what, too_big)
@@ -128,13 +127,7 @@ def read_data(
 def parse_data(
     text: str, name: str, fmt: str, what: str = "source", max_values: int = MAX_VALUES
 ) -> Any:
-    """The values of ``text`` in ``fmt`` (``json``, ``toml``, ``yaml``), checked as a file's.
-
-    Raises:
-        SourceError: A syntax error, a duplicate key, or a value beyond the structure caps.
-        OptionalDependencyError: YAML without PyYAML, TOML on Python 3.10 without tomli.
-
-    """
+    """The values of ``text`` in ``fmt`` (``json``, ``toml``, ``yaml``), checked as a file's."""
     try:
         if fmt == "json":
             data = _json(text, name, what)
@@ -350,24 +343,14 @@ def numbers(value: Any, where: str, n: int | None = None, *, parameter: str | No
 
 
 def text(value: Any, where: str, *, parameter: str | None = None) -> str:
-    """A name or a text of a file: a string, never a number or a boolean made into one.
-
-    Raises:
-        ParameterError: ``"<where>=<value> must be a string (quote it)"``.
-
-    """
+    """A name or text of a file: a string (never ``5`` or ``true``: "must be a string")."""
     if not isinstance(value, str):
         raise _wrong(where, value, " must be a string (quote it)", "a string", parameter)
     return value
 
 
 def texts(value: Any, where: str, *, parameter: str | None = None) -> tuple[str, ...]:
-    """A list of names, each a string (:func:`text`, its index named).
-
-    Raises:
-        ParameterError: Not a list, or an item that is not a string.
-
-    """
+    """A list of names, each a string (:func:`text`, its index named)."""
     if not isinstance(value, list | tuple):
         problem = ": a list of names (strings) is required"
         raise _wrong(where, value, problem, "a list of strings", parameter)
@@ -379,13 +362,7 @@ def texts(value: Any, where: str, *, parameter: str | None = None) -> tuple[str,
 def check_keys(
     got: Iterable[Any], allowed: Sequence[str], where: str, *, parameter: str | None = None
 ) -> None:
-    """Refuse a key not in ``allowed`` (a typo never passes silently).
-
-    Raises:
-        ParameterError: ``"<where>: unknown key 'x' (did you mean ...); allowed: [...]"``;
-            ``parameter`` defaults to the key.
-
-    """
+    """Refuse a key not in ``allowed``: ``"<where>: unknown key 'x' (did you mean ...)"``."""
     for key in got:
         if key not in allowed:
             raise ParameterError(

@@ -119,11 +119,8 @@ class KinematicModel(Model):
     ) -> np.ndarray:
         """Frame Jacobian (6×nq), rows ``[v; ω]``, in the chosen reference frame.
 
-        Args:
-            q: Joint values (nq,).
-            reference: ``"local"``, ``"world"`` or ``"local_world_aligned"`` (see module doc;
-                world axes are the base frame's).
-            frame: Frame name (default: the tip).
+        ``reference``: ``"local"``, ``"world"`` or ``"local_world_aligned"`` (module
+        docstring; world axes are the base frame's); ``frame``: default the tip.
 
         Raises:
             ParameterError: Unknown ``reference``.
@@ -198,8 +195,7 @@ class KinematicModel(Model):
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
 
-        Equal to :meth:`fk` of each row to rounding (≈1e-15): the compiled block kernel of
-        :mod:`hexapod_kin._kernels` on every core; the same bits whatever the thread count.
+        Equal to :meth:`fk` of each row to rounding (≈1e-15), the same bits on any thread count.
 
         Args:
             qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).

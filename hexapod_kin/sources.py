@@ -33,12 +33,7 @@ __all__ = ["ResolvedSource", "erd_names", "erd_path", "erd_share", "resolve_sour
 
 # ------------------------------------------------------------------------ example-robot-data
 def erd_share() -> Path:
-    """Directory ``share`` of the example-robot-data 6 (cmeel) data package.
-
-    Raises:
-        SourceError: If example-robot-data is not installed.
-
-    """
+    """Directory ``share`` of the example-robot-data 6 (cmeel) package (else SourceError)."""
     import importlib.metadata  # here: ~30 ms that the other sources do not need
 
     try:
@@ -330,8 +325,7 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
         **params: Preset parameters (only with a preset name).
 
     Raises:
-        SourceError: If the source cannot be resolved (the message says what is accepted and
-            suggests close names).
+        SourceError: The source cannot be resolved (close names suggested).
 
     """
     if isinstance(package_dirs, (str, os.PathLike)):
