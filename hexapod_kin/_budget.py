@@ -113,15 +113,12 @@ def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, A
 def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str, Any], str | None]:
     """Run ``job(*args)`` within ``budget`` seconds of CPU time (see the module docstring).
 
-    Args:
-        job: A module-level generator function (it is named to the child, not pickled by
-            value) yielding ``(name, value)`` pairs of picklable values.
-        args: Its (picklable) arguments.
-        budget: CPU seconds, or ``None``: no limit, run here.
+    ``job``: a module-level generator function yielding picklable ``(name, value)`` pairs;
+    ``args``: picklable; ``budget``: CPU seconds, or ``None``: no limit, run here.
 
     Returns:
-        ``(items by name, None)`` when the job finished, else the items yielded before it
-        stopped and why: ``"budget of 5 s reached"``, or the error the job ended with.
+        ``(items by name, None)``, or the items yielded before it stopped and why
+        (``"budget of 5 s reached"``, or the job's error).
 
     """
     if budget is None:

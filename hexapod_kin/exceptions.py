@@ -25,12 +25,12 @@ class HexapodKinError(ValueError):
     """Base of every error raised by hexapod_kin (a ``ValueError``).
 
     Args:
-        message: The whole message (``str(err)`` returns it unchanged).
-        parameter: Name of the offending parameter (e.g. ``"q"``, ``"source"``), if known.
-        value: The value that was given, if known.
-        allowed: What is allowed (a list of names, a range, a description), if known.
+        message: The whole message (``str(err)``).
+        parameter: The offending parameter (``"q"``, ``"source"``), if known.
+        value: The value given, if known.
+        allowed: What is allowed (names, a range, a description), if known.
 
-    The three keywords are kept as attributes of the same names (``None`` when not said).
+    The keywords are kept as attributes of the same names (``None`` when not said).
 
     """
 
@@ -134,15 +134,8 @@ def choices(names: Iterable[str], limit: int = 40) -> str:
 def one_of(parameter: str, value: Any, allowed: Iterable[Any], also: str = "") -> Any:
     """``value`` when it is one of ``allowed``, else a :class:`ParameterError` naming them.
 
-    Args:
-        parameter: The argument's name (in the message and the error's fields).
-        value: What was given.
-        allowed: The valid values.
-        also: Text appended to the list of valid values (e.g. ``" or h(x, y)"``).
-
-    Raises:
-        ParameterError: ``value`` is not in ``allowed``.
-
+    ``parameter`` is named in the message and the error's fields; ``also`` is appended to the
+    list of valid values (e.g. ``" or h(x, y)"``).
     """
     valid = list(allowed)
     if value in valid:
@@ -156,15 +149,10 @@ def one_of(parameter: str, value: Any, allowed: Iterable[Any], also: str = "") -
 
 
 def did_you_mean(name: str, names: Iterable[str], n: int = 3, cutoff: float = 0.6) -> str:
-    """A "did you mean" hint for an unknown ``name`` among ``names``.
+    """``" (did you mean 'a' or 'b'?)"`` for an unknown ``name`` among ``names``, or ``""``.
 
-    At most ``n`` suggestions, ``cutoff`` the similarity threshold in [0, 1] of
-    ``difflib.get_close_matches``; names that start with ``name`` (``ur5`` → ``ur5_robot``)
-    count as close.
-
-    Returns:
-        ``" (did you mean 'a' or 'b'?)"``, or ``""`` when nothing is close.
-
+    At most ``n`` suggestions by ``difflib.get_close_matches`` (``cutoff`` in [0, 1]), names
+    starting with ``name`` (``ur5`` → ``ur5_robot``) too.
     """
     pool = [str(x) for x in names]
     if not isinstance(name, str) or not pool:

@@ -1,11 +1,8 @@
-"""The catalogue: the seed systems as named, documented presets.
+"""The catalogue: the seed systems (``hexapod_kin/report/seeds/``) as named presets.
 
-Every preset is a function returning a frozen, validated :class:`~hexapod_kin.params.Chain`
-(or :class:`~hexapod_kin.params.Hexapod`); every argument is a dimension in SI units.
-:data:`PRESETS` maps names to those functions (kept sorted; a test checks it).
-
-Sources: the lab reports shipped in ``hexapod_kin/report/seeds/``; each preset's docstring
-names its seed and gives its table.
+Each returns a validated :class:`~hexapod_kin.params.Chain` (or
+:class:`~hexapod_kin.params.Hexapod`) from dimensions in SI units, its docstring naming its
+seed and table; :data:`PRESETS` maps names to them (sorted).
 """
 
 from __future__ import annotations
@@ -45,16 +42,9 @@ def hexabot_leg(
     ``Rz(q1)·[l1 + l2 c2 + l3 c23, 0, −(l2 s2 + l3 s23)]``: a positive knee angle moves the
     foot down (−z).
 
-    Args:
-        l1: Coxa (hip to knee) length in [m].
-        l2: Femur (knee to ankle) length in [m].
-        l3: Tibia (ankle to foot) length in [m].
-        alpha2: Twist of row 2 in [rad].
-        name: Robot name.
-        limits: Joint limits (3), default ±π rad, 10 rad/s, 10 N·m.
-
-    Returns:
-        The chain, tip frame ``foot``, joints ``hip, knee, ankle``.
+    ``l1``, ``l2``, ``l3``: coxa, femur, tibia lengths in [m]; ``alpha2``: row 2's twist
+    [rad]; ``limits``: three (default ±π rad, 10 rad/s, 10 N·m). Joints ``hip, knee, ankle``,
+    tip ``foot``.
 
     """
     l1, l2, l3 = positive("l1", l1), positive("l2", l2), positive("l3", l3)
@@ -91,14 +81,8 @@ def coxa_tibia_leg(
     ``P = Rz(θ1)·[l1 + l2 cos θ2, 0, l2 sin θ2]``; with l1 = 10, l2 = 5: (0°, −30°) →
     (14.3301, 0, −2.5) and (20°, −30°) → (13.4659, 4.9012, −2.5).
 
-    Args:
-        l1: Coxa length (defaults are the paper's numbers, read as metres).
-        l2: Tibia length.
-        name: Robot name.
-        limits: Joint limits (2), default ±π.
-
-    Returns:
-        The chain, joints ``coxa, tibia``, tip ``foot``.
+    ``l1``, ``l2``: coxa and tibia lengths (the paper's numbers, read as metres); ``limits``:
+    two (default ±π). Joints ``coxa, tibia``, tip ``foot``.
 
     """
     l1, l2 = positive("l1", l1), positive("l2", l2)
@@ -139,15 +123,8 @@ def scara(
     The prismatic variable ``q4 ∈ [0, stroke]`` moves the tool down (α = π flips z).
     Singular when the arm is stretched or folded: ``θ2 = 0`` or ``θ2 = π``.
 
-    Args:
-        r1: Height of the first joint frame in [m].
-        d2: First arm length in [m].
-        d3: Second arm length in [m].
-        stroke: Prismatic stroke in [m] (limits [0, stroke]).
-        name: Robot name.
-
-    Returns:
-        The chain, joints ``theta1, theta2, theta3, q4``, tip ``tool``.
+    ``r1``: height of the first joint frame, ``d2``, ``d3``: arm lengths, ``stroke``: the
+    prismatic range [0, stroke], all in [m]. Joints ``theta1, theta2, theta3, q4``, tip ``tool``.
 
     """
     r1 = positive("r1", r1)
@@ -177,14 +154,7 @@ def pendulum(
     horizontal; ``q = −π/2`` hangs it straight down. The seed's initial angle is 30° from the
     vertical, i.e. ``q0 = −π/2 + π/6``. Joint damping ``damping`` [N·m·s/rad] goes into the URDF.
 
-    Args:
-        length: Rod length in [m].
-        mass: Bob mass in [kg].
-        damping: Viscous joint damping in [N·m·s/rad] (>= 0).
-        name: Robot name.
-
-    Returns:
-        The chain, joint ``swing``, tip ``bob``.
+    ``length`` of the rod [m], ``mass`` of the bob [kg]. Joint ``swing``, tip ``bob``.
 
     """
     length, mass = positive("length", length), positive("mass", mass)
@@ -229,18 +199,9 @@ def hexapod(
     xy-plane at yaw ``mount_yaw_deg[i]`` (30°, 90°, 150°, −150°, −90°, −30°) and points
     radially outward (its hip axis is the body z axis). Body x points forward, z up.
 
-    Args:
-        body_radius: Radius of the mount circle in [m].
-        l1: Coxa length in [m].
-        l2: Femur length in [m].
-        l3: Tibia length in [m].
-        body_height: Body thickness in [m].
-        body_mass: Body mass in [kg].
-        mount_yaw_deg: Mount yaw angles in [deg] (one per leg; its length sets the leg count).
-        name: Robot name.
-
-    Returns:
-        The :class:`Hexapod` (joints ``leg<i>_hip/knee/ankle``, feet ``leg<i>_foot``).
+    ``body_radius``, ``body_height`` [m], ``body_mass`` [kg]; ``l1``, ``l2``, ``l3`` as
+    :func:`hexabot_leg`; ``mount_yaw_deg``: one per leg. Joints ``leg<i>_hip/knee/ankle``,
+    feet ``leg<i>_foot``.
 
     """
     body_radius = positive("body_radius", body_radius)

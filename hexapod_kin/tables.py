@@ -75,22 +75,18 @@ _ANGLE_KEYS = {"alpha", "theta"}
 
 #: Largest magnitude of a length in a table [m] (and of a com or pose offset).
 MAX_LENGTH = 1e3
-#: Smallest magnitude of a non-zero length of a row [m]: below it (down to subnormal numbers)
-#: the Jacobian's singular values underflow and every measure is noise; write 0 instead.
+#: Smallest non-zero length of a row [m] (below it the Jacobian's singular values underflow).
 MIN_LENGTH = 1e-9
 #: Largest magnitude of any other number (the URDF gate's bound on any value).
 MAX_NUMBER = 1e9
-#: Most rows and most joint rows of a table: the URDF gate's caps on links and degrees of
-#: freedom (``_gate.limits.MAX_LINKS``, ``MAX_DOF``) in the table's terms: a row is a link,
-#: and the base, frame 0, tool and DH tip links take the other four.
+#: Most rows and joint rows of a table: the gate's ``MAX_LINKS`` (less the base, frame 0, tool
+#: and DH tip links) and ``MAX_DOF``.
 MAX_ROWS = 996
 MAX_JOINTS = 128
 
 
 def read_table(path: Path | str, **overrides: Any) -> Chain:
-    """Read a TOML/YAML table file into a :class:`Chain` (see the module docstring).
-
-    ``overrides`` are top-level keys replacing the file's (e.g. ``name="leg4b"``).
+    """Read a TOML/YAML table file into a :class:`Chain`, ``overrides`` replacing top-level keys.
 
     Raises:
         SourceError: Unreadable file or invalid TOML/YAML.
@@ -143,12 +139,7 @@ def _pose(value: Any, scale: float, where: str) -> Pose:
 
 
 def chain_from_table(data: dict[str, Any]) -> Chain:
-    """Build a :class:`Chain` from the mapping of a table file (see the module docstring).
-
-    Raises:
-        ParameterError: A bad key or value (the message names the row and the key).
-
-    """
+    """Build a :class:`Chain` from the mapping of a table file (else ParameterError, row named)."""
     check_keys(data, TOP_KEYS, "table")
     convention = one_of("convention", str(data.get("convention", "khalil")).lower(), _GEOMETRY)
     angles = one_of("angles", str(data.get("angles", "rad")).lower(), ("rad", "deg"))
