@@ -309,20 +309,10 @@ def recover_chain(
             ) from None
     m = km.model
     names = [str(m.names[i]) for i in range(m.njoints)]
-    kinds = {i: joint_kind(m.joints[i]) for i in range(1, m.njoints)}  # (kind, axis) or None
-    for i, kind in kinds.items():
-        if kind is None:
-            raise ConfigurationError(
-                f"joint {names[i]!r} is a {m.joints[i].shortname()}; a Khalil table expresses "
-                "revolute, continuous, prismatic and fixed joints only"
-            )
+    # (kind, axis) of every joint: the loader admitted one-variable joints only
+    kinds = {i: joint_kind(m.joints[i]) for i in range(1, m.njoints)}
     frame = m.frames[km.tip_id]
-    path = []
-    j = int(frame.parentJoint)
-    while j != 0:
-        path.append(j)
-        j = int(m.parents[j])
-    path.reverse()
+    path = [int(j) for j in m.supports[frame.parentJoint]][1:]  # root → tip, universe left out
     if sorted(path) != list(range(1, m.njoints)):
         extra = sorted(set(range(1, m.njoints)) - set(path))
         raise ConfigurationError(

@@ -48,33 +48,23 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool 
         with contextlib.suppress(FileNotFoundError):
             if not isinstance(exc, FileExistsError):  # else the name was another's: keep it
                 os.unlink(tmp)
-        if isinstance(exc, OSError):
-            raise _cannot_write(dest, exc) from None
+        if isinstance(exc, OSError):  # named by the destination, never the temporary file
+            raise ParameterError(
+                f"path={str(dest)!r}: cannot write it ({exc.strerror or exc}); the previous "
+                "content, if any, is unchanged",
+                parameter="path",
+                value=str(dest),
+                allowed="a file in a writable directory",
+            ) from None
         raise
-    if sync:
-        _fsync_dir(parent)
+    if sync:  # the rename made durable (best effort: some file systems refuse it)
+        with contextlib.suppress(OSError):
+            fd = os.open(parent, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
     return dest
-
-
-def _cannot_write(dest: Path, exc: OSError) -> ParameterError:
-    """The error of a failed write, naming the destination (never the hidden temporary file)."""
-    return ParameterError(
-        f"path={str(dest)!r}: cannot write it ({exc.strerror or exc}); the previous content, "
-        "if any, is unchanged",
-        parameter="path",
-        value=str(dest),
-        allowed="a file in a writable directory",
-    )
-
-
-def _fsync_dir(directory: Path) -> None:
-    """Make the rename durable (best effort: some file systems refuse directory fsync)."""
-    with contextlib.suppress(OSError):
-        fd = os.open(directory, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
 
 
 def read_regular(

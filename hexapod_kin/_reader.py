@@ -132,7 +132,16 @@ def parse_data(
         if fmt == "json":
             data = _json(text, name, what)
         elif fmt == "toml":
-            toml = _toml_module(what)
+            try:
+                import tomllib as toml  # type: ignore[import-not-found,unused-ignore]
+            except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+                try:
+                    import tomli as toml  # type: ignore[no-redef,import-not-found,unused-ignore]
+                except ModuleNotFoundError:
+                    raise OptionalDependencyError(
+                        "reading TOML on Python 3.10 needs tomli; `pip install tomli`",
+                        parameter=what,
+                    ) from None
             try:
                 data = toml.loads(text)
             except toml.TOMLDecodeError as exc:
@@ -172,19 +181,6 @@ def _json(text: str, name: str, what: str) -> Any:
         return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
     except json.JSONDecodeError as exc:
         raise _invalid(name, what, "JSON", exc) from None
-
-
-def _toml_module(what: str) -> Any:
-    try:
-        import tomllib  # type: ignore[import-not-found,unused-ignore]
-    except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-        try:
-            import tomli as tomllib  # type: ignore[no-redef,import-not-found,unused-ignore]
-        except ModuleNotFoundError:
-            raise OptionalDependencyError(
-                "reading TOML on Python 3.10 needs tomli; `pip install tomli`", parameter=what
-            ) from None
-    return tomllib
 
 
 def _yaml(text: str, name: str, what: str) -> Any:

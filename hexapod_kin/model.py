@@ -439,8 +439,16 @@ class Model:
 
         try:
             geom = build(drop)
-        except (RuntimeError, ValueError):  # a mesh the loader cannot read: find and drop it
-            bad = _unreadable_meshes(self.mesh_files)
+        except (RuntimeError, ValueError):  # a mesh Coal's loader cannot read: find and drop it
+            import coal
+
+            bad = set()
+            for uri, path in self.mesh_files.items():
+                if path.lower().endswith((".stl", ".dae", ".obj", ".ply", ".3ds", ".off")):
+                    try:
+                        coal.MeshLoader().load(path, np.ones(3))
+                    except (RuntimeError, ValueError, TypeError):
+                        bad.add(uri)
             if not bad:
                 raise
             _warn(
@@ -511,21 +519,6 @@ def _warn(message: str) -> None:
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE_DIR):
         level, frame = level + 1, frame.f_back  # type: ignore[assignment]
     warnings.warn(message, UrdfWarning, stacklevel=level)
-
-
-def _unreadable_meshes(files: dict[str, str]) -> set[str]:
-    """URIs of the mesh files Coal's loader (what Pinocchio uses) fails to read."""
-    import coal
-
-    bad = set()
-    for uri, path in files.items():
-        if not path.lower().endswith((".stl", ".dae", ".obj", ".ply", ".3ds", ".off")):
-            continue  # textures
-        try:
-            coal.MeshLoader().load(path, np.ones(3))
-        except (RuntimeError, ValueError, TypeError):
-            bad.add(uri)
-    return bad
 
 
 def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> None:

@@ -1,7 +1,4 @@
-"""The gate's caps and tables: sizes, magnitudes, DoF, joint types, numeric attributes.
-
-Part of :mod:`hexapod_kin._gate` (see its docstring for the rules these serve).
-"""
+"""The gate's caps and tables: sizes, magnitudes, DoF, joint types, numeric attributes."""
 
 from __future__ import annotations
 

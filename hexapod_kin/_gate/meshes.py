@@ -1,7 +1,4 @@
-"""Materials, visual/collision geometry, and the mesh/texture files they name.
-
-Part of :mod:`hexapod_kin._gate`.
-"""
+"""Materials, visual/collision geometry, and the mesh/texture files they name."""
 
 from __future__ import annotations
 
@@ -50,10 +47,6 @@ def _absolute_mesh(uri: str, path: str, mesh_root: object) -> Path:
                 + ("" if name == path else f" (it links to {real!r})")
             )
     return Path(real)
-
-
-def _inside(path: str, root: str) -> bool:
-    return path == root or path.startswith(root.rstrip(os.sep) + os.sep)
 
 
 def resolve_mesh(
@@ -117,7 +110,8 @@ def resolve_mesh(
     last: UrdfError | None = None
     for root_real, joined in candidates:
         real = os.path.realpath(joined)
-        if root_real and not _inside(real, root_real):
+        inside = real == root_real or real.startswith(root_real.rstrip(os.sep) + os.sep)
+        if root_real and not inside:
             # an escape out of the root through ".." or a link is hostile: always refused
             raise UrdfError(f"{uri!r} resolves to {real!r}, outside the allowed root {root_real!r}")
         try:

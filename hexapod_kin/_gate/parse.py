@@ -1,7 +1,4 @@
-"""Strict, hostile-safe XML parsing; element paths in messages; plain decimal numbers.
-
-Part of :mod:`hexapod_kin._gate`.
-"""
+"""Strict, hostile-safe XML parsing; element paths in messages; plain decimal numbers."""
 
 from __future__ import annotations
 
@@ -87,8 +84,7 @@ def numbers_of(
 def check_numbers(root: etree._Element) -> None:
     """Check every numeric attribute under the ``<link>``, ``<joint>`` and ``<material>``s.
 
-    Fast path: one regular expression per attribute (the exact count of plain decimal
-    numbers); :func:`numbers_of` runs only to explain a failure or to look for overflow.
+    One regular expression per attribute; :func:`numbers_of` only to explain or bound.
     """
     patterns, numeric = PATTERNS, NUMERIC
     for top in root:
@@ -120,12 +116,7 @@ def number_of(el: etree._Element, attr: str, default: float | None = None) -> fl
 
 # ------------------------------------------------------------------------ parsing
 def parse_urdf(text: str | bytes) -> etree._Element:
-    """Parse URDF text with the gate's strict, hostile-safe parser (no other check).
-
-    Raises:
-        UrdfError: Malformed XML, DOCTYPE/ENTITY declarations, bad encodings.
-
-    """
+    """Parse URDF text strictly (no DOCTYPE, ENTITY or other encodings), no other check."""
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if len(data) > MAX_URDF_BYTES:
         raise UrdfError(f"URDF size {len(data)} bytes exceeds the cap of {MAX_URDF_BYTES} bytes")

@@ -1,21 +1,18 @@
 """The stated inertia repairs: ``load(..., inertia="collision" | "point")``.
 
-Real robot files often carry inertias no body can have (the PhantomX's break ``I1 + I2 >= I3``
-on every link). A repair rewrites every ``<inertial>`` and keeps what the file states with most
-confidence, each link's **mass** and **centre of mass** (the inertial origin):
+Real files carry inertias no body can have (the PhantomX's break ``I1 + I2 >= I3`` on every
+link). A repair rewrites every ``<inertial>``, keeping each link's **mass** and **centre of
+mass**:
 
-* ``"collision"``: the link's collision shapes, filled uniformly (the URDF mass shared in
-  proportion to their volumes): a box ``m (b² + c²) / 12`` about each axis, a cylinder
-  (axis z) ``m (3 r² + l²) / 12`` and ``m r² / 2``, a sphere ``2 m r² / 5``; a mesh by its
-  axis-aligned bounding box (scaled) taken as a box. Each shape is moved to the link's centre
-  of mass by the parallel-axis theorem and rotated into the inertial frame. A link without a
-  usable collision shape (none, or a mesh that cannot be found or read) gets the point repair.
-* ``"point"``: a point mass at the centre of mass with the tiny isotropic inertia of a solid
-  sphere of radius :data:`POINT_RADIUS` (``2 m r² / 5``).
+* ``"collision"``: the link's collision shapes filled uniformly (the mass shared by volume):
+  box ``m (b² + c²) / 12``, cylinder (axis z) ``m (3 r² + l²) / 12`` and ``m r² / 2``, sphere
+  ``2 m r² / 5``, a mesh as its scaled bounding box; moved to the centre of mass (parallel
+  axes) into the inertial frame. Without a usable shape: the point repair.
+* ``"point"``: the inertia of a solid sphere of radius :data:`POINT_RADIUS` at the centre of
+  mass.
 
-Both give physical tensors (sums of ``tr(S)·E − S``, ``S >= 0``): the triangle inequality
-holds on every link and merged moving body. Massless links get a zero inertia; a massless
-moving body stays a defect (mass is not invented).
+Both give physical tensors on every link and merged body; massless links get a zero inertia
+(a massless moving body stays a defect: mass is not invented).
 """
 
 from __future__ import annotations
@@ -88,19 +85,8 @@ def _stl_vertices(data: bytes) -> np.ndarray:
     return np.array(rows, dtype=np.float64).reshape(-1, 3)
 
 
-def _obj_vertices(data: bytes) -> np.ndarray:
-    text = data.decode("utf-8", errors="replace")
-    rows = [ln.split()[1:4] for ln in text.splitlines() if ln.startswith("v ")]
-    return np.array(rows, dtype=np.float64).reshape(-1, 3)
-
-
 def mesh_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Axis-aligned bounds ``(lo, hi)`` [mesh units] of a mesh file (STL, OBJ; else trimesh).
-
-    Raises:
-        UrdfError: Unreadable, empty or too large mesh, or a format without a reader.
-
-    """
+    """Axis-aligned bounds ``(lo, hi)`` [mesh units] of a mesh file (STL, OBJ; else trimesh)."""
     size = path.stat().st_size
     if size > MAX_BBOX_MESH_BYTES:
         raise UrdfError(f"{path.name}: {size} bytes, over {MAX_BBOX_MESH_BYTES}")
@@ -110,7 +96,9 @@ def mesh_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
         if suffix == ".stl":
             pts = _stl_vertices(data)
         elif suffix == ".obj":
-            pts = _obj_vertices(data)
+            lines = data.decode("utf-8", errors="replace").splitlines()
+            rows = [ln.split()[1:4] for ln in lines if ln.startswith("v ")]
+            pts = np.array(rows, dtype=np.float64).reshape(-1, 3)
         else:
             try:
                 import trimesh  # optional
@@ -196,12 +184,9 @@ def repair_inertials(
     package_dirs: Sequence[str | os.PathLike[str]] = (),
     mesh_root: str | os.PathLike[str] | None = None,
 ) -> InertiaRepair:
-    """Rewrite every ``<inertial>`` of a URDF by ``mode`` (see the module docstring).
+    """Rewrite every ``<inertial>`` of a URDF that passed the gate by ``mode``.
 
-    ``text`` must have passed the gate; ``package_dirs`` and ``mesh_root`` resolve collision
-    meshes as the gate does. Returns an :class:`InertiaRepair` (its ``text`` keeps every line
-    where it was).
-
+    Collision meshes resolve as the gate's; the :class:`InertiaRepair`'s text keeps every line.
     """
     check_mode(mode)
     root = parse_urdf(text)

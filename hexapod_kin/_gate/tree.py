@@ -1,7 +1,4 @@
-"""The verdict: structure (names, parents, one root, reachability), joints, then the other checks.
-
-Part of :mod:`hexapod_kin._gate`; :func:`check_urdf` is the one entry point.
-"""
+"""The verdict (:func:`check_urdf`): structure, joints, then the other checks."""
 
 from __future__ import annotations
 
@@ -40,18 +37,17 @@ from .parse import (
 
 @dataclass(frozen=True)
 class GateResult:
-    """What the gate learned about a URDF that passed.
+    """What the gate learned about a URDF that passed (names in document order).
 
     Attributes:
         root: The parsed ``<robot>`` element (lxml).
-        links: Link names, in document order.
-        joints: Joint names, in document order.
+        links: Link names.
+        joints: Joint names.
         root_link: Name of the root link.
-        meshes: The resolved mesh and texture files, as ``(uri, path)`` pairs in document order.
-        missing_meshes: Mesh/texture URIs that could not be found (lenient mode only), as
-            ``(uri, reason)`` pairs; their visual/collision elements must be dropped.
-        inertia_defects: Physically implausible inertials (lenient mode only), as
-            ``(link, defect)`` pairs; harmless to kinematics, refused by dynamics.
+        meshes: The resolved mesh and texture files, ``(uri, path)``.
+        missing_meshes: Lenient mode: ``(uri, reason)`` of files not found (drop their
+            elements).
+        inertia_defects: Lenient mode: ``(link, defect)`` of implausible inertials.
         repairs: Harmless defects mended in lenient mode, one message each (a nameless
             ``<robot>`` named ``"robot"``; a ``<mimic>`` of no joint dropped).
         text: The mended document when there are :attr:`repairs` (for Pinocchio), else None.
