@@ -21,19 +21,12 @@ __all__ = ["AlignedChain", "ChainArrays", "aligned_chain"]
 
 @dataclass(frozen=True)
 class ChainArrays:
-    """A serial chain as flat arrays (read-only), in the model's base frame.
+    """A serial chain as flat read-only arrays, in the model's base frame.
 
-    Attributes:
-        rot: (m, 3, 3) rotation of each joint placement (parent joint → joint at q = 0); the
-            first one includes the base → root transform.
-        trans: (m + 1, 3) translations of the placements in [m]; the last row is the tip
-            offset in the frame of the tip's parent joint.
-        tip_rot: (3, 3) rotation of the tip frame in its parent joint frame.
-        axis: (m, 3) unit joint axes in their joint frames.
-        kind: (m,) 0 revolute, 1 prismatic.
-        col: (m,) index of each joint's variable in ``q``.
-        nq: Length of ``q``.
-
+    ``rot`` (m, 3, 3) and ``trans`` (m + 1, 3) [m]: the joint placements at q = 0 (the first
+    from the base, the last translation the tip offset); ``tip_rot`` (3, 3): the tip frame in
+    its joint's; ``axis`` (m, 3): unit axes; ``kind`` (m,): 0 revolute, 1 prismatic; ``col``
+    (m,): each joint's index in ``q`` (of length ``nq``).
     """
 
     rot: np.ndarray
@@ -71,12 +64,7 @@ class ChainArrays:
 
     @classmethod
     def from_model(cls, model: Any, frame: str | None = None) -> ChainArrays:
-        """Extract the chain from root to ``frame`` (default: the tip) of a loaded model.
-
-        Raises:
-            SourceError: If a joint on the path is not a 1-DOF revolute/prismatic joint.
-
-        """
+        """Extract the chain from root to ``frame`` (default: the tip) of a loaded model."""
         m = model.model
         fid = model.tip_id if frame is None else model.frame_id(frame)
         fr = m.frames[fid]
@@ -85,10 +73,7 @@ class ChainArrays:
         for k, i in enumerate(path):
             placement = model.baseMo * m.jointPlacements[i] if k == 0 else m.jointPlacements[i]
             kind = joint_kind(m.joints[i])
-            if kind is None:
-                raise SourceError(
-                    f"joint {m.names[i]!r} of kind {m.joints[i].shortname()} is not 1-DOF rev/prism"
-                )
+            assert kind is not None  # the loader admits one-variable joints only
             kinds.append(1 if kind[0] == "prismatic" else 0)
             rots.append(np.array(placement.rotation))
             trans.append(np.array(placement.translation))
@@ -112,18 +97,10 @@ class ChainArrays:
 class AlignedChain:
     """A chain re-expressed with z joint axes (the block FK core's arguments).
 
-    Placement ``j`` (rotation ``prot[j]``, translation ``ptr[j]``) comes before joint ``j``'s
-    motion ``Rz(q)`` / ``Tz(q)``; placement ``m`` is the tip's. With ``A_j ez = u_j`` (see
-    :func:`_z_to`), placement ``j`` is ``A_{j-1}ᵀ (R_j, t_j) A_j`` (``A_{-1} = A_m = I``).
-
-    Attributes:
-        prot: (m + 1, 9) placement rotations, row-major; the last is the tip rotation.
-        ptr: (m + 1, 3) placement translations in [m]; the last is the tip offset.
-        flags: (m + 1,) int64, 1 where the placement rotation is exactly the identity.
-        kind: (m,) 0 revolute, 1 prismatic.
-        col: (m,) index of each joint's variable in ``q`` (distinct).
-        nq: Length of ``q``.
-
+    Placement ``j`` (``prot[j]`` (9,) row-major, ``ptr[j]`` [m]) comes before joint ``j``'s
+    ``Rz(q)`` / ``Tz(q)``; the last is the tip's. With ``A_j ez = u_j`` (:func:`_z_to`) it is
+    ``A_{j-1}ᵀ (R_j, t_j) A_j`` (``A_{-1} = A_m = I``). ``flags``: 1 where ``prot[j]`` is
+    exactly the identity; ``kind``, ``col`` (distinct), ``nq`` as :class:`ChainArrays`.
     """
 
     prot: np.ndarray

@@ -78,14 +78,12 @@ class Model:
 
     Attributes:
         model: The ``pinocchio.Model`` (reduced to the base → tip joints when asked).
-        data: The calling thread's ``pinocchio.Data`` (one per thread, never re-paired).
+        data: The calling thread's ``pinocchio.Data``.
         full_model: The model before reduction.
-        urdf: The URDF text the model was built from.
-        source: The resolved source (name, mesh directories, params).
+        urdf: The URDF text it was built from; ``source``: the resolved source.
         base: Name of the base frame.
-        tip: Name of the tip frame (``<flange>_tool`` when a ``tool`` offset was given).
-        flange: The frame the tool is mounted on (the tip of the chain without the tool).
-        tool: The tool offset ``flangeMtip`` (4×4, read-only), or ``None``.
+        tip: Name of the tip frame (``<flange>_tool`` with a ``tool`` offset).
+        flange: The frame the tool is mounted on; ``tool``: ``flangeMtip`` (4×4) or None.
 
     """
 
