@@ -258,11 +258,10 @@ def fk_jac_into(
     tip_rot: np.ndarray,
     out_r: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """Tip position into ``out_p`` (3,), LWA Jacobian into ``out_j`` (3 or 6, nq), rotation.
+    """Tip position into ``out_p`` (3,), rotation into ``out_r`` (3, 3), LWA Jacobian ``out_j``.
 
-    ``scratch`` is a (6, m) work array (nothing is allocated); the tip frame's rotation (the
-    chain's ``tip_rot`` applied) goes to ``out_r`` (3, 3). Compiled callers pass ``want_jac``
-    as a runtime value, never a literal (numba would compile one copy per literal).
+    ``out_j``: (3 or 6, nq); ``scratch``: (6, m) work (nothing allocated); ``want_jac``: a
+    runtime value, never a literal (one compiled copy).
     """
     m = rot.shape[0]
     r00, r01, r02 = 1.0, 0.0, 0.0
@@ -394,20 +393,14 @@ def fk_jac_block(
     trig: np.ndarray,
     jb: np.ndarray,
 ) -> None:  # pragma: no cover - compiled
-    """The block FK + Jacobian core: ``nb`` configurations, structure of arrays.
+    """The block FK + Jacobian core: ``nb`` configurations ``qb`` (nq, B), column-wise.
 
-    The chain is an :class:`~hexapod_kin._chain.AlignedChain` (``prot``, ``ptr``, ``flags``,
-    ``kind``, ``col``); ``qb`` (nq, B) holds the block's configurations column-wise. Writes the
-    tip rotation into ``rr`` (9, B, row-major; with ``tip_rot`` False the tip placement's own
-    rotation is left out) and position into ``pp`` (3, B). With ``want_jac``, the Jacobian into
-    ``jb`` (6·nq, B), row ``a·nq + c`` holding ``J[a, c]``: revolute ``[w × (keep·p − o); w]``
-    (``keep`` 1: LOCAL_WORLD_ALIGNED; 0: WORLD, the velocity of the point at the base
-    origin), prismatic ``[w; 0]``; columns of variables off the path are not written (the
-    caller zeroes them once). ``skip0``: joint 0 stays at q = 0 (its column is still
-    computed). ``trig`` is (2, B) scratch. Each element's arithmetic depends on its own ``q``
-    only: sin / cos by :func:`sincos` over the block, then libm for the elements with
-    ``|q| > POLY_TRIG_MAX``. Callers pass the flags as runtime values, never literal
-    ``True``/``False``: one compiled copy serves every caller.
+    Of an :class:`~hexapod_kin._chain.AlignedChain` (``prot`` ... ``col``): the tip rotation
+    into ``rr`` (9, B, row-major; without the tip placement's own unless ``tip_rot``), its
+    position into ``pp`` (3, B); with ``want_jac``, ``J[a, c]`` into row ``a·nq + c`` of ``jb``
+    (6·nq, B): revolute ``[w × (keep·p − o); w]`` (``keep`` 1: LOCAL_WORLD_ALIGNED; 0: WORLD),
+    prismatic ``[w; 0]``, columns off the path not written. ``skip0``: joint 0 stays at q = 0;
+    ``trig``: (2, B) scratch. Flags are runtime values (one compiled copy for every caller).
     """
     nq = qb.shape[0]
     m = kind.shape[0]
@@ -505,11 +498,10 @@ def pose_jacobian_kernel(
     last_block: int,
     block: int,
 ) -> bool:  # pragma: no cover - compiled
-    """Poses into ``out_t`` (N, 16) and Jacobians into ``out_j`` (N, 6·nq) of some blocks.
+    """Poses ``out_t`` (N, 16) and Jacobians ``out_j`` (N, 6·nq) of some blocks of ``qs``.
 
-    Blocks ``first_block`` to ``last_block - 1`` of ``block`` rows of ``qs`` (N, nq), through
-    :func:`fk_jac_block`; ``ref`` a value of :data:`REF_CODES`. Returns whether a ``q`` in
-    them is non-finite or ``|q| >= Q_MAX`` (the caller raises; only those rows are garbage).
+    Blocks ``first_block`` .. ``last_block - 1``; ``ref``: of :data:`REF_CODES`. Returns
+    whether a ``q`` there is non-finite or ``|q| >= Q_MAX`` (the caller raises).
     """
     nconf = qs.shape[0]
     nq = qs.shape[1]

@@ -1,15 +1,12 @@
 """Forward kinematics, every intermediate transform and frame Jacobians (Pinocchio).
 
-Pose notation: Pinocchio's ``aMb`` — the pose of frame ``b`` expressed in frame ``a`` — as 4×4
-numpy arrays; ``base`` is the chain's frame 0 (Khalil numbering), ``tip`` its last frame.
+Poses are Pinocchio's ``aMb`` (frame ``b`` in frame ``a``) as 4×4 arrays; ``base`` is the
+chain's frame 0, ``tip`` its last. Jacobians take their reference frame explicitly:
 
-Reference frames of Jacobians (explicit argument, as in Pinocchio):
-
-* ``"local"`` — the tip's twist expressed in the tip frame;
-* ``"world"`` — the spatial twist expressed in the base frame (velocity of the point at the
-  base origin);
-* ``"local_world_aligned"`` — the tip's linear velocity and angular velocity expressed in
-  the base axes (the textbook ``J`` of the seeds; rows 0–2 are ``∂p/∂q``).
+* ``"local"`` — the tip's twist in the tip frame;
+* ``"world"`` — the spatial twist in the base frame (velocity of the point at the base origin);
+* ``"local_world_aligned"`` — the tip's linear and angular velocity in the base axes (the
+  seeds' textbook ``J``; rows 0–2 are ``∂p/∂q``).
 """
 
 from __future__ import annotations

@@ -308,10 +308,8 @@ class Chain:
         friction: Joint dry friction, one value or one per joint.
         description: Free text (source of the preset), written into the URDF header.
         base_pose: ``T_base_0``: Khalil frame 0 in the base link (anything :meth:`Pose.of`
-            takes; ``None``: identity), the fixed joint ``<name>_base_offset`` to the link
-            ``<base>_frame0``.
-        tool: ``T_n_tool``: the tool frame in the last row's (``None``: no tool link), the
-            fixed joint ``<tip>_tool`` to the link ``tip``.
+            takes; ``None``: identity).
+        tool: ``T_n_tool``: the tool frame in the last row's (``None``: no tool link).
 
     """
 

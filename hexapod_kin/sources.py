@@ -1,12 +1,9 @@
 """What a model source means — one meaning everywhere (load, chain_from_urdf, the exporters).
 
-:func:`resolve_source` turns a source into a :class:`ResolvedSource` (URDF text, a label, where
-its meshes resolve, and the parameter table when there is one). A source is a
-:class:`~hexapod_kin.params.Chain` or ``Hexapod``, a path, or a string read in this order:
-URDF text (it starts with ``<``), a preset name, ``erd:NAME`` (example-robot-data), a file
-path (``.urdf``/``.xml``, a ROS ``.xacro`` expanded without ROS, or a table file
-``.toml``/``.yaml``). Also the example-robot-data index (:func:`erd_names`, :func:`erd_path`)
-and the second engine (:func:`yourdfpy_load`). Never imports Pinocchio.
+:func:`resolve_source` turns a :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a path, or a
+string (in this order: URDF text, a preset name, ``erd:NAME``, a ``.urdf``/``.xml``/``.xacro``
+or table file) into a :class:`ResolvedSource`. Also example-robot-data's index
+(:func:`erd_names`, :func:`erd_path`) and yourdfpy (:func:`yourdfpy_load`). No Pinocchio.
 """
 
 from __future__ import annotations
@@ -318,10 +315,8 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
         source: What to load: a :class:`~hexapod_kin.params.Chain` or ``Hexapod``, a preset
             name (``"hexabot_leg"``), a URDF file path, URDF text, a table file (``.toml``,
             ``.yaml``; see :mod:`hexapod_kin.tables`) or ``"erd:NAME"``.
-        package_dirs: Extra directories where ``package://PKG/...`` resolves (``<dir>/PKG``),
-            tried before ``ROS_PACKAGE_PATH`` and the folders above a URDF file; an entry
-            ``NAME=PATH`` says package NAME is the folder PATH (for a xacro's
-            ``$(find NAME)``, and ``package://NAME/`` when PATH's last part is NAME).
+        package_dirs: Directories where ``package://PKG/...`` resolves first (``<dir>/PKG``);
+            ``NAME=PATH``: package NAME is the folder PATH (a xacro's ``$(find NAME)``).
         **params: Preset parameters (only with a preset name).
 
     Raises:

@@ -5,11 +5,9 @@ axis is ``0 0 1``: the URDF link of row ``j`` *is* Khalil frame ``j`` (a fixed r
 joint). Visuals: a sphere at every joint, a cylinder from each frame's origin to the next, a
 sphere at the tip; inertials from the chain (default: rods).
 
-A chain's base pose (``Chain.base_pose``, ``T_base_0``) becomes the fixed joint
-``<robot>_base_offset`` from the base link to the link ``<base>_frame0`` (Khalil frame 0); its
-tool pose (``Chain.tool``, ``T_n_tool``) becomes the fixed joint ``<tip>_fixed`` from the last
-row's link to the tool link named ``tip``. ``matrix_to_rpy`` / ``rpy_to_matrix`` are re-exported
-from :mod:`hexapod_kin.params` (the package's one RPY convention).
+A chain's ``base_pose`` becomes the fixed joint ``<robot>_base_offset`` to the link
+``<base>_frame0`` (Khalil frame 0), its ``tool`` the fixed joint ``<tip>_fixed`` to the tool
+link ``tip``.
 """
 
 from __future__ import annotations
