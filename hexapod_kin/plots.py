@@ -134,16 +134,10 @@ def plot_still(
 ) -> Path:
     """One frame of a 3-D scene as a stick figure (the still frame of an animation).
 
-    Args:
-        chains: Point lists (K, 3) in [m], each drawn as links with joint markers (a leg).
-        path: Destination PNG (written atomically; returned).
-        title: Figure title (say which time the frame is).
-        traces: Paths (N, 3) drawn as thin lines (e.g. the foot's path over the run).
-        outlines: Closed polygons (M, 3) drawn as outlines (a body, a support polygon).
-        ghosts: Point lists drawn faint behind ``chains`` (e.g. the pose at t = 0).
-        view: Elevation and azimuth of the camera in [deg].
-        size: Figure size in inches.
-
+    ``chains``: point lists (K, 3) [m] drawn as links with joint markers (legs); ``traces``:
+    paths (N, 3) as thin lines; ``outlines``: closed polygons (a body, a support polygon);
+    ``ghosts``: point lists drawn faint behind (the pose at t = 0); ``view``: elevation and
+    azimuth [deg]; ``size`` in inches. Returns the written path.
     """
     import numpy as np
 
@@ -344,13 +338,10 @@ def plot_singularity_map(
     sits below the axes (never over the data); flagged points are hatched when no family is
     known.
 
-    Args:
-        result: A :class:`~hexapod_kin.singularity.ScanResult` of a *grid* scan over exactly
-            two joints.
-        path: Output path (``.png``, ``.jpg``, ``.svg`` or ``.pdf``; written atomically).
-        measure: ``"det"`` (default when J is square), ``"manipulability"`` (default
-            otherwise), ``"sigma_min"`` or ``"condition"``.
-        title: Figure title (default: source, measure and the fixed joints).
+    ``result``: a :class:`~hexapod_kin.singularity.ScanResult` of a *grid* scan over two
+    joints; ``path``: a :data:`FORMATS` file, written atomically; ``measure``: ``"det"``
+    (default when J is square), ``"manipulability"`` (else), ``"sigma_min"`` or
+    ``"condition"``; ``title``: default source, measure and the fixed joints.
 
     Raises:
         ParameterError: Not a 2-joint grid scan, an unknown measure or file suffix.

@@ -76,16 +76,9 @@ def precompile(
 ) -> dict[str, float]:
     """Compile (or load from numba's disk cache) the kernels of ``areas``.
 
-    Args:
-        areas: Names from :data:`AREAS` (default: all of them).
-        processes: Areas compiled at once (numba holds the GIL): here and in
-            ``processes - 1`` children, shared by expected seconds
-            (:data:`hexapod_kin._kernels.COMPILE_SECONDS`); a failed child's areas are
-            compiled here (its error raised).
-        done: Called with each area's name and seconds as it finishes (progress).
-
-    Returns:
-        Seconds per area, in order (milliseconds once the disk cache holds them).
+    ``areas``: names of :data:`AREAS` (default all); ``processes``: areas compiled at once
+    (numba holds the GIL), here and in ``processes - 1`` children (a failed child's areas
+    compiled here); ``done(name, seconds)`` as each finishes. Returns seconds per area.
 
     Raises:
         ParameterError: An unknown area name or ``processes`` < 1.

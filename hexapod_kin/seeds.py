@@ -162,17 +162,10 @@ def seed_experiment(
 
     The defaults (the seeds give none) move the foot 0 → 3.2 cm → 0 along x every period.
 
-    Args:
-        model: A loaded 3-joint model (default: ``hexabot_leg``).
-        amplitude: A in [m/s].
-        period: T in [s].
-        dt: Step in [s].
-        duration: In [s].
-        q0: Start (default ``SEED_Q0`` on a 3-joint chain within its limits, else
-            :func:`default_stance`).
-        method: Integration method.
-        gain: Closed-loop gain [1/s] toward the exact reference ``x0 + A T/(2π)(1 − cos 2πt/T)``.
-        baseline: Also run the plain Euler + ``np.linalg.solve`` loop (needs a square J).
+    ``model``: a loaded 3-joint model (default ``hexabot_leg``); ``amplitude`` A [m/s],
+    ``period`` T, ``dt``, ``duration`` [s]; ``q0``: default ``SEED_Q0`` where it fits, else
+    :func:`default_stance`; ``gain`` [1/s] toward the exact ``x0 + A T/(2π)(1 − cos 2πt/T)``;
+    ``baseline``: also the plain Euler + ``np.linalg.solve`` loop (a square J).
 
     """
     from .kinematics import load
@@ -241,12 +234,8 @@ def step_torques(
 ) -> StepTorques:
     """Joint torques along the seeds' resolved-rate step (:func:`seed_experiment`).
 
-    Args:
-        model: A loaded 3-joint leg (default ``hexabot_leg``).
-        force: Constant foot force on the environment (3,) in [N], base axes.
-        frame: Force frame (default the tip).
-        **seed_kwargs: Passed to :func:`seed_experiment` (``amplitude``, ``period``, ``dt``,
-            ``duration``, ``q0``, ``method``, ``gain``); the baseline run is skipped.
+    ``force``: constant foot force on the environment (3,) [N], base axes, at ``frame``
+    (default the tip); ``model`` and ``**seed_kwargs`` as :func:`seed_experiment` (no baseline).
 
     Raises:
         ParameterError: Not a 3-joint model; as

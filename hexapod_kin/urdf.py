@@ -340,11 +340,8 @@ def to_urdf(
 ) -> str:
     """Return the URDF text of a chain or robot (deterministic: same input, same bytes).
 
-    Args:
-        source: A :class:`Chain` or a :class:`Hexapod`, a preset name (``"hexabot_leg"``)
-            or a table file (``.toml``/``.yaml``), as :func:`hexapod_kin.load` reads them.
-        leg: For a :class:`Hexapod`, emit only this leg with its mount on the body.
-        header: Extra line for the header comment (e.g. which command made the file).
+    ``source``: as :func:`table_of`; ``leg``: a :class:`Hexapod`'s one leg on the body;
+    ``header``: an extra header comment line (e.g. which command made the file).
 
     Raises:
         ParameterError: ``source`` of another kind (a URDF), ``leg`` for a chain, or a number

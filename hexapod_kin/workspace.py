@@ -74,14 +74,10 @@ def _voxel_counts(points: np.ndarray, h: float) -> tuple[int, int]:
 def workspace(
     model: Any, samples: int = 2_000_000, voxel: float | None = None, seed: int | None = 0
 ) -> WorkspaceResult:
-    """Reachable tip points of random configurations and a reachable-volume estimate.
+    """Tip points of ``samples`` random configurations of ``model`` and the reachable volume.
 
-    Args:
-        model: A loaded model or a source.
-        samples: Number of uniform random configurations within the joint limits.
-        voxel: Voxel edge in [m]; default ``reach / 25`` (finer voxels need more samples:
-            empty voxels inside the workspace bias the estimate low).
-        seed: Random seed.
+    ``voxel`` [m]: default ``reach / 25`` (finer voxels need more samples: empty voxels inside
+    the workspace bias the estimate low).
 
     Raises:
         ParameterError: ``samples`` out of range or ``voxel`` not > 0.
@@ -108,16 +104,11 @@ def workspace(
 def cross_section(
     points: np.ndarray, plane: str = "xz", offset: float = 0.0, thickness: float | None = None
 ) -> np.ndarray:
-    """Points of a workspace in a slab around a coordinate plane, as 2-D coordinates.
+    """The (M, 2) coordinates of the tip ``points`` (N, 3) [m] in a slab around a plane.
 
-    Args:
-        points: Tip positions (N, 3) in [m].
-        plane: ``"xz"``, ``"yz"`` or ``"xy"`` (the two kept coordinates, in that order).
-        offset: Position of the plane along the dropped axis in [m].
-        thickness: Slab thickness in [m]; default 1 % of the points' extent.
-
-    Returns:
-        (M, 2) coordinates of the points with ``|coordinate − offset| ≤ thickness / 2``.
+    ``plane``: ``"xz"``, ``"yz"`` or ``"xy"`` (the kept coordinates, in order); the slab is
+    ``|coordinate − offset| ≤ thickness / 2`` along the dropped axis ([m]; ``thickness``
+    default 1 % of the points' extent).
 
     Raises:
         ParameterError: Unknown plane or bad thickness.
