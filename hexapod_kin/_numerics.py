@@ -42,14 +42,9 @@ def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.n
     The smaller system: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m; ``Jf``: ``jac`` with the columns
     of frozen joints (``free`` False or 0) zeroed. A stack of tasks (n ≤ m) at once.
 
-    Args:
-        jac: Task Jacobian (m, n), or a stack (..., m, n).
-        error: Task error or velocity (m,) (stack: (..., m)), in the task's units.
-        lam2: Damping ``λ² ≥ 0`` in the task's units squared.
-        free: Optional (n,) booleans or 0/1 weights of the joints.
-
-    Returns:
-        Δq (n,) (stack: (..., n)); zeros when singular (``λ² = 0`` at a singularity).
+    ``jac`` (m, n) or a stack (..., m, n); ``error`` (m,) (stack (..., m)) in the task's units;
+    ``lam2``: ``λ² ≥ 0`` in those squared; ``free``: (n,) booleans or 0/1 weights. Returns Δq
+    (n,) (stack (..., n)); zeros when singular (``λ² = 0`` at a singularity).
 
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)

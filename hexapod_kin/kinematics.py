@@ -192,11 +192,9 @@ class KinematicModel(Model):
     def fk_batch(self, qs: Any, *, out: np.ndarray | None = None) -> np.ndarray:
         """Tip poses ``baseMtip`` of many configurations, (N, 4, 4), in one kernel pass.
 
-        Equal to :meth:`fk` of each row to rounding (≈1e-15), the same bits on any thread count.
-
-        Args:
-            qs: Configurations (N, nq) in [rad] / [m] (one (nq,) row is taken as N = 1).
-            out: Optional (N, 4, 4) float64 C-contiguous array to fill and return.
+        ``qs`` (N, nq) in [rad] / [m] (one (nq,) row: N = 1); ``out``: an optional (N, 4, 4)
+        float64 C-contiguous array to fill. Equal to :meth:`fk` of each row to rounding
+        (≈1e-15), the same bits on any thread count.
 
         Raises:
             ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150`` (``out``
@@ -212,13 +210,8 @@ class KinematicModel(Model):
     ) -> np.ndarray:
         """Tip Jacobians of many configurations, (N, 6, nq), rows ``[v; ω]``, in one pass.
 
-        Equal to :meth:`jacobian` of each row to rounding (the kernel of :meth:`fk_batch`);
-        columns of variables off the base → tip path are zero.
-
-        Args:
-            qs: Configurations (N, nq) in [rad] / [m].
-            reference: ``"local"``, ``"world"`` or ``"local_world_aligned"``.
-            out: Optional (N, 6, nq) float64 C-contiguous array to fill and return.
+        Arguments as :meth:`fk_batch` (``out``: (N, 6, nq)) and :meth:`jacobian`; equal to
+        :meth:`jacobian` of each row to rounding; columns off the base → tip path are zero.
 
         Raises:
             ParameterError: Unknown ``reference``; ``out`` of the wrong shape/dtype/layout.
