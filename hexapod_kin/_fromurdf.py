@@ -1,8 +1,6 @@
 """Recover a Khalil–Kleinfinger table from a serial URDF chain (:func:`chain_from_urdf`).
 
-The model is loaded with :func:`hexapod_kin.load` (``base=`` / ``tip=`` pick a sub-chain); its
-joint placements and axes at ``q = 0`` give one line per joint (base frame), on which the
-Khalil frames are placed:
+The loaded model's joint axes at ``q = 0`` are lines (base frame) carrying the Khalil frames:
 
 * ``z_j`` is joint ``j``'s axis, with the URDF's direction (``q`` keeps its sign);
 * ``x_j`` is the common normal from line ``j`` to line ``j + 1``, frame ``j``'s origin its foot
@@ -13,20 +11,17 @@ Khalil frames are placed:
   joint 1's axis meeting the ``x_0`` line: every URDF hexapod_kin writes), else frame 1 at
   ``q = 0``, the offset going to ``Chain.base_pose``; what remains to the tip is ``Chain.tool``.
 
-Rows ``(α_j, d_j, θ_j, r_j)`` are read off consecutive frames; fixed joints need none.
+Rows ``(α_j, d_j, θ_j, r_j)`` are read off consecutive frames (fixed joints need none).
 
-**Snapping.** Rounded rotations (``3.14159``) leave axes meant to be parallel a few µrad off,
-and their common normal lands kilometres away. An axis within ``angle_tol`` (default
-:data:`SNAP_TOL`) of parallel, anti-parallel or perpendicular to the previous one is made exact
-by turning the rest of the chain about that joint's origin; each snap is reported
-(:class:`Snap`, ``Chain.description``), snapped twists are multiples of π/2, and a snap of
-``ε`` rad moves the tip by at most ``ε ×`` the path length from that joint to the tip
-(:attr:`TableRecovery.fk_bound` sums them).
+**Snapping.** Rounded rotations (``3.14159``) leave parallel axes a few µrad off (their common
+normal kilometres away): an axis within ``angle_tol`` (:data:`SNAP_TOL`) of parallel or
+perpendicular to the previous one is made exact by turning the rest of the chain about that
+joint (each :class:`Snap` reported; twists then multiples of π/2); a snap of ``ε`` rad moves
+the tip by at most ``ε ×`` the path length to it (:attr:`TableRecovery.fk_bound`).
 
-**Checks.** No recovered length (``|d|``, ``|r|``, the tool offset) may exceed the chain's size
-(:attr:`TableRecovery.size`, twice the path length), else a
-:class:`~hexapod_kin.exceptions.ConfigurationError` names the joints and the ``angle_tol`` that
-would snap them. The table's FK equals Pinocchio's at ``q = 0`` and random configurations, to
+**Checks.** No recovered length may exceed twice the path length
+(:attr:`TableRecovery.size`; else a :class:`~hexapod_kin.exceptions.ConfigurationError` names
+the joints and the ``angle_tol`` that would snap them); the table's FK equals Pinocchio's to
 1e-9 relative without snaps, else within ``fk_bound``.
 """
 

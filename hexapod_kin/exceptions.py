@@ -1,8 +1,7 @@
-"""The one exception family of hexapod_kin.
+"""The one exception family of hexapod_kin: every error derives from :class:`HexapodKinError`.
 
-Every error the package raises derives from :class:`HexapodKinError`. Messages name the
-parameter, the value that was given and what is allowed (listing the valid names where there
-is a list), so that a user can fix the call without reading the source.
+Messages name the parameter, the value given and what is allowed (the valid names, where
+there is a list), so that a user can fix the call without reading the source.
 """
 
 from __future__ import annotations

@@ -177,8 +177,7 @@ class Model:
             )
         self._shape = (self.nq,)
         names = [k[0] for k in kinds if k is not None]  # every joint's kind (all known here)
-        # Continuous joints are Pinocchio's unbounded revolute joints: q holds their angle
-        # (one value, as for every joint here); Pinocchio takes (cos, sin) — see pinocchio_q.
+        # continuous joints: one angle in q, (cos, sin) in Pinocchio's (pinocchio_q)
         idx = [(int(m.joints[i].idx_q), int(m.joints[i].idx_v)) for i in joints]
         self._unbounded = tuple(p for p, kind in zip(idx, names) if kind == "continuous")
         plain = [p for p, kind in zip(idx, names) if kind != "continuous"]
@@ -373,8 +372,7 @@ class Model:
             ConfigurationError: Wrong length, not numbers, or non-finite values.
 
         """
-        # fast path, one comparison: hypot of the values is NaN/inf for any NaN/inf and
-        # bounds every |q_i|
+        # fast path: hypot of the values is NaN/inf for any NaN/inf and bounds every |q_i|
         if q.__class__ is _ND and q.dtype is _F64 and q.shape == self._shape:
             if _hypot(*q.tolist()) < 1e150:
                 return q

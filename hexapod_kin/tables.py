@@ -28,11 +28,9 @@ leg4.toml``). The format (examples in ``examples/``)::
     com = [0.05, 0, 0]             #   with com [m] and inertia [ixx, iyy, izz, ixy, ixz, iyz]
     inertia = [1e-4, 1e-4, 1e-4, 0, 0, 0]   # [kg m^2] about the com, in the row's link frame
 
-Standard DH rows become Khalil rows through :meth:`Chain.from_dh` (one fixed row more, which
-carries the tip): ``link`` names, ``mass`` and inertials then refer to the joint's frame, and
-the extra tip link takes ``tip``. Unknown keys are refused (a typo never passes silently).
-TOML is read with the standard library (``tomllib``, Python ≥ 3.11; ``tomli`` before);
-YAML with PyYAML (``pip install hexapod-kin[tables]``).
+Standard DH rows become Khalil rows by :meth:`Chain.from_dh` (``link``, ``mass`` and inertials
+of the joint's frame; one fixed row more, its link named ``tip``). Unknown keys are refused.
+YAML needs PyYAML (``pip install hexapod-kin[tables]``).
 """
 
 from __future__ import annotations
