@@ -27,19 +27,15 @@ __all__ = ["SEED_Q0", "SeedRun", "euler_baseline", "seed002_schedule", "seed_bas
 
 @dataclass(frozen=True)
 class SeedRun:
-    """The seeds' experiment and its drift figures (metres).
+    """The seeds' experiment (``trajectory``, amplitude A [m/s], period T [s]) and its drift.
 
     Attributes:
-        trajectory: The resolved-rate run.
-        amplitude: A in [m/s].
-        period: T in [s].
-        drift_y: max |y(t) − y(0)| in [m] (tip from Pinocchio FK of the joint trajectory).
-        drift_z: max |z(t) − z(0)| in [m].
-        error_x: max |x(t) − x(0) − ∫v_x| in [m] against the exact integral
-            ``A T/(2π) (1 − cos 2πt/T)``.
-        baseline: Same three figures for the plain Euler + ``np.linalg.solve`` open loop.
-        baseline_deviation: (N, 3) |foot − reference| of that baseline in [m], or None.
-        baseline_failure: Why the baseline could not run (singular J on its way), or None.
+        drift_y: max |y(t) − y(0)| [m] of the tip (Pinocchio FK of the joint trajectory).
+        drift_z: max |z(t) − z(0)| [m].
+        error_x: max |x(t) − x(0) − A T/(2π) (1 − cos 2πt/T)| [m] (the exact ∫v_x).
+        baseline: The same figures of the plain Euler + ``np.linalg.solve`` open loop.
+        baseline_deviation: Its (N, 3) |foot − reference| [m], or None.
+        baseline_failure: Why it could not run (a singular J), or None.
 
     """
 

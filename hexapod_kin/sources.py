@@ -147,16 +147,9 @@ def _package_dirs_for(path: Path | None, text: str, extra: tuple[str, ...] = ())
 # ------------------------------------------------------------------------ sources
 @dataclass(frozen=True)
 class ResolvedSource:
-    """A source resolved to URDF text.
+    """A source resolved to URDF ``text``, with its ``name`` (preset, file, ``erd:NAME``).
 
-    Attributes:
-        text: The URDF document.
-        name: A short label (preset name, file name, ``erd:NAME``).
-        package_dirs: Directories where ``package://`` meshes resolve.
-        mesh_root: Directory relative mesh paths resolve against (the URDF's directory).
-        params: The Chain or Hexapod it came from, if any.
-        path: The file it was read from, if any.
-
+    Its meshes resolve in ``package_dirs`` and ``mesh_root``; ``params``, ``path``: if any.
     """
 
     text: str

@@ -24,17 +24,9 @@ class WorkspaceResult:
     neighbour, is cut through its middle on average); ``volume_occupied`` counts every occupied
     voxel (an over-estimate). For solid workspaces (≥ 3 joints acting on the position).
 
-    Attributes:
-        q: The sampled configurations (N, n).
-        points: Tip positions (N, 3) in [m], base frame.
-        voxel: Voxel edge in [m].
-        volume_occupied: Occupied voxels × voxel³ in [m³].
-        volume: The boundary-corrected estimate in [m³].
-        interior: Number of interior voxels.
-        boundary: Number of boundary voxels.
-        lower: Bounding-box corner (3,) in [m].
-        upper: Bounding-box corner (3,) in [m].
-        source: The model's name.
+    ``q`` (N, n) sampled configurations; ``points`` (N, 3) tips [m], base frame; ``voxel``
+    [m]; ``volume_occupied``, ``volume`` [m³]; ``interior``, ``boundary``: voxel counts;
+    ``lower``, ``upper`` (3,): bounding-box corners [m]; ``source``: the model's name.
 
     """
 
