@@ -137,8 +137,7 @@ class TableRecovery:
 
     Attributes:
         chain: The recovered :class:`~hexapod_kin.params.Chain`.
-        snaps: The snaps applied, in chain order (empty for an exact URDF).
-        angle_tol: The snapping tolerance used [rad].
+        snaps: The snaps applied, in chain order; ``angle_tol``: their tolerance [rad].
         size: The bound on every recovered length [m] (see the module docstring).
         fk_bound: ``Σ angle × reach`` over the snaps (and the zeroed lengths) [m]: the most the
             table's tip can differ from the URDF's in any configuration.

@@ -1,11 +1,9 @@
 """The one compiled layer (numba): the FK + Jacobian core and the batch kernels of chains.
 
-The same maths, equal to Pinocchio to rounding, in two forms: :func:`fk_jac_into`, one
-configuration of a :class:`~hexapod_kin._chain.ChainArrays` (the compiled IK and resolved-rate
-loops), and :func:`fk_jac_block`, a structure-of-arrays block of an
-:class:`~hexapod_kin._chain.AlignedChain` (every batch kernel), whose per-joint loops vectorise
-(sin / cos by :func:`sincos`, libm beyond :data:`POLY_TRIG_MAX`). **Same bits every time**:
-no ``fastmath``; each element's arithmetic depends on its own input only.
+Equal to Pinocchio to rounding: :func:`fk_jac_into`, one configuration of a
+:class:`~hexapod_kin._chain.ChainArrays` (the IK loop), and :func:`fk_jac_block`, a block of an
+:class:`~hexapod_kin._chain.AlignedChain` (every batch kernel; its loops vectorise).
+**Same bits every time**: no ``fastmath``; each element depends on its own input only.
 
 Kernels are ``cache=True`` (:func:`hexapod_kin._kmath.njit`, numba's files sealed); before an
 area's first kernel call :func:`run_blocks` prints one notice unless the area's stamp
@@ -116,17 +114,13 @@ def mark_compiled(area: str) -> None:
 def _notice(area: str) -> bool:
     """Whether the first-use line was said (left open for :func:`_progress`'s dots)."""
     path = _stamp(area)
-    if _NOTICE[0] and (path is None or not path.exists()):
-        print(
-            f"hexapod-kin: compiling {area} kernels for this machine, about "
-            f"{COMPILE_SECONDS.get(area, 10.0):.0f} s (once; 'hexapod-kin precompile' does it "
-            "ahead) ",
-            end="",
-            file=sys.stderr,
-            flush=True,
-        )
-        return True
-    return False
+    said = _NOTICE[0] and (path is None or not path.exists())
+    if said:
+        seconds = COMPILE_SECONDS.get(area, 10.0)
+        what = f"compiling {area} kernels for this machine, about {seconds:.0f} s"
+        ahead = "(once; 'hexapod-kin precompile' does it ahead) "
+        print(f"hexapod-kin: {what} {ahead}", end="", file=sys.stderr, flush=True)
+    return said
 
 
 @contextlib.contextmanager

@@ -396,10 +396,9 @@ def csv_table(
 ) -> tuple[dict[str, str], list[str], list[list[float]]]:
     """A CSV's ``# key: value`` lines, its header's cells and its rows of numbers.
 
-    Blank lines skipped; the first other line not starting with ``#`` is the header (cells
-    stripped); every later line a row of as many plain finite decimals (``-1.5``, ``.25``,
-    ``3e-4``; ``float()``'s ``inf``, ``nan``, ``1_000`` or spaces refused). ``name``: the
-    file; ``what``: the kind of file (``parameter``).
+    After the header (the first line not blank nor ``#``), rows of as many plain finite
+    decimals (``-1.5``, ``.25``, ``3e-4``; not ``inf``, ``nan``, ``1_000``). ``name``: the file;
+    ``what``: the kind of file.
 
     Raises:
         SourceError: No header, a row of another width, or a cell that is not a finite

@@ -218,14 +218,12 @@ def path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class DefaultTips:
-    """The tip a user would pick for a URDF with no ``tip`` given (see :func:`default_tips`).
+    """The tip(s) a user would pick for a URDF with no ``tip`` given (:func:`default_tips`).
 
     Attributes:
-        kind: ``"chain"`` (one serial chain: its last frame), ``"gripper"`` (an arm whose end
-            branches into fingers: the TCP or flange, the finger joints locked) or ``"limbs"``
-            (several limbs from the root, e.g. the legs of a legged robot: every limb's end).
+        kind: ``"chain"``, ``"gripper"`` (the TCP or flange) or ``"limbs"`` (every limb's end).
         tips: The tip frame(s); ``tips[0]`` is the model's tip.
-        locked: Joints locked by this choice (the fingers of a gripper).
+        locked: Joints locked by this choice (a gripper's fingers).
         note: One line saying what was chosen (empty for a plain chain).
 
     """

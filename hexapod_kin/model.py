@@ -114,10 +114,8 @@ class Model:
         if parsed is None:
             full, text = self._parse(resolved, strict_inertia, inertia)
         else:  # a view of a loaded robot: its gate verdict and its parse, shared
-            self.inertia_repair = parsed.inertia_repair
-            self.missing_meshes = parsed.missing_meshes
-            self.mesh_files = parsed.mesh_files
-            self.inertia_defects = parsed.inertia_defects
+            for key in ("inertia_repair", "missing_meshes", "mesh_files", "inertia_defects"):
+                setattr(self, key, getattr(parsed, key))
             full, text = parsed.full_model, parsed.urdf
         self.full_model: pin.Model = full
         self.urdf: str = text
