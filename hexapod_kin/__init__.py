@@ -26,8 +26,8 @@ from .exceptions import (
     UrdfWarning,
 )
 
-#: ``typing.TYPE_CHECKING`` without importing ``typing`` (mypy reads the name so): the console
-#: entry's Ctrl-C handler comes after this module, which should take as little time as it can.
+#: ``typing.TYPE_CHECKING`` without importing ``typing``: this module loads before the console
+#: entry's Ctrl-C handler, in as little time as it can.
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first access
     from . import robots
@@ -37,9 +37,8 @@ if TYPE_CHECKING:  # pragma: no cover - the names below are imported on first ac
     from .params import Chain, DHRow, Hexapod, Inertial, JointLimits, KhalilRow, LegMount, Pose
     from .urdf import to_urdf, write_urdf
 
-#: Names of the package imported from their module on first access (PEP 562), so that
-#: ``import hexapod_kin`` imports no numpy: a Ctrl-C while a command starts is then caught
-#: by the command line's own handler (one line, status 130), not by Python's traceback.
+#: Names imported from their module on first access (PEP 562): ``import hexapod_kin`` imports
+#: no numpy, Pinocchio, sympy or numba (a Ctrl-C at start-up meets the command line's handler).
 _PARAMS_NAMES = ("Chain", "DHRow", "Hexapod", "Inertial", "JointLimits", "KhalilRow", "LegMount",
                  "Pose")  # fmt: skip
 _LAZY_NAMES = {
@@ -53,9 +52,7 @@ _LAZY_NAMES = {
     "write_urdf": ".urdf",
     **dict.fromkeys(_PARAMS_NAMES, ".params"),
 }
-
-#: Submodules reachable as attributes (``hk.singularity``) without importing them up front
-#: (PEP 562): ``import hexapod_kin`` stays light (no Pinocchio, sympy or numba).
+#: Submodules reachable as attributes (``hk.singularity``), imported on first access too.
 _LAZY_SUBMODULES = (
     "dynamics", "export", "frames", "gait", "ik", "kinematics", "model", "motion", "params",
     "plots", "report", "robots", "seeds", "simulate", "singularity", "sources", "sweep",

@@ -295,12 +295,8 @@ def fk_jac_into(
         wx = r00 * ux + r01 * uy + r02 * uz
         wy = r10 * ux + r11 * uy + r12 * uz
         wz = r20 * ux + r21 * uy + r22 * uz
-        scratch[0, k] = px
-        scratch[1, k] = py
-        scratch[2, k] = pz
-        scratch[3, k] = wx
-        scratch[4, k] = wy
-        scratch[5, k] = wz
+        scratch[0, k], scratch[1, k], scratch[2, k] = px, py, pz
+        scratch[3, k], scratch[4, k], scratch[5, k] = wx, wy, wz
         qk = q[col[k]]
         if kind[k] == 1:
             px, py, pz = px + wx * qk, py + wy * qk, pz + wz * qk
@@ -398,14 +394,10 @@ def fk_jac_block(
     """
     nq = qb.shape[0]
     m = kind.shape[0]
-    for a in range(3):
-        v = ptr[0, a]
-        for i in range(nb):
-            pp[a, i] = v
-    for a in range(9):
-        v = prot[0, a]
-        for i in range(nb):
-            rr[a, i] = v
+    for a in range(9):  # the first placement, every configuration
+        rr[a, :nb] = prot[0, a]
+        if a < 3:
+            pp[a, :nb] = ptr[0, a]
     for j in range(m):
         cj = col[j]
         if want_jac:  # prismatic [w; 0]; revolute [o; w], its linear part finished below

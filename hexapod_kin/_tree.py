@@ -21,12 +21,8 @@ __all__ = ["Tree", "mat_vec", "robot_size", "tree_frames", "tree_poses"]
 class Tree:
     """The actuated joints of a floating-base tree as arrays (joint order = Pinocchio's q).
 
-    Attributes:
-        parents: (n,) index of each joint's parent joint (−1: the floating body).
-        placements: (n, 4, 4) joint placements in the parent joint's frame at q = 0.
-        axes: (n, 3) unit joint axes in the joint's own frame.
-        prismatic: (n,) True for prismatic joints.
-
+    ``parents`` (n,): parent joints (−1: the floating body); ``placements`` (n, 4, 4): in the
+    parent's frame at q = 0; ``axes`` (n, 3): unit, in the joint's frame; ``prismatic`` (n,).
     """
 
     parents: np.ndarray
@@ -84,11 +80,7 @@ class Tree:
 
     @cached_property
     def groups(self) -> tuple[tuple[np.ndarray, np.ndarray | None, int, np.ndarray], ...]:
-        """:attr:`levels` split by axis: ``(joints, parents, k, sign)``.
-
-        ``k`` = 0, 1, 2 for revolute joints about ``±x, ±y, ±z`` of their frame (``sign``
-        (n_g, 1): ±1), 3 for the others (unaligned axes, prismatic joints).
-        """
+        """:attr:`levels` split by axis ``k``: 0, 1, 2 about ``sign`` × x, y, z; 3: any other."""
         a = np.asarray(self.axes, dtype=float)
         pr = np.asarray(self.prismatic, dtype=bool)
         kind = np.full(len(a), 3)
@@ -106,10 +98,7 @@ class Tree:
 
     @cached_property
     def soa_terms(self) -> tuple[np.ndarray, ...]:
-        """:attr:`local_terms` components first, for :func:`tree_frames`: (3, 3, n, 1), (3, n, 1).
-
-        The third matrix is ``(P_R a) aᵀ − P_R`` (so ``M = P_R + sin q K1 + (1 − cos q) K2``).
-        """
+        """:attr:`local_terms` components first for :func:`tree_frames`, the 4th less ``P_R``."""
         Pr, Pt, K1, K2, Pa = self.local_terms
         mat = [np.ascontiguousarray(x.transpose(1, 2, 0)[..., None]) for x in (Pr, K1, K2 - Pr)]
         vec = [np.ascontiguousarray(x.T[..., None]) for x in (Pt, Pa)]
@@ -117,11 +106,10 @@ class Tree:
 
     @cached_property
     def local_terms(self) -> tuple[np.ndarray, ...]:
-        """``(P_R, P_t, P_R[a]×, (P_R a) aᵀ, P_R a)`` per joint (n, 3, 3) / (n, 3).
+        """``(P_R, P_t, P_R[a]×, (P_R a) aᵀ, P_R a)`` per joint: placement ``P``, axis ``a``.
 
-        With ``P`` the placement (rotation ``P_R``, translation ``P_t``) and ``a`` the axis:
-        ``P_R R(a, q) = cos q P_R + sin q P_R[a]× + (1 − cos q)(P_R a) aᵀ`` (Rodrigues), and a
-        prismatic joint's frame is at ``P_t + (P_R a) q``.
+        ``P_R R(a, q) = cos q P_R + sin q P_R[a]× + (1 − cos q)(P_R a) aᵀ``; a prismatic
+        joint's frame is at ``P_t + (P_R a) q``.
         """
         Pr = np.ascontiguousarray(self.placements[:, :3, :3])
         a = np.asarray(self.axes, dtype=float)

@@ -358,12 +358,9 @@ def plot_workspace(
     singular_points: Any = None,
     title: str | None = None,
 ) -> Path:
-    """Workspace cross-section: reachable tip points in a slab around a coordinate plane.
+    """A :class:`~hexapod_kin.workspace.WorkspaceResult`'s section around ``plane`` (xz, yz, xy).
 
-    ``ws`` is a :class:`~hexapod_kin.workspace.WorkspaceResult`, ``plane`` ``"xz"``, ``"yz"``
-    or ``"xy"``, ``singular_points`` optional (M, 3) tip positions of singular configurations
-    to overlay. Returns the written path.
-
+    ``singular_points``: (M, 3) tips of singular configurations, overlaid. Returns the path.
     """
     import numpy as np
 
@@ -387,14 +384,11 @@ def plot_workspace(
 
 # ---------------------------------------------------------------- motion pictures
 def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None) -> Path:
-    """The seeds' figures of a resolved-rate run, in one PNG (2×2 panels).
+    """The seeds' figures of a resolved-rate run in one 2×2 figure; returns the written path.
 
-    Panels: foot position vs time (x, y, z); commanded vs actual foot velocity; joint angles
-    vs time; deviation from the reference path (|y − y0|, |z − z0|, |x − x_ref|, log scale),
-    with the plain Euler baseline when the run has one.
-
-    ``run`` is a :class:`~hexapod_kin.seeds.SeedRun` or a
-    :class:`~hexapod_kin.motion.Trajectory`. Returns the written path.
+    ``run``: a :class:`~hexapod_kin.seeds.SeedRun` or :class:`~hexapod_kin.motion.Trajectory`.
+    Foot position; commanded vs actual foot velocity; joint angles; deviation from the
+    reference path (log scale, with the plain Euler baseline when the run has one).
     """
     import numpy as np
 
@@ -463,11 +457,7 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
 
 
 def plot_step(step: Any, path: str | os.PathLike[str], title: str | None = None) -> Path:
-    """A foot step: the path seen from the side (along travel vs height) and the joints vs time.
-
-    ``step`` is a :class:`~hexapod_kin.gait.FootStep`. Returns the written path.
-
-    """
+    """A :class:`~hexapod_kin.gait.FootStep`: its path from the side and its joints vs time."""
     import numpy as np
 
     plt = pyplot()
