@@ -3,15 +3,11 @@
 :func:`run` runs a job (a module-level generator function yielding ``(name, value)`` pairs)
 within a budget of **CPU time of the work**, never wall-clock time:
 
-* in a fresh interpreter (``subprocess``, no ``fork``, no ``__main__`` re-run): job, arguments
-  and ``sys.path`` go down its stdin, items come back on a pipe as yielded; the budget starts
-  with the job;
-* its ``ITIMER_PROF`` raises :class:`BudgetReached` in the job (which may catch it to finish a
-  phase; :func:`cpu_limit` nests): the items sent so far are the answer; ``RLIMIT_CPU`` a few
-  seconds later ends a child stuck in C code; nothing outlives the call;
-* inside a budgeted child, or where no child can start, the job runs inline;
-* a Ctrl-C reaches the child once, from the parent (``SIGTERM``, a ``KeyboardInterrupt`` in
-  the job); a warning in the child is said in the parent.
+in a fresh interpreter (job, arguments, ``sys.path`` down its stdin, items back on a pipe);
+its ``ITIMER_PROF`` raises :class:`BudgetReached` in the job (:func:`cpu_limit` nests): the
+items sent so far are the answer; ``RLIMIT_CPU`` ends a child stuck in C code. Inside a
+budgeted child, or where no child can start, the job runs inline. A Ctrl-C reaches the child
+once (``SIGTERM``: a ``KeyboardInterrupt`` in the job); its warnings are said in the parent.
 """
 
 from __future__ import annotations

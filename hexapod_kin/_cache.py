@@ -1,17 +1,12 @@
 """The package's disk caches (symbolic, families, report, sweep): one folder, one key, one seal.
 
-* :func:`folder`: ``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else platformdirs' user cache folder,
-  else ``~/.cache/hexapod_kin/<kind>``; :func:`key`: SHA-256 of the canonical JSON of what an
-  entry depends on.
-* :func:`mac` / :func:`seal`: HMAC-SHA256 keyed by a per-user secret (32 random bytes in the
-  root's ``seal.key``, mode 0600, created once, race-free): an entry edited and resealed
-  without it is detected; without a usable secret nothing is cached.
-* :func:`seal_folder` / :func:`check_folder`: another program's files (numba's) sealed as
-  opaque bytes with the user's secret (:func:`user_secret`).
-* :func:`store` / :func:`load`: one atomic JSON envelope per entry (``format``, ``key``,
-  ``body``, ``seal``). Missing or of another format: no entry, quietly; any other entry not
-  the sealed one of its key: no entry and one :class:`~hexapod_kin.exceptions.CacheWarning`
-  (:func:`damaged`). Each cache also checks an entry's claims against the robot.
+:func:`folder` (``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else the user cache folder); :func:`key`
+(SHA-256 of the canonical JSON of what an entry depends on); :func:`seal` (HMAC-SHA256 keyed
+by a per-user secret in the root's ``seal.key``: no secret, no cache); :func:`store` /
+:func:`load` (one atomic JSON envelope per entry: missing or of another format, no entry;
+not the sealed one of its key, no entry and one :class:`~hexapod_kin.exceptions.CacheWarning`);
+:func:`seal_folder` / :func:`check_folder` (numba's files sealed as opaque bytes). Each cache
+also checks an entry's claims against the robot.
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes, *, sync: bool 
     renamed over ``path``; any failure before (even ``KeyboardInterrupt``) removes it.
 
     Raises:
-        ParameterError: If the destination directory does not exist or ``path`` is a directory.
+        ParameterError: No such directory, ``path`` a directory, or the write failed.
 
     """
     dest = Path(path)
@@ -79,9 +79,8 @@ def read_regular(
     non-blocking: a pipe with no writer does not hang; ``fstat`` of the open descriptor).
 
     Raises:
-        SourceError: Not a regular file, unreadable, or larger than ``max_bytes`` (one line
-            naming the file and the cap; ``parameter`` is ``what``); ``too_big``, when given,
-            is the class raised for the size cap (e.g. :class:`~.exceptions.UrdfError`).
+        SourceError: Not a regular file, unreadable, or larger than ``max_bytes`` (then
+            ``too_big`` when given, e.g. :class:`~.exceptions.UrdfError`); ``parameter``: ``what``.
 
     """
     name, fd = str(path), -1

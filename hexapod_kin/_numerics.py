@@ -39,13 +39,10 @@ def chain_scale(trans: Any) -> float:
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
     """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (twin of ``_kmath.dls_into``).
 
-    The smaller system: ``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m; ``Jf``: ``jac`` with the columns
-    of frozen joints (``free`` False or 0) zeroed. A stack of tasks (n ≤ m) at once.
-
-    ``jac`` (m, n) or a stack (..., m, n); ``error`` (m,) (stack (..., m)) in the task's units;
-    ``lam2``: ``λ² ≥ 0`` in those squared; ``free``: (n,) booleans or 0/1 weights. Returns Δq
-    (n,) (stack (..., n)); zeros when singular (``λ² = 0`` at a singularity).
-
+    The smaller system (``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m); ``Jf``: ``jac`` (m, n) with the
+    columns of frozen joints (``free``: (n,) False or 0) zeroed; ``error`` (m,) in the task's
+    units, ``lam2`` ``λ² ≥ 0`` in those squared. A stack (..., m, n) of tasks (n ≤ m) at once.
+    Zeros when singular (``λ² = 0`` at a singularity).
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)
     e = np.asarray(error, dtype=float)

@@ -63,12 +63,9 @@ def matrix_to_rpy(rot: np.ndarray) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class Pose:
-    """A rigid transform ``T_a_b``; :meth:`of` builds one from a matrix, ``(xyz, rpy)``, a pose.
+    """A rigid transform ``T_a_b``: ``xyz`` [m] and ``rotation`` ``R_a_b`` (row tuples).
 
-    Attributes:
-        xyz: Origin of frame ``b`` in frame ``a`` in [m].
-        rotation: The 3×3 rotation ``R_a_b``, row-major, as nested tuples.
-
+    :meth:`of` builds one from a matrix, ``(xyz, rpy)`` or another pose.
     """
 
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)

@@ -58,8 +58,7 @@ def resolve_mesh(
     """The real path of a mesh/texture ``filename`` (rule 7 of :mod:`hexapod_kin._gate`).
 
     Raises:
-        UrdfError: Refused scheme or absolute path, an escape out of the root, a missing,
-            non-regular or too large file. (The caller adds the element and line.)
+        UrdfError: Refused, outside the root, missing, not regular or too large (no line).
 
     """
     if not uri or not uri.strip():

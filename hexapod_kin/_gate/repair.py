@@ -1,15 +1,13 @@
 """The stated inertia repairs: ``load(..., inertia="collision" | "point")``.
 
-Real files carry inertias no body can have (the PhantomX's break ``I1 + I2 >= I3`` on every
-link). A repair rewrites every ``<inertial>``, keeping each link's **mass** and **centre of
-mass**:
+Real files carry inertias no body can have (PhantomX: ``I1 + I2 < I3``); a repair rewrites
+every ``<inertial>``, keeping each link's **mass** and **centre of mass**:
 
 * ``"collision"``: the link's collision shapes filled uniformly (the mass shared by volume):
   box ``m (b² + c²) / 12``, cylinder (axis z) ``m (3 r² + l²) / 12`` and ``m r² / 2``, sphere
   ``2 m r² / 5``, a mesh as its scaled bounding box; moved to the centre of mass (parallel
   axes) into the inertial frame. Without a usable shape: the point repair.
-* ``"point"``: the inertia of a solid sphere of radius :data:`POINT_RADIUS` at the centre of
-  mass.
+* ``"point"``: a solid sphere's of radius :data:`POINT_RADIUS` at the centre of mass.
 
 Both give physical tensors on every link and merged body; massless links get a zero inertia
 (a massless moving body stays a defect: mass is not invented).

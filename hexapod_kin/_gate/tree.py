@@ -102,13 +102,12 @@ def check_urdf(
 
     """
     key = (lenient, text)
-    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS:
-        cached = _CACHE.get(key)
-        if cached is not None:
-            return cached
+    cacheable = isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS
+    cached = _CACHE.get(key) if cacheable else None
+    if cached is not None:
+        return cached
     result = _check(text, tuple(package_dirs), mesh_root, lenient)
-    no_files = not result.meshes and not result.missing_meshes
-    if isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS and no_files:
+    if cacheable and not result.meshes and not result.missing_meshes:
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = result
