@@ -1,13 +1,12 @@
 """Budgets in CPU time: work that sympy cannot interrupt, run in one child and cut at its budget.
 
 :func:`run` runs a job (a module-level generator function yielding ``(name, value)`` pairs)
-within a budget of **CPU time of the work**, never wall-clock time:
-
-in a fresh interpreter (job, arguments, ``sys.path`` down its stdin, items back on a pipe);
-its ``ITIMER_PROF`` raises :class:`BudgetReached` in the job (:func:`cpu_limit` nests): the
-items sent so far are the answer; ``RLIMIT_CPU`` ends a child stuck in C code. Inside a
-budgeted child, or where no child can start, the job runs inline. A Ctrl-C reaches the child
-once (``SIGTERM``: a ``KeyboardInterrupt`` in the job); its warnings are said in the parent.
+within a budget of **CPU time of the work**, never wall-clock time, in a fresh interpreter
+(job, arguments, ``sys.path`` down its stdin, items back on a pipe); its ``ITIMER_PROF``
+raises :class:`BudgetReached` in the job (:func:`cpu_limit` nests): the items sent so far are
+the answer; ``RLIMIT_CPU`` ends a child stuck in C code. Inside a budgeted child, or where no
+child can start, the job runs inline. A Ctrl-C reaches the child once (``SIGTERM``: a
+``KeyboardInterrupt`` in the job); its warnings are said in the parent.
 """
 
 from __future__ import annotations
