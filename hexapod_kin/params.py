@@ -559,16 +559,10 @@ class LegMount:
 
 @dataclass(frozen=True)
 class Hexapod:
-    """A body carrying legs (six for a hexapod), each on a fixed mount.
+    """A body carrying ``legs`` (six :class:`LegMount` for a hexapod), its link ``body``.
 
-    Attributes:
-        legs: The leg mounts.
-        name: Robot name.
-        body: Body link name.
-        body_size: Body box ``(length x, width y, height z)`` in [m] (visual and inertia).
-        body_mass: Body mass in [kg].
-        description: Free text written into the URDF header.
-
+    ``body_size``: the body box ``(x, y, z)`` [m] (visual and inertia), ``body_mass`` [kg];
+    ``name`` and ``description`` go into the URDF.
     """
 
     legs: tuple[LegMount, ...]

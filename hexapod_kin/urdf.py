@@ -294,9 +294,8 @@ def table_of(source: Any, leg: str | None = None) -> Chain | Hexapod:
     is read (:func:`~hexapod_kin.tables.read_table`): what the exports of tables take.
 
     Raises:
-        ParameterError: A URDF (path, text or ``erd:NAME``: it has no table), another type,
-            or ``leg`` for a chain or not one of the robot's legs.
-        SourceError: A string that names no preset and no file (close names suggested).
+        ParameterError: A URDF (it has no table), another type, or a bad ``leg``.
+        SourceError: A string naming no preset and no file (close names suggested).
 
     """
     if isinstance(source, (str, os.PathLike)):

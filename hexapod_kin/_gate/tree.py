@@ -89,17 +89,11 @@ def check_urdf(
     mesh_root: str | os.PathLike[str] | None = None,
     lenient: bool = False,
 ) -> GateResult:
-    """Check a URDF document (str, or UTF-8 bytes); raise :class:`UrdfError` on the first problem.
+    """Check a URDF document (str, or UTF-8 bytes): the rules of :mod:`hexapod_kin._gate`.
 
-    The checks and the ``lenient`` mode are those of :mod:`hexapod_kin._gate`; ``mesh_root``
-    ``None`` (URDF text) refuses relative mesh paths.
-
-    Returns:
-        A :class:`GateResult`, shared by calls with the same text naming no files.
-
-    Raises:
-        UrdfError: Naming the element, attribute, value and line of the problem.
-
+    ``mesh_root`` None (URDF text) refuses relative mesh paths. The :class:`GateResult` is
+    shared by calls with the same text naming no files; the first problem, a
+    :class:`UrdfError` naming element, attribute, value and line.
     """
     key = (lenient, text)
     cacheable = isinstance(text, str) and len(text) <= _CACHE_MAX_CHARS
