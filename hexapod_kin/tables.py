@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from ._gate.limits import MAX_ABS, MAX_DOF, MAX_LINKS
 from ._reader import check_keys, clip, named, number, numbers, read_data, text
 from .exceptions import ParameterError, one_of
 from .params import (
@@ -75,12 +76,9 @@ _ANGLE_KEYS = {"alpha", "theta"}
 MAX_LENGTH = 1e3
 #: Smallest non-zero length of a row [m] (below it the Jacobian's singular values underflow).
 MIN_LENGTH = 1e-9
-#: Largest magnitude of any other number (the URDF gate's bound on any value).
-MAX_NUMBER = 1e9
-#: Most rows and joint rows of a table: the gate's ``MAX_LINKS`` (less the base, frame 0, tool
-#: and DH tip links) and ``MAX_DOF``.
-MAX_ROWS = 996
-MAX_JOINTS = 128
+#: The URDF gate's caps in a table's terms: any other number; rows (links less the base, frame
+#: 0, tool and DH tip links); joint rows.
+MAX_NUMBER, MAX_ROWS, MAX_JOINTS = MAX_ABS, MAX_LINKS - 4, MAX_DOF
 
 
 def read_table(path: Path | str, **overrides: Any) -> Chain:

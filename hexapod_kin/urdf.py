@@ -21,11 +21,12 @@ from typing import Any
 import numpy as np
 
 from . import robots
+from ._gate.limits import LIMIT_TAGS, MAX_ABS, MAX_ABS_LIMIT, NUMERIC
 from ._io import atomic_write
 from ._version import __version__
 from .exceptions import ParameterError, SourceError, choices, did_you_mean
 from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
-from .tables import MAX_NUMBER, read_table
+from .tables import read_table
 
 __all__ = ["table_of", "to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
 
@@ -245,13 +246,6 @@ def _robot_urdf(robot: Hexapod, legs: tuple[LegMount, ...]) -> list[str]:
     return lines
 
 
-#: Tags whose numbers may reach :data:`_MAX_LIMIT` (the loader's cap there: "unbounded" ±1e16).
-_LIMIT_TAGS = ("limit", "safety_controller", "dynamics", "calibration", "mimic")
-_MAX_LIMIT = 1e20
-_NUMERIC = (
-    "xyz", "rpy", "value", "mass", "ixx", "iyy", "izz", "ixy", "ixz", "iyz", "radius", "length",
-    "size", "lower", "upper", "velocity", "effort", "damping", "friction",
-)  # fmt: skip
 _ELEMENT = re.compile(r"<([A-Za-z_]\w*)\s([^>]*)>")
 _ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
 
@@ -264,9 +258,9 @@ def _check_magnitudes(text: str, name: str) -> None:
     """
     for element in _ELEMENT.finditer(text):
         tag = element.group(1)
-        cap = _MAX_LIMIT if tag in _LIMIT_TAGS else MAX_NUMBER
+        cap = MAX_ABS_LIMIT if tag in LIMIT_TAGS else MAX_ABS
         for attribute, value in _ATTRIBUTE.findall(element.group(2)):
-            if attribute not in _NUMERIC:
+            if attribute not in NUMERIC.get(tag, ()):  # the gate's numeric attributes
                 continue
             for word in value.split():
                 try:
