@@ -1,23 +1,14 @@
 """The one strict reader of every file a user gives: tables, calibrations, feet, plans, timelines.
 
-:func:`read_data` reads a JSON, TOML (``tomllib``, ``tomli`` on 3.10) or YAML (PyYAML) file,
-:func:`read_text` the text of any other (a CSV), with the same checks and messages:
-
-* **the file**: a regular file only (a folder, device, pipe or socket is named and refused
-  unread), at most ``max_bytes`` counted while reading, strict UTF-8 (the bad byte named);
-* **the syntax**: duplicate keys refused (never the last value silently); plain YAML only (no
-  tags such as ``!!python/object``); ``Infinity``/``NaN`` are not JSON;
-* **the structure**: at most :data:`MAX_ALIASES` YAML aliases, :data:`MAX_DEPTH` levels and
-  ``max_values`` values after alias expansion (a 400-byte "billion laughs" refused in
-  milliseconds); string keys, integers of at most 15 digits, strings of at most
-  :data:`MAX_STRING` characters.
-
-Every refusal is one line naming the file, a :class:`~.exceptions.SourceError` whose
-``parameter`` is the kind of file (``what``: ``"source"``, ``"feet"``, ...). Values are then
-checked by :func:`number` / :func:`numbers` (finite int or float, never ``'0.3'`` nor a
-boolean), :func:`text` / :func:`texts` (strings, never ``5`` or ``true``), :func:`check_keys`
-(unknown keys, "did you mean"), :func:`named` (the file named in front of a value's error) and
-:func:`csv_table` (plain decimal numbers only).
+:func:`read_data` (JSON, TOML, YAML) and :func:`read_text` (any other, a CSV) refuse, in one
+line naming the file (a :class:`~.exceptions.SourceError`, ``parameter`` the kind of file):
+anything but a regular file (unread), more than ``max_bytes`` (counted while reading), bad
+UTF-8; duplicate keys, YAML tags (``!!python/object``), JSON's ``NaN``; more than
+:data:`MAX_ALIASES` YAML aliases, :data:`MAX_DEPTH` levels or ``max_values`` values after
+alias expansion (a "billion laughs" in milliseconds); keys that are not strings, integers of
+more than 15 digits, strings of more than :data:`MAX_STRING` characters. Values are then
+checked by :func:`number` / :func:`numbers`, :func:`text` / :func:`texts`,
+:func:`check_keys`, :func:`named` (the file named in a value's error) and :func:`csv_table`.
 """
 
 from __future__ import annotations

@@ -405,13 +405,8 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
     ax = axes[0, 1]
     for k, name in enumerate("xyz"):
         (line,) = ax.plot(*decimate(t, tr.foot_velocity[:, k]), label=f"actual v{name}")
-        ax.plot(
-            *decimate(t, tr.command[:, k]),
-            "--",
-            color=line.get_color(),
-            alpha=0.8,
-            label=f"commanded v{name}",
-        )
+        command = decimate(t, tr.command[:, k])
+        ax.plot(*command, "--", color=line.get_color(), alpha=0.8, label=f"commanded v{name}")
     ax.set(ylabel="foot velocity [m/s]", title="commanded vs actual foot velocity")
     ax.legend(loc="best", fontsize=8, ncol=2)
     ax.grid(True, alpha=0.3)
@@ -425,27 +420,19 @@ def plot_motion(run: Any, path: str | os.PathLike[str], title: str | None = None
     dev = np.abs(tr.foot - tr.reference)
     floor = 1e-18
     for k, name in enumerate("xyz"):
-        ax.semilogy(
-            *decimate(t, np.maximum(dev[:, k], floor)), label=f"|{name} − {name}_ref| {tr.method}"
-        )
+        deviation = decimate(t, np.maximum(dev[:, k], floor))
+        ax.semilogy(*deviation, label=f"|{name} − {name}_ref| {tr.method}")
     base_dev = getattr(run, "baseline_deviation", None)
     if base_dev is not None:
-        ax.semilogy(
-            *decimate(t, np.maximum(base_dev[:, 2], floor)), "k:", label="|z − z0| Euler + solve"
-        )
-        ax.semilogy(
-            *decimate(t, np.maximum(base_dev[:, 0], floor)),
-            "k--",
-            lw=0.8,
-            label="|x − x_ref| Euler + solve",
-        )
+        base_z, base_x = (decimate(t, np.maximum(base_dev[:, k], floor)) for k in (2, 0))
+        ax.semilogy(*base_z, "k:", label="|z − z0| Euler + solve")
+        ax.semilogy(*base_x, "k--", lw=0.8, label="|x − x_ref| Euler + solve")
     ax.set(ylabel="deviation from the reference path [m]", xlabel="t [s]", title="drift")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if title is None:
         title = f"resolved-rate run: {tr.method}, dt = {tr.dt:g} s, gain {tr.gain:g} 1/s"
-        drift = getattr(run, "drift_z", None)
-        if drift is not None:
+        if getattr(run, "drift_z", None) is not None:  # a SeedRun
             title += (
                 f" — drift y {run.drift_y:.1e} m, z {run.drift_z:.1e} m, "
                 f"x error {run.error_x:.1e} m"
