@@ -244,9 +244,8 @@ def singularity_map_figure(
     unit = " [m]" if measure == "sigma_min" and set(result.rows) <= {"x", "y", "z"} else ""
     if measure == "det":
         lim = float(np.nanmax(np.abs(val))) or 1.0
-        mesh = ax.pcolormesh(
-            xa, xb, val.T, cmap="RdBu_r", norm=TwoSlopeNorm(0.0, -lim, lim), shading="nearest"
-        )
+        norm = TwoSlopeNorm(0.0, -lim, lim)
+        mesh = ax.pcolormesh(xa, xb, val.T, cmap="RdBu_r", norm=norm, shading="nearest")
     elif measure == "condition":
         with np.errstate(divide="ignore"):
             shown = np.log10(np.where(np.isfinite(val), val, np.nan))
@@ -282,14 +281,9 @@ def singularity_map_figure(
             res = result.family_residual(qq, f)
             if not (np.nanmin(res) <= 0 <= np.nanmax(res)):
                 continue
+            xs, ys = _joint_axis(result, ja, fine_a)[0], _joint_axis(result, jb, fine_b)[0]
             ax.contour(
-                _joint_axis(result, ja, fine_a)[0],
-                _joint_axis(result, jb, fine_b)[0],
-                res.T,
-                levels=[0.0],
-                colors=[colour],
-                linestyles=[style],
-                linewidths=2.2,
+                xs, ys, res.T, levels=[0.0], colors=[colour], linestyles=[style], linewidths=2.2
             )
         else:
             continue
