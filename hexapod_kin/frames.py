@@ -265,12 +265,8 @@ def default_tips(model: pin.Model) -> DefaultTips:
         tips = tuple(
             max(v, key=lambda e: (len(e[2]), "foot" in e[1].lower(), e[0]))[1] for v in long
         )
-        return DefaultTips(
-            "limbs",
-            tips,
-            note=f"{len(tips)} limbs from the root: every limb's end ({', '.join(tips)}); "
-            "--tip picks one",
-        )
+        note = f"{len(tips)} limbs from the root: every limb's end ({', '.join(tips)})"
+        return DefaultTips("limbs", tips, note=note + "; --tip picks one")
     shared = list(ends[0][2])
     for _, _, p in ends[1:]:
         k = 0
@@ -292,12 +288,9 @@ def default_tips(model: pin.Model) -> DefaultTips:
             )  # fmt: skip
         if tip and fingers:
             names = tuple(str(model.names[j]) for j in fingers)
-            return DefaultTips(
-                "gripper",
-                (tip,),
-                names,
-                note=f"tip {tip} (gripper joints {', '.join(names)} locked); --tip picks "
-                "another frame",
+            note = (
+                f"tip {tip} (gripper joints {', '.join(names)} locked); --tip picks another frame"
             )
+            return DefaultTips("gripper", (tip,), names, note=note)
     depth = max(len(p) for _, _, p in ends)
     return DefaultTips("chain", (max((i, n) for i, n, p in ends if len(p) == depth)[1],))

@@ -374,10 +374,9 @@ class Model:
         if q.__class__ is _ND and q.dtype is _F64 and q.shape == self._shape:
             if _hypot(*q.tolist()) < 1e150:
                 return q
+        joints = list(self.joint_names)
         arr = _float_array(
-            q,
-            f"{name}={q!r} is not a sequence of {self.nq} numbers "
-            f"(joints {list(self.joint_names)})",
+            q, f"{name}={q!r} is not a sequence of {self.nq} numbers (joints {joints})"
         )
         if arr.shape != self._shape:
             raise ConfigurationError(

@@ -286,13 +286,8 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
     for name, folder in named.items():  # package://NAME/ resolves in NAME=PATH's parent
         if Path(folder).name == name:
             package_dirs = (*package_dirs, str(Path(folder).parent))
-    return ResolvedSource(
-        text,
-        path.name,
-        package_dirs=_package_dirs_for(path, text, package_dirs),
-        mesh_root=str(path.parent.resolve()),
-        path=str(path),
-    )
+    dirs, root = _package_dirs_for(path, text, package_dirs), str(path.parent.resolve())
+    return ResolvedSource(text, path.name, dirs, root, path=str(path))
 
 
 _ACCEPTED = (

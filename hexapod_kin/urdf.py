@@ -147,16 +147,10 @@ def _chain_body(chain: Chain, prefix: str, parent: str, indent: str = "  ") -> l
     k = 0
     prev = parent
     if chain.base_pose is not None:
-        frame0 = prefix + chain.frame0_link
+        frame0, offset = prefix + chain.frame0_link, f"{prefix}{chain.name}_base_offset"
         lines += [
             indent + comment(f"base offset T_{chain.base}_0 (Khalil frame 0 in the base link)"),
-            *fixed_joint(
-                indent,
-                f"{prefix}{chain.name}_base_offset",
-                prev,
-                frame0,
-                _origin(chain.base_pose.matrix),
-            ),  # fmt: skip
+            *fixed_joint(indent, offset, prev, frame0, _origin(chain.base_pose.matrix)),
             f'{indent}<link name="{frame0}"/>',
         ]
         prev = frame0
