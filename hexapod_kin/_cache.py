@@ -94,12 +94,8 @@ def _secret(base: Path | None = None, *, quiet: bool = False) -> bytes | None:
             except OSError as exc:
                 file = base.exists() and not base.is_dir() or isinstance(exc, NotADirectoryError)
                 if file and not quiet:
-                    warnings.warn(
-                        f"cache folder {str(base)!r} is not a folder (a regular file?); "
-                        "nothing is cached",
-                        CacheWarning,
-                        stacklevel=4,
-                    )
+                    where = f"cache folder {str(base)!r} is not a folder (a regular file?)"
+                    warnings.warn(f"{where}; nothing is cached", CacheWarning, stacklevel=4)
                 break
             finally:
                 with contextlib.suppress(OSError):
@@ -137,11 +133,8 @@ def damaged(kind: str, name: str, why: BaseException | str, then: str, stackleve
     short = name[:12] if re.fullmatch(r"[0-9a-f]{16,}", name) else name
     if isinstance(why, BaseException):
         why = f"{type(why).__name__}: {' '.join(str(why).split())[:80]}"
-    warnings.warn(
-        f"{kind} cache entry {short} is damaged or was edited ({why}); {then}",
-        CacheWarning,
-        stacklevel=stacklevel,
-    )
+    message = f"{kind} cache entry {short} is damaged or was edited ({why}); {then}"
+    warnings.warn(message, CacheWarning, stacklevel=stacklevel)
 
 
 def store(kind: str, digest: str, body: Any, fmt: int, *, sync: bool = True) -> Path | None:

@@ -337,10 +337,8 @@ def recover_chain(
     n = len(path)
     # frame 0: the base frame when row 1 can start from it
     o_b, x_b, z_b = np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0])
-    base_ok = (
-        abs(float(np.dot(axes[0], x_b))) < 1e-12
-        and _meet(o_b, x_b, points[0], axes[0], scale) is not None
-    )
+    perpendicular = abs(float(np.dot(axes[0], x_b))) < 1e-12
+    base_ok = perpendicular and _meet(o_b, x_b, points[0], axes[0], scale) is not None
     prev = (o_b, x_b, z_b) if base_ok else None
     frames: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for k in range(n):

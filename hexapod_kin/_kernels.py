@@ -269,17 +269,10 @@ def fk_jac_into(
             py + r10 * tx + r11 * ty + r12 * tz,
             pz + r20 * tx + r21 * ty + r22 * tz,
         )
-        if not (
-            rot[k, 0, 0] == 1.0
-            and rot[k, 1, 1] == 1.0
-            and rot[k, 2, 2] == 1.0
-            and rot[k, 0, 1] == 0.0
-            and rot[k, 0, 2] == 0.0
-            and rot[k, 1, 0] == 0.0
-            and rot[k, 1, 2] == 0.0
-            and rot[k, 2, 0] == 0.0
-            and rot[k, 2, 1] == 0.0
-        ):
+        ones = rot[k, 0, 0] == 1.0 and rot[k, 1, 1] == 1.0 and rot[k, 2, 2] == 1.0
+        upper = rot[k, 0, 1] == 0.0 and rot[k, 0, 2] == 0.0 and rot[k, 1, 2] == 0.0
+        lower = rot[k, 1, 0] == 0.0 and rot[k, 2, 0] == 0.0 and rot[k, 2, 1] == 0.0
+        if not (ones and upper and lower):  # a placement that turns
             n00 = r00 * rot[k, 0, 0] + r01 * rot[k, 1, 0] + r02 * rot[k, 2, 0]
             n01 = r00 * rot[k, 0, 1] + r01 * rot[k, 1, 1] + r02 * rot[k, 2, 1]
             n02 = r00 * rot[k, 0, 2] + r01 * rot[k, 1, 2] + r02 * rot[k, 2, 2]
@@ -589,13 +582,8 @@ def _out(out: np.ndarray | None, shape: tuple[int, ...], name: str) -> np.ndarra
     """``out`` checked (float64, C-contiguous, writeable, ``shape``), or a new array."""
     if out is None:
         return np.empty(shape)
-    if not (
-        isinstance(out, np.ndarray)
-        and out.dtype == np.float64
-        and out.shape == shape
-        and out.flags.c_contiguous
-        and out.flags.writeable
-    ):
+    good = isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == shape
+    if not (good and out.flags.c_contiguous and out.flags.writeable):
         raise ParameterError(
             f"{name}: an array of shape {np.shape(out)} and dtype "
             f"{getattr(out, 'dtype', type(out).__name__)} is not allowed; a writeable "

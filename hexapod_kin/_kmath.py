@@ -126,12 +126,8 @@ def _check(folder: str) -> bool:
         if usable
         else "the kernels are compiled in memory, never loaded from it"
     )
-    warnings.warn(
-        f"numba's compiled-code cache in {folder} holds files not sealed by this user "
-        f"({name}: {why}{more}); {then}",
-        CacheWarning,
-        stacklevel=5,
-    )
+    unsealed = f"numba's compiled-code cache in {folder} holds files not sealed by this user"
+    warnings.warn(f"{unsealed} ({name}: {why}{more}); {then}", CacheWarning, stacklevel=5)
     return usable
 
 

@@ -66,12 +66,8 @@ class KinematicModel(Model):
         """
         m, d, fid, nq, root = self._local.hot  # the hot call: one lookup, the q check inlined
         try:  # len + hypot of the flat list: a 0-d or 2-D array raises TypeError here
-            ok = (
-                q.__class__ is _ND
-                and q.dtype is _F64
-                and len(q) == nq
-                and _hypot(*q.tolist()) < 1e150
-            )
+            ok = q.__class__ is _ND and q.dtype is _F64 and len(q) == nq
+            ok = ok and _hypot(*q.tolist()) < 1e150
         except TypeError:
             ok = False
         if not ok:
@@ -132,12 +128,8 @@ class KinematicModel(Model):
         if frame is not None:
             fid = self.frame_id(frame)
         try:  # len + hypot of the flat list: a 0-d or 2-D array raises TypeError here
-            ok = (
-                q.__class__ is _ND
-                and q.dtype is _F64
-                and len(q) == nq
-                and _hypot(*q.tolist()) < 1e150
-            )
+            ok = q.__class__ is _ND and q.dtype is _F64 and len(q) == nq
+            ok = ok and _hypot(*q.tolist()) < 1e150
         except TypeError:
             ok = False
         if not ok:
@@ -175,13 +167,8 @@ class KinematicModel(Model):
             _reference(reference)
         key = None if reference is None else reference.lower()
         q = qs
-        if not (
-            isinstance(q, np.ndarray)
-            and q.dtype == np.float64
-            and q.ndim == 2
-            and q.shape[1] == self.nq
-            and q.flags.c_contiguous
-        ):
+        ready = isinstance(q, np.ndarray) and q.dtype == np.float64 and q.ndim == 2
+        if not (ready and q.shape[1] == self.nq and q.flags.c_contiguous):
             q = np.ascontiguousarray(self.check_q_batch(qs, "Q"))
         chain = self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
         return pose_jacobian_batch(

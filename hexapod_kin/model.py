@@ -407,10 +407,8 @@ class Model:
         """Uniform random configurations within the joint limits ((nq,) or (n, nq))."""
         if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 0):
             raise ConfigurationError(f"n={n!r} is not allowed; a count >= 0 (or None) required")
-        rng = np.random.default_rng(seed)
-        lo, hi = self.lower, self.upper
         size = (self.nq,) if n is None else (n, self.nq)
-        return rng.uniform(lo, hi, size=size)
+        return np.random.default_rng(seed).uniform(self.lower, self.upper, size=size)
 
     @property
     def locked_joints(self) -> tuple[str, ...]:

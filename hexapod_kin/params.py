@@ -269,11 +269,8 @@ def rod_inertial(start: np.ndarray, end: np.ndarray, mass: float, radius: float)
         axial = 0.5 * mass * radius**2
         transverse = mass * (3 * radius**2 + length**2) / 12.0
         mat = transverse * (np.eye(3) - np.outer(u, u)) + axial * np.outer(u, u)
-    return Inertial(
-        mass=mass,
-        com=(float(com[0]), float(com[1]), float(com[2])),
-        inertia=(mat[0, 0], mat[1, 1], mat[2, 2], mat[0, 1], mat[0, 2], mat[1, 2]),
-    )
+    inertia = (mat[0, 0], mat[1, 1], mat[2, 2], mat[0, 1], mat[0, 2], mat[1, 2])
+    return Inertial(mass=mass, com=(float(com[0]), float(com[1]), float(com[2])), inertia=inertia)
 
 
 def default_limits(sigma: str) -> JointLimits:

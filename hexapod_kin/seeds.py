@@ -183,8 +183,7 @@ def seed_experiment(
     traj = resolved_rate(mdl, vel, q_start, dt, duration, method=method, gain=gain, path=ref)
     figs, _ = _drift(traj.foot, traj.t, a, per)  # traj.foot: Pinocchio FK of traj.q
     base: dict[str, float] = {}
-    base_dev = None
-    failure = None
+    base_dev, failure = None, None
     if baseline and mdl.nq == 3:
         base, base_dev, failure = seed_baseline(
             mdl, amplitude=a, period=per, dt=dt, duration=duration, q0=q_start

@@ -101,8 +101,7 @@ def resolve_mesh(
         if mesh_root is None:
             raise MeshMissing(
                 f"{uri!r}: not found: relative mesh path but no mesh root (URDF given as "
-                "text); load the "
-                "URDF from its file so relative paths resolve next to it"
+                "text); load the URDF from its file so relative paths resolve next to it"
             )
         root = os.fspath(mesh_root)
         candidates = [(os.path.realpath(root), os.path.join(root, uri))]

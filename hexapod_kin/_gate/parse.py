@@ -33,11 +33,8 @@ def _where(el: etree._Element) -> str:
     while node is not None and node.tag != "robot":
         name = node.get("name")
         tag = node.tag if isinstance(node.tag, str) else "?"
-        parts.append(
-            f'<{tag} name="{name}">'
-            if name is not None and tag in ("link", "joint", "material", "visual", "collision")
-            else f"<{tag}>"
-        )
+        named = name is not None and tag in ("link", "joint", "material", "visual", "collision")
+        parts.append(f'<{tag} name="{name}">' if named else f"<{tag}>")
         node = node.getparent()
     parts.reverse()
     return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
@@ -96,11 +93,8 @@ def check_numbers(root: etree._Element) -> None:
                 kind = spec.get(attr)
                 if kind is None:
                     continue
-                if (
-                    not patterns[kind[0]].match(raw)
-                    or BIG_NUMBER.search(raw)
-                    or (kind[1] is not None and NEGATIVE.search(raw))
-                ):
+                odd = BIG_NUMBER.search(raw) or (kind[1] is not None and NEGATIVE.search(raw))
+                if odd or not patterns[kind[0]].match(raw):  # explained (or passed) there
                     numbers_of(node, attr, kind[0], kind[1])
 
 
