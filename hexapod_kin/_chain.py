@@ -135,12 +135,7 @@ def _z_to(u: np.ndarray) -> np.ndarray:
 
 
 def aligned_chain(arrays: ChainArrays) -> AlignedChain:
-    """The chain of ``arrays`` with z joint axes (:class:`AlignedChain`).
-
-    Raises:
-        SourceError: One joint variable drives two joints of the chain.
-
-    """
+    """The chain of ``arrays`` with z joint axes (SourceError: a variable drives two joints)."""
     m = arrays.rot.shape[0]
     prot = np.empty((m + 1, 9))
     ptr = np.empty((m + 1, 3))

@@ -264,9 +264,6 @@ def recover_chain(
             joint's axis are snapped (default :data:`SNAP_TOL`; 0 = never snap).
         **load_kwargs: Passed to :func:`hexapod_kin.load` (e.g. preset parameters).
 
-    Returns:
-        A :class:`TableRecovery`: the chain, the snaps and the FK difference.
-
     Raises:
         ConfigurationError: A joint the table cannot express (named), a branch between
             ``base`` and ``tip`` (not serial), a recovered length larger than the chain

@@ -75,10 +75,9 @@ class ConfigurationError(HexapodKinError):
 
 
 class LimitError(ConfigurationError):
-    """A plan that reaches a limit: answered, not achieved (a ``ConfigurationError``).
+    """A plan that reaches a limit (a servo's range or speed, a leg's reach, a friction cone).
 
-    A servo's range or a joint's speed (timelines), a leg's reach or the friction cone
-    (standing). The command line exits with status 1 for it (not 2: the input was good).
+    Answered, not achieved: the command line exits with status 1 (not 2: the input was good).
     """
 
 
@@ -115,11 +114,7 @@ class CacheWarning(HexapodKinWarning):
 
 
 class UrdfWarning(HexapodKinWarning):
-    """A URDF loaded for kinematics despite a defect that only geometry or dynamics would use.
-
-    Raised through :func:`warnings.warn` for a mesh that cannot be found (its visual is
-    dropped) and for physically implausible inertials (dynamics refuses them).
-    """
+    """A URDF loaded despite a defect of geometry (a mesh not found) or dynamics (inertials)."""
 
 
 def choices(names: Iterable[str], limit: int = 40) -> str:

@@ -51,10 +51,7 @@ def _reference(reference: str) -> pin.ReferenceFrame:
 
 
 class KinematicModel(Model):
-    """A :class:`~hexapod_kin.model.Model` with forward kinematics and Jacobians.
-
-    Returned by :func:`load`. All outputs are fresh arrays (safe to modify).
-    """
+    """:func:`load`'s :class:`~hexapod_kin.model.Model`, with FK and Jacobians (fresh arrays)."""
 
     # -------------------------------------------------------------- forward kinematics
     def fk(self, q: Any) -> np.ndarray:
@@ -95,10 +92,7 @@ class KinematicModel(Model):
         return [(self.baseMo * d.oMf[self.frame_id(name)]).homogeneous for name in self.path_frames]
 
     def transforms(self, q: Any) -> list[np.ndarray]:
-        """Every intermediate transform ``^{j-1}T_j`` along the path (4×4 each; product: fk).
-
-        For a chain built from a Khalil table, entry ``j-1`` is the table's row ``j``.
-        """
+        """Every ``^{j-1}T_j`` along the path (4×4; of a Khalil table: its row ``j``)."""
         world = self.frame_placements(q)
         return [np.linalg.solve(world[j - 1], world[j]) for j in range(1, len(world))]
 

@@ -526,10 +526,5 @@ def _raise_inertia_defects(name: str, defects: tuple[tuple[str, str], ...]) -> N
 
 
 def check_inertials(model: Model) -> None:
-    """Refuse a model whose inertials are physically implausible (dynamics calls this first).
-
-    Raises:
-        UrdfError: Naming the first link with a defect (and how many more there are).
-
-    """
+    """Dynamics' first check: a UrdfError naming the first link with an implausible inertial."""
     _raise_inertia_defects(model.name, model.inertia_defects)

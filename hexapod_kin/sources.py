@@ -387,10 +387,10 @@ def _hint(text: str) -> str:
 
 # ------------------------------------------------------------------------ second engine
 def yourdfpy_load(text: str) -> Any:
-    """The URDF text loaded by yourdfpy (meshes not loaded): only text that passed the gate.
+    """The URDF text, which passed the gate, loaded by yourdfpy (meshes not loaded).
 
     Raises:
-        OptionalDependencyError: If yourdfpy is not installed.
+        OptionalDependencyError: yourdfpy is not installed.
 
     """
     try:

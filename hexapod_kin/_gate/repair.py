@@ -73,9 +73,7 @@ def _stl_vertices(data: bytes) -> np.ndarray:
     if len(data) >= 84:
         (count,) = struct.unpack_from("<I", data, 80)
         if 84 + 50 * count == len(data) and count > 0:
-            rec = np.frombuffer(data, dtype=np.uint8, count=50 * count, offset=84).reshape(
-                count, 50
-            )
+            rec = np.frombuffer(data, np.uint8, 50 * count, 84).reshape(count, 50)
             tri = rec[:, 12:48].copy().view("<f4").reshape(count * 3, 3)
             return tri.astype(np.float64)
     text = data.decode("ascii", errors="replace")
