@@ -1,8 +1,7 @@
 """Compile every kernel ahead of use: ``hexapod_kin.precompile()`` / ``hexapod-kin precompile``.
 
-Each area calls its batch APIs once with tiny inputs: numba compiles its kernels into the disk
-cache every later process loads, and the area's stamp
-(:func:`hexapod_kin._kernels.mark_compiled`) silences the first-use notice.
+Each area calls its batch APIs once with tiny inputs (numba's disk cache then holds them) and
+stamps itself (:func:`hexapod_kin._kernels.mark_compiled`: no first-use notice).
 """
 
 from __future__ import annotations

@@ -1,8 +1,4 @@
-"""The loader's warnings about a gate result: one line per kind of defect.
-
-Each kind once, with a count, the first few names, the first line and what to do (the full
-lists stay in ``missing_meshes`` / ``inertia_defects``).
-"""
+"""The loader's warnings about a gate result: one line per kind of defect (count, names...)."""
 
 from __future__ import annotations
 
