@@ -14,7 +14,7 @@ Quick start::
 
 from __future__ import annotations
 
-from ._lazy import lazy_names
+from . import _lazy
 from ._version import __version__
 from .exceptions import (
     ConfigurationError,
@@ -59,7 +59,7 @@ _LAZY_SUBMODULES = (
     "symbolic", "tables", "urdf", "viewer", "workspace",
 )  # fmt: skip
 
-__getattr__, __dir__ = lazy_names(__name__, _LAZY_NAMES, globals(), _LAZY_SUBMODULES)
+__getattr__, __dir__ = _lazy.lazy_names(__name__, _LAZY_NAMES, globals(), _LAZY_SUBMODULES)
 
 __all__ = ["__version__", "Chain", "ConfigurationError", "DHRow", "FrameNotFoundError",
            "Hexapod", "HexapodKinError", "Inertial", "JointLimits", "KhalilRow",
