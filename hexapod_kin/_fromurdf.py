@@ -109,13 +109,10 @@ def _frame(o: np.ndarray, x: np.ndarray, z: np.ndarray) -> np.ndarray:
 class Snap:
     """One snap: a joint axis turned exactly parallel or perpendicular to the previous one.
 
-    Attributes:
-        joints: The previous joint and the snapped joint (URDF names).
-        kind: ``"parallel"``, ``"anti-parallel"`` or ``"perpendicular"``.
-        angle: The rotation of the snapped joint and everything after it [rad].
-        reach: Path length from the snapped joint to the tip [m] (the tip moves by at most
-            ``angle × reach``).
-
+    ``joints``: the previous and the snapped joint (URDF names); ``kind``: ``"parallel"``,
+    ``"anti-parallel"`` or ``"perpendicular"``; ``angle`` [rad]: the rotation of the snapped
+    joint and all after it; ``reach`` [m]: the path length from it to the tip (the tip moves by
+    at most ``angle × reach``).
     """
 
     joints: tuple[str, str]

@@ -220,12 +220,9 @@ def path_frames(model: pin.Model, base_id: int, tip_id: int) -> tuple[str, ...]:
 class DefaultTips:
     """The tip(s) a user would pick for a URDF with no ``tip`` given (:func:`default_tips`).
 
-    Attributes:
-        kind: ``"chain"``, ``"gripper"`` (the TCP or flange) or ``"limbs"`` (every limb's end).
-        tips: The tip frame(s); ``tips[0]`` is the model's tip.
-        locked: Joints locked by this choice (a gripper's fingers).
-        note: One line saying what was chosen (empty for a plain chain).
-
+    ``kind``: ``"chain"``, ``"gripper"`` (the TCP or flange) or ``"limbs"`` (every limb's end);
+    ``tips[0]`` is the model's tip; ``locked``: joints locked by this choice (a gripper's
+    fingers); ``note``: one line saying what was chosen (empty for a plain chain).
     """
 
     kind: str

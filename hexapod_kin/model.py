@@ -77,12 +77,10 @@ class Model:
     """A Pinocchio model with its data, built from URDF text, restricted to base → tip.
 
     Attributes:
-        model: The ``pinocchio.Model`` (reduced to the base → tip joints when asked).
-        data: The calling thread's ``pinocchio.Data``.
-        full_model: The model before reduction.
+        model: The ``pinocchio.Model`` (reduced to the base → tip joints when asked);
+            ``full_model``: before reduction; ``data``: the calling thread's ``pinocchio.Data``.
         urdf: The URDF text it was built from; ``source``: the resolved source.
-        base: Name of the base frame.
-        tip: Name of the tip frame (``<flange>_tool`` with a ``tool`` offset).
+        base: Name of the base frame; ``tip``: of the tip (``<flange>_tool`` with a ``tool``).
         flange: The frame the tool is mounted on; ``tool``: ``flangeMtip`` (4×4) or None.
 
     """

@@ -182,12 +182,8 @@ class DHRow:
 class JointLimits:
     """Limits of one joint, in the units of its variable.
 
-    Attributes:
-        lower: Lower position bound in [rad] or [m].
-        upper: Upper position bound in [rad] or [m] (``lower <= upper``).
-        velocity: Maximum speed in [rad/s] or [m/s] (``>= 0``).
-        effort: Maximum torque [N·m] or force [N] (``>= 0``).
-
+    ``lower <= upper`` in [rad] or [m]; maximum ``velocity`` [rad/s] or [m/s] and ``effort``
+    (torque [N·m] or force [N]), both ``>= 0``.
     """
 
     lower: float = -math.pi
@@ -212,12 +208,8 @@ class JointLimits:
 class Inertial:
     """Mass properties of a link, in the link's (Khalil) frame.
 
-    Attributes:
-        mass: Mass in [kg] (> 0).
-        com: Centre of mass ``(x, y, z)`` in [m].
-        inertia: ``(ixx, iyy, izz, ixy, ixz, iyz)`` about the centre of mass in [kg·m²],
-            positive definite, obeying the triangle inequality.
-
+    ``mass`` > 0 [kg]; centre of mass ``com`` [m]; ``inertia`` ``(ixx, iyy, izz, ixy, ixz,
+    iyz)`` about it [kg·m²], positive definite, obeying the triangle inequality.
     """
 
     mass: float
@@ -292,7 +284,8 @@ class Chain:
         inertials: One :class:`Inertial` per row (the link carried by that row's frame) or
             ``None`` for a default: a rod of ``link_mass`` from the frame origin to the next
             frame's origin (the tip link gets a small sphere).
-        name: Robot name in the URDF.
+        name: Robot name in the URDF; ``description`` (free text, the preset's source) goes into
+            its header.
         base: Name of the base link. A pose (4×4 or ``(xyz, rpy)``) may be given here
             instead: it becomes :attr:`base_pose` and the link keeps the name ``"base"``.
         tip: Name of the tip frame: the last row's link, or the tool link when :attr:`tool`
@@ -301,9 +294,8 @@ class Chain:
             ``tip`` (with a tool: ``link<n>``, the tool link is ``tip``).
         link_mass: Default link mass in [kg] when ``inertials`` is ``None``.
         link_radius: Radius in [m] of the visual cylinders and default rod inertia.
-        damping: Joint viscous damping, one value or one per joint ([N·m·s/rad] or [N·s/m]).
-        friction: Joint dry friction, one value or one per joint.
-        description: Free text (source of the preset), written into the URDF header.
+        damping: Joint viscous damping ([N·m·s/rad] or [N·s/m]) and ``friction`` (dry), one
+            value or one per joint.
         base_pose: ``T_base_0``: Khalil frame 0 in the base link (anything :meth:`Pose.of`
             takes; ``None``: identity).
         tool: ``T_n_tool``: the tool frame in the last row's (``None``: no tool link).
@@ -527,12 +519,8 @@ def chain_from_rows(rows: Sequence[Sequence[Any]], **kwargs: Any) -> Chain:
 class LegMount:
     """A leg fixed to the body: a chain and its mount pose on the body.
 
-    Attributes:
-        name: Leg name, used as prefix of its joints and links (e.g. ``"leg1"``).
-        chain: The leg's Khalil chain (its frame 0 is the mount frame).
-        xyz: Mount position in the body frame in [m].
-        yaw: Mount rotation about the body z axis in [rad].
-
+    ``chain``'s frame 0 is the mount frame, at ``xyz`` [m] in the body frame, turned by ``yaw``
+    [rad] about the body z axis; ``name`` prefixes its joints and links (``"leg1"``).
     """
 
     name: str

@@ -30,12 +30,12 @@ class SeedRun:
     """The seeds' experiment (``trajectory``, amplitude A [m/s], period T [s]) and its drift.
 
     Attributes:
-        drift_y: max |y(t) − y(0)| [m] of the tip (Pinocchio FK of the joint trajectory).
-        drift_z: max |z(t) − z(0)| [m].
+        drift_y: max |y(t) − y(0)| [m] of the tip (Pinocchio FK of the joint trajectory);
+            ``drift_z`` the same of z.
         error_x: max |x(t) − x(0) − A T/(2π) (1 − cos 2πt/T)| [m] (the exact ∫v_x).
         baseline: The same figures of the plain Euler + ``np.linalg.solve`` open loop.
-        baseline_deviation: Its (N, 3) |foot − reference| [m], or None.
-        baseline_failure: Why it could not run (a singular J), or None.
+        baseline_deviation: Its (N, 3) |foot − reference| [m], or None; ``baseline_failure``:
+            why it could not run (a singular J), or None.
 
     """
 

@@ -40,14 +40,11 @@ class GateResult:
     """What the gate learned about a URDF that passed (names in document order).
 
     Attributes:
-        root: The parsed ``<robot>`` element (lxml).
-        links: Link names.
-        joints: Joint names.
-        root_link: Name of the root link.
+        root: The parsed ``<robot>`` element (lxml); ``links``, ``joints``: the names;
+            ``root_link``: the root link's name.
         meshes: The resolved mesh and texture files, ``(uri, path)``.
         missing_meshes: Lenient mode: ``(uri, reason)`` of files not found (drop their
-            elements).
-        inertia_defects: Lenient mode: ``(link, defect)`` of implausible inertials.
+            elements); ``inertia_defects``: ``(link, defect)`` of implausible inertials.
         repairs: Harmless defects mended in lenient mode, one message each (a nameless
             ``<robot>`` named ``"robot"``; a ``<mimic>`` of no joint dropped).
         text: The mended document when there are :attr:`repairs` (for Pinocchio), else None.
