@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 import numpy as np
 import pinocchio as pin
 
-from ._gate import check_urdf
+from ._gate import check_urdf, parse_urdf
 from ._gate.messages import defect_lines, first_names, mesh_lines
 from ._gate.repair import INERTIA_MODES, InertiaRepair, check_mode, repair_inertials
 from .exceptions import (
@@ -415,6 +415,8 @@ class Model:
 
     def geometry_model(self, kind: str = "visual") -> Any:
         """Pinocchio's ``GeometryModel`` of :attr:`model` (``kind``: visual or collision)."""
+        from lxml import etree
+
         kinds = {"visual": pin.GeometryType.VISUAL, "collision": pin.GeometryType.COLLISION}
         one_of("kind", kind, kinds)
         dirs = list(self.source.package_dirs)
@@ -423,7 +425,21 @@ class Model:
         drop = {uri for uri, _ in self.missing_meshes}
 
         def build(dropped: set[str]) -> Any:
-            text = self._geometry_text(dropped)
+            """From the URDF without the elements of ``dropped``, every mesh by the gate's path."""
+            text = self.urdf
+            if dropped or self.mesh_files:
+                root = parse_urdf(self.urdf)
+                for link in root.findall("link"):
+                    for part in [*link.findall("visual"), *link.findall("collision")]:
+                        nodes = list(part.iter("mesh", "texture"))
+                        if any(m.get("filename") in dropped for m in nodes):
+                            link.remove(part)
+                            continue
+                        for m in nodes:
+                            path = self.mesh_files.get(m.get("filename") or "")
+                            if path is not None:
+                                m.set("filename", path)
+                text = str(etree.tostring(root, encoding="unicode"))
             return pin.buildGeomFromUrdfString(self.full_model, text, kinds[kind], None, dirs)
 
         try:
@@ -451,27 +467,6 @@ class Model:
             )
             geom = geoms[0]
         return geom
-
-    def _geometry_text(self, drop: set[str]) -> str:
-        """The URDF without the visuals/collisions of ``drop``, every mesh by the gate's path."""
-        from lxml import etree
-
-        from ._gate import parse_urdf
-
-        if not drop and not self.mesh_files:
-            return self.urdf
-        root = parse_urdf(self.urdf)
-        for link in root.findall("link"):
-            for part in [*link.findall("visual"), *link.findall("collision")]:
-                nodes = list(part.iter("mesh", "texture"))
-                if any(m.get("filename") in drop for m in nodes):
-                    link.remove(part)
-                    continue
-                for m in nodes:
-                    path = self.mesh_files.get(m.get("filename") or "")
-                    if path is not None:
-                        m.set("filename", path)
-        return str(etree.tostring(root, encoding="unicode"))
 
     def yourdfpy(self) -> Any:
         """The same URDF text loaded by yourdfpy (a second engine; meshes not loaded)."""

@@ -100,21 +100,13 @@ def _number(value: Any, where: str, limit: float = MAX_NUMBER, floor: float = 0.
     out = number(value, where)
     key = where.rsplit(".", 1)[-1]
     if abs(out) > limit:
-        raise ParameterError(
-            f"{where}={out:g} is out of range; allowed |{key}| <= {limit:g}",
-            parameter=where,
-            value=out,
-            allowed=f"|value| <= {limit:g}",
-        )
-    if 0.0 < abs(out) < floor:
-        raise ParameterError(
-            f"{where}={out:g} is below the smallest length {floor:g} m; allowed 0 or "
-            f"{floor:g} <= |{key}| <= {limit:g}",
-            parameter=where,
-            value=out,
-            allowed=f"0 or {floor:g} <= |value| <= {limit:g}",
-        )
-    return out
+        problem, allowed = f"is out of range; allowed |{key}| <= {limit:g}", f"|value| <= {limit:g}"
+    elif 0.0 < abs(out) < floor:
+        problem = f"is below the smallest length {floor:g} m; allowed 0 or {floor:g} <= |{key}|"
+        problem, allowed = f"{problem} <= {limit:g}", f"0 or {floor:g} <= |value| <= {limit:g}"
+    else:
+        return out
+    raise ParameterError(f"{where}={out:g} {problem}", parameter=where, value=out, allowed=allowed)
 
 
 def _numbers(value: Any, n: int, where: str, limit: float = MAX_NUMBER) -> tuple[float, ...]:
