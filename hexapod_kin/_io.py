@@ -84,6 +84,10 @@ def read_regular(
 
     """
     name, fd = str(path), -1
+
+    def refused(why: str, allowed: str, cls: type[HexapodKinError] = SourceError) -> Exception:
+        return cls(f"{what}={name!r}{why}", parameter=what, value=name, allowed=allowed)
+
     try:
         fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
         mode = os.fstat(fd).st_mode
@@ -95,12 +99,7 @@ def read_regular(
                 else "a socket" if stat.S_ISSOCK(mode)
                 else "not a regular file"
             )  # fmt: skip
-            raise SourceError(
-                f"{what}={name!r} is {kind}; only regular files are read",
-                parameter=what,
-                value=name,
-                allowed="a regular file",
-            )
+            raise refused(f" is {kind}; only regular files are read", "a regular file")
         chunks: list[bytes] = []
         total = 0
         while True:
@@ -110,21 +109,12 @@ def read_regular(
             chunks.append(block)
             total += len(block)
             if total > max_bytes:
-                raise (too_big or SourceError)(
-                    f"{what}={name!r}: more than {max_bytes} bytes (exceeds the cap of "
-                    f"{max_bytes} bytes)",
-                    parameter=what,
-                    value=name,
-                    allowed=f"at most {max_bytes} bytes",
-                )
+                why = f": more than {max_bytes} bytes (exceeds the cap of {max_bytes} bytes)"
+                raise refused(why, f"at most {max_bytes} bytes", too_big or SourceError)
         return b"".join(chunks)
     except OSError as exc:
-        raise SourceError(
-            f"{what}={name!r}: cannot read it ({exc.strerror or exc})",
-            parameter=what,
-            value=name,
-            allowed="a readable regular file",
-        ) from None
+        why = f": cannot read it ({exc.strerror or exc})"
+        raise refused(why, "a readable regular file") from None
     finally:
         if fd >= 0:
             os.close(fd)
