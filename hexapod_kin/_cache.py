@@ -1,12 +1,10 @@
 """The package's disk caches (symbolic, families, report, sweep): one folder, one key, one seal.
 
-:func:`folder` (``$HEXAPOD_KIN_CACHE_DIR/<kind>``, else the user cache folder); :func:`key`
-(SHA-256 of the canonical JSON of what an entry depends on); :func:`seal` (HMAC-SHA256 keyed
-by a per-user secret in the root's ``seal.key``: no secret, no cache); :func:`store` /
-:func:`load` (one atomic JSON envelope per entry: missing or of another format, no entry;
-not the sealed one of its key, no entry and one :class:`~hexapod_kin.exceptions.CacheWarning`);
-:func:`seal_folder` / :func:`check_folder` (numba's files sealed as opaque bytes). Each cache
-also checks an entry's claims against the robot.
+The root is ``$HEXAPOD_KIN_CACHE_DIR``, else the user cache folder. Entries are sealed by an
+HMAC-SHA256 keyed by a per-user secret in the root's ``seal.key`` (no secret, no cache); an
+entry that is not the sealed one of its key is no entry, with one
+:class:`~hexapod_kin.exceptions.CacheWarning`. Each cache also checks an entry's claims
+against the robot.
 """
 
 from __future__ import annotations

@@ -193,11 +193,7 @@ class KinematicModel(Model):
 
         Arguments as :meth:`fk_batch` (``out``: (N, 6, nq)) and :meth:`jacobian`; equal to
         :meth:`jacobian` of each row to rounding; columns off the base → tip path are zero.
-
-        Raises:
-            ParameterError: Unknown ``reference``; ``out`` of the wrong shape/dtype/layout.
-            ConfigurationError: Wrong shape, non-finite values or ``|q| >= 1e150``.
-
+        Raises as :meth:`fk_batch`, and ParameterError for an unknown ``reference``.
         """
         jac: np.ndarray = self._batch(qs, False, reference, out_jacobian=out)[1]
         return jac
