@@ -144,28 +144,6 @@ def _shape(
     return vol, inertia, xyz + rot @ centre, rot
 
 
-def _collision_inertia(
-    link: etree._Element,
-    mass: float,
-    com: np.ndarray,
-    package_dirs: Sequence[str],
-    mesh_root: str | None,
-) -> np.ndarray:
-    """Inertia [kg m^2] about ``com`` in link axes from the link's collision shapes."""
-    shapes = [_shape(c, package_dirs, mesh_root) for c in link.findall("collision")]
-    if not shapes:
-        raise UrdfError("no <collision>")
-    total = sum(v for v, *_ in shapes)
-    if not total > 0.0:
-        raise UrdfError("collision shapes of zero volume")
-    out = np.zeros((3, 3))
-    for vol, unit, centre, rot in shapes:
-        m = mass * vol / total
-        d = centre - com
-        out += m * (rot @ unit @ rot.T) + m * (float(d @ d) * np.eye(3) - np.outer(d, d))
-    return out
-
-
 def _write(inertia_el: etree._Element, mat: np.ndarray) -> None:
     for key, (i, j) in {
         "ixx": (0, 0), "ixy": (0, 1), "ixz": (0, 2), "iyy": (1, 1), "iyz": (1, 2), "izz": (2, 2),
@@ -202,8 +180,20 @@ def repair_inertials(
         rot_i, com = origin_of(inertial)
         mat_link = None
         if mode == "collision":
-            try:
-                mat_link = _collision_inertia(link, mass, com, dirs, mroot)
+            try:  # the collision shapes' inertia about com in link axes, mass shared by volume
+                shapes = [_shape(c, dirs, mroot) for c in link.findall("collision")]
+                if not shapes:
+                    raise UrdfError("no <collision>")
+                total = sum(v for v, *_ in shapes)
+                if not total > 0.0:
+                    raise UrdfError("collision shapes of zero volume")
+                out = np.zeros((3, 3))
+                for vol, unit, centre, rot in shapes:
+                    m, d = mass * vol / total, centre - com
+                    out += m * (rot @ unit @ rot.T) + m * (
+                        float(d @ d) * np.eye(3) - np.outer(d, d)
+                    )
+                mat_link = out
                 rep.from_collision.append(name)
             except (UrdfError, OSError) as exc:
                 rep.fallbacks.append((name, str(exc)))
