@@ -48,21 +48,6 @@ class WorkspaceResult:
         return fields_dict(self, *names)
 
 
-def _voxel_counts(points: np.ndarray, h: float) -> tuple[int, int]:
-    lower = points.min(axis=0) - h
-    idx = np.floor((points - lower) / h).astype(np.int64)
-    dims = idx.max(axis=0) + 2
-    occ = np.zeros(tuple(int(d) for d in dims), dtype=bool)
-    occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
-    pad = np.pad(occ, 1)
-    inner = occ.copy()
-    for ax in range(3):
-        for shift in (1, -1):
-            inner &= np.roll(pad, shift, axis=ax)[1:-1, 1:-1, 1:-1]
-    n_inner = int(inner.sum())
-    return n_inner, int(occ.sum()) - n_inner
-
-
 def workspace(
     model: Any, samples: int = 2_000_000, voxel: float | None = None, seed: int | None = 0
 ) -> WorkspaceResult:
@@ -86,7 +71,16 @@ def workspace(
     span = float(np.ptp(pts, axis=0).max())
     if span / h > 2000:
         raise ParameterError(f"voxel={h!r} m is too small for a workspace {span:.3g} m wide")
-    n_in, n_b = _voxel_counts(pts, h)
+    idx = np.floor((pts - (pts.min(axis=0) - h)) / h).astype(np.int64)  # voxels, one margin
+    occ = np.zeros(tuple(int(d) for d in idx.max(axis=0) + 2), dtype=bool)
+    occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    pad = np.pad(occ, 1)
+    inner = occ.copy()  # occupied voxels whose six neighbours are occupied
+    for ax in range(3):
+        for shift in (1, -1):
+            inner &= np.roll(pad, shift, axis=ax)[1:-1, 1:-1, 1:-1]
+    n_in = int(inner.sum())
+    n_b = int(occ.sum()) - n_in
     lower, upper = pts.min(axis=0), pts.max(axis=0)
     read_only(q, pts, lower, upper)
     volumes = (n_in + n_b) * h**3, (n_in + 0.5 * n_b) * h**3  # occupied, boundary-corrected
