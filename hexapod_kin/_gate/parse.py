@@ -26,8 +26,10 @@ from .limits import (
 
 
 # ------------------------------------------------------------------------ messages
-def _where(el: etree._Element) -> str:
-    """``<joint name="j1"> <axis>`` style path of an element, with its line."""
+def error_at(
+    el: etree._Element, problem: str, attr: str | None = None, value: object = None
+) -> UrdfError:
+    """The :class:`UrdfError` of ``problem`` at ``el`` (``line 7: <joint name="j1"> <axis>``)."""
     parts: list[str] = []
     node: etree._Element | None = el
     while node is not None and node.tag != "robot":
@@ -37,15 +39,9 @@ def _where(el: etree._Element) -> str:
         parts.append(f'<{tag} name="{name}">' if named else f"<{tag}>")
         node = node.getparent()
     parts.reverse()
-    return f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
-
-
-def error_at(
-    el: etree._Element, problem: str, attr: str | None = None, value: object = None
-) -> UrdfError:
-    """The :class:`UrdfError` of ``problem`` at ``el`` (and ``attr=value``), with its line."""
+    where = f"line {el.sourceline}: {' '.join(parts) or '<robot>'}"
     attr_part = f" {attr}={value!r}" if attr is not None else ""
-    return UrdfError(f"URDF {_where(el)}{attr_part}: {problem}")
+    return UrdfError(f"URDF {where}{attr_part}: {problem}")
 
 
 # ------------------------------------------------------------------------ numbers
