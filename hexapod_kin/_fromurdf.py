@@ -394,8 +394,20 @@ def recover_chain(
     size = 2.0 * sum(float(np.linalg.norm(b - a)) for a, b in zip(joints[:-1], joints[1:])) + 1e-9
     _check_lengths(rows, tool, size, path_names, km, axes, tol)
     zeroed: list[tuple[str, float]] = []
-    if tol > 0:  # lengths within rounding of the URDF's constants: clean zeros
-        rows, tool, zeroed = _zero_lengths(rows, tool, _LEN_TOL * max(1.0, size))
+    if tol > 0:  # |d|, |r| and tool offsets within rounding of the URDF's constants: clean zeros
+        tiny = _LEN_TOL * max(1.0, size)  # (each moves the tip by its size)
+        for k, row in enumerate(rows):
+            for key in ("d", "r"):
+                v = getattr(row, key)
+                if v != 0.0 and abs(v) < tiny:
+                    zeroed.append((f"{key}{k + 1}", v))
+                    row = rows[k] = replace(row, d=0.0) if key == "d" else replace(row, r=0.0)
+        for i, axis in enumerate("xyz"):
+            v = float(tool[i, 3])
+            if v != 0.0 and abs(v) < tiny:
+                if abs(v) > 1e-14:  # beyond rounding: say so
+                    zeroed.append((f"tool_{axis}", v))
+                tool[i, 3] = 0.0
     limits = []
     for k in range(n):
         lo, hi = float(km.lower[k]), float(km.upper[k])
@@ -430,30 +442,6 @@ def recover_chain(
     )
     fk_error = _check(chain, km, fk_bound, sum(s.angle for s in snaps))
     return TableRecovery(chain, tuple(snaps), tol, size, fk_bound, fk_error, tuple(zeroed))
-
-
-def _zero_lengths(
-    rows: list[KhalilRow], tool: np.ndarray, tiny: float
-) -> tuple[list[KhalilRow], np.ndarray, list[tuple[str, float]]]:
-    """Set |d|, |r| and tool offsets below ``tiny`` to 0 (each moves the tip by its size)."""
-    zeroed: list[tuple[str, float]] = []
-    out = []
-    for k, row in enumerate(rows, start=1):
-        if row.d != 0.0 and abs(row.d) < tiny:
-            zeroed.append((f"d{k}", row.d))
-            row = replace(row, d=0.0)
-        if row.r != 0.0 and abs(row.r) < tiny:
-            zeroed.append((f"r{k}", row.r))
-            row = replace(row, r=0.0)
-        out.append(row)
-    tool = tool.copy()
-    for i, axis in enumerate("xyz"):
-        v = float(tool[i, 3])
-        if v != 0.0 and abs(v) < tiny:
-            if abs(v) > 1e-14:  # beyond rounding: say so
-                zeroed.append((f"tool_{axis}", v))
-            tool[i, 3] = 0.0
-    return out, tool, zeroed
 
 
 def _check_lengths(
