@@ -392,7 +392,31 @@ def recover_chain(
     tool[:3, :3] = u @ vt
     joints = [np.zeros(3), *points, t_base_tip[:3, 3]]  # size: twice the path's length [m]
     size = 2.0 * sum(float(np.linalg.norm(b - a)) for a, b in zip(joints[:-1], joints[1:])) + 1e-9
-    _check_lengths(rows, tool, size, path_names, km, axes, tol)
+    values = [(f"d{k + 1}", r.d, k) for k, r in enumerate(rows)]
+    values += [(f"r{k + 1}", r.r, k) for k, r in enumerate(rows)]
+    values += [("the tool offset", float(np.linalg.norm(tool[:3, 3])), len(rows) - 1)]
+    for label, value, k in values:
+        if abs(value) <= size:
+            continue
+        # the usual cause: axes k-1, k or k, k+1 nearly (not quite) parallel
+        worst = ""
+        for a in range(max(0, k - 1), min(len(axes) - 1, k + 1)):
+            s = float(np.linalg.norm(np.cross(axes[a], axes[a + 1])))
+            off = math.atan2(s, abs(float(np.dot(axes[a], axes[a + 1]))))
+            if 0.0 < off < 0.1:
+                worst = (
+                    f"; the axes of {path_names[a]!r} and {path_names[a + 1]!r} are {off:.3g} "
+                    f"rad from parallel (angle_tol={tol:.3g} rad): snap them with angle_tol >= "
+                    f"{off * 1.01:.3g} or correct the URDF"
+                )
+                break
+        raise ConfigurationError(
+            f"chain_from_urdf: {km.name!r} ({km.base} -> {km.tip}): recovered {label} = "
+            f"{value:.6g} m is larger than the chain itself (size bound {size:.4g} m){worst}",
+            parameter="angle_tol",
+            value=tol,
+            allowed=f"recovered lengths <= {size:.4g} m",
+        )
     zeroed: list[tuple[str, float]] = []
     if tol > 0:  # |d|, |r| and tool offsets within rounding of the URDF's constants: clean zeros
         tiny = _LEN_TOL * max(1.0, size)  # (each moves the tip by its size)
@@ -442,42 +466,6 @@ def recover_chain(
     )
     fk_error = _check(chain, km, fk_bound, sum(s.angle for s in snaps))
     return TableRecovery(chain, tuple(snaps), tol, size, fk_bound, fk_error, tuple(zeroed))
-
-
-def _check_lengths(
-    rows: list[KhalilRow],
-    tool: np.ndarray,
-    size: float,
-    names: list[str],
-    km: Any,
-    axes: list[np.ndarray],
-    tol: float,
-) -> None:
-    values = [(f"d{k + 1}", r.d, k) for k, r in enumerate(rows)]
-    values += [(f"r{k + 1}", r.r, k) for k, r in enumerate(rows)]
-    values += [("the tool offset", float(np.linalg.norm(tool[:3, 3])), len(rows) - 1)]
-    for label, value, k in values:
-        if abs(value) <= size:
-            continue
-        # the usual cause: axes k-1, k or k, k+1 nearly (not quite) parallel
-        worst = ""
-        for a in range(max(0, k - 1), min(len(axes) - 1, k + 1)):
-            s = float(np.linalg.norm(np.cross(axes[a], axes[a + 1])))
-            off = math.atan2(s, abs(float(np.dot(axes[a], axes[a + 1]))))
-            if 0.0 < off < 0.1:
-                worst = (
-                    f"; the axes of {names[a]!r} and {names[a + 1]!r} are {off:.3g} rad from "
-                    f"parallel (angle_tol={tol:.3g} rad): snap them with angle_tol >= "
-                    f"{off * 1.01:.3g} or correct the URDF"
-                )
-                break
-        raise ConfigurationError(
-            f"chain_from_urdf: {km.name!r} ({km.base} -> {km.tip}): recovered {label} = "
-            f"{value:.6g} m is larger than the chain itself (size bound {size:.4g} m){worst}",
-            parameter="angle_tol",
-            value=tol,
-            allowed=f"recovered lengths <= {size:.4g} m",
-        )
 
 
 def _check(chain: Chain, km: Any, bound: float = 0.0, turn: float = 0.0) -> float:
