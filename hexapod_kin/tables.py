@@ -255,30 +255,22 @@ def chain_from_table(data: dict[str, Any]) -> Chain:
         chain = Chain(
             rows=khalil, base_pose=poses.get("base_pose"), tool=poses.get("tool"), **kwargs
         )
-    if any(m is not None for m in masses):
-        chain = chain.replace(inertials=_inertials(chain, masses))
+    if any(m is not None for m in masses):  # a rod to the next frame, or the given com/inertia
+        inertials: list[Inertial | None] = []
+        for j, spec in enumerate(masses):
+            if spec is None:
+                inertials.append(None)
+                continue
+            mass, com, inertia = spec
+            try:
+                if com is None or inertia is None:
+                    last = j + 1 == len(chain.rows)
+                    nxt = np.zeros(3) if last else chain.rows[j + 1].transform(0.0)[:3, 3]
+                    inertials.append(rod_inertial(np.zeros(3), nxt, mass, chain.link_radius))
+                else:
+                    inn = Inertial(mass=mass, com=com, inertia=inertia)  # type: ignore[arg-type]
+                    inertials.append(inn)
+            except ParameterError as exc:
+                raise ParameterError(f"row {j + 1}: {exc}", parameter="mass", value=mass) from None
+        chain = chain.replace(inertials=tuple(inertials))
     return chain
-
-
-def _inertials(
-    chain: Chain,
-    masses: list[tuple[float, tuple[float, ...] | None, tuple[float, ...] | None] | None],
-) -> tuple[Inertial | None, ...]:
-    """Given masses: a rod to the next frame (like the default), or the given com/inertia."""
-    out: list[Inertial | None] = []
-    for j, spec in enumerate(masses):
-        if spec is None:
-            out.append(None)
-            continue
-        mass, com, inertia = spec
-        where = f"row {j + 1}"
-        try:
-            if com is None or inertia is None:
-                last = j + 1 == len(chain.rows)
-                nxt = np.zeros(3) if last else chain.rows[j + 1].transform(0.0)[:3, 3]
-                out.append(rod_inertial(np.zeros(3), nxt, mass, chain.link_radius))
-            else:
-                out.append(Inertial(mass=mass, com=com, inertia=inertia))  # type: ignore[arg-type]
-        except ParameterError as exc:
-            raise ParameterError(f"{where}: {exc}", parameter="mass", value=mass) from None
-    return tuple(out)
