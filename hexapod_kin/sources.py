@@ -189,27 +189,6 @@ _FIND = re.compile(r"\$\(find\s+([^)\s]+)\s*\)")
 _XACRO_LOCK = threading.Lock()
 
 
-def _split_package_dirs(given: tuple[str, ...]) -> tuple[tuple[str, ...], dict[str, str]]:
-    """``package_dirs`` entries: plain folders, and ``NAME=PATH`` (package NAME is PATH)."""
-    dirs: list[str] = []
-    named: dict[str, str] = {}
-    for entry in given:
-        name, eq, folder = entry.partition("=")
-        if eq and name and "/" not in name and os.sep not in name and not os.path.isdir(entry):
-            if not os.path.isdir(folder):
-                raise SourceError(
-                    f"package_dirs entry {entry!r}: {folder!r} is not a directory; give "
-                    "NAME=PATH with PATH the package's folder (the one holding package.xml)",
-                    parameter="package_dirs",
-                    value=entry,
-                    allowed="DIR or NAME=PATH",
-                )
-            named[name] = os.path.abspath(folder)
-        else:
-            dirs.append(entry)
-    return tuple(dirs), named
-
-
 def _find_package(pkg: str, path: Path, dirs: tuple[str, ...], named: dict[str, str]) -> str:
     """The folder of ROS package ``pkg`` for ``$(find pkg)``, without ROS (see :func:`_expand`)."""
     if pkg in named:
@@ -280,7 +259,23 @@ def _from_file(path: Path, package_dirs: tuple[str, ...], **params: Any) -> Reso
         return ResolvedSource(to_urdf(chain), path.name, params=chain, path=str(path))
     _no_params(params, f"file {str(path)!r}")
     text = _read_text(path)
-    package_dirs, named = _split_package_dirs(package_dirs)
+    plain: list[str] = []  # package_dirs: folders, and NAME=PATH (package NAME is PATH)
+    named: dict[str, str] = {}
+    for entry in package_dirs:
+        name, eq, folder = entry.partition("=")
+        if eq and name and "/" not in name and os.sep not in name and not os.path.isdir(entry):
+            if not os.path.isdir(folder):
+                raise SourceError(
+                    f"package_dirs entry {entry!r}: {folder!r} is not a directory; give "
+                    "NAME=PATH with PATH the package's folder (the one holding package.xml)",
+                    parameter="package_dirs",
+                    value=entry,
+                    allowed="DIR or NAME=PATH",
+                )
+            named[name] = os.path.abspath(folder)
+        else:
+            plain.append(entry)
+    package_dirs = tuple(plain)
     if path.suffix.lower() == ".xacro":
         text = _expand(path, text, package_dirs, named)
     for name, folder in named.items():  # package://NAME/ resolves in NAME=PATH's parent
