@@ -25,7 +25,7 @@ from ._gate.limits import LIMIT_TAGS, MAX_ABS, MAX_ABS_LIMIT, NUMERIC
 from ._io import atomic_write
 from ._version import __version__
 from .exceptions import ParameterError, SourceError, choices, did_you_mean
-from .params import Chain, Hexapod, LegMount, matrix_to_rpy, rpy_to_matrix
+from .params import Chain, Hexapod, matrix_to_rpy, rpy_to_matrix
 from .tables import read_table
 
 __all__ = ["table_of", "to_urdf", "write_urdf", "matrix_to_rpy", "rpy_to_matrix"]
@@ -207,39 +207,6 @@ def _header(name: str, description: str, header: str | None) -> list[str]:
     ]
 
 
-def _chain_urdf(chain: Chain) -> list[str]:
-    """The links and joints of a chain's document: its base link, then its rows."""
-    rad = chain.link_radius
-    return [
-        f'  <link name="{chain.base}">',
-        *_visual("    ", f'<box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/>', "base"),
-        "  </link>",
-        *_chain_body(chain, "", chain.base),
-    ]
-
-
-def _robot_urdf(robot: Hexapod, legs: tuple[LegMount, ...]) -> list[str]:
-    """The links and joints of a robot's document: its body, then each leg on its mount."""
-    lx, ly, lz = robot.body_size
-    m = robot.body_mass
-    inertia = (m * (ly**2 + lz**2) / 12.0, m * (lx**2 + lz**2) / 12.0, m * (lx**2 + ly**2) / 12.0)
-    lines = [
-        f'  <link name="{robot.body}">',
-        *_inertial_xml("    ", m, (0.0, 0.0, 0.0), (*inertia, 0.0, 0.0, 0.0)),
-        *_visual("    ", f'<box size="{vec(robot.body_size)}"/>', "body"),
-        "  </link>",
-    ]
-    for leg in legs:
-        base = f"{leg.name}_{leg.chain.base}"
-        lines += [
-            "  " + comment(f"{leg.name}: mount xyz={vec(leg.xyz)} yaw={num(leg.yaw)} rad"),
-            *fixed_joint("  ", f"{leg.name}_mount", robot.body, base, _origin(leg.transform())),
-            f'  <link name="{base}"/>',
-            *_chain_body(leg.chain, f"{leg.name}_", base),
-        ]
-    return lines
-
-
 _ELEMENT = re.compile(r"<([A-Za-z_]\w*)\s([^>]*)>")
 _ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
 
@@ -337,11 +304,34 @@ def to_urdf(
 
     """
     source = table_of(source, leg)
-    if isinstance(source, Chain):
-        name, body = source.name, _chain_urdf(source)
-    else:
+    if isinstance(source, Chain):  # its base link, then its rows
+        rad, name = source.link_radius, source.name
+        body = [
+            f'  <link name="{source.base}">',
+            *_visual("    ", f'<box size="{vec((6 * rad, 6 * rad, 2 * rad))}"/>', "base"),
+            "  </link>",
+            *_chain_body(source, "", source.base),
+        ]
+    else:  # its body, then each leg on its mount
         legs = source.legs if leg is None else (source.leg(leg),)
-        name, body = source.name + ("" if leg is None else f"_{leg}"), _robot_urdf(source, legs)
+        name = source.name + ("" if leg is None else f"_{leg}")
+        (lx, ly, lz), m = source.body_size, source.body_mass
+        inertia = [m * (a**2 + b**2) / 12.0 for a, b in ((ly, lz), (lx, lz), (lx, ly))]
+        body = [
+            f'  <link name="{source.body}">',
+            *_inertial_xml("    ", m, (0.0, 0.0, 0.0), (*inertia, 0.0, 0.0, 0.0)),
+            *_visual("    ", f'<box size="{vec(source.body_size)}"/>', "body"),
+            "  </link>",
+        ]
+        for one in legs:
+            base = f"{one.name}_{one.chain.base}"
+            mount = _origin(one.transform())
+            body += [
+                "  " + comment(f"{one.name}: mount xyz={vec(one.xyz)} yaw={num(one.yaw)} rad"),
+                *fixed_joint("  ", f"{one.name}_mount", source.body, base, mount),
+                f'  <link name="{base}"/>',
+                *_chain_body(one.chain, f"{one.name}_", base),
+            ]
     text = "\n".join([*_header(name, source.description, header), *body, "</robot>"]) + "\n"
     _check_magnitudes(text, source.name)
     return text
