@@ -151,7 +151,41 @@ def parse_data(
             else f"a value the {fmt.upper()} reader refuses ({_short(exc)})"
         )  # fmt: skip
         raise _refuse(name, what, problem, "integers of at most 15 digits") from None
-    _check_structure(data, name, what, max_values)
+    # deep, huge (after alias expansion) or odd values refused; iterative, stops early
+    stack: list[tuple[Any, int, str]] = [(data, 0, "")]
+    count = 0
+    while stack:
+        value, depth, key = stack.pop()
+        count += 1
+        if count > max_values:
+            raise _refuse(name, what, f"more than {max_values} values (after alias expansion)",
+                          f"at most {max_values} values")  # fmt: skip
+        if depth > MAX_DEPTH:
+            raise _refuse(name, what, f"values nested deeper than {MAX_DEPTH} levels",
+                          f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
+        where = f"key {key!r}" if key else "a value"
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if not isinstance(k, str):
+                    raise _refuse(name, what, f"the key {clip(k)} is not a string",
+                                  "keys that are strings")  # fmt: skip
+                stack.append((k, depth + 1, key))
+                stack.append((v, depth + 1, k[:40]))
+        elif isinstance(value, (list, tuple)):
+            stack.extend((v, depth + 1, key) for v in value)
+        elif isinstance(value, bool) or value is None:
+            continue
+        elif isinstance(value, int):
+            if abs(value) > _MAX_INT:
+                raise _refuse(name, what, f"{where}: an integer of {len(str(abs(value)))} digits",
+                              "integers of at most 15 digits")  # fmt: skip
+        elif isinstance(value, str):
+            if len(value) > MAX_STRING:
+                raise _refuse(name, what, f"{where}: a string of {len(value)} characters",
+                              f"strings of at most {MAX_STRING} characters")  # fmt: skip
+        elif not isinstance(value, float):
+            raise _refuse(name, what, f"{where}: a value of type {type(value).__name__}",
+                          "numbers, strings, lists and mappings")  # fmt: skip
     return data
 
 
@@ -244,44 +278,6 @@ def clip(value: Any) -> str:
     """``repr(value)``, shortened past 40 characters (a value quoted in a message)."""
     text = repr(value)
     return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
-
-
-def _check_structure(data: Any, name: str, what: str, max_values: int) -> None:
-    """Refuse deep, huge (after alias expansion) or odd values; iterative, stops early."""
-    stack: list[tuple[Any, int, str]] = [(data, 0, "")]
-    count = 0
-    while stack:
-        value, depth, key = stack.pop()
-        count += 1
-        if count > max_values:
-            raise _refuse(name, what, f"more than {max_values} values (after alias expansion)",
-                          f"at most {max_values} values")  # fmt: skip
-        if depth > MAX_DEPTH:
-            raise _refuse(name, what, f"values nested deeper than {MAX_DEPTH} levels",
-                          f"nesting up to {MAX_DEPTH} levels")  # fmt: skip
-        where = f"key {key!r}" if key else "a value"
-        if isinstance(value, dict):
-            for k, v in value.items():
-                if not isinstance(k, str):
-                    raise _refuse(name, what, f"the key {clip(k)} is not a string",
-                                  "keys that are strings")  # fmt: skip
-                stack.append((k, depth + 1, key))
-                stack.append((v, depth + 1, k[:40]))
-        elif isinstance(value, (list, tuple)):
-            stack.extend((v, depth + 1, key) for v in value)
-        elif isinstance(value, bool) or value is None:
-            continue
-        elif isinstance(value, int):
-            if abs(value) > _MAX_INT:
-                raise _refuse(name, what, f"{where}: an integer of {len(str(abs(value)))} digits",
-                              "integers of at most 15 digits")  # fmt: skip
-        elif isinstance(value, str):
-            if len(value) > MAX_STRING:
-                raise _refuse(name, what, f"{where}: a string of {len(value)} characters",
-                              f"strings of at most {MAX_STRING} characters")  # fmt: skip
-        elif not isinstance(value, float):
-            raise _refuse(name, what, f"{where}: a value of type {type(value).__name__}",
-                          "numbers, strings, lists and mappings")  # fmt: skip
 
 
 # ---------------------------------------------------------------- the values of a file
