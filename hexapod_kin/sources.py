@@ -354,30 +354,23 @@ def resolve_source(source: Any, *, package_dirs: Any = (), **params: Any) -> Res
     path = Path(text).expanduser()
     if path.suffix.lower() in (".urdf", ".xml", ".xacro", *TABLE_SUFFIXES) or path.exists():
         return _from_file(path, extra, **params)
+    hint = did_you_mean(text, names)
+    if not hint:  # then example-robot-data names (given as erd:NAME)
+        try:
+            close = did_you_mean(text[3:].lstrip(":") if text.startswith("erd") else text,
+                                 erd_names())  # fmt: skip
+        except SourceError:
+            close = ""
+        found = close[len(" (did you mean ") : -len("?)")].split(" or ")
+        erd = " or ".join(f"'erd:{n.strip(chr(39))}'" for n in found)
+        hint = f" (did you mean {erd}?)" if close else ""
     raise SourceError(
-        f"source={text!r} is not a preset, a file or 'erd:NAME'{_hint(text)}; presets are "
+        f"source={text!r} is not a preset, a file or 'erd:NAME'{hint}; presets are "
         f"{choices(names)}",
         parameter="source",
         value=text,
         allowed=names,
     )
-
-
-def _hint(text: str) -> str:
-    """Suggest close presets, then example-robot-data names (given as ``erd:NAME``)."""
-    hint = did_you_mean(text, robots.names())
-    if hint:
-        return hint
-    try:
-        names = erd_names()
-    except SourceError:
-        return ""
-    bare = text[3:].lstrip(":") if text.startswith("erd") else text
-    close = did_you_mean(bare, names)
-    if not close:
-        return ""
-    found = close[len(" (did you mean ") : -len("?)")].split(" or ")
-    return " (did you mean " + " or ".join(f"'erd:{n.strip(chr(39))}'" for n in found) + "?)"
 
 
 # ------------------------------------------------------------------------ second engine
