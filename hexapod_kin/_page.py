@@ -30,13 +30,9 @@ def escape(value: Any) -> Html:
     return value if isinstance(value, Html) else Html(html.escape(str(value), quote=True))
 
 
-def _substitute(template: str, values: dict[str, Any]) -> str:
-    return Template(template).substitute({k: escape(v) for k, v in values.items()})
-
-
 def fill(template: str, **values: Any) -> Html:
     """``template`` (``$name`` holes) filled in one pass, each value through :func:`escape`."""
-    return Html(_substitute(template, values))
+    return Html(Template(template).substitute({k: escape(v) for k, v in values.items()}))
 
 
 def script_json(obj: Any) -> Html:
@@ -71,7 +67,7 @@ def page(title: str, body: Html, *, style: str = "", policy: str | None = None) 
         else f'<meta http-equiv="Content-Security-Policy" content="{policy}">\n'
     )
     values = {"policy": Html(csp), "version": __version__, "title": title, "style": Html(style)}
-    return _substitute(SKELETON, {**values, "body": body})  # a document (text), not markup
+    return str(fill(SKELETON, **values, body=body))  # a document (text), not markup
 
 
 def check_height(height: Any) -> int:
