@@ -21,7 +21,6 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from .legs import GaitError
-from .tables import PhaseTable
 from .terrain import RELIEF_RADIUS, Terrain, sphere_gap
 
 __all__ = [
@@ -405,30 +404,27 @@ def leg_terrain_clearance(
 
 
 def raise_checks(
-    joint_names: tuple[str, ...],
-    table: PhaseTable,
-    names: tuple[str, ...],
+    wb: Any,
+    st: Any,
     pairs: tuple[tuple[int, int], ...],
-    t: np.ndarray,
     clear: np.ndarray,
     margin: np.ndarray,
-    tol: float,
-    strokes: np.ndarray,
     qdot: np.ndarray,
     qddot: np.ndarray,
     vlim: np.ndarray,
-    acc_lim: np.ndarray,
     support: np.ndarray,
 ) -> None:
     """Raise the first failed walk check: leg clearance, stability margin, joint speed/accel.
 
-    The margin fails below ``−tol`` [m] and only for a statically stable ``table``; a rate
-    fails above its limit × (1 + 1e-9).
+    ``wb`` the robot, ``st`` the walk's settings (``table``, ``t``, ``tol``, ``strokes``,
+    ``acc_lim``). The margin fails below ``−st.tol`` [m] and only for a statically stable
+    table; a rate fails above its limit × (1 + 1e-9).
 
     Raises:
         GaitError: Names the check, the legs or the joint, the time and by how much.
 
     """
+    names, table, t, tol, acc_lim = wb.leg_names, st.table, st.t, st.tol, st.acc_lim
     if clear.size and clear.min() <= 0:
         i, k = np.unravel_index(int(np.argmin(clear)), clear.shape)
         a, b = pairs[k]
@@ -440,7 +436,7 @@ def raise_checks(
             time=float(t[i]),
             amount=float(-clear[i, k]),
             parameter="stride",
-            value=strokes.max(),
+            value=st.strokes.max(),
         )
     if table.statically_stable and margin.min() <= -tol:
         im = int(np.argmin(margin))
@@ -462,7 +458,7 @@ def raise_checks(
         over = np.abs(rates) - lim * (1.0 + 1e-9)
         if over.size and over.max() > 0:
             i, j = np.unravel_index(int(np.argmax(over)), over.shape)
-            joint = joint_names[j]
+            joint = wb.joint_names[j]
             d = float(np.abs(rates[i, j]) - lim[j])
             raise GaitError(
                 f"joint {joint}: |rate| {abs(rates[i, j]):.4g} {unit} exceeds its limit "

@@ -45,7 +45,7 @@ from .paths import se2_pose
 from .stability import periodic_spline, support_margin
 from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses"]
+__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses", "zmp_margin"]
 
 #: The sway's friction budget: the body's horizontal acceleration at the sway's knots,
 #: ``|s − z| g / h`` (``s`` the sway, ``z`` its ZMP target, ``h`` the body's height), at most
@@ -147,15 +147,11 @@ def _within_friction(
     return targets(lo), full
 
 
-def _zmp_margin(
-    wb: Any, poses: np.ndarray, plan: np.ndarray, t: np.ndarray, table: Any, T: float, q0: Any
-) -> float:
-    """The smallest margin [m] of the whole robot's ZMP in its stance feet's polygon."""
-    q = np.array(wb.body_ik(poses, plan, q_prev=q0, times=t, strict=False).q)
-    ground = float(np.mean(plan[0, :, 2]))
-    zmp = zmp_points(wb, q, poses, t, np.full(len(t), ground))
-    phase = np.remainder(np.asarray(t)[:, None] / T + np.asarray(table.offsets)[None, :], 1.0)
-    return float(np.min(support_margin(plan, phase < table.duty_factor, zmp)))
+def zmp_margin(
+    wb: Any, q: np.ndarray, base: np.ndarray, feet: np.ndarray, support: Any, t: Any, ground: Any
+) -> np.ndarray:
+    """(N,) margins [m] of the ZMP (on the heights ``ground`` (N,)) in the support polygons."""
+    return np.asarray(support_margin(feet, support, zmp_points(wb, q, base, t, ground)))
 
 
 def sway_poses(
@@ -237,9 +233,12 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
-    if not np.array_equal(safest, incentres) and _zmp_margin(wb, out, plan, t, table, T, q0) < 0.0:
-        safest = incentres  # a body that tips is worse than one that asks more friction
-        out = fit(safest * gain)
+    if not np.array_equal(safest, incentres):
+        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+        stance = np.remainder(np.asarray(t)[:, None] / T + offs[None, :], 1.0) < beta
+        if zmp_margin(wb, q, out, plan, stance, t, np.full(len(t), ground)).min() < 0.0:
+            safest = incentres  # a body that tips is worse than one that asks more friction
+            out = fit(safest * gain)
     if np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed

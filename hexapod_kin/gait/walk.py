@@ -72,10 +72,11 @@ from .stability import (
     terrain_clearance,
 )
 from .sway import sway_poses
+from .sway import zmp_margin as sway_zmp_margin
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
 from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_profile, swing_raise
 from .terrain import terrain as make_terrain
-from .zmp import rates, zmp_points
+from .zmp import rates
 
 __all__ = [
     "GaitRun",
@@ -152,23 +153,6 @@ def highest_speed(robot: Any = None, **options: Any) -> tuple[float, float, floa
 
 
 _SEARCHED = ("stride", "velocity", "period", "duration", "strict")
-
-
-def _zmp_margin(
-    wb: WholeBody,
-    q: np.ndarray,
-    base: np.ndarray,
-    contacts: np.ndarray,
-    support: np.ndarray,
-    t: np.ndarray,
-) -> np.ndarray:
-    """(N,) :attr:`GaitRun.zmp_margin` (empty below 4 samples or without a mass)."""
-    if len(t) < 4 or not wb.mass > 0:
-        return np.zeros(0)
-    sup = support[..., None]
-    h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
-    zmp = np.ascontiguousarray(zmp_points(wb, q, base, t, h))
-    return np.asarray(support_margin(contacts, support, zmp))
 
 
 def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
@@ -352,24 +336,7 @@ def walk(
         )
     t = np.arange(n) / hz
     st = _Setup(
-        table,
-        H,
-        T,
-        beta,
-        vel,
-        bh,
-        reach,
-        dur,
-        hz,
-        rad,
-        gain,
-        acc_lim,
-        ground,
-        t,
-        nb,
-        strokes,
-        size,
-        MARGIN_TOL * size,
+        table, H, T, beta, vel, bh, reach, dur, hz, rad, gain, acc_lim, ground, t, nb, strokes, size
     )
     sw = _Swings.of(wb, st)
     plan = sw.planned_feet(st)
@@ -425,7 +392,11 @@ class _Setup:
     nb: np.ndarray  # (L, 2) neutral feet in the body frame
     strokes: np.ndarray  # (L,) each foot's stroke during a stance [m]
     size: float  # the robot's size [m] (the checks' rounding scale)
-    tol: float  # margin tolerance [m]
+
+    @property
+    def tol(self) -> float:
+        """The margin tolerance [m]: :data:`MARGIN_TOL` × the robot's size."""
+        return MARGIN_TOL * self.size
 
 
 @dataclass
@@ -670,8 +641,13 @@ def _checked(
     ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
     slip = np.where(support, np.linalg.norm(actual - ref - sol.rolled, axis=-1), 0.0)
-    margin = support_margin(actual - rad * n_nxt, support, com)
-    zmp_margin = _zmp_margin(wb, q, base, actual - rad * n_nxt, support, t)
+    contacts = actual - rad * n_nxt
+    margin = support_margin(contacts, support, com)
+    zmp_margin = np.zeros(0)  # below 4 samples or without a mass
+    if len(t) >= 4 and wb.mass > 0:
+        sup = support[..., None]  # the ground: the stance contacts' mean height
+        h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
+        zmp_margin = sway_zmp_margin(wb, q, base, contacts, support, t, h)
     pairs = _neighbour_pairs(wb)
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
@@ -681,22 +657,7 @@ def _checked(
     qdot, qddot = rates(q, t)
     vlim = np.asarray(wb.velocity_limit, dtype=float).reshape(-1)
     if strict:
-        raise_checks(
-            wb.joint_names,
-            st.table,
-            names,
-            pairs,
-            t,
-            clear,
-            margin,
-            st.tol,
-            st.strokes,
-            qdot,
-            qddot,
-            vlim,
-            st.acc_lim,
-            support,
-        )
+        raise_checks(wb, st, pairs, clear, margin, qdot, qddot, vlim, support)
     phase = st.table.phase(t, st.T)
     read_only(t, base, actual, sol.feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
     used, gap = sw.used, sol.edge_gap
