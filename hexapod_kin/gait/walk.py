@@ -2,44 +2,28 @@
 
 :func:`walk` plans a periodic gait of the whole hexapod and returns a :class:`GaitRun`.
 
-* **Body**: the commanded body twist (vx, vy forward/sideways in the body frame [m/s], ωz
-  [rad/s]) is integrated exactly on SE(2) (arcs of circle; straight lines for ωz = 0; turning
-  in place for vx = vy = 0); the body stays level and its height follows the mean ground height
-  of the feet plus ``body_height`` (stance feet: their contact point; swing feet: blended
-  from lift-off to touch-down with the swing's own profile, so the body height is continuous).
-* **Feet**: each leg follows the phase table (:mod:`.tables`). Its touch-down point is fixed
-  when the swing is planned (à la Raibert): the leg's neutral foot point under the body's pose
-  at the middle of the *next* stance, projected on the terrain. The swing goes from the last
-  contact to the next one with a quintic horizontal profile ``10s³ − 15s⁴ + 6s⁵`` and a
-  vertical lift ``64 s³(1 − s)³·h`` (peak h at s = ½): zero velocity **and zero acceleration**
-  at lift-off and touch-down.
-* **Round feet roll** (:func:`.paths.rolling_offsets`): the planned foot points are the centres
-  of the foot spheres (radius ``r = robot.foot_radius``), ``c = contact + r n`` (n the terrain
-  normal). During stance the centre moves as a sphere rolling without slip,
-  ``ċ = ω × (r n)`` with ω the foot frame's angular velocity, so the material point in contact
-  stays put and the body moves over the ground as planned. ω depends on the joint angles, so
-  IK and rolling are iterated to a fixed point (``settings["rolling_residual"]``). With
-  ``r = 0`` the feet are points fixed in the world during stance.
-* **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
-  periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
-  one knot per swing group at mid-swing; each knot moves the zero-moment point to the
-  support's safest point (the stance contacts at that instant; three of them: the incentre,
-  :func:`.sway.support_centre`, nearer the body's centre when the sway would accelerate
-  beyond :data:`.sway.SWAY_FRICTION` g), times the gain ``sway`` (:mod:`.sway`; default 1, so
-  that the plan's ZMP margin stays positive between the knots too).
-* The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
-  is given by the same formula, before ``t = 0`` too), so no start-up transient.
-* **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
-  rates and accelerations by second-order finite differences.
-* **Terrain edges**: a touch-down whose disc of radius r + ``FOOTHOLD_MARGIN`` is not flat
-  moves along its travel to the nearest flat one (:func:`.terrain.off_edges`); a swing over an
-  edge is raised by ΔH·p(s) (:func:`.terrain.swing_raise`; ΔH ≤ step_height).
-* **Checks** at every sample: stance slip (the contact point's material point, by forward
-  kinematics), static stability margin (:mod:`.stability`; a margin within
-  ``MARGIN_TOL`` × the robot's size of zero is not a failure; patterns with
-  ``statically_stable=False`` report it but never fail on it), joint limit margin, joint speed
-  against the URDF's velocity limits (and acceleration against an optional limit), IK status,
-  clearance between neighbouring legs; foot spheres and leg links against the terrain.
+* **Body**: the body twist (vx, vy [m/s] in the body frame, ωz [rad/s]) integrated exactly on
+  SE(2); level, at ``body_height`` above the feet's mean ground height (swing feet blended
+  from lift-off to touch-down, so the height is continuous).
+* **Feet**: each leg follows the phase table (:mod:`.tables`). A touch-down point is fixed
+  when its swing is planned (à la Raibert): the neutral foot point under the body at the
+  middle of the *next* stance, on the terrain. Swings: horizontal ``10s³ − 15s⁴ + 6s⁵``,
+  lift ``64 s³(1 − s)³·h``: zero velocity and acceleration at lift-off and touch-down.
+* **Round feet roll** (:func:`.paths.rolling_offsets`): planned points are the spheres'
+  centres ``c = contact + r n``, rolling without slip in stance (``ċ = ω × (r n)``); IK and
+  rolling iterate to a fixed point (``settings["rolling_residual"]``).
+* **Body sway** (``sway``; on by default for four legs): :mod:`.sway`.
+* The gait's periodic regime restricted to ``[0, duration]``: no start-up transient.
+* **Joints**: body-pose IK (closed form per leg, nearest branch); rates by second-order
+  finite differences.
+* **Terrain edges**: a touch-down whose disc of radius r + :data:`FOOTHOLD_MARGIN` is not
+  flat moves along its travel (:func:`.terrain.off_edges`); a swing over an edge is raised
+  (:func:`.terrain.swing_raise`, by at most the step height).
+* **Checks** at every sample: stance slip, static stability margin (:mod:`.stability`; within
+  ``MARGIN_TOL`` × the robot's size of zero is no failure; patterns with
+  ``statically_stable=False`` never fail on it), joint limits, speeds (URDF limits) and
+  accelerations (optional limit), IK status, neighbouring legs' clearance, feet and links
+  against the terrain.
 """
 
 from __future__ import annotations
@@ -222,7 +206,7 @@ def walk(
         foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
             feet fixed in stance).
         sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
-            legs, else 0): see the module docstring.
+            legs, else 0): :mod:`.sway`.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
             accelerations are reported, not checked; URDF has no acceleration limit).
         knee: Where the knees of the closed-form legs point at the first sample (one of
