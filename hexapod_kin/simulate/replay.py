@@ -36,10 +36,9 @@ LIMITS: dict[str, float] = {
     "height": 0.01,
 }
 
-#: A swing foot touching the ground where the plan has its sphere at least this far from
-#: the ground [m] (measured at the planned centre, along the ground's normal, lowered by
-#: how far the body sank into the soft contacts while settling; on bumps, plus twice their
-#: amplitude) is a strike.
+#: A swing foot touching the ground where the plan has its sphere at least this far from it
+#: [m] (along the normal, less the body's sinking while settling; plus twice the bumps) is a
+#: strike.
 STRIKE_CLEARANCE = 0.002
 
 
@@ -57,8 +56,8 @@ def _roll_pitch(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 class Travel:
     """A walk's travel against its plan, in figures and words (a replay's, a controlled walk's).
 
-    From ``distance`` and ``distance_planned`` [m], ``direction_error`` [rad] (walked against
-    planned displacement), ``turn`` and ``turn_planned`` [rad] of the class using it.
+    From the ``distance``, ``distance_planned``, ``direction_error``, ``turn`` and
+    ``turn_planned`` of the class using it.
     """
 
     if TYPE_CHECKING:  # given by the class using it (fields or properties)
@@ -97,11 +96,7 @@ class Travel:
 
     @property
     def distance_error(self) -> float | None:
-        """(distance along the plan's direction − planned) / planned (None: no translation).
-
-        The displacement is projected on the planned one (:attr:`distance_along`), so a
-        robot that went sideways or backwards does not pass on its distance alone.
-        """
+        """(:attr:`distance_along` − planned) / planned (None: no translation)."""
         if self.distance_planned < 1e-6:
             return None
         return (self.distance_along - self.distance_planned) / self.distance_planned
@@ -253,19 +248,11 @@ def _linear(v: np.ndarray, sub: int) -> np.ndarray:
 
 
 def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
-    """(N, nq) the plan's joint torques [N·m], columns ``joint_names`` (None: none exist).
+    """(N, nq) the plan's joint torques [N·m], columns ``joint_names``, for the servos.
 
-    :func:`hexapod_kin.dynamics.gait_torques`: the full inverse dynamics of the plan (RNEA,
-    the stance feet's forces of minimum norm holding the floating base) when the run carries
-    its robot, else the quasi-static ``τ = g(q) − Σ J_iᵀ f_i``. The servos add it to their
-    PD law so that they hold the planned angles under the planned load: without it a
-    position servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to
-    leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
-    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %). A plan whose stance
-    feet cannot hold the robot at some sample (fewer than three, or in a line: a plan that
-    is not statically stable) has no such torques: None, and it is replayed without them; so
-    has a robot whose inertials are physically implausible (dynamics refuses to answer with
-    them, :meth:`~hexapod_kin.model.Model.check_inertials`).
+    :func:`hexapod_kin.dynamics.gait_torques` (full inverse dynamics when the run carries its
+    robot, else quasi-static). None when the stance cannot hold the robot at some sample
+    (not statically stable) or its inertials are implausible: replayed without them.
     """
     from ..dynamics.gait_loads import gait_torques
 
@@ -281,11 +268,8 @@ def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
 def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
     """Give the settled robot the plan's first velocities: the body's twist, the joints' rates.
 
-    A plan walks from its first sample at its walking speed (the body already moving, the
-    stance feet at rest); a robot let go at rest from there is jerked to that speed by its
-    servos, and the jerk slides its feet (erd:go1 without armature: 5.8 mm lost in the
-    first half cycle, 2.2 % of a 4 s crawl). MuJoCo's free joint takes the linear velocity
-    in the world and the angular one in the body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
+    MuJoCo's free joint takes the linear velocity in the world and the angular one in the
+    body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
     """
     mj, m, d = eng.mj, eng.model, eng.data
     twist = np.asarray(run.base_velocity(), dtype=float)[0]
@@ -382,7 +366,6 @@ def simulate(
         OptionalDependencyError: MuJoCo is not installed.
 
     """
-    import inspect
     import time
 
     from ..gait.walk import GaitRun, walk
@@ -401,8 +384,7 @@ def simulate(
         except (TypeError, ValueError):
             walked = 0.0  # the walk refuses it
     spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
-    # bounded work: refused before planning
-    check_steps(1e-3 if timestep is None else timestep, spans)
+    check_steps(1e-3 if timestep is None else timestep, spans)  # bounded work, before planning
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
@@ -428,8 +410,7 @@ def simulate(
         if foot_radius is None:  # the robot's feet, from its collision shapes if need be
             wb = scene_robot(wb)  # a mesh's round end: the foot's centre moves there
             foot_radius = scene_foot_radius(wb)
-        if "foot_radius" in inspect.signature(walk).parameters:
-            walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
+        walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
             wb,
             pattern=pattern,
@@ -442,7 +423,6 @@ def simulate(
     if foot_radius is None and planned_radius is not None:  # the feet the plan rolled
         foot_radius = float(planned_radius) if planned_radius > 0 else POINT_FOOT
     one_of("terrain", ground, list(SCENE_TERRAINS))
-    # the URDF text at hand: the robot's path, text or erd:NAME, or a loaded model's own URDF
     by_name = isinstance(run_or_robot, (str, os.PathLike))
     sc = scene_mjcf(
         wb,
@@ -509,12 +489,10 @@ def simulate(
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
     above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
-    # the body as it stands after settling: soft contacts sink it (MuJoCo's default contact
-    # by ~4 mm), and the swing feet, held by the servos relative to it, with it
+    # soft contacts sink the settled body (~4 mm) and the swing feet with it
     sink = max(0.0, float(planned[0, 2, 3] - base[0, 2, 3]))
     gap = (above - sink) * sc.normal_z - sc.foot_radius
-    # on bumps the ground under the swing foot and under the stance feet carrying the body
-    # are each up to ±bumps off the plan's: 2 × bumps more clearance before it is a strike
+    # on bumps the ground under swing and stance feet is each up to ±bumps off the plan's
     held = (gap >= STRIKE_CLEARANCE + 2.0 * sc.bumps) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
@@ -573,27 +551,6 @@ def simulate(
             timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
-    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall, fed)
-    return _summary(run, sc, t, base, planned, qs, forces, *figures)
-
-
-def _summary(
-    run: Any,
-    sc: SimScene,
-    t: np.ndarray,
-    base: np.ndarray,
-    planned: np.ndarray,
-    qs: np.ndarray,
-    forces: np.ndarray,
-    lift: float,
-    max_slip: float,
-    max_speed: float,
-    strikes: dict[str, float],
-    seen: dict[tuple[str, str], float],
-    stand: StandForces | None,
-    wall: float,
-    fed: bool,
-) -> SimRun:
     dp = planned[-1, :2, 3] - planned[0, :2, 3]
     ds = base[-1, :2, 3] - base[0, :2, 3]
     yaw_p, yaw_s = _yaw(planned[:, :3, :3]), _yaw(base[:, :3, :3])
@@ -626,7 +583,7 @@ def _summary(
         max_slip_speed=max_speed,
         swing_strikes=tuple(sorted(strikes.items(), key=lambda x: x[1])),
         non_foot_contacts=contacts,
-        stand=stand,
+        stand=stance,
         scene=sc,
         wall_time=wall,
         plan=run.to_dict(),
