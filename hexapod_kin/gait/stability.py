@@ -347,9 +347,6 @@ def leg_terrain_clearance(
     """
     p = np.asarray(points, dtype=float)
     a, b = p[:, :, :-1], p[:, :, 1:]  # (N, L, K-1, 3) segment ends
-    # every point of a segment within RELIEF_RADIUS of one of its ends lies over ground below
-    # max(h(a), h(b)) + relief: it is clear when its lower end is a link radius above that
-    # (then the gap given is that lower bound)
     top = np.maximum(ground(a[..., 0], a[..., 1]), ground(b[..., 0], b[..., 1]))
     side = 0.5 * np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]) + link_radius
     gap = np.minimum(a[..., 2], b[..., 2]) - link_radius - top - ground.relief
