@@ -150,8 +150,7 @@ def frame_poses(
 def default_configuration(model: Model) -> np.ndarray:
     """The package's home pose (:func:`hexapod_kin.ik.home`), for display and demos.
 
-    A hexapod stands with every leg at the legs' home :data:`hexapod_kin.ik.LEG_HOME`
-    (hip, knee, ankle; clipped to the limits); any other model is at ``ik.home(model)``.
+    A hexapod's legs at :data:`hexapod_kin.ik.LEG_HOME` (clipped to the limits).
     """
     from .. import ik
 
@@ -222,9 +221,7 @@ def hexapod_sway(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hexapod sways its body (heave, roll, pitch, yaw) with its feet fixed in the world.
 
-    Returns ``(times, qs, base_poses)``; the legs follow by body-pose IK on the robot's legs
-    (:meth:`~.robot.WholeBody.body_ik`: closed form per leg, the branch nearest to the
-    previous sample; a sample out of reach keeps the previous one).
+    Returns ``(times, qs, base_poses)``; the legs by :meth:`~.robot.WholeBody.body_ik`.
     """
     import pinocchio as pin
 
