@@ -174,31 +174,29 @@ def walk(
     """Walk the robot and check every sample.
 
     Args:
-        robot: The robot: a :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
+        robot: A :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
             :func:`~.robot.as_whole_body` takes (a URDF path, ``erd:NAME``, a loaded model);
             default the built-in hexapod.
         pattern: A name of :func:`~.tables.pattern_names` for the robot's legs (``tripod``,
             ``wave``, ``ripple`` for six; ``crawl``, ``trot``, ``pace`` for four; ``wave``,
             ``ripple`` for eight) or a :class:`~.tables.PhaseTable` (default
-            :func:`~.tables.default_pattern`: tripod, crawl for four legs, else wave).
-        stride: Foot stroke during stance [m] for a straight forward walk (sets
-            ``vx = stride / (duty_factor · period)``); default :func:`default_stride` when
-            ``velocity`` is not given. Give ``stride`` or ``velocity``, not both.
+            :func:`~.tables.default_pattern`).
+        stride: Foot stroke during stance [m] for a straight forward walk (``vx = stride /
+            (duty_factor · period)``); default :func:`default_stride` without ``velocity``.
+            Give ``stride`` or ``velocity``, not both.
         step_height: Swing lift above the straight line between contacts [m] (default
             :func:`default_step_height`).
         period: Cycle time T [s]. Default 1 s, or for a straight walk (no ``velocity``) the
             shortest multiple of :data:`~.limits.PERIOD_STEP` that keeps every joint within
             its URDF velocity limit (and ``accel_limit``): :func:`~.limits.fit_period`.
         duty_factor: Stance fraction β in (0, 1) (default the pattern's).
-        velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame (curves with
-            vx and wz, turning in place with only wz).
-        body_height: Body above the mean ground height of the feet's contacts [m] (default the
-            robot's :attr:`~.robot.WholeBody.body_height`; the built-in hexapod: 0.08 m).
+        velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame.
+        body_height: Body above the mean ground height of the feet's contacts [m] (default
+            :attr:`~.robot.WholeBody.body_height`).
         foot_reach: Horizontal distance from each leg's mount to its neutral foot point [m]
-            (default the robot's own, :attr:`~.robot.WholeBody.foot_reach`; the built-in
-            hexapod: 0.16 m).
-        terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
-            :class:`~.terrain.Terrain` or ``h(x, y)``.
+            (default :attr:`~.robot.WholeBody.foot_reach`).
+        terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a :class:`~.terrain.Terrain`
+            or ``h(x, y)``.
         rate: Sample rate [Hz].
         duration: Length of the run [s].
         q0: (nq,) joints the first sample's IK branches are nearest to.
@@ -208,28 +206,24 @@ def walk(
         sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
             legs, else 0): :mod:`.sway`.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
-            accelerations are reported, not checked; URDF has no acceleration limit).
+            reported, not checked).
         knee: Where the knees of the closed-form legs point at the first sample (one of
-            :data:`~.knee.KNEES`: ``up``, ``down``, ``forward``, ``backward``, ``out``,
-            ``in``; default: the branch inside the joint limits nearest ``q0``). The
-            directions taken are reported (``settings["knees"]``).
-        open_loop: True (default): the plan is played as it is, so a pattern that is not
-            statically stable (trot, pace: two feet on the ground) is refused with a
-            :class:`GaitError` (check ``"statically unstable"``). False: planned anyway,
-            for a balance controller to track (its static margin reported, not checked).
+            :data:`~.knee.KNEES`; default: the branch inside the joint limits nearest
+            ``q0``); reported in ``settings["knees"]``.
+        open_loop: True (default): a pattern that is not statically stable (trot, pace) is
+            refused with a :class:`GaitError` (check ``"statically unstable"``). False:
+            planned anyway, for a balance controller (its static margin reported only).
 
     Returns:
         A :class:`GaitRun`.
 
     Raises:
         ParameterError: A bad parameter (named, with what is allowed).
-        GaitError: (``strict``) a check fails: ``"terrain"`` (a foot off the terrain),
-            ``"terrain clearance"`` (a foot sphere into the ground: step too low),
-            ``"leg terrain clearance"`` (a link into the terrain),
-            ``"reach"`` (stride too long, step too high...), ``"joint limit"``,
-            ``"leg clearance"``, ``"stability margin"`` (statically stable patterns only),
-            ``"joint speed"``, ``"joint acceleration"``; the message names the leg or joint,
-            the time and by how much.
+        GaitError: (``strict``) a check fails: ``"terrain"``, ``"terrain clearance"``,
+            ``"leg terrain clearance"``, ``"reach"``, ``"joint limit"``, ``"leg clearance"``,
+            ``"stability margin"`` (statically stable patterns only), ``"joint speed"``,
+            ``"joint acceleration"``; the message names the leg or joint, the time and by
+            how much.
 
     """
     args = dict(locals())  # this walk's arguments (a period is fitted by walking again)
