@@ -136,13 +136,11 @@ class SimRun(Travel):
         max_pitch: Max |pitch| [rad].
         height_error: Max |z − z_planned| of the body [m].
         max_slip: Largest tangential slide of a stance foot's contact point during one
-            planned stance [m], added up across contact breaks (a stance foot off the ground
-            that comes down again in the same stance: its sphere's lowest point's slide
+            planned stance [m], added up across contact breaks (its lowest point's slide
             meanwhile counts).
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
         swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
-            ground (a new contact, not a late lift-off) where the plan has it at least
-            :data:`STRIKE_CLEARANCE` clear of it.
+            ground where the plan has it :data:`STRIKE_CLEARANCE` clear (not a late lift-off).
         non_foot_contacts: ``(geom, geom, first time [s])`` of every pair in contact that is
             not a foot on the ground.
         stand: The standing forces check (None when skipped).
@@ -150,8 +148,7 @@ class SimRun(Travel):
         wall_time: Wall time of the replay (settling included) [s].
         plan: The plan's own summary (:meth:`GaitRun.to_dict`).
         run: The plan replayed.
-        feedforward: The servos carried the plan's joint torques (False: a bare PD law,
-            asked for or for a plan whose stance cannot hold the robot).
+        feedforward: The servos carried the plan's joint torques (False: a bare PD law).
 
     """
 
@@ -326,16 +323,14 @@ def simulate(
         pattern: The walk's pattern (when planning; default the robot's
             :func:`~hexapod_kin.gait.tables.default_pattern`: tripod for six legs, crawl for four).
         velocity: The walk's body twist ``(vx, vy, wz)`` (when planning).
-        terrain: ``flat`` (default), ``slope`` or ``step``: planned on and simulated on; with a
-            run, its own terrain unless given (a plan replayed on other ground: its first
-            sample's stance feet must stand on both).
+        terrain: ``flat`` (default), ``slope`` or ``step``, planned and simulated on; with a
+            run, its own unless given (its first stance feet must then stand on both).
         duration: The walk's length [s] (when planning).
         feet: The feet of a URDF robot without foot links (``"frame:x,y,z ..."``, as
             :func:`~hexapod_kin.gait.robot.as_whole_body` takes them; when planning).
-        foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
-            else the robot's); when planning, the plan's feet too. When planning without
-            it, feet that are the round ends of the legs' meshes are planned and simulated
-            as those spheres (:func:`~.collision.scene_robot`).
+        foot_radius: Foot sphere radius [m] (default: the plan's, else the robot's); when
+            planning, the plan's feet too; without it, feet at the round ends of the legs'
+            meshes are planned and simulated as those spheres (:func:`~.collision.scene_robot`).
         friction: Sliding friction coefficient.
         kp: Servo position gain [N·m/rad] (default: scaled to the robot,
             :func:`~.scene.servo_defaults`; 300 for the built-in hexapod).
@@ -344,9 +339,8 @@ def simulate(
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
         timestep: Physics step [s]; must divide the plan's sample interval (default: 1 ms
             or less for the servos' stability, see :func:`scene_mjcf`).
-        settle: Time [s] the robot stands at the first pose before the replay (≥ 0). The
-            replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
-            the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
+        settle: Time [s] the robot stands at the first pose before the replay (≥ 0); all
+            the steps at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
         stand: Also run :func:`stand_forces` (flat ground).
         bumps: Random bumps of this amplitude [m] on flat ground (see :func:`scene_mjcf`);
             the plan stays the flat one.

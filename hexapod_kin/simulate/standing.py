@@ -62,17 +62,12 @@ def stand_forces(
 ) -> StandForces:
     """The robot standing in MuJoCo at :func:`hexapod_kin.dynamics.stand`'s pose, flat ground.
 
-    The base is placed level at the stance's height, raised so that the stance feet's
-    spheres touch the ground, the joints held at the stance's angles by the actuators;
-    after ``settle`` seconds the contact force of each foot (3-D, mean over the last 0.2 s)
-    is compared with the stance's contact force.
-
-    The servos are the robot's own (:func:`~.scene.servo_defaults`, the walking gains)
-    once settled: the first half of ``settle`` they hold at a tenth of that gain, so that
-    the load spreads over the feet as the stance's shares (a statically indeterminate
-    stance under stiff servos keeps the internal forces friction locks in at touch-down),
-    then the gain ramps to the robot's over a quarter of ``settle`` and holds. The servos
-    have no armature here unless asked.
+    The base level at the stance's height with the stance spheres on the ground, the joints
+    held at the stance's angles; after ``settle`` seconds each foot's contact force (mean over
+    the last 0.2 s) is compared with the stance's. The servos hold at a tenth of the robot's
+    gains (:func:`~.scene.servo_defaults`) for the first half of ``settle``, so that the load
+    spreads as the stance shares it (stiff servos keep the internal forces friction locks in
+    at touch-down), then ramp to them over a quarter; no armature unless asked.
 
     Args:
         robot: As :func:`scene_mjcf`.
@@ -91,7 +86,6 @@ def stand_forces(
     from ..params import Hexapod
 
     dur = positive("settle", settle)
-
     check_steps(
         scene_options.get("timestep") or 1e-3 if scene is None else scene.timestep, {"settle": dur}
     )
