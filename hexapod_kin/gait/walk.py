@@ -139,16 +139,6 @@ def highest_speed(robot: Any = None, **options: Any) -> tuple[float, float, floa
 _SEARCHED = ("stride", "velocity", "period", "duration", "strict")
 
 
-def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
-    yaw = np.arctan2(wb.mounts[:, 1, 3], wb.mounts[:, 0, 3])
-    order = [int(i) for i in np.argsort(yaw, kind="stable")]
-    n = len(order)
-    if n < 2:
-        return ()
-    pairs = {tuple(sorted((order[k], order[(k + 1) % n]))) for k in range(n)}
-    return tuple(sorted((int(a), int(b)) for a, b in pairs if a != b))
-
-
 def walk(
     robot: Any = None,
     *,
@@ -626,7 +616,9 @@ def _checked(
         sup = support[..., None]  # the ground: the stance contacts' mean height
         h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
         zmp_margin = sway_zmp_margin(wb, q, base, contacts, support, t, h)
-    pairs = _neighbour_pairs(wb)
+    order = np.argsort(np.arctan2(wb.mounts[:, 1, 3], wb.mounts[:, 0, 3]), kind="stable")
+    ring = {tuple(sorted((int(a), int(b)))) for a, b in zip(order, np.roll(order, -1))}
+    pairs = tuple(sorted((a, b) for a, b in ring if a != b))  # neighbouring legs
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
     leg_gap = leg_terrain_clearance(

@@ -42,17 +42,6 @@ LIMITS: dict[str, float] = {
 STRIKE_CLEARANCE = 0.002
 
 
-def _yaw(R: np.ndarray) -> np.ndarray:
-    return np.unwrap(np.arctan2(R[..., 1, 0], R[..., 0, 0]))
-
-
-def _roll_pitch(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Roll and pitch [rad] of ``R = Rz(ψ) Ry(θ) Rx(φ)``."""
-    pitch = np.arcsin(np.clip(-R[..., 2, 0], -1.0, 1.0))
-    roll = np.arctan2(R[..., 2, 1], R[..., 2, 2])
-    return roll, pitch
-
-
 class Travel:
     """A walk's travel against its plan, in figures and words (a replay's, a controlled walk's).
 
@@ -547,9 +536,10 @@ def simulate(
         )
     dp = planned[-1, :2, 3] - planned[0, :2, 3]
     ds = base[-1, :2, 3] - base[0, :2, 3]
-    yaw_p, yaw_s = _yaw(planned[:, :3, :3]), _yaw(base[:, :3, :3])
+    yaw_p, yaw_s = (np.unwrap(np.arctan2(T[:, 1, 0], T[:, 0, 0])) for T in (planned, base))
     yaw_p, yaw_s = yaw_p - yaw_p[0], yaw_s - yaw_s[0]
-    roll, pitch = _roll_pitch(base[:, :3, :3])
+    roll = np.arctan2(base[:, 2, 1], base[:, 2, 2])  # of R = Rz(ψ) Ry(θ) Rx(φ)
+    pitch = np.arcsin(np.clip(-base[:, 2, 0], -1.0, 1.0))
     lp, ls = float(np.linalg.norm(dp)), float(np.linalg.norm(ds))
     direction = 0.0
     if lp > 1e-6 and ls > 0:
