@@ -65,22 +65,18 @@ def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndar
 class WholeBody:
     """A legged robot with a floating base: Pinocchio model and vectorised kinematics.
 
-    Build it with :func:`as_whole_body` (any source) or :func:`whole_body` (a Hexapod),
-    both cached. A view of the one loaded robot (:attr:`kinematic`): legs as joint indices,
-    mounts and feet (a frame and an offset). Joint order: Pinocchio's ``v[6:]`` (the URDF
-    tree, depth first); one angle per joint, continuous joints included (Pinocchio's ``q``
-    holds their cosine and sine: :meth:`pinocchio_q`); the joints that belong to no leg are
-    locked at their neutral value (:attr:`locked_joints`).
+    Built by :func:`as_whole_body` or :func:`whole_body` (cached): a view of the one loaded
+    robot (:attr:`kinematic`). Joint order: Pinocchio's ``v[6:]``; one angle per joint,
+    continuous ones included (:meth:`pinocchio_q` makes their (cos, sin)); joints of no leg
+    are locked at their neutral value (:attr:`locked_joints`).
 
     Attributes:
         params: The Hexapod it was built from (``None`` for a URDF robot).
         source: A label of the source (preset, file name, ``erd:NAME``).
-        model: Pinocchio model with a free-flyer root (a copy of the loaded robot's
-            :attr:`~hexapod_kin.model.Model.floating_model`, reduced to the legs' joints);
-            one frame ``<leg>_contact`` per foot (the contact sphere's centre) is added.
-            Its ``nq`` is 7 + :attr:`nq` plus one per continuous joint (a (cos, sin) pair).
-        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source): the one
-            model this description is a view of.
+        model: Pinocchio model with a free-flyer root (the loaded robot's
+            :attr:`~hexapod_kin.model.Model.floating_model` reduced to the legs' joints)
+            plus a frame ``<leg>_contact`` per foot (the contact sphere's centre).
+        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source).
         leg_names: The legs' names (the order of phase tables).
         joint_names: The leg joints (the columns of q).
         mass: Total mass in [kg] (from the URDF's inertials).
@@ -692,9 +688,9 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
             1.5 × its link radius; a URDF's foot links' sphere collision radius, else 0).
 
     Raises:
-        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody.
+        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody, a
+            source that is one chain (a table file, an arm preset).
         SourceError, UrdfError: The source cannot be loaded.
-        ParameterError: A source that is one chain (a table file, an arm preset).
         ConfigurationError: No legs found (names the frames), a non-revolute/prismatic leg
             joint.
 
