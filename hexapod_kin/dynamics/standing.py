@@ -1,21 +1,18 @@
 """The standing hexapod: a standing pose, the contact forces that hold its weight, joint torques.
 
-The body is level at height ``h`` above flat ground (world z up; the feet at z = 0). The
-robot's mass and centre of mass include the body fixed to the universe (``model.inertias[0]``,
-which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out).
-
-Contact forces ``f_i`` (ground on foot i, world axes, point contacts) balance gravity::
+The body is level at height ``h`` above flat ground (world z up; the feet at z = 0); mass and
+centre of mass include the body fixed to the universe (``model.inertias[0]``, which
+Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out). Contact forces ``f_i`` (ground
+on foot i, world axes, point contacts) balance gravity::
 
     Σ f_i = m g ẑ,    Σ (p_i − c) × f_i = 0
 
 ``method="min_norm"``: ``f = A⁺ b`` (least Σ‖f_i‖²; it may pull or slide, ``feasible`` says);
 ``"friction"``: the least Σ‖f_i‖² with ``f_z ≥ 0`` and ``‖f_t‖ ≤ μ f_z`` (SLSQP from the
-minimum-norm point, projected back onto the equations). Joint torques (static):
-``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i.
-
-Any other legged robot stands by :func:`hexapod_kin.gait.stand.standing_pose` on its
-floating-base model, the forces at the foot spheres' lowest points (``J_i = J_v − [c_i − p_i]×
-J_ω``).
+minimum-norm point, projected back onto the equations). Static joint torques
+``τ = g(q) − Σ_i J_iᵀ f_i`` (``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i).
+Other legged robots stand by :func:`hexapod_kin.gait.stand.standing_pose`, the forces at the
+foot spheres' lowest points (``J_i = J_v − [c_i − p_i]× J_ω``).
 """
 
 from __future__ import annotations

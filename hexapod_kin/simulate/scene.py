@@ -736,9 +736,8 @@ class _Engine:
 def check_steps(timestep: Any, spans: dict[str, float], default_timestep: float = 1e-3) -> float:
     """Refuse a simulation of more than ``dynamics.MAX_STEPS`` physics steps; the timestep [s].
 
-    ``spans`` maps each option to the simulated time it adds [s] (e.g. ``settle``, the
-    walk's ``duration``). Past the cap the refusal names the option adding the most steps,
-    or ``timestep`` when the spans would fit at ``default_timestep``.
+    ``spans`` maps each option to the simulated time it adds [s]; past the cap the refusal
+    names the option adding the most, or ``timestep`` when the spans fit at ``default_timestep``.
 
     Raises:
         ParameterError: A timestep that is not > 0, a span not finite >= 0, too many steps.
