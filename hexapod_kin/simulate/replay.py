@@ -16,6 +16,7 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
+    _joints,
     _mujoco,
     _robot,
     check_steps,
@@ -261,8 +262,7 @@ def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
     twist = np.asarray(run.base_velocity(), dtype=float)[0]
     d.qvel[:3] = eng.base_pose()[:3, :3] @ twist[:3]
     d.qvel[3:6] = twist[3:]
-    for j, rate in zip(eng.scene.joint_names, qd):
-        d.qvel[m.jnt_dofadr[mj.mj_name2id(m, mj.mjtObj.mjOBJ_JOINT, j)]] = rate
+    d.qvel[m.jnt_dofadr[_joints(mj, m, eng.scene.joint_names)]] = qd
 
 
 def _lift(run: Any, scene: SimScene) -> float:

@@ -355,10 +355,10 @@ def scene_mjcf(
     data = mujoco.MjData(model)
     # the robot at its neutral pose, base at the origin: where each foot is, in which body
     q0 = np.asarray(wb.neutral_q(), dtype=float)
-    jadr = _joint_qpos(mujoco, model, wb.joint_names)
+    jids = _joints(mujoco, model, wb.joint_names)
     data.qpos[:] = 0.0
     data.qpos[3] = 1.0
-    data.qpos[jadr] = q0
+    data.qpos[model.jnt_qposadr[jids]] = q0
     mujoco.mj_kinematics(model, data)
     feet = wb.feet(q0[None], np.eye(4)[None])[0]
     ends = _leg_ends(wb)
@@ -366,8 +366,7 @@ def scene_mjcf(
     bodies = {b.get("name"): b for b in root.iter("body")}
     foot_geoms = []
     for leg, (name, col) in enumerate(zip(wb.leg_names, ends)):
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, wb.joint_names[col])
-        bid = int(model.jnt_bodyid[jid])
+        bid = int(model.jnt_bodyid[jids[col]])
         R, x = data.xmat[bid].reshape(3, 3), data.xpos[bid]
         local = R.T @ (feet[leg] - x)
         # drop the export's spheres at the foot point (this body or bodies welded to it)
@@ -443,9 +442,10 @@ def scene_mjcf(
     )
     act = etree.SubElement(root, "actuator")
     names = []
-    effort = _effort(mujoco, model, wb.joint_names)
-    for jn, lim in zip(wb.joint_names, effort):
+    for jn, jid in zip(wb.joint_names, jids):
         attrs = dict(name=f"{jn}_servo", joint=jn, kp=num(kp), kv=num(kv))
+        frc = model.jnt_actfrcrange[jid] if model.jnt_actfrclimited[jid] else (-np.inf, np.inf)
+        lim = float(min(abs(frc[0]), abs(frc[1])))
         if math.isfinite(lim):
             attrs.update(forcerange=f"{num(-lim)} {num(lim)}", forcelimited="true")
         etree.SubElement(act, "position", **attrs)
@@ -483,14 +483,12 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
     model = mujoco.MjModel.from_xml_string(etree.tostring(root, encoding="unicode"))
     data = mujoco.MjData(model)
     data.qpos[3] = 1.0
-    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    jids = _joints(mujoco, model, wb.joint_names)
+    data.qpos[model.jnt_qposadr[jids]] = q0
     mujoco.mj_forward(model, data)
     full = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, full)
-    dofs = [
-        int(model.jnt_dofadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
-        for j in wb.joint_names
-    ]
+    dofs = model.jnt_dofadr[jids]
     inertia = 1.0 / np.diag(np.linalg.inv(full))[dofs]
     omega = float(np.sqrt(kp / inertia).max())
     k = math.ceil(MAX_TIMESTEP * omega / STABLE_OMEGA_DT)
@@ -524,7 +522,7 @@ def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
     data = mujoco.MjData(model)
     data.qpos[:] = 0.0
     data.qpos[2], data.qpos[3] = 100.0, 1.0
-    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    data.qpos[model.jnt_qposadr[_joints(mujoco, model, wb.joint_names)]] = q0
     mujoco.mj_forward(model, data)
 
     def name(b: int) -> str:
@@ -570,23 +568,13 @@ def _trim(elem: Any, model: Any, data: Any, g: int, foot: np.ndarray, r: float) 
             return
 
 
-def _joint_qpos(mujoco: Any, model: Any, names: Any) -> np.ndarray:
-    out = []
-    for jn in names:
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
-        if jid < 0:
-            raise ConfigurationError(f"joint {jn!r} is not in the robot's MJCF")
-        out.append(int(model.jnt_qposadr[jid]))
-    return np.array(out)
-
-
-def _effort(mujoco: Any, model: Any, names: Any) -> np.ndarray:
-    out = []
-    for jn in names:
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
-        lim = model.jnt_actfrcrange[jid] if model.jnt_actfrclimited[jid] else (-np.inf, np.inf)
-        out.append(float(min(abs(lim[0]), abs(lim[1]))))
-    return np.array(out)
+def _joints(mujoco: Any, model: Any, names: Any) -> np.ndarray:
+    """The MuJoCo ids of the joints ``names`` (ConfigurationError for one not in the MJCF)."""
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names], int)
+    missing = [n for n, i in zip(names, ids) if i < 0]
+    if missing:
+        raise ConfigurationError(f"joint {missing[0]!r} is not in the robot's MJCF")
+    return ids
 
 
 # ----------------------------------------------------------------------------- the engine
@@ -599,7 +587,7 @@ class _Engine:
         self.scene = scene
         self.model = m = mujoco.MjModel.from_xml_string(scene.xml)
         self.data = mujoco.MjData(m)
-        self.jq = _joint_qpos(mujoco, m, scene.joint_names)
+        self.jq = m.jnt_qposadr[_joints(mujoco, m, scene.joint_names)]
         self.act = np.array(
             [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
         )
