@@ -522,7 +522,7 @@ def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
     data = mujoco.MjData(model)
     data.qpos[:] = 0.0
     data.qpos[2], data.qpos[3] = 100.0, 1.0
-    data.qpos[model.jnt_qposadr[_joints(mujoco, model, wb.joint_names)]] = q0
+    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
     mujoco.mj_forward(model, data)
 
     def name(b: int) -> str:
@@ -577,6 +577,11 @@ def _joints(mujoco: Any, model: Any, names: Any) -> np.ndarray:
     return ids
 
 
+def _joint_qpos(mujoco: Any, model: Any, names: Any) -> np.ndarray:
+    """The ``qpos`` addresses of the joints ``names``."""
+    return np.asarray(model.jnt_qposadr[_joints(mujoco, model, names)])
+
+
 # ----------------------------------------------------------------------------- the engine
 class _Engine:
     """A compiled scene: ids of the joints, actuators, feet and the ground."""
@@ -587,7 +592,7 @@ class _Engine:
         self.scene = scene
         self.model = m = mujoco.MjModel.from_xml_string(scene.xml)
         self.data = mujoco.MjData(m)
-        self.jq = m.jnt_qposadr[_joints(mujoco, m, scene.joint_names)]
+        self.jq = _joint_qpos(mujoco, m, scene.joint_names)
         self.act = np.array(
             [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in scene.actuators]
         )
