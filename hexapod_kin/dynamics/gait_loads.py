@@ -1,16 +1,16 @@
 """Contact forces and joint torques along a gait run: quasi-static and full inverse dynamics.
 
-Takes a walk's samples (``t``, ``base_poses``, ``q``, ``joint_names``, ``support``), as in
-``hexapod_kin.gait.GaitRun``.
+From a walk's ``t``, ``base_poses``, ``q``, ``joint_names`` and ``support`` (a
+``hexapod_kin.gait.GaitRun``):
 
-* **Quasi-static** (``torque``): the weight distributed over the stance feet as
-  :func:`~hexapod_kin.dynamics.standing.contact_forces` does, then ``τ = g(q)[6:] − Σ
-  J_i[:3, 6:]ᵀ f_i`` on the floating-base model (world axes); accelerations left out.
-* **Full inverse dynamics** (``torque_full``, with ``run.robot``): ``b = M(q) a + h(q, v)`` by
-  Pinocchio's ``rnea`` with the plan's velocities and accelerations; the contact forces (at
-  ``centre − r n``) solve the base rows ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or in
-  the friction cones), then ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``; ``base_residual`` is the
-  largest ``‖b_base − Σ J_{i,base}ᵀ f_i‖``.
+* **Quasi-static** (``torque``): the weight over the stance feet as
+  :func:`~hexapod_kin.dynamics.standing.contact_forces` shares it, ``τ = g(q)[6:] − Σ
+  J_i[:3, 6:]ᵀ f_i`` on the floating-base model (world axes).
+* **Full inverse dynamics** (``torque_full``, with ``run.robot``): ``b = M(q) a + h(q, v)``
+  (``rnea`` on the plan's velocities and accelerations); the contact forces (at ``centre −
+  r n``) solve the base rows ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or in the
+  friction cones), ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``; ``base_residual`` the largest
+  ``‖b_base − Σ J_{i,base}ᵀ f_i‖``.
 """
 
 from __future__ import annotations
@@ -107,17 +107,15 @@ class GaitTorques:
 def gait_torques(
     run: Any, model: Any = None, *, method: ContactMethod = "min_norm", mu: float | None = None
 ) -> GaitTorques:
-    """Contact forces and joint torques at every sample of a gait run.
-
-    Both loads on a floating-base model in world axes: the run's own robot, or the
-    floating-base twin of a Hexapod's table model (see the module doc).
+    """Contact forces and joint torques at every sample of a gait run (see the module doc).
 
     Args:
         run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
             ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L)
             (with ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too).
         model: The fixed-base whole robot the run walks (default: the run's own robot,
-            ``run.robot.kinematic``, else ``load("hexapod")``).
+            ``run.robot.kinematic``, else ``load("hexapod")``; a Hexapod's table model walks
+            as its floating-base twin).
         method: ``"min_norm"`` or ``"friction"``.
         mu: Friction coefficient.
 

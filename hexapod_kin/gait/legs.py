@@ -57,8 +57,8 @@ class GaitError(ConfigurationError):
     """A gait or body pose that the robot cannot perform (a check failed).
 
     Attributes:
-        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
-            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
+        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``, ...: see
+            :func:`~.walk.walk`).
         leg: The leg's name (``None`` when the check is about the whole robot).
         time: Time of the first failing sample in [s] (``None`` for a single pose).
         amount: By how much the check fails, in [m] or [rad] (≥ 0).
