@@ -45,15 +45,9 @@ def default_stance(model: ModelLike) -> np.ndarray:
 # ============================================================================ results
 @dataclass(frozen=True)
 class ClosestApproach:
-    """The sample of a run nearest to a singularity (smallest σ_min).
+    """The sample of a run nearest to a singularity (smallest σ_min of the task Jacobian).
 
-    Attributes:
-        index: Sample index.
-        t: Time in [s].
-        sigma_min: Smallest singular value of the task Jacobian there.
-        condition: σ_max/σ_min there (inf at a singularity).
-        q: Joint values there in [rad]/[m].
-
+    ``t`` in [s]; ``condition`` σ_max/σ_min (inf at a singularity); ``q`` in [rad]/[m].
     """
 
     index: int
@@ -74,27 +68,13 @@ class ClosestApproach:
 class Trajectory:
     """A resolved-rate run, sampled at ``t`` (all arrays read-only, SI units, base axes).
 
-    Attributes:
-        t: (N,) times in [s].
-        q: (N, n) joint values in [rad]/[m].
-        qdot: (N, n) joint rates in [rad/s]/[m/s] (the control law at each sample).
-        foot: (N, 3) tip position in [m].
-        foot_velocity: (N, 3) actual tip velocity ``J q̇`` in [m/s].
-        rotation: (N, 3, 3) tip rotation.
-        angular_velocity: (N, 3) actual tip angular velocity in [rad/s] (base axes).
-        command: (N, 3) commanded linear velocity [m/s], or (N, 6) commanded twist
-            ([m/s], [rad/s]) in ``frame``.
-        reference: (N, 3) reference position in [m].
-        reference_rotation: (N, 3, 3) reference rotation (6-D runs), else None.
-        sigma_min: (N,) smallest singular value of the task Jacobian (3×n position, or 6×n).
-        sigma_max: (N,) largest singular value.
-        damping: (N,) DLS damping λ² used at each sample.
-        limited: (N,) True where a joint was frozen at a limit or q̇ scaled to the speed limits.
-        method: ``"euler"`` or ``"rk4"``.
-        dt: Step in [s].
-        gain: Closed-loop gain K in [1/s] (0: open loop).
-        frame: ``"base"`` or ``"tip"``: the axes of ``command``.
-
+    Per sample (N rows): ``t`` [s]; ``q``, ``qdot`` joint values and rates (the law at each
+    sample); ``foot`` [m], ``foot_velocity`` (``J q̇``) [m/s], ``rotation`` (3, 3) and
+    ``angular_velocity`` [rad/s] of the tip; ``command``: linear velocity (3,) or twist (6,)
+    ``[v; ω]`` in ``frame``; ``reference`` [m] and ``reference_rotation`` (None for a linear
+    velocity); ``sigma_min``, ``sigma_max`` of the task Jacobian (3×n or 6×n); ``damping`` λ²;
+    ``limited``: a joint frozen at a limit or q̇ scaled to the speed limits. ``gain``: K in
+    [1/s] (0: open loop); ``frame``: ``"base"`` or ``"tip"``, the axes of ``command``.
     """
 
     t: np.ndarray
@@ -241,15 +221,8 @@ def _integrate_position(p0: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarra
 def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -> np.ndarray:
     """Exact poses reached by following a constant twist from ``pose0`` for times ``t``.
 
-    Args:
-        pose0: Start pose (4, 4).
-        twist: ``[v; ω]`` (6,) in [m/s], [rad/s].
-        t: Times (M,) in [s].
-        frame: ``"base"`` or ``"tip"``.
-
-    Returns:
-        (M, 4, 4) poses.
-
+    ``pose0`` (4, 4), ``twist`` ``[v; ω]`` (6,) in [m/s], [rad/s], times ``t`` (M,) in [s]
+    → (M, 4, 4) poses.
     """
     t0, xi = np.asarray(pose0, dtype=float), np.asarray(twist, dtype=float)
     times = np.atleast_1d(np.asarray(t, dtype=float))
@@ -383,15 +356,12 @@ def resolved_rate(
     out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
                     lam2max, lo, hi, within_limits, vmax)  # fmt: skip
     c, pose, tw, sg = np.ascontiguousarray, out["pose"], out["twist"], out["sigma"]
-    t, q, qdot = np.arange(steps + 1) * dt, out["q"], out["qdot"]
-    damping, limited, frame = out["damping"], out["limited"], frame if rows6 else "base"
-    foot, foot_v, rot, ang_v = c(pose[:, :3, 3]), c(tw[:, :3]), c(pose[:, :3, :3]), c(tw[:, 3:])
-    command, reference, smin, smax = c(vel[::2]), c(ref_p[::2]), c(sg[:, 0]), c(sg[:, 1])
     ref_rot = None if ref_r is None else c(ref_r[::2])
-    read_only(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, smin, smax, damping,
-              limited, *(() if ref_rot is None else (ref_rot,)))  # fmt: skip
-    return Trajectory(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, ref_rot, smin,
-                      smax, damping, limited, method, dt, gain, frame)  # fmt: skip
+    fields = (np.arange(steps + 1) * dt, out["q"], out["qdot"], c(pose[:, :3, 3]), c(tw[:, :3]),
+              c(pose[:, :3, :3]), c(tw[:, 3:]), c(vel[::2]), c(ref_p[::2]), ref_rot, c(sg[:, 0]),
+              c(sg[:, 1]), out["damping"], out["limited"])  # fmt: skip
+    read_only(*(a for a in fields if a is not None))
+    return Trajectory(*fields, method, dt, gain, frame if rows6 else "base")
 
 
 def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:
