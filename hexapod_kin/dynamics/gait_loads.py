@@ -35,28 +35,15 @@ __all__ = ["GaitTorques", "full_dynamics", "gait_torques"]
 class GaitTorques:
     """Quasi-static loads along a gait run (SI units, world axes for forces; read-only).
 
-    Attributes:
-        t: (N,) times in [s].
-        joint_names: The joints (columns of ``torque``).
-        leg_names: The legs (second axis of ``forces``).
-        support: (N, L) True for the stance feet.
-        forces: (N, L, 3) ground-on-foot forces in [N] (zero for swing feet).
-        torque: (N, nq) joint torques ``g(q) − Σ J_iᵀ f_i`` in [N·m].
-        peak: (nq,) ``max_t |torque|`` per joint in [N·m].
-        peak_time: (nq,) time of each peak in [s].
-        force_residual: Largest ``‖Σ f − m g ẑ‖`` over the run in [N].
-        moment_residual: Largest ``‖Σ (p − c) × f‖`` over the run in [N·m].
-        min_normal_force: (N,) smallest stance ``f_z`` at each sample in [N].
-        mass: Robot mass in [kg].
-        method: Contact-force distribution.
-        mu: Friction coefficient (None for min-norm).
-        torque_full: (N, nq) full inverse-dynamics torques [N·m] (empty without ``run.robot``).
-        forces_full: (N, L, 3) their contact forces [N] (world axes).
-        peak_full: (nq,) ``max_t |torque_full|`` [N·m].
-        peak_full_time: (nq,) time of each [s].
-        peak_difference: (nq,) ``max_t |torque_full − torque|`` [N·m].
-        base_residual: Largest residual of the base rows [N, N·m] (see the module doc).
-
+    ``t`` (N,) [s]; ``support`` (N, L) True for the stance feet (L: ``leg_names``);
+    ``forces`` (N, L, 3) ground on foot [N] (zero for swing feet); ``torque`` (N, nq)
+    ``g(q) − Σ J_iᵀ f_i`` [N·m] (nq: ``joint_names``), ``peak`` its ``max_t`` per joint at
+    ``peak_time`` [s]; ``force_residual`` [N], ``moment_residual`` [N·m]: the largest over the
+    run (as :class:`~hexapod_kin.dynamics.standing.ContactSolution`); ``min_normal_force``
+    (N,) smallest stance ``f_z`` [N]; ``mass`` [kg]; ``mu`` None for min-norm. Full inverse
+    dynamics (empty without ``run.robot``): ``torque_full`` [N·m] and ``forces_full`` [N],
+    ``peak_full`` at ``peak_full_time``, ``peak_difference`` ``max_t |torque_full − torque|``,
+    ``base_residual`` [N, N·m] (see the module doc).
     """
 
     t: np.ndarray
@@ -109,15 +96,11 @@ def gait_torques(
 ) -> GaitTorques:
     """Contact forces and joint torques at every sample of a gait run (see the module doc).
 
-    Args:
-        run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
-            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L)
-            (with ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too).
-        model: The fixed-base whole robot the run walks (default: the run's own robot,
-            ``run.robot.kinematic``, else ``load("hexapod")``; a Hexapod's table model walks
-            as its floating-base twin).
-        method: ``"min_norm"`` or ``"friction"``.
-        mu: Friction coefficient.
+    ``run``: a walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
+    ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L) (with
+    ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too). ``model``: the
+    fixed-base whole robot the run walks (default: ``run.robot.kinematic``, else
+    ``load("hexapod")``; a Hexapod's table model walks as its floating-base twin).
 
     Raises:
         ParameterError: The run's joints are not the model's; bad method or mu.
