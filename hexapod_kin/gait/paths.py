@@ -48,17 +48,9 @@ def foot_path(
     ``direction`` of travel); in swing it returns through a half ellipse (semi-axes L/2 and
     ``height``) or a cycloid (zero velocity at lift-off and touchdown).
 
-    Args:
-        phase: Phase(s) in cycles (any real; taken modulo 1).
-        center: Middle of the stance line (3,) in [m] (its z is the ground).
-        length: Step length L in [m] (>= 0).
-        height: Swing height in [m] (>= 0).
-        duty_factor: Fraction of the cycle in stance, in (0, 1).
-        direction: Horizontal direction of travel (2,), normalised here.
-        shape: ``"ellipse"`` or ``"cycloid"``.
-
-    Returns:
-        (..., 3) positions in [m], the shape of ``phase`` plus 3.
+    ``phase`` in cycles (any real, taken modulo 1); ``center`` (3,) [m] (its z is the
+    ground); ``length`` L and ``height`` [m] (>= 0); ``duty_factor`` in (0, 1); ``direction``
+    (2,) normalised here. Returns (..., 3) positions in [m], the shape of ``phase`` plus 3.
 
     Raises:
         ParameterError: Bad lengths, duty factor, direction or shape.
@@ -101,18 +93,10 @@ def foot_path(
 class FootStep:
     """One or more step cycles of a leg (arrays read-only, SI units).
 
-    Attributes:
-        t: (M,) times in [s].
-        phase: (M,) phase in cycles (0 = touchdown).
-        stance: (M,) True during stance.
-        foot: (M, 3) planned foot positions in [m].
-        q: (M, n) joint trajectory by IK.
-        qdot: (M, n) joint rates by finite differences [rad/s].
-        reached: (M,) True where IK reached the planned position.
-        foot_actual: (M, 3) FK(q) (Pinocchio) in [m].
-        within_limits: True if every sample is inside the joint position limits.
-        max_joint_step: Largest |Δq| between consecutive samples [rad]/[m] (continuity).
-
+    Per sample: ``t`` [s], ``phase`` in cycles (0 = touchdown), ``stance``, planned ``foot``
+    [m], ``q`` by IK, ``qdot`` by finite differences, ``reached`` (IK reached the plan),
+    ``foot_actual`` FK(q) [m]. ``within_limits``: every sample inside the joint position
+    limits; ``max_joint_step``: largest |Δq| between samples [rad]/[m] (continuity).
     """
 
     t: np.ndarray
@@ -153,23 +137,10 @@ def foot_step(
 ) -> FootStep:
     """Plan a foot step (stance + swing) and its joint trajectory by IK.
 
-    Args:
-        model: A loaded leg model.
-        center: Middle of the stance line (3,) in [m]; default the foot at
-            :func:`default_stance`.
-        length: Step length [m].
-        height: Swing height [m].
-        dt: Sample time [s].
-        duration: Cycle time [s].
-        duty_factor: Stance fraction in (0, 1).
-        direction: Horizontal travel direction (2,).
-        shape: Swing shape ``"ellipse"`` or ``"cycloid"``.
-        cycles: Number of cycles (>= 1).
-        phase_offset: Phase at t = 0 in cycles (gait tables set one per leg).
-        q0: Joints near the first sample (IK branch / warm start).
-
-    Returns:
-        A :class:`FootStep`.
+    The step as in :func:`foot_path` (``center`` default: the foot at
+    :func:`default_stance`); ``dt`` and ``duration`` (of one cycle) in [s]; ``cycles`` >= 1;
+    ``phase_offset`` in cycles at t = 0 (gait tables set one per leg); ``q0``: joints near the
+    first sample (IK branch, warm start).
 
     Raises:
         ParameterError: Bad step parameters.

@@ -280,40 +280,34 @@ def terrain_clearance(
             ``promised`` (both name the leg, the time, by how much).
 
     """
+
+    def fail(msg: str, check: str, i: Any, leg: Any, d: float, allowed: str) -> GaitError:
+        return GaitError(f"leg {names[leg]}: {msg}", check=check, leg=names[leg],
+                         time=float(t[i]), amount=d, parameter="step_height", value=H,
+                         allowed=allowed)  # fmt: skip
+
     gap = sphere_gap(ground, feet, rad)
     if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
         d = float(-gap[i, leg])
         kind = "swing" if swing[i, leg] else "stance"
         where = "off the terrain" if math.isinf(d) else f"{d:.4g} m into the ground"
-        raise GaitError(
-            f"leg {names[leg]}: {kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s "
-            f"(check 'terrain clearance'; step_height={H:g} m, or the footholds near an edge)",
-            check="terrain clearance",
-            leg=names[leg],
-            time=float(t[i]),
-            amount=d,
-            parameter="step_height",
-            value=H,
-            allowed="foot spheres clear of the terrain",
-        )
+        raise fail(
+            f"{kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s (check 'terrain "
+            f"clearance'; step_height={H:g} m, or the footholds near an edge)",
+            "terrain clearance", i, leg, d, "foot spheres clear of the terrain",
+        )  # fmt: skip
     gap_e = np.full(gap.shape, np.inf) if edge_gap is None else np.asarray(edge_gap)
     short = swing & (gap_e < promised)
     if strict and short.any():
         i, leg = np.unravel_index(int(np.argmin(np.where(short, gap_e, np.inf))), gap.shape)
         d = float(promised - gap_e[i, leg])
-        raise GaitError(
-            f"leg {names[leg]}: the swing passes a terrain edge {1e3 * gap_e[i, leg]:.3g} mm away "
-            f"at t={t[i]:.4g} s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised "
-            f"(check 'swing clearance'; raise step_height={H:g} m or move the footholds)",
-            check="swing clearance",
-            leg=names[leg],
-            time=float(t[i]),
-            amount=d,
-            parameter="step_height",
-            value=H,
-            allowed=f"swings clear of edges by {promised:g} m",
-        )
+        raise fail(
+            f"the swing passes a terrain edge {1e3 * gap_e[i, leg]:.3g} mm away at t={t[i]:.4g} "
+            f"s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised (check 'swing "
+            f"clearance'; raise step_height={H:g} m or move the footholds)",
+            "swing clearance", i, leg, d, f"swings clear of edges by {promised:g} m",
+        )  # fmt: skip
     return gap
 
 

@@ -108,17 +108,13 @@ class Travel:
 class SimRun(Travel):
     """A plan replayed in MuJoCo, and how far the physics departs from it (SI units).
 
+    ``t``: the plan's sample times [s]; ``base_poses``, ``q``: the simulated body poses and
+    joint angles [rad]; ``planned``: the plan's body poses raised by ``lift`` [m] (the foot
+    spheres on the ground); ``foot_forces`` (N, L): normal force on each foot [N];
+    ``distance``, ``turn``: horizontal displacement of the body [m] and yaw change [rad]
+    (``distance_planned``, ``turn_planned``: the plan's).
+
     Attributes:
-        t: (N,) the plan's sample times [s].
-        base_poses: (N, 4, 4) simulated body poses.
-        planned: (N, 4, 4) planned body poses, raised by ``lift``.
-        q: (N, nq) simulated joint angles [rad].
-        foot_forces: (N, L) normal force on each foot at each sample [N].
-        lift: Vertical shift of the plan that puts the foot spheres on the ground [m].
-        distance_planned: Planned horizontal displacement of the body [m].
-        distance: Simulated horizontal displacement of the body [m] (its length).
-        turn_planned: Planned yaw change [rad].
-        turn: Simulated yaw change [rad].
         heading_error: Max over time of the yaw error (both from their start) [rad].
         direction_error: Angle between the simulated and planned displacements [rad]
             (0 when the plan does not move).

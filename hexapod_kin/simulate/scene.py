@@ -147,25 +147,9 @@ def _leg_ends(wb: Any) -> list[int]:
 class SimScene:
     """The MJCF of a robot on a terrain, ready to simulate.
 
-    Attributes:
-        xml: The MJCF text (robot, terrain, foot spheres, actuators, options).
-        terrain: ``flat``, ``slope`` or ``step``.
-        foot_radius: Foot sphere radius [m].
-        foot_geoms: Per leg, the name of its foot sphere geom.
-        actuators: Per leg joint (``joint_names`` order), its actuator's name.
-        joint_names: The leg joints.
-        leg_names: The legs.
-        kp: Position gain [N·m/rad].
-        kv: Velocity gain [N·m·s/rad].
-        friction: Sliding friction coefficient.
-        timestep: Physics step [s].
-        armature: Servo rotor inertia per leg joint [kg·m²].
-        contact_time: Contact ``solref`` time constant [s].
-        bumps: Amplitude of the ground's random bumps [m] (0: none).
-        seed: The bumps' random seed.
-        flat_start: Half-width [m] of the flat square (height 0) the bumps leave around the
-            origin.
-
+    ``xml``: the MJCF text (robot, terrain, foot spheres, actuators, options);
+    ``foot_geoms`` per leg (``leg_names``), ``actuators`` per leg joint (``joint_names``
+    order): their names. The settings as :func:`scene_mjcf` takes them, in SI units.
     """
 
     xml: str

@@ -21,14 +21,9 @@ STAND_SETTLE = 2.0
 class StandForces:
     """Per-foot contact forces of the robot standing in MuJoCo vs :func:`dynamics.stand`.
 
-    Attributes:
-        legs: The stance legs.
-        forces: (L, 3) MuJoCo's contact force on each foot, world frame [N] (mean over the
-            last 0.2 s).
-        expected: (L, 3) ``stand()``'s contact force on each foot [N].
-        weight: ``m g`` [N].
-        height: Body height of the stance [m] (foot points at the ground).
-
+    ``forces`` (L, 3): MuJoCo's on each stance foot (``legs``), world frame [N], mean over the
+    last 0.2 s; ``expected``: ``stand()``'s [N]; ``weight`` ``m g`` [N]; ``height`` of the
+    stance's body [m] (foot points at the ground).
     """
 
     legs: tuple[str, ...]
@@ -69,12 +64,9 @@ def stand_forces(
     spreads as the stance shares it (stiff servos keep the internal forces friction locks in
     at touch-down), then ramp to them over a quarter; no armature unless asked.
 
-    Args:
-        robot: As :func:`scene_mjcf`.
-        scene: A flat :class:`SimScene` of the robot (default built from ``scene_options``).
-        settle: Simulated time [s] (> 0.2; at most ``dynamics.MAX_STEPS`` timesteps).
-        **scene_options: Passed to :func:`scene_mjcf` (``foot_radius``, ``kp``...;
-            ``armature`` defaults to 0 here).
+    ``robot`` and ``**scene_options`` as :func:`scene_mjcf` (``armature`` defaults to 0 here),
+    or a flat :class:`SimScene` ``scene``; ``settle`` > 0.2 [s] (at most
+    ``dynamics.MAX_STEPS`` timesteps).
 
     Raises:
         ParameterError: Bad values, a scene that is not flat, too many physics steps.
