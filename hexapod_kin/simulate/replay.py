@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, UrdfError, one_of
 from .collision import scene_robot
 from .scene import (
@@ -194,34 +195,17 @@ class SimRun(Travel):
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: the figures, the checks, the scene and the plan's summary."""
-        return {
-            "distance_planned": self.distance_planned,
-            "distance": self.distance,
-            "distance_error": self.distance_error,
-            "distance_along": self.distance_along,
-            "direction": self.direction,
-            "turn_planned": self.turn_planned,
-            "turn": self.turn,
-            "turn_error": self.turn_error,
-            "heading_error_deg": math.degrees(self.heading_error),
-            "direction_error_deg": math.degrees(self.direction_error),
-            "max_roll_deg": math.degrees(self.max_roll),
-            "max_pitch_deg": math.degrees(self.max_pitch),
-            "height_error": self.height_error,
-            "max_slip": self.max_slip,
-            "max_slip_speed": self.max_slip_speed,
-            "swing_strikes": [list(c) for c in self.swing_strikes],
-            "lift": self.lift,
-            "non_foot_contacts": [list(c) for c in self.non_foot_contacts],
-            "stand": None if self.stand is None else self.stand.to_dict(),
-            "checks": self.checks(),
-            "stumbled": self.stumbled,
-            "ok": self.ok,
-            "wall_time": self.wall_time,
-            "feedforward": self.feedforward,
-            "scene": self.scene.to_dict(),
-            "plan": self.plan,
-        }
+        out = fields_dict(self, *"distance_planned distance distance_error distance_along".split())
+        out |= fields_dict(self, "direction", "turn_planned", "turn", "turn_error")
+        for name in ("heading_error", "direction_error", "max_roll", "max_pitch"):
+            out[f"{name}_deg"] = math.degrees(getattr(self, name))
+        out |= fields_dict(self, "height_error", "max_slip", "max_slip_speed")
+        out["swing_strikes"] = [list(c) for c in self.swing_strikes]
+        out |= {"lift": self.lift, "non_foot_contacts": [list(c) for c in self.non_foot_contacts]}
+        out["stand"] = None if self.stand is None else self.stand.to_dict()
+        out |= {"checks": self.checks()} | fields_dict(self, "stumbled", "ok", "wall_time")
+        out |= {"feedforward": self.feedforward, "scene": self.scene.to_dict()}
+        return out | {"plan": self.plan}
 
 
 def _linear(v: np.ndarray, sub: int) -> np.ndarray:
