@@ -186,36 +186,10 @@ def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.
     return np.ascontiguousarray(out)
 
 
-def _width(velocity: Any) -> int:
-    """3 (linear velocity) or 6 (twist), from a constant or from ``velocity(0.0)``."""
-    probe = velocity(0.0) if callable(velocity) else velocity
-    try:
-        size = np.asarray(probe, dtype=float).size
-    except (TypeError, ValueError):
-        size = -1
-    if size not in (3, 6):
-        msg = (
-            f"velocity has {size} values; a linear velocity (3,) [m/s] or a twist (6,) "
-            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed"
-        )
-        raise ConfigurationError(msg, parameter="velocity", value=size, allowed="3 or 6 values")
-    return size
-
-
 def _simpson(vel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Increments over full and half steps by Simpson's rule on (v_k, v_k+½, v_k+1)."""
     v0, vh, v1 = vel[0:-1:2], vel[1::2], vel[2::2]
     return dt / 6.0 * (v0 + 4.0 * vh + v1), dt / 24.0 * (5.0 * v0 + 8.0 * vh - v1)
-
-
-def _integrate_position(p0: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarray:
-    """p_ref at half steps by Simpson's rule (exact for quadratics)."""
-    full, half = _simpson(vel, dt)
-    ref = np.empty_like(vel)
-    ref[0] = p0
-    ref[2::2] = p0 + np.cumsum(full, axis=0)
-    ref[1::2] = ref[0:-1:2] + half
-    return ref
 
 
 def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -> np.ndarray:
@@ -312,7 +286,17 @@ def resolved_rate(
             allowed="1..5e7 steps of dt",
         )
     start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0").copy()
-    width = _width(velocity)
+    probe = velocity(0.0) if callable(velocity) else velocity  # 3 (linear velocity) or 6 (twist)
+    try:
+        width = np.asarray(probe, dtype=float).size
+    except (TypeError, ValueError):
+        width = -1
+    if width not in (3, 6):
+        msg = (
+            f"velocity has {width} values; a linear velocity (3,) [m/s] or a twist (6,) "
+            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed"
+        )
+        raise ConfigurationError(msg, parameter="velocity", value=width, allowed="3 or 6 values")
     rows6 = width == 6
     times_half = np.arange(2 * steps + 1) * (0.5 * dt)
     what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
@@ -329,8 +313,11 @@ def resolved_rate(
             ref = _integrate_pose(pose0, vel, dt, frame)
         ref_p = np.ascontiguousarray(ref[:, :3, 3])
         ref_r = np.ascontiguousarray(ref[:, :3, :3])
-    elif path is None:
-        ref_p = _integrate_position(pose0[:3, 3], vel, dt)
+    elif path is None:  # p_ref at half steps by Simpson's rule (exact for quadratics)
+        (full, half), p0 = _simpson(vel, dt), pose0[:3, 3]
+        ref_p = np.empty_like(vel)
+        ref_p[0], ref_p[2::2] = p0, p0 + np.cumsum(full, axis=0)
+        ref_p[1::2] = ref_p[0:-1:2] + half
     else:
         ref_p = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
     check_within(mdl, ref_p, "path", ParameterError)

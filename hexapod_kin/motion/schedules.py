@@ -119,17 +119,18 @@ class PosePath:
         """Time of the last knot in [s]."""
         return float(self.times[-1])
 
-    def _segment(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+    def _segment(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(t, t as 1-D, segment index k, fraction s in it)``."""
+        tt = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(tt)
+        k = np.clip(np.searchsorted(self.times, flat, side="right") - 1, 0, self.times.size - 2)
         dt = self.times[k + 1] - self.times[k]
-        s = np.clip((t - self.times[k]) / dt, 0.0, 1.0)
-        return k, s
+        s = np.clip((flat - self.times[k]) / dt, 0.0, 1.0)
+        return tt, flat, k, s
 
     def sample(self, t: Any) -> np.ndarray:
         """Poses at times ``t``: (M, 4, 4) for (M,) times, (4, 4) for a scalar."""
-        tt = np.asarray(t, dtype=float)
-        flat = np.atleast_1d(tt)
-        k, s = self._segment(flat)
+        tt, _, k, s = self._segment(t)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
         se3, exp6, motion = pin.SE3, pin.exp6, pin.Motion
         out = np.array([(se3(self.poses[ki]) * exp6(motion(si * xi[ki]))).homogeneous
@@ -141,9 +142,7 @@ class PosePath:
 
         Segment i's twist on ``[t_i, t_{i+1}]`` (the last segment's at the end), 0 after.
         """
-        tt = np.asarray(t, dtype=float)
-        flat = np.atleast_1d(tt)
-        k, _ = self._segment(flat)
+        tt, flat, k, _ = self._segment(t)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
         out = xi[k] / (self.times[k + 1] - self.times[k])[:, None]
         out[flat > self.times[-1]] = 0.0
