@@ -41,13 +41,9 @@ MAX_STEPS = 5_000_000
 class PassiveJoints:
     """The passive joint forces: damping, smoothed Coulomb friction, springs (per joint).
 
-    Attributes:
-        damping: (nq,) viscous damping ``b`` in [N·m·s/rad] (prismatic: [N·s/m]).
-        friction: (nq,) Coulomb friction ``F`` in [N·m] (prismatic: [N]).
-        friction_velocity: Smoothing speed ``v_F`` of ``F tanh(q̇/v_F)`` in [rad/s].
-        stiffness: (nq,) spring stiffness ``K`` in [N·m/rad] (prismatic: [N/m]).
-        q_rest: (nq,) spring rest position in [rad]/[m].
-
+    Per joint (prismatic: [N·s/m], [N], [N/m]): ``damping`` ``b`` [N·m·s/rad], ``friction``
+    ``F`` [N·m], ``stiffness`` ``K`` [N·m/rad], ``q_rest`` [rad]/[m]; ``friction_velocity``
+    ``v_F`` [rad/s], the smoothing of ``F tanh(q̇/v_F)``.
     """
 
     damping: np.ndarray
@@ -84,13 +80,8 @@ def passive_joints(
 ) -> PassiveJoints:
     """The passive joint forces of ``model``: the URDF's damping and friction unless overridden.
 
-    Args:
-        model: A loaded model.
-        damping: Viscous damping per joint (scalar or (nq,)) in [N·m·s/rad]; default the URDF's.
-        friction: Coulomb friction per joint in [N·m]; default the URDF's.
-        friction_velocity: ``v_F`` in [rad/s] (> 0), the tanh smoothing of the friction.
-        stiffness: Joint spring stiffness (scalar or (nq,)) in [N·m/rad]; default none.
-        q_rest: Spring rest position (nq,); default zeros.
+    Each value a scalar or (nq,), in the units of :class:`PassiveJoints`;
+    ``friction_velocity`` > 0; ``q_rest`` defaults to zeros.
 
     Raises:
         ParameterError: A negative, non-finite or wrongly shaped value (named).
@@ -108,21 +99,11 @@ def passive_joints(
 
 @dataclass(frozen=True)
 class Simulation:
-    """A forward-dynamics run, sampled every ``dt`` (arrays read-only, SI units).
+    """A forward-dynamics run, sampled every ``dt`` [s] (arrays read-only, SI units).
 
-    Attributes:
-        t: (N,) times in [s].
-        q: (N, nq) joint positions in [rad]/[m].
-        v: (N, nq) joint velocities q̇ in [rad/s]/[m/s].
-        a: (N, nq) joint accelerations q̈ (ABA at each sample) in [rad/s²]/[m/s²].
-        kinetic: (N,) kinetic energy in [J].
-        potential: (N,) potential energy in [J] (gravity plus springs).
-        total: (N,) kinetic + potential in [J].
-        method: ``"rk4"`` or ``"symplectic_euler"``.
-        dt: Step in [s].
-        passive: The damping, friction and springs used.
-        joint_names: Names of the joints (columns of q).
-
+    Per sample: ``t`` [s]; ``q``, ``v`` (q̇), ``a`` (q̈ by ABA) (N, nq) in [rad]/[m] and their
+    rates; ``kinetic``, ``potential`` (gravity plus springs), ``total`` energies (N,) in [J].
+    ``passive``: the damping, friction and springs used; ``joint_names``: the columns of q.
     """
 
     t: np.ndarray
@@ -181,20 +162,10 @@ def simulate(
 ) -> Simulation:
     """Integrate the forward dynamics of ``model`` from ``(q0, v0)``.
 
-    Args:
-        model: A loaded model (``hexapod_kin.load(...)``) or a source to load.
-        q0: Initial joint positions (nq,) in [rad]/[m].
-        v0: Initial joint velocities (nq,) in [rad/s]/[m/s]; default zeros.
-        dt: Fixed step in [s].
-        duration: Length of the run in [s] (rounded to a whole number of steps).
-        method: ``"rk4"`` (default) or ``"symplectic_euler"`` (see the module doc).
-        damping: Viscous damping override (default: the URDF's), see :func:`passive_joints`.
-        friction: Coulomb friction override (default: the URDF's).
-        friction_velocity: Friction smoothing speed in [rad/s].
-        stiffness: Joint springs in [N·m/rad] (default none).
-        q_rest: Spring rest positions (default zeros).
-        tau: Applied joint torques: None (zero), a constant (nq,) or a function
-            ``tau(t, q, v) -> (nq,)`` in [N·m]/[N].
+    ``q0``, ``v0`` (nq,) in [rad]/[m] and [rad/s]/[m/s] (``v0`` default zeros); ``dt`` and
+    ``duration`` in [s] (rounded to whole steps); ``method`` as in the module doc; the passive
+    overrides as in :func:`passive_joints`; ``tau``: None (zero), a constant (nq,) or a
+    function ``tau(t, q, v) -> (nq,)`` in [N·m]/[N].
 
     Raises:
         ParameterError: Bad ``dt``, ``duration``, ``method``, passive parameters or inertials.
@@ -268,21 +239,19 @@ def _run(
             v = v + h * a
             q = q + h * v
         a = acc(tk + h, q, v)
-        if k % 64 == 63 or k == n - 1:  # a diverged state stays non-finite: check now and then
-            _finite_or_raise(q, v, a, tk + h, h)
+        # a diverged state stays non-finite: check now and then
+        if (k % 64 == 63 or k == n - 1) and not math.isfinite(
+            float(np.sum(q) + np.sum(v) + np.sum(a))
+        ):
+            msg = (
+                f"the simulation diverged by t = {tk + h:.6g} s (non-finite state); reduce "
+                f"dt={h!r} or check the model and torques"
+            )
+            raise ConfigurationError(msg, parameter="dt", value=h, allowed="a smaller step")
         qs.append(q)
         vs.append(v)
         accs.append(a)
     return np.array(qs), np.array(vs), np.array(accs)
-
-
-def _finite_or_raise(q: Any, v: Any, a: Any, t: float, h: float) -> None:
-    if not math.isfinite(float(np.sum(q) + np.sum(v) + np.sum(a))):
-        msg = (
-            f"the simulation diverged by t = {t:.6g} s (non-finite state); reduce dt={h!r} or "
-            "check the model and torques"
-        )
-        raise ConfigurationError(msg, parameter="dt", value=h, allowed="a smaller step")
 
 
 def _applied(tau: Any, nq: int) -> Callable[[float, np.ndarray, np.ndarray], np.ndarray]:

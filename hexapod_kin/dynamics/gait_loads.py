@@ -1,16 +1,16 @@
 """Contact forces and joint torques along a gait run: quasi-static and full inverse dynamics.
 
-Takes a walk's samples (``t``, ``base_poses``, ``q``, ``joint_names``, ``support``), as in
-``hexapod_kin.gait.GaitRun``.
+From a walk's ``t``, ``base_poses``, ``q``, ``joint_names`` and ``support`` (a
+``hexapod_kin.gait.GaitRun``):
 
-* **Quasi-static** (``torque``): the weight distributed over the stance feet as
-  :func:`~hexapod_kin.dynamics.standing.contact_forces` does, then ``τ = g(q)[6:] − Σ
-  J_i[:3, 6:]ᵀ f_i`` on the floating-base model (world axes); accelerations left out.
-* **Full inverse dynamics** (``torque_full``, with ``run.robot``): ``b = M(q) a + h(q, v)`` by
-  Pinocchio's ``rnea`` with the plan's velocities and accelerations; the contact forces (at
-  ``centre − r n``) solve the base rows ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or in
-  the friction cones), then ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``; ``base_residual`` is the
-  largest ``‖b_base − Σ J_{i,base}ᵀ f_i‖``.
+* **Quasi-static** (``torque``): the weight over the stance feet as
+  :func:`~hexapod_kin.dynamics.standing.contact_forces` shares it, ``τ = g(q)[6:] − Σ
+  J_i[:3, 6:]ᵀ f_i`` on the floating-base model (world axes).
+* **Full inverse dynamics** (``torque_full``, with ``run.robot``): ``b = M(q) a + h(q, v)``
+  (``rnea`` on the plan's velocities and accelerations); the contact forces (at ``centre −
+  r n``) solve the base rows ``Σ_i J_{i,base}ᵀ f_i = b_base`` (minimum norm, or in the
+  friction cones), ``τ = b_joints − Σ J_{i,joints}ᵀ f_i``; ``base_residual`` the largest
+  ``‖b_base − Σ J_{i,base}ᵀ f_i‖``.
 """
 
 from __future__ import annotations
@@ -35,28 +35,15 @@ __all__ = ["GaitTorques", "full_dynamics", "gait_torques"]
 class GaitTorques:
     """Quasi-static loads along a gait run (SI units, world axes for forces; read-only).
 
-    Attributes:
-        t: (N,) times in [s].
-        joint_names: The joints (columns of ``torque``).
-        leg_names: The legs (second axis of ``forces``).
-        support: (N, L) True for the stance feet.
-        forces: (N, L, 3) ground-on-foot forces in [N] (zero for swing feet).
-        torque: (N, nq) joint torques ``g(q) − Σ J_iᵀ f_i`` in [N·m].
-        peak: (nq,) ``max_t |torque|`` per joint in [N·m].
-        peak_time: (nq,) time of each peak in [s].
-        force_residual: Largest ``‖Σ f − m g ẑ‖`` over the run in [N].
-        moment_residual: Largest ``‖Σ (p − c) × f‖`` over the run in [N·m].
-        min_normal_force: (N,) smallest stance ``f_z`` at each sample in [N].
-        mass: Robot mass in [kg].
-        method: Contact-force distribution.
-        mu: Friction coefficient (None for min-norm).
-        torque_full: (N, nq) full inverse-dynamics torques [N·m] (empty without ``run.robot``).
-        forces_full: (N, L, 3) their contact forces [N] (world axes).
-        peak_full: (nq,) ``max_t |torque_full|`` [N·m].
-        peak_full_time: (nq,) time of each [s].
-        peak_difference: (nq,) ``max_t |torque_full − torque|`` [N·m].
-        base_residual: Largest residual of the base rows [N, N·m] (see the module doc).
-
+    ``t`` (N,) [s]; ``support`` (N, L) True for the stance feet (L: ``leg_names``);
+    ``forces`` (N, L, 3) ground on foot [N] (zero for swing feet); ``torque`` (N, nq)
+    ``g(q) − Σ J_iᵀ f_i`` [N·m] (nq: ``joint_names``), ``peak`` its ``max_t`` per joint at
+    ``peak_time`` [s]; ``force_residual`` [N], ``moment_residual`` [N·m]: the largest over the
+    run (as :class:`~hexapod_kin.dynamics.standing.ContactSolution`); ``min_normal_force``
+    (N,) smallest stance ``f_z`` [N]; ``mass`` [kg]; ``mu`` None for min-norm. Full inverse
+    dynamics (empty without ``run.robot``): ``torque_full`` [N·m] and ``forces_full`` [N],
+    ``peak_full`` at ``peak_full_time``, ``peak_difference`` ``max_t |torque_full − torque|``,
+    ``base_residual`` [N, N·m] (see the module doc).
     """
 
     t: np.ndarray
@@ -107,19 +94,13 @@ class GaitTorques:
 def gait_torques(
     run: Any, model: Any = None, *, method: ContactMethod = "min_norm", mu: float | None = None
 ) -> GaitTorques:
-    """Contact forces and joint torques at every sample of a gait run.
+    """Contact forces and joint torques at every sample of a gait run (see the module doc).
 
-    Both loads on a floating-base model in world axes: the run's own robot, or the
-    floating-base twin of a Hexapod's table model (see the module doc).
-
-    Args:
-        run: A walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
-            ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L)
-            (with ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too).
-        model: The fixed-base whole robot the run walks (default: the run's own robot,
-            ``run.robot.kinematic``, else ``load("hexapod")``).
-        method: ``"min_norm"`` or ``"friction"``.
-        mu: Friction coefficient.
+    ``run``: a walk (``hexapod_kin.gait.walk(...)``) or anything with ``t`` (N,),
+    ``base_poses`` (N, 4, 4), ``q`` (N, nq), ``joint_names`` and ``support`` (N, L) (with
+    ``robot``, ``pinocchio_q/v/a()`` and ``feet``: full dynamics too). ``model``: the
+    fixed-base whole robot the run walks (default: ``run.robot.kinematic``, else
+    ``load("hexapod")``; a Hexapod's table model walks as its floating-base twin).
 
     Raises:
         ParameterError: The run's joints are not the model's; bad method or mu.

@@ -36,14 +36,9 @@ __all__ = ["PendulumExperiment", "PendulumRun", "PhysicalPendulum", "decay_rate"
 class PhysicalPendulum:
     """A 1-joint model seen as a physical pendulum (SI units).
 
-    Attributes:
-        inertia: ``I`` about the joint axis in [kg·m²] (``pin.crba``, constant).
-        mass: Moving mass ``m`` in [kg] (``pin.computeTotalMass``).
-        com_distance: ``l_c``, axis to centre of mass, in [m].
-        gravity: ``g`` in [m/s²] (norm of the model's gravity).
-        q_hanging: Joint value of the hanging (stable) equilibrium in [rad].
-        potential_min: Pinocchio's potential energy at ``q_hanging`` in [J].
-
+    ``inertia`` ``I`` about the axis [kg·m²] (``pin.crba``), ``mass`` [kg], ``com_distance``
+    ``l_c`` axis to centre of mass [m], ``gravity`` ``g`` [m/s²], ``q_hanging`` the stable
+    equilibrium [rad], ``potential_min`` Pinocchio's potential energy there [J].
     """
 
     inertia: float
@@ -111,17 +106,9 @@ def exact_period(pendulum: PhysicalPendulum, theta0: float) -> float:
 def hermite_crossings(
     t: np.ndarray, y: np.ndarray, dy: np.ndarray, direction: int = 0
 ) -> np.ndarray:
-    """Times where ``y`` crosses zero, located by the cubic Hermite interpolant (``dy`` = y').
+    """Increasing times where ``y`` crosses zero, by the cubic Hermite interpolant (``dy`` = y').
 
-    Args:
-        t: (N,) sample times in [s].
-        y: (N,) samples.
-        dy: (N,) derivatives of ``y`` at the samples.
-        direction: +1 upward crossings only, −1 downward only, 0 both.
-
-    Returns:
-        The crossing times, increasing.
-
+    ``t``, ``y``, ``dy`` (N,); ``direction`` +1 upward crossings only, −1 downward only, 0 both.
     """
     sign = np.sign(y)
     idx = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
@@ -180,21 +167,12 @@ def decay_rate(
 class PendulumRun:
     """One pendulum run, angle measured from the hanging equilibrium (SI units).
 
-    Attributes:
-        theta0: Initial angle in [rad] (released from rest).
-        damping: Joint damping ``b`` in [N·m·s/rad].
-        pendulum: ``I``, ``m``, ``l_c``, ``g``.
-        simulation: The forward-dynamics run (joint coordinates).
-        theta: (N,) angle from the hanging equilibrium in [rad].
-        omega: (N,) angular velocity in [rad/s].
-        energy: (N,) total energy in [J], zero at rest in the hanging equilibrium.
-        period: Measured (damped) period in [s], or None with fewer than two turning points.
-        period_exact: The exact undamped period for ``theta0`` in [s].
-        energy_drift: ``max |E(t) − E(0)| / E(0)``.
-        energy_max_increase: Largest step-to-step increase of E, relative to ``E(0)``.
-        decay_rate: Measured envelope decay rate in [1/s] (None with fewer than 3 maxima).
-        decay_rate_exact: ``b / (2 I)`` in [1/s] (the small-amplitude value).
-
+    ``theta0`` [rad] (released from rest); ``damping`` ``b`` [N·m·s/rad]; ``simulation`` the
+    run in joint coordinates; per sample ``theta`` [rad], ``omega`` [rad/s], ``energy`` [J]
+    (zero at rest hanging); ``period`` measured [s] (None with < 2 turning points),
+    ``period_exact`` undamped for ``theta0``; ``energy_drift`` ``max |E(t) − E(0)| / E(0)``;
+    ``energy_max_increase`` largest step-to-step rise of E over ``E(0)``; ``decay_rate``
+    measured [1/s] (None with < 3 maxima), ``decay_rate_exact`` ``b / (2 I)``.
     """
 
     theta0: float
@@ -235,17 +213,6 @@ class PendulumRun:
         return out
 
 
-def _theta0(theta0: Any) -> float:
-    th = positive("theta0", theta0)
-    if not th < math.pi:
-        msg = (
-            f"theta0={theta0!r} rad is not allowed; the initial angle from the hanging "
-            "equilibrium must lie in (0, pi) (pi is the unstable upright equilibrium)"
-        )
-        raise ParameterError(msg, parameter="theta0", value=theta0, allowed="0 < theta0 < pi")
-    return th
-
-
 def pendulum_run(
     model: Any = None,
     theta0: float = math.pi / 6,
@@ -257,19 +224,21 @@ def pendulum_run(
 ) -> PendulumRun:
     """Release a one-joint pendulum from ``theta0`` (rest) and measure period, energy, decay.
 
-    Args:
-        model: A one-revolute-joint model or source; default the ``pendulum`` preset.
-        theta0: Initial angle from the hanging equilibrium in [rad], in (0, π).
-        damping: Joint damping in [N·m·s/rad]; default the URDF's (the preset: 0.01).
-        dt: Step in [s].
-        duration: In [s].
-        method: Integrator (``"rk4"`` default).
+    ``model``: one revolute joint (default the ``pendulum`` preset); ``theta0`` in (0, π) rad
+    from the hanging equilibrium; ``damping`` [N·m·s/rad], default the URDF's (the preset:
+    0.01); ``dt``, ``duration`` in [s].
 
     Raises:
         ParameterError: Bad angle, damping, step, duration or model.
 
     """
-    th0 = _theta0(theta0)
+    th0 = positive("theta0", theta0)
+    if not th0 < math.pi:
+        msg = (
+            f"theta0={theta0!r} rad is not allowed; the initial angle from the hanging "
+            "equilibrium must lie in (0, pi) (pi is the unstable upright equilibrium)"
+        )
+        raise ParameterError(msg, parameter="theta0", value=theta0, allowed="0 < theta0 < pi")
     if model is None:
         b_urdf = 0.01 if damping is None else positive("damping", damping, allow_zero=True)
         mdl = as_model("pendulum", damping=b_urdf)
@@ -300,11 +269,8 @@ def pendulum_run(
 class PendulumExperiment:
     """Seed 001 §1: the undamped and the damped pendulum, and the small-amplitude decay check.
 
-    Attributes:
-        undamped: Run with damping 0 from ``theta0``.
-        damped: Run with the given damping from ``theta0``.
-        small: Damped run from the small angle ``decay_theta0`` (the decay-rate check).
-
+    ``undamped`` (damping 0) and ``damped`` from ``theta0``; ``small``: damped, from the small
+    angle ``decay_theta0`` (the decay-rate check).
     """
 
     undamped: PendulumRun
@@ -348,15 +314,9 @@ def pendulum_experiment(
 ) -> PendulumExperiment:
     """Run the seed's pendulum undamped and damped (and at small amplitude for the decay).
 
-    Args:
-        theta0: Initial angle from the hanging equilibrium in [rad] (seed: 30°).
-        damping: Joint damping of the damped runs in [N·m·s/rad] (seed: 0.01).
-        dt: Step in [s].
-        duration: In [s].
-        method: Integrator.
-        decay_theta0: Initial angle of the small-amplitude decay run in [rad].
-        length: Pendulum length in [m] (preset parameter).
-        mass: Bob mass in [kg] (preset parameter).
+    Angles in [rad] (``theta0`` seed: 30°; ``decay_theta0`` the small-amplitude run's),
+    ``damping`` [N·m·s/rad] of the damped runs, ``dt``, ``duration`` [s]; ``length`` [m] and
+    ``mass`` [kg] of the preset.
 
     Raises:
         ParameterError: Any bad value (named).

@@ -1,21 +1,18 @@
 """The standing hexapod: a standing pose, the contact forces that hold its weight, joint torques.
 
-The body is level at height ``h`` above flat ground (world z up; the feet at z = 0). The
-robot's mass and centre of mass include the body fixed to the universe (``model.inertias[0]``,
-which Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out).
-
-Contact forces ``f_i`` (ground on foot i, world axes, point contacts) balance gravity::
+The body is level at height ``h`` above flat ground (world z up; the feet at z = 0); mass and
+centre of mass include the body fixed to the universe (``model.inertias[0]``, which
+Pinocchio's ``computeTotalMass``/``centerOfMass`` leave out). Contact forces ``f_i`` (ground
+on foot i, world axes, point contacts) balance gravity::
 
     Σ f_i = m g ẑ,    Σ (p_i − c) × f_i = 0
 
 ``method="min_norm"``: ``f = A⁺ b`` (least Σ‖f_i‖²; it may pull or slide, ``feasible`` says);
 ``"friction"``: the least Σ‖f_i‖² with ``f_z ≥ 0`` and ``‖f_t‖ ≤ μ f_z`` (SLSQP from the
-minimum-norm point, projected back onto the equations). Joint torques (static):
-``τ = g(q) − Σ_i J_iᵀ f_i``, ``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i.
-
-Any other legged robot stands by :func:`hexapod_kin.gait.stand.standing_pose` on its
-floating-base model, the forces at the foot spheres' lowest points (``J_i = J_v − [c_i − p_i]×
-J_ω``).
+minimum-norm point, projected back onto the equations). Static joint torques
+``τ = g(q) − Σ_i J_iᵀ f_i`` (``J_i`` the LOCAL_WORLD_ALIGNED linear Jacobian of contact i).
+Other legged robots stand by :func:`hexapod_kin.gait.stand.standing_pose`, the forces at the
+foot spheres' lowest points (``J_i = J_v − [c_i − p_i]× J_ω``).
 """
 
 from __future__ import annotations
@@ -98,11 +95,8 @@ def standing_configuration(
     Foot i is ``reach`` from its hip axis along the leg's mount direction, ``height`` below the
     body origin, moved by ``−shift``; each leg by the closed-form IK, hip nearest 0, knee up.
 
-    Args:
-        model: The whole robot (from a Hexapod, e.g. ``load("hexapod")``).
-        height: Body origin above the ground in [m] (> 0).
-        reach: Hip axis to foot, horizontal, in [m]; default ``l1 + l2`` of the leg.
-        shift: Body shift (dx, dy) over the feet in [m].
+    ``model``: the whole robot (from a Hexapod, e.g. ``load("hexapod")``); ``height`` > 0,
+    ``reach`` (default ``l1 + l2`` of the leg) and ``shift`` (dx, dy) in [m].
 
     Raises:
         ParameterError: Not a Hexapod, bad numbers; ``height``, ``reach`` or a ``shift``
@@ -154,13 +148,9 @@ def _default_reach(chain: Any) -> float:
 
 @dataclass(frozen=True)
 class ContactSolution:
-    """Contact forces and their balance residuals (SI units).
+    """Contact forces (k, 3) ground on foot [N] (read-only) and their balance residuals.
 
-    Attributes:
-        forces: (k, 3) ground-on-foot forces in [N] (read-only).
-        force_residual: ``‖Σ f − W ẑ‖`` in [N].
-        moment_residual: ``‖Σ (p − c) × f‖`` in [N·m].
-
+    ``force_residual`` ``‖Σ f − W ẑ‖`` [N]; ``moment_residual`` ``‖Σ (p − c) × f‖`` [N·m].
     """
 
     forces: np.ndarray
@@ -182,12 +172,8 @@ def contact_forces(
 ) -> ContactSolution:
     """Point-contact forces that hold a weight ``weight`` [N] at ``com`` on ``feet`` (k, 3).
 
-    Args:
-        feet: (k, 3) foot positions in [m] (world axes).
-        com: (3,) centre of mass in [m].
-        weight: ``m g`` in [N] (> 0), acting along −z.
-        method: ``"min_norm"`` or ``"friction"`` (see the module doc).
-        mu: Friction coefficient (> 0); needed by ``"friction"``.
+    Positions in [m], world axes; ``weight`` ``m g`` > 0 acts along −z; ``method`` as in the
+    module doc; ``mu`` > 0, needed by ``"friction"``.
 
     Raises:
         ParameterError: Bad method or ``mu``.
@@ -276,23 +262,11 @@ def _friction_qp(
 class Stance:
     """The standing robot (SI units, world: ground z = 0, z up; arrays read-only).
 
-    Attributes:
-        height: Body origin above the ground in [m].
-        q: (nq,) joint values in [rad].
-        joint_names: Joint names (columns of q and the torques).
-        stance_legs: Names of the legs on the ground.
-        feet: (k, 3) stance foot positions in [m].
-        mass: Robot mass in [kg] (body included).
-        com: (3,) centre of mass in [m].
-        weight: ``m g`` in [N].
-        forces: (k, 3) contact forces, ground on foot, in [N].
-        method: ``"min_norm"`` or ``"friction"``.
-        mu: Friction coefficient used (None for min-norm).
-        force_residual: ``‖Σ f − m g ẑ‖`` in [N].
-        moment_residual: ``‖Σ (p − c) × f‖`` in [N·m].
-        gravity_torque: (nq,) ``g(q)`` in [N·m] (legs in the air).
-        torque: (nq,) ``g(q) − Σ J_iᵀ f_i`` in [N·m] (standing).
-
+    ``height`` of the body origin [m]; ``q`` [rad] (columns ``joint_names``, as the torques);
+    ``feet`` (k, 3) of the ``stance_legs`` [m]; ``mass`` [kg] (body included), ``com`` [m],
+    ``weight`` ``m g`` [N]; ``forces`` (k, 3) ground on foot [N], by ``method`` with ``mu``
+    (None for min-norm) and residuals as in :class:`ContactSolution`; ``gravity_torque``
+    ``g(q)`` (legs in the air) and ``torque`` ``g(q) − Σ J_iᵀ f_i`` (standing) in [N·m].
     """
 
     height: float
@@ -371,13 +345,9 @@ def stance_at(
 ) -> Stance:
     """Contact forces and joint torques of the robot standing at ``q`` with its body ``height``.
 
-    Args:
-        model: The whole robot (from a Hexapod).
-        q: (nq,) joint values; the stance feet should be at ``−height`` in the body frame.
-        height: Body origin above the ground in [m].
-        legs: Stance legs (names or 1-based numbers); default all.
-        method: ``"min_norm"`` or ``"friction"``.
-        mu: Friction coefficient (``"friction"``; with ``"min_norm"``: what ``feasible`` checks).
+    The stance feet should be at ``−height`` [m] in the body frame; ``legs``: names or 1-based
+    numbers (default all); ``mu``: the friction cone of ``"friction"`` (with ``"min_norm"``:
+    what ``feasible`` checks).
 
     Raises:
         ParameterError, ConfigurationError: As :func:`contact_forces`; bad legs or q.
@@ -443,21 +413,13 @@ def stand(
 ) -> Stance:
     """A legged robot standing level at ``height``: pose, contact forces and joint torques.
 
-    Args:
-        model: A Hexapod's model or preset (default ``load("hexapod")``), or any legged robot
-            :func:`hexapod_kin.gait.as_whole_body` takes.
-        height: Body origin above the ground in [m] (default: a Hexapod 0.10 m; another
-            robot its ``body_height``).
-        reach: Hip axis to foot, horizontal, in [m] (default: the robot's own).
-        shift: Body shift (dx, dy) over the feet in [m].
-        legs: Stance legs (names or 1-based numbers); default all.
-        method: ``"min_norm"`` or ``"friction"`` (see the module doc).
-        mu: Friction coefficient.
-        feet: Feet as frame plus offset, for a URDF without foot links
-            (:func:`hexapod_kin.gait.legs.parse_feet`).
-        foot_radius: Contact radius of the feet [m] (default: the robot's).
-        knee: Where the knees point (:data:`hexapod_kin.gait.knee.KNEES`; default: inside the
-            limits nearest the neutral q).
+    ``model``: a Hexapod's model or preset (default ``load("hexapod")``), or any legged robot
+    :func:`hexapod_kin.gait.as_whole_body` takes. Lengths in [m]: ``height`` (default: a
+    Hexapod 0.10; another robot its ``body_height``), ``reach`` (hip axis to foot, default
+    the robot's), ``shift`` (dx, dy), ``foot_radius`` (default the robot's). ``legs``: names
+    or 1-based numbers (default all); ``feet``: frame plus offset for a URDF without foot links
+    (:func:`hexapod_kin.gait.legs.parse_feet`); ``knee``: :data:`hexapod_kin.gait.knee.KNEES`
+    (default: inside the limits nearest the neutral q).
 
     Raises:
         ParameterError, ConfigurationError: Bad values; unreachable pose; no balance.

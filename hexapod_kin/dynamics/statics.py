@@ -44,20 +44,11 @@ def external_force(
 class LegTorques:
     """Static joint torques of a leg at ``q`` (SI units; arrays read-only).
 
-    Attributes:
-        q: (nq,) joint values in [rad]/[m].
-        force: (3,) force of the foot on its environment in [N], base axes.
-        frame: The frame the force acts at (the tip by default).
-        gravity: (nq,) ``g(q)``, the torques that hold the leg against gravity, in [N·m].
-        force_torque: (nq,) ``Jᵀ F`` in [N·m].
-        total: (nq,) ``g(q) + Jᵀ F`` in [N·m].
-        force_torque_rnea: (nq,) the same as ``force_torque`` by RNEA with the reaction ``−F``
-            as external force (gravity off).
-        crosscheck_error: ``max |Jᵀ F − RNEA|`` in [N·m].
-        gravity_crosscheck_error: ``max |computeGeneralizedGravity − rnea(q, 0, 0)|`` in [N·m].
-        joint_names: Joint names.
-        effort_limit: (nq,) URDF effort limits in [N·m].
-
+    ``force`` (3,) of the foot on its environment in [N], base axes, acting at ``frame``; per
+    joint in [N·m]: ``gravity`` ``g(q)``, ``force_torque`` ``Jᵀ F``, ``total`` their sum,
+    ``force_torque_rnea`` ``Jᵀ F`` again by RNEA (reaction ``−F`` as external force, gravity
+    off), ``effort_limit`` (the URDF's); ``crosscheck_error`` ``max |Jᵀ F − RNEA|`` and
+    ``gravity_crosscheck_error`` ``max |computeGeneralizedGravity − rnea(q, 0, 0)|`` in [N·m].
     """
 
     q: np.ndarray
@@ -131,11 +122,8 @@ def _force(force: Any) -> np.ndarray:
 def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = None) -> LegTorques:
     """Joint torques holding the leg at ``q`` against gravity and a foot force.
 
-    Args:
-        model: A loaded model (a leg, or any chain) or a source.
-        q: Joint values (nq,) in [rad]/[m].
-        force: Force of the foot on its environment (3,) in [N], base axes; default zero.
-        frame: Frame where the force acts (default: the tip).
+    ``force``: of the foot on its environment (3,) in [N], base axes (default zero), acting at
+    ``frame`` (default the tip).
 
     Raises:
         ConfigurationError: Bad ``q``.
@@ -161,19 +149,10 @@ def leg_torques(model: Any, q: Any, force: Any = None, *, frame: str | None = No
 class StepTorques:
     """Joint torques along a trajectory (e.g. the seeds' resolved-rate step), SI units.
 
-    Attributes:
-        t: (N,) times in [s].
-        q: (N, nq) joint values.
-        force: (3,) constant foot force on the environment in [N], base axes.
-        gravity: (N, nq) ``g(q)`` in [N·m].
-        force_torque: (N, nq) ``Jᵀ F`` in [N·m].
-        inertial: (N, nq) ``M q̈ + C q̇`` (q̈ by central differences) in [N·m].
-        total: (N, nq) ``gravity + force_torque + inertial`` in [N·m].
-        peak: (nq,) ``max_t |total|`` per joint in [N·m].
-        peak_gravity: (nq,) ``max_t |gravity|`` in [N·m].
-        crosscheck_error: ``max_t max |Jᵀ F − RNEA with fext|`` in [N·m].
-        joint_names: Joint names.
-
+    ``t`` (N,) in [s]; ``force`` (3,) constant, as in :class:`LegTorques`; (N, nq) in [N·m]:
+    ``gravity``, ``force_torque``, ``inertial`` ``M q̈ + C q̇`` (q̈ by central differences),
+    ``total`` their sum; ``peak`` and ``peak_gravity`` ``max_t |total|``, ``max_t |gravity|``
+    per joint; ``crosscheck_error`` ``max_t max |Jᵀ F − RNEA with fext|`` in [N·m].
     """
 
     t: np.ndarray
@@ -205,13 +184,8 @@ def torques_along(
 ) -> StepTorques:
     """Joint torques along a sampled trajectory ``q(t)`` (see :class:`StepTorques`).
 
-    Args:
-        model: A loaded model.
-        t: (N,) increasing times in [s] (N >= 2).
-        q: (N, nq) joint values.
-        qdot: (N, nq) joint rates; default central differences of ``q``.
-        force: Constant foot force on the environment (3,) in [N], base axes.
-        frame: Force frame (default the tip).
+    ``t`` (N,) strictly increasing times in [s] (N >= 2); ``q``, ``qdot`` (N, nq) (``qdot``
+    default central differences of ``q``); ``force``, ``frame`` as in :func:`leg_torques`.
 
     Raises:
         ConfigurationError: Bad ``q``/``qdot`` shapes or values.

@@ -1,16 +1,12 @@
 """Which way a leg's knee points: the branch of its closed-form IK, chosen and reported.
 
-A leg's *knee* is its foot joint's origin (the last joint of the leg). Its direction is the
-knee's offset from the straight line hip → foot (the hip: the joint before the knee, a
-hexapod's femur or a quadruped's thigh), perpendicular to that line, in the body frame; it
-is named by the largest of its components
-along the body's axes and the leg's outward direction (from the body's centre to the
-mount, horizontal): ``up`` (+z), ``down`` (−z), ``forward`` (+x), ``backward`` (−x), ``out``,
-``in``. A straight leg (the knee on the line) points ``straight``.
-
-:func:`knee_seed` picks, for every closed-form leg, the branch of the first sample whose knee
-points most along the direction asked (among the branches inside the joint limits, when any
-is); the walk then continues each leg on the branch nearest its previous sample.
+A leg's *knee* is its last joint's origin; its direction is the knee's offset from the line
+hip → foot (the hip: the joint before the knee), perpendicular to it, in the body frame,
+named by its largest component along the body's axes and the leg's outward horizontal
+direction: ``up`` (+z), ``down`` (−z), ``forward`` (+x), ``backward`` (−x), ``out``, ``in``;
+``straight`` for a knee on the line. :func:`knee_seed` picks for every closed-form leg the
+first sample's branch whose knee points most along the direction asked (among those inside
+the joint limits, when any); the walk then continues each leg on its nearest branch.
 """
 
 from __future__ import annotations

@@ -1,13 +1,11 @@
 """The numerical leg IK, used where no closed form recognises the leg: the package's one loop.
 
-Each leg is a chain view (:class:`~hexapod_kin._chain.ChainArrays`: body → foot, its joints
-alone) solved by :func:`hexapod_kin.ik.solve_chain` — the compiled Levenberg–Marquardt loop of
-:func:`hexapod_kin.ik.solve` on the position rows — for all samples in one call. All samples
-start from the seed; a sample whose solution is far from its predecessor's (a branch jump,
-> 0.5 rad) or not reached is solved again warm-started from the previous sample, in time
-order. A foot is *reached* when the residual is at most :data:`REACH_TOL`; otherwise the
-residual is the distance of the best reachable point found to the target (the leg's
-``excess``).
+Each leg is a chain view (:class:`~hexapod_kin._chain.ChainArrays`, body → foot) solved by
+:func:`hexapod_kin.ik.solve_chain` (the compiled Levenberg–Marquardt loop on the position
+rows) for all samples at once from the seed; a sample far from its predecessor (a branch
+jump, > 0.5 rad) or not reached is solved again warm-started from the previous one, in time
+order. *Reached*: a residual of at most :data:`REACH_TOL`; otherwise the residual is the
+distance of the best point found to the target (the leg's ``excess``).
 """
 
 from __future__ import annotations

@@ -1,14 +1,11 @@
 """Legs of any floating-base robot: found in the kinematic tree, feet, closed forms.
 
-* **Legs from the tree**: every chain of actuated joints from the floating body (the root
-  link) to a foot. A foot is either the deepest frame of a branch (a leaf link such as
-  solo12's ``FL_FOOT``) or a point given by the user on a frame (``frame:x,y,z``, the offset
-  in that frame, in [m]) when the URDF has no foot link (:func:`parse_feet`).
-* **Closed forms**: a leg's table (:func:`hexapod_kin.chain_from_urdf` of its sub-chain, a
-  view of the loaded robot; or a Hexapod's leg table on its mount) is used where
-  :mod:`hexapod_kin.ik.closed` recognises it and its solutions reproduce the leg's own
-  kinematics (:func:`closed_leg`); other legs are solved numerically
-  (:func:`~.leg_ik.solve_legs`).
+* **Legs from the tree**: every chain of actuated joints from the floating body to a foot:
+  the deepest frame of a branch (a leaf link such as solo12's ``FL_FOOT``) or a point given
+  on a frame (``frame:x,y,z`` [m], :func:`parse_feet`) when the URDF has no foot link.
+* **Closed forms**: a leg's table (a view of the loaded robot, or a Hexapod's leg on its
+  mount) where :mod:`hexapod_kin.ik.closed` recognises it and reproduces the leg's own
+  kinematics (:func:`closed_leg`); other legs numerically (:func:`~.leg_ik.solve_legs`).
 """
 
 from __future__ import annotations
@@ -60,8 +57,8 @@ class GaitError(ConfigurationError):
     """A gait or body pose that the robot cannot perform (a check failed).
 
     Attributes:
-        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``,
-            ``"terrain clearance"``, ``"leg clearance"``, ``"stability margin"``).
+        check: The failed check (``"reach"``, ``"joint limit"``, ``"terrain"``, ...: see
+            :func:`~.walk.walk`).
         leg: The leg's name (``None`` when the check is about the whole robot).
         time: Time of the first failing sample in [s] (``None`` for a single pose).
         amount: By how much the check fails, in [m] or [rad] (≥ 0).
@@ -299,16 +296,12 @@ def _strip_common(names: list[str]) -> list[str]:
     return out if all(out) and len(set(out)) == len(out) else names
 
 
-def _frame_depth(model: Any, fid: int) -> int:
-    depth = 0
-    while fid != 0 and (parent := model.frames[fid].parentFrame) != fid and depth < 10_000:
-        depth, fid = depth + 1, int(parent)
-    return depth
-
-
 def _frame_key(model: Any, i: int) -> tuple[int, float]:
     """The deepest frame first, then the farthest from its joint."""
-    return (_frame_depth(model, i), float(np.linalg.norm(model.frames[i].placement.translation)))
+    depth, fid = 0, i
+    while fid != 0 and (parent := model.frames[fid].parentFrame) != fid and depth < 10_000:
+        depth, fid = depth + 1, int(parent)
+    return (depth, float(np.linalg.norm(model.frames[i].placement.translation)))
 
 
 def find_legs(
@@ -316,16 +309,14 @@ def find_legs(
 ) -> tuple[list[LegTree], list[int]]:
     """The legs of a Pinocchio model with a free-flyer root (joint 1), and the other joints.
 
-    Legs: with ``feet``, one per foot (the joints from the root to the foot's frame); without,
-    one per leaf of the joint tree whose deepest frame is away from its joint (the foot), the
-    branches shorter than half the longest one left out (a head, a sensor). Legs are ordered
-    counter-clockwise seen from above starting at the front-left (the order of the built-in
-    hexapod: ``atan2(y, x)`` of the first joint in [0, 2π)); ``ccw=False`` keeps the order of
-    ``feet``.
+    With ``feet``, one leg per foot; without, one per leaf of the joint tree whose deepest
+    frame is off its joint, dropping branches shorter than half the longest (a head, a
+    sensor). Ordered counter-clockwise from above from the front-left (``atan2(y, x)`` of the
+    first joint in [0, 2π)); ``ccw=False`` keeps the order of ``feet``.
 
     Returns:
-        ``(legs, others)``: the legs (joint indices are model joint ids minus 2, i.e. indices
-        into q[7:]) and the ids of the joints that belong to no leg.
+        ``(legs, others)``: the legs (joint indices into q[7:]) and the ids of the joints of
+        no leg.
 
     Raises:
         ParameterError: A foot offset larger than the robot (:func:`check_offsets`).
@@ -458,10 +449,10 @@ def closed_leg(
 ) -> bool:
     """True when the closed form of ``table`` (frame 0 at ``T0`` in the body) solves the leg.
 
-    Checked at 6 seeded random configurations inside the limits: a valid slot must put the
-    foot (``feet_of``: (N, m) joints → (N, 3) body-frame feet, the leg's own FK) on the
-    target within 1e-9 of the span (max(span, 1 m)); a table that only approximates the leg
-    (axes snapped by :func:`hexapod_kin.chain_from_urdf`) is not used.
+    At 6 seeded configurations inside the limits a valid slot must put the foot (``feet_of``:
+    (N, m) joints → (N, 3) body-frame feet) on target within 1e-9 × max(span, 1 m): a table
+    that only approximates the leg (axes snapped by :func:`hexapod_kin.chain_from_urdf`) is
+    refused.
     """
     from ..ik import analytic_batch
 
@@ -496,8 +487,8 @@ def finite_or_inf(v: Any) -> np.ndarray:
 def _nearest(cand: np.ndarray, refs: np.ndarray, usable: np.ndarray) -> np.ndarray:
     """For each reference, the valid slot nearest to it (the first on a tie), (A, G, N).
 
-    ``cand`` (m, K, G, N) candidates, ``refs`` (m, A, G, N) references, ``usable`` (K, G, N);
-    the distance is ``Σ_j |wrap(cand_j − ref_j)|`` (all-invalid samples give slot 0).
+    ``cand`` (m, K, G, N), ``refs`` (m, A, G, N), ``usable`` (K, G, N); distance
+    ``Σ_j |wrap(cand_j − ref_j)|`` (all-invalid samples give slot 0).
     """
     m, k = cand.shape[:2]
     shape = (refs.shape[1], k) + np.broadcast_shapes(cand.shape[2:], refs.shape[2:])
@@ -526,18 +517,14 @@ def _nearest(cand: np.ndarray, refs: np.ndarray, usable: np.ndarray) -> np.ndarr
 def pick_branch(qk: np.ndarray, valid: np.ndarray, q0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per leg and sample, the valid IK slot nearest the previous sample (angles unwrapped).
 
-    The rule is sequential: at each sample with a valid slot, the slot whose wrapped
-    difference to the previous value has the smallest sum of absolute values
-    (``Σ|wrap(q_k − q_prev)|``, the first on a tie) is taken and continued,
-    ``q = q_prev + wrap(q_k − q_prev)``; samples without a valid slot keep ``q_prev``. It is
-    evaluated for all samples at once: the choice at sample i only depends on which slot was
-    chosen at the last sample with one (the wrap is 2π-periodic), so each sample is a map
-    ``F_i`` from that slot to its own (a K × K table of distances), the chosen slots are the
-    prefix compositions ``F_i ∘ … ∘ F_0`` (by doubling, log₂ N rounds), and the unwrapped
-    value is the candidate plus 2π times an integer count of turns accumulated along the
-    samples (so no rounding accumulates). When every leg keeps the slot of its first sample
-    (checked: each sample's nearest slot to that slot's previous value is that slot) the
-    composition is skipped.
+    Sequentially: the slot with the smallest ``Σ|wrap(q_k − q_prev)|`` (the first on a tie) is
+    taken and continued, ``q = q_prev + wrap(q_k − q_prev)``; samples without a valid slot keep
+    ``q_prev``. Evaluated for all samples at once: the choice at sample i depends only on the
+    slot chosen at the last sample with one, so each sample is a map ``F_i`` between slots and
+    the chosen slots are the prefix compositions ``F_i ∘ … ∘ F_0`` (by doubling, log₂ N
+    rounds); the unwrapped value is the candidate plus 2π times an integer count of turns (no
+    rounding accumulates). When every leg keeps its first sample's slot the composition is
+    skipped.
 
     Args:
         qk: (G, N, K, m) candidate solutions of G legs at N samples.
@@ -610,13 +597,11 @@ def leg_layout(
     params: Any,
     robot: Any,
 ) -> dict[str, Any]:
-    """The legs' spans, mounts, default stance geometry and closed forms.
+    """The legs' spans, mounts, default stance geometry and closed forms, as a dict.
 
-    Returns a dict: ``span`` (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2),
-    ``reach`` (L,) [m], ``body_height`` [m] (the rules of
-    :meth:`~.robot.WholeBody.neutral_feet`) and ``closed`` (per leg ``(table,
-    T_body_frame0)`` or ``None``), the tables recovered from views of the loaded ``robot``
-    (:meth:`~hexapod_kin.model.Model.view`: its parse, not a second one).
+    ``span`` (L,) [m], ``mounts`` (L, 4, 4), ``direction`` (L, 2), ``reach`` (L,) [m],
+    ``body_height`` [m] (the rules of :meth:`~.robot.WholeBody.neutral_feet`) and ``closed``
+    (per leg ``(table, T_body_frame0)`` or ``None``; tables from views of the loaded ``robot``).
     """
     from .._fromurdf import chain_from_urdf
     from ..params import Pose
@@ -624,10 +609,7 @@ def leg_layout(
     hexa = params is not None
 
     def leg_fk(leg: int, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Leg ``leg``'s joint origins (N, m, 3) and feet (N, 3), body frame, at its q (N, m).
-
-        The whole tree through the one batch FK (the other joints at ``q_zero``).
-        """
+        """Leg ``leg``'s joint origins (N, m, 3) and feet (N, 3), body frame, at its q (N, m)."""
         c, foot = list(cols[leg]), legs[leg].foot_placement[:3, 3]
         Q = np.tile(q_zero, (len(q), 1))
         Q[:, c] = q

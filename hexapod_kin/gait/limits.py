@@ -1,14 +1,11 @@
 """Walks sized by the robot's own limits: the default period, and each pattern's top speed.
 
-A straight walk at stride ``L`` and period ``T`` is, to first order, the same path in joint
-space whatever ``T`` (the stride fixes where the feet go): joint speeds scale as ``1/T`` and
-accelerations as ``1/T²``. With ``ρ`` the largest ratio of a joint's speed to its URDF
-velocity limit (or the square root of its acceleration to an acceleration limit, when given),
-a plan at ``T₀`` fits the limits at ``T = ρ·T₀``.
-
-* :func:`fit_period` — the default period (a multiple of :data:`PERIOD_STEP` within them).
-* :func:`top_speed` — each pattern's highest straight speed ``v = L / (β · ρ(L) · T₀)``
-  over the strides the legs can reach.
+At stride ``L`` a straight walk follows, to first order, the same joint path whatever the
+period ``T``: joint speeds scale as ``1/T``, accelerations as ``1/T²``. With ``ρ`` the largest
+ratio of a joint's speed to its URDF limit (or the square root of its acceleration's to an
+acceleration limit), a plan at ``T₀`` fits at ``T = ρ·T₀``: :func:`fit_period` (the default
+period, a multiple of :data:`PERIOD_STEP`) and :func:`top_speed` (``v = L / (β · ρ(L) · T₀)``
+over the strides the legs can reach).
 """
 
 from __future__ import annotations
@@ -54,10 +51,9 @@ def fit_period(plan: Callable[[float], Any], period: float = 1.0, passes: int = 
         passes: Plans tried at most after the first.
 
     Returns:
-        ``period``, or the multiple of :data:`PERIOD_STEP` at the speed ratio's scale that
-        the last plan found within the limits (the last one tried when none is; a plan that
-        cannot be made, or whose feet are out of reach, returns ``period``: the walk itself
-        then reports why).
+        ``period``, or the multiple of :data:`PERIOD_STEP` at the speed ratio's scale that the
+        last plan found within the limits (or the last one tried); ``period`` when a plan
+        cannot be made or its feet are out of reach (the walk then reports why).
 
     """
     T = float(period)

@@ -43,23 +43,14 @@ def foot_path(
 ) -> np.ndarray:
     """Foot position over one step cycle, as a pure function of the phase.
 
-    Phase 0 is touchdown at the front: during stance (``phase < duty_factor``) the foot
-    moves on the ground in a straight line from ``center + L/2·u`` to ``center − L/2·u`` at
-    constant speed (``u`` the horizontal unit ``direction`` of travel of the body); during
-    swing it returns through the air: a half ellipse (``shape="ellipse"``, semi-axes L/2 and
-    ``height``) or a cycloid (``shape="cycloid"``, zero velocity at lift-off and touchdown).
+    Phase 0 is touchdown at the front: in stance (``phase < duty_factor``) the foot moves at
+    constant speed from ``center + L/2·u`` to ``center − L/2·u`` (``u`` the unit horizontal
+    ``direction`` of travel); in swing it returns through a half ellipse (semi-axes L/2 and
+    ``height``) or a cycloid (zero velocity at lift-off and touchdown).
 
-    Args:
-        phase: Phase(s) in cycles (any real; taken modulo 1).
-        center: Middle of the stance line (3,) in [m] (its z is the ground).
-        length: Step length L in [m] (>= 0).
-        height: Swing height in [m] (>= 0).
-        duty_factor: Fraction of the cycle in stance, in (0, 1).
-        direction: Horizontal direction of travel (2,), normalised here.
-        shape: ``"ellipse"`` or ``"cycloid"``.
-
-    Returns:
-        (..., 3) positions in [m], the shape of ``phase`` plus 3.
+    ``phase`` in cycles (any real, taken modulo 1); ``center`` (3,) [m] (its z is the
+    ground); ``length`` L and ``height`` [m] (>= 0); ``duty_factor`` in (0, 1); ``direction``
+    (2,) normalised here. Returns (..., 3) positions in [m], the shape of ``phase`` plus 3.
 
     Raises:
         ParameterError: Bad lengths, duty factor, direction or shape.
@@ -102,18 +93,10 @@ def foot_path(
 class FootStep:
     """One or more step cycles of a leg (arrays read-only, SI units).
 
-    Attributes:
-        t: (M,) times in [s].
-        phase: (M,) phase in cycles (0 = touchdown).
-        stance: (M,) True during stance.
-        foot: (M, 3) planned foot positions in [m].
-        q: (M, n) joint trajectory by IK.
-        qdot: (M, n) joint rates by finite differences [rad/s].
-        reached: (M,) True where IK reached the planned position.
-        foot_actual: (M, 3) FK(q) (Pinocchio) in [m].
-        within_limits: True if every sample is inside the joint position limits.
-        max_joint_step: Largest |Δq| between consecutive samples [rad]/[m] (continuity).
-
+    Per sample: ``t`` [s], ``phase`` in cycles (0 = touchdown), ``stance``, planned ``foot``
+    [m], ``q`` by IK, ``qdot`` by finite differences, ``reached`` (IK reached the plan),
+    ``foot_actual`` FK(q) [m]. ``within_limits``: every sample inside the joint position
+    limits; ``max_joint_step``: largest |Δq| between samples [rad]/[m] (continuity).
     """
 
     t: np.ndarray
@@ -154,23 +137,10 @@ def foot_step(
 ) -> FootStep:
     """Plan a foot step (stance + swing) and its joint trajectory by IK.
 
-    Args:
-        model: A loaded leg model.
-        center: Middle of the stance line (3,) in [m]; default the foot at
-            :func:`default_stance`.
-        length: Step length [m].
-        height: Swing height [m].
-        dt: Sample time [s].
-        duration: Cycle time [s].
-        duty_factor: Stance fraction in (0, 1).
-        direction: Horizontal travel direction (2,).
-        shape: Swing shape ``"ellipse"`` or ``"cycloid"``.
-        cycles: Number of cycles (>= 1).
-        phase_offset: Phase at t = 0 in cycles (gait tables set one per leg).
-        q0: Joints near the first sample (IK branch / warm start).
-
-    Returns:
-        A :class:`FootStep`.
+    The step as in :func:`foot_path` (``center`` default: the foot at
+    :func:`default_stance`); ``dt`` and ``duration`` (of one cycle) in [s]; ``cycles`` >= 1;
+    ``phase_offset`` in cycles at t = 0 (gait tables set one per leg); ``q0``: joints near the
+    first sample (IK branch, warm start).
 
     Raises:
         ParameterError: Bad step parameters.
@@ -209,9 +179,9 @@ def foot_step(
 def terrain_normals(ground: Any, x: Any, y: Any, step: float = 1e-6) -> np.ndarray:
     """Unit normals (..., 3) of the ground ``z = h(x, y)`` at ``x``, ``y`` [m].
 
-    ``n ∝ (−∂h/∂x, −∂h/∂y, 1)`` with each slope the smaller (in size) of the forward and the
-    backward difference over ``step`` [m] (min-mod: exact on a plane up to rounding, and the
-    flat side at a step's edge); ``ẑ`` where the ground is undefined.
+    ``n ∝ (−∂h/∂x, −∂h/∂y, 1)``, each slope the smaller of the forward and backward difference
+    over ``step`` [m] (min-mod: exact on a plane, the flat side at an edge); ``ẑ`` where the
+    ground is undefined.
     """
     xa, ya = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
     h0 = ground(xa, ya)
@@ -233,8 +203,7 @@ def terrain_normals(ground: Any, x: Any, y: Any, step: float = 1e-6) -> np.ndarr
 def rotation_increments(rot: np.ndarray) -> np.ndarray:
     """Rotation vectors (N − 1, ...) ``θ_k = log(R_{k+1} R_kᵀ)`` of world rotations (N, ..., 3, 3).
 
-    ``θ_k`` is the world-frame rotation from sample k to k + 1 (``ω dt`` for a constant angular
-    velocity ω): axis-angle from the trace and the skew part (angles below π).
+    Axis-angle from the trace and the skew part (angles below π).
     """
     # R_{k+1} R_kᵀ = Σ_j b_j a_jᵀ (columns a_j of R_k, b_j of R_{k+1}): trace Σ a_j·b_j,
     # skew part (vee) Σ a_j × b_j
@@ -256,11 +225,10 @@ def rotation_increments(rot: np.ndarray) -> np.ndarray:
 def rolling_offsets(rot: Any, support: Any, normals: Any, radius: float) -> np.ndarray:
     """How far each stance foot's centre has rolled since its first stance sample, (N, L, 3) [m].
 
-    A sphere of radius r rolling without slip on a plane of unit normal n has centre velocity
-    ``v = ω × (r n)`` (the material point in contact, ``c − r n``, is at rest). Discretely,
-    ``D_i = Σ_{k = s}^{i − 1} θ_k × (r n)`` from the stance's first sample s, ``θ_k`` the foot
-    frame's rotation increment (:func:`rotation_increments`) and n the stance's contact
-    normal; 0 in swing. The contact point then slips by ``c_i − c_s − D_i`` (zero when rolling).
+    A sphere of radius r rolling without slip on a plane of normal n moves its centre by
+    ``ω × (r n)``; discretely ``D_i = Σ_{k = s}^{i − 1} θ_k × (r n)`` from the stance's first
+    sample s (``θ_k``: :func:`rotation_increments` of the foot frame), 0 in swing. The contact
+    point slips by ``c_i − c_s − D_i``.
 
     Args:
         rot: (N, L, 3, 3) world rotations of the foot frames.
@@ -326,15 +294,11 @@ def rolling_ik(
 ) -> tuple[np.ndarray, np.ndarray, Any, int, float, np.ndarray | None, np.ndarray]:
     """IK of the planned feet with the stance feet rolling, iterated to a fixed point.
 
-    Each pass solves the feet's targets by ``wb.body_ik`` (closed forms, else the package's
-    one IK loop, :func:`hexapod_kin.ik.step.lm_loop`), the first pass the plan itself. The
-    rolling ``D(q)`` of the solution (:func:`rolling_offsets` of its foot frames' rotations)
-    gives the next targets: ``plan + D`` in stance, ``plan + D_lift-off·(1 − blend)`` in
-    swing — until ``max|targets − feet(q)| ≤ tol`` [m] (the planned contact points' slip),
-    ``max_passes``, or a pass leaves a foot out of reach (a plan that cannot be walked is
-    refined no further). A pass contracts the error by about ``r·|∂φ/∂c|`` (r the foot
-    radius, φ the foot's rotation, c its centre); Anderson(1) mixing of the targets, per
-    foot and sample, speeds the fixed point up (2-3× fewer passes).
+    Each pass solves the targets by ``wb.body_ik`` (the first: the plan); the rolling ``D(q)``
+    of the solution (:func:`rolling_offsets`) gives the next targets, ``plan + D`` in stance and
+    ``plan + D_lift-off·(1 − blend)`` in swing, until ``max|targets − feet(q)| ≤ tol`` [m],
+    ``max_passes``, or a foot out of reach. Anderson(1) mixing per foot and sample (2-3× fewer
+    passes).
 
     Returns:
         ``(feet, q, ik, passes, residual [m], joint poses of q or None, D)``: the targets

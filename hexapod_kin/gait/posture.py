@@ -1,19 +1,13 @@
 """The default standing posture of a robot whose geometric default leaves no joint range.
 
 :meth:`~.robot.WholeBody.neutral_feet` puts each foot at a fixed fraction of its leg's span
-(0.64 out, 0.32 down). That is a good stance for most legs, but not for every real robot: a
-leg whose tibia is bent upwards, or whose knee range is narrow, reaches that point only at
-the edge of a joint range, and the first step leaves it. Here the stance is checked over the
-box a default step sweeps around each neutral foot (± half the stride along x and y, the step
-height up), and when some joint keeps less than :data:`MIN_ROOM` of its range there, the
-stance (one body height, one reach for every leg) that keeps the most range is searched on a
-grid of reaches and depths.
-
-The search is bounded: a grid stance is tried by IK only when every target of the box lies
-within each leg's reach (:func:`max_reach`, a bound from the leg's geometry) and every
-numerically solved leg reaches its neutral foot from the seed (one batched solve for the
-whole grid: a necessary condition of the full check); when a leg is solved numerically, at
-most :data:`MAX_TRIES` stances are tried.
+(0.64 out, 0.32 down); a leg with an upturned tibia or a narrow knee range may reach it only
+at the edge of a joint range. The stance is checked over the box a default step sweeps
+around each neutral foot; when a joint keeps less than :data:`MIN_ROOM` of its range there,
+the stance (one body height, one reach for all legs) keeping the most range is searched on a
+grid of reaches and depths. Bounded: a grid stance is tried by IK only when every target is
+within each leg's reach (:func:`max_reach`) and every numerical leg reaches its neutral foot
+from the seed (one batched solve); with a numerical leg, at most :data:`MAX_TRIES` stances.
 """
 
 from __future__ import annotations

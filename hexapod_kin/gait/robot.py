@@ -1,14 +1,12 @@
 """A legged robot with a floating base (Pinocchio free-flyer), from any source; body-pose IK.
 
-:func:`as_whole_body` describes the legs of the one robot :func:`hexapod_kin.load` gives for
-a Hexapod, a URDF, ``erd:NAME`` or a loaded model (its floating-base twin,
-:attr:`~hexapod_kin.model.Model.floating_model`; no second parse): legs from the kinematic
-tree (:mod:`.legs`), the tree's constants as arrays so that forward kinematics, the centre of
-mass and the leg segments are computed for many samples at once (the batch path,
-:mod:`hexapod_kin._tree`; raw Pinocchio is the reference in the tests). :meth:`WholeBody.body_ik`
-solves the leg joints of body poses with the feet fixed in the world, leg by leg: closed form
-where recognised, else numerically. Poses are 4×4 ``worldMbody`` arrays (body frame: x
-forward, z up).
+:func:`as_whole_body` describes the legs of the one robot :func:`hexapod_kin.load` gives
+(its :attr:`~hexapod_kin.model.Model.floating_model`; no second parse): legs from the
+kinematic tree (:mod:`.legs`), the tree's constants as arrays for batched forward
+kinematics, centre of mass and leg segments (:mod:`hexapod_kin._tree`).
+:meth:`WholeBody.body_ik` solves the leg joints of body poses with the feet fixed in the
+world, leg by leg: closed form where recognised, else numerically. Poses are 4×4
+``worldMbody`` arrays (body frame: x forward, z up).
 """
 
 from __future__ import annotations
@@ -67,22 +65,18 @@ def body_pose(xyz: Any = (0.0, 0.0, 0.0), rpy: Any = (0.0, 0.0, 0.0)) -> np.ndar
 class WholeBody:
     """A legged robot with a floating base: Pinocchio model and vectorised kinematics.
 
-    Build it with :func:`as_whole_body` (any source) or :func:`whole_body` (a Hexapod),
-    both cached. A view of the one loaded robot (:attr:`kinematic`): legs as joint indices,
-    mounts and feet (a frame and an offset). Joint order: Pinocchio's ``v[6:]`` (the URDF
-    tree, depth first); one angle per joint, continuous joints included (Pinocchio's ``q``
-    holds their cosine and sine: :meth:`pinocchio_q`); the joints that belong to no leg are
-    locked at their neutral value (:attr:`locked_joints`).
+    Built by :func:`as_whole_body` or :func:`whole_body` (cached): a view of the one loaded
+    robot (:attr:`kinematic`). Joint order: Pinocchio's ``v[6:]``; one angle per joint,
+    continuous ones included (:meth:`pinocchio_q` makes their (cos, sin)); joints of no leg
+    are locked at their neutral value (:attr:`locked_joints`).
 
     Attributes:
         params: The Hexapod it was built from (``None`` for a URDF robot).
         source: A label of the source (preset, file name, ``erd:NAME``).
-        model: Pinocchio model with a free-flyer root (a copy of the loaded robot's
-            :attr:`~hexapod_kin.model.Model.floating_model`, reduced to the legs' joints);
-            one frame ``<leg>_contact`` per foot (the contact sphere's centre) is added.
-            Its ``nq`` is 7 + :attr:`nq` plus one per continuous joint (a (cos, sin) pair).
-        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source): the one
-            model this description is a view of.
+        model: Pinocchio model with a free-flyer root (the loaded robot's
+            :attr:`~hexapod_kin.model.Model.floating_model` reduced to the legs' joints)
+            plus a frame ``<leg>_contact`` per foot (the contact sphere's centre).
+        kinematic: The loaded robot (:func:`hexapod_kin.load` of the source).
         leg_names: The legs' names (the order of phase tables).
         joint_names: The leg joints (the columns of q).
         mass: Total mass in [kg] (from the URDF's inertials).
@@ -260,15 +254,13 @@ class WholeBody:
     def neutral_feet(self, foot_reach: float | None = None) -> np.ndarray:
         """Neutral foot points (L, 3) in the body frame [m] (the contact spheres' centres).
 
-        Horizontally, foot i is at ``mount_i + r_i ê_i``: ``ê_i`` the horizontal direction
-        from the leg's mount to its foot at q = 0 (clipped into the joint ranges), less the
-        offset every leg shares (a joint-zero convention such as Unitree's bent knees; a
-        Hexapod: the mount's x axis; a leg hanging straight down: outward from the body
-        centre), ``r_i = foot_reach``, or by default ``min(d_i, 0.64 ℓ_i)`` with ``d_i`` that
-        horizontal distance at q = 0 and ``ℓ_i`` the leg's span (mount to foot through every
-        joint, at q = 0). Vertically at ``−body_height + foot_radius`` (the ground at
-        ``−``:attr:`body_height`): the default height puts every neutral foot at most
-        ``ℓ·√(0.64² + 0.32²)`` from its mount.
+        Horizontally ``mount_i + r_i ê_i``: ``ê_i`` the horizontal direction from the mount to the
+        foot at q = 0 (clipped into the limits) less the offset every leg shares (a joint-zero
+        convention such as Unitree's bent knees; a Hexapod: the mount's x axis; a leg hanging
+        straight down: outward), ``r_i = foot_reach`` or by default ``min(d_i, 0.64 ℓ_i)`` (``d_i``
+        that distance at q = 0, ``ℓ_i`` the leg's span). Vertically ``−body_height +
+        foot_radius``: the default height puts each neutral foot at most ``ℓ·√(0.64² + 0.32²)``
+        from its mount.
 
         Raises:
             ParameterError: ``foot_reach`` not a number >= 0.
@@ -296,8 +288,7 @@ class WholeBody:
     def reach_excess(self, targets: np.ndarray, leg: int) -> np.ndarray:
         """Distance (N,) by which frame-0 foot targets lie outside a closed-form leg's reach [m].
 
-        Exact for the ``leg3`` and ``coxa_tibia`` families (the annulus of the last two
-        links about the hip); other legs: by the numerical IK's residual.
+        Exact for the ``leg3`` and ``coxa_tibia`` families; other legs: the numerical IK's residual.
         """
         from ..ik import detect_family
 
@@ -337,10 +328,9 @@ class WholeBody:
     ) -> BodyIK:
         """The leg joints that put the feet at world points under body poses.
 
-        Each leg is solved on its own: by its closed form where :mod:`hexapod_kin.ik.closed`
-        recognises it (at each sample the branch nearest to the previous sample's, the first
-        to ``q_prev``), otherwise numerically (:func:`~.leg_ik.solve_legs`, warm-started from
-        the previous sample; :attr:`ik_kind` says which).
+        Each leg on its own: its closed form where :mod:`hexapod_kin.ik.closed` recognises it (the
+        branch nearest the previous sample's, the first to ``q_prev``), else numerically
+        (:func:`~.leg_ik.solve_legs`, warm-started; :attr:`ik_kind` says which).
 
         Args:
             base: Body pose(s) ``worldMbody``: (4, 4) or (N, 4, 4) (see :func:`body_pose`), or
@@ -356,9 +346,8 @@ class WholeBody:
             A :class:`BodyIK` (per-leg status and out-of-reach distances).
 
         Raises:
-            GaitError: ``strict`` and a foot is out of reach (check ``"reach"``: names the
-                leg, the time and by how much) or a joint is beyond its limit
-                (``"joint limit"``).
+            GaitError: ``strict`` and a foot out of reach (check ``"reach"``) or a joint beyond
+                its limit (``"joint limit"``), naming the leg, the time and by how much.
             ParameterError: Bad shapes.
 
         """
@@ -450,8 +439,7 @@ class WholeBody:
     def _within_limits(self, qk: np.ndarray, valid: np.ndarray, cols: np.ndarray) -> np.ndarray:
         """``valid`` (G, N, K) narrowed to the branches inside the joint limits (modulo 2π).
 
-        A sample where no valid branch is inside keeps every valid one (the limit check then
-        names the joint).
+        A sample with no valid branch inside keeps every valid one (the limit check names it).
         """
         lo, hi = self.lower[cols], self.upper[cols]  # (G, m)
         mid = np.where(np.isfinite(lo) & np.isfinite(hi), 0.5 * (lo + hi), 0.0)[:, None, None]
@@ -700,9 +688,9 @@ def as_whole_body(robot: Any = None, *, feet: Any = None, foot_radius: Any = Non
             1.5 × its link radius; a URDF's foot links' sphere collision radius, else 0).
 
     Raises:
-        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody.
+        ParameterError: A bad ``feet`` or ``foot_radius``, options given with a WholeBody, a
+            source that is one chain (a table file, an arm preset).
         SourceError, UrdfError: The source cannot be loaded.
-        ParameterError: A source that is one chain (a table file, an arm preset).
         ConfigurationError: No legs found (names the frames), a non-revolute/prismatic leg
             joint.
 

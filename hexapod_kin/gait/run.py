@@ -26,20 +26,17 @@ class GaitRun:
     Attributes:
         t: (N,) times [s].
         base_poses: (N, 4, 4) body poses ``worldMbody`` (the free-flyer's placement).
-        feet: (N, L, 3) feet (foot-sphere centres) in the world by forward kinematics of ``q``
-            [m].
+        feet: (N, L, 3) foot-sphere centres in the world by forward kinematics of ``q`` [m].
         feet_planned: (N, L, 3) planned feet [m].
         q: (N, nq) joint angles [rad] (in ``joint_names`` order).
         qdot: (N, nq) joint rates [rad/s] (second-order finite differences).
         support: (N, L) True for the stance feet (the support set).
         phase: (N, L) gait phase in cycles [0, 1) (stance below the duty factor).
         com: (N, 3) whole-body centre of mass in the world [m].
-        slip: (N, L) how far the material point of each stance foot in contact with the ground
-            has slid since the stance's first sample [m] (0 in swing): ``‖c − c_s − D‖``,
-            c the sphere's centre by FK and D its rolling (:func:`.paths.rolling_offsets`)
-            from the FK rotations (for point feet, the distance from the first stance sample).
-        margin: (N,) static stability margin [m] (negative: CoM outside the support polygon
-            of the contact points).
+        slip: (N, L) slide of each stance foot's contact point since the stance's first
+            sample [m] (0 in swing): ``‖c − c_s − D‖``, c the sphere's centre by FK, D its
+            rolling (:func:`.paths.rolling_offsets`).
+        margin: (N,) static stability margin [m] (negative: CoM outside the support polygon).
         limit_margin: (N, nq) distance of each joint to its nearest limit [rad].
         ik_ok: (N, L) True where the leg's IK reached its foot inside the joint limits.
         reach_excess: (N, L) distance a foot is out of its leg's reach [m] (0 if reached).
@@ -47,8 +44,7 @@ class GaitRun:
         pairs: The neighbouring pairs, by leg index.
         leg_names: The legs.
         joint_names: The joints.
-        table: The phase table used (``table.statically_stable``: False for trot and pace,
-            whose margin is reported but not a check).
+        table: The phase table used.
         settings: The walk's parameters (stride [m], step_height [m], period [s],
             duty_factor, velocity (vx [m/s], vy [m/s], wz [rad/s]), body_height [m],
             foot_reach [m], terrain, duration [s], rate [Hz], foot_radius [m], sway,
@@ -58,16 +54,14 @@ class GaitRun:
         velocity_limit: (nq,) the joints' velocity limits [rad/s] (inf: none).
         accel_limit: (nq,) the acceleration limits checked [rad/s²] (inf: none given).
         robot: The whole-robot model that walked (for viewers and simulators).
-        normals: (N, L, 3) the ground's unit normal at each foot's current (stance) or next
-            (swing) contact; the contact point is ``feet − foot_radius · normals``.
+        normals: (N, L, 3) the ground's unit normal at each foot's current or next contact
+            (the contact point: ``feet − foot_radius · normals``).
         foot_gap: (N, L) how far each foot sphere clears the terrain [m] (sampled,
             :func:`.stability.terrain_clearance`; 0 in stance, negative: into it).
         leg_gap: (N, L) how far each leg's links clear the terrain above its foot's ground
             [m] (:func:`.stability.leg_terrain_clearance`).
-        zmp_margin: (N,) the zero-moment point's signed distance to the support polygon's
-            edge [m] (:func:`.zmp.zmp_points`: the whole robot's centroidal dynamics, the
-            legs' momentum included, on the stance contacts' mean height). Reported, not a
-            check.
+        zmp_margin: (N,) the zero-moment point's (:func:`.zmp.zmp_points`) signed distance to
+            the support polygon's edge [m]. Reported, not a check.
 
     """
 
@@ -197,11 +191,9 @@ class GaitRun:
         return rates(np.concatenate([p, yaw[:, None]], axis=1), self.t)
 
     def base_velocity(self) -> np.ndarray:
-        """Body twist (N, 6) in the body frame: linear [m/s], angular [rad/s].
+        """Body twist (N, 6) in the body frame, Pinocchio's ``v[:6] = (Rᵀ ṗ, ω)`` [m/s, rad/s].
 
-        The free-flyer's velocity in Pinocchio's convention (``v[:6] = (Rᵀ ṗ, ω)``); by
-        second-order finite differences of :attr:`base_poses` (the body stays level:
-        ω = (0, 0, ψ̇)).
+        By second-order finite differences of :attr:`base_poses` (a level body: ω = (0, 0, ψ̇)).
         """
         rate, _ = self._base_rates()
         out = np.zeros((len(self.t), 6))

@@ -1,15 +1,10 @@
-"""Static stability and leg clearance, vectorised over time.
+"""Static stability and leg clearance, vectorised over time (in chunks of :data:`CHUNK`).
 
-* :func:`support_margin`: the support polygon is the convex hull of the stance feet projected
-  on the ground plane (xy); the margin is the signed distance from the projected centre of
-  mass to its edge — positive inside (the distance to the nearest edge), negative outside
-  (minus the distance to the polygon); with two stance feet the polygon is a segment and with
-  one a point (margin ≤ 0), with none −∞.
+* :func:`support_margin`: signed distance from the projected centre of mass to the edge of
+  the stance feet's convex hull (xy): positive inside, negative outside; two feet give a
+  segment, one a point (margin ≤ 0), none −∞.
 * :func:`segment_clearance`: the smallest distance between the segments of neighbouring legs
-  (closest points of two segments: Ericson, *Real-Time Collision Detection*, 5.1.9).
-
-Both run in numpy, vectorised over samples (in chunks of :data:`CHUNK` samples, bounding the
-(N, L, L, L) work arrays).
+  (Ericson, *Real-Time Collision Detection*, 5.1.9).
 """
 
 from __future__ import annotations
@@ -21,7 +16,6 @@ import numpy as np
 
 from ..exceptions import ParameterError
 from .legs import GaitError
-from .tables import PhaseTable
 from .terrain import RELIEF_RADIUS, Terrain, sphere_gap
 
 __all__ = [
@@ -55,13 +49,10 @@ def _seg_point(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
 
 
 def _margin_numpy(pts: np.ndarray, mask: np.ndarray, com: np.ndarray) -> np.ndarray:
-    """:func:`support_margin` in numpy: hull edges as the stance pairs with no foot on their right.
+    """Support margin: hull edges as the stance pairs with no stance foot on their right.
 
-    An ordered pair (a, b) of distinct stance feet is on the boundary of the counter-clockwise
-    hull when every stance foot c has ``(b − a) × (c − a) ≥ 0``; the margin is the smallest
-    distance to those segments, positive when the centre of mass is on the left of all of them.
-    Stance feet on one line (or one or two of them) give a point or a segment: minus the
-    distance to it (the nearest of all stance pairs' segments, whose union it is).
+    Collinear stance feet (or one or two) give minus the distance to their segment (the union
+    of all stance pairs' segments).
     """
     a = pts[:, :, None, :]  # (N, L, 1, 2)
     b = pts[:, None, :, :]  # (N, 1, L, 2)
@@ -204,10 +195,9 @@ def periodic_spline(knots: Any, values: Any, period: float, t: Any) -> np.ndarra
         t: (N,) times [s] (any real).
 
     Returns:
-        (N, D): value, with the second derivatives ``M_j`` at the knots solving the cyclic
-        system ``h_{j−1} M_{j−1} + 2 (h_{j−1} + h_j) M_j + h_j M_{j+1} = 6 (δ_j − δ_{j−1})``
-        (δ_j the slope of chord j), so value, slope and curvature are continuous, across the
-        period too. One knot gives a constant.
+        (N, D) values; the knots' second derivatives ``M_j`` solve the cyclic system
+        ``h_{j−1} M_{j−1} + 2 (h_{j−1} + h_j) M_j + h_j M_{j+1} = 6 (δ_j − δ_{j−1})`` (δ_j the
+        slope of chord j). One knot gives a constant.
 
     """
     x = np.asarray(knots, dtype=float)
@@ -280,53 +270,44 @@ def terrain_clearance(
 ) -> np.ndarray:
     """The foot spheres against the terrain: (N, L) gaps [m] (:func:`~.terrain.sphere_gap`).
 
-    Every foot, swing and stance (a stance sphere touches its ground: gap 0): the sphere of
-    radius ``rad`` at each centre ``feet`` (N, L, 3) must not enter the terrain (sampled in
-    a disc of radius ``rad``, ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``). With ``edge_gap``
-    (N, L), each swing foot sphere's clearance to the terrain above its own ground plane
-    (:func:`~.terrain.edge_distance`; ``inf`` where none is near), every swing must also
-    clear the terrain's edges by ``promised`` [m].
+    Every foot, swing and stance (gap 0 in stance). With ``edge_gap`` (N, L), each swing
+    sphere's clearance to the terrain above its own ground plane
+    (:func:`~.terrain.edge_distance`), every swing must also clear edges by ``promised`` [m].
 
     Raises:
         GaitError: (``strict``) check ``"terrain clearance"``: a sphere more than 1e-9 m
-            into the ground (the leg, the time, the depth); check ``"swing clearance"``: a
-            swing passes an edge closer than ``promised`` (the leg, the time, by how much).
+            into the ground; check ``"swing clearance"``: a swing passes an edge closer than
+            ``promised`` (both name the leg, the time, by how much).
 
     """
+
+    def fail(msg: str, check: str, i: Any, leg: Any, d: float, allowed: str) -> GaitError:
+        return GaitError(f"leg {names[leg]}: {msg}", check=check, leg=names[leg],
+                         time=float(t[i]), amount=d, parameter="step_height", value=H,
+                         allowed=allowed)  # fmt: skip
+
     gap = sphere_gap(ground, feet, rad)
     if strict and gap.min() < -1e-9:
         i, leg = np.unravel_index(int(np.argmin(gap)), gap.shape)
         d = float(-gap[i, leg])
         kind = "swing" if swing[i, leg] else "stance"
         where = "off the terrain" if math.isinf(d) else f"{d:.4g} m into the ground"
-        raise GaitError(
-            f"leg {names[leg]}: {kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s "
-            f"(check 'terrain clearance'; step_height={H:g} m, or the footholds near an edge)",
-            check="terrain clearance",
-            leg=names[leg],
-            time=float(t[i]),
-            amount=d,
-            parameter="step_height",
-            value=H,
-            allowed="foot spheres clear of the terrain",
-        )
+        raise fail(
+            f"{kind} foot sphere (r={rad:g} m) {where} at t={t[i]:.4g} s (check 'terrain "
+            f"clearance'; step_height={H:g} m, or the footholds near an edge)",
+            "terrain clearance", i, leg, d, "foot spheres clear of the terrain",
+        )  # fmt: skip
     gap_e = np.full(gap.shape, np.inf) if edge_gap is None else np.asarray(edge_gap)
     short = swing & (gap_e < promised)
     if strict and short.any():
         i, leg = np.unravel_index(int(np.argmin(np.where(short, gap_e, np.inf))), gap.shape)
         d = float(promised - gap_e[i, leg])
-        raise GaitError(
-            f"leg {names[leg]}: the swing passes a terrain edge {1e3 * gap_e[i, leg]:.3g} mm away "
-            f"at t={t[i]:.4g} s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised "
-            f"(check 'swing clearance'; raise step_height={H:g} m or move the footholds)",
-            check="swing clearance",
-            leg=names[leg],
-            time=float(t[i]),
-            amount=d,
-            parameter="step_height",
-            value=H,
-            allowed=f"swings clear of edges by {promised:g} m",
-        )
+        raise fail(
+            f"the swing passes a terrain edge {1e3 * gap_e[i, leg]:.3g} mm away at t={t[i]:.4g} "
+            f"s, {1e3 * d:.3g} mm short of the {1e3 * promised:.3g} mm promised (check 'swing "
+            f"clearance'; raise step_height={H:g} m or move the footholds)",
+            "swing clearance", i, leg, d, f"swings clear of edges by {promised:g} m",
+        )  # fmt: skip
     return gap
 
 
@@ -346,19 +327,13 @@ def leg_terrain_clearance(
 ) -> np.ndarray:
     """The legs' links against the terrain: (N, L) smallest gap [m] of each leg.
 
-    Each segment of ``points`` (N, L, K, 3) (the polylines of ``points_and_com``) is a
-    capsule of radius ``link_radius`` ρ, sampled as balls of radius ρ at most
-    :data:`SEGMENT_SPACING`·ρ apart (the capsule's surface between two balls is then at most
-    ρ(1 − cos asin(1/4)) ≈ 0.03ρ outside them);
-    each ball is held against the terrain as :func:`~.terrain.sphere_gap` does, ignoring the
-    ground within :data:`~.terrain.EDGE_TOL` of the leg's own ground plane ``planes``
-    (N, L, 4): ``n·x = k`` (its stance contact's; in swing the lower contact's), and the
-    balls within ``link_radius + foot_radius`` of the foot centre (the foot's neighbourhood,
-    which the foot sphere's own check covers; the MJCF export trims a link wider than the
-    foot there). A segment whose points are all within :data:`~.terrain.RELIEF_RADIUS`
-    (horizontally, plus the link radius) of one of its ends, and whose lower end is
-    ``link_radius + relief`` above the higher of the grounds under its ends, is clear without
-    sampling (its gap is then that bound).
+    Each segment of ``points`` (N, L, K, 3) is a capsule of radius ρ = ``link_radius``, sampled
+    as balls of radius ρ at most :data:`SEGMENT_SPACING`·ρ apart and held against the terrain
+    as :func:`~.terrain.sphere_gap` does, ignoring the ground within :data:`~.terrain.EDGE_TOL`
+    of the leg's own ground plane ``planes`` (N, L, 4) and the balls within ``link_radius +
+    foot_radius`` of the foot centre (the foot's own check covers it). A segment within
+    :data:`~.terrain.RELIEF_RADIUS` of its ends whose lower end is ``link_radius + relief``
+    above the higher ground under them is clear unsampled (that bound its gap).
 
     Raises:
         GaitError: (``strict``) check ``"leg terrain clearance"``: a link into the terrain.
@@ -366,9 +341,6 @@ def leg_terrain_clearance(
     """
     p = np.asarray(points, dtype=float)
     a, b = p[:, :, :-1], p[:, :, 1:]  # (N, L, K-1, 3) segment ends
-    # every point of a segment within RELIEF_RADIUS of one of its ends lies over ground below
-    # max(h(a), h(b)) + relief: it is clear when its lower end is a link radius above that
-    # (then the gap given is that lower bound)
     top = np.maximum(ground(a[..., 0], a[..., 1]), ground(b[..., 0], b[..., 1]))
     side = 0.5 * np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]) + link_radius
     gap = np.minimum(a[..., 2], b[..., 2]) - link_radius - top - ground.relief
@@ -405,30 +377,27 @@ def leg_terrain_clearance(
 
 
 def raise_checks(
-    joint_names: tuple[str, ...],
-    table: PhaseTable,
-    names: tuple[str, ...],
+    wb: Any,
+    st: Any,
     pairs: tuple[tuple[int, int], ...],
-    t: np.ndarray,
     clear: np.ndarray,
     margin: np.ndarray,
-    tol: float,
-    strokes: np.ndarray,
     qdot: np.ndarray,
     qddot: np.ndarray,
     vlim: np.ndarray,
-    acc_lim: np.ndarray,
     support: np.ndarray,
 ) -> None:
     """Raise the first failed walk check: leg clearance, stability margin, joint speed/accel.
 
-    The margin fails below ``−tol`` [m] and only for a statically stable ``table``; a rate
-    fails above its limit × (1 + 1e-9).
+    ``wb`` the robot, ``st`` the walk's settings (``table``, ``t``, ``tol``, ``strokes``,
+    ``acc_lim``). The margin fails below ``−st.tol`` [m] and only for a statically stable
+    table; a rate fails above its limit × (1 + 1e-9).
 
     Raises:
         GaitError: Names the check, the legs or the joint, the time and by how much.
 
     """
+    names, table, t, tol, acc_lim = wb.leg_names, st.table, st.t, st.tol, st.acc_lim
     if clear.size and clear.min() <= 0:
         i, k = np.unravel_index(int(np.argmin(clear)), clear.shape)
         a, b = pairs[k]
@@ -440,7 +409,7 @@ def raise_checks(
             time=float(t[i]),
             amount=float(-clear[i, k]),
             parameter="stride",
-            value=strokes.max(),
+            value=st.strokes.max(),
         )
     if table.statically_stable and margin.min() <= -tol:
         im = int(np.argmin(margin))
@@ -462,7 +431,7 @@ def raise_checks(
         over = np.abs(rates) - lim * (1.0 + 1e-9)
         if over.size and over.max() > 0:
             i, j = np.unravel_index(int(np.argmax(over)), over.shape)
-            joint = joint_names[j]
+            joint = wb.joint_names[j]
             d = float(np.abs(rates[i, j]) - lim[j])
             raise GaitError(
                 f"joint {joint}: |rate| {abs(rates[i, j]):.4g} {unit} exceeds its limit "

@@ -39,15 +39,9 @@ __all__ = [
 class StandingPose:
     """A legged robot standing level on flat ground (z = 0, z up; SI units; arrays read-only).
 
-    Attributes:
-        robot: The robot.
-        height: Body origin above the ground [m].
-        q: (nq,) joint values.
-        base: (4, 4) body pose ``worldMbody``.
-        feet: (L, 3) foot positions (the contact spheres' centres, ``foot_radius`` above the
-            ground) [m].
-        contacts: (L, 3) contact points on the ground [m].
-
+    ``height`` of the body origin [m]; ``base`` (4, 4) ``worldMbody``; ``feet`` (L, 3) the
+    contact spheres' centres (``foot_radius`` above the ground) and ``contacts`` (L, 3) the
+    points on the ground [m].
     """
 
     robot: WholeBody
@@ -70,17 +64,13 @@ def standing_pose(
 ) -> StandingPose:
     """Stand any legged robot level on flat ground (see the module doc for the rule).
 
-    Args:
-        robot: Any robot :func:`~.robot.as_whole_body` takes (default the built-in hexapod).
-        height: Body origin above the ground [m] (default the robot's ``body_height``;
-            negative for a base frame below the ground, e.g. Kraby's at its belly's level);
-            every leg's mount must be above the ground.
-        reach: Mount-to-foot horizontal distance [m] (default the robot's own).
-        shift: Body shift (dx, dy) over the feet [m].
-        feet: Foot spec for a URDF without foot links (see :func:`~.legs.parse_feet`).
-        foot_radius: Contact radius of the feet [m].
-        knee: Where the closed-form legs' knees point (:data:`~.knee.KNEES`; default: the
-            branch inside the joint limits nearest the robot's neutral q).
+    ``robot``: any :func:`~.robot.as_whole_body` takes (default the built-in hexapod).
+    Lengths in [m]: ``height`` of the body origin (default the robot's ``body_height``;
+    negative for a base frame below the ground, e.g. Kraby's belly; every leg's mount must be
+    above the ground), ``reach`` mount to foot, horizontal (default the robot's own), ``shift``
+    (dx, dy), ``foot_radius``. ``feet``: for a URDF without foot links (:func:`~.legs.parse_feet`);
+    ``knee``: :data:`~.knee.KNEES` (default: the branch inside the joint limits nearest the
+    robot's neutral q).
 
     Raises:
         ParameterError: Bad numbers; ``height``, ``reach`` or a ``shift`` component larger
@@ -150,8 +140,7 @@ def frame_poses(
 def default_configuration(model: Model) -> np.ndarray:
     """The package's home pose (:func:`hexapod_kin.ik.home`), for display and demos.
 
-    A hexapod stands with every leg at the legs' home :data:`hexapod_kin.ik.LEG_HOME`
-    (hip, knee, ankle; clipped to the limits); any other model is at ``ik.home(model)``.
+    A hexapod's legs at :data:`hexapod_kin.ik.LEG_HOME` (clipped to the limits).
     """
     from .. import ik
 
@@ -185,10 +174,7 @@ def demo_trajectory(
     other model sweeps each joint sinusoidally within its limits (amplitude ≤ 0.6 rad or a
     quarter of the range, phases staggered).
 
-    Args:
-        model: A loaded model.
-        duration: Length in [s] (> 0).
-        samples: Number of samples (2 to :data:`MAX_DEMO_SAMPLES`).
+    ``duration`` > 0 in [s]; ``samples`` from 2 to :data:`MAX_DEMO_SAMPLES`.
 
     Raises:
         ParameterError: Bad ``duration`` or ``samples``.
@@ -222,9 +208,7 @@ def hexapod_sway(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The hexapod sways its body (heave, roll, pitch, yaw) with its feet fixed in the world.
 
-    Returns ``(times, qs, base_poses)``; the legs follow by body-pose IK on the robot's legs
-    (:meth:`~.robot.WholeBody.body_ik`: closed form per leg, the branch nearest to the
-    previous sample; a sample out of reach keeps the previous one).
+    Returns ``(times, qs, base_poses)``; the legs by :meth:`~.robot.WholeBody.body_ik`.
     """
     import pinocchio as pin
 

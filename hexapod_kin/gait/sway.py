@@ -1,37 +1,24 @@
 """Body sway of a statically stable walk on few legs: the zero-moment point to each support.
 
-A quadruped's crawl lifts one leg at a time; the body must move so that the support (the
-three stance feet) holds it. Moving the centre of mass (CoM) into the triangle is the static
-rule, but a body that sways accelerates, and the ground then holds it at the zero-moment point
-(ZMP), not under the CoM: on flat ground ``z = c − (h / g) c̈`` (h the CoM height above the
-ground; the legs' own momentum about the CoM neglected). At a 1 s cycle the difference is
-several centimetres for a 0.25 m tall body, larger than the triangle's inscribed margin.
+A crawl lifts one leg at a time and the body must sway over the three stance feet. A
+swaying body accelerates, so the ground holds it at the zero-moment point (ZMP), not under
+the CoM: on flat ground ``z = c − (h / g) c̈`` (h the CoM height; the legs' own momentum
+neglected), centimetres apart at a 1 s cycle.
 
-The sway is a periodic cubic spline (C², period T) in the body frame, one knot per swing
-group at mid-swing. The knot values are solved so that the ZMP, not the CoM, sits at
-``gain`` × the safest point of that swing's support (:func:`support_centre`: the centre of the
-largest circle inside a support triangle, else the stance feet's mean; the feet's mean too
-when the legs cannot follow the incentre's larger sway: a foot out of reach, a joint past its
-position or speed limit): the spline, its second derivative and so the ZMP at the knots are
-linear in the knot values (one small linear solve), then two correction passes with the ZMP
-of the whole robot (:func:`.zmp.zmp_points`: the planned joints by IK, the legs' momentum
-included).
+The sway is a periodic cubic spline (C², period T) in the body frame with one knot per
+swing group at mid-swing. The knot values put the ZMP at ``gain`` × the safest point of that
+swing's support (:func:`support_centre`), by one linear solve (spline, its second derivative
+and the ZMP at the knots are linear in them), then two correction passes with the whole
+robot's ZMP (:func:`.zmp.zmp_points`). The stance feet's mean replaces the incentre when the
+legs cannot follow its larger sway (a foot out of reach, a joint past a position or speed
+limit). The incentre has the largest static margin and leans towards the stance foot
+diagonal to the swinging one, which halves the swinging corner's drop on compliant ground
+(``s_a + s_b − s_d``: ``∝ 1 − 2/3`` at the centroid, ``3 − 2√2 ≈ 0.17`` at the incentre).
 
-Why the incentre: besides the largest static margin, it leans towards the stance foot
-diagonal to the swinging one. On compliant ground each stance foot sinks in proportion to its
-load, and the swinging foot's corner of the body drops by the plane through the sunk feet:
-``s_a + s_b − s_d`` for a rectangle (``a``, ``b`` the adjacent stance feet, ``d`` the diagonal
-one), ``∝ 1 − 2/3`` at the centroid and ``∝ 3 − 2√2 ≈ 0.17`` at a right isosceles triangle's
-incentre (the diagonal foot's share ``√2 − 1``): half the drop, so a swing lands on time.
-
-Within the friction: the ground pushes the swaying body with ``m c̈``, a horizontal force of
-``|c − z| / h`` of its weight, so a ZMP far from the body asks for friction. A long body's
-incentres lie far ahead and behind, and the sway that reaches them accelerates at up to
-:data:`SWAY_FRICTION` g at most (at the knots); beyond it each target is the point farthest
-inside its support within a common distance of the body's nominal centre (:func:`support_centre`
-with ``reach``), the largest distance within the budget (bisected). When that sway's ZMP
-leaves the support somewhere (the legs' own momentum near lift-off and touch-down), the
-incentres are kept: a body that tips is worse than one that asks for more friction.
+Friction: the sway asks ``|c − z| / h`` of the weight as horizontal force, at most
+:data:`SWAY_FRICTION` at the knots; beyond it each target is the point farthest inside its
+support within a common (bisected) distance of the body's centre. If that sway's ZMP leaves
+the support, the incentres are kept: a body that tips is worse than one that slides.
 """
 
 from __future__ import annotations
@@ -45,15 +32,11 @@ from .paths import se2_pose
 from .stability import periodic_spline, support_margin
 from .zmp import GRAVITY, rates, zmp_points
 
-__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses"]
+__all__ = ["SWAY_FRICTION", "support_centre", "sway_poses", "zmp_margin"]
 
-#: The sway's friction budget: the body's horizontal acceleration at the sway's knots,
-#: ``|s − z| g / h`` (``s`` the sway, ``z`` its ZMP target, ``h`` the body's height), at most
-#: this many ``g``: half the lowest floor friction of ``simulate --robust`` (0.6). Where the
-#: incentres ask more, each target is the point farthest inside its support within a common
-#: distance of the body's nominal centre, the largest distance within the budget. A long
-#: body's incentres lie far ahead and behind (erd:hyq's at ±0.33 m, 0.63 h: 0.63 g asked of
-#: a floor of friction 0.6; its stance feet crept 0.7 mm a cycle, +1.2 % of travel).
+#: The sway's friction budget: its horizontal acceleration at the knots, ``|s − z| g / h``
+#: (``s`` the sway, ``z`` its ZMP target, ``h`` the body's height), at most this many ``g``:
+#: half the lowest floor friction of ``simulate --robust`` (0.6).
 SWAY_FRICTION = 0.3
 
 
@@ -147,15 +130,11 @@ def _within_friction(
     return targets(lo), full
 
 
-def _zmp_margin(
-    wb: Any, poses: np.ndarray, plan: np.ndarray, t: np.ndarray, table: Any, T: float, q0: Any
-) -> float:
-    """The smallest margin [m] of the whole robot's ZMP in its stance feet's polygon."""
-    q = np.array(wb.body_ik(poses, plan, q_prev=q0, times=t, strict=False).q)
-    ground = float(np.mean(plan[0, :, 2]))
-    zmp = zmp_points(wb, q, poses, t, np.full(len(t), ground))
-    phase = np.remainder(np.asarray(t)[:, None] / T + np.asarray(table.offsets)[None, :], 1.0)
-    return float(np.min(support_margin(plan, phase < table.duty_factor, zmp)))
+def zmp_margin(
+    wb: Any, q: np.ndarray, base: np.ndarray, feet: np.ndarray, support: Any, t: Any, ground: Any
+) -> np.ndarray:
+    """(N,) margins [m] of the ZMP (on the heights ``ground`` (N,)) in the support polygons."""
+    return np.asarray(support_margin(feet, support, zmp_points(wb, q, base, t, ground)))
 
 
 def sway_poses(
@@ -237,9 +216,12 @@ def sway_poses(
         return out
 
     out = fit(safest * gain)
-    if not np.array_equal(safest, incentres) and _zmp_margin(wb, out, plan, t, table, T, q0) < 0.0:
-        safest = incentres  # a body that tips is worse than one that asks more friction
-        out = fit(safest * gain)
+    if not np.array_equal(safest, incentres):
+        q = np.array(wb.body_ik(out, plan, q_prev=q0, times=t, strict=False).q)
+        stance = np.remainder(np.asarray(t)[:, None] / T + offs[None, :], 1.0) < beta
+        if zmp_margin(wb, q, out, plan, stance, t, np.full(len(t), ground)).min() < 0.0:
+            safest = incentres  # a body that tips is worse than one that asks more friction
+            out = fit(safest * gain)
     if np.array_equal(safest, centroid):
         return out
     # the largest margin where the legs follow it (reached, within their position and speed

@@ -1,29 +1,21 @@
 """Gait phase tables: which legs swing when (per-leg phase offset) and the duty factor.
 
-A leg's phase is ``φ(t) = t / T + offset`` (in cycles, modulo 1); it is in stance for
-``φ < β`` (the duty factor) and in swing for ``β ≤ φ < 1``, so it lifts off at
-``t = (k + β − offset)·T`` and touches down ``(1 − β)·T`` later. Leg order is the robot's
-(``hexapod``: leg1 front-left, leg2 middle-left, leg3 rear-left, leg4 rear-right, leg5
-middle-right, leg6 front-right).
+A leg's phase is ``φ(t) = t / T + offset`` (cycles, modulo 1): stance for ``φ < β`` (the
+duty factor), swing for ``β ≤ φ < 1``; it lifts off at ``t = (k + β − offset)·T``. Leg order
+is the robot's (``hexapod``: leg1 front-left, leg2 middle-left, leg3 rear-left, leg4
+rear-right, leg5 middle-right, leg6 front-right). The built-in patterns are made from the
+legs' xy in the body frame (``positions``, x forward, y left), for any order of legs:
 
-The built-in patterns are defined from where the legs are (``positions``: each leg's xy in
-the body frame, x forward, y left; the walk passes the leg mounts), for any order of legs:
-
-* ``wave`` (any N ≥ 5; on four legs it is the ``crawl``): one leg at a time in the *lateral
-  sequence* — the left legs rear to front, then the right legs rear to front — lift-offs 1/N
-  cycle apart,
-  ``β = max(1 − 1/N, 0.8)`` (on four legs 0.8 rather than 0.75, so that two consecutive
-  swings never meet at one instant: a diagonal hand-over would put the centre of mass on the
-  diagonal, margin 0).
-* ``crawl`` (N = 4): the four-legged wave (lateral sequence LH, LF, RH, RF, β = 0.8); the walk
-  sways the body over each support triangle (:mod:`.walk`). (A four-legged ``wave`` would be
-  the same gait: the name is not offered for four legs.)
+* ``wave`` (N ≥ 5): one leg at a time in the *lateral sequence* (left legs rear to front,
+  then right rear to front), lift-offs 1/N cycle apart, ``β = max(1 − 1/N, 0.8)``.
+* ``crawl`` (N = 4): the four-legged wave (LH, LF, RH, RF), β = 0.8 rather than 0.75 so that
+  two swings never meet (a diagonal hand-over puts the CoM on the diagonal, margin 0); the
+  walk sways the body over each support triangle (:mod:`.sway`).
 * ``tripod`` (N = 6): alternate legs around the body (the front-left leg's set first), β = ½.
-* ``ripple`` (even N ≥ 6, as many legs on each side): each side rear to front, lift-offs
-  2/N cycle apart, the right side half a cycle after the left, ``β = 1 − 2/N``.
-* ``trot`` (N = 4, diagonal pairs) and ``pace`` (N = 4, lateral pairs), β = ½: two feet on the
-  ground, **not statically stable** (``statically_stable=False``: the walk reports their
-  margin but does not fail on it).
+* ``ripple`` (even N ≥ 6, as many a side): each side rear to front, lift-offs 2/N apart, the
+  right side half a cycle after the left, ``β = 1 − 2/N``.
+* ``trot`` (N = 4, diagonal pairs) and ``pace`` (lateral pairs), β = ½: two feet down, **not
+  statically stable** (the walk reports their margin but does not fail on it).
 """
 
 from __future__ import annotations
@@ -125,9 +117,8 @@ def _offsets(lift: dict[int, float], beta: float, n: int) -> tuple[float, ...]:
 def default_positions(n_legs: int) -> np.ndarray:
     """The legs' layout assumed when none is given: (N, 2) xy in the body frame.
 
-    The built-in hexapod's convention: the first ⌈N/2⌉ legs on the left (y = +1) front to
-    rear, the others on the right (y = −1) rear to front (counter-clockwise from the
-    front-left leg); x in steps of 1 centred on 0.
+    The built-in hexapod's: the first ⌈N/2⌉ legs left (y = 1) front to rear, the others right
+    (y = −1) rear to front; x in steps of 1 centred on 0.
     """
     n = int(n_legs)
     left = (n + 1) // 2
@@ -165,13 +156,10 @@ def _rank(values: np.ndarray, tol: float) -> np.ndarray:
 def _sides(xy: np.ndarray) -> tuple[list[int], list[int]]:
     """Left and right legs, each sorted rear to front (by x within the tolerance; ties by index).
 
-    A leg is left for ``y > tol``, right for ``y < −tol`` (``tol``: :data:`LAYOUT_TOL` × the
-    layout's size); a leg on the x axis goes to the side with fewer legs, the front one
-    first, the left side on a tie (so the RARL hexapod's legs at 0° and 180° make three a
-    side, as a ring counter-clockwise from the front-left leg). With an even number of legs
-    the sides are then balanced: while one has two more, its leg nearest the axis (smallest
-    ``|y|``; the rear one leaving the left, the front one leaving the right) changes side
-    (Kraby's legs at ±3 mm of the axis).
+    Left for ``y > tol``, right for ``y < −tol`` (``tol``: :data:`LAYOUT_TOL` × the layout's
+    size); a leg on the x axis goes to the side with fewer legs (front first, left on a tie:
+    the RARL hexapod's legs at 0° and 180° make three a side). With an even number of legs,
+    while one side has two more, its leg nearest the axis changes side (Kraby's legs at ±3 mm).
     """
     tol = _tol(xy)
     xr = _rank(xy[:, 0], tol)

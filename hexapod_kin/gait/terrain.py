@@ -189,12 +189,10 @@ def _plane_height(pl: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) -> np.ndarray:
     """How far spheres clear the terrain [m], sampled: negative = depth into it.
 
-    For a sphere of radius r at centre ``c``, the ground point at horizontal offset d
-    (|d| ≤ r) is outside the sphere when ``c_z − h(c_xy + d) ≥ √(r² − |d|²)``; the gap is
-    the smallest ``c_z − h(c_xy + d) − √(r² − |d|²)`` over the offsets of
-    :func:`disc_offsets` (exact for a level ground: ``c_z − h − r``; a sampled estimate
-    elsewhere, the ring spacing r/4 and 16 directions its resolution). −∞ where the ground
-    is undefined.
+    The smallest ``c_z − h(c_xy + d) − √(r² − |d|²)`` over the offsets d of
+    :func:`disc_offsets` (exact on level ground, ``c_z − h − r``); −∞ where the ground is
+    undefined. Centres at least ``r +`` :attr:`Terrain.relief` above the ground are not
+    sampled: their gap is ``c_z − h(c_xy) − r``.
 
     Args:
         ground: The terrain.
@@ -202,9 +200,6 @@ def sphere_gap(ground: Terrain, centres: Any, radius: float, below: Any = None) 
         radius: r [m] (≥ 0).
         below: Optional (..., 4) planes ``n·x = k`` (n_z > 0): the ground at most
             :data:`EDGE_TOL` above its point's plane is ignored (a leg's own foot ground).
-
-    Points whose centre is at least ``r +`` :attr:`Terrain.relief` above the ground under it
-    are not sampled (they clear it): their gap is the centre sample's, ``c_z − h(c_xy) − r``.
 
     """
     c = np.asarray(centres, dtype=float)
@@ -230,13 +225,11 @@ def edge_distance(
 ) -> np.ndarray:
     """3-D distance [m] from spheres to the terrain above given planes (``inf``: none near).
 
-    The terrain is sampled around each centre ``c`` (..., 3) in a disc of radius
-    ``radius + reach`` (:func:`disc_offsets`, fine); a sample at horizontal offset d with
-    height ``h = h(c_xy + d)`` more than :data:`EDGE_TOL` above its point's plane ``below``
-    (..., 4) (a leg's own ground, ignored) is at ``√(|d|² + (c_z − h)²) − r`` from the
-    sphere, or ``|d| − r`` when ``h ≥ c_z`` (the step face beside the sphere); the smallest.
-    Exact to the sampling for a height field with vertical steps (a step's corner). Spheres
-    more than ``reach`` above the terrain's :attr:`Terrain.relief` are not sampled (``inf``).
+    Samples ``h = h(c_xy + d)`` in a disc of radius ``radius + reach`` around each centre
+    (..., 3) (:func:`disc_offsets`, fine), kept where more than :data:`EDGE_TOL` above the
+    point's plane ``below`` (..., 4); each is at ``√(|d|² + (c_z − h)²) − r`` from the sphere, or
+    ``|d| − r`` when ``h ≥ c_z`` (a step's face); the smallest. Spheres more than ``reach``
+    above the terrain's :attr:`Terrain.relief` are not sampled (``inf``).
     """
     c = np.asarray(centres, dtype=float)
     out = np.full(c.shape[:-1], np.inf)
@@ -266,8 +259,7 @@ def disc_residual(ground: Terrain, points: Any, radius: float) -> np.ndarray:
     """Largest residual [m] of the plane fitted to the heights sampled in discs.
 
     Least squares ``h ≈ a + b·dx + c·dy`` over :func:`disc_offsets` around each point
-    (..., 2|3) [m]; a disc straddling a height discontinuity leaves a residual of the order
-    of the jump, a plane or a gently curved ground ~0 (∞ where the ground is undefined).
+    (..., 2|3) [m]: of the order of the jump across an edge, ~0 on a plane (∞: undefined).
     """
     p = np.asarray(points, dtype=float)
     d = disc_offsets(radius)
@@ -283,11 +275,10 @@ def off_edges(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Footholds moved off terrain edges along a direction (the edge-aware foothold rule).
 
-    A point whose disc of ``radius`` is not flat (:func:`disc_residual` above
-    :data:`EDGE_TOL`; sampled on rings of ``radius / cos(π/16)``, so that an edge line inside
-    the disc crosses a sample) moves along the unit ``direction`` (its direction of travel) to the
-    nearest point, forward or backward, at a multiple of ``radius/64`` and at most ``reach``
-    away, whose disc is flat (a tie goes forward); points with no such place stay.
+    A point whose disc is not flat (:func:`disc_residual` above :data:`EDGE_TOL`; rings of
+    ``radius / cos(π/16)`` so that an edge inside the disc crosses a sample) moves along
+    ``direction`` to the nearest flat place, forward or backward, at a multiple of
+    ``radius/64`` and at most ``reach`` away (a tie goes forward); with none it stays.
 
     Args:
         ground: The terrain.
@@ -329,11 +320,8 @@ RAISE_FROM = 0.05
 def swing_profile(s: Any) -> tuple[np.ndarray, np.ndarray]:
     """Swing progress ``(10s³ − 15s⁴ + 6s⁵, 64 s³(1 − s)³)`` at ``s ∈ [0, 1]``.
 
-    The first blends the horizontal position (and the ground height) from lift-off to
-    touch-down, the second scales the step height (1 at s = ½); both have zero first **and
-    second** derivatives at s = 0 and 1 (``30s²(1 − s)²`` and ``60s(1 − s)(1 − 2s)``;
-    ``192 s²(1 − s)²(1 − 2s)`` and ``384 s(1 − s)(5s² − 5s + 1)``), so a swing starts and ends
-    with zero velocity and zero acceleration.
+    The horizontal blend (and ground height) from lift-off to touch-down, and the lift's
+    scale (1 at s = ½): both with zero first and second derivatives at s = 0 and 1.
     """
     s = np.asarray(s, dtype=float)
     u = s * (1.0 - s)
@@ -344,9 +332,8 @@ def raise_profile(s: Any) -> np.ndarray:
     """The swing raise's shape at ``s ∈ [0, 1]``: a plateau with quintic ramps, C².
 
     ``q(s/a)`` for ``s < a``, 1 on ``[a, 1 − a]``, ``q((1 − s)/a)`` beyond (``a`` =
-    :data:`RAMP`, ``q(u) = 10u³ − 15u⁴ + 6u⁵``): zero velocity and acceleration at lift-off
-    and touch-down and at the joins, and up to ``q(0.4) = 0.32`` already at s = 0.1 (the
-    lift ``64 s³(1 − s)³`` is 0.05 there): it clears a rise close to the lift-off.
+    :data:`RAMP`, ``q`` the first of :func:`swing_profile`): 0.32 already at s = 0.1, where the
+    lift is 0.05, so it clears a rise close to the lift-off.
     """
     u = np.clip(
         np.minimum(np.asarray(s, dtype=float), 1.0 - np.asarray(s, dtype=float)) / RAMP, 0, 1
@@ -365,18 +352,12 @@ def swing_raise(
 ) -> np.ndarray:
     """The extra height [m] each swing needs to clear the terrain (0 where it passes no edge).
 
-    A swing's sphere centre (radius r) goes from ``start`` to ``end`` (M, 3) as
-    ``c(s) = start + (end − start)·b(s) + height·ℓ(s)·ẑ`` (:func:`swing_profile`'s
-    b, ℓ) on ``samples + 1`` values of s. A swing whose path passes over a terrain edge (a disc
-    of radius ``r + margin`` around a point of its path is not flat, :func:`disc_residual`)
-    is raised by ``ΔH·p(s)`` (p = :func:`raise_profile`) with the smallest ΔH ≥ 0 for which
-    the sphere clears the terrain (:func:`sphere_gap`) by ``margin·p(s)`` where its path is
-    by the edge (the disc above is not flat) and by 0 elsewhere:
-    ``ΔH = max(0, maxₛ (m(s) − gap(s)/p(s)))`` (m = margin or 0) over the samples, at
-    most ``height`` (a swing at most doubles its lift: a taller rise needs a higher step,
-    and the clearance check says so).
-    Samples with ``p(s) <`` :data:`RAISE_FROM` (next to the
-    contacts, where no raise helps) are left to the footholds and to the clearance check.
+    The sphere centre (radius r) goes from ``start`` to ``end`` (M, 3) as ``c(s) = start +
+    (end − start)·b(s) + height·ℓ(s)·ẑ`` (:func:`swing_profile`) on ``samples + 1`` values of
+    s. A path by an edge (a disc of radius ``r + margin`` not flat, :func:`disc_residual`) is
+    raised by ``ΔH·p(s)`` (p = :func:`raise_profile`), ``ΔH = max(0, maxₛ (m(s) −
+    gap(s)/p(s)))`` with ``gap`` of :func:`sphere_gap` and ``m = margin`` by the edge, else 0,
+    over the samples with ``p ≥`` :data:`RAISE_FROM`; at most ``height``.
     """
     c0, c1 = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
     s = np.linspace(0.0, 1.0, samples + 1)

@@ -2,44 +2,28 @@
 
 :func:`walk` plans a periodic gait of the whole hexapod and returns a :class:`GaitRun`.
 
-* **Body**: the commanded body twist (vx, vy forward/sideways in the body frame [m/s], ωz
-  [rad/s]) is integrated exactly on SE(2) (arcs of circle; straight lines for ωz = 0; turning
-  in place for vx = vy = 0); the body stays level and its height follows the mean ground height
-  of the feet plus ``body_height`` (stance feet: their contact point; swing feet: blended
-  from lift-off to touch-down with the swing's own profile, so the body height is continuous).
-* **Feet**: each leg follows the phase table (:mod:`.tables`). Its touch-down point is fixed
-  when the swing is planned (à la Raibert): the leg's neutral foot point under the body's pose
-  at the middle of the *next* stance, projected on the terrain. The swing goes from the last
-  contact to the next one with a quintic horizontal profile ``10s³ − 15s⁴ + 6s⁵`` and a
-  vertical lift ``64 s³(1 − s)³·h`` (peak h at s = ½): zero velocity **and zero acceleration**
-  at lift-off and touch-down.
-* **Round feet roll** (:func:`.paths.rolling_offsets`): the planned foot points are the centres
-  of the foot spheres (radius ``r = robot.foot_radius``), ``c = contact + r n`` (n the terrain
-  normal). During stance the centre moves as a sphere rolling without slip,
-  ``ċ = ω × (r n)`` with ω the foot frame's angular velocity, so the material point in contact
-  stays put and the body moves over the ground as planned. ω depends on the joint angles, so
-  IK and rolling are iterated to a fixed point (``settings["rolling_residual"]``). With
-  ``r = 0`` the feet are points fixed in the world during stance.
-* **Body sway** (``sway``; on by default for four legs): the body's horizontal position gets a
-  periodic offset, in the body frame, that is the periodic cubic spline (C², period T) through
-  one knot per swing group at mid-swing; each knot moves the zero-moment point to the
-  support's safest point (the stance contacts at that instant; three of them: the incentre,
-  :func:`.sway.support_centre`, nearer the body's centre when the sway would accelerate
-  beyond :data:`.sway.SWAY_FRICTION` g), times the gain ``sway`` (:mod:`.sway`; default 1, so
-  that the plan's ZMP margin stays positive between the knots too).
-* The walk is the gait's periodic regime restricted to ``[0, duration]`` (every contact point
-  is given by the same formula, before ``t = 0`` too), so no start-up transient.
-* **Joints**: body-pose IK (closed form per leg, nearest branch) at every sample; joint
-  rates and accelerations by second-order finite differences.
-* **Terrain edges**: a touch-down whose disc of radius r + ``FOOTHOLD_MARGIN`` is not flat
-  moves along its travel to the nearest flat one (:func:`.terrain.off_edges`); a swing over an
-  edge is raised by ΔH·p(s) (:func:`.terrain.swing_raise`; ΔH ≤ step_height).
-* **Checks** at every sample: stance slip (the contact point's material point, by forward
-  kinematics), static stability margin (:mod:`.stability`; a margin within
-  ``MARGIN_TOL`` × the robot's size of zero is not a failure; patterns with
-  ``statically_stable=False`` report it but never fail on it), joint limit margin, joint speed
-  against the URDF's velocity limits (and acceleration against an optional limit), IK status,
-  clearance between neighbouring legs; foot spheres and leg links against the terrain.
+* **Body**: the body twist (vx, vy [m/s] in the body frame, ωz [rad/s]) integrated exactly on
+  SE(2); level, at ``body_height`` above the feet's mean ground height (swing feet blended
+  from lift-off to touch-down, so the height is continuous).
+* **Feet**: each leg follows the phase table (:mod:`.tables`). A touch-down point is fixed
+  when its swing is planned (à la Raibert): the neutral foot point under the body at the
+  middle of the *next* stance, on the terrain. Swings: horizontal ``10s³ − 15s⁴ + 6s⁵``,
+  lift ``64 s³(1 − s)³·h``: zero velocity and acceleration at lift-off and touch-down.
+* **Round feet roll** (:func:`.paths.rolling_offsets`): planned points are the spheres'
+  centres ``c = contact + r n``, rolling without slip in stance (``ċ = ω × (r n)``); IK and
+  rolling iterate to a fixed point (``settings["rolling_residual"]``).
+* **Body sway** (``sway``; on by default for four legs): :mod:`.sway`.
+* The gait's periodic regime restricted to ``[0, duration]``: no start-up transient.
+* **Joints**: body-pose IK (closed form per leg, nearest branch); rates by second-order
+  finite differences.
+* **Terrain edges**: a touch-down whose disc of radius r + :data:`FOOTHOLD_MARGIN` is not
+  flat moves along its travel (:func:`.terrain.off_edges`); a swing over an edge is raised
+  (:func:`.terrain.swing_raise`, by at most the step height).
+* **Checks** at every sample: stance slip, static stability margin (:mod:`.stability`; within
+  ``MARGIN_TOL`` × the robot's size of zero is no failure; patterns with
+  ``statically_stable=False`` never fail on it), joint limits, speeds (URDF limits) and
+  accelerations (optional limit), IK status, neighbouring legs' clearance, feet and links
+  against the terrain.
 """
 
 from __future__ import annotations
@@ -72,10 +56,11 @@ from .stability import (
     terrain_clearance,
 )
 from .sway import sway_poses
+from .sway import zmp_margin as sway_zmp_margin
 from .tables import PhaseTable, default_pattern, pattern_names, phase_table
 from .terrain import Terrain, edge_distance, off_edges, raise_profile, swing_profile, swing_raise
 from .terrain import terrain as make_terrain
-from .zmp import rates, zmp_points
+from .zmp import rates
 
 __all__ = [
     "GaitRun",
@@ -154,33 +139,6 @@ def highest_speed(robot: Any = None, **options: Any) -> tuple[float, float, floa
 _SEARCHED = ("stride", "velocity", "period", "duration", "strict")
 
 
-def _zmp_margin(
-    wb: WholeBody,
-    q: np.ndarray,
-    base: np.ndarray,
-    contacts: np.ndarray,
-    support: np.ndarray,
-    t: np.ndarray,
-) -> np.ndarray:
-    """(N,) :attr:`GaitRun.zmp_margin` (empty below 4 samples or without a mass)."""
-    if len(t) < 4 or not wb.mass > 0:
-        return np.zeros(0)
-    sup = support[..., None]
-    h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
-    zmp = np.ascontiguousarray(zmp_points(wb, q, base, t, h))
-    return np.asarray(support_margin(contacts, support, zmp))
-
-
-def _neighbour_pairs(wb: WholeBody) -> tuple[tuple[int, int], ...]:
-    yaw = np.arctan2(wb.mounts[:, 1, 3], wb.mounts[:, 0, 3])
-    order = [int(i) for i in np.argsort(yaw, kind="stable")]
-    n = len(order)
-    if n < 2:
-        return ()
-    pairs = {tuple(sorted((order[k], order[(k + 1) % n]))) for k in range(n)}
-    return tuple(sorted((int(a), int(b)) for a, b in pairs if a != b))
-
-
 def walk(
     robot: Any = None,
     *,
@@ -206,31 +164,29 @@ def walk(
     """Walk the robot and check every sample.
 
     Args:
-        robot: The robot: a :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
+        robot: A :class:`~.robot.WholeBody`, a ``Hexapod``, or any source
             :func:`~.robot.as_whole_body` takes (a URDF path, ``erd:NAME``, a loaded model);
             default the built-in hexapod.
         pattern: A name of :func:`~.tables.pattern_names` for the robot's legs (``tripod``,
             ``wave``, ``ripple`` for six; ``crawl``, ``trot``, ``pace`` for four; ``wave``,
             ``ripple`` for eight) or a :class:`~.tables.PhaseTable` (default
-            :func:`~.tables.default_pattern`: tripod, crawl for four legs, else wave).
-        stride: Foot stroke during stance [m] for a straight forward walk (sets
-            ``vx = stride / (duty_factor · period)``); default :func:`default_stride` when
-            ``velocity`` is not given. Give ``stride`` or ``velocity``, not both.
+            :func:`~.tables.default_pattern`).
+        stride: Foot stroke during stance [m] for a straight forward walk (``vx = stride /
+            (duty_factor · period)``); default :func:`default_stride` without ``velocity``.
+            Give ``stride`` or ``velocity``, not both.
         step_height: Swing lift above the straight line between contacts [m] (default
             :func:`default_step_height`).
         period: Cycle time T [s]. Default 1 s, or for a straight walk (no ``velocity``) the
             shortest multiple of :data:`~.limits.PERIOD_STEP` that keeps every joint within
             its URDF velocity limit (and ``accel_limit``): :func:`~.limits.fit_period`.
         duty_factor: Stance fraction β in (0, 1) (default the pattern's).
-        velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame (curves with
-            vx and wz, turning in place with only wz).
-        body_height: Body above the mean ground height of the feet's contacts [m] (default the
-            robot's :attr:`~.robot.WholeBody.body_height`; the built-in hexapod: 0.08 m).
+        velocity: Body twist ``(vx, vy, wz)`` [m/s, m/s, rad/s] in the body frame.
+        body_height: Body above the mean ground height of the feet's contacts [m] (default
+            :attr:`~.robot.WholeBody.body_height`).
         foot_reach: Horizontal distance from each leg's mount to its neutral foot point [m]
-            (default the robot's own, :attr:`~.robot.WholeBody.foot_reach`; the built-in
-            hexapod: 0.16 m).
-        terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a
-            :class:`~.terrain.Terrain` or ``h(x, y)``.
+            (default :attr:`~.robot.WholeBody.foot_reach`).
+        terrain: ``"flat"`` (default), ``"slope"``, ``"step"``, a :class:`~.terrain.Terrain`
+            or ``h(x, y)``.
         rate: Sample rate [Hz].
         duration: Length of the run [s].
         q0: (nq,) joints the first sample's IK branches are nearest to.
@@ -238,30 +194,26 @@ def walk(
         foot_radius: Radius of the round feet [m] (default ``robot.foot_radius``; 0: point
             feet fixed in stance).
         sway: Body-sway gain in [0, 1] (default 1 for a statically stable pattern on four
-            legs, else 0): see the module docstring.
+            legs, else 0): :mod:`.sway`.
         accel_limit: Joint acceleration limit [rad/s²], one number or (nq,) (default none:
-            accelerations are reported, not checked; URDF has no acceleration limit).
+            reported, not checked).
         knee: Where the knees of the closed-form legs point at the first sample (one of
-            :data:`~.knee.KNEES`: ``up``, ``down``, ``forward``, ``backward``, ``out``,
-            ``in``; default: the branch inside the joint limits nearest ``q0``). The
-            directions taken are reported (``settings["knees"]``).
-        open_loop: True (default): the plan is played as it is, so a pattern that is not
-            statically stable (trot, pace: two feet on the ground) is refused with a
-            :class:`GaitError` (check ``"statically unstable"``). False: planned anyway,
-            for a balance controller to track (its static margin reported, not checked).
+            :data:`~.knee.KNEES`; default: the branch inside the joint limits nearest
+            ``q0``); reported in ``settings["knees"]``.
+        open_loop: True (default): a pattern that is not statically stable (trot, pace) is
+            refused with a :class:`GaitError` (check ``"statically unstable"``). False:
+            planned anyway, for a balance controller (its static margin reported only).
 
     Returns:
         A :class:`GaitRun`.
 
     Raises:
         ParameterError: A bad parameter (named, with what is allowed).
-        GaitError: (``strict``) a check fails: ``"terrain"`` (a foot off the terrain),
-            ``"terrain clearance"`` (a foot sphere into the ground: step too low),
-            ``"leg terrain clearance"`` (a link into the terrain),
-            ``"reach"`` (stride too long, step too high...), ``"joint limit"``,
-            ``"leg clearance"``, ``"stability margin"`` (statically stable patterns only),
-            ``"joint speed"``, ``"joint acceleration"``; the message names the leg or joint,
-            the time and by how much.
+        GaitError: (``strict``) a check fails: ``"terrain"``, ``"terrain clearance"``,
+            ``"leg terrain clearance"``, ``"reach"``, ``"joint limit"``, ``"leg clearance"``,
+            ``"stability margin"`` (statically stable patterns only), ``"joint speed"``,
+            ``"joint acceleration"``; the message names the leg or joint, the time and by
+            how much.
 
     """
     args = dict(locals())  # this walk's arguments (a period is fitted by walking again)
@@ -352,24 +304,7 @@ def walk(
         )
     t = np.arange(n) / hz
     st = _Setup(
-        table,
-        H,
-        T,
-        beta,
-        vel,
-        bh,
-        reach,
-        dur,
-        hz,
-        rad,
-        gain,
-        acc_lim,
-        ground,
-        t,
-        nb,
-        strokes,
-        size,
-        MARGIN_TOL * size,
+        table, H, T, beta, vel, bh, reach, dur, hz, rad, gain, acc_lim, ground, t, nb, strokes, size
     )
     sw = _Swings.of(wb, st)
     plan = sw.planned_feet(st)
@@ -425,7 +360,11 @@ class _Setup:
     nb: np.ndarray  # (L, 2) neutral feet in the body frame
     strokes: np.ndarray  # (L,) each foot's stroke during a stance [m]
     size: float  # the robot's size [m] (the checks' rounding scale)
-    tol: float  # margin tolerance [m]
+
+    @property
+    def tol(self) -> float:
+        """The margin tolerance [m]: :data:`MARGIN_TOL` × the robot's size."""
+        return MARGIN_TOL * self.size
 
 
 @dataclass
@@ -670,9 +609,16 @@ def _checked(
     ref = actual[stance_start_index(support), np.arange(nl)[None, :]]
     # rolled: the rolling of the final q's foot rotations (by FK; 0 for point feet)
     slip = np.where(support, np.linalg.norm(actual - ref - sol.rolled, axis=-1), 0.0)
-    margin = support_margin(actual - rad * n_nxt, support, com)
-    zmp_margin = _zmp_margin(wb, q, base, actual - rad * n_nxt, support, t)
-    pairs = _neighbour_pairs(wb)
+    contacts = actual - rad * n_nxt
+    margin = support_margin(contacts, support, com)
+    zmp_margin = np.zeros(0)  # below 4 samples or without a mass
+    if len(t) >= 4 and wb.mass > 0:
+        sup = support[..., None]  # the ground: the stance contacts' mean height
+        h = ((contacts[..., 2:3] * sup).sum(axis=1) / np.maximum(sup.sum(axis=1), 1))[:, 0]
+        zmp_margin = sway_zmp_margin(wb, q, base, contacts, support, t, h)
+    order = np.argsort(np.arctan2(wb.mounts[:, 1, 3], wb.mounts[:, 0, 3]), kind="stable")
+    ring = {tuple(sorted((int(a), int(b)))) for a, b in zip(order, np.roll(order, -1))}
+    pairs = tuple(sorted((a, b) for a, b in ring if a != b))  # neighbouring legs
     clear = segment_clearance(pts, np.array(pairs, dtype=np.int64).reshape(-1, 2))
     clear -= 2.0 * wb.link_radius
     leg_gap = leg_terrain_clearance(
@@ -681,22 +627,7 @@ def _checked(
     qdot, qddot = rates(q, t)
     vlim = np.asarray(wb.velocity_limit, dtype=float).reshape(-1)
     if strict:
-        raise_checks(
-            wb.joint_names,
-            st.table,
-            names,
-            pairs,
-            t,
-            clear,
-            margin,
-            st.tol,
-            st.strokes,
-            qdot,
-            qddot,
-            vlim,
-            st.acc_lim,
-            support,
-        )
+        raise_checks(wb, st, pairs, clear, margin, qdot, qddot, vlim, support)
     phase = st.table.phase(t, st.T)
     read_only(t, base, actual, sol.feet, q, qdot, qddot, support, phase, com, slip, margin, clear)
     used, gap = sw.used, sol.edge_gap
@@ -726,33 +657,10 @@ def _checked(
     ik_ok = np.asarray(sol.ik.ok)
     read_only(ik_ok, vlim, st.acc_lim, n_nxt, foot_gap, leg_gap)
     return GaitRun(
-        t=t,
-        base_poses=base,
-        feet=actual,
-        feet_planned=sol.feet,
-        q=q,
-        qdot=qdot,
-        support=support,
-        phase=phase,
-        com=com,
-        slip=slip,
-        margin=margin,
-        zmp_margin=zmp_margin,
-        limit_margin=sol.ik.limit_margin,
-        ik_ok=ik_ok,
-        reach_excess=sol.ik.excess,
-        clearance=clear,
-        pairs=pairs,
-        leg_names=names,
-        joint_names=wb.joint_names,
-        table=st.table,
-        settings=settings,
-        mass=wb.mass,
-        qddot=qddot,
-        velocity_limit=vlim,
-        accel_limit=st.acc_lim,
-        robot=wb,
-        normals=n_nxt,
-        foot_gap=foot_gap,
-        leg_gap=leg_gap,
-    )
+        t=t, base_poses=base, feet=actual, feet_planned=sol.feet, q=q, qdot=qdot,
+        support=support, phase=phase, com=com, slip=slip, margin=margin, zmp_margin=zmp_margin,
+        limit_margin=sol.ik.limit_margin, ik_ok=ik_ok, reach_excess=sol.ik.excess,
+        clearance=clear, pairs=pairs, leg_names=names, joint_names=wb.joint_names,
+        table=st.table, settings=settings, mass=wb.mass, qddot=qddot, velocity_limit=vlim,
+        accel_limit=st.acc_lim, robot=wb, normals=n_nxt, foot_gap=foot_gap, leg_gap=leg_gap,
+    )  # fmt: skip

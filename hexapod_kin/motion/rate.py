@@ -45,15 +45,9 @@ def default_stance(model: ModelLike) -> np.ndarray:
 # ============================================================================ results
 @dataclass(frozen=True)
 class ClosestApproach:
-    """The sample of a run nearest to a singularity (smallest σ_min).
+    """The sample of a run nearest to a singularity (smallest σ_min of the task Jacobian).
 
-    Attributes:
-        index: Sample index.
-        t: Time in [s].
-        sigma_min: Smallest singular value of the task Jacobian there.
-        condition: σ_max/σ_min there (inf at a singularity).
-        q: Joint values there in [rad]/[m].
-
+    ``t`` in [s]; ``condition`` σ_max/σ_min (inf at a singularity); ``q`` in [rad]/[m].
     """
 
     index: int
@@ -74,27 +68,13 @@ class ClosestApproach:
 class Trajectory:
     """A resolved-rate run, sampled at ``t`` (all arrays read-only, SI units, base axes).
 
-    Attributes:
-        t: (N,) times in [s].
-        q: (N, n) joint values in [rad]/[m].
-        qdot: (N, n) joint rates in [rad/s]/[m/s] (the control law at each sample).
-        foot: (N, 3) tip position in [m].
-        foot_velocity: (N, 3) actual tip velocity ``J q̇`` in [m/s].
-        rotation: (N, 3, 3) tip rotation.
-        angular_velocity: (N, 3) actual tip angular velocity in [rad/s] (base axes).
-        command: (N, 3) commanded linear velocity [m/s], or (N, 6) commanded twist
-            ([m/s], [rad/s]) in ``frame``.
-        reference: (N, 3) reference position in [m].
-        reference_rotation: (N, 3, 3) reference rotation (6-D runs), else None.
-        sigma_min: (N,) smallest singular value of the task Jacobian (3×n position, or 6×n).
-        sigma_max: (N,) largest singular value.
-        damping: (N,) DLS damping λ² used at each sample.
-        limited: (N,) True where a joint was frozen at a limit or q̇ scaled to the speed limits.
-        method: ``"euler"`` or ``"rk4"``.
-        dt: Step in [s].
-        gain: Closed-loop gain K in [1/s] (0: open loop).
-        frame: ``"base"`` or ``"tip"``: the axes of ``command``.
-
+    Per sample (N rows): ``t`` [s]; ``q``, ``qdot`` joint values and rates (the law at each
+    sample); ``foot`` [m], ``foot_velocity`` (``J q̇``) [m/s], ``rotation`` (3, 3) and
+    ``angular_velocity`` [rad/s] of the tip; ``command``: linear velocity (3,) or twist (6,)
+    ``[v; ω]`` in ``frame``; ``reference`` [m] and ``reference_rotation`` (None for a linear
+    velocity); ``sigma_min``, ``sigma_max`` of the task Jacobian (3×n or 6×n); ``damping`` λ²;
+    ``limited``: a joint frozen at a limit or q̇ scaled to the speed limits. ``gain``: K in
+    [1/s] (0: open loop); ``frame``: ``"base"`` or ``"tip"``, the axes of ``command``.
     """
 
     t: np.ndarray
@@ -206,50 +186,17 @@ def _sample(fn: Any, times: np.ndarray, width: int, name: str, what: str) -> np.
     return np.ascontiguousarray(out)
 
 
-def _width(velocity: Any) -> int:
-    """3 (linear velocity) or 6 (twist), from a constant or from ``velocity(0.0)``."""
-    probe = velocity(0.0) if callable(velocity) else velocity
-    try:
-        size = np.asarray(probe, dtype=float).size
-    except (TypeError, ValueError):
-        size = -1
-    if size not in (3, 6):
-        msg = (
-            f"velocity has {size} values; a linear velocity (3,) [m/s] or a twist (6,) "
-            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed"
-        )
-        raise ConfigurationError(msg, parameter="velocity", value=size, allowed="3 or 6 values")
-    return size
-
-
 def _simpson(vel: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Increments over full and half steps by Simpson's rule on (v_k, v_k+½, v_k+1)."""
     v0, vh, v1 = vel[0:-1:2], vel[1::2], vel[2::2]
     return dt / 6.0 * (v0 + 4.0 * vh + v1), dt / 24.0 * (5.0 * v0 + 8.0 * vh - v1)
 
 
-def _integrate_position(p0: np.ndarray, vel: np.ndarray, dt: float) -> np.ndarray:
-    """p_ref at half steps by Simpson's rule (exact for quadratics)."""
-    full, half = _simpson(vel, dt)
-    ref = np.empty_like(vel)
-    ref[0] = p0
-    ref[2::2] = p0 + np.cumsum(full, axis=0)
-    ref[1::2] = ref[0:-1:2] + half
-    return ref
-
-
 def constant_twist_pose(pose0: Any, twist: Any, t: Any, frame: Frame = "base") -> np.ndarray:
     """Exact poses reached by following a constant twist from ``pose0`` for times ``t``.
 
-    Args:
-        pose0: Start pose (4, 4).
-        twist: ``[v; ω]`` (6,) in [m/s], [rad/s].
-        t: Times (M,) in [s].
-        frame: ``"base"`` or ``"tip"``.
-
-    Returns:
-        (M, 4, 4) poses.
-
+    ``pose0`` (4, 4), ``twist`` ``[v; ω]`` (6,) in [m/s], [rad/s], times ``t`` (M,) in [s]
+    → (M, 4, 4) poses.
     """
     t0, xi = np.asarray(pose0, dtype=float), np.asarray(twist, dtype=float)
     times = np.atleast_1d(np.asarray(t, dtype=float))
@@ -339,7 +286,17 @@ def resolved_rate(
             allowed="1..5e7 steps of dt",
         )
     start = default_stance(mdl) if q0 is None else mdl.check_q(q0, "q0").copy()
-    width = _width(velocity)
+    probe = velocity(0.0) if callable(velocity) else velocity  # 3 (linear velocity) or 6 (twist)
+    try:
+        width = np.asarray(probe, dtype=float).size
+    except (TypeError, ValueError):
+        width = -1
+    if width not in (3, 6):
+        msg = (
+            f"velocity has {width} values; a linear velocity (3,) [m/s] or a twist (6,) "
+            "[v; ω] in [m/s], [rad/s] (or a callable returning one) is needed"
+        )
+        raise ConfigurationError(msg, parameter="velocity", value=width, allowed="3 or 6 values")
     rows6 = width == 6
     times_half = np.arange(2 * steps + 1) * (0.5 * dt)
     what = "a linear velocity (3,) in [m/s]" if not rows6 else "a twist (6,) [m/s, rad/s]"
@@ -356,8 +313,11 @@ def resolved_rate(
             ref = _integrate_pose(pose0, vel, dt, frame)
         ref_p = np.ascontiguousarray(ref[:, :3, 3])
         ref_r = np.ascontiguousarray(ref[:, :3, :3])
-    elif path is None:
-        ref_p = _integrate_position(pose0[:3, 3], vel, dt)
+    elif path is None:  # p_ref at half steps by Simpson's rule (exact for quadratics)
+        (full, half), p0 = _simpson(vel, dt), pose0[:3, 3]
+        ref_p = np.empty_like(vel)
+        ref_p[0], ref_p[2::2] = p0, p0 + np.cumsum(full, axis=0)
+        ref_p[1::2] = ref_p[0:-1:2] + half
     else:
         ref_p = _sample(path, times_half, 3, "path", "a position (3,) in [m]")
     check_within(mdl, ref_p, "path", ParameterError)
@@ -383,15 +343,12 @@ def resolved_rate(
     out = integrate(mdl, start, vel, ref_p, ref_r, dt, method == "rk4", frame == "tip", gain, eps,
                     lam2max, lo, hi, within_limits, vmax)  # fmt: skip
     c, pose, tw, sg = np.ascontiguousarray, out["pose"], out["twist"], out["sigma"]
-    t, q, qdot = np.arange(steps + 1) * dt, out["q"], out["qdot"]
-    damping, limited, frame = out["damping"], out["limited"], frame if rows6 else "base"
-    foot, foot_v, rot, ang_v = c(pose[:, :3, 3]), c(tw[:, :3]), c(pose[:, :3, :3]), c(tw[:, 3:])
-    command, reference, smin, smax = c(vel[::2]), c(ref_p[::2]), c(sg[:, 0]), c(sg[:, 1])
     ref_rot = None if ref_r is None else c(ref_r[::2])
-    read_only(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, smin, smax, damping,
-              limited, *(() if ref_rot is None else (ref_rot,)))  # fmt: skip
-    return Trajectory(t, q, qdot, foot, foot_v, rot, ang_v, command, reference, ref_rot, smin,
-                      smax, damping, limited, method, dt, gain, frame)  # fmt: skip
+    fields = (np.arange(steps + 1) * dt, out["q"], out["qdot"], c(pose[:, :3, 3]), c(tw[:, :3]),
+              c(pose[:, :3, :3]), c(tw[:, 3:]), c(vel[::2]), c(ref_p[::2]), ref_rot, c(sg[:, 0]),
+              c(sg[:, 1]), out["damping"], out["limited"])  # fmt: skip
+    read_only(*(a for a in fields if a is not None))
+    return Trajectory(*fields, method, dt, gain, frame if rows6 else "base")
 
 
 def _sample_poses(path: Any, times: np.ndarray) -> np.ndarray:

@@ -31,11 +31,8 @@ __all__ = ["JointSchedule", "PosePath", "Tracked", "follow_pose_path", "track"]
 class JointSchedule:
     """Piecewise-linear joint trajectory through knots (held constant after the last one).
 
-    Attributes:
-        times: (K,) knot times in [s], non-decreasing.
-        values: (K, n) joint values at the knots in [rad]/[m].
-        description: Free text (source).
-
+    ``times`` (K,) in [s], non-decreasing; ``values`` (K, n) in [rad]/[m]; ``description``
+    free text (source).
     """
 
     times: np.ndarray
@@ -75,12 +72,8 @@ class PosePath:
     """Poses at knot times, interpolated on SE(3) (arrays read-only).
 
     Between knots ``i`` and ``i+1``: ``T_i exp(s ξ_i)``, ``ξ_i = log(T_i⁻¹ T_{i+1})``, ``s``
-    linear in time (a screw motion); held at the last pose afterwards.
-
-    Attributes:
-        times: (K,) knot times in [s], strictly increasing, starting at 0.
-        poses: (K, 4, 4) poses ``baseMtarget``.
-
+    linear in time (a screw motion); held at the last pose afterwards. ``times`` (K,) in [s]
+    start at 0 and increase strictly; ``poses`` (K, 4, 4) are ``baseMtarget``.
     """
 
     times: np.ndarray
@@ -126,17 +119,18 @@ class PosePath:
         """Time of the last knot in [s]."""
         return float(self.times[-1])
 
-    def _segment(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, self.times.size - 2)
+    def _segment(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(t, t as 1-D, segment index k, fraction s in it)``."""
+        tt = np.asarray(t, dtype=float)
+        flat = np.atleast_1d(tt)
+        k = np.clip(np.searchsorted(self.times, flat, side="right") - 1, 0, self.times.size - 2)
         dt = self.times[k + 1] - self.times[k]
-        s = np.clip((t - self.times[k]) / dt, 0.0, 1.0)
-        return k, s
+        s = np.clip((flat - self.times[k]) / dt, 0.0, 1.0)
+        return tt, flat, k, s
 
     def sample(self, t: Any) -> np.ndarray:
         """Poses at times ``t``: (M, 4, 4) for (M,) times, (4, 4) for a scalar."""
-        tt = np.asarray(t, dtype=float)
-        flat = np.atleast_1d(tt)
-        k, s = self._segment(flat)
+        tt, _, k, s = self._segment(t)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
         se3, exp6, motion = pin.SE3, pin.exp6, pin.Motion
         out = np.array([(se3(self.poses[ki]) * exp6(motion(si * xi[ki]))).homogeneous
@@ -148,9 +142,7 @@ class PosePath:
 
         Segment i's twist on ``[t_i, t_{i+1}]`` (the last segment's at the end), 0 after.
         """
-        tt = np.asarray(t, dtype=float)
-        flat = np.atleast_1d(tt)
-        k, _ = self._segment(flat)
+        tt, flat, k, _ = self._segment(t)
         xi: np.ndarray = self._xi  # type: ignore[attr-defined]
         out = xi[k] / (self.times[k + 1] - self.times[k])[:, None]
         out[flat > self.times[-1]] = 0.0
@@ -173,17 +165,9 @@ def follow_pose_path(
 ) -> Trajectory:
     """Track a :class:`PosePath` by resolved rate: feed-forward body twist + pose feedback.
 
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-        path: The pose path.
-        q0: Start (nq,); default: 6-D IK of the first pose.
-        dt: Step in [s].
-        gain: Closed-loop gain on the pose error ``[p_ref − p; log(R_ref Rᵀ)]`` in [1/s].
-        method: ``"rk4"`` or ``"euler"``.
-        within_limits: Respect the joint position limits.
-
-    Returns:
-        The :class:`Trajectory` (``frame="tip"``; its reference is the path).
+    ``q0`` defaults to the 6-D IK of the first pose; ``dt`` in [s]; ``gain`` in [1/s] on the
+    pose error ``[p_ref − p; log(R_ref Rᵀ)]``. Returns the :class:`Trajectory` (``frame="tip"``;
+    its reference is the path).
 
     Raises:
         IKError: The first pose cannot be reached (when ``q0`` is None).
@@ -211,10 +195,7 @@ def follow_pose_path(
 class Tracked:
     """Joint trajectory reaching a sequence of tip targets (arrays read-only).
 
-    Attributes:
-        q: (M, n) joint values in [rad]/[m].
-        reached: (M,) True where the target was reached.
-
+    ``q`` (M, n) in [rad]/[m]; ``reached`` (M,) True where the target was reached.
     """
 
     q: np.ndarray
@@ -231,12 +212,9 @@ def track(model: ModelLike, positions: Any, q0: Any = None, *, tol: float = 1e-1
     The closed form when the chain has one (the solution nearest the previous sample), else
     :func:`hexapod_kin.ik.solve` warm-started from the previous sample.
 
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-        positions: (M, 3) tip positions in [m], or (M, 4, 4) poses.
-        q0: Joints near the first sample (branch choice / warm start); default
-            :func:`hexapod_kin.ik.home`.
-        tol: Position tolerance [m] of the numerical fallback.
+    ``positions``: (M, 3) tip positions in [m], or (M, 4, 4) poses; ``q0``: joints near the
+    first sample (branch choice, warm start; default :func:`hexapod_kin.ik.home`); ``tol``:
+    position tolerance [m] of the numerical fallback.
 
     Raises:
         IKError: Bad positions.

@@ -1,23 +1,11 @@
 """The robot's own collision geometry, read through Pinocchio, for the MuJoCo scene.
 
-* :func:`foot_radius_of`: the contact radius of the feet from the foot links' collision
-  shapes (sphere: its radius; cylinder or capsule: its radius; mesh: the mean of the two
-  largest half-extents of its bounding box, the radius of a ball or a wheel), when the shape
-  is centred on the foot point (within a quarter of its size). The smallest over the legs.
-* :func:`collision_hulls`: every mesh collision of the body and the legs as the vertices of
-  its convex hull, in its link's frame (MuJoCo collides the convex hull of a mesh geom; the
-  hull's vertices are what it keeps). The foot link's own shapes are left out (the scene's
-  foot sphere stands for them), and so are the mesh vertices within two foot radii of a
-  foot point (a lower leg's mesh that models the foot too).
-* :func:`foot_spheres`: for a robot whose foot links have no shape centred on the foot
-  point, the round end of the mesh that carries the foot (a lower leg whose end is the foot):
-  the sphere fitted to that mesh's vertices near its end, when they fit one and the foot point
-  lies on it. Its centre and radius are the scene's foot (the foot point the URDF names is a
-  point of that end's surface, not its centre).
-
-Both take the geometry Pinocchio built from the URDF
-(:meth:`hexapod_kin.model.KinematicModel.geometry_model`), so meshes resolve with the
-source's package directories, as for the viewer.
+:func:`foot_radius_of` (the feet's radius from the foot links' shapes),
+:func:`collision_hulls` (mesh collisions of body and legs as convex hulls, the feet's own
+shapes left to the scene's foot spheres) and :func:`foot_spheres` (feet at the round ends
+of the meshes that carry them). All read the geometry Pinocchio built from the URDF
+(:meth:`hexapod_kin.model.KinematicModel.geometry_model`), so meshes resolve as for the
+viewer.
 """
 
 from __future__ import annotations
@@ -94,8 +82,9 @@ def _act(placement: Any, v: np.ndarray) -> np.ndarray:
 def foot_radius_of(wb: Any) -> float | None:
     """The feet's contact radius [m] from the foot links' collision shapes (None: not found).
 
-    Every leg must have a shape centred on its foot point (sphere, cylinder, capsule or
-    mesh; see the module's docstring); the smallest radius is returned.
+    Every leg needs a shape centred on its foot point (within a quarter of its size): a
+    sphere's, cylinder's or capsule's radius, or a mesh's mean of its two largest bounding-box
+    half-extents (a ball or a wheel). The smallest over the legs.
     """
     found = _collision_model(wb)
     if found is None:
@@ -156,10 +145,9 @@ def _fit_sphere(v: np.ndarray) -> tuple[np.ndarray, float, float]:
 def _end_sphere(v: np.ndarray, point: np.ndarray) -> tuple[np.ndarray, float] | None:
     """The sphere of a mesh's round end at the foot point (joint frame), else None.
 
-    ``v`` the mesh's vertices and ``point`` the foot point, both in the frame of the joint
-    moving them; the end is the vertices deepest along the joint-to-foot direction ``d``
-    (within a depth of :data:`_CAP_DEPTHS` × ``|point|`` of the deepest). Found when they lie
-    on a sphere and the foot point does too (:data:`FIT_RELATIVE`, :data:`FIT_TOLERANCE`).
+    The end: the vertices within :data:`_CAP_DEPTHS` × ``|point|`` of the deepest along the
+    joint-to-foot direction; found when they and the foot point lie on a sphere
+    (:data:`FIT_RELATIVE`, :data:`FIT_TOLERANCE`).
     """
     reach = float(np.linalg.norm(point))
     if reach <= 0 or len(v) < 4:
@@ -182,19 +170,18 @@ FootEnds = tuple[tuple[str, tuple[float, float, float]], ...]
 
 
 def foot_spheres(wb: Any) -> tuple[FootEnds, float] | None:
-    """The feet as the round ends of the meshes that carry them (see the module's docstring).
+    """The feet as the round ends of the meshes that carry them.
 
-    For a robot without a foot radius of its own (``wb.foot_radius == 0``) whose foot links
-    have no shape centred on the foot point (:func:`foot_radius_of` finds none): per leg, the
-    sphere of the round end of a mesh moved by the foot's joint that ends at the foot point
-    (:func:`_end_sphere`). Every leg must have one; their radius is the smallest (a larger end's
-    centre moves along the leg by the difference, so that its lowest point stays).
+    For a robot with no foot radius and no shape centred on its foot points
+    (:func:`foot_radius_of`): per leg, the sphere fitted to the round end of a mesh moved by
+    the foot's joint that ends at the foot point (:func:`_end_sphere`). The radius is the
+    smallest (a larger end's centre moves along the leg by the difference, its lowest point
+    kept).
 
     Returns:
-        ``(feet, radius)``: per leg (in ``wb``'s order) the foot frame's parent frame and the
-        sphere's centre in it [m], as :func:`hexapod_kin.gait.as_whole_body` takes ``feet``;
-        the radius [m]. None when the robot has a foot radius, a centred foot shape, or a leg
-        without such an end.
+        ``(feet, radius)``: per leg the foot frame's parent frame and the sphere's centre in it
+        [m], as :func:`hexapod_kin.gait.as_whole_body` takes ``feet``, and the radius [m]; None
+        when the robot has a foot radius, a centred foot shape, or a leg without such an end.
 
     """
     if float(wb.foot_radius) > 0 or foot_radius_of(wb) is not None:
@@ -249,8 +236,8 @@ def scene_robot(robot: Any, feet: Any = None) -> Any:
 def collision_hulls(wb: Any, foot_radius: float) -> list[MeshHull]:
     """The mesh collisions of the body and the legs as convex hull vertices (link frames).
 
-    ``foot_radius`` [m] sets the region around each foot point whose vertices are left to
-    the foot sphere (within ``2 × foot_radius``, at least 5 mm).
+    The foot links' shapes are left out, and so are the vertices within ``2 × foot_radius``
+    (at least 5 mm) of a foot point (the scene's foot sphere stands for them).
     """
     found = _collision_model(wb)
     if found is None:

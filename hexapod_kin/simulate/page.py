@@ -51,13 +51,9 @@ def simulation_html(sim: Any, path: str | os.PathLike[str], **options: Any) -> P
     contacts). The two play in step: the simulation follows the plan's play, pause and
     time (the frames' messages, relayed by the page).
 
-    Args:
-        sim: A :class:`~hexapod_kin.simulate.SimRun` (with its plan, ``sim.run``).
-        path: Destination ``.html`` (written atomically).
-        **options: Passed to both animations (``fps``, ``speed``...).
-
-    Returns:
-        The path written.
+    ``sim``: a :class:`~hexapod_kin.simulate.SimRun` with its plan (``sim.run``); ``path``:
+    the ``.html`` (written atomically, returned); ``**options`` go to both animations
+    (``fps``, ``speed``...).
 
     Raises:
         OptionalDependencyError: The viewer extra (meshcat) is missing.

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._fields import fields_dict
 from ..exceptions import ConfigurationError, ParameterError, UrdfError, one_of
 from .collision import scene_robot
 from .scene import (
@@ -16,6 +17,7 @@ from .scene import (
     SCENE_TERRAINS,
     SimScene,
     _Engine,
+    _joints,
     _mujoco,
     _robot,
     check_steps,
@@ -36,29 +38,17 @@ LIMITS: dict[str, float] = {
     "height": 0.01,
 }
 
-#: A swing foot touching the ground where the plan has its sphere at least this far from
-#: the ground [m] (measured at the planned centre, along the ground's normal, lowered by
-#: how far the body sank into the soft contacts while settling; on bumps, plus twice their
-#: amplitude) is a strike.
+#: A swing foot touching the ground where the plan has its sphere at least this far from it
+#: [m] (along the normal, less the body's sinking while settling; plus twice the bumps) is a
+#: strike.
 STRIKE_CLEARANCE = 0.002
-
-
-def _yaw(R: np.ndarray) -> np.ndarray:
-    return np.unwrap(np.arctan2(R[..., 1, 0], R[..., 0, 0]))
-
-
-def _roll_pitch(R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Roll and pitch [rad] of ``R = Rz(ψ) Ry(θ) Rx(φ)``."""
-    pitch = np.arcsin(np.clip(-R[..., 2, 0], -1.0, 1.0))
-    roll = np.arctan2(R[..., 2, 1], R[..., 2, 2])
-    return roll, pitch
 
 
 class Travel:
     """A walk's travel against its plan, in figures and words (a replay's, a controlled walk's).
 
-    From ``distance`` and ``distance_planned`` [m], ``direction_error`` [rad] (walked against
-    planned displacement), ``turn`` and ``turn_planned`` [rad] of the class using it.
+    From the ``distance``, ``distance_planned``, ``direction_error``, ``turn`` and
+    ``turn_planned`` of the class using it.
     """
 
     if TYPE_CHECKING:  # given by the class using it (fields or properties)
@@ -97,11 +87,7 @@ class Travel:
 
     @property
     def distance_error(self) -> float | None:
-        """(distance along the plan's direction − planned) / planned (None: no translation).
-
-        The displacement is projected on the planned one (:attr:`distance_along`), so a
-        robot that went sideways or backwards does not pass on its distance alone.
-        """
+        """(:attr:`distance_along` − planned) / planned (None: no translation)."""
         if self.distance_planned < 1e-6:
             return None
         return (self.distance_along - self.distance_planned) / self.distance_planned
@@ -123,17 +109,13 @@ class Travel:
 class SimRun(Travel):
     """A plan replayed in MuJoCo, and how far the physics departs from it (SI units).
 
+    ``t``: the plan's sample times [s]; ``base_poses``, ``q``: the simulated body poses and
+    joint angles [rad]; ``planned``: the plan's body poses raised by ``lift`` [m] (the foot
+    spheres on the ground); ``foot_forces`` (N, L): normal force on each foot [N];
+    ``distance``, ``turn``: horizontal displacement of the body [m] and yaw change [rad]
+    (``distance_planned``, ``turn_planned``: the plan's).
+
     Attributes:
-        t: (N,) the plan's sample times [s].
-        base_poses: (N, 4, 4) simulated body poses.
-        planned: (N, 4, 4) planned body poses, raised by ``lift``.
-        q: (N, nq) simulated joint angles [rad].
-        foot_forces: (N, L) normal force on each foot at each sample [N].
-        lift: Vertical shift of the plan that puts the foot spheres on the ground [m].
-        distance_planned: Planned horizontal displacement of the body [m].
-        distance: Simulated horizontal displacement of the body [m] (its length).
-        turn_planned: Planned yaw change [rad].
-        turn: Simulated yaw change [rad].
         heading_error: Max over time of the yaw error (both from their start) [rad].
         direction_error: Angle between the simulated and planned displacements [rad]
             (0 when the plan does not move).
@@ -141,13 +123,11 @@ class SimRun(Travel):
         max_pitch: Max |pitch| [rad].
         height_error: Max |z − z_planned| of the body [m].
         max_slip: Largest tangential slide of a stance foot's contact point during one
-            planned stance [m], added up across contact breaks (a stance foot off the ground
-            that comes down again in the same stance: its sphere's lowest point's slide
+            planned stance [m], added up across contact breaks (its lowest point's slide
             meanwhile counts).
         max_slip_speed: Largest tangential speed of a stance foot's contact point [m/s].
         swing_strikes: ``(leg, first time [s])`` of every swing foot that came down on the
-            ground (a new contact, not a late lift-off) where the plan has it at least
-            :data:`STRIKE_CLEARANCE` clear of it.
+            ground where the plan has it :data:`STRIKE_CLEARANCE` clear (not a late lift-off).
         non_foot_contacts: ``(geom, geom, first time [s])`` of every pair in contact that is
             not a foot on the ground.
         stand: The standing forces check (None when skipped).
@@ -155,8 +135,7 @@ class SimRun(Travel):
         wall_time: Wall time of the replay (settling included) [s].
         plan: The plan's own summary (:meth:`GaitRun.to_dict`).
         run: The plan replayed.
-        feedforward: The servos carried the plan's joint torques (False: a bare PD law,
-            asked for or for a plan whose stance cannot hold the robot).
+        feedforward: The servos carried the plan's joint torques (False: a bare PD law).
 
     """
 
@@ -216,34 +195,17 @@ class SimRun(Travel):
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: the figures, the checks, the scene and the plan's summary."""
-        return {
-            "distance_planned": self.distance_planned,
-            "distance": self.distance,
-            "distance_error": self.distance_error,
-            "distance_along": self.distance_along,
-            "direction": self.direction,
-            "turn_planned": self.turn_planned,
-            "turn": self.turn,
-            "turn_error": self.turn_error,
-            "heading_error_deg": math.degrees(self.heading_error),
-            "direction_error_deg": math.degrees(self.direction_error),
-            "max_roll_deg": math.degrees(self.max_roll),
-            "max_pitch_deg": math.degrees(self.max_pitch),
-            "height_error": self.height_error,
-            "max_slip": self.max_slip,
-            "max_slip_speed": self.max_slip_speed,
-            "swing_strikes": [list(c) for c in self.swing_strikes],
-            "lift": self.lift,
-            "non_foot_contacts": [list(c) for c in self.non_foot_contacts],
-            "stand": None if self.stand is None else self.stand.to_dict(),
-            "checks": self.checks(),
-            "stumbled": self.stumbled,
-            "ok": self.ok,
-            "wall_time": self.wall_time,
-            "feedforward": self.feedforward,
-            "scene": self.scene.to_dict(),
-            "plan": self.plan,
-        }
+        out = fields_dict(self, *"distance_planned distance distance_error distance_along".split())
+        out |= fields_dict(self, "direction", "turn_planned", "turn", "turn_error")
+        for name in ("heading_error", "direction_error", "max_roll", "max_pitch"):
+            out[f"{name}_deg"] = math.degrees(getattr(self, name))
+        out |= fields_dict(self, "height_error", "max_slip", "max_slip_speed")
+        out["swing_strikes"] = [list(c) for c in self.swing_strikes]
+        out |= {"lift": self.lift, "non_foot_contacts": [list(c) for c in self.non_foot_contacts]}
+        out["stand"] = None if self.stand is None else self.stand.to_dict()
+        out |= {"checks": self.checks()} | fields_dict(self, "stumbled", "ok", "wall_time")
+        out |= {"feedforward": self.feedforward, "scene": self.scene.to_dict()}
+        return out | {"plan": self.plan}
 
 
 def _linear(v: np.ndarray, sub: int) -> np.ndarray:
@@ -253,19 +215,11 @@ def _linear(v: np.ndarray, sub: int) -> np.ndarray:
 
 
 def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
-    """(N, nq) the plan's joint torques [N·m], columns ``joint_names`` (None: none exist).
+    """(N, nq) the plan's joint torques [N·m], columns ``joint_names``, for the servos.
 
-    :func:`hexapod_kin.dynamics.gait_torques`: the full inverse dynamics of the plan (RNEA,
-    the stance feet's forces of minimum norm holding the floating base) when the run carries
-    its robot, else the quasi-static ``τ = g(q) − Σ J_iᵀ f_i``. The servos add it to their
-    PD law so that they hold the planned angles under the planned load: without it a
-    position servo of gain ``kp`` gives way by ``τ / kp``, and as the load passes from leg to
-    leg over a cycle the feet, pinned by friction, carry the body back (a 4 s crawl: erd:b1
-    −2.2 % of its travel, erd:go1 −1.4 %; with it +0.5 % and +0.2 %). A plan whose stance
-    feet cannot hold the robot at some sample (fewer than three, or in a line: a plan that
-    is not statically stable) has no such torques: None, and it is replayed without them; so
-    has a robot whose inertials are physically implausible (dynamics refuses to answer with
-    them, :meth:`~hexapod_kin.model.Model.check_inertials`).
+    :func:`hexapod_kin.dynamics.gait_torques` (full inverse dynamics when the run carries its
+    robot, else quasi-static). None when the stance cannot hold the robot at some sample
+    (not statically stable) or its inertials are implausible: replayed without them.
     """
     from ..dynamics.gait_loads import gait_torques
 
@@ -281,18 +235,14 @@ def _plan_torques(run: Any, joint_names: Any) -> np.ndarray | None:
 def _start_moving(eng: _Engine, run: Any, qd: np.ndarray) -> None:
     """Give the settled robot the plan's first velocities: the body's twist, the joints' rates.
 
-    A plan walks from its first sample at its walking speed (the body already moving, the
-    stance feet at rest); a robot let go at rest from there is jerked to that speed by its
-    servos, and the jerk slides its feet (erd:go1 without armature: 5.8 mm lost in the
-    first half cycle, 2.2 % of a 4 s crawl). MuJoCo's free joint takes the linear velocity
-    in the world and the angular one in the body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
+    MuJoCo's free joint takes the linear velocity in the world and the angular one in the
+    body (``qvel[3:6]``, Pinocchio's ``v[3:6]``).
     """
     mj, m, d = eng.mj, eng.model, eng.data
     twist = np.asarray(run.base_velocity(), dtype=float)[0]
     d.qvel[:3] = eng.base_pose()[:3, :3] @ twist[:3]
     d.qvel[3:6] = twist[3:]
-    for j, rate in zip(eng.scene.joint_names, qd):
-        d.qvel[m.jnt_dofadr[mj.mj_name2id(m, mj.mjtObj.mjOBJ_JOINT, j)]] = rate
+    d.qvel[m.jnt_dofadr[_joints(mj, m, eng.scene.joint_names)]] = qd
 
 
 def _lift(run: Any, scene: SimScene) -> float:
@@ -342,16 +292,14 @@ def simulate(
         pattern: The walk's pattern (when planning; default the robot's
             :func:`~hexapod_kin.gait.tables.default_pattern`: tripod for six legs, crawl for four).
         velocity: The walk's body twist ``(vx, vy, wz)`` (when planning).
-        terrain: ``flat`` (default), ``slope`` or ``step``: planned on and simulated on; with a
-            run, its own terrain unless given (a plan replayed on other ground: its first
-            sample's stance feet must stand on both).
+        terrain: ``flat`` (default), ``slope`` or ``step``, planned and simulated on; with a
+            run, its own unless given (its first stance feet must then stand on both).
         duration: The walk's length [s] (when planning).
         feet: The feet of a URDF robot without foot links (``"frame:x,y,z ..."``, as
             :func:`~hexapod_kin.gait.robot.as_whole_body` takes them; when planning).
-        foot_radius: Foot sphere radius [m] (default: the plan's ``settings["foot_radius"]``,
-            else the robot's); when planning, the plan's feet too. When planning without
-            it, feet that are the round ends of the legs' meshes are planned and simulated
-            as those spheres (:func:`~.collision.scene_robot`).
+        foot_radius: Foot sphere radius [m] (default: the plan's, else the robot's); when
+            planning, the plan's feet too; without it, feet at the round ends of the legs'
+            meshes are planned and simulated as those spheres (:func:`~.collision.scene_robot`).
         friction: Sliding friction coefficient.
         kp: Servo position gain [N·m/rad] (default: scaled to the robot,
             :func:`~.scene.servo_defaults`; 300 for the built-in hexapod).
@@ -360,9 +308,8 @@ def simulate(
         contact_time: Contact stiffness time constant [s] (see :func:`scene_mjcf`).
         timestep: Physics step [s]; must divide the plan's sample interval (default: 1 ms
             or less for the servos' stability, see :func:`scene_mjcf`).
-        settle: Time [s] the robot stands at the first pose before the replay (≥ 0). The
-            replay's steps (settle, duration and the stand check's :data:`STAND_SETTLE` over
-            the timestep) are at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
+        settle: Time [s] the robot stands at the first pose before the replay (≥ 0); all
+            the steps at most ``dynamics.MAX_STEPS`` (:func:`~.scene.check_steps`).
         stand: Also run :func:`stand_forces` (flat ground).
         bumps: Random bumps of this amplitude [m] on flat ground (see :func:`scene_mjcf`);
             the plan stays the flat one.
@@ -382,7 +329,6 @@ def simulate(
         OptionalDependencyError: MuJoCo is not installed.
 
     """
-    import inspect
     import time
 
     from ..gait.walk import GaitRun, walk
@@ -401,8 +347,7 @@ def simulate(
         except (TypeError, ValueError):
             walked = 0.0  # the walk refuses it
     spans = {"settle": wait, "duration": walked, "stand": STAND_SETTLE if stand else 0.0}
-    # bounded work: refused before planning
-    check_steps(1e-3 if timestep is None else timestep, spans)
+    check_steps(1e-3 if timestep is None else timestep, spans)  # bounded work, before planning
     if isinstance(run_or_robot, GaitRun):
         run = run_or_robot
         wb = _robot(getattr(run, "robot", None))
@@ -428,8 +373,7 @@ def simulate(
         if foot_radius is None:  # the robot's feet, from its collision shapes if need be
             wb = scene_robot(wb)  # a mesh's round end: the foot's centre moves there
             foot_radius = scene_foot_radius(wb)
-        if "foot_radius" in inspect.signature(walk).parameters:
-            walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
+        walk_options["foot_radius"] = foot_radius  # the plan rolls the same feet
         run = walk(
             wb,
             pattern=pattern,
@@ -442,7 +386,6 @@ def simulate(
     if foot_radius is None and planned_radius is not None:  # the feet the plan rolled
         foot_radius = float(planned_radius) if planned_radius > 0 else POINT_FOOT
     one_of("terrain", ground, list(SCENE_TERRAINS))
-    # the URDF text at hand: the robot's path, text or erd:NAME, or a loaded model's own URDF
     by_name = isinstance(run_or_robot, (str, os.PathLike))
     sc = scene_mjcf(
         wb,
@@ -509,12 +452,10 @@ def simulate(
     leg_names = sc.leg_names
     centre = np.asarray(run.feet)
     above = centre[..., 2] + lift - sc.height(centre[..., 0], centre[..., 1])
-    # the body as it stands after settling: soft contacts sink it (MuJoCo's default contact
-    # by ~4 mm), and the swing feet, held by the servos relative to it, with it
+    # soft contacts sink the settled body (~4 mm) and the swing feet with it
     sink = max(0.0, float(planned[0, 2, 3] - base[0, 2, 3]))
     gap = (above - sink) * sc.normal_z - sc.foot_radius
-    # on bumps the ground under the swing foot and under the stance feet carrying the body
-    # are each up to ±bumps off the plan's: 2 × bumps more clearance before it is a strike
+    # on bumps the ground under swing and stance feet is each up to ±bumps off the plan's
     held = (gap >= STRIKE_CLEARANCE + 2.0 * sc.bumps) & ~support
     clear = (held[:-1] & held[1:]).tolist()  # clear over the whole interval
     in_order = bool(np.array_equal(eng.act, np.arange(m.nu)))
@@ -573,32 +514,12 @@ def simulate(
             timestep=timestep,  # None: its own stable step (its servos have no armature)
             settle=STAND_SETTLE,
         )
-    figures = (lift, max_slip, max_speed, strikes, seen, stance, wall, fed)
-    return _summary(run, sc, t, base, planned, qs, forces, *figures)
-
-
-def _summary(
-    run: Any,
-    sc: SimScene,
-    t: np.ndarray,
-    base: np.ndarray,
-    planned: np.ndarray,
-    qs: np.ndarray,
-    forces: np.ndarray,
-    lift: float,
-    max_slip: float,
-    max_speed: float,
-    strikes: dict[str, float],
-    seen: dict[tuple[str, str], float],
-    stand: StandForces | None,
-    wall: float,
-    fed: bool,
-) -> SimRun:
     dp = planned[-1, :2, 3] - planned[0, :2, 3]
     ds = base[-1, :2, 3] - base[0, :2, 3]
-    yaw_p, yaw_s = _yaw(planned[:, :3, :3]), _yaw(base[:, :3, :3])
+    yaw_p, yaw_s = (np.unwrap(np.arctan2(T[:, 1, 0], T[:, 0, 0])) for T in (planned, base))
     yaw_p, yaw_s = yaw_p - yaw_p[0], yaw_s - yaw_s[0]
-    roll, pitch = _roll_pitch(base[:, :3, :3])
+    roll = np.arctan2(base[:, 2, 1], base[:, 2, 2])  # of R = Rz(ψ) Ry(θ) Rx(φ)
+    pitch = np.arcsin(np.clip(-base[:, 2, 0], -1.0, 1.0))
     lp, ls = float(np.linalg.norm(dp)), float(np.linalg.norm(ds))
     direction = 0.0
     if lp > 1e-6 and ls > 0:
@@ -626,7 +547,7 @@ def _summary(
         max_slip_speed=max_speed,
         swing_strikes=tuple(sorted(strikes.items(), key=lambda x: x[1])),
         non_foot_contacts=contacts,
-        stand=stand,
+        stand=stance,
         scene=sc,
         wall_time=wall,
         plan=run.to_dict(),

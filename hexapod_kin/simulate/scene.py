@@ -20,10 +20,8 @@ MAX_FRICTION = 100.0
 #: The default (and largest automatic) physics step [s].
 MAX_TIMESTEP = 1e-3
 
-#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows:
-#: below the scaled servos' 0.21 to 0.37 at 1 ms (so half that step), far below 0.9 to 1.3
-#: without armature. Accuracy, not only stability: the replay's travel and slip converge
-#: as the step shrinks, and at the stability limit (0.4) they are off by up to 2 %.
+#: The largest ``ω dt`` of a servo (ω its natural frequency) the automatic timestep allows
+#: (accuracy, not only stability: at the stability limit, 0.4, travel and slip are off by 2 %).
 STABLE_OMEGA_DT = 0.2
 
 #: The automatic timestep is at least ``MAX_TIMESTEP / MAX_SPLIT`` (bounded work).
@@ -89,8 +87,7 @@ def scene_foot_radius(robot: Any) -> float:
 def _robot_mjcf(wb: Any, source: Any = None) -> str:
     """The robot's MJCF with a free base: from its Hexapod table, else from its URDF.
 
-    The URDF text is the robot's ``urdf`` attribute, else that of ``source`` (the path, text
-    or ``erd:NAME`` the robot was built from), else that of the robot's ``source`` label.
+    The URDF: the robot's ``urdf``, else that of ``source``, else of its ``source`` label.
     """
     import os
 
@@ -122,11 +119,7 @@ def _robot_mjcf(wb: Any, source: Any = None) -> str:
 
 
 def _leg_ends(wb: Any) -> list[int]:
-    """Per leg, the column of the joint nearest the foot (the deepest joint moving it).
-
-    Found by moving each joint by 1e-3 rad from the neutral pose: a joint belongs to the legs
-    whose foot moves; the deepest in the kinematic tree of those carries the foot.
-    """
+    """Per leg, the column of the deepest joint moving its foot (each joint moved 1e-3 rad)."""
     q0 = np.asarray(wb.neutral_q(), dtype=float)
     eye = np.eye(4)[None]
     f0 = wb.feet(q0[None], eye)[0]
@@ -154,25 +147,9 @@ def _leg_ends(wb: Any) -> list[int]:
 class SimScene:
     """The MJCF of a robot on a terrain, ready to simulate.
 
-    Attributes:
-        xml: The MJCF text (robot, terrain, foot spheres, actuators, options).
-        terrain: ``flat``, ``slope`` or ``step``.
-        foot_radius: Foot sphere radius [m].
-        foot_geoms: Per leg, the name of its foot sphere geom.
-        actuators: Per leg joint (``joint_names`` order), its actuator's name.
-        joint_names: The leg joints.
-        leg_names: The legs.
-        kp: Position gain [N·m/rad].
-        kv: Velocity gain [N·m·s/rad].
-        friction: Sliding friction coefficient.
-        timestep: Physics step [s].
-        armature: Servo rotor inertia per leg joint [kg·m²].
-        contact_time: Contact ``solref`` time constant [s].
-        bumps: Amplitude of the ground's random bumps [m] (0: none).
-        seed: The bumps' random seed.
-        flat_start: Half-width [m] of the flat square (height 0) the bumps leave around the
-            origin.
-
+    ``xml``: the MJCF text (robot, terrain, foot spheres, actuators, options);
+    ``foot_geoms`` per leg (``leg_names``), ``actuators`` per leg joint (``joint_names``
+    order): their names. The settings as :func:`scene_mjcf` takes them, in SI units.
     """
 
     xml: str
@@ -199,8 +176,7 @@ class SimScene:
             return h
         field = self.bumps * (2.0 * _bump_field(self.seed, self.flat_start) - 1.0)
         ny, nx = field.shape
-        # MuJoCo's height field: row i at y = −half_y + i·cell, column j at x (bilinear here,
-        # two triangles per cell there: equal at the nodes, within the bumps' slope between)
+        # MuJoCo's height field, bilinear here (two triangles per cell there: equal at nodes)
         u = np.clip((np.asarray(x) + _BUMP_HALF[0]) / _BUMP_CELL, 0, nx - 1.000001)
         v = np.clip((np.asarray(y) + _BUMP_HALF[1]) / _BUMP_CELL, 0, ny - 1.000001)
         j, i = np.floor(u).astype(int), np.floor(v).astype(int)
@@ -230,20 +206,16 @@ class SimScene:
         return fields_dict(self, *names, "contact_time", "bumps", "seed", "flat_start")
 
 
-#: The built-in hexapod's weight lever ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²] (mass 1.96 kg,
-#: leg span 0.25 m), for which the servos are kp = 300 N·m/rad, kv = 3 N·m·s/rad and an
-#: armature of 0.002 kg·m² (AX-12-class servos).
+#: The built-in hexapod's ``m ℓ`` [kg·m] and ``m ℓ²`` [kg·m²], for its AX-12-class servos.
 _REF_ML, _REF_ML2 = 1.96 * 0.25, 1.96 * 0.25**2
 
 
 def servo_defaults(robot: Any) -> tuple[float, float, float]:
     """Default servo ``(kp, kv, armature)`` for a robot, scaled to its weight and size.
 
-    The position gain keeps the sag under the robot's own weight the same fraction of a
-    radian for every robot: ``kp = 300 N·m/rad × m ℓ / (1.96 kg × 0.25 m)`` (``m`` the mass,
-    ``ℓ`` the mean leg span), ``kv = 0.01 s × kp``, and the armature (reflected rotor
-    inertia) grows as ``m ℓ²`` from 0.002 kg·m². Three significant digits: the built-in
-    hexapod gets exactly 300, 3 and 0.002; erd:anymal (30.5 kg, 0.685 m) 12,800 N·m/rad.
+    The same sag under the robot's weight for every robot: ``kp = 300 N·m/rad × m ℓ /
+    (1.96 kg × 0.25 m)`` (``m`` the mass, ``ℓ`` the mean leg span), ``kv = 0.01 s × kp``, the
+    armature ``0.002 kg·m² × m ℓ² / (1.96 kg × (0.25 m)²)``; three significant digits.
     """
     wb = _robot(robot, None)
     span = wb.leg_span
@@ -298,18 +270,14 @@ def scene_mjcf(
             Default :func:`servo_defaults` (scaled to the robot's weight and size).
         kv: Velocity gain [N·m·s/rad] (> 0); default ``0.01 s × kp``.
         armature: Rotor inertia of each leg joint's servo [kg·m²] (≥ 0; MuJoCo's
-            ``armature``): the reflected inertia of a geared servo, which also keeps the
-            light links from chattering on stiff contacts. Default :func:`servo_defaults`.
+            ``armature``). Default :func:`servo_defaults`.
         contact_time: Contact stiffness as MuJoCo's ``solref`` time constant [s] (critically
             damped; at least twice the time step).
         timestep: Physics time step [s] (> 0). Default: :data:`MAX_TIMESTEP`, divided by
             the smallest whole number that keeps every servo's ``ω dt`` within
-            :data:`STABLE_OMEGA_DT` (``ω = sqrt(kp / I)``, ``I`` the joint's effective
-            inertia ``1 / (M⁻¹)_jj`` at the neutral pose, armature included): the position
-            gain is explicit in MuJoCo's integrator, and a light link without armature on a
-            gain scaled to the whole robot is otherwise integrated near its stability limit
-            (``ω dt`` ≈ 1.2; erd:go1 then loses a third of its travel). At least
-            ``MAX_TIMESTEP / MAX_SPLIT``.
+            :data:`STABLE_OMEGA_DT` (``ω = sqrt(kp / I)``, ``I = 1 / (M⁻¹)_jj`` at the
+            neutral pose, armature included; the position gain is explicit in MuJoCo's
+            integrator). At least ``MAX_TIMESTEP / MAX_SPLIT``.
         bumps: Amplitude [m] of random bumps on flat ground (0: none; at most
             :data:`MAX_BUMPS`): a height field of 5 cm cells, 16 m × 8 m, heights uniform in
             ``[-bumps, bumps]`` (seeded).
@@ -371,10 +339,10 @@ def scene_mjcf(
     data = mujoco.MjData(model)
     # the robot at its neutral pose, base at the origin: where each foot is, in which body
     q0 = np.asarray(wb.neutral_q(), dtype=float)
-    jadr = _joint_qpos(mujoco, model, wb.joint_names)
+    jids = _joints(mujoco, model, wb.joint_names)
     data.qpos[:] = 0.0
     data.qpos[3] = 1.0
-    data.qpos[jadr] = q0
+    data.qpos[model.jnt_qposadr[jids]] = q0
     mujoco.mj_kinematics(model, data)
     feet = wb.feet(q0[None], np.eye(4)[None])[0]
     ends = _leg_ends(wb)
@@ -382,8 +350,7 @@ def scene_mjcf(
     bodies = {b.get("name"): b for b in root.iter("body")}
     foot_geoms = []
     for leg, (name, col) in enumerate(zip(wb.leg_names, ends)):
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, wb.joint_names[col])
-        bid = int(model.jnt_bodyid[jid])
+        bid = int(model.jnt_bodyid[jids[col]])
         R, x = data.xmat[bid].reshape(3, 3), data.xpos[bid]
         local = R.T @ (feet[leg] - x)
         # drop the export's spheres at the foot point (this body or bodies welded to it)
@@ -459,9 +426,10 @@ def scene_mjcf(
     )
     act = etree.SubElement(root, "actuator")
     names = []
-    effort = _effort(mujoco, model, wb.joint_names)
-    for jn, lim in zip(wb.joint_names, effort):
+    for jn, jid in zip(wb.joint_names, jids):
         attrs = dict(name=f"{jn}_servo", joint=jn, kp=num(kp), kv=num(kv))
+        frc = model.jnt_actfrcrange[jid] if model.jnt_actfrclimited[jid] else (-np.inf, np.inf)
+        lim = float(min(abs(frc[0]), abs(frc[1])))
         if math.isfinite(lim):
             attrs.update(forcerange=f"{num(-lim)} {num(lim)}", forcelimited="true")
         etree.SubElement(act, "position", **attrs)
@@ -499,14 +467,12 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
     model = mujoco.MjModel.from_xml_string(etree.tostring(root, encoding="unicode"))
     data = mujoco.MjData(model)
     data.qpos[3] = 1.0
-    data.qpos[_joint_qpos(mujoco, model, wb.joint_names)] = q0
+    jids = _joints(mujoco, model, wb.joint_names)
+    data.qpos[model.jnt_qposadr[jids]] = q0
     mujoco.mj_forward(model, data)
     full = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, full)
-    dofs = [
-        int(model.jnt_dofadr[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j)])
-        for j in wb.joint_names
-    ]
+    dofs = model.jnt_dofadr[jids]
     inertia = 1.0 / np.diag(np.linalg.inv(full))[dofs]
     omega = float(np.sqrt(kp / inertia).max())
     k = math.ceil(MAX_TIMESTEP * omega / STABLE_OMEGA_DT)
@@ -514,12 +480,10 @@ def _stable_timestep(mujoco: Any, root: Any, wb: Any, q0: np.ndarray, kp: float)
 
 
 def _bump_field(seed: int, flat: float = 0.0) -> np.ndarray:
-    """(ny, nx) the bumps' elevations in [0, 1] on the grid of :data:`_BUMP_CELL`.
+    """(ny, nx) the bumps' elevations in [0, 1], seeded, MuJoCo's ``hfield_data`` order.
 
-    Row ``i`` at ``y = −half_y + i·cell``, column ``j`` at ``x = −half_x + j·cell`` (MuJoCo's
-    ``hfield_data`` order), uniform (seeded); 0.5 (the height 0) on the square
-    ``|x|, |y| <= flat`` [m] when ``flat > 0``. Its far corners are exactly 0 and 1 (MuJoCo
-    rescales an MJCF's elevations to [0, 1]: these are kept as they are).
+    0.5 (height 0) on the square ``|x|, |y| <= flat`` [m]; the far corners exactly 0 and 1, so
+    MuJoCo's rescaling to [0, 1] keeps them.
     """
     nx, ny = (int(round(2 * h / _BUMP_CELL)) + 1 for h in _BUMP_HALF)
     grid = np.random.default_rng(seed).uniform(0.0, 1.0, ny * nx).reshape(ny, nx)
@@ -533,9 +497,8 @@ def _bump_field(seed: int, flat: float = 0.0) -> np.ndarray:
 def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
     """Exclude contacts between robot bodies whose collision shapes touch in the neutral pose.
 
-    Overlapping collision shapes at rest are a modelling artefact of the URDF (ANYmal's thigh
-    boxes cross its base box), not a collision of the plan: left in, they push the legs apart
-    from the first step. The robot is held in the air, so only its own contacts count.
+    A URDF's modelling artefact (ANYmal's thigh boxes cross its base box), found with the
+    robot held in the air.
     """
     from lxml import etree
 
@@ -568,11 +531,8 @@ def _exclude_touching(root: Any, mujoco: Any, wb: Any, q0: np.ndarray) -> None:
 def _trim(elem: Any, model: Any, data: Any, g: int, foot: np.ndarray, r: float) -> None:
     """Shorten a link cylinder that ends at the foot point: the foot sphere alone is its tip.
 
-    Its flat end (a disc of the link's radius ρ centred on the foot point) sticks out of a
-    foot sphere of radius r < ρ; with ρ ≤ r its rim is only ``r − ρ`` inside the sphere, and
-    a soft contact sinks the foot further (erd:hyq's shin, ρ = 20 mm in a 21.75 mm foot, 16–24°
-    above horizontal: its rim 3 mm above the ground, which MuJoCo's default contact reaches).
-    The end moves back by ρ along the link's axis (at most half the cylinder).
+    The flat end's rim (radius ρ) would touch the ground beside the sphere; the end moves back
+    by ρ along the axis (at most half the cylinder).
     """
     from ..export._common import num, vec
 
@@ -592,23 +552,18 @@ def _trim(elem: Any, model: Any, data: Any, g: int, foot: np.ndarray, r: float) 
             return
 
 
+def _joints(mujoco: Any, model: Any, names: Any) -> np.ndarray:
+    """The MuJoCo ids of the joints ``names`` (ConfigurationError for one not in the MJCF)."""
+    ids = np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names], int)
+    missing = [n for n, i in zip(names, ids) if i < 0]
+    if missing:
+        raise ConfigurationError(f"joint {missing[0]!r} is not in the robot's MJCF")
+    return ids
+
+
 def _joint_qpos(mujoco: Any, model: Any, names: Any) -> np.ndarray:
-    out = []
-    for jn in names:
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
-        if jid < 0:
-            raise ConfigurationError(f"joint {jn!r} is not in the robot's MJCF")
-        out.append(int(model.jnt_qposadr[jid]))
-    return np.array(out)
-
-
-def _effort(mujoco: Any, model: Any, names: Any) -> np.ndarray:
-    out = []
-    for jn in names:
-        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, jn)
-        lim = model.jnt_actfrcrange[jid] if model.jnt_actfrclimited[jid] else (-np.inf, np.inf)
-        out.append(float(min(abs(lim[0]), abs(lim[1]))))
-    return np.array(out)
+    """The ``qpos`` addresses of the joints ``names``."""
+    return np.asarray(model.jnt_qposadr[_joints(mujoco, model, names)])
 
 
 # ----------------------------------------------------------------------------- the engine
@@ -714,14 +669,12 @@ class _Engine:
         return float(np.linalg.norm(u - (u @ n) * n))
 
     def scan(self) -> tuple[list[tuple[int, int]], list[tuple[int, float, int]]]:
-        """The contacts now: non-foot geom pairs, and per foot contact its slip speed.
+        """The contacts now: ``(others, feet)``.
 
-        Returns ``(others, feet)``: ``others`` the geom pairs that are not a foot on the
-        ground; ``feet`` ``(leg, speed [m/s], contact index)``, the speed that of the foot's
-        material point at the contact point along the contact plane: ``v + ω × (p_c − c)``
-        (``v``, ``ω`` the foot's velocity at its centre ``c``,
-        :func:`mujoco.mj_objectVelocity`) less its normal part, zero for a foot that rolls.
-        Plain Python on the few contacts of a step (numpy's per-call cost would dominate).
+        ``others``: the geom pairs that are not a foot on the ground; ``feet``: ``(leg, speed
+        [m/s], contact index)``, the tangential speed of the foot's material point at the
+        contact, ``v + ω × (p_c − c)`` less its normal part (zero for a rolling foot). Plain
+        Python: a step has few contacts.
         """
         mj, m, d = self.mj, self.model, self.data
         nc = int(d.ncon)
@@ -760,9 +713,8 @@ class _Engine:
 def check_steps(timestep: Any, spans: dict[str, float], default_timestep: float = 1e-3) -> float:
     """Refuse a simulation of more than ``dynamics.MAX_STEPS`` physics steps; the timestep [s].
 
-    ``spans`` maps each option to the simulated time it adds [s] (e.g. ``settle``, the
-    walk's ``duration``). Past the cap the refusal names the option adding the most steps,
-    or ``timestep`` when the spans would fit at ``default_timestep``.
+    ``spans`` maps each option to the simulated time it adds [s]; past the cap the refusal
+    names the option adding the most, or ``timestep`` when the spans fit at ``default_timestep``.
 
     Raises:
         ParameterError: A timestep that is not > 0, a span not finite >= 0, too many steps.

@@ -21,14 +21,9 @@ STAND_SETTLE = 2.0
 class StandForces:
     """Per-foot contact forces of the robot standing in MuJoCo vs :func:`dynamics.stand`.
 
-    Attributes:
-        legs: The stance legs.
-        forces: (L, 3) MuJoCo's contact force on each foot, world frame [N] (mean over the
-            last 0.2 s).
-        expected: (L, 3) ``stand()``'s contact force on each foot [N].
-        weight: ``m g`` [N].
-        height: Body height of the stance [m] (foot points at the ground).
-
+    ``forces`` (L, 3): MuJoCo's on each stance foot (``legs``), world frame [N], mean over the
+    last 0.2 s; ``expected``: ``stand()``'s [N]; ``weight`` ``m g`` [N]; ``height`` of the
+    stance's body [m] (foot points at the ground).
     """
 
     legs: tuple[str, ...]
@@ -62,24 +57,16 @@ def stand_forces(
 ) -> StandForces:
     """The robot standing in MuJoCo at :func:`hexapod_kin.dynamics.stand`'s pose, flat ground.
 
-    The base is placed level at the stance's height, raised so that the stance feet's
-    spheres touch the ground, the joints held at the stance's angles by the actuators;
-    after ``settle`` seconds the contact force of each foot (3-D, mean over the last 0.2 s)
-    is compared with the stance's contact force.
+    The base level at the stance's height with the stance spheres on the ground, the joints
+    held at the stance's angles; after ``settle`` seconds each foot's contact force (mean over
+    the last 0.2 s) is compared with the stance's. The servos hold at a tenth of the robot's
+    gains (:func:`~.scene.servo_defaults`) for the first half of ``settle``, so that the load
+    spreads as the stance shares it (stiff servos keep the internal forces friction locks in
+    at touch-down), then ramp to them over a quarter; no armature unless asked.
 
-    The servos are the robot's own (:func:`~.scene.servo_defaults`, the walking gains)
-    once settled: the first half of ``settle`` they hold at a tenth of that gain, so that
-    the load spreads over the feet as the stance's shares (a statically indeterminate
-    stance under stiff servos keeps the internal forces friction locks in at touch-down),
-    then the gain ramps to the robot's over a quarter of ``settle`` and holds. The servos
-    have no armature here unless asked.
-
-    Args:
-        robot: As :func:`scene_mjcf`.
-        scene: A flat :class:`SimScene` of the robot (default built from ``scene_options``).
-        settle: Simulated time [s] (> 0.2; at most ``dynamics.MAX_STEPS`` timesteps).
-        **scene_options: Passed to :func:`scene_mjcf` (``foot_radius``, ``kp``...;
-            ``armature`` defaults to 0 here).
+    ``robot`` and ``**scene_options`` as :func:`scene_mjcf` (``armature`` defaults to 0 here),
+    or a flat :class:`SimScene` ``scene``; ``settle`` > 0.2 [s] (at most
+    ``dynamics.MAX_STEPS`` timesteps).
 
     Raises:
         ParameterError: Bad values, a scene that is not flat, too many physics steps.
@@ -91,7 +78,6 @@ def stand_forces(
     from ..params import Hexapod
 
     dur = positive("settle", settle)
-
     check_steps(
         scene_options.get("timestep") or 1e-3 if scene is None else scene.timestep, {"settle": dur}
     )
