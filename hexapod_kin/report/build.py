@@ -83,20 +83,13 @@ def _section(v: Verdict) -> str:
 
 @dataclass(frozen=True)
 class Report:
-    """A built report.
+    """A built report: its folder, ``report.md``, ``report.html``, verdicts and other facts.
 
     Attributes:
-        out: The report folder.
-        markdown: Path of ``report.md``.
-        html: Path of ``report.html``.
-        verdicts: Every verdict, in claims-file order.
-        facts: Other computed figures (scan family counts, standing, walking).
         seconds: Wall time of this run in [s] (of the replay when replayed).
-        replayed_from: UTC time (``YYYY-MM-DDTHH:MM:SSZ``) of the build whose files this run
-            copied (same source, claims, options and libraries; see :mod:`.replay`), or
-            ``None``: computed by this run.
-        build_seconds: Wall time in [s] of the build that computed the report (this run's
-            ``seconds`` unless replayed).
+        replayed_from: UTC time (``YYYY-MM-DDTHH:MM:SSZ``) of the build this run copied
+            (:mod:`.replay`), or ``None``: computed by this run.
+        build_seconds: Wall time in [s] of the build that computed the report.
 
     """
 
@@ -184,10 +177,8 @@ def _probe(out: Path) -> None:
     """Make ``out`` and write one byte in it (then remove it): a write that will fail, fails now."""
 
     def refuse(why: str) -> ParameterError:
-        allowed = "a folder that can be written"
-        return ParameterError(
-            f"out={str(out)!r}: {why}", parameter="out", value=str(out), allowed=allowed
-        )
+        text, allowed = f"out={str(out)!r}: {why}", "a folder that can be written"
+        return ParameterError(text, parameter="out", value=str(out), allowed=allowed)
 
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -259,12 +250,7 @@ def _replayed(entry: Any, out: Path, start: float) -> Report | None:
 
 
 def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[Report, list[Path]]:
-    """Compute everything and write the report.
-
-    Returns:
-        The :class:`Report` and the files written into ``out`` but ``verdicts.json``.
-
-    """
+    """Compute and write the report: the :class:`Report` and the files but ``verdicts.json``."""
     from . import figures
     from ._worker import NumericHalf
     from .checks import Context, evaluate
@@ -411,11 +397,8 @@ def _facts(key: str, rep: Report) -> list[Block]:
 
 
 def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
-    def cell(x: str) -> str:
-        return str(x).replace("|", "/")
-
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return out + ["| " + " | ".join(cell(x) for x in r) + " |" for r in rows]
+    return out + ["| " + " | ".join(str(x).replace("|", "/") for x in r) + " |" for r in rows]
 
 
 def _md_derivation(title: str, printed: dict[str, Any]) -> list[str]:
