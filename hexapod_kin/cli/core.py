@@ -124,20 +124,16 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
-        print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
-        print(matrix_text(t))
+        print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):\n{matrix_text(t)}")
         if 1 < j < n:  # ^0T_1 = ^0T_1 above; ^0T_n is the tip, printed last
-            print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):")
-            print(matrix_text(c))
+            print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):\n{matrix_text(c)}")
     _placement(f"^0T_{n} = T tip  ({model.base} -> {model.tip}):", tip)
     return 0
 
 
 def _placement(title: str, T: Any) -> None:
     """A placement printed: its title, the 4x4 matrix, the position [m]."""
-    print(title)
-    print(matrix_text(T))
-    print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
+    print(f"{title}\n{matrix_text(T)}\nposition [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
 
 
 # ------------------------------------------------------------------------ jacobian
@@ -221,10 +217,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     q_deg = (20.0, 30.0, 45.0)
     q = np.radians(q_deg)
     print(f"q = ({', '.join(f'{v:g}' for v in q_deg)}) deg  (hip, knee, ankle)")
-    print("T foot in base:")
-    print(matrix_text(model.fk(q)))
-    print("J (local_world_aligned):")
-    print(matrix_text(model.jacobian(q)))
+    print(f"T foot in base:\n{matrix_text(model.fk(q))}")
+    print(f"J (local_world_aligned):\n{matrix_text(model.jacobian(q))}")
     print(f"det(J_position) = {np.linalg.det(model.position_jacobian(q)):.6e}")
     return 0
 
@@ -283,13 +277,11 @@ def _phase(end: float, make: Callable[[], Iterator[Any]]) -> tuple[list[Any], bo
 def _derive_job(
     rows: Any, fmt: str, budget: float, jac_pin: Any, qs: Any, pinned: tuple[Any, str, str]
 ) -> Iterator[tuple[str, Any]]:  # pragma: no cover - runs in the child process
-    """``derive``'s work within ``budget`` CPU seconds, in one child process.
+    """``derive``'s work within ``budget`` CPU seconds, in one child process (no Pinocchio).
 
-    The derivation (the disk cache read, the stages) until :data:`_AFTER` is left, the
-    formulas printed (``fmt``: ``"text"``, ``"json"`` or ``"latex"``) until half of it is
-    left, then the check against Pinocchio's Jacobians ``jac_pin`` at ``qs`` (computed by the
-    parent: no Pinocchio here). Yields the derivation, the output and
-    what was cut, the check and why it is incomplete.
+    Yields the derivation (until :data:`_AFTER` is left), the formulas as ``fmt`` (until half
+    of it) and what was cut, the check against the parent's ``jac_pin`` at ``qs`` and why
+    it is incomplete.
     """
     import dataclasses
     import json

@@ -55,13 +55,8 @@ _ITEMS: dict[str, Callable[[Any], Any]] = {
 class Context(Experiments):
     """hexapod_kin's side of every comparison, computed on first use and kept.
 
-    The models and the experiments are :class:`~.experiments.Experiments`'; the derivations
-    and the replayed schedule are added here.
-
-    Args:
-        quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
-        claims: All claims (a matrix check looks up the seed's own factors).
-
+    The derivations and the replayed schedule beside :class:`~.experiments.Experiments`'
+    models and experiments (``quick``: smaller runs); ``claims``: all claims, by id.
     """
 
     def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
@@ -167,11 +162,7 @@ class Context(Experiments):
 def _seed_ik(
     formulas: dict[str, str], feet: np.ndarray, lengths: dict[sp.Symbol, float]
 ) -> np.ndarray:
-    """The seed's IK formulas (assignments in order) evaluated at every foot: (N, 2) θ1, θ2.
-
-    Each formula is parsed once and evaluated with numpy over all feet at once (symbols
-    matched by name: the lengths, ``x, y, z`` and the names assigned before it).
-    """
+    """The seed's IK formulas (assignments in order, symbols by name) at every foot: (N, 2)."""
     env: dict[str, Any] = {k.name: float(v) for k, v in lengths.items()}
     env.update(x=feet[:, 0], y=feet[:, 1], z=feet[:, 2])
     for name, text in formulas.items():
@@ -196,9 +187,8 @@ def _verdict(
     first, last = c.lines
     lines = f"{first}-{last}" if first else ""
     layout = json.dumps(cells, ensure_ascii=False) if cells else ""
-    return Verdict(
-        c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method, layout, lines
-    )
+    head = (c.id, c.seed, c.where, c.kind, claimed, computed)
+    return Verdict(*head, status, reason, method, layout, lines)
 
 
 def _judged(
@@ -214,11 +204,8 @@ _AT = re.compile(r"^\((\d+),(\d+)\):")
 
 def _cells(seed_rows: Any, ours: sp.Matrix, diffs: list[str], note: str = "") -> dict[str, Any]:
     """The matrix layout of a verdict: the seed's entries as written, ours, the differing ones."""
-    differ = []
-    for d in diffs:
-        m = _AT.match(d)
-        if m:
-            differ.append([int(m.group(1)) - 1, int(m.group(2)) - 1])
+    found = [_AT.match(d) for d in diffs]
+    differ = [[int(m.group(1)) - 1, int(m.group(2)) - 1] for m in found if m]
     rows = [[str(v) for v in row] for row in seed_rows]
     mine = [[fmt(tidy(ours[i, j])) for j in range(ours.cols)] for i in range(ours.rows)]
     return {"seed": rows, "ours": mine, "differ": differ, "note": note}
@@ -546,11 +533,7 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
 
 
 def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
-    """Why a failed ``bound`` claim holds for an admissible value of what the seed leaves open.
-
-    Returns the reason (the claim is *underdetermined*), or None: no admissible value is known
-    to make it hold (the seed is *wrong*). Only claims with ``unstated`` are asked.
-    """
+    """Why a failed ``bound`` claim with ``unstated`` holds for an admissible value (else None)."""
     if "unstated" not in c.data:
         return None
     name, tol = c.data["quantity"], float(c.data["tol"])
@@ -580,11 +563,7 @@ def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
 
 
 def _check_bound(c: Claim, ctx: Context) -> Verdict:
-    """``bound``: a measured quantity within ``tol`` of the claimed value.
-
-    Out of ``tol``: *underdetermined* when :func:`_admissible` finds an admissible value of
-    the claim's ``unstated`` for which it holds, else *wrong*.
-    """
+    """``bound``: a measured quantity within ``tol`` (else underdetermined or wrong)."""
     val = ctx.quantity(c.data["quantity"])
     target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
     claimed = f"{c.data['quantity']} = {target:g} {unit}"
@@ -614,10 +593,7 @@ CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
 
 
 def evaluate(claims: list[Claim], ctx: Context) -> list[Verdict]:
-    """Compute every claim's verdict against ``ctx``.
-
-    A comparison that raises gives status ``"error"`` with the exception (never skipped).
-    """
+    """Every claim's verdict against ``ctx`` (one that raises: status ``"error"``, not skipped)."""
     out = []
     for claim in claims:
         try:

@@ -60,9 +60,7 @@ class Claim:
     def lines(self) -> tuple[int, int]:
         """First and last line (1-based) of the claim's passage in the shipped seed text."""
         raw = [int(x) for x in self.data.get("lines", [])]
-        if not raw:
-            return (0, 0)
-        return (raw[0], raw[-1])
+        return (raw[0], raw[-1]) if raw else (0, 0)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the claim's TOML table."""
@@ -130,10 +128,7 @@ class Verdict:
         return cls(**{n: data[n] for n in names})
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed.
-
-        ``cells`` is None for a verdict that is not a matrix or table.
-        """
+        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed."""
         out: dict[str, Any] = self.fields()
         del out["reason"], out["method"], out["cells"]
         cells = json.loads(self.cells) if self.cells else None
