@@ -477,9 +477,7 @@ def _markdown(
         lines += ["", f"## {title}", ""]
         if intro:
             lines += [intro, ""]
-        for v in rep.verdicts:
-            if _section(v) != key:
-                continue
+        for v in [v for v in rep.verdicts if _section(v) == key]:
             lines += [f"### {v.claim} — seed {v.seed}, {v.where}", ""]
             passage = _passage_md(v, seeds)
             if passage:
@@ -557,9 +555,7 @@ def _html(
         h.append(f"<h2>{e(title)}</h2>")
         if intro:
             h.append(f"<p>{H.inline(intro)}</p>")
-        for v in rep.verdicts:
-            if _section(v) != key:
-                continue
+        for v in [v for v in rep.verdicts if _section(v) == key]:
             h.append(
                 f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
                 f"{e(H.seed_notation(v.where))}{passage(v)}</h3>"

@@ -30,9 +30,8 @@ def msgpack_lib() -> Any:
     try:
         import umsgpack
     except ImportError:
-        raise OptionalDependencyError(
-            f"the viewer needs u-msgpack-python; {INSTALL_HINT}"
-        ) from None
+        msg = f"the viewer needs u-msgpack-python; {INSTALL_HINT}"
+        raise OptionalDependencyError(msg) from None
     return umsgpack
 
 
@@ -49,8 +48,7 @@ def bundle() -> str:
     path = meshcat_dir() / "viewer" / "dist" / "main.min.js"
     if not path.is_file():
         raise OptionalDependencyError(f"meshcat's viewer bundle {path} is missing; {INSTALL_HINT}")
-    text = path.read_text(encoding="utf-8")
-    return text.replace("</script", "<\\/script")
+    return path.read_text(encoding="utf-8").replace("</script", "<\\/script")
 
 
 # ====================================================================== low-level: JSON objects
@@ -75,10 +73,7 @@ TYPED_ARRAYS = {
 
 
 def attribute(array: np.ndarray, item_size: int) -> dict[str, Any]:
-    """A three.js BufferGeometry attribute of ``array`` (int16, uint16, uint32 or float32).
-
-    Other integer arrays are sent as uint32, other floats as float32.
-    """
+    """A three.js BufferGeometry attribute of ``array`` (other ints as uint32, floats float32)."""
     kind = array.dtype.name
     if kind not in TYPED_ARRAYS:
         kind = "uint32" if array.dtype.kind == "u" else "float32"
@@ -173,10 +168,8 @@ class ObjectJSON:
     ) -> dict[str, Any]:
         """One object node (Mesh, Group, Sprite, LineSegments) with its 4×4 ``matrix``."""
         out: dict[str, Any] = {"uuid": self._id("object"), "type": kind}
-        if geometry is not None:
-            out["geometry"] = geometry
-        if material is not None:
-            out["material"] = material
+        parts = (("geometry", geometry), ("material", material))
+        out.update({k: v for k, v in parts if v is not None})
         out["matrix"] = column_major(np.eye(4) if matrix is None else matrix)
         if children:
             out["children"] = children
@@ -198,13 +191,9 @@ class ObjectJSON:
 
 def cylinder(radius: float, length: float, segments: int = 32) -> dict[str, Any]:
     """three.js cylinder (axis y; rotate by Rx(π/2) for a URDF cylinder, axis z)."""
-    return {
-        "type": "CylinderGeometry",
-        "radiusTop": float(radius),
-        "radiusBottom": float(radius),
-        "height": float(length),
-        "radialSegments": segments,
-    }
+    r = float(radius)
+    kw = dict(radiusTop=r, radiusBottom=r, height=float(length), radialSegments=segments)
+    return {"type": "CylinderGeometry", **kw}
 
 
 def sphere(radius: float) -> dict[str, Any]:

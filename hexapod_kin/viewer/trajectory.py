@@ -144,5 +144,4 @@ def clip(path: str, times: np.ndarray, T: np.ndarray) -> dict[str, Any]:
     """The animation clip (position and quaternion tracks, times [s]) of poses ``T`` (N, 4, 4)."""
     tracks = [track("position", "vector3", times, T[:, :3, 3])]
     tracks.append(track("quaternion", "quaternion", times, quaternions(T)))
-    # key times are in seconds
     return {"path": path, "clip": {"fps": 1.0, "name": "default", "tracks": tracks}}
