@@ -42,14 +42,7 @@ EXEC_DEPENDS = tuple(
 
 @dataclass(frozen=True)
 class PackageExport:
-    """What :func:`export_package` wrote.
-
-    Attributes:
-        path: The package folder.
-        name: The ROS package name.
-        files: Paths of the files written, relative to ``path``, sorted.
-
-    """
+    """What :func:`export_package` wrote: the folder, the ROS package name, the files (sorted)."""
 
     path: Path
     name: str

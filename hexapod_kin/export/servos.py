@@ -177,14 +177,12 @@ class Servo:
     def check_range(self, lower: float, upper: float) -> None:
         """Refuse a servo that cannot drive a joint of limits [lower, upper] [rad or m].
 
-        The centre (``offset``) must lie within a turn (2π) of the joint's range, the angles
-        the servo's own ``limits`` reach must overlap it, and a step of the ``resolution`` must
-        lie within that overlap. Infinite limits check nothing.
+        The ``offset`` within a turn of the joint's range, the angles the servo's ``limits``
+        reach overlapping it, a step of the ``resolution`` within that (infinite limits: no
+        check).
 
         Raises:
-            ParameterError: Naming the joint, the key (``offset``, ``limits``, or
-                ``resolution`` when no step of it lies within both ranges), the value and the
-                allowed range.
+            ParameterError: Naming the joint, the key, the value and the allowed range.
 
         """
         lo, hi = float(lower), float(upper)
@@ -214,12 +212,7 @@ class Servo:
             self._check_steps(lo, hi)
 
     def _check_cover(self, lower: float, upper: float, reach: float) -> None:
-        """Refuse a µs or ticks scale whose servo limits sweep < :data:`MIN_COVER` of the joint.
-
-        ``reach``: the joint angles [rad or m] the servo's limits span. A servo that moves a
-        joint of 3 rad by 0.002 rad end to end is a unit slip in the scale (µs per degree
-        given per radian, ticks per degree...), refused before any walk is planned.
-        """
+        """Refuse a µs/ticks scale whose limits sweep ``reach`` < MIN_COVER of the joint's range."""
         span = upper - lower
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units)
         if key is None or self.limits is None or not (span > 0 and reach < MIN_COVER * span):
@@ -295,12 +288,11 @@ class Calibration:
     ) -> None:
         """Refuse a listed joint not in ``joint_names`` and a servo that cannot drive its joint.
 
-        A typo would go unnoticed. With the joints' ``lower``/``upper`` limits [rad or m] every
-        joint's servo (unlisted ones through the defaults) is held to :meth:`Servo.check_range`.
+        With the joints' ``lower``/``upper`` limits [rad or m] every joint's servo is held to
+        :meth:`Servo.check_range`.
 
         Raises:
-            ParameterError: An unknown joint (naming it and the joints allowed); a range or
-                offset incompatible with the joint's limits.
+            ParameterError: An unknown joint (naming the joints allowed); a servo unfit.
 
         """
         extra = [j for j in self.servos if j not in joint_names]
@@ -320,13 +312,7 @@ class Calibration:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], name: str | None = None) -> Calibration:
-        """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc).
-
-        Args:
-            data: The file's values.
-            name: The file, named in errors (None: none named).
-
-        """
+        """Build from a file's data (see the module doc); ``name``: the file, named in errors."""
 
         def refuse(why: str, value: Any, allowed: Any) -> ParameterError:
             return _bad(why, "calibration", value, allowed)

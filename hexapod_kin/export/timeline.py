@@ -85,18 +85,14 @@ def _identity() -> Calibration:
 
 @dataclass(frozen=True)
 class Timeline:
-    """A plan resampled for servos (arrays read-only).
+    """A plan resampled for servos (arrays read-only), its ``calibration``, rate and interpolation.
 
     Attributes:
         t: (N,) sample times [s], ``k / rate``.
-        joint_names: The joints, in column order.
-        q: (N, J) joint angles of the commands sent [rad] (the servo values mapped back).
-        qdot: (N, J) joint rates [rad/s].
-        command: (N, J) servo commands in each servo's units (rounded to its resolution).
-        speed: (N, J) servo speeds in servo units per second.
-        calibration: The servos used.
-        rate: Samples per second [Hz].
-        interpolation: ``"linear"`` or ``"cubic"``.
+        q: (N, J) joint angles of the commands sent [rad] (the servo values mapped back);
+            ``qdot`` (N, J) their rates [rad/s]; columns in ``joint_names`` order.
+        command: (N, J) servo commands in each servo's units (rounded to its resolution);
+            ``speed`` (N, J) in servo units per second.
 
     """
 
@@ -363,10 +359,9 @@ def timeline(
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
     t, q, qdot, names = _plan_arrays(plan, times, joint_names)
-    if isinstance(calibration, Calibration):
-        cal = calibration
-    else:
-        cal = _identity() if calibration is None else read_calibration(calibration)
+    cal = calibration
+    if not isinstance(cal, Calibration):
+        cal = _identity() if cal is None else read_calibration(cal)
     plim = _model_position_limits(plan, position_limit, len(names))
     cal.check_joints(names, plim[0], plim[1])
     servos = [cal.servo(j) for j in names]
@@ -497,10 +492,7 @@ def _read_json(raw: str, p: Path) -> Timeline:
 
 
 def _csv(text: str, name: str, what: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
-    """``# key: value`` lines, the column names (units dropped) and the (N, columns) numbers.
-
-    The numbers pass the strict reader's (:func:`hexapod_kin._reader.csv_table`).
-    """
+    """``# key: value`` lines, the column names (units dropped) and the numbers (csv_table's)."""
     meta, header, rows = csv_table(text, name, what)
     names = tuple(h.rsplit(" [", 1)[0] for h in header)
     return meta, names, np.array(rows, dtype=float).reshape(len(rows), len(header))
