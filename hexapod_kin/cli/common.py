@@ -65,9 +65,7 @@ class OneLineParser(argparse.ArgumentParser):
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
-        fmt = kwargs.get("formatter_class")
-        if fmt is None or fmt is argparse.ArgumentDefaultsHelpFormatter:
-            kwargs["formatter_class"] = DefaultsFormatter
+        kwargs.setdefault("formatter_class", DefaultsFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:

@@ -225,7 +225,6 @@ def _add_stand(sub: Any) -> None:
         "--body-height",
         dest="height",
         type=float,
-        default=None,
         help="body above the ground [m] (default: a Hexapod 0.10; other robots their own)",
     )
     p.add_argument(

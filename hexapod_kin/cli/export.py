@@ -18,10 +18,8 @@ def _add_xacro(sub: Any) -> None:
         "xacro", help="parametric xacro (a macro per leg family, a property per dimension)"
     )
     robot_args(p, kinds="table")
-    p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
-    p.add_argument(
-        "-o", "--output", default=None, help="file to write (atomically); stdout if unset"
-    )
+    p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount")
+    p.add_argument("-o", "--output", help="file to write (atomically); stdout if unset")
     p.add_argument(
         "-x", "--expand", action="store_true", help="print/write the expanded URDF instead"
     )
@@ -55,9 +53,7 @@ def _add_package(sub: Any) -> None:
     )
     robot_args(p, kinds="table")
     p.add_argument("-o", "--out", required=True, help="package folder to create")
-    p.add_argument(
-        "-n", "--name", default=None, help="ROS package name (default <robot>_description)"
-    )
+    p.add_argument("-n", "--name", help="ROS package name (default <robot>_description)")
     p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in meshes/ (trimesh)")
     p.add_argument("-f", "--force", action="store_true", help="replace a non-empty --out folder")
     p.add_argument("--maintainer", default="hexapod_kin user", help="package.xml maintainer")
@@ -91,14 +87,12 @@ def _add_mjcf(sub: Any) -> None:
         help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
     )
     robot_args(p)
-    p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")
+    p.add_argument("-o", "--output", help="MJCF file to write; stdout if unset")
     p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in <stem>_meshes/")
     p.add_argument("--no-floor", action="store_true", help="no floor plane and light")
-    p.add_argument(
-        "--floor-z", type=float, default=None, help="floor height [m] (default: below reach)"
-    )
-    p.add_argument("--timestep", type=float, default=None, help="option timestep [s]")
-    p.add_argument("--integrator", default=None, help="Euler, RK4, implicit or implicitfast")
+    p.add_argument("--floor-z", type=float, help="floor height [m] (default: below reach)")
+    p.add_argument("--timestep", type=float, help="option timestep [s]")
+    p.add_argument("--integrator", help="Euler, RK4, implicit or implicitfast")
     p.add_argument(
         "--floating", action="store_true", help="robots: a free joint on the body (it can fall)"
     )

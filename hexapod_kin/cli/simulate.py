@@ -43,7 +43,6 @@ def register(sub: Any) -> None:
             "(pip install 'hexapod-kin[export]'; --robust and --control also proxsuite: "
             "'hexapod-kin[export,control]')."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
