@@ -61,16 +61,11 @@ LINK_RADIUS_FRACTION = 0.02
 
 
 def thickening(model: Model, objects: Sequence[Any]) -> tuple[float, float]:
-    """Factor for thin primitives so that links stay visible at the robot's scale.
+    """``(factor, rod radius [m])`` thin primitives grow by so that links stay visible.
 
-    The rod radius is the largest cylinder radius of the model's primitives; the drawn radius
-    is at least :data:`LINK_RADIUS_FRACTION` of the chain's length scale. Cylinders and
-    capsules of the rod radius or thinner, spheres up to 3 and boxes up to 6 rod radii grow by
-    the same factor (1 to 20); meshes and larger primitives are drawn as they are.
-
-    Returns:
-        ``(factor, rod radius [m])``; ``(1.0, 0.0)`` when the model has no cylinder.
-
+    The rod radius is the largest cylinder radius, drawn at least :data:`LINK_RADIUS_FRACTION`
+    of the chain's length scale; cylinders up to 1, spheres up to 3 and boxes up to 6 rod radii
+    grow by the factor (1 to 20). ``(1.0, 0.0)`` without a cylinder.
     """
     from .._numerics import chain_length
 
@@ -382,10 +377,8 @@ def _camera_offset(
 ) -> np.ndarray:
     """Camera position (relative to the scene centre) that fits every ball in the view.
 
-    The camera looks at the centre from the direction (1, −1.25, 0.75) (front-right, above);
-    its distance is the smallest one for which every ball (``points`` (M, 3) relative to the
-    centre, ``radii`` (M,)) projects inside ``margin`` of the vertical field of view
-    ``fov_deg`` and of the horizontal one for an aspect ratio of at least ``min_aspect``.
+    From the direction (1, −1.25, 0.75), the nearest at which every ball (``points`` (M, 3),
+    ``radii`` (M,)) is inside ``margin`` of the field of view (aspect at least ``min_aspect``).
     """
     direction = np.array([1.0, -1.25, 0.75])
     direction /= np.linalg.norm(direction)
@@ -415,9 +408,7 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
         ("z", [0.1, 0.25, 0.9, 1.0], rotation("x", math.pi / 2)),
     )
     for i, (_axis, rgba, rot) in enumerate(axes):
-        offset = np.zeros(3)
-        offset[i] = length / 2
-        at = translation(offset) @ rot
+        at = translation(np.eye(3)[i] * (length / 2)) @ rot
         kids.append(o.node("Mesh", geometry=cyl, material=o.material(rgba), matrix=at))
     tex = o.text_texture(label)
     mat = o.material([1, 1, 1, 1], "SpriteMaterial", map=tex, depthTest=False, transparent=True)

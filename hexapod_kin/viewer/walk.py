@@ -32,11 +32,7 @@ def _joint_columns(run: Any, mdl: Any) -> list[int]:
 
 
 def _foot_frames(run: Any, mdl: Any) -> Any:
-    """The frame each foot of the run's robot is on, in the loaded model ``mdl`` (one per leg).
-
-    A foot given as a frame plus an offset is traced at its frame's origin. ``None`` (the
-    page's default) when the run carries no robot or ``mdl`` lacks one of the frames.
-    """
+    """The frame each foot of the run's robot is on (its origin traced), or None: the default."""
     wb = getattr(run, "robot", None)
     if wb is None:
         return None
