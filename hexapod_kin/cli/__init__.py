@@ -64,11 +64,7 @@ def _one_line(text: object) -> str:
 
 
 def _one_line_warning(original: Any) -> Any:
-    """``warnings.showwarning`` printing the package's warnings as ``hexapod-kin: warning: ...``.
-
-    One line per line of the message, each distinct text once; other warnings as Python shows
-    them.
-    """
+    """``warnings.showwarning`` printing each distinct package warning ``hexapod-kin: warning``."""
     from ..exceptions import HexapodKinWarning
 
     said: set[str] = set()
@@ -108,10 +104,10 @@ def run() -> None:
 
 
 def _exit_interrupted() -> None:
-    """End an interrupted command by its own SIGINT, without the interpreter's teardown.
+    """End an interrupted command by its own SIGINT (the shell sees 130), with no teardown.
 
     The command's clean-up has run; the teardown would finalize what the interrupt left
-    half-built (a numba compile cut short). POSIX: the shell sees 130 and a calling script stops.
+    half-built (a numba compile cut short).
     """
     for stream in (sys.stdout, sys.stderr):
         try:

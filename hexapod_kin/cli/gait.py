@@ -90,10 +90,8 @@ SPEED_CHECKS = ("joint speed", "joint acceleration", "reach")
 def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
     """:func:`~hexapod_kin.gait.walk.walk` with the options of :func:`.common.walk_options`.
 
-    A walk that asks more than the robot can (a joint too fast, a foot out of reach) fails
-    with the highest straight speed of its pattern for this robot added to the message
-    (:func:`~hexapod_kin.gait.walk.highest_speed`); ``simulate`` and ``timeline gait`` plan
-    through it too.
+    A walk asking more than the robot can fails with its pattern's highest straight speed
+    (:func:`~hexapod_kin.gait.walk.highest_speed`) in the message.
 
     Raises:
         GaitError: A check fails (exit status 1).

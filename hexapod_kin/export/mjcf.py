@@ -236,11 +236,9 @@ def to_mjcf(
     """Return the MJCF of a source, compiled by MuJoCo (deterministic).
 
     Args:
-        source: What :func:`hexapod_kin.load` takes (resolved by
-            :func:`~hexapod_kin.sources.resolve_source`): a chain, a robot, a preset name, a
-            table file, a URDF path or text, ``erd:NAME``. A URDF without a parameter table is
-            used without its mesh geometry (primitives, inertials and joints kept; no
-            reach-based floor).
+        source: What :func:`hexapod_kin.load` takes; a URDF without a parameter table is used
+            without its mesh geometry (primitives, inertials and joints kept; no reach-based
+            floor).
         meshes: STL visuals (trimesh) as non-colliding mesh geoms (group 1); the primitive
             collision geoms move to group 3.
         mesh_prefix: Folder of the mesh files relative to the MJCF file.
@@ -249,14 +247,11 @@ def to_mjcf(
         floor_z: Floor height in [m]; default just below everything the robot can reach.
         timestep: ``<option timestep>`` in [s] (> 0); default MuJoCo's (0.002 s).
         integrator: ``<option integrator>``: one of :data:`INTEGRATORS`; default MuJoCo's.
-        floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
-            ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor
-            (a Hexapod or a robot's URDF; not a chain).
-        balance_inertia: Mend a URDF from elsewhere with rounded inertials: principal
-            moments within 1e-6 of zero (relative to the link's largest; dummy and sensor
-            links with ``ixx = 0``) are raised to that floor, and MuJoCo raises those that
-            break the triangle inequality ``A + B >= C`` (``balanceinertia``). Off: such a
-            URDF is refused, and the MJCF's inertias are the URDF's.
+        floating: A free joint ``floating_base`` on the root body (qpos ``x y z qw qx qy qz``
+            first): the robot can fall, stand and walk (a Hexapod or a robot's URDF).
+        balance_inertia: Mend rounded inertials: principal moments within 1e-6 of zero
+            (relative to the link's largest) raised to that floor, and MuJoCo's
+            ``balanceinertia`` for ``A + B >= C``. Off: such a URDF is refused.
 
     Raises:
         ParameterError: Invalid timestep, integrator, floor height or source; ``floating``

@@ -93,8 +93,7 @@ def package_files(
     """The package name and its files (path relative to the package → bytes, sorted).
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
+        source: Any source with a parameter table (a Chain, a Hexapod, a preset, a file).
         name: ROS package name (REP 144); default ``<robot>_description``.
         meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
         header: Header line recorded in every file (the command that made it).
@@ -177,8 +176,7 @@ def export_package(
         source: A source with a parameter table (as :func:`package_files`).
         out: The package folder to create (its parent must exist).
         force: Replace ``out`` if it exists and is not empty.
-        **options: The keywords of :func:`package_files` (``name``, ``meshes``, ``header``,
-            ``maintainer``, ``email``, ``license``).
+        **options: The keywords of :func:`package_files`.
 
     Raises:
         ParameterError: Invalid name/e-mail/source, missing parent folder, or ``out`` exists

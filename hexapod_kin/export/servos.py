@@ -355,11 +355,8 @@ def _servo(joint: str, entry: Mapping[str, Any]) -> Servo:
 def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
 
-    With ``robot`` (a model: ``joint_names``, ``lower``, ``upper``) every entry must name one
-    of its joints and fit that joint's limits (:meth:`Calibration.check_joints`).
-
-    The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
-    regular file of at most 1 MB, UTF-8, no key given twice, YAML alias and depth caps).
+    Through the strict reader (:mod:`hexapod_kin._reader`); with ``robot`` (``joint_names``,
+    ``lower``, ``upper``) every entry must fit one of its joints (:meth:`Calibration.check_joints`).
 
     Example (AX-12-like servos: 1024 ticks over 300°, centre 512)::
 

@@ -330,27 +330,24 @@ def timeline(
 
     Args:
         plan: A ``GaitRun``, a resolved-rate ``Trajectory``, anything with ``t`` and ``q``
-            (and optionally ``qdot``, ``joint_names``, ``robot``), a ``(times, q)`` pair or
-            (N, J) joint angles with ``times=`` (an IK path) [rad].
+            (optionally ``qdot``, ``joint_names``, ``robot``), a ``(times, q)`` pair or (N, J)
+            joint angles [rad] with ``times`` (an IK path).
+        times: (N,) times [s] of an array plan.
         rate: Samples per second [Hz]; samples at ``t0 + k / rate`` up to the plan's end.
         interpolation: ``"linear"`` or ``"cubic"`` (see the module doc).
-        calibration: A :class:`Calibration`, a calibration file, or None (every joint in rad,
-            unlimited).
-        times: (N,) times [s] of an array plan.
+        calibration: A :class:`Calibration`, a file, or None (every joint in rad, unlimited).
         joint_names: The plan's joint names (default: the plan's own, else joint1..J).
-        velocity_limit: Speed limits [rad/s], scalar or (J,), used where the calibration
-            gives none (default: the plan's robot's ``velocity_limit``, else unlimited).
-        position_limit: The joints' ``(lower, upper)`` limits, each (J,) [rad or m]
-            (default: the plan's robot's ``lower``/``upper``, else none): every resampled
-            sample must lie within them (1e-9 of slack).
+        velocity_limit: Speed limits [rad/s], scalar or (J,), where the calibration gives
+            none (default: the plan's robot's, else unlimited).
+        position_limit: ``(lower, upper)``, each (J,) [rad or m] (default: the plan's robot's,
+            else none): every sample within them (1e-9 of slack).
 
     Raises:
         LimitError: A sample beyond a servo's limits, a joint's limits or its speed limit
-            (the message names the joint, the time [s] and the value; ``parameter`` is the
-            joint).
+            (naming the joint, the time [s] and the value; ``parameter`` is the joint).
         ConfigurationError: A malformed plan.
-        ParameterError: Bad rate, interpolation or calibration (a calibration is checked
-            against the joints' limits before any sample: :meth:`Calibration.check_joints`).
+        ParameterError: Bad rate, interpolation or calibration (checked against the joints'
+            limits before any sample: :meth:`Calibration.check_joints`).
 
     """
     if interpolation not in INTERPOLATIONS:
@@ -466,11 +463,7 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
     raw = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
     try:
         with named(p, "timeline", SourceError):
-            if kind == "json":
-                return _read_json(raw, p)
-            if kind == "csv":
-                return _read_csv(raw, p)
-            return _read_ros2(raw, p)
+            return {"json": _read_json, "csv": _read_csv, "ros2": _read_ros2}[kind](raw, p)
     except _MALFORMED as exc:
         raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
 

@@ -140,12 +140,11 @@ def reproduce(
     """Redo every result of the four seeds, compare, and write the report into ``out``.
 
     ``quick``: reduced sizes; ``animations``: the step and walk animations (the ``viewer``
-    extra); ``cache``: replay an earlier build with the same inputs (:mod:`.replay`), else
-    compute again (and store). The :class:`Report` says whether it was replayed.
+    extra); ``cache``: replay an earlier build with the same inputs (:mod:`.replay`).
 
     Raises:
-        ParameterError: A file of ``out`` cannot be written (a full disk or a read-only
-            folder is found before the build; the folders this call made are removed).
+        ParameterError: A file of ``out`` cannot be written (found before the build; the
+            folders this call made are removed).
 
     """
     start = time.perf_counter()

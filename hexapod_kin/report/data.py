@@ -69,21 +69,14 @@ class Claim:
 
 @dataclass(frozen=True)
 class Verdict:
-    """A computed verdict.
+    """A computed verdict: the claim's id, seed (``"000"`` … ``"003"``), place and kind.
 
     Attributes:
-        claim: The claim's id.
-        seed: The seed (``"000"`` … ``"003"``).
-        where: Location in the seed (section / equation / table / figure).
-        kind: The claim's kind.
-        claimed: The seed's value, as text.
-        computed: hexapod_kin's value, as text.
-        status: One of :data:`STATUSES`.
-        reason: The computed reason (empty when it agrees).
+        claimed: The seed's value, as text; ``computed``: hexapod_kin's.
+        status: One of :data:`STATUSES`; ``reason``: why (empty when it agrees).
         method: How it was compared, with the tolerance.
         cells: For a matrix or table: JSON text ``{"seed": rows, "ours": rows, "differ":
-            [[i, j], ...] (0-based), "header": [...] or absent, "note": text}`` (entries as
-            text), so the report lays it out as a matrix; ``""`` otherwise.
+            [[i, j], ...] (0-based), "header": [...] or absent, "note": text}``; else ``""``.
         lines: The claim's passage in the shipped seed text, ``"first-last"`` (1-based), or
             ``""``.
 

@@ -421,10 +421,9 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
 def scene_commands(model: Model, times: Any, qs: Any, **options: Any) -> list[dict[str, Any]]:
     """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
 
-    The same commands feed the offline page and :meth:`Viewer.animate`; the last one is the
-    ``set_animation`` when there is more than one sample. ``options``: the keywords of
-    :func:`build_for` (those of :func:`~hexapod_kin.viewer.page.render_html`, documented there,
-    but ``title`` and ``speed``).
+    As the offline page and :meth:`Viewer.animate` send them (the last: ``set_animation``,
+    with more than one sample); ``options``: :func:`~hexapod_kin.viewer.page.render_html`'s
+    keywords but ``title`` and ``speed``.
 
     Raises:
         ConfigurationError: Bad shapes or values of ``times``, ``qs``, ``base_poses``,

@@ -33,10 +33,8 @@ LOOPBACK = "127.0.0.1"
 class MeshcatServer:
     """A meshcat server subprocess listening on 127.0.0.1 only, with free ports.
 
-    Use as a context manager (or call :meth:`close`). The child runs in its own process
-    group; :meth:`close` terminates the group (SIGTERM, then SIGKILL) and reaps it. It is
-    also closed at interpreter exit, and the child exits by itself when its parent dies (its
-    stdin pipe closes).
+    A context manager; :meth:`close` (also at interpreter exit) terminates the child's process
+    group and reaps it; the child exits by itself when its parent dies (its stdin closes).
 
     Attributes:
         web_url: ``http://127.0.0.1:PORT/static/`` (the page to open).

@@ -70,12 +70,10 @@ def walk_page(run: Any, *, model: Any = None, title: str | None = None, **option
 
     Args:
         run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
-        model: The loaded robot (default :func:`~hexapod_kin.gait.show.run_model`: the run's
-            own robot, ``run.robot``, or the built-in hexapod); its joints are matched to the
-            run's by name.
+        model: The loaded robot, joints matched to the run's by name (default
+            :func:`~hexapod_kin.gait.show.run_model`: ``run.robot`` or the built-in hexapod).
         title: Page title (default: pattern, terrain and the minimum margin).
-        **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``,
-            ``speed``...).
+        **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``...).
 
     Raises:
         OptionalDependencyError: The viewer extra (meshcat) is missing.
