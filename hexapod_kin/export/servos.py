@@ -84,20 +84,13 @@ class Servo:
         need(sign in (1, -1), "direction", f"direction {sign!r}; allowed: 1 or -1", (1, -1))
         for name in ("offset", "centre"):
             need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
-        tpr, upr = self.ticks_per_revolution, self.us_per_rad
-        need(
-            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr >= 1),
-            "ticks_per_revolution",
-            "units 'ticks' need ticks_per_revolution >= 1 (e.g. 1228.8 for 1024 ticks over "
-            f"300°), got {tpr!r}",
-            ">= 1",
-        )
-        need(
-            self.units != "us" or (upr is not None and math.isfinite(upr) and upr >= 1),
-            "us_per_rad",
-            f"units 'us' need us_per_rad >= 1 (a PWM servo: some 500 to 650), got {upr!r}",
-            ">= 1",
-        )
+        for unit, key, e_g in (
+            ("ticks", "ticks_per_revolution", "e.g. 1228.8 for 1024 ticks over 300°"),
+            ("us", "us_per_rad", "a PWM servo: some 500 to 650"),
+        ):
+            v = getattr(self, key)
+            ok = self.units != unit or (v is not None and math.isfinite(v) and v >= 1)
+            need(ok, key, f"units {unit!r} need {key} >= 1 ({e_g}), got {v!r}", ">= 1")
         if self.limits is not None:
             lo, hi = self.limits
             text = f"limits {list(self.limits)} must be finite with lowest < highest"
