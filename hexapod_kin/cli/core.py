@@ -29,7 +29,6 @@ from .common import (
 __all__ = ["COMMANDS", "register"]
 
 
-# ------------------------------------------------------------------------ list
 def _add_list(sub: Any) -> None:
     p = sub.add_parser("list", help="list the presets")
     p.add_argument("--json", action="store_true")
@@ -56,7 +55,6 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ urdf
 def _add_urdf(sub: Any) -> None:
     p = sub.add_parser("urdf", help="export the URDF of a preset or a table file")
     robot_args(p, kinds="table")
@@ -79,7 +77,6 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ fk
 def _add_fk(sub: Any) -> None:
     p = sub.add_parser("fk", help="tip transform and every intermediate transform")
     robot_args(p, frames=True, tool=True)
@@ -136,7 +133,6 @@ def _placement(title: str, T: Any) -> None:
     print(f"{title}\n{matrix_text(T)}\nposition [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
 
 
-# ------------------------------------------------------------------------ jacobian
 def _add_jacobian(sub: Any) -> None:
     p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
     robot_args(p, frames=True, tool=True)
@@ -187,7 +183,6 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ demo
 def _add_demo(sub: Any) -> None:
     p = sub.add_parser("demo", help="export the leg URDF, print its FK and Jacobian")
     p.add_argument("--out", default="out", help="directory for the exported URDF")
@@ -223,7 +218,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
         "derive", help="symbolic T, p, J (direct/indirect), det J factored, singular families"
@@ -406,7 +400,6 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ scan
 #: ``--families`` choice -> ``scan(families=...)``.
 _FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
 
@@ -491,7 +484,6 @@ def _cmd_scan(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ main
 Command = tuple[Callable[[Any], None], Callable[[argparse.Namespace], int]]
 
 #: Subcommands in help order: (declare arguments, run).

@@ -28,7 +28,6 @@ from .common import (
 __all__ = ["register"]
 
 
-# ------------------------------------------------------------------------ pendulum
 def _add_pendulum(sub: Any) -> None:
     p = sub.add_parser(
         "pendulum",
@@ -141,7 +140,6 @@ def _pendulum_html(exp: Any, args: argparse.Namespace) -> str:
     return html_page(model, run.simulation.t, run.simulation.q, args.html, title, 1 / 30)
 
 
-# ------------------------------------------------------------------------ torques
 def _add_torques(sub: Any) -> None:
     p = sub.add_parser(
         "torques",
@@ -208,7 +206,6 @@ def _cmd_torques(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ stand
 def _add_stand(sub: Any) -> None:
     p = sub.add_parser(
         "stand",

@@ -12,7 +12,6 @@ from .common import emit_json, made_by, output_path, pick, robot_args, robot_of
 __all__ = ["register"]
 
 
-# ------------------------------------------------------------------------ xacro
 def _add_xacro(sub: Any) -> None:
     p = sub.add_parser(
         "xacro", help="parametric xacro (a macro per leg family, a property per dimension)"
@@ -45,7 +44,6 @@ def _cmd_xacro(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ export-package
 def _add_package(sub: Any) -> None:
     p = sub.add_parser(
         "export-package",
@@ -80,7 +78,6 @@ def _cmd_package(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ mjcf
 def _add_mjcf(sub: Any) -> None:
     p = sub.add_parser(
         "mjcf",

@@ -32,7 +32,6 @@ def _angle(args: argparse.Namespace, v: float) -> float:
     return math.radians(v) if args.deg else v
 
 
-# ------------------------------------------------------------------------ ik
 def _add_ik(sub: Any) -> None:
     p = sub.add_parser(
         "ik", help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)"
@@ -172,7 +171,6 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ step
 def _add_step(sub: Any) -> None:
     p = sub.add_parser(
         "step",

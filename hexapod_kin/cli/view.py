@@ -68,7 +68,6 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ view
 def _add_view(sub: Any) -> None:
     p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
     robot_args(p, frames=True)
@@ -93,7 +92,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
         return serve_until(viewer, args)
 
 
-# ------------------------------------------------------------------------ animate
 def _add_animate(sub: Any) -> None:
     p = sub.add_parser(
         "animate",

@@ -24,7 +24,6 @@ from .objects import (
 from .trajectory import clip, track
 
 
-# ====================================================================== per-frame overlays
 def check_overlays(overlays: Any, n: int) -> dict[str, np.ndarray]:
     """Validate ``overlays``: name -> (N, M, 3) polylines, one per sample (M = 1: a point)."""
     if overlays is None:

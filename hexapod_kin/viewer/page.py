@@ -26,7 +26,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
 
 
-# ====================================================================== self-contained HTML
 #: The page may run its own inline code and decode data: URIs, and fetch nothing else.
 _CSP = (
     "default-src 'none'; script-src 'unsafe-inline' blob:; style-src 'unsafe-inline'; "

@@ -25,7 +25,6 @@ if TYPE_CHECKING:  # pragma: no cover
 MAX_SAMPLES = 3000
 
 
-# ====================================================================== trajectories
 @dataclass(frozen=True)
 class Motion:
     """A checked trajectory: times (N,) [s], q (N, nq), root poses (N, 4, 4) or None."""
