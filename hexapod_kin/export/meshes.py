@@ -107,9 +107,7 @@ def _clip_box(size: np.ndarray, points: list[np.ndarray]) -> str | None:
         trimmed[axis] = min(abs(float(p[axis])) for p in inside)
         if trimmed[axis] > 0 and (best is half or np.prod(trimmed) > np.prod(best)):
             best = trimmed
-    if best is half:
-        return None
-    return " ".join(f"{v:.6g}" for v in 2.0 * best)
+    return None if best is half else " ".join(f"{v:.6g}" for v in 2.0 * best)
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> np.ndarray:

@@ -362,9 +362,7 @@ def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) 
 
     """
     src = table_of(source, leg)
-    if isinstance(src, Chain):
-        return _chain_doc(src, header)
-    return _robot_doc(src, leg, header)
+    return _chain_doc(src, header) if isinstance(src, Chain) else _robot_doc(src, leg, header)
 
 
 def write_xacro(

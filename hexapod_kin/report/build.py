@@ -8,6 +8,7 @@ earlier build replays it (:mod:`.replay`). Nothing heavy is imported at module l
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
 from collections import Counter
@@ -155,10 +156,8 @@ def reproduce(
         return _reproduce(out, quick=quick, animations=animations, cache=cache, start=start)
     except BaseException:
         for folder in made:  # deepest first; only the folders this call made, when empty
-            try:
+            with contextlib.suppress(OSError):
                 folder.rmdir()
-            except OSError:
-                pass
         raise
 
 

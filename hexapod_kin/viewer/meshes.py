@@ -50,11 +50,8 @@ def _mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
         tris = np.array(corners, dtype=np.int64).reshape(-1, 3)
     except (AttributeError, RuntimeError, TypeError, ValueError):
         return None
-    if not len(verts) or not len(tris) or not np.all(np.isfinite(verts)):
-        return None
-    if tris.min() < 0 or tris.max() >= len(verts):
-        return None
-    return verts, tris
+    empty = not len(verts) or not len(tris) or not np.all(np.isfinite(verts))
+    return None if empty or tris.min() < 0 or tris.max() >= len(verts) else (verts, tris)
 
 
 def _quantise(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
