@@ -324,13 +324,8 @@ def robot_of(args: argparse.Namespace) -> Robot:
         from ..gait.legs import parse_feet
 
         feet = parse_feet(" ".join(feet))
-    return Robot(
-        source=source,
-        params=set_params(getattr(args, "set", None), source=source),
-        options=options,
-        feet=feet or None,
-        foot_radius=getattr(args, "foot_radius", None),
-    )
+    params = set_params(getattr(args, "set", None), source=source)
+    return Robot(source, params, options, feet or None, getattr(args, "foot_radius", None))
 
 
 def load_source(args: argparse.Namespace) -> Any:

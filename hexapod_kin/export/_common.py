@@ -84,9 +84,6 @@ def need(module: str, extra: str = "export") -> Any:
         with held_interrupt():
             return importlib.import_module(module)
     except ImportError:
-        raise OptionalDependencyError(
-            f"{module} is not installed; `pip install 'hexapod-kin[{extra}]'` installs xacro, "
-            "mujoco and trimesh",
-            parameter="module",
-            value=module,
-        ) from None
+        hint = f"`pip install 'hexapod-kin[{extra}]'` installs xacro, mujoco and trimesh"
+        msg = f"{module} is not installed; {hint}"
+        raise OptionalDependencyError(msg, parameter="module", value=module) from None

@@ -108,28 +108,16 @@ class Servo:
         key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
         reach = abs(self.zero) + self.scale * 4.0 * math.pi
         within = f"commands within ±{MAX_COMMAND:g}"
-        need(
-            reach <= MAX_COMMAND,
-            key,
-            f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
-            f"allowed: {within}",
-            within,
-        )
-        need(
-            not self.step > 0 or self.step / self.scale <= 2.0 * math.pi,
-            key,
-            f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units} "
-            f"{self.step / self.scale:g} rad; allowed: at most one turn",
-            "at most one turn per step",
-        )
-        need(
-            not self.step > 0 or reach / self.step < 2.0**52,
-            "resolution",
-            f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units} "
-            "(more than 2^52 steps)",
-            f">= {reach / 2.0**52:.3g}" if self.step > 0 else "",
-            value=self.step,
-        )
+        text = f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}"
+        need(reach <= MAX_COMMAND, key, f"{text}; allowed: {within}", within)
+        ok = not self.step > 0 or self.step / self.scale <= 2.0 * math.pi
+        text = f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units}"
+        turn = "at most one turn"
+        need(ok, key, f"{text} {self.step / self.scale:g} rad; allowed: {turn}", f"{turn} per step")
+        ok = not self.step > 0 or reach / self.step < 2.0**52
+        text = f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units}"
+        least = f">= {reach / 2.0**52:.3g}" if self.step > 0 else ""
+        need(ok, "resolution", f"{text} (more than 2^52 steps)", least, value=self.step)
 
     @property
     def scale(self) -> float:

@@ -473,15 +473,11 @@ def _read_json(raw: str, p: Path) -> Timeline:
     if d.get("format") != FORMAT:
         raise KeyError("format")
     t = np.asarray(numbers(d["t"], "t"), dtype=float)
-    return _from_commands(
-        t,
-        texts(d["joint_names"], "joint_names"),
-        np.asarray(numbers(d["command"], "command"), dtype=float).reshape(len(t), -1),
-        np.asarray(numbers(d["speed"], "speed"), dtype=float).reshape(len(t), -1),
-        Calibration.from_dict(d["calibration"]),
-        number(d["rate"], "rate"),
-        text(d["interpolation"], "interpolation"),
-    )
+    n, names = len(t), texts(d["joint_names"], "joint_names")
+    cmd, speed = (np.asarray(numbers(d[k], k), float).reshape(n, -1) for k in ("command", "speed"))
+    cal = Calibration.from_dict(d["calibration"])
+    how = (number(d["rate"], "rate"), text(d["interpolation"], "interpolation"))
+    return _from_commands(t, names, cmd, speed, cal, *how)
 
 
 def _csv(text: str, name: str, what: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
@@ -498,15 +494,8 @@ def _read_csv(text: str, p: Path) -> Timeline:
     n = (len(columns) - 1) // 2
     names = columns[1 : 1 + n]
     cal = Calibration.from_dict(parse_data(meta["calibration"], str(p), "json", "timeline"))
-    return _from_commands(
-        data[:, 0].copy(),
-        names,
-        data[:, 1 : 1 + n].copy(),
-        data[:, 1 + n :].copy(),
-        cal,
-        float(meta["rate"]),
-        meta["interpolation"],
-    )
+    cols = (data[:, 0].copy(), names, data[:, 1 : 1 + n].copy(), data[:, 1 + n :].copy())
+    return _from_commands(*cols, cal, float(meta["rate"]), meta["interpolation"])
 
 
 def _read_ros2(text: str, p: Path) -> Timeline:
