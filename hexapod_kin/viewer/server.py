@@ -89,17 +89,13 @@ class MeshcatServer:
             while b"\n" not in buf:
                 left = deadline - time.monotonic()
                 if left <= 0:
-                    raise ViewerError(
-                        f"the meshcat server did not start within start_timeout={timeout} s; "
-                        f"its stderr: {self.stderr_tail()!r}"
-                    )
+                    msg = f"the meshcat server did not start within start_timeout={timeout} s"
+                    raise ViewerError(f"{msg}; its stderr: {self.stderr_tail()!r}")
                 if sel.select(min(left, 0.2)):
                     chunk = os.read(self._proc.stdout.fileno(), 4096)
                     if not chunk:
-                        raise ViewerError(
-                            f"the meshcat server exited with status {self._proc.wait(5)} before "
-                            f"starting; its stderr: {self.stderr_tail()!r}"
-                        )
+                        msg = f"the meshcat server exited with status {self._proc.wait(5)} before"
+                        raise ViewerError(f"{msg} starting; its stderr: {self.stderr_tail()!r}")
                     buf += chunk
         try:
             info = json.loads(buf.split(b"\n", 1)[0])
@@ -186,10 +182,8 @@ class Client:
         if self._sock is None:
             raise ViewerError("the viewer is closed; open a new Viewer")
         if not self.server.running:
-            raise ViewerError(
-                f"the meshcat server (pid {self.server.pid}) is not running; stderr: "
-                f"{self.server.stderr_tail(500)!r}"
-            )
+            msg = f"the meshcat server (pid {self.server.pid}) is not running; stderr: "
+            raise ViewerError(msg + repr(self.server.stderr_tail(500)))
         try:
             self._sock.send_multipart(frames)
             return bytes(self._sock.recv())

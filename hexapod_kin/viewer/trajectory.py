@@ -53,10 +53,9 @@ def check_base_poses(poses: Any, n: int) -> np.ndarray | None:
     err = np.abs(np.einsum("nji,njk->nik", rot, rot) - np.eye(3)).max()
     bottom = np.abs(arr[:, 3, :] - [0.0, 0.0, 0.0, 1.0]).max()
     if err > 1e-6 or bottom > 1e-9 or np.any(np.linalg.det(rot) < 0):
-        raise ConfigurationError(
-            f"base_poses are not rigid transforms (|RᵀR − I| = {err:.2e}, last row off by "
-            f"{bottom:.2e}); expected rotations with det +1 and a last row [0, 0, 0, 1]"
-        )
+        msg = f"base_poses are not rigid transforms (|RᵀR − I| = {err:.2e}, last row off by "
+        msg += f"{bottom:.2e}); expected rotations with det +1 and a last row [0, 0, 0, 1]"
+        raise ConfigurationError(msg)
     return arr
 
 
