@@ -109,12 +109,10 @@ def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
             v, stride, period = highest_speed(wb, **options)
         except HexapodKinError:  # pragma: no cover - the search plans what walk planned
             raise exc from None
-        top = (
-            f"the highest straight speed of {options.get('pattern')!s} for this robot is "
-            f"{v:.3g} m/s (--stride {stride:.3g} --period {period:.3g})"
-            if v > 0
-            else f"no stride of {options.get('pattern')!s} is within this robot's reach"
-        )
+        top = f"no stride of {options.get('pattern')!s} is within this robot's reach"
+        if v > 0:
+            top = f"the highest straight speed of {options.get('pattern')!s} for this robot is "
+            top += f"{v:.3g} m/s (--stride {stride:.3g} --period {period:.3g})"
         exc.message = f"{exc}; {top}"  # the same error (check, leg, time...), told more
         exc.args = (exc.message,)
         raise exc from None

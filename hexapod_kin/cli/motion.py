@@ -341,11 +341,9 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     vel = np.array(args.velocity if args.twist is None else args.twist, dtype=float)
     if args.twist is not None and args.deg:
         vel[3:] = np.radians(vel[3:])
-    label = (
-        f"velocity {vel.tolist()} m/s (base axes)"
-        if args.twist is None
-        else f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
-    )
+    label = f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
+    if args.twist is None:
+        label = f"velocity {vel.tolist()} m/s (base axes)"
     kw = pick(args, "frame", "method", "gain")
     tr = motion.resolved_rate(model, vel, q0, args.dt, args.duration, **kw)
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))

@@ -149,11 +149,9 @@ def package_files(
     files["launch/display.launch.py"] = launch
     root = src.base if isinstance(src, Chain) else src.body
     files["rviz/display.rviz"] = _template("display.rviz", fixed_frame=root, header=made)
-    visuals = (
-        "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
-        if meshes
-        else "primitives (cylinders, spheres, boxes)"
-    )
+    visuals = "primitives (cylinders, spheres, boxes)"
+    if meshes:
+        visuals = "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
     files["README.md"] = _template(
         "README.md",
         name=pkg,

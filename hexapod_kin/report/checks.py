@@ -117,11 +117,9 @@ class Context(Experiments):
         ours = np.array([s[np.argmin(np.abs(s - qi).sum(axis=1))] for s, qi in zip(sols, q)])
         back = np.array([mdl.position(qi) for qi in ours])
         claim = self.claims.get("002-table1")
-        seed = (
-            _seed_ik(claim.data["value"], feet, self.lengths("coxa"))
-            if claim is not None
-            else np.full_like(q, np.nan)
-        )
+        seed = np.full_like(q, np.nan)
+        if claim is not None:
+            seed = _seed_ik(claim.data["value"], feet, self.lengths("coxa"))
         knots = {"knots_t": sched.times, "knots_q": sched.values}
         return dict(t=t, q=q, feet=feet, ours=ours, back=back, seed=seed, **knots)
 
@@ -258,11 +256,8 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
         p = _at(parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]), subs)
         dp = p.jacobian(Q[: seed.cols])
         own = matrix_diff(seed, dp, c.id + "d")
-        notes.append(
-            "it is the derivative of the seed's own p"
-            if not own
-            else "nor is it the derivative of the seed's own p: " + "; ".join(own)
-        )
+        nor = "nor is it the derivative of the seed's own p: " + "; ".join(own)
+        notes.append(nor if own else "it is the derivative of the seed's own p")
     return _judged(c, claimed, computed, [" — ".join(n for n in notes if n)], _SYMBOLIC, cells)
 
 
