@@ -72,9 +72,7 @@ def held_interrupt() -> Iterator[Callable[[], None]]:
 
 
 def need(module: str, extra: str = "export") -> Any:
-    """Import an optional dependency or raise :class:`OptionalDependencyError` with the hint.
-
-    The import runs with Ctrl-C held (:func:`held_interrupt`): trimesh's import swallows it.
+    """Import an optional dependency with Ctrl-C held (:func:`held_interrupt`: trimesh's).
 
     Raises:
         OptionalDependencyError: If ``module`` is not installed.

@@ -271,8 +271,7 @@ def save(
     """Keep a successful build's ``files`` (written into ``out``) under ``runs/<key>/``.
 
     ``record``: the build's verdicts (:meth:`~.data.Verdict.fields`), facts, summary, counts
-    and seconds. Returns the entry's folder, or ``None`` (never raises; an ``"error"`` verdict
-    is not kept); then keeps ``keep`` entries (:func:`prune`).
+    and seconds. Returns the entry's folder, or ``None`` (never raises); prunes to ``keep``.
     """
     folder = runs_dir() / key
     try:
@@ -309,9 +308,9 @@ def save(
 
 
 def prune(keep: int = KEEP) -> list[Path]:
-    """Remove all but the ``keep`` most recently used entries; return the removed folders.
+    """Remove all but the ``keep`` most recently used entries (never raises); return them.
 
-    An entry without a manifest is removed after an hour (it may be being stored). Never raises.
+    An entry without a manifest is removed after an hour (it may be being stored).
     """
     removed: list[Path] = []
     try:
