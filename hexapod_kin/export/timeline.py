@@ -268,11 +268,9 @@ def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
 
 def _model_position_limits(plan: Any, position_limit: Any, n: int) -> np.ndarray:
     """(2, n) joint limits [rad or m]: given, else the plan's robot's ``lower``/``upper``."""
-    if position_limit is not None:
-        lo, hi = position_limit
-    else:
-        robot = getattr(plan, "robot", None)
-        lo, hi = getattr(robot, "lower", None), getattr(robot, "upper", None)
+    robot = getattr(plan, "robot", None)
+    own = (getattr(robot, "lower", None), getattr(robot, "upper", None))
+    lo, hi = own if position_limit is None else position_limit
     out = np.array([np.full(n, -np.inf), np.full(n, np.inf)])
     if lo is None or hi is None:
         return out

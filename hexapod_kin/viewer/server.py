@@ -172,9 +172,8 @@ class Client:
         zmq = self._zmq
         sock = self._ctx.socket(zmq.REQ)
         ms = max(1, int(self.timeout * 1000))
-        sock.setsockopt(zmq.LINGER, 0)
-        sock.setsockopt(zmq.RCVTIMEO, ms)
-        sock.setsockopt(zmq.SNDTIMEO, ms)
+        for option, value in ((zmq.LINGER, 0), (zmq.RCVTIMEO, ms), (zmq.SNDTIMEO, ms)):
+            sock.setsockopt(option, value)
         sock.connect(self.server.zmq_url)
         self._sock = sock
 
