@@ -158,7 +158,7 @@ class Timeline:
             "points:",
         ]
         for k in range(len(self.t)):
-            sec, nanosec = _duration(float(self.t[k]))
+            sec, nanosec = divmod(int(round(float(self.t[k]) * 1e9)), 1_000_000_000)
             out += [
                 "- positions: [" + ", ".join(_num(v) for v in self.q[k]) + "]",
                 "  velocities: [" + ", ".join(_num(v) for v in self.qdot[k]) + "]",
@@ -186,13 +186,6 @@ class Timeline:
 
 def _num(v: float) -> str:
     return repr(float(v))
-
-
-def _duration(t: float) -> tuple[int, int]:
-    """``builtin_interfaces/Duration`` of ``t`` [s]: (sec, nanosec), nanosec in [0, 1e9)."""
-    ns = int(round(t * 1e9))
-    sec, nanosec = divmod(ns, 1_000_000_000)
-    return int(sec), int(nanosec)
 
 
 FORMATS: tuple[str, ...] = ("csv", "json", "ros2")

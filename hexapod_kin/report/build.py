@@ -432,15 +432,6 @@ def _md_cells(cells: str) -> list[str]:
     return out
 
 
-def _passage_md(v: Verdict, seeds: dict[str, str]) -> str:
-    """Where a claim's passage is in the shipped seed text (a link from the report folder)."""
-    if not v.lines or v.seed not in seeds:
-        return ""
-    name = seed_file(seeds[v.seed]).name
-    first, span = _span(v.lines)
-    return f"[{name}, {span}](seeds/{name}#L{first})"
-
-
 def _span(lines: str) -> tuple[str, str]:
     """The first line of a passage ``"first-last"`` and ``"line a"`` or ``"lines a–b"``."""
     first, _, last = lines.partition("-")
@@ -477,9 +468,10 @@ def _markdown(
             lines += [intro, ""]
         for v in [v for v in rep.verdicts if _section(v) == key]:
             lines += [f"### {v.claim} — seed {v.seed}, {v.where}", ""]
-            passage = _passage_md(v, seeds)
-            if passage:
-                lines += [f"- passage: {passage}"]
+            if v.lines and v.seed in seeds:  # a link to the shipped seed text
+                name = seed_file(seeds[v.seed]).name
+                first, span = _span(v.lines)
+                lines += [f"- passage: [{name}, {span}](seeds/{name}#L{first})"]
             if v.cells:
                 lines += _md_cells(v.cells) + [""]
             else:

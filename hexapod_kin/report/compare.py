@@ -97,13 +97,6 @@ def _rng(key: str) -> np.random.Generator:
     return np.random.default_rng(int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "big"))
 
 
-def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
-    """Angles (``q…``, ``theta``, ``alpha``) uniform in [−π, π], other symbols in [0.5, 2]."""
-    angle = [s.name.startswith("q") or s.name in ("theta", "alpha") for s in symbols]
-    spans = [(-math.pi, math.pi) if a else (0.5, 2.0) for a in angle]
-    return {s: float(rng.uniform(*span)) for s, span in zip(symbols, spans)}
-
-
 def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
     """``expr`` at ``point`` (symbols replaced by numbers), as a float."""
     return float(sp.N(sp.sympify(expr).xreplace(point)))
@@ -134,7 +127,9 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     ea, eb = [plain(x) for x in a], [plain(x) for x in b]
     ordered = sorted(set().union(*(e.free_symbols for e in ea + eb)), key=str)
     rng = _rng(key)
-    pts = [_point(ordered, rng) for _ in range(POINTS)]
+    angle = [s.name.startswith("q") or s.name in ("theta", "alpha") for s in ordered]
+    spans = [(-math.pi, math.pi) if a else (0.5, 2.0) for a in angle]
+    pts = [{s: float(rng.uniform(*w)) for s, w in zip(ordered, spans)} for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
     with np.errstate(all="ignore"):
         vals = _evaluate(ea + eb, dict(zip(ordered, args))).reshape(2, len(ea), POINTS)

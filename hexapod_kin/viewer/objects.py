@@ -52,11 +52,6 @@ def bundle() -> str:
 
 
 # ====================================================================== low-level: JSON objects
-def _uuid(*parts: object) -> str:
-    """Deterministic UUID (meshcat's own ``uuid1`` would embed the host's MAC address)."""
-    return str(uuid.uuid5(_NS, "/".join(str(p) for p in parts)))
-
-
 def f32(array: Any) -> Any:
     """A float32 typed array for meshcat's msgpack decoder (extension 0x17)."""
     arr = np.ascontiguousarray(np.asarray(array, dtype=np.float32).ravel())
@@ -94,12 +89,6 @@ def trace_rgba(k: int) -> list[float]:
     return [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
 
 
-def _hex_color(rgb: Sequence[float]) -> int:
-    """The 0xRRGGBB integer of an RGB(A) colour in [0, 1]."""
-    r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgb[:3])
-    return (r << 16) | (g << 8) | b
-
-
 def rotation(axis: str, angle: float) -> np.ndarray:
     """The 4×4 rotation by ``angle`` [rad] about ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
     c, s = math.cos(angle), math.sin(angle)
@@ -127,8 +116,9 @@ class ObjectJSON:
         self._n = 0
 
     def _id(self, role: str) -> str:
+        """A deterministic UUID (meshcat's ``uuid1`` would embed the host's MAC address)."""
         self._n += 1
-        return _uuid(self.key, role, self._n)
+        return str(uuid.uuid5(_NS, f"{self.key}/{role}/{self._n}"))
 
     def geometry(self, data: dict[str, Any]) -> str:
         """Add a geometry; return its UUID."""
@@ -140,7 +130,8 @@ class ObjectJSON:
         """Add a material of colour ``rgba``; return its UUID."""
         mid = self._id("material")
         alpha = float(rgba[3]) if len(rgba) > 3 else 1.0
-        data: dict[str, Any] = dict(uuid=mid, type=kind, color=_hex_color(rgba), side=2)
+        r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgba[:3])
+        data: dict[str, Any] = dict(uuid=mid, type=kind, color=(r << 16) | (g << 8) | b, side=2)
         data.update(transparent=alpha < 1.0, opacity=alpha)
         if kind == "MeshPhongMaterial":
             data.update(reflectivity=0.5, shininess=40)

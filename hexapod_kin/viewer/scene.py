@@ -154,21 +154,17 @@ class Scene:
             intrinsic = np.diag(np.append(radii, 1.0))
         elif mesh_path and (mesh := mesh_geometry(g, normals=self.normals)) is not None:
             gid = obj.geometry(mesh.data)
-            radius = self._mesh_radius(g)  # the BVH has the mesh scale applied
+            try:  # the BVH has the mesh scale applied
+                g.computeLocalAABB()
+                radius = float(g.aabb_radius + np.linalg.norm(np.asarray(g.aabb_center)))
+            except (AttributeError, RuntimeError):
+                radius = 0.05
             intrinsic = mesh.matrix
         else:
             warnings.warn(f"viewer: geometry {go.name!r} of type {kind} is not drawn", stacklevel=3)
             return None
         root = obj.node("Mesh", geometry=gid, material=mat, matrix=intrinsic, name=name)
         return Visual(path, obj.lower(root), radius)
-
-    @staticmethod
-    def _mesh_radius(g: Any) -> float:
-        try:
-            g.computeLocalAABB()
-            return float(g.aabb_radius + np.linalg.norm(np.asarray(g.aabb_center)))
-        except (AttributeError, RuntimeError):
-            return 0.05
 
     # -------------------------------------------------------------- placements
     def placements(self, qs: np.ndarray, base_poses: np.ndarray | None) -> np.ndarray:
