@@ -17,32 +17,6 @@ from typing import Any, NoReturn
 
 from ..exceptions import ParameterError
 
-__all__ = [
-    "OneLineParser",
-    "emit_json",
-    "Robot",
-    "check_outputs",
-    "html_page",
-    "load_source",
-    "made_by",
-    "margin_failures",
-    "matrix_text",
-    "not_achieved",
-    "numbers",
-    "output_path",
-    "pick",
-    "q_args",
-    "q_from_args",
-    "robot_args",
-    "robot_of",
-    "seed",
-    "set_params",
-    "knee_arg",
-    "velocity",
-    "walk_args",
-    "walk_options",
-]
-
 #: Image formats that ``--plot`` accepts (matplotlib writes each natively).
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
 

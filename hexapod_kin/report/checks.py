@@ -65,7 +65,6 @@ class Context(Experiments):
         self._derived: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
-    # ------------------------------------------------------------------ models
     def derivation(self, key: str) -> Any:
         """:func:`hexapod_kin.symbolic.derive` of the model, kept (no budget: small tables)."""
         from ..symbolic import derive
@@ -101,7 +100,6 @@ class Context(Experiments):
             raise KeyError(f"unknown item {item!r}")
         return sp.Matrix(plain(sp.Matrix(out)))
 
-    # ------------------------------------------------------------------ experiments
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:
         """Seed 002 Table I replayed: q(t), FK, the seed's IK and :func:`ik.analytic`."""
@@ -231,7 +229,6 @@ def _with(c: Claim) -> str:
     return " with " + ", ".join(f"{k} = {v:g}" for k, v in subs.items()) if subs else ""
 
 
-# ---------------------------------------------------------------------- checks
 def _check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)

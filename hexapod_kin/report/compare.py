@@ -91,7 +91,6 @@ def plain(expr: Any) -> Any:
     return expr.xreplace(rename) if rename else expr
 
 
-# ---------------------------------------------------------------------- comparison helpers
 def _rng(key: str) -> np.random.Generator:
     """A generator seeded by ``key`` (SHA-256: the same points in every process)."""
     return np.random.default_rng(int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "big"))
@@ -264,7 +263,6 @@ def parse_matrix(rows: Any) -> sp.Matrix:
     return sp.Matrix([[parse(v) for v in row] for row in rows])
 
 
-# ---------------------------------------------------------------------- family sampling
 def values(expr: Any, qs: np.ndarray) -> np.ndarray:
     """A real expression of ``q1 … q4`` at each row of ``qs`` (an imaginary value is NaN)."""
     expr = plain(expr)

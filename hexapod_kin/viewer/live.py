@@ -75,7 +75,6 @@ class Viewer:
             self.close()
             raise
 
-    # -------------------------------------------------------------- properties
     @property
     def url(self) -> str:
         """The page to open in a browser (``http://127.0.0.1:PORT/static/``)."""
@@ -96,7 +95,6 @@ class Viewer:
         """The server process handle."""
         return self._server
 
-    # -------------------------------------------------------------- drawing
     def send(self, cmd: dict[str, Any]) -> None:
         """Send one raw meshcat command (a dict as in :func:`scene_commands`)."""
         if self._client is None:
@@ -155,7 +153,6 @@ class Viewer:
             raise ParameterError(f"part={part!r} is not allowed; use one of {choices(PARTS)}")
         self.send(set_property(f"/meshcat/{part}", "visible", bool(visible)))
 
-    # -------------------------------------------------------------- lifetime
     def close(self) -> None:
         """Disconnect and stop the server (idempotent)."""
         client, self._client = self._client, None

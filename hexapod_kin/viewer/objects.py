@@ -24,7 +24,6 @@ _NS = uuid.UUID("6f1d3c9a-2b1e-4f55-9a59-0c8c2f7d1e42")
 TRACE_COLORS = (0x1F77B4, 0xD62728, 0x2CA02C, 0x9467BD, 0x8C564B, 0xE377C2, 0x17BECF)
 
 
-# ====================================================================== optional dependencies
 def msgpack_lib() -> Any:
     """The u-msgpack-python module (an optional dependency)."""
     try:
@@ -51,7 +50,6 @@ def bundle() -> str:
     return path.read_text(encoding="utf-8").replace("</script", "<\\/script")
 
 
-# ====================================================================== low-level: JSON objects
 def f32(array: Any) -> Any:
     """A float32 typed array for meshcat's msgpack decoder (extension 0x17)."""
     arr = np.ascontiguousarray(np.asarray(array, dtype=np.float32).ravel())
@@ -261,7 +259,6 @@ def nice_step(x: float) -> float:
     return 10.0 ** (k + 1)  # pragma: no cover
 
 
-# ====================================================================== commands
 def set_object(path: str, obj: dict[str, Any]) -> dict[str, Any]:
     """The meshcat ``set_object`` command."""
     return {"type": "set_object", "path": path, "object": obj}

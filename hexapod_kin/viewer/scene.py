@@ -46,7 +46,6 @@ if TYPE_CHECKING:  # pragma: no cover
 PARTS = ("robot", "trace", "frames", "singular", "ground")
 
 
-# ====================================================================== the model's scene
 @dataclass(frozen=True)
 class Visual:
     """One drawn geometry: its meshcat path, three.js object and bounding radius [m]."""
@@ -166,7 +165,6 @@ class Scene:
         root = obj.node("Mesh", geometry=gid, material=mat, matrix=intrinsic, name=name)
         return Visual(path, obj.lower(root), radius)
 
-    # -------------------------------------------------------------- placements
     def placements(self, qs: np.ndarray, base_poses: np.ndarray | None) -> np.ndarray:
         """World poses (N, G, 4, 4) of the drawn geometries."""
         import pinocchio as pin
@@ -201,7 +199,6 @@ def khalil_frames(model: Model) -> tuple[str, ...]:
     return tuple(names[start:])
 
 
-# ====================================================================== scene + animation
 def _resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
     """The frames whose path is drawn (``None``/``True``: the tip, or every foot)."""
     from ..params import Hexapod
