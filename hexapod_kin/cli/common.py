@@ -47,6 +47,11 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def refused(option: str, value: Any, allowed: Any, msg: str) -> ParameterError:
+    """The :class:`ParameterError` of a bad ``option`` ``value`` (``msg``; what is ``allowed``)."""
+    return ParameterError(msg, parameter=option, value=value, allowed=allowed)
+
+
 def seed(text: str) -> int:
     """An argparse ``type`` for ``--seed``: an integer in [0, 2**63) (numpy's seeds)."""
     try:
@@ -93,9 +98,7 @@ def _set_value(key: str, text: str) -> Any:
             return text
     except ValueError:  # an integer beyond Python's digit limit
         msg = f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot"
-        raise ParameterError(
-            msg, parameter=key, value=f"{text[:20]}...", allowed="a number of at most 15 digits"
-        ) from None
+        raise refused(key, f"{text[:20]}...", "a number of at most 15 digits", msg) from None
     else:
         return tuple(parsed) if isinstance(parsed, list) else parsed
     items = [t.strip() for t in text.split(",")]
@@ -114,9 +117,7 @@ def _set_value(key: str, text: str) -> Any:
                 f"-s {key}={shown}: item {i} ({one!r}) is not a finite number; a list value "
                 f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)"
             )
-            raise ParameterError(
-                msg, parameter=key, value=text, allowed="comma-separated finite numbers"
-            )
+            raise refused(key, text, "comma-separated finite numbers", msg)
         values.append(v)
     return tuple(values)
 
@@ -329,9 +330,7 @@ def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
             f"--{attr} has {q.size} values; {model.name} has {model.nq} joints "
             f"({', '.join(model.joint_names)})"
         )
-        raise ParameterError(
-            msg, parameter=f"--{attr}", value=list(values), allowed=f"{model.nq} values"
-        )
+        raise refused(f"--{attr}", list(values), f"{model.nq} values", msg)
     if getattr(args, "deg", False):
         prismatic = np.asarray(model.is_prismatic, dtype=bool)
         q = np.where(prismatic, q, np.radians(q))
@@ -453,9 +452,7 @@ def velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
         vel = []
     if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
         msg = f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]"
-        raise ParameterError(
-            msg, parameter="--velocity", value=" ".join(values), allowed="vx,vy,wz"
-        )
+        raise refused("--velocity", " ".join(values), "vx,vy,wz", msg)
     return tuple(vel)
 
 
@@ -508,9 +505,7 @@ def html_page(model: Any, t: Any, q: Any, path: str, title: str, every: float) -
         from ..viewer import export_html
     except ImportError as exc:
         msg = f"--html needs the viewer (hexapod_kin.viewer): {exc}"
-        raise ParameterError(
-            msg, parameter="--html", value=path, allowed="install hexapod-kin[viewer]"
-        ) from None
+        raise refused("--html", path, "install hexapod-kin[viewer]", msg) from None
     stride = max(1, int(round(every / float(t[1] - t[0])))) if len(t) > 1 else 1
     return str(export_html(model, t[::stride], q[::stride], path, title=title))
 

@@ -21,6 +21,7 @@ from .common import (
     pick,
     q_args,
     q_from_args,
+    refused,
     robot_args,
     robot_of,
     seed,
@@ -203,8 +204,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         msg = f"--out {args.out!r}: cannot create the directory ({exc.strerror})"
-        allowed = "a writable directory"
-        raise ParameterError(msg, parameter="--out", value=args.out, allowed=allowed) from None
+        raise refused("--out", args.out, "a writable directory", msg) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
     print(f"wrote {path}")

@@ -114,9 +114,8 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
         print(f"wrote {args.output}", file=sys.stderr)
         return 0
     if args.meshes:
-        raise ParameterError(
-            "--meshes writes mesh files beside the MJCF; give -o FILE", parameter="meshes"
-        )
+        msg = "--meshes writes mesh files beside the MJCF; give -o FILE"
+        raise ParameterError(msg, parameter="meshes")
     sys.stdout.write(to_mjcf(src, **kwargs).xml)
     return 0
 

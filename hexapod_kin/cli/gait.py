@@ -57,9 +57,8 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     check_outputs(args)
     robot = robot_of(args)
     if args.view and (args.source != "hexapod" or robot.params):
-        raise ParameterError(
-            "--view plays the built-in hexapod; use --html for other robots", parameter="view"
-        )
+        msg = "--view plays the built-in hexapod; use --html for other robots"
+        raise ParameterError(msg, parameter="view")
     model = robot.load()
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     # a check that fails raises GaitError: one line, exit status 1 (cli.main)

@@ -11,7 +11,6 @@ import math
 import sys
 from typing import Any, Literal
 
-from ..exceptions import ParameterError
 from .common import (
     check_outputs,
     emit_json,
@@ -22,6 +21,7 @@ from .common import (
     pick,
     q_args,
     q_from_args,
+    refused,
     robot_args,
 )
 
@@ -85,9 +85,7 @@ def _target(args: argparse.Namespace) -> Any:
     if args.pose is not None:
         if args.yaw is not None:
             msg = "--yaw goes with --target, not --pose (the pose has its own rpy)"
-            raise ParameterError(
-                msg, parameter="--yaw", value=args.yaw, allowed="only with --target"
-            )
+            raise refused("--yaw", args.yaw, "only with --target", msg)
         from .._pose import Pose
 
         return Pose.of([*args.pose[:3], *(_angle(args, v) for v in args.pose[3:])], "--pose").matrix
