@@ -343,8 +343,7 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
     parent = p.parent if str(p.parent) else Path(".")
 
     def refuse(why: str, allowed: Any) -> NoReturn:
-        text = f"{option} {str(path)!r}: {why}"
-        raise ParameterError(text, parameter=option, value=str(path), allowed=allowed)
+        raise refused(option, str(path), allowed, f"{option} {str(path)!r}: {why}")
 
     if p.suffix.lower() not in suffixes:
         refuse(
